@@ -1,0 +1,39 @@
+# One entry point for people and CI: `make demo`, `make test`, `make lint`, `make bench`.
+PY ?= python3
+VENV ?= .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.deps-installed
+
+.PHONY: demo test test-rust test-python lint build bench clean
+
+$(STAMP): pyproject.toml
+	$(PY) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+	$(BIN)/python -m pip install -q "maturin>=1.7,<2" "numpy>=1.24" "scipy>=1.10" \
+		"pytest>=7" "hypothesis>=6" "matplotlib>=3.6" "pandas>=1.5" "ruff>=0.5"
+	touch $(STAMP)
+
+build: $(STAMP)
+	$(BIN)/maturin develop --release --quiet
+
+demo: build
+	$(BIN)/python -m sysid demo
+
+test-rust:
+	cargo test --release -p sysid-core
+
+test-python: build
+	$(BIN)/python -m pytest -q
+
+test: test-rust test-python
+
+lint: $(STAMP)
+	cargo fmt --all -- --check
+	cargo clippy --release --all-targets -- -D warnings
+	$(BIN)/ruff check python tests benches
+
+bench: build
+	$(BIN)/python benches/run.py
+
+clean:
+	rm -rf $(VENV) target

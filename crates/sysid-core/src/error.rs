@@ -1,0 +1,133 @@
+//! The one error type of sysid-core.
+//!
+//! Every fallible public function returns [`Result`]. Messages are written for the person who
+//! called the library: they name the problem and the fix, because the binding crate passes
+//! them on unchanged as the text of the Python exception.
+
+use thiserror::Error;
+
+/// What went wrong, with the data needed to explain it.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[non_exhaustive]
+pub enum SysidError {
+    /// A sample is NaN or infinite.
+    #[error(
+        "{what} has a non-finite value (NaN or Inf) at sample {sample}, channel {channel}; \
+         interpolate or cut it out before identification"
+    )]
+    NonFinite {
+        /// Which array ("u", "y", "markov", ...).
+        what: &'static str,
+        /// Row (time index) of the first offending value.
+        sample: usize,
+        /// Column (channel) of the first offending value.
+        channel: usize,
+    },
+    /// The record is too short for what was asked of it.
+    #[error("too few samples: {context} needs at least {needed} but got {got}; {fix}")]
+    InsufficientData {
+        /// What needed the samples.
+        context: String,
+        /// How many are needed.
+        needed: usize,
+        /// How many there are.
+        got: usize,
+        /// What the user can do.
+        fix: &'static str,
+    },
+    /// Arrays whose shapes do not fit together.
+    #[error("{what} has shape {got} but should have shape {expected}")]
+    ShapeMismatch {
+        /// Which argument.
+        what: String,
+        /// The expected shape, in words or numbers.
+        expected: String,
+        /// The shape received.
+        got: String,
+    },
+    /// The input does not excite the system enough for the requested horizon.
+    #[error(
+        "the input is not persistently exciting: the {rows} rows of future inputs in the data \
+         matrix have numerical rank {rank} (relative tolerance {tol:.1e}); use a richer input \
+         (white noise, PRBS, multisine), a shorter horizon, or remove constant input channels"
+    )]
+    NotPersistentlyExciting {
+        /// Numerical rank found.
+        rank: usize,
+        /// Rank needed (number of future-input rows).
+        rows: usize,
+        /// Relative tolerance used to decide the rank.
+        tol: f64,
+    },
+    /// The model order is larger than the data matrix supports.
+    #[error(
+        "order {order} is too large: with a future horizon of {future} and {outputs} output(s) \
+         at most {max} states can be identified; choose order <= {max} or a longer horizon"
+    )]
+    OrderTooLarge {
+        /// Requested order.
+        order: usize,
+        /// Largest admissible order.
+        max: usize,
+        /// Future horizon in use.
+        future: usize,
+        /// Number of outputs.
+        outputs: usize,
+    },
+    /// An argument outside its valid range.
+    #[error("invalid {name}: {reason}")]
+    InvalidArgument {
+        /// The argument's name.
+        name: &'static str,
+        /// What is wrong and what would be right.
+        reason: String,
+    },
+    /// Two Hankel factors that cannot be combined.
+    #[error("cannot merge compressed data: {reason}")]
+    IncompatibleFactors {
+        /// Why not.
+        reason: String,
+    },
+    /// A numerical step failed (rank loss, non-convergence).
+    #[error("numerical failure in {step}: {reason}")]
+    Numerical {
+        /// Which step.
+        step: &'static str,
+        /// What happened, and what may help.
+        reason: String,
+    },
+    /// The discrete algebraic Riccati equation has no stabilising solution.
+    #[error(
+        "the Riccati equation for the Kalman gain has no stabilising solution ({reason}); \
+         the noise covariances may be degenerate: fit with kalman=False or a different order"
+    )]
+    NoStabilizingSolution {
+        /// Why the solver gave up.
+        reason: String,
+    },
+}
+
+/// Result with [`SysidError`].
+pub type Result<T> = std::result::Result<T, SysidError>;
+
+impl SysidError {
+    pub(crate) fn invalid(name: &'static str, reason: impl Into<String>) -> Self {
+        SysidError::InvalidArgument { name, reason: reason.into() }
+    }
+
+    pub(crate) fn numerical(step: &'static str, reason: impl Into<String>) -> Self {
+        SysidError::Numerical { step, reason: reason.into() }
+    }
+}
+
+/// Checks that every entry of `x` is finite.
+pub fn check_finite(what: &'static str, x: faer::MatRef<'_, f64>) -> Result<()> {
+    for j in 0..x.ncols() {
+        for i in 0..x.nrows() {
+            if !x[(i, j)].is_finite() {
+                return Err(SysidError::NonFinite { what, sample: i, channel: j });
+            }
+        }
+    }
+    Ok(())
+}

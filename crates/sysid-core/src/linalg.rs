@@ -1,0 +1,133 @@
+//! Small dense helpers shared by the estimators: least squares through a truncated SVD,
+//! eigenvalues, spectral radius, LQ re-triangularisation.
+
+use crate::error::{Result, SysidError};
+use faer::{Mat, MatRef};
+
+/// Eigenvalues of a square matrix as `(re, im)` pairs.
+pub fn eigenvalues(a: MatRef<'_, f64>) -> Result<Vec<(f64, f64)>> {
+    if a.nrows() == 0 {
+        return Ok(Vec::new());
+    }
+    let ev = a
+        .eigenvalues()
+        .map_err(|e| SysidError::numerical("eigenvalues", format!("{e:?}")))?;
+    Ok(ev.iter().map(|z| (z.re, z.im)).collect())
+}
+
+/// Largest eigenvalue modulus of a square matrix.
+pub fn spectral_radius(a: MatRef<'_, f64>) -> Result<f64> {
+    Ok(eigenvalues(a)?
+        .into_iter()
+        .map(|(re, im)| re.hypot(im))
+        .fold(0.0, f64::max))
+}
+
+/// Moore-Penrose pseudo-inverse through the thin SVD; singular values below
+/// `rtol * s_max` are treated as zero.
+pub fn pinv(a: MatRef<'_, f64>, rtol: f64) -> Result<Mat<f64>> {
+    let (m, n) = (a.nrows(), a.ncols());
+    if m == 0 || n == 0 {
+        return Ok(Mat::zeros(n, m));
+    }
+    let svd = a
+        .thin_svd()
+        .map_err(|e| SysidError::numerical("pseudo-inverse (SVD)", format!("{e:?}")))?;
+    let s = svd.S().column_vector();
+    let smax = s[0];
+    let cut = rtol * smax;
+    let r = (0..s.nrows()).filter(|&i| s[i] > cut && s[i] > 0.0).count();
+    let u = svd.U().subcols(0, r);
+    let v = svd.V().subcols(0, r);
+    let mut vs = v.to_owned();
+    for j in 0..r {
+        let inv = 1.0 / s[j];
+        for i in 0..n {
+            vs[(i, j)] *= inv;
+        }
+    }
+    Ok(&vs * u.transpose())
+}
+
+/// Solves `X A = B` for X in the least-squares sense (minimum norm), i.e. `X = B A^+`.
+pub fn rsolve_lstsq(b: MatRef<'_, f64>, a: MatRef<'_, f64>, rtol: f64) -> Result<Mat<f64>> {
+    Ok(b * pinv(a, rtol)?)
+}
+
+/// Lower-triangular L with `L L^T = M M^T` (the L of the LQ factorisation of M), with a
+/// non-negative diagonal. M may have more columns than rows; L is `M.nrows() x M.nrows()`.
+pub fn lq_lower(m: MatRef<'_, f64>) -> Mat<f64> {
+    let rows = m.nrows();
+    if m.ncols() == 0 || rows == 0 {
+        return Mat::zeros(rows, rows);
+    }
+    let qr = m.transpose().qr();
+    let r = qr.thin_R(); // min(cols, rows) x rows, upper trapezoidal
+    let mut l = Mat::<f64>::zeros(rows, rows);
+    for i in 0..r.nrows() {
+        let sign = if r[(i, i)] < 0.0 { -1.0 } else { 1.0 };
+        for j in i..rows {
+            l[(j, i)] = sign * r[(i, j)];
+        }
+    }
+    l
+}
+
+/// Symmetric part `(M + M^T) / 2`.
+pub fn symmetrize(m: &mut Mat<f64>) {
+    let n = m.nrows();
+    for i in 0..n {
+        for j in 0..i {
+            let v = 0.5 * (m[(i, j)] + m[(j, i)]);
+            m[(i, j)] = v;
+            m[(j, i)] = v;
+        }
+    }
+}
+
+/// Numerical rank: number of singular values above `rtol * s_max`.
+pub fn rank(a: MatRef<'_, f64>, rtol: f64) -> Result<usize> {
+    if a.nrows() == 0 || a.ncols() == 0 {
+        return Ok(0);
+    }
+    let s = a
+        .singular_values()
+        .map_err(|e| SysidError::numerical("rank (SVD)", format!("{e:?}")))?;
+    let smax = s[0];
+    Ok(s.iter().filter(|&&x| x > rtol * smax && x > 0.0).count())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use faer::mat;
+
+    #[test]
+    fn pinv_inverts_full_rank() {
+        let a = mat![[2.0, 1.0], [1.0, 3.0], [0.0, 1.0]];
+        let p = pinv(a.as_ref(), 1e-12).unwrap();
+        let i = &p * &a;
+        for r in 0..2 {
+            for c in 0..2 {
+                let e = if r == c { 1.0 } else { 0.0 };
+                assert!((i[(r, c)] - e).abs() < 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn lq_reproduces_gram() {
+        let m = mat![[1.0, 2.0, 3.0, 4.0], [0.5, -1.0, 2.0, 0.0], [3.0, 1.0, 0.0, 1.0]];
+        let l = lq_lower(m.as_ref());
+        let g1 = &l * l.transpose();
+        let g2 = &m * m.transpose();
+        for i in 0..3 {
+            for j in 0..3 {
+                assert!((g1[(i, j)] - g2[(i, j)]).abs() < 1e-12);
+            }
+            for j in i + 1..3 {
+                assert_eq!(l[(i, j)], 0.0);
+            }
+        }
+    }
+}

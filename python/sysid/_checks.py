@@ -1,0 +1,64 @@
+"""Argument checking shared by the public functions (one helper, SciPy style)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .errors import DataError, NonFiniteError, ShapeError
+
+
+def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = False) -> np.ndarray:
+    """Return ``x`` as a float64 array shaped (samples, channels) without copying if possible.
+
+    1-D input is read as one channel. Strings, objects, complex numbers, 3-D arrays and
+    non-finite values raise a :class:`DataError` that names the argument.
+    """
+    if isinstance(x, (str, bytes)):
+        raise ShapeError(f"{name} must be a numeric array, got a string")
+    arr = np.asarray(x)
+    if arr.dtype.kind not in "biuf":
+        raise DataError(
+            f"{name} must be a real numeric array, got dtype {arr.dtype}; convert it with "
+            f"np.asarray({name}, dtype=float)"
+        )
+    arr = arr.astype(np.float64, copy=False)
+    if arr.ndim == 1:
+        arr = arr[:, None]
+    elif arr.ndim == 0:
+        raise ShapeError(f"{name} must be 1-D or 2-D (samples, channels), got a scalar")
+    elif arr.ndim != 2:
+        raise ShapeError(
+            f"{name} must be 1-D or 2-D (samples, channels), got {arr.ndim}-D with shape {arr.shape}"
+        )
+    if arr.shape[0] == 0 and not allow_empty:
+        raise ShapeError(f"{name} has no samples (shape {arr.shape})")
+    if ncols is not None and arr.shape[1] != ncols:
+        raise ShapeError(f"{name} has shape {arr.shape} but should have {ncols} column(s)")
+    if not np.isfinite(arr).all():
+        bad = np.argwhere(~np.isfinite(arr))[0]
+        raise NonFiniteError(
+            f"{name} has a non-finite value (NaN or Inf) at sample {bad[0]}, channel {bad[1]}; "
+            "interpolate or cut it out before identification"
+        )
+    return arr
+
+
+def as_matrix(x: Any, name: str, shape: tuple[int | None, int | None]) -> np.ndarray:
+    """Return a finite float64 matrix, checking its shape (``None`` matches any size)."""
+    if isinstance(x, (str, bytes)):
+        raise ShapeError(f"{name} must be a numeric matrix, got a string")
+    arr = np.asarray(x)
+    if arr.dtype.kind not in "biuf":
+        raise DataError(f"{name} must be real and numeric, got dtype {arr.dtype}")
+    arr = np.atleast_2d(arr.astype(np.float64, copy=False))
+    if arr.ndim != 2:
+        raise ShapeError(f"{name}: expected 2-D, got {arr.ndim}-D")
+    for got, want in zip(arr.shape, shape):
+        if want is not None and got != want:
+            expected = tuple("any" if s is None else s for s in shape)
+            raise ShapeError(f"{name} has shape {arr.shape} but should have shape {expected}")
+    if not np.isfinite(arr).all():
+        raise NonFiniteError(f"{name} has non-finite entries (NaN or Inf)")
+    return arr

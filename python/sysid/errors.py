@@ -1,0 +1,65 @@
+"""Exceptions raised by sysid.
+
+Every error of the Rust core arrives as one of these classes (the mapping lives in the
+binding crate). Bad input raises a subclass of :class:`ValueError`, numerical failure a
+subclass of :class:`ArithmeticError`; all derive from :class:`SysidError`.
+
+Examples
+--------
+>>> import numpy as np, sysid
+>>> try:
+...     sysid.IOData(u=np.zeros((5, 1)), y=np.zeros((4, 1)))
+... except sysid.DataError as e:
+...     print(type(e).__name__)
+ShapeError
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "SysidError",
+    "DataError",
+    "NonFiniteError",
+    "ShapeError",
+    "InsufficientDataError",
+    "ExcitationError",
+    "OrderError",
+    "NumericalError",
+    "RiccatiError",
+]
+
+
+class SysidError(Exception):
+    """Base class of every sysid exception."""
+
+
+class DataError(SysidError, ValueError):
+    """The data or an argument is unusable as given; the message says how to fix it."""
+
+
+class NonFiniteError(DataError):
+    """A NaN or Inf in the data."""
+
+
+class ShapeError(DataError):
+    """Arrays with the wrong number of dimensions, samples or channels."""
+
+
+class InsufficientDataError(DataError):
+    """Too few samples for the requested horizon or model."""
+
+
+class ExcitationError(DataError):
+    """The input is not persistently exciting enough for the requested horizon or order."""
+
+
+class OrderError(DataError):
+    """The requested model order is larger than the data or horizon allow."""
+
+
+class NumericalError(SysidError, ArithmeticError):
+    """A numerical step failed (rank loss, non-convergence)."""
+
+
+class RiccatiError(NumericalError):
+    """The Riccati equation of the Kalman gain has no stabilising solution."""

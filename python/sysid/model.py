@@ -1,0 +1,270 @@
+"""The identified model: :class:`StateSpaceModel` in innovation form.
+
+.. math::
+
+    x(t+1) = A x(t) + B u(t) + K e(t), \\qquad y(t) = C x(t) + D u(t) + e(t),
+    \\qquad E[e e^T] = \\Lambda \\;(\\texttt{noise\\_cov})
+
+Simulation and Kalman prediction run in the Rust core; poles, frequency responses and Markov
+parameters are small dense computations done here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from . import _sysid
+from ._checks import as_2d, as_matrix
+from .errors import DataError, ShapeError
+
+__all__ = ["StateSpaceModel"]
+
+
+class StateSpaceModel:
+    """Discrete-time state-space model ``x(t+1) = A x + B u + K e``, ``y = C x + D u + e``.
+
+    Parameters
+    ----------
+    A, B, C : array_like
+        System matrices, shapes ``(n, n)``, ``(n, m)``, ``(l, n)``.
+    D : array_like, optional
+        Feed-through, ``(l, m)``; zero if omitted.
+    K : array_like, optional
+        Innovation-form (Kalman predictor) gain, ``(n, l)``; ``None`` for an output-error model.
+    dt : float
+        Sample time in seconds.
+    noise_cov : array_like, optional
+        Covariance of the innovations e, ``(l, l)``.
+    x0 : array_like, optional
+        Initial state estimated with the model, ``(n,)``.
+    input_names, output_names : sequence of str, optional
+        Channel names.
+    info : dict, optional
+        How the model was obtained (method, horizon, singular values, ...).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1)
+    >>> m
+    StateSpaceModel(nstates=1, ninputs=1, noutputs=1, dt=0.1, stable, no noise model)
+    >>> m.simulate(np.array([1.0, 0.0, 0.0]))[:, 0]
+    array([0. , 1. , 0.5])
+    >>> m.markov(3)[:, 0, 0]
+    array([0. , 1. , 0.5])
+    """
+
+    def __init__(
+        self,
+        A: Any,
+        B: Any,
+        C: Any,
+        D: Any = None,
+        K: Any = None,
+        *,
+        dt: float = 1.0,
+        noise_cov: Any = None,
+        x0: Any = None,
+        input_names: Sequence[str] | None = None,
+        output_names: Sequence[str] | None = None,
+        info: dict[str, Any] | None = None,
+    ) -> None:
+        A = as_matrix(A, "A", (None, None))
+        n = A.shape[0]
+        if A.shape[1] != n:
+            raise ShapeError(f"A has shape {A.shape} but should be square")
+        B = np.asarray(B, dtype=float)
+        B = B.reshape(n, -1) if B.size == 0 or B.ndim < 2 else B
+        B = as_matrix(B, "B", (n, None)) if B.size else np.zeros((n, B.shape[1]))
+        C = as_matrix(C, "C", (None, n))
+        m, l = B.shape[1], C.shape[0]
+        D = np.zeros((l, m)) if D is None else as_matrix(np.reshape(D, (l, m)) if np.size(D) == l * m else D, "D", (l, m))
+        self.A, self.B, self.C, self.D = A, B, C, D
+        self.K = None if K is None else as_matrix(K, "K", (n, l))
+        self.noise_cov = None if noise_cov is None else as_matrix(noise_cov, "noise_cov", (l, l))
+        self.x0 = None if x0 is None else as_matrix(np.reshape(x0, (n, 1)), "x0", (n, 1))[:, 0]
+        dt = float(dt)
+        if not np.isfinite(dt) or dt <= 0:
+            raise DataError(f"dt must be a positive number of seconds, got {dt}")
+        self.dt = dt
+        self.input_names = list(input_names) if input_names is not None else [f"u{i}" for i in range(m)]
+        self.output_names = list(output_names) if output_names is not None else [f"y{i}" for i in range(l)]
+        if len(self.input_names) != m or len(self.output_names) != l:
+            raise ShapeError("the number of channel names does not match B and C")
+        self.info: dict[str, Any] = dict(info or {})
+
+    # -- sizes (python-control names) ---------------------------------------------------
+    @property
+    def nstates(self) -> int:
+        """Number of states n."""
+        return self.A.shape[0]
+
+    @property
+    def ninputs(self) -> int:
+        """Number of inputs m."""
+        return self.B.shape[1]
+
+    @property
+    def noutputs(self) -> int:
+        """Number of outputs l."""
+        return self.C.shape[0]
+
+    # -- time domain --------------------------------------------------------------------
+    def _x0(self, x0: Any) -> np.ndarray | None:
+        if x0 is None:
+            return None
+        if isinstance(x0, str):
+            if x0 == "model":
+                return self.x0
+            raise DataError(f"x0 must be an array, None or 'model', got {x0!r}")
+        return as_matrix(np.reshape(np.asarray(x0, dtype=float), (-1, 1)), "x0", (self.nstates, 1))[:, 0]
+
+    def _u(self, u: Any, n_samples: int | None = None) -> np.ndarray:
+        if u is None:
+            if self.ninputs:
+                raise DataError("u is required: the model has inputs")
+            if n_samples is None:
+                raise DataError("a model without inputs needs n_samples (or y) to simulate")
+            return np.zeros((n_samples, 0))
+        return as_2d(u, "u", ncols=self.ninputs, allow_empty=self.ninputs == 0)
+
+    def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
+        """Simulate the deterministic part from ``x0`` (zero by default).
+
+        Parameters
+        ----------
+        u : array_like
+            Inputs ``(n_samples, ninputs)``.
+        x0 : array_like or "model", optional
+            Initial state; ``"model"`` uses the state estimated with the model.
+
+        Returns
+        -------
+        ndarray
+            Outputs ``(n_samples, noutputs)``.
+
+        Examples
+        --------
+        >>> import sysid
+        >>> sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]]).simulate([1, 1, 1])[:, 0]
+        array([0. , 1. , 1.9])
+        """
+        u = self._u(u)
+        return _sysid.simulate(self.A, self.B, self.C, self.D, u, self._x0(x0))
+
+    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
+        """``horizon``-step-ahead prediction ``ŷ(t | t - horizon)`` with the Kalman predictor.
+
+        Uses ``K``; a model without ``K`` (output error) predicts by simulation.
+
+        Parameters
+        ----------
+        u, y : array_like
+            Measured inputs and outputs.
+        horizon : int
+            Steps ahead, ``>= 1``.
+        x0 : array_like or "model", optional
+            Predictor state at time 0.
+
+        Returns
+        -------
+        ndarray
+            Predictions ``(n_samples, noutputs)``.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> m = sysid.StateSpaceModel([[0.9]], [[0.0]], [[1.0]], K=[[0.9]])
+        >>> m.predict(None, [1.0, 0.9, 0.81])[:, 0]
+        array([0.  , 0.9 , 0.81])
+        """
+        y = as_2d(y, "y", ncols=self.noutputs)
+        u = self._u(u, y.shape[0])
+        if u.shape[0] != y.shape[0]:
+            raise ShapeError(f"u has {u.shape[0]} samples but y has {y.shape[0]}")
+        if isinstance(horizon, bool) or int(horizon) != horizon or horizon < 1:
+            raise DataError(f"horizon must be an integer >= 1, got {horizon!r}")
+        K = self.K if self.K is not None else np.zeros((self.nstates, self.noutputs))
+        return _sysid.predict(self.A, self.B, self.C, self.D, K, u, y, self._x0(x0), int(horizon))
+
+    # -- system properties --------------------------------------------------------------
+    def poles(self) -> np.ndarray:
+        """Eigenvalues of A (discrete-time poles).
+
+        Examples
+        --------
+        >>> import sysid
+        >>> sysid.StateSpaceModel([[0.5, 0], [0, -0.2]], [[1], [1]], [[1, 1]]).poles()
+        array([ 0.5+0.j, -0.2+0.j])
+        """
+        return np.linalg.eigvals(self.A).astype(complex)
+
+    def is_stable(self) -> bool:
+        """True when every pole lies strictly inside the unit circle."""
+        return bool(self.nstates == 0 or np.max(np.abs(self.poles())) < 1.0)
+
+    def markov(self, count: int) -> np.ndarray:
+        """Markov parameters ``D, CB, CAB, ...``, shape ``(count, noutputs, ninputs)``.
+
+        Examples
+        --------
+        >>> import sysid
+        >>> sysid.StateSpaceModel([[0.5]], [[2.0]], [[1.0]], [[3.0]]).markov(3)[:, 0, 0]
+        array([3. , 2. , 1. ])
+        """
+        out = np.empty((count, self.noutputs, self.ninputs))
+        if count:
+            out[0] = self.D
+        ab = self.B
+        for k in range(1, count):
+            out[k] = self.C @ ab
+            ab = self.A @ ab
+        return out
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """Frequency response ``C (z I - A)^{-1} B + D`` at ``z = exp(j omega dt)``.
+
+        Parameters
+        ----------
+        omega : array_like
+            Angular frequencies in rad/s (the Nyquist frequency is ``pi / dt``).
+
+        Returns
+        -------
+        ndarray
+            Complex response, shape ``(len(omega), noutputs, ninputs)``.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> m = sysid.StateSpaceModel([[0.5]], [[0.5]], [[1.0]], dt=1.0)
+        >>> np.round(m.freqresp([0.0])[0, 0, 0].real, 12)
+        1.0
+        """
+        w = np.atleast_1d(np.asarray(omega, dtype=float))
+        if w.ndim != 1 or not np.isfinite(w).all():
+            raise DataError("omega must be a finite 1-D array of angular frequencies (rad/s)")
+        z = np.exp(1j * w * self.dt)
+        n = self.nstates
+        # Hessenberg-free but well-conditioned enough: one complex solve per frequency
+        eye = np.eye(n)
+        out = np.empty((w.size, self.noutputs, self.ninputs), dtype=complex)
+        for i, zi in enumerate(z):
+            out[i] = self.C @ np.linalg.solve(zi * eye - self.A, self.B) + self.D if n else self.D
+        return out
+
+    def dcgain(self) -> np.ndarray:
+        """Steady-state gain ``C (I - A)^{-1} B + D``, shape ``(noutputs, ninputs)``."""
+        return self.freqresp([0.0])[0].real
+
+    def __repr__(self) -> str:
+        stab = "stable" if self.is_stable() else "UNSTABLE"
+        noise = "innovation form" if self.K is not None else "no noise model"
+        method = f", {self.info['method']}" if "method" in self.info else ""
+        return (
+            f"StateSpaceModel(nstates={self.nstates}, ninputs={self.ninputs}, "
+            f"noutputs={self.noutputs}, dt={self.dt:g}, {stab}, {noise}{method})"
+        )
