@@ -1,8 +1,19 @@
 //! Python bindings of sysid-core: numpy <-> faer conversion, GIL release, error mapping.
+//! Nothing else lives here: algorithms belong to `sysid-core`, orchestration to `python/sysid`.
+//!
+//! Each binding file exposes `register(m)`; add one line below per file.
+
 use pyo3::prelude::*;
+
+mod convert;
+mod errors;
+mod hankel;
+mod simulate;
 
 #[pymodule]
 fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    hankel::register(m)?;
+    simulate::register(m)?;
     Ok(())
 }

@@ -1,0 +1,49 @@
+//! The one place where core errors become Python exceptions.
+//!
+//! The classes live in `sysid.errors` (Python), so that they can subclass both `SysidError`
+//! and a builtin (`ValueError`, `ArithmeticError`).
+
+use pyo3::prelude::*;
+use pyo3::types::PyType;
+use sysid_core::SysidError;
+
+fn class_name(e: &SysidError) -> &'static str {
+    match e {
+        SysidError::NonFinite { .. } => "NonFiniteError",
+        SysidError::InsufficientData { .. } => "InsufficientDataError",
+        SysidError::ShapeMismatch { .. } => "ShapeError",
+        SysidError::NotPersistentlyExciting { .. } => "ExcitationError",
+        SysidError::OrderTooLarge { .. } => "OrderError",
+        SysidError::InvalidArgument { .. } | SysidError::IncompatibleFactors { .. } => "DataError",
+        SysidError::NoStabilizingSolution { .. } => "RiccatiError",
+        SysidError::Numerical { .. } => "NumericalError",
+        _ => "SysidError",
+    }
+}
+
+/// Converts a core error into the matching `sysid.errors` exception.
+pub fn to_py(e: SysidError) -> PyErr {
+    Python::attach(|py| {
+        let msg = e.to_string();
+        match py
+            .import("sysid.errors")
+            .and_then(|m| m.getattr(class_name(&e)))
+            .and_then(|c| c.cast_into::<PyType>().map_err(PyErr::from))
+        {
+            Ok(cls) => PyErr::from_type(cls, msg),
+            Err(_) => pyo3::exceptions::PyValueError::new_err(msg),
+        }
+    })
+}
+
+/// `Result<T, SysidError>` -> `PyResult<T>`.
+pub trait IntoPy<T> {
+    /// Maps the error with [`to_py`].
+    fn py(self) -> PyResult<T>;
+}
+
+impl<T> IntoPy<T> for Result<T, SysidError> {
+    fn py(self) -> PyResult<T> {
+        self.map_err(to_py)
+    }
+}
