@@ -92,6 +92,8 @@ class SubspaceEstimator:
         ``"ordinary-moesp"``, ``"n4sid"`` or ``"cva"``.
     chunk_rows : int, optional
         Hankel columns per QR update in the compressor (memory ``(k + chunk) k`` doubles).
+    compressor : str
+        ``"qr"``: the exact compressor (sequential QR updates).
 
     Examples
     --------
@@ -116,6 +118,7 @@ class SubspaceEstimator:
         future: int | None = None,
         method: str = "moesp",
         chunk_rows: int | None = None,
+        compressor: str = "qr",
     ) -> None:
         if not isinstance(data, IOData):
             raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
@@ -129,8 +132,39 @@ class SubspaceEstimator:
         self.future = _check_int(future if future is not None else horizon, "future", 1)
         if chunk_rows is not None:
             chunk_rows = _check_int(chunk_rows, "chunk_rows", 1)
-        self.factor = _sysid.compress(data.experiments, self.past, self.future, chunk_rows)
+        self.factor = _sysid.compress(
+            data.experiments, self.past, self.future, chunk_rows, compressor
+        )
         self._svd: dict[str, Any] = {}
+
+    @classmethod
+    def from_factor(
+        cls,
+        factor: Any,
+        *,
+        dt: float = 1.0,
+        method: str = "moesp",
+        input_names: list[str] | None = None,
+        output_names: list[str] | None = None,
+    ) -> SubspaceEstimator:
+        """An estimator on an already computed :class:`~sysid._sysid.HankelFactor`.
+
+        For factors computed out of core, merged across experiments or machines, or loaded
+        from disk. Fits with ``x0=True`` need the data and are not available.
+        """
+        self = cls.__new__(cls)
+        m, l = factor.n_inputs, factor.n_outputs
+        # a placeholder record that carries only channel counts, names and dt
+        self.data = IOData(
+            u=np.zeros((1, m)), y=np.zeros((1, l)), dt=dt,
+            input_names=input_names, output_names=output_names,
+        )
+        self._from_factor = True
+        self.method = _method(method)
+        self.past, self.future = factor.past, factor.future
+        self.factor = factor
+        self._svd = {}
+        return self
 
     def _subspace(self, method: str | None) -> Any:
         key = self.method if method is None else _method(method)
@@ -203,6 +237,8 @@ class SubspaceEstimator:
         x0_est = None
         B, D = res["B"], res["D"]
         if x0:
+            if getattr(self, "_from_factor", False):
+                raise DataError("x0=True needs the data; this estimator was built from a factor")
             if self.data.n_experiments != 1:
                 raise DataError("x0=True needs a single-experiment record")
             u, y = self.data.experiments[0]
