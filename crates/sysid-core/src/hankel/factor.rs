@@ -18,6 +18,56 @@ pub enum Block {
     YFuture,
 }
 
+/// How a [`HankelFactor`] was obtained, so that callers can report a fallback.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum FactorSource {
+    /// Exact sequential QR ([`super::QrCompressor`]).
+    Qr,
+    /// Lagged correlation sums and Cholesky ([`super::CorrelationCompressor`]), well
+    /// conditioned: agrees with the exact factor to round-off times the condition number.
+    Correlation,
+    /// The correlation Gram matrix was numerically singular or nearly so: the relative
+    /// Cholesky pivot fell below the threshold (the Cholesky factor is kept, `clipped = 0`),
+    /// or Cholesky failed and the factor was built from the eigendecomposition with the
+    /// negative eigenvalues set to zero (`clipped > 0`). Singular values of the data matrix
+    /// below about `sqrt(eps)` times the largest are not resolved: rerun with the exact QR
+    /// compressor where they matter.
+    CorrelationIllConditioned {
+        /// Eigenvalues of the (centred, scaled) Gram matrix that were negative and clipped.
+        clipped: usize,
+        /// Smallest relative Cholesky pivot (`min L_ii^2 / max G_ii`, 0 when it failed).
+        relative_pivot: f64,
+    },
+    /// The correlation path was ill-conditioned and the data, still in memory, were
+    /// compressed again with the exact QR compressor.
+    QrFallback {
+        /// Smallest relative Cholesky pivot of the rejected correlation factor.
+        relative_pivot: f64,
+    },
+}
+
+impl FactorSource {
+    /// Short name: `"qr"`, `"correlation"`, `"correlation-ill-conditioned"` or `"qr-fallback"`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            FactorSource::Qr => "qr",
+            FactorSource::Correlation => "correlation",
+            FactorSource::CorrelationIllConditioned { .. } => "correlation-ill-conditioned",
+            FactorSource::QrFallback { .. } => "qr-fallback",
+        }
+    }
+
+    fn rank(&self) -> u8 {
+        match self {
+            FactorSource::Qr => 0,
+            FactorSource::Correlation => 1,
+            FactorSource::QrFallback { .. } => 2,
+            FactorSource::CorrelationIllConditioned { .. } => 3,
+        }
+    }
+}
+
 /// Lower-triangular `L` with `H H^T = L L^T`, the data's block-Hankel matrix H compressed.
 ///
 /// It is a value: it can be merged with the factor of another experiment recorded with the
@@ -28,6 +78,7 @@ pub struct HankelFactor {
     l: Mat<f64>,
     n_columns: usize,
     n_experiments: usize,
+    source: FactorSource,
 }
 
 impl HankelFactor {
@@ -54,7 +105,24 @@ impl HankelFactor {
                 }
             }
         }
-        Ok(Self { layout, l, n_columns, n_experiments })
+        Ok(Self {
+            layout,
+            l,
+            n_columns,
+            n_experiments,
+            source: FactorSource::Qr,
+        })
+    }
+
+    /// The same factor, recorded as obtained by `source`.
+    pub fn with_source(mut self, source: FactorSource) -> Self {
+        self.source = source;
+        self
+    }
+
+    /// How the factor was obtained (exact QR, correlation, or a fallback).
+    pub fn source(&self) -> FactorSource {
+        self.source
     }
 
     /// The layout (channel counts and horizons).
@@ -99,6 +167,11 @@ impl HankelFactor {
             l: lq_lower(both.as_ref()),
             n_columns: self.n_columns + other.n_columns,
             n_experiments: self.n_experiments + other.n_experiments,
+            source: if other.source.rank() > self.source.rank() {
+                other.source
+            } else {
+                self.source
+            },
         })
     }
 }

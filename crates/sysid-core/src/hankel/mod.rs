@@ -20,12 +20,19 @@
 //!
 //! Compressors implement [`Compressor`]: push chunks of samples, mark the end of an
 //! experiment, finish into a [`HankelFactor`]. [`QrCompressor`] is exact (sequential QR
-//! updates, as SLICOT does with sequential data batches).
+//! updates, as SLICOT does with sequential data batches); [`CorrelationCompressor`] is fast
+//! (lagged correlation sums, the Gram matrix `H H^T` filled from its block-Hankel shift
+//! structure, then Cholesky), with a reported fallback when `H H^T` is numerically singular.
 
+mod correlation;
 mod factor;
 mod qr;
 
-pub use factor::{Block, HankelFactor};
+pub use correlation::{
+    compress_experiments, CompressorKind, CorrelationCompressor, CorrelationOptions,
+    CorrelationState, CorrelationSums,
+};
+pub use factor::{Block, FactorSource, HankelFactor};
 pub use qr::QrCompressor;
 
 use crate::error::{Result, SysidError};
@@ -48,7 +55,10 @@ impl HankelLayout {
     /// Checks and builds a layout.
     pub fn new(n_inputs: usize, n_outputs: usize, past: usize, future: usize) -> Result<Self> {
         if n_outputs == 0 {
-            return Err(SysidError::invalid("outputs", "at least one output channel is needed"));
+            return Err(SysidError::invalid(
+                "outputs",
+                "at least one output channel is needed",
+            ));
         }
         if past == 0 || future == 0 {
             return Err(SysidError::invalid(
@@ -56,7 +66,12 @@ impl HankelLayout {
                 format!("past and future horizons must be >= 1 (got past={past}, future={future})"),
             ));
         }
-        Ok(Self { n_inputs, n_outputs, past, future })
+        Ok(Self {
+            n_inputs,
+            n_outputs,
+            past,
+            future,
+        })
     }
 
     /// Samples per Hankel column, `p + f`.
@@ -151,14 +166,24 @@ pub(crate) fn check_chunk(
     if u.nrows() != y.nrows() && layout.n_inputs > 0 {
         return Err(SysidError::ShapeMismatch {
             what: "u".into(),
-            expected: format!("({}, {}) (as many samples as y)", y.nrows(), layout.n_inputs),
+            expected: format!(
+                "({}, {}) (as many samples as y)",
+                y.nrows(),
+                layout.n_inputs
+            ),
             got: format!("({}, {})", u.nrows(), u.ncols()),
         });
     }
     let shift = |e: SysidError| match e {
-        SysidError::NonFinite { what, sample, channel } => {
-            SysidError::NonFinite { what, sample: sample + offset, channel }
-        }
+        SysidError::NonFinite {
+            what,
+            sample,
+            channel,
+        } => SysidError::NonFinite {
+            what,
+            sample: sample + offset,
+            channel,
+        },
         other => other,
     };
     crate::error::check_finite("u", u).map_err(shift)?;
@@ -168,3 +193,6 @@ pub(crate) fn check_chunk(
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod correlation_tests;

@@ -1,0 +1,830 @@
+//! The fast compressor: lagged correlation sums, the Gram matrix from its block-Hankel shift
+//! structure, then Cholesky.
+//!
+//! With `z_t = [u_t; y_t]` (d = m + l channels), window `w = p + f` and `T = N - w + 1`
+//! columns, the Gram matrix of the data matrix in natural order (block `a` = sample offset
+//! `a`) is `G_ab = sum_{t<T} z_{t+a} z_{t+b}^T`. For `a <= b`, with `tau = b - a`,
+//!
+//! ```text
+//! G_ab = S_tau - sum_{t<a} z_t z_{t+tau}^T - sum_{t=a+T}^{N-1-tau} z_t z_{t+tau}^T,
+//! S_tau = sum_{t=0}^{N-1-tau} z_t z_{t+tau}^T,
+//! ```
+//!
+//! so only the `w` lagged sums (`2 w d^2 N` flops, one GEMM per block of samples) touch every
+//! sample; the corrections use the first and last `w - 1` samples of each experiment. Sums are
+//! formed in centred, scaled coordinates `x = (z - c) / s` (shift `c` and power-of-two scale
+//! `s` per channel, from the first chunk), together with the column sums `sum_t X_t`. With
+//! `Ga = [[X X^T, X 1], [1^T X^T, T]] = La La^T` (Cholesky, well conditioned), the raw
+//! data matrix `H = [diag(s) | c] [X; 1^T]` has `H H^T = (E La)(E La)^T`, `E = [diag(s) | c]`,
+//! and `L` is the LQ triangle of the rows of `E La` permuted to the canonical order: the same
+//! matrix the exact compressor factors, up to round-off.
+//!
+//! Samples are processed in blocks with fixed boundaries (in parallel with rayon); partial
+//! sums of contiguous segments are combined pairwise in a fixed order (the cross terms between
+//! neighbouring segments come from their boundary samples), so the result does not depend on
+//! the number of threads.
+
+use super::{
+    check_chunk, Block, Compressor, FactorSource, HankelFactor, HankelLayout, QrCompressor,
+};
+use crate::error::{Result, SysidError};
+use crate::linalg::lq_lower;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, MatRef, Par, Side};
+use rayon::prelude::*;
+
+/// Knobs of the correlation compressor.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub struct CorrelationOptions {
+    /// Samples per block (the unit of parallel work and of the pairwise reduction).
+    pub block_rows: usize,
+    /// Threshold on the smallest relative Cholesky pivot `min La_ii^2 / max Ga_ii` of the
+    /// centred, scaled Gram matrix below which the result is flagged ill-conditioned (and,
+    /// in [`compress_experiments`], recomputed by the exact compressor).
+    pub min_relative_pivot: f64,
+    /// Process blocks on the rayon thread pool (the result is the same either way).
+    pub parallel: bool,
+}
+
+impl Default for CorrelationOptions {
+    fn default() -> Self {
+        Self {
+            block_rows: 8192,
+            min_relative_pivot: 1e-10,
+            parallel: true,
+        }
+    }
+}
+
+/// Partial sums of one contiguous stretch of samples (inside one experiment).
+#[derive(Debug, Clone, PartialEq)]
+struct Segment {
+    n: usize,
+    /// d x (w d): block `tau` holds `sum x_t x_{t+tau}^T` over pairs inside the segment.
+    lag: Mat<f64>,
+    sum: Vec<f64>,
+    /// First `min(n, w - 1)` samples, row-major.
+    head: Vec<f64>,
+    /// Last `min(n, w - 1)` samples, row-major.
+    tail: Vec<f64>,
+}
+
+impl Segment {
+    fn empty(d: usize, w: usize) -> Self {
+        Segment {
+            n: 0,
+            lag: Mat::zeros(d, w * d),
+            sum: vec![0.0; d],
+            head: vec![],
+            tail: vec![],
+        }
+    }
+
+    /// Sums of `n` row-major samples `x` (n x d).
+    fn from_rows(x: &[f64], n: usize, d: usize, w: usize) -> Self {
+        debug_assert_eq!(x.len(), n * d);
+        let mut lag = Mat::<f64>::zeros(d, w * d);
+        let nf = n.saturating_sub(w - 1);
+        if nf > 0 && d > 0 {
+            // SAFETY: rows t < nf of the overlapping Hankel view read x[t d .. t d + w d],
+            // which ends at (nf - 1 + w) d = n d, inside x; both views only read.
+            let (xt, xw) = unsafe {
+                (
+                    MatRef::from_raw_parts(x.as_ptr(), nf, d, d as isize, 1),
+                    MatRef::from_raw_parts(x.as_ptr(), nf, w * d, d as isize, 1),
+                )
+            };
+            matmul(
+                lag.as_mut(),
+                Accum::Replace,
+                xt.transpose(),
+                xw,
+                1.0,
+                Par::Seq,
+            );
+        }
+        for t in nf..n {
+            for tau in 0..(n - t) {
+                add_outer(
+                    &mut lag,
+                    tau * d,
+                    &x[t * d..(t + 1) * d],
+                    &x[(t + tau) * d..(t + tau + 1) * d],
+                );
+            }
+        }
+        let mut sum = vec![0.0; d];
+        for t in 0..n {
+            for (s, v) in sum.iter_mut().zip(&x[t * d..(t + 1) * d]) {
+                *s += v;
+            }
+        }
+        let b = n.min(w - 1);
+        Segment {
+            n,
+            lag,
+            sum,
+            head: x[..b * d].to_vec(),
+            tail: x[(n - b) * d..].to_vec(),
+        }
+    }
+
+    /// Sums of the samples of `self` followed by those of `next`.
+    fn concat(&self, next: &Segment, d: usize, w: usize) -> Segment {
+        if self.n == 0 {
+            return next.clone();
+        }
+        if next.n == 0 {
+            return self.clone();
+        }
+        let mut lag = &self.lag + &next.lag;
+        let tail_rows = self.tail.len() / d.max(1);
+        for tau in 1..w {
+            for i in 1..=tau.min(self.n) {
+                let j = tau - i;
+                if j >= next.n {
+                    continue;
+                }
+                let a = &self.tail[(tail_rows - i) * d..(tail_rows - i + 1) * d];
+                let b = &next.head[j * d..(j + 1) * d];
+                add_outer(&mut lag, tau * d, a, b);
+            }
+        }
+        let n = self.n + next.n;
+        let keep = n.min(w - 1) * d;
+        let mut head = self.head.clone();
+        head.extend_from_slice(&next.head);
+        head.truncate(keep);
+        let mut tail = self.tail.clone();
+        tail.extend_from_slice(&next.tail);
+        let tail = tail[tail.len() - keep..].to_vec();
+        let sum = self.sum.iter().zip(&next.sum).map(|(a, b)| a + b).collect();
+        Segment {
+            n,
+            lag,
+            sum,
+            head,
+            tail,
+        }
+    }
+}
+
+#[inline]
+fn add_outer(lag: &mut Mat<f64>, col0: usize, a: &[f64], b: &[f64]) {
+    for (j, bj) in b.iter().enumerate() {
+        let mut col = lag.as_mut().col_mut(col0 + j);
+        for (i, ai) in a.iter().enumerate() {
+            col[i] += ai * bj;
+        }
+    }
+}
+
+/// Plain-data snapshot of [`CorrelationSums`] (for saving, pickling, sending to a worker).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CorrelationState {
+    /// Channel counts and horizons.
+    pub layout: HankelLayout,
+    /// Per-channel shift `c` (inputs then outputs).
+    pub center: Vec<f64>,
+    /// Per-channel scale `s` (powers of two).
+    pub scale: Vec<f64>,
+    /// Gram matrix of closed experiments, natural order, centred and scaled: (w d) x (w d).
+    pub gram: Mat<f64>,
+    /// Column sums `sum_t X_t` of closed experiments (w d).
+    pub col_sum: Vec<f64>,
+    /// Hankel columns of closed experiments.
+    pub n_columns: usize,
+    /// Closed experiments.
+    pub n_experiments: usize,
+    /// Samples of the open (not yet ended) experiment.
+    pub open_samples: usize,
+    /// Lagged sums of the open experiment, d x (w d).
+    pub open_lag: Mat<f64>,
+    /// Channel sums of the open experiment.
+    pub open_sum: Vec<f64>,
+    /// First `min(open_samples, w - 1)` samples of the open experiment, row-major.
+    pub open_head: Vec<f64>,
+    /// Last `min(open_samples, w - 1)` samples of the open experiment, row-major.
+    pub open_tail: Vec<f64>,
+}
+
+/// Lagged correlation sums of a record: a value that can be merged with the sums of the
+/// samples that follow it (or of other experiments) and turned into a [`HankelFactor`].
+///
+/// All partial sums that are to be merged must share the shift and scale given to
+/// [`CorrelationSums::new`]; this is what lets chunks of one record be summed on different
+/// machines and combined afterwards.
+///
+/// ```
+/// use faer::Mat;
+/// use sysid_core::hankel::{CorrelationSums, HankelLayout};
+/// let layout = HankelLayout::new(1, 1, 2, 2).unwrap();
+/// let u = Mat::from_fn(60, 1, |i, _| ((i * 7919) % 13) as f64 - 6.0);
+/// let y = Mat::from_fn(60, 1, |i, _| ((i * 104729) % 11) as f64 - 5.0);
+/// let (c, s) = (vec![0.0, 0.0], vec![4.0, 4.0]);
+/// let mut a = CorrelationSums::new(layout, c.clone(), s.clone()).unwrap();
+/// a.push(u.as_ref().subrows(0, 25), y.as_ref().subrows(0, 25)).unwrap();
+/// let mut b = CorrelationSums::new(layout, c, s).unwrap();
+/// b.push(u.as_ref().subrows(25, 35), y.as_ref().subrows(25, 35)).unwrap();
+/// let f = a.merge(&b).unwrap().into_factor(1e-10).unwrap();
+/// assert_eq!(f.n_columns(), 60 - 4 + 1);
+/// ```
+#[derive(Debug, Clone)]
+pub struct CorrelationSums {
+    layout: HankelLayout,
+    center: Vec<f64>,
+    inv_scale: Vec<f64>,
+    scale: Vec<f64>,
+    gram: Mat<f64>,
+    col_sum: Vec<f64>,
+    n_columns: usize,
+    n_experiments: usize,
+    /// Pairwise reduction stack of the open experiment: (level, segment), in sample order.
+    stack: Vec<(u32, Segment)>,
+    open_samples: usize,
+    block_rows: usize,
+    parallel: bool,
+}
+
+impl CorrelationSums {
+    /// Empty sums for `layout`, accumulated in coordinates `(z - center) / scale`.
+    pub fn new(layout: HankelLayout, center: Vec<f64>, scale: Vec<f64>) -> Result<Self> {
+        let d = layout.n_inputs + layout.n_outputs;
+        if center.len() != d || scale.len() != d {
+            return Err(SysidError::ShapeMismatch {
+                what: "center/scale".into(),
+                expected: format!("({d},) each (one per input and output channel)"),
+                got: format!("({},) and ({},)", center.len(), scale.len()),
+            });
+        }
+        if center.iter().any(|v| !v.is_finite())
+            || scale.iter().any(|v| !v.is_finite() || *v <= 0.0)
+        {
+            return Err(SysidError::invalid(
+                "center/scale",
+                "must be finite, with positive scales",
+            ));
+        }
+        let k = layout.k();
+        let w = layout.window();
+        Ok(Self {
+            layout,
+            inv_scale: scale.iter().map(|s| 1.0 / s).collect(),
+            center,
+            scale,
+            gram: Mat::zeros(k, k),
+            col_sum: vec![0.0; k],
+            n_columns: 0,
+            n_experiments: 0,
+            stack: vec![(0, Segment::empty(d, w))],
+            open_samples: 0,
+            block_rows: CorrelationOptions::default().block_rows,
+            parallel: true,
+        })
+    }
+
+    /// Shift and power-of-two scale per channel estimated from a chunk (mean and standard
+    /// deviation), as [`CorrelationCompressor`] does with the first chunk it receives.
+    pub fn center_scale(u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> (Vec<f64>, Vec<f64>) {
+        let mut center = Vec::new();
+        let mut scale = Vec::new();
+        for x in [u, y] {
+            let n = x.nrows();
+            for c in 0..x.ncols() {
+                let mean = if n == 0 {
+                    0.0
+                } else {
+                    (0..n).map(|t| x[(t, c)]).sum::<f64>() / n as f64
+                };
+                let var = if n == 0 {
+                    0.0
+                } else {
+                    (0..n).map(|t| (x[(t, c)] - mean).powi(2)).sum::<f64>() / n as f64
+                };
+                let spread = if var > 0.0 && var.is_finite() {
+                    var.sqrt()
+                } else {
+                    mean.abs()
+                };
+                let e = if spread > 0.0 && spread.is_finite() {
+                    spread.log2().round().clamp(-1000.0, 1000.0)
+                } else {
+                    0.0
+                };
+                center.push(if mean.is_finite() { mean } else { 0.0 });
+                scale.push(2f64.powi(e as i32));
+            }
+        }
+        (center, scale)
+    }
+
+    /// Sets the block size and whether blocks run in parallel (the sums do not depend on
+    /// `parallel`; they depend on `block_rows` only through round-off).
+    pub fn set_blocking(&mut self, block_rows: usize, parallel: bool) {
+        self.block_rows = block_rows.max(1);
+        self.parallel = parallel;
+    }
+
+    /// The layout.
+    pub fn layout(&self) -> &HankelLayout {
+        &self.layout
+    }
+
+    /// Hankel columns of the closed experiments.
+    pub fn n_columns(&self) -> usize {
+        self.n_columns
+    }
+
+    /// Closed experiments.
+    pub fn n_experiments(&self) -> usize {
+        self.n_experiments
+    }
+
+    /// Samples pushed into the open experiment.
+    pub fn open_samples(&self) -> usize {
+        self.open_samples
+    }
+
+    fn d(&self) -> usize {
+        self.layout.n_inputs + self.layout.n_outputs
+    }
+
+    fn push_segment(&mut self, seg: Segment) {
+        let (d, w) = (self.d(), self.layout.window());
+        self.stack.push((0, seg));
+        while self.stack.len() >= 2
+            && self.stack[self.stack.len() - 1].0 == self.stack[self.stack.len() - 2].0
+        {
+            let (lb, b) = self.stack.pop().unwrap();
+            let (_, a) = self.stack.pop().unwrap();
+            self.stack.push((lb + 1, a.concat(&b, d, w)));
+        }
+    }
+
+    fn collapse(&mut self) -> Segment {
+        let (d, w) = (self.d(), self.layout.window());
+        let mut acc: Option<Segment> = None;
+        while let Some((_, s)) = self.stack.pop() {
+            acc = Some(match acc {
+                None => s,
+                Some(later) => s.concat(&later, d, w),
+            });
+        }
+        let seg = acc.unwrap_or_else(|| Segment::empty(d, w));
+        self.stack.push((u32::MAX, seg.clone()));
+        seg
+    }
+
+    /// Appends samples to the open experiment.
+    pub fn push(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> Result<()> {
+        let u = if self.layout.n_inputs == 0 {
+            u.subrows(0, 0)
+        } else {
+            u
+        };
+        check_chunk(&self.layout, u, y, self.open_samples)?;
+        let n = y.nrows();
+        if n == 0 {
+            return Ok(());
+        }
+        let (m, d, w) = (self.layout.n_inputs, self.d(), self.layout.window());
+        let br = self.block_rows;
+        let n_blocks = n.div_ceil(br);
+        let (center, inv) = (&self.center, &self.inv_scale);
+        let block = |b: usize| {
+            let s = b * br;
+            let len = br.min(n - s);
+            let mut x = vec![0.0; len * d];
+            for t in 0..len {
+                let row = &mut x[t * d..(t + 1) * d];
+                for c in 0..m {
+                    row[c] = (u[(s + t, c)] - center[c]) * inv[c];
+                }
+                for c in 0..(d - m) {
+                    row[m + c] = (y[(s + t, c)] - center[m + c]) * inv[m + c];
+                }
+            }
+            Segment::from_rows(&x, len, d, w)
+        };
+        let segs: Vec<Segment> = if self.parallel && n_blocks > 1 {
+            (0..n_blocks).into_par_iter().map(block).collect()
+        } else {
+            (0..n_blocks).map(block).collect()
+        };
+        for s in segs {
+            self.push_segment(s);
+        }
+        self.open_samples += n;
+        Ok(())
+    }
+
+    /// Closes the open experiment: its Hankel columns join the Gram matrix.
+    pub fn end_experiment(&mut self) -> Result<()> {
+        let seg = self.collapse();
+        let (d, w) = (self.d(), self.layout.window());
+        self.stack.clear();
+        self.stack.push((0, Segment::empty(d, w)));
+        self.open_samples = 0;
+        if seg.n == 0 {
+            return Ok(());
+        }
+        if seg.n < w {
+            return Err(SysidError::InsufficientData {
+                context: format!(
+                    "experiment {} with a window of p + f = {w} samples",
+                    self.n_experiments + 1
+                ),
+                needed: w,
+                got: seg.n,
+                fix: "drop the short experiment or use a smaller horizon",
+            });
+        }
+        let t_cols = seg.n - w + 1;
+        let (head, tail) = (&seg.head, &seg.tail);
+        for a in 0..w {
+            for b in a..w {
+                let tau = b - a;
+                for i in 0..d {
+                    for j in 0..d {
+                        let mut v = seg.lag[(i, tau * d + j)];
+                        for t in 0..a {
+                            v -= head[t * d + i] * head[(t + tau) * d + j];
+                        }
+                        for q in a..(w - 1 - tau) {
+                            v -= tail[q * d + i] * tail[(q + tau) * d + j];
+                        }
+                        self.gram[(a * d + i, b * d + j)] += v;
+                        if a != b {
+                            self.gram[(b * d + j, a * d + i)] += v;
+                        }
+                    }
+                }
+            }
+            for i in 0..d {
+                let mut v = seg.sum[i];
+                for t in 0..a {
+                    v -= head[t * d + i];
+                }
+                for q in a..(w - 1) {
+                    v -= tail[q * d + i];
+                }
+                self.col_sum[a * d + i] += v;
+            }
+        }
+        self.n_columns += t_cols;
+        self.n_experiments += 1;
+        Ok(())
+    }
+
+    /// Sums of `self` followed by `other`: `other`'s samples continue `self`'s open
+    /// experiment, and closed experiments add up. Both must share layout, shift and scale;
+    /// if `self` has an open experiment, `other` must not contain closed ones (end the
+    /// experiment first to join separate experiments).
+    pub fn merge(&self, other: &CorrelationSums) -> Result<CorrelationSums> {
+        if self.layout != other.layout {
+            return Err(SysidError::IncompatibleFactors {
+                reason: format!("layouts differ: {:?} vs {:?}", self.layout, other.layout),
+            });
+        }
+        if self.center != other.center || self.scale != other.scale {
+            return Err(SysidError::IncompatibleFactors {
+                reason: "the partial sums use different shifts or scales; build every part with \
+                         the same center and scale"
+                    .into(),
+            });
+        }
+        if self.open_samples > 0 && other.n_experiments > 0 {
+            return Err(SysidError::IncompatibleFactors {
+                reason: "the first operand has an open experiment and the second contains closed \
+                         experiments; call end_experiment() on the first before merging"
+                    .into(),
+            });
+        }
+        let (d, w) = (self.d(), self.layout.window());
+        let mut out = self.clone();
+        let a = out.collapse();
+        let b = other.clone().collapse();
+        out.stack = vec![(0, a.concat(&b, d, w))];
+        out.open_samples = self.open_samples + other.open_samples;
+        out.gram = &self.gram + &other.gram;
+        for (x, y) in out.col_sum.iter_mut().zip(&other.col_sum) {
+            *x += y;
+        }
+        out.n_columns += other.n_columns;
+        out.n_experiments += other.n_experiments;
+        Ok(out)
+    }
+
+    /// A plain-data snapshot.
+    pub fn state(&self) -> CorrelationState {
+        let seg = self.clone().collapse();
+        CorrelationState {
+            layout: self.layout,
+            center: self.center.clone(),
+            scale: self.scale.clone(),
+            gram: self.gram.clone(),
+            col_sum: self.col_sum.clone(),
+            n_columns: self.n_columns,
+            n_experiments: self.n_experiments,
+            open_samples: seg.n,
+            open_lag: seg.lag,
+            open_sum: seg.sum,
+            open_head: seg.head,
+            open_tail: seg.tail,
+        }
+    }
+
+    /// Rebuilds sums from a snapshot, checking its shapes.
+    pub fn from_state(s: CorrelationState) -> Result<Self> {
+        let mut out = Self::new(s.layout, s.center, s.scale)?;
+        let (d, w, k) = (out.d(), s.layout.window(), s.layout.k());
+        let b = s.open_samples.min(w - 1) * d;
+        let ok = s.gram.nrows() == k
+            && s.gram.ncols() == k
+            && s.col_sum.len() == k
+            && s.open_lag.nrows() == d
+            && s.open_lag.ncols() == w * d
+            && s.open_sum.len() == d
+            && s.open_head.len() == b
+            && s.open_tail.len() == b;
+        if !ok {
+            return Err(SysidError::invalid(
+                "state",
+                "the correlation-sum arrays do not fit the layout",
+            ));
+        }
+        out.gram = s.gram;
+        out.col_sum = s.col_sum;
+        out.n_columns = s.n_columns;
+        out.n_experiments = s.n_experiments;
+        out.open_samples = s.open_samples;
+        out.stack = vec![(
+            0,
+            Segment {
+                n: s.open_samples,
+                lag: s.open_lag,
+                sum: s.open_sum,
+                head: s.open_head,
+                tail: s.open_tail,
+            },
+        )];
+        Ok(out)
+    }
+
+    /// Closes the open experiment and factors the Gram matrix of the raw data.
+    ///
+    /// The result is flagged [`FactorSource::CorrelationIllConditioned`] when the smallest
+    /// relative Cholesky pivot of the centred, scaled Gram matrix is below
+    /// `min_relative_pivot`, or when Cholesky fails (then the factor comes from the
+    /// eigendecomposition with negative eigenvalues set to zero).
+    pub fn into_factor(mut self, min_relative_pivot: f64) -> Result<HankelFactor> {
+        self.end_experiment()?;
+        let (m, l, p) = (
+            self.layout.n_inputs,
+            self.layout.n_outputs,
+            self.layout.past,
+        );
+        let (d, w, k) = (m + l, self.layout.window(), self.layout.k());
+        if self.n_columns < k {
+            return Err(SysidError::InsufficientData {
+                context: format!(
+                    "a data matrix with {k} rows (horizons p={}, f={}, {m} input(s), {l} output(s))",
+                    p, self.layout.future
+                ),
+                needed: k + (w - 1) * self.n_experiments.max(1),
+                got: self.n_columns + (w - 1) * self.n_experiments,
+                fix: "use a longer record or a smaller horizon",
+            });
+        }
+        // augmented Gram matrix [[X X^T, X 1], [1^T X^T, T]]
+        let mut ga = Mat::<f64>::zeros(k + 1, k + 1);
+        ga.as_mut()
+            .submatrix_mut(0, 0, k, k)
+            .copy_from(self.gram.as_ref());
+        for i in 0..k {
+            ga[(i, k)] = self.col_sum[i];
+            ga[(k, i)] = self.col_sum[i];
+        }
+        ga[(k, k)] = self.n_columns as f64;
+        let max_diag = (0..=k).map(|i| ga[(i, i)]).fold(0.0, f64::max);
+        let (la, source) = match ga.llt(Side::Lower) {
+            Ok(llt) => {
+                let la = llt.L().to_owned();
+                let min_piv = (0..=k)
+                    .map(|i| la[(i, i)] * la[(i, i)])
+                    .fold(f64::INFINITY, f64::min);
+                let rel = if max_diag > 0.0 {
+                    min_piv / max_diag
+                } else {
+                    0.0
+                };
+                let src = if rel >= min_relative_pivot {
+                    FactorSource::Correlation
+                } else {
+                    FactorSource::CorrelationIllConditioned {
+                        clipped: 0,
+                        relative_pivot: rel,
+                    }
+                };
+                (la, src)
+            }
+            Err(_) => {
+                let evd = ga.self_adjoint_eigen(Side::Lower).map_err(|e| {
+                    SysidError::numerical(
+                        "correlation compressor (eigendecomposition)",
+                        format!("{e:?}"),
+                    )
+                })?;
+                let s = evd.S().column_vector();
+                let v = evd.U();
+                let clipped = (0..=k).filter(|&i| s[i] < 0.0).count();
+                let f = Mat::from_fn(k + 1, k + 1, |i, j| v[(i, j)] * s[j].max(0.0).sqrt());
+                (
+                    f,
+                    FactorSource::CorrelationIllConditioned {
+                        clipped,
+                        relative_pivot: 0.0,
+                    },
+                )
+            }
+        };
+        // rows of E La, permuted from natural to canonical order
+        let (uf, _) = self.layout.block(Block::UFuture);
+        let (up, _) = self.layout.block(Block::UPast);
+        let (yp, _) = self.layout.block(Block::YPast);
+        let (yf, _) = self.layout.block(Block::YFuture);
+        let mut h = Mat::<f64>::zeros(k, k + 1);
+        for a in 0..w {
+            for c in 0..d {
+                let r = a * d + c;
+                let dst = match (c < m, a < p) {
+                    (true, true) => up + a * m + c,
+                    (true, false) => uf + (a - p) * m + c,
+                    (false, true) => yp + a * l + (c - m),
+                    (false, false) => yf + (a - p) * l + (c - m),
+                };
+                let (s, cc) = (self.scale[c], self.center[c]);
+                for j in 0..=k {
+                    h[(dst, j)] = s * la[(r, j)] + cc * la[(k, j)];
+                }
+            }
+        }
+        let l_mat = lq_lower(h.as_ref());
+        Ok(
+            HankelFactor::from_parts(self.layout, l_mat, self.n_columns, self.n_experiments)?
+                .with_source(source),
+        )
+    }
+}
+
+/// The fast streaming compressor (lagged correlation sums, then Cholesky).
+///
+/// Same interface and same result as [`QrCompressor`] up to round-off on well-conditioned
+/// data, at `2 (p + f)(m + l)^2` flops per sample instead of `2 (p + f)^2 (m + l)^2`. The
+/// shift and scale are taken from the first chunk pushed. Check
+/// [`HankelFactor::source`]: when the Gram matrix is nearly singular (noise-free data, a
+/// constant channel) the factor is flagged and small singular values are not resolved.
+///
+/// ```
+/// use faer::Mat;
+/// use sysid_core::hankel::{Compressor, CorrelationCompressor, FactorSource, HankelLayout};
+/// let layout = HankelLayout::new(1, 1, 2, 2).unwrap();
+/// let u = Mat::from_fn(80, 1, |i, _| ((i * 7919) % 13) as f64 - 6.0);
+/// let y = Mat::from_fn(80, 1, |i, _| ((i * 104729) % 11) as f64 - 5.0);
+/// let mut c = CorrelationCompressor::new(layout);
+/// c.push(u.as_ref(), y.as_ref()).unwrap();
+/// let f = c.finish().unwrap();
+/// assert_eq!(f.n_columns(), 80 - 4 + 1);
+/// assert_eq!(f.source(), FactorSource::Correlation);
+/// ```
+#[derive(Debug, Clone)]
+pub struct CorrelationCompressor {
+    layout: HankelLayout,
+    options: CorrelationOptions,
+    sums: Option<CorrelationSums>,
+}
+
+impl CorrelationCompressor {
+    /// A compressor with default options.
+    pub fn new(layout: HankelLayout) -> Self {
+        Self::with_options(layout, CorrelationOptions::default())
+    }
+
+    /// A compressor with the given options.
+    pub fn with_options(layout: HankelLayout, options: CorrelationOptions) -> Self {
+        Self {
+            layout,
+            options,
+            sums: None,
+        }
+    }
+
+    /// The layout being compressed.
+    pub fn layout(&self) -> &HankelLayout {
+        &self.layout
+    }
+}
+
+impl Compressor for CorrelationCompressor {
+    fn push(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> Result<()> {
+        if self.sums.is_none() {
+            let u0 = if self.layout.n_inputs == 0 {
+                u.subrows(0, 0)
+            } else {
+                u
+            };
+            check_chunk(&self.layout, u0, y, 0)?;
+            if y.nrows() == 0 {
+                return Ok(());
+            }
+            let (c, s) = CorrelationSums::center_scale(u0, y);
+            let mut sums = CorrelationSums::new(self.layout, c, s)?;
+            sums.set_blocking(self.options.block_rows, self.options.parallel);
+            self.sums = Some(sums);
+        }
+        self.sums.as_mut().unwrap().push(u, y)
+    }
+
+    fn end_experiment(&mut self) -> Result<()> {
+        match self.sums.as_mut() {
+            Some(s) => s.end_experiment(),
+            None => Ok(()),
+        }
+    }
+
+    fn finish(self) -> Result<HankelFactor> {
+        match self.sums {
+            Some(s) => s.into_factor(self.options.min_relative_pivot),
+            None => Err(SysidError::InsufficientData {
+                context: "the correlation compressor".into(),
+                needed: self.layout.window(),
+                got: 0,
+                fix: "push samples before finishing",
+            }),
+        }
+    }
+}
+
+/// Which compressor [`compress_experiments`] uses.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum CompressorKind {
+    /// Exact sequential QR, with an optional number of windows per QR update.
+    Qr {
+        /// Windows per QR update (`None`: the default).
+        chunk_rows: Option<usize>,
+    },
+    /// Lagged correlation sums; falls back to the exact QR pass when the Gram matrix is
+    /// ill-conditioned (the data are in memory), recorded as [`FactorSource::QrFallback`].
+    Correlation(CorrelationOptions),
+}
+
+/// Compresses in-memory experiments `(u, y)` with the chosen compressor.
+///
+/// ```
+/// use faer::Mat;
+/// use sysid_core::hankel::{compress_experiments, CompressorKind, CorrelationOptions, HankelLayout};
+/// let layout = HankelLayout::new(1, 1, 3, 3).unwrap();
+/// let u = Mat::from_fn(200, 1, |i, _| ((i * 7919) % 13) as f64 - 6.0);
+/// let y = Mat::from_fn(200, 1, |i, _| ((i * 104729) % 11) as f64 - 5.0);
+/// let kind = CompressorKind::Correlation(CorrelationOptions::default());
+/// let f = compress_experiments(layout, &[(u.as_ref(), y.as_ref())], kind).unwrap();
+/// assert_eq!(f.n_columns(), 200 - 6 + 1);
+/// ```
+pub fn compress_experiments(
+    layout: HankelLayout,
+    experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
+    kind: CompressorKind,
+) -> Result<HankelFactor> {
+    fn run<C: Compressor>(
+        mut c: C,
+        experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
+    ) -> Result<HankelFactor> {
+        for (u, y) in experiments {
+            c.push(*u, *y)?;
+            c.end_experiment()?;
+        }
+        c.finish()
+    }
+    let qr = |chunk_rows: Option<usize>| match chunk_rows {
+        Some(r) => QrCompressor::with_chunk_rows(layout, r),
+        None => QrCompressor::new(layout),
+    };
+    match kind {
+        CompressorKind::Qr { chunk_rows } => run(qr(chunk_rows), experiments),
+        CompressorKind::Correlation(opts) => {
+            let f = run(
+                CorrelationCompressor::with_options(layout, opts),
+                experiments,
+            )?;
+            match f.source() {
+                FactorSource::CorrelationIllConditioned { relative_pivot, .. } => {
+                    Ok(run(qr(None), experiments)?
+                        .with_source(FactorSource::QrFallback { relative_pivot }))
+                }
+                _ => Ok(f),
+            }
+        }
+    }
+}
