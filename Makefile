@@ -4,7 +4,7 @@ VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.deps-installed
 
-.PHONY: demo test test-rust test-python lint build bench clean
+.PHONY: demo test test-rust test-python lint build bench bench-quick bench-full clean
 
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -34,6 +34,12 @@ lint: $(STAMP)
 
 bench: build
 	$(BIN)/python benches/run.py
+
+bench-quick: build
+	$(BIN)/python benches/run.py --quick
+
+bench-full: build
+	$(BIN)/python benches/run.py --full
 
 clean:
 	rm -rf $(VENV) target

@@ -33,6 +33,7 @@ from .errors import (
 )
 from .model import StateSpaceModel
 from .subspace import SubspaceEstimator, cva, default_horizon, moesp, n4sid
+from .streaming import compress_dask, compress_stream
 
 __all__ = [
     "__version__",
@@ -44,6 +45,8 @@ __all__ = [
     "moesp",
     "n4sid",
     "cva",
+    "compress_stream",
+    "compress_dask",
     "SysidError",
     "DataError",
     "NonFiniteError",

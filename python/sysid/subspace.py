@@ -34,6 +34,7 @@ from . import _sysid
 from .data import IOData
 from .errors import DataError
 from .model import StateSpaceModel
+from .streaming import warn_if_fallback
 
 __all__ = ["SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "METHODS"]
 
@@ -93,7 +94,10 @@ class SubspaceEstimator:
     chunk_rows : int, optional
         Hankel columns per QR update in the compressor (memory ``(k + chunk) k`` doubles).
     compressor : str
-        ``"qr"``: the exact compressor (sequential QR updates).
+        ``"qr"``: the exact compressor (sequential QR updates); ``"correlation"``: the fast one
+        (lagged correlation sums and Cholesky, about ``p + f`` times fewer flops), which
+        recompresses exactly, with a ``RuntimeWarning``, when its Gram matrix is ill-conditioned
+        (``factor.source == "qr-fallback"``); see docs/performance.md.
 
     Examples
     --------
@@ -135,6 +139,7 @@ class SubspaceEstimator:
         self.factor = _sysid.compress(
             data.experiments, self.past, self.future, chunk_rows, compressor
         )
+        warn_if_fallback(self.factor)
         self._svd: dict[str, Any] = {}
 
     @classmethod

@@ -6,8 +6,11 @@ use faer::MatRef;
 use numpy::{PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
-use sysid_core::hankel::{Compressor, HankelFactor, HankelLayout, QrCompressor};
-use sysid_core::{Result as CoreResult, SysidError};
+use sysid_core::hankel::{
+    compress_experiments, CompressorKind, CorrelationOptions, FactorSource, HankelFactor,
+    HankelLayout,
+};
+use sysid_core::SysidError;
 
 /// Triangular factor of a block-Hankel data matrix (`H H^T = L L^T`).
 #[pyclass(name = "HankelFactor", module = "sysid._sysid", frozen)]
@@ -47,12 +50,30 @@ impl PyHankelFactor {
         self.inner.layout().future
     }
 
+    /// How the factor was obtained: "qr", "correlation", "correlation-ill-conditioned" or
+    /// "qr-fallback".
+    #[getter]
+    fn source(&self) -> &'static str {
+        self.inner.source().name()
+    }
+
+    /// Smallest relative Cholesky pivot of the correlation path (None for the exact path).
+    #[getter]
+    fn relative_pivot(&self) -> Option<f64> {
+        match self.inner.source() {
+            FactorSource::CorrelationIllConditioned { relative_pivot, .. }
+            | FactorSource::QrFallback { relative_pivot } => Some(relative_pivot),
+            _ => None,
+        }
+    }
+
     fn merge(&self, other: &PyHankelFactor) -> PyResult<PyHankelFactor> {
         Ok(PyHankelFactor { inner: self.inner.merge(&other.inner).py()? })
     }
 
     #[staticmethod]
     #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (n_inputs, n_outputs, past, future, l, n_columns, n_experiments, source="qr", relative_pivot=None))]
     fn from_parts(
         n_inputs: usize,
         n_outputs: usize,
@@ -61,10 +82,28 @@ impl PyHankelFactor {
         l: PyReadonlyArray2<'_, f64>,
         n_columns: usize,
         n_experiments: usize,
+        source: &str,
+        relative_pivot: Option<f64>,
     ) -> PyResult<PyHankelFactor> {
         let layout = HankelLayout::new(n_inputs, n_outputs, past, future).py()?;
-        let inner =
-            HankelFactor::from_parts(layout, view(&l).to_owned(), n_columns, n_experiments).py()?;
+        let rp = relative_pivot.unwrap_or(0.0);
+        let source = match source {
+            "qr" => FactorSource::Qr,
+            "correlation" => FactorSource::Correlation,
+            "correlation-ill-conditioned" => {
+                FactorSource::CorrelationIllConditioned { clipped: 0, relative_pivot: rp }
+            }
+            "qr-fallback" => FactorSource::QrFallback { relative_pivot: rp },
+            other => {
+                return Err(crate::errors::to_py(SysidError::InvalidArgument {
+                    name: "source",
+                    reason: format!("unknown factor source {other:?}"),
+                }))
+            }
+        };
+        let inner = HankelFactor::from_parts(layout, view(&l).to_owned(), n_columns, n_experiments)
+            .py()?
+            .with_source(source);
         Ok(PyHankelFactor { inner })
     }
 
@@ -82,6 +121,8 @@ impl PyHankelFactor {
             to_numpy(py, me.inner.l()),
             me.inner.n_columns(),
             me.inner.n_experiments(),
+            me.inner.source().name(),
+            me.relative_pivot(),
         );
         PyTuple::new(py, [ctor, args.into_pyobject(py)?.into_any()])
     }
@@ -101,19 +142,11 @@ impl PyHankelFactor {
     }
 }
 
-/// Feeds every experiment to a compressor (GIL released by the caller).
-pub fn compress_all<C: Compressor>(
-    mut c: C,
-    experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
-) -> CoreResult<HankelFactor> {
-    for (u, y) in experiments {
-        c.push(*u, *y)?;
-        c.end_experiment()?;
-    }
-    c.finish()
-}
-
 /// Compresses a list of `(u, y)` experiments into a `HankelFactor`.
+///
+/// `compressor="qr"` is exact (`chunk_rows` windows per QR update); `"correlation"` is fast
+/// (`chunk_rows` samples per parallel block) and falls back to the exact pass when its Gram
+/// matrix is ill-conditioned (then `factor.source == "qr-fallback"`).
 #[pyfunction]
 #[pyo3(signature = (experiments, past, future, chunk_rows=None, compressor="qr"))]
 pub fn compress(
@@ -137,19 +170,23 @@ pub fn compress(
         .iter()
         .map(|(u, y)| (view_nd(u.as_array()), view_nd(y.as_array())))
         .collect();
-    let result = match compressor {
-        "qr" => py.detach(|| {
-            let c = match chunk_rows {
-                Some(r) => QrCompressor::with_chunk_rows(layout, r),
-                None => QrCompressor::new(layout),
-            };
-            compress_all(c, &views)
-        }),
-        other => Err(SysidError::InvalidArgument {
-            name: "compressor",
-            reason: format!("unknown compressor {other:?}; available: \"qr\""),
-        }),
+    let kind = match compressor {
+        "qr" => CompressorKind::Qr { chunk_rows },
+        "correlation" => {
+            let mut opts = CorrelationOptions::default();
+            if let Some(r) = chunk_rows {
+                opts.block_rows = r.max(1);
+            }
+            CompressorKind::Correlation(opts)
+        }
+        other => {
+            return Err(crate::errors::to_py(SysidError::InvalidArgument {
+                name: "compressor",
+                reason: format!("unknown compressor {other:?}; available: \"qr\", \"correlation\""),
+            }))
+        }
     };
+    let result = py.detach(|| compress_experiments(layout, &views, kind));
     Ok(PyHankelFactor { inner: result.py()? })
 }
 

@@ -1,0 +1,156 @@
+"""One benchmark measurement in a fresh process: load a case, identify, report JSON.
+
+Run by benches/run.py with the interpreter of the tool's environment (the sysid development
+venv for sysid and NumPy, benches/.venv-peers for sippy-unipi and nfoursid). Prints one JSON
+line: wall time of the identification alone, the process's peak resident memory and its
+resident memory just before identification (interpreter, imports and data), and the
+identified poles.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import sys
+import time
+import traceback
+
+import numpy as np
+
+
+def rss_mb() -> float:
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+def peak_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def po_moesp_a(l_mat: np.ndarray, m: int, l: int, i: int, order: int) -> np.ndarray:
+    """A from the triangular factor (rows [U_f; U_p; Y_p; Y_f]) by PO-MOESP (Verhaegen 1994):
+    the Y_f rows of L in the columns of the past data span the extended observability
+    matrix."""
+    fm, pp = i * m, i * (m + l)
+    l32 = l_mat[fm + pp :, fm : fm + pp]
+    uu = np.linalg.svd(l32, full_matrices=False)[0][:, :order]
+    return np.linalg.lstsq(uu[:-l], uu[l:], rcond=None)[0]
+
+
+def hankel_numpy(u: np.ndarray, y: np.ndarray, i: int) -> np.ndarray:
+    """Plain NumPy baseline: the explicit block-Hankel matrix and one dense QR."""
+    n = y.shape[0]
+    cols = n - 2 * i + 1
+
+    def blocks(x: np.ndarray, start: int) -> np.ndarray:
+        return np.vstack([x[start + j : start + j + cols].T for j in range(i)])
+
+    h = np.vstack([blocks(u, i), blocks(u, 0), blocks(y, 0), blocks(y, i)])
+    r = np.linalg.qr(h.T, mode="r")
+    return r.T
+
+
+def run_sysid(u, y, i, order, compressor):
+    from sysid import _sysid
+
+    f = _sysid.compress([(u, y)], i, i, None, compressor)
+    m, l = u.shape[1], y.shape[1]
+    # the whole identification when the subspace engine is available, else compression
+    # followed by the same small PO-MOESP step as the NumPy baseline
+    try:
+        import sysid
+
+        est = sysid.SubspaceEstimator.from_factor(f, dt=1.0, method="moesp")
+        model = est.fit(order=order)
+        return np.asarray(model.A), {"source": f.source, "engine": "sysid"}
+    except Exception as exc:  # noqa: BLE001 - fall back to the shared step, say so
+        a = po_moesp_a(f.l, m, l, i, order)
+        return a, {"source": f.source, "engine": f"numpy-po-moesp ({type(exc).__name__})"}
+
+
+def run_numpy(u, y, i, order):
+    return po_moesp_a(hankel_numpy(u, y, i), u.shape[1], y.shape[1], i, order), {}
+
+
+def run_sippy(u, y, i, order):
+    try:
+        from sippy import system_identification
+    except ImportError:  # sippy-unipi >= 1.0 installs the package as sippy_unipi
+        from sippy_unipi import system_identification
+
+    sysid_ = system_identification(
+        y.T, u.T, "N4SID", SS_fixed_order=order, SS_f=i, SS_p=i, SS_threshold=0.0
+    )
+    return np.asarray(sysid_.A), {}
+
+
+def run_nfoursid(u, y, i, order):
+    import pandas as pd
+    from nfoursid.nfoursid import NFourSID
+
+    cols_u = [f"u{j}" for j in range(u.shape[1])]
+    cols_y = [f"y{j}" for j in range(y.shape[1])]
+    df = pd.DataFrame(np.hstack([u, y]), columns=cols_u + cols_y)
+    nf = NFourSID(df, output_columns=cols_y, input_columns=cols_u, num_block_rows=i)
+    nf.subspace_identification()
+    ss, _ = nf.system_identification(rank=order)
+    return np.asarray(ss.a), {}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--tool", required=True)
+    ap.add_argument("--data", required=True)
+    ap.add_argument("--m", type=int, required=True)
+    ap.add_argument("--horizon", type=int, required=True)
+    ap.add_argument("--order", type=int, required=True)
+    ap.add_argument("--memory-limit-gb", type=float, default=16.0)
+    args = ap.parse_args()
+    lim = int(args.memory_limit_gb * 2**30)
+    resource.setrlimit(resource.RLIMIT_AS, (lim, lim))
+    out: dict = {"tool": args.tool}
+    try:
+        if args.tool.startswith("sysid"):
+            import sysid  # noqa: F401  (imports count in the baseline)
+        elif args.tool == "sippy":
+            try:
+                import sippy  # noqa: F401
+            except ImportError:
+                import sippy_unipi  # noqa: F401
+        elif args.tool == "nfoursid":
+            import nfoursid  # noqa: F401
+            import pandas  # noqa: F401
+        z = np.load(args.data)
+        u, y = np.ascontiguousarray(z[:, : args.m]), np.ascontiguousarray(z[:, args.m :])
+        del z
+        out["baseline_mb"] = rss_mb()
+        t0 = time.perf_counter()
+        if args.tool == "sysid-correlation":
+            a, info = run_sysid(u, y, args.horizon, args.order, "correlation")
+        elif args.tool == "sysid-qr":
+            a, info = run_sysid(u, y, args.horizon, args.order, "qr")
+        elif args.tool == "numpy-qr":
+            a, info = run_numpy(u, y, args.horizon, args.order)
+        elif args.tool == "sippy":
+            a, info = run_sippy(u, y, args.horizon, args.order)
+        elif args.tool == "nfoursid":
+            a, info = run_nfoursid(u, y, args.horizon, args.order)
+        else:
+            raise SystemExit(f"unknown tool {args.tool}")
+        out["seconds"] = time.perf_counter() - t0
+        ev = np.linalg.eigvals(a)
+        out["poles"] = [[float(z.real), float(z.imag)] for z in ev]
+        out.update(info)
+        out["ok"] = True
+    except BaseException as exc:  # noqa: BLE001 - a failing peer is a result, report it
+        out["ok"] = False
+        msg = f"{type(exc).__name__}: {exc}"
+        out["error"] = msg.splitlines()[0][:200] if msg.strip() else traceback.format_exc()[-200:]
+    out["peak_mb"] = peak_mb()
+    sys.stdout.write(json.dumps(out) + "\n")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,279 @@
+//! Bindings for streaming compression: a compressor object fed chunk by chunk, and the
+//! mergeable, picklable `CorrelationSums` value (for Dask).
+
+use crate::convert::{slice_to_numpy, to_numpy, view, vec1};
+use crate::errors::{to_py, IntoPy};
+use crate::hankel::PyHankelFactor;
+use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyTuple;
+use sysid_core::hankel::{
+    Compressor, CorrelationCompressor, CorrelationOptions, CorrelationState, CorrelationSums,
+    HankelLayout, QrCompressor,
+};
+use sysid_core::SysidError;
+
+enum Inner {
+    Qr(QrCompressor),
+    Correlation(CorrelationCompressor),
+}
+
+fn finished() -> PyErr {
+    to_py(SysidError::InvalidArgument {
+        name: "compressor",
+        reason: "finish() was already called; create a new StreamingCompressor".into(),
+    })
+}
+
+/// A compressor fed chunk by chunk: `push(u, y)`, `end_experiment()`, `finish()`.
+#[pyclass(name = "StreamingCompressor", module = "sysid._sysid")]
+pub struct PyStreamingCompressor {
+    inner: Option<Inner>,
+    kind: &'static str,
+    samples: usize,
+}
+
+#[pymethods]
+impl PyStreamingCompressor {
+    #[new]
+    #[pyo3(signature = (n_inputs, n_outputs, past, future, compressor="qr", chunk_rows=None))]
+    fn new(
+        n_inputs: usize,
+        n_outputs: usize,
+        past: usize,
+        future: usize,
+        compressor: &str,
+        chunk_rows: Option<usize>,
+    ) -> PyResult<Self> {
+        let layout = HankelLayout::new(n_inputs, n_outputs, past, future).py()?;
+        let (inner, kind) = match compressor {
+            "qr" => (
+                Inner::Qr(match chunk_rows {
+                    Some(r) => QrCompressor::with_chunk_rows(layout, r),
+                    None => QrCompressor::new(layout),
+                }),
+                "qr",
+            ),
+            "correlation" => {
+                let mut opts = CorrelationOptions::default();
+                if let Some(r) = chunk_rows {
+                    opts.block_rows = r.max(1);
+                }
+                (Inner::Correlation(CorrelationCompressor::with_options(layout, opts)), "correlation")
+            }
+            other => {
+                return Err(to_py(SysidError::InvalidArgument {
+                    name: "compressor",
+                    reason: format!("unknown compressor {other:?}; available: \"qr\", \"correlation\""),
+                }))
+            }
+        };
+        Ok(Self { inner: Some(inner), kind, samples: 0 })
+    }
+
+    /// Appends a chunk `(u, y)` to the current experiment (the GIL is released).
+    fn push(
+        &mut self,
+        py: Python<'_>,
+        u: PyReadonlyArray2<'_, f64>,
+        y: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<()> {
+        let (uv, yv) = (view(&u), view(&y));
+        let n = yv.nrows();
+        let inner = self.inner.as_mut().ok_or_else(finished)?;
+        py.detach(|| match inner {
+            Inner::Qr(c) => c.push(uv, yv),
+            Inner::Correlation(c) => c.push(uv, yv),
+        })
+        .py()?;
+        self.samples += n;
+        Ok(())
+    }
+
+    /// Closes the current experiment; the next push starts a new one.
+    fn end_experiment(&mut self) -> PyResult<()> {
+        match self.inner.as_mut().ok_or_else(finished)? {
+            Inner::Qr(c) => c.end_experiment(),
+            Inner::Correlation(c) => c.end_experiment(),
+        }
+        .py()
+    }
+
+    /// Closes the last experiment and returns the `HankelFactor`.
+    fn finish(&mut self, py: Python<'_>) -> PyResult<PyHankelFactor> {
+        let inner = self.inner.take().ok_or_else(finished)?;
+        let f = py
+            .detach(|| match inner {
+                Inner::Qr(c) => c.finish(),
+                Inner::Correlation(c) => c.finish(),
+            })
+            .py()?;
+        Ok(PyHankelFactor { inner: f })
+    }
+
+    /// Samples pushed so far.
+    #[getter]
+    fn samples(&self) -> usize {
+        self.samples
+    }
+
+    #[getter]
+    fn compressor(&self) -> &'static str {
+        self.kind
+    }
+
+    fn __repr__(&self) -> String {
+        let state = if self.inner.is_some() { "open" } else { "finished" };
+        format!("StreamingCompressor(compressor={:?}, samples={}, {state})", self.kind, self.samples)
+    }
+}
+
+/// Lagged correlation sums of a stretch of data: mergeable and picklable.
+#[pyclass(name = "CorrelationSums", module = "sysid._sysid")]
+#[derive(Clone)]
+pub struct PyCorrelationSums {
+    inner: CorrelationSums,
+}
+
+fn vec_to_numpy<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f64>> {
+    slice_to_numpy(py, v)
+}
+
+#[pymethods]
+impl PyCorrelationSums {
+    #[new]
+    fn new(
+        n_inputs: usize,
+        n_outputs: usize,
+        past: usize,
+        future: usize,
+        center: PyReadonlyArray1<'_, f64>,
+        scale: PyReadonlyArray1<'_, f64>,
+    ) -> PyResult<Self> {
+        let layout = HankelLayout::new(n_inputs, n_outputs, past, future).py()?;
+        Ok(Self { inner: CorrelationSums::new(layout, vec1(&center), vec1(&scale)).py()? })
+    }
+
+    /// Shift and power-of-two scale per channel (inputs then outputs) estimated from a chunk.
+    #[staticmethod]
+    fn center_scale<'py>(
+        py: Python<'py>,
+        u: PyReadonlyArray2<'py, f64>,
+        y: PyReadonlyArray2<'py, f64>,
+    ) -> (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>) {
+        let (c, s) = CorrelationSums::center_scale(view(&u), view(&y));
+        (vec_to_numpy(py, &c), vec_to_numpy(py, &s))
+    }
+
+    /// Appends samples to the open experiment (the GIL is released).
+    fn push(
+        &mut self,
+        py: Python<'_>,
+        u: PyReadonlyArray2<'_, f64>,
+        y: PyReadonlyArray2<'_, f64>,
+    ) -> PyResult<()> {
+        let (uv, yv) = (view(&u), view(&y));
+        let inner = &mut self.inner;
+        py.detach(|| inner.push(uv, yv)).py()
+    }
+
+    /// Closes the open experiment.
+    fn end_experiment(&mut self) -> PyResult<()> {
+        self.inner.end_experiment().py()
+    }
+
+    /// Sums of `self` followed by `other` (a new object).
+    fn merge(&self, other: &PyCorrelationSums) -> PyResult<PyCorrelationSums> {
+        Ok(PyCorrelationSums { inner: self.inner.merge(&other.inner).py()? })
+    }
+
+    /// The `HankelFactor` of everything summed (closing the open experiment of a copy).
+    #[pyo3(signature = (min_relative_pivot=1e-10))]
+    fn to_factor(&self, py: Python<'_>, min_relative_pivot: f64) -> PyResult<PyHankelFactor> {
+        let s = self.inner.clone();
+        let f = py.detach(|| s.into_factor(min_relative_pivot)).py()?;
+        Ok(PyHankelFactor { inner: f })
+    }
+
+    #[getter]
+    fn n_columns(&self) -> usize {
+        self.inner.n_columns()
+    }
+    #[getter]
+    fn n_experiments(&self) -> usize {
+        self.inner.n_experiments()
+    }
+    #[getter]
+    fn open_samples(&self) -> usize {
+        self.inner.open_samples()
+    }
+
+    #[staticmethod]
+    #[allow(clippy::too_many_arguments)]
+    fn _from_state(
+        layout: (usize, usize, usize, usize),
+        center: PyReadonlyArray1<'_, f64>,
+        scale: PyReadonlyArray1<'_, f64>,
+        gram: PyReadonlyArray2<'_, f64>,
+        col_sum: PyReadonlyArray1<'_, f64>,
+        counts: (usize, usize, usize),
+        open_lag: PyReadonlyArray2<'_, f64>,
+        open_vectors: (PyReadonlyArray1<'_, f64>, PyReadonlyArray1<'_, f64>, PyReadonlyArray1<'_, f64>),
+    ) -> PyResult<PyCorrelationSums> {
+        let layout = HankelLayout::new(layout.0, layout.1, layout.2, layout.3).py()?;
+        let state = CorrelationState {
+            layout,
+            center: vec1(&center),
+            scale: vec1(&scale),
+            gram: view(&gram).to_owned(),
+            col_sum: vec1(&col_sum),
+            n_columns: counts.0,
+            n_experiments: counts.1,
+            open_samples: counts.2,
+            open_lag: view(&open_lag).to_owned(),
+            open_sum: vec1(&open_vectors.0),
+            open_head: vec1(&open_vectors.1),
+            open_tail: vec1(&open_vectors.2),
+        };
+        Ok(PyCorrelationSums { inner: CorrelationSums::from_state(state).py()? })
+    }
+
+    /// Pickling support (Dask ships partial sums between processes).
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
+        let py = slf.py();
+        let s = slf.borrow().inner.state();
+        let ctor = py.get_type::<PyCorrelationSums>().getattr("_from_state")?;
+        let lay = s.layout;
+        let args = (
+            (lay.n_inputs, lay.n_outputs, lay.past, lay.future),
+            vec_to_numpy(py, &s.center),
+            vec_to_numpy(py, &s.scale),
+            to_numpy(py, s.gram.as_ref()),
+            vec_to_numpy(py, &s.col_sum),
+            (s.n_columns, s.n_experiments, s.open_samples),
+            to_numpy(py, s.open_lag.as_ref()),
+            (vec_to_numpy(py, &s.open_sum), vec_to_numpy(py, &s.open_head), vec_to_numpy(py, &s.open_tail)),
+        );
+        PyTuple::new(py, [ctor, args.into_pyobject(py)?.into_any()])
+    }
+
+    fn __repr__(&self) -> String {
+        let lay = self.inner.layout();
+        format!(
+            "CorrelationSums(n_inputs={}, n_outputs={}, past={}, future={}, n_columns={}, n_experiments={}, open_samples={})",
+            lay.n_inputs,
+            lay.n_outputs,
+            lay.past,
+            lay.future,
+            self.inner.n_columns(),
+            self.inner.n_experiments(),
+            self.inner.open_samples()
+        )
+    }
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PyStreamingCompressor>()?;
+    m.add_class::<PyCorrelationSums>()?;
+    Ok(())
+}
