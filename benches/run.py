@@ -192,7 +192,7 @@ def write_report(name: str, rows: list[dict], rate: float, kind: str) -> None:
         " vs sippy | note |",
         "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for key, grp in itertools.groupby(rows, key=lambda r: (r["n"], r["m"], r["l"], r["i"])):
+    for _key, grp in itertools.groupby(rows, key=lambda r: (r["n"], r["m"], r["l"], r["i"])):
         grp = list(grp)
         sippy = next((r for r in grp if r["tool"] == "sippy" and r.get("ok")), None)
         for r in grp:

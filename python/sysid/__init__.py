@@ -32,8 +32,8 @@ from .errors import (
     SysidError,
 )
 from .model import StateSpaceModel
-from .subspace import SubspaceEstimator, cva, default_horizon, moesp, n4sid
 from .streaming import compress_dask, compress_stream
+from .subspace import SubspaceEstimator, cva, default_horizon, moesp, n4sid
 
 __all__ = [
     "__version__",
