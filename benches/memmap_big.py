@@ -43,7 +43,8 @@ else:
     a = po_moesp_a(f.l, 2, 2, horizon, order)
     out["poles"] = [[float(p.real), float(p.imag)] for p in np.linalg.eigvals(a)]
 out["seconds"] = time.perf_counter() - t0
-out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+out["peak_mb"] = [int(x.split()[1]) / 1024 for x in open("/proc/self/status")
+                  if x.startswith("VmHWM:")][0]
 print(json.dumps(out))
 """
 

@@ -26,6 +26,12 @@ def rss_mb() -> float:
 
 
 def peak_mb() -> float:
+    """Peak resident memory of this process image (VmHWM; ru_maxrss would include the
+    parent's memory at fork time, which Linux carries across exec)."""
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024.0
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from sysid import _sysid
 from sysid.errors import DataError, InsufficientDataError, NonFiniteError
-from sysid.streaming import compress_dask, compress_stream
+from sysid.streaming import CompressionFallbackWarning, compress_dask, compress_stream
 
 
 def noisy_record(n: int, m: int, l: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -78,10 +78,16 @@ def test_ill_conditioned_data_fall_back_to_the_exact_pass():
     assert fast.relative_pivot < 1e-10
     np.testing.assert_array_equal(fast.l, exact.l)
     # streamed data cannot be re-read: the factor is flagged and a warning says so
-    with pytest.warns(RuntimeWarning, match="ill-conditioned"):
+    with pytest.warns(CompressionFallbackWarning, match="ill-conditioned"):
         streamed = compress_stream((u, y), 5, chunk_size=300, progress=False)
     assert streamed.source == "correlation-ill-conditioned"
     assert_same_gram(streamed, exact, 1e-11)
+    # the estimator turns the in-memory fallback into a warning naming it
+    import sysid
+
+    with pytest.warns(CompressionFallbackWarning, match="qr-fallback"):
+        est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=5, compressor="correlation")
+    assert est.factor.source == "qr-fallback"
 
 
 def test_unknown_compressor_is_rejected():

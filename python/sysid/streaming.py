@@ -24,11 +24,22 @@ from . import _sysid
 from ._checks import as_2d
 from .errors import DataError
 
-__all__ = ["compress_stream", "compress_dask", "warn_if_fallback", "COMPRESSORS"]
+__all__ = [
+    "compress_stream",
+    "compress_dask",
+    "warn_if_fallback",
+    "CompressionFallbackWarning",
+    "COMPRESSORS",
+]
 
 COMPRESSORS = ("qr", "correlation")
 
 Source = Union[tuple[Any, Any], Iterable[tuple[Any, Any]], str, os.PathLike]
+
+
+class CompressionFallbackWarning(RuntimeWarning):
+    """The correlation compressor met an ill-conditioned Gram matrix; the message says which
+    fallback was used (the exact QR pass, or an eigenvalue-clipped factor)."""
 
 
 def warn_if_fallback(factor: Any, stacklevel: int = 2) -> None:
@@ -46,7 +57,7 @@ def warn_if_fallback(factor: Any, stacklevel: int = 2) -> None:
             "the correlation compressor's Gram matrix was ill-conditioned (relative pivot "
             f"{factor.relative_pivot:.1e}); the data were compressed again with the exact QR "
             "compressor (factor.source == 'qr-fallback')",
-            RuntimeWarning,
+            CompressionFallbackWarning,
             stacklevel=stacklevel + 1,
         )
     elif src == "correlation-ill-conditioned":
@@ -55,7 +66,7 @@ def warn_if_fallback(factor: Any, stacklevel: int = 2) -> None:
             f"{factor.relative_pivot:.1e}; eigenvalue-clipped factor when it is 0): singular "
             "values below about 1e-8 of the largest are not resolved; compress with "
             "compressor='qr' if they matter (noise-free data, constant channels)",
-            RuntimeWarning,
+            CompressionFallbackWarning,
             stacklevel=stacklevel + 1,
         )
 

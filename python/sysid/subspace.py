@@ -96,8 +96,8 @@ class SubspaceEstimator:
     compressor : str
         ``"qr"``: the exact compressor (sequential QR updates); ``"correlation"``: the fast one
         (lagged correlation sums and Cholesky, about ``p + f`` times fewer flops), which
-        recompresses exactly, with a ``RuntimeWarning``, when its Gram matrix is ill-conditioned
-        (``factor.source == "qr-fallback"``); see docs/performance.md.
+        compresses again exactly, with a ``CompressionFallbackWarning``, when its Gram matrix
+        is ill-conditioned (``factor.source == "qr-fallback"``); see docs/performance.md.
 
     Examples
     --------

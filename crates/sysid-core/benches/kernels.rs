@@ -10,7 +10,9 @@ use sysid_core::StateSpace;
 fn record(n: usize, m: usize, l: usize) -> (Mat<f64>, Mat<f64>) {
     let mut s = 1u64;
     let mut next = move || {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
     };
     let u = Mat::from_fn(n, m, |_, _| next());
@@ -48,13 +50,29 @@ fn compressors(c: &mut Criterion) {
 fn simulation(c: &mut Criterion) {
     let n = 1_000_000;
     let nx = 8;
-    let a = Mat::from_fn(nx, nx, |i, j| if i == j { 0.9 } else if j == i + 1 { 0.1 } else { 0.0 });
-    let sys = StateSpace::new(a, Mat::from_fn(nx, 2, |i, j| (i + j) as f64 * 0.1), Mat::from_fn(2, nx, |i, j| (i * j) as f64 * 0.1), Mat::zeros(2, 2)).unwrap();
+    let a = Mat::from_fn(nx, nx, |i, j| {
+        if i == j {
+            0.9
+        } else if j == i + 1 {
+            0.1
+        } else {
+            0.0
+        }
+    });
+    let sys = StateSpace::new(
+        a,
+        Mat::from_fn(nx, 2, |i, j| (i + j) as f64 * 0.1),
+        Mat::from_fn(2, nx, |i, j| (i * j) as f64 * 0.1),
+        Mat::zeros(2, 2),
+    )
+    .unwrap();
     let (u, _) = record(n, 2, 1);
     let mut g = c.benchmark_group("simulate");
     g.sample_size(10);
     g.throughput(Throughput::Elements(n as u64));
-    g.bench_function("n8_m2_l2", |b| b.iter(|| simulate(&sys, u.as_ref(), None).unwrap()));
+    g.bench_function("n8_m2_l2", |b| {
+        b.iter(|| simulate(&sys, u.as_ref(), None).unwrap())
+    });
     g.finish();
 }
 

@@ -68,7 +68,9 @@ impl PyHankelFactor {
     }
 
     fn merge(&self, other: &PyHankelFactor) -> PyResult<PyHankelFactor> {
-        Ok(PyHankelFactor { inner: self.inner.merge(&other.inner).py()? })
+        Ok(PyHankelFactor {
+            inner: self.inner.merge(&other.inner).py()?,
+        })
     }
 
     #[staticmethod]
@@ -90,9 +92,10 @@ impl PyHankelFactor {
         let source = match source {
             "qr" => FactorSource::Qr,
             "correlation" => FactorSource::Correlation,
-            "correlation-ill-conditioned" => {
-                FactorSource::CorrelationIllConditioned { clipped: 0, relative_pivot: rp }
-            }
+            "correlation-ill-conditioned" => FactorSource::CorrelationIllConditioned {
+                clipped: 0,
+                relative_pivot: rp,
+            },
             "qr-fallback" => FactorSource::QrFallback { relative_pivot: rp },
             other => {
                 return Err(crate::errors::to_py(SysidError::InvalidArgument {
@@ -187,7 +190,9 @@ pub fn compress(
         }
     };
     let result = py.detach(|| compress_experiments(layout, &views, kind));
-    Ok(PyHankelFactor { inner: result.py()? })
+    Ok(PyHankelFactor {
+        inner: result.py()?,
+    })
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

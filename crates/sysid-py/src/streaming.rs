@@ -1,7 +1,7 @@
 //! Bindings for streaming compression: a compressor object fed chunk by chunk, and the
 //! mergeable, picklable `CorrelationSums` value (for Dask).
 
-use crate::convert::{slice_to_numpy, to_numpy, view, vec1};
+use crate::convert::{slice_to_numpy, to_numpy, vec1, view};
 use crate::errors::{to_py, IntoPy};
 use crate::hankel::PyHankelFactor;
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
@@ -59,16 +59,25 @@ impl PyStreamingCompressor {
                 if let Some(r) = chunk_rows {
                     opts.block_rows = r.max(1);
                 }
-                (Inner::Correlation(CorrelationCompressor::with_options(layout, opts)), "correlation")
+                (
+                    Inner::Correlation(CorrelationCompressor::with_options(layout, opts)),
+                    "correlation",
+                )
             }
             other => {
                 return Err(to_py(SysidError::InvalidArgument {
                     name: "compressor",
-                    reason: format!("unknown compressor {other:?}; available: \"qr\", \"correlation\""),
+                    reason: format!(
+                        "unknown compressor {other:?}; available: \"qr\", \"correlation\""
+                    ),
                 }))
             }
         };
-        Ok(Self { inner: Some(inner), kind, samples: 0 })
+        Ok(Self {
+            inner: Some(inner),
+            kind,
+            samples: 0,
+        })
     }
 
     /// Appends a chunk `(u, y)` to the current experiment (the GIL is released).
@@ -123,8 +132,15 @@ impl PyStreamingCompressor {
     }
 
     fn __repr__(&self) -> String {
-        let state = if self.inner.is_some() { "open" } else { "finished" };
-        format!("StreamingCompressor(compressor={:?}, samples={}, {state})", self.kind, self.samples)
+        let state = if self.inner.is_some() {
+            "open"
+        } else {
+            "finished"
+        };
+        format!(
+            "StreamingCompressor(compressor={:?}, samples={}, {state})",
+            self.kind, self.samples
+        )
     }
 }
 
@@ -151,7 +167,9 @@ impl PyCorrelationSums {
         scale: PyReadonlyArray1<'_, f64>,
     ) -> PyResult<Self> {
         let layout = HankelLayout::new(n_inputs, n_outputs, past, future).py()?;
-        Ok(Self { inner: CorrelationSums::new(layout, vec1(&center), vec1(&scale)).py()? })
+        Ok(Self {
+            inner: CorrelationSums::new(layout, vec1(&center), vec1(&scale)).py()?,
+        })
     }
 
     /// Shift and power-of-two scale per channel (inputs then outputs) estimated from a chunk.
@@ -184,7 +202,9 @@ impl PyCorrelationSums {
 
     /// Sums of `self` followed by `other` (a new object).
     fn merge(&self, other: &PyCorrelationSums) -> PyResult<PyCorrelationSums> {
-        Ok(PyCorrelationSums { inner: self.inner.merge(&other.inner).py()? })
+        Ok(PyCorrelationSums {
+            inner: self.inner.merge(&other.inner).py()?,
+        })
     }
 
     /// The `HankelFactor` of everything summed (closing the open experiment of a copy).
@@ -218,7 +238,11 @@ impl PyCorrelationSums {
         col_sum: PyReadonlyArray1<'_, f64>,
         counts: (usize, usize, usize),
         open_lag: PyReadonlyArray2<'_, f64>,
-        open_vectors: (PyReadonlyArray1<'_, f64>, PyReadonlyArray1<'_, f64>, PyReadonlyArray1<'_, f64>),
+        open_vectors: (
+            PyReadonlyArray1<'_, f64>,
+            PyReadonlyArray1<'_, f64>,
+            PyReadonlyArray1<'_, f64>,
+        ),
     ) -> PyResult<PyCorrelationSums> {
         let layout = HankelLayout::new(layout.0, layout.1, layout.2, layout.3).py()?;
         let state = CorrelationState {
@@ -235,7 +259,9 @@ impl PyCorrelationSums {
             open_head: vec1(&open_vectors.1),
             open_tail: vec1(&open_vectors.2),
         };
-        Ok(PyCorrelationSums { inner: CorrelationSums::from_state(state).py()? })
+        Ok(PyCorrelationSums {
+            inner: CorrelationSums::from_state(state).py()?,
+        })
     }
 
     /// Pickling support (Dask ships partial sums between processes).
@@ -252,7 +278,11 @@ impl PyCorrelationSums {
             vec_to_numpy(py, &s.col_sum),
             (s.n_columns, s.n_experiments, s.open_samples),
             to_numpy(py, s.open_lag.as_ref()),
-            (vec_to_numpy(py, &s.open_sum), vec_to_numpy(py, &s.open_head), vec_to_numpy(py, &s.open_tail)),
+            (
+                vec_to_numpy(py, &s.open_sum),
+                vec_to_numpy(py, &s.open_head),
+                vec_to_numpy(py, &s.open_tail),
+            ),
         );
         PyTuple::new(py, [ctor, args.into_pyobject(py)?.into_any()])
     }
