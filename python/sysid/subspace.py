@@ -33,6 +33,7 @@ import numpy as np
 from . import _sysid
 from .data import IOData
 from .errors import DataError
+from .input_design import check_excitation
 from .model import StateSpaceModel
 
 __all__ = ["SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "METHODS"]
@@ -233,6 +234,9 @@ class SubspaceEstimator:
         for name, flag in (("feedthrough", feedthrough), ("kalman", kalman), ("stable", stable), ("x0", x0)):
             if not isinstance(flag, (bool, np.bool_)):
                 raise DataError(f"{name} must be True or False, got {flag!r}")
+        if self.data.n_inputs and not getattr(self, "_from_factor", False):
+            # warn (ExcitationWarning) when the input cannot support order n
+            check_excitation([u for u, _ in self.data.experiments], n, stacklevel=2)
         res = sub.fit(n, bool(feedthrough), bool(kalman), bool(stable))
         x0_est = None
         B, D = res["B"], res["D"]
