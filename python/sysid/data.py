@@ -1170,8 +1170,12 @@ class IOData:
             t0 = np.asarray(get("t0"), dtype=float).ravel()
 
             def strs(key: str) -> list[str]:
-                v = np.asarray(get(key)).ravel()
-                return [str(s).strip() for s in v]
+                out = []
+                for s in np.asarray(get(key), dtype=object).ravel():
+                    while isinstance(s, np.ndarray):  # MATLAB cells arrive nested
+                        s = s.ravel()[0] if s.size else ""
+                    out.append(str(s).strip())
+                return out
 
             us = [np.asarray(get(f"u_{k}"), dtype=float) for k in range(n)]
             ys = [np.asarray(get(f"y_{k}"), dtype=float) for k in range(n)]

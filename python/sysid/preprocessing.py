@@ -174,9 +174,7 @@ def find_spikes(x: Any, window: int = 7, n_sigmas: float = 3.0) -> np.ndarray:
 
     Notes
     -----
-    The local MAD is a noise scale: on noise-free smooth signals it collapses at extrema,
-    which may then be flagged (their repair by interpolation changes them little). On
-    piecewise-constant signals (binary inputs) step edges would be flagged: apply it to
+    On piecewise-constant signals (binary inputs) step edges may be flagged: apply it to
     measured channels.
 
     Examples
@@ -196,12 +194,15 @@ def find_spikes(x: Any, window: int = 7, n_sigmas: float = 3.0) -> np.ndarray:
         raise DataError(f"window must be an odd integer >= 3, got {window!r}")
     if not n_sigmas > 0:
         raise DataError(f"n_sigmas must be positive, got {n_sigmas}")
-    med = ndimage.median_filter(arr, size=(window, 1), mode="nearest")
+    h = window // 2
+    padded = np.pad(arr, ((h, h), (0, 0)), mode="edge")
+    win = np.lib.stride_tricks.sliding_window_view(padded, window, axis=0)  # (n, ch, window)
+    med = np.median(win, axis=2)
+    mad = np.median(np.abs(win - med[:, :, None]), axis=2)
     dev = np.abs(arr - med)
-    mad = ndimage.median_filter(dev, size=(window, 1), mode="nearest")
-    # a floor against flagging round-off in constant stretches
+    # floor: round-off in constant stretches
     floor = 1e-9 * (np.max(np.abs(arr), axis=0) + 1e-300)
-    return dev > n_sigmas * np.maximum(1.4826 * mad, floor)
+    return dev > n_sigmas * 1.4826 * np.maximum(mad, floor)
 
 
 def despike(
