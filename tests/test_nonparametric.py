@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import runpy
+from pathlib import Path
+
 import matplotlib
 import numpy as np
 import pytest
@@ -198,3 +201,27 @@ def test_plots_draw() -> None:
     import matplotlib.pyplot as plt
 
     plt.close("all")
+
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+
+@pytest.mark.skipif(not (DATA / "daisy" / "winding.dat").exists(), reason="shared data missing")
+def test_winding_workflow_example(capsys: pytest.CaptureFixture[str]) -> None:
+    example = Path(__file__).resolve().parents[1] / "examples" / "winding_workflow.py"
+    mod = runpy.run_path(str(example))
+    res = mod["main"](DATA / "daisy" / "winding.dat")  # plots are tested elsewhere (slow)
+    assert res["dt"] == pytest.approx(0.1)
+    est, val = res["estimation"], res["validation"]
+    assert (est.n_inputs, est.n_outputs) == (5, 2)
+    assert est.n_samples + val.n_samples == res["data"].n_samples
+    assert res["spa"].response.shape[1:] == (2, 5)
+    assert res["coherence"].values.shape[1:] == (2, 5)
+    # all five inputs together explain most of each tension at low frequency
+    low = res["coherence"].hz < 0.5
+    assert res["coherence"].multiple[low].mean() > 0.6
+    assert np.all(res["fit"] > 50)
+    # the validation simulation maps back to the record's units
+    raw = res["data"].slice(1500).y
+    assert np.all(np.abs(np.mean(res["y_original"] - raw, axis=0)) < 0.5)
+    assert "validation fit" in capsys.readouterr().out
