@@ -15,7 +15,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-
 import sysid
 
 HERE = Path(__file__).resolve().parent

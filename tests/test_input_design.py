@@ -6,7 +6,6 @@ import warnings
 
 import numpy as np
 import pytest
-
 import sysid
 from sysid.errors import DataError
 

@@ -8,9 +8,8 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 import pytest
-from scipy import signal
-
 import sysid
+from scipy import signal
 from sysid.errors import DataError, InsufficientDataError
 
 matplotlib.use("Agg")

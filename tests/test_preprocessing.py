@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import sysid
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import signal
-
-import sysid
 from sysid.errors import DataError, InsufficientDataError
 
 
@@ -84,7 +83,9 @@ def test_scale_and_constant_channel() -> None:
 
 # ------------------------------------------------------------------ filters
 
-@pytest.mark.parametrize("kind, cut", [("lowpass", 5.0), ("highpass", 2.0), ("bandpass", (2.0, 10.0))])
+@pytest.mark.parametrize(
+    "kind, cut", [("lowpass", 5.0), ("highpass", 2.0), ("bandpass", (2.0, 10.0))]
+)
 def test_filters_match_sosfiltfilt(kind: str, cut: float | tuple[float, float]) -> None:
     d = noisy()
     f = (sysid.bandpass(d, *cut, order=3) if kind == "bandpass"

@@ -433,7 +433,9 @@ def welch_frf(
     )
 
 
-def _lag_covariances(zs: list[np.ndarray], max_lag: int, remove_mean: bool) -> tuple[np.ndarray, int]:
+def _lag_covariances(
+    zs: list[np.ndarray], max_lag: int, remove_mean: bool
+) -> tuple[np.ndarray, int]:
     """``R[tau] = (1/N) sum_t z(t + tau) z(t)^T`` for tau = 0..max_lag, over experiments."""
     nc = zs[0].shape[1]
     R = np.zeros((max_lag + 1, nc, nc))

@@ -561,7 +561,7 @@ def decimate(data: IOData, q: int, *, order: int = 8) -> IOData:
 
         def dec(x: np.ndarray) -> np.ndarray:
             if not x.shape[1]:
-                return np.zeros((len(range(0, e.y.shape[0], q)), 0))
+                return np.zeros((len(range(0, x.shape[0], q)), 0))
             return signal.decimate(x, int(q), n=order, axis=0, zero_phase=True)
 
         def take(tr: np.ndarray | None) -> np.ndarray | None:

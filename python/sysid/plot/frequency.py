@@ -39,8 +39,8 @@ def plot_frd(frd: Any, *, models: Any = None, fig: Any = None) -> Any:
     if models is None:
         models = {}
     elif not isinstance(models, dict):
-        models = {f"model {k}" if isinstance(models, (list, tuple)) else "model": mod
-                  for k, mod in enumerate(models if isinstance(models, (list, tuple)) else [models])}
+        seq = list(models) if isinstance(models, (list, tuple)) else [models]
+        models = {("model" if len(seq) == 1 else f"model {k}"): mod for k, mod in enumerate(seq)}
     f = frd.hz
     mag_db = 20 * np.log10(np.maximum(frd.magnitude, 1e-300))
     phase = np.degrees(frd.phase)
