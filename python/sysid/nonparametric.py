@@ -147,7 +147,7 @@ class FRD:
         self.info = dict(info or {})
 
     def _same(self, x: Any, name: str, dtype: type) -> np.ndarray:
-        a = np.asarray(x, dtype=dtype)
+        a: np.ndarray = np.asarray(x, dtype=dtype)
         if a.shape != self.response.shape:
             raise ShapeError(f"{name} has shape {a.shape} but the response {self.response.shape}")
         return a

@@ -122,8 +122,8 @@ def repair_nan(
             "sample(s) in all; use IOData.from_raw(..., nan='interpolate') or nan='split'"
         )
     x = np.concatenate([ua, y], axis=1)
-    any_bad = bad.any(axis=1)
-    cut = any_bad.copy()
+    any_bad = np.asarray(bad.any(axis=1), dtype=bool)
+    cut: np.ndarray = any_bad.copy()
     if nan == "interpolate":
         # gaps are per channel; a long gap in any channel cuts the record there
         long_gap = np.zeros_like(any_bad)
@@ -314,7 +314,7 @@ def detrend(
     if kind == "piecewise":
         if breakpoints is None:
             raise DataError("kind='piecewise' needs breakpoints=[sample, ...]")
-        bl = list(breakpoints)
+        bl: list[Any] = list(breakpoints)
         per_exp = bl and all(isinstance(b, (list, tuple, np.ndarray)) for b in bl)
         bps: list[list[int]] = [list(b) for b in bl] if per_exp else [bl] * n_exp
         if len(bps) != n_exp:
