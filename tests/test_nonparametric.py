@@ -224,3 +224,38 @@ def test_winding_workflow_example(capsys: pytest.CaptureFixture[str]) -> None:
     raw = res["data"].slice(1500).y
     assert np.all(np.abs(np.mean(res["y_original"] - raw, axis=0)) < 0.5)
     assert "validation fit" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "fn, a, b",
+    [
+        (sysid.spa, {"lags": 20}, {"lags": 60}),
+        (sysid.spa, {"remove_mean": True}, {"remove_mean": False}),
+        (sysid.spa, {"n_freq": 64}, {"n_freq": 128}),
+        (sysid.welch_frf, {"nperseg": 128}, {"nperseg": 128, "noverlap": 16}),
+        (sysid.welch_frf, {"nperseg": 128}, {"nperseg": 128, "window": "hamming"}),
+        (sysid.welch_frf, {"nperseg": 128}, {"nperseg": 128, "nfft": 256}),
+        (sysid.etfe, {"smoothing": 21}, {"smoothing": 21, "window": "boxcar"}),
+        (sysid.etfe, {"smoothing": 21}, {"smoothing": 41}),
+    ],
+)
+def test_every_option_changes_the_estimate(fn, a, b) -> None:  # type: ignore[no-untyped-def]
+    d = mimo_record(0.5, n=3000)
+    y_off = sysid.IOData(u=d.u + 1.0, y=d.y + 2.0, dt=d.dt)  # offsets matter for remove_mean
+    fa, fb = fn(y_off, **a), fn(y_off, **b)
+    assert fa.omega.shape != fb.omega.shape or not np.allclose(fa.response, fb.response)
+
+
+def test_confidence_level_widens_the_band() -> None:
+    d = mimo_record(0.5, n=3000)
+    narrow, wide = sysid.spa(d, confidence=0.5), sysid.spa(d, confidence=0.99)
+    assert np.all(wide.radius > narrow.radius)
+    np.testing.assert_allclose(wide.response, narrow.response)
+
+
+def test_spectra_detrend_option() -> None:
+    x = np.random.default_rng(0).standard_normal(1024) + 5.0
+    d = sysid.IOData(u=None, y=x)
+    on = sysid.spectra(d, nperseg=128).psd("y0")
+    off = sysid.spectra(d, nperseg=128, detrend=False).psd("y0")
+    assert off[0] > 100 * on[0]  # the mean shows at zero frequency only without detrending

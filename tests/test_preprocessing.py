@@ -202,3 +202,24 @@ def test_detrend_invariant_to_added_trend(seed: int, kind: str) -> None:
     a = sysid.detrend(sysid.IOData(u=None, y=y), kind).y
     b = sysid.detrend(sysid.IOData(u=None, y=y + extra), kind).y
     np.testing.assert_allclose(a, b, atol=1e-10)
+
+
+def test_channel_flags_and_thresholds_change_the_result() -> None:
+    d = noisy()
+    only_u = sysid.detrend(d, "linear", outputs=False)
+    np.testing.assert_array_equal(only_u.y, d.y)
+    assert not np.allclose(only_u.u, d.u)
+    np.testing.assert_allclose(only_u.retrend().u, d.u, atol=1e-12)
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(600)
+    u[200:350] *= 0.2
+    loose = sysid.drop_quiet(sysid.IOData(u=u, y=u), window=30, threshold=0.5)
+    strict = sysid.drop_quiet(sysid.IOData(u=u, y=u), window=30, threshold=0.05)
+    assert loose.n_experiments == 2 and strict.n_experiments == 1
+    y = np.sin(np.arange(400) / 20.0)
+    y[100] += 0.3
+    gentle = sysid.despike(sysid.IOData(u=None, y=y), n_sigmas=1e6)
+    np.testing.assert_array_equal(gentle.y[:, 0], y)
+    assert sysid.despike(sysid.IOData(u=None, y=y), n_sigmas=3).y[100, 0] < y[100] - 0.2
+    x = sysid.IOData(u=None, y=rng.standard_normal(500))
+    assert not np.allclose(sysid.decimate(x, 2, order=4).y, sysid.decimate(x, 2, order=8).y)
