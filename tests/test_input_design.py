@@ -143,3 +143,23 @@ def test_subspace_fit_is_quiet_on_white_noise() -> None:
         warnings.simplefilter("error")
         model = sysid.SubspaceEstimator(_record(u), horizon=4).fit(order=4)
     assert model.nstates == 4
+
+
+def test_lagged_gram_equals_hankel_product() -> None:
+    from sysid.input_design import _lag_gram
+
+    rng = np.random.default_rng(4)
+    us = [rng.standard_normal((40, 2)), rng.standard_normal((25, 2)), rng.standard_normal((3, 2))]
+    mo = 6
+    ref = np.zeros((mo * 2, mo * 2))
+    cols = 0
+    for x in us:
+        k = x.shape[0] - mo + 1
+        if k < 1:
+            continue
+        H = np.hstack([x[i : i + k] for i in range(mo)])
+        ref += H.T @ H
+        cols += k
+    G, c = _lag_gram(us, mo)
+    assert c == cols
+    np.testing.assert_allclose(G, ref, rtol=1e-12, atol=1e-12)

@@ -300,6 +300,32 @@ def crest_factor(u: Any) -> np.ndarray:
     return np.max(np.abs(x), axis=0) / np.sqrt(np.mean(x * x, axis=0))
 
 
+def _lag_gram(us: list[np.ndarray], mo: int) -> tuple[np.ndarray, int]:
+    """``sum H^T H`` over experiments, ``H`` the ``(K, mo m)`` matrix of ``mo`` stacked lags,
+    and the total number of Hankel columns ``K``."""
+    m = us[0].shape[1]
+    G = np.zeros((mo * m, mo * m))
+    cols = 0
+    for x in us:
+        n = x.shape[0]
+        K = n - mo + 1  # Hankel columns of this experiment
+        if K < 1:
+            continue
+        # G[i, j] = sum_{t<K} x(t+i) x(t+j)^T from one lagged product per lag tau = j - i
+        # (O(N mo m^2) instead of O(N mo^2 m^2)), minus the short head and tail each block
+        # does not cover
+        for tau in range(mo):
+            S = x[: n - tau].T @ x[tau:]
+            for i in range(mo - tau):
+                j = i + tau
+                blk = S - x[:i].T @ x[tau : tau + i] - x[i + K : n - tau].T @ x[i + K + tau :]
+                G[i * m : (i + 1) * m, j * m : (j + 1) * m] += blk
+                if tau:
+                    G[j * m : (j + 1) * m, i * m : (i + 1) * m] += blk.T
+        cols += K
+    return G, cols
+
+
 def persistent_excitation_order(u: Any, max_order: int = 20, *, tol: float = 1e-9) -> int:
     """The order of persistent excitation of an input, up to ``max_order``.
 
@@ -335,15 +361,7 @@ def persistent_excitation_order(u: Any, max_order: int = 20, *, tol: float = 1e-
         raise DataError("all experiments must have the same number of inputs")
     longest = max(x.shape[0] for x in us)
     mo = min(mo, longest)
-    G = np.zeros((mo * m, mo * m))
-    cols = 0
-    for x in us:
-        n_cols = x.shape[0] - mo + 1
-        if n_cols < 1:
-            continue
-        H = np.hstack([x[i : i + n_cols] for i in range(mo)])  # (n_cols, mo*m)
-        G += H.T @ H
-        cols += n_cols
+    G, cols = _lag_gram(us, mo)
     if cols == 0:
         raise DataError(f"every experiment is shorter than max_order = {mo}")
     G /= cols
