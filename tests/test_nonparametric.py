@@ -259,3 +259,15 @@ def test_spectra_detrend_option() -> None:
     on = sysid.spectra(d, nperseg=128).psd("y0")
     off = sysid.spectra(d, nperseg=128, detrend=False).psd("y0")
     assert off[0] > 100 * on[0]  # the mean shows at zero frequency only without detrending
+
+
+def test_frd_from_model_and_to_pandas() -> None:
+    g = true_system()
+    w = np.linspace(0.1, 30.0, 7)
+    f = sysid.FRD.from_model(g, w)
+    np.testing.assert_allclose(f.response, g.freqresp(w))
+    df = sysid.spa(mimo_record(0.5, n=2000), n_freq=16).to_pandas()
+    assert len(df) == 16 * 2 * 2
+    assert {"omega", "output", "input", "magnitude", "coherence", "std"} <= set(df.columns)
+    row = df[(df.output == "y1") & (df.input == "u0")].iloc[3]
+    assert row.magnitude == pytest.approx(np.hypot(row.real, row.imag))

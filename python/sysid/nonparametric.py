@@ -228,6 +228,49 @@ class FRD:
             output_names=[self.output_names[i] for i in iy], method=self.method, info=self.info,
         )
 
+    @classmethod
+    def from_model(cls, model: Any, omega: Any) -> FRD:
+        """The frequency response of a model (anything with ``freqresp(omega)``) as an FRD.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1)
+        >>> sysid.FRD.from_model(m, np.linspace(0.1, 30.0, 10))
+        FRD (model): 10 frequencies 0.1..30 rad/s, 1 output x 1 input
+        """
+        return cls(
+            omega, model.freqresp(np.asarray(omega, dtype=float)), dt=getattr(model, "dt", None),
+            input_names=getattr(model, "input_names", None),
+            output_names=getattr(model, "output_names", None), method="model",
+        )
+
+    def to_pandas(self) -> Any:
+        """A long-format DataFrame: one row per frequency and output/input pair with
+        ``omega``, ``hz``, ``output``, ``input``, ``real``, ``imag``, ``magnitude``,
+        ``phase`` (rad) and, when known, ``coherence`` and ``std``."""
+        from .data import _pandas
+
+        pd = _pandas()
+        nf, l, m = self.response.shape
+        idx = np.indices((nf, l, m)).reshape(3, -1)
+        g = self.response.reshape(-1)
+        cols: dict[str, Any] = {
+            "omega": self.omega[idx[0]],
+            "hz": self.hz[idx[0]],
+            "output": np.array(self.output_names, dtype=object)[idx[1]],
+            "input": np.array(self.input_names, dtype=object)[idx[2]],
+            "real": g.real,
+            "imag": g.imag,
+            "magnitude": np.abs(g),
+            "phase": self.phase.reshape(-1),
+        }
+        if self.coherence is not None:
+            cols["coherence"] = self.coherence.reshape(-1)
+        if self.std is not None:
+            cols["std"] = self.std.reshape(-1)
+        return pd.DataFrame(cols)
+
     def plot(self, models: Any = None, *, fig: Any = None) -> Any:
         """Bode plot with the confidence band and coherence; ``models`` are overlaid."""
         from .plot.frequency import plot_frd
