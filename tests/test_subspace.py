@@ -8,7 +8,7 @@ from conftest import markov, match_poles, random_system, simulate
 
 import sysid
 
-METHODS = ["moesp", "n4sid", "ordinary-moesp", "pi-moesp"]
+METHODS = ["moesp", "n4sid", "cva", "ordinary-moesp", "pi-moesp"]
 
 
 @pytest.mark.parametrize("seed", range(16))

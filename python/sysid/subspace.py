@@ -140,6 +140,7 @@ class SubspaceEstimator:
             data.experiments, self.past, self.future, chunk_rows, compressor
         )
         self._svd: dict[str, Any] = {}
+        self._subspace(None)  # checks the record (length, excitation) right away
 
     @classmethod
     def from_factor(
