@@ -161,8 +161,11 @@ class SubspaceEstimator:
         m, l = factor.n_inputs, factor.n_outputs
         # a placeholder record that carries only channel counts, names and dt
         self.data = IOData(
-            u=np.zeros((1, m)), y=np.zeros((1, l)), dt=dt,
-            input_names=input_names, output_names=output_names,
+            u=np.zeros((1, m)),
+            y=np.zeros((1, l)),
+            dt=dt,
+            input_names=input_names,
+            output_names=output_names,
         )
         self._from_factor = True
         self.method = _method(method)
@@ -235,7 +238,12 @@ class SubspaceEstimator:
             n = sub.auto_order()
         else:
             n = _check_int(order, "order", 1)
-        for name, flag in (("feedthrough", feedthrough), ("kalman", kalman), ("stable", stable), ("x0", x0)):
+        for name, flag in (
+            ("feedthrough", feedthrough),
+            ("kalman", kalman),
+            ("stable", stable),
+            ("x0", x0),
+        ):
             if not isinstance(flag, (bool, np.bool_)):
                 raise DataError(f"{name} must be True or False, got {flag!r}")
         if self.data.n_inputs and not getattr(self, "_from_factor", False):
@@ -264,7 +272,11 @@ class SubspaceEstimator:
             "S": res["S"],
         }
         return StateSpaceModel(
-            res["A"], B, res["C"], D, res["K"],
+            res["A"],
+            B,
+            res["C"],
+            D,
+            res["K"],
             dt=self.data.dt,
             noise_cov=res["noise_cov"],
             x0=x0_est,
