@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
 import sysid
 
 HERE = Path(__file__).resolve().parent

@@ -6,9 +6,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import sysid
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
+import sysid
 from sysid.errors import DataError, InsufficientDataError, NonFiniteError, ShapeError
 
 DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"

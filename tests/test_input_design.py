@@ -6,6 +6,7 @@ import warnings
 
 import numpy as np
 import pytest
+
 import sysid
 from sysid.errors import DataError
 

@@ -8,8 +8,9 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 import pytest
-import sysid
 from scipy import signal
+
+import sysid
 from sysid.errors import DataError, InsufficientDataError
 
 matplotlib.use("Agg")

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-import sysid
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import signal
+
+import sysid
 from sysid.errors import DataError, InsufficientDataError
 
 
