@@ -271,3 +271,19 @@ def test_reads_f16_csv_header() -> None:
     d = sysid.IOData.from_csv(DATA / "f16" / "F16Data_FullMSine_Level1.csv", ["Force"],
                               ["Acceleration1", "Acceleration2", "Acceleration3"], dt=1 / 400)
     assert d.n_samples == 73728 and d.output_names[0] == "Acceleration1"
+
+
+def test_pandas_datetime_index_and_missing_values() -> None:
+    import pandas as pd
+
+    idx = pd.date_range("2024-01-01", periods=50, freq="20ms")
+    y = np.sin(np.arange(50) / 5.0)
+    y[10] = np.nan
+    df = pd.DataFrame({"elev": np.cos(np.arange(50) / 5.0), "pitch": y}, index=idx)
+    with pytest.raises(NonFiniteError):
+        sysid.IOData.from_pandas(df, ["elev"], ["pitch"])
+    d = sysid.IOData.from_pandas(df, ["elev"], ["pitch"], nan="interpolate",
+                                 units={"elev": "deg", "pitch": "deg"})
+    assert d.dt == pytest.approx(0.02) and d.n_samples == 50
+    assert d.output_units == ["deg"]
+    np.testing.assert_allclose(d.y[10, 0], 0.5 * (y[9] + y[11]))

@@ -8,6 +8,8 @@ from pathlib import Path
 import matplotlib
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy import signal
 
 import sysid
@@ -272,3 +274,15 @@ def test_frd_from_model_and_to_pandas() -> None:
     assert {"omega", "output", "input", "magnitude", "coherence", "std"} <= set(df.columns)
     row = df[(df.output == "y1") & (df.input == "u0")].iloc[3]
     assert row.magnitude == pytest.approx(np.hypot(row.real, row.imag))
+
+
+@settings(max_examples=15, deadline=None)
+@given(st.floats(0.1, 10.0), st.integers(0, 1000), st.sampled_from(["spa", "welch", "etfe"]))
+def test_frf_scales_and_permutes_with_the_channels(c: float, seed: int, name: str) -> None:
+    d = mimo_record(0.3, n=1500, seed=seed)
+    base = ESTIMATORS[name](d)
+    scaled = ESTIMATORS[name](sysid.IOData(u=c * d.u, y=d.y[:, ::-1], dt=d.dt))
+    np.testing.assert_allclose(scaled.omega, base.omega)
+    np.testing.assert_allclose(scaled.response, base.response[:, ::-1, :] / c, rtol=1e-8,
+                               atol=1e-10)
+    np.testing.assert_allclose(scaled.coherence, base.coherence[:, ::-1, :], atol=1e-10)

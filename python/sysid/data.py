@@ -971,6 +971,8 @@ class IOData:
         dt: float | None = None,
         experiment: str | None = None,
         units: dict[str, str] | None = None,
+        nan: str = "error",
+        max_gap: int = 5,
     ) -> IOData:
         """A record from a DataFrame's columns.
 
@@ -988,6 +990,8 @@ class IOData:
             Column numbering the experiments (default ``"experiment"`` if present).
         units : dict, optional
             Unit per column name.
+        nan, max_gap :
+            Handling of missing values (single-experiment frames), as in :meth:`from_raw`.
 
         Examples
         --------
@@ -1026,15 +1030,23 @@ class IOData:
                 ts.append(g.index.to_numpy(dtype=float))
         if dt is None and not ts:
             dt = df.attrs.get("dt")
+        kw: dict[str, Any] = {
+            "input_names": inputs,
+            "output_names": outputs,
+            "input_units": [units.get(c, "") for c in inputs],
+            "output_units": [units.get(c, "") for c in outputs],
+        }
+        if nan != "error":
+            if len(groups) != 1:
+                raise DataError("nan= repairs single-experiment frames; split them first")
+            return cls.from_raw(us[0], ys[0], dt, time=ts[0] if ts else None, nan=nan,
+                                max_gap=max_gap, **kw)
         return cls(
             us if inputs else None,
             ys,
             dt,
             time=ts if ts else None,
-            input_names=inputs,
-            output_names=outputs,
-            input_units=[units.get(c, "") for c in inputs],
-            output_units=[units.get(c, "") for c in outputs],
+            **kw,
         )
 
     # ---------------------------------------------------------------- CSV
