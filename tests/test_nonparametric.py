@@ -286,3 +286,19 @@ def test_frf_scales_and_permutes_with_the_channels(c: float, seed: int, name: st
     np.testing.assert_allclose(scaled.response, base.response[:, ::-1, :] / c, rtol=1e-8,
                                atol=1e-10)
     np.testing.assert_allclose(scaled.coherence, base.coherence[:, ::-1, :], atol=1e-10)
+
+
+def test_band_is_calibrated_with_few_averages() -> None:
+    # about 8 Welch segments and a 9-bin smoothing window for 2 inputs: the large-sample
+    # circle would hold ~78 % at the 90 % level; the F-distribution band holds ~90 %
+    g = true_system()
+    cover = []
+    for seed in range(8):
+        d = mimo_record(0.5, n=1200, seed=seed)
+        for frd in (sysid.welch_frf(d, nperseg=256, confidence=0.9),
+                    sysid.etfe(d, smoothing=9, confidence=0.9)):
+            assert frd.dof is not None and frd.dof < 20
+            cover.append(frd.within_band(g).mean())
+    assert 0.85 < np.mean(cover) < 0.95
+    with pytest.raises(InsufficientDataError, match="increase smoothing"):
+        sysid.etfe(mimo_record(0.5, n=400), smoothing=3)

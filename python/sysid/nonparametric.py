@@ -9,12 +9,15 @@ with ``v`` independent of ``u``
     S_{yu} = G S_{uu}, \\qquad G = S_{yu} S_{uu}^{-1}, \\qquad
     S_{vv} = S_{yy} - S_{yu} S_{uu}^{-1} S_{uy}.
 
-The variance of each entry of the estimate is ``c [S_uu^{-1}]_jj [S_vv]_ii`` with ``c`` the
-variance reduction of the method (Ljung, *System Identification*, 1999, ch. 6): ``c =
-sum(w(tau)^2) / N`` for a lag window ``w`` (Blackman-Tukey), ``1 / K_eff`` for ``K_eff``
-effective Welch averages, ``sum(W_k^2)`` for a normalised frequency window ``W`` (smoothed
-ETFE). The confidence band at level ``p`` is the circle of radius ``sigma sqrt(-ln(1-p))``
-around the estimate (complex normal error). Frequencies are angular, in rad/s.
+Each method averages the equivalent of ``K`` independent spectral estimates (Ljung, *System
+Identification*, 1999, ch. 6): ``K = N / sum(w(tau)^2)`` for a lag window ``w``
+(Blackman-Tukey), the effective number of Welch averages (overlap accounted for, Welch 1967),
+``1 / sum(W_k^2)`` per experiment for a normalised frequency window ``W`` (smoothed ETFE).
+With ``m`` inputs the variance of each entry is estimated as ``sigma^2 = [S_vv]_ii
+[S_uu^{-1}]_jj / (K - m)`` and the error, normalised by it, follows an F distribution with
+``(2, 2 (K - m))`` degrees of freedom (Gaussian data): the confidence band at level ``p`` is the
+circle of radius ``sigma sqrt(F^{-1}(p))`` around the estimate, which tends to
+``sigma sqrt(-ln(1 - p))`` for large ``K``. Frequencies are angular, in rad/s.
 
 Spectra are one-sided densities in units^2/Hz, as ``scipy.signal.welch``. Several
 experiments are averaged (no segment or lag spans two). Frequencies where the input
@@ -87,6 +90,9 @@ class FRD:
         Standard deviation of each complex entry, same shape (``E|G_hat - G|^2 = std^2``).
     confidence : float
         Level of the band drawn and tested by :meth:`within_band`.
+    dof : float, optional
+        Denominator degrees of freedom of the F distribution of the normalised error
+        (``2 (K - m)``); ``None`` for the large-sample (complex normal) limit.
     dt : float, optional
         Sample time of the data it came from.
     input_names, output_names : list of str, optional
@@ -115,6 +121,7 @@ class FRD:
         coherence: Any = None,
         std: Any = None,
         confidence: float = 0.99,
+        dof: float | None = None,
         dt: float | None = None,
         input_names: Sequence[str] | None = None,
         output_names: Sequence[str] | None = None,
@@ -139,6 +146,9 @@ class FRD:
         self.coherence = None if coherence is None else self._same(coherence, "coherence", float)
         self.std = None if std is None else self._same(std, "std", float)
         self.confidence = float(confidence)
+        if dof is not None and not dof > 0:
+            raise DataError(f"dof must be positive, got {dof}")
+        self.dof = None if dof is None else float(dof)
         self.dt = dt
         l, m = g.shape[1:]
         self.input_names = IOData._names(input_names, m, "u", "input")
@@ -180,7 +190,9 @@ class FRD:
         """Radius of the confidence circle at :attr:`confidence` (``None`` without ``std``)."""
         if self.std is None:
             return None
-        return self.std * np.sqrt(-np.log1p(-self.confidence))
+        if self.dof is None:
+            return self.std * np.sqrt(-np.log1p(-self.confidence))
+        return self.std * np.sqrt(stats.f.ppf(self.confidence, 2, self.dof))
 
     def _other(self, other: Any) -> np.ndarray:
         if hasattr(other, "freqresp"):
@@ -223,7 +235,7 @@ class FRD:
 
         return FRD(
             self.omega, sub(self.response), coherence=sub(self.coherence), std=sub(self.std),
-            confidence=self.confidence, dt=self.dt,
+            confidence=self.confidence, dof=self.dof, dt=self.dt,
             input_names=[self.input_names[i] for i in iu],
             output_names=[self.output_names[i] for i in iy], method=self.method, info=self.info,
         )
@@ -398,6 +410,16 @@ def _frf_from_S(
     return G, np.clip(coh, 0, 1), np.clip(mcoh, 0, 1), np.maximum(ratio, 0.0), keep, l
 
 
+def _band(ratio: np.ndarray, K: float, m: int, fix: str) -> tuple[np.ndarray, float]:
+    """Standard deviation and F degrees of freedom from ``K`` equivalent averages."""
+    if K - m < 1.0:
+        raise InsufficientDataError(
+            f"the estimate averages the equivalent of {K:.1f} spectra for {m} input(s): too "
+            f"few for a confidence band; {fix}"
+        )
+    return np.sqrt(ratio / (K - m)), 2.0 * (K - m)
+
+
 def _check_int(x: Any, name: str, lo: int) -> int:
     if isinstance(x, bool) or not isinstance(x, (int, np.integer)) or x < lo:
         raise DataError(f"{name} must be an integer >= {lo}, got {x!r}")
@@ -466,8 +488,9 @@ def welch_frf(
     # segment means are removed: the zero-frequency bin carries no information
     S, f = S[1:], f[1:]
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m)
+    std, dof = _band(ratio, k_eff, m, "lower nperseg")
     return FRD(
-        2 * np.pi * f[keep], G, coherence=coh, std=np.sqrt(ratio / k_eff),
+        2 * np.pi * f[keep], G, coherence=coh, std=std, dof=dof,
         confidence=confidence, dt=data.dt, input_names=data.input_names,
         output_names=data.output_names, method="welch",
         info={"nperseg": nperseg, "noverlap": noverlap, "window": window, "segments": count,
@@ -557,9 +580,10 @@ def spa(
     S *= 2.0 * data.dt  # one-sided density, as the Welch estimate
     m = data.n_inputs
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m)
-    c = (lagw[0] ** 2 + 2.0 * (lagw[1:] ** 2).sum()) / total
+    std, dof = _band(ratio, total / (lagw[0] ** 2 + 2.0 * (lagw[1:] ** 2).sum()), m,
+                     "lower lags")
     return FRD(
-        w[keep], G, coherence=coh, std=np.sqrt(c * ratio), confidence=confidence,
+        w[keep], G, coherence=coh, std=std, dof=dof, confidence=confidence,
         dt=data.dt, input_names=data.input_names, output_names=data.output_names,
         method="blackman-tukey",
         info={"lags": M, "window": "hann", "multiple_coherence": mcoh, "dropped": w[~keep]},
@@ -653,8 +677,8 @@ def etfe(
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m)
     w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
     info.update({"window": window, "multiple_coherence": mcoh, "dropped": w[~keep]})
-    c = float((W**2).sum()) / data.n_experiments
-    return FRD(w[keep], G, coherence=coh, std=np.sqrt(c * ratio), confidence=confidence,
+    std, dof = _band(ratio, data.n_experiments / float((W**2).sum()), m, "increase smoothing")
+    return FRD(w[keep], G, coherence=coh, std=std, dof=dof, confidence=confidence,
                dt=data.dt, input_names=data.input_names, output_names=data.output_names,
                method="etfe", info=info)
 
