@@ -302,3 +302,18 @@ def test_band_is_calibrated_with_few_averages() -> None:
     assert 0.85 < np.mean(cover) < 0.95
     with pytest.raises(InsufficientDataError, match="increase smoothing"):
         sysid.etfe(mimo_record(0.5, n=400), smoothing=3)
+
+
+@pytest.mark.skipif(not (DATA / "f16").exists(), reason="shared data missing")
+def test_f16_multisine_etfe_over_periods() -> None:
+    d = sysid.IOData.from_csv(DATA / "f16" / "F16Data_FullMSine_Level1.csv", ["Force"],
+                              ["Acceleration1", "Acceleration2", "Acceleration3"], dt=1 / 400)
+    P = 8192  # samples per period; the first period holds the transient
+    periods = [d.slice(k * P, (k + 1) * P) for k in range(1, 9)]
+    frd = sysid.etfe(periods[0].merge(*periods[1:]), min_power=1e-3)
+    # only the multisine's lines are kept: 2..15 Hz on the 400/8192 Hz grid
+    assert frd.hz.min() >= 2.0 - 1e-9 and frd.hz.max() <= 15.0 + 1e-9
+    assert 250 < frd.omega.size <= round(13 / (400 / P)) + 1
+    # averaged over 8 periods, the response is coherent on every kept line
+    assert np.percentile(frd.coherence, 5) > 0.99
+    assert frd.info["dropped"].size > 3000

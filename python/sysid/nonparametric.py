@@ -383,7 +383,7 @@ def _welch_matrix(
 
 
 def _frf_from_S(
-    S: np.ndarray, m: int
+    S: np.ndarray, m: int, min_power: float = 1e-12
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """G, pairwise coherence, multiple coherence, noise-to-input ratio factor, kept mask."""
     Suu = S[:, :m, :m]
@@ -394,7 +394,7 @@ def _frf_from_S(
     top = max(np.abs(np.einsum("fii->f", Suu)).max(), np.finfo(float).tiny)
     for k in range(nf):
         tr = np.trace(Suu[k]).real
-        if tr <= 1e-12 * top or np.linalg.cond(Suu[k]) > _COND_LIMIT:
+        if tr <= min_power * top or np.linalg.cond(Suu[k]) > _COND_LIMIT:
             keep[k] = False
     Suu, Syu, Syy = Suu[keep], Syu[keep], Syy[keep]
     Suu_inv = np.linalg.inv(Suu)
@@ -595,6 +595,7 @@ def etfe(
     *,
     smoothing: int | None = None,
     window: str = "hann",
+    min_power: float = 1e-12,
     confidence: float = 0.99,
 ) -> FRD:
     """Empirical transfer-function estimate ``Y(omega_k) / U(omega_k)`` on the FFT grid.
@@ -612,6 +613,9 @@ def etfe(
         (``smoothing > m``).
     window : str
         Frequency-window shape (``scipy.signal.get_window`` name).
+    min_power : float
+        Bins whose input power (trace of ``U U^H``) is below this fraction of the largest
+        are left out: with a periodic multisine, ``1e-3`` keeps the excited lines only.
     confidence : float
         Level of the band (smoothed estimates only).
 
@@ -650,7 +654,7 @@ def etfe(
         S[:, :m, :m], S[:, m:, :m] = Puu, Pyu
         S[:, :m, m:] = np.conj(np.swapaxes(Pyu, 1, 2))
         S[:, m:, m:] = Pyy
-        G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m)
+        G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, min_power)
         w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
         info["dropped"] = w[~keep]
         coh_out = coh if data.n_experiments > m else None
@@ -674,7 +678,7 @@ def etfe(
     S[:, :m, :m], S[:, m:, :m] = smooth(Puu), smooth(Pyu)
     S[:, :m, m:] = np.conj(np.swapaxes(S[:, m:, :m], 1, 2))
     S[:, m:, m:] = smooth(Pyy)
-    G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m)
+    G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, min_power)
     w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
     info.update({"window": window, "multiple_coherence": mcoh, "dropped": w[~keep]})
     std, dof = _band(ratio, data.n_experiments / float((W**2).sum()), m, "increase smoothing")
