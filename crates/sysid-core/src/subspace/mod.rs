@@ -215,7 +215,10 @@ impl Subspace {
         let max = self.max_order();
         let lay = self.factor.layout();
         if order == 0 {
-            return Err(SysidError::invalid("order", "the model order must be at least 1"));
+            return Err(SysidError::invalid(
+                "order",
+                "the model order must be at least 1",
+            ));
         }
         if order > max {
             return Err(SysidError::OrderTooLarge {
