@@ -128,3 +128,20 @@ fn rejects_bad_input() {
         Err(SysidError::ShapeMismatch { .. })
     ));
 }
+
+#[test]
+fn factor_does_not_depend_on_the_thread_count_beyond_round_off() {
+    let layout = HankelLayout::new(3, 3, 8, 8).unwrap();
+    let (u, y) = record(3000, 3, 3, 17);
+    let run = |par: faer::Par| {
+        faer::set_global_parallelism(par);
+        let mut c = QrCompressor::new(layout);
+        c.push(u.as_ref(), y.as_ref()).unwrap();
+        c.finish().unwrap()
+    };
+    let serial = run(faer::Par::Seq);
+    let parallel = run(faer::Par::rayon(2));
+    faer::set_global_parallelism(faer::Par::rayon(0));
+    let scale = serial.l().norm_max();
+    assert!(max_abs_diff(serial.l(), parallel.l()) < 1e-12 * scale);
+}

@@ -214,7 +214,13 @@ impl Subspace {
     pub fn fit(&self, order: usize, opts: &FitOptions) -> Result<Identified> {
         let max = self.max_order();
         let lay = self.factor.layout();
-        if order == 0 || order > max {
+        if order == 0 {
+            return Err(SysidError::invalid(
+                "order",
+                "the model order must be at least 1",
+            ));
+        }
+        if order > max {
             return Err(SysidError::OrderTooLarge {
                 order,
                 max,
