@@ -287,3 +287,28 @@ def test_pandas_datetime_index_and_missing_values() -> None:
     assert d.dt == pytest.approx(0.02) and d.n_samples == 50
     assert d.output_units == ["deg"]
     np.testing.assert_allclose(d.y[10, 0], 0.5 * (y[9] + y[11]))
+
+
+@settings(max_examples=15, deadline=None)
+@given(
+    st.lists(st.integers(2, 30), min_size=1, max_size=3),
+    st.integers(0, 3),
+    st.integers(1, 3),
+    st.floats(1e-3, 10.0),
+)
+def test_file_round_trips_for_any_shape(lengths: list[int], m: int, l: int, dt: float) -> None:
+    import tempfile
+
+    rng = np.random.default_rng(len(lengths) + 10 * m + 100 * l)
+    d = sysid.IOData(
+        u=[rng.standard_normal((n, m)) for n in lengths] if m else None,
+        y=[rng.standard_normal((n, l)) for n in lengths],
+        dt=dt,
+        output_units=["m/s"] * l,
+    )
+    with tempfile.TemporaryDirectory() as tmp:
+        d.to_npz(Path(tmp) / "r.npz")
+        assert sysid.IOData.from_npz(Path(tmp) / "r.npz") == d
+        d.to_mat(Path(tmp) / "r.mat")
+        assert sysid.IOData.from_mat(Path(tmp) / "r.mat") == d
+    assert sysid.IOData.from_pandas(d.to_pandas(), dt=dt) == d

@@ -1026,7 +1026,7 @@ class IOData:
                 ts.append(g[time].to_numpy(dtype=float))
             elif dt is None and isinstance(g.index, pd.DatetimeIndex):
                 ts.append((g.index - groups[0].index[0]).total_seconds().to_numpy())
-            elif dt is None and g.index.dtype.kind in "if" and len(g) > 1:
+            elif dt is None and g.index.dtype.kind in "if":
                 ts.append(g.index.to_numpy(dtype=float))
         if dt is None and not ts:
             dt = df.attrs.get("dt")
