@@ -1,6 +1,6 @@
 """Type stubs of the compiled core (``sysid._sysid``); see the Python wrappers for docs."""
 
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -29,7 +29,7 @@ class HankelFactor:
     @property
     def source(self) -> str: ...
     @property
-    def relative_pivot(self) -> Optional[float]: ...
+    def relative_pivot(self) -> float | None: ...
     def merge(self, other: HankelFactor) -> HankelFactor: ...
     @staticmethod
     def from_parts(
@@ -41,7 +41,7 @@ class HankelFactor:
         n_columns: int,
         n_experiments: int,
         source: str = "qr",
-        relative_pivot: Optional[float] = None,
+        relative_pivot: float | None = None,
     ) -> HankelFactor: ...
     def __reduce__(self) -> Any: ...
 
@@ -49,7 +49,7 @@ def compress(
     experiments: list[tuple[Array, Array]],
     past: int,
     future: int,
-    chunk_rows: Optional[int] = None,
+    chunk_rows: int | None = None,
     compressor: str = "qr",
 ) -> HankelFactor: ...
 
@@ -65,21 +65,24 @@ class Subspace:
 def estimate_bd_x0(
     a: Array, c: Array, u: Array, y: Array, feedthrough: bool
 ) -> tuple[Array, Array, Array]: ...
-def simulate(
-    a: Array, b: Array, c: Array, d: Array, u: Array, x0: Optional[Array]
-) -> Array: ...
+def simulate(a: Array, b: Array, c: Array, d: Array, u: Array, x0: Array | None) -> Array: ...
 def predict(
-    a: Array, b: Array, c: Array, d: Array, k: Array, u: Array, y: Array,
-    x0: Optional[Array], horizon: int,
+    a: Array,
+    b: Array,
+    c: Array,
+    d: Array,
+    k: Array,
+    u: Array,
+    y: Array,
+    x0: Array | None,
+    horizon: int,
 ) -> Array: ...
-def kalman_gain(
-    a: Array, c: Array, q: Array, r: Array, s: Array
-) -> tuple[Array, Array, Array]: ...
+def kalman_gain(a: Array, c: Array, q: Array, r: Array, s: Array) -> tuple[Array, Array, Array]: ...
 
 class StreamingCompressor:
     def __init__(
         self, n_inputs: int, n_outputs: int, past: int, future: int,
-        compressor: str = "qr", chunk_rows: Optional[int] = None,
+        compressor: str = "qr", chunk_rows: int | None = None,
     ) -> None: ...
     def push(self, u: Array, y: Array) -> None: ...
     def end_experiment(self) -> None: ...

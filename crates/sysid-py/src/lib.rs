@@ -10,6 +10,7 @@ mod errors;
 mod hankel;
 mod simulate;
 mod streaming;
+mod subspace;
 
 #[pymodule]
 fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -17,5 +18,6 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     hankel::register(m)?;
     simulate::register(m)?;
     streaming::register(m)?;
+    subspace::register(m)?;
     Ok(())
 }
