@@ -42,13 +42,16 @@ def random_system(nx: int, m: int, l: int, seed: int) -> tuple[np.ndarray, ...]:
 
 
 def generate(
-    path: Path, n: int, m: int, l: int, nx: int, seed: int, chunk: int = 1_000_000
+    path: Path, n: int, m: int, l: int, nx: int, seed: int, chunk: int = 1_000_000,
+    noise_seed: int | None = None,
 ) -> np.ndarray:
-    """Writes the record to `path` (.npy); returns the true poles."""
+    """Writes the record to `path` (.npy); returns the true poles. The system depends on
+    `seed` only; inputs and noise on `noise_seed` (default `seed + 1`), so a validation
+    record of the same system is `generate(..., seed, noise_seed=other)`."""
     from sysid import _sysid
 
     a, b, c = random_system(nx, m, l, seed)
-    rng = np.random.default_rng(seed + 1)
+    rng = np.random.default_rng(seed + 1 if noise_seed is None else noise_seed)
     b_aug = np.hstack([b, np.eye(nx)])
     c_aug = np.vstack([c, np.eye(nx)])
     d_aug = np.zeros((l + nx, m + nx))

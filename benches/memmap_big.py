@@ -36,12 +36,11 @@ if mode == "read":
         _release_pages(z, a, min(z.shape[0], a + (1 << 20)))
 else:
     import sysid
-    from worker import po_moesp_a
     f = sysid.compress_stream((z[:, :2], z[:, 2:]), horizon, compressor=mode, progress=False)
     out["compress_seconds"] = time.perf_counter() - t0
     out["source"] = f.source
-    a = po_moesp_a(f.l, 2, 2, horizon, order)
-    out["poles"] = [[float(p.real), float(p.imag)] for p in np.linalg.eigvals(a)]
+    model = sysid.SubspaceEstimator.from_factor(f, dt=1.0).fit(order=order)
+    out["poles"] = [[float(p.real), float(p.imag)] for p in np.asarray(model.poles())]
 out["seconds"] = time.perf_counter() - t0
 out["peak_mb"] = [int(x.split()[1]) / 1024 for x in open("/proc/self/status")
                   if x.startswith("VmHWM:")][0]

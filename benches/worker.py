@@ -59,25 +59,17 @@ def hankel_numpy(u: np.ndarray, y: np.ndarray, i: int) -> np.ndarray:
 
 
 def run_sysid(u, y, i, order, compressor):
-    from sysid import _sysid
+    """The whole identification through the public API (PO-MOESP, A B C D K)."""
+    import sysid
 
-    f = _sysid.compress([(u, y)], i, i, None, compressor)
-    m, l = u.shape[1], y.shape[1]
-    # the whole identification when the subspace engine is available, else compression
-    # followed by the same small PO-MOESP step as the NumPy baseline
-    try:
-        import sysid
-
-        est = sysid.SubspaceEstimator.from_factor(f, dt=1.0, method="moesp")
-        model = est.fit(order=order)
-        return np.asarray(model.A), {"source": f.source, "engine": "sysid"}
-    except Exception as exc:  # noqa: BLE001 - fall back to the shared step, say so
-        a = po_moesp_a(f.l, m, l, i, order)
-        return a, {"source": f.source, "engine": f"numpy-po-moesp ({type(exc).__name__})"}
+    est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=i, compressor=compressor)
+    model = est.fit(order=order)
+    abcd = tuple(np.asarray(x) for x in (model.A, model.B, model.C, model.D))
+    return abcd, {"source": est.factor.source}
 
 
 def run_numpy(u, y, i, order):
-    return po_moesp_a(hankel_numpy(u, y, i), u.shape[1], y.shape[1], i, order), {}
+    return (po_moesp_a(hankel_numpy(u, y, i), u.shape[1], y.shape[1], i, order),), {}
 
 
 def run_sippy(u, y, i, order):
@@ -89,7 +81,7 @@ def run_sippy(u, y, i, order):
     sysid_ = system_identification(
         y.T, u.T, "N4SID", SS_fixed_order=order, SS_f=i, SS_p=i, SS_threshold=0.0
     )
-    return np.asarray(sysid_.A), {}
+    return tuple(np.asarray(x) for x in (sysid_.A, sysid_.B, sysid_.C, sysid_.D)), {}
 
 
 def run_nfoursid(u, y, i, order):
@@ -102,7 +94,22 @@ def run_nfoursid(u, y, i, order):
     nf = NFourSID(df, output_columns=cols_y, input_columns=cols_u, num_block_rows=i)
     nf.subspace_identification()
     ss, _ = nf.system_identification(rank=order)
-    return np.asarray(ss.a), {}
+    return tuple(np.asarray(x) for x in (ss.a, ss.b, ss.c, ss.d)), {}
+
+
+def validation_fit(abcd, path: str, m: int) -> float:
+    """Simulation fit on a fresh record of the same system, 100 (1 - |y - yhat| / |y - mean|),
+    averaged over outputs."""
+    a, b, c, d = abcd
+    z = np.load(path)
+    u, y = z[:, :m], z[:, m:]
+    x = np.zeros(a.shape[0])
+    yh = np.empty_like(y)
+    for t in range(len(u)):
+        yh[t] = c @ x + d @ u[t]
+        x = a @ x + b @ u[t]
+    err = np.linalg.norm(y - yh, axis=0) / np.linalg.norm(y - y.mean(axis=0), axis=0)
+    return float(np.mean(100 * (1 - err)))
 
 
 def main() -> None:
@@ -113,6 +120,7 @@ def main() -> None:
     ap.add_argument("--horizon", type=int, required=True)
     ap.add_argument("--order", type=int, required=True)
     ap.add_argument("--memory-limit-gb", type=float, default=16.0)
+    ap.add_argument("--validation", default=None, help="record for the validation fit")
     args = ap.parse_args()
     lim = int(args.memory_limit_gb * 2**30)
     resource.setrlimit(resource.RLIMIT_AS, (lim, lim))
@@ -134,19 +142,22 @@ def main() -> None:
         out["baseline_mb"] = rss_mb()
         t0 = time.perf_counter()
         if args.tool == "sysid-correlation":
-            a, info = run_sysid(u, y, args.horizon, args.order, "correlation")
+            abcd, info = run_sysid(u, y, args.horizon, args.order, "correlation")
         elif args.tool == "sysid-qr":
-            a, info = run_sysid(u, y, args.horizon, args.order, "qr")
+            abcd, info = run_sysid(u, y, args.horizon, args.order, "qr")
         elif args.tool == "numpy-qr":
-            a, info = run_numpy(u, y, args.horizon, args.order)
+            abcd, info = run_numpy(u, y, args.horizon, args.order)
         elif args.tool == "sippy":
-            a, info = run_sippy(u, y, args.horizon, args.order)
+            abcd, info = run_sippy(u, y, args.horizon, args.order)
         elif args.tool == "nfoursid":
-            a, info = run_nfoursid(u, y, args.horizon, args.order)
+            abcd, info = run_nfoursid(u, y, args.horizon, args.order)
         else:
             raise SystemExit(f"unknown tool {args.tool}")
         out["seconds"] = time.perf_counter() - t0
-        ev = np.linalg.eigvals(a)
+        out["peak_mb"] = peak_mb()
+        if args.validation and len(abcd) == 4:
+            out["fit"] = validation_fit(abcd, args.validation, args.m)
+        ev = np.linalg.eigvals(abcd[0])
         out["poles"] = [[float(z.real), float(z.imag)] for z in ev]
         out.update(info)
         out["ok"] = True
@@ -154,7 +165,7 @@ def main() -> None:
         out["ok"] = False
         msg = f"{type(exc).__name__}: {exc}"
         out["error"] = msg.splitlines()[0][:200] if msg.strip() else traceback.format_exc()[-200:]
-    out["peak_mb"] = peak_mb()
+    out.setdefault("peak_mb", peak_mb())
     sys.stdout.write(json.dumps(out) + "\n")
 
 
