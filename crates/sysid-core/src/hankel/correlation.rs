@@ -37,7 +37,9 @@ use rayon::prelude::*;
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
 pub struct CorrelationOptions {
-    /// Samples per block (the unit of parallel work and of the pairwise reduction).
+    /// Samples per block (the unit of parallel work and of the pairwise reduction); 0 picks
+    /// a size whose block-Hankel view (`block_rows x (p + f)(m + l)` doubles, which the GEMM
+    /// may pack) stays near 4 MB, at least 256 samples.
     pub block_rows: usize,
     /// Threshold on the smallest relative Cholesky pivot `min La_ii^2 / max Ga_ii` of the
     /// centred, scaled Gram matrix below which the result is flagged ill-conditioned (and,
@@ -50,7 +52,7 @@ pub struct CorrelationOptions {
 impl Default for CorrelationOptions {
     fn default() -> Self {
         Self {
-            block_rows: 8192,
+            block_rows: 0,
             min_relative_pivot: 1e-10,
             parallel: true,
         }
@@ -279,7 +281,7 @@ impl CorrelationSums {
             n_experiments: 0,
             stack: vec![(0, Segment::empty(d, w))],
             open_samples: 0,
-            block_rows: CorrelationOptions::default().block_rows,
+            block_rows: Self::auto_block_rows(&layout),
             parallel: true,
         })
     }
@@ -319,11 +321,21 @@ impl CorrelationSums {
         (center, scale)
     }
 
-    /// Sets the block size and whether blocks run in parallel (the sums do not depend on
-    /// `parallel`; they depend on `block_rows` only through round-off).
+    /// Sets the block size (0: automatic, see [`CorrelationOptions::block_rows`]) and whether
+    /// blocks run in parallel (the sums do not depend on `parallel`; they depend on
+    /// `block_rows` only through round-off).
     pub fn set_blocking(&mut self, block_rows: usize, parallel: bool) {
-        self.block_rows = block_rows.max(1);
+        self.block_rows = if block_rows == 0 {
+            Self::auto_block_rows(&self.layout)
+        } else {
+            block_rows
+        };
         self.parallel = parallel;
+    }
+
+    fn auto_block_rows(layout: &HankelLayout) -> usize {
+        let width = layout.k().max(1) * std::mem::size_of::<f64>();
+        ((4usize << 20) / width).max(256)
     }
 
     /// The layout.
@@ -391,7 +403,7 @@ impl CorrelationSums {
         let (m, d, w) = (self.layout.n_inputs, self.d(), self.layout.window());
         let br = self.block_rows;
         let n_blocks = n.div_ceil(br);
-        let (center, inv) = (&self.center, &self.inv_scale);
+        let (center, inv) = (self.center.clone(), self.inv_scale.clone());
         let block = |b: usize| {
             let s = b * br;
             let len = br.min(n - s);
@@ -407,13 +419,19 @@ impl CorrelationSums {
             }
             Segment::from_rows(&x, len, d, w)
         };
-        let segs: Vec<Segment> = if self.parallel && n_blocks > 1 {
-            (0..n_blocks).into_par_iter().map(block).collect()
-        } else {
-            (0..n_blocks).map(block).collect()
-        };
-        for s in segs {
-            self.push_segment(s);
+        // batches bound the memory of pending segments; the sequence of segments pushed,
+        // hence the result, does not depend on the batch size or the thread count
+        const BATCH: usize = 32;
+        for b0 in (0..n_blocks).step_by(BATCH) {
+            let b1 = (b0 + BATCH).min(n_blocks);
+            let segs: Vec<Segment> = if self.parallel && b1 - b0 > 1 {
+                (b0..b1).into_par_iter().map(block).collect()
+            } else {
+                (b0..b1).map(block).collect()
+            };
+            for s in segs {
+                self.push_segment(s);
+            }
         }
         self.open_samples += n;
         Ok(())
