@@ -134,6 +134,10 @@ def main() -> None:
     ap.add_argument("--memory-limit-gb", type=float, default=8.0, help="address space per run")
     ap.add_argument("--name", default=None, help="results file name (default: the grid name)")
     ap.add_argument("--seed", type=int, default=2024)
+    ap.add_argument(
+        "--update", action="store_true",
+        help="re-run only --tools and replace their rows in the existing results file",
+    )
     args = ap.parse_args()
     kind = "quick" if args.quick else "full" if args.full else "default"
     name = args.name or kind
@@ -178,6 +182,13 @@ def main() -> None:
             rows.append(res)
             print(json.dumps({k: v for k, v in res.items() if k != "poles"}), flush=True)
         path.unlink(missing_ok=True) if n >= 10**7 else None
+    old = HERE / "results" / f"{name}.json"
+    if args.update and old.exists():
+        new = {(r["n"], r["m"], r["l"], r["i"], r["tool"]): r for r in rows}
+        merged = []
+        for r in json.loads(old.read_text()):
+            merged.append(new.pop((r["n"], r["m"], r["l"], r["i"], r["tool"]), r))
+        rows = merged + list(new.values())
     write_report(name, rows, rate, kind)
 
 
