@@ -247,7 +247,9 @@ def compress_stream(
     >>> import numpy as np
     >>> from sysid.streaming import compress_stream
     >>> rng = np.random.default_rng(0)
-    >>> u = rng.standard_normal((5000, 1)); y = np.cumsum(u, axis=0) * 0.01 + u
+    >>> u = rng.standard_normal((5000, 1))
+    >>> e = 0.1 * rng.standard_normal((5000, 1))
+    >>> y = np.convolve(u[:, 0], [1.0, 0.5, 0.25])[:5000, None] + e
     >>> chunks = ((u[s:s + 1000], y[s:s + 1000]) for s in range(0, 5000, 1000))
     >>> f = compress_stream(chunks, past=5, progress=False)
     >>> f.n_columns, f.source
