@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
 from sysid import _sysid
 from sysid.errors import DataError, InsufficientDataError, NonFiniteError
 from sysid.streaming import CompressionFallbackWarning, compress_dask, compress_stream
