@@ -117,7 +117,11 @@ mod tests {
 
     #[test]
     fn lq_reproduces_gram() {
-        let m = mat![[1.0, 2.0, 3.0, 4.0], [0.5, -1.0, 2.0, 0.0], [3.0, 1.0, 0.0, 1.0]];
+        let m = mat![
+            [1.0, 2.0, 3.0, 4.0],
+            [0.5, -1.0, 2.0, 0.0],
+            [3.0, 1.0, 0.0, 1.0]
+        ];
         let l = lq_lower(m.as_ref());
         let g1 = &l * l.transpose();
         let g2 = &m * m.transpose();
