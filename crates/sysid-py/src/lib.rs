@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 mod convert;
 mod errors;
 mod hankel;
+mod realization;
 mod simulate;
 
 #[pymodule]
@@ -15,5 +16,6 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     hankel::register(m)?;
     simulate::register(m)?;
+    realization::register(m)?;
     Ok(())
 }
