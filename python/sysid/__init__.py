@@ -33,6 +33,15 @@ from .errors import (
 )
 from .model import StateSpaceModel
 from .subspace import SubspaceEstimator, cva, default_horizon, moesp, n4sid
+from .modal import ModalAnalysis, modal_analysis
+from .realization import EraResult, MarkovEstimate, era, ho_kalman, impulse_response, kung, okid
+from .reduction import (
+    Gramians,
+    balanced_realization,
+    balanced_truncation,
+    gramians,
+    hankel_singular_values,
+)
 
 __all__ = [
     "__version__",
@@ -53,4 +62,18 @@ __all__ = [
     "OrderError",
     "NumericalError",
     "RiccatiError",
+    "ho_kalman",
+    "kung",
+    "era",
+    "EraResult",
+    "impulse_response",
+    "okid",
+    "MarkovEstimate",
+    "modal_analysis",
+    "ModalAnalysis",
+    "gramians",
+    "Gramians",
+    "hankel_singular_values",
+    "balanced_realization",
+    "balanced_truncation",
 ]
