@@ -31,9 +31,8 @@ from .errors import (
     ShapeError,
     SysidError,
 )
-from .model import StateSpaceModel
-from .subspace import SubspaceEstimator, cva, default_horizon, moesp, n4sid
 from .modal import ModalAnalysis, modal_analysis
+from .model import StateSpaceModel
 from .realization import EraResult, MarkovEstimate, era, ho_kalman, impulse_response, kung, okid
 from .reduction import (
     Gramians,
@@ -42,6 +41,7 @@ from .reduction import (
     gramians,
     hankel_singular_values,
 )
+from .subspace import SubspaceEstimator, cva, default_horizon, moesp, n4sid
 
 __all__ = [
     "__version__",

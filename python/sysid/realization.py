@@ -40,8 +40,8 @@ import numpy as np
 from . import _sysid
 from .data import IOData
 from .errors import DataError, NonFiniteError, ShapeError
-from .model import StateSpaceModel
 from .modal import ModalAnalysis, modal_analysis
+from .model import StateSpaceModel
 
 __all__ = [
     "ho_kalman",
