@@ -19,6 +19,7 @@ Examples
 
 from __future__ import annotations
 
+import copy
 from typing import Any
 
 import numpy as np
@@ -69,6 +70,24 @@ class ModalAnalysis:
 
     def __len__(self) -> int:
         return len(self.eigenvalues)
+
+    def select(self, mask: Any) -> ModalAnalysis:
+        """The modes where ``mask`` (boolean or index array) selects, as a new object.
+
+        Examples
+        --------
+        >>> import sysid
+        >>> m = sysid.modal_analysis(sysid.StateSpaceModel([[0.5, 0], [0, 0.9]], [[1], [1]],
+        ...                                               [[1, 1]]))
+        >>> len(m.select(m.damping > 0.5)), len(m.select([0]))
+        (2, 1)
+        """
+        out = copy.copy(self)
+        idx = np.asarray(mask)
+        for name in ("eigenvalues", "s", "omega", "frequencies_hz", "damping", "mode_shapes"):
+            setattr(out, name, getattr(self, name)[idx])
+        out.extra = {k: v[idx] for k, v in self.extra.items()}
+        return out
 
     def table(self) -> str:
         """The modes as a text table (frequency in Hz and rad/s, damping, extra columns)."""

@@ -55,6 +55,18 @@ pub fn ho_kalman(markov: &[Mat<f64>], opts: &RealizationOptions) -> Result<Reali
         }
     };
     check_order(n, &svd.s, r, s, l, m)?;
+    let rank = svd.s.iter().filter(|&&x| x > opts.rank_tol * svd.s[0]).count();
+    if n > rank {
+        return Err(crate::error::SysidError::invalid(
+            "order",
+            format!(
+                "order {n} exceeds the numerical rank {rank} of the Hankel matrix (relative \
+                 tolerance {:.1e}); Ho-Kalman needs exact Markov parameters: choose order <= \
+                 {rank}, or use kung/era for noisy ones",
+                opts.rank_tol
+            ),
+        ));
+    }
     let (o, ctr) = factors(&svd, n);
     let h1 = block_hankel(markov, r, s, 1);
     let a = a_from_shift(&svd, h1.as_ref(), n);
