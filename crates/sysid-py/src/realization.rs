@@ -24,7 +24,9 @@ fn unstack(h: MatRef<'_, f64>, l: usize) -> PyResult<Vec<Mat<f64>>> {
             got: format!("({}, {})", h.nrows(), h.ncols()),
         }));
     }
-    Ok((0..h.nrows() / l).map(|k| h.subrows(k * l, l).to_owned()).collect())
+    Ok((0..h.nrows() / l)
+        .map(|k| h.subrows(k * l, l).to_owned())
+        .collect())
 }
 
 fn stack(h: &[Mat<f64>]) -> Mat<f64> {
@@ -38,11 +40,21 @@ fn model(
     c: &PyReadonlyArray2<'_, f64>,
     d: &PyReadonlyArray2<'_, f64>,
 ) -> PyResult<StateSpace> {
-    StateSpace::new(view(a).to_owned(), view(b).to_owned(), view(c).to_owned(), view(d).to_owned())
-        .py()
+    StateSpace::new(
+        view(a).to_owned(),
+        view(b).to_owned(),
+        view(c).to_owned(),
+        view(d).to_owned(),
+    )
+    .py()
 }
 
-fn options(order: Option<usize>, rows: Option<usize>, cols: Option<usize>, rank_tol: f64) -> RealizationOptions {
+fn options(
+    order: Option<usize>,
+    rows: Option<usize>,
+    cols: Option<usize>,
+    rank_tol: f64,
+) -> RealizationOptions {
     let mut o = RealizationOptions::default();
     o.order = order;
     o.rows = rows;
@@ -109,7 +121,10 @@ pub fn realize<'py>(
 fn views<'a>(
     experiments: &'a [(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>)],
 ) -> Vec<(MatRef<'a, f64>, MatRef<'a, f64>)> {
-    experiments.iter().map(|(u, y)| (view_nd(u.as_array()), view_nd(y.as_array()))).collect()
+    experiments
+        .iter()
+        .map(|(u, y)| (view_nd(u.as_array()), view_nd(y.as_array())))
+        .collect()
 }
 
 /// Least-squares FIR estimate; `regularization` is "none" or "tc".
@@ -165,7 +180,10 @@ pub fn okid<'py>(
     let est = py.detach(|| rz::okid(&v, &opts)).py()?;
     let d = PyDict::new(py);
     d.set_item("markov", mat_to_numpy(py, &stack(&est.markov)))?;
-    d.set_item("observer_markov", mat_to_numpy(py, &stack(&est.observer_markov)))?;
+    d.set_item(
+        "observer_markov",
+        mat_to_numpy(py, &stack(&est.observer_markov)),
+    )?;
     d.set_item("residual_cov", mat_to_numpy(py, &est.residual_cov))?;
     d.set_item("samples", est.samples)?;
     Ok(d)
@@ -179,7 +197,9 @@ pub fn solve_discrete_lyapunov<'py>(
     q: PyReadonlyArray2<'_, f64>,
 ) -> PyResult<Arr<'py>> {
     let (av, qv) = (view(&a), view(&q));
-    let x = py.detach(|| sysid_core::lyapunov::solve_discrete_lyapunov(av, qv)).py()?;
+    let x = py
+        .detach(|| sysid_core::lyapunov::solve_discrete_lyapunov(av, qv))
+        .py()?;
     Ok(mat_to_numpy(py, &x))
 }
 
@@ -230,7 +250,10 @@ pub fn balanced_truncation<'py>(
     out.set_item("b", mat_to_numpy(py, &bal.model.b))?;
     out.set_item("c", mat_to_numpy(py, &bal.model.c))?;
     out.set_item("d", mat_to_numpy(py, &bal.model.d))?;
-    out.set_item("hankel_singular_values", slice_to_numpy(py, &bal.hankel_singular_values))?;
+    out.set_item(
+        "hankel_singular_values",
+        slice_to_numpy(py, &bal.hankel_singular_values),
+    )?;
     out.set_item("t", mat_to_numpy(py, &bal.t))?;
     out.set_item("t_inv", mat_to_numpy(py, &bal.t_inv))?;
     out.set_item("error_bound", bal.error_bound)?;
@@ -254,10 +277,19 @@ pub fn modal_analysis<'py>(
     out.set_item("eig_re", slice_to_numpy(py, &col(&|m| m.eigenvalue.re)))?;
     out.set_item("eig_im", slice_to_numpy(py, &col(&|m| m.eigenvalue.im)))?;
     out.set_item("omega", slice_to_numpy(py, &col(&|m| m.omega)))?;
-    out.set_item("frequency_hz", slice_to_numpy(py, &col(&|m| m.frequency_hz)))?;
+    out.set_item(
+        "frequency_hz",
+        slice_to_numpy(py, &col(&|m| m.frequency_hz)),
+    )?;
     out.set_item("damping", slice_to_numpy(py, &col(&|m| m.damping)))?;
-    out.set_item("shape_re", mat_to_numpy(py, &Mat::from_fn(k, l, |i, j| modes[i].shape[j].re)))?;
-    out.set_item("shape_im", mat_to_numpy(py, &Mat::from_fn(k, l, |i, j| modes[i].shape[j].im)))?;
+    out.set_item(
+        "shape_re",
+        mat_to_numpy(py, &Mat::from_fn(k, l, |i, j| modes[i].shape[j].re)),
+    )?;
+    out.set_item(
+        "shape_im",
+        mat_to_numpy(py, &Mat::from_fn(k, l, |i, j| modes[i].shape[j].im)),
+    )?;
     Ok(out)
 }
 

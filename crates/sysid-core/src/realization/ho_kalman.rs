@@ -55,7 +55,11 @@ pub fn ho_kalman(markov: &[Mat<f64>], opts: &RealizationOptions) -> Result<Reali
         }
     };
     check_order(n, &svd.s, r, s, l, m)?;
-    let rank = svd.s.iter().filter(|&&x| x > opts.rank_tol * svd.s[0]).count();
+    let rank = svd
+        .s
+        .iter()
+        .filter(|&&x| x > opts.rank_tol * svd.s[0])
+        .count();
     if n > rank {
         return Err(crate::error::SysidError::invalid(
             "order",

@@ -40,7 +40,13 @@ pub(crate) fn eigen_decomposition(a: MatRef<'_, f64>) -> Result<EigenDecompositi
             err = err.max((check[(i, j)] - c64::new(target, 0.0)).norm());
         }
     }
-    if !err.is_finite() || err > 1e-6 {
+    let norm = |m: &Mat<c64>| {
+        (0..n)
+            .map(|j| (0..n).map(|i| m[(i, j)].norm()).sum::<f64>())
+            .fold(0.0, f64::max)
+    };
+    let cond = norm(&vectors) * norm(&inverse);
+    if !err.is_finite() || err > 1e-6 || !(cond < 1e12) {
         return Err(SysidError::numerical(
             "eigendecomposition of A",
             "A is defective or nearly so (repeated poles without a full set of eigenvectors); \
@@ -192,6 +198,16 @@ mod tests {
             let big = m.shape.iter().map(|z| z.norm()).fold(0.0, f64::max);
             assert!((big - 1.0).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn defective_matrix_is_an_error() {
+        let a = faer::mat![[0.5, 1.0], [0.0, 0.5]];
+        let c = faer::mat![[1.0, 0.0]];
+        assert!(matches!(
+            modal_analysis(a.as_ref(), c.as_ref(), 1.0),
+            Err(SysidError::Numerical { .. })
+        ));
     }
 
     #[test]
