@@ -136,7 +136,7 @@ pub fn balanced_truncation(sys: &StateSpace, order: usize) -> Result<Balanced> {
     }
     let sr = square_root(sys)?;
     let smax = sr.s[0];
-    if !(sr.s[order - 1] > smax * 1e-13) {
+    if sr.s[order - 1].is_nan() || sr.s[order - 1] <= smax * 1e-13 {
         let minimal = sr.s.iter().filter(|&&x| x > smax * 1e-13).count();
         return Err(SysidError::invalid(
             "order",

@@ -170,7 +170,7 @@ fn check_experiments(
     }
     let su: Vec<f64> = su.iter().map(|s| (s / count as f64).sqrt()).collect();
     let sy: Vec<f64> = sy.iter().map(|s| (s / count as f64).sqrt()).collect();
-    if let Some(i) = su.iter().position(|&s| !(s > 0.0)) {
+    if let Some(i) = su.iter().position(|&s| s.is_nan() || s <= 0.0) {
         return Err(SysidError::invalid(
             "u",
             format!("input {i} is identically zero; drop it"),
@@ -611,14 +611,18 @@ mod tests {
     fn noise_free_fir_and_okid_are_exact() {
         let sys = random_system(4, 2, 2, 0.6, 21);
         let (u, y) = noisy_data(&sys, 600, 0.0, 1);
-        let mut fo = FirOptions::default();
-        fo.length = 60;
-        fo.regularization = Regularization::None;
+        let fo = FirOptions {
+            length: 60,
+            regularization: Regularization::None,
+            ..Default::default()
+        };
         let f = fir(&[(u.as_ref(), y.as_ref())], &fo).unwrap();
         assert!(markov_error(&f.markov, &sys) < 1e-8);
-        let mut oo = OkidOptions::default();
-        oo.observer_order = 4;
-        oo.count = 80;
+        let oo = OkidOptions {
+            observer_order: 4,
+            count: 80,
+            ..Default::default()
+        };
         let o = okid(&[(u.as_ref(), y.as_ref())], &oo).unwrap();
         assert!(markov_error(&o.markov, &sys) < 1e-8);
     }
@@ -629,8 +633,10 @@ mod tests {
         let mut wins = 0;
         for seed in 0..5 {
             let (u, y) = noisy_data(&sys, 250, 0.3, 100 + seed);
-            let mut fo = FirOptions::default();
-            fo.length = 80;
+            let mut fo = FirOptions {
+                length: 80,
+                ..Default::default()
+            };
             let tc = fir(&[(u.as_ref(), y.as_ref())], &fo).unwrap();
             fo.regularization = Regularization::None;
             let ls = fir(&[(u.as_ref(), y.as_ref())], &fo).unwrap();
@@ -646,9 +652,11 @@ mod tests {
     fn experiments_are_pooled() {
         let sys = random_system(3, 1, 2, 0.7, 9);
         let (u, y) = noisy_data(&sys, 800, 0.0, 4);
-        let mut oo = OkidOptions::default();
-        oo.observer_order = 5;
-        oo.count = 20;
+        let oo = OkidOptions {
+            observer_order: 5,
+            count: 20,
+            ..Default::default()
+        };
         let whole = okid(&[(u.as_ref(), y.as_ref())], &oo).unwrap();
         let parts = okid(
             &[
@@ -670,8 +678,10 @@ mod tests {
         let oo = OkidOptions::default();
         assert!(okid(&[(u.as_ref(), y.as_ref())], &oo).is_err()); // zero input
         let mut u = Mat::from_fn(50, 1, |t, _| (t as f64).sin());
-        let mut ob = OkidOptions::default();
-        ob.observer_order = 60;
+        let ob = OkidOptions {
+            observer_order: 60,
+            ..Default::default()
+        };
         assert!(matches!(
             okid(&[(u.as_ref(), y.as_ref())], &ob),
             Err(SysidError::InsufficientData { .. })

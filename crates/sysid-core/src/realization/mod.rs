@@ -220,7 +220,7 @@ pub(crate) fn check_order(
             ),
         ));
     }
-    if !(sv[n - 1] > sv[0] * 1e-14) {
+    if sv[n - 1].is_nan() || sv[n - 1] <= sv[0] * 1e-14 {
         return Err(SysidError::invalid(
             "order",
             format!(

@@ -46,7 +46,7 @@ pub(crate) fn eigen_decomposition(a: MatRef<'_, f64>) -> Result<EigenDecompositi
             .fold(0.0, f64::max)
     };
     let cond = norm(&vectors) * norm(&inverse);
-    if !err.is_finite() || err > 1e-6 || !(cond < 1e12) {
+    if !err.is_finite() || err > 1e-6 || cond.is_nan() || cond >= 1e12 {
         return Err(SysidError::numerical(
             "eigendecomposition of A",
             "A is defective or nearly so (repeated poles without a full set of eigenvectors); \
