@@ -19,10 +19,11 @@ Examples
 
 from . import datasets
 from ._sysid import __version__
-from .data import IOData
+from .data import DataSummary, IOData, SplitData, Trend, check_unit, sample_time
 from .errors import (
     DataError,
     ExcitationError,
+    ExcitationWarning,
     InsufficientDataError,
     NonFiniteError,
     NumericalError,
@@ -31,8 +32,49 @@ from .errors import (
     ShapeError,
     SysidError,
 )
+from .input_design import (
+    check_excitation,
+    chirp,
+    crest_factor,
+    multisine,
+    persistent_excitation_order,
+    prbs,
+    random_binary,
+    random_gaussian,
+)
 from .modal import ModalAnalysis, modal_analysis
 from .model import StateSpaceModel
+from .nonparametric import (
+    FRD,
+    Coherence,
+    Correlation,
+    FRDComparison,
+    Spectra,
+    coherence,
+    correlation,
+    etfe,
+    periodogram,
+    spa,
+    spectra,
+    welch_frf,
+)
+from .preprocessing import (
+    bandpass,
+    butter_sos,
+    decimate,
+    despike,
+    detrend,
+    drop_quiet,
+    filtfilt,
+    find_spikes,
+    highpass,
+    lowpass,
+    repair_nan,
+    resample,
+    scale,
+    select_mask,
+    select_mode,
+)
 from .realization import EraResult, MarkovEstimate, era, ho_kalman, impulse_response, kung, okid
 from .reduction import (
     Gramians,
@@ -62,6 +104,49 @@ __all__ = [
     "OrderError",
     "NumericalError",
     "RiccatiError",
+    # data handling, pre-processing, input design, non-parametric analysis
+    "ExcitationWarning",
+    "Trend",
+    "SplitData",
+    "DataSummary",
+    "sample_time",
+    "check_unit",
+    "repair_nan",
+    "find_spikes",
+    "despike",
+    "detrend",
+    "scale",
+    "butter_sos",
+    "filtfilt",
+    "lowpass",
+    "highpass",
+    "bandpass",
+    "resample",
+    "decimate",
+    "select_mode",
+    "select_mask",
+    "drop_quiet",
+    "prbs",
+    "random_binary",
+    "random_gaussian",
+    "multisine",
+    "chirp",
+    "crest_factor",
+    "persistent_excitation_order",
+    "check_excitation",
+    "FRD",
+    "FRDComparison",
+    "Spectra",
+    "Coherence",
+    "Correlation",
+    "etfe",
+    "spa",
+    "welch_frf",
+    "spectra",
+    "periodogram",
+    "coherence",
+    "correlation",
+    # realisation, Markov parameters, reduction, modal analysis
     "ho_kalman",
     "kung",
     "era",

@@ -31,7 +31,10 @@ def _demo(args: argparse.Namespace) -> int:
     print(model)
     print("poles:", np.array2string(model.poles(), precision=4))
     yv, uv = y[500:], u[500:]
-    for name, yh in (("simulation", model.simulate(uv)), ("1-step prediction", model.predict(uv, yv))):
+    for name, yh in (
+        ("simulation", model.simulate(uv)),
+        ("1-step prediction", model.predict(uv, yv)),
+    ):
         # NRMSE fit after removing the transient-independent offset of the validation part
         e = yv - yh
         fit = 100 * (1 - np.linalg.norm(e - e.mean(0)) / np.linalg.norm(yv - yv.mean(0)))

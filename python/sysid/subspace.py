@@ -11,9 +11,11 @@ Methods (``method=``):
     PO-MOESP (Verhaegen 1994): past inputs and outputs as instruments; consistent with
     process and measurement noise.
 ``"ordinary-moesp"``
-    MOESP with past inputs only as instruments (Verhaegen & Dewilde 1992, the seed slides'
-    "ordinary" MOESP); consistent for output-error (measurement-noise-only) data, biased
-    with process noise.
+    MOESP without instruments: only future inputs and outputs (Verhaegen & Dewilde 1992,
+    the seed slides' ordinary MOESP); consistent for output-error (measurement-noise-only)
+    data, biased with process noise.
+``"pi-moesp"``
+    MOESP with past inputs as instruments (Verhaegen & Dewilde 1992).
 ``"n4sid"``
     N4SID (Van Overschee & De Moor 1994): oblique projection, unit weights.
 ``"cva"``
@@ -33,11 +35,12 @@ import numpy as np
 from . import _sysid
 from .data import IOData
 from .errors import DataError
+from .input_design import check_excitation
 from .model import StateSpaceModel
 
 __all__ = ["SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "METHODS"]
 
-METHODS = ("moesp", "ordinary-moesp", "n4sid", "cva")
+METHODS = ("moesp", "ordinary-moesp", "pi-moesp", "n4sid", "cva")
 _ALIASES = {"po-moesp": "moesp", "pomoesp": "moesp", "moesp-ordinary": "ordinary-moesp"}
 
 Order = Union[int, Literal["auto"]]
@@ -88,8 +91,9 @@ class SubspaceEstimator:
     past, future : int, optional
         Separate past and future horizons (override ``horizon``).
     method : str
-        Default weighting for :attr:`singular_values` and :meth:`fit`: ``"moesp"``,
-        ``"ordinary-moesp"``, ``"n4sid"`` or ``"cva"``.
+        Default weighting for :attr:`singular_values` and :meth:`fit`: one of
+        :data:`METHODS` (``"moesp"``, ``"ordinary-moesp"``, ``"pi-moesp"``, ``"n4sid"``,
+        ``"cva"``).
     chunk_rows : int, optional
         Hankel columns per QR update in the compressor (memory ``(k + chunk) k`` doubles).
     compressor : str
@@ -136,6 +140,7 @@ class SubspaceEstimator:
             data.experiments, self.past, self.future, chunk_rows, compressor
         )
         self._svd: dict[str, Any] = {}
+        self._subspace(None)  # checks the record (length, excitation) right away
 
     @classmethod
     def from_factor(
@@ -156,8 +161,11 @@ class SubspaceEstimator:
         m, l = factor.n_inputs, factor.n_outputs
         # a placeholder record that carries only channel counts, names and dt
         self.data = IOData(
-            u=np.zeros((1, m)), y=np.zeros((1, l)), dt=dt,
-            input_names=input_names, output_names=output_names,
+            u=np.zeros((1, m)),
+            y=np.zeros((1, l)),
+            dt=dt,
+            input_names=input_names,
+            output_names=output_names,
         )
         self._from_factor = True
         self.method = _method(method)
@@ -230,9 +238,17 @@ class SubspaceEstimator:
             n = sub.auto_order()
         else:
             n = _check_int(order, "order", 1)
-        for name, flag in (("feedthrough", feedthrough), ("kalman", kalman), ("stable", stable), ("x0", x0)):
+        for name, flag in (
+            ("feedthrough", feedthrough),
+            ("kalman", kalman),
+            ("stable", stable),
+            ("x0", x0),
+        ):
             if not isinstance(flag, (bool, np.bool_)):
                 raise DataError(f"{name} must be True or False, got {flag!r}")
+        if self.data.n_inputs and not getattr(self, "_from_factor", False):
+            # warn (ExcitationWarning) when the input cannot support order n
+            check_excitation([u for u, _ in self.data.experiments], n, stacklevel=2)
         res = sub.fit(n, bool(feedthrough), bool(kalman), bool(stable))
         x0_est = None
         B, D = res["B"], res["D"]
@@ -256,7 +272,11 @@ class SubspaceEstimator:
             "S": res["S"],
         }
         return StateSpaceModel(
-            res["A"], B, res["C"], D, res["K"],
+            res["A"],
+            B,
+            res["C"],
+            D,
+            res["K"],
             dt=self.data.dt,
             noise_cov=res["noise_cov"],
             x0=x0_est,

@@ -56,15 +56,7 @@ impl StateSpace {
             ));
         }
         for (name, m) in [("A", &a), ("B", &b), ("C", &c), ("D", &d)] {
-            crate::error::check_finite(
-                match name {
-                    "A" => "A",
-                    "B" => "B",
-                    "C" => "C",
-                    _ => "D",
-                },
-                m.as_ref(),
-            )?;
+            crate::error::check_finite(name, m.as_ref())?;
         }
         Ok(Self { a, b, c, d })
     }

@@ -115,7 +115,7 @@ pub fn kalman_gain(
     })?;
     let k = innov_llt.solve(apct_s.transpose()).transpose().to_owned();
     let rho = spectral_radius((a - &k * c).as_ref())?;
-    if !(rho < 1.0) {
+    if rho.is_nan() || rho >= 1.0 {
         return Err(fail(format!(
             "the predictor A - K C has spectral radius {rho:.6} >= 1"
         )));

@@ -10,12 +10,14 @@ mod errors;
 mod hankel;
 mod realization;
 mod simulate;
+mod subspace;
 
 #[pymodule]
 fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     hankel::register(m)?;
     simulate::register(m)?;
+    subspace::register(m)?;
     realization::register(m)?;
     Ok(())
 }

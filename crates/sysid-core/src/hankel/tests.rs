@@ -113,7 +113,7 @@ fn rejects_bad_input() {
         }) => {}
         other => panic!("unexpected {other:?}"),
     }
-    let (u, y) = record(9, 1, 1, 3);
+    let (u, y) = record(5, 1, 1, 3);
     let mut c = QrCompressor::new(layout);
     c.push(u.as_ref(), y.as_ref()).unwrap();
     assert!(matches!(
@@ -127,4 +127,21 @@ fn rejects_bad_input() {
         c.push(u.as_ref(), y.as_ref()),
         Err(SysidError::ShapeMismatch { .. })
     ));
+}
+
+#[test]
+fn factor_does_not_depend_on_the_thread_count_beyond_round_off() {
+    let layout = HankelLayout::new(3, 3, 8, 8).unwrap();
+    let (u, y) = record(3000, 3, 3, 17);
+    let run = |par: faer::Par| {
+        faer::set_global_parallelism(par);
+        let mut c = QrCompressor::new(layout);
+        c.push(u.as_ref(), y.as_ref()).unwrap();
+        c.finish().unwrap()
+    };
+    let serial = run(faer::Par::Seq);
+    let parallel = run(faer::Par::rayon(2));
+    faer::set_global_parallelism(faer::Par::rayon(0));
+    let scale = serial.l().norm_max();
+    assert!(max_abs_diff(serial.l(), parallel.l()) < 1e-12 * scale);
 }
