@@ -182,7 +182,7 @@ def test_hankel_too_small_for_requested_size_names_the_fix() -> None:
     with pytest.raises(sysid.DataError, match="positive integer"):
         sysid.kung(h, order=0)
     with pytest.raises(sysid.DataError, match="rank"):
-        sysid.ho_kalman(random_system(3, 1, 1, 1).markov(20), order=5)  # a 3rd-order system has rank 3
+        sysid.ho_kalman(random_system(3, 1, 1, 1).markov(20), order=5)  # the rank is 3
 
 
 # -- Markov parameters from data ----------------------------------------------------------

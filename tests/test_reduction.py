@@ -7,9 +7,9 @@ import pytest
 import scipy.linalg as sla
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from test_realization import THESIS_DT, pole_error, random_system, thesis_model
 
 import sysid
-from test_realization import THESIS_DT, pole_error, random_system, thesis_model
 
 
 def scipy_hsv(m: sysid.StateSpaceModel) -> np.ndarray:

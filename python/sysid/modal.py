@@ -105,8 +105,9 @@ class ModalAnalysis:
 
     def to_pandas(self) -> Any:
         """The modes as a pandas DataFrame (pandas imported lazily)."""
-        import pandas as pd
+        from .data import _pandas
 
+        pd = _pandas()
         cols: dict[str, Any] = {
             "frequency_hz": self.frequencies_hz, "omega": self.omega, "damping": self.damping,
             "eigenvalue": self.eigenvalues, **self.extra,

@@ -359,6 +359,8 @@ def impulse_response(data: IOData, length: int, *, regularization: str | None = 
     """
     exps, dt = _experiments(data)
     n = _count(length, "length")
+    if n is None:
+        raise DataError("length is required: the number of Markov parameters to estimate")
     if regularization not in ("tc", None):
         raise DataError(f"regularization must be 'tc' or None, got {regularization!r}")
     out = _sysid.fir(exps, n, bool(feedthrough), regularization or "none", hyper)
@@ -407,7 +409,8 @@ def okid(data: IOData, observer_order: int, count: int | None = None, *,
     """
     exps, dt = _experiments(data)
     p = _count(observer_order, "observer_order")
-    assert p is not None
+    if p is None:
+        raise DataError("observer_order is required: the number of past samples in the observer")
     c = _count(count, "count") or 4 * p + 1
     out = _sysid.okid(exps, p, c, bool(feedthrough))
     l, m = exps[0][1].shape[1], exps[0][0].shape[1]
