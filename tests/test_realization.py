@@ -304,3 +304,15 @@ def test_f16_example_finds_the_wing_bending_mode_near_5_2_hz() -> None:
     assert near.sum() == 1, modes
     assert 0.001 < modes.damping[near][0] < 0.05
     assert modes.extra["mac"][near][0] > 0.9
+
+
+def test_docs_examples_run() -> None:
+    import re
+
+    doc = Path(__file__).resolve().parents[1] / "docs" / "realization.md"
+    blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), flags=re.S)
+    assert len(blocks) >= 3
+    namespace: dict = {}
+    for i, block in enumerate(blocks):  # the blocks build on each other
+        exec(compile(block, f"docs/realization.md[python block {i}]", "exec"), namespace)
+    assert namespace["small"].nstates == 2
