@@ -316,3 +316,35 @@ def test_docs_examples_run() -> None:
     for i, block in enumerate(blocks):  # the blocks build on each other
         exec(compile(block, f"docs/realization.md[python block {i}]", "exec"), namespace)
     assert namespace["small"].nstates == 2
+
+
+def test_era_on_the_inverse_fft_of_a_periodic_etfe() -> None:
+    """Seed 001's route: ETFE of periodic data, inverse FFT, ERA."""
+    true, _ = lightly_damped()
+    siso_in = sysid.StateSpaceModel(true.A, true.B[:, :1], true.C, dt=0.01)
+    period = 2048
+    u = np.tile(np.random.default_rng(3).standard_normal(period), 2)
+    y = siso_in.simulate(u)
+    frd = sysid.etfe(sysid.IOData(u[period:], y[period:], dt=0.01))
+    est = sysid.impulse_from_frf(frd)
+    assert est.markov.shape == (period, 2, 1) and est.dt == 0.01
+    res = est.era(order=4, rows=100, cols=200)
+    assert pole_error(res.model, siso_in) < 1e-8
+    noisy = y[period:] + 0.01 * np.random.default_rng(4).standard_normal((period, 2))
+    est_noisy = sysid.impulse_from_frf(sysid.etfe(sysid.IOData(u[period:], noisy, dt=0.01)))
+    assert pole_error(est_noisy.era(order=4, rows=100, cols=200).model, siso_in) < 1e-2
+
+
+def test_impulse_from_frf_rejects_gaps_unless_told() -> None:
+    true = random_system(2, 1, 1, 3, rmax=0.8)
+    w = 2 * np.pi * np.fft.rfftfreq(64)
+    g = true.freqresp(w)
+    np.testing.assert_allclose(sysid.impulse_from_frf(g).markov[:20], true.markov(20), atol=1e-9)
+    gappy = sysid.FRD(w[5:], g[5:], dt=1.0, info={"n_fft": 64})
+    with pytest.raises(sysid.DataError, match="missing"):
+        sysid.impulse_from_frf(gappy)
+    assert sysid.impulse_from_frf(gappy, fill_missing=True).markov.shape == (64, 1, 1)
+    with pytest.raises(sysid.DataError, match="grid"):
+        sysid.impulse_from_frf(sysid.FRD(w[1:] * 1.01, g[1:], dt=1.0), n_fft=64)
+    with pytest.raises(sysid.NonFiniteError):
+        sysid.impulse_from_frf(np.full((33, 1, 1), np.nan))

@@ -75,7 +75,16 @@ from .preprocessing import (
     select_mask,
     select_mode,
 )
-from .realization import EraResult, MarkovEstimate, era, ho_kalman, impulse_response, kung, okid
+from .realization import (
+    EraResult,
+    MarkovEstimate,
+    era,
+    ho_kalman,
+    impulse_from_frf,
+    impulse_response,
+    kung,
+    okid,
+)
 from .reduction import (
     Gramians,
     balanced_realization,
@@ -154,6 +163,7 @@ __all__ = [
     "impulse_response",
     "okid",
     "MarkovEstimate",
+    "impulse_from_frf",
     "modal_analysis",
     "ModalAnalysis",
     "gramians",

@@ -51,6 +51,7 @@ __all__ = [
     "impulse_response",
     "okid",
     "MarkovEstimate",
+    "impulse_from_frf",
 ]
 
 
@@ -424,3 +425,90 @@ def okid(data: IOData, observer_order: int, count: int | None = None, *,
     return MarkovEstimate(h, dt, "okid", info)
 
 
+
+
+def impulse_from_frf(frf: Any, n_fft: int | None = None, *, dt: float | None = None,
+                     fill_missing: bool = False) -> MarkovEstimate:
+    """Markov parameters as the inverse FFT of a frequency response on the FFT grid.
+
+    For a record of ``n_fft`` samples in periodic steady state (a periodic input, the
+    transient dropped), the ETFE ``Y/U`` at ``omega_k = 2 pi k / (n_fft dt)`` is exact, and
+    its inverse FFT is the impulse response folded over one period,
+    ``sum_j h_{k + j n_fft}``, which equals ``h_k`` once the response has decayed within a
+    period. ERA then realises it (the approach of seed 001: ETFE, inverse FFT, ERA).
+
+    Parameters
+    ----------
+    frf : FRD or array_like
+        A :class:`sysid.FRD` (e.g. from :func:`sysid.etfe`) or a complex array
+        ``(n_fft // 2 + 1, noutputs, ninputs)`` on the full grid from 0 to the Nyquist
+        frequency.
+    n_fft : int, optional
+        Length of the period; taken from the FRD (``info["n_fft"]``) if omitted.
+    dt : float, optional
+        Sample time; taken from the FRD if omitted, else 1.
+    fill_missing : bool
+        Set bins absent from the FRD (unexcited lines) to zero instead of raising; the
+        impulse response is then band-limited.
+
+    Returns
+    -------
+    MarkovEstimate
+        ``n_fft`` Markov parameters (method ``"ifft"``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> true = sysid.StateSpaceModel([[0.8, 0.3], [-0.3, 0.8]], [[1.0], [0.0]], [[1.0, 1.0]])
+    >>> u = np.tile(np.random.default_rng(0).standard_normal(256), 2)
+    >>> y = true.simulate(u)
+    >>> frd = sysid.etfe(sysid.IOData(u[256:], y[256:]))   # one period in steady state
+    >>> est = sysid.impulse_from_frf(frd)
+    >>> bool(np.allclose(est.markov[:50], true.markov(50), atol=1e-10))
+    True
+    """
+    omega = None
+    if hasattr(frf, "response") and hasattr(frf, "omega"):
+        omega = np.asarray(frf.omega, dtype=float)
+        if dt is None:
+            dt = getattr(frf, "dt", None)
+        if n_fft is None:
+            n_fft = (getattr(frf, "info", None) or {}).get("n_fft")
+        g = np.asarray(frf.response)
+    else:
+        g = np.asarray(frf)
+    if g.ndim == 1:
+        g = g[:, None, None]
+    if g.ndim != 3:
+        raise ShapeError(f"the frequency response must be (n_freq, noutputs, ninputs), got {g.shape}")
+    if not np.isfinite(g).all():
+        raise NonFiniteError("the frequency response has non-finite values (NaN or Inf)")
+    dt = float(dt if dt is not None else 1.0)
+    if n_fft is None:
+        if omega is not None:
+            raise DataError("n_fft is required: the FRD does not record its FFT length")
+        n_fft = 2 * (g.shape[0] - 1)
+    n_fft = _count(n_fft, "n_fft")
+    assert n_fft is not None
+    nf = n_fft // 2 + 1
+    full = np.zeros((nf,) + g.shape[1:], dtype=complex)
+    if omega is None:
+        if g.shape[0] != nf:
+            raise ShapeError(f"a frequency response for n_fft = {n_fft} needs {nf} bins, got "
+                             f"{g.shape[0]}")
+        full[:] = g
+    else:
+        k = omega * n_fft * dt / (2 * np.pi)
+        idx = np.rint(k).astype(int)
+        if np.any(np.abs(k - idx) > 1e-6) or np.any(idx < 0) or np.any(idx >= nf):
+            raise DataError("the FRD frequencies are not on the FFT grid of n_fft samples; "
+                            "use an unsmoothed ETFE of one period (or pass n_fft)")
+        full[idx] = g
+        missing = np.setdiff1d(np.arange(nf), idx)
+        if missing.size and not fill_missing:
+            raise DataError(
+                f"{missing.size} of the {nf} FFT bins are missing from the FRD (unexcited "
+                "lines?); excite the whole band, or pass fill_missing=True for a band-limited "
+                "impulse response")
+    h = np.fft.irfft(full, n=n_fft, axis=0)
+    return MarkovEstimate(h, dt, "ifft", {"samples": n_fft})
