@@ -480,7 +480,8 @@ def impulse_from_frf(frf: Any, n_fft: int | None = None, *, dt: float | None = N
     if g.ndim == 1:
         g = g[:, None, None]
     if g.ndim != 3:
-        raise ShapeError(f"the frequency response must be (n_freq, noutputs, ninputs), got {g.shape}")
+        raise ShapeError(
+            f"the frequency response must be (n_freq, noutputs, ninputs), got {g.shape}")
     if not np.isfinite(g).all():
         raise NonFiniteError("the frequency response has non-finite values (NaN or Inf)")
     dt = float(dt if dt is not None else 1.0)
