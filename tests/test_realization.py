@@ -7,6 +7,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import sysid
 
@@ -348,3 +350,29 @@ def test_impulse_from_frf_rejects_gaps_unless_told() -> None:
         sysid.impulse_from_frf(sysid.FRD(w[1:] * 1.01, g[1:], dt=1.0), n_fft=64)
     with pytest.raises(sysid.NonFiniteError):
         sysid.impulse_from_frf(np.full((33, 1, 1), np.nan))
+
+
+def test_okid_feedthrough_flag_and_default_count() -> None:
+    true = random_system(3, 1, 2, 4, rmax=0.8)
+    data = innovation_data(true, np.zeros((3, 2)), 400, 0.0, 1)
+    with_d = sysid.okid(data, observer_order=4)
+    assert with_d.markov.shape[0] == 17
+    np.testing.assert_allclose(with_d.markov[0], true.D, atol=1e-9)
+    strictly = sysid.okid(data, observer_order=4, feedthrough=False)
+    assert np.all(strictly.markov[0] == 0)
+    assert not np.allclose(strictly.markov[1:5], true.markov(5)[1:], atol=1e-3)  # D is missed
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 10_000), scale=st.floats(1e-3, 1e3))
+def test_era_poles_ignore_scaling_and_output_order(seed: int, scale: float) -> None:
+    true = random_system(4, 2, 3, seed)
+    h = true.markov(30)
+    base = sysid.era(h, order=4)
+    scaled = sysid.era(scale * h, order=4)
+    perm = sysid.era(h[:, ::-1, :], order=4)
+    assert pole_error(scaled.model, base.model) < 1e-7
+    assert pole_error(perm.model, base.model) < 1e-7
+    np.testing.assert_allclose(perm.model.markov(30), h[:, ::-1, :], atol=1e-8 * np.abs(h).max())
+    np.testing.assert_allclose(scaled.singular_values, scale * base.singular_values,
+                               rtol=1e-8, atol=1e-12 * scale * base.singular_values[0])

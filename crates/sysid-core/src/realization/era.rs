@@ -127,11 +127,6 @@ pub(crate) fn phase_collinearity(shape: impl Iterator<Item = c64>) -> f64 {
     (diff / tr).powi(2).min(1.0)
 }
 
-/// Order suggested by the largest gap of the singular values (exposed for the bindings).
-pub fn suggested_order(singular_values: &[f64]) -> usize {
-    largest_gap(singular_values, singular_values.len().saturating_sub(1))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
