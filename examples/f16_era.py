@@ -38,10 +38,19 @@ def load(path: Path = DEFAULT) -> sysid.IOData:
                         output_names=["acc1", "acc2", "acc3"])
 
 
+def markov(data: sysid.IOData) -> sysid.MarkovEstimate:
+    """OKID with observer order 20: 301 Markov parameters (6 s at 50 Hz)."""
+    return sysid.okid(data, observer_order=20, count=301)
+
+
 def identify(data: sysid.IOData) -> sysid.EraResult:
-    """OKID (observer order 20) for 301 Markov parameters, then ERA of order 30."""
-    markov = sysid.okid(data, observer_order=20, count=301)
-    return markov.era(order=30, rows=100, cols=200)
+    """ERA of order 30 on a 100 x 200 block Hankel matrix of the OKID Markov parameters."""
+    return markov(data).era(order=30, rows=100, cols=200)
+
+
+def stabilization(data: sysid.IOData) -> sysid.StabilizationDiagram:
+    """ERA at orders 10, 12, ..., 40: physical modes stay put as the order grows."""
+    return sysid.era_stabilization(markov(data), range(10, 42, 2), rows=100, cols=200)
 
 
 def physical_modes(result: sysid.EraResult) -> sysid.ModalAnalysis:
@@ -60,6 +69,7 @@ def main(argv: list[str]) -> sysid.ModalAnalysis:
     print(data)
     print(f"ERA: order {result.order}, Hankel {result.rows}x{result.cols} blocks")
     print(modes)
+    print(stabilization(data))
     return modes
 
 

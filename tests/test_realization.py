@@ -306,6 +306,27 @@ def test_f16_example_finds_the_wing_bending_mode_near_5_2_hz() -> None:
     assert near.sum() == 1, modes
     assert 0.001 < modes.damping[near][0] < 0.05
     assert modes.extra["mac"][near][0] > 0.9
+    stable = example.stabilization(example.load(F16)).stable_frequencies()
+    assert np.min(np.abs(stable - 5.2)) < 0.1, stable
+
+
+def test_stabilization_diagram_and_plots(tmp_path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    true = lightly_damped()[0]
+    h = true.markov(121) + 1e-4 * np.random.default_rng(0).standard_normal((121, 2, 2))
+    diagram = sysid.era_stabilization(h, range(2, 14, 2), dt=0.01)
+    expected = sysid.modal_analysis(sysid.StateSpaceModel(true.A, true.B, true.C, dt=0.01))
+    np.testing.assert_allclose(diagram.stable_frequencies(), expected.frequencies_hz, rtol=1e-3)
+    assert "StabilizationDiagram(orders 2..12" in repr(diagram)
+    assert diagram.status[0].max() == 0  # nothing to compare with at the first order
+    ax = diagram.plot()
+    ax.figure.savefig(tmp_path / "stab.png")
+    ax2 = sysid.era(h, dt=0.01).plot()
+    assert ax2.get_yscale() == "log"
+    with pytest.raises(sysid.DataError, match="increasing"):
+        sysid.era_stabilization(h, [4, 2])
 
 
 def test_docs_examples_run() -> None:

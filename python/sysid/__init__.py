@@ -78,7 +78,9 @@ from .preprocessing import (
 from .realization import (
     EraResult,
     MarkovEstimate,
+    StabilizationDiagram,
     era,
+    era_stabilization,
     ho_kalman,
     impulse_from_frf,
     impulse_response,
@@ -164,6 +166,8 @@ __all__ = [
     "okid",
     "MarkovEstimate",
     "impulse_from_frf",
+    "era_stabilization",
+    "StabilizationDiagram",
     "modal_analysis",
     "ModalAnalysis",
     "gramians",

@@ -52,6 +52,8 @@ __all__ = [
     "okid",
     "MarkovEstimate",
     "impulse_from_frf",
+    "era_stabilization",
+    "StabilizationDiagram",
 ]
 
 
@@ -231,6 +233,12 @@ class EraResult:
             mac[k], mpc[k] = self.mac[i], self.mpc[i]
         res.extra = {"mac": mac, "mpc": mpc}
         return res
+
+    def plot(self, *, ax: Any = None) -> Any:
+        """Hankel singular values with the chosen order (matplotlib axes)."""
+        from .plot.realization import plot_hankel_singular_values
+
+        return plot_hankel_singular_values(self.singular_values, self.order, ax=ax)
 
     def __repr__(self) -> str:
         return (
@@ -516,3 +524,111 @@ def impulse_from_frf(frf: Any, n_fft: int | None = None, *, dt: float | None = N
                 "impulse response")
     h = np.fft.irfft(full, n=n_fft, axis=0)
     return MarkovEstimate(h, dt, "ifft", {"samples": n_fft})
+
+
+class StabilizationDiagram:
+    """ERA modes over a range of orders, each flagged by its stability across orders.
+
+    Attributes
+    ----------
+    orders : list of int
+        Model orders realised.
+    modes : list of ModalAnalysis
+        The modes at each order (with ``extra["mac"]`` and ``extra["mpc"]``).
+    status : list of ndarray
+        Per mode: 2 = frequency and damping agree with a mode of the previous order and MAC is
+        above ``min_mac``; 1 = frequency agrees only; 0 = new.
+    """
+
+    def __init__(self, orders: list[int], modes: list[ModalAnalysis],
+                 status: list[np.ndarray]) -> None:
+        self.orders = orders
+        self.modes = modes
+        self.status = status
+
+    def stable_frequencies(self, min_count: int = 3) -> np.ndarray:
+        """Frequencies (Hz) of modes fully stable at ``min_count`` or more orders (clustered)."""
+        f = np.sort(np.concatenate([m.frequencies_hz[s == 2] for m, s in
+                                    zip(self.modes, self.status)] or [np.empty(0)]))
+        out: list[float] = []
+        start = 0
+        for i in range(1, f.size + 1):
+            if i == f.size or f[i] > f[i - 1] * 1.01:
+                if i - start >= min_count:
+                    out.append(float(np.median(f[start:i])))
+                start = i
+        return np.asarray(out)
+
+    def plot(self, *, ax: Any = None) -> Any:
+        """Frequency against order (matplotlib axes)."""
+        from .plot.realization import plot_stabilization
+
+        return plot_stabilization(self, ax=ax)
+
+    def __repr__(self) -> str:
+        return (f"StabilizationDiagram(orders {self.orders[0]}..{self.orders[-1]}, stable "
+                f"modes at {np.round(self.stable_frequencies(), 3).tolist()} Hz)")
+
+
+def era_stabilization(markov: Any, orders: Any, *, rows: int | None = None,
+                      cols: int | None = None, dt: float | None = None,
+                      freq_tol: float = 0.01, damping_tol: float = 0.05,
+                      min_mac: float = 0.9) -> StabilizationDiagram:
+    """Stabilisation diagram: ERA at each order, modes compared with the previous order.
+
+    Physical modes reappear at the same frequency and damping as the order grows; noise
+    modes wander. A mode is flagged stable when a mode of the previous order lies within
+    ``freq_tol`` (relative) in frequency and ``damping_tol`` (relative) in damping and its MAC
+    exceeds ``min_mac``.
+
+    Parameters
+    ----------
+    markov : array_like or MarkovEstimate
+        Markov parameters ``(count, noutputs, ninputs)``.
+    orders : iterable of int
+        Increasing model orders.
+    rows, cols : int, optional
+        Hankel block rows and columns (as in :func:`era`).
+    dt : float, optional
+        Sample time (from a MarkovEstimate, else 1).
+    freq_tol, damping_tol, min_mac : float
+        Stability criteria.
+
+    Returns
+    -------
+    StabilizationDiagram
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> true = sysid.StateSpaceModel([[0.9, 0.3], [-0.3, 0.9]], [[1.0], [0.0]], [[1.0, 0.0]],
+    ...                              dt=0.01)
+    >>> h = true.markov(81) + 1e-4 * np.random.default_rng(0).standard_normal((81, 1, 1))
+    >>> d = sysid.era_stabilization(h, range(2, 12, 2), dt=0.01)
+    >>> f = sysid.modal_analysis(true).frequencies_hz
+    >>> bool(np.allclose(d.stable_frequencies(), f, rtol=1e-3))
+    True
+    """
+    orders = [int(o) for o in orders]
+    if not orders or any(b <= a for a, b in zip(orders, orders[1:])):
+        raise DataError(f"orders must be a non-empty increasing sequence, got {orders}")
+    modes_list: list[ModalAnalysis] = []
+    status: list[np.ndarray] = []
+    prev: ModalAnalysis | None = None
+    for order in orders:
+        modes = era(markov, order, rows=rows, cols=cols, dt=dt).modes()
+        st = np.zeros(len(modes), dtype=int)
+        if prev is not None and len(prev):
+            for k in range(len(modes)):
+                df = np.abs(prev.frequencies_hz - modes.frequencies_hz[k])
+                j = int(np.argmin(df))
+                if df[j] <= freq_tol * max(modes.frequencies_hz[k], 1e-12):
+                    st[k] = 1
+                    dz = abs(prev.damping[j] - modes.damping[k])
+                    if (dz <= damping_tol * max(abs(modes.damping[k]), 1e-12)
+                            and modes.extra["mac"][k] >= min_mac):
+                        st[k] = 2
+        modes_list.append(modes)
+        status.append(st)
+        prev = modes
+    return StabilizationDiagram(orders, modes_list, status)
