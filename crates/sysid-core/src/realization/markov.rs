@@ -557,6 +557,16 @@ pub fn okid(exps: Experiments<'_, '_>, opts: &OkidOptions) -> Result<OkidEstimat
         for i in 1..=k.min(p) {
             h += observer_markov[i - 1].subcols(m, l) * &markov[k - i];
         }
+        if h.norm_max().is_nan() || !h.norm_max().is_finite() {
+            return Err(SysidError::numerical(
+                "OKID Markov parameters",
+                format!(
+                    "the recursion overflowed at Markov parameter {k}: the identified model is \
+                     unstable; ask for fewer Markov parameters, change the observer order, or \
+                     low-pass and decimate data whose input leaves a band unexcited"
+                ),
+            ));
+        }
         markov.push(h);
     }
     let r22 = r.submatrix(d, d, l, l);
