@@ -127,6 +127,7 @@ class SubspaceEstimator:
         if not isinstance(data, IOData):
             raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
         self.data = data
+        self._from_factor = False
         self.method = _method(method)
         shortest = min(y.shape[0] for _, y in data.experiments)
         if horizon is None:
@@ -253,7 +254,7 @@ class SubspaceEstimator:
         x0_est = None
         B, D = res["B"], res["D"]
         if x0:
-            if getattr(self, "_from_factor", False):
+            if self._from_factor:
                 raise DataError("x0=True needs the data; this estimator was built from a factor")
             if self.data.n_experiments != 1:
                 raise DataError("x0=True needs a single-experiment record")
