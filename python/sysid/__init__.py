@@ -33,6 +33,26 @@ from .errors import (
 )
 from .model import StateSpaceModel
 from .subspace import SubspaceEstimator, cva, default_horizon, moesp, n4sid
+from .validation import compare, error_spectrum, estimate_x0, fit_metrics, residuals
+from .criteria import criteria, n_parameters, select_order
+from .analysis import (
+    ContinuousStateSpace,
+    c2d,
+    ctrb,
+    d2c,
+    damp,
+    from_control,
+    from_scipy,
+    impulse,
+    is_controllable,
+    is_observable,
+    obsv,
+    step,
+    to_control,
+    to_scipy,
+    zeros,
+)
+from .io import load_model, save_model
 
 __all__ = [
     "__version__",
@@ -53,4 +73,29 @@ __all__ = [
     "OrderError",
     "NumericalError",
     "RiccatiError",
+    "compare",
+    "residuals",
+    "error_spectrum",
+    "estimate_x0",
+    "fit_metrics",
+    "criteria",
+    "n_parameters",
+    "select_order",
+    "ContinuousStateSpace",
+    "zeros",
+    "damp",
+    "ctrb",
+    "obsv",
+    "is_controllable",
+    "is_observable",
+    "step",
+    "impulse",
+    "c2d",
+    "d2c",
+    "to_control",
+    "from_control",
+    "to_scipy",
+    "from_scipy",
+    "save_model",
+    "load_model",
 ]
