@@ -501,10 +501,12 @@ class ErrorSpectrum:
         self.output_names = list(model.output_names)
 
     def worst_frequency(self) -> np.ndarray:
-        """Frequency (Hz) where the error-to-output power ratio is largest, per output."""
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = self.error_psd / np.maximum(self.output_psd, 1e-300)
-        return self.freq[np.argmax(ratio[1:], axis=0) + 1]
+        """Frequency (Hz, above zero) of the largest simulation-error power, per output."""
+        return self.freq[np.argmax(self.error_psd[1:], axis=0) + 1]
+
+    def relative_error(self) -> np.ndarray:
+        """Error-to-output power ratio per frequency, ``(len(freq), noutputs)``."""
+        return self.error_psd / np.maximum(self.output_psd, 1e-300)
 
     def plot(self, fig: Any = None) -> Any:
         """Both spectra on a log scale, one axis per output."""
