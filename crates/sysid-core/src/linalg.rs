@@ -73,6 +73,97 @@ pub fn lq_lower(m: MatRef<'_, f64>) -> Mat<f64> {
     l
 }
 
+/// Streaming triangularisation of a tall matrix given row by row.
+///
+/// Rows are buffered below the current upper-triangular `R` (k x k); every `chunk_rows`
+/// rows the stack `[R; rows]` is re-triangularised by Householder QR, so `R^T R` always
+/// equals the Gram matrix of all rows pushed, in `(k + chunk) k` doubles of memory.
+///
+/// ```
+/// use sysid_core::linalg::QrAccumulator;
+/// let mut acc = QrAccumulator::new(2, 2);
+/// for row in [[3.0, 0.0], [4.0, 0.0], [0.0, 2.0]] {
+///     acc.push_row(&row);
+/// }
+/// let r = acc.finish();
+/// assert!((r[(0, 0)].abs() - 5.0).abs() < 1e-14 && (r[(1, 1)].abs() - 2.0).abs() < 1e-14);
+/// ```
+#[derive(Debug, Clone)]
+pub struct QrAccumulator {
+    k: usize,
+    chunk_rows: usize,
+    work: Mat<f64>,
+    pending: usize,
+    rows: usize,
+}
+
+impl QrAccumulator {
+    /// An accumulator for rows of length `k`, re-triangularising every `chunk_rows` rows.
+    pub fn new(k: usize, chunk_rows: usize) -> Self {
+        let chunk_rows = chunk_rows.max(1);
+        Self { k, chunk_rows, work: Mat::zeros(k + chunk_rows, k), pending: 0, rows: 0 }
+    }
+
+    /// Row length k.
+    pub fn k(&self) -> usize {
+        self.k
+    }
+
+    /// Number of rows pushed so far.
+    pub fn n_rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Appends one row (length k).
+    #[inline]
+    pub fn push_row(&mut self, row: &[f64]) {
+        debug_assert_eq!(row.len(), self.k);
+        let r = self.k + self.pending;
+        for (j, v) in row.iter().enumerate() {
+            self.work[(r, j)] = *v;
+        }
+        self.pending += 1;
+        self.rows += 1;
+        if self.pending == self.chunk_rows {
+            self.flush();
+        }
+    }
+
+    /// Re-triangularises the pending rows into R.
+    pub fn flush(&mut self) {
+        if self.pending == 0 {
+            return;
+        }
+        let k = self.k;
+        let rows = k + self.pending;
+        let qr = self.work.as_ref().subrows(0, rows).qr();
+        let r = qr.thin_R();
+        let mut top = self.work.as_mut().subrows_mut(0, k);
+        top.fill(0.0);
+        for i in 0..r.nrows().min(k) {
+            for j in i..k {
+                top[(i, j)] = r[(i, j)];
+            }
+        }
+        self.work.as_mut().subrows_mut(k, self.pending).fill(0.0);
+        self.pending = 0;
+    }
+
+    /// The upper-triangular R (k x k) with `R^T R = sum of row row^T`, non-negative diagonal.
+    pub fn finish(mut self) -> Mat<f64> {
+        self.flush();
+        let k = self.k;
+        let mut r = Mat::<f64>::zeros(k, k);
+        for i in 0..k {
+            let sign = if self.work[(i, i)] < 0.0 { -1.0 } else { 1.0 };
+            for j in i..k {
+                r[(i, j)] = sign * self.work[(i, j)];
+            }
+        }
+        r
+    }
+}
+
 /// Symmetric part `(M + M^T) / 2`.
 pub fn symmetrize(m: &mut Mat<f64>) {
     let n = m.nrows();

@@ -7,6 +7,7 @@
 
 use super::{check_chunk, Compressor, HankelFactor, HankelLayout};
 use crate::error::{Result, SysidError};
+use crate::linalg::QrAccumulator;
 use faer::{Mat, MatRef};
 
 /// Exact streaming compressor (sequential QR updates).
@@ -26,10 +27,7 @@ use faer::{Mat, MatRef};
 #[derive(Debug, Clone)]
 pub struct QrCompressor {
     layout: HankelLayout,
-    chunk_rows: usize,
-    /// Top k rows: current R (upper triangular); below: pending window rows.
-    work: Mat<f64>,
-    pending: usize,
+    acc: QrAccumulator,
     tail_u: Mat<f64>,
     tail_y: Mat<f64>,
     tail_len: usize,
@@ -51,13 +49,10 @@ impl QrCompressor {
     /// The result does not depend on it beyond round-off.
     pub fn with_chunk_rows(layout: HankelLayout, chunk_rows: usize) -> Self {
         let k = layout.k();
-        let chunk_rows = chunk_rows.max(1);
         let w = layout.window();
         Self {
             layout,
-            chunk_rows,
-            work: Mat::zeros(k + chunk_rows, k),
-            pending: 0,
+            acc: QrAccumulator::new(k, chunk_rows),
             tail_u: Mat::zeros(w, layout.n_inputs),
             tail_y: Mat::zeros(w, layout.n_outputs),
             tail_len: 0,
@@ -74,32 +69,10 @@ impl QrCompressor {
         &self.layout
     }
 
-    fn flush(&mut self) -> Result<()> {
-        if self.pending == 0 {
-            return Ok(());
-        }
-        let k = self.layout.k();
-        let rows = k + self.pending;
-        let qr = self.work.as_ref().subrows(0, rows).qr();
-        let r = qr.thin_R();
-        let mut top = self.work.as_mut().subrows_mut(0, k);
-        top.fill(0.0);
-        let rr = r.nrows().min(k);
-        for i in 0..rr {
-            for j in i..k {
-                top[(i, j)] = r[(i, j)];
-            }
-        }
-        self.work.as_mut().subrows_mut(k, self.pending).fill(0.0);
-        self.pending = 0;
-        Ok(())
-    }
-
-    fn take_window(&mut self, start: usize, u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> Result<()> {
+    fn take_window(&mut self, start: usize, u: MatRef<'_, f64>, y: MatRef<'_, f64>) {
         let (m, l) = (self.layout.n_inputs, self.layout.n_outputs);
         let (p, f) = (self.layout.past, self.layout.future);
         let tl = self.tail_len;
-        let k = self.layout.k();
         let (uf, _) = self.layout.block(super::Block::UFuture);
         let (up, _) = self.layout.block(super::Block::UPast);
         let (yp, _) = self.layout.block(super::Block::YPast);
@@ -123,16 +96,8 @@ impl QrCompressor {
                 col[yf + j * l + c] = sample_y(start + p + j, c);
             }
         }
-        let row = k + self.pending;
-        for (i, v) in col.iter().enumerate() {
-            self.work[(row, i)] = *v;
-        }
-        self.pending += 1;
+        self.acc.push_row(col);
         self.n_columns += 1;
-        if self.pending == self.chunk_rows {
-            self.flush()?;
-        }
-        Ok(())
     }
 }
 
@@ -145,7 +110,7 @@ impl Compressor for QrCompressor {
         let total = self.tail_len + n_new;
         if total >= w {
             for start in 0..=(total - w) {
-                self.take_window(start, u, y)?;
+                self.take_window(start, u, y);
             }
         }
         // keep the last w - 1 samples as the new tail
@@ -195,7 +160,6 @@ impl Compressor for QrCompressor {
 
     fn finish(mut self) -> Result<HankelFactor> {
         self.end_experiment()?;
-        self.flush()?;
         let k = self.layout.k();
         let w = self.layout.window();
         if self.n_columns < k {
@@ -209,13 +173,7 @@ impl Compressor for QrCompressor {
                 fix: "use a longer record or a smaller horizon",
             });
         }
-        let mut l = Mat::<f64>::zeros(k, k);
-        for i in 0..k {
-            let sign = if self.work[(i, i)] < 0.0 { -1.0 } else { 1.0 };
-            for j in i..k {
-                l[(j, i)] = sign * self.work[(i, j)];
-            }
-        }
+        let l = self.acc.finish().transpose().to_owned();
         HankelFactor::from_parts(self.layout, l, self.n_columns, self.n_experiments)
     }
 }

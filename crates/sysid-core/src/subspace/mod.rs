@@ -1,36 +1,200 @@
-//! Subspace identification on a compressed record (placeholder while the engine lands).
+//! Subspace identification on a compressed record.
+//!
+//! With the data matrix in the row order `[U_f; U_p; Y_p; Y_f]` (`W_p = [U_p; Y_p]`) and its
+//! factor `L` partitioned accordingly,
+//!
+//! ```text
+//!   [U_f]   [L11  0    0 ] [Q1^T]
+//!   [W_p] = [L21  L22  0 ] [Q2^T]
+//!   [Y_f]   [L31  L32  L33] [Q3^T]
+//! ```
+//!
+//! every method takes the SVD of a weighted block of L ([`weighting`]):
+//!
+//! | method | matrix whose SVD is taken | reference |
+//! |---|---|---|
+//! | PO-MOESP | `L32` (Y_f projected on the past, future inputs removed) | Verhaegen 1994 |
+//! | ordinary MOESP | `L22'` of the LQ of `[U_f; Y_f]` alone (no instruments) | Verhaegen & Dewilde 1992 |
+//! | PI-MOESP | block of `Y_f` on `U_p` in the LQ of `[U_f; U_p; Y_f]` | Verhaegen & Dewilde 1992 |
+//! | N4SID | `L32 L22^{-1} [L21 L22]` (oblique projection) | Van Overschee & De Moor 1994 |
+//! | CVA | `T^{-1} L32`, `T T^T = L32 L32^T + L33 L33^T` | Larimore 1990 |
+//!
+//! The left singular vectors give the extended observability matrix `Γ_f`; the order is the
+//! number of retained singular values ([`order`]); `A`, `C` come from its shift invariance,
+//! `B`, `D` and the noise covariances from a least-squares regression on `L` and `K` from the
+//! Riccati equation ([`system`]). `B`, `D` and `x0` can also be re-estimated on the data
+//! given `A`, `C` ([`bd_x0`]). Nothing here depends on the record length.
+
+pub mod bd_x0;
+pub mod order;
+pub mod system;
+pub mod weighting;
+
 use crate::error::{Result, SysidError};
 use crate::hankel::HankelFactor;
+use crate::model::StateSpace;
+use faer::Mat;
 
 /// Weighting of the subspace method.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
 pub enum Method {
-    /// PO-MOESP (past inputs and outputs as instruments).
+    /// PO-MOESP: past inputs and outputs as instruments (consistent with process noise).
     #[default]
     Moesp,
+    /// Ordinary MOESP: future inputs and outputs only, no instruments (output-error data).
+    OrdinaryMoesp,
+    /// PI-MOESP: past inputs as instruments.
+    PiMoesp,
+    /// N4SID with unit weights (oblique projection).
+    N4sid,
+    /// Canonical variate analysis.
+    Cva,
 }
 
-/// Options.
-#[derive(Debug, Clone, Default)]
+impl Method {
+    /// Parses `"moesp" | "po-moesp" | "ordinary-moesp" | "pi-moesp" | "n4sid" | "cva"`.
+    pub fn parse(name: &str) -> Result<Self> {
+        Ok(match name.to_ascii_lowercase().as_str() {
+            "moesp" | "po-moesp" => Method::Moesp,
+            "ordinary-moesp" => Method::OrdinaryMoesp,
+            "pi-moesp" => Method::PiMoesp,
+            "n4sid" => Method::N4sid,
+            "cva" => Method::Cva,
+            other => {
+                return Err(SysidError::invalid(
+                    "method",
+                    format!(
+                        "unknown method {other:?}; choose moesp, ordinary-moesp, pi-moesp, n4sid or cva"
+                    ),
+                ))
+            }
+        })
+    }
+}
+
+/// Options of the weighted SVD.
+#[derive(Debug, Clone)]
 #[non_exhaustive]
 pub struct SubspaceOptions {
     /// Weighting.
     pub method: Method,
+    /// Relative tolerance for the rank of the future-input block (persistent excitation).
+    pub input_rank_tol: f64,
 }
 
-/// Weighted SVD of a compressed record.
+impl Default for SubspaceOptions {
+    fn default() -> Self {
+        Self { method: Method::Moesp, input_rank_tol: 1e-10 }
+    }
+}
+
+impl SubspaceOptions {
+    /// Options for a given method, other fields at their defaults.
+    pub fn with_method(method: Method) -> Self {
+        Self { method, ..Self::default() }
+    }
+}
+
+/// Options of one fit.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct FitOptions {
+    /// Estimate D (otherwise D = 0).
+    pub feedthrough: bool,
+    /// Estimate the noise model: K from the Riccati equation and the innovation covariance.
+    pub kalman: bool,
+    /// Enforce a stable A when the least-squares estimate is not (Chui & Maciejowski 1996).
+    pub stable: bool,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        Self { feedthrough: true, kalman: true, stable: false }
+    }
+}
+
+/// An identified innovation-form model with its noise description.
+#[derive(Debug, Clone)]
+pub struct Identified {
+    /// A, B, C, D.
+    pub sys: StateSpace,
+    /// Kalman predictor gain (n x l), when requested.
+    pub k: Option<Mat<f64>>,
+    /// Covariance of the innovations `C P C^T + R` (l x l), when K was requested.
+    pub innovation_cov: Option<Mat<f64>>,
+    /// State noise covariance Q (n x n) of the residuals.
+    pub q: Mat<f64>,
+    /// Output noise covariance R (l x l) of the residuals.
+    pub r: Mat<f64>,
+    /// Cross covariance S (n x l) of the residuals.
+    pub s: Mat<f64>,
+    /// True when stability enforcement changed A.
+    pub stabilized: bool,
+}
+
+/// The weighted SVD of a compressed record, ready to fit models of any order.
+///
+/// See the crate-level example.
 #[derive(Debug, Clone)]
 pub struct Subspace {
-    sv: Vec<f64>,
+    factor: HankelFactor,
+    method: Method,
+    weighted: weighting::Weighted,
 }
 
 impl Subspace {
-    /// Computes the weighted SVD.
-    pub fn new(_factor: &HankelFactor, _opts: &SubspaceOptions) -> Result<Self> {
-        Err(SysidError::invalid("method", "not implemented yet"))
+    /// Checks excitation and computes the weighted SVD of `factor` for `opts.method`.
+    pub fn new(factor: &HankelFactor, opts: &SubspaceOptions) -> Result<Self> {
+        let lay = factor.layout();
+        if lay.future < 2 {
+            return Err(SysidError::invalid(
+                "future horizon",
+                format!("must be >= 2 for the shift-invariance step (got {})", lay.future),
+            ));
+        }
+        weighting::check_excitation(factor, opts.input_rank_tol)?;
+        let weighted = weighting::weighted_svd(factor, opts.method)?;
+        Ok(Self { factor: factor.clone(), method: opts.method, weighted })
     }
-    /// Automatic order.
+
+    /// The weighting used.
+    pub fn method(&self) -> Method {
+        self.method
+    }
+
+    /// Singular values, largest first (SLICOT's convention: data not divided by sqrt(N);
+    /// canonical correlations for CVA).
+    pub fn singular_values(&self) -> &[f64] {
+        &self.weighted.singular_values
+    }
+
+    /// Largest order the horizon allows: `(f - 1) l`, and no more than the numerical rank.
+    pub fn max_order(&self) -> usize {
+        let lay = self.factor.layout();
+        ((lay.future - 1) * lay.n_outputs).min(self.weighted.rank)
+    }
+
+    /// The order at the largest gap of the log singular values (SLICOT IB01AD's rule).
     pub fn auto_order(&self) -> usize {
-        self.sv.len()
+        order::largest_log_gap(self.singular_values(), self.max_order())
+    }
+
+    /// Estimates A, B, C, D (and K, noise covariances) for `order`.
+    pub fn fit(&self, order: usize, opts: &FitOptions) -> Result<Identified> {
+        let max = self.max_order();
+        let lay = self.factor.layout();
+        if order == 0 || order > max {
+            return Err(SysidError::OrderTooLarge {
+                order,
+                max,
+                future: lay.future,
+                outputs: lay.n_outputs,
+            });
+        }
+        system::identify(&self.factor, &self.weighted, order, opts)
     }
 }
+
+#[cfg(test)]
+mod tests;
