@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from .data import IOData
-from .errors import DataError, SysidError
+from .errors import DataError, NumericalError, SysidError
 from .model import StateSpaceModel
 from .validation import _records, _x0_for, compare
 
@@ -282,11 +282,18 @@ class OrderSelection:
             lines.append(
                 f"{r['method']:<15} {r['order']:>3} {r['singular_value']:10.4g} "
                 f"{r['n_params']:>4} {r['aic']:11.2f} {r['aicc']:11.2f} {r['bic']:11.2f} "
-                f"{r['fpe']:10.4g} {r['fit_estimation']:8.2f} {r['fit_validation']:8.2f} "
+                f"{r['fpe']:10.4g} {_pct(r['fit_estimation'])} {_pct(r['fit_validation'])} "
                 f"{'yes' if r['stable'] else 'NO':>6}{star}"
             )
         lines.append(self.reason)
         return "\n".join(lines)
+
+
+def _pct(x: float) -> str:
+    """A fit percentage in 8 characters (diverging fits of unstable models as -inf)."""
+    if not np.isfinite(x):
+        return f"{'-':>8}" if np.isnan(x) else f"{'-inf':>8}"
+    return f"{x:8.2f}" if x > -1e4 else f"{'< -1e4':>8}"
 
 
 def _check_orders(orders: Iterable[int] | None, max_order: int) -> list[int]:
@@ -303,6 +310,32 @@ def _check_orders(orders: Iterable[int] | None, max_order: int) -> list[int]:
     if not out:
         raise DataError("orders is empty")
     return sorted(set(out))
+
+
+def _fit(est: Any, n: int, meth: str, feedthrough: bool, kalman: bool) -> StateSpaceModel:
+    try:
+        return est.fit(n, method=meth, feedthrough=feedthrough, kalman=kalman)
+    except NumericalError as e:
+        if not kalman:
+            raise
+        # no stabilising Kalman gain (e.g. noise-free data): keep an output-error model
+        mod = est.fit(n, method=meth, feedthrough=feedthrough, kalman=False)
+        mod.info["kalman_failed"] = str(e)
+        return mod
+
+
+def _failed(row: dict[str, Any], e: Exception) -> dict[str, Any]:
+    row.update({"error": str(e), "stable": False, "max_abs_pole": np.nan, "n_params": 0,
+                "loss": np.nan, "fit_estimation": np.nan, "fit_validation": np.nan,
+                **{k: np.nan for k in CRITERIA}})
+    return row
+
+
+def _check_validation(validation: Any, m: int, l: int, dt: float) -> None:
+    if validation is None:
+        return
+    probe = StateSpaceModel(np.zeros((1, 1)), np.zeros((1, m)), np.zeros((l, 1)), dt=dt)
+    _records(probe, validation)  # raises a ShapeError naming the channel counts
 
 
 def select_order(
@@ -365,6 +398,7 @@ def select_order(
 
     meths = [_method(m) for m in meths]
     orders_ = _check_orders(orders, est.max_order)
+    _check_validation(validation, est.data.n_inputs, est.data.n_outputs, est.data.dt)
     est_data = None if getattr(est, "_from_factor", False) else est.data
     rows, models, svs, svd_picks = [], {}, {}, {}
     for meth in meths:
@@ -376,21 +410,18 @@ def select_order(
                                    "singular_value": float(sv[n - 1]) if n <= sv.size else np.nan,
                                    "error": None}
             try:
-                try:
-                    mod = est.fit(n, method=meth, feedthrough=feedthrough, kalman=kalman)
-                except SysidError as e:
-                    if not kalman:
-                        raise
-                    # no stabilising Kalman gain (e.g. noise-free data): output-error model
-                    mod = est.fit(n, method=meth, feedthrough=feedthrough, kalman=False)
-                    mod.info["kalman_failed"] = str(e)
-                models[(meth, n)] = mod
-                row["stable"] = mod.is_stable()
-                row["max_abs_pole"] = float(np.max(np.abs(mod.poles())))
-                d = n_parameters(n, mod.ninputs, mod.noutputs, feedthrough=feedthrough,
-                                 noise_model=mod.K is not None, x0=x0 == "estimate",
-                                 n_experiments=est_data.n_experiments if est_data else 1)
-                row["n_params"] = d
+                mod = _fit(est, n, meth, feedthrough, kalman)
+            except SysidError as e:
+                rows.append(_failed(row, e))
+                continue
+            models[(meth, n)] = mod
+            row["stable"] = mod.is_stable()
+            row["max_abs_pole"] = float(np.max(np.abs(mod.poles())))
+            d = n_parameters(n, mod.ninputs, mod.noutputs, feedthrough=feedthrough,
+                             noise_model=mod.K is not None, x0=x0 == "estimate",
+                             n_experiments=est_data.n_experiments if est_data else 1)
+            row["n_params"] = d
+            try:
                 if est_data is not None:
                     c = criteria(mod, est_data, x0=x0, n_params=d)
                     row.update({k: getattr(c, k) for k in ("loss",) + CRITERIA})
@@ -399,10 +430,9 @@ def select_order(
                     row.update({k: np.nan for k in ("loss", "fit_estimation") + CRITERIA})
                 row["fit_validation"] = (compare(mod, validation, x0=x0).mean_fit
                                          if validation is not None else np.nan)
-            except SysidError as e:
-                row.update({"error": str(e), "stable": False, "max_abs_pole": np.nan,
-                            "n_params": 0, "loss": np.nan, "fit_estimation": np.nan,
-                            "fit_validation": np.nan, **{k: np.nan for k in CRITERIA}})
+            except NumericalError as e:  # e.g. an unstable predictor overflowing
+                rows.append(_failed(row, e))
+                continue
             rows.append(row)
     return OrderSelection(rows, svs, models, svd_picks, validation is not None, criterion,
                           float(fit_tol))
