@@ -50,6 +50,7 @@ from .validation import _records, _x0_for, compare
 __all__ = ["n_parameters", "Criteria", "criteria", "OrderSelection", "select_order"]
 
 CRITERIA = ("aic", "aicc", "bic", "fpe")
+_NAMES = {"aic": "AIC", "aicc": "AICc", "bic": "BIC", "fpe": "FPE"}
 
 
 def n_parameters(n: int, m: int, l: int, *, feedthrough: bool = True, noise_model: bool = True,
@@ -216,8 +217,7 @@ class OrderSelection:
 
     def _reason(self) -> str:
         r = self._row(self.method, self.order)
-        votes = ", ".join(f"{k.upper() if k in CRITERIA else k} -> {v}"
-                          for k, v in self.picks.items())
+        votes = ", ".join(f"{_NAMES.get(k, k)} -> {v}" for k, v in self.picks.items())
         parts = [f"order {self.order} ({self.method}) chosen by {self.criterion}"]
         if self.criterion == "validation":
             top = max(x["fit_validation"] for x in self.rows if x["error"] is None
@@ -226,7 +226,7 @@ class OrderSelection:
                 f": validation fit {r['fit_validation']:.1f} % is within {self.fit_tol:g} "
                 f"points of the best ({top:.1f} %), and no smaller stable order is")
         elif self.criterion in CRITERIA:
-            parts.append(f": smallest {self.criterion.upper()} = {r[self.criterion]:.4g}")
+            parts.append(f": smallest {_NAMES[self.criterion]} = {r[self.criterion]:.4g}")
         else:
             parts.append(": largest gap of the log singular values")
         sv = self.singular_values[self.method]

@@ -120,9 +120,9 @@ def plot_order_selection(table: Any, fig: Any = None) -> Any:
     ax = axes[0, 1]
     rows = [r for r in df if r["method"] == table.method]
     orders = np.array([r["order"] for r in rows])
-    for crit in ("aic", "aicc", "bic"):
+    for crit, name in (("aic", "AIC"), ("aicc", "AICc"), ("bic", "BIC")):
         vals = np.array([r[crit] for r in rows], dtype=float)
-        ax.plot(orders, vals, "o-", label=crit.upper())
+        ax.plot(orders, vals, "o-", label=name)
     ax.set_title(f"information criteria ({table.method})")
     ax.set_xlabel("order")
     ax.legend(fontsize=8)
@@ -131,8 +131,11 @@ def plot_order_selection(table: Any, fig: Any = None) -> Any:
     for meth in methods:
         r = [x for x in df if x["method"] == meth]
         key = "fit_validation" if table.has_validation else "fit_estimation"
-        ax.plot([x["order"] for x in r], [x[key] for x in r], "o-", label=meth)
-    ax.set_title("validation fit %" if table.has_validation else "estimation fit %")
+        fits = np.array([x[key] for x in r], dtype=float)
+        # diverging fits of unstable models would flatten everything else: clip them
+        ax.plot([x["order"] for x in r], np.where(fits < -100, np.nan, fits), "o-", label=meth)
+    ax.set_title(("validation fit %" if table.has_validation else "estimation fit %")
+                 + " (below -100 not shown)")
     ax.set_xlabel("order")
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
