@@ -5,10 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.signal
+import sysid
 from hypothesis import given, settings
 from hypothesis import strategies as st
-
-import sysid
 from sysid.analysis import ContinuousStateSpace
 
 control = pytest.importorskip("control")
@@ -112,7 +111,8 @@ def test_rank_tests():
     bad = sysid.StateSpaceModel(A, np.vstack([m.B, [[0, 0]]]), np.hstack([m.C, np.zeros((3, 1))]))
     assert not sysid.is_controllable(bad) and not sysid.is_observable(bad)
     # a weakly coupled mode passes only with a loose tolerance
-    weak = sysid.StateSpaceModel(A, np.vstack([m.B, [[1e-9, 0]]]), np.hstack([m.C, np.ones((3, 1))]))
+    weak = sysid.StateSpaceModel(A, np.vstack([m.B, [[1e-9, 0]]]),
+                                 np.hstack([m.C, np.ones((3, 1))]))
     assert sysid.is_controllable(weak, tol=1e-12) and not sysid.is_controllable(weak, tol=1e-6)
 
 
@@ -148,7 +148,8 @@ def test_c2d_matches_scipy_and_control(method, scipy_method):
 
 
 @settings(max_examples=25, deadline=None)
-@given(seed=st.integers(0, 10_000), dt=st.floats(0.01, 0.5), method=st.sampled_from(["zoh", "tustin"]))
+@given(seed=st.integers(0, 10_000), dt=st.floats(0.01, 0.5),
+       method=st.sampled_from(["zoh", "tustin"]))
 def test_d2c_inverts_c2d(seed, dt, method):
     sys = random_continuous(seed)
     back = sysid.d2c(sysid.c2d(sys, dt, method), method)
@@ -230,3 +231,13 @@ def test_plots_of_responses():
     ax2 = plot_sigma(m)
     assert len(ax2.lines) == 1
     plt.close("all")
+
+
+def test_model_shortcuts(tmp_path):
+    m = sysid.StateSpaceModel(A_PULSE1, B_PULSE1, C_PULSE1, dt=0.004)
+    np.testing.assert_array_equal(m.zeros(), sysid.zeros(m))
+    np.testing.assert_array_equal(m.damp().wn_hz, sysid.damp(m).wn_hz)
+    np.testing.assert_array_equal(m.step(20).y, sysid.step(m, 20).y)
+    np.testing.assert_array_equal(m.impulse(20).y, m.markov(20))
+    m.save(tmp_path / "m.npz")
+    np.testing.assert_array_equal(sysid.load_model(tmp_path / "m.npz").A, m.A)

@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import sysid
 from sysid import _sysid
 from sysid.cli import main, read_csv
@@ -204,3 +203,11 @@ def test_model_and_data_channel_mismatch(tmp_path):
         sysid.compare(model, sysid.datasets.load_dryer())
     with pytest.raises(sysid.ShapeError, match="2 input.*1 input"):
         sysid.residuals(model, sysid.datasets.load_dryer())
+
+
+def test_console_script_points_at_main():
+    tomllib = pytest.importorskip("tomllib")
+    pyproject = Path(__file__).resolve().parents[1] / "pyproject.toml"
+    scripts = tomllib.loads(pyproject.read_text())["project"]["scripts"]
+    module, func = scripts["sysid"].split(":")
+    assert module == "sysid.cli" and getattr(sys.modules[module], func) is main

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 import sysid
 from sysid import _sysid
 from sysid.criteria import CRITERIA, Criteria, n_parameters

@@ -6,7 +6,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 import sysid
 from sysid import _sysid
 from sysid.validation import ResidualAnalysis

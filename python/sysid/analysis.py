@@ -214,7 +214,8 @@ class DampingTable:
         self.poles, self.s, self.dt = poles[order], s[order], dt
         with np.errstate(divide="ignore", invalid="ignore"):
             self.wn = np.abs(self.s)
-            self.zeta = np.where(self.wn > 0, -self.s.real / np.where(self.wn > 0, self.wn, 1), -1.0)
+            safe = np.where(self.wn > 0, self.wn, 1.0)
+            self.zeta = np.where(self.wn > 0, -self.s.real / safe, -1.0)
             self.zeta = np.where(np.isinf(self.s.real), 1.0, self.zeta)
             self.wd = np.abs(self.s.imag)
             self.tau = np.where(self.s.real != 0, -1.0 / self.s.real, np.inf)
@@ -237,7 +238,8 @@ class DampingTable:
         return len(self.poles)
 
     def __repr__(self) -> str:
-        head = f"{'pole':>24} {'|pole|':>8} {'wn rad/s':>10} {'wn Hz':>9} {'damping':>8} {'wd Hz':>9}"
+        head = (f"{'pole':>24} {'|pole|':>8} {'wn rad/s':>10} {'wn Hz':>9} {'damping':>8} "
+                f"{'wd Hz':>9}")
         rows = [head]
         for p, wn, fz, z, fd in zip(self.poles, self.wn, self.wn_hz, self.zeta, self.wd_hz):
             rows.append(

@@ -63,7 +63,8 @@ def read_csv(path: str | Path, delimiter: str | None = None) -> tuple[list[str],
     if not path.is_file():
         raise DataError(f"no data file at {str(path)!r}")
     with open(path, newline="", encoding="utf-8-sig") as f:
-        lines = [ln for ln in f.read().splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
+        lines = [ln for ln in f.read().splitlines()
+                 if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise DataError(f"{str(path)!r} is empty")
     if delimiter is None:
@@ -420,7 +421,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         return int(args.func(args))
-    except SysidError as e:
+    except (SysidError, ImportError) as e:
         print(f"sysid: error: {e}", file=sys.stderr)
         return 2
 

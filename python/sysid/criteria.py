@@ -85,7 +85,8 @@ class Criteria:
     """
 
     def __init__(self, log_loss: float, n_params: int, n_samples: int) -> None:
-        self.log_loss, self.n_params, self.n_samples = float(log_loss), int(n_params), int(n_samples)
+        self.log_loss, self.n_params = float(log_loss), int(n_params)
+        self.n_samples = int(n_samples)
         self.loss = float(np.exp(self.log_loss))
         N, d = float(n_samples), float(n_params)
         logv = self.log_loss

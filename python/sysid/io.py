@@ -17,7 +17,8 @@ exactly.
 Examples
 --------
 >>> import os, tempfile, sysid
->>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1, info={"units": {"inputs": ["V"], "outputs": ["degC"]}})
+>>> units = {"units": {"inputs": ["V"], "outputs": ["degC"]}}
+>>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1, info=units)
 >>> path = os.path.join(tempfile.mkdtemp(), "m.json")
 >>> sysid.save_model(m, path)
 >>> sysid.load_model(path).info["units"]["outputs"]

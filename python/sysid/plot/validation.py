@@ -154,21 +154,25 @@ def plot_stabilization(table: Any, ax: Any = None, hz: bool = True) -> Any:
     if ax is None:
         _, ax = plt.subplots(figsize=(7, 4))
     prev = None
+    settled_pts, new_pts, unstable_pts = [], [], []
     for order, damp in table.damping(table.method):
         f = damp.wn_hz if hz else damp.wn
-        z = damp.zeta
         keep = np.isfinite(f) & (damp.poles.imag >= 0)
-        stable = np.abs(damp.poles) < 1
-        for fi, zi, st in zip(f[keep], z[keep], stable[keep]):
-            settled = prev is not None and np.any(
+        f, z, inside = f[keep], damp.zeta[keep], np.abs(damp.poles[keep]) < 1
+        for fi, zi, st in zip(f, z, inside):
+            settled = prev is not None and bool(np.any(
                 (np.abs(prev[0] - fi) <= 0.01 * max(fi, 1e-12))
                 & (np.abs(prev[1] - zi) <= 0.05 * max(abs(zi), 1e-2))
-            )
-            if not st:
-                ax.plot(fi, order, "x", color="C3")
-            else:
-                ax.plot(fi, order, "o", color="C0", mfc="C0" if settled else "none")
-        prev = (f[keep], z[keep])
+            ))
+            (unstable_pts if not st else settled_pts if settled else new_pts).append((fi, order))
+        prev = (f, z)
+    for pts, style, kw in ((new_pts, "o", {"mfc": "none", "color": "C0", "label": "new"}),
+                           (settled_pts, "o", {"color": "C0", "label": "settled"}),
+                           (unstable_pts, "x", {"color": "C3", "label": "unstable"})):
+        if pts:
+            arr = np.array(pts)
+            ax.plot(arr[:, 0], arr[:, 1], style, ls="none", **kw)
+    ax.legend(fontsize=7, loc="upper right")
     ax.set_xlabel("natural frequency [Hz]" if hz else "natural frequency [rad/s]")
     ax.set_ylabel("model order")
     ax.set_title(f"stabilisation diagram ({table.method})")
