@@ -139,3 +139,14 @@ def test_order_selection_bad_input():
     with pytest.raises(sysid.ShapeError, match="input"):
         sysid.select_order(est, [1], validation=(np.zeros((50, 2)), np.zeros((50, 1))))
     assert set(CRITERIA) == {"aic", "aicc", "bic", "fpe"}
+
+
+@needs_engine
+def test_order_selection_from_a_factor_uses_the_gap():
+    true = order6_system(6)
+    u = np.random.default_rng(7).standard_normal((600, 2))
+    est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=true.simulate(u)), horizon=6)
+    bare = sysid.SubspaceEstimator.from_factor(est.factor)
+    sel = sysid.select_order(bare, range(1, 7))
+    assert sel.criterion == "svd" and sel.order == 6
+    assert np.isnan(sel.rows[0]["aic"])  # no data, no criteria

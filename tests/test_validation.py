@@ -261,3 +261,22 @@ def test_dryer_residuals_white_for_order_4_not_for_order_1():
     bad = sysid.residuals(est.fit(1), val)
     assert good.is_white, good.summary()
     assert not bad.is_white, bad.summary()
+
+
+def test_fit_is_invariant_to_output_scaling():
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    m = second_order(K=[[0.6], [0.2]])
+    u, y = innovation_data(m, 300, seed=14)
+
+    @settings(max_examples=20, deadline=None)
+    @given(scale=st.floats(1e-3, 1e3), horizon=st.sampled_from([None, 1, 5]))
+    def check(scale, horizon):
+        scaled = sysid.StateSpaceModel(m.A, m.B, scale * m.C, scale * m.D, m.K / scale, dt=0.1)
+        a = sysid.compare(m, (u, y), horizon)
+        b = sysid.compare(scaled, (u, scale * y), horizon)
+        np.testing.assert_allclose(b.fit, a.fit, rtol=1e-8, atol=1e-8)
+        np.testing.assert_allclose(b.rmse, scale * a.rmse, rtol=1e-8)
+
+    check()

@@ -170,7 +170,8 @@ class OrderSelection:
         ``fit_tol`` of the best validation fit, stable models only).
     order, method : int, str
         The recommendation: the validation pick when validation data were given, else the
-        BIC pick (or the rule named by ``criterion``).
+        BIC pick (the singular-value gap for an estimator without data), or the rule named
+        by ``criterion``.
     reason : str
         Why, in one paragraph.
     """
@@ -202,7 +203,7 @@ class OrderSelection:
                 best = min(good, key=lambda r: (r["order"], -r["fit_validation"]))
                 self.picks["validation"], self.pick_methods["validation"] = (
                     best["order"], best["method"])
-        rule = criterion or ("validation" if "validation" in self.picks else "bic")
+        rule = criterion or next(r for r in ("validation", "bic", "svd") if r in self.picks)
         if rule not in self.picks:
             raise DataError(f"criterion {rule!r} is not available; choose one of "
                             f"{', '.join(self.picks)}")
