@@ -177,7 +177,7 @@ class StateSpaceModel:
         Examples
         --------
         >>> import numpy as np, sysid
-        >>> m = sysid.StateSpaceModel([[0.9]], [[0.0]], [[1.0]], K=[[0.9]])
+        >>> m = sysid.StateSpaceModel([[0.9]], np.zeros((1, 0)), [[1.0]], K=[[0.9]])
         >>> m.predict(None, [1.0, 0.9, 0.81])[:, 0]
         array([0.  , 0.9 , 0.81])
         """
@@ -213,7 +213,7 @@ class StateSpaceModel:
         --------
         >>> import sysid
         >>> sysid.StateSpaceModel([[0.5]], [[2.0]], [[1.0]], [[3.0]]).markov(3)[:, 0, 0]
-        array([3. , 2. , 1. ])
+        array([3., 2., 1.])
         """
         out = np.empty((count, self.noutputs, self.ninputs))
         if count:
@@ -241,7 +241,7 @@ class StateSpaceModel:
         --------
         >>> import numpy as np, sysid
         >>> m = sysid.StateSpaceModel([[0.5]], [[0.5]], [[1.0]], dt=1.0)
-        >>> np.round(m.freqresp([0.0])[0, 0, 0].real, 12)
+        >>> float(np.round(m.freqresp([0.0])[0, 0, 0].real, 12))
         1.0
         """
         w = np.atleast_1d(np.asarray(omega, dtype=float))

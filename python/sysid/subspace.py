@@ -11,9 +11,11 @@ Methods (``method=``):
     PO-MOESP (Verhaegen 1994): past inputs and outputs as instruments; consistent with
     process and measurement noise.
 ``"ordinary-moesp"``
-    MOESP with past inputs only as instruments (Verhaegen & Dewilde 1992, the seed slides'
-    "ordinary" MOESP); consistent for output-error (measurement-noise-only) data, biased
-    with process noise.
+    MOESP without instruments: only future inputs and outputs (Verhaegen & Dewilde 1992,
+    the seed slides' ordinary MOESP); consistent for output-error (measurement-noise-only)
+    data, biased with process noise.
+``"pi-moesp"``
+    MOESP with past inputs as instruments (Verhaegen & Dewilde 1992).
 ``"n4sid"``
     N4SID (Van Overschee & De Moor 1994): oblique projection, unit weights.
 ``"cva"``
@@ -37,7 +39,7 @@ from .model import StateSpaceModel
 
 __all__ = ["SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "METHODS"]
 
-METHODS = ("moesp", "ordinary-moesp", "n4sid", "cva")
+METHODS = ("moesp", "ordinary-moesp", "pi-moesp", "n4sid", "cva")
 _ALIASES = {"po-moesp": "moesp", "pomoesp": "moesp", "moesp-ordinary": "ordinary-moesp"}
 
 Order = Union[int, Literal["auto"]]
@@ -88,8 +90,9 @@ class SubspaceEstimator:
     past, future : int, optional
         Separate past and future horizons (override ``horizon``).
     method : str
-        Default weighting for :attr:`singular_values` and :meth:`fit`: ``"moesp"``,
-        ``"ordinary-moesp"``, ``"n4sid"`` or ``"cva"``.
+        Default weighting for :attr:`singular_values` and :meth:`fit`: one of
+        :data:`METHODS` (``"moesp"``, ``"ordinary-moesp"``, ``"pi-moesp"``, ``"n4sid"``,
+        ``"cva"``).
     chunk_rows : int, optional
         Hankel columns per QR update in the compressor (memory ``(k + chunk) k`` doubles).
     compressor : str
@@ -136,6 +139,7 @@ class SubspaceEstimator:
             data.experiments, self.past, self.future, chunk_rows, compressor
         )
         self._svd: dict[str, Any] = {}
+        self._subspace(None)  # checks the record (length, excitation) right away
 
     @classmethod
     def from_factor(

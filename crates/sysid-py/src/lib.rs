@@ -9,11 +9,13 @@ mod convert;
 mod errors;
 mod hankel;
 mod simulate;
+mod subspace;
 
 #[pymodule]
 fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     hankel::register(m)?;
     simulate::register(m)?;
+    subspace::register(m)?;
     Ok(())
 }

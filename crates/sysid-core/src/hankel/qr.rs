@@ -160,17 +160,12 @@ impl Compressor for QrCompressor {
 
     fn finish(mut self) -> Result<HankelFactor> {
         self.end_experiment()?;
-        let k = self.layout.k();
-        let w = self.layout.window();
-        if self.n_columns < k {
+        if self.n_columns == 0 {
             return Err(SysidError::InsufficientData {
-                context: format!(
-                    "a data matrix with {k} rows (horizons p={}, f={}, {} input(s), {} output(s))",
-                    self.layout.past, self.layout.future, self.layout.n_inputs, self.layout.n_outputs
-                ),
-                needed: k + (w - 1) * self.n_experiments.max(1),
+                context: format!("a window of p + f = {} samples", self.layout.window()),
+                needed: self.layout.window(),
                 got: self.total_samples,
-                fix: "use a longer record or a smaller horizon",
+                fix: "push data before finishing, or use a smaller horizon",
             });
         }
         let l = self.acc.finish().transpose().to_owned();

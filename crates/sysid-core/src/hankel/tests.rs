@@ -103,7 +103,7 @@ fn rejects_bad_input() {
         Err(SysidError::NonFinite { what: "y", sample: 42, channel: 0 }) => {}
         other => panic!("unexpected {other:?}"),
     }
-    let (u, y) = record(9, 1, 1, 3);
+    let (u, y) = record(5, 1, 1, 3);
     let mut c = QrCompressor::new(layout);
     c.push(u.as_ref(), y.as_ref()).unwrap();
     assert!(matches!(c.finish(), Err(SysidError::InsufficientData { .. })));

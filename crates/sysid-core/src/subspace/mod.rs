@@ -153,6 +153,19 @@ impl Subspace {
                 format!("must be >= 2 for the shift-invariance step (got {})", lay.future),
             ));
         }
+        let k = lay.k();
+        if factor.n_columns() < k {
+            let w = lay.window();
+            return Err(SysidError::InsufficientData {
+                context: format!(
+                    "a data matrix with {k} rows (horizons p={}, f={}, {} input(s), {} output(s))",
+                    lay.past, lay.future, lay.n_inputs, lay.n_outputs
+                ),
+                needed: k + (w - 1) * factor.n_experiments().max(1),
+                got: factor.n_columns() + (w - 1) * factor.n_experiments(),
+                fix: "use a longer record or a smaller horizon",
+            });
+        }
         weighting::check_excitation(factor, opts.input_rank_tol)?;
         let weighted = weighting::weighted_svd(factor, opts.method)?;
         Ok(Self { factor: factor.clone(), method: opts.method, weighted })

@@ -75,7 +75,7 @@ fn noise_free_mimo_systems_are_recovered_for_every_method() {
         let y = simulate(&sys, u.as_ref(), None).unwrap();
         let f = (n + 2).div_ceil(l) + 2;
         let fac = compress(&u, &y, f, f);
-        for method in [Method::Moesp, Method::N4sid, Method::OrdinaryMoesp, Method::PiMoesp] {
+        for method in [Method::Moesp, Method::N4sid, Method::OrdinaryMoesp, Method::PiMoesp, Method::Cva] {
             let sub = Subspace::new(&fac, &SubspaceOptions::with_method(method)).unwrap();
             assert_eq!(sub.auto_order(), n, "case {case} {method:?} sv={:?}", sub.singular_values());
             let id = sub.fit(n, &FitOptions { kalman: false, ..FitOptions::default() }).unwrap();

@@ -74,15 +74,15 @@ pub fn weighted_svd(factor: &HankelFactor, method: Method) -> Result<Weighted> {
             let l32 = l.submatrix(yf.0, wp_s, yf.1, wp_n);
             let dmax = (0..t.nrows()).map(|i| t[(i, i)].abs()).fold(0.0, f64::max);
             let dmin = (0..t.nrows()).map(|i| t[(i, i)].abs()).fold(f64::INFINITY, f64::min);
-            if !(dmin > 1e-13 * dmax) {
-                return Err(SysidError::numerical(
-                    "CVA weighting",
-                    "the future outputs are (nearly) linearly dependent once the future inputs are \
-                     removed (noise-free or redundant outputs); use method=\"moesp\" or \"n4sid\"",
-                ));
-            }
-            let mut w = l32.to_owned();
-            t.solve_lower_triangular_in_place(w.as_mut());
+            let w = if dmin > 1e-10 * dmax {
+                let mut w = l32.to_owned();
+                t.solve_lower_triangular_in_place(w.as_mut());
+                w
+            } else {
+                // noise-free or redundant outputs: Y_f Π Y_f^T is singular; whiten on its
+                // range only (truncated pseudo-inverse), where L32 lives too
+                pinv(t.as_ref(), 1e-10)? * l32
+            };
             transform = Some(t);
             w
         }

@@ -1,0 +1,90 @@
+//! Bindings of `sysid_core::subspace`: weighted SVD, order choice and fits.
+
+use crate::convert::{mat_to_numpy, slice_to_numpy, view};
+use crate::errors::IntoPy;
+use crate::hankel::PyHankelFactor;
+use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use sysid_core::subspace::{bd_x0, FitOptions, Method, Subspace, SubspaceOptions};
+
+/// Weighted SVD of a compressed record for one method.
+#[pyclass(name = "Subspace", module = "sysid._sysid", frozen)]
+pub struct PySubspace {
+    inner: Subspace,
+}
+
+#[pymethods]
+impl PySubspace {
+    #[new]
+    fn new(py: Python<'_>, factor: &PyHankelFactor, method: &str) -> PyResult<Self> {
+        let method = Method::parse(method).py()?;
+        let f = factor.inner.clone();
+        let inner = py.detach(|| Subspace::new(&f, &SubspaceOptions::with_method(method))).py()?;
+        Ok(Self { inner })
+    }
+
+    #[getter]
+    fn singular_values<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        slice_to_numpy(py, self.inner.singular_values())
+    }
+
+    #[getter]
+    fn max_order(&self) -> usize {
+        self.inner.max_order()
+    }
+
+    fn auto_order(&self) -> usize {
+        self.inner.auto_order()
+    }
+
+    /// Returns a dict with A, B, C, D, K, noise_cov (None without Kalman), Q, R, S, stabilized.
+    fn fit<'py>(
+        &self,
+        py: Python<'py>,
+        order: usize,
+        feedthrough: bool,
+        kalman: bool,
+        stable: bool,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let mut opts = FitOptions::default();
+        opts.feedthrough = feedthrough;
+        opts.kalman = kalman;
+        opts.stable = stable;
+        let id = py.detach(|| self.inner.fit(order, &opts)).py()?;
+        let d = PyDict::new(py);
+        d.set_item("A", mat_to_numpy(py, &id.sys.a))?;
+        d.set_item("B", mat_to_numpy(py, &id.sys.b))?;
+        d.set_item("C", mat_to_numpy(py, &id.sys.c))?;
+        d.set_item("D", mat_to_numpy(py, &id.sys.d))?;
+        d.set_item("K", id.k.as_ref().map(|k| mat_to_numpy(py, k)))?;
+        d.set_item("noise_cov", id.innovation_cov.as_ref().map(|k| mat_to_numpy(py, k)))?;
+        d.set_item("Q", mat_to_numpy(py, &id.q))?;
+        d.set_item("R", mat_to_numpy(py, &id.r))?;
+        d.set_item("S", mat_to_numpy(py, &id.s))?;
+        d.set_item("stabilized", id.stabilized)?;
+        Ok(d)
+    }
+}
+
+/// B, D and x0 by least squares on one record given A and C: `(B, D, x0)`.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+pub fn estimate_bd_x0<'py>(
+    py: Python<'py>,
+    a: PyReadonlyArray2<'_, f64>,
+    c: PyReadonlyArray2<'_, f64>,
+    u: PyReadonlyArray2<'_, f64>,
+    y: PyReadonlyArray2<'_, f64>,
+    feedthrough: bool,
+) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>)> {
+    let (av, cv, uv, yv) = (view(&a), view(&c), view(&u), view(&y));
+    let (b, d, x0) = py.detach(|| bd_x0::estimate_bd_x0(av, cv, uv, yv, feedthrough)).py()?;
+    Ok((mat_to_numpy(py, &b), mat_to_numpy(py, &d), slice_to_numpy(py, &x0)))
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<PySubspace>()?;
+    m.add_function(wrap_pyfunction!(estimate_bd_x0, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,200 @@
+"""The subspace engine against systems whose answer is known (issue 2's 'done means')."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import markov, match_poles, random_system, simulate
+
+import sysid
+
+METHODS = ["moesp", "n4sid", "cva", "ordinary-moesp", "pi-moesp"]
+
+
+@pytest.mark.parametrize("seed", range(16))
+def test_noise_free_random_mimo_systems_are_recovered(seed):
+    rng = np.random.default_rng(seed)
+    n = 1 + seed % 10
+    m = 1 + seed % 4
+    l = 1 + (seed // 4) % 4
+    a, b, c, d = random_system(n, m, l, rng)
+    u = rng.standard_normal((1500, m))
+    y = simulate(a, b, c, d, u)
+    horizon = -(-(n + 1) // min(l, m)) + 2  # PI-MOESP needs p m > n past inputs
+    est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=horizon)
+    for method in METHODS:
+        assert est.singular_values_for(method).size > 0
+        model = est.fit("auto", method=method, kalman=False)
+        assert model.nstates == n, f"{method}: order {model.nstates} != {n}"
+        h_true = markov(a, b, c, d, 40)
+        h_est = model.markov(40)
+        assert np.max(np.abs(h_est - h_true)) < 1e-8 * np.max(np.abs(h_true)), method
+        poles_err = match_poles(model.poles(), np.linalg.eigvals(a))
+        assert poles_err < 1e-8, f"{method}: pole error {poles_err:.2e}"
+
+
+def test_seed_slides_second_order_system_shows_two_dominant_singular_values():
+    # seed 000, slides 24-26: order-2 system, 500 samples of white noise, i = 10, j = 490
+    rng = np.random.default_rng(0)
+    a = np.array([[1.5, -0.7], [1.0, 0.0]])
+    b = np.array([[1.0], [0.0]])
+    c = np.array([[1.0, 0.5]])
+    d = np.zeros((1, 1))
+    u = rng.standard_normal((509, 1))  # j = N - 2i + 1 = 490 columns
+    y = simulate(a, b, c, d, u)
+    est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=10, method="ordinary-moesp")
+    assert est.factor.n_columns == 490
+    sv = est.singular_values
+    assert sv.size == 10
+    assert sv[1] / sv[2] > 1e10  # two dominant values, the rest round-off
+    assert est.auto_order == 2
+    # with measurement noise v ~ (0, 0.01), slide 38: still two dominant values
+    yv = y + 0.1 * rng.standard_normal(y.shape)
+    sv = sysid.SubspaceEstimator(sysid.IOData(u=u, y=yv), horizon=10).singular_values
+    assert sv[1] / sv[2] > 5 * sv[2] / sv[-1]
+
+
+def _first_order_pole(method, seed, N, sw, sv):
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal((N, 1))
+    w = sw * rng.standard_normal((N, 1))
+    v = sv * rng.standard_normal((N, 1))
+    y = simulate(np.array([[0.7]]), np.eye(1), np.eye(1), np.zeros((1, 1)), u, w=w, v=v)
+    est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=5, method=method)
+    return est.fit(1, kalman=False).poles()[0].real
+
+
+def test_seed_slides_process_noise_biases_ordinary_moesp_but_not_po_moesp():
+    # seed 000, slides 44-49: A = 0.7, B = 1, C = 1, D = 0. Monte Carlo over fixed seeds; the
+    # bound is statistical: a consistent estimator's mean lies within 4 standard errors of the
+    # truth (probability of a false failure ~ 6e-5), a biased one outside it.
+    runs, N = 40, 2000
+    po = np.array([_first_order_pole("moesp", s, N, 1.0, 0.5) for s in range(runs)])
+    om = np.array([_first_order_pole("ordinary-moesp", s, N, 1.0, 0.5) for s in range(runs)])
+    se_po = po.std(ddof=1) / np.sqrt(runs)
+    se_om = om.std(ddof=1) / np.sqrt(runs)
+    assert abs(po.mean() - 0.7) < 4 * se_po + 1e-3
+    assert abs(om.mean() - 0.7) > 4 * se_om
+    # without process noise ordinary MOESP is consistent too (slides 34-41)
+    om0 = np.array([_first_order_pole("ordinary-moesp", s, N, 0.0, 0.5) for s in range(runs)])
+    assert abs(om0.mean() - 0.7) < 4 * om0.std(ddof=1) / np.sqrt(runs) + 1e-3
+
+
+@pytest.mark.parametrize("method", ["moesp", "n4sid", "cva"])
+def test_pole_errors_shrink_as_n_grows_with_process_and_measurement_noise(method):
+    a = np.array([[0.6, 0.5, 0.0], [-0.5, 0.6, 0.0], [0.0, 0.0, 0.85]])
+    b = np.array([[1.0], [0.0], [0.7]])
+    c = np.array([[1.0, 0.0, 1.0], [0.0, 1.0, -0.5]])
+    d = np.zeros((2, 1))
+    k = np.array([[0.3, 0.1], [0.0, 0.2], [0.1, 0.0]])
+    true = np.linalg.eigvals(a)
+    errors = []
+    for N in (1_000, 10_000, 100_000):
+        errs = []
+        for seed in range(4):
+            rng = np.random.default_rng(100 + seed)
+            u = rng.standard_normal((N, 1))
+            e = 0.5 * rng.standard_normal((N, 2))
+            y = simulate(a, b, c, d, u, w=e @ k.T, v=e)
+            model = sysid.SubspaceEstimator(
+                sysid.IOData(u=u, y=y), horizon=6, method=method
+            ).fit(3, kalman=False)
+            errs.append(match_poles(model.poles(), true))
+        errors.append(float(np.mean(errs)))
+    assert errors[1] < errors[0] and errors[2] < errors[1], errors
+    # root-N consistency: two decades of N should cut the error by well over a factor 3
+    assert errors[2] < errors[0] / 3, errors
+
+
+def test_innovation_model_is_recovered_with_kalman_gain():
+    rng = np.random.default_rng(5)
+    a = np.array([[0.7, 0.3], [-0.3, 0.7]])
+    b = np.array([[1.0], [0.5]])
+    c = np.array([[1.0, 0.0]])
+    d = np.zeros((1, 1))
+    k = np.array([[0.5], [0.2]])
+    N = 200_000
+    u = rng.standard_normal((N, 1))
+    e = 0.3 * rng.standard_normal((N, 1))
+    y = simulate(a, b, c, d, u, w=e @ k.T, v=e)
+    model = sysid.n4sid(sysid.IOData(u=u, y=y), order=2, horizon=8)
+    true_pred = np.linalg.eigvals(a - k @ c)
+    assert match_poles(np.linalg.eigvals(model.A - model.K @ model.C), true_pred) < 0.02
+    assert abs(model.noise_cov[0, 0] - 0.09) < 0.005
+    # the one-step predictor's errors are the innovations
+    yh = model.predict(u[:5000], y[:5000])
+    assert abs(np.var((y - 0)[:5000] - yh) - 0.09) < 0.01
+
+
+def test_stability_enforcement_is_opt_in_and_recorded():
+    rng = np.random.default_rng(2)
+    # a short noisy record of an almost integrating system: the LS estimate can be unstable
+    u = rng.standard_normal((120, 1))
+    y = simulate(np.array([[0.999]]), np.eye(1), np.eye(1), np.zeros((1, 1)), u)
+    y = y + 2.0 * rng.standard_normal(y.shape)
+    data = sysid.IOData(u=u, y=y)
+    for seed_h in (3, 4, 5, 6):
+        est = sysid.SubspaceEstimator(data, horizon=seed_h)
+        free = est.fit(1, kalman=False)
+        forced = est.fit(1, kalman=False, stable=True)
+        assert forced.is_stable()
+        assert forced.info["stable_enforced"] is True
+        if free.is_stable():
+            np.testing.assert_allclose(forced.A, free.A)
+
+
+def test_feedthrough_false_forces_zero_d_and_x0_estimate_matches():
+    rng = np.random.default_rng(9)
+    a, b, c, d = random_system(3, 2, 2, rng, feedthrough=False)
+    u = rng.standard_normal((800, 2))
+    x0 = np.array([2.0, -1.0, 0.5])
+    y = simulate(a, b, c, d, u, x0=x0)
+    data = sysid.IOData(u=u, y=y)
+    model = sysid.SubspaceEstimator(data, horizon=5).fit(3, feedthrough=False, x0=True)
+    assert np.all(model.D == 0)
+    np.testing.assert_allclose(model.simulate(u, x0="model"), y, atol=1e-8 * np.abs(y).max())
+
+
+def test_separate_past_and_future_horizons():
+    rng = np.random.default_rng(4)
+    a, b, c, d = random_system(4, 1, 2, rng)
+    u = rng.standard_normal((600, 1))
+    y = simulate(a, b, c, d, u)
+    est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), past=8, future=4)
+    assert (est.past, est.future) == (8, 4)
+    assert est.factor.l.shape == (12 * 3, 12 * 3)
+    model = est.fit(4, kalman=False)
+    np.testing.assert_allclose(model.markov(20), markov(a, b, c, d, 20), atol=1e-8)
+
+
+def test_default_horizon_rule_is_used():
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((400, 2))
+    y = simulate(*random_system(2, 2, 1, rng), u)
+    est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y))
+    assert est.past == est.future == sysid.default_horizon(400, 2, 1)
+
+
+def test_multiple_experiments_identify_one_model():
+    rng = np.random.default_rng(8)
+    a, b, c, d = random_system(3, 1, 1, rng)
+    us = [rng.standard_normal((300, 1)) for _ in range(3)]
+    ys = [simulate(a, b, c, d, u) for u in us]
+    est = sysid.SubspaceEstimator(sysid.IOData(u=us, y=ys), horizon=5)
+    assert est.factor.n_experiments == 3
+    assert est.factor.n_columns == 3 * (300 - 10 + 1)
+    model = est.fit("auto", kalman=False)
+    np.testing.assert_allclose(model.markov(20), markov(a, b, c, d, 20), atol=1e-8)
+
+
+def test_output_only_data_gives_a_stochastic_model():
+    rng = np.random.default_rng(12)
+    a = np.array([[0.8, 0.4], [-0.4, 0.8]])
+    c = np.array([[1.0, 0.0]])
+    k = np.array([[0.6], [0.3]])
+    N = 50_000
+    e = rng.standard_normal((N, 1))
+    y = simulate(a, np.zeros((2, 0)), c, np.zeros((1, 0)), np.zeros((N, 0)), w=e @ k.T, v=e)
+    model = sysid.SubspaceEstimator(sysid.IOData(u=None, y=y), horizon=6).fit(2)
+    assert model.ninputs == 0
+    assert match_poles(model.poles(), np.linalg.eigvals(a)) < 0.05
