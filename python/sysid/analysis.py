@@ -517,11 +517,14 @@ def _control() -> Any:
 def to_control(model: StateSpaceModel | ContinuousStateSpace) -> Any:
     """A ``control.StateSpace`` (discrete with ``dt``, or continuous); ``K`` is dropped.
 
+    Needs python-control (optional; the examples are skipped by the doctest run, the
+    conversions are tested against it in ``tests/test_analysis.py`` when it is installed).
+
     Examples
     --------
     >>> import sysid
-    >>> sys = sysid.to_control(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1))
-    >>> sys.dt
+    >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1)
+    >>> sysid.to_control(m).dt  # doctest: +SKIP
     0.1
     """
     ct = _control()
@@ -549,8 +552,8 @@ def from_control(sys: Any) -> StateSpaceModel | ContinuousStateSpace:
 
     Examples
     --------
-    >>> import control, sysid
-    >>> sysid.from_control(control.ss([[0.5]], [[1.0]], [[1.0]], [[0.0]], 0.1))
+    >>> import control, sysid  # doctest: +SKIP
+    >>> sysid.from_control(control.ss([[0.5]], [[1.0]], [[1.0]], [[0.0]], 0.1))  # doctest: +SKIP
     StateSpaceModel(nstates=1, ninputs=1, noutputs=1, dt=0.1, stable, no noise model)
     """
     ct = _control()
