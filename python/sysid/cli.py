@@ -22,6 +22,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .criteria import _pct
 from .data import IOData
 from .errors import DataError, OrderError, SysidError
 
@@ -280,7 +281,7 @@ def _html(out: dict[str, Any], files: dict[str, Path]) -> str:
                  "yes" if res.whiteness[j] else "no"]
                 for j, name in enumerate(model.output_names)]
     order_rows = [[r["method"], r["order"], f"{r['singular_value']:.4g}",
-                   f"{r['aic']:.2f}", f"{r['bic']:.2f}", f"{r['fit_validation']:.2f}",
+                   f"{r['aic']:.2f}", f"{r['bic']:.2f}", _pct(r["fit_validation"]).strip(),
                    "yes" if r["stable"] else "no"] for r in sel.rows if r["error"] is None]
     imgs = "".join(
         f'<figure><img src="{esc(files[k].name)}" alt="{esc(k)}"><figcaption>{esc(cap)}'

@@ -159,7 +159,8 @@ def fit_metrics(y: Any, yhat: Any) -> dict[str, np.ndarray]:
 
     ``fit = 100 (1 - ||y - yhat|| / ||y - mean(y)||)`` (MATLAB's ``compare``; 100 is
     perfect, 0 is no better than the mean, negative is worse), ``vaf = 100 (1 - var(y - yhat)
-    / var(y))`` and ``rmse = sqrt(mean((y - yhat)^2))``.
+    / var(y))`` and ``rmse = sqrt(mean((y - yhat)^2))``. Fit and VAF are undefined (NaN)
+    for a constant output channel.
 
     Examples
     --------
@@ -263,8 +264,8 @@ def compare(model: StateSpaceModel, data: Any, horizon: int | None = None, *,
         Validation data, ideally not used for estimation.
     horizon : int or None
         ``None`` (default) simulates from the inputs alone; ``k`` predicts ``k`` steps
-        ahead with the Kalman predictor (needs ``model.K``; without it, prediction equals
-        simulation after the first ``k`` samples).
+        ahead with the Kalman predictor (needs ``model.K``; without it the predictor never
+        looks at the measured outputs and prediction equals simulation).
     x0 : "estimate", "zero", "model" or array
         Initial state: least squares on each experiment (default), zero, the model's own, or
         given (one array, or a list with one per experiment).
