@@ -280,3 +280,29 @@ def test_fit_is_invariant_to_output_scaling():
         np.testing.assert_allclose(b.rmse, scale * a.rmse, rtol=1e-8)
 
     check()
+
+
+def test_initial_state_on_long_records_matches_the_full_regression():
+    """The regression stops where the free response has decayed; the answer is unchanged."""
+    m = sysid.StateSpaceModel([[0.95, 0.1], [0.0, 0.9]], [[1.0], [0.5]], [[1.0, 1.0]],
+                              K=[[0.5], [0.2]])
+    rng = np.random.default_rng(15)
+    u = rng.standard_normal((6000, 1))
+    y = m.simulate(u, x0=[2.0, -1.0]) + 0.1 * rng.standard_normal((6000, 1))
+    for horizon in (None, 1, 4):
+        base = (m.simulate(u) if horizon is None else m.predict(u, y, horizon))
+        cols = [(m.simulate(np.zeros_like(u), x0=e) if horizon is None else
+                 m.predict(np.zeros_like(u), np.zeros_like(y), horizon, x0=e))[:, 0]
+                for e in np.eye(2)]
+        full = np.linalg.lstsq(np.array(cols).T, (y - base)[:, 0], rcond=None)[0]
+        np.testing.assert_allclose(sysid.estimate_x0(m, u, y, horizon), full, rtol=1e-9)
+
+
+def test_unstable_model_fit_is_minus_infinity_or_a_clear_error():
+    m = sysid.StateSpaceModel([[1.5]], [[1.0]], [[1.0]])
+    y = np.random.default_rng(16).standard_normal((3000, 1))
+    # outputs near 1e176: finite, but their squares overflow; no warning, fit -inf
+    r = sysid.compare(m, (np.ones((1000, 1)), y[:1000]), x0="zero")
+    assert r.fit[0, 0] == -np.inf
+    with pytest.raises(sysid.NumericalError, match="unstable"):
+        sysid.compare(m, (np.ones((3000, 1)), y), x0="zero")

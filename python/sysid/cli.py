@@ -51,15 +51,8 @@ def _is_number(s: str) -> bool:
     return True
 
 
-def read_csv(path: str | Path, delimiter: str | None = None) -> tuple[list[str], np.ndarray]:
-    """Read a numeric table: ``(column names, values (rows, columns))``.
-
-    The first line is a header of names unless every field in it is a number (then the
-    columns are named ``"0", "1", ...``). The delimiter is guessed among comma, semicolon,
-    tab and white space unless given. Empty lines and lines starting with ``#`` are skipped.
-    A field that is not a number raises a :class:`~sysid.DataError` naming its column and
-    line.
-    """
+def _read_table(path: str | Path, delimiter: str | None) -> tuple[list[str], list[list[str]]]:
+    """Column names and the rows as strings (see :func:`read_csv`)."""
     path = Path(path)
     if not path.is_file():
         raise DataError(f"no data file at {str(path)!r}")
@@ -69,37 +62,74 @@ def read_csv(path: str | Path, delimiter: str | None = None) -> tuple[list[str],
     if not lines:
         raise DataError(f"{str(path)!r} is empty")
     if delimiter is None:
-        first = lines[0]
-        delimiter = next((d for d in (",", ";", "\t") if d in first), " ")
+        delimiter = next((d for d in (",", ";") if d in lines[0]), " ")
 
     def split(line: str) -> list[str]:
-        if delimiter == " ":
+        if delimiter in (" ", "\t"):
             return line.split()
         return [c.strip() for c in next(csv.reader([line], delimiter=delimiter))]
 
     head = split(lines[0])
+    while head and head[-1] == "":  # a trailing delimiter ends every line
+        head.pop()
     if all(_is_number(c) for c in head):
-        names, body, offset = [str(i) for i in range(len(head))], lines, 1
+        names, body, first = [str(i) for i in range(len(head))], lines, 1
     else:
-        names, body, offset = head, lines[1:], 2
+        names, body, first = head, lines[1:], 2
     if not body:
         raise DataError(f"{str(path)!r} has a header but no data rows")
-    values = np.empty((len(body), len(names)))
+    rows = []
     for r, line in enumerate(body):
         cells = split(line)
+        while len(cells) > len(names) and cells[-1] == "":
+            cells.pop()
         if len(cells) != len(names):
-            raise DataError(f"{path.name} line {r + offset}: {len(cells)} fields but the header "
+            raise DataError(f"{path.name} line {r + first}: {len(cells)} fields but the header "
                             f"has {len(names)} columns")
-        for c, cell in enumerate(cells):
+        rows.append(cells)
+    return names, rows
+
+
+def _numeric(path: str | Path, names: list[str], rows: list[list[str]], cols: list[int],
+             first_line: int) -> np.ndarray:
+    values = np.empty((len(rows), len(cols)))
+    for r, cells in enumerate(rows):
+        for k, c in enumerate(cols):
+            cell = cells[c]
             try:
-                values[r, c] = float(cell)
+                values[r, k] = float(cell)
             except ValueError:
+                what = "is empty" if cell == "" else f"{cell!r} is not a number"
                 raise DataError(
-                    f"{path.name} line {r + offset}, column {names[c]!r}: {cell!r} is not a "
-                    "number; fix or remove that row (missing values must be repaired before "
-                    "identification)"
+                    f"{Path(path).name} line {r + first_line}, column {names[c]!r}: {what}; fix or "
+                    "remove that row (missing values must be repaired before identification)"
                 ) from None
-    return names, values
+    return values
+
+
+def read_csv(path: str | Path, delimiter: str | None = None) -> tuple[list[str], np.ndarray]:
+    r"""Read a numeric table: ``(column names, values (rows, columns))``.
+
+    The first line is a header of names unless every field in it is a number (then the
+    columns are named ``"0", "1", ...``). The delimiter is guessed (comma, semicolon, else
+    white space) unless given; a trailing delimiter at the end of every line is allowed.
+    Empty lines and lines starting with ``#`` are skipped. A field that is not a number
+    raises a :class:`~sysid.DataError` naming its column and line.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from sysid.cli import read_csv
+    >>> path = os.path.join(tempfile.mkdtemp(), "d.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("u,y,\n1,2,\n3,4,\n")
+    >>> read_csv(path)
+    (['u', 'y'], array([[1., 2.],
+           [3., 4.]]))
+    """
+    names, rows = _read_table(path, delimiter)
+    first = 1 if names == [str(i) for i in range(len(names))] else 2
+    return names, _numeric(path, names, rows, list(range(len(names))), first)
 
 
 def _columns(spec: str, names: list[str], what: str) -> list[int]:
@@ -166,7 +196,7 @@ def identify(
                 f"order {order} is larger than the data and horizon support (at most "
                 f"{est.max_order} with horizon {est.past}); lower --order or raise --horizon"
             )
-    top = est.max_order if order == "auto" else max(int(order), 1)
+    top = 0 if order == "auto" else int(order)
     orders = range(1, min(est.max_order, max(10, 2 * est.auto_order, top)) + 1)
     say(f"sweeping orders {orders.start}..{orders.stop - 1} on one compression")
     sel = select_order(est, orders, validation=val_data)
@@ -355,12 +385,16 @@ def _demo(args: argparse.Namespace) -> int:
 def _identify(args: argparse.Namespace) -> int:
     say = _Progress(args.quiet)
     say(f"reading {args.data}")
-    names, values = read_csv(args.data, args.delimiter)
+    names, rows = _read_table(args.data, args.delimiter)
+    first = 1 if names == [str(i) for i in range(len(names))] else 2
     ui = _columns(args.inputs, names, "inputs") if args.inputs else []
     yi = _columns(args.outputs, names, "outputs")
+    say(f"{len(rows)} samples; converting {len(ui)} input and {len(yi)} output column(s)")
+    u = _numeric(args.data, names, rows, ui, first)
+    y = _numeric(args.data, names, rows, yi, first)
     if args.time is not None:
         ti = _columns(args.time, names, "times")[0]
-        t = values[:, ti]
+        t = _numeric(args.data, names, rows, [ti], first)[:, 0]
         steps = np.diff(t)
         if steps.size == 0 or not np.all(steps > 0):
             raise DataError(f"time column {args.time!r} must increase strictly")
@@ -369,7 +403,6 @@ def _identify(args: argparse.Namespace) -> int:
             raise DataError("give either --dt or --time, not both")
     else:
         dt = 1.0 if args.dt is None else float(args.dt)
-    u, y = values[:, ui], values[:, yi]
     N = y.shape[0]
     k = _split_index(args.split, N)
     pre: dict[str, Any] = {"file": str(args.data), "inputs": [names[i] for i in ui],

@@ -121,15 +121,35 @@ def estimate_x0(model: StateSpaceModel, u: Any, y: Any, horizon: int | None = No
     if n == 0:
         return np.zeros(0)
     h = _horizon(horizon)
-    base = _run(model, u, y, h, None)
-    u0, y0 = np.zeros_like(u), np.zeros_like(y)
-    phi = np.empty((y.size, n))
+    W = _window(model, h, y.shape[0])
+    base = _run(model, u[:W], y[:W], h, None)
+    u0, y0 = np.zeros((W, u.shape[1])), np.zeros((W, y.shape[1]))
+    phi = np.empty((W * y.shape[1], n))
     for i in range(n):
         e = np.zeros(n)
         e[i] = 1.0
         phi[:, i] = _run(model, u0, y0, h, e).ravel()
-    x0, *_ = np.linalg.lstsq(phi, (y - base).ravel(), rcond=None)
+    x0, *_ = np.linalg.lstsq(phi, (y[:W] - base).ravel(), rcond=None)
     return x0
+
+
+def _window(model: StateSpaceModel, horizon: int | None, N: int) -> int:
+    """Samples over which the free response from x0 is above 1e-13 of its start.
+
+    The state is seen through ``A`` (simulation) or the predictor ``A - K C``; past the
+    window its influence is below round-off, so the regression ignores those samples (this
+    keeps the estimate O(n^2 W) instead of O(n^2 N) on long records).
+    """
+    F = model.A
+    if horizon is not None and model.K is not None:
+        F = model.A - model.K @ model.C
+    rho = float(np.max(np.abs(np.linalg.eigvals(F)))) if F.size else 0.0
+    if rho >= 0.9999:
+        return N
+    decay = 1 if rho == 0 else int(np.ceil(np.log(1e-13) / np.log(rho)))
+    # transient growth of non-normal matrices: leave generous room
+    W = 4 * decay + 10 * model.nstates + (horizon or 0)
+    return int(min(N, max(W, 50)))
 
 
 def _x0_for(model: StateSpaceModel, x0: Any, u: np.ndarray, y: np.ndarray, horizon: int | None,
@@ -173,12 +193,19 @@ def fit_metrics(y: Any, yhat: Any) -> dict[str, np.ndarray]:
     yhat = as_2d(yhat, "yhat", ncols=y.shape[1])
     if yhat.shape != y.shape:
         raise ShapeError(f"yhat has shape {yhat.shape} but y has {y.shape}")
+    return _metrics(y, yhat)
+
+
+def _metrics(y: np.ndarray, yhat: np.ndarray) -> dict[str, np.ndarray]:
     err = y - yhat
-    with np.errstate(divide="ignore", invalid="ignore"):
+    # an unstable model's simulation may overflow: its fit is then -inf, not a warning
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         dev = np.linalg.norm(y - y.mean(0), axis=0)
         fit = 100.0 * (1.0 - np.linalg.norm(err, axis=0) / dev)
         vaf = 100.0 * (1.0 - err.var(0) / y.var(0))
-    return {"fit": fit, "vaf": vaf, "rmse": np.sqrt(np.mean(err**2, axis=0))}
+        rmse = np.sqrt(np.mean(err**2, axis=0))
+    fit = np.where(np.isnan(fit) & ~np.isfinite(rmse), -np.inf, fit)
+    return {"fit": fit, "vaf": vaf, "rmse": rmse}
 
 
 # -- compare ----------------------------------------------------------------------------
@@ -205,7 +232,7 @@ class CompareResult:
         self.u, self.y, self.yhat, self.x0 = u, y, yhat, x0
         self.output_names = list(model.output_names)
         self.dt = model.dt
-        metrics = [fit_metrics(a, b) for a, b in zip(y, yhat)]
+        metrics = [_metrics(a, b) for a, b in zip(y, yhat)]
         self.fit = np.array([d["fit"] for d in metrics])
         self.vaf = np.array([d["vaf"] for d in metrics])
         self.rmse = np.array([d["rmse"] for d in metrics])
