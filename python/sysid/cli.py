@@ -196,10 +196,14 @@ def identify(
                 f"order {order} is larger than the data and horizon support (at most "
                 f"{est.max_order} with horizon {est.past}); lower --order or raise --horizon"
             )
-    top = 0 if order == "auto" else int(order)
-    orders = range(1, min(est.max_order, max(10, 2 * est.auto_order, top)) + 1)
-    say(f"sweeping orders {orders.start}..{orders.stop - 1} on one compression")
-    sel = select_order(est, orders, validation=val_data)
+    top = min(est.max_order, max(10, 2 * est.auto_order, 0 if order == "auto" else int(order)))
+    while True:
+        say(f"sweeping orders 1..{top} on one compression")
+        sel = select_order(est, range(1, top + 1), validation=val_data)
+        if order != "auto" or sel.order < top or top >= est.max_order:
+            break
+        # the best order sits at the edge of the sweep: look further
+        top = min(est.max_order, 2 * top)
     n = sel.order if order == "auto" else int(order)
     say(f"fitting order {n} ({est.method})")
     x0 = est_data.n_experiments == 1
