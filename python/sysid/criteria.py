@@ -6,8 +6,8 @@ An innovation-form model ``(A, B, C, D, K)`` of order ``n`` with ``m`` inputs an
 outputs has ``n^2 + n m + l n + n l`` entries in ``A, B, C, K`` (plus ``l m`` in ``D``), but
 any similarity transform ``T`` gives the same input-output behaviour, so ``n^2`` of them are
 not identifiable. The count used here is the dimension of the identifiable (pseudo-canonical)
-parameterisation, Ljung (1999, *System Identification*, 2nd ed., Sec. 4.3 and 10.x on
-state-space forms; McKelvey 1995):
+parameterisation (Ljung 1999, *System Identification*, 2nd ed., Sec. 4.3 on state-space model
+structures; McKelvey 1995, PhD thesis, Linkoping, on fully parameterised forms):
 
 .. math::
 

@@ -175,6 +175,9 @@ def plot_stabilization(table: Any, ax: Any = None, hz: bool = True) -> Any:
     ax.legend(fontsize=7, loc="upper right")
     ax.set_xlabel("natural frequency [Hz]" if hz else "natural frequency [rad/s]")
     ax.set_ylabel("model order")
+    from matplotlib.ticker import MaxNLocator
+
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_title(f"stabilisation diagram ({table.method})")
     ax.grid(True, alpha=0.3)
     return ax
