@@ -306,3 +306,12 @@ def test_unstable_model_fit_is_minus_infinity_or_a_clear_error():
     assert r.fit[0, 0] == -np.inf
     with pytest.raises(sysid.NumericalError, match="unstable"):
         sysid.compare(m, (np.ones((3000, 1)), y), x0="zero")
+
+
+def test_one_initial_state_for_several_experiments():
+    m = second_order()
+    rng = np.random.default_rng(17)
+    us = [rng.standard_normal((100, 1)), rng.standard_normal((100, 1))]
+    ys = [m.simulate(u, x0=[1.0, 2.0]) for u in us]
+    r = sysid.compare(m, sysid.IOData(u=us, y=ys, dt=0.1), x0=[1.0, 2.0])
+    assert np.all(r.fit > 99.999999)

@@ -166,7 +166,8 @@ def _x0_for(model: StateSpaceModel, x0: Any, u: np.ndarray, y: np.ndarray, horiz
         raise DataError(f"x0 must be 'estimate', 'zero', 'model' or an array, got {x0!r}")
     if x0 is None:
         return None
-    if isinstance(x0, (list, tuple)) and count > 1 and len(x0) == count:
+    if (isinstance(x0, (list, tuple)) and count > 1 and len(x0) == count
+            and np.ndim(x0[0]) >= 1):  # one state vector per experiment
         x0 = x0[index]
     arr = np.asarray(x0, dtype=float).ravel()
     if arr.size != model.nstates:
