@@ -6,10 +6,11 @@ import pickle
 import threading
 
 import numpy as np
-from conftest import random_system, simulate
 
 import sysid
 from sysid import _sysid
+
+from conftest import random_system, simulate
 
 
 def _data(N=400):
@@ -55,8 +56,7 @@ def test_factor_pickles_and_estimator_rebuilds_from_it():
     est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=4)
     f2 = pickle.loads(pickle.dumps(est.factor))
     np.testing.assert_array_equal(f2.l, est.factor.l)
-    assert (f2.n_columns, f2.n_experiments, f2.past, f2.future) == (
-        est.factor.n_columns, 1, 4, 4)
+    assert (f2.n_columns, f2.n_experiments, f2.past, f2.future) == (est.factor.n_columns, 1, 4, 4)
     est2 = sysid.SubspaceEstimator.from_factor(f2)
     np.testing.assert_allclose(est2.fit(3).markov(10), est.fit(3).markov(10))
     assert "HankelFactor(n_inputs=2" in repr(f2)

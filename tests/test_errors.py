@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import random_system, simulate
 
 import sysid
 from sysid import _sysid
+
+from conftest import random_system, simulate
 
 
 @pytest.fixture
@@ -22,7 +23,9 @@ def test_nan_in_output_names_sample_and_fix(record):
     u, y = record
     y = y.copy()
     y[17, 0] = np.nan
-    with pytest.raises(sysid.NonFiniteError, match=r"y has a non-finite value .* sample 17.*interpolate"):
+    with pytest.raises(
+        sysid.NonFiniteError, match=r"y has a non-finite value .* sample 17.*interpolate"
+    ):
         sysid.IOData(u=u, y=y)
 
 
@@ -65,7 +68,7 @@ def test_rank_deficient_inputs(record):
     u, y = record
     u2 = np.hstack([u, 2 * u])
     with pytest.raises(sysid.ExcitationError, match="rank"):
-        sysid.SubspaceEstimator(sysid.IOData(u=u2, y=y), horizon=4).singular_values
+        _ = sysid.SubspaceEstimator(sysid.IOData(u=u2, y=y), horizon=4).singular_values
 
 
 def test_order_above_the_horizon_limit(record):
@@ -149,8 +152,9 @@ def test_unstable_model_simulation_overflow_is_an_error():
 
 def test_riccati_without_stabilising_solution():
     with pytest.raises(sysid.RiccatiError, match="no stabilising solution"):
-        _sysid.kalman_gain(np.diag([1.5, 0.5]), np.array([[0.0, 1.0]]), np.eye(2),
-                           np.eye(1), np.zeros((2, 1)))
+        _sysid.kalman_gain(
+            np.diag([1.5, 0.5]), np.array([[0.0, 1.0]]), np.eye(2), np.eye(1), np.zeros((2, 1))
+        )
 
 
 def test_x0_needs_data_and_a_single_experiment(record):

@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import numpy as np
-from conftest import random_system, simulate
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import sysid
 from sysid import _sysid
+
+from conftest import random_system, simulate
 
 SETTINGS = settings(max_examples=25, deadline=None)
 
@@ -64,8 +65,12 @@ def test_scaling_an_input_scales_the_column_of_b(seed, col, scale, method):
     y = simulate(a, b, c, d, u)
     us = u.copy()
     us[:, col] *= scale
-    m1 = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=4, method=method).fit(3, kalman=False)
-    m2 = sysid.SubspaceEstimator(sysid.IOData(u=us, y=y), horizon=4, method=method).fit(3, kalman=False)
+    m1 = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=4, method=method).fit(
+        3, kalman=False
+    )
+    m2 = sysid.SubspaceEstimator(sysid.IOData(u=us, y=y), horizon=4, method=method).fit(
+        3, kalman=False
+    )
     h1, h2 = m1.markov(15), m2.markov(15)
     expected = h1.copy()
     expected[:, :, col] /= scale

@@ -7,21 +7,43 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import match_poles, shared_data
 
 import sysid
 
+from conftest import match_poles, shared_data
+
 # IB01AD, MOESP, 15 block rows, raw data
-SLICOT_SV = [69.8841, 14.9963, 3.6675, 1.9677, 0.3000, 0.2078, 0.1651, 0.1373,
-             0.1133, 0.1059, 0.0856, 0.0784, 0.0733, 0.0678, 0.0571]
+SLICOT_SV = [
+    69.8841,
+    14.9963,
+    3.6675,
+    1.9677,
+    0.3000,
+    0.2078,
+    0.1651,
+    0.1373,
+    0.1133,
+    0.1059,
+    0.0856,
+    0.0784,
+    0.0733,
+    0.0678,
+    0.0571,
+]
 # IB01BD eig(A) and Markov parameters h0..h8
 SLICOT_POLES = [0.4758 + 0.2001j, 0.4758 - 0.2001j, 0.7455, 0.9611]
 SLICOT_MARKOV = [-0.0041, -0.0004, 0.0007, 0.0740, 0.1251, 0.1405, 0.1313, 0.1109, 0.0881]
 # eig(A - K C) with SLICOT's published K
 SLICOT_PREDICTOR_POLES = [0.8244, 0.2410, 0.3710 + 0.0271j, 0.3710 - 0.0271j]
 # IB01BD A, C (to express our initial state in SLICOT's basis) and IB01CD x0, B, D
-SLICOT_A = np.array([[0.8924, 0.3887, 0.1285, 0.1716], [-0.0837, 0.6186, -0.6273, -0.4582],
-                     [0.0052, 0.1307, 0.6685, -0.6755], [0.0055, 0.0734, -0.2148, 0.4788]])
+SLICOT_A = np.array(
+    [
+        [0.8924, 0.3887, 0.1285, 0.1716],
+        [-0.0837, 0.6186, -0.6273, -0.4582],
+        [0.0052, 0.1307, 0.6685, -0.6755],
+        [0.0055, 0.0734, -0.2148, 0.4788],
+    ]
+)
 SLICOT_C = np.array([[-0.4442, 0.6663, 0.3961, 0.4102]])
 SLICOT_X0 = np.array([-11.4329, -0.6767, 0.0472, 0.3600])
 SLICOT_B_CD = np.array([-0.2150, -0.1962, 0.0511, 0.0373])

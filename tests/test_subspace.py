@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import markov, match_poles, random_system, simulate
 
 import sysid
+
+from conftest import markov, match_poles, random_system, simulate
 
 METHODS = ["moesp", "n4sid", "cva", "ordinary-moesp", "pi-moesp"]
 
@@ -96,9 +97,9 @@ def test_pole_errors_shrink_as_n_grows_with_process_and_measurement_noise(method
             u = rng.standard_normal((N, 1))
             e = 0.5 * rng.standard_normal((N, 2))
             y = simulate(a, b, c, d, u, w=e @ k.T, v=e)
-            model = sysid.SubspaceEstimator(
-                sysid.IOData(u=u, y=y), horizon=6, method=method
-            ).fit(3, kalman=False)
+            model = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=6, method=method).fit(
+                3, kalman=False
+            )
             errs.append(match_poles(model.poles(), true))
         errors.append(float(np.mean(errs)))
     assert errors[1] < errors[0] and errors[2] < errors[1], errors

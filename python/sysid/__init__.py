@@ -19,22 +19,6 @@ Examples
 
 from . import datasets
 from ._sysid import __version__
-from .data import IOData
-from .errors import (
-    DataError,
-    ExcitationError,
-    InsufficientDataError,
-    NonFiniteError,
-    NumericalError,
-    OrderError,
-    RiccatiError,
-    ShapeError,
-    SysidError,
-)
-from .model import StateSpaceModel
-from .subspace import SubspaceEstimator, cva, default_horizon, moesp, n4sid
-from .validation import compare, error_spectrum, estimate_x0, fit_metrics, residuals
-from .criteria import criteria, n_parameters, select_order
 from .analysis import (
     ContinuousStateSpace,
     c2d,
@@ -52,7 +36,65 @@ from .analysis import (
     to_scipy,
     zeros,
 )
+from .criteria import criteria, n_parameters, select_order
+from .data import DataSummary, IOData, SplitData, Trend, check_unit, sample_time
+from .errors import (
+    DataError,
+    ExcitationError,
+    ExcitationWarning,
+    InsufficientDataError,
+    NonFiniteError,
+    NumericalError,
+    OrderError,
+    RiccatiError,
+    ShapeError,
+    SysidError,
+)
+from .input_design import (
+    check_excitation,
+    chirp,
+    crest_factor,
+    multisine,
+    persistent_excitation_order,
+    prbs,
+    random_binary,
+    random_gaussian,
+)
 from .io import load_model, save_model
+from .model import StateSpaceModel
+from .nonparametric import (
+    FRD,
+    Coherence,
+    Correlation,
+    FRDComparison,
+    Spectra,
+    coherence,
+    correlation,
+    etfe,
+    periodogram,
+    spa,
+    spectra,
+    welch_frf,
+)
+from .preprocessing import (
+    bandpass,
+    butter_sos,
+    decimate,
+    despike,
+    detrend,
+    drop_quiet,
+    filtfilt,
+    find_spikes,
+    highpass,
+    lowpass,
+    repair_nan,
+    resample,
+    scale,
+    select_mask,
+    select_mode,
+)
+from .subspace import SubspaceEstimator, cva, default_horizon, moesp, n4sid
+from .validation import compare, error_spectrum, estimate_x0, fit_metrics, residuals
 
 __all__ = [
     "__version__",
@@ -98,4 +140,46 @@ __all__ = [
     "from_scipy",
     "save_model",
     "load_model",
+    # data handling, pre-processing, input design, non-parametric analysis
+    "ExcitationWarning",
+    "Trend",
+    "SplitData",
+    "DataSummary",
+    "sample_time",
+    "check_unit",
+    "repair_nan",
+    "find_spikes",
+    "despike",
+    "detrend",
+    "scale",
+    "butter_sos",
+    "filtfilt",
+    "lowpass",
+    "highpass",
+    "bandpass",
+    "resample",
+    "decimate",
+    "select_mode",
+    "select_mask",
+    "drop_quiet",
+    "prbs",
+    "random_binary",
+    "random_gaussian",
+    "multisine",
+    "chirp",
+    "crest_factor",
+    "persistent_excitation_order",
+    "check_excitation",
+    "FRD",
+    "FRDComparison",
+    "Spectra",
+    "Coherence",
+    "Correlation",
+    "etfe",
+    "spa",
+    "welch_frf",
+    "spectra",
+    "periodogram",
+    "coherence",
+    "correlation",
 ]

@@ -30,7 +30,8 @@ def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = Fa
         raise ShapeError(f"{name} must be 1-D or 2-D (samples, channels), got a scalar")
     elif arr.ndim != 2:
         raise ShapeError(
-            f"{name} must be 1-D or 2-D (samples, channels), got {arr.ndim}-D with shape {arr.shape}"
+            f"{name} must be 1-D or 2-D (samples, channels), "
+            f"got {arr.ndim}-D with shape {arr.shape}"
         )
     if arr.shape[0] == 0 and not allow_empty:
         raise ShapeError(f"{name} has no samples (shape {arr.shape})")

@@ -1,6 +1,6 @@
 """Type stubs of the compiled core (``sysid._sysid``); see the Python wrappers for docs."""
 
-from typing import Any, Optional
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -43,7 +43,7 @@ def compress(
     experiments: list[tuple[Array, Array]],
     past: int,
     future: int,
-    chunk_rows: Optional[int] = None,
+    chunk_rows: int | None = None,
 ) -> HankelFactor: ...
 
 class Subspace:
@@ -58,13 +58,16 @@ class Subspace:
 def estimate_bd_x0(
     a: Array, c: Array, u: Array, y: Array, feedthrough: bool
 ) -> tuple[Array, Array, Array]: ...
-def simulate(
-    a: Array, b: Array, c: Array, d: Array, u: Array, x0: Optional[Array]
-) -> Array: ...
+def simulate(a: Array, b: Array, c: Array, d: Array, u: Array, x0: Array | None) -> Array: ...
 def predict(
-    a: Array, b: Array, c: Array, d: Array, k: Array, u: Array, y: Array,
-    x0: Optional[Array], horizon: int,
+    a: Array,
+    b: Array,
+    c: Array,
+    d: Array,
+    k: Array,
+    u: Array,
+    y: Array,
+    x0: Array | None,
+    horizon: int,
 ) -> Array: ...
-def kalman_gain(
-    a: Array, c: Array, q: Array, r: Array, s: Array
-) -> tuple[Array, Array, Array]: ...
+def kalman_gain(a: Array, c: Array, q: Array, r: Array, s: Array) -> tuple[Array, Array, Array]: ...

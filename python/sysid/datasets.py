@@ -42,5 +42,10 @@ def load_dryer():  # type: ignore[no-untyped-def]
     from .data import IOData
 
     d = np.loadtxt(path("dryer"))
-    return IOData(u=d[:, :1], y=d[:, 1:], dt=0.08, input_names=["heater voltage"],
-                  output_names=["air temperature"])
+    return IOData(
+        u=d[:, :1],
+        y=d[:, 1:],
+        dt=0.08,
+        input_names=["heater voltage"],
+        output_names=["air temperature"],
+    )

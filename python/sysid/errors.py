@@ -26,6 +26,7 @@ __all__ = [
     "OrderError",
     "NumericalError",
     "RiccatiError",
+    "ExcitationWarning",
 ]
 
 
@@ -63,3 +64,7 @@ class NumericalError(SysidError, ArithmeticError):
 
 class RiccatiError(NumericalError):
     """The Riccati equation of the Kalman gain has no stabilising solution."""
+
+
+class ExcitationWarning(UserWarning):
+    """The input may not excite the system enough for the requested model order."""

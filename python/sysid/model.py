@@ -81,7 +81,11 @@ class StateSpaceModel:
         B = as_matrix(B, "B", (n, None)) if B.size else np.zeros((n, B.shape[1]))
         C = as_matrix(C, "C", (None, n))
         m, l = B.shape[1], C.shape[0]
-        D = np.zeros((l, m)) if D is None else as_matrix(np.reshape(D, (l, m)) if np.size(D) == l * m else D, "D", (l, m))
+        D = (
+            np.zeros((l, m))
+            if D is None
+            else as_matrix(np.reshape(D, (l, m)) if np.size(D) == l * m else D, "D", (l, m))
+        )
         self.A, self.B, self.C, self.D = A, B, C, D
         self.K = None if K is None else as_matrix(K, "K", (n, l))
         self.noise_cov = None if noise_cov is None else as_matrix(noise_cov, "noise_cov", (l, l))
@@ -90,8 +94,12 @@ class StateSpaceModel:
         if not np.isfinite(dt) or dt <= 0:
             raise DataError(f"dt must be a positive number of seconds, got {dt}")
         self.dt = dt
-        self.input_names = list(input_names) if input_names is not None else [f"u{i}" for i in range(m)]
-        self.output_names = list(output_names) if output_names is not None else [f"y{i}" for i in range(l)]
+        self.input_names = (
+            list(input_names) if input_names is not None else [f"u{i}" for i in range(m)]
+        )
+        self.output_names = (
+            list(output_names) if output_names is not None else [f"y{i}" for i in range(l)]
+        )
         if len(self.input_names) != m or len(self.output_names) != l:
             raise ShapeError("the number of channel names does not match B and C")
         self.info: dict[str, Any] = dict(info or {})
@@ -120,7 +128,9 @@ class StateSpaceModel:
             if x0 == "model":
                 return self.x0
             raise DataError(f"x0 must be an array, None or 'model', got {x0!r}")
-        return as_matrix(np.reshape(np.asarray(x0, dtype=float), (-1, 1)), "x0", (self.nstates, 1))[:, 0]
+        return as_matrix(np.reshape(np.asarray(x0, dtype=float), (-1, 1)), "x0", (self.nstates, 1))[
+            :, 0
+        ]
 
     def _u(self, u: Any, n_samples: int | None = None) -> np.ndarray:
         if u is None:

@@ -35,6 +35,7 @@ import numpy as np
 from . import _sysid
 from .data import IOData
 from .errors import DataError
+from .input_design import check_excitation
 from .model import StateSpaceModel
 
 __all__ = ["SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "METHODS"]
@@ -160,8 +161,11 @@ class SubspaceEstimator:
         m, l = factor.n_inputs, factor.n_outputs
         # a placeholder record that carries only channel counts, names and dt
         self.data = IOData(
-            u=np.zeros((1, m)), y=np.zeros((1, l)), dt=dt,
-            input_names=input_names, output_names=output_names,
+            u=np.zeros((1, m)),
+            y=np.zeros((1, l)),
+            dt=dt,
+            input_names=input_names,
+            output_names=output_names,
         )
         self._from_factor = True
         self.method = _method(method)
@@ -234,9 +238,17 @@ class SubspaceEstimator:
             n = sub.auto_order()
         else:
             n = _check_int(order, "order", 1)
-        for name, flag in (("feedthrough", feedthrough), ("kalman", kalman), ("stable", stable), ("x0", x0)):
+        for name, flag in (
+            ("feedthrough", feedthrough),
+            ("kalman", kalman),
+            ("stable", stable),
+            ("x0", x0),
+        ):
             if not isinstance(flag, (bool, np.bool_)):
                 raise DataError(f"{name} must be True or False, got {flag!r}")
+        if self.data.n_inputs and not getattr(self, "_from_factor", False):
+            # warn (ExcitationWarning) when the input cannot support order n
+            check_excitation([u for u, _ in self.data.experiments], n, stacklevel=2)
         res = sub.fit(n, bool(feedthrough), bool(kalman), bool(stable))
         x0_est = None
         B, D = res["B"], res["D"]
@@ -260,7 +272,11 @@ class SubspaceEstimator:
             "S": res["S"],
         }
         return StateSpaceModel(
-            res["A"], B, res["C"], D, res["K"],
+            res["A"],
+            B,
+            res["C"],
+            D,
+            res["K"],
             dt=self.data.dt,
             noise_cov=res["noise_cov"],
             x0=x0_est,

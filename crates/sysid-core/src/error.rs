@@ -112,11 +112,17 @@ pub type Result<T> = std::result::Result<T, SysidError>;
 
 impl SysidError {
     pub(crate) fn invalid(name: &'static str, reason: impl Into<String>) -> Self {
-        SysidError::InvalidArgument { name, reason: reason.into() }
+        SysidError::InvalidArgument {
+            name,
+            reason: reason.into(),
+        }
     }
 
     pub(crate) fn numerical(step: &'static str, reason: impl Into<String>) -> Self {
-        SysidError::Numerical { step, reason: reason.into() }
+        SysidError::Numerical {
+            step,
+            reason: reason.into(),
+        }
     }
 }
 
@@ -125,7 +131,11 @@ pub fn check_finite(what: &'static str, x: faer::MatRef<'_, f64>) -> Result<()> 
     for j in 0..x.ncols() {
         for i in 0..x.nrows() {
             if !x[(i, j)].is_finite() {
-                return Err(SysidError::NonFinite { what, sample: i, channel: j });
+                return Err(SysidError::NonFinite {
+                    what,
+                    sample: i,
+                    channel: j,
+                });
             }
         }
     }

@@ -40,6 +40,8 @@
 //! ```
 
 #![warn(missing_docs)]
+// Index loops mirror the formulas in numerical kernels; iterator chains would hide them.
+#![allow(clippy::needless_range_loop)]
 
 pub mod error;
 pub mod hankel;

@@ -101,7 +101,13 @@ impl QrAccumulator {
     /// An accumulator for rows of length `k`, re-triangularising every `chunk_rows` rows.
     pub fn new(k: usize, chunk_rows: usize) -> Self {
         let chunk_rows = chunk_rows.max(1);
-        Self { k, chunk_rows, work: Mat::zeros(k + chunk_rows, k), pending: 0, rows: 0 }
+        Self {
+            k,
+            chunk_rows,
+            work: Mat::zeros(k + chunk_rows, k),
+            pending: 0,
+            rows: 0,
+        }
     }
 
     /// Row length k.
@@ -208,7 +214,11 @@ mod tests {
 
     #[test]
     fn lq_reproduces_gram() {
-        let m = mat![[1.0, 2.0, 3.0, 4.0], [0.5, -1.0, 2.0, 0.0], [3.0, 1.0, 0.0, 1.0]];
+        let m = mat![
+            [1.0, 2.0, 3.0, 4.0],
+            [0.5, -1.0, 2.0, 0.0],
+            [3.0, 1.0, 0.0, 1.0]
+        ];
         let l = lq_lower(m.as_ref());
         let g1 = &l * l.transpose();
         let g2 = &m * m.transpose();

@@ -33,11 +33,12 @@ impl StateSpace {
     /// Builds a model after checking that the shapes agree and every entry is finite.
     pub fn new(a: Mat<f64>, b: Mat<f64>, c: Mat<f64>, d: Mat<f64>) -> Result<Self> {
         let n = a.nrows();
-        let mismatch = |what: &str, expected: String, got: MatRef<'_, f64>| SysidError::ShapeMismatch {
-            what: what.to_string(),
-            expected,
-            got: shape(got),
-        };
+        let mismatch =
+            |what: &str, expected: String, got: MatRef<'_, f64>| SysidError::ShapeMismatch {
+                what: what.to_string(),
+                expected,
+                got: shape(got),
+            };
         if a.ncols() != n {
             return Err(mismatch("A", format!("({n}, {n})"), a.as_ref()));
         }
@@ -48,18 +49,14 @@ impl StateSpace {
             return Err(mismatch("C", format!("(l, {n})"), c.as_ref()));
         }
         if d.nrows() != c.nrows() || d.ncols() != b.ncols() {
-            return Err(mismatch("D", format!("({}, {})", c.nrows(), b.ncols()), d.as_ref()));
+            return Err(mismatch(
+                "D",
+                format!("({}, {})", c.nrows(), b.ncols()),
+                d.as_ref(),
+            ));
         }
         for (name, m) in [("A", &a), ("B", &b), ("C", &c), ("D", &d)] {
-            crate::error::check_finite(
-                match name {
-                    "A" => "A",
-                    "B" => "B",
-                    "C" => "C",
-                    _ => "D",
-                },
-                m.as_ref(),
-            )?;
+            crate::error::check_finite(name, m.as_ref())?;
         }
         Ok(Self { a, b, c, d })
     }

@@ -56,7 +56,10 @@ pub fn kalman_gain(
     let l = c.nrows();
     let fail = |reason: String| SysidError::NoStabilizingSolution { reason };
     if r.nrows() != l || r.ncols() != l || q.nrows() != n || s.nrows() != n || s.ncols() != l {
-        return Err(SysidError::invalid("covariances", "Q, R, S shapes do not match A and C"));
+        return Err(SysidError::invalid(
+            "covariances",
+            "Q, R, S shapes do not match A and C",
+        ));
     }
     let r_llt = r
         .llt(faer::Side::Lower)
@@ -98,23 +101,32 @@ pub fn kalman_gain(
         }
     }
     if !converged {
-        return Err(fail(format!("no convergence after {iterations} doubling steps")));
+        return Err(fail(format!(
+            "no convergence after {iterations} doubling steps"
+        )));
     }
     let p = h;
     let cp = c * &p;
     let mut innov = &cp * c.transpose() + r;
     symmetrize(&mut innov);
     let apct_s = a * cp.transpose() + s; // A P C^T + S
-    let innov_llt = innov
-        .llt(faer::Side::Lower)
-        .map_err(|_| fail("the innovation covariance C P C^T + R is not positive definite".into()))?;
+    let innov_llt = innov.llt(faer::Side::Lower).map_err(|_| {
+        fail("the innovation covariance C P C^T + R is not positive definite".into())
+    })?;
     let k = innov_llt.solve(apct_s.transpose()).transpose().to_owned();
     let rho = spectral_radius((a - &k * c).as_ref())?;
-    if !(rho < 1.0) {
-        return Err(fail(format!("the predictor A - K C has spectral radius {rho:.6} >= 1")));
+    if rho.is_nan() || rho >= 1.0 {
+        return Err(fail(format!(
+            "the predictor A - K C has spectral radius {rho:.6} >= 1"
+        )));
     }
     let _ = innov_llt.inverse();
-    Ok(KalmanSolution { p, k, innovation_cov: innov, iterations })
+    Ok(KalmanSolution {
+        p,
+        k,
+        innovation_cov: innov,
+        iterations,
+    })
 }
 
 #[cfg(test)]

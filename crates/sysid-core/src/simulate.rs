@@ -97,7 +97,11 @@ fn check_inputs(sys: &StateSpace, u: MatRef<'_, f64>, x0: Option<&[f64]>) -> Res
             });
         }
         if let Some(i) = x0.iter().position(|v| !v.is_finite()) {
-            return Err(SysidError::NonFinite { what: "x0", sample: i, channel: 0 });
+            return Err(SysidError::NonFinite {
+                what: "x0",
+                sample: i,
+                channel: 0,
+            });
         }
     }
     check_finite("u", u)
@@ -134,8 +138,12 @@ pub fn simulate(sys: &StateSpace, u: MatRef<'_, f64>, x0: Option<&[f64]>) -> Res
         dense.step(&x, &ut, &mut xn);
         std::mem::swap(&mut x, &mut xn);
     }
-    check_finite("simulated output (the model diverged)", y.as_ref())
-        .map_err(|_| SysidError::numerical("simulate", "the simulated output overflowed; the model is unstable over this record length"))?;
+    check_finite("simulated output (the model diverged)", y.as_ref()).map_err(|_| {
+        SysidError::numerical(
+            "simulate",
+            "the simulated output overflowed; the model is unstable over this record length",
+        )
+    })?;
     Ok(y)
 }
 
@@ -164,7 +172,10 @@ pub fn predict(
     let dense = Dense::new(sys);
     let (n, m, l) = (dense.n, dense.m, dense.l);
     if horizon == 0 {
-        return Err(SysidError::invalid("horizon", "the prediction horizon must be >= 1"));
+        return Err(SysidError::invalid(
+            "horizon",
+            "the prediction horizon must be >= 1",
+        ));
     }
     if k.nrows() != n || k.ncols() != l {
         return Err(SysidError::ShapeMismatch {
@@ -232,7 +243,11 @@ pub fn predict(
             out[(t, i)] = yt[i];
         }
     }
-    check_finite("prediction", out.as_ref())
-        .map_err(|_| SysidError::numerical("predict", "the prediction overflowed; the predictor A - K C is unstable"))?;
+    check_finite("prediction", out.as_ref()).map_err(|_| {
+        SysidError::numerical(
+            "predict",
+            "the prediction overflowed; the predictor A - K C is unstable",
+        )
+    })?;
     Ok(out)
 }

@@ -48,7 +48,9 @@ impl PyHankelFactor {
     }
 
     fn merge(&self, other: &PyHankelFactor) -> PyResult<PyHankelFactor> {
-        Ok(PyHankelFactor { inner: self.inner.merge(&other.inner).py()? })
+        Ok(PyHankelFactor {
+            inner: self.inner.merge(&other.inner).py()?,
+        })
     }
 
     #[staticmethod]
@@ -150,7 +152,9 @@ pub fn compress(
             reason: format!("unknown compressor {other:?}; available: \"qr\""),
         }),
     };
-    Ok(PyHankelFactor { inner: result.py()? })
+    Ok(PyHankelFactor {
+        inner: result.py()?,
+    })
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -12,8 +12,13 @@ fn model(
     c: &PyReadonlyArray2<'_, f64>,
     d: &PyReadonlyArray2<'_, f64>,
 ) -> PyResult<StateSpace> {
-    StateSpace::new(view(a).to_owned(), view(b).to_owned(), view(c).to_owned(), view(d).to_owned())
-        .py()
+    StateSpace::new(
+        view(a).to_owned(),
+        view(b).to_owned(),
+        view(c).to_owned(),
+        view(d).to_owned(),
+    )
+    .py()
 }
 
 /// Simulates `x(t+1) = A x + B u, y = C x + D u`; returns `(N, l)`.
@@ -55,7 +60,9 @@ pub fn predict<'py>(
     let sys = model(&a, &b, &c, &d)?;
     let x0 = x0.as_ref().map(vec1);
     let (kv, uv, yv) = (view(&k), view(&u), view(&y));
-    let out = py.detach(|| sim::predict(&sys, kv, uv, yv, x0.as_deref(), horizon)).py()?;
+    let out = py
+        .detach(|| sim::predict(&sys, kv, uv, yv, x0.as_deref(), horizon))
+        .py()?;
     Ok(mat_to_numpy(py, &out))
 }
 
@@ -69,9 +76,17 @@ pub fn kalman_gain<'py>(
     q: PyReadonlyArray2<'_, f64>,
     r: PyReadonlyArray2<'_, f64>,
     s: PyReadonlyArray2<'_, f64>,
-) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>)> {
+) -> PyResult<(
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+)> {
     let sol = riccati::kalman_gain(view(&a), view(&c), view(&q), view(&r), view(&s)).py()?;
-    Ok((mat_to_numpy(py, &sol.k), mat_to_numpy(py, &sol.p), mat_to_numpy(py, &sol.innovation_cov)))
+    Ok((
+        mat_to_numpy(py, &sol.k),
+        mat_to_numpy(py, &sol.p),
+        mat_to_numpy(py, &sol.innovation_cov),
+    ))
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -20,7 +20,9 @@ impl PySubspace {
     fn new(py: Python<'_>, factor: &PyHankelFactor, method: &str) -> PyResult<Self> {
         let method = Method::parse(method).py()?;
         let f = factor.inner.clone();
-        let inner = py.detach(|| Subspace::new(&f, &SubspaceOptions::with_method(method))).py()?;
+        let inner = py
+            .detach(|| Subspace::new(&f, &SubspaceOptions::with_method(method)))
+            .py()?;
         Ok(Self { inner })
     }
 
@@ -58,7 +60,10 @@ impl PySubspace {
         d.set_item("C", mat_to_numpy(py, &id.sys.c))?;
         d.set_item("D", mat_to_numpy(py, &id.sys.d))?;
         d.set_item("K", id.k.as_ref().map(|k| mat_to_numpy(py, k)))?;
-        d.set_item("noise_cov", id.innovation_cov.as_ref().map(|k| mat_to_numpy(py, k)))?;
+        d.set_item(
+            "noise_cov",
+            id.innovation_cov.as_ref().map(|k| mat_to_numpy(py, k)),
+        )?;
         d.set_item("Q", mat_to_numpy(py, &id.q))?;
         d.set_item("R", mat_to_numpy(py, &id.r))?;
         d.set_item("S", mat_to_numpy(py, &id.s))?;
@@ -77,10 +82,20 @@ pub fn estimate_bd_x0<'py>(
     u: PyReadonlyArray2<'_, f64>,
     y: PyReadonlyArray2<'_, f64>,
     feedthrough: bool,
-) -> PyResult<(Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<f64>>, Bound<'py, PyArray1<f64>>)> {
+) -> PyResult<(
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray1<f64>>,
+)> {
     let (av, cv, uv, yv) = (view(&a), view(&c), view(&u), view(&y));
-    let (b, d, x0) = py.detach(|| bd_x0::estimate_bd_x0(av, cv, uv, yv, feedthrough)).py()?;
-    Ok((mat_to_numpy(py, &b), mat_to_numpy(py, &d), slice_to_numpy(py, &x0)))
+    let (b, d, x0) = py
+        .detach(|| bd_x0::estimate_bd_x0(av, cv, uv, yv, feedthrough))
+        .py()?;
+    Ok((
+        mat_to_numpy(py, &b),
+        mat_to_numpy(py, &d),
+        slice_to_numpy(py, &x0),
+    ))
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -54,7 +54,12 @@ impl HankelFactor {
                 }
             }
         }
-        Ok(Self { layout, l, n_columns, n_experiments })
+        Ok(Self {
+            layout,
+            l,
+            n_columns,
+            n_experiments,
+        })
     }
 
     /// The layout (channel counts and horizons).

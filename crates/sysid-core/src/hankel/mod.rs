@@ -48,7 +48,10 @@ impl HankelLayout {
     /// Checks and builds a layout.
     pub fn new(n_inputs: usize, n_outputs: usize, past: usize, future: usize) -> Result<Self> {
         if n_outputs == 0 {
-            return Err(SysidError::invalid("outputs", "at least one output channel is needed"));
+            return Err(SysidError::invalid(
+                "outputs",
+                "at least one output channel is needed",
+            ));
         }
         if past == 0 || future == 0 {
             return Err(SysidError::invalid(
@@ -56,7 +59,12 @@ impl HankelLayout {
                 format!("past and future horizons must be >= 1 (got past={past}, future={future})"),
             ));
         }
-        Ok(Self { n_inputs, n_outputs, past, future })
+        Ok(Self {
+            n_inputs,
+            n_outputs,
+            past,
+            future,
+        })
     }
 
     /// Samples per Hankel column, `p + f`.
@@ -151,14 +159,24 @@ pub(crate) fn check_chunk(
     if u.nrows() != y.nrows() && layout.n_inputs > 0 {
         return Err(SysidError::ShapeMismatch {
             what: "u".into(),
-            expected: format!("({}, {}) (as many samples as y)", y.nrows(), layout.n_inputs),
+            expected: format!(
+                "({}, {}) (as many samples as y)",
+                y.nrows(),
+                layout.n_inputs
+            ),
             got: format!("({}, {})", u.nrows(), u.ncols()),
         });
     }
     let shift = |e: SysidError| match e {
-        SysidError::NonFinite { what, sample, channel } => {
-            SysidError::NonFinite { what, sample: sample + offset, channel }
-        }
+        SysidError::NonFinite {
+            what,
+            sample,
+            channel,
+        } => SysidError::NonFinite {
+            what,
+            sample: sample + offset,
+            channel,
+        },
         other => other,
     };
     crate::error::check_finite("u", u).map_err(shift)?;

@@ -78,8 +78,20 @@ impl QrCompressor {
         let (yp, _) = self.layout.block(super::Block::YPast);
         let (yf, _) = self.layout.block(super::Block::YFuture);
         let col = &mut self.column;
-        let sample_u = |s: usize, c: usize| if s < tl { self.tail_u[(s, c)] } else { u[(s - tl, c)] };
-        let sample_y = |s: usize, c: usize| if s < tl { self.tail_y[(s, c)] } else { y[(s - tl, c)] };
+        let sample_u = |s: usize, c: usize| {
+            if s < tl {
+                self.tail_u[(s, c)]
+            } else {
+                u[(s - tl, c)]
+            }
+        };
+        let sample_y = |s: usize, c: usize| {
+            if s < tl {
+                self.tail_y[(s, c)]
+            } else {
+                y[(s - tl, c)]
+            }
+        };
         for j in 0..p {
             for c in 0..m {
                 col[up + j * m + c] = sample_u(start + j, c);
@@ -103,7 +115,11 @@ impl QrCompressor {
 
 impl Compressor for QrCompressor {
     fn push(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> Result<()> {
-        let u = if self.layout.n_inputs == 0 { u.subrows(0, 0) } else { u };
+        let u = if self.layout.n_inputs == 0 {
+            u.subrows(0, 0)
+        } else {
+            u
+        };
         check_chunk(&self.layout, u, y, self.exp_samples)?;
         let n_new = y.nrows();
         let w = self.layout.window();
@@ -121,10 +137,18 @@ impl Compressor for QrCompressor {
         for s in 0..keep {
             let src = first + s;
             for c in 0..self.layout.n_inputs {
-                nu[(s, c)] = if src < self.tail_len { self.tail_u[(src, c)] } else { u[(src - self.tail_len, c)] };
+                nu[(s, c)] = if src < self.tail_len {
+                    self.tail_u[(src, c)]
+                } else {
+                    u[(src - self.tail_len, c)]
+                };
             }
             for c in 0..self.layout.n_outputs {
-                ny[(s, c)] = if src < self.tail_len { self.tail_y[(src, c)] } else { y[(src - self.tail_len, c)] };
+                ny[(s, c)] = if src < self.tail_len {
+                    self.tail_y[(src, c)]
+                } else {
+                    y[(src - self.tail_len, c)]
+                };
             }
         }
         self.tail_u = nu;

@@ -3,7 +3,9 @@ use crate::linalg::lq_lower;
 use faer::Mat;
 
 fn lcg(seed: &mut u64) -> f64 {
-    *seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+    *seed = seed
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
     ((*seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
 }
 
@@ -55,14 +57,18 @@ fn streaming_matches_explicit_lq_across_chunk_sizes() {
                 let mut s = 0;
                 while s < 301 {
                     let n = push.min(301 - s);
-                    c.push(u.as_ref().subrows(s, n), y.as_ref().subrows(s, n)).unwrap();
+                    c.push(u.as_ref().subrows(s, n), y.as_ref().subrows(s, n))
+                        .unwrap();
                     s += n;
                 }
                 let fac = c.finish().unwrap();
                 assert_eq!(fac.n_columns(), 301 - p - f + 1);
                 let scale = l_ref.norm_max();
                 let err = max_abs_diff(fac.l(), l_ref.as_ref());
-                assert!(err < 1e-12 * scale * 100.0, "m={m} l={l} chunk={chunk_rows} push={push} err={err}");
+                assert!(
+                    err < 1e-12 * scale * 100.0,
+                    "m={m} l={l} chunk={chunk_rows} push={push} err={err}"
+                );
             }
         }
     }
@@ -100,15 +106,42 @@ fn rejects_bad_input() {
     y[(42, 0)] = f64::NAN;
     let mut c = QrCompressor::new(layout);
     match c.push(u.as_ref(), y.as_ref()) {
-        Err(SysidError::NonFinite { what: "y", sample: 42, channel: 0 }) => {}
+        Err(SysidError::NonFinite {
+            what: "y",
+            sample: 42,
+            channel: 0,
+        }) => {}
         other => panic!("unexpected {other:?}"),
     }
     let (u, y) = record(5, 1, 1, 3);
     let mut c = QrCompressor::new(layout);
     c.push(u.as_ref(), y.as_ref()).unwrap();
-    assert!(matches!(c.finish(), Err(SysidError::InsufficientData { .. })));
+    assert!(matches!(
+        c.finish(),
+        Err(SysidError::InsufficientData { .. })
+    ));
     let (u, _) = record(50, 1, 1, 3);
     let (_, y) = record(40, 1, 1, 3);
     let mut c = QrCompressor::new(layout);
-    assert!(matches!(c.push(u.as_ref(), y.as_ref()), Err(SysidError::ShapeMismatch { .. })));
+    assert!(matches!(
+        c.push(u.as_ref(), y.as_ref()),
+        Err(SysidError::ShapeMismatch { .. })
+    ));
+}
+
+#[test]
+fn factor_does_not_depend_on_the_thread_count_beyond_round_off() {
+    let layout = HankelLayout::new(3, 3, 8, 8).unwrap();
+    let (u, y) = record(3000, 3, 3, 17);
+    let run = |par: faer::Par| {
+        faer::set_global_parallelism(par);
+        let mut c = QrCompressor::new(layout);
+        c.push(u.as_ref(), y.as_ref()).unwrap();
+        c.finish().unwrap()
+    };
+    let serial = run(faer::Par::Seq);
+    let parallel = run(faer::Par::rayon(2));
+    faer::set_global_parallelism(faer::Par::rayon(0));
+    let scale = serial.l().norm_max();
+    assert!(max_abs_diff(serial.l(), parallel.l()) < 1e-12 * scale);
 }

@@ -85,14 +85,20 @@ pub struct SubspaceOptions {
 
 impl Default for SubspaceOptions {
     fn default() -> Self {
-        Self { method: Method::Moesp, input_rank_tol: 1e-10 }
+        Self {
+            method: Method::Moesp,
+            input_rank_tol: 1e-10,
+        }
     }
 }
 
 impl SubspaceOptions {
     /// Options for a given method, other fields at their defaults.
     pub fn with_method(method: Method) -> Self {
-        Self { method, ..Self::default() }
+        Self {
+            method,
+            ..Self::default()
+        }
     }
 }
 
@@ -110,7 +116,11 @@ pub struct FitOptions {
 
 impl Default for FitOptions {
     fn default() -> Self {
-        Self { feedthrough: true, kalman: true, stable: false }
+        Self {
+            feedthrough: true,
+            kalman: true,
+            stable: false,
+        }
     }
 }
 
@@ -150,7 +160,10 @@ impl Subspace {
         if lay.future < 2 {
             return Err(SysidError::invalid(
                 "future horizon",
-                format!("must be >= 2 for the shift-invariance step (got {})", lay.future),
+                format!(
+                    "must be >= 2 for the shift-invariance step (got {})",
+                    lay.future
+                ),
             ));
         }
         let k = lay.k();
@@ -168,7 +181,11 @@ impl Subspace {
         }
         weighting::check_excitation(factor, opts.input_rank_tol)?;
         let weighted = weighting::weighted_svd(factor, opts.method)?;
-        Ok(Self { factor: factor.clone(), method: opts.method, weighted })
+        Ok(Self {
+            factor: factor.clone(),
+            method: opts.method,
+            weighted,
+        })
     }
 
     /// The weighting used.
@@ -197,7 +214,13 @@ impl Subspace {
     pub fn fit(&self, order: usize, opts: &FitOptions) -> Result<Identified> {
         let max = self.max_order();
         let lay = self.factor.layout();
-        if order == 0 || order > max {
+        if order == 0 {
+            return Err(SysidError::invalid(
+                "order",
+                "the model order must be at least 1",
+            ));
+        }
+        if order > max {
             return Err(SysidError::OrderTooLarge {
                 order,
                 max,

@@ -40,7 +40,11 @@ pub fn observability(a: MatRef<'_, f64>, c: MatRef<'_, f64>, rows: usize) -> Mat
 
 /// A and C from `Γ` (f l x n) by shift invariance; with `stable`, the zero-padded shift
 /// (Chui & Maciejowski 1996) replaces an unstable least-squares A.
-pub fn shift_invariance(gamma: MatRef<'_, f64>, l: usize, stable: bool) -> Result<(Mat<f64>, Mat<f64>, bool)> {
+pub fn shift_invariance(
+    gamma: MatRef<'_, f64>,
+    l: usize,
+    stable: bool,
+) -> Result<(Mat<f64>, Mat<f64>, bool)> {
     let (fl, n) = (gamma.nrows(), gamma.ncols());
     let c = gamma.subrows(0, l).to_owned();
     let up = gamma.subrows(0, fl - l);
@@ -73,7 +77,11 @@ impl KMap<'_> {
         let mut h = Mat::<f64>::zeros(f * l, f * m);
         for j in 0..f {
             for q in 0..=j {
-                let blk = if j == q { d } else { markov[j - q - 1].as_ref() };
+                let blk = if j == q {
+                    d
+                } else {
+                    markov[j - q - 1].as_ref()
+                };
                 h.as_mut().submatrix_mut(j * l, q * m, l, m).copy_from(blk);
             }
         }
@@ -82,7 +90,9 @@ impl KMap<'_> {
         let g1h = &self.o1_pinv * h1; // n x (f-1) m
         let mut k = Mat::<f64>::zeros(n + l, f * m);
         k.as_mut().submatrix_mut(0, 0, n, m).copy_from(b);
-        k.as_mut().submatrix_mut(0, m, n, (f - 1) * m).copy_from(&g1h);
+        k.as_mut()
+            .submatrix_mut(0, m, n, (f - 1) * m)
+            .copy_from(&g1h);
         k.as_mut().submatrix_mut(n, 0, l, m).copy_from(d);
         let agh = self.a * &gh;
         let cgh = self.c * &gh;
@@ -95,7 +105,12 @@ impl KMap<'_> {
 }
 
 /// Estimates the model of order `n` from the weighted SVD.
-pub fn identify(factor: &HankelFactor, w: &Weighted, n: usize, opts: &FitOptions) -> Result<Identified> {
+pub fn identify(
+    factor: &HankelFactor,
+    w: &Weighted,
+    n: usize,
+    opts: &FitOptions,
+) -> Result<Identified> {
     let lay = factor.layout();
     let (m, l, f) = (lay.n_inputs, lay.n_outputs, lay.future);
     let lmat = factor.l();
@@ -225,10 +240,24 @@ pub fn identify(factor: &HankelFactor, w: &Weighted, n: usize, opts: &FitOptions
         )
     })?;
     let (k, innovation_cov) = if opts.kalman {
-        let sol = kalman_gain(sys.a.as_ref(), sys.c.as_ref(), q.as_ref(), r.as_ref(), s.as_ref())?;
+        let sol = kalman_gain(
+            sys.a.as_ref(),
+            sys.c.as_ref(),
+            q.as_ref(),
+            r.as_ref(),
+            s.as_ref(),
+        )?;
         (Some(sol.k), Some(sol.innovation_cov))
     } else {
         (None, None)
     };
-    Ok(Identified { sys, k, innovation_cov, q, r, s, stabilized })
+    Ok(Identified {
+        sys,
+        k,
+        innovation_cov,
+        q,
+        r,
+        s,
+        stabilized,
+    })
 }

@@ -8,7 +8,10 @@ use faer::Mat;
 pub(crate) struct Rng(u64);
 impl Rng {
     pub(crate) fn uniform(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 11) as f64 / (1u64 << 53) as f64
     }
     pub(crate) fn normal(&mut self) -> f64 {
@@ -35,7 +38,11 @@ pub(crate) fn random_system(n: usize, m: usize, l: usize, rng: &mut Rng) -> Stat
             i += 1;
         }
     }
-    let t = Mat::from_fn(n, n, |i, j| if i == j { 1.0 } else { 0.0 } + 0.3 * rng.normal());
+    let t = Mat::from_fn(
+        n,
+        n,
+        |i, j| if i == j { 1.0 } else { 0.0 } + 0.3 * rng.normal(),
+    );
     let tinv = crate::linalg::pinv(t.as_ref(), 1e-14).unwrap();
     let a = &t * &a * &tinv;
     let b = Mat::from_fn(n, m, |_, _| rng.normal());
@@ -75,12 +82,34 @@ fn noise_free_mimo_systems_are_recovered_for_every_method() {
         let y = simulate(&sys, u.as_ref(), None).unwrap();
         let f = (n + 2).div_ceil(l) + 2;
         let fac = compress(&u, &y, f, f);
-        for method in [Method::Moesp, Method::N4sid, Method::OrdinaryMoesp, Method::PiMoesp, Method::Cva] {
+        for method in [
+            Method::Moesp,
+            Method::N4sid,
+            Method::OrdinaryMoesp,
+            Method::PiMoesp,
+            Method::Cva,
+        ] {
             let sub = Subspace::new(&fac, &SubspaceOptions::with_method(method)).unwrap();
-            assert_eq!(sub.auto_order(), n, "case {case} {method:?} sv={:?}", sub.singular_values());
-            let id = sub.fit(n, &FitOptions { kalman: false, ..FitOptions::default() }).unwrap();
+            assert_eq!(
+                sub.auto_order(),
+                n,
+                "case {case} {method:?} sv={:?}",
+                sub.singular_values()
+            );
+            let id = sub
+                .fit(
+                    n,
+                    &FitOptions {
+                        kalman: false,
+                        ..FitOptions::default()
+                    },
+                )
+                .unwrap();
             let err = rel_markov_error(&sys, &id.sys, 30);
-            assert!(err < 1e-8, "case {case} n={n} m={m} l={l} {method:?}: markov err {err:e}");
+            assert!(
+                err < 1e-8,
+                "case {case} n={n} m={m} l={l} {method:?}: markov err {err:e}"
+            );
         }
     }
 }

@@ -44,7 +44,11 @@ pub fn check_excitation(factor: &HankelFactor, rtol: f64) -> Result<()> {
     let smax = sv[0];
     let rank = sv.iter().filter(|&&x| x > rtol * smax && x > 0.0).count();
     if rank < n {
-        return Err(SysidError::NotPersistentlyExciting { rank, rows: n, tol: rtol });
+        return Err(SysidError::NotPersistentlyExciting {
+            rank,
+            rows: n,
+            tol: rtol,
+        });
     }
     Ok(())
 }
@@ -73,7 +77,9 @@ pub fn weighted_svd(factor: &HankelFactor, method: Method) -> Result<Weighted> {
             let t = lq_lower(y_perp);
             let l32 = l.submatrix(yf.0, wp_s, yf.1, wp_n);
             let dmax = (0..t.nrows()).map(|i| t[(i, i)].abs()).fold(0.0, f64::max);
-            let dmin = (0..t.nrows()).map(|i| t[(i, i)].abs()).fold(f64::INFINITY, f64::min);
+            let dmin = (0..t.nrows())
+                .map(|i| t[(i, i)].abs())
+                .fold(f64::INFINITY, f64::min);
             let w = if dmin > 1e-10 * dmax {
                 let mut w = l32.to_owned();
                 t.solve_lower_triangular_in_place(w.as_mut());
@@ -106,7 +112,7 @@ pub fn weighted_svd(factor: &HankelFactor, method: Method) -> Result<Weighted> {
         .map_err(|e| SysidError::numerical("weighted SVD", format!("{e:?}")))?;
     let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
     let smax = s.first().copied().unwrap_or(0.0);
-    if !(smax > 0.0) || !smax.is_finite() {
+    if smax.is_nan() || smax <= 0.0 || !smax.is_finite() {
         return Err(SysidError::numerical(
             "weighted SVD",
             "the projected output data are zero: the outputs carry no information about the \
@@ -119,5 +125,9 @@ pub fn weighted_svd(factor: &HankelFactor, method: Method) -> Result<Weighted> {
         Some(t) => &t * &u,
         None => u,
     };
-    Ok(Weighted { singular_values: s, basis, rank })
+    Ok(Weighted {
+        singular_values: s,
+        basis,
+        rank,
+    })
 }

@@ -1,0 +1,404 @@
+"""Test signals for identification experiments and a check of persistent excitation.
+
+Every generator returns a float array shaped ``(n_samples, n_channels)``. Random ones take a
+``seed`` (an int or a ``numpy.random.Generator``) so experiments are reproducible.
+
+An input is *persistently exciting of order n* when the ``n m x n m`` sample covariance of
+``n`` stacked lags ``[u(t); u(t+1); ...; u(t+n-1)]`` is nonsingular. A system of order ``n``
+needs an input persistently exciting of order ``2 n`` to be identifiable from the data (one
+sinusoid excites order 2; white noise every order).
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+from scipy import signal
+
+from ._checks import as_2d
+from .errors import DataError, ExcitationWarning
+
+__all__ = [
+    "prbs",
+    "random_binary",
+    "random_gaussian",
+    "multisine",
+    "chirp",
+    "crest_factor",
+    "persistent_excitation_order",
+    "check_excitation",
+]
+
+
+def _n(n: Any, name: str = "n_samples") -> int:
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
+        raise DataError(f"{name} must be a positive integer, got {n!r}")
+    return int(n)
+
+
+def _levels(levels: Any) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in levels)
+    except (TypeError, ValueError):
+        raise DataError(f"levels must be a pair (low, high), got {levels!r}") from None
+    if not lo < hi:
+        raise DataError(f"levels must satisfy low < high, got {levels!r}")
+    return lo, hi
+
+
+def _band(band: Any) -> tuple[float, float]:
+    try:
+        lo, hi = (float(v) for v in band)
+    except (TypeError, ValueError):
+        raise DataError(f"band must be a pair (low, high), got {band!r}") from None
+    if not 0.0 <= lo < hi <= 1.0:
+        raise DataError(
+            f"band {band} must satisfy 0 <= low < high <= 1 (fractions of the Nyquist frequency)"
+        )
+    return lo, hi
+
+
+def prbs(
+    n_samples: int,
+    *,
+    n_bits: int | None = None,
+    hold: int = 1,
+    levels: tuple[float, float] = (-1.0, 1.0),
+    n_channels: int = 1,
+) -> np.ndarray:
+    """Pseudo-random binary sequence: a maximum-length shift-register sequence.
+
+    Parameters
+    ----------
+    n_samples : int
+        Length of the output (the sequence is repeated periodically if longer).
+    n_bits : int, optional
+        Shift-register length; period ``2**n_bits - 1`` bits. Default: the smallest period
+        covering ``n_samples / hold`` (at most 2**20 - 1).
+    hold : int
+        Samples each bit is held (clock divider): concentrates power below
+        ``1 / (hold dt)`` Hz.
+    levels : (low, high)
+    n_channels : int
+        Channels are circular shifts of one sequence by ``period // n_channels`` bits,
+        nearly uncorrelated (cross-correlation ``-1/period`` over a full period).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> u = sysid.prbs(63, n_bits=6)
+    >>> u.shape, np.unique(u).tolist()
+    ((63, 1), [-1.0, 1.0])
+    >>> int(u.sum())
+    1
+    """
+    n = _n(n_samples)
+    hold = _n(hold, "hold")
+    m = _n(n_channels, "n_channels")
+    lo, hi = _levels(levels)
+    n_sym = -(-n // hold)
+    if n_bits is None:
+        n_bits = max(2, min(20, int(np.ceil(np.log2(n_sym + 1)))))
+    if not isinstance(n_bits, (int, np.integer)) or not 2 <= n_bits <= 32:
+        raise DataError(f"n_bits must be an integer in 2..32, got {n_bits!r}")
+    seq = signal.max_len_seq(int(n_bits))[0].astype(float)
+    period = seq.size
+    shift = max(1, period // m)
+    cols = []
+    for j in range(m):
+        s = np.roll(seq, -j * shift)
+        s = np.tile(s, -(-n_sym // period))[:n_sym]
+        cols.append(np.repeat(s, hold)[:n])
+    bits = np.column_stack(cols)
+    return lo + (hi - lo) * bits
+
+
+def _rng(seed: Any) -> np.random.Generator:
+    return seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+
+
+def _bandlimit(x: np.ndarray, band: tuple[float, float]) -> np.ndarray:
+    """Zero out FFT bins outside ``band`` (fractions of Nyquist), as an ideal filter."""
+    lo, hi = band
+    if lo == 0.0 and hi == 1.0:
+        return x
+    n = x.shape[0]
+    X = np.fft.rfft(x, axis=0)
+    f = np.arange(X.shape[0]) / (n / 2.0)  # fraction of Nyquist
+    X[(f < lo) | (f > hi)] = 0.0
+    return np.fft.irfft(X, n, axis=0)
+
+
+def random_binary(
+    n_samples: int,
+    *,
+    band: tuple[float, float] = (0.0, 1.0),
+    levels: tuple[float, float] = (-1.0, 1.0),
+    n_channels: int = 1,
+    seed: Any = None,
+) -> np.ndarray:
+    """Random binary signal: the sign of (band-limited) Gaussian noise.
+
+    ``band`` gives the pass band as fractions of the Nyquist frequency (the signal's
+    spectrum follows it only roughly: taking the sign spreads power).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> u = sysid.random_binary(1000, n_channels=2, seed=0)
+    >>> u.shape, np.unique(u).tolist()
+    ((1000, 2), [-1.0, 1.0])
+    """
+    n, m = _n(n_samples), _n(n_channels, "n_channels")
+    lo, hi = _levels(levels)
+    e = _bandlimit(_rng(seed).standard_normal((n, m)), _band(band))
+    return np.where(e >= 0.0, hi, lo)
+
+
+def random_gaussian(
+    n_samples: int,
+    *,
+    band: tuple[float, float] = (0.0, 1.0),
+    std: float = 1.0,
+    mean: float = 0.0,
+    n_channels: int = 1,
+    seed: Any = None,
+) -> np.ndarray:
+    """Gaussian noise, optionally band-limited (ideal filter; fractions of Nyquist),
+    rescaled to the given standard deviation.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> u = sysid.random_gaussian(4000, band=(0.0, 0.5), std=2.0, seed=1)
+    >>> round(float(u.std()), 6)
+    2.0
+    """
+    n, m = _n(n_samples), _n(n_channels, "n_channels")
+    if not std > 0:
+        raise DataError(f"std must be positive, got {std}")
+    e = _bandlimit(_rng(seed).standard_normal((n, m)), _band(band))
+    e = e - e.mean(axis=0)
+    return mean + std * e / e.std(axis=0)
+
+
+def multisine(
+    n_samples: int,
+    *,
+    band: tuple[float, float] = (0.0, 1.0),
+    lines: Any = None,
+    n_channels: int = 1,
+    phases: str = "schroeder",
+    rms: float = 1.0,
+    periods: int = 1,
+    seed: Any = None,
+) -> np.ndarray:
+    """Sum of sinusoids on the FFT grid of one period, with a low crest factor.
+
+    Parameters
+    ----------
+    n_samples : int
+        Samples per period (the output has ``periods * n_samples`` samples).
+    band : (low, high)
+        Excited band as fractions of Nyquist (used when ``lines`` is None).
+    lines : array_like of int, optional
+        FFT bins to excite (``1 .. n_samples // 2 - 1``), instead of ``band``.
+    n_channels : int
+        Channels get interleaved lines (channel ``j`` the ``j``-th of every ``n_channels``),
+        so every frequency is excited by one input only and the MIMO frequency response is
+        obtained line by line.
+    phases : {"schroeder", "random"}
+        Schroeder's phases ``-pi k (k - 1) / K`` (low crest factor for a flat spectrum) or
+        random phases (``seed``).
+    rms : float
+        Root-mean-square value of each channel.
+    periods : int
+        Number of repeated periods (steady state: drop the first when identifying).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> u = sysid.multisine(1024, band=(0.0, 0.5))
+    >>> bool(sysid.crest_factor(u)[0] < 1.8)
+    True
+    """
+    n = _n(n_samples)
+    m = _n(n_channels, "n_channels")
+    p = _n(periods, "periods")
+    if not rms > 0:
+        raise DataError(f"rms must be positive, got {rms}")
+    if lines is None:
+        lo, hi = _band(band)
+        k_all = np.arange(1, n // 2 + (n % 2))
+        frac = k_all / (n / 2.0)
+        k_all = k_all[(frac >= lo) & (frac <= hi) & (k_all < n / 2.0)]
+    else:
+        k_all = np.unique(np.asarray(lines, dtype=int).ravel())
+        if k_all.size and (k_all.min() < 1 or k_all.max() >= n / 2.0):
+            raise DataError(f"lines must lie in 1..{int(np.ceil(n / 2.0)) - 1} for period {n}")
+    if k_all.size < m:
+        raise DataError(
+            f"only {k_all.size} FFT line(s) in the band for {m} channel(s); widen the band "
+            "or lengthen the period"
+        )
+    if phases not in ("schroeder", "random"):
+        raise DataError(f"phases must be 'schroeder' or 'random', got {phases!r}")
+    rng = _rng(seed)
+    t = np.arange(n)
+    out = np.empty((n, m))
+    for j in range(m):
+        kj = k_all[j::m]
+        K = kj.size
+        if phases == "schroeder":
+            ph = -np.pi * np.arange(1, K + 1) * np.arange(K) / K
+        else:
+            ph = rng.uniform(-np.pi, np.pi, K)
+        x = np.cos(2 * np.pi * np.outer(t, kj) / n + ph).sum(axis=1)
+        out[:, j] = rms * x / np.sqrt(np.mean(x * x))
+    return np.tile(out, (p, 1))
+
+
+def chirp(
+    n_samples: int,
+    dt: float,
+    f0: float,
+    f1: float,
+    *,
+    amplitude: float = 1.0,
+    method: str = "logarithmic",
+) -> np.ndarray:
+    """Frequency sweep from ``f0`` to ``f1`` Hz over the record (``scipy.signal.chirp``).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> sysid.chirp(500, 0.01, 0.1, 10.0).shape
+    (500, 1)
+    """
+    n = _n(n_samples)
+    nyq = 0.5 / float(dt)
+    if not (0 < f0 < nyq and 0 < f1 <= nyq):
+        raise DataError(f"f0, f1 must lie in (0, {nyq:g}] Hz (the Nyquist frequency)")
+    if method not in ("linear", "logarithmic", "quadratic", "hyperbolic"):
+        raise DataError(f"unknown chirp method {method!r}")
+    t = np.arange(n) * float(dt)
+    return amplitude * signal.chirp(t, f0, t[-1], f1, method=method)[:, None]
+
+
+def crest_factor(u: Any) -> np.ndarray:
+    """Peak over RMS of each channel (``sqrt(2)`` for one sinusoid).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> np.round(sysid.crest_factor(np.cos(2 * np.pi * np.arange(100) / 10)), 4)
+    array([1.4142])
+    """
+    x = as_2d(u, "u")
+    return np.max(np.abs(x), axis=0) / np.sqrt(np.mean(x * x, axis=0))
+
+
+def _lag_gram(us: list[np.ndarray], mo: int) -> tuple[np.ndarray, int]:
+    """``sum H^T H`` over experiments, ``H`` the ``(K, mo m)`` matrix of ``mo`` stacked lags,
+    and the total number of Hankel columns ``K``."""
+    m = us[0].shape[1]
+    G = np.zeros((mo * m, mo * m))
+    cols = 0
+    for x in us:
+        n = x.shape[0]
+        K = n - mo + 1  # Hankel columns of this experiment
+        if K < 1:
+            continue
+        # G[i, j] = sum_{t<K} x(t+i) x(t+j)^T from one lagged product per lag tau = j - i
+        # (O(N mo m^2) instead of O(N mo^2 m^2)), minus the short head and tail each block
+        # does not cover
+        for tau in range(mo):
+            S = x[: n - tau].T @ x[tau:]
+            for i in range(mo - tau):
+                j = i + tau
+                blk = S - x[:i].T @ x[tau : tau + i] - x[i + K : n - tau].T @ x[i + K + tau :]
+                G[i * m : (i + 1) * m, j * m : (j + 1) * m] += blk
+                if tau:
+                    G[j * m : (j + 1) * m, i * m : (i + 1) * m] += blk.T
+        cols += K
+    return G, cols
+
+
+def persistent_excitation_order(u: Any, max_order: int = 20, *, tol: float = 1e-9) -> int:
+    """The order of persistent excitation of an input, up to ``max_order``.
+
+    The largest ``n <= max_order`` for which the ``n m x n m`` sample covariance of
+    ``n`` stacked lags of ``u`` is nonsingular (its smallest eigenvalue above ``tol`` times
+    its largest). Several experiments (a list of arrays) contribute their lag columns
+    together.
+
+    Parameters
+    ----------
+    u : array_like or list of array_like
+        ``(n_samples, n_inputs)``.
+    max_order : int
+        Largest order tested (the answer ``max_order`` means "at least").
+    tol : float
+        Relative eigenvalue threshold for rank.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> t = np.arange(500)
+    >>> sysid.persistent_excitation_order(np.sin(0.3 * t), 10)
+    2
+    >>> sysid.persistent_excitation_order(np.random.default_rng(0).standard_normal(500), 10)
+    10
+    """
+    mo = _n(max_order, "max_order")
+    us = [as_2d(x, "u") for x in (u if isinstance(u, list) else [u])]
+    m = us[0].shape[1]
+    if m == 0:
+        raise DataError("the record has no inputs; persistent excitation concerns inputs")
+    if any(x.shape[1] != m for x in us):
+        raise DataError("all experiments must have the same number of inputs")
+    longest = max(x.shape[0] for x in us)
+    mo = min(mo, longest)
+    G, cols = _lag_gram(us, mo)
+    if cols == 0:
+        raise DataError(f"every experiment is shorter than max_order = {mo}")
+    G /= cols
+    top = np.linalg.eigvalsh(G)[-1]
+    if top <= 0:
+        return 0
+    order = 0
+    for n in range(1, mo + 1):
+        ev = np.linalg.eigvalsh(G[: n * m, : n * m])
+        if ev[0] > tol * top:
+            order = n
+        else:
+            break
+    return order
+
+
+def check_excitation(u: Any, order: int, *, stacklevel: int = 2) -> int:
+    """Warn (:class:`~sysid.ExcitationWarning`) if ``u`` cannot support a model of ``order``:
+    its persistent-excitation order is below ``2 * order``. Returns that order.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid, warnings
+    >>> u = np.random.default_rng(0).standard_normal((300, 1))
+    >>> sysid.check_excitation(u, order=3)
+    6
+    """
+    need = 2 * int(order)
+    got = persistent_excitation_order(u, need)
+    if got < need:
+        warnings.warn(
+            ExcitationWarning(
+                f"the input is persistently exciting of order {got} only, but a model of order "
+                f"{order} needs order {need}: the estimate is not determined by the data. "
+                "Use a richer input (white noise, PRBS, a multisine with more lines) or a lower "
+                "order"
+            ),
+            stacklevel=stacklevel + 1,
+        )
+    return got

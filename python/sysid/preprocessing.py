@@ -1,0 +1,714 @@
+"""Getting a record into shape before identification.
+
+Every function takes an :class:`~sysid.IOData` and returns a new one (nothing is changed in
+place). Steps that remove something a model should later give back (trends, offsets,
+scaling) record it in :attr:`IOData.trend`, so that ``data.retrend()`` or
+``data.trend.add_outputs(y_model)`` maps results back to engineering units.
+
+Typical order (flight-test practice): segment selection (:func:`select_mode`,
+:func:`select_mask`, :func:`drop_quiet`), spike and drop-out repair (:func:`despike`,
+:meth:`IOData.from_raw`), :func:`detrend`, zero-phase filtering (:func:`lowpass`,
+:func:`highpass`, :func:`bandpass`), :func:`resample` or :func:`decimate`, :func:`scale`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+from scipy import ndimage, signal
+
+from .data import IOData, _Exp
+from .errors import DataError, InsufficientDataError, NonFiniteError
+
+__all__ = [
+    "repair_nan",
+    "find_spikes",
+    "despike",
+    "detrend",
+    "scale",
+    "butter_sos",
+    "filtfilt",
+    "lowpass",
+    "highpass",
+    "bandpass",
+    "resample",
+    "decimate",
+    "select_mode",
+    "select_mask",
+    "drop_quiet",
+]
+
+
+# --------------------------------------------------------------------------------------------
+# runs and gaps
+# --------------------------------------------------------------------------------------------
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Half-open ``(start, stop)`` of every run of True in a 1-D boolean array."""
+    m = np.concatenate([[False], np.asarray(mask, dtype=bool), [False]])
+    d = np.diff(m.astype(np.int8))
+    return list(zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist()))
+
+
+def _fill(x: np.ndarray, bad: np.ndarray) -> np.ndarray:
+    """Linear interpolation over the samples flagged ``bad`` (per column; ends held)."""
+    out = x.copy()
+    k = np.arange(x.shape[0])
+    for j in range(x.shape[1]):
+        b = bad[:, j]
+        if b.any():
+            good = ~b
+            if not good.any():
+                raise NonFiniteError(f"channel {j} has no valid sample to interpolate from")
+            out[b, j] = np.interp(k[b], k[good], x[good, j])
+    return out
+
+
+def repair_nan(
+    u: np.ndarray | None,
+    y: np.ndarray,
+    *,
+    nan: str = "interpolate",
+    max_gap: int = 5,
+    min_length: int = 2,
+) -> list[tuple[np.ndarray | None, np.ndarray, int]]:
+    """Handle NaN/Inf drop-outs in raw ``(samples, channels)`` arrays.
+
+    Parameters
+    ----------
+    u, y : ndarray
+        Raw inputs (or ``None``) and outputs of one experiment.
+    nan : {"error", "interpolate", "split"}
+        ``"error"``: raise :class:`~sysid.NonFiniteError` naming the first bad sample.
+        ``"interpolate"``: fill gaps of at most ``max_gap`` samples (linearly, per channel)
+        and cut the record at longer ones. ``"split"``: cut at every gap.
+    max_gap : int
+        Longest gap to interpolate.
+    min_length : int
+        Clean runs shorter than this are dropped.
+
+    Returns
+    -------
+    list of (u, y, start)
+        The clean runs and the sample where each starts in the raw record.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.preprocessing import repair_nan
+    >>> y = np.array([[0.0], [np.nan], [2.0], [3.0]])
+    >>> repair_nan(None, y)[0][1].ravel()
+    array([0., 1., 2., 3.])
+    """
+    if nan not in ("error", "interpolate", "split"):
+        raise DataError(f"nan must be 'error', 'interpolate' or 'split', got {nan!r}")
+    if not isinstance(max_gap, (int, np.integer)) or max_gap < 0:
+        raise DataError(f"max_gap must be a non-negative integer, got {max_gap!r}")
+    if not isinstance(min_length, (int, np.integer)) or min_length < 1:
+        raise DataError(f"min_length must be a positive integer, got {min_length!r}")
+    ua = np.zeros((y.shape[0], 0)) if u is None else u
+    bad = np.concatenate([~np.isfinite(ua), ~np.isfinite(y)], axis=1)
+    if not bad.any():
+        return [(u, y, 0)]
+    if nan == "error":
+        i, j = np.argwhere(bad)[0]
+        raise NonFiniteError(
+            f"non-finite value at sample {i} ({'u' if j < ua.shape[1] else 'y'} channel "
+            f"{j if j < ua.shape[1] else j - ua.shape[1]}), {int(bad.any(axis=1).sum())} bad "
+            "sample(s) in all; use IOData.from_raw(..., nan='interpolate') or nan='split'"
+        )
+    x = np.concatenate([ua, y], axis=1)
+    any_bad = np.asarray(bad.any(axis=1), dtype=bool)
+    cut: np.ndarray = any_bad.copy()
+    if nan == "interpolate":
+        # gaps are per channel; a long gap in any channel cuts the record there
+        long_gap = np.zeros_like(any_bad)
+        for j in range(x.shape[1]):
+            for a, b in _runs(bad[:, j]):
+                if b - a > max_gap or a == 0 or b == len(any_bad):
+                    long_gap[a:b] = True
+        cut = long_gap
+        fillable = bad & ~long_gap[:, None]
+        x = np.where(bad, 0.0, x)
+        for a, b in _runs(~long_gap):
+            x[a:b] = _fill(x[a:b], fillable[a:b])
+    out = []
+    for a, b in _runs(~cut):
+        if b - a >= min_length:
+            seg = x[a:b]
+            out.append((None if u is None else seg[:, : ua.shape[1]], seg[:, ua.shape[1]:], a))
+    if not out:
+        raise InsufficientDataError(
+            f"no clean stretch of at least {min_length} samples is left after removing the "
+            "non-finite values"
+        )
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# spikes
+# --------------------------------------------------------------------------------------------
+
+
+def find_spikes(x: Any, window: int = 7, n_sigmas: float = 3.0) -> np.ndarray:
+    """Hampel identifier: samples further than ``n_sigmas`` robust standard deviations
+    (``1.4826 * MAD``) from the median of the ``window`` samples centred on them.
+
+    Parameters
+    ----------
+    x : array_like
+        ``(samples, channels)`` or 1-D.
+    window : int
+        Odd window length (samples).
+    n_sigmas : float
+        Threshold.
+
+    Returns
+    -------
+    ndarray of bool
+        Same shape as ``x`` (2-D), True at spikes.
+
+    Notes
+    -----
+    On piecewise-constant signals (binary inputs) step edges may be flagged: apply it to
+    measured channels.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.preprocessing import find_spikes
+    >>> rng = np.random.default_rng(0)
+    >>> x = np.sin(np.arange(50) / 5.0) + 0.05 * rng.standard_normal(50); x[20] += 5.0
+    >>> np.flatnonzero(find_spikes(x))
+    array([20])
+    """
+    arr = np.asarray(x, dtype=float)
+    arr = arr[:, None] if arr.ndim == 1 else arr
+    if arr.ndim != 2:
+        raise DataError(f"x must be 1-D or 2-D, got shape {arr.shape}")
+    if not isinstance(window, (int, np.integer)) or window < 3 or window % 2 == 0:
+        raise DataError(f"window must be an odd integer >= 3, got {window!r}")
+    if not n_sigmas > 0:
+        raise DataError(f"n_sigmas must be positive, got {n_sigmas}")
+    h = window // 2
+    padded = np.pad(arr, ((h, h), (0, 0)), mode="edge")
+    win = np.lib.stride_tricks.sliding_window_view(padded, window, axis=0)  # (n, ch, window)
+    med = np.median(win, axis=2)
+    mad = np.median(np.abs(win - med[:, :, None]), axis=2)
+    dev = np.abs(arr - med)
+    # floor: round-off in constant stretches
+    floor = 1e-9 * (np.max(np.abs(arr), axis=0) + 1e-300)
+    return dev > n_sigmas * 1.4826 * np.maximum(mad, floor)
+
+
+def despike(
+    data: IOData,
+    *,
+    window: int = 7,
+    n_sigmas: float = 3.0,
+    channels: Sequence[str] | None = None,
+    dropout: float | None = None,
+) -> IOData:
+    """Replace spikes (and drop-out values) by linear interpolation between good samples.
+
+    Parameters
+    ----------
+    data : IOData
+    window, n_sigmas :
+        Hampel identifier settings (:func:`find_spikes`).
+    channels : list of str, optional
+        Channel names to repair; default every output.
+    dropout : float, optional
+        A sentinel value the logger writes when a sample is lost (e.g. ``0.0`` or
+        ``-9999``); such samples are repaired too.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> y = np.sin(np.arange(50) / 5.0); y[20] = 9.0
+    >>> d = sysid.despike(sysid.IOData(u=None, y=y))
+    >>> bool(abs(d.y[20, 0] - np.sin(4.0)) < 0.02)
+    True
+    """
+    names = data.output_names if channels is None else list(channels)
+    iu = data._index([n for n in names if n in data.input_names], data.input_names, "input")
+    unknown = [n for n in names if n not in data.input_names and n not in data.output_names]
+    if unknown:
+        raise DataError(data._unknown_names(unknown))
+    iy = [data.output_names.index(n) for n in names if n in data.output_names]
+    exps = []
+    for e in data._exps:
+        u, y = e.u.copy(), e.y.copy()
+        for arr, idx in ((u, iu), (y, iy)):
+            if not idx:
+                continue
+            sub = arr[:, idx]
+            bad = find_spikes(sub, window, n_sigmas)
+            if dropout is not None:
+                bad |= sub == dropout
+            arr[:, idx] = _fill(sub, bad)
+        exps.append(_Exp(u, y, e.t0, e.tu, e.ty))
+    return data._derive(exps)
+
+
+# --------------------------------------------------------------------------------------------
+# trends and scaling
+# --------------------------------------------------------------------------------------------
+
+
+def _basis(n: int, kind: str, breakpoints: Sequence[int]) -> np.ndarray:
+    k = np.arange(n, dtype=float)
+    if kind in ("mean", "constant"):
+        return np.ones((n, 1))
+    # scaled time keeps the least-squares problem well conditioned
+    s = k / max(n - 1, 1)
+    cols = [np.ones(n), s]
+    if kind == "piecewise":
+        for b in breakpoints:
+            cols.append(np.maximum(s - b / max(n - 1, 1), 0.0))
+    return np.column_stack(cols)
+
+
+def detrend(
+    data: IOData,
+    kind: str = "linear",
+    *,
+    breakpoints: Sequence[int] | Sequence[Sequence[int]] | None = None,
+    inputs: bool = True,
+    outputs: bool = True,
+) -> IOData:
+    """Remove a mean, a line or a continuous piecewise line from every channel.
+
+    The removed trend is recorded per sample (see :attr:`IOData.trend`), so
+    ``detrend(d).retrend()`` gives ``d`` back and model outputs can be mapped back with
+    ``data.trend.add_outputs(y_model, experiment)``.
+
+    Parameters
+    ----------
+    data : IOData
+    kind : {"mean", "linear", "piecewise"}
+        Offset only; offset and slope; or a continuous piecewise-linear trend with knots at
+        ``breakpoints``. Fitted per experiment and channel by least squares.
+    breakpoints : sequence of int, optional
+        Sample indices of the knots (``"piecewise"`` only); a list of such sequences gives
+        one per experiment.
+    inputs, outputs : bool
+        Which channels to detrend.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> t = np.arange(100.0)
+    >>> d = sysid.IOData(u=None, y=np.where(t < 50, t, 100 - t))
+    >>> p = sysid.detrend(d, "piecewise", breakpoints=[50])
+    >>> bool(np.abs(p.y).max() < 1e-9)
+    True
+    """
+    if kind not in ("mean", "constant", "linear", "piecewise"):
+        raise DataError(f"kind must be 'mean', 'linear' or 'piecewise', got {kind!r}")
+    n_exp = data.n_experiments
+    if kind == "piecewise":
+        if breakpoints is None:
+            raise DataError("kind='piecewise' needs breakpoints=[sample, ...]")
+        bl: list[Any] = list(breakpoints)
+        per_exp = bl and all(isinstance(b, (list, tuple, np.ndarray)) for b in bl)
+        bps: list[list[int]] = [list(b) for b in bl] if per_exp else [bl] * n_exp
+        if len(bps) != n_exp:
+            raise DataError(f"{len(bps)} breakpoint lists for {n_exp} experiments")
+    elif breakpoints is not None:
+        raise DataError("breakpoints are only used with kind='piecewise'")
+    else:
+        bps = [[]] * n_exp
+    exps = []
+    for k, e in enumerate(data._exps):
+        n = e.y.shape[0]
+        for b in bps[k]:
+            if not (isinstance(b, (int, np.integer)) and 0 < b < n - 1):
+                raise DataError(
+                    f"breakpoint {b!r} is not a sample index inside experiment {k} (1..{n - 2})"
+                )
+        basis = _basis(n, kind, sorted(bps[k]))
+        if basis.shape[1] > n:
+            raise InsufficientDataError(
+                f"experiment {k} has {n} samples, too few for a {kind} trend"
+            )
+        pinv = np.linalg.pinv(basis)
+        parts = {}
+        for name, x, tr, sc, on in (
+            ("u", e.u, e.tu, data._u_scale, inputs),
+            ("y", e.y, e.ty, data._y_scale, outputs),
+        ):
+            fitted = basis @ (pinv @ x) if on and x.shape[1] else np.zeros_like(x)
+            old = np.zeros_like(x) if tr is None else tr
+            parts[name] = (x - fitted, old + sc * fitted)
+        exps.append(_Exp(parts["u"][0], parts["y"][0], e.t0, parts["u"][1], parts["y"][1]))
+    return data._derive(exps)
+
+
+def scale(data: IOData, by: str | Any = "std") -> IOData:
+    """Divide every channel by a factor, recorded in :attr:`IOData.trend`.
+
+    Parameters
+    ----------
+    by : {"std", "max"} or (u_scale, y_scale)
+        The standard deviation or the largest absolute value of each channel (over all
+        experiments), or explicit factors per input and output.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> d = sysid.scale(sysid.IOData(u=np.array([0.0, 2.0, 4.0]), y=np.ones(3)), "max")
+    >>> d.u.ravel(), d.trend.u_scale
+    (array([0. , 0.5, 1. ]), array([4.]))
+    """
+    if isinstance(by, str):
+        if by not in ("std", "max"):
+            raise DataError(f"by must be 'std', 'max' or (u_scale, y_scale), got {by!r}")
+        f = np.std if by == "std" else (lambda x, axis: np.max(np.abs(x), axis=axis))
+        su = f(np.vstack([e.u for e in data._exps]), axis=0) if data.n_inputs else np.ones(0)
+        sy = f(np.vstack([e.y for e in data._exps]), axis=0)
+    else:
+        try:
+            su, sy = (np.asarray(v, dtype=float).ravel() for v in by)
+        except (TypeError, ValueError):
+            raise DataError("by must be 'std', 'max' or a pair (u_scale, y_scale)") from None
+        if su.size != data.n_inputs or sy.size != data.n_outputs:
+            raise DataError(
+                f"scales have {su.size} and {sy.size} entries for {data.n_inputs} inputs and "
+                f"{data.n_outputs} outputs"
+            )
+    for kind, s, names in (("input", su, data.input_names), ("output", sy, data.output_names)):
+        bad = ~(np.isfinite(s) & (s > 0))
+        if bad.any():
+            raise DataError(
+                f"{kind} {names[int(np.flatnonzero(bad)[0])]} has scale "
+                f"{s[bad][0]:g} (a constant channel?); remove it or give explicit scales"
+            )
+    exps = [_Exp(e.u / su, e.y / sy, e.t0, e.tu, e.ty) for e in data._exps]
+    new = data._derive(exps)
+    new._u_scale = data._u_scale * su
+    new._y_scale = data._y_scale * sy
+    return new
+
+
+# --------------------------------------------------------------------------------------------
+# filtering
+# --------------------------------------------------------------------------------------------
+
+
+def butter_sos(kind: str, cutoff: float | Sequence[float], dt: float, order: int = 4) -> np.ndarray:
+    """Second-order sections of a digital Butterworth filter (``scipy.signal.butter``).
+
+    Parameters
+    ----------
+    kind : {"lowpass", "highpass", "bandpass", "bandstop"}
+    cutoff : float or (float, float)
+        Corner frequency(ies) in Hz, below the Nyquist frequency ``1 / (2 dt)``.
+    dt : float
+        Sample time in seconds.
+    order : int
+        Filter order (applied twice by :func:`filtfilt`, so the magnitude is squared).
+    """
+    if kind not in ("lowpass", "highpass", "bandpass", "bandstop"):
+        raise DataError(f"unknown filter kind {kind!r}")
+    if not isinstance(order, (int, np.integer)) or order < 1:
+        raise DataError(f"order must be a positive integer, got {order!r}")
+    fc = np.atleast_1d(np.asarray(cutoff, dtype=float))
+    need = 2 if kind in ("bandpass", "bandstop") else 1
+    if fc.size != need:
+        raise DataError(f"a {kind} filter needs {need} cutoff frequency(ies) in Hz, got {cutoff}")
+    nyq = 0.5 / dt
+    if not (np.all(fc > 0) and np.all(fc < nyq)):
+        raise DataError(
+            f"cutoff {cutoff} Hz must lie strictly between 0 and the Nyquist frequency "
+            f"{nyq:g} Hz (dt = {dt:g} s)"
+        )
+    if need == 2 and not fc[0] < fc[1]:
+        raise DataError(f"band edges must be increasing, got {cutoff}")
+    return signal.butter(int(order), fc if need == 2 else fc[0], btype=kind, output="sos",
+                         fs=1.0 / dt)
+
+
+def filtfilt(
+    data: IOData, sos: Any, *, inputs: bool = True, outputs: bool = True
+) -> IOData:
+    """Zero-phase filtering (forward and backward, ``scipy.signal.sosfiltfilt``) of every
+    experiment. Experiments too short for the filter's padding raise an error."""
+    sos = np.asarray(sos, dtype=float)
+    if sos.ndim != 2 or sos.shape[1] != 6:
+        raise DataError(f"sos must have shape (n_sections, 6), got {sos.shape}")
+    padlen = 3 * (2 * sos.shape[0] + 1 - min((sos[:, 2] == 0).sum(), (sos[:, 5] == 0).sum()))
+    exps = []
+    for k, e in enumerate(data._exps):
+        if e.y.shape[0] <= padlen:
+            raise InsufficientDataError(
+                f"experiment {k} has {e.y.shape[0]} samples; the zero-phase filter needs more "
+                f"than {padlen} (lower the order or drop short segments)"
+            )
+        u = signal.sosfiltfilt(sos, e.u, axis=0) if inputs and e.u.shape[1] else e.u
+        y = signal.sosfiltfilt(sos, e.y, axis=0) if outputs else e.y
+        exps.append(_Exp(u, y, e.t0, e.tu, e.ty))
+    return data._derive(exps)
+
+
+def lowpass(
+    data: IOData, cutoff: float, order: int = 4, *, inputs: bool = True, outputs: bool = True
+) -> IOData:
+    """Zero-phase Butterworth low-pass filter (cutoff in Hz) of inputs and/or outputs.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> t = np.arange(1000) * 0.01
+    >>> d = sysid.IOData(u=None, y=np.sin(2 * np.pi * 0.5 * t) + np.sin(2 * np.pi * 20 * t),
+    ...                  dt=0.01)
+    >>> f = sysid.lowpass(d, 5.0)
+    >>> bool(np.abs(f.y[100:-100, 0] - np.sin(2 * np.pi * 0.5 * t[100:-100])).max() < 1e-2)
+    True
+    """
+    return filtfilt(data, butter_sos("lowpass", cutoff, data.dt, order),
+                    inputs=inputs, outputs=outputs)
+
+
+def highpass(
+    data: IOData, cutoff: float, order: int = 4, *, inputs: bool = True, outputs: bool = True
+) -> IOData:
+    """Zero-phase Butterworth high-pass filter (cutoff in Hz); see :func:`lowpass`."""
+    return filtfilt(data, butter_sos("highpass", cutoff, data.dt, order),
+                    inputs=inputs, outputs=outputs)
+
+
+def bandpass(
+    data: IOData,
+    low: float,
+    high: float,
+    order: int = 4,
+    *,
+    inputs: bool = True,
+    outputs: bool = True,
+) -> IOData:
+    """Zero-phase Butterworth band-pass filter between ``low`` and ``high`` Hz."""
+    return filtfilt(data, butter_sos("bandpass", (low, high), data.dt, order),
+                    inputs=inputs, outputs=outputs)
+
+
+# --------------------------------------------------------------------------------------------
+# resampling
+# --------------------------------------------------------------------------------------------
+
+
+def _trend_on(tr: np.ndarray | None, n_new: int, factor: float) -> np.ndarray | None:
+    if tr is None:
+        return None
+    k_old = np.arange(tr.shape[0], dtype=float)
+    k_new = np.arange(n_new) * factor
+    return np.column_stack([np.interp(k_new, k_old, c) for c in tr.T]).reshape(n_new, -1)
+
+
+def resample(data: IOData, dt: float, *, max_denominator: int = 100) -> IOData:
+    """Change the sample time with polyphase anti-alias filtering
+    (``scipy.signal.resample_poly``, ends padded with a line).
+
+    The ratio ``data.dt / dt`` is approximated by a fraction with denominator at most
+    ``max_denominator``; the resulting sample time is exact for that fraction.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> d = sysid.IOData(u=np.ones(300), y=np.ones(300), dt=0.01)
+    >>> r = sysid.resample(d, 0.025)
+    >>> r.dt, r.n_samples
+    (0.025, 120)
+    """
+    new_dt = float(dt)
+    if not np.isfinite(new_dt) or new_dt <= 0:
+        raise DataError(f"dt must be a positive number of seconds, got {dt}")
+    ratio = Fraction(data.dt / new_dt).limit_denominator(max_denominator)  # up / down
+    up, down = ratio.numerator, ratio.denominator
+    if up == 0:
+        raise DataError(f"dt = {new_dt:g} s is too long for a record sampled at {data.dt:g} s")
+    exps = []
+    for e in data._exps:
+        n_new = int(np.ceil(e.y.shape[0] * up / down))
+        u = (signal.resample_poly(e.u, up, down, axis=0, padtype="line")
+             if e.u.shape[1] else np.zeros((n_new, 0)))
+        y = signal.resample_poly(e.y, up, down, axis=0, padtype="line")
+        f = down / up
+        exps.append(_Exp(u, y, e.t0, _trend_on(e.tu, n_new, f), _trend_on(e.ty, n_new, f)))
+    return data._derive(exps, dt=data.dt * down / up)
+
+
+def decimate(data: IOData, q: int, *, order: int = 8) -> IOData:
+    """Keep every ``q``-th sample after a zero-phase Chebyshev anti-alias filter
+    (``scipy.signal.decimate`` with ``zero_phase=True``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> sysid.decimate(sysid.IOData(u=np.ones(100), y=np.ones(100), dt=0.01), 4).dt
+    0.04
+    """
+    if not isinstance(q, (int, np.integer)) or q < 2:
+        raise DataError(f"q must be an integer >= 2, got {q!r}")
+    exps = []
+    for k, e in enumerate(data._exps):
+        if e.y.shape[0] <= 3 * (order + 1):
+            raise InsufficientDataError(f"experiment {k} is too short to decimate")
+
+        def dec(x: np.ndarray) -> np.ndarray:
+            if not x.shape[1]:
+                return np.zeros((len(range(0, x.shape[0], q)), 0))
+            return signal.decimate(x, int(q), n=order, axis=0, zero_phase=True)
+
+        def take(tr: np.ndarray | None) -> np.ndarray | None:
+            return None if tr is None else tr[::q]
+
+        exps.append(_Exp(dec(e.u), dec(e.y), e.t0, take(e.tu), take(e.ty)))
+    return data._derive(exps, dt=data.dt * q)
+
+
+# --------------------------------------------------------------------------------------------
+# segment selection
+# --------------------------------------------------------------------------------------------
+
+
+def select_mask(data: IOData, mask: Any, *, min_length: int = 2) -> IOData:
+    """Keep the samples where ``mask`` is True; each contiguous run becomes an experiment.
+
+    Parameters
+    ----------
+    mask : array_like of bool, or list of them (one per experiment)
+    min_length : int
+        Runs shorter than this are dropped.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> d = sysid.IOData(u=np.arange(8.0), y=np.arange(8.0))
+    >>> sysid.select_mask(d, [1, 1, 1, 0, 0, 1, 1, 0]).lengths
+    [3, 2]
+    """
+    masks = mask if isinstance(mask, list) and data.n_experiments > 1 else [mask]
+    if len(masks) != data.n_experiments:
+        raise DataError(
+            f"give one mask per experiment ({data.n_experiments}), got {len(masks)}"
+        )
+    if not isinstance(min_length, (int, np.integer)) or min_length < 1:
+        raise DataError(f"min_length must be a positive integer, got {min_length!r}")
+    exps = []
+    for k, (e, m) in enumerate(zip(data._exps, masks)):
+        m = np.asarray(m).ravel()
+        if m.size != e.y.shape[0]:
+            raise DataError(
+                f"mask of experiment {k} has {m.size} samples but the data have {e.y.shape[0]}"
+            )
+        if m.dtype.kind not in "biu":
+            raise DataError(f"mask must be boolean, got dtype {m.dtype}")
+        for a, b in _runs(m.astype(bool)):
+            if b - a >= min_length:
+                exps.append(e.rows(slice(a, b), data.dt))
+    if not exps:
+        raise InsufficientDataError(
+            f"no run of at least {min_length} selected samples; check the mask or min_length"
+        )
+    return data._derive(exps)
+
+
+def select_mode(
+    data: IOData, mode: Any, keep: Any, *, min_length: int = 2
+) -> IOData:
+    """Keep the samples whose ``mode`` (a flag or switch signal) is in ``keep``; each
+    contiguous run becomes its own experiment.
+
+    Parameters
+    ----------
+    mode : array_like, or list of them (one per experiment)
+        A value per sample (e.g. 1, 2 autopilot, 3 manual).
+    keep : scalar or collection
+        Mode values to keep.
+    min_length : int
+        Shorter runs are dropped (manoeuvres too short to identify from).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> d = sysid.IOData(u=np.arange(9.0), y=np.arange(9.0))
+    >>> sysid.select_mode(d, [3, 1, 1, 2, 3, 3, 1, 2, 2], keep={1, 2}).lengths
+    [3, 3]
+    """
+    ks = np.atleast_1d(np.asarray(list(keep) if isinstance(keep, (set, frozenset)) else keep))
+    modes = mode if isinstance(mode, list) and data.n_experiments > 1 else [mode]
+    masks = [np.isin(np.asarray(m).ravel(), ks) for m in modes]
+    if not any(m.any() for m in masks):
+        seen = np.unique(np.concatenate([np.asarray(m).ravel() for m in modes]))
+        raise InsufficientDataError(f"no sample has a mode in {ks.tolist()}; modes seen: "
+                                    f"{seen.tolist()[:20]}")
+    return select_mask(data, masks if data.n_experiments > 1 else masks[0],
+                       min_length=min_length)
+
+
+def drop_quiet(
+    data: IOData,
+    *,
+    window: int = 50,
+    threshold: float = 0.05,
+    channels: Sequence[str] | None = None,
+    min_length: int | None = None,
+) -> IOData:
+    """Cut out stretches where the inputs hardly move (nothing to identify from).
+
+    A sample is quiet when the moving standard deviation over ``window`` samples of every
+    chosen channel is below ``threshold`` times that channel's overall standard deviation;
+    quiet runs of at least ``window`` samples are removed and the record is split there.
+
+    Parameters
+    ----------
+    channels : list of str, optional
+        Channels that must move; default every input (outputs for time series).
+    min_length : int, optional
+        Shortest kept segment (default ``window``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> u = np.random.default_rng(0).standard_normal(300); u[100:200] = 0.0
+    >>> sysid.drop_quiet(sysid.IOData(u=u, y=u), window=20).n_experiments
+    2
+    """
+    if not isinstance(window, (int, np.integer)) or window < 2:
+        raise DataError(f"window must be an integer >= 2, got {window!r}")
+    if channels is None:
+        names = data.input_names if data.n_inputs else data.output_names
+    else:
+        names = list(channels)
+    unknown = [n for n in names if n not in data.input_names + data.output_names]
+    if unknown:
+        raise DataError(data._unknown_names(unknown))
+    allx = [
+        np.column_stack(
+            [e.u[:, data.input_names.index(n)] if n in data.input_names
+             else e.y[:, data.output_names.index(n)] for n in names]
+        )
+        for e in data._exps
+    ]
+    ref = np.vstack(allx).std(axis=0)
+    masks = []
+    for x in allx:
+        mean = ndimage.uniform_filter1d(x, window, axis=0, mode="nearest")
+        msq = ndimage.uniform_filter1d(x * x, window, axis=0, mode="nearest")
+        sd = np.sqrt(np.maximum(msq - mean * mean, 0.0))
+        quiet = (sd <= threshold * ref).all(axis=1)
+        keep = np.ones(len(x), dtype=bool)
+        for a, b in _runs(quiet):
+            if b - a >= window:
+                keep[a:b] = False
+        masks.append(keep)
+    return select_mask(
+        data,
+        masks if data.n_experiments > 1 else masks[0],
+        min_length=window if min_length is None else min_length,
+    )

@@ -1,0 +1,314 @@
+"""IOData: construction, metadata, selection, splitting, merging, file formats, bad input."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import sysid
+from sysid.errors import DataError, InsufficientDataError, NonFiniteError, ShapeError
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+
+
+def record(n: int = 50, m: int = 2, l: int = 1, dt: float = 0.1, seed: int = 0) -> sysid.IOData:
+    rng = np.random.default_rng(seed)
+    return sysid.IOData(
+        u=rng.standard_normal((n, m)), y=rng.standard_normal((n, l)), dt=dt,
+        input_names=[f"in{j}" for j in range(m)], output_names=[f"out{j}" for j in range(l)],
+        input_units=["deg"] * m, output_units=["rad/s"] * l,
+    )
+
+
+# ------------------------------------------------------------------ construction
+
+def test_existing_interface_kept() -> None:
+    u, y = np.ones((10, 1)), np.zeros((10, 2))
+    d = sysid.IOData(u, y, 0.5)
+    assert d.n_inputs == 1 and d.n_outputs == 2 and d.n_experiments == 1
+    assert d.n_samples == 10 and d.dt == 0.5
+    assert d.input_names == ["u0"] and d.output_names == ["y0", "y1"]
+    (uu, yy), = d.experiments
+    assert uu.dtype == np.float64 and yy.shape == (10, 2)
+    assert sysid.IOData(u=None, y=y).n_inputs == 0
+    assert sysid.IOData(u, y).dt == 1.0
+
+
+def test_time_vector_gives_dt_and_start() -> None:
+    t = 3.0 + 0.02 * np.arange(100)
+    d = sysid.IOData(u=np.ones(100), y=np.ones(100), time=t)
+    assert d.dt == 0.02
+    np.testing.assert_allclose(d.time, t)
+
+
+@pytest.mark.parametrize(
+    "t, match",
+    [
+        (np.r_[0.0, 0.1, 0.2, 0.2, 0.4], "repeats at sample 3"),
+        (np.r_[0.0, 0.1, 0.2, 0.15, 0.4], "goes back at sample 3"),
+        (np.r_[np.arange(10) * 0.1, 2.0 + np.arange(10) * 0.1], "a gap at sample 10"),
+        (np.r_[0.0, 0.1, 0.2, 0.33, 0.4, 0.5], "jitter|gap"),
+    ],
+)
+def test_bad_time_vectors_say_where(t: np.ndarray, match: str) -> None:
+    with pytest.raises(DataError, match=match):
+        sysid.sample_time(t)
+    with pytest.raises(DataError, match=match):
+        sysid.IOData(u=None, y=np.ones(t.size), time=t)
+
+
+def test_irregular_error_suggests_resampling_and_from_irregular_works() -> None:
+    rng = np.random.default_rng(0)
+    t = np.sort(rng.uniform(0, 10, 400))
+    with pytest.raises(DataError, match="from_irregular"):
+        sysid.sample_time(t)
+    d = sysid.IOData.from_irregular(t, np.sin(t), np.cos(t), dt=0.05, method="cubic")
+    assert d.dt == 0.05
+    np.testing.assert_allclose(d.y[:, 0], np.cos(d.time), atol=1e-3)
+
+
+def test_dt_disagreeing_with_time() -> None:
+    with pytest.raises(DataError, match="disagrees"):
+        sysid.IOData(u=None, y=np.ones(5), dt=0.2, time=np.arange(5) * 0.1)
+
+
+@pytest.mark.parametrize(
+    "kwargs, err, match",
+    [
+        ({"input_names": ["a", "b"]}, ShapeError, "2 input name"),
+        ({"output_names": ["a", "a"]}, DataError, "duplicate output"),
+        ({"input_names": ["x"], "output_names": ["x", "z"]}, DataError, "both an input"),
+        ({"input_names": [""]}, DataError, "non-empty strings"),
+        ({"output_units": ["m", "furlongs"]}, DataError, "unknown unit 'furlongs'"),
+        ({"output_units": ["m"]}, ShapeError, "1 output unit"),
+        ({"input_units": [3]}, DataError, "must be a string"),
+    ],
+)
+def test_bad_names_and_units(kwargs: dict, err: type, match: str) -> None:
+    with pytest.raises(err, match=match):
+        sysid.IOData(u=np.ones((5, 1)), y=np.ones((5, 2)), **kwargs)
+
+
+@pytest.mark.parametrize(
+    "unit",
+    ["m/s^2", "deg/s", "N*m", "kN", "degC", "%", "-", "", "V", "m s^-1", "mbar", "rad/s",
+     "kg*m^2", "ft/s", "g0"],
+)
+def test_known_units(unit: str) -> None:
+    assert sysid.check_unit(unit) == unit
+
+
+def test_nan_rejected_by_constructor_with_pointer_to_from_raw() -> None:
+    y = np.ones(10)
+    y[4] = np.nan
+    with pytest.raises(NonFiniteError, match="sample 4"):
+        sysid.IOData(u=None, y=y)
+    with pytest.raises(NonFiniteError, match="nan='interpolate'"):
+        sysid.IOData.from_raw(None, y)
+
+
+def test_from_raw_interpolates_short_and_splits_long_gaps() -> None:
+    t = np.arange(200) * 0.1
+    y = np.sin(t)
+    u = np.cos(t)
+    y[50] = np.nan              # short gap: filled
+    u[120:140] = np.nan         # long gap: cut
+    d = sysid.IOData.from_raw(u, y, 0.1, nan="interpolate", max_gap=3)
+    assert d.lengths == [120, 60]
+    np.testing.assert_allclose(d.experiment(0).y[50, 0], 0.5 * (y[49] + y[51]))
+    np.testing.assert_allclose(d.times[1][0], 14.0)  # the second piece keeps its time
+    s = sysid.IOData.from_raw(u, y, 0.1, nan="split")
+    assert s.lengths == [50, 69, 60]
+    with pytest.raises(DataError, match="nan must be"):
+        sysid.IOData.from_raw(u, y, nan="drop")
+
+
+def test_empty_segments_are_errors() -> None:
+    with pytest.raises(ShapeError, match="no samples"):
+        sysid.IOData(u=[np.ones(5), np.ones(0)], y=[np.ones(5), np.ones(0)])
+    with pytest.raises(ShapeError, match="empty list"):
+        sysid.IOData(u=None, y=[])
+    d = record()
+    with pytest.raises(InsufficientDataError, match="empty"):
+        d.slice(10, 10)
+    with pytest.raises(InsufficientDataError, match="no samples between"):
+        d.time_slice(100.0, 200.0)
+    y = np.full(10, np.nan)
+    with pytest.raises(DataError):
+        sysid.IOData.from_raw(None, y, nan="split")
+
+
+# ------------------------------------------------------------------ selection
+
+def test_slicing_by_samples_and_time() -> None:
+    d = record(n=50, dt=0.1)
+    s = d[10:20]
+    np.testing.assert_array_equal(s.u, d.u[10:20])
+    np.testing.assert_allclose(s.time[0], 1.0)
+    ts = d.time_slice(1.0, 2.0)
+    np.testing.assert_array_equal(ts.y, d.y[10:20])
+    assert d.slice(0, None, 2).dt == pytest.approx(0.2)
+
+
+def test_select_channels_by_name() -> None:
+    d = record(m=3, l=2)
+    s = d[["in2", "out1"]]
+    assert s.input_names == ["in2"] and s.output_names == ["out1"]
+    np.testing.assert_array_equal(s.u[:, 0], d.u[:, 2])
+    assert d["out0"].n_inputs == 3  # an unnamed kind is kept whole
+    assert s.input_units == ["deg"]
+    with pytest.raises(DataError, match="unknown channel name"):
+        d["nope"]
+    with pytest.raises(DataError, match="no input named"):
+        d.select(inputs=["out0"])
+    with pytest.raises(DataError, match="repeats"):
+        d.select(inputs=["in0", "in0"])
+    assert d.select(inputs=[]).n_inputs == 0
+
+
+def test_split_and_merge() -> None:
+    d = record(n=100)
+    est, val = d.split(0.7)
+    assert (est.n_samples, val.n_samples) == (70, 30)
+    np.testing.assert_array_equal(np.vstack([est.u, val.u]), d.u)
+    both = est.merge(val)
+    assert both.n_experiments == 2 and both.lengths == [70, 30]
+    a, b = both.split(0.5)
+    assert a.lengths == [35, 15]
+    with pytest.raises(DataError, match="between 0 and 1"):
+        d.split(1.2)
+    renamed = sysid.IOData(u=d.u, y=d.y, dt=0.1, input_names=d.input_names,
+                           output_names=["other"])
+    with pytest.raises(DataError, match="output_names"):
+        d.merge(renamed)
+    with pytest.raises(DataError, match="dt = "):
+        d.merge(record(n=100, dt=0.2))
+    with pytest.raises(DataError, match="units"):
+        d.merge(sysid.IOData(u=d.u, y=d.y, dt=0.1, input_names=d.input_names,
+                             output_names=d.output_names))
+
+
+@settings(max_examples=25, deadline=None)
+@given(st.lists(st.integers(3, 40), min_size=1, max_size=4), st.floats(0.2, 0.8))
+def test_split_then_merge_keeps_every_sample(lengths: list[int], frac: float) -> None:
+    rng = np.random.default_rng(1)
+    d = sysid.IOData(u=[rng.standard_normal(n) for n in lengths],
+                     y=[rng.standard_normal(n) for n in lengths])
+    est, val = d.split(frac)
+    assert est.n_samples + val.n_samples == d.n_samples
+    for k in range(d.n_experiments):
+        joined = np.vstack([est.experiments[k][1], val.experiments[k][1]])
+        np.testing.assert_array_equal(joined, d.experiments[k][1])
+
+
+def test_repr_and_summary() -> None:
+    d = record(n=40)
+    assert repr(d) == "IOData: 40 samples, 2 inputs, 1 output, dt = 0.1 s"
+    s = d.summary()
+    row = s.rows[2]
+    assert row["channel"] == "out0" and row["unit"] == "rad/s"
+    assert row["std"] == pytest.approx(d.y.std())
+    assert "out0" in repr(s) and "rad/s" in repr(s)
+    assert list(s.to_pandas().index) == ["in0", "in1", "out0"]
+
+
+# ------------------------------------------------------------------ files
+
+def test_pandas_round_trip_with_experiments() -> None:
+    d = record(n=30).merge(record(n=20, seed=1))
+    df = d.to_pandas()
+    back = sysid.IOData.from_pandas(df)
+    assert back == d
+    assert back.output_units == ["rad/s"] and back.n_experiments == 2
+    with pytest.raises(DataError, match="not in the DataFrame"):
+        sysid.IOData.from_pandas(df, ["in0"], ["missing"])
+
+
+def test_csv_npz_mat_round_trips(tmp_path: Path) -> None:
+    d = record(n=30).merge(record(n=25, seed=2))
+    d.to_csv(tmp_path / "r.csv")
+    c = sysid.IOData.from_csv(tmp_path / "r.csv", ["in0", "in1"], ["out0"])
+    assert c == d and c.input_units == ["deg", "deg"]
+    d.to_npz(tmp_path / "r.npz")
+    assert sysid.IOData.from_npz(tmp_path / "r.npz") == d
+    d.to_mat(tmp_path / "r.mat")
+    m = sysid.IOData.from_mat(tmp_path / "r.mat")
+    assert m == d and m.output_units == ["rad/s"]
+    with pytest.raises(DataError, match="inputs and outputs"):
+        sysid.IOData.from_csv(tmp_path / "r.csv")
+    with pytest.raises(DataError, match="no column"):
+        sysid.IOData.from_csv(tmp_path / "r.csv", ["zz"], ["out0"])
+
+
+def test_plain_mat_file(tmp_path: Path) -> None:
+    from scipy.io import savemat
+
+    rng = np.random.default_rng(0)
+    savemat(tmp_path / "plain.mat", {"u": rng.standard_normal((50, 2)),
+                                    "y": rng.standard_normal((50, 1)), "Ts": 0.25})
+    d = sysid.IOData.from_mat(tmp_path / "plain.mat", dt="Ts")
+    assert (d.n_inputs, d.n_outputs, d.dt) == (2, 1, 0.25)
+    with pytest.raises(DataError, match="no variable"):
+        sysid.IOData.from_mat(tmp_path / "plain.mat", y="out")
+
+
+def test_csv_with_blanks_and_trailing_comma(tmp_path: Path) -> None:
+    p = tmp_path / "raw.csv"
+    rows = ["a,b,", "1,10,", "2,,", "3,30,", "4,40,"]
+    p.write_text("\n".join(rows) + "\n")
+    with pytest.raises(NonFiniteError):
+        sysid.IOData.from_csv(p, ["a"], ["b"])
+    d = sysid.IOData.from_csv(p, ["a"], ["b"], dt=0.5, nan="interpolate")
+    np.testing.assert_allclose(d.y.ravel(), [10, 20, 30, 40])
+
+
+@pytest.mark.skipif(not (DATA / "f16").exists(), reason="shared data not present")
+def test_reads_f16_csv_header() -> None:
+    d = sysid.IOData.from_csv(DATA / "f16" / "F16Data_FullMSine_Level1.csv", ["Force"],
+                              ["Acceleration1", "Acceleration2", "Acceleration3"], dt=1 / 400)
+    assert d.n_samples == 73728 and d.output_names[0] == "Acceleration1"
+
+
+def test_pandas_datetime_index_and_missing_values() -> None:
+    import pandas as pd
+
+    idx = pd.date_range("2024-01-01", periods=50, freq="20ms")
+    y = np.sin(np.arange(50) / 5.0)
+    y[10] = np.nan
+    df = pd.DataFrame({"elev": np.cos(np.arange(50) / 5.0), "pitch": y}, index=idx)
+    with pytest.raises(NonFiniteError):
+        sysid.IOData.from_pandas(df, ["elev"], ["pitch"])
+    d = sysid.IOData.from_pandas(df, ["elev"], ["pitch"], nan="interpolate",
+                                 units={"elev": "deg", "pitch": "deg"})
+    assert d.dt == pytest.approx(0.02) and d.n_samples == 50
+    assert d.output_units == ["deg"]
+    np.testing.assert_allclose(d.y[10, 0], 0.5 * (y[9] + y[11]))
+
+
+@settings(max_examples=15, deadline=None)
+@given(
+    st.lists(st.integers(2, 30), min_size=1, max_size=3),
+    st.integers(0, 3),
+    st.integers(1, 3),
+    st.floats(1e-3, 10.0),
+)
+def test_file_round_trips_for_any_shape(lengths: list[int], m: int, l: int, dt: float) -> None:
+    import tempfile
+
+    rng = np.random.default_rng(len(lengths) + 10 * m + 100 * l)
+    d = sysid.IOData(
+        u=[rng.standard_normal((n, m)) for n in lengths] if m else None,
+        y=[rng.standard_normal((n, l)) for n in lengths],
+        dt=dt,
+        output_units=["m/s"] * l,
+    )
+    with tempfile.TemporaryDirectory() as tmp:
+        d.to_npz(Path(tmp) / "r.npz")
+        assert sysid.IOData.from_npz(Path(tmp) / "r.npz") == d
+        d.to_mat(Path(tmp) / "r.mat")
+        assert sysid.IOData.from_mat(Path(tmp) / "r.mat") == d
+    assert sysid.IOData.from_pandas(d.to_pandas(), dt=dt) == d
