@@ -5,9 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.signal
-import sysid
 from hypothesis import given, settings
 from hypothesis import strategies as st
+
+import sysid
 from sysid.analysis import ContinuousStateSpace
 
 try:  # python-control is an optional oracle

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 import sysid
 from sysid import _sysid
 from sysid.cli import main, read_csv

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 import sysid
 from sysid import _sysid
 from sysid.criteria import CRITERIA, Criteria, n_parameters

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 import sysid
 from sysid import _sysid
 from sysid.validation import ResidualAnalysis
