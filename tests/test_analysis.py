@@ -252,3 +252,17 @@ def test_model_shortcuts(tmp_path):
     np.testing.assert_array_equal(m.impulse(20).y, m.markov(20))
     m.save(tmp_path / "m.npz")
     np.testing.assert_array_equal(sysid.load_model(tmp_path / "m.npz").A, m.A)
+
+
+def test_plots_of_continuous_models():
+    plt = pytest.importorskip("matplotlib.pyplot")
+    from sysid.plot.model import plot_bode, plot_pzmap
+
+    sys = random_continuous(8, m=1, l=1)
+    fig = plot_bode(sys)
+    x = fig.axes[0].lines[0].get_xdata()
+    wn = np.abs(sys.poles())
+    assert x.min() < wn.min() / (2 * np.pi) < wn.max() / (2 * np.pi) < x.max()
+    ax = plot_pzmap(sys)
+    assert ax.get_xlabel() == "Re s"
+    plt.close("all")

@@ -316,3 +316,11 @@ def test_one_initial_state_for_several_experiments():
     ys = [m.simulate(u, x0=[1.0, 2.0]) for u in us]
     r = sysid.compare(m, sysid.IOData(u=us, y=ys, dt=0.1), x0=[1.0, 2.0])
     assert np.all(r.fit > 99.999999)
+
+
+def test_residual_table():
+    pytest.importorskip("pandas")
+    m = second_order(K=[[0.6], [0.2]])
+    u, y = innovation_data(m, 400, seed=18)
+    df = sysid.residuals(m, (u, y)).to_pandas()
+    assert list(df["output"]) == ["y0"] and bool(df["white"][0])

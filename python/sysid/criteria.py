@@ -260,6 +260,10 @@ class OrderSelection:
 
         return pd.DataFrame(self.rows)
 
+    def summary(self) -> str:
+        """The table and the reason for the recommendation, as text."""
+        return repr(self)
+
     def plot(self, fig: Any = None) -> Any:
         """Singular values, criteria and fit versus order."""
         from .plot.validation import plot_order_selection

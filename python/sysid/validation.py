@@ -428,6 +428,17 @@ class ResidualAnalysis:
         """Whiteness accepted for every output."""
         return bool(np.all(self.whiteness))
 
+    def to_pandas(self) -> Any:
+        """One row per output: Ljung-Box and independence statistics with their verdicts."""
+        import pandas as pd
+
+        return pd.DataFrame({
+            "output": self.output_names, "ljung_box": self.ljung_box,
+            "ljung_box_p": self.ljung_box_pvalue, "white": self.whiteness,
+            "independence": self.independence_stat,
+            "independence_p": self.independence_pvalue, "independent": self.independence,
+        })
+
     def summary(self) -> str:
         """A text table of the tests."""
         M = self.max_lag

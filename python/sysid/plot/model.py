@@ -19,8 +19,13 @@ def _models(models: Any) -> list[Any]:
 def _omega(models: list[Any], omega: Any, n: int = 400) -> np.ndarray:
     if omega is not None:
         return np.asarray(omega, dtype=float)
-    nyq = min(np.pi / m.dt for m in models)
-    return np.logspace(np.log10(nyq) - 3, np.log10(nyq), n)
+    if all(hasattr(m, "dt") for m in models):
+        nyq = min(np.pi / m.dt for m in models)
+        return np.logspace(np.log10(nyq) - 3, np.log10(nyq), n)
+    # continuous models: two decades either side of the pole magnitudes
+    mags = np.concatenate([np.abs(m.poles()) for m in models] + [np.ones(1)])
+    mags = mags[mags > 0]
+    return np.logspace(np.log10(mags.min()) - 2, np.log10(mags.max()) + 2, n)
 
 
 def plot_bode(models: Any, omega: Any = None, *, hz: bool = True, fig: Any = None,
@@ -49,7 +54,8 @@ def plot_bode(models: Any, omega: Any = None, *, hz: bool = True, fig: Any = Non
     x = w / (2 * np.pi) if hz else w
     for k, mod in enumerate(ms):
         H = mod.freqresp(w)
-        lab = labels[k] if labels is not None else repr(mod.info.get("method", f"model {k}"))
+        info = getattr(mod, "info", {})
+        lab = labels[k] if labels is not None else str(info.get("method", f"model {k}"))
         for i in range(l):
             for j in range(m):
                 mag = 20 * np.log10(np.maximum(np.abs(H[:, i, j]), 1e-300))
@@ -94,8 +100,10 @@ def plot_pzmap(models: Any, ax: Any = None) -> Any:
     ms = _models(models)
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 5))
-    th = np.linspace(0, 2 * np.pi, 400)
-    ax.plot(np.cos(th), np.sin(th), color="0.5", lw=0.8)
+    discrete = all(hasattr(m, "dt") for m in ms)
+    if discrete:  # the stability boundary: unit circle (z) or imaginary axis (s)
+        th = np.linspace(0, 2 * np.pi, 400)
+        ax.plot(np.cos(th), np.sin(th), color="0.5", lw=0.8)
     for k, mod in enumerate(ms):
         p, z = mod.poles(), zeros(mod)
         ax.plot(p.real, p.imag, "x", color=f"C{k}", ms=8, label="poles")
@@ -103,8 +111,8 @@ def plot_pzmap(models: Any, ax: Any = None) -> Any:
     ax.axhline(0, color="0.8", lw=0.5)
     ax.axvline(0, color="0.8", lw=0.5)
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("Re z")
-    ax.set_ylabel("Im z")
+    ax.set_xlabel("Re z" if discrete else "Re s")
+    ax.set_ylabel("Im z" if discrete else "Im s")
     ax.legend(fontsize=8, loc="upper left")
     ax.set_title("pole-zero map")
     return ax
