@@ -123,12 +123,15 @@ def test_identify_mimo_without_header(tmp_path):
     u = rng.standard_normal((600, 2))
     y = true.simulate(u) + 0.01 * rng.standard_normal((600, 2))
     path = tmp_path / "plain.txt"
-    np.savetxt(path, np.hstack([u, y]))
+    np.savetxt(path, np.hstack([u, y]), delimiter=";")
     rep = tmp_path / "rep"
     assert main(["identify", str(path), "--inputs", "0,1", "--outputs", "2,3", "--dt", "0.5",
-                 "--split", "0.7", "--quiet", "--report", str(rep)]) == 0
+                 "--split", "0.7", "--quiet", "--delimiter", ";", "--method", "n4sid",
+                 "--report", str(rep)]) == 0
     check_report(rep, ["2", "3"])
-    assert sysid.load_model(rep / "model.json").nstates == 3
+    model = sysid.load_model(rep / "model.json")
+    assert model.nstates == 3 and model.info["settings"]["method"] == "n4sid"
+    assert model.info["preprocessing"]["validation_samples"] == [420, 600]
 
 
 def test_demo_runs_as_a_module_and_writes_a_report(tmp_path):
@@ -151,7 +154,9 @@ def test_demo_runs_as_a_module_and_writes_a_report(tmp_path):
 # -- bad input -------------------------------------------------------------------------
 def run_error(capsys, argv):
     assert main(argv) == 2
-    return capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert err.count("sysid: error:") == 1
+    return err
 
 
 def test_missing_column(tmp_path, capsys):

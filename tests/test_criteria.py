@@ -151,3 +151,24 @@ def test_order_selection_from_a_factor_uses_the_gap():
     sel = sysid.select_order(bare, range(1, 7))
     assert sel.criterion == "svd" and sel.order == 6
     assert np.isnan(sel.rows[0]["aic"])  # no data, no criteria
+
+
+@needs_engine
+def test_sweep_settings_change_the_table():
+    d = sysid.datasets.load_dryer()
+    est = sysid.SubspaceEstimator(sysid.IOData(u=d.u[:500], y=d.y[:500], dt=d.dt), horizon=15)
+    val = sysid.IOData(u=d.u[500:], y=d.y[500:], dt=d.dt)
+    base = sysid.select_order(est, range(1, 8), validation=val)
+    # a looser tolerance lets a smaller order win; zero tolerance takes the best fit
+    loose = sysid.select_order(est, range(1, 8), validation=val, fit_tol=5.0)
+    strict = sysid.select_order(est, range(1, 8), validation=val, fit_tol=0.0)
+    assert loose.order < base.order <= strict.order
+    best = max(r["fit_validation"] for r in strict.rows)
+    assert strict.model().info["order"] == strict.order
+    assert [r["fit_validation"] for r in strict.rows if r["order"] == strict.order] == [best]
+    # the parameter count follows the model structure
+    lean = sysid.select_order(est, [4], x0="zero", feedthrough=False, kalman=False)
+    assert lean.rows[0]["n_params"] == n_parameters(4, 1, 1, feedthrough=False,
+                                                   noise_model=False)
+    assert base.rows[3]["n_params"] == n_parameters(4, 1, 1, x0=True)
+    assert lean.model().K is None and np.all(lean.model().D == 0)

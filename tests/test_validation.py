@@ -161,6 +161,9 @@ def test_residual_correlations_match_numpy():
         c = np.sum(e[tau:] * uc[: len(e) - tau]) / np.sqrt(np.sum(e * e) * np.sum(uc * uc))
         assert res.crosscorr[res.xlags == tau][0, 0, 0] == pytest.approx(c)
     assert res.bound == pytest.approx(2.5758 / np.sqrt(500), rel=1e-4)
+    loose = sysid.residuals(true, (u, y), max_lag=5, x0="zero", alpha=0.05)
+    assert loose.bound == pytest.approx(1.96 / np.sqrt(500), rel=1e-3)
+    np.testing.assert_array_equal(loose.ljung_box, res.ljung_box)
 
 
 def test_ljung_box_has_its_nominal_size():
