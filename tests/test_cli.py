@@ -217,3 +217,13 @@ def test_console_script_points_at_main():
     scripts = tomllib.loads(pyproject.read_text())["project"]["scripts"]
     module, func = scripts["sysid"].split(":")
     assert module == "sysid.cli" and getattr(sys.modules[module], func) is main
+
+
+def test_identify_without_validation_data_uses_bic():
+    from sysid.cli import identify
+
+    d = sysid.datasets.load_dryer()
+    out = identify(d, None, horizon=15)
+    assert out["which"] == "estimation" and out["selection"].criterion == "bic"
+    assert out["model"].nstates == out["selection"].picks["bic"]
+    assert "files" not in out
