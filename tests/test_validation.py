@@ -170,12 +170,16 @@ def test_ljung_box_has_its_nominal_size():
     """Under white residuals the test rejects about alpha of the time (seeded, 400 draws)."""
     m = sysid.StateSpaceModel([[0.0]], [[0.0]], [[0.0]], dt=1.0)
     rng = np.random.default_rng(7)
-    rejected = 0
+    rejected, dependent = 0, 0
     for _ in range(400):
         e = rng.standard_normal((400, 1))
-        res = ResidualAnalysis(m, [e], [rng.standard_normal((400, 1))], 10, 0.05)
+        # a coloured input: the independence test must still hold its size
+        u = np.convolve(rng.standard_normal(403), [1.0, 0.8, 0.5, 0.3], "valid")[:, None]
+        res = ResidualAnalysis(m, [e], [u], 10, 0.05)
         rejected += int(not res.is_white)
+        dependent += int(not res.independence.all())
     assert 0.02 < rejected / 400 < 0.09
+    assert 0.02 < dependent / 400 < 0.09
 
 
 def test_residuals_several_outputs_and_experiments():
