@@ -217,7 +217,8 @@ def identify(
     say(f"validating on the {which} data")
     sim = compare(model, check)
     pred = compare(model, check, horizon=1)
-    res = residuals(model, check, max_lag=min(25, max(1, check.n_samples // 5)))
+    shortest = min(y.shape[0] for _, y in check.experiments)
+    res = residuals(model, check, max_lag=min(25, max(1, shortest // 5)))
     out: dict[str, Any] = {"model": model, "selection": sel, "compare": sim,
                            "prediction": pred, "residuals": res, "which": which}
     if report is not None:
