@@ -302,7 +302,8 @@ def _pbh_rank_ok(A: np.ndarray, B: np.ndarray, tol: float | None) -> bool:
     n = A.shape[0]
     if n == 0:
         return True
-    scale = max(np.linalg.norm(A, 2), np.linalg.norm(B, 2), 1e-300)
+    scale = max(float(np.linalg.norm(A, 2)), float(np.linalg.norm(B, 2)) if B.size else 0.0,
+                1e-300)
     tol = n * np.finfo(float).eps * 1e3 if tol is None else float(tol)
     for lam in np.linalg.eigvals(A):
         sv = np.linalg.svd(np.hstack([A - lam * np.eye(n), B]), compute_uv=False)

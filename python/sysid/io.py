@@ -155,8 +155,9 @@ def save_model(model: StateSpaceModel, path: PathLike, *, format: str | None = N
         if d[k] is not None:
             arrays[k] = np.asarray(d[k], dtype=float)
     meta = {k: v for k, v in d.items() if k not in arrays and k not in ("K", "noise_cov", "x0")}
+    payload: dict[str, Any] = {"__meta__": np.array(json.dumps(meta)), **arrays}
     with open(path, "wb") as f:
-        np.savez(f, __meta__=np.array(json.dumps(meta)), **arrays)
+        np.savez(f, **payload)
 
 
 def load_model(path: PathLike, *, format: str | None = None) -> StateSpaceModel:

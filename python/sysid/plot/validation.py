@@ -154,7 +154,9 @@ def plot_stabilization(table: Any, ax: Any = None, hz: bool = True) -> Any:
     if ax is None:
         _, ax = plt.subplots(figsize=(7, 4))
     prev = None
-    settled_pts, new_pts, unstable_pts = [], [], []
+    settled_pts: list[tuple[float, int]] = []
+    new_pts: list[tuple[float, int]] = []
+    unstable_pts: list[tuple[float, int]] = []
     for order, damp in table.damping(table.method):
         f = damp.wn_hz if hz else damp.wn
         keep = np.isfinite(f) & (damp.poles.imag >= 0)
