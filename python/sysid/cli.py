@@ -332,7 +332,9 @@ def _html(out: dict[str, Any], files: dict[str, Path]) -> str:
             ("pzmap", "pole-zero map"),
         )
     )
-    poles = ", ".join(f"{p:.4f}" for p in model.poles())
+    from .analysis import damp
+
+    details = esc(res.summary() + "\n\n" + repr(damp(model)))
     return f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>sysid report</title>
 <style>body{{font-family:sans-serif;max-width:1100px;margin:auto}}img{{max-width:100%}}
@@ -340,7 +342,7 @@ td,th{{text-align:right}}</style></head><body>
 <h1>sysid identification report</h1>
 <p>{esc(repr(model))}</p>
 <p>Order choice: {esc(sel.reason)}</p>
-<p>Poles: {esc(poles)}</p>
+<pre>{details}</pre>
 <h2>Fit on the {esc(out['which'])} data</h2>
 {table("fit", ["output", "simulation fit %", "1-step fit %", "whiteness p", "white"], fit_rows)}
 <h2>Order sweep</h2>
