@@ -19,6 +19,24 @@ Examples
 
 from . import datasets
 from ._sysid import __version__
+from .analysis import (
+    ContinuousStateSpace,
+    c2d,
+    ctrb,
+    d2c,
+    damp,
+    from_control,
+    from_scipy,
+    impulse,
+    is_controllable,
+    is_observable,
+    obsv,
+    step,
+    to_control,
+    to_scipy,
+    zeros,
+)
+from .criteria import criteria, n_parameters, select_order
 from .data import DataSummary, IOData, SplitData, Trend, check_unit, sample_time
 from .errors import (
     DataError,
@@ -42,6 +60,7 @@ from .input_design import (
     random_binary,
     random_gaussian,
 )
+from .io import load_model, save_model
 from .modal import ModalAnalysis, modal_analysis
 from .model import StateSpaceModel
 from .nonparametric import (
@@ -95,6 +114,7 @@ from .reduction import (
     hankel_singular_values,
 )
 from .subspace import SubspaceEstimator, cva, default_horizon, moesp, n4sid
+from .validation import compare, error_spectrum, estimate_x0, fit_metrics, residuals
 
 __all__ = [
     "__version__",
@@ -115,6 +135,31 @@ __all__ = [
     "OrderError",
     "NumericalError",
     "RiccatiError",
+    "compare",
+    "residuals",
+    "error_spectrum",
+    "estimate_x0",
+    "fit_metrics",
+    "criteria",
+    "n_parameters",
+    "select_order",
+    "ContinuousStateSpace",
+    "zeros",
+    "damp",
+    "ctrb",
+    "obsv",
+    "is_controllable",
+    "is_observable",
+    "step",
+    "impulse",
+    "c2d",
+    "d2c",
+    "to_control",
+    "from_control",
+    "to_scipy",
+    "from_scipy",
+    "save_model",
+    "load_model",
     # data handling, pre-processing, input design, non-parametric analysis
     "ExcitationWarning",
     "Trend",
