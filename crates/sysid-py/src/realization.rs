@@ -3,7 +3,7 @@
 //! Markov parameters cross the boundary stacked as a 2-D array `(count * l, m)`; the Python
 //! layer reshapes them to `(count, l, m)`. Complex values travel as real and imaginary parts.
 
-use crate::convert::{mat_to_numpy, slice_to_numpy, view, view_nd};
+use crate::convert::{mat_to_numpy, slice_to_numpy, state_space as model, view, view_nd};
 use crate::errors::IntoPy;
 use faer::{Mat, MatRef};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
@@ -12,7 +12,7 @@ use pyo3::types::PyDict;
 use sysid_core::realization::{
     self as rz, FirOptions, OkidOptions, Realization, RealizationOptions, Regularization,
 };
-use sysid_core::{StateSpace, SysidError};
+use sysid_core::SysidError;
 
 type Arr<'py> = Bound<'py, PyArray2<f64>>;
 
@@ -32,21 +32,6 @@ fn unstack(h: MatRef<'_, f64>, l: usize) -> PyResult<Vec<Mat<f64>>> {
 fn stack(h: &[Mat<f64>]) -> Mat<f64> {
     let (l, m) = h.first().map(|x| (x.nrows(), x.ncols())).unwrap_or((0, 0));
     Mat::from_fn(h.len() * l, m, |i, j| h[i / l][(i % l, j)])
-}
-
-fn model(
-    a: &PyReadonlyArray2<'_, f64>,
-    b: &PyReadonlyArray2<'_, f64>,
-    c: &PyReadonlyArray2<'_, f64>,
-    d: &PyReadonlyArray2<'_, f64>,
-) -> PyResult<StateSpace> {
-    StateSpace::new(
-        view(a).to_owned(),
-        view(b).to_owned(),
-        view(c).to_owned(),
-        view(d).to_owned(),
-    )
-    .py()
 }
 
 fn options(
