@@ -10,7 +10,8 @@ $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q "maturin>=1.7,<2" "numpy>=1.24" "scipy>=1.10" \
-		"pytest>=7" "hypothesis>=6" "matplotlib>=3.6" "pandas>=1.5" "ruff>=0.5"
+		"pytest>=7" "hypothesis>=6" "matplotlib>=3.6" "pandas>=1.5" "ruff>=0.5" \
+		"control>=0.10"
 	touch $(STAMP)
 
 build: $(STAMP)

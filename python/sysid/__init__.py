@@ -19,6 +19,24 @@ Examples
 
 from . import datasets
 from ._sysid import __version__
+from .analysis import (
+    ContinuousStateSpace,
+    c2d,
+    ctrb,
+    d2c,
+    damp,
+    from_control,
+    from_scipy,
+    impulse,
+    is_controllable,
+    is_observable,
+    obsv,
+    step,
+    to_control,
+    to_scipy,
+    zeros,
+)
+from .criteria import criteria, n_parameters, select_order
 from .data import DataSummary, IOData, SplitData, Trend, check_unit, sample_time
 from .errors import (
     DataError,
@@ -42,6 +60,8 @@ from .input_design import (
     random_binary,
     random_gaussian,
 )
+from .io import load_model, save_model
+from .modal import ModalAnalysis, modal_analysis
 from .model import StateSpaceModel
 from .nonparametric import (
     FRD,
@@ -74,8 +94,28 @@ from .preprocessing import (
     select_mask,
     select_mode,
 )
+from .realization import (
+    EraResult,
+    MarkovEstimate,
+    StabilizationDiagram,
+    era,
+    era_stabilization,
+    ho_kalman,
+    impulse_from_frf,
+    impulse_response,
+    kung,
+    okid,
+)
+from .reduction import (
+    Gramians,
+    balanced_realization,
+    balanced_truncation,
+    gramians,
+    hankel_singular_values,
+)
 from .streaming import compress_dask, compress_stream
 from .subspace import SubspaceEstimator, cva, default_horizon, moesp, n4sid
+from .validation import compare, error_spectrum, estimate_x0, fit_metrics, residuals
 
 __all__ = [
     "__version__",
@@ -98,6 +138,31 @@ __all__ = [
     "OrderError",
     "NumericalError",
     "RiccatiError",
+    "compare",
+    "residuals",
+    "error_spectrum",
+    "estimate_x0",
+    "fit_metrics",
+    "criteria",
+    "n_parameters",
+    "select_order",
+    "ContinuousStateSpace",
+    "zeros",
+    "damp",
+    "ctrb",
+    "obsv",
+    "is_controllable",
+    "is_observable",
+    "step",
+    "impulse",
+    "c2d",
+    "d2c",
+    "to_control",
+    "from_control",
+    "to_scipy",
+    "from_scipy",
+    "save_model",
+    "load_model",
     # data handling, pre-processing, input design, non-parametric analysis
     "ExcitationWarning",
     "Trend",
@@ -140,4 +205,22 @@ __all__ = [
     "periodogram",
     "coherence",
     "correlation",
+    # realisation, Markov parameters, reduction, modal analysis
+    "ho_kalman",
+    "kung",
+    "era",
+    "EraResult",
+    "impulse_response",
+    "okid",
+    "MarkovEstimate",
+    "impulse_from_frf",
+    "era_stabilization",
+    "StabilizationDiagram",
+    "modal_analysis",
+    "ModalAnalysis",
+    "gramians",
+    "Gramians",
+    "hankel_singular_values",
+    "balanced_realization",
+    "balanced_truncation",
 ]

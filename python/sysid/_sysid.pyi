@@ -79,6 +79,37 @@ def predict(
 ) -> Array: ...
 def kalman_gain(a: Array, c: Array, q: Array, r: Array, s: Array) -> tuple[Array, Array, Array]: ...
 
+# -- realisation, Markov parameters, balancing, modal analysis (crates/sysid-py/src/realization.rs)
+def realize(
+    method: str,
+    markov: Array,
+    noutputs: int,
+    order: int | None = None,
+    rows: int | None = None,
+    cols: int | None = None,
+    rank_tol: float = 1e-8,
+) -> dict[str, Any]: ...
+def fir(
+    experiments: list[tuple[Array, Array]],
+    length: int,
+    feedthrough: bool = True,
+    regularization: str = "tc",
+    hyper: tuple[float, float] | None = None,
+) -> dict[str, Any]: ...
+def okid(
+    experiments: list[tuple[Array, Array]],
+    observer_order: int,
+    count: int,
+    feedthrough: bool = True,
+) -> dict[str, Any]: ...
+def solve_discrete_lyapunov(a: Array, q: Array) -> Array: ...
+def gramians(a: Array, b: Array, c: Array, d: Array) -> tuple[Array, Array]: ...
+def hankel_singular_values(a: Array, b: Array, c: Array, d: Array) -> Array: ...
+def balanced_truncation(
+    a: Array, b: Array, c: Array, d: Array, order: int | None = None
+) -> dict[str, Any]: ...
+def modal_analysis(a: Array, c: Array, dt: float) -> dict[str, Any]: ...
+
 class StreamingCompressor:
     def __init__(
         self, n_inputs: int, n_outputs: int, past: int, future: int,

@@ -1,55 +1,470 @@
 """The ``sysid`` command line.
 
-``sysid demo`` identifies the bundled hair-dryer record (the quickstart's main job).
+``sysid identify DATA.csv --inputs U --outputs Y --report OUT/``
+    Identify a state-space model from a CSV file: split into estimation and validation
+    parts, compress once, sweep the orders, fit the chosen order, validate, and write the
+    model (JSON), the tables (CSV) and the plots (PNG) with an HTML page that shows them.
+``sysid demo [--report DIR]``
+    The same on the bundled hair-dryer record (estimation samples 1-500, validation
+    501-1000, horizon 15, order auto); prints a short summary.
 """
 
 from __future__ import annotations
 
 import argparse
+import csv
+import html
 import sys
+import time
 from collections.abc import Sequence
+from pathlib import Path
+from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ["main"]
+from .criteria import _pct
+from .data import IOData
+from .errors import DataError, OrderError, SysidError
+
+__all__ = ["main", "read_csv", "identify"]
 
 
+# -- progress -------------------------------------------------------------------------
+class _Progress:
+    """Stage lines on stderr with elapsed time (quiet mode prints nothing)."""
+
+    def __init__(self, quiet: bool) -> None:
+        self.quiet, self.t0 = quiet, time.perf_counter()
+
+    def __call__(self, msg: str) -> None:
+        if not self.quiet:
+            print(f"[sysid {time.perf_counter() - self.t0:6.1f} s] {msg}", file=sys.stderr,
+                  flush=True)
+
+
+# -- CSV input ------------------------------------------------------------------------
+def _is_number(s: str) -> bool:
+    try:
+        float(s)
+    except ValueError:
+        return False
+    return True
+
+
+def _read_table(path: str | Path, delimiter: str | None) -> tuple[list[str], list[list[str]]]:
+    """Column names and the rows as strings (see :func:`read_csv`)."""
+    path = Path(path)
+    if not path.is_file():
+        raise DataError(f"no data file at {str(path)!r}")
+    with open(path, newline="", encoding="utf-8-sig") as f:
+        lines = [ln for ln in f.read().splitlines()
+                 if ln.strip() and not ln.lstrip().startswith("#")]
+    if not lines:
+        raise DataError(f"{str(path)!r} is empty")
+    if delimiter is None:
+        delimiter = next((d for d in (",", ";") if d in lines[0]), " ")
+
+    def split(line: str) -> list[str]:
+        if delimiter in (" ", "\t"):
+            return line.split()
+        return [c.strip() for c in next(csv.reader([line], delimiter=delimiter))]
+
+    head = split(lines[0])
+    while head and head[-1] == "":  # a trailing delimiter ends every line
+        head.pop()
+    if all(_is_number(c) for c in head):
+        names, body, first = [str(i) for i in range(len(head))], lines, 1
+    else:
+        names, body, first = head, lines[1:], 2
+    if not body:
+        raise DataError(f"{str(path)!r} has a header but no data rows")
+    rows = []
+    for r, line in enumerate(body):
+        cells = split(line)
+        while len(cells) > len(names) and cells[-1] == "":
+            cells.pop()
+        if len(cells) != len(names):
+            raise DataError(f"{path.name} line {r + first}: {len(cells)} fields but the header "
+                            f"has {len(names)} columns")
+        rows.append(cells)
+    return names, rows
+
+
+def _numeric(path: str | Path, names: list[str], rows: list[list[str]], cols: list[int],
+             first_line: int) -> np.ndarray:
+    values = np.empty((len(rows), len(cols)))
+    for r, cells in enumerate(rows):
+        for k, c in enumerate(cols):
+            cell = cells[c]
+            try:
+                values[r, k] = float(cell)
+            except ValueError:
+                what = "is empty" if cell == "" else f"{cell!r} is not a number"
+                raise DataError(
+                    f"{Path(path).name} line {r + first_line}, column {names[c]!r}: {what}; fix or "
+                    "remove that row (missing values must be repaired before identification)"
+                ) from None
+    return values
+
+
+def read_csv(path: str | Path, delimiter: str | None = None) -> tuple[list[str], np.ndarray]:
+    r"""Read a numeric table: ``(column names, values (rows, columns))``.
+
+    The first line is a header of names unless every field in it is a number (then the
+    columns are named ``"0", "1", ...``). The delimiter is guessed (comma, semicolon, else
+    white space) unless given; a trailing delimiter at the end of every line is allowed.
+    Empty lines and lines starting with ``#`` are skipped. A field that is not a number
+    raises a :class:`~sysid.DataError` naming its column and line.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from sysid.cli import read_csv
+    >>> path = os.path.join(tempfile.mkdtemp(), "d.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("u,y,\n1,2,\n3,4,\n")
+    >>> read_csv(path)
+    (['u', 'y'], array([[1., 2.],
+           [3., 4.]]))
+    """
+    names, rows = _read_table(path, delimiter)
+    first = 1 if names == [str(i) for i in range(len(names))] else 2
+    return names, _numeric(path, names, rows, list(range(len(names))), first)
+
+
+def _columns(spec: str, names: list[str], what: str) -> list[int]:
+    want = [s.strip() for s in spec.split(",") if s.strip()]
+    if not want:
+        raise DataError(f"--{what} is empty; give column names separated by commas")
+    idx = []
+    for w in want:
+        if w in names:
+            idx.append(names.index(w))
+        else:
+            raise DataError(f"{what[:-1]} column {w!r} not found; the file has columns: "
+                            + ", ".join(names))
+    return idx
+
+
+def _split_index(split: str, n: int) -> int:
+    try:
+        val = float(split)
+    except ValueError:
+        raise DataError(f"--split must be a fraction (0.5) or a sample count (500), "
+                        f"got {split!r}") from None
+    k = int(round(val * n)) if val <= 1 else int(val)
+    if not 0 < k <= n:
+        raise DataError(f"--split {split} leaves no estimation data (record has {n} samples)")
+    return k
+
+
+# -- the pipeline ---------------------------------------------------------------------
+def identify(
+    est_data: IOData,
+    val_data: IOData | None,
+    *,
+    order: str | int = "auto",
+    method: str = "moesp",
+    horizon: int | None = None,
+    report: str | Path | None = None,
+    preprocessing: dict[str, Any] | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> dict[str, Any]:
+    """Identify, validate and (optionally) write a report; returns a summary dict.
+
+    The summary holds ``model``, ``selection`` (:class:`~sysid.criteria.OrderSelection`),
+    ``compare`` (validation simulation), ``prediction`` (validation 1-step), ``residuals``
+    and, with ``report``, the written ``files``.
+    """
+    from .criteria import select_order
+    from .subspace import SubspaceEstimator
+    from .validation import compare, error_spectrum, residuals
+
+    say = progress or (lambda _msg: None)
+    say(f"compressing {est_data.n_samples} samples "
+        f"({est_data.n_inputs} in, {est_data.n_outputs} out, horizon {horizon or 'default'})")
+    est = SubspaceEstimator(est_data, horizon, method=method)
+    if order != "auto":
+        if isinstance(order, str):
+            if not order.isdigit():
+                raise DataError(f"--order must be 'auto' or a positive integer, got {order!r}")
+            order = int(order)
+        if order < 1:
+            raise DataError(f"--order must be >= 1, got {order}")
+        if order > est.max_order:
+            raise OrderError(
+                f"order {order} is larger than the data and horizon support (at most "
+                f"{est.max_order} with horizon {est.past}); lower --order or raise --horizon"
+            )
+    top = min(est.max_order, max(10, 2 * est.auto_order, 0 if order == "auto" else int(order)))
+    while True:
+        say(f"sweeping orders 1..{top} on one compression")
+        sel = select_order(est, range(1, top + 1), validation=val_data)
+        if order != "auto" or sel.order < top or top >= est.max_order:
+            break
+        # the best order sits at the edge of the sweep: look further
+        top = min(est.max_order, 2 * top)
+    n = sel.order if order == "auto" else int(order)
+    say(f"fitting order {n} ({est.method})")
+    x0 = est_data.n_experiments == 1
+    model = est.fit(n, x0=x0)
+    model.info["settings"] = {"method": est.method, "order": n, "order_rule": (
+        sel.criterion if order == "auto" else "given"), "past": est.past,
+        "future": est.future, "x0": x0}
+    model.info["preprocessing"] = dict(preprocessing or {})
+    check = val_data if val_data is not None else est_data
+    which = "validation" if val_data is not None else "estimation"
+    say(f"validating on the {which} data")
+    sim = compare(model, check)
+    pred = compare(model, check, horizon=1)
+    shortest = min(y.shape[0] for _, y in check.experiments)
+    res = residuals(model, check, max_lag=min(25, max(1, shortest // 5)))
+    out: dict[str, Any] = {"model": model, "selection": sel, "compare": sim,
+                           "prediction": pred, "residuals": res, "which": which}
+    if report is not None:
+        say(f"writing the report to {report}")
+        spec = error_spectrum(model, check)
+        out["files"] = _write_report(Path(report), out, spec)
+    say("done")
+    return out
+
+
+def _write_report(root: Path, out: dict[str, Any], spec: Any) -> dict[str, Path]:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from .io import save_model
+    from .plot import _pyplot
+    from .plot.model import plot_bode, plot_pzmap
+    from .plot.validation import plot_singular_values
+
+    plt = _pyplot()
+    root.mkdir(parents=True, exist_ok=True)
+    model, sel = out["model"], out["selection"]
+    files: dict[str, Path] = {}
+    files["model"] = root / "model.json"
+    save_model(model, files["model"])
+
+    # tables
+    files["fit"] = root / "fit.csv"
+    with open(files["fit"], "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["output", "simulation fit %", "1-step fit %", "simulation VAF %",
+                    "simulation RMSE", "whiteness p", "independence p"])
+        res = out["residuals"]
+        for j, name in enumerate(model.output_names):
+            w.writerow([name, f"{out['compare'].fit.mean(0)[j]:.4f}",
+                        f"{out['prediction'].fit.mean(0)[j]:.4f}",
+                        f"{out['compare'].vaf.mean(0)[j]:.4f}",
+                        f"{out['compare'].rmse.mean(0)[j]:.6g}",
+                        f"{res.ljung_box_pvalue[j]:.4g}", f"{res.independence_pvalue[j]:.4g}"])
+    files["orders"] = root / "orders.csv"
+    if _has_pandas():
+        sel.to_pandas().to_csv(files["orders"], index=False)
+    else:  # pragma: no cover
+        _rows_csv(sel.rows, files["orders"])
+
+    # plots
+    def save(name: str, fig: Any) -> None:
+        files[name] = root / f"{name}.png"
+        fig.savefig(files[name], dpi=90)
+        plt.close(fig)
+
+    ax = plot_singular_values(sel.singular_values[sel.method], model.nstates)
+    ax.set_title("singular values (order choice)")
+    save("singular_values", ax.figure)
+    save("order_selection", sel.plot())
+    save("stabilization", sel.stabilization_plot().figure)
+    save("compare", out["compare"].plot())
+    save("residuals", out["residuals"].plot())
+    save("error_spectrum", spec.plot())
+    save("bode", plot_bode(model))
+    save("pzmap", plot_pzmap(model).figure)
+
+    files["html"] = root / "index.html"
+    files["html"].write_text(_html(out, files), encoding="utf-8")
+    return files
+
+
+def _has_pandas() -> bool:
+    try:
+        import pandas  # noqa: F401
+    except ImportError:  # pragma: no cover
+        return False
+    return True
+
+
+def _rows_csv(rows: list[dict[str, Any]], path: Path) -> None:  # pragma: no cover
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+
+
+def _html(out: dict[str, Any], files: dict[str, Path]) -> str:
+    model, sel, res = out["model"], out["selection"], out["residuals"]
+    esc = html.escape
+
+    def table(tid: str, header: list[str], rows: list[list[Any]]) -> str:
+        th = "".join(f"<th>{esc(h)}</th>" for h in header)
+        body = "".join("<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in r) + "</tr>"
+                       for r in rows)
+        return f'<table id="{tid}" border="1" cellpadding="3"><tr>{th}</tr>{body}</table>'
+
+    fit_rows = [[name, f"{out['compare'].fit.mean(0)[j]:.2f}",
+                 f"{out['prediction'].fit.mean(0)[j]:.2f}", f"{res.ljung_box_pvalue[j]:.3g}",
+                 "yes" if res.whiteness[j] else "no"]
+                for j, name in enumerate(model.output_names)]
+    order_rows = [[r["method"], r["order"], f"{r['singular_value']:.4g}",
+                   f"{r['aic']:.2f}", f"{r['bic']:.2f}", _pct(r["fit_validation"]).strip(),
+                   "yes" if r["stable"] else "no"] for r in sel.rows if r["error"] is None]
+    imgs = "".join(
+        f'<figure><img src="{esc(files[k].name)}" alt="{esc(k)}"><figcaption>{esc(cap)}'
+        "</figcaption></figure>"
+        for k, cap in (
+            ("compare", f"{out['which']} data: measured and simulated outputs"),
+            ("residuals", "residual correlations with 99 % bounds"),
+            ("error_spectrum", "spectrum of the simulation error"),
+            ("singular_values", "singular values"),
+            ("order_selection", "order selection"),
+            ("stabilization", "stabilisation diagram"),
+            ("bode", "Bode plot"),
+            ("pzmap", "pole-zero map"),
+        )
+    )
+    from .analysis import damp
+
+    details = esc(res.summary() + "\n\n" + repr(damp(model)))
+    return f"""<!DOCTYPE html>
+<html><head><meta charset="utf-8"><title>sysid report</title>
+<style>body{{font-family:sans-serif;max-width:1100px;margin:auto}}img{{max-width:100%}}
+td,th{{text-align:right}}</style></head><body>
+<h1>sysid identification report</h1>
+<p>{esc(repr(model))}</p>
+<p>Order choice: {esc(sel.reason)}</p>
+<pre>{details}</pre>
+<h2>Fit on the {esc(out['which'])} data</h2>
+{table("fit", ["output", "simulation fit %", "1-step fit %", "whiteness p", "white"], fit_rows)}
+<h2>Order sweep</h2>
+{table("orders", ["method", "order", "singular value", "AIC", "BIC", "validation fit %",
+                  "stable"], order_rows)}
+<p>Files: <a href="model.json">model.json</a>, <a href="fit.csv">fit.csv</a>,
+<a href="orders.csv">orders.csv</a></p>
+{imgs}
+</body></html>
+"""
+
+
+def _print_summary(out: dict[str, Any]) -> None:
+    model, sel = out["model"], out["selection"]
+    print(model)
+    print("order choice:", sel.reason)
+    print("poles:", np.array2string(model.poles(), precision=4))
+    for kind, r in (("simulation", out["compare"]), ("1-step prediction", out["prediction"])):
+        fits = ", ".join(f"{n}: {f:.1f} %" for n, f in zip(r.output_names, r.fit.mean(0)))
+        print(f"{out['which']} fit ({kind}): {fits}")
+    res = out["residuals"]
+    print("residual whiteness (Ljung-Box p): " + ", ".join(
+        f"{n}: {p:.3g}" for n, p in zip(res.output_names, res.ljung_box_pvalue)))
+    if "files" in out:
+        print(f"report: {out['files']['html']}")
+
+
+# -- commands -------------------------------------------------------------------------
 def _demo(args: argparse.Namespace) -> int:
     from . import datasets
-    from .data import IOData
-    from .subspace import SubspaceEstimator
 
     data = datasets.load_dryer()
     print(data)
     u, y = data.u, data.y
-    est_data = IOData(u=u[:500], y=y[:500], dt=data.dt)
-    est = SubspaceEstimator(est_data, horizon=15)
-    print(est)
-    sv = est.singular_values
-    print("singular values:", np.array2string(sv, precision=4, max_line_width=100))
-    model = est.fit(order="auto", x0=True)
-    print(model)
-    print("poles:", np.array2string(model.poles(), precision=4))
-    yv, uv = y[500:], u[500:]
-    for name, yh in (
-        ("simulation", model.simulate(uv)),
-        ("1-step prediction", model.predict(uv, yv)),
-    ):
-        # NRMSE fit after removing the transient-independent offset of the validation part
-        e = yv - yh
-        fit = 100 * (1 - np.linalg.norm(e - e.mean(0)) / np.linalg.norm(yv - yv.mean(0)))
-        print(f"validation fit ({name}, samples 501-1000, offset removed): {fit:.1f} %")
+    kw = {"dt": data.dt, "input_names": data.input_names, "output_names": data.output_names}
+    est_data = IOData(u=u[:500], y=y[:500], **kw)
+    val_data = IOData(u=u[500:], y=y[500:], **kw)
+    print("estimation: samples 1-500, validation: samples 501-1000, horizon 15")
+    out = identify(est_data, val_data, order="auto", horizon=15, report=args.report,
+                   preprocessing={"samples": "estimation 1-500, validation 501-1000",
+                                  "detrend": "none (raw data, as SLICOT)"},
+                   progress=_Progress(args.quiet))
+    _print_summary(out)
     return 0
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``sysid`` command."""
-    parser = argparse.ArgumentParser(prog="sysid", description=__doc__)
+def _identify(args: argparse.Namespace) -> int:
+    say = _Progress(args.quiet)
+    say(f"reading {args.data}")
+    names, rows = _read_table(args.data, args.delimiter)
+    first = 1 if names == [str(i) for i in range(len(names))] else 2
+    ui = _columns(args.inputs, names, "inputs") if args.inputs else []
+    yi = _columns(args.outputs, names, "outputs")
+    say(f"{len(rows)} samples; converting {len(ui)} input and {len(yi)} output column(s)")
+    u = _numeric(args.data, names, rows, ui, first)
+    y = _numeric(args.data, names, rows, yi, first)
+    if args.time is not None:
+        ti = _columns(args.time, names, "times")[0]
+        t = _numeric(args.data, names, rows, [ti], first)[:, 0]
+        steps = np.diff(t)
+        if steps.size == 0 or not np.all(steps > 0):
+            raise DataError(f"time column {args.time!r} must increase strictly")
+        dt = float(np.median(steps))
+        if args.dt is not None:
+            raise DataError("give either --dt or --time, not both")
+    else:
+        dt = 1.0 if args.dt is None else float(args.dt)
+    N = y.shape[0]
+    k = _split_index(args.split, N)
+    pre: dict[str, Any] = {"file": str(args.data), "inputs": [names[i] for i in ui],
+                           "outputs": [names[i] for i in yi],
+                           "estimation_samples": [0, k], "validation_samples": [k, N]}
+    if args.detrend == "mean":
+        mu, my = u[:k].mean(0), y[:k].mean(0)
+        u, y = u - mu, y - my
+        pre["removed_means"] = {"inputs": mu.tolist(), "outputs": my.tolist()}
+    pre["detrend"] = args.detrend
+    kw = {"dt": dt, "input_names": pre["inputs"], "output_names": pre["outputs"]}
+    est_data = IOData(u=u[:k] if ui else None, y=y[:k], **kw)
+    val_data = IOData(u=u[k:] if ui else None, y=y[k:], **kw) if k < N else None
+    out = identify(est_data, val_data, order=args.order, method=args.method,
+                   horizon=args.horizon, report=args.report, preprocessing=pre, progress=say)
+    _print_summary(out)
+    return 0
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="sysid", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="identify the bundled hair-dryer record")
+    demo.add_argument("--report", default="report", help="report directory (default ./report)")
+    demo.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     demo.set_defaults(func=_demo)
-    args = parser.parse_args(argv)
-    return int(args.func(args))
+    ide = sub.add_parser("identify", help="identify a model from a CSV file")
+    ide.add_argument("data", help="CSV file (header row of column names, numeric rows)")
+    ide.add_argument("--inputs", default="", help="input columns, comma separated")
+    ide.add_argument("--outputs", required=True, help="output columns, comma separated")
+    ide.add_argument("--order", default="auto", help="model order or 'auto' (default)")
+    ide.add_argument("--method", default="moesp", help="moesp, ordinary-moesp, n4sid or cva")
+    ide.add_argument("--horizon", type=int, default=None, help="past/future horizon")
+    ide.add_argument("--split", default="0.5",
+                     help="estimation part: fraction (0.5) or sample count (500); 1 = all")
+    ide.add_argument("--dt", type=float, default=None, help="sample time in seconds")
+    ide.add_argument("--time", default=None, help="time column (sample time from its steps)")
+    ide.add_argument("--detrend", choices=("none", "mean"), default="none",
+                     help="remove the estimation part's means first (recorded in the model)")
+    ide.add_argument("--delimiter", default=None, help="field separator (default: guessed)")
+    ide.add_argument("--report", required=True, help="output directory")
+    ide.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    ide.set_defaults(func=_identify)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``sysid`` command: errors become one readable line and exit code 2."""
+    args = _parser().parse_args(argv)
+    try:
+        return int(args.func(args))
+    except (SysidError, ImportError) as e:
+        print(f"sysid: error: {e}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":  # pragma: no cover

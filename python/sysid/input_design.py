@@ -378,6 +378,22 @@ def persistent_excitation_order(u: Any, max_order: int = 20, *, tol: float = 1e-
     return order
 
 
+def warn_excitation(got: int, order: int, *, stacklevel: int = 2) -> None:
+    """Issue the :class:`~sysid.ExcitationWarning` for an input of excitation order ``got``
+    asked to support a model of ``order`` (which needs ``2 * order``); silent otherwise."""
+    need = 2 * order
+    if got < need:
+        warnings.warn(
+            ExcitationWarning(
+                f"the input is persistently exciting of order {got} only, but a model of order "
+                f"{order} needs order {need}: the estimate is not determined by the data. "
+                "Use a richer input (white noise, PRBS, a multisine with more lines) or a lower "
+                "order"
+            ),
+            stacklevel=stacklevel + 1,
+        )
+
+
 def check_excitation(u: Any, order: int, *, stacklevel: int = 2) -> int:
     """Warn (:class:`~sysid.ExcitationWarning`) if ``u`` cannot support a model of ``order``:
     its persistent-excitation order is below ``2 * order``. Returns that order.
@@ -391,14 +407,5 @@ def check_excitation(u: Any, order: int, *, stacklevel: int = 2) -> int:
     """
     need = 2 * int(order)
     got = persistent_excitation_order(u, need)
-    if got < need:
-        warnings.warn(
-            ExcitationWarning(
-                f"the input is persistently exciting of order {got} only, but a model of order "
-                f"{order} needs order {need}: the estimate is not determined by the data. "
-                "Use a richer input (white noise, PRBS, a multisine with more lines) or a lower "
-                "order"
-            ),
-            stacklevel=stacklevel + 1,
-        )
+    warn_excitation(got, int(order), stacklevel=stacklevel + 1)
     return got

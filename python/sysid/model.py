@@ -278,3 +278,34 @@ class StateSpaceModel:
             f"StateSpaceModel(nstates={self.nstates}, ninputs={self.ninputs}, "
             f"noutputs={self.noutputs}, dt={self.dt:g}, {stab}, {noise}{method})"
         )
+
+    # -- analysis shortcuts (thin wrappers over sysid.analysis and sysid.io) --------------
+    def zeros(self) -> np.ndarray:
+        """Transmission zeros; see :func:`sysid.zeros`."""
+        from .analysis import zeros
+
+        return zeros(self)
+
+    def damp(self) -> Any:
+        """Pole frequencies (rad/s, Hz) and damping; see :func:`sysid.damp`."""
+        from .analysis import damp
+
+        return damp(self)
+
+    def step(self, n_samples: int | None = None) -> Any:
+        """Step responses; see :func:`sysid.step`."""
+        from .analysis import step
+
+        return step(self, n_samples)
+
+    def impulse(self, n_samples: int | None = None) -> Any:
+        """Impulse responses (Markov parameters); see :func:`sysid.impulse`."""
+        from .analysis import impulse
+
+        return impulse(self, n_samples)
+
+    def save(self, path: Any) -> None:
+        """Write the model to a ``.json`` or ``.npz`` file; see :func:`sysid.save_model`."""
+        from .io import save_model
+
+        save_model(self, path)

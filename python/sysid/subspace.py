@@ -35,7 +35,7 @@ import numpy as np
 from . import _sysid
 from .data import IOData
 from .errors import DataError
-from .input_design import check_excitation
+from .input_design import warn_excitation
 from .model import StateSpaceModel
 from .streaming import warn_if_fallback
 
@@ -131,6 +131,7 @@ class SubspaceEstimator:
         if not isinstance(data, IOData):
             raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
         self.data = data
+        self._from_factor = False
         self.method = _method(method)
         shortest = min(y.shape[0] for _, y in data.experiments)
         if horizon is None:
@@ -145,6 +146,7 @@ class SubspaceEstimator:
         )
         warn_if_fallback(self.factor)
         self._svd: dict[str, Any] = {}
+        self._pe_cache: dict[int, int] = {}
         self._subspace(None)  # checks the record (length, excitation) right away
 
     @classmethod
@@ -177,6 +179,7 @@ class SubspaceEstimator:
         self.past, self.future = factor.past, factor.future
         self.factor = factor
         self._svd = {}
+        self._pe_cache = {}
         return self
 
     def _subspace(self, method: str | None) -> Any:
@@ -251,14 +254,14 @@ class SubspaceEstimator:
         ):
             if not isinstance(flag, (bool, np.bool_)):
                 raise DataError(f"{name} must be True or False, got {flag!r}")
-        if self.data.n_inputs and not getattr(self, "_from_factor", False):
+        if self.factor.n_inputs:
             # warn (ExcitationWarning) when the input cannot support order n
-            check_excitation([u for u, _ in self.data.experiments], n, stacklevel=2)
+            warn_excitation(self._excitation_order(2 * n), n, stacklevel=2)
         res = sub.fit(n, bool(feedthrough), bool(kalman), bool(stable))
         x0_est = None
         B, D = res["B"], res["D"]
         if x0:
-            if getattr(self, "_from_factor", False):
+            if self._from_factor:
                 raise DataError("x0=True needs the data; this estimator was built from a factor")
             if self.data.n_experiments != 1:
                 raise DataError("x0=True needs a single-experiment record")
@@ -289,6 +292,31 @@ class SubspaceEstimator:
             output_names=self.data.output_names,
             info=info,
         )
+
+    def _excitation_order(self, needed: int, tol: float = 1e-9) -> int:
+        """Persistent-excitation order of the input, read from the factor (no pass over the
+        data): the largest ``d <= min(needed, past + future)`` for which the input's block
+        Hankel matrix with ``d`` block rows has full rank (eigenvalues of its Gram matrix
+        above ``tol`` times the largest, as :func:`sysid.persistent_excitation_order`)."""
+        f = self.factor
+        m = f.n_inputs
+        if needed not in self._pe_cache:
+            L = f.l
+            # input rows in time order: U_p (rows f m .. (f + p) m) then U_f (rows 0 .. f m)
+            rows = np.r_[np.arange(f.future * m, (f.future + f.past) * m), np.arange(f.future * m)]
+            depth = min(needed, f.past + f.future)
+            M = L[rows[: depth * m]]
+            G = M @ M.T
+            top = np.linalg.eigvalsh(G)[-1]
+            got = 0
+            for d in range(1, depth + 1):
+                if np.linalg.eigvalsh(G[: d * m, : d * m])[0] > tol * top:
+                    got = d
+                else:
+                    break
+            # beyond the window the factor cannot tell: do not claim a deficiency there
+            self._pe_cache[needed] = needed if got == f.past + f.future else got
+        return self._pe_cache[needed]
 
     def __repr__(self) -> str:
         return (

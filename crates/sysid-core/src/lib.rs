@@ -46,7 +46,9 @@
 pub mod error;
 pub mod hankel;
 pub mod linalg;
+pub mod lyapunov;
 pub mod model;
+pub mod realization;
 pub mod riccati;
 pub mod simulate;
 pub mod subspace;

@@ -7,6 +7,9 @@ use faer::{Mat, MatRef};
 use numpy::ndarray::{Array1, Array2, ArrayView1, ArrayView2};
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
+use sysid_core::StateSpace;
+
+use crate::errors::IntoPy;
 
 /// A faer view of a 2-D numpy array (no copy, any strides).
 pub fn view<'a>(a: &'a PyReadonlyArray2<'_, f64>) -> MatRef<'a, f64> {
@@ -41,4 +44,20 @@ pub fn mat_to_numpy<'py>(py: Python<'py>, m: &Mat<f64>) -> Bound<'py, PyArray2<f
 /// A slice as a new 1-D numpy array.
 pub fn slice_to_numpy<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f64>> {
     Array1::from(v.to_vec()).into_pyarray(py)
+}
+
+/// A core `StateSpace` from four numpy matrices (shapes and finiteness checked by the core).
+pub fn state_space(
+    a: &PyReadonlyArray2<'_, f64>,
+    b: &PyReadonlyArray2<'_, f64>,
+    c: &PyReadonlyArray2<'_, f64>,
+    d: &PyReadonlyArray2<'_, f64>,
+) -> PyResult<StateSpace> {
+    StateSpace::new(
+        view(a).to_owned(),
+        view(b).to_owned(),
+        view(c).to_owned(),
+        view(d).to_owned(),
+    )
+    .py()
 }

@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 mod convert;
 mod errors;
 mod hankel;
+mod realization;
 mod simulate;
 mod streaming;
 mod subspace;
@@ -19,5 +20,6 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     simulate::register(m)?;
     streaming::register(m)?;
     subspace::register(m)?;
+    realization::register(m)?;
     Ok(())
 }

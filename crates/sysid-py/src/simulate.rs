@@ -1,25 +1,10 @@
 //! Bindings of simulation, prediction and the Kalman gain.
 
-use crate::convert::{mat_to_numpy, vec1, view};
+use crate::convert::{mat_to_numpy, state_space as model, vec1, view};
 use crate::errors::IntoPy;
 use numpy::{PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
-use sysid_core::{riccati, simulate as sim, StateSpace};
-
-fn model(
-    a: &PyReadonlyArray2<'_, f64>,
-    b: &PyReadonlyArray2<'_, f64>,
-    c: &PyReadonlyArray2<'_, f64>,
-    d: &PyReadonlyArray2<'_, f64>,
-) -> PyResult<StateSpace> {
-    StateSpace::new(
-        view(a).to_owned(),
-        view(b).to_owned(),
-        view(c).to_owned(),
-        view(d).to_owned(),
-    )
-    .py()
-}
+use sysid_core::{riccati, simulate as sim};
 
 /// Simulates `x(t+1) = A x + B u, y = C x + D u`; returns `(N, l)`.
 #[pyfunction]

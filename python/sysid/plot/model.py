@@ -1,0 +1,138 @@
+"""Plots of models: Bode, singular values (sigma), pole-zero map, time responses."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from . import _pyplot
+
+__all__ = ["plot_bode", "plot_sigma", "plot_pzmap", "plot_time_response"]
+
+
+def _models(models: Any) -> list[Any]:
+    return list(models) if isinstance(models, (list, tuple)) else [models]
+
+
+def _omega(models: list[Any], omega: Any, n: int = 400) -> np.ndarray:
+    if omega is not None:
+        return np.asarray(omega, dtype=float)
+    if all(hasattr(m, "dt") for m in models):
+        nyq = min(np.pi / m.dt for m in models)
+        return np.logspace(np.log10(nyq) - 3, np.log10(nyq), n)
+    # continuous models: two decades either side of the pole magnitudes
+    mags = np.concatenate([np.abs(m.poles()) for m in models] + [np.ones(1)])
+    mags = mags[mags > 0]
+    return np.logspace(np.log10(mags.min()) - 2, np.log10(mags.max()) + 2, n)
+
+
+def plot_bode(models: Any, omega: Any = None, *, hz: bool = True, fig: Any = None,
+              labels: Sequence[str] | None = None) -> Any:
+    """Magnitude (dB) and phase (deg) of each input-output pair, for one or more models.
+
+    Parameters
+    ----------
+    models : StateSpaceModel or list of them
+        Models with the same channels.
+    omega : array_like, optional
+        Angular frequencies in rad/s (default: three decades below Nyquist).
+    hz : bool
+        Label the frequency axis in Hz (else rad/s).
+    fig : matplotlib Figure, optional
+    labels : sequence of str, optional
+        Legend entries, one per model.
+    """
+    plt = _pyplot()
+    ms = _models(models)
+    w = _omega(ms, omega)
+    l, m = ms[0].noutputs, ms[0].ninputs
+    if fig is None:
+        fig = plt.figure(figsize=(4 * m + 2, 3.2 * l + 1))
+    axes = fig.subplots(2 * l, m, squeeze=False, sharex=True)
+    x = w / (2 * np.pi) if hz else w
+    for k, mod in enumerate(ms):
+        H = mod.freqresp(w)
+        info = getattr(mod, "info", {})
+        lab = labels[k] if labels is not None else str(info.get("method", f"model {k}"))
+        for i in range(l):
+            for j in range(m):
+                mag = 20 * np.log10(np.maximum(np.abs(H[:, i, j]), 1e-300))
+                ph = np.degrees(np.unwrap(np.angle(H[:, i, j])))
+                axes[2 * i, j].semilogx(x, mag, color=f"C{k}", label=lab)
+                axes[2 * i + 1, j].semilogx(x, ph, color=f"C{k}")
+                axes[2 * i, j].set_ylabel(f"|{mod.output_names[i]}/{mod.input_names[j]}| [dB]",
+                                          fontsize=8)
+                axes[2 * i + 1, j].set_ylabel("phase [deg]", fontsize=8)
+    for ax in axes.ravel():
+        ax.grid(True, which="both", alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel("frequency [Hz]" if hz else "frequency [rad/s]")
+    if len(ms) > 1:
+        axes[0, 0].legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def plot_sigma(models: Any, omega: Any = None, *, hz: bool = True, ax: Any = None) -> Any:
+    """Singular values of the frequency response (MIMO gain envelope), in dB."""
+    plt = _pyplot()
+    ms = _models(models)
+    w = _omega(ms, omega)
+    if ax is None:
+        _, ax = plt.subplots(figsize=(6, 3.5))
+    x = w / (2 * np.pi) if hz else w
+    for k, mod in enumerate(ms):
+        sv = np.linalg.svd(mod.freqresp(w), compute_uv=False)
+        ax.semilogx(x, 20 * np.log10(np.maximum(sv, 1e-300)), color=f"C{k}")
+    ax.set_xlabel("frequency [Hz]" if hz else "frequency [rad/s]")
+    ax.set_ylabel("singular values [dB]")
+    ax.grid(True, which="both", alpha=0.3)
+    return ax
+
+
+def plot_pzmap(models: Any, ax: Any = None) -> Any:
+    """Poles (x) and transmission zeros (o) in the z-plane with the unit circle."""
+    from ..analysis import zeros
+
+    plt = _pyplot()
+    ms = _models(models)
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5, 5))
+    discrete = all(hasattr(m, "dt") for m in ms)
+    if discrete:  # the stability boundary: unit circle (z) or imaginary axis (s)
+        th = np.linspace(0, 2 * np.pi, 400)
+        ax.plot(np.cos(th), np.sin(th), color="0.5", lw=0.8)
+    for k, mod in enumerate(ms):
+        p, z = mod.poles(), zeros(mod)
+        ax.plot(p.real, p.imag, "x", color=f"C{k}", ms=8, label="poles")
+        ax.plot(z.real, z.imag, "o", color=f"C{k}", mfc="none", ms=8, label="zeros")
+    ax.axhline(0, color="0.8", lw=0.5)
+    ax.axvline(0, color="0.8", lw=0.5)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("Re z" if discrete else "Re s")
+    ax.set_ylabel("Im z" if discrete else "Im s")
+    ax.legend(fontsize=8, loc="upper left")
+    ax.set_title("pole-zero map")
+    return ax
+
+
+def plot_time_response(resp: Any, fig: Any = None) -> Any:
+    """A :class:`~sysid.analysis.TimeResponse`, one axis per (output, input)."""
+    plt = _pyplot()
+    _, l, m = resp.y.shape
+    if fig is None:
+        fig = plt.figure(figsize=(3.5 * m + 1, 2.4 * l + 1))
+    axes = fig.subplots(l, m, squeeze=False, sharex=True)
+    for i in range(l):
+        for j in range(m):
+            ax = axes[i, j]
+            ax.step(resp.t, resp.y[:, i, j], where="post")
+            ax.set_title(f"{resp.kind}: {resp.input_names[j]} -> {resp.output_names[i]}",
+                         fontsize=8)
+            ax.grid(True, alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel("time [s]")
+    fig.tight_layout()
+    return fig

@@ -1,0 +1,268 @@
+"""Model analysis: zeros, damping, rank tests, responses, c2d/d2c, conversions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.signal
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import sysid
+from sysid.analysis import ContinuousStateSpace
+
+try:  # python-control is an optional oracle
+    import control
+except ImportError:  # pragma: no cover
+    control = None
+needs_control = pytest.mark.skipif(control is None, reason="python-control is not installed")
+
+
+def random_continuous(seed: int, n: int = 4, m: int = 2, l: int = 3) -> ContinuousStateSpace:
+    rng = np.random.default_rng(seed)
+    # stable, distinct poles: real parts in [-3, -0.2], a few oscillatory pairs
+    A = rng.standard_normal((n, n))
+    A = A - (np.max(np.linalg.eigvals(A).real) + rng.uniform(0.2, 1.0)) * np.eye(n)
+    return ContinuousStateSpace(A, rng.standard_normal((n, m)), rng.standard_normal((l, n)),
+                                rng.standard_normal((l, m)))
+
+
+# -- the thesis example (seed 002, appendix B.19-B.22, Ts = 4 ms) --------------------
+A_PULSE1 = np.array([
+    [0.9396, -0.1076, -0.1926, 0.2289, 0.1112, 0.0143],
+    [0.0843, 0.9275, -0.3058, -0.1376, -0.0802, -0.0012],
+    [0.1851, 0.2925, 0.9122, 0.1300, 0.0510, -0.0126],
+    [-0.2200, 0.1624, -0.0791, 0.8958, -0.0134, 0.0404],
+    [-0.1099, 0.0774, -0.0342, -0.0570, 0.9740, 0.0615],
+    [-0.2038, -0.2027, -0.1052, 0.4774, -0.2319, 0.5055],
+])
+B_PULSE1 = np.array([[0.0795], [0.2898], [0.5659], [-0.7335], [-0.1450], [2.8114]])
+C_PULSE1 = np.array([[0.0982, 0.0359, 0.5388, -0.6955, -0.3720, 0.4386]])
+
+
+def test_thesis_poles_in_hz():
+    m = sysid.StateSpaceModel(A_PULSE1, B_PULSE1, C_PULSE1, dt=0.004)
+    table = sysid.damp(m)
+    osc = table.poles.imag > 0
+    # the thesis quotes the oscillation frequencies angle(z) / (2 pi Ts): 15.46 and 12.75 Hz
+    assert sorted(np.round(table.wd_hz[osc], 2)) == [12.75, 15.46]
+    # natural frequencies |log z| / (2 pi Ts) are slightly higher (damping 0.02 and 0.04)
+    assert sorted(np.round(table.wn_hz[osc], 2)) == [12.76, 15.46]
+    assert np.all(table.zeta[osc] > 0.01) and np.all(table.zeta[osc] < 0.05)
+    # rad/s and Hz are consistent, and the representation is a table
+    np.testing.assert_allclose(table.wn, 2 * np.pi * table.wn_hz)
+    assert "15.46" in repr(table) and len(table) == 6
+
+
+def test_damp_continuous_and_real_poles():
+    sys = ContinuousStateSpace([[-2.0, 0.0], [0.0, -0.5]], [[1.0], [1.0]], [[1.0, 1.0]])
+    t = sysid.damp(sys)
+    np.testing.assert_allclose(t.wn, [0.5, 2.0])
+    np.testing.assert_allclose(t.zeta, [1.0, 1.0])
+    np.testing.assert_allclose(t.tau, [2.0, 0.5])
+    # a discrete pole at the origin is infinitely fast, not a NaN
+    t0 = sysid.damp(sysid.StateSpaceModel([[0.0]], [[1.0]], [[1.0]]))
+    assert np.isinf(t0.wn[0]) and t0.zeta[0] == 1.0
+
+
+@needs_control
+def test_damp_matches_control():
+    m = sysid.c2d(random_continuous(3), 0.05)
+    wn, zeta, _ = control.damp(sysid.to_control(m), doprint=False)
+    t = sysid.damp(m)
+    np.testing.assert_allclose(np.sort(t.wn), np.sort(wn), rtol=1e-10)
+    np.testing.assert_allclose(np.sort(t.zeta), np.sort(zeta), rtol=1e-8, atol=1e-12)
+
+
+# -- zeros ---------------------------------------------------------------------------
+@needs_control
+def test_zeros_square_match_control():
+    sys = random_continuous(1, n=5, m=2, l=2)
+    m = sysid.c2d(sys, 0.1)
+    expected = control.zeros(sysid.to_control(m))
+    got = sysid.zeros(m)
+    assert got.size == expected.size
+    np.testing.assert_allclose(np.sort_complex(got), np.sort_complex(expected), rtol=1e-8)
+
+
+def test_zeros_siso_are_numerator_roots():
+    m = sysid.c2d(random_continuous(2, n=4, m=1, l=1), 0.1)
+    num, _ = scipy.signal.ss2tf(m.A, m.B, m.C, m.D)
+    roots = np.roots(np.trim_zeros(num[0], "f"))
+    np.testing.assert_allclose(np.sort_complex(sysid.zeros(m)), np.sort_complex(roots),
+                               rtol=1e-7)
+
+
+def test_zeros_non_square():
+    # two outputs sharing the zero at 0.35 (and a distinct one each): only 0.35 is common
+    A = np.diag([0.5, 0.2])
+    B = np.array([[1.0], [1.0]])
+    C = np.array([[1.0, 1.0], [2.0, 2.0]])
+    z = sysid.zeros(sysid.StateSpaceModel(A, B, C))
+    np.testing.assert_allclose(z, [0.35], atol=1e-10)
+    # a tall system with no common zero has none
+    C2 = np.array([[1.0, 1.0], [1.0, 0.0]])
+    assert sysid.zeros(sysid.StateSpaceModel(A, B, C2)).size == 0
+
+
+# -- controllability / observability -------------------------------------------------
+def test_rank_tests():
+    m = sysid.c2d(random_continuous(4), 0.1)
+    assert sysid.is_controllable(m) and sysid.is_observable(m)
+    assert np.linalg.matrix_rank(sysid.ctrb(m)) == 4
+    assert sysid.obsv(m).shape == (4 * 3, 4)
+    if control is not None:
+        np.testing.assert_allclose(sysid.ctrb(m), control.ctrb(m.A, m.B))
+        np.testing.assert_allclose(sysid.obsv(m), control.obsv(m.A, m.C))
+    # add a mode that the input cannot reach and the output cannot see
+    A = np.block([[m.A, np.zeros((4, 1))], [np.zeros((1, 4)), np.array([[0.3]])]])
+    bad = sysid.StateSpaceModel(A, np.vstack([m.B, [[0, 0]]]), np.hstack([m.C, np.zeros((3, 1))]))
+    assert not sysid.is_controllable(bad) and not sysid.is_observable(bad)
+    # a weakly coupled mode passes only with a loose tolerance
+    weak = sysid.StateSpaceModel(A, np.vstack([m.B, [[1e-9, 0]]]),
+                                 np.hstack([m.C, np.ones((3, 1))]))
+    assert sysid.is_controllable(weak, tol=1e-12) and not sysid.is_controllable(weak, tol=1e-6)
+
+
+# -- responses -----------------------------------------------------------------------
+def test_step_and_impulse():
+    m = sysid.c2d(random_continuous(5, m=2, l=2), 0.1)
+    s = sysid.step(m, 400)
+    assert s.y.shape == (400, 2, 2)
+    np.testing.assert_allclose(s.y[-1], m.dcgain(), rtol=1e-6, atol=1e-8)
+    imp = sysid.impulse(m, 30)
+    np.testing.assert_allclose(np.cumsum(imp.y, axis=0), s.y[:30], atol=1e-12)
+    if control is not None:
+        _, yc = control.step_response(sysid.to_control(m), T=np.arange(50) * 0.1)
+        np.testing.assert_allclose(s.y[:50, 0, 0], yc[0, 0], atol=1e-10)
+    assert sysid.step(m).y.shape[0] >= 20  # default length from the slowest pole
+    with pytest.raises(sysid.DataError, match="n_samples"):
+        sysid.step(m, 0)
+
+
+# -- c2d / d2c -----------------------------------------------------------------------
+@pytest.mark.parametrize("method,scipy_method", [("zoh", "zoh"), ("tustin", "bilinear")])
+def test_c2d_matches_scipy_and_control(method, scipy_method):
+    sys = random_continuous(6)
+    dt = 0.07
+    d = sysid.c2d(sys, dt, method)
+    ref = scipy.signal.cont2discrete((sys.A, sys.B, sys.C, sys.D), dt, method=scipy_method)
+    for got, want in zip((d.A, d.B, d.C, d.D), ref[:4]):
+        np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-12)
+    if control is None:
+        return
+    ct = control.sample_system(sysid.to_control(sys), dt, method=method)
+    for got, want in zip((d.A, d.B, d.C, d.D), (ct.A, ct.B, ct.C, ct.D)):
+        np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-12)
+    assert d.dt == dt
+
+
+@settings(max_examples=25, deadline=None)
+@given(seed=st.integers(0, 10_000), dt=st.floats(0.01, 0.5),
+       method=st.sampled_from(["zoh", "tustin"]))
+def test_d2c_inverts_c2d(seed, dt, method):
+    sys = random_continuous(seed)
+    back = sysid.d2c(sysid.c2d(sys, dt, method), method)
+    for got, want in zip((back.A, back.B, back.C, back.D), (sys.A, sys.B, sys.C, sys.D)):
+        np.testing.assert_allclose(got, want, rtol=1e-8, atol=1e-8)
+
+
+def test_d2c_frequency_response_tustin():
+    sys = random_continuous(7, m=1, l=1)
+    dt = 0.05
+    d = sysid.c2d(sys, dt, "tustin")
+    w = np.array([0.3, 2.0, 10.0])
+    # the bilinear map sends continuous frequency (2/dt) tan(w dt / 2) to discrete w
+    warped = 2 / dt * np.tan(w * dt / 2)
+    np.testing.assert_allclose(d.freqresp(w), sys.freqresp(warped), rtol=1e-10)
+
+
+def test_d2c_errors():
+    with pytest.raises(sysid.NumericalError, match="negative real axis"):
+        sysid.d2c(sysid.StateSpaceModel([[-0.5]], [[1.0]], [[1.0]]))
+    with pytest.raises(sysid.NumericalError, match="z = -1"):
+        sysid.d2c(sysid.StateSpaceModel([[-1.0]], [[1.0]], [[1.0]]), "tustin")
+    with pytest.raises(sysid.DataError, match="zoh"):
+        sysid.d2c(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), "euler")
+    with pytest.raises(sysid.DataError, match="dt"):
+        sysid.c2d(ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]]), -1.0)
+
+
+# -- conversions ---------------------------------------------------------------------
+@needs_control
+def test_control_round_trip():
+    m = sysid.StateSpaceModel(A_PULSE1, B_PULSE1, C_PULSE1, dt=0.004, input_names=["force"],
+                              output_names=["x"])
+    ct = sysid.to_control(m)
+    assert ct.dt == 0.004 and ct.input_labels == ["force"]
+    back = sysid.from_control(ct)
+    assert isinstance(back, sysid.StateSpaceModel) and back.output_names == ["x"]
+    np.testing.assert_array_equal(back.A, m.A)
+    w = np.linspace(0.1, 700, 7)
+    np.testing.assert_allclose(
+        ct.frequency_response(w).complex.reshape(-1), m.freqresp(w)[:, 0, 0], rtol=1e-10)
+    cont = sysid.from_control(control.tf([1.0], [1.0, 2.0]))
+    assert isinstance(cont, ContinuousStateSpace)
+    np.testing.assert_allclose(cont.dcgain(), [[0.5]])
+
+
+def test_scipy_round_trip():
+    m = sysid.StateSpaceModel(A_PULSE1, B_PULSE1, C_PULSE1, dt=0.004)
+    sp = sysid.to_scipy(m)
+    assert sp.dt == 0.004
+    back = sysid.from_scipy(sp)
+    np.testing.assert_array_equal(back.C, m.C)
+    cont = sysid.from_scipy(scipy.signal.TransferFunction([1.0], [1.0, 3.0]))
+    np.testing.assert_allclose(cont.dcgain(), [[1 / 3]])
+    d = sysid.from_scipy(scipy.signal.dlti([1.0], [1.0, -0.5], dt=0.2))
+    assert isinstance(d, sysid.StateSpaceModel) and d.dt == 0.2
+    np.testing.assert_allclose(d.dcgain(), [[2.0]])
+    with pytest.raises(sysid.DataError, match="scipy.signal"):
+        sysid.from_scipy("not a system")
+
+
+def test_wrong_types():
+    with pytest.raises(sysid.DataError, match="StateSpaceModel"):
+        sysid.step(np.eye(2))
+    with pytest.raises(sysid.DataError, match="ContinuousStateSpace"):
+        sysid.c2d(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), 0.1)
+
+
+def test_plots_of_responses():
+    plt = pytest.importorskip("matplotlib.pyplot")
+    m = sysid.StateSpaceModel(A_PULSE1, B_PULSE1, C_PULSE1, dt=0.004)
+    fig = sysid.step(m, 50).plot()
+    assert len(fig.axes) == 1
+    from sysid.plot.model import plot_bode, plot_pzmap, plot_sigma
+
+    fig = plot_bode([m, m], labels=["a", "b"])
+    assert len(fig.axes) == 2
+    ax = plot_pzmap(m)
+    assert len(ax.lines) >= 3  # circle, poles, zeros
+    ax2 = plot_sigma(m)
+    assert len(ax2.lines) == 1
+    plt.close("all")
+
+
+def test_model_shortcuts(tmp_path):
+    m = sysid.StateSpaceModel(A_PULSE1, B_PULSE1, C_PULSE1, dt=0.004)
+    np.testing.assert_array_equal(m.zeros(), sysid.zeros(m))
+    np.testing.assert_array_equal(m.damp().wn_hz, sysid.damp(m).wn_hz)
+    np.testing.assert_array_equal(m.step(20).y, sysid.step(m, 20).y)
+    np.testing.assert_array_equal(m.impulse(20).y, m.markov(20))
+    m.save(tmp_path / "m.npz")
+    np.testing.assert_array_equal(sysid.load_model(tmp_path / "m.npz").A, m.A)
+
+
+def test_plots_of_continuous_models():
+    plt = pytest.importorskip("matplotlib.pyplot")
+    from sysid.plot.model import plot_bode, plot_pzmap
+
+    sys = random_continuous(8, m=1, l=1)
+    fig = plot_bode(sys)
+    x = fig.axes[0].lines[0].get_xdata()
+    wn = np.abs(sys.poles())
+    assert x.min() < wn.min() / (2 * np.pi) < wn.max() / (2 * np.pi) < x.max()
+    ax = plot_pzmap(sys)
+    assert ax.get_xlabel() == "Re s"
+    plt.close("all")

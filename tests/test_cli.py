@@ -1,0 +1,229 @@
+"""The command line: demo, identify, the HTML report, and bad input."""
+
+from __future__ import annotations
+
+import csv
+import subprocess
+import sys
+from html.parser import HTMLParser
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import sysid
+from sysid import _sysid
+from sysid.cli import main, read_csv
+
+pytestmark = pytest.mark.skipif(not hasattr(_sysid, "Subspace"),
+                                reason="the subspace engine is not in this build yet")
+pytest.importorskip("matplotlib")
+
+
+class Page(HTMLParser):
+    """Collects images and tables of the report page."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.images: list[str] = []
+        self.tables: dict[str, list[list[str]]] = {}
+        self._table: str | None = None
+        self._cell: list[str] | None = None
+        self.title = ""
+        self._in_title = False
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "img":
+            self.images.append(a["src"])
+        elif tag == "table":
+            self._table = a.get("id", f"table{len(self.tables)}")
+            self.tables[self._table] = []
+        elif tag == "tr" and self._table:
+            self.tables[self._table].append([])
+        elif tag in ("td", "th") and self._table:
+            self._cell = []
+        elif tag == "title":
+            self._in_title = True
+
+    def handle_endtag(self, tag):
+        if tag in ("td", "th") and self._cell is not None:
+            self.tables[self._table][-1].append("".join(self._cell).strip())
+            self._cell = None
+        elif tag == "table":
+            self._table = None
+        elif tag == "title":
+            self._in_title = False
+
+    def handle_data(self, data):
+        if self._cell is not None:
+            self._cell.append(data)
+        if self._in_title:
+            self.title += data
+
+
+def check_report(root: Path, outputs: list[str]) -> Page:
+    page = Page()
+    page.feed((root / "index.html").read_text(encoding="utf-8"))
+    page.close()
+    assert page.title == "sysid report"
+    assert len(page.images) >= 8
+    for src in page.images:
+        data = (root / src).read_bytes()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 2000, src
+    fit = page.tables["fit"]
+    assert fit[0][:3] == ["output", "simulation fit %", "1-step fit %"]
+    assert [row[0] for row in fit[1:]] == outputs
+    for row in fit[1:]:
+        sim, pred = float(row[1]), float(row[2])
+        assert -100 < sim <= 100 and -100 < pred <= 100
+    orders = page.tables["orders"]
+    assert [int(r[1]) for r in orders[1:]] == list(range(1, len(orders)))
+    model = sysid.load_model(root / "model.json")
+    assert model.info["settings"]["order"] == model.nstates
+    assert "preprocessing" in model.info
+    with open(root / "fit.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert [r["output"] for r in rows] == outputs
+    return page
+
+
+def dryer_csv(path: Path) -> Path:
+    d = np.loadtxt(sysid.datasets.path("dryer"))
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["time", "heater", "temperature"])
+        for k, (u, y) in enumerate(d):
+            w.writerow([f"{0.08 * k:.2f}", u, y])
+    return path
+
+
+def test_identify_from_csv(tmp_path, capsys):
+    data = dryer_csv(tmp_path / "dryer.csv")
+    rep = tmp_path / "out"
+    code = main(["identify", str(data), "--inputs", "heater", "--outputs", "temperature",
+                 "--time", "time", "--split", "500", "--order", "4", "--horizon", "15",
+                 "--detrend", "mean", "--report", str(rep)])
+    assert code == 0
+    captured = capsys.readouterr()
+    assert "[sysid" in captured.err  # progress on stderr
+    check_report(rep, ["temperature"])
+    model = sysid.load_model(rep / "model.json")
+    assert model.nstates == 4 and model.dt == pytest.approx(0.08)
+    pre = model.info["preprocessing"]
+    assert pre["estimation_samples"] == [0, 500] and pre["detrend"] == "mean"
+    assert pre["removed_means"]["outputs"][0] == pytest.approx(
+        np.loadtxt(sysid.datasets.path("dryer"))[:500, 1].mean())
+
+
+def test_identify_mimo_without_header(tmp_path):
+    rng = np.random.default_rng(0)
+    true = sysid.StateSpaceModel(np.diag([0.9, 0.5, -0.3]), rng.standard_normal((3, 2)),
+                                 rng.standard_normal((2, 3)), dt=0.5)
+    u = rng.standard_normal((600, 2))
+    y = true.simulate(u) + 0.01 * rng.standard_normal((600, 2))
+    path = tmp_path / "plain.txt"
+    np.savetxt(path, np.hstack([u, y]), delimiter=";")
+    rep = tmp_path / "rep"
+    assert main(["identify", str(path), "--inputs", "0,1", "--outputs", "2,3", "--dt", "0.5",
+                 "--split", "0.7", "--quiet", "--delimiter", ";", "--method", "n4sid",
+                 "--report", str(rep)]) == 0
+    check_report(rep, ["2", "3"])
+    model = sysid.load_model(rep / "model.json")
+    assert model.nstates == 3 and model.info["settings"]["method"] == "n4sid"
+    assert model.info["preprocessing"]["validation_samples"] == [420, 600]
+
+
+def test_demo_runs_as_a_module_and_writes_a_report(tmp_path):
+    """``python -m sysid demo`` (what ``make demo`` runs) in a fresh process."""
+    env_path = str(Path(sysid.__file__).parents[1])
+    proc = subprocess.run(
+        [sys.executable, "-m", "sysid", "demo", "--report", str(tmp_path / "r"), "--quiet"],
+        capture_output=True, text=True, cwd=tmp_path, timeout=300,
+        env={"PYTHONPATH": env_path, "MPLBACKEND": "Agg", "PATH": "/usr/bin:/bin"},
+    )
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout
+    assert "validation fit (simulation): air temperature:" in out
+    assert "order choice: order 4" in out
+    check_report(tmp_path / "r", ["air temperature"])
+    fit = float(out.split("validation fit (simulation): air temperature:")[1].split("%")[0])
+    assert 80 < fit < 95
+
+
+# -- bad input -------------------------------------------------------------------------
+def run_error(capsys, argv):
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("sysid: error:") == 1
+    return err
+
+
+def test_missing_column(tmp_path, capsys):
+    data = dryer_csv(tmp_path / "d.csv")
+    err = run_error(capsys, ["identify", str(data), "--inputs", "voltage", "--outputs",
+                             "temperature", "--report", str(tmp_path / "r")])
+    assert "input column 'voltage' not found" in err and "time, heater, temperature" in err
+
+
+def test_text_in_numeric_column(tmp_path, capsys):
+    path = tmp_path / "bad.csv"
+    path.write_text("u,y\n1.0,2.0\n0.5,abc\n")
+    err = run_error(capsys, ["identify", str(path), "--inputs", "u", "--outputs", "y",
+                             "--report", str(tmp_path / "r")])
+    assert "line 3, column 'y': 'abc' is not a number" in err
+    with pytest.raises(sysid.DataError, match="2 fields but the header has 3"):
+        (tmp_path / "ragged.csv").write_text("a,b,c\n1,2\n")
+        read_csv(tmp_path / "ragged.csv")
+
+
+def test_order_larger_than_the_data_support(tmp_path, capsys):
+    data = dryer_csv(tmp_path / "d.csv")
+    err = run_error(capsys, ["identify", str(data), "--inputs", "heater", "--outputs",
+                             "temperature", "--horizon", "5", "--order", "40",
+                             "--report", str(tmp_path / "r")])
+    assert "order 40 is larger than the data and horizon support" in err
+    assert "raise --horizon" in err
+    err = run_error(capsys, ["identify", str(data), "--inputs", "heater", "--outputs",
+                             "temperature", "--order", "four", "--report", str(tmp_path / "r")])
+    assert "--order must be 'auto' or a positive integer" in err
+
+
+def test_other_bad_arguments(tmp_path, capsys):
+    data = dryer_csv(tmp_path / "d.csv")
+    base = ["identify", str(data), "--inputs", "heater", "--outputs", "temperature",
+            "--report", str(tmp_path / "r")]
+    assert "--split must be" in run_error(capsys, base + ["--split", "half"])
+    assert "leaves no estimation data" in run_error(capsys, base + ["--split", "0"])
+    assert "either --dt or --time" in run_error(capsys, base + ["--time", "time", "--dt", "1"])
+    assert "no data file" in run_error(capsys, ["identify", str(tmp_path / "none.csv"),
+                                                "--outputs", "y", "--report", "r"])
+    (tmp_path / "empty.csv").write_text("")
+    assert "is empty" in run_error(capsys, ["identify", str(tmp_path / "empty.csv"),
+                                            "--outputs", "y", "--report", "r"])
+
+
+def test_model_and_data_channel_mismatch(tmp_path):
+    model = sysid.StateSpaceModel([[0.5]], [[1.0, 0.0]], [[1.0]], dt=0.08)
+    with pytest.raises(sysid.ShapeError, match="2 input.*1 input"):
+        sysid.compare(model, sysid.datasets.load_dryer())
+    with pytest.raises(sysid.ShapeError, match="2 input.*1 input"):
+        sysid.residuals(model, sysid.datasets.load_dryer())
+
+
+def test_console_script_points_at_main():
+    tomllib = pytest.importorskip("tomllib")
+    pyproject = Path(__file__).resolve().parents[1] / "pyproject.toml"
+    scripts = tomllib.loads(pyproject.read_text())["project"]["scripts"]
+    module, func = scripts["sysid"].split(":")
+    assert module == "sysid.cli" and getattr(sys.modules[module], func) is main
+
+
+def test_identify_without_validation_data_uses_bic():
+    from sysid.cli import identify
+
+    d = sysid.datasets.load_dryer()
+    out = identify(d, None, horizon=15)
+    assert out["which"] == "estimation" and out["selection"].criterion == "bic"
+    assert out["model"].nstates == out["selection"].picks["bic"]
+    assert "files" not in out

@@ -1,0 +1,174 @@
+"""Information criteria and order selection."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import sysid
+from sysid import _sysid
+from sysid.criteria import CRITERIA, Criteria, n_parameters
+
+needs_engine = pytest.mark.skipif(not hasattr(_sysid, "Subspace"),
+                                  reason="the subspace engine is not in this build yet")
+
+
+def test_parameter_count():
+    # n (2 l + m) + l m: A, B, C, K minus the n^2 of the state basis, plus D
+    assert n_parameters(4, 1, 1) == 4 * 3 + 1
+    assert n_parameters(3, 2, 3) == 3 * (6 + 2) + 6
+    assert n_parameters(3, 2, 3, feedthrough=False) == 24
+    assert n_parameters(3, 2, 3, noise_model=False) == 3 * (3 + 2) + 6
+    assert n_parameters(3, 2, 3, x0=True, n_experiments=2) == 30 + 6
+
+
+def test_criteria_formulas():
+    c = Criteria(np.log(0.01), 10, 500)
+    assert c.aic == pytest.approx(500 * np.log(0.01) + 20)
+    assert c.aicc == pytest.approx(c.aic + 2 * 10 * 11 / (500 - 11))
+    assert c.bic == pytest.approx(500 * np.log(0.01) + 10 * np.log(500))
+    assert c.fpe == pytest.approx(0.01 * (1 + 10 / 500) / (1 - 10 / 500))
+    many = Criteria(0.0, 600, 500)
+    assert np.isinf(many.fpe) and np.isinf(many.aicc)
+    assert "AIC" in repr(c)
+
+
+def test_criteria_of_a_model_penalise_extra_parameters():
+    rng = np.random.default_rng(0)
+    m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]], [[0.5]], K=[[0.3]])
+    u = rng.standard_normal(800)
+    y = m.simulate(u) + 0.1 * rng.standard_normal((800, 1))
+    c = sysid.criteria(m, (u, y))
+    assert c.n_params == n_parameters(1, 1, 1, x0=True)
+    assert c.loss == pytest.approx(np.var(y - m.predict(u, y, 1, sysid.estimate_x0(m, u, y, 1))),
+                                   rel=0.05)
+    c2 = sysid.criteria(m, (u, y), n_params=c.n_params + 5)
+    assert c2.aic == pytest.approx(c.aic + 10) and c2.bic > c.bic
+    zero = sysid.criteria(m, (u, y), x0="zero")
+    assert zero.n_params == c.n_params - 1
+
+
+def test_regularised_loss_on_exact_data():
+    m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]])
+    u = np.random.default_rng(1).standard_normal(300)
+    c = sysid.criteria(m, (u, m.simulate(u)), resolution=1e-6)
+    # the floor is (resolution * rms(y))^2: round-off does not count as information
+    assert c.loss == pytest.approx(1e-12 * np.mean(m.simulate(u) ** 2), rel=1e-3)
+
+
+def order6_system(seed=0):
+    rng = np.random.default_rng(seed)
+    A = np.zeros((6, 6))
+    for k, (r, f) in enumerate([(0.95, 0.05), (0.9, 0.15), (0.85, 0.3)]):
+        p = r * np.exp(2j * np.pi * f)
+        A[2 * k: 2 * k + 2, 2 * k: 2 * k + 2] = [[p.real, -p.imag], [p.imag, p.real]]
+    return sysid.StateSpaceModel(A, rng.standard_normal((6, 2)), rng.standard_normal((2, 6)),
+                                 rng.standard_normal((2, 2)))
+
+
+@needs_engine
+def test_noise_free_order_6_is_picked_by_every_rule():
+    true = order6_system()
+    rng = np.random.default_rng(2)
+    u, uv = rng.standard_normal((1000, 2)), rng.standard_normal((500, 2))
+    est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=true.simulate(u)), horizon=8)
+    sel = sysid.select_order(est, validation=(uv, true.simulate(uv)))
+    assert sel.picks == {"aic": 6, "aicc": 6, "bic": 6, "fpe": 6, "svd": 6, "validation": 6}
+    assert sel.order == 6 and "validation" in sel.reason
+    orders = sorted(r["order"] for r in sel.rows)
+    assert orders[0] == 1 and orders[-1] >= 6
+    np.testing.assert_allclose(np.sort_complex(sel.model().poles()),
+                               np.sort_complex(true.poles()), atol=1e-8)
+    # without validation data, BIC decides
+    assert sysid.select_order(est).criterion == "bic"
+
+
+@needs_engine
+def test_dryer_order_selection_picks_4_or_5_and_explains():
+    d = sysid.datasets.load_dryer()
+    est_data = sysid.IOData(u=d.u[:500], y=d.y[:500], dt=d.dt)
+    val = sysid.IOData(u=d.u[500:], y=d.y[500:], dt=d.dt)
+    sel = sysid.select_order(est_data, horizon=15, validation=val)
+    assert sel.order in (4, 5), repr(sel)
+    assert sel.picks["bic"] in (4, 5)
+    assert f"order {sel.order}" in sel.reason and "validation fit" in sel.reason
+    assert "Votes" in sel.reason and "BIC -> " in sel.reason
+    df = sel.to_pandas()
+    assert {"order", "aic", "bic", "fit_validation", "stable"} <= set(df.columns)
+    assert len(df) == len(sel.rows)
+    # reusing one compression for several weightings
+    est = sysid.SubspaceEstimator(est_data, horizon=15)
+    both = sysid.select_order(est, range(1, 8), methods=["moesp", "n4sid"], validation=val,
+                              criterion="bic")
+    assert {r["method"] for r in both.rows} == {"moesp", "n4sid"}
+    assert set(both.singular_values) == {"moesp", "n4sid"}
+    assert both.criterion == "bic" and both.order == both.picks["bic"]
+
+
+@needs_engine
+def test_order_selection_plots_and_stabilisation_diagram():
+    plt = pytest.importorskip("matplotlib.pyplot")
+    true = order6_system(3)
+    u = np.random.default_rng(4).standard_normal((600, 2))
+    sel = sysid.select_order(sysid.IOData(u=u, y=true.simulate(u)), horizon=6)
+    fig = sel.plot()
+    assert len(fig.axes) == 3
+    ax = sel.stabilization_plot()
+    assert len(ax.lines) > 0
+    orders = [o for o, _ in sel.damping()]
+    assert orders == sorted(orders)
+    plt.close("all")
+
+
+@needs_engine
+def test_order_selection_bad_input():
+    rng = np.random.default_rng(5)
+    data = sysid.IOData(u=rng.standard_normal((300, 1)), y=rng.standard_normal((300, 1)))
+    est = sysid.SubspaceEstimator(data, horizon=5)
+    with pytest.raises(sysid.DataError, match="larger than the horizon allows"):
+        sysid.select_order(est, [1, est.max_order + 1])
+    with pytest.raises(sysid.DataError, match="integers >= 1"):
+        sysid.select_order(est, [0])
+    with pytest.raises(sysid.DataError, match="empty"):
+        sysid.select_order(est, [])
+    with pytest.raises(sysid.DataError, match="unknown method"):
+        sysid.select_order(est, [1], methods=["pem"])
+    with pytest.raises(sysid.DataError, match="not available"):
+        sysid.select_order(est, [1, 2], criterion="validation")
+    with pytest.raises(sysid.DataError, match="IOData or SubspaceEstimator"):
+        sysid.select_order(np.zeros((10, 2)))
+    with pytest.raises(sysid.ShapeError, match="input"):
+        sysid.select_order(est, [1], validation=(np.zeros((50, 2)), np.zeros((50, 1))))
+    assert set(CRITERIA) == {"aic", "aicc", "bic", "fpe"}
+
+
+@needs_engine
+def test_order_selection_from_a_factor_uses_the_gap():
+    true = order6_system(6)
+    u = np.random.default_rng(7).standard_normal((600, 2))
+    est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=true.simulate(u)), horizon=6)
+    bare = sysid.SubspaceEstimator.from_factor(est.factor)
+    sel = sysid.select_order(bare, range(1, 7))
+    assert sel.criterion == "svd" and sel.order == 6
+    assert np.isnan(sel.rows[0]["aic"])  # no data, no criteria
+
+
+@needs_engine
+def test_sweep_settings_change_the_table():
+    d = sysid.datasets.load_dryer()
+    est = sysid.SubspaceEstimator(sysid.IOData(u=d.u[:500], y=d.y[:500], dt=d.dt), horizon=15)
+    val = sysid.IOData(u=d.u[500:], y=d.y[500:], dt=d.dt)
+    base = sysid.select_order(est, range(1, 8), validation=val)
+    # a looser tolerance lets a smaller order win; zero tolerance takes the best fit
+    loose = sysid.select_order(est, range(1, 8), validation=val, fit_tol=5.0)
+    strict = sysid.select_order(est, range(1, 8), validation=val, fit_tol=0.0)
+    assert loose.order < base.order <= strict.order
+    best = max(r["fit_validation"] for r in strict.rows)
+    assert strict.model().info["order"] == strict.order
+    assert [r["fit_validation"] for r in strict.rows if r["order"] == strict.order] == [best]
+    # the parameter count follows the model structure
+    lean = sysid.select_order(est, [4], x0="zero", feedthrough=False, kalman=False)
+    assert lean.rows[0]["n_params"] == n_parameters(4, 1, 1, feedthrough=False,
+                                                   noise_model=False)
+    assert base.rows[3]["n_params"] == n_parameters(4, 1, 1, x0=True)
+    assert lean.model().K is None and np.all(lean.model().D == 0)

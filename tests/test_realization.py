@@ -1,0 +1,399 @@
+"""Realisation (Ho-Kalman, Kung, ERA) and Markov-parameter estimation (FIR, TC, OKID)."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import sysid
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def random_system(n: int, m: int, l: int, seed: int, rmax: float = 0.95) -> sysid.StateSpaceModel:
+    """Random stable MIMO system with poles in the annulus 0.3 <= |z| <= rmax."""
+    rng = np.random.default_rng(seed)
+    blocks = []
+    for _ in range(n // 2):
+        r, th = rng.uniform(0.3, rmax), rng.uniform(0.2, 2.8)
+        blocks.append(r * np.array([[np.cos(th), np.sin(th)], [-np.sin(th), np.cos(th)]]))
+    if n % 2:
+        blocks.append(np.array([[rng.uniform(-rmax, rmax)]]))
+    a = np.zeros((n, n))
+    i = 0
+    for blk in blocks:
+        k = blk.shape[0]
+        a[i:i + k, i:i + k] = blk
+        i += k
+    t = 2 * np.eye(n) + rng.uniform(-0.5, 0.5, (n, n))
+    a = np.linalg.solve(t, a @ t)
+    return sysid.StateSpaceModel(a, rng.standard_normal((n, m)), rng.standard_normal((l, n)),
+                                 rng.standard_normal((l, m)))
+
+
+def pole_error(a: sysid.StateSpaceModel, b: sysid.StateSpaceModel) -> float:
+    pa, pb = a.poles(), b.poles()
+    assert len(pa) == len(pb)
+    return max(np.min(np.abs(pb - p)) for p in pa)
+
+
+def markov_error(a: sysid.StateSpaceModel, b: sysid.StateSpaceModel, count: int = 60) -> float:
+    ha, hb = a.markov(count), b.markov(count)
+    return float(np.max(np.abs(ha - hb)) / np.max(np.abs(hb)))
+
+
+# -- seed 002, appendix B (B.19-B.22): the Ho-Kalman model of experiment Pulse1, Ts = 4 ms --
+THESIS_A = np.array([
+    [0.9396, -0.1076, -0.1926, 0.2289, 0.1112, 0.0143],
+    [0.0843, 0.9275, -0.3058, -0.1376, -0.0802, -0.0012],
+    [0.1851, 0.2925, 0.9122, 0.1300, 0.0510, -0.0126],
+    [-0.2200, 0.1624, -0.0791, 0.8958, -0.0134, 0.0404],
+    [-0.1099, 0.0774, -0.0342, -0.0570, 0.9740, 0.0615],
+    [-0.2038, -0.2027, -0.1052, 0.4774, -0.2319, 0.5055],
+])
+THESIS_B = np.array([[0.0795], [0.2898], [0.5659], [-0.7335], [-0.1450], [2.8114]])
+THESIS_C = np.array([[0.0982, 0.0359, 0.5388, -0.6955, -0.3720, 0.4386]])
+THESIS_DT = 0.004
+
+
+def thesis_model() -> sysid.StateSpaceModel:
+    return sysid.StateSpaceModel(THESIS_A, THESIS_B, THESIS_C, 0.0, dt=THESIS_DT)
+
+
+@pytest.mark.parametrize("n, m, l, seed", [(1, 1, 1, 0), (3, 2, 2, 1), (6, 2, 3, 2),
+                                           (7, 3, 1, 3), (8, 1, 4, 4)])
+def test_exact_markov_parameters_are_realised_to_1e9(n: int, m: int, l: int, seed: int) -> None:
+    true = random_system(n, m, l, seed)
+    h = true.markov(2 * n + 10)
+    models = {
+        "ho_kalman": sysid.ho_kalman(h),
+        "kung": sysid.kung(h, order=n),
+        "era": sysid.era(h, order=n).model,
+        "era-auto": sysid.era(h).model,
+    }
+    for name, model in models.items():
+        assert model.nstates == n, name
+        assert pole_error(model, true) < 1e-9, name
+        assert markov_error(model, true) < 1e-9, name
+        assert model.info["method"] in name
+    # D is h_0 exactly
+    np.testing.assert_array_equal(models["era"].D, true.D)
+
+
+def test_era_block_rows_and_columns_are_used_and_change_the_hankel_matrix() -> None:
+    true = random_system(4, 2, 2, 7)
+    h = true.markov(40)
+    a = sysid.era(h, order=4, rows=5, cols=30)
+    b = sysid.era(h, order=4, rows=30, cols=5)
+    assert (a.rows, a.cols, b.rows, b.cols) == (5, 30, 30, 5)
+    assert len(a.singular_values) == min(5 * 2, 30 * 2) == len(b.singular_values)
+    assert pole_error(a.model, true) < 1e-9 and pole_error(b.model, true) < 1e-9
+    assert np.all(a.mac > 1 - 1e-9)
+
+
+def test_kung_and_era_order_from_the_singular_value_gap_on_noisy_markov() -> None:
+    true = random_system(4, 1, 2, 11, rmax=0.9)
+    rng = np.random.default_rng(0)
+    h = true.markov(61)
+    noisy = h + 1e-4 * rng.standard_normal(h.shape)
+    for est in (sysid.kung(noisy), sysid.era(noisy).model):
+        assert est.nstates == 4
+        assert pole_error(est, true) < 1e-2
+    assert sysid.ho_kalman(noisy, rank_tol=1e-2).nstates == 4
+
+
+def test_era_amplitude_coherence_flags_noise_modes() -> None:
+    true = random_system(2, 1, 1, 5, rmax=0.9)
+    rng = np.random.default_rng(2)
+    h = true.markov(61) + np.r_[0.0, np.ones(60)][:, None, None] * 1e-3 * rng.standard_normal(
+        (61, 1, 1))
+    res = sysid.era(h, order=6)
+    order = np.argsort(-res.mac)
+    physical = res.eigenvalues[order[:2]]
+    assert np.min(res.mac[order[:2]]) > 0.99
+    assert np.max(res.mac[order[2:]]) < 0.95
+    assert max(np.min(np.abs(physical - p)) for p in true.poles()) < 1e-2
+    assert np.all((res.mpc >= 0) & (res.mpc <= 1))
+    text = repr(res)
+    assert "EraResult(order=6" in text and "MAC" in text and "freq (Hz)" in text
+
+
+def test_era_phase_collinearity_of_proportionally_damped_structure() -> None:
+    # two-mass chain, proportional damping: real mode shapes in displacement -> MPC = 1
+    dt = 0.01
+    mass = np.diag([1.0, 2.0])
+    stiff = np.array([[300.0, -100.0], [-100.0, 100.0]])
+    damp = 0.002 * stiff + 0.05 * mass
+    minv = np.linalg.inv(mass)
+    ac = np.block([[np.zeros((2, 2)), np.eye(2)], [-minv @ stiff, -minv @ damp]])
+    from scipy.linalg import expm
+    ad = expm(ac * dt)
+    bd = np.linalg.solve(ac, (ad - np.eye(4)) @ np.r_[np.zeros((2, 1)), minv @ [[1.0], [0.0]]])
+    sys_ = sysid.StateSpaceModel(ad, bd, np.c_[np.eye(2), np.zeros((2, 2))], dt=dt)
+    res = sysid.era(sys_.markov(201), order=4, dt=dt)
+    np.testing.assert_allclose(res.mpc, 1.0, atol=1e-8)
+    # the same structure with a non-proportional damper: complex modes, MPC clearly below 1
+    damp2 = np.array([[8.0, 0.0], [0.0, 0.0]])
+    ac2 = np.block([[np.zeros((2, 2)), np.eye(2)], [-minv @ stiff, -minv @ damp2]])
+    ad2 = expm(ac2 * dt)
+    bd2 = np.linalg.solve(ac2, (ad2 - np.eye(4)) @ np.r_[np.zeros((2, 1)), minv @ [[1.0], [0.0]]])
+    sys2 = sysid.StateSpaceModel(ad2, bd2, np.c_[np.eye(2), np.zeros((2, 2))], dt=dt)
+    res2 = sysid.era(sys2.markov(201), order=4, dt=dt)
+    assert np.min(res2.mpc) < 0.99
+
+
+def test_thesis_pulse1_model_poles_come_back_through_era() -> None:
+    model = thesis_model()
+    res = sysid.era(model.markov(101), dt=THESIS_DT)
+    assert res.order == 6
+    assert pole_error(res.model, model) < 1e-9
+    modes = res.modes()
+    pairs = modes.select(np.abs(modes.eigenvalues.imag) > 1e-9)
+    np.testing.assert_allclose(np.sort(pairs.frequencies_hz), [12.759, 15.464], atol=1e-3)
+    np.testing.assert_allclose(
+        np.sort(pairs.s.imag / (2 * np.pi)), [12.749, 15.461], atol=1e-3)  # damped frequencies
+    real = np.sort(modes.select(np.abs(modes.eigenvalues.imag) <= 1e-9).eigenvalues.real)
+    np.testing.assert_allclose(real, [0.49034, 0.95291], atol=1e-5)
+
+
+@pytest.mark.parametrize("bad, error", [
+    (lambda h: h[:5], sysid.InsufficientDataError),
+    (lambda h: np.where(np.arange(len(h))[:, None, None] == 3, np.nan, h), sysid.NonFiniteError),
+    (lambda h: h[:, :, 0], sysid.ShapeError),
+    (lambda h: h.astype(complex), sysid.DataError),
+])
+def test_bad_markov_parameters_raise_clear_errors(bad, error) -> None:  # type: ignore[no-untyped-def]
+    h = random_system(3, 2, 2, 1).markov(20)
+    for fn in (sysid.ho_kalman, sysid.kung, sysid.era):
+        with pytest.raises(error):
+            fn(bad(h), rows=3, cols=3) if error is sysid.InsufficientDataError else fn(bad(h))
+
+
+def test_hankel_too_small_for_requested_size_names_the_fix() -> None:
+    h = random_system(3, 1, 1, 1).markov(10)
+    with pytest.raises(sysid.InsufficientDataError, match="block rows"):
+        sysid.era(h, rows=6, cols=6)
+    with pytest.raises(sysid.DataError, match="order"):
+        sysid.era(h, order=20)
+    with pytest.raises(sysid.DataError, match="positive integer"):
+        sysid.kung(h, order=0)
+    with pytest.raises(sysid.DataError, match="rank"):
+        sysid.ho_kalman(random_system(3, 1, 1, 1).markov(20), order=5)  # the rank is 3
+
+
+# -- Markov parameters from data ----------------------------------------------------------
+
+def innovation_data(model: sysid.StateSpaceModel, k: np.ndarray, n: int, noise: float,
+                    seed: int) -> sysid.IOData:
+    """Data from x+ = A x + B u + K e, y = C x + D u + e with white u and e."""
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal((n, model.ninputs))
+    e = noise * rng.standard_normal((n, model.noutputs))
+    aug = sysid.StateSpaceModel(model.A, np.c_[model.B, k], model.C,
+                                np.c_[model.D, np.eye(model.noutputs)])
+    return sysid.IOData(u, aug.simulate(np.c_[u, e]), dt=model.dt)
+
+
+def lightly_damped() -> tuple[sysid.StateSpaceModel, np.ndarray]:
+    """2 inputs, 2 outputs, two modes at |z| = 0.98 and 0.97, with a Kalman gain."""
+    def rot(r: float, th: float) -> np.ndarray:
+        return r * np.array([[np.cos(th), np.sin(th)], [-np.sin(th), np.cos(th)]])
+    a = np.zeros((4, 4))
+    a[:2, :2], a[2:, 2:] = rot(0.98, 0.3), rot(0.97, 0.9)
+    b = np.array([[1.0, 0.0], [0.0, 0.5], [0.5, 1.0], [0.0, 1.0]])
+    c = np.array([[1.0, 0.0, 1.0, 0.0], [0.0, 1.0, 0.5, -1.0]])
+    q = 0.5 * np.eye(4)
+    gain, _, _ = sysid._sysid.kalman_gain(a, c, q, np.eye(2), np.zeros((4, 2)))
+    return sysid.StateSpaceModel(a, b, c), gain
+
+
+def test_okid_poles_converge_with_n_and_beat_fir_of_the_same_length() -> None:
+    true, k = lightly_damped()
+    rho = np.max(np.abs(np.linalg.eigvals(true.A - k @ true.C)))
+    p = int(np.ceil(np.log(1e-4) / np.log(rho)))  # observer lags to make (A - KC)^p negligible
+    okid_err, fir_err = {}, {}
+    for n in (2000, 8000, 32000):
+        errs, ferrs = [], []
+        for seed in range(3):
+            data = innovation_data(true, k, n, 1.0, seed)
+            est = sysid.okid(data, observer_order=p, count=120)
+            errs.append(pole_error(est.era(order=4).model, true))
+            # plain least-squares FIR with as many lags truncates the slow impulse response
+            fir = sysid.impulse_response(data, p + 1, regularization=None)
+            ferrs.append(pole_error(fir.era(order=4).model, true))
+        okid_err[n], fir_err[n] = float(np.median(errs)), float(np.median(ferrs))
+        assert okid_err[n] < 3.0 / np.sqrt(n), (n, okid_err[n])
+        assert okid_err[n] < fir_err[n] / 2, (n, okid_err[n], fir_err[n])
+    assert okid_err[32000] < okid_err[2000] / 2
+
+
+def test_tc_regularised_fir_beats_least_squares_on_short_noisy_records() -> None:
+    true = random_system(4, 1, 1, 8, rmax=0.9)
+    wins = 0
+    for seed in range(5):
+        data = innovation_data(true, np.zeros((4, 1)), 250, 0.3, 100 + seed)
+        h = true.markov(80)
+        tc = sysid.impulse_response(data, 80)
+        ls = sysid.impulse_response(data, 80, regularization=None)
+        wins += np.linalg.norm(tc.markov - h) < np.linalg.norm(ls.markov - h)
+        assert 0 < tc.info["decay"][0] < 1 and tc.info["scale"][0] > 0
+        assert tc.method == "fir-tc" and ls.method == "fir"
+    assert wins >= 4
+
+
+def test_fir_options_change_the_estimate() -> None:
+    true = random_system(2, 1, 1, 3, rmax=0.8)
+    data = innovation_data(true, np.zeros((2, 1)), 300, 0.1, 1)
+    free = sysid.impulse_response(data, 20, regularization=None)
+    fixed = sysid.impulse_response(data, 20, hyper=(1e-6, 0.5))
+    strict = sysid.impulse_response(data, 20, feedthrough=False, regularization=None)
+    assert np.all(strict.markov[0] == 0) and np.any(free.markov[0] != 0)
+    assert np.linalg.norm(fixed.markov) < 0.1 * np.linalg.norm(free.markov)  # heavy shrinkage
+    assert free.markov.shape == (20, 1, 1)
+    assert "MarkovEstimate(fir: 20 Markov parameters" in repr(free)
+
+
+def test_okid_mimo_noise_free_is_exact_and_pools_experiments() -> None:
+    true = random_system(4, 2, 3, 21, rmax=0.8)
+    d1 = innovation_data(true, np.zeros((4, 3)), 300, 0.0, 1)
+    d2 = innovation_data(true, np.zeros((4, 3)), 300, 0.0, 2)
+    both = sysid.IOData([d1.u, d2.u], [d1.y, d2.y], dt=1.0)
+    est = sysid.okid(both, observer_order=4, count=40)
+    assert est.markov.shape == (40, 3, 2)
+    assert est.info["observer_markov"].shape == (4, 3, 5)
+    np.testing.assert_allclose(est.markov, true.markov(40), atol=1e-8)
+    assert sysid.okid(both, observer_order=4).markov.shape[0] == 17
+
+
+def test_markov_estimators_reject_bad_input() -> None:
+    true = random_system(2, 1, 1, 3)
+    data = innovation_data(true, np.zeros((2, 1)), 100, 0.1, 1)
+    with pytest.raises(sysid.InsufficientDataError):
+        sysid.okid(data, observer_order=60)
+    with pytest.raises(sysid.InsufficientDataError):
+        sysid.impulse_response(data, 150)
+    with pytest.raises(sysid.DataError, match="regularization"):
+        sysid.impulse_response(data, 10, regularization="ridge")
+    with pytest.raises(sysid.DataError, match="IOData"):
+        sysid.okid(np.zeros((100, 2)), observer_order=3)  # type: ignore[arg-type]
+    with pytest.raises(sysid.DataError, match="inputs"):
+        sysid.okid(sysid.IOData(None, data.y), observer_order=3)
+    with pytest.raises(sysid.DataError, match="identically zero"):
+        sysid.okid(sysid.IOData(np.zeros((100, 1)), data.y), observer_order=3)
+    with pytest.raises(sysid.DataError, match="TC hyperparameters"):
+        sysid.impulse_response(data, 10, hyper=(1.0, 1.5))
+
+
+# -- the F-16 ground vibration test: the documented example ---------------------------------
+
+F16 = DATA / "f16" / "F16Data_FullMSine_Level1.csv"
+
+
+@pytest.mark.skipif(not F16.exists(), reason="F-16 data not available")
+def test_f16_example_finds_the_wing_bending_mode_near_5_2_hz() -> None:
+    spec = importlib.util.spec_from_file_location("f16_era", EXAMPLES / "f16_era.py")
+    assert spec is not None and spec.loader is not None
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    modes = example.main(["f16_era.py", str(F16)])
+    near = np.abs(modes.frequencies_hz - 5.2) < 0.15
+    assert near.sum() == 1, modes
+    assert 0.001 < modes.damping[near][0] < 0.05
+    assert modes.extra["mac"][near][0] > 0.9
+    stable = example.stabilization(example.load(F16)).stable_frequencies()
+    assert np.min(np.abs(stable - 5.2)) < 0.1, stable
+
+
+def test_stabilization_diagram_and_plots(tmp_path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    true = lightly_damped()[0]
+    h = true.markov(121) + 1e-4 * np.random.default_rng(0).standard_normal((121, 2, 2))
+    diagram = sysid.era_stabilization(h, range(2, 14, 2), dt=0.01)
+    expected = sysid.modal_analysis(sysid.StateSpaceModel(true.A, true.B, true.C, dt=0.01))
+    np.testing.assert_allclose(diagram.stable_frequencies(), expected.frequencies_hz, rtol=1e-3)
+    assert "StabilizationDiagram(orders 2..12" in repr(diagram)
+    assert diagram.status[0].max() == 0  # nothing to compare with at the first order
+    ax = diagram.plot()
+    ax.figure.savefig(tmp_path / "stab.png")
+    ax2 = sysid.era(h, dt=0.01).plot()
+    assert ax2.get_yscale() == "log"
+    with pytest.raises(sysid.DataError, match="increasing"):
+        sysid.era_stabilization(h, [4, 2])
+
+
+def test_docs_examples_run() -> None:
+    import re
+
+    doc = Path(__file__).resolve().parents[1] / "docs" / "realization.md"
+    blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), flags=re.S)
+    assert len(blocks) >= 3
+    namespace: dict = {}
+    for i, block in enumerate(blocks):  # the blocks build on each other
+        exec(compile(block, f"docs/realization.md[python block {i}]", "exec"), namespace)
+    assert namespace["small"].nstates == 2
+
+
+def test_era_on_the_inverse_fft_of_a_periodic_etfe() -> None:
+    """Seed 001's route: ETFE of periodic data, inverse FFT, ERA."""
+    true, _ = lightly_damped()
+    siso_in = sysid.StateSpaceModel(true.A, true.B[:, :1], true.C, dt=0.01)
+    period = 2048
+    u = np.tile(np.random.default_rng(3).standard_normal(period), 2)
+    y = siso_in.simulate(u)
+    frd = sysid.etfe(sysid.IOData(u[period:], y[period:], dt=0.01))
+    est = sysid.impulse_from_frf(frd)
+    assert est.markov.shape == (period, 2, 1) and est.dt == 0.01
+    res = est.era(order=4, rows=100, cols=200)
+    assert pole_error(res.model, siso_in) < 1e-8
+    noisy = y[period:] + 0.01 * np.random.default_rng(4).standard_normal((period, 2))
+    est_noisy = sysid.impulse_from_frf(sysid.etfe(sysid.IOData(u[period:], noisy, dt=0.01)))
+    assert pole_error(est_noisy.era(order=4, rows=100, cols=200).model, siso_in) < 1e-2
+
+
+def test_impulse_from_frf_rejects_gaps_unless_told() -> None:
+    true = random_system(2, 1, 1, 3, rmax=0.8)
+    w = 2 * np.pi * np.fft.rfftfreq(64)
+    g = true.freqresp(w)
+    np.testing.assert_allclose(sysid.impulse_from_frf(g).markov[:20], true.markov(20), atol=1e-9)
+    gappy = sysid.FRD(w[5:], g[5:], dt=1.0, info={"n_fft": 64})
+    with pytest.raises(sysid.DataError, match="missing"):
+        sysid.impulse_from_frf(gappy)
+    assert sysid.impulse_from_frf(gappy, fill_missing=True).markov.shape == (64, 1, 1)
+    with pytest.raises(sysid.DataError, match="grid"):
+        sysid.impulse_from_frf(sysid.FRD(w[1:] * 1.01, g[1:], dt=1.0), n_fft=64)
+    with pytest.raises(sysid.NonFiniteError):
+        sysid.impulse_from_frf(np.full((33, 1, 1), np.nan))
+
+
+def test_okid_feedthrough_flag_and_default_count() -> None:
+    true = random_system(3, 1, 2, 4, rmax=0.8)
+    data = innovation_data(true, np.zeros((3, 2)), 400, 0.0, 1)
+    with_d = sysid.okid(data, observer_order=4)
+    assert with_d.markov.shape[0] == 17
+    np.testing.assert_allclose(with_d.markov[0], true.D, atol=1e-9)
+    strictly = sysid.okid(data, observer_order=4, feedthrough=False)
+    assert np.all(strictly.markov[0] == 0)
+    assert not np.allclose(strictly.markov[1:5], true.markov(5)[1:], atol=1e-3)  # D is missed
+
+
+@settings(max_examples=20, deadline=None)
+@given(seed=st.integers(0, 10_000), scale=st.floats(1e-3, 1e3))
+def test_era_poles_ignore_scaling_and_output_order(seed: int, scale: float) -> None:
+    true = random_system(4, 2, 3, seed)
+    h = true.markov(30)
+    base = sysid.era(h, order=4)
+    scaled = sysid.era(scale * h, order=4)
+    perm = sysid.era(h[:, ::-1, :], order=4)
+    assert pole_error(scaled.model, base.model) < 1e-7
+    assert pole_error(perm.model, base.model) < 1e-7
+    np.testing.assert_allclose(perm.model.markov(30), h[:, ::-1, :], atol=1e-8 * np.abs(h).max())
+    np.testing.assert_allclose(scaled.singular_values, scale * base.singular_values,
+                               rtol=1e-8, atol=1e-12 * scale * base.singular_values[0])

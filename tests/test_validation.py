@@ -1,0 +1,333 @@
+"""compare, residual tests and the error spectrum."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import sysid
+from sysid import _sysid
+from sysid.validation import ResidualAnalysis
+
+DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
+needs_engine = pytest.mark.skipif(not hasattr(_sysid, "Subspace"),
+                                  reason="the subspace engine is not in this build yet")
+
+
+def second_order(K=None) -> sysid.StateSpaceModel:
+    return sysid.StateSpaceModel([[0.8, 0.3], [-0.3, 0.8]], [[1.0], [0.5]], [[1.0, 0.0]],
+                                 [[0.2]], K, dt=0.1)
+
+
+def innovation_data(model, N, seed, noise=0.3):
+    """Data from the innovation form: x+ = A x + B u + K e, y = C x + D u + e."""
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal((N, model.ninputs))
+    e = noise * rng.standard_normal((N, model.noutputs))
+    x = np.zeros(model.nstates)
+    y = np.empty((N, model.noutputs))
+    for t in range(N):
+        y[t] = model.C @ x + model.D @ u[t] + e[t]
+        x = model.A @ x + model.B @ u[t] + model.K @ e[t]
+    return u, y
+
+
+# -- fit numbers ---------------------------------------------------------------------
+def test_fit_metrics_definitions():
+    rng = np.random.default_rng(0)
+    y = rng.standard_normal((100, 2)) + [3.0, -1.0]
+    yh = y + 0.2 * rng.standard_normal((100, 2))
+    d = sysid.fit_metrics(y, yh)
+    for j in range(2):
+        e = y[:, j] - yh[:, j]
+        assert d["fit"][j] == pytest.approx(
+            100 * (1 - np.sqrt(np.sum(e**2)) / np.sqrt(np.sum((y[:, j] - y[:, j].mean()) ** 2))))
+        assert d["vaf"][j] == pytest.approx(100 * (1 - np.var(e) / np.var(y[:, j])))
+        assert d["rmse"][j] == pytest.approx(np.sqrt(np.mean(e**2)))
+    assert sysid.fit_metrics(y, y)["fit"] == pytest.approx([100, 100])
+    # predicting the mean scores 0
+    assert sysid.fit_metrics(y, np.tile(y.mean(0), (100, 1)))["fit"] == pytest.approx([0, 0])
+
+
+# -- compare -------------------------------------------------------------------------
+def test_compare_recovers_initial_state():
+    m = second_order()
+    u = np.random.default_rng(1).standard_normal((300, 1))
+    y = m.simulate(u, x0=[4.0, -2.0])
+    r = sysid.compare(m, (u, y))
+    np.testing.assert_allclose(r.x0[0], [4.0, -2.0], atol=1e-10)
+    assert r.fit[0, 0] > 99.999999
+    zero = sysid.compare(m, (u, y), x0="zero")
+    assert zero.fit[0, 0] < 99
+    given = sysid.compare(m, (u, y), x0=[4.0, -2.0])
+    np.testing.assert_allclose(given.yhat[0], y, atol=1e-12)
+    m.x0 = np.array([4.0, -2.0])
+    np.testing.assert_allclose(sysid.compare(m, (u, y), x0="model").yhat[0], y, atol=1e-12)
+
+
+def test_compare_prediction_beats_simulation_with_noise_model():
+    m = second_order(K=[[0.6], [0.2]])
+    u, y = innovation_data(m, 2000, seed=2)
+    sim = sysid.compare(m, (u, y))
+    p1 = sysid.compare(m, (u, y), horizon=1)
+    p50 = sysid.compare(m, (u, y), horizon=50)
+    assert p1.fit[0, 0] > sim.fit[0, 0] + 5
+    # far horizons forget the measurements: back to simulation
+    assert p50.fit[0, 0] == pytest.approx(sim.fit[0, 0], abs=1.0)
+    # the one-step error is the innovation itself (variance 0.09)
+    assert p1.rmse[0, 0] == pytest.approx(0.3, rel=0.05)
+    assert "1-step prediction" in repr(p1) and "simulation" in repr(sim)
+
+
+def test_compare_prediction_initial_state_is_exact():
+    m = second_order(K=[[0.6], [0.2]])
+    u, y = innovation_data(m, 200, seed=3, noise=0.0)
+    y = y + m.simulate(np.zeros_like(u), x0=[1.0, 2.0])  # free response of the true state
+    for h in (1, 3):
+        r = sysid.compare(m, (u, y), horizon=h)
+        assert r.fit[0, 0] > 99.999999
+
+
+def test_compare_several_experiments():
+    m = second_order()
+    rng = np.random.default_rng(4)
+    us = [rng.standard_normal((200, 1)), rng.standard_normal((150, 1))]
+    ys = [m.simulate(us[0], x0=[1.0, 0.0]), m.simulate(us[1], x0=[0.0, -3.0]) + 0.5]
+    r = sysid.compare(m, sysid.IOData(u=us, y=ys, dt=0.1))
+    assert r.fit.shape == (2, 1)
+    assert r.fit[0, 0] > 99.99 and r.fit[1, 0] < r.fit[0, 0]
+    np.testing.assert_allclose(r.x0[0], [1.0, 0.0], atol=1e-10)
+    df = r.to_pandas()
+    assert list(df["experiment"]) == [0, 1]
+    assert "exp" in r.summary()
+    given = sysid.compare(m, sysid.IOData(u=us, y=ys, dt=0.1), x0=[[1.0, 0.0], [0.0, -3.0]])
+    np.testing.assert_allclose(given.yhat[0], ys[0], atol=1e-12)
+
+
+def test_compare_bad_input():
+    m = second_order()
+    u = np.zeros((50, 1))
+    with pytest.raises(sysid.ShapeError, match="1 input.*2 input"):
+        sysid.compare(m, (np.zeros((50, 2)), np.zeros((50, 1))))
+    with pytest.raises(sysid.ShapeError, match="1 output.*2 output"):
+        sysid.compare(m, sysid.IOData(u=u, y=np.zeros((50, 2)), dt=0.1))
+    with pytest.raises(sysid.DataError, match="sampled every 0.2"):
+        sysid.compare(m, sysid.IOData(u=u, y=np.zeros((50, 1)), dt=0.2))
+    with pytest.raises(sysid.DataError, match="x0 must be"):
+        sysid.compare(m, (u, np.zeros((50, 1))), x0="guess")
+    with pytest.raises(sysid.ShapeError, match="2 states"):
+        sysid.compare(m, (u, np.zeros((50, 1))), x0=[1.0, 2.0, 3.0])
+    with pytest.raises(sysid.DataError, match="carries no initial state"):
+        sysid.compare(m, (u, np.zeros((50, 1))), x0="model")
+    with pytest.raises(sysid.DataError, match="horizon"):
+        sysid.compare(m, (u, np.zeros((50, 1))), horizon=0)
+    with pytest.raises(sysid.DataError, match="IOData or a pair"):
+        sysid.compare(m, np.zeros((50, 2)))
+    with pytest.raises(sysid.DataError, match="StateSpaceModel"):
+        sysid.compare("model", (u, np.zeros((50, 1))))
+    with pytest.raises(sysid.NonFiniteError):
+        sysid.compare(m, (u, np.full((50, 1), np.nan)))
+
+
+# -- residuals -----------------------------------------------------------------------
+def test_residuals_accept_true_model_and_reject_wrong_ones():
+    true = second_order(K=[[0.6], [0.2]])
+    u, y = innovation_data(true, 3000, seed=5)
+    ok = sysid.residuals(true, (u, y))
+    assert ok.is_white and ok.independence.all()
+    # no noise model: the innovations are coloured by the missing K
+    no_k = second_order(K=[[0.0], [0.0]])
+    assert not sysid.residuals(no_k, (u, y)).is_white
+    # wrong input gain: the residual correlates with past inputs
+    wrong_b = sysid.StateSpaceModel(true.A, true.B * 0.7, true.C, true.D, true.K, dt=0.1)
+    res = sysid.residuals(wrong_b, (u, y))
+    assert not res.independence.all()
+    assert np.max(np.abs(res.crosscorr[res.xlags > 0])) > res.bound
+    assert "NOT" in res.summary() or "NO" in res.summary()
+
+
+def test_residual_correlations_match_numpy():
+    true = second_order(K=[[0.6], [0.2]])
+    u, y = innovation_data(true, 500, seed=6)
+    res = sysid.residuals(true, (u, y), max_lag=5, x0="zero")
+    e = y - true.predict(u, y)
+    e = e[:, 0] - e[:, 0].mean()
+    uc = u[:, 0] - u[:, 0].mean()
+    for tau in range(6):
+        r = np.sum(e[tau:] * e[: len(e) - tau]) / np.sum(e * e)
+        assert res.autocorr[tau, 0, 0] == pytest.approx(r)
+        c = np.sum(e[tau:] * uc[: len(e) - tau]) / np.sqrt(np.sum(e * e) * np.sum(uc * uc))
+        assert res.crosscorr[res.xlags == tau][0, 0, 0] == pytest.approx(c)
+    assert res.bound == pytest.approx(2.5758 / np.sqrt(500), rel=1e-4)
+    loose = sysid.residuals(true, (u, y), max_lag=5, x0="zero", alpha=0.05)
+    assert loose.bound == pytest.approx(1.96 / np.sqrt(500), rel=1e-3)
+    np.testing.assert_array_equal(loose.ljung_box, res.ljung_box)
+
+
+def test_ljung_box_has_its_nominal_size():
+    """Under white residuals the test rejects about alpha of the time (seeded, 400 draws)."""
+    m = sysid.StateSpaceModel([[0.0]], [[0.0]], [[0.0]], dt=1.0)
+    rng = np.random.default_rng(7)
+    rejected, dependent = 0, 0
+    for _ in range(400):
+        e = rng.standard_normal((400, 1))
+        # a coloured input: the independence test must still hold its size
+        u = np.convolve(rng.standard_normal(403), [1.0, 0.8, 0.5, 0.3], "valid")[:, None]
+        res = ResidualAnalysis(m, [e], [u], 10, 0.05)
+        rejected += int(not res.is_white)
+        dependent += int(not res.independence.all())
+    assert 0.02 < rejected / 400 < 0.09
+    assert 0.02 < dependent / 400 < 0.09
+
+
+def test_residuals_several_outputs_and_experiments():
+    rng = np.random.default_rng(8)
+    A = np.diag([0.7, -0.4, 0.5])
+    m = sysid.StateSpaceModel(A, rng.standard_normal((3, 2)), rng.standard_normal((2, 3)),
+                              K=0.3 * rng.standard_normal((3, 2)), dt=1.0)
+    parts = [innovation_data(m, n, seed=s) for n, s in ((800, 9), (700, 10))]
+    data = sysid.IOData(u=[p[0] for p in parts], y=[p[1] for p in parts])
+    res = sysid.residuals(m, data, max_lag=10)
+    assert res.autocorr.shape == (11, 2, 2) and res.crosscorr.shape == (21, 2, 2)
+    np.testing.assert_allclose(np.diagonal(res.autocorr[0]), [1.0, 1.0])
+    assert res.n_samples == 1500 and res.whiteness.shape == (2,)
+    assert res.is_white
+
+
+def test_residuals_bad_input():
+    m = second_order(K=[[0.5], [0.1]])
+    u, y = innovation_data(m, 100, seed=11)
+    with pytest.raises(sysid.DataError, match="max_lag"):
+        sysid.residuals(m, (u, y), max_lag=0)
+    with pytest.raises(sysid.DataError, match="more than 100 samples"):
+        sysid.residuals(m, (u, y), max_lag=100)
+    with pytest.raises(sysid.DataError, match="alpha"):
+        sysid.residuals(m, (u, y), alpha=1.5)
+    with pytest.raises(sysid.ShapeError, match="input"):
+        sysid.residuals(m, (np.hstack([u, u]), y))
+
+
+# -- error spectrum ------------------------------------------------------------------
+def test_error_spectrum_points_at_the_missed_mode():
+    # true system: a slow mode plus a lightly damped resonance at 0.2 cycles/sample;
+    # the model has only the slow mode
+    p = 0.97 * np.exp(2j * np.pi * 0.2)
+    A = np.array([[0.9, 0, 0], [0, p.real, -p.imag], [0, p.imag, p.real]])
+    true = sysid.StateSpaceModel(A, [[1.0], [1.0], [0.0]], [[1.0, 0.3, 0.0]])
+    slow = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]])
+    u = np.random.default_rng(12).standard_normal((4096, 1))
+    spec = sysid.error_spectrum(slow, (u, true.simulate(u)))
+    assert spec.worst_frequency()[0] == pytest.approx(0.2, abs=0.01)
+    near = np.abs(spec.freq - 0.2) < 0.01
+    assert np.all(spec.relative_error()[near] > 0.5)
+    assert spec.error_psd.shape == spec.output_psd.shape == (129, 1)
+    exact = sysid.error_spectrum(true, (u, true.simulate(u)), nperseg=512)
+    assert np.max(exact.error_psd) < 1e-20 and len(exact.freq) == 257
+    with pytest.raises(sysid.DataError, match="nperseg"):
+        sysid.error_spectrum(slow, (u, true.simulate(u)), nperseg=2)
+
+
+def test_validation_plots():
+    plt = pytest.importorskip("matplotlib.pyplot")
+    m = second_order(K=[[0.6], [0.2]])
+    u, y = innovation_data(m, 300, seed=13)
+    fig = sysid.compare(m, (u, y)).plot()
+    assert len(fig.axes) == 1 and len(fig.axes[0].lines) == 2
+    fig = sysid.residuals(m, (u, y)).plot()
+    assert len(fig.axes) == 2
+    fig = sysid.error_spectrum(m, (u, y)).plot()
+    assert len(fig.axes) == 1
+    plt.close("all")
+
+
+# -- on the dryer record, with the subspace engine ------------------------------------
+def dryer_parts():
+    d = sysid.datasets.load_dryer()
+    kw = {"dt": d.dt}
+    return (sysid.IOData(u=d.u[:500], y=d.y[:500], **kw),
+            sysid.IOData(u=d.u[500:], y=d.y[500:], **kw))
+
+
+@needs_engine
+def test_dryer_validation_fit_is_reported_and_repeatable():
+    est_data, val = dryer_parts()
+    fits = []
+    for _ in range(2):
+        model = sysid.SubspaceEstimator(est_data, horizon=15).fit(4)
+        fits.append(sysid.compare(model, val).fit[0, 0])
+    assert fits[0] == fits[1]
+    assert 70 < fits[0] <= 100
+
+
+@needs_engine
+def test_dryer_residuals_white_for_order_4_not_for_order_1():
+    est_data, val = dryer_parts()
+    est = sysid.SubspaceEstimator(est_data, horizon=15)
+    good = sysid.residuals(est.fit(4), val)
+    bad = sysid.residuals(est.fit(1), val)
+    assert good.is_white, good.summary()
+    assert not bad.is_white, bad.summary()
+
+
+def test_fit_is_invariant_to_output_scaling():
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    m = second_order(K=[[0.6], [0.2]])
+    u, y = innovation_data(m, 300, seed=14)
+
+    @settings(max_examples=20, deadline=None)
+    @given(scale=st.floats(1e-3, 1e3), horizon=st.sampled_from([None, 1, 5]))
+    def check(scale, horizon):
+        scaled = sysid.StateSpaceModel(m.A, m.B, scale * m.C, scale * m.D, m.K / scale, dt=0.1)
+        a = sysid.compare(m, (u, y), horizon)
+        b = sysid.compare(scaled, (u, scale * y), horizon)
+        np.testing.assert_allclose(b.fit, a.fit, rtol=1e-8, atol=1e-8)
+        np.testing.assert_allclose(b.rmse, scale * a.rmse, rtol=1e-8)
+
+    check()
+
+
+def test_initial_state_on_long_records_matches_the_full_regression():
+    """The regression stops where the free response has decayed; the answer is unchanged."""
+    m = sysid.StateSpaceModel([[0.95, 0.1], [0.0, 0.9]], [[1.0], [0.5]], [[1.0, 1.0]],
+                              K=[[0.5], [0.2]])
+    rng = np.random.default_rng(15)
+    u = rng.standard_normal((6000, 1))
+    y = m.simulate(u, x0=[2.0, -1.0]) + 0.1 * rng.standard_normal((6000, 1))
+    for horizon in (None, 1, 4):
+        base = (m.simulate(u) if horizon is None else m.predict(u, y, horizon))
+        cols = [(m.simulate(np.zeros_like(u), x0=e) if horizon is None else
+                 m.predict(np.zeros_like(u), np.zeros_like(y), horizon, x0=e))[:, 0]
+                for e in np.eye(2)]
+        full = np.linalg.lstsq(np.array(cols).T, (y - base)[:, 0], rcond=None)[0]
+        np.testing.assert_allclose(sysid.estimate_x0(m, u, y, horizon), full, rtol=1e-9)
+
+
+def test_unstable_model_fit_is_minus_infinity_or_a_clear_error():
+    m = sysid.StateSpaceModel([[1.5]], [[1.0]], [[1.0]])
+    y = np.random.default_rng(16).standard_normal((3000, 1))
+    # outputs near 1e176: finite, but their squares overflow; no warning, fit -inf
+    r = sysid.compare(m, (np.ones((1000, 1)), y[:1000]), x0="zero")
+    assert r.fit[0, 0] == -np.inf
+    with pytest.raises(sysid.NumericalError, match="unstable"):
+        sysid.compare(m, (np.ones((3000, 1)), y), x0="zero")
+
+
+def test_one_initial_state_for_several_experiments():
+    m = second_order()
+    rng = np.random.default_rng(17)
+    us = [rng.standard_normal((100, 1)), rng.standard_normal((100, 1))]
+    ys = [m.simulate(u, x0=[1.0, 2.0]) for u in us]
+    r = sysid.compare(m, sysid.IOData(u=us, y=ys, dt=0.1), x0=[1.0, 2.0])
+    assert np.all(r.fit > 99.999999)
+
+
+def test_residual_table():
+    pytest.importorskip("pandas")
+    m = second_order(K=[[0.6], [0.2]])
+    u, y = innovation_data(m, 400, seed=18)
+    df = sysid.residuals(m, (u, y)).to_pandas()
+    assert list(df["output"]) == ["y0"] and bool(df["white"][0])
