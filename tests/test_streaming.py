@@ -224,3 +224,24 @@ def test_dask_on_a_local_cluster_matches_single_machine():
     for g in (f, f2):
         assert g.source == "correlation" and g.n_columns == ref.n_columns
         assert_same_gram(g, ref)
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    cuts=st.lists(st.integers(1, 1199), min_size=1, max_size=5, unique=True),
+    chunk=st.integers(1, 700),
+)
+def test_partial_sums_merged_in_any_split_equal_the_whole(cuts, chunk):
+    u, y = noisy_record(1200, 1, 2, 11)
+    center, scale = _sysid.CorrelationSums.center_scale(u, y)
+    bounds = [0, *sorted(cuts), 1200]
+    parts = []
+    for s, e in zip(bounds[:-1], bounds[1:]):
+        p = _sysid.CorrelationSums(1, 2, 3, 4, center, scale)
+        for a in range(s, e, chunk):
+            p.push(u[a:min(e, a + chunk)], y[a:min(e, a + chunk)])
+        parts.append(p)
+    total = parts[0]
+    for p in parts[1:]:
+        total = total.merge(p)
+    assert_same_gram(total.to_factor(), _sysid.compress([(u, y)], 3, 4, None, "qr"))
