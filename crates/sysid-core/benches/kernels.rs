@@ -25,7 +25,7 @@ fn compressors(c: &mut Criterion) {
     let mut g = c.benchmark_group("compress");
     g.sample_size(10);
     g.throughput(Throughput::Elements(n as u64));
-    for &(m, l, i) in &[(3usize, 3usize, 20usize), (8, 8, 10)] {
+    for &(m, l, i) in &[(3usize, 3usize, 20usize), (8, 8, 10), (2, 2, 20)] {
         let (u, y) = record(n, m, l);
         let layout = HankelLayout::new(m, l, i, i).unwrap();
         let id = format!("m{m}_l{l}_i{i}");
