@@ -245,3 +245,14 @@ def test_partial_sums_merged_in_any_split_equal_the_whole(cuts, chunk):
     for p in parts[1:]:
         total = total.merge(p)
     assert_same_gram(total.to_factor(), _sysid.compress([(u, y)], 3, 4, None, "qr"))
+
+
+def test_copy_on_write_memmap_edits_survive(tmp_path):
+    u, y = noisy_record(2000, 1, 1, 12)
+    np.save(tmp_path / "z.npy", np.hstack([u, y]))
+    z = np.load(tmp_path / "z.npy", mmap_mode="c")
+    z[:, 1] *= 2.0  # an edit that exists only in this process's private pages
+    f = compress_stream((z[:, :1], z[:, 1:]), 3, chunk_size=100, progress=False)
+    ref = _sysid.compress([(u, 2.0 * y)], 3, 3, None, "correlation")
+    assert_same_gram(f, ref)
+    np.testing.assert_array_equal(z[:, 1:], 2.0 * y)

@@ -113,6 +113,8 @@ def _release_pages(arr: np.ndarray, start: int, stop: int) -> None:
     mm = getattr(arr, "_mmap", None)
     if mm is None or stop <= start or not hasattr(mm, "madvise"):
         return
+    if getattr(arr, "mode", "r") in ("c", "copyonwrite"):
+        return  # private copy-on-write pages: dropping them would drop the caller's edits
     try:
         base = np.frombuffer(mm, dtype=np.uint8).__array_interface__["data"][0]
         first = arr[start:stop].__array_interface__["data"][0] - base
