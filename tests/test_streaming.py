@@ -256,3 +256,14 @@ def test_copy_on_write_memmap_edits_survive(tmp_path):
     ref = _sysid.compress([(u, 2.0 * y)], 3, 3, None, "correlation")
     assert_same_gram(f, ref)
     np.testing.assert_array_equal(z[:, 1:], 2.0 * y)
+
+
+def test_min_relative_pivot_sets_the_ill_conditioning_threshold():
+    u, y = noisy_record(1000, 1, 1, 13)
+    s = _sysid.CorrelationSums(1, 1, 3, 3, *_sysid.CorrelationSums.center_scale(u, y))
+    s.push(u, y)
+    assert s.to_factor().source == "correlation"
+    strict = s.to_factor(min_relative_pivot=0.5)
+    assert strict.source == "correlation-ill-conditioned"
+    assert 0.0 < strict.relative_pivot < 0.5
+    assert_same_gram(strict, s.to_factor())
