@@ -165,3 +165,8 @@ def test_x0_needs_data_and_a_single_experiment(record):
     est2 = sysid.SubspaceEstimator.from_factor(est.factor)
     with pytest.raises(sysid.DataError, match="needs the data"):
         est2.fit(2, x0=True)
+
+
+def test_kalman_gain_with_mismatched_shapes_is_a_shape_error_not_a_panic():
+    with pytest.raises(sysid.ShapeError, match="C has shape"):
+        _sysid.kalman_gain(np.eye(2), np.zeros((1, 3)), np.eye(2), np.eye(1), np.zeros((2, 1)))

@@ -55,11 +55,22 @@ pub fn kalman_gain(
     let n = a.nrows();
     let l = c.nrows();
     let fail = |reason: String| SysidError::NoStabilizingSolution { reason };
-    if r.nrows() != l || r.ncols() != l || q.nrows() != n || s.nrows() != n || s.ncols() != l {
-        return Err(SysidError::invalid(
-            "covariances",
-            "Q, R, S shapes do not match A and C",
-        ));
+    let checks: [(&'static str, MatRef<'_, f64>, usize, usize); 5] = [
+        ("A", a, n, n),
+        ("C", c, l, n),
+        ("Q", q, n, n),
+        ("R", r, l, l),
+        ("S", s, n, l),
+    ];
+    for (what, m, rows, cols) in checks {
+        if m.nrows() != rows || m.ncols() != cols {
+            return Err(SysidError::ShapeMismatch {
+                what: what.into(),
+                expected: format!("({rows}, {cols})"),
+                got: format!("({}, {})", m.nrows(), m.ncols()),
+            });
+        }
+        crate::error::check_finite(what, m)?;
     }
     let r_llt = r
         .llt(faer::Side::Lower)
@@ -147,6 +158,37 @@ mod tests {
         let rhs = &a * p * a.transpose() + &q - &sol.k * apct_s.transpose();
         assert!((p - &rhs).norm_max() < 1e-12 * p.norm_max());
         assert!(spectral_radius((&a - &sol.k * &c).as_ref()).unwrap() < 1.0);
+    }
+
+    #[test]
+    fn mismatched_shapes_are_errors_not_panics() {
+        let a = mat![[0.5, 0.0], [0.0, 0.5]];
+        let q = mat![[1.0, 0.0], [0.0, 1.0]];
+        let r = mat![[1.0]];
+        let s = mat![[0.0], [0.0]];
+        let c_bad = mat![[1.0, 0.0, 0.0]];
+        assert!(matches!(
+            kalman_gain(
+                a.as_ref(),
+                c_bad.as_ref(),
+                q.as_ref(),
+                r.as_ref(),
+                s.as_ref()
+            ),
+            Err(SysidError::ShapeMismatch { .. })
+        ));
+        let a_bad = mat![[0.5, 0.0]];
+        let c = mat![[1.0, 0.0]];
+        assert!(matches!(
+            kalman_gain(
+                a_bad.as_ref(),
+                c.as_ref(),
+                q.as_ref(),
+                r.as_ref(),
+                s.as_ref()
+            ),
+            Err(SysidError::ShapeMismatch { .. })
+        ));
     }
 
     #[test]
