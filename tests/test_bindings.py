@@ -92,3 +92,19 @@ def test_reprs_are_readable():
     est = sysid.SubspaceEstimator(data, horizon=4)
     assert repr(est).startswith("SubspaceEstimator(method='moesp', past=4, future=4")
     assert "nstates=3" in repr(est.fit(3))
+
+
+def test_import_is_light():
+    # SciPy's signal/statistics modules, pandas and matplotlib load only when used
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, sysid; "
+        "print(sorted(m for m in ('scipy.signal', 'scipy.stats', 'pandas', 'matplotlib', "
+        "'dask') if m in sys.modules))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"
+    assert callable(sysid.compare) and callable(sysid.criteria)
+    assert "spa" in dir(sysid)

@@ -1,8 +1,8 @@
-"""sysid: identification of linear state-space models from input/output data.
+r"""sysid: identification of linear state-space models from input/output data.
 
 .. math::
 
-    x(t+1) = A x(t) + B u(t) + K e(t), \\qquad y(t) = C x(t) + D u(t) + e(t)
+    x(t+1) = A x(t) + B u(t) + K e(t), \qquad y(t) = C x(t) + D u(t) + e(t)
 
 A streaming Rust core (on faer) compresses the record once; every estimate, order choice
 and validation step works on small matrices afterwards.
@@ -17,27 +17,22 @@ Examples
 4
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
 from . import datasets
 from ._sysid import __version__
-from .analysis import (
-    ContinuousStateSpace,
-    c2d,
-    ctrb,
-    d2c,
-    damp,
-    from_control,
-    from_scipy,
-    impulse,
-    is_controllable,
-    is_observable,
-    obsv,
-    step,
-    to_control,
-    to_scipy,
-    zeros,
+from .criteria import criteria  # a function named like its module: bind it eagerly
+from .data import (
+    DataSummary,
+    IOData,
+    SplitData,
+    Trend,
+    check_unit,
+    sample_time,
 )
-from .criteria import criteria, n_parameters, select_order
-from .data import DataSummary, IOData, SplitData, Trend, check_unit, sample_time
 from .errors import (
     DataError,
     ExcitationError,
@@ -50,72 +45,111 @@ from .errors import (
     ShapeError,
     SysidError,
 )
-from .input_design import (
-    check_excitation,
-    chirp,
-    crest_factor,
-    multisine,
-    persistent_excitation_order,
-    prbs,
-    random_binary,
-    random_gaussian,
-)
-from .io import load_model, save_model
-from .modal import ModalAnalysis, modal_analysis
 from .model import StateSpaceModel
-from .nonparametric import (
-    FRD,
-    Coherence,
-    Correlation,
-    FRDComparison,
-    Spectra,
-    coherence,
-    correlation,
-    etfe,
-    periodogram,
-    spa,
-    spectra,
-    welch_frf,
+from .subspace import (
+    SubspaceEstimator,
+    cva,
+    default_horizon,
+    moesp,
+    n4sid,
 )
-from .preprocessing import (
-    bandpass,
-    butter_sos,
-    decimate,
-    despike,
-    detrend,
-    drop_quiet,
-    filtfilt,
-    find_spikes,
-    highpass,
-    lowpass,
-    repair_nan,
-    resample,
-    scale,
-    select_mask,
-    select_mode,
-)
-from .realization import (
-    EraResult,
-    MarkovEstimate,
-    StabilizationDiagram,
-    era,
-    era_stabilization,
-    ho_kalman,
-    impulse_from_frf,
-    impulse_response,
-    kung,
-    okid,
-)
-from .reduction import (
-    Gramians,
-    balanced_realization,
-    balanced_truncation,
-    gramians,
-    hankel_singular_values,
-)
-from .streaming import compress_dask, compress_stream
-from .subspace import SubspaceEstimator, cva, default_horizon, moesp, n4sid
-from .validation import compare, error_spectrum, estimate_x0, fit_metrics, residuals
+
+# Everything else loads on first use (PEP 562), so that `import sysid` pulls in neither
+# SciPy's signal and statistics modules nor plotting: name -> submodule.
+_LAZY = {
+    "Coherence": "nonparametric",
+    "ContinuousStateSpace": "analysis",
+    "Correlation": "nonparametric",
+    "EraResult": "realization",
+    "FRD": "nonparametric",
+    "FRDComparison": "nonparametric",
+    "Gramians": "reduction",
+    "MarkovEstimate": "realization",
+    "ModalAnalysis": "modal",
+    "Spectra": "nonparametric",
+    "StabilizationDiagram": "realization",
+    "balanced_realization": "reduction",
+    "balanced_truncation": "reduction",
+    "bandpass": "preprocessing",
+    "butter_sos": "preprocessing",
+    "c2d": "analysis",
+    "check_excitation": "input_design",
+    "chirp": "input_design",
+    "coherence": "nonparametric",
+    "compare": "validation",
+    "compress_dask": "streaming",
+    "compress_stream": "streaming",
+    "correlation": "nonparametric",
+    "crest_factor": "input_design",
+    "ctrb": "analysis",
+    "d2c": "analysis",
+    "damp": "analysis",
+    "decimate": "preprocessing",
+    "despike": "preprocessing",
+    "detrend": "preprocessing",
+    "drop_quiet": "preprocessing",
+    "era": "realization",
+    "era_stabilization": "realization",
+    "error_spectrum": "validation",
+    "estimate_x0": "validation",
+    "etfe": "nonparametric",
+    "filtfilt": "preprocessing",
+    "find_spikes": "preprocessing",
+    "fit_metrics": "validation",
+    "from_control": "analysis",
+    "from_scipy": "analysis",
+    "gramians": "reduction",
+    "hankel_singular_values": "reduction",
+    "highpass": "preprocessing",
+    "ho_kalman": "realization",
+    "impulse": "analysis",
+    "impulse_from_frf": "realization",
+    "impulse_response": "realization",
+    "is_controllable": "analysis",
+    "is_observable": "analysis",
+    "kung": "realization",
+    "load_model": "io",
+    "lowpass": "preprocessing",
+    "modal_analysis": "modal",
+    "multisine": "input_design",
+    "n_parameters": "criteria",
+    "obsv": "analysis",
+    "okid": "realization",
+    "periodogram": "nonparametric",
+    "persistent_excitation_order": "input_design",
+    "prbs": "input_design",
+    "random_binary": "input_design",
+    "random_gaussian": "input_design",
+    "repair_nan": "preprocessing",
+    "resample": "preprocessing",
+    "residuals": "validation",
+    "save_model": "io",
+    "scale": "preprocessing",
+    "select_mask": "preprocessing",
+    "select_mode": "preprocessing",
+    "select_order": "criteria",
+    "spa": "nonparametric",
+    "spectra": "nonparametric",
+    "step": "analysis",
+    "to_control": "analysis",
+    "to_scipy": "analysis",
+    "welch_frf": "nonparametric",
+    "zeros": "analysis",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module 'sysid' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_LAZY))
+
 
 __all__ = [
     "__version__",
@@ -163,7 +197,6 @@ __all__ = [
     "from_scipy",
     "save_model",
     "load_model",
-    # data handling, pre-processing, input design, non-parametric analysis
     "ExcitationWarning",
     "Trend",
     "SplitData",
@@ -205,7 +238,6 @@ __all__ = [
     "periodogram",
     "coherence",
     "correlation",
-    # realisation, Markov parameters, reduction, modal analysis
     "ho_kalman",
     "kung",
     "era",

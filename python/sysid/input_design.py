@@ -15,7 +15,6 @@ import warnings
 from typing import Any
 
 import numpy as np
-from scipy import signal
 
 from ._checks import as_2d
 from .errors import DataError, ExcitationWarning
@@ -103,6 +102,8 @@ def prbs(
         n_bits = max(2, min(20, int(np.ceil(np.log2(n_sym + 1)))))
     if not isinstance(n_bits, (int, np.integer)) or not 2 <= n_bits <= 32:
         raise DataError(f"n_bits must be an integer in 2..32, got {n_bits!r}")
+    from scipy import signal
+
     seq = signal.max_len_seq(int(n_bits))[0].astype(float)
     period = seq.size
     shift = max(1, period // m)
@@ -284,6 +285,8 @@ def chirp(
     if method not in ("linear", "logarithmic", "quadratic", "hyperbolic"):
         raise DataError(f"unknown chirp method {method!r}")
     t = np.arange(n) * float(dt)
+    from scipy import signal
+
     return amplitude * signal.chirp(t, f0, t[-1], f1, method=method)[:, None]
 
 

@@ -25,8 +25,6 @@ from __future__ import annotations
 from typing import Any, Union
 
 import numpy as np
-import scipy.signal
-import scipy.stats
 
 from ._checks import as_2d
 from .data import IOData
@@ -395,6 +393,8 @@ class ResidualAnalysis:
             self.crosscorr = reu / np.outer(se, su)[None]
         else:
             self.crosscorr = np.zeros((2 * M + 1, len(se), 0))
+        import scipy.stats
+
         z = scipy.stats.norm.ppf(1 - alpha / 2)
         self.bound = float(z / np.sqrt(N))
         r = np.array([self.autocorr[1:, i, i] for i in range(len(se))])  # (l, M)
@@ -594,6 +594,8 @@ def error_spectrum(model: StateSpaceModel, data: Any, *, x0: X0 = "estimate",
     err_sum, out_sum, weight = 0.0, 0.0, 0
     freq = np.zeros(0)
     for y, yh in zip(cmp.y, cmp.yhat):
+        import scipy.signal
+
         freq, pe = scipy.signal.welch(y - yh, fs=fs, nperseg=int(nperseg), axis=0)
         _, py = scipy.signal.welch(y, fs=fs, nperseg=int(nperseg), axis=0)
         err_sum = err_sum + pe * y.shape[0]
