@@ -11,7 +11,7 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q "maturin>=1.7,<2" "numpy>=1.24" "scipy>=1.10" \
 		"pytest>=7" "hypothesis>=6" "matplotlib>=3.6" "pandas>=1.5" "ruff>=0.5" \
-		"control>=0.10" "dask[array]>=2023.1" "distributed>=2023.1" "pyarrow>=12"
+		"control>=0.10" "dask[array]>=2023.1" "distributed>=2023.1" "pyarrow>=12" "mypy>=1.10"
 	touch $(STAMP)
 
 build: $(STAMP)
@@ -28,10 +28,11 @@ test-python: build
 
 test: test-rust test-python
 
-lint: $(STAMP)
+lint: build
 	cargo fmt --all -- --check
 	cargo clippy --release --all-targets -- -D warnings
 	$(BIN)/ruff check python tests benches examples
+	$(BIN)/python -m mypy.stubtest sysid._sysid
 
 bench: build
 	$(BIN)/python benches/run.py

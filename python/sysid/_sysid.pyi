@@ -1,19 +1,40 @@
 """Type stubs of the compiled core (``sysid._sysid``); see the Python wrappers for docs."""
 
-from typing import Any
+from typing import Any, final
 
 import numpy as np
 import numpy.typing as npt
 
 __version__: str
+__all__ = [
+    "__version__",
+    "HankelFactor",
+    "compress",
+    "simulate",
+    "predict",
+    "kalman_gain",
+    "StreamingCompressor",
+    "CorrelationSums",
+    "Subspace",
+    "estimate_bd_x0",
+    "realize",
+    "fir",
+    "okid",
+    "solve_discrete_lyapunov",
+    "gramians",
+    "hankel_singular_values",
+    "balanced_truncation",
+    "modal_analysis",
+]
 
-Array = npt.NDArray[np.float64]
+_Array = npt.NDArray[np.float64]
 
+@final
 class HankelFactor:
     """Triangular factor L (k x k, H H^T = L L^T) of a block-Hankel data matrix."""
 
     @property
-    def l(self) -> Array: ...
+    def l(self) -> _Array: ...
     @property
     def n_columns(self) -> int: ...
     @property
@@ -37,7 +58,7 @@ class HankelFactor:
         n_outputs: int,
         past: int,
         future: int,
-        l: Array,
+        l: _Array,
         n_columns: int,
         n_experiments: int,
         source: str = "qr",
@@ -46,43 +67,48 @@ class HankelFactor:
     def __reduce__(self) -> Any: ...
 
 def compress(
-    experiments: list[tuple[Array, Array]],
+    experiments: list[tuple[_Array, _Array]],
     past: int,
     future: int,
     chunk_rows: int | None = None,
     compressor: str = "qr",
 ) -> HankelFactor: ...
 
+@final
 class Subspace:
-    def __init__(self, factor: HankelFactor, method: str) -> None: ...
+    def __new__(cls, factor: HankelFactor, method: str) -> Subspace: ...
     @property
-    def singular_values(self) -> Array: ...
+    def singular_values(self) -> _Array: ...
     @property
     def max_order(self) -> int: ...
     def auto_order(self) -> int: ...
     def fit(self, order: int, feedthrough: bool, kalman: bool, stable: bool) -> dict[str, Any]: ...
 
 def estimate_bd_x0(
-    a: Array, c: Array, u: Array, y: Array, feedthrough: bool
-) -> tuple[Array, Array, Array]: ...
-def simulate(a: Array, b: Array, c: Array, d: Array, u: Array, x0: Array | None) -> Array: ...
+    a: _Array, c: _Array, u: _Array, y: _Array, feedthrough: bool
+) -> tuple[_Array, _Array, _Array]: ...
+def simulate(
+    a: _Array, b: _Array, c: _Array, d: _Array, u: _Array, x0: _Array | None = None
+) -> _Array: ...
 def predict(
-    a: Array,
-    b: Array,
-    c: Array,
-    d: Array,
-    k: Array,
-    u: Array,
-    y: Array,
-    x0: Array | None,
-    horizon: int,
-) -> Array: ...
-def kalman_gain(a: Array, c: Array, q: Array, r: Array, s: Array) -> tuple[Array, Array, Array]: ...
+    a: _Array,
+    b: _Array,
+    c: _Array,
+    d: _Array,
+    k: _Array,
+    u: _Array,
+    y: _Array,
+    x0: _Array | None = None,
+    horizon: int = 1,
+) -> _Array: ...
+def kalman_gain(
+    a: _Array, c: _Array, q: _Array, r: _Array, s: _Array
+) -> tuple[_Array, _Array, _Array]: ...
 
 # -- realisation, Markov parameters, balancing, modal analysis (crates/sysid-py/src/realization.rs)
 def realize(
     method: str,
-    markov: Array,
+    markov: _Array,
     noutputs: int,
     order: int | None = None,
     rows: int | None = None,
@@ -90,32 +116,38 @@ def realize(
     rank_tol: float = 1e-8,
 ) -> dict[str, Any]: ...
 def fir(
-    experiments: list[tuple[Array, Array]],
+    experiments: list[tuple[_Array, _Array]],
     length: int,
     feedthrough: bool = True,
     regularization: str = "tc",
     hyper: tuple[float, float] | None = None,
 ) -> dict[str, Any]: ...
 def okid(
-    experiments: list[tuple[Array, Array]],
+    experiments: list[tuple[_Array, _Array]],
     observer_order: int,
     count: int,
     feedthrough: bool = True,
 ) -> dict[str, Any]: ...
-def solve_discrete_lyapunov(a: Array, q: Array) -> Array: ...
-def gramians(a: Array, b: Array, c: Array, d: Array) -> tuple[Array, Array]: ...
-def hankel_singular_values(a: Array, b: Array, c: Array, d: Array) -> Array: ...
+def solve_discrete_lyapunov(a: _Array, q: _Array) -> _Array: ...
+def gramians(a: _Array, b: _Array, c: _Array, d: _Array) -> tuple[_Array, _Array]: ...
+def hankel_singular_values(a: _Array, b: _Array, c: _Array, d: _Array) -> _Array: ...
 def balanced_truncation(
-    a: Array, b: Array, c: Array, d: Array, order: int | None = None
+    a: _Array, b: _Array, c: _Array, d: _Array, order: int | None = None
 ) -> dict[str, Any]: ...
-def modal_analysis(a: Array, c: Array, dt: float) -> dict[str, Any]: ...
+def modal_analysis(a: _Array, c: _Array, dt: float) -> dict[str, Any]: ...
 
+@final
 class StreamingCompressor:
-    def __init__(
-        self, n_inputs: int, n_outputs: int, past: int, future: int,
-        compressor: str = "qr", chunk_rows: int | None = None,
-    ) -> None: ...
-    def push(self, u: Array, y: Array) -> None: ...
+    def __new__(
+        cls,
+        n_inputs: int,
+        n_outputs: int,
+        past: int,
+        future: int,
+        compressor: str = "qr",
+        chunk_rows: int | None = None,
+    ) -> StreamingCompressor: ...
+    def push(self, u: _Array, y: _Array) -> None: ...
     def end_experiment(self) -> None: ...
     def finish(self) -> HankelFactor: ...
     @property
@@ -123,14 +155,20 @@ class StreamingCompressor:
     @property
     def compressor(self) -> str: ...
 
+@final
 class CorrelationSums:
-    def __init__(
-        self, n_inputs: int, n_outputs: int, past: int, future: int,
-        center: Array, scale: Array,
-    ) -> None: ...
+    def __new__(
+        cls,
+        n_inputs: int,
+        n_outputs: int,
+        past: int,
+        future: int,
+        center: _Array,
+        scale: _Array,
+    ) -> CorrelationSums: ...
     @staticmethod
-    def center_scale(u: Array, y: Array) -> tuple[Array, Array]: ...
-    def push(self, u: Array, y: Array) -> None: ...
+    def center_scale(u: _Array, y: _Array) -> tuple[_Array, _Array]: ...
+    def push(self, u: _Array, y: _Array) -> None: ...
     def end_experiment(self) -> None: ...
     def merge(self, other: CorrelationSums) -> CorrelationSums: ...
     def to_factor(self, min_relative_pivot: float = 1e-10) -> HankelFactor: ...
