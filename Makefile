@@ -6,7 +6,7 @@ STAMP := $(VENV)/.deps-installed
 
 .PHONY: demo test test-rust test-python lint build bench bench-quick bench-full clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml Makefile
 	$(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q "maturin>=1.7,<2" "numpy>=1.24" "scipy>=1.10" \
