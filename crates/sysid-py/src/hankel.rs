@@ -7,8 +7,7 @@ use numpy::{PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use sysid_core::hankel::{
-    compress_experiments, CompressorKind, CorrelationOptions, FactorSource, HankelFactor,
-    HankelLayout,
+    compress_experiments, CompressorKind, FactorSource, HankelFactor, HankelLayout,
 };
 use sysid_core::SysidError;
 
@@ -173,22 +172,7 @@ pub fn compress(
         .iter()
         .map(|(u, y)| (view_nd(u.as_array()), view_nd(y.as_array())))
         .collect();
-    let kind = match compressor {
-        "qr" => CompressorKind::Qr { chunk_rows },
-        "correlation" => {
-            let mut opts = CorrelationOptions::default();
-            if let Some(r) = chunk_rows {
-                opts.block_rows = r.max(1);
-            }
-            CompressorKind::Correlation(opts)
-        }
-        other => {
-            return Err(crate::errors::to_py(SysidError::InvalidArgument {
-                name: "compressor",
-                reason: format!("unknown compressor {other:?}; available: \"qr\", \"correlation\""),
-            }))
-        }
-    };
+    let kind = CompressorKind::parse(compressor, chunk_rows).py()?;
     let result = py.detach(|| compress_experiments(layout, &views, kind));
     Ok(PyHankelFactor {
         inner: result.py()?,

@@ -8,15 +8,9 @@ use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyTuple;
 use sysid_core::hankel::{
-    Compressor, CorrelationCompressor, CorrelationOptions, CorrelationState, CorrelationSums,
-    HankelLayout, QrCompressor,
+    AnyCompressor, Compressor, CompressorKind, CorrelationState, CorrelationSums, HankelLayout,
 };
 use sysid_core::SysidError;
-
-enum Inner {
-    Qr(QrCompressor),
-    Correlation(CorrelationCompressor),
-}
 
 fn finished() -> PyErr {
     to_py(SysidError::InvalidArgument {
@@ -28,7 +22,7 @@ fn finished() -> PyErr {
 /// A compressor fed chunk by chunk: `push(u, y)`, `end_experiment()`, `finish()`.
 #[pyclass(name = "StreamingCompressor", module = "sysid._sysid")]
 pub struct PyStreamingCompressor {
-    inner: Option<Inner>,
+    inner: Option<AnyCompressor>,
     kind: &'static str,
     samples: usize,
 }
@@ -46,33 +40,9 @@ impl PyStreamingCompressor {
         chunk_rows: Option<usize>,
     ) -> PyResult<Self> {
         let layout = HankelLayout::new(n_inputs, n_outputs, past, future).py()?;
-        let (inner, kind) = match compressor {
-            "qr" => (
-                Inner::Qr(match chunk_rows {
-                    Some(r) => QrCompressor::with_chunk_rows(layout, r),
-                    None => QrCompressor::new(layout),
-                }),
-                "qr",
-            ),
-            "correlation" => {
-                let mut opts = CorrelationOptions::default();
-                if let Some(r) = chunk_rows {
-                    opts.block_rows = r.max(1);
-                }
-                (
-                    Inner::Correlation(CorrelationCompressor::with_options(layout, opts)),
-                    "correlation",
-                )
-            }
-            other => {
-                return Err(to_py(SysidError::InvalidArgument {
-                    name: "compressor",
-                    reason: format!(
-                        "unknown compressor {other:?}; available: \"qr\", \"correlation\""
-                    ),
-                }))
-            }
-        };
+        let kind = CompressorKind::parse(compressor, chunk_rows).py()?;
+        let inner = kind.build(layout);
+        let kind = kind.name();
         Ok(Self {
             inner: Some(inner),
             kind,
@@ -90,33 +60,24 @@ impl PyStreamingCompressor {
         let (uv, yv) = (view(&u), view(&y));
         let n = yv.nrows();
         let inner = self.inner.as_mut().ok_or_else(finished)?;
-        py.detach(|| match inner {
-            Inner::Qr(c) => c.push(uv, yv),
-            Inner::Correlation(c) => c.push(uv, yv),
-        })
-        .py()?;
+        py.detach(|| inner.push(uv, yv)).py()?;
         self.samples += n;
         Ok(())
     }
 
     /// Closes the current experiment; the next push starts a new one.
     fn end_experiment(&mut self) -> PyResult<()> {
-        match self.inner.as_mut().ok_or_else(finished)? {
-            Inner::Qr(c) => c.end_experiment(),
-            Inner::Correlation(c) => c.end_experiment(),
-        }
-        .py()
+        self.inner
+            .as_mut()
+            .ok_or_else(finished)?
+            .end_experiment()
+            .py()
     }
 
     /// Closes the last experiment and returns the `HankelFactor`.
     fn finish(&mut self, py: Python<'_>) -> PyResult<PyHankelFactor> {
         let inner = self.inner.take().ok_or_else(finished)?;
-        let f = py
-            .detach(|| match inner {
-                Inner::Qr(c) => c.finish(),
-                Inner::Correlation(c) => c.finish(),
-            })
-            .py()?;
+        let f = py.detach(|| inner.finish()).py()?;
         Ok(PyHankelFactor { inner: f })
     }
 
@@ -151,10 +112,6 @@ pub struct PyCorrelationSums {
     inner: CorrelationSums,
 }
 
-fn vec_to_numpy<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f64>> {
-    slice_to_numpy(py, v)
-}
-
 #[pymethods]
 impl PyCorrelationSums {
     #[new]
@@ -180,7 +137,7 @@ impl PyCorrelationSums {
         y: PyReadonlyArray2<'py, f64>,
     ) -> (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>) {
         let (c, s) = CorrelationSums::center_scale(view(&u), view(&y));
-        (vec_to_numpy(py, &c), vec_to_numpy(py, &s))
+        (slice_to_numpy(py, &c), slice_to_numpy(py, &s))
     }
 
     /// Appends samples to the open experiment (the GIL is released).
@@ -272,16 +229,16 @@ impl PyCorrelationSums {
         let lay = s.layout;
         let args = (
             (lay.n_inputs, lay.n_outputs, lay.past, lay.future),
-            vec_to_numpy(py, &s.center),
-            vec_to_numpy(py, &s.scale),
+            slice_to_numpy(py, &s.center),
+            slice_to_numpy(py, &s.scale),
             to_numpy(py, s.gram.as_ref()),
-            vec_to_numpy(py, &s.col_sum),
+            slice_to_numpy(py, &s.col_sum),
             (s.n_columns, s.n_experiments, s.open_samples),
             to_numpy(py, s.open_lag.as_ref()),
             (
-                vec_to_numpy(py, &s.open_sum),
-                vec_to_numpy(py, &s.open_head),
-                vec_to_numpy(py, &s.open_tail),
+                slice_to_numpy(py, &s.open_sum),
+                slice_to_numpy(py, &s.open_head),
+                slice_to_numpy(py, &s.open_tail),
             ),
         );
         PyTuple::new(py, [ctor, args.into_pyobject(py)?.into_any()])

@@ -24,9 +24,7 @@
 //! neighbouring segments come from their boundary samples), so the result does not depend on
 //! the number of threads.
 
-use super::{
-    check_chunk, Block, Compressor, FactorSource, HankelFactor, HankelLayout, QrCompressor,
-};
+use super::{check_chunk, Block, Compressor, FactorSource, HankelFactor, HankelLayout};
 use crate::error::{Result, SysidError};
 use crate::linalg::lq_lower;
 use faer::linalg::matmul::matmul;
@@ -780,69 +778,6 @@ impl Compressor for CorrelationCompressor {
                 got: 0,
                 fix: "push samples before finishing",
             }),
-        }
-    }
-}
-
-/// Which compressor [`compress_experiments`] uses.
-#[derive(Debug, Clone, Copy, PartialEq)]
-#[non_exhaustive]
-pub enum CompressorKind {
-    /// Exact sequential QR, with an optional number of windows per QR update.
-    Qr {
-        /// Windows per QR update (`None`: the default).
-        chunk_rows: Option<usize>,
-    },
-    /// Lagged correlation sums; falls back to the exact QR pass when the Gram matrix is
-    /// ill-conditioned (the data are in memory), recorded as [`FactorSource::QrFallback`].
-    Correlation(CorrelationOptions),
-}
-
-/// Compresses in-memory experiments `(u, y)` with the chosen compressor.
-///
-/// ```
-/// use faer::Mat;
-/// use sysid_core::hankel::{compress_experiments, CompressorKind, CorrelationOptions, HankelLayout};
-/// let layout = HankelLayout::new(1, 1, 3, 3).unwrap();
-/// let u = Mat::from_fn(200, 1, |i, _| ((i * 7919) % 13) as f64 - 6.0);
-/// let y = Mat::from_fn(200, 1, |i, _| ((i * 104729) % 11) as f64 - 5.0);
-/// let kind = CompressorKind::Correlation(CorrelationOptions::default());
-/// let f = compress_experiments(layout, &[(u.as_ref(), y.as_ref())], kind).unwrap();
-/// assert_eq!(f.n_columns(), 200 - 6 + 1);
-/// ```
-pub fn compress_experiments(
-    layout: HankelLayout,
-    experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
-    kind: CompressorKind,
-) -> Result<HankelFactor> {
-    fn run<C: Compressor>(
-        mut c: C,
-        experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
-    ) -> Result<HankelFactor> {
-        for (u, y) in experiments {
-            c.push(*u, *y)?;
-            c.end_experiment()?;
-        }
-        c.finish()
-    }
-    let qr = |chunk_rows: Option<usize>| match chunk_rows {
-        Some(r) => QrCompressor::with_chunk_rows(layout, r),
-        None => QrCompressor::new(layout),
-    };
-    match kind {
-        CompressorKind::Qr { chunk_rows } => run(qr(chunk_rows), experiments),
-        CompressorKind::Correlation(opts) => {
-            let f = run(
-                CorrelationCompressor::with_options(layout, opts),
-                experiments,
-            )?;
-            match f.source() {
-                FactorSource::CorrelationIllConditioned { relative_pivot, .. } => {
-                    Ok(run(qr(None), experiments)?
-                        .with_source(FactorSource::QrFallback { relative_pivot }))
-                }
-                _ => Ok(f),
-            }
         }
     }
 }

@@ -26,13 +26,14 @@
 
 mod correlation;
 mod factor;
+mod kind;
 mod qr;
 
 pub use correlation::{
-    compress_experiments, CompressorKind, CorrelationCompressor, CorrelationOptions,
-    CorrelationState, CorrelationSums,
+    CorrelationCompressor, CorrelationOptions, CorrelationState, CorrelationSums,
 };
 pub use factor::{Block, FactorSource, HankelFactor};
+pub use kind::{compress_experiments, AnyCompressor, CompressorKind};
 pub use qr::QrCompressor;
 
 use crate::error::{Result, SysidError};

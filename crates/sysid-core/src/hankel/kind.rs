@@ -1,0 +1,140 @@
+//! The choice of compressor: by value ([`CompressorKind`]) or by name, built into one
+//! streaming object ([`AnyCompressor`]) or run over in-memory experiments
+//! ([`compress_experiments`], with the exact fallback of the fast compressor).
+
+use super::{
+    Compressor, CorrelationCompressor, CorrelationOptions, FactorSource, HankelFactor,
+    HankelLayout, QrCompressor,
+};
+use crate::error::{Result, SysidError};
+use faer::MatRef;
+
+/// Which compressor to use.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[non_exhaustive]
+pub enum CompressorKind {
+    /// Exact sequential QR, with an optional number of windows per QR update.
+    Qr {
+        /// Windows per QR update (`None`: the default).
+        chunk_rows: Option<usize>,
+    },
+    /// Lagged correlation sums; in [`compress_experiments`] it falls back to the exact QR
+    /// pass when the Gram matrix is ill-conditioned, recorded as [`FactorSource::QrFallback`].
+    Correlation(CorrelationOptions),
+}
+
+impl CompressorKind {
+    /// Parses `"qr"` or `"correlation"`; `chunk_rows` sets the windows per QR update or the
+    /// samples per block of the correlation sums.
+    ///
+    /// ```
+    /// use sysid_core::hankel::CompressorKind;
+    /// assert_eq!(CompressorKind::parse("qr", Some(64)).unwrap(), CompressorKind::Qr { chunk_rows: Some(64) });
+    /// assert!(CompressorKind::parse("svd", None).is_err());
+    /// ```
+    pub fn parse(name: &str, chunk_rows: Option<usize>) -> Result<Self> {
+        match name {
+            "qr" => Ok(CompressorKind::Qr { chunk_rows }),
+            "correlation" => {
+                let mut opts = CorrelationOptions::default();
+                if let Some(r) = chunk_rows {
+                    opts.block_rows = r.max(1);
+                }
+                Ok(CompressorKind::Correlation(opts))
+            }
+            other => Err(SysidError::invalid(
+                "compressor",
+                format!("unknown compressor {other:?}; available: \"qr\", \"correlation\""),
+            )),
+        }
+    }
+
+    /// The name [`CompressorKind::parse`] accepts for this kind.
+    pub fn name(&self) -> &'static str {
+        match self {
+            CompressorKind::Qr { .. } => "qr",
+            CompressorKind::Correlation(_) => "correlation",
+        }
+    }
+
+    /// A streaming compressor of this kind for `layout`.
+    pub fn build(self, layout: HankelLayout) -> AnyCompressor {
+        match self {
+            CompressorKind::Qr {
+                chunk_rows: Some(r),
+            } => AnyCompressor::Qr(QrCompressor::with_chunk_rows(layout, r)),
+            CompressorKind::Qr { chunk_rows: None } => AnyCompressor::Qr(QrCompressor::new(layout)),
+            CompressorKind::Correlation(opts) => {
+                AnyCompressor::Correlation(CorrelationCompressor::with_options(layout, opts))
+            }
+        }
+    }
+}
+
+/// Either compressor behind one type (for callers that choose at run time).
+#[derive(Debug, Clone)]
+pub enum AnyCompressor {
+    /// The exact compressor.
+    Qr(QrCompressor),
+    /// The fast compressor.
+    Correlation(CorrelationCompressor),
+}
+
+impl Compressor for AnyCompressor {
+    fn push(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> Result<()> {
+        match self {
+            AnyCompressor::Qr(c) => c.push(u, y),
+            AnyCompressor::Correlation(c) => c.push(u, y),
+        }
+    }
+
+    fn end_experiment(&mut self) -> Result<()> {
+        match self {
+            AnyCompressor::Qr(c) => c.end_experiment(),
+            AnyCompressor::Correlation(c) => c.end_experiment(),
+        }
+    }
+
+    fn finish(self) -> Result<HankelFactor> {
+        match self {
+            AnyCompressor::Qr(c) => c.finish(),
+            AnyCompressor::Correlation(c) => c.finish(),
+        }
+    }
+}
+
+/// Compresses in-memory experiments `(u, y)` with the chosen compressor.
+///
+/// ```
+/// use faer::Mat;
+/// use sysid_core::hankel::{compress_experiments, CompressorKind, CorrelationOptions, HankelLayout};
+/// let layout = HankelLayout::new(1, 1, 3, 3).unwrap();
+/// let u = Mat::from_fn(200, 1, |i, _| ((i * 7919) % 13) as f64 - 6.0);
+/// let y = Mat::from_fn(200, 1, |i, _| ((i * 104729) % 11) as f64 - 5.0);
+/// let kind = CompressorKind::Correlation(CorrelationOptions::default());
+/// let f = compress_experiments(layout, &[(u.as_ref(), y.as_ref())], kind).unwrap();
+/// assert_eq!(f.n_columns(), 200 - 6 + 1);
+/// ```
+pub fn compress_experiments(
+    layout: HankelLayout,
+    experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
+    kind: CompressorKind,
+) -> Result<HankelFactor> {
+    let run = |kind: CompressorKind| -> Result<HankelFactor> {
+        let mut c = kind.build(layout);
+        for (u, y) in experiments {
+            c.push(*u, *y)?;
+            c.end_experiment()?;
+        }
+        c.finish()
+    };
+    let f = run(kind)?;
+    match f.source() {
+        // the data are in memory: redo the exact pass rather than keep a degraded factor
+        FactorSource::CorrelationIllConditioned { relative_pivot, .. } => {
+            Ok(run(CompressorKind::Qr { chunk_rows: None })?
+                .with_source(FactorSource::QrFallback { relative_pivot }))
+        }
+        _ => Ok(f),
+    }
+}
