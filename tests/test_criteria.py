@@ -127,7 +127,7 @@ def test_order_selection_bad_input():
     est = sysid.SubspaceEstimator(data, horizon=5)
     with pytest.raises(sysid.DataError, match="larger than the horizon allows"):
         sysid.select_order(est, [1, est.max_order + 1])
-    with pytest.raises(sysid.DataError, match="integers >= 1"):
+    with pytest.raises(sysid.DataError, match="every entry of orders must be a positive integer"):
         sysid.select_order(est, [0])
     with pytest.raises(sysid.DataError, match="empty"):
         sysid.select_order(est, [])

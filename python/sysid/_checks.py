@@ -63,3 +63,21 @@ def as_matrix(x: Any, name: str, shape: tuple[int | None, int | None]) -> np.nda
     if not np.isfinite(arr).all():
         raise NonFiniteError(f"{name} has non-finite entries (NaN or Inf)")
     return arr
+
+
+def as_int(x: Any, name: str, lo: int = 1, hi: int | None = None, *, alt: str = "") -> int:
+    """Return an integer argument (a Python or NumPy integer, not a bool) in ``[lo, hi]``.
+
+    The message names the argument and the range; ``alt`` names another accepted value
+    (e.g. ``"None (simulation)"``) that the caller has already handled.
+    """
+    ok = isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_))
+    if ok and x >= lo and (hi is None or x <= hi):
+        return int(x)
+    if hi is not None:
+        want = f"an integer between {lo} and {hi}"
+    elif lo == 1:
+        want = "a positive integer"
+    else:
+        want = f"an integer >= {lo}"
+    raise DataError(f"{name} must be {alt + ' or ' if alt else ''}{want}, got {x!r}")

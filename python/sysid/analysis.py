@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from ._checks import as_matrix
+from ._checks import as_int, as_matrix
 from .errors import DataError, NumericalError, ShapeError
 from .model import StateSpaceModel
 
@@ -367,9 +367,7 @@ def _n_samples(model: StateSpaceModel, n_samples: int | None) -> int:
         # long enough for the slowest mode to decay to 1 % (bounded)
         n = 100 if rho >= 1 or rho == 0 else int(np.ceil(np.log(0.01) / np.log(rho))) + 10
         return int(min(max(n, 20), 10000))
-    if isinstance(n_samples, bool) or int(n_samples) != n_samples or n_samples < 1:
-        raise DataError(f"n_samples must be a positive integer, got {n_samples!r}")
-    return int(n_samples)
+    return as_int(n_samples, "n_samples")
 
 
 def step(model: StateSpaceModel, n_samples: int | None = None) -> TimeResponse:

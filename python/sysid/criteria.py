@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from ._checks import as_int
 from .data import IOData
 from .errors import DataError, NumericalError, SysidError
 from .model import StateSpaceModel
@@ -307,8 +308,7 @@ def _check_orders(orders: Iterable[int] | None, max_order: int) -> list[int]:
         return list(range(1, min(max_order, 15) + 1))
     out = []
     for o in orders:
-        if isinstance(o, bool) or not isinstance(o, (int, np.integer)) or o < 1:
-            raise DataError(f"orders must be integers >= 1, got {o!r}")
+        o = as_int(o, "every entry of orders")
         if o > max_order:
             raise DataError(f"order {o} is larger than the horizon allows ({max_order}); "
                             "increase the horizon or lower the order")

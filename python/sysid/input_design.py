@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ._checks import as_2d
+from ._checks import as_2d, as_int
 from .errors import DataError, ExcitationWarning
 
 __all__ = [
@@ -32,9 +32,7 @@ __all__ = [
 
 
 def _n(n: Any, name: str = "n_samples") -> int:
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
-        raise DataError(f"{name} must be a positive integer, got {n!r}")
-    return int(n)
+    return as_int(n, name)
 
 
 def _levels(levels: Any) -> tuple[float, float]:

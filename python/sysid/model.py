@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from . import _sysid
-from ._checks import as_2d, as_matrix
+from ._checks import as_2d, as_int, as_matrix
 from .errors import DataError, ShapeError
 
 __all__ = ["StateSpaceModel"]
@@ -195,8 +195,7 @@ class StateSpaceModel:
         u = self._u(u, y.shape[0])
         if u.shape[0] != y.shape[0]:
             raise ShapeError(f"u has {u.shape[0]} samples but y has {y.shape[0]}")
-        if isinstance(horizon, bool) or int(horizon) != horizon or horizon < 1:
-            raise DataError(f"horizon must be an integer >= 1, got {horizon!r}")
+        horizon = as_int(horizon, "horizon")
         K = self.K if self.K is not None else np.zeros((self.nstates, self.noutputs))
         return _sysid.predict(self.A, self.B, self.C, self.D, K, u, y, self._x0(x0), int(horizon))
 

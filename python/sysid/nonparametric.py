@@ -33,6 +33,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage, signal, stats
 
+from ._checks import as_int
 from .data import IOData
 from .errors import DataError, InsufficientDataError, ShapeError
 
@@ -420,12 +421,6 @@ def _band(ratio: np.ndarray, K: float, m: int, fix: str) -> tuple[np.ndarray, fl
     return np.sqrt(ratio / (K - m)), 2.0 * (K - m)
 
 
-def _check_int(x: Any, name: str, lo: int) -> int:
-    if isinstance(x, bool) or not isinstance(x, (int, np.integer)) or x < lo:
-        raise DataError(f"{name} must be an integer >= {lo}, got {x!r}")
-    return int(x)
-
-
 def _default_nperseg(data: IOData) -> int:
     shortest = min(data.lengths)
     return int(min(256, 2 ** max(3, int(np.log2(max(shortest // 4, 8))))))
@@ -474,8 +469,8 @@ def welch_frf(
     True
     """
     data = _need_data(data)
-    nperseg = _default_nperseg(data) if nperseg is None else _check_int(nperseg, "nperseg", 2)
-    noverlap = nperseg // 2 if noverlap is None else _check_int(noverlap, "noverlap", 0)
+    nperseg = _default_nperseg(data) if nperseg is None else as_int(nperseg, "nperseg", 2)
+    noverlap = nperseg // 2 if noverlap is None else as_int(noverlap, "noverlap", 0)
     if noverlap >= nperseg:
         raise DataError(f"noverlap ({noverlap}) must be smaller than nperseg ({nperseg})")
     S, f, k_eff, count = _welch_matrix(_z(data), nperseg, noverlap, window, nfft, data.dt, True)
@@ -557,14 +552,14 @@ def spa(
     """
     data = _need_data(data)
     N = data.n_samples
-    M = int(min(N // 10, 30)) if lags is None else _check_int(lags, "lags", 1)
+    M = int(min(N // 10, 30)) if lags is None else as_int(lags, "lags", 1)
     if M >= min(data.lengths):
         raise InsufficientDataError(
             f"lags = {M} needs experiments longer than {M} samples (shortest: "
             f"{min(data.lengths)})"
         )
     if omega is None:
-        n_freq = _check_int(n_freq, "n_freq", 2)
+        n_freq = as_int(n_freq, "n_freq", 2)
         w = np.arange(1, n_freq + 1) * np.pi / (n_freq * data.dt)
     else:
         w = np.asarray(omega, dtype=float).ravel()
@@ -661,7 +656,7 @@ def etfe(
         return FRD(w[keep], G, coherence=coh_out, dt=data.dt, confidence=confidence,
                    input_names=data.input_names, output_names=data.output_names,
                    method="etfe", info=info)
-    width = _check_int(smoothing, "smoothing", 2)
+    width = as_int(smoothing, "smoothing", 2)
     if width <= m:
         raise DataError(f"smoothing must exceed the number of inputs ({m}), got {width}")
     W = signal.get_window(window, width + 2)[1:-1] if window != "boxcar" else np.ones(width)
@@ -772,8 +767,8 @@ def spectra(
     True
     """
     data = _need_data(data, inputs=False)
-    nperseg = _default_nperseg(data) if nperseg is None else _check_int(nperseg, "nperseg", 2)
-    noverlap = nperseg // 2 if noverlap is None else _check_int(noverlap, "noverlap", 0)
+    nperseg = _default_nperseg(data) if nperseg is None else as_int(nperseg, "nperseg", 2)
+    noverlap = nperseg // 2 if noverlap is None else as_int(noverlap, "noverlap", 0)
     if noverlap >= nperseg:
         raise DataError(f"noverlap ({noverlap}) must be smaller than nperseg ({nperseg})")
     S, f, k_eff, count = _welch_matrix(_z(data), nperseg, noverlap, window, nfft, data.dt,
@@ -962,7 +957,7 @@ def correlation(
     [3]
     """
     data = _need_data(data, inputs=False)
-    L = _check_int(max_lag, "max_lag", 0)
+    L = as_int(max_lag, "max_lag", 0)
     if L >= min(data.lengths):
         raise InsufficientDataError(f"max_lag = {L} needs experiments longer than {L} samples")
     if not 0.0 < confidence < 1.0:

@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 
 from . import _sysid
+from ._checks import as_int
 from .data import IOData
 from .errors import DataError, NonFiniteError, ShapeError
 from .modal import ModalAnalysis, modal_analysis
@@ -88,11 +89,7 @@ def _markov(markov: Any) -> tuple[np.ndarray, float | None]:
 
 
 def _count(x: int | None, name: str) -> int | None:
-    if x is None:
-        return None
-    if isinstance(x, bool) or int(x) != x or x < 1:
-        raise DataError(f"{name} must be a positive integer or None, got {x!r}")
-    return int(x)
+    return None if x is None else as_int(x, name, alt="None")
 
 
 def _model(d: dict[str, Any], dt: float, method: str, **info: Any) -> StateSpaceModel:

@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import _sysid
+from ._checks import as_int
 from .errors import DataError
 from .model import StateSpaceModel
 
@@ -91,10 +92,8 @@ def hankel_singular_values(model: StateSpaceModel) -> np.ndarray:
 
 def _reduce(model: StateSpaceModel, order: int | None, method: str) -> StateSpaceModel:
     m = _check(model)
-    if order is not None and (isinstance(order, bool) or int(order) != order):
-        raise DataError(f"order must be an integer, got {order!r}")
-    if order is not None and order < 1:
-        raise DataError(f"order must be at least 1, got {order}")
+    if order is not None:
+        order = as_int(order, "order")
     out = _sysid.balanced_truncation(m.A, m.B, m.C, m.D, None if order is None else int(order))
     t_inv = np.asarray(out["t_inv"])
     info = dict(m.info)

@@ -21,7 +21,7 @@ from typing import Any, Union
 import numpy as np
 
 from . import _sysid
-from ._checks import as_2d
+from ._checks import as_2d, as_int
 from .errors import DataError
 
 __all__ = [
@@ -259,10 +259,7 @@ def compress_stream(
     """
     if compressor not in COMPRESSORS:
         raise DataError(f"compressor must be one of {COMPRESSORS}, got {compressor!r}")
-    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or (
-        chunk_size < 1
-    ):
-        raise DataError(f"chunk_size must be an integer >= 1, got {chunk_size!r}")
+    chunk_size = as_int(chunk_size, "chunk_size")
     future = past if future is None else future
     if isinstance(source, tuple) and len(source) == 2 and _is_dask(source[1]):
         return compress_dask(source[0], source[1], past, future)

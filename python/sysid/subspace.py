@@ -33,6 +33,7 @@ from typing import Any, Literal, Union
 import numpy as np
 
 from . import _sysid
+from ._checks import as_int
 from .data import IOData
 from .errors import DataError
 from .input_design import warn_excitation
@@ -72,12 +73,6 @@ def default_horizon(n_samples: int, n_inputs: int, n_outputs: int) -> int:
     2
     """
     return int(min(20, max(2, n_samples // (20 * (n_inputs + n_outputs)))))
-
-
-def _check_int(x: Any, name: str, lo: int) -> int:
-    if isinstance(x, bool) or not isinstance(x, (int, np.integer)) or x < lo:
-        raise DataError(f"{name} must be an integer >= {lo}, got {x!r}")
-    return int(x)
 
 
 class SubspaceEstimator:
@@ -136,11 +131,11 @@ class SubspaceEstimator:
         shortest = min(y.shape[0] for _, y in data.experiments)
         if horizon is None:
             horizon = default_horizon(shortest, data.n_inputs, data.n_outputs)
-        horizon = _check_int(horizon, "horizon", 1)
-        self.past = _check_int(past if past is not None else horizon, "past", 1)
-        self.future = _check_int(future if future is not None else horizon, "future", 1)
+        horizon = as_int(horizon, "horizon", 1)
+        self.past = as_int(past if past is not None else horizon, "past", 1)
+        self.future = as_int(future if future is not None else horizon, "future", 1)
         if chunk_rows is not None:
-            chunk_rows = _check_int(chunk_rows, "chunk_rows", 1)
+            chunk_rows = as_int(chunk_rows, "chunk_rows", 1)
         self.factor = _sysid.compress(
             data.experiments, self.past, self.future, chunk_rows, compressor
         )
@@ -245,7 +240,7 @@ class SubspaceEstimator:
                 raise DataError(f"order must be an integer or 'auto', got {order!r}")
             n = sub.auto_order()
         else:
-            n = _check_int(order, "order", 1)
+            n = as_int(order, "order", 1)
         for name, flag in (
             ("feedthrough", feedthrough),
             ("kalman", kalman),

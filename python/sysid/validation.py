@@ -26,7 +26,7 @@ from typing import Any, Union
 
 import numpy as np
 
-from ._checks import as_2d
+from ._checks import as_2d, as_int
 from .data import IOData
 from .errors import DataError, ShapeError
 from .model import StateSpaceModel
@@ -82,9 +82,7 @@ def _records(model: StateSpaceModel, data: Any) -> list[tuple[np.ndarray, np.nda
 def _horizon(horizon: Any) -> int | None:
     if horizon is None or (isinstance(horizon, float) and np.isinf(horizon)):
         return None
-    if isinstance(horizon, bool) or not isinstance(horizon, (int, np.integer)) or horizon < 1:
-        raise DataError(f"horizon must be None (simulation) or an integer >= 1, got {horizon!r}")
-    return int(horizon)
+    return as_int(horizon, "horizon", alt="None (simulation)")
 
 
 def _run(model: StateSpaceModel, u: np.ndarray, y: np.ndarray, horizon: int | None,
@@ -507,8 +505,7 @@ def residuals(model: StateSpaceModel, data: Any, max_lag: int = 25, *, x0: X0 = 
     False
     """
     recs = _records(model, data)
-    if isinstance(max_lag, bool) or not isinstance(max_lag, (int, np.integer)) or max_lag < 1:
-        raise DataError(f"max_lag must be an integer >= 1, got {max_lag!r}")
+    max_lag = as_int(max_lag, "max_lag")
     if not 0 < float(alpha) < 1:
         raise DataError(f"alpha must lie strictly between 0 and 1, got {alpha!r}")
     N = min(y.shape[0] for _, y in recs)
@@ -588,8 +585,8 @@ def error_spectrum(model: StateSpaceModel, data: Any, *, x0: X0 = "estimate",
     shortest = min(y.shape[0] for y in cmp.y)
     if nperseg is None:
         nperseg = min(256, shortest)
-    elif isinstance(nperseg, bool) or int(nperseg) != nperseg or not 4 <= nperseg <= shortest:
-        raise DataError(f"nperseg must be an integer between 4 and {shortest}, got {nperseg!r}")
+    else:
+        nperseg = as_int(nperseg, "nperseg", 4, shortest)
     fs = 1.0 / model.dt
     err_sum, out_sum, weight = 0.0, 0.0, 0
     freq = np.zeros(0)
