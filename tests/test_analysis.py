@@ -9,7 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import sysid
-from sysid.analysis import ContinuousStateSpace
+from sysid.analysis.lti import ContinuousStateSpace
 
 try:  # python-control is an optional oracle
     import control

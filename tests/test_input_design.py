@@ -147,7 +147,7 @@ def test_subspace_fit_is_quiet_on_white_noise() -> None:
 
 
 def test_lagged_gram_equals_hankel_product() -> None:
-    from sysid.input_design import _lag_gram
+    from sysid.data.input_design import _lag_gram
 
     rng = np.random.default_rng(4)
     us = [rng.standard_normal((40, 2)), rng.standard_normal((25, 2)), rng.standard_normal((3, 2))]

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import sysid
+import sysid.models.io
 
 
 def full_model() -> sysid.StateSpaceModel:
@@ -98,7 +99,7 @@ def test_bad_files(tmp_path):
         sysid.load_model(tmp_path / "plain.npz")
     with pytest.raises(sysid.DataError, match="StateSpaceModel"):
         sysid.save_model(np.eye(2), tmp_path / "m.json")
-    d = sysid.io.model_to_dict(full_model())
+    d = sysid.models.io.model_to_dict(full_model())
     d["version"] = 99
     with pytest.raises(sysid.DataError, match="newer"):
-        sysid.io.model_from_dict(d)
+        sysid.models.io.model_from_dict(d)

@@ -17,15 +17,12 @@ Examples
 4
 """
 
-from __future__ import annotations
+import importlib as _importlib
 
-import importlib
-from typing import Any
-
-from . import datasets
 from ._sysid import __version__
-from .criteria import criteria  # a function named like its module: bind it eagerly
-from .data import (
+from .analysis.criteria import criteria  # a function named like its module: bind it eagerly
+from .data import datasets
+from .data.iodata import (
     DataSummary,
     IOData,
     SplitData,
@@ -45,110 +42,110 @@ from .errors import (
     ShapeError,
     SysidError,
 )
-from .model import StateSpaceModel
-from .subspace import (
+from .estimate.subspace import (
     SubspaceEstimator,
     cva,
     default_horizon,
     moesp,
     n4sid,
 )
+from .models.statespace import StateSpaceModel
 
 # Everything else loads on first use (PEP 562), so that `import sysid` pulls in neither
 # SciPy's signal and statistics modules nor plotting: name -> submodule.
 _LAZY = {
-    "Coherence": "nonparametric",
-    "ContinuousStateSpace": "analysis",
-    "Correlation": "nonparametric",
-    "EraResult": "realization",
-    "FRD": "nonparametric",
-    "FRDComparison": "nonparametric",
-    "Gramians": "reduction",
-    "MarkovEstimate": "realization",
-    "ModalAnalysis": "modal",
-    "Spectra": "nonparametric",
-    "StabilizationDiagram": "realization",
-    "balanced_realization": "reduction",
-    "balanced_truncation": "reduction",
-    "bandpass": "preprocessing",
-    "butter_sos": "preprocessing",
-    "c2d": "analysis",
-    "check_excitation": "input_design",
-    "chirp": "input_design",
-    "coherence": "nonparametric",
-    "compare": "validation",
-    "compress_dask": "streaming",
-    "compress_stream": "streaming",
-    "correlation": "nonparametric",
-    "crest_factor": "input_design",
-    "ctrb": "analysis",
-    "d2c": "analysis",
-    "damp": "analysis",
-    "decimate": "preprocessing",
-    "despike": "preprocessing",
-    "detrend": "preprocessing",
-    "drop_quiet": "preprocessing",
-    "era": "realization",
-    "era_stabilization": "realization",
-    "error_spectrum": "validation",
-    "estimate_x0": "validation",
-    "etfe": "nonparametric",
-    "filtfilt": "preprocessing",
-    "find_spikes": "preprocessing",
-    "fit_metrics": "validation",
-    "from_control": "analysis",
-    "from_scipy": "analysis",
-    "gramians": "reduction",
-    "hankel_singular_values": "reduction",
-    "highpass": "preprocessing",
-    "ho_kalman": "realization",
-    "impulse": "analysis",
-    "impulse_from_frf": "realization",
-    "impulse_response": "realization",
-    "is_controllable": "analysis",
-    "is_observable": "analysis",
-    "kung": "realization",
-    "load_model": "io",
-    "lowpass": "preprocessing",
-    "modal_analysis": "modal",
-    "multisine": "input_design",
-    "n_parameters": "criteria",
-    "obsv": "analysis",
-    "okid": "realization",
-    "periodogram": "nonparametric",
-    "persistent_excitation_order": "input_design",
-    "prbs": "input_design",
-    "random_binary": "input_design",
-    "random_gaussian": "input_design",
-    "repair_nan": "preprocessing",
-    "resample": "preprocessing",
-    "residuals": "validation",
-    "save_model": "io",
-    "scale": "preprocessing",
-    "select_mask": "preprocessing",
-    "select_mode": "preprocessing",
-    "select_order": "criteria",
-    "spa": "nonparametric",
-    "spectra": "nonparametric",
-    "step": "analysis",
-    "to_control": "analysis",
-    "to_scipy": "analysis",
-    "welch_frf": "nonparametric",
-    "zeros": "analysis",
+    "Coherence": "analysis.nonparametric",
+    "ContinuousStateSpace": "analysis.lti",
+    "Correlation": "analysis.nonparametric",
+    "EraResult": "estimate.realization",
+    "FRD": "analysis.nonparametric",
+    "FRDComparison": "analysis.nonparametric",
+    "Gramians": "analysis.reduction",
+    "MarkovEstimate": "estimate.realization",
+    "ModalAnalysis": "analysis.modal",
+    "Spectra": "analysis.nonparametric",
+    "StabilizationDiagram": "estimate.realization",
+    "balanced_realization": "analysis.reduction",
+    "balanced_truncation": "analysis.reduction",
+    "bandpass": "data.preprocessing",
+    "butter_sos": "data.preprocessing",
+    "c2d": "analysis.lti",
+    "check_excitation": "data.input_design",
+    "chirp": "data.input_design",
+    "coherence": "analysis.nonparametric",
+    "compare": "analysis.validation",
+    "compress_dask": "estimate.streaming",
+    "compress_stream": "estimate.streaming",
+    "correlation": "analysis.nonparametric",
+    "crest_factor": "data.input_design",
+    "ctrb": "analysis.lti",
+    "d2c": "analysis.lti",
+    "damp": "analysis.lti",
+    "decimate": "data.preprocessing",
+    "despike": "data.preprocessing",
+    "detrend": "data.preprocessing",
+    "drop_quiet": "data.preprocessing",
+    "era": "estimate.realization",
+    "era_stabilization": "estimate.realization",
+    "error_spectrum": "analysis.validation",
+    "estimate_x0": "analysis.validation",
+    "etfe": "analysis.nonparametric",
+    "filtfilt": "data.preprocessing",
+    "find_spikes": "data.preprocessing",
+    "fit_metrics": "analysis.validation",
+    "from_control": "analysis.lti",
+    "from_scipy": "analysis.lti",
+    "gramians": "analysis.reduction",
+    "hankel_singular_values": "analysis.reduction",
+    "highpass": "data.preprocessing",
+    "ho_kalman": "estimate.realization",
+    "impulse": "analysis.lti",
+    "impulse_from_frf": "estimate.realization",
+    "impulse_response": "estimate.realization",
+    "is_controllable": "analysis.lti",
+    "is_observable": "analysis.lti",
+    "kung": "estimate.realization",
+    "load_model": "models.io",
+    "lowpass": "data.preprocessing",
+    "modal_analysis": "analysis.modal",
+    "multisine": "data.input_design",
+    "n_parameters": "analysis.criteria",
+    "obsv": "analysis.lti",
+    "okid": "estimate.realization",
+    "periodogram": "analysis.nonparametric",
+    "persistent_excitation_order": "data.input_design",
+    "prbs": "data.input_design",
+    "random_binary": "data.input_design",
+    "random_gaussian": "data.input_design",
+    "repair_nan": "data.preprocessing",
+    "resample": "data.preprocessing",
+    "residuals": "analysis.validation",
+    "save_model": "models.io",
+    "scale": "data.preprocessing",
+    "select_mask": "data.preprocessing",
+    "select_mode": "data.preprocessing",
+    "select_order": "analysis.criteria",
+    "spa": "analysis.nonparametric",
+    "spectra": "analysis.nonparametric",
+    "step": "analysis.lti",
+    "to_control": "analysis.lti",
+    "to_scipy": "analysis.lti",
+    "welch_frf": "analysis.nonparametric",
+    "zeros": "analysis.lti",
 }
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> object:
     module = _LAZY.get(name)
     if module is None:
         raise AttributeError(f"module 'sysid' has no attribute {name!r}")
-    value = getattr(importlib.import_module(f".{module}", __name__), name)
+    value = getattr(_importlib.import_module(f".{module}", __name__), name)
     globals()[name] = value
     return value
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_LAZY))
+    return sorted(set(__all__) | {"datasets", "__version__"})
 
 
 __all__ = [

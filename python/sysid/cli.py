@@ -22,8 +22,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .criteria import _pct
-from .data import IOData
+from .analysis.criteria import _pct
+from .data.iodata import IOData
 from .errors import DataError, OrderError, SysidError
 
 __all__ = ["main", "read_csv", "identify"]
@@ -176,9 +176,9 @@ def identify(
     ``compare`` (validation simulation), ``prediction`` (validation 1-step), ``residuals``
     and, with ``report``, the written ``files``.
     """
-    from .criteria import select_order
-    from .subspace import SubspaceEstimator
-    from .validation import compare, error_spectrum, residuals
+    from .analysis.criteria import select_order
+    from .analysis.validation import compare, error_spectrum, residuals
+    from .estimate.subspace import SubspaceEstimator
 
     say = progress or (lambda _msg: None)
     say(f"compressing {est_data.n_samples} samples "
@@ -233,7 +233,7 @@ def _write_report(root: Path, out: dict[str, Any], spec: Any) -> dict[str, Path]
     import matplotlib
 
     matplotlib.use("Agg")
-    from .io import save_model
+    from .models.io import save_model
     from .plot import _pyplot
     from .plot.model import plot_bode, plot_pzmap
     from .plot.validation import plot_singular_values
@@ -332,7 +332,7 @@ def _html(out: dict[str, Any], files: dict[str, Path]) -> str:
             ("pzmap", "pole-zero map"),
         )
     )
-    from .analysis import damp
+    from .analysis.lti import damp
 
     details = esc(res.summary() + "\n\n" + repr(damp(model)))
     return f"""<!DOCTYPE html>
@@ -372,7 +372,7 @@ def _print_summary(out: dict[str, Any]) -> None:
 
 # -- commands -------------------------------------------------------------------------
 def _demo(args: argparse.Namespace) -> int:
-    from . import datasets
+    from .data import datasets
 
     data = datasets.load_dryer()
     print(data)

@@ -94,7 +94,7 @@ def plot_sigma(models: Any, omega: Any = None, *, hz: bool = True, ax: Any = Non
 
 def plot_pzmap(models: Any, ax: Any = None) -> Any:
     """Poles (x) and transmission zeros (o) in the z-plane with the unit circle."""
-    from ..analysis import zeros
+    from ..analysis.lti import zeros
 
     plt = _pyplot()
     ms = _models(models)

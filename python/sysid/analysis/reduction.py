@@ -21,10 +21,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import _sysid
-from ._checks import as_int
-from .errors import DataError
-from .model import StateSpaceModel
+from .. import _sysid
+from .._checks import as_int
+from ..errors import DataError
+from ..models.statespace import StateSpaceModel
 
 __all__ = [
     "Gramians",

@@ -33,9 +33,9 @@ from typing import Any
 import numpy as np
 from scipy import ndimage, signal, stats
 
-from ._checks import as_int
-from .data import IOData
-from .errors import DataError, InsufficientDataError, ShapeError
+from .._checks import as_int
+from ..data.iodata import IOData
+from ..errors import DataError, InsufficientDataError, ShapeError
 
 __all__ = [
     "FRD",
@@ -262,7 +262,7 @@ class FRD:
         """A long-format DataFrame: one row per frequency and output/input pair with
         ``omega``, ``hz``, ``output``, ``input``, ``real``, ``imag``, ``magnitude``,
         ``phase`` (rad) and, when known, ``coherence`` and ``std``."""
-        from .data import _pandas
+        from ..data.iodata import _pandas
 
         pd = _pandas()
         nf, l, m = self.response.shape
@@ -286,7 +286,7 @@ class FRD:
 
     def plot(self, models: Any = None, *, fig: Any = None) -> Any:
         """Bode plot with the confidence band and coherence; ``models`` are overlaid."""
-        from .plot.frequency import plot_frd
+        from ..plot.frequency import plot_frd
 
         return plot_frd(self, models=models, fig=fig)
 
@@ -738,7 +738,7 @@ class Spectra:
 
     def plot(self, channels: Sequence[str] | None = None, *, ax: Any = None) -> Any:
         """Log-log plot of the auto spectra."""
-        from .plot.data import plot_spectra
+        from ..plot.data import plot_spectra
 
         return plot_spectra(self, channels=channels, ax=ax)
 
@@ -841,7 +841,7 @@ class Coherence:
 
     def plot(self, *, fig: Any = None, threshold: float | None = 0.6) -> Any:
         """One panel per input, every output's coherence against frequency."""
-        from .plot.data import plot_coherence
+        from ..plot.data import plot_coherence
 
         return plot_coherence(self, fig=fig, threshold=threshold)
 
@@ -933,7 +933,7 @@ class Correlation:
 
     def plot(self, a: str, b: str, *, ax: Any = None) -> Any:
         """Stem plot of ``r_ab`` with the confidence bounds."""
-        from .plot.data import plot_correlation
+        from ..plot.data import plot_correlation
 
         return plot_correlation(self, a, b, ax=ax)
 

@@ -37,12 +37,12 @@ from typing import Any
 
 import numpy as np
 
-from . import _sysid
-from ._checks import as_int
-from .data import IOData
-from .errors import DataError, NonFiniteError, ShapeError
-from .modal import ModalAnalysis, modal_analysis
-from .model import StateSpaceModel
+from .. import _sysid
+from .._checks import as_int
+from ..analysis.modal import ModalAnalysis, modal_analysis
+from ..data.iodata import IOData
+from ..errors import DataError, NonFiniteError, ShapeError
+from ..models.statespace import StateSpaceModel
 
 __all__ = [
     "ho_kalman",
@@ -233,7 +233,7 @@ class EraResult:
 
     def plot(self, *, ax: Any = None) -> Any:
         """Hankel singular values with the chosen order (matplotlib axes)."""
-        from .plot.realization import plot_hankel_singular_values
+        from ..plot.realization import plot_hankel_singular_values
 
         return plot_hankel_singular_values(self.singular_values, self.order, ax=ax)
 
@@ -558,7 +558,7 @@ class StabilizationDiagram:
 
     def plot(self, *, ax: Any = None) -> Any:
         """Frequency against order (matplotlib axes)."""
-        from .plot.realization import plot_stabilization
+        from ..plot.realization import plot_stabilization
 
         return plot_stabilization(self, ax=ax)
 

@@ -26,10 +26,10 @@ from typing import Any, Union
 
 import numpy as np
 
-from ._checks import as_2d, as_int
-from .data import IOData
-from .errors import DataError, ShapeError
-from .model import StateSpaceModel
+from .._checks import as_2d, as_int
+from ..data.iodata import IOData
+from ..errors import DataError, ShapeError
+from ..models.statespace import StateSpaceModel
 
 __all__ = [
     "CompareResult",
@@ -267,7 +267,7 @@ class CompareResult:
 
     def plot(self, experiment: int = 0, fig: Any = None) -> Any:
         """Measured and model outputs over time, one axis per output; returns the figure."""
-        from .plot.validation import plot_compare
+        from ..plot.validation import plot_compare
 
         return plot_compare(self, experiment=experiment, fig=fig)
 
@@ -455,7 +455,7 @@ class ResidualAnalysis:
 
     def plot(self, fig: Any = None) -> Any:
         """Auto-correlation per output and cross-correlation per (output, input) with bounds."""
-        from .plot.validation import plot_residuals
+        from ..plot.validation import plot_residuals
 
         return plot_residuals(self, fig=fig)
 
@@ -547,7 +547,7 @@ class ErrorSpectrum:
 
     def plot(self, fig: Any = None) -> Any:
         """Both spectra on a log scale, one axis per output."""
-        from .plot.validation import plot_error_spectrum
+        from ..plot.validation import plot_error_spectrum
 
         return plot_error_spectrum(self, fig=fig)
 

@@ -32,12 +32,12 @@ from typing import Any, Literal, Union
 
 import numpy as np
 
-from . import _sysid
-from ._checks import as_int
-from .data import IOData
-from .errors import DataError
-from .input_design import warn_excitation
-from .model import StateSpaceModel
+from .. import _sysid
+from .._checks import as_int
+from ..data.input_design import warn_excitation
+from ..data.iodata import IOData
+from ..errors import DataError
+from ..models.statespace import StateSpaceModel
 from .streaming import warn_if_fallback
 
 __all__ = ["SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "METHODS"]
@@ -66,7 +66,7 @@ def default_horizon(n_samples: int, n_inputs: int, n_outputs: int) -> int:
 
     Examples
     --------
-    >>> from sysid.subspace import default_horizon
+    >>> from sysid.estimate.subspace import default_horizon
     >>> default_horizon(1000, 1, 1)
     20
     >>> default_horizon(200, 2, 2)

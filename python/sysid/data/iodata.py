@@ -22,8 +22,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ._checks import as_2d
-from .errors import DataError, InsufficientDataError, NonFiniteError, ShapeError
+from .._checks import as_2d
+from ..errors import DataError, InsufficientDataError, NonFiniteError, ShapeError
 
 __all__ = ["IOData", "Trend", "SplitData", "DataSummary", "sample_time", "check_unit"]
 
@@ -62,7 +62,7 @@ def check_unit(unit: Any, channel: str = "channel") -> str:
 
     Examples
     --------
-    >>> from sysid.data import check_unit
+    >>> from sysid.data.iodata import check_unit
     >>> check_unit("m/s^2", "y0")
     'm/s^2'
     >>> check_unit("furlong", "y0")  # doctest: +ELLIPSIS
@@ -773,7 +773,7 @@ class IOData:
 
     def plot(self, fig: Any = None) -> Any:
         """Plot every channel against time (see :func:`sysid.plot.data.plot_data`)."""
-        from .plot.data import plot_data
+        from ..plot.data import plot_data
 
         return plot_data(self, fig=fig)
 

@@ -20,9 +20,9 @@ from typing import Any, Union
 
 import numpy as np
 
-from . import _sysid
-from ._checks import as_2d, as_int
-from .errors import DataError
+from .. import _sysid
+from .._checks import as_2d, as_int
+from ..errors import DataError
 
 __all__ = [
     "compress_stream",
@@ -247,7 +247,7 @@ def compress_stream(
     Examples
     --------
     >>> import numpy as np
-    >>> from sysid.streaming import compress_stream
+    >>> from sysid.estimate.streaming import compress_stream
     >>> rng = np.random.default_rng(0)
     >>> u = rng.standard_normal((5000, 1))
     >>> e = 0.1 * rng.standard_normal((5000, 1))

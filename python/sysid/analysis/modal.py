@@ -24,9 +24,9 @@ from typing import Any
 
 import numpy as np
 
-from . import _sysid
-from .errors import DataError
-from .model import StateSpaceModel
+from .. import _sysid
+from ..errors import DataError
+from ..models.statespace import StateSpaceModel
 
 __all__ = ["ModalAnalysis", "modal_analysis"]
 
@@ -105,7 +105,7 @@ class ModalAnalysis:
 
     def to_pandas(self) -> Any:
         """The modes as a pandas DataFrame (pandas imported lazily)."""
-        from .data import _pandas
+        from ..data.iodata import _pandas
 
         pd = _pandas()
         cols: dict[str, Any] = {

@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from . import _sysid
-from ._checks import as_2d, as_int, as_matrix
-from .errors import DataError, ShapeError
+from .. import _sysid
+from .._checks import as_2d, as_int, as_matrix
+from ..errors import DataError, ShapeError
 
 __all__ = ["StateSpaceModel"]
 
@@ -281,25 +281,25 @@ class StateSpaceModel:
     # -- analysis shortcuts (thin wrappers over sysid.analysis and sysid.io) --------------
     def zeros(self) -> np.ndarray:
         """Transmission zeros; see :func:`sysid.zeros`."""
-        from .analysis import zeros
+        from ..analysis.lti import zeros
 
         return zeros(self)
 
     def damp(self) -> Any:
         """Pole frequencies (rad/s, Hz) and damping; see :func:`sysid.damp`."""
-        from .analysis import damp
+        from ..analysis.lti import damp
 
         return damp(self)
 
     def step(self, n_samples: int | None = None) -> Any:
         """Step responses; see :func:`sysid.step`."""
-        from .analysis import step
+        from ..analysis.lti import step
 
         return step(self, n_samples)
 
     def impulse(self, n_samples: int | None = None) -> Any:
         """Impulse responses (Markov parameters); see :func:`sysid.impulse`."""
-        from .analysis import impulse
+        from ..analysis.lti import impulse
 
         return impulse(self, n_samples)
 

@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from ._checks import as_2d, as_int
-from .errors import DataError, ExcitationWarning
+from .._checks import as_2d, as_int
+from ..errors import DataError, ExcitationWarning
 
 __all__ = [
     "prbs",

@@ -39,7 +39,7 @@ def load_dryer():  # type: ignore[no-untyped-def]
     """
     import numpy as np
 
-    from .data import IOData
+    from .iodata import IOData
 
     d = np.loadtxt(path("dryer"))
     return IOData(

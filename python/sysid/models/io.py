@@ -34,9 +34,9 @@ from typing import Any, Union
 
 import numpy as np
 
-from . import __version__
-from .errors import DataError
-from .model import StateSpaceModel
+from .._sysid import __version__
+from ..errors import DataError
+from .statespace import StateSpaceModel
 
 __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict"]
 

@@ -21,9 +21,9 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from ._checks import as_int, as_matrix
-from .errors import DataError, NumericalError, ShapeError
-from .model import StateSpaceModel
+from .._checks import as_int, as_matrix
+from ..errors import DataError, NumericalError, ShapeError
+from ..models.statespace import StateSpaceModel
 
 __all__ = [
     "ContinuousStateSpace",
@@ -350,7 +350,7 @@ class TimeResponse:
 
     def plot(self, fig: Any = None) -> Any:
         """One axis per (output, input) pair; returns the figure."""
-        from .plot.model import plot_time_response
+        from ..plot.model import plot_time_response
 
         return plot_time_response(self, fig=fig)
 

@@ -20,8 +20,8 @@ from typing import Any
 import numpy as np
 from scipy import ndimage, signal
 
-from .data import IOData, _Exp
-from .errors import DataError, InsufficientDataError, NonFiniteError
+from ..errors import DataError, InsufficientDataError, NonFiniteError
+from .iodata import IOData, _Exp
 
 __all__ = [
     "repair_nan",
@@ -99,7 +99,7 @@ def repair_nan(
     Examples
     --------
     >>> import numpy as np
-    >>> from sysid.preprocessing import repair_nan
+    >>> from sysid.data.preprocessing import repair_nan
     >>> y = np.array([[0.0], [np.nan], [2.0], [3.0]])
     >>> repair_nan(None, y)[0][1].ravel()
     array([0., 1., 2., 3.])
@@ -180,7 +180,7 @@ def find_spikes(x: Any, window: int = 7, n_sigmas: float = 3.0) -> np.ndarray:
     Examples
     --------
     >>> import numpy as np
-    >>> from sysid.preprocessing import find_spikes
+    >>> from sysid.data.preprocessing import find_spikes
     >>> rng = np.random.default_rng(0)
     >>> x = np.sin(np.arange(50) / 5.0) + 0.05 * rng.standard_normal(50); x[20] += 5.0
     >>> np.flatnonzero(find_spikes(x))

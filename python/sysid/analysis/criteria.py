@@ -42,10 +42,10 @@ from typing import Any
 
 import numpy as np
 
-from ._checks import as_int
-from .data import IOData
-from .errors import DataError, NumericalError, SysidError
-from .model import StateSpaceModel
+from .._checks import as_int
+from ..data.iodata import IOData
+from ..errors import DataError, NumericalError, SysidError
+from ..models.statespace import StateSpaceModel
 from .validation import _records, _x0_for, compare
 
 __all__ = ["n_parameters", "Criteria", "criteria", "OrderSelection", "select_order"]
@@ -60,7 +60,7 @@ def n_parameters(n: int, m: int, l: int, *, feedthrough: bool = True, noise_mode
 
     Examples
     --------
-    >>> from sysid.criteria import n_parameters
+    >>> from sysid.analysis.criteria import n_parameters
     >>> n_parameters(4, 1, 1)        # 4 (2 + 1) + 1
     13
     >>> n_parameters(4, 1, 1, feedthrough=False, noise_model=False)
@@ -248,7 +248,7 @@ class OrderSelection:
 
     def damping(self, method: str | None = None) -> Iterator[tuple[int, Any]]:
         """``(order, DampingTable)`` for each fitted order of ``method``."""
-        from .analysis import damp
+        from .lti import damp
 
         meth = method or self.method
         for (mm, order), mod in sorted(self._models.items(), key=lambda kv: kv[0][1]):
@@ -267,13 +267,13 @@ class OrderSelection:
 
     def plot(self, fig: Any = None) -> Any:
         """Singular values, criteria and fit versus order."""
-        from .plot.validation import plot_order_selection
+        from ..plot.validation import plot_order_selection
 
         return plot_order_selection(self, fig=fig)
 
     def stabilization_plot(self, ax: Any = None, hz: bool = True) -> Any:
         """Stabilisation diagram of the pole frequencies versus order."""
-        from .plot.validation import plot_stabilization
+        from ..plot.validation import plot_stabilization
 
         return plot_stabilization(self, ax=ax, hz=hz)
 
@@ -385,7 +385,7 @@ def select_order(
     -------
     OrderSelection
     """
-    from .subspace import SubspaceEstimator
+    from ..estimate.subspace import SubspaceEstimator
 
     est = data if isinstance(data, SubspaceEstimator) else None
     if est is None:
@@ -400,7 +400,7 @@ def select_order(
     meths = [est.method] if methods is None else list(methods)
     if not meths:
         raise DataError("methods is empty")
-    from .subspace import _method
+    from ..estimate.subspace import _method
 
     meths = [_method(m) for m in meths]
     orders_ = _check_orders(orders, est.max_order)

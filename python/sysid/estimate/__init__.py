@@ -1,0 +1,2 @@
+"""Estimators: subspace identification, realisation from impulse responses, streaming
+compression of long records."""

@@ -1,0 +1,1 @@
+"""Model families (discrete and continuous state space) and model files (save/load)."""
