@@ -48,6 +48,7 @@ pub mod hankel;
 pub mod linalg;
 pub mod lyapunov;
 pub mod model;
+pub mod optim;
 pub mod realization;
 pub mod riccati;
 pub mod simulate;
