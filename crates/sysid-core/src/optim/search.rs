@@ -467,7 +467,8 @@ pub fn minimize(
                 .map(|i| cand.theta[i] - pt.theta[i])
                 .collect::<Vec<_>>(),
         );
-        let old = pt.cost;
+        // relative decrease under the same cost definition (before any re-weighting)
+        let rel_decrease = (pt.cost - cand.cost) / pt.cost.abs().max(f64::MIN_POSITIVE);
         pt = cand;
         iterations += 1;
         if problem.accepted(&pt.theta)? {
@@ -486,7 +487,7 @@ pub fn minimize(
             stop = StopReason::Cancelled;
             break;
         }
-        if old - pt.cost <= options.tol_cost * old.abs() {
+        if rel_decrease <= options.tol_cost {
             stop = StopReason::CostTolerance;
             break;
         }
