@@ -194,6 +194,7 @@ def pem(
     regularization: dict[str, Any] | None = None,
     progress: bool | Callable[..., Any] = False,
     local_coordinates: bool = True,
+    weighting: str | None = None,
 ) -> StateSpaceModel:
     """Refine a state-space model by minimising its prediction (or simulation) errors.
 
@@ -227,6 +228,12 @@ def pem(
         stop.
     local_coordinates : bool
         Search in data-driven local coordinates (default); ``False`` searches all entries.
+    weighting : {"noise", "identity"}, optional
+        ``"noise"``: weight the errors by the inverse of their covariance, re-estimated between
+        iterations (the determinant criterion, maximum likelihood for Gaussian innovations);
+        ``"identity"``: plain sum of squares. Default ``"noise"`` for prediction focus and
+        ``"identity"`` for simulation focus (simulation errors are not white, and on the
+        shipped records the plain sum gives the better validation fit; see docs/pem.md).
 
     Returns
     -------
@@ -256,6 +263,10 @@ def pem(
         raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
     if focus not in _FOCUS:
         raise DataError(f"focus must be 'prediction' or 'simulation', got {focus!r}")
+    if weighting is None:
+        weighting = "noise" if focus == "prediction" else "identity"
+    if weighting not in ("noise", "identity"):
+        raise DataError(f"weighting must be 'noise' or 'identity', got {weighting!r}")
     if noise not in _NOISE:
         raise DataError(f"noise must be 'estimate', 'none' or 'fixed', got {noise!r}")
     if data.n_inputs != model.ninputs or data.n_outputs != model.noutputs:
@@ -315,7 +326,7 @@ def pem(
     res = _sysid.pem_refine(
         A, B, C, D, K, exps, focus=focus, estimate_d=bool(feedthrough), estimate_k=estimate_k,
         x0=[m if isinstance(m, str) else np.ascontiguousarray(m) for m in modes],
-        reweight=True, local_coordinates=bool(local_coordinates), max_iter=max_iter,
+        reweight=weighting == "noise", local_coordinates=bool(local_coordinates), max_iter=max_iter,
         tol_cost=tol, reg_lambda=lam, reg_r=R, reg_nominal=nom, progress=cb)
     Kres = res["k"] if K is not None else None
     x0s = res["x0"]
@@ -346,6 +357,7 @@ def pem(
         "stop": res["stop"],
         "condition": res["condition"],
         "focus": focus,
+        "weighting": weighting,
         "feedthrough": bool(feedthrough),
         "noise": noise if focus == "prediction" else "none",
         "x0": ["estimate" if isinstance(m, str) and m == "estimate" else
@@ -385,7 +397,8 @@ def _start_loss(data: IOData, start: StateSpaceModel, focus: str, feedthrough: b
         return float("inf")
     if m.info["pem"]["stabilized"]:
         return float("inf")
-    return float(m.info["pem"]["cost"][0])
+    key = "cost" if m.info["pem"]["weighting"] == "noise" else "weighted_cost"
+    return float(m.info["pem"][key][0])
 
 
 def ssest(
