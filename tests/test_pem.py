@@ -228,3 +228,16 @@ def test_bad_arguments():
         sysid.pem((u, y), true, x0=np.zeros(3))
     with pytest.raises(DataError, match="output"):
         sysid.pem((u, y[:, :1]), true)
+
+
+def test_docs_examples_run():
+    import re
+    from pathlib import Path
+
+    doc = Path(__file__).resolve().parents[1] / "docs" / "pem.md"
+    blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), flags=re.S)
+    assert len(blocks) >= 3
+    namespace: dict = {}
+    for i, block in enumerate(blocks):  # the blocks build on each other
+        exec(compile(block, f"docs/pem.md[python block {i}]", "exec"), namespace)
+    assert namespace["fit_pem"] > namespace["fit_start"]
