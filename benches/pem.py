@@ -127,7 +127,8 @@ def main() -> None:
     long = case(8, 3, 3, 20000, 1, run_scipy=False)
     long["sysid_s_per_iteration_N1e6"] = long["sysid_s_per_iteration"] * 50
     res["order 8 (3,3) per iteration"] = long
-    res["peak RSS MB, order 8 (3,3), N=1e4 / 1e5 (record: 0.5 / 4.6 MB)"] = [peak_rss(10_000), peak_rss(100_000)]
+    key = "peak RSS MB, order 8 (3,3), N=1e4 / 1e5 (record: 0.5 / 4.6 MB)"
+    res[key] = [peak_rss(10_000), peak_rss(100_000)]
     print(json.dumps(res, indent=1))
     print("maxrss MB", resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
 

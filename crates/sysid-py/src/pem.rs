@@ -91,7 +91,10 @@ pub fn pem_refine<'py>(
         o.x0 = modes;
     }
     let kv = k.as_ref().map(|k| view(k));
-    let views: Vec<_> = experiments.iter().map(|(u, y)| (view(u), view(y))).collect();
+    let views: Vec<_> = experiments
+        .iter()
+        .map(|(u, y)| (view(u), view(y)))
+        .collect();
     let mut callback_error: Option<PyErr> = None;
     let result = py.detach(|| {
         let mut observer = |it: &sysid_core::optim::Iteration| -> Flow {
@@ -101,7 +104,13 @@ pub fn pem_refine<'py>(
             Python::attach(|py| {
                 match cb.call1(
                     py,
-                    (it.iteration, it.cost, it.step_norm, it.gradient_norm, it.damping),
+                    (
+                        it.iteration,
+                        it.cost,
+                        it.step_norm,
+                        it.gradient_norm,
+                        it.damping,
+                    ),
                 ) {
                     Ok(v) => {
                         if v.bind(py).is(&*pyo3::types::PyBool::new(py, false)) {

@@ -111,8 +111,9 @@ pub trait Problem {
     fn search_basis(&mut self, _theta: &[f64]) -> Result<Option<Mat<f64>>> {
         Ok(None)
     }
-    /// Called after each accepted step. Return `true` when the provider changed the definition
-    /// of its cost (for example re-estimated a noise weighting), so the search re-evaluates.
+    /// Called after each accepted step, before the Jacobian is formed there; the provider may
+    /// change the definition of its cost (for example re-estimate a noise weighting). Return
+    /// `true` when it did (informational: the search evaluates the new point afterwards anyway).
     fn accepted(&mut self, _theta: &[f64]) -> Result<bool> {
         Ok(false)
     }

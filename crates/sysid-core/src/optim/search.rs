@@ -412,7 +412,7 @@ pub fn minimize(
             stop = StopReason::GradientTolerance;
             break;
         }
-        let mut accepted: Option<(Point, f64)> = None;
+        let mut accepted: Option<(Vec<f64>, f64, f64)> = None;
         for _try in 0..60 {
             let s = red.step(mu, options.rank_tol);
             let mut alpha = 1.0;
@@ -431,11 +431,14 @@ pub fn minimize(
                 mu = (mu * 10.0).max(1e-6);
                 continue;
             }
-            let cand = evaluate_point(problem, options, trial, &mut evals)?;
-            let actual = pt.cost - cand.cost;
-            if cand.cost.is_finite() && actual > 0.0 {
+            // the trial is judged on its cost alone; the Jacobian is formed once accepted
+            evals += 1;
+            let raw = problem.evaluate(&trial, false)?;
+            let cand_cost = regularise(options, &trial, &raw).0;
+            let actual = pt.cost - cand_cost;
+            if cand_cost.is_finite() && actual > 0.0 {
                 // predicted decrease of the (projected) step taken
-                let st: Vec<f64> = (0..p).map(|i| cand.theta[i] - pt.theta[i]).collect();
+                let st: Vec<f64> = (0..p).map(|i| trial[i] - pt.theta[i]).collect();
                 let mut quad = 0.0;
                 for i in 0..p {
                     let hs: f64 = (0..p).map(|j| pt.h[(i, j)] * st[j]).sum();
@@ -450,7 +453,7 @@ pub fn minimize(
                 } else if rho < 0.25 {
                     mu = (mu * 2.0).max(1e-8);
                 }
-                accepted = Some((cand, used));
+                accepted = Some((trial, cand_cost, used));
                 break;
             }
             if mu > 1e10 {
@@ -458,23 +461,16 @@ pub fn minimize(
             }
             mu = (mu * 10.0).max(1e-6);
         }
-        let Some((cand, used)) = accepted else {
+        let Some((trial, cand_cost, used)) = accepted else {
             stop = StopReason::NoDescent;
             break;
         };
-        let step_norm = norm(
-            &(0..p)
-                .map(|i| cand.theta[i] - pt.theta[i])
-                .collect::<Vec<_>>(),
-        );
+        let step_norm = norm(&(0..p).map(|i| trial[i] - pt.theta[i]).collect::<Vec<_>>());
         // relative decrease under the same cost definition (before any re-weighting)
-        let rel_decrease = (pt.cost - cand.cost) / pt.cost.abs().max(f64::MIN_POSITIVE);
-        pt = cand;
+        let rel_decrease = (pt.cost - cand_cost) / pt.cost.abs().max(f64::MIN_POSITIVE);
         iterations += 1;
-        if problem.accepted(&pt.theta)? {
-            let th = pt.theta.clone();
-            pt = evaluate_point(problem, options, th, &mut evals)?;
-        }
+        problem.accepted(&trial)?;
+        pt = evaluate_point(problem, options, trial, &mut evals)?;
         history.push(pt.cost);
         let info = Iteration {
             iteration: iterations,

@@ -5,6 +5,7 @@ use crate::linalg::spectral_radius;
 use crate::model::StateSpace;
 use crate::optim::{self, Covariance, Evaluation, Flow, Iteration, Problem, Solution};
 use faer::linalg::matmul::matmul;
+use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
 use faer::{Accum, Mat, MatRef, Par, Side};
 
 /// What the predictor's errors are.
@@ -127,6 +128,9 @@ pub struct Predictor<'a> {
     block: usize,
     n_samples: usize,
     losses: Vec<f64>,
+    /// Sensitivities are formed only for parameters `>= col_lo` (the others get zero rows and
+    /// columns in the Gauss-Newton matrix): the initial-state-only pre-step sets it.
+    col_lo: usize,
 }
 
 struct Unpacked {
@@ -264,6 +268,7 @@ impl<'a> Predictor<'a> {
             block: opts.block,
             n_samples,
             losses: Vec::new(),
+            col_lo: 0,
         })
     }
 
@@ -446,11 +451,15 @@ impl Problem for Predictor<'_> {
         let mut cost = 0.0;
         let mut h = Mat::<f64>::zeros(if jacobian { np } else { 0 }, if jacobian { np } else { 0 });
         let mut g = Mat::<f64>::zeros(if jacobian { np } else { 0 }, 1);
-        let mut jb = Mat::<f64>::zeros(if jacobian { blk * l } else { 0 }, np);
+        let lo = self.col_lo.min(np);
+        let nc = np - lo;
+        let mut jb = Mat::<f64>::zeros(if jacobian { blk * l } else { 0 }, nc);
         let mut rb = Mat::<f64>::zeros(if jacobian { blk * l } else { 0 }, 1);
-        let mut s = Mat::<f64>::zeros(n, if jacobian { np } else { 0 });
+        // sensitivities of the parameters lo..np only (column c <-> parameter lo + c)
+        let mut s = Mat::<f64>::zeros(n, if jacobian { nc } else { 0 });
         let mut s2 = s.clone();
-        let mut cs = Mat::<f64>::zeros(l, if jacobian { np } else { 0 });
+        let mut cs = Mat::<f64>::zeros(l, if jacobian { nc } else { 0 });
+        let full = lo == 0;
         let mut e = vec![0.0; l];
         let mut we = vec![0.0; l];
         let mut x = vec![0.0; n];
@@ -461,8 +470,10 @@ impl Problem for Predictor<'_> {
             if jacobian {
                 s.fill(0.0);
                 if let Some(o) = self.x0_off[ex] {
-                    for i in 0..n {
-                        s[(i, o + i)] = 1.0;
+                    if o >= lo {
+                        for i in 0..n {
+                            s[(i, o - lo + i)] = 1.0;
+                        }
                     }
                 }
             }
@@ -498,6 +509,9 @@ impl Problem for Predictor<'_> {
                         Par::Seq,
                     );
                     for i in 0..l {
+                        if !full {
+                            break;
+                        }
                         for j in 0..n {
                             cs[(i, ic + i * n + j)] += x[j];
                         }
@@ -530,6 +544,9 @@ impl Problem for Predictor<'_> {
                         Par::Seq,
                     );
                     for i in 0..n {
+                        if !full {
+                            break;
+                        }
                         for j in 0..n {
                             s2[(i, ia + i * n + j)] += x[j];
                         }
@@ -537,7 +554,7 @@ impl Problem for Predictor<'_> {
                             s2[(i, ib + i * m + j)] += u[(t, j)];
                         }
                     }
-                    if !k_zero {
+                    if !k_zero && full {
                         for i in 0..l {
                             for j in 0..n {
                                 let col = ic + i * n + j;
@@ -555,7 +572,7 @@ impl Problem for Predictor<'_> {
                             }
                         }
                     }
-                    if let Some(ik) = ik {
+                    if let (Some(ik), true) = (ik, full) {
                         for i in 0..n {
                             for j in 0..l {
                                 s2[(i, ik + i * l + j)] += e[j];
@@ -566,9 +583,20 @@ impl Problem for Predictor<'_> {
                     if row == blk || t + 1 == len {
                         let rows = row * l;
                         let jr = jb.as_ref().subrows(0, rows);
-                        matmul(h.as_mut(), Accum::Add, jr.transpose(), jr, 1.0, Par::Seq);
+                        // lower triangle of J^T J only (mirrored at the end)
+                        tri::matmul(
+                            h.as_mut().submatrix_mut(lo, lo, nc, nc),
+                            BlockStructure::TriangularLower,
+                            Accum::Add,
+                            jr.transpose(),
+                            BlockStructure::Rectangular,
+                            jr,
+                            BlockStructure::Rectangular,
+                            1.0,
+                            Par::Seq,
+                        );
                         matmul(
-                            g.as_mut(),
+                            g.as_mut().subrows_mut(lo, nc),
                             Accum::Add,
                             jr.transpose(),
                             rb.as_ref().subrows(0, rows),
@@ -596,6 +624,11 @@ impl Problem for Predictor<'_> {
         }
         if !cost.is_finite() {
             cost = f64::INFINITY;
+        }
+        for i in 0..h.nrows() {
+            for j in 0..i {
+                h[(j, i)] = h[(i, j)];
+            }
         }
         Ok(Evaluation {
             cost,
@@ -754,8 +787,10 @@ pub fn pem(
         o.fixed = Some(fixed);
         let local = prob.local;
         prob.local = false;
+        prob.col_lo = prob.x0_off.iter().flatten().copied().min().unwrap_or(0);
         let sol = optim::minimize(&mut prob, &theta, &o, &mut |_| Flow::Continue)?;
         prob.local = local;
+        prob.col_lo = 0;
         theta = sol.theta;
     }
     prob.losses.clear();
