@@ -241,3 +241,29 @@ def test_docs_examples_run():
     for i, block in enumerate(blocks):  # the blocks build on each other
         exec(compile(block, f"docs/pem.md[python block {i}]", "exec"), namespace)
     assert namespace["fit_pem"] > namespace["fit_start"]
+
+
+def test_tol_weighting_and_local_coordinates_change_the_result():
+    true = _truth()
+    rng = np.random.default_rng(8)
+    u = rng.standard_normal((800, 2))
+    e = rng.standard_normal((800, 2)) * np.array([0.05, 1.0])  # unequal noise levels
+    y = _data(true, u, e)
+    start = _perturb(true, 0.05)
+    tight = sysid.pem((u, y), start, tol=1e-10, max_iter=200)
+    loose = sysid.pem((u, y), start, tol=1e-1)
+    assert loose.info["pem"]["iterations"] < tight.info["pem"]["iterations"]
+    assert loose.info["pem"]["cost"][-1] > tight.info["pem"]["cost"][-1]
+    # the determinant criterion weights the quiet output more: its errors get smaller
+    det = sysid.pem((u, y), start, focus="simulation", weighting="noise", max_iter=100)
+    ide = sysid.pem((u, y), start, focus="simulation", weighting="identity", max_iter=100)
+    assert det.info["pem"]["weighting"] == "noise" and ide.info["pem"]["weighting"] == "identity"
+    assert det.noise_cov[0, 0] < ide.noise_cov[0, 0]
+    assert det.noise_cov[1, 1] > ide.noise_cov[1, 1]
+    # without local coordinates the search also works but moves along the similarity orbit:
+    # same poles, different matrices
+    free = sysid.pem((u, y), start, local_coordinates=False, tol=1e-10, max_iter=200)
+    assert _pole_err(free, tight) < 1e-4
+    assert not np.allclose(free.A, tight.A, atol=1e-6)
+    with pytest.raises(DataError, match="weighting"):
+        sysid.pem((u, y), start, weighting="fit")
