@@ -82,14 +82,16 @@ pub fn covariance(gauss_newton: MatRef<'_, f64>, scale: f64, rtol: f64) -> Resul
         .collect();
     let drop: Vec<usize> = (0..p).filter(|i| !keep.contains(i)).collect();
     let lmin = keep.iter().map(|&i| s[i]).fold(f64::INFINITY, f64::min);
-    let mut cov = Mat::<f64>::zeros(p, p);
-    for &k in &keep {
-        let w = scale / s[k];
-        for j in 0..p {
-            let uj = u[(j, k)] / d[j];
-            for i in 0..p {
-                cov[(i, j)] += w * (u[(i, k)] / d[i]) * uj;
-            }
+    // cov = (D^-1 U_k s_k^-1/2)(D^-1 U_k s_k^-1/2)^T * scale, one matrix product
+    let f = Mat::from_fn(p, keep.len(), |i, j| {
+        u[(i, keep[j])] / d[i] * (scale / s[keep[j]]).sqrt()
+    });
+    let mut cov = &f * f.transpose();
+    for i in 0..p {
+        for j in 0..i {
+            let m = 0.5 * (cov[(i, j)] + cov[(j, i)]);
+            cov[(i, j)] = m;
+            cov[(j, i)] = m;
         }
     }
     // Unidentifiable directions in parameter space: H D^-1 v = 0, orthonormalised.

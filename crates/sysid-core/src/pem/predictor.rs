@@ -460,6 +460,13 @@ impl Problem for Predictor<'_> {
         let mut s2 = s.clone();
         let mut cs = Mat::<f64>::zeros(l, if jacobian { nc } else { 0 });
         let full = lo == 0;
+        // the one product whose cost grows with p^2: faer's global parallelism, as the
+        // compressors (results agree to round-off for any thread count)
+        let par = if nc >= 64 {
+            faer::get_global_parallelism()
+        } else {
+            Par::Seq
+        };
         let mut e = vec![0.0; l];
         let mut we = vec![0.0; l];
         let mut x = vec![0.0; n];
@@ -593,7 +600,7 @@ impl Problem for Predictor<'_> {
                             jr,
                             BlockStructure::Rectangular,
                             1.0,
-                            Par::Seq,
+                            par,
                         );
                         matmul(
                             g.as_mut().subrows_mut(lo, nc),
