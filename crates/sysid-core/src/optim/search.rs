@@ -451,7 +451,7 @@ pub fn minimize(
                 if rho > 0.75 {
                     mu /= 3.0;
                 } else if rho < 0.25 {
-                    mu = (mu * 2.0).max(1e-8);
+                    mu = (mu * 2.0).max(1e-12);
                 }
                 accepted = Some((trial, cand_cost, used));
                 break;
@@ -459,7 +459,7 @@ pub fn minimize(
             if mu > 1e10 {
                 break;
             }
-            mu = (mu * 10.0).max(1e-6);
+            mu = (mu * 4.0).max(1e-12);
         }
         let Some((trial, cand_cost, used)) = accepted else {
             stop = StopReason::NoDescent;
