@@ -25,6 +25,7 @@ __all__ = [
     "hankel_singular_values",
     "balanced_truncation",
     "modal_analysis",
+    "pem_refine",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -179,3 +180,27 @@ class CorrelationSums:
     @property
     def open_samples(self) -> int: ...
     def __reduce__(self) -> Any: ...
+
+def pem_refine(
+    a: _Array,
+    b: _Array,
+    c: _Array,
+    d: _Array,
+    k: _Array | None,
+    experiments: list[tuple[_Array, _Array]],
+    *,
+    focus: str = "prediction",
+    estimate_d: bool = False,
+    estimate_k: bool = True,
+    x0: list[Any] | None = None,
+    reweight: bool = True,
+    local_coordinates: bool = True,
+    max_iter: int = 50,
+    tol_cost: float = 1e-6,
+    tol_step: float = 1e-9,
+    tol_gradient: float = 1e-9,
+    reg_lambda: float = 0.0,
+    reg_r: _Array | None = None,
+    reg_nominal: _Array | None = None,
+    progress: Any = None,
+) -> dict[str, Any]: ...

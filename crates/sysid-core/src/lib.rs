@@ -48,6 +48,8 @@ pub mod hankel;
 pub mod linalg;
 pub mod lyapunov;
 pub mod model;
+pub mod optim;
+pub mod pem;
 pub mod realization;
 pub mod riccati;
 pub mod simulate;

@@ -1,0 +1,113 @@
+//! Parameter covariance from the Gauss-Newton matrix, restricted to identifiable directions.
+
+use crate::error::{Result, SysidError};
+use faer::{Mat, MatRef, Side};
+
+/// The covariance of the parameters and what the data do not determine.
+#[derive(Debug, Clone)]
+pub struct Covariance {
+    /// `scale * H^+` on the identifiable directions, p x p.
+    pub covariance: Mat<f64>,
+    /// Numerical rank of the Gauss-Newton matrix.
+    pub rank: usize,
+    /// Orthonormal basis (p x (p - rank)) of the directions the data do not determine.
+    pub unidentifiable: Mat<f64>,
+    /// Condition number of the Jacobi-scaled matrix on the identifiable directions.
+    pub condition: f64,
+}
+
+/// The covariance `scale * H^+` of parameters estimated by minimising `1/2 r^T W r`, with
+/// `H = J^T W J` the Gauss-Newton matrix at the optimum.
+///
+/// When `W` is the inverse of the noise covariance `scale` is 1; with `W = I` and white noise of
+/// variance `sigma^2`, `scale = sigma^2`. The pseudo-inverse is taken after Jacobi scaling
+/// (`D^-1 H D^-1`, `D = diag(H)^(1/2)`), dropping eigenvalues below `rtol` times the largest:
+/// those directions (mapped back to the parameters and returned in `unidentifiable`) get zero
+/// variance, so the caller can name them instead of reporting a huge number.
+///
+/// ```
+/// use faer::mat;
+/// use sysid_core::optim::covariance;
+/// // Two parameters that only enter as their sum: one direction is not identifiable.
+/// let h = mat![[1.0, 1.0], [1.0, 1.0]];
+/// let c = covariance(h.as_ref(), 2.0, 1e-10).unwrap();
+/// assert_eq!(c.rank, 1);
+/// assert!((c.unidentifiable[(0, 0)] + c.unidentifiable[(1, 0)]).abs() < 1e-12);
+/// ```
+pub fn covariance(gauss_newton: MatRef<'_, f64>, scale: f64, rtol: f64) -> Result<Covariance> {
+    let p = gauss_newton.nrows();
+    if gauss_newton.ncols() != p {
+        return Err(SysidError::ShapeMismatch {
+            what: "gauss_newton".into(),
+            expected: format!("({p}, {p})"),
+            got: format!("({}, {})", p, gauss_newton.ncols()),
+        });
+    }
+    crate::error::check_finite("gauss_newton", gauss_newton)?;
+    if !(scale.is_finite() && scale >= 0.0) {
+        return Err(SysidError::invalid(
+            "scale",
+            format!("must be finite and >= 0, got {scale}"),
+        ));
+    }
+    if p == 0 {
+        return Ok(Covariance {
+            covariance: Mat::zeros(0, 0),
+            rank: 0,
+            unidentifiable: Mat::zeros(0, 0),
+            condition: 1.0,
+        });
+    }
+    let d: Vec<f64> = (0..p)
+        .map(|i| {
+            let v = gauss_newton[(i, i)];
+            if v > 0.0 {
+                v.sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let hs = Mat::from_fn(p, p, |i, j| {
+        0.5 * (gauss_newton[(i, j)] + gauss_newton[(j, i)]) / (d[i] * d[j])
+    });
+    let e = hs
+        .self_adjoint_eigen(Side::Lower)
+        .map_err(|e| SysidError::numerical("covariance (eigenvalues)", format!("{e:?}")))?;
+    let s = e.S().column_vector();
+    let u = e.U();
+    let lmax = (0..p).map(|i| s[i]).fold(0.0, f64::max);
+    let keep: Vec<usize> = (0..p)
+        .filter(|&i| s[i] > rtol * lmax && s[i] > 0.0)
+        .collect();
+    let drop: Vec<usize> = (0..p).filter(|i| !keep.contains(i)).collect();
+    let lmin = keep.iter().map(|&i| s[i]).fold(f64::INFINITY, f64::min);
+    // cov = (D^-1 U_k s_k^-1/2)(D^-1 U_k s_k^-1/2)^T * scale, one matrix product
+    let f = Mat::from_fn(p, keep.len(), |i, j| {
+        u[(i, keep[j])] / d[i] * (scale / s[keep[j]]).sqrt()
+    });
+    let mut cov = &f * f.transpose();
+    for i in 0..p {
+        for j in 0..i {
+            let m = 0.5 * (cov[(i, j)] + cov[(j, i)]);
+            cov[(i, j)] = m;
+            cov[(j, i)] = m;
+        }
+    }
+    // Unidentifiable directions in parameter space: H D^-1 v = 0, orthonormalised.
+    let mut null = Mat::from_fn(p, drop.len(), |i, j| u[(i, drop[j])] / d[i]);
+    if null.ncols() > 0 {
+        let qr = null.qr();
+        null = qr.compute_thin_Q();
+    }
+    Ok(Covariance {
+        covariance: cov,
+        rank: keep.len(),
+        unidentifiable: null,
+        condition: if keep.is_empty() {
+            f64::INFINITY
+        } else {
+            lmax / lmin
+        },
+    })
+}

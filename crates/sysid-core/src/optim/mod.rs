@@ -1,0 +1,257 @@
+//! One Gauss-Newton / Levenberg-Marquardt search for every prediction-error estimator.
+//!
+//! A [`Problem`] provides, at a parameter vector `theta`, the cost
+//!
+//! ```text
+//! V(theta) = 1/2 r(theta)^T W r(theta)
+//! ```
+//!
+//! and, when asked, the gradient `g = J^T W r` and the Gauss-Newton matrix `H = J^T W J`
+//! (`J = dr/dtheta`). Providers accumulate `g` and `H` over blocks of samples, so no `N x p`
+//! Jacobian is ever stored and memory does not depend on the record length.
+//!
+//! [`minimize`] takes damped Gauss-Newton steps
+//!
+//! ```text
+//! (D^-1 H D^-1 + mu I) D s = -D^-1 g,      D = diag(H)^(1/2)        (Marquardt scaling)
+//! ```
+//!
+//! restricted to the free directions: fixed parameters (a mask), parameters held at an active
+//! bound, and, when the provider supplies one, a basis of admissible search directions (for
+//! example the orthogonal complement of the similarity orbit of a state-space model, the
+//! data-driven local coordinates of McKelvey, Helmersson & Ribarits 2004). The damping `mu`
+//! follows the ratio of actual to predicted decrease (a trust region in the scaled norm). A
+//! trial point outside the bounds is projected onto them; a trial point the provider calls
+//! inadmissible (an unstable predictor, say) is never evaluated: the step is halved until it
+//! is admissible. Only points that decrease the cost are accepted, so the search never
+//! diverges.
+//!
+//! Regularisation toward a nominal value (MATLAB's `Regularization.Lambda/R/Nominal`) adds
+//! `lambda/2 (theta - nominal)^T R (theta - nominal)` to the cost.
+//!
+//! [`covariance`] turns the Gauss-Newton matrix at the optimum into the parameter covariance,
+//! a pseudo-inverse restricted to the identifiable directions, and returns the directions
+//! the data do not determine.
+
+mod covariance;
+mod search;
+#[cfg(test)]
+mod tests;
+
+pub use covariance::{covariance, Covariance};
+pub use search::minimize;
+
+use crate::error::Result;
+use faer::Mat;
+
+/// What a provider returns at one parameter vector.
+#[derive(Debug, Clone)]
+pub struct Evaluation {
+    /// `1/2 r^T W r` (without the regularisation term; the search adds it).
+    pub cost: f64,
+    /// `J^T W r`, length p (empty when the Jacobian was not asked for).
+    pub gradient: Vec<f64>,
+    /// `J^T W J`, p x p (0 x 0 when the Jacobian was not asked for).
+    pub gauss_newton: Mat<f64>,
+}
+
+impl Evaluation {
+    /// An evaluation carrying only the cost.
+    pub fn cost_only(cost: f64) -> Self {
+        Evaluation {
+            cost,
+            gradient: Vec::new(),
+            gauss_newton: Mat::zeros(0, 0),
+        }
+    }
+}
+
+/// A residual provider the search can minimise.
+///
+/// ```
+/// use faer::Mat;
+/// use sysid_core::optim::{minimize, Evaluation, Options, Problem, Flow};
+///
+/// // Fit y = a + b t to three points: linear least squares, solved in one step.
+/// struct Line;
+/// impl Problem for Line {
+///     fn n_params(&self) -> usize { 2 }
+///     fn evaluate(&mut self, th: &[f64], jac: bool) -> sysid_core::Result<Evaluation> {
+///         let data = [(0.0, 1.0), (1.0, 3.0), (2.0, 5.0)];
+///         let mut ev = Evaluation::cost_only(0.0);
+///         if jac { ev.gradient = vec![0.0; 2]; ev.gauss_newton = Mat::zeros(2, 2); }
+///         for (t, y) in data {
+///             let r = th[0] + th[1] * t - y;
+///             ev.cost += 0.5 * r * r;
+///             if jac {
+///                 let j = [1.0, t];
+///                 for a in 0..2 {
+///                     ev.gradient[a] += j[a] * r;
+///                     for b in 0..2 { ev.gauss_newton[(a, b)] += j[a] * j[b]; }
+///                 }
+///             }
+///         }
+///         Ok(ev)
+///     }
+/// }
+/// let sol = minimize(&mut Line, &[0.0, 0.0], &Options::default(), &mut |_| Flow::Continue).unwrap();
+/// assert!((sol.theta[0] - 1.0).abs() < 1e-9 && (sol.theta[1] - 2.0).abs() < 1e-9);
+/// ```
+pub trait Problem {
+    /// Number of parameters p.
+    fn n_params(&self) -> usize;
+    /// The cost at `theta`; with `jacobian`, also the gradient and the Gauss-Newton matrix.
+    fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation>;
+    /// `false` when `theta` is outside the admissible set; the search then shortens its step.
+    fn admissible(&mut self, _theta: &[f64]) -> bool {
+        true
+    }
+    /// An orthonormal basis (p x q) of the directions the search may move in at `theta`, or
+    /// `None` for all of them. Recomputed at every iterate.
+    fn search_basis(&mut self, _theta: &[f64]) -> Result<Option<Mat<f64>>> {
+        Ok(None)
+    }
+    /// Called after each accepted step, before the Jacobian is formed there; the provider may
+    /// change the definition of its cost (for example re-estimate a noise weighting). Return
+    /// `true` when it did (informational: the search evaluates the new point afterwards anyway).
+    fn accepted(&mut self, _theta: &[f64]) -> Result<bool> {
+        Ok(false)
+    }
+}
+
+/// Regularisation toward a nominal value: `lambda/2 (theta - nominal)^T R (theta - nominal)`.
+#[derive(Debug, Clone)]
+pub struct Regularization {
+    /// Weight lambda (>= 0).
+    pub lambda: f64,
+    /// Symmetric positive semi-definite p x p weighting; `None` means the identity.
+    pub r: Option<Mat<f64>>,
+    /// The nominal value (length p); `None` means zero.
+    pub nominal: Option<Vec<f64>>,
+}
+
+/// Options of [`minimize`]. Build with `Options::default()` and set fields.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct Options {
+    /// Maximum number of accepted iterations.
+    pub max_iter: usize,
+    /// Stop when an accepted step lowers the cost by less than this fraction.
+    pub tol_cost: f64,
+    /// Stop when the step is shorter than `tol_step * (tol_step + |theta|)`.
+    pub tol_step: f64,
+    /// Stop when the Gauss-Newton predicted decrease `g^T H^+ g / 2` is below
+    /// `tol_gradient * cost` (first-order optimality, independent of scaling).
+    pub tol_gradient: f64,
+    /// Lower bounds (length p; `-inf` for none), or `None`.
+    pub lower: Option<Vec<f64>>,
+    /// Upper bounds (length p; `+inf` for none), or `None`.
+    pub upper: Option<Vec<f64>>,
+    /// `true` for parameters that never move (length p), or `None`.
+    pub fixed: Option<Vec<bool>>,
+    /// Regularisation toward a nominal value, or `None`.
+    pub regularization: Option<Regularization>,
+    /// Initial Levenberg-Marquardt damping in the scaled problem.
+    pub initial_damping: f64,
+    /// Eigenvalues of the scaled Gauss-Newton matrix below `rank_tol * max` are treated as
+    /// zero when reporting its condition and solving for the step.
+    pub rank_tol: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            max_iter: 100,
+            tol_cost: 1e-7,
+            tol_step: 1e-9,
+            tol_gradient: 1e-9,
+            lower: None,
+            upper: None,
+            fixed: None,
+            regularization: None,
+            initial_damping: 1e-4,
+            rank_tol: 1e-13,
+        }
+    }
+}
+
+/// Why the search stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopReason {
+    /// The relative cost decrease fell below `tol_cost`.
+    CostTolerance,
+    /// The step fell below `tol_step`.
+    StepTolerance,
+    /// The predicted decrease fell below `tol_gradient * cost` (or the cost is zero).
+    GradientTolerance,
+    /// No damping produced a decrease of the cost: a (local) minimum to working precision.
+    NoDescent,
+    /// `max_iter` iterations were taken.
+    MaxIterations,
+    /// The observer asked to stop.
+    Cancelled,
+}
+
+impl StopReason {
+    /// A short lower-case name ("cost tolerance", ...).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            StopReason::CostTolerance => "cost tolerance",
+            StopReason::StepTolerance => "step tolerance",
+            StopReason::GradientTolerance => "gradient tolerance",
+            StopReason::NoDescent => "no further decrease",
+            StopReason::MaxIterations => "maximum iterations",
+            StopReason::Cancelled => "cancelled",
+        }
+    }
+}
+
+/// Reported to the observer after every accepted step.
+#[derive(Debug, Clone)]
+pub struct Iteration {
+    /// Iteration number, from 1.
+    pub iteration: usize,
+    /// Cost after the step (with regularisation).
+    pub cost: f64,
+    /// Euclidean norm of the step taken.
+    pub step_norm: f64,
+    /// Infinity norm of the (free, reduced) gradient before the step.
+    pub gradient_norm: f64,
+    /// Damping used for the accepted step.
+    pub damping: f64,
+}
+
+/// What the observer tells the search.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Flow {
+    /// Go on.
+    Continue,
+    /// Stop now, keeping the current point.
+    Stop,
+}
+
+/// The result of [`minimize`].
+#[derive(Debug, Clone)]
+pub struct Solution {
+    /// The final parameters.
+    pub theta: Vec<f64>,
+    /// The final cost (with regularisation).
+    pub cost: f64,
+    /// Cost at the start and after each accepted iteration.
+    pub history: Vec<f64>,
+    /// Accepted iterations.
+    pub iterations: usize,
+    /// Cost evaluations (including rejected trials).
+    pub evaluations: usize,
+    /// Why it stopped.
+    pub stop: StopReason,
+    /// `J^T W J` at the solution (without regularisation), p x p.
+    pub gauss_newton: Mat<f64>,
+    /// `J^T W r` at the solution (without regularisation).
+    pub gradient: Vec<f64>,
+    /// Condition number of the scaled reduced Gauss-Newton matrix at the last iterate
+    /// (infinite when singular).
+    pub condition: f64,
+    /// Indices of parameters at a bound at the solution.
+    pub active_bounds: Vec<usize>,
+}

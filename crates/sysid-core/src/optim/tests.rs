@@ -1,0 +1,309 @@
+// Tests mirror how callers outside the crate set options (Options is non_exhaustive).
+#![allow(clippy::field_reassign_with_default, clippy::type_complexity)]
+
+use super::*;
+use faer::prelude::Solve;
+use faer::Mat;
+
+/// Least squares on explicit residuals r(theta) with Jacobian J(theta).
+struct Ls<F: FnMut(&[f64]) -> (Vec<f64>, Vec<Vec<f64>>)> {
+    p: usize,
+    f: F,
+    admissible: Box<dyn FnMut(&[f64]) -> bool>,
+    visited: Vec<Vec<f64>>,
+}
+
+impl<F: FnMut(&[f64]) -> (Vec<f64>, Vec<Vec<f64>>)> Problem for Ls<F> {
+    fn n_params(&self) -> usize {
+        self.p
+    }
+    fn evaluate(&mut self, th: &[f64], jac: bool) -> crate::Result<Evaluation> {
+        self.visited.push(th.to_vec());
+        let (r, j) = (self.f)(th);
+        let mut ev = Evaluation::cost_only(0.5 * r.iter().map(|x| x * x).sum::<f64>());
+        if jac {
+            let p = self.p;
+            ev.gradient = (0..p)
+                .map(|a| (0..r.len()).map(|k| j[k][a] * r[k]).sum())
+                .collect();
+            ev.gauss_newton = Mat::from_fn(p, p, |a, b| {
+                (0..r.len()).map(|k| j[k][a] * j[k][b]).sum::<f64>()
+            });
+        }
+        Ok(ev)
+    }
+    fn admissible(&mut self, th: &[f64]) -> bool {
+        (self.admissible)(th)
+    }
+}
+
+fn ls<F: FnMut(&[f64]) -> (Vec<f64>, Vec<Vec<f64>>)>(p: usize, f: F) -> Ls<F> {
+    Ls {
+        p,
+        f,
+        admissible: Box::new(|_| true),
+        visited: Vec::new(),
+    }
+}
+
+fn rosen(t: &[f64]) -> (Vec<f64>, Vec<Vec<f64>>) {
+    (
+        vec![10.0 * (t[1] - t[0] * t[0]), 1.0 - t[0]],
+        vec![vec![-20.0 * t[0], 10.0], vec![-1.0, 0.0]],
+    )
+}
+
+/// y = X theta with a fixed X (4 x 3).
+fn linear(t: &[f64]) -> (Vec<f64>, Vec<Vec<f64>>) {
+    let x = [
+        [1.0, 0.5, -2.0],
+        [0.0, 1.0, 3.0],
+        [2.0, -1.0, 0.5],
+        [1.0, 1.0, 1.0],
+    ];
+    let y = [1.0, -2.0, 0.3, 4.0];
+    let r = (0..4)
+        .map(|k| (0..3).map(|a| x[k][a] * t[a]).sum::<f64>() - y[k])
+        .collect();
+    (r, x.iter().map(|row| row.to_vec()).collect())
+}
+
+fn go(p: &mut dyn Problem, t0: &[f64], o: &Options) -> Solution {
+    minimize(p, t0, o, &mut |_| Flow::Continue).unwrap()
+}
+
+#[test]
+fn rosenbrock_converges() {
+    let mut pr = ls(2, rosen);
+    let sol = go(&mut pr, &[-1.2, 1.0], &Options::default());
+    assert!((sol.theta[0] - 1.0).abs() < 1e-8, "{:?}", sol.theta);
+    assert!((sol.theta[1] - 1.0).abs() < 1e-8);
+    assert!(sol.cost < 1e-16);
+    assert!(sol.history.windows(2).all(|w| w[1] < w[0]));
+    assert_eq!(sol.history.len(), sol.iterations + 1);
+}
+
+#[test]
+fn linear_least_squares_in_one_step() {
+    let mut pr = ls(3, linear);
+    let mut o = Options::default();
+    o.initial_damping = 0.0;
+    let sol = go(&mut pr, &[0.0; 3], &o);
+    // reference: normal equations
+    let (_, j) = linear(&[0.0; 3]);
+    let x = Mat::from_fn(4, 3, |i, k| j[i][k]);
+    let y = Mat::from_fn(4, 1, |i, _| [1.0, -2.0, 0.3, 4.0][i]);
+    let xtx = x.transpose() * &x;
+    let xty = x.transpose() * &y;
+    let th = xtx.llt(faer::Side::Lower).unwrap().solve(&xty);
+    for a in 0..3 {
+        assert!((sol.theta[a] - th[(a, 0)]).abs() < 1e-12);
+    }
+    assert_eq!(sol.iterations, 1);
+    assert!(sol.condition.is_finite() && sol.condition >= 1.0);
+}
+
+#[test]
+fn bounds_are_respected_and_reported() {
+    let mut pr = ls(3, linear);
+    let mut o = Options::default();
+    o.lower = Some(vec![f64::NEG_INFINITY, 0.0, f64::NEG_INFINITY]);
+    o.upper = Some(vec![0.5, f64::INFINITY, f64::INFINITY]);
+    o.tol_gradient = 1e-20;
+    o.tol_cost = 1e-15;
+    let unb = go(&mut ls(3, linear), &[0.0; 3], &Options::default());
+    assert!(unb.theta[0] > 0.5, "the test needs an active upper bound");
+    let sol = go(&mut pr, &[0.0; 3], &o);
+    assert!(pr.visited.iter().all(|t| t[0] <= 0.5 && t[1] >= 0.0));
+    assert!(sol.active_bounds.contains(&0));
+    assert_eq!(sol.theta[0], 0.5);
+    // with theta0 pinned at 0.5 the others solve the reduced least squares problem
+    let mut fixed = o.clone();
+    fixed.lower = None;
+    fixed.upper = None;
+    fixed.fixed = Some(vec![true, false, false]);
+    let red = go(&mut ls(3, linear), &[0.5, 0.0, 0.0], &fixed);
+    if !sol.active_bounds.contains(&1) {
+        for a in 1..3 {
+            assert!(
+                (sol.theta[a] - red.theta[a]).abs() < 1e-7,
+                "{:?} {:?} {:?} {:?}",
+                sol.theta,
+                red.theta,
+                sol.stop,
+                sol.history
+            );
+        }
+    }
+    assert!(sol.cost > unb.cost);
+}
+
+#[test]
+fn fixed_parameters_never_move() {
+    let mut pr = ls(2, rosen);
+    let mut o = Options::default();
+    o.fixed = Some(vec![false, true]);
+    o.tol_gradient = 1e-20;
+    o.tol_cost = 1e-15;
+    let sol = go(&mut pr, &[-1.2, 0.7], &o);
+    assert!(pr.visited.iter().all(|t| t[1] == 0.7));
+    // min over x of 100 (0.7 - x^2)^2 + (1 - x)^2 lies near x = +sqrt(0.7) (from -1.2 maybe
+    // the other local minimum): check stationarity instead
+    let (r, j) = rosen(&sol.theta);
+    let g0 = j[0][0] * r[0] + j[1][0] * r[1];
+    assert!(g0.abs() < 1e-6, "{g0}");
+}
+
+#[test]
+fn regularisation_pulls_toward_nominal() {
+    let free = go(&mut ls(3, linear), &[0.0; 3], &Options::default());
+    let nominal = vec![5.0, -5.0, 2.0];
+    let mut last = f64::INFINITY;
+    for lambda in [0.1, 1.0, 10.0, 1e6] {
+        let mut o = Options::default();
+        o.regularization = Some(Regularization {
+            lambda,
+            r: None,
+            nominal: Some(nominal.clone()),
+        });
+        let sol = go(&mut ls(3, linear), &[0.0; 3], &o);
+        let dist: f64 = (0..3).map(|a| (sol.theta[a] - nominal[a]).powi(2)).sum();
+        assert!(
+            dist < last,
+            "distance to nominal must shrink as lambda grows"
+        );
+        last = dist;
+        // exact solution of the regularised normal equations
+        let (_, j) = linear(&[0.0; 3]);
+        let x = Mat::from_fn(4, 3, |i, k| j[i][k]);
+        let y = Mat::from_fn(4, 1, |i, _| [1.0, -2.0, 0.3, 4.0][i]);
+        let a = x.transpose() * &x + Mat::<f64>::identity(3, 3) * faer::Scale(lambda);
+        let b = x.transpose() * &y + Mat::from_fn(3, 1, |i, _| lambda * nominal[i]);
+        let th = a.llt(faer::Side::Lower).unwrap().solve(&b);
+        for k in 0..3 {
+            assert!((sol.theta[k] - th[(k, 0)]).abs() < 1e-8 * (1.0 + th[(k, 0)].abs()));
+        }
+    }
+    let d0: f64 = (0..3).map(|a| (free.theta[a] - nominal[a]).powi(2)).sum();
+    assert!(last < 1e-6 * d0);
+}
+
+#[test]
+fn inadmissible_region_never_entered() {
+    // minimum of the linear problem lies at theta0 > 0.5; declare theta0 >= 0.4 inadmissible
+    let unb = go(&mut ls(3, linear), &[0.0; 3], &Options::default());
+    assert!(unb.theta[0] > 0.5);
+    let mut pr = ls(3, linear);
+    pr.admissible = Box::new(|t| t[0] < 0.4);
+    let sol = go(&mut pr, &[0.0; 3], &Options::default());
+    assert!(pr.visited.iter().all(|t| t[0] < 0.4));
+    assert!(
+        sol.theta[0] < 0.4
+            && sol.cost
+                < go(&mut ls(3, linear), &[0.0; 3], &{
+                    let mut o = Options::default();
+                    o.max_iter = 0;
+                    o
+                })
+                .cost
+    );
+    // an inadmissible start is an error, not a search
+    let mut bad = ls(3, linear);
+    bad.admissible = Box::new(|t| t[0] < 0.4);
+    assert!(
+        minimize(&mut bad, &[1.0, 0.0, 0.0], &Options::default(), &mut |_| {
+            Flow::Continue
+        })
+        .is_err()
+    );
+}
+
+#[test]
+fn observer_sees_every_iteration_and_can_cancel() {
+    let mut seen = Vec::new();
+    let sol = minimize(
+        &mut ls(2, rosen),
+        &[-1.2, 1.0],
+        &Options::default(),
+        &mut |it| {
+            seen.push(it.cost);
+            if it.iteration == 3 {
+                Flow::Stop
+            } else {
+                Flow::Continue
+            }
+        },
+    )
+    .unwrap();
+    assert_eq!(sol.stop, StopReason::Cancelled);
+    assert_eq!(sol.iterations, 3);
+    assert_eq!(seen, sol.history[1..].to_vec());
+}
+
+#[test]
+fn max_iter_and_bad_options() {
+    let mut o = Options::default();
+    o.max_iter = 2;
+    let sol = go(&mut ls(2, rosen), &[-1.2, 1.0], &o);
+    assert_eq!(sol.stop, StopReason::MaxIterations);
+    assert_eq!(sol.iterations, 2);
+    o.fixed = Some(vec![true]);
+    assert!(minimize(&mut ls(2, rosen), &[0.0, 0.0], &o, &mut |_| Flow::Continue).is_err());
+    assert!(minimize(
+        &mut ls(2, rosen),
+        &[f64::NAN, 0.0],
+        &Options::default(),
+        &mut |_| Flow::Continue
+    )
+    .is_err());
+}
+
+#[test]
+fn search_basis_restricts_the_step() {
+    // Only move along (1, 1)/sqrt2: the solution is the best point on that line.
+    struct Along(Ls<fn(&[f64]) -> (Vec<f64>, Vec<Vec<f64>>)>);
+    impl Problem for Along {
+        fn n_params(&self) -> usize {
+            3
+        }
+        fn evaluate(&mut self, t: &[f64], j: bool) -> crate::Result<Evaluation> {
+            self.0.evaluate(t, j)
+        }
+        fn search_basis(&mut self, _t: &[f64]) -> crate::Result<Option<Mat<f64>>> {
+            let s = 0.5f64.sqrt();
+            Ok(Some(Mat::from_fn(3, 1, |i, _| if i < 2 { s } else { 0.0 })))
+        }
+    }
+    let mut pr = Along(ls(3, linear));
+    let sol = go(&mut pr, &[0.0; 3], &Options::default());
+    assert!((sol.theta[0] - sol.theta[1]).abs() < 1e-14 && sol.theta[2] == 0.0);
+    assert!(sol.iterations >= 1);
+}
+
+#[test]
+fn covariance_matches_inverse_and_finds_null_space() {
+    let (_, j) = linear(&[0.0; 3]);
+    let x = Mat::from_fn(4, 3, |i, k| j[i][k]);
+    let h = x.transpose() * &x;
+    let c = covariance(h.as_ref(), 0.3, 1e-12).unwrap();
+    assert_eq!(c.rank, 3);
+    let prod = &c.covariance * &h;
+    for i in 0..3 {
+        for k in 0..3 {
+            let e = if i == k { 0.3 } else { 0.0 };
+            assert!((prod[(i, k)] - e).abs() < 1e-12);
+        }
+    }
+    // duplicate a column: direction (1, -1, 0)-like is unidentifiable
+    let x2 = Mat::from_fn(4, 3, |i, k| if k == 1 { 2.0 * j[i][0] } else { j[i][k] });
+    let h2 = x2.transpose() * &x2;
+    let c2 = covariance(h2.as_ref(), 1.0, 1e-10).unwrap();
+    assert_eq!(c2.rank, 2);
+    let v = c2.unidentifiable.col(0);
+    // x2 v = 0
+    let xv = &x2 * v;
+    assert!(xv.norm_l2() < 1e-10);
+    // a generalised inverse: H C H = H
+    let hch = &h2 * &c2.covariance * &h2;
+    assert!((&hch - &h2).norm_l2() < 1e-9 * h2.norm_l2());
+}

@@ -1,0 +1,835 @@
+//! The innovation predictor as an [`optim::Problem`] and the [`pem`] driver.
+
+use crate::error::{check_finite, Result, SysidError};
+use crate::linalg::spectral_radius;
+use crate::model::StateSpace;
+use crate::optim::{self, Covariance, Evaluation, Flow, Iteration, Problem, Solution};
+use faer::linalg::matmul::matmul;
+use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
+use faer::{Accum, Mat, MatRef, Par, Side};
+
+/// What the predictor's errors are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Focus {
+    /// One-step-ahead prediction errors of the innovation form (K estimated or fixed).
+    Prediction,
+    /// Simulation errors (K = 0).
+    Simulation,
+}
+
+/// The initial state of one experiment.
+#[derive(Debug, Clone, PartialEq)]
+pub enum InitialState {
+    /// Estimated with the other parameters (started at its least-squares value).
+    Estimate,
+    /// Zero.
+    Zero,
+    /// A given value (length n), not estimated.
+    Given(Vec<f64>),
+}
+
+/// Options of [`pem`]. Build with `PemOptions::default()` and set fields.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct PemOptions {
+    /// Prediction (default) or simulation errors.
+    pub focus: Focus,
+    /// Estimate D (`true`) or keep it at its start value (`false`, default).
+    pub estimate_d: bool,
+    /// Estimate K (default) or keep it fixed at its start value (prediction focus only).
+    pub estimate_k: bool,
+    /// Initial state per experiment; a single entry applies to all. Default: estimated.
+    pub x0: Vec<InitialState>,
+    /// Re-estimate the weighting `W = Lambda^-1` between iterations (default `true`);
+    /// `false` keeps `W = I`.
+    pub reweight: bool,
+    /// Search in data-driven local coordinates (default `true`).
+    pub local_coordinates: bool,
+    /// Samples per block in the accumulation of the normal equations.
+    pub block: usize,
+    /// Options of the search (tolerances, iteration cap, regularisation, ...).
+    pub optim: optim::Options,
+}
+
+impl Default for PemOptions {
+    fn default() -> Self {
+        let o = optim::Options {
+            max_iter: 50,
+            tol_cost: 1e-6,
+            ..Default::default()
+        };
+        PemOptions {
+            focus: Focus::Prediction,
+            estimate_d: false,
+            estimate_k: true,
+            x0: vec![InitialState::Estimate],
+            reweight: true,
+            local_coordinates: true,
+            block: 128,
+            optim: o,
+        }
+    }
+}
+
+/// The refined model and what the search did.
+#[derive(Debug, Clone)]
+pub struct PemResult {
+    /// The refined (A, B, C, D).
+    pub sys: StateSpace,
+    /// The refined Kalman gain (zero for simulation focus).
+    pub k: Mat<f64>,
+    /// The initial state of each experiment (estimated, zero or given).
+    pub x0: Vec<Vec<f64>>,
+    /// Sample covariance of the prediction errors at the solution, l x l.
+    pub innovation_covariance: Mat<f64>,
+    /// The free parameters at the solution (layout in [`Predictor`]).
+    pub theta: Vec<f64>,
+    /// What the search did.
+    pub solution: Solution,
+    /// Covariance of `theta` from the Gauss-Newton matrix with `W = Lambda^-1`.
+    pub covariance: Covariance,
+    /// Number of samples used.
+    pub n_samples: usize,
+    /// `det(Lambda)` (the maximum-likelihood loss, MATLAB's "loss function") at the start and
+    /// after every accepted iteration.
+    pub loss_history: Vec<f64>,
+}
+
+fn determinant(m: &Mat<f64>) -> f64 {
+    match m.llt(Side::Lower) {
+        Ok(f) => (0..m.nrows()).map(|i| f.L()[(i, i)].powi(2)).product(),
+        Err(_) => 0.0,
+    }
+}
+
+/// The innovation predictor over several experiments, as an optimisation problem.
+///
+/// Parameter layout (row-major blocks): `A (n*n), B (n*m), C (l*n)`, then `D (l*m)` when
+/// estimated, `K (n*l)` when estimated, then `x0` (n) of every experiment whose initial state
+/// is estimated, in experiment order.
+pub struct Predictor<'a> {
+    exps: Vec<(MatRef<'a, f64>, MatRef<'a, f64>)>,
+    n: usize,
+    m: usize,
+    l: usize,
+    focus: Focus,
+    est_d: bool,
+    est_k: bool,
+    d_fixed: Mat<f64>,
+    k_fixed: Mat<f64>,
+    x0_mode: Vec<InitialState>,
+    x0_off: Vec<Option<usize>>,
+    p: usize,
+    /// `R^-1` with `R R^T = Lambda` (weighted residual `R^-1 e`).
+    rinv: Mat<f64>,
+    floor: Vec<f64>,
+    reweight: bool,
+    local: bool,
+    block: usize,
+    n_samples: usize,
+    losses: Vec<f64>,
+    /// Sensitivities are formed only for parameters `>= col_lo` (the others get zero rows and
+    /// columns in the Gauss-Newton matrix): the initial-state-only pre-step sets it.
+    col_lo: usize,
+}
+
+struct Unpacked {
+    a: Mat<f64>,
+    b: Mat<f64>,
+    c: Mat<f64>,
+    d: Mat<f64>,
+    k: Mat<f64>,
+    x0: Vec<Vec<f64>>,
+}
+
+impl<'a> Predictor<'a> {
+    /// Checks the data and builds the problem around a start model.
+    pub fn new(
+        start: &StateSpace,
+        k0: Option<MatRef<'_, f64>>,
+        experiments: &[(MatRef<'a, f64>, MatRef<'a, f64>)],
+        opts: &PemOptions,
+    ) -> Result<Self> {
+        let (n, m, l) = (start.n_states(), start.n_inputs(), start.n_outputs());
+        if experiments.is_empty() {
+            return Err(SysidError::invalid("data", "no experiment given"));
+        }
+        if opts.block == 0 {
+            return Err(SysidError::invalid("block", "must be >= 1"));
+        }
+        let mut n_samples = 0;
+        let mut floor = vec![0.0; l];
+        for (e, (u, y)) in experiments.iter().enumerate() {
+            if u.ncols() != m || y.ncols() != l || u.nrows() != y.nrows() {
+                return Err(SysidError::ShapeMismatch {
+                    what: format!("experiment {e} (u, y)"),
+                    expected: format!("(N, {m}) and (N, {l})"),
+                    got: format!(
+                        "({}, {}) and ({}, {})",
+                        u.nrows(),
+                        u.ncols(),
+                        y.nrows(),
+                        y.ncols()
+                    ),
+                });
+            }
+            check_finite("u", *u)?;
+            check_finite("y", *y)?;
+            n_samples += y.nrows();
+            for j in 0..l {
+                for t in 0..y.nrows() {
+                    floor[j] += y[(t, j)] * y[(t, j)];
+                }
+            }
+        }
+        let x0_mode: Vec<InitialState> = match opts.x0.len() {
+            1 => vec![opts.x0[0].clone(); experiments.len()],
+            k if k == experiments.len() => opts.x0.clone(),
+            k => {
+                return Err(SysidError::invalid(
+                    "x0",
+                    format!(
+                    "{k} initial-state choices for {} experiments; give one or one per experiment",
+                    experiments.len()
+                ),
+                ))
+            }
+        };
+        for s in &x0_mode {
+            if let InitialState::Given(v) = s {
+                if v.len() != n || v.iter().any(|x| !x.is_finite()) {
+                    return Err(SysidError::invalid(
+                        "x0",
+                        format!("a given initial state must have {n} finite entries"),
+                    ));
+                }
+            }
+        }
+        let needed = n * n + n * m + l * n;
+        if n_samples * l < needed {
+            return Err(SysidError::InsufficientData {
+                context: "prediction-error refinement".into(),
+                needed: needed.div_ceil(l.max(1)),
+                got: n_samples,
+                fix: "use a longer record or a lower order",
+            });
+        }
+        let est_k = opts.estimate_k && opts.focus == Focus::Prediction;
+        let k_fixed = match (opts.focus, k0) {
+            (Focus::Simulation, _) | (_, None) => Mat::zeros(n, l),
+            (_, Some(k)) => {
+                if k.nrows() != n || k.ncols() != l {
+                    return Err(SysidError::ShapeMismatch {
+                        what: "K".into(),
+                        expected: format!("({n}, {l})"),
+                        got: format!("({}, {})", k.nrows(), k.ncols()),
+                    });
+                }
+                check_finite("K", k)?;
+                k.to_owned()
+            }
+        };
+        let mut p = n * n + n * m + l * n;
+        if opts.estimate_d {
+            p += l * m;
+        }
+        if est_k {
+            p += n * l;
+        }
+        let mut x0_off = Vec::new();
+        for s in &x0_mode {
+            if *s == InitialState::Estimate {
+                x0_off.push(Some(p));
+                p += n;
+            } else {
+                x0_off.push(None);
+            }
+        }
+        for f in floor.iter_mut() {
+            *f = (*f / n_samples as f64).max(f64::MIN_POSITIVE) * 1e-12;
+        }
+        Ok(Predictor {
+            exps: experiments.to_vec(),
+            n,
+            m,
+            l,
+            focus: opts.focus,
+            est_d: opts.estimate_d,
+            est_k,
+            d_fixed: start.d.clone(),
+            k_fixed,
+            x0_mode,
+            x0_off,
+            p,
+            rinv: Mat::identity(l, l),
+            floor,
+            reweight: opts.reweight,
+            local: opts.local_coordinates,
+            block: opts.block,
+            n_samples,
+            losses: Vec::new(),
+            col_lo: 0,
+        })
+    }
+
+    /// The parameter vector of a model (initial states: zero where estimated).
+    pub fn pack(&self, sys: &StateSpace, k: MatRef<'_, f64>, x0: &[Vec<f64>]) -> Vec<f64> {
+        let mut th = Vec::with_capacity(self.p);
+        let push = |th: &mut Vec<f64>, m: MatRef<'_, f64>| {
+            for i in 0..m.nrows() {
+                for j in 0..m.ncols() {
+                    th.push(m[(i, j)]);
+                }
+            }
+        };
+        push(&mut th, sys.a.as_ref());
+        push(&mut th, sys.b.as_ref());
+        push(&mut th, sys.c.as_ref());
+        if self.est_d {
+            push(&mut th, sys.d.as_ref());
+        }
+        if self.est_k {
+            push(&mut th, k);
+        }
+        for (e, off) in self.x0_off.iter().enumerate() {
+            if off.is_some() {
+                th.extend_from_slice(&x0[e]);
+            }
+        }
+        th
+    }
+
+    fn unpack(&self, th: &[f64]) -> Unpacked {
+        let (n, m, l) = (self.n, self.m, self.l);
+        let mut o = 0;
+        let mut take = |r: usize, c: usize| {
+            let mat = Mat::from_fn(r, c, |i, j| th[o + i * c + j]);
+            o += r * c;
+            mat
+        };
+        let a = take(n, n);
+        let b = take(n, m);
+        let c = take(l, n);
+        let d = if self.est_d {
+            take(l, m)
+        } else {
+            self.d_fixed.clone()
+        };
+        let k = if self.est_k {
+            take(n, l)
+        } else {
+            self.k_fixed.clone()
+        };
+        let x0 = self
+            .x0_mode
+            .iter()
+            .zip(&self.x0_off)
+            .map(|(mode, off)| match (mode, off) {
+                (_, Some(o)) => th[*o..*o + n].to_vec(),
+                (InitialState::Given(v), None) => v.clone(),
+                _ => vec![0.0; n],
+            })
+            .collect();
+        Unpacked { a, b, c, d, k, x0 }
+    }
+
+    fn column_offsets(&self) -> (usize, usize, usize, Option<usize>, Option<usize>) {
+        let (n, m, l) = (self.n, self.m, self.l);
+        let ia = 0;
+        let ib = n * n;
+        let ic = ib + n * m;
+        let mut next = ic + l * n;
+        let id = if self.est_d {
+            let v = next;
+            next += l * m;
+            Some(v)
+        } else {
+            None
+        };
+        let ik = if self.est_k { Some(next) } else { None };
+        (ia, ib, ic, id, ik)
+    }
+
+    /// Prediction errors' sample covariance at `theta`.
+    pub fn innovation_covariance(&self, th: &[f64]) -> Mat<f64> {
+        let l = self.l;
+        let mut lam = Mat::<f64>::zeros(l, l);
+        self.residual_pass(th, &mut |e: &[f64]| {
+            for i in 0..l {
+                for j in 0..=i {
+                    lam[(i, j)] += e[i] * e[j];
+                }
+            }
+        });
+        let nf = self.n_samples as f64;
+        Mat::from_fn(l, l, |i, j| {
+            let (a, b) = if i >= j { (i, j) } else { (j, i) };
+            lam[(a, b)] / nf
+        })
+    }
+
+    fn residual_pass(&self, th: &[f64], f: &mut dyn FnMut(&[f64])) {
+        let (n, m, l) = (self.n, self.m, self.l);
+        let p = self.unpack(th);
+        let abar = &p.a - &p.k * &p.c;
+        let bbar = &p.b - &p.k * &p.d;
+        let mut e = vec![0.0; l];
+        let mut xn = vec![0.0; n];
+        for (ex, (u, y)) in self.exps.iter().enumerate() {
+            let mut x = p.x0[ex].clone();
+            for t in 0..y.nrows() {
+                for i in 0..l {
+                    let mut s = y[(t, i)];
+                    for j in 0..n {
+                        s -= p.c[(i, j)] * x[j];
+                    }
+                    for j in 0..m {
+                        s -= p.d[(i, j)] * u[(t, j)];
+                    }
+                    e[i] = s;
+                }
+                f(&e);
+                for i in 0..n {
+                    let mut s = 0.0;
+                    for j in 0..n {
+                        s += abar[(i, j)] * x[j];
+                    }
+                    for j in 0..m {
+                        s += bbar[(i, j)] * u[(t, j)];
+                    }
+                    for j in 0..l {
+                        s += p.k[(i, j)] * y[(t, j)];
+                    }
+                    xn[i] = s;
+                }
+                std::mem::swap(&mut x, &mut xn);
+            }
+        }
+    }
+
+    /// Sets the weighting from the prediction errors at `theta`.
+    fn reweight_at(&mut self, th: &[f64]) -> Result<()> {
+        let l = self.l;
+        let mut lam = self.innovation_covariance(th);
+        for i in 0..l {
+            lam[(i, i)] += self.floor[i];
+        }
+        let llt = lam.llt(Side::Lower).map_err(|_| {
+            SysidError::numerical(
+                "prediction-error weighting",
+                "the prediction-error covariance is not positive definite",
+            )
+        })?;
+        let r = llt.L().to_owned();
+        self.losses
+            .push((0..l).map(|i| r[(i, i)] * r[(i, i)]).product::<f64>());
+        // invert the lower-triangular factor
+        let mut rinv = Mat::<f64>::identity(l, l);
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+            r.as_ref(),
+            rinv.as_mut(),
+            Par::Seq,
+        );
+        self.rinv = rinv;
+        Ok(())
+    }
+}
+
+impl Problem for Predictor<'_> {
+    fn n_params(&self) -> usize {
+        self.p
+    }
+
+    fn evaluate(&mut self, th: &[f64], jacobian: bool) -> Result<Evaluation> {
+        let (n, m, l, np) = (self.n, self.m, self.l, self.p);
+        let pm = self.unpack(th);
+        let abar = &pm.a - &pm.k * &pm.c;
+        let bbar = &pm.b - &pm.k * &pm.d;
+        let (ia, ib, ic, id, ik) = self.column_offsets();
+        let k_zero = (0..n).all(|i| (0..l).all(|j| pm.k[(i, j)] == 0.0));
+        let blk = self.block;
+        let mut cost = 0.0;
+        let mut h = Mat::<f64>::zeros(if jacobian { np } else { 0 }, if jacobian { np } else { 0 });
+        let mut g = Mat::<f64>::zeros(if jacobian { np } else { 0 }, 1);
+        let lo = self.col_lo.min(np);
+        let nc = np - lo;
+        let mut jb = Mat::<f64>::zeros(if jacobian { blk * l } else { 0 }, nc);
+        let mut rb = Mat::<f64>::zeros(if jacobian { blk * l } else { 0 }, 1);
+        // sensitivities of the parameters lo..np only (column c <-> parameter lo + c)
+        let mut s = Mat::<f64>::zeros(n, if jacobian { nc } else { 0 });
+        let mut s2 = s.clone();
+        let mut cs = Mat::<f64>::zeros(l, if jacobian { nc } else { 0 });
+        let full = lo == 0;
+        // the one product whose cost grows with p^2: faer's global parallelism, as the
+        // compressors (results agree to round-off for any thread count)
+        let par = if nc >= 64 {
+            faer::get_global_parallelism()
+        } else {
+            Par::Seq
+        };
+        let mut e = vec![0.0; l];
+        let mut we = vec![0.0; l];
+        let mut x = vec![0.0; n];
+        let mut xn = vec![0.0; n];
+        let rinv = self.rinv.clone();
+        for (ex, (u, y)) in self.exps.iter().enumerate() {
+            x.copy_from_slice(&pm.x0[ex]);
+            if jacobian {
+                s.fill(0.0);
+                if let Some(o) = self.x0_off[ex] {
+                    if o >= lo {
+                        for i in 0..n {
+                            s[(i, o - lo + i)] = 1.0;
+                        }
+                    }
+                }
+            }
+            let len = y.nrows();
+            let mut row = 0usize;
+            for t in 0..len {
+                for i in 0..l {
+                    let mut v = y[(t, i)];
+                    for j in 0..n {
+                        v -= pm.c[(i, j)] * x[j];
+                    }
+                    for j in 0..m {
+                        v -= pm.d[(i, j)] * u[(t, j)];
+                    }
+                    e[i] = v;
+                }
+                for i in 0..l {
+                    let mut v = 0.0;
+                    for j in 0..=i {
+                        v += rinv[(i, j)] * e[j];
+                    }
+                    we[i] = v;
+                    cost += 0.5 * v * v;
+                }
+                if jacobian {
+                    // dŷ/dθ = C S + G
+                    matmul(
+                        cs.as_mut(),
+                        Accum::Replace,
+                        pm.c.as_ref(),
+                        s.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
+                    for i in 0..l {
+                        if !full {
+                            break;
+                        }
+                        for j in 0..n {
+                            cs[(i, ic + i * n + j)] += x[j];
+                        }
+                        if let Some(id) = id {
+                            for j in 0..m {
+                                cs[(i, id + i * m + j)] += u[(t, j)];
+                            }
+                        }
+                    }
+                    // weighted Jacobian rows: -R^-1 dŷ
+                    matmul(
+                        jb.as_mut().subrows_mut(row * l, l),
+                        Accum::Replace,
+                        rinv.as_ref(),
+                        cs.as_ref(),
+                        -1.0,
+                        Par::Seq,
+                    );
+                    for i in 0..l {
+                        rb[(row * l + i, 0)] = we[i];
+                    }
+                    row += 1;
+                    // S(t+1) = Abar S + F
+                    matmul(
+                        s2.as_mut(),
+                        Accum::Replace,
+                        abar.as_ref(),
+                        s.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
+                    for i in 0..n {
+                        if !full {
+                            break;
+                        }
+                        for j in 0..n {
+                            s2[(i, ia + i * n + j)] += x[j];
+                        }
+                        for j in 0..m {
+                            s2[(i, ib + i * m + j)] += u[(t, j)];
+                        }
+                    }
+                    if !k_zero && full {
+                        for i in 0..l {
+                            for j in 0..n {
+                                let col = ic + i * n + j;
+                                for r in 0..n {
+                                    s2[(r, col)] -= pm.k[(r, i)] * x[j];
+                                }
+                            }
+                            if let Some(id) = id {
+                                for j in 0..m {
+                                    let col = id + i * m + j;
+                                    for r in 0..n {
+                                        s2[(r, col)] -= pm.k[(r, i)] * u[(t, j)];
+                                    }
+                                }
+                            }
+                        }
+                    }
+                    if let (Some(ik), true) = (ik, full) {
+                        for i in 0..n {
+                            for j in 0..l {
+                                s2[(i, ik + i * l + j)] += e[j];
+                            }
+                        }
+                    }
+                    std::mem::swap(&mut s, &mut s2);
+                    if row == blk || t + 1 == len {
+                        let rows = row * l;
+                        let jr = jb.as_ref().subrows(0, rows);
+                        // lower triangle of J^T J only (mirrored at the end)
+                        tri::matmul(
+                            h.as_mut().submatrix_mut(lo, lo, nc, nc),
+                            BlockStructure::TriangularLower,
+                            Accum::Add,
+                            jr.transpose(),
+                            BlockStructure::Rectangular,
+                            jr,
+                            BlockStructure::Rectangular,
+                            1.0,
+                            par,
+                        );
+                        matmul(
+                            g.as_mut().subrows_mut(lo, nc),
+                            Accum::Add,
+                            jr.transpose(),
+                            rb.as_ref().subrows(0, rows),
+                            1.0,
+                            Par::Seq,
+                        );
+                        row = 0;
+                    }
+                }
+                for i in 0..n {
+                    let mut v = 0.0;
+                    for j in 0..n {
+                        v += abar[(i, j)] * x[j];
+                    }
+                    for j in 0..m {
+                        v += bbar[(i, j)] * u[(t, j)];
+                    }
+                    for j in 0..l {
+                        v += pm.k[(i, j)] * y[(t, j)];
+                    }
+                    xn[i] = v;
+                }
+                std::mem::swap(&mut x, &mut xn);
+            }
+        }
+        if !cost.is_finite() {
+            cost = f64::INFINITY;
+        }
+        for i in 0..h.nrows() {
+            for j in 0..i {
+                h[(j, i)] = h[(i, j)];
+            }
+        }
+        Ok(Evaluation {
+            cost,
+            gradient: (0..g.nrows()).map(|i| g[(i, 0)]).collect(),
+            gauss_newton: h,
+        })
+    }
+
+    fn admissible(&mut self, th: &[f64]) -> bool {
+        let pm = self.unpack(th);
+        let mat = match self.focus {
+            Focus::Simulation => pm.a,
+            Focus::Prediction => &pm.a - &pm.k * &pm.c,
+        };
+        matches!(spectral_radius(mat.as_ref()), Ok(r) if r < 1.0)
+    }
+
+    fn search_basis(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
+        if !self.local || self.n == 0 {
+            return Ok(None);
+        }
+        let pm = self.unpack(th);
+        let (n, m, l) = (self.n, self.m, self.l);
+        let k_ok = self.est_k || (0..n).all(|i| (0..l).all(|j| pm.k[(i, j)] == 0.0));
+        let x0_ok = self
+            .x0_mode
+            .iter()
+            .all(|s| !matches!(s, InitialState::Given(v) if v.iter().any(|&x| x != 0.0)));
+        if !k_ok || !x0_ok {
+            return Ok(None);
+        }
+        let (ia, ib, ic, _id, ik) = self.column_offsets();
+        let mut tan = Mat::<f64>::zeros(self.p, n * n);
+        for a in 0..n {
+            for b in 0..n {
+                let col = a * n + b;
+                // δA = A E_ab - E_ab A
+                for i in 0..n {
+                    tan[(ia + i * n + b, col)] += pm.a[(i, a)];
+                }
+                for j in 0..n {
+                    tan[(ia + a * n + j, col)] -= pm.a[(b, j)];
+                }
+                for j in 0..m {
+                    tan[(ib + a * m + j, col)] -= pm.b[(b, j)];
+                }
+                for i in 0..l {
+                    tan[(ic + i * n + b, col)] += pm.c[(i, a)];
+                }
+                if let Some(ik) = ik {
+                    for j in 0..l {
+                        tan[(ik + a * l + j, col)] -= pm.k[(b, j)];
+                    }
+                }
+                for (ex, off) in self.x0_off.iter().enumerate() {
+                    if let Some(o) = off {
+                        tan[(o + a, col)] -= pm.x0[ex][b];
+                    }
+                }
+            }
+        }
+        let svd = tan
+            .svd()
+            .map_err(|e| SysidError::numerical("local coordinates (SVD)", format!("{e:?}")))?;
+        let sv = svd.S().column_vector();
+        let smax = if sv.nrows() > 0 { sv[0] } else { 0.0 };
+        let rank = (0..sv.nrows())
+            .filter(|&i| sv[i] > 1e-10 * smax && sv[i] > 0.0)
+            .count();
+        let u = svd.U();
+        Ok(Some(u.subcols(rank, self.p - rank).to_owned()))
+    }
+
+    fn accepted(&mut self, th: &[f64]) -> Result<bool> {
+        if self.reweight {
+            self.reweight_at(th)?;
+            return Ok(true);
+        }
+        let lam = self.innovation_covariance(th);
+        self.losses.push(determinant(&lam));
+        Ok(false)
+    }
+}
+
+/// Refines a start model by minimising its prediction (or simulation) errors over one or more
+/// experiments `(u, y)`, each `(N_e, m)` and `(N_e, l)`.
+///
+/// The start must give a stable predictor (A - K C, or A for simulation); `k0` is its Kalman
+/// gain (zero when `None`). The observer sees every accepted iteration and may stop the search.
+///
+/// ```
+/// use faer::{mat, Mat};
+/// use sysid_core::{StateSpace, simulate::simulate};
+/// use sysid_core::pem::{pem, PemOptions, Focus};
+/// use sysid_core::optim::Flow;
+/// let truth = StateSpace::new(mat![[0.8]], mat![[1.0]], mat![[0.5]], mat![[0.0]]).unwrap();
+/// let u = Mat::from_fn(200, 1, |t, _| ((t * 7919 % 13) as f64) - 6.0);
+/// let y = simulate(&truth, u.as_ref(), None).unwrap();
+/// let start = StateSpace::new(mat![[0.6]], mat![[1.0]], mat![[0.4]], mat![[0.0]]).unwrap();
+/// let mut o = PemOptions::default();
+/// o.focus = Focus::Simulation;
+/// let r = pem(&start, None, &[(u.as_ref(), y.as_ref())], &o, &mut |_| Flow::Continue).unwrap();
+/// assert!((r.sys.a[(0, 0)] - 0.8).abs() < 1e-8);
+/// ```
+pub fn pem(
+    start: &StateSpace,
+    k0: Option<MatRef<'_, f64>>,
+    experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
+    options: &PemOptions,
+    observer: &mut dyn FnMut(&Iteration) -> Flow,
+) -> Result<PemResult> {
+    let mut prob = Predictor::new(start, k0, experiments, options)?;
+    let n = prob.n;
+    let kmat = prob.k_fixed.clone();
+    let k_start = match (options.focus, k0) {
+        (Focus::Prediction, Some(k)) => k.to_owned(),
+        _ => kmat,
+    };
+    let x0s: Vec<Vec<f64>> = prob
+        .x0_mode
+        .iter()
+        .map(|s| match s {
+            InitialState::Given(v) => v.clone(),
+            _ => vec![0.0; n],
+        })
+        .collect();
+    let mut theta = prob.pack(start, k_start.as_ref(), &x0s);
+    if !prob.admissible(&theta) {
+        return Err(SysidError::invalid(
+            "start model",
+            match options.focus {
+                Focus::Simulation => "A of the start model is unstable: stabilise it first \
+                     (for example reflect the unstable poles) or use focus=\"prediction\""
+                    .to_string(),
+                Focus::Prediction => "the predictor A - K C of the start model is unstable: \
+                     stabilise it first or start from a Kalman gain of the model"
+                    .to_string(),
+            },
+        ));
+    }
+    prob.rinv = Mat::identity(prob.l, prob.l);
+    // Estimated initial states: least squares with everything else fixed (linear: one step).
+    if prob.x0_off.iter().any(|o| o.is_some()) {
+        let mut o = optim::Options {
+            max_iter: 1,
+            initial_damping: 0.0,
+            tol_gradient: 0.0,
+            ..Default::default()
+        };
+        let mut fixed = vec![true; prob.p];
+        for off in prob.x0_off.iter().flatten() {
+            for i in 0..n {
+                fixed[off + i] = false;
+            }
+        }
+        o.fixed = Some(fixed);
+        let local = prob.local;
+        prob.local = false;
+        prob.col_lo = prob.x0_off.iter().flatten().copied().min().unwrap_or(0);
+        let sol = optim::minimize(&mut prob, &theta, &o, &mut |_| Flow::Continue)?;
+        prob.local = local;
+        prob.col_lo = 0;
+        theta = sol.theta;
+    }
+    prob.losses.clear();
+    if prob.reweight {
+        prob.reweight_at(&theta)?;
+    } else {
+        let lam = prob.innovation_covariance(&theta);
+        prob.losses.push(determinant(&lam));
+    }
+    let solution = optim::minimize(&mut prob, &theta, &options.optim, observer)?;
+    let theta = solution.theta.clone();
+    let pm = prob.unpack(&theta);
+    let lam = prob.innovation_covariance(&theta);
+    // Covariance with W = Lambda^-1 (the maximum-likelihood weighting) at the solution.
+    let loss_history = prob.losses.clone();
+    let h = if prob.reweight {
+        solution.gauss_newton.clone()
+    } else {
+        prob.reweight = true;
+        prob.reweight_at(&theta)?;
+        prob.evaluate(&theta, true)?.gauss_newton
+    };
+    let covariance = optim::covariance(h.as_ref(), 1.0, 1e-10)?;
+    Ok(PemResult {
+        sys: StateSpace::new(pm.a, pm.b, pm.c, pm.d)?,
+        k: pm.k,
+        x0: pm.x0,
+        innovation_covariance: lam,
+        theta,
+        solution,
+        covariance,
+        n_samples: prob.n_samples,
+        loss_history,
+    })
+}

@@ -1,0 +1,301 @@
+#![allow(clippy::field_reassign_with_default)]
+use super::*;
+use crate::model::StateSpace;
+use crate::optim::{Flow, Problem};
+use faer::{mat, Mat};
+
+fn noise(n: usize, c: usize, seed: u64) -> Mat<f64> {
+    let mut s = seed;
+    Mat::from_fn(n, c, |_, _| {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+    })
+}
+
+fn truth() -> (StateSpace, Mat<f64>) {
+    let a = mat![[0.7, 0.2, 0.0], [-0.2, 0.7, 0.1], [0.0, 0.0, -0.5]];
+    let b = mat![[1.0, 0.0], [0.3, 1.0], [0.5, -0.4]];
+    let c = mat![[1.0, 0.0, 0.4], [0.0, 1.0, -0.3]];
+    let d = mat![[0.0, 0.0], [0.0, 0.0]];
+    let k = mat![[0.3, 0.0], [0.1, 0.2], [0.0, 0.1]];
+    (StateSpace::new(a, b, c, d).unwrap(), k)
+}
+
+/// Innovation-form data: x+ = A x + B u + K e, y = C x + D u + e.
+fn data(sys: &StateSpace, k: &Mat<f64>, u: &Mat<f64>, e: &Mat<f64>, x0: &[f64]) -> Mat<f64> {
+    let (n, l) = (sys.n_states(), sys.n_outputs());
+    let mut x = Mat::from_fn(n, 1, |i, _| x0[i]);
+    let mut y = Mat::zeros(u.nrows(), l);
+    for t in 0..u.nrows() {
+        let ut = Mat::from_fn(u.ncols(), 1, |i, _| u[(t, i)]);
+        let et = Mat::from_fn(e.ncols(), 1, |i, _| e[(t, i)]);
+        let yt = &sys.c * &x + &sys.d * &ut + &et;
+        for i in 0..l {
+            y[(t, i)] = yt[(i, 0)];
+        }
+        x = &sys.a * &x + &sys.b * &ut + k * &et;
+    }
+    y
+}
+
+fn sorted_poles(sys: &StateSpace) -> Vec<(f64, f64)> {
+    let mut p = sys.poles().unwrap();
+    p.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    p
+}
+
+fn pole_err(a: &StateSpace, b: &StateSpace) -> f64 {
+    sorted_poles(a)
+        .iter()
+        .zip(sorted_poles(b))
+        .map(|(p, q)| (p.0 - q.0).hypot(p.1 - q.1))
+        .fold(0.0, f64::max)
+}
+
+fn perturbed(sys: &StateSpace, eps: f64) -> StateSpace {
+    let pa = noise(3, 3, 99);
+    let pb = noise(3, 2, 98);
+    let pc = noise(2, 3, 97);
+    StateSpace::new(
+        &sys.a + &pa * faer::Scale(eps),
+        &sys.b + &pb * faer::Scale(eps),
+        &sys.c + &pc * faer::Scale(eps),
+        sys.d.clone(),
+    )
+    .unwrap()
+}
+
+fn run(
+    start: &StateSpace,
+    k: Option<&Mat<f64>>,
+    exps: &[(&Mat<f64>, &Mat<f64>)],
+    o: &PemOptions,
+) -> PemResult {
+    let views: Vec<_> = exps.iter().map(|(u, y)| (u.as_ref(), y.as_ref())).collect();
+    pem(start, k.map(|k| k.as_ref()), &views, o, &mut |_| {
+        Flow::Continue
+    })
+    .unwrap()
+}
+
+#[test]
+fn exact_start_stays_exact() {
+    let (sys, k) = truth();
+    let u = noise(400, 2, 1);
+    let y = data(&sys, &k, &u, &Mat::zeros(400, 2), &[0.0; 3]);
+    let r = run(&sys, Some(&k), &[(&u, &y)], &PemOptions::default());
+    assert!(pole_err(&r.sys, &sys) < 1e-8, "{}", pole_err(&r.sys, &sys));
+    let tr = r.innovation_covariance[(0, 0)] + r.innovation_covariance[(1, 1)];
+    assert!(tr < 1e-24, "{tr}");
+}
+
+#[test]
+fn perturbed_start_converges_noise_free() {
+    let (sys, k) = truth();
+    let u = noise(500, 2, 2);
+    let y = data(&sys, &k, &u, &Mat::zeros(500, 2), &[0.0; 3]);
+    for focus in [Focus::Prediction, Focus::Simulation] {
+        let mut o = PemOptions::default();
+        o.focus = focus;
+        o.optim.max_iter = 100;
+        let start = perturbed(&sys, 0.05);
+        assert!(pole_err(&start, &sys) > 1e-3);
+        let r = run(&start, Some(&k), &[(&u, &y)], &o);
+        assert!(
+            pole_err(&r.sys, &sys) < 1e-7,
+            "{focus:?}: {} {:?} {} {:?}",
+            pole_err(&r.sys, &sys),
+            r.solution.stop,
+            r.solution.iterations,
+            r.solution.history
+        );
+        assert!(
+            r.solution
+                .history
+                .windows(2)
+                .all(|w| w[1] <= w[0] * (1.0 + 1e-12))
+                || o.reweight
+        );
+        assert!(r.solution.iterations >= 1);
+    }
+}
+
+#[test]
+fn noisy_prediction_recovers_k_and_beats_simulation_focus() {
+    let (sys, k) = truth();
+    let n = 3000;
+    let u = noise(n, 2, 3);
+    let e = noise(n, 2, 4) * faer::Scale(0.3);
+    let y = data(&sys, &k, &u, &e, &[0.0; 3]);
+    let start = perturbed(&sys, 0.03);
+    let pr = run(
+        &start,
+        Some(&Mat::zeros(3, 2)),
+        &[(&u, &y)],
+        &PemOptions::default(),
+    );
+    // K estimated: predictor errors approach the innovation variance 0.09/12
+    let var = 0.09 / 12.0;
+    assert!((pr.innovation_covariance[(0, 0)] / var - 1.0).abs() < 0.1);
+    let mut o = PemOptions::default();
+    o.focus = Focus::Simulation;
+    let sr = run(&start, None, &[(&u, &y)], &o);
+    assert!(sr.k.norm_l2() == 0.0);
+    assert!(sr.innovation_covariance[(0, 0)] > 1.1 * pr.innovation_covariance[(0, 0)]);
+    assert!(pole_err(&pr.sys, &sys) < 0.05);
+    // covariance: rank p - n^2 (the similarity directions are not identifiable)
+    let p = pr.theta.len();
+    assert_eq!(pr.covariance.rank, p - 9);
+}
+
+#[test]
+fn fixed_k_stays_and_d_zero_or_free() {
+    let (mut sys, k) = truth();
+    sys.d = mat![[0.5, 0.0], [0.0, -0.2]];
+    let u = noise(500, 2, 5);
+    let y = data(&sys, &k, &u, &Mat::zeros(500, 2), &[0.0; 3]);
+    let mut start = perturbed(&sys, 0.02);
+    start.d = Mat::zeros(2, 2);
+    let mut o = PemOptions::default();
+    o.estimate_k = false;
+    let kf = Mat::<f64>::zeros(3, 2);
+    let fixed = run(&start, Some(&kf), &[(&u, &y)], &o);
+    assert_eq!(fixed.k, kf);
+    assert!(fixed.sys.d.norm_l2() == 0.0);
+    o.estimate_d = true;
+    o.optim.max_iter = 100;
+    let free = run(&start, Some(&kf), &[(&u, &y)], &o);
+    assert!((&free.sys.d - &sys.d).norm_l2() < 1e-7);
+    assert!(pole_err(&free.sys, &sys) < 1e-7);
+    assert!(fixed.innovation_covariance[(0, 0)] > 1e-6);
+}
+
+#[test]
+fn initial_state_estimated_zero_given_and_multi_experiment() {
+    let (sys, k) = truth();
+    let x0 = [2.0, -1.0, 1.5];
+    let u1 = noise(300, 2, 6);
+    let u2 = noise(300, 2, 7);
+    let y1 = data(&sys, &k, &u1, &Mat::zeros(300, 2), &x0);
+    let y2 = data(&sys, &k, &u2, &Mat::zeros(300, 2), &[0.0; 3]);
+    let mut o = PemOptions::default();
+    o.focus = Focus::Simulation;
+    o.optim.max_iter = 100;
+    // exact model, x0 estimated: recovers x0 and stays exact
+    let est = run(&sys, None, &[(&u1, &y1)], &o);
+    for i in 0..3 {
+        assert!((est.x0[0][i] - x0[i]).abs() < 1e-8);
+    }
+    // x0 = 0 on data with a non-zero initial state: the model must move away from the truth
+    o.x0 = vec![InitialState::Zero];
+    let zero = run(&sys, None, &[(&u1, &y1)], &o);
+    assert!(zero.x0[0].iter().all(|&v| v == 0.0));
+    assert!(pole_err(&zero.sys, &sys) > 1e-6);
+    // given x0: the truth again is exact and stays
+    o.x0 = vec![InitialState::Given(x0.to_vec())];
+    let given = run(&sys, None, &[(&u1, &y1)], &o);
+    assert!(pole_err(&given.sys, &sys) < 1e-8);
+    // two experiments, one x0 each: from a perturbed start both are fitted exactly
+    o.x0 = vec![InitialState::Estimate, InitialState::Zero];
+    let start = perturbed(&sys, 0.03);
+    let two = run(&start, None, &[(&u1, &y1), (&u2, &y2)], &o);
+    assert!(
+        pole_err(&two.sys, &sys) < 1e-7,
+        "{}",
+        pole_err(&two.sys, &sys)
+    );
+    assert_eq!(two.n_samples, 600);
+    // x0 lives in the model's state basis: compare the free responses C A^t x0
+    let free = |s: &StateSpace, x: &[f64]| {
+        let mut v = Mat::from_fn(3, 1, |i, _| x[i]);
+        let mut out = Vec::new();
+        for _ in 0..6 {
+            let yv = &s.c * &v;
+            out.extend((0..2).map(|i| yv[(i, 0)]));
+            v = &s.a * &v;
+        }
+        out
+    };
+    let (fa, fb) = (free(&two.sys, &two.x0[0]), free(&sys, &x0));
+    assert!(fa.iter().zip(&fb).all(|(a, b)| (a - b).abs() < 1e-6));
+    // a single experiment alone gives a different (noisy-free but shorter) fit path: the
+    // second experiment changes the result on noisy data
+    let e = noise(300, 2, 8) * faer::Scale(0.2);
+    let y2n = data(&sys, &k, &u2, &e, &[0.0; 3]);
+    let a = run(&start, None, &[(&u1, &y1), (&u2, &y2n)], &o);
+    o.x0 = vec![InitialState::Estimate];
+    let b = run(&start, None, &[(&u1, &y1)], &o);
+    assert!(pole_err(&a.sys, &b.sys) > 1e-6);
+}
+
+#[test]
+fn unstable_start_is_an_error_and_bad_input_is_reported() {
+    let (sys, _) = truth();
+    let u = noise(100, 2, 9);
+    let y = noise(100, 2, 10);
+    let mut bad = sys.clone();
+    bad.a[(2, 2)] = 1.5;
+    let mut o = PemOptions::default();
+    o.focus = Focus::Simulation;
+    let err = pem(&bad, None, &[(u.as_ref(), y.as_ref())], &o, &mut |_| {
+        Flow::Continue
+    })
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("unstable"), "{err}");
+    let y3 = noise(100, 3, 10);
+    assert!(pem(&sys, None, &[(u.as_ref(), y3.as_ref())], &o, &mut |_| {
+        Flow::Continue
+    })
+    .is_err());
+}
+
+#[test]
+fn search_stays_stable_from_a_start_near_the_boundary() {
+    let (sys, k) = truth();
+    let u = noise(400, 2, 11);
+    let e = noise(400, 2, 12) * faer::Scale(0.5);
+    let y = data(&sys, &k, &u, &e, &[0.0; 3]);
+    let mut start = sys.clone();
+    start.a[(2, 2)] = -0.98;
+    let mut o = PemOptions::default();
+    o.focus = Focus::Simulation;
+    let r = run(&start, None, &[(&u, &y)], &o);
+    let rad = crate::linalg::spectral_radius(r.sys.a.as_ref()).unwrap();
+    assert!(rad < 1.0);
+}
+
+#[test]
+fn local_coordinates_and_gradient_check() {
+    // analytic gradient equals finite differences of the cost
+    let (sys, k) = truth();
+    let u = noise(200, 2, 13);
+    let e = noise(200, 2, 14) * faer::Scale(0.2);
+    let y = data(&sys, &k, &u, &e, &[0.3, 0.0, -0.2]);
+    let mut o = PemOptions::default();
+    o.estimate_d = true;
+    o.reweight = false;
+    let views = [(u.as_ref(), y.as_ref())];
+    let mut pr = Predictor::new(&sys, Some(k.as_ref()), &views, &o).unwrap();
+    let th = pr.pack(&sys, k.as_ref(), &[vec![0.1, 0.2, 0.3]]);
+    let ev = pr.evaluate(&th, true).unwrap();
+    for j in 0..th.len() {
+        let h = 1e-6;
+        let mut tp = th.clone();
+        tp[j] += h;
+        let mut tm = th.clone();
+        tm[j] -= h;
+        let fd = (pr.evaluate(&tp, false).unwrap().cost - pr.evaluate(&tm, false).unwrap().cost)
+            / (2.0 * h);
+        assert!(
+            (fd - ev.gradient[j]).abs() < 1e-5 * (1.0 + fd.abs()),
+            "param {j}: {fd} vs {}",
+            ev.gradient[j]
+        );
+    }
+    // the basis is orthogonal to the similarity directions and has p - n^2 columns
+    let q = pr.search_basis(&th).unwrap().unwrap();
+    assert_eq!(q.ncols(), th.len() - 9);
+}

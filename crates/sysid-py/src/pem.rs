@@ -1,0 +1,168 @@
+//! Bindings of the prediction-error refinement (`sysid_core::pem`).
+
+use crate::convert::{mat_to_numpy, slice_to_numpy, state_space as model, vec1, view};
+use crate::errors::IntoPy;
+use numpy::{PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use sysid_core::optim::{Flow, Regularization};
+use sysid_core::pem::{self, Focus, InitialState, PemOptions};
+
+/// Refines a state-space model by prediction-error minimisation; returns a dict.
+#[pyfunction]
+#[pyo3(signature = (a, b, c, d, k, experiments, *, focus="prediction", estimate_d=false,
+    estimate_k=true, x0=None, reweight=true, local_coordinates=true, max_iter=50,
+    tol_cost=1e-6, tol_step=1e-9, tol_gradient=1e-9, reg_lambda=0.0, reg_r=None,
+    reg_nominal=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn pem_refine<'py>(
+    py: Python<'py>,
+    a: PyReadonlyArray2<'_, f64>,
+    b: PyReadonlyArray2<'_, f64>,
+    c: PyReadonlyArray2<'_, f64>,
+    d: PyReadonlyArray2<'_, f64>,
+    k: Option<PyReadonlyArray2<'_, f64>>,
+    experiments: Vec<(PyReadonlyArray2<'py, f64>, PyReadonlyArray2<'py, f64>)>,
+    focus: &str,
+    estimate_d: bool,
+    estimate_k: bool,
+    x0: Option<Vec<Option<Bound<'py, PyAny>>>>,
+    reweight: bool,
+    local_coordinates: bool,
+    max_iter: usize,
+    tol_cost: f64,
+    tol_step: f64,
+    tol_gradient: f64,
+    reg_lambda: f64,
+    reg_r: Option<PyReadonlyArray2<'_, f64>>,
+    reg_nominal: Option<PyReadonlyArray1<'_, f64>>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let sys = model(&a, &b, &c, &d)?;
+    let mut o = PemOptions::default();
+    o.focus = match focus {
+        "prediction" => Focus::Prediction,
+        "simulation" => Focus::Simulation,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "focus must be \"prediction\" or \"simulation\", got {other:?}"
+            )))
+        }
+    };
+    o.estimate_d = estimate_d;
+    o.estimate_k = estimate_k;
+    o.reweight = reweight;
+    o.local_coordinates = local_coordinates;
+    o.optim.max_iter = max_iter;
+    o.optim.tol_cost = tol_cost;
+    o.optim.tol_step = tol_step;
+    o.optim.tol_gradient = tol_gradient;
+    if reg_lambda != 0.0 {
+        o.optim.regularization = Some(Regularization {
+            lambda: reg_lambda,
+            r: reg_r.as_ref().map(|r| view(r).to_owned()),
+            nominal: reg_nominal.as_ref().map(vec1),
+        });
+    }
+    if let Some(list) = x0 {
+        let mut modes = Vec::new();
+        for item in list {
+            modes.push(match item {
+                None => InitialState::Zero,
+                Some(obj) => {
+                    if let Ok(s) = obj.extract::<String>() {
+                        match s.as_str() {
+                            "estimate" => InitialState::Estimate,
+                            "zero" => InitialState::Zero,
+                            other => {
+                                return Err(PyValueError::new_err(format!(
+                                    "x0 entries must be \"estimate\", \"zero\" or an array, got {other:?}"
+                                )))
+                            }
+                        }
+                    } else {
+                        let arr: PyReadonlyArray1<'_, f64> = obj.extract()?;
+                        InitialState::Given(vec1(&arr))
+                    }
+                }
+            });
+        }
+        o.x0 = modes;
+    }
+    let kv = k.as_ref().map(|k| view(k));
+    let views: Vec<_> = experiments
+        .iter()
+        .map(|(u, y)| (view(u), view(y)))
+        .collect();
+    let mut callback_error: Option<PyErr> = None;
+    let result = py.detach(|| {
+        let mut observer = |it: &sysid_core::optim::Iteration| -> Flow {
+            let Some(cb) = &progress else {
+                return Flow::Continue;
+            };
+            Python::attach(|py| {
+                match cb.call1(
+                    py,
+                    (
+                        it.iteration,
+                        it.cost,
+                        it.step_norm,
+                        it.gradient_norm,
+                        it.damping,
+                    ),
+                ) {
+                    Ok(v) => {
+                        if v.bind(py).is(&*pyo3::types::PyBool::new(py, false)) {
+                            Flow::Stop
+                        } else {
+                            Flow::Continue
+                        }
+                    }
+                    Err(e) => {
+                        callback_error = Some(e);
+                        Flow::Stop
+                    }
+                }
+            })
+        };
+        pem::pem(&sys, kv, &views, &o, &mut observer)
+    });
+    if let Some(e) = callback_error {
+        return Err(e);
+    }
+    let r = result.py()?;
+    let out = PyDict::new(py);
+    out.set_item("a", mat_to_numpy(py, &r.sys.a))?;
+    out.set_item("b", mat_to_numpy(py, &r.sys.b))?;
+    out.set_item("c", mat_to_numpy(py, &r.sys.c))?;
+    out.set_item("d", mat_to_numpy(py, &r.sys.d))?;
+    out.set_item("k", mat_to_numpy(py, &r.k))?;
+    let x0s: Vec<_> = r.x0.iter().map(|v| slice_to_numpy(py, v)).collect();
+    out.set_item("x0", x0s)?;
+    out.set_item(
+        "innovation_covariance",
+        mat_to_numpy(py, &r.innovation_covariance),
+    )?;
+    out.set_item("theta", slice_to_numpy(py, &r.theta))?;
+    out.set_item("covariance", mat_to_numpy(py, &r.covariance.covariance))?;
+    out.set_item("rank", r.covariance.rank)?;
+    out.set_item(
+        "unidentifiable",
+        mat_to_numpy(py, &r.covariance.unidentifiable),
+    )?;
+    out.set_item("iterations", r.solution.iterations)?;
+    out.set_item("evaluations", r.solution.evaluations)?;
+    out.set_item("cost", r.solution.cost)?;
+    out.set_item("history", r.solution.history.clone())?;
+    out.set_item("loss_history", r.loss_history.clone())?;
+    out.set_item("stop", r.solution.stop.as_str())?;
+    out.set_item("condition", r.solution.condition)?;
+    out.set_item("n_samples", r.n_samples)?;
+    Ok(out)
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(pem_refine, m)?)?;
+    Ok(())
+}
