@@ -49,6 +49,7 @@ pub mod linalg;
 pub mod lyapunov;
 pub mod model;
 pub mod optim;
+pub mod polynomial;
 pub mod realization;
 pub mod riccati;
 pub mod simulate;
