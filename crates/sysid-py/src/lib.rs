@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 mod convert;
 mod errors;
 mod hankel;
+mod polynomial;
 mod realization;
 mod simulate;
 mod streaming;
@@ -21,5 +22,6 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     streaming::register(m)?;
     subspace::register(m)?;
     realization::register(m)?;
+    polynomial::register(m)?;
     Ok(())
 }

@@ -1,0 +1,1 @@
+"""Estimators (the layout helper owns this package; polynomial estimators live here)."""

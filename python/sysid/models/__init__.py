@@ -1,0 +1,1 @@
+"""Model families (the layout helper owns this package; polynomial models live here)."""
