@@ -57,6 +57,14 @@ from .subspace import (
 # Everything else loads on first use (PEP 562), so that `import sysid` pulls in neither
 # SciPy's signal and statistics modules nor plotting: name -> submodule.
 _LAZY = {
+    # polynomial models (issue 13)
+    "PolynomialModel": "models.polynomial",
+    "arx": "estimate.polynomial",
+    "armax": "estimate.polynomial",
+    "oe": "estimate.polynomial",
+    "bj": "estimate.polynomial",
+    "arxstruc": "estimate.polynomial",
+    "selstruc": "estimate.polynomial",
     "Coherence": "nonparametric",
     "ContinuousStateSpace": "analysis",
     "Correlation": "nonparametric",
@@ -152,6 +160,13 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
+    "PolynomialModel",
+    "arx",
+    "armax",
+    "oe",
+    "bj",
+    "arxstruc",
+    "selstruc",
     "__version__",
     "datasets",
     "IOData",
