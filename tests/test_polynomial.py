@@ -65,15 +65,18 @@ def test_oe_bj_armax_noise_free(u1):
 def test_oe_noise_free_2x2():
     rng = np.random.default_rng(12)
     u = rng.standard_normal((800, 2))
-    y = np.column_stack([
-        signal.lfilter([1.0], [1, -0.5], _delay(u[:, 0], 1))
-        + signal.lfilter([0.4], [1, -0.3], _delay(u[:, 1], 1)),
-        signal.lfilter([-0.6], [1, 0.2], _delay(u[:, 0], 1))
-        + signal.lfilter([0.9], [1, -0.7], _delay(u[:, 1], 1)),
-    ])
+    y = np.column_stack(
+        [
+            signal.lfilter([1.0], [1, -0.5], _delay(u[:, 0], 1))
+            + signal.lfilter([0.4], [1, -0.3], _delay(u[:, 1], 1)),
+            signal.lfilter([-0.6], [1, 0.2], _delay(u[:, 0], 1))
+            + signal.lfilter([0.9], [1, -0.7], _delay(u[:, 1], 1)),
+        ]
+    )
     m = sysid.oe(sysid.IOData(u, y, 1.0), 1, 1, 1)
-    np.testing.assert_allclose([m.f[0][0][0], m.f[0][1][0], m.f[1][0][0], m.f[1][1][0]],
-                               [-0.5, -0.3, 0.2, -0.7], atol=1e-8)
+    np.testing.assert_allclose(
+        [m.f[0][0][0], m.f[0][1][0], m.f[1][0][0], m.f[1][1][0]], [-0.5, -0.3, 0.2, -0.7], atol=1e-8
+    )
     np.testing.assert_allclose([m.b[1][0][0], m.b[1][1][0]], [-0.6, 0.9], atol=1e-8)
 
 
@@ -117,7 +120,8 @@ def test_options_change_results(u1):
     k = np.diag([1.0, 10.0, 1.0, 10.0])
     assert not np.allclose(
         sysid.arx(d, 2, 2, 1, regularization=50.0, kernel=k).b[0][0],
-        sysid.arx(d, 2, 2, 1, regularization=50.0).b[0][0])
+        sysid.arx(d, 2, 2, 1, regularization=50.0).b[0][0],
+    )
     assert not np.allclose(sysid.arx(d, 2, 2, 2).b[0][0], base.b[0][0])
     one = sysid.oe(d, 1, 1, 1, max_iter=1)
     full = sysid.oe(d, 1, 1, 1)

@@ -7,6 +7,10 @@ import numpy.typing as npt
 
 __version__: str
 __all__ = [
+    "arx_fit",
+    "arx_struc",
+    "poly_filter",
+    "polynomial_pem",
     "__version__",
     "HankelFactor",
     "compress",
@@ -179,3 +183,34 @@ class CorrelationSums:
     @property
     def open_samples(self) -> int: ...
     def __reduce__(self) -> Any: ...
+
+# polynomial models (issue 13)
+def arx_fit(
+    experiments: list[tuple[_Array, _Array]],
+    na: list[list[int]],
+    nb: list[list[int]],
+    nk: list[list[int]],
+    lam: float = 0.0,
+    reg_factor: _Array | None = None,
+) -> list[dict[str, Any]]: ...
+def arx_struc(
+    experiments: list[tuple[_Array, _Array]],
+    na_range: list[int],
+    nb_range: list[int],
+    nk_range: list[int],
+) -> _Array: ...
+def poly_filter(b: list[float], a: list[float], x: _Array) -> _Array: ...
+def polynomial_pem(
+    y: _Array,
+    u: _Array,
+    na: int,
+    nb: list[int],
+    nc: int,
+    nd: int,
+    nf: list[int],
+    nk: list[int],
+    theta0: list[float] | None = None,
+    max_iter: int = 100,
+    tol: float = 1e-9,
+    progress: Any | None = None,
+) -> dict[str, Any]: ...

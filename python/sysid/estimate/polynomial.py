@@ -36,7 +36,12 @@ def _exps(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
 
 
 def arx(
-    data: Any, na: Any, nb: Any, nk: Any = 1, *, regularization: float = 0.0,
+    data: Any,
+    na: Any,
+    nb: Any,
+    nk: Any = 1,
+    *,
+    regularization: float = 0.0,
     kernel: np.ndarray | None = None,
 ) -> PolynomialModel:
     """Least-squares ARX ``A(q) y(t) = B(q) u(t - nk) + e(t)``.
@@ -80,7 +85,9 @@ def arx(
     model = PolynomialModel(
         a=[[np.asarray(x) for x in f["a"]] for f in fits],
         b=[[np.asarray(x) for x in f["b"]] for f in fits],
-        nk=nk_g, dt=data.dt, noise_variance=[f["loss"] for f in fits],
+        nk=nk_g,
+        dt=data.dt,
+        noise_variance=[f["loss"] for f in fits],
     )
     model.info = {"method": "arx", "loss": [f["loss"] for f in fits]}
     model.covariance = [f["loss"] * f["unscaled_cov"] for f in fits]  # type: ignore[attr-defined]
@@ -89,8 +96,16 @@ def arx(
 
 
 def _pem(
-    data: Any, na: Any, nb: Any, nc: Any, nd: Any, nf: Any, nk: Any, method: str,
-    max_iter: int, progress: Callable[[int, float], Any] | None,
+    data: Any,
+    na: Any,
+    nb: Any,
+    nc: Any,
+    nd: Any,
+    nf: Any,
+    nk: Any,
+    method: str,
+    max_iter: int,
+    progress: Callable[[int, float], Any] | None,
 ) -> PolynomialModel:
     exps = _exps(data)
     if len(exps) != 1:
@@ -108,17 +123,26 @@ def _pem(
     cov, var = [], []
     for i in range(ny):
         r = _sysid.polynomial_pem(
-            np.ascontiguousarray(y[:, i]), u, na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i],
-            nk_g[i], None, int(max_iter), 1e-9, progress,
+            np.ascontiguousarray(y[:, i]),
+            u,
+            na_v[i],
+            nb_g[i],
+            nc_v[i],
+            nd_v[i],
+            nf_g[i],
+            nk_g[i],
+            None,
+            int(max_iter),
+            1e-9,
+            progress,
         )
-        th = r["theta"]
-        pos = 0
+        th = np.asarray(r["theta"])
+        cuts = np.cumsum([na_v[i], *nb_g[i], nc_v[i], nd_v[i], *nf_g[i]])
+        pieces = np.split(th, cuts[:-1])
+        it = iter(pieces)
 
-        def take(n: int) -> np.ndarray:
-            nonlocal pos
-            s = th[pos:pos + n]
-            pos += n
-            return s
+        def take(_n: int, it: Any = it) -> np.ndarray:
+            return np.asarray(next(it))
 
         a = take(na_v[i])
         parts["a"].append([a if k == i else np.zeros(0) for k in range(ny)])
@@ -131,15 +155,31 @@ def _pem(
         info["stop"].append(r["stop"])
         cov.append(r["covariance"])
         var.append(r["noise_variance"])
-    m = PolynomialModel(parts["a"], parts["b"], nk_g, data.dt, c=parts["c"], d=parts["d"],
-                        f=parts["f"], noise_variance=var)
+    m = PolynomialModel(
+        parts["a"],
+        parts["b"],
+        nk_g,
+        data.dt,
+        c=parts["c"],
+        d=parts["d"],
+        f=parts["f"],
+        noise_variance=var,
+    )
     m.info = info
     m.covariance = cov  # type: ignore[attr-defined]
     return m
 
 
-def armax(data: Any, na: Any, nb: Any, nc: Any, nk: Any = 1, *, max_iter: int = 100,
-          progress: Callable[[int, float], Any] | None = None) -> PolynomialModel:
+def armax(
+    data: Any,
+    na: Any,
+    nb: Any,
+    nc: Any,
+    nk: Any = 1,
+    *,
+    max_iter: int = 100,
+    progress: Callable[[int, float], Any] | None = None,
+) -> PolynomialModel:
     """ARMAX ``A y = B u(t-nk) + C e`` by prediction-error minimisation (per output).
 
     Examples
@@ -156,14 +196,30 @@ def armax(data: Any, na: Any, nb: Any, nc: Any, nk: Any = 1, *, max_iter: int = 
     return _pem(data, na, nb, nc, 0, 0, nk, "armax", max_iter, progress)
 
 
-def oe(data: Any, nb: Any, nf: Any, nk: Any = 1, *, max_iter: int = 100,
-       progress: Callable[[int, float], Any] | None = None) -> PolynomialModel:
+def oe(
+    data: Any,
+    nb: Any,
+    nf: Any,
+    nk: Any = 1,
+    *,
+    max_iter: int = 100,
+    progress: Callable[[int, float], Any] | None = None,
+) -> PolynomialModel:
     """Output error ``y = B/F u(t-nk) + e`` (Steiglitz-McBride start, then Gauss-Newton)."""
     return _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress)
 
 
-def bj(data: Any, nb: Any, nc: Any, nd: Any, nf: Any, nk: Any = 1, *, max_iter: int = 100,
-       progress: Callable[[int, float], Any] | None = None) -> PolynomialModel:
+def bj(
+    data: Any,
+    nb: Any,
+    nc: Any,
+    nd: Any,
+    nf: Any,
+    nk: Any = 1,
+    *,
+    max_iter: int = 100,
+    progress: Callable[[int, float], Any] | None = None,
+) -> PolynomialModel:
     """Box-Jenkins ``y = B/F u(t-nk) + C/D e``."""
     return _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress)
 
@@ -177,7 +233,9 @@ def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
     return np.asarray(_sysid.arx_struc(exps, *rng))
 
 
-def selstruc(table: np.ndarray, criterion: str = "aic", n_samples: int | None = None) -> tuple[int, int, int]:
+def selstruc(
+    table: np.ndarray, criterion: str = "aic", n_samples: int | None = None
+) -> tuple[int, int, int]:
     """Choose ``(na, nb, nk)`` from an :func:`arxstruc` table by ``aic``, ``bic``/``mdl``."""
     if n_samples is None:
         raise DataError("selstruc needs n_samples (the number of estimation samples)")

@@ -104,7 +104,10 @@ class PolynomialModel:
     def coupled(self) -> bool:
         """``True`` when ``A`` couples outputs (off-diagonal terms)."""
         return any(
-            self.a[i][k].size for i in range(self.n_outputs) for k in range(self.n_outputs) if i != k
+            self.a[i][k].size
+            for i in range(self.n_outputs)
+            for k in range(self.n_outputs)
+            if i != k
         )
 
     def _check_u(self, u: Any) -> np.ndarray:
@@ -203,7 +206,9 @@ class PolynomialModel:
                 else f"B{j + 1}(q) u{j + 1}(t-{self.nk[i, j]})"
                 for j in range(self.n_inputs)
             )
-            noise = "C(q)/D(q) e(t)" if self.d[i].size else ("C(q) e(t)" if self.c[i].size else "e(t)")
+            noise = (
+                "C(q)/D(q) e(t)" if self.d[i].size else ("C(q) e(t)" if self.c[i].size else "e(t)")
+            )
             lines.append(f"  y{i + 1}: A(q) y(t) = {rhs + ' + ' if rhs else ''}{noise}")
             lines.append("    " + _fmt("A", _monic(self.a[i][i]), True))
             for j in range(self.n_inputs):
