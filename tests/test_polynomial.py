@@ -150,3 +150,17 @@ def test_bad_input(u1):
         sysid.arx(_data(y, np.zeros(600)), 1, 1, 1)
     with pytest.raises(DataError, match="criterion"):
         sysid.selstruc(sysid.arxstruc(d, [1], [1], [1]), "xyz", 600)
+
+
+def test_docs_dryer_example(capsys):
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "docs" / "polynomial.md").read_text()
+    ns: dict = {}
+    for i, block in enumerate(re.findall(r"```python\n(.*?)```", text, re.S)):
+        exec(compile(block, f"docs/polynomial.md[python block {i}]", "exec"), ns)
+    out = capsys.readouterr().out
+    assert "(3, 4, 2)" in out
+    assert ns["fit"](ns["arx"]) > 80 and ns["fit"](ns["oe"]) > 80
+    assert ns["oe"].info["stop"][0] in ("cost tolerance", "step tolerance", "gradient tolerance")

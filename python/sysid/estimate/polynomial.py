@@ -95,6 +95,28 @@ def arx(
     return model
 
 
+def _fit(c: np.ndarray, n: int) -> list[float]:
+    out = np.zeros(n)
+    out[: min(n, c.size)] = c[:n]
+    return out.tolist()
+
+
+def _start(
+    init: PolynomialModel, i: int, na: int, nb: list[int], nc: int, nd: int, nf: list[int]
+) -> list[float]:
+    """Starting parameters of output ``i`` from another polynomial model (``F`` from its
+    ``F``, or from its ``A`` when it has none, as when refining an ARX model into OE)."""
+    if init.n_inputs != len(nb) or init.n_outputs <= i:
+        raise DataError("init has other input/output counts than the data")
+    a = init.a[i][i]
+    th = _fit(a, na)
+    th += [v for j, n in enumerate(nb) for v in _fit(init.b[i][j], n)]
+    th += _fit(init.c[i], nc) + _fit(init.d[i], nd)
+    for j, n in enumerate(nf):
+        th += _fit(init.f[i][j] if init.f[i][j].size else a, n)
+    return th
+
+
 def _pem(
     data: Any,
     na: Any,
@@ -106,6 +128,7 @@ def _pem(
     method: str,
     max_iter: int,
     progress: Callable[[int, float], Any] | None,
+    init: PolynomialModel | None = None,
 ) -> PolynomialModel:
     exps = _exps(data)
     if len(exps) != 1:
@@ -131,7 +154,7 @@ def _pem(
             nd_v[i],
             nf_g[i],
             nk_g[i],
-            None,
+            None if init is None else _start(init, i, na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i]),
             int(max_iter),
             1e-9,
             progress,
@@ -204,9 +227,13 @@ def oe(
     *,
     max_iter: int = 100,
     progress: Callable[[int, float], Any] | None = None,
+    init: PolynomialModel | None = None,
 ) -> PolynomialModel:
-    """Output error ``y = B/F u(t-nk) + e`` (Steiglitz-McBride start, then Gauss-Newton)."""
-    return _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress)
+    """Output error ``y = B/F u(t-nk) + e``.
+
+    Starts from Steiglitz-McBride (one input) or from ``init`` (an ARX model's ``A`` becomes
+    ``F``), then Gauss-Newton on the simulation error; ``F`` is kept stable."""
+    return _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, init)
 
 
 def bj(

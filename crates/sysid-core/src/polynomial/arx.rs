@@ -274,7 +274,7 @@ impl ArxCompressor {
         // Rank check of the regression.
         let dmax = (0..p).map(|d| rs[(d, d)].abs()).fold(0.0, f64::max);
         for d in 0..p {
-            if !(rs[(d, d)].abs() > 1e-12 * dmax) || dmax == 0.0 {
+            if rs[(d, d)].abs().is_nan() || rs[(d, d)].abs() <= 1e-12 * dmax || dmax == 0.0 {
                 return Err(SysidError::NotPersistentlyExciting {
                     rank: d,
                     rows: p,
