@@ -164,3 +164,18 @@ def test_docs_dryer_example(capsys):
     assert "(3, 4, 2)" in out
     assert ns["fit"](ns["arx"]) > 80 and ns["fit"](ns["oe"]) > 80
     assert ns["oe"].info["stop"][0] in ("cost tolerance", "step tolerance", "gradient tolerance")
+
+
+def test_conversions_agree(u1):
+    y = signal.lfilter([0.5, 0.3], [1.0, -1.2, 0.5], _delay(u1, 1))
+    m = sysid.oe(_data(y, u1), 2, 2, 1)
+    ss = m.to_statespace()
+    np.testing.assert_allclose(ss.simulate(u1[:, None]), m.simulate(u1[:, None]), atol=1e-9)
+    w = np.linspace(0.1, 3.0, 7)
+    _, h = signal.dfreqresp(m.to_scipy(), w)
+    np.testing.assert_allclose(h, m.freqresp(w)[:, 0, 0], atol=1e-9)
+    np.testing.assert_allclose(
+        np.sort_complex(m.poles()), np.sort_complex(np.roots([1, -1.2, 0.5])), atol=1e-8
+    )
+    np.testing.assert_allclose(m.zeros(), [-0.6], atol=1e-8)
+    np.testing.assert_allclose(m.predict(u1[:, None], y[:, None]), y[:, None], atol=1e-8)

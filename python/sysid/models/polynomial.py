@@ -31,6 +31,11 @@ def _fmt(name: str, coef: np.ndarray, monic: bool) -> str:
     return f"{name}(q) = " + head + "".join(f" {sg} {t}" for sg, t in parts[1:])
 
 
+def _trim(num: np.ndarray) -> np.ndarray:
+    t = np.trim_zeros(num, "f")
+    return t if t.size else np.zeros(1)
+
+
 class PolynomialModel:
     """A (MIMO) polynomial model; see the module docstring for the equations.
 
@@ -194,6 +199,69 @@ class PolynomialModel:
             for j in range(self.n_inputs):
                 r.append(np.roots(_monic(self.f[i][j])))
         return np.concatenate(r) if r else np.zeros(0)
+
+    def _channel_tf(self, i: int, j: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(num, den)`` of channel ``(i, j)`` in powers of ``z`` (equal lengths)."""
+        if self.coupled:
+            raise DataError("transfer functions of a coupled MIMO ARX model are not implemented")
+        num = np.concatenate([np.zeros(int(self.nk[i, j])), self.b[i][j]])
+        den = np.convolve(_monic(self.a[i][i]), _monic(self.f[i][j]))
+        n = max(num.size, den.size)
+        return np.pad(num, (0, n - num.size)), np.pad(den, (0, n - den.size))
+
+    def zeros(self) -> np.ndarray:
+        """Zeros of every ``B_ij`` (in ``z``), concatenated."""
+        out = [
+            np.roots(self._channel_tf(i, j)[0])
+            for i in range(self.n_outputs)
+            for j in range(self.n_inputs)
+        ]
+        return np.concatenate(out) if out else np.zeros(0)
+
+    def to_scipy(self) -> Any:
+        """SciPy ``dlti`` transfer function (single input, single output)."""
+        from scipy import signal
+
+        if (self.n_outputs, self.n_inputs) != (1, 1):
+            raise DataError("to_scipy: only single-input single-output models; use to_statespace")
+        num, den = self._channel_tf(0, 0)
+        return signal.dlti(_trim(num), den, dt=self.dt)
+
+    def to_control(self) -> Any:
+        """python-control ``TransferFunction`` (MIMO as nested lists of channels)."""
+        import control
+
+        nums = [
+            [self._channel_tf(i, j)[0] for j in range(self.n_inputs)] for i in range(self.n_outputs)
+        ]
+        dens = [
+            [self._channel_tf(i, j)[1] for j in range(self.n_inputs)] for i in range(self.n_outputs)
+        ]
+        return control.tf(nums, dens, self.dt)
+
+    def to_statespace(self) -> Any:
+        """Deterministic part as a :class:`~sysid.StateSpaceModel` (one block per channel)."""
+        from scipy import signal
+
+        from sysid.model import StateSpaceModel
+
+        ny, nu = self.n_outputs, self.n_inputs
+        blocks = []
+        for i in range(ny):
+            for j in range(nu):
+                num, den = self._channel_tf(i, j)
+                blocks.append((i, j, *signal.tf2ss(_trim(num), den)))
+        n = sum(b[2].shape[0] for b in blocks)
+        A, B, C, D = np.zeros((n, n)), np.zeros((n, nu)), np.zeros((ny, n)), np.zeros((ny, nu))
+        k = 0
+        for i, j, a, b, c, d in blocks:
+            r = a.shape[0]
+            A[k : k + r, k : k + r] = a
+            B[k : k + r, j] = b[:, 0]
+            C[i, k : k + r] = c[0]
+            D[i, j] = d[0, 0]
+            k += r
+        return StateSpaceModel(A, B, C, D, dt=self.dt)
 
     def __repr__(self) -> str:
         lines = [
