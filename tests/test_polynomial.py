@@ -179,3 +179,21 @@ def test_conversions_agree(u1):
     )
     np.testing.assert_allclose(m.zeros(), [-0.6], atol=1e-8)
     np.testing.assert_allclose(m.predict(u1[:, None], y[:, None]), y[:, None], atol=1e-8)
+
+
+def test_ar_arma_delayest():
+    rng = np.random.default_rng(21)
+    e = rng.standard_normal(4000)
+    y = signal.lfilter([1, 0.5], [1, -0.7], e)
+    ts = sysid.IOData(None, y[:, None], 1.0)
+    m = sysid.arma(ts, 1, 1)
+    sd = np.sqrt(np.diag(m.covariance[0]))
+    assert abs(m.a[0][0][0] + 0.7) < 4 * sd[0] and abs(m.c[0][0] - 0.5) < 4 * sd[1]
+    assert sysid.ar(ts, 3).a[0][0].size == 3
+    u = rng.standard_normal(800)
+    yd = signal.lfilter([0.8], [1, -0.5], _delay(u, 4)) + 0.05 * rng.standard_normal(800)
+    d = _data(yd, u)
+    assert sysid.delayest(d) == 4
+    assert sysid.delayest(d, nk_max=3) != 4  # the range option matters
+    with pytest.raises(DataError, match="without inputs"):
+        sysid.ar(d, 1)

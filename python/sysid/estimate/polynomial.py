@@ -254,7 +254,22 @@ def bj(
 def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
     """Loss of every ARX structure in the ranges, from one compression.
 
-    Returns rows ``[na, nb, nk, loss, n_parameters]`` (loss: mean squared residual)."""
+    Returns rows ``[na, nb, nk, loss, n_parameters]`` (loss: mean squared residual);
+    structures whose regression is rank deficient are left out.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(400)
+    >>> e = 0.1 * rng.standard_normal(400)  # equation error: the ARX(1, 1, 1) structure
+    >>> y = signal.lfilter([0, 1.0], [1, -0.5], u) + signal.lfilter([1], [1, -0.5], e)
+    >>> d = sysid.IOData(u[:, None], y[:, None], 1.0)
+    >>> table = sysid.arxstruc(d, [1, 2], [1, 2], [1])
+    >>> sysid.selstruc(table, "bic", 400)
+    (1, 1, 1)
+    """
     exps = _exps(data)
     rng = [list(map(int, np.atleast_1d(v))) for v in (na, nb, nk)]
     return np.asarray(_sysid.arx_struc(exps, *rng))
@@ -275,3 +290,47 @@ def selstruc(
         raise DataError(f"unknown criterion {criterion!r}; use 'aic', 'bic' or 'mdl'")
     best = table[int(np.argmin(score))]
     return int(best[0]), int(best[1]), int(best[2])
+
+
+def ar(data: Any, na: int, *, max_iter: int = 100) -> PolynomialModel:
+    """Autoregressive time-series model ``A(q) y = e`` (data without inputs).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> y = signal.lfilter([1], [1, -0.8], np.random.default_rng(0).standard_normal(4000))
+    >>> m = sysid.estimate.polynomial.ar(sysid.IOData(None, y[:, None], 1.0), 1)
+    >>> bool(abs(m.a[0][0][0] + 0.8) < 0.03)
+    True
+    """
+    if _exps(data)[0][0].shape[1] != 0:
+        raise DataError("ar/arma model time series: pass data without inputs (IOData(None, y))")
+    return _pem(data, na, 0, 0, 0, 0, 0, "ar", max_iter, None)
+
+
+def arma(data: Any, na: int, nc: int, *, max_iter: int = 100) -> PolynomialModel:
+    """ARMA time-series model ``A(q) y = C(q) e`` (data without inputs)."""
+    if _exps(data)[0][0].shape[1] != 0:
+        raise DataError("ar/arma model time series: pass data without inputs (IOData(None, y))")
+    return _pem(data, na, 0, nc, 0, 0, 0, "arma", max_iter, None)
+
+
+def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int = 10) -> int:
+    """Input delay of a single-input single-output record: the ``nk`` whose ARX(na, nb, nk)
+    has the smallest loss, all from one compression (as MATLAB's ``delayest``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(500)
+    >>> y = signal.lfilter([0, 0, 0, 0.7], [1, -0.5], u) + 0.01 * rng.standard_normal(500)
+    >>> sysid.estimate.polynomial.delayest(sysid.IOData(u[:, None], y[:, None], 1.0))
+    3
+    """
+    if not 0 <= nk_min <= nk_max:
+        raise DataError(f"need 0 <= nk_min <= nk_max, got {nk_min}, {nk_max}")
+    table = arxstruc(data, [na], [nb], list(range(nk_min, nk_max + 1)))
+    return int(table[int(np.argmin(table[:, 3])), 2])

@@ -358,7 +358,8 @@ impl ArxCompressor {
 
     /// Loss (mean squared residual, all outputs summed) of every SISO-pattern structure
     /// `na in na_range, nb in nb_range, nk in nk_range` (same orders for all channels), from the
-    /// one compression: rows `[na, nb, nk, loss, n_params]`.
+    /// one compression: rows `[na, nb, nk, loss, n_params]`. Structures whose regression is
+    /// rank deficient (over-parameterised for noise-free data) are left out of the table.
     pub fn arxstruc(
         &self,
         na_range: &[usize],
@@ -382,10 +383,16 @@ impl ArxCompressor {
                         nk: vec![vec![nk; nu]; ny],
                     };
                     let mut loss = 0.0;
+                    let mut deficient = false;
                     for i in 0..ny {
-                        loss += self
-                            .solve_with_factor(r.as_ref(), i, &orders, 0.0, None)?
-                            .loss;
+                        match self.solve_with_factor(r.as_ref(), i, &orders, 0.0, None) {
+                            Ok(f) => loss += f.loss,
+                            Err(SysidError::NotPersistentlyExciting { .. }) => deficient = true,
+                            Err(e) => return Err(e),
+                        }
+                    }
+                    if deficient {
+                        continue;
                     }
                     let np = ny * (na + nu * nb);
                     out.push([na as f64, nb as f64, nk as f64, loss, np as f64]);
