@@ -197,3 +197,22 @@ def test_ar_arma_delayest():
     assert sysid.delayest(d, nk_max=3) != 4  # the range option matters
     with pytest.raises(DataError, match="without inputs"):
         sysid.ar(d, 1)
+
+
+def test_iv4_noise_free_and_unbiased():
+    rng = np.random.default_rng(41)
+    u = rng.standard_normal(3000)
+    y0 = signal.lfilter([0, 1.0, 0.5], [1, -1.5, 0.7], u)
+    m = sysid.iv4(_data(y0, u), 2, 2, 1)
+    np.testing.assert_allclose(m.a[0][0], [-1.5, 0.7], atol=1e-8)
+    np.testing.assert_allclose(m.b[0][0], [1.0, 0.5], atol=1e-8)
+    y = y0 + 0.5 * signal.lfilter([1], [1, -0.9], rng.standard_normal(3000))
+    iv = sysid.iv4(_data(y, u), 2, 2, 1)
+    ls = sysid.arx(_data(y, u), 2, 2, 1)
+    err_iv = np.abs(iv.a[0][0] - [-1.5, 0.7]).max()
+    err_ls = np.abs(ls.a[0][0] - [-1.5, 0.7]).max()
+    assert err_iv < 0.05 and err_ls > 2 * err_iv
+    ref = sysid.iv4(_data(y, u), 2, 2, 1, reference=u + 0.1 * rng.standard_normal(3000))
+    assert not np.allclose(ref.a[0][0], iv.a[0][0])  # the instrument option matters
+    with pytest.raises(DataError, match="single input"):
+        sysid.iv4(sysid.IOData(np.c_[u, u], y[:, None], 1.0), 1, 1, 1)

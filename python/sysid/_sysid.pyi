@@ -8,6 +8,7 @@ import numpy.typing as npt
 __version__: str
 __all__ = [
     "arx_fit",
+    "iv4",
     "arx_struc",
     "poly_filter",
     "polynomial_pem",
@@ -214,3 +215,6 @@ def polynomial_pem(
     tol: float = 1e-9,
     progress: Any | None = None,
 ) -> dict[str, Any]: ...
+def iv4(
+    y: _Array, u: _Array, na: int, nb: int, nk: int, reference: _Array | None = None
+) -> _Array: ...

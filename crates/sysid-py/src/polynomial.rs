@@ -205,11 +205,35 @@ pub fn polynomial_pem<'py>(
     Ok(d)
 }
 
+/// IV4 estimate `[a.., b..]` of a single-input single-output ARX structure.
+#[pyfunction]
+#[pyo3(signature = (y, u, na, nb, nk, reference=None))]
+pub fn iv4<'py>(
+    py: Python<'py>,
+    y: PyReadonlyArray1<'_, f64>,
+    u: PyReadonlyArray1<'_, f64>,
+    na: usize,
+    nb: usize,
+    nk: usize,
+    reference: Option<PyReadonlyArray1<'_, f64>>,
+) -> PyResult<Bound<'py, numpy::PyArray1<f64>>> {
+    let (ys, us) = (y.as_slice()?.to_vec(), u.as_slice()?.to_vec());
+    let rs = match reference {
+        Some(r) => Some(r.as_slice()?.to_vec()),
+        None => None,
+    };
+    let th = py
+        .detach(|| sysid_core::polynomial::iv::iv4(&ys, &us, na, nb, nk, rs.as_deref()))
+        .py()?;
+    Ok(slice_to_numpy(py, &th))
+}
+
 /// Registers the functions of this file.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(arx_fit, m)?)?;
     m.add_function(wrap_pyfunction!(arx_struc, m)?)?;
     m.add_function(wrap_pyfunction!(poly_filter, m)?)?;
     m.add_function(wrap_pyfunction!(polynomial_pem, m)?)?;
+    m.add_function(wrap_pyfunction!(iv4, m)?)?;
     Ok(())
 }

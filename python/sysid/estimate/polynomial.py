@@ -334,3 +334,36 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int =
         raise DataError(f"need 0 <= nk_min <= nk_max, got {nk_min}, {nk_max}")
     table = arxstruc(data, [na], [nb], list(range(nk_min, nk_max + 1)))
     return int(table[int(np.argmin(table[:, 3])), 2])
+
+
+def iv4(
+    data: Any, na: int, nb: int, nk: int = 1, *, reference: np.ndarray | None = None
+) -> PolynomialModel:
+    """Four-stage instrumental-variable estimate of ``A(q) y = B(q) u(t-nk) + v``.
+
+    Consistent for coloured noise ``v`` where least squares (:func:`arx`) is biased. For
+    closed-loop data pass the reference signal as ``reference``: the instruments are then
+    built from it instead of the (noise-correlated) input. Single input and output.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(3000)
+    >>> v = signal.lfilter([1], [1, -0.9], rng.standard_normal(3000))
+    >>> y = signal.lfilter([0, 1.0], [1, -0.5], u) + 0.5 * v
+    >>> m = sysid.iv4(sysid.IOData(u[:, None], y[:, None], 1.0), 1, 1, 1)
+    >>> bool(abs(m.a[0][0][0] + 0.5) < 0.05)
+    True
+    """
+    exps = _exps(data)
+    if len(exps) != 1 or exps[0][0].shape[1] != 1 or exps[0][1].shape[1] != 1:
+        raise DataError("iv4: one experiment with a single input and a single output")
+    u, y = exps[0][0][:, 0].copy(), exps[0][1][:, 0].copy()
+    r = None if reference is None else np.ascontiguousarray(reference, float).ravel()
+    na_, nb_, nk_ = (_grid(v, 1, 1, n)[0][0] for v, n in ((na, "na"), (nb, "nb"), (nk, "nk")))
+    th = _sysid.iv4(y, u, na_, nb_, nk_, r)
+    m = PolynomialModel([[th[:na_]]], [[th[na_:]]], [[nk_]], data.dt)
+    m.info = {"method": "iv4"}
+    return m

@@ -26,6 +26,7 @@
 
 pub mod arx;
 pub mod filter;
+pub mod iv;
 pub mod pem;
 
 #[cfg(test)]
