@@ -7,6 +7,11 @@ import numpy.typing as npt
 
 __version__: str
 __all__ = [
+    "arx_fit",
+    "iv4",
+    "arx_struc",
+    "poly_filter",
+    "polynomial_pem",
     "__version__",
     "HankelFactor",
     "compress",
@@ -204,3 +209,36 @@ def pem_refine(
     reg_nominal: _Array | None = None,
     progress: Any = None,
 ) -> dict[str, Any]: ...
+# polynomial models (issue 13)
+def arx_fit(
+    experiments: list[tuple[_Array, _Array]],
+    na: list[list[int]],
+    nb: list[list[int]],
+    nk: list[list[int]],
+    lam: float = 0.0,
+    reg_factor: _Array | None = None,
+) -> list[dict[str, Any]]: ...
+def arx_struc(
+    experiments: list[tuple[_Array, _Array]],
+    na_range: list[int],
+    nb_range: list[int],
+    nk_range: list[int],
+) -> _Array: ...
+def poly_filter(b: list[float], a: list[float], x: _Array) -> _Array: ...
+def polynomial_pem(
+    y: _Array,
+    u: _Array,
+    na: int,
+    nb: list[int],
+    nc: int,
+    nd: int,
+    nf: list[int],
+    nk: list[int],
+    theta0: list[float] | None = None,
+    max_iter: int = 100,
+    tol: float = 1e-9,
+    progress: Any | None = None,
+) -> dict[str, Any]: ...
+def iv4(
+    y: _Array, u: _Array, na: int, nb: int, nk: int, reference: _Array | None = None
+) -> _Array: ...

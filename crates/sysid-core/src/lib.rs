@@ -50,6 +50,7 @@ pub mod lyapunov;
 pub mod model;
 pub mod optim;
 pub mod pem;
+pub mod polynomial;
 pub mod realization;
 pub mod riccati;
 pub mod simulate;

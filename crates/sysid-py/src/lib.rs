@@ -9,6 +9,7 @@ mod convert;
 mod errors;
 mod hankel;
 mod pem;
+mod polynomial;
 mod realization;
 mod simulate;
 mod streaming;
@@ -23,5 +24,6 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     subspace::register(m)?;
     realization::register(m)?;
     pem::register(m)?;
+    polynomial::register(m)?;
     Ok(())
 }

@@ -1,0 +1,509 @@
+//! Prediction-error providers for single-output polynomial structures (ARX, ARMAX, OE, BJ,
+//! AR, ARMA), started from linear estimates and refined by [`crate::optim::minimize`].
+
+use faer::{Mat, MatRef};
+
+use super::filter::{conv, filter, is_stable, monic};
+use crate::error::{check_finite, Result, SysidError};
+use crate::linalg::QrAccumulator;
+use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution};
+
+/// Orders of `A y = sum B_j/F_j u_j(t-nk_j) + C/D e` for one output.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct MisoOrders {
+    /// Order of A.
+    pub na: usize,
+    /// Coefficients of each B_j.
+    pub nb: Vec<usize>,
+    /// Order of C.
+    pub nc: usize,
+    /// Order of D.
+    pub nd: usize,
+    /// Order of each F_j.
+    pub nf: Vec<usize>,
+    /// Delay of each input.
+    pub nk: Vec<usize>,
+}
+
+impl MisoOrders {
+    /// Number of free parameters, laid out `[a, b_1.., b_m, c, d, f_1.., f_m]`.
+    pub fn n_params(&self) -> usize {
+        self.na + self.nb.iter().sum::<usize>() + self.nc + self.nd + self.nf.iter().sum::<usize>()
+    }
+}
+
+/// The polynomials of one output, split out of a parameter vector.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MisoPolys {
+    /// Monic A.
+    pub a: Vec<f64>,
+    /// B_j (b_0 first; applied to u_j(t - nk_j)).
+    pub b: Vec<Vec<f64>>,
+    /// Monic C.
+    pub c: Vec<f64>,
+    /// Monic D.
+    pub d: Vec<f64>,
+    /// Monic F_j.
+    pub f: Vec<Vec<f64>>,
+}
+
+impl MisoOrders {
+    /// Splits `theta` into polynomials.
+    pub fn polys(&self, theta: &[f64]) -> MisoPolys {
+        let mut i = 0;
+        let mut take = |n: usize| {
+            let s = theta[i..i + n].to_vec();
+            i += n;
+            s
+        };
+        let a = monic(&take(self.na));
+        let b: Vec<Vec<f64>> = self.nb.iter().map(|&n| take(n)).collect();
+        let c = monic(&take(self.nc));
+        let d = monic(&take(self.nd));
+        let f: Vec<Vec<f64>> = self.nf.iter().map(|&n| monic(&take(n))).collect();
+        MisoPolys { a, b, c, d, f }
+    }
+}
+
+/// Prediction-error problem of one output: residual `e = D/C (A y - sum B_j/F_j x_j)`,
+/// `x_j(t) = u_j(t - nk_j)`, zero initial conditions.
+pub struct MisoProblem {
+    orders: MisoOrders,
+    y: Vec<f64>,
+    x: Vec<Vec<f64>>,
+    block: usize,
+}
+
+fn delayed(u: MatRef<'_, f64>, j: usize, nk: usize) -> Vec<f64> {
+    let n = u.nrows();
+    (0..n)
+        .map(|t| if t >= nk { u[(t - nk, j)] } else { 0.0 })
+        .collect()
+}
+
+fn shifted(s: &[f64], t: usize, k: usize) -> f64 {
+    if t >= k {
+        s[t - k]
+    } else {
+        0.0
+    }
+}
+
+impl MisoProblem {
+    /// Output column `y` (length N) and inputs `u` (N x m).
+    pub fn new(y: &[f64], u: MatRef<'_, f64>, orders: MisoOrders) -> Result<Self> {
+        let m = u.ncols();
+        if orders.nb.len() != m || orders.nf.len() != m || orders.nk.len() != m {
+            return Err(SysidError::invalid(
+                "orders",
+                format!("nb, nf and nk need one entry per input ({m})"),
+            ));
+        }
+        if m > 0 && u.nrows() != y.len() {
+            return Err(SysidError::ShapeMismatch {
+                what: "u".into(),
+                expected: format!("{} rows like y", y.len()),
+                got: format!("{} rows", u.nrows()),
+            });
+        }
+        check_finite("u", u)?;
+        if let Some(t) = y.iter().position(|v| !v.is_finite()) {
+            return Err(SysidError::NonFinite {
+                what: "y",
+                sample: t,
+                channel: 0,
+            });
+        }
+        let p = orders.n_params();
+        if p == 0 {
+            return Err(SysidError::invalid(
+                "orders",
+                "the structure has no parameters",
+            ));
+        }
+        if y.len() < 2 * p + 2 {
+            return Err(SysidError::InsufficientData {
+                context: format!("a polynomial model with {p} parameters"),
+                needed: 2 * p + 2,
+                got: y.len(),
+                fix: "use a longer record or smaller orders",
+            });
+        }
+        let x = (0..m).map(|j| delayed(u, j, orders.nk[j])).collect();
+        Ok(Self {
+            orders,
+            y: y.to_vec(),
+            x,
+            block: 128,
+        })
+    }
+
+    /// Residuals and the intermediate signals `(e, v, w_j)`.
+    fn signals(&self, p: &MisoPolys) -> (Vec<f64>, Vec<f64>, Vec<Vec<f64>>) {
+        let w: Vec<Vec<f64>> = (0..self.x.len())
+            .map(|j| filter(&p.b[j], &p.f[j], &self.x[j]))
+            .collect();
+        let ay = filter(&p.a, &[1.0], &self.y);
+        let mut v = ay;
+        for wj in &w {
+            for (vt, wt) in v.iter_mut().zip(wj) {
+                *vt -= wt;
+            }
+        }
+        let e = filter(&p.d, &p.c, &v);
+        (e, v, w)
+    }
+
+    /// Residuals at `theta`.
+    pub fn residuals(&self, theta: &[f64]) -> Vec<f64> {
+        self.signals(&self.orders.polys(theta)).0
+    }
+}
+
+impl Problem for MisoProblem {
+    fn n_params(&self) -> usize {
+        self.orders.n_params()
+    }
+
+    fn admissible(&mut self, theta: &[f64]) -> bool {
+        let p = self.orders.polys(theta);
+        is_stable(&p.c) && p.f.iter().all(|f| is_stable(f))
+    }
+
+    fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
+        let o = &self.orders;
+        let p = o.polys(theta);
+        let (e, v, w) = self.signals(&p);
+        let cost = 0.5 * e.iter().map(|x| x * x).sum::<f64>();
+        if !cost.is_finite() {
+            return Ok(Evaluation::cost_only(f64::INFINITY));
+        }
+        let mut ev = Evaluation::cost_only(cost);
+        if !jacobian {
+            return Ok(ev);
+        }
+        let np = o.n_params();
+        let n = self.y.len();
+        let ya = filter(&p.d, &p.c, &self.y);
+        let cf: Vec<Vec<f64>> = p.f.iter().map(|f| conv(&p.c, f)).collect();
+        let xf: Vec<Vec<f64>> = (0..self.x.len())
+            .map(|j| filter(&p.d, &cf[j], &self.x[j]))
+            .collect();
+        let wf: Vec<Vec<f64>> = (0..self.x.len())
+            .map(|j| {
+                if o.nf[j] > 0 {
+                    filter(&p.d, &cf[j], &w[j])
+                } else {
+                    Vec::new()
+                }
+            })
+            .collect();
+        let ec = if o.nc > 0 {
+            filter(&[1.0], &p.c, &e)
+        } else {
+            Vec::new()
+        };
+        let vc = if o.nd > 0 {
+            filter(&[1.0], &p.c, &v)
+        } else {
+            Vec::new()
+        };
+        let mut gn = Mat::<f64>::zeros(np, np);
+        let mut grad = vec![0.0; np];
+        let mut jb = Mat::<f64>::zeros(self.block, np);
+        let mut eb = Mat::<f64>::zeros(self.block, 1);
+        let mut t0 = 0;
+        while t0 < n {
+            let rows = self.block.min(n - t0);
+            for r in 0..rows {
+                let t = t0 + r;
+                let mut c = 0;
+                for k in 1..=o.na {
+                    jb[(r, c)] = shifted(&ya, t, k);
+                    c += 1;
+                }
+                for j in 0..self.x.len() {
+                    for k in 0..o.nb[j] {
+                        jb[(r, c)] = -shifted(&xf[j], t, k);
+                        c += 1;
+                    }
+                }
+                for k in 1..=o.nc {
+                    jb[(r, c)] = -shifted(&ec, t, k);
+                    c += 1;
+                }
+                for k in 1..=o.nd {
+                    jb[(r, c)] = shifted(&vc, t, k);
+                    c += 1;
+                }
+                for j in 0..self.x.len() {
+                    for k in 1..=o.nf[j] {
+                        jb[(r, c)] = shifted(&wf[j], t, k);
+                        c += 1;
+                    }
+                }
+                eb[(r, 0)] = e[t];
+            }
+            let jr = jb.as_ref().subrows(0, rows);
+            gn += jr.transpose() * jr;
+            let g = jr.transpose() * eb.as_ref().subrows(0, rows);
+            for a in 0..np {
+                grad[a] += g[(a, 0)];
+            }
+            t0 += rows;
+        }
+        ev.gradient = grad;
+        ev.gauss_newton = gn;
+        Ok(ev)
+    }
+}
+
+/// Least squares of `target` on lagged signals: `regs` lists `(signal, first_lag, n_lags)`.
+fn lagged_ls(target: &[f64], regs: &[(&[f64], usize, usize)]) -> Result<Vec<f64>> {
+    let p: usize = regs.iter().map(|r| r.2).sum();
+    if p == 0 {
+        return Ok(Vec::new());
+    }
+    let start = regs.iter().map(|r| r.1 + r.2).max().unwrap_or(0);
+    let mut acc = QrAccumulator::new(p + 1, 256);
+    let mut row = vec![0.0; p + 1];
+    for t in start..target.len() {
+        let mut c = 0;
+        for (s, first, nl) in regs {
+            for k in *first..*first + *nl {
+                row[c] = s[t - k];
+                c += 1;
+            }
+        }
+        row[p] = target[t];
+        acc.push_row(&row);
+    }
+    let r = acc.finish();
+    let dmax = (0..p).map(|d| r[(d, d)]).fold(0.0, f64::max);
+    let mut th = vec![0.0; p];
+    for d in (0..p).rev() {
+        if r[(d, d)] <= 1e-13 * dmax {
+            th[d] = 0.0;
+            continue;
+        }
+        let mut v = r[(d, p)];
+        for e in d + 1..p {
+            v -= r[(d, e)] * th[e];
+        }
+        th[d] = v / r[(d, d)];
+    }
+    Ok(th)
+}
+
+/// Steiglitz-McBride for a single-input output-error model: returns `(b, f)`.
+pub fn steiglitz_mcbride(
+    y: &[f64],
+    x: &[f64],
+    nb: usize,
+    nf: usize,
+    iters: usize,
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    let mut f = vec![0.0; nf];
+    let mut b = vec![0.0; nb];
+    for _ in 0..iters.max(1) {
+        let fp = monic(&f);
+        let (yf, xf) = if is_stable(&fp) {
+            (filter(&[1.0], &fp, y), filter(&[1.0], &fp, x))
+        } else {
+            (y.to_vec(), x.to_vec())
+        };
+        let th = lagged_ls(&yf, &[(&yf, 1, nf), (&xf, 0, nb)])?;
+        let fnew: Vec<f64> = th[..nf].iter().map(|v| -v).collect();
+        let bnew = th[nf..].to_vec();
+        let change: f64 = fnew.iter().zip(&f).map(|(a, c)| (a - c).abs()).sum();
+        f = fnew;
+        b = bnew;
+        if change < 1e-12 {
+            break;
+        }
+    }
+    if !is_stable(&monic(&f)) {
+        f.iter_mut().for_each(|v| *v = 0.0);
+    }
+    Ok((b, f))
+}
+
+fn stable_or_zero(c: Vec<f64>) -> Vec<f64> {
+    if is_stable(&monic(&c)) {
+        c
+    } else {
+        vec![0.0; c.len()]
+    }
+}
+
+/// Starting parameters: ARX / Hannan-Rissanen for `A, B, C`; Steiglitz-McBride (one input) or
+/// least squares with `F = 1` for OE parts; Hannan-Rissanen on the output-error residual for
+/// the noise model `C/D` of Box-Jenkins structures.
+pub fn initial_guess(y: &[f64], u: MatRef<'_, f64>, o: &MisoOrders) -> Result<Vec<f64>> {
+    let m = u.ncols();
+    let x: Vec<Vec<f64>> = (0..m).map(|j| delayed(u, j, o.nk[j])).collect();
+    let n = y.len();
+    let has_f = o.nf.iter().any(|&f| f > 0);
+    let mut a = vec![0.0; o.na];
+    let mut b: Vec<Vec<f64>> = o.nb.iter().map(|&k| vec![0.0; k]).collect();
+    let mut f: Vec<Vec<f64>> = o.nf.iter().map(|&k| vec![0.0; k]).collect();
+    let mut c = vec![0.0; o.nc];
+    let mut d = vec![0.0; o.nd];
+    // High-order ARX residual as an innovation estimate.
+    let high = (o.na.max(o.nc).max(o.nd) + o.nf.iter().copied().max().unwrap_or(0) + 4)
+        .min(n / 10)
+        .max(1);
+    let innov = |target: &[f64], xs: &[Vec<f64>], ar_only: bool| -> Result<Vec<f64>> {
+        let mut regs: Vec<(&[f64], usize, usize)> = vec![(target, 1, high)];
+        if !ar_only {
+            for xj in xs {
+                regs.push((xj.as_slice(), 0, high));
+            }
+        }
+        let th = lagged_ls(target, &regs)?;
+        let mut e = target.to_vec();
+        for t in 0..n {
+            let mut s = 0.0;
+            let mut c = 0;
+            for (sig, first, nl) in &regs {
+                for k in *first..*first + *nl {
+                    s += th[c] * shifted(sig, t, k);
+                    c += 1;
+                }
+            }
+            e[t] -= s;
+        }
+        Ok(e)
+    };
+    if !has_f {
+        // A, B (and C, D if any) jointly: ARX or Hannan-Rissanen.
+        let ehat = if o.nc > 0 || o.nd > 0 {
+            innov(y, &x, false)?
+        } else {
+            vec![0.0; n]
+        };
+        let mut regs: Vec<(&[f64], usize, usize)> = vec![(y, 1, o.na)];
+        for j in 0..m {
+            regs.push((x[j].as_slice(), 0, o.nb[j]));
+        }
+        regs.push((ehat.as_slice(), 1, o.nc));
+        let th = lagged_ls(y, &regs)?;
+        a = th[..o.na].iter().map(|v| -v).collect();
+        let mut i = o.na;
+        for j in 0..m {
+            b[j] = th[i..i + o.nb[j]].to_vec();
+            i += o.nb[j];
+        }
+        c = stable_or_zero(th[i..i + o.nc].to_vec());
+        if o.nd > 0 {
+            // D from an AR fit of the equation error.
+            let mut v = filter(&monic(&a), &[1.0], y);
+            for j in 0..m {
+                let w = filter(&b[j], &[1.0], &x[j]);
+                v.iter_mut().zip(&w).for_each(|(vt, wt)| *vt -= wt);
+            }
+            let th = lagged_ls(&v, &[(v.as_slice(), 1, o.nd)])?;
+            d = th.iter().map(|t| -t).collect();
+        }
+    } else {
+        let ya = filter(&monic(&a), &[1.0], y);
+        if m == 1 {
+            let (bb, ff) = steiglitz_mcbride(&ya, &x[0], o.nb[0], o.nf[0], 30)?;
+            b[0] = bb;
+            f[0] = ff;
+        } else {
+            let mut regs: Vec<(&[f64], usize, usize)> = Vec::new();
+            for j in 0..m {
+                regs.push((x[j].as_slice(), 0, o.nb[j]));
+            }
+            let th = lagged_ls(&ya, &regs)?;
+            let mut i = 0;
+            for j in 0..m {
+                b[j] = th[i..i + o.nb[j]].to_vec();
+                i += o.nb[j];
+            }
+        }
+        if o.nc > 0 || o.nd > 0 {
+            let mut v = ya.clone();
+            for j in 0..m {
+                let w = filter(&b[j], &monic(&f[j]), &x[j]);
+                v.iter_mut().zip(&w).for_each(|(vt, wt)| *vt -= wt);
+            }
+            let ehat = innov(&v, &[], true)?;
+            let th = lagged_ls(&v, &[(v.as_slice(), 1, o.nd), (ehat.as_slice(), 1, o.nc)])?;
+            d = th[..o.nd].iter().map(|t| -t).collect();
+            c = stable_or_zero(th[o.nd..].to_vec());
+        }
+    }
+    let mut theta = a;
+    for bj in b {
+        theta.extend(bj);
+    }
+    theta.extend(c);
+    theta.extend(d);
+    for fj in f {
+        theta.extend(fj);
+    }
+    Ok(theta)
+}
+
+/// Result of [`estimate`].
+#[derive(Debug, Clone)]
+pub struct MisoEstimate {
+    /// The search's solution (theta, cost, iterations, stop reason, J^T J).
+    pub solution: Solution,
+    /// The starting point.
+    pub theta0: Vec<f64>,
+    /// Innovation variance estimate `2 cost / N`.
+    pub noise_variance: f64,
+    /// Parameter covariance `noise_variance * (J^T J)^+`.
+    pub covariance: Mat<f64>,
+}
+
+/// Prediction-error estimate of one output's polynomial model, from `theta0` or (when `None`)
+/// from [`initial_guess`].
+pub fn estimate(
+    y: &[f64],
+    u: MatRef<'_, f64>,
+    orders: MisoOrders,
+    theta0: Option<&[f64]>,
+    options: &Options,
+    observer: &mut dyn FnMut(&Iteration) -> Flow,
+) -> Result<MisoEstimate> {
+    let mut prob = MisoProblem::new(y, u, orders.clone())?;
+    let mut th0 = match theta0 {
+        Some(t) => {
+            if t.len() != orders.n_params() {
+                return Err(SysidError::invalid(
+                    "theta0",
+                    format!(
+                        "has {} entries but the structure has {}",
+                        t.len(),
+                        orders.n_params()
+                    ),
+                ));
+            }
+            t.to_vec()
+        }
+        None => initial_guess(y, u, &orders)?,
+    };
+    if !prob.admissible(&th0) {
+        if theta0.is_some() {
+            return Err(SysidError::invalid(
+                "theta0",
+                "C or F is not stable at the start",
+            ));
+        }
+        th0 = vec![0.0; orders.n_params()];
+    }
+    let solution = minimize(&mut prob, &th0, options, observer)?;
+    let n = y.len() as f64;
+    let noise_variance = 2.0 * solution.cost / n;
+    let cov = crate::optim::covariance(solution.gauss_newton.as_ref(), noise_variance, 1e-10)?;
+    Ok(MisoEstimate {
+        solution,
+        theta0: th0,
+        noise_variance,
+        covariance: cov.covariance,
+    })
+}

@@ -1,0 +1,295 @@
+use faer::Mat;
+
+use super::arx::{ArxCompressor, ArxOrders};
+use super::filter::{filter, is_stable, monic};
+use super::pem::{estimate, MisoOrders, MisoProblem};
+use crate::optim::{Flow, Options, Problem};
+
+fn noise(n: usize, seed: u64) -> Vec<f64> {
+    // Uniform(-0.5, 0.5) from a 64-bit LCG, summed twice for a smoother distribution.
+    let mut s = seed
+        .wrapping_mul(2862933555777941757)
+        .wrapping_add(3037000493);
+    (0..n)
+        .map(|_| {
+            let mut v = 0.0;
+            for _ in 0..2 {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                v += (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5;
+            }
+            v
+        })
+        .collect()
+}
+
+fn delay(x: &[f64], nk: usize) -> Vec<f64> {
+    (0..x.len())
+        .map(|t| if t >= nk { x[t - nk] } else { 0.0 })
+        .collect()
+}
+
+fn close(a: &[f64], b: &[f64], tol: f64) {
+    assert_eq!(a.len(), b.len());
+    for (x, y) in a.iter().zip(b) {
+        assert!((x - y).abs() < tol, "{a:?} vs {b:?}");
+    }
+}
+
+#[test]
+fn stability_test() {
+    assert!(is_stable(&[1.0, -1.5, 0.7]));
+    assert!(!is_stable(&[1.0, -1.5, 1.01]));
+    assert!(!is_stable(&[1.0, 0.0, 0.0, 1.0]));
+    assert!(is_stable(&[1.0]));
+}
+
+#[test]
+fn siso_arx_noise_free() {
+    let n = 400;
+    let u = noise(n, 1);
+    // (1 - 1.5 q^-1 + 0.7 q^-2) y = (1 + 0.5 q^-1) u(t-2)
+    let y = filter(&[1.0, 0.5], &[1.0, -1.5, 0.7], &delay(&u, 2));
+    let um = Mat::from_fn(n, 1, |t, _| u[t]);
+    let ym = Mat::from_fn(n, 1, |t, _| y[t]);
+    let mut c = ArxCompressor::new(1, 1, 6).unwrap();
+    c.push(um.as_ref(), ym.as_ref()).unwrap();
+    let o = ArxOrders {
+        na: vec![vec![2]],
+        nb: vec![vec![2]],
+        nk: vec![vec![2]],
+    };
+    let fit = c.solve_output(0, &o, 0.0, None).unwrap();
+    close(&fit.a[0], &[-1.5, 0.7], 1e-10);
+    close(&fit.b[0], &[1.0, 0.5], 1e-10);
+    assert!(fit.loss < 1e-20);
+    // arxstruc: the true structure has (near) zero loss, a smaller one does not.
+    let table = c.arxstruc(&[1, 2], &[1, 2], &[1, 2]).unwrap();
+    let best = table
+        .iter()
+        .find(|r| r[0] == 2.0 && r[1] == 2.0 && r[2] == 2.0)
+        .unwrap();
+    let small = table
+        .iter()
+        .find(|r| r[0] == 1.0 && r[1] == 1.0 && r[2] == 1.0)
+        .unwrap();
+    assert!(best[3] < 1e-20 && small[3] > 1e-3);
+    // Ridge shrinks the estimate.
+    let ridge = c.solve_output(0, &o, 100.0, None).unwrap();
+    assert!((ridge.b[0][0] - 1.0).abs() > 1e-3);
+}
+
+#[test]
+fn mimo_arx_noise_free_with_cross_terms() {
+    let n = 600;
+    let u1 = noise(n, 2);
+    let u2 = noise(n, 3);
+    let mut y1 = vec![0.0; n];
+    let mut y2 = vec![0.0; n];
+    for t in 2..n {
+        y1[t] = 0.6 * y1[t - 1] - 0.2 * y2[t - 1] + 1.0 * u1[t - 1] + 0.3 * u2[t - 2];
+        y2[t] =
+            0.1 * y1[t - 1] + 0.5 * y2[t - 1] - 0.1 * y2[t - 2] + 0.7 * u2[t - 1] - 0.4 * u1[t - 1];
+    }
+    let um = Mat::from_fn(n, 2, |t, j| if j == 0 { u1[t] } else { u2[t] });
+    let ym = Mat::from_fn(n, 2, |t, j| if j == 0 { y1[t] } else { y2[t] });
+    let mut c = ArxCompressor::new(2, 2, 3).unwrap();
+    // Two experiments: halves of the record, each with its own start-up rows dropped.
+    c.push(um.as_ref().subrows(0, 300), ym.as_ref().subrows(0, 300))
+        .unwrap();
+    c.push(um.as_ref().subrows(300, 300), ym.as_ref().subrows(300, 300))
+        .unwrap();
+    let o = ArxOrders {
+        na: vec![vec![1, 1], vec![1, 2]],
+        nb: vec![vec![1, 1], vec![1, 1]],
+        nk: vec![vec![1, 2], vec![1, 1]],
+    };
+    let f0 = c.solve_output(0, &o, 0.0, None).unwrap();
+    close(&f0.a[0], &[-0.6], 1e-10);
+    close(&f0.a[1], &[0.2], 1e-10);
+    close(&f0.b[0], &[1.0], 1e-10);
+    close(&f0.b[1], &[0.3], 1e-10);
+    let f1 = c.solve_output(1, &o, 0.0, None).unwrap();
+    close(&f1.a[0], &[-0.1], 1e-10);
+    close(&f1.a[1], &[-0.5, 0.1], 1e-10);
+    close(&f1.b[0], &[-0.4], 1e-10);
+    close(&f1.b[1], &[0.7], 1e-10);
+}
+
+fn siso(nb: usize, nc: usize, nd: usize, nf: usize, na: usize, nk: usize) -> MisoOrders {
+    MisoOrders {
+        na,
+        nb: vec![nb],
+        nc,
+        nd,
+        nf: vec![nf],
+        nk: vec![nk],
+    }
+}
+
+#[test]
+fn siso_oe_armax_bj_noise_free() {
+    let n = 500;
+    let u = noise(n, 4);
+    let um = Mat::from_fn(n, 1, |t, _| u[t]);
+    let obs = &mut |_: &crate::optim::Iteration| Flow::Continue;
+    // OE: y = (0.5 + 0.3 q^-1)/(1 - 1.2 q^-1 + 0.5 q^-2) u(t-1)
+    let y = filter(&[0.5, 0.3], &[1.0, -1.2, 0.5], &delay(&u, 1));
+    let est = estimate(
+        &y,
+        um.as_ref(),
+        siso(2, 0, 0, 2, 0, 1),
+        None,
+        &Options::default(),
+        obs,
+    )
+    .unwrap();
+    close(&est.solution.theta, &[0.5, 0.3, -1.2, 0.5], 1e-8);
+    // ARMAX deterministic part (no noise): A y = B u.
+    let y = filter(&[0.8], &[1.0, -0.7], &delay(&u, 1));
+    let est = estimate(
+        &y,
+        um.as_ref(),
+        siso(1, 1, 0, 0, 1, 1),
+        None,
+        &Options::default(),
+        obs,
+    )
+    .unwrap();
+    close(&est.solution.theta[..2], &[-0.7, 0.8], 1e-8);
+    // BJ deterministic part.
+    let y = filter(&[1.0, 0.3], &[1.0, -0.9, 0.2], &delay(&u, 2));
+    let est = estimate(
+        &y,
+        um.as_ref(),
+        siso(2, 1, 1, 2, 0, 2),
+        None,
+        &Options::default(),
+        obs,
+    )
+    .unwrap();
+    close(&est.solution.theta[..2], &[1.0, 0.3], 1e-8);
+    close(&est.solution.theta[4..], &[-0.9, 0.2], 1e-8);
+}
+
+#[test]
+fn two_by_two_oe_noise_free() {
+    // Each output: y_i = B_i1/F_i1 u_1 + B_i2/F_i2 u_2 (MISO per output).
+    let n = 800;
+    let u1 = noise(n, 5);
+    let u2 = noise(n, 6);
+    let um = Mat::from_fn(n, 2, |t, j| if j == 0 { u1[t] } else { u2[t] });
+    let truth = [[(1.0, -0.5), (0.4, -0.3)], [(-0.6, 0.2), (0.9, -0.7)]];
+    for row in truth {
+        let w1 = filter(&[row[0].0], &[1.0, row[0].1], &delay(&u1, 1));
+        let w2 = filter(&[row[1].0], &[1.0, row[1].1], &delay(&u2, 1));
+        let y: Vec<f64> = w1.iter().zip(&w2).map(|(a, b)| a + b).collect();
+        let o = MisoOrders {
+            na: 0,
+            nb: vec![1, 1],
+            nc: 0,
+            nd: 0,
+            nf: vec![1, 1],
+            nk: vec![1, 1],
+        };
+        let est = estimate(&y, um.as_ref(), o, None, &Options::default(), &mut |_| {
+            Flow::Continue
+        })
+        .unwrap();
+        close(
+            &est.solution.theta,
+            &[row[0].0, row[1].0, row[0].1, row[1].1],
+            1e-8,
+        );
+    }
+}
+
+#[test]
+fn jacobian_matches_finite_differences() {
+    let n = 300;
+    let u = noise(n, 7);
+    let e = noise(n, 8);
+    let um = Mat::from_fn(n, 1, |t, _| u[t]);
+    let w = filter(&[1.0, 0.5], &[1.0, -0.6], &delay(&u, 1));
+    let v = filter(&[1.0, 0.4], &[1.0, -0.3], &e);
+    let y: Vec<f64> = w.iter().zip(&v).map(|(a, b)| a + b).collect();
+    let o = MisoOrders {
+        na: 1,
+        nb: vec![2],
+        nc: 1,
+        nd: 1,
+        nf: vec![1],
+        nk: vec![1],
+    };
+    let mut p = MisoProblem::new(&y, um.as_ref(), o).unwrap();
+    let th = [0.1, 0.9, 0.4, 0.3, -0.2, -0.5];
+    let ev = p.evaluate(&th, true).unwrap();
+    for k in 0..th.len() {
+        let h = 1e-6;
+        let mut tp = th;
+        tp[k] += h;
+        let mut tm = th;
+        tm[k] -= h;
+        let g = (p.evaluate(&tp, false).unwrap().cost - p.evaluate(&tm, false).unwrap().cost)
+            / (2.0 * h);
+        assert!(
+            (g - ev.gradient[k]).abs() < 1e-5 * (1.0 + g.abs()),
+            "{k}: {g} vs {}",
+            ev.gradient[k]
+        );
+    }
+    assert!(!p.admissible(&[0.0, 0.0, 0.0, 1.2, 0.0, 0.0]));
+    assert!(monic(&[0.5]) == vec![1.0, 0.5]);
+}
+
+#[test]
+fn armax_with_noise_is_consistent() {
+    let n = 4000;
+    let u = noise(n, 9);
+    let e: Vec<f64> = noise(n, 10).iter().map(|v| 0.3 * v).collect();
+    let um = Mat::from_fn(n, 1, |t, _| u[t]);
+    // (1 - 0.7 q^-1) y = 0.8 u(t-1) + (1 + 0.5 q^-1) e
+    let mut y = vec![0.0; n];
+    for t in 1..n {
+        y[t] = 0.7 * y[t - 1] + 0.8 * u[t - 1] + e[t] + 0.5 * e[t - 1];
+    }
+    let est = estimate(
+        &y,
+        um.as_ref(),
+        siso(1, 1, 0, 0, 1, 1),
+        None,
+        &Options::default(),
+        &mut |_| Flow::Continue,
+    )
+    .unwrap();
+    let th = &est.solution.theta;
+    let truth = [-0.7, 0.8, 0.5];
+    for k in 0..3 {
+        let sd = est.covariance[(k, k)].sqrt();
+        assert!(
+            (th[k] - truth[k]).abs() < 4.0 * sd,
+            "{k}: {} vs {} (sd {sd})",
+            th[k],
+            truth[k]
+        );
+        assert!(sd < 0.05);
+    }
+}
+
+#[test]
+fn iv4_noise_free_and_colored_noise() {
+    let n = 3000;
+    let u = noise(n, 30);
+    let y0 = filter(&[1.0, 0.5], &[1.0, -1.5, 0.7], &delay(&u, 1));
+    let th = super::iv::iv4(&y0, &u, 2, 2, 1, None).unwrap();
+    close(&th, &[-1.5, 0.7, 1.0, 0.5], 1e-8);
+    // Coloured output noise: least squares is biased, IV4 is not.
+    let v = filter(&[1.0], &[1.0, -0.9], &noise(n, 31));
+    let y: Vec<f64> = y0.iter().zip(&v).map(|(a, b)| a + 0.5 * b).collect();
+    let th = super::iv::iv4(&y, &u, 2, 2, 1, None).unwrap();
+    close(&th, &[-1.5, 0.7, 1.0, 0.5], 0.05);
+    // Reference as instrument gives the same answer on open-loop data (r = u).
+    let thr = super::iv::iv4(&y, &u, 2, 2, 1, Some(&u)).unwrap();
+    close(&thr, &[-1.5, 0.7, 1.0, 0.5], 0.05);
+}

@@ -1,0 +1,239 @@
+//! Bindings of `sysid_core::polynomial`: ARX by streaming QR, order search, filtering and the
+//! prediction-error estimate of single-output polynomial structures.
+
+use crate::convert::{mat_to_numpy, slice_to_numpy, view_nd};
+use crate::errors::IntoPy;
+use numpy::{PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use sysid_core::optim::{Flow, Options};
+use sysid_core::polynomial::arx::{ArxCompressor, ArxOrders};
+use sysid_core::polynomial::filter;
+use sysid_core::polynomial::pem::{self, MisoOrders};
+
+type Experiments<'a> = Vec<(PyReadonlyArray2<'a, f64>, PyReadonlyArray2<'a, f64>)>;
+
+fn compress(experiments: &Experiments<'_>, max_lag: usize) -> PyResult<ArxCompressor> {
+    let (nu, ny) = match experiments.first() {
+        Some((u, y)) => (u.as_array().ncols(), y.as_array().ncols()),
+        None => {
+            return Err(crate::errors::to_py(
+                sysid_core::SysidError::InvalidArgument {
+                    name: "experiments",
+                    reason: "needs at least one (u, y) record".into(),
+                },
+            ))
+        }
+    };
+    let mut c = ArxCompressor::new(nu, ny, max_lag).py()?;
+    for (u, y) in experiments {
+        c.push(view_nd(u.as_array()), view_nd(y.as_array())).py()?;
+    }
+    Ok(c)
+}
+
+/// Least-squares ARX of every output; `reg_factor` M gives the penalty `lam |M theta|^2` of
+/// each output's equation.
+#[pyfunction]
+#[pyo3(signature = (experiments, na, nb, nk, lam=0.0, reg_factor=None))]
+pub fn arx_fit<'py>(
+    py: Python<'py>,
+    experiments: Experiments<'_>,
+    na: Vec<Vec<usize>>,
+    nb: Vec<Vec<usize>>,
+    nk: Vec<Vec<usize>>,
+    lam: f64,
+    reg_factor: Option<PyReadonlyArray2<'_, f64>>,
+) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    let max_lag = na
+        .iter()
+        .flatten()
+        .copied()
+        .chain(
+            nb.iter()
+                .flatten()
+                .zip(nk.iter().flatten())
+                .map(|(b, k)| (b + k).saturating_sub(1)),
+        )
+        .max()
+        .unwrap_or(0)
+        .max(1);
+    let orders = ArxOrders { na, nb, nk };
+    let m = reg_factor.as_ref().map(|r| view_nd(r.as_array()));
+    let ny = experiments.first().map_or(0, |e| e.1.as_array().ncols());
+    let views: Vec<_> = experiments
+        .iter()
+        .map(|(u, y)| (view_nd(u.as_array()), view_nd(y.as_array())))
+        .collect();
+    let fits = py
+        .detach(|| -> sysid_core::Result<Vec<_>> {
+            let c = compress_core(&views, max_lag)?;
+            let r = c.factor();
+            (0..ny)
+                .map(|i| c.solve_with_factor(r.as_ref(), i, &orders, lam, m))
+                .collect()
+        })
+        .py()?;
+    fits.iter()
+        .map(|f| {
+            let d = PyDict::new(py);
+            d.set_item("a", f.a.clone())?;
+            d.set_item("b", f.b.clone())?;
+            d.set_item("theta", slice_to_numpy(py, &f.theta))?;
+            d.set_item("loss", f.loss)?;
+            d.set_item("unscaled_cov", mat_to_numpy(py, &f.unscaled_cov))?;
+            d.set_item("n_rows", f.n_rows)?;
+            Ok(d)
+        })
+        .collect()
+}
+
+fn compress_core(
+    experiments: &[(faer::MatRef<'_, f64>, faer::MatRef<'_, f64>)],
+    max_lag: usize,
+) -> sysid_core::Result<ArxCompressor> {
+    let (nu, ny) = experiments
+        .first()
+        .map(|(u, y)| (u.ncols(), y.ncols()))
+        .unwrap_or((0, 0));
+    let mut c = ArxCompressor::new(nu, ny, max_lag)?;
+    for (u, y) in experiments {
+        c.push(*u, *y)?;
+    }
+    Ok(c)
+}
+
+/// Loss of every ARX structure in the ranges from one compression: rows `[na, nb, nk, loss, np]`.
+#[pyfunction]
+pub fn arx_struc<'py>(
+    py: Python<'py>,
+    experiments: Experiments<'_>,
+    na_range: Vec<usize>,
+    nb_range: Vec<usize>,
+    nk_range: Vec<usize>,
+) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+    let max_lag = na_range
+        .iter()
+        .copied()
+        .chain(
+            nb_range
+                .iter()
+                .flat_map(|b| nk_range.iter().map(move |k| (b + k).saturating_sub(1))),
+        )
+        .max()
+        .unwrap_or(1)
+        .max(1);
+    let c = compress(&experiments, max_lag)?;
+    let rows = py
+        .detach(|| c.arxstruc(&na_range, &nb_range, &nk_range))
+        .py()?;
+    let m = faer::Mat::from_fn(rows.len(), 5, |i, j| rows[i][j]);
+    Ok(mat_to_numpy(py, &m))
+}
+
+/// `B(q)/A(q) x` from rest (A monic).
+#[pyfunction]
+pub fn poly_filter<'py>(
+    py: Python<'py>,
+    b: Vec<f64>,
+    a: Vec<f64>,
+    x: PyReadonlyArray1<'_, f64>,
+) -> PyResult<Bound<'py, numpy::PyArray1<f64>>> {
+    let xs = x.as_slice()?.to_vec();
+    let y = py.detach(|| filter::filter(&b, &a, &xs));
+    Ok(slice_to_numpy(py, &y))
+}
+
+/// Prediction-error estimate of one output: `A y = sum B_j/F_j u_j(t-nk_j) + C/D e`.
+#[pyfunction]
+#[pyo3(signature = (y, u, na, nb, nc, nd, nf, nk, theta0=None, max_iter=100, tol=1e-9, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn polynomial_pem<'py>(
+    py: Python<'py>,
+    y: PyReadonlyArray1<'_, f64>,
+    u: PyReadonlyArray2<'_, f64>,
+    na: usize,
+    nb: Vec<usize>,
+    nc: usize,
+    nd: usize,
+    nf: Vec<usize>,
+    nk: Vec<usize>,
+    theta0: Option<Vec<f64>>,
+    max_iter: usize,
+    tol: f64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let ys = y.as_slice()?.to_vec();
+    let uv = view_nd(u.as_array());
+    let orders = MisoOrders {
+        na,
+        nb,
+        nc,
+        nd,
+        nf,
+        nk,
+    };
+    let mut opts = Options::default();
+    opts.max_iter = max_iter;
+    opts.tol_gradient = tol;
+    opts.tol_step = tol;
+    let est = match progress {
+        Some(cb) => {
+            let mut obs =
+                |it: &sysid_core::optim::Iteration| match cb.call1(py, (it.iteration, it.cost)) {
+                    Ok(v) if v.is_truthy(py).unwrap_or(false) => Flow::Stop,
+                    _ => Flow::Continue,
+                };
+            pem::estimate(&ys, uv, orders, theta0.as_deref(), &opts, &mut obs)
+        }
+        None => py.detach(|| {
+            pem::estimate(&ys, uv, orders, theta0.as_deref(), &opts, &mut |_| {
+                Flow::Continue
+            })
+        }),
+    }
+    .py()?;
+    let d = PyDict::new(py);
+    d.set_item("theta", slice_to_numpy(py, &est.solution.theta))?;
+    d.set_item("theta0", slice_to_numpy(py, &est.theta0))?;
+    d.set_item("cost", est.solution.cost)?;
+    d.set_item("iterations", est.solution.iterations)?;
+    d.set_item("stop", est.solution.stop.as_str())?;
+    d.set_item("history", slice_to_numpy(py, &est.solution.history))?;
+    d.set_item("noise_variance", est.noise_variance)?;
+    d.set_item("covariance", mat_to_numpy(py, &est.covariance))?;
+    Ok(d)
+}
+
+/// IV4 estimate `[a.., b..]` of a single-input single-output ARX structure.
+#[pyfunction]
+#[pyo3(signature = (y, u, na, nb, nk, reference=None))]
+pub fn iv4<'py>(
+    py: Python<'py>,
+    y: PyReadonlyArray1<'_, f64>,
+    u: PyReadonlyArray1<'_, f64>,
+    na: usize,
+    nb: usize,
+    nk: usize,
+    reference: Option<PyReadonlyArray1<'_, f64>>,
+) -> PyResult<Bound<'py, numpy::PyArray1<f64>>> {
+    let (ys, us) = (y.as_slice()?.to_vec(), u.as_slice()?.to_vec());
+    let rs = match reference {
+        Some(r) => Some(r.as_slice()?.to_vec()),
+        None => None,
+    };
+    let th = py
+        .detach(|| sysid_core::polynomial::iv::iv4(&ys, &us, na, nb, nk, rs.as_deref()))
+        .py()?;
+    Ok(slice_to_numpy(py, &th))
+}
+
+/// Registers the functions of this file.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(arx_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(arx_struc, m)?)?;
+    m.add_function(wrap_pyfunction!(poly_filter, m)?)?;
+    m.add_function(wrap_pyfunction!(polynomial_pem, m)?)?;
+    m.add_function(wrap_pyfunction!(iv4, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,369 @@
+"""Polynomial estimators: ``arx``, ``armax``, ``oe``, ``bj``, ``ar``, ``arma``, ``arxstruc``,
+``selstruc`` and ``delayest`` (least squares by streaming QR in Rust; the iterative structures
+through the shared Gauss-Newton optimiser of ``sysid-core``)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from ..errors import DataError
+from ..models.polynomial import PolynomialModel
+
+
+def _grid(v: Any, ny: int, ncol: int, name: str) -> list[list[int]]:
+    a = np.asarray(v)
+    if a.ndim == 0:
+        a = np.full((ny, ncol), int(a))
+    elif a.ndim == 1 and ny == 1:
+        a = a.reshape(1, -1)
+    if a.shape != (ny, ncol):
+        raise DataError(f"{name} has shape {a.shape} but should be ({ny}, {ncol}) or a scalar")
+    if np.any(a < 0) or not np.all(np.equal(np.mod(a, 1), 0)):
+        raise DataError(f"{name} must hold non-negative integers, got {a.tolist()}")
+    return a.astype(int).tolist()
+
+
+def _exps(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
+    try:
+        exps = data.experiments
+    except AttributeError:
+        raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))") from None
+    return [(np.ascontiguousarray(u, float), np.ascontiguousarray(y, float)) for u, y in exps]
+
+
+def arx(
+    data: Any,
+    na: Any,
+    nb: Any,
+    nk: Any = 1,
+    *,
+    regularization: float = 0.0,
+    kernel: np.ndarray | None = None,
+) -> PolynomialModel:
+    """Least-squares ARX ``A(q) y(t) = B(q) u(t - nk) + e(t)``.
+
+    Parameters
+    ----------
+    data : IOData
+        Estimation record (several experiments are used together).
+    na : int or array_like (n_outputs, n_outputs)
+        Orders of ``A`` (off-diagonal entries couple outputs).
+    nb, nk : int or array_like (n_outputs, n_inputs)
+        Number of ``B`` coefficients and input delays.
+    regularization : float
+        Weight ``lambda`` of the penalty ``lambda |M theta|^2`` (ridge when ``kernel`` is None).
+    kernel : ndarray, optional
+        The factor ``M`` (for example the inverse Cholesky factor of a TC kernel); it must
+        have as many columns as each output's equation has parameters.
+
+    Returns
+    -------
+    PolynomialModel
+        With ``info`` (loss per output) and ``covariance`` per output.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal((300, 1)); y = np.zeros((300, 1))
+    >>> for t in range(1, 300): y[t] = 0.5 * y[t - 1] + u[t - 1]
+    >>> m = sysid.estimate.polynomial.arx(sysid.IOData(u, y, 1.0), 1, 1, 1)
+    >>> np.round(m.a[0][0], 8).tolist(), np.round(m.b[0][0], 8).tolist()
+    ([-0.5], [1.0])
+    """
+    exps = _exps(data)
+    ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
+    na_g, nb_g, nk_g = _grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"), _grid(nk, ny, nu, "nk")
+    if not (regularization >= 0 and np.isfinite(regularization)):
+        raise DataError(f"regularization must be a finite number >= 0, got {regularization}")
+    fac = None if kernel is None else np.ascontiguousarray(kernel, float)
+    fits = _sysid.arx_fit(exps, na_g, nb_g, nk_g, float(regularization), fac)
+    model = PolynomialModel(
+        a=[[np.asarray(x) for x in f["a"]] for f in fits],
+        b=[[np.asarray(x) for x in f["b"]] for f in fits],
+        nk=nk_g,
+        dt=data.dt,
+        noise_variance=[f["loss"] for f in fits],
+    )
+    model.info = {"method": "arx", "loss": [f["loss"] for f in fits]}
+    model.covariance = [f["loss"] * f["unscaled_cov"] for f in fits]  # type: ignore[attr-defined]
+    model.parameters = [f["theta"] for f in fits]  # type: ignore[attr-defined]
+    return model
+
+
+def _fit(c: np.ndarray, n: int) -> list[float]:
+    out = np.zeros(n)
+    out[: min(n, c.size)] = c[:n]
+    return out.tolist()
+
+
+def _start(
+    init: PolynomialModel, i: int, na: int, nb: list[int], nc: int, nd: int, nf: list[int]
+) -> list[float]:
+    """Starting parameters of output ``i`` from another polynomial model (``F`` from its
+    ``F``, or from its ``A`` when it has none, as when refining an ARX model into OE)."""
+    if init.n_inputs != len(nb) or init.n_outputs <= i:
+        raise DataError("init has other input/output counts than the data")
+    a = init.a[i][i]
+    th = _fit(a, na)
+    th += [v for j, n in enumerate(nb) for v in _fit(init.b[i][j], n)]
+    th += _fit(init.c[i], nc) + _fit(init.d[i], nd)
+    for j, n in enumerate(nf):
+        th += _fit(init.f[i][j] if init.f[i][j].size else a, n)
+    return th
+
+
+def _pem(
+    data: Any,
+    na: Any,
+    nb: Any,
+    nc: Any,
+    nd: Any,
+    nf: Any,
+    nk: Any,
+    method: str,
+    max_iter: int,
+    progress: Callable[[int, float], Any] | None,
+    init: PolynomialModel | None = None,
+) -> PolynomialModel:
+    exps = _exps(data)
+    if len(exps) != 1:
+        raise DataError(f"{method}: one experiment only so far; merge or pick one experiment")
+    u, y = exps[0]
+    ny, nu = y.shape[1], u.shape[1]
+    nb_g, nf_g, nk_g = _grid(nb, ny, nu, "nb"), _grid(nf, ny, nu, "nf"), _grid(nk, ny, nu, "nk")
+    na_v = [int(v) for v in np.broadcast_to(np.asarray(na), (ny,))]
+    nc_v = [int(v) for v in np.broadcast_to(np.asarray(nc), (ny,))]
+    nd_v = [int(v) for v in np.broadcast_to(np.asarray(nd), (ny,))]
+    if min(na_v + nc_v + nd_v, default=0) < 0:
+        raise DataError("na, nc and nd must be non-negative integers")
+    parts: dict[str, list[Any]] = {k: [] for k in "abcdf"}
+    info: dict[str, Any] = {"method": method, "iterations": [], "cost": [], "stop": []}
+    cov, var = [], []
+    for i in range(ny):
+        r = _sysid.polynomial_pem(
+            np.ascontiguousarray(y[:, i]),
+            u,
+            na_v[i],
+            nb_g[i],
+            nc_v[i],
+            nd_v[i],
+            nf_g[i],
+            nk_g[i],
+            None if init is None else _start(init, i, na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i]),
+            int(max_iter),
+            1e-9,
+            progress,
+        )
+        th = np.asarray(r["theta"])
+        cuts = np.cumsum([na_v[i], *nb_g[i], nc_v[i], nd_v[i], *nf_g[i]])
+        pieces = np.split(th, cuts[:-1])
+        it = iter(pieces)
+
+        def take(_n: int, it: Any = it) -> np.ndarray:
+            return np.asarray(next(it))
+
+        a = take(na_v[i])
+        parts["a"].append([a if k == i else np.zeros(0) for k in range(ny)])
+        parts["b"].append([take(n) for n in nb_g[i]])
+        parts["c"].append(take(nc_v[i]))
+        parts["d"].append(take(nd_v[i]))
+        parts["f"].append([take(n) for n in nf_g[i]])
+        info["iterations"].append(r["iterations"])
+        info["cost"].append(r["cost"])
+        info["stop"].append(r["stop"])
+        cov.append(r["covariance"])
+        var.append(r["noise_variance"])
+    m = PolynomialModel(
+        parts["a"],
+        parts["b"],
+        nk_g,
+        data.dt,
+        c=parts["c"],
+        d=parts["d"],
+        f=parts["f"],
+        noise_variance=var,
+    )
+    m.info = info
+    m.covariance = cov  # type: ignore[attr-defined]
+    return m
+
+
+def armax(
+    data: Any,
+    na: Any,
+    nb: Any,
+    nc: Any,
+    nk: Any = 1,
+    *,
+    max_iter: int = 100,
+    progress: Callable[[int, float], Any] | None = None,
+) -> PolynomialModel:
+    """ARMAX ``A y = B u(t-nk) + C e`` by prediction-error minimisation (per output).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(1)
+    >>> u = rng.standard_normal((2000, 1)); e = 0.1 * rng.standard_normal(2000)
+    >>> y = np.zeros((2000, 1))
+    >>> for t in range(1, 2000): y[t] = 0.7 * y[t-1] + u[t-1, 0] + e[t] + 0.5 * e[t-1]
+    >>> m = sysid.estimate.polynomial.armax(sysid.IOData(u, y, 1.0), 1, 1, 1)
+    >>> bool(abs(m.c[0][0] - 0.5) < 0.1)
+    True
+    """
+    return _pem(data, na, nb, nc, 0, 0, nk, "armax", max_iter, progress)
+
+
+def oe(
+    data: Any,
+    nb: Any,
+    nf: Any,
+    nk: Any = 1,
+    *,
+    max_iter: int = 100,
+    progress: Callable[[int, float], Any] | None = None,
+    init: PolynomialModel | None = None,
+) -> PolynomialModel:
+    """Output error ``y = B/F u(t-nk) + e``.
+
+    Starts from Steiglitz-McBride (one input) or from ``init`` (an ARX model's ``A`` becomes
+    ``F``), then Gauss-Newton on the simulation error; ``F`` is kept stable."""
+    return _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, init)
+
+
+def bj(
+    data: Any,
+    nb: Any,
+    nc: Any,
+    nd: Any,
+    nf: Any,
+    nk: Any = 1,
+    *,
+    max_iter: int = 100,
+    progress: Callable[[int, float], Any] | None = None,
+) -> PolynomialModel:
+    """Box-Jenkins ``y = B/F u(t-nk) + C/D e``."""
+    return _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress)
+
+
+def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
+    """Loss of every ARX structure in the ranges, from one compression.
+
+    Returns rows ``[na, nb, nk, loss, n_parameters]`` (loss: mean squared residual);
+    structures whose regression is rank deficient are left out.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(400)
+    >>> e = 0.1 * rng.standard_normal(400)  # equation error: the ARX(1, 1, 1) structure
+    >>> y = signal.lfilter([0, 1.0], [1, -0.5], u) + signal.lfilter([1], [1, -0.5], e)
+    >>> d = sysid.IOData(u[:, None], y[:, None], 1.0)
+    >>> table = sysid.arxstruc(d, [1, 2], [1, 2], [1])
+    >>> sysid.selstruc(table, "bic", 400)
+    (1, 1, 1)
+    """
+    exps = _exps(data)
+    rng = [list(map(int, np.atleast_1d(v))) for v in (na, nb, nk)]
+    return np.asarray(_sysid.arx_struc(exps, *rng))
+
+
+def selstruc(
+    table: np.ndarray, criterion: str = "aic", n_samples: int | None = None
+) -> tuple[int, int, int]:
+    """Choose ``(na, nb, nk)`` from an :func:`arxstruc` table by ``aic``, ``bic``/``mdl``."""
+    if n_samples is None:
+        raise DataError("selstruc needs n_samples (the number of estimation samples)")
+    loss, p = table[:, 3], table[:, 4]
+    if criterion == "aic":
+        score = np.log(loss) + 2 * p / n_samples
+    elif criterion in ("bic", "mdl"):
+        score = np.log(loss) + p * np.log(n_samples) / n_samples
+    else:
+        raise DataError(f"unknown criterion {criterion!r}; use 'aic', 'bic' or 'mdl'")
+    best = table[int(np.argmin(score))]
+    return int(best[0]), int(best[1]), int(best[2])
+
+
+def ar(data: Any, na: int, *, max_iter: int = 100) -> PolynomialModel:
+    """Autoregressive time-series model ``A(q) y = e`` (data without inputs).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> y = signal.lfilter([1], [1, -0.8], np.random.default_rng(0).standard_normal(4000))
+    >>> m = sysid.estimate.polynomial.ar(sysid.IOData(None, y[:, None], 1.0), 1)
+    >>> bool(abs(m.a[0][0][0] + 0.8) < 0.03)
+    True
+    """
+    if _exps(data)[0][0].shape[1] != 0:
+        raise DataError("ar/arma model time series: pass data without inputs (IOData(None, y))")
+    return _pem(data, na, 0, 0, 0, 0, 0, "ar", max_iter, None)
+
+
+def arma(data: Any, na: int, nc: int, *, max_iter: int = 100) -> PolynomialModel:
+    """ARMA time-series model ``A(q) y = C(q) e`` (data without inputs)."""
+    if _exps(data)[0][0].shape[1] != 0:
+        raise DataError("ar/arma model time series: pass data without inputs (IOData(None, y))")
+    return _pem(data, na, 0, nc, 0, 0, 0, "arma", max_iter, None)
+
+
+def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int = 10) -> int:
+    """Input delay of a single-input single-output record: the ``nk`` whose ARX(na, nb, nk)
+    has the smallest loss, all from one compression (as MATLAB's ``delayest``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(500)
+    >>> y = signal.lfilter([0, 0, 0, 0.7], [1, -0.5], u) + 0.01 * rng.standard_normal(500)
+    >>> sysid.estimate.polynomial.delayest(sysid.IOData(u[:, None], y[:, None], 1.0))
+    3
+    """
+    if not 0 <= nk_min <= nk_max:
+        raise DataError(f"need 0 <= nk_min <= nk_max, got {nk_min}, {nk_max}")
+    table = arxstruc(data, [na], [nb], list(range(nk_min, nk_max + 1)))
+    return int(table[int(np.argmin(table[:, 3])), 2])
+
+
+def iv4(
+    data: Any, na: int, nb: int, nk: int = 1, *, reference: np.ndarray | None = None
+) -> PolynomialModel:
+    """Four-stage instrumental-variable estimate of ``A(q) y = B(q) u(t-nk) + v``.
+
+    Consistent for coloured noise ``v`` where least squares (:func:`arx`) is biased. For
+    closed-loop data pass the reference signal as ``reference``: the instruments are then
+    built from it instead of the (noise-correlated) input. Single input and output.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(3000)
+    >>> v = signal.lfilter([1], [1, -0.9], rng.standard_normal(3000))
+    >>> y = signal.lfilter([0, 1.0], [1, -0.5], u) + 0.5 * v
+    >>> m = sysid.iv4(sysid.IOData(u[:, None], y[:, None], 1.0), 1, 1, 1)
+    >>> bool(abs(m.a[0][0][0] + 0.5) < 0.05)
+    True
+    """
+    exps = _exps(data)
+    if len(exps) != 1 or exps[0][0].shape[1] != 1 or exps[0][1].shape[1] != 1:
+        raise DataError("iv4: one experiment with a single input and a single output")
+    u, y = exps[0][0][:, 0].copy(), exps[0][1][:, 0].copy()
+    r = None if reference is None else np.ascontiguousarray(reference, float).ravel()
+    na_, nb_, nk_ = (_grid(v, 1, 1, n)[0][0] for v, n in ((na, "na"), (nb, "nb"), (nk, "nk")))
+    th = _sysid.iv4(y, u, na_, nb_, nk_, r)
+    m = PolynomialModel([[th[:na_]]], [[th[na_:]]], [[nk_]], data.dt)
+    m.info = {"method": "iv4"}
+    return m

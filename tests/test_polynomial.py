@@ -1,0 +1,218 @@
+"""Polynomial models: noise-free recovery, Monte Carlo calibration, options, bad input."""
+
+import numpy as np
+import pytest
+from scipy import signal
+
+import sysid
+from sysid.errors import DataError
+
+
+def _data(y, u):
+    return sysid.IOData(u.reshape(len(u), -1), y.reshape(len(y), -1), 1.0)
+
+
+def _delay(x, k):
+    return np.concatenate([np.zeros(k), x[: len(x) - k]])
+
+
+@pytest.fixture
+def u1():
+    return np.random.default_rng(10).standard_normal(600)
+
+
+def test_arx_noise_free_siso(u1):
+    y = signal.lfilter([1.0, 0.5], [1.0, -1.5, 0.7], _delay(u1, 2))
+    m = sysid.arx(_data(y, u1), 2, 2, 2)
+    np.testing.assert_allclose(m.a[0][0], [-1.5, 0.7], atol=1e-8)
+    np.testing.assert_allclose(m.b[0][0], [1.0, 0.5], atol=1e-8)
+    assert "A(q) = 1 - 1.5 q^-1 + 0.7 q^-2" in repr(m)
+    np.testing.assert_allclose(m.simulate(u1[:, None])[:, 0], y, atol=1e-8)
+
+
+def test_arx_noise_free_2x2_coupled():
+    rng = np.random.default_rng(11)
+    n = 500
+    u = rng.standard_normal((n, 2))
+    u[:2] = 0.0  # the record starts at rest, as simulate() does
+    y = np.zeros((n, 2))
+    for t in range(2, n):
+        y[t, 0] = 0.6 * y[t - 1, 0] - 0.2 * y[t - 1, 1] + u[t - 1, 0] + 0.3 * u[t - 2, 1]
+        y[t, 1] = 0.1 * y[t - 1, 0] + 0.5 * y[t - 1, 1] + 0.7 * u[t - 1, 1] - 0.4 * u[t - 1, 0]
+    m = sysid.arx(sysid.IOData(u, y, 1.0), [[1, 1], [1, 1]], 1, [[1, 2], [1, 1]])
+    np.testing.assert_allclose(m.a[0][1], [0.2], atol=1e-8)
+    np.testing.assert_allclose(m.a[1][0], [-0.1], atol=1e-8)
+    np.testing.assert_allclose(m.b[0][1], [0.3], atol=1e-8)
+    np.testing.assert_allclose(m.b[1][0], [-0.4], atol=1e-8)
+    np.testing.assert_allclose(m.simulate(u)[2:], y[2:], atol=1e-8)
+
+
+def test_oe_bj_armax_noise_free(u1):
+    y = signal.lfilter([0.5, 0.3], [1.0, -1.2, 0.5], _delay(u1, 1))
+    m = sysid.oe(_data(y, u1), 2, 2, 1)
+    np.testing.assert_allclose(m.b[0][0], [0.5, 0.3], atol=1e-8)
+    np.testing.assert_allclose(m.f[0][0], [-1.2, 0.5], atol=1e-8)
+    assert m.info["iterations"][0] >= 0 and m.info["stop"][0]
+    y = signal.lfilter([1.0, 0.3], [1.0, -0.9, 0.2], _delay(u1, 2))
+    m = sysid.bj(_data(y, u1), 2, 1, 1, 2, 2)
+    np.testing.assert_allclose(m.f[0][0], [-0.9, 0.2], atol=1e-8)
+    y = signal.lfilter([0.8], [1.0, -0.7], _delay(u1, 1))
+    m = sysid.armax(_data(y, u1), 1, 1, 1, 1)
+    np.testing.assert_allclose(m.a[0][0], [-0.7], atol=1e-8)
+    np.testing.assert_allclose(m.b[0][0], [0.8], atol=1e-8)
+
+
+def test_oe_noise_free_2x2():
+    rng = np.random.default_rng(12)
+    u = rng.standard_normal((800, 2))
+    y = np.column_stack(
+        [
+            signal.lfilter([1.0], [1, -0.5], _delay(u[:, 0], 1))
+            + signal.lfilter([0.4], [1, -0.3], _delay(u[:, 1], 1)),
+            signal.lfilter([-0.6], [1, 0.2], _delay(u[:, 0], 1))
+            + signal.lfilter([0.9], [1, -0.7], _delay(u[:, 1], 1)),
+        ]
+    )
+    m = sysid.oe(sysid.IOData(u, y, 1.0), 1, 1, 1)
+    np.testing.assert_allclose(
+        [m.f[0][0][0], m.f[0][1][0], m.f[1][0][0], m.f[1][1][0]], [-0.5, -0.3, 0.2, -0.7], atol=1e-8
+    )
+    np.testing.assert_allclose([m.b[1][0][0], m.b[1][1][0]], [-0.6, 0.9], atol=1e-8)
+
+
+def test_arx_std_calibrated_monte_carlo():
+    # 300 runs, ARX(1,1): predicted std within 25 % of the sample std.
+    est, sds = [], []
+    for run in range(300):
+        rng = np.random.default_rng(1000 + run)
+        u = rng.standard_normal(300)
+        e = 0.5 * rng.standard_normal(300)
+        y = signal.lfilter([0.0, 1.0], [1.0, -0.8], u) + signal.lfilter([1.0], [1.0, -0.8], e)
+        m = sysid.arx(_data(y, u), 1, 1, 1)
+        est.append(m.parameters[0])
+        sds.append(np.sqrt(np.diag(m.covariance[0])))
+    ratio = np.mean(sds, axis=0) / np.std(est, axis=0)
+    assert np.all(np.abs(ratio - 1) < 0.25), ratio
+
+
+def test_armax_std_calibrated_monte_carlo():
+    est, sds = [], []
+    for run in range(200):
+        rng = np.random.default_rng(5000 + run)
+        u = rng.standard_normal(400)
+        e = 0.3 * rng.standard_normal(400)
+        y = signal.lfilter([0.0, 0.8], [1.0, -0.7], u) + signal.lfilter([1.0, 0.5], [1.0, -0.7], e)
+        m = sysid.armax(_data(y, u), 1, 1, 1, 1)
+        est.append([m.a[0][0][0], m.b[0][0][0], m.c[0][0]])
+        sds.append(np.sqrt(np.diag(m.covariance[0])))
+    est = np.asarray(est)
+    np.testing.assert_allclose(est.mean(axis=0), [-0.7, 0.8, 0.5], atol=0.03)
+    ratio = np.mean(sds, axis=0) / np.std(est, axis=0)
+    assert np.all(np.abs(ratio - 1) < 0.25), ratio
+
+
+def test_options_change_results(u1):
+    rng = np.random.default_rng(3)
+    y = signal.lfilter([0.0, 1.0], [1.0, -0.8], u1) + 0.3 * rng.standard_normal(600)
+    d = _data(y, u1)
+    base = sysid.arx(d, 2, 2, 1)
+    assert not np.allclose(sysid.arx(d, 2, 2, 1, regularization=50.0).b[0][0], base.b[0][0])
+    k = np.diag([1.0, 10.0, 1.0, 10.0])
+    assert not np.allclose(
+        sysid.arx(d, 2, 2, 1, regularization=50.0, kernel=k).b[0][0],
+        sysid.arx(d, 2, 2, 1, regularization=50.0).b[0][0],
+    )
+    assert not np.allclose(sysid.arx(d, 2, 2, 2).b[0][0], base.b[0][0])
+    one = sysid.oe(d, 1, 1, 1, max_iter=1)
+    full = sysid.oe(d, 1, 1, 1)
+    assert one.info["iterations"][0] <= 1 and one.info["cost"][0] >= full.info["cost"][0]
+    calls = []
+    sysid.armax(d, 1, 1, 1, 1, progress=lambda i, c: calls.append((i, c)))
+    assert calls and calls[0][0] == 1
+    table = sysid.arxstruc(d, [1, 2, 3], [1, 2], [1, 2])
+    assert sysid.selstruc(table, "aic", 600) != sysid.selstruc(table[table[:, 2] == 2], "aic", 600)
+    aic = sysid.selstruc(table, "aic", 600)
+    assert aic[2] == 1 and sysid.selstruc(table, "bic", 600)[0] <= aic[0]
+
+
+def test_bad_input(u1):
+    y = signal.lfilter([0.0, 1.0], [1.0, -0.8], u1)
+    d = _data(y, u1)
+    with pytest.raises(DataError, match="nb"):
+        sysid.arx(d, 1, [[1, 2]], 1)
+    with pytest.raises(DataError, match="non-negative"):
+        sysid.arx(d, -1, 1, 1)
+    with pytest.raises(DataError, match="regularization"):
+        sysid.arx(d, 1, 1, 1, regularization=-1.0)
+    with pytest.raises(sysid.SysidError, match="too few samples"):
+        sysid.oe(_data(y[:5], u1[:5]), 2, 2, 1)
+    with pytest.raises(sysid.SysidError, match="persistently exciting"):
+        sysid.arx(_data(y, np.zeros(600)), 1, 1, 1)
+    with pytest.raises(DataError, match="criterion"):
+        sysid.selstruc(sysid.arxstruc(d, [1], [1], [1]), "xyz", 600)
+
+
+def test_docs_dryer_example(capsys):
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "docs" / "polynomial.md").read_text()
+    ns: dict = {}
+    for i, block in enumerate(re.findall(r"```python\n(.*?)```", text, re.S)):
+        exec(compile(block, f"docs/polynomial.md[python block {i}]", "exec"), ns)
+    out = capsys.readouterr().out
+    assert "(3, 4, 2)" in out
+    assert ns["fit"](ns["arx"]) > 80 and ns["fit"](ns["oe"]) > 80
+    assert ns["oe"].info["stop"][0] in ("cost tolerance", "step tolerance", "gradient tolerance")
+
+
+def test_conversions_agree(u1):
+    y = signal.lfilter([0.5, 0.3], [1.0, -1.2, 0.5], _delay(u1, 1))
+    m = sysid.oe(_data(y, u1), 2, 2, 1)
+    ss = m.to_statespace()
+    np.testing.assert_allclose(ss.simulate(u1[:, None]), m.simulate(u1[:, None]), atol=1e-9)
+    w = np.linspace(0.1, 3.0, 7)
+    _, h = signal.dfreqresp(m.to_scipy(), w)
+    np.testing.assert_allclose(h, m.freqresp(w)[:, 0, 0], atol=1e-9)
+    np.testing.assert_allclose(
+        np.sort_complex(m.poles()), np.sort_complex(np.roots([1, -1.2, 0.5])), atol=1e-8
+    )
+    np.testing.assert_allclose(m.zeros(), [-0.6], atol=1e-8)
+    np.testing.assert_allclose(m.predict(u1[:, None], y[:, None]), y[:, None], atol=1e-8)
+
+
+def test_ar_arma_delayest():
+    rng = np.random.default_rng(21)
+    e = rng.standard_normal(4000)
+    y = signal.lfilter([1, 0.5], [1, -0.7], e)
+    ts = sysid.IOData(None, y[:, None], 1.0)
+    m = sysid.arma(ts, 1, 1)
+    sd = np.sqrt(np.diag(m.covariance[0]))
+    assert abs(m.a[0][0][0] + 0.7) < 4 * sd[0] and abs(m.c[0][0] - 0.5) < 4 * sd[1]
+    assert sysid.ar(ts, 3).a[0][0].size == 3
+    u = rng.standard_normal(800)
+    yd = signal.lfilter([0.8], [1, -0.5], _delay(u, 4)) + 0.05 * rng.standard_normal(800)
+    d = _data(yd, u)
+    assert sysid.delayest(d) == 4
+    assert sysid.delayest(d, nk_max=3) != 4  # the range option matters
+    with pytest.raises(DataError, match="without inputs"):
+        sysid.ar(d, 1)
+
+
+def test_iv4_noise_free_and_unbiased():
+    rng = np.random.default_rng(41)
+    u = rng.standard_normal(3000)
+    y0 = signal.lfilter([0, 1.0, 0.5], [1, -1.5, 0.7], u)
+    m = sysid.iv4(_data(y0, u), 2, 2, 1)
+    np.testing.assert_allclose(m.a[0][0], [-1.5, 0.7], atol=1e-8)
+    np.testing.assert_allclose(m.b[0][0], [1.0, 0.5], atol=1e-8)
+    y = y0 + 0.5 * signal.lfilter([1], [1, -0.9], rng.standard_normal(3000))
+    iv = sysid.iv4(_data(y, u), 2, 2, 1)
+    ls = sysid.arx(_data(y, u), 2, 2, 1)
+    err_iv = np.abs(iv.a[0][0] - [-1.5, 0.7]).max()
+    err_ls = np.abs(ls.a[0][0] - [-1.5, 0.7]).max()
+    assert err_iv < 0.05 and err_ls > 2 * err_iv
+    ref = sysid.iv4(_data(y, u), 2, 2, 1, reference=u + 0.1 * rng.standard_normal(3000))
+    assert not np.allclose(ref.a[0][0], iv.a[0][0])  # the instrument option matters
+    with pytest.raises(DataError, match="single input"):
+        sysid.iv4(sysid.IOData(np.c_[u, u], y[:, None], 1.0), 1, 1, 1)
