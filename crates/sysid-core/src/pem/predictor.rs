@@ -131,6 +131,9 @@ pub struct Predictor<'a> {
     /// Sensitivities are formed only for parameters `>= col_lo` (the others get zero rows and
     /// columns in the Gauss-Newton matrix): the initial-state-only pre-step sets it.
     col_lo: usize,
+    /// Form `J^T W J` through the predictor parameterisation (see [`Predictor::evaluate_structured`]);
+    /// `false` forms every Jacobian row (the reference path, kept for tests).
+    pub(super) structured: bool,
 }
 
 struct Unpacked {
@@ -269,6 +272,7 @@ impl<'a> Predictor<'a> {
             n_samples,
             losses: Vec::new(),
             col_lo: 0,
+            structured: true,
         })
     }
 
@@ -408,7 +412,7 @@ impl<'a> Predictor<'a> {
     }
 
     /// Sets the weighting from the prediction errors at `theta`.
-    fn reweight_at(&mut self, th: &[f64]) -> Result<()> {
+    pub(super) fn reweight_at(&mut self, th: &[f64]) -> Result<()> {
         let l = self.l;
         let mut lam = self.innovation_covariance(th);
         for i in 0..l {
@@ -435,12 +439,362 @@ impl<'a> Predictor<'a> {
     }
 }
 
+/// Sparse columns of `T = dphi/dtheta`, the derivative of the predictor parameters
+/// `phi = (A - K C, B - K D, C, D, K, x0)` with respect to `theta = (A, B, C, D, K, x0)`
+/// (both in the layout of [`Predictor`]): `(row, value)` pairs per column.
+type SparseCols = Vec<Vec<(usize, f64)>>;
+
+impl Predictor<'_> {
+    fn predictor_map(&self, pm: &Unpacked) -> SparseCols {
+        let (n, m, l) = (self.n, self.m, self.l);
+        let (ia, ib, ic, id, ik) = self.column_offsets();
+        let mut t: SparseCols = (0..self.p).map(|c| vec![(c, 1.0)]).collect();
+        for r in 0..l {
+            for i in 0..n {
+                let kir = pm.k[(i, r)];
+                if kir == 0.0 {
+                    continue;
+                }
+                for j in 0..n {
+                    t[ic + r * n + j].push((ia + i * n + j, -kir));
+                }
+                if let Some(id) = id {
+                    for j in 0..m {
+                        t[id + r * m + j].push((ib + i * m + j, -kir));
+                    }
+                }
+            }
+        }
+        if let Some(ik) = ik {
+            for i in 0..n {
+                for r in 0..l {
+                    let col = &mut t[ik + i * l + r];
+                    for j in 0..n {
+                        if pm.c[(r, j)] != 0.0 {
+                            col.push((ia + i * n + j, -pm.c[(r, j)]));
+                        }
+                    }
+                    for j in 0..m {
+                        if pm.d[(r, j)] != 0.0 {
+                            col.push((ib + i * m + j, -pm.d[(r, j)]));
+                        }
+                    }
+                }
+            }
+        }
+        t
+    }
+
+    /// Cost, `J^T W r` and `J^T W J` through the predictor parameterisation
+    /// `phi = (Abar, Bbar, C, D, K, x0)` with `Abar = A - K C`, `Bbar = B - K D`.
+    ///
+    /// In `phi` the predictor's state depends on `Abar, Bbar, K, x0` only, so the columns of
+    /// `C` and `D` have no state sensitivity: their Jacobian rows are `e_i (x) z(t)^T` with
+    /// `z = (x, u)`, and their blocks of `J^T W J` are `W (x) sum z z^T` (static-static) and
+    /// `sum_k (W C)_ik sum_t z_j(t) S_k(t)` (static-dynamic), `O(N n (n + m) p_d)` instead of
+    /// `O(N l p^2)`. The dynamic block `sum S^T C^T W C S` is formed from `min(l, n)` rows per
+    /// sample (`R^-1 C`, or the Cholesky factor of `C^T W C` when `l > n`). The result is
+    /// mapped back to `theta` by the chain rule, `J_theta = J_phi T` ([`Self::predictor_map`]),
+    /// so it equals the plain evaluation up to round-off.
+    fn evaluate_structured(&self, th: &[f64]) -> Result<Evaluation> {
+        let (n, m, l, np) = (self.n, self.m, self.l, self.p);
+        let pm = self.unpack(th);
+        let abar = &pm.a - &pm.k * &pm.c;
+        let bbar = &pm.b - &pm.k * &pm.d;
+        let (ia, ib, ic, id, ik) = self.column_offsets();
+        let blk = self.block;
+        // dynamic parameters (state sensitivity): Abar, Bbar, K, then each estimated x0
+        let mut dcols: Vec<usize> = (ia..ia + n * n).chain(ib..ib + n * m).collect();
+        let k_at = dcols.len();
+        if let Some(ik) = ik {
+            dcols.extend(ik..ik + n * l);
+        }
+        let mut x0_at = Vec::with_capacity(self.x0_off.len());
+        for off in &self.x0_off {
+            if let Some(o) = off {
+                x0_at.push(Some(dcols.len()));
+                dcols.extend(*o..*o + n);
+            } else {
+                x0_at.push(None);
+            }
+        }
+        let pd = dcols.len();
+        let nz = n + m;
+        let rinv = self.rinv.clone();
+        let w = rinv.transpose() * &rinv;
+        let q = &rinv * &pm.c;
+        let wc = &w * &pm.c;
+        // rows whose Gram matrix is C^T W C
+        let lt: Mat<f64> = if l > n {
+            let g = q.transpose() * &q;
+            match g.llt(Side::Lower) {
+                Ok(f) => f.L().transpose().to_owned(),
+                Err(_) => q.clone(),
+            }
+        } else {
+            q.clone()
+        };
+        let r = lt.nrows();
+        let par = if pd >= 64 {
+            faer::get_global_parallelism()
+        } else {
+            Par::Seq
+        };
+        let mut hd = Mat::<f64>::zeros(pd, pd);
+        let mut gd = vec![0.0; pd];
+        // rows k * nz + j: sum_t z_j(t) S_k(t)
+        let mut cross = Mat::<f64>::zeros(n * nz, pd);
+        let mut zz = Mat::<f64>::zeros(nz, nz);
+        // sum_t (W e)(t) z(t)^T
+        let mut gz = Mat::<f64>::zeros(l, nz);
+        let mut jb = Mat::<f64>::zeros(blk * r, pd);
+        let mut sbuf = Mat::<f64>::zeros(n * blk, pd);
+        let mut zbuf = Mat::<f64>::zeros(blk, nz);
+        let mut s = Mat::<f64>::zeros(n, pd);
+        let mut s2 = s.clone();
+        let mut cost = 0.0;
+        let mut e = vec![0.0; l];
+        let mut we = vec![0.0; l];
+        let mut wz = vec![0.0; l];
+        let mut v = vec![0.0; n];
+        let mut z = vec![0.0; nz];
+        let mut x = vec![0.0; n];
+        let mut xn = vec![0.0; n];
+        for (ex, (u, y)) in self.exps.iter().enumerate() {
+            x.copy_from_slice(&pm.x0[ex]);
+            s.fill(0.0);
+            if let Some(c0) = x0_at[ex] {
+                for i in 0..n {
+                    s[(i, c0 + i)] = 1.0;
+                }
+            }
+            let len = y.nrows();
+            let mut row = 0usize;
+            for t in 0..len {
+                for i in 0..l {
+                    let mut a = y[(t, i)];
+                    for j in 0..n {
+                        a -= pm.c[(i, j)] * x[j];
+                    }
+                    for j in 0..m {
+                        a -= pm.d[(i, j)] * u[(t, j)];
+                    }
+                    e[i] = a;
+                }
+                for i in 0..l {
+                    let mut a = 0.0;
+                    for j in 0..=i {
+                        a += rinv[(i, j)] * e[j];
+                    }
+                    we[i] = a;
+                    cost += 0.5 * a * a;
+                }
+                // W e = R^-T R^-1 e
+                for i in 0..l {
+                    let mut a = 0.0;
+                    for j in i..l {
+                        a += rinv[(j, i)] * we[j];
+                    }
+                    wz[i] = a;
+                }
+                z[..n].copy_from_slice(&x);
+                for j in 0..m {
+                    z[n + j] = u[(t, j)];
+                }
+                for i in 0..l {
+                    for j in 0..nz {
+                        gz[(i, j)] += wz[i] * z[j];
+                    }
+                }
+                for a in 0..nz {
+                    for b in 0..=a {
+                        zz[(a, b)] += z[a] * z[b];
+                    }
+                    zbuf[(row, a)] = z[a];
+                }
+                // dynamic gradient: -S^T C^T W e
+                for k in 0..n {
+                    let mut a = 0.0;
+                    for i in 0..l {
+                        a += pm.c[(i, k)] * wz[i];
+                    }
+                    v[k] = a;
+                }
+                for c in 0..pd {
+                    let mut a = 0.0;
+                    for k in 0..n {
+                        a += s[(k, c)] * v[k];
+                    }
+                    gd[c] -= a;
+                }
+                for c in 0..pd {
+                    for k in 0..n {
+                        sbuf[(k * blk + row, c)] = s[(k, c)];
+                    }
+                }
+                matmul(
+                    jb.as_mut().subrows_mut(row * r, r),
+                    Accum::Replace,
+                    lt.as_ref(),
+                    s.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                row += 1;
+                // S(t+1) = Abar S + F, F: e_i x_j (Abar), e_i u_j (Bbar), e_i y_j (K)
+                matmul(
+                    s2.as_mut(),
+                    Accum::Replace,
+                    abar.as_ref(),
+                    s.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                for i in 0..n {
+                    for j in 0..n {
+                        s2[(i, i * n + j)] += x[j];
+                    }
+                    for j in 0..m {
+                        s2[(i, n * n + i * m + j)] += u[(t, j)];
+                    }
+                    if ik.is_some() {
+                        for j in 0..l {
+                            s2[(i, k_at + i * l + j)] += y[(t, j)];
+                        }
+                    }
+                }
+                std::mem::swap(&mut s, &mut s2);
+                if row == blk || t + 1 == len {
+                    let jr = jb.as_ref().subrows(0, row * r);
+                    tri::matmul(
+                        hd.as_mut(),
+                        BlockStructure::TriangularLower,
+                        Accum::Add,
+                        jr.transpose(),
+                        BlockStructure::Rectangular,
+                        jr,
+                        BlockStructure::Rectangular,
+                        1.0,
+                        par,
+                    );
+                    let zr = zbuf.as_ref().subrows(0, row);
+                    for k in 0..n {
+                        matmul(
+                            cross.as_mut().subrows_mut(k * nz, nz),
+                            Accum::Add,
+                            zr.transpose(),
+                            sbuf.as_ref().subrows(k * blk, row),
+                            1.0,
+                            par,
+                        );
+                    }
+                    row = 0;
+                }
+                for i in 0..n {
+                    let mut a = 0.0;
+                    for j in 0..n {
+                        a += abar[(i, j)] * x[j];
+                    }
+                    for j in 0..m {
+                        a += bbar[(i, j)] * u[(t, j)];
+                    }
+                    for j in 0..l {
+                        a += pm.k[(i, j)] * y[(t, j)];
+                    }
+                    xn[i] = a;
+                }
+                std::mem::swap(&mut x, &mut xn);
+            }
+        }
+        if !cost.is_finite() {
+            cost = f64::INFINITY;
+        }
+        // assemble J^T W J and J^T W r in phi
+        let stat = |i: usize, j: usize| -> Option<usize> {
+            if j < n {
+                Some(ic + i * n + j)
+            } else {
+                id.map(|d| d + i * m + (j - n))
+            }
+        };
+        let mut h = Mat::<f64>::zeros(np, np);
+        let mut g = vec![0.0; np];
+        for a in 0..pd {
+            g[dcols[a]] = gd[a];
+            for b in 0..=a {
+                h[(dcols[a], dcols[b])] = hd[(a, b)];
+                h[(dcols[b], dcols[a])] = hd[(a, b)];
+            }
+        }
+        for i in 0..l {
+            for j in 0..nz {
+                let Some(sij) = stat(i, j) else { continue };
+                g[sij] = -gz[(i, j)];
+                for i2 in 0..l {
+                    for j2 in 0..nz {
+                        let Some(s2j) = stat(i2, j2) else { continue };
+                        let zjj = if j >= j2 { zz[(j, j2)] } else { zz[(j2, j)] };
+                        h[(sij, s2j)] = w[(i, i2)] * zjj;
+                    }
+                }
+                for a in 0..pd {
+                    let mut acc = 0.0;
+                    for k in 0..n {
+                        acc += wc[(i, k)] * cross[(k * nz + j, a)];
+                    }
+                    h[(sij, dcols[a])] = acc;
+                    h[(dcols[a], sij)] = acc;
+                }
+            }
+        }
+        // back to theta: H = T^T H_phi T, g = T^T g_phi
+        let tmap = self.predictor_map(&pm);
+        let mut ht = Mat::<f64>::zeros(np, np);
+        for (c, col) in tmap.iter().enumerate() {
+            for &(rw, val) in col {
+                for i in 0..np {
+                    ht[(i, c)] += val * h[(i, rw)];
+                }
+            }
+        }
+        let mut hth = Mat::<f64>::zeros(np, np);
+        for cp in 0..np {
+            for (c, col) in tmap.iter().enumerate() {
+                let mut acc = 0.0;
+                for &(rw, val) in col {
+                    acc += val * ht[(rw, cp)];
+                }
+                hth[(c, cp)] = acc;
+            }
+        }
+        for i in 0..np {
+            for j in 0..i {
+                let a = 0.5 * (hth[(i, j)] + hth[(j, i)]);
+                hth[(i, j)] = a;
+                hth[(j, i)] = a;
+            }
+        }
+        let gradient = tmap
+            .iter()
+            .map(|col| col.iter().map(|&(rw, val)| val * g[rw]).sum())
+            .collect();
+        Ok(Evaluation {
+            cost,
+            gradient,
+            gauss_newton: hth,
+        })
+    }
+}
+
 impl Problem for Predictor<'_> {
     fn n_params(&self) -> usize {
         self.p
     }
 
     fn evaluate(&mut self, th: &[f64], jacobian: bool) -> Result<Evaluation> {
+        if jacobian && self.structured && self.col_lo == 0 && self.n > 0 {
+            return self.evaluate_structured(th);
+        }
         let (n, m, l, np) = (self.n, self.m, self.l, self.p);
         let pm = self.unpack(th);
         let abar = &pm.a - &pm.k * &pm.c;

@@ -299,3 +299,51 @@ fn local_coordinates_and_gradient_check() {
     let q = pr.search_basis(&th).unwrap().unwrap();
     assert_eq!(q.ncols(), th.len() - 9);
 }
+
+/// The structured `J^T W J` (predictor parameterisation, Kronecker blocks for C and D) equals
+/// the plain one that forms every Jacobian row, for every option that changes its layout.
+#[test]
+fn structured_gauss_newton_equals_the_plain_one() {
+    let (sys, k) = truth();
+    let sys = StateSpace::new(
+        sys.a.clone(),
+        sys.b.clone(),
+        sys.c.clone(),
+        mat![[0.2, -0.1], [0.0, 0.3]],
+    )
+    .unwrap();
+    let u1 = noise(150, 2, 21);
+    let u2 = noise(90, 2, 22);
+    let y1 = data(&sys, &k, &u1, &(noise(150, 2, 23) * faer::Scale(0.3)), &[0.3, 0.0, -0.2]);
+    let y2 = data(&sys, &k, &u2, &(noise(90, 2, 24) * faer::Scale(0.3)), &[0.0; 3]);
+    let views = [(u1.as_ref(), y1.as_ref()), (u2.as_ref(), y2.as_ref())];
+    for (focus, est_d, est_k, x0) in [
+        (Focus::Prediction, true, true, vec![InitialState::Estimate]),
+        (Focus::Prediction, false, true, vec![InitialState::Estimate, InitialState::Zero]),
+        (Focus::Prediction, true, false, vec![InitialState::Zero]),
+        (Focus::Simulation, true, false, vec![InitialState::Estimate]),
+        (Focus::Simulation, false, false, vec![InitialState::Given(vec![0.1, 0.2, 0.3])]),
+    ] {
+        let mut o = PemOptions::default();
+        o.focus = focus;
+        o.estimate_d = est_d;
+        o.estimate_k = est_k;
+        o.x0 = x0;
+        o.block = 7;
+        let mut pr = Predictor::new(&sys, Some(k.as_ref()), &views, &o).unwrap();
+        let x0s = vec![vec![0.1, -0.2, 0.3], vec![0.05, 0.0, 0.1]];
+        let th = pr.pack(&sys, k.as_ref(), &x0s);
+        pr.reweight_at(&th).unwrap();
+        let fast = pr.evaluate(&th, true).unwrap();
+        pr.structured = false;
+        let plain = pr.evaluate(&th, true).unwrap();
+        let scale = plain.gauss_newton.norm_max();
+        let dh = (&fast.gauss_newton - &plain.gauss_newton).norm_max();
+        assert!(dh < 1e-11 * scale, "{focus:?} {est_d} {est_k}: {dh} vs {scale}");
+        let gs = plain.gradient.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        for (a, b) in fast.gradient.iter().zip(&plain.gradient) {
+            assert!((a - b).abs() < 1e-11 * gs, "{a} vs {b}");
+        }
+        assert!((fast.cost - plain.cost).abs() < 1e-12 * plain.cost);
+    }
+}
