@@ -117,6 +117,12 @@ pub trait Problem {
     fn accepted(&mut self, _theta: &[f64]) -> Result<bool> {
         Ok(false)
     }
+    /// Cost and gradient at `theta` without the Gauss-Newton matrix (left empty), when the
+    /// provider forms them much more cheaply than a full evaluation; `None` (the default) when
+    /// it cannot. Used only with [`Options::reuse_gauss_newton`] `> 0`.
+    fn gradient_only(&mut self, _theta: &[f64]) -> Result<Option<Evaluation>> {
+        Ok(None)
+    }
 }
 
 /// Regularisation toward a nominal value: `lambda/2 (theta - nominal)^T R (theta - nominal)`.
@@ -156,6 +162,12 @@ pub struct Options {
     /// Eigenvalues of the scaled Gauss-Newton matrix below `rank_tol * max` are treated as
     /// zero when reporting its condition and solving for the step.
     pub rank_tol: f64,
+    /// After a step whose Gauss-Newton model predicted the actual decrease well (ratio
+    /// > 0.75), up to this many consecutive iterations reuse the last Gauss-Newton matrix with
+    /// a fresh gradient from [`Problem::gradient_only`] (a chord step) instead of forming
+    /// `J^T J` again. A poorer step, or a stopping test met after a chord step, forms it anew;
+    /// the solution always carries the Gauss-Newton matrix at its own point. Default 0 (never).
+    pub reuse_gauss_newton: usize,
 }
 
 impl Default for Options {
@@ -171,6 +183,7 @@ impl Default for Options {
             regularization: None,
             initial_damping: 1e-4,
             rank_tol: 1e-13,
+            reuse_gauss_newton: 0,
         }
     }
 }

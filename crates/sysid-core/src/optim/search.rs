@@ -383,6 +383,8 @@ pub fn minimize(
     let mut mu = options.initial_damping.max(0.0);
     let mut iterations = 0usize;
     let mut condition = f64::NAN;
+    // consecutive iterations whose Gauss-Newton matrix is reused from an earlier point
+    let mut frozen = 0usize;
     let stop;
     loop {
         if iterations >= options.max_iter {
@@ -412,8 +414,13 @@ pub fn minimize(
             stop = StopReason::GradientTolerance;
             break;
         }
-        let mut accepted: Option<(Vec<f64>, f64, f64)> = None;
-        for _try in 0..60 {
+        let stale = frozen > 0;
+        let mut accepted: Option<(Vec<f64>, f64, f64, f64)> = None;
+        for try_ in 0..60 {
+            if stale && try_ > 0 {
+                // a chord step gets one try at the current damping
+                break;
+            }
             let s = red.step(mu, options.rank_tol);
             let mut alpha = 1.0;
             let mut trial: Vec<f64> = (0..p).map(|i| pt.theta[i] + s[i]).collect();
@@ -428,7 +435,9 @@ pub fn minimize(
                 ok = problem.admissible(&trial);
             }
             if !ok {
-                mu = (mu * 10.0).max(1e-6);
+                if !stale {
+                    mu = (mu * 10.0).max(1e-6);
+                }
                 continue;
             }
             // the trial is judged on its cost alone; the Jacobian is formed once accepted
@@ -448,20 +457,27 @@ pub fn minimize(
                 let pred = -(lin + 0.5 * quad);
                 let rho = if pred > 0.0 { actual / pred } else { 0.0 };
                 let used = mu;
-                if rho > 0.75 {
+                // the damping follows the Gauss-Newton model, not a reused one
+                if !stale && rho > 0.75 {
                     mu /= 3.0;
-                } else if rho < 0.25 {
+                } else if !stale && rho < 0.25 {
                     mu = (mu * 2.0).max(1e-12);
                 }
-                accepted = Some((trial, cand_cost, used));
+                accepted = Some((trial, cand_cost, used, rho));
                 break;
             }
-            if mu > 1e10 {
+            if mu > 1e10 || stale {
                 break;
             }
             mu = (mu * 4.0).max(1e-12);
         }
-        let Some((trial, cand_cost, used)) = accepted else {
+        let Some((trial, cand_cost, used, rho)) = accepted else {
+            if stale {
+                // the reused matrix found no descent: form it at this point and try again
+                frozen = 0;
+                pt = evaluate_point(problem, options, pt.theta, &mut evals)?;
+                continue;
+            }
             stop = StopReason::NoDescent;
             break;
         };
@@ -470,7 +486,31 @@ pub fn minimize(
         let rel_decrease = (pt.cost - cand_cost) / pt.cost.abs().max(f64::MIN_POSITIVE);
         iterations += 1;
         problem.accepted(&trial)?;
-        pt = evaluate_point(problem, options, trial, &mut evals)?;
+        let mut chord = None;
+        if frozen < options.reuse_gauss_newton && rho > 0.75 {
+            if let Some(mut raw) = problem.gradient_only(&trial)? {
+                evals += 1;
+                raw.gauss_newton = pt.raw.gauss_newton.clone();
+                let (cost, g, h) = regularise(options, &trial, &raw);
+                chord = Some(Point {
+                    theta: trial.clone(),
+                    cost,
+                    raw,
+                    g,
+                    h,
+                });
+            }
+        }
+        pt = match chord {
+            Some(c) => {
+                frozen += 1;
+                c
+            }
+            None => {
+                frozen = 0;
+                evaluate_point(problem, options, trial, &mut evals)?
+            }
+        };
         history.push(pt.cost);
         let info = Iteration {
             iteration: iterations,
@@ -483,14 +523,26 @@ pub fn minimize(
             stop = StopReason::Cancelled;
             break;
         }
+        let small_step = step_norm <= options.tol_step * (options.tol_step + norm(&pt.theta));
+        if (rel_decrease <= options.tol_cost || small_step) && stale {
+            // a chord step met a stopping test: confirm with the Gauss-Newton matrix
+            if frozen > 0 {
+                frozen = 0;
+                pt = evaluate_point(problem, options, pt.theta, &mut evals)?;
+            }
+            continue;
+        }
         if rel_decrease <= options.tol_cost {
             stop = StopReason::CostTolerance;
             break;
         }
-        if step_norm <= options.tol_step * (options.tol_step + norm(&pt.theta)) {
+        if small_step {
             stop = StopReason::StepTolerance;
             break;
         }
+    }
+    if frozen > 0 {
+        pt = evaluate_point(problem, options, pt.theta, &mut evals)?;
     }
     let active_bounds = at_bounds(options, &pt.theta);
     Ok(Solution {

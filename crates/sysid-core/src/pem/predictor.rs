@@ -56,6 +56,8 @@ impl Default for PemOptions {
         let o = optim::Options {
             max_iter: 50,
             tol_cost: 1e-6,
+            // J^T W J costs O(N min(l, n) p^2), the gradient O(N n^2 p): chord steps
+            reuse_gauss_newton: 3,
             ..Default::default()
         };
         PemOptions {
@@ -495,8 +497,9 @@ impl Predictor<'_> {
     /// `O(N l p^2)`. The dynamic block `sum S^T C^T W C S` is formed from `min(l, n)` rows per
     /// sample (`R^-1 C`, or the Cholesky factor of `C^T W C` when `l > n`). The result is
     /// mapped back to `theta` by the chain rule, `J_theta = J_phi T` ([`Self::predictor_map`]),
-    /// so it equals the plain evaluation up to round-off.
-    fn evaluate_structured(&self, th: &[f64]) -> Result<Evaluation> {
+    /// so it equals the plain evaluation up to round-off. With `grad_only` the Gauss-Newton
+    /// matrix is skipped (left empty): the sensitivities and the gradient cost `O(N n^2 p_d)`.
+    fn evaluate_structured(&self, th: &[f64], grad_only: bool) -> Result<Evaluation> {
         let (n, m, l, np) = (self.n, self.m, self.l, self.p);
         let pm = self.unpack(th);
         let abar = &pm.a - &pm.k * &pm.c;
@@ -540,16 +543,17 @@ impl Predictor<'_> {
         } else {
             Par::Seq
         };
-        let mut hd = Mat::<f64>::zeros(pd, pd);
+        let hp = if grad_only { 0 } else { pd };
+        let mut hd = Mat::<f64>::zeros(hp, hp);
         let mut gd = vec![0.0; pd];
         // rows k * nz + j: sum_t z_j(t) S_k(t)
-        let mut cross = Mat::<f64>::zeros(n * nz, pd);
+        let mut cross = Mat::<f64>::zeros(if grad_only { 0 } else { n * nz }, hp);
         let mut zz = Mat::<f64>::zeros(nz, nz);
         // sum_t (W e)(t) z(t)^T
         let mut gz = Mat::<f64>::zeros(l, nz);
-        let mut jb = Mat::<f64>::zeros(blk * r, pd);
-        let mut sbuf = Mat::<f64>::zeros(n * blk, pd);
-        let mut zbuf = Mat::<f64>::zeros(blk, nz);
+        let mut jb = Mat::<f64>::zeros(if grad_only { 0 } else { blk * r }, hp);
+        let mut sbuf = Mat::<f64>::zeros(if grad_only { 0 } else { n * blk }, hp);
+        let mut zbuf = Mat::<f64>::zeros(if grad_only { 0 } else { blk }, nz);
         let mut s = Mat::<f64>::zeros(n, pd);
         let mut s2 = s.clone();
         let mut cost = 0.0;
@@ -606,11 +610,13 @@ impl Predictor<'_> {
                         gz[(i, j)] += wz[i] * z[j];
                     }
                 }
-                for a in 0..nz {
-                    for b in 0..=a {
-                        zz[(a, b)] += z[a] * z[b];
+                if !grad_only {
+                    for a in 0..nz {
+                        for b in 0..=a {
+                            zz[(a, b)] += z[a] * z[b];
+                        }
+                        zbuf[(row, a)] = z[a];
                     }
-                    zbuf[(row, a)] = z[a];
                 }
                 // dynamic gradient: -S^T C^T W e
                 for k in 0..n {
@@ -627,19 +633,21 @@ impl Predictor<'_> {
                     }
                     gd[c] -= a;
                 }
-                for c in 0..pd {
-                    for k in 0..n {
-                        sbuf[(k * blk + row, c)] = s[(k, c)];
+                if !grad_only {
+                    for c in 0..pd {
+                        for k in 0..n {
+                            sbuf[(k * blk + row, c)] = s[(k, c)];
+                        }
                     }
+                    matmul(
+                        jb.as_mut().subrows_mut(row * r, r),
+                        Accum::Replace,
+                        lt.as_ref(),
+                        s.as_ref(),
+                        1.0,
+                        Par::Seq,
+                    );
                 }
-                matmul(
-                    jb.as_mut().subrows_mut(row * r, r),
-                    Accum::Replace,
-                    lt.as_ref(),
-                    s.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
                 row += 1;
                 // S(t+1) = Abar S + F, F: e_i x_j (Abar), e_i u_j (Bbar), e_i y_j (K)
                 matmul(
@@ -664,7 +672,9 @@ impl Predictor<'_> {
                     }
                 }
                 std::mem::swap(&mut s, &mut s2);
-                if row == blk || t + 1 == len {
+                if grad_only {
+                    row = 0;
+                } else if row == blk || t + 1 == len {
                     let jr = jb.as_ref().subrows(0, row * r);
                     tri::matmul(
                         hd.as_mut(),
@@ -717,8 +727,29 @@ impl Predictor<'_> {
                 id.map(|d| d + i * m + (j - n))
             }
         };
-        let mut h = Mat::<f64>::zeros(np, np);
         let mut g = vec![0.0; np];
+        for i in 0..l {
+            for j in 0..nz {
+                if let Some(sij) = stat(i, j) {
+                    g[sij] = -gz[(i, j)];
+                }
+            }
+        }
+        let tmap = self.predictor_map(&pm);
+        if grad_only {
+            for a in 0..pd {
+                g[dcols[a]] = gd[a];
+            }
+            return Ok(Evaluation {
+                cost,
+                gradient: tmap
+                    .iter()
+                    .map(|col| col.iter().map(|&(rw, val)| val * g[rw]).sum())
+                    .collect(),
+                gauss_newton: Mat::zeros(0, 0),
+            });
+        }
+        let mut h = Mat::<f64>::zeros(np, np);
         for a in 0..pd {
             g[dcols[a]] = gd[a];
             for b in 0..=a {
@@ -729,7 +760,6 @@ impl Predictor<'_> {
         for i in 0..l {
             for j in 0..nz {
                 let Some(sij) = stat(i, j) else { continue };
-                g[sij] = -gz[(i, j)];
                 for i2 in 0..l {
                     for j2 in 0..nz {
                         let Some(s2j) = stat(i2, j2) else { continue };
@@ -748,7 +778,6 @@ impl Predictor<'_> {
             }
         }
         // back to theta: H = T^T H_phi T, g = T^T g_phi
-        let tmap = self.predictor_map(&pm);
         let mut ht = Mat::<f64>::zeros(np, np);
         for (c, col) in tmap.iter().enumerate() {
             for &(rw, val) in col {
@@ -793,7 +822,7 @@ impl Problem for Predictor<'_> {
 
     fn evaluate(&mut self, th: &[f64], jacobian: bool) -> Result<Evaluation> {
         if jacobian && self.structured && self.col_lo == 0 && self.n > 0 {
-            return self.evaluate_structured(th);
+            return self.evaluate_structured(th, false);
         }
         let (n, m, l, np) = (self.n, self.m, self.l, self.p);
         let pm = self.unpack(th);
@@ -1061,6 +1090,13 @@ impl Problem for Predictor<'_> {
             .count();
         let u = svd.U();
         Ok(Some(u.subcols(rank, self.p - rank).to_owned()))
+    }
+
+    fn gradient_only(&mut self, th: &[f64]) -> Result<Option<Evaluation>> {
+        if self.structured && self.col_lo == 0 && self.n > 0 {
+            return self.evaluate_structured(th, true).map(Some);
+        }
+        Ok(None)
     }
 
     fn accepted(&mut self, th: &[f64]) -> Result<bool> {

@@ -345,5 +345,9 @@ fn structured_gauss_newton_equals_the_plain_one() {
             assert!((a - b).abs() < 1e-11 * gs, "{a} vs {b}");
         }
         assert!((fast.cost - plain.cost).abs() < 1e-12 * plain.cost);
+        pr.structured = true;
+        let chord = pr.gradient_only(&th).unwrap().unwrap();
+        assert_eq!(chord.gradient, fast.gradient);
+        assert_eq!(chord.gauss_newton.nrows(), 0);
     }
 }
