@@ -351,3 +351,37 @@ fn structured_gauss_newton_equals_the_plain_one() {
         assert_eq!(chord.gauss_newton.nrows(), 0);
     }
 }
+
+/// The parallel products of the structured evaluation split the output only: the Gauss-Newton
+/// matrix and gradient are bit-for-bit the same for any thread count.
+#[test]
+fn structured_evaluation_is_identical_for_any_thread_count() {
+    let n = 6;
+    let a = Mat::from_fn(n, n, |i, j| {
+        if i == j {
+            0.5
+        } else {
+            0.4 * noise(n, n, 31)[(i, j)]
+        }
+    });
+    let b = noise(n, 2, 32);
+    let c = noise(6, n, 33);
+    let sys = StateSpace::new(a, b, c, Mat::zeros(6, 2)).unwrap();
+    let k = noise(n, 6, 34) * faer::Scale(0.1);
+    let u = noise(400, 2, 35);
+    let y = data(&sys, &k, &u, &(noise(400, 6, 36) * faer::Scale(0.2)), &[0.0; 6]);
+    let views = [(u.as_ref(), y.as_ref())];
+    let o = PemOptions::default();
+    let mut pr = Predictor::new(&sys, Some(k.as_ref()), &views, &o).unwrap();
+    let th = pr.pack(&sys, k.as_ref(), &[vec![0.0; n]]);
+    pr.reweight_at(&th).unwrap();
+    let run = |pr: &mut Predictor, par: faer::Par| {
+        faer::set_global_parallelism(par);
+        pr.evaluate(&th, true).unwrap()
+    };
+    let serial = run(&mut pr, faer::Par::Seq);
+    let parallel = run(&mut pr, faer::Par::rayon(2));
+    faer::set_global_parallelism(faer::Par::rayon(0));
+    assert_eq!(serial.gradient, parallel.gradient);
+    assert!(serial.gauss_newton == parallel.gauss_newton);
+}
