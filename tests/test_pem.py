@@ -96,8 +96,11 @@ def test_fixed_k_and_no_noise_model():
     assert not np.allclose(est.K, start.K, atol=1e-3)
     none = sysid.pem((u, y), start, noise="none")
     assert none.K is None
-    # the estimated noise model predicts best on the estimation data
-    assert np.linalg.det(est.noise_cov) < np.linalg.det(fixed.noise_cov)
+    # the estimated noise model predicts no worse on the estimation data. (Not strictly
+    # better: with A and C free, a fixed K of full column rank still leaves the predictor
+    # free through the state basis, so both searches reach the same optimum up to the
+    # tolerance.)
+    assert np.linalg.det(est.noise_cov) <= np.linalg.det(fixed.noise_cov) * (1 + 1e-6)
     assert np.linalg.det(est.noise_cov) < np.linalg.det(none.noise_cov)
 
 
