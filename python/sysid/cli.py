@@ -206,7 +206,9 @@ def identify(
         top = min(est.max_order, 2 * top)
     n = sel.order if order == "auto" else int(order)
     say(f"fitting order {n} ({est.method})")
-    x0 = est_data.n_experiments == 1
+    # B, D from the regression on the factor: on the DaISy records it loses less validation
+    # fit than B, D, x0 by least squares (benches/results/subspace_defaults.md)
+    x0 = False
     model = est.fit(n, x0=x0)
     model.info["settings"] = {"method": est.method, "order": n, "order_rule": (
         sel.criterion if order == "auto" else "given"), "past": est.past,
