@@ -87,7 +87,8 @@ def main() -> None:
           + " | ssest prediction (start) | ssest simulation (start) |")
     print("|---" * (len(keys) + 3) + "|")
     for r in rows:
-        cells = [f"{r[k]:.1f}" + ("" if r[k + " stable"] else " (unstable)") for k in keys]
+        cells = [(f"{r[k]:.1f}" if r[k] > -1e3 else "diverges")
+                 + ("" if r[k + " stable"] else " (unstable A)") for k in keys]
         print(f"| {r['record']} ({r['order']}) | " + " | ".join(cells)
               + f" | {r['ssest prediction']:.1f} ({r['ssest prediction start']}) | "
               + f"{r['ssest simulation']:.1f} ({r['ssest simulation start']}) |")

@@ -139,9 +139,26 @@ def test_unstable_start_is_stabilised_and_recorded():
     m = sysid.pem((u, y), bad, focus="simulation")
     assert "reflected" in m.info["pem"]["stabilized"]
     assert m.is_stable()
-    fixed_bad = sysid.StateSpaceModel(true.A, true.B, true.C, true.D, K=np.full((4, 2), 3.0))
+    # the search from the stabilised start converges (no divergence): the true poles back
+    assert _pole_err(m, true) < 0.05
+    assert m.info["pem"]["cost"][-1] <= m.info["pem"]["cost"][0]
+    # prediction focus: a stable A with an unstable predictor A - K C starts from K = 0
+    loud = sysid.StateSpaceModel(true.A, true.B, true.C, true.D, K=np.full((4, 2), 3.0))
+    assert np.max(np.abs(np.linalg.eigvals(loud.A - loud.K @ loud.C))) > 1
+    p = sysid.pem((u, y), loud)
+    assert p.info["pem"]["stabilized"] == "unstable predictor: started from K = 0"
+    assert np.max(np.abs(np.linalg.eigvals(p.A - p.K @ p.C))) < 1
+    assert _pole_err(p, true) < 0.05
+    # an unstable A in prediction focus: reflected and K = 0
+    both = sysid.StateSpaceModel(bad.A, true.B, true.C, true.D, K=true.K)
+    q = sysid.pem((u, y), both)
+    assert q.info["pem"]["stabilized"] == "unstable poles of A reflected and K = 0"
+    assert q.is_stable()
+    # a fixed K cannot be changed to stabilise: a clear error instead
     with pytest.raises(DataError, match="unstable"):
-        sysid.pem((u, y), fixed_bad, noise="fixed")
+        sysid.pem((u, y), loud, noise="fixed")
+    # a stable start is left alone
+    assert sysid.pem((u, y), true, max_iter=1).info["pem"]["stabilized"] is None
 
 
 def test_refined_never_worse_and_progress_and_regularisation(capsys):
@@ -156,8 +173,13 @@ def test_refined_never_worse_and_progress_and_regularisation(capsys):
     assert len(seen) == m.info["pem"]["iterations"] > 0
     stopped = sysid.pem((u, y), start, progress=lambda *a: False)
     assert stopped.info["pem"]["stop"] == "cancelled" and stopped.info["pem"]["iterations"] == 1
-    sysid.pem((u, y), start, max_iter=2, progress=True)
-    assert "pem iteration   1" in capsys.readouterr().out
+    printed = sysid.pem((u, y), start, max_iter=3, progress=True)
+    lines = capsys.readouterr().out.splitlines()
+    # one line per iteration, each with the cost, the step and the gradient norm
+    assert len(lines) == printed.info["pem"]["iterations"] > 0
+    for k, line in enumerate(lines, 1):
+        assert line.startswith(f"pem iteration {k:3d}: cost ")
+        assert " step " in line and " gradient " in line
     reg = sysid.pem((u, y), start, regularization={"lambda": 1e6, "nominal": "model"})
     free = sysid.pem((u, y), start)
     assert _pole_err(reg, start) < 0.1 * _pole_err(free, start)
