@@ -162,8 +162,8 @@ pub struct Options {
     /// Eigenvalues of the scaled Gauss-Newton matrix below `rank_tol * max` are treated as
     /// zero when reporting its condition and solving for the step.
     pub rank_tol: f64,
-    /// After a step whose Gauss-Newton model predicted the actual decrease well (ratio
-    /// > 0.75), up to this many consecutive iterations reuse the last Gauss-Newton matrix with
+    /// After a step whose Gauss-Newton model predicted the actual decrease well (ratio above
+    /// 0.75), up to this many consecutive iterations reuse the last Gauss-Newton matrix with
     /// a fresh gradient from [`Problem::gradient_only`] (a chord step) instead of forming
     /// `J^T J` again. A poorer step, or a stopping test met after a chord step, forms it anew;
     /// the solution always carries the Gauss-Newton matrix at its own point. Default 0 (never).

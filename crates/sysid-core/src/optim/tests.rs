@@ -364,7 +364,9 @@ fn chord_steps_reuse_the_gauss_newton_matrix_and_reach_the_same_minimum() {
     assert_eq!(plain.grads, 0);
     assert!(chord.grads > 0, "no chord step taken");
     // fewer Jacobians per iteration, same minimum, and the matrix returned is the one there
-    assert!((chord.full as f64) / (b.iterations as f64) < (plain.full as f64) / (a.iterations as f64));
+    assert!(
+        (chord.full as f64) / (b.iterations as f64) < (plain.full as f64) / (a.iterations as f64)
+    );
     for (x, y) in a.theta.iter().zip(&b.theta) {
         assert!((x - y).abs() < 1e-10, "{x} vs {y}");
     }

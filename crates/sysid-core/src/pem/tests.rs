@@ -314,15 +314,37 @@ fn structured_gauss_newton_equals_the_plain_one() {
     .unwrap();
     let u1 = noise(150, 2, 21);
     let u2 = noise(90, 2, 22);
-    let y1 = data(&sys, &k, &u1, &(noise(150, 2, 23) * faer::Scale(0.3)), &[0.3, 0.0, -0.2]);
-    let y2 = data(&sys, &k, &u2, &(noise(90, 2, 24) * faer::Scale(0.3)), &[0.0; 3]);
+    let y1 = data(
+        &sys,
+        &k,
+        &u1,
+        &(noise(150, 2, 23) * faer::Scale(0.3)),
+        &[0.3, 0.0, -0.2],
+    );
+    let y2 = data(
+        &sys,
+        &k,
+        &u2,
+        &(noise(90, 2, 24) * faer::Scale(0.3)),
+        &[0.0; 3],
+    );
     let views = [(u1.as_ref(), y1.as_ref()), (u2.as_ref(), y2.as_ref())];
     for (focus, est_d, est_k, x0) in [
         (Focus::Prediction, true, true, vec![InitialState::Estimate]),
-        (Focus::Prediction, false, true, vec![InitialState::Estimate, InitialState::Zero]),
+        (
+            Focus::Prediction,
+            false,
+            true,
+            vec![InitialState::Estimate, InitialState::Zero],
+        ),
         (Focus::Prediction, true, false, vec![InitialState::Zero]),
         (Focus::Simulation, true, false, vec![InitialState::Estimate]),
-        (Focus::Simulation, false, false, vec![InitialState::Given(vec![0.1, 0.2, 0.3])]),
+        (
+            Focus::Simulation,
+            false,
+            false,
+            vec![InitialState::Given(vec![0.1, 0.2, 0.3])],
+        ),
     ] {
         let mut o = PemOptions::default();
         o.focus = focus;
@@ -339,7 +361,10 @@ fn structured_gauss_newton_equals_the_plain_one() {
         let plain = pr.evaluate(&th, true).unwrap();
         let scale = plain.gauss_newton.norm_max();
         let dh = (&fast.gauss_newton - &plain.gauss_newton).norm_max();
-        assert!(dh < 1e-11 * scale, "{focus:?} {est_d} {est_k}: {dh} vs {scale}");
+        assert!(
+            dh < 1e-11 * scale,
+            "{focus:?} {est_d} {est_k}: {dh} vs {scale}"
+        );
         let gs = plain.gradient.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         for (a, b) in fast.gradient.iter().zip(&plain.gradient) {
             assert!((a - b).abs() < 1e-11 * gs, "{a} vs {b}");
@@ -369,7 +394,13 @@ fn structured_evaluation_is_identical_for_any_thread_count() {
     let sys = StateSpace::new(a, b, c, Mat::zeros(6, 2)).unwrap();
     let k = noise(n, 6, 34) * faer::Scale(0.1);
     let u = noise(400, 2, 35);
-    let y = data(&sys, &k, &u, &(noise(400, 6, 36) * faer::Scale(0.2)), &[0.0; 6]);
+    let y = data(
+        &sys,
+        &k,
+        &u,
+        &(noise(400, 6, 36) * faer::Scale(0.2)),
+        &[0.0; 6],
+    );
     let views = [(u.as_ref(), y.as_ref())];
     let o = PemOptions::default();
     let mut pr = Predictor::new(&sys, Some(k.as_ref()), &views, &o).unwrap();
