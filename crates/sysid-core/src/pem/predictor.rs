@@ -136,6 +136,9 @@ pub struct Predictor<'a> {
     /// Form `J^T W J` through the predictor parameterisation (see [`Predictor::evaluate_structured`]);
     /// `false` forms every Jacobian row (the reference path, kept for tests).
     pub(super) structured: bool,
+    /// Within the structured path, use the modal coordinates of `A - K C` when well
+    /// conditioned ([`Predictor::evaluate_modal`]).
+    pub(super) modal: bool,
 }
 
 struct Unpacked {
@@ -275,6 +278,7 @@ impl<'a> Predictor<'a> {
             losses: Vec::new(),
             col_lo: 0,
             structured: true,
+            modal: true,
         })
     }
 
@@ -446,7 +450,473 @@ impl<'a> Predictor<'a> {
 /// (both in the layout of [`Predictor`]): `(row, value)` pairs per column.
 type SparseCols = Vec<Vec<(usize, f64)>>;
 
+/// A real block-diagonal (modal) form `Lambda = T^-1 Abar T` with 1x1 and 2x2 blocks.
+pub(super) struct Modal {
+    t: Mat<f64>,
+    ti: Mat<f64>,
+    lam: Mat<f64>,
+    /// For each state index: (first row, size) of its block.
+    block: Vec<(usize, usize)>,
+}
+
+/// The modal form of `abar`, or `None` when its eigenvectors are ill-conditioned (then the
+/// plain structured evaluation is used).
+pub(super) fn modal_form(abar: MatRef<'_, f64>) -> Option<Modal> {
+    use faer::linalg::solvers::DenseSolveCore;
+    let n = abar.nrows();
+    let eig = crate::realization::modal::eigen_decomposition(abar).ok()?;
+    let mut t = Mat::<f64>::zeros(n, n);
+    let mut lam = Mat::<f64>::zeros(n, n);
+    let mut block = vec![(0usize, 0usize); n];
+    let mut k = 0usize;
+    let scale = 1.0 + eig.values.iter().map(|z| z.norm()).fold(0.0, f64::max);
+    for (idx, z) in eig.values.iter().enumerate() {
+        let v = eig.vectors.col(idx);
+        if z.im.abs() <= 1e-13 * scale {
+            if k >= n {
+                return None;
+            }
+            // rotate the (complex) eigenvector to be real
+            let mut big = 0usize;
+            for i in 0..n {
+                if v[i].norm() > v[big].norm() {
+                    big = i;
+                }
+            }
+            let ph = v[big].conj() * (1.0 / v[big].norm());
+            for i in 0..n {
+                t[(i, k)] = (v[i] * ph).re;
+            }
+            lam[(k, k)] = z.re;
+            block[k] = (k, 1);
+            k += 1;
+        } else if z.im > 0.0 {
+            if k + 1 >= n {
+                return None;
+            }
+            for i in 0..n {
+                t[(i, k)] = v[i].re;
+                t[(i, k + 1)] = v[i].im;
+            }
+            lam[(k, k)] = z.re;
+            lam[(k, k + 1)] = z.im;
+            lam[(k + 1, k)] = -z.im;
+            lam[(k + 1, k + 1)] = z.re;
+            block[k] = (k, 2);
+            block[k + 1] = (k, 2);
+            k += 2;
+        }
+    }
+    if k != n {
+        return None;
+    }
+    let ti = t.partial_piv_lu().inverse();
+    let norm1 = |m: &Mat<f64>| {
+        (0..n)
+            .map(|j| (0..n).map(|i| m[(i, j)].abs()).sum::<f64>())
+            .fold(0.0, f64::max)
+    };
+    let cond = norm1(&t) * norm1(&ti);
+    if !cond.is_finite() || cond > 1e6 {
+        return None;
+    }
+    let check = &ti * abar * &t - &lam;
+    let anorm = abar.norm_max().max(1e-300);
+    if !(check.norm_max() <= 1e-11 * anorm * cond) {
+        return None;
+    }
+    Some(Modal { t, ti, lam, block })
+}
+
 impl Predictor<'_> {
+    /// As [`Self::evaluate_structured`], with the state-moving parameters taken in the modal
+    /// coordinates of `Abar` (`phi' = (T^-1 Abar T, T^-1 Bbar, C T, D, T^-1 K, T^-1 x0)`, a
+    /// linear map of `phi` at the current point). There `Abar` is block diagonal, so the
+    /// sensitivity of every state-moving parameter lives in one 1x1 or 2x2 block: `S` is
+    /// stored compactly (`p_e <= 2 p_d` numbers per sample), its recursion costs `O(p_e)` and
+    /// `sum S^T C^T W C S` comes from the Gram matrix of those numbers, `O(N p_e^2)` instead of
+    /// `O(N min(l, n) p_d^2)`. The chain rule through `T` and the predictor map gives the
+    /// result in `theta`.
+    fn evaluate_modal(&self, th: &[f64], grad_only: bool, md: &Modal) -> Result<Evaluation> {
+        let (n, m, l, np) = (self.n, self.m, self.l, self.p);
+        let pm = self.unpack(th);
+        let abar = &pm.a - &pm.k * &pm.c;
+        let bbar = &pm.b - &pm.k * &pm.d;
+        let (ia, ib, ic, id, ik) = self.column_offsets();
+        let blk = self.block;
+        let cq = &pm.c * &md.t;
+        // dynamic columns: (phi index, state row of the parameter, forcing kind)
+        // kind: 0 = x'_j, 1 = u_j, 2 = y_j, 3 = initial state
+        let mut dcols: Vec<(usize, usize, u8, usize)> = Vec::new();
+        for i in 0..n {
+            for j in 0..n {
+                dcols.push((ia + i * n + j, i, 0, j));
+            }
+        }
+        for i in 0..n {
+            for j in 0..m {
+                dcols.push((ib + i * m + j, i, 1, j));
+            }
+        }
+        if let Some(ik) = ik {
+            for i in 0..n {
+                for j in 0..l {
+                    dcols.push((ik + i * l + j, i, 2, j));
+                }
+            }
+        }
+        let mut x0_at = Vec::with_capacity(self.x0_off.len());
+        for off in &self.x0_off {
+            if let Some(o) = off {
+                x0_at.push(Some(dcols.len()));
+                for i in 0..n {
+                    dcols.push((o + i, i, 3, 0));
+                }
+            } else {
+                x0_at.push(None);
+            }
+        }
+        let pd = dcols.len();
+        let mut eoff = vec![0usize; pd + 1];
+        for c in 0..pd {
+            eoff[c + 1] = eoff[c] + md.block[dcols[c].1].1;
+        }
+        let pe = eoff[pd];
+        let nz = n + m;
+        let rinv = self.rinv.clone();
+        let w = rinv.transpose() * &rinv;
+        let wc = &w * &cq;
+        let mq = cq.transpose() * &wc;
+        let par = if pe >= 64 {
+            faer::get_global_parallelism()
+        } else {
+            Par::Seq
+        };
+        let hp = if grad_only { 0 } else { pe };
+        let mut gram = Mat::<f64>::zeros(hp, hp);
+        let mut cross = Mat::<f64>::zeros(if grad_only { 0 } else { nz }, hp);
+        let mut vbuf = Mat::<f64>::zeros(if grad_only { 0 } else { blk }, hp);
+        let mut zbuf = Mat::<f64>::zeros(if grad_only { 0 } else { blk }, nz);
+        let mut zz = Mat::<f64>::zeros(nz, nz);
+        let mut gz = Mat::<f64>::zeros(l, nz);
+        let mut gd = vec![0.0; pd];
+        let mut sc = vec![0.0; pe];
+        let mut sn = vec![0.0; pe];
+        let mut cost = 0.0;
+        let mut e = vec![0.0; l];
+        let mut we = vec![0.0; l];
+        let mut wz = vec![0.0; l];
+        let mut v = vec![0.0; n];
+        let mut z = vec![0.0; nz];
+        let mut x = vec![0.0; n];
+        let mut xn = vec![0.0; n];
+        for (ex, (u, y)) in self.exps.iter().enumerate() {
+            x.copy_from_slice(&pm.x0[ex]);
+            sc.fill(0.0);
+            if let Some(c0) = x0_at[ex] {
+                for i in 0..n {
+                    let c = c0 + i;
+                    let (b0, _) = md.block[i];
+                    sc[eoff[c] + (i - b0)] = 1.0;
+                }
+            }
+            let len = y.nrows();
+            let mut row = 0usize;
+            for t in 0..len {
+                for i in 0..l {
+                    let mut a = y[(t, i)];
+                    for j in 0..n {
+                        a -= pm.c[(i, j)] * x[j];
+                    }
+                    for j in 0..m {
+                        a -= pm.d[(i, j)] * u[(t, j)];
+                    }
+                    e[i] = a;
+                }
+                for i in 0..l {
+                    let mut a = 0.0;
+                    for j in 0..=i {
+                        a += rinv[(i, j)] * e[j];
+                    }
+                    we[i] = a;
+                    cost += 0.5 * a * a;
+                }
+                for i in 0..l {
+                    let mut a = 0.0;
+                    for j in i..l {
+                        a += rinv[(j, i)] * we[j];
+                    }
+                    wz[i] = a;
+                }
+                // modal state x' = T^-1 x, regressor z = (x', u)
+                for a in 0..n {
+                    let mut acc = 0.0;
+                    for b in 0..n {
+                        acc += md.ti[(a, b)] * x[b];
+                    }
+                    z[a] = acc;
+                }
+                for j in 0..m {
+                    z[n + j] = u[(t, j)];
+                }
+                for i in 0..l {
+                    for j in 0..nz {
+                        gz[(i, j)] += wz[i] * z[j];
+                    }
+                }
+                for k in 0..n {
+                    let mut a = 0.0;
+                    for i in 0..l {
+                        a += cq[(i, k)] * wz[i];
+                    }
+                    v[k] = a;
+                }
+                for (c, &(_, i, _, _)) in dcols.iter().enumerate() {
+                    let (b0, bs) = md.block[i];
+                    let mut a = 0.0;
+                    for q in 0..bs {
+                        a += sc[eoff[c] + q] * v[b0 + q];
+                    }
+                    gd[c] -= a;
+                }
+                if !grad_only {
+                    for a in 0..nz {
+                        for b in 0..=a {
+                            zz[(a, b)] += z[a] * z[b];
+                        }
+                        zbuf[(row, a)] = z[a];
+                    }
+                    for q in 0..pe {
+                        vbuf[(row, q)] = sc[q];
+                    }
+                }
+                row += 1;
+                // S'(t+1) = Lambda S' + F, blockwise
+                for (c, &(_, i, kind, j)) in dcols.iter().enumerate() {
+                    let (b0, bs) = md.block[i];
+                    let o = eoff[c];
+                    for q in 0..bs {
+                        let mut a = 0.0;
+                        for r in 0..bs {
+                            a += md.lam[(b0 + q, b0 + r)] * sc[o + r];
+                        }
+                        sn[o + q] = a;
+                    }
+                    let f = match kind {
+                        0 => z[j],
+                        1 => u[(t, j)],
+                        2 => y[(t, j)],
+                        _ => 0.0,
+                    };
+                    sn[o + (i - b0)] += f;
+                }
+                std::mem::swap(&mut sc, &mut sn);
+                if grad_only {
+                    row = 0;
+                } else if row == blk || t + 1 == len {
+                    let vr = vbuf.as_ref().subrows(0, row);
+                    tri::matmul(
+                        gram.as_mut(),
+                        BlockStructure::TriangularLower,
+                        Accum::Add,
+                        vr.transpose(),
+                        BlockStructure::Rectangular,
+                        vr,
+                        BlockStructure::Rectangular,
+                        1.0,
+                        par,
+                    );
+                    matmul(
+                        cross.as_mut(),
+                        Accum::Add,
+                        zbuf.as_ref().subrows(0, row).transpose(),
+                        vr,
+                        1.0,
+                        par,
+                    );
+                    row = 0;
+                }
+                for i in 0..n {
+                    let mut a = 0.0;
+                    for j in 0..n {
+                        a += abar[(i, j)] * x[j];
+                    }
+                    for j in 0..m {
+                        a += bbar[(i, j)] * u[(t, j)];
+                    }
+                    for j in 0..l {
+                        a += pm.k[(i, j)] * y[(t, j)];
+                    }
+                    xn[i] = a;
+                }
+                std::mem::swap(&mut x, &mut xn);
+            }
+        }
+        if !cost.is_finite() {
+            cost = f64::INFINITY;
+        }
+        let stat = |i: usize, j: usize| -> Option<usize> {
+            if j < n {
+                Some(ic + i * n + j)
+            } else {
+                id.map(|d| d + i * m + (j - n))
+            }
+        };
+        // gradient and Gauss-Newton matrix in phi'
+        let mut g = vec![0.0; np];
+        for i in 0..l {
+            for j in 0..nz {
+                if let Some(sij) = stat(i, j) {
+                    g[sij] = -gz[(i, j)];
+                }
+            }
+        }
+        for (c, d) in dcols.iter().enumerate() {
+            g[d.0] = gd[c];
+        }
+        let q = self.modal_map(&pm, md);
+        if grad_only {
+            let gm = Mat::from_fn(np, 1, |i, _| g[i]);
+            let gt = q.transpose() * &gm;
+            return Ok(Evaluation {
+                cost,
+                gradient: (0..np).map(|i| gt[(i, 0)]).collect(),
+                gauss_newton: Mat::zeros(0, 0),
+            });
+        }
+        let mut h = Mat::<f64>::zeros(np, np);
+        for c in 0..pd {
+            let (b0, bs) = md.block[dcols[c].1];
+            for c2 in 0..=c {
+                let (b2, bs2) = md.block[dcols[c2].1];
+                let mut acc = 0.0;
+                for qa in 0..bs {
+                    for qb in 0..bs2 {
+                        let (ra, rb) = (eoff[c] + qa, eoff[c2] + qb);
+                        let gv = if ra >= rb {
+                            gram[(ra, rb)]
+                        } else {
+                            gram[(rb, ra)]
+                        };
+                        acc += mq[(b0 + qa, b2 + qb)] * gv;
+                    }
+                }
+                h[(dcols[c].0, dcols[c2].0)] = acc;
+                h[(dcols[c2].0, dcols[c].0)] = acc;
+            }
+        }
+        for i in 0..l {
+            for j in 0..nz {
+                let Some(sij) = stat(i, j) else { continue };
+                for i2 in 0..l {
+                    for j2 in 0..nz {
+                        let Some(s2j) = stat(i2, j2) else { continue };
+                        let zjj = if j >= j2 { zz[(j, j2)] } else { zz[(j2, j)] };
+                        h[(sij, s2j)] = w[(i, i2)] * zjj;
+                    }
+                }
+                for (c, d) in dcols.iter().enumerate() {
+                    let (b0, bs) = md.block[d.1];
+                    let mut acc = 0.0;
+                    for qa in 0..bs {
+                        acc += wc[(i, b0 + qa)] * cross[(j, eoff[c] + qa)];
+                    }
+                    h[(sij, d.0)] = acc;
+                    h[(d.0, sij)] = acc;
+                }
+            }
+        }
+        let par_p = if np >= 64 {
+            faer::get_global_parallelism()
+        } else {
+            Par::Seq
+        };
+        let mut hq = Mat::<f64>::zeros(np, np);
+        matmul(
+            hq.as_mut(),
+            Accum::Replace,
+            h.as_ref(),
+            q.as_ref(),
+            1.0,
+            par_p,
+        );
+        let mut hth = Mat::<f64>::zeros(np, np);
+        matmul(
+            hth.as_mut(),
+            Accum::Replace,
+            q.transpose(),
+            hq.as_ref(),
+            1.0,
+            par_p,
+        );
+        for i in 0..np {
+            for j in 0..i {
+                let a = 0.5 * (hth[(i, j)] + hth[(j, i)]);
+                hth[(i, j)] = a;
+                hth[(j, i)] = a;
+            }
+        }
+        let gm = Mat::from_fn(np, 1, |i, _| g[i]);
+        let gt = q.transpose() * &gm;
+        Ok(Evaluation {
+            cost,
+            gradient: (0..np).map(|i| gt[(i, 0)]).collect(),
+            gauss_newton: hth,
+        })
+    }
+
+    /// `Q = dphi'/dtheta` (dense): the predictor map followed by the modal change of basis.
+    fn modal_map(&self, pm: &Unpacked, md: &Modal) -> Mat<f64> {
+        let (n, m, l, np) = (self.n, self.m, self.l, self.p);
+        let (ia, ib, ic, _id, ik) = self.column_offsets();
+        let tmap = self.predictor_map(pm);
+        let x0_offs: Vec<usize> = self.x0_off.iter().flatten().copied().collect();
+        let mut q = Mat::<f64>::zeros(np, np);
+        for (c, col) in tmap.iter().enumerate() {
+            for &(r, v) in col {
+                if r >= ia && r < ib {
+                    let (i, j) = ((r - ia) / n, (r - ia) % n);
+                    for a in 0..n {
+                        let f = v * md.ti[(a, i)];
+                        for b in 0..n {
+                            q[(ia + a * n + b, c)] += f * md.t[(j, b)];
+                        }
+                    }
+                } else if r >= ib && r < ic {
+                    let (i, j) = ((r - ib) / m, (r - ib) % m);
+                    for a in 0..n {
+                        q[(ib + a * m + j, c)] += v * md.ti[(a, i)];
+                    }
+                } else if r >= ic && r < ic + l * n {
+                    let (rr, j) = ((r - ic) / n, (r - ic) % n);
+                    for b in 0..n {
+                        q[(ic + rr * n + b, c)] += v * md.t[(j, b)];
+                    }
+                } else if let Some(k0) = ik.filter(|&k0| r >= k0 && r < k0 + n * l) {
+                    let (i, j) = ((r - k0) / l, (r - k0) % l);
+                    for a in 0..n {
+                        q[(k0 + a * l + j, c)] += v * md.ti[(a, i)];
+                    }
+                } else if let Some(&o) = x0_offs.iter().find(|&&o| r >= o && r < o + n) {
+                    let i = r - o;
+                    for a in 0..n {
+                        q[(o + a, c)] += v * md.ti[(a, i)];
+                    }
+                } else {
+                    // D: unchanged
+                    q[(r, c)] += v;
+                }
+            }
+        }
+        q
+    }
+
+    fn modal_at(&self, th: &[f64]) -> Option<Modal> {
+        let pm = self.unpack(th);
+        let abar = &pm.a - &pm.k * &pm.c;
+        modal_form(abar.as_ref())
+    }
+
     fn predictor_map(&self, pm: &Unpacked) -> SparseCols {
         let (n, m, l) = (self.n, self.m, self.l);
         let (ia, ib, ic, id, ik) = self.column_offsets();
@@ -822,6 +1292,11 @@ impl Problem for Predictor<'_> {
 
     fn evaluate(&mut self, th: &[f64], jacobian: bool) -> Result<Evaluation> {
         if jacobian && self.structured && self.col_lo == 0 && self.n > 0 {
+            if self.modal {
+                if let Some(md) = self.modal_at(th) {
+                    return self.evaluate_modal(th, false, &md);
+                }
+            }
             return self.evaluate_structured(th, false);
         }
         let (n, m, l, np) = (self.n, self.m, self.l, self.p);
@@ -1094,6 +1569,11 @@ impl Problem for Predictor<'_> {
 
     fn gradient_only(&mut self, th: &[f64]) -> Result<Option<Evaluation>> {
         if self.structured && self.col_lo == 0 && self.n > 0 {
+            if self.modal {
+                if let Some(md) = self.modal_at(th) {
+                    return self.evaluate_modal(th, true, &md).map(Some);
+                }
+            }
             return self.evaluate_structured(th, true).map(Some);
         }
         Ok(None)
