@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -11,7 +9,6 @@ import sysid
 from sysid import _sysid
 from sysid.analysis.validation import ResidualAnalysis
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 needs_engine = pytest.mark.skipif(not hasattr(_sysid, "Subspace"),
                                   reason="the subspace engine is not in this build yet")
 

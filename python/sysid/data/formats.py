@@ -31,6 +31,25 @@ def _pandas() -> Any:
     return pd
 
 
+def _open_text(p: Path) -> Any:
+    """A text stream of a file, decompressed by its suffix (``.gz``, ``.bz2``, ``.xz``) as
+    ``numpy.genfromtxt`` does."""
+    suffix = p.suffix.lower()
+    if suffix == ".gz":
+        import gzip
+
+        return gzip.open(p, "rt", encoding="utf-8")
+    if suffix == ".bz2":
+        import bz2
+
+        return bz2.open(p, "rt", encoding="utf-8")
+    if suffix in (".xz", ".lzma"):
+        import lzma
+
+        return lzma.open(p, "rt", encoding="utf-8")
+    return open(p, encoding="utf-8")
+
+
 class _FileFormats:
     """Readers and writers of :class:`~sysid.IOData` (a base class of it)."""
 
@@ -169,6 +188,7 @@ class _FileFormats:
         """Write a CSV file: header ``time,experiment,<inputs>,<outputs>``, one row a sample.
 
         Units are written into the header as ``name [unit]``; :meth:`from_csv` reads them back.
+        A name ending in ``.gz`` writes a gzip-compressed file.
         """
         head = ["time", "experiment"] + [
             f"{n} [{u}]" if u else n
@@ -204,11 +224,22 @@ class _FileFormats:
         units. Without ``inputs``/``outputs``, a file written by :meth:`to_csv` is read back
         whole. Empty fields become NaN and are handled as ``nan`` says (see
         :meth:`from_raw`; only for single-experiment files). Trailing delimiters are ignored.
+        Files ending in ``.gz``, ``.bz2`` or ``.xz`` are decompressed while reading.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid, tempfile, os
+        >>> d = sysid.IOData(u=np.arange(4.0), y=np.ones(4), dt=0.5, output_units=["m"])
+        >>> f = os.path.join(tempfile.mkdtemp(), "rec.csv.gz")
+        >>> d.to_csv(f)
+        >>> back = sysid.IOData.from_csv(f, inputs=["u0"], outputs=["y0"])
+        >>> back == d, back.output_units
+        (True, ['m'])
         """
         p = Path(path)
         if not p.exists():
             raise DataError(f"no such file: {p}")
-        with open(p, encoding="utf-8") as fh:
+        with _open_text(p) as fh:
             header = fh.readline().strip()
         raw_names = [h.strip().strip('"') for h in header.split(delimiter)]
         while raw_names and raw_names[-1] == "":
