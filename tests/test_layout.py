@@ -267,3 +267,29 @@ def test_namespace_holds_only_public_names():
 def test_every_public_name_resolves(name):
     """Every name in ``__all__`` loads (the lazy map points at a module that defines it)."""
     assert getattr(sysid, name) is not None
+
+
+def test_readme_where_things_are_points_at_existing_names_and_files():
+    """The README's map from a method's name to its Python and Rust files stays true."""
+    import re
+
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "README.md").read_text(encoding="utf-8")
+    section = text[text.index("## Where things are") :]
+    section = section[: section.index("\n## ", 3)]
+    rows = [r for r in section.splitlines() if r.startswith("| ") and not r.startswith("| concept")]
+    assert len(rows) > 20
+    problems = []
+    for row in rows:
+        _, names, py, rs = [c.strip() for c in row.strip().strip("|").split("|")]
+        for n in re.findall(r"`([^`]+)`", names):
+            head = re.split(r"[./ ]", n)[0]
+            if head and head != "sysid" and not hasattr(sysid, head):
+                problems.append(f"no sysid.{head} ({row[:40]}...)")
+        for f in re.findall(r"[\w/]+\.py|[\w/]+/", py):
+            if not (PACKAGE / f).exists():
+                problems.append(f"no python/sysid/{f}")
+        for f in re.findall(r"[\w/]+\.rs|[\w/]+/", rs):
+            if not (root / "crates" / "sysid-core" / "src" / f).exists():
+                problems.append(f"no crates/sysid-core/src/{f}")
+    assert not problems, problems
