@@ -45,7 +45,7 @@ import numpy as np
 from .._checks import as_int
 from ..data.iodata import IOData
 from ..errors import DataError, NumericalError, SysidError
-from ..models.protocol import _optional, check_model
+from ..models.checks import _optional, check_model
 from ..models.statespace import StateSpaceModel, ss_parameter_count
 from .validation import _records, _run, _stateful, _x0_for, compare
 

@@ -21,9 +21,10 @@ import numpy as np
 
 from .._checks import as_matrix
 from ..errors import DataError, ShapeError
+from ..models.checks import _optional, check_model
 from ..models.continuous import ContinuousStateSpace, c2d, d2c
 from ..models.linear import DampingTable, damping_table, transmission_zeros
-from ..models.protocol import TimeResponse, _optional, check_model
+from ..models.protocol import TimeResponse
 from ..models.statespace import StateSpaceModel
 
 __all__ = [

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import DataError
-from ..models.protocol import check_model
+from ..models.checks import check_model
 from .criteria import _pct
 from .validation import compare, error_spectrum
 from .whiteness import residuals
@@ -50,8 +50,8 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
     --------
     >>> import tempfile, numpy as np, sysid
     >>> m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]], K=[[0.5]])
-    >>> u = np.random.default_rng(0).standard_normal((300, 1))
-    >>> files = sysid.report(m, (u, m.simulate(u)), tempfile.mkdtemp())
+    >>> u, e = np.random.default_rng(0).standard_normal((2, 300, 1))
+    >>> files = sysid.report(m, (u, m.simulate(u) + 0.1 * e), tempfile.mkdtemp())
     >>> sorted(files)[:4]
     ['bode', 'compare', 'error_spectrum', 'fit']
     """

@@ -35,7 +35,7 @@ import numpy as np
 from .._checks import as_2d, as_int
 from ..data.iodata import IOData
 from ..errors import DataError, ShapeError
-from ..models.protocol import check_model
+from ..models.checks import check_model
 
 __all__ = [
     "CompareResult",

@@ -71,12 +71,11 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 
 from ..errors import DataError
+from .checks import REQUIRED, _optional, as_statespace, check_model
 
 __all__ = ["Model", "ModelMixin", "check_model", "as_statespace", "TimeResponse"]
 
-#: Names a model must have to satisfy :class:`Model` (checked by :func:`check_model`).
-REQUIRED = ("simulate", "predict", "freqresp", "dt", "ninputs", "noutputs", "input_names",
-            "output_names", "n_parameters", "info")
+_ = REQUIRED  # re-exported: the names checked by check_model
 
 
 @runtime_checkable
@@ -130,51 +129,6 @@ class Model(Protocol):
 
     def freqresp(self, omega: Any) -> np.ndarray:
         """Complex frequency response ``(len(omega), noutputs, ninputs)``."""
-
-
-def check_model(model: Any, what: str = "model") -> Any:
-    """Return ``model`` if it satisfies :class:`Model`, else raise a :class:`DataError`
-    naming the missing members.
-
-    Examples
-    --------
-    >>> from sysid.models.protocol import check_model
-    >>> check_model(object())
-    Traceback (most recent call last):
-    ...
-    sysid.errors.DataError: model must satisfy sysid.Model; object lacks simulate, ...
-    """
-    missing = [name for name in REQUIRED if not hasattr(model, name)]
-    if missing:
-        raise DataError(
-            f"{what} must satisfy sysid.Model; {type(model).__name__} lacks "
-            f"{', '.join(missing)} (see sysid.models.protocol for the interface)"
-        )
-    return model
-
-
-def as_statespace(model: Any, purpose: str) -> Any:
-    """``model.to_statespace()`` (or the model itself if it has state-space matrices).
-
-    Raises a :class:`DataError` naming ``purpose`` when the model has neither.
-    """
-    if all(hasattr(model, k) for k in ("A", "B", "C", "D")) and getattr(model, "dt", 0) > 0:
-        return model
-    conv = getattr(model, "to_statespace", None)
-    if conv is None:
-        raise DataError(
-            f"{purpose} needs a state-space form, but {type(model).__name__} has no "
-            "to_statespace() method; add one (returning a sysid.StateSpaceModel)"
-        )
-    return conv()
-
-
-def _optional(model: Any, name: str, purpose: str) -> Any:
-    """Call ``model.name()`` or ``model.to_statespace().name()``, or raise naming both."""
-    fn = getattr(model, name, None)
-    if fn is not None:
-        return fn()
-    return getattr(as_statespace(model, f"{purpose} ({name}())"), name)()
 
 
 # -- time responses ---------------------------------------------------------------------

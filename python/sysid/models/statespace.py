@@ -20,7 +20,7 @@ from .. import _sysid
 from .._checks import as_2d, as_int, as_matrix
 from ..errors import DataError, ShapeError
 from .linear import DampingTable, damping_table, transmission_zeros
-from .protocol import ModelMixin
+from .protocol import ModelMixin, TimeResponse, default_length
 
 __all__ = ["StateSpaceModel", "ss_parameter_count"]
 
@@ -286,6 +286,11 @@ class StateSpaceModel(ModelMixin):
         for i, zi in enumerate(z):
             out[i] = self.C @ np.linalg.solve(zi * eye - self.A, self.B) + self.D if n else self.D
         return out
+
+    def impulse(self, n_samples: int | None = None) -> TimeResponse:
+        """Impulse responses: the Markov parameters; see :func:`sysid.impulse`."""
+        N = default_length(self, n_samples)
+        return TimeResponse("impulse", np.arange(N) * self.dt, self.markov(N), self)
 
     def dcgain(self) -> np.ndarray:
         """Steady-state gain ``C (I - A)^{-1} B + D``, shape ``(noutputs, ninputs)``."""

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ..models.protocol import _optional, check_model
+from ..models.checks import _optional, check_model
 from . import _pyplot
 
 __all__ = ["plot_bode", "plot_sigma", "plot_pzmap", "plot_time_response"]
