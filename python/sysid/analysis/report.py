@@ -116,9 +116,9 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
     except DataError as e:  # no poles()/zeros() nor to_statespace()
         plt.close("all")
         notes.append(f"no pole-zero map: {e}")
-    step = getattr(model, "step", None)
-    if step is not None:
-        save("step", step().plot())
+    from .lti import step
+
+    save("step", step(model).plot())
     files["html"] = root / "index.html"
     files["html"].write_text(_html(model, sim, pred, res, selection, which, files, notes),
                              encoding="utf-8")
@@ -155,9 +155,9 @@ def _html(model: Any, sim: Any, pred: Any, res: Any, sel: Any, which: str,
         for k, cap in captions if k in files
     )
     details = res.summary()
-    try:
-        from .lti import damp
+    from .lti import damp
 
+    try:
         details += "\n\n" + repr(damp(model))
     except DataError:
         pass
