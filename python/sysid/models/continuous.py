@@ -88,7 +88,7 @@ class ContinuousStateSpace(ModelMixin):
         ref = StateSpaceModel(A, B, C, D, input_names=input_names, output_names=output_names)
         self.A, self.B, self.C, self.D = ref.A, ref.B, ref.C, ref.D
         self.input_names, self.output_names = ref.input_names, ref.output_names
-        self.hold = _method(hold, ("zoh", "foh"))
+        self.hold = _method(hold, ("zoh", "foh"), "hold")
         self.info: dict[str, Any] = dict(info or {})
 
     dt = 0.0  # continuous time (python-control's convention)
@@ -263,10 +263,10 @@ class ContinuousStateSpace(ModelMixin):
         )
 
 
-def _method(method: Any, allowed: tuple[str, ...] = _METHODS) -> str:
+def _method(method: Any, allowed: tuple[str, ...] = _METHODS, what: str = "method") -> str:
     key = {"bilinear": "tustin"}.get(str(method).lower(), str(method).lower())
     if key not in allowed:
-        raise DataError(f"method must be one of {', '.join(repr(a) for a in allowed)}, "
+        raise DataError(f"{what} must be one of {', '.join(repr(a) for a in allowed)}, "
                         f"got {method!r}")
     return key
 
