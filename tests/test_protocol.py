@@ -299,3 +299,25 @@ def test_polynomial_k_step_prediction_matches_the_conditional_mean():
                                m.simulate(u[:, None]), atol=1e-10)
     with pytest.raises(sysid.DataError, match="horizon"):
         m.predict(u[:, None], y[:, None], horizon=0)
+
+
+def test_frd_takes_part_where_meaningful():
+    """An FRD has no time response, but its frequency side plots beside models."""
+    from sysid.plot.model import plot_bode, plot_sigma
+
+    m = _families()["statespace"]
+    w = np.linspace(0.5, 20.0, 60)
+    frd = sysid.FRD(w, m.freqresp(w), dt=DT)
+    assert (frd.ninputs, frd.noutputs) == (1, 1)
+    np.testing.assert_array_equal(frd.freqresp(w[::-1]), m.freqresp(w[::-1]))
+    mid = 0.5 * (w[3] + w[4])  # linear interpolation between neighbours
+    np.testing.assert_allclose(frd.freqresp([mid])[0], 0.5 * (frd.response[3] + frd.response[4]))
+    with pytest.raises(sysid.DataError, match="extrapolate"):
+        frd.freqresp([30.0])
+    fig = plot_bode([m, frd], labels=["model", "data"])
+    xs = fig.axes[0].lines[1].get_xdata()
+    np.testing.assert_allclose(xs, w / (2 * np.pi))  # the FRD's own grid
+    assert plot_sigma(frd).lines
+    with pytest.raises(sysid.DataError, match="lacks simulate"):
+        sysid.compare(frd, (np.zeros(10), np.zeros(10)))
+    plt.close("all")

@@ -10,14 +10,16 @@ from typing import Any
 
 from ..errors import DataError
 
-__all__ = ["REQUIRED", "check_model", "as_statespace"]
+__all__ = ["REQUIRED", "FREQUENCY", "check_model", "as_statespace"]
 
 #: Names a model must have to satisfy :class:`sysid.Model` (checked by :func:`check_model`).
 REQUIRED = ("simulate", "predict", "freqresp", "dt", "ninputs", "noutputs", "input_names",
             "output_names", "n_parameters", "info")
+#: The frequency-domain part, enough for Bode and sigma plots (e.g. :class:`sysid.FRD`).
+FREQUENCY = ("freqresp", "ninputs", "noutputs", "input_names", "output_names")
 
 
-def check_model(model: Any, what: str = "model") -> Any:
+def check_model(model: Any, what: str = "model", members: tuple[str, ...] = REQUIRED) -> Any:
     """Return ``model`` if it satisfies :class:`Model`, else raise a :class:`DataError`
     naming the missing members.
 
@@ -29,7 +31,7 @@ def check_model(model: Any, what: str = "model") -> Any:
     ...
     sysid.errors.DataError: model must satisfy sysid.Model (e.g. a sysid.StateSpaceModel); ...
     """
-    missing = [name for name in REQUIRED if not hasattr(model, name)]
+    missing = [name for name in members if not hasattr(model, name)]
     if missing:
         raise DataError(
             f"{what} must satisfy sysid.Model (e.g. a sysid.StateSpaceModel); "

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ..models.checks import _optional, check_model
+from ..models.checks import FREQUENCY, _optional, check_model
 from . import _pyplot
 
 __all__ = ["plot_bode", "plot_sigma", "plot_pzmap", "plot_time_response"]
@@ -15,13 +15,17 @@ __all__ = ["plot_bode", "plot_sigma", "plot_pzmap", "plot_time_response"]
 
 def _models(models: Any) -> list[Any]:
     ms = list(models) if isinstance(models, (list, tuple)) else [models]
-    return [check_model(m) for m in ms]
+    return [check_model(m, "every model", FREQUENCY) for m in ms]
 
 
 def _omega(models: list[Any], omega: Any, n: int = 400) -> np.ndarray:
     if omega is not None:
         return np.asarray(omega, dtype=float)
-    sampled = [m for m in models if m.dt]
+    measured = [m.omega for m in models if isinstance(getattr(m, "omega", None), np.ndarray)]
+    if measured:  # frequency-response data: their own grid, where they are defined
+        lo, hi = max(w.min() for w in measured), min(w.max() for w in measured)
+        return np.unique(np.concatenate([w[(w >= lo) & (w <= hi)] for w in measured]))
+    sampled = [m for m in models if getattr(m, "dt", None)]
     if sampled:
         nyq = min(np.pi / m.dt for m in sampled)
         return np.logspace(np.log10(nyq) - 3, np.log10(nyq), n)
@@ -39,7 +43,8 @@ def plot_bode(models: Any, omega: Any = None, *, hz: bool = True, fig: Any = Non
     Parameters
     ----------
     models : sysid.Model or list of them
-        Models (any family, discrete or continuous) with the same channels.
+        Models (any family, discrete or continuous, or :class:`sysid.FRD`) with the same
+        channels.
     omega : array_like, optional
         Angular frequencies in rad/s (default: three decades below Nyquist).
     hz : bool
@@ -106,7 +111,7 @@ def plot_pzmap(models: Any, ax: Any = None) -> Any:
     ms = _models(models)
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 5))
-    discrete = all(m.dt for m in ms)
+    discrete = all(getattr(m, "dt", None) for m in ms)
     if discrete:  # the stability boundary: unit circle (z) or imaginary axis (s)
         th = np.linspace(0, 2 * np.pi, 400)
         ax.plot(np.cos(th), np.sin(th), color="0.5", lw=0.8)
