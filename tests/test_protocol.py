@@ -192,7 +192,7 @@ def test_step_and_impulse_of_a_fir_are_its_coefficients():
 def test_report_takes_any_model(case, tmp_path):
     name, model, noisy, _ = case
     if name == "fir":
-        sysid.register_model(FIR)
+        sysid.register_model(FIR, name="tests.FIR")
     files = sysid.report(model, noisy, tmp_path, which="estimation")
     page = files["html"].read_text(encoding="utf-8")
     assert "<table id=\"fit\"" in page and "Fit on the estimation data" in page
@@ -208,7 +208,7 @@ def test_report_takes_any_model(case, tmp_path):
 
 @pytest.mark.parametrize("ext", ["json", "npz"])
 def test_save_load_round_trip_every_family(ext, tmp_path):
-    sysid.register_model(FIR)
+    sysid.register_model(FIR, name="tests.FIR")
     u = np.random.default_rng(0).standard_normal((40, 1))
     for name, model in _families().items():
         path = tmp_path / f"{name}.{ext}"
@@ -222,7 +222,7 @@ def test_save_load_round_trip_every_family(ext, tmp_path):
         np.testing.assert_array_equal(back.freqresp([0.3, 2.0]), model.freqresp([0.3, 2.0]))
     d = json.loads((tmp_path / f"fir.{ext}").read_text()) if ext == "json" else None
     if d is not None:
-        assert d["family"] == "FIR" and d["version"] == 2
+        assert d["family"] == "tests.FIR" and d["version"] == 2
 
 
 def test_saving_needs_to_dict_and_registration(tmp_path):
@@ -244,9 +244,9 @@ def test_saving_needs_to_dict_and_registration(tmp_path):
     class Other(FIR):
         pass
 
-    sysid.register_model(FIR)
+    sysid.register_model(FIR, name="tests.FIR")
     with pytest.raises(sysid.DataError, match="already registered"):
-        sysid.register_model(Other, name="FIR")
+        sysid.register_model(Other, name="tests.FIR")
 
 
 def test_version_1_files_still_load(tmp_path):
@@ -321,3 +321,20 @@ def test_frd_takes_part_where_meaningful():
     with pytest.raises(sysid.DataError, match="lacks simulate"):
         sysid.compare(frd, (np.zeros(10), np.zeros(10)))
     plt.close("all")
+
+
+def test_docs_models_examples_run(tmp_path, monkeypatch, capsys):
+    """docs/models.md: every Python block runs and prints what the comments say."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "models.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    assert len(blocks) == 2
+    monkeypatch.chdir(tmp_path)
+    for i, block in enumerate(blocks):
+        exec(compile(block, f"docs/models.md[{i}]", "exec"), {})
+    out = capsys.readouterr().out.splitlines()
+    assert out[1] == "True" and out[2] == "4 bic"
+    assert out[3].startswith("[0.  1.  0.6 0.3]")
+    assert out[4] == "[[100.]]" and out[6] == "True"

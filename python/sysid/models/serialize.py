@@ -56,8 +56,9 @@ def register_model(cls: T | None = None, *, name: str | None = None) -> Any:
 
     The class needs a method ``to_dict()`` and a classmethod ``from_dict(d)``. Use as a
     decorator (``@sysid.register_model``) or call ``sysid.register_model(cls, name=...)``;
-    ``name`` (default: the class name) is written into the file and must be unique.
-    Returns the class.
+    ``name`` (default: the class name) is written into the file and must be unique (a
+    class defined again under the same module and name replaces the old one). Returns the
+    class.
     """
 
     def add(c: T) -> T:
@@ -66,7 +67,10 @@ def register_model(cls: T | None = None, *, name: str | None = None) -> Any:
                 raise DataError(f"{c.__name__} has no {attr}(); a saved model class needs "
                                 "to_dict() and a classmethod from_dict(d)")
         key = name or c.__name__
-        if key in REGISTRY and REGISTRY[key] is not c:
+        old = REGISTRY.get(key)
+        redefined = old is not None and (old.__module__, old.__qualname__) == (
+            c.__module__, c.__qualname__)  # the same class defined again (a notebook cell)
+        if old is not None and old is not c and not redefined:
             raise DataError(f"a model family named {key!r} is already registered "
                             f"({REGISTRY[key].__module__}); pass another name=")
         REGISTRY[key] = c
