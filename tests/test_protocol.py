@@ -338,3 +338,44 @@ def test_docs_models_examples_run(tmp_path, monkeypatch, capsys):
     assert out[1] == "True" and out[2] == "4 bic"
     assert out[3].startswith("[0.  1.  0.6 0.3]")
     assert out[4] == "[[100.]]" and out[6] == "True"
+
+
+def test_mixin_defaults_go_through_to_statespace():
+    """ModelMixin writes predict, poles, zeros, step and impulse once, via to_statespace()."""
+    ss = sysid.StateSpaceModel([[0.8, 0.1], [0.0, 0.5]], [[1.0], [1.0]], [[1.0, -0.5]],
+                               K=[[0.4], [0.1]], dt=DT)
+
+    class Wrapped(sysid.ModelMixin):
+        dt, info, n_parameters = DT, {}, 7
+        ninputs = noutputs = 1
+        input_names, output_names = ["u0"], ["y0"]
+
+        def simulate(self, u, x0=None):
+            return ss.simulate(u)
+
+        def freqresp(self, omega):
+            return ss.freqresp(omega)
+
+        def to_statespace(self):
+            return ss
+
+    w = Wrapped()
+    rng = np.random.default_rng(1)
+    u, y = rng.standard_normal((2, 80, 1))
+    for k in (1, 3):
+        np.testing.assert_array_equal(w.predict(u, y, k), ss.predict(u, y, k))
+    np.testing.assert_array_equal(w.poles(), ss.poles())
+    np.testing.assert_array_equal(w.zeros(), ss.zeros())
+    np.testing.assert_allclose(w.step(20).y, ss.step(20).y, atol=1e-14)
+    np.testing.assert_allclose(w.impulse(20).y, ss.impulse(20).y, atol=1e-14)
+    assert sysid.damp(w).dt == DT and len(sysid.damp(w)) == 2
+    # the polynomial family gets step/impulse from the mixin too, equal to its state space
+    poly = _families()["polynomial"]
+    np.testing.assert_allclose(sysid.step(poly, 25).y, sysid.step(poly.to_statespace(), 25).y,
+                               atol=1e-12)
+
+    class NoStateSpace(sysid.ModelMixin):
+        pass
+
+    with pytest.raises(sysid.DataError, match=r"predict needs a state-space form.*to_statespace"):
+        NoStateSpace().predict(u, y, 2)

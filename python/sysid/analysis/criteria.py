@@ -432,7 +432,7 @@ def select_order(
     orders_ = _check_orders(orders, est.max_order)
     _check_validation(validation, est.data.n_inputs, est.data.n_outputs, est.data.dt)
     est_data = None if getattr(est, "_from_factor", False) else est.data
-    rows, models, svs, svd_picks = [], {}, {}, {}
+    rows, fitted, svs, svd_picks = [], {}, {}, {}
     for meth in meths:
         sv = np.asarray(est.singular_values_for(meth))
         svs[meth] = sv
@@ -446,7 +446,7 @@ def select_order(
             except SysidError as e:
                 rows.append(_failed(row, e))
                 continue
-            models[(meth, n)] = mod
+            fitted[(meth, n)] = mod
             row["stable"] = mod.is_stable()
             row["max_abs_pole"] = float(np.max(np.abs(mod.poles())))
             d = n_parameters(n, mod.ninputs, mod.noutputs, feedthrough=feedthrough,
@@ -466,7 +466,7 @@ def select_order(
                 rows.append(_failed(row, e))
                 continue
             rows.append(row)
-    return OrderSelection(rows, svs, models, svd_picks, validation is not None, criterion,
+    return OrderSelection(rows, svs, fitted, svd_picks, validation is not None, criterion,
                           float(fit_tol))
 
 

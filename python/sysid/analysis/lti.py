@@ -48,12 +48,6 @@ __all__ = [
 ]
 
 
-def _model(model: Any) -> StateSpaceModel:
-    if not isinstance(model, StateSpaceModel):
-        raise DataError(f"expected a sysid.StateSpaceModel, got {type(model).__name__}")
-    return model
-
-
 # -- zeros, damping (computed in sysid.models.linear) ------------------------------------
 def zeros(model: Any, tol: float = 1e-6) -> np.ndarray:
     """Transmission zeros of any model: :func:`~sysid.models.linear.transmission_zeros` of
