@@ -10,12 +10,13 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
 __all__ = ["transmission_zeros", "DampingTable", "damping_table"]
 
 
 def _pencil_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
+    import scipy.linalg  # on first use: `import sysid` stays light
+
     n = A.shape[0]
     M = np.block([[A, B], [C, D]])
     N = np.zeros_like(M)
