@@ -20,8 +20,10 @@ Data may be an :class:`~sysid.IOData` (several experiments allowed: each gets it
 initial state and its own row of fit numbers) or a pair ``(u, y)``.
 
 Any model satisfying :class:`sysid.Model` is accepted. The initial state is estimated for
-state-space models (those with ``A, B, C, D`` and ``nstates``); other models (polynomial,
-FIR, ...) start from rest, and ``x0`` may then only be ``"estimate"`` or ``"zero"``. A
+state-space models (those with ``A, B, C, D`` and ``nstates``), and for the simulation of a
+model with ``to_statespace()`` (its state-space form simulates the same map); other models,
+and predictions of polynomial models, start from rest, and ``x0`` may then only be
+``"estimate"`` or ``"zero"``. A
 continuous-time model (``dt == 0``) is discretised at the data's sample time with its
 ``hold`` (ZOH or FOH), so the data must be an :class:`~sysid.IOData`.
 """
@@ -352,14 +354,28 @@ def compare(model: Any, data: Any, horizon: int | None = None, *,
     """
     model, recs = _records(model, data)
     h = _horizon(horizon)
+    runner = _simulator(model, x0, h)
     us, ys, yh, x0s = [], [], [], []
     for i, (u, y) in enumerate(recs):
-        x = _x0_for(model, x0, u, y, h, i, len(recs))
+        x = _x0_for(runner, x0, u, y, h, i, len(recs))
         us.append(u)
         ys.append(y)
-        yh.append(_run(model, u, y, h, x))
+        yh.append(_run(runner, u, y, h, x))
         x0s.append(x)
     return CompareResult(model, h, us, ys, yh, x0s)
+
+
+def _simulator(model: Any, x0: Any, horizon: int | None) -> Any:
+    """For a simulation with ``x0="estimate"`` of a model without a state (polynomial, ...),
+    its ``to_statespace()``: the same input-output map, whose initial state can be fitted."""
+    if (horizon is not None or _stateful(model) or not isinstance(x0, str)
+            or x0 != "estimate" or not hasattr(model, "to_statespace")):
+        return model
+    try:
+        ss = model.to_statespace()
+    except DataError:  # e.g. a coupled MIMO ARX model: simulate from rest
+        return model
+    return ss if _stateful(ss) else model
 
 
 # -- spectrum of the simulation error ---------------------------------------------------
