@@ -268,8 +268,14 @@ def test_missing_members_are_named():
         def simulate(self, u, x0=None):
             return np.asarray(u)
 
+    assert not isinstance(Half(), sysid.Model) and not isinstance(np.eye(2), sysid.Model)
     with pytest.raises(sysid.DataError, match="lacks predict, freqresp"):
         sysid.compare(Half(), (np.zeros(10), np.zeros(10)))
+    for fn in (sysid.residuals, sysid.error_spectrum, sysid.criteria, sysid.report):
+        with pytest.raises(sysid.DataError, match="must satisfy sysid.Model"):
+            fn(Half(), (np.zeros(10), np.zeros(10)), *(["out"] if fn is sysid.report else []))
+    with pytest.raises(sysid.DataError, match="lacks simulate"):
+        sysid.select_order((np.zeros(10), np.zeros(10)), models=[object()])
     with pytest.raises(sysid.DataError, match="x0 must be 'estimate' or 'zero'"):
         sysid.compare(FIR(H_TRUE), (np.zeros(10), np.zeros(10)), x0=[1.0])
     with pytest.raises(sysid.DataError, match="needs the data's sample time"):

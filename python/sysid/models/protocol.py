@@ -73,9 +73,7 @@ import numpy as np
 from ..errors import DataError
 from .checks import REQUIRED, _optional, as_statespace, check_model
 
-__all__ = ["Model", "ModelMixin", "check_model", "as_statespace", "TimeResponse"]
-
-_ = REQUIRED  # re-exported: the names checked by check_model
+__all__ = ["Model", "ModelMixin", "REQUIRED", "check_model", "as_statespace", "TimeResponse"]
 
 
 @runtime_checkable
