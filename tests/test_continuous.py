@@ -79,6 +79,10 @@ def test_zoh_simulation_matches_lsim():
     _, y_lin, _ = scipy.signal.lsim((sys.A, sys.B, sys.C, sys.D), u, t, X0=x0, interp=True)
     _close(sys.simulate(u, dt=0.05, method="foh", x0=x0), y_lin, 1e-9)
     assert np.max(np.abs(y_lin - y_ref)) > 1e-2  # the hold option changes the result
+    # from rest with u(0) != 0 (the FOH state shift xi(0) = -G2 u(0) matters here)
+    for method, interp in (("zoh", False), ("foh", True)):
+        _, ref, _ = scipy.signal.lsim((sys.A, sys.B, sys.C, sys.D), u, t, interp=interp)
+        _close(sys.simulate(u, t, method=method), ref, 1e-9)
 
 
 def test_foh_simulation_of_a_ramp_is_exact():

@@ -13,7 +13,11 @@ exact discretisations, computed once from the exponential of an augmented matrix
 - FOH: ``expm([[A, B, 0], [0, 0, I/dt], [0, 0, 0]] dt)`` holds ``Ad``, ``G1`` and ``G2 =
   int_0^dt e^{A s} B (dt - s)/dt ds``; ``x(k+1) = Ad x(k) + G1 u(k) + G2 (u(k+1) - u(k))``.
   With the state ``xi = x - G2 u`` this is the ordinary model ``Bd = G1 + (Ad - I) G2``,
-  ``Cd = C``, ``Dd = D + C G2`` (the realisation of ``scipy.signal.cont2discrete``).
+  ``Cd = C``, ``Dd = D + C G2`` (the realisation of ``scipy.signal.cont2discrete``). Its
+  state differs from the continuous one: rest (``x(0) = 0``) is ``xi(0) = -G2 u(0)``,
+  which :meth:`ContinuousStateSpace.simulate` applies; the discrete model alone (and
+  ``compare(..., x0="zero")`` on a FOH model) starts from ``xi(0) = 0``, so the default
+  ``x0="estimate"`` is the one to use there.
 - Tustin (bilinear): with ``M = (I - A dt / 2)^{-1}``, ``Ad = M (I + A dt / 2)``,
   ``Bd = M B dt``, ``Cd = C M``, ``Dd = D + C M B dt / 2``.
 
@@ -168,16 +172,16 @@ class ContinuousStateSpace(ModelMixin):
         step = _sample_time(t, dt, u.shape[0])
         method = _method(method or self.hold, ("zoh", "foh"))
         Ad, Bd, Cd, Dd, G2 = _discretise(self, step, method)
-        xi0 = None
+        x = np.zeros(self.nstates)
         if x0 is not None:
-            xi0 = np.asarray(x0, dtype=float).reshape(-1)
-            if xi0.size != self.nstates:
-                raise DataError(f"x0 has {xi0.size} entries but the model has {self.nstates} "
+            x = np.asarray(x0, dtype=float).reshape(-1)
+            if x.size != self.nstates:
+                raise DataError(f"x0 has {x.size} entries but the model has {self.nstates} "
                                 "states")
-            if u.shape[0]:
-                xi0 = xi0 - G2 @ u[0]  # FOH state xi = x - G2 u (G2 = 0 for ZOH)
+        # the discrete state is xi = x - G2 u (G2 = 0 for ZOH): from rest, xi(0) = -G2 u(0)
+        xi0 = x - G2 @ u[0] if u.shape[0] else x
         d = StateSpaceModel(Ad, Bd, Cd, Dd, dt=step)
-        return d.simulate(u, x0=xi0)
+        return d.simulate(u, x0=xi0 if np.any(xi0) else None)
 
     def predict(self, u: Any, y: Any, horizon: int = 1, *, t: Any = None,
                 dt: float | None = None, method: str | None = None,
