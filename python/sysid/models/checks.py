@@ -42,12 +42,8 @@ def check_model(model: Any, what: str = "model", members: tuple[str, ...] = REQU
 
 
 def as_statespace(model: Any, purpose: str) -> Any:
-    """``model.to_statespace()`` (or the model itself if it has state-space matrices).
-
-    Raises a :class:`DataError` naming ``purpose`` when the model has neither.
-    """
-    if all(hasattr(model, k) for k in ("A", "B", "C", "D")) and getattr(model, "dt", 0) > 0:
-        return model
+    """``model.to_statespace()``, or a :class:`DataError` naming ``purpose`` and the
+    missing method."""
     conv = getattr(model, "to_statespace", None)
     if conv is None:
         raise DataError(

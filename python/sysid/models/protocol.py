@@ -203,17 +203,24 @@ class ModelMixin:
     not provide what it needs. See the module example.
     """
 
+    def _delegate(self, name: str) -> Any:
+        ss = as_statespace(self, f"{name}()" if name != "predict" else name)
+        if ss is self:  # its own to_statespace(): the mixin's default would call itself
+            raise DataError(f"{type(self).__name__}.to_statespace() returns the model itself; "
+                            f"define {name}() on the class")
+        return getattr(ss, name)
+
     def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
         """``horizon``-step prediction with the Kalman predictor of ``to_statespace()``."""
-        return np.asarray(as_statespace(self, "predict").predict(u, y, horizon))
+        return np.asarray(self._delegate("predict")(u, y, horizon))
 
     def poles(self) -> np.ndarray:
         """Poles of ``to_statespace()``."""
-        return np.asarray(as_statespace(self, "poles()").poles())
+        return np.asarray(self._delegate("poles")())
 
     def zeros(self) -> np.ndarray:
         """Transmission zeros of ``to_statespace()``."""
-        return np.asarray(as_statespace(self, "zeros()").zeros())
+        return np.asarray(self._delegate("zeros")())
 
     def step(self, n_samples: int | None = None) -> TimeResponse:
         """Response to a unit step on each input, from rest (by simulation)."""
