@@ -398,3 +398,39 @@ def test_simulation_of_a_polynomial_model_estimates_its_initial_conditions():
     np.testing.assert_allclose(est.fit, 100.0, atol=1e-6)
     assert sysid.compare(poly, (u, y), x0="zero").fit[0, 0] < 99
     assert sysid.compare(FIR(H_TRUE), (u, y)).x0 == [None]  # no state form: from rest
+
+
+def test_coupled_mimo_arx_k_step_prediction_matches_the_conditional_mean():
+    """A matrix-A ARX model: yhat(t | t-k) equals the output re-simulated with the innovations
+    after t - k set to zero; k = 1 leaves exactly the innovations as residuals."""
+    a = [[np.array([-0.5]), np.array([0.2])], [np.array([-0.3]), np.array([-0.4, 0.1])]]
+    b = [[np.array([1.0])], [np.array([0.5])]]
+    m = sysid.PolynomialModel(a, b, [[1], [1]], 1.0)
+    assert m.coupled
+    rng = np.random.default_rng(8)
+    n = 40
+    u, e = rng.standard_normal((n, 1)), 0.2 * rng.standard_normal((n, 2))
+
+    def run(ee):
+        y = np.zeros((n, 2))
+        for t in range(n):
+            for i in range(2):
+                s = ee[t, i] + (b[i][0][0] * u[t - 1, 0] if t >= 1 else 0.0)
+                for q in range(2):
+                    for lag, c in enumerate(a[i][q], start=1):
+                        if t >= lag:
+                            s -= c * y[t - lag, q]
+                y[t, i] = s
+        return y
+
+    y = run(e)
+    np.testing.assert_allclose(m.residuals(u, y), e, atol=1e-12)
+    np.testing.assert_allclose(run(np.zeros_like(e)), m.simulate(u), atol=1e-12)
+    for k in (1, 2, 4):
+        oracle = np.empty((n, 2))
+        for t in range(n):
+            ek = e.copy()
+            ek[max(t - k + 1, 0):] = 0.0
+            oracle[t] = run(ek)[t]
+        np.testing.assert_allclose(m.predict(u, y, horizon=k), oracle, atol=1e-12)
+    assert sysid.compare(m, (u, y), horizon=2).fit.shape == (1, 2)

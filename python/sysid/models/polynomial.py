@@ -230,11 +230,12 @@ class PolynomialModel(ModelMixin):
         return y
 
     def residuals(self, u: Any, y: Any) -> np.ndarray:
-        """One-step prediction errors ``e = D/C (A y - sum B/F u)`` (uncoupled ``A``)."""
+        """One-step prediction errors ``e = D/C (A y - sum B/F u)`` (matrix ``A`` for a
+        coupled MIMO ARX model)."""
         u = self._check_u(u)
         y = np.asarray(y, dtype=float).reshape(u.shape[0], -1)
         if self.coupled:
-            raise DataError("residuals of a coupled MIMO ARX model: use predict()")
+            return y - self._coupled_predict(u, y, 1)
         out = []
         for i in range(self.n_outputs):
             v = _sysid.poly_filter(list(_monic(self.a[i][i])), [1.0], np.ascontiguousarray(y[:, i]))
@@ -243,13 +244,14 @@ class PolynomialModel(ModelMixin):
         return np.column_stack(out)
 
     def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
-        """``horizon``-step-ahead prediction ``yhat(t | t - horizon)`` (uncoupled ``A``).
+        """``horizon``-step-ahead prediction ``yhat(t | t - horizon)``.
 
         With ``H_i = C_i / (A_i D_i)`` the noise filter of output ``i`` and ``h_0 = 1, h_1,
         ...`` its impulse response, ``yhat(t | t - k) = y(t) - sum_{j<k} h_j e(t - j)``,
         where ``e`` are the one-step prediction errors (:meth:`residuals`): the part of
         ``y(t)`` driven by innovations not yet seen at ``t - k`` is removed. ``k = 1``
-        gives ``y - e``; as ``k`` grows the prediction tends to the simulation.
+        gives ``y - e``; as ``k`` grows the prediction tends to the simulation. A coupled
+        MIMO ARX model iterates its matrix difference equation instead.
 
         Examples
         --------
@@ -264,6 +266,8 @@ class PolynomialModel(ModelMixin):
         k = int(horizon)
         y2 = np.asarray(y, dtype=float)
         y2 = y2.reshape(len(y2), -1)
+        if self.coupled:
+            return self._coupled_predict(self._check_u(u), y2, k)
         e = self.residuals(u, y2)
         out = y2 - e
         if k > 1:
@@ -275,6 +279,32 @@ class PolynomialModel(ModelMixin):
                 # yhat = y - sum_{j<k} h_j e(t - j): remove the innovations after t - k
                 out[:, i] = y2[:, i] - np.convolve(e[:, i], h)[: y2.shape[0]]
         return out
+
+    def _coupled_predict(self, u: np.ndarray, y: np.ndarray, k: int) -> np.ndarray:
+        """``yhat(t | t - k)`` of a MIMO ARX model ``sum_l A_l y(t - l) = w(t) + e(t)``.
+
+        ``P_0 = y`` and ``P_j(t) = w(t) - sum_{l>=1} A_l P_{max(j - l, 0)}(t - l)``: the
+        prediction ``j`` steps ahead uses measured outputs where they are known and
+        shorter-range predictions where not (future innovations have mean zero).
+        """
+        if y.shape != (u.shape[0], self.n_outputs):
+            raise DataError(f"y has shape {y.shape} but should be ({u.shape[0]}, "
+                            f"{self.n_outputs})")
+        n, ny = y.shape
+        w = np.column_stack([self._deterministic(u, i) for i in range(ny)])
+        na = max(self.a[i][q].size for i in range(ny) for q in range(ny))
+        lags = np.zeros((na + 1, ny, ny))  # lags[l][i, q]: coefficient of y_q(t - l) in row i
+        for i in range(ny):
+            for q in range(ny):
+                lags[1: self.a[i][q].size + 1, i, q] = self.a[i][q]
+        preds = [y]
+        for j in range(1, k + 1):
+            p = w.copy()
+            for lag in range(1, na + 1):
+                if lag < n:
+                    p[lag:] -= preds[max(j - lag, 0)][: n - lag] @ lags[lag].T
+            preds.append(p)
+        return preds[k]
 
     def freqresp(self, w: Any) -> np.ndarray:
         """Frequency response ``(len(w), n_outputs, n_inputs)`` at ``w`` (rad/s)."""
