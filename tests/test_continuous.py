@@ -158,3 +158,21 @@ def test_public_names_and_protocol():
     assert isinstance(sys, sysid.Model) and sys.dt == 0.0
     assert sys.n_parameters == 2 * (1 + 1) + 1  # n (l + m) + l m (D is non-zero)
     np.testing.assert_allclose(sysid.damp(sys).s, np.sort_complex(sys.poles()), atol=1e-12)
+
+
+def test_compare_uses_the_continuous_state_and_rest():
+    """At the data's rate the initial state is the continuous one: from-rest FOH data are
+    fitted exactly with x0="zero" (u(0) != 0), and x0="estimate" recovers a true x(0)."""
+    sys = sysid.ContinuousStateSpace([[-0.5, 2.0], [-2.0, -0.5]], [[1.0], [0.3]],
+                                     [[1.0, 0.0]], hold="foh")
+    rng = np.random.default_rng(6)
+    u = 1.0 + rng.standard_normal((250, 1))
+    rest = sysid.IOData(u, sys.simulate(u, dt=0.1), 0.1)
+    np.testing.assert_allclose(sysid.compare(sys, rest, x0="zero").fit, 100.0, atol=1e-8)
+    x_true = np.array([1.5, -0.7])
+    moved = sysid.IOData(u, sys.simulate(u, dt=0.1, x0=x_true), 0.1)
+    r = sysid.compare(sys, moved)
+    np.testing.assert_allclose(r.x0[0], x_true, atol=1e-9)
+    np.testing.assert_allclose(r.fit, 100.0, atol=1e-8)
+    assert sysid.compare(sys, moved, x0="zero").fit[0, 0] < 99
+    assert "SampledContinuous" in r.summary() and r.dt == 0.1

@@ -24,8 +24,9 @@ state-space models (those with ``A, B, C, D`` and ``nstates``), and for the simu
 model with ``to_statespace()`` (its state-space form simulates the same map); other models,
 and predictions of polynomial models, start from rest, and ``x0`` may then only be
 ``"estimate"`` or ``"zero"``. A
-continuous-time model (``dt == 0``) is discretised at the data's sample time with its
-``hold`` (ZOH or FOH), so the data must be an :class:`~sysid.IOData`.
+continuous-time model (``dt == 0``) meets the data at their sample time with its ``hold``
+(ZOH or FOH, exact; its initial state is the continuous state), so the data must be an
+:class:`~sysid.IOData`.
 """
 
 from __future__ import annotations
@@ -56,8 +57,9 @@ def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndar
     """The model at the data's rate and the experiments of ``data`` as (u, y) pairs,
     checked against the model's channels.
 
-    A continuous-time model (``dt == 0``) is replaced by its discretisation at the data's
-    sample time (:meth:`~sysid.ContinuousStateSpace.c2d` with the model's ``hold``).
+    A continuous-time model (``dt == 0``) is replaced by the model at the data's sample
+    time: :meth:`~sysid.ContinuousStateSpace.sampled` (exact hold, continuous initial
+    state), or ``c2d(dt)`` for another continuous class.
     """
     check_model(model)
     if isinstance(data, IOData):
@@ -85,10 +87,11 @@ def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndar
         if not isinstance(data, IOData):
             raise DataError("a continuous-time model needs the data's sample time: pass the "
                             "data as a sysid.IOData (with dt), or discretise with model.c2d(dt)")
-        if not hasattr(model, "c2d"):
-            raise DataError(f"{type(model).__name__} is continuous-time (dt == 0) but has no "
-                            "c2d(dt) method to meet sampled data")
-        return model.c2d(data.dt), recs
+        for name in ("sampled", "c2d"):
+            if hasattr(model, name):
+                return getattr(model, name)(data.dt), recs
+        raise DataError(f"{type(model).__name__} is continuous-time (dt == 0) but has no "
+                        "sampled(dt) or c2d(dt) method to meet sampled data")
     if isinstance(data, IOData) and not np.isclose(data.dt, model.dt, rtol=1e-9):
         raise DataError(
             f"the data are sampled every {data.dt:g} s but the model every {model.dt:g} s; "

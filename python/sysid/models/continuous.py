@@ -15,9 +15,8 @@ exact discretisations, computed once from the exponential of an augmented matrix
   With the state ``xi = x - G2 u`` this is the ordinary model ``Bd = G1 + (Ad - I) G2``,
   ``Cd = C``, ``Dd = D + C G2`` (the realisation of ``scipy.signal.cont2discrete``). Its
   state differs from the continuous one: rest (``x(0) = 0``) is ``xi(0) = -G2 u(0)``,
-  which :meth:`ContinuousStateSpace.simulate` applies; the discrete model alone (and
-  ``compare(..., x0="zero")`` on a FOH model) starts from ``xi(0) = 0``, so the default
-  ``x0="estimate"`` is the one to use there.
+  which :meth:`ContinuousStateSpace.simulate` applies (and :func:`sysid.compare`, through
+  :meth:`ContinuousStateSpace.sampled`); the discrete model alone starts from ``xi(0) = 0``.
 - Tustin (bilinear): with ``M = (I - A dt / 2)^{-1}``, ``Ad = M (I + A dt / 2)``,
   ``Bd = M B dt``, ``Cd = C M``, ``Dd = D + C M B dt / 2``.
 
@@ -38,7 +37,7 @@ from .linear import transmission_zeros
 from .protocol import ModelMixin, TimeResponse
 from .statespace import StateSpaceModel, ss_parameter_count
 
-__all__ = ["ContinuousStateSpace", "c2d", "d2c"]
+__all__ = ["ContinuousStateSpace", "SampledContinuous", "c2d", "d2c"]
 
 _METHODS = ("zoh", "foh", "tustin")
 
@@ -136,6 +135,11 @@ class ContinuousStateSpace(ModelMixin):
     def c2d(self, dt: float, method: str | None = None) -> StateSpaceModel:
         """Discretise (default: the model's ``hold``); see :func:`c2d`."""
         return c2d(self, dt, method or self.hold)
+
+    def sampled(self, dt: float) -> SampledContinuous:
+        """The model as it meets data sampled every ``dt`` with its ``hold``; see
+        :class:`SampledContinuous` (what :func:`sysid.compare` uses)."""
+        return SampledContinuous(self, dt)
 
     # -- sampled data ---------------------------------------------------------------------
     def simulate(self, u: Any, t: Any = None, *, dt: float | None = None,
@@ -265,6 +269,57 @@ class ContinuousStateSpace(ModelMixin):
             f"ContinuousStateSpace(nstates={self.nstates}, ninputs={self.ninputs}, "
             f"noutputs={self.noutputs}, {stab})"
         )
+
+
+class SampledContinuous:
+    """A :class:`ContinuousStateSpace` seen at sample time ``dt``: a discrete
+    :class:`sysid.Model` whose ``simulate``/``predict`` are the continuous model's exact
+    hold simulation, with ``x0`` the *continuous* state (zero is rest, also under FOH).
+
+    ``A, B, C, D`` are the hold's discrete realisation (for the initial-state regression);
+    there is no noise model, so prediction is simulation.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> s = sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]], hold="foh").sampled(0.5)
+    >>> s
+    SampledContinuous(ContinuousStateSpace(nstates=1, ninputs=1, noutputs=1, stable), dt=0.5, foh)
+    >>> s.simulate([[1.0], [1.0]], x0=[0.0])[:, 0].round(4)
+    array([0.    , 0.3935])
+    """
+
+    def __init__(self, sys: ContinuousStateSpace, dt: float) -> None:
+        self.continuous, self.dt = sys, _sample_time(None, dt, 1)
+        self.A, self.B, self.C, self.D, _ = _discretise(sys, self.dt, sys.hold)
+        self.K, self.x0 = None, None
+        self.input_names, self.output_names = sys.input_names, sys.output_names
+        self.info = sys.info
+
+    nstates = property(lambda self: self.A.shape[0], doc="Number of states n.")
+    ninputs = property(lambda self: self.B.shape[1], doc="Number of inputs m.")
+    noutputs = property(lambda self: self.C.shape[0], doc="Number of outputs l.")
+    n_parameters = property(lambda self: self.continuous.n_parameters,
+                            doc="Free parameters of the continuous model.")
+
+    def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
+        """The continuous model's response with its hold (``x0``: continuous state)."""
+        return self.continuous.simulate(u, dt=self.dt, x0=x0)
+
+    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
+        """No noise model: the simulation."""
+        return self.continuous.predict(u, y, horizon, dt=self.dt, x0=x0)
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """Frequency response of the discrete realisation (``z = exp(j omega dt)``)."""
+        return StateSpaceModel(self.A, self.B, self.C, self.D, dt=self.dt).freqresp(omega)
+
+    def poles(self) -> np.ndarray:
+        """Discrete poles ``exp(s dt)``."""
+        return np.linalg.eigvals(self.A).astype(complex)
+
+    def __repr__(self) -> str:
+        return f"SampledContinuous({self.continuous!r}, dt={self.dt:g}, {self.continuous.hold})"
 
 
 def _method(method: Any, allowed: tuple[str, ...] = _METHODS, what: str = "method") -> str:
