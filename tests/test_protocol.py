@@ -434,3 +434,18 @@ def test_coupled_mimo_arx_k_step_prediction_matches_the_conditional_mean():
             oracle[t] = run(ek)[t]
         np.testing.assert_allclose(m.predict(u, y, horizon=k), oracle, atol=1e-12)
     assert sysid.compare(m, (u, y), horizon=2).fit.shape == (1, 2)
+
+
+def test_state_space_tools_go_through_to_statespace():
+    """Modal analysis and balanced reduction take any model with to_statespace(); others are
+    told which method is missing, continuous ones to discretise first."""
+    poly = _families()["polynomial"]
+    ss = poly.to_statespace()
+    np.testing.assert_allclose(sysid.hankel_singular_values(poly),
+                               sysid.hankel_singular_values(ss))
+    np.testing.assert_allclose(np.sort(sysid.modal_analysis(poly).omega),
+                               np.sort(sysid.modal_analysis(ss).omega))
+    with pytest.raises(sysid.DataError, match=r"to_statespace\(\)"):
+        sysid.gramians(FIR(H_TRUE, DT))
+    with pytest.raises(sysid.DataError, match="c2d"):
+        sysid.modal_analysis(_families()["continuous"])

@@ -10,7 +10,7 @@ from typing import Any
 
 from ..errors import DataError
 
-__all__ = ["REQUIRED", "FREQUENCY", "check_model", "as_statespace"]
+__all__ = ["REQUIRED", "FREQUENCY", "check_model", "as_statespace", "discrete_statespace"]
 
 #: Names a model must have to satisfy :class:`sysid.Model` (checked by :func:`check_model`).
 REQUIRED = ("simulate", "predict", "freqresp", "dt", "ninputs", "noutputs", "input_names",
@@ -59,3 +59,22 @@ def _optional(model: Any, name: str, purpose: str) -> Any:
     if fn is not None:
         return fn()
     return getattr(as_statespace(model, f"{purpose} ({name}())"), name)()
+
+
+def discrete_statespace(model: Any, purpose: str) -> Any:
+    """The discrete state-space form of any model, for tools working on ``A, B, C, D``.
+
+    A model with ``A``, ``B``, ``C``, ``D`` and ``dt > 0`` is returned as it is; others go
+    through ``to_statespace()``; a continuous-time model is told to discretise first.
+    """
+    check_model(model)
+    if all(hasattr(model, k) for k in ("A", "B", "C", "D")) and model.dt:
+        return model
+    if not model.dt:
+        raise DataError(f"{purpose} works on discrete-time models; discretise first with "
+                        "model.c2d(dt)")
+    ss = as_statespace(model, purpose)
+    if not all(hasattr(ss, k) for k in ("A", "B", "C", "D")):
+        raise DataError(f"{type(model).__name__}.to_statespace() returned a "
+                        f"{type(ss).__name__}, not a state-space model")
+    return ss
