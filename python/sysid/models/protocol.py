@@ -200,7 +200,18 @@ class ModelMixin:
     - ``save(path)`` through :func:`sysid.save_model` (needs ``to_dict``).
 
     Each raises a :class:`~sysid.DataError` naming the missing method when the class does
-    not provide what it needs. See the module example.
+    not provide what it needs.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> class Integrator(sysid.ModelMixin):          # only the state-space form is given
+    ...     def to_statespace(self):
+    ...         return sysid.StateSpaceModel([[1.0]], [[1.0]], [[1.0]])
+    >>> Integrator().poles()
+    array([1.+0.j])
+    >>> Integrator().predict([1.0, 1.0, 1.0], [0.0, 1.0, 2.0], 2)[:, 0]
+    array([0., 1., 2.])
     """
 
     def _delegate(self, name: str) -> Any:

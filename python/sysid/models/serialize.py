@@ -59,6 +59,22 @@ def register_model(cls: T | None = None, *, name: str | None = None) -> Any:
     ``name`` (default: the class name) is written into the file and must be unique (a
     class defined again under the same module and name replaces the old one). Returns the
     class.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> class Delay:
+    ...     def __init__(self, k):
+    ...         self.k = int(k)
+    ...     def to_dict(self):
+    ...         return {"k": self.k}
+    ...     @classmethod
+    ...     def from_dict(cls, d):
+    ...         return cls(d["k"])
+    >>> sysid.register_model(Delay, name="example.Delay") is Delay
+    True
+    >>> sysid.model_to_dict(Delay(3))["family"]
+    'example.Delay'
     """
 
     def add(c: T) -> T:
