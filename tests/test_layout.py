@@ -214,19 +214,10 @@ def test_import_reader_resolves_relative_imports_and_skips_type_checking(tmp_pat
 # ------------------------------------------------------------------------------ the package
 
 
-# Back-edges tolerated for now, each with its owner. They run through files being rewritten on
-# branch `protocol` (issue 9 items 1-2): StateSpaceModel's convenience methods (zeros, damp,
-# step, impulse, save) import the analysis functions that take a model, which import the model
-# module; the pole-zero plot imports analysis.lti for zeros. The fix is for models/ to import
-# nothing from analysis/ or io (the computation in the model, analysis and io calling it), and
-# for plot/ to ask the model (``model.zeros()``) rather than analysis/.
-# Delete an entry as soon as its edge is gone; add none.
-TOLERATED_EDGES = {
-    ("sysid.models.statespace", "sysid.analysis.lti"),  # branch protocol
-    ("sysid.models.statespace", "sysid.models.io"),  # branch protocol
-    # plot.model takes zeros from analysis.lti, whose step/impulse results plot with it
-    ("sysid.plot.model", "sysid.analysis.lti"),  # branch protocol
-}
+# Back-edges tolerated for now, each with its owner; delete an entry as soon as its edge is
+# gone; add none. (The model modules import nothing from analysis/, io or plot/ since branch
+# `protocol`: the computation lives in models/, analysis and io call it.)
+TOLERATED_EDGES: set[tuple[str, str]] = set()
 
 
 def test_no_import_cycle_between_modules():
@@ -239,9 +230,8 @@ def test_no_import_cycle_between_modules():
     )
 
 
-# analysis/validation.py (601 lines) is being rewritten on branch `protocol`; delete this entry
-# when that lands. Add none.
-TOLERATED_LONG = {"sysid/analysis/validation.py"}
+# Add none.
+TOLERATED_LONG: set[str] = set()
 
 
 def test_no_module_over_600_lines():

@@ -51,7 +51,7 @@ from .models.statespace import StateSpaceModel
 # SciPy's signal and statistics modules nor plotting: name -> submodule.
 _LAZY = {
     "Coherence": "analysis.spectra",
-    "ContinuousStateSpace": "analysis.lti",
+    "ContinuousStateSpace": "models.continuous",
     "Correlation": "analysis.correlation",
     "EraResult": "estimate.realization",
     "FRD": "models.frd",
@@ -72,7 +72,7 @@ _LAZY = {
     "bandpass": "data.filtering",
     "bj": "estimate.polynomial",
     "butter_sos": "data.filtering",
-    "c2d": "analysis.lti",
+    "c2d": "models.continuous",
     "check_excitation": "data.input_design",
     "chirp": "data.input_design",
     "coherence": "analysis.spectra",
@@ -82,7 +82,7 @@ _LAZY = {
     "correlation": "analysis.correlation",
     "crest_factor": "data.input_design",
     "ctrb": "analysis.lti",
-    "d2c": "analysis.lti",
+    "d2c": "models.continuous",
     "damp": "analysis.lti",
     "decimate": "data.filtering",
     "delayest": "estimate.polynomial",
@@ -126,7 +126,7 @@ _LAZY = {
     "random_gaussian": "data.input_design",
     "repair_nan": "data.raw",
     "resample": "data.filtering",
-    "residuals": "analysis.validation",
+    "residuals": "analysis.whiteness",
     "save_model": "models.io",
     "scale": "data.preprocessing",
     "select_mask": "data.preprocessing",
@@ -141,6 +141,14 @@ _LAZY = {
     "to_scipy": "analysis.lti",
     "welch_frf": "analysis.frf",
     "zeros": "analysis.lti",
+    # issue 9 items 1-2 (branch protocol): the model protocol, saving any family, reports
+    "Model": "models.protocol",
+    "ModelMixin": "models.protocol",
+    "TimeResponse": "models.protocol",
+    "register_model": "models.io",
+    "model_to_dict": "models.io",
+    "model_from_dict": "models.io",
+    "report": "analysis.report",
 }
 
 
@@ -274,4 +282,11 @@ __all__ = [
     "hankel_singular_values",
     "balanced_realization",
     "balanced_truncation",
+    "Model",
+    "ModelMixin",
+    "TimeResponse",
+    "register_model",
+    "model_to_dict",
+    "model_from_dict",
+    "report",
 ]

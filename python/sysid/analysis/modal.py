@@ -27,6 +27,7 @@ import numpy as np
 from .. import _sysid
 from ..data.formats import _pandas
 from ..errors import DataError
+from ..models.checks import discrete_statespace
 from ..models.statespace import StateSpaceModel
 
 __all__ = ["ModalAnalysis", "modal_analysis"]
@@ -139,7 +140,7 @@ def modal_analysis(model: StateSpaceModel, dt: float | None = None) -> ModalAnal
     (1.0, 6.931472)
     """
     if not isinstance(model, StateSpaceModel):
-        raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
+        model = discrete_statespace(model, "modal analysis")
     dt = float(model.dt if dt is None else dt)
     if not np.isfinite(dt) or dt <= 0:
         raise DataError(f"dt must be a positive number of seconds, got {dt}")

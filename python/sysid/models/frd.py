@@ -121,6 +121,37 @@ class FRD:
     def n_outputs(self) -> int:
         return self.response.shape[1]
 
+    # the frequency-domain part of the model protocol (sysid.Model): an FRD has no time
+    # response, but the Bode and sigma plots and FRD.compare take it like any model
+    ninputs = property(lambda self: self.n_inputs, doc="Number of inputs (protocol name).")
+    noutputs = property(lambda self: self.n_outputs, doc="Number of outputs (protocol name).")
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """The response at ``omega`` (rad/s), interpolated linearly in real and imaginary
+        parts between the measured frequencies; outside their range is an error.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> f = sysid.FRD([1.0, 2.0], np.array([1.0, 3.0j]))
+        >>> f.freqresp([1.5])[0, 0, 0]
+        np.complex128(0.5+1.5j)
+        """
+        w = np.atleast_1d(np.asarray(omega, dtype=float))
+        order = np.argsort(self.omega, kind="stable")
+        ws, g = self.omega[order], self.response[order]
+        if w.ndim != 1 or not np.isfinite(w).all():
+            raise DataError("omega must be a finite 1-D array of angular frequencies (rad/s)")
+        lo, hi = ws[0], ws[-1]
+        if w.size and (w.min() < lo * (1 - 1e-12) or w.max() > hi * (1 + 1e-12)):
+            raise DataError(f"omega must lie within the measured {lo:g}..{hi:g} rad/s; an FRD "
+                            "does not extrapolate (fit a model to it first)")
+        flat = g.reshape(ws.size, -1)
+        out = np.empty((w.size, flat.shape[1]), dtype=complex)
+        for k in range(flat.shape[1]):
+            out[:, k] = np.interp(w, ws, flat[:, k].real) + 1j * np.interp(w, ws, flat[:, k].imag)
+        return out.reshape(w.size, *g.shape[1:])
+
     @property
     def magnitude(self) -> np.ndarray:
         """``|G|``, shape ``(n_freq, n_outputs, n_inputs)``."""

@@ -19,11 +19,33 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_2d, as_int, as_matrix
 from ..errors import DataError, ShapeError
+from .linear import DampingTable, damping_table, transmission_zeros
+from .protocol import ModelMixin, TimeResponse, default_length
 
-__all__ = ["StateSpaceModel"]
+__all__ = ["StateSpaceModel", "ss_parameter_count"]
 
 
-class StateSpaceModel:
+def ss_parameter_count(n: int, m: int, l: int, *, feedthrough: bool = True,
+                       noise_model: bool = True, x0: bool = False,
+                       n_experiments: int = 1) -> int:
+    """Identifiable parameters ``n (2 l + m) + [D] l m + [x0] n n_exp`` of an innovation-form
+    model (``n (l + m)`` without ``K``); see :mod:`sysid.analysis.criteria`.
+
+    Examples
+    --------
+    >>> from sysid.models.statespace import ss_parameter_count
+    >>> ss_parameter_count(4, 1, 1)        # 4 (2 + 1) + 1
+    13
+    """
+    d = n * ((2 * l if noise_model else l) + m)
+    if feedthrough:
+        d += l * m
+    if x0:
+        d += n * n_experiments
+    return int(d)
+
+
+class StateSpaceModel(ModelMixin):
     """Discrete-time state-space model ``x(t+1) = A x + B u + K e``, ``y = C x + D u + e``.
 
     Parameters
@@ -265,6 +287,11 @@ class StateSpaceModel:
             out[i] = self.C @ np.linalg.solve(zi * eye - self.A, self.B) + self.D if n else self.D
         return out
 
+    def impulse(self, n_samples: int | None = None) -> TimeResponse:
+        """Impulse responses: the Markov parameters; see :func:`sysid.impulse`."""
+        N = default_length(self, n_samples)
+        return TimeResponse("impulse", np.arange(N) * self.dt, self.markov(N), self)
+
     def dcgain(self) -> np.ndarray:
         """Steady-state gain ``C (I - A)^{-1} B + D``, shape ``(noutputs, ninputs)``."""
         return self.freqresp([0.0])[0].real
@@ -278,33 +305,48 @@ class StateSpaceModel:
             f"noutputs={self.noutputs}, dt={self.dt:g}, {stab}, {noise}{method})"
         )
 
-    # -- analysis shortcuts (thin wrappers over sysid.analysis and sysid.io) --------------
+    # -- the model protocol (sysid.Model) ------------------------------------------------
+    @property
+    def n_parameters(self) -> int:
+        """Identifiable parameters: ``n (2 l + m)`` with ``K`` (``n (l + m)`` without) plus
+        ``l m`` when ``D`` is non-zero; see :func:`sysid.n_parameters`."""
+        return ss_parameter_count(self.nstates, self.ninputs, self.noutputs,
+                                  feedthrough=bool(np.any(self.D != 0)),
+                                  noise_model=self.K is not None)
+
+    def to_statespace(self) -> StateSpaceModel:
+        """The model itself (it is already in state-space form)."""
+        return self
+
+    def to_dict(self) -> dict[str, Any]:
+        """Matrices, sample time, names and info (see :func:`sysid.save_model`)."""
+        return {"nstates": self.nstates, "ninputs": self.ninputs, "noutputs": self.noutputs,
+                "dt": self.dt, "A": self.A, "B": self.B, "C": self.C, "D": self.D,
+                "K": self.K, "noise_cov": self.noise_cov, "x0": self.x0,
+                "input_names": list(self.input_names), "output_names": list(self.output_names),
+                "info": self.info}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> StateSpaceModel:
+        """Inverse of :meth:`to_dict`, checking the shapes."""
+        n, m, l = int(d["nstates"]), int(d["ninputs"]), int(d["noutputs"])
+
+        def arr(key: str, shape: tuple[int, ...]) -> np.ndarray | None:
+            v = d.get(key)
+            return None if v is None else np.asarray(v, dtype=float).reshape(shape)
+
+        return cls(
+            arr("A", (n, n)), arr("B", (n, m)), arr("C", (l, n)), arr("D", (l, m)),
+            arr("K", (n, l)), dt=float(d["dt"]), noise_cov=arr("noise_cov", (l, l)),
+            x0=arr("x0", (n,)), input_names=d.get("input_names"),
+            output_names=d.get("output_names"), info=d.get("info") or {},
+        )
+
+    # -- analysis shortcuts ---------------------------------------------------------------
     def zeros(self) -> np.ndarray:
         """Transmission zeros; see :func:`sysid.zeros`."""
-        from ..analysis.lti import zeros
+        return transmission_zeros(self.A, self.B, self.C, self.D)
 
-        return zeros(self)
-
-    def damp(self) -> Any:
+    def damp(self) -> DampingTable:
         """Pole frequencies (rad/s, Hz) and damping; see :func:`sysid.damp`."""
-        from ..analysis.lti import damp
-
-        return damp(self)
-
-    def step(self, n_samples: int | None = None) -> Any:
-        """Step responses; see :func:`sysid.step`."""
-        from ..analysis.lti import step
-
-        return step(self, n_samples)
-
-    def impulse(self, n_samples: int | None = None) -> Any:
-        """Impulse responses (Markov parameters); see :func:`sysid.impulse`."""
-        from ..analysis.lti import impulse
-
-        return impulse(self, n_samples)
-
-    def save(self, path: Any) -> None:
-        """Write the model to a ``.json`` or ``.npz`` file; see :func:`sysid.save_model`."""
-        from .io import save_model
-
-        save_model(self, path)
+        return damping_table(self.poles(), self.dt)

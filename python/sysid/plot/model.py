@@ -7,23 +7,31 @@ from typing import Any
 
 import numpy as np
 
+from ..models.checks import FREQUENCY, _optional, check_model
 from . import _pyplot
 
 __all__ = ["plot_bode", "plot_sigma", "plot_pzmap", "plot_time_response"]
 
 
 def _models(models: Any) -> list[Any]:
-    return list(models) if isinstance(models, (list, tuple)) else [models]
+    ms = list(models) if isinstance(models, (list, tuple)) else [models]
+    return [check_model(m, "every model", FREQUENCY) for m in ms]
 
 
 def _omega(models: list[Any], omega: Any, n: int = 400) -> np.ndarray:
     if omega is not None:
         return np.asarray(omega, dtype=float)
-    if all(hasattr(m, "dt") for m in models):
-        nyq = min(np.pi / m.dt for m in models)
+    measured = [m.omega for m in models if isinstance(getattr(m, "omega", None), np.ndarray)]
+    if measured:  # frequency-response data: their own grid, where they are defined
+        lo, hi = max(w.min() for w in measured), min(w.max() for w in measured)
+        return np.unique(np.concatenate([w[(w >= lo) & (w <= hi)] for w in measured]))
+    sampled = [m for m in models if getattr(m, "dt", None)]
+    if sampled:
+        nyq = min(np.pi / m.dt for m in sampled)
         return np.logspace(np.log10(nyq) - 3, np.log10(nyq), n)
     # continuous models: two decades either side of the pole magnitudes
-    mags = np.concatenate([np.abs(m.poles()) for m in models] + [np.ones(1)])
+    mags = np.concatenate([np.abs(_optional(m, "poles", "the frequency grid")) for m in models]
+                          + [np.ones(1)])
     mags = mags[mags > 0]
     return np.logspace(np.log10(mags.min()) - 2, np.log10(mags.max()) + 2, n)
 
@@ -34,8 +42,9 @@ def plot_bode(models: Any, omega: Any = None, *, hz: bool = True, fig: Any = Non
 
     Parameters
     ----------
-    models : StateSpaceModel or list of them
-        Models with the same channels.
+    models : sysid.Model or list of them
+        Models (any family, discrete or continuous, or :class:`sysid.FRD`) with the same
+        channels.
     omega : array_like, optional
         Angular frequencies in rad/s (default: three decades below Nyquist).
     hz : bool
@@ -93,19 +102,22 @@ def plot_sigma(models: Any, omega: Any = None, *, hz: bool = True, ax: Any = Non
 
 
 def plot_pzmap(models: Any, ax: Any = None) -> Any:
-    """Poles (x) and transmission zeros (o) in the z-plane with the unit circle."""
-    from ..analysis.lti import zeros
+    """Poles (x) and zeros (o): z-plane with the unit circle, or s-plane (continuous).
 
+    Any model with ``poles()``/``zeros()`` or ``to_statespace()``; a model with neither
+    raises a :class:`~sysid.DataError` naming the missing method.
+    """
     plt = _pyplot()
     ms = _models(models)
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 5))
-    discrete = all(hasattr(m, "dt") for m in ms)
+    discrete = all(getattr(m, "dt", None) for m in ms)
     if discrete:  # the stability boundary: unit circle (z) or imaginary axis (s)
         th = np.linspace(0, 2 * np.pi, 400)
         ax.plot(np.cos(th), np.sin(th), color="0.5", lw=0.8)
     for k, mod in enumerate(ms):
-        p, z = mod.poles(), zeros(mod)
+        p = np.asarray(_optional(mod, "poles", "the pole-zero map"))
+        z = np.asarray(_optional(mod, "zeros", "the pole-zero map"))
         ax.plot(p.real, p.imag, "x", color=f"C{k}", ms=8, label="poles")
         ax.plot(z.real, z.imag, "o", color=f"C{k}", mfc="none", ms=8, label="zeros")
     ax.axhline(0, color="0.8", lw=0.5)
@@ -119,7 +131,7 @@ def plot_pzmap(models: Any, ax: Any = None) -> Any:
 
 
 def plot_time_response(resp: Any, fig: Any = None) -> Any:
-    """A :class:`~sysid.analysis.TimeResponse`, one axis per (output, input)."""
+    """A :class:`~sysid.TimeResponse`, one axis per (output, input)."""
     plt = _pyplot()
     _, l, m = resp.y.shape
     if fig is None:
