@@ -64,6 +64,8 @@ _LAZY = {
     "MarkovEstimate": "estimate.realization",
     "ModalAnalysis": "analysis.modal",
     "PolynomialModel": "models.polynomial",
+    "ParameterUncertainty": "models.uncertainty",
+    "UncertaintyWarning": "models.uncertainty",
     "Spectra": "analysis.nonparametric",
     "StabilizationDiagram": "estimate.realization",
     "ar": "estimate.polynomial",
@@ -162,6 +164,8 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
+    "ParameterUncertainty",
+    "UncertaintyWarning",
     "__version__",
     "datasets",
     "IOData",

@@ -207,11 +207,20 @@ class DampingTable:
         Damping ratio ``-Re(s) / |s|``.
     tau : ndarray
         Time constant ``-1 / Re(s)`` in seconds (``inf`` on the stability boundary).
+    pole_std, wn_std, wn_hz_std, zeta_std : ndarray or None
+        First-order standard deviations (``damp(model, std=True)``, from the model's
+        parameter uncertainty); ``pole_std`` is complex (std of the real and imaginary parts).
     """
 
-    def __init__(self, poles: np.ndarray, s: np.ndarray, dt: float | None) -> None:
+    def __init__(self, poles: np.ndarray, s: np.ndarray, dt: float | None,
+                 std: dict[str, np.ndarray] | None = None) -> None:
         order = np.lexsort((s.imag, np.abs(s)))
         self.poles, self.s, self.dt = poles[order], s[order], dt
+        self.pole_std = self.wn_std = self.wn_hz_std = self.zeta_std = None
+        if std is not None:
+            self.pole_std = std["pole_std"][order]
+            self.wn_std, self.wn_hz_std = std["wn_std"][order], std["wn_hz_std"][order]
+            self.zeta_std = std["zeta_std"][order]
         with np.errstate(divide="ignore", invalid="ignore"):
             self.wn = np.abs(self.s)
             safe = np.where(self.wn > 0, self.wn, 1.0)
@@ -226,13 +235,15 @@ class DampingTable:
         """The table as a :class:`pandas.DataFrame`."""
         import pandas as pd
 
-        return pd.DataFrame(
-            {
-                "pole": self.poles, "magnitude": np.abs(self.poles), "wn [rad/s]": self.wn,
-                "wn [Hz]": self.wn_hz, "damping": self.zeta, "wd [Hz]": self.wd_hz,
-                "tau [s]": self.tau,
-            }
-        )
+        cols = {
+            "pole": self.poles, "magnitude": np.abs(self.poles), "wn [rad/s]": self.wn,
+            "wn [Hz]": self.wn_hz, "damping": self.zeta, "wd [Hz]": self.wd_hz,
+            "tau [s]": self.tau,
+        }
+        if self.pole_std is not None:
+            cols.update({"std Re(pole)": self.pole_std.real, "std Im(pole)": self.pole_std.imag,
+                         "std wn [Hz]": self.wn_hz_std, "std damping": self.zeta_std})
+        return pd.DataFrame(cols)
 
     def __len__(self) -> int:
         return len(self.poles)
@@ -240,21 +251,29 @@ class DampingTable:
     def __repr__(self) -> str:
         head = (f"{'pole':>24} {'|pole|':>8} {'wn rad/s':>10} {'wn Hz':>9} {'damping':>8} "
                 f"{'wd Hz':>9}")
+        if self.pole_std is not None:
+            head += f" {'std Hz':>9} {'std damp':>9}"
         rows = [head]
-        for p, wn, fz, z, fd in zip(self.poles, self.wn, self.wn_hz, self.zeta, self.wd_hz):
+        for k, (p, wn, fz, z, fd) in enumerate(
+                zip(self.poles, self.wn, self.wn_hz, self.zeta, self.wd_hz)):
             rows.append(
                 f"{p.real:>11.5g}{p.imag:>+11.5g}j {abs(p):8.4f} {wn:10.4g} {fz:9.4g} "
                 f"{z:8.4f} {fd:9.4g}"
+                + ("" if self.wn_hz_std is None or self.zeta_std is None else
+                   f" {self.wn_hz_std[k]:9.3g} {self.zeta_std[k]:9.3g}")
             )
         where = f"dt = {self.dt:g} s" if self.dt is not None else "continuous time"
         return f"DampingTable ({where})\n" + "\n".join(rows)
 
 
-def damp(model: StateSpaceModel | ContinuousStateSpace) -> DampingTable:
+def damp(model: StateSpaceModel | ContinuousStateSpace, std: bool = False) -> DampingTable:
     """Natural frequencies (rad/s and Hz), damping ratios and time constants of the poles.
 
     Discrete poles are mapped through ``s = log(z) / dt``; a pole at ``z = 0`` gets
-    ``s = -inf`` (infinitely fast, damping 1).
+    ``s = -inf`` (infinitely fast, damping 1). With ``std=True`` (a discrete model with
+    ``uncertainty``) the table also has the first-order standard deviations of the poles,
+    natural frequencies and damping ratios (NaN, with a warning, for a pole too close to
+    another one for first order to hold).
 
     Examples
     --------
@@ -272,6 +291,11 @@ def damp(model: StateSpaceModel | ContinuousStateSpace) -> DampingTable:
     if isinstance(model, ContinuousStateSpace):
         return DampingTable(p, p.copy(), None)
     _model(model)
+    if std:
+        from ..models.uncertainty import damping_std
+
+        d = damping_std(model, model.dt)
+        return DampingTable(d["poles"], d["s"].astype(complex), model.dt, std=d)
     with np.errstate(divide="ignore"):
         s = np.where(np.abs(p) > 0, np.log(np.where(np.abs(p) > 0, p, 1)) / model.dt, -np.inf)
     return DampingTable(p, s.astype(complex), model.dt)
@@ -344,8 +368,10 @@ def is_observable(model: Any, tol: float | None = None) -> bool:
 class TimeResponse:
     """Step or impulse response: ``y[t, i, j]`` is output i for input j at time ``t[t]``."""
 
-    def __init__(self, kind: str, t: np.ndarray, y: np.ndarray, model: StateSpaceModel) -> None:
+    def __init__(self, kind: str, t: np.ndarray, y: np.ndarray, model: StateSpaceModel,
+                 std: np.ndarray | None = None) -> None:
         self.kind, self.t, self.y = kind, t, y
+        self.std = std  # first-order std of y (step(..., std=True)); plotted as bands
         self.input_names, self.output_names = model.input_names, model.output_names
 
     def plot(self, fig: Any = None) -> Any:
@@ -370,8 +396,12 @@ def _n_samples(model: StateSpaceModel, n_samples: int | None) -> int:
     return as_int(n_samples, "n_samples")
 
 
-def step(model: StateSpaceModel, n_samples: int | None = None) -> TimeResponse:
+def step(model: StateSpaceModel, n_samples: int | None = None, std: bool = False
+         ) -> TimeResponse:
     """Response to a unit step on each input (zero initial state).
+
+    With ``std=True`` (a model with ``uncertainty``) ``resp.std`` holds the first-order
+    standard deviation of each sample, drawn as a 95 % band by ``resp.plot()``.
 
     Examples
     --------
@@ -388,7 +418,12 @@ def step(model: StateSpaceModel, n_samples: int | None = None) -> TimeResponse:
         u = np.zeros((N, m))
         u[:, j] = 1.0
         y[:, :, j] = model.simulate(u)
-    return TimeResponse("step", np.arange(N) * model.dt, y, model)
+    sd = None
+    if std:
+        from ..models.uncertainty import complex_std
+
+        _, sd = complex_std(model, lambda m: step(m, N).y)
+    return TimeResponse("step", np.arange(N) * model.dt, y, model, std=sd)
 
 
 def impulse(model: StateSpaceModel, n_samples: int | None = None) -> TimeResponse:
