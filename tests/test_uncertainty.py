@@ -392,3 +392,29 @@ def test_bootstrap_option_changes_the_result_and_checks_input():
         est.fit(4, uncertainty="asymptotic")
     with pytest.raises(DataError, match="n_boot"):
         est.fit(4, uncertainty="bootstrap", n_boot=3)
+
+
+def test_modal_table_std_and_html_report_pole_table(tmp_path):
+    from sysid.cli import main
+
+    m = _model_with_uncertainty(scale=1e-6)
+    modes = sysid.modal_analysis(m, std=True)
+    table = sysid.damp(m, std=True)
+    for z, sd_hz, sd_d in zip(modes.eigenvalues, modes.extra["sd_hz"], modes.extra["sd_damping"]):
+        k = int(np.argmin(np.abs(table.poles - z)))
+        np.testing.assert_allclose([sd_hz, sd_d], [table.wn_hz_std[k], table.zeta_std[k]])
+    assert "SD_HZ" in modes.table() and "sd_hz" not in sysid.modal_analysis(m).extra
+    # the report: a pole table, with std columns when asked for the bootstrap
+    d = np.loadtxt(sysid.datasets.path("dryer"))
+    path = tmp_path / "dryer.csv"
+    np.savetxt(path, d, delimiter=",", header="heater,temperature", comments="")
+    rep = tmp_path / "rep"
+    assert main(["identify", str(path), "--inputs", "heater", "--outputs", "temperature",
+                 "--order", "4", "--horizon", "15", "--detrend", "mean", "--quiet",
+                 "--uncertainty", "bootstrap", "--n-boot", "30", "--report", str(rep)]) == 0
+    html = (rep / "index.html").read_text()
+    assert 'id="poles"' in html and "std damping" in html
+    from sysid.cli import _pole_table
+
+    plain = _pole_table(sysid.StateSpaceModel(m.A, m.B, m.C, dt=0.1), lambda *a: repr(a))
+    assert "pole" in plain and "std damping" not in plain

@@ -169,8 +169,13 @@ def identify(
     report: str | Path | None = None,
     preprocessing: dict[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
+    uncertainty: str | None = None,
+    n_boot: int = 100,
 ) -> dict[str, Any]:
     """Identify, validate and (optionally) write a report; returns a summary dict.
+
+    ``uncertainty="bootstrap"`` attaches the residual-bootstrap parameter uncertainty
+    (``n_boot`` records) so the report's pole table has standard deviations.
 
     The summary holds ``model``, ``selection`` (:class:`~sysid.criteria.OrderSelection`),
     ``compare`` (validation simulation), ``prediction`` (validation 1-step), ``residuals``
@@ -207,7 +212,9 @@ def identify(
     n = sel.order if order == "auto" else int(order)
     say(f"fitting order {n} ({est.method})")
     x0 = est_data.n_experiments == 1
-    model = est.fit(n, x0=x0)
+    if uncertainty is not None:
+        say(f"fitting order {n} with a residual bootstrap of {n_boot} records")
+    model = est.fit(n, x0=x0, uncertainty=uncertainty, n_boot=n_boot, rng=0)
     model.info["settings"] = {"method": est.method, "order": n, "order_rule": (
         sel.criterion if order == "auto" else "given"), "past": est.past,
         "future": est.future, "x0": x0}
@@ -335,6 +342,7 @@ def _html(out: dict[str, Any], files: dict[str, Path]) -> str:
     from .analysis.lti import damp
 
     details = esc(res.summary() + "\n\n" + repr(damp(model)))
+    pole_table = _pole_table(model, table)
     return f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>sysid report</title>
 <style>body{{font-family:sans-serif;max-width:1100px;margin:auto}}img{{max-width:100%}}
@@ -343,6 +351,8 @@ td,th{{text-align:right}}</style></head><body>
 <p>{esc(repr(model))}</p>
 <p>Order choice: {esc(sel.reason)}</p>
 <pre>{details}</pre>
+<h2>Poles</h2>
+{pole_table}
 <h2>Fit on the {esc(out['which'])} data</h2>
 {table("fit", ["output", "simulation fit %", "1-step fit %", "whiteness p", "white"], fit_rows)}
 <h2>Order sweep</h2>
@@ -353,6 +363,37 @@ td,th{{text-align:right}}</style></head><body>
 {imgs}
 </body></html>
 """
+
+
+def _pole_table(model: Any, table: Callable[[str, list[str], list[list[Any]]], str]) -> str:
+    """Poles with frequency and damping, and their standard deviations when the model has
+    an uncertainty (NaN, shown as n/a, where first order does not hold)."""
+    import warnings
+
+    from .analysis.lti import damp
+    from .models.uncertainty import UncertaintyWarning
+
+    has = getattr(model, "uncertainty", None) is not None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UncertaintyWarning)
+        t = damp(model, std=has)
+
+    def g(x: float) -> str:
+        return "n/a" if not np.isfinite(x) else f"{x:.4g}"
+    header = ["pole", "|pole|", "wn [Hz]", "damping"]
+    if has:
+        header += ["std Re", "std Im", "std wn [Hz]", "std damping"]
+    rows = []
+    for k, p in enumerate(t.poles):
+        row = [f"{p.real:.5g}{p.imag:+.5g}j", f"{abs(p):.4f}", g(t.wn_hz[k]), g(t.zeta[k])]
+        if has and t.pole_std is not None and t.wn_hz_std is not None and \
+                t.zeta_std is not None:
+            row += [g(t.pole_std[k].real), g(t.pole_std[k].imag), g(t.wn_hz_std[k]),
+                    g(t.zeta_std[k])]
+        rows.append(row)
+    note = ("<p>Standard deviations: first order from a residual bootstrap of the subspace "
+            "fit.</p>" if has else "")
+    return table("poles", header, rows) + note
 
 
 def _print_summary(out: dict[str, Any]) -> None:
@@ -384,7 +425,7 @@ def _demo(args: argparse.Namespace) -> int:
     out = identify(est_data, val_data, order="auto", horizon=15, report=args.report,
                    preprocessing={"samples": "estimation 1-500, validation 501-1000",
                                   "detrend": "none (raw data, as SLICOT)"},
-                   progress=_Progress(args.quiet))
+                   progress=_Progress(args.quiet), uncertainty="bootstrap")
     _print_summary(out)
     return 0
 
@@ -424,7 +465,9 @@ def _identify(args: argparse.Namespace) -> int:
     est_data = IOData(u=u[:k] if ui else None, y=y[:k], **kw)
     val_data = IOData(u=u[k:] if ui else None, y=y[k:], **kw) if k < N else None
     out = identify(est_data, val_data, order=args.order, method=args.method,
-                   horizon=args.horizon, report=args.report, preprocessing=pre, progress=say)
+                   horizon=args.horizon, report=args.report, preprocessing=pre, progress=say,
+                   uncertainty=None if args.uncertainty == "none" else args.uncertainty,
+                   n_boot=args.n_boot)
     _print_summary(out)
     return 0
 
@@ -452,6 +495,10 @@ def _parser() -> argparse.ArgumentParser:
                      help="remove the estimation part's means first (recorded in the model)")
     ide.add_argument("--delimiter", default=None, help="field separator (default: guessed)")
     ide.add_argument("--report", required=True, help="output directory")
+    ide.add_argument("--uncertainty", choices=("none", "bootstrap"), default="none",
+                     help="pole standard deviations in the report from a residual bootstrap")
+    ide.add_argument("--n-boot", dest="n_boot", type=int, default=100,
+                     help="bootstrap records (default 100)")
     ide.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     ide.set_defaults(func=_identify)
     return parser

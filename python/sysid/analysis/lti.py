@@ -289,6 +289,8 @@ def damp(model: StateSpaceModel | ContinuousStateSpace, std: bool = False) -> Da
     """
     p = model.poles()
     if isinstance(model, ContinuousStateSpace):
+        if std:
+            raise DataError("damp(std=True) needs a discrete-time model with uncertainty")
         return DampingTable(p, p.copy(), None)
     _model(model)
     if std:
