@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from ..data.formats import _pandas
 from ..errors import DataError
 from ..models.statespace import StateSpaceModel
 
@@ -105,8 +106,6 @@ class ModalAnalysis:
 
     def to_pandas(self) -> Any:
         """The modes as a pandas DataFrame (pandas imported lazily)."""
-        from ..data.iodata import _pandas
-
         pd = _pandas()
         cols: dict[str, Any] = {
             "frequency_hz": self.frequencies_hz, "omega": self.omega, "damping": self.damping,

@@ -14,6 +14,8 @@ sample covariance is the covariance of the parameters ``vec(A, B, C, D, K)`` att
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -53,8 +55,9 @@ def _vector(m: StateSpaceModel, with_k: bool) -> np.ndarray:
     return np.concatenate([np.asarray(p, float).ravel() for p in parts])
 
 
-def bootstrap_uncertainty(estimator: Any, model: StateSpaceModel, fit_options: dict[str, Any],
-                          n_boot: int = 100, rng: Any = None) -> ParameterUncertainty:
+def bootstrap_uncertainty(estimator: Any, model: StateSpaceModel,
+                          refit: Callable[[IOData], StateSpaceModel], n_boot: int = 100,
+                          rng: Any = None) -> ParameterUncertainty:
     """Residual-bootstrap :class:`~sysid.ParameterUncertainty` of a subspace ``model``.
 
     Parameters
@@ -63,8 +66,9 @@ def bootstrap_uncertainty(estimator: Any, model: StateSpaceModel, fit_options: d
         The estimator that produced ``model`` (its data, horizons and weighting are reused).
     model : StateSpaceModel
         The estimate (with ``K``: ``kalman=True``).
-    fit_options : dict
-        The keyword arguments of the fit (order, method, feedthrough, stable, x0).
+    refit : callable
+        ``refit(record) -> StateSpaceModel``: the same fit (horizons, weighting, order,
+        options) on a resampled record.
     n_boot : int
         Bootstrap records (at least 20; 100-200 for standard deviations good to ~5-7 %).
     rng : seed or numpy Generator
@@ -76,8 +80,6 @@ def bootstrap_uncertainty(estimator: Any, model: StateSpaceModel, fit_options: d
         basis, their bootstrap covariance, and ``info``-style attributes ``n_boot`` and
         ``n_failed``.
     """
-    from .subspace import SubspaceEstimator
-
     n_boot = as_int(n_boot, "n_boot", 20)
     if model.K is None:
         raise DataError("uncertainty='bootstrap' resamples the innovations and needs the noise "
@@ -107,13 +109,9 @@ def bootstrap_uncertainty(estimator: Any, model: StateSpaceModel, fit_options: d
         rec = IOData(u=us if len(us) > 1 else us[0], y=ys if len(ys) > 1 else ys[0],
                      dt=data.dt)
         try:
-            est = SubspaceEstimator(rec, past=estimator.past, future=estimator.future,
-                                    method=estimator.method)
-            import warnings
-
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")  # excitation warnings repeat the original fit's
-                mb = est.fit(**fit_options)
+                mb = refit(rec)
         except Exception:  # noqa: BLE001 - a failed resample is counted, not fatal
             failed += 1
             continue

@@ -303,9 +303,12 @@ class SubspaceEstimator:
                 raise DataError(f"uncertainty must be None or 'bootstrap', got {uncertainty!r}")
             from .bootstrap import bootstrap_uncertainty
 
-            opts = {"order": n, "method": method, "feedthrough": bool(feedthrough),
-                    "kalman": True, "stable": bool(stable), "x0": bool(x0)}
-            model.uncertainty = bootstrap_uncertainty(self, model, opts, n_boot, rng)
+            def refit(rec: IOData) -> StateSpaceModel:
+                est = SubspaceEstimator(rec, past=self.past, future=self.future,
+                                        method=self.method)
+                return est.fit(n, method=method, feedthrough=feedthrough, stable=stable, x0=x0)
+
+            model.uncertainty = bootstrap_uncertainty(self, model, refit, n_boot, rng)
             model.info["uncertainty"] = {"method": "bootstrap",
                                          "n_boot": model.uncertainty.n_boot,  # type: ignore
                                          "n_failed": model.uncertainty.n_failed}  # type: ignore
