@@ -418,3 +418,18 @@ def test_modal_table_std_and_html_report_pole_table(tmp_path):
 
     plain = _pole_table(sysid.StateSpaceModel(m.A, m.B, m.C, dt=0.1), lambda *a: repr(a))
     assert "pole" in plain and "std damping" not in plain
+
+
+def test_bootstrap_uses_every_experiment():
+    true = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.8]], [[1.0], [0.5]], [[1.0, 0.0]],
+                                 K=[[0.5], [0.1]])
+    rng = np.random.default_rng(0)
+    us = [rng.standard_normal((400, 1)) for _ in range(3)]
+    ys = [_simulate(true, u, 0.1 * rng.standard_normal((400, 1))) for u in us]
+    one = sysid.SubspaceEstimator(sysid.IOData(u=us[0], y=ys[0]), horizon=5).fit(
+        2, uncertainty="bootstrap", n_boot=60, rng=0)
+    three = sysid.SubspaceEstimator(sysid.IOData(u=us, y=ys), horizon=5).fit(
+        2, uncertainty="bootstrap", n_boot=60, rng=0)
+    s1, s3 = np.abs(one.poles(std=True)[1]), np.abs(three.poles(std=True)[1])
+    # three times the data: about 1/sqrt(3) of the spread
+    assert np.all(s3 < 0.8 * s1) and np.all(s3 > 0.35 * s1), (s1, s3)
