@@ -82,6 +82,10 @@ def test_linear_and_monte_carlo_agree_on_a_smooth_function():
     np.testing.assert_allclose(an.std, lin.std[:1], rtol=1e-6)
     # the option changes the result: Monte Carlo is a sampling estimate, not the linearisation
     assert not np.allclose(mc.covariance, lin.covariance, rtol=1e-6)
+    # a large difference step sees the curvature of b / (1 - a): another (worse) number
+    wide = unc.propagate(f, step=3.0)
+    assert not np.allclose(wide.std, lin.std, rtol=1e-4)
+    np.testing.assert_allclose(unc.propagate(f, step=1e-4).std, lin.std, rtol=1e-6)
 
 
 def test_sample_has_the_covariance():
@@ -384,6 +388,8 @@ def test_bootstrap_option_changes_the_result_and_checks_input():
     c = est.fit(4, feedthrough=False, uncertainty="bootstrap", n_boot=80, rng=1)
     assert a.uncertainty.method == "bootstrap" and a.info["uncertainty"]["n_boot"] == 40
     np.testing.assert_array_equal(a.covariance, b.covariance)  # seeded: reproducible
+    other = est.fit(4, feedthrough=False, uncertainty="bootstrap", n_boot=40, rng=2)
+    assert not np.allclose(a.covariance, other.covariance)
     assert not np.allclose(a.covariance, c.covariance)
     np.testing.assert_array_equal(a.A, plain.A)  # the estimate itself is unchanged
     with pytest.raises(DataError, match="kalman"):
@@ -414,6 +420,7 @@ def test_modal_table_std_and_html_report_pole_table(tmp_path):
                  "--uncertainty", "bootstrap", "--n-boot", "30", "--report", str(rep)]) == 0
     html = (rep / "index.html").read_text()
     assert 'id="poles"' in html and "std damping" in html
+    assert sysid.load_model(rep / "model.json").info["uncertainty"]["n_boot"] == 30
     from sysid.cli import _pole_table
 
     plain = _pole_table(sysid.StateSpaceModel(m.A, m.B, m.C, dt=0.1), lambda *a: repr(a))
