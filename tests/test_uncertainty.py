@@ -342,7 +342,8 @@ def test_monte_carlo_armax_and_oe_coefficients():
 
 
 def test_monte_carlo_iv4():
-    """IV4 with coloured equation noise: its asymptotic covariance is calibrated."""
+    """IV4 with coloured equation noise, open loop and closed loop (reference as instrument):
+    its asymptotic covariance is calibrated."""
     est, sds = [], []
     for run in range(200):
         rng = np.random.default_rng(9000 + run)
@@ -354,6 +355,22 @@ def test_monte_carlo_iv4():
         sds.append([m.std["a"][0][0][0], m.std["b"][0][0][0]])
     covered = np.abs(np.subtract(est, [-0.5, 1.0])) <= 1.96 * np.asarray(sds)
     _check(est, sds, covered, "iv4")
+    # closed loop u = r - 0.3 y, the reference as instrument
+    est, sds = [], []
+    for run in range(200):
+        rng = np.random.default_rng(11000 + run)
+        r = rng.standard_normal(800)
+        v = 0.3 * signal.lfilter([1.0], [1.0, -0.9], rng.standard_normal(800))
+        x, u, y = np.zeros(800), np.zeros(800), np.zeros(800)
+        for k in range(800):
+            x[k] = 0.5 * x[k - 1] + u[k - 1] if k else 0.0
+            y[k] = x[k] + v[k]
+            u[k] = r[k] - 0.3 * y[k]
+        m = sysid.iv4(sysid.IOData(u[:, None], y[:, None], 1.0), 1, 1, 1, reference=r)
+        est.append([m.a[0][0][0], m.b[0][0][0]])
+        sds.append([m.std["a"][0][0][0], m.std["b"][0][0][0]])
+    covered = np.abs(np.subtract(est, [-0.5, 1.0])) <= 1.96 * np.asarray(sds)
+    _check(est, sds, covered, "iv4 closed loop")
 
 
 # -- polynomial models through the same code ---------------------------------------------
