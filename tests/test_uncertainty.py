@@ -159,6 +159,10 @@ def test_markov_dcgain_freqresp_std_and_model_std():
     np.testing.assert_allclose(g, m.dcgain())
     assert np.all(gsd > 0)
     H, Hsd = m.freqresp([0.0, 3.0], std=True)
+    # the analytic state-space derivative equals differencing the frequency response
+    _, G = unc.scaled_jacobian(lambda mm: mm.freqresp([0.0, 3.0]))
+    num = np.sqrt(np.sum(G.real**2, 1)) + 1j * np.sqrt(np.sum(G.imag**2, 1))
+    np.testing.assert_allclose(Hsd.ravel(), num, rtol=1e-6, atol=1e-14)
     np.testing.assert_allclose(Hsd[0].real, gsd, rtol=1e-6)  # H(0) is the DC gain
     np.testing.assert_allclose(Hsd[0].imag, 0, atol=1e-12)
     std = m.std

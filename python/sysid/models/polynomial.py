@@ -182,9 +182,9 @@ class PolynomialModel:
         ``std=True`` (needs :attr:`uncertainty`) the pair ``(H, sd)``, ``sd`` complex (std of
         the real and imaginary parts, first order)."""
         if std:
-            from .uncertainty import complex_std
+            from .uncertainty import freqresp_std
 
-            return complex_std(self, lambda m: m.freqresp(w))
+            return freqresp_std(self, w)
         if self.coupled:
             raise DataError("frequency response of a coupled MIMO ARX model is not implemented")
         z1 = np.exp(-1j * np.asarray(w, float) * self.dt)

@@ -285,9 +285,9 @@ class StateSpaceModel:
         if w.ndim != 1 or not np.isfinite(w).all():
             raise DataError("omega must be a finite 1-D array of angular frequencies (rad/s)")
         if std:
-            from .uncertainty import complex_std
+            from .uncertainty import freqresp_std
 
-            return complex_std(self, lambda m: m.freqresp(w))
+            return freqresp_std(self, w)
         z = np.exp(1j * w * self.dt)
         n = self.nstates
         # Hessenberg-free but well-conditioned enough: one complex solve per frequency

@@ -428,6 +428,12 @@ def damping_std(model: Any, dt: float) -> dict[str, np.ndarray]:
     }
 
 
+def freqresp_std(model: Any, omega: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Frequency response and its std (complex: real/imaginary parts), first order."""
+    H, G = freq_jacobian(model, omega)
+    return H, _complex_std(G).reshape(H.shape)
+
+
 def complex_std(model: Any, fn: Callable[[Any], Any]) -> tuple[np.ndarray, np.ndarray]:
     """A complex (or real) function of the model and its std (complex: real/imag parts)."""
     unc = require(model)
@@ -439,12 +445,51 @@ def complex_std(model: Any, fn: Callable[[Any], Any]) -> tuple[np.ndarray, np.nd
     return value, sd.reshape(np.shape(value))
 
 
+def _is_statespace(m: Any) -> bool:
+    return all(isinstance(getattr(m, k, None), np.ndarray) for k in "ABCD") and \
+        getattr(m, "dt", None) is not None
+
+
+def freq_jacobian(model: Any, omega: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Frequency response ``H`` and its complex scaled Jacobian ``G`` (rows: ``H.ravel()``).
+
+    For state-space models analytically, ``dH = Y dA X + dC X + Y dB + dD`` with
+    ``X = (zI - A)^-1 B`` and ``Y = C (zI - A)^-1`` (one solve per frequency, whatever the
+    number of parameters); otherwise by differencing ``freqresp``.
+    """
+    unc = require(model)
+    w = np.atleast_1d(np.asarray(omega, dtype=float))
+    nominal = unc.build(unc.theta)
+    if not _is_statespace(nominal):
+        H, G = unc.scaled_jacobian(lambda m: m.freqresp(w))
+        return H, G.astype(complex)
+    A, B, C = nominal.A, nominal.B, nominal.C
+    n, m, l = A.shape[0], B.shape[1], C.shape[0]
+    _, J = unc.scaled_jacobian(lambda mm: np.concatenate(
+        [mm.A.ravel(), mm.B.ravel(), mm.C.ravel(), mm.D.ravel()]))
+    r = J.shape[1]
+    cuts = np.cumsum([n * n, n * m, l * n])
+    dA, dB, dC, dD = (x.T.reshape((r,) + shape) for x, shape in zip(
+        np.split(J, cuts), ((n, n), (n, m), (l, n), (l, m))))
+    H = nominal.freqresp(w)
+    G = np.empty((w.size, l, m, r), dtype=complex)
+    eye = np.eye(n)
+    for i, z in enumerate(np.exp(1j * w * nominal.dt)):
+        if n:
+            M = z * eye - A
+            X = np.linalg.solve(M, B)
+            Y = np.linalg.solve(M.T, C.T).T
+            d = Y @ dA @ X + dC @ X + Y @ dB + dD
+        else:
+            d = dD.astype(complex)
+        G[i] = np.moveaxis(d, 0, -1)
+    return H, G.reshape(-1, r)
+
+
 def bode_std(model: Any, omega: Any) -> dict[str, np.ndarray]:
     """Frequency response with the std of ``log|H|`` and of the phase (rad), first order:
     ``d log H = dH / H``."""
-    unc = require(model)
-    H, G = unc.scaled_jacobian(lambda m: m.freqresp(omega))
-    G = G.astype(complex)
+    H, G = freq_jacobian(model, omega)
     with np.errstate(divide="ignore", invalid="ignore"):
         R = G / H.ravel()[:, None]
     return {"H": H, "log_mag_std": np.sqrt(np.sum(R.real**2, axis=1)).reshape(H.shape),
