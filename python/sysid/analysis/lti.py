@@ -26,6 +26,7 @@ from ..models.continuous import ContinuousStateSpace, c2d, d2c
 from ..models.linear import DampingTable, damping_table, transmission_zeros
 from ..models.protocol import TimeResponse
 from ..models.statespace import StateSpaceModel
+from .controllability import ctrb, is_controllable, is_observable, obsv  # noqa: F401 (moved)
 
 __all__ = [
     "ContinuousStateSpace",
@@ -73,7 +74,7 @@ def zeros(model: Any, tol: float = 1e-6) -> np.ndarray:
     return np.asarray(_optional(model, "zeros", "zeros"))
 
 
-def damp(model: Any) -> DampingTable:
+def damp(model: Any, std: bool = False) -> DampingTable:
     """Natural frequencies (rad/s and Hz), damping ratios and time constants of the poles.
 
     Works on any model with ``poles()`` (or ``to_statespace()``). Discrete poles are mapped
@@ -93,79 +94,25 @@ def damp(model: Any) -> DampingTable:
     array([0.0995, 0.0995])
     """
     check_model(model)
+    if std:
+        if not float(model.dt):
+            raise DataError("damp(std=True) needs a discrete-time model with uncertainty")
+        from ..models.uncertainty import damping_std
+
+        d = damping_std(model, model.dt)
+        return DampingTable(d["poles"], d["s"].astype(complex), model.dt, std=d)
     return damping_table(np.asarray(_optional(model, "poles", "damp")), float(model.dt))
 
 
-# -- controllability / observability ----------------------------------------------------
-def ctrb(model: Any) -> np.ndarray:
-    """Controllability matrix ``[B, AB, ..., A^{n-1} B]``, shape ``(n, n m)``."""
-    A, B = model.A, model.B
-    blocks, ab = [], B
-    for _ in range(A.shape[0]):
-        blocks.append(ab)
-        ab = A @ ab
-    return np.hstack(blocks) if blocks else np.zeros((0, 0))
-
-
-def obsv(model: Any) -> np.ndarray:
-    """Observability matrix ``[C; CA; ...; C A^{n-1}]``, shape ``(n l, n)``."""
-    return ctrb(_Transposed(model)).T
-
-
-class _Transposed:
-    def __init__(self, model: Any) -> None:
-        self.A, self.B = model.A.T, model.C.T
-
-
-def _pbh_rank_ok(A: np.ndarray, B: np.ndarray, tol: float | None) -> bool:
-    n = A.shape[0]
-    if n == 0:
-        return True
-    scale = max(float(np.linalg.norm(A, 2)), float(np.linalg.norm(B, 2)) if B.size else 0.0,
-                1e-300)
-    tol = n * np.finfo(float).eps * 1e3 if tol is None else float(tol)
-    for lam in np.linalg.eigvals(A):
-        sv = np.linalg.svd(np.hstack([A - lam * np.eye(n), B]), compute_uv=False)
-        if sv[n - 1] <= tol * scale:
-            return False
-    return True
-
-
-def is_controllable(model: Any, tol: float | None = None) -> bool:
-    """Popov-Belevitch-Hautus test: ``[A - lambda I, B]`` has full row rank at every pole.
-
-    The rank is judged on the smallest singular value relative to ``max(||A||, ||B||)``;
-    ``tol`` defaults to ``1000 n eps``. More reliable than the rank of :func:`ctrb`, whose
-    columns lose precision as powers of A grow.
-
-    Examples
-    --------
-    >>> import sysid
-    >>> sysid.is_controllable(sysid.StateSpaceModel([[0.5, 0], [0, 0.2]], [[1], [0]], [[1, 1]]))
-    False
-    """
-    return _pbh_rank_ok(model.A, model.B, tol)
-
-
-def is_observable(model: Any, tol: float | None = None) -> bool:
-    """PBH observability test (the dual of :func:`is_controllable`).
-
-    Examples
-    --------
-    >>> import sysid
-    >>> sysid.is_observable(sysid.StateSpaceModel([[0.5, 0], [0, 0.2]], [[1], [0]], [[1, 1]]))
-    True
-    """
-    return _pbh_rank_ok(model.A.T, model.C.T, tol)
-
-
 # -- time responses ---------------------------------------------------------------------
-def step(model: Any, n_samples: int | None = None) -> TimeResponse:
+def step(model: Any, n_samples: int | None = None, std: bool = False) -> TimeResponse:
     """Response to a unit step on each input (from rest) of any model: ``model.step``.
 
     Discrete models simulate ``n_samples`` samples (default: until the slowest pole has
     decayed to 1 %); a :class:`ContinuousStateSpace` is sampled exactly (see its
-    :meth:`~ContinuousStateSpace.step`).
+    :meth:`~ContinuousStateSpace.step`). With ``std=True`` (a model with ``uncertainty``)
+    ``resp.std`` holds the first-order standard deviation of each sample, drawn as a 95 %
+    band by ``resp.plot()``.
 
     Examples
     --------
@@ -174,7 +121,13 @@ def step(model: Any, n_samples: int | None = None) -> TimeResponse:
     >>> r.y[:, 0, 0]
     array([0.   , 0.5  , 0.75 , 0.875])
     """
-    return _response(model, "step", n_samples)
+    resp = _response(model, "step", n_samples)
+    if std:
+        from ..models.uncertainty import complex_std
+
+        N = len(resp.t)
+        _, resp.std = complex_std(model, lambda m: step(m, N).y)
+    return resp
 
 
 def impulse(model: Any, n_samples: int | None = None) -> TimeResponse:

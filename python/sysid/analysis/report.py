@@ -11,7 +11,9 @@ from __future__ import annotations
 import csv
 import html
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
+
+import numpy as np
 
 from ..errors import DataError
 from ..models.checks import check_model
@@ -157,8 +159,10 @@ def _html(model: Any, sim: Any, pred: Any, res: Any, sel: Any, which: str,
     details = res.summary()
     from .lti import damp
 
+    poles = ""
     try:
         details += "\n\n" + repr(damp(model))
+        poles = "<h2>Poles</h2>\n" + _pole_table(model, table)
     except DataError:
         pass
     sweep = ""
@@ -180,6 +184,7 @@ td,th{{text-align:right}}</style></head><body>
 <p>{esc(repr(model))}</p>
 {sweep}
 <pre>{esc(details)}</pre>
+{poles}
 <h2>Fit on the {esc(which)} data</h2>
 {table("fit", ["output", "simulation fit %", "1-step fit %", "whiteness p", "white"], fit_rows)}
 <p>Files: {links}</p>
@@ -187,3 +192,35 @@ td,th{{text-align:right}}</style></head><body>
 {imgs}
 </body></html>
 """
+
+
+def _pole_table(model: Any, table: Callable[[str, list[str], list[list[Any]]], str]) -> str:
+    """Poles with frequency and damping, and their standard deviations when the model has
+    an uncertainty (NaN, shown as n/a, where first order does not hold)."""
+    import warnings
+
+    from ..models.uncertainty import UncertaintyWarning
+    from .lti import damp
+
+    has = getattr(model, "uncertainty", None) is not None
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UncertaintyWarning)
+        t = damp(model, std=has)
+
+    def g(x: float) -> str:
+        return "n/a" if not np.isfinite(x) else f"{x:.4g}"
+    header = ["pole", "|pole|", "wn [Hz]", "damping"]
+    if has:
+        header += ["std Re", "std Im", "std wn [Hz]", "std damping"]
+    rows = []
+    for k, p in enumerate(t.poles):
+        row = [f"{p.real:.5g}{p.imag:+.5g}j", f"{abs(p):.4f}", g(t.wn_hz[k]), g(t.zeta[k])]
+        if has and t.pole_std is not None and t.wn_hz_std is not None and \
+                t.zeta_std is not None:
+            row += [g(t.pole_std[k].real), g(t.pole_std[k].imag), g(t.wn_hz_std[k]),
+                    g(t.zeta_std[k])]
+        rows.append(row)
+    note = ("<p>Standard deviations: first order, from the model's parameter uncertainty ("
+            f"{html.escape(str(model.uncertainty.method))}).</p>" if has else "")
+    return table("poles", header, rows) + note
+

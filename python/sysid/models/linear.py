@@ -97,11 +97,20 @@ class DampingTable:
         Damping ratio ``-Re(s) / |s|``.
     tau : ndarray
         Time constant ``-1 / Re(s)`` in seconds (``inf`` on the stability boundary).
+    pole_std, wn_std, wn_hz_std, zeta_std : ndarray or None
+        First-order standard deviations (``damp(model, std=True)``, from the model's
+        parameter uncertainty); ``pole_std`` is complex (std of the real and imaginary parts).
     """
 
-    def __init__(self, poles: np.ndarray, s: np.ndarray, dt: float | None) -> None:
+    def __init__(self, poles: np.ndarray, s: np.ndarray, dt: float | None,
+                 std: dict[str, np.ndarray] | None = None) -> None:
         order = np.lexsort((s.imag, np.abs(s)))
         self.poles, self.s, self.dt = poles[order], s[order], dt
+        self.pole_std = self.wn_std = self.wn_hz_std = self.zeta_std = None
+        if std is not None:
+            self.pole_std = std["pole_std"][order]
+            self.wn_std, self.wn_hz_std = std["wn_std"][order], std["wn_hz_std"][order]
+            self.zeta_std = std["zeta_std"][order]
         with np.errstate(divide="ignore", invalid="ignore"):
             self.wn = np.abs(self.s)
             safe = np.where(self.wn > 0, self.wn, 1.0)
@@ -116,13 +125,15 @@ class DampingTable:
         """The table as a :class:`pandas.DataFrame`."""
         import pandas as pd
 
-        return pd.DataFrame(
-            {
-                "pole": self.poles, "magnitude": np.abs(self.poles), "wn [rad/s]": self.wn,
-                "wn [Hz]": self.wn_hz, "damping": self.zeta, "wd [Hz]": self.wd_hz,
-                "tau [s]": self.tau,
-            }
-        )
+        cols = {
+            "pole": self.poles, "magnitude": np.abs(self.poles), "wn [rad/s]": self.wn,
+            "wn [Hz]": self.wn_hz, "damping": self.zeta, "wd [Hz]": self.wd_hz,
+            "tau [s]": self.tau,
+        }
+        if self.pole_std is not None:
+            cols.update({"std Re(pole)": self.pole_std.real, "std Im(pole)": self.pole_std.imag,
+                         "std wn [Hz]": self.wn_hz_std, "std damping": self.zeta_std})
+        return pd.DataFrame(cols)
 
     def __len__(self) -> int:
         return len(self.poles)
@@ -130,11 +141,16 @@ class DampingTable:
     def __repr__(self) -> str:
         head = (f"{'pole':>24} {'|pole|':>8} {'wn rad/s':>10} {'wn Hz':>9} {'damping':>8} "
                 f"{'wd Hz':>9}")
+        if self.pole_std is not None:
+            head += f" {'std Hz':>9} {'std damp':>9}"
         rows = [head]
-        for p, wn, fz, z, fd in zip(self.poles, self.wn, self.wn_hz, self.zeta, self.wd_hz):
+        for k, (p, wn, fz, z, fd) in enumerate(
+                zip(self.poles, self.wn, self.wn_hz, self.zeta, self.wd_hz)):
             rows.append(
                 f"{p.real:>11.5g}{p.imag:>+11.5g}j {abs(p):8.4f} {wn:10.4g} {fz:9.4g} "
                 f"{z:8.4f} {fd:9.4g}"
+                + ("" if self.wn_hz_std is None or self.zeta_std is None else
+                   f" {self.wn_hz_std[k]:9.3g} {self.zeta_std[k]:9.3g}")
             )
         where = f"dt = {self.dt:g} s" if self.dt is not None else "continuous time"
         return f"DampingTable ({where})\n" + "\n".join(rows)

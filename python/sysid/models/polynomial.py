@@ -306,8 +306,14 @@ class PolynomialModel(ModelMixin):
             preds.append(p)
         return preds[k]
 
-    def freqresp(self, w: Any) -> np.ndarray:
-        """Frequency response ``(len(w), n_outputs, n_inputs)`` at ``w`` (rad/s)."""
+    def freqresp(self, w: Any, std: bool = False) -> Any:
+        """Frequency response ``(len(w), n_outputs, n_inputs)`` at ``w`` (rad/s); with
+        ``std=True`` (needs :attr:`uncertainty`) the pair ``(H, sd)``, ``sd`` complex (std of
+        the real and imaginary parts, first order)."""
+        if std:
+            from .uncertainty import freqresp_std
+
+            return freqresp_std(self, w)
         if self.coupled:
             raise DataError("frequency response of a coupled MIMO ARX model is not implemented")
         z1 = np.exp(-1j * np.asarray(w, float) * self.dt)
@@ -320,8 +326,14 @@ class PolynomialModel(ModelMixin):
                 out[:, i, j] = bb / (a * ff)
         return out
 
-    def poles(self) -> np.ndarray:
-        """Roots of ``A_i F_ij`` over all channels (uncoupled ``A``)."""
+    def poles(self, std: bool = False, method: str = "linear") -> Any:
+        """Roots of ``A_i F_ij`` over all channels (uncoupled ``A``); with ``std=True`` (needs
+        :attr:`uncertainty`) the pair ``(poles, sd)`` as for
+        :meth:`sysid.StateSpaceModel.poles`."""
+        if std:
+            from .uncertainty import pole_std
+
+            return pole_std(self, method)
         r = []
         for i in range(self.n_outputs):
             r.append(np.roots(_monic(self.a[i][i])))
@@ -418,3 +430,44 @@ class PolynomialModel(ModelMixin):
             if self.d[i].size:
                 lines.append("    " + _fmt("D", _monic(self.d[i]), True))
         return "\n".join(lines)
+
+    # -- parameter uncertainty (sysid.models.uncertainty) ---------------------------------
+    def _coefficients(self) -> list[np.ndarray]:
+        """Every coefficient array, in the order a, b, c, d, f (row by row)."""
+        return ([x for row in self.a for x in row] + [x for row in self.b for x in row]
+                + list(self.c) + list(self.d) + [x for row in self.f for x in row])
+
+    @property
+    def std(self) -> dict[str, Any] | None:
+        """Standard deviations of the coefficients, nested like ``a, b, c, d, f``; ``None``
+        without :attr:`uncertainty`.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> rng = np.random.default_rng(0)
+        >>> u = rng.standard_normal((500, 1))
+        >>> y = np.zeros((500, 1))
+        >>> for t in range(1, 500): y[t] = 0.5 * y[t - 1] + u[t - 1] + 0.1 * rng.standard_normal()
+        >>> m = sysid.arx(sysid.IOData(u, y, 1.0), 1, 1, 1)
+        >>> sd = m.std
+        >>> bool(0.002 < sd["a"][0][0][0] < 0.01), bool(0.002 < sd["b"][0][0][0] < 0.01)
+        (True, True)
+        """
+        if self.uncertainty is None:
+            return None
+        from .uncertainty import complex_std
+
+        _, sd = complex_std(self, lambda m: np.concatenate(
+            [np.zeros(0)] + [np.asarray(x, float).ravel() for x in m._coefficients()]))
+        it = iter(sd.tolist())
+
+        def take(x: np.ndarray) -> np.ndarray:
+            return np.array([next(it) for _ in range(np.asarray(x).size)])
+
+        a = [[take(x) for x in row] for row in self.a]
+        b = [[take(x) for x in row] for row in self.b]
+        c = [take(x) for x in self.c]
+        d = [take(x) for x in self.d]
+        f = [[take(x) for x in row] for row in self.f]
+        return {"a": a, "b": b, "c": c, "d": d, "f": f}

@@ -140,8 +140,10 @@ class TimeResponse:
     TimeResponse(step, 3 samples, 1 output(s) x 1 input(s))
     """
 
-    def __init__(self, kind: str, t: np.ndarray, y: np.ndarray, model: Any) -> None:
+    def __init__(self, kind: str, t: np.ndarray, y: np.ndarray, model: Any,
+                 std: np.ndarray | None = None) -> None:
         self.kind, self.t, self.y = kind, t, y
+        self.std = std  # first-order std of y (step(..., std=True)); plotted as bands
         self.input_names, self.output_names = list(model.input_names), list(model.output_names)
 
     def plot(self, fig: Any = None) -> Any:

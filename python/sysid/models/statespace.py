@@ -79,6 +79,10 @@ class StateSpaceModel(ModelMixin):
     array([0. , 1. , 0.5])
     """
 
+    #: Parameter uncertainty (:class:`~sysid.ParameterUncertainty`) attached by the estimator
+    #: (``sysid.pem``, ``fit(uncertainty="bootstrap")``, ...); ``None`` when unknown.
+    uncertainty: Any = None
+
     def __init__(
         self,
         A: Any,
@@ -222,8 +226,18 @@ class StateSpaceModel(ModelMixin):
         return _sysid.predict(self.A, self.B, self.C, self.D, K, u, y, self._x0(x0), int(horizon))
 
     # -- system properties --------------------------------------------------------------
-    def poles(self) -> np.ndarray:
+    def poles(self, std: bool = False, method: str = "linear") -> Any:
         """Eigenvalues of A (discrete-time poles).
+
+        Parameters
+        ----------
+        std : bool
+            Also return their standard deviations (needs :attr:`uncertainty`): a pair
+            ``(poles, sd)`` with ``sd`` complex, ``sd.real`` the std of the real part and
+            ``sd.imag`` that of the imaginary part of each pole.
+        method : {"linear", "monte-carlo"}
+            First-order perturbation with left and right eigenvectors (poles too close to
+            another pole for it to hold get NaN and an ``UncertaintyWarning``), or sampling.
 
         Examples
         --------
@@ -231,14 +245,20 @@ class StateSpaceModel(ModelMixin):
         >>> sysid.StateSpaceModel([[0.5, 0], [0, -0.2]], [[1], [1]], [[1, 1]]).poles()
         array([ 0.5+0.j, -0.2+0.j])
         """
+        if std:
+            from .uncertainty import pole_std
+
+            return pole_std(self, method)
         return np.linalg.eigvals(self.A).astype(complex)
 
     def is_stable(self) -> bool:
         """True when every pole lies strictly inside the unit circle."""
         return bool(self.nstates == 0 or np.max(np.abs(self.poles())) < 1.0)
 
-    def markov(self, count: int) -> np.ndarray:
+    def markov(self, count: int, std: bool = False) -> Any:
         """Markov parameters ``D, CB, CAB, ...``, shape ``(count, noutputs, ninputs)``.
+
+        With ``std=True`` (needs :attr:`uncertainty`): ``(markov, std)``, first order.
 
         Examples
         --------
@@ -246,6 +266,10 @@ class StateSpaceModel(ModelMixin):
         >>> sysid.StateSpaceModel([[0.5]], [[2.0]], [[1.0]], [[3.0]]).markov(3)[:, 0, 0]
         array([3., 2., 1.])
         """
+        if std:
+            from .uncertainty import complex_std
+
+            return complex_std(self, lambda m: m.markov(count))
         out = np.empty((count, self.noutputs, self.ninputs))
         if count:
             out[0] = self.D
@@ -255,18 +279,22 @@ class StateSpaceModel(ModelMixin):
             ab = self.A @ ab
         return out
 
-    def freqresp(self, omega: Any) -> np.ndarray:
+    def freqresp(self, omega: Any, std: bool = False) -> Any:
         """Frequency response ``C (z I - A)^{-1} B + D`` at ``z = exp(j omega dt)``.
 
         Parameters
         ----------
         omega : array_like
             Angular frequencies in rad/s (the Nyquist frequency is ``pi / dt``).
+        std : bool
+            Also return the first-order std (needs :attr:`uncertainty`), complex: ``sd.real``
+            of the real part, ``sd.imag`` of the imaginary part.
 
         Returns
         -------
         ndarray
-            Complex response, shape ``(len(omega), noutputs, ninputs)``.
+            Complex response, shape ``(len(omega), noutputs, ninputs)``; with ``std=True`` the
+            pair ``(H, sd)``.
 
         Examples
         --------
@@ -278,6 +306,10 @@ class StateSpaceModel(ModelMixin):
         w = np.atleast_1d(np.asarray(omega, dtype=float))
         if w.ndim != 1 or not np.isfinite(w).all():
             raise DataError("omega must be a finite 1-D array of angular frequencies (rad/s)")
+        if std:
+            from .uncertainty import freqresp_std
+
+            return freqresp_std(self, w)
         z = np.exp(1j * w * self.dt)
         n = self.nstates
         # Hessenberg-free but well-conditioned enough: one complex solve per frequency
@@ -292,8 +324,13 @@ class StateSpaceModel(ModelMixin):
         N = default_length(self, n_samples)
         return TimeResponse("impulse", np.arange(N) * self.dt, self.markov(N), self)
 
-    def dcgain(self) -> np.ndarray:
-        """Steady-state gain ``C (I - A)^{-1} B + D``, shape ``(noutputs, ninputs)``."""
+    def dcgain(self, std: bool = False) -> Any:
+        """Steady-state gain ``C (I - A)^{-1} B + D``, shape ``(noutputs, ninputs)``; with
+        ``std=True`` (needs :attr:`uncertainty`) the pair ``(gain, std)``, first order."""
+        if std:
+            from .uncertainty import complex_std
+
+            return complex_std(self, lambda m: m.dcgain())
         return self.freqresp([0.0])[0].real
 
     def __repr__(self) -> str:
@@ -347,6 +384,68 @@ class StateSpaceModel(ModelMixin):
         """Transmission zeros; see :func:`sysid.zeros`."""
         return transmission_zeros(self.A, self.B, self.C, self.D)
 
-    def damp(self) -> DampingTable:
-        """Pole frequencies (rad/s, Hz) and damping; see :func:`sysid.damp`."""
+    def damp(self, std: bool = False) -> DampingTable:
+        """Pole frequencies (rad/s, Hz) and damping; see :func:`sysid.damp` (``std=True``:
+        with first-order standard deviations from :attr:`uncertainty`)."""
+        if std:
+            from .uncertainty import damping_std
+
+            d = damping_std(self, self.dt)
+            return DampingTable(d["poles"], d["s"].astype(complex), self.dt, std=d)
         return damping_table(self.poles(), self.dt)
+
+    def step(self, n_samples: int | None = None, std: bool = False) -> TimeResponse:
+        """Step responses from rest; see :func:`sysid.step` (``std=True``: with a band)."""
+        resp = super().step(n_samples)
+        if std:
+            from .uncertainty import complex_std
+
+            N = len(resp.t)
+            _, resp.std = complex_std(self, lambda m: m.step(N).y)
+        return resp
+
+    # -- parameter uncertainty (sysid.models.uncertainty) ---------------------------------
+    @property
+    def covariance(self) -> np.ndarray | None:
+        """Covariance of the free parameters (``uncertainty.covariance``), or ``None``."""
+        return None if self.uncertainty is None else self.uncertainty.covariance
+
+    @property
+    def std(self) -> dict[str, np.ndarray] | None:
+        """Standard deviations of the entries of ``A, B, C, D`` (and ``K``), first order from
+        :attr:`uncertainty`; ``None`` without one.
+
+        The entries are those of this realisation: for a fully parameterised model the
+        similarity directions carry no information and the std refers to the identifiable
+        directions only (the minimum-norm representative). Poles, frequency responses and
+        other invariants are the meaningful quantities there.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+        >>> m.uncertainty = sysid.ParameterUncertainty(
+        ...     [0.5, 1.0], np.diag([1e-4, 4e-4]),
+        ...     lambda t: sysid.StateSpaceModel([[t[0]]], [[t[1]]], [[1.0]]))
+        >>> {k: np.round(v, 4).tolist() for k, v in m.std.items()}
+        {'A': [[0.01]], 'B': [[0.02]], 'C': [[0.0]], 'D': [[0.0]]}
+        """
+        if self.uncertainty is None:
+            return None
+        from .uncertainty import complex_std
+
+        names = ["A", "B", "C", "D"] + (["K"] if self.K is not None else [])
+
+        def parts(m: StateSpaceModel) -> np.ndarray:
+            mats = [m.A, m.B, m.C, m.D] + ([m.K if m.K is not None else np.zeros(self.K.shape)]
+                                           if self.K is not None else [])
+            return np.concatenate([x.ravel() for x in mats])
+
+        _, sd = complex_std(self, parts)
+        out, o = {}, 0
+        for name in names:
+            shape = getattr(self, name).shape
+            size = int(np.prod(shape))
+            out[name] = sd[o:o + size].reshape(shape)
+            o += size
+        return out
