@@ -6,7 +6,8 @@ first period holds the transient and is dropped. Because nothing above 15 Hz is 
 record is decimated by 8 (fs = 50 Hz) before OKID estimates the Markov parameters; ERA then
 realises a model whose modes are judged by their damping and modal amplitude coherence.
 
-Run: ``python examples/f16_era.py [path/to/F16Data_FullMSine_Level1.csv]``
+Run: ``python examples/f16_era.py [path/to/F16Data_FullMSine_Level1.csv]`` (default: the
+copy bundled with sysid, ``sysid.datasets.path("f16")``).
 """
 
 from __future__ import annotations
@@ -19,9 +20,7 @@ from scipy import signal
 
 import sysid
 
-DEFAULT = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "f16" / (
-    "F16Data_FullMSine_Level1.csv"
-)
+DEFAULT = Path(sysid.datasets.path("f16"))
 PERIOD = 8192
 FS = 400.0
 DECIMATE = 8

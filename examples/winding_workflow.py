@@ -5,6 +5,7 @@ load -> check the sample time -> select -> detrend -> split -> coherence, spectr
 correlation, ETFE and spectral analysis -> a subspace model compared with the spectral estimate.
 
 Run:  python examples/winding_workflow.py [path/to/winding.dat] [--plot OUTDIR]
+(default: the copy bundled with sysid, ``sysid.datasets.path("winding")``).
 """
 
 from __future__ import annotations
@@ -18,8 +19,7 @@ import numpy as np
 
 import sysid
 
-HERE = Path(__file__).resolve().parent
-DEFAULT = HERE.parent.parent / "shared" / "data" / "daisy" / "winding.dat"
+DEFAULT = Path(sysid.datasets.path("winding"))
 
 
 def main(path: str | Path = DEFAULT, plot_dir: str | Path | None = None) -> dict[str, Any]:

@@ -3,27 +3,14 @@
 from __future__ import annotations
 
 import os
-from pathlib import Path
 
 import numpy as np
-import pytest
 from hypothesis import settings
 
 # CI runs the same examples every time (reproducible); locally hypothesis explores anew.
 settings.register_profile("ci", derandomize=True, print_blob=True)
 if os.environ.get("CI"):
     settings.load_profile("ci")
-
-SHARED_DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-
-
-def shared_data(rel: str) -> Path:
-    """Path of a record in ../shared/data; skips the test when the folder is absent."""
-    p = SHARED_DATA / rel
-    if not p.exists():
-        pytest.skip(f"{p} not available")
-    return p
-
 
 def random_system(n, m, l, rng, rmin=0.3, rmax=0.9, feedthrough=True):
     """A random stable (A, B, C, D) with well-separated pole moduli in [rmin, rmax]."""

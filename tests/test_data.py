@@ -12,8 +12,6 @@ from hypothesis import strategies as st
 import sysid
 from sysid.errors import DataError, InsufficientDataError, NonFiniteError, ShapeError
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-
 
 def record(n: int = 50, m: int = 2, l: int = 1, dt: float = 0.1, seed: int = 0) -> sysid.IOData:
     rng = np.random.default_rng(seed)
@@ -244,6 +242,34 @@ def test_csv_npz_mat_round_trips(tmp_path: Path) -> None:
         sysid.IOData.from_csv(tmp_path / "r.csv", ["zz"], ["out0"])
 
 
+@pytest.mark.parametrize("suffix", [".gz", ".bz2", ".xz"])
+def test_compressed_csv_reads_like_the_plain_file(tmp_path: Path, suffix: str) -> None:
+    import bz2
+    import gzip
+    import lzma
+
+    d = record(n=30).merge(record(n=25, seed=2))
+    d.to_csv(tmp_path / "r.csv")
+    text = (tmp_path / "r.csv").read_bytes()
+    pack = {".gz": gzip.compress, ".bz2": bz2.compress, ".xz": lzma.compress}[suffix]
+    (tmp_path / f"r.csv{suffix}").write_bytes(pack(text))
+    c = sysid.IOData.from_csv(tmp_path / f"r.csv{suffix}", ["in0", "in1"], ["out0"])
+    assert c == d and c.input_units == ["deg", "deg"] and c.lengths == [30, 25]
+    # the header (names, units) comes from the decompressed stream, not the raw bytes
+    with pytest.raises(DataError, match="no column 'zz'.*'in0'"):
+        sysid.IOData.from_csv(tmp_path / f"r.csv{suffix}", ["zz"], ["out0"])
+
+
+def test_to_csv_gz_writes_a_gzip_file(tmp_path: Path) -> None:
+    import gzip
+
+    d = record(n=20)
+    d.to_csv(tmp_path / "r.csv.gz")
+    assert (tmp_path / "r.csv.gz").read_bytes()[:2] == b"\x1f\x8b"  # gzip magic
+    assert gzip.decompress((tmp_path / "r.csv.gz").read_bytes()).startswith(b"time,experiment")
+    assert sysid.IOData.from_csv(tmp_path / "r.csv.gz", ["in0", "in1"], ["out0"]) == d
+
+
 def test_plain_mat_file(tmp_path: Path) -> None:
     from scipy.io import savemat
 
@@ -266,9 +292,9 @@ def test_csv_with_blanks_and_trailing_comma(tmp_path: Path) -> None:
     np.testing.assert_allclose(d.y.ravel(), [10, 20, 30, 40])
 
 
-@pytest.mark.skipif(not (DATA / "f16").exists(), reason="shared data not present")
 def test_reads_f16_csv_header() -> None:
-    d = sysid.IOData.from_csv(DATA / "f16" / "F16Data_FullMSine_Level1.csv", ["Force"],
+    """The F-16 file as published (quoted header, trailing comma), gzip-compressed."""
+    d = sysid.IOData.from_csv(sysid.datasets.path("f16"), ["Force"],
                               ["Acceleration1", "Acceleration2", "Acceleration3"], dt=1 / 400)
     assert d.n_samples == 73728 and d.output_names[0] == "Acceleration1"
 
@@ -312,3 +338,18 @@ def test_file_round_trips_for_any_shape(lengths: list[int], m: int, l: int, dt: 
         d.to_mat(Path(tmp) / "r.mat")
         assert sysid.IOData.from_mat(Path(tmp) / "r.mat") == d
     assert sysid.IOData.from_pandas(d.to_pandas(), dt=dt) == d
+
+
+def test_docs_data_examples_run_on_the_bundled_records() -> None:
+    """docs/data.md's code blocks, run in order on the copies bundled with sysid."""
+    import re
+
+    doc = Path(__file__).resolve().parents[1] / "docs" / "data.md"
+    blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), flags=re.S)
+    assert len(blocks) >= 2
+    ns: dict[str, object] = {}
+    for i, block in enumerate(blocks):
+        exec(compile(block, f"docs/data.md[python block {i}]", "exec"), ns)
+    assert repr(ns["data"]) == "IOData: 2500 samples, 5 inputs, 2 outputs, dt = 0.1 s"
+    frd = ns["frd"]
+    assert isinstance(frd, sysid.FRD) and frd.omega.size == 267  # "keeps the 267 excited lines"

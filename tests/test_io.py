@@ -60,7 +60,8 @@ def test_json_is_readable_and_tagged(tmp_path):
     path = tmp_path / "m.json"
     sysid.save_model(full_model(), path)
     d = json.loads(path.read_text())
-    assert d["format"] == "sysid-state-space-model" and d["dt"] == 0.004
+    assert d["format"] == "sysid-model" and d["version"] == 2 and d["dt"] == 0.004
+    assert d["family"] == "StateSpaceModel"
     assert d["input_names"] == ["elevator", "aileron"]
 
 

@@ -205,14 +205,10 @@ def test_plots_draw() -> None:
     plt.close("all")
 
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
-
-
-@pytest.mark.skipif(not (DATA / "daisy" / "winding.dat").exists(), reason="shared data missing")
 def test_winding_workflow_example(capsys: pytest.CaptureFixture[str]) -> None:
     example = Path(__file__).resolve().parents[1] / "examples" / "winding_workflow.py"
     mod = runpy.run_path(str(example))
-    res = mod["main"](DATA / "daisy" / "winding.dat")  # plots are tested elsewhere (slow)
+    res = mod["main"](sysid.datasets.path("winding"))  # plots are tested elsewhere (slow)
     assert res["dt"] == pytest.approx(0.1)
     est, val = res["estimation"], res["validation"]
     assert (est.n_inputs, est.n_outputs) == (5, 2)
@@ -304,10 +300,8 @@ def test_band_is_calibrated_with_few_averages() -> None:
         sysid.etfe(mimo_record(0.5, n=400), smoothing=3)
 
 
-@pytest.mark.skipif(not (DATA / "f16").exists(), reason="shared data missing")
 def test_f16_multisine_etfe_over_periods() -> None:
-    d = sysid.IOData.from_csv(DATA / "f16" / "F16Data_FullMSine_Level1.csv", ["Force"],
-                              ["Acceleration1", "Acceleration2", "Acceleration3"], dt=1 / 400)
+    d = sysid.datasets.load_f16()
     P = 8192  # samples per period; the first period holds the transient
     periods = [d.slice(k * P, (k + 1) * P) for k in range(1, 9)]
     frd = sysid.etfe(periods[0].merge(*periods[1:]), min_power=1e-3)

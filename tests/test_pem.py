@@ -314,8 +314,6 @@ def test_module_doctests():
 )
 def test_real_records_reach_the_published_fits(name, inputs, outputs, n_est, order,
                                                 feedthrough, goal):
-    if name not in sysid.datasets.NAMES:
-        pytest.skip(f"{name} is not bundled yet (the layout issue ships it)")
     d = np.loadtxt(sysid.datasets.path(name))
     u, y = d[:, inputs], d[:, outputs]
     u, y = u - u[:n_est].mean(0), y - y[:n_est].mean(0)

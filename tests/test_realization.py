@@ -12,7 +12,6 @@ from hypothesis import strategies as st
 
 import sysid
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
@@ -292,16 +291,15 @@ def test_markov_estimators_reject_bad_input() -> None:
 
 # -- the F-16 ground vibration test: the documented example ---------------------------------
 
-F16 = DATA / "f16" / "F16Data_FullMSine_Level1.csv"
+F16 = sysid.datasets.path("f16")
 
 
-@pytest.mark.skipif(not F16.exists(), reason="F-16 data not available")
 def test_f16_example_finds_the_wing_bending_mode_near_5_2_hz() -> None:
     spec = importlib.util.spec_from_file_location("f16_era", EXAMPLES / "f16_era.py")
     assert spec is not None and spec.loader is not None
     example = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(example)
-    modes = example.main(["f16_era.py", str(F16)])
+    modes = example.main(["f16_era.py", F16])
     near = np.abs(modes.frequencies_hz - 5.2) < 0.15
     assert near.sum() == 1, modes
     assert 0.001 < modes.damping[near][0] < 0.05

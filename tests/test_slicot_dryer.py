@@ -1,6 +1,8 @@
 """SLICOT's published IB01AD/IB01BD/IB01CD results on the hair-dryer record.
 
 Reference: ../shared/reference/slicot_dryer.md (numbers typed from there, cited per constant).
+Data: the bundled DaISy copy, ``sysid.datasets.path("dryer")`` (its SHA-256 is checked in
+tests/test_datasets.py).
 """
 
 from __future__ import annotations
@@ -10,7 +12,7 @@ import pytest
 
 import sysid
 
-from conftest import match_poles, shared_data
+from conftest import match_poles
 
 # IB01AD, MOESP, 15 block rows, raw data
 SLICOT_SV = [
@@ -52,15 +54,9 @@ SLICOT_D_CD = -0.0018
 
 @pytest.fixture(scope="module")
 def estimator():
-    d = np.loadtxt(shared_data("daisy/dryer.dat"))
+    d = np.loadtxt(sysid.datasets.path("dryer"))
     data = sysid.IOData(u=d[:, :1], y=d[:, 1:], dt=0.08)
     return sysid.SubspaceEstimator(data, horizon=15, method="moesp")
-
-
-def test_bundled_copy_is_the_shared_record():
-    a = np.loadtxt(shared_data("daisy/dryer.dat"))
-    b = np.loadtxt(sysid.datasets.path("dryer"))
-    np.testing.assert_array_equal(a, b)
 
 
 def test_singular_values_match_to_four_significant_digits(estimator):

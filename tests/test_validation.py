@@ -2,16 +2,13 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
 import sysid
 from sysid import _sysid
-from sysid.analysis.validation import ResidualAnalysis
+from sysid.analysis.whiteness import ResidualAnalysis
 
-DATA = Path(__file__).resolve().parents[1].parent / "shared" / "data"
 needs_engine = pytest.mark.skipif(not hasattr(_sysid, "Subspace"),
                                   reason="the subspace engine is not in this build yet")
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import html
 import sys
 import time
 from collections.abc import Sequence
@@ -22,7 +21,6 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .analysis.criteria import _pct
 from .data.iodata import IOData
 from .errors import DataError, OrderError, SysidError
 
@@ -169,15 +167,21 @@ def identify(
     report: str | Path | None = None,
     preprocessing: dict[str, Any] | None = None,
     progress: Callable[[str], None] | None = None,
+    uncertainty: str | None = None,
+    n_boot: int = 100,
 ) -> dict[str, Any]:
     """Identify, validate and (optionally) write a report; returns a summary dict.
+
+    ``uncertainty="bootstrap"`` attaches the residual-bootstrap parameter uncertainty
+    (``n_boot`` records) so the report's pole table has standard deviations.
 
     The summary holds ``model``, ``selection`` (:class:`~sysid.criteria.OrderSelection`),
     ``compare`` (validation simulation), ``prediction`` (validation 1-step), ``residuals``
     and, with ``report``, the written ``files``.
     """
     from .analysis.criteria import select_order
-    from .analysis.validation import compare, error_spectrum, residuals
+    from .analysis.validation import compare
+    from .analysis.whiteness import residuals
     from .estimate.subspace import SubspaceEstimator
 
     say = progress or (lambda _msg: None)
@@ -209,7 +213,9 @@ def identify(
     # B, D from the regression on the factor: on the DaISy records it loses less validation
     # fit than B, D, x0 by least squares (benches/results/subspace_defaults.md)
     x0 = False
-    model = est.fit(n, x0=x0)
+    if uncertainty is not None:
+        say(f"fitting order {n} with a residual bootstrap of {n_boot} records")
+    model = est.fit(n, x0=x0, uncertainty=uncertainty, n_boot=n_boot, rng=0)
     model.info["settings"] = {"method": est.method, "order": n, "order_rule": (
         sel.criterion if order == "auto" else "given"), "past": est.past,
         "future": est.future, "x0": x0}
@@ -225,136 +231,16 @@ def identify(
                            "prediction": pred, "residuals": res, "which": which}
     if report is not None:
         say(f"writing the report to {report}")
-        spec = error_spectrum(model, check)
-        out["files"] = _write_report(Path(report), out, spec)
+        out["files"] = _write_report(Path(report), out, check)
     say("done")
     return out
 
 
-def _write_report(root: Path, out: dict[str, Any], spec: Any) -> dict[str, Path]:
-    import matplotlib
+def _write_report(root: Path, out: dict[str, Any], check: Any) -> dict[str, Path]:
+    from .analysis.report import report
 
-    matplotlib.use("Agg")
-    from .models.io import save_model
-    from .plot import _pyplot
-    from .plot.model import plot_bode, plot_pzmap
-    from .plot.validation import plot_singular_values
-
-    plt = _pyplot()
-    root.mkdir(parents=True, exist_ok=True)
-    model, sel = out["model"], out["selection"]
-    files: dict[str, Path] = {}
-    files["model"] = root / "model.json"
-    save_model(model, files["model"])
-
-    # tables
-    files["fit"] = root / "fit.csv"
-    with open(files["fit"], "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(["output", "simulation fit %", "1-step fit %", "simulation VAF %",
-                    "simulation RMSE", "whiteness p", "independence p"])
-        res = out["residuals"]
-        for j, name in enumerate(model.output_names):
-            w.writerow([name, f"{out['compare'].fit.mean(0)[j]:.4f}",
-                        f"{out['prediction'].fit.mean(0)[j]:.4f}",
-                        f"{out['compare'].vaf.mean(0)[j]:.4f}",
-                        f"{out['compare'].rmse.mean(0)[j]:.6g}",
-                        f"{res.ljung_box_pvalue[j]:.4g}", f"{res.independence_pvalue[j]:.4g}"])
-    files["orders"] = root / "orders.csv"
-    if _has_pandas():
-        sel.to_pandas().to_csv(files["orders"], index=False)
-    else:  # pragma: no cover
-        _rows_csv(sel.rows, files["orders"])
-
-    # plots
-    def save(name: str, fig: Any) -> None:
-        files[name] = root / f"{name}.png"
-        fig.savefig(files[name], dpi=90)
-        plt.close(fig)
-
-    ax = plot_singular_values(sel.singular_values[sel.method], model.nstates)
-    ax.set_title("singular values (order choice)")
-    save("singular_values", ax.figure)
-    save("order_selection", sel.plot())
-    save("stabilization", sel.stabilization_plot().figure)
-    save("compare", out["compare"].plot())
-    save("residuals", out["residuals"].plot())
-    save("error_spectrum", spec.plot())
-    save("bode", plot_bode(model))
-    save("pzmap", plot_pzmap(model).figure)
-
-    files["html"] = root / "index.html"
-    files["html"].write_text(_html(out, files), encoding="utf-8")
-    return files
-
-
-def _has_pandas() -> bool:
-    try:
-        import pandas  # noqa: F401
-    except ImportError:  # pragma: no cover
-        return False
-    return True
-
-
-def _rows_csv(rows: list[dict[str, Any]], path: Path) -> None:  # pragma: no cover
-    with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=list(rows[0]))
-        w.writeheader()
-        w.writerows(rows)
-
-
-def _html(out: dict[str, Any], files: dict[str, Path]) -> str:
-    model, sel, res = out["model"], out["selection"], out["residuals"]
-    esc = html.escape
-
-    def table(tid: str, header: list[str], rows: list[list[Any]]) -> str:
-        th = "".join(f"<th>{esc(h)}</th>" for h in header)
-        body = "".join("<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in r) + "</tr>"
-                       for r in rows)
-        return f'<table id="{tid}" border="1" cellpadding="3"><tr>{th}</tr>{body}</table>'
-
-    fit_rows = [[name, f"{out['compare'].fit.mean(0)[j]:.2f}",
-                 f"{out['prediction'].fit.mean(0)[j]:.2f}", f"{res.ljung_box_pvalue[j]:.3g}",
-                 "yes" if res.whiteness[j] else "no"]
-                for j, name in enumerate(model.output_names)]
-    order_rows = [[r["method"], r["order"], f"{r['singular_value']:.4g}",
-                   f"{r['aic']:.2f}", f"{r['bic']:.2f}", _pct(r["fit_validation"]).strip(),
-                   "yes" if r["stable"] else "no"] for r in sel.rows if r["error"] is None]
-    imgs = "".join(
-        f'<figure><img src="{esc(files[k].name)}" alt="{esc(k)}"><figcaption>{esc(cap)}'
-        "</figcaption></figure>"
-        for k, cap in (
-            ("compare", f"{out['which']} data: measured and simulated outputs"),
-            ("residuals", "residual correlations with 99 % bounds"),
-            ("error_spectrum", "spectrum of the simulation error"),
-            ("singular_values", "singular values"),
-            ("order_selection", "order selection"),
-            ("stabilization", "stabilisation diagram"),
-            ("bode", "Bode plot"),
-            ("pzmap", "pole-zero map"),
-        )
-    )
-    from .analysis.lti import damp
-
-    details = esc(res.summary() + "\n\n" + repr(damp(model)))
-    return f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>sysid report</title>
-<style>body{{font-family:sans-serif;max-width:1100px;margin:auto}}img{{max-width:100%}}
-td,th{{text-align:right}}</style></head><body>
-<h1>sysid identification report</h1>
-<p>{esc(repr(model))}</p>
-<p>Order choice: {esc(sel.reason)}</p>
-<pre>{details}</pre>
-<h2>Fit on the {esc(out['which'])} data</h2>
-{table("fit", ["output", "simulation fit %", "1-step fit %", "whiteness p", "white"], fit_rows)}
-<h2>Order sweep</h2>
-{table("orders", ["method", "order", "singular value", "AIC", "BIC", "validation fit %",
-                  "stable"], order_rows)}
-<p>Files: <a href="model.json">model.json</a>, <a href="fit.csv">fit.csv</a>,
-<a href="orders.csv">orders.csv</a></p>
-{imgs}
-</body></html>
-"""
+    return report(out["model"], check, root, selection=out["selection"], which=out["which"],
+                  max_lag=out["residuals"].max_lag)
 
 
 def _print_summary(out: dict[str, Any]) -> None:
@@ -386,7 +272,7 @@ def _demo(args: argparse.Namespace) -> int:
     out = identify(est_data, val_data, order="auto", horizon=15, report=args.report,
                    preprocessing={"samples": "estimation 1-500, validation 501-1000",
                                   "detrend": "none (raw data, as SLICOT)"},
-                   progress=_Progress(args.quiet))
+                   progress=_Progress(args.quiet), uncertainty="bootstrap")
     _print_summary(out)
     return 0
 
@@ -426,7 +312,9 @@ def _identify(args: argparse.Namespace) -> int:
     est_data = IOData(u=u[:k] if ui else None, y=y[:k], **kw)
     val_data = IOData(u=u[k:] if ui else None, y=y[k:], **kw) if k < N else None
     out = identify(est_data, val_data, order=args.order, method=args.method,
-                   horizon=args.horizon, report=args.report, preprocessing=pre, progress=say)
+                   horizon=args.horizon, report=args.report, preprocessing=pre, progress=say,
+                   uncertainty=None if args.uncertainty == "none" else args.uncertainty,
+                   n_boot=args.n_boot)
     _print_summary(out)
     return 0
 
@@ -454,6 +342,10 @@ def _parser() -> argparse.ArgumentParser:
                      help="remove the estimation part's means first (recorded in the model)")
     ide.add_argument("--delimiter", default=None, help="field separator (default: guessed)")
     ide.add_argument("--report", required=True, help="output directory")
+    ide.add_argument("--uncertainty", choices=("none", "bootstrap"), default="none",
+                     help="pole standard deviations in the report from a residual bootstrap")
+    ide.add_argument("--n-boot", dest="n_boot", type=int, default=100,
+                     help="bootstrap records (default 100)")
     ide.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     ide.set_defaults(func=_identify)
     return parser

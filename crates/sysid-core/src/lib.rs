@@ -46,15 +46,14 @@
 pub mod error;
 pub mod hankel;
 pub mod linalg;
-pub mod lyapunov;
 pub mod model;
 pub mod optim;
 pub mod pem;
 pub mod polynomial;
 pub mod realization;
-pub mod riccati;
-pub mod simulate;
 pub mod subspace;
 
 pub use error::{Result, SysidError};
 pub use model::StateSpace;
+// The model's equations live in `model/`; their old root paths stay valid.
+pub use model::{lyapunov, riccati, simulate};

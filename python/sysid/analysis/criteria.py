@@ -45,8 +45,9 @@ import numpy as np
 from .._checks import as_int
 from ..data.iodata import IOData
 from ..errors import DataError, NumericalError, SysidError
-from ..models.statespace import StateSpaceModel
-from .validation import _records, _x0_for, compare
+from ..models.checks import _optional, check_model
+from ..models.statespace import StateSpaceModel, ss_parameter_count
+from .validation import _records, _run, _stateful, _x0_for, compare
 
 __all__ = ["n_parameters", "Criteria", "criteria", "OrderSelection", "select_order"]
 
@@ -66,12 +67,8 @@ def n_parameters(n: int, m: int, l: int, *, feedthrough: bool = True, noise_mode
     >>> n_parameters(4, 1, 1, feedthrough=False, noise_model=False)
     8
     """
-    d = n * ((2 * l if noise_model else l) + m)
-    if feedthrough:
-        d += l * m
-    if x0:
-        d += n * n_experiments
-    return int(d)
+    return ss_parameter_count(n, m, l, feedthrough=feedthrough, noise_model=noise_model, x0=x0,
+                              n_experiments=n_experiments)
 
 
 class Criteria:
@@ -107,20 +104,22 @@ class Criteria:
                 f"FPE={self.fpe:.4g})")
 
 
-def criteria(model: StateSpaceModel, data: Any, *, x0: Any = "estimate",
+def criteria(model: Any, data: Any, *, x0: Any = "estimate",
              n_params: int | None = None, resolution: float = 1e-8) -> Criteria:
     """Information criteria of a model on (its estimation) data.
 
     Parameters
     ----------
-    model : StateSpaceModel
+    model : sysid.Model
+        Any model; its ``n_parameters`` is the parameter count.
     data : IOData or (u, y)
         The data the model was estimated on.
     x0 : "estimate", "zero", "model" or array
-        Initial predictor state; an estimated one counts ``n`` parameters per experiment.
+        Initial predictor state; an estimated one counts ``n`` parameters per experiment
+        (state-space models only: other models start from rest).
     n_params : int, optional
-        Override the parameter count (default :func:`n_parameters` from the model's shape,
-        its ``D`` and ``K``).
+        Override the parameter count (default ``model.n_parameters``, for a state-space
+        model :func:`n_parameters` from its shape, its ``D`` and ``K``).
     resolution : float
         Relative floor of the prediction-error covariance (see module docs).
 
@@ -135,22 +134,21 @@ def criteria(model: StateSpaceModel, data: Any, *, x0: Any = "estimate",
     >>> c.n_params   # n (2 l + m) + n for x0; D = 0 counts as no feed-through
     4
     """
-    recs = _records(model, data)
+    given = model
+    model, recs = _records(model, data)
     es, ys = [], []
     for i, (u, y) in enumerate(recs):
         x = _x0_for(model, x0, u, y, 1, i, len(recs))
-        es.append(y - model.predict(u, y, 1, x))
+        es.append(y - _run(model, u, y, 1, x))
         ys.append(y)
     e, y = np.vstack(es), np.vstack(ys)
     N = e.shape[0]
     lam = e.T @ e / N + np.diag(resolution**2 * np.mean(y**2, axis=0) + 1e-300)
     _, logdet = np.linalg.slogdet(lam)  # lam is positive definite by construction
     if n_params is None:
-        n_params = n_parameters(
-            model.nstates, model.ninputs, model.noutputs,
-            feedthrough=bool(np.any(model.D != 0)), noise_model=model.K is not None,
-            x0=isinstance(x0, str) and x0 == "estimate", n_experiments=len(recs),
-        )
+        n_params = int(given.n_parameters)
+        if _stateful(model) and isinstance(x0, str) and x0 == "estimate":
+            n_params += model.nstates * len(recs)
     return Criteria(logdet, n_params, N)
 
 
@@ -178,7 +176,7 @@ class OrderSelection:
     """
 
     def __init__(self, rows: list[dict[str, Any]], singular_values: dict[str, np.ndarray],
-                 models: dict[tuple[str, int], StateSpaceModel], svd_picks: dict[str, int],
+                 models: dict[tuple[str, int], Any], svd_picks: dict[str, int],
                  has_validation: bool, criterion: str | None, fit_tol: float) -> None:
         self.rows, self.singular_values, self._models = rows, singular_values, models
         self.has_validation, self.fit_tol = has_validation, fit_tol
@@ -194,7 +192,8 @@ class OrderSelection:
                 best = min(vals, key=lambda r: (r[crit], r["order"]))
                 self.picks[crit], self.pick_methods[crit] = best["order"], best["method"]
         first = rows[0]["method"]
-        self.picks["svd"], self.pick_methods["svd"] = svd_picks[first], first
+        if first in svd_picks:
+            self.picks["svd"], self.pick_methods["svd"] = svd_picks[first], first
         if has_validation:
             cand = [r for r in ok if r["stable"] and np.isfinite(r["fit_validation"])]
             cand = cand or [r for r in ok if np.isfinite(r["fit_validation"])]
@@ -204,7 +203,8 @@ class OrderSelection:
                 best = min(good, key=lambda r: (r["order"], -r["fit_validation"]))
                 self.picks["validation"], self.pick_methods["validation"] = (
                     best["order"], best["method"])
-        rule = criterion or next(r for r in ("validation", "bic", "svd") if r in self.picks)
+        rule = criterion or next((r for r in ("validation", "bic", "svd") if r in self.picks),
+                                 "")
         if rule not in self.picks:
             raise DataError(f"criterion {rule!r} is not available; choose one of "
                             f"{', '.join(self.picks)}")
@@ -232,14 +232,14 @@ class OrderSelection:
             parts.append(f": smallest {_NAMES[self.criterion]} = {r[self.criterion]:.4g}")
         else:
             parts.append(": largest gap of the log singular values")
-        sv = self.singular_values[self.method]
+        sv = self.singular_values.get(self.method, np.zeros(0))
         if 0 < self.order < sv.size:
             parts.append(f"; singular values {sv[self.order - 1]:.4g} -> {sv[self.order]:.4g} "
                          f"(ratio {sv[self.order - 1] / max(sv[self.order], 1e-300):.3g})")
         parts.append(f"; {'stable' if r['stable'] else 'UNSTABLE'} model. Votes: {votes}.")
         return "".join(parts)
 
-    def model(self, order: int | None = None, method: str | None = None) -> StateSpaceModel:
+    def model(self, order: int | None = None, method: str | None = None) -> Any:
         """The fitted model of the sweep (default: the recommended one)."""
         key = (method or self.method, self.order if order is None else order)
         if key not in self._models:
@@ -253,7 +253,11 @@ class OrderSelection:
         meth = method or self.method
         for (mm, order), mod in sorted(self._models.items(), key=lambda kv: kv[0][1]):
             if mm == meth:
-                yield order, damp(mod)
+                try:
+                    table = damp(mod)
+                except DataError:  # a model without poles() or to_statespace()
+                    continue
+                yield order, table
 
     def to_pandas(self) -> Any:
         """The table as a :class:`pandas.DataFrame`."""
@@ -287,7 +291,8 @@ class OrderSelection:
                 continue
             star = " *" if (r["method"], r["order"]) == (self.method, self.order) else ""
             lines.append(
-                f"{r['method']:<15} {r['order']:>3} {r['singular_value']:10.4g} "
+                f"{r.get('model', r['method'])[:15]:<15} {r['order']:>3} "
+                f"{r['singular_value']:10.4g} "
                 f"{r['n_params']:>4} {r['aic']:11.2f} {r['aicc']:11.2f} {r['bic']:11.2f} "
                 f"{r['fpe']:10.4g} {_pct(r['fit_estimation'])} {_pct(r['fit_validation'])} "
                 f"{'yes' if r['stable'] else 'NO':>6}{star}"
@@ -356,13 +361,16 @@ def select_order(
     fit_tol: float = 0.5,
     feedthrough: bool = True,
     kalman: bool = True,
+    models: Sequence[Any] | None = None,
 ) -> OrderSelection:
-    """Sweep orders (and weightings) on one compression; tabulate criteria and fits.
+    """Sweep orders (and weightings) on one compression, or rank given models; tabulate
+    criteria and fits.
 
     Parameters
     ----------
-    data : IOData or SubspaceEstimator
-        Estimation data (compressed once), or an estimator to reuse.
+    data : IOData, (u, y) or SubspaceEstimator
+        Estimation data (compressed once), or an estimator to reuse. With ``models``, the
+        data the models were estimated on (an IOData or a pair).
     orders : iterable of int, optional
         Orders to fit (default ``1 .. min(max_order, 15)``).
     methods : sequence of str, optional
@@ -380,11 +388,29 @@ def select_order(
         Percentage points of validation fit a smaller order may give up and still win.
     feedthrough, kalman : bool
         Passed to :meth:`SubspaceEstimator.fit`.
+    models : sequence of sysid.Model, optional
+        Candidate models of any family (state-space, polynomial, your own) to rank instead of
+        a subspace sweep; the "order" of each is its ``nstates`` or else its
+        ``n_parameters``, and must differ between candidates. ``orders``, ``methods``,
+        ``horizon``, ``feedthrough`` and ``kalman`` do not apply.
 
     Returns
     -------
     OrderSelection
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> true = sysid.StateSpaceModel([[0.8, 0.3], [-0.3, 0.8]], [[1.0], [0.0]], [[1.0, 0.5]])
+    >>> u = rng.standard_normal(400)
+    >>> y = true.simulate(u) + 0.05 * rng.standard_normal((400, 1))
+    >>> low = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]])
+    >>> sysid.select_order((u, y), models=[low, true], criterion="bic").order
+    2
     """
+    if models is not None:
+        return _rank_models(data, list(models), validation, x0, criterion, float(fit_tol))
     from ..estimate.subspace import SubspaceEstimator
 
     est = data if isinstance(data, SubspaceEstimator) else None
@@ -406,7 +432,7 @@ def select_order(
     orders_ = _check_orders(orders, est.max_order)
     _check_validation(validation, est.data.n_inputs, est.data.n_outputs, est.data.dt)
     est_data = None if getattr(est, "_from_factor", False) else est.data
-    rows, models, svs, svd_picks = [], {}, {}, {}
+    rows, fitted, svs, svd_picks = [], {}, {}, {}
     for meth in meths:
         sv = np.asarray(est.singular_values_for(meth))
         svs[meth] = sv
@@ -420,7 +446,7 @@ def select_order(
             except SysidError as e:
                 rows.append(_failed(row, e))
                 continue
-            models[(meth, n)] = mod
+            fitted[(meth, n)] = mod
             row["stable"] = mod.is_stable()
             row["max_abs_pole"] = float(np.max(np.abs(mod.poles())))
             d = n_parameters(n, mod.ninputs, mod.noutputs, feedthrough=feedthrough,
@@ -440,5 +466,62 @@ def select_order(
                 rows.append(_failed(row, e))
                 continue
             rows.append(row)
-    return OrderSelection(rows, svs, models, svd_picks, validation is not None, criterion,
+    return OrderSelection(rows, svs, fitted, svd_picks, validation is not None, criterion,
                           float(fit_tol))
+
+
+def _order_of(model: Any) -> int:
+    return int(getattr(model, "nstates", model.n_parameters))
+
+
+def _stability(model: Any) -> tuple[bool, float]:
+    """``(stable, max |pole|)``; a model without poles counts as stable (FIR-like)."""
+    try:
+        p = np.asarray(_optional(model, "poles", "stability"))
+    except DataError:
+        return True, np.nan
+    if not p.size:
+        return True, 0.0
+    if not model.dt:
+        return bool(np.max(p.real) < 0), float(np.max(np.abs(p)))
+    rho = float(np.max(np.abs(p)))
+    return rho < 1.0, rho
+
+
+def _rank_models(data: Any, models: list[Any], validation: Any, x0: str,
+                 criterion: str | None, fit_tol: float) -> OrderSelection:
+    """:func:`select_order` over given candidate models (any :class:`sysid.Model`)."""
+    if not models:
+        raise DataError("models is empty; pass at least one candidate model")
+    if not fit_tol >= 0:
+        raise DataError(f"fit_tol must be >= 0, got {fit_tol!r}")
+    if x0 not in ("estimate", "zero"):
+        raise DataError(f"x0 must be 'estimate' or 'zero', got {x0!r}")
+    seen: dict[int, Any] = {}
+    rows, fitted = [], {}
+    for mod in models:
+        check_model(mod, "every candidate in models")
+        order = _order_of(mod)
+        if order in seen:
+            raise DataError(f"two candidate models have order {order} ({seen[order]!r} and "
+                            f"{mod!r}); rank models of different orders, or compare them "
+                            "one by one with sysid.criteria")
+        seen[order] = mod
+        label = str(mod.info.get("method", type(mod).__name__))
+        row: dict[str, Any] = {"method": "models", "order": order, "model": label,
+                               "singular_value": np.nan, "error": None}
+        try:
+            c = criteria(mod, data, x0=x0)
+            row["stable"], row["max_abs_pole"] = _stability(mod)
+            row["n_params"] = c.n_params
+            row.update({k: getattr(c, k) for k in ("loss",) + CRITERIA})
+            row["fit_estimation"] = compare(mod, data, x0=x0).mean_fit
+            row["fit_validation"] = (compare(mod, validation, x0=x0).mean_fit
+                                     if validation is not None else np.nan)
+        except NumericalError as e:
+            rows.append(_failed(row, e))
+            continue
+        fitted[("models", order)] = mod
+        rows.append(row)
+    rows.sort(key=lambda r: r["order"])
+    return OrderSelection(rows, {}, fitted, {}, validation is not None, criterion, fit_tol)

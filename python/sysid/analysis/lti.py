@@ -15,15 +15,18 @@ Conventions
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
-from .._checks import as_int, as_matrix
-from ..errors import DataError, NumericalError, ShapeError
+from .._checks import as_matrix
+from ..errors import DataError, ShapeError
+from ..models.checks import _optional, check_model
+from ..models.continuous import ContinuousStateSpace, c2d, d2c
+from ..models.linear import DampingTable, damping_table, transmission_zeros
+from ..models.protocol import TimeResponse
 from ..models.statespace import StateSpaceModel
+from .controllability import ctrb, is_controllable, is_observable, obsv  # noqa: F401 (moved)
 
 __all__ = [
     "ContinuousStateSpace",
@@ -46,115 +49,13 @@ __all__ = [
 ]
 
 
-class ContinuousStateSpace:
-    """Continuous-time model ``dx/dt = A x + B u``, ``y = C x + D u``.
+# -- zeros, damping (computed in sysid.models.linear) ------------------------------------
+def zeros(model: Any, tol: float = 1e-6) -> np.ndarray:
+    """Transmission zeros of any model: :func:`~sysid.models.linear.transmission_zeros` of
+    its state-space matrices, else its own ``zeros()`` (or that of ``to_statespace()``).
 
-    Parameters
-    ----------
-    A, B, C : array_like
-        Shapes ``(n, n)``, ``(n, m)``, ``(l, n)``.
-    D : array_like, optional
-        ``(l, m)``; zero if omitted.
-    input_names, output_names : sequence of str, optional
-        Channel names.
-
-    Examples
-    --------
-    >>> import sysid
-    >>> sys = sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]])
-    >>> sys
-    ContinuousStateSpace(nstates=1, ninputs=1, noutputs=1, stable)
-    >>> float(sys.dcgain()[0, 0])
-    1.0
-    """
-
-    def __init__(
-        self,
-        A: Any,
-        B: Any,
-        C: Any,
-        D: Any = None,
-        *,
-        input_names: Sequence[str] | None = None,
-        output_names: Sequence[str] | None = None,
-    ) -> None:
-        # reuse the discrete model's checks, then keep only the matrices
-        ref = StateSpaceModel(A, B, C, D, input_names=input_names, output_names=output_names)
-        self.A, self.B, self.C, self.D = ref.A, ref.B, ref.C, ref.D
-        self.input_names, self.output_names = ref.input_names, ref.output_names
-
-    nstates = property(lambda self: self.A.shape[0], doc="Number of states n.")
-    ninputs = property(lambda self: self.B.shape[1], doc="Number of inputs m.")
-    noutputs = property(lambda self: self.C.shape[0], doc="Number of outputs l.")
-
-    def poles(self) -> np.ndarray:
-        """Eigenvalues of A (continuous-time poles, rad/s)."""
-        return np.linalg.eigvals(self.A).astype(complex)
-
-    def is_stable(self) -> bool:
-        """True when every pole has a strictly negative real part."""
-        return bool(self.nstates == 0 or np.max(self.poles().real) < 0)
-
-    def freqresp(self, omega: Any) -> np.ndarray:
-        """``C (j omega I - A)^{-1} B + D``, shape ``(len(omega), noutputs, ninputs)``."""
-        w = np.atleast_1d(np.asarray(omega, dtype=float))
-        eye = np.eye(self.nstates)
-        out = np.empty((w.size, self.noutputs, self.ninputs), dtype=complex)
-        for i, wi in enumerate(w):
-            out[i] = self.C @ np.linalg.solve(1j * wi * eye - self.A, self.B) + self.D
-        return out
-
-    def dcgain(self) -> np.ndarray:
-        """``D - C A^{-1} B``, shape ``(noutputs, ninputs)``."""
-        return self.freqresp([0.0])[0].real
-
-    def c2d(self, dt: float, method: str = "zoh") -> StateSpaceModel:
-        """Discretise; see :func:`c2d`."""
-        return c2d(self, dt, method)
-
-    def __repr__(self) -> str:
-        stab = "stable" if self.is_stable() else "UNSTABLE"
-        return (
-            f"ContinuousStateSpace(nstates={self.nstates}, ninputs={self.ninputs}, "
-            f"noutputs={self.noutputs}, {stab})"
-        )
-
-
-def _model(model: Any) -> StateSpaceModel:
-    if not isinstance(model, StateSpaceModel):
-        raise DataError(f"expected a sysid.StateSpaceModel, got {type(model).__name__}")
-    return model
-
-
-# -- zeros ------------------------------------------------------------------------------
-def _pencil_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
-    n = A.shape[0]
-    M = np.block([[A, B], [C, D]])
-    N = np.zeros_like(M)
-    N[:n, :n] = np.eye(n)
-    w = scipy.linalg.eigvals(M, N, homogeneous_eigvals=True)
-    alpha, beta = w
-    scale = max(float(np.abs(M).max()), 1.0)
-    # infinite eigenvalues come out with beta at round-off level
-    finite = np.abs(alpha) < 1e8 * scale * np.abs(beta)
-    z = alpha[finite] / beta[finite]
-    return z.astype(complex)
-
-
-def zeros(model: StateSpaceModel | ContinuousStateSpace, tol: float = 1e-6) -> np.ndarray:
-    """Transmission zeros: finite generalised eigenvalues of the Rosenbrock pencil.
-
-    ``[[A - z I, B], [C, D]]`` loses rank at a zero. For a square system the pencil's
-    generalised eigenvalues are the zeros (``scipy.linalg.eigvals``). A non-square system is
-    squared down twice with random (seeded) combinations of its outputs or inputs; zeros
-    common to both, within ``tol`` relative, are kept (the spurious zeros of a squaring-down
-    move with the combination, the true ones do not).
-
-    Parameters
-    ----------
-    model : StateSpaceModel or ContinuousStateSpace
-    tol : float
-        Relative tolerance for matching zeros of the two squared-down systems.
+    ``[[A - z I, B], [C, D]]`` loses rank at a zero; non-square systems are squared down
+    twice at random and the common zeros kept, within ``tol`` relative.
 
     Returns
     -------
@@ -168,93 +69,17 @@ def zeros(model: StateSpaceModel | ContinuousStateSpace, tol: float = 1e-6) -> n
     >>> sysid.zeros(m)
     array([0.35+0.j])
     """
-    A, B, C, D = model.A, model.B, model.C, model.D
-    l, m = D.shape
-    if l == m:
-        z = _pencil_zeros(A, B, C, D)
-    else:
-        rng = np.random.default_rng(12345)
-        k = min(l, m)
-        cands = []
-        for _ in range(2):
-            if l > m:
-                W = rng.standard_normal((k, l))
-                cands.append(_pencil_zeros(A, B, W @ C, W @ D))
-            else:
-                W = rng.standard_normal((m, k))
-                cands.append(_pencil_zeros(A, B @ W, C, D @ W))
-        z1, z2 = cands
-        keep = [a for a in z1 if z2.size and np.min(np.abs(z2 - a)) <= tol * max(1.0, abs(a))]
-        z = np.array(keep, dtype=complex)
-    return z[np.argsort(np.abs(z), kind="stable")]
+    if all(hasattr(model, k) for k in ("A", "B", "C", "D")):
+        return transmission_zeros(model.A, model.B, model.C, model.D, tol)
+    return np.asarray(_optional(model, "zeros", "zeros"))
 
 
-# -- damping ----------------------------------------------------------------------------
-class DampingTable:
-    """Poles with their natural frequency, damping ratio and time constant.
-
-    Attributes
-    ----------
-    poles : ndarray
-        Poles of the model (discrete ``z`` or continuous ``s``), sorted by frequency.
-    s : ndarray
-        Continuous-time equivalents ``log(z) / dt`` (equal to ``poles`` for continuous models).
-    wn, wn_hz : ndarray
-        Natural frequency ``|s|`` in rad/s and Hz.
-    wd, wd_hz : ndarray
-        Damped frequency ``|Im s|`` in rad/s and Hz (``|angle(z)| / (2 pi dt)`` in Hz).
-    zeta : ndarray
-        Damping ratio ``-Re(s) / |s|``.
-    tau : ndarray
-        Time constant ``-1 / Re(s)`` in seconds (``inf`` on the stability boundary).
-    """
-
-    def __init__(self, poles: np.ndarray, s: np.ndarray, dt: float | None) -> None:
-        order = np.lexsort((s.imag, np.abs(s)))
-        self.poles, self.s, self.dt = poles[order], s[order], dt
-        with np.errstate(divide="ignore", invalid="ignore"):
-            self.wn = np.abs(self.s)
-            safe = np.where(self.wn > 0, self.wn, 1.0)
-            self.zeta = np.where(self.wn > 0, -self.s.real / safe, -1.0)
-            self.zeta = np.where(np.isinf(self.s.real), 1.0, self.zeta)
-            self.wd = np.abs(self.s.imag)
-            self.tau = np.where(self.s.real != 0, -1.0 / self.s.real, np.inf)
-        self.wn_hz = self.wn / (2 * np.pi)
-        self.wd_hz = self.wd / (2 * np.pi)
-
-    def to_pandas(self) -> Any:
-        """The table as a :class:`pandas.DataFrame`."""
-        import pandas as pd
-
-        return pd.DataFrame(
-            {
-                "pole": self.poles, "magnitude": np.abs(self.poles), "wn [rad/s]": self.wn,
-                "wn [Hz]": self.wn_hz, "damping": self.zeta, "wd [Hz]": self.wd_hz,
-                "tau [s]": self.tau,
-            }
-        )
-
-    def __len__(self) -> int:
-        return len(self.poles)
-
-    def __repr__(self) -> str:
-        head = (f"{'pole':>24} {'|pole|':>8} {'wn rad/s':>10} {'wn Hz':>9} {'damping':>8} "
-                f"{'wd Hz':>9}")
-        rows = [head]
-        for p, wn, fz, z, fd in zip(self.poles, self.wn, self.wn_hz, self.zeta, self.wd_hz):
-            rows.append(
-                f"{p.real:>11.5g}{p.imag:>+11.5g}j {abs(p):8.4f} {wn:10.4g} {fz:9.4g} "
-                f"{z:8.4f} {fd:9.4g}"
-            )
-        where = f"dt = {self.dt:g} s" if self.dt is not None else "continuous time"
-        return f"DampingTable ({where})\n" + "\n".join(rows)
-
-
-def damp(model: StateSpaceModel | ContinuousStateSpace) -> DampingTable:
+def damp(model: Any, std: bool = False) -> DampingTable:
     """Natural frequencies (rad/s and Hz), damping ratios and time constants of the poles.
 
-    Discrete poles are mapped through ``s = log(z) / dt``; a pole at ``z = 0`` gets
-    ``s = -inf`` (infinitely fast, damping 1).
+    Works on any model with ``poles()`` (or ``to_statespace()``). Discrete poles are mapped
+    through ``s = log(z) / dt``; a pole at ``z = 0`` gets ``s = -inf`` (infinitely fast,
+    damping 1); a continuous model (``dt == 0``) keeps its poles.
 
     Examples
     --------
@@ -268,110 +93,26 @@ def damp(model: StateSpaceModel | ContinuousStateSpace) -> DampingTable:
     >>> np.round(table.zeta, 4)
     array([0.0995, 0.0995])
     """
-    p = model.poles()
-    if isinstance(model, ContinuousStateSpace):
-        return DampingTable(p, p.copy(), None)
-    _model(model)
-    with np.errstate(divide="ignore"):
-        s = np.where(np.abs(p) > 0, np.log(np.where(np.abs(p) > 0, p, 1)) / model.dt, -np.inf)
-    return DampingTable(p, s.astype(complex), model.dt)
+    check_model(model)
+    if std:
+        if not float(model.dt):
+            raise DataError("damp(std=True) needs a discrete-time model with uncertainty")
+        from ..models.uncertainty import damping_std
 
-
-# -- controllability / observability ----------------------------------------------------
-def ctrb(model: Any) -> np.ndarray:
-    """Controllability matrix ``[B, AB, ..., A^{n-1} B]``, shape ``(n, n m)``."""
-    A, B = model.A, model.B
-    blocks, ab = [], B
-    for _ in range(A.shape[0]):
-        blocks.append(ab)
-        ab = A @ ab
-    return np.hstack(blocks) if blocks else np.zeros((0, 0))
-
-
-def obsv(model: Any) -> np.ndarray:
-    """Observability matrix ``[C; CA; ...; C A^{n-1}]``, shape ``(n l, n)``."""
-    return ctrb(_Transposed(model)).T
-
-
-class _Transposed:
-    def __init__(self, model: Any) -> None:
-        self.A, self.B = model.A.T, model.C.T
-
-
-def _pbh_rank_ok(A: np.ndarray, B: np.ndarray, tol: float | None) -> bool:
-    n = A.shape[0]
-    if n == 0:
-        return True
-    scale = max(float(np.linalg.norm(A, 2)), float(np.linalg.norm(B, 2)) if B.size else 0.0,
-                1e-300)
-    tol = n * np.finfo(float).eps * 1e3 if tol is None else float(tol)
-    for lam in np.linalg.eigvals(A):
-        sv = np.linalg.svd(np.hstack([A - lam * np.eye(n), B]), compute_uv=False)
-        if sv[n - 1] <= tol * scale:
-            return False
-    return True
-
-
-def is_controllable(model: Any, tol: float | None = None) -> bool:
-    """Popov-Belevitch-Hautus test: ``[A - lambda I, B]`` has full row rank at every pole.
-
-    The rank is judged on the smallest singular value relative to ``max(||A||, ||B||)``;
-    ``tol`` defaults to ``1000 n eps``. More reliable than the rank of :func:`ctrb`, whose
-    columns lose precision as powers of A grow.
-
-    Examples
-    --------
-    >>> import sysid
-    >>> sysid.is_controllable(sysid.StateSpaceModel([[0.5, 0], [0, 0.2]], [[1], [0]], [[1, 1]]))
-    False
-    """
-    return _pbh_rank_ok(model.A, model.B, tol)
-
-
-def is_observable(model: Any, tol: float | None = None) -> bool:
-    """PBH observability test (the dual of :func:`is_controllable`).
-
-    Examples
-    --------
-    >>> import sysid
-    >>> sysid.is_observable(sysid.StateSpaceModel([[0.5, 0], [0, 0.2]], [[1], [0]], [[1, 1]]))
-    True
-    """
-    return _pbh_rank_ok(model.A.T, model.C.T, tol)
+        d = damping_std(model, model.dt)
+        return DampingTable(d["poles"], d["s"].astype(complex), model.dt, std=d)
+    return damping_table(np.asarray(_optional(model, "poles", "damp")), float(model.dt))
 
 
 # -- time responses ---------------------------------------------------------------------
-class TimeResponse:
-    """Step or impulse response: ``y[t, i, j]`` is output i for input j at time ``t[t]``."""
+def step(model: Any, n_samples: int | None = None, std: bool = False) -> TimeResponse:
+    """Response to a unit step on each input (from rest) of any model: ``model.step``.
 
-    def __init__(self, kind: str, t: np.ndarray, y: np.ndarray, model: StateSpaceModel) -> None:
-        self.kind, self.t, self.y = kind, t, y
-        self.input_names, self.output_names = model.input_names, model.output_names
-
-    def plot(self, fig: Any = None) -> Any:
-        """One axis per (output, input) pair; returns the figure."""
-        from ..plot.model import plot_time_response
-
-        return plot_time_response(self, fig=fig)
-
-    def __repr__(self) -> str:
-        return (
-            f"TimeResponse({self.kind}, {len(self.t)} samples, {self.y.shape[1]} output(s) x "
-            f"{self.y.shape[2]} input(s))"
-        )
-
-
-def _n_samples(model: StateSpaceModel, n_samples: int | None) -> int:
-    if n_samples is None:
-        rho = np.max(np.abs(model.poles())) if model.nstates else 0.0
-        # long enough for the slowest mode to decay to 1 % (bounded)
-        n = 100 if rho >= 1 or rho == 0 else int(np.ceil(np.log(0.01) / np.log(rho))) + 10
-        return int(min(max(n, 20), 10000))
-    return as_int(n_samples, "n_samples")
-
-
-def step(model: StateSpaceModel, n_samples: int | None = None) -> TimeResponse:
-    """Response to a unit step on each input (zero initial state).
+    Discrete models simulate ``n_samples`` samples (default: until the slowest pole has
+    decayed to 1 %); a :class:`ContinuousStateSpace` is sampled exactly (see its
+    :meth:`~ContinuousStateSpace.step`). With ``std=True`` (a model with ``uncertainty``)
+    ``resp.std`` holds the first-order standard deviation of each sample, drawn as a 95 %
+    band by ``resp.plot()``.
 
     Examples
     --------
@@ -380,18 +121,16 @@ def step(model: StateSpaceModel, n_samples: int | None = None) -> TimeResponse:
     >>> r.y[:, 0, 0]
     array([0.   , 0.5  , 0.75 , 0.875])
     """
-    model = _model(model)
-    N = _n_samples(model, n_samples)
-    m = model.ninputs
-    y = np.empty((N, model.noutputs, m))
-    for j in range(m):
-        u = np.zeros((N, m))
-        u[:, j] = 1.0
-        y[:, :, j] = model.simulate(u)
-    return TimeResponse("step", np.arange(N) * model.dt, y, model)
+    resp = _response(model, "step", n_samples)
+    if std:
+        from ..models.uncertainty import complex_std
+
+        N = len(resp.t)
+        _, resp.std = complex_std(model, lambda m: step(m, N).y)
+    return resp
 
 
-def impulse(model: StateSpaceModel, n_samples: int | None = None) -> TimeResponse:
+def impulse(model: Any, n_samples: int | None = None) -> TimeResponse:
     """Response to a unit pulse ``u(0) = 1`` on each input: the Markov parameters.
 
     Examples
@@ -400,108 +139,17 @@ def impulse(model: StateSpaceModel, n_samples: int | None = None) -> TimeRespons
     >>> sysid.impulse(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), 3).y[:, 0, 0]
     array([0. , 1. , 0.5])
     """
-    model = _model(model)
-    N = _n_samples(model, n_samples)
-    return TimeResponse("impulse", np.arange(N) * model.dt, model.markov(N), model)
+    return _response(model, "impulse", n_samples)
 
 
-# -- continuous <-> discrete ------------------------------------------------------------
-_METHODS = ("zoh", "tustin")
+def _response(model: Any, kind: str, n_samples: int | None) -> TimeResponse:
+    check_model(model)
+    fn = getattr(model, kind, None)
+    if fn is None:
+        from ..models.protocol import sampled_response
 
-
-def _conv_method(method: str) -> str:
-    key = {"bilinear": "tustin"}.get(str(method).lower(), str(method).lower())
-    if key not in _METHODS:
-        raise DataError(f"method must be 'zoh' or 'tustin', got {method!r}")
-    return key
-
-
-def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh") -> StateSpaceModel:
-    """Discretise a continuous model with a zero-order hold or the Tustin transform.
-
-    ``zoh``: ``expm([[A, B], [0, 0]] dt) = [[Ad, Bd], [0, I]]``, ``Cd = C``, ``Dd = D``.
-    ``tustin`` (bilinear): with ``M = (I - A dt / 2)^{-1}``, ``Ad = M (I + A dt / 2)``,
-    ``Bd = M B dt``, ``Cd = C M``, ``Dd = D + C M B dt / 2`` (SciPy's realisation).
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> d = sysid.c2d(sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]]), 0.1)
-    >>> bool(np.isclose(d.A[0, 0], np.exp(-0.1)))
-    True
-    """
-    if not isinstance(sys, ContinuousStateSpace):
-        raise DataError(f"c2d needs a sysid.ContinuousStateSpace, got {type(sys).__name__}")
-    dt = float(dt)
-    if not np.isfinite(dt) or dt <= 0:
-        raise DataError(f"dt must be a positive number of seconds, got {dt}")
-    method = _conv_method(method)
-    A, B, C, D = sys.A, sys.B, sys.C, sys.D
-    n, m = B.shape
-    if method == "zoh":
-        big = np.zeros((n + m, n + m))
-        big[:n, :n], big[:n, n:] = A, B
-        E = scipy.linalg.expm(big * dt)
-        Ad, Bd, Cd, Dd = E[:n, :n], E[:n, n:], C.copy(), D.copy()
-    else:
-        ima = np.eye(n) - 0.5 * dt * A
-        Ad = np.linalg.solve(ima, np.eye(n) + 0.5 * dt * A)
-        Bd = np.linalg.solve(ima, dt * B)
-        Cd = np.linalg.solve(ima.T, C.T).T
-        Dd = D + 0.5 * C @ Bd
-    return StateSpaceModel(
-        Ad, Bd, Cd, Dd, dt=dt, input_names=sys.input_names, output_names=sys.output_names,
-        info={"method": f"c2d ({method})"},
-    )
-
-
-def d2c(model: StateSpaceModel, method: str = "zoh") -> ContinuousStateSpace:
-    """Continuous-time equivalent of a discrete model (inverse of :func:`c2d`).
-
-    ``zoh`` takes the principal matrix logarithm of ``[[A, B], [0, I]]`` and fails with a
-    :class:`NumericalError` when a pole lies on the negative real axis or at zero (no real
-    logarithm). ``tustin`` fails when a pole is at ``z = -1``. The noise model (``K``) is not
-    converted.
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> c = sysid.d2c(sysid.StateSpaceModel([[np.exp(-0.1)]], [[1.0]], [[1.0]], dt=0.1))
-    >>> bool(np.isclose(c.A[0, 0], -1.0))
-    True
-    """
-    model = _model(model)
-    method = _conv_method(method)
-    A, B, C, D, dt = model.A, model.B, model.C, model.D, model.dt
-    n, m = B.shape
-    p = model.poles()
-    if method == "zoh":
-        bad = (np.abs(p.imag) <= 1e-12 * np.maximum(1, np.abs(p))) & (p.real <= 0)
-        if bad.any():
-            raise NumericalError(
-                f"the model has a pole at z = {p[bad][0].real:g} on the negative real axis or at "
-                "zero: it has no zero-order-hold continuous equivalent; use method='tustin'"
-            )
-        big = np.eye(n + m)
-        big[:n, :n], big[:n, n:] = A, B
-        L = scipy.linalg.logm(big)
-        L = np.real_if_close(L, tol=1e6)
-        if np.iscomplexobj(L):
-            raise NumericalError("the matrix logarithm is complex: no real continuous equivalent")
-        L = L / dt
-        Ac, Bc, Cc, Dc = L[:n, :n], L[:n, n:], C.copy(), D.copy()
-    else:
-        api = A + np.eye(n)
-        if n and np.linalg.cond(api) > 1e12:
-            raise NumericalError("the model has a pole at z = -1: no Tustin continuous equivalent")
-        inv = np.linalg.inv(api) if n else api
-        Ac = (2.0 / dt) * (np.eye(n) - 2.0 * inv)
-        Bc = 2.0 * inv @ B / dt
-        Cc = 2.0 * C @ inv
-        Dc = D - 0.5 * Cc @ B
-    return ContinuousStateSpace(
-        Ac, Bc, Cc, Dc, input_names=model.input_names, output_names=model.output_names
-    )
+        return sampled_response(model, kind, n_samples)
+    return fn(n_samples)  # type: ignore[no-any-return]
 
 
 # -- other libraries --------------------------------------------------------------------

@@ -25,7 +25,9 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from ..data.formats import _pandas
 from ..errors import DataError
+from ..models.checks import discrete_statespace
 from ..models.statespace import StateSpaceModel
 
 __all__ = ["ModalAnalysis", "modal_analysis"]
@@ -98,15 +100,13 @@ class ModalAnalysis:
         for i in range(len(self)):
             row = (f"{i:>4} {self.frequencies_hz[i]:>11.4f} {self.omega[i]:>14.4f} "
                    f"{self.damping[i]:>9.4f}")
-            for v in self.extra.values():
-                row += f" {v[i]:>7.3f}"
+            for k, v in self.extra.items():
+                row += f" {v[i]:>7.3g}" if k.startswith("sd_") else f" {v[i]:>7.3f}"
             lines.append(row)
         return "\n".join(lines)
 
     def to_pandas(self) -> Any:
         """The modes as a pandas DataFrame (pandas imported lazily)."""
-        from ..data.iodata import _pandas
-
         pd = _pandas()
         cols: dict[str, Any] = {
             "frequency_hz": self.frequencies_hz, "omega": self.omega, "damping": self.damping,
@@ -118,7 +118,8 @@ class ModalAnalysis:
         return f"ModalAnalysis({len(self)} modes, dt={self.dt:g})\n" + self.table()
 
 
-def modal_analysis(model: StateSpaceModel, dt: float | None = None) -> ModalAnalysis:
+def modal_analysis(model: StateSpaceModel, dt: float | None = None, std: bool = False
+                   ) -> ModalAnalysis:
     """Natural frequencies, damping ratios and mode shapes of a discrete-time model.
 
     Parameters
@@ -127,6 +128,9 @@ def modal_analysis(model: StateSpaceModel, dt: float | None = None) -> ModalAnal
         The model; its ``dt`` is the sample time unless ``dt`` is given.
     dt : float, optional
         Sample time in seconds, overriding ``model.dt``.
+    std : bool
+        Add the first-order standard deviations of each mode's frequency and damping
+        (``extra["sd_hz"]``, ``extra["sd_damping"]``) from the model's ``uncertainty``.
 
     Returns
     -------
@@ -140,9 +144,17 @@ def modal_analysis(model: StateSpaceModel, dt: float | None = None) -> ModalAnal
     (1.0, 6.931472)
     """
     if not isinstance(model, StateSpaceModel):
-        raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
+        model = discrete_statespace(model, "modal analysis")
     dt = float(model.dt if dt is None else dt)
     if not np.isfinite(dt) or dt <= 0:
         raise DataError(f"dt must be a positive number of seconds, got {dt}")
     d = _sysid.modal_analysis(model.A, model.C, dt)
-    return ModalAnalysis(d, dt, list(model.output_names))
+    out = ModalAnalysis(d, dt, list(model.output_names))
+    if std:
+        from ..models.uncertainty import damping_std
+
+        sd = damping_std(model, dt)
+        idx = [int(np.argmin(np.abs(sd["poles"] - z))) for z in out.eigenvalues]
+        out.extra["sd_hz"] = sd["wn_hz_std"][idx]
+        out.extra["sd_damping"] = sd["zeta_std"][idx]
+    return out

@@ -18,12 +18,14 @@ array([5.263, 0.   ])
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from .. import _sysid
 from .._checks import as_int
 from ..errors import DataError
+from ..models.checks import discrete_statespace
 from ..models.statespace import StateSpaceModel
 
 __all__ = [
@@ -35,10 +37,15 @@ __all__ = [
 ]
 
 
-def _check(model: StateSpaceModel) -> StateSpaceModel:
-    if not isinstance(model, StateSpaceModel):
-        raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
-    return model
+def _check(model: Any) -> StateSpaceModel:
+    """The model's discrete state-space form (any :class:`sysid.Model` with one)."""
+    if isinstance(model, StateSpaceModel):
+        return model
+    ss = discrete_statespace(model, "balanced realisation")
+    if not isinstance(ss, StateSpaceModel):
+        ss = StateSpaceModel(ss.A, ss.B, ss.C, ss.D, dt=ss.dt, input_names=model.input_names,
+                             output_names=model.output_names)
+    return ss
 
 
 @dataclass(frozen=True)

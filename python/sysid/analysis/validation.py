@@ -3,7 +3,7 @@
 :func:`compare`
     Simulation (``horizon=None``) or ``k``-step-ahead Kalman prediction against the
     measured outputs, per output NRMSE fit (MATLAB's ``compare`` definition), VAF and RMSE.
-:func:`residuals`
+:func:`residuals` (in :mod:`sysid.analysis.whiteness`)
     Auto-correlation of the one-step prediction errors and their cross-correlation with the
     inputs, with confidence bounds, a Ljung-Box portmanteau test of whiteness per output and
     Ljung's chi-square test of independence from past inputs.
@@ -18,6 +18,15 @@ an array are the alternatives.
 
 Data may be an :class:`~sysid.IOData` (several experiments allowed: each gets its own
 initial state and its own row of fit numbers) or a pair ``(u, y)``.
+
+Any model satisfying :class:`sysid.Model` is accepted. The initial state is estimated for
+state-space models (those with ``A, B, C, D`` and ``nstates``), and for the simulation of a
+model with ``to_statespace()`` (its state-space form simulates the same map); other models,
+and predictions of polynomial models, start from rest, and ``x0`` may then only be
+``"estimate"`` or ``"zero"``. A
+continuous-time model (``dt == 0``) meets the data at their sample time with its ``hold``
+(ZOH or FOH, exact; its initial state is the continuous state), so the data must be an
+:class:`~sysid.IOData`.
 """
 
 from __future__ import annotations
@@ -29,14 +38,12 @@ import numpy as np
 from .._checks import as_2d, as_int
 from ..data.iodata import IOData
 from ..errors import DataError, ShapeError
-from ..models.statespace import StateSpaceModel
+from ..models.checks import check_model
 
 __all__ = [
     "CompareResult",
-    "ResidualAnalysis",
     "ErrorSpectrum",
     "compare",
-    "residuals",
     "error_spectrum",
     "fit_metrics",
     "estimate_x0",
@@ -46,10 +53,15 @@ X0 = Union[str, np.ndarray, None]
 
 
 # -- argument handling ------------------------------------------------------------------
-def _records(model: StateSpaceModel, data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The experiments of ``data`` as (u, y) pairs, checked against the model's channels."""
-    if not isinstance(model, StateSpaceModel):
-        raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
+def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndarray]]]:
+    """The model at the data's rate and the experiments of ``data`` as (u, y) pairs,
+    checked against the model's channels.
+
+    A continuous-time model (``dt == 0``) is replaced by the model at the data's sample
+    time: :meth:`~sysid.ContinuousStateSpace.sampled` (exact hold, continuous initial
+    state), or ``c2d(dt)`` for another continuous class.
+    """
+    check_model(model)
     if isinstance(data, IOData):
         recs = data.experiments
     elif isinstance(data, tuple) and len(data) == 2:
@@ -71,12 +83,26 @@ def _records(model: StateSpaceModel, data: Any) -> list[tuple[np.ndarray, np.nda
             )
         if u.shape[0] != y.shape[0]:
             raise ShapeError(f"u has {u.shape[0]} samples but y has {y.shape[0]}")
+    if not model.dt:
+        if not isinstance(data, IOData):
+            raise DataError("a continuous-time model needs the data's sample time: pass the "
+                            "data as a sysid.IOData (with dt), or discretise with model.c2d(dt)")
+        for name in ("sampled", "c2d"):
+            if hasattr(model, name):
+                return getattr(model, name)(data.dt), recs
+        raise DataError(f"{type(model).__name__} is continuous-time (dt == 0) but has no "
+                        "sampled(dt) or c2d(dt) method to meet sampled data")
     if isinstance(data, IOData) and not np.isclose(data.dt, model.dt, rtol=1e-9):
         raise DataError(
             f"the data are sampled every {data.dt:g} s but the model every {model.dt:g} s; "
             "resample the data or use a model of the same sample time"
         )
-    return recs
+    return model, recs
+
+
+def _stateful(model: Any) -> bool:
+    """A state-space model: its initial state can be estimated and given."""
+    return all(hasattr(model, k) for k in ("A", "B", "C", "D", "nstates"))
 
 
 def _horizon(horizon: Any) -> int | None:
@@ -85,20 +111,29 @@ def _horizon(horizon: Any) -> int | None:
     return as_int(horizon, "horizon", alt="None (simulation)")
 
 
-def _run(model: StateSpaceModel, u: np.ndarray, y: np.ndarray, horizon: int | None,
+def _run(model: Any, u: np.ndarray, y: np.ndarray, horizon: int | None,
          x0: np.ndarray | None) -> np.ndarray:
     if horizon is None:
-        return model.simulate(u, x0)
-    return model.predict(u, y, horizon, x0)
+        out = model.simulate(u, x0=x0) if x0 is not None else model.simulate(u)
+    elif x0 is not None:
+        out = model.predict(u, y, horizon, x0=x0)
+    else:
+        out = model.predict(u, y, horizon)
+    out = np.asarray(out, dtype=float)
+    if out.size != y.size:
+        raise ShapeError(f"{type(model).__name__} returned {out.shape} outputs for data of "
+                         f"shape {y.shape}")
+    return out.reshape(y.shape)
 
 
-def estimate_x0(model: StateSpaceModel, u: Any, y: Any, horizon: int | None = None) -> np.ndarray:
+def estimate_x0(model: Any, u: Any, y: Any, horizon: int | None = None) -> np.ndarray:
     """Least-squares initial state for simulation (``horizon=None``) or prediction.
 
     The output is ``yhat(x0) = yhat(0) + Phi x0`` where column ``i`` of ``Phi`` is the free
     response from the ``i``-th unit state (computed with the same simulator or predictor, so
     the estimate is exact for whatever is being compared). ``x0`` minimises
-    ``||y - yhat(x0)||``.
+    ``||y - yhat(x0)||``. Needs a state-space model (``A, B, C, D``); use
+    ``model.to_statespace()`` for others.
 
     Examples
     --------
@@ -109,6 +144,9 @@ def estimate_x0(model: StateSpaceModel, u: Any, y: Any, horizon: int | None = No
     >>> np.round(sysid.estimate_x0(m, u, y), 10)
     array([3.])
     """
+    if not _stateful(model):
+        raise DataError(f"estimate_x0 needs a state-space model; {type(model).__name__} has no "
+                        "A, B, C, D (pass model.to_statespace())")
     u = as_2d(u, "u", ncols=model.ninputs, allow_empty=model.ninputs == 0)
     y = as_2d(y, "y", ncols=model.noutputs)
     if u.shape[0] != y.shape[0]:
@@ -129,7 +167,7 @@ def estimate_x0(model: StateSpaceModel, u: Any, y: Any, horizon: int | None = No
     return x0
 
 
-def _window(model: StateSpaceModel, horizon: int | None, N: int) -> int:
+def _window(model: Any, horizon: int | None, N: int) -> int:
     """Samples over which the free response from x0 is above 1e-13 of its start.
 
     The state is seen through ``A`` (simulation) or the predictor ``A - K C``; past the
@@ -137,7 +175,7 @@ def _window(model: StateSpaceModel, horizon: int | None, N: int) -> int:
     keeps the estimate O(n^2 W) instead of O(n^2 N) on long records).
     """
     F = model.A
-    if horizon is not None and model.K is not None:
+    if horizon is not None and getattr(model, "K", None) is not None:
         F = model.A - model.K @ model.C
     rho = float(np.max(np.abs(np.linalg.eigvals(F)))) if F.size else 0.0
     if rho >= 0.9999:
@@ -148,15 +186,20 @@ def _window(model: StateSpaceModel, horizon: int | None, N: int) -> int:
     return int(min(N, max(W, 50)))
 
 
-def _x0_for(model: StateSpaceModel, x0: Any, u: np.ndarray, y: np.ndarray, horizon: int | None,
+def _x0_for(model: Any, x0: Any, u: np.ndarray, y: np.ndarray, horizon: int | None,
             index: int, count: int) -> np.ndarray | None:
+    if not _stateful(model):
+        if x0 is None or (isinstance(x0, str) and x0 in ("estimate", "zero")):
+            return None  # no state to estimate: the model starts from rest
+        raise DataError(f"{type(model).__name__} has no state-space form here: x0 must be "
+                        "'estimate' or 'zero' (it starts from rest)")
     if isinstance(x0, str):
         if x0 == "estimate":
             return estimate_x0(model, u, y, horizon)
         if x0 == "zero":
             return None
         if x0 == "model":
-            if model.x0 is None:
+            if getattr(model, "x0", None) is None:
                 raise DataError("x0='model' but the model carries no initial state")
             return model.x0
         raise DataError(f"x0 must be 'estimate', 'zero', 'model' or an array, got {x0!r}")
@@ -223,7 +266,7 @@ class CompareResult:
         Shape ``(n_experiments, noutputs)``; see :func:`fit_metrics`.
     """
 
-    def __init__(self, model: StateSpaceModel, horizon: int | None, u: list[np.ndarray],
+    def __init__(self, model: Any, horizon: int | None, u: list[np.ndarray],
                  y: list[np.ndarray], yhat: list[np.ndarray], x0: list[Any]) -> None:
         self.model, self.horizon = model, horizon
         self.u, self.y, self.yhat, self.x0 = u, y, yhat, x0
@@ -277,13 +320,14 @@ class CompareResult:
         return f"CompareResult({self.kind}, {ne} experiment{'s' * (ne != 1)}, fit % [{fits}])"
 
 
-def compare(model: StateSpaceModel, data: Any, horizon: int | None = None, *,
+def compare(model: Any, data: Any, horizon: int | None = None, *,
             x0: X0 = "estimate") -> CompareResult:
     """Compare a model's simulation or ``horizon``-step prediction with measured outputs.
 
     Parameters
     ----------
-    model : StateSpaceModel
+    model : sysid.Model
+        Any model (state-space, continuous, polynomial, your own class).
     data : IOData or (u, y)
         Validation data, ideally not used for estimation.
     horizon : int or None
@@ -311,213 +355,30 @@ def compare(model: StateSpaceModel, data: Any, horizon: int | None = None, *,
     >>> bool(sysid.compare(m, (u, y), x0="zero").fit[0, 0] < r.fit[0, 0])
     True
     """
-    recs = _records(model, data)
+    model, recs = _records(model, data)
     h = _horizon(horizon)
+    runner = _simulator(model, x0, h)
     us, ys, yh, x0s = [], [], [], []
     for i, (u, y) in enumerate(recs):
-        x = _x0_for(model, x0, u, y, h, i, len(recs))
+        x = _x0_for(runner, x0, u, y, h, i, len(recs))
         us.append(u)
         ys.append(y)
-        yh.append(_run(model, u, y, h, x))
+        yh.append(_run(runner, u, y, h, x))
         x0s.append(x)
     return CompareResult(model, h, us, ys, yh, x0s)
 
 
-# -- residual analysis ------------------------------------------------------------------
-def _xcorr_sums(a: np.ndarray, b: np.ndarray, lags: np.ndarray) -> np.ndarray:
-    """``sum_t a(t) b(t - tau)^T`` for each lag, shape (len(lags), a.cols, b.cols)."""
-    N = a.shape[0]
-    out = np.zeros((lags.size, a.shape[1], b.shape[1]))
-    for k, tau in enumerate(lags):
-        if abs(tau) >= N:
-            continue
-        if tau >= 0:
-            out[k] = a[tau:].T @ b[: N - tau]
-        else:
-            out[k] = a[: N + tau].T @ b[-tau:]
-    return out
-
-
-class ResidualAnalysis:
-    """Correlation tests of the one-step prediction errors (innovations).
-
-    Attributes
-    ----------
-    e : list of ndarray
-        One-step prediction errors per experiment, ``(n_samples, noutputs)``.
-    lags : ndarray
-        ``0 .. max_lag`` for :attr:`autocorr`.
-    autocorr : ndarray
-        ``(max_lag + 1, l, l)`` normalised correlations ``r_ij(tau) = E[e_i(t) e_j(t - tau)]``.
-    xlags : ndarray
-        ``-max_lag .. max_lag`` for :attr:`crosscorr`.
-    crosscorr : ndarray
-        ``(2 max_lag + 1, l, m)`` normalised ``E[e_i(t) u_j(t - tau)]``; positive lags look at
-        past inputs (missing dynamics), negative ones at future inputs (feedback).
-    bound : float
-        ``z_{1 - alpha/2} / sqrt(N)``: the band a white, input-independent residual stays in
-        with probability ``1 - alpha`` at each lag.
-    ljung_box, ljung_box_pvalue : ndarray
-        Portmanteau statistic ``Q = N (N + 2) sum_{tau=1}^{M} r_ii(tau)^2 / (N - tau)`` per
-        output and its p-value under ``chi2(M)``.
-    whiteness : ndarray of bool
-        ``p >= alpha`` per output: whiteness is not rejected.
-    independence_stat, independence_pvalue : ndarray
-        Ljung's (1999, eq. 16.62) test per output: ``S = N r^T R_phi^{-1} r / lambda`` with
-        ``r`` the covariances of the residual with ``phi(t) = [u(t); ...; u(t - M)]``,
-        ``R_phi`` the covariance of ``phi``; ``chi2(m (M + 1))`` under independence.
-    independence : ndarray of bool
-        ``p >= alpha`` per output.
-    """
-
-    def __init__(self, model: StateSpaceModel, e: list[np.ndarray], u: list[np.ndarray],
-                 max_lag: int, alpha: float) -> None:
-        self.model, self.e, self.max_lag, self.alpha = model, e, max_lag, alpha
-        self.output_names, self.input_names = list(model.output_names), list(model.input_names)
-        M = max_lag
-        ec = [x - x.mean(0) for x in e]
-        uc = [x - x.mean(0) for x in u]
-        N = sum(x.shape[0] for x in e)
-        self.n_samples = N
-        self.lags = np.arange(M + 1)
-        self.xlags = np.arange(-M, M + 1)
-        ree = sum(_xcorr_sums(x, x, self.lags) for x in ec) / N
-        se = np.sqrt(np.maximum(np.diag(ree[0]), 1e-300))
-        self.autocorr = ree / np.outer(se, se)[None]
-        m = model.ninputs
-        if m:
-            reu = sum(_xcorr_sums(a, b, self.xlags) for a, b in zip(ec, uc)) / N
-            su = np.sqrt(np.maximum(np.diag(sum(b.T @ b for b in uc) / N), 1e-300))
-            self.crosscorr = reu / np.outer(se, su)[None]
-        else:
-            self.crosscorr = np.zeros((2 * M + 1, len(se), 0))
-        import scipy.stats
-
-        z = scipy.stats.norm.ppf(1 - alpha / 2)
-        self.bound = float(z / np.sqrt(N))
-        r = np.array([self.autocorr[1:, i, i] for i in range(len(se))])  # (l, M)
-        self.ljung_box = N * (N + 2) * np.sum(r**2 / (N - self.lags[1:]), axis=1)
-        self.ljung_box_pvalue = scipy.stats.chi2.sf(self.ljung_box, M)
-        self.whiteness = self.ljung_box_pvalue >= alpha
-        self.independence_stat = np.full(len(se), np.nan)
-        self.independence_pvalue = np.full(len(se), np.nan)
-        if m:
-            # phi(t) = [u(t); u(t-1); ...; u(t-M)], over samples with a full past
-            rows_phi, rows_e = [], []
-            for a, b in zip(ec, uc):
-                if b.shape[0] <= M:
-                    continue
-                rows_phi.append(np.hstack([b[M - k: b.shape[0] - k] for k in range(M + 1)]))
-                rows_e.append(a[M:])
-            if rows_phi:
-                phi, ee = np.vstack(rows_phi), np.vstack(rows_e)
-                n_eff = phi.shape[0]
-                Rphi = phi.T @ phi / n_eff
-                rr = ee.T @ phi / n_eff  # (l, m (M + 1))
-                lam = np.mean(ee**2, axis=0)
-                sol = np.linalg.lstsq(Rphi, rr.T, rcond=1e-12)[0]  # (m(M+1), l)
-                self.independence_stat = n_eff * np.einsum("ij,ji->i", rr, sol) / lam
-                self.independence_pvalue = scipy.stats.chi2.sf(self.independence_stat,
-                                                               m * (M + 1))
-        self.independence = self.independence_pvalue >= alpha
-
-    @property
-    def is_white(self) -> bool:
-        """Whiteness accepted for every output."""
-        return bool(np.all(self.whiteness))
-
-    def to_pandas(self) -> Any:
-        """One row per output: Ljung-Box and independence statistics with their verdicts."""
-        import pandas as pd
-
-        return pd.DataFrame({
-            "output": self.output_names, "ljung_box": self.ljung_box,
-            "ljung_box_p": self.ljung_box_pvalue, "white": self.whiteness,
-            "independence": self.independence_stat,
-            "independence_p": self.independence_pvalue, "independent": self.independence,
-        })
-
-    def summary(self) -> str:
-        """A text table of the tests."""
-        M = self.max_lag
-        lines = [f"residual analysis of {self.model!r}",
-                 f"{self.n_samples} samples, lags 1..{M}, alpha = {self.alpha:g}, "
-                 f"bound +-{self.bound:.4f}",
-                 f"{'output':<20} {'Ljung-Box Q':>12} {'p':>8} {'white':>6} "
-                 f"{'indep. S':>10} {'p':>8} {'indep.':>7}"]
-        for i, name in enumerate(self.output_names):
-            lines.append(
-                f"{name[:20]:<20} {self.ljung_box[i]:12.2f} {self.ljung_box_pvalue[i]:8.3g} "
-                f"{'yes' if self.whiteness[i] else 'NO':>6} {self.independence_stat[i]:10.2f} "
-                f"{self.independence_pvalue[i]:8.3g} {'yes' if self.independence[i] else 'NO':>7}"
-            )
-        return "\n".join(lines)
-
-    def plot(self, fig: Any = None) -> Any:
-        """Auto-correlation per output and cross-correlation per (output, input) with bounds."""
-        from ..plot.validation import plot_residuals
-
-        return plot_residuals(self, fig=fig)
-
-    def __repr__(self) -> str:
-        w = ", ".join(f"{n}: {'white' if ok else 'NOT white'} (p={p:.2g})" for n, ok, p in
-                      zip(self.output_names, self.whiteness, self.ljung_box_pvalue))
-        return f"ResidualAnalysis({self.n_samples} samples, max_lag={self.max_lag}, {w})"
-
-
-def residuals(model: StateSpaceModel, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
-              alpha: float = 0.01) -> ResidualAnalysis:
-    """Whiteness and independence tests of the one-step prediction errors.
-
-    A model that captures the dynamics and the noise leaves innovations that are white and
-    uncorrelated with past inputs. Means are removed before correlating.
-
-    Parameters
-    ----------
-    model : StateSpaceModel
-        Needs ``K`` for a meaningful test of the noise model (without it the errors are
-        simulation errors, coloured whenever there is process noise).
-    data : IOData or (u, y)
-    max_lag : int
-        Largest lag ``M`` tested.
-    x0 : "estimate", "zero", "model" or array
-        Initial predictor state (see :func:`compare`).
-    alpha : float
-        Significance level of the tests and of the plotted bounds.
-
-    Returns
-    -------
-    ResidualAnalysis
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> rng = np.random.default_rng(0)
-    >>> m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]], K=[[0.5]])
-    >>> u, e = rng.standard_normal((2, 2000, 1))
-    >>> x, y = 0.0, np.empty((2000, 1))
-    >>> for t in range(2000):
-    ...     y[t] = x + e[t]
-    ...     x = 0.9 * x + u[t, 0] + 0.5 * e[t, 0]
-    >>> sysid.residuals(m, (u, y)).is_white
-    True
-    >>> sysid.residuals(m.__class__([[0.5]], [[1.0]], [[1.0]], K=[[0.0]]), (u, y)).is_white
-    False
-    """
-    recs = _records(model, data)
-    max_lag = as_int(max_lag, "max_lag")
-    if not 0 < float(alpha) < 1:
-        raise DataError(f"alpha must lie strictly between 0 and 1, got {alpha!r}")
-    N = min(y.shape[0] for _, y in recs)
-    if max_lag >= N:
-        raise DataError(f"max_lag={max_lag} needs more than {max_lag} samples per experiment; "
-                        f"the shortest has {N}")
-    es, us = [], []
-    for i, (u, y) in enumerate(recs):
-        x = _x0_for(model, x0, u, y, 1, i, len(recs))
-        es.append(y - model.predict(u, y, 1, x))
-        us.append(u)
-    return ResidualAnalysis(model, es, us, int(max_lag), float(alpha))
+def _simulator(model: Any, x0: Any, horizon: int | None) -> Any:
+    """For a simulation with ``x0="estimate"`` of a model without a state (polynomial, ...),
+    its ``to_statespace()``: the same input-output map, whose initial state can be fitted."""
+    if (horizon is not None or _stateful(model) or not isinstance(x0, str)
+            or x0 != "estimate" or not hasattr(model, "to_statespace")):
+        return model
+    try:
+        ss = model.to_statespace()
+    except DataError:  # e.g. a coupled MIMO ARX model: simulate from rest
+        return model
+    return ss if _stateful(ss) else model
 
 
 # -- spectrum of the simulation error ---------------------------------------------------
@@ -532,7 +393,7 @@ class ErrorSpectrum:
         ``(len(freq), noutputs)`` one-sided power spectral densities (units^2 / Hz).
     """
 
-    def __init__(self, model: StateSpaceModel, freq: np.ndarray, err: np.ndarray,
+    def __init__(self, model: Any, freq: np.ndarray, err: np.ndarray,
                  out: np.ndarray) -> None:
         self.model, self.freq, self.error_psd, self.output_psd = model, freq, err, out
         self.output_names = list(model.output_names)
@@ -556,7 +417,7 @@ class ErrorSpectrum:
                 f"{len(self.output_names)} output(s))")
 
 
-def error_spectrum(model: StateSpaceModel, data: Any, *, x0: X0 = "estimate",
+def error_spectrum(model: Any, data: Any, *, x0: X0 = "estimate",
                    nperseg: int | None = None) -> ErrorSpectrum:
     """Power spectrum of the simulation error ``y - yhat`` beside the output's (Welch).
 
@@ -565,7 +426,7 @@ def error_spectrum(model: StateSpaceModel, data: Any, *, x0: X0 = "estimate",
 
     Parameters
     ----------
-    model : StateSpaceModel
+    model : sysid.Model
     data : IOData or (u, y)
     x0 : "estimate", "zero", "model" or array
         Initial state of the simulation.
@@ -587,7 +448,7 @@ def error_spectrum(model: StateSpaceModel, data: Any, *, x0: X0 = "estimate",
         nperseg = min(256, shortest)
     else:
         nperseg = as_int(nperseg, "nperseg", 4, shortest)
-    fs = 1.0 / model.dt
+    fs = 1.0 / cmp.dt
     err_sum, out_sum, weight = 0.0, 0.0, 0
     freq = np.zeros(0)
     for y, yh in zip(cmp.y, cmp.yhat):
@@ -598,4 +459,5 @@ def error_spectrum(model: StateSpaceModel, data: Any, *, x0: X0 = "estimate",
         err_sum = err_sum + pe * y.shape[0]
         out_sum = out_sum + py * y.shape[0]
         weight += y.shape[0]
-    return ErrorSpectrum(model, freq, np.asarray(err_sum) / weight, np.asarray(out_sum) / weight)
+    return ErrorSpectrum(cmp.model, freq, np.asarray(err_sum) / weight,
+                         np.asarray(out_sum) / weight)

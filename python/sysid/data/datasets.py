@@ -1,17 +1,46 @@
-"""Real measured records bundled with sysid (unmodified DaISy copies).
+"""Real measured records bundled with sysid (unmodified copies; see ``_data/README.md``).
 
-``dryer``: laboratory hair dryer, 1000 samples, input heater voltage, output air temperature,
-dt = 0.08 s (DaISy 96-006; SLICOT's identification example).
+=============  ==================================  ===========================================
+name           record                              file
+=============  ==================================  ===========================================
+``dryer``      laboratory hair dryer (DaISy):      ``dryer.dat``; 1000 samples, dt = 0.08 s,
+               heater voltage -> air temperature   SLICOT's identification example
+``robot_arm``  flexible robot arm (DaISy):         ``robot_arm.dat.gz``; 1024 samples, sample
+               reaction torque -> acceleration     time not given by the source
+``winding``    industrial winding process          ``winding.dat.gz``; 2500 samples, dt = 0.1 s,
+               (DaISy): 5 inputs -> 2 tensions     columns S1 S2 S3 I1 I3 T1 T3
+``f16``        F-16 ground vibration test, level   ``F16Data_FullMSine_Level1.csv.gz``; 73728
+               1 (nonlinearbenchmark.org): shaker  samples at 400 Hz, 9 periods of a 2-15 Hz
+               force -> three accelerations        multisine (the first is transient)
+=============  ==================================  ===========================================
+
+:func:`path` gives the file (``numpy.loadtxt`` and :meth:`sysid.IOData.from_csv` read the
+compressed ones directly); ``load_<name>()`` returns the record as :class:`sysid.IOData`.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-__all__ = ["path", "load_dryer", "NAMES"]
+from .iodata import IOData
+
+__all__ = [
+    "path",
+    "load_dryer",
+    "load_robot_arm",
+    "load_winding",
+    "load_f16",
+    "NAMES",
+]
 
 _DIR = Path(__file__).parent / "_data"
-NAMES = ("dryer",)
+_FILES = {
+    "dryer": "dryer.dat",
+    "robot_arm": "robot_arm.dat.gz",
+    "winding": "winding.dat.gz",
+    "f16": "F16Data_FullMSine_Level1.csv.gz",
+}
+NAMES = tuple(_FILES)
 
 
 def path(name: str) -> str:
@@ -22,13 +51,21 @@ def path(name: str) -> str:
     >>> import sysid
     >>> sysid.datasets.path("dryer").endswith("dryer.dat")
     True
+    >>> sysid.datasets.NAMES
+    ('dryer', 'robot_arm', 'winding', 'f16')
     """
-    if name not in NAMES:
+    if name not in _FILES:
         raise ValueError(f"unknown data set {name!r}; bundled: {', '.join(NAMES)}")
-    return str(_DIR / f"{name}.dat")
+    return str(_DIR / _FILES[name])
 
 
-def load_dryer():  # type: ignore[no-untyped-def]
+def _columns(name: str):  # type: ignore[no-untyped-def]
+    import numpy as np
+
+    return np.loadtxt(path(name))
+
+
+def load_dryer() -> IOData:
     """The hair-dryer record as :class:`sysid.IOData` (u: heater voltage, y: temperature).
 
     Examples
@@ -37,11 +74,7 @@ def load_dryer():  # type: ignore[no-untyped-def]
     >>> sysid.datasets.load_dryer()
     IOData: 1000 samples, 1 input, 1 output, dt = 0.08 s
     """
-    import numpy as np
-
-    from .iodata import IOData
-
-    d = np.loadtxt(path("dryer"))
+    d = _columns("dryer")
     return IOData(
         u=d[:, :1],
         y=d[:, 1:],
@@ -49,3 +82,56 @@ def load_dryer():  # type: ignore[no-untyped-def]
         input_names=["heater voltage"],
         output_names=["air temperature"],
     )
+
+
+def load_robot_arm() -> IOData:
+    """The flexible robot arm (u: reaction torque of the structure, y: arm acceleration).
+
+    The source gives no sample time: ``dt`` is 1 (frequencies in rad/sample). Published
+    practice: estimate on samples 1-800, validate on 801-1024.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> sysid.datasets.load_robot_arm()
+    IOData: 1024 samples, 1 input, 1 output, dt = 1 s
+    """
+    d = _columns("robot_arm")
+    return IOData(u=d[:, :1], y=d[:, 1:], dt=1.0, input_names=["torque"],
+                  output_names=["acceleration"])
+
+
+def load_winding() -> IOData:
+    """The industrial winding process: reel speeds S1, S2, S3 and motor current set-points
+    I1, I3 in; web tensions T1, T3 out; dt = 0.1 s.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> sysid.datasets.load_winding()
+    IOData: 2500 samples, 5 inputs, 2 outputs, dt = 0.1 s
+    """
+    d = _columns("winding")
+    return IOData(u=d[:, :5], y=d[:, 5:7], dt=0.1,
+                  input_names=["S1", "S2", "S3", "I1", "I3"], output_names=["T1", "T3"])
+
+
+def load_f16() -> IOData:
+    """The F-16 ground vibration test, level 1 (12.4 N RMS, close to linear): shaker force
+    in (N), three accelerations out, fs = 400 Hz, 9 periods of 8192 samples (drop the first,
+    which holds the transient). The shaker's reference voltage, an alternative input, is in
+    the file (:func:`path`) as column ``Voltage``.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> d = sysid.datasets.load_f16()
+    >>> d
+    IOData: 73728 samples, 1 input, 3 outputs, dt = 0.0025 s
+    >>> d.output_names
+    ['Acceleration1', 'Acceleration2', 'Acceleration3']
+    """
+    outputs = ["Acceleration1", "Acceleration2", "Acceleration3"]
+    d = IOData.from_csv(path("f16"), ["Force"], outputs, dt=1 / 400)
+    return IOData(d.u, d.y, d.dt, input_names=["Force"], output_names=outputs,
+                  input_units=["N"])

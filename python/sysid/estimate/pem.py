@@ -22,6 +22,7 @@ from .._checks import as_int
 from ..data.iodata import IOData
 from ..errors import DataError
 from ..models.statespace import StateSpaceModel
+from ..models.uncertainty import ParameterUncertainty
 
 __all__ = ["pem", "ssest", "PemUncertainty"]
 
@@ -29,81 +30,8 @@ _FOCUS = ("prediction", "simulation")
 _NOISE = ("estimate", "none", "fixed")
 
 
-class PemUncertainty:
-    """Covariance of the free parameters of a refined model, and first-order propagation.
-
-    Follows the ``ParameterUncertainty(theta, covariance, build, ...)`` contract of
-    ``sysid.models.uncertainty`` so that it can be swapped for it.
-
-    Parameters
-    ----------
-    theta : ndarray, shape (p,)
-        Free parameters at the estimate (layout: ``A, B, C`` row-major, then ``D`` and ``K``
-        when estimated, then the estimated initial states).
-    covariance : ndarray, shape (p, p)
-        Their covariance (Gauss-Newton, identifiable directions only).
-    build : callable
-        ``build(theta) -> StateSpaceModel``.
-    names : list of str, optional
-    dof : int, optional
-        Number of identifiable parameters.
-    method : str
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from sysid.estimate.pem import PemUncertainty
-    >>> import sysid
-    >>> u = PemUncertainty(np.array([0.5]), np.array([[0.01]]),
-    ...                    lambda t: sysid.StateSpaceModel([[t[0]]], [[1.0]], [[1.0]]))
-    >>> value, cov = u.propagate(lambda m: m.poles().real)
-    >>> round(float(np.sqrt(cov[0, 0])), 8)
-    0.1
-    """
-
-    def __init__(self, theta: Any, covariance: Any, build: Callable[[np.ndarray], Any], *,
-                 names: list[str] | None = None, dof: int | None = None,
-                 method: str = "gauss-newton") -> None:
-        self.theta = np.asarray(theta, dtype=float).ravel()
-        self.covariance = np.asarray(covariance, dtype=float)
-        self.build = build
-        self.names = names
-        self.dof = dof
-        self.method = method
-
-    @property
-    def std(self) -> np.ndarray:
-        """Standard deviation of each free parameter."""
-        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
-
-    def propagate(self, fn: Callable[[Any], Any], *, step: float = 1e-6) -> tuple[np.ndarray,
-                                                                                  np.ndarray]:
-        """Value of ``fn(model)`` (a real array) and its first-order covariance
-        ``J C J^T`` with ``J`` from central differences along the covariance's eigenvectors.
-        """
-        value = np.asarray(fn(self.build(self.theta)), dtype=float).ravel()
-        w, V = np.linalg.eigh(self.covariance)
-        keep = w > 1e-300
-        cov = np.zeros((value.size, value.size))
-        for lam, v in zip(w[keep], V.T[keep]):
-            s = np.sqrt(lam)
-            h = step / max(s * np.abs(v).max(), 1e-300) * s  # ~step in the largest entry
-            hp = np.asarray(fn(self.build(self.theta + h * v)), dtype=float).ravel()
-            hm = np.asarray(fn(self.build(self.theta - h * v)), dtype=float).ravel()
-            g = (hp - hm) / (2 * h) * s  # derivative along the sqrt(lam)-scaled direction
-            cov += np.outer(g, g)
-        return value, cov
-
-    def sample(self, n: int, rng: Any = None) -> list[Any]:
-        """``n`` models with parameters drawn from the Gaussian approximation."""
-        rng = np.random.default_rng(rng)
-        w, V = np.linalg.eigh(self.covariance)
-        L = V * np.sqrt(np.clip(w, 0.0, None))
-        return [self.build(self.theta + L @ rng.standard_normal(self.theta.size))
-                for _ in range(int(n))]
-
-    def __repr__(self) -> str:
-        return f"PemUncertainty({self.theta.size} parameters, rank {self.dof}, {self.method})"
+#: The interim name of :class:`sysid.ParameterUncertainty` (kept for compatibility).
+PemUncertainty = ParameterUncertainty
 
 
 def _stabilize(A: np.ndarray) -> np.ndarray:
@@ -241,7 +169,8 @@ def pem(
         ``info["pem"]`` holds iterations, the cost (``det`` of the error covariance, the
         maximum-likelihood loss) at the start and after each iteration, the weighted cost the
         search minimised, the stop reason and the condition number; ``uncertainty`` the parameter
-        covariance (:class:`PemUncertainty`).
+        covariance (:class:`sysid.ParameterUncertainty`), so that ``poles(std=True)``,
+        ``freqresp(w, std=True)``, ``damp(std=True)`` and Bode bands work.
 
     Examples
     --------
@@ -373,17 +302,29 @@ def pem(
         res["a"], res["b"], res["c"], res["d"], Kres, dt=data.dt,
         noise_cov=res["innovation_covariance"], x0=x0s[0] if len(x0s) == 1 else None,
         input_names=data.input_names, output_names=data.output_names, info=info)
-    out.uncertainty = _uncertainty(res["theta"], res["covariance"], build, int(res["rank"]))
+    out.uncertainty = _uncertainty(
+        res["theta"], res["covariance"], build, int(res["rank"]),
+        _names(n, model.ninputs, l, bool(feedthrough), estimate_k and K is not None, len(est_x0)))
     return out
 
 
 def _uncertainty(theta: np.ndarray, cov: np.ndarray, build: Callable[[np.ndarray], Any],
-                 rank: int) -> Any:
-    try:  # the shared machinery, once it is on main
-        from ..models.uncertainty import ParameterUncertainty  # type: ignore[import-not-found]
-    except ImportError:
-        return PemUncertainty(theta, cov, build, dof=rank)
-    return ParameterUncertainty(theta, cov, build, dof=rank)  # pragma: no cover
+                 rank: int, names: list[str]) -> ParameterUncertainty:
+    return ParameterUncertainty(theta, cov, build, names=names[:len(theta)]
+                                + [f"theta{i}" for i in range(len(names), len(theta))],
+                                dof=rank, method="gauss-newton")
+
+
+def _names(n: int, m: int, l: int, feedthrough: bool, estimate_k: bool,
+           n_x0: int) -> list[str]:
+    out = []
+    for name, r, c, on in (("A", n, n, True), ("B", n, m, True), ("C", l, n, True),
+                           ("D", l, m, feedthrough), ("K", n, l, estimate_k)):
+        if on:
+            out += [f"{name}[{i},{j}]" for i in range(r) for j in range(c)]
+    for e in range(n_x0):
+        out += [f"x0[{e}][{i}]" for i in range(n)]
+    return out
 
 
 def _start_loss(data: IOData, start: StateSpaceModel, focus: str, feedthrough: bool,

@@ -12,6 +12,67 @@ import numpy as np
 from .. import _sysid
 from ..errors import DataError
 from ..models.polynomial import PolynomialModel
+from ..models.uncertainty import ParameterUncertainty
+
+
+# -- parameter uncertainty: one ParameterUncertainty over every output's coefficients ------
+def _refs(model: PolynomialModel, kind: str) -> list[tuple[str, int, int | None]]:
+    """The coefficient arrays in the order of the estimators' parameter vectors: per output,
+    ARX ``[a_i1.., a_i2.., ..., b_i1.., ...]``; PEM ``[a_ii, b_i1.., c_i, d_i, f_i1..]``."""
+    ny, nu = model.n_outputs, model.n_inputs
+    out: list[tuple[str, int, int | None]] = []
+    for i in range(ny):
+        if kind == "arx":
+            out += [("a", i, k) for k in range(ny)] + [("b", i, j) for j in range(nu)]
+        else:
+            out += [("a", i, i)] + [("b", i, j) for j in range(nu)] + [("c", i, None),
+                                                                        ("d", i, None)]
+            out += [("f", i, j) for j in range(nu)]
+    return out
+
+
+def _get(model: PolynomialModel, ref: tuple[str, int, int | None]) -> np.ndarray:
+    name, i, j = ref
+    arr = getattr(model, name)[i]
+    return np.asarray(arr if j is None else arr[j])
+
+
+def _attach_uncertainty(model: PolynomialModel, covs: list[np.ndarray], kind: str,
+                        method: str) -> None:
+    """``model.uncertainty`` from the per-output covariances (block diagonal: the outputs'
+    equations are estimated separately)."""
+    import copy
+
+    from scipy.linalg import block_diag
+
+    refs = _refs(model, kind)
+    sizes = [_get(model, r).size for r in refs]
+    theta = np.concatenate([_get(model, r) for r in refs]) if refs else np.zeros(0)
+    P = block_diag(*[np.atleast_2d(np.asarray(c, float)) for c in covs if np.size(c)])
+    if P.shape != (theta.size, theta.size):
+        return  # a covariance that does not match the coefficients is not attached
+    names = [f"{r[0]}[{r[1]}]" + (f"[{r[2]}]" if r[2] is not None else "") + f"[{k}]"
+             for r, n in zip(refs, sizes) for k in range(n)]
+    template = copy.deepcopy(model)
+    template.uncertainty = None
+
+    def build(t: np.ndarray) -> PolynomialModel:
+        m = copy.copy(template)
+        m.a = [list(row) for row in template.a]
+        m.b = [list(row) for row in template.b]
+        m.f = [list(row) for row in template.f]
+        m.c, m.d = list(template.c), list(template.d)
+        o = 0
+        for (name, i, j), n in zip(refs, sizes):
+            piece = np.asarray(t[o:o + n], dtype=float)
+            o += n
+            if j is None:
+                getattr(m, name)[i] = piece
+            else:
+                getattr(m, name)[i][j] = piece
+        return m
+
+    model.uncertainty = ParameterUncertainty(theta, P, build, names=names, method=method)
 
 
 def _grid(v: Any, ny: int, ncol: int, name: str) -> list[list[int]]:
@@ -92,6 +153,7 @@ def arx(
     model.info = {"method": "arx", "loss": [f["loss"] for f in fits]}
     model.covariance = [f["loss"] * f["unscaled_cov"] for f in fits]  # type: ignore[attr-defined]
     model.parameters = [f["theta"] for f in fits]  # type: ignore[attr-defined]
+    _attach_uncertainty(model, model.covariance, "arx", "least-squares")  # type: ignore[attr-defined]
     return model
 
 
@@ -190,6 +252,7 @@ def _pem(
     )
     m.info = info
     m.covariance = cov  # type: ignore[attr-defined]
+    _attach_uncertainty(m, cov, "pem", "gauss-newton")
     return m
 
 
@@ -366,4 +429,53 @@ def iv4(
     th = _sysid.iv4(y, u, na_, nb_, nk_, r)
     m = PolynomialModel([[th[:na_]]], [[th[na_:]]], [[nk_]], data.dt)
     m.info = {"method": "iv4"}
+    cov, lam = _iv_covariance(y, u, u if r is None else r, th, na_, nb_, nk_)
+    m.noise_variance = np.array([lam])
+    m.covariance = [cov]  # type: ignore[attr-defined]
+    _attach_uncertainty(m, [cov], "arx", "instrumental-variable")
     return m
+
+
+def _lags(x: np.ndarray, t0: int, t1: int, lags: range) -> np.ndarray:
+    return np.column_stack([x[t0 - k:t1 - k] for k in lags]) if len(lags) else \
+        np.zeros((t1 - t0, 0))
+
+
+def _iv_covariance(y: np.ndarray, u: np.ndarray, r: np.ndarray, th: np.ndarray, na: int,
+                   nb: int, nk: int, block: int = 20000) -> tuple[np.ndarray, float]:
+    """Asymptotic covariance ``lambda R^-1 S R^-T`` of the final IV4 stage (``R = sum z phi^T``,
+    ``S = sum z z^T`` with the prefiltered regressors ``phi`` and instruments ``z`` rebuilt at
+    the estimate; ``lambda`` the variance of the prefiltered equation error), accumulated in
+    blocks of samples."""
+    from scipy import signal
+
+    a, b = np.r_[1.0, th[:na]], th[na:]
+    ud, rd = (np.r_[np.zeros(nk), x[: x.size - nk]] for x in (u, r))
+    w = signal.lfilter(a, [1.0], y) - signal.lfilter(b, [1.0], ud)
+    nl = na + nb  # the AR prefilter L of the equation error, as stage 3 of iv4
+    start_l = nl
+    G = np.zeros((nl, nl))
+    g = np.zeros(nl)
+    for t0 in range(start_l, w.size, block):
+        t1 = min(w.size, t0 + block)
+        X = -_lags(w, t0, t1, range(1, nl + 1))
+        G += X.T @ X
+        g += X.T @ w[t0:t1]
+    ell = np.r_[1.0, np.linalg.lstsq(G, g, rcond=None)[0]] if nl else np.ones(1)
+    x = signal.lfilter(b, a, rd)
+    yf, uf, xf, rf, wf = (signal.lfilter(ell, [1.0], s) for s in (y, u, x, r, w))
+    start = max(na, nk + nb) + nl
+    p = na + nb
+    R = np.zeros((p, p))
+    S = np.zeros((p, p))
+    for t0 in range(start, y.size, block):
+        t1 = min(y.size, t0 + block)
+        phi = np.hstack([-_lags(yf, t0, t1, range(1, na + 1)),
+                         _lags(uf, t0, t1, range(nk, nk + nb))])
+        z = np.hstack([-_lags(xf, t0, t1, range(1, na + 1)),
+                       _lags(rf, t0, t1, range(nk, nk + nb))])
+        R += z.T @ phi
+        S += z.T @ z
+    lam = float(np.mean(wf[start:] ** 2))
+    Ri = np.linalg.inv(R)
+    return lam * Ri @ S @ Ri.T, lam

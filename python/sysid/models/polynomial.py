@@ -12,6 +12,7 @@ import numpy as np
 
 from .. import _sysid
 from ..errors import DataError
+from .protocol import ModelMixin
 
 Poly = np.ndarray
 
@@ -31,12 +32,24 @@ def _fmt(name: str, coef: np.ndarray, monic: bool) -> str:
     return f"{name}(q) = " + head + "".join(f" {sg} {t}" for sg, t in parts[1:])
 
 
+def _rest(x0: Any) -> None:
+    if x0 is not None and not (isinstance(x0, str) and x0 == "zero"):
+        raise DataError("polynomial models start from rest: x0 must be None or 'zero'")
+
+
+def _names(names: Any, count: int, what: str) -> list[str]:
+    out = [str(n) for n in names]
+    if len(out) != count:
+        raise DataError(f"{len(out)} {what} names given for {count} {what}s")
+    return out
+
+
 def _trim(num: np.ndarray) -> np.ndarray:
     t = np.trim_zeros(num, "f")
     return t if t.size else np.zeros(1)
 
 
-class PolynomialModel:
+class PolynomialModel(ModelMixin):
     """A (MIMO) polynomial model; see the module docstring for the equations.
 
     Parameters
@@ -115,6 +128,61 @@ class PolynomialModel:
             if i != k
         )
 
+    # -- the model protocol (sysid.Model) ------------------------------------------------
+    ninputs = property(lambda self: self.n_inputs, doc="Number of inputs (protocol name).")
+    noutputs = property(lambda self: self.n_outputs, doc="Number of outputs (protocol name).")
+
+    @property
+    def input_names(self) -> list[str]:
+        """Input channel names (``u0, u1, ...`` unless set)."""
+        names = getattr(self, "_input_names", None)
+        return list(names) if names is not None else [f"u{j}" for j in range(self.n_inputs)]
+
+    @input_names.setter
+    def input_names(self, names: Any) -> None:
+        self._input_names = None if names is None else _names(names, self.n_inputs, "input")
+
+    @property
+    def output_names(self) -> list[str]:
+        """Output channel names (``y0, y1, ...`` unless set)."""
+        names = getattr(self, "_output_names", None)
+        return list(names) if names is not None else [f"y{i}" for i in range(self.n_outputs)]
+
+    @output_names.setter
+    def output_names(self, names: Any) -> None:
+        self._output_names = None if names is None else _names(names, self.n_outputs, "output")
+
+    @property
+    def n_parameters(self) -> int:
+        """Free coefficients: every entry of ``a``, ``b``, ``c``, ``d`` and ``f``.
+
+        Examples
+        --------
+        >>> PolynomialModel([[[-0.5, 0.1]]], [[[1.0, 0.3]]], [[1]], 1.0, c=[[0.2]]).n_parameters
+        5
+        """
+        count = sum(x.size for row in self.a for x in row)
+        count += sum(x.size for row in self.b for x in row)
+        count += sum(x.size for row in self.f for x in row)
+        return int(count + sum(x.size for x in self.c) + sum(x.size for x in self.d))
+
+    def to_dict(self) -> dict[str, Any]:
+        """Coefficients, delays, sample time, names and info (see :func:`sysid.save_model`)."""
+        return {"a": [list(row) for row in self.a], "b": [list(row) for row in self.b],
+                "f": [list(row) for row in self.f], "c": list(self.c), "d": list(self.d),
+                "nk": self.nk, "dt": self.dt, "noise_variance": self.noise_variance,
+                "input_names": self.input_names, "output_names": self.output_names,
+                "info": self.info}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> PolynomialModel:
+        """Inverse of :meth:`to_dict`."""
+        m = cls(d["a"], d["b"], d["nk"], float(d["dt"]), c=d.get("c"), d=d.get("d"),
+                f=d.get("f"), noise_variance=d.get("noise_variance"))
+        m.input_names, m.output_names = d.get("input_names"), d.get("output_names")
+        m.info = dict(d.get("info") or {})
+        return m
+
     def _check_u(self, u: Any) -> np.ndarray:
         u = np.ascontiguousarray(u, dtype=float)
         if u.ndim == 1:
@@ -137,8 +205,12 @@ class PolynomialModel:
             w += _sysid.poly_filter(list(self.b[i][j]), list(_monic(self.f[i][j])), x)
         return w
 
-    def simulate(self, u: Any) -> np.ndarray:
-        """Noise-free output for input ``u`` (from rest), ``(n_samples, n_outputs)``."""
+    def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
+        """Noise-free output for input ``u`` (from rest), ``(n_samples, n_outputs)``.
+
+        ``x0`` must be ``None`` or ``"zero"``: polynomial filters start from rest.
+        """
+        _rest(x0)
         u = self._check_u(u)
         n, ny = u.shape[0], self.n_outputs
         w = np.column_stack([self._deterministic(u, i) for i in range(ny)])
@@ -158,11 +230,12 @@ class PolynomialModel:
         return y
 
     def residuals(self, u: Any, y: Any) -> np.ndarray:
-        """One-step prediction errors ``e = D/C (A y - sum B/F u)`` (uncoupled ``A``)."""
+        """One-step prediction errors ``e = D/C (A y - sum B/F u)`` (matrix ``A`` for a
+        coupled MIMO ARX model)."""
         u = self._check_u(u)
         y = np.asarray(y, dtype=float).reshape(u.shape[0], -1)
         if self.coupled:
-            raise DataError("residuals of a coupled MIMO ARX model: use predict()")
+            return y - self._coupled_predict(u, y, 1)
         out = []
         for i in range(self.n_outputs):
             v = _sysid.poly_filter(list(_monic(self.a[i][i])), [1.0], np.ascontiguousarray(y[:, i]))
@@ -170,15 +243,77 @@ class PolynomialModel:
             out.append(_sysid.poly_filter(list(_monic(self.d[i])), list(_monic(self.c[i])), v))
         return np.column_stack(out)
 
-    def predict(self, u: Any, y: Any, k: int = 1) -> np.ndarray:
-        """One-step-ahead prediction ``y - e`` (only ``k = 1`` is implemented)."""
-        if k != 1:
-            raise NotImplementedError("k-step prediction of polynomial models: only k = 1 so far")
-        y = np.asarray(y, dtype=float)
-        return y.reshape(len(y), -1) - self.residuals(u, y)
+    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
+        """``horizon``-step-ahead prediction ``yhat(t | t - horizon)``.
 
-    def freqresp(self, w: Any) -> np.ndarray:
-        """Frequency response ``(len(w), n_outputs, n_inputs)`` at ``w`` (rad/s)."""
+        With ``H_i = C_i / (A_i D_i)`` the noise filter of output ``i`` and ``h_0 = 1, h_1,
+        ...`` its impulse response, ``yhat(t | t - k) = y(t) - sum_{j<k} h_j e(t - j)``,
+        where ``e`` are the one-step prediction errors (:meth:`residuals`): the part of
+        ``y(t)`` driven by innovations not yet seen at ``t - k`` is removed. ``k = 1``
+        gives ``y - e``; as ``k`` grows the prediction tends to the simulation. A coupled
+        MIMO ARX model iterates its matrix difference equation instead.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> m = PolynomialModel([[[-0.5]]], [[[0.0]]], [[1]], 1.0)   # y = e / (1 - 0.5 q^-1)
+        >>> m.predict(np.zeros((3, 1)), [1.0, 0.5, 0.25], horizon=2)[:, 0]
+        array([0.  , 0.  , 0.25])
+        """
+        _rest(x0)
+        if isinstance(horizon, bool) or int(horizon) != horizon or horizon < 1:
+            raise DataError(f"horizon must be a positive integer, got {horizon!r}")
+        k = int(horizon)
+        y2 = np.asarray(y, dtype=float)
+        y2 = y2.reshape(len(y2), -1)
+        if self.coupled:
+            return self._coupled_predict(self._check_u(u), y2, k)
+        e = self.residuals(u, y2)
+        out = y2 - e
+        if k > 1:
+            for i in range(self.n_outputs):
+                pulse = np.zeros(k)
+                pulse[0] = 1.0
+                den = np.convolve(_monic(self.a[i][i]), _monic(self.d[i]))
+                h = _sysid.poly_filter(list(_monic(self.c[i])), list(den), pulse)
+                # yhat = y - sum_{j<k} h_j e(t - j): remove the innovations after t - k
+                out[:, i] = y2[:, i] - np.convolve(e[:, i], h)[: y2.shape[0]]
+        return out
+
+    def _coupled_predict(self, u: np.ndarray, y: np.ndarray, k: int) -> np.ndarray:
+        """``yhat(t | t - k)`` of a MIMO ARX model ``sum_l A_l y(t - l) = w(t) + e(t)``.
+
+        ``P_0 = y`` and ``P_j(t) = w(t) - sum_{l>=1} A_l P_{max(j - l, 0)}(t - l)``: the
+        prediction ``j`` steps ahead uses measured outputs where they are known and
+        shorter-range predictions where not (future innovations have mean zero).
+        """
+        if y.shape != (u.shape[0], self.n_outputs):
+            raise DataError(f"y has shape {y.shape} but should be ({u.shape[0]}, "
+                            f"{self.n_outputs})")
+        n, ny = y.shape
+        w = np.column_stack([self._deterministic(u, i) for i in range(ny)])
+        na = max(self.a[i][q].size for i in range(ny) for q in range(ny))
+        lags = np.zeros((na + 1, ny, ny))  # lags[l][i, q]: coefficient of y_q(t - l) in row i
+        for i in range(ny):
+            for q in range(ny):
+                lags[1: self.a[i][q].size + 1, i, q] = self.a[i][q]
+        preds = [y]
+        for j in range(1, k + 1):
+            p = w.copy()
+            for lag in range(1, na + 1):
+                if lag < n:
+                    p[lag:] -= preds[max(j - lag, 0)][: n - lag] @ lags[lag].T
+            preds.append(p)
+        return preds[k]
+
+    def freqresp(self, w: Any, std: bool = False) -> Any:
+        """Frequency response ``(len(w), n_outputs, n_inputs)`` at ``w`` (rad/s); with
+        ``std=True`` (needs :attr:`uncertainty`) the pair ``(H, sd)``, ``sd`` complex (std of
+        the real and imaginary parts, first order)."""
+        if std:
+            from .uncertainty import freqresp_std
+
+            return freqresp_std(self, w)
         if self.coupled:
             raise DataError("frequency response of a coupled MIMO ARX model is not implemented")
         z1 = np.exp(-1j * np.asarray(w, float) * self.dt)
@@ -191,8 +326,14 @@ class PolynomialModel:
                 out[:, i, j] = bb / (a * ff)
         return out
 
-    def poles(self) -> np.ndarray:
-        """Roots of ``A_i F_ij`` over all channels (uncoupled ``A``)."""
+    def poles(self, std: bool = False, method: str = "linear") -> Any:
+        """Roots of ``A_i F_ij`` over all channels (uncoupled ``A``); with ``std=True`` (needs
+        :attr:`uncertainty`) the pair ``(poles, sd)`` as for
+        :meth:`sysid.StateSpaceModel.poles`."""
+        if std:
+            from .uncertainty import pole_std
+
+            return pole_std(self, method)
         r = []
         for i in range(self.n_outputs):
             r.append(np.roots(_monic(self.a[i][i])))
@@ -261,7 +402,8 @@ class PolynomialModel:
             C[i, k : k + r] = c[0]
             D[i, j] = d[0, 0]
             k += r
-        return StateSpaceModel(A, B, C, D, dt=self.dt)
+        return StateSpaceModel(A, B, C, D, dt=self.dt, input_names=self.input_names,
+                               output_names=self.output_names)
 
     def __repr__(self) -> str:
         lines = [
@@ -288,3 +430,44 @@ class PolynomialModel:
             if self.d[i].size:
                 lines.append("    " + _fmt("D", _monic(self.d[i]), True))
         return "\n".join(lines)
+
+    # -- parameter uncertainty (sysid.models.uncertainty) ---------------------------------
+    def _coefficients(self) -> list[np.ndarray]:
+        """Every coefficient array, in the order a, b, c, d, f (row by row)."""
+        return ([x for row in self.a for x in row] + [x for row in self.b for x in row]
+                + list(self.c) + list(self.d) + [x for row in self.f for x in row])
+
+    @property
+    def std(self) -> dict[str, Any] | None:
+        """Standard deviations of the coefficients, nested like ``a, b, c, d, f``; ``None``
+        without :attr:`uncertainty`.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> rng = np.random.default_rng(0)
+        >>> u = rng.standard_normal((500, 1))
+        >>> y = np.zeros((500, 1))
+        >>> for t in range(1, 500): y[t] = 0.5 * y[t - 1] + u[t - 1] + 0.1 * rng.standard_normal()
+        >>> m = sysid.arx(sysid.IOData(u, y, 1.0), 1, 1, 1)
+        >>> sd = m.std
+        >>> bool(0.002 < sd["a"][0][0][0] < 0.01), bool(0.002 < sd["b"][0][0][0] < 0.01)
+        (True, True)
+        """
+        if self.uncertainty is None:
+            return None
+        from .uncertainty import complex_std
+
+        _, sd = complex_std(self, lambda m: np.concatenate(
+            [np.zeros(0)] + [np.asarray(x, float).ravel() for x in m._coefficients()]))
+        it = iter(sd.tolist())
+
+        def take(x: np.ndarray) -> np.ndarray:
+            return np.array([next(it) for _ in range(np.asarray(x).size)])
+
+        a = [[take(x) for x in row] for row in self.a]
+        b = [[take(x) for x in row] for row in self.b]
+        c = [take(x) for x in self.c]
+        d = [take(x) for x in self.d]
+        f = [[take(x) for x in row] for row in self.f]
+        return {"a": a, "b": b, "c": c, "d": d, "f": f}

@@ -19,11 +19,33 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_2d, as_int, as_matrix
 from ..errors import DataError, ShapeError
+from .linear import DampingTable, damping_table, transmission_zeros
+from .protocol import ModelMixin, TimeResponse, default_length
 
-__all__ = ["StateSpaceModel"]
+__all__ = ["StateSpaceModel", "ss_parameter_count"]
 
 
-class StateSpaceModel:
+def ss_parameter_count(n: int, m: int, l: int, *, feedthrough: bool = True,
+                       noise_model: bool = True, x0: bool = False,
+                       n_experiments: int = 1) -> int:
+    """Identifiable parameters ``n (2 l + m) + [D] l m + [x0] n n_exp`` of an innovation-form
+    model (``n (l + m)`` without ``K``); see :mod:`sysid.analysis.criteria`.
+
+    Examples
+    --------
+    >>> from sysid.models.statespace import ss_parameter_count
+    >>> ss_parameter_count(4, 1, 1)        # 4 (2 + 1) + 1
+    13
+    """
+    d = n * ((2 * l if noise_model else l) + m)
+    if feedthrough:
+        d += l * m
+    if x0:
+        d += n * n_experiments
+    return int(d)
+
+
+class StateSpaceModel(ModelMixin):
     """Discrete-time state-space model ``x(t+1) = A x + B u + K e``, ``y = C x + D u + e``.
 
     Parameters
@@ -56,6 +78,10 @@ class StateSpaceModel:
     >>> m.markov(3)[:, 0, 0]
     array([0. , 1. , 0.5])
     """
+
+    #: Parameter uncertainty (:class:`~sysid.ParameterUncertainty`) attached by the estimator
+    #: (``sysid.pem``, ``fit(uncertainty="bootstrap")``, ...); ``None`` when unknown.
+    uncertainty: Any = None
 
     def __init__(
         self,
@@ -200,8 +226,18 @@ class StateSpaceModel:
         return _sysid.predict(self.A, self.B, self.C, self.D, K, u, y, self._x0(x0), int(horizon))
 
     # -- system properties --------------------------------------------------------------
-    def poles(self) -> np.ndarray:
+    def poles(self, std: bool = False, method: str = "linear") -> Any:
         """Eigenvalues of A (discrete-time poles).
+
+        Parameters
+        ----------
+        std : bool
+            Also return their standard deviations (needs :attr:`uncertainty`): a pair
+            ``(poles, sd)`` with ``sd`` complex, ``sd.real`` the std of the real part and
+            ``sd.imag`` that of the imaginary part of each pole.
+        method : {"linear", "monte-carlo"}
+            First-order perturbation with left and right eigenvectors (poles too close to
+            another pole for it to hold get NaN and an ``UncertaintyWarning``), or sampling.
 
         Examples
         --------
@@ -209,14 +245,20 @@ class StateSpaceModel:
         >>> sysid.StateSpaceModel([[0.5, 0], [0, -0.2]], [[1], [1]], [[1, 1]]).poles()
         array([ 0.5+0.j, -0.2+0.j])
         """
+        if std:
+            from .uncertainty import pole_std
+
+            return pole_std(self, method)
         return np.linalg.eigvals(self.A).astype(complex)
 
     def is_stable(self) -> bool:
         """True when every pole lies strictly inside the unit circle."""
         return bool(self.nstates == 0 or np.max(np.abs(self.poles())) < 1.0)
 
-    def markov(self, count: int) -> np.ndarray:
+    def markov(self, count: int, std: bool = False) -> Any:
         """Markov parameters ``D, CB, CAB, ...``, shape ``(count, noutputs, ninputs)``.
+
+        With ``std=True`` (needs :attr:`uncertainty`): ``(markov, std)``, first order.
 
         Examples
         --------
@@ -224,6 +266,10 @@ class StateSpaceModel:
         >>> sysid.StateSpaceModel([[0.5]], [[2.0]], [[1.0]], [[3.0]]).markov(3)[:, 0, 0]
         array([3., 2., 1.])
         """
+        if std:
+            from .uncertainty import complex_std
+
+            return complex_std(self, lambda m: m.markov(count))
         out = np.empty((count, self.noutputs, self.ninputs))
         if count:
             out[0] = self.D
@@ -233,18 +279,22 @@ class StateSpaceModel:
             ab = self.A @ ab
         return out
 
-    def freqresp(self, omega: Any) -> np.ndarray:
+    def freqresp(self, omega: Any, std: bool = False) -> Any:
         """Frequency response ``C (z I - A)^{-1} B + D`` at ``z = exp(j omega dt)``.
 
         Parameters
         ----------
         omega : array_like
             Angular frequencies in rad/s (the Nyquist frequency is ``pi / dt``).
+        std : bool
+            Also return the first-order std (needs :attr:`uncertainty`), complex: ``sd.real``
+            of the real part, ``sd.imag`` of the imaginary part.
 
         Returns
         -------
         ndarray
-            Complex response, shape ``(len(omega), noutputs, ninputs)``.
+            Complex response, shape ``(len(omega), noutputs, ninputs)``; with ``std=True`` the
+            pair ``(H, sd)``.
 
         Examples
         --------
@@ -256,6 +306,10 @@ class StateSpaceModel:
         w = np.atleast_1d(np.asarray(omega, dtype=float))
         if w.ndim != 1 or not np.isfinite(w).all():
             raise DataError("omega must be a finite 1-D array of angular frequencies (rad/s)")
+        if std:
+            from .uncertainty import freqresp_std
+
+            return freqresp_std(self, w)
         z = np.exp(1j * w * self.dt)
         n = self.nstates
         # Hessenberg-free but well-conditioned enough: one complex solve per frequency
@@ -265,8 +319,18 @@ class StateSpaceModel:
             out[i] = self.C @ np.linalg.solve(zi * eye - self.A, self.B) + self.D if n else self.D
         return out
 
-    def dcgain(self) -> np.ndarray:
-        """Steady-state gain ``C (I - A)^{-1} B + D``, shape ``(noutputs, ninputs)``."""
+    def impulse(self, n_samples: int | None = None) -> TimeResponse:
+        """Impulse responses: the Markov parameters; see :func:`sysid.impulse`."""
+        N = default_length(self, n_samples)
+        return TimeResponse("impulse", np.arange(N) * self.dt, self.markov(N), self)
+
+    def dcgain(self, std: bool = False) -> Any:
+        """Steady-state gain ``C (I - A)^{-1} B + D``, shape ``(noutputs, ninputs)``; with
+        ``std=True`` (needs :attr:`uncertainty`) the pair ``(gain, std)``, first order."""
+        if std:
+            from .uncertainty import complex_std
+
+            return complex_std(self, lambda m: m.dcgain())
         return self.freqresp([0.0])[0].real
 
     def __repr__(self) -> str:
@@ -278,33 +342,110 @@ class StateSpaceModel:
             f"noutputs={self.noutputs}, dt={self.dt:g}, {stab}, {noise}{method})"
         )
 
-    # -- analysis shortcuts (thin wrappers over sysid.analysis and sysid.io) --------------
+    # -- the model protocol (sysid.Model) ------------------------------------------------
+    @property
+    def n_parameters(self) -> int:
+        """Identifiable parameters: ``n (2 l + m)`` with ``K`` (``n (l + m)`` without) plus
+        ``l m`` when ``D`` is non-zero; see :func:`sysid.n_parameters`."""
+        return ss_parameter_count(self.nstates, self.ninputs, self.noutputs,
+                                  feedthrough=bool(np.any(self.D != 0)),
+                                  noise_model=self.K is not None)
+
+    def to_statespace(self) -> StateSpaceModel:
+        """The model itself (it is already in state-space form)."""
+        return self
+
+    def to_dict(self) -> dict[str, Any]:
+        """Matrices, sample time, names and info (see :func:`sysid.save_model`)."""
+        return {"nstates": self.nstates, "ninputs": self.ninputs, "noutputs": self.noutputs,
+                "dt": self.dt, "A": self.A, "B": self.B, "C": self.C, "D": self.D,
+                "K": self.K, "noise_cov": self.noise_cov, "x0": self.x0,
+                "input_names": list(self.input_names), "output_names": list(self.output_names),
+                "info": self.info}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> StateSpaceModel:
+        """Inverse of :meth:`to_dict`, checking the shapes."""
+        n, m, l = int(d["nstates"]), int(d["ninputs"]), int(d["noutputs"])
+
+        def arr(key: str, shape: tuple[int, ...]) -> np.ndarray | None:
+            v = d.get(key)
+            return None if v is None else np.asarray(v, dtype=float).reshape(shape)
+
+        return cls(
+            arr("A", (n, n)), arr("B", (n, m)), arr("C", (l, n)), arr("D", (l, m)),
+            arr("K", (n, l)), dt=float(d["dt"]), noise_cov=arr("noise_cov", (l, l)),
+            x0=arr("x0", (n,)), input_names=d.get("input_names"),
+            output_names=d.get("output_names"), info=d.get("info") or {},
+        )
+
+    # -- analysis shortcuts ---------------------------------------------------------------
     def zeros(self) -> np.ndarray:
         """Transmission zeros; see :func:`sysid.zeros`."""
-        from ..analysis.lti import zeros
+        return transmission_zeros(self.A, self.B, self.C, self.D)
 
-        return zeros(self)
+    def damp(self, std: bool = False) -> DampingTable:
+        """Pole frequencies (rad/s, Hz) and damping; see :func:`sysid.damp` (``std=True``:
+        with first-order standard deviations from :attr:`uncertainty`)."""
+        if std:
+            from .uncertainty import damping_std
 
-    def damp(self) -> Any:
-        """Pole frequencies (rad/s, Hz) and damping; see :func:`sysid.damp`."""
-        from ..analysis.lti import damp
+            d = damping_std(self, self.dt)
+            return DampingTable(d["poles"], d["s"].astype(complex), self.dt, std=d)
+        return damping_table(self.poles(), self.dt)
 
-        return damp(self)
+    def step(self, n_samples: int | None = None, std: bool = False) -> TimeResponse:
+        """Step responses from rest; see :func:`sysid.step` (``std=True``: with a band)."""
+        resp = super().step(n_samples)
+        if std:
+            from .uncertainty import complex_std
 
-    def step(self, n_samples: int | None = None) -> Any:
-        """Step responses; see :func:`sysid.step`."""
-        from ..analysis.lti import step
+            N = len(resp.t)
+            _, resp.std = complex_std(self, lambda m: m.step(N).y)
+        return resp
 
-        return step(self, n_samples)
+    # -- parameter uncertainty (sysid.models.uncertainty) ---------------------------------
+    @property
+    def covariance(self) -> np.ndarray | None:
+        """Covariance of the free parameters (``uncertainty.covariance``), or ``None``."""
+        return None if self.uncertainty is None else self.uncertainty.covariance
 
-    def impulse(self, n_samples: int | None = None) -> Any:
-        """Impulse responses (Markov parameters); see :func:`sysid.impulse`."""
-        from ..analysis.lti import impulse
+    @property
+    def std(self) -> dict[str, np.ndarray] | None:
+        """Standard deviations of the entries of ``A, B, C, D`` (and ``K``), first order from
+        :attr:`uncertainty`; ``None`` without one.
 
-        return impulse(self, n_samples)
+        The entries are those of this realisation: for a fully parameterised model the
+        similarity directions carry no information and the std refers to the identifiable
+        directions only (the minimum-norm representative). Poles, frequency responses and
+        other invariants are the meaningful quantities there.
 
-    def save(self, path: Any) -> None:
-        """Write the model to a ``.json`` or ``.npz`` file; see :func:`sysid.save_model`."""
-        from .io import save_model
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+        >>> m.uncertainty = sysid.ParameterUncertainty(
+        ...     [0.5, 1.0], np.diag([1e-4, 4e-4]),
+        ...     lambda t: sysid.StateSpaceModel([[t[0]]], [[t[1]]], [[1.0]]))
+        >>> {k: np.round(v, 4).tolist() for k, v in m.std.items()}
+        {'A': [[0.01]], 'B': [[0.02]], 'C': [[0.0]], 'D': [[0.0]]}
+        """
+        if self.uncertainty is None:
+            return None
+        from .uncertainty import complex_std
 
-        save_model(self, path)
+        names = ["A", "B", "C", "D"] + (["K"] if self.K is not None else [])
+
+        def parts(m: StateSpaceModel) -> np.ndarray:
+            mats = [m.A, m.B, m.C, m.D] + ([m.K if m.K is not None else np.zeros(self.K.shape)]
+                                           if self.K is not None else [])
+            return np.concatenate([x.ravel() for x in mats])
+
+        _, sd = complex_std(self, parts)
+        out, o = {}, 0
+        for name in names:
+            shape = getattr(self, name).shape
+            size = int(np.prod(shape))
+            out[name] = sd[o:o + size].reshape(shape)
+            o += size
+        return out

@@ -7,35 +7,52 @@ from typing import Any
 
 import numpy as np
 
+from ..models.checks import FREQUENCY, _optional, check_model
 from . import _pyplot
 
 __all__ = ["plot_bode", "plot_sigma", "plot_pzmap", "plot_time_response"]
 
 
 def _models(models: Any) -> list[Any]:
-    return list(models) if isinstance(models, (list, tuple)) else [models]
+    ms = list(models) if isinstance(models, (list, tuple)) else [models]
+    return [check_model(m, "every model", FREQUENCY) for m in ms]
 
 
 def _omega(models: list[Any], omega: Any, n: int = 400) -> np.ndarray:
     if omega is not None:
         return np.asarray(omega, dtype=float)
-    if all(hasattr(m, "dt") for m in models):
-        nyq = min(np.pi / m.dt for m in models)
+    measured = [m.omega for m in models if isinstance(getattr(m, "omega", None), np.ndarray)]
+    if measured:  # frequency-response data: their own grid, where they are defined
+        lo, hi = max(w.min() for w in measured), min(w.max() for w in measured)
+        return np.unique(np.concatenate([w[(w >= lo) & (w <= hi)] for w in measured]))
+    sampled = [m for m in models if getattr(m, "dt", None)]
+    if sampled:
+        nyq = min(np.pi / m.dt for m in sampled)
         return np.logspace(np.log10(nyq) - 3, np.log10(nyq), n)
     # continuous models: two decades either side of the pole magnitudes
-    mags = np.concatenate([np.abs(m.poles()) for m in models] + [np.ones(1)])
+    mags = np.concatenate([np.abs(_optional(m, "poles", "the frequency grid")) for m in models]
+                          + [np.ones(1)])
     mags = mags[mags > 0]
     return np.logspace(np.log10(mags.min()) - 2, np.log10(mags.max()) + 2, n)
 
 
+def _z(confidence: float) -> float:
+    from scipy.stats import norm
+
+    if not 0 < confidence < 1:
+        raise ValueError(f"confidence must be between 0 and 1, got {confidence}")
+    return float(norm.ppf(0.5 + confidence / 2))
+
+
 def plot_bode(models: Any, omega: Any = None, *, hz: bool = True, fig: Any = None,
-              labels: Sequence[str] | None = None) -> Any:
+              labels: Sequence[str] | None = None, confidence: float | None = None) -> Any:
     """Magnitude (dB) and phase (deg) of each input-output pair, for one or more models.
 
     Parameters
     ----------
-    models : StateSpaceModel or list of them
-        Models with the same channels.
+    models : sysid.Model or list of them
+        Models (any family, discrete or continuous, or :class:`sysid.FRD`) with the same
+        channels.
     omega : array_like, optional
         Angular frequencies in rad/s (default: three decades below Nyquist).
     hz : bool
@@ -43,9 +60,13 @@ def plot_bode(models: Any, omega: Any = None, *, hz: bool = True, fig: Any = Non
     fig : matplotlib Figure, optional
     labels : sequence of str, optional
         Legend entries, one per model.
+    confidence : float, optional
+        Draw confidence bands at this level (e.g. ``0.95``) for the models that carry a
+        parameter ``uncertainty``: first-order std of ``log|H|`` and of the phase.
     """
     plt = _pyplot()
     ms = _models(models)
+    zc = None if confidence is None else _z(confidence)
     w = _omega(ms, omega)
     l, m = ms[0].noutputs, ms[0].ninputs
     if fig is None:
@@ -56,12 +77,24 @@ def plot_bode(models: Any, omega: Any = None, *, hz: bool = True, fig: Any = Non
         H = mod.freqresp(w)
         info = getattr(mod, "info", {})
         lab = labels[k] if labels is not None else str(info.get("method", f"model {k}"))
+        band = None
+        if zc is not None and getattr(mod, "uncertainty", None) is not None:
+            from ..models.uncertainty import bode_std
+
+            band = bode_std(mod, w)
         for i in range(l):
             for j in range(m):
                 mag = 20 * np.log10(np.maximum(np.abs(H[:, i, j]), 1e-300))
                 ph = np.degrees(np.unwrap(np.angle(H[:, i, j])))
                 axes[2 * i, j].semilogx(x, mag, color=f"C{k}", label=lab)
                 axes[2 * i + 1, j].semilogx(x, ph, color=f"C{k}")
+                if band is not None and zc is not None:
+                    dm = zc * 20 / np.log(10) * band["log_mag_std"][:, i, j]
+                    dp = zc * np.degrees(band["phase_std"][:, i, j])
+                    axes[2 * i, j].fill_between(x, mag - dm, mag + dm, color=f"C{k}", alpha=0.25,
+                                                lw=0)
+                    axes[2 * i + 1, j].fill_between(x, ph - dp, ph + dp, color=f"C{k}",
+                                                    alpha=0.25, lw=0)
                 axes[2 * i, j].set_ylabel(f"|{mod.output_names[i]}/{mod.input_names[j]}| [dB]",
                                           fontsize=8)
                 axes[2 * i + 1, j].set_ylabel("phase [deg]", fontsize=8)
@@ -93,19 +126,22 @@ def plot_sigma(models: Any, omega: Any = None, *, hz: bool = True, ax: Any = Non
 
 
 def plot_pzmap(models: Any, ax: Any = None) -> Any:
-    """Poles (x) and transmission zeros (o) in the z-plane with the unit circle."""
-    from ..analysis.lti import zeros
+    """Poles (x) and zeros (o): z-plane with the unit circle, or s-plane (continuous).
 
+    Any model with ``poles()``/``zeros()`` or ``to_statespace()``; a model with neither
+    raises a :class:`~sysid.DataError` naming the missing method.
+    """
     plt = _pyplot()
     ms = _models(models)
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 5))
-    discrete = all(hasattr(m, "dt") for m in ms)
+    discrete = all(getattr(m, "dt", None) for m in ms)
     if discrete:  # the stability boundary: unit circle (z) or imaginary axis (s)
         th = np.linspace(0, 2 * np.pi, 400)
         ax.plot(np.cos(th), np.sin(th), color="0.5", lw=0.8)
     for k, mod in enumerate(ms):
-        p, z = mod.poles(), zeros(mod)
+        p = np.asarray(_optional(mod, "poles", "the pole-zero map"))
+        z = np.asarray(_optional(mod, "zeros", "the pole-zero map"))
         ax.plot(p.real, p.imag, "x", color=f"C{k}", ms=8, label="poles")
         ax.plot(z.real, z.imag, "o", color=f"C{k}", mfc="none", ms=8, label="zeros")
     ax.axhline(0, color="0.8", lw=0.5)
@@ -119,7 +155,8 @@ def plot_pzmap(models: Any, ax: Any = None) -> Any:
 
 
 def plot_time_response(resp: Any, fig: Any = None) -> Any:
-    """A :class:`~sysid.analysis.TimeResponse`, one axis per (output, input)."""
+    """A :class:`~sysid.TimeResponse`, one axis per (output, input); a 95 % band
+    where the response carries ``std`` (``sysid.step(model, std=True)``)."""
     plt = _pyplot()
     _, l, m = resp.y.shape
     if fig is None:
@@ -129,6 +166,10 @@ def plot_time_response(resp: Any, fig: Any = None) -> Any:
         for j in range(m):
             ax = axes[i, j]
             ax.step(resp.t, resp.y[:, i, j], where="post")
+            if getattr(resp, "std", None) is not None:
+                d = 1.96 * resp.std[:, i, j]
+                ax.fill_between(resp.t, resp.y[:, i, j] - d, resp.y[:, i, j] + d, step="post",
+                                alpha=0.25, lw=0, label="95 %")
             ax.set_title(f"{resp.kind}: {resp.input_names[j]} -> {resp.output_names[i]}",
                          fontsize=8)
             ax.grid(True, alpha=0.3)

@@ -114,9 +114,12 @@ def plot_order_selection(table: Any, fig: Any = None) -> Any:
     df = table.rows
     methods = sorted({r["method"] for r in df})
     for meth in methods:
-        sv = table.singular_values[meth]
-        plot_singular_values(sv, table.order if meth == table.method else None, ax=axes[0, 0])
-    axes[0, 0].set_title("singular values")
+        if meth in table.singular_values:
+            sv = table.singular_values[meth]
+            plot_singular_values(sv, table.order if meth == table.method else None,
+                                 ax=axes[0, 0])
+    axes[0, 0].set_title("singular values" if table.singular_values
+                         else "no singular values (given models)")
     ax = axes[0, 1]
     rows = [r for r in df if r["method"] == table.method]
     orders = np.array([r["order"] for r in rows])

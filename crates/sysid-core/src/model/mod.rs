@@ -1,4 +1,28 @@
-//! The discrete-time state-space model `x(t+1) = A x + B u`, `y = C x + D u`.
+//! The discrete-time state-space model and the equations every family solves on it.
+//!
+//! ```text
+//! x(t+1) = A x(t) + B u(t) + K e(t)
+//!   y(t) = C x(t) + D u(t) + e(t),        E[e e^T] = Λ
+//! ```
+//!
+//! [`StateSpace`] holds the deterministic part (A, B, C, D) and its Markov parameters
+//! `h_0 = D`, `h_k = C A^{k-1} B`. The submodules are the model's own computations, shared by
+//! every estimator that produces one:
+//!
+//! - [`simulate`]: `y = C x + D u` run forward (simulation), and the predictor
+//!   `x̂(t+1) = A x̂ + B u + K (y - C x̂ - D u)` with its k-step-ahead form;
+//! - [`lyapunov`]: the gramian equation `X = A X A^T + Q` (stable A), for covariances and
+//!   balanced realisation;
+//! - [`riccati`]: the filter Riccati equation
+//!   `P = A P A^T + Q - (A P C^T + S)(C P C^T + R)^{-1}(A P C^T + S)^T` whose stabilising
+//!   solution gives the innovation gain `K` and covariance `Λ = C P C^T + R`.
+//!
+//! They are also reachable at the crate root (`sysid_core::simulate`, `sysid_core::lyapunov`,
+//! `sysid_core::riccati`), their paths before they were grouped here.
+
+pub mod lyapunov;
+pub mod riccati;
+pub mod simulate;
 
 use crate::error::{Result, SysidError};
 use faer::{Mat, MatRef};

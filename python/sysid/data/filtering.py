@@ -1,0 +1,196 @@
+"""Zero-phase Butterworth filtering and changes of sample rate (with anti-alias filtering).
+
+Every function takes an :class:`~sysid.IOData` and returns a new one; a removed trend
+recorded in :attr:`IOData.trend` is carried along (filtered trends are not: see
+:func:`filtfilt`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from fractions import Fraction
+from typing import Any
+
+import numpy as np
+from scipy import signal
+
+from ..errors import DataError, InsufficientDataError
+from .iodata import IOData, _Exp
+
+__all__ = ["butter_sos", "filtfilt", "lowpass", "highpass", "bandpass", "resample", "decimate"]
+
+
+# --------------------------------------------------------------------------------------------
+# filtering
+# --------------------------------------------------------------------------------------------
+
+
+def butter_sos(kind: str, cutoff: float | Sequence[float], dt: float, order: int = 4) -> np.ndarray:
+    """Second-order sections of a digital Butterworth filter (``scipy.signal.butter``).
+
+    Parameters
+    ----------
+    kind : {"lowpass", "highpass", "bandpass", "bandstop"}
+    cutoff : float or (float, float)
+        Corner frequency(ies) in Hz, below the Nyquist frequency ``1 / (2 dt)``.
+    dt : float
+        Sample time in seconds.
+    order : int
+        Filter order (applied twice by :func:`filtfilt`, so the magnitude is squared).
+    """
+    if kind not in ("lowpass", "highpass", "bandpass", "bandstop"):
+        raise DataError(f"unknown filter kind {kind!r}")
+    if not isinstance(order, (int, np.integer)) or order < 1:
+        raise DataError(f"order must be a positive integer, got {order!r}")
+    fc = np.atleast_1d(np.asarray(cutoff, dtype=float))
+    need = 2 if kind in ("bandpass", "bandstop") else 1
+    if fc.size != need:
+        raise DataError(f"a {kind} filter needs {need} cutoff frequency(ies) in Hz, got {cutoff}")
+    nyq = 0.5 / dt
+    if not (np.all(fc > 0) and np.all(fc < nyq)):
+        raise DataError(
+            f"cutoff {cutoff} Hz must lie strictly between 0 and the Nyquist frequency "
+            f"{nyq:g} Hz (dt = {dt:g} s)"
+        )
+    if need == 2 and not fc[0] < fc[1]:
+        raise DataError(f"band edges must be increasing, got {cutoff}")
+    return signal.butter(int(order), fc if need == 2 else fc[0], btype=kind, output="sos",
+                         fs=1.0 / dt)
+
+
+def filtfilt(
+    data: IOData, sos: Any, *, inputs: bool = True, outputs: bool = True
+) -> IOData:
+    """Zero-phase filtering (forward and backward, ``scipy.signal.sosfiltfilt``) of every
+    experiment. Experiments too short for the filter's padding raise an error."""
+    sos = np.asarray(sos, dtype=float)
+    if sos.ndim != 2 or sos.shape[1] != 6:
+        raise DataError(f"sos must have shape (n_sections, 6), got {sos.shape}")
+    padlen = 3 * (2 * sos.shape[0] + 1 - min((sos[:, 2] == 0).sum(), (sos[:, 5] == 0).sum()))
+    exps = []
+    for k, e in enumerate(data._exps):
+        if e.y.shape[0] <= padlen:
+            raise InsufficientDataError(
+                f"experiment {k} has {e.y.shape[0]} samples; the zero-phase filter needs more "
+                f"than {padlen} (lower the order or drop short segments)"
+            )
+        u = signal.sosfiltfilt(sos, e.u, axis=0) if inputs and e.u.shape[1] else e.u
+        y = signal.sosfiltfilt(sos, e.y, axis=0) if outputs else e.y
+        exps.append(_Exp(u, y, e.t0, e.tu, e.ty))
+    return data._derive(exps)
+
+
+def lowpass(
+    data: IOData, cutoff: float, order: int = 4, *, inputs: bool = True, outputs: bool = True
+) -> IOData:
+    """Zero-phase Butterworth low-pass filter (cutoff in Hz) of inputs and/or outputs.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> t = np.arange(1000) * 0.01
+    >>> d = sysid.IOData(u=None, y=np.sin(2 * np.pi * 0.5 * t) + np.sin(2 * np.pi * 20 * t),
+    ...                  dt=0.01)
+    >>> f = sysid.lowpass(d, 5.0)
+    >>> bool(np.abs(f.y[100:-100, 0] - np.sin(2 * np.pi * 0.5 * t[100:-100])).max() < 1e-2)
+    True
+    """
+    return filtfilt(data, butter_sos("lowpass", cutoff, data.dt, order),
+                    inputs=inputs, outputs=outputs)
+
+
+def highpass(
+    data: IOData, cutoff: float, order: int = 4, *, inputs: bool = True, outputs: bool = True
+) -> IOData:
+    """Zero-phase Butterworth high-pass filter (cutoff in Hz); see :func:`lowpass`."""
+    return filtfilt(data, butter_sos("highpass", cutoff, data.dt, order),
+                    inputs=inputs, outputs=outputs)
+
+
+def bandpass(
+    data: IOData,
+    low: float,
+    high: float,
+    order: int = 4,
+    *,
+    inputs: bool = True,
+    outputs: bool = True,
+) -> IOData:
+    """Zero-phase Butterworth band-pass filter between ``low`` and ``high`` Hz."""
+    return filtfilt(data, butter_sos("bandpass", (low, high), data.dt, order),
+                    inputs=inputs, outputs=outputs)
+
+
+# --------------------------------------------------------------------------------------------
+# resampling
+# --------------------------------------------------------------------------------------------
+
+
+def _trend_on(tr: np.ndarray | None, n_new: int, factor: float) -> np.ndarray | None:
+    if tr is None:
+        return None
+    k_old = np.arange(tr.shape[0], dtype=float)
+    k_new = np.arange(n_new) * factor
+    return np.column_stack([np.interp(k_new, k_old, c) for c in tr.T]).reshape(n_new, -1)
+
+
+def resample(data: IOData, dt: float, *, max_denominator: int = 100) -> IOData:
+    """Change the sample time with polyphase anti-alias filtering
+    (``scipy.signal.resample_poly``, ends padded with a line).
+
+    The ratio ``data.dt / dt`` is approximated by a fraction with denominator at most
+    ``max_denominator``; the resulting sample time is exact for that fraction.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> d = sysid.IOData(u=np.ones(300), y=np.ones(300), dt=0.01)
+    >>> r = sysid.resample(d, 0.025)
+    >>> r.dt, r.n_samples
+    (0.025, 120)
+    """
+    new_dt = float(dt)
+    if not np.isfinite(new_dt) or new_dt <= 0:
+        raise DataError(f"dt must be a positive number of seconds, got {dt}")
+    ratio = Fraction(data.dt / new_dt).limit_denominator(max_denominator)  # up / down
+    up, down = ratio.numerator, ratio.denominator
+    if up == 0:
+        raise DataError(f"dt = {new_dt:g} s is too long for a record sampled at {data.dt:g} s")
+    exps = []
+    for e in data._exps:
+        n_new = int(np.ceil(e.y.shape[0] * up / down))
+        u = (signal.resample_poly(e.u, up, down, axis=0, padtype="line")
+             if e.u.shape[1] else np.zeros((n_new, 0)))
+        y = signal.resample_poly(e.y, up, down, axis=0, padtype="line")
+        f = down / up
+        exps.append(_Exp(u, y, e.t0, _trend_on(e.tu, n_new, f), _trend_on(e.ty, n_new, f)))
+    return data._derive(exps, dt=data.dt * down / up)
+
+
+def decimate(data: IOData, q: int, *, order: int = 8) -> IOData:
+    """Keep every ``q``-th sample after a zero-phase Chebyshev anti-alias filter
+    (``scipy.signal.decimate`` with ``zero_phase=True``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> sysid.decimate(sysid.IOData(u=np.ones(100), y=np.ones(100), dt=0.01), 4).dt
+    0.04
+    """
+    if not isinstance(q, (int, np.integer)) or q < 2:
+        raise DataError(f"q must be an integer >= 2, got {q!r}")
+    exps = []
+    for k, e in enumerate(data._exps):
+        if e.y.shape[0] <= 3 * (order + 1):
+            raise InsufficientDataError(f"experiment {k} is too short to decimate")
+
+        def dec(x: np.ndarray) -> np.ndarray:
+            if not x.shape[1]:
+                return np.zeros((len(range(0, x.shape[0], q)), 0))
+            return signal.decimate(x, int(q), n=order, axis=0, zero_phase=True)
+
+        def take(tr: np.ndarray | None) -> np.ndarray | None:
+            return None if tr is None else tr[::q]
+
+        exps.append(_Exp(dec(e.u), dec(e.y), e.t0, take(e.tu), take(e.ty)))
+    return data._derive(exps, dt=data.dt * q)

@@ -1,0 +1,295 @@
+"""Raw records: NaN/Inf drop-outs and irregular sampling.
+
+:func:`repair_nan` interpolates short gaps and cuts a record at long ones;
+:meth:`IOData.from_raw <sysid.IOData.from_raw>` and
+:meth:`IOData.from_irregular <sysid.IOData.from_irregular>` build a clean, uniformly sampled
+record from raw arrays (they are methods of a base class of :class:`~sysid.IOData` defined
+here).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from .._checks import as_2d
+from ..errors import DataError, InsufficientDataError, NonFiniteError, ShapeError
+from .units import sample_time
+
+if TYPE_CHECKING:
+    from .iodata import IOData
+
+__all__ = ["repair_nan"]
+
+
+# --------------------------------------------------------------------------------------------
+# runs and gaps
+# --------------------------------------------------------------------------------------------
+
+
+def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """Half-open ``(start, stop)`` of every run of True in a 1-D boolean array."""
+    m = np.concatenate([[False], np.asarray(mask, dtype=bool), [False]])
+    d = np.diff(m.astype(np.int8))
+    return list(zip(np.flatnonzero(d == 1).tolist(), np.flatnonzero(d == -1).tolist()))
+
+
+def _fill(x: np.ndarray, bad: np.ndarray) -> np.ndarray:
+    """Linear interpolation over the samples flagged ``bad`` (per column; ends held)."""
+    out = x.copy()
+    k = np.arange(x.shape[0])
+    for j in range(x.shape[1]):
+        b = bad[:, j]
+        if b.any():
+            good = ~b
+            if not good.any():
+                raise NonFiniteError(f"channel {j} has no valid sample to interpolate from")
+            out[b, j] = np.interp(k[b], k[good], x[good, j])
+    return out
+
+
+def repair_nan(
+    u: np.ndarray | None,
+    y: np.ndarray,
+    *,
+    nan: str = "interpolate",
+    max_gap: int = 5,
+    min_length: int = 2,
+) -> list[tuple[np.ndarray | None, np.ndarray, int]]:
+    """Handle NaN/Inf drop-outs in raw ``(samples, channels)`` arrays.
+
+    Parameters
+    ----------
+    u, y : ndarray
+        Raw inputs (or ``None``) and outputs of one experiment.
+    nan : {"error", "interpolate", "split"}
+        ``"error"``: raise :class:`~sysid.NonFiniteError` naming the first bad sample.
+        ``"interpolate"``: fill gaps of at most ``max_gap`` samples (linearly, per channel)
+        and cut the record at longer ones. ``"split"``: cut at every gap.
+    max_gap : int
+        Longest gap to interpolate.
+    min_length : int
+        Clean runs shorter than this are dropped.
+
+    Returns
+    -------
+    list of (u, y, start)
+        The clean runs and the sample where each starts in the raw record.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.data.raw import repair_nan
+    >>> y = np.array([[0.0], [np.nan], [2.0], [3.0]])
+    >>> repair_nan(None, y)[0][1].ravel()
+    array([0., 1., 2., 3.])
+    """
+    if nan not in ("error", "interpolate", "split"):
+        raise DataError(f"nan must be 'error', 'interpolate' or 'split', got {nan!r}")
+    if not isinstance(max_gap, (int, np.integer)) or max_gap < 0:
+        raise DataError(f"max_gap must be a non-negative integer, got {max_gap!r}")
+    if not isinstance(min_length, (int, np.integer)) or min_length < 1:
+        raise DataError(f"min_length must be a positive integer, got {min_length!r}")
+    ua = np.zeros((y.shape[0], 0)) if u is None else u
+    bad = np.concatenate([~np.isfinite(ua), ~np.isfinite(y)], axis=1)
+    if not bad.any():
+        return [(u, y, 0)]
+    if nan == "error":
+        i, j = np.argwhere(bad)[0]
+        raise NonFiniteError(
+            f"non-finite value at sample {i} ({'u' if j < ua.shape[1] else 'y'} channel "
+            f"{j if j < ua.shape[1] else j - ua.shape[1]}), {int(bad.any(axis=1).sum())} bad "
+            "sample(s) in all; use IOData.from_raw(..., nan='interpolate') or nan='split'"
+        )
+    x = np.concatenate([ua, y], axis=1)
+    any_bad = np.asarray(bad.any(axis=1), dtype=bool)
+    cut: np.ndarray = any_bad.copy()
+    if nan == "interpolate":
+        # gaps are per channel; a long gap in any channel cuts the record there
+        long_gap = np.zeros_like(any_bad)
+        for j in range(x.shape[1]):
+            for a, b in _runs(bad[:, j]):
+                if b - a > max_gap or a == 0 or b == len(any_bad):
+                    long_gap[a:b] = True
+        cut = long_gap
+        fillable = bad & ~long_gap[:, None]
+        x = np.where(bad, 0.0, x)
+        for a, b in _runs(~long_gap):
+            x[a:b] = _fill(x[a:b], fillable[a:b])
+    out = []
+    for a, b in _runs(~cut):
+        if b - a >= min_length:
+            seg = x[a:b]
+            out.append((None if u is None else seg[:, : ua.shape[1]], seg[:, ua.shape[1]:], a))
+    if not out:
+        raise InsufficientDataError(
+            f"no clean stretch of at least {min_length} samples is left after removing the "
+            "non-finite values"
+        )
+    return out
+
+
+class _RawConstructors:
+    """``IOData.from_raw`` and ``IOData.from_irregular`` (a base class of :class:`IOData`)."""
+
+    # ---------------------------------------------------------------- raw and irregular data
+
+    @classmethod
+    def from_raw(
+        cls,
+        u: Any,
+        y: Any,
+        dt: float | None = None,
+        *,
+        time: Any = None,
+        nan: str = "error",
+        max_gap: int = 5,
+        min_length: int = 2,
+        input_names: Sequence[str] | None = None,
+        output_names: Sequence[str] | None = None,
+        input_units: Sequence[str] | None = None,
+        output_units: Sequence[str] | None = None,
+    ) -> IOData:
+        """A record from raw arrays that may contain NaN drop-outs.
+
+        Parameters
+        ----------
+        u, y : array_like
+            One experiment each, ``(n_samples, channels)``; ``u`` may be ``None``.
+        dt, time : optional
+            Sample time or time vector, as for :class:`IOData`.
+        nan : {"error", "interpolate", "split"}
+            ``"error"`` raises on any NaN/Inf; ``"interpolate"`` fills gaps of at most
+            ``max_gap`` consecutive samples linearly (per channel) and splits the record at
+            longer ones; ``"split"`` cuts the record at every gap, each clean run becoming
+            its own experiment.
+        max_gap : int
+            Longest gap (samples) that ``"interpolate"`` fills.
+        min_length : int
+            Clean runs shorter than this are dropped.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> y = np.arange(12.0); y[3] = np.nan; y[6:9] = np.nan
+        >>> sysid.IOData.from_raw(None, y, nan="interpolate", max_gap=1).lengths
+        [6, 3]
+        >>> sysid.IOData.from_raw(None, y, nan="split").lengths
+        [3, 2, 3]
+        """
+        ua = None if u is None else _raw2d(u, "u")
+        ya = _raw2d(y, "y")
+        if ua is not None and ua.shape[0] != ya.shape[0]:
+            raise ShapeError(f"u has {ua.shape[0]} samples but y has {ya.shape[0]}")
+        t0 = 0.0
+        if time is not None:
+            t = np.asarray(time, dtype=float).ravel()
+            if t.size != ya.shape[0]:
+                raise ShapeError(f"time has {t.size} instants but y has {ya.shape[0]} samples")
+            h = sample_time(t)
+            if dt is not None and abs(float(dt) - h) > 0.01 * h:
+                raise DataError(f"dt = {dt} disagrees with the time vector (median {h:g} s)")
+            dt, t0 = h, float(t[0])
+        runs = repair_nan(ua, ya, nan=nan, max_gap=max_gap, min_length=min_length)
+        h = 1.0 if dt is None else float(dt)
+        return cls(
+            None if ua is None else [r[0] for r in runs],
+            [r[1] for r in runs],
+            h,
+            time=[t0 + r[2] * h + np.arange(len(r[1])) * h for r in runs],
+            input_names=input_names,
+            output_names=output_names,
+            input_units=input_units,
+            output_units=output_units,
+        )
+
+    @classmethod
+    def from_irregular(
+        cls,
+        time: Any,
+        u: Any,
+        y: Any,
+        dt: float | None = None,
+        *,
+        method: str = "linear",
+        input_names: Sequence[str] | None = None,
+        output_names: Sequence[str] | None = None,
+        input_units: Sequence[str] | None = None,
+        output_units: Sequence[str] | None = None,
+    ) -> IOData:
+        """A uniformly sampled record interpolated from irregularly timed samples.
+
+        Parameters
+        ----------
+        time : array_like
+            Strictly increasing sample instants (repeats are an error: remove them first).
+        u, y : array_like
+            Values at those instants (``u`` may be ``None``).
+        dt : float, optional
+            New sample time; default the median spacing of ``time``.
+        method : {"linear", "cubic"}
+            Interpolation (``"cubic"``: SciPy's ``CubicSpline``). No anti-alias filter is
+            applied: choose ``dt`` no longer than the typical spacing.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> t = np.array([0.0, 0.1, 0.2, 0.35, 0.4, 0.5])
+        >>> d = sysid.IOData.from_irregular(t, None, 2 * t, dt=0.1)
+        >>> d.y.ravel()
+        array([0. , 0.2, 0.4, 0.6, 0.8, 1. ])
+        """
+        t = np.asarray(time, dtype=float).ravel()
+        ya = as_2d(y, "y")
+        ua = None if u is None else as_2d(u, "u")
+        if t.size != ya.shape[0] or (ua is not None and ua.shape[0] != t.size):
+            raise ShapeError("time, u and y must have the same number of samples")
+        if t.size < 2 or not np.isfinite(t).all():
+            raise DataError("time must hold at least 2 finite instants")
+        d = np.diff(t)
+        if (d <= 0).any():
+            i = int(np.flatnonzero(d <= 0)[0])
+            raise DataError(
+                f"time is not strictly increasing at sample {i + 1} ({t[i]:g} then {t[i + 1]:g});"
+                " sort the samples and remove duplicates first"
+            )
+        h = float(np.median(d)) if dt is None else float(dt)
+        if not np.isfinite(h) or h <= 0:
+            raise DataError(f"dt must be positive, got {dt}")
+        grid = t[0] + np.arange(int(np.floor((t[-1] - t[0]) / h + 1e-9)) + 1) * h
+        if method == "linear":
+            def interp(x: np.ndarray) -> np.ndarray:
+                return np.column_stack([np.interp(grid, t, c) for c in x.T]).reshape(
+                    grid.size, x.shape[1]
+                )
+        elif method == "cubic":
+            from scipy.interpolate import CubicSpline
+
+            def interp(x: np.ndarray) -> np.ndarray:
+                return CubicSpline(t, x, axis=0)(grid)
+        else:
+            raise DataError(f"method must be 'linear' or 'cubic', got {method!r}")
+        return cls(
+            None if ua is None else interp(ua),
+            interp(ya),
+            h,
+            time=grid,
+            input_names=input_names,
+            output_names=output_names,
+            input_units=input_units,
+            output_units=output_units,
+        )
+
+
+def _raw2d(x: Any, name: str) -> np.ndarray:
+    arr = np.asarray(x)
+    if arr.dtype.kind not in "biuf":
+        raise DataError(f"{name} must be a real numeric array, got dtype {arr.dtype}")
+    arr = arr.astype(np.float64)
+    if arr.ndim == 1:
+        arr = arr[:, None]
+    if arr.ndim != 2 or arr.shape[0] == 0:
+        raise ShapeError(f"{name} must be a non-empty (samples, channels) array, got {arr.shape}")
+    return arr

@@ -1,0 +1,140 @@
+"""Physical units of channels and the time base of records.
+
+:func:`check_unit` validates a unit string (SI symbols with prefixes and the usual
+engineering units); :func:`sample_time` reads the sample time off a time vector and refuses
+non-uniform sampling with a message that names the first offending sample.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+import numpy as np
+
+from ..errors import DataError, NonFiniteError, ShapeError
+
+__all__ = ["check_unit", "sample_time"]
+
+
+# --------------------------------------------------------------------------------------------
+# units
+# --------------------------------------------------------------------------------------------
+
+_PREFIXABLE = {
+    "m", "g", "s", "A", "K", "mol", "cd", "N", "Pa", "J", "W", "V", "Ohm", "ohm", "Hz",
+    "rad", "bar", "L", "l", "T", "Wb", "C", "F", "S", "H", "lm", "lx", "Wh", "VA", "t",
+}
+_PLAIN = {
+    "deg", "degC", "degF", "°", "°C", "°F", "%", "-", "1", "rpm", "min", "h", "d", "ft",
+    "in", "mi", "nmi", "lbf", "lb", "lbs", "kt", "kn", "kts", "psi", "g0", "G", "counts",
+    "count", "bit", "bits", "dB", "dBm", "ppm", "pH", "mmHg", "inHg", "atm", "rev", "cycle",
+    "cycles", "sample", "samples", "unit", "units", "pu", "p.u.", "m3", "m2", "cm", "mm",
+}
+_PREFIXES = ("k", "M", "G", "m", "u", "µ", "n", "p", "c", "d", "h")
+_UNIT_TOKEN = re.compile(r"[*/·\s()]+")
+
+
+def _known_symbol(sym: str) -> bool:
+    sym = re.sub(r"\^?-?\d+$", "", sym)  # exponent: m^2, s-1, m2
+    if sym in _PLAIN or sym in _PREFIXABLE:
+        return True
+    return any(sym.startswith(p) and sym[len(p):] in _PREFIXABLE for p in _PREFIXES)
+
+
+def check_unit(unit: Any, channel: str = "channel") -> str:
+    """Validate a unit string such as ``"m/s^2"``, ``"deg/s"``, ``"N*m"`` or ``""`` (none).
+
+    Units are products and quotients of known symbols (SI with prefixes, ``deg``, ``degC``,
+    ``%``, ``rpm``, ``ft``, ``kt``, ``psi``, ``g0``, ``counts``, ``-`` for dimensionless...)
+    with optional integer exponents. An unknown symbol raises :class:`~sysid.DataError`.
+
+    Examples
+    --------
+    >>> from sysid.data.units import check_unit
+    >>> check_unit("m/s^2", "y0")
+    'm/s^2'
+    >>> check_unit("furlong", "y0")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: unknown unit 'furlong' for channel y0 (symbol 'furlong'); ...
+    """
+    if unit is None:
+        return ""
+    if not isinstance(unit, str):
+        raise DataError(f"the unit of channel {channel} must be a string, got {unit!r}")
+    u = unit.strip()
+    if u == "":
+        return ""
+    for sym in _UNIT_TOKEN.split(u):
+        if sym and not _known_symbol(sym):
+            raise DataError(
+                f"unknown unit {unit!r} for channel {channel} (symbol {sym!r}); use SI symbols "
+                "with prefixes (e.g. 'm/s^2', 'deg/s', 'N*m', 'V'), '-' for dimensionless, "
+                "or '' for none"
+            )
+    return u
+
+
+# --------------------------------------------------------------------------------------------
+# sample time
+# --------------------------------------------------------------------------------------------
+
+
+def sample_time(time: Any, *, rtol: float = 0.01) -> float:
+    """The sample time of a time vector: its median spacing, after checking it is uniform.
+
+    Parameters
+    ----------
+    time : array_like
+        Sample instants in seconds, 1-D, at least two.
+    rtol : float
+        Largest accepted relative deviation of any spacing from the median.
+
+    Returns
+    -------
+    float
+        The median spacing.
+
+    Raises
+    ------
+    DataError
+        If the vector repeats or goes back in time, or has gaps or jitter beyond ``rtol``
+        (the message names the first offending sample and suggests
+        :meth:`IOData.from_irregular` to resample onto a uniform grid).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> sysid.sample_time(np.arange(100) * 0.02 + 5.0)
+    0.02
+    """
+    t = np.asarray(time, dtype=float)
+    if t.ndim != 1 or t.size < 2:
+        raise ShapeError(f"time must be a 1-D vector of at least 2 instants, got shape {t.shape}")
+    if not np.isfinite(t).all():
+        i = int(np.flatnonzero(~np.isfinite(t))[0])
+        raise NonFiniteError(f"time has a non-finite value at sample {i}")
+    d = np.diff(t)
+    bad = np.flatnonzero(d <= 0)
+    if bad.size:
+        i = int(bad[0])
+        what = "repeats" if d[i] == 0 else "goes back"
+        raise DataError(
+            f"time {what} at sample {i + 1} (t[{i}] = {t[i]:g}, t[{i + 1}] = {t[i + 1]:g}; "
+            f"{bad.size} such place(s)); remove duplicate samples or sort the record first"
+        )
+    h = float(np.median(d))
+    dev = np.abs(d - h) > rtol * h
+    if dev.any():
+        i = int(np.flatnonzero(dev)[0])
+        kind = "a gap" if d[i] > h else "jitter"
+        raise DataError(
+            f"irregular sampling: {kind} at sample {i + 1} (spacing {d[i]:g} s against the "
+            f"median {h:g} s; {int(dev.sum())} spacing(s) off by more than {rtol:.0%}); "
+            "resample onto a uniform grid with sysid.IOData.from_irregular(time, u, y, dt), "
+            "or cut the record at the gap"
+        )
+    # round-off of summed float steps: report a clean value when it is one
+    r = float(f"{h:.12g}")
+    return r if abs(r - h) <= 1e-9 * h else h

@@ -1,0 +1,80 @@
+"""Checks that a model satisfies :class:`sysid.Model`, and access to optional members.
+
+Kept apart from :mod:`sysid.models.protocol` so that the plots can use them without
+importing the result classes (which import the plots).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..errors import DataError
+
+__all__ = ["REQUIRED", "FREQUENCY", "check_model", "as_statespace", "discrete_statespace"]
+
+#: Names a model must have to satisfy :class:`sysid.Model` (checked by :func:`check_model`).
+REQUIRED = ("simulate", "predict", "freqresp", "dt", "ninputs", "noutputs", "input_names",
+            "output_names", "n_parameters", "info")
+#: The frequency-domain part, enough for Bode and sigma plots (e.g. :class:`sysid.FRD`).
+FREQUENCY = ("freqresp", "ninputs", "noutputs", "input_names", "output_names")
+
+
+def check_model(model: Any, what: str = "model", members: tuple[str, ...] = REQUIRED) -> Any:
+    """Return ``model`` if it satisfies :class:`Model`, else raise a :class:`DataError`
+    naming the missing members.
+
+    Examples
+    --------
+    >>> from sysid.models.protocol import check_model
+    >>> check_model(object())
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: model must satisfy sysid.Model (e.g. a sysid.StateSpaceModel); ...
+    """
+    missing = [name for name in members if not hasattr(model, name)]
+    if missing:
+        raise DataError(
+            f"{what} must satisfy sysid.Model (e.g. a sysid.StateSpaceModel); "
+            f"{type(model).__name__} lacks "
+            f"{', '.join(missing)} (see sysid.models.protocol for the interface)"
+        )
+    return model
+
+
+def as_statespace(model: Any, purpose: str) -> Any:
+    """``model.to_statespace()``, or a :class:`DataError` naming ``purpose`` and the
+    missing method."""
+    conv = getattr(model, "to_statespace", None)
+    if conv is None:
+        raise DataError(
+            f"{purpose} needs a state-space form, but {type(model).__name__} has no "
+            "to_statespace() method; add one (returning a sysid.StateSpaceModel)"
+        )
+    return conv()
+
+
+def _optional(model: Any, name: str, purpose: str) -> Any:
+    """Call ``model.name()`` or ``model.to_statespace().name()``, or raise naming both."""
+    fn = getattr(model, name, None)
+    if fn is not None:
+        return fn()
+    return getattr(as_statespace(model, f"{purpose} ({name}())"), name)()
+
+
+def discrete_statespace(model: Any, purpose: str) -> Any:
+    """The discrete state-space form of any model, for tools working on ``A, B, C, D``.
+
+    A model with ``A``, ``B``, ``C``, ``D`` and ``dt > 0`` is returned as it is; others go
+    through ``to_statespace()``; a continuous-time model is told to discretise first.
+    """
+    check_model(model)
+    if all(hasattr(model, k) for k in ("A", "B", "C", "D")) and model.dt:
+        return model
+    if not model.dt:
+        raise DataError(f"{purpose} works on discrete-time models; discretise first with "
+                        "model.c2d(dt)")
+    ss = as_statespace(model, purpose)
+    if not all(hasattr(ss, k) for k in ("A", "B", "C", "D")):
+        raise DataError(f"{type(model).__name__}.to_statespace() returned a "
+                        f"{type(ss).__name__}, not a state-space model")
+    return ss

@@ -1,0 +1,468 @@
+"""Continuous-time models: :class:`ContinuousStateSpace`, and :func:`c2d`/:func:`d2c`.
+
+.. math::
+
+    \\dot x(t) = A x(t) + B u(t), \\qquad y(t) = C x(t) + D u(t)
+
+Measured data are samples every ``dt``; between samples the input is held constant
+(zero-order hold, ``"zoh"``) or interpolated linearly (first-order hold, ``"foh"``). Both are
+exact discretisations, computed once from the exponential of an augmented matrix
+(``scipy.linalg.expm``):
+
+- ZOH: ``expm([[A, B], [0, 0]] dt) = [[Ad, G1], [0, I]]``, ``Bd = G1``.
+- FOH: ``expm([[A, B, 0], [0, 0, I/dt], [0, 0, 0]] dt)`` holds ``Ad``, ``G1`` and ``G2 =
+  int_0^dt e^{A s} B (dt - s)/dt ds``; ``x(k+1) = Ad x(k) + G1 u(k) + G2 (u(k+1) - u(k))``.
+  With the state ``xi = x - G2 u`` this is the ordinary model ``Bd = G1 + (Ad - I) G2``,
+  ``Cd = C``, ``Dd = D + C G2`` (the realisation of ``scipy.signal.cont2discrete``). Its
+  state differs from the continuous one: rest (``x(0) = 0``) is ``xi(0) = -G2 u(0)``,
+  which :meth:`ContinuousStateSpace.simulate` applies (and :func:`sysid.compare`, through
+  :meth:`ContinuousStateSpace.sampled`); the discrete model alone starts from ``xi(0) = 0``.
+- Tustin (bilinear): with ``M = (I - A dt / 2)^{-1}``, ``Ad = M (I + A dt / 2)``,
+  ``Bd = M B dt``, ``Cd = C M``, ``Dd = D + C M B dt / 2``.
+
+The discrete model is then simulated by the Rust simulator.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+
+from .._checks import as_2d
+from ..errors import DataError, NumericalError
+from .linear import transmission_zeros
+from .protocol import ModelMixin, TimeResponse
+from .statespace import StateSpaceModel, ss_parameter_count
+
+__all__ = ["ContinuousStateSpace", "SampledContinuous", "c2d", "d2c"]
+
+_METHODS = ("zoh", "foh", "tustin")
+
+
+class ContinuousStateSpace(ModelMixin):
+    """Continuous-time model ``dx/dt = A x + B u``, ``y = C x + D u``.
+
+    Satisfies :class:`sysid.Model` with ``dt = 0.0``; simulating measured data needs the
+    data's sample time (``simulate(u, dt=...)``, or an :class:`~sysid.IOData` given to
+    :func:`sysid.compare`).
+
+    Parameters
+    ----------
+    A, B, C : array_like
+        Shapes ``(n, n)``, ``(n, m)``, ``(l, n)``.
+    D : array_like, optional
+        ``(l, m)``; zero if omitted.
+    input_names, output_names : sequence of str, optional
+        Channel names.
+    hold : {"zoh", "foh"}
+        How the input behaves between samples, used when the model meets sampled data
+        (:func:`sysid.compare`, :func:`sysid.residuals`, ...).
+    info : dict, optional
+        How the model was obtained.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> sys = sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]])
+    >>> sys
+    ContinuousStateSpace(nstates=1, ninputs=1, noutputs=1, stable)
+    >>> float(sys.dcgain()[0, 0])
+    1.0
+    >>> sys.simulate([1.0, 1.0, 1.0], dt=0.5)[:, 0].round(4)
+    array([0.    , 0.3935, 0.6321])
+    """
+
+    def __init__(
+        self,
+        A: Any,
+        B: Any,
+        C: Any,
+        D: Any = None,
+        *,
+        input_names: Sequence[str] | None = None,
+        output_names: Sequence[str] | None = None,
+        hold: str = "zoh",
+        info: dict[str, Any] | None = None,
+    ) -> None:
+        # reuse the discrete model's checks, then keep only the matrices
+        ref = StateSpaceModel(A, B, C, D, input_names=input_names, output_names=output_names)
+        self.A, self.B, self.C, self.D = ref.A, ref.B, ref.C, ref.D
+        self.input_names, self.output_names = ref.input_names, ref.output_names
+        self.hold = _method(hold, ("zoh", "foh"), "hold")
+        self.info: dict[str, Any] = dict(info or {})
+
+    dt = 0.0  # continuous time (python-control's convention)
+    nstates = property(lambda self: self.A.shape[0], doc="Number of states n.")
+    ninputs = property(lambda self: self.B.shape[1], doc="Number of inputs m.")
+    noutputs = property(lambda self: self.C.shape[0], doc="Number of outputs l.")
+
+    @property
+    def n_parameters(self) -> int:
+        """Identifiable parameters ``n (l + m) + [D != 0] l m`` (no noise model)."""
+        return ss_parameter_count(self.nstates, self.ninputs, self.noutputs,
+                                  feedthrough=bool(np.any(self.D != 0)), noise_model=False)
+
+    def poles(self) -> np.ndarray:
+        """Eigenvalues of A (continuous-time poles, rad/s)."""
+        return np.linalg.eigvals(self.A).astype(complex)
+
+    def zeros(self) -> np.ndarray:
+        """Transmission zeros (``s``-plane); see :func:`sysid.zeros`."""
+        return transmission_zeros(self.A, self.B, self.C, self.D)
+
+    def is_stable(self) -> bool:
+        """True when every pole has a strictly negative real part."""
+        return bool(self.nstates == 0 or np.max(self.poles().real) < 0)
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """``C (j omega I - A)^{-1} B + D``, shape ``(len(omega), noutputs, ninputs)``."""
+        w = np.atleast_1d(np.asarray(omega, dtype=float))
+        if w.ndim != 1 or not np.isfinite(w).all():
+            raise DataError("omega must be a finite 1-D array of angular frequencies (rad/s)")
+        eye = np.eye(self.nstates)
+        out = np.empty((w.size, self.noutputs, self.ninputs), dtype=complex)
+        for i, wi in enumerate(w):
+            out[i] = self.C @ np.linalg.solve(1j * wi * eye - self.A, self.B) + self.D
+        return out
+
+    def dcgain(self) -> np.ndarray:
+        """``D - C A^{-1} B``, shape ``(noutputs, ninputs)``."""
+        return self.freqresp([0.0])[0].real
+
+    def c2d(self, dt: float, method: str | None = None) -> StateSpaceModel:
+        """Discretise (default: the model's ``hold``); see :func:`c2d`."""
+        return c2d(self, dt, method or self.hold)
+
+    def sampled(self, dt: float) -> SampledContinuous:
+        """The model as it meets data sampled every ``dt`` with its ``hold``; see
+        :class:`SampledContinuous` (what :func:`sysid.compare` uses)."""
+        return SampledContinuous(self, dt)
+
+    # -- sampled data ---------------------------------------------------------------------
+    def simulate(self, u: Any, t: Any = None, *, dt: float | None = None,
+                 method: str | None = None, x0: Any = None) -> np.ndarray:
+        """Response to sampled inputs held between samples by ZOH or FOH (exact).
+
+        Parameters
+        ----------
+        u : array_like
+            Inputs ``(n_samples, ninputs)`` at times ``0, dt, 2 dt, ...``.
+        t : array_like, optional
+            Sample times (uniform); gives ``dt``. Pass ``t`` or ``dt``.
+        dt : float, optional
+            Sample time in seconds.
+        method : {"zoh", "foh"}, optional
+            Hold between samples (default: the model's ``hold``).
+        x0 : array_like, optional
+            Continuous state at time 0 (zero by default).
+
+        Returns
+        -------
+        ndarray
+            Outputs ``(n_samples, noutputs)`` at the sample times.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> sys = sysid.ContinuousStateSpace([[0.0]], [[1.0]], [[1.0]])   # an integrator
+        >>> t = np.arange(4.0)
+        >>> sys.simulate(t, t, method="foh")[:, 0]    # integral of a ramp: t^2 / 2
+        array([0. , 0.5, 2. , 4.5])
+        """
+        u = as_2d(u, "u", ncols=self.ninputs, allow_empty=self.ninputs == 0)
+        step = _sample_time(t, dt, u.shape[0])
+        method = _method(method or self.hold, ("zoh", "foh"))
+        Ad, Bd, Cd, Dd, G2 = _discretise(self, step, method)
+        x = np.zeros(self.nstates)
+        if x0 is not None:
+            x = np.asarray(x0, dtype=float).reshape(-1)
+            if x.size != self.nstates:
+                raise DataError(f"x0 has {x.size} entries but the model has {self.nstates} "
+                                "states")
+        # the discrete state is xi = x - G2 u (G2 = 0 for ZOH): from rest, xi(0) = -G2 u(0)
+        xi0 = x - G2 @ u[0] if u.shape[0] else x
+        d = StateSpaceModel(Ad, Bd, Cd, Dd, dt=step)
+        return d.simulate(u, x0=xi0 if np.any(xi0) else None)
+
+    def predict(self, u: Any, y: Any, horizon: int = 1, *, t: Any = None,
+                dt: float | None = None, method: str | None = None,
+                x0: Any = None) -> np.ndarray:
+        """No noise model: the prediction is the simulation (``y`` only sets the length)."""
+        y = np.asarray(y, dtype=float)
+        if y.shape[0] != np.shape(u)[0]:
+            raise DataError(f"u has {np.shape(u)[0]} samples but y has {y.shape[0]}")
+        return self.simulate(u, t, dt=dt, method=method, x0=x0)
+
+    def _grid(self, n_samples: int | None, dt: float | None) -> tuple[int, float]:
+        re = -self.poles().real
+        slow = float(np.min(re[re > 0])) if np.any(re > 0) else 0.1
+        t_final = 5.0 / slow  # e^-5 < 1 %
+        if dt is None:
+            N = 200 if n_samples is None else int(n_samples)
+            return N, t_final / max(N - 1, 1)
+        step = _sample_time(None, dt, 1)
+        N = int(min(np.ceil(t_final / step) + 1, 10000)) if n_samples is None else int(n_samples)
+        return N, step
+
+    def step(self, n_samples: int | None = None, *, dt: float | None = None) -> TimeResponse:
+        """Unit-step response sampled every ``dt`` (exact: a step is held by ZOH).
+
+        Without ``dt`` the grid spans five time constants of the slowest pole.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> r = sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]]).step(3, dt=1.0)
+        >>> bool(np.allclose(r.y[:, 0, 0], 1 - np.exp(-r.t)))
+        True
+        """
+        N, step = self._grid(n_samples, dt)
+        m = self.ninputs
+        y = np.empty((N, self.noutputs, m))
+        for j in range(m):
+            u = np.zeros((N, m))
+            u[:, j] = 1.0
+            y[:, :, j] = self.simulate(u, dt=step, method="zoh")
+        return TimeResponse("step", np.arange(N) * step, y, self)
+
+    def impulse(self, n_samples: int | None = None, *, dt: float | None = None) -> TimeResponse:
+        """Impulse response ``C e^{A t} B`` at the samples (the Dirac part ``D`` is left out).
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> r = sysid.ContinuousStateSpace([[-2.0]], [[1.0]], [[3.0]]).impulse(4, dt=0.5)
+        >>> bool(np.allclose(r.y[:, 0, 0], 3 * np.exp(-2 * r.t)))
+        True
+        """
+        N, step = self._grid(n_samples, dt)
+        m = self.ninputs
+        y = np.empty((N, self.noutputs, m))
+        zero = np.zeros((N, m))
+        for j in range(m):
+            y[:, :, j] = self.simulate(zero, dt=step, x0=self.B[:, j], method="zoh")
+        return TimeResponse("impulse", np.arange(N) * step, y, self)
+
+    # -- saving -----------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """Matrices, names, hold and info (see :func:`sysid.save_model`)."""
+        return {"A": self.A, "B": self.B, "C": self.C, "D": self.D, "hold": self.hold,
+                "input_names": list(self.input_names), "output_names": list(self.output_names),
+                "info": self.info}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> ContinuousStateSpace:
+        """Inverse of :meth:`to_dict`."""
+        n = np.asarray(d["A"]).shape[0]
+        B = np.asarray(d["B"], float).reshape(n, -1)
+        C = np.asarray(d["C"], float).reshape(-1, n)
+        return cls(d["A"], B, C, d["D"], input_names=d.get("input_names"),
+                   output_names=d.get("output_names"), hold=d.get("hold", "zoh"),
+                   info=d.get("info"))
+
+    def __repr__(self) -> str:
+        stab = "stable" if self.is_stable() else "UNSTABLE"
+        return (
+            f"ContinuousStateSpace(nstates={self.nstates}, ninputs={self.ninputs}, "
+            f"noutputs={self.noutputs}, {stab})"
+        )
+
+
+class SampledContinuous:
+    """A :class:`ContinuousStateSpace` seen at sample time ``dt``: a discrete
+    :class:`sysid.Model` whose ``simulate``/``predict`` are the continuous model's exact
+    hold simulation, with ``x0`` the *continuous* state (zero is rest, also under FOH).
+
+    ``A, B, C, D`` are the hold's discrete realisation (for the initial-state regression);
+    there is no noise model, so prediction is simulation.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> s = sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]], hold="foh").sampled(0.5)
+    >>> s
+    SampledContinuous(ContinuousStateSpace(nstates=1, ninputs=1, noutputs=1, stable), dt=0.5, foh)
+    >>> s.simulate([[1.0], [1.0]], x0=[0.0])[:, 0].round(4)
+    array([0.    , 0.3935])
+    """
+
+    def __init__(self, sys: ContinuousStateSpace, dt: float) -> None:
+        self.continuous, self.dt = sys, _sample_time(None, dt, 1)
+        self.A, self.B, self.C, self.D, _ = _discretise(sys, self.dt, sys.hold)
+        self.K, self.x0 = None, None
+        self.input_names, self.output_names = sys.input_names, sys.output_names
+        self.info = sys.info
+
+    nstates = property(lambda self: self.A.shape[0], doc="Number of states n.")
+    ninputs = property(lambda self: self.B.shape[1], doc="Number of inputs m.")
+    noutputs = property(lambda self: self.C.shape[0], doc="Number of outputs l.")
+    n_parameters = property(lambda self: self.continuous.n_parameters,
+                            doc="Free parameters of the continuous model.")
+
+    def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
+        """The continuous model's response with its hold (``x0``: continuous state)."""
+        return self.continuous.simulate(u, dt=self.dt, x0=x0)
+
+    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
+        """No noise model: the simulation."""
+        return self.continuous.predict(u, y, horizon, dt=self.dt, x0=x0)
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """Frequency response of the discrete realisation (``z = exp(j omega dt)``)."""
+        return StateSpaceModel(self.A, self.B, self.C, self.D, dt=self.dt).freqresp(omega)
+
+    def poles(self) -> np.ndarray:
+        """Discrete poles ``exp(s dt)``."""
+        return np.linalg.eigvals(self.A).astype(complex)
+
+    def __repr__(self) -> str:
+        return f"SampledContinuous({self.continuous!r}, dt={self.dt:g}, {self.continuous.hold})"
+
+
+def _method(method: Any, allowed: tuple[str, ...] = _METHODS, what: str = "method") -> str:
+    key = {"bilinear": "tustin"}.get(str(method).lower(), str(method).lower())
+    if key not in allowed:
+        raise DataError(f"{what} must be one of {', '.join(repr(a) for a in allowed)}, "
+                        f"got {method!r}")
+    return key
+
+
+def _sample_time(t: Any, dt: Any, n: int) -> float:
+    if t is not None:
+        if dt is not None:
+            raise DataError("give the sample times t or the sample time dt, not both")
+        t = np.asarray(t, dtype=float).ravel()
+        if t.size != n:
+            raise DataError(f"t has {t.size} entries but u has {n} samples")
+        if n < 2:
+            raise DataError("t needs at least two samples to give a sample time; pass dt")
+        d = np.diff(t)
+        if not np.allclose(d, d[0], rtol=1e-9, atol=0):
+            raise DataError("t must be uniformly spaced; resample the data or pass dt")
+        dt = d[0]
+    if dt is None:
+        raise DataError("a continuous-time model needs the sample time of the data: pass dt "
+                        "(or t), or discretise it with c2d")
+    dt = float(dt)
+    if not np.isfinite(dt) or dt <= 0:
+        raise DataError(f"dt must be a positive number of seconds, got {dt}")
+    return dt
+
+
+def _hold_integrals(A: np.ndarray, B: np.ndarray, dt: float
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``Ad = e^{A dt}``, ``G1``, ``G2`` from one exponential of the FOH augmented matrix."""
+    n, m = B.shape
+    big = np.zeros((n + 2 * m, n + 2 * m))
+    big[:n, :n], big[:n, n:n + m] = A, B
+    big[n:n + m, n + m:] = np.eye(m) / dt
+    E = scipy.linalg.expm(big * dt)
+    return E[:n, :n], E[:n, n:n + m], E[:n, n + m:]
+
+
+def _discretise(sys: ContinuousStateSpace, dt: float, method: str
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(Ad, Bd, Cd, Dd, G2)`` with ``G2`` the FOH state shift (zero otherwise)."""
+    A, B, C, D = sys.A, sys.B, sys.C, sys.D
+    n, m = B.shape
+    if method == "zoh":
+        big = np.zeros((n + m, n + m))
+        big[:n, :n], big[:n, n:] = A, B
+        E = scipy.linalg.expm(big * dt)
+        return E[:n, :n], E[:n, n:], C.copy(), D.copy(), np.zeros((n, m))
+    if method == "foh":
+        Ad, G1, G2 = _hold_integrals(A, B, dt)
+        return Ad, G1 + (Ad - np.eye(n)) @ G2, C.copy(), D + C @ G2, G2
+    ima = np.eye(n) - 0.5 * dt * A
+    Ad = np.linalg.solve(ima, np.eye(n) + 0.5 * dt * A)
+    Bd = np.linalg.solve(ima, dt * B)
+    Cd = np.linalg.solve(ima.T, C.T).T
+    return Ad, Bd, Cd, D + 0.5 * C @ Bd, np.zeros((n, m))
+
+
+def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh") -> StateSpaceModel:
+    """Discretise a continuous model: zero-order hold, first-order hold or Tustin.
+
+    See the module documentation for the formulas (``"bilinear"`` is accepted for Tustin).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> d = sysid.c2d(sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]]), 0.1)
+    >>> bool(np.isclose(d.A[0, 0], np.exp(-0.1)))
+    True
+    >>> float(sysid.c2d(sysid.ContinuousStateSpace([[0.0]], [[1.0]], [[1.0]]), 1.0, "foh").D[0, 0])
+    0.5
+    """
+    if not isinstance(sys, ContinuousStateSpace):
+        raise DataError(f"c2d needs a sysid.ContinuousStateSpace, got {type(sys).__name__}")
+    dt = _sample_time(None, dt, 1)
+    method = _method(method)
+    Ad, Bd, Cd, Dd, _ = _discretise(sys, dt, method)
+    return StateSpaceModel(
+        Ad, Bd, Cd, Dd, dt=dt, input_names=sys.input_names, output_names=sys.output_names,
+        info={"method": f"c2d ({method})"},
+    )
+
+
+def _real_log(M: np.ndarray, p: np.ndarray, method: str) -> np.ndarray:
+    bad = (np.abs(p.imag) <= 1e-12 * np.maximum(1, np.abs(p))) & (p.real <= 0)
+    if bad.any():
+        raise NumericalError(
+            f"the model has a pole at z = {p[bad][0].real:g} on the negative real axis or at "
+            f"zero: it has no {method.upper()} continuous equivalent; use method='tustin'"
+        )
+    L = np.real_if_close(scipy.linalg.logm(M), tol=1e6)
+    if np.iscomplexobj(L):
+        raise NumericalError("the matrix logarithm is complex: no real continuous equivalent")
+    return np.asarray(L)
+
+
+def d2c(model: StateSpaceModel, method: str = "zoh") -> ContinuousStateSpace:
+    """Continuous-time equivalent of a discrete model (inverse of :func:`c2d`).
+
+    ``zoh`` takes the principal matrix logarithm of ``[[A, B], [0, I]]``; ``foh`` takes
+    ``A = log(Ad) / dt`` and solves the FOH relations for ``B`` and ``D``. Both fail with a
+    :class:`NumericalError` when a pole lies on the negative real axis or at zero (no real
+    logarithm). ``tustin`` fails when a pole is at ``z = -1``. The noise model (``K``) is not
+    converted.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> c = sysid.d2c(sysid.StateSpaceModel([[np.exp(-0.1)]], [[1.0]], [[1.0]], dt=0.1))
+    >>> bool(np.isclose(c.A[0, 0], -1.0))
+    True
+    """
+    if not isinstance(model, StateSpaceModel):
+        raise DataError(f"d2c needs a sysid.StateSpaceModel, got {type(model).__name__}")
+    method = _method(method)
+    A, B, C, D, dt = model.A, model.B, model.C, model.D, model.dt
+    n, m = B.shape
+    p = model.poles()
+    if method == "zoh":
+        big = np.eye(n + m)
+        big[:n, :n], big[:n, n:] = A, B
+        L = _real_log(big, p, method) / dt
+        Ac, Bc, Cc, Dc = L[:n, :n], L[:n, n:], C.copy(), D.copy()
+    elif method == "foh":
+        Ac = _real_log(A, p, method) / dt if n else np.zeros((0, 0))
+        Ad, F1, F2 = _hold_integrals(Ac, np.eye(n), dt)
+        Bc = np.linalg.solve(F1 + (Ad - np.eye(n)) @ F2, B) if n else np.zeros((0, m))
+        Cc, Dc = C.copy(), D - C @ F2 @ Bc
+    else:
+        api = A + np.eye(n)
+        if n and np.linalg.cond(api) > 1e12:
+            raise NumericalError("the model has a pole at z = -1: no Tustin continuous equivalent")
+        inv = np.linalg.inv(api) if n else api
+        Ac = (2.0 / dt) * (np.eye(n) - 2.0 * inv)
+        Bc = 2.0 * inv @ B / dt
+        Cc = 2.0 * C @ inv
+        Dc = D - 0.5 * Cc @ B
+    return ContinuousStateSpace(
+        Ac, Bc, Cc, Dc, input_names=model.input_names, output_names=model.output_names,
+        hold="foh" if method == "foh" else "zoh",
+    )

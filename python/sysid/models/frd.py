@@ -1,0 +1,308 @@
+"""Frequency-response data: a measured or estimated ``G(e^{j omega dt})`` on a grid.
+
+:class:`FRD` is the model that non-parametric estimators return (:func:`sysid.welch_frf`,
+:func:`sysid.spa`, :func:`sysid.etfe`), with a confidence band when the estimator gives one;
+:meth:`FRD.from_model` samples any model with ``freqresp(omega)`` onto a grid, and
+:meth:`FRD.compare` measures a model against the data (:class:`FRDComparison`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from ..data.formats import _pandas
+from ..data.iodata import IOData
+from ..errors import DataError, ShapeError
+
+__all__ = ["FRD", "FRDComparison"]
+
+
+class FRD:
+    """Frequency-response data: a measured or estimated ``G(e^{j omega dt})``.
+
+    Parameters
+    ----------
+    omega : array_like
+        Angular frequencies in rad/s, shape ``(n_freq,)``.
+    response : array_like
+        Complex response, ``(n_freq, n_outputs, n_inputs)``.
+    coherence : array_like, optional
+        Magnitude-squared coherence per output/input pair, same shape (real, 0..1).
+    std : array_like, optional
+        Standard deviation of each complex entry, same shape (``E|G_hat - G|^2 = std^2``).
+    confidence : float
+        Level of the band drawn and tested by :meth:`within_band`.
+    dof : float, optional
+        Denominator degrees of freedom of the F distribution of the normalised error
+        (``2 (K - m)``); ``None`` for the large-sample (complex normal) limit.
+    dt : float, optional
+        Sample time of the data it came from.
+    input_names, output_names : list of str, optional
+    method : str
+        How it was estimated.
+    info : dict, optional
+        Settings (window, lags, averages, dropped frequencies).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    >>> w = np.linspace(0.1, 3.0, 5)
+    >>> f = sysid.FRD(w, m.freqresp(w))
+    >>> f
+    FRD: 5 frequencies 0.1..3 rad/s, 1 output x 1 input
+    >>> f.compare(m).max_error < 1e-12
+    True
+    """
+
+    def __init__(
+        self,
+        omega: Any,
+        response: Any,
+        *,
+        coherence: Any = None,
+        std: Any = None,
+        confidence: float = 0.99,
+        dof: float | None = None,
+        dt: float | None = None,
+        input_names: Sequence[str] | None = None,
+        output_names: Sequence[str] | None = None,
+        method: str = "",
+        info: dict[str, Any] | None = None,
+    ) -> None:
+        w = np.asarray(omega, dtype=float).ravel()
+        g = np.asarray(response, dtype=complex)
+        if g.ndim == 1:
+            g = g[:, None, None]
+        if g.ndim != 3 or g.shape[0] != w.size:
+            raise ShapeError(
+                f"response must be (n_freq, n_outputs, n_inputs) with n_freq = {w.size}, "
+                f"got {g.shape}"
+            )
+        if not (np.isfinite(w).all() and np.isfinite(g).all()):
+            raise DataError("omega and response must be finite")
+        if not 0.0 < confidence < 1.0:
+            raise DataError(f"confidence must lie in (0, 1), got {confidence}")
+        self.omega = w
+        self.response = g
+        self.coherence = None if coherence is None else self._same(coherence, "coherence", float)
+        self.std = None if std is None else self._same(std, "std", float)
+        self.confidence = float(confidence)
+        if dof is not None and not dof > 0:
+            raise DataError(f"dof must be positive, got {dof}")
+        self.dof = None if dof is None else float(dof)
+        self.dt = dt
+        l, m = g.shape[1:]
+        self.input_names = IOData._names(input_names, m, "u", "input")
+        self.output_names = IOData._names(output_names, l, "y", "output")
+        self.method = method
+        self.info = dict(info or {})
+
+    def _same(self, x: Any, name: str, dtype: type) -> np.ndarray:
+        a: np.ndarray = np.asarray(x, dtype=dtype)
+        if a.shape != self.response.shape:
+            raise ShapeError(f"{name} has shape {a.shape} but the response {self.response.shape}")
+        return a
+
+    @property
+    def hz(self) -> np.ndarray:
+        """Frequencies in Hz."""
+        return self.omega / (2 * np.pi)
+
+    @property
+    def n_inputs(self) -> int:
+        return self.response.shape[2]
+
+    @property
+    def n_outputs(self) -> int:
+        return self.response.shape[1]
+
+    # the frequency-domain part of the model protocol (sysid.Model): an FRD has no time
+    # response, but the Bode and sigma plots and FRD.compare take it like any model
+    ninputs = property(lambda self: self.n_inputs, doc="Number of inputs (protocol name).")
+    noutputs = property(lambda self: self.n_outputs, doc="Number of outputs (protocol name).")
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """The response at ``omega`` (rad/s), interpolated linearly in real and imaginary
+        parts between the measured frequencies; outside their range is an error.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> f = sysid.FRD([1.0, 2.0], np.array([1.0, 3.0j]))
+        >>> f.freqresp([1.5])[0, 0, 0]
+        np.complex128(0.5+1.5j)
+        """
+        w = np.atleast_1d(np.asarray(omega, dtype=float))
+        order = np.argsort(self.omega, kind="stable")
+        ws, g = self.omega[order], self.response[order]
+        if w.ndim != 1 or not np.isfinite(w).all():
+            raise DataError("omega must be a finite 1-D array of angular frequencies (rad/s)")
+        lo, hi = ws[0], ws[-1]
+        if w.size and (w.min() < lo * (1 - 1e-12) or w.max() > hi * (1 + 1e-12)):
+            raise DataError(f"omega must lie within the measured {lo:g}..{hi:g} rad/s; an FRD "
+                            "does not extrapolate (fit a model to it first)")
+        flat = g.reshape(ws.size, -1)
+        out = np.empty((w.size, flat.shape[1]), dtype=complex)
+        for k in range(flat.shape[1]):
+            out[:, k] = np.interp(w, ws, flat[:, k].real) + 1j * np.interp(w, ws, flat[:, k].imag)
+        return out.reshape(w.size, *g.shape[1:])
+
+    @property
+    def magnitude(self) -> np.ndarray:
+        """``|G|``, shape ``(n_freq, n_outputs, n_inputs)``."""
+        return np.abs(self.response)
+
+    @property
+    def phase(self) -> np.ndarray:
+        """Unwrapped phase in radians along frequency."""
+        return np.unwrap(np.angle(self.response), axis=0)
+
+    @property
+    def radius(self) -> np.ndarray | None:
+        """Radius of the confidence circle at :attr:`confidence` (``None`` without ``std``)."""
+        if self.std is None:
+            return None
+        if self.dof is None:
+            return self.std * np.sqrt(-np.log1p(-self.confidence))
+        return self.std * np.sqrt(stats.f.ppf(self.confidence, 2, self.dof))
+
+    def _other(self, other: Any) -> np.ndarray:
+        if hasattr(other, "freqresp"):
+            g = np.asarray(other.freqresp(self.omega))
+        elif isinstance(other, FRD):
+            if other.omega.shape != self.omega.shape or not np.allclose(other.omega, self.omega):
+                raise DataError("the two FRDs are on different frequency grids")
+            g = other.response
+        else:
+            g = np.asarray(other, dtype=complex)
+        if g.shape != self.response.shape:
+            raise ShapeError(f"the other response has shape {g.shape}, this one "
+                             f"{self.response.shape}")
+        return g
+
+    def within_band(self, other: Any) -> np.ndarray:
+        """Whether ``other`` (a model with ``freqresp``, an FRD or an array) lies inside the
+        confidence circle at every frequency and pair; bool ``(n_freq, l, m)``."""
+        if self.radius is None:
+            raise DataError(f"this FRD ({self.method or 'given'}) carries no confidence band")
+        return np.abs(self._other(other) - self.response) <= self.radius
+
+    def compare(self, other: Any) -> FRDComparison:
+        """Compare with a model's (or another FRD's) response on this grid."""
+        g = self._other(other)
+        err = np.abs(g - self.response)
+        rel = err / np.maximum(np.abs(self.response), np.finfo(float).tiny)
+        inside = None if self.std is None else float(self.within_band(g).mean())
+        return FRDComparison(self.omega, self.response, g, err, rel, inside)
+
+    def select(self, outputs: Any = None, inputs: Any = None) -> FRD:
+        """The sub-response of some outputs and inputs (names or indices)."""
+        dummy = IOData(u=np.zeros((1, self.n_inputs)), y=np.zeros((1, self.n_outputs)),
+                       input_names=self.input_names, output_names=self.output_names)
+        iu = dummy._index(inputs, self.input_names, "input")
+        iy = dummy._index(outputs, self.output_names, "output")
+
+        def sub(a: np.ndarray | None) -> np.ndarray | None:
+            return None if a is None else a[:, iy][:, :, iu]
+
+        return FRD(
+            self.omega, sub(self.response), coherence=sub(self.coherence), std=sub(self.std),
+            confidence=self.confidence, dof=self.dof, dt=self.dt,
+            input_names=[self.input_names[i] for i in iu],
+            output_names=[self.output_names[i] for i in iy], method=self.method, info=self.info,
+        )
+
+    @classmethod
+    def from_model(cls, model: Any, omega: Any) -> FRD:
+        """The frequency response of a model (anything with ``freqresp(omega)``) as an FRD.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1)
+        >>> sysid.FRD.from_model(m, np.linspace(0.1, 30.0, 10))
+        FRD (model): 10 frequencies 0.1..30 rad/s, 1 output x 1 input
+        """
+        return cls(
+            omega, model.freqresp(np.asarray(omega, dtype=float)), dt=getattr(model, "dt", None),
+            input_names=getattr(model, "input_names", None),
+            output_names=getattr(model, "output_names", None), method="model",
+        )
+
+    def to_pandas(self) -> Any:
+        """A long-format DataFrame: one row per frequency and output/input pair with
+        ``omega``, ``hz``, ``output``, ``input``, ``real``, ``imag``, ``magnitude``,
+        ``phase`` (rad) and, when known, ``coherence`` and ``std``."""
+        pd = _pandas()
+        nf, l, m = self.response.shape
+        idx = np.indices((nf, l, m)).reshape(3, -1)
+        g = self.response.reshape(-1)
+        cols: dict[str, Any] = {
+            "omega": self.omega[idx[0]],
+            "hz": self.hz[idx[0]],
+            "output": np.array(self.output_names, dtype=object)[idx[1]],
+            "input": np.array(self.input_names, dtype=object)[idx[2]],
+            "real": g.real,
+            "imag": g.imag,
+            "magnitude": np.abs(g),
+            "phase": self.phase.reshape(-1),
+        }
+        if self.coherence is not None:
+            cols["coherence"] = self.coherence.reshape(-1)
+        if self.std is not None:
+            cols["std"] = self.std.reshape(-1)
+        return pd.DataFrame(cols)
+
+    def plot(self, models: Any = None, *, fig: Any = None) -> Any:
+        """Bode plot with the confidence band and coherence; ``models`` are overlaid."""
+        from ..plot.frequency import plot_frd
+
+        return plot_frd(self, models=models, fig=fig)
+
+    def __repr__(self) -> str:
+        l, m = self.n_outputs, self.n_inputs
+        meth = f" ({self.method})" if self.method else ""
+        return (
+            f"FRD{meth}: {self.omega.size} frequencies {self.omega[0]:.3g}.."
+            f"{self.omega[-1]:.3g} rad/s, {l} output{'s' * (l != 1)} x "
+            f"{m} input{'s' * (m != 1)}"
+        )
+
+
+class FRDComparison:
+    """Measured against model response on the FRD's grid (from :meth:`FRD.compare`).
+
+    Attributes
+    ----------
+    omega, measured, model : ndarray
+    error : ndarray
+        ``|model - measured|``.
+    relative_error : ndarray
+        ``error / |measured|``.
+    fraction_within_band : float or None
+        Share of frequency/pair entries inside the FRD's confidence band.
+    """
+
+    def __init__(self, omega: np.ndarray, measured: np.ndarray, model: np.ndarray,
+                 error: np.ndarray, relative_error: np.ndarray, inside: float | None) -> None:
+        self.omega = omega
+        self.measured = measured
+        self.model = model
+        self.error = error
+        self.relative_error = relative_error
+        self.fraction_within_band = inside
+
+    @property
+    def max_error(self) -> float:
+        return float(self.error.max())
+
+    def __repr__(self) -> str:
+        band = ("" if self.fraction_within_band is None
+                else f", {self.fraction_within_band:.1%} within the confidence band")
+        return (f"FRDComparison: median relative error {np.median(self.relative_error):.3g}, "
+                f"max {self.relative_error.max():.3g}{band}")

@@ -1,0 +1,175 @@
+"""Small dense computations on linear models: transmission zeros and pole damping.
+
+They work on matrices and pole arrays only, so every model family (and
+:mod:`sysid.analysis.lti`, which exposes them as :func:`sysid.zeros` and :func:`sysid.damp`)
+calls them without importing anything above ``models/``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ["transmission_zeros", "DampingTable", "damping_table"]
+
+
+def _pencil_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray) -> np.ndarray:
+    import scipy.linalg  # on first use: `import sysid` stays light
+
+    n = A.shape[0]
+    M = np.block([[A, B], [C, D]])
+    N = np.zeros_like(M)
+    N[:n, :n] = np.eye(n)
+    w = scipy.linalg.eigvals(M, N, homogeneous_eigvals=True)
+    alpha, beta = w
+    scale = max(float(np.abs(M).max()), 1.0)
+    # infinite eigenvalues come out with beta at round-off level
+    finite = np.abs(alpha) < 1e8 * scale * np.abs(beta)
+    z = alpha[finite] / beta[finite]
+    return z.astype(complex)
+
+
+def transmission_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+                       tol: float = 1e-6) -> np.ndarray:
+    """Transmission zeros: finite generalised eigenvalues of the Rosenbrock pencil.
+
+    ``[[A - z I, B], [C, D]]`` loses rank at a zero. For a square system the pencil's
+    generalised eigenvalues are the zeros (``scipy.linalg.eigvals``). A non-square system is
+    squared down twice with random (seeded) combinations of its outputs or inputs; zeros
+    common to both, within ``tol`` relative, are kept (the spurious zeros of a squaring-down
+    move with the combination, the true ones do not).
+
+    Parameters
+    ----------
+    A, B, C, D : ndarray
+        State-space matrices (discrete or continuous).
+    tol : float
+        Relative tolerance for matching zeros of the two squared-down systems.
+
+    Returns
+    -------
+    ndarray
+        Complex zeros (discrete ``z`` or continuous ``s``), sorted by modulus.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.models.linear import transmission_zeros
+    >>> A, B, C = np.diag([0.5, 0.2]), np.ones((2, 1)), np.ones((1, 2))
+    >>> transmission_zeros(A, B, C, np.zeros((1, 1)))
+    array([0.35+0.j])
+    """
+    l, m = D.shape
+    if l == m:
+        z = _pencil_zeros(A, B, C, D)
+    else:
+        rng = np.random.default_rng(12345)
+        k = min(l, m)
+        cands = []
+        for _ in range(2):
+            if l > m:
+                W = rng.standard_normal((k, l))
+                cands.append(_pencil_zeros(A, B, W @ C, W @ D))
+            else:
+                W = rng.standard_normal((m, k))
+                cands.append(_pencil_zeros(A, B @ W, C, D @ W))
+        z1, z2 = cands
+        keep = [a for a in z1 if z2.size and np.min(np.abs(z2 - a)) <= tol * max(1.0, abs(a))]
+        z = np.array(keep, dtype=complex)
+    return z[np.argsort(np.abs(z), kind="stable")]
+
+
+class DampingTable:
+    """Poles with their natural frequency, damping ratio and time constant.
+
+    Attributes
+    ----------
+    poles : ndarray
+        Poles of the model (discrete ``z`` or continuous ``s``), sorted by frequency.
+    s : ndarray
+        Continuous-time equivalents ``log(z) / dt`` (equal to ``poles`` for continuous models).
+    wn, wn_hz : ndarray
+        Natural frequency ``|s|`` in rad/s and Hz.
+    wd, wd_hz : ndarray
+        Damped frequency ``|Im s|`` in rad/s and Hz (``|angle(z)| / (2 pi dt)`` in Hz).
+    zeta : ndarray
+        Damping ratio ``-Re(s) / |s|``.
+    tau : ndarray
+        Time constant ``-1 / Re(s)`` in seconds (``inf`` on the stability boundary).
+    pole_std, wn_std, wn_hz_std, zeta_std : ndarray or None
+        First-order standard deviations (``damp(model, std=True)``, from the model's
+        parameter uncertainty); ``pole_std`` is complex (std of the real and imaginary parts).
+    """
+
+    def __init__(self, poles: np.ndarray, s: np.ndarray, dt: float | None,
+                 std: dict[str, np.ndarray] | None = None) -> None:
+        order = np.lexsort((s.imag, np.abs(s)))
+        self.poles, self.s, self.dt = poles[order], s[order], dt
+        self.pole_std = self.wn_std = self.wn_hz_std = self.zeta_std = None
+        if std is not None:
+            self.pole_std = std["pole_std"][order]
+            self.wn_std, self.wn_hz_std = std["wn_std"][order], std["wn_hz_std"][order]
+            self.zeta_std = std["zeta_std"][order]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.wn = np.abs(self.s)
+            safe = np.where(self.wn > 0, self.wn, 1.0)
+            self.zeta = np.where(self.wn > 0, -self.s.real / safe, -1.0)
+            self.zeta = np.where(np.isinf(self.s.real), 1.0, self.zeta)
+            self.wd = np.abs(self.s.imag)
+            self.tau = np.where(self.s.real != 0, -1.0 / self.s.real, np.inf)
+        self.wn_hz = self.wn / (2 * np.pi)
+        self.wd_hz = self.wd / (2 * np.pi)
+
+    def to_pandas(self) -> Any:
+        """The table as a :class:`pandas.DataFrame`."""
+        import pandas as pd
+
+        cols = {
+            "pole": self.poles, "magnitude": np.abs(self.poles), "wn [rad/s]": self.wn,
+            "wn [Hz]": self.wn_hz, "damping": self.zeta, "wd [Hz]": self.wd_hz,
+            "tau [s]": self.tau,
+        }
+        if self.pole_std is not None:
+            cols.update({"std Re(pole)": self.pole_std.real, "std Im(pole)": self.pole_std.imag,
+                         "std wn [Hz]": self.wn_hz_std, "std damping": self.zeta_std})
+        return pd.DataFrame(cols)
+
+    def __len__(self) -> int:
+        return len(self.poles)
+
+    def __repr__(self) -> str:
+        head = (f"{'pole':>24} {'|pole|':>8} {'wn rad/s':>10} {'wn Hz':>9} {'damping':>8} "
+                f"{'wd Hz':>9}")
+        if self.pole_std is not None:
+            head += f" {'std Hz':>9} {'std damp':>9}"
+        rows = [head]
+        for k, (p, wn, fz, z, fd) in enumerate(
+                zip(self.poles, self.wn, self.wn_hz, self.zeta, self.wd_hz)):
+            rows.append(
+                f"{p.real:>11.5g}{p.imag:>+11.5g}j {abs(p):8.4f} {wn:10.4g} {fz:9.4g} "
+                f"{z:8.4f} {fd:9.4g}"
+                + ("" if self.wn_hz_std is None or self.zeta_std is None else
+                   f" {self.wn_hz_std[k]:9.3g} {self.zeta_std[k]:9.3g}")
+            )
+        where = f"dt = {self.dt:g} s" if self.dt is not None else "continuous time"
+        return f"DampingTable ({where})\n" + "\n".join(rows)
+
+
+def damping_table(poles: np.ndarray, dt: float) -> DampingTable:
+    """The :class:`DampingTable` of ``poles``: discrete (``dt > 0``, mapped through
+    ``s = log(z) / dt``; ``z = 0`` gives ``s = -inf``) or continuous (``dt == 0``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.models.linear import damping_table
+    >>> np.round(damping_table(np.array([-1.0 + 2.0j, -1.0 - 2.0j]), 0.0).zeta, 4)
+    array([0.4472, 0.4472])
+    """
+    p = np.asarray(poles, dtype=complex)
+    if not dt:
+        return DampingTable(p, p.copy(), None)
+    with np.errstate(divide="ignore"):
+        s = np.where(np.abs(p) > 0, np.log(np.where(np.abs(p) > 0, p, 1)) / dt, -np.inf)
+    return DampingTable(p, s.astype(complex), dt)

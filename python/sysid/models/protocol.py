@@ -1,0 +1,250 @@
+"""The model protocol: what every sysid model offers, and defaults written once.
+
+Every model family (:class:`~sysid.StateSpaceModel`, :class:`~sysid.ContinuousStateSpace`,
+:class:`~sysid.PolynomialModel`, and any class of your own) satisfies :class:`Model`, so
+:func:`sysid.compare`, :func:`sysid.residuals`, :func:`sysid.error_spectrum`,
+:func:`sysid.criteria`, :func:`sysid.select_order`, the plots, :func:`sysid.report` and
+:func:`sysid.save_model` work on all of them.
+
+Required members
+----------------
+``simulate(u, x0=None)``
+    Noise-free output ``(n_samples, noutputs)`` for inputs ``(n_samples, ninputs)``.
+``predict(u, y, horizon=1)``
+    ``horizon``-step-ahead prediction ``yhat(t | t - horizon)`` from measured ``u`` and ``y``.
+``freqresp(omega)``
+    Complex response ``(len(omega), noutputs, ninputs)`` at angular frequencies (rad/s).
+``dt``
+    Sample time in seconds; ``0.0`` for a continuous-time model (python-control's convention).
+``ninputs``, ``noutputs``, ``input_names``, ``output_names``
+    Channel counts and names.
+``n_parameters``
+    Number of free (identifiable) parameters, used by the information criteria.
+``info``
+    A dict saying how the model was obtained.
+
+Optional members
+----------------
+``poles()``, ``zeros()``
+    Poles and (transmission) zeros, discrete ``z`` or continuous ``s``.
+``to_statespace()``
+    An equivalent :class:`~sysid.StateSpaceModel`; functions needing state-space internals
+    (initial-state estimation, damping) go through it.
+``nstates`` with ``simulate(u, x0=array)``
+    A model with a state can have its initial state estimated by :func:`sysid.compare`.
+``to_dict()`` / ``from_dict(d)``
+    Saving; see :func:`sysid.register_model`.
+
+:class:`ModelMixin` gives ``predict`` (through ``to_statespace()``), ``poles``, ``zeros``,
+``step`` and ``impulse`` to a class that defines the rest.
+
+Examples
+--------
+A finite-impulse-response model in a few lines satisfies the protocol:
+
+>>> import numpy as np, sysid
+>>> class FIR(sysid.ModelMixin):
+...     def __init__(self, h, dt=1.0):
+...         self.h, self.dt, self.info = np.asarray(h, float), dt, {"method": "fir"}
+...         self.ninputs = self.noutputs = 1
+...         self.input_names, self.output_names = ["u0"], ["y0"]
+...     n_parameters = property(lambda self: self.h.size)
+...     def simulate(self, u, x0=None):
+...         u = np.asarray(u, float).reshape(-1)
+...         return np.convolve(u, self.h)[: u.size, None]
+...     def predict(self, u, y, horizon=1):
+...         return self.simulate(u)
+...     def freqresp(self, omega):
+...         z = np.exp(-1j * np.outer(omega, np.arange(self.h.size)) * self.dt)
+...         return (z @ self.h)[:, None, None]
+>>> isinstance(FIR([0.0, 1.0, 0.5]), sysid.Model)
+True
+>>> FIR([0.0, 1.0, 0.5]).step(4).y[:, 0, 0]
+array([0. , 1. , 1.5, 1.5])
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+
+from ..errors import DataError
+from .checks import REQUIRED, _optional, as_statespace, check_model
+
+__all__ = ["Model", "ModelMixin", "REQUIRED", "check_model", "as_statespace", "TimeResponse"]
+
+
+@runtime_checkable
+class Model(Protocol):
+    """The interface every sysid model satisfies (see the module documentation).
+
+    ``isinstance(obj, sysid.Model)`` checks that the members exist.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> isinstance(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), sysid.Model)
+    True
+    >>> isinstance(sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]]), sysid.Model)
+    True
+    """
+
+    @property
+    def dt(self) -> float:
+        """Sample time in seconds (``0.0``: continuous time)."""
+
+    @property
+    def ninputs(self) -> int:
+        """Number of inputs."""
+
+    @property
+    def noutputs(self) -> int:
+        """Number of outputs."""
+
+    @property
+    def input_names(self) -> Sequence[str]:
+        """Input channel names."""
+
+    @property
+    def output_names(self) -> Sequence[str]:
+        """Output channel names."""
+
+    @property
+    def n_parameters(self) -> int:
+        """Number of free parameters."""
+
+    @property
+    def info(self) -> dict[str, Any]:
+        """How the model was obtained."""
+
+    def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
+        """Noise-free output ``(n_samples, noutputs)``."""
+
+    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+        """``horizon``-step-ahead prediction ``(n_samples, noutputs)``."""
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """Complex frequency response ``(len(omega), noutputs, ninputs)``."""
+
+
+# -- time responses ---------------------------------------------------------------------
+class TimeResponse:
+    """Step or impulse response: ``y[t, i, j]`` is output i for input j at time ``t[t]``.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> sysid.step(sysid.StateSpaceModel([[0.5]], [[0.5]], [[1.0]]), 3)
+    TimeResponse(step, 3 samples, 1 output(s) x 1 input(s))
+    """
+
+    def __init__(self, kind: str, t: np.ndarray, y: np.ndarray, model: Any,
+                 std: np.ndarray | None = None) -> None:
+        self.kind, self.t, self.y = kind, t, y
+        self.std = std  # first-order std of y (step(..., std=True)); plotted as bands
+        self.input_names, self.output_names = list(model.input_names), list(model.output_names)
+
+    def plot(self, fig: Any = None) -> Any:
+        """One axis per (output, input) pair; returns the figure."""
+        from ..plot.model import plot_time_response
+
+        return plot_time_response(self, fig=fig)
+
+    def __repr__(self) -> str:
+        return (
+            f"TimeResponse({self.kind}, {len(self.t)} samples, {self.y.shape[1]} output(s) x "
+            f"{self.y.shape[2]} input(s))"
+        )
+
+
+def default_length(model: Any, n_samples: int | None) -> int:
+    """``n_samples``, or long enough for the slowest pole to decay to 1 % (20..10000)."""
+    if n_samples is not None:
+        n = int(n_samples)
+        if n < 1 or n != n_samples:
+            raise DataError(f"n_samples must be a positive integer, got {n_samples!r}")
+        return n
+    try:
+        p = _optional(model, "poles", "the default response length")
+    except DataError:
+        return 100
+    rho = float(np.max(np.abs(p))) if np.size(p) else 0.0
+    n = 100 if rho >= 1 or rho == 0 else int(np.ceil(np.log(0.01) / np.log(rho))) + 10
+    return int(min(max(n, 20), 10000))
+
+
+def sampled_response(model: Any, kind: str, n_samples: int | None) -> TimeResponse:
+    """Step (``u = 1``) or impulse (``u(0) = 1``) response of a discrete model via simulate."""
+    N = default_length(model, n_samples)
+    m = model.ninputs
+    y = np.empty((N, model.noutputs, m))
+    for j in range(m):
+        u = np.zeros((N, m))
+        if kind == "step":
+            u[:, j] = 1.0
+        else:
+            u[0, j] = 1.0
+        y[:, :, j] = np.asarray(model.simulate(u)).reshape(N, model.noutputs)
+    return TimeResponse(kind, np.arange(N) * model.dt, y, model)
+
+
+class ModelMixin:
+    """Default implementations of the protocol's derived members, written once.
+
+    A class defining ``simulate``, ``freqresp``, ``dt``, the channel names and counts,
+    ``n_parameters`` and ``info`` gets from this mixin:
+
+    - ``predict(u, y, horizon)`` through ``to_statespace()`` (its innovation form);
+    - ``poles()``, ``zeros()`` through ``to_statespace()``;
+    - ``step(n_samples)``, ``impulse(n_samples)`` through ``simulate``;
+    - ``save(path)`` through :func:`sysid.save_model` (needs ``to_dict``).
+
+    Each raises a :class:`~sysid.DataError` naming the missing method when the class does
+    not provide what it needs.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> class Integrator(sysid.ModelMixin):          # only the state-space form is given
+    ...     def to_statespace(self):
+    ...         return sysid.StateSpaceModel([[1.0]], [[1.0]], [[1.0]])
+    >>> Integrator().poles()
+    array([1.+0.j])
+    >>> Integrator().predict([1.0, 1.0, 1.0], [0.0, 1.0, 2.0], 2)[:, 0]
+    array([0., 1., 2.])
+    """
+
+    def _delegate(self, name: str) -> Any:
+        ss = as_statespace(self, f"{name}()" if name != "predict" else name)
+        if ss is self:  # its own to_statespace(): the mixin's default would call itself
+            raise DataError(f"{type(self).__name__}.to_statespace() returns the model itself; "
+                            f"define {name}() on the class")
+        return getattr(ss, name)
+
+    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+        """``horizon``-step prediction with the Kalman predictor of ``to_statespace()``."""
+        return np.asarray(self._delegate("predict")(u, y, horizon))
+
+    def poles(self) -> np.ndarray:
+        """Poles of ``to_statespace()``."""
+        return np.asarray(self._delegate("poles")())
+
+    def zeros(self) -> np.ndarray:
+        """Transmission zeros of ``to_statespace()``."""
+        return np.asarray(self._delegate("zeros")())
+
+    def step(self, n_samples: int | None = None) -> TimeResponse:
+        """Response to a unit step on each input, from rest (by simulation)."""
+        return sampled_response(self, "step", n_samples)
+
+    def impulse(self, n_samples: int | None = None) -> TimeResponse:
+        """Response to a unit pulse ``u(0) = 1`` on each input, from rest (by simulation)."""
+        return sampled_response(self, "impulse", n_samples)
+
+    def save(self, path: Any, *, format: str | None = None) -> None:
+        """Write the model to a ``.json`` or ``.npz`` file; see :func:`sysid.save_model`."""
+        from .serialize import save_model
+
+        save_model(self, path, format=format)

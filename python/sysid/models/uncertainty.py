@@ -1,0 +1,496 @@
+"""Parameter uncertainty of an estimated model and its propagation: written once, used by
+every model family.
+
+An estimator that knows the covariance ``P`` of its free parameters ``theta`` attaches
+
+.. math::
+
+    \\texttt{ParameterUncertainty}(\\theta, P, \\texttt{build})
+
+where ``build(theta)`` rebuilds the model. Any real function ``f`` of the model then gets the
+first-order (delta-method) covariance ``J P J^T`` with ``J = df/dtheta`` taken by central
+differences along the eigenvectors of ``P`` (only the directions that ``P`` spans matter, so the
+unidentifiable directions of an over-parameterised model are never stepped along), or a Monte
+Carlo estimate from models drawn from ``N(theta, P)``. Poles use the analytic first-order
+perturbation ``d lambda = w^H dA v / (w^H v)`` (left and right eigenvectors) where the model
+has an ``A`` matrix; a pole that lies too close to another pole for a first-order expansion to
+hold gets ``NaN`` and an :class:`UncertaintyWarning` rather than a misleading small number.
+
+Examples
+--------
+>>> import numpy as np, sysid
+>>> from sysid.models.uncertainty import ParameterUncertainty
+>>> unc = ParameterUncertainty([0.5, 1.0], np.diag([1e-4, 4e-4]),
+...                            lambda t: sysid.StateSpaceModel([[t[0]]], [[t[1]]], [[1.0]]),
+...                            names=["a", "b"])
+>>> np.round(unc.std, 6)
+array([0.01, 0.02])
+>>> g = unc.propagate(lambda m: m.dcgain().ravel())   # b / (1 - a)
+>>> round(float(g.value[0]), 6), round(float(g.std[0]), 4)
+(2.0, 0.0566)
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Sequence
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ..errors import DataError
+
+__all__ = ["ParameterUncertainty", "Propagation", "UncertaintyWarning"]
+
+_METHODS = ("linear", "monte-carlo")
+
+
+class UncertaintyWarning(UserWarning):
+    """A standard deviation could not be computed reliably (reported as NaN)."""
+
+
+class Propagation(NamedTuple):
+    """Value of a function of the model and its covariance; unpacks as ``value, covariance``.
+
+    Attributes
+    ----------
+    value : ndarray
+        ``fn(model)`` at the estimate (its own shape).
+    covariance : ndarray
+        Covariance of ``value.ravel()``, shape ``(k, k)``.
+    """
+
+    value: np.ndarray
+    covariance: np.ndarray
+
+    @property
+    def std(self) -> np.ndarray:
+        """Standard deviations, shaped like :attr:`value`."""
+        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None)).reshape(
+            np.shape(self.value))
+
+
+def _real_vector(x: Any, what: str = "fn(model)") -> np.ndarray:
+    a = np.asarray(x)
+    if np.iscomplexobj(a):
+        raise DataError(f"{what} must be real: propagate its real and imaginary parts (or "
+                        "abs and angle) as separate entries")
+    return a.astype(float)
+
+
+class ParameterUncertainty:
+    """Covariance of the free parameters of an estimated model, and its propagation.
+
+    Parameters
+    ----------
+    theta : array_like, shape (p,)
+        Free parameters at the estimate.
+    covariance : array_like, shape (p, p)
+        Their covariance (symmetric positive semi-definite; it may be singular, as for an
+        over-parameterised state-space model whose similarity directions are not identifiable).
+    build : callable
+        ``build(theta) -> model`` of the same family (``StateSpaceModel``, ``PolynomialModel``,
+        ...).
+    names : sequence of str, optional
+        One name per parameter (default ``theta0, theta1, ...``).
+    dof : int, optional
+        Number of identifiable directions (default: the numerical rank of ``covariance``).
+    method : str
+        How the covariance was obtained (``"gauss-newton"``, ``"least-squares"``,
+        ``"bootstrap"``, ``"instrumental-variable"``, ...); informational.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> unc = ParameterUncertainty([0.9], [[1e-4]],
+    ...                            lambda t: sysid.StateSpaceModel([[t[0]]], [[1.0]], [[1.0]]))
+    >>> unc
+    ParameterUncertainty(1 parameter, rank 1, gauss-newton)
+    >>> p = unc.propagate(lambda m: m.poles().real)
+    >>> round(float(p.std[0]), 6)
+    0.01
+    """
+
+    def __init__(
+        self,
+        theta: Any,
+        covariance: Any,
+        build: Callable[[np.ndarray], Any],
+        *,
+        names: Sequence[str] | None = None,
+        dof: int | None = None,
+        method: str = "gauss-newton",
+    ) -> None:
+        th = np.asarray(theta, dtype=float).ravel()
+        P = np.asarray(covariance, dtype=float)
+        p = th.size
+        if P.shape != (p, p):
+            raise DataError(f"covariance has shape {P.shape} but theta has {p} entries: "
+                            f"it must be ({p}, {p})")
+        if not (np.all(np.isfinite(th)) and np.all(np.isfinite(P))):
+            raise DataError("theta and covariance must be finite")
+        if not callable(build):
+            raise DataError("build must be a callable build(theta) -> model")
+        P = 0.5 * (P + P.T)
+        w, V = np.linalg.eigh(P) if p else (np.zeros(0), np.zeros((0, 0)))
+        top = float(w.max()) if w.size else 0.0
+        if w.size and w.min() < -1e-8 * max(top, 1e-300):
+            raise DataError("covariance is not positive semi-definite (smallest eigenvalue "
+                            f"{w.min():.3g}, largest {top:.3g})")
+        keep = w > 1e-13 * top if top > 0 else np.zeros(p, bool)
+        self.theta = th
+        self.covariance = P
+        self.build = build
+        self.names = list(names) if names is not None else [f"theta{i}" for i in range(p)]
+        if len(self.names) != p:
+            raise DataError(f"names has {len(self.names)} entries but theta has {p}")
+        self._w, self._V = w[keep], V[:, keep]
+        self.dof = int(keep.sum()) if dof is None else int(dof)
+        self.method = str(method)
+        self._cache: tuple[list[float], list[Any], list[Any]] | None = None
+
+    # -- parameters ---------------------------------------------------------------------
+    @property
+    def n_parameters(self) -> int:
+        """Number of free parameters p."""
+        return self.theta.size
+
+    @property
+    def std(self) -> np.ndarray:
+        """Standard deviation of each free parameter, shape ``(p,)``."""
+        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+
+    @property
+    def correlation(self) -> np.ndarray:
+        """Correlation matrix of the parameters (NaN rows/columns where a std is zero)."""
+        s = self.std
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out = self.covariance / np.outer(s, s)
+        out[np.outer(s, s) == 0] = np.nan
+        return out
+
+    @property
+    def model(self) -> Any:
+        """The model at the estimate, ``build(theta)``."""
+        return self.build(self.theta)
+
+    def sample_parameters(self, n: int, rng: Any = None) -> np.ndarray:
+        """``n`` parameter vectors drawn from ``N(theta, covariance)``, shape ``(n, p)``."""
+        if int(n) < 1:
+            raise DataError(f"n must be a positive number of samples, got {n}")
+        rng = np.random.default_rng(rng)
+        z = rng.standard_normal((int(n), self._w.size))
+        return self.theta + (z * np.sqrt(self._w)) @ self._V.T
+
+    def sample(self, n: int, rng: Any = None) -> list[Any]:
+        """``n`` models whose parameters are drawn from the Gaussian approximation.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> unc = ParameterUncertainty([0.5], [[0.01]],
+        ...     lambda t: sysid.StateSpaceModel([[t[0]]], [[1.0]], [[1.0]]))
+        >>> len(unc.sample(3, rng=0))
+        3
+        """
+        return [self.build(t) for t in self.sample_parameters(n, rng)]
+
+    # -- first-order machinery ----------------------------------------------------------
+    def _perturbed(self, step: float) -> tuple[list[float], list[Any], list[Any]]:
+        """Models at ``theta +- h_k v_k`` along each identifiable eigenvector ``v_k`` (cached:
+        every first-order quantity reuses them)."""
+        if self._cache is not None and self._cache[0] and self._step == step:
+            return self._cache
+        scale = max(1.0, float(np.max(np.abs(self.theta)))) if self.theta.size else 1.0
+        hs, plus, minus = [], [], []
+        for lam, v in zip(self._w, self._V.T):
+            h = max(step * np.sqrt(lam), 1e-7 * scale)
+            hs.append(h)
+            plus.append(self.build(self.theta + h * v))
+            minus.append(self.build(self.theta - h * v))
+        self._cache, self._step = (hs, plus, minus), step
+        return self._cache
+
+    def scaled_jacobian(self, fn: Callable[[Any], Any], *, step: float = 1e-3
+                        ) -> tuple[np.ndarray, np.ndarray]:
+        """``fn(model)`` (flattened) and ``G`` with ``G G^T`` its first-order covariance.
+
+        ``G[:, k] = d fn / d theta . v_k sqrt(lambda_k)`` for the eigenpairs ``(lambda_k, v_k)``
+        of the covariance (central differences with steps ``step * sqrt(lambda_k)``). ``fn``
+        may return complex values (then ``G`` is complex).
+        """
+        value = np.asarray(fn(self.build(self.theta)))
+        flat = value.ravel()
+        hs, plus, minus = self._perturbed(step)
+        G = np.zeros((flat.size, len(hs)), dtype=complex if np.iscomplexobj(flat) else float)
+        for k, (h, mp, mm) in enumerate(zip(hs, plus, minus)):
+            d = (np.asarray(fn(mp)).ravel() - np.asarray(fn(mm)).ravel()) / (2 * h)
+            G[:, k] = d * np.sqrt(self._w[k])
+        return value, G
+
+    def jacobian(self, fn: Callable[[Any], Any], *, step: float = 1e-3) -> np.ndarray:
+        """``d fn(model) / d theta``, shape ``(k, p)``, in the directions the covariance spans
+        (components along unidentifiable directions are zero)."""
+        _, G = self.scaled_jacobian(fn, step=step)
+        with np.errstate(divide="ignore"):
+            return (G / np.sqrt(self._w)) @ self._V.T
+
+    def propagate(
+        self,
+        fn: Callable[[Any], Any],
+        method: str = "linear",
+        *,
+        n: int = 1000,
+        rng: Any = None,
+        jacobian: Any = None,
+        step: float = 1e-3,
+    ) -> Propagation:
+        """Value of a real function of the model and its covariance.
+
+        Parameters
+        ----------
+        fn : callable
+            ``fn(model) -> array`` of real numbers.
+        method : {"linear", "monte-carlo"}
+            First order ``J P J^T`` (default), or the sample covariance of ``fn`` over ``n``
+            models drawn from ``N(theta, P)``.
+        n : int
+            Monte Carlo samples.
+        rng : seed or numpy Generator, optional
+        jacobian : array_like or callable, optional
+            Analytic ``d fn / d theta`` (``(k, p)``, or ``jacobian(theta)`` returning it) instead
+            of central differences.
+        step : float
+            Difference step in standard deviations along each eigen-direction.
+
+        Returns
+        -------
+        Propagation
+            ``(value, covariance)`` with ``.std``.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> unc = ParameterUncertainty([0.5], [[1e-4]],
+        ...     lambda t: sysid.StateSpaceModel([[t[0]]], [[1.0]], [[1.0]]))
+        >>> lin = unc.propagate(lambda m: m.dcgain().ravel())
+        >>> mc = unc.propagate(lambda m: m.dcgain().ravel(), "monte-carlo", n=4000, rng=1)
+        >>> round(float(lin.std[0]), 3), bool(abs(mc.std[0] / lin.std[0] - 1) < 0.05)
+        (0.04, True)
+        """
+        if method not in _METHODS:
+            raise DataError(f"method must be 'linear' or 'monte-carlo', got {method!r}")
+        value = _real_vector(fn(self.build(self.theta)))
+        if method == "monte-carlo":
+            vals = np.array([_real_vector(fn(m)).ravel() for m in self.sample(n, rng)])
+            cov = np.atleast_2d(np.cov(vals, rowvar=False)) if len(vals) > 1 else \
+                np.zeros((value.size, value.size))
+            return Propagation(value, cov.reshape(value.size, value.size))
+        if jacobian is not None:
+            J = jacobian(self.theta) if callable(jacobian) else jacobian
+            J = np.asarray(J, dtype=float).reshape(value.size, self.theta.size)
+            return Propagation(value, J @ self.covariance @ J.T)
+        _, G = self.scaled_jacobian(lambda m: _real_vector(fn(m)), step=step)
+        return Propagation(value, G @ G.T)
+
+    # -- reporting ----------------------------------------------------------------------
+    def to_pandas(self) -> Any:
+        """Parameters, std and relative std as a :class:`pandas.DataFrame` (index: names)."""
+        import pandas as pd
+
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rel = self.std / np.abs(self.theta)
+        return pd.DataFrame({"value": self.theta, "std": self.std, "relative std": rel},
+                            index=pd.Index(self.names, name="parameter"))
+
+    def summary(self, max_rows: int = 40) -> str:
+        """A text table of the parameters with their standard deviations."""
+        lines = [repr(self), f"{'parameter':>14} {'value':>12} {'std':>11}"]
+        for name, v, s in list(zip(self.names, self.theta, self.std))[:max_rows]:
+            lines.append(f"{name:>14} {v:12.6g} {s:11.4g}")
+        if self.theta.size > max_rows:
+            lines.append(f"... {self.theta.size - max_rows} more (to_pandas() has all)")
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        p = self.theta.size
+        return (f"ParameterUncertainty({p} parameter{'s' if p != 1 else ''}, rank {self.dof}, "
+                f"{self.method})")
+
+
+# -- model-level quantities (shared by every model family) ------------------------------
+def require(model: Any) -> ParameterUncertainty:
+    """The model's :class:`ParameterUncertainty`, or a clear error when it has none."""
+    unc = getattr(model, "uncertainty", None)
+    if unc is None:
+        raise DataError(
+            "this model carries no parameter uncertainty: estimate it with sysid.pem/ssest, a "
+            "polynomial estimator, or SubspaceEstimator.fit(..., uncertainty='bootstrap')")
+    return unc  # type: ignore[no-any-return]
+
+
+def _match(ref: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """``p`` reordered to match ``ref`` (minimum total distance)."""
+    from scipy.optimize import linear_sum_assignment
+
+    if ref.size != p.size:
+        raise DataError("the number of poles changed between samples; cannot match them")
+    _, col = linear_sum_assignment(np.abs(ref[:, None] - p[None, :]))
+    return p[col]
+
+
+def _complex_std(G: np.ndarray) -> np.ndarray:
+    """std of the real and imaginary parts from a complex scaled Jacobian, as one complex."""
+    return (np.sqrt(np.sum(G.real**2, axis=1)) + 1j * np.sqrt(np.sum(G.imag**2, axis=1)))
+
+
+def pole_jacobian(model: Any, *, step: float = 1e-3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Poles, their complex scaled Jacobian ``G`` (``G G^H``-type covariance) and a mask of the
+    poles for which a first-order expansion is not trustworthy.
+
+    State-space models use ``d lambda_i = w_i^H dA v_i / (w_i^H v_i)`` with the derivative of
+    ``A`` along each identifiable direction; other models difference their ``poles()`` and
+    match them to the nominal ones.
+    """
+    unc = require(model)
+    nominal = unc.build(unc.theta)
+    A = getattr(nominal, "A", None)
+    if isinstance(A, np.ndarray) and A.ndim == 2:
+        from scipy.linalg import eig
+
+        lam, W, V = eig(A, left=True, right=True)
+        _, dA = unc.scaled_jacobian(lambda m: m.A, step=step)
+        n = A.shape[0]
+        dA = dA.reshape(n, n, -1)
+        denom = np.einsum("ij,ij->j", W.conj(), V)
+        G = np.einsum("ai,abk,bi->ik", W.conj(), dA, V) / denom[:, None]
+    else:
+        lam = np.asarray(nominal.poles(), dtype=complex)
+        _, G = unc.scaled_jacobian(lambda m: _match(lam, np.asarray(m.poles(), complex)),
+                                   step=step)
+        G = G.astype(complex)
+    sd = np.abs(_complex_std(G))
+    bad = np.zeros(lam.size, bool)
+    for i in range(lam.size):
+        others = np.delete(lam, i)
+        sep = float(np.min(np.abs(others - lam[i]))) if others.size else np.inf
+        # first order holds while the pole's 3-sigma region stays well away from its neighbours
+        bad[i] = sd[i] > 0 and 6.0 * sd[i] >= sep
+    return lam.astype(complex), G, bad
+
+
+def pole_std(model: Any, method: str = "linear", *, n: int = 1000, rng: Any = None
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """Poles and their std (complex: ``sd.real`` of the real parts, ``sd.imag`` of the
+    imaginary parts); see :meth:`StateSpaceModel.poles`."""
+    if method not in _METHODS:
+        raise DataError(f"method must be 'linear' or 'monte-carlo', got {method!r}")
+    if method == "monte-carlo":
+        unc = require(model)
+        lam = np.asarray(unc.build(unc.theta).poles(), complex)
+        draws = np.array([_match(lam, np.asarray(m.poles(), complex))
+                          for m in unc.sample(n, rng)])
+        sd = draws.real.std(axis=0, ddof=1) + 1j * draws.imag.std(axis=0, ddof=1)
+        return lam, sd
+    lam, G, bad = pole_jacobian(model)
+    sd = _complex_std(G)
+    if bad.any():
+        warnings.warn(
+            f"{int(bad.sum())} pole(s) lie too close to another pole for a first-order standard "
+            "deviation (near-repeated poles); reported as NaN. Use poles(std=True, "
+            "method='monte-carlo') for a sampling estimate.", UncertaintyWarning, stacklevel=3)
+        sd = np.where(bad, np.nan + 1j * np.nan, sd)
+    return lam, sd
+
+
+def damping_std(model: Any, dt: float) -> dict[str, np.ndarray]:
+    """Poles, ``s = log(z)/dt``, natural frequency (rad/s, Hz), damping and their std (first
+    order, through the pole Jacobian)."""
+    lam, G, bad = pole_jacobian(model)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.where(lam != 0, np.log(np.where(lam != 0, lam, 1.0)) / dt, -np.inf)
+        Gs = G / (lam[:, None] * dt)
+        wn = np.abs(s)
+        dwn = (np.conj(s)[:, None] * Gs).real / wn[:, None]
+        dzeta = -Gs.real / wn[:, None] + (s.real / wn**2)[:, None] * dwn
+        wn_sd = np.sqrt(np.sum(dwn**2, axis=1))
+        zeta_sd = np.sqrt(np.sum(dzeta**2, axis=1))
+    bad = bad | ~np.isfinite(s) | (wn == 0)
+    if bad.any():
+        warnings.warn(f"{int(bad.sum())} pole(s) near another pole or at z = 0: their damping and "
+                      "frequency std are reported as NaN", UncertaintyWarning, stacklevel=3)
+    nan = np.full(lam.size, np.nan)
+    return {
+        "poles": lam, "s": s,
+        "pole_std": np.where(bad, np.nan + 1j * np.nan, _complex_std(G)),
+        "wn_std": np.where(bad, nan, wn_sd), "wn_hz_std": np.where(bad, nan, wn_sd / (2 * np.pi)),
+        "zeta_std": np.where(bad, nan, zeta_sd),
+    }
+
+
+def freqresp_std(model: Any, omega: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Frequency response and its std (complex: real/imaginary parts), first order."""
+    H, G = freq_jacobian(model, omega)
+    return H, _complex_std(G).reshape(H.shape)
+
+
+def complex_std(model: Any, fn: Callable[[Any], Any]) -> tuple[np.ndarray, np.ndarray]:
+    """A complex (or real) function of the model and its std (complex: real/imag parts)."""
+    unc = require(model)
+    value, G = unc.scaled_jacobian(fn)
+    if np.iscomplexobj(G):
+        sd = _complex_std(G)
+    else:
+        sd = np.sqrt(np.sum(G**2, axis=1))
+    return value, sd.reshape(np.shape(value))
+
+
+def _is_statespace(m: Any) -> bool:
+    return all(isinstance(getattr(m, k, None), np.ndarray) for k in "ABCD") and \
+        getattr(m, "dt", None) is not None
+
+
+def freq_jacobian(model: Any, omega: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Frequency response ``H`` and its complex scaled Jacobian ``G`` (rows: ``H.ravel()``).
+
+    For state-space models analytically, ``dH = Y dA X + dC X + Y dB + dD`` with
+    ``X = (zI - A)^-1 B`` and ``Y = C (zI - A)^-1`` (one solve per frequency, whatever the
+    number of parameters); otherwise by differencing ``freqresp``.
+    """
+    unc = require(model)
+    w = np.atleast_1d(np.asarray(omega, dtype=float))
+    nominal = unc.build(unc.theta)
+    if not _is_statespace(nominal):
+        H, G = unc.scaled_jacobian(lambda m: m.freqresp(w))
+        return H, G.astype(complex)
+    A, B, C = nominal.A, nominal.B, nominal.C
+    n, m, l = A.shape[0], B.shape[1], C.shape[0]
+    _, J = unc.scaled_jacobian(lambda mm: np.concatenate(
+        [mm.A.ravel(), mm.B.ravel(), mm.C.ravel(), mm.D.ravel()]))
+    r = J.shape[1]
+    cuts = np.cumsum([n * n, n * m, l * n])
+    dA, dB, dC, dD = (x.T.reshape((r,) + shape) for x, shape in zip(
+        np.split(J, cuts), ((n, n), (n, m), (l, n), (l, m))))
+    H = nominal.freqresp(w)
+    G = np.empty((w.size, l, m, r), dtype=complex)
+    eye = np.eye(n)
+    for i, z in enumerate(np.exp(1j * w * nominal.dt)):
+        if n:
+            M = z * eye - A
+            X = np.linalg.solve(M, B)
+            Y = np.linalg.solve(M.T, C.T).T
+            d = Y @ dA @ X + dC @ X + Y @ dB + dD
+        else:
+            d = dD.astype(complex)
+        G[i] = np.moveaxis(d, 0, -1)
+    return H, G.reshape(-1, r)
+
+
+def bode_std(model: Any, omega: Any) -> dict[str, np.ndarray]:
+    """Frequency response with the std of ``log|H|`` and of the phase (rad), first order:
+    ``d log H = dH / H``."""
+    H, G = freq_jacobian(model, omega)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        R = G / H.ravel()[:, None]
+    return {"H": H, "log_mag_std": np.sqrt(np.sum(R.real**2, axis=1)).reshape(H.shape),
+            "phase_std": np.sqrt(np.sum(R.imag**2, axis=1)).reshape(H.shape)}

@@ -1,0 +1,463 @@
+"""Parameter uncertainty (sysid.models.uncertainty) and its propagation: unit checks,
+invariances, and Monte Carlo calibration for PEM, the subspace bootstrap and polynomial models."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import signal
+
+import sysid
+from sysid import _sysid
+from sysid.errors import DataError
+from sysid.models.uncertainty import ParameterUncertainty, UncertaintyWarning
+
+
+def _truth() -> sysid.StateSpaceModel:
+    A = np.array([[0.8, 0.3, 0.0, 0.0], [-0.3, 0.8, 0.0, 0.0],
+                  [0.0, 0.0, 0.5, 0.0], [0.0, 0.0, 0.0, -0.4]])
+    B = np.array([[1.0, 0.0], [0.5, 1.0], [0.0, 1.0], [1.0, -0.5]])
+    C = np.array([[1.0, 0.0, 1.0, 0.5], [0.0, 1.0, -0.5, 1.0]])
+    K = np.array([[0.3, 0.0], [0.0, 0.2], [0.1, 0.1], [0.0, 0.2]])
+    return sysid.StateSpaceModel(A, B, C, np.zeros((2, 2)), K)
+
+
+def _simulate(true, u, e):
+    """Innovation form x+ = A x + B u + K e, y = C x + D u + e: process and measurement noise."""
+    Ba = np.hstack([true.B, true.K])
+    Da = np.hstack([true.D, np.eye(true.noutputs)])
+    return _sysid.simulate(true.A, Ba, true.C, Da, np.hstack([u, e]), None)
+
+
+def _first_order(theta=(0.5, 1.0), var=(1e-4, 4e-4)):
+    return ParameterUncertainty(
+        list(theta), np.diag(var),
+        lambda t: sysid.StateSpaceModel([[t[0]]], [[t[1]]], [[1.0]], dt=0.1),
+        names=["a", "b"])
+
+
+# -- the class ---------------------------------------------------------------------------
+def test_std_correlation_summary_and_repr():
+    P = np.array([[4e-4, 1e-4], [1e-4, 1e-4]])
+    unc = ParameterUncertainty([0.5, 1.0], P, lambda t: None, names=["a", "b"], method="x")
+    np.testing.assert_allclose(unc.std, [0.02, 0.01])
+    np.testing.assert_allclose(unc.correlation, [[1, 0.5], [0.5, 1]])
+    assert repr(unc) == "ParameterUncertainty(2 parameters, rank 2, x)"
+    assert "a" in unc.summary() and "0.02" in unc.summary()
+    df = unc.to_pandas()
+    assert list(df.index) == ["a", "b"] and np.allclose(df["std"], [0.02, 0.01])
+
+
+def test_bad_input_is_named():
+    build = lambda t: None  # noqa: E731
+    with pytest.raises(DataError, match="shape"):
+        ParameterUncertainty([1.0, 2.0], np.eye(3), build)
+    with pytest.raises(DataError, match="positive semi-definite"):
+        ParameterUncertainty([1.0, 2.0], np.diag([1.0, -1.0]), build)
+    with pytest.raises(DataError, match="finite"):
+        ParameterUncertainty([np.nan], [[1.0]], build)
+    with pytest.raises(DataError, match="names"):
+        ParameterUncertainty([1.0], [[1.0]], build, names=["a", "b"])
+    with pytest.raises(DataError, match="method"):
+        _first_order().propagate(lambda m: m.dcgain(), method="exact")
+    with pytest.raises(DataError, match="real"):
+        _first_order().propagate(lambda m: m.poles())
+    with pytest.raises(DataError, match="no parameter uncertainty"):
+        sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]).poles(std=True)
+
+
+def test_linear_and_monte_carlo_agree_on_a_smooth_function():
+    unc = _first_order()
+    f = lambda m: np.r_[m.dcgain().ravel(), np.abs(m.freqresp([1.0, 5.0])[:, 0, 0])]  # noqa
+    lin = unc.propagate(f)
+    mc = unc.propagate(f, "monte-carlo", n=4000, rng=3)
+    np.testing.assert_allclose(mc.std, lin.std, rtol=0.05)
+    # the analytic Jacobian of the gain b / (1 - a) gives the same first order
+    J = lambda t: np.array([[t[1] / (1 - t[0]) ** 2, 1 / (1 - t[0])]])  # noqa: E731
+    an = unc.propagate(lambda m: m.dcgain().ravel(), jacobian=J)
+    np.testing.assert_allclose(an.std, lin.std[:1], rtol=1e-6)
+    # the option changes the result: Monte Carlo is a sampling estimate, not the linearisation
+    assert not np.allclose(mc.covariance, lin.covariance, rtol=1e-6)
+    # a large difference step sees the curvature of b / (1 - a): another (worse) number
+    wide = unc.propagate(f, step=3.0)
+    assert not np.allclose(wide.std, lin.std, rtol=1e-4)
+    np.testing.assert_allclose(unc.propagate(f, step=1e-4).std, lin.std, rtol=1e-6)
+
+
+def test_sample_has_the_covariance():
+    P = np.array([[4e-4, 1e-4], [1e-4, 1e-4]])
+    unc = ParameterUncertainty([0.5, 1.0], P, lambda t: t)
+    draws = np.array(unc.sample(20000, rng=0))
+    np.testing.assert_allclose(np.cov(draws, rowvar=False), P, rtol=0.05, atol=5e-6)
+    a, b = unc.sample(2, rng=5), unc.sample(2, rng=5)
+    assert np.array_equal(a, b)
+
+
+def test_singular_covariance_only_steps_identifiable_directions():
+    # theta = (a1, a2) with A = a1 + a2: only the sum is identified
+    v = np.array([1.0, 1.0]) / np.sqrt(2)
+    P = 2e-4 * np.outer(v, v)
+    unc = ParameterUncertainty([0.2, 0.3], P,
+                               lambda t: sysid.StateSpaceModel([[t[0] + t[1]]], [[1.0]], [[1.0]]))
+    assert unc.dof == 1
+    m = unc.model
+    m.uncertainty = unc
+    p, sd = m.poles(std=True)
+    np.testing.assert_allclose(sd.real, [0.02], rtol=1e-6)  # var(a1 + a2) = 2 * 2e-4
+    J = unc.jacobian(lambda mm: mm.poles().real)
+    np.testing.assert_allclose(J, [[1.0, 1.0]], atol=1e-6)
+    # a function of theta0 alone: only its component along the identifiable sum is seen
+    J0 = ParameterUncertainty([0.2, 0.3], P, lambda t: t).jacobian(lambda t: t[:1])
+    np.testing.assert_allclose(J0, [[0.5, 0.5]], atol=1e-6)
+
+
+# -- state-space quantities --------------------------------------------------------------
+def _model_with_uncertainty(seed=0, scale=1e-5):
+    true = _truth()
+    rng = np.random.default_rng(seed)
+    theta = np.concatenate([true.A.ravel(), true.B.ravel(), true.C.ravel()])
+    L = rng.standard_normal((theta.size, theta.size))
+    P = scale * (L @ L.T) / theta.size
+
+    def build(t):
+        return sysid.StateSpaceModel(t[:16].reshape(4, 4), t[16:24].reshape(4, 2),
+                                     t[24:32].reshape(2, 4), np.zeros((2, 2)), dt=0.1)
+    m = build(theta)
+    m.uncertainty = ParameterUncertainty(theta, P, build)
+    return m
+
+
+def test_pole_std_analytic_matches_differenced_eigenvalues():
+    m = _model_with_uncertainty()
+    p, sd = m.poles(std=True)
+    # the same quantity by central differences of matched eigenvalues (generic route)
+    ref = np.sort_complex(p)
+
+    def parts(mm):
+        q = np.sort_complex(mm.poles())
+        return np.r_[q.real, q.imag]
+    prop = m.uncertainty.propagate(parts)
+    order = [int(np.argmin(np.abs(ref - z))) for z in p]
+    np.testing.assert_allclose(sd.real, prop.std[:4][order], rtol=1e-5)
+    np.testing.assert_allclose(sd.imag, prop.std[4:][order], rtol=1e-5, atol=1e-12)
+    mc_p, mc_sd = m.poles(std=True, method="monte-carlo")
+    np.testing.assert_allclose(mc_sd.real, sd.real, rtol=0.1)
+
+
+def test_markov_dcgain_freqresp_std_and_model_std():
+    m = _model_with_uncertainty()
+    unc = m.uncertainty
+    val, sd = m.markov(4, std=True)
+    assert val.shape == sd.shape == (4, 2, 2) and np.all(sd[0] == 0)  # D is not a parameter
+    np.testing.assert_allclose(sd[1].ravel(),
+                               unc.propagate(lambda mm: mm.markov(2)[1].ravel()).std, rtol=1e-6)
+    g, gsd = m.dcgain(std=True)
+    np.testing.assert_allclose(g, m.dcgain())
+    assert np.all(gsd > 0)
+    H, Hsd = m.freqresp([0.0, 3.0], std=True)
+    # the analytic state-space derivative equals differencing the frequency response
+    _, G = unc.scaled_jacobian(lambda mm: mm.freqresp([0.0, 3.0]))
+    num = np.sqrt(np.sum(G.real**2, 1)) + 1j * np.sqrt(np.sum(G.imag**2, 1))
+    np.testing.assert_allclose(Hsd.ravel(), num, rtol=1e-6, atol=1e-14)
+    np.testing.assert_allclose(Hsd[0].real, gsd, rtol=1e-6)  # H(0) is the DC gain
+    np.testing.assert_allclose(Hsd[0].imag, 0, atol=1e-12)
+    std = m.std
+    np.testing.assert_allclose(std["A"].ravel(), unc.std[:16], rtol=1e-6)
+    np.testing.assert_allclose(std["C"].ravel(), unc.std[24:], rtol=1e-6)
+    assert np.all(std["D"] == 0) and "K" not in std
+    assert m.covariance is unc.covariance
+
+
+def test_damping_table_std_columns_match_propagation():
+    m = _model_with_uncertainty(scale=1e-6)
+    table = sysid.damp(m, std=True)
+
+    def zeta_wn(mm):
+        t = sysid.damp(mm)
+        return np.r_[t.zeta, t.wn_hz]
+    prop = m.uncertainty.propagate(zeta_wn)
+    np.testing.assert_allclose(table.zeta_std, prop.std[:4], rtol=1e-4, atol=1e-12)
+    np.testing.assert_allclose(table.wn_hz_std, prop.std[4:], rtol=1e-4)
+    df = table.to_pandas()
+    assert {"std wn [Hz]", "std damping", "std Re(pole)"} <= set(df.columns)
+    assert "std damp" in repr(table)
+    assert sysid.damp(m).zeta_std is None
+
+
+def test_near_repeated_poles_are_reported_honestly():
+    def build(t):
+        return sysid.StateSpaceModel([[t[0], 0.0], [0.0, t[1]]], [[1.0], [1.0]], [[1.0, 1.0]])
+    m = build([0.5, 0.5 + 1e-4])
+    m.uncertainty = ParameterUncertainty([0.5, 0.5 + 1e-4], 1e-4 * np.eye(2), build)
+    with pytest.warns(UncertaintyWarning, match="too close"):
+        p, sd = m.poles(std=True)
+    assert np.all(np.isnan(sd.real))
+    with pytest.warns(UncertaintyWarning):
+        assert np.all(np.isnan(sysid.damp(m, std=True).zeta_std))
+    # sampling is still available and gives a finite spread of the right size
+    _, mc = m.poles(std=True, method="monte-carlo", )
+    assert np.all(np.isfinite(mc.real)) and np.all(mc.real > 0.003)
+    # well separated: no warning
+    far = build([0.5, -0.5])
+    far.uncertainty = ParameterUncertainty([0.5, -0.5], 1e-4 * np.eye(2), build)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        np.testing.assert_allclose(far.poles(std=True)[1].real, [0.01, 0.01])
+
+
+@settings(max_examples=20, deadline=None)
+@given(st.integers(0, 10_000))
+def test_std_invariant_under_similarity_and_reparameterisation(seed):
+    """The state basis of build() and a linear change of parameters theta = M phi change
+    neither the pole nor the frequency-response std."""
+    m = _model_with_uncertainty(seed=seed % 7)
+    unc = m.uncertainty
+    rng = np.random.default_rng(seed)
+    T = np.eye(4) + 0.3 * rng.standard_normal((4, 4))
+    Ti = np.linalg.inv(T)
+    M = np.eye(unc.theta.size) + 0.2 * rng.standard_normal((unc.theta.size,) * 2)
+    Mi = np.linalg.inv(M)
+
+    def build2(phi):
+        mm = unc.build(M @ phi)
+        return sysid.StateSpaceModel(T @ mm.A @ Ti, T @ mm.B, mm.C @ Ti, mm.D, dt=mm.dt)
+    m2 = build2(Mi @ unc.theta)
+    m2.uncertainty = ParameterUncertainty(Mi @ unc.theta, Mi @ unc.covariance @ Mi.T, build2)
+    p1, s1 = m.poles(std=True)
+    p2, s2 = m2.poles(std=True)
+    o = [int(np.argmin(np.abs(p2 - z))) for z in p1]
+    np.testing.assert_allclose(s2[o].real, s1.real, rtol=1e-4)
+    np.testing.assert_allclose(s2[o].imag, s1.imag, rtol=1e-4, atol=1e-10)
+    w = [0.2, 5.0, 20.0]
+    np.testing.assert_allclose(m2.freqresp(w, std=True)[1], m.freqresp(w, std=True)[1],
+                               rtol=1e-4)
+
+
+# -- plots and the report ----------------------------------------------------------------
+def test_bode_and_step_bands():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from sysid.plot.model import plot_bode
+
+    m = _model_with_uncertainty()
+    fig = plot_bode(m, np.linspace(0.1, 30, 50), confidence=0.95)
+    assert sum(len(ax.collections) for ax in fig.axes) == 8  # magnitude and phase, 2 x 2
+    plt.close(fig)
+    fig = plot_bode(m, np.linspace(0.1, 30, 50))
+    assert sum(len(ax.collections) for ax in fig.axes) == 0
+    plt.close(fig)
+    resp = sysid.step(m, 30, std=True)
+    assert resp.std.shape == resp.y.shape and resp.std[0].max() == 0 and resp.std[5].min() > 0
+    fig = resp.plot()
+    assert sum(len(ax.collections) for ax in fig.axes) == 4
+    plt.close(fig)
+
+
+# -- Monte Carlo calibration -------------------------------------------------------------
+_REF = np.array([0.8 + 0.3j, 0.5, -0.4])
+_W = np.array([0.1, 0.4, 0.9, 1.6, 2.5])
+
+
+def _pole_parts(p, sd):
+    """Real and |imag| parts of the poles nearest the reference, with their std."""
+    v, s = [], []
+    for r in _REF:
+        i = int(np.argmin(np.abs(p - r)))
+        if r.imag > 0:
+            v += [p[i].real, abs(p[i].imag)]
+            s += [sd[i].real, sd[i].imag]
+        else:
+            v += [p[i].real]
+            s += [sd[i].real]
+    return v, s
+
+
+def _check(values, stds, covered, label=""):
+    sample = np.std(values, axis=0, ddof=1)
+    predicted = np.sqrt(np.mean(np.square(stds), axis=0))
+    ratio = predicted / sample
+    assert np.all(np.abs(ratio - 1) < 0.25), (label, ratio)
+    coverage = np.mean(covered, axis=0)
+    print(label, "std ratio", np.round(ratio, 3), "coverage", coverage)  # shown with pytest -s
+    assert np.all((coverage >= 0.90) & (coverage <= 0.98)), (label, coverage)
+    return ratio, coverage
+
+
+def test_monte_carlo_pem_and_subspace_bootstrap():
+    """200 records of a 2-input 2-output order-4 system with process and measurement noise:
+    the std of each pole (real and imaginary parts) within 25 % of the sample std, and the
+    95 % intervals of the frequency response (Re H11, Im H22 at 5 frequencies) cover the truth
+    in 90-98 % of runs, for PEM (Gauss-Newton covariance) and the subspace bootstrap."""
+    true = _truth()
+    G0 = true.freqresp(_W)
+    out: dict[str, tuple[list, list, list]] = {"pem": ([], [], []), "bootstrap": ([], [], [])}
+    for seed in range(200):
+        rng = np.random.default_rng(2000 + seed)
+        u = rng.standard_normal((600, 2))
+        data = sysid.IOData(u=u, y=_simulate(true, u, 0.2 * rng.standard_normal((600, 2))))
+        boot = sysid.SubspaceEstimator(data, horizon=6).fit(
+            4, feedthrough=False, uncertainty="bootstrap", n_boot=30, rng=seed)
+        pem = sysid.pem(data, true, tol=1e-8)
+        for key, m in (("pem", pem), ("bootstrap", boot)):
+            v, s = _pole_parts(*m.poles(std=True))
+            H, sd = m.freqresp(_W, std=True)
+            out[key][0].append(v)
+            out[key][1].append(s)
+            out[key][2].append(np.r_[
+                np.abs(H[:, 0, 0].real - G0[:, 0, 0].real) <= 1.96 * sd[:, 0, 0].real,
+                np.abs(H[:, 1, 1].imag - G0[:, 1, 1].imag) <= 1.96 * sd[:, 1, 1].imag])
+    for key, (v, s, c) in out.items():
+        _check(v, s, c, key)
+
+
+def test_monte_carlo_armax_and_oe_coefficients():
+    """ARMAX(1,1,1) and OE(1,1): the coefficient std (``m.std``) within 25 % of the sample
+    std over 200 records, and 95 % intervals covering the truth in 90-98 % of runs."""
+    truth = {"armax": [-0.7, 0.8, 0.5], "oe": [0.8, -0.7]}
+    out: dict[str, tuple[list, list, list]] = {k: ([], [], []) for k in truth}
+    for run in range(200):
+        rng = np.random.default_rng(7000 + run)
+        u = rng.standard_normal(400)
+        e = 0.3 * rng.standard_normal(400)
+        y = signal.lfilter([0.0, 0.8], [1.0, -0.7], u) + signal.lfilter([1.0, 0.5], [1.0, -0.7], e)
+        d = sysid.IOData(u[:, None], y[:, None], 1.0)
+        ma = sysid.armax(d, 1, 1, 1, 1)
+        sa = ma.std
+        yo = signal.lfilter([0.0, 0.8], [1.0, -0.7], u) + e
+        mo = sysid.oe(sysid.IOData(u[:, None], yo[:, None], 1.0), 1, 1, 1)
+        so = mo.std
+        for key, v, s in (
+            ("armax", [ma.a[0][0][0], ma.b[0][0][0], ma.c[0][0]],
+             [sa["a"][0][0][0], sa["b"][0][0][0], sa["c"][0][0]]),
+            ("oe", [mo.b[0][0][0], mo.f[0][0][0]], [so["b"][0][0][0], so["f"][0][0][0]]),
+        ):
+            out[key][0].append(v)
+            out[key][1].append(s)
+            out[key][2].append(np.abs(np.subtract(v, truth[key])) <= 1.96 * np.asarray(s))
+    for key, (v, s, c) in out.items():
+        _check(v, s, c, key)
+
+
+def test_monte_carlo_iv4():
+    """IV4 with coloured equation noise, open loop and closed loop (reference as instrument):
+    its asymptotic covariance is calibrated."""
+    est, sds = [], []
+    for run in range(200):
+        rng = np.random.default_rng(9000 + run)
+        u = rng.standard_normal(600)
+        v = signal.lfilter([1.0], [1.0, -0.9], rng.standard_normal(600))
+        y = signal.lfilter([0.0, 1.0], [1.0, -0.5], u) + 0.3 * v
+        m = sysid.iv4(sysid.IOData(u[:, None], y[:, None], 1.0), 1, 1, 1)
+        est.append([m.a[0][0][0], m.b[0][0][0]])
+        sds.append([m.std["a"][0][0][0], m.std["b"][0][0][0]])
+    covered = np.abs(np.subtract(est, [-0.5, 1.0])) <= 1.96 * np.asarray(sds)
+    _check(est, sds, covered, "iv4")
+    # closed loop u = r - 0.3 y, the reference as instrument
+    est, sds = [], []
+    for run in range(200):
+        rng = np.random.default_rng(11000 + run)
+        r = rng.standard_normal(800)
+        v = 0.3 * signal.lfilter([1.0], [1.0, -0.9], rng.standard_normal(800))
+        x, u, y = np.zeros(800), np.zeros(800), np.zeros(800)
+        for k in range(800):
+            x[k] = 0.5 * x[k - 1] + u[k - 1] if k else 0.0
+            y[k] = x[k] + v[k]
+            u[k] = r[k] - 0.3 * y[k]
+        m = sysid.iv4(sysid.IOData(u[:, None], y[:, None], 1.0), 1, 1, 1, reference=r)
+        est.append([m.a[0][0][0], m.b[0][0][0]])
+        sds.append([m.std["a"][0][0][0], m.std["b"][0][0][0]])
+    covered = np.abs(np.subtract(est, [-0.5, 1.0])) <= 1.96 * np.asarray(sds)
+    _check(est, sds, covered, "iv4 closed loop")
+
+
+# -- polynomial models through the same code ---------------------------------------------
+def test_polynomial_poles_and_freqresp_std():
+    rng = np.random.default_rng(4)
+    u = rng.standard_normal(500)
+    y = signal.lfilter([0.0, 0.8], [1.0, -0.7], u) + 0.3 * rng.standard_normal(500)
+    m = sysid.oe(sysid.IOData(u[:, None], y[:, None], 1.0), 1, 1, 1)
+    p, sd = m.poles(std=True)
+    # the pole of OE(1,1) is -f1: its std is that of f1
+    np.testing.assert_allclose(sd.real, m.std["f"][0][0], rtol=1e-6)
+    H, Hsd = m.freqresp([0.0], std=True)
+    g = m.uncertainty.propagate(lambda mm: mm.freqresp([0.0])[:, 0, 0].real)
+    np.testing.assert_allclose(Hsd[0, 0, 0].real, g.std[0], rtol=1e-6)
+    arx = sysid.arx(sysid.IOData(u[:, None], y[:, None], 1.0), 2, 2, 1)
+    np.testing.assert_allclose(np.r_[arx.std["a"][0][0], arx.std["b"][0][0]],
+                               np.sqrt(np.diag(arx.covariance[0])), rtol=1e-6)
+    assert arx.uncertainty.method == "least-squares"
+
+
+# -- the bootstrap option ----------------------------------------------------------------
+def test_bootstrap_option_changes_the_result_and_checks_input():
+    true = _truth()
+    rng = np.random.default_rng(11)
+    u = rng.standard_normal((500, 2))
+    data = sysid.IOData(u=u, y=_simulate(true, u, 0.2 * rng.standard_normal((500, 2))))
+    est = sysid.SubspaceEstimator(data, horizon=6)
+    plain = est.fit(4, feedthrough=False)
+    assert plain.uncertainty is None and plain.std is None
+    a = est.fit(4, feedthrough=False, uncertainty="bootstrap", n_boot=40, rng=1)
+    b = est.fit(4, feedthrough=False, uncertainty="bootstrap", n_boot=40, rng=1)
+    c = est.fit(4, feedthrough=False, uncertainty="bootstrap", n_boot=80, rng=1)
+    assert a.uncertainty.method == "bootstrap" and a.info["uncertainty"]["n_boot"] == 40
+    np.testing.assert_array_equal(a.covariance, b.covariance)  # seeded: reproducible
+    other = est.fit(4, feedthrough=False, uncertainty="bootstrap", n_boot=40, rng=2)
+    assert not np.allclose(a.covariance, other.covariance)
+    assert not np.allclose(a.covariance, c.covariance)
+    np.testing.assert_array_equal(a.A, plain.A)  # the estimate itself is unchanged
+    with pytest.raises(DataError, match="kalman"):
+        est.fit(4, kalman=False, uncertainty="bootstrap")
+    with pytest.raises(DataError, match="bootstrap"):
+        est.fit(4, uncertainty="asymptotic")
+    with pytest.raises(DataError, match="n_boot"):
+        est.fit(4, uncertainty="bootstrap", n_boot=3)
+
+
+def test_modal_table_std_and_html_report_pole_table(tmp_path):
+    from sysid.cli import main
+
+    m = _model_with_uncertainty(scale=1e-6)
+    modes = sysid.modal_analysis(m, std=True)
+    table = sysid.damp(m, std=True)
+    for z, sd_hz, sd_d in zip(modes.eigenvalues, modes.extra["sd_hz"], modes.extra["sd_damping"]):
+        k = int(np.argmin(np.abs(table.poles - z)))
+        np.testing.assert_allclose([sd_hz, sd_d], [table.wn_hz_std[k], table.zeta_std[k]])
+    assert "SD_HZ" in modes.table() and "sd_hz" not in sysid.modal_analysis(m).extra
+    # the report: a pole table, with std columns when asked for the bootstrap
+    d = np.loadtxt(sysid.datasets.path("dryer"))
+    path = tmp_path / "dryer.csv"
+    np.savetxt(path, d, delimiter=",", header="heater,temperature", comments="")
+    rep = tmp_path / "rep"
+    assert main(["identify", str(path), "--inputs", "heater", "--outputs", "temperature",
+                 "--order", "4", "--horizon", "15", "--detrend", "mean", "--quiet",
+                 "--uncertainty", "bootstrap", "--n-boot", "30", "--report", str(rep)]) == 0
+    html = (rep / "index.html").read_text()
+    assert 'id="poles"' in html and "std damping" in html
+    assert sysid.load_model(rep / "model.json").info["uncertainty"]["n_boot"] == 30
+    from sysid.analysis.report import _pole_table
+
+    plain = _pole_table(sysid.StateSpaceModel(m.A, m.B, m.C, dt=0.1), lambda *a: repr(a))
+    assert "pole" in plain and "std damping" not in plain
+
+
+def test_bootstrap_uses_every_experiment():
+    true = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.8]], [[1.0], [0.5]], [[1.0, 0.0]],
+                                 K=[[0.5], [0.1]])
+    rng = np.random.default_rng(0)
+    us = [rng.standard_normal((400, 1)) for _ in range(3)]
+    ys = [_simulate(true, u, 0.1 * rng.standard_normal((400, 1))) for u in us]
+    one = sysid.SubspaceEstimator(sysid.IOData(u=us[0], y=ys[0]), horizon=5).fit(
+        2, uncertainty="bootstrap", n_boot=60, rng=0)
+    three = sysid.SubspaceEstimator(sysid.IOData(u=us, y=ys), horizon=5).fit(
+        2, uncertainty="bootstrap", n_boot=60, rng=0)
+    s1, s3 = np.abs(one.poles(std=True)[1]), np.abs(three.poles(std=True)[1])
+    # three times the data: about 1/sqrt(3) of the spread
+    assert np.all(s3 < 0.8 * s1) and np.all(s3 > 0.35 * s1), (s1, s3)
