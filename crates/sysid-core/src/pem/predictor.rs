@@ -522,7 +522,9 @@ pub(super) fn modal_form(abar: MatRef<'_, f64>) -> Option<Modal> {
     }
     let check = &ti * abar * &t - &lam;
     let anorm = abar.norm_max().max(1e-300);
-    if !(check.norm_max() <= 1e-11 * anorm * cond) {
+    // NaN in the check counts as a failure
+    let accurate = check.norm_max() <= 1e-11 * anorm * cond;
+    if !accurate {
         return None;
     }
     Some(Modal { t, ti, lam, block })
