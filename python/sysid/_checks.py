@@ -65,6 +65,11 @@ def as_matrix(x: Any, name: str, shape: tuple[int | None, int | None]) -> np.nda
     return arr
 
 
+#: Largest size argument (horizon, order, lag count...) accepted before it is compared with
+#: the data: far beyond any record, small enough that no size computation overflows.
+MAX_SIZE = 2**40
+
+
 def as_int(x: Any, name: str, lo: int = 1, hi: int | None = None, *, alt: str = "") -> int:
     """Return an integer argument (a Python or NumPy integer, not a bool) in ``[lo, hi]``.
 
@@ -72,8 +77,13 @@ def as_int(x: Any, name: str, lo: int = 1, hi: int | None = None, *, alt: str = 
     (e.g. ``"None (simulation)"``) that the caller has already handled.
     """
     ok = isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_))
-    if ok and x >= lo and (hi is None or x <= hi):
+    if ok and x >= lo and (hi is None or x <= hi) and x <= MAX_SIZE:
         return int(x)
+    if ok and x > MAX_SIZE and (hi is None or hi > MAX_SIZE):
+        raise DataError(
+            f"{name} = {x} is far too large (more than 2**40); sizes must fit the data: "
+            f"choose a {name} much smaller than the number of samples"
+        )
     if hi is not None:
         want = f"an integer between {lo} and {hi}"
     elif lo == 1:
@@ -81,3 +91,54 @@ def as_int(x: Any, name: str, lo: int = 1, hi: int | None = None, *, alt: str = 
     else:
         want = f"an integer >= {lo}"
     raise DataError(f"{name} must be {alt + ' or ' if alt else ''}{want}, got {x!r}")
+
+
+#: Largest array, in bytes, built for a length the caller chose (as in the Rust core).
+MAX_BYTES = 1 << 32
+
+
+def as_count(x: Any, name: str, bytes_per_item: int, lo: int = 1) -> int:
+    """An integer length ``>= lo`` whose array (``bytes_per_item`` each) fits in memory."""
+    n = as_int(x, name, lo)
+    if n * max(1, bytes_per_item) > MAX_BYTES:
+        raise DataError(
+            f"{name} = {n} would need {n * bytes_per_item / 2**30:.1f} GiB, more than the "
+            f"{MAX_BYTES >> 30} GiB limit; choose a smaller {name}"
+        )
+    return n
+
+
+def as_int_grid(v: Any, shape: tuple[int, int], name: str) -> list[list[int]]:
+    """Non-negative integer orders/delays as a ``shape`` grid (a scalar fills it).
+
+    Bools, fractions, negatives, values above :data:`MAX_SIZE` and wrong shapes raise a
+    :class:`DataError` naming ``name``.
+    """
+    try:
+        a = np.array(v, dtype=object)
+    except (TypeError, ValueError):
+        raise DataError(f"{name} must be a non-negative integer or an array of them, "
+                        f"got {v!r}") from None
+    if a.ndim == 0:
+        a = np.full(shape, a.item(), dtype=object)
+    elif a.ndim == 1 and shape[0] == 1:
+        a = a.reshape(1, -1)
+    if a.shape != shape:
+        raise ShapeError(f"{name} has shape {a.shape} but should be {shape} or a scalar")
+    out = []
+    for row in a.tolist():
+        r = []
+        for x in row:
+            integral = isinstance(x, (int, np.integer)) or (
+                isinstance(x, (float, np.floating)) and np.isfinite(x) and float(x).is_integer()
+            )
+            if isinstance(x, (bool, np.bool_)) or not integral or x < 0:
+                raise DataError(f"{name} must hold non-negative integers, got {a.tolist()}")
+            if x > MAX_SIZE:
+                raise DataError(
+                    f"{name} = {int(x)} is far too large (more than 2**40); orders and delays "
+                    "must be much smaller than the number of samples"
+                )
+            r.append(int(x))
+        out.append(r)
+    return out

@@ -54,9 +54,17 @@ def _read_table(path: str | Path, delimiter: str | None) -> tuple[list[str], lis
     path = Path(path)
     if not path.is_file():
         raise DataError(f"no data file at {str(path)!r}")
-    with open(path, newline="", encoding="utf-8-sig") as f:
-        lines = [ln for ln in f.read().splitlines()
-                 if ln.strip() and not ln.lstrip().startswith("#")]
+    raw = path.read_bytes()
+    try:
+        if b"\0" in raw[:65536]:
+            raise UnicodeDecodeError("utf-8", raw[:1], 0, 1, "NUL byte")
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise DataError(
+            f"{str(path)!r} is not a text table (binary content); give a CSV or whitespace-"
+            "separated text file with one column per channel"
+        ) from None
+    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     if not lines:
         raise DataError(f"{str(path)!r} is empty")
     if delimiter is None:
@@ -262,6 +270,7 @@ def _print_summary(out: dict[str, Any]) -> None:
 def _demo(args: argparse.Namespace) -> int:
     from .data import datasets
 
+    _check_report_dir(args.report)
     data = datasets.load_dryer()
     print(data)
     u, y = data.u, data.y
@@ -277,7 +286,20 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_report_dir(report: str | Path) -> None:
+    p = Path(report)
+    if p.exists() and not p.is_dir():
+        raise DataError(f"--report {str(p)!r} is an existing file, not a directory; give a "
+                        "directory name (it is created if missing)")
+
+
 def _identify(args: argparse.Namespace) -> int:
+    from .estimate.subspace import _method
+
+    _method(args.method)  # before reading and compressing anything
+    _check_report_dir(args.report)
+    if args.horizon is not None and args.horizon < 1:
+        raise DataError(f"--horizon must be a positive integer, got {args.horizon}")
     say = _Progress(args.quiet)
     say(f"reading {args.data}")
     names, rows = _read_table(args.data, args.delimiter)
@@ -332,7 +354,8 @@ def _parser() -> argparse.ArgumentParser:
     ide.add_argument("--inputs", default="", help="input columns, comma separated")
     ide.add_argument("--outputs", required=True, help="output columns, comma separated")
     ide.add_argument("--order", default="auto", help="model order or 'auto' (default)")
-    ide.add_argument("--method", default="moesp", help="moesp, ordinary-moesp, n4sid or cva")
+    ide.add_argument("--method", default="moesp",
+                     help="moesp (default), ordinary-moesp, pi-moesp, n4sid or cva")
     ide.add_argument("--horizon", type=int, default=None, help="past/future horizon")
     ide.add_argument("--split", default="0.5",
                      help="estimation part: fraction (0.5) or sample count (500); 1 = all")
@@ -357,8 +380,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return int(args.func(args))
     except (SysidError, ImportError) as e:
-        print(f"sysid: error: {e}", file=sys.stderr)
+        print(f"sysid: error: {_one_line(e)}", file=sys.stderr)
         return 2
+    except OSError as e:
+        print(f"sysid: error: {_one_line(e)}", file=sys.stderr)
+        return 2
+    except Exception as e:  # noqa: BLE001 - every CLI failure is one line and exit 2
+        print(f"sysid: error: unexpected {type(e).__name__}: {_one_line(e)} (please report "
+              "this with the command line)", file=sys.stderr)
+        return 2
+
+
+def _one_line(e: BaseException) -> str:
+    return " ".join(str(e).split()) or type(e).__name__
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -126,6 +126,41 @@ impl SysidError {
     }
 }
 
+/// Largest matrix, in bytes, that sysid allocates for a size the caller chose (a horizon, a
+/// number of lags, a chunk size): 4 GiB. Larger requests are refused with an error naming the
+/// argument instead of aborting the process in the allocator.
+pub const MAX_MATRIX_BYTES: usize = 1 << 32;
+
+/// Checks that a `rows x cols` matrix of `f64` whose size comes from argument `name` can be
+/// allocated: no overflow and at most [`MAX_MATRIX_BYTES`].
+///
+/// ```
+/// use sysid_core::error::check_matrix_size;
+/// assert!(check_matrix_size("horizon", 100, 100).is_ok());
+/// assert!(check_matrix_size("horizon", usize::MAX, 2).is_err());
+/// assert!(check_matrix_size("horizon", 1 << 20, 1 << 20).is_err());
+/// ```
+pub fn check_matrix_size(name: &'static str, rows: usize, cols: usize) -> Result<()> {
+    let bytes = rows
+        .checked_mul(cols)
+        .and_then(|n| n.checked_mul(std::mem::size_of::<f64>()));
+    match bytes {
+        Some(b) if b <= MAX_MATRIX_BYTES => Ok(()),
+        _ => Err(SysidError::invalid(
+            name,
+            format!(
+                "it would need a {rows} x {cols} matrix ({}), more than the {} GiB limit; \
+                 choose a smaller {name}",
+                match bytes {
+                    Some(b) => format!("{:.1} GiB", b as f64 / (1u64 << 30) as f64),
+                    None => "more memory than can be addressed".to_string(),
+                },
+                MAX_MATRIX_BYTES >> 30
+            ),
+        )),
+    }
+}
+
 /// Checks that every entry of `x` is finite.
 pub fn check_finite(what: &'static str, x: faer::MatRef<'_, f64>) -> Result<()> {
     for j in 0..x.ncols() {

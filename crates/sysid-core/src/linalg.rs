@@ -99,8 +99,12 @@ pub struct QrAccumulator {
 
 impl QrAccumulator {
     /// An accumulator for rows of length `k`, re-triangularising every `chunk_rows` rows.
+    ///
+    /// `chunk_rows` is capped so that the work matrix stays within
+    /// [`crate::error::MAX_MATRIX_BYTES`] (the result does not depend on it beyond round-off).
     pub fn new(k: usize, chunk_rows: usize) -> Self {
-        let chunk_rows = chunk_rows.max(1);
+        let cap = (crate::error::MAX_MATRIX_BYTES / 8 / k.max(1)).saturating_sub(k);
+        let chunk_rows = chunk_rows.min(cap).max(1);
         Self {
             k,
             chunk_rows,

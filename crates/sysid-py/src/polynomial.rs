@@ -53,7 +53,7 @@ pub fn arx_fit<'py>(
             nb.iter()
                 .flatten()
                 .zip(nk.iter().flatten())
-                .map(|(b, k)| (b + k).saturating_sub(1)),
+                .map(|(b, k)| b.saturating_add(*k).saturating_sub(1)),
         )
         .max()
         .unwrap_or(0)
@@ -115,11 +115,11 @@ pub fn arx_struc<'py>(
     let max_lag = na_range
         .iter()
         .copied()
-        .chain(
-            nb_range
+        .chain(nb_range.iter().flat_map(|b| {
+            nk_range
                 .iter()
-                .flat_map(|b| nk_range.iter().map(move |k| (b + k).saturating_sub(1))),
-        )
+                .map(move |k| b.saturating_add(*k).saturating_sub(1))
+        }))
         .max()
         .unwrap_or(1)
         .max(1);

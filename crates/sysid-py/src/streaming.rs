@@ -41,6 +41,7 @@ impl PyStreamingCompressor {
     ) -> PyResult<Self> {
         let layout = HankelLayout::new(n_inputs, n_outputs, past, future).py()?;
         let kind = CompressorKind::parse(compressor, chunk_rows).py()?;
+        kind.check(&layout).py()?;
         let inner = kind.build(layout);
         let kind = kind.name();
         Ok(Self {

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import as_int, as_int_grid
 from ..errors import DataError
 from ..models.polynomial import PolynomialModel
 from ..models.uncertainty import ParameterUncertainty
@@ -76,16 +77,12 @@ def _attach_uncertainty(model: PolynomialModel, covs: list[np.ndarray], kind: st
 
 
 def _grid(v: Any, ny: int, ncol: int, name: str) -> list[list[int]]:
-    a = np.asarray(v)
-    if a.ndim == 0:
-        a = np.full((ny, ncol), int(a))
-    elif a.ndim == 1 and ny == 1:
-        a = a.reshape(1, -1)
-    if a.shape != (ny, ncol):
-        raise DataError(f"{name} has shape {a.shape} but should be ({ny}, {ncol}) or a scalar")
-    if np.any(a < 0) or not np.all(np.equal(np.mod(a, 1), 0)):
-        raise DataError(f"{name} must hold non-negative integers, got {a.tolist()}")
-    return a.astype(int).tolist()
+    return as_int_grid(v, (ny, ncol), name)
+
+
+def _col(v: Any, ny: int, name: str) -> list[int]:
+    a = np.array(v, dtype=object)
+    return [r[0] for r in as_int_grid(a.reshape(-1, 1) if a.ndim else a, (ny, 1), name)]
 
 
 def _exps(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -198,9 +195,7 @@ def _pem(
     u, y = exps[0]
     ny, nu = y.shape[1], u.shape[1]
     nb_g, nf_g, nk_g = _grid(nb, ny, nu, "nb"), _grid(nf, ny, nu, "nf"), _grid(nk, ny, nu, "nk")
-    na_v = [int(v) for v in np.broadcast_to(np.asarray(na), (ny,))]
-    nc_v = [int(v) for v in np.broadcast_to(np.asarray(nc), (ny,))]
-    nd_v = [int(v) for v in np.broadcast_to(np.asarray(nd), (ny,))]
+    na_v, nc_v, nd_v = _col(na, ny, "na"), _col(nc, ny, "nc"), _col(nd, ny, "nd")
     if min(na_v + nc_v + nd_v, default=0) < 0:
         raise DataError("na, nc and nd must be non-negative integers")
     parts: dict[str, list[Any]] = {k: [] for k in "abcdf"}
@@ -217,7 +212,7 @@ def _pem(
             nf_g[i],
             nk_g[i],
             None if init is None else _start(init, i, na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i]),
-            int(max_iter),
+            as_int(max_iter, "max_iter", 0),
             1e-9,
             progress,
         )

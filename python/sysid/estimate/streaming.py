@@ -183,6 +183,20 @@ def _experiments(
     """Split a source into experiments, each an iterator of chunks and its length if known."""
     if isinstance(source, (str, os.PathLike)):
         return [_parquet_chunks(Path(source), input_columns, output_columns)]
+    if isinstance(source, np.ndarray) or (
+        isinstance(source, list) and source and not isinstance(source[0], (tuple, list, str))
+        and not hasattr(source[0], "__next__") and not isinstance(source[0], os.PathLike)
+    ):
+        raise DataError(
+            "source must be (u, y) pairs, not bare arrays: pass (u, y), a list of (u, y) "
+            "(one per experiment), or (None, y) for output-only data"
+        )
+    if isinstance(source, tuple) and len(source) == 2 and (
+        source[0] is None and (hasattr(source[1], "shape") or isinstance(source[1], list))
+    ):
+        y = np.asarray(source[1], dtype=float)
+        y = y[:, None] if y.ndim == 1 else y
+        source = (np.zeros((y.shape[0], 0)), y)
     if isinstance(source, tuple) and len(source) == 2 and all(
         hasattr(a, "shape") or isinstance(a, (list, np.ndarray)) for a in source
     ):
@@ -260,7 +274,8 @@ def compress_stream(
     if compressor not in COMPRESSORS:
         raise DataError(f"compressor must be one of {COMPRESSORS}, got {compressor!r}")
     chunk_size = as_int(chunk_size, "chunk_size")
-    future = past if future is None else future
+    past = as_int(past, "past")
+    future = past if future is None else as_int(future, "future")
     if isinstance(source, tuple) and len(source) == 2 and _is_dask(source[1]):
         return compress_dask(source[0], source[1], past, future)
     exps = _experiments(source, int(chunk_size), input_columns, output_columns)
@@ -273,8 +288,16 @@ def compress_stream(
     comp = None
     try:
         for chunks, _ in exps:
-            for u, y in chunks:
+            for chunk in chunks:
+                if not (isinstance(chunk, (tuple, list)) and len(chunk) == 2):
+                    raise DataError(
+                        "each chunk of the source must be a (u, y) pair (u may be None for "
+                        f"output-only data), got {type(chunk).__name__}"
+                    )
+                u, y = chunk
                 y2 = as_2d(y, "y")
+                if u is None:
+                    u = np.zeros((y2.shape[0], 0))
                 u2 = as_2d(u, "u", allow_empty=True)
                 if u2.shape[0] == 0 and y2.shape[0] > 0:
                     u2 = np.zeros((y2.shape[0], 0))
@@ -337,7 +360,8 @@ def compress_dask(
     import dask
     import dask.array as da
 
-    future = past if future is None else future
+    past = as_int(past, "past")
+    future = past if future is None else as_int(future, "future")
     u = da.asarray(u)
     y = da.asarray(y)
     if u.ndim == 1:

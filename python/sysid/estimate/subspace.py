@@ -36,7 +36,7 @@ from .. import _sysid
 from .._checks import as_int
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
-from ..errors import DataError
+from ..errors import DataError, InsufficientDataError, OrderError
 from ..models.statespace import StateSpaceModel
 from .streaming import warn_if_fallback
 
@@ -128,14 +128,30 @@ class SubspaceEstimator:
         self.data = data
         self._from_factor = False
         self.method = _method(method)
-        shortest = min(y.shape[0] for _, y in data.experiments)
+        lengths = data.lengths
+        shortest, longest = min(lengths), max(lengths)
+        self._horizon_note = ""
         if horizon is None:
             horizon = default_horizon(shortest, data.n_inputs, data.n_outputs)
+            if horizon < default_horizon(longest, data.n_inputs, data.n_outputs):
+                k = lengths.index(shortest)
+                self._horizon_note = (
+                    f" (the default horizon {horizon} was set by experiment {k}, which has only "
+                    f"{shortest} samples; drop that experiment or pass horizon=...)"
+                )
         horizon = as_int(horizon, "horizon", 1)
         self.past = as_int(past if past is not None else horizon, "past", 1)
         self.future = as_int(future if future is not None else horizon, "future", 1)
         if chunk_rows is not None:
             chunk_rows = as_int(chunk_rows, "chunk_rows", 1)
+        if self.past + self.future > longest:
+            which = "horizon" if past is None and future is None else "past/future"
+            raise InsufficientDataError(
+                f"{which} too large for the data: a window of past + future = "
+                f"{self.past} + {self.future} samples needs at least {self.past + self.future} "
+                f"samples per experiment but the longest has {longest}; choose "
+                f"horizon <= {max(longest // 2, 1)} (a few times the expected order)"
+            )
         self.factor = _sysid.compress(
             data.experiments, self.past, self.future, chunk_rows, compressor
         )
@@ -159,7 +175,13 @@ class SubspaceEstimator:
         For factors computed out of core, merged across experiments or machines, or loaded
         from disk. Fits with ``x0=True`` need the data and are not available.
         """
+        if not isinstance(factor, _sysid.HankelFactor):
+            raise DataError(
+                f"factor must be a HankelFactor (from sysid.compress_stream or "
+                f"SubspaceEstimator(...).factor), got {type(factor).__name__}"
+            )
         self = cls.__new__(cls)
+        self._horizon_note = ""
         m, l = factor.n_inputs, factor.n_outputs
         # a placeholder record that carries only channel counts, names and dt
         self.data = IOData(
@@ -263,7 +285,12 @@ class SubspaceEstimator:
         if self.factor.n_inputs:
             # warn (ExcitationWarning) when the input cannot support order n
             warn_excitation(self._excitation_order(2 * n), n, stacklevel=2)
-        res = sub.fit(n, bool(feedthrough), bool(kalman), bool(stable))
+        try:
+            res = sub.fit(n, bool(feedthrough), bool(kalman), bool(stable))
+        except OrderError as e:
+            if not self._horizon_note:
+                raise
+            raise OrderError(f"{e}{self._horizon_note}") from None
         x0_est = None
         B, D = res["B"], res["D"]
         if x0:

@@ -162,10 +162,9 @@ class TimeResponse:
 def default_length(model: Any, n_samples: int | None) -> int:
     """``n_samples``, or long enough for the slowest pole to decay to 1 % (20..10000)."""
     if n_samples is not None:
-        n = int(n_samples)
-        if n < 1 or n != n_samples:
-            raise DataError(f"n_samples must be a positive integer, got {n_samples!r}")
-        return n
+        from .._checks import as_count
+
+        return as_count(n_samples, "n_samples", 8 * (model.noutputs + 1) * max(model.ninputs, 1))
     try:
         p = _optional(model, "poles", "the default response length")
     except DataError:

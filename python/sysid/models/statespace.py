@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_int, as_matrix
+from .._checks import as_2d, as_count, as_int, as_matrix
 from ..errors import DataError, ShapeError
 from .linear import DampingTable, damping_table, transmission_zeros
 from .protocol import ModelMixin, TimeResponse, default_length
@@ -270,6 +270,7 @@ class StateSpaceModel(ModelMixin):
             from .uncertainty import complex_std
 
             return complex_std(self, lambda m: m.markov(count))
+        count = as_count(count, "count", 8 * self.noutputs * self.ninputs, lo=0)
         out = np.empty((count, self.noutputs, self.ninputs))
         if count:
             out[0] = self.D

@@ -57,6 +57,39 @@ impl CompressorKind {
         }
     }
 
+    /// Checks that the work memory of this kind for `layout` (the QR work matrix of
+    /// `(k + chunk_rows) x k`) can be allocated (correlation blocks are bounded by the data).
+    ///
+    /// ```
+    /// use sysid_core::hankel::{CompressorKind, HankelLayout};
+    /// let layout = HankelLayout::new(1, 1, 10, 10).unwrap();
+    /// assert!(CompressorKind::parse("qr", Some(1 << 50)).unwrap().check(&layout).is_err());
+    /// assert!(CompressorKind::parse("qr", Some(256)).unwrap().check(&layout).is_ok());
+    /// ```
+    pub fn check(&self, layout: &HankelLayout) -> Result<()> {
+        let k = layout.k();
+        let rows = match self {
+            CompressorKind::Qr {
+                chunk_rows: Some(0),
+            } => {
+                return Err(SysidError::invalid(
+                    "chunk_rows",
+                    "must be a positive integer, got 0",
+                ))
+            }
+            CompressorKind::Qr {
+                chunk_rows: Some(r),
+            } => k.checked_add(*r),
+            CompressorKind::Qr { chunk_rows: None } => Some(k + (4 * k).max(512)),
+            // a block never holds more samples than the chunk pushed: bounded by the data
+            CompressorKind::Correlation(_) => return Ok(()),
+        };
+        match rows {
+            Some(r) => crate::error::check_matrix_size("chunk_rows", r, k),
+            None => crate::error::check_matrix_size("chunk_rows", usize::MAX, k),
+        }
+    }
+
     /// A streaming compressor of this kind for `layout`.
     pub fn build(self, layout: HankelLayout) -> AnyCompressor {
         match self {
@@ -120,6 +153,24 @@ pub fn compress_experiments(
     experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
     kind: CompressorKind,
 ) -> Result<HankelFactor> {
+    kind.check(&layout)?;
+    let w = layout.window();
+    let longest = experiments
+        .iter()
+        .map(|(_, y)| y.nrows())
+        .max()
+        .unwrap_or(0);
+    if longest < w {
+        return Err(SysidError::InsufficientData {
+            context: format!(
+                "the horizon (past={} + future={} = a window of {w} samples)",
+                layout.past, layout.future
+            ),
+            needed: w,
+            got: longest,
+            fix: "choose a smaller horizon (past/future) or give a longer record",
+        });
+    }
     let run = |kind: CompressorKind| -> Result<HankelFactor> {
         let mut c = kind.build(layout);
         for (u, y) in experiments {

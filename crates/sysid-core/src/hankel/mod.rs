@@ -67,6 +67,32 @@ impl HankelLayout {
                 format!("past and future horizons must be >= 1 (got past={past}, future={future})"),
             ));
         }
+        let d = n_inputs.checked_add(n_outputs);
+        let k = past
+            .checked_add(future)
+            .and_then(|w| d.and_then(|d| w.checked_mul(d)));
+        let Some(k) = k else {
+            return Err(SysidError::invalid(
+                "horizon",
+                format!(
+                    "past={past} and future={future} are far too large (the data matrix \
+                     would have more rows than can be counted); use a horizon of a few times \
+                     the expected order"
+                ),
+            ));
+        };
+        crate::error::check_matrix_size("horizon", k, k).map_err(|_| {
+            SysidError::invalid(
+                "horizon",
+                format!(
+                    "past={past} and future={future} with {n_inputs} input(s) and \
+                     {n_outputs} output(s) give a {k} x {k} data matrix ({:.1} GiB), more \
+                     than the {} GiB limit; use a horizon of a few times the expected order",
+                    (k as f64).powi(2) * 8.0 / (1u64 << 30) as f64,
+                    crate::error::MAX_MATRIX_BYTES >> 30
+                ),
+            )
+        })?;
         Ok(Self {
             n_inputs,
             n_outputs,

@@ -72,7 +72,10 @@ impl ArxCompressor {
         if max_lag == 0 {
             return Err(SysidError::invalid("max_lag", "must be at least 1"));
         }
-        let k = (n_inputs + n_outputs) * (max_lag + 1);
+        let k = n_inputs
+            .checked_add(n_outputs)
+            .and_then(|d| max_lag.checked_add(1).and_then(|l| d.checked_mul(l)))
+            .unwrap_or(usize::MAX);
         if k > 4000 {
             return Err(SysidError::invalid(
                 "orders",

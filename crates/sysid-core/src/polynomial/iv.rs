@@ -95,11 +95,12 @@ pub fn iv4(
     if nb == 0 {
         return Err(SysidError::invalid("nb", "iv4 needs nb >= 1"));
     }
-    let p = na + nb;
-    if y.len() < 4 * (p + nk) + 10 {
+    let p = na.saturating_add(nb);
+    let need = p.saturating_add(nk).saturating_mul(4).saturating_add(10);
+    if y.len() < need {
         return Err(SysidError::InsufficientData {
-            context: format!("iv4 with {p} parameters"),
-            needed: 4 * (p + nk) + 10,
+            context: format!("iv4 with {p} parameters (na={na}, nb={nb}, nk={nk})"),
+            needed: need,
             got: y.len(),
             fix: "use a longer record or smaller orders",
         });

@@ -28,7 +28,12 @@ pub struct MisoOrders {
 impl MisoOrders {
     /// Number of free parameters, laid out `[a, b_1.., b_m, c, d, f_1.., f_m]`.
     pub fn n_params(&self) -> usize {
-        self.na + self.nb.iter().sum::<usize>() + self.nc + self.nd + self.nf.iter().sum::<usize>()
+        // saturating: absurd orders give usize::MAX, which every length check then refuses
+        [self.na, self.nc, self.nd]
+            .into_iter()
+            .chain(self.nb.iter().copied())
+            .chain(self.nf.iter().copied())
+            .fold(0usize, |a, b| a.saturating_add(b))
     }
 }
 
@@ -121,10 +126,14 @@ impl MisoProblem {
                 "the structure has no parameters",
             ));
         }
-        if y.len() < 2 * p + 2 {
+        let need = p.saturating_mul(2).saturating_add(2);
+        if y.len() < need || orders.nk.iter().any(|&k| k >= y.len()) {
             return Err(SysidError::InsufficientData {
-                context: format!("a polynomial model with {p} parameters"),
-                needed: 2 * p + 2,
+                context: format!(
+                    "a polynomial model with {p} parameters and delays nk={:?}",
+                    orders.nk
+                ),
+                needed: need.max(orders.nk.iter().max().map_or(0, |k| k.saturating_add(1))),
                 got: y.len(),
                 fix: "use a longer record or smaller orders",
             });
