@@ -17,6 +17,7 @@ def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = Fa
     """
     if isinstance(x, (str, bytes)):
         raise ShapeError(f"{name} must be a numeric array, got a string")
+    x = unmask(x, name)
     arr = np.asarray(x)
     if arr.dtype.kind not in "biuf":
         raise DataError(
@@ -46,11 +47,49 @@ def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = Fa
     return arr
 
 
+def unmask(x: Any, name: str) -> Any:
+    """The data of a masked array without masked entries; masked entries raise.
+
+    A masked sample is a missing sample: it is never silently replaced by the value under
+    the mask.
+    """
+    if not isinstance(x, np.ma.MaskedArray):
+        return x
+    mask = np.ma.getmaskarray(x)
+    if mask.any():
+        first = np.argwhere(mask)[0]
+        where = ", ".join(str(int(i)) for i in first)
+        raise NonFiniteError(
+            f"{name} is a masked array with {int(mask.sum())} masked value(s) (the first at "
+            f"index {where}); masked samples are missing data: pass {name}.filled(np.nan) to "
+            "IOData.from_raw (which interpolates short gaps) or cut them out"
+        )
+    return np.ma.getdata(x)
+
+
+def as_dt(dt: Any, name: str = "dt") -> float:
+    """A sample time in seconds: a finite positive number (not a bool, not None)."""
+    if dt is None or isinstance(dt, (bool, np.bool_, str, bytes)):
+        raise DataError(f"{name} must be a positive number of seconds, got {dt!r}")
+    try:
+        val = float(dt)
+    except (TypeError, ValueError):
+        raise DataError(f"{name} must be a positive number of seconds, got {dt!r}") from None
+    if not np.isfinite(val) or val <= 0:
+        raise DataError(f"{name} must be a positive number of seconds, got {val}")
+    return val
+
+
 def as_matrix(x: Any, name: str, shape: tuple[int | None, int | None]) -> np.ndarray:
     """Return a finite float64 matrix, checking its shape (``None`` matches any size)."""
     if isinstance(x, (str, bytes)):
         raise ShapeError(f"{name} must be a numeric matrix, got a string")
-    arr = np.asarray(x)
+    x = unmask(x, name)
+    try:
+        arr = np.asarray(x)
+    except ValueError:
+        raise ShapeError(f"{name} must be a rectangular numeric matrix (rows of equal "
+                         "length)") from None
     if arr.dtype.kind not in "biuf":
         raise DataError(f"{name} must be real and numeric, got dtype {arr.dtype}")
     arr = np.atleast_2d(arr.astype(np.float64, copy=False))
@@ -142,3 +181,22 @@ def as_int_grid(v: Any, shape: tuple[int, int], name: str) -> list[list[int]]:
             r.append(int(x))
         out.append(r)
     return out
+
+
+def check_covariance(P: np.ndarray, name: str) -> np.ndarray:
+    """A covariance matrix: symmetric (to round-off) and positive semi-definite."""
+    scale = max(float(np.max(np.abs(P))), np.finfo(float).tiny) if P.size else 1.0
+    asym = float(np.max(np.abs(P - P.T))) if P.size else 0.0
+    if asym > 1e-8 * scale:
+        raise DataError(
+            f"{name} must be symmetric, but {name} - {name}.T has entries of size {asym:.3g}; "
+            f"pass (P + P.T) / 2 if the asymmetry is round-off"
+        )
+    P = 0.5 * (P + P.T)
+    low = float(np.min(np.linalg.eigvalsh(P))) if P.size else 0.0
+    if low < -1e-10 * scale:
+        raise DataError(
+            f"{name} must be positive semi-definite (a covariance), but it has the negative "
+            f"eigenvalue {low:.3g}"
+        )
+    return P

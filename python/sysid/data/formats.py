@@ -9,6 +9,7 @@ and the matching reader gives the record back unchanged.
 from __future__ import annotations
 
 import re
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -29,6 +30,20 @@ def _pandas() -> Any:
     except ImportError as e:  # pragma: no cover - depends on the environment
         raise ImportError("this needs pandas: pip install 'sysid[pandas]'") from e
     return pd
+
+
+def _default_index(index: Any) -> bool:
+    """A 0, 1, 2, ... index that pandas made up (not a time axis)."""
+    pd = _pandas()
+    return isinstance(index, pd.RangeIndex) and index.step == 1 and index.name is None
+
+
+_TIME_NAMES = ("time", "t", "Time", "TIME", "time_s", "t_s", "seconds")
+
+
+def _time_column(df: Any) -> str | None:
+    """The name of a time column when the frame has one under a usual name."""
+    return next((c for c in _TIME_NAMES if c in df.columns), None)
 
 
 def _open_text(p: Path) -> Any:
@@ -159,10 +174,18 @@ class _FileFormats:
                 ts.append(g[time].to_numpy(dtype=float))
             elif dt is None and isinstance(g.index, pd.DatetimeIndex):
                 ts.append((g.index - groups[0].index[0]).total_seconds().to_numpy())
-            elif dt is None and g.index.dtype.kind in "if":
+            elif dt is None and g.index.dtype.kind in "if" and not _default_index(g.index):
                 ts.append(g.index.to_numpy(dtype=float))
+            elif dt is None and _time_column(g) is not None:
+                ts.append(g[_time_column(g)].to_numpy(dtype=float))
         if dt is None and not ts:
             dt = df.attrs.get("dt")
+            if dt is None:
+                warnings.warn(
+                    "the DataFrame carries no sample time (no dt=, no time column, a default "
+                    "0, 1, 2, ... index): assuming dt = 1 s; pass dt=... or time='column'",
+                    UserWarning, stacklevel=2,
+                )
         kw: dict[str, Any] = {
             "input_names": inputs,
             "output_names": outputs,
@@ -214,7 +237,7 @@ class _FileFormats:
         time: str | int | None = None,
         dt: float | None = None,
         experiment: str | int | None = None,
-        delimiter: str = ",",
+        delimiter: str | None = None,
         nan: str = "error",
         max_gap: int = 5,
     ) -> IOData:
@@ -224,7 +247,8 @@ class _FileFormats:
         units. Without ``inputs``/``outputs``, a file written by :meth:`to_csv` is read back
         whole. Empty fields become NaN and are handled as ``nan`` says (see
         :meth:`from_raw`; only for single-experiment files). Trailing delimiters are ignored.
-        Files ending in ``.gz``, ``.bz2`` or ``.xz`` are decompressed while reading.
+        The delimiter is guessed from the header (comma, semicolon, tab, else white space,
+        as in ``.dat`` files) unless given. Files ending in ``.gz``, ``.bz2`` or ``.xz`` are decompressed while reading.
 
         Examples
         --------
@@ -239,8 +263,14 @@ class _FileFormats:
         p = Path(path)
         if not p.exists():
             raise DataError(f"no such file: {p}")
-        with _open_text(p) as fh:
-            header = fh.readline().strip()
+        try:
+            with _open_text(p) as fh:
+                header = fh.readline().strip()
+        except UnicodeDecodeError:
+            raise DataError(f"{p.name} is not a text file (binary content); give a CSV or "
+                            "whitespace-separated text file") from None
+        if delimiter is None:
+            delimiter = next((d for d in (",", ";", "\t") if d in header), None)
         raw_names = [h.strip().strip('"') for h in header.split(delimiter)]
         while raw_names and raw_names[-1] == "":
             raw_names.pop()
@@ -256,7 +286,13 @@ class _FileFormats:
         def col(c: str | int) -> int:
             if isinstance(c, (int, np.integer)):
                 if not 0 <= c < len(names):
-                    raise DataError(f"column {c} out of range: the file has {len(names)} columns")
+                    hint = "" if len(names) > 1 else (
+                        f"; the header was read as one column with delimiter={delimiter!r}: "
+                        "pass delimiter=... (e.g. ' ' or '\\t')"
+                    )
+                    raise DataError(
+                        f"column {c} out of range: the file has {len(names)} columns{hint}"
+                    )
                 return int(c)
             if c not in names:
                 raise DataError(f"no column {c!r} in {p.name}; its columns are {names}")

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_2d
+from .._checks import as_2d, as_dt
 from ..errors import DataError, InsufficientDataError, ShapeError
 from .formats import _FileFormats, _pandas
 from .raw import _RawConstructors
@@ -38,12 +38,43 @@ __all__ = ["IOData", "Trend", "SplitData", "DataSummary", "sample_time", "check_
 # --------------------------------------------------------------------------------------------
 
 
-def _as_list(x: Any) -> list[Any] | None:
+def _is_array(v: Any) -> bool:
+    return hasattr(v, "shape") and hasattr(v, "dtype")
+
+
+def _as_list(x: Any, name: str = "data") -> list[Any] | None:
+    """Experiments of an argument: a list of arrays is several; anything else is one.
+
+    A (nested) list of numbers is one experiment, as NumPy would read it; only a list whose
+    items are arrays means one array per experiment. A list mixing both is refused.
+    """
     if x is None:
         return None
     if isinstance(x, (list, tuple)):
-        return list(x)
+        if not x:
+            return []
+        arrays = [_is_array(v) for v in x]
+        if all(arrays):
+            return list(x)
+        if any(arrays):
+            raise DataError(
+                f"{name} is a list mixing arrays and other values; a list of numbers (or of "
+                "rows of numbers) is one experiment, a list of numpy arrays is one experiment "
+                "per array"
+            )
+        return [x]
     return [x]
+
+
+def _time_first(a: np.ndarray, name: str) -> np.ndarray:
+    """Refuse a channels-first array (fewer samples than channels) with the fix."""
+    if a.ndim == 2 and 1 < a.shape[0] < a.shape[1] or a.shape[0] == 1 and a.shape[1] > 1:
+        raise ShapeError(
+            f"{name} has {a.shape[0]} sample(s) and {a.shape[1]} channels; sysid arrays are "
+            f"time-first (samples, channels): if the data are channels-first (python-control's "
+            f"layout), pass {name}.T"
+        )
+    return a
 
 
 def _plural(n: int, word: str) -> str:
@@ -131,15 +162,16 @@ class IOData(_Segments, _RawConstructors, _FileFormats):
     ) -> None:
         if y is None:
             raise DataError("y is required: IOData(u=..., y=..., dt=...)")
-        ylist = _as_list(y)
+        ylist = _as_list(y, "y")
         if not ylist:
             raise ShapeError("y is an empty list: give at least one experiment")
-        ys = [as_2d(v, "y" if i == 0 else f"y[{i}]") for i, v in enumerate(ylist)]
+        ys = [_time_first(as_2d(v, "y" if i == 0 else f"y[{i}]"), "y" if i == 0 else f"y[{i}]")
+              for i, v in enumerate(ylist)]
         n_out = ys[0].shape[1]
         for i, v in enumerate(ys):
             if v.shape[1] != n_out:
                 raise ShapeError(f"y[{i}] has {v.shape[1]} outputs but y[0] has {n_out}")
-        us_in = _as_list(u)
+        us_in = _as_list(u, "u")
         if us_in is None:
             us = [np.zeros((v.shape[0], 0)) for v in ys]
         else:
@@ -147,7 +179,8 @@ class IOData(_Segments, _RawConstructors, _FileFormats):
                 raise ShapeError(
                     f"u has {len(us_in)} experiment(s) but y has {len(ys)}; give one array each"
                 )
-            us = [as_2d(v, "u" if i == 0 else f"u[{i}]") for i, v in enumerate(us_in)]
+            us = [_time_first(as_2d(v, "u" if i == 0 else f"u[{i}]"),
+                              "u" if i == 0 else f"u[{i}]") for i, v in enumerate(us_in)]
         n_in = us[0].shape[1]
         for i, (a, b) in enumerate(zip(us, ys)):
             if a.shape[1] != n_in:
@@ -160,7 +193,7 @@ class IOData(_Segments, _RawConstructors, _FileFormats):
                 )
         t0s = [0.0] * len(ys)
         if time is not None:
-            tl = _as_list(time)
+            tl = _as_list(time, "time")
             assert tl is not None
             if len(tl) != len(ys):
                 raise ShapeError(f"time has {len(tl)} experiment(s) but y has {len(ys)}")
@@ -189,13 +222,7 @@ class IOData(_Segments, _RawConstructors, _FileFormats):
                     )
                 if dt is None:
                     dt = h
-        dt = 1.0 if dt is None else dt
-        try:
-            dt = float(dt)
-        except (TypeError, ValueError):
-            raise DataError(f"dt must be a positive number of seconds, got {dt!r}") from None
-        if not np.isfinite(dt) or dt <= 0:
-            raise DataError(f"dt must be a positive number of seconds, got {dt}")
+        dt = 1.0 if dt is None else as_dt(dt)
         self._exps = [_Exp(a, b, t) for a, b, t in zip(us, ys, t0s)]
         self.dt = dt
         self.input_names = self._names(input_names, n_in, "u", "input")

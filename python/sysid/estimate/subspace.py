@@ -184,9 +184,10 @@ class SubspaceEstimator:
         self._horizon_note = ""
         m, l = factor.n_inputs, factor.n_outputs
         # a placeholder record that carries only channel counts, names and dt
+        rows = max(m, l, 1)  # time-first: at least as many samples as channels
         self.data = IOData(
-            u=np.zeros((1, m)),
-            y=np.zeros((1, l)),
+            u=np.zeros((rows, m)),
+            y=np.zeros((rows, l)),
             dt=dt,
             input_names=input_names,
             output_names=output_names,

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_count, as_int, as_matrix
+from .._checks import as_2d, as_count, as_dt, as_int, as_matrix, check_covariance, unmask
 from ..errors import DataError, ShapeError
 from .linear import DampingTable, damping_table, transmission_zeros
 from .protocol import ModelMixin, TimeResponse, default_length
@@ -102,9 +102,20 @@ class StateSpaceModel(ModelMixin):
         n = A.shape[0]
         if A.shape[1] != n:
             raise ShapeError(f"A has shape {A.shape} but should be square")
-        B = np.asarray(B, dtype=float)
+        B = np.asarray(unmask(B, "B"), dtype=float)
+        if B.ndim < 2 and n and B.size % n:
+            raise ShapeError(
+                f"B has {B.size} entries but A is {n}x{n}: B must be {n}x(number of inputs), "
+                f"e.g. a column of {n} values for one input"
+            )
         B = B.reshape(n, -1) if B.size == 0 or B.ndim < 2 else B
         B = as_matrix(B, "B", (n, None)) if B.size else np.zeros((n, B.shape[1]))
+        C = np.asarray(unmask(C, "C"), dtype=float)
+        if C.ndim < 2 and C.size != n:
+            raise ShapeError(
+                f"C has {C.size} entries but A is {n}x{n}: C must be (number of outputs)x{n}, "
+                f"e.g. a row of {n} values for one output"
+            )
         C = as_matrix(C, "C", (None, n))
         m, l = B.shape[1], C.shape[0]
         D = (
@@ -114,12 +125,12 @@ class StateSpaceModel(ModelMixin):
         )
         self.A, self.B, self.C, self.D = A, B, C, D
         self.K = None if K is None else as_matrix(K, "K", (n, l))
-        self.noise_cov = None if noise_cov is None else as_matrix(noise_cov, "noise_cov", (l, l))
+        self.noise_cov = None if noise_cov is None else check_covariance(
+            as_matrix(noise_cov, "noise_cov", (l, l)), "noise_cov")
+        if x0 is not None and np.size(x0) != n:
+            raise ShapeError(f"x0 has {np.size(x0)} entries but the model has {n} states")
         self.x0 = None if x0 is None else as_matrix(np.reshape(x0, (n, 1)), "x0", (n, 1))[:, 0]
-        dt = float(dt)
-        if not np.isfinite(dt) or dt <= 0:
-            raise DataError(f"dt must be a positive number of seconds, got {dt}")
-        self.dt = dt
+        self.dt = as_dt(dt)
         self.input_names = (
             list(input_names) if input_names is not None else [f"u{i}" for i in range(m)]
         )
