@@ -277,3 +277,314 @@ def test_cli_help_lists_every_method(capsys):
     out = capsys.readouterr().out
     for m in METHODS:
         assert m in out
+
+
+# ---------------------------------------------------------------- 2. no silent guesses
+
+
+def test_channels_first_refused():
+    with pytest.raises(sysid.ShapeError) as e:
+        sysid.IOData(u=U.T, y=Y.T)
+    assert "time-first" in str(e.value) and "y.T" in str(e.value)
+
+
+def test_channels_first_multichannel_refused():
+    with pytest.raises(sysid.ShapeError, match="u.T"):
+        sysid.IOData(u=np.ones((2, 50)), y=np.ones((50, 1)))
+
+
+def test_nested_list_is_one_experiment():
+    d = sysid.IOData(u=U.tolist(), y=Y.tolist())
+    assert d.n_experiments == 1 and d.n_samples == 400
+
+
+def test_flat_list_is_one_experiment():
+    d = sysid.IOData(u=U.ravel().tolist(), y=Y.ravel().tolist())
+    assert d.n_experiments == 1 and d.n_samples == 400
+
+
+def test_list_of_arrays_is_several_experiments():
+    d = sysid.IOData(u=[U[:200], U[200:]], y=[Y[:200], Y[200:]])
+    assert d.n_experiments == 2
+
+
+def test_list_mixing_arrays_and_numbers_refused():
+    with pytest.raises(DataError, match="mixing arrays"):
+        sysid.IOData(u=None, y=[Y[:, 0], 1.0, 2.0])
+
+
+@pytest.mark.parametrize("where", ["u", "y"])
+def test_masked_samples_are_missing(where):
+    arr = np.ma.masked_array(U if where == "u" else Y, mask=np.zeros_like(U, dtype=bool))
+    arr.mask[5, 0] = True
+    kw = {"u": U, "y": Y, where: arr}
+    with pytest.raises(sysid.NonFiniteError) as e:
+        sysid.IOData(**kw)
+    assert "masked" in str(e.value) and "from_raw" in str(e.value)
+
+
+def test_masked_without_mask_is_fine():
+    d = sysid.IOData(u=np.ma.masked_array(U), y=Y)
+    assert np.array_equal(d.u, U)
+
+
+def test_output_only_white_noise_auto_refused():
+    d = sysid.IOData(y=np.random.default_rng(3).standard_normal((1000, 1)))
+    with pytest.raises(DataError) as e:
+        sysid.SubspaceEstimator(d).fit("auto")
+    assert "white noise" in str(e.value) and "explicit order" in str(e.value)
+
+
+def test_output_only_ar2_auto_works():
+    rng = np.random.default_rng(1)
+    e = rng.standard_normal(2000)
+    y = np.zeros(2000)
+    for t in range(2, 2000):
+        y[t] = 1.5 * y[t - 1] - 0.7 * y[t - 2] + e[t]
+    m = sysid.SubspaceEstimator(sysid.IOData(y=y)).fit("auto")
+    assert m.nstates == 2 and m.is_stable()
+    assert np.allclose(np.abs(m.poles()), np.sqrt(0.7), atol=0.03)
+
+
+def test_constant_output_refused():
+    with pytest.raises(DataError) as e:
+        sysid.cva(sysid.IOData(u=U, y=np.ones((400, 1))), order=1)
+    assert "constant" in str(e.value) and "nothing to identify" in str(e.value)
+
+
+def test_compare_constant_output_refused():
+    with pytest.raises(DataError) as e:
+        sysid.compare(TRUE, sysid.IOData(u=U, y=np.ones((400, 1))))
+    assert "constant" in str(e.value) and "undefined" in str(e.value)
+
+
+def test_fit_metrics_constant_is_nan():
+    assert np.isnan(sysid.fit_metrics(np.ones(10), np.zeros(10))["fit"][0])
+
+
+@pytest.mark.parametrize(
+    ("cov", "words"),
+    [([[-1.0]], ["positive semi-definite", "negative eigenvalue"]),
+     ([[1.0, 0.5], [0.0, 1.0]], ["symmetric"])],
+)
+def test_noise_cov_validated(cov, words):
+    n = len(cov)
+    with pytest.raises(DataError) as e:
+        sysid.StateSpaceModel(0.5 * np.eye(n), np.ones((n, 1)), np.eye(n),
+                              K=0.1 * np.eye(n), noise_cov=cov)
+    for w in words:
+        assert w in str(e.value)
+
+
+@pytest.mark.parametrize("fn", ["spa", "etfe", "welch_frf"])
+def test_frf_zero_input(fn):
+    d = sysid.IOData(u=np.zeros((256, 1)), y=Y[:256])
+    with pytest.raises(sysid.ExcitationError) as e:
+        getattr(sysid, fn)(d)
+    assert fn in str(e.value) and "no power" in str(e.value)
+
+
+@pytest.mark.parametrize("n", [5, 7, 9])
+def test_spa_tiny_record(n):
+    with pytest.raises(InsufficientDataError) as e:
+        sysid.spa(sysid.IOData(u=U[:n], y=Y[:n]))
+    assert "lags" in str(e.value) and "20 samples" in str(e.value)
+
+
+@pytest.mark.parametrize("dt", [None, True, "x", -1.0, float("nan")])
+def test_model_dt_refused(dt):
+    with pytest.raises(DataError, match="dt must be a positive number"):
+        sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=dt)
+
+
+@pytest.mark.parametrize("dt", [True, "fast", 0.0])
+def test_iodata_dt_refused(dt):
+    with pytest.raises(DataError, match="dt must be a positive number"):
+        sysid.IOData(u=U, y=Y, dt=dt)
+
+
+def test_from_pandas_without_time_warns():
+    pd = pytest.importorskip("pandas")
+    df = pd.DataFrame({"u": U[:, 0], "y": Y[:, 0]})
+    with pytest.warns(UserWarning, match="no sample time"):
+        d = sysid.IOData.from_pandas(df, inputs=["u"], outputs=["y"])
+    assert d.dt == 1.0
+
+
+def test_from_pandas_time_column_used():
+    pd = pytest.importorskip("pandas")
+    df = pd.DataFrame({"time": np.arange(400) * 0.25, "u": U[:, 0], "y": Y[:, 0]})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        d = sysid.IOData.from_pandas(df, inputs=["u"], outputs=["y"])
+    assert d.dt == 0.25
+
+
+def test_from_pandas_datetime_index_used():
+    pd = pytest.importorskip("pandas")
+    idx = pd.date_range("2024-01-01", periods=400, freq="100ms")
+    df = pd.DataFrame({"u": U[:, 0], "y": Y[:, 0]}, index=idx)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        d = sysid.IOData.from_pandas(df, inputs=["u"], outputs=["y"])
+    assert d.dt == pytest.approx(0.1)
+
+
+def test_large_offset_warns():
+    d = sysid.IOData(u=U + 1000.0, y=Y + 5000.0)
+    with pytest.warns(UserWarning, match="detrend"):
+        sysid.SubspaceEstimator(d, 5)
+
+
+def test_detrended_offset_does_not_warn():
+    d = sysid.detrend(sysid.IOData(u=U + 1000.0, y=Y + 5000.0))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UserWarning)
+        sysid.SubspaceEstimator(d, 5)
+
+
+# ---------------------------------------------------------------- 3. messages
+
+
+@pytest.mark.parametrize("scale", [1e300, 1e200, 1e-310])
+def test_out_of_range_data(scale):
+    with pytest.raises(DataError) as e:
+        sysid.SubspaceEstimator(sysid.IOData(u=U * scale, y=Y * scale)).fit(1)
+    assert "outside the range" in str(e.value) and "rescale" in str(e.value)
+
+
+def test_simulate_overflow_names_input():
+    with pytest.raises(sysid.NumericalError) as e:
+        TRUE.simulate(1e308 * np.ones((50, 1)))
+    assert "stable" in str(e.value) and "scale the input" in str(e.value)
+
+
+def test_markov_negative():
+    with pytest.raises(DataError, match="count must be an integer >= 0"):
+        TRUE.markov(-3)
+
+
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        ((np.eye(2), [1, 2, 3], [[1, 0]]), ["B has 3 entries", "2x2"]),
+        ((np.eye(2), [[1], [1]], [1, 2, 3]), ["C has 3 entries"]),
+        ((np.ones((2, 3)), [[1], [1]], [[1, 0]]), ["A", "square"]),
+        ((np.eye(2), np.ones((3, 1)), [[1, 0]]), ["B has shape"]),
+        ((np.eye(2), [[1], [1]], np.ones((1, 3))), ["C has shape"]),
+    ],
+)
+def test_statespace_shapes_named(args, words):
+    with pytest.raises(sysid.ShapeError) as e:
+        sysid.StateSpaceModel(*args)
+    for w in words:
+        assert w in str(e.value)
+
+
+def test_statespace_x0_shape():
+    with pytest.raises(sysid.ShapeError, match="x0 has 3 entries"):
+        sysid.StateSpaceModel(np.eye(2), [[1], [1]], [[1, 0]], x0=[1, 2, 3])
+
+
+def test_short_experiment_named_in_order_error():
+    d = sysid.IOData(u=[U, U[:8]], y=[Y, Y[:8]])
+    with pytest.raises(sysid.OrderError) as e:
+        sysid.SubspaceEstimator(d).fit(2)
+    assert "experiment 1" in str(e.value) and "8 samples" in str(e.value)
+
+
+def test_from_factor_wrong_type():
+    with pytest.raises(DataError, match="HankelFactor"):
+        sysid.SubspaceEstimator.from_factor("x")
+
+
+def test_dcgain_integrator():
+    m = sysid.StateSpaceModel([[1.0]], [[1.0]], [[1.0]])
+    with pytest.raises(sysid.NumericalError) as e:
+        m.dcgain()
+    assert "infinite" in str(e.value) and "z = 1" in str(e.value)
+
+
+@pytest.mark.parametrize(
+    ("source", "words"),
+    [
+        ([U, Y], ["(u, y) pairs", "bare arrays"]),
+        (U, ["(u, y) pairs"]),
+        (iter([U]), ["(u, y) pair"]),
+    ],
+)
+def test_compress_stream_bad_source(source, words):
+    with pytest.raises(DataError) as e:
+        sysid.compress_stream(source, past=3, progress=False)
+    for w in words:
+        assert w in str(e.value)
+
+
+def test_compress_stream_output_only_pair():
+    f = sysid.compress_stream((None, Y), past=3, progress=False)
+    assert f.n_inputs == 0 and f.n_outputs == 1
+
+
+def _model_file(tmp_path, name, content):
+    p = tmp_path / name
+    if isinstance(content, bytes):
+        p.write_bytes(content)
+    else:
+        import json
+
+        p.write_text(json.dumps(content))
+    return p
+
+
+def _saved():
+    return sysid.model_to_dict(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]))
+
+
+@pytest.mark.parametrize(
+    ("name", "content", "words"),
+    [
+        ("r.json", bytes(range(200, 256)) * 4, ["not a sysid model file"]),
+        ("r.npz", b"PK\x03\x04garbage" * 10, ["not a sysid model file"]),
+        ("r.bin", bytes(range(200, 256)), ["not a sysid model file", "neither JSON nor NPZ"]),
+        ("l.json", [1, 2], ["not a sysid model file"]),
+        ("f.json", {"format": "other"}, ["not a sysid model file", "format"]),
+        ("v.json", {**_saved(), "version": "2"}, ["not a sysid model file", "version"]),
+        ("n.json", {k: v for k, v in _saved().items() if k != "version"},
+         ["not a sysid model file", "version"]),
+        ("new.json", {**_saved(), "version": 99}, ["newer", "upgrade"]),
+        ("s.json", {**_saved(), "A": {"__ndarray__": ["a"], "shape": [1, 1]}},
+         ["not a sysid model file"]),
+        ("k.json", {**_saved(), "A": {"__ndarray__": [1, 2, 3, 4], "shape": [2, 2]}},
+         ["not a sysid model file"]),
+        ("m.json", {k: v for k, v in _saved().items() if k != "A"},
+         ["not a sysid model file", "A"]),
+    ],
+)
+def test_load_model_one_clear_error(tmp_path, name, content, words):
+    p = _model_file(tmp_path, name, content)
+    with pytest.raises(DataError) as e:
+        sysid.load_model(p)
+    for w in words:
+        assert w in str(e.value)
+
+
+def test_from_csv_guesses_whitespace(tmp_path):
+    p = tmp_path / "rec.dat"
+    p.write_text("u y\n" + "\n".join(f"{a} {b}" for a, b in zip(U[:50, 0], Y[:50, 0])))
+    d = sysid.IOData.from_csv(p, inputs=[0], outputs=[1], dt=1.0)
+    assert d.n_samples == 50 and np.allclose(d.y[:, 0], Y[:50, 0])
+
+
+def test_from_csv_wrong_delimiter_hint(tmp_path):
+    p = tmp_path / "rec.dat"
+    p.write_text("u y\n1 2\n3 4\n")
+    with pytest.raises(DataError) as e:
+        sysid.IOData.from_csv(p, inputs=[0], outputs=[1], delimiter=",")
+    assert "out of range" in str(e.value) and "delimiter" in str(e.value)
+
+
+def test_from_csv_binary(tmp_path):
+    p = tmp_path / "rec.csv"
+    p.write_bytes(bytes(range(128, 256)) * 8)
+    with pytest.raises(DataError, match="not a text file"):
+        sysid.IOData.from_csv(p, outputs=[0])

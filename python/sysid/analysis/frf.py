@@ -37,7 +37,7 @@ from scipy import ndimage, signal
 
 from .._checks import as_int
 from ..data.iodata import IOData
-from ..errors import DataError, InsufficientDataError
+from ..errors import DataError, ExcitationError, InsufficientDataError
 from ..models.frd import FRD
 from .correlation import _lag_covariances
 from .spectra import (
@@ -55,6 +55,15 @@ __all__ = ["welch_frf", "spa", "etfe"]
 # --------------------------------------------------------------------------------------------
 # frequency responses
 # --------------------------------------------------------------------------------------------
+
+
+def _need_excitation(keep: np.ndarray, what: str) -> None:
+    if not np.any(keep):
+        raise ExcitationError(
+            f"{what}: the input has no power at any frequency (an all-zero or constant "
+            "input?), so there is no frequency response to estimate; check the input "
+            "channels, or use output-only analysis (sysid.spectra) for time series"
+        )
 
 
 def welch_frf(
@@ -109,6 +118,7 @@ def welch_frf(
     # segment means are removed: the zero-frequency bin carries no information
     S, f = S[1:], f[1:]
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m)
+    _need_excitation(keep, "welch_frf")
     std, dof = _band(ratio, k_eff, m, "lower nperseg")
     return FRD(
         2 * np.pi * f[keep], G, coherence=coh, std=std, dof=dof,
@@ -159,6 +169,11 @@ def spa(
     data = _need_data(data)
     N = data.n_samples
     M = int(min(N // 10, 30)) if lags is None else as_int(lags, "lags", 1)
+    if lags is None and M < 2:
+        raise InsufficientDataError(
+            f"spa's default lag window (lags = N / 10) needs at least 20 samples, the record "
+            f"has {N}; pass lags=... (>= 1, below the shortest experiment) or use more data"
+        )
     if M >= min(data.lengths):
         raise InsufficientDataError(
             f"lags = {M} needs experiments longer than {M} samples (shortest: "
@@ -181,6 +196,7 @@ def spa(
     S *= 2.0 * data.dt  # one-sided density, as the Welch estimate
     m = data.n_inputs
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m)
+    _need_excitation(keep, "spa")
     std, dof = _band(ratio, total / (lagw[0] ** 2 + 2.0 * (lagw[1:] ** 2).sum()), m,
                      "lower lags")
     return FRD(
@@ -256,6 +272,7 @@ def etfe(
         S[:, :m, m:] = np.conj(np.swapaxes(Pyu, 1, 2))
         S[:, m:, m:] = Pyy
         G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, min_power)
+        _need_excitation(keep, "etfe")
         w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
         info["dropped"] = w[~keep]
         coh_out = coh if data.n_experiments > m else None
@@ -280,6 +297,7 @@ def etfe(
     S[:, :m, m:] = np.conj(np.swapaxes(S[:, m:, :m], 1, 2))
     S[:, m:, m:] = smooth(Pyy)
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, min_power)
+    _need_excitation(keep, "etfe")
     w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
     info.update({"window": window, "multiple_coherence": mcoh, "dropped": w[~keep]})
     std, dof = _band(ratio, data.n_experiments / float((W**2).sum()), m, "increase smoothing")

@@ -245,6 +245,7 @@ def _metrics(y: np.ndarray, yhat: np.ndarray) -> dict[str, np.ndarray]:
         vaf = 100.0 * (1.0 - err.var(0) / y.var(0))
         rmse = np.sqrt(np.mean(err**2, axis=0))
     fit = np.where(np.isnan(fit) & ~np.isfinite(rmse), -np.inf, fit)
+    fit = np.where(dev == 0, np.nan, fit)  # undefined for a constant channel (documented)
     return {"fit": fit, "vaf": vaf, "rmse": rmse}
 
 
@@ -365,6 +366,17 @@ def compare(model: Any, data: Any, horizon: int | None = None, *,
         ys.append(y)
         yh.append(_run(runner, u, y, h, x))
         x0s.append(x)
+    for i, (_, y) in enumerate(recs):
+        flat = np.ptp(y, axis=0) == 0
+        if flat.any():
+            names = getattr(model, "output_names", None) or [f"y{j}" for j in range(y.shape[1])]
+            which = ", ".join(str(names[j]) for j in np.flatnonzero(flat))
+            raise DataError(
+                f"output {which} is constant"
+                + (f" in experiment {i}" if len(recs) > 1 else "")
+                + ": the fit (NRMSE against the mean) is undefined for a constant signal; "
+                "compare on a record where the output varies, or look at the residuals"
+            )
     return CompareResult(model, h, us, ys, yh, x0s)
 
 

@@ -248,7 +248,8 @@ class _FileFormats:
         whole. Empty fields become NaN and are handled as ``nan`` says (see
         :meth:`from_raw`; only for single-experiment files). Trailing delimiters are ignored.
         The delimiter is guessed from the header (comma, semicolon, tab, else white space,
-        as in ``.dat`` files) unless given. Files ending in ``.gz``, ``.bz2`` or ``.xz`` are decompressed while reading.
+        as in ``.dat`` files) unless given. Files ending in ``.gz``, ``.bz2`` or ``.xz`` are
+        decompressed while reading.
 
         Examples
         --------

@@ -28,6 +28,7 @@ Singular values follow SLICOT's convention: the data are not divided by ``sqrt(N
 
 from __future__ import annotations
 
+import warnings
 from typing import Any, Literal, Union
 
 import numpy as np
@@ -55,6 +56,68 @@ def _method(method: str) -> str:
     if key not in METHODS:
         raise DataError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
     return key
+
+
+def _check_signals(data: IOData) -> None:
+    """Refuse constant outputs; warn about offsets much larger than the variation."""
+    for kind, idx, names in (("output", 1, data.output_names), ("input", 0, data.input_names)):
+        if not names:
+            continue
+        x = np.concatenate([e[idx] for e in data.experiments])
+        big = np.max(np.abs(x), axis=0)
+        for j, n in enumerate(names):
+            if big[j] > 1e150 or 0 < big[j] < 1e-150:
+                raise DataError(
+                    f"{kind} {n} has values of order {big[j]:.0e}, outside the range sysid "
+                    "computes with (products of samples overflow or underflow); rescale the "
+                    "channel to order 1 first, e.g. sysid.scale(data) or data in other units"
+                )
+        mean, std = x.mean(0), x.std(0)
+        for j, n in enumerate(names):
+            if std[j] == 0 and kind == "output":
+                raise DataError(
+                    f"output {n} is constant ({mean[j]:g}): there is nothing to identify; "
+                    "check the channel (a stuck sensor, the wrong column?) or drop it"
+                )
+            if not data.has_trend and abs(mean[j]) > 10 * std[j] > 0:
+                warnings.warn(
+                    f"{kind} {n} has an offset ({mean[j]:.4g}) much larger than its variation "
+                    f"(std {std[j]:.3g}) and the data were not detrended: the model will "
+                    "spend a state on the offset (a pole near 1); remove it first with "
+                    "sysid.detrend(data) (command line: --detrend mean or --detrend linear)",
+                    UserWarning,
+                    stacklevel=3,
+                )
+
+
+def _refuse_white_noise(data: IOData, lags: int = 20, level: float = 0.05) -> None:
+    """Output-only data that pass a Ljung-Box whiteness test have no dynamics to identify."""
+    from scipy import stats
+
+    pvals = []
+    for j in range(data.n_outputs):
+        q, n_tot = 0.0, 0
+        for _, y in data.experiments:
+            x = y[:, j] - y[:, j].mean()
+            N = x.size
+            if N <= lags + 1:
+                continue
+            c0 = float(x @ x)
+            if c0 == 0.0:
+                continue
+            r = np.array([x[k:] @ x[:-k] for k in range(1, lags + 1)]) / c0
+            q += N * (N + 2) * float(np.sum(r**2 / (N - np.arange(1, lags + 1))))
+            n_tot += 1
+        if n_tot == 0:
+            return
+        pvals.append(float(stats.chi2.sf(q, lags * n_tot)))
+    if min(pvals) > level:
+        raise DataError(
+            "order='auto' on output-only data that look like white noise (Ljung-Box p = "
+            + ", ".join(f"{n}: {p:.2g}" for n, p in zip(data.output_names, pvals))
+            + f" at {lags} lags): there are no dynamics to identify (an order-0 model y = e "
+            "describes them); pass an explicit order to fit one anyway"
+        )
 
 
 def default_horizon(n_samples: int, n_inputs: int, n_outputs: int) -> int:
@@ -144,6 +207,7 @@ class SubspaceEstimator:
         self.future = as_int(future if future is not None else horizon, "future", 1)
         if chunk_rows is not None:
             chunk_rows = as_int(chunk_rows, "chunk_rows", 1)
+        _check_signals(data)
         if self.past + self.future > longest:
             which = "horizon" if past is None and future is None else "past/future"
             raise InsufficientDataError(
@@ -272,6 +336,8 @@ class SubspaceEstimator:
         if isinstance(order, str):
             if order != "auto":
                 raise DataError(f"order must be an integer or 'auto', got {order!r}")
+            if self.factor.n_inputs == 0 and not self._from_factor:
+                _refuse_white_noise(self.data)
             n = sub.auto_order()
         else:
             n = as_int(order, "order", 1)

@@ -202,7 +202,8 @@ class FRD:
 
     def select(self, outputs: Any = None, inputs: Any = None) -> FRD:
         """The sub-response of some outputs and inputs (names or indices)."""
-        dummy = IOData(u=np.zeros((1, self.n_inputs)), y=np.zeros((1, self.n_outputs)),
+        rows = max(self.n_inputs, self.n_outputs, 1)  # time-first: samples >= channels
+        dummy = IOData(u=np.zeros((rows, self.n_inputs)), y=np.zeros((rows, self.n_outputs)),
                        input_names=self.input_names, output_names=self.output_names)
         iu = dummy._index(inputs, self.input_names, "input")
         iy = dummy._index(outputs, self.output_names, "output")

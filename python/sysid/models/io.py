@@ -29,6 +29,8 @@ Examples
 
 from __future__ import annotations
 
+import zipfile
+from pathlib import Path
 from typing import Any
 
 from ..errors import DataError
@@ -59,6 +61,8 @@ def model_from_dict(d: dict[str, Any]) -> Any:
     """Inverse of :func:`sysid.model_to_dict`: the registered family's ``from_dict``.
 
     Checks the format tag and the version; version-1 files (state-space only) still load.
+    Anything else raises one :class:`~sysid.DataError` "not a sysid model file: <what is
+    wrong>".
 
     Examples
     --------
@@ -68,24 +72,29 @@ def model_from_dict(d: dict[str, Any]) -> Any:
     array([0. , 1. , 1.5])
     """
     if not isinstance(d, dict) or d.get("format") not in (FORMAT, LEGACY_FORMAT):
-        raise DataError(f"not a sysid model file (expected format {FORMAT!r})")
-    version = int(d.get("version", 0))
-    if version > VERSION:
-        raise DataError(f"model file version {version} is newer than this sysid "
+        got = d.get("format") if isinstance(d, dict) else type(d).__name__
+        raise DataError(f"not a sysid model file: expected format {FORMAT!r}, got {got!r}")
+    raw_version = d.get("version")
+    if isinstance(raw_version, bool) or not isinstance(raw_version, int) or raw_version < 1:
+        raise DataError(f"not a sysid model file: missing or invalid format version "
+                        f"{raw_version!r} (expected an integer 1..{VERSION})")
+    if raw_version > VERSION:
+        raise DataError(f"model file version {raw_version} is newer than this sysid "
                         f"understands ({VERSION}); upgrade sysid")
-    body = {k: _decode(v) for k, v in d.items()}
     family = "StateSpaceModel" if d["format"] == LEGACY_FORMAT else str(d.get("family"))
     cls = REGISTRY.get(family)
     if cls is None:
         raise DataError(f"unknown model family {family!r}: import the module that defines it "
                         "and register the class with sysid.register_model before loading")
     try:
+        body = {k: _decode(v) for k, v in d.items()}
         return cls.from_dict(body)  # type: ignore[attr-defined]
-    except (KeyError, ValueError, TypeError) as e:
-        if isinstance(e, DataError):
-            raise
-        raise DataError(f"the {family} entry of this model file is incomplete or damaged: "
-                        f"{e!r}") from e
+    except KeyError as e:
+        raise DataError(f"not a sysid model file: the {family} entry has no field "
+                        f"{e.args[0]!r}") from None
+    except (ValueError, TypeError, AttributeError, IndexError) as e:
+        raise DataError(f"not a sysid model file: the {family} entry is inconsistent or "
+                        f"damaged ({e})") from None
 
 
 def load_model(path: PathLike, *, format: str | None = None) -> Any:
@@ -99,4 +108,23 @@ def load_model(path: PathLike, *, format: str | None = None) -> Any:
     >>> sysid.load_model(path)
     StateSpaceModel(nstates=1, ninputs=1, noutputs=1, dt=1, stable, no noise model)
     """
-    return model_from_dict(read_model_file(path, format))
+    p = Path(path)
+    if format is None and p.suffix.lower() not in (".json", ".npz") and p.is_file():
+        head = p.read_bytes()[:4]
+        format = "npz" if head.startswith(b"PK") else "json" if head.lstrip()[:1] == b"{" else None
+        if format is None:
+            raise DataError(f"not a sysid model file: {str(p)!r} is neither JSON nor NPZ "
+                            "(save models with sysid.save_model or model.save)")
+    try:
+        d = read_model_file(p, format)
+    except FileNotFoundError:
+        raise
+    except DataError as e:
+        msg = str(e)
+        raise DataError(msg if msg.startswith("not a sysid model file")
+                        else f"not a sysid model file: {msg}") from None
+    except (UnicodeDecodeError, ValueError, OSError, zipfile.BadZipFile, KeyError,
+            AttributeError, TypeError) as e:
+        raise DataError(f"not a sysid model file: {str(p)!r} could not be read as "
+                        f"{format or p.suffix.lstrip('.')} ({type(e).__name__}: {e})") from None
+    return model_from_dict(d)

@@ -222,8 +222,8 @@ def read_model_file(path: PathLike, fmt: str | None) -> dict[str, Any]:
         if not isinstance(d, dict):
             raise DataError(f"{str(path)!r} is not a sysid model file")
         return {k: _decode(v) for k, v in d.items()}
-    with np.load(path, allow_pickle=False) as z:
-        if "__meta__" not in z:
+    with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
+        if not isinstance(z, np.lib.npyio.NpzFile) or "__meta__" not in z:
             raise DataError(f"{str(path)!r} is not a sysid model file (no metadata)")
         d = {k: _decode(v) for k, v in json.loads(str(z["__meta__"])).items()}
         for k in z.files:

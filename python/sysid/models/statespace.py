@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_2d, as_count, as_dt, as_int, as_matrix, check_covariance, unmask
-from ..errors import DataError, ShapeError
+from ..errors import DataError, NumericalError, ShapeError
 from .linear import DampingTable, damping_table, transmission_zeros
 from .protocol import ModelMixin, TimeResponse, default_length
 
@@ -200,7 +200,17 @@ class StateSpaceModel(ModelMixin):
         array([0. , 1. , 1.9])
         """
         u = self._u(u)
-        return _sysid.simulate(self.A, self.B, self.C, self.D, u, self._x0(x0))
+        try:
+            return _sysid.simulate(self.A, self.B, self.C, self.D, u, self._x0(x0))
+        except NumericalError as e:
+            if not self.is_stable() or "overflow" not in str(e):
+                raise
+            big = float(np.max(np.abs(u))) if u.size else 0.0
+            raise NumericalError(
+                f"the simulated output overflowed although the model is stable: the input "
+                f"reaches {big:.3g}, too close to the largest double ({np.finfo(float).max:.3g}) "
+                "for the model's gain; scale the input (and the model) to order 1"
+            ) from None
 
     def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
         """``horizon``-step-ahead prediction ``ŷ(t | t - horizon)`` with the Kalman predictor.
@@ -343,7 +353,15 @@ class StateSpaceModel(ModelMixin):
             from .uncertainty import complex_std
 
             return complex_std(self, lambda m: m.dcgain())
-        return self.freqresp([0.0])[0].real
+        try:
+            return self.freqresp([0.0])[0].real
+        except np.linalg.LinAlgError:
+            ones = [p for p in self.poles() if abs(p - 1.0) < 1e-9]
+            raise NumericalError(
+                f"the DC gain is infinite: the model has {len(ones)} pole(s) at z = 1 (an "
+                "integrator), so its step response grows without bound; look at step() or "
+                "freqresp() at low frequencies instead"
+            ) from None
 
     def __repr__(self) -> str:
         stab = "stable" if self.is_stable() else "UNSTABLE"
