@@ -588,3 +588,122 @@ def test_from_csv_binary(tmp_path):
     p.write_bytes(bytes(range(128, 256)) * 8)
     with pytest.raises(DataError, match="not a text file"):
         sysid.IOData.from_csv(p, outputs=[0])
+
+
+# ---------------------------------------------------------------- 4. order choice and report
+
+
+def _ts_csv(tmp_path, n=2000):
+    rng = np.random.default_rng(1)
+    e = rng.standard_normal(n)
+    y = np.zeros(n)
+    for t in range(2, n):
+        y[t] = 1.5 * y[t - 1] - 0.7 * y[t - 2] + e[t]
+    p = tmp_path / "ts.csv"
+    np.savetxt(p, y[:, None], header="T", comments="", delimiter=",")
+    return p
+
+
+def test_cli_output_only_end_to_end(capsys, tmp_path):
+    pytest.importorskip("matplotlib")
+    from sysid.cli import main
+
+    rep = tmp_path / "rep"
+    assert main(["identify", str(_ts_csv(tmp_path)), "--outputs", "T", "--report", str(rep),
+                 "--quiet"]) == 0
+    assert (rep / "index.html").is_file()
+    assert not (rep / "bode.png").exists()
+    assert "no Bode plot" in (rep / "index.html").read_text()
+
+
+def test_cli_saves_the_validated_model(capsys, tmp_path, csv_file):
+    pytest.importorskip("matplotlib")
+    from sysid.cli import main
+
+    rep = tmp_path / "rep"
+    assert main(["identify", str(csv_file), "--inputs", "u", "--outputs", "y",
+                 "--report", str(rep), "--quiet"]) == 0
+    import csv as _csv
+
+    m = sysid.load_model(rep / "model.json")
+    with open(rep / "orders.csv") as fh:
+        rows = list(_csv.DictReader(fh))
+    row = next(r for r in rows if int(r["order"]) == m.nstates)
+    val = sysid.IOData(u=U[200:], y=Y[200:])
+    assert float(row["fit_validation"]) == pytest.approx(sysid.compare(m, val).mean_fit,
+                                                         abs=1e-9)
+    assert m.info["settings"]["order"] == m.nstates
+    assert m.info["preprocessing"]["detrend"] == "none"
+
+
+def test_cli_detrend_linear(capsys, tmp_path):
+    pytest.importorskip("matplotlib")
+    from sysid.cli import main
+
+    p = tmp_path / "drift.csv"
+    t = np.arange(400.0)
+    np.savetxt(p, np.c_[U + 0.01 * t[:, None], Y + 100 + 0.05 * t[:, None]], delimiter=",",
+               header="u,y", comments="")
+    rep = tmp_path / "rep"
+    assert main(["identify", str(p), "--inputs", "u", "--outputs", "y", "--report",
+                 str(rep), "--quiet", "--detrend", "linear"]) == 0
+    m = sysid.load_model(rep / "model.json")
+    assert "removed_lines" in m.info["preprocessing"]
+
+
+def test_order_reason_names_excluded_orders():
+    from sysid.analysis.criteria import OrderSelection
+
+    def row(n, fit, stable):
+        return {"method": "moesp", "order": n, "singular_value": 1.0 / n, "error": None,
+                "stable": stable, "max_abs_pole": 0.5 if stable else 1.1, "n_params": n,
+                "loss": 1.0, "aic": 1.0, "aicc": 1.0, "bic": 1.0, "fpe": 1.0,
+                "fit_estimation": fit, "fit_validation": fit}
+
+    rows = [row(1, 50.0, True), row(2, 55.4, True), row(3, 57.8, False)]
+    sel = OrderSelection(rows, {}, {}, {}, True, None, 0.5)
+    assert sel.order == 2
+    assert "excluded as unstable: order(s) 3" in sel.reason
+    assert "best stable order's (55.4 %)" in sel.reason
+
+
+def test_excitation_warning_once_per_sweep():
+    t = np.arange(600)
+    u = (np.sin(0.3 * t) + np.sin(1.1 * t) + np.sin(2.0 * t))[:, None]  # three sinusoids:
+    # persistently exciting of order 6, so orders 4 and 5 (needing 8 and 10) both warn
+    y = TRUE.simulate(u) + 0.01 * np.random.default_rng(5).standard_normal((600, 1))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sysid.select_order(sysid.IOData(u=u, y=y), range(1, 6), horizon=6)
+    exc = [w for w in caught if issubclass(w.category, sysid.ExcitationWarning)]
+    assert len(exc) == 1
+    assert "every higher order" in str(exc[0].message)
+
+
+def test_info_records_settings_from_python():
+    d = sysid.detrend(sysid.IOData(u=U, y=Y + 3.0))
+    m = sysid.SubspaceEstimator(d, 5).fit(1)
+    assert m.info["settings"]["past"] == 5 and m.info["settings"]["order"] == 1
+    assert m.info["preprocessing"]["detrended"] is True
+
+
+def test_to_control_noise_inputs():
+    pytest.importorskip("control")
+    m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], K=[[0.3]], dt=0.1)
+    c = sysid.to_control(m, noise=True)
+    assert c.ninputs == 2 and np.allclose(c.B, [[1.0, 0.3]]) and np.allclose(c.D, [[0, 1]])
+    with pytest.raises(DataError, match="Kalman gain"):
+        sysid.to_control(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), noise=True)
+
+
+def test_report_has_spa_window_and_tight_figures(tmp_path):
+    pytest.importorskip("matplotlib")
+    n = 3000
+    rng = np.random.default_rng(2)
+    u = rng.standard_normal((n, 1))
+    d = sysid.IOData(u=u, y=TRUE.simulate(u) + 0.05 * rng.standard_normal((n, 1)))
+    m = sysid.SubspaceEstimator(d, 5).fit(1)
+    files = sysid.report(m, d, tmp_path / "r")
+    assert "compare_window" in files and "bode" in files
+    html = files["html"].read_text()
+    assert "spa" in html and "first 500 samples" in html

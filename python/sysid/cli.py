@@ -223,11 +223,16 @@ def identify(
     x0 = False
     if uncertainty is not None:
         say(f"fitting order {n} with a residual bootstrap of {n_boot} records")
-    model = est.fit(n, x0=x0, uncertainty=uncertainty, n_boot=n_boot, rng=0)
-    model.info["settings"] = {"method": est.method, "order": n, "order_rule": (
+    # the model saved and reported is the one the sweep validated (same fit, same settings);
+    # the bootstrap adds its uncertainty without changing the estimate
+    model = (sel.model(n, est.method) if uncertainty is None
+             else est.fit(n, x0=x0, uncertainty=uncertainty, n_boot=n_boot, rng=0))
+    model.info["settings"] = {**model.info.get("settings", {}), "method": est.method,
+                              "order": n, "order_rule": (
         sel.criterion if order == "auto" else "given"), "past": est.past,
         "future": est.future, "x0": x0}
-    model.info["preprocessing"] = dict(preprocessing or {})
+    model.info["preprocessing"] = {**model.info.get("preprocessing", {}),
+                                   **dict(preprocessing or {})}
     check = val_data if val_data is not None else est_data
     which = "validation" if val_data is not None else "estimation"
     say(f"validating on the {which} data")
@@ -329,6 +334,18 @@ def _identify(args: argparse.Namespace) -> int:
         mu, my = u[:k].mean(0), y[:k].mean(0)
         u, y = u - mu, y - my
         pre["removed_means"] = {"inputs": mu.tolist(), "outputs": my.tolist()}
+    elif args.detrend == "linear":
+        # the line fitted on the estimation part, extended over the whole record
+        tt = np.arange(N, dtype=float)
+        basis = np.c_[np.ones(N), tt]
+        coef_u = np.linalg.lstsq(basis[:k], u[:k], rcond=None)[0] if ui else None
+        coef_y = np.linalg.lstsq(basis[:k], y[:k], rcond=None)[0]
+        if coef_u is not None:
+            u = u - basis @ coef_u
+        y = y - basis @ coef_y
+        pre["removed_lines"] = {
+            "inputs": [] if coef_u is None else coef_u.T.tolist(),
+            "outputs": coef_y.T.tolist(), "basis": "offset + slope * sample index"}
     pre["detrend"] = args.detrend
     kw = {"dt": dt, "input_names": pre["inputs"], "output_names": pre["outputs"]}
     est_data = IOData(u=u[:k] if ui else None, y=y[:k], **kw)
@@ -361,8 +378,9 @@ def _parser() -> argparse.ArgumentParser:
                      help="estimation part: fraction (0.5) or sample count (500); 1 = all")
     ide.add_argument("--dt", type=float, default=None, help="sample time in seconds")
     ide.add_argument("--time", default=None, help="time column (sample time from its steps)")
-    ide.add_argument("--detrend", choices=("none", "mean"), default="none",
-                     help="remove the estimation part's means first (recorded in the model)")
+    ide.add_argument("--detrend", choices=("none", "mean", "linear"), default="none",
+                     help="remove the estimation part's means (or lines) first; recorded in "
+                          "the model")
     ide.add_argument("--delimiter", default=None, help="field separator (default: guessed)")
     ide.add_argument("--report", required=True, help="output directory")
     ide.add_argument("--uncertainty", choices=("none", "bootstrap"), default="none",

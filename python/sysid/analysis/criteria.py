@@ -37,6 +37,7 @@ least-squares estimate), which changes nothing on noisy data.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Iterable, Iterator, Sequence
 from typing import Any
 
@@ -194,11 +195,13 @@ class OrderSelection:
         first = rows[0]["method"]
         if first in svd_picks:
             self.picks["svd"], self.pick_methods["svd"] = svd_picks[first], first
+        self._top: float | None = None
         if has_validation:
             cand = [r for r in ok if r["stable"] and np.isfinite(r["fit_validation"])]
             cand = cand or [r for r in ok if np.isfinite(r["fit_validation"])]
             if cand:
                 top = max(r["fit_validation"] for r in cand)
+                self._top = top
                 good = [r for r in cand if r["fit_validation"] >= top - fit_tol]
                 best = min(good, key=lambda r: (r["order"], -r["fit_validation"]))
                 self.picks["validation"], self.pick_methods["validation"] = (
@@ -223,11 +226,14 @@ class OrderSelection:
         votes = ", ".join(f"{_NAMES.get(k, k)} -> {v}" for k, v in self.picks.items())
         parts = [f"order {self.order} ({self.method}) chosen by {self.criterion}"]
         if self.criterion == "validation":
-            top = max(x["fit_validation"] for x in self.rows if x["error"] is None
-                      and np.isfinite(x["fit_validation"]))
+            top = self._top if self._top is not None else r["fit_validation"]
             parts.append(
                 f": validation fit {r['fit_validation']:.1f} % is within {self.fit_tol:g} "
-                f"points of the best ({top:.1f} %), and no smaller stable order is")
+                f"points of the best stable order's ({top:.1f} %), and no smaller stable "
+                "order is")
+            excluded = self._excluded()
+            if excluded:
+                parts.append(f" ({excluded})")
         elif self.criterion in CRITERIA:
             parts.append(f": smallest {_NAMES[self.criterion]} = {r[self.criterion]:.4g}")
         else:
@@ -238,6 +244,24 @@ class OrderSelection:
                          f"(ratio {sv[self.order - 1] / max(sv[self.order], 1e-300):.3g})")
         parts.append(f"; {'stable' if r['stable'] else 'UNSTABLE'} model. Votes: {votes}.")
         return "".join(parts)
+
+    def _excluded(self) -> str:
+        """Which orders the choice left out and why (unstable, failed)."""
+        def orders(rows: list[dict[str, Any]]) -> str:
+            return ", ".join(str(x["order"]) for x in rows)
+
+        unstable = [x for x in self.rows if x["error"] is None and not x["stable"]]
+        failed = [x for x in self.rows if x["error"] is not None]
+        out = []
+        if unstable:
+            best = max(unstable, key=lambda x: x["fit_validation"]
+                       if np.isfinite(x["fit_validation"]) else -np.inf)
+            fit = (f", the best of them {best['fit_validation']:.1f} % at order "
+                   f"{best['order']}" if np.isfinite(best["fit_validation"]) else "")
+            out.append(f"excluded as unstable: order(s) {orders(unstable)}{fit}")
+        if failed:
+            out.append(f"not fitted: order(s) {orders(failed)} ({failed[0]['error']})")
+        return "; ".join(out)
 
     def model(self, order: int | None = None, method: str | None = None) -> Any:
         """The fitted model of the sweep (default: the recommended one)."""
@@ -432,7 +456,43 @@ def select_order(
     orders_ = _check_orders(orders, est.max_order)
     _check_validation(validation, est.data.n_inputs, est.data.n_outputs, est.data.dt)
     est_data = None if getattr(est, "_from_factor", False) else est.data
-    rows, fitted, svs, svd_picks = [], {}, {}, {}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        rows, fitted, svs, svd_picks = _sweep(est, meths, orders_, est_data, validation,
+                                              feedthrough, kalman, x0)
+    _warn_once(caught)
+    return OrderSelection(rows, svs, fitted, svd_picks, validation is not None, criterion,
+                          float(fit_tol))
+
+
+def _warn_once(caught: list[Any]) -> None:
+    """Re-emit the warnings of a sweep: each distinct one once, and the excitation warning
+    only for the lowest order that raised it (it would repeat for every higher order)."""
+    from ..errors import ExcitationWarning
+
+    seen: set[tuple[type, str]] = set()
+    excitation = [w for w in caught if issubclass(w.category, ExcitationWarning)]
+    for w in caught:
+        if issubclass(w.category, ExcitationWarning):
+            if w is not excitation[0]:
+                continue
+            msg = str(w.message)
+            if len(excitation) > 1:
+                msg += " (the same holds for every higher order of the sweep)"
+            warnings.warn(msg, w.category, stacklevel=3)
+            continue
+        key = (w.category, str(w.message))
+        if key not in seen:
+            seen.add(key)
+            warnings.warn(w.message, w.category, stacklevel=3)
+
+
+def _sweep(est: Any, meths: list[str], orders_: list[int], est_data: Any, validation: Any,
+           feedthrough: bool, kalman: bool, x0: str) -> tuple[Any, Any, Any, Any]:
+    rows: list[dict[str, Any]] = []
+    fitted: dict[tuple[str, int], Any] = {}
+    svs: dict[str, np.ndarray] = {}
+    svd_picks: dict[str, int] = {}
     for meth in meths:
         sv = np.asarray(est.singular_values_for(meth))
         svs[meth] = sv
@@ -466,8 +526,7 @@ def select_order(
                 rows.append(_failed(row, e))
                 continue
             rows.append(row)
-    return OrderSelection(rows, svs, fitted, svd_picks, validation is not None, criterion,
-                          float(fit_tol))
+    return rows, fitted, svs, svd_picks
 
 
 def _order_of(model: Any) -> int:

@@ -161,8 +161,13 @@ def _control() -> Any:
     return control
 
 
-def to_control(model: StateSpaceModel | ContinuousStateSpace) -> Any:
-    """A ``control.StateSpace`` (discrete with ``dt``, or continuous); ``K`` is dropped.
+def to_control(model: StateSpaceModel | ContinuousStateSpace, *, noise: bool = False) -> Any:
+    """A ``control.StateSpace`` (discrete with ``dt``, or continuous).
+
+    By default the deterministic part ``(A, B, C, D)``: ``K`` is dropped. With
+    ``noise=True`` the noise-augmented system of the innovation form, inputs ``[u, e]``:
+    ``x(t+1) = A x + [B K] [u; e]``, ``y = C x + [D I] [u; e]`` (the innovation channels are
+    named ``e:<output>``); a model without ``K`` raises :class:`~sysid.DataError`.
 
     Needs python-control (optional; the examples are skipped by the doctest run, the
     conversions are tested against it in ``tests/test_analysis.py`` when it is installed).
@@ -170,16 +175,24 @@ def to_control(model: StateSpaceModel | ContinuousStateSpace) -> Any:
     Examples
     --------
     >>> import sysid
-    >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1)
+    >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], K=[[0.3]], dt=0.1)
     >>> sysid.to_control(m).dt  # doctest: +SKIP
     0.1
+    >>> sysid.to_control(m, noise=True).ninputs  # doctest: +SKIP
+    2
     """
     ct = _control()
     dt = model.dt if isinstance(model, StateSpaceModel) else 0
-    return ct.ss(
-        model.A, model.B, model.C, model.D, dt,
-        inputs=list(model.input_names), outputs=list(model.output_names),
-    )
+    B, D, inputs = model.B, model.D, list(model.input_names)
+    if noise:
+        K = getattr(model, "K", None)
+        if K is None:
+            raise DataError("noise=True needs a model with a Kalman gain K (an innovation "
+                            "form, e.g. fit(..., kalman=True)); this model has none")
+        B = np.hstack([B, K])
+        D = np.hstack([D, np.eye(model.noutputs)])
+        inputs += [f"e:{n}" for n in model.output_names]
+    return ct.ss(model.A, B, model.C, D, dt, inputs=inputs, outputs=list(model.output_names))
 
 
 def _from_matrices(A: Any, B: Any, C: Any, D: Any, dt: Any, names: tuple[Any, Any]) -> Any:

@@ -15,7 +15,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..errors import DataError
+from ..data.iodata import IOData
+from ..errors import DataError, SysidError
 from ..models.checks import check_model
 from .criteria import _pct
 from .validation import compare, error_spectrum
@@ -94,7 +95,7 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
 
     def save(name: str, fig: Any) -> None:
         files[name] = root / f"{name}.png"
-        fig.savefig(files[name], dpi=90)
+        fig.savefig(files[name], dpi=90, bbox_inches="tight")  # no clipped axis labels
         plt.close(fig)
 
     if selection is not None:
@@ -110,9 +111,15 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
         save("order_selection", selection.plot())
         save("stabilization", selection.stabilization_plot().figure)
     save("compare", sim.plot())
+    if shortest > 2 * _WINDOW:
+        save("compare_window", _window(sim.plot(), _WINDOW))
     save("residuals", res.plot())
     save("error_spectrum", spec.plot())
-    save("bode", plot_bode(model))
+    if model.ninputs == 0:
+        notes.append("time-series model (no inputs): no Bode plot or step response; the "
+                     "error spectrum shows what the model leaves unexplained")
+    else:
+        save("bode", _bode_with_spa(model, data, plot_bode, notes))
     try:
         save("pzmap", plot_pzmap(model).figure)
     except DataError as e:  # no poles()/zeros() nor to_statespace()
@@ -120,11 +127,39 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
         notes.append(f"no pole-zero map: {e}")
     from .lti import step
 
-    save("step", step(model).plot())
+    if model.ninputs:
+        save("step", step(model).plot())
     files["html"] = root / "index.html"
     files["html"].write_text(_html(model, sim, pred, res, selection, which, files, notes),
                              encoding="utf-8")
     return files
+
+
+_WINDOW = 500  # samples shown in the zoomed comparison of a long record
+
+
+def _window(fig: Any, n: int) -> Any:
+    """The comparison figure zoomed on its first ``n`` samples (a long record is a block)."""
+    for ax in fig.axes:
+        lines = [ln for ln in ax.get_lines() if len(ln.get_xdata()) > n]
+        if lines:
+            x = np.asarray(lines[0].get_xdata(), dtype=float)
+            ax.set_xlim(x[0], x[n - 1])
+            ax.relim(visible_only=True)
+    fig.suptitle(f"first {n} samples")
+    return fig
+
+
+def _bode_with_spa(model: Any, data: Any, plot_bode: Any, notes: list[str]) -> Any:
+    """The model's Bode plot with the non-parametric (spa) estimate beside it."""
+    from .frf import spa
+
+    try:
+        frd = spa(data if isinstance(data, IOData) else IOData(*data))
+    except SysidError as e:
+        notes.append(f"no spa estimate on the Bode plot: {e}")
+        return plot_bode(model)
+    return plot_bode([model, frd], labels=["model", "spa (non-parametric)"])
 
 
 def _html(model: Any, sim: Any, pred: Any, res: Any, sel: Any, which: str,
@@ -142,12 +177,13 @@ def _html(model: Any, sim: Any, pred: Any, res: Any, sel: Any, which: str,
                 for j, name in enumerate(model.output_names)]
     captions = (
         ("compare", f"{which} data: measured and simulated outputs"),
+        ("compare_window", f"{which} data: the first {_WINDOW} samples"),
         ("residuals", "residual correlations with 99 % bounds"),
         ("error_spectrum", "spectrum of the simulation error"),
         ("singular_values", "singular values"),
         ("order_selection", "order selection"),
         ("stabilization", "stabilisation diagram"),
-        ("bode", "Bode plot"),
+        ("bode", "Bode plot: the model and the spa (Blackman-Tukey) estimate"),
         ("pzmap", "pole-zero map"),
         ("step", "step response"),
     )

@@ -58,6 +58,20 @@ def _method(method: str) -> str:
     return key
 
 
+def _preprocessing(data: IOData, from_factor: bool) -> dict[str, Any]:
+    """What the record says was done to it before fitting (trend removed, scaling)."""
+    if from_factor:
+        return {"source": "a precomputed HankelFactor (pre-processing unknown)"}
+    tr = data.trend
+    return {
+        "experiments": data.n_experiments,
+        "samples": data.lengths,
+        "detrended": any(np.any(a != 0) for a in tr.u_trend + tr.y_trend),
+        "input_scale": tr.u_scale.tolist(),
+        "output_scale": tr.y_scale.tolist(),
+    }
+
+
 def _check_signals(data: IOData) -> None:
     """Refuse constant outputs; warn about offsets much larger than the variation."""
     for kind, idx, names in (("output", 1, data.output_names), ("input", 0, data.input_names)):
@@ -378,6 +392,12 @@ class SubspaceEstimator:
             "Q": res["Q"],
             "R": res["R"],
             "S": res["S"],
+            "settings": {"method": method and _method(method) or self.method, "order": n,
+                         "order_rule": "auto" if isinstance(order, str) else "given",
+                         "past": self.past, "future": self.future,
+                         "feedthrough": bool(feedthrough), "kalman": bool(kalman),
+                         "stable": bool(stable), "x0": bool(x0)},
+            "preprocessing": _preprocessing(self.data, self._from_factor),
         }
         model = StateSpaceModel(
             res["A"],
