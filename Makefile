@@ -4,7 +4,7 @@ VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.deps-installed
 
-.PHONY: demo test test-rust test-python lint build bench bench-quick bench-full clean
+.PHONY: demo test test-rust test-python lint build bench bench-quick bench-full clean fuzz
 
 $(STAMP): pyproject.toml Makefile
 	$(PY) -m venv $(VENV)
@@ -42,6 +42,14 @@ bench-quick: build
 
 bench-full: build
 	$(BIN)/python benches/run.py --full
+
+# Fuzz the compressors and the estimators for FUZZ_SECONDS each (needs a nightly toolchain
+# and `cargo install cargo-fuzz`); a crash leaves its input in fuzz/artifacts/<target>/.
+FUZZ_SECONDS ?= 60
+fuzz:
+	cd fuzz && for t in compressor estimators; do \
+		cargo +nightly fuzz run $$t -- -max_total_time=$(FUZZ_SECONDS) -rss_limit_mb=4096 || exit 1; \
+	done
 
 clean:
 	rm -rf $(VENV) target
