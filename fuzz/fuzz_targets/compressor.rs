@@ -17,7 +17,11 @@ fuzz_target!(|data: &[u8]| {
         0 => None,
         _ => Some(b.size(64)),
     };
-    let kind_name = if b.byte() % 2 == 0 { "qr" } else { "correlation" };
+    let kind_name = if b.byte() % 2 == 0 {
+        "qr"
+    } else {
+        "correlation"
+    };
     let Ok(layout) = HankelLayout::new(m, l, past, future) else {
         return;
     };
@@ -43,7 +47,12 @@ fuzz_target!(|data: &[u8]| {
         let mut start = 0;
         while start < y.nrows() {
             let len = (1 + b.size(16)).min(y.nrows() - start);
-            if c.push(u.as_ref().subrows(start, len), y.as_ref().subrows(start, len)).is_err() {
+            if c.push(
+                u.as_ref().subrows(start, len),
+                y.as_ref().subrows(start, len),
+            )
+            .is_err()
+            {
                 return;
             }
             start += len;

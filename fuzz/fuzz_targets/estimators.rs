@@ -24,7 +24,8 @@ fuzz_target!(|data: &[u8]| {
     // subspace
     if let Ok(layout) = HankelLayout::new(m, l, h, h) {
         let exps = [(u.as_ref(), y.as_ref())];
-        if let Ok(f) = compress_experiments(layout, &exps, CompressorKind::Qr { chunk_rows: None }) {
+        if let Ok(f) = compress_experiments(layout, &exps, CompressorKind::Qr { chunk_rows: None })
+        {
             let method = Method::parse(METHODS[b.byte() as usize % METHODS.len()]).unwrap();
             if let Ok(s) = Subspace::new(&f, &SubspaceOptions::with_method(method)) {
                 let _ = s.auto_order();
@@ -53,9 +54,21 @@ fuzz_target!(|data: &[u8]| {
         .map(|t| faer::Mat::from_fn(l, 1, |i, _| y[(t, i)]))
         .collect();
     let opts = RealizationOptions {
-        order: if b.byte() % 2 == 0 { None } else { Some(b.size(6)) },
-        rows: if b.byte() % 2 == 0 { None } else { Some(b.size(30)) },
-        cols: if b.byte() % 2 == 0 { None } else { Some(b.size(30)) },
+        order: if b.byte() % 2 == 0 {
+            None
+        } else {
+            Some(b.size(6))
+        },
+        rows: if b.byte() % 2 == 0 {
+            None
+        } else {
+            Some(b.size(30))
+        },
+        cols: if b.byte() % 2 == 0 {
+            None
+        } else {
+            Some(b.size(30))
+        },
         ..RealizationOptions::default()
     };
     let _ = era(&markov, &opts);
