@@ -21,6 +21,7 @@ __all__ = [
     "StreamingCompressor",
     "CorrelationSums",
     "Subspace",
+    "ClosedLoopSubspace",
     "estimate_bd_x0",
     "realize",
     "fir",
@@ -89,6 +90,23 @@ class Subspace:
     def max_order(self) -> int: ...
     def auto_order(self) -> int: ...
     def fit(self, order: int, feedthrough: bool, kalman: bool, stable: bool) -> dict[str, Any]: ...
+
+@final
+class ClosedLoopSubspace:
+    def __new__(
+        cls,
+        factor: HankelFactor,
+        method: str,
+        regularization: str = "none",
+        ridge: float = 1e-3,
+        feedthrough: bool = False,
+    ) -> ClosedLoopSubspace: ...
+    @property
+    def singular_values(self) -> _Array: ...
+    @property
+    def max_order(self) -> int: ...
+    def auto_order(self) -> int: ...
+    def fit(self, order: int) -> dict[str, Any]: ...
 
 def estimate_bd_x0(
     a: _Array, c: _Array, u: _Array, y: _Array, feedthrough: bool

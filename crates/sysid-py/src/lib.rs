@@ -5,6 +5,7 @@
 
 use pyo3::prelude::*;
 
+mod closed_loop;
 mod convert;
 mod errors;
 mod hankel;
@@ -22,6 +23,7 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     simulate::register(m)?;
     streaming::register(m)?;
     subspace::register(m)?;
+    closed_loop::register(m)?;
     realization::register(m)?;
     pem::register(m)?;
     polynomial::register(m)?;

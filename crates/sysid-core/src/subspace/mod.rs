@@ -26,6 +26,7 @@
 //! given `A`, `C` ([`bd_x0`]). Nothing here depends on the record length.
 
 pub mod bd_x0;
+pub mod closed_loop;
 pub mod order;
 pub mod system;
 pub mod weighting;
@@ -233,4 +234,4 @@ impl Subspace {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
