@@ -30,6 +30,7 @@ from .errors import (
     DataError,
     ExcitationError,
     ExcitationWarning,
+    FeedbackWarning,
     InsufficientDataError,
     NonFiniteError,
     NumericalError,
@@ -54,6 +55,7 @@ _LAZY = {
     "ContinuousStateSpace": "models.continuous",
     "Correlation": "analysis.correlation",
     "EraResult": "estimate.realization",
+    "FeedbackTest": "analysis.feedback",
     "FRD": "models.frd",
     "FRDComparison": "models.frd",
     "Gramians": "analysis.reduction",
@@ -76,6 +78,7 @@ _LAZY = {
     "butter_sos": "data.filtering",
     "c2d": "models.continuous",
     "check_excitation": "data.input_design",
+    "check_feedback": "analysis.feedback",
     "chirp": "data.input_design",
     "coherence": "analysis.spectra",
     "compare": "analysis.validation",
@@ -151,6 +154,9 @@ _LAZY = {
     "model_to_dict": "models.io",
     "model_from_dict": "models.io",
     "report": "analysis.report",
+    # issue 15 items 1-2 (branch subspace2): closed-loop subspace, feedback test
+    "pbsid": "estimate.closed_loop",
+    "ssarx": "estimate.closed_loop",
 }
 
 
@@ -190,6 +196,11 @@ __all__ = [
     "OrderError",
     "NumericalError",
     "RiccatiError",
+    "FeedbackWarning",
+    "FeedbackTest",
+    "check_feedback",
+    "pbsid",
+    "ssarx",
     "compare",
     "pem",
     "ssest",

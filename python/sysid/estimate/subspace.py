@@ -21,6 +21,11 @@ Methods (``method=``):
 ``"cva"``
     Canonical variate analysis (Larimore 1990): the future outputs whitened first; the
     singular values are canonical correlations (between 0 and 1).
+``"pbsid"``, ``"ssarx"``
+    Closed-loop methods (PBSID-opt, Chiuso 2007; SSARX, Jansson 2003): a VARX of the
+    predictor first, so that they stay consistent under feedback when the loop has a delay
+    (see :mod:`sysid.estimate.closed_loop`). The open-loop methods warn
+    (:class:`sysid.FeedbackWarning`) when the record shows feedback.
 
 Singular values follow SLICOT's convention: the data are not divided by ``sqrt(N)``
 (``cva`` reports canonical correlations instead, which do not scale with N).
@@ -28,6 +33,7 @@ Singular values follow SLICOT's convention: the data are not divided by ``sqrt(N
 
 from __future__ import annotations
 
+import warnings
 from typing import Any, Literal, Union
 
 import numpy as np
@@ -36,14 +42,19 @@ from .. import _sysid
 from .._checks import as_int
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
-from ..errors import DataError
+from ..errors import DataError, FeedbackWarning
 from ..models.statespace import StateSpaceModel
 from .streaming import warn_if_fallback
 
 __all__ = ["SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "METHODS"]
 
-METHODS = ("moesp", "ordinary-moesp", "pi-moesp", "n4sid", "cva")
-_ALIASES = {"po-moesp": "moesp", "pomoesp": "moesp", "moesp-ordinary": "ordinary-moesp"}
+METHODS = ("moesp", "ordinary-moesp", "pi-moesp", "n4sid", "cva", "pbsid", "ssarx")
+CLOSED_LOOP = ("pbsid", "ssarx")
+_ALIASES = {"po-moesp": "moesp", "pomoesp": "moesp", "moesp-ordinary": "ordinary-moesp",
+            "pbsid-opt": "pbsid"}
+#: combined p-value below which the open-loop methods warn of feedback (strict: the warning
+#: must not fire by chance on open-loop data)
+FEEDBACK_WARNING_LEVEL = 1e-6
 
 Order = Union[int, Literal["auto"]]
 
@@ -180,8 +191,38 @@ class SubspaceEstimator:
     def _subspace(self, method: str | None) -> Any:
         key = self.method if method is None else _method(method)
         if key not in self._svd:
-            self._svd[key] = _sysid.Subspace(self.factor, key)
+            if key in CLOSED_LOOP:
+                self._svd[key] = _sysid.ClosedLoopSubspace(self.factor, key)
+            else:
+                self._svd[key] = _sysid.Subspace(self.factor, key)
         return self._svd[key]
+
+    def feedback_pvalue(self) -> float:
+        """Combined p-value of the feedback test (:func:`sysid.check_feedback`) computed on
+        this estimator's factor (no pass over the data); 1.0 without inputs."""
+        if "feedback" not in self._svd:
+            p = 1.0
+            if self.factor.n_inputs:
+                from ..analysis.feedback import feedback_pvalues
+
+                pv = feedback_pvalues(self.factor)[1]
+                p = float(min(1.0, len(pv) * float(np.min(pv))))
+            self._svd["feedback"] = p
+        return float(self._svd["feedback"])
+
+    def _warn_feedback(self, key: str) -> None:
+        if key in CLOSED_LOOP or "feedback_warned" in self._svd:
+            return
+        p = self.feedback_pvalue()
+        self._svd["feedback_warned"] = True
+        if p < FEEDBACK_WARNING_LEVEL:
+            warnings.warn(
+                f"the record shows feedback (past outputs predict the input, p = {p:.2g}): "
+                f"the open-loop method {key!r} is biased under feedback; use method='pbsid' "
+                "or 'ssarx' (see sysid.check_feedback)",
+                FeedbackWarning,
+                stacklevel=3,
+            )
 
     @property
     def singular_values(self) -> np.ndarray:
@@ -214,6 +255,7 @@ class SubspaceEstimator:
         uncertainty: str | None = None,
         n_boot: int = 100,
         rng: Any = None,
+        regularization: str = "none",
     ) -> StateSpaceModel:
         """Estimate ``A, B, C, D, K`` and the noise covariances for one order.
 
@@ -240,12 +282,21 @@ class SubspaceEstimator:
             Bootstrap records (``uncertainty="bootstrap"``).
         rng : seed or numpy Generator, optional
             Random numbers of the bootstrap.
+        regularization : {"none", "ridge", "tc"}
+            Closed-loop methods only: regularisation of their VARX.
 
         Returns
         -------
         StateSpaceModel
         """
+        key = self.method if method is None else _method(method)
+        if key in CLOSED_LOOP:
+            from .closed_loop import closed_loop_fit
+
+            return closed_loop_fit(self, key, order, feedthrough=feedthrough, kalman=kalman,
+                                   regularization=regularization)
         sub = self._subspace(method)
+        self._warn_feedback(key)
         if isinstance(order, str):
             if order != "auto":
                 raise DataError(f"order must be an integer or 'auto', got {order!r}")
