@@ -29,10 +29,19 @@ from ..errors import DataError, InsufficientDataError
 __all__ = ["FeedbackTest", "check_feedback", "feedback_pvalues"]
 
 
-def _rss_last(rows: np.ndarray) -> float:
-    """Residual sum of squares of the last row regressed on the others (rows of an L factor)."""
-    r = np.linalg.qr(rows.T, mode="r")
-    return float(r[-1, -1] ** 2) if r.shape[0] == rows.shape[0] else 0.0
+def _residual(x: np.ndarray, target: np.ndarray, rtol: float = 1e-9) -> tuple[float, int]:
+    """Residual sum of squares of ``target`` (a row of L) regressed on the rows ``x`` of L,
+    and the numerical rank of ``x`` (rows scaled to unit norm; exactly dependent rows, as
+    noise-free outputs give, do not count)."""
+    norms = np.linalg.norm(x, axis=1)
+    xs = x[norms > 0] / norms[norms > 0, None]
+    if xs.shape[0] == 0:
+        return float(target @ target), 0
+    _, s, vt = np.linalg.svd(xs, full_matrices=False)
+    r = int(np.sum(s > rtol * s[0]))
+    v = vt[:r]
+    res = target - (target @ v.T) @ v
+    return float(res @ res), r
 
 
 def feedback_pvalues(factor: Any) -> tuple[np.ndarray, np.ndarray, int, int]:
@@ -48,18 +57,18 @@ def feedback_pvalues(factor: Any) -> tuple[np.ndarray, np.ndarray, int, int]:
     n_cols = int(factor.n_columns)
     up = np.arange(f * m, (f + p) * m)
     yp = np.arange((f + p) * m, (f + p) * m + p * l)
-    q = p * l
-    df2 = n_cols - p * (m + l)
     Fs, ps = np.zeros(m), np.ones(m)
-    if df2 <= 0:
-        return Fs, ps, q, df2
+    rss_r_rank = [_residual(L[up], L[i]) for i in range(m)]
+    full = np.vstack([L[up], L[yp]])
+    q, df2 = p * l, n_cols - p * (m + l)
     for i in range(m):
-        ui = L[[i]]
-        total = float(np.sum(ui**2))
-        rss_r = _rss_last(np.vstack([L[up], ui]))
-        rss_f = _rss_last(np.vstack([L[up], L[yp], ui]))
-        if total <= 0 or rss_r <= 1e-10 * total:
-            continue  # deterministic input: no power, no claim
+        ui = L[i]
+        total = float(ui @ ui)
+        rss_r, r_r = rss_r_rank[i]
+        rss_f, r_f = _residual(full, ui)
+        q, df2 = r_f - r_r, n_cols - r_f
+        if q <= 0 or df2 <= 0 or total <= 0 or rss_r <= 1e-10 * total:
+            continue  # deterministic input or no new regressor: no power, no claim
         rss_f = max(rss_f, 1e-300)
         F = max(rss_r - rss_f, 0.0) / q / (rss_f / df2)
         Fs[i], ps[i] = F, float(stats.f.sf(F, q, df2))
@@ -190,7 +199,7 @@ def check_feedback(data: IOData, lags: int | None = None, *, alpha: float = 0.01
     exps = [(u - u.mean(axis=0), y - y.mean(axis=0)) for u, y in data.experiments]
     factor = _sysid.compress(exps, lags, 1, None, "qr")
     F, p, q, df2 = feedback_pvalues(factor)
-    if df2 <= 0:
+    if factor.n_columns <= lags * (data.n_inputs + data.n_outputs):
         raise InsufficientDataError(f"lags = {lags} leaves no degrees of freedom; use a "
                                     "longer record or fewer lags")
     return FeedbackTest(F, p, lags, (q, df2), float(alpha), list(data.input_names))

@@ -248,7 +248,7 @@ class SubspaceEstimator:
         order: Order = "auto",
         *,
         method: str | None = None,
-        feedthrough: bool = True,
+        feedthrough: bool | None = None,
         kalman: bool = True,
         stable: bool = False,
         x0: bool = False,
@@ -265,8 +265,10 @@ class SubspaceEstimator:
             Model order; ``"auto"`` takes :attr:`auto_order`.
         method : str, optional
             Weighting for this fit (default: the estimator's).
-        feedthrough : bool
-            Estimate ``D``; ``False`` forces ``D = 0``.
+        feedthrough : bool, optional
+            Estimate ``D``; ``False`` forces ``D = 0``. Default: ``True`` for the open-loop
+            methods, ``False`` for ``"pbsid"``/``"ssarx"`` (estimating ``D`` under feedback is
+            consistent only when the controller has no direct feedthrough).
         kalman : bool
             Estimate the noise model (``K`` from the Riccati equation, innovation covariance).
         stable : bool
@@ -290,6 +292,8 @@ class SubspaceEstimator:
         StateSpaceModel
         """
         key = self.method if method is None else _method(method)
+        if feedthrough is None:
+            feedthrough = key not in CLOSED_LOOP
         if key in CLOSED_LOOP:
             from .closed_loop import closed_loop_fit
 
