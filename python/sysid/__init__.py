@@ -157,6 +157,8 @@ _LAZY = {
     # issue 15 items 1-2 (branch subspace2): closed-loop subspace, feedback test
     "pbsid": "estimate.closed_loop",
     "ssarx": "estimate.closed_loop",
+    "orthogonal_decomposition": "estimate.orthogonal",
+    "OrthogonalDecomposition": "estimate.orthogonal",
 }
 
 
@@ -201,6 +203,8 @@ __all__ = [
     "check_feedback",
     "pbsid",
     "ssarx",
+    "orthogonal_decomposition",
+    "OrthogonalDecomposition",
     "compare",
     "pem",
     "ssest",
