@@ -187,3 +187,19 @@ def test_bad_arguments():
         sysid.check_feedback(data, lags=0)
     with pytest.raises(sysid.DataError, match="input"):
         sysid.check_feedback(sysid.IOData(y=data.y))
+
+
+def test_docs_examples_run():
+    import re
+    from pathlib import Path
+
+    doc = Path(__file__).resolve().parents[1] / "docs" / "closed_loop.md"
+    blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), flags=re.S)
+    assert len(blocks) == 4
+    ns: dict = {}
+    for i, block in enumerate(blocks):  # the blocks build on each other
+        exec(compile(block, f"docs/closed_loop.md[python block {i}]", "exec"), ns)
+    assert ns["test"].detected
+    assert abs(ns["model"].dcgain()[0, 0] - 2.5) < 0.3
+    assert abs(ns["biased"].dcgain()[0, 0] - 2.5) > 0.7
+    assert (ns["od"].deterministic.nstates, ns["od"].stochastic.nstates) == (2, 4)
