@@ -155,8 +155,8 @@ _LAZY = {
     "model_from_dict": "models.io",
     "report": "analysis.report",
     # issue 15 items 1-2 (branch subspace2): closed-loop subspace, feedback test
-    "pbsid": "estimate.closed_loop",
-    "ssarx": "estimate.closed_loop",
+    "pbsid": "estimate.subspace",
+    "ssarx": "estimate.subspace",
     "orthogonal_decomposition": "estimate.orthogonal",
     "OrthogonalDecomposition": "estimate.orthogonal",
 }
