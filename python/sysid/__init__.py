@@ -157,6 +157,7 @@ _LAZY = {
     # issue 15 items 1-2 (branch subspace2): closed-loop subspace, feedback test
     "pbsid": "estimate.subspace",
     "ssarx": "estimate.subspace",
+    "RecursiveSubspace": "estimate.recursive",
     "orthogonal_decomposition": "estimate.orthogonal",
     "OrthogonalDecomposition": "estimate.orthogonal",
 }
@@ -205,6 +206,7 @@ __all__ = [
     "ssarx",
     "orthogonal_decomposition",
     "OrthogonalDecomposition",
+    "RecursiveSubspace",
     "compare",
     "pem",
     "ssest",

@@ -22,6 +22,7 @@ __all__ = [
     "CorrelationSums",
     "Subspace",
     "ClosedLoopSubspace",
+    "RecursiveFactor",
     "estimate_bd_x0",
     "realize",
     "fir",
@@ -107,6 +108,18 @@ class ClosedLoopSubspace:
     def max_order(self) -> int: ...
     def auto_order(self) -> int: ...
     def fit(self, order: int) -> dict[str, Any]: ...
+
+@final
+class RecursiveFactor:
+    def __new__(
+        cls, n_inputs: int, n_outputs: int, past: int, future: int, forgetting: float = 1.0
+    ) -> RecursiveFactor: ...
+    def update(self, u: _Array, y: _Array) -> None: ...
+    def factor(self) -> HankelFactor: ...
+    @property
+    def n_columns(self) -> int: ...
+    @property
+    def effective_columns(self) -> float: ...
 
 def estimate_bd_x0(
     a: _Array, c: _Array, u: _Array, y: _Array, feedthrough: bool

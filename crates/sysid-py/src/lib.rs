@@ -12,6 +12,7 @@ mod hankel;
 mod pem;
 mod polynomial;
 mod realization;
+mod recursive;
 mod simulate;
 mod streaming;
 mod subspace;
@@ -24,6 +25,7 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     streaming::register(m)?;
     subspace::register(m)?;
     closed_loop::register(m)?;
+    recursive::register(m)?;
     realization::register(m)?;
     pem::register(m)?;
     polynomial::register(m)?;

@@ -28,6 +28,7 @@
 pub mod bd_x0;
 pub mod closed_loop;
 pub mod order;
+pub mod recursive;
 pub mod system;
 pub mod weighting;
 
