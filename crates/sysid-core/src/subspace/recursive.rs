@@ -45,7 +45,7 @@ impl RecursiveFactor {
             tail_y: Mat::zeros(0, layout.n_outputs),
             n_columns: 0,
             weight: 0.0,
-            block_rows: (4 * k).max(256),
+            block_rows: (4 * k).max(512),
         })
     }
 
@@ -96,11 +96,15 @@ impl RecursiveFactor {
         let n_new = (total + 1).saturating_sub(w);
         let lam = self.forgetting;
         let mut col = vec![0.0; k];
+        // sqrt(λ)^i for the rows of a block
+        let half: Vec<f64> = (0..=self.block_rows.min(n_new.max(1)))
+            .map(|i| lam.powf(i as f64 / 2.0))
+            .collect();
         let mut start = 0;
         while start < n_new {
             let b = (n_new - start).min(self.block_rows);
             let mut stack = Mat::<f64>::zeros(k + b, k);
-            let sr = lam.powf(b as f64 / 2.0);
+            let sr = half[b];
             for j in 0..k {
                 for i in 0..=j {
                     stack[(i, j)] = sr * self.r[(i, j)];
@@ -108,7 +112,7 @@ impl RecursiveFactor {
             }
             for i in 0..b {
                 lay.fill_column(bu.as_ref(), by.as_ref(), start + i, &mut col);
-                let s = lam.powf((b - 1 - i) as f64 / 2.0);
+                let s = half[b - 1 - i];
                 for j in 0..k {
                     stack[(k + i, j)] = s * col[j];
                 }
