@@ -158,6 +158,7 @@ _LAZY = {
     "pbsid": "estimate.subspace",
     "ssarx": "estimate.subspace",
     "RecursiveSubspace": "estimate.recursive",
+    "frd_subspace": "estimate.frequency",
     "orthogonal_decomposition": "estimate.orthogonal",
     "OrthogonalDecomposition": "estimate.orthogonal",
 }
@@ -207,6 +208,7 @@ __all__ = [
     "orthogonal_decomposition",
     "OrthogonalDecomposition",
     "RecursiveSubspace",
+    "frd_subspace",
     "compare",
     "pem",
     "ssest",

@@ -23,6 +23,7 @@ __all__ = [
     "Subspace",
     "ClosedLoopSubspace",
     "RecursiveFactor",
+    "frd_subspace",
     "estimate_bd_x0",
     "realize",
     "fir",
@@ -121,6 +122,15 @@ class RecursiveFactor:
     @property
     def effective_columns(self) -> float: ...
 
+def frd_subspace(
+    omega: _Array,
+    g_re: _Array,
+    g_im: _Array,
+    n_outputs: int,
+    horizon: int,
+    order: int | None = None,
+    weights: _Array | None = None,
+) -> dict[str, Any]: ...
 def estimate_bd_x0(
     a: _Array, c: _Array, u: _Array, y: _Array, feedthrough: bool
 ) -> tuple[_Array, _Array, _Array]: ...

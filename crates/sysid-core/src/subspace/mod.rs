@@ -27,6 +27,7 @@
 
 pub mod bd_x0;
 pub mod closed_loop;
+pub mod frequency;
 pub mod order;
 pub mod recursive;
 pub mod system;
