@@ -195,7 +195,7 @@ def test_docs_examples_run():
 
     doc = Path(__file__).resolve().parents[1] / "docs" / "closed_loop.md"
     blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), flags=re.S)
-    assert len(blocks) == 5
+    assert len(blocks) == 6
     ns: dict = {}
     for i, block in enumerate(blocks):  # the blocks build on each other
         exec(compile(block, f"docs/closed_loop.md[python block {i}]", "exec"), ns)
@@ -204,3 +204,7 @@ def test_docs_examples_run():
     assert abs(ns["biased"].dcgain()[0, 0] - 2.5) > 0.7
     assert (ns["od"].deterministic.nstates, ns["od"].stochastic.nstates) == (2, 4)
     assert abs(ns["m_track"].poles()[0].real - 0.85) < 0.03
+    np.testing.assert_allclose(np.sort_complex(ns["fit_ct"].poles()),
+                               np.sort_complex(ns["ct"].poles()), atol=1e-8)
+    assert np.max(np.abs(np.sort_complex(ns["fit_dt"].poles())
+                         - np.sort_complex(ns["dsys"].poles()))) < 0.02
