@@ -63,7 +63,7 @@ def test_arguments_and_repr():
         sysid.RecursiveSubspace(1, 4, forgetting=1.2)
     rs = sysid.RecursiveSubspace(1, 4)
     with pytest.raises(sysid.InsufficientDataError):
-        rs.factor
+        _ = rs.factor
     rs.update(np.ones(3), np.ones(3))
     with pytest.raises(sysid.DataError, match="chunks"):
         rs.update(np.ones((3, 2)), np.ones(3))
