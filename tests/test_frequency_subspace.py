@@ -69,3 +69,20 @@ def test_weights_and_errors():
         sysid.frd_subspace(sysid.FRD(w * 2, g, dt=0.1), 3)
     with pytest.raises(sysid.OrderError):
         sysid.frd_subspace(sysid.FRD(w, g, dt=0.1), 30, horizon=4)
+
+
+def test_continuous_model_from_sampled_data():
+    # a known CT system sampled with a zero-order hold: a DT subspace model, then d2c (ZOH),
+    # or the smoothed FRD of the record through frd_subspace, both give the CT poles
+    # (measured over 4 seeds: at most 0.0015 and 0.016)
+    ct_true = sysid.ContinuousStateSpace([[0.0, 1.0, 0.0], [-4.0, -0.4, 1.0], [0.0, 0.0, -1.0]],
+                                         [[0.0], [0.0], [1.0]], [[4.0, 0.0, 0.0]])
+    rng = np.random.default_rng(5)
+    dt = 0.2
+    u = rng.standard_normal(6000)
+    y = sysid.c2d(ct_true, dt).simulate(u) + 0.01 * rng.standard_normal((6000, 1))
+    data = sysid.IOData(u=u, y=y, dt=dt)
+    ct = sysid.d2c(sysid.moesp(data, 3, horizon=10), "zoh")
+    assert np.max(np.abs(_poles(ct) - _poles(ct_true))) < 0.005
+    ct2 = sysid.d2c(sysid.frd_subspace(sysid.spa(data, lags=300), 3, horizon=10), "zoh")
+    assert np.max(np.abs(_poles(ct2) - _poles(ct_true))) < 0.04
