@@ -208,3 +208,35 @@ def test_docs_examples_run():
                                np.sort_complex(ns["ct"].poles()), atol=1e-8)
     assert np.max(np.abs(np.sort_complex(ns["fit_dt"].poles())
                          - np.sort_complex(ns["dsys"].poles()))) < 0.02
+
+
+def test_mimo_closed_loop():
+    # 3 states, 2 inputs, 2 outputs under u = r - F y (F coupling the channels)
+    a = np.array([[0.8, 0.3, 0.0], [-0.3, 0.8, 0.0], [0.0, 0.0, 0.5]])
+    b = np.array([[1.0, 0.0], [0.0, 1.0], [0.5, -0.5]])
+    c = np.array([[1.0, 0.0, 1.0], [0.0, 1.0, 0.5]])
+    k = np.array([[0.3, 0.1], [0.0, 0.2], [0.1, 0.1]])
+    f = np.array([[0.2, 0.0], [0.1, 0.3]])
+    true = sysid.StateSpaceModel(a, b, c)
+
+    def record(n, noise, seed):
+        rng = np.random.default_rng(seed)
+        r = rng.standard_normal((n, 2))
+        e = noise * rng.standard_normal((n, 2))
+        loop = sysid.StateSpaceModel(
+            a - b @ f @ c, np.hstack([b, k - b @ f]), np.vstack([-f @ c, c]),
+            np.block([[np.eye(2), -f], [np.zeros((2, 2)), np.eye(2)]]))
+        z = loop.simulate(np.hstack([r, e]))
+        return sysid.IOData(u=z[:, :2], y=z[:, 2:])
+
+    exact = record(2_000, 0.0, 1)
+    noisy = record(30_000, 0.5, 1)
+    assert sysid.check_feedback(noisy).p_value < 1e-10
+    for method in ("pbsid", "ssarx"):
+        for data, tol in ((exact, 1e-9), (noisy, 0.01)):
+            est = sysid.SubspaceEstimator(data, past=10, future=5, method=method)
+            assert est.auto_order == 3
+            model = est.fit(3)
+            assert np.max(np.abs(np.sort_complex(model.poles())
+                                 - np.sort_complex(true.poles()))) < tol, (method, tol)
+            assert np.max(np.abs(model.dcgain() - true.dcgain())) < 10 * tol, (method, tol)

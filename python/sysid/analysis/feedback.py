@@ -12,7 +12,9 @@ data with feedback.
 
 The null hypothesis is exact when the input is white or autoregressive of order at most
 ``lags``; an input that is a filtered signal with a long memory can give a (small) positive
-bias with very long, noise-free records.
+bias with very long, noise-free records. A noise-free loop is not flagged: its outputs are a
+function of the past inputs, so they add nothing (and without noise the open-loop methods
+are not biased either).
 """
 
 from __future__ import annotations
