@@ -187,6 +187,10 @@ def test_bad_arguments():
         sysid.check_feedback(data, lags=0)
     with pytest.raises(sysid.DataError, match="input"):
         sysid.check_feedback(sysid.IOData(y=data.y))
+    est = sysid.SubspaceEstimator(data, 5, method="pbsid")
+    for kw in ({"x0": True}, {"stable": True}, {"uncertainty": "bootstrap"}):
+        with pytest.raises(sysid.DataError, match="not available"):
+            est.fit(2, **kw)
 
 
 def test_docs_examples_run():

@@ -102,7 +102,7 @@ class SubspaceEstimator:
     method : str
         Default weighting for :attr:`singular_values` and :meth:`fit`: one of
         :data:`METHODS` (``"moesp"``, ``"ordinary-moesp"``, ``"pi-moesp"``, ``"n4sid"``,
-        ``"cva"``).
+        ``"cva"``, and for closed-loop data ``"pbsid"``, ``"ssarx"``).
     chunk_rows : int, optional
         Hankel columns per QR update in the compressor (memory ``(k + chunk) k`` doubles).
     compressor : str
@@ -298,6 +298,11 @@ class SubspaceEstimator:
             feedthrough = key not in CLOSED_LOOP
         if key in CLOSED_LOOP:
             from .closed_loop import closed_loop_fit
+
+            if x0 or stable or uncertainty is not None:
+                raise DataError(f"x0, stable and uncertainty are not available with "
+                                f"method={key!r} (an open-loop re-fit or simulation would "
+                                "ignore the feedback); refine with sysid.pem for both")
 
             return closed_loop_fit(self, key, order, feedthrough=feedthrough, kalman=kalman,
                                    regularization=regularization)
