@@ -84,5 +84,6 @@ def test_continuous_model_from_sampled_data():
     data = sysid.IOData(u=u, y=y, dt=dt)
     ct = sysid.d2c(sysid.moesp(data, 3, horizon=10), "zoh")
     assert np.max(np.abs(_poles(ct) - _poles(ct_true))) < 0.005
-    ct2 = sysid.d2c(sysid.frd_subspace(sysid.spa(data, lags=300), 3, horizon=10), "zoh")
+    ct2 = sysid.frd_subspace(data, 3, horizon=10, lags=300, continuous=True)  # time data in
+    assert isinstance(ct2, sysid.ContinuousStateSpace)
     assert np.max(np.abs(_poles(ct2) - _poles(ct_true))) < 0.04

@@ -38,14 +38,19 @@ def frd_subspace(
     continuous: bool = False,
     T: float | None = None,
     weights: Any = None,
+    lags: int | None = None,
 ) -> Any:
     """State-space model from frequency-response data (McKelvey, Akçay & Ljung 1996).
 
     Parameters
     ----------
-    frd : FRD
+    frd : FRD or IOData
         Measured (``etfe``, ``spa``, ``welch_frf``) or computed response. Discrete time needs
-        ``frd.dt`` (the frequencies up to ``pi / dt``).
+        ``frd.dt`` (the frequencies up to ``pi / dt``). A sampled record (``IOData``) is
+        turned into its Blackman-Tukey estimate (:func:`sysid.spa`, ``lags`` below) first;
+        with ``continuous=True`` its discrete model is then converted with the zero-order
+        hold it was sampled with (:func:`sysid.d2c`), which gives a
+        :class:`sysid.ContinuousStateSpace` directly from time data.
     order : int or "auto"
         ``"auto"``: the largest gap of the log singular values.
     horizon : int, optional
@@ -57,6 +62,8 @@ def frd_subspace(
         over the positive frequencies, which maps their geometric centre to ``pi / 2``.
     weights : array_like, optional
         Non-negative weight per frequency (for example ``1 / std``).
+    lags : int, optional
+        Lag window of :func:`sysid.spa` for ``IOData`` input (default: its own).
 
     Returns
     -------
@@ -77,9 +84,21 @@ def frd_subspace(
     >>> bool(np.allclose(np.sort_complex(fit.poles()), np.sort_complex(ct.poles())))
     True
     """
+    from ..data.iodata import IOData
     from ..models.frd import FRD
     from ..models.statespace import StateSpaceModel
 
+    if isinstance(frd, IOData):
+        from ..analysis.frf import spa
+        from ..models.continuous import d2c
+
+        est = spa(frd) if lags is None else spa(frd, lags=lags)
+        dmodel = frd_subspace(est, order, horizon=horizon, weights=weights)
+        if not continuous:
+            return dmodel
+        ct = d2c(dmodel, "zoh")
+        ct.info.update(dmodel.info)
+        return ct
     if not isinstance(frd, FRD):
         raise DataError(f"frd must be a sysid.FRD, got {type(frd).__name__}")
     omega = np.asarray(frd.omega, dtype=float)
