@@ -21,6 +21,9 @@ __all__ = [
     "StreamingCompressor",
     "CorrelationSums",
     "Subspace",
+    "ClosedLoopSubspace",
+    "RecursiveFactor",
+    "frd_subspace",
     "estimate_bd_x0",
     "realize",
     "fir",
@@ -90,6 +93,44 @@ class Subspace:
     def auto_order(self) -> int: ...
     def fit(self, order: int, feedthrough: bool, kalman: bool, stable: bool) -> dict[str, Any]: ...
 
+@final
+class ClosedLoopSubspace:
+    def __new__(
+        cls,
+        factor: HankelFactor,
+        method: str,
+        regularization: str = "none",
+        ridge: float = 1e-3,
+        feedthrough: bool = False,
+    ) -> ClosedLoopSubspace: ...
+    @property
+    def singular_values(self) -> _Array: ...
+    @property
+    def max_order(self) -> int: ...
+    def auto_order(self) -> int: ...
+    def fit(self, order: int) -> dict[str, Any]: ...
+
+@final
+class RecursiveFactor:
+    def __new__(
+        cls, n_inputs: int, n_outputs: int, past: int, future: int, forgetting: float = 1.0
+    ) -> RecursiveFactor: ...
+    def update(self, u: _Array, y: _Array) -> None: ...
+    def factor(self) -> HankelFactor: ...
+    @property
+    def n_columns(self) -> int: ...
+    @property
+    def effective_columns(self) -> float: ...
+
+def frd_subspace(
+    omega: _Array,
+    g_re: _Array,
+    g_im: _Array,
+    n_outputs: int,
+    horizon: int,
+    order: int | None = None,
+    weights: _Array | None = None,
+) -> dict[str, Any]: ...
 def estimate_bd_x0(
     a: _Array, c: _Array, u: _Array, y: _Array, feedthrough: bool
 ) -> tuple[_Array, _Array, _Array]: ...

@@ -27,6 +27,7 @@ __all__ = [
     "NumericalError",
     "RiccatiError",
     "ExcitationWarning",
+    "FeedbackWarning",
 ]
 
 
@@ -68,3 +69,8 @@ class RiccatiError(NumericalError):
 
 class ExcitationWarning(UserWarning):
     """The input may not excite the system enough for the requested model order."""
+
+
+class FeedbackWarning(UserWarning):
+    """The input depends on past outputs (feedback): open-loop subspace methods are biased;
+    use ``method="pbsid"`` or ``"ssarx"`` (see :func:`sysid.check_feedback`)."""

@@ -5,12 +5,14 @@
 
 use pyo3::prelude::*;
 
+mod closed_loop;
 mod convert;
 mod errors;
 mod hankel;
 mod pem;
 mod polynomial;
 mod realization;
+mod recursive;
 mod simulate;
 mod streaming;
 mod subspace;
@@ -22,6 +24,8 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     simulate::register(m)?;
     streaming::register(m)?;
     subspace::register(m)?;
+    closed_loop::register(m)?;
+    recursive::register(m)?;
     realization::register(m)?;
     pem::register(m)?;
     polynomial::register(m)?;

@@ -1,12 +1,12 @@
 //! Bindings of `sysid_core::subspace`: weighted SVD, order choice and fits.
 
-use crate::convert::{mat_to_numpy, slice_to_numpy, view};
+use crate::convert::{mat_to_numpy, slice_to_numpy, vec1, view};
 use crate::errors::IntoPy;
 use crate::hankel::PyHankelFactor;
-use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sysid_core::subspace::{bd_x0, FitOptions, Method, Subspace, SubspaceOptions};
+use sysid_core::subspace::{bd_x0, frequency, FitOptions, Method, Subspace, SubspaceOptions};
 
 /// Weighted SVD of a compressed record for one method.
 #[pyclass(name = "Subspace", module = "sysid._sysid", frozen)]
@@ -98,8 +98,52 @@ pub fn estimate_bd_x0<'py>(
     ))
 }
 
+/// Frequency-domain subspace identification from `G_k` (rows of `g_re`/`g_im`: the
+/// row-major `l x m` response at `omega[k]`, rad/sample): dict with A, B, C, D and
+/// singular_values. `order=None` takes the largest log gap.
+#[pyfunction]
+#[pyo3(signature = (omega, g_re, g_im, n_outputs, horizon, order=None, weights=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn frd_subspace<'py>(
+    py: Python<'py>,
+    omega: PyReadonlyArray1<'_, f64>,
+    g_re: PyReadonlyArray2<'_, f64>,
+    g_im: PyReadonlyArray2<'_, f64>,
+    n_outputs: usize,
+    horizon: usize,
+    order: Option<usize>,
+    weights: Option<PyReadonlyArray1<'_, f64>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let om = vec1(&omega);
+    let w = weights.as_ref().map(vec1);
+    let (gr, gi) = (view(&g_re), view(&g_im));
+    let l = n_outputs.max(1);
+    let m = gr.ncols() / l;
+    let to_mats = |g: faer::MatRef<'_, f64>| -> Vec<faer::Mat<f64>> {
+        (0..g.nrows())
+            .map(|k| faer::Mat::from_fn(l, m, |r, j| g[(k, r * m + j)]))
+            .collect()
+    };
+    let (re, im) = (to_mats(gr), to_mats(gi));
+    let id = py
+        .detach(|| {
+            let rr: Vec<_> = re.iter().map(|x| x.as_ref()).collect();
+            let ii: Vec<_> = im.iter().map(|x| x.as_ref()).collect();
+            frequency::identify_frd(&om, &rr, &ii, w.as_deref(), order, horizon)
+        })
+        .py()?;
+    let d = PyDict::new(py);
+    d.set_item("A", mat_to_numpy(py, &id.sys.a))?;
+    d.set_item("B", mat_to_numpy(py, &id.sys.b))?;
+    d.set_item("C", mat_to_numpy(py, &id.sys.c))?;
+    d.set_item("D", mat_to_numpy(py, &id.sys.d))?;
+    d.set_item("singular_values", slice_to_numpy(py, &id.singular_values))?;
+    Ok(d)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PySubspace>()?;
+    m.add_function(wrap_pyfunction!(frd_subspace, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_bd_x0, m)?)?;
     Ok(())
 }

@@ -352,6 +352,7 @@ def ssest(
     noise: str = "estimate",
     horizon: int | None = None,
     methods: tuple[str, ...] = ("moesp", "n4sid", "cva"),
+    method: str | None = None,
     max_iter: int = 50,
     tol: float = 1e-6,
     regularization: dict[str, Any] | None = None,
@@ -374,6 +375,11 @@ def ssest(
         Subspace horizon (default :func:`sysid.default_horizon`).
     methods : tuple of str
         Subspace weightings tried for the start.
+    method : str, optional
+        One subspace method for the start (overrides ``methods``); ``"pbsid"`` or
+        ``"ssarx"`` for closed-loop data (their start is consistent under feedback, and the
+        start's ``B, D`` are then not re-fitted on the data with ``x0``, which would be an
+        output-error fit).
 
     Returns
     -------
@@ -401,16 +407,24 @@ def ssest(
     candidates = []
     import warnings
 
-    for method in methods:
-        for use_x0 in ((False, True) if data.n_experiments == 1 else (False,)):
+    from .subspace import CLOSED_LOOP
+
+    names = methods if method is None else (method,)
+    for name in names:
+        x0_options = (False, True) if data.n_experiments == 1 else (False,)
+        if name in CLOSED_LOOP:
+            x0_options = (False,)
+        for use_x0 in x0_options:
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
-                    cand = est.fit(order, method=method, feedthrough=feedthrough, x0=use_x0)
+                    cand = est.fit(order, method=name, feedthrough=feedthrough, x0=use_x0)
             except Exception:  # noqa: BLE001 - a failing weighting is just not a candidate
+                if method is not None:
+                    raise
                 continue
             loss = _start_loss(data, cand, focus, feedthrough, x0, noise)
-            candidates.append((loss, method, use_x0, cand))
+            candidates.append((loss, name, use_x0, cand))
     if not candidates:
         raise DataError("no subspace start could be computed for this order; lower the order")
     candidates.sort(key=lambda c: c[0])

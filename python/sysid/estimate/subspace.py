@@ -21,6 +21,11 @@ Methods (``method=``):
 ``"cva"``
     Canonical variate analysis (Larimore 1990): the future outputs whitened first; the
     singular values are canonical correlations (between 0 and 1).
+``"pbsid"``, ``"ssarx"``
+    Closed-loop methods (PBSID-opt, Chiuso 2007; SSARX, Jansson 2003): a VARX of the
+    predictor first, so that they stay consistent under feedback when the loop has a delay
+    (see :mod:`sysid.estimate.closed_loop`). The open-loop methods warn
+    (:class:`sysid.FeedbackWarning`) when the record shows feedback.
 
 Singular values follow SLICOT's convention: the data are not divided by ``sqrt(N)``
 (``cva`` reports canonical correlations instead, which do not scale with N).
@@ -37,14 +42,21 @@ from .. import _sysid
 from .._checks import as_int
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
-from ..errors import DataError, InsufficientDataError, OrderError
+from ..errors import DataError, FeedbackWarning, InsufficientDataError, OrderError
 from ..models.statespace import StateSpaceModel
 from .streaming import warn_if_fallback
 
-__all__ = ["SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "METHODS"]
+__all__ = [
+    "SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "pbsid", "ssarx", "METHODS",
+]
 
-METHODS = ("moesp", "ordinary-moesp", "pi-moesp", "n4sid", "cva")
-_ALIASES = {"po-moesp": "moesp", "pomoesp": "moesp", "moesp-ordinary": "ordinary-moesp"}
+METHODS = ("moesp", "ordinary-moesp", "pi-moesp", "n4sid", "cva", "pbsid", "ssarx")
+CLOSED_LOOP = ("pbsid", "ssarx")
+_ALIASES = {"po-moesp": "moesp", "pomoesp": "moesp", "moesp-ordinary": "ordinary-moesp",
+            "pbsid-opt": "pbsid"}
+#: combined p-value below which the open-loop methods warn of feedback (strict: the warning
+#: must not fire by chance on open-loop data)
+FEEDBACK_WARNING_LEVEL = 1e-6
 
 Order = Union[int, Literal["auto"]]
 
@@ -166,7 +178,7 @@ class SubspaceEstimator:
     method : str
         Default weighting for :attr:`singular_values` and :meth:`fit`: one of
         :data:`METHODS` (``"moesp"``, ``"ordinary-moesp"``, ``"pi-moesp"``, ``"n4sid"``,
-        ``"cva"``).
+        ``"cva"``, and for closed-loop data ``"pbsid"``, ``"ssarx"``).
     chunk_rows : int, optional
         Hankel columns per QR update in the compressor (memory ``(k + chunk) k`` doubles).
     compressor : str
@@ -281,8 +293,38 @@ class SubspaceEstimator:
     def _subspace(self, method: str | None) -> Any:
         key = self.method if method is None else _method(method)
         if key not in self._svd:
-            self._svd[key] = _sysid.Subspace(self.factor, key)
+            if key in CLOSED_LOOP:
+                self._svd[key] = _sysid.ClosedLoopSubspace(self.factor, key)
+            else:
+                self._svd[key] = _sysid.Subspace(self.factor, key)
         return self._svd[key]
+
+    def feedback_pvalue(self) -> float:
+        """Combined p-value of the feedback test (:func:`sysid.check_feedback`) computed on
+        this estimator's factor (no pass over the data); 1.0 without inputs."""
+        if "feedback" not in self._svd:
+            p = 1.0
+            if self.factor.n_inputs:
+                from ..analysis.feedback import feedback_pvalues
+
+                pv = feedback_pvalues(self.factor)[1]
+                p = float(min(1.0, len(pv) * float(np.min(pv))))
+            self._svd["feedback"] = p
+        return float(self._svd["feedback"])
+
+    def _warn_feedback(self, key: str) -> None:
+        if key in CLOSED_LOOP or "feedback_warned" in self._svd:
+            return
+        p = self.feedback_pvalue()
+        self._svd["feedback_warned"] = True
+        if p < FEEDBACK_WARNING_LEVEL:
+            warnings.warn(
+                f"the record shows feedback (past outputs predict the input, p = {p:.2g}): "
+                f"the open-loop method {key!r} is biased under feedback; use method='pbsid' "
+                "or 'ssarx' (see sysid.check_feedback)",
+                FeedbackWarning,
+                stacklevel=3,
+            )
 
     @property
     def singular_values(self) -> np.ndarray:
@@ -308,13 +350,14 @@ class SubspaceEstimator:
         order: Order = "auto",
         *,
         method: str | None = None,
-        feedthrough: bool = True,
+        feedthrough: bool | None = None,
         kalman: bool = True,
         stable: bool = False,
         x0: bool = False,
         uncertainty: str | None = None,
         n_boot: int = 100,
         rng: Any = None,
+        regularization: str = "none",
     ) -> StateSpaceModel:
         """Estimate ``A, B, C, D, K`` and the noise covariances for one order.
 
@@ -324,8 +367,10 @@ class SubspaceEstimator:
             Model order; ``"auto"`` takes :attr:`auto_order`.
         method : str, optional
             Weighting for this fit (default: the estimator's).
-        feedthrough : bool
-            Estimate ``D``; ``False`` forces ``D = 0``.
+        feedthrough : bool, optional
+            Estimate ``D``; ``False`` forces ``D = 0``. Default: ``True`` for the open-loop
+            methods, ``False`` for ``"pbsid"``/``"ssarx"`` (estimating ``D`` under feedback is
+            consistent only when the controller has no direct feedthrough).
         kalman : bool
             Estimate the noise model (``K`` from the Riccati equation, innovation covariance).
         stable : bool
@@ -341,12 +386,28 @@ class SubspaceEstimator:
             Bootstrap records (``uncertainty="bootstrap"``).
         rng : seed or numpy Generator, optional
             Random numbers of the bootstrap.
+        regularization : {"none", "ridge", "tc"}
+            Closed-loop methods only: regularisation of their VARX.
 
         Returns
         -------
         StateSpaceModel
         """
+        key = self.method if method is None else _method(method)
+        if feedthrough is None:
+            feedthrough = key not in CLOSED_LOOP
+        if key in CLOSED_LOOP:
+            from .closed_loop import closed_loop_fit
+
+            if x0 or stable or uncertainty is not None:
+                raise DataError(f"x0, stable and uncertainty are not available with "
+                                f"method={key!r} (an open-loop re-fit or simulation would "
+                                "ignore the feedback); refine with sysid.pem for both")
+
+            return closed_loop_fit(self, key, order, feedthrough=feedthrough, kalman=kalman,
+                                   regularization=regularization)
         sub = self._subspace(method)
+        self._warn_feedback(key)
         if isinstance(order, str):
             if order != "auto":
                 raise DataError(f"order must be an integer or 'auto', got {order!r}")
@@ -497,3 +558,89 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
 moesp = _shortcut("moesp")
 n4sid = _shortcut("n4sid")
 cva = _shortcut("cva")
+
+
+def _one_call(method: str) -> Any:
+    def fit(
+        data: IOData,
+        order: Order = "auto",
+        *,
+        horizon: int | None = None,
+        past: int | None = None,
+        future: int | None = None,
+        feedthrough: bool = False,
+        regularization: str = "none",
+        ridge: float = 1e-3,
+    ) -> StateSpaceModel:
+        from .closed_loop import closed_loop_fit
+
+        est = SubspaceEstimator(data, horizon, past=past, future=future, method=method)
+        return closed_loop_fit(est, method, order, feedthrough=feedthrough,
+                               regularization=regularization, ridge=ridge)
+
+    fit.__name__ = method
+    fit.__qualname__ = method
+    return fit
+
+
+pbsid = _one_call("pbsid")
+pbsid.__doc__ = """Identify a state-space model from closed-loop data with PBSID-opt.
+
+    Equivalent to ``SubspaceEstimator(data, horizon, method="pbsid").fit(order, ...)``;
+    consistent under feedback when the loop has a delay (see
+    :mod:`sysid.estimate.closed_loop`).
+
+    Parameters
+    ----------
+    data : IOData
+    order : int or "auto"
+    horizon, past, future : int, optional
+        VARX order (past) and observability horizon (future <= past + 1).
+    feedthrough : bool
+        Estimate ``D`` (only with a controller without direct feedthrough).
+    regularization : {"none", "ridge", "tc"}
+        Of the VARX.
+    ridge : float
+        Ridge weight (``regularization="ridge"``).
+
+    Returns
+    -------
+    StateSpaceModel
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> n = 4000; r = rng.standard_normal(n); e = 0.5 * rng.standard_normal(n)
+    >>> u, y = np.zeros(n), np.zeros(n)
+    >>> for t in range(1, n):
+    ...     y[t] = 0.8 * y[t - 1] + u[t - 1] + e[t]
+    ...     u[t] = r[t] - 0.3 * y[t]
+    >>> m = sysid.pbsid(sysid.IOData(u=u, y=y), order=1, horizon=10)
+    >>> bool(abs(m.poles()[0] - 0.8) < 0.02)
+    True
+    """
+
+ssarx = _one_call("ssarx")
+ssarx.__doc__ = """Identify a state-space model from closed-loop data with SSARX (Jansson).
+
+    Equivalent to ``SubspaceEstimator(data, horizon, method="ssarx").fit(order, ...)``; same
+    parameters as :func:`pbsid`.
+
+    Returns
+    -------
+    StateSpaceModel
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> n = 4000; r = rng.standard_normal(n); e = 0.5 * rng.standard_normal(n)
+    >>> u, y = np.zeros(n), np.zeros(n)
+    >>> for t in range(1, n):
+    ...     y[t] = 0.8 * y[t - 1] + u[t - 1] + e[t]
+    ...     u[t] = r[t] - 0.3 * y[t]
+    >>> m = sysid.ssarx(sysid.IOData(u=u, y=y), order=1, horizon=10)
+    >>> bool(abs(m.poles()[0] - 0.8) < 0.02)
+    True
+    """

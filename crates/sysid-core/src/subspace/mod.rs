@@ -26,7 +26,10 @@
 //! given `A`, `C` ([`bd_x0`]). Nothing here depends on the record length.
 
 pub mod bd_x0;
+pub mod closed_loop;
+pub mod frequency;
 pub mod order;
+pub mod recursive;
 pub mod system;
 pub mod weighting;
 
@@ -233,4 +236,4 @@ impl Subspace {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

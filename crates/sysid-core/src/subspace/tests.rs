@@ -5,7 +5,7 @@ use crate::hankel::{Compressor, HankelLayout, QrCompressor};
 use crate::simulate::simulate;
 use faer::Mat;
 
-pub(crate) struct Rng(u64);
+pub(crate) struct Rng(pub(crate) u64);
 impl Rng {
     pub(crate) fn uniform(&mut self) -> f64 {
         self.0 = self

@@ -1,0 +1,266 @@
+//! Frequency-domain subspace identification from frequency-response data (McKelvey, Akçay &
+//! Ljung 1996).
+//!
+//! With `z_k = e^{j ω_k}` (ω in rad/sample) and `G_k = D + C (z_k I - A)^{-1} B`, the data
+//! equation `Y = Γ_q X + T_q U` holds for
+//!
+//! ```text
+//!   Y[:, k] = [G_k; z_k G_k; ...; z_k^{q-1} G_k],   U[:, k] = [I; z_k I; ...; z_k^{q-1} I],
+//!   X[:, k] = (z_k I - A)^{-1} B,
+//! ```
+//!
+//! so the column space of `Y` with `U` projected out is that of `Γ_q`. Real and imaginary
+//! parts side by side make every matrix real (the conjugate frequencies are implied); the
+//! projection is the LQ factorisation of `[U; Y]`, the SVD of its `Y` block gives `Γ_q`, A and
+//! C follow by shift invariance, and B, D by linear least squares on `G_k`. Each frequency
+//! may carry a weight. Exact data of an order-n system give it exactly when `q > n` and at
+//! least `n + 1` distinct frequencies are given (fewer when the system has more inputs).
+
+use super::order::largest_log_gap;
+use super::system::shift_invariance;
+use crate::error::{Result, SysidError};
+use crate::linalg::{lq_lower, pinv};
+use crate::model::StateSpace;
+use faer::{Mat, MatRef};
+
+/// Result of [`identify_frd`].
+#[derive(Debug, Clone)]
+pub struct FrdIdentified {
+    /// The discrete-time model.
+    pub sys: StateSpace,
+    /// Singular values of the projected data, largest first.
+    pub singular_values: Vec<f64>,
+}
+
+/// Identifies `(A, B, C, D)` of `order` (or the largest log gap when `None`) from `G_k`
+/// (real and imaginary parts, each `l x m`) at `omega` (rad/sample) with horizon `q`.
+pub fn identify_frd(
+    omega: &[f64],
+    g_re: &[MatRef<'_, f64>],
+    g_im: &[MatRef<'_, f64>],
+    weights: Option<&[f64]>,
+    order: Option<usize>,
+    q: usize,
+) -> Result<FrdIdentified> {
+    let nf = omega.len();
+    if nf == 0 || g_re.len() != nf || g_im.len() != nf {
+        return Err(SysidError::invalid(
+            "frequency data",
+            "omega, the real and the imaginary parts need the same, non-zero length",
+        ));
+    }
+    let (l, m) = (g_re[0].nrows(), g_re[0].ncols());
+    if l == 0 || m == 0 {
+        return Err(SysidError::invalid(
+            "frequency data",
+            "needs inputs and outputs",
+        ));
+    }
+    if q < 2 {
+        return Err(SysidError::invalid("horizon", "must be >= 2"));
+    }
+    let w: Vec<f64> = match weights {
+        Some(w) if w.len() == nf => w.to_vec(),
+        Some(_) => return Err(SysidError::invalid("weights", "one weight per frequency")),
+        None => vec![1.0; nf],
+    };
+    for k in 0..nf {
+        if !omega[k].is_finite() || !w[k].is_finite() || w[k] < 0.0 {
+            return Err(SysidError::invalid(
+                "frequency data",
+                "frequencies and weights must be finite, weights non-negative",
+            ));
+        }
+        crate::error::check_finite("response (real part)", g_re[k])?;
+        crate::error::check_finite("response (imaginary part)", g_im[k])?;
+    }
+    // [U; Y], real and imaginary parts of each frequency's m columns side by side
+    let rows_u = q * m;
+    let rows = q * (m + l);
+    let mut z = Mat::<f64>::zeros(rows, 2 * nf * m);
+    for k in 0..nf {
+        for i in 0..q {
+            let (c, s) = ((i as f64 * omega[k]).cos(), (i as f64 * omega[k]).sin());
+            for j in 0..m {
+                let (cr, ci) = (2 * k * m + j, (2 * k + 1) * m + j);
+                z[(i * m + j, cr)] = w[k] * c;
+                z[(i * m + j, ci)] = w[k] * s;
+                for r in 0..l {
+                    let (gr, gi) = (g_re[k][(r, j)], g_im[k][(r, j)]);
+                    z[(rows_u + i * l + r, cr)] = w[k] * (c * gr - s * gi);
+                    z[(rows_u + i * l + r, ci)] = w[k] * (c * gi + s * gr);
+                }
+            }
+        }
+    }
+    let lfac = lq_lower(z.as_ref());
+    let l22 = lfac.as_ref().submatrix(rows_u, rows_u, q * l, q * l);
+    let svd = l22
+        .thin_svd()
+        .map_err(|e| SysidError::numerical("frequency-domain SVD", format!("{e:?}")))?;
+    let sv: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+    let smax = sv.first().copied().unwrap_or(0.0);
+    if !smax.is_finite() || smax <= 0.0 {
+        return Err(SysidError::numerical(
+            "frequency-domain SVD",
+            "the response carries nothing beyond a constant; is it zero?",
+        ));
+    }
+    let rank = sv.iter().filter(|&&x| x > 1e-12 * smax).count();
+    let max = ((q - 1) * l).min(rank).min(2 * nf * m);
+    let n = match order {
+        Some(n) => n,
+        None => largest_log_gap(&sv, max),
+    };
+    if n == 0 || n > max {
+        return Err(SysidError::OrderTooLarge {
+            order: n,
+            max,
+            future: q,
+            outputs: l,
+        });
+    }
+    let mut gamma = svd.U().subcols(0, n).to_owned();
+    for j in 0..n {
+        let s = sv[j].sqrt();
+        for i in 0..gamma.nrows() {
+            gamma[(i, j)] *= s;
+        }
+    }
+    let (a, c, _) = shift_invariance(gamma.as_ref(), l, false)?;
+    let (b, d) = fit_bd(omega, g_re, g_im, &w, a.as_ref(), c.as_ref())?;
+    let sys = StateSpace::new(a, b, c, d).map_err(|_| {
+        SysidError::numerical(
+            "system matrices",
+            "non-finite estimates; lower the order or check the frequency data",
+        )
+    })?;
+    Ok(FrdIdentified {
+        sys,
+        singular_values: sv,
+    })
+}
+
+/// B and D minimising `Σ_k w_k^2 |G_k - D - C (z_k I - A)^{-1} B|^2`, column by column.
+fn fit_bd(
+    omega: &[f64],
+    g_re: &[MatRef<'_, f64>],
+    g_im: &[MatRef<'_, f64>],
+    w: &[f64],
+    a: MatRef<'_, f64>,
+    c: MatRef<'_, f64>,
+) -> Result<(Mat<f64>, Mat<f64>)> {
+    let (n, l, m, nf) = (a.nrows(), c.nrows(), g_re[0].ncols(), omega.len());
+    // F_k = C (z_k I - A)^{-1} in real form from [[cI - A, -sI], [sI, cI - A]]
+    let mut design = Mat::<f64>::zeros(2 * l * nf, n + l);
+    for k in 0..nf {
+        let (co, si) = (omega[k].cos(), omega[k].sin());
+        let mut big = Mat::<f64>::zeros(2 * n, 2 * n);
+        for i in 0..n {
+            for j in 0..n {
+                let v = -a[(i, j)];
+                big[(i, j)] = v;
+                big[(n + i, n + j)] = v;
+            }
+            big[(i, i)] += co;
+            big[(n + i, n + i)] += co;
+            big[(i, n + i)] = -si;
+            big[(n + i, i)] = si;
+        }
+        let inv = pinv(big.as_ref(), 1e-14)?;
+        let xr = inv.as_ref().submatrix(0, 0, n, n);
+        let xi = inv.as_ref().submatrix(n, 0, n, n);
+        let fr = c * xr;
+        let fi = c * xi;
+        for r in 0..l {
+            for j in 0..n {
+                design[(2 * l * k + r, j)] = w[k] * fr[(r, j)];
+                design[(2 * l * k + l + r, j)] = w[k] * fi[(r, j)];
+            }
+            design[(2 * l * k + r, n + r)] = w[k];
+        }
+    }
+    let dp = pinv(design.as_ref(), 1e-13)?;
+    let mut b = Mat::<f64>::zeros(n, m);
+    let mut d = Mat::<f64>::zeros(l, m);
+    for j in 0..m {
+        let mut rhs = Mat::<f64>::zeros(2 * l * nf, 1);
+        for k in 0..nf {
+            for r in 0..l {
+                rhs[(2 * l * k + r, 0)] = w[k] * g_re[k][(r, j)];
+                rhs[(2 * l * k + l + r, 0)] = w[k] * g_im[k][(r, j)];
+            }
+        }
+        let th = &dp * &rhs;
+        for i in 0..n {
+            b[(i, j)] = th[(i, 0)];
+        }
+        for r in 0..l {
+            d[(r, j)] = th[(n + r, 0)];
+        }
+    }
+    Ok((b, d))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exact_frequency_response_gives_the_system() {
+        // 3rd-order, 2 outputs, 1 input
+        let a = faer::mat![[0.7, 0.3, 0.0], [-0.3, 0.7, 0.0], [0.0, 0.0, -0.5]];
+        let b = faer::mat![[1.0], [0.0], [0.5]];
+        let c = faer::mat![[1.0, 0.0, 1.0], [0.0, 1.0, 0.2]];
+        let d = faer::mat![[0.1], [0.0]];
+        let omega: Vec<f64> = (0..40).map(|k| 0.05 + 3.0 * k as f64 / 40.0).collect();
+        let resp =
+            |a: MatRef<'_, f64>, b: MatRef<'_, f64>, c: MatRef<'_, f64>, d: MatRef<'_, f64>| {
+                omega
+                    .iter()
+                    .map(|&om| fit_bd_response(a, b, c, d, om))
+                    .collect::<Vec<_>>()
+            };
+        let g = resp(a.as_ref(), b.as_ref(), c.as_ref(), d.as_ref());
+        let re: Vec<MatRef<'_, f64>> = g.iter().map(|x| x.0.as_ref()).collect();
+        let im: Vec<MatRef<'_, f64>> = g.iter().map(|x| x.1.as_ref()).collect();
+        let id = identify_frd(&omega, &re, &im, None, None, 6).unwrap();
+        assert_eq!(id.sys.a.nrows(), 3);
+        let g2 = resp(
+            id.sys.a.as_ref(),
+            id.sys.b.as_ref(),
+            id.sys.c.as_ref(),
+            id.sys.d.as_ref(),
+        );
+        for (x, y) in g.iter().zip(g2.iter()) {
+            assert!((&x.0 - &y.0).norm_max() < 1e-9 && (&x.1 - &y.1).norm_max() < 1e-9);
+        }
+    }
+
+    /// G(e^{jω}) in real and imaginary parts, through the real 2n x 2n system.
+    fn fit_bd_response(
+        a: MatRef<'_, f64>,
+        b: MatRef<'_, f64>,
+        c: MatRef<'_, f64>,
+        d: MatRef<'_, f64>,
+        om: f64,
+    ) -> (Mat<f64>, Mat<f64>) {
+        let n = a.nrows();
+        let (co, si) = (om.cos(), om.sin());
+        let mut big = Mat::<f64>::zeros(2 * n, 2 * n);
+        for i in 0..n {
+            for j in 0..n {
+                big[(i, j)] = -a[(i, j)];
+                big[(n + i, n + j)] = -a[(i, j)];
+            }
+            big[(i, i)] += co;
+            big[(n + i, n + i)] += co;
+            big[(i, n + i)] = -si;
+            big[(n + i, i)] = si;
+        }
+        let inv = pinv(big.as_ref(), 1e-14).unwrap();
+        let xr = inv.as_ref().submatrix(0, 0, n, n) * b;
+        let xi = inv.as_ref().submatrix(n, 0, n, n) * b;
+        (c * &xr + d, c * &xi)
+    }
+}
