@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 
 mod convert;
 mod errors;
+mod greybox;
 mod hankel;
 mod pem;
 mod polynomial;
@@ -25,5 +26,6 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     realization::register(m)?;
     pem::register(m)?;
     polynomial::register(m)?;
+    greybox::register(m)?;
     Ok(())
 }
