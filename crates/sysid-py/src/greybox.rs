@@ -421,7 +421,37 @@ pub fn greybox_ode_simulate<'py>(
     Ok(mat_to_numpy(py, &result.py()?))
 }
 
+/// `exp(x)` and its Fréchet derivatives in the directions `dirs` (small matrices).
+#[pyfunction]
+pub fn expm_frechet<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    dirs: Vec<PyReadonlyArray2<'py, f64>>,
+) -> PyResult<(
+    Bound<'py, numpy::PyArray2<f64>>,
+    Vec<Bound<'py, numpy::PyArray2<f64>>>,
+)> {
+    let xv = view(&x);
+    if xv.nrows() != xv.ncols() {
+        return Err(PyValueError::new_err("x must be square"));
+    }
+    let ds: Vec<Mat<f64>> = dirs.iter().map(|d| view(d).to_owned()).collect();
+    if ds
+        .iter()
+        .any(|d| d.nrows() != xv.nrows() || d.ncols() != xv.ncols())
+    {
+        return Err(PyValueError::new_err("every direction must have the shape of x"));
+    }
+    crate::errors::IntoPy::py(sysid_core::error::check_finite("x", xv))?;
+    let (f, l) = sysid_core::greybox::expm::expm_frechet(xv, &ds);
+    Ok((
+        mat_to_numpy(py, &f),
+        l.iter().map(|m| mat_to_numpy(py, m)).collect(),
+    ))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(expm_frechet, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_linear, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_ode, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_ode_simulate, m)?)?;

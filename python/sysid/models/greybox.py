@@ -13,7 +13,7 @@ exponential of the augmented matrix
 
 and the derivatives of ``(A_d, B_d)`` with respect to a parameter come from the Fréchet
 derivative of the exponential in the direction of that parameter's ``(dA, dB)``
-(:func:`scipy.linalg.expm_frechet`); ``dA/dp`` itself by central differences of ``fn`` unless
+(the augmented-block form, scaling and squaring in the Rust core); ``dA/dp`` itself by central differences of ``fn`` unless
 a ``jacobian`` is given. ``K`` (when returned) is the innovation gain of the *sampled* model.
 
 Examples
@@ -37,8 +37,8 @@ from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
+from .. import _sysid
 from ..errors import DataError
 
 __all__ = ["Param", "param", "fixed", "Parameters", "GreyBox", "IdentifiabilityWarning"]
@@ -176,6 +176,14 @@ def _takes_dt(fn: Callable[..., Any]) -> bool:
         return False
     return "dt" in sig.parameters or any(
         q.kind == q.VAR_KEYWORD for q in sig.parameters.values())
+
+
+def _expm(M: np.ndarray, dirs: list[np.ndarray]) -> tuple[np.ndarray, list[np.ndarray]]:
+    """``exp(M)`` and its Fréchet derivatives (Rust core: scaling and squaring; no LAPACK
+    threads for these small matrices)."""
+    E, L = _sysid.expm_frechet(np.ascontiguousarray(M, dtype=float),
+                               [np.ascontiguousarray(d, dtype=float) for d in dirs])
+    return E, list(L)
 
 
 def _hold_blocks(A: np.ndarray, B: np.ndarray, dt: float, hold: str) -> np.ndarray:
@@ -331,7 +339,7 @@ class GreyBox:
         A, B, C, D = mats["A"], mats["B"], mats["C"], mats["D"]
         assert A is not None and B is not None and C is not None and D is not None
         n, m = B.shape
-        E = scipy.linalg.expm(_hold_blocks(A, B, dt, self.hold))
+        E = _expm(_hold_blocks(A, B, dt, self.hold), [])[0]
         Ad, Bd, dD = _from_blocks(E, C, D, n, m, self.hold)
         return {**mats, "A": Ad, "B": Bd, "D": D + dD}
 
@@ -348,14 +356,16 @@ class GreyBox:
         assert A is not None and B is not None and C is not None and D is not None
         n, m = B.shape
         M = _hold_blocks(A, B, dt, self.hold)
-        E = scipy.linalg.expm(M)
-        Ad, Bd, dD0 = _from_blocks(E, C, D, n, m, self.hold)
-        out = []
+        dMs = []
         for d in raw:
             dM = _hold_blocks(d["A"], d["B"], dt, self.hold)
             if self.hold == "foh":
                 dM[n:n + m, n + m:] = 0.0
-            dE = scipy.linalg.expm_frechet(M, dM, compute_expm=False)
+            dMs.append(dM)
+        E, dEs = _expm(M, dMs)
+        Ad, Bd, dD0 = _from_blocks(E, C, D, n, m, self.hold)
+        out = []
+        for d, dE in zip(raw, dEs):
             if self.hold == "zoh":
                 dAd, dBd, ddD = dE[:n, :n], dE[:n, n:n + m], np.zeros_like(D)
             else:

@@ -12,6 +12,7 @@
 //! `dx/dt = f(t, x, u, p)`, `y = h(t, x, u, p)` from its simulation errors, integrating all
 //! finite-difference perturbations of the parameters together.
 
+pub mod expm;
 pub mod ode;
 
 use crate::error::{Result, SysidError};
