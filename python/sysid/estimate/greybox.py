@@ -147,7 +147,7 @@ def greyest(
     structure: Any,
     *,
     focus: str = "prediction",
-    x0: Any = "estimate",
+    x0: Any = None,
     noise: str = "model",
     weighting: str = "noise",
     multistart: int = 0,
@@ -168,8 +168,10 @@ def greyest(
         One-step prediction errors (with the structure's ``K``) or simulation errors (``K = 0``).
         A nonlinear structure always uses simulation errors.
     x0 : "estimate", "zero", "model", array, or a list per experiment
-        Initial states: estimated (default), zero, the structure's own (``fn`` returns x0,
-        possibly a function of the parameters), or given.
+        Initial states: estimated, zero, the structure's own (a linear ``fn`` returning x0,
+        possibly a function of the parameters; a nonlinear structure's ``x0`` and
+        ``x0_free``), or given. Default: "estimate" for linear, "model" for nonlinear
+        structures.
     noise : {"model", "none", "estimate"}
         ``K`` as the structure returns it (zero when it returns none), no ``K``, or every entry
         of ``K`` estimated freely (innovation gain of the sampled model). Prediction focus only.
@@ -234,7 +236,8 @@ def greyest(
             abs(structure.dt - dt) > 1e-9 * dt:
         raise DataError(f"the structure's dt={structure.dt} differs from the data's dt={dt}: "
                         "resample the data or give the structure the data's sample time")
-    fit = _LinearFit(data, structure, dt, focus, x0, noise, weighting == "noise")
+    fit = _LinearFit(data, structure, dt, focus, "estimate" if x0 is None else x0, noise,
+                     weighting == "noise")
     best = fit.run(fit.z0, max_iter, float(tol), cb)
     starts: list[float | None] = []
     if multistart:

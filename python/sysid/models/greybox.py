@@ -135,26 +135,24 @@ class Parameters(Mapping[str, Any]):
     """
 
     def __init__(self, values: Mapping[str, Any]) -> None:
-        object.__setattr__(self, "_v", dict(values))
+        # plain instance attributes: attribute access at C speed inside user functions
+        self.__dict__.update(values)
 
     def __getattr__(self, name: str) -> Any:
-        try:
-            return self._v[name]
-        except KeyError:
-            raise AttributeError(f"no parameter named {name!r}; the structure has "
-                                 f"{', '.join(self._v)}") from None
+        raise AttributeError(f"no parameter named {name!r}; the structure has "
+                             f"{', '.join(self.__dict__)}")
 
     def __getitem__(self, name: str) -> Any:
-        return self._v[name]
+        return self.__dict__[name]
 
     def __iter__(self) -> Any:
-        return iter(self._v)
+        return iter(self.__dict__)
 
     def __len__(self) -> int:
-        return len(self._v)
+        return len(self.__dict__)
 
     def __repr__(self) -> str:
-        return "Parameters(" + ", ".join(f"{k}={v!r}" for k, v in self._v.items()) + ")"
+        return "Parameters(" + ", ".join(f"{k}={v!r}" for k, v in self.__dict__.items()) + ")"
 
 
 def as_params(params: Mapping[str, Any]) -> dict[str, Param]:

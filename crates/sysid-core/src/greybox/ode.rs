@@ -129,6 +129,8 @@ pub struct OdeProblem<'a> {
     rhs_calls: usize,
     /// Step size carried between sample intervals by the adaptive integrator.
     h_last: f64,
+    /// The error covariance at the last evaluated point (saves a simulation per reweight).
+    last_cov: Option<(Vec<f64>, Mat<f64>)>,
 }
 
 impl<'a> OdeProblem<'a> {
@@ -204,6 +206,7 @@ impl<'a> OdeProblem<'a> {
             n_samples,
             rhs_calls: 0,
             h_last: h0,
+            last_cov: None,
         })
     }
 
@@ -478,6 +481,11 @@ impl<'a> OdeProblem<'a> {
 
     /// Sample covariance of the simulation errors at `theta`.
     pub fn error_covariance(&mut self, th: &[f64]) -> Result<Mat<f64>> {
+        if let Some((t, c)) = &self.last_cov {
+            if t.as_slice() == th {
+                return Ok(c.clone());
+            }
+        }
         let l = self.l;
         let mut lam = Mat::<f64>::zeros(l, l);
         let ok = self.run(th, false, &mut |e, _, _| {
@@ -535,7 +543,13 @@ impl Problem for OdeProblem<'_> {
         let mut h = Mat::<f64>::zeros(if jacobian { q } else { 0 }, if jacobian { q } else { 0 });
         let mut we = vec![0.0; l];
         let mut jw = Mat::<f64>::zeros(l, q);
+        let mut lam = Mat::<f64>::zeros(l, l);
         let ok = self.run(th, jacobian, &mut |e, dy, cols| {
+            for i in 0..l {
+                for j in 0..l {
+                    lam[(i, j)] += e[i] * e[j];
+                }
+            }
             for i in 0..l {
                 let mut v = 0.0;
                 for j in 0..=i {
@@ -577,6 +591,7 @@ impl Problem for OdeProblem<'_> {
         if !ok || !cost.is_finite() {
             return Ok(Evaluation::cost_only(f64::INFINITY));
         }
+        self.last_cov = Some((th.to_vec(), lam * (1.0 / self.n_samples as f64)));
         for i in 0..h.nrows() {
             for j in 0..i {
                 h[(j, i)] = h[(i, j)];
