@@ -340,3 +340,110 @@ def test_bad_structures_raise():
         sysid.greyest(sysid.IOData(u=u, y=u, dt=0.1), sysid.GreyBox(
             lambda p: ([[-1 / p.a]], [[1.0]], [[1.0]], [[0.0]]), {"a": sysid.param(0.5)}),
             progress=lambda *a: 1 / 0)
+
+
+# -- nonlinear grey-box ------------------------------------------------------------------------
+def lateral_ode(t, x, u, p):
+    return [p.Yv * x[0] - p.U0 * x[2] + p.g * x[3] + p.Yd_ped * u[1],
+            p.Lv * x[0] + p.Lp * x[1] + p.Lr * x[2] + p.Ld_lat * u[0] + p.Ld_ped * u[1],
+            p.Nv * x[0] + p.Np * x[1] + p.Nr * x[2] + p.Nd_lat * u[0] + p.Nd_ped * u[1],
+            x[1]]
+
+
+def states(t, x, u, p):
+    return [x[0], x[1], x[2], x[3]]
+
+
+def test_lateral_as_ode_gives_the_same_parameters(lateral_case):
+    """The same equations as a nonlinear grey-box (RK4 at the sample time, vectorised
+    Jacobian): the estimates agree with the linear grey-box within a small fraction of their
+    standard deviations, and so do the standard deviations."""
+    u, y0, sigma, start, dt = lateral_case
+    n = 600
+    y = y0[:n] + sigma * np.random.default_rng(11).standard_normal((n, 4))
+    data = sysid.IOData(u=u[:n], y=y, dt=dt)
+    lin = sysid.greyest(data, start, x0="zero")
+    init = {**{k: 1.3 * v for k, v in TRUE.items()}, **KNOWN}
+    nl = sysid.NonlinearGreyBox(lateral_ode, states, init, nx=4, vectorized=True)
+    fit = sysid.greyest(data, nl)
+    free = list(TRUE)
+    a = np.array([fit.parameters[k]["value"] for k in free])
+    b = np.array([lin.parameters[k]["value"] for k in free])
+    sa = np.array([fit.parameters[k]["std"] for k in free])
+    sb = np.array([lin.parameters[k]["std"] for k in free])
+    assert np.all(np.abs(a - b) < 0.05 * sb), (a - b) / sb
+    np.testing.assert_allclose(sa, sb, rtol=0.05)
+    assert fit.parameters["U0"]["value"] == 55.0 and fit.parameters["U0"]["fixed"]
+    assert fit.info["rhs_calls"] > 0 and fit.info["seconds"] > 0
+    # the estimated structure is a model: simulate, compare
+    assert fit.model.dt == dt
+    np.testing.assert_allclose(fit.model.simulate(u[:n]), lin.model.simulate(u[:n], dt=dt),
+                               atol=1e-3 * np.abs(y0).max())
+
+
+def _pendulum():
+    def f(t, x, u, p):
+        return [x[1], -p.w2 * np.sin(x[0]) - p.c * x[1] + p.b * u[0]]
+
+    def h(t, x, u, p):
+        return [x[0]]
+    return f, h
+
+
+def test_nonlinear_exact_on_noise_free_data_with_several_experiments():
+    """A pendulum (sin nonlinearity), two experiments with their own initial states: the
+    first experiment's angle is estimated, its rate is fixed, the second's state is fixed."""
+    f, h = _pendulum()
+    dt = 0.05
+    rng = np.random.default_rng(5)
+    truth = {"w2": 9.0, "c": 0.4, "b": 2.0}
+    x0s = np.array([[0.8, 0.0], [-0.3, 0.5]])
+    exps = []
+    for e in range(2):
+        u = np.repeat(rng.standard_normal(15), 10)[:, None]
+        s = sysid.NonlinearGreyBox(f, h, truth, nx=2, x0=x0s[e], integrator="rk4", substeps=2)
+        exps.append((u, s.simulate(u, dt=dt)))
+    data = sysid.IOData(u=[e[0] for e in exps], y=[e[1] for e in exps], dt=dt)
+    guess = x0s.copy()
+    guess[0, 0] = 0.5
+    s = sysid.NonlinearGreyBox(f, h, {"w2": 6.0, "c": 0.2, "b": 1.0}, nx=2, x0=guess,
+                               x0_free=[[True, False], [False, False]], substeps=2)
+    for vec in (True, False):
+        s.vectorized = vec
+        fit = sysid.greyest(data, s)
+        np.testing.assert_allclose(fit.parameters.value, [9.0, 0.4, 2.0], atol=1e-6)
+        assert abs(fit.initial_states[0][0] - 0.8) < 1e-6
+        assert fit.initial_states[0][1] == 0.0 and np.all(fit.initial_states[1] == x0s[1])
+    # the adaptive integrator reproduces the data of the fine RK4 to its tolerance
+    s.integrator = "adaptive"
+    fit = sysid.greyest(data, s)
+    np.testing.assert_allclose(fit.parameters.value, [9.0, 0.4, 2.0], rtol=1e-3)
+
+
+def test_nonlinear_bounds_fixed_and_options():
+    f, h = _pendulum()
+    dt = 0.05
+    rng = np.random.default_rng(6)
+    u = np.repeat(rng.standard_normal(30), 15)[:, None]
+    y = sysid.NonlinearGreyBox(f, h, {"w2": 9.0, "c": 0.4, "b": 2.0}, nx=2, x0=[0.5, 0]
+                               ).simulate(u, dt=dt)
+    y = y + 0.01 * rng.standard_normal(y.shape)
+    data = sysid.IOData(u=u, y=y, dt=dt)
+    s = sysid.NonlinearGreyBox(f, h, {"w2": 8.5, "c": sysid.param(0.1, bounds=(0.0, 0.3)),
+                                      "b": sysid.fixed(2.0)}, nx=2, x0=[0.5, 0.0],
+                               vectorized=True)
+    fit = sysid.greyest(data, s)
+    assert fit.parameters["c"]["value"] == 0.3 and fit.parameters["c"]["bound"] == "upper"
+    assert fit.parameters["b"]["value"] == 2.0 and fit.parameters["b"]["std"] == 0.0
+    # x0: "zero" (the data start at 0.5) fits worse than "estimate"
+    s2 = sysid.NonlinearGreyBox(f, h, {"w2": 8.5, "c": 0.2, "b": 1.5}, nx=2, vectorized=True)
+    est = sysid.greyest(data, s2, x0="estimate")
+    zero = sysid.greyest(data, s2, x0="zero")
+    assert abs(est.initial_states[0][0] - 0.5) < 0.01
+    assert est.info["loss"] < 0.5 * zero.info["loss"]
+    assert abs(est.parameters["w2"]["value"] - 9.0) < 3 * est.parameters["w2"]["std"] + 1e-6
+    with pytest.raises(DataError):
+        sysid.NonlinearGreyBox(f, h, {"w2": 1.0}, nx=2, integrator="euler")
+    with pytest.raises(DataError, match="f returned"):
+        sysid.greyest(data, sysid.NonlinearGreyBox(lambda t, x, u, p: [x[1]], h,
+                                                   {"w2": 1.0}, nx=2, vectorized=True))
