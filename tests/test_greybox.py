@@ -447,3 +447,20 @@ def test_nonlinear_bounds_fixed_and_options():
     with pytest.raises(DataError, match="f returned"):
         sysid.greyest(data, sysid.NonlinearGreyBox(lambda t, x, u, p: [x[1]], h,
                                                    {"w2": 1.0}, nx=2, vectorized=True))
+
+
+def test_docs_examples_run():
+    import re
+    from pathlib import Path
+
+    doc = Path(__file__).resolve().parents[1] / "docs" / "greybox.md"
+    blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), flags=re.S)
+    assert len(blocks) >= 4
+    namespace: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.IdentifiabilityWarning)
+        for i, block in enumerate(blocks):  # the blocks build on each other
+            exec(compile(block, f"docs/greybox.md[python block {i}]", "exec"), namespace)
+    assert namespace["worst"] < 0.1
+    assert "IdentifiabilityWarning" in type(namespace["caught"][0].message).__name__ or \
+        "a, b" in str(namespace["caught"][0].message)
