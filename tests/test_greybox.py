@@ -464,3 +464,16 @@ def test_docs_examples_run():
     assert namespace["worst"] < 0.1
     assert "IdentifiabilityWarning" in type(namespace["caught"][0].message).__name__ or \
         "a, b" in str(namespace["caught"][0].message)
+
+
+def test_report_shows_the_parameter_table(tmp_path):
+    motor, data = _motor_data()
+    fit = sysid.greyest(data, sysid.GreyBox(motor, {"K": 1.0, "tau": sysid.param(
+        1.0, unit="s", description="time constant"), "unused": sysid.fixed(3.0)}))
+    files = sysid.report(fit.model, data, tmp_path)
+    page = next(p for p in (files.values() if isinstance(files, dict) else files)
+                if str(p).endswith(".html"))
+    from pathlib import Path
+    text = Path(page).read_text()
+    assert 'id="parameters"' in text and "time constant" in text and "fixed" in text
+    assert f"{fit.parameters['tau']['value']:.6g}" in text
