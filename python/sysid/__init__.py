@@ -56,7 +56,7 @@ _LAZY = {
     "EraResult": "estimate.realization",
     "FRD": "models.frd",
     "GreyBox": "models.greybox",
-    "GreyEstimate": "estimate.greybox",
+    "GreyEstimate": "estimate.greyresult",
     "IdentifiabilityWarning": "models.greybox",
     "NonlinearGreyBox": "models.nlgreybox",
     "ParameterTable": "models.paramtable",

@@ -21,6 +21,7 @@ from ..errors import DataError, SysidError
 from ..models.nlgreybox import NonlinearGreyBox
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
+from .greyresult import GreyEstimate, _warn_unidentifiable
 
 __all__ = ["nlgreyest"]
 
@@ -54,8 +55,6 @@ def _initial_states(s: NonlinearGreyBox, x0: Any, count: int) -> tuple[np.ndarra
 def nlgreyest(data: IOData, s: NonlinearGreyBox, *, x0: Any, weighting: str, multistart: int,
               rng: Any, max_iter: int, tol: float, progress: Any) -> Any:
     """See :func:`sysid.greyest` (the nonlinear branch)."""
-    from .greybox import GreyEstimate, _warn_unidentifiable
-
     exps = [(np.ascontiguousarray(u), np.ascontiguousarray(y)) for u, y in data.experiments]
     dt = float(data.dt)
     s = s.with_values({}, dt=dt)

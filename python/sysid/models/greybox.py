@@ -12,9 +12,10 @@ exponential of the augmented matrix
     = \\begin{bmatrix} A_d & B_d \\\\ 0 & I \\end{bmatrix},
 
 and the derivatives of ``(A_d, B_d)`` with respect to a parameter come from the Fréchet
-derivative of the exponential in the direction of that parameter's ``(dA, dB)``
-(the augmented-block form, scaling and squaring in the Rust core); ``dA/dp`` itself by central differences of ``fn`` unless
-a ``jacobian`` is given. ``K`` (when returned) is the innovation gain of the *sampled* model.
+derivative of the exponential in the direction of that parameter's ``(dA, dB)`` (the
+augmented-block form, scaling and squaring in the Rust core); ``dA/dp`` itself by central
+differences of ``fn`` unless a ``jacobian`` is given. ``K`` (when returned) is the
+innovation gain of the *sampled* model.
 
 Examples
 --------
