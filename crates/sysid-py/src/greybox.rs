@@ -440,7 +440,9 @@ pub fn expm_frechet<'py>(
         .iter()
         .any(|d| d.nrows() != xv.nrows() || d.ncols() != xv.ncols())
     {
-        return Err(PyValueError::new_err("every direction must have the shape of x"));
+        return Err(PyValueError::new_err(
+            "every direction must have the shape of x",
+        ));
     }
     crate::errors::IntoPy::py(sysid_core::error::check_finite("x", xv))?;
     let (f, l) = sysid_core::greybox::expm::expm_frechet(xv, &ds);

@@ -14,6 +14,8 @@
 
 pub mod expm;
 pub mod ode;
+#[cfg(test)]
+mod tests;
 
 use crate::error::{Result, SysidError};
 use crate::model::StateSpace;
@@ -150,12 +152,16 @@ pub fn linear(
         return Err(SysidError::invalid(
             "initial parameters",
             match options.focus {
-                Focus::Simulation => "the sampled A of the structure at the initial parameters \
+                Focus::Simulation => {
+                    "the sampled A of the structure at the initial parameters \
                      has eigenvalues on or outside the unit circle (an unstable system cannot be \
                      fitted by simulation errors): start from stable values, or use \
-                     focus=\"prediction\" with a stabilising K",
-                Focus::Prediction => "the predictor A - K C at the initial parameters is \
-                     unstable: start from values that give a stable predictor",
+                     focus=\"prediction\" with a stabilising K"
+                }
+                Focus::Prediction => {
+                    "the predictor A - K C at the initial parameters is \
+                     unstable: start from values that give a stable predictor"
+                }
             },
         ));
     }

@@ -19,7 +19,13 @@ use faer::{Mat, MatRef, Side};
 pub trait OdeModel {
     /// `dx/dt` (`nx x K`) at time `t` for states `x` (`nx x K`), input `u` (length m) and
     /// parameters `p` (`np x K`).
-    fn rhs(&mut self, t: f64, x: MatRef<'_, f64>, u: &[f64], p: MatRef<'_, f64>) -> Result<Mat<f64>>;
+    fn rhs(
+        &mut self,
+        t: f64,
+        x: MatRef<'_, f64>,
+        u: &[f64],
+        p: MatRef<'_, f64>,
+    ) -> Result<Mat<f64>>;
     /// The outputs (`l x K`).
     fn output(
         &mut self,
@@ -155,7 +161,10 @@ impl<'a> OdeProblem<'a> {
             ));
         }
         if structure.x0.iter().any(|v| v.len() != structure.nx) {
-            return Err(SysidError::invalid("x0", "every initial state needs nx entries"));
+            return Err(SysidError::invalid(
+                "x0",
+                "every initial state needs nx entries",
+            ));
         }
         if structure.free_p.iter().any(|&i| i >= structure.p.len())
             || structure
@@ -166,7 +175,10 @@ impl<'a> OdeProblem<'a> {
             return Err(SysidError::invalid("structure", "free index out of range"));
         }
         if structure.typical.len() != structure.free_p.len() + structure.free_x0.len() {
-            return Err(SysidError::invalid("typical", "one entry per searched quantity"));
+            return Err(SysidError::invalid(
+                "typical",
+                "one entry per searched quantity",
+            ));
         }
         if !(options.dt.is_finite() && options.dt > 0.0) {
             return Err(SysidError::invalid("dt", "must be a positive sample time"));
@@ -176,7 +188,10 @@ impl<'a> OdeProblem<'a> {
                 return Err(SysidError::invalid("substeps", "must be >= 1"))
             }
             Integrator::Adaptive { rtol, atol } if !(rtol > 0.0 && atol > 0.0) => {
-                return Err(SysidError::invalid("tolerances", "rtol and atol must be > 0"))
+                return Err(SysidError::invalid(
+                    "tolerances",
+                    "rtol and atol must be > 0",
+                ))
             }
             _ => {}
         }
@@ -671,7 +686,11 @@ pub fn estimate(
         prob.losses.pop();
         prob.evaluate(&theta, true)?.gauss_newton
     };
-    let fixed = options.optim.fixed.clone().unwrap_or_else(|| vec![false; q]);
+    let fixed = options
+        .optim
+        .fixed
+        .clone()
+        .unwrap_or_else(|| vec![false; q]);
     let covariance = free_covariance(&h, &fixed)?;
     Ok(OdeResult {
         theta,

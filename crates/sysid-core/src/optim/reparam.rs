@@ -59,7 +59,10 @@ impl<'a> Reparameterized<'a> {
         if th.len() != q {
             return Err(SysidError::numerical(
                 "parameter map",
-                format!("returned {} inner parameters, the problem has {q}", th.len()),
+                format!(
+                    "returned {} inner parameters, the problem has {q}",
+                    th.len()
+                ),
             ));
         }
         if let Some(m) = m {
