@@ -421,16 +421,18 @@ pub fn greybox_ode_simulate<'py>(
     Ok(mat_to_numpy(py, &result.py()?))
 }
 
+type ExpmOut<'py> = (
+    Bound<'py, numpy::PyArray2<f64>>,
+    Vec<Bound<'py, numpy::PyArray2<f64>>>,
+);
+
 /// `exp(x)` and its Fréchet derivatives in the directions `dirs` (small matrices).
 #[pyfunction]
 pub fn expm_frechet<'py>(
     py: Python<'py>,
     x: PyReadonlyArray2<'py, f64>,
     dirs: Vec<PyReadonlyArray2<'py, f64>>,
-) -> PyResult<(
-    Bound<'py, numpy::PyArray2<f64>>,
-    Vec<Bound<'py, numpy::PyArray2<f64>>>,
-)> {
+) -> PyResult<ExpmOut<'py>> {
     let xv = view(&x);
     if xv.nrows() != xv.ncols() {
         return Err(PyValueError::new_err("x must be square"));

@@ -120,13 +120,15 @@ pub fn linear(
         Mat::zeros(l, n),
         Mat::zeros(l, m),
     )?;
-    let mut po = PemOptions::default();
-    po.focus = options.focus;
-    po.estimate_d = true;
-    po.estimate_k = options.with_k;
-    po.x0 = vec![InitialState::Estimate];
-    po.reweight = options.reweight;
-    po.local_coordinates = false;
+    let po = PemOptions {
+        focus: options.focus,
+        estimate_d: true,
+        estimate_k: options.with_k,
+        x0: vec![InitialState::Estimate],
+        reweight: options.reweight,
+        local_coordinates: false,
+        ..Default::default()
+    };
     if options.with_k && options.focus != Focus::Prediction {
         return Err(SysidError::invalid(
             "with_k",

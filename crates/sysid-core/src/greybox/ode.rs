@@ -15,6 +15,9 @@ use crate::error::{Result, SysidError};
 use crate::optim::{self, Covariance, Evaluation, Flow, Iteration, Problem, Solution};
 use faer::{Mat, MatRef, Side};
 
+/// What [`OdeProblem::run`] reports per sample: residual, `d yhat / d theta`, moved columns.
+type Sink<'a> = dyn FnMut(&[f64], &Mat<f64>, &[usize]) + 'a;
+
 /// The model equations evaluated on `K` columns at once.
 pub trait OdeModel {
     /// `dx/dt` (`nx x K`) at time `t` for states `x` (`nx x K`), input `u` (length m) and
@@ -184,7 +187,7 @@ impl<'a> OdeProblem<'a> {
             return Err(SysidError::invalid("dt", "must be a positive sample time"));
         }
         match options.integrator {
-            Integrator::Rk4 { substeps } if substeps == 0 => {
+            Integrator::Rk4 { substeps: 0 } => {
                 return Err(SysidError::invalid("substeps", "must be >= 1"))
             }
             Integrator::Adaptive { rtol, atol } if !(rtol > 0.0 && atol > 0.0) => {
@@ -436,12 +439,7 @@ impl<'a> OdeProblem<'a> {
 
     /// Runs every experiment; `sink(e, t, residual, d yhat / d theta)` per sample
     /// (the derivative is `l x q`, empty without `jac`).
-    fn run(
-        &mut self,
-        th: &[f64],
-        jac: bool,
-        sink: &mut dyn FnMut(&[f64], &Mat<f64>, &[usize]),
-    ) -> Result<bool> {
+    fn run(&mut self, th: &[f64], jac: bool, sink: &mut Sink<'_>) -> Result<bool> {
         let q = th.len();
         let h = self.steps(th);
         let l = self.l;

@@ -12,7 +12,7 @@ fn expm_matches_closed_form_and_frechet_matches_differences() {
     // a non-normal 3x3 with a large norm (several squarings)
     let x = mat![[-1.0, 4.0, 0.5], [0.0, -2.0, 3.0], [1.0, 0.0, -0.5]];
     let e = mat![[0.3, -0.2, 0.0], [0.1, 0.0, 0.7], [0.0, 0.5, -0.4]];
-    let (f, l) = expm_frechet(x.as_ref(), &[e.clone()]);
+    let (f, l) = expm_frechet(x.as_ref(), std::slice::from_ref(&e));
     let h = 1e-6;
     let (fp, _) = expm_frechet((&x + &e * h).as_ref(), &[]);
     let (fm, _) = expm_frechet((&x - &e * h).as_ref(), &[]);
