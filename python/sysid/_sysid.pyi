@@ -34,6 +34,10 @@ __all__ = [
     "balanced_truncation",
     "modal_analysis",
     "pem_refine",
+    "greybox_linear",
+    "greybox_ode",
+    "greybox_ode_simulate",
+    "expm_frechet",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -250,6 +254,69 @@ def pem_refine(
     reg_nominal: _Array | None = None,
     progress: Any = None,
 ) -> dict[str, Any]: ...
+# grey-box models (issue 12)
+def greybox_linear(
+    dims: tuple[int, int, int],
+    experiments: list[tuple[_Array, _Array]],
+    structure: Any,
+    p0: list[float],
+    *,
+    focus: str = "prediction",
+    with_k: bool = False,
+    reweight: bool = True,
+    x0_params: list[int] = ...,
+    lower: list[float] | None = None,
+    upper: list[float] | None = None,
+    fixed: list[bool] | None = None,
+    max_iter: int = 100,
+    tol_cost: float = 1e-10,
+    tol_step: float = 1e-10,
+    tol_gradient: float = 1e-12,
+    progress: Any = None,
+) -> dict[str, Any]: ...
+def greybox_ode(
+    f: Any,
+    h: Any,
+    experiments: list[tuple[_Array, _Array]],
+    nx: int,
+    p: list[float],
+    free_p: list[int],
+    x0: list[list[float]],
+    free_x0: list[tuple[int, int]],
+    typical: list[float],
+    dt: float,
+    *,
+    integrator_name: str = "rk4",
+    substeps: int = 1,
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    reweight: bool = True,
+    fd_step: float = 1e-6,
+    lower: list[float] | None = None,
+    upper: list[float] | None = None,
+    fixed: list[bool] | None = None,
+    max_iter: int = 100,
+    tol_cost: float = 1e-10,
+    tol_step: float = 1e-10,
+    tol_gradient: float = 1e-12,
+    progress: Any = None,
+) -> dict[str, Any]: ...
+def greybox_ode_simulate(
+    f: Any,
+    h: Any,
+    u: _Array,
+    nx: int,
+    p: list[float],
+    x0: list[float],
+    dt: float,
+    *,
+    integrator_name: str = "rk4",
+    substeps: int = 1,
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+) -> _Array: ...
+def expm_frechet(x: _Array, dirs: list[_Array]) -> tuple[_Array, list[_Array]]: ...
+
 # polynomial models (issue 13)
 def arx_fit(
     experiments: list[tuple[_Array, _Array]],

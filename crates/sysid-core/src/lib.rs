@@ -44,6 +44,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod error;
+pub mod greybox;
 pub mod hankel;
 pub mod linalg;
 pub mod model;

@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 mod closed_loop;
 mod convert;
 mod errors;
+mod greybox;
 mod hankel;
 mod pem;
 mod polynomial;
@@ -29,5 +30,6 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     realization::register(m)?;
     pem::register(m)?;
     polynomial::register(m)?;
+    greybox::register(m)?;
     Ok(())
 }

@@ -201,6 +201,7 @@ def _html(model: Any, sim: Any, pred: Any, res: Any, sel: Any, which: str,
         poles = "<h2>Poles</h2>\n" + _pole_table(model, table)
     except DataError:
         pass
+    params = _parameter_table(model, table)
     sweep = ""
     if sel is not None:
         order_rows = [[r.get("model", r["method"]), r["order"], f"{r['singular_value']:.4g}",
@@ -220,6 +221,7 @@ td,th{{text-align:right}}</style></head><body>
 <p>{esc(repr(model))}</p>
 {sweep}
 <pre>{esc(details)}</pre>
+{params}
 {poles}
 <h2>Fit on the {esc(which)} data</h2>
 {table("fit", ["output", "simulation fit %", "1-step fit %", "whiteness p", "white"], fit_rows)}
@@ -228,6 +230,25 @@ td,th{{text-align:right}}</style></head><body>
 {imgs}
 </body></html>
 """
+
+
+def _parameter_table(model: Any, table: Callable[[str, list[str], list[list[Any]]], str]
+                     ) -> str:
+    """The grey-box parameter table (name, value, std, fixed, active bound, 95 % interval,
+    unit) when the model carries one (``info["greybox"]["parameters"]``, set by greyest)."""
+    info = getattr(model, "info", None) or {}
+    rows = (info.get("greybox") or {}).get("parameters")
+    if not rows:
+        return ""
+
+    def g(x: float) -> str:
+        return f"{x:.6g}"
+    body = [[r["name"], g(r["value"]), g(r["std"]), "fixed" if r["fixed"] else "",
+             r["bound"], "" if r["fixed"] else f"[{g(r['ci95'][0])}, {g(r['ci95'][1])}]",
+             r["unit"], r["description"]] for r in rows]
+    return "<h2>Parameters</h2>\n" + table(
+        "parameters", ["parameter", "value", "std", "fixed", "bound active", "95 % interval",
+                       "unit", "description"], body)
 
 
 def _pole_table(model: Any, table: Callable[[str, list[str], list[list[Any]]], str]) -> str:

@@ -29,16 +29,22 @@
 //! Regularisation toward a nominal value (MATLAB's `Regularization.Lambda/R/Nominal`) adds
 //! `lambda/2 (theta - nominal)^T R (theta - nominal)` to the cost.
 //!
+//! [`Reparameterized`] shows a problem in other parameters `p` through a map
+//! `theta = phi(p)` and its Jacobian (the chain rule on `g` and `H`): grey-box models reuse the
+//! state-space predictor this way.
+//!
 //! [`covariance`] turns the Gauss-Newton matrix at the optimum into the parameter covariance,
 //! a pseudo-inverse restricted to the identifiable directions, and returns the directions
 //! the data do not determine.
 
 mod covariance;
+mod reparam;
 mod search;
 #[cfg(test)]
 mod tests;
 
 pub use covariance::{covariance, Covariance};
+pub use reparam::{ParameterMap, Reparameterized};
 pub use search::minimize;
 
 use crate::error::Result;

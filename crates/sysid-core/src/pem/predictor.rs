@@ -360,6 +360,21 @@ impl<'a> Predictor<'a> {
         (ia, ib, ic, id, ik)
     }
 
+    /// `det(Lambda)` at the start and after every accepted step (the maximum-likelihood loss).
+    pub(crate) fn losses(&mut self) -> &mut Vec<f64> {
+        &mut self.losses
+    }
+
+    /// Whether the weighting is re-estimated between steps; set it.
+    pub(crate) fn set_reweight(&mut self, on: bool) {
+        self.reweight = on;
+    }
+
+    /// Total number of samples over the experiments.
+    pub(crate) fn n_samples(&self) -> usize {
+        self.n_samples
+    }
+
     /// Prediction errors' sample covariance at `theta`.
     pub fn innovation_covariance(&self, th: &[f64]) -> Mat<f64> {
         let l = self.l;
@@ -418,7 +433,7 @@ impl<'a> Predictor<'a> {
     }
 
     /// Sets the weighting from the prediction errors at `theta`.
-    pub(super) fn reweight_at(&mut self, th: &[f64]) -> Result<()> {
+    pub(crate) fn reweight_at(&mut self, th: &[f64]) -> Result<()> {
         let l = self.l;
         let mut lam = self.innovation_covariance(th);
         for i in 0..l {

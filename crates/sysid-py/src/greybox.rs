@@ -1,0 +1,463 @@
+//! Bindings of the grey-box estimators (`sysid_core::greybox`): Python callables become a
+//! parameter map (linear structures) or an ODE model (nonlinear structures).
+
+use crate::convert::{mat_to_numpy, slice_to_numpy, view};
+use crate::errors::IntoPy;
+use faer::{Mat, MatRef};
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use sysid_core::greybox::ode::{self, Integrator, OdeModel, OdeOptions, OdeStructure};
+use sysid_core::greybox::{self, LinearOptions};
+use sysid_core::optim::{self, Flow, Iteration, ParameterMap};
+use sysid_core::pem::Focus;
+use sysid_core::SysidError;
+
+/// The first Python error raised inside a callback (re-raised after the search).
+type Slot = Option<PyErr>;
+
+fn callback_failed(slot: &mut Slot, e: PyErr, what: &str) -> SysidError {
+    let msg = format!("{what} raised: {e}");
+    if slot.is_none() {
+        *slot = Some(e);
+    }
+    SysidError::InvalidArgument {
+        name: "callback",
+        reason: msg,
+    }
+}
+
+fn to_mat(obj: &Bound<'_, PyAny>) -> PyResult<Mat<f64>> {
+    let a: PyReadonlyArray2<'_, f64> = obj.extract()?;
+    Ok(view(&a).to_owned())
+}
+
+struct PyMap<'s> {
+    f: Py<PyAny>,
+    err: &'s mut Slot,
+}
+
+impl ParameterMap for PyMap<'_> {
+    fn map(&mut self, p: &[f64], jac: bool) -> sysid_core::Result<(Vec<f64>, Option<Mat<f64>>)> {
+        Python::attach(|py| {
+            let r = (|| -> PyResult<(Vec<f64>, Option<Mat<f64>>)> {
+                let out = self.f.call1(py, (slice_to_numpy(py, p), jac))?;
+                let (th, m): (PyReadonlyArray1<'_, f64>, Option<Bound<'_, PyAny>>) =
+                    out.extract(py)?;
+                let th: Vec<f64> = th.as_array().iter().copied().collect();
+                let m = match m {
+                    Some(m) if !m.is_none() => Some(to_mat(&m)?),
+                    _ => None,
+                };
+                Ok((th, m))
+            })();
+            r.map_err(|e| callback_failed(self.err, e, "the grey-box structure function"))
+        })
+    }
+}
+
+struct PyOde<'s> {
+    f: Py<PyAny>,
+    h: Py<PyAny>,
+    err: &'s mut Slot,
+}
+
+impl PyOde<'_> {
+    fn call(
+        &mut self,
+        which: bool,
+        t: f64,
+        x: MatRef<'_, f64>,
+        u: &[f64],
+        p: MatRef<'_, f64>,
+    ) -> sysid_core::Result<Mat<f64>> {
+        Python::attach(|py| {
+            let r = (|| -> PyResult<Mat<f64>> {
+                let xa = Array2::from_shape_fn((x.nrows(), x.ncols()), |(i, j)| x[(i, j)])
+                    .into_pyarray(py);
+                let pa = Array2::from_shape_fn((p.nrows(), p.ncols()), |(i, j)| p[(i, j)])
+                    .into_pyarray(py);
+                let f = if which { &self.f } else { &self.h };
+                let out = f.call1(py, (t, xa, slice_to_numpy(py, u), pa))?;
+                to_mat(out.bind(py))
+            })();
+            r.map_err(|e| {
+                callback_failed(
+                    self.err,
+                    e,
+                    if which {
+                        "the state equation f"
+                    } else {
+                        "the output equation h"
+                    },
+                )
+            })
+        })
+    }
+}
+
+impl OdeModel for PyOde<'_> {
+    fn rhs(
+        &mut self,
+        t: f64,
+        x: MatRef<'_, f64>,
+        u: &[f64],
+        p: MatRef<'_, f64>,
+    ) -> sysid_core::Result<Mat<f64>> {
+        self.call(true, t, x, u, p)
+    }
+    fn output(
+        &mut self,
+        t: f64,
+        x: MatRef<'_, f64>,
+        u: &[f64],
+        p: MatRef<'_, f64>,
+    ) -> sysid_core::Result<Mat<f64>> {
+        self.call(false, t, x, u, p)
+    }
+}
+
+fn observer<'a>(
+    progress: &'a Option<Py<PyAny>>,
+    slot: &'a mut Slot,
+) -> impl FnMut(&Iteration) -> Flow + 'a {
+    move |it: &Iteration| -> Flow {
+        let Some(cb) = progress else {
+            return Flow::Continue;
+        };
+        Python::attach(|py| {
+            match cb.call1(
+                py,
+                (
+                    it.iteration,
+                    it.cost,
+                    it.step_norm,
+                    it.gradient_norm,
+                    it.damping,
+                ),
+            ) {
+                Ok(v) => {
+                    if v.bind(py).is(&*pyo3::types::PyBool::new(py, false)) {
+                        Flow::Stop
+                    } else {
+                        Flow::Continue
+                    }
+                }
+                Err(e) => {
+                    if slot.is_none() {
+                        *slot = Some(e);
+                    }
+                    Flow::Stop
+                }
+            }
+        })
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn search_options(
+    max_iter: usize,
+    tol_cost: f64,
+    tol_step: f64,
+    tol_gradient: f64,
+    lower: Option<Vec<f64>>,
+    upper: Option<Vec<f64>>,
+    fixed: Option<Vec<bool>>,
+) -> optim::Options {
+    let mut o = optim::Options::default();
+    o.max_iter = max_iter;
+    o.tol_cost = tol_cost;
+    o.tol_step = tol_step;
+    o.tol_gradient = tol_gradient;
+    o.lower = lower;
+    o.upper = upper;
+    o.fixed = fixed;
+    o
+}
+
+fn solution_items(
+    out: &Bound<'_, PyDict>,
+    py: Python<'_>,
+    sol: &optim::Solution,
+    cov: &optim::Covariance,
+) -> PyResult<()> {
+    out.set_item("covariance", mat_to_numpy(py, &cov.covariance))?;
+    out.set_item("rank", cov.rank)?;
+    out.set_item("unidentifiable", mat_to_numpy(py, &cov.unidentifiable))?;
+    out.set_item("iterations", sol.iterations)?;
+    out.set_item("evaluations", sol.evaluations)?;
+    out.set_item("cost", sol.cost)?;
+    out.set_item("history", sol.history.clone())?;
+    out.set_item("stop", sol.stop.as_str())?;
+    out.set_item("condition", sol.condition)?;
+    out.set_item("active_bounds", sol.active_bounds.clone())?;
+    out.set_item("gradient", slice_to_numpy(py, &sol.gradient))?;
+    Ok(())
+}
+
+/// Estimates a linear grey-box structure; `structure(p, jac) -> (theta, dtheta/dp or None)`.
+#[pyfunction]
+#[pyo3(signature = (dims, experiments, structure, p0, *, focus="prediction", with_k=false,
+    reweight=true, x0_params=vec![], lower=None, upper=None, fixed=None, max_iter=100,
+    tol_cost=1e-10, tol_step=1e-10, tol_gradient=1e-12, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn greybox_linear<'py>(
+    py: Python<'py>,
+    dims: (usize, usize, usize),
+    experiments: Vec<(PyReadonlyArray2<'py, f64>, PyReadonlyArray2<'py, f64>)>,
+    structure: Py<PyAny>,
+    p0: Vec<f64>,
+    focus: &str,
+    with_k: bool,
+    reweight: bool,
+    x0_params: Vec<usize>,
+    lower: Option<Vec<f64>>,
+    upper: Option<Vec<f64>>,
+    fixed: Option<Vec<bool>>,
+    max_iter: usize,
+    tol_cost: f64,
+    tol_step: f64,
+    tol_gradient: f64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let focus = match focus {
+        "prediction" => Focus::Prediction,
+        "simulation" => Focus::Simulation,
+        other => {
+            return Err(PyValueError::new_err(format!(
+                "focus must be \"prediction\" or \"simulation\", got {other:?}"
+            )))
+        }
+    };
+    let mut o = LinearOptions::default();
+    o.focus = focus;
+    o.with_k = with_k;
+    o.reweight = reweight;
+    o.x0_params = x0_params;
+    o.optim = search_options(
+        max_iter,
+        tol_cost,
+        tol_step,
+        tol_gradient,
+        lower,
+        upper,
+        fixed,
+    );
+    let views: Vec<_> = experiments
+        .iter()
+        .map(|(u, y)| (view(u), view(y)))
+        .collect();
+    let mut map_err: Slot = None;
+    let mut obs_err: Slot = None;
+    let result = py.detach(|| {
+        let mut map = PyMap {
+            f: structure,
+            err: &mut map_err,
+        };
+        let mut obs = observer(&progress, &mut obs_err);
+        greybox::linear(dims, &views, &mut map, &p0, &o, &mut obs)
+    });
+    if let Some(e) = map_err.or(obs_err) {
+        return Err(e);
+    }
+    let r = result.py()?;
+    let out = PyDict::new(py);
+    out.set_item("p", slice_to_numpy(py, &r.p))?;
+    out.set_item("theta", slice_to_numpy(py, &r.theta))?;
+    out.set_item(
+        "innovation_covariance",
+        mat_to_numpy(py, &r.innovation_covariance),
+    )?;
+    out.set_item("n_samples", r.n_samples)?;
+    out.set_item("loss_history", r.loss_history.clone())?;
+    solution_items(&out, py, &r.solution, &r.covariance)?;
+    Ok(out)
+}
+
+fn integrator(name: &str, substeps: usize, rtol: f64, atol: f64) -> PyResult<Integrator> {
+    match name {
+        "rk4" => Ok(Integrator::Rk4 { substeps }),
+        "adaptive" => Ok(Integrator::Adaptive { rtol, atol }),
+        other => Err(PyValueError::new_err(format!(
+            "integrator must be \"rk4\" or \"adaptive\", got {other:?}"
+        ))),
+    }
+}
+
+/// Estimates a nonlinear grey-box model; `f(t, x, u, p)` and `h(t, x, u, p)` take `x` as
+/// `(nx, K)` and `p` as `(np, K)` arrays (K perturbed columns) and return `(nx, K)`, `(l, K)`.
+#[pyfunction]
+#[pyo3(signature = (f, h, experiments, nx, p, free_p, x0, free_x0, typical, dt, *,
+    integrator_name="rk4", substeps=1, rtol=1e-8, atol=1e-10, reweight=true, fd_step=1e-6,
+    lower=None, upper=None, fixed=None, max_iter=100, tol_cost=1e-10, tol_step=1e-10,
+    tol_gradient=1e-12, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn greybox_ode<'py>(
+    py: Python<'py>,
+    f: Py<PyAny>,
+    h: Py<PyAny>,
+    experiments: Vec<(PyReadonlyArray2<'py, f64>, PyReadonlyArray2<'py, f64>)>,
+    nx: usize,
+    p: Vec<f64>,
+    free_p: Vec<usize>,
+    x0: Vec<Vec<f64>>,
+    free_x0: Vec<(usize, usize)>,
+    typical: Vec<f64>,
+    dt: f64,
+    integrator_name: &str,
+    substeps: usize,
+    rtol: f64,
+    atol: f64,
+    reweight: bool,
+    fd_step: f64,
+    lower: Option<Vec<f64>>,
+    upper: Option<Vec<f64>>,
+    fixed: Option<Vec<bool>>,
+    max_iter: usize,
+    tol_cost: f64,
+    tol_step: f64,
+    tol_gradient: f64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mut o = OdeOptions::default();
+    o.dt = dt;
+    o.integrator = integrator(integrator_name, substeps, rtol, atol)?;
+    o.reweight = reweight;
+    o.fd_step = fd_step;
+    o.optim = search_options(
+        max_iter,
+        tol_cost,
+        tol_step,
+        tol_gradient,
+        lower,
+        upper,
+        fixed,
+    );
+    let st = OdeStructure {
+        nx,
+        p,
+        free_p,
+        x0,
+        free_x0,
+        typical,
+    };
+    let views: Vec<_> = experiments
+        .iter()
+        .map(|(u, y)| (view(u), view(y)))
+        .collect();
+    let mut cb_err: Slot = None;
+    let mut obs_err: Slot = None;
+    let result = py.detach(|| {
+        let mut model = PyOde {
+            f,
+            h,
+            err: &mut cb_err,
+        };
+        let mut obs = observer(&progress, &mut obs_err);
+        ode::estimate(&mut model, &views, st, &o, &mut obs)
+    });
+    if let Some(e) = cb_err.or(obs_err) {
+        return Err(e);
+    }
+    let r = result.py()?;
+    let out = PyDict::new(py);
+    out.set_item("theta", slice_to_numpy(py, &r.theta))?;
+    out.set_item(
+        "innovation_covariance",
+        mat_to_numpy(py, &r.innovation_covariance),
+    )?;
+    out.set_item("n_samples", r.n_samples)?;
+    out.set_item("loss_history", r.loss_history.clone())?;
+    out.set_item("rhs_calls", r.rhs_calls)?;
+    solution_items(&out, py, &r.solution, &r.covariance)?;
+    Ok(out)
+}
+
+/// Simulates a nonlinear grey-box model (`f`, `h` as for [`greybox_ode`], called with K = 1).
+#[pyfunction]
+#[pyo3(signature = (f, h, u, nx, p, x0, dt, *, integrator_name="rk4", substeps=1, rtol=1e-8,
+    atol=1e-10))]
+#[allow(clippy::too_many_arguments)]
+pub fn greybox_ode_simulate<'py>(
+    py: Python<'py>,
+    f: Py<PyAny>,
+    h: Py<PyAny>,
+    u: PyReadonlyArray2<'py, f64>,
+    nx: usize,
+    p: Vec<f64>,
+    x0: Vec<f64>,
+    dt: f64,
+    integrator_name: &str,
+    substeps: usize,
+    rtol: f64,
+    atol: f64,
+) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+    let mut o = OdeOptions::default();
+    o.dt = dt;
+    o.integrator = integrator(integrator_name, substeps, rtol, atol)?;
+    let st = OdeStructure {
+        nx,
+        p,
+        free_p: vec![],
+        x0: vec![x0],
+        free_x0: vec![],
+        typical: vec![],
+    };
+    let uv = view(&u);
+    let mut cb_err: Slot = None;
+    let result = py.detach(|| {
+        let mut model = PyOde {
+            f,
+            h,
+            err: &mut cb_err,
+        };
+        ode::simulate(&mut model, uv, &st, 0, &o)
+    });
+    if let Some(e) = cb_err {
+        return Err(e);
+    }
+    Ok(mat_to_numpy(py, &result.py()?))
+}
+
+type ExpmOut<'py> = (
+    Bound<'py, numpy::PyArray2<f64>>,
+    Vec<Bound<'py, numpy::PyArray2<f64>>>,
+);
+
+/// `exp(x)` and its Fréchet derivatives in the directions `dirs` (small matrices).
+#[pyfunction]
+pub fn expm_frechet<'py>(
+    py: Python<'py>,
+    x: PyReadonlyArray2<'py, f64>,
+    dirs: Vec<PyReadonlyArray2<'py, f64>>,
+) -> PyResult<ExpmOut<'py>> {
+    let xv = view(&x);
+    if xv.nrows() != xv.ncols() {
+        return Err(PyValueError::new_err("x must be square"));
+    }
+    let ds: Vec<Mat<f64>> = dirs.iter().map(|d| view(d).to_owned()).collect();
+    if ds
+        .iter()
+        .any(|d| d.nrows() != xv.nrows() || d.ncols() != xv.ncols())
+    {
+        return Err(PyValueError::new_err(
+            "every direction must have the shape of x",
+        ));
+    }
+    crate::errors::IntoPy::py(sysid_core::error::check_finite("x", xv))?;
+    let (f, l) = sysid_core::greybox::expm::expm_frechet(xv, &ds);
+    Ok((
+        mat_to_numpy(py, &f),
+        l.iter().map(|m| mat_to_numpy(py, m)).collect(),
+    ))
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(expm_frechet, m)?)?;
+    m.add_function(wrap_pyfunction!(greybox_linear, m)?)?;
+    m.add_function(wrap_pyfunction!(greybox_ode, m)?)?;
+    m.add_function(wrap_pyfunction!(greybox_ode_simulate, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,479 @@
+"""Grey-box estimation (sysid.GreyBox, sysid.greyest): exactness, calibration, options."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import sysid
+from sysid.errors import DataError
+
+# -- the gyroplane lateral/directional structure (report 003, pedal-input model) -------------
+# Tables 6.1-6.3, rudder-pedal column; Lr and Np fixed at zero, U0 and g fixed as in the
+# report's model file (g enters with the file's sign, -9.81).
+TRUE = {"Yv": 0.878698, "Yd_ped": 0.0456625, "Lv": 0.00208104, "Lp": -0.0669935,
+        "Ld_lat": -0.00146285, "Ld_ped": 0.00060241, "Nv": 0.0586699, "Nr": -1.8769,
+        "Nd_lat": 0.00775002, "Nd_ped": 0.0102646}
+KNOWN = {"U0": sysid.fixed(55.0), "g": sysid.fixed(-9.81), "Lr": sysid.fixed(0.0),
+         "Np": sysid.fixed(0.0)}
+
+
+def lateral(p, dt=None):
+    A = [[p.Yv, 0, -p.U0, p.g], [p.Lv, p.Lp, p.Lr, 0], [p.Nv, p.Np, p.Nr, 0], [0, 1, 0, 0]]
+    B = [[0, p.Yd_ped], [p.Ld_lat, p.Ld_ped], [p.Nd_lat, p.Nd_ped], [0, 0]]
+    return A, B, np.eye(4), np.zeros((4, 2))
+
+
+def _sweeps(n: int, dt: float) -> np.ndarray:
+    t = np.arange(n) * dt
+    T = n * dt
+
+    def sweep(f0: float, f1: float) -> np.ndarray:
+        return np.sin(2 * np.pi * (f0 * t + (f1 - f0) * t ** 2 / (2 * T)))
+    return np.column_stack([10 * sweep(0.05, 1.5), 10 * sweep(1.5, 0.05)])
+
+
+@pytest.fixture(scope="module")
+def lateral_case():
+    dt, n = 0.05, 1200
+    u = _sweeps(n, dt)
+    truth = sysid.GreyBox(lateral, {**TRUE, **KNOWN})
+    y0 = truth.model(dt=dt).simulate(u)
+    sigma = 0.05 * y0.std(axis=0)
+    start = sysid.GreyBox(lateral, {**{k: 1.3 * v for k, v in TRUE.items()}, **KNOWN})
+    return u, y0, sigma, start, dt
+
+
+def test_lateral_monte_carlo_calibration(lateral_case):
+    """200 noisy records (fixed seeds): each free derivative's 95 % interval covers the truth
+    in 90-98 % of runs, and the mean estimate is within one predicted std of the truth."""
+    u, y0, sigma, start, dt = lateral_case
+    names = list(TRUE)
+    runs = 200
+    est = np.zeros((runs, len(names)))
+    std = np.zeros_like(est)
+    for r in range(runs):
+        rng = np.random.default_rng(1000 + r)
+        y = y0 + sigma * rng.standard_normal(y0.shape)
+        fit = sysid.greyest(sysid.IOData(u=u, y=y, dt=dt), start, x0="zero")
+        est[r] = [fit.parameters[k]["value"] for k in names]
+        std[r] = [fit.parameters[k]["std"] for k in names]
+    truth = np.array([TRUE[k] for k in names])
+    coverage = np.mean(np.abs(est - truth) <= 1.959964 * std, axis=0)
+    assert np.all((coverage >= 0.90) & (coverage <= 0.98)), dict(zip(names, coverage))
+    assert np.all(np.abs(est.mean(axis=0) - truth) <= std.mean(axis=0)), names
+    # the predicted std is the spread of the estimates (within 15 %)
+    ratio = est.std(axis=0) / std.mean(axis=0)
+    assert np.all(np.abs(ratio - 1) < 0.15), dict(zip(names, ratio))
+
+
+def test_lateral_fixed_parameters_never_move(lateral_case):
+    u, y0, sigma, start, dt = lateral_case
+    rng = np.random.default_rng(7)
+    y = y0 + sigma * rng.standard_normal(y0.shape)
+    wrong = sysid.GreyBox(lateral, {**{k: 1.3 * v for k, v in TRUE.items()},
+                                    **KNOWN, "U0": sysid.fixed(50.0)})
+    fit = sysid.greyest(sysid.IOData(u=u, y=y, dt=dt), wrong, x0="zero")
+    t = fit.parameters
+    for k in ("U0", "g", "Lr", "Np"):
+        assert t[k]["fixed"] and t[k]["std"] == 0.0
+    assert t["U0"]["value"] == 50.0 and t["g"]["value"] == -9.81 and t["Lr"]["value"] == 0.0
+    assert fit.structure.params["U0"].value == 50.0
+    # the table, the model's uncertainty and the covariance agree
+    free = fit.free_names
+    assert free == list(TRUE)
+    np.testing.assert_allclose(fit.model.uncertainty.std, [t[k]["std"] for k in free])
+    assert fit.correlation.shape == (10, 10)
+    np.testing.assert_allclose(np.diag(fit.correlation), 1.0)
+    df = fit.to_pandas()
+    assert list(df.index) == list(t.names) and bool(df.loc["U0", "fixed"])
+    assert "Yv" in repr(fit.parameters) and "fixed" in fit.summary()
+
+
+def test_lateral_model_is_usable_everywhere(lateral_case):
+    u, y0, sigma, start, dt = lateral_case
+    y = y0 + sigma * np.random.default_rng(3).standard_normal(y0.shape)
+    data = sysid.IOData(u=u, y=y, dt=dt)
+    fit = sysid.greyest(data, start, x0="zero")
+    assert isinstance(fit.model, sysid.ContinuousStateSpace)
+    cmp = sysid.compare(fit.model, data)
+    assert np.all(np.asarray(cmp.fit) > 90)
+    sysid.residuals(fit.model, data)
+    # any function of the model gets a std from the grey-box covariance
+    g = fit.model.uncertainty.propagate(lambda m: np.sort(m.poles().real))
+    assert np.all(np.isfinite(g.std)) and np.all(g.std > 0)
+
+
+def test_dc_motor_matches_least_squares_on_noise_free_data():
+    """y(t+1) = a y(t) + b u(t) exactly for a ZOH-sampled first-order motor: least squares
+    gives a, b, hence tau = -dt / ln a and K = b / (1 - a); greyest must agree to 1e-8."""
+    dt = 0.02
+
+    def motor(p, dt=None):
+        return [[-1.0 / p.tau]], [[p.K / p.tau]], [[1.0]], [[0.0]]
+
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.standard_normal(60), 10)
+    y = sysid.GreyBox(motor, {"K": 3.7, "tau": 0.45}).model(dt=dt).simulate(u)[:, 0]
+    Phi = np.column_stack([y[:-1], u[:-1]])
+    a, b = np.linalg.lstsq(Phi, y[1:], rcond=None)[0]
+    tau_ls, K_ls = -dt / np.log(a), b / (1 - a)
+    s = sysid.GreyBox(motor, {"K": 1.0, "tau": sysid.param(1.0, bounds=(1e-3, 100))})
+    fit = sysid.greyest(sysid.IOData(u=u, y=y, dt=dt), s, x0="zero")
+    assert abs(fit.parameters["tau"]["value"] - tau_ls) < 1e-8
+    assert abs(fit.parameters["K"]["value"] - K_ls) < 1e-8
+    # the user-supplied derivative path gives the same answer
+    s2 = sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0}, jacobian=lambda p: {
+        "K": ([[0.0]], [[1 / p.tau]], [[0.0]], [[0.0]]),
+        "tau": ([[1 / p.tau ** 2]], [[-p.K / p.tau ** 2]], [[0.0]], [[0.0]])})
+    fit2 = sysid.greyest(sysid.IOData(u=u, y=y, dt=dt), s2, x0="zero")
+    np.testing.assert_allclose(fit2.parameters.value, [K_ls, tau_ls], atol=1e-8)
+
+
+def test_product_only_parameters_are_named():
+    def prod(p, dt=None):
+        return [[-p.a * p.b]], [[1.0]], [[1.0]], [[0.0]]
+
+    u = np.sign(np.sin(np.arange(300) * 0.07))
+    y = sysid.GreyBox(prod, {"a": 1.0, "b": 2.0}).model(dt=0.05).simulate(u)
+    y = y + 0.01 * np.random.default_rng(0).standard_normal(y.shape)
+    s = sysid.GreyBox(prod, {"a": 1.5, "b": 1.5})
+    with pytest.warns(sysid.IdentifiabilityWarning, match=r"a, b"):
+        fit = sysid.greyest(sysid.IOData(u=u, y=y, dt=0.05), s, x0="zero")
+    assert fit.info["rank"] == 1
+    assert abs(np.prod(fit.parameters.value) - 2.0) < 0.02
+    # fixing one of them removes the warning
+    s = sysid.GreyBox(prod, {"a": sysid.fixed(1.0), "b": 1.5})
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sysid.IdentifiabilityWarning)
+        fit = sysid.greyest(sysid.IOData(u=u, y=y, dt=0.05), s, x0="zero")
+    assert abs(fit.parameters["b"]["value"] - 2.0) < 0.02
+
+
+def _motor_data(tau=0.3, K=2.0, n=400, noise=0.02, seed=0, x0=None, dt=0.05):
+    def motor(p, dt=None):
+        return [[-1.0 / p.tau]], [[p.K / p.tau]], [[1.0]], [[0.0]]
+    u = np.sign(np.sin(np.arange(n) * 0.05))
+    y = sysid.GreyBox(motor, {"K": K, "tau": tau}).model(dt=dt).simulate(u, x0=x0)
+    y = y + noise * np.random.default_rng(seed).standard_normal(y.shape)
+    return motor, sysid.IOData(u=u, y=y, dt=dt)
+
+
+def test_active_bound_is_reported():
+    motor, data = _motor_data()
+    s = sysid.GreyBox(motor, {"K": 1.0, "tau": sysid.param(0.1, bounds=(0.01, 0.2))})
+    fit = sysid.greyest(data, s, x0="zero")
+    row = fit.parameters["tau"]
+    assert row["value"] == 0.2 and row["bound"] == "upper"
+    assert fit.parameters["K"]["bound"] == ""
+    assert "upper" in str(fit.parameters)
+    free = sysid.greyest(data, sysid.GreyBox(motor, {"K": 1.0, "tau": 0.1}), x0="zero")
+    assert abs(free.parameters["tau"]["value"] - 0.3) < 0.01
+
+
+def test_options_change_the_result():
+    motor, data = _motor_data(x0=[1.5])
+    s = sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0})
+    est = sysid.greyest(data, s, x0="estimate")
+    zero = sysid.greyest(data, s, x0="zero")
+    assert abs(est.initial_states[0][0] - 1.5) < 0.05
+    assert est.info["loss"] < 0.5 * zero.info["loss"]
+    given = sysid.greyest(data, s, x0=[1.5])
+    assert given.initial_states[0][0] == 1.5
+    # weighting: identity vs noise (two outputs with very different noise)
+    ident = sysid.greyest(data, s, weighting="identity")
+    assert ident.info["weighted_cost"][-1] != est.info["weighted_cost"][-1]
+    # hold: the same data seen through FOH gives other parameters
+    foh = sysid.greyest(data, sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0}, hold="foh"))
+    assert abs(foh.parameters["tau"]["value"] - est.parameters["tau"]["value"]) > 1e-3
+    # max_iter stops early
+    short = sysid.greyest(data, s, max_iter=1)
+    assert short.info["iterations"] == 1 and short.info["stop"] == "maximum iterations"
+    with pytest.raises(DataError):
+        sysid.greyest(data, s, focus="bogus")
+    with pytest.raises(DataError):
+        sysid.greyest(data, s, x0="model")
+
+
+def test_focus_and_noise_model():
+    """Process noise through a Kalman gain: prediction focus with K estimated fits the
+    one-step predictor better than the output-error model."""
+    dt = 0.1
+
+    def first(p, dt=None):
+        return [[p.a]], [[p.b]], [[1.0]], [[0.0]]
+
+    rng = np.random.default_rng(2)
+    n = 2000
+    u = rng.standard_normal(n)
+    e = 0.3 * rng.standard_normal(n)
+    x = 0.0
+    y = np.zeros(n)
+    for t in range(n):
+        y[t] = x + e[t]
+        x = 0.9 * x + 0.5 * u[t] + 0.7 * e[t]
+    data = sysid.IOData(u=u, y=y, dt=dt)
+    s = sysid.GreyBox(first, {"a": 0.5, "b": 1.0}, continuous=False)
+    oe = sysid.greyest(data, s, noise="none")
+    kal = sysid.greyest(data, s, noise="estimate")
+    sim = sysid.greyest(data, s, noise="estimate", focus="simulation")
+    assert kal.info["loss"] < 0.7 * oe.info["loss"]
+    assert kal.model.K is not None and abs(kal.model.K[0, 0] - 0.7) < 0.05
+    assert abs(kal.parameters["a"]["value"] - 0.9) < 3 * kal.parameters["a"]["std"] + 1e-9
+    assert sim.model.K is None or not np.any(sim.model.K)
+    assert sim.info["noise"] == "none"
+    # K as a function of the parameters (returned by the structure)
+    s2 = sysid.GreyBox(lambda p: ([[p.a]], [[p.b]], [[1.0]], [[0.0]], [[p.k]]),
+                       {"a": 0.5, "b": 1.0, "k": 0.2}, continuous=False)
+    fit2 = sysid.greyest(data, s2)
+    assert abs(fit2.parameters["k"]["value"] - 0.7) < 0.05
+
+
+def test_multistart_escapes_a_local_minimum():
+    """A lightly damped oscillator: the simulation error is multimodal in the frequency."""
+    dt = 0.05
+
+    def osc(p, dt=None):
+        return [[0.0, 1.0], [-p.w ** 2, -0.1 * p.w]], [[0.0], [p.w ** 2]], [[1.0, 0.0]], [[0.0]]
+
+    rng = np.random.default_rng(1)
+    u = np.repeat(rng.standard_normal(40), 15)
+    y = sysid.GreyBox(osc, {"w": 2.0}).model(dt=dt).simulate(u)
+    data = sysid.IOData(u=u, y=y + 0.01 * rng.standard_normal(y.shape), dt=dt)
+    s = sysid.GreyBox(osc, {"w": sysid.param(3.5, bounds=(0.5, 4.0))})
+    single = sysid.greyest(data, s, focus="simulation", x0="zero")
+    multi = sysid.greyest(data, s, focus="simulation", x0="zero", multistart=10, rng=0)
+    assert abs(multi.parameters["w"]["value"] - 2.0) < 0.01
+    assert multi.info["loss"] < single.info["loss"]
+    assert len(multi.info["multistart"]) == 10
+    assert abs(single.parameters["w"]["value"] - 2.0) > 0.1
+
+
+def test_input_delay():
+    motor, _ = _motor_data()
+    dt = 0.05
+    u = np.sign(np.sin(np.arange(400) * 0.05))
+    truth = sysid.GreyBox(motor, {"K": 2.0, "tau": 0.3}, input_delay=0.15)
+    y = truth.model(dt=dt).simulate(u)
+    assert np.all(y[:5] == 0) and y[5, 0] != 0  # u[0] = 0, 3 samples of delay, 1 of ZOH
+    data = sysid.IOData(u=u, y=y, dt=dt)
+    s = sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0}, input_delay=0.15)
+    fit = sysid.greyest(data, s, x0="zero")
+    np.testing.assert_allclose(fit.parameters.value, [2.0, 0.3], atol=1e-7)
+    assert fit.model.nstates == 4  # 1 state + 3 delay states
+    nodelay = sysid.greyest(data, sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0}), x0="zero")
+    assert nodelay.info["loss"] > 1e3 * fit.info["loss"]
+    with pytest.raises(DataError, match="multiple"):
+        sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0}, input_delay=0.123).model(dt=dt)
+
+
+def test_scale_keeps_the_optimum():
+    motor, data = _motor_data()
+    a = sysid.greyest(data, sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0}))
+    b = sysid.greyest(data, sysid.GreyBox(motor, {"K": sysid.param(1.0, scale=100.0),
+                                                  "tau": sysid.param(1.0, scale=1e-3)}))
+    np.testing.assert_allclose(a.parameters.value, b.parameters.value, rtol=1e-6)
+    np.testing.assert_allclose(a.parameters.std, b.parameters.std, rtol=1e-4)
+
+
+def test_from_structure_equals_the_function_form():
+    A = np.array([[0.8, 0.2], [-0.1, 0.7]])
+    B = np.array([[1.0], [0.5]])
+    C = np.array([[1.0, 0.0]])
+    rng = np.random.default_rng(4)
+    u = rng.standard_normal(500)
+    y = sysid.StateSpaceModel(A, B, C).simulate(u)
+    data = sysid.IOData(u=u, y=y, dt=1.0)
+    free = {"A": [[1, 1], [0, 1]]}
+    s = sysid.GreyBox.from_structure(np.array([[0.6, 0.1], [-0.1, 0.6]]), B, C, free=free,
+                                     dt=1.0)
+    assert s.free_names == ["A_0_0", "A_0_1", "A_1_1"]
+    fit = sysid.greyest(data, s, x0="zero")
+    np.testing.assert_allclose(fit.parameters.value, [0.8, 0.2, 0.7], atol=1e-8)
+
+    def same(p):
+        return [[p.A_0_0, p.A_0_1], [-0.1, p.A_1_1]], B, C, [[0.0]]
+    g = sysid.GreyBox(same, {k: s.params[k].value for k in s.free_names}, continuous=False)
+    fit2 = sysid.greyest(data, g, x0="zero")
+    np.testing.assert_allclose(fit2.parameters.value, fit.parameters.value, atol=1e-10)
+    # B_1_0 free as well: four parameters for three transfer-function coefficients
+    s4 = sysid.GreyBox.from_structure(np.array([[0.6, 0.1], [-0.1, 0.6]]), B * [[1], [0.6]],
+                                      C, free={**free, "B": [[0], [1]]}, dt=1.0)
+    with pytest.warns(sysid.IdentifiabilityWarning, match="A_0_0, A_0_1, A_1_1, B_1_0"):
+        sysid.greyest(data, s4, x0="zero")
+    with pytest.raises(DataError):
+        sysid.GreyBox.from_structure(A, B, C, free={"Q": [[1]]})
+
+
+def test_foh_sampling_and_frechet_derivatives():
+    def sys2(p, dt=None):
+        return ([[p.a, 1.0], [-2.0, p.c]], [[0.0], [p.b]], [[1.0, 0.0]], [[0.0]])
+    vals = {"a": -0.3, "b": 1.2, "c": -0.8}
+    for hold in ("zoh", "foh"):
+        s = sysid.GreyBox(sys2, vals, hold=hold)
+        ref = sysid.c2d(s.model(), 0.2, hold)
+        got = s.sampled(None, 0.2)
+        np.testing.assert_allclose(got["A"], ref.A, atol=1e-13)
+        np.testing.assert_allclose(got["B"], ref.B, atol=1e-13)
+        np.testing.assert_allclose(got["D"], ref.D, atol=1e-13)
+        base, ders = s.sampled_derivatives(None, 0.2, ["a", "b", "c"])
+        for k, d in zip("abc", ders):
+            h = 1e-6
+            up = s.sampled({**vals, k: vals[k] + h}, 0.2)
+            dn = s.sampled({**vals, k: vals[k] - h}, 0.2)
+            for key in ("A", "B", "D"):
+                np.testing.assert_allclose(d[key], (up[key] - dn[key]) / (2 * h), atol=1e-8)
+
+
+def test_bad_structures_raise():
+    with pytest.raises(DataError):
+        sysid.param(2.0, bounds=(0, 1))
+    with pytest.raises(DataError):
+        sysid.GreyBox(lambda p: ([[p.a]], [[1.0]]), {"a": 1.0})
+    s = sysid.GreyBox(lambda p: ([[p.a]], [[1.0]], [[1.0]], [[0.0]]), {"a": 1.0})
+    u = np.ones(50)
+    with pytest.raises(DataError, match="unstable"):
+        sysid.greyest(sysid.IOData(u=u, y=u, dt=0.1), s)
+    with pytest.raises(ZeroDivisionError):
+        sysid.greyest(sysid.IOData(u=u, y=u, dt=0.1), sysid.GreyBox(
+            lambda p: ([[-1 / p.a]], [[1.0]], [[1.0]], [[0.0]]), {"a": sysid.param(0.5)}),
+            progress=lambda *a: 1 / 0)
+
+
+# -- nonlinear grey-box ------------------------------------------------------------------------
+def lateral_ode(t, x, u, p):
+    return [p.Yv * x[0] - p.U0 * x[2] + p.g * x[3] + p.Yd_ped * u[1],
+            p.Lv * x[0] + p.Lp * x[1] + p.Lr * x[2] + p.Ld_lat * u[0] + p.Ld_ped * u[1],
+            p.Nv * x[0] + p.Np * x[1] + p.Nr * x[2] + p.Nd_lat * u[0] + p.Nd_ped * u[1],
+            x[1]]
+
+
+def states(t, x, u, p):
+    return [x[0], x[1], x[2], x[3]]
+
+
+def test_lateral_as_ode_gives_the_same_parameters(lateral_case):
+    """The same equations as a nonlinear grey-box (RK4 at the sample time, vectorised
+    Jacobian): the estimates agree with the linear grey-box within a small fraction of their
+    standard deviations, and so do the standard deviations."""
+    u, y0, sigma, start, dt = lateral_case
+    n = 600
+    y = y0[:n] + sigma * np.random.default_rng(11).standard_normal((n, 4))
+    data = sysid.IOData(u=u[:n], y=y, dt=dt)
+    lin = sysid.greyest(data, start, x0="zero")
+    init = {**{k: 1.3 * v for k, v in TRUE.items()}, **KNOWN}
+    nl = sysid.NonlinearGreyBox(lateral_ode, states, init, nx=4, vectorized=True)
+    fit = sysid.greyest(data, nl)
+    free = list(TRUE)
+    a = np.array([fit.parameters[k]["value"] for k in free])
+    b = np.array([lin.parameters[k]["value"] for k in free])
+    sa = np.array([fit.parameters[k]["std"] for k in free])
+    sb = np.array([lin.parameters[k]["std"] for k in free])
+    assert np.all(np.abs(a - b) < 0.05 * sb), (a - b) / sb
+    np.testing.assert_allclose(sa, sb, rtol=0.05)
+    assert fit.parameters["U0"]["value"] == 55.0 and fit.parameters["U0"]["fixed"]
+    assert fit.info["rhs_calls"] > 0 and fit.info["seconds"] > 0
+    # the estimated structure is a model: simulate, compare
+    assert fit.model.dt == dt
+    np.testing.assert_allclose(fit.model.simulate(u[:n]), lin.model.simulate(u[:n], dt=dt),
+                               atol=1e-3 * np.abs(y0).max())
+
+
+def _pendulum():
+    def f(t, x, u, p):
+        return [x[1], -p.w2 * np.sin(x[0]) - p.c * x[1] + p.b * u[0]]
+
+    def h(t, x, u, p):
+        return [x[0]]
+    return f, h
+
+
+def test_nonlinear_exact_on_noise_free_data_with_several_experiments():
+    """A pendulum (sin nonlinearity), two experiments with their own initial states: the
+    first experiment's angle is estimated, its rate is fixed, the second's state is fixed."""
+    f, h = _pendulum()
+    dt = 0.05
+    rng = np.random.default_rng(5)
+    truth = {"w2": 9.0, "c": 0.4, "b": 2.0}
+    x0s = np.array([[0.8, 0.0], [-0.3, 0.5]])
+    exps = []
+    for e in range(2):
+        u = np.repeat(rng.standard_normal(15), 10)[:, None]
+        s = sysid.NonlinearGreyBox(f, h, truth, nx=2, x0=x0s[e], integrator="rk4", substeps=2)
+        exps.append((u, s.simulate(u, dt=dt)))
+    data = sysid.IOData(u=[e[0] for e in exps], y=[e[1] for e in exps], dt=dt)
+    guess = x0s.copy()
+    guess[0, 0] = 0.5
+    s = sysid.NonlinearGreyBox(f, h, {"w2": 6.0, "c": 0.2, "b": 1.0}, nx=2, x0=guess,
+                               x0_free=[[True, False], [False, False]], substeps=2)
+    for vec in (True, False):
+        s.vectorized = vec
+        fit = sysid.greyest(data, s)
+        np.testing.assert_allclose(fit.parameters.value, [9.0, 0.4, 2.0], atol=1e-6)
+        assert abs(fit.initial_states[0][0] - 0.8) < 1e-6
+        assert fit.initial_states[0][1] == 0.0 and np.all(fit.initial_states[1] == x0s[1])
+    # the adaptive integrator reproduces the data of the fine RK4 to its tolerance
+    s.integrator = "adaptive"
+    fit = sysid.greyest(data, s)
+    np.testing.assert_allclose(fit.parameters.value, [9.0, 0.4, 2.0], rtol=1e-3)
+
+
+def test_nonlinear_bounds_fixed_and_options():
+    f, h = _pendulum()
+    dt = 0.05
+    rng = np.random.default_rng(6)
+    u = np.repeat(rng.standard_normal(30), 15)[:, None]
+    y = sysid.NonlinearGreyBox(f, h, {"w2": 9.0, "c": 0.4, "b": 2.0}, nx=2, x0=[0.5, 0]
+                               ).simulate(u, dt=dt)
+    y = y + 0.01 * rng.standard_normal(y.shape)
+    data = sysid.IOData(u=u, y=y, dt=dt)
+    s = sysid.NonlinearGreyBox(f, h, {"w2": 8.5, "c": sysid.param(0.1, bounds=(0.0, 0.3)),
+                                      "b": sysid.fixed(2.0)}, nx=2, x0=[0.5, 0.0],
+                               vectorized=True)
+    fit = sysid.greyest(data, s)
+    assert fit.parameters["c"]["value"] == 0.3 and fit.parameters["c"]["bound"] == "upper"
+    assert fit.parameters["b"]["value"] == 2.0 and fit.parameters["b"]["std"] == 0.0
+    # x0: "zero" (the data start at 0.5) fits worse than "estimate"
+    s2 = sysid.NonlinearGreyBox(f, h, {"w2": 8.5, "c": 0.2, "b": 1.5}, nx=2, vectorized=True)
+    est = sysid.greyest(data, s2, x0="estimate")
+    zero = sysid.greyest(data, s2, x0="zero")
+    assert abs(est.initial_states[0][0] - 0.5) < 0.01
+    assert est.info["loss"] < 0.5 * zero.info["loss"]
+    assert abs(est.parameters["w2"]["value"] - 9.0) < 3 * est.parameters["w2"]["std"] + 1e-6
+    with pytest.raises(DataError):
+        sysid.NonlinearGreyBox(f, h, {"w2": 1.0}, nx=2, integrator="euler")
+    with pytest.raises(DataError, match="f returned"):
+        sysid.greyest(data, sysid.NonlinearGreyBox(lambda t, x, u, p: [x[1]], h,
+                                                   {"w2": 1.0}, nx=2, vectorized=True))
+
+
+def test_docs_examples_run():
+    import re
+    from pathlib import Path
+
+    doc = Path(__file__).resolve().parents[1] / "docs" / "greybox.md"
+    blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), flags=re.S)
+    assert len(blocks) >= 4
+    namespace: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.IdentifiabilityWarning)
+        for i, block in enumerate(blocks):  # the blocks build on each other
+            exec(compile(block, f"docs/greybox.md[python block {i}]", "exec"), namespace)
+    assert namespace["worst"] < 0.1
+    assert "IdentifiabilityWarning" in type(namespace["caught"][0].message).__name__ or \
+        "a, b" in str(namespace["caught"][0].message)
+
+
+def test_report_shows_the_parameter_table(tmp_path):
+    motor, data = _motor_data()
+    fit = sysid.greyest(data, sysid.GreyBox(motor, {"K": 1.0, "tau": sysid.param(
+        1.0, unit="s", description="time constant"), "unused": sysid.fixed(3.0)}))
+    files = sysid.report(fit.model, data, tmp_path)
+    page = next(p for p in (files.values() if isinstance(files, dict) else files)
+                if str(p).endswith(".html"))
+    from pathlib import Path
+    text = Path(page).read_text()
+    assert 'id="parameters"' in text and "time constant" in text and "fixed" in text
+    assert f"{fit.parameters['tau']['value']:.6g}" in text
