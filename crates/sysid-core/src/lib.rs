@@ -47,6 +47,7 @@ pub mod error;
 pub mod hankel;
 pub mod linalg;
 pub mod model;
+pub mod narx;
 pub mod optim;
 pub mod pem;
 pub mod polynomial;
