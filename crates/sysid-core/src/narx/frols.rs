@@ -225,14 +225,14 @@ struct State {
 /// let n = 300;
 /// let u = Mat::from_fn(n, 1, |t, _| (((t * 7919) % 97) as f64 / 48.0) - 1.0);
 /// let mut y = Mat::<f64>::zeros(n, 1);
-/// for t in 1..n { y[(t, 0)] = 0.5 * y[(t - 1, 0)] + u[(t - 1, 0)] * u[(t - 1, 0)]; }
+/// for t in 1..n { y[(t, 0)] = 0.5 * y[(t - 1, 0)] + u[(t - 1, 0)] - 0.3 * y[(t - 1, 0)] * u[(t - 1, 0)]; }
 /// let spec = LagSpec::new(1, 1, &[1], &[1], &[1], &[0]).unwrap();
 /// let cands = Candidates::new(&Basis::Polynomial { degree: 2 }, spec.n_vars()).unwrap();
 /// let rec = [Record { u: u.as_ref(), y: y.as_ref(), e: None }];
 /// let sel = frols(&spec, &cands, &rec, &[vec![]], &FrolsOptions::with_max_terms(4)).unwrap();
 /// let mut chosen: Vec<_> = sel[0].terms.iter().map(|&k| cands.terms[k].clone()).collect();
 /// chosen.sort_by_key(|t| format!("{t:?}"));
-/// assert_eq!(chosen, vec![Term::Monomial(vec![0]), Term::Monomial(vec![1, 1])]);
+/// assert_eq!(chosen, vec![Term::Monomial(vec![0, 1]), Term::Monomial(vec![0]), Term::Monomial(vec![1])]);
 /// ```
 pub fn frols(
     spec: &LagSpec,
