@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 mod convert;
 mod errors;
 mod hankel;
+mod narx;
 mod pem;
 mod polynomial;
 mod realization;
@@ -25,5 +26,6 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     realization::register(m)?;
     pem::register(m)?;
     polynomial::register(m)?;
+    narx::register(m)?;
     Ok(())
 }

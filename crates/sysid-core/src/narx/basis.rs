@@ -69,7 +69,11 @@ impl Basis {
                     ),
                 ));
             }
-            if r.widths.iter().chain(&r.scale).any(|w| !(*w > 0.0 && w.is_finite())) {
+            if r.widths
+                .iter()
+                .chain(&r.scale)
+                .any(|w| !(*w > 0.0 && w.is_finite()))
+            {
                 return Err(SysidError::invalid(
                     "basis",
                     "RBF widths and scales must be positive and finite",

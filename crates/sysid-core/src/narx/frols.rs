@@ -13,8 +13,8 @@
 use faer::Mat;
 use rayon::prelude::*;
 
-use super::basis::Candidates;
-use super::regressors::{LagSpec, Record};
+use super::basis::{Basis, Candidates, Term};
+use super::regressors::{LagSpec, Record, Signal};
 use crate::error::{Result, SysidError};
 use crate::linalg::QrAccumulator;
 
@@ -163,7 +163,8 @@ where
             let p = probes(rec, t0, len, x);
             for a in 0..q {
                 for b in 0..q {
-                    s.gram[a * q + b] += dot(&p[a * len..(a + 1) * len], &p[b * len..(b + 1) * len]);
+                    s.gram[a * q + b] +=
+                        dot(&p[a * len..(a + 1) * len], &p[b * len..(b + 1) * len]);
                 }
             }
             let sc = &mut scratch[..cands.scratch_len(len)];
@@ -270,7 +271,17 @@ pub fn frols(
         }
         p
     };
-    let s0 = pass(spec, cands, records, &bl, opts.parallel, ny, ny, true, &targets);
+    let s0 = pass(
+        spec,
+        cands,
+        records,
+        &bl,
+        opts.parallel,
+        ny,
+        ny,
+        true,
+        &targets,
+    );
     let mut states: Vec<State> = (0..ny)
         .map(|i| {
             let yy = s0.gram[i * ny + i];
@@ -380,7 +391,17 @@ pub fn frols(
             p
         };
         let q = na + ny;
-        let sums = pass(spec, cands, records, &bl, opts.parallel, na, q, false, &probes);
+        let sums = pass(
+            spec,
+            cands,
+            records,
+            &bl,
+            opts.parallel,
+            na,
+            q,
+            false,
+            &probes,
+        );
         for (a, &i) in active.iter().enumerate() {
             let st = &mut states[i];
             let (s, c) = st.pending.take().expect("set above");
@@ -426,11 +447,30 @@ pub fn fit(
     records: &[Record<'_>],
     terms: &[Vec<usize>],
 ) -> Result<Vec<Mat<f64>>> {
+    if terms.iter().flatten().any(|&k| k >= cands.len()) {
+        return Err(SysidError::invalid("terms", "candidate index out of range"));
+    }
+    let terms: Vec<Vec<Term>> = terms
+        .iter()
+        .map(|t| t.iter().map(|&k| cands.terms[k].clone()).collect())
+        .collect();
+    fit_terms(spec, &cands.basis, records, &terms)
+}
+
+/// As [`fit`] for explicit terms (for example a NARMAX model's terms refitted on new
+/// residuals).
+pub fn fit_terms(
+    spec: &LagSpec,
+    basis: &Basis,
+    records: &[Record<'_>],
+    terms: &[Vec<Term>],
+) -> Result<Vec<Mat<f64>>> {
     spec.check_records(records)?;
-    if terms.len() != spec.n_outputs || terms.iter().flatten().any(|&k| k >= cands.len()) {
+    basis.check(spec.n_vars())?;
+    if terms.len() != spec.n_outputs {
         return Err(SysidError::invalid(
             "terms",
-            "needs one list of candidate indices per output",
+            "needs one list of terms per output",
         ));
     }
     let nv = spec.n_vars();
@@ -443,13 +483,13 @@ pub fn fit(
     for rec in records {
         for t in spec.max_lag..rec.y.nrows() {
             spec.fill_with(t, &mut x, |s, ch, tt| match s {
-                super::regressors::Signal::Output => rec.y[(tt, ch)],
-                super::regressors::Signal::Input => rec.u[(tt, ch)],
-                super::regressors::Signal::Noise => rec.e.expect("checked")[(tt, ch)],
+                Signal::Output => rec.y[(tt, ch)],
+                Signal::Input => rec.u[(tt, ch)],
+                Signal::Noise => rec.e.expect("checked")[(tt, ch)],
             });
             for (i, ti) in terms.iter().enumerate() {
                 row.clear();
-                row.extend(ti.iter().map(|&k| cands.basis.eval(&cands.terms[k], &x)));
+                row.extend(ti.iter().map(|term| basis.eval(term, &x)));
                 row.push(rec.y[(t, i)]);
                 accs[i].push_row(&row);
             }

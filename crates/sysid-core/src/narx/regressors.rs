@@ -69,7 +69,10 @@ impl LagSpec {
         ne: &[usize],
     ) -> Result<Self> {
         if n_outputs == 0 {
-            return Err(SysidError::invalid("y", "needs at least one output channel"));
+            return Err(SysidError::invalid(
+                "y",
+                "needs at least one output channel",
+            ));
         }
         if na.len() != n_outputs || ne.len() != n_outputs {
             return Err(SysidError::invalid(

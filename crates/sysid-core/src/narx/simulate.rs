@@ -143,7 +143,9 @@ impl NarxModel {
     /// terms; zero for `t < max_lag`).
     pub fn residuals(&self, u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> Result<Mat<f64>> {
         let p = self.predict(u, y, 1)?;
-        Ok(Mat::from_fn(y.nrows(), y.ncols(), |t, i| y[(t, i)] - p[(t, i)]))
+        Ok(Mat::from_fn(y.nrows(), y.ncols(), |t, i| {
+            y[(t, i)] - p[(t, i)]
+        }))
     }
 
     /// `horizon`-step prediction `yhat(t | t - horizon)`: measured outputs up to

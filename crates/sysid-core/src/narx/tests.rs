@@ -12,8 +12,7 @@ fn billings(n: usize, seed: u64) -> (Mat<f64>, Mat<f64>) {
     let u = Mat::from_fn(n, 1, |_, _| rng.random_range(-1.0..1.0));
     let mut y = Mat::<f64>::zeros(n, 1);
     for t in 2..n {
-        y[(t, 0)] = -0.605 * y[(t - 1, 0)] - 0.163 * y[(t - 2, 0)].powi(2)
-            + 0.588 * u[(t - 1, 0)]
+        y[(t, 0)] = -0.605 * y[(t - 1, 0)] - 0.163 * y[(t - 2, 0)].powi(2) + 0.588 * u[(t - 1, 0)]
             - 0.24 * u[(t - 2, 0)];
     }
     (u, y)
@@ -23,7 +22,7 @@ fn billings(n: usize, seed: u64) -> (Mat<f64>, Mat<f64>) {
 fn enumeration_counts_and_parents() {
     let c = Candidates::new(&Basis::Polynomial { degree: 3 }, 4).unwrap();
     assert_eq!(c.len(), 35); // binomial(7, 3)
-    // the generated columns equal the directly evaluated terms
+                             // the generated columns equal the directly evaluated terms
     let len = 5;
     let x: Vec<f64> = (0..len * 4).map(|i| (i as f64 * 0.37).sin()).collect();
     let mut sc = vec![0.0; c.scratch_len(len)];
@@ -41,12 +40,20 @@ fn frols_selects_true_terms_and_exact_coefficients() {
     let (u, y) = billings(500, 1);
     let spec = LagSpec::new(1, 1, &[2], &[2], &[1], &[0]).unwrap();
     let cands = Candidates::new(&Basis::Polynomial { degree: 2 }, spec.n_vars()).unwrap();
-    let rec = [Record { u: u.as_ref(), y: y.as_ref(), e: None }];
+    let rec = [Record {
+        u: u.as_ref(),
+        y: y.as_ref(),
+        e: None,
+    }];
     for block_rows in [0, 7, 64] {
         let mut opts = FrolsOptions::with_max_terms(8);
         opts.block_rows = block_rows;
         let sel = frols(&spec, &cands, &rec, &[vec![]], &opts).unwrap();
-        let mut got: Vec<Term> = sel[0].terms.iter().map(|&k| cands.terms[k].clone()).collect();
+        let mut got: Vec<Term> = sel[0]
+            .terms
+            .iter()
+            .map(|&k| cands.terms[k].clone())
+            .collect();
         assert_eq!(got.len(), 4, "{got:?}");
         let r = fit(&spec, &cands, &rec, &[sel[0].terms.clone()]).unwrap();
         let th = solve_prefix(&r[0], 4).unwrap();
