@@ -151,6 +151,11 @@ _LAZY = {
     "model_to_dict": "models.io",
     "model_from_dict": "models.io",
     "report": "analysis.report",
+    # issue 14 (branch narx): nonlinear models
+    "NARXModel": "models.narx",
+    "PolynomialBasis": "models.narx",
+    "RBFBasis": "models.narx",
+    "nlarx": "estimate.narx",
 }
 
 
@@ -168,6 +173,10 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
+    "NARXModel",
+    "PolynomialBasis",
+    "RBFBasis",
+    "nlarx",
     "ParameterUncertainty",
     "UncertaintyWarning",
     "__version__",

@@ -33,6 +33,7 @@ from typing import Any
 
 from ..errors import DataError
 from .continuous import ContinuousStateSpace
+from .narx import NARXModel
 from .polynomial import PolynomialModel
 from .serialize import (
     FORMAT,
@@ -51,7 +52,7 @@ __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict", "regi
 
 LEGACY_FORMAT = "sysid-state-space-model"  # version 1: state-space models only
 
-for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel):
+for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel):
     register_model(_cls)
 
 
