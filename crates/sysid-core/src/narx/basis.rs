@@ -112,6 +112,10 @@ pub struct Candidates {
     slot: Vec<Option<usize>>,
     n_slots: usize,
     n_vars: usize,
+    /// Runs of consecutive leaf monomials with the same parent and consecutive last
+    /// variables: `(parent, first term, first variable, count)`.
+    groups: Vec<(usize, usize, usize, usize)>,
+    grouped: Vec<bool>,
 }
 
 /// Largest number of candidate terms accepted.
@@ -181,7 +185,7 @@ impl Candidates {
             is_parent[p.0] = true;
         }
         let mut n_slots = 0;
-        let slot = is_parent
+        let slot: Vec<Option<usize>> = is_parent
             .iter()
             .map(|&b| {
                 b.then(|| {
@@ -190,6 +194,18 @@ impl Candidates {
                 })
             })
             .collect();
+        let mut groups: Vec<(usize, usize, usize, usize)> = Vec::new();
+        let mut grouped = vec![false; terms.len()];
+        for k in 0..terms.len() {
+            let (Some((p, v)), None) = (parent[k], slot[k]) else {
+                continue;
+            };
+            grouped[k] = true;
+            match groups.last_mut() {
+                Some(g) if g.0 == p && g.1 + g.3 == k && g.2 + g.3 == v => g.3 += 1,
+                _ => groups.push((p, k, v, 1)),
+            }
+        }
         Ok(Self {
             terms,
             basis: basis.clone(),
@@ -197,6 +213,8 @@ impl Candidates {
             slot,
             n_slots,
             n_vars,
+            groups,
+            grouped,
         })
     }
 
@@ -218,6 +236,105 @@ impl Candidates {
     /// Scratch length (doubles) for [`Self::for_each_column`] on blocks of `len` rows.
     pub fn scratch_len(&self, len: usize) -> usize {
         (self.n_slots + 1) * len
+    }
+
+    /// Scratch length (doubles) for [`Self::accumulate`] on blocks of `len` rows and `np`
+    /// probes.
+    pub fn accumulate_scratch_len(&self, len: usize, np: usize) -> usize {
+        (self.n_slots + 2 + np + self.n_vars) * len
+    }
+
+    /// For every candidate `k`: adds `phi_k . p_j` to `cross[k * np + j]` for the `np`
+    /// probe columns `p` (column-major `len x np`) and, with `sq`, `phi_k . phi_k` to
+    /// `sq[k]`, over the block of lagged variables `x` (column-major, `len x n_vars`).
+    ///
+    /// Leaf monomials (the highest degree, most of the candidates) are never formed: for a
+    /// parent column `c`, `(c * x_v) . p = (c * p) . x_v`, one product per sample for all the
+    /// parent's children.
+    #[allow(clippy::too_many_arguments)]
+    pub fn accumulate(
+        &self,
+        x: &[f64],
+        len: usize,
+        probes: &[f64],
+        np: usize,
+        cross: &mut [f64],
+        mut sq: Option<&mut [f64]>,
+        scratch: &mut [f64],
+    ) {
+        let (stored, rest) = scratch.split_at_mut(self.n_slots * len);
+        let (leaf, rest) = rest.split_at_mut(len);
+        let (p2, rest) = rest.split_at_mut(len);
+        let (pw, rest) = rest.split_at_mut(np * len);
+        let x2 = &mut rest[..self.n_vars * len];
+        let mut row = vec![0.0; self.n_vars];
+        for (k, term) in self.terms.iter().enumerate() {
+            if self.grouped[k] {
+                continue;
+            }
+            match (term, self.parent[k]) {
+                (Term::Monomial(_), None) => leaf.fill(1.0),
+                (Term::Monomial(_), Some((p, v))) => {
+                    let xv = &x[v * len..(v + 1) * len];
+                    if p == 0 {
+                        leaf.copy_from_slice(xv);
+                    } else {
+                        let s = self.slot[p].expect("parents are stored");
+                        let pc = &stored[s * len..(s + 1) * len];
+                        for i in 0..len {
+                            leaf[i] = pc[i] * xv[i];
+                        }
+                    }
+                }
+                (Term::Rbf(_), _) => {
+                    for i in 0..len {
+                        for v in 0..self.n_vars {
+                            row[v] = x[v * len + i];
+                        }
+                        leaf[i] = self.basis.eval(term, &row);
+                    }
+                }
+            }
+            if let Some(s) = self.slot[k] {
+                stored[s * len..(s + 1) * len].copy_from_slice(leaf);
+            }
+            for j in 0..np {
+                cross[k * np + j] += dot(leaf, &probes[j * len..(j + 1) * len]);
+            }
+            if let Some(sq) = sq.as_deref_mut() {
+                sq[k] += dot(leaf, leaf);
+            }
+        }
+        if sq.is_some() {
+            for i in 0..self.n_vars * len {
+                x2[i] = x[i] * x[i];
+            }
+        }
+        for &(p, k0, v0, count) in &self.groups {
+            let s = self.slot[p].expect("parents are stored");
+            let pc = &stored[s * len..(s + 1) * len];
+            for j in 0..np {
+                let pj = &probes[j * len..(j + 1) * len];
+                let w = &mut pw[j * len..(j + 1) * len];
+                for i in 0..len {
+                    w[i] = pc[i] * pj[i];
+                }
+            }
+            for c in 0..count {
+                let xv = &x[(v0 + c) * len..(v0 + c + 1) * len];
+                for j in 0..np {
+                    cross[(k0 + c) * np + j] += dot(&pw[j * len..(j + 1) * len], xv);
+                }
+            }
+            if let Some(sq) = sq.as_deref_mut() {
+                for i in 0..len {
+                    p2[i] = pc[i] * pc[i];
+                }
+                for c in 0..count {
+                    sq[k0 + c] += dot(p2, &x2[(v0 + c) * len..(v0 + c + 1) * len]);
+                }
+            }
+        }
     }
 
     /// Calls `f(k, column)` for every candidate `k` in order, on the block of lagged
@@ -294,4 +411,25 @@ pub fn term_name(term: &Term, names: &[String]) -> String {
         }
         Term::Rbf(c) => format!("rbf{c}"),
     }
+}
+
+/// Dot product with eight independent partial sums (vectorises without reassociation).
+#[inline]
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    let (a, b) = (&a[..n], &b[..n]);
+    let mut acc = [0.0f64; 8];
+    let ca = a.chunks_exact(8);
+    let cb = b.chunks_exact(8);
+    let (ra, rb) = (ca.remainder(), cb.remainder());
+    for (x, y) in ca.zip(cb) {
+        for l in 0..8 {
+            acc[l] += x[l] * y[l];
+        }
+    }
+    let mut tail = 0.0;
+    for (x, y) in ra.iter().zip(rb) {
+        tail += x * y;
+    }
+    ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7])) + tail
 }

@@ -13,7 +13,7 @@
 use faer::Mat;
 use rayon::prelude::*;
 
-use super::basis::{Basis, Candidates, Term};
+use super::basis::{dot, Basis, Candidates, Term};
 use super::regressors::{LagSpec, Record, Signal};
 use crate::error::{Result, SysidError};
 use crate::linalg::QrAccumulator;
@@ -97,25 +97,6 @@ impl Sums {
     }
 }
 
-#[inline]
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len();
-    let (mut s0, mut s1, mut s2, mut s3) = (0.0, 0.0, 0.0, 0.0);
-    let mut i = 0;
-    while i + 4 <= n {
-        s0 += a[i] * b[i];
-        s1 += a[i + 1] * b[i + 1];
-        s2 += a[i + 2] * b[i + 2];
-        s3 += a[i + 3] * b[i + 3];
-        i += 4;
-    }
-    while i < n {
-        s0 += a[i] * b[i];
-        i += 1;
-    }
-    (s0 + s1) + (s2 + s3)
-}
-
 /// Row blocks `(record, first row, length)` covering rows `max_lag..N` of every record.
 fn blocks(spec: &LagSpec, records: &[Record<'_>], len: usize) -> Vec<(usize, usize, usize)> {
     let mut out = Vec::new();
@@ -155,7 +136,7 @@ where
         let mut s = Sums::zeros(m, np, q, want_sq);
         let maxlen = bs.iter().map(|b| b.2).max().unwrap_or(0);
         let mut x = vec![0.0; maxlen * nv];
-        let mut scratch = vec![0.0; cands.scratch_len(maxlen)];
+        let mut scratch = vec![0.0; cands.accumulate_scratch_len(maxlen, np)];
         for &(r, t0, len) in bs {
             let rec = &records[r];
             let x = &mut x[..len * nv];
@@ -167,15 +148,9 @@ where
                         dot(&p[a * len..(a + 1) * len], &p[b * len..(b + 1) * len]);
                 }
             }
-            let sc = &mut scratch[..cands.scratch_len(len)];
-            cands.for_each_column(x, len, sc, |k, col| {
-                if want_sq {
-                    s.sq[k] += dot(col, col);
-                }
-                for j in 0..np {
-                    s.cross[k * np + j] += dot(col, &p[j * len..(j + 1) * len]);
-                }
-            });
+            let sc = &mut scratch[..cands.accumulate_scratch_len(len, np)];
+            let sq = if want_sq { Some(&mut s.sq[..]) } else { None };
+            cands.accumulate(x, len, &p, np, &mut s.cross, sq, sc);
         }
         s
     };
@@ -197,7 +172,7 @@ fn block_len(cands: &Candidates, opts: &FrolsOptions) -> usize {
     if opts.block_rows > 0 {
         return opts.block_rows;
     }
-    let per_row = 8 * (cands.scratch_len(1) + cands.n_vars());
+    let per_row = 8 * (cands.accumulate_scratch_len(1, 2) + cands.n_vars());
     ((2 << 20) / per_row).clamp(64, 4096)
 }
 

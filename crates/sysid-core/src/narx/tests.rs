@@ -100,3 +100,38 @@ fn simulate_and_predict_reproduce_the_system() {
         assert!((ys[(t, 0)] - y[(t, 0)]).abs() < 1e-12);
     }
 }
+
+#[test]
+fn accumulate_equals_explicit_columns() {
+    let nv = 5;
+    for basis in [
+        Basis::Polynomial { degree: 1 },
+        Basis::Polynomial { degree: 3 },
+        Basis::Rbf(super::basis::RbfBasis {
+            centres: Mat::from_fn(3, nv, |i, j| (i as f64 - j as f64) * 0.3),
+            widths: vec![1.0, 0.7, 2.0],
+            shift: vec![0.1; nv],
+            scale: vec![1.5; nv],
+        }),
+    ] {
+        let c = Candidates::new(&basis, nv).unwrap();
+        for len in [1, 7, 33] {
+            let x: Vec<f64> = (0..len * nv).map(|i| (i as f64 * 0.71).cos()).collect();
+            let np = 2;
+            let p: Vec<f64> = (0..len * np).map(|i| (i as f64 * 0.13).sin()).collect();
+            let mut cross = vec![0.0; c.len() * np];
+            let mut sq = vec![0.0; c.len()];
+            let mut sc = vec![0.0; c.accumulate_scratch_len(len, np)];
+            c.accumulate(&x, len, &p, np, &mut cross, Some(&mut sq), &mut sc);
+            let mut sc2 = vec![0.0; c.scratch_len(len)];
+            c.for_each_column(&x, len, &mut sc2, |k, col| {
+                let want: f64 = col.iter().map(|v| v * v).sum();
+                assert!((sq[k] - want).abs() < 1e-12 * (1.0 + want));
+                for j in 0..np {
+                    let want: f64 = (0..len).map(|i| col[i] * p[j * len + i]).sum();
+                    assert!((cross[k * np + j] - want).abs() < 1e-12 * (1.0 + want.abs()));
+                }
+            });
+        }
+    }
+}
