@@ -45,6 +45,7 @@
 
 pub mod error;
 pub mod hankel;
+pub mod hw;
 pub mod linalg;
 pub mod model;
 pub mod narx;
