@@ -156,6 +156,15 @@ _LAZY = {
     "PolynomialBasis": "models.narx",
     "RBFBasis": "models.narx",
     "nlarx": "estimate.narx",
+    "nlhw": "estimate.hammerstein",
+    "HammersteinWienerModel": "models.hammerstein",
+    "Nonlinearity": "models.hammerstein",
+    "Saturation": "models.hammerstein",
+    "DeadZone": "models.hammerstein",
+    "PolynomialNonlinearity": "models.hammerstein",
+    "PiecewiseLinear": "models.hammerstein",
+    "SigmoidNetwork": "models.hammerstein",
+    "UserFunction": "models.hammerstein",
 }
 
 
@@ -173,6 +182,15 @@ def __dir__() -> list[str]:
 
 
 __all__ = [
+    "nlhw",
+    "HammersteinWienerModel",
+    "Nonlinearity",
+    "Saturation",
+    "DeadZone",
+    "PolynomialNonlinearity",
+    "PiecewiseLinear",
+    "SigmoidNetwork",
+    "UserFunction",
     "NARXModel",
     "PolynomialBasis",
     "RBFBasis",

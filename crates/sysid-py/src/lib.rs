@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 mod convert;
 mod errors;
 mod hankel;
+mod hw;
 mod narx;
 mod pem;
 mod polynomial;
@@ -27,5 +28,6 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     pem::register(m)?;
     polynomial::register(m)?;
     narx::register(m)?;
+    hw::register(m)?;
     Ok(())
 }
