@@ -73,6 +73,7 @@ pub fn hw_estimate<'py>(
     opts.max_iter = max_iter;
     opts.tol_gradient = tol;
     opts.tol_step = tol;
+    opts.tol_cost = tol;
     let sol = match progress {
         Some(cb) => {
             let mut obs =

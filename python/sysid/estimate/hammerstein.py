@@ -107,6 +107,10 @@ def nlhw(
     b0, f0 = np.asarray(lin.b[0][0], float), np.asarray(lin.f[0][0], float)
     u_all = np.concatenate([r[0] for r in records])
     fin.params = fin.initial(u_all)
+    # B absorbs the gain of the starting nonlinearity: B f(u) ~ B_linear u
+    fu = fin(u_all)
+    if not isinstance(fin, UserFunction) and float(fu @ fu) > 0:
+        b0 = b0 * float(fu @ u_all) / float(fu @ fu) if float(fu @ u_all) != 0 else b0
     start = HammersteinWienerModel(fin, Nonlinearity(), b0, f0, int(nk), dt)
     x_all = np.concatenate([start.signals(r[0])[2] for r in records])
     fout.params = fout.initial(x_all)

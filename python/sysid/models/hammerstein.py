@@ -179,7 +179,8 @@ class PiecewiseLinear(Nonlinearity):
 
 
 class SigmoidNetwork(Nonlinearity):
-    """``x + sum_k a_k tanh(b_k x + d_k)`` with ``units`` units.
+    """``c x + sum_k a_k tanh(b_k x + d_k)`` with ``units`` units, ``a_1 = 1`` (gain
+    normalisation); ``params = [c, b_1, d_1, a_2, b_2, d_2, ...]``.
 
     Examples
     --------
@@ -202,14 +203,17 @@ class SigmoidNetwork(Nonlinearity):
 
     def initial(self, x: Any) -> np.ndarray:
         s = float(np.std(x)) or 1.0
-        centres = np.linspace(-1, 1, self.units) * s
-        return np.column_stack([np.full(self.units, 0.1 * s), np.full(self.units, 2.0 / s),
-                                -2.0 / s * centres]).ravel()
+        centres = np.linspace(-1, 1, self.units) * s if self.units > 1 else np.zeros(1)
+        p = np.column_stack([np.full(self.units, 0.5), np.full(self.units, 1.0 / s),
+                             -1.0 / s * centres]).ravel()
+        p[0] = 0.5 / s  # the linear coefficient c
+        return p
 
     def __call__(self, x: Any) -> np.ndarray:
         x = np.asarray(x, float)
         p = np.asarray(self.params, float).reshape(-1, 3)
-        return x + sum(a * np.tanh(b * x + d) for a, b, d in p)
+        amps = np.concatenate([[1.0], p[1:, 0]])
+        return p[0, 0] * x + sum(a * np.tanh(b * x + d) for a, (_, b, d) in zip(amps, p))
 
     def to_dict(self) -> dict[str, Any]:
         return {"kind": self.kind, "params": self.params, "units": self.units}

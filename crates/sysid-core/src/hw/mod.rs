@@ -12,7 +12,8 @@
 //! sample with a ring of the last `nf` values; `J^T J` and `J^T r` are accumulated per sample.
 //! The admissible set is `F` stable. Each nonlinearity has a unit-gain normalisation so that
 //! the gain lives in `B` only: saturation and dead zone have unit slope, the polynomial and
-//! the sigmoid network have a unit linear term, the piecewise-linear map keeps its value at
+//! the sigmoid network its first unit's amplitude fixed at one, the polynomial a unit
+//! linear term, the piecewise-linear map keeps its value at
 //! its last breakpoint fixed.
 
 use faer::Mat;
@@ -43,7 +44,8 @@ pub enum Nonlinearity {
         /// The breakpoints.
         breakpoints: Vec<f64>,
     },
-    /// `x + sum_k a_k tanh(b_k x + d_k)`; parameters `[a_k, b_k, d_k]` per unit.
+    /// `c x + sum_k a_k tanh(b_k x + d_k)` with `a_1 = 1` (the gain normalisation);
+    /// parameters `[c, b_1, d_1, a_2, b_2, d_2, ...]`.
     Sigmoid {
         /// Number of units.
         units: usize,
@@ -148,14 +150,19 @@ impl Nonlinearity {
                 (v, (val(s + 1) - val(s)) / h)
             }
             Nonlinearity::Sigmoid { units } => {
-                let (mut v, mut d) = (x, 1.0);
+                let c = p[0];
+                let (mut v, mut d) = (c * x, c);
+                dp[0] = x;
                 for k in 0..*units {
-                    let (a, b, c) = (p[3 * k], p[3 * k + 1], p[3 * k + 2]);
-                    let th = (b * x + c).tanh();
+                    let a = if k == 0 { 1.0 } else { p[3 * k] };
+                    let (b, o) = (p[3 * k + 1], p[3 * k + 2]);
+                    let th = (b * x + o).tanh();
                     let sech2 = 1.0 - th * th;
                     v += a * th;
                     d += a * b * sech2;
-                    dp[3 * k] = th;
+                    if k > 0 {
+                        dp[3 * k] = th;
+                    }
                     dp[3 * k + 1] = a * x * sech2;
                     dp[3 * k + 2] = a * sech2;
                 }
@@ -419,4 +426,66 @@ pub fn estimate(
         records: records.to_vec(),
     };
     minimize(&mut problem, theta0, options, observer)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Gauss-Newton gradient equals the finite-difference gradient of the cost.
+    #[test]
+    fn gradient_matches_finite_differences() {
+        let u: Vec<f64> = (0..300)
+            .map(|t| (((t * 7919) % 211) as f64 / 105.0) - 1.0)
+            .collect();
+        let y: Vec<f64> = u.iter().map(|v| (2.0 * v).tanh() + 0.1 * v * v).collect();
+        let nls = [
+            (Nonlinearity::Saturation, vec![-0.613, 0.707]),
+            (Nonlinearity::DeadZone, vec![-0.213, 0.117]),
+            (Nonlinearity::Polynomial { degree: 3 }, vec![0.2, -0.1]),
+            (
+                Nonlinearity::PiecewiseLinear {
+                    breakpoints: vec![-1.0, -0.2, 0.5, 1.0],
+                },
+                vec![-0.9, -0.3, 0.4],
+            ),
+            (
+                Nonlinearity::Sigmoid { units: 2 },
+                vec![0.3, 1.1, 0.1, 0.5, 0.7, -0.2],
+            ),
+        ];
+        for (inp, pin) in &nls {
+            for (out, pout) in [&nls[2], &nls[4]] {
+                let s = HwStructure {
+                    input: inp.clone(),
+                    output: out.clone(),
+                    nb: 2,
+                    nf: 1,
+                    nk: 1,
+                };
+                let mut th = pin.clone();
+                th.extend([0.4, 0.2, -0.6]);
+                th.extend(pout.iter());
+                let mut pr = HwProblem {
+                    structure: s,
+                    records: vec![(&u, &y)],
+                };
+                let ev = pr.evaluate(&th, true).unwrap();
+                for a in 0..th.len() {
+                    let h = 1e-6;
+                    let (mut tp, mut tm) = (th.clone(), th.clone());
+                    tp[a] += h;
+                    tm[a] -= h;
+                    let fd = (pr.evaluate(&tp, false).unwrap().cost
+                        - pr.evaluate(&tm, false).unwrap().cost)
+                        / (2.0 * h);
+                    let g = ev.gradient[a];
+                    assert!(
+                        (fd - g).abs() < 1e-4 * (1.0 + g.abs()),
+                        "{inp:?}/{out:?} param {a}: fd {fd} vs {g}"
+                    );
+                }
+            }
+        }
+    }
 }
