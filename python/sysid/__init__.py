@@ -157,6 +157,9 @@ _LAZY = {
     "RBFBasis": "models.narx",
     "nlarx": "estimate.narx",
     "nlhw": "estimate.hammerstein",
+    "augmented_fit": "estimate.augmented",
+    "augment_inputs": "models.augmented",
+    "AugmentedInputModel": "models.augmented",
     "HammersteinWienerModel": "models.hammerstein",
     "Nonlinearity": "models.hammerstein",
     "Saturation": "models.hammerstein",
@@ -183,6 +186,9 @@ def __dir__() -> list[str]:
 
 __all__ = [
     "nlhw",
+    "augmented_fit",
+    "augment_inputs",
+    "AugmentedInputModel",
     "HammersteinWienerModel",
     "Nonlinearity",
     "Saturation",
