@@ -106,17 +106,30 @@ def nlhw(
              int(nb), int(nf), int(nk))
     b0, f0 = np.asarray(lin.b[0][0], float), np.asarray(lin.f[0][0], float)
     u_all = np.concatenate([r[0] for r in records])
-    fin.params = fin.initial(u_all)
-    # B absorbs the gain of the starting nonlinearity: B f(u) ~ B_linear u
-    fu = fin(u_all)
-    if not isinstance(fin, UserFunction) and float(fu @ fu) > 0:
-        b0 = b0 * float(fu @ u_all) / float(fu @ fu) if float(fu @ u_all) != 0 else b0
-    start = HammersteinWienerModel(fin, Nonlinearity(), b0, f0, int(nk), dt)
-    x_all = np.concatenate([start.signals(r[0])[2] for r in records])
-    fout.params = fout.initial(x_all)
-    theta0 = np.concatenate([fin.params, b0, f0, fout.params])
-    res = _sysid.hw_estimate(records, fin.spec(), fout.spec(), int(nb), int(nf), int(nk),
-                             theta0.tolist(), int(max_iter), float(tol), progress)
+    lin_b = b0
+    res, theta0, x_all = None, None, np.zeros(0)
+    for start_in in fin.starts(u_all):
+        fin.params = start_in
+        # B absorbs the gain of the starting nonlinearity: B f(u) ~ B_linear u
+        fu = fin(u_all)
+        b0 = lin_b
+        if not isinstance(fin, UserFunction) and float(fu @ fu) > 0 and float(fu @ u_all):
+            b0 = lin_b * float(fu @ u_all) / float(fu @ fu)
+        start = HammersteinWienerModel(fin, Nonlinearity(), b0, f0, int(nk), dt)
+        xs = np.concatenate([start.signals(r[0])[2] for r in records])
+        for start_out in fout.starts(xs):
+            th0 = np.concatenate([start_in, b0, f0, start_out])
+            try:
+                r = _sysid.hw_estimate(records, fin.spec(), fout.spec(), int(nb), int(nf),
+                                       int(nk), th0.tolist(), int(max_iter), float(tol),
+                                       progress)
+            except DataError:
+                continue  # an inadmissible start (unstable F): try the next one
+            if res is None or r["cost"] < res["cost"]:
+                res, theta0, x_all = r, th0, xs
+    if res is None:
+        raise DataError("no admissible start for the Hammerstein-Wiener search; check nb, nf "
+                        "and nk against a linear fit (sysid.oe)")
     th = np.asarray(res["theta"], float)
     na, nbeta = fin.params.size, fout.params.size
     fin.params = th[:na]
@@ -124,6 +137,7 @@ def nlhw(
     fout.params = th[na + int(nb) + int(nf):]
     info = {"method": "nlhw", "iterations": int(res["iterations"]), "stop": res["stop"],
             "cost_history": np.asarray(res["history"]), "theta0": theta0,
+            "n_starts": len(fin.starts(u_all)) * len(fout.starts(x_all)),
             "covariance": np.asarray(res["covariance"]),
             "u_range": (float(u_all.min()), float(u_all.max())),
             "x_range": (float(x_all.min()), float(x_all.max())), "n_output_params": nbeta}

@@ -208,14 +208,15 @@ def nlarx(
                             "max_terms": int(max_terms), "criterion_values": scores}
     if noise_terms:
         model = _narmax(model, exps, orders, degree, rbf, int(noise_terms), int(max_terms),
-                        int(n_iterations), float(err_tol), names, info)
+                        int(n_iterations), float(err_tol), names, info, criterion)
     model.info.update(info)
     return model
 
 
 def _narmax(model: NARXModel, exps: list[tuple[np.ndarray, np.ndarray]], orders: Any,
             degree: int | None, rbf: Any, ne: int, max_noise: int, n_iterations: int,
-            err_tol: float, names: dict[str, Any], info: dict[str, Any]) -> NARXModel:
+            err_tol: float, names: dict[str, Any], info: dict[str, Any],
+            criterion: str | None) -> NARXModel:
     """Extended least squares: residuals of the current model, noise terms chosen after the
     (forced) process terms, refit; repeated ``n_iterations`` times."""
     na_, nb_, nk_, _ = orders
@@ -229,12 +230,17 @@ def _narmax(model: NARXModel, exps: list[tuple[np.ndarray, np.ndarray]], orders:
         sel, _ = _sysid.narx_frols(recs, (na_, nb_, nk_, ne_), degree, rbf,
                                    max(len(p) for p in process) + max_noise, process, err_tol)
         terms, coefs, errs, var = [], [], [], []
-        for s in sel:
+        for s, p in zip(sel, process):
             k = len(s["terms"])
+            if criterion in ("aic", "bic", "fpe"):  # noise terms kept by the same criterion
+                n = int(s["n_rows"])
+                sc = [_score(_prefix(s["r"], j)[1], n, j, criterion)
+                      for j in range(len(p), k + 1)]
+                k = len(p) + int(np.argmin(sc))
             th, rss = _prefix(s["r"], k)
-            terms.append(s["terms"])
+            terms.append(s["terms"][:k])
             coefs.append(th)
-            errs.append(np.asarray(s["err"]))
+            errs.append(np.asarray(s["err"])[:k])
             var.append(rss / s["n_rows"])
         new = NARXModel(na_, nb_, nk_, current.basis, terms, coefs, current.dt, ne=ne_,
                         err=errs, noise_variance=var, **names)

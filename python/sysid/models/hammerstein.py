@@ -37,6 +37,10 @@ class Nonlinearity:
         """Starting parameters from the signal the nonlinearity sees (near identity)."""
         return np.zeros(0)
 
+    def starts(self, x: np.ndarray) -> list[np.ndarray]:
+        """Starting points tried by :func:`sysid.nlhw` (the best final cost is kept)."""
+        return [self.initial(x)]
+
     def __call__(self, x: Any) -> np.ndarray:
         """Evaluate at ``x`` with the current ``params``."""
         return np.asarray(x, float)
@@ -52,7 +56,7 @@ class Nonlinearity:
 
 class Saturation(Nonlinearity):
     """``clip(x, lower, upper)`` (unit slope); ``lower``/``upper`` start values (default: the
-    5 % and 95 % quantiles of the signal).
+    1 % and 99 % quantiles of the signal).
 
     Examples
     --------
@@ -69,9 +73,19 @@ class Saturation(Nonlinearity):
         self.params = np.array([np.nan, np.nan])
 
     def initial(self, x: Any) -> np.ndarray:
-        lo = self.lower if self.lower is not None else float(np.quantile(x, 0.05))
-        hi = self.upper if self.upper is not None else float(np.quantile(x, 0.95))
+        lo = self.lower if self.lower is not None else float(np.quantile(x, 0.01))
+        hi = self.upper if self.upper is not None else float(np.quantile(x, 0.99))
         return np.array([lo, hi], float)
+
+    def starts(self, x: Any) -> list[np.ndarray]:
+        if self.lower is not None and self.upper is not None:
+            return [self.initial(x)]
+        out = []
+        for q in (0.01, 0.1, 0.25):
+            lo = self.lower if self.lower is not None else float(np.quantile(x, q))
+            hi = self.upper if self.upper is not None else float(np.quantile(x, 1 - q))
+            out.append(np.array([lo, hi], float))
+        return out
 
     def __call__(self, x: Any) -> np.ndarray:
         return np.clip(np.asarray(x, float), self.params[0], self.params[1])
@@ -99,6 +113,13 @@ class DeadZone(Nonlinearity):
         s = 0.05 * float(np.std(x)) if x is not None else 0.05
         return np.array([self.lower if self.lower is not None else -s,
                          self.upper if self.upper is not None else s], float)
+
+    def starts(self, x: Any) -> list[np.ndarray]:
+        if self.lower is not None and self.upper is not None:
+            return [self.initial(x)]
+        s = float(np.std(x))
+        return [self.initial(x), np.array([self.lower if self.lower is not None else -0.3 * s,
+                                           self.upper if self.upper is not None else 0.3 * s])]
 
     def __call__(self, x: Any) -> np.ndarray:
         x = np.asarray(x, float)
