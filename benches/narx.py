@@ -1,8 +1,8 @@
 """NARX term selection (FROLS): sysid against sysidentpy, time, memory, terms, coefficients
 and free-run validation RMSE.
 
-    .venv/bin/python benches/narx.py            # N 1e3, 1e4, 1e5; (lags 2, degree 2), (lags 10, degree 4)
-    .venv/bin/python benches/narx.py --quick    # N 1e3 only
+    .venv/bin/python benches/narx.py          # N 1e3..1e5; lags 2 degree 2, lags 10 degree 4
+    .venv/bin/python benches/narx.py --quick  # N 1e3 only
 
 Data: Billings' system y = -0.605 y1 - 0.163 y2^2 + 0.588 u1 - 0.24 u2 + e, u uniform on
 [-1, 1], e ~ N(0, 0.02^2). Both tools get the same record, lags (ylag = xlag = lags, input

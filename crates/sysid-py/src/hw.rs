@@ -14,6 +14,11 @@ use sysid_core::optim::{covariance, Flow, Options};
 use sysid_core::SysidError;
 
 type Nl = (String, usize, Vec<f64>);
+type Signals<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+);
 
 fn nl(spec: &Nl) -> PyResult<Nonlinearity> {
     let (kind, n, bp) = spec;
@@ -112,11 +117,7 @@ pub fn hw_simulate<'py>(
     nk: usize,
     theta: Vec<f64>,
     u: PyReadonlyArray1<'_, f64>,
-) -> PyResult<(
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-    Bound<'py, PyArray1<f64>>,
-)> {
+) -> PyResult<Signals<'py>> {
     let s = structure(&input, &output, nb, nf, nk)?;
     if theta.len() != s.n_params() {
         return Err(crate::errors::to_py(SysidError::InvalidArgument {

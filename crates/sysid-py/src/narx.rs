@@ -66,9 +66,9 @@ fn decode(v: &[i64]) -> Term {
     }
 }
 
-fn records<'a>(
-    views: &'a [(MatRef<'a, f64>, MatRef<'a, f64>, Option<MatRef<'a, f64>>)],
-) -> Vec<Record<'a>> {
+type Views<'a> = (MatRef<'a, f64>, MatRef<'a, f64>, Option<MatRef<'a, f64>>);
+
+fn records<'a>(views: &'a [Views<'a>]) -> Vec<Record<'a>> {
     views
         .iter()
         .map(|(u, y, e)| Record {

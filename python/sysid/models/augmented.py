@@ -1,5 +1,6 @@
 """Basis-function input augmentation: a linear model on the inputs and chosen static functions
-of them (``[u, f_1(u), f_2(u), ...]``), identified with the subspace or ARX engines (:func:`sysid.augmented_fit`).
+of them (``[u, f_1(u), f_2(u), ...]``), identified with the subspace or ARX engines
+(:func:`sysid.augmented_fit`).
 
 The linear machinery stays unchanged: the augmented record is an ordinary :class:`IOData`
 with more input channels, and the model applies the same functions before simulating.

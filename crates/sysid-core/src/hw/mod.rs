@@ -73,7 +73,7 @@ impl Nonlinearity {
             )),
             Nonlinearity::PiecewiseLinear { breakpoints }
                 if breakpoints.len() < 2
-                    || breakpoints.windows(2).any(|w| !(w[1] > w[0]))
+                    || breakpoints.windows(2).any(|w| w[1] <= w[0])
                     || breakpoints.iter().any(|b| !b.is_finite()) =>
             {
                 Err(SysidError::invalid(

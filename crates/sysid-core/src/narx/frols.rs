@@ -97,6 +97,12 @@ impl Sums {
     }
 }
 
+/// `a > b` (false when either is NaN).
+#[inline]
+fn above(a: f64, b: f64) -> bool {
+    a > b
+}
+
 /// Row blocks `(record, first row, length)` covering rows `max_lag..N` of every record.
 fn blocks(spec: &LagSpec, records: &[Record<'_>], len: usize) -> Vec<(usize, usize, usize)> {
     let mut out = Vec::new();
@@ -305,7 +311,7 @@ pub fn frols(
                 let mut best = None;
                 let mut best_err = 0.0;
                 for k in 0..m {
-                    if st.excluded[k] || !(st.res_sq[k] > opts.collinear_tol * st.d[k]) {
+                    if st.excluded[k] || !above(st.res_sq[k], opts.collinear_tol * st.d[k]) {
                         continue;
                     }
                     let e = st.res_y[k] * st.res_y[k] / (st.res_sq[k] * st.yy);
@@ -381,7 +387,7 @@ pub fn frols(
             let st = &mut states[i];
             let (s, c) = st.pending.take().expect("set above");
             let ww = sums.gram[a * q + a];
-            if !(ww > opts.collinear_tol * st.d[s]) || !ww.is_finite() {
+            if !above(ww, opts.collinear_tol * st.d[s]) || !ww.is_finite() {
                 st.excluded[s] = true; // lost to rounding: try the next best
                 continue;
             }
@@ -484,7 +490,7 @@ pub fn solve_prefix(r: &Mat<f64>, k: usize) -> Option<Vec<f64>> {
         for j in i + 1..k {
             s -= r[(i, j)] * th[j];
         }
-        if !(r[(i, i)].abs() > 1e-14 * scale) {
+        if !above(r[(i, i)].abs(), 1e-14 * scale) {
             return None;
         }
         th[i] = s / r[(i, i)];

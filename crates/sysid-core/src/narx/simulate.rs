@@ -123,7 +123,7 @@ impl NarxModel {
             }
             for i in 0..ny {
                 let v = self.output(i, &x);
-                if !(v.abs() < BLOWUP) {
+                if !v.is_finite() || v.abs() >= BLOWUP {
                     return Err(SysidError::numerical(
                         "free-run simulation",
                         format!(
