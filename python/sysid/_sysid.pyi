@@ -7,6 +7,12 @@ import numpy.typing as npt
 
 __version__: str
 __all__ = [
+    "narx_frols",
+    "narx_fit",
+    "narx_simulate",
+    "narx_predict",
+    "hw_estimate",
+    "hw_simulate",
     "arx_fit",
     "iv4",
     "arx_struc",
@@ -350,3 +356,62 @@ def polynomial_pem(
 def iv4(
     y: _Array, u: _Array, na: int, nb: int, nk: int, reference: _Array | None = None
 ) -> _Array: ...
+# nonlinear models (issue 14)
+_Orders = tuple[list[int], list[int], list[int], list[int]]
+_Rbf = tuple[_Array, _Array, _Array, _Array]
+_Equations = list[tuple[list[list[int]], list[float]]]
+def narx_frols(
+    experiments: list[tuple[_Array, _Array, _Array | None]],
+    orders: _Orders,
+    degree: int | None,
+    rbf: _Rbf | None,
+    max_terms: int,
+    forced: list[list[list[int]]],
+    err_tol: float = 1e-10,
+    block_rows: int = 0,
+) -> tuple[list[dict[str, Any]], int]: ...
+def narx_fit(
+    experiments: list[tuple[_Array, _Array, _Array | None]],
+    orders: _Orders,
+    degree: int | None,
+    rbf: _Rbf | None,
+    terms: list[list[list[int]]],
+) -> list[_Array]: ...
+def narx_simulate(
+    orders: _Orders,
+    degree: int | None,
+    rbf: _Rbf | None,
+    equations: _Equations,
+    u: _Array,
+    y0: _Array,
+) -> _Array: ...
+def narx_predict(
+    orders: _Orders,
+    degree: int | None,
+    rbf: _Rbf | None,
+    equations: _Equations,
+    u: _Array,
+    y: _Array,
+    horizon: int,
+) -> _Array: ...
+def hw_estimate(
+    records: list[tuple[_Array, _Array]],
+    input: tuple[str, int, list[float]],
+    output: tuple[str, int, list[float]],
+    nb: int,
+    nf: int,
+    nk: int,
+    theta0: list[float],
+    max_iter: int = 100,
+    tol: float = 1e-10,
+    progress: Any | None = None,
+) -> dict[str, Any]: ...
+def hw_simulate(
+    input: tuple[str, int, list[float]],
+    output: tuple[str, int, list[float]],
+    nb: int,
+    nf: int,
+    nk: int,
+    theta: list[float],
+    u: _Array,
+) -> tuple[_Array, _Array, _Array]: ...

@@ -46,8 +46,10 @@
 pub mod error;
 pub mod greybox;
 pub mod hankel;
+pub mod hw;
 pub mod linalg;
 pub mod model;
+pub mod narx;
 pub mod optim;
 pub mod pem;
 pub mod polynomial;

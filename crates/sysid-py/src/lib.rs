@@ -10,6 +10,8 @@ mod convert;
 mod errors;
 mod greybox;
 mod hankel;
+mod hw;
+mod narx;
 mod pem;
 mod polynomial;
 mod realization;
@@ -31,5 +33,7 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     pem::register(m)?;
     polynomial::register(m)?;
     greybox::register(m)?;
+    narx::register(m)?;
+    hw::register(m)?;
     Ok(())
 }

@@ -35,6 +35,8 @@ from typing import Any
 
 from ..errors import DataError
 from .continuous import ContinuousStateSpace
+from .hammerstein import HammersteinWienerModel
+from .narx import NARXModel
 from .polynomial import PolynomialModel
 from .serialize import (
     FORMAT,
@@ -53,7 +55,8 @@ __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict", "regi
 
 LEGACY_FORMAT = "sysid-state-space-model"  # version 1: state-space models only
 
-for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel):
+for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel,
+             HammersteinWienerModel):
     register_model(_cls)
 
 

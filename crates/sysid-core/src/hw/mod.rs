@@ -1,0 +1,491 @@
+//! Hammerstein-Wiener models (single input, single output, several experiments).
+//!
+//! ```text
+//! w(t) = f(u(t); alpha)                       static input nonlinearity
+//! x(t) = B(q)/F(q) w(t - nk)                  linear block (output-error form)
+//! y(t) = g(x(t); beta) + e(t)                 static output nonlinearity
+//! ```
+//!
+//! Estimated by prediction error with the one optimiser ([`crate::optim`]): the residual is
+//! `r = y - g(x)`, its Jacobian `-g'(x) dx/dtheta` and `-dg/dbeta`, where the sensitivities
+//! of `x` are `1/F` filters of `B dw/dalpha`, `w(t - nk - k)` and `-x(t - k)`, run sample by
+//! sample with a ring of the last `nf` values; `J^T J` and `J^T r` are accumulated per sample.
+//! The admissible set is `F` stable. Each nonlinearity has a unit-gain normalisation so that
+//! the gain lives in `B` only: saturation and dead zone have unit slope, the polynomial and
+//! the sigmoid network its first unit's amplitude fixed at one, the polynomial a unit
+//! linear term, the piecewise-linear map keeps its value at
+//! its last breakpoint fixed.
+
+use faer::Mat;
+
+use crate::error::{Result, SysidError};
+use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution};
+use crate::polynomial::filter::is_stable;
+
+/// A static nonlinearity with its free parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Nonlinearity {
+    /// `f(x) = x`.
+    Identity,
+    /// `clip(x, lower, upper)`; parameters `[lower, upper]`.
+    Saturation,
+    /// `x - upper` above `upper`, `x - lower` below `lower`, zero between; parameters
+    /// `[lower, upper]`.
+    DeadZone,
+    /// `x + c_2 x^2 + ... + c_d x^d`; parameters `c_2..c_d`.
+    Polynomial {
+        /// Degree `d >= 2`.
+        degree: usize,
+    },
+    /// Linear interpolation of values at fixed, increasing breakpoints (end segments
+    /// extended); parameters the values at all breakpoints but the last (held at the last
+    /// breakpoint itself).
+    PiecewiseLinear {
+        /// The breakpoints.
+        breakpoints: Vec<f64>,
+    },
+    /// `c x + sum_k a_k tanh(b_k x + d_k)` with `a_1 = 1` (the gain normalisation);
+    /// parameters `[c, b_1, d_1, a_2, b_2, d_2, ...]`.
+    Sigmoid {
+        /// Number of units.
+        units: usize,
+    },
+}
+
+impl Nonlinearity {
+    /// Number of free parameters.
+    pub fn n_params(&self) -> usize {
+        match self {
+            Nonlinearity::Identity => 0,
+            Nonlinearity::Saturation | Nonlinearity::DeadZone => 2,
+            Nonlinearity::Polynomial { degree } => degree.saturating_sub(1),
+            Nonlinearity::PiecewiseLinear { breakpoints } => breakpoints.len().saturating_sub(1),
+            Nonlinearity::Sigmoid { units } => 3 * units,
+        }
+    }
+
+    /// Checks the definition.
+    pub fn check(&self) -> Result<()> {
+        match self {
+            Nonlinearity::Polynomial { degree } if *degree < 2 => Err(SysidError::invalid(
+                "nonlinearity",
+                "a polynomial nonlinearity needs degree >= 2",
+            )),
+            Nonlinearity::PiecewiseLinear { breakpoints }
+                if breakpoints.len() < 2
+                    || breakpoints.windows(2).any(|w| w[1] <= w[0])
+                    || breakpoints.iter().any(|b| !b.is_finite()) =>
+            {
+                Err(SysidError::invalid(
+                    "breakpoints",
+                    "need at least two finite, strictly increasing breakpoints",
+                ))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Value, derivative in `x`, and (into `dp`) derivatives in the parameters.
+    #[inline]
+    pub fn eval(&self, p: &[f64], x: f64, dp: &mut [f64]) -> (f64, f64) {
+        match self {
+            Nonlinearity::Identity => (x, 1.0),
+            Nonlinearity::Saturation => {
+                let (lo, hi) = (p[0], p[1]);
+                dp[0] = 0.0;
+                dp[1] = 0.0;
+                if x >= hi {
+                    dp[1] = 1.0;
+                    (hi, 0.0)
+                } else if x <= lo {
+                    dp[0] = 1.0;
+                    (lo, 0.0)
+                } else {
+                    (x, 1.0)
+                }
+            }
+            Nonlinearity::DeadZone => {
+                let (lo, hi) = (p[0], p[1]);
+                dp[0] = 0.0;
+                dp[1] = 0.0;
+                if x > hi {
+                    dp[1] = -1.0;
+                    (x - hi, 1.0)
+                } else if x < lo {
+                    dp[0] = -1.0;
+                    (x - lo, 1.0)
+                } else {
+                    (0.0, 0.0)
+                }
+            }
+            Nonlinearity::Polynomial { degree } => {
+                let (mut v, mut d, mut xp) = (x, 1.0, x);
+                for k in 2..=*degree {
+                    let c = p[k - 2];
+                    d += c * k as f64 * xp;
+                    xp *= x;
+                    v += c * xp;
+                    dp[k - 2] = xp;
+                }
+                (v, d)
+            }
+            Nonlinearity::PiecewiseLinear { breakpoints: z } => {
+                let k = z.len();
+                let val = |i: usize| if i + 1 == k { z[k - 1] } else { p[i] };
+                let s = match z.iter().position(|&b| x < b) {
+                    None => k - 2,
+                    Some(0) => 0,
+                    Some(i) => i - 1,
+                };
+                let h = z[s + 1] - z[s];
+                let lam = (x - z[s]) / h;
+                dp.iter_mut().for_each(|d| *d = 0.0);
+                if s < k - 1 {
+                    dp[s] = 1.0 - lam;
+                }
+                if s + 1 < k - 1 {
+                    dp[s + 1] = lam;
+                }
+                let v = (1.0 - lam) * val(s) + lam * val(s + 1);
+                (v, (val(s + 1) - val(s)) / h)
+            }
+            Nonlinearity::Sigmoid { units } => {
+                let c = p[0];
+                let (mut v, mut d) = (c * x, c);
+                dp[0] = x;
+                for k in 0..*units {
+                    let a = if k == 0 { 1.0 } else { p[3 * k] };
+                    let (b, o) = (p[3 * k + 1], p[3 * k + 2]);
+                    let th = (b * x + o).tanh();
+                    let sech2 = 1.0 - th * th;
+                    v += a * th;
+                    d += a * b * sech2;
+                    if k > 0 {
+                        dp[3 * k] = th;
+                    }
+                    dp[3 * k + 1] = a * x * sech2;
+                    dp[3 * k + 2] = a * sech2;
+                }
+                (v, d)
+            }
+        }
+    }
+}
+
+/// The structure of a Hammerstein-Wiener model.
+#[derive(Debug, Clone)]
+pub struct HwStructure {
+    /// Input nonlinearity.
+    pub input: Nonlinearity,
+    /// Output nonlinearity.
+    pub output: Nonlinearity,
+    /// Number of `B` coefficients.
+    pub nb: usize,
+    /// Number of free `F` coefficients.
+    pub nf: usize,
+    /// Input delay.
+    pub nk: usize,
+}
+
+impl HwStructure {
+    /// Total parameters `[alpha, b, f, beta]`.
+    pub fn n_params(&self) -> usize {
+        self.input.n_params() + self.nb + self.nf + self.output.n_params()
+    }
+
+    fn split<'a>(&self, th: &'a [f64]) -> (&'a [f64], &'a [f64], &'a [f64], &'a [f64]) {
+        let na = self.input.n_params();
+        let (alpha, rest) = th.split_at(na);
+        let (b, rest) = rest.split_at(self.nb);
+        let (f, beta) = rest.split_at(self.nf);
+        (alpha, b, f, beta)
+    }
+
+    /// Noise-free output for input `u` at parameters `theta` (from rest).
+    pub fn simulate(&self, theta: &[f64], u: &[f64]) -> Vec<f64> {
+        let mut out = vec![0.0; u.len()];
+        self.run(theta, u, None, |t, yhat, _, _| out[t] = yhat);
+        out
+    }
+
+    /// The linear block's intermediate signals `(w, x)` for input `u`.
+    pub fn intermediate(&self, theta: &[f64], u: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let (alpha, b, f, _) = self.split(theta);
+        let mut dp = vec![0.0; alpha.len()];
+        let w: Vec<f64> = u
+            .iter()
+            .map(|&v| self.input.eval(alpha, v, &mut dp).0)
+            .collect();
+        let mut x = vec![0.0; u.len()];
+        for t in 0..u.len() {
+            let mut s = 0.0;
+            for (k, bk) in b.iter().enumerate() {
+                if t >= self.nk + k {
+                    s += bk * w[t - self.nk - k];
+                }
+            }
+            for (i, fi) in f.iter().enumerate() {
+                if t > i {
+                    s -= fi * x[t - 1 - i];
+                }
+            }
+            x[t] = s;
+        }
+        (w, x)
+    }
+
+    /// Runs the model; `visit(t, yhat, jacobian row of yhat (if asked), _)` per sample.
+    fn run(
+        &self,
+        theta: &[f64],
+        u: &[f64],
+        mut jac: Option<&mut Vec<f64>>,
+        mut visit: impl FnMut(usize, f64, Option<&[f64]>, ()),
+    ) {
+        let (alpha, b, f, beta) = self.split(theta);
+        let (na, nbeta) = (alpha.len(), beta.len());
+        let n = u.len();
+        let p = self.n_params();
+        let plin = na + self.nb + self.nf;
+        let mut dpa = vec![0.0; na];
+        let mut dpb = vec![0.0; nbeta];
+        // w and dw/dalpha for every sample (n x (1 + na)); x history
+        let mut w = vec![0.0; n];
+        let mut dw = vec![0.0; n * na];
+        for t in 0..n {
+            w[t] = self.input.eval(alpha, u[t], &mut dpa).0;
+            dw[t * na..(t + 1) * na].copy_from_slice(&dpa);
+        }
+        let mut x = vec![0.0; n];
+        let ring = self.nf.max(1);
+        let mut s_hist = vec![0.0; ring * plin]; // s(t-1-i) at slot (t-1-i) % ring
+        let mut s = vec![0.0; plin];
+        for t in 0..n {
+            let mut xt = 0.0;
+            for (k, bk) in b.iter().enumerate() {
+                if t >= self.nk + k {
+                    xt += bk * w[t - self.nk - k];
+                }
+            }
+            for (i, fi) in f.iter().enumerate() {
+                if t > i {
+                    xt -= fi * x[t - 1 - i];
+                }
+            }
+            x[t] = xt;
+            let (yhat, gd) = self.output.eval(beta, xt, &mut dpb);
+            if let Some(row) = jac.as_deref_mut() {
+                // sources of the 1/F filters
+                s.iter_mut().for_each(|v| *v = 0.0);
+                for (k, bk) in b.iter().enumerate() {
+                    if t >= self.nk + k {
+                        let tt = t - self.nk - k;
+                        for j in 0..na {
+                            s[j] += bk * dw[tt * na + j];
+                        }
+                        s[na + k] = w[tt];
+                    }
+                }
+                for i in 0..self.nf {
+                    if t > i {
+                        s[na + self.nb + i] = -x[t - 1 - i];
+                    }
+                }
+                for (i, fi) in f.iter().enumerate() {
+                    if t > i {
+                        let slot = (t - 1 - i) % ring;
+                        for j in 0..plin {
+                            s[j] -= fi * s_hist[slot * plin + j];
+                        }
+                    }
+                }
+                let slot = t % ring;
+                s_hist[slot * plin..(slot + 1) * plin].copy_from_slice(&s);
+                row.clear();
+                row.extend(s.iter().map(|v| gd * v));
+                row.extend_from_slice(&dpb);
+                debug_assert_eq!(row.len(), p);
+                visit(t, yhat, Some(row), ());
+            } else {
+                visit(t, yhat, None, ());
+            }
+        }
+    }
+}
+
+/// The prediction-error problem of a Hammerstein-Wiener structure over several records.
+pub struct HwProblem<'a> {
+    /// The structure.
+    pub structure: HwStructure,
+    /// `(u, y)` records.
+    pub records: Vec<(&'a [f64], &'a [f64])>,
+}
+
+impl Problem for HwProblem<'_> {
+    fn n_params(&self) -> usize {
+        self.structure.n_params()
+    }
+
+    fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
+        let p = self.n_params();
+        let mut cost = 0.0;
+        let mut g = vec![0.0; p];
+        let mut h = Mat::<f64>::zeros(if jacobian { p } else { 0 }, if jacobian { p } else { 0 });
+        let mut row = Vec::with_capacity(p);
+        for (u, y) in &self.records {
+            let jac = if jacobian { Some(&mut row) } else { None };
+            self.structure.run(theta, u, jac, |t, yhat, jr, _| {
+                let r = y[t] - yhat;
+                cost += 0.5 * r * r;
+                if let Some(jr) = jr {
+                    // residual Jacobian is -jr
+                    for a in 0..p {
+                        g[a] -= jr[a] * r;
+                        let ja = jr[a];
+                        if ja != 0.0 {
+                            for b in 0..=a {
+                                h[(a, b)] += ja * jr[b];
+                            }
+                        }
+                    }
+                }
+            });
+        }
+        if jacobian {
+            for a in 0..p {
+                for b in 0..a {
+                    h[(b, a)] = h[(a, b)];
+                }
+            }
+        }
+        Ok(Evaluation {
+            cost,
+            gradient: if jacobian { g } else { Vec::new() },
+            gauss_newton: h,
+        })
+    }
+
+    fn admissible(&mut self, theta: &[f64]) -> bool {
+        let (_, _, f, _) = self.structure.split(theta);
+        let mut a = vec![1.0];
+        a.extend_from_slice(f);
+        theta.iter().all(|v| v.is_finite()) && is_stable(&a)
+    }
+}
+
+/// Prediction-error estimate of a Hammerstein-Wiener model from `theta0` (for example a
+/// linear output-error fit with identity-like nonlinearities).
+///
+/// ```
+/// use sysid_core::hw::{estimate, HwStructure, Nonlinearity};
+/// use sysid_core::optim::Options;
+/// // Hammerstein: saturation at +-0.5, then 0.5 q^-1 / (1 - 0.8 q^-1)
+/// let s = HwStructure { input: Nonlinearity::Saturation, output: Nonlinearity::Identity,
+///                       nb: 1, nf: 1, nk: 1 };
+/// let u: Vec<f64> = (0..400).map(|t| ((t * 7919 % 101) as f64 / 50.0) - 1.0).collect();
+/// let y = s.simulate(&[-0.5, 0.5, 0.5, -0.8], &u);
+/// let sol = estimate(&s, &[(&u, &y)], &[-0.9, 0.9, 0.4, -0.7], &Options::default(),
+///                    &mut |_| sysid_core::optim::Flow::Continue).unwrap();
+/// assert!((sol.theta[3] + 0.8).abs() < 1e-6 && (sol.theta[1] - 0.5).abs() < 1e-6);
+/// ```
+pub fn estimate(
+    structure: &HwStructure,
+    records: &[(&[f64], &[f64])],
+    theta0: &[f64],
+    options: &Options,
+    observer: &mut dyn FnMut(&Iteration) -> Flow,
+) -> Result<Solution> {
+    structure.input.check()?;
+    structure.output.check()?;
+    if structure.nb == 0 {
+        return Err(SysidError::invalid("nb", "must be at least 1"));
+    }
+    if theta0.len() != structure.n_params() {
+        return Err(SysidError::invalid(
+            "theta0",
+            format!("needs {} parameters", structure.n_params()),
+        ));
+    }
+    for (u, y) in records {
+        if u.len() != y.len() {
+            return Err(SysidError::ShapeMismatch {
+                what: "u".into(),
+                expected: format!("{} samples like y", y.len()),
+                got: format!("{}", u.len()),
+            });
+        }
+        if u.iter().chain(y.iter()).any(|v| !v.is_finite()) {
+            return Err(SysidError::invalid(
+                "data",
+                "non-finite sample; interpolate or cut it out first",
+            ));
+        }
+    }
+    let mut problem = HwProblem {
+        structure: structure.clone(),
+        records: records.to_vec(),
+    };
+    minimize(&mut problem, theta0, options, observer)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Gauss-Newton gradient equals the finite-difference gradient of the cost.
+    #[test]
+    fn gradient_matches_finite_differences() {
+        let u: Vec<f64> = (0..300)
+            .map(|t| (((t * 7919) % 211) as f64 / 105.0) - 1.0)
+            .collect();
+        let y: Vec<f64> = u.iter().map(|v| (2.0 * v).tanh() + 0.1 * v * v).collect();
+        let nls = [
+            (Nonlinearity::Saturation, vec![-0.613, 0.707]),
+            (Nonlinearity::DeadZone, vec![-0.213, 0.117]),
+            (Nonlinearity::Polynomial { degree: 3 }, vec![0.2, -0.1]),
+            (
+                Nonlinearity::PiecewiseLinear {
+                    breakpoints: vec![-1.0, -0.2, 0.5, 1.0],
+                },
+                vec![-0.9, -0.3, 0.4],
+            ),
+            (
+                Nonlinearity::Sigmoid { units: 2 },
+                vec![0.3, 1.1, 0.1, 0.5, 0.7, -0.2],
+            ),
+        ];
+        for (inp, pin) in &nls {
+            for (out, pout) in [&nls[2], &nls[4]] {
+                let s = HwStructure {
+                    input: inp.clone(),
+                    output: out.clone(),
+                    nb: 2,
+                    nf: 1,
+                    nk: 1,
+                };
+                let mut th = pin.clone();
+                th.extend([0.4, 0.2, -0.6]);
+                th.extend(pout.iter());
+                let mut pr = HwProblem {
+                    structure: s,
+                    records: vec![(&u, &y)],
+                };
+                let ev = pr.evaluate(&th, true).unwrap();
+                for a in 0..th.len() {
+                    let h = 1e-6;
+                    let (mut tp, mut tm) = (th.clone(), th.clone());
+                    tp[a] += h;
+                    tm[a] -= h;
+                    let fd = (pr.evaluate(&tp, false).unwrap().cost
+                        - pr.evaluate(&tm, false).unwrap().cost)
+                        / (2.0 * h);
+                    let g = ev.gradient[a];
+                    assert!(
+                        (fd - g).abs() < 1e-4 * (1.0 + g.abs()),
+                        "{inp:?}/{out:?} param {a}: fd {fd} vs {g}"
+                    );
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,253 @@
+//! Free-run simulation, k-step prediction and one-step residuals of NARX / NARMAX models.
+
+use faer::{Mat, MatRef};
+
+use super::basis::{Basis, Term};
+use super::regressors::{LagSpec, Signal};
+use crate::error::{check_finite, Result, SysidError};
+
+/// One output's equation `y_i(t) = sum_k coefs[k] terms[k](x(t))`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Equation {
+    /// The terms.
+    pub terms: Vec<Term>,
+    /// Their coefficients.
+    pub coefs: Vec<f64>,
+}
+
+/// A NARX / NARMAX model: lagged variables, basis and one equation per output.
+#[derive(Debug, Clone)]
+pub struct NarxModel {
+    /// The lagged variables.
+    pub spec: LagSpec,
+    /// The basis (for RBF parameters).
+    pub basis: Basis,
+    /// One equation per output.
+    pub equations: Vec<Equation>,
+}
+
+/// Outputs larger than this are taken as a diverged simulation.
+const BLOWUP: f64 = 1e150;
+
+impl NarxModel {
+    /// Checks the parts and builds the model.
+    pub fn new(spec: LagSpec, basis: Basis, equations: Vec<Equation>) -> Result<Self> {
+        basis.check(spec.n_vars())?;
+        if equations.len() != spec.n_outputs {
+            return Err(SysidError::invalid(
+                "equations",
+                format!("needs one equation per output ({})", spec.n_outputs),
+            ));
+        }
+        for e in &equations {
+            if e.terms.len() != e.coefs.len() {
+                return Err(SysidError::invalid(
+                    "coefs",
+                    "needs one coefficient per term",
+                ));
+            }
+            for t in &e.terms {
+                let ok = match (t, &basis) {
+                    (Term::Monomial(v), _) => v.iter().all(|&i| i < spec.n_vars()),
+                    (Term::Rbf(c), Basis::Rbf(r)) => *c < r.centres.nrows(),
+                    (Term::Rbf(_), Basis::Polynomial { .. }) => false,
+                };
+                if !ok {
+                    return Err(SysidError::invalid(
+                        "terms",
+                        format!("term {t:?} does not fit the lagged variables or the basis"),
+                    ));
+                }
+            }
+            if e.coefs.iter().any(|c| !c.is_finite()) {
+                return Err(SysidError::invalid("coefs", "non-finite coefficient"));
+            }
+        }
+        Ok(Self {
+            spec,
+            basis,
+            equations,
+        })
+    }
+
+    #[inline]
+    fn output(&self, i: usize, x: &[f64]) -> f64 {
+        let e = &self.equations[i];
+        e.terms
+            .iter()
+            .zip(&e.coefs)
+            .map(|(t, c)| c * self.basis.eval(t, x))
+            .sum()
+    }
+
+    fn check_u(&self, u: MatRef<'_, f64>) -> Result<()> {
+        if u.ncols() != self.spec.n_inputs {
+            return Err(SysidError::ShapeMismatch {
+                what: "u".into(),
+                expected: format!("(N, {})", self.spec.n_inputs),
+                got: format!("({}, {})", u.nrows(), u.ncols()),
+            });
+        }
+        check_finite("u", u)
+    }
+
+    /// Free-run simulation from `n = u.nrows()` inputs: the first `max_lag` outputs are
+    /// `y0` (`max_lag x n_outputs`, for example the measured ones), later ones are simulated
+    /// (noise terms are zero). Fails, naming the sample, when the output blows up.
+    pub fn simulate(&self, u: MatRef<'_, f64>, y0: MatRef<'_, f64>) -> Result<Mat<f64>> {
+        self.check_u(u)?;
+        let (n, ny, lag) = (u.nrows(), self.spec.n_outputs, self.spec.max_lag);
+        if y0.nrows() != lag || y0.ncols() != ny {
+            return Err(SysidError::ShapeMismatch {
+                what: "initial outputs".into(),
+                expected: format!("({lag}, {ny})"),
+                got: format!("({}, {})", y0.nrows(), y0.ncols()),
+            });
+        }
+        check_finite("initial outputs", y0)?;
+        let mut y = Mat::<f64>::zeros(n, ny);
+        for t in 0..n.min(lag) {
+            for i in 0..ny {
+                y[(t, i)] = y0[(t, i)];
+            }
+        }
+        let mut x = vec![0.0; self.spec.n_vars()];
+        for t in lag..n {
+            {
+                let yr = y.as_ref();
+                self.spec.fill_with(t, &mut x, |s, ch, tt| match s {
+                    Signal::Output => yr[(tt, ch)],
+                    Signal::Input => u[(tt, ch)],
+                    Signal::Noise => 0.0,
+                });
+            }
+            for i in 0..ny {
+                let v = self.output(i, &x);
+                if !v.is_finite() || v.abs() >= BLOWUP {
+                    return Err(SysidError::numerical(
+                        "free-run simulation",
+                        format!(
+                            "the output diverged at sample {t} (|y{i}| > 1e150): the model is \
+                             unstable for this input; use fewer terms, a lower degree, or \
+                             inputs within the range of the estimation data"
+                        ),
+                    ));
+                }
+                y[(t, i)] = v;
+            }
+        }
+        Ok(y)
+    }
+
+    /// One-step residuals `e(t) = y(t) - yhat(t | t-1)` (computed recursively for the noise
+    /// terms; zero for `t < max_lag`).
+    pub fn residuals(&self, u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> Result<Mat<f64>> {
+        let p = self.predict(u, y, 1)?;
+        Ok(Mat::from_fn(y.nrows(), y.ncols(), |t, i| {
+            y[(t, i)] - p[(t, i)]
+        }))
+    }
+
+    /// `horizon`-step prediction `yhat(t | t - horizon)`: measured outputs up to
+    /// `t - horizon`, simulated after; residual terms from the one-step residuals up to
+    /// `t - horizon`, zero after. Rows `t < max_lag` repeat the measured output.
+    pub fn predict(
+        &self,
+        u: MatRef<'_, f64>,
+        y: MatRef<'_, f64>,
+        horizon: usize,
+    ) -> Result<Mat<f64>> {
+        self.check_u(u)?;
+        let (n, ny, lag) = (y.nrows(), self.spec.n_outputs, self.spec.max_lag);
+        if y.ncols() != ny || u.nrows() != n {
+            return Err(SysidError::ShapeMismatch {
+                what: "u, y".into(),
+                expected: format!("(N, {}) and (N, {ny})", self.spec.n_inputs),
+                got: format!("({}, {}) and ({n}, {})", u.nrows(), u.ncols(), y.ncols()),
+            });
+        }
+        check_finite("y", y)?;
+        if horizon == 0 {
+            return Err(SysidError::invalid("horizon", "must be at least 1"));
+        }
+        let noise = self.spec.has_noise();
+        // one-step residuals first (only needed for noise terms)
+        let mut e = Mat::<f64>::zeros(n, ny);
+        let mut x = vec![0.0; self.spec.n_vars()];
+        if noise {
+            for t in lag..n {
+                {
+                    let er = e.as_ref();
+                    self.spec.fill_with(t, &mut x, |s, ch, tt| match s {
+                        Signal::Output => y[(tt, ch)],
+                        Signal::Input => u[(tt, ch)],
+                        Signal::Noise => er[(tt, ch)],
+                    });
+                }
+                for i in 0..ny {
+                    e[(t, i)] = y[(t, i)] - self.output(i, &x);
+                }
+            }
+        }
+        let mut out = Mat::<f64>::zeros(n, ny);
+        for t in 0..n.min(lag) {
+            for i in 0..ny {
+                out[(t, i)] = y[(t, i)];
+            }
+        }
+        if horizon == 1 {
+            for t in lag..n {
+                for i in 0..ny {
+                    out[(t, i)] = y[(t, i)] - e[(t, i)];
+                }
+                if !noise {
+                    self.spec.fill_with(t, &mut x, |s, ch, tt| match s {
+                        Signal::Output => y[(tt, ch)],
+                        Signal::Input => u[(tt, ch)],
+                        Signal::Noise => 0.0,
+                    });
+                    for i in 0..ny {
+                        out[(t, i)] = self.output(i, &x);
+                    }
+                }
+            }
+            return Ok(out);
+        }
+        // local simulation of `horizon` steps from every origin
+        let mut loc = vec![0.0; horizon * ny];
+        for t in lag..n {
+            let origin = t as isize - horizon as isize; // last measured sample
+            let first = (origin + 1).max(lag as isize) as usize;
+            for s in first..=t {
+                {
+                    let get = |sig: Signal, ch: usize, tt: usize| -> f64 {
+                        let measured = (tt as isize) <= origin || tt < lag;
+                        match sig {
+                            Signal::Input => u[(tt, ch)],
+                            Signal::Output if measured => y[(tt, ch)],
+                            Signal::Output => loc[(tt - first) * ny + ch],
+                            Signal::Noise if (tt as isize) <= origin => e[(tt, ch)],
+                            Signal::Noise => 0.0,
+                        }
+                    };
+                    self.spec.fill_with(s, &mut x, get);
+                }
+                for i in 0..ny {
+                    let v = self.output(i, &x);
+                    loc[(s - first) * ny + i] = if v.abs() < BLOWUP { v } else { f64::NAN };
+                }
+            }
+            for i in 0..ny {
+                let v = loc[(t - first) * ny + i];
+                if !v.is_finite() {
+                    return Err(SysidError::numerical(
+                        "k-step prediction",
+                        format!("the prediction diverged at sample {t}; use a shorter horizon"),
+                    ));
+                }
+                out[(t, i)] = v;
+            }
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,142 @@
+//! Bindings of `sysid_core::hw`: Hammerstein-Wiener prediction-error estimate and simulation.
+//!
+//! A nonlinearity crosses the boundary as `(kind, n, breakpoints)`: kind `"identity"`,
+//! `"saturation"`, `"deadzone"`, `"polynomial"` (n = degree), `"pwl"` (breakpoints) or
+//! `"sigmoid"` (n = units).
+
+use crate::convert::{mat_to_numpy, slice_to_numpy, vec1};
+use crate::errors::IntoPy;
+use numpy::{PyArray1, PyReadonlyArray1};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use sysid_core::hw::{self, HwStructure, Nonlinearity};
+use sysid_core::optim::{covariance, Flow, Options};
+use sysid_core::SysidError;
+
+type Nl = (String, usize, Vec<f64>);
+type Signals<'py> = (
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+);
+
+fn nl(spec: &Nl) -> PyResult<Nonlinearity> {
+    let (kind, n, bp) = spec;
+    Ok(match kind.as_str() {
+        "identity" => Nonlinearity::Identity,
+        "saturation" => Nonlinearity::Saturation,
+        "deadzone" => Nonlinearity::DeadZone,
+        "polynomial" => Nonlinearity::Polynomial { degree: *n },
+        "pwl" => Nonlinearity::PiecewiseLinear {
+            breakpoints: bp.clone(),
+        },
+        "sigmoid" => Nonlinearity::Sigmoid { units: *n },
+        other => {
+            return Err(crate::errors::to_py(SysidError::InvalidArgument {
+                name: "nonlinearity",
+                reason: format!("unknown kind {other:?}"),
+            }))
+        }
+    })
+}
+
+fn structure(input: &Nl, output: &Nl, nb: usize, nf: usize, nk: usize) -> PyResult<HwStructure> {
+    let s = HwStructure {
+        input: nl(input)?,
+        output: nl(output)?,
+        nb,
+        nf,
+        nk,
+    };
+    s.input.check().py()?;
+    s.output.check().py()?;
+    Ok(s)
+}
+
+/// Prediction-error estimate from `theta0`; returns a dict (theta, cost, history,
+/// iterations, stop, covariance).
+#[pyfunction]
+#[pyo3(signature = (records, input, output, nb, nf, nk, theta0, max_iter=100, tol=1e-10, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn hw_estimate<'py>(
+    py: Python<'py>,
+    records: Vec<(PyReadonlyArray1<'_, f64>, PyReadonlyArray1<'_, f64>)>,
+    input: Nl,
+    output: Nl,
+    nb: usize,
+    nf: usize,
+    nk: usize,
+    theta0: Vec<f64>,
+    max_iter: usize,
+    tol: f64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s = structure(&input, &output, nb, nf, nk)?;
+    let data: Vec<(Vec<f64>, Vec<f64>)> = records.iter().map(|(u, y)| (vec1(u), vec1(y))).collect();
+    let refs: Vec<(&[f64], &[f64])> = data.iter().map(|(u, y)| (&u[..], &y[..])).collect();
+    let mut opts = Options::default();
+    opts.max_iter = max_iter;
+    opts.tol_gradient = tol;
+    opts.tol_step = tol;
+    opts.tol_cost = tol;
+    let sol = match progress {
+        Some(cb) => {
+            let mut obs =
+                |it: &sysid_core::optim::Iteration| match cb.call1(py, (it.iteration, it.cost)) {
+                    Ok(v) if v.is_truthy(py).unwrap_or(false) => Flow::Stop,
+                    _ => Flow::Continue,
+                };
+            hw::estimate(&s, &refs, &theta0, &opts, &mut obs)
+        }
+        None => py.detach(|| hw::estimate(&s, &refs, &theta0, &opts, &mut |_| Flow::Continue)),
+    }
+    .py()?;
+    let n: usize = data.iter().map(|d| d.0.len()).sum();
+    let var = 2.0 * sol.cost / (n.saturating_sub(theta0.len()).max(1)) as f64;
+    let cov = covariance(sol.gauss_newton.as_ref(), var, 1e-10).py()?;
+    let d = PyDict::new(py);
+    d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
+    d.set_item("cost", sol.cost)?;
+    d.set_item("iterations", sol.iterations)?;
+    d.set_item("stop", sol.stop.as_str())?;
+    d.set_item("history", slice_to_numpy(py, &sol.history))?;
+    d.set_item("noise_variance", var)?;
+    d.set_item("covariance", mat_to_numpy(py, &cov.covariance))?;
+    Ok(d)
+}
+
+/// Simulated output and the intermediate signals `(y, w, x)`.
+#[pyfunction]
+#[allow(clippy::too_many_arguments)]
+pub fn hw_simulate<'py>(
+    py: Python<'py>,
+    input: Nl,
+    output: Nl,
+    nb: usize,
+    nf: usize,
+    nk: usize,
+    theta: Vec<f64>,
+    u: PyReadonlyArray1<'_, f64>,
+) -> PyResult<Signals<'py>> {
+    let s = structure(&input, &output, nb, nf, nk)?;
+    if theta.len() != s.n_params() {
+        return Err(crate::errors::to_py(SysidError::InvalidArgument {
+            name: "theta",
+            reason: format!("needs {} parameters", s.n_params()),
+        }));
+    }
+    let u = vec1(&u);
+    let (y, (w, x)) = py.detach(|| (s.simulate(&theta, &u), s.intermediate(&theta, &u)));
+    Ok((
+        slice_to_numpy(py, &y),
+        slice_to_numpy(py, &w),
+        slice_to_numpy(py, &x),
+    ))
+}
+
+/// Registers the functions of this file.
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(hw_estimate, m)?)?;
+    m.add_function(wrap_pyfunction!(hw_simulate, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,134 @@
+"""Hammerstein-Wiener: known Hammerstein and Wiener systems (saturation, dead zone,
+polynomial, piecewise linear, sigmoid) recover the linear block's poles and the
+nonlinearity; saving, protocol, errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import sysid
+
+
+def linear(w, b=0.5, f=-0.8):
+    """x(t) = -f x(t-1) + b w(t-1)."""
+    x = np.zeros_like(w)
+    for t in range(1, w.size):
+        x[t] = -f * x[t - 1] + b * w[t - 1]
+    return x
+
+
+def second_order(w):
+    """Poles 0.7 +- 0.3j: x = 1.4 x1 - 0.58 x2 + 0.3 w1 + 0.1 w2."""
+    x = np.zeros(w.size + 1)  # x[0] is the rest state before the record
+    wp = np.concatenate([[0.0], w])
+    for t in range(2, w.size + 1):
+        x[t] = 1.4 * x[t - 1] - 0.58 * x[t - 2] + 0.3 * wp[t - 1] + 0.1 * wp[t - 2]
+    return x[1:]
+
+
+def _u(n, seed, scale=1.0):
+    return scale * np.random.default_rng(seed).uniform(-1, 1, n)
+
+
+def test_hammerstein_saturation_noise_free_exact():
+    u = _u(800, 1)
+    y = second_order(np.clip(u, -0.4, 0.6))
+    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 2, 2, 1, input_nl=sysid.Saturation())
+    np.testing.assert_allclose(m.input_nl.params, [-0.4, 0.6], atol=1e-7)
+    np.testing.assert_allclose(np.sort_complex(m.poles()), np.sort_complex(
+        np.roots([1, -1.4, 0.58]).astype(complex)), atol=1e-7)
+    np.testing.assert_allclose(m.b, [0.3, 0.1], atol=1e-7)
+    assert "Hammerstein" in repr(m) and m.info["iterations"] > 0
+
+
+def test_hammerstein_deadzone_with_noise():
+    u = _u(3000, 2, 2.0)
+    rng = np.random.default_rng(3)
+    dz = np.where(u > 0.5, u - 0.5, np.where(u < -0.3, u + 0.3, 0.0))
+    y = linear(dz) + 0.02 * rng.standard_normal(u.size)
+    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl=sysid.DeadZone())
+    # stated tolerances: breakpoints within 0.03, pole within 0.01
+    np.testing.assert_allclose(m.input_nl.params, [-0.3, 0.5], atol=0.03)
+    assert abs(m.poles()[0].real - 0.8) < 0.01 and abs(m.b[0] - 0.5) < 0.02
+
+
+def test_hammerstein_polynomial_noise_free():
+    u = _u(600, 4)
+    y = linear(u + 0.5 * u ** 2 - 0.3 * u ** 3)
+    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1,
+                   input_nl=sysid.PolynomialNonlinearity(3))
+    np.testing.assert_allclose(m.input_nl.params, [0.5, -0.3], atol=1e-7)
+    assert abs(m.poles()[0].real - 0.8) < 1e-7
+
+
+def test_wiener_saturation_and_polynomial():
+    u = _u(1500, 5)
+    x = second_order(u)
+    y = np.clip(x, -0.3, 0.25)
+    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 2, 2, 1, output_nl=sysid.Saturation())
+    assert "Wiener" in repr(m)
+    np.testing.assert_allclose(m.output_nl.params, [-0.3, 0.25], atol=1e-6)
+    np.testing.assert_allclose(np.sort_complex(m.poles()), np.sort_complex(
+        np.roots([1, -1.4, 0.58]).astype(complex)), atol=1e-6)
+    y2 = linear(u) + 0.4 * linear(u) ** 2
+    m2 = sysid.nlhw(sysid.IOData(u, y2, 1.0), 1, 1, 1,
+                    output_nl=sysid.PolynomialNonlinearity(2))
+    np.testing.assert_allclose(m2.output_nl.params, [0.4], atol=1e-6)
+    assert abs(m2.poles()[0].real - 0.8) < 1e-6
+
+
+def test_hammerstein_wiener_both_sides():
+    u = _u(2000, 6)
+    y = np.clip(linear(u + 0.4 * u ** 2), -0.6, 0.7)
+    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl=sysid.PolynomialNonlinearity(2),
+                   output_nl=sysid.Saturation())
+    np.testing.assert_allclose(m.input_nl.params, [0.4], atol=1e-5)
+    np.testing.assert_allclose(m.output_nl.params, [-0.6, 0.7], atol=1e-5)
+    assert abs(m.poles()[0].real - 0.8) < 1e-5
+
+
+def test_piecewise_linear_and_sigmoid_fit_better_than_linear():
+    u = _u(2000, 7, 2.0)
+    y = linear(np.tanh(1.5 * u))
+    d = sysid.IOData(u, y, 1.0)
+    lin = sysid.oe(d, 1, 1, 1)
+    err_lin = np.mean((lin.simulate(u[:, None])[:, 0] - y) ** 2)
+    pwl = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.PiecewiseLinear([-2, -1, -0.3, 0.3, 1, 2]))
+    sig = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.SigmoidNetwork(2))
+    for m in (pwl, sig):
+        err = np.mean((m.simulate(u)[:, 0] - y) ** 2)
+        assert err < 0.05 * err_lin
+        assert abs(m.poles()[0].real - 0.8) < 0.02
+
+
+def test_user_function_input():
+    u = _u(500, 8)
+    y = linear(np.sign(u) * u ** 2)
+    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1,
+                   input_nl=sysid.UserFunction(lambda v: np.sign(v) * v ** 2))
+    assert abs(m.poles()[0].real - 0.8) < 1e-6 and abs(m.b[0] - 0.5) < 1e-6
+    np.testing.assert_allclose(m.simulate(u)[:, 0], y, atol=1e-8)
+    with pytest.raises(sysid.DataError, match="UserFunction"):
+        m.to_dict()
+
+
+def test_protocol_saving_and_errors(tmp_path):
+    u = _u(600, 9)
+    y = linear(np.clip(u, -0.5, 0.5))
+    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl=sysid.Saturation())
+    assert isinstance(m, sysid.Model)
+    assert m.freqresp(np.array([0.1, 1.0])).shape == (2, 1, 1)
+    assert sysid.compare(m, sysid.IOData(u, y, 1.0)).fit[0] > 99.9
+    for ext in ("json", "npz"):
+        sysid.save_model(m, tmp_path / f"m.{ext}")
+        m2 = sysid.load_model(tmp_path / f"m.{ext}")
+        np.testing.assert_array_equal(m2.simulate(u), m.simulate(u))
+    assert len(m.to_pandas()) == m.n_parameters == 4
+    assert "input" in m.summary()
+    with pytest.raises(sysid.DataError, match="one input"):
+        sysid.nlhw(sysid.IOData(np.c_[u, u], y, 1.0), 1, 1, 1)
+    with pytest.raises(sysid.DataError, match="nonlinearity"):
+        sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl="saturation")
+    with pytest.raises(sysid.DataError, match="breakpoints"):
+        sysid.PiecewiseLinear([1.0, 0.0])
