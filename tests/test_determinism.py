@@ -57,7 +57,7 @@ def _run(threads: int, compressors: list[str]) -> dict:
     return json.loads(res.stdout.strip().splitlines()[-1])
 
 
-@pytest.mark.parametrize("compressors", [["qr", "correlation"]])
+@pytest.mark.parametrize("compressors", [["qr", "correlation", "auto"]])
 def test_bit_identical_for_1_2_3_threads(compressors: list[str]) -> None:
     runs = {t: _run(t, compressors) for t in (1, 2, 3)}
     for comp in compressors:

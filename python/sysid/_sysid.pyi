@@ -72,12 +72,14 @@ class HankelFactor:
     ) -> HankelFactor: ...
     def __reduce__(self) -> Any: ...
 
+AUTO_MIN_RELATIVE_PIVOT: float
+
 def compress(
     experiments: list[tuple[_Array, _Array]],
     past: int,
     future: int,
     chunk_rows: int | None = None,
-    compressor: str = "qr",
+    compressor: str = "auto",
 ) -> HankelFactor: ...
 
 @final

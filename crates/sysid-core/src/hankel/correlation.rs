@@ -624,7 +624,7 @@ impl CorrelationSums {
         }
         ga[(k, k)] = self.n_columns as f64;
         let max_diag = (0..=k).map(|i| ga[(i, i)]).fold(0.0, f64::max);
-        let (la, source) = match cholesky_lower_seq(ga.as_ref()) {
+        let (la, source, pivot) = match cholesky_lower_seq(ga.as_ref()) {
             Some(la) => {
                 let min_piv = (0..=k)
                     .map(|i| la[(i, i)] * la[(i, i)])
@@ -642,7 +642,7 @@ impl CorrelationSums {
                         relative_pivot: rel,
                     }
                 };
-                (la, src)
+                (la, src, rel)
             }
             None => {
                 let evd = ga.self_adjoint_eigen(Side::Lower).map_err(|e| {
@@ -661,6 +661,7 @@ impl CorrelationSums {
                         clipped,
                         relative_pivot: 0.0,
                     },
+                    0.0,
                 )
             }
         };
@@ -688,7 +689,8 @@ impl CorrelationSums {
         let l_mat = lq_lower(h.as_ref());
         Ok(
             HankelFactor::from_parts(self.layout, l_mat, self.n_columns, self.n_experiments)?
-                .with_source(source),
+                .with_source(source)
+                .with_relative_pivot(Some(pivot)),
         )
     }
 }
