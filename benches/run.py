@@ -6,9 +6,10 @@
 
 Every (case, tool) runs in its own subprocess (so peak memory is that tool's alone), with a
 memory limit and a timeout; a tool that fails is reported with its error. Tools: sysid with
-its default (auto) and both explicit compressors, a plain NumPy baseline (explicit Hankel matrix, one dense QR), and the peers
-sippy-unipi (N4SID) and nfoursid, which live in benches/.venv-peers (created here on first
-use: `pip install sippy-unipi nfoursid control`), never in sysid's dependencies. Accuracy is
+its default (auto) and both explicit compressors, a plain NumPy baseline (explicit Hankel
+matrix, one dense QR), and the peers sippy-unipi (N4SID) and nfoursid, which live in
+benches/.venv-peers (created here on first use: `pip install sippy-unipi nfoursid control`),
+never in sysid's dependencies. Accuracy is
 the largest distance between identified and true poles (optimally matched), so speed never
 hides a worse answer. Results go to benches/results/<name>.md and .json.
 """

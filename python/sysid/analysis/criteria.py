@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_int
+from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..errors import DataError, NumericalError, SysidError
 from ..models.checks import _optional, check_model
@@ -362,6 +363,7 @@ def select_order(
     feedthrough: bool = True,
     kalman: bool = True,
     models: Sequence[Any] | None = None,
+    progress: bool | None = None,
 ) -> OrderSelection:
     """Sweep orders (and weightings) on one compression, or rank given models; tabulate
     criteria and fits.
@@ -393,6 +395,8 @@ def select_order(
         a subspace sweep; the "order" of each is its ``nstates`` or else its
         ``n_parameters``, and must differ between candidates. ``orders``, ``methods``,
         ``horizon``, ``feedthrough`` and ``kalman`` do not apply.
+    progress : bool, optional
+        A progress bar over the fits (default: only when stderr is a terminal).
 
     Returns
     -------
@@ -433,11 +437,24 @@ def select_order(
     _check_validation(validation, est.data.n_inputs, est.data.n_outputs, est.data.dt)
     est_data = None if getattr(est, "_from_factor", False) else est.data
     rows, fitted, svs, svd_picks = [], {}, {}, {}
+    with Bar(len(meths) * len(orders_), "order sweep", unit="fits",
+             enabled=show(progress)) as bar:
+        _sweep(est, est_data, meths, orders_, validation, x0, feedthrough, kalman, rows,
+               fitted, svs, svd_picks, bar)
+    return OrderSelection(rows, svs, fitted, svd_picks, validation is not None, criterion,
+                          float(fit_tol))
+
+
+def _sweep(est: Any, est_data: Any, meths: list[str], orders_: list[int], validation: Any,
+           x0: str, feedthrough: bool, kalman: bool, rows: list[dict[str, Any]],
+           fitted: dict[Any, Any], svs: dict[str, Any], svd_picks: dict[str, int],
+           bar: Bar) -> None:
     for meth in meths:
         sv = np.asarray(est.singular_values_for(meth))
         svs[meth] = sv
         svd_picks[meth] = int(est._subspace(meth).auto_order())
         for n in orders_:
+            bar.update(1)
             row: dict[str, Any] = {"method": meth, "order": n,
                                    "singular_value": float(sv[n - 1]) if n <= sv.size else np.nan,
                                    "error": None}
@@ -466,8 +483,6 @@ def select_order(
                 rows.append(_failed(row, e))
                 continue
             rows.append(row)
-    return OrderSelection(rows, svs, fitted, svd_picks, validation is not None, criterion,
-                          float(fit_tol))
 
 
 def _order_of(model: Any) -> int:

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import mmap
 import os
-import sys
 import warnings
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -22,6 +21,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_2d, as_int
+from .._progress import Bar, show
 from ..errors import DataError
 
 __all__ = [
@@ -98,39 +98,6 @@ def warn_if_fallback(factor: Any, stacklevel: int = 2, requested: str = "correla
             CompressionFallbackWarning,
             stacklevel=stacklevel + 1,
         )
-
-
-class _Progress:
-    """tqdm when installed, else a carriage-return line on stderr; silent when disabled."""
-
-    def __init__(self, enabled: bool, total: int | None, desc: str) -> None:
-        self.enabled, self.total, self.desc, self.done = enabled, total, desc, 0
-        self._bar = None
-        if enabled:
-            try:
-                from tqdm.auto import tqdm
-
-                self._bar = tqdm(total=total, desc=desc, unit="samples", unit_scale=True)
-            except ImportError:
-                self._bar = None
-
-    def update(self, n: int) -> None:
-        self.done += n
-        if not self.enabled:
-            return
-        if self._bar is not None:
-            self._bar.update(n)
-        else:
-            tot = f"/{self.total:,}" if self.total else ""
-            sys.stderr.write(f"\r{self.desc}: {self.done:,}{tot} samples")
-            sys.stderr.flush()
-
-    def close(self) -> None:
-        if self.enabled:
-            if self._bar is not None:
-                self._bar.close()
-            else:
-                sys.stderr.write("\n")
 
 
 def _release_pages(arr: np.ndarray, start: int, stop: int) -> None:
@@ -269,8 +236,8 @@ def compress_stream(
     chunk_size : int
         Samples per push for array sources.
     progress : bool, optional
-        Show progress (tqdm if installed, else a line on stderr); default: when stderr is
-        a terminal.
+        Show a progress bar with rate and time left (tqdm if installed, else a counter line
+        on stderr); default: when stderr is a terminal.
 
     Returns
     -------
@@ -305,8 +272,8 @@ def compress_stream(
         raise DataError("source has no experiments")
     totals = [n for _, n in exps]
     total = None if any(n is None for n in totals) else sum(n for n in totals if n is not None)
-    show = sys.stderr.isatty() if progress is None else bool(progress)
-    bar = _Progress(show, total, "compress")
+    bar = Bar(total, f"compress ({compressor})", unit="samples", enabled=show(progress),
+              unit_scale=True)
     comp = None
     try:
         for chunks, _ in exps:
