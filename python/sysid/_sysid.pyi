@@ -7,6 +7,7 @@ import numpy.typing as npt
 
 __version__: str
 __all__ = [
+    "AUTO_MIN_RELATIVE_PIVOT",
     "arx_fit",
     "iv4",
     "arx_struc",

@@ -182,6 +182,9 @@ pub fn compress(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyHankelFactor>()?;
     m.add_function(wrap_pyfunction!(compress, m)?)?;
-    m.add("AUTO_MIN_RELATIVE_PIVOT", sysid_core::hankel::AUTO_MIN_RELATIVE_PIVOT)?;
+    m.add(
+        "AUTO_MIN_RELATIVE_PIVOT",
+        sysid_core::hankel::AUTO_MIN_RELATIVE_PIVOT,
+    )?;
     Ok(())
 }
