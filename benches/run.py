@@ -6,9 +6,10 @@
 
 Every (case, tool) runs in its own subprocess (so peak memory is that tool's alone), with a
 memory limit and a timeout; a tool that fails is reported with its error. Tools: sysid with
-both compressors, a plain NumPy baseline (explicit Hankel matrix, one dense QR), and the peers
-sippy-unipi (N4SID) and nfoursid, which live in benches/.venv-peers (created here on first
-use: `pip install sippy-unipi nfoursid control`), never in sysid's dependencies. Accuracy is
+its default (auto) and both explicit compressors, a plain NumPy baseline (explicit Hankel
+matrix, one dense QR), and the peers sippy-unipi (N4SID) and nfoursid, which live in
+benches/.venv-peers (created here on first use: `pip install sippy-unipi nfoursid control`),
+never in sysid's dependencies. Accuracy is
 the largest distance between identified and true poles (optimally matched), so speed never
 hides a worse answer. Results go to benches/results/<name>.md and .json.
 """
@@ -30,7 +31,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 PEERS = HERE / ".venv-peers"
 DATA = HERE / ".data"
-TOOLS = ("sysid-correlation", "sysid-qr", "numpy-qr", "sippy", "nfoursid")
+TOOLS = ("sysid-auto", "sysid-correlation", "sysid-qr", "numpy-qr", "sippy", "nfoursid")
 
 
 def ensure_peers() -> Path | None:
@@ -80,19 +81,19 @@ def grid(kind: str) -> list[dict]:
 
     if kind == "quick":
         add(1e4, 3, 3, 20, TOOLS)
-        add(1e5, 3, 3, 20, ("sysid-correlation", "sysid-qr", "numpy-qr", "sippy"))
+        add(1e5, 3, 3, 20, ("sysid-auto", "sysid-correlation", "sysid-qr", "numpy-qr", "sippy"))
         return cases
     if kind == "default":
         for n in (1e4, 1e5, 1e6):  # issue 2: 3 inputs, 3 outputs, horizon 20, all peers
             add(n, 3, 3, 20, TOOLS)
         add(1e4, 1, 1, 10, TOOLS, order=4)
-        add(1e6, 8, 8, 20, ("sysid-correlation", "sysid-qr", "numpy-qr"))
-        add(1e7, 3, 3, 20, ("sysid-correlation",))
+        add(1e6, 8, 8, 20, ("sysid-auto", "sysid-correlation", "sysid-qr", "numpy-qr"))
+        add(1e7, 3, 3, 20, ("sysid-auto", "sysid-correlation"))
         return cases
     for n, (m, l), i in itertools.product(
         (1e4, 1e5, 1e6, 1e7), ((1, 1), (3, 3), (8, 8)), (10, 20, 40)
     ):
-        tools = TOOLS if n <= 1e6 else ("sysid-correlation", "sysid-qr")
+        tools = TOOLS if n <= 1e6 else ("sysid-auto", "sysid-correlation", "sysid-qr")
         add(n, m, l, i, tools, order=4 if (m, l) == (1, 1) else 8)
     return cases
 
@@ -170,7 +171,7 @@ def main() -> None:
         for tool in case["tools"]:
             if args.tools and tool not in args.tools:
                 continue
-            py = Path(sys.executable) if tool in ("sysid-correlation", "sysid-qr", "numpy-qr") \
+            py = Path(sys.executable) if tool.startswith("sysid") or tool == "numpy-qr" \
                 else peers_py
             if py is None:
                 res = {"tool": tool, "ok": False, "error": "peer environment unavailable"}
@@ -221,7 +222,9 @@ def write_report(name: str, rows: list[dict], rate: float, kind: str) -> None:
             extra = (r["peak_mb"] - r["baseline_mb"]) if ok and "baseline_mb" in r else None
             speed = f"{sippy['seconds'] / sec:.0f}x" if sippy and sec else "-"
             note = "" if ok else f"FAILED: {r.get('error', '')}"
-            if ok and r.get("source") not in (None, "qr", "correlation"):
+            if ok and r.get("source") not in (None, "qr", "correlation") and not (
+                r["tool"] == "sysid-auto" and r.get("source") == "qr-fallback"
+            ):
                 note += f"factor {r['source']}"
             lines.append(
                 f"| {r['n']:.0e} | {r['m']} | {r['l']} | {r['i']} | {r['order']} | {r['tool']} | "

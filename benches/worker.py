@@ -147,7 +147,9 @@ def main() -> None:
             pass
         out["baseline_mb"] = rss_mb()
         t0 = time.perf_counter()
-        if args.tool == "sysid-correlation":
+        if args.tool == "sysid-auto":
+            abcd, info = run_sysid(u, y, args.horizon, args.order, "auto")
+        elif args.tool == "sysid-correlation":
             abcd, info = run_sysid(u, y, args.horizon, args.order, "correlation")
         elif args.tool == "sysid-qr":
             abcd, info = run_sysid(u, y, args.horizon, args.order, "qr")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import pickle
+import warnings
 
 import numpy as np
 import pytest
@@ -78,11 +79,23 @@ def test_ill_conditioned_data_fall_back_to_the_exact_pass():
     assert fast.source == "qr-fallback"
     assert fast.relative_pivot < 1e-10
     np.testing.assert_array_equal(fast.l, exact.l)
-    # streamed data cannot be re-read: the factor is flagged and a warning says so
+    # compressor="correlation" streams once: the factor is flagged and a warning says so
     with pytest.warns(CompressionFallbackWarning, match="ill-conditioned"):
-        streamed = compress_stream((u, y), 5, chunk_size=300, progress=False)
+        streamed = compress_stream((u, y), 5, chunk_size=300, progress=False,
+                                   compressor="correlation")
     assert streamed.source == "correlation-ill-conditioned"
     assert_same_gram(streamed, exact, 1e-11)
+    # the default reads arrays a second time, exactly, without a warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        again = compress_stream((u, y), 5, chunk_size=300, progress=False)
+    assert again.source == "qr-fallback" and again.relative_pivot < 1e-10
+    np.testing.assert_array_equal(again.l, exact.l)
+    # ... but not a one-pass iterator: flagged and warned
+    chunks = ((u[s:s + 300], y[s:s + 300]) for s in range(0, 2000, 300))
+    with pytest.warns(CompressionFallbackWarning, match="ill-conditioned"):
+        once = compress_stream(chunks, 5, progress=False)
+    assert once.source == "correlation-ill-conditioned"
     # the estimator turns the in-memory fallback into a warning naming it
     import sysid
 

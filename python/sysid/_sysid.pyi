@@ -13,6 +13,7 @@ __all__ = [
     "narx_predict",
     "hw_estimate",
     "hw_simulate",
+    "AUTO_MIN_RELATIVE_PIVOT",
     "arx_fit",
     "iv4",
     "arx_struc",
@@ -85,12 +86,14 @@ class HankelFactor:
     ) -> HankelFactor: ...
     def __reduce__(self) -> Any: ...
 
+AUTO_MIN_RELATIVE_PIVOT: float
+
 def compress(
     experiments: list[tuple[_Array, _Array]],
     past: int,
     future: int,
     chunk_rows: int | None = None,
-    compressor: str = "qr",
+    compressor: str = "auto",
 ) -> HankelFactor: ...
 
 @final

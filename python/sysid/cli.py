@@ -24,7 +24,7 @@ import numpy as np
 from .data.iodata import IOData
 from .errors import DataError, OrderError, SysidError
 
-__all__ = ["main", "read_csv", "identify"]
+__all__ = ["main", "read_csv", "read_columns", "identify"]
 
 
 # -- progress -------------------------------------------------------------------------
@@ -177,11 +177,15 @@ def identify(
     progress: Callable[[str], None] | None = None,
     uncertainty: str | None = None,
     n_boot: int = 100,
+    compressor: str = "auto",
+    bars: bool | None = False,
 ) -> dict[str, Any]:
     """Identify, validate and (optionally) write a report; returns a summary dict.
 
-    ``uncertainty="bootstrap"`` attaches the residual-bootstrap parameter uncertainty
-    (``n_boot`` records) so the report's pole table has standard deviations.
+    ``compressor`` is passed to :class:`~sysid.SubspaceEstimator` (its decision is in
+    ``model.info["compression"]``); ``bars`` draws progress bars in the order sweep (None:
+    on a terminal). ``uncertainty="bootstrap"`` attaches the residual-bootstrap parameter
+    uncertainty (``n_boot`` records) so the report's pole table has standard deviations.
 
     The summary holds ``model``, ``selection`` (:class:`~sysid.criteria.OrderSelection`),
     ``compare`` (validation simulation), ``prediction`` (validation 1-step), ``residuals``
@@ -195,7 +199,11 @@ def identify(
     say = progress or (lambda _msg: None)
     say(f"compressing {est_data.n_samples} samples "
         f"({est_data.n_inputs} in, {est_data.n_outputs} out, horizon {horizon or 'default'})")
-    est = SubspaceEstimator(est_data, horizon, method=method)
+    t0 = time.perf_counter()
+    est = SubspaceEstimator(est_data, horizon, method=method, compressor=compressor)
+    dt_c = time.perf_counter() - t0
+    say(f"compressed with {est.factor.source} in {dt_c:.2f} s "
+        f"({est_data.n_samples / max(dt_c, 1e-9) / 1e6:.1f} M samples/s)")
     if order != "auto":
         if isinstance(order, str):
             if not order.isdigit():
@@ -211,7 +219,7 @@ def identify(
     top = min(est.max_order, max(10, 2 * est.auto_order, 0 if order == "auto" else int(order)))
     while True:
         say(f"sweeping orders 1..{top} on one compression")
-        sel = select_order(est, range(1, top + 1), validation=val_data)
+        sel = select_order(est, range(1, top + 1), validation=val_data, progress=bars)
         if order != "auto" or sel.order < top or top >= est.max_order:
             break
         # the best order sits at the edge of the sweep: look further
@@ -298,14 +306,127 @@ def _check_report_dir(report: str | Path) -> None:
                         "directory name (it is created if missing)")
 
 
-def _identify(args: argparse.Namespace) -> int:
-    from .estimate.subspace import _method
+#: CSV files larger than this are read by pyarrow's streaming reader, in blocks.
+STREAM_BYTES = 8 << 20
 
-    _method(args.method)  # before reading and compressing anything
-    _check_report_dir(args.report)
-    if args.horizon is not None and args.horizon < 1:
-        raise DataError(f"--horizon must be a positive integer, got {args.horizon}")
-    say = _Progress(args.quiet)
+
+class _CountingFile:
+    """A binary file that advances a progress bar by the bytes read through it."""
+
+    def __init__(self, path: Path, bar: Any) -> None:
+        self._f, self._bar = open(path, "rb"), bar  # noqa: SIM115 (closed by close())
+
+    def read(self, n: int = -1) -> bytes:
+        b = self._f.read(n)
+        self._bar.update(len(b))
+        return b
+
+    def readable(self) -> bool:
+        return True
+
+    def seekable(self) -> bool:
+        return False
+
+    @property
+    def closed(self) -> bool:
+        return self._f.closed
+
+    def close(self) -> None:
+        self._f.close()
+
+
+def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None = None,
+                 progress: bool | None = None) -> np.ndarray:
+    """Read the named numeric columns of a large CSV or Parquet file in blocks.
+
+    CSV goes through pyarrow's streaming reader (``pyarrow.csv.open_csv``, blocks of 16 MB,
+    only the named columns converted, to float64) with a progress bar over the bytes (rate
+    and time left); Parquet through ``ParquetFile.iter_batches`` with a bar over the rows.
+    Only the requested columns are held in memory, as float64.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from sysid.cli import read_columns
+    >>> path = os.path.join(tempfile.mkdtemp(), "d.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("t,u,y\n0,1,2\n1,3,4\n")
+    >>> read_columns(path, ["y", "u"], progress=False)
+    array([[2., 1.],
+           [4., 3.]])
+    """
+    from ._progress import Bar, show
+
+    path = Path(path)
+    try:
+        import pyarrow as pa
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise ImportError("reading large files in blocks needs pyarrow: pip install pyarrow") \
+            from exc
+    parts: list[np.ndarray] = []
+
+    def take(batch: Any) -> None:
+        names = batch.schema.names
+        parts.append(np.column_stack([
+            batch.column(names.index(c)).to_numpy(zero_copy_only=False).astype(float)
+            for c in columns]) if columns else np.zeros((batch.num_rows, 0)))
+
+    if path.suffix.lower() in (".parquet", ".pq"):
+        import pyarrow.parquet as pq
+
+        pf = pq.ParquetFile(path)
+        missing = [c for c in columns if c not in pf.schema_arrow.names]
+        if missing:
+            raise DataError(f"{path.name}: no column(s) {missing}; the file has "
+                            f"{pf.schema_arrow.names}")
+        with Bar(pf.metadata.num_rows, f"reading {path.name}", unit="rows", unit_scale=True,
+                 enabled=show(progress)) as bar:
+            for batch in pf.iter_batches(batch_size=1 << 20, columns=columns):
+                take(batch)
+                bar.update(batch.num_rows)
+    else:
+        import pyarrow.csv as pacsv
+
+        with open(path, encoding="utf-8-sig") as f:
+            first = f.readline()
+        delim = delimiter or next((d for d in (",", ";", "\t") if d in first), ",")
+        with Bar(path.stat().st_size, f"reading {path.name}", unit="B", unit_scale=True,
+                 enabled=show(progress)) as bar:
+            src = _CountingFile(path, bar)
+            try:
+                reader = pacsv.open_csv(
+                    src, read_options=pacsv.ReadOptions(block_size=16 << 20),
+                    parse_options=pacsv.ParseOptions(delimiter=delim),
+                    convert_options=pacsv.ConvertOptions(
+                        include_columns=columns,
+                        column_types={c: pa.float64() for c in columns}))
+                for batch in reader:
+                    take(batch)
+            except (pa.ArrowInvalid, KeyError) as e:
+                raise DataError(f"{path.name}: {e}; check the column names and that every "
+                                "field is a number") from None
+            finally:
+                src.close()
+    return np.concatenate(parts) if parts else np.zeros((0, len(columns)))
+
+
+def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
+        list[str], list[int], list[int], np.ndarray, np.ndarray, np.ndarray | None]:
+    """Names, input and output column indices, u, y and the time column if asked."""
+    path = Path(args.data)
+    big = path.is_file() and (path.suffix.lower() in (".parquet", ".pq")
+                              or (path.stat().st_size > STREAM_BYTES
+                                  and args.delimiter not in (" ", "\t")))
+    if big:
+        say(f"reading {args.data} in blocks")
+        names = _header(path)
+        ui = _columns(args.inputs, names, "inputs") if args.inputs else []
+        yi = _columns(args.outputs, names, "outputs")
+        ti = [_columns(args.time, names, "times")[0]] if args.time is not None else []
+        z = read_columns(path, [names[i] for i in ui + yi + ti], delimiter=args.delimiter,
+                         progress=_bars(args))
+        u, y = z[:, :len(ui)], z[:, len(ui):len(ui) + len(yi)]
+        return names, ui, yi, u, y, (z[:, -1] if ti else None)
     say(f"reading {args.data}")
     names, rows = _read_table(args.data, args.delimiter)
     first = 1 if names == [str(i) for i in range(len(names))] else 2
@@ -314,9 +435,39 @@ def _identify(args: argparse.Namespace) -> int:
     say(f"{len(rows)} samples; converting {len(ui)} input and {len(yi)} output column(s)")
     u = _numeric(args.data, names, rows, ui, first)
     y = _numeric(args.data, names, rows, yi, first)
+    t = None
     if args.time is not None:
         ti = _columns(args.time, names, "times")[0]
         t = _numeric(args.data, names, rows, [ti], first)[:, 0]
+    return names, ui, yi, u, y, t
+
+
+def _bars(args: argparse.Namespace) -> bool | None:
+    """Progress bars: asked (--progress), silenced (--quiet), else on a terminal only."""
+    return True if args.progress else False if args.quiet else None
+
+
+def _header(path: Path) -> list[str]:
+    if path.suffix.lower() in (".parquet", ".pq"):
+        import pyarrow.parquet as pq
+
+        return list(pq.ParquetFile(path).schema_arrow.names)
+    with open(path, encoding="utf-8-sig") as f:
+        first = f.readline().strip()
+    delim = next((d for d in (",", ";", "\t") if d in first), ",")
+    return [c.strip() for c in first.split(delim)]
+
+
+def _identify(args: argparse.Namespace) -> int:
+    from .estimate.subspace import _method
+
+    _method(args.method)  # before reading and compressing anything
+    _check_report_dir(args.report)
+    if args.horizon is not None and args.horizon < 1:
+        raise DataError(f"--horizon must be a positive integer, got {args.horizon}")
+    say = _Progress(args.quiet)
+    names, ui, yi, u, y, t = _load(args, say)
+    if t is not None:
         steps = np.diff(t)
         if steps.size == 0 or not np.all(steps > 0):
             raise DataError(f"time column {args.time!r} must increase strictly")
@@ -352,6 +503,7 @@ def _identify(args: argparse.Namespace) -> int:
     val_data = IOData(u=u[k:] if ui else None, y=y[k:], **kw) if k < N else None
     out = identify(est_data, val_data, order=args.order, method=args.method,
                    horizon=args.horizon, report=args.report, preprocessing=pre, progress=say,
+                   compressor=args.compressor, bars=_bars(args),
                    uncertainty=None if args.uncertainty == "none" else args.uncertainty,
                    n_boot=args.n_boot)
     _print_summary(out)
@@ -367,7 +519,8 @@ def _parser() -> argparse.ArgumentParser:
     demo.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
     demo.set_defaults(func=_demo)
     ide = sub.add_parser("identify", help="identify a model from a CSV file")
-    ide.add_argument("data", help="CSV file (header row of column names, numeric rows)")
+    ide.add_argument("data", help="CSV file (header row of column names, numeric rows) or "
+                     "Parquet file; files over 8 MB are read in blocks with a progress bar")
     ide.add_argument("--inputs", default="", help="input columns, comma separated")
     ide.add_argument("--outputs", required=True, help="output columns, comma separated")
     ide.add_argument("--order", default="auto", help="model order or 'auto' (default)")
@@ -387,7 +540,12 @@ def _parser() -> argparse.ArgumentParser:
                      help="pole standard deviations in the report from a residual bootstrap")
     ide.add_argument("--n-boot", dest="n_boot", type=int, default=100,
                      help="bootstrap records (default 100)")
+    ide.add_argument("--compressor", choices=("auto", "qr", "correlation"), default="auto",
+                     help="data compression: auto (default: fast, exact path when the data "
+                          "are ill-conditioned), qr (exact), correlation (fast)")
     ide.add_argument("--quiet", action="store_true", help="no progress lines on stderr")
+    ide.add_argument("--progress", action="store_true",
+                     help="progress bars (rate, time left) even when stderr is not a terminal")
     ide.set_defaults(func=_identify)
     return parser
 

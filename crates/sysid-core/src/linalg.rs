@@ -2,7 +2,75 @@
 //! eigenvalues, spectral radius, LQ re-triangularisation.
 
 use crate::error::{Result, SysidError};
-use faer::{Mat, MatRef};
+use faer::{Mat, MatMut, MatRef, Par};
+
+/// Householder QR of `a` in place, on the calling thread: afterwards the upper triangle of
+/// `a` (its first `min(rows, cols)` rows) holds R (the rest holds the reflectors).
+///
+/// Sequential on purpose: faer's threaded QR may reassociate sums, so its last bits depend
+/// on the thread count; every compression path goes through this function so that its
+/// result does not. Threads are used one level up, on independent blocks of samples.
+///
+/// ```
+/// use faer::mat;
+/// use sysid_core::linalg::qr_r_in_place;
+/// let mut a = mat![[3.0, 1.0], [4.0, 2.0]];
+/// qr_r_in_place(a.as_mut());
+/// assert!((a[(0, 0)].abs() - 5.0).abs() < 1e-14);
+/// ```
+pub fn qr_r_in_place(a: MatMut<'_, f64>) {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::qr::no_pivoting::factor;
+    let (m, n) = (a.nrows(), a.ncols());
+    if m == 0 || n == 0 {
+        return;
+    }
+    let bs = factor::recommended_block_size::<f64>(m, n);
+    let mut coeff = Mat::<f64>::zeros(bs, m.min(n));
+    let mut buf = MemBuffer::new(factor::qr_in_place_scratch::<f64>(
+        m,
+        n,
+        bs,
+        Par::Seq,
+        Default::default(),
+    ));
+    factor::qr_in_place(
+        a,
+        coeff.as_mut(),
+        Par::Seq,
+        MemStack::new(&mut buf),
+        Default::default(),
+    );
+}
+
+/// Cholesky factor (lower) of a symmetric positive definite matrix, on the calling thread
+/// (deterministic for any thread count, as [`qr_r_in_place`]); `None` when a pivot is not
+/// positive.
+pub fn cholesky_lower_seq(a: MatRef<'_, f64>) -> Option<Mat<f64>> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::cholesky::llt::factor;
+    let n = a.nrows();
+    let mut l = a.to_owned();
+    let mut buf = MemBuffer::new(factor::cholesky_in_place_scratch::<f64>(
+        n,
+        Par::Seq,
+        Default::default(),
+    ));
+    factor::cholesky_in_place(
+        l.as_mut(),
+        Default::default(),
+        Par::Seq,
+        MemStack::new(&mut buf),
+        Default::default(),
+    )
+    .ok()?;
+    for j in 0..n {
+        for i in 0..j {
+            l[(i, j)] = 0.0;
+        }
+    }
+    Some(l)
+}
 
 /// Eigenvalues of a square matrix as `(re, im)` pairs.
 pub fn eigenvalues(a: MatRef<'_, f64>) -> Result<Vec<(f64, f64)>> {
@@ -54,6 +122,37 @@ pub fn rsolve_lstsq(b: MatRef<'_, f64>, a: MatRef<'_, f64>, rtol: f64) -> Result
     Ok(b * pinv(a, rtol)?)
 }
 
+/// Least-squares solution `X` of `A X = B` (A tall, full column rank) by Householder QR of
+/// `[A | B]` on the calling thread, so that the result does not depend on the thread count.
+///
+/// ```
+/// use faer::mat;
+/// use sysid_core::linalg::lstsq_seq;
+/// let a = mat![[1.0, 0.0], [0.0, 2.0], [0.0, 0.0]];
+/// let b = mat![[1.0], [4.0], [3.0]];
+/// let x = lstsq_seq(a.as_ref(), b.as_ref());
+/// assert!((x[(0, 0)] - 1.0).abs() < 1e-15 && (x[(1, 0)] - 2.0).abs() < 1e-15);
+/// ```
+pub fn lstsq_seq(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    let (rows, n, r) = (a.nrows(), a.ncols(), b.ncols());
+    let mut ab = Mat::<f64>::zeros(rows.max(n + r), n + r);
+    ab.as_mut().submatrix_mut(0, 0, rows, n).copy_from(a);
+    ab.as_mut().submatrix_mut(0, n, rows, r).copy_from(b);
+    qr_r_in_place(ab.as_mut());
+    // [R, Q^T B] in the first n rows: back substitution
+    let mut x = Mat::<f64>::zeros(n, r);
+    for c in 0..r {
+        for i in (0..n).rev() {
+            let mut v = ab[(i, n + c)];
+            for j in (i + 1)..n {
+                v -= ab[(i, j)] * x[(j, c)];
+            }
+            x[(i, c)] = v / ab[(i, i)];
+        }
+    }
+    x
+}
+
 /// Lower-triangular L with `L L^T = M M^T` (the L of the LQ factorisation of M), with a
 /// non-negative diagonal. M may have more columns than rows; L is `M.nrows() x M.nrows()`.
 pub fn lq_lower(m: MatRef<'_, f64>) -> Mat<f64> {
@@ -61,10 +160,10 @@ pub fn lq_lower(m: MatRef<'_, f64>) -> Mat<f64> {
     if m.ncols() == 0 || rows == 0 {
         return Mat::zeros(rows, rows);
     }
-    let qr = m.transpose().qr();
-    let r = qr.thin_R(); // min(cols, rows) x rows, upper trapezoidal
+    let mut r = m.transpose().to_owned();
+    qr_r_in_place(r.as_mut()); // upper trapezoidal in its first min(cols, rows) rows
     let mut l = Mat::<f64>::zeros(rows, rows);
-    for i in 0..r.nrows() {
+    for i in 0..r.nrows().min(rows) {
         let sign = if r[(i, i)] < 0.0 { -1.0 } else { 1.0 };
         for j in i..rows {
             l[(j, i)] = sign * r[(i, j)];
@@ -146,16 +245,13 @@ impl QrAccumulator {
         }
         let k = self.k;
         let rows = k + self.pending;
-        let qr = self.work.as_ref().subrows(0, rows).qr();
-        let r = qr.thin_R();
-        let mut top = self.work.as_mut().subrows_mut(0, k);
-        top.fill(0.0);
-        for i in 0..r.nrows().min(k) {
-            for j in i..k {
-                top[(i, j)] = r[(i, j)];
+        qr_r_in_place(self.work.as_mut().subrows_mut(0, rows));
+        // keep R (upper triangle of the first min(rows, k) rows), clear the reflectors
+        for j in 0..k {
+            for i in (j + 1)..rows {
+                self.work[(i, j)] = 0.0;
             }
         }
-        self.work.as_mut().subrows_mut(k, self.pending).fill(0.0);
         self.pending = 0;
     }
 

@@ -56,14 +56,11 @@ impl PyHankelFactor {
         self.inner.source().name()
     }
 
-    /// Smallest relative Cholesky pivot of the correlation path (None for the exact path).
+    /// Smallest relative Cholesky pivot of the correlation path, also when it was rejected
+    /// (None when only the exact path ran).
     #[getter]
     fn relative_pivot(&self) -> Option<f64> {
-        match self.inner.source() {
-            FactorSource::CorrelationIllConditioned { relative_pivot, .. }
-            | FactorSource::QrFallback { relative_pivot } => Some(relative_pivot),
-            _ => None,
-        }
+        self.inner.relative_pivot()
     }
 
     fn merge(&self, other: &PyHankelFactor) -> PyResult<PyHankelFactor> {
@@ -105,7 +102,8 @@ impl PyHankelFactor {
         };
         let inner = HankelFactor::from_parts(layout, view(&l).to_owned(), n_columns, n_experiments)
             .py()?
-            .with_source(source);
+            .with_source(source)
+            .with_relative_pivot(relative_pivot);
         Ok(PyHankelFactor { inner })
     }
 
@@ -146,11 +144,13 @@ impl PyHankelFactor {
 
 /// Compresses a list of `(u, y)` experiments into a `HankelFactor`.
 ///
-/// `compressor="qr"` is exact (`chunk_rows` windows per QR update); `"correlation"` is fast
-/// (`chunk_rows` samples per parallel block) and falls back to the exact pass when its Gram
-/// matrix is ill-conditioned (then `factor.source == "qr-fallback"`).
+/// `compressor="auto"` (default) runs the fast correlation path and keeps it when its Gram
+/// matrix is well conditioned (relative pivot >= AUTO_MIN_RELATIVE_PIVOT), else compresses
+/// exactly (`factor.source == "qr-fallback"`); `"qr"` is exact (`chunk_rows` windows per QR
+/// update); `"correlation"` is fast (`chunk_rows` samples per parallel block) and falls back
+/// to the exact pass only when its Gram matrix is numerically singular (pivot < 1e-10).
 #[pyfunction]
-#[pyo3(signature = (experiments, past, future, chunk_rows=None, compressor="qr"))]
+#[pyo3(signature = (experiments, past, future, chunk_rows=None, compressor="auto"))]
 pub fn compress(
     py: Python<'_>,
     experiments: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>)>,
@@ -182,5 +182,9 @@ pub fn compress(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyHankelFactor>()?;
     m.add_function(wrap_pyfunction!(compress, m)?)?;
+    m.add(
+        "AUTO_MIN_RELATIVE_PIVOT",
+        sysid_core::hankel::AUTO_MIN_RELATIVE_PIVOT,
+    )?;
     Ok(())
 }

@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_int
+from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..errors import DataError, NumericalError, SysidError
 from ..models.checks import _optional, check_model
@@ -386,6 +387,7 @@ def select_order(
     feedthrough: bool = True,
     kalman: bool = True,
     models: Sequence[Any] | None = None,
+    progress: bool | None = None,
 ) -> OrderSelection:
     """Sweep orders (and weightings) on one compression, or rank given models; tabulate
     criteria and fits.
@@ -417,6 +419,8 @@ def select_order(
         a subspace sweep; the "order" of each is its ``nstates`` or else its
         ``n_parameters``, and must differ between candidates. ``orders``, ``methods``,
         ``horizon``, ``feedthrough`` and ``kalman`` do not apply.
+    progress : bool, optional
+        A progress bar over the fits (default: only when stderr is a terminal).
 
     Returns
     -------
@@ -456,10 +460,13 @@ def select_order(
     orders_ = _check_orders(orders, est.max_order)
     _check_validation(validation, est.data.n_inputs, est.data.n_outputs, est.data.dt)
     est_data = None if getattr(est, "_from_factor", False) else est.data
+    rows, fitted, svs, svd_picks = [], {}, {}, {}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        rows, fitted, svs, svd_picks = _sweep(est, meths, orders_, est_data, validation,
-                                              feedthrough, kalman, x0)
+        with Bar(len(meths) * len(orders_), "order sweep", unit="fits",
+                 enabled=show(progress)) as bar:
+            _sweep(est, est_data, meths, orders_, validation, x0, feedthrough, kalman, rows,
+                   fitted, svs, svd_picks, bar)
     _warn_once(caught)
     return OrderSelection(rows, svs, fitted, svd_picks, validation is not None, criterion,
                           float(fit_tol))
@@ -487,17 +494,16 @@ def _warn_once(caught: list[Any]) -> None:
             warnings.warn(w.message, w.category, stacklevel=3)
 
 
-def _sweep(est: Any, meths: list[str], orders_: list[int], est_data: Any, validation: Any,
-           feedthrough: bool, kalman: bool, x0: str) -> tuple[Any, Any, Any, Any]:
-    rows: list[dict[str, Any]] = []
-    fitted: dict[tuple[str, int], Any] = {}
-    svs: dict[str, np.ndarray] = {}
-    svd_picks: dict[str, int] = {}
+def _sweep(est: Any, est_data: Any, meths: list[str], orders_: list[int], validation: Any,
+           x0: str, feedthrough: bool, kalman: bool, rows: list[dict[str, Any]],
+           fitted: dict[Any, Any], svs: dict[str, Any], svd_picks: dict[str, int],
+           bar: Bar) -> None:
     for meth in meths:
         sv = np.asarray(est.singular_values_for(meth))
         svs[meth] = sv
         svd_picks[meth] = int(est._subspace(meth).auto_order())
         for n in orders_:
+            bar.update(1)
             row: dict[str, Any] = {"method": meth, "order": n,
                                    "singular_value": float(sv[n - 1]) if n <= sv.size else np.nan,
                                    "error": None}
@@ -526,7 +532,6 @@ def _sweep(est: Any, meths: list[str], orders_: list[int], est_data: Any, valida
                 rows.append(_failed(row, e))
                 continue
             rows.append(row)
-    return rows, fitted, svs, svd_picks
 
 
 def _order_of(model: Any) -> int:

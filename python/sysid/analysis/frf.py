@@ -49,7 +49,64 @@ from .spectra import (
     _z,
 )
 
-__all__ = ["welch_frf", "spa", "etfe"]
+__all__ = ["welch_frf", "spa", "etfe", "default_lags"]
+
+#: Lag window width over the last significant lag: the Hann window then weighs every lag
+#: with a visible correlation by at least ``0.5 (1 + cos(pi / 6)) = 0.93``.
+LAGS_PER_SIGNIFICANT_LAG = 6
+#: A correlation is significant above this many standard deviations of its noise.
+SIGNIFICANCE = 4.5
+
+
+def default_lags(data: IOData, remove_mean: bool = True) -> tuple[int, dict[str, Any]]:
+    """Lag window width for :func:`spa` chosen from where the covariances decay into noise.
+
+    The correlation coefficients ``r_ab(tau)`` of the input-input and output-input channel
+    pairs (both signs of the lag) are compared with their noise level under independence,
+    ``sqrt((1 + 2 sum_k r_aa(k) r_bb(k)) / N)`` (Bartlett's formula), for lags up to
+    ``min(N / 10, shortest experiment - 1, 2000)``. The last lag ``tau_d`` at which any of
+    them exceeds ``4.5`` noise levels is where the response has decayed into the noise;
+    the window is ``M = 6 tau_d`` (at least 10, at most the lag limit), so the Hann window
+    still weighs ``tau_d`` by 0.93 and the bias it leaves is small next to the band.
+
+    Returns
+    -------
+    (int, dict)
+        ``M`` and the record of the choice (``lags_rule``, ``significant_lag``,
+        ``max_lag``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal((20000, 1))
+    >>> slow = sysid.StateSpaceModel([[0.95]], [[1.0]], [[1.0]])
+    >>> fast = sysid.StateSpaceModel([[0.3]], [[1.0]], [[1.0]])
+    >>> m_slow = sysid.default_lags(sysid.IOData(u=u, y=slow.simulate(u)))[0]
+    >>> m_fast = sysid.default_lags(sysid.IOData(u=u, y=fast.simulate(u)))[0]
+    >>> bool(m_slow > 4 * m_fast)
+    True
+    """
+    data = _need_data(data)
+    shortest = min(data.lengths)
+    limit = int(max(1, min(data.n_samples // 10, shortest - 1, 2000)))
+    R, total = _lag_covariances(_z(data), limit, remove_mean)
+    sd = np.sqrt(np.clip(np.diag(R[0]), np.finfo(float).tiny, None))
+    rho = R / np.outer(sd, sd)
+    auto = np.einsum("kaa->ka", rho)
+    spread = 1.0 + 2.0 * np.einsum("ka,kb->ab", auto[1:], auto[1:])
+    noise = np.sqrt(np.clip(spread, 1.0, None) / total)
+    m = data.n_inputs
+    pairs = np.ones_like(noise, dtype=bool)
+    pairs[m:, m:] = False  # output-output correlations carry the noise model, not G
+    if m == 0:
+        pairs[:] = True
+    big = (np.abs(rho[1:]) > SIGNIFICANCE * noise[None]) & pairs[None]
+    hits = np.nonzero(big.any(axis=(1, 2)))[0]
+    tau_d = int(hits[-1] + 1) if hits.size else 0
+    M = int(min(limit, max(10, LAGS_PER_SIGNIFICANT_LAG * tau_d)))
+    return M, {"lags_rule": "data: 6 x last significant lag", "significant_lag": tau_d,
+               "max_lag": limit}
 
 
 # --------------------------------------------------------------------------------------------
@@ -147,8 +204,13 @@ def spa(
     ----------
     data : IOData
     lags : int, optional
-        Lag window width ``M`` (default ``min(N / 10, 30)``); larger ``M`` means less bias,
-        more variance.
+        Lag window width ``M``; larger ``M`` means less bias, more variance. Default: chosen
+        from the data by :func:`default_lags` (six times the last lag at which an input-input
+        or output-input correlation stands out of its noise), so that the lag window does
+        not bias the estimate beyond its band; the rule and the lag are recorded in
+        ``info`` (``"lags"``, ``"lags_rule"``, ``"significant_lag"``). MATLAB's fixed
+        ``min(N / 10, 30)`` truncates slowly decaying responses and makes the band
+        dishonest.
     omega : array_like, optional
         Angular frequencies (rad/s); default ``n_freq`` points up to Nyquist.
     remove_mean : bool
@@ -168,12 +230,16 @@ def spa(
     """
     data = _need_data(data)
     N = data.n_samples
-    M = int(min(N // 10, 30)) if lags is None else as_int(lags, "lags", 1)
-    if lags is None and M < 2:
-        raise InsufficientDataError(
-            f"spa's default lag window (lags = N / 10) needs at least 20 samples, the record "
-            f"has {N}; pass lags=... (>= 1, below the shortest experiment) or use more data"
-        )
+    lag_info: dict[str, Any] = {"lags_rule": "given"}
+    if lags is None:
+        if N // 10 < 2:
+            raise InsufficientDataError(
+                f"spa's default lag window needs at least 20 samples, the record has {N}; "
+                f"pass lags=... (>= 1, below the shortest experiment) or use more data"
+            )
+        M, lag_info = default_lags(data, remove_mean)
+    else:
+        M = as_int(lags, "lags", 1)
     if M >= min(data.lengths):
         raise InsufficientDataError(
             f"lags = {M} needs experiments longer than {M} samples (shortest: "
@@ -203,7 +269,8 @@ def spa(
         w[keep], G, coherence=coh, std=std, dof=dof, confidence=confidence,
         dt=data.dt, input_names=data.input_names, output_names=data.output_names,
         method="blackman-tukey",
-        info={"lags": M, "window": "hann", "multiple_coherence": mcoh, "dropped": w[~keep]},
+        info={"lags": M, "window": "hann", "multiple_coherence": mcoh, "dropped": w[~keep],
+              **lag_info},
     )
 
 

@@ -19,6 +19,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int
+from .._progress import iteration_callback
 from ..data.iodata import IOData
 from ..errors import DataError
 from ..models.statespace import StateSpaceModel
@@ -120,7 +121,7 @@ def pem(
     max_iter: int = 50,
     tol: float = 1e-6,
     regularization: dict[str, Any] | None = None,
-    progress: bool | Callable[..., Any] = False,
+    progress: bool | None | Callable[..., Any] = None,
     local_coordinates: bool = True,
     weighting: str | None = None,
 ) -> StateSpaceModel:
@@ -150,10 +151,12 @@ def pem(
         ``{"lambda": float, "R": (p, p) array, "nominal": "zero" | "model" | array}``: adds
         ``lambda/2 (theta - nominal)^T R (theta - nominal)`` to the cost (MATLAB's
         ``Regularization``).
-    progress : bool or callable
-        ``True`` prints one line per iteration; a callable gets
-        ``(iteration, cost, step_norm, gradient_norm, damping)`` and may return ``False`` to
-        stop.
+    progress : bool or callable, optional
+        A progress bar over the iterations with the cost (sysid's one progress machinery,
+        :mod:`sysid._progress`): by default only on a terminal; ``True`` asks for it (when
+        stderr is not a terminal, one line per iteration on stdout instead, for logs);
+        ``False`` silences it; a callable gets ``(iteration, cost, step_norm,
+        gradient_norm, damping)`` and may return ``False`` to stop.
     local_coordinates : bool
         Search in data-driven local coordinates (default); ``False`` searches all entries.
     weighting : {"noise", "identity"}, optional
@@ -244,19 +247,15 @@ def pem(
             and regularization["nominal"] == "model":
         nom = np.concatenate([start_theta] + [np.zeros(n) for m in modes if
                                               isinstance(m, str) and m == "estimate"])
-    if progress is True:
-        cb: Any = _progress_printer
-    elif progress is False or progress is None:
-        cb = None
-    elif callable(progress):
-        cb = progress
-    else:
-        raise DataError(f"progress must be True, False or a callable, got {progress!r}")
-    res = _sysid.pem_refine(
-        A, B, C, D, K, exps, focus=focus, estimate_d=bool(feedthrough), estimate_k=estimate_k,
-        x0=[m if isinstance(m, str) else np.ascontiguousarray(m) for m in modes],
-        reweight=weighting == "noise", local_coordinates=bool(local_coordinates), max_iter=max_iter,
-        tol_cost=tol, reg_lambda=lam, reg_r=R, reg_nominal=nom, progress=cb)
+    cb, close_bar = iteration_callback(progress, "pem", max_iter, _progress_printer)
+    try:
+        res = _sysid.pem_refine(
+            A, B, C, D, K, exps, focus=focus, estimate_d=bool(feedthrough), estimate_k=estimate_k,
+            x0=[m if isinstance(m, str) else np.ascontiguousarray(m) for m in modes],
+            reweight=weighting == "noise", local_coordinates=bool(local_coordinates),
+            max_iter=max_iter, tol_cost=tol, reg_lambda=lam, reg_r=R, reg_nominal=nom, progress=cb)
+    finally:
+        close_bar()
     Kres = res["k"] if K is not None else None
     x0s = res["x0"]
     est_x0 = [i for i, m in enumerate(modes) if isinstance(m, str) and m == "estimate"]
@@ -356,7 +355,7 @@ def ssest(
     max_iter: int = 50,
     tol: float = 1e-6,
     regularization: dict[str, Any] | None = None,
-    progress: bool | Callable[..., Any] = False,
+    progress: bool | None | Callable[..., Any] = None,
 ) -> StateSpaceModel:
     """Estimate a state-space model: the best subspace start, refined by :func:`pem`.
 

@@ -11,6 +11,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int, as_int_grid
+from .._progress import iteration_callback
 from ..errors import DataError
 from ..models.polynomial import PolynomialModel
 from ..models.uncertainty import ParameterUncertainty
@@ -186,7 +187,7 @@ def _pem(
     nk: Any,
     method: str,
     max_iter: int,
-    progress: Callable[[int, float], Any] | None,
+    progress: bool | None | Callable[[int, float], Any],
     init: PolynomialModel | None = None,
 ) -> PolynomialModel:
     exps = _exps(data)
@@ -201,21 +202,18 @@ def _pem(
     parts: dict[str, list[Any]] = {k: [] for k in "abcdf"}
     info: dict[str, Any] = {"method": method, "iterations": [], "cost": [], "stop": []}
     cov, var = [], []
-    for i in range(ny):
-        r = _sysid.polynomial_pem(
-            np.ascontiguousarray(y[:, i]),
-            u,
-            na_v[i],
-            nb_g[i],
-            nc_v[i],
-            nd_v[i],
-            nf_g[i],
+    cb, close_bar = iteration_callback(progress, method, int(max_iter) * ny)
+    try:
+        rs = [_sysid.polynomial_pem(
+            np.ascontiguousarray(y[:, i]), u, na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i],
             nk_g[i],
-            None if init is None else _start(init, i, na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i]),
-            as_int(max_iter, "max_iter", 0),
-            1e-9,
-            progress,
-        )
+            None if init is None else _start(init, i, na_v[i], nb_g[i], nc_v[i], nd_v[i],
+                                             nf_g[i]),
+            as_int(max_iter, "max_iter", 0), 1e-9, cb) for i in range(ny)]
+    finally:
+        close_bar()
+    for i in range(ny):
+        r = rs[i]
         th = np.asarray(r["theta"])
         cuts = np.cumsum([na_v[i], *nb_g[i], nc_v[i], nd_v[i], *nf_g[i]])
         pieces = np.split(th, cuts[:-1])
@@ -259,7 +257,7 @@ def armax(
     nk: Any = 1,
     *,
     max_iter: int = 100,
-    progress: Callable[[int, float], Any] | None = None,
+    progress: bool | None | Callable[[int, float], Any] = None,
 ) -> PolynomialModel:
     """ARMAX ``A y = B u(t-nk) + C e`` by prediction-error minimisation (per output).
 
@@ -284,7 +282,7 @@ def oe(
     nk: Any = 1,
     *,
     max_iter: int = 100,
-    progress: Callable[[int, float], Any] | None = None,
+    progress: bool | None | Callable[[int, float], Any] = None,
     init: PolynomialModel | None = None,
 ) -> PolynomialModel:
     """Output error ``y = B/F u(t-nk) + e``.
@@ -303,7 +301,7 @@ def bj(
     nk: Any = 1,
     *,
     max_iter: int = 100,
-    progress: Callable[[int, float], Any] | None = None,
+    progress: bool | None | Callable[[int, float], Any] = None,
 ) -> PolynomialModel:
     """Box-Jenkins ``y = B/F u(t-nk) + C/D e``."""
     return _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress)

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import mmap
 import os
-import sys
 import warnings
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -22,6 +21,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_2d, as_int
+from .._progress import Bar, show
 from ..errors import DataError
 
 __all__ = [
@@ -30,9 +30,10 @@ __all__ = [
     "warn_if_fallback",
     "CompressionFallbackWarning",
     "COMPRESSORS",
+    "compression_info",
 ]
 
-COMPRESSORS = ("qr", "correlation")
+COMPRESSORS = ("auto", "qr", "correlation")
 
 Source = Union[tuple[Any, Any], Iterable[tuple[Any, Any]], str, os.PathLike]
 
@@ -42,17 +43,45 @@ class CompressionFallbackWarning(RuntimeWarning):
     fallback was used (the exact QR pass, or an eigenvalue-clipped factor)."""
 
 
-def warn_if_fallback(factor: Any, stacklevel: int = 2) -> None:
+def compression_info(factor: Any, requested: str) -> dict[str, Any]:
+    """What the compressor decided, for ``model.info["compression"]``.
+
+    ``requested`` is the compressor asked for; ``source`` the path that made the factor
+    (``"correlation"``, ``"qr"``, ``"qr-fallback"`` or ``"correlation-ill-conditioned"``);
+    ``relative_pivot`` the smallest relative Cholesky pivot of the centred, scaled Gram
+    matrix (about ``1 / cond(H)^2``; ``None`` when only the exact path ran) and
+    ``threshold`` the pivot below which ``"auto"`` takes the exact path.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid import _sysid
+    >>> from sysid.estimate.streaming import compression_info
+    >>> u = np.random.default_rng(0).standard_normal((2000, 1))
+    >>> y = u + 0.1 * np.random.default_rng(1).standard_normal((2000, 1))
+    >>> compression_info(_sysid.compress([(u, y)], 3, 3), "auto")["source"]
+    'correlation'
+    """
+    return {
+        "requested": requested,
+        "source": getattr(factor, "source", "qr"),
+        "relative_pivot": getattr(factor, "relative_pivot", None),
+        "threshold": _sysid.AUTO_MIN_RELATIVE_PIVOT if requested == "auto" else 1e-10,
+    }
+
+
+def warn_if_fallback(factor: Any, stacklevel: int = 2, requested: str = "correlation") -> None:
     """Warn when a factor did not come from the requested path without a fallback.
 
     ``factor.source`` is ``"qr"`` or ``"correlation"`` normally; ``"qr-fallback"`` means the
     correlation Gram matrix was ill-conditioned and the in-memory data were compressed again
-    exactly; ``"correlation-ill-conditioned"`` means the data were streamed, so the exact
-    pass could not be rerun and singular values below about ``1e-8`` of the largest are not
-    resolved.
+    exactly (expected, hence silent, with ``requested="auto"``);
+    ``"correlation-ill-conditioned"`` means the data were streamed from a one-pass iterator,
+    so the exact pass could not be rerun and singular values below about ``1e-8`` of the
+    largest are not resolved.
     """
     src = getattr(factor, "source", "qr")
-    if src == "qr-fallback":
+    if src == "qr-fallback" and requested != "auto":
         warnings.warn(
             "the correlation compressor's Gram matrix was ill-conditioned (relative pivot "
             f"{factor.relative_pivot:.1e}); the data were compressed again with the exact QR "
@@ -69,39 +98,6 @@ def warn_if_fallback(factor: Any, stacklevel: int = 2) -> None:
             CompressionFallbackWarning,
             stacklevel=stacklevel + 1,
         )
-
-
-class _Progress:
-    """tqdm when installed, else a carriage-return line on stderr; silent when disabled."""
-
-    def __init__(self, enabled: bool, total: int | None, desc: str) -> None:
-        self.enabled, self.total, self.desc, self.done = enabled, total, desc, 0
-        self._bar = None
-        if enabled:
-            try:
-                from tqdm.auto import tqdm
-
-                self._bar = tqdm(total=total, desc=desc, unit="samples", unit_scale=True)
-            except ImportError:
-                self._bar = None
-
-    def update(self, n: int) -> None:
-        self.done += n
-        if not self.enabled:
-            return
-        if self._bar is not None:
-            self._bar.update(n)
-        else:
-            tot = f"/{self.total:,}" if self.total else ""
-            sys.stderr.write(f"\r{self.desc}: {self.done:,}{tot} samples")
-            sys.stderr.flush()
-
-    def close(self) -> None:
-        if self.enabled:
-            if self._bar is not None:
-                self._bar.close()
-            else:
-                sys.stderr.write("\n")
 
 
 def _release_pages(arr: np.ndarray, start: int, stop: int) -> None:
@@ -226,7 +222,7 @@ def compress_stream(
     past: int,
     future: int | None = None,
     *,
-    compressor: str = "correlation",
+    compressor: str = "auto",
     chunk_size: int = 1 << 18,
     input_columns: list[str] | None = None,
     output_columns: list[str] | None = None,
@@ -244,14 +240,18 @@ def compress_stream(
         list of these, one per experiment (no Hankel column spans two).
     past, future : int
         Horizons (``future`` defaults to ``past``).
-    compressor : {"correlation", "qr"}
-        ``"correlation"`` (fast; when its Gram matrix is ill-conditioned the factor is
-        flagged and a ``RuntimeWarning`` says so) or ``"qr"`` (exact).
+    compressor : {"auto", "correlation", "qr"}
+        ``"auto"`` (default): the fast correlation path, and a second, exact pass when its
+        Gram matrix is too ill-conditioned for the factor to match the exact one (relative
+        pivot below ``sysid._sysid.AUTO_MIN_RELATIVE_PIVOT``; ``factor.source ==
+        "qr-fallback"``); a one-pass iterator cannot be read twice, so there the factor is
+        flagged ``"correlation-ill-conditioned"`` with a warning. ``"correlation"``: fast
+        only (flagged and warned when ill-conditioned); ``"qr"``: exact.
     chunk_size : int
         Samples per push for array sources.
     progress : bool, optional
-        Show progress (tqdm if installed, else a line on stderr); default: when stderr is
-        a terminal.
+        Show a progress bar with rate and time left (tqdm if installed, else a counter line
+        on stderr); default: when stderr is a terminal.
 
     Returns
     -------
@@ -270,6 +270,10 @@ def compress_stream(
     >>> f = compress_stream(chunks, past=5, progress=False)
     >>> f.n_columns, f.source
     (4991, 'correlation')
+    >>> f = compress_stream((u, 0 * e + y - e), past=5, progress=False)  # noise-free
+    >>> f.source
+    'qr-fallback'
+
     """
     if compressor not in COMPRESSORS:
         raise DataError(f"compressor must be one of {COMPRESSORS}, got {compressor!r}")
@@ -283,8 +287,8 @@ def compress_stream(
         raise DataError("source has no experiments")
     totals = [n for _, n in exps]
     total = None if any(n is None for n in totals) else sum(n for n in totals if n is not None)
-    show = sys.stderr.isatty() if progress is None else bool(progress)
-    bar = _Progress(show, total, "compress")
+    bar = Bar(total, f"compress ({compressor})", unit="samples", enabled=show(progress),
+              unit_scale=True)
     comp = None
     try:
         for chunks, _ in exps:
@@ -314,8 +318,28 @@ def compress_stream(
     if comp is None:
         raise DataError("source gave no samples")
     factor = comp.finish()
-    warn_if_fallback(factor)
+    if (compressor == "auto" and factor.source == "correlation-ill-conditioned"
+            and _rereadable(source)):
+        pivot = factor.relative_pivot
+        exact = compress_stream(source, past, future, compressor="qr", chunk_size=chunk_size,
+                                input_columns=input_columns, output_columns=output_columns,
+                                progress=progress)
+        factor = _sysid.HankelFactor.from_parts(
+            exact.n_inputs, exact.n_outputs, exact.past, exact.future, exact.l,
+            exact.n_columns, exact.n_experiments, "qr-fallback", pivot)
+    warn_if_fallback(factor, requested=compressor)
     return factor
+
+
+def _rereadable(source: Any) -> bool:
+    """Whether a source can be read a second time (arrays, memmaps, file paths)."""
+    if isinstance(source, list):
+        return all(_rereadable(s) for s in source)
+    if isinstance(source, (str, os.PathLike)):
+        return True
+    return isinstance(source, tuple) and len(source) == 2 and all(
+        hasattr(a, "shape") or isinstance(a, (list, np.ndarray)) for a in source
+    )
 
 
 def _partial_sums(

@@ -44,7 +44,7 @@ from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
 from ..errors import DataError, FeedbackWarning, InsufficientDataError, OrderError
 from ..models.statespace import StateSpaceModel
-from .streaming import warn_if_fallback
+from .streaming import compression_info, warn_if_fallback
 
 __all__ = [
     "SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "pbsid", "ssarx", "METHODS",
@@ -181,11 +181,14 @@ class SubspaceEstimator:
         ``"cva"``, and for closed-loop data ``"pbsid"``, ``"ssarx"``).
     chunk_rows : int, optional
         Hankel columns per QR update in the compressor (memory ``(k + chunk) k`` doubles).
-    compressor : str
-        ``"qr"``: the exact compressor (sequential QR updates); ``"correlation"``: the fast one
-        (lagged correlation sums and Cholesky, about ``p + f`` times fewer flops), which
-        compresses again exactly, with a ``CompressionFallbackWarning``, when its Gram matrix
-        is ill-conditioned (``factor.source == "qr-fallback"``); see docs/performance.md.
+    compressor : {"auto", "qr", "correlation"}
+        ``"auto"`` (default): the fast correlation path (lagged correlation sums and
+        Cholesky, about ``p + f`` times fewer flops) when its Gram matrix is well enough
+        conditioned for the factor to match the exact one, else the exact QR pass
+        (``factor.source == "qr-fallback"``); the decision and the relative pivot it was
+        made from are in ``model.info["compression"]``. ``"qr"``: always exact;
+        ``"correlation"``: fast, with the exact pass and a ``CompressionFallbackWarning``
+        only when its Gram matrix is numerically singular. See docs/performance.md.
 
     Examples
     --------
@@ -210,7 +213,7 @@ class SubspaceEstimator:
         future: int | None = None,
         method: str = "moesp",
         chunk_rows: int | None = None,
-        compressor: str = "qr",
+        compressor: str = "auto",
     ) -> None:
         if not isinstance(data, IOData):
             raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
@@ -245,7 +248,8 @@ class SubspaceEstimator:
         self.factor = _sysid.compress(
             data.experiments, self.past, self.future, chunk_rows, compressor
         )
-        warn_if_fallback(self.factor)
+        self.compressor = compressor
+        warn_if_fallback(self.factor, requested=compressor)
         self._svd: dict[str, Any] = {}
         self._pe_cache: dict[int, int] = {}
         self._subspace(None)  # checks the record (length, excitation) right away
@@ -286,6 +290,7 @@ class SubspaceEstimator:
         self.method = _method(method)
         self.past, self.future = factor.past, factor.future
         self.factor = factor
+        self.compressor = "given"
         self._svd = {}
         self._pe_cache = {}
         return self
@@ -449,6 +454,7 @@ class SubspaceEstimator:
             "future": self.future,
             "singular_values": sub.singular_values,
             "n_columns": self.factor.n_columns,
+            "compression": compression_info(self.factor, self.compressor),
             "stable_enforced": bool(stable),
             "Q": res["Q"],
             "R": res["R"],

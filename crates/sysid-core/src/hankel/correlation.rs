@@ -26,7 +26,7 @@
 
 use super::{check_chunk, Block, Compressor, FactorSource, HankelFactor, HankelLayout};
 use crate::error::{Result, SysidError};
-use crate::linalg::lq_lower;
+use crate::linalg::{cholesky_lower_seq, lq_lower};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par, Side};
 use rayon::prelude::*;
@@ -624,9 +624,8 @@ impl CorrelationSums {
         }
         ga[(k, k)] = self.n_columns as f64;
         let max_diag = (0..=k).map(|i| ga[(i, i)]).fold(0.0, f64::max);
-        let (la, source) = match ga.llt(Side::Lower) {
-            Ok(llt) => {
-                let la = llt.L().to_owned();
+        let (la, source, pivot) = match cholesky_lower_seq(ga.as_ref()) {
+            Some(la) => {
                 let min_piv = (0..=k)
                     .map(|i| la[(i, i)] * la[(i, i)])
                     .fold(f64::INFINITY, f64::min);
@@ -643,9 +642,9 @@ impl CorrelationSums {
                         relative_pivot: rel,
                     }
                 };
-                (la, src)
+                (la, src, rel)
             }
-            Err(_) => {
+            None => {
                 let evd = ga.self_adjoint_eigen(Side::Lower).map_err(|e| {
                     SysidError::numerical(
                         "correlation compressor (eigendecomposition)",
@@ -662,6 +661,7 @@ impl CorrelationSums {
                         clipped,
                         relative_pivot: 0.0,
                     },
+                    0.0,
                 )
             }
         };
@@ -689,7 +689,8 @@ impl CorrelationSums {
         let l_mat = lq_lower(h.as_ref());
         Ok(
             HankelFactor::from_parts(self.layout, l_mat, self.n_columns, self.n_experiments)?
-                .with_source(source),
+                .with_source(source)
+                .with_relative_pivot(Some(pivot)),
         )
     }
 }

@@ -79,6 +79,7 @@ pub struct HankelFactor {
     n_columns: usize,
     n_experiments: usize,
     source: FactorSource,
+    relative_pivot: Option<f64>,
 }
 
 impl HankelFactor {
@@ -111,6 +112,7 @@ impl HankelFactor {
             n_columns,
             n_experiments,
             source: FactorSource::Qr,
+            relative_pivot: None,
         })
     }
 
@@ -118,6 +120,26 @@ impl HankelFactor {
     pub fn with_source(mut self, source: FactorSource) -> Self {
         self.source = source;
         self
+    }
+
+    /// The same factor, with the smallest relative Cholesky pivot of the correlation path
+    /// that produced (or was rejected for) it.
+    pub fn with_relative_pivot(mut self, pivot: Option<f64>) -> Self {
+        self.relative_pivot = pivot;
+        self
+    }
+
+    /// Smallest relative Cholesky pivot `min La_ii^2 / max Ga_ii` of the centred, scaled
+    /// Gram matrix when the correlation path was run (also when it was rejected for the
+    /// exact path), `None` for the exact compressor alone. About `1 / cond(H)^2`: the
+    /// correlation factor loses `eps / pivot` relative accuracy in its weakest direction.
+    pub fn relative_pivot(&self) -> Option<f64> {
+        match (self.relative_pivot, self.source) {
+            (Some(p), _) => Some(p),
+            (None, FactorSource::CorrelationIllConditioned { relative_pivot, .. })
+            | (None, FactorSource::QrFallback { relative_pivot }) => Some(relative_pivot),
+            _ => None,
+        }
     }
 
     /// How the factor was obtained (exact QR, correlation, or a fallback).
@@ -171,6 +193,10 @@ impl HankelFactor {
                 other.source
             } else {
                 self.source
+            },
+            relative_pivot: match (self.relative_pivot(), other.relative_pivot()) {
+                (Some(a), Some(b)) => Some(a.min(b)),
+                (a, b) => a.or(b),
             },
         })
     }

@@ -21,10 +21,23 @@ pub enum CompressorKind {
     /// Lagged correlation sums; in [`compress_experiments`] it falls back to the exact QR
     /// pass when the Gram matrix is ill-conditioned, recorded as [`FactorSource::QrFallback`].
     Correlation(CorrelationOptions),
+    /// The default: the correlation path when its Gram matrix is well enough conditioned
+    /// for the factor to match the exact one (smallest relative Cholesky pivot at least
+    /// [`AUTO_MIN_RELATIVE_PIVOT`]), else the exact QR pass (in [`compress_experiments`];
+    /// recorded as [`FactorSource::QrFallback`]). The pivot is recorded either way.
+    Auto(CorrelationOptions),
 }
 
+/// Threshold on the smallest relative Cholesky pivot of the centred, scaled Gram matrix
+/// above which the `"auto"` compressor keeps the correlation factor. The correlation
+/// factor's relative error in its weakest direction is about `c eps / pivot` (c ~ 10-100
+/// from the summation), so `1e-6` keeps it below about `1e-8` there (measured: error ~ eps / pivot on nearly collinear inputs) and far smaller in the
+/// directions that carry the model; the accuracy suite (tests/test_compressor_accuracy.py)
+/// checks Markov parameters within `1e-8` of the exact path.
+pub const AUTO_MIN_RELATIVE_PIVOT: f64 = 1e-6;
+
 impl CompressorKind {
-    /// Parses `"qr"` or `"correlation"`; `chunk_rows` sets the windows per QR update or the
+    /// Parses `"auto"`, `"qr"` or `"correlation"`; `chunk_rows` sets the windows per QR update or the
     /// samples per block of the correlation sums.
     ///
     /// ```
@@ -42,9 +55,21 @@ impl CompressorKind {
                 }
                 Ok(CompressorKind::Correlation(opts))
             }
+            "auto" => {
+                let mut opts = CorrelationOptions {
+                    min_relative_pivot: AUTO_MIN_RELATIVE_PIVOT,
+                    ..CorrelationOptions::default()
+                };
+                if let Some(r) = chunk_rows {
+                    opts.block_rows = r.max(1);
+                }
+                Ok(CompressorKind::Auto(opts))
+            }
             other => Err(SysidError::invalid(
                 "compressor",
-                format!("unknown compressor {other:?}; available: \"qr\", \"correlation\""),
+                format!(
+                    "unknown compressor {other:?}; available: \"auto\", \"qr\", \"correlation\""
+                ),
             )),
         }
     }
@@ -54,6 +79,7 @@ impl CompressorKind {
         match self {
             CompressorKind::Qr { .. } => "qr",
             CompressorKind::Correlation(_) => "correlation",
+            CompressorKind::Auto(_) => "auto",
         }
     }
 
@@ -97,7 +123,7 @@ impl CompressorKind {
                 chunk_rows: Some(r),
             } => AnyCompressor::Qr(QrCompressor::with_chunk_rows(layout, r)),
             CompressorKind::Qr { chunk_rows: None } => AnyCompressor::Qr(QrCompressor::new(layout)),
-            CompressorKind::Correlation(opts) => {
+            CompressorKind::Correlation(opts) | CompressorKind::Auto(opts) => {
                 AnyCompressor::Correlation(CorrelationCompressor::with_options(layout, opts))
             }
         }
@@ -184,7 +210,8 @@ pub fn compress_experiments(
         // the data are in memory: redo the exact pass rather than keep a degraded factor
         FactorSource::CorrelationIllConditioned { relative_pivot, .. } => {
             Ok(run(CompressorKind::Qr { chunk_rows: None })?
-                .with_source(FactorSource::QrFallback { relative_pivot }))
+                .with_source(FactorSource::QrFallback { relative_pivot })
+                .with_relative_pivot(Some(relative_pivot)))
         }
         _ => Ok(f),
     }

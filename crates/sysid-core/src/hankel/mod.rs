@@ -33,7 +33,7 @@ pub use correlation::{
     CorrelationCompressor, CorrelationOptions, CorrelationState, CorrelationSums,
 };
 pub use factor::{Block, FactorSource, HankelFactor};
-pub use kind::{compress_experiments, AnyCompressor, CompressorKind};
+pub use kind::{compress_experiments, AnyCompressor, CompressorKind, AUTO_MIN_RELATIVE_PIVOT};
 pub use qr::QrCompressor;
 
 use crate::error::{Result, SysidError};

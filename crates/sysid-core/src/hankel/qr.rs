@@ -1,16 +1,23 @@
-//! The exact compressor: the triangular factor updated by QR, chunk by chunk.
+//! The exact compressor: the triangular factor updated by QR, block by block.
 //!
-//! Windows (Hankel columns) are written as rows of a work matrix below the current `R`
-//! (`R = L^T`, upper triangular); when `chunk_rows` rows are pending, the stack `[R; rows]`
-//! is re-triangularised by Householder QR. Cost `2 (k + c) k^2` flops per `c` columns, memory
-//! `(k + c) k` doubles, whatever the record length.
+//! Windows (Hankel columns) are numbered in the order they are pushed and grouped into
+//! blocks of `block_windows` consecutive windows (boundaries fixed by that numbering, not by
+//! the chunks pushed or the threads available). Each block is triangularised on its own:
+//! its windows are written as rows below a running `R` (`R = L^T`, upper triangular) and the
+//! stack is re-triangularised by Householder QR every `chunk_rows` rows. Complete blocks of a
+//! push are compressed in parallel on the rayon pool; their k x k triangles are then merged
+//! into the record's triangle one after the other, in block order. Every QR runs on one
+//! thread, so the factor is bit-for-bit the same for any number of threads (and any way of
+//! cutting the record into pushes). Cost `2 (k + c) k^2` flops per `c` windows plus about
+//! `3 k^3` per block merge, memory `(k + c) k` doubles per thread, whatever the length.
 
 use super::{check_chunk, Compressor, HankelFactor, HankelLayout};
 use crate::error::{Result, SysidError};
-use crate::linalg::QrAccumulator;
+use crate::linalg::{qr_r_in_place, QrAccumulator};
 use faer::{Mat, MatRef};
+use rayon::prelude::*;
 
-/// Exact streaming compressor (sequential QR updates).
+/// Exact streaming compressor (block-wise QR updates merged in a fixed order).
 ///
 /// ```
 /// use faer::Mat;
@@ -27,6 +34,12 @@ use faer::{Mat, MatRef};
 #[derive(Debug, Clone)]
 pub struct QrCompressor {
     layout: HankelLayout,
+    chunk_rows: usize,
+    block_windows: usize,
+    parallel: bool,
+    /// Triangle of the closed blocks (None before the first block closes).
+    r: Option<Mat<f64>>,
+    /// The open block.
     acc: QrAccumulator,
     tail_u: Mat<f64>,
     tail_y: Mat<f64>,
@@ -38,20 +51,80 @@ pub struct QrCompressor {
     column: Vec<f64>,
 }
 
+/// Blocks compressed concurrently per batch (bounds the memory of pending triangles).
+const BATCH_BLOCKS: usize = 16;
+
+/// Writes the window starting at sample `start` of (tail, chunk) into `col`.
+#[allow(clippy::too_many_arguments)]
+fn fill_window(
+    layout: &HankelLayout,
+    tail_u: MatRef<'_, f64>,
+    tail_y: MatRef<'_, f64>,
+    tl: usize,
+    u: MatRef<'_, f64>,
+    y: MatRef<'_, f64>,
+    start: usize,
+    col: &mut [f64],
+) {
+    let (m, l) = (layout.n_inputs, layout.n_outputs);
+    let (p, f) = (layout.past, layout.future);
+    let (uf, _) = layout.block(super::Block::UFuture);
+    let (up, _) = layout.block(super::Block::UPast);
+    let (yp, _) = layout.block(super::Block::YPast);
+    let (yf, _) = layout.block(super::Block::YFuture);
+    let sample_u = |s: usize, c: usize| {
+        if s < tl {
+            tail_u[(s, c)]
+        } else {
+            u[(s - tl, c)]
+        }
+    };
+    let sample_y = |s: usize, c: usize| {
+        if s < tl {
+            tail_y[(s, c)]
+        } else {
+            y[(s - tl, c)]
+        }
+    };
+    for j in 0..p {
+        for c in 0..m {
+            col[up + j * m + c] = sample_u(start + j, c);
+        }
+        for c in 0..l {
+            col[yp + j * l + c] = sample_y(start + j, c);
+        }
+    }
+    for j in 0..f {
+        for c in 0..m {
+            col[uf + j * m + c] = sample_u(start + p + j, c);
+        }
+        for c in 0..l {
+            col[yf + j * l + c] = sample_y(start + p + j, c);
+        }
+    }
+}
+
 impl QrCompressor {
-    /// A compressor with the default chunk size, `max(4 k, 512)` windows per QR update.
+    /// A compressor with the default chunk size, `max(4 k, 512)` windows per QR update,
+    /// and blocks of 8 chunks.
     pub fn new(layout: HankelLayout) -> Self {
         let k = layout.k();
         Self::with_chunk_rows(layout, (4 * k).max(512))
     }
 
-    /// A compressor that re-triangularises after every `chunk_rows` windows (at least 1).
-    /// The result does not depend on it beyond round-off.
+    /// A compressor that re-triangularises after every `chunk_rows` windows (at least 1),
+    /// with blocks of `8 chunk_rows` windows. The result does not depend on it beyond
+    /// round-off.
     pub fn with_chunk_rows(layout: HankelLayout, chunk_rows: usize) -> Self {
         let k = layout.k();
         let w = layout.window();
+        let chunk_rows = chunk_rows.max(1);
         Self {
             layout,
+            chunk_rows,
+            block_windows: 8 * chunk_rows,
+            parallel: true,
+            r: None,
             acc: QrAccumulator::new(k, chunk_rows),
             tail_u: Mat::zeros(w, layout.n_inputs),
             tail_y: Mat::zeros(w, layout.n_outputs),
@@ -64,52 +137,42 @@ impl QrCompressor {
         }
     }
 
+    /// Whether complete blocks run on the rayon pool (default true). The factor is the same
+    /// bit for bit either way.
+    pub fn set_parallel(&mut self, parallel: bool) {
+        self.parallel = parallel;
+    }
+
     /// The layout being compressed.
     pub fn layout(&self) -> &HankelLayout {
         &self.layout
     }
 
-    fn take_window(&mut self, start: usize, u: MatRef<'_, f64>, y: MatRef<'_, f64>) {
-        let (m, l) = (self.layout.n_inputs, self.layout.n_outputs);
-        let (p, f) = (self.layout.past, self.layout.future);
-        let tl = self.tail_len;
-        let (uf, _) = self.layout.block(super::Block::UFuture);
-        let (up, _) = self.layout.block(super::Block::UPast);
-        let (yp, _) = self.layout.block(super::Block::YPast);
-        let (yf, _) = self.layout.block(super::Block::YFuture);
-        let col = &mut self.column;
-        let sample_u = |s: usize, c: usize| {
-            if s < tl {
-                self.tail_u[(s, c)]
-            } else {
-                u[(s - tl, c)]
-            }
-        };
-        let sample_y = |s: usize, c: usize| {
-            if s < tl {
-                self.tail_y[(s, c)]
-            } else {
-                y[(s - tl, c)]
-            }
-        };
-        for j in 0..p {
-            for c in 0..m {
-                col[up + j * m + c] = sample_u(start + j, c);
-            }
-            for c in 0..l {
-                col[yp + j * l + c] = sample_y(start + j, c);
+    /// Merges a block's triangle into the record's (in block order).
+    fn merge_block(&mut self, rb: Mat<f64>) {
+        match self.r.as_mut() {
+            None => self.r = Some(rb),
+            Some(r) => {
+                let k = r.nrows();
+                let mut both = Mat::<f64>::zeros(2 * k, k);
+                both.as_mut().subrows_mut(0, k).copy_from(r.as_ref());
+                both.as_mut().subrows_mut(k, k).copy_from(rb.as_ref());
+                qr_r_in_place(both.as_mut());
+                for j in 0..k {
+                    for i in 0..k {
+                        r[(i, j)] = if i <= j { both[(i, j)] } else { 0.0 };
+                    }
+                }
             }
         }
-        for j in 0..f {
-            for c in 0..m {
-                col[uf + j * m + c] = sample_u(start + p + j, c);
-            }
-            for c in 0..l {
-                col[yf + j * l + c] = sample_y(start + p + j, c);
-            }
+    }
+
+    fn close_block(&mut self) {
+        let k = self.layout.k();
+        let acc = std::mem::replace(&mut self.acc, QrAccumulator::new(k, self.chunk_rows));
+        if acc.n_rows() > 0 {
+            self.merge_block(acc.finish());
         }
-        self.acc.push_row(col);
-        self.n_columns += 1;
     }
 }
 
@@ -125,9 +188,71 @@ impl Compressor for QrCompressor {
         let w = self.layout.window();
         let total = self.tail_len + n_new;
         if total >= w {
-            for start in 0..=(total - w) {
-                self.take_window(start, u, y);
+            let n_win = total - w + 1;
+            let (layout, tl) = (self.layout, self.tail_len);
+            let bw = self.block_windows;
+            let mut next = 0;
+            // 1. complete the open block, window by window
+            if self.acc.n_rows() > 0 {
+                let take = (bw - self.acc.n_rows()).min(n_win);
+                for s in 0..take {
+                    fill_window(
+                        &layout,
+                        self.tail_u.as_ref(),
+                        self.tail_y.as_ref(),
+                        tl,
+                        u,
+                        y,
+                        s,
+                        &mut self.column,
+                    );
+                    self.acc.push_row(&self.column);
+                }
+                next = take;
+                if self.acc.n_rows() == bw {
+                    self.close_block();
+                }
             }
+            // 2. whole blocks, each from scratch (in parallel), merged in block order
+            let n_full = (n_win - next) / bw;
+            let (k, cr) = (layout.k(), self.chunk_rows);
+            for b0 in (0..n_full).step_by(BATCH_BLOCKS) {
+                let b1 = (b0 + BATCH_BLOCKS).min(n_full);
+                let (tu, ty) = (self.tail_u.as_ref(), self.tail_y.as_ref());
+                let block = |b: usize| {
+                    let mut acc = QrAccumulator::new(k, cr);
+                    let mut col = vec![0.0; k];
+                    let first = next + b * bw;
+                    for s in first..first + bw {
+                        fill_window(&layout, tu, ty, tl, u, y, s, &mut col);
+                        acc.push_row(&col);
+                    }
+                    acc.finish()
+                };
+                let rs: Vec<Mat<f64>> = if self.parallel && b1 - b0 > 1 {
+                    (b0..b1).into_par_iter().map(block).collect()
+                } else {
+                    (b0..b1).map(block).collect()
+                };
+                for rb in rs {
+                    self.merge_block(rb);
+                }
+            }
+            // 3. the rest opens a new block
+            for s in (next + n_full * bw)..n_win {
+                fill_window(
+                    &layout,
+                    self.tail_u.as_ref(),
+                    self.tail_y.as_ref(),
+                    tl,
+                    u,
+                    y,
+                    s,
+                    &mut self.column,
+                );
+                self.acc.push_row(&self.column);
+            }
+            self.n_columns += n_win;
         }
         // keep the last w - 1 samples as the new tail
         let keep = total.min(w - 1);
@@ -192,7 +317,16 @@ impl Compressor for QrCompressor {
                 fix: "push data before finishing, or use a smaller horizon",
             });
         }
-        let l = self.acc.finish().transpose().to_owned();
+        self.close_block();
+        let r = self.r.take().expect("at least one window was pushed");
+        let k = self.layout.k();
+        let mut l = Mat::<f64>::zeros(k, k);
+        for i in 0..k {
+            let sign = if r[(i, i)] < 0.0 { -1.0 } else { 1.0 };
+            for j in i..k {
+                l[(j, i)] = sign * r[(i, j)];
+            }
+        }
         HankelFactor::from_parts(self.layout, l, self.n_columns, self.n_experiments)
     }
 }

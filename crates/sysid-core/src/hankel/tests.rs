@@ -130,18 +130,36 @@ fn rejects_bad_input() {
 }
 
 #[test]
-fn factor_does_not_depend_on_the_thread_count_beyond_round_off() {
+fn factor_is_bit_identical_for_any_thread_count_and_chunking() {
     let layout = HankelLayout::new(3, 3, 8, 8).unwrap();
-    let (u, y) = record(3000, 3, 3, 17);
-    let run = |par: faer::Par| {
-        faer::set_global_parallelism(par);
-        let mut c = QrCompressor::new(layout);
-        c.push(u.as_ref(), y.as_ref()).unwrap();
+    let (u, y) = record(6000, 3, 3, 17);
+    // small blocks (8 * 40 windows) so that a push holds many of them
+    let run = |parallel: bool, cut: usize| {
+        let mut c = QrCompressor::with_chunk_rows(layout, 40);
+        c.set_parallel(parallel);
+        let mut s = 0;
+        while s < 6000 {
+            let e = (s + cut).min(6000);
+            c.push(u.as_ref().subrows(s, e - s), y.as_ref().subrows(s, e - s))
+                .unwrap();
+            s = e;
+        }
         c.finish().unwrap()
     };
-    let serial = run(faer::Par::Seq);
-    let parallel = run(faer::Par::rayon(2));
-    faer::set_global_parallelism(faer::Par::rayon(0));
-    let scale = serial.l().norm_max();
-    assert!(max_abs_diff(serial.l(), parallel.l()) < 1e-12 * scale);
+    let serial = run(false, 6000);
+    for threads in [1, 2, 3] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let f = pool.install(|| run(true, 6000));
+        assert_eq!(f.l(), serial.l(), "threads={threads}");
+    }
+    for cut in [1, 333, 2500] {
+        assert_eq!(run(true, cut).l(), serial.l(), "pushes of {cut} samples");
+    }
+    // and it is the factor of the data matrix
+    let l_ref = lq_lower(explicit_h(&layout, &[(u.clone(), y.clone())]).as_ref());
+    let scale = l_ref.norm_max();
+    assert!(max_abs_diff(serial.l(), l_ref.as_ref()) < 1e-12 * scale);
 }

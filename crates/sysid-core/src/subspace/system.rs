@@ -21,7 +21,6 @@ use crate::hankel::{Block, HankelFactor};
 use crate::linalg::{pinv, spectral_radius, symmetrize};
 use crate::model::StateSpace;
 use crate::riccati::kalman_gain;
-use faer::linalg::solvers::SolveLstsq;
 use faer::{Mat, MatRef};
 
 const PINV_TOL: f64 = 1e-12;
@@ -202,9 +201,8 @@ pub fn identify(
             }
         }
         let theta = if n_theta > 0 {
-            let mut sol = rhs.clone();
-            design.qr().solve_lstsq_in_place(sol.as_mut());
-            sol.as_ref().subrows(0, n_theta).to_owned()
+            // sequential QR: the same bits for any thread count
+            crate::linalg::lstsq_seq(design.as_ref(), rhs.as_ref())
         } else {
             Mat::zeros(0, 1)
         };

@@ -1,0 +1,111 @@
+"""One progress machinery for long work: compression of streams, reading large files, order
+sweeps and iterative estimators.
+
+``progress=None`` (the default everywhere) shows a bar only when stderr is a terminal;
+``True`` asks for it anyway (in a log: the bar is drawn once at the start and once at the
+end, one line), ``False`` silences it. Bars are tqdm's (rate and time left); without tqdm a
+plain counter line is written instead.
+"""
+
+from __future__ import annotations
+
+import sys
+from typing import Any, Callable
+
+__all__ = ["Bar", "show", "iteration_callback"]
+
+
+def show(progress: bool | None) -> bool:
+    """Whether to draw: ``progress`` if given, else whether stderr is a terminal."""
+    if progress is None:
+        return bool(getattr(sys.stderr, "isatty", lambda: False)())
+    return bool(progress)
+
+
+class Bar:
+    """A progress bar on stderr (tqdm if installed), silent when ``enabled`` is false.
+
+    Examples
+    --------
+    >>> from sysid._progress import Bar
+    >>> with Bar(3, "work", enabled=False) as bar:
+    ...     for _ in range(3):
+    ...         bar.update(1)
+    >>> bar.done
+    3
+    """
+
+    def __init__(self, total: int | None, desc: str, *, unit: str = "it",
+                 enabled: bool = True, unit_scale: bool = False) -> None:
+        self.total, self.desc, self.unit, self.enabled, self.done = total, desc, unit, enabled, 0
+        self._bar: Any = None
+        if enabled:
+            try:
+                from tqdm.auto import tqdm
+            except ImportError:
+                return
+            live = bool(getattr(sys.stderr, "isatty", lambda: False)())
+            self._bar = tqdm(total=total, desc=desc, unit=unit, unit_scale=unit_scale,
+                             file=sys.stderr, dynamic_ncols=live,
+                             mininterval=0.1 if live else 1e9, maxinterval=0 if not live else 10)
+
+    def update(self, n: int = 1, **postfix: Any) -> None:
+        """Advance by ``n`` (and show ``postfix`` values, e.g. the cost)."""
+        self.done += n
+        if not self.enabled:
+            return
+        if self._bar is not None:
+            if postfix:
+                self._bar.set_postfix(postfix, refresh=False)
+            self._bar.update(n)
+        else:
+            tot = f"/{self.total:,}" if self.total else ""
+            sys.stderr.write(f"\r{self.desc}: {self.done:,}{tot} {self.unit}")
+            sys.stderr.flush()
+
+    def close(self) -> None:
+        if not self.enabled:
+            return
+        if self._bar is not None:
+            self._bar.close()
+        else:
+            sys.stderr.write("\n")
+        self.enabled = False
+
+    def __enter__(self) -> Bar:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+
+def iteration_callback(
+    progress: bool | None | Callable[..., Any],
+    desc: str,
+    max_iter: int,
+    log_line: Callable[..., None] | None = None,
+) -> tuple[Callable[..., Any] | None, Callable[[], None]]:
+    """The per-iteration callback of an iterative estimator and a function closing it.
+
+    ``progress`` may be a callable (used as is: ``callable(iteration, cost, ...)``, a
+    ``False`` return stops the estimator), ``None`` (a bar on a terminal, else nothing),
+    ``True`` (a bar on a terminal; in a log, ``log_line`` per iteration when given) or
+    ``False``. The bar shows the iterations against ``max_iter`` and the current cost.
+    """
+    if callable(progress):
+        return progress, lambda: None
+    if progress is not None and not isinstance(progress, bool):
+        from .errors import DataError
+
+        raise DataError(f"progress must be True, False, None or a callable, got {progress!r}")
+    if not show(progress):
+        return None, lambda: None
+    terminal = bool(getattr(sys.stderr, "isatty", lambda: False)())
+    if not terminal and log_line is not None:
+        return log_line, lambda: None
+    bar = Bar(max_iter, desc, unit="it")
+
+    def cb(it: int, cost: float, *rest: Any) -> None:
+        bar.update(1, cost=f"{cost:.6g}")
+
+    return cb, bar.close
