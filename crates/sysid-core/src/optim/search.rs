@@ -218,7 +218,7 @@ struct Reduced {
 /// Smallest damping (relative to the largest eigenvalue) of a Cholesky solve: the similarity
 /// directions of a state-space model are an exact null space of `J^T W J`, orthogonal to the
 /// gradient, so a tiny shift leaves the step in their complement.
-const CHOLESKY_FLOOR: f64 = 1e-12;
+const CHOLESKY_FLOOR: f64 = 1e-10;
 
 fn reduce(
     problem: &mut dyn Problem,
@@ -337,18 +337,16 @@ fn reduce_cholesky(pt: &Point, blocked: &[bool]) -> Reduced {
     });
     // largest eigenvalue by power iteration (deterministic start; an estimate from below,
     // enough to scale the damping)
-    let mut x = vec![1.0 / (p.max(1) as f64).sqrt(); p];
+    let mut x = Mat::from_fn(p, 1, |_, _| 1.0 / (p.max(1) as f64).sqrt());
     let mut lmax = 1.0;
-    for _ in 0..30 {
-        let y: Vec<f64> = (0..p)
-            .map(|i| (0..p).map(|j| hs[(i, j)] * x[j]).sum())
-            .collect();
-        let ny = norm(&y);
+    for _ in 0..12 {
+        let y = &hs * &x;
+        let ny = y.norm_l2();
         if !(ny > 0.0 && ny.is_finite()) {
             break;
         }
         lmax = ny;
-        x = y.into_iter().map(|v| v / ny).collect();
+        x = y * faer::Scale(1.0 / ny);
     }
     let mut red = Reduced {
         d,

@@ -139,6 +139,11 @@ pub struct Predictor<'a> {
     /// Within the structured path, use the modal coordinates of `A - K C` when well
     /// conditioned ([`Predictor::evaluate_modal`]).
     pub(super) modal: bool,
+    /// The weighting-independent sums of the last modal `J^T W J` (`theta`, Gram of the
+    /// sensitivities, their cross sums with the regressor, `sum z z^T`): a re-weighted
+    /// Gauss-Newton matrix at the same point (the covariance after an unweighted search)
+    /// costs a gradient pass instead of a full one.
+    gram_cache: Option<(Vec<f64>, Mat<f64>, Mat<f64>, Mat<f64>)>,
 }
 
 struct Unpacked {
@@ -279,6 +284,7 @@ impl<'a> Predictor<'a> {
             col_lo: 0,
             structured: true,
             modal: true,
+            gram_cache: None,
         })
     }
 
@@ -539,7 +545,14 @@ impl Predictor<'_> {
     /// `sum S^T C^T W C S` comes from the Gram matrix of those numbers, `O(N p_e^2)` instead of
     /// `O(N min(l, n) p_d^2)`. The chain rule through `T` and the predictor map gives the
     /// result in `theta`.
-    fn evaluate_modal(&self, th: &[f64], grad_only: bool, md: &Modal) -> Result<Evaluation> {
+    fn evaluate_modal(&mut self, th: &[f64], grad_only: bool, md: &Modal) -> Result<Evaluation> {
+        let cached = if grad_only {
+            None
+        } else {
+            self.gram_cache.take().filter(|c| c.0.as_slice() == th)
+        };
+        // accumulate the sums (else they come from the cache, or are not needed)
+        let acc = !grad_only && cached.is_none();
         let t_in = std::time::Instant::now();
         let (n, m, l, np) = (self.n, self.m, self.l, self.p);
         let pm = self.unpack(th);
@@ -595,11 +608,11 @@ impl Predictor<'_> {
         } else {
             Par::Seq
         };
-        let hp = if grad_only { 0 } else { pe };
+        let hp = if acc { pe } else { 0 };
         let mut gram = Mat::<f64>::zeros(hp, hp);
-        let mut cross = Mat::<f64>::zeros(if grad_only { 0 } else { nz }, hp);
-        let mut vbuf = Mat::<f64>::zeros(if grad_only { 0 } else { blk }, hp);
-        let mut zbuf = Mat::<f64>::zeros(if grad_only { 0 } else { blk }, nz);
+        let mut cross = Mat::<f64>::zeros(if acc { nz } else { 0 }, hp);
+        let mut vbuf = Mat::<f64>::zeros(if acc { blk } else { 0 }, hp);
+        let mut zbuf = Mat::<f64>::zeros(if acc { blk } else { 0 }, nz);
         let mut zz = Mat::<f64>::zeros(nz, nz);
         let mut gz = Mat::<f64>::zeros(l, nz);
         let mut gd = vec![0.0; pd];
@@ -682,7 +695,7 @@ impl Predictor<'_> {
                     }
                     gd[c] -= a;
                 }
-                if !grad_only {
+                if acc {
                     for a in 0..nz {
                         for b in 0..=a {
                             zz[(a, b)] += z[a] * z[b];
@@ -714,7 +727,7 @@ impl Predictor<'_> {
                     sn[o + (i - b0)] += f;
                 }
                 std::mem::swap(&mut sc, &mut sn);
-                if grad_only {
+                if !acc {
                     row = 0;
                 } else if row == blk || t + 1 == len {
                     let vr = vbuf.as_ref().subrows(0, row);
@@ -793,6 +806,9 @@ impl Predictor<'_> {
                 gradient,
                 gauss_newton: Mat::zeros(0, 0),
             });
+        }
+        if let Some(c) = cached {
+            (gram, cross, zz) = (c.1, c.2, c.3);
         }
         let mut h = Mat::<f64>::zeros(np, np);
         for c in 0..pd {
@@ -883,6 +899,7 @@ impl Predictor<'_> {
             }
         }
         crate::optim::prof("modal-chain", t_in);
+        self.gram_cache = Some((th.to_vec(), gram, cross, zz));
         Ok(Evaluation {
             cost,
             gradient,

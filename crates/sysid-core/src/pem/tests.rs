@@ -407,6 +407,19 @@ fn structured_gauss_newton_equals_the_plain_one() {
             assert!((a - b).abs() < 1e-11 * gs, "{a} vs {b}");
         }
         assert_eq!(chord.gauss_newton.nrows(), 0);
+        // another weighting at the same point: the cached sums give the same matrix
+        let mut th2 = th.clone();
+        th2[0] += 0.01;
+        pr.reweight_at(&th2).unwrap();
+        let cached = pr.evaluate(&th, true).unwrap();
+        pr.modal = false;
+        let fresh = pr.evaluate(&th, true).unwrap();
+        pr.modal = true;
+        let scale = fresh.gauss_newton.norm_max();
+        let dc = (&cached.gauss_newton - &fresh.gauss_newton).norm_max();
+        assert!(dc < 1e-11 * scale, "{dc} vs {scale}");
+        assert!((cached.cost - fresh.cost).abs() < 1e-12 * fresh.cost);
+        assert!((fast.cost - fresh.cost).abs() > 1e-9 * fresh.cost);
     }
 }
 
