@@ -132,22 +132,48 @@ class ParameterUncertainty:
         if not callable(build):
             raise DataError("build must be a callable build(theta) -> model")
         P = 0.5 * (P + P.T)
-        w, V = np.linalg.eigh(P) if p else (np.zeros(0), np.zeros((0, 0)))
-        top = float(w.max()) if w.size else 0.0
-        if w.size and w.min() < -1e-8 * max(top, 1e-300):
-            raise DataError("covariance is not positive semi-definite (smallest eigenvalue "
-                            f"{w.min():.3g}, largest {top:.3g})")
-        keep = w > 1e-13 * top if top > 0 else np.zeros(p, bool)
         self.theta = th
         self.covariance = P
         self.build = build
         self.names = list(names) if names is not None else [f"theta{i}" for i in range(p)]
         if len(self.names) != p:
             raise DataError(f"names has {len(self.names)} entries but theta has {p}")
-        self._w, self._V = w[keep], V[:, keep]
-        self.dof = int(keep.sum()) if dof is None else int(dof)
+        self._eig: tuple[np.ndarray, np.ndarray] | None = None
+        if dof is None or p <= 200:
+            self._eigen()          # checks positive semi-definiteness now
+        else:
+            # large: the eigendecomposition (seconds for p ~ 1500) waits until sampling or
+            # first-order propagation needs it; a Cholesky factor checks definiteness now
+            top = float(np.max(np.diag(P), initial=0.0))
+            try:
+                np.linalg.cholesky(P + 1e-8 * max(top, 1e-300) * np.eye(p))
+            except np.linalg.LinAlgError:
+                self._eigen()      # raises with the eigenvalues
+        self.dof = int(self._w.size) if dof is None else int(dof)
         self.method = str(method)
         self._cache: tuple[list[float], list[Any], list[Any]] | None = None
+
+    def _eigen(self) -> tuple[np.ndarray, np.ndarray]:
+        """Eigenpairs of the covariance on its range (computed once)."""
+        if self._eig is None:
+            P = self.covariance
+            p = P.shape[0]
+            w, V = np.linalg.eigh(P) if p else (np.zeros(0), np.zeros((0, 0)))
+            top = float(w.max()) if w.size else 0.0
+            if w.size and w.min() < -1e-8 * max(top, 1e-300):
+                raise DataError("covariance is not positive semi-definite (smallest eigenvalue "
+                                f"{w.min():.3g}, largest {top:.3g})")
+            keep = w > 1e-13 * top if top > 0 else np.zeros(p, bool)
+            self._eig = (w[keep], V[:, keep])
+        return self._eig
+
+    @property
+    def _w(self) -> np.ndarray:
+        return self._eigen()[0]
+
+    @property
+    def _V(self) -> np.ndarray:
+        return self._eigen()[1]
 
     # -- parameters ---------------------------------------------------------------------
     @property

@@ -46,6 +46,7 @@ mod tests;
 pub use covariance::{covariance, Covariance};
 pub use reparam::{ParameterMap, Reparameterized};
 pub use search::minimize;
+pub(crate) use search::prof;
 
 use crate::error::Result;
 use faer::Mat;
@@ -174,6 +175,15 @@ pub struct Options {
     /// `J^T J` again. A poorer step, or a stopping test met after a chord step, forms it anew;
     /// the solution always carries the Gauss-Newton matrix at its own point. Default 0 (never).
     pub reuse_gauss_newton: usize,
+    /// Up to this many free parameters the damped steps come from an eigendecomposition of
+    /// the scaled Gauss-Newton matrix reduced to the search basis
+    /// ([`Problem::search_basis`]). Above it (a state-space model of order 20 with 28 outputs
+    /// has 1580 parameters) the basis and the eigendecomposition, each `O(p^3)`, are skipped:
+    /// every damped step is one Cholesky solve of the scaled full matrix plus a tiny shift.
+    /// Similarity directions, an exact null space of `J^T W J` orthogonal to the gradient,
+    /// then stay out of the step by themselves (the complement is taken in the Marquardt
+    /// metric); the condition number is not computed (NaN). Default 400.
+    pub eigen_limit: usize,
 }
 
 impl Default for Options {
@@ -190,6 +200,7 @@ impl Default for Options {
             initial_damping: 1e-4,
             rank_tol: 1e-13,
             reuse_gauss_newton: 0,
+            eigen_limit: 400,
         }
     }
 }
@@ -269,7 +280,7 @@ pub struct Solution {
     /// `J^T W r` at the solution (without regularisation).
     pub gradient: Vec<f64>,
     /// Condition number of the scaled reduced Gauss-Newton matrix at the last iterate
-    /// (infinite when singular).
+    /// (infinite when singular; NaN above [`Options::eigen_limit`] free parameters).
     pub condition: f64,
     /// Indices of parameters at a bound at the solution.
     pub active_bounds: Vec<usize>,

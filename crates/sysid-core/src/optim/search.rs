@@ -2,6 +2,7 @@
 
 use super::{Evaluation, Flow, Iteration, Options, Problem, Solution, StopReason};
 use crate::error::{Result, SysidError};
+use faer::prelude::Solve;
 use faer::{Mat, Side};
 
 /// Regularised cost, gradient and Gauss-Newton matrix at one point.
@@ -127,6 +128,12 @@ fn regularise(opt: &Options, theta: &[f64], raw: &Evaluation) -> (f64, Vec<f64>,
     (cost, g, h)
 }
 
+pub(crate) fn prof(what: &str, t0: std::time::Instant) {
+    if std::env::var_os("SYSID_PROFILE").is_some() {
+        eprintln!("PROF {what} {:.3}", t0.elapsed().as_secs_f64());
+    }
+}
+
 fn evaluate_point(
     problem: &mut dyn Problem,
     opt: &Options,
@@ -134,7 +141,9 @@ fn evaluate_point(
     evals: &mut usize,
 ) -> Result<Point> {
     *evals += 1;
+    let t0 = std::time::Instant::now();
     let raw = problem.evaluate(&theta, true)?;
+    prof("full", t0);
     let p = theta.len();
     if raw.gradient.len() != p || raw.gauss_newton.nrows() != p || raw.gauss_newton.ncols() != p {
         return Err(SysidError::numerical(
@@ -179,18 +188,37 @@ fn at_bounds(opt: &Options, theta: &[f64]) -> Vec<usize> {
         .collect()
 }
 
-/// The reduced step problem at a point: T (p x q) with theta = theta_k + T z.
+/// How the damped steps are solved at one point.
+enum Solver {
+    /// Eigenpairs `(v, lam)` of the scaled reduced Gauss-Newton matrix `D^-1 T^T H T D^-1`,
+    /// with `T` (p x q) the search basis: theta = theta_k + T z.
+    Eigen {
+        t: Mat<f64>,
+        v: Mat<f64>,
+        lam: Vec<f64>,
+    },
+    /// Large problems: the scaled full-space matrix `D^-1 H D^-1` (rows and columns of blocked
+    /// parameters replaced by the identity) and an estimate of its largest eigenvalue; every
+    /// damped step is one Cholesky solve.
+    Cholesky { hs: Mat<f64>, lmax: f64 },
+}
+
+/// The reduced step problem at a point.
 struct Reduced {
-    t: Mat<f64>,
-    /// Marquardt scaling of z.
+    /// Marquardt scaling (of z for `Eigen`, of theta for `Cholesky`).
     d: Vec<f64>,
-    /// Eigenvectors / eigenvalues of the scaled reduced Gauss-Newton matrix.
-    v: Mat<f64>,
-    lam: Vec<f64>,
     /// Scaled reduced gradient.
     gs: Vec<f64>,
     condition: f64,
+    solver: Solver,
+    /// The blocked parameters it was formed with.
+    blocked: Vec<bool>,
 }
+
+/// Smallest damping (relative to the largest eigenvalue) of a Cholesky solve: the similarity
+/// directions of a state-space model are an exact null space of `J^T W J`, orthogonal to the
+/// gradient, so a tiny shift leaves the step in their complement.
+const CHOLESKY_FLOOR: f64 = 1e-10;
 
 fn reduce(
     problem: &mut dyn Problem,
@@ -199,7 +227,14 @@ fn reduce(
     blocked: &[bool],
 ) -> Result<Reduced> {
     let p = pt.theta.len();
+    let n_free = blocked.iter().filter(|&&b| !b).count();
+    if n_free > opt.eigen_limit {
+        return Ok(reduce_cholesky(pt, blocked));
+    }
+    let t0 = std::time::Instant::now();
     let basis = problem.search_basis(&pt.theta)?;
+    prof("basis", t0);
+    let t0 = std::time::Instant::now();
     let mut t = match basis {
         Some(b) => {
             if b.nrows() != p {
@@ -228,8 +263,6 @@ fn reduce(
     let q = t.ncols();
     let ht = &pt.h * &t;
     let hr = t.transpose() * &ht;
-    let gvec = Mat::from_fn(p, 1, |i, _| pt.g[i]);
-    let gr = t.transpose() * &gvec;
     let d: Vec<f64> = (0..q)
         .map(|i| {
             let v = hr[(i, i)];
@@ -248,7 +281,8 @@ fn reduce(
             hs[(j, i)] = m;
         }
     }
-    let gs: Vec<f64> = (0..q).map(|i| gr[(i, 0)] / d[i]).collect();
+    prof("reduce-products", t0);
+    let t0 = std::time::Instant::now();
     let (v, lam) = if q == 0 {
         (Mat::zeros(0, 0), Vec::new())
     } else {
@@ -259,6 +293,7 @@ fn reduce(
         let lam: Vec<f64> = (0..q).map(|i| s[i].max(0.0)).collect();
         (e.U().to_owned(), lam)
     };
+    prof("reduce-eigen", t0);
     let lmax = lam.iter().copied().fold(0.0, f64::max);
     let lmin = lam.iter().copied().fold(f64::INFINITY, f64::min);
     let condition = if q == 0 {
@@ -268,54 +303,160 @@ fn reduce(
     } else {
         f64::INFINITY
     };
-    Ok(Reduced {
-        t,
+    let mut red = Reduced {
         d,
-        v,
-        lam,
-        gs,
+        gs: Vec::new(),
         condition,
-    })
+        solver: Solver::Eigen { t, v, lam },
+        blocked: blocked.to_vec(),
+    };
+    red.set_gradient(&pt.g);
+    Ok(red)
+}
+
+/// The large-problem form of [`reduce`]: no basis and no eigendecomposition.
+fn reduce_cholesky(pt: &Point, blocked: &[bool]) -> Reduced {
+    let t0 = std::time::Instant::now();
+    let p = pt.theta.len();
+    let d: Vec<f64> = (0..p)
+        .map(|i| {
+            let v = pt.h[(i, i)];
+            if v > 0.0 && v.is_finite() && !blocked[i] {
+                v.sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let hs = Mat::from_fn(p, p, |i, j| {
+        if blocked[i] || blocked[j] {
+            f64::from(u8::from(i == j))
+        } else {
+            0.5 * (pt.h[(i, j)] + pt.h[(j, i)]) / (d[i] * d[j])
+        }
+    });
+    // largest eigenvalue by power iteration (deterministic start; an estimate from below,
+    // enough to scale the damping)
+    let mut x = Mat::from_fn(p, 1, |_, _| 1.0 / (p.max(1) as f64).sqrt());
+    let mut lmax = 1.0;
+    for _ in 0..12 {
+        let y = &hs * &x;
+        let ny = y.norm_l2();
+        if !(ny > 0.0 && ny.is_finite()) {
+            break;
+        }
+        lmax = ny;
+        x = y * faer::Scale(1.0 / ny);
+    }
+    let mut red = Reduced {
+        d,
+        gs: Vec::new(),
+        condition: f64::NAN,
+        solver: Solver::Cholesky { hs, lmax },
+        blocked: blocked.to_vec(),
+    };
+    red.set_gradient(&pt.g);
+    prof("reduce-cholesky", t0);
+    red
 }
 
 impl Reduced {
+    /// Sets the scaled reduced gradient from the full gradient `g` (also used to reuse the
+    /// factorisation at a new point for a chord step).
+    fn set_gradient(&mut self, g: &[f64]) {
+        self.gs = match &self.solver {
+            Solver::Eigen { t, .. } => {
+                let q = t.ncols();
+                (0..q)
+                    .map(|j| (0..t.nrows()).map(|i| t[(i, j)] * g[i]).sum::<f64>() / self.d[j])
+                    .collect()
+            }
+            Solver::Cholesky { .. } => (0..g.len())
+                .map(|i| {
+                    if self.blocked[i] {
+                        0.0
+                    } else {
+                        g[i] / self.d[i]
+                    }
+                })
+                .collect(),
+        };
+    }
+
+    /// `(hs + shift I)^-1 gs` by Cholesky, raising the shift until it factors.
+    fn cholesky_solve(hs: &Mat<f64>, gs: &[f64], mut shift: f64) -> Vec<f64> {
+        let p = gs.len();
+        for _ in 0..12 {
+            let mut a = hs.clone();
+            for i in 0..p {
+                a[(i, i)] += shift;
+            }
+            if let Ok(f) = a.llt(Side::Lower) {
+                let b = Mat::from_fn(p, 1, |i, _| gs[i]);
+                let z = f.solve(&b);
+                let z: Vec<f64> = (0..p).map(|i| z[(i, 0)]).collect();
+                if z.iter().all(|v| v.is_finite()) {
+                    return z;
+                }
+            }
+            if std::env::var_os("SYSID_PROFILE").is_some() {
+                eprintln!("PROF chol-retry {shift:e}");
+            }
+            shift = (shift * 100.0).max(f64::MIN_POSITIVE);
+        }
+        vec![0.0; p]
+    }
+
     /// Full-space step for damping `mu` (relative to the largest eigenvalue); `mu = 0` gives the
     /// Gauss-Newton step through the pseudo-inverse.
     fn step(&self, mu: f64, rank_tol: f64) -> Vec<f64> {
-        let q = self.lam.len();
-        let p = self.t.nrows();
-        let lmax = self
-            .lam
+        let (t, v, lam) = match &self.solver {
+            Solver::Eigen { t, v, lam } => (t, v, lam),
+            Solver::Cholesky { hs, lmax } => {
+                let z = Self::cholesky_solve(hs, &self.gs, mu.max(CHOLESKY_FLOOR) * lmax);
+                return (0..z.len()).map(|i| -z[i] / self.d[i]).collect();
+            }
+        };
+        let q = lam.len();
+        let p = t.nrows();
+        let lmax = lam
             .iter()
             .copied()
             .fold(0.0, f64::max)
             .max(f64::MIN_POSITIVE);
         let mut c = vec![0.0; q];
         for k in 0..q {
-            let proj: f64 = (0..q).map(|i| self.v[(i, k)] * self.gs[i]).sum();
-            let den = self.lam[k] + mu * lmax;
-            if self.lam[k] > rank_tol * lmax || mu > 0.0 {
+            let proj: f64 = (0..q).map(|i| v[(i, k)] * self.gs[i]).sum();
+            let den = lam[k] + mu * lmax;
+            if lam[k] > rank_tol * lmax || mu > 0.0 {
                 c[k] = -proj / den;
             }
         }
         let mut z = vec![0.0; q];
         for i in 0..q {
-            z[i] = (0..q).map(|k| self.v[(i, k)] * c[k]).sum::<f64>() / self.d[i];
+            z[i] = (0..q).map(|k| v[(i, k)] * c[k]).sum::<f64>() / self.d[i];
         }
         (0..p)
-            .map(|i| (0..q).map(|j| self.t[(i, j)] * z[j]).sum())
+            .map(|i| (0..q).map(|j| t[(i, j)] * z[j]).sum())
             .collect()
     }
 
     /// Predicted decrease of the Gauss-Newton step (`g^T H^+ g / 2`, scaled reduced problem).
     fn gn_decrease(&self, rank_tol: f64) -> f64 {
-        let q = self.lam.len();
-        let lmax = self.lam.iter().copied().fold(0.0, f64::max);
+        let (v, lam) = match &self.solver {
+            Solver::Eigen { v, lam, .. } => (v, lam),
+            Solver::Cholesky { hs, lmax } => {
+                let z = Self::cholesky_solve(hs, &self.gs, CHOLESKY_FLOOR * lmax);
+                return 0.5 * z.iter().zip(&self.gs).map(|(a, b)| a * b).sum::<f64>();
+            }
+        };
+        let q = lam.len();
+        let lmax = lam.iter().copied().fold(0.0, f64::max);
         let mut s = 0.0;
         for k in 0..q {
-            if self.lam[k] > rank_tol * lmax && self.lam[k] > 0.0 {
-                let proj: f64 = (0..q).map(|i| self.v[(i, k)] * self.gs[i]).sum();
-                s += proj * proj / self.lam[k];
+            if lam[k] > rank_tol * lmax && lam[k] > 0.0 {
+                let proj: f64 = (0..q).map(|i| v[(i, k)] * self.gs[i]).sum();
+                s += proj * proj / lam[k];
             }
         }
         0.5 * s
@@ -385,6 +526,7 @@ pub fn minimize(
     let mut condition = f64::NAN;
     // consecutive iterations whose Gauss-Newton matrix is reused from an earlier point
     let mut frozen = 0usize;
+    let mut last_red: Option<Reduced> = None;
     let stop;
     loop {
         if iterations >= options.max_iter {
@@ -401,7 +543,16 @@ pub fn minimize(
                 blocked[i] = true;
             }
         }
-        let red = reduce(problem, options, &pt, &blocked)?;
+        let stale = frozen > 0;
+        // a chord step reuses the factorisation of the matrix it reuses
+        let red = match last_red.take() {
+            Some(mut r) if stale && r.blocked == blocked => {
+                r.set_gradient(&pt.g);
+                r
+            }
+            _ => reduce(problem, options, &pt, &blocked)?,
+        };
+        let red = &*last_red.insert(red);
         condition = red.condition;
         let gnorm = red
             .gs
@@ -414,7 +565,6 @@ pub fn minimize(
             stop = StopReason::GradientTolerance;
             break;
         }
-        let stale = frozen > 0;
         let mut accepted: Option<(Vec<f64>, f64, f64, f64)> = None;
         for try_ in 0..60 {
             if stale && try_ > 0 {
@@ -442,7 +592,9 @@ pub fn minimize(
             }
             // the trial is judged on its cost alone; the Jacobian is formed once accepted
             evals += 1;
+            let t0 = std::time::Instant::now();
             let raw = problem.evaluate(&trial, false)?;
+            prof("cost", t0);
             let cand_cost = regularise(options, &trial, &raw).0;
             let actual = pt.cost - cand_cost;
             if cand_cost.is_finite() && actual > 0.0 {
@@ -462,6 +614,9 @@ pub fn minimize(
                     mu /= 3.0;
                 } else if !stale && rho < 0.25 {
                     mu = (mu * 2.0).max(1e-12);
+                }
+                if std::env::var_os("SYSID_PROFILE").is_some() {
+                    eprintln!("PROF step mu {used:e} rho {rho} pred {pred:e} actual {actual:e} try {try_}");
                 }
                 accepted = Some((trial, cand_cost, used, rho));
                 break;
@@ -485,10 +640,15 @@ pub fn minimize(
         // relative decrease under the same cost definition (before any re-weighting)
         let rel_decrease = (pt.cost - cand_cost) / pt.cost.abs().max(f64::MIN_POSITIVE);
         iterations += 1;
+        let t0 = std::time::Instant::now();
         problem.accepted(&trial)?;
+        prof("accepted", t0);
         let mut chord = None;
         if frozen < options.reuse_gauss_newton && rho > 0.75 {
-            if let Some(mut raw) = problem.gradient_only(&trial)? {
+            let t0 = std::time::Instant::now();
+            let go = problem.gradient_only(&trial)?;
+            prof("gradient", t0);
+            if let Some(mut raw) = go {
                 evals += 1;
                 raw.gauss_newton = pt.raw.gauss_newton.clone();
                 let (cost, g, h) = regularise(options, &trial, &raw);

@@ -374,3 +374,28 @@ fn chord_steps_reuse_the_gauss_newton_matrix_and_reach_the_same_minimum() {
     let at = ls(2, Chord::residuals).evaluate(&b.theta, true).unwrap();
     assert!((&at.gauss_newton - &b.gauss_newton).norm_max() < 1e-12);
 }
+
+#[test]
+fn cholesky_steps_reach_the_same_minimum() {
+    // eigen_limit = 0 forces the large-problem path (one Cholesky solve per damped step)
+    let mut o = Options::default();
+    o.eigen_limit = 0;
+    let sol = go(&mut ls(2, rosen), &[-1.2, 1.0], &o);
+    assert!((sol.theta[0] - 1.0).abs() < 1e-8, "{:?}", sol.theta);
+    assert!((sol.theta[1] - 1.0).abs() < 1e-8);
+    assert!(sol.history.windows(2).all(|w| w[1] < w[0]));
+    assert!(sol.condition.is_nan());
+    let eig = go(&mut ls(3, linear), &[0.0; 3], &Options::default());
+    let chol = go(&mut ls(3, linear), &[0.0; 3], &o);
+    for a in 0..3 {
+        assert!((eig.theta[a] - chol.theta[a]).abs() < 1e-9);
+    }
+    // bounds and fixed parameters hold on this path too
+    let mut b = o.clone();
+    b.upper = Some(vec![0.5, f64::INFINITY, f64::INFINITY]);
+    b.fixed = Some(vec![false, false, true]);
+    let mut pr = ls(3, linear);
+    let s = go(&mut pr, &[0.0; 3], &b);
+    assert!(pr.visited.iter().all(|t| t[0] <= 0.5 && t[2] == 0.0));
+    assert_eq!(s.theta[0], 0.5);
+}

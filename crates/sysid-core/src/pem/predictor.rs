@@ -139,6 +139,11 @@ pub struct Predictor<'a> {
     /// Within the structured path, use the modal coordinates of `A - K C` when well
     /// conditioned ([`Predictor::evaluate_modal`]).
     pub(super) modal: bool,
+    /// The weighting-independent sums of the last modal `J^T W J` (`theta`, Gram of the
+    /// sensitivities, their cross sums with the regressor, `sum z z^T`): a re-weighted
+    /// Gauss-Newton matrix at the same point (the covariance after an unweighted search)
+    /// costs a gradient pass instead of a full one.
+    gram_cache: Option<(Vec<f64>, Mat<f64>, Mat<f64>, Mat<f64>)>,
 }
 
 struct Unpacked {
@@ -279,6 +284,7 @@ impl<'a> Predictor<'a> {
             col_lo: 0,
             structured: true,
             modal: true,
+            gram_cache: None,
         })
     }
 
@@ -554,7 +560,15 @@ impl Predictor<'_> {
     /// `sum S^T C^T W C S` comes from the Gram matrix of those numbers, `O(N p_e^2)` instead of
     /// `O(N min(l, n) p_d^2)`. The chain rule through `T` and the predictor map gives the
     /// result in `theta`.
-    fn evaluate_modal(&self, th: &[f64], grad_only: bool, md: &Modal) -> Result<Evaluation> {
+    fn evaluate_modal(&mut self, th: &[f64], grad_only: bool, md: &Modal) -> Result<Evaluation> {
+        let cached = if grad_only {
+            None
+        } else {
+            self.gram_cache.take().filter(|c| c.0.as_slice() == th)
+        };
+        // accumulate the sums (else they come from the cache, or are not needed)
+        let acc = !grad_only && cached.is_none();
+        let t_in = std::time::Instant::now();
         let (n, m, l, np) = (self.n, self.m, self.l, self.p);
         let pm = self.unpack(th);
         let abar = &pm.a - &pm.k * &pm.c;
@@ -609,11 +623,11 @@ impl Predictor<'_> {
         } else {
             Par::Seq
         };
-        let hp = if grad_only { 0 } else { pe };
+        let hp = if acc { pe } else { 0 };
         let mut gram = Mat::<f64>::zeros(hp, hp);
-        let mut cross = Mat::<f64>::zeros(if grad_only { 0 } else { nz }, hp);
-        let mut vbuf = Mat::<f64>::zeros(if grad_only { 0 } else { blk }, hp);
-        let mut zbuf = Mat::<f64>::zeros(if grad_only { 0 } else { blk }, nz);
+        let mut cross = Mat::<f64>::zeros(if acc { nz } else { 0 }, hp);
+        let mut vbuf = Mat::<f64>::zeros(if acc { blk } else { 0 }, hp);
+        let mut zbuf = Mat::<f64>::zeros(if acc { blk } else { 0 }, nz);
         let mut zz = Mat::<f64>::zeros(nz, nz);
         let mut gz = Mat::<f64>::zeros(l, nz);
         let mut gd = vec![0.0; pd];
@@ -696,7 +710,7 @@ impl Predictor<'_> {
                     }
                     gd[c] -= a;
                 }
-                if !grad_only {
+                if acc {
                     for a in 0..nz {
                         for b in 0..=a {
                             zz[(a, b)] += z[a] * z[b];
@@ -728,7 +742,7 @@ impl Predictor<'_> {
                     sn[o + (i - b0)] += f;
                 }
                 std::mem::swap(&mut sc, &mut sn);
-                if grad_only {
+                if !acc {
                     row = 0;
                 } else if row == blk || t + 1 == len {
                     let vr = vbuf.as_ref().subrows(0, row);
@@ -791,15 +805,25 @@ impl Predictor<'_> {
         for (c, d) in dcols.iter().enumerate() {
             g[d.0] = gd[c];
         }
-        let q = self.modal_map(&pm, md);
+        crate::optim::prof("modal-loop", t_in);
+        let t_in = std::time::Instant::now();
+        // chain rule theta -> phi -> phi': J_theta = J_phi' M T with M the modal change of
+        // basis (Kronecker blocks, applied by n x n products) and T the sparse predictor map
+        let tmap = self.predictor_map(&pm);
+        let gphi = self.modal_mt(md, &g);
+        let gradient: Vec<f64> = tmap
+            .iter()
+            .map(|col| col.iter().map(|&(r, v)| v * gphi[r]).sum())
+            .collect();
         if grad_only {
-            let gm = Mat::from_fn(np, 1, |i, _| g[i]);
-            let gt = q.transpose() * &gm;
             return Ok(Evaluation {
                 cost,
-                gradient: (0..np).map(|i| gt[(i, 0)]).collect(),
+                gradient,
                 gauss_newton: Mat::zeros(0, 0),
             });
+        }
+        if let Some(c) = cached {
+            (gram, cross, zz) = (c.1, c.2, c.3);
         }
         let mut h = Mat::<f64>::zeros(np, np);
         for c in 0..pd {
@@ -843,29 +867,45 @@ impl Predictor<'_> {
                 }
             }
         }
-        let par_p = if np >= 64 {
-            faer::get_global_parallelism()
-        } else {
-            Par::Seq
-        };
-        let mut hq = Mat::<f64>::zeros(np, np);
-        matmul(
-            hq.as_mut(),
-            Accum::Replace,
-            h.as_ref(),
-            q.as_ref(),
-            1.0,
-            par_p,
-        );
-        let mut hth = Mat::<f64>::zeros(np, np);
-        matmul(
-            hth.as_mut(),
-            Accum::Replace,
-            q.transpose(),
-            hq.as_ref(),
-            1.0,
-            par_p,
-        );
+        // H_phi = M^T H' M: M^T on every column, then on every row
+        let mut col = vec![0.0; np];
+        let mut zt = Mat::<f64>::zeros(np, np);
+        for c in 0..np {
+            for i in 0..np {
+                col[i] = h[(i, c)];
+            }
+            let o = self.modal_mt(md, &col);
+            // stored transposed: zt[(c, i)] = (M^T H')[(i, c)]
+            for i in 0..np {
+                zt[(c, i)] = o[i];
+            }
+        }
+        let mut hphi = h;
+        for r in 0..np {
+            for j in 0..np {
+                col[j] = zt[(j, r)];
+            }
+            let o = self.modal_mt(md, &col);
+            // H_phi is symmetric: row r written as column r (contiguous)
+            for j in 0..np {
+                hphi[(j, r)] = o[j];
+            }
+        }
+        // H_theta = T^T H_phi T with the sparse T
+        let mut y = Mat::<f64>::zeros(np, np);
+        for (c, tc) in tmap.iter().enumerate() {
+            for &(r, v) in tc {
+                for i in 0..np {
+                    y[(i, c)] += v * hphi[(i, r)];
+                }
+            }
+        }
+        let mut hth = zt;
+        for c2 in 0..np {
+            for (c1, tc) in tmap.iter().enumerate() {
+                hth[(c1, c2)] = tc.iter().map(|&(r, v)| v * y[(r, c2)]).sum();
+            }
+        }
         for i in 0..np {
             for j in 0..i {
                 let a = 0.5 * (hth[(i, j)] + hth[(j, i)]);
@@ -873,59 +913,124 @@ impl Predictor<'_> {
                 hth[(j, i)] = a;
             }
         }
-        let gm = Mat::from_fn(np, 1, |i, _| g[i]);
-        let gt = q.transpose() * &gm;
+        crate::optim::prof("modal-chain", t_in);
+        self.gram_cache = Some((th.to_vec(), gram, cross, zz));
         Ok(Evaluation {
             cost,
-            gradient: (0..np).map(|i| gt[(i, 0)]).collect(),
+            gradient,
             gauss_newton: hth,
         })
     }
 
-    /// `Q = dphi'/dtheta` (dense): the predictor map followed by the modal change of basis.
-    fn modal_map(&self, pm: &Unpacked, md: &Modal) -> Mat<f64> {
-        let (n, m, l, np) = (self.n, self.m, self.l, self.p);
+    /// `M^T x` for the modal change of basis `phi' = M phi` (`phi' = (T^-1 Abar T, T^-1 Bbar,
+    /// C T, D, T^-1 K, T^-1 x0)`, row-major blocks), by `n x n` products: `O(n^2 (n + m + l))`.
+    fn modal_mt(&self, md: &Modal, x: &[f64]) -> Vec<f64> {
+        let (n, m, l) = (self.n, self.m, self.l);
+        let (ia, ib, ic, id, ik) = self.column_offsets();
+        let mut out = x.to_vec();
+        let (t, ti) = (&md.t, &md.ti);
+        // A: out[i, j] = sum_ab Ti[a, i] X[a, b] T[j, b]
+        let mut tmp = vec![0.0; n * n];
+        for a in 0..n {
+            for j in 0..n {
+                let mut s = 0.0;
+                for b in 0..n {
+                    s += x[ia + a * n + b] * t[(j, b)];
+                }
+                tmp[a * n + j] = s;
+            }
+        }
+        for i in 0..n {
+            for j in 0..n {
+                let mut s = 0.0;
+                for a in 0..n {
+                    s += ti[(a, i)] * tmp[a * n + j];
+                }
+                out[ia + i * n + j] = s;
+            }
+        }
+        // blocks T^-1 X (rows of the state): B (n x m), K (n x l), each x0 (n x 1)
+        let left = |out: &mut Vec<f64>, off: usize, cols: usize| {
+            for i in 0..n {
+                for j in 0..cols {
+                    let mut s = 0.0;
+                    for a in 0..n {
+                        s += ti[(a, i)] * x[off + a * cols + j];
+                    }
+                    out[off + i * cols + j] = s;
+                }
+            }
+        };
+        left(&mut out, ib, m);
+        if let Some(k0) = ik {
+            left(&mut out, k0, l);
+        }
+        for o in self.x0_off.iter().flatten() {
+            left(&mut out, *o, 1);
+        }
+        // C: out[r, j] = sum_b X[r, b] T[j, b]
+        for r in 0..l {
+            for j in 0..n {
+                let mut s = 0.0;
+                for b in 0..n {
+                    s += x[ic + r * n + b] * t[(j, b)];
+                }
+                out[ic + r * n + j] = s;
+            }
+        }
+        let _ = id; // D is unchanged
+        out
+    }
+
+    /// Tangent vectors (p x n^2) of the similarity orbit at `theta`: `(A X - X A, -X B, C X, 0,
+    /// -X K, -X x0)` for `X = E_ab`; `None` when local coordinates are off or inexact (a fixed
+    /// non-zero `K` or a given non-zero `x0`).
+    pub(super) fn similarity_tangent(&self, th: &[f64]) -> Option<Mat<f64>> {
+        if !self.local || self.n == 0 {
+            return None;
+        }
+
+        let pm = self.unpack(th);
+        let (n, m, l) = (self.n, self.m, self.l);
+        let k_ok = self.est_k || (0..n).all(|i| (0..l).all(|j| pm.k[(i, j)] == 0.0));
+        let x0_ok = self
+            .x0_mode
+            .iter()
+            .all(|s| !matches!(s, InitialState::Given(v) if v.iter().any(|&x| x != 0.0)));
+        if !k_ok || !x0_ok {
+            return None;
+        }
         let (ia, ib, ic, _id, ik) = self.column_offsets();
-        let tmap = self.predictor_map(pm);
-        let x0_offs: Vec<usize> = self.x0_off.iter().flatten().copied().collect();
-        let mut q = Mat::<f64>::zeros(np, np);
-        for (c, col) in tmap.iter().enumerate() {
-            for &(r, v) in col {
-                if r >= ia && r < ib {
-                    let (i, j) = ((r - ia) / n, (r - ia) % n);
-                    for a in 0..n {
-                        let f = v * md.ti[(a, i)];
-                        for b in 0..n {
-                            q[(ia + a * n + b, c)] += f * md.t[(j, b)];
-                        }
+        let mut tan = Mat::<f64>::zeros(self.p, n * n);
+        for a in 0..n {
+            for b in 0..n {
+                let col = a * n + b;
+                // δA = A E_ab - E_ab A
+                for i in 0..n {
+                    tan[(ia + i * n + b, col)] += pm.a[(i, a)];
+                }
+                for j in 0..n {
+                    tan[(ia + a * n + j, col)] -= pm.a[(b, j)];
+                }
+                for j in 0..m {
+                    tan[(ib + a * m + j, col)] -= pm.b[(b, j)];
+                }
+                for i in 0..l {
+                    tan[(ic + i * n + b, col)] += pm.c[(i, a)];
+                }
+                if let Some(ik) = ik {
+                    for j in 0..l {
+                        tan[(ik + a * l + j, col)] -= pm.k[(b, j)];
                     }
-                } else if r >= ib && r < ic {
-                    let (i, j) = ((r - ib) / m, (r - ib) % m);
-                    for a in 0..n {
-                        q[(ib + a * m + j, c)] += v * md.ti[(a, i)];
+                }
+                for (ex, off) in self.x0_off.iter().enumerate() {
+                    if let Some(o) = off {
+                        tan[(o + a, col)] -= pm.x0[ex][b];
                     }
-                } else if r >= ic && r < ic + l * n {
-                    let (rr, j) = ((r - ic) / n, (r - ic) % n);
-                    for b in 0..n {
-                        q[(ic + rr * n + b, c)] += v * md.t[(j, b)];
-                    }
-                } else if let Some(k0) = ik.filter(|&k0| r >= k0 && r < k0 + n * l) {
-                    let (i, j) = ((r - k0) / l, (r - k0) % l);
-                    for a in 0..n {
-                        q[(k0 + a * l + j, c)] += v * md.ti[(a, i)];
-                    }
-                } else if let Some(&o) = x0_offs.iter().find(|&&o| r >= o && r < o + n) {
-                    let i = r - o;
-                    for a in 0..n {
-                        q[(o + a, c)] += v * md.ti[(a, i)];
-                    }
-                } else {
-                    // D: unchanged
-                    q[(r, c)] += v;
                 }
             }
         }
-        q
+        Some(tan)
     }
 
     fn modal_at(&self, th: &[f64]) -> Option<Modal> {
@@ -1311,9 +1416,11 @@ impl Problem for Predictor<'_> {
         if jacobian && self.structured && self.col_lo == 0 && self.n > 0 {
             if self.modal {
                 if let Some(md) = self.modal_at(th) {
+                    crate::optim::prof("modal-yes", std::time::Instant::now());
                     return self.evaluate_modal(th, false, &md);
                 }
             }
+            crate::optim::prof("modal-no", std::time::Instant::now());
             return self.evaluate_structured(th, false);
         }
         let (n, m, l, np) = (self.n, self.m, self.l, self.p);
@@ -1529,49 +1636,9 @@ impl Problem for Predictor<'_> {
     }
 
     fn search_basis(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
-        if !self.local || self.n == 0 {
+        let Some(tan) = self.similarity_tangent(th) else {
             return Ok(None);
-        }
-        let pm = self.unpack(th);
-        let (n, m, l) = (self.n, self.m, self.l);
-        let k_ok = self.est_k || (0..n).all(|i| (0..l).all(|j| pm.k[(i, j)] == 0.0));
-        let x0_ok = self
-            .x0_mode
-            .iter()
-            .all(|s| !matches!(s, InitialState::Given(v) if v.iter().any(|&x| x != 0.0)));
-        if !k_ok || !x0_ok {
-            return Ok(None);
-        }
-        let (ia, ib, ic, _id, ik) = self.column_offsets();
-        let mut tan = Mat::<f64>::zeros(self.p, n * n);
-        for a in 0..n {
-            for b in 0..n {
-                let col = a * n + b;
-                // δA = A E_ab - E_ab A
-                for i in 0..n {
-                    tan[(ia + i * n + b, col)] += pm.a[(i, a)];
-                }
-                for j in 0..n {
-                    tan[(ia + a * n + j, col)] -= pm.a[(b, j)];
-                }
-                for j in 0..m {
-                    tan[(ib + a * m + j, col)] -= pm.b[(b, j)];
-                }
-                for i in 0..l {
-                    tan[(ic + i * n + b, col)] += pm.c[(i, a)];
-                }
-                if let Some(ik) = ik {
-                    for j in 0..l {
-                        tan[(ik + a * l + j, col)] -= pm.k[(b, j)];
-                    }
-                }
-                for (ex, off) in self.x0_off.iter().enumerate() {
-                    if let Some(o) = off {
-                        tan[(o + a, col)] -= pm.x0[ex][b];
-                    }
-                }
-            }
-        }
+        };
         let svd = tan
             .svd()
             .map_err(|e| SysidError::numerical("local coordinates (SVD)", format!("{e:?}")))?;
@@ -1694,7 +1761,10 @@ pub fn pem(
         let lam = prob.innovation_covariance(&theta);
         prob.losses.push(determinant(&lam));
     }
+    let t0 = std::time::Instant::now();
     let solution = optim::minimize(&mut prob, &theta, &options.optim, observer)?;
+    crate::optim::prof("minimize", t0);
+    let t_end = std::time::Instant::now();
     let theta = solution.theta.clone();
     let pm = prob.unpack(&theta);
     let lam = prob.innovation_covariance(&theta);
@@ -1707,7 +1777,15 @@ pub fn pem(
         prob.reweight_at(&theta)?;
         prob.evaluate(&theta, true)?.gauss_newton
     };
+    crate::optim::prof("final-h", t_end);
+    let t0 = std::time::Instant::now();
     let covariance = optim::covariance(h.as_ref(), 1.0, 1e-10)?;
+    crate::optim::prof("covariance", t0);
+    let mut solution = solution;
+    if solution.condition.is_nan() {
+        // a large search does not form the eigenvalues; those of the covariance say the same
+        solution.condition = covariance.condition;
+    }
     Ok(PemResult {
         sys: StateSpace::new(pm.a, pm.b, pm.c, pm.d)?,
         k: pm.k,

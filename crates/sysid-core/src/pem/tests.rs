@@ -85,10 +85,14 @@ fn exact_start_stays_exact() {
     let (sys, k) = truth();
     let u = noise(400, 2, 1);
     let y = data(&sys, &k, &u, &Mat::zeros(400, 2), &[0.0; 3]);
-    let r = run(&sys, Some(&k), &[(&u, &y)], &PemOptions::default());
-    assert!(pole_err(&r.sys, &sys) < 1e-8, "{}", pole_err(&r.sys, &sys));
-    let tr = r.innovation_covariance[(0, 0)] + r.innovation_covariance[(1, 1)];
-    assert!(tr < 1e-24, "{tr}");
+    for limit in [400, 0] {
+        let mut o = PemOptions::default();
+        o.optim.eigen_limit = limit;
+        let r = run(&sys, Some(&k), &[(&u, &y)], &o);
+        assert!(pole_err(&r.sys, &sys) < 1e-8, "{}", pole_err(&r.sys, &sys));
+        let tr = r.innovation_covariance[(0, 0)] + r.innovation_covariance[(1, 1)];
+        assert!(tr < 1e-24, "{tr}");
+    }
 }
 
 #[test]
@@ -96,16 +100,26 @@ fn perturbed_start_converges_noise_free() {
     let (sys, k) = truth();
     let u = noise(500, 2, 2);
     let y = data(&sys, &k, &u, &Mat::zeros(500, 2), &[0.0; 3]);
-    for focus in [Focus::Prediction, Focus::Simulation] {
+    for (focus, limit) in [
+        (Focus::Prediction, 400),
+        (Focus::Simulation, 400),
+        // the large-problem step (Cholesky, no explicit local coordinates)
+        (Focus::Prediction, 0),
+        (Focus::Simulation, 0),
+    ] {
         let mut o = PemOptions::default();
         o.focus = focus;
         o.optim.max_iter = 100;
+        o.optim.eigen_limit = limit;
         let start = perturbed(&sys, 0.05);
         assert!(pole_err(&start, &sys) > 1e-3);
         let r = run(&start, Some(&k), &[(&u, &y)], &o);
+        // the large-problem step (no explicit local coordinates, damping in the full
+        // Marquardt metric) creeps on noise-free prediction errors: 2e-7 after 100 iterations
+        let tol = if limit == 0 { 1e-6 } else { 1e-7 };
         assert!(
-            pole_err(&r.sys, &sys) < 1e-7,
-            "{focus:?}: {} {:?} {} {:?}",
+            pole_err(&r.sys, &sys) < tol,
+            "{focus:?} {limit}: {} {:?} {} {:?}",
             pole_err(&r.sys, &sys),
             r.solution.stop,
             r.solution.iterations,
@@ -298,6 +312,17 @@ fn local_coordinates_and_gradient_check() {
     // the basis is orthogonal to the similarity directions and has p - n^2 columns
     let q = pr.search_basis(&th).unwrap().unwrap();
     assert_eq!(q.ncols(), th.len() - 9);
+    // the similarity directions are a null space of J^T W J and orthogonal to the gradient
+    let tan = pr.similarity_tangent(&th).unwrap();
+    let ht = &ev.gauss_newton * &tan;
+    let scale = ev.gauss_newton.norm_max() * tan.norm_max();
+    eprintln!("H tan {} of {scale}", ht.norm_max());
+    assert!(ht.norm_max() < 1e-9 * scale, "{} of {scale}", ht.norm_max());
+    let gnorm = ev.gradient.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    for c in 0..tan.ncols() {
+        let gt: f64 = (0..th.len()).map(|i| ev.gradient[i] * tan[(i, c)]).sum();
+        assert!(gt.abs() < 1e-9 * gnorm * scale.max(1.0), "{gt}");
+    }
 }
 
 /// The structured `J^T W J` (predictor parameterisation, Kronecker blocks for C and D) equals
@@ -382,6 +407,19 @@ fn structured_gauss_newton_equals_the_plain_one() {
             assert!((a - b).abs() < 1e-11 * gs, "{a} vs {b}");
         }
         assert_eq!(chord.gauss_newton.nrows(), 0);
+        // another weighting at the same point: the cached sums give the same matrix
+        let mut th2 = th.clone();
+        th2[0] += 0.01;
+        pr.reweight_at(&th2).unwrap();
+        let cached = pr.evaluate(&th, true).unwrap();
+        pr.modal = false;
+        let fresh = pr.evaluate(&th, true).unwrap();
+        pr.modal = true;
+        let scale = fresh.gauss_newton.norm_max();
+        let dc = (&cached.gauss_newton - &fresh.gauss_newton).norm_max();
+        assert!(dc < 1e-11 * scale, "{dc} vs {scale}");
+        assert!((cached.cost - fresh.cost).abs() < 1e-12 * fresh.cost);
+        assert!((fast.cost - fresh.cost).abs() > 1e-9 * fresh.cost);
     }
 }
 
