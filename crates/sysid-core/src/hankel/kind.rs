@@ -106,7 +106,10 @@ impl CompressorKind {
             CompressorKind::Qr {
                 chunk_rows: Some(r),
             } => k.checked_add(*r),
-            CompressorKind::Qr { chunk_rows: None } => Some(k + (4 * k).max(512)),
+            // "auto" may fall back to the exact pass with the default window count
+            CompressorKind::Qr { chunk_rows: None } | CompressorKind::Auto(_) => {
+                Some(k + (4 * k).max(512))
+            }
             // a block never holds more samples than the chunk pushed: bounded by the data
             CompressorKind::Correlation(_) => return Ok(()),
         };
