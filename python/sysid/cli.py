@@ -350,7 +350,7 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
     >>> from sysid.cli import read_columns
     >>> path = os.path.join(tempfile.mkdtemp(), "d.csv")
     >>> with open(path, "w") as f:
-    ...     _ = f.write("t,u,y\n0,1,2\n1,3,4\n")
+    ...     _ = f.write("t,u,y\\n0,1,2\\n1,3,4\\n")
     >>> read_columns(path, ["y", "u"], progress=False)
     array([[2., 1.],
            [4., 3.]])

@@ -208,6 +208,21 @@ pub fn compress_experiments(
         }
         c.finish()
     };
+    if let CompressorKind::Auto(_) = kind {
+        // fewer Hankel columns than rows: the Gram matrix is singular, the exact path it is
+        let w = layout.window();
+        let cols: usize = experiments
+            .iter()
+            .map(|(_, y)| (y.nrows() + 1).saturating_sub(w))
+            .sum();
+        if cols < layout.k() {
+            return Ok(run(CompressorKind::Qr { chunk_rows: None })?
+                .with_source(FactorSource::QrFallback {
+                    relative_pivot: 0.0,
+                })
+                .with_relative_pivot(Some(0.0)));
+        }
+    }
     let f = run(kind)?;
     match f.source() {
         // the data are in memory: redo the exact pass rather than keep a degraded factor
