@@ -477,3 +477,18 @@ def test_report_shows_the_parameter_table(tmp_path):
     text = Path(page).read_text()
     assert 'id="parameters"' in text and "time constant" in text and "fixed" in text
     assert f"{fit.parameters['tau']['value']:.6g}" in text
+
+
+def test_progress_reports_and_stops():
+    motor, data = _motor_data()
+    s = sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0})
+    seen = []
+    fit = sysid.greyest(data, s, progress=lambda it, cost, *rest: seen.append(cost))
+    assert len(seen) == fit.info["iterations"] >= 2
+    stopped = sysid.greyest(data, s, progress=lambda *a: False)
+    assert stopped.info["iterations"] == 1 and stopped.info["stop"] == "cancelled"
+    nl = sysid.NonlinearGreyBox(lambda t, x, u, p: [(-x[0] + p.K * u[0]) / p.tau],
+                                lambda t, x, u, p: [x[0]], {"K": 1.0, "tau": 1.0}, nx=1,
+                                vectorized=True)
+    nfit = sysid.greyest(data, nl, progress=lambda *a: False)
+    assert nfit.info["stop"] == "cancelled"
