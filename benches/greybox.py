@@ -15,8 +15,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
-import sysid  # noqa: E402
 from test_greybox import KNOWN, TRUE, _sweeps, lateral, lateral_ode, states  # noqa: E402
+
+import sysid  # noqa: E402
 
 
 def main() -> None:

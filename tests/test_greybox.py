@@ -477,3 +477,38 @@ def test_report_shows_the_parameter_table(tmp_path):
     text = Path(page).read_text()
     assert 'id="parameters"' in text and "time constant" in text and "fixed" in text
     assert f"{fit.parameters['tau']['value']:.6g}" in text
+
+
+def test_progress_reports_and_stops():
+    motor, data = _motor_data()
+    s = sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0})
+    seen = []
+    fit = sysid.greyest(data, s, progress=lambda it, cost, *rest: seen.append(cost))
+    assert len(seen) == fit.info["iterations"] >= 2
+    stopped = sysid.greyest(data, s, progress=lambda *a: False)
+    assert stopped.info["iterations"] == 1 and stopped.info["stop"] == "cancelled"
+    nl = sysid.NonlinearGreyBox(lambda t, x, u, p: [(-x[0] + p.K * u[0]) / p.tau],
+                                lambda t, x, u, p: [x[0]], {"K": 1.0, "tau": 1.0}, nx=1,
+                                vectorized=True)
+    nfit = sysid.greyest(data, nl, progress=lambda *a: False)
+    assert nfit.info["stop"] == "cancelled"
+
+
+def test_nonlinear_result_is_a_model_and_plots():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    motor, data = _motor_data()
+    nl = sysid.NonlinearGreyBox(lambda t, x, u, p: [(-x[0] + p.K * u[0]) / p.tau],
+                                lambda t, x, u, p: [x[0]], {"K": 1.0, "tau": 1.0}, nx=1,
+                                vectorized=True)
+    fit = sysid.greyest(data, nl)
+    assert isinstance(fit.model, sysid.Model)
+    assert np.all(np.asarray(sysid.compare(fit.model, data).fit) > 90)
+    lin = fit.model.linearize()
+    assert abs(lin.A[0, 0] - np.exp(-data.dt / fit.parameters["tau"]["value"])) < 1e-6
+    ax = fit.plot()
+    assert len(ax.get_xticklabels()) == 2
+    plt.close("all")

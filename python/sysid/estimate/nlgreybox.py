@@ -59,6 +59,7 @@ def nlgreyest(data: IOData, s: NonlinearGreyBox, *, x0: Any, weighting: str, mul
     dt = float(data.dt)
     s = s.with_values({}, dt=dt)
     s._ninputs, s._noutputs = data.n_inputs, data.n_outputs
+    s._input_names, s._output_names = data.input_names, data.output_names
     X0, F0 = _initial_states(s, x0, len(exps))
     names = s.names
     free = s.free_names

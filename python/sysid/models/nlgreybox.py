@@ -119,7 +119,7 @@ class NonlinearGreyBox(ModelMixin):
         self.vectorized = bool(vectorized)
         self.dt = 0.0 if dt is None else float(dt)
         self._ninputs, self._noutputs = ninputs, noutputs
-        self.input_names, self.output_names = input_names, output_names
+        self._input_names, self._output_names = input_names, output_names
         self.info: dict[str, Any] = {"method": "nonlinear grey-box structure"}
 
     # -- sizes and names ------------------------------------------------------------------
@@ -138,6 +138,18 @@ class NonlinearGreyBox(ModelMixin):
             y = self._call(self.h, 0.0, self.x0[0][:, None], u, self.values[:, None])
             self._noutputs = y.shape[0]
         return int(self._noutputs)
+
+    @property
+    def input_names(self) -> list[str]:
+        """Input channel names (``u0, u1, ...`` unless given)."""
+        n = self._input_names
+        return list(n) if n is not None else [f"u{i}" for i in range(self.ninputs)]
+
+    @property
+    def output_names(self) -> list[str]:
+        """Output channel names (``y0, y1, ...`` unless given)."""
+        n = self._output_names
+        return list(n) if n is not None else [f"y{i}" for i in range(self.noutputs)]
 
     @property
     def names(self) -> list[str]:
