@@ -104,6 +104,9 @@ fn determinant(m: &Mat<f64>) -> f64 {
     }
 }
 
+/// `(theta, Gram of the modal sensitivities, cross sums with the regressor, sum z z^T)`.
+type GramCache = (Vec<f64>, Mat<f64>, Mat<f64>, Mat<f64>);
+
 /// The innovation predictor over several experiments, as an optimisation problem.
 ///
 /// Parameter layout (row-major blocks): `A (n*n), B (n*m), C (l*n)`, then `D (l*m)` when
@@ -143,7 +146,7 @@ pub struct Predictor<'a> {
     /// sensitivities, their cross sums with the regressor, `sum z z^T`): a re-weighted
     /// Gauss-Newton matrix at the same point (the covariance after an unweighted search)
     /// costs a gradient pass instead of a full one.
-    gram_cache: Option<(Vec<f64>, Mat<f64>, Mat<f64>, Mat<f64>)>,
+    gram_cache: Option<GramCache>,
 }
 
 struct Unpacked {
