@@ -87,3 +87,18 @@ def test_continuous_model_from_sampled_data():
     ct2 = sysid.frd_subspace(data, 3, horizon=10, lags=300, continuous=True)  # time data in
     assert isinstance(ct2, sysid.ContinuousStateSpace)
     assert np.max(np.abs(_poles(ct2) - _poles(ct_true))) < 0.04
+
+
+def test_input_output_spectra_of_a_record():
+    # McKelvey's spectra form with the transient term: exact for a noise-free record that is
+    # not periodic (zero initial state, non-zero final state)
+    rng = np.random.default_rng(2)
+    u = rng.standard_normal((1024, 2))
+    data = sysid.IOData(u=u, y=TRUE.simulate(u), dt=0.1)
+    model = sysid.frd_subspace(data, 3, method="dft")
+    np.testing.assert_allclose(_poles(model), _poles(TRUE), atol=1e-8)
+    np.testing.assert_allclose(model.D, TRUE.D, atol=1e-8)
+    w = np.linspace(0.0, np.pi / 0.1, 9)
+    np.testing.assert_allclose(model.freqresp(w), TRUE.freqresp(w), atol=1e-8)
+    with pytest.raises(sysid.DataError, match="method"):
+        sysid.frd_subspace(data, 3, method="fft")

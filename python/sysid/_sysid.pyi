@@ -31,6 +31,7 @@ __all__ = [
     "ClosedLoopSubspace",
     "RecursiveFactor",
     "frd_subspace",
+    "spectra_subspace",
     "estimate_bd_x0",
     "realize",
     "fir",
@@ -143,6 +144,17 @@ def frd_subspace(
     horizon: int,
     order: int | None = None,
     weights: _Array | None = None,
+) -> dict[str, Any]: ...
+def spectra_subspace(
+    omega: _Array,
+    u_re: _Array,
+    u_im: _Array,
+    y_re: _Array,
+    y_im: _Array,
+    horizon: int,
+    order: int | None = None,
+    weights: _Array | None = None,
+    transient: bool = True,
 ) -> dict[str, Any]: ...
 def estimate_bd_x0(
     a: _Array, c: _Array, u: _Array, y: _Array, feedthrough: bool

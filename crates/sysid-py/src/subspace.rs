@@ -141,7 +141,52 @@ pub fn frd_subspace<'py>(
     Ok(d)
 }
 
+/// Frequency-domain subspace identification from one record's input and output DFTs
+/// (rows: frequencies): dict with A, B, C, D and singular_values.
+#[pyfunction]
+#[pyo3(signature = (omega, u_re, u_im, y_re, y_im, horizon, order=None, weights=None, transient=true))]
+#[allow(clippy::too_many_arguments)]
+pub fn spectra_subspace<'py>(
+    py: Python<'py>,
+    omega: PyReadonlyArray1<'_, f64>,
+    u_re: PyReadonlyArray2<'_, f64>,
+    u_im: PyReadonlyArray2<'_, f64>,
+    y_re: PyReadonlyArray2<'_, f64>,
+    y_im: PyReadonlyArray2<'_, f64>,
+    horizon: usize,
+    order: Option<usize>,
+    weights: Option<PyReadonlyArray1<'_, f64>>,
+    transient: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let om = vec1(&omega);
+    let w = weights.as_ref().map(vec1);
+    let (ur, ui, yr, yi) = (view(&u_re), view(&u_im), view(&y_re), view(&y_im));
+    let id = py
+        .detach(|| {
+            frequency::identify_spectra(
+                &om,
+                ur,
+                ui,
+                yr,
+                yi,
+                w.as_deref(),
+                order,
+                horizon,
+                transient,
+            )
+        })
+        .py()?;
+    let d = PyDict::new(py);
+    d.set_item("A", mat_to_numpy(py, &id.sys.a))?;
+    d.set_item("B", mat_to_numpy(py, &id.sys.b))?;
+    d.set_item("C", mat_to_numpy(py, &id.sys.c))?;
+    d.set_item("D", mat_to_numpy(py, &id.sys.d))?;
+    d.set_item("singular_values", slice_to_numpy(py, &id.singular_values))?;
+    Ok(d)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(spectra_subspace, m)?)?;
     m.add_class::<PySubspace>()?;
     m.add_function(wrap_pyfunction!(frd_subspace, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_bd_x0, m)?)?;

@@ -39,6 +39,7 @@ def frd_subspace(
     T: float | None = None,
     weights: Any = None,
     lags: int | None = None,
+    method: str = "spa",
 ) -> Any:
     """State-space model from frequency-response data (McKelvey, Akçay & Ljung 1996).
 
@@ -64,6 +65,11 @@ def frd_subspace(
         Non-negative weight per frequency (for example ``1 / std``).
     lags : int, optional
         Lag window of :func:`sysid.spa` for ``IOData`` input (default: its own).
+    method : {"spa", "dft"}
+        For ``IOData`` input: through the smoothed FRD (``"spa"``) or directly from the
+        input and output DFTs of the (single-experiment) record (``"dft"``, McKelvey, Akçay &
+        Ljung's spectra form, with the transient term estimated: exact for noise-free
+        records, periodic or not).
 
     Returns
     -------
@@ -92,8 +98,13 @@ def frd_subspace(
         from ..analysis.frf import spa
         from ..models.continuous import d2c
 
-        est = spa(frd) if lags is None else spa(frd, lags=lags)
-        dmodel = frd_subspace(est, order, horizon=horizon, weights=weights)
+        if method == "dft":
+            dmodel = _from_dft(frd, order, horizon, weights)
+        elif method == "spa":
+            est = spa(frd) if lags is None else spa(frd, lags=lags)
+            dmodel = frd_subspace(est, order, horizon=horizon, weights=weights)
+        else:
+            raise DataError(f"method must be 'spa' or 'dft', got {method!r}")
         if not continuous:
             return dmodel
         ct = d2c(dmodel, "zoh")
@@ -153,3 +164,33 @@ def frd_subspace(
     ct.info.update(info)
     ct.info["bilinear_T"] = T
     return ct
+
+
+def _from_dft(data: Any, order: Order, horizon: int | None, weights: Any) -> Any:
+    """Discrete model from the DFTs of a single-experiment record."""
+    from ..models.statespace import StateSpaceModel
+
+    if data.n_experiments != 1:
+        raise DataError("method='dft' needs a single-experiment record")
+    u, y = data.experiments[0]
+    n = y.shape[0]
+    U = np.fft.rfft(u, axis=0) / np.sqrt(n)
+    Y = np.fft.rfft(y, axis=0) / np.sqrt(n)
+    wd = 2 * np.pi * np.arange(U.shape[0]) / n
+    if horizon is None:
+        horizon = 20 if isinstance(order, str) else max(10, int(order) + 1)
+    q = as_int(horizon, "horizon", 2)
+    nord = None if isinstance(order, str) else as_int(order, "order", 1)
+    if isinstance(order, str) and order != "auto":
+        raise DataError(f"order must be an integer or 'auto', got {order!r}")
+    w = None
+    if weights is not None:
+        w = np.ascontiguousarray(np.broadcast_to(np.asarray(weights, float), (wd.size,)))
+    c = np.ascontiguousarray
+    res = _sysid.spectra_subspace(c(wd), c(U.real), c(U.imag), c(Y.real), c(Y.imag), q, nord,
+                                  w, True)
+    info = {"method": "frequency-subspace-dft", "horizon": q, "order": res["A"].shape[0],
+            "singular_values": res["singular_values"]}
+    return StateSpaceModel(res["A"], res["B"], res["C"], res["D"], dt=data.dt,
+                           input_names=data.input_names, output_names=data.output_names,
+                           info=info)

@@ -141,6 +141,181 @@ pub fn identify_frd(
     })
 }
 
+/// Identifies `(A, B, C, D)` from the DFTs of one record's input and output, `U_k` (rows
+/// of `u_re`, `u_im`: `nf x m`) and `Y_k` (`nf x l`) at `omega` (rad/sample), with
+/// `Y_k = G(z_k) U_k + C (z_k I - A)^{-1} z_k x_t` where the transient `x_t` (the initial
+/// minus the final state, scaled as the DFT) is estimated with B and D when `transient` is
+/// set (McKelvey, Akçay & Ljung 1996, the input/output spectra form). Exact for noise-free
+/// records, periodic or not.
+#[allow(clippy::too_many_arguments)]
+pub fn identify_spectra(
+    omega: &[f64],
+    u_re: MatRef<'_, f64>,
+    u_im: MatRef<'_, f64>,
+    y_re: MatRef<'_, f64>,
+    y_im: MatRef<'_, f64>,
+    weights: Option<&[f64]>,
+    order: Option<usize>,
+    q: usize,
+    transient: bool,
+) -> Result<FrdIdentified> {
+    let nf = omega.len();
+    let (m, l) = (u_re.ncols(), y_re.ncols());
+    if nf == 0
+        || u_re.nrows() != nf
+        || u_im.nrows() != nf
+        || y_re.nrows() != nf
+        || y_im.nrows() != nf
+        || u_im.ncols() != m
+        || y_im.ncols() != l
+    {
+        return Err(SysidError::invalid(
+            "spectra",
+            "omega and the input/output DFTs need the same number of frequencies",
+        ));
+    }
+    if l == 0 || m == 0 || q < 2 {
+        return Err(SysidError::invalid(
+            "spectra",
+            "needs inputs, outputs and a horizon >= 2",
+        ));
+    }
+    let w: Vec<f64> = match weights {
+        Some(w) if w.len() == nf => w.to_vec(),
+        Some(_) => return Err(SysidError::invalid("weights", "one weight per frequency")),
+        None => vec![1.0; nf],
+    };
+    for x in [u_re, u_im, y_re, y_im] {
+        crate::error::check_finite("spectra", x)?;
+    }
+    // the transient acts as one more input with DFT z_k (an impulse into the state)
+    let mt = m + usize::from(transient);
+    let rows_u = q * mt;
+    let mut z = Mat::<f64>::zeros(q * (mt + l), 2 * nf);
+    for k in 0..nf {
+        for i in 0..q {
+            let (c, s) = ((i as f64 * omega[k]).cos(), (i as f64 * omega[k]).sin());
+            for j in 0..m {
+                let (a, b) = (u_re[(k, j)], u_im[(k, j)]);
+                z[(i * mt + j, 2 * k)] = w[k] * (c * a - s * b);
+                z[(i * mt + j, 2 * k + 1)] = w[k] * (c * b + s * a);
+            }
+            if transient {
+                let ang = (i + 1) as f64 * omega[k];
+                z[(i * mt + m, 2 * k)] = w[k] * ang.cos();
+                z[(i * mt + m, 2 * k + 1)] = w[k] * ang.sin();
+            }
+            for r in 0..l {
+                let (a, b) = (y_re[(k, r)], y_im[(k, r)]);
+                z[(rows_u + i * l + r, 2 * k)] = w[k] * (c * a - s * b);
+                z[(rows_u + i * l + r, 2 * k + 1)] = w[k] * (c * b + s * a);
+            }
+        }
+    }
+    let lfac = lq_lower(z.as_ref());
+    let l22 = lfac.as_ref().submatrix(rows_u, rows_u, q * l, q * l);
+    let svd = l22
+        .thin_svd()
+        .map_err(|e| SysidError::numerical("frequency-domain SVD", format!("{e:?}")))?;
+    let sv: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+    let smax = sv.first().copied().unwrap_or(0.0);
+    if !smax.is_finite() || smax <= 0.0 {
+        return Err(SysidError::numerical(
+            "frequency-domain SVD",
+            "the output spectra carry nothing beyond the input's; are the outputs zero?",
+        ));
+    }
+    let rank = sv.iter().filter(|&&x| x > 1e-12 * smax).count();
+    let max = ((q - 1) * l).min(rank);
+    let n = order.unwrap_or_else(|| largest_log_gap(&sv, max));
+    if n == 0 || n > max {
+        return Err(SysidError::OrderTooLarge {
+            order: n,
+            max,
+            future: q,
+            outputs: l,
+        });
+    }
+    let mut gamma = svd.U().subcols(0, n).to_owned();
+    for j in 0..n {
+        let s = sv[j].sqrt();
+        for i in 0..gamma.nrows() {
+            gamma[(i, j)] *= s;
+        }
+    }
+    let (a, c, _) = shift_invariance(gamma.as_ref(), l, false)?;
+    // B, D (and the transient) by least squares: unknowns vec(B), vec(D), x_t
+    let nt = n * m + l * m + if transient { n } else { 0 };
+    let mut design = Mat::<f64>::zeros(2 * l * nf, nt);
+    let mut rhs = Mat::<f64>::zeros(2 * l * nf, 1);
+    for k in 0..nf {
+        let (co, si) = (omega[k].cos(), omega[k].sin());
+        let (fr, fi) = resolvent(a.as_ref(), c.as_ref(), co, si)?;
+        for r in 0..l {
+            let (re_row, im_row) = (2 * l * k + r, 2 * l * k + l + r);
+            for i in 0..m {
+                let (ur, ui) = (u_re[(k, i)], u_im[(k, i)]);
+                for p in 0..n {
+                    let col = i * n + p; // B[p, i], column-major
+                    design[(re_row, col)] = w[k] * (fr[(r, p)] * ur - fi[(r, p)] * ui);
+                    design[(im_row, col)] = w[k] * (fr[(r, p)] * ui + fi[(r, p)] * ur);
+                }
+                let col = n * m + i * l + r; // D[r, i]
+                design[(re_row, col)] = w[k] * ur;
+                design[(im_row, col)] = w[k] * ui;
+            }
+            if transient {
+                for p in 0..n {
+                    let col = n * m + l * m + p; // F_k z_k x_t
+                    design[(re_row, col)] = w[k] * (fr[(r, p)] * co - fi[(r, p)] * si);
+                    design[(im_row, col)] = w[k] * (fr[(r, p)] * si + fi[(r, p)] * co);
+                }
+            }
+            rhs[(re_row, 0)] = w[k] * y_re[(k, r)];
+            rhs[(im_row, 0)] = w[k] * y_im[(k, r)];
+        }
+    }
+    let th = pinv(design.as_ref(), 1e-13)? * &rhs;
+    let b = Mat::from_fn(n, m, |p, i| th[(i * n + p, 0)]);
+    let d = Mat::from_fn(l, m, |r, i| th[(n * m + i * l + r, 0)]);
+    let sys = StateSpace::new(a, b, c, d).map_err(|_| {
+        SysidError::numerical(
+            "system matrices",
+            "non-finite estimates; lower the order or check the spectra",
+        )
+    })?;
+    Ok(FrdIdentified {
+        sys,
+        singular_values: sv,
+    })
+}
+
+/// `C (z I - A)^{-1}` at `z = co + j si`, real and imaginary parts.
+fn resolvent(
+    a: MatRef<'_, f64>,
+    c: MatRef<'_, f64>,
+    co: f64,
+    si: f64,
+) -> Result<(Mat<f64>, Mat<f64>)> {
+    let n = a.nrows();
+    let mut big = Mat::<f64>::zeros(2 * n, 2 * n);
+    for i in 0..n {
+        for j in 0..n {
+            big[(i, j)] = -a[(i, j)];
+            big[(n + i, n + j)] = -a[(i, j)];
+        }
+        big[(i, i)] += co;
+        big[(n + i, n + i)] += co;
+        big[(i, n + i)] = -si;
+        big[(n + i, i)] = si;
+    }
+    let inv = pinv(big.as_ref(), 1e-14)?;
+    Ok((
+        c * inv.as_ref().submatrix(0, 0, n, n),
+        c * inv.as_ref().submatrix(n, 0, n, n),
+    ))
+}
+
 /// B and D minimising `Σ_k w_k^2 |G_k - D - C (z_k I - A)^{-1} B|^2`, column by column.
 fn fit_bd(
     omega: &[f64],
