@@ -53,23 +53,21 @@ fuzz_target!(|data: &[u8]| {
     let markov: Vec<_> = (0..count)
         .map(|t| faer::Mat::from_fn(l, 1, |i, _| y[(t, i)]))
         .collect();
-    let opts = RealizationOptions {
-        order: if b.byte() % 2 == 0 {
-            None
-        } else {
-            Some(b.size(6))
-        },
-        rows: if b.byte() % 2 == 0 {
-            None
-        } else {
-            Some(b.size(30))
-        },
-        cols: if b.byte() % 2 == 0 {
-            None
-        } else {
-            Some(b.size(30))
-        },
-        ..RealizationOptions::default()
+    let mut opts = RealizationOptions::default();
+    opts.order = if b.byte() % 2 == 0 {
+        None
+    } else {
+        Some(b.size(6))
+    };
+    opts.rows = if b.byte() % 2 == 0 {
+        None
+    } else {
+        Some(b.size(30))
+    };
+    opts.cols = if b.byte() % 2 == 0 {
+        None
+    } else {
+        Some(b.size(30))
     };
     let _ = era(&markov, &opts);
 });
