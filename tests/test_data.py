@@ -317,7 +317,7 @@ def test_pandas_datetime_index_and_missing_values() -> None:
 
 @settings(max_examples=15, deadline=None)
 @given(
-    st.lists(st.integers(2, 30), min_size=1, max_size=3),
+    st.lists(st.integers(3, 30), min_size=1, max_size=3),
     st.integers(0, 3),
     st.integers(1, 3),
     st.floats(1e-3, 10.0),

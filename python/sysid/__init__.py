@@ -164,8 +164,8 @@ _LAZY = {
     "model_from_dict": "models.io",
     "report": "analysis.report",
     # issue 15 items 1-2 (branch subspace2): closed-loop subspace, feedback test
-    "pbsid": "estimate.subspace",
-    "ssarx": "estimate.subspace",
+    "pbsid": "estimate.closed_loop_calls",
+    "ssarx": "estimate.closed_loop_calls",
     "RecursiveSubspace": "estimate.recursive",
     "frd_subspace": "estimate.frequency",
     "orthogonal_decomposition": "estimate.orthogonal",

@@ -525,7 +525,8 @@ def _parser() -> argparse.ArgumentParser:
     ide.add_argument("--outputs", required=True, help="output columns, comma separated")
     ide.add_argument("--order", default="auto", help="model order or 'auto' (default)")
     ide.add_argument("--method", default="moesp",
-                     help="moesp (default), ordinary-moesp, pi-moesp, n4sid or cva")
+                     help="moesp (default), ordinary-moesp, pi-moesp, n4sid, cva; closed loop: "
+                          "pbsid or ssarx")
     ide.add_argument("--horizon", type=int, default=None, help="past/future horizon")
     ide.add_argument("--split", default="0.5",
                      help="estimation part: fraction (0.5) or sample count (500); 1 = all")

@@ -1,6 +1,6 @@
 """Closed-loop subspace identification: PBSID-opt and SSARX (the fit on an estimator's
 factor; the one-call :func:`sysid.pbsid` and :func:`sysid.ssarx` live in
-:mod:`sysid.estimate.subspace`).
+:mod:`sysid.estimate.closed_loop_calls`).
 
 Data taken under feedback (``u = r - F y``) make the future inputs depend on past noise,
 and the open-loop subspace methods (MOESP, N4SID, CVA) then converge to a wrong model.
