@@ -30,6 +30,11 @@ impl<'a> Bytes<'a> {
         }
     }
 
+    /// A small count in `0..=max` (for the harness's own loops, never huge).
+    pub fn small(&mut self, max: usize) -> usize {
+        self.byte() as usize % (max + 1)
+    }
+
     /// A sample value: ordinary numbers, with zeros, repeats, huge, tiny and non-finite ones.
     pub fn value(&mut self) -> f64 {
         match self.byte() {

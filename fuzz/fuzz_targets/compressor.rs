@@ -31,12 +31,10 @@ fuzz_target!(|data: &[u8]| {
     if kind.check(&layout).is_err() {
         return;
     }
-    let n_exp = 1 + b.size(2);
+    let n_exp = 1 + b.small(2);
     let mut exps = Vec::new();
     for _ in 0..n_exp {
-        let n = b.size(60);
-        // (a record longer than the data would not be fuzzing anything)
-        let n = n.min(200);
+        let n = b.small(200);
         exps.push((b.mat(n, m), b.mat(n, l)));
     }
     let views: Vec<_> = exps.iter().map(|(u, y)| (u.as_ref(), y.as_ref())).collect();
@@ -46,7 +44,7 @@ fuzz_target!(|data: &[u8]| {
     for (u, y) in &exps {
         let mut start = 0;
         while start < y.nrows() {
-            let len = (1 + b.size(16)).min(y.nrows() - start);
+            let len = (1 + b.small(16)).min(y.nrows() - start);
             if c.push(
                 u.as_ref().subrows(start, len),
                 y.as_ref().subrows(start, len),

@@ -16,9 +16,9 @@ const METHODS: [&str; 5] = ["moesp", "ordinary-moesp", "pi-moesp", "n4sid", "cva
 
 fuzz_target!(|data: &[u8]| {
     let mut b = Bytes::new(data);
-    let (m, l) = (b.size(2), 1 + b.size(1));
-    let h = 1 + b.size(5);
-    let n = (b.size(120) + 2 * h).min(300);
+    let (m, l) = (b.small(2), 1 + b.small(1));
+    let h = 1 + b.small(5);
+    let n = b.small(120) + 2 * h;
     let (u, y) = (b.mat(n, m), b.mat(n, l));
 
     // subspace
