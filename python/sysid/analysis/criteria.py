@@ -404,7 +404,8 @@ def select_order(
     horizon : int, optional
         Horizon of the estimator built from ``data``.
     validation : IOData or (u, y), optional
-        Fresh data for the validation fit (simulation, NRMSE %).
+        Fresh data for the validation fit (simulation, NRMSE %; for a time series, without
+        inputs, the one-step prediction).
     x0 : "estimate" or "zero"
         Initial states in the criteria and fits.
     criterion : str, optional
@@ -519,14 +520,16 @@ def _sweep(est: Any, est_data: Any, meths: list[str], orders_: list[int], valida
                              noise_model=mod.K is not None, x0=x0 == "estimate",
                              n_experiments=est_data.n_experiments if est_data else 1)
             row["n_params"] = d
+            # a time series has nothing to simulate from: its fits are one-step predictions
+            h = 1 if mod.ninputs == 0 and getattr(mod, "K", None) is not None else None
             try:
                 if est_data is not None:
                     c = criteria(mod, est_data, x0=x0, n_params=d)
                     row.update({k: getattr(c, k) for k in ("loss",) + CRITERIA})
-                    row["fit_estimation"] = compare(mod, est_data, x0=x0).mean_fit
+                    row["fit_estimation"] = compare(mod, est_data, h, x0=x0).mean_fit
                 else:
                     row.update({k: np.nan for k in ("loss", "fit_estimation") + CRITERIA})
-                row["fit_validation"] = (compare(mod, validation, x0=x0).mean_fit
+                row["fit_validation"] = (compare(mod, validation, h, x0=x0).mean_fit
                                          if validation is not None else np.nan)
             except NumericalError as e:  # e.g. an unstable predictor overflowing
                 rows.append(_failed(row, e))
