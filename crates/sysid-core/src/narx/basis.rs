@@ -268,36 +268,11 @@ impl Candidates {
         let (pw, rest) = rest.split_at_mut(np * len);
         let x2 = &mut rest[..self.n_vars * len];
         let mut row = vec![0.0; self.n_vars];
-        for (k, term) in self.terms.iter().enumerate() {
+        for k in 0..self.terms.len() {
             if self.grouped[k] {
                 continue;
             }
-            match (term, self.parent[k]) {
-                (Term::Monomial(_), None) => leaf.fill(1.0),
-                (Term::Monomial(_), Some((p, v))) => {
-                    let xv = &x[v * len..(v + 1) * len];
-                    if p == 0 {
-                        leaf.copy_from_slice(xv);
-                    } else {
-                        let s = self.slot[p].expect("parents are stored");
-                        let pc = &stored[s * len..(s + 1) * len];
-                        for i in 0..len {
-                            leaf[i] = pc[i] * xv[i];
-                        }
-                    }
-                }
-                (Term::Rbf(_), _) => {
-                    for i in 0..len {
-                        for v in 0..self.n_vars {
-                            row[v] = x[v * len + i];
-                        }
-                        leaf[i] = self.basis.eval(term, &row);
-                    }
-                }
-            }
-            if let Some(s) = self.slot[k] {
-                stored[s * len..(s + 1) * len].copy_from_slice(leaf);
-            }
+            self.column(k, x, len, stored, leaf, &mut row);
             for j in 0..np {
                 cross[k * np + j] += dot(leaf, &probes[j * len..(j + 1) * len]);
             }
@@ -337,6 +312,47 @@ impl Candidates {
         }
     }
 
+    /// Candidate `k` over the block `x` (column-major, `len x n_vars`) into `leaf`: a
+    /// monomial as its stored parent times one variable, an RBF row by row (`row` is scratch
+    /// of `n_vars`); kept in `stored` when it is itself a parent.
+    fn column(
+        &self,
+        k: usize,
+        x: &[f64],
+        len: usize,
+        stored: &mut [f64],
+        leaf: &mut [f64],
+        row: &mut [f64],
+    ) {
+        let term = &self.terms[k];
+        match (term, self.parent[k]) {
+            (Term::Monomial(_), None) => leaf.fill(1.0),
+            (Term::Monomial(_), Some((p, v))) => {
+                let xv = &x[v * len..(v + 1) * len];
+                if p == 0 {
+                    leaf.copy_from_slice(xv);
+                } else {
+                    let s = self.slot[p].expect("parents are stored");
+                    let pc = &stored[s * len..(s + 1) * len];
+                    for i in 0..len {
+                        leaf[i] = pc[i] * xv[i];
+                    }
+                }
+            }
+            (Term::Rbf(_), _) => {
+                for i in 0..len {
+                    for v in 0..self.n_vars {
+                        row[v] = x[v * len + i];
+                    }
+                    leaf[i] = self.basis.eval(term, row);
+                }
+            }
+        }
+        if let Some(s) = self.slot[k] {
+            stored[s * len..(s + 1) * len].copy_from_slice(leaf);
+        }
+    }
+
     /// Calls `f(k, column)` for every candidate `k` in order, on the block of lagged
     /// variables `x` (column-major, `len x n_vars`).
     pub fn for_each_column(
@@ -349,34 +365,8 @@ impl Candidates {
         let (stored, leaf) = scratch.split_at_mut(self.n_slots * len);
         let leaf = &mut leaf[..len];
         let mut row = vec![0.0; self.n_vars];
-        for (k, term) in self.terms.iter().enumerate() {
-            // compute into `leaf`, then keep a copy when it is a parent
-            match (term, self.parent[k]) {
-                (Term::Monomial(_), None) => leaf.fill(1.0),
-                (Term::Monomial(_), Some((p, v))) => {
-                    let xv = &x[v * len..(v + 1) * len];
-                    if p == 0 {
-                        leaf.copy_from_slice(xv);
-                    } else {
-                        let s = self.slot[p].expect("parents are stored");
-                        let pc = &stored[s * len..(s + 1) * len];
-                        for i in 0..len {
-                            leaf[i] = pc[i] * xv[i];
-                        }
-                    }
-                }
-                (Term::Rbf(_), _) => {
-                    for i in 0..len {
-                        for v in 0..self.n_vars {
-                            row[v] = x[v * len + i];
-                        }
-                        leaf[i] = self.basis.eval(term, &row);
-                    }
-                }
-            }
-            if let Some(s) = self.slot[k] {
-                stored[s * len..(s + 1) * len].copy_from_slice(leaf);
-            }
+        for k in 0..self.terms.len() {
+            self.column(k, x, len, stored, leaf, &mut row);
             f(k, leaf);
         }
     }

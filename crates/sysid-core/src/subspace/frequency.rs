@@ -108,26 +108,7 @@ pub fn identify_frd(
     }
     let rank = sv.iter().filter(|&&x| x > 1e-12 * smax).count();
     let max = ((q - 1) * l).min(rank).min(2 * nf * m);
-    let n = match order {
-        Some(n) => n,
-        None => largest_log_gap(&sv, max),
-    };
-    if n == 0 || n > max {
-        return Err(SysidError::OrderTooLarge {
-            order: n,
-            max,
-            future: q,
-            outputs: l,
-        });
-    }
-    let mut gamma = svd.U().subcols(0, n).to_owned();
-    for j in 0..n {
-        let s = sv[j].sqrt();
-        for i in 0..gamma.nrows() {
-            gamma[(i, j)] *= s;
-        }
-    }
-    let (a, c, _) = shift_invariance(gamma.as_ref(), l, false)?;
+    let (_, a, c) = order_and_ac(svd.U(), &sv, order, max, q, l)?;
     let (b, d) = fit_bd(omega, g_re, g_im, &w, a.as_ref(), c.as_ref())?;
     let sys = StateSpace::new(a, b, c, d).map_err(|_| {
         SysidError::numerical(
@@ -227,23 +208,7 @@ pub fn identify_spectra(
     }
     let rank = sv.iter().filter(|&&x| x > 1e-12 * smax).count();
     let max = ((q - 1) * l).min(rank);
-    let n = order.unwrap_or_else(|| largest_log_gap(&sv, max));
-    if n == 0 || n > max {
-        return Err(SysidError::OrderTooLarge {
-            order: n,
-            max,
-            future: q,
-            outputs: l,
-        });
-    }
-    let mut gamma = svd.U().subcols(0, n).to_owned();
-    for j in 0..n {
-        let s = sv[j].sqrt();
-        for i in 0..gamma.nrows() {
-            gamma[(i, j)] *= s;
-        }
-    }
-    let (a, c, _) = shift_invariance(gamma.as_ref(), l, false)?;
+    let (n, a, c) = order_and_ac(svd.U(), &sv, order, max, q, l)?;
     // B, D (and the transient) by least squares: unknowns vec(B), vec(D), x_t
     let nt = n * m + l * m + if transient { n } else { 0 };
     let mut design = Mat::<f64>::zeros(2 * l * nf, nt);
@@ -291,6 +256,36 @@ pub fn identify_spectra(
 }
 
 /// `C (z I - A)^{-1}` at `z = co + j si`, real and imaginary parts.
+/// The order (given, or the largest gap of the log singular values up to `max`) and `A`, `C`
+/// by shift invariance of the first `n` left singular vectors `u` scaled by `sqrt(sv)`.
+fn order_and_ac(
+    u: MatRef<'_, f64>,
+    sv: &[f64],
+    order: Option<usize>,
+    max: usize,
+    q: usize,
+    l: usize,
+) -> Result<(usize, Mat<f64>, Mat<f64>)> {
+    let n = order.unwrap_or_else(|| largest_log_gap(sv, max));
+    if n == 0 || n > max {
+        return Err(SysidError::OrderTooLarge {
+            order: n,
+            max,
+            future: q,
+            outputs: l,
+        });
+    }
+    let mut gamma = u.subcols(0, n).to_owned();
+    for j in 0..n {
+        let s = sv[j].sqrt();
+        for i in 0..gamma.nrows() {
+            gamma[(i, j)] *= s;
+        }
+    }
+    let (a, c, _) = shift_invariance(gamma.as_ref(), l, false)?;
+    Ok((n, a, c))
+}
+
 fn resolvent(
     a: MatRef<'_, f64>,
     c: MatRef<'_, f64>,
