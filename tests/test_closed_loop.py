@@ -244,3 +244,18 @@ def test_mimo_closed_loop():
             assert np.max(np.abs(np.sort_complex(model.poles())
                                  - np.sort_complex(true.poles()))) < tol, (method, tol)
             assert np.max(np.abs(model.dcgain() - true.dcgain())) < 10 * tol, (method, tol)
+
+
+def test_f_survival_function_matches_scipy():
+    """The feedback test's own F tail (no scipy.stats import on every fit) equals SciPy's."""
+    from scipy import stats
+
+    from sysid.analysis.feedback import f_sf
+
+    for d1 in (1, 3, 12, 60, 400):
+        for d2 in (3, 40, 1000, 50_000):
+            for F in (1e-4, 0.3, 1.0, 2.5, 8.0, 60.0, 900.0):
+                ref = stats.f.sf(F, d1, d2)
+                if ref > 1e-280:
+                    assert f_sf(F, d1, d2) == pytest.approx(ref, rel=1e-8, abs=0)
+    assert f_sf(0.0, 2, 10) == 1.0 and f_sf(float("inf"), 2, 10) == 0.0
