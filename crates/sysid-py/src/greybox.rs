@@ -11,12 +11,11 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::greybox::ode::{self, Integrator, OdeModel, OdeOptions, OdeStructure};
 use sysid_core::greybox::{self, LinearOptions};
-use sysid_core::optim::{self, Flow, Iteration, ParameterMap};
+use sysid_core::optim::{self, ParameterMap};
 use sysid_core::pem::Focus;
 use sysid_core::SysidError;
 
-/// The first Python error raised inside a callback (re-raised after the search).
-type Slot = Option<PyErr>;
+use crate::search::{observer, solution_items, Slot};
 
 fn callback_failed(slot: &mut Slot, e: PyErr, what: &str) -> SysidError {
     let msg = format!("{what} raised: {e}");
@@ -119,43 +118,6 @@ impl OdeModel for PyOde<'_> {
     }
 }
 
-fn observer<'a>(
-    progress: &'a Option<Py<PyAny>>,
-    slot: &'a mut Slot,
-) -> impl FnMut(&Iteration) -> Flow + 'a {
-    move |it: &Iteration| -> Flow {
-        let Some(cb) = progress else {
-            return Flow::Continue;
-        };
-        Python::attach(|py| {
-            match cb.call1(
-                py,
-                (
-                    it.iteration,
-                    it.cost,
-                    it.step_norm,
-                    it.gradient_norm,
-                    it.damping,
-                ),
-            ) {
-                Ok(v) => {
-                    if v.bind(py).is(&*pyo3::types::PyBool::new(py, false)) {
-                        Flow::Stop
-                    } else {
-                        Flow::Continue
-                    }
-                }
-                Err(e) => {
-                    if slot.is_none() {
-                        *slot = Some(e);
-                    }
-                    Flow::Stop
-                }
-            }
-        })
-    }
-}
-
 #[allow(clippy::too_many_arguments)]
 fn search_options(
     max_iter: usize,
@@ -175,26 +137,6 @@ fn search_options(
     o.upper = upper;
     o.fixed = fixed;
     o
-}
-
-fn solution_items(
-    out: &Bound<'_, PyDict>,
-    py: Python<'_>,
-    sol: &optim::Solution,
-    cov: &optim::Covariance,
-) -> PyResult<()> {
-    out.set_item("covariance", mat_to_numpy(py, &cov.covariance))?;
-    out.set_item("rank", cov.rank)?;
-    out.set_item("unidentifiable", mat_to_numpy(py, &cov.unidentifiable))?;
-    out.set_item("iterations", sol.iterations)?;
-    out.set_item("evaluations", sol.evaluations)?;
-    out.set_item("cost", sol.cost)?;
-    out.set_item("history", sol.history.clone())?;
-    out.set_item("stop", sol.stop.as_str())?;
-    out.set_item("condition", sol.condition)?;
-    out.set_item("active_bounds", sol.active_bounds.clone())?;
-    out.set_item("gradient", slice_to_numpy(py, &sol.gradient))?;
-    Ok(())
 }
 
 /// Estimates a linear grey-box structure; `structure(p, jac) -> (theta, dtheta/dp or None)`.

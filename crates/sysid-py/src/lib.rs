@@ -16,6 +16,7 @@ mod pem;
 mod polynomial;
 mod realization;
 mod recursive;
+mod search;
 mod simulate;
 mod streaming;
 mod subspace;

@@ -2,11 +2,12 @@
 
 use crate::convert::{mat_to_numpy, slice_to_numpy, state_space as model, vec1, view};
 use crate::errors::IntoPy;
+use crate::search::{observer, solution_items, Slot};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sysid_core::optim::{Flow, Regularization};
+use sysid_core::optim::Regularization;
 use sysid_core::pem::{self, Focus, InitialState, PemOptions};
 
 /// Refines a state-space model by prediction-error minimisation; returns a dict.
@@ -95,37 +96,9 @@ pub fn pem_refine<'py>(
         .iter()
         .map(|(u, y)| (view(u), view(y)))
         .collect();
-    let mut callback_error: Option<PyErr> = None;
+    let mut callback_error: Slot = None;
     let result = py.detach(|| {
-        let mut observer = |it: &sysid_core::optim::Iteration| -> Flow {
-            let Some(cb) = &progress else {
-                return Flow::Continue;
-            };
-            Python::attach(|py| {
-                match cb.call1(
-                    py,
-                    (
-                        it.iteration,
-                        it.cost,
-                        it.step_norm,
-                        it.gradient_norm,
-                        it.damping,
-                    ),
-                ) {
-                    Ok(v) => {
-                        if v.bind(py).is(&*pyo3::types::PyBool::new(py, false)) {
-                            Flow::Stop
-                        } else {
-                            Flow::Continue
-                        }
-                    }
-                    Err(e) => {
-                        callback_error = Some(e);
-                        Flow::Stop
-                    }
-                }
-            })
-        };
+        let mut observer = observer(&progress, &mut callback_error);
         pem::pem(&sys, kv, &views, &o, &mut observer)
     });
     if let Some(e) = callback_error {
@@ -145,19 +118,8 @@ pub fn pem_refine<'py>(
         mat_to_numpy(py, &r.innovation_covariance),
     )?;
     out.set_item("theta", slice_to_numpy(py, &r.theta))?;
-    out.set_item("covariance", mat_to_numpy(py, &r.covariance.covariance))?;
-    out.set_item("rank", r.covariance.rank)?;
-    out.set_item(
-        "unidentifiable",
-        mat_to_numpy(py, &r.covariance.unidentifiable),
-    )?;
-    out.set_item("iterations", r.solution.iterations)?;
-    out.set_item("evaluations", r.solution.evaluations)?;
-    out.set_item("cost", r.solution.cost)?;
-    out.set_item("history", r.solution.history.clone())?;
     out.set_item("loss_history", r.loss_history.clone())?;
-    out.set_item("stop", r.solution.stop.as_str())?;
-    out.set_item("condition", r.solution.condition)?;
+    solution_items(&out, py, &r.solution, &r.covariance)?;
     out.set_item("n_samples", r.n_samples)?;
     Ok(out)
 }

@@ -250,8 +250,10 @@ class SubspaceEstimator:
         )
         self.compressor = compressor
         warn_if_fallback(self.factor, requested=compressor)
-        self._svd: dict[str, Any] = {}
+        self._svd: dict[Any, Any] = {}
         self._pe_cache: dict[int, int] = {}
+        self._feedback_p: float | None = None
+        self._feedback_warned = False
         self._subspace(None)  # checks the record (length, excitation) right away
 
     @classmethod
@@ -293,6 +295,8 @@ class SubspaceEstimator:
         self.compressor = "given"
         self._svd = {}
         self._pe_cache = {}
+        self._feedback_p = None
+        self._feedback_warned = False
         return self
 
     def _subspace(self, method: str | None) -> Any:
@@ -307,21 +311,21 @@ class SubspaceEstimator:
     def feedback_pvalue(self) -> float:
         """Combined p-value of the feedback test (:func:`sysid.check_feedback`) computed on
         this estimator's factor (no pass over the data); 1.0 without inputs."""
-        if "feedback" not in self._svd:
+        if self._feedback_p is None:
             p = 1.0
             if self.factor.n_inputs:
                 from ..analysis.feedback import feedback_pvalues
 
                 pv = feedback_pvalues(self.factor)[1]
                 p = float(min(1.0, len(pv) * float(np.min(pv))))
-            self._svd["feedback"] = p
-        return float(self._svd["feedback"])
+            self._feedback_p = p
+        return self._feedback_p
 
     def _warn_feedback(self, key: str) -> None:
-        if key in CLOSED_LOOP or "feedback_warned" in self._svd:
+        if key in CLOSED_LOOP or self._feedback_warned:
             return
         p = self.feedback_pvalue()
-        self._svd["feedback_warned"] = True
+        self._feedback_warned = True
         if p < FEEDBACK_WARNING_LEVEL:
             warnings.warn(
                 f"the record shows feedback (past outputs predict the input, p = {p:.2g}): "
