@@ -117,12 +117,12 @@ impl RecursiveFactor {
                     stack[(k + i, j)] = s * col[j];
                 }
             }
-            let qr = stack.qr();
-            let rr = qr.thin_R();
+            // the compressors' sequential QR: the same bits for any thread count
+            crate::linalg::qr_r_in_place(stack.as_mut());
             self.r.fill(0.0);
-            for i in 0..rr.nrows().min(k) {
+            for i in 0..k {
                 for j in i..k {
-                    self.r[(i, j)] = rr[(i, j)];
+                    self.r[(i, j)] = stack[(i, j)];
                 }
             }
             self.weight =
