@@ -31,7 +31,7 @@ def test_every_bundled_file_is_listed_with_its_checksum():
     sums = _published_sums()
     files = {p.name for p in DATA_DIR.iterdir() if p.name != "README.md"}
     assert {f.removesuffix(".gz") for f in files} == set(sums)
-    assert len(sums) == len(sysid.datasets.NAMES) == 4
+    assert len(sums) == len(sysid.datasets.NAMES) == 7
 
 
 @pytest.mark.parametrize("name", sysid.datasets.NAMES)
@@ -70,8 +70,30 @@ def test_f16_loader_matches_the_csv_columns():
                                atol=0.05 * np.std(u))
 
 
+def test_ph_loader_drops_the_time_column():
+    cols = np.loadtxt(sysid.datasets.path("ph"))
+    d = sysid.datasets.load_ph()
+    assert cols.shape == (2001, 4) and (d.n_inputs, d.n_outputs, d.dt) == (2, 1, 10.0)
+    np.testing.assert_array_equal(np.hstack([d.u, d.y]), cols[:, 1:])
+    np.testing.assert_array_equal(cols[:, 0], np.arange(1, 2002))
+
+
+@pytest.mark.parametrize(("name", "periods"), [("f16_level3", 3), ("f16_level2", 2)])
+def test_cut_f16_records_are_whole_steady_state_periods(name, periods):
+    d = getattr(sysid.datasets, f"load_{name}")()
+    assert (d.n_samples, d.n_inputs, d.n_outputs, d.dt) == (8192 * periods, 1, 3, 1 / 400)
+    raw = np.genfromtxt(sysid.datasets.path(name), delimiter=",", skip_header=1,
+                        usecols=(0, 2, 3, 4))
+    np.testing.assert_array_equal(np.hstack([d.u, d.y]), raw)
+    # the kept periods repeat the multisine (the transient first period is not among them)
+    u = d.u[:, 0]
+    np.testing.assert_allclose(u[:8192], u[8192:16384], atol=0.05 * np.std(u))
+    y = d.y[:, 1]
+    assert np.std(y[:8192] - y[8192:16384]) < 0.2 * np.std(y)
+
+
 def test_unknown_name_lists_the_bundled_ones():
-    with pytest.raises(ValueError, match="dryer, robot_arm, winding, f16"):
+    with pytest.raises(ValueError, match="dryer, robot_arm, winding, f16, f16_level3"):
         sysid.datasets.path("flutter")
 
 

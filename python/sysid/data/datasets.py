@@ -12,10 +12,18 @@ name           record                              file
 ``f16``        F-16 ground vibration test, level   ``F16Data_FullMSine_Level1.csv.gz``; 73728
                1 (nonlinearbenchmark.org): shaker  samples at 400 Hz, 9 periods of a 2-15 Hz
                force -> three accelerations        multisine (the first is transient)
+``f16_level3`` F-16, level 3 (36.8 N RMS,          ``..._Level3_periods2-4.csv.gz``: periods 2-4
+               nonlinear), estimation              of the record (24576 samples; rows cut)
+``f16_level2`` F-16, level 2 (24.6 N RMS),         ``..._Level2_Validation_periods2-3.csv.gz``:
+               validation                          periods 2-3 (16384 samples; rows cut)
+``ph``         pH neutralisation (DaISy,           ``pHdata.dat.gz``; 2001 samples, dt = 10 s
+               simulated): acid, base flow -> pH
 =============  ==================================  ===========================================
 
 :func:`path` gives the file (``numpy.loadtxt`` and :meth:`sysid.IOData.from_csv` read the
 compressed ones directly); ``load_<name>()`` returns the record as :class:`sysid.IOData`.
+The two F-16 level 2/3 files keep only some periods of the published records (the rows
+unchanged); every other file is the published file.
 """
 
 from __future__ import annotations
@@ -30,6 +38,9 @@ __all__ = [
     "load_robot_arm",
     "load_winding",
     "load_f16",
+    "load_f16_level3",
+    "load_f16_level2",
+    "load_ph",
     "NAMES",
 ]
 
@@ -39,6 +50,9 @@ _FILES = {
     "robot_arm": "robot_arm.dat.gz",
     "winding": "winding.dat.gz",
     "f16": "F16Data_FullMSine_Level1.csv.gz",
+    "f16_level3": "F16Data_FullMSine_Level3_periods2-4.csv.gz",
+    "f16_level2": "F16Data_FullMSine_Level2_Validation_periods2-3.csv.gz",
+    "ph": "pHdata.dat.gz",
 }
 NAMES = tuple(_FILES)
 
@@ -52,7 +66,7 @@ def path(name: str) -> str:
     >>> sysid.datasets.path("dryer").endswith("dryer.dat")
     True
     >>> sysid.datasets.NAMES
-    ('dryer', 'robot_arm', 'winding', 'f16')
+    ('dryer', 'robot_arm', 'winding', 'f16', 'f16_level3', 'f16_level2', 'ph')
     """
     if name not in _FILES:
         raise ValueError(f"unknown data set {name!r}; bundled: {', '.join(NAMES)}")
@@ -131,7 +145,53 @@ def load_f16() -> IOData:
     >>> d.output_names
     ['Acceleration1', 'Acceleration2', 'Acceleration3']
     """
+    return _f16("f16")
+
+
+def _f16(name: str) -> IOData:
     outputs = ["Acceleration1", "Acceleration2", "Acceleration3"]
-    d = IOData.from_csv(path("f16"), ["Force"], outputs, dt=1 / 400)
+    d = IOData.from_csv(path(name), ["Force"], outputs, dt=1 / 400)
     return IOData(d.u, d.y, d.dt, input_names=["Force"], output_names=outputs,
                   input_units=["N"])
+
+
+def load_f16_level3() -> IOData:
+    """The F-16 ground vibration test at level 3 (36.8 N RMS, the most nonlinear shipped
+    level; the benchmark's estimation record): periods 2-4 of the 9 (24576 samples at
+    400 Hz, in steady state; the transient first period and periods 5-9 are not shipped).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> sysid.datasets.load_f16_level3()
+    IOData: 24576 samples, 1 input, 3 outputs, dt = 0.0025 s
+    """
+    return _f16("f16_level3")
+
+
+def load_f16_level2() -> IOData:
+    """The F-16 ground vibration test at level 2 (24.6 N RMS; the benchmark's validation
+    record for models estimated at level 3): periods 2-3 of the 9 (16384 samples at 400 Hz).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> sysid.datasets.load_f16_level2()
+    IOData: 16384 samples, 1 input, 3 outputs, dt = 0.0025 s
+    """
+    return _f16("f16_level2")
+
+
+def load_ph() -> IOData:
+    """The pH neutralisation process (DaISy, simulated, nonlinear): acid and base
+    flows in, pH out; dt = 10 s (the file's first column, the time index, is dropped).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> sysid.datasets.load_ph()
+    IOData: 2001 samples, 2 inputs, 1 output, dt = 10 s
+    """
+    d = _columns("ph")
+    return IOData(u=d[:, 1:3], y=d[:, 3:], dt=10.0, input_names=["acid flow", "base flow"],
+                  output_names=["pH"])
