@@ -2,7 +2,12 @@
 //! free-run simulation and k-step prediction of NARX / NARMAX models.
 //!
 //! Terms cross the boundary as lists of ints: a monomial is its sorted variable indices
-//! (empty: the constant), radial basis function `c` is `[-1 - c]`.
+//! (empty: the constant), radial basis function `c` is `[-1 - c]`, custom regressor `c`
+//! is `[-1, c]` (the variable after the lagged ones, so the code does not depend on them).
+//!
+//! Custom regressors cross as their arguments, `(kind, channel, lag)` with kind 0 for an
+//! output and 1 for an input; their values as one `(N, n_custom)` array per experiment
+//! (estimation) or as Python callables of the argument values (simulation, prediction).
 
 use crate::convert::{mat_to_numpy, slice_to_numpy, view, view_nd};
 use crate::errors::IntoPy;
@@ -12,8 +17,9 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::narx::basis::{Basis, Candidates, RbfBasis, Term};
 use sysid_core::narx::frols::{self, FrolsOptions};
-use sysid_core::narx::regressors::{LagSpec, Record};
+use sysid_core::narx::regressors::{LagSpec, LagVar, Record, Signal};
 use sysid_core::narx::simulate::{Equation, NarxModel};
+use std::cell::RefCell;
 use sysid_core::SysidError;
 
 type Experiments<'a> = Vec<(
@@ -44,23 +50,48 @@ fn basis(degree: Option<usize>, rbf: Option<Rbf<'_>>) -> PyResult<Basis> {
     }
 }
 
+type CustomArgs = Vec<Vec<(u8, usize, usize)>>;
+
 fn spec(
     nu: usize,
     ny: usize,
     orders: &(Vec<usize>, Vec<usize>, Vec<usize>, Vec<usize>),
+    custom: &CustomArgs,
 ) -> PyResult<LagSpec> {
-    LagSpec::new(nu, ny, &orders.0, &orders.1, &orders.2, &orders.3).py()
+    let sp = LagSpec::new(nu, ny, &orders.0, &orders.1, &orders.2, &orders.3).py()?;
+    if custom.is_empty() {
+        return Ok(sp);
+    }
+    let args = custom
+        .iter()
+        .map(|a| {
+            a.iter()
+                .map(|&(kind, channel, lag)| LagVar {
+                    signal: if kind == 0 {
+                        Signal::Output
+                    } else {
+                        Signal::Input
+                    },
+                    channel,
+                    lag,
+                })
+                .collect()
+        })
+        .collect();
+    sp.with_custom(args).py()
 }
 
-fn encode(t: &Term) -> Vec<i64> {
+fn encode(t: &Term, n_lagged: usize) -> Vec<i64> {
     match t {
         Term::Monomial(v) => v.iter().map(|&i| i as i64).collect(),
         Term::Rbf(c) => vec![-1 - *c as i64],
+        Term::Custom(v) => vec![-1, (*v - n_lagged) as i64],
     }
 }
 
-fn decode(v: &[i64]) -> Term {
+fn decode(v: &[i64], n_lagged: usize) -> Term {
     match v {
+        [-1, c] => Term::Custom(n_lagged + (*c).max(0) as usize),
         [c] if *c < 0 => Term::Rbf((-1 - c) as usize),
         _ => Term::Monomial(v.iter().map(|&i| i.max(0) as usize).collect()),
     }
@@ -68,13 +99,15 @@ fn decode(v: &[i64]) -> Term {
 
 type Views<'a> = (MatRef<'a, f64>, MatRef<'a, f64>, Option<MatRef<'a, f64>>);
 
-fn records<'a>(views: &'a [Views<'a>]) -> Vec<Record<'a>> {
+fn records<'a>(views: &'a [Views<'a>], custom: &'a [MatRef<'a, f64>]) -> Vec<Record<'a>> {
     views
         .iter()
-        .map(|(u, y, e)| Record {
+        .enumerate()
+        .map(|(i, (u, y, e))| Record {
             u: *u,
             y: *y,
             e: *e,
+            c: custom.get(i).copied(),
         })
         .collect()
 }
@@ -85,7 +118,7 @@ type Orders = (Vec<usize>, Vec<usize>, Vec<usize>, Vec<usize>);
 /// Returns, per output, a dict with `terms` (encoded), `err`, `rss`, `r`, `n_rows`, and the
 /// number of candidates.
 #[pyfunction]
-#[pyo3(signature = (experiments, orders, degree, rbf, max_terms, forced, err_tol=1e-10, block_rows=0))]
+#[pyo3(signature = (experiments, orders, degree, rbf, max_terms, forced, err_tol=1e-10, block_rows=0, custom_args=vec![], custom_values=vec![]))]
 #[allow(clippy::too_many_arguments)]
 pub fn narx_frols<'py>(
     py: Python<'py>,
@@ -97,13 +130,16 @@ pub fn narx_frols<'py>(
     forced: Vec<Vec<Vec<i64>>>,
     err_tol: f64,
     block_rows: usize,
+    custom_args: CustomArgs,
+    custom_values: Vec<PyReadonlyArray2<'_, f64>>,
 ) -> PyResult<(Vec<Bound<'py, PyDict>>, usize)> {
     let b = basis(degree, rbf)?;
     let (nu, ny) = experiments
         .first()
         .map(|(u, y, _)| (u.as_array().ncols(), y.as_array().ncols()))
         .unwrap_or((0, 1));
-    let sp = spec(nu, ny, &orders)?;
+    let sp = spec(nu, ny, &orders, &custom_args)?;
+    let cviews: Vec<MatRef<'_, f64>> = custom_values.iter().map(view).collect();
     let views: Vec<_> = experiments
         .iter()
         .map(|(u, y, e)| {
@@ -116,9 +152,9 @@ pub fn narx_frols<'py>(
         .collect();
     let (sels, rs, terms, m) = py
         .detach(|| -> sysid_core::Result<_> {
-            let cands = Candidates::new(&b, sp.n_vars())?;
+            let cands = Candidates::with_custom(&b, sp.n_lagged(), sp.n_custom())?;
             let index = |t: &Vec<i64>| -> sysid_core::Result<usize> {
-                let t = decode(t);
+                let t = decode(t, sp.n_lagged());
                 cands.terms.iter().position(|c| *c == t).ok_or_else(|| {
                     SysidError::InvalidArgument {
                         name: "forced",
@@ -133,13 +169,13 @@ pub fn narx_frols<'py>(
             let mut opts = FrolsOptions::with_max_terms(max_terms);
             opts.err_tol = err_tol;
             opts.block_rows = block_rows;
-            let recs = records(&views);
+            let recs = records(&views, &cviews);
             let sels = frols::frols(&sp, &cands, &recs, &forced_idx, &opts)?;
             let chosen: Vec<Vec<usize>> = sels.iter().map(|s| s.terms.clone()).collect();
             let rs = frols::fit(&sp, &cands, &recs, &chosen)?;
             let terms: Vec<Vec<Vec<i64>>> = chosen
                 .iter()
-                .map(|c| c.iter().map(|&k| encode(&cands.terms[k])).collect())
+                .map(|c| c.iter().map(|&k| encode(&cands.terms[k], sp.n_lagged())).collect())
                 .collect();
             Ok((sels, rs, terms, cands.len()))
         })
@@ -163,6 +199,8 @@ pub fn narx_frols<'py>(
 
 /// Streaming QR factor of `[terms_i, y_i]` per output for given (encoded) terms.
 #[pyfunction]
+#[pyo3(signature = (experiments, orders, degree, rbf, terms, custom_args=vec![], custom_values=vec![]))]
+#[allow(clippy::too_many_arguments)]
 pub fn narx_fit<'py>(
     py: Python<'py>,
     experiments: Experiments<'_>,
@@ -170,13 +208,16 @@ pub fn narx_fit<'py>(
     degree: Option<usize>,
     rbf: Option<Rbf<'_>>,
     terms: Vec<Vec<Vec<i64>>>,
+    custom_args: CustomArgs,
+    custom_values: Vec<PyReadonlyArray2<'_, f64>>,
 ) -> PyResult<Vec<Bound<'py, PyArray2<f64>>>> {
     let b = basis(degree, rbf)?;
     let (nu, ny) = experiments
         .first()
         .map(|(u, y, _)| (u.as_array().ncols(), y.as_array().ncols()))
         .unwrap_or((0, 1));
-    let sp = spec(nu, ny, &orders)?;
+    let sp = spec(nu, ny, &orders, &custom_args)?;
+    let cviews: Vec<MatRef<'_, f64>> = custom_values.iter().map(view).collect();
     let views: Vec<_> = experiments
         .iter()
         .map(|(u, y, e)| {
@@ -191,14 +232,15 @@ pub fn narx_fit<'py>(
         .detach(|| -> sysid_core::Result<Vec<Mat<f64>>> {
             let ts: Vec<Vec<Term>> = terms
                 .iter()
-                .map(|t| t.iter().map(|v| decode(v)).collect())
+                .map(|t| t.iter().map(|v| decode(v, sp.n_lagged())).collect())
                 .collect();
-            frols::fit_terms(&sp, &b, &records(&views), &ts)
+            frols::fit_terms(&sp, &b, &records(&views, &cviews), &ts)
         })
         .py()?;
     Ok(rs.iter().map(|r| mat_to_numpy(py, r)).collect())
 }
 
+#[allow(clippy::too_many_arguments)]
 fn model(
     nu: usize,
     ny: usize,
@@ -206,21 +248,74 @@ fn model(
     degree: Option<usize>,
     rbf: Option<Rbf<'_>>,
     equations: Vec<(Vec<Vec<i64>>, Vec<f64>)>,
+    custom_args: &CustomArgs,
 ) -> PyResult<NarxModel> {
     let b = basis(degree, rbf)?;
-    let sp = spec(nu, ny, orders)?;
+    let sp = spec(nu, ny, orders, custom_args)?;
     let eqs = equations
         .into_iter()
         .map(|(t, c)| Equation {
-            terms: t.iter().map(|v| decode(v)).collect(),
+            terms: t.iter().map(|v| decode(v, sp.n_lagged())).collect(),
             coefs: c,
         })
         .collect();
     NarxModel::new(sp, b, eqs).py()
 }
 
-/// Free-run simulation; `y0` holds the first `max_lag` outputs.
+/// Runs `run` with a callback evaluating custom regressor `c` by the Python callable
+/// `fns[c]` (called with the argument values as floats; must return a float). A Python
+/// exception from a callable is raised as is.
+fn custom_error(reason: String) -> SysidError {
+    SysidError::InvalidArgument {
+        name: "custom",
+        reason,
+    }
+}
+
+fn with_custom<T>(
+    py: Python<'_>,
+    fns: &[Py<PyAny>],
+    run: impl FnOnce(&mut sysid_core::narx::simulate::CustomFn<'_>) -> sysid_core::Result<T> + Send,
+) -> PyResult<T>
+where
+    T: Send,
+{
+    if fns.is_empty() {
+        let mut none = |_: usize, _: &[f64]| -> sysid_core::Result<f64> {
+            Err(custom_error(
+                "the model has custom regressors: pass their functions".into(),
+            ))
+        };
+        return py.detach(|| run(&mut none)).py();
+    }
+    let failure: RefCell<Option<PyErr>> = RefCell::new(None);
+    let mut call = |c: usize, args: &[f64]| -> sysid_core::Result<f64> {
+        let f = fns.get(c).ok_or_else(|| {
+            custom_error(format!("no function for custom regressor {c}"))
+        })?;
+        let r = f
+            .bind(py)
+            .call1(pyo3::types::PyTuple::new(py, args).map_err(|e| {
+                custom_error(e.to_string())
+            })?)
+            .and_then(|v| v.extract::<f64>());
+        r.map_err(|e| {
+            let msg = format!("custom regressor {c} failed: {e}");
+            *failure.borrow_mut() = Some(e);
+            custom_error(msg)
+        })
+    };
+    let out = run(&mut call);
+    if let Some(e) = failure.into_inner() {
+        return Err(e);
+    }
+    out.py()
+}
+
+/// Free-run simulation; `y0` holds the first `max_lag` outputs; `custom_fns` evaluate the
+/// custom regressors (arguments `custom_args`).
 #[pyfunction]
+#[pyo3(signature = (orders, degree, rbf, equations, u, y0, custom_args=vec![], custom_fns=vec![]))]
 #[allow(clippy::too_many_arguments)]
 pub fn narx_simulate<'py>(
     py: Python<'py>,
@@ -230,15 +325,18 @@ pub fn narx_simulate<'py>(
     equations: Vec<(Vec<Vec<i64>>, Vec<f64>)>,
     u: PyReadonlyArray2<'_, f64>,
     y0: PyReadonlyArray2<'_, f64>,
+    custom_args: CustomArgs,
+    custom_fns: Vec<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let (uv, yv) = (view(&u), view(&y0));
-    let m = model(uv.ncols(), yv.ncols(), &orders, degree, rbf, equations)?;
-    let y = py.detach(|| m.simulate(uv, yv)).py()?;
+    let m = model(uv.ncols(), yv.ncols(), &orders, degree, rbf, equations, &custom_args)?;
+    let y = with_custom(py, &custom_fns, |f| m.simulate_with(uv, yv, f))?;
     Ok(mat_to_numpy(py, &y))
 }
 
 /// `horizon`-step prediction from measured `u`, `y`.
 #[pyfunction]
+#[pyo3(signature = (orders, degree, rbf, equations, u, y, horizon, custom_args=vec![], custom_fns=vec![]))]
 #[allow(clippy::too_many_arguments)]
 pub fn narx_predict<'py>(
     py: Python<'py>,
@@ -249,10 +347,12 @@ pub fn narx_predict<'py>(
     u: PyReadonlyArray2<'_, f64>,
     y: PyReadonlyArray2<'_, f64>,
     horizon: usize,
+    custom_args: CustomArgs,
+    custom_fns: Vec<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let (uv, yv) = (view(&u), view(&y));
-    let m = model(uv.ncols(), yv.ncols(), &orders, degree, rbf, equations)?;
-    let p = py.detach(|| m.predict(uv, yv, horizon)).py()?;
+    let m = model(uv.ncols(), yv.ncols(), &orders, degree, rbf, equations, &custom_args)?;
+    let p = with_custom(py, &custom_fns, |f| m.predict_with(uv, yv, horizon, f))?;
     Ok(mat_to_numpy(py, &p))
 }
 

@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import _sysid
 from ..errors import DataError
+from ..models.customreg import CustomRegressor
 from ..models.narx import NARXModel, PolynomialBasis, RBFBasis
 
 __all__ = ["nlarx"]
@@ -47,6 +48,30 @@ def _lag_matrix(u: np.ndarray, y: np.ndarray, na: list[int], nb: list[int], nk: 
     cols = [y[L - lag:n - lag, k] for k in range(len(na)) for lag in range(1, na[k] + 1)]
     cols += [u[L - lag:n - lag, j] for j in range(len(nb)) for lag in range(nk[j], nk[j] + nb[j])]
     return np.column_stack(cols)
+
+
+def _custom(custom: list[Any], exps: list[tuple[np.ndarray, np.ndarray]], orders: Any,
+            ne: int, names: dict[str, Any]) -> dict[str, Any]:
+    """Arguments and values (one ``(N, n_custom)`` array per experiment) of the custom
+    regressors for ``_sysid.narx_frols``; empty without custom regressors."""
+    if not custom:
+        return {}
+    if not all(isinstance(c, CustomRegressor) for c in custom):
+        raise DataError("custom must be a list of sysid.CustomRegressor")
+    na_, nb_, nk_, _ = orders
+    ny, nu = len(na_), len(nb_)
+    outs = names["output_names"] or [f"y{i}" for i in range(ny)]
+    ins = names["input_names"] or [f"u{j}" for j in range(nu)]
+    args = [c.resolve(list(outs), list(ins)) for c in custom]
+    L = max([*na_, *[b + k - 1 for b, k in zip(nb_, nk_) if b], ne, 1,
+             *[lag for a in args for _, _, lag in a]])
+    vals = []
+    for u, y in exps:
+        if y.shape[0] <= L:
+            raise DataError(f"a record of {y.shape[0]} samples is too short for lags up to {L}")
+        vals.append(np.ascontiguousarray(np.column_stack(
+            [c.values(u, y, L, list(outs), list(ins)) for c in custom])))
+    return {"custom_args": args, "custom_values": vals}
 
 
 def _prefix(r: np.ndarray, k: int) -> tuple[np.ndarray, float]:
@@ -96,6 +121,7 @@ def nlarx(
     noise_terms: int = 0,
     n_iterations: int = 5,
     err_tol: float = 1e-10,
+    custom: Any = None,
 ) -> NARXModel:
     """NARX / NARMAX model with terms chosen by FROLS (forward-regression orthogonal least
     squares with the error reduction ratio).
@@ -126,6 +152,9 @@ def nlarx(
         Extended-least-squares rounds (NARMAX only).
     err_tol : float
         Stop selecting when the unexplained fraction ``1 - sum ERR`` falls below this.
+    custom : list of CustomRegressor, optional
+        User-supplied regressors (MATLAB's ``customreg``), candidates beside the basis's
+        terms; each enters linearly if chosen.
 
     Returns
     -------
@@ -163,10 +192,13 @@ def nlarx(
         basis = basis.fitted(np.vstack([_lag_matrix(u, y, na_, nb_, nk_) for u, y in exps]))
     degree, rbf = basis.rust_args()
     orders = (na_, nb_, nk_, [0] * ny)
-    sel, n_cands = _sysid.narx_frols([(u, y, None) for u, y in exps], orders, degree, rbf,
-                                     int(max_terms), [[] for _ in range(ny)], float(err_tol))
     names = dict(input_names=getattr(data, "input_names", None),
                  output_names=getattr(data, "output_names", None))
+    custom = list(custom or [])
+    cust = _custom(custom, exps, orders, noise_terms, names)
+    sel, n_cands = _sysid.narx_frols([(u, y, None) for u, y in exps], orders, degree, rbf,
+                                     int(max_terms), [[] for _ in range(ny)], float(err_tol),
+                                     **cust)
     n_rows = int(sel[0]["n_rows"])
     keep, scores = [], []
     for s in sel:
@@ -188,7 +220,7 @@ def nlarx(
             errs.append(np.asarray(s["err"])[:k])
             var.append(rss / n_rows)
         return NARXModel(na_, nb_, nk_, basis, terms, coefs, dt, err=errs,
-                         noise_variance=var, **names)
+                         noise_variance=var, custom=custom, **names)
 
     if criterion == "validation":
         vexps = _exps(validation)
@@ -208,7 +240,7 @@ def nlarx(
                             "max_terms": int(max_terms), "criterion_values": scores}
     if noise_terms:
         model = _narmax(model, exps, orders, degree, rbf, int(noise_terms), int(max_terms),
-                        int(n_iterations), float(err_tol), names, info, criterion)
+                        int(n_iterations), float(err_tol), names, info, criterion, cust)
     model.info.update(info)
     return model
 
@@ -216,7 +248,7 @@ def nlarx(
 def _narmax(model: NARXModel, exps: list[tuple[np.ndarray, np.ndarray]], orders: Any,
             degree: int | None, rbf: Any, ne: int, max_noise: int, n_iterations: int,
             err_tol: float, names: dict[str, Any], info: dict[str, Any],
-            criterion: str | None) -> NARXModel:
+            criterion: str | None, cust: dict[str, Any]) -> NARXModel:
     """Extended least squares: residuals of the current model, noise terms chosen after the
     (forced) process terms, refit; repeated ``n_iterations`` times."""
     na_, nb_, nk_, _ = orders
@@ -228,7 +260,8 @@ def _narmax(model: NARXModel, exps: list[tuple[np.ndarray, np.ndarray]], orders:
     for _ in range(max(n_iterations, 1)):
         recs = [(u, y, np.ascontiguousarray(y - current.predict(u, y, 1))) for u, y in exps]
         sel, _ = _sysid.narx_frols(recs, (na_, nb_, nk_, ne_), degree, rbf,
-                                   max(len(p) for p in process) + max_noise, process, err_tol)
+                                   max(len(p) for p in process) + max_noise, process, err_tol,
+                                   **cust)
         terms, coefs, errs, var = [], [], [], []
         for s, p in zip(sel, process):
             k = len(s["terms"])
@@ -243,7 +276,7 @@ def _narmax(model: NARXModel, exps: list[tuple[np.ndarray, np.ndarray]], orders:
             errs.append(np.asarray(s["err"])[:k])
             var.append(rss / s["n_rows"])
         new = NARXModel(na_, nb_, nk_, current.basis, terms, coefs, current.dt, ne=ne_,
-                        err=errs, noise_variance=var, **names)
+                        err=errs, noise_variance=var, custom=current.custom, **names)
         history.append(float(np.sum(var)))
         same = [t for t in new.terms] == [t for t in current.terms] and all(
             np.allclose(a, b, rtol=1e-8, atol=1e-12) for a, b in zip(new.coefs, current.coefs))

@@ -16,9 +16,10 @@ import numpy as np
 
 from .. import _sysid
 from ..errors import DataError
+from .customreg import CustomRegressor
 from .protocol import ModelMixin
 
-__all__ = ["NARXModel", "PolynomialBasis", "RBFBasis"]
+__all__ = ["NARXModel", "PolynomialBasis", "RBFBasis", "CustomRegressor"]
 
 
 class PolynomialBasis:
@@ -162,8 +163,11 @@ def lag_names(na: list[int], nb: list[int], nk: list[int], ne: list[int],
     return out
 
 
-def term_name(term: list[int], names: list[str]) -> str:
-    """``1``, ``y0(t-1)^2 u0(t-1)`` or ``rbf3``."""
+def term_name(term: list[int], names: list[str], custom: list[str] | None = None) -> str:
+    """``1``, ``y0(t-1)^2 u0(t-1)``, ``rbf3`` or the name of custom regressor ``c`` (term
+    ``[-1, c]``)."""
+    if len(term) == 2 and term[0] == -1:
+        return (custom or [])[term[1]]
     if len(term) == 1 and term[0] < 0:
         return f"rbf{-1 - term[0]}"
     if not term:
@@ -202,6 +206,8 @@ class NARXModel(ModelMixin):
         Error reduction ratio of each term (from FROLS).
     noise_variance : array_like, optional
         Residual variance per output.
+    custom : list of CustomRegressor, optional
+        User-supplied regressors; term ``[-1, c]`` is ``custom[c]``.
 
     Examples
     --------
@@ -218,7 +224,8 @@ class NARXModel(ModelMixin):
     def __init__(self, na: Any, nb: Any, nk: Any, basis: PolynomialBasis | RBFBasis,
                  terms: Any, coefs: Any, dt: float, *, ne: Any = None, err: Any = None,
                  noise_variance: Any = None, input_names: Any = None,
-                 output_names: Any = None, info: dict[str, Any] | None = None) -> None:
+                 output_names: Any = None, info: dict[str, Any] | None = None,
+                 custom: Any = None) -> None:
         self.na = [int(v) for v in np.atleast_1d(na)]
         self.nb = [int(v) for v in np.atleast_1d(nb)] if np.size(nb) else []
         self.nk = [int(v) for v in np.atleast_1d(nk)] if np.size(nk) else []
@@ -243,9 +250,14 @@ class NARXModel(ModelMixin):
         self.output_names = ([f"y{i}" for i in range(ny)] if output_names is None
                              else [str(n) for n in output_names])
         self.info: dict[str, Any] = dict(info or {})
+        self.custom: list[CustomRegressor] = list(custom or [])
+        if not all(isinstance(c, CustomRegressor) for c in self.custom):
+            raise DataError("custom must be a list of sysid.CustomRegressor")
+        self._custom_args = [c.resolve(self.output_names, self.input_names)
+                             for c in self.custom]
         # checks terms against the lags and basis (raises a DataError naming the problem)
         self._rust("simulate", np.zeros((self.max_lag + 1, nu)),
-                   np.zeros((self.max_lag, ny)))
+                   np.zeros((self.max_lag, ny)), fns=[lambda *a: 0.0] * len(self.custom))
 
     # -- protocol ----------------------------------------------------------------------
     ninputs = property(lambda self: len(self.nb), doc="Number of inputs.")
@@ -260,6 +272,7 @@ class NARXModel(ModelMixin):
     def max_lag(self) -> int:
         """Largest lag: the number of initial outputs a simulation needs."""
         lags = [*self.na, *[b + k - 1 for b, k in zip(self.nb, self.nk) if b], *self.ne, 1]
+        lags += [lag for a in getattr(self, "_custom_args", []) for _, _, lag in a]
         return int(max(lags))
 
     @property
@@ -270,14 +283,18 @@ class NARXModel(ModelMixin):
 
     def term_names(self, output: int = 0) -> list[str]:
         """Readable names of the terms of one output's equation."""
-        names = self.regressor_names
-        return [term_name(t, names) for t in self.terms[output]]
+        names, custom = self.regressor_names, [c.name for c in self.custom]
+        return [term_name(t, names, custom) for t in self.terms[output]]
 
-    def _rust(self, fn: str, *arrays: Any) -> np.ndarray:
+    def _rust(self, fn: str, *arrays: Any, fns: Any = None) -> np.ndarray:
         degree, rbf = self.basis.rust_args()
         orders = (self.na, self.nb, self.nk, self.ne)
         eqs = [(t, c.tolist()) for t, c in zip(self.terms, self.coefs)]
-        return np.asarray(getattr(_sysid, f"narx_{fn}")(orders, degree, rbf, eqs, *arrays))
+        if not self.custom:
+            return np.asarray(getattr(_sysid, f"narx_{fn}")(orders, degree, rbf, eqs, *arrays))
+        fns = [c.scalar() for c in self.custom] if fns is None else fns
+        return np.asarray(getattr(_sysid, f"narx_{fn}")(
+            orders, degree, rbf, eqs, *arrays, custom_args=self._custom_args, custom_fns=fns))
 
     def _u(self, u: Any, n: int | None = None) -> np.ndarray:
         u = np.asarray(u, dtype=float)
@@ -402,6 +419,10 @@ class NARXModel(ModelMixin):
     # -- saving ------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         """Everything needed to rebuild the model (see :func:`sysid.save_model`)."""
+        if self.custom:
+            raise DataError("a NARXModel with custom regressors holds Python functions and "
+                            "cannot be saved; save the terms and coefficients (to_pandas()) "
+                            "and rebuild it with NARXModel(..., custom=[...])")
         return {"na": self.na, "nb": self.nb, "nk": self.nk, "ne": self.ne,
                 "basis": self.basis.to_dict(), "terms": self.terms,
                 "coefs": [c for c in self.coefs], "err": [e for e in self.err],

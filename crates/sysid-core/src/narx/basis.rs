@@ -12,6 +12,11 @@ pub enum Term {
     Monomial(Vec<usize>),
     /// Gaussian radial basis function number `c` of the basis.
     Rbf(usize),
+    /// The user-supplied regressor held in variable `v` (a [`Signal::Custom`] variable of
+    /// the lag spec, after the lagged ones).
+    ///
+    /// [`Signal::Custom`]: super::regressors::Signal::Custom
+    Custom(usize),
 }
 
 /// Gaussian radial basis functions `exp(-|z - c_k|^2 / (2 w_k^2))` of the scaled variables
@@ -50,6 +55,7 @@ impl Basis {
                 Basis::Rbf(r) => r.eval(*c, x),
                 Basis::Polynomial { .. } => f64::NAN,
             },
+            Term::Custom(v) => x[*v],
         }
     }
 
@@ -88,7 +94,7 @@ impl RbfBasis {
     #[inline]
     fn eval(&self, c: usize, x: &[f64]) -> f64 {
         let mut s = 0.0;
-        for v in 0..x.len() {
+        for v in 0..self.shift.len() {
             let d = (x[v] - self.shift[v]) / self.scale[v] - self.centres[(c, v)];
             s += d * d;
         }
@@ -130,6 +136,19 @@ impl Candidates {
     /// assert_eq!(Candidates::new(&Basis::Polynomial { degree: 2 }, 2).unwrap().len(), 6);
     /// ```
     pub fn new(basis: &Basis, n_vars: usize) -> Result<Self> {
+        Self::with_custom(basis, n_vars, 0)
+    }
+
+    /// The candidates of `basis` over `n_lagged` lagged variables, followed by `n_custom`
+    /// user-supplied regressors (variables `n_lagged..n_lagged + n_custom`, one term each).
+    ///
+    /// ```
+    /// use sysid_core::narx::basis::{Basis, Candidates, Term};
+    /// let c = Candidates::with_custom(&Basis::Polynomial { degree: 2 }, 2, 1).unwrap();
+    /// assert_eq!((c.len(), c.terms[6].clone()), (7, Term::Custom(2)));
+    /// ```
+    pub fn with_custom(basis: &Basis, n_lagged: usize, n_custom: usize) -> Result<Self> {
+        let n_vars = n_lagged;
         basis.check(n_vars)?;
         let mut terms = vec![Term::Monomial(vec![])];
         let mut parent = vec![None];
@@ -179,6 +198,11 @@ impl Candidates {
                 }
             }
         }
+        for c in 0..n_custom {
+            terms.push(Term::Custom(n_lagged + c));
+            parent.push(None);
+        }
+        let n_vars = n_lagged + n_custom;
         // parents keep their block column while children are generated
         let mut is_parent = vec![false; terms.len()];
         for p in parent.iter().flatten() {
@@ -228,7 +252,7 @@ impl Candidates {
         self.terms.is_empty()
     }
 
-    /// Number of lagged variables.
+    /// Number of variables (lagged ones and custom regressors).
     pub fn n_vars(&self) -> usize {
         self.n_vars
     }
@@ -339,6 +363,7 @@ impl Candidates {
                     }
                 }
             }
+            (Term::Custom(v), _) => leaf.copy_from_slice(&x[v * len..(v + 1) * len]),
             (Term::Rbf(_), _) => {
                 for i in 0..len {
                     for v in 0..self.n_vars {
@@ -400,6 +425,7 @@ pub fn term_name(term: &Term, names: &[String]) -> String {
             parts.join(" ")
         }
         Term::Rbf(c) => format!("rbf{c}"),
+        Term::Custom(v) => names[*v].clone(),
     }
 }
 

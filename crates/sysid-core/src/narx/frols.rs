@@ -210,7 +210,7 @@ struct State {
 /// for t in 1..n { y[(t, 0)] = 0.5 * y[(t - 1, 0)] + u[(t - 1, 0)] - 0.3 * y[(t - 1, 0)] * u[(t - 1, 0)]; }
 /// let spec = LagSpec::new(1, 1, &[1], &[1], &[1], &[0]).unwrap();
 /// let cands = Candidates::new(&Basis::Polynomial { degree: 2 }, spec.n_vars()).unwrap();
-/// let rec = [Record { u: u.as_ref(), y: y.as_ref(), e: None }];
+/// let rec = [Record::new(u.as_ref(), y.as_ref())];
 /// let sel = frols(&spec, &cands, &rec, &[vec![]], &FrolsOptions::with_max_terms(4)).unwrap();
 /// let mut chosen: Vec<_> = sel[0].terms.iter().map(|&k| cands.terms[k].clone()).collect();
 /// chosen.sort_by_key(|t| format!("{t:?}"));
@@ -447,7 +447,7 @@ pub fn fit_terms(
     terms: &[Vec<Term>],
 ) -> Result<Vec<Mat<f64>>> {
     spec.check_records(records)?;
-    basis.check(spec.n_vars())?;
+    basis.check(spec.n_lagged())?;
     if terms.len() != spec.n_outputs {
         return Err(SysidError::invalid(
             "terms",
@@ -467,6 +467,7 @@ pub fn fit_terms(
                 Signal::Output => rec.y[(tt, ch)],
                 Signal::Input => rec.u[(tt, ch)],
                 Signal::Noise => rec.e.expect("checked")[(tt, ch)],
+                Signal::Custom => rec.c.expect("checked")[(tt, ch)],
             });
             for (i, ti) in terms.iter().enumerate() {
                 row.clear();

@@ -13,6 +13,10 @@ pub enum Signal {
     Input,
     /// A residual (NARMAX noise term).
     Noise,
+    /// The value of a user-supplied (custom) regressor at time `t` (always lag 0): read from
+    /// the record's precomputed columns when estimating, computed by a callback from its
+    /// arguments when simulating.
+    Custom,
 }
 
 /// One lagged variable `signal_channel(t - lag)`.
@@ -28,7 +32,8 @@ pub struct LagVar {
 
 /// The lagged variables shared by every output's equation: for each output `k` the lags
 /// `1..=na[k]`, for each input `j` the lags `nk[j]..nk[j]+nb[j]-1`, for each output `k` the
-/// residual lags `1..=ne[k]`, in this order.
+/// residual lags `1..=ne[k]`, in this order; then, after [`LagSpec::with_custom`], one
+/// [`Signal::Custom`] variable per user-supplied regressor.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LagSpec {
     /// Number of inputs.
@@ -39,9 +44,13 @@ pub struct LagSpec {
     pub vars: Vec<LagVar>,
     /// The largest lag: rows `t >= max_lag` of every experiment enter the regression.
     pub max_lag: usize,
+    /// Arguments (lagged outputs and inputs) of each custom regressor.
+    pub custom: Vec<Vec<LagVar>>,
 }
 
-/// One experiment: inputs `(N, m)`, outputs `(N, p)`, and for NARMAX the residuals `(N, p)`.
+/// One experiment: inputs `(N, m)`, outputs `(N, p)`, for NARMAX the residuals `(N, p)`,
+/// and with custom regressors their values `(N, n_custom)` (row `t`: the value at time `t`;
+/// rows before the largest lag are not read).
 #[derive(Debug, Clone, Copy)]
 pub struct Record<'a> {
     /// Inputs.
@@ -50,6 +59,20 @@ pub struct Record<'a> {
     pub y: MatRef<'a, f64>,
     /// Residuals (needed when the spec has noise lags).
     pub e: Option<MatRef<'a, f64>>,
+    /// Values of the custom regressors (needed when the spec has some).
+    pub c: Option<MatRef<'a, f64>>,
+}
+
+impl<'a> Record<'a> {
+    /// A record of inputs and outputs only.
+    pub fn new(u: MatRef<'a, f64>, y: MatRef<'a, f64>) -> Self {
+        Self {
+            u,
+            y,
+            e: None,
+            c: None,
+        }
+    }
 }
 
 impl LagSpec {
@@ -120,12 +143,67 @@ impl LagSpec {
             n_outputs,
             vars,
             max_lag,
+            custom: Vec::new(),
         })
     }
 
-    /// Number of lagged variables.
+    /// Adds user-supplied regressors: `args[c]` lists the lagged outputs (lag >= 1) and
+    /// inputs of regressor `c`. Each becomes one [`Signal::Custom`] variable after the lagged
+    /// ones (a candidate term of its own, never multiplied with others); the largest lag
+    /// grows to cover the arguments.
+    ///
+    /// ```
+    /// use sysid_core::narx::regressors::{LagSpec, LagVar, Signal};
+    /// let arg = |signal, lag| LagVar { signal, channel: 0, lag };
+    /// let s = LagSpec::new(1, 1, &[1], &[1], &[1], &[0]).unwrap()
+    ///     .with_custom(vec![vec![arg(Signal::Output, 1), arg(Signal::Input, 3)]]).unwrap();
+    /// assert_eq!((s.n_vars(), s.n_lagged(), s.max_lag), (3, 2, 3));
+    /// ```
+    pub fn with_custom(mut self, args: Vec<Vec<LagVar>>) -> Result<Self> {
+        if !self.custom.is_empty() {
+            return Err(SysidError::invalid("custom", "custom regressors are already set"));
+        }
+        for (c, a) in args.iter().enumerate() {
+            for v in a {
+                let ok = match v.signal {
+                    Signal::Output => v.channel < self.n_outputs && v.lag >= 1,
+                    Signal::Input => v.channel < self.n_inputs,
+                    Signal::Noise | Signal::Custom => false,
+                };
+                if !ok {
+                    return Err(SysidError::invalid(
+                        "custom",
+                        format!(
+                            "argument {v:?} of custom regressor {c} is not a lagged output \
+                             (lag >= 1) or input of this model"
+                        ),
+                    ));
+                }
+                self.max_lag = self.max_lag.max(v.lag);
+            }
+            self.vars.push(LagVar {
+                signal: Signal::Custom,
+                channel: c,
+                lag: 0,
+            });
+        }
+        self.custom = args;
+        Ok(self)
+    }
+
+    /// Number of variables (lagged ones and custom regressors).
     pub fn n_vars(&self) -> usize {
         self.vars.len()
+    }
+
+    /// Number of lagged variables (the ones monomials and radial basis functions use).
+    pub fn n_lagged(&self) -> usize {
+        self.vars.len() - self.custom.len()
+    }
+
+    /// Number of custom regressors.
+    pub fn n_custom(&self) -> usize {
+        self.custom.len()
     }
 
     /// Whether residual lags (NARMAX) are present.
@@ -142,6 +220,7 @@ impl LagSpec {
                     Signal::Output => "y",
                     Signal::Input => "u",
                     Signal::Noise => "e",
+                    Signal::Custom => return format!("custom{}", v.channel),
                 };
                 if v.lag == 0 {
                     format!("{s}{}(t)", v.channel)
@@ -202,6 +281,24 @@ impl LagSpec {
                     }
                 }
             }
+            if !self.custom.is_empty() {
+                match r.c {
+                    Some(c) if c.nrows() == n && c.ncols() == self.custom.len() => {
+                        let tail = c.subrows(self.max_lag.min(n), n - self.max_lag.min(n));
+                        check_finite("custom regressor values", tail)?
+                    }
+                    _ => {
+                        return Err(SysidError::invalid(
+                            "custom",
+                            format!(
+                                "custom regressors need their values (N, {}) for every \
+                                 experiment",
+                                self.custom.len()
+                            ),
+                        ))
+                    }
+                }
+            }
             if n <= self.max_lag {
                 return Err(SysidError::InsufficientData {
                     context: format!("a NARX regression with lags up to {}", self.max_lag),
@@ -223,6 +320,7 @@ impl LagSpec {
                 Signal::Output => r.y,
                 Signal::Input => r.u,
                 Signal::Noise => r.e.expect("checked by check_records"),
+                Signal::Custom => r.c.expect("checked by check_records"),
             };
             for (i, xv) in col.iter_mut().enumerate() {
                 *xv = src[(t0 + i - v.lag, v.channel)];

@@ -26,13 +26,24 @@ pub struct NarxModel {
     pub equations: Vec<Equation>,
 }
 
+/// Evaluates custom regressor `c` at its arguments (the lagged outputs and inputs listed in
+/// [`LagSpec::custom`], in that order).
+pub type CustomFn<'a> = dyn FnMut(usize, &[f64]) -> Result<f64> + 'a;
+
+fn no_custom(_: usize, _: &[f64]) -> Result<f64> {
+    Err(SysidError::invalid(
+        "custom",
+        "the model has custom regressors: simulate it with their functions",
+    ))
+}
+
 /// Outputs larger than this are taken as a diverged simulation.
 const BLOWUP: f64 = 1e150;
 
 impl NarxModel {
     /// Checks the parts and builds the model.
     pub fn new(spec: LagSpec, basis: Basis, equations: Vec<Equation>) -> Result<Self> {
-        basis.check(spec.n_vars())?;
+        basis.check(spec.n_lagged())?;
         if equations.len() != spec.n_outputs {
             return Err(SysidError::invalid(
                 "equations",
@@ -48,7 +59,8 @@ impl NarxModel {
             }
             for t in &e.terms {
                 let ok = match (t, &basis) {
-                    (Term::Monomial(v), _) => v.iter().all(|&i| i < spec.n_vars()),
+                    (Term::Monomial(v), _) => v.iter().all(|&i| i < spec.n_lagged()),
+                    (Term::Custom(v), _) => (spec.n_lagged()..spec.n_vars()).contains(v),
                     (Term::Rbf(c), Basis::Rbf(r)) => *c < r.centres.nrows(),
                     (Term::Rbf(_), Basis::Polynomial { .. }) => false,
                 };
@@ -68,6 +80,46 @@ impl NarxModel {
             basis,
             equations,
         })
+    }
+
+    /// Whether custom regressor `c` appears in some equation.
+    fn uses_custom(&self, c: usize) -> bool {
+        let v = self.spec.n_lagged() + c;
+        self.equations
+            .iter()
+            .any(|e| e.terms.iter().any(|t| *t == Term::Custom(v)))
+    }
+
+    /// Values at time `t` of the custom regressors in use (others zero), arguments read
+    /// through `get`.
+    fn custom_values(
+        &self,
+        t: usize,
+        used: &[bool],
+        get: &impl Fn(Signal, usize, usize) -> f64,
+        f: &mut CustomFn<'_>,
+        vals: &mut [f64],
+    ) -> Result<()> {
+        let mut args = Vec::new();
+        for (c, a) in self.spec.custom.iter().enumerate() {
+            if !used[c] {
+                continue;
+            }
+            args.clear();
+            args.extend(a.iter().map(|v| get(v.signal, v.channel, t - v.lag)));
+            let v = f(c, &args)?;
+            if !v.is_finite() {
+                return Err(SysidError::numerical(
+                    "custom regressor",
+                    format!(
+                        "custom regressor {c} returned {v} at sample {t} (arguments {args:?}); \
+                         make the function finite over the range of the signals"
+                    ),
+                ));
+            }
+            vals[c] = v;
+        }
+        Ok(())
     }
 
     #[inline]
@@ -95,6 +147,17 @@ impl NarxModel {
     /// `y0` (`max_lag x n_outputs`, for example the measured ones), later ones are simulated
     /// (noise terms are zero). Fails, naming the sample, when the output blows up.
     pub fn simulate(&self, u: MatRef<'_, f64>, y0: MatRef<'_, f64>) -> Result<Mat<f64>> {
+        self.simulate_with(u, y0, &mut no_custom)
+    }
+
+    /// [`Self::simulate`] of a model with custom regressors, evaluated by `custom` at every
+    /// sample from the simulated outputs and the inputs.
+    pub fn simulate_with(
+        &self,
+        u: MatRef<'_, f64>,
+        y0: MatRef<'_, f64>,
+        custom: &mut CustomFn<'_>,
+    ) -> Result<Mat<f64>> {
         self.check_u(u)?;
         let (n, ny, lag) = (u.nrows(), self.spec.n_outputs, self.spec.max_lag);
         if y0.nrows() != lag || y0.ncols() != ny {
@@ -112,13 +175,20 @@ impl NarxModel {
             }
         }
         let mut x = vec![0.0; self.spec.n_vars()];
+        let used: Vec<bool> = (0..self.spec.n_custom()).map(|c| self.uses_custom(c)).collect();
+        let mut cv = vec![0.0; used.len()];
         for t in lag..n {
             {
                 let yr = y.as_ref();
-                self.spec.fill_with(t, &mut x, |s, ch, tt| match s {
+                let get = |s: Signal, ch: usize, tt: usize| match s {
                     Signal::Output => yr[(tt, ch)],
                     Signal::Input => u[(tt, ch)],
-                    Signal::Noise => 0.0,
+                    Signal::Noise | Signal::Custom => 0.0,
+                };
+                self.custom_values(t, &used, &get, custom, &mut cv)?;
+                self.spec.fill_with(t, &mut x, |s, ch, tt| match s {
+                    Signal::Custom => cv[ch],
+                    _ => get(s, ch, tt),
                 });
             }
             for i in 0..ny {
@@ -157,6 +227,17 @@ impl NarxModel {
         y: MatRef<'_, f64>,
         horizon: usize,
     ) -> Result<Mat<f64>> {
+        self.predict_with(u, y, horizon, &mut no_custom)
+    }
+
+    /// [`Self::predict`] of a model with custom regressors, evaluated by `custom`.
+    pub fn predict_with(
+        &self,
+        u: MatRef<'_, f64>,
+        y: MatRef<'_, f64>,
+        horizon: usize,
+        custom: &mut CustomFn<'_>,
+    ) -> Result<Mat<f64>> {
         self.check_u(u)?;
         let (n, ny, lag) = (y.nrows(), self.spec.n_outputs, self.spec.max_lag);
         if y.ncols() != ny || u.nrows() != n {
@@ -171,17 +252,26 @@ impl NarxModel {
             return Err(SysidError::invalid("horizon", "must be at least 1"));
         }
         let noise = self.spec.has_noise();
+        let used: Vec<bool> = (0..self.spec.n_custom()).map(|c| self.uses_custom(c)).collect();
+        let mut cv = vec![0.0; used.len()];
+        let measured = |s: Signal, ch: usize, tt: usize| match s {
+            Signal::Output => y[(tt, ch)],
+            Signal::Input => u[(tt, ch)],
+            Signal::Noise | Signal::Custom => 0.0,
+        };
         // one-step residuals first (only needed for noise terms)
         let mut e = Mat::<f64>::zeros(n, ny);
         let mut x = vec![0.0; self.spec.n_vars()];
         if noise {
             for t in lag..n {
+                self.custom_values(t, &used, &measured, custom, &mut cv)?;
                 {
                     let er = e.as_ref();
                     self.spec.fill_with(t, &mut x, |s, ch, tt| match s {
                         Signal::Output => y[(tt, ch)],
                         Signal::Input => u[(tt, ch)],
                         Signal::Noise => er[(tt, ch)],
+                        Signal::Custom => cv[ch],
                     });
                 }
                 for i in 0..ny {
@@ -201,10 +291,10 @@ impl NarxModel {
                     out[(t, i)] = y[(t, i)] - e[(t, i)];
                 }
                 if !noise {
+                    self.custom_values(t, &used, &measured, custom, &mut cv)?;
                     self.spec.fill_with(t, &mut x, |s, ch, tt| match s {
-                        Signal::Output => y[(tt, ch)],
-                        Signal::Input => u[(tt, ch)],
-                        Signal::Noise => 0.0,
+                        Signal::Custom => cv[ch],
+                        _ => measured(s, ch, tt),
                     });
                     for i in 0..ny {
                         out[(t, i)] = self.output(i, &x);
@@ -227,10 +317,14 @@ impl NarxModel {
                             Signal::Output if measured => y[(tt, ch)],
                             Signal::Output => loc[(tt - first) * ny + ch],
                             Signal::Noise if (tt as isize) <= origin => e[(tt, ch)],
-                            Signal::Noise => 0.0,
+                            Signal::Noise | Signal::Custom => 0.0,
                         }
                     };
-                    self.spec.fill_with(s, &mut x, get);
+                    self.custom_values(s, &used, &get, custom, &mut cv)?;
+                    self.spec.fill_with(s, &mut x, |sig, ch, tt| match sig {
+                        Signal::Custom => cv[ch],
+                        _ => get(sig, ch, tt),
+                    });
                 }
                 for i in 0..ny {
                     let v = self.output(i, &x);

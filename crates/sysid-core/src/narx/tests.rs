@@ -40,11 +40,7 @@ fn frols_selects_true_terms_and_exact_coefficients() {
     let (u, y) = billings(500, 1);
     let spec = LagSpec::new(1, 1, &[2], &[2], &[1], &[0]).unwrap();
     let cands = Candidates::new(&Basis::Polynomial { degree: 2 }, spec.n_vars()).unwrap();
-    let rec = [Record {
-        u: u.as_ref(),
-        y: y.as_ref(),
-        e: None,
-    }];
+    let rec = [Record::new(u.as_ref(), y.as_ref())];
     for block_rows in [0, 7, 64] {
         let mut opts = FrolsOptions::with_max_terms(8);
         opts.block_rows = block_rows;
@@ -134,4 +130,84 @@ fn accumulate_equals_explicit_columns() {
             });
         }
     }
+}
+
+/// y = 0.5 y(t-1) + 0.8 u(t-1) - 0.4 y(t-1) |u(t-1)|: the last term a custom regressor.
+#[test]
+fn custom_regressor_is_selected_fitted_and_simulated_exactly() {
+    use super::regressors::{LagVar, Signal};
+    let n = 400;
+    let mut rng = StdRng::seed_from_u64(7);
+    let u = Mat::from_fn(n, 1, |_, _| rng.random_range(-1.5..1.5));
+    let mut y = Mat::<f64>::zeros(n, 1);
+    let f = |a: &[f64]| a[0] * a[1].abs();
+    for t in 1..n {
+        y[(t, 0)] = 0.5 * y[(t - 1, 0)] + 0.8 * u[(t - 1, 0)]
+            - 0.4 * f(&[y[(t - 1, 0)], u[(t - 1, 0)]]);
+    }
+    let args = vec![
+        LagVar {
+            signal: Signal::Output,
+            channel: 0,
+            lag: 1,
+        },
+        LagVar {
+            signal: Signal::Input,
+            channel: 0,
+            lag: 1,
+        },
+    ];
+    let spec = LagSpec::new(1, 1, &[1], &[1], &[1], &[0])
+        .unwrap()
+        .with_custom(vec![args])
+        .unwrap();
+    let c = Mat::from_fn(n, 1, |t, _| {
+        if t == 0 {
+            0.0
+        } else {
+            f(&[y[(t - 1, 0)], u[(t - 1, 0)]])
+        }
+    });
+    let cands =
+        Candidates::with_custom(&Basis::Polynomial { degree: 2 }, spec.n_lagged(), 1).unwrap();
+    let rec = [Record {
+        u: u.as_ref(),
+        y: y.as_ref(),
+        e: None,
+        c: Some(c.as_ref()),
+    }];
+    let sel = frols(&spec, &cands, &rec, &[vec![]], &FrolsOptions::with_max_terms(3)).unwrap();
+    let mut got: Vec<Term> = sel[0].terms.iter().map(|&k| cands.terms[k].clone()).collect();
+    let r = fit(&spec, &cands, &rec, &[sel[0].terms.clone()]).unwrap();
+    let th = solve_prefix(&r[0], 3).unwrap();
+    let mut pairs: Vec<(Term, f64)> = got.drain(..).zip(th).collect();
+    pairs.sort_by_key(|p| format!("{:?}", p.0));
+    let want = [
+        (Term::Custom(2), -0.4),
+        (Term::Monomial(vec![0]), 0.5),
+        (Term::Monomial(vec![1]), 0.8),
+    ];
+    for (g, w) in pairs.iter().zip(&want) {
+        assert_eq!(g.0, w.0);
+        assert!((g.1 - w.1).abs() < 1e-10, "{g:?} vs {w:?}");
+    }
+    let eq = Equation {
+        terms: want.iter().map(|p| p.0.clone()).collect(),
+        coefs: want.iter().map(|p| p.1).collect(),
+    };
+    let m = NarxModel::new(spec, Basis::Polynomial { degree: 2 }, vec![eq]).unwrap();
+    let y0 = Mat::<f64>::zeros(1, 1);
+    assert!(m.simulate(u.as_ref(), y0.as_ref()).is_err()); // needs the function
+    let ys = m
+        .simulate_with(u.as_ref(), y0.as_ref(), &mut |_, a| Ok(f(a)))
+        .unwrap();
+    let p3 = m
+        .predict_with(u.as_ref(), y.as_ref(), 3, &mut |_, a| Ok(f(a)))
+        .unwrap();
+    for t in 0..n {
+        assert!((ys[(t, 0)] - y[(t, 0)]).abs() < 1e-12);
+        assert!((p3[(t, 0)] - y[(t, 0)]).abs() < 1e-12);
+    }
+    let bad = m.simulate_with(u.as_ref(), y0.as_ref(), &mut |_, _| Ok(f64::NAN));
+    assert!(format!("{:?}", bad.unwrap_err()).contains("custom regressor"));
 }
