@@ -1,6 +1,6 @@
 """Type stubs of the compiled core (``sysid._sysid``); see the Python wrappers for docs."""
 
-from typing import Any, final
+from typing import Any, Callable, final
 
 import numpy as np
 import numpy.typing as npt
@@ -384,6 +384,8 @@ def narx_frols(
     forced: list[list[list[int]]],
     err_tol: float = 1e-10,
     block_rows: int = 0,
+    custom_args: list[list[tuple[int, int, int]]] = ...,
+    custom_values: list[_Array] = ...,
 ) -> tuple[list[dict[str, Any]], int]: ...
 def narx_fit(
     experiments: list[tuple[_Array, _Array, _Array | None]],
@@ -391,6 +393,8 @@ def narx_fit(
     degree: int | None,
     rbf: _Rbf | None,
     terms: list[list[list[int]]],
+    custom_args: list[list[tuple[int, int, int]]] = ...,
+    custom_values: list[_Array] = ...,
 ) -> list[_Array]: ...
 def narx_simulate(
     orders: _Orders,
@@ -399,6 +403,8 @@ def narx_simulate(
     equations: _Equations,
     u: _Array,
     y0: _Array,
+    custom_args: list[list[tuple[int, int, int]]] = ...,
+    custom_fns: list[Callable[..., float]] = ...,
 ) -> _Array: ...
 def narx_predict(
     orders: _Orders,
@@ -408,6 +414,8 @@ def narx_predict(
     u: _Array,
     y: _Array,
     horizon: int,
+    custom_args: list[list[tuple[int, int, int]]] = ...,
+    custom_fns: list[Callable[..., float]] = ...,
 ) -> _Array: ...
 def hw_estimate(
     records: list[tuple[_Array, _Array]],
