@@ -4,11 +4,12 @@
 //! `"saturation"`, `"deadzone"`, `"polynomial"` (n = degree), `"pwl"` (breakpoints) or
 //! `"sigmoid"` (n = units).
 
-use crate::convert::{mat_to_numpy, slice_to_numpy, vec1};
+use crate::convert::{mat_to_numpy, slice_to_numpy, vec1, view};
 use crate::errors::IntoPy;
-use numpy::{PyArray1, PyReadonlyArray1};
+use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use sysid_core::hw::mimo::{self, MimoHwStructure};
 use sysid_core::hw::{self, HwStructure, Nonlinearity};
 use sysid_core::optim::{covariance, Flow, Options};
 use sysid_core::SysidError;
@@ -134,9 +135,107 @@ pub fn hw_simulate<'py>(
     ))
 }
 
+fn mimo_structure(
+    inputs: &[Nl],
+    outputs: &[Nl],
+    order: usize,
+    feedthrough: bool,
+) -> PyResult<MimoHwStructure> {
+    let s = MimoHwStructure {
+        inputs: inputs.iter().map(nl).collect::<PyResult<_>>()?,
+        outputs: outputs.iter().map(nl).collect::<PyResult<_>>()?,
+        order,
+        feedthrough,
+    };
+    s.check().py()?;
+    Ok(s)
+}
+
+/// MIMO Hammerstein-Wiener (state-space linear block) prediction-error estimate from
+/// `theta0`; returns a dict (theta, cost, history, iterations, stop, noise_variance).
+#[pyfunction]
+#[pyo3(signature = (records, inputs, outputs, order, feedthrough, theta0, max_iter=100, tol=1e-10, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn hw_mimo_estimate<'py>(
+    py: Python<'py>,
+    records: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>)>,
+    inputs: Vec<Nl>,
+    outputs: Vec<Nl>,
+    order: usize,
+    feedthrough: bool,
+    theta0: Vec<f64>,
+    max_iter: usize,
+    tol: f64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s = mimo_structure(&inputs, &outputs, order, feedthrough)?;
+    let refs: Vec<_> = records.iter().map(|(u, y)| (view(u), view(y))).collect();
+    let mut opts = Options::default();
+    opts.max_iter = max_iter;
+    opts.tol_gradient = tol;
+    opts.tol_step = tol;
+    opts.tol_cost = tol;
+    let sol = match progress {
+        Some(cb) => {
+            let mut obs =
+                |it: &sysid_core::optim::Iteration| match cb.call1(py, (it.iteration, it.cost)) {
+                    Ok(v) if v.is_truthy(py).unwrap_or(false) => Flow::Stop,
+                    _ => Flow::Continue,
+                };
+            mimo::estimate_mimo(&s, &refs, &theta0, &opts, &mut obs)
+        }
+        None => py.detach(|| {
+            mimo::estimate_mimo(&s, &refs, &theta0, &opts, &mut |_| Flow::Continue)
+        }),
+    }
+    .py()?;
+    let n: usize = refs.iter().map(|(_, y)| y.nrows() * y.ncols()).sum();
+    let var = 2.0 * sol.cost / (n.saturating_sub(theta0.len()).max(1)) as f64;
+    let d = PyDict::new(py);
+    d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
+    d.set_item("cost", sol.cost)?;
+    d.set_item("iterations", sol.iterations)?;
+    d.set_item("stop", sol.stop.as_str())?;
+    d.set_item("history", slice_to_numpy(py, &sol.history))?;
+    d.set_item("noise_variance", var)?;
+    Ok(d)
+}
+
+/// Simulated outputs `(N, p)` of a MIMO Hammerstein-Wiener model from rest.
+#[pyfunction]
+pub fn hw_mimo_simulate<'py>(
+    py: Python<'py>,
+    inputs: Vec<Nl>,
+    outputs: Vec<Nl>,
+    order: usize,
+    feedthrough: bool,
+    theta: Vec<f64>,
+    u: PyReadonlyArray2<'_, f64>,
+) -> PyResult<Bound<'py, PyArray2<f64>>> {
+    let s = mimo_structure(&inputs, &outputs, order, feedthrough)?;
+    if theta.len() != s.n_params() {
+        return Err(crate::errors::to_py(SysidError::InvalidArgument {
+            name: "theta",
+            reason: format!("needs {} parameters", s.n_params()),
+        }));
+    }
+    let uv = view(&u);
+    if uv.ncols() != s.inputs.len() {
+        return Err(crate::errors::to_py(SysidError::ShapeMismatch {
+            what: "u".into(),
+            expected: format!("(N, {})", s.inputs.len()),
+            got: format!("({}, {})", uv.nrows(), uv.ncols()),
+        }));
+    }
+    let y = py.detach(|| s.simulate(&theta, uv));
+    Ok(mat_to_numpy(py, &y))
+}
+
 /// Registers the functions of this file.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(hw_estimate, m)?)?;
     m.add_function(wrap_pyfunction!(hw_simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(hw_mimo_estimate, m)?)?;
+    m.add_function(wrap_pyfunction!(hw_mimo_simulate, m)?)?;
     Ok(())
 }

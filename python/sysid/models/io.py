@@ -36,6 +36,7 @@ from typing import Any
 from ..errors import DataError
 from .continuous import ContinuousStateSpace
 from .hammerstein import HammersteinWienerModel
+from .hammerstein_ss import HammersteinWienerSSModel
 from .narx import NARXModel
 from .polynomial import PolynomialModel
 from .serialize import (
@@ -56,7 +57,7 @@ __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict", "regi
 LEGACY_FORMAT = "sysid-state-space-model"  # version 1: state-space models only
 
 for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel,
-             HammersteinWienerModel):
+             HammersteinWienerModel, HammersteinWienerSSModel):
     register_model(_cls)
 
 

@@ -1,4 +1,5 @@
-//! Hammerstein-Wiener models (single input, single output, several experiments).
+//! Hammerstein-Wiener models (single input, single output, several experiments; the MIMO
+//! state-space form is in [`mimo`]).
 //!
 //! ```text
 //! w(t) = f(u(t); alpha)                       static input nonlinearity
@@ -19,6 +20,8 @@
 use faer::Mat;
 
 use crate::error::{Result, SysidError};
+
+pub mod mimo;
 use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution};
 use crate::polynomial::filter::is_stable;
 

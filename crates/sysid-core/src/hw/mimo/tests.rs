@@ -1,0 +1,156 @@
+use faer::Mat;
+use rand::{rngs::StdRng, Rng, SeedableRng};
+
+use super::*;
+use crate::linalg::eigenvalues;
+
+fn inputs(n: usize, seed: u64) -> Mat<f64> {
+    let mut rng = StdRng::seed_from_u64(seed);
+    Mat::from_fn(n, 2, |_, _| rng.random_range(-1.0..1.0))
+}
+
+/// Linear block with poles 0.8 and 0.5 (A in companion form), full B and C.
+fn linear_block() -> Vec<f64> {
+    vec![
+        1.3, -0.4, 1.0, 0.0, // A
+        1.0, 0.5, 0.2, -0.7, // B
+        0.6, 0.3, -0.4, 0.9, // C
+    ]
+}
+
+fn sorted_poles(s: &MimoHwStructure, th: &[f64]) -> Vec<f64> {
+    let (a, _, _, _) = s.matrices(th);
+    let mut p: Vec<f64> = eigenvalues(a.as_ref())
+        .unwrap()
+        .into_iter()
+        .map(|(re, im)| {
+            assert!(im.abs() < 1e-9);
+            re
+        })
+        .collect();
+    p.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    p
+}
+
+fn fit(s: &MimoHwStructure, truth: &[f64], start: &[f64]) -> Solution {
+    let u = inputs(800, 3);
+    let y = s.simulate(truth, u.as_ref());
+    let opts = Options {
+        max_iter: 200,
+        ..Options::default()
+    };
+    estimate_mimo(s, &[(u.as_ref(), y.as_ref())], start, &opts, &mut |_| Flow::Continue)
+        .unwrap()
+}
+
+#[test]
+fn gradient_matches_finite_differences() {
+    let s = MimoHwStructure {
+        inputs: vec![Nonlinearity::Saturation, Nonlinearity::Polynomial { degree: 3 }],
+        outputs: vec![Nonlinearity::Polynomial { degree: 2 }, Nonlinearity::Identity],
+        order: 2,
+        feedthrough: true,
+    };
+    let mut th = vec![-0.613, 0.707, 0.2, -0.1];
+    th.extend(linear_block());
+    th.extend([0.1, -0.2, 0.05, 0.3]); // D
+    th.push(0.25);
+    let u = inputs(300, 1);
+    let y = Mat::from_fn(300, 2, |t, i| ((t * (i + 3)) as f64 * 0.37).sin());
+    let mut pr = MimoHwProblem {
+        structure: s,
+        records: vec![(u.as_ref(), y.as_ref())],
+    };
+    let ev = pr.evaluate(&th, true).unwrap();
+    for a in 0..th.len() {
+        let h = 1e-6;
+        let (mut tp, mut tm) = (th.clone(), th.clone());
+        tp[a] += h;
+        tm[a] -= h;
+        let fd = (pr.evaluate(&tp, false).unwrap().cost - pr.evaluate(&tm, false).unwrap().cost)
+            / (2.0 * h);
+        let g = ev.gradient[a];
+        assert!(
+            (fd - g).abs() < 1e-5 * (1.0 + g.abs()),
+            "param {a}: fd {fd} vs {g}"
+        );
+    }
+}
+
+/// 2 x 2 Hammerstein: saturation on input 0, cubic polynomial on input 1.
+#[test]
+fn hammerstein_2x2_recovered() {
+    let s = MimoHwStructure {
+        inputs: vec![Nonlinearity::Saturation, Nonlinearity::Polynomial { degree: 3 }],
+        outputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
+        order: 2,
+        feedthrough: false,
+    };
+    let mut truth = vec![-0.5, 0.6, 0.3, -0.2];
+    truth.extend(linear_block());
+    // start: the nonlinearities near identity, the linear block perturbed by ~10 %
+    let mut start = vec![-0.9, 0.9, 0.0, 0.0];
+    start.extend(linear_block().iter().enumerate().map(|(k, v)| {
+        v * (1.0 + 0.1 * ((k as f64 * 1.7).sin()))
+    }));
+    let sol = fit(&s, &truth, &start);
+    let p = sorted_poles(&s, &sol.theta);
+    assert!((p[0] - 0.5).abs() < 1e-6 && (p[1] - 0.8).abs() < 1e-6, "{p:?}");
+    for k in 0..4 {
+        assert!((sol.theta[k] - truth[k]).abs() < 1e-6, "{:?}", &sol.theta[..4]);
+    }
+    assert!(sol.cost < 1e-18, "cost {}", sol.cost);
+}
+
+/// 2 x 2 Wiener: quadratic polynomial on output 0, saturation on output 1.
+#[test]
+fn wiener_2x2_recovered() {
+    let s = MimoHwStructure {
+        inputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
+        outputs: vec![Nonlinearity::Polynomial { degree: 2 }, Nonlinearity::Saturation],
+        order: 2,
+        feedthrough: false,
+    };
+    let mut truth = linear_block();
+    truth.extend([0.4, -0.5, 0.45]);
+    let mut start: Vec<f64> = linear_block()
+        .iter()
+        .enumerate()
+        .map(|(k, v)| v * (1.0 + 0.05 * ((k as f64 * 1.3).cos())))
+        .collect();
+    start.extend([0.0, -2.0, 2.0]);
+    let sol = fit(&s, &truth, &start);
+    let p = sorted_poles(&s, &sol.theta);
+    assert!((p[0] - 0.5).abs() < 1e-6 && (p[1] - 0.8).abs() < 1e-6, "{p:?}");
+    let nl = &sol.theta[12..];
+    for (g, w) in nl.iter().zip([0.4, -0.5, 0.45]) {
+        assert!((g - w).abs() < 1e-6, "{nl:?}");
+    }
+}
+
+#[test]
+fn bad_starts_and_shapes_are_errors() {
+    let s = MimoHwStructure {
+        inputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
+        outputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
+        order: 2,
+        feedthrough: false,
+    };
+    let u = inputs(50, 2);
+    let y = Mat::<f64>::zeros(50, 2);
+    let mut th = linear_block();
+    th[0] = 3.0; // unstable A
+    let r = estimate_mimo(&s, &[(u.as_ref(), y.as_ref())], &th, &Options::default(), &mut |_| {
+        Flow::Continue
+    });
+    assert!(format!("{:?}", r.unwrap_err()).contains("unstable"));
+    let y1 = Mat::<f64>::zeros(50, 1);
+    let r = estimate_mimo(
+        &s,
+        &[(u.as_ref(), y1.as_ref())],
+        &linear_block(),
+        &Options::default(),
+        &mut |_| Flow::Continue,
+    );
+    assert!(r.is_err());
+}
