@@ -72,7 +72,7 @@ def test_protocol_saving_and_errors(tmp_path):
     assert sysid.compare(m, d).fit.min() > 99
     assert len(m.to_pandas()) == m.n_parameters
     assert "poles" in m.summary()
-    path = tmp_path / "hw.sysid"
+    path = tmp_path / "hw.json"
     sysid.save_model(m, path)
     m2 = sysid.load_model(path)
     np.testing.assert_allclose(m2.simulate(u), m.simulate(u), atol=1e-12)

@@ -125,23 +125,39 @@ def nlhw_ss(
     if np.max(np.abs(np.linalg.eigvals(A))) >= 1:
         raise DataError("the linear start (n4sid) is unstable; try another order")
     u_all = np.vstack([r[0] for r in records])
-    for j, f in enumerate(fin):  # B's column absorbs the gain of the starting nonlinearity
-        f.params = f.starts(u_all[:, j])[0]
-        fu = f(u_all[:, j])
-        if not isinstance(f, UserFunction) and float(fu @ fu) > 0 and float(fu @ u_all[:, j]):
-            g = float(fu @ u_all[:, j]) / float(fu @ fu)
-            B[:, j] *= g
-            if D is not None:
-                D[:, j] *= g
-    start = HammersteinWienerSSModel(fin, [Nonlinearity()] * p, A, B, C, D, dt)
-    v_all = np.vstack([start.simulate(r[0]) for r in records])
-    for i, g in enumerate(fout):
-        g.params = g.starts(v_all[:, i])[0]
-    start = HammersteinWienerSSModel(fin, fout, A, B, C, D, dt)
-    fi, fo = start.specs()
-    th0 = start.theta
-    res = _sysid.hw_mimo_estimate(records, fi, fo, int(order), bool(feedthrough), th0.tolist(),
-                                  int(max_iter), float(tol), progress)
+    in_starts = [f.starts(u_all[:, j]) for j, f in enumerate(fin)]
+    res, th0, v_all = None, None, np.zeros((0, p))
+    # start k: every channel's k-th starting point (the last one when it has fewer)
+    for k in range(max(len(s_) for s_ in in_starts)):
+        Bk, Dk = B.copy(), None if D is None else D.copy()
+        for j, f in enumerate(fin):  # B's column absorbs the starting nonlinearity's gain
+            f.params = in_starts[j][min(k, len(in_starts[j]) - 1)]
+            fu = f(u_all[:, j])
+            if not isinstance(f, UserFunction) and float(fu @ fu) > 0 and float(
+                    fu @ u_all[:, j]):
+                g = float(fu @ u_all[:, j]) / float(fu @ fu)
+                Bk[:, j] *= g
+                if Dk is not None:
+                    Dk[:, j] *= g
+        start = HammersteinWienerSSModel(fin, [Nonlinearity()] * p, A, Bk, C, Dk, dt)
+        vs = np.vstack([start.simulate(r[0]) for r in records])
+        out_starts = [g.starts(vs[:, i]) for i, g in enumerate(fout)]
+        for q in range(max(len(s_) for s_ in out_starts)):
+            for i, g in enumerate(fout):
+                g.params = out_starts[i][min(q, len(out_starts[i]) - 1)]
+            start = HammersteinWienerSSModel(fin, fout, A, Bk, C, Dk, dt)
+            fi, fo = start.specs()
+            try:
+                r = _sysid.hw_mimo_estimate(records, fi, fo, int(order), bool(feedthrough),
+                                            start.theta.tolist(), int(max_iter), float(tol),
+                                            progress)
+            except DataError:
+                continue  # an inadmissible start: try the next one
+            if res is None or r["cost"] < res["cost"]:
+                res, th0, v_all = r, start.theta, vs
+    if res is None:
+        raise DataError("no admissible start for the Hammerstein-Wiener search; check the "
+                        "order against a linear fit (sysid.n4sid)")
     th = np.asarray(res["theta"], float)
     k = 0
     for f in fin:
@@ -155,6 +171,7 @@ def nlhw_ss(
     for g in fout:
         g.params, k = th[k:k + np.size(g.params)], k + np.size(g.params)
     info = {"method": "nlhw_ss", "iterations": int(res["iterations"]), "stop": res["stop"],
+            "n_starts": max(len(s_) for s_ in in_starts),
             "cost_history": np.asarray(res["history"]), "theta0": th0,
             "u_ranges": [(float(c.min()), float(c.max())) for c in u_all.T],
             "v_ranges": [(float(c.min()), float(c.max())) for c in v_all.T]}

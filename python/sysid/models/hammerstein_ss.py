@@ -132,10 +132,6 @@ class HammersteinWienerSSModel(ModelMixin):
 
         return StateSpaceModel(self.A, self.B, self.C, self.D, dt=self.dt)
 
-    def to_statespace(self) -> Any:
-        """The linear block (used by ``step``, ``poles``, ``zeros``)."""
-        return self.linear()
-
     def freqresp(self, omega: Any) -> np.ndarray:
         """Frequency response of the linear block (between the nonlinearities)."""
         return np.asarray(self.linear().freqresp(omega))
