@@ -288,3 +288,10 @@ def test_docs_nonlinear_examples_and_their_claims(capsys):
     assert ns["ph_best_lin"] == "arx(1,3,0)" and ns["ph_best_narx"].startswith("nlarx(1,1,1)")
     np.testing.assert_allclose([pl[1], pn[1]], [1.849, 1.364], atol=5e-3)
     assert sum(np.isinf(v[1]) for v in ns["ph_narx"].values()) == 3
+    pw = ns["ph_wiener"][ns["ph_best_wiener"]]
+    assert ns["ph_best_wiener"] == "nlhw_ss(2) pwl(6)"
+    np.testing.assert_allclose(pw, [0.427, 0.820], atol=5e-3)
+    # the MIMO Hammerstein example: poles and nonlinearities
+    np.testing.assert_allclose(np.sort(ns["ham2"].poles().real), [0.5, 0.8], atol=1e-6)
+    np.testing.assert_allclose(ns["ham2"].input_nls[0].params, [-0.5, 0.6], atol=1e-6)
+    np.testing.assert_allclose(ns["ham2"].input_nls[1].params, [0.3], atol=1e-6)

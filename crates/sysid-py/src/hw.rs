@@ -184,9 +184,9 @@ pub fn hw_mimo_estimate<'py>(
                 };
             mimo::estimate_mimo(&s, &refs, &theta0, &opts, &mut obs)
         }
-        None => py.detach(|| {
-            mimo::estimate_mimo(&s, &refs, &theta0, &opts, &mut |_| Flow::Continue)
-        }),
+        None => {
+            py.detach(|| mimo::estimate_mimo(&s, &refs, &theta0, &opts, &mut |_| Flow::Continue))
+        }
     }
     .py()?;
     let n: usize = refs.iter().map(|(_, y)| y.nrows() * y.ncols()).sum();

@@ -15,11 +15,11 @@ use faer::{Mat, MatRef};
 use numpy::{PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use std::cell::RefCell;
 use sysid_core::narx::basis::{Basis, Candidates, RbfBasis, Term};
 use sysid_core::narx::frols::{self, FrolsOptions};
 use sysid_core::narx::regressors::{LagSpec, LagVar, Record, Signal};
 use sysid_core::narx::simulate::{Equation, NarxModel};
-use std::cell::RefCell;
 use sysid_core::SysidError;
 
 type Experiments<'a> = Vec<(
@@ -175,7 +175,11 @@ pub fn narx_frols<'py>(
             let rs = frols::fit(&sp, &cands, &recs, &chosen)?;
             let terms: Vec<Vec<Vec<i64>>> = chosen
                 .iter()
-                .map(|c| c.iter().map(|&k| encode(&cands.terms[k], sp.n_lagged())).collect())
+                .map(|c| {
+                    c.iter()
+                        .map(|&k| encode(&cands.terms[k], sp.n_lagged()))
+                        .collect()
+                })
                 .collect();
             Ok((sels, rs, terms, cands.len()))
         })
@@ -290,14 +294,12 @@ where
     }
     let failure: RefCell<Option<PyErr>> = RefCell::new(None);
     let mut call = |c: usize, args: &[f64]| -> sysid_core::Result<f64> {
-        let f = fns.get(c).ok_or_else(|| {
-            custom_error(format!("no function for custom regressor {c}"))
-        })?;
+        let f = fns
+            .get(c)
+            .ok_or_else(|| custom_error(format!("no function for custom regressor {c}")))?;
         let r = f
             .bind(py)
-            .call1(pyo3::types::PyTuple::new(py, args).map_err(|e| {
-                custom_error(e.to_string())
-            })?)
+            .call1(pyo3::types::PyTuple::new(py, args).map_err(|e| custom_error(e.to_string()))?)
             .and_then(|v| v.extract::<f64>());
         r.map_err(|e| {
             let msg = format!("custom regressor {c} failed: {e}");
@@ -329,7 +331,15 @@ pub fn narx_simulate<'py>(
     custom_fns: Vec<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let (uv, yv) = (view(&u), view(&y0));
-    let m = model(uv.ncols(), yv.ncols(), &orders, degree, rbf, equations, &custom_args)?;
+    let m = model(
+        uv.ncols(),
+        yv.ncols(),
+        &orders,
+        degree,
+        rbf,
+        equations,
+        &custom_args,
+    )?;
     let y = with_custom(py, &custom_fns, |f| m.simulate_with(uv, yv, f))?;
     Ok(mat_to_numpy(py, &y))
 }
@@ -351,7 +361,15 @@ pub fn narx_predict<'py>(
     custom_fns: Vec<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let (uv, yv) = (view(&u), view(&y));
-    let m = model(uv.ncols(), yv.ncols(), &orders, degree, rbf, equations, &custom_args)?;
+    let m = model(
+        uv.ncols(),
+        yv.ncols(),
+        &orders,
+        degree,
+        rbf,
+        equations,
+        &custom_args,
+    )?;
     let p = with_custom(py, &custom_fns, |f| m.predict_with(uv, yv, horizon, f))?;
     Ok(mat_to_numpy(py, &p))
 }

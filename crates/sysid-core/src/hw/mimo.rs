@@ -171,8 +171,7 @@ impl MimoHwStructure {
                 }
                 let nb = self.outputs[i].n_params();
                 let b0 = l.beta[i];
-                let (yhat, gd) =
-                    self.outputs[i].eval(&theta[b0..b0 + nb], v, &mut dg[b0..b0 + nb]);
+                let (yhat, gd) = self.outputs[i].eval(&theta[b0..b0 + nb], v, &mut dg[b0..b0 + nb]);
                 if jacobian {
                     // dv_i = C_i S + dC_i x + D_i dw + dD_i w
                     for k in 0..pp {
@@ -330,7 +329,13 @@ pub fn estimate_mimo(
             return Err(SysidError::ShapeMismatch {
                 what: "u, y".into(),
                 expected: format!("(N, {m}) and (N, {p})"),
-                got: format!("({}, {}) and ({}, {})", u.nrows(), u.ncols(), y.nrows(), y.ncols()),
+                got: format!(
+                    "({}, {}) and ({}, {})",
+                    u.nrows(),
+                    u.ncols(),
+                    y.nrows(),
+                    y.ncols()
+                ),
             });
         }
         crate::error::check_finite("u", *u)?;

@@ -161,7 +161,10 @@ impl LagSpec {
     /// ```
     pub fn with_custom(mut self, args: Vec<Vec<LagVar>>) -> Result<Self> {
         if !self.custom.is_empty() {
-            return Err(SysidError::invalid("custom", "custom regressors are already set"));
+            return Err(SysidError::invalid(
+                "custom",
+                "custom regressors are already set",
+            ));
         }
         for (c, a) in args.iter().enumerate() {
             for v in a {

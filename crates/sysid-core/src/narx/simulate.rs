@@ -87,7 +87,7 @@ impl NarxModel {
         let v = self.spec.n_lagged() + c;
         self.equations
             .iter()
-            .any(|e| e.terms.iter().any(|t| *t == Term::Custom(v)))
+            .any(|e| e.terms.contains(&Term::Custom(v)))
     }
 
     /// Values at time `t` of the custom regressors in use (others zero), arguments read
@@ -175,7 +175,9 @@ impl NarxModel {
             }
         }
         let mut x = vec![0.0; self.spec.n_vars()];
-        let used: Vec<bool> = (0..self.spec.n_custom()).map(|c| self.uses_custom(c)).collect();
+        let used: Vec<bool> = (0..self.spec.n_custom())
+            .map(|c| self.uses_custom(c))
+            .collect();
         let mut cv = vec![0.0; used.len()];
         for t in lag..n {
             {
@@ -252,7 +254,9 @@ impl NarxModel {
             return Err(SysidError::invalid("horizon", "must be at least 1"));
         }
         let noise = self.spec.has_noise();
-        let used: Vec<bool> = (0..self.spec.n_custom()).map(|c| self.uses_custom(c)).collect();
+        let used: Vec<bool> = (0..self.spec.n_custom())
+            .map(|c| self.uses_custom(c))
+            .collect();
         let mut cv = vec![0.0; used.len()];
         let measured = |s: Signal, ch: usize, tt: usize| match s {
             Signal::Output => y[(tt, ch)],

@@ -142,8 +142,8 @@ fn custom_regressor_is_selected_fitted_and_simulated_exactly() {
     let mut y = Mat::<f64>::zeros(n, 1);
     let f = |a: &[f64]| a[0] * a[1].abs();
     for t in 1..n {
-        y[(t, 0)] = 0.5 * y[(t - 1, 0)] + 0.8 * u[(t - 1, 0)]
-            - 0.4 * f(&[y[(t - 1, 0)], u[(t - 1, 0)]]);
+        y[(t, 0)] =
+            0.5 * y[(t - 1, 0)] + 0.8 * u[(t - 1, 0)] - 0.4 * f(&[y[(t - 1, 0)], u[(t - 1, 0)]]);
     }
     let args = vec![
         LagVar {
@@ -176,8 +176,19 @@ fn custom_regressor_is_selected_fitted_and_simulated_exactly() {
         e: None,
         c: Some(c.as_ref()),
     }];
-    let sel = frols(&spec, &cands, &rec, &[vec![]], &FrolsOptions::with_max_terms(3)).unwrap();
-    let mut got: Vec<Term> = sel[0].terms.iter().map(|&k| cands.terms[k].clone()).collect();
+    let sel = frols(
+        &spec,
+        &cands,
+        &rec,
+        &[vec![]],
+        &FrolsOptions::with_max_terms(3),
+    )
+    .unwrap();
+    let mut got: Vec<Term> = sel[0]
+        .terms
+        .iter()
+        .map(|&k| cands.terms[k].clone())
+        .collect();
     let r = fit(&spec, &cands, &rec, &[sel[0].terms.clone()]).unwrap();
     let th = solve_prefix(&r[0], 3).unwrap();
     let mut pairs: Vec<(Term, f64)> = got.drain(..).zip(th).collect();

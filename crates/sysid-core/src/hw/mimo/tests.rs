@@ -39,15 +39,23 @@ fn fit(s: &MimoHwStructure, truth: &[f64], start: &[f64]) -> Solution {
         max_iter: 200,
         ..Options::default()
     };
-    estimate_mimo(s, &[(u.as_ref(), y.as_ref())], start, &opts, &mut |_| Flow::Continue)
-        .unwrap()
+    estimate_mimo(s, &[(u.as_ref(), y.as_ref())], start, &opts, &mut |_| {
+        Flow::Continue
+    })
+    .unwrap()
 }
 
 #[test]
 fn gradient_matches_finite_differences() {
     let s = MimoHwStructure {
-        inputs: vec![Nonlinearity::Saturation, Nonlinearity::Polynomial { degree: 3 }],
-        outputs: vec![Nonlinearity::Polynomial { degree: 2 }, Nonlinearity::Identity],
+        inputs: vec![
+            Nonlinearity::Saturation,
+            Nonlinearity::Polynomial { degree: 3 },
+        ],
+        outputs: vec![
+            Nonlinearity::Polynomial { degree: 2 },
+            Nonlinearity::Identity,
+        ],
         order: 2,
         feedthrough: true,
     };
@@ -81,7 +89,10 @@ fn gradient_matches_finite_differences() {
 #[test]
 fn hammerstein_2x2_recovered() {
     let s = MimoHwStructure {
-        inputs: vec![Nonlinearity::Saturation, Nonlinearity::Polynomial { degree: 3 }],
+        inputs: vec![
+            Nonlinearity::Saturation,
+            Nonlinearity::Polynomial { degree: 3 },
+        ],
         outputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
         order: 2,
         feedthrough: false,
@@ -90,14 +101,24 @@ fn hammerstein_2x2_recovered() {
     truth.extend(linear_block());
     // start: the nonlinearities near identity, the linear block perturbed by ~10 %
     let mut start = vec![-0.9, 0.9, 0.0, 0.0];
-    start.extend(linear_block().iter().enumerate().map(|(k, v)| {
-        v * (1.0 + 0.1 * ((k as f64 * 1.7).sin()))
-    }));
+    start.extend(
+        linear_block()
+            .iter()
+            .enumerate()
+            .map(|(k, v)| v * (1.0 + 0.1 * ((k as f64 * 1.7).sin()))),
+    );
     let sol = fit(&s, &truth, &start);
     let p = sorted_poles(&s, &sol.theta);
-    assert!((p[0] - 0.5).abs() < 1e-6 && (p[1] - 0.8).abs() < 1e-6, "{p:?}");
+    assert!(
+        (p[0] - 0.5).abs() < 1e-6 && (p[1] - 0.8).abs() < 1e-6,
+        "{p:?}"
+    );
     for k in 0..4 {
-        assert!((sol.theta[k] - truth[k]).abs() < 1e-6, "{:?}", &sol.theta[..4]);
+        assert!(
+            (sol.theta[k] - truth[k]).abs() < 1e-6,
+            "{:?}",
+            &sol.theta[..4]
+        );
     }
     assert!(sol.cost < 1e-18, "cost {}", sol.cost);
 }
@@ -107,7 +128,10 @@ fn hammerstein_2x2_recovered() {
 fn wiener_2x2_recovered() {
     let s = MimoHwStructure {
         inputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
-        outputs: vec![Nonlinearity::Polynomial { degree: 2 }, Nonlinearity::Saturation],
+        outputs: vec![
+            Nonlinearity::Polynomial { degree: 2 },
+            Nonlinearity::Saturation,
+        ],
         order: 2,
         feedthrough: false,
     };
@@ -121,7 +145,10 @@ fn wiener_2x2_recovered() {
     start.extend([0.0, -2.0, 2.0]);
     let sol = fit(&s, &truth, &start);
     let p = sorted_poles(&s, &sol.theta);
-    assert!((p[0] - 0.5).abs() < 1e-6 && (p[1] - 0.8).abs() < 1e-6, "{p:?}");
+    assert!(
+        (p[0] - 0.5).abs() < 1e-6 && (p[1] - 0.8).abs() < 1e-6,
+        "{p:?}"
+    );
     let nl = &sol.theta[12..];
     for (g, w) in nl.iter().zip([0.4, -0.5, 0.45]) {
         assert!((g - w).abs() < 1e-6, "{nl:?}");
@@ -140,9 +167,13 @@ fn bad_starts_and_shapes_are_errors() {
     let y = Mat::<f64>::zeros(50, 2);
     let mut th = linear_block();
     th[0] = 3.0; // unstable A
-    let r = estimate_mimo(&s, &[(u.as_ref(), y.as_ref())], &th, &Options::default(), &mut |_| {
-        Flow::Continue
-    });
+    let r = estimate_mimo(
+        &s,
+        &[(u.as_ref(), y.as_ref())],
+        &th,
+        &Options::default(),
+        &mut |_| Flow::Continue,
+    );
     assert!(format!("{:?}", r.unwrap_err()).contains("unstable"));
     let y1 = Mat::<f64>::zeros(50, 1);
     let r = estimate_mimo(
