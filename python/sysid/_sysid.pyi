@@ -13,6 +13,8 @@ __all__ = [
     "narx_predict",
     "hw_estimate",
     "hw_simulate",
+    "hw_mimo_estimate",
+    "hw_mimo_simulate",
     "AUTO_MIN_RELATIVE_PIVOT",
     "arx_fit",
     "iv4",
@@ -438,3 +440,22 @@ def hw_simulate(
     theta: list[float],
     u: _Array,
 ) -> tuple[_Array, _Array, _Array]: ...
+def hw_mimo_estimate(
+    records: list[tuple[_Array, _Array]],
+    inputs: list[tuple[str, int, list[float]]],
+    outputs: list[tuple[str, int, list[float]]],
+    order: int,
+    feedthrough: bool,
+    theta0: list[float],
+    max_iter: int = 100,
+    tol: float = 1e-10,
+    progress: Callable[[int, float], Any] | None = None,
+) -> dict[str, Any]: ...
+def hw_mimo_simulate(
+    inputs: list[tuple[str, int, list[float]]],
+    outputs: list[tuple[str, int, list[float]]],
+    order: int,
+    feedthrough: bool,
+    theta: list[float],
+    u: _Array,
+) -> _Array: ...

@@ -356,6 +356,14 @@ class NARXModel(ModelMixin):
                     b[i][blk - ny][v - offs[blk]] = c
         return PolynomialModel(a, b, [list(self.nk)] * ny, self.dt)
 
+    def to_nlss(self) -> Any:
+        """The nonlinear state-space form (:class:`~sysid.NARXStateSpace`): the state is the
+        shift register of the last ``max_lag`` outputs and inputs; its simulation is this
+        model's free run."""
+        from .narx_ss import NARXStateSpace
+
+        return NARXStateSpace(self)
+
     def freqresp(self, omega: Any) -> np.ndarray:
         """Frequency response of :meth:`linearize` (the small-signal response at zero)."""
         return np.asarray(self.linearize().freqresp(omega))
