@@ -1,7 +1,9 @@
-"""The records bundled with sysid: unmodified copies of the published files, loadable by name.
+"""The records bundled with sysid: unmodified copies of the published files (the F-16 level 2
+and 3 files: whole periods cut from them, rows unchanged), loadable by name.
 
 The SHA-256 sums are those published with the records (``_data/README.md``, typed from the
-shared data description); a copy that was altered, truncated or re-encoded fails here.
+shared data description; for the two cut files, those of the cut files); a copy that was
+altered, truncated or re-encoded fails here.
 """
 
 from __future__ import annotations
