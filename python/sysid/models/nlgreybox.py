@@ -36,6 +36,9 @@ from .protocol import ModelMixin
 __all__ = ["NonlinearGreyBox"]
 
 _INTEGRATORS = ("rk4", "adaptive")
+_JACOBIANS = ("auto", "fd", "sensitivity")
+#: relative central-difference step for derivatives of f and h not given by the user
+_CD_STEP = float(np.finfo(float).eps ** (1 / 3))
 
 
 def _stack(out: Any, rows: int, k: int, what: str) -> np.ndarray:
@@ -53,6 +56,28 @@ def _stack(out: Any, rows: int, k: int, what: str) -> np.ndarray:
     except ValueError as e:
         raise DataError(f"{what} returned values that do not fit ({rows}, {k}): {e}") from e
     return res
+
+
+def _matrix(out: Any, shape: tuple[int, int], what: str) -> np.ndarray:
+    try:
+        return np.asarray(out, dtype=float).reshape(shape)
+    except ValueError as e:
+        raise DataError(f"the derivative {what} returned {np.shape(out)}, expected {shape}"
+                        ) from e
+
+
+def _param_matrix(out: Any, rows: int, names: list[str]) -> np.ndarray:
+    """``(rows, n_params)`` from an array in parameter order or a dict ``{name: column}``."""
+    if isinstance(out, Mapping):
+        unknown = set(out) - set(names)
+        if unknown:
+            raise DataError(f"the parameter derivative names unknown parameters "
+                            f"{sorted(unknown)}; the structure has {names}")
+        res = np.zeros((rows, len(names)))
+        for k, col in out.items():
+            res[:, names.index(k)] = np.asarray(col, dtype=float).reshape(rows)
+        return res
+    return _matrix(out, (rows, len(names)), "d/dp")
 
 
 class NonlinearGreyBox(ModelMixin):
@@ -82,6 +107,18 @@ class NonlinearGreyBox(ModelMixin):
     ninputs, noutputs : int, optional
         Channel counts (otherwise found from the data / one call of ``h``).
     input_names, output_names : sequence of str, optional
+    dfdx, dfdp, dhdx, dhdp : callable, optional
+        Derivatives ``(t, x, u, p)`` at one point (``x`` of shape ``(nx,)``, float
+        parameters): ``dfdx -> (nx, nx)``, ``dhdx -> (ny, nx)``; ``dfdp``/``dhdp`` return
+        ``(nx, n_params)``/``(ny, n_params)`` in the order of ``params`` or a dict
+        ``{name: column}`` (missing names are zero). With them ``greyest`` forms the Jacobian by
+        the forward sensitivity equations ``dS/dt = f_x S + f_p`` integrated beside the
+        states by the same integrator.
+    jacobian : {"auto", "fd", "sensitivity"}
+        ``"auto"``: sensitivity equations when ``dfdx`` and ``dfdp`` are given, otherwise
+        forward differences of the whole simulation (``"fd"``). ``"sensitivity"`` without
+        (some) derivatives takes the missing ones by central differences of ``f``/``h`` at
+        each integrator stage.
 
     Examples
     --------
@@ -97,9 +134,18 @@ class NonlinearGreyBox(ModelMixin):
                  substeps: int = 1, rtol: float = 1e-8, atol: float = 1e-10,
                  vectorized: bool = False, dt: float | None = None, ninputs: int | None = None,
                  noutputs: int | None = None, input_names: Any = None,
-                 output_names: Any = None) -> None:
+                 output_names: Any = None, dfdx: Callable[..., Any] | None = None,
+                 dfdp: Callable[..., Any] | None = None, dhdx: Callable[..., Any] | None = None,
+                 dhdp: Callable[..., Any] | None = None, jacobian: str = "auto") -> None:
         if not (callable(f) and callable(h)):
             raise DataError("f and h must be callables f(t, x, u, p), h(t, x, u, p)")
+        if jacobian not in _JACOBIANS:
+            raise DataError(f"jacobian must be 'auto', 'fd' or 'sensitivity', got {jacobian!r}")
+        for name, fn in (("dfdx", dfdx), ("dfdp", dfdp), ("dhdx", dhdx), ("dhdp", dhdp)):
+            if fn is not None and not callable(fn):
+                raise DataError(f"{name} must be a callable (t, x, u, p) -> array")
+        self.dfdx, self.dfdp, self.dhdx, self.dhdp = dfdx, dfdp, dhdx, dhdp
+        self.jacobian = jacobian
         if integrator not in _INTEGRATORS:
             raise DataError(f"integrator must be 'rk4' or 'adaptive', got {integrator!r}")
         self.f, self.h = f, h
@@ -224,6 +270,63 @@ class NonlinearGreyBox(ModelMixin):
         """Integrator keywords of the core functions."""
         return {"integrator_name": self.integrator, "substeps": self.substeps,
                 "rtol": self.rtol, "atol": self.atol}
+
+    @property
+    def jacobian_method(self) -> str:
+        """``"sensitivity"`` or ``"fd"``: how ``greyest`` forms the Jacobian."""
+        if self.jacobian == "auto":
+            given = self.dfdx is not None and self.dfdp is not None
+            return "sensitivity" if given else "fd"
+        return self.jacobian
+
+    def jacobian_options(self, free: list[str]) -> dict[str, Any]:
+        """Keywords of the core functions for the Jacobian: the method and, for the
+        sensitivity equations, the point-wise derivative callables ``(t, x, u, p) ->
+        (value, d/dx, d/dp)`` (user derivatives, or central differences of ``f``/``h`` in
+        the free parameters)."""
+        if self.jacobian_method == "fd":
+            return {"jacobian": "fd"}
+        return {"jacobian": "sensitivity",
+                "rhs_derivatives": self._point_derivatives(self.f, self.dfdx, self.dfdp, free),
+                "output_derivatives": self._point_derivatives(self.h, self.dhdx, self.dhdp,
+                                                              free)}
+
+    def _point_derivatives(self, fn: Callable[..., Any], ddx: Callable[..., Any] | None,
+                           ddp: Callable[..., Any] | None, free: list[str]
+                           ) -> Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        names = self.names
+        idx = [names.index(k) for k in free]
+        nx = self.nx
+        typical = np.array([self.params[k].typical for k in names])
+
+        def call(t: float, x: np.ndarray, u: np.ndarray, P: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+            v = self._call(fn, t, x[:, None], u, P[:, None])
+            rows = v.shape[0]
+            need_x, need_p = ddx is None, ddp is None
+            if need_x or need_p:   # central differences, all columns in one call
+                hx = _CD_STEP * np.maximum(np.abs(x), 1.0)
+                hp = _CD_STEP * np.maximum(np.abs(P[idx]), typical[idx])
+                kx, kp = (nx if need_x else 0), (len(idx) if need_p else 0)
+                X = np.repeat(x[:, None], 2 * (kx + kp), axis=1)
+                Pm = np.repeat(P[:, None], 2 * (kx + kp), axis=1)
+                for i in range(kx):
+                    X[i, 2 * i] += hx[i]
+                    X[i, 2 * i + 1] -= hx[i]
+                for c, i in enumerate(idx[:kp]):
+                    Pm[i, 2 * (kx + c)] += hp[c]
+                    Pm[i, 2 * (kx + c) + 1] -= hp[c]
+                V = self._call(fn, t, X, u, Pm) if kx + kp else np.zeros((rows, 0))
+                D = (V[:, 0::2] - V[:, 1::2]) / np.concatenate([hx[:kx], hp[:kp]]) / 2
+            p = Parameters({n: float(P[i]) for i, n in enumerate(names)})
+            dx = D[:, :nx] if need_x else _matrix(ddx(t, x, u, p), (rows, nx), "d/dx")
+            dp = np.zeros((rows, len(names)))
+            if need_p:
+                dp[:, idx] = D[:, kx:]
+            else:
+                dp = _param_matrix(ddp(t, x, u, p), rows, names)
+            return v, np.ascontiguousarray(dx, dtype=float), dp
+        return call
 
     # -- the sysid.Model protocol ---------------------------------------------------------
     def simulate(self, u: Any, x0: Any = None, *, dt: float | None = None) -> np.ndarray:

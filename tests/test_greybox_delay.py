@@ -1,0 +1,142 @@
+"""Grey-box input delays that are not whole multiples of the sample time (ZOH, exact)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+import sysid
+from sysid.errors import DataError
+
+A0 = np.array([[-0.7, 1.3], [-2.0, -0.4]])
+B0 = np.array([[0.0, 1.0, 0.3], [1.0, -0.5, 0.2]])
+C0 = np.array([[1.0, 0.0], [0.3, 1.0]])
+D0 = np.array([[0.2, 0.0, 0.1], [0.0, -0.4, 0.0]])
+
+
+def plant(p, dt=None):
+    A = A0 * [[p.a, 1.0], [1.0, p.c]]
+    return A, B0 * [[1.0], [p.b]], C0, D0
+
+
+VALS = {"a": 1.1, "b": 0.9, "c": 1.2}
+
+
+def _fine_simulation(u: np.ndarray, dt: float, delays: np.ndarray, k: int) -> np.ndarray:
+    """The continuous delayed system on a grid k times finer, where every delay is a whole
+    number of fine steps: the delayed ZOH input is constant over each fine step, so this is
+    exact (to round-off) and independent of sysid (scipy's expm, a plain loop)."""
+    A, B, C, D = (np.asarray(x, float) for x in plant(sysid.models.greybox.Parameters(VALS)))
+    n, m = B.shape
+    h = dt / k
+    E = expm(np.block([[A, B], [np.zeros((m, n + m))]]) * h)
+    Phi, Gam = E[:n, :n], E[:n, n:]
+    steps = np.round(delays / h).astype(int)
+    assert np.allclose(steps * h, delays, atol=1e-15)
+    uf = np.repeat(u, k, axis=0)
+    ud = np.zeros_like(uf)
+    for j, s in enumerate(steps):
+        ud[s:, j] = uf[:uf.shape[0] - s, j]
+    x = np.zeros(n)
+    y = np.zeros((u.shape[0], C.shape[0]))
+    for i in range(uf.shape[0]):
+        if i % k == 0:
+            y[i // k] = C @ x + D @ ud[i]
+        x = Phi @ x + Gam @ ud[i]
+    return y
+
+
+@pytest.mark.parametrize("delays", [[0.13, 0.02, 0.1], [0.0, 0.049, 0.151]])
+def test_fractional_delay_matches_a_fine_step_simulation(delays):
+    dt, k = 0.05, 1000
+    delays = np.array(delays)
+    u = np.random.default_rng(0).standard_normal((60, 3))
+    s = sysid.GreyBox(plant, VALS, input_delay=delays)
+    m = s.model(dt=dt)
+    y = m.simulate(u)
+    ref = _fine_simulation(u, dt, delays, k)
+    assert np.max(np.abs(y - ref)) < 1e-12 * np.max(np.abs(ref)), np.max(np.abs(y - ref))
+    # the realisation: one shift-register state per whole sample of delay, one more for a
+    # fraction (0.13 = 2 dt + 0.03: 3, 0.02: 1, 0.1 = 2 dt: 2)
+    lo, r = sysid.models.greydelay.split_delays(delays, dt)
+    assert m.nstates == 2 + int(np.sum(lo + (r > 0)))
+
+
+def test_fraction_tends_to_the_whole_sample_shift():
+    """tau -> l dt: the model is continuous in tau (the fractional taps merge). Without
+    feedthrough only: with D the output at the sampling instant jumps when the delayed
+    input's step crosses it (tau slightly above l dt sees the previous input sample)."""
+    dt = 0.05
+
+    def strictly_proper(p, dt=None):
+        A, B, C, _ = plant(p)
+        return A, B, C, np.zeros_like(D0)
+    u = np.random.default_rng(1).standard_normal((40, 3))
+    y0 = sysid.GreyBox(strictly_proper, VALS, input_delay=[0.1, 0.05, 0.0]
+                       ).model(dt=dt).simulate(u)
+    for eps in (1e-4, -1e-4, 1e-7, -1e-7):
+        y = sysid.GreyBox(strictly_proper, VALS, input_delay=[0.1 + eps, 0.05 + eps, abs(eps)]
+                          ).model(dt=dt).simulate(u)
+        assert np.max(np.abs(y - y0)) < 20 * abs(eps) * np.max(np.abs(y0))
+    # with feedthrough: tau = l dt + 1e-9 s reads D u_{k-l-1} at the sampling instant
+    a = sysid.GreyBox(plant, VALS, input_delay=[0.1, 0, 0]).model(dt=dt).simulate(u)
+    b = sysid.GreyBox(plant, VALS, input_delay=[0.1 + 1e-7, 0, 0]).model(dt=dt).simulate(u)
+    jump = np.zeros_like(a)   # D (u_{k-3} - u_{k-2}), u_{-1} = 0
+    jump[2:, 0] = D0[0, 0] * (np.concatenate([[0.0], u[:-3, 0]]) - u[:-2, 0])
+    np.testing.assert_allclose(b - a, jump, atol=1e-6)
+
+
+def test_fractional_delay_derivatives_are_exact():
+    dt = 0.05
+    s = sysid.GreyBox(plant, VALS, input_delay=[0.13, 0.02, 0.1])
+    base, ders = s.sampled_taps(None, dt, ["a", "b", "c"])
+    assert base["B"].shape == (2, 5) and base["D"].shape == (2, 5)
+    assert s.input_taps(dt) == [(0, 2), (0, 3), (1, 0), (1, 1), (2, 2)]
+    for k, d in zip("abc", ders):
+        h = 1e-5
+        up = s.sampled_taps({**VALS, k: VALS[k] + h}, dt)[0]
+        dn = s.sampled_taps({**VALS, k: VALS[k] - h}, dt)[0]
+        for key in ("A", "B", "D"):
+            fd = (up[key] - dn[key]) / (2 * h)
+            np.testing.assert_allclose(d[key], fd, atol=1e-9, rtol=1e-7)
+
+
+def _motor(p, dt=None):
+    return [[-1.0 / p.tau]], [[p.K / p.tau]], [[1.0]], [[0.0]]
+
+
+def test_estimation_with_a_fixed_fractional_delay():
+    dt, delay = 0.05, 0.13
+    rng = np.random.default_rng(3)
+    u = np.repeat(rng.standard_normal(40), 10)
+    y = sysid.GreyBox(_motor, {"K": 2.0, "tau": 0.3}, input_delay=delay).model(dt=dt).simulate(u)
+    data = sysid.IOData(u=u, y=y, dt=dt)
+    s = sysid.GreyBox(_motor, {"K": 1.0, "tau": sysid.param(1.0, bounds=(0.01, 10))},
+                      input_delay=delay)
+    fit = sysid.greyest(data, s, x0="zero")
+    np.testing.assert_allclose(fit.parameters.value, [2.0, 0.3], atol=1e-9)
+    assert fit.model.nstates == 1 + 3
+    np.testing.assert_allclose(fit.model.simulate(u), y, atol=1e-9)
+    # the nearest whole-sample delays fit clearly worse
+    for wrong in (0.1, 0.15):
+        w = sysid.greyest(data, sysid.GreyBox(_motor, {"K": 1.0, "tau": 1.0},
+                                              input_delay=wrong), x0="zero")
+        assert w.info["loss"] > 1e6 * max(fit.info["loss"], 1e-30)
+    # with noise: within the predicted std (x0 estimated, prediction focus)
+    yn = y + 0.02 * rng.standard_normal(y.shape)
+    noisy = sysid.greyest(sysid.IOData(u=u, y=yn, dt=dt), s)
+    z = (noisy.parameters.value - [2.0, 0.3]) / noisy.parameters.std
+    assert np.all(np.abs(z) < 4), z
+
+
+def test_fractional_delay_errors_name_the_fix():
+    with pytest.raises(DataError, match="continuous=True"):
+        sysid.GreyBox(lambda p: ([[p.a]], [[1.0]], [[1.0]], [[0.0]]), {"a": 0.5},
+                      continuous=False, input_delay=0.13).model(dt=0.05)
+    with pytest.raises(DataError, match="hold='zoh'"):
+        sysid.GreyBox(_motor, {"K": 1.0, "tau": 1.0}, input_delay=0.13, hold="foh"
+                      ).model(dt=0.05)
+    # FOH with whole-sample delays still works
+    m = sysid.GreyBox(_motor, {"K": 1.0, "tau": 1.0}, input_delay=0.1, hold="foh").model(dt=0.05)
+    assert m.nstates == 3
