@@ -301,27 +301,27 @@ class NonlinearGreyBox(ModelMixin):
 
         def call(t: float, x: np.ndarray, u: np.ndarray, P: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-            v = self._call(fn, t, x[:, None], u, P[:, None])
-            rows = v.shape[0]
             need_x, need_p = ddx is None, ddp is None
-            if need_x or need_p:   # central differences, all columns in one call
-                hx = _CD_STEP * np.maximum(np.abs(x), 1.0)
-                hp = _CD_STEP * np.maximum(np.abs(P[idx]), typical[idx])
-                kx, kp = (nx if need_x else 0), (len(idx) if need_p else 0)
-                X = np.repeat(x[:, None], 2 * (kx + kp), axis=1)
-                Pm = np.repeat(P[:, None], 2 * (kx + kp), axis=1)
-                for i in range(kx):
-                    X[i, 2 * i] += hx[i]
-                    X[i, 2 * i + 1] -= hx[i]
-                for c, i in enumerate(idx[:kp]):
-                    Pm[i, 2 * (kx + c)] += hp[c]
-                    Pm[i, 2 * (kx + c) + 1] -= hp[c]
-                V = self._call(fn, t, X, u, Pm) if kx + kp else np.zeros((rows, 0))
-                D = (V[:, 0::2] - V[:, 1::2]) / np.concatenate([hx[:kx], hp[:kp]]) / 2
+            kx, kp = (nx if need_x else 0), (len(idx) if need_p else 0)
+            # the point and its central-difference neighbours in one call: column 0, then
+            # +h/-h pairs for each state entry and free parameter not given by the user
+            X = np.repeat(x[:, None], 1 + 2 * (kx + kp), axis=1)
+            Pm = np.repeat(P[:, None], 1 + 2 * (kx + kp), axis=1)
+            hx = _CD_STEP * np.maximum(np.abs(x[:kx]), 1.0)
+            hp = _CD_STEP * np.maximum(np.abs(P[idx[:kp]]), typical[idx[:kp]])
+            for i in range(kx):
+                X[i, 1 + 2 * i] += hx[i]
+                X[i, 2 + 2 * i] -= hx[i]
+            for c, i in enumerate(idx[:kp]):
+                Pm[i, 1 + 2 * (kx + c)] += hp[c]
+                Pm[i, 2 + 2 * (kx + c)] -= hp[c]
+            V = self._call(fn, t, X, u, Pm)
+            v, rows = V[:, :1], V.shape[0]
+            D = (V[:, 1::2] - V[:, 2::2]) / np.concatenate([hx, hp]) / 2
             p = Parameters({n: float(P[i]) for i, n in enumerate(names)})
-            dx = D[:, :nx] if need_x else _matrix(ddx(t, x, u, p), (rows, nx), "d/dx")
-            dp = np.zeros((rows, len(names)))
-            if need_p:
+            dx = D[:, :nx] if ddx is None else _matrix(ddx(t, x, u, p), (rows, nx), "d/dx")
+            if ddp is None:
+                dp = np.zeros((rows, len(names)))
                 dp[:, idx] = D[:, kx:]
             else:
                 dp = _param_matrix(ddp(t, x, u, p), rows, names)
