@@ -37,6 +37,7 @@ from ..errors import DataError
 from .continuous import ContinuousStateSpace
 from .hammerstein import HammersteinWienerModel
 from .narx import NARXModel
+from .nlgreybox import NonlinearGreyBox
 from .polynomial import PolynomialModel
 from .serialize import (
     FORMAT,
@@ -56,7 +57,7 @@ __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict", "regi
 LEGACY_FORMAT = "sysid-state-space-model"  # version 1: state-space models only
 
 for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel,
-             HammersteinWienerModel):
+             HammersteinWienerModel, NonlinearGreyBox):
     register_model(_cls)
 
 

@@ -381,6 +381,73 @@ class NonlinearGreyBox(ModelMixin):
         """Frequency response of the linearisation."""
         return np.asarray(self.linearize().freqresp(omega))
 
+    # -- saving ----------------------------------------------------------------------------
+    _FUNCTIONS = ("f", "h", "dfdx", "dfdp", "dhdx", "dhdp")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Everything but code (see :func:`sysid.save_model`): parameter values, fixed flags,
+        bounds, scales, units; initial states; integrator; sample time; the covariance of the
+        free parameters when estimated; ``f``, ``h`` (and the derivatives) as
+        ``"module:qualname"`` references, imported again on load. Lambdas, nested functions
+        and functions defined in ``__main__`` cannot be referred to: a
+        :class:`~sysid.DataError` names the function and the fix."""
+        from .callref import callable_ref
+
+        refs = {k: None if getattr(self, k) is None else callable_ref(getattr(self, k), k)
+                for k in self._FUNCTIONS}
+        params = [{"name": k, "value": v.value, "lower": v.bounds[0], "upper": v.bounds[1],
+                   "fixed": v.fixed, "scale": v.scale, "unit": v.unit,
+                   "description": v.description} for k, v in self.params.items()]
+        unc = getattr(self, "uncertainty", None)
+        cov = None if unc is None else {"names": list(unc.names), "covariance": unc.covariance,
+                                        "dof": unc.dof}
+        return {"functions": refs, "params": params, "nx": self.nx, "x0": self.x0,
+                "x0_free": self.x0_free, "integrator": self.integrator,
+                "substeps": self.substeps, "rtol": self.rtol, "atol": self.atol,
+                "vectorized": self.vectorized, "jacobian": self.jacobian, "dt": self.dt,
+                "ninputs": self._ninputs, "noutputs": self._noutputs,
+                "input_names": None if self._input_names is None else list(self._input_names),
+                "output_names": None if self._output_names is None else
+                list(self._output_names), "uncertainty": cov, "info": self.info}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> NonlinearGreyBox:
+        """Inverse of :meth:`to_dict`: imports the functions again (a
+        :class:`~sysid.DataError` naming the one that cannot be imported)."""
+        from .callref import resolve_ref
+        from .greybox import param
+
+        refs = d.get("functions") or {}
+        fns = {k: None if refs.get(k) is None else resolve_ref(refs[k], k)
+               for k in cls._FUNCTIONS}
+        params = {r["name"]: param(r["value"], bounds=(r["lower"], r["upper"]),
+                                   fixed=bool(r["fixed"]), scale=r.get("scale"),
+                                   unit=r.get("unit", ""), description=r.get("description", ""))
+                  for r in d["params"]}
+        dt = float(d.get("dt") or 0.0)
+        out = cls(fns["f"], fns["h"], params, nx=int(d["nx"]), x0=d.get("x0"),
+                  x0_free=np.asarray(d.get("x0_free", False), dtype=bool),
+                  integrator=d.get("integrator", "rk4"), substeps=int(d.get("substeps", 1)),
+                  rtol=float(d.get("rtol", 1e-8)), atol=float(d.get("atol", 1e-10)),
+                  vectorized=bool(d.get("vectorized", False)), dt=dt or None,
+                  ninputs=d.get("ninputs"), noutputs=d.get("noutputs"),
+                  input_names=d.get("input_names"), output_names=d.get("output_names"),
+                  dfdx=fns["dfdx"], dfdp=fns["dfdp"], dhdx=fns["dhdx"], dhdp=fns["dhdp"],
+                  jacobian=d.get("jacobian", "auto"))
+        out.info = dict(d.get("info") or {})
+        unc = d.get("uncertainty")
+        if unc is not None:
+            from .uncertainty import ParameterUncertainty
+
+            names = list(unc["names"])
+
+            def build(theta: np.ndarray) -> NonlinearGreyBox:
+                return out.with_values(dict(zip(names, np.asarray(theta, dtype=float))))
+            out.uncertainty = ParameterUncertainty(
+                [out.params[k].value for k in names], unc["covariance"], build, names=names,
+                dof=None if unc.get("dof") is None else int(unc["dof"]))
+        return out
+
     def __repr__(self) -> str:
         p = len(self.params)
         return (f"NonlinearGreyBox({p} parameter{'s' if p != 1 else ''} "
