@@ -302,6 +302,14 @@ class NonlinearGreyBox(ModelMixin):
         def call(t: float, x: np.ndarray, u: np.ndarray, P: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             need_x, need_p = ddx is None, ddp is None
+            p = Parameters({n: float(P[i]) for i, n in enumerate(names)})
+            if ddx is not None and ddp is not None:   # all given: three plain calls
+                v = np.asarray(fn(t, x, u, p) if not self.vectorized else
+                               self._call(fn, t, x[:, None], u, P[:, None]), dtype=float)
+                v = v.reshape(-1, 1)
+                rows = v.shape[0]
+                return (v, _matrix(ddx(t, x, u, p), (rows, nx), "d/dx"),
+                        _param_matrix(ddp(t, x, u, p), rows, names))
             kx, kp = (nx if need_x else 0), (len(idx) if need_p else 0)
             # the point and its central-difference neighbours in one call: column 0, then
             # +h/-h pairs for each state entry and free parameter not given by the user
@@ -318,7 +326,6 @@ class NonlinearGreyBox(ModelMixin):
             V = self._call(fn, t, X, u, Pm)
             v, rows = V[:, :1], V.shape[0]
             D = (V[:, 1::2] - V[:, 2::2]) / np.concatenate([hx, hp]) / 2
-            p = Parameters({n: float(P[i]) for i, n in enumerate(names)})
             dx = D[:, :nx] if ddx is None else _matrix(ddx(t, x, u, p), (rows, nx), "d/dx")
             if ddp is None:
                 dp = np.zeros((rows, len(names)))
