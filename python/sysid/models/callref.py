@@ -54,13 +54,13 @@ def callable_ref(fn: Callable[..., Any], role: str) -> str:
     module = getattr(fn, "__module__", None)
     qualname = getattr(fn, "__qualname__", None)
     name = f"{role} ({getattr(fn, '__name__', type(fn).__name__)})"
-    if qualname is None or module is None:
-        raise DataError(f"{name} has no module and qualified name, so a saved model cannot "
-                        f"refer to it: {_FIX}")
-    if "<lambda>" in qualname:
+    if qualname is not None and "<lambda>" in qualname:
         raise DataError(f"{role} is a lambda: a saved model refers to its functions by "
                         f"'module:name' and re-imports them on load, which a lambda cannot "
                         f"be; {_FIX}")
+    if qualname is None or module is None:
+        raise DataError(f"{name} has no module and qualified name, so a saved model cannot "
+                        f"refer to it: {_FIX}")
     if "<locals>" in qualname:
         raise DataError(f"{name} is defined inside another function ({module}:{qualname}) "
                         f"and cannot be imported on load; {_FIX}")
