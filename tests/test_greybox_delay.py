@@ -8,6 +8,8 @@ from scipy.linalg import expm
 
 import sysid
 from sysid.errors import DataError
+from sysid.models.greybox import Parameters
+from sysid.models.greydelay import split_delays
 
 A0 = np.array([[-0.7, 1.3], [-2.0, -0.4]])
 B0 = np.array([[0.0, 1.0, 0.3], [1.0, -0.5, 0.2]])
@@ -27,7 +29,7 @@ def _fine_simulation(u: np.ndarray, dt: float, delays: np.ndarray, k: int) -> np
     """The continuous delayed system on a grid k times finer, where every delay is a whole
     number of fine steps: the delayed ZOH input is constant over each fine step, so this is
     exact (to round-off) and independent of sysid (scipy's expm, a plain loop)."""
-    A, B, C, D = (np.asarray(x, float) for x in plant(sysid.models.greybox.Parameters(VALS)))
+    A, B, C, D = (np.asarray(x, float) for x in plant(Parameters(VALS)))
     n, m = B.shape
     h = dt / k
     E = expm(np.block([[A, B], [np.zeros((m, n + m))]]) * h)
@@ -59,8 +61,37 @@ def test_fractional_delay_matches_a_fine_step_simulation(delays):
     assert np.max(np.abs(y - ref)) < 1e-12 * np.max(np.abs(ref)), np.max(np.abs(y - ref))
     # the realisation: one shift-register state per whole sample of delay, one more for a
     # fraction (0.13 = 2 dt + 0.03: 3, 0.02: 1, 0.1 = 2 dt: 2)
-    lo, r = sysid.models.greydelay.split_delays(delays, dt)
+    lo, r = split_delays(delays, dt)
     assert m.nstates == 2 + int(np.sum(lo + (r > 0)))
+
+
+def test_fractional_delay_matches_scipy_solve_ivp():
+    """The same against SciPy's adaptive Runge-Kutta (DOP853) on the continuous delayed
+    system, integrated piecewise between the instants where a delayed input switches."""
+    from scipy.integrate import solve_ivp
+
+    dt = 0.05
+    delays = np.array([0.13, 0.02, 0.1])
+    u = np.random.default_rng(2).standard_normal((30, 3))
+    A, B, C, D = (np.asarray(x, float) for x in plant(Parameters(VALS)))
+
+    def u_delayed(t: float) -> np.ndarray:   # ZOH input, delayed, zero before it arrives
+        k = np.floor((t - delays) / dt + 1e-9).astype(int)
+        return np.where(k >= 0, u[np.clip(k, 0, len(u) - 1), [0, 1, 2]], 0.0)
+
+    switches = np.unique(np.concatenate([np.arange(len(u)) * dt + d for d in delays]))
+    x = np.zeros(2)
+    y = np.zeros((len(u), 2))
+    for k in range(len(u)):
+        t0 = k * dt
+        y[k] = C @ x + D @ u_delayed(t0)
+        cuts = [t0] + [c for c in switches if t0 < c < t0 + dt - 1e-12] + [t0 + dt]
+        for a, b in zip(cuts[:-1], cuts[1:]):
+            ud = u_delayed(0.5 * (a + b))
+            x = solve_ivp(lambda t, z, ud=ud: A @ z + B @ ud, (a, b), x, method="DOP853",
+                          rtol=1e-13, atol=1e-15).y[:, -1]
+    got = sysid.GreyBox(plant, VALS, input_delay=delays).model(dt=dt).simulate(u)
+    np.testing.assert_allclose(got, y, atol=1e-10 * np.max(np.abs(y)))
 
 
 def test_fraction_tends_to_the_whole_sample_shift():

@@ -983,7 +983,7 @@ pub fn simulate(
 /// o.jacobian = OdeJacobian::Sensitivity;
 /// let (y, j) = jacobian(&mut M, &[u.as_ref()], &st, &o).unwrap();
 /// // x(t) = (1 - e^{-a t}) / a, dx/da = t e^{-a t} / a - (1 - e^{-a t}) / a^2
-/// let t = 49.0 * 0.05;
+/// let t: f64 = 49.0 * 0.05;
 /// let exact = t * (-2.0 * t).exp() / 2.0 - (1.0 - (-2.0 * t).exp()) / 4.0;
 /// assert!((j[(49, 0)] - exact).abs() < 1e-6 && y.nrows() == 50);
 /// ```
