@@ -522,10 +522,3 @@ class GreyBox:
         return (f"GreyBox({s(p, 'parameter')} ({len(self.free_names)} free), "
                 f"{s(self.nstates, 'state')}, {s(self.ninputs, 'input')}, "
                 f"{s(self.noutputs, 'output')}, {kind})")
-
-
-def delay_states(mats: Mapping[str, Any], delays: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Any]:
-    """``(A, B, C, D, K)`` with integer input delays realised as shift-register states."""
-    m = mats["B"].shape[1]
-    return tap_states(mats, [(j, int(d)) for j, d in enumerate(delays)], m)
