@@ -177,10 +177,12 @@ fn sensitivity_jacobian_is_the_derivative_of_the_simulation() {
             atol: 1e-13,
         },
     ] {
-        let mut o = OdeOptions::default();
-        o.dt = 0.05;
-        o.integrator = integ;
-        o.jacobian = OdeJacobian::Sensitivity;
+        let o = OdeOptions {
+            dt: 0.05,
+            integrator: integ,
+            jacobian: OdeJacobian::Sensitivity,
+            ..Default::default()
+        };
         let (y, j) = jacobian(&mut Pendulum, &[u.as_ref()], &st, &o).unwrap();
         // central differences of the simulation
         let mut o_fd = o.clone();
