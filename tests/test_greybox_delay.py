@@ -94,6 +94,42 @@ def test_fractional_delay_matches_scipy_solve_ivp():
     np.testing.assert_allclose(got, y, atol=1e-10 * np.max(np.abs(y)))
 
 
+@pytest.mark.parametrize("delays", [[0.13, 0.02, 0.1], [0.05, 0.049, 0.151]])
+def test_fractional_delay_with_first_order_hold(delays):
+    """FOH: the delayed input is linear between the instants k dt + tau. On a grid 1000
+    times finer those instants are grid points, so SciPy's FOH sampling of the fine step
+    (cont2discrete) with the interpolated input is exact. The first input sample is zero, so
+    that the FOH state convention (z = x - G u[k], MATLAB's and SciPy's) starts at x = 0."""
+    from scipy.signal import cont2discrete
+
+    dt, k = 0.05, 1000
+    delays = np.array(delays)
+    u = np.random.default_rng(4).standard_normal((40, 3))
+    u[0] = 0.0
+    A, B, C, D = (np.asarray(x, float) for x in plant(Parameters(VALS)))
+    Af, Bf, Cf, Df, _ = cont2discrete((A, B, C, D), dt / k, method="foh")
+    tf = np.arange(len(u) * k) * (dt / k)
+    grid = np.concatenate([[-dt], np.arange(len(u)) * dt])
+    w = np.column_stack([np.interp(tf - d, grid, np.concatenate([[0.0], u[:, j]]), left=0.0)
+                         for j, d in enumerate(delays)])
+    z = np.zeros(2)
+    ref = np.zeros((len(u), 2))
+    for i in range(len(tf)):
+        if i % k == 0:
+            ref[i // k] = Cf @ z + Df @ w[i]
+        z = Af @ z + Bf @ w[i]
+    s = sysid.GreyBox(plant, VALS, input_delay=delays, hold="foh")
+    got = s.model(dt=dt).simulate(u)
+    assert np.max(np.abs(got - ref)) < 1e-11 * np.max(np.abs(ref)), np.max(np.abs(got - ref))
+    # derivatives of the taps against central differences
+    base, ders = s.sampled_taps(None, dt, ["a", "b", "c"])
+    for name, d in zip("abc", ders):
+        up = s.sampled_taps({**VALS, name: VALS[name] + 1e-5}, dt)[0]
+        dn = s.sampled_taps({**VALS, name: VALS[name] - 1e-5}, dt)[0]
+        for key in ("A", "B", "D"):
+            np.testing.assert_allclose(d[key], (up[key] - dn[key]) / 2e-5, atol=1e-9, rtol=1e-7)
+
+
 def test_fraction_tends_to_the_whole_sample_shift():
     """tau -> l dt: the model is continuous in tau (the fractional taps merge). Without
     feedthrough only: with D the output at the sampling instant jumps when the delayed
@@ -154,6 +190,14 @@ def test_estimation_with_a_fixed_fractional_delay():
         w = sysid.greyest(data, sysid.GreyBox(_motor, {"K": 1.0, "tau": 1.0},
                                               input_delay=wrong), x0="zero")
         assert w.info["loss"] > 1e6 * max(fit.info["loss"], 1e-30)
+    # the same under first-order hold (inputs interpolated between samples)
+    yf = sysid.GreyBox(_motor, {"K": 2.0, "tau": 0.3}, input_delay=delay, hold="foh"
+                       ).model(dt=dt).simulate(u)
+    sf = sysid.GreyBox(_motor, {"K": 1.0, "tau": sysid.param(1.0, bounds=(0.01, 10))},
+                       input_delay=delay, hold="foh")
+    ffit = sysid.greyest(sysid.IOData(u=u, y=yf, dt=dt), sf, x0="zero")
+    np.testing.assert_allclose(ffit.parameters.value, [2.0, 0.3], atol=1e-9)
+    assert np.max(np.abs(yf - y)) > 1e-3          # FOH and ZOH data differ
     # with noise: within the predicted std (x0 estimated, prediction focus)
     yn = y + 0.02 * rng.standard_normal(y.shape)
     noisy = sysid.greyest(sysid.IOData(u=u, y=yn, dt=dt), s)
@@ -165,9 +209,9 @@ def test_fractional_delay_errors_name_the_fix():
     with pytest.raises(DataError, match="continuous=True"):
         sysid.GreyBox(lambda p: ([[p.a]], [[1.0]], [[1.0]], [[0.0]]), {"a": 0.5},
                       continuous=False, input_delay=0.13).model(dt=0.05)
-    with pytest.raises(DataError, match="hold='zoh'"):
-        sysid.GreyBox(_motor, {"K": 1.0, "tau": 1.0}, input_delay=0.13, hold="foh"
-                      ).model(dt=0.05)
-    # FOH with whole-sample delays still works
+    # FOH: whole samples, and a fraction (one more state than under ZOH's l + 1: none here)
     m = sysid.GreyBox(_motor, {"K": 1.0, "tau": 1.0}, input_delay=0.1, hold="foh").model(dt=0.05)
     assert m.nstates == 3
+    m = sysid.GreyBox(_motor, {"K": 1.0, "tau": 1.0}, input_delay=0.13, hold="foh"
+                      ).model(dt=0.05)
+    assert m.nstates == 1 + 3

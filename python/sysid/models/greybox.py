@@ -225,8 +225,8 @@ class GreyBox:
         Sample time of a discrete structure (default: the data's).
     input_delay : float or array_like, optional
         Known input delays in seconds (per input). Any delay for a continuous structure
-        with ``hold="zoh"`` (a fraction of the sample time is sampled exactly, see
-        :mod:`sysid.models.greydelay`); whole multiples of the sample time otherwise.
+        (a fraction of the sample time is sampled exactly under ZOH and FOH, see
+        :mod:`sysid.models.greydelay`); whole multiples of the sample time for a discrete one.
     hold : {"zoh", "foh"}
         Inter-sample behaviour for a continuous structure.
     jacobian : callable, optional
@@ -389,7 +389,7 @@ class GreyBox:
         whose delay is a whole number of samples, two (``l`` and ``l + 1`` samples) for a
         fractional delay ``l dt + r`` (see :mod:`sysid.models.greydelay`)."""
         check_fraction(self.input_delay, dt, self.continuous, self.hold)
-        return input_taps(self.input_delay, dt)
+        return input_taps(self.input_delay, dt, self.hold)
 
     def sampled_taps(self, values: Any, dt: float, names: list[str] | None = None
                      ) -> tuple[dict[str, Any], list[dict[str, Any]]]:
@@ -401,9 +401,8 @@ class GreyBox:
         raw, raw_d, base, ders = self._sampled_all(vals, dt, names)
         if len(taps) == self.ninputs:  # whole-sample delays: the plain columns
             return base, ders
-        Bt, Dt, dt_ders = delayed_blocks(
-            raw["A"], raw["B"], raw["D"], base["B"], dt, self.input_delay,
-            [(r["A"], r["B"], r["D"], d["B"]) for r, d in zip(raw_d, ders)])
+        Bt, Dt, dt_ders = delayed_blocks(raw, raw_d, base, ders, dt, self.input_delay,
+                                         self.hold)
         return ({**base, "B": Bt, "D": Dt},
                 [{**d, "B": db, "D": dd} for d, (db, dd) in zip(ders, dt_ders)])
 

@@ -17,7 +17,10 @@ with :math:`\\Phi = e^{A h}`, :math:`\\Gamma_0 = \\int_0^{h-r} e^{A s}\\,ds\\, b
 *Computer-Controlled Systems*, section 2.3). Both come from two exponentials of the augmented
 matrix ``[[A, b_j], [0, 0]]`` (over ``h - r`` and over ``r``), and their derivatives with
 respect to a parameter from the Fréchet derivatives of those exponentials and the product
-rule, so the gradient stays exact. ``r = 0`` is the usual ``l``-sample shift.
+rule, so the gradient stays exact. ``r = 0`` is the usual ``l``-sample shift. Under a
+first-order hold the delayed input is linear between the instants ``k h + r`` and each
+sample interval gets ``u_{k-l-1}``, ``u_{k-l}`` and ``u_{k-l+1}`` (:func:`foh_columns`; for
+``l = 0`` the last is moved into the state, as for the undelayed first-order hold).
 
 The sampled model is handed to the predictor with one input column per *tap* ``(j, s)``:
 input ``j`` shifted by ``s`` samples (``s = l`` with ``Γ0``, and ``s = l + 1`` with ``Γ1``
@@ -42,7 +45,8 @@ import numpy as np
 from .. import _sysid
 from ..errors import DataError
 
-__all__ = ["split_delays", "input_taps", "fractional_columns", "tap_states", "shift_taps"]
+__all__ = ["split_delays", "input_taps", "fractional_columns", "foh_columns", "tap_states",
+           "shift_taps"]
 
 #: a delay within this fraction of the sample time of a whole multiple is that multiple
 _SNAP = 1e-9
@@ -65,21 +69,29 @@ def split_delays(delays: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]
     return lo, r
 
 
-def input_taps(delays: np.ndarray, dt: float) -> list[tuple[int, int]]:
-    """The predictor's input columns ``(input, shift in samples)`` for these delays.
+def input_taps(delays: np.ndarray, dt: float, hold: str = "zoh") -> list[tuple[int, int]]:
+    """The predictor's input columns ``(input, shift in samples)`` for these delays, sorted:
+    a whole-sample delay ``l`` is one column; ``l dt + r`` is two under ZOH (``l``,
+    ``l + 1``) and three under FOH (``l - 1``, ``l``, ``l + 1``; two, ``0`` and ``1``, when
+    ``l = 0``).
 
     Examples
     --------
     >>> from sysid.models.greydelay import input_taps
     >>> input_taps([0.1, 0.13], 0.05)
     [(0, 2), (1, 2), (1, 3)]
+    >>> input_taps([0.1, 0.13], 0.05, "foh")
+    [(0, 2), (1, 1), (1, 2), (1, 3)]
     """
     lo, r = split_delays(delays, dt)
     taps: list[tuple[int, int]] = []
     for j, (l, rj) in enumerate(zip(lo, r)):
-        taps.append((j, int(l)))
-        if rj > 0:
-            taps.append((j, int(l) + 1))
+        if rj == 0:
+            taps.append((j, int(l)))
+        elif hold == "zoh":
+            taps += [(j, int(l)), (j, int(l) + 1)]
+        else:
+            taps += [(j, s) for s in range(max(int(l) - 1, 0), int(l) + 2)]
     return taps
 
 
@@ -119,38 +131,107 @@ def fractional_columns(A: np.ndarray, b: np.ndarray, dt: float, r: float,
     return g0, g1, ders
 
 
-def delayed_blocks(A: np.ndarray, B: np.ndarray, D: np.ndarray, Bd: np.ndarray,
-                   dt: float, delays: np.ndarray,
-                   dirs: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
+def _aug_foh(A: np.ndarray, b: np.ndarray, t: float, ramp: float) -> np.ndarray:
+    n = A.shape[0]
+    M = np.zeros((n + 2, n + 2))
+    M[:n, :n], M[:n, n] = A * t, b * t
+    M[n, n + 1] = ramp * t
+    return M
+
+
+def foh_columns(A: np.ndarray, b: np.ndarray, C: np.ndarray, D: np.ndarray, Ad: np.ndarray,
+                dt: float, r: float, whole: int,
+                dirs: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
+                ) -> tuple[list[tuple[int, np.ndarray, np.ndarray]],
+                           list[list[tuple[np.ndarray, np.ndarray]]]]:
+    """First-order hold of one input column ``b`` delayed by ``whole dt + r`` (``0 < r <
+    dt``): ``[(shift, B column, D column)]`` and their derivatives along each direction
+    ``(dA, db, dC, dD, dAd)``.
+
+    The delayed input is linear between the instants ``k dt + r``: over the first ``r``
+    seconds of a sample interval it runs from ``u[k-l-1]`` towards ``u[k-l]``, then from
+    ``u[k-l]`` towards ``u[k-l+1]``. A segment of length ``T`` starting at ``w0`` with slope
+    ``m`` adds ``E[:n, n] w0 + E[:n, n+1] m`` with ``E = exp([[A, b, 0], [0, 0, 1], [0, 0, 0]]
+    T)``. With ``l = 0`` the term in ``u[k+1]`` is moved into the state (``z = x - G u[k]``,
+    as the plain first-order hold does), which adds ``Ad G`` to ``B`` and ``C G`` to ``D``.
+    """
+    n, h = A.shape[0], dt
+    E1, L1 = _expm(_aug_foh(A, b, r, 1.0), [_aug_foh(dA, db, r, 0.0) for dA, db, *_ in dirs])
+    E2, L2 = _expm(_aug_foh(A, b, h - r, 1.0),
+                   [_aug_foh(dA, db, h - r, 0.0) for dA, db, *_ in dirs])
+
+    def first(E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The first segment's weights of u[k-l-1] and u[k-l] (before the propagation)."""
+        e0, e1 = E[:n, n], E[:n, n + 1]
+        return e0 * r / h - e1 / h, e0 * (1 - r / h) + e1 / h
+
+    v1, w1 = first(E1)
+    F2 = E2[:n, :n]
+    gm = F2 @ v1
+    g0 = F2 @ w1 + E2[:n, n] - E2[:n, n + 1] / h
+    gp = E2[:n, n + 1] / h
+    dm, d0 = D * r / h, D * (1 - r / h)
+    ders = []
+    for (dA, _, dC, dD, dAd), dE1, dE2 in zip(dirs, L1, L2):
+        dv1, dw1 = first(dE1)
+        dF2 = dE2[:n, :n]
+        dgm = dF2 @ v1 + F2 @ dv1
+        dg0 = dF2 @ w1 + F2 @ dw1 + dE2[:n, n] - dE2[:n, n + 1] / h
+        dgp = dE2[:n, n + 1] / h
+        ders.append((dgm, dg0, dgp, dD * r / h, dD * (1 - r / h), dA, dC, dAd))
+    if whole >= 1:
+        cols = [(whole - 1, gp, np.zeros_like(dm)), (whole, g0, d0), (whole + 1, gm, dm)]
+        dcols = [[(dgp, np.zeros_like(ddm)), (dg0, dd0), (dgm, ddm)]
+                 for dgm, dg0, dgp, ddm, dd0, *_ in ders]
+        return cols, dcols
+    cols = [(0, g0 + Ad @ gp, d0 + C @ gp), (1, gm, dm)]
+    dcols = [[(dg0 + dAd @ gp + Ad @ dgp, dd0 + dC @ gp + C @ dgp), (dgm, ddm)]
+             for dgm, dg0, dgp, ddm, dd0, _, dC, dAd in ders]
+    return cols, dcols
+
+
+def delayed_blocks(raw: Mapping[str, Any], raw_d: list[Mapping[str, Any]],
+                   base: Mapping[str, Any], ders: list[Mapping[str, Any]], dt: float,
+                   delays: np.ndarray, hold: str
                    ) -> tuple[np.ndarray, np.ndarray, list[tuple[np.ndarray, np.ndarray]]]:
-    """``(B_taps, D_taps)`` over :func:`input_taps` for a ZOH-sampled continuous structure,
-    and their derivatives along each direction ``(dA, dB, dD, dBd)`` (``Bd``, ``dBd``: the
-    undelayed sampled input matrix and its derivative)."""
-    _, r = split_delays(delays, dt)
+    """``(B_taps, D_taps)`` over the taps (sorted by input, then shift) of a sampled
+    continuous structure
+    (``raw``: its continuous matrices, ``base``: sampled without delay; ``raw_d``/``ders``
+    their derivatives), and the derivatives of ``(B_taps, D_taps)``."""
+    lo, r = split_delays(delays, dt)
+    A, B, C, D = raw["A"], raw["B"], raw["C"], raw["D"]
     n, l = A.shape[0], D.shape[0]
-    cols_b: list[np.ndarray] = []
-    cols_d: list[np.ndarray] = []
-    dcols: list[tuple[list[np.ndarray], list[np.ndarray]]] = [([], []) for _ in dirs]
+    cols: list[tuple[int, int, np.ndarray, np.ndarray]] = []
+    dcols: list[list[tuple[int, int, np.ndarray, np.ndarray]]] = [[] for _ in ders]
     for j, rj in enumerate(r):
         if rj == 0:
-            cols_b.append(Bd[:, j])
-            cols_d.append(D[:, j])
-            for (_, _, dD, dBd), (db, dd) in zip(dirs, dcols):
-                db.append(dBd[:, j])
-                dd.append(dD[:, j])
+            cols.append((j, int(lo[j]), base["B"][:, j], base["D"][:, j]))
+            for d, out in zip(ders, dcols):
+                out.append((j, int(lo[j]), d["B"][:, j], d["D"][:, j]))
             continue
-        g0, g1, ders = fractional_columns(A, B[:, j], dt, float(rj),
-                                          [(dA, dB[:, j]) for dA, dB, _, _ in dirs])
-        cols_b += [g0, g1]
-        cols_d += [np.zeros(l), D[:, j]]
-        for (dg0, dg1), (_, _, dD, _), (db, dd) in zip(ders, dirs, dcols):
-            db += [dg0, dg1]
-            dd += [np.zeros(l), dD[:, j]]
+        if hold == "zoh":
+            g0, g1, gd = fractional_columns(A, B[:, j], dt, float(rj),
+                                            [(q["A"], q["B"][:, j]) for q in raw_d])
+            cols += [(j, int(lo[j]), g0, np.zeros(l)), (j, int(lo[j]) + 1, g1, D[:, j])]
+            for (dg0, dg1), q, out in zip(gd, raw_d, dcols):
+                out += [(j, int(lo[j]), dg0, np.zeros(l)), (j, int(lo[j]) + 1, dg1, q["D"][:, j])]
+            continue
+        fc, fd = foh_columns(A, B[:, j], C, D[:, j], base["A"], dt, float(rj), int(lo[j]),
+                             [(q["A"], q["B"][:, j], q["C"], q["D"][:, j], d["A"])
+                              for q, d in zip(raw_d, ders)])
+        cols += [(j, s, bc, dc) for s, bc, dc in fc]
+        for out, dd in zip(dcols, fd):
+            out += [(j, s, db, dx) for (s, _, _), (db, dx) in zip(fc, dd)]
+    order = sorted(range(len(cols)), key=lambda c: (cols[c][0], cols[c][1]))
 
-    def stack(cols: list[np.ndarray], rows: int) -> np.ndarray:
-        return np.column_stack(cols) if cols else np.zeros((rows, 0))
-    return (stack(cols_b, n), stack(cols_d, l),
-            [(stack(db, n), stack(dd, l)) for db, dd in dcols])
+    def stack(items: list[tuple[int, int, np.ndarray, np.ndarray]]
+              ) -> tuple[np.ndarray, np.ndarray]:
+        if not items:
+            return np.zeros((n, 0)), np.zeros((l, 0))
+        return (np.column_stack([items[c][2] for c in order]),
+                np.column_stack([items[c][3] for c in order]))
+    Bt, Dt = stack(cols)
+    return Bt, Dt, [stack(out) for out in dcols]
 
 
 def shift_taps(u: np.ndarray, taps: list[tuple[int, int]]) -> np.ndarray:
@@ -227,7 +308,3 @@ def check_fraction(delays: np.ndarray, dt: float, continuous: bool, hold: str) -
                         f"discrete structure's sample time {dt} s: a discrete model has no "
                         "values between samples; give a whole number of samples or write the "
                         "structure in continuous time (continuous=True)")
-    if hold != "zoh":
-        raise DataError(f"input_delay {np.asarray(delays).tolist()} s is not a multiple of the "
-                        f"sample time {dt} s, which is supported with hold='zoh' only: use "
-                        "hold='zoh' or a delay that is a multiple of the sample time")
