@@ -47,11 +47,32 @@ def lateral_case():
 
 
 def test_lateral_monte_carlo_calibration(lateral_case):
-    """200 noisy records (fixed seeds): each free derivative's 95 % interval covers the truth
-    in 90-98 % of runs, and the mean estimate is within one predicted std of the truth."""
-    u, y0, sigma, start, dt = lateral_case
+    """400 noisy records (fixed seeds): each free derivative's 95 % interval covers the truth
+    in 90-98 % of runs, the mean estimate is within 4 standard errors of the truth (far
+    inside the issue's "within one predicted std"), and the spread of the estimates matches
+    the predicted std.
+
+    Why 400 runs and these bounds. If the intervals are calibrated and the runs independent,
+    the number of runs in which one parameter's interval covers the truth is
+    X ~ Binomial(n, 0.95). The band 90-98 % is left with probability
+    P(X < 0.90 n) + P(X > 0.98 n): 1.0e-2 for n = 200 (mostly the upper side,
+    P(X >= 197) = 9.0e-3), so with ten parameters a calibrated estimator failed up to one
+    seed set in ten (the union bound; the 98 % of Lv in the earlier 200-run version was such
+    a fluctuation: 2000 runs give 1915/2000 = 95.75 %, Clopper-Pearson 95 % interval
+    [94.8, 96.6] %, and z = (est - truth) / std has mean 0.02 and spread 0.99). For
+    n = 400 it is 6.2e-4 + 1.4e-5 per parameter, at most 0.63 % for all ten, so the band is
+    the issue's own and a failure means a miscalibration, not bad luck. The mean of
+    z = (est - truth) / std over n runs has standard error 1/sqrt(n) = 0.05; 4/sqrt(n) is
+    beyond the two-sided Bonferroni point for ten parameters at 1e-3 (3.89). The spread ratio
+    std(est) / mean(std) of Gaussian estimates has standard error 1/sqrt(2 n) = 0.035; 15 %
+    is 4.2 of them. The fits start at the truth: calibration is a property of the optimum
+    (they land within 4e-5 std of the fits started 30 % off, which the other tests and the
+    docs cover), and it halves the cost (400 fits in about 8 s CPU).
+    """
+    u, y0, sigma, _, dt = lateral_case
+    start = sysid.GreyBox(lateral, {**TRUE, **KNOWN})
     names = list(TRUE)
-    runs = 200
+    runs = 400
     est = np.zeros((runs, len(names)))
     std = np.zeros_like(est)
     for r in range(runs):
@@ -63,8 +84,9 @@ def test_lateral_monte_carlo_calibration(lateral_case):
     truth = np.array([TRUE[k] for k in names])
     coverage = np.mean(np.abs(est - truth) <= 1.959964 * std, axis=0)
     assert np.all((coverage >= 0.90) & (coverage <= 0.98)), dict(zip(names, coverage))
+    z = (est - truth) / std
+    assert np.all(np.abs(z.mean(axis=0)) <= 4 / np.sqrt(runs)), dict(zip(names, z.mean(0)))
     assert np.all(np.abs(est.mean(axis=0) - truth) <= std.mean(axis=0)), names
-    # the predicted std is the spread of the estimates (within 15 %)
     ratio = est.std(axis=0) / std.mean(axis=0)
     assert np.all(np.abs(ratio - 1) < 0.15), dict(zip(names, ratio))
 
@@ -265,8 +287,9 @@ def test_input_delay():
     assert fit.model.nstates == 4  # 1 state + 3 delay states
     nodelay = sysid.greyest(data, sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0}), x0="zero")
     assert nodelay.info["loss"] > 1e3 * fit.info["loss"]
-    with pytest.raises(DataError, match="multiple"):
-        sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0}, input_delay=0.123).model(dt=dt)
+    # a delay between samples (tests/test_greybox_delay.py): whole samples + one more state
+    assert sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0}, input_delay=0.123
+                         ).model(dt=dt).nstates == 1 + 3
 
 
 def test_scale_keeps_the_optimum():

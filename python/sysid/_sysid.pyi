@@ -47,6 +47,7 @@ __all__ = [
     "greybox_linear",
     "greybox_ode",
     "greybox_ode_simulate",
+    "greybox_ode_jacobian",
     "expm_frechet",
 ]
 
@@ -315,6 +316,9 @@ def greybox_ode(
     atol: float = 1e-10,
     reweight: bool = True,
     fd_step: float = 1e-6,
+    jacobian: str = "fd",
+    rhs_derivatives: Any = None,
+    output_derivatives: Any = None,
     lower: list[float] | None = None,
     upper: list[float] | None = None,
     fixed: list[bool] | None = None,
@@ -338,6 +342,27 @@ def greybox_ode_simulate(
     rtol: float = 1e-8,
     atol: float = 1e-10,
 ) -> _Array: ...
+def greybox_ode_jacobian(
+    f: Any,
+    h: Any,
+    inputs: list[_Array],
+    nx: int,
+    p: list[float],
+    free_p: list[int],
+    x0: list[list[float]],
+    free_x0: list[tuple[int, int]],
+    typical: list[float],
+    dt: float,
+    *,
+    integrator_name: str = "rk4",
+    substeps: int = 1,
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    fd_step: float = 1e-6,
+    jacobian: str = "fd",
+    rhs_derivatives: Any = None,
+    output_derivatives: Any = None,
+) -> tuple[_Array, _Array]: ...
 def expm_frechet(x: _Array, dirs: list[_Array]) -> tuple[_Array, list[_Array]]: ...
 
 # polynomial models (issue 13)

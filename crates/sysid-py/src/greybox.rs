@@ -9,7 +9,9 @@ use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sysid_core::greybox::ode::{self, Integrator, OdeModel, OdeOptions, OdeStructure};
+use sysid_core::greybox::ode::{
+    self, Derivatives, Integrator, OdeJacobian, OdeModel, OdeOptions, OdeStructure,
+};
 use sysid_core::greybox::{self, LinearOptions};
 use sysid_core::optim::{self, ParameterMap};
 use sysid_core::pem::Focus;
@@ -60,6 +62,10 @@ impl ParameterMap for PyMap<'_> {
 struct PyOde<'s> {
     f: Py<PyAny>,
     h: Py<PyAny>,
+    /// `(t, x, u, p) -> (f, df/dx, df/dp)` at one point (sensitivity equations).
+    fd: Option<Py<PyAny>>,
+    /// `(t, x, u, p) -> (h, dh/dx, dh/dp)` at one point.
+    hd: Option<Py<PyAny>>,
     err: &'s mut Slot,
 }
 
@@ -97,6 +103,48 @@ impl PyOde<'_> {
     }
 }
 
+impl PyOde<'_> {
+    fn derivatives(
+        &mut self,
+        which: bool,
+        t: f64,
+        x: &[f64],
+        u: &[f64],
+        p: &[f64],
+    ) -> sysid_core::Result<Option<Derivatives>> {
+        let Some(fun) = (if which { &self.fd } else { &self.hd }) else {
+            return Ok(None);
+        };
+        Python::attach(|py| {
+            let r = (|| -> PyResult<Derivatives> {
+                let out = fun.call1(
+                    py,
+                    (
+                        t,
+                        slice_to_numpy(py, x),
+                        slice_to_numpy(py, u),
+                        slice_to_numpy(py, p),
+                    ),
+                )?;
+                let (v, dx, dp): (Bound<'_, PyAny>, Bound<'_, PyAny>, Bound<'_, PyAny>) =
+                    out.extract(py)?;
+                Ok((to_mat(&v)?, to_mat(&dx)?, to_mat(&dp)?))
+            })();
+            r.map(Some).map_err(|e| {
+                callback_failed(
+                    self.err,
+                    e,
+                    if which {
+                        "the derivatives of f"
+                    } else {
+                        "the derivatives of h"
+                    },
+                )
+            })
+        })
+    }
+}
+
 impl OdeModel for PyOde<'_> {
     fn rhs(
         &mut self,
@@ -115,6 +163,41 @@ impl OdeModel for PyOde<'_> {
         p: MatRef<'_, f64>,
     ) -> sysid_core::Result<Mat<f64>> {
         self.call(false, t, x, u, p)
+    }
+    fn rhs_derivatives(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        u: &[f64],
+        p: &[f64],
+    ) -> sysid_core::Result<Option<Derivatives>> {
+        self.derivatives(true, t, x, u, p)
+    }
+    fn output_derivatives(
+        &mut self,
+        t: f64,
+        x: &[f64],
+        u: &[f64],
+        p: &[f64],
+    ) -> sysid_core::Result<Option<Derivatives>> {
+        self.derivatives(false, t, x, u, p)
+    }
+}
+
+fn jacobian_kind(
+    name: &str,
+    fd: &Option<Py<PyAny>>,
+    hd: &Option<Py<PyAny>>,
+) -> PyResult<OdeJacobian> {
+    match name {
+        "fd" => Ok(OdeJacobian::FiniteDifference),
+        "sensitivity" if fd.is_some() && hd.is_some() => Ok(OdeJacobian::Sensitivity),
+        "sensitivity" => Err(PyValueError::new_err(
+            "jacobian=\"sensitivity\" needs rhs_derivatives and output_derivatives",
+        )),
+        other => Err(PyValueError::new_err(format!(
+            "jacobian must be \"fd\" or \"sensitivity\", got {other:?}"
+        ))),
     }
 }
 
@@ -233,6 +316,7 @@ fn integrator(name: &str, substeps: usize, rtol: f64, atol: f64) -> PyResult<Int
 #[pyfunction]
 #[pyo3(signature = (f, h, experiments, nx, p, free_p, x0, free_x0, typical, dt, *,
     integrator_name="rk4", substeps=1, rtol=1e-8, atol=1e-10, reweight=true, fd_step=1e-6,
+    jacobian="fd", rhs_derivatives=None, output_derivatives=None,
     lower=None, upper=None, fixed=None, max_iter=100, tol_cost=1e-10, tol_step=1e-10,
     tol_gradient=1e-12, progress=None))]
 #[allow(clippy::too_many_arguments)]
@@ -254,6 +338,9 @@ pub fn greybox_ode<'py>(
     atol: f64,
     reweight: bool,
     fd_step: f64,
+    jacobian: &str,
+    rhs_derivatives: Option<Py<PyAny>>,
+    output_derivatives: Option<Py<PyAny>>,
     lower: Option<Vec<f64>>,
     upper: Option<Vec<f64>>,
     fixed: Option<Vec<bool>>,
@@ -268,6 +355,7 @@ pub fn greybox_ode<'py>(
     o.integrator = integrator(integrator_name, substeps, rtol, atol)?;
     o.reweight = reweight;
     o.fd_step = fd_step;
+    o.jacobian = jacobian_kind(jacobian, &rhs_derivatives, &output_derivatives)?;
     o.optim = search_options(
         max_iter,
         tol_cost,
@@ -295,6 +383,8 @@ pub fn greybox_ode<'py>(
         let mut model = PyOde {
             f,
             h,
+            fd: rhs_derivatives,
+            hd: output_derivatives,
             err: &mut cb_err,
         };
         let mut obs = observer(&progress, &mut obs_err);
@@ -353,6 +443,8 @@ pub fn greybox_ode_simulate<'py>(
         let mut model = PyOde {
             f,
             h,
+            fd: None,
+            hd: None,
             err: &mut cb_err,
         };
         ode::simulate(&mut model, uv, &st, 0, &o)
@@ -361,6 +453,72 @@ pub fn greybox_ode_simulate<'py>(
         return Err(e);
     }
     Ok(mat_to_numpy(py, &result.py()?))
+}
+
+type JacobianOut<'py> = (
+    Bound<'py, numpy::PyArray2<f64>>,
+    Bound<'py, numpy::PyArray2<f64>>,
+);
+
+/// The simulated outputs of every experiment (stacked) and their derivatives with respect to
+/// the free parameters and free initial-state entries (row `t l + i`), by forward
+/// differences (`jacobian="fd"`) or the sensitivity equations (`"sensitivity"`).
+#[pyfunction]
+#[pyo3(signature = (f, h, inputs, nx, p, free_p, x0, free_x0, typical, dt, *,
+    integrator_name="rk4", substeps=1, rtol=1e-8, atol=1e-10, fd_step=1e-6, jacobian="fd",
+    rhs_derivatives=None, output_derivatives=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn greybox_ode_jacobian<'py>(
+    py: Python<'py>,
+    f: Py<PyAny>,
+    h: Py<PyAny>,
+    inputs: Vec<PyReadonlyArray2<'py, f64>>,
+    nx: usize,
+    p: Vec<f64>,
+    free_p: Vec<usize>,
+    x0: Vec<Vec<f64>>,
+    free_x0: Vec<(usize, usize)>,
+    typical: Vec<f64>,
+    dt: f64,
+    integrator_name: &str,
+    substeps: usize,
+    rtol: f64,
+    atol: f64,
+    fd_step: f64,
+    jacobian: &str,
+    rhs_derivatives: Option<Py<PyAny>>,
+    output_derivatives: Option<Py<PyAny>>,
+) -> PyResult<JacobianOut<'py>> {
+    let mut o = OdeOptions::default();
+    o.dt = dt;
+    o.integrator = integrator(integrator_name, substeps, rtol, atol)?;
+    o.fd_step = fd_step;
+    o.jacobian = jacobian_kind(jacobian, &rhs_derivatives, &output_derivatives)?;
+    let st = OdeStructure {
+        nx,
+        p,
+        free_p,
+        x0,
+        free_x0,
+        typical,
+    };
+    let views: Vec<_> = inputs.iter().map(|u| view(u)).collect();
+    let mut cb_err: Slot = None;
+    let result = py.detach(|| {
+        let mut model = PyOde {
+            f,
+            h,
+            fd: rhs_derivatives,
+            hd: output_derivatives,
+            err: &mut cb_err,
+        };
+        ode::jacobian(&mut model, &views, &st, &o)
+    });
+    if let Some(e) = cb_err {
+        return Err(e);
+    }
+    let (y, j) = result.py()?;
+    Ok((mat_to_numpy(py, &y), mat_to_numpy(py, &j)))
 }
 
 type ExpmOut<'py> = (
@@ -401,5 +559,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(greybox_linear, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_ode, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_ode_simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(greybox_ode_jacobian, m)?)?;
     Ok(())
 }

@@ -23,7 +23,8 @@ from .. import _sysid
 from .._checks import as_int
 from ..data.iodata import IOData
 from ..errors import DataError, SysidError
-from ..models.greybox import GreyBox, delay_states
+from ..models.greybox import GreyBox
+from ..models.greydelay import shift_taps, tap_states
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 from .greyresult import GreyEstimate, _warn_unidentifiable
@@ -42,15 +43,6 @@ def _progress(progress: Any) -> Any:
     if callable(progress):
         return progress
     raise DataError(f"progress must be True, False or a callable, got {progress!r}")
-
-
-def _shift(u: np.ndarray, d: np.ndarray) -> np.ndarray:
-    if not np.any(d):
-        return u
-    out = np.zeros_like(u)
-    for j, k in enumerate(d):
-        out[k:, j] = u[:u.shape[0] - k, j]
-    return out
 
 
 def _x0_modes(x0: Any, count: int, n: int, has_model_x0: bool) -> list[Any]:
@@ -186,14 +178,15 @@ class _LinearFit:
     def __init__(self, data: IOData, s: GreyBox, dt: float, focus: str, x0: Any, noise: str,
                  reweight: bool) -> None:
         self.data, self.s, self.dt, self.focus, self.reweight = data, s, dt, focus, reweight
-        base = s.sampled(None, dt)
-        self.n, self.m = base["B"].shape
+        self.taps = s.input_taps(dt)
+        base = s.sampled_taps(None, dt)[0]
+        self.n, self.m = base["B"].shape  # m: one input column per tap (delayed input)
         self.l = base["C"].shape[0]
         n, l = self.n, self.l
         self.free = s.free_names
         self.scale = np.array([s.params[k].typical for k in self.free])
-        self.delays = s.delay_samples(dt)
-        self.exps = [(_shift(np.ascontiguousarray(u), self.delays), np.ascontiguousarray(y))
+        self.exps = [(shift_taps(np.asarray(u, dtype=float), self.taps),
+                      np.ascontiguousarray(y))
                      for u, y in data.experiments]
         self.noise = noise if focus == "prediction" else "none"
         self.k_model = self.noise == "model" and base["K"] is not None
@@ -230,10 +223,7 @@ class _LinearFit:
     def theta(self, z: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
         n, l, nf = self.n, self.l, self.nf
         vals = self.values(z)
-        if jac:
-            base, ders = self.s.sampled_derivatives(vals, self.dt, self.free)
-        else:
-            base, ders = self.s.sampled(vals, self.dt), []
+        base, ders = self.s.sampled_taps(vals, self.dt, self.free if jac else None)
 
         def pack(mats: dict[str, Any], xs: list[np.ndarray], with_k: Any) -> list[np.ndarray]:
             parts = [mats["A"].ravel(), mats["B"].ravel(), mats["C"].ravel(), mats["D"].ravel()]
@@ -328,12 +318,12 @@ class _LinearFit:
         x0s = [th[row + e * n: row + (e + 1) * n] for e in range(len(self.exps))]
         lam = np.asarray(res["innovation_covariance"])
         d = self.data
-        delays = self.delays
+        delayed = bool(np.any(s.input_delay > 0))
 
         def build(theta_free: np.ndarray) -> Any:
             v = dict(vals)
             v.update(zip(self.free, np.asarray(theta_free, dtype=float)))
-            return _model(est, v, self.dt, K, delays, d, lam, None)
+            return _model(est, v, self.dt, K, delayed, d, lam, None)
 
         info = {
             "method": "greyest", "iterations": res["iterations"],
@@ -344,8 +334,8 @@ class _LinearFit:
             "x0_values": x0s, "multistart": starts, "loss": res["loss"],
             "greybox": {"parameters": table.rows()},
         }
-        model = _model(est, vals, self.dt, K, delays, d, lam, info)
-        if len(x0s) == 1 and not np.any(delays) and hasattr(model, "K"):
+        model = _model(est, vals, self.dt, K, delayed, d, lam, info)
+        if len(x0s) == 1 and not delayed and hasattr(model, "K"):
             model.x0 = x0s[0]
         model.uncertainty = ParameterUncertainty(
             [vals[k] for k in self.free], cov, build, names=list(self.free),
@@ -353,18 +343,18 @@ class _LinearFit:
         return GreyEstimate(table, cov, list(self.free), model, est, x0s, info)
 
 
-def _model(s: GreyBox, vals: dict[str, float], dt: float, K: Any, delays: np.ndarray,
+def _model(s: GreyBox, vals: dict[str, float], dt: float, K: Any, delayed: bool,
            data: IOData, lam: np.ndarray, info: dict[str, Any] | None) -> Any:
     from ..models.continuous import ContinuousStateSpace
     from ..models.statespace import StateSpaceModel
 
     names = {"input_names": data.input_names, "output_names": data.output_names}
-    if s.continuous and K is None and not np.any(delays):
+    if s.continuous and K is None and not delayed:
         m = s.matrices(vals, dt)
         out: Any = ContinuousStateSpace(m["A"], m["B"], m["C"], m["D"], hold=s.hold,
                                         info=info, **names)
         return out
-    mats = dict(s.sampled(vals, dt))
+    mats = dict(s.sampled_taps(vals, dt)[0])
     mats["K"] = K
-    A, B, C, D, Ka = delay_states(mats, delays)
+    A, B, C, D, Ka = tap_states(mats, s.input_taps(dt), s.ninputs)
     return StateSpaceModel(A, B, C, D, Ka, dt=dt, noise_cov=lam, info=info, **names)

@@ -75,7 +75,7 @@ def nlgreyest(data: IOData, s: NonlinearGreyBox, *, x0: Any, weighting: str, mul
             s.rhs(), s.out(), exps, s.nx, list(map(float, p)), free_idx,
             [list(map(float, r)) for r in X0], free_x0, typical, dt,
             reweight=weighting == "noise", lower=lower, upper=upper, max_iter=max_iter,
-            tol_cost=tol, progress=cb, **s.core_options())
+            tol_cost=tol, progress=cb, **s.core_options(), **s.jacobian_options(free))
         res["seconds"] = time.perf_counter() - t0
         res["loss"] = float(np.linalg.det(np.atleast_2d(res["innovation_covariance"])))
         return res
@@ -130,6 +130,7 @@ def nlgreyest(data: IOData, s: NonlinearGreyBox, *, x0: Any, weighting: str, mul
         "n_samples": int(best["n_samples"]), "focus": "simulation", "x0_values": list(X),
         "multistart": starts, "loss": best["loss"], "seconds": best["seconds"],
         "rhs_calls": int(best["rhs_calls"]), "integrator": s.integrator,
+        "jacobian": s.jacobian_method,
         "greybox": {"parameters": table.rows()},
     }
     est.info = info

@@ -41,6 +41,7 @@ import numpy as np
 
 from .. import _sysid
 from ..errors import DataError
+from .greydelay import check_fraction, delayed_blocks, input_taps, split_delays, tap_states
 
 __all__ = ["Param", "param", "fixed", "Parameters", "GreyBox", "IdentifiabilityWarning"]
 
@@ -223,7 +224,9 @@ class GreyBox:
     dt : float, optional
         Sample time of a discrete structure (default: the data's).
     input_delay : float or array_like, optional
-        Known input delays in seconds (per input), multiples of the sample time.
+        Known input delays in seconds (per input). Any delay for a continuous structure
+        (a fraction of the sample time is sampled exactly under ZOH and FOH, see
+        :mod:`sysid.models.greydelay`); whole multiples of the sample time for a discrete one.
     hold : {"zoh", "foh"}
         Inter-sample behaviour for a continuous structure.
     jacobian : callable, optional
@@ -346,11 +349,17 @@ class GreyBox:
                             ) -> tuple[dict[str, Any], list[dict[str, np.ndarray | None]]]:
         """Sampled matrices and their derivatives with respect to each parameter in ``names``
         (Fréchet derivative of the exponential for continuous structures)."""
-        vals = self._values(values)
+        _, _, base, ders = self._sampled_all(self._values(values), dt, names)
+        return base, ders
+
+    def _sampled_all(self, vals: dict[str, float], dt: float, names: list[str]
+                     ) -> tuple[dict[str, Any], list[dict[str, Any]], dict[str, Any],
+                                list[dict[str, Any]]]:
+        """``(raw, raw derivatives, sampled, sampled derivatives)``."""
         base = self._call(vals, dt)
         raw = self._raw_derivatives(vals, dt, names, base)
         if not self.continuous:
-            return base, raw
+            return base, raw, base, raw
         A, B, C, D = base["A"], base["B"], base["C"], base["D"]
         assert A is not None and B is not None and C is not None and D is not None
         n, m = B.shape
@@ -373,7 +382,29 @@ class GreyBox:
                 dBd = dG1 + dAd @ G2 + (Ad - np.eye(n)) @ dG2
                 ddD = d["C"] @ G2 + C @ dG2
             out.append({**d, "A": dAd, "B": dBd, "D": d["D"] + ddD})
-        return {**base, "A": Ad, "B": Bd, "D": D + dD0}, out
+        return base, raw, {**base, "A": Ad, "B": Bd, "D": D + dD0}, out
+
+    def input_taps(self, dt: float) -> list[tuple[int, int]]:
+        """The sampled model's input columns ``(input, shift in samples)``: one per input
+        whose delay is a whole number of samples, two (``l`` and ``l + 1`` samples) for a
+        fractional delay ``l dt + r`` (see :mod:`sysid.models.greydelay`)."""
+        check_fraction(self.input_delay, dt, self.continuous, self.hold)
+        return input_taps(self.input_delay, dt, self.hold)
+
+    def sampled_taps(self, values: Any, dt: float, names: list[str] | None = None
+                     ) -> tuple[dict[str, Any], list[dict[str, Any]]]:
+        """The sampled matrices with ``B`` and ``D`` over :meth:`input_taps` (exact for
+        fractional input delays under ZOH), and their derivatives with respect to ``names``."""
+        taps = self.input_taps(dt)
+        vals = self._values(values)
+        names = list(names or [])
+        raw, raw_d, base, ders = self._sampled_all(vals, dt, names)
+        if len(taps) == self.ninputs:  # whole-sample delays: the plain columns
+            return base, ders
+        Bt, Dt, dt_ders = delayed_blocks(raw, raw_d, base, ders, dt, self.input_delay,
+                                         self.hold)
+        return ({**base, "B": Bt, "D": Dt},
+                [{**d, "B": db, "D": dd} for d, (db, dd) in zip(ders, dt_ders)])
 
     def _raw_derivatives(self, vals: dict[str, float], dt: float | None, names: list[str],
                          base: dict[str, Any]) -> list[dict[str, np.ndarray | None]]:
@@ -418,19 +449,15 @@ class GreyBox:
             return ContinuousStateSpace(mats["A"], mats["B"], mats["C"], mats["D"],
                                         hold=self.hold, input_names=self.input_names,
                                         output_names=self.output_names)
-        mats = self.sampled(values, dt)
-        A, B, C, D, K = delay_states(mats, self.delay_samples(dt))
+        mats, _ = self.sampled_taps(values, dt)
+        A, B, C, D, K = tap_states(mats, self.input_taps(dt), self.ninputs)
         return StateSpaceModel(A, B, C, D, K, dt=dt, input_names=self.input_names,
                                output_names=self.output_names)
 
     def delay_samples(self, dt: float) -> np.ndarray:
-        """Input delays in samples (an error when not a multiple of ``dt``)."""
-        d = self.input_delay / dt
-        r = np.round(d)
-        if np.any(np.abs(d - r) > 1e-6 * np.maximum(1, d)):
-            raise DataError(f"input_delay {self.input_delay.tolist()} s is not a multiple of "
-                            f"the sample time {dt} s")
-        return r.astype(int)
+        """Input delays in whole samples, rounded down (the fraction is in
+        :meth:`input_taps`)."""
+        return split_delays(self.input_delay, dt)[0]
 
     @classmethod
     def from_structure(cls, A: Any, B: Any, C: Any, D: Any = None, K: Any = None, *,
@@ -494,36 +521,3 @@ class GreyBox:
         return (f"GreyBox({s(p, 'parameter')} ({len(self.free_names)} free), "
                 f"{s(self.nstates, 'state')}, {s(self.ninputs, 'input')}, "
                 f"{s(self.noutputs, 'output')}, {kind})")
-
-
-def delay_states(mats: Mapping[str, Any], delays: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, Any]:
-    """``(A, B, C, D, K)`` with integer input delays realised as shift-register states."""
-    A, B, C, D, K = mats["A"], mats["B"], mats["C"], mats["D"], mats.get("K")
-    total = int(np.sum(delays))
-    if total == 0:
-        return A, B, C, D, K
-    n, m = B.shape
-    l = C.shape[0]
-    N = n + total
-    Aa = np.zeros((N, N))
-    Ba = np.zeros((N, m))
-    Aa[:n, :n] = A
-    Ca = np.zeros((l, N))
-    Ca[:, :n] = C
-    Da = D.copy()
-    off = n
-    for j, d in enumerate(delays):
-        if d == 0:
-            Ba[:n, j] = B[:, j]
-            continue
-        # chain: input -> s_1 -> ... -> s_d -> (B, D) column j
-        Ba[off, j] = 1.0
-        for k in range(1, d):
-            Aa[off + k, off + k - 1] = 1.0
-        Aa[:n, off + d - 1] = B[:, j]
-        Ca[:, off + d - 1] = D[:, j]
-        Da[:, j] = 0.0
-        off += d
-    Ka = None if K is None else np.vstack([K, np.zeros((total, l))])
-    return Aa, Ba, Ca, Da, Ka

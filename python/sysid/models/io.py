@@ -38,6 +38,7 @@ from .continuous import ContinuousStateSpace
 from .hammerstein import HammersteinWienerModel
 from .hammerstein_ss import HammersteinWienerSSModel
 from .narx import NARXModel
+from .nlgreybox import NonlinearGreyBox
 from .polynomial import PolynomialModel
 from .serialize import (
     FORMAT,
@@ -57,7 +58,7 @@ __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict", "regi
 LEGACY_FORMAT = "sysid-state-space-model"  # version 1: state-space models only
 
 for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel,
-             HammersteinWienerModel, HammersteinWienerSSModel):
+             HammersteinWienerModel, HammersteinWienerSSModel, NonlinearGreyBox):
     register_model(_cls)
 
 

@@ -36,6 +36,9 @@ from .protocol import ModelMixin
 __all__ = ["NonlinearGreyBox"]
 
 _INTEGRATORS = ("rk4", "adaptive")
+_JACOBIANS = ("auto", "fd", "sensitivity")
+#: relative central-difference step for derivatives of f and h not given by the user
+_CD_STEP = float(np.finfo(float).eps ** (1 / 3))
 
 
 def _stack(out: Any, rows: int, k: int, what: str) -> np.ndarray:
@@ -53,6 +56,28 @@ def _stack(out: Any, rows: int, k: int, what: str) -> np.ndarray:
     except ValueError as e:
         raise DataError(f"{what} returned values that do not fit ({rows}, {k}): {e}") from e
     return res
+
+
+def _matrix(out: Any, shape: tuple[int, int], what: str) -> np.ndarray:
+    try:
+        return np.asarray(out, dtype=float).reshape(shape)
+    except ValueError as e:
+        raise DataError(f"the derivative {what} returned {np.shape(out)}, expected {shape}"
+                        ) from e
+
+
+def _param_matrix(out: Any, rows: int, names: list[str]) -> np.ndarray:
+    """``(rows, n_params)`` from an array in parameter order or a dict ``{name: column}``."""
+    if isinstance(out, Mapping):
+        unknown = set(out) - set(names)
+        if unknown:
+            raise DataError(f"the parameter derivative names unknown parameters "
+                            f"{sorted(unknown)}; the structure has {names}")
+        res = np.zeros((rows, len(names)))
+        for k, col in out.items():
+            res[:, names.index(k)] = np.asarray(col, dtype=float).reshape(rows)
+        return res
+    return _matrix(out, (rows, len(names)), "d/dp")
 
 
 class NonlinearGreyBox(ModelMixin):
@@ -82,6 +107,18 @@ class NonlinearGreyBox(ModelMixin):
     ninputs, noutputs : int, optional
         Channel counts (otherwise found from the data / one call of ``h``).
     input_names, output_names : sequence of str, optional
+    dfdx, dfdp, dhdx, dhdp : callable, optional
+        Derivatives ``(t, x, u, p)`` at one point (``x`` of shape ``(nx,)``, float
+        parameters): ``dfdx -> (nx, nx)``, ``dhdx -> (ny, nx)``; ``dfdp``/``dhdp`` return
+        ``(nx, n_params)``/``(ny, n_params)`` in the order of ``params`` or a dict
+        ``{name: column}`` (missing names are zero). With them ``greyest`` forms the Jacobian by
+        the forward sensitivity equations ``dS/dt = f_x S + f_p`` integrated beside the
+        states by the same integrator.
+    jacobian : {"auto", "fd", "sensitivity"}
+        ``"auto"``: sensitivity equations when ``dfdx`` and ``dfdp`` are given, otherwise
+        forward differences of the whole simulation (``"fd"``). ``"sensitivity"`` without
+        (some) derivatives takes the missing ones by central differences of ``f``/``h`` at
+        each integrator stage.
 
     Examples
     --------
@@ -97,9 +134,18 @@ class NonlinearGreyBox(ModelMixin):
                  substeps: int = 1, rtol: float = 1e-8, atol: float = 1e-10,
                  vectorized: bool = False, dt: float | None = None, ninputs: int | None = None,
                  noutputs: int | None = None, input_names: Any = None,
-                 output_names: Any = None) -> None:
+                 output_names: Any = None, dfdx: Callable[..., Any] | None = None,
+                 dfdp: Callable[..., Any] | None = None, dhdx: Callable[..., Any] | None = None,
+                 dhdp: Callable[..., Any] | None = None, jacobian: str = "auto") -> None:
         if not (callable(f) and callable(h)):
             raise DataError("f and h must be callables f(t, x, u, p), h(t, x, u, p)")
+        if jacobian not in _JACOBIANS:
+            raise DataError(f"jacobian must be 'auto', 'fd' or 'sensitivity', got {jacobian!r}")
+        for name, fn in (("dfdx", dfdx), ("dfdp", dfdp), ("dhdx", dhdx), ("dhdp", dhdp)):
+            if fn is not None and not callable(fn):
+                raise DataError(f"{name} must be a callable (t, x, u, p) -> array")
+        self.dfdx, self.dfdp, self.dhdx, self.dhdp = dfdx, dfdp, dhdx, dhdp
+        self.jacobian = jacobian
         if integrator not in _INTEGRATORS:
             raise DataError(f"integrator must be 'rk4' or 'adaptive', got {integrator!r}")
         self.f, self.h = f, h
@@ -225,6 +271,70 @@ class NonlinearGreyBox(ModelMixin):
         return {"integrator_name": self.integrator, "substeps": self.substeps,
                 "rtol": self.rtol, "atol": self.atol}
 
+    @property
+    def jacobian_method(self) -> str:
+        """``"sensitivity"`` or ``"fd"``: how ``greyest`` forms the Jacobian."""
+        if self.jacobian == "auto":
+            given = self.dfdx is not None and self.dfdp is not None
+            return "sensitivity" if given else "fd"
+        return self.jacobian
+
+    def jacobian_options(self, free: list[str]) -> dict[str, Any]:
+        """Keywords of the core functions for the Jacobian: the method and, for the
+        sensitivity equations, the point-wise derivative callables ``(t, x, u, p) ->
+        (value, d/dx, d/dp)`` (user derivatives, or central differences of ``f``/``h`` in
+        the free parameters)."""
+        if self.jacobian_method == "fd":
+            return {"jacobian": "fd"}
+        return {"jacobian": "sensitivity",
+                "rhs_derivatives": self._point_derivatives(self.f, self.dfdx, self.dfdp, free),
+                "output_derivatives": self._point_derivatives(self.h, self.dhdx, self.dhdp,
+                                                              free)}
+
+    def _point_derivatives(self, fn: Callable[..., Any], ddx: Callable[..., Any] | None,
+                           ddp: Callable[..., Any] | None, free: list[str]
+                           ) -> Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        names = self.names
+        idx = [names.index(k) for k in free]
+        nx = self.nx
+        typical = np.array([self.params[k].typical for k in names])
+
+        def call(t: float, x: np.ndarray, u: np.ndarray, P: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+            need_x, need_p = ddx is None, ddp is None
+            p = Parameters({n: float(P[i]) for i, n in enumerate(names)})
+            if ddx is not None and ddp is not None:   # all given: three plain calls
+                v = np.asarray(fn(t, x, u, p) if not self.vectorized else
+                               self._call(fn, t, x[:, None], u, P[:, None]), dtype=float)
+                v = v.reshape(-1, 1)
+                rows = v.shape[0]
+                return (v, _matrix(ddx(t, x, u, p), (rows, nx), "d/dx"),
+                        _param_matrix(ddp(t, x, u, p), rows, names))
+            kx, kp = (nx if need_x else 0), (len(idx) if need_p else 0)
+            # the point and its central-difference neighbours in one call: column 0, then
+            # +h/-h pairs for each state entry and free parameter not given by the user
+            X = np.repeat(x[:, None], 1 + 2 * (kx + kp), axis=1)
+            Pm = np.repeat(P[:, None], 1 + 2 * (kx + kp), axis=1)
+            hx = _CD_STEP * np.maximum(np.abs(x[:kx]), 1.0)
+            hp = _CD_STEP * np.maximum(np.abs(P[idx[:kp]]), typical[idx[:kp]])
+            for i in range(kx):
+                X[i, 1 + 2 * i] += hx[i]
+                X[i, 2 + 2 * i] -= hx[i]
+            for c, i in enumerate(idx[:kp]):
+                Pm[i, 1 + 2 * (kx + c)] += hp[c]
+                Pm[i, 2 + 2 * (kx + c)] -= hp[c]
+            V = self._call(fn, t, X, u, Pm)
+            v, rows = V[:, :1], V.shape[0]
+            D = (V[:, 1::2] - V[:, 2::2]) / np.concatenate([hx, hp]) / 2
+            dx = D[:, :nx] if ddx is None else _matrix(ddx(t, x, u, p), (rows, nx), "d/dx")
+            if ddp is None:
+                dp = np.zeros((rows, len(names)))
+                dp[:, idx] = D[:, kx:]
+            else:
+                dp = _param_matrix(ddp(t, x, u, p), rows, names)
+            return v, np.ascontiguousarray(dx, dtype=float), dp
+        return call
+
     # -- the sysid.Model protocol ---------------------------------------------------------
     def simulate(self, u: Any, x0: Any = None, *, dt: float | None = None) -> np.ndarray:
         """Outputs ``(n_samples, noutputs)`` for inputs held between samples (``x0``: the
@@ -277,6 +387,73 @@ class NonlinearGreyBox(ModelMixin):
     def freqresp(self, omega: Any) -> np.ndarray:
         """Frequency response of the linearisation."""
         return np.asarray(self.linearize().freqresp(omega))
+
+    # -- saving ----------------------------------------------------------------------------
+    _FUNCTIONS = ("f", "h", "dfdx", "dfdp", "dhdx", "dhdp")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Everything but code (see :func:`sysid.save_model`): parameter values, fixed flags,
+        bounds, scales, units; initial states; integrator; sample time; the covariance of the
+        free parameters when estimated; ``f``, ``h`` (and the derivatives) as
+        ``"module:qualname"`` references, imported again on load. Lambdas, nested functions
+        and functions defined in ``__main__`` cannot be referred to: a
+        :class:`~sysid.DataError` names the function and the fix."""
+        from .callref import callable_ref
+
+        refs = {k: None if getattr(self, k) is None else callable_ref(getattr(self, k), k)
+                for k in self._FUNCTIONS}
+        params = [{"name": k, "value": v.value, "lower": v.bounds[0], "upper": v.bounds[1],
+                   "fixed": v.fixed, "scale": v.scale, "unit": v.unit,
+                   "description": v.description} for k, v in self.params.items()]
+        unc = getattr(self, "uncertainty", None)
+        cov = None if unc is None else {"names": list(unc.names), "covariance": unc.covariance,
+                                        "dof": unc.dof}
+        return {"functions": refs, "params": params, "nx": self.nx, "x0": self.x0,
+                "x0_free": self.x0_free, "integrator": self.integrator,
+                "substeps": self.substeps, "rtol": self.rtol, "atol": self.atol,
+                "vectorized": self.vectorized, "jacobian": self.jacobian, "dt": self.dt,
+                "ninputs": self._ninputs, "noutputs": self._noutputs,
+                "input_names": None if self._input_names is None else list(self._input_names),
+                "output_names": None if self._output_names is None else
+                list(self._output_names), "uncertainty": cov, "info": self.info}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> NonlinearGreyBox:
+        """Inverse of :meth:`to_dict`: imports the functions again (a
+        :class:`~sysid.DataError` naming the one that cannot be imported)."""
+        from .callref import resolve_ref
+        from .greybox import param
+
+        refs = d.get("functions") or {}
+        fns = {k: None if refs.get(k) is None else resolve_ref(refs[k], k)
+               for k in cls._FUNCTIONS}
+        params = {r["name"]: param(r["value"], bounds=(r["lower"], r["upper"]),
+                                   fixed=bool(r["fixed"]), scale=r.get("scale"),
+                                   unit=r.get("unit", ""), description=r.get("description", ""))
+                  for r in d["params"]}
+        dt = float(d.get("dt") or 0.0)
+        out = cls(fns["f"], fns["h"], params, nx=int(d["nx"]), x0=d.get("x0"),
+                  x0_free=np.asarray(d.get("x0_free", False), dtype=bool),
+                  integrator=d.get("integrator", "rk4"), substeps=int(d.get("substeps", 1)),
+                  rtol=float(d.get("rtol", 1e-8)), atol=float(d.get("atol", 1e-10)),
+                  vectorized=bool(d.get("vectorized", False)), dt=dt or None,
+                  ninputs=d.get("ninputs"), noutputs=d.get("noutputs"),
+                  input_names=d.get("input_names"), output_names=d.get("output_names"),
+                  dfdx=fns["dfdx"], dfdp=fns["dfdp"], dhdx=fns["dhdx"], dhdp=fns["dhdp"],
+                  jacobian=d.get("jacobian", "auto"))
+        out.info = dict(d.get("info") or {})
+        unc = d.get("uncertainty")
+        if unc is not None:
+            from .uncertainty import ParameterUncertainty
+
+            names = list(unc["names"])
+
+            def build(theta: np.ndarray) -> NonlinearGreyBox:
+                return out.with_values(dict(zip(names, np.asarray(theta, dtype=float))))
+            out.uncertainty = ParameterUncertainty(
+                [out.params[k].value for k in names], unc["covariance"], build, names=names,
+                dof=None if unc.get("dof") is None else int(unc["dof"]))
+        return out
 
     def __repr__(self) -> str:
         p = len(self.params)

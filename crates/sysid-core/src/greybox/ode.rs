@@ -1,8 +1,13 @@
 //! Nonlinear grey-box models: `dx/dt = f(t, x, u, p)`, `y = h(t, x, u, p)`, simulation errors.
 //!
 //! The free parameters are some entries of `p` and some initial-state entries of each
-//! experiment. The Jacobian of the simulated outputs is taken by forward differences, all
-//! perturbed trajectories integrated together: the model is evaluated on `K` columns at once
+//! experiment. The Jacobian of the simulated outputs is taken either by forward differences,
+//! all perturbed trajectories integrated together, or (with [`OdeJacobian::Sensitivity`])
+//! by the forward sensitivity equations `dS/dt = f_x S + f_p`, `S(0) = dx0/dtheta`,
+//! `dy/dtheta = h_x S + h_p`, integrated beside the states by the same integrator: the
+//! sensitivities ride as extra columns of the state matrix, so the same Runge-Kutta stages
+//! serve both (for the fixed-step RK4 this is exactly the derivative of the discrete
+//! simulation). For forward differences the model is evaluated on `K` columns at once
 //! (`x` is `nx x K`, `p` is `np x K`, column 0 the nominal point), so a vectorised
 //! right-hand side costs one call per integrator stage for the whole Jacobian. The input is
 //! held constant over each sample interval (zero-order hold). Integrators: classical
@@ -37,6 +42,42 @@ pub trait OdeModel {
         u: &[f64],
         p: MatRef<'_, f64>,
     ) -> Result<Mat<f64>>;
+    /// `(f, df/dx, df/dp)` at one point (`nx x 1`, `nx x nx`, `nx x np`), for the
+    /// sensitivity equations; `None` (the default) when the model has no derivatives.
+    fn rhs_derivatives(
+        &mut self,
+        _t: f64,
+        _x: &[f64],
+        _u: &[f64],
+        _p: &[f64],
+    ) -> Result<Option<Derivatives>> {
+        Ok(None)
+    }
+    /// `(h, dh/dx, dh/dp)` at one point (`l x 1`, `l x nx`, `l x np`); `None` by default.
+    fn output_derivatives(
+        &mut self,
+        _t: f64,
+        _x: &[f64],
+        _u: &[f64],
+        _p: &[f64],
+    ) -> Result<Option<Derivatives>> {
+        Ok(None)
+    }
+}
+
+/// A function value and its derivatives with respect to the state and the parameters:
+/// `(value (k x 1), d/dx (k x nx), d/dp (k x np))`.
+pub type Derivatives = (Mat<f64>, Mat<f64>, Mat<f64>);
+
+/// How the Jacobian of the simulated outputs is formed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum OdeJacobian {
+    /// Forward differences, all perturbed trajectories integrated together (default).
+    #[default]
+    FiniteDifference,
+    /// Forward sensitivity equations with the model's
+    /// [`OdeModel::rhs_derivatives`] and [`OdeModel::output_derivatives`].
+    Sensitivity,
 }
 
 /// How the state equation is integrated between samples.
@@ -68,6 +109,8 @@ pub struct OdeOptions {
     pub reweight: bool,
     /// Relative forward-difference step (times `max(|theta_k|, typical_k)`).
     pub fd_step: f64,
+    /// Forward differences or sensitivity equations.
+    pub jacobian: OdeJacobian,
     /// Options of the search (bounds and fixed mask in the free parameters).
     pub optim: optim::Options,
 }
@@ -79,6 +122,7 @@ impl Default for OdeOptions {
             integrator: Integrator::Rk4 { substeps: 1 },
             reweight: true,
             fd_step: 1e-6,
+            jacobian: OdeJacobian::FiniteDifference,
             optim: optim::Options {
                 max_iter: 100,
                 tol_cost: 1e-10,
@@ -121,7 +165,8 @@ pub struct OdeResult {
     pub n_samples: usize,
     /// `det(Lambda)` at the start and after every accepted iteration.
     pub loss_history: Vec<f64>,
-    /// Right-hand-side evaluations (calls, each on all columns).
+    /// Right-hand-side evaluations (calls, each on all columns; with sensitivities, calls
+    /// of [`OdeModel::rhs_derivatives`] count too).
     pub rhs_calls: usize,
 }
 
@@ -140,6 +185,8 @@ pub struct OdeProblem<'a> {
     h_last: f64,
     /// The error covariance at the last evaluated point (saves a simulation per reweight).
     last_cov: Option<(Vec<f64>, Mat<f64>)>,
+    /// While sensitivities are integrated: the searched index of every sensitivity column.
+    sens_cols: Option<Vec<usize>>,
 }
 
 impl<'a> OdeProblem<'a> {
@@ -225,6 +272,7 @@ impl<'a> OdeProblem<'a> {
             rhs_calls: 0,
             h_last: h0,
             last_cov: None,
+            sens_cols: None,
         })
     }
 
@@ -265,6 +313,20 @@ impl<'a> OdeProblem<'a> {
             }
         }
         let kc = 1 + cols.len();
+        if jac && self.opt.jacobian == OdeJacobian::Sensitivity {
+            // x in column 0, S = dx/dtheta in the others: S(0) = e_i for a free x0 entry
+            let pm = Mat::from_fn(p.len(), 1, |i, _| p[i]);
+            let mut xm = Mat::zeros(self.st.nx, kc);
+            for i in 0..self.st.nx {
+                xm[(i, 0)] = x0[i];
+            }
+            for (c, &k) in cols.iter().enumerate() {
+                if k >= nfp {
+                    xm[(self.st.free_x0[k - nfp].1, c + 1)] = 1.0;
+                }
+            }
+            return (pm, xm, cols);
+        }
         let h = self.steps(th);
         let mut pm = Mat::from_fn(p.len(), kc, |i, _| p[i]);
         let mut xm = Mat::from_fn(self.st.nx, kc, |i, _| x0[i]);
@@ -279,6 +341,9 @@ impl<'a> OdeProblem<'a> {
     }
 
     fn rhs(&mut self, t: f64, x: &Mat<f64>, u: &[f64], p: &Mat<f64>) -> Result<Mat<f64>> {
+        if self.sens_cols.is_some() {
+            return self.rhs_sensitivity(t, x, u, p);
+        }
         self.rhs_calls += 1;
         let d = self.model.rhs(t, x.as_ref(), u, p.as_ref())?;
         if d.nrows() != x.nrows() || d.ncols() != x.ncols() {
@@ -294,6 +359,41 @@ impl<'a> OdeProblem<'a> {
             ));
         }
         Ok(d)
+    }
+
+    /// `[f, f_x S + f_p]` for the state in column 0 and the sensitivities in the others.
+    fn rhs_sensitivity(
+        &mut self,
+        t: f64,
+        x: &Mat<f64>,
+        u: &[f64],
+        p: &Mat<f64>,
+    ) -> Result<Mat<f64>> {
+        self.rhs_calls += 1;
+        let nx = x.nrows();
+        let np = p.nrows();
+        let xs: Vec<f64> = (0..nx).map(|i| x[(i, 0)]).collect();
+        let ps: Vec<f64> = (0..np).map(|i| p[(i, 0)]).collect();
+        let (f, fx, fp) = self
+            .model
+            .rhs_derivatives(t, &xs, u, &ps)?
+            .ok_or_else(no_derivatives)?;
+        check_derivatives("f", &f, &fx, &fp, nx, nx, np)?;
+        let cols = self.sens_cols.as_ref().expect("sensitivity columns");
+        let nfp = self.st.free_p.len();
+        let mut out = &fx * x;
+        for i in 0..nx {
+            out[(i, 0)] = f[(i, 0)];
+        }
+        for (c, &k) in cols.iter().enumerate() {
+            if k < nfp {
+                let pi = self.st.free_p[k];
+                for i in 0..nx {
+                    out[(i, c + 1)] += fp[(i, pi)];
+                }
+            }
+        }
+        Ok(out)
     }
 
     /// Advances `x` over one sample interval `[t, t + dt]` with input `u` held.
@@ -445,8 +545,11 @@ impl<'a> OdeProblem<'a> {
         let l = self.l;
         let dt = self.opt.dt;
         let exps = self.exps.clone();
+        self.sens_cols = None;
         for (e, (u, y)) in exps.iter().enumerate() {
             let (p, mut x, cols) = self.columns(th, e, jac);
+            let sens = jac && self.opt.jacobian == OdeJacobian::Sensitivity;
+            self.sens_cols = sens.then(|| cols.clone());
             let kc = x.ncols();
             let mut ut = vec![0.0; u.ncols()];
             let mut res = vec![0.0; l];
@@ -457,6 +560,22 @@ impl<'a> OdeProblem<'a> {
                     ut[j] = u[(t, j)];
                 }
                 let time = t as f64 * dt;
+                if sens {
+                    let yh = self.sensitivity_output(time, &x, &ut, &p, &cols, &mut dy)?;
+                    let mut finite = true;
+                    for i in 0..l {
+                        res[i] = y[(t, i)] - yh[(i, 0)];
+                        finite &= res[i].is_finite();
+                    }
+                    if !finite {
+                        return Ok(false);
+                    }
+                    sink(&res, &dy, &cols);
+                    if t + 1 < y.nrows() {
+                        self.advance(time, &mut x, &ut, &p)?;
+                    }
+                    continue;
+                }
                 let yh = self.model.output(time, x.as_ref(), &ut, p.as_ref())?;
                 if yh.nrows() != l || yh.ncols() != kc {
                     return Err(SysidError::invalid(
@@ -488,8 +607,44 @@ impl<'a> OdeProblem<'a> {
                     self.advance(time, &mut x, &ut, &p)?;
                 }
             }
+            self.sens_cols = None;
         }
         Ok(true)
+    }
+
+    /// `h` at the state in column 0, and `dy/dtheta = h_x S + h_p` into `dy`.
+    fn sensitivity_output(
+        &mut self,
+        t: f64,
+        x: &Mat<f64>,
+        u: &[f64],
+        p: &Mat<f64>,
+        cols: &[usize],
+        dy: &mut Mat<f64>,
+    ) -> Result<Mat<f64>> {
+        let nx = x.nrows();
+        let np = p.nrows();
+        let l = self.l;
+        let xs: Vec<f64> = (0..nx).map(|i| x[(i, 0)]).collect();
+        let ps: Vec<f64> = (0..np).map(|i| p[(i, 0)]).collect();
+        let (h, hx, hp) = self
+            .model
+            .output_derivatives(t, &xs, u, &ps)?
+            .ok_or_else(no_derivatives)?;
+        check_derivatives("h", &h, &hx, &hp, l, nx, np)?;
+        let hs = &hx * x;
+        let nfp = self.st.free_p.len();
+        for (c, &k) in cols.iter().enumerate() {
+            for i in 0..l {
+                dy[(i, k)] = hs[(i, c + 1)]
+                    + if k < nfp {
+                        hp[(i, self.st.free_p[k])]
+                    } else {
+                        0.0
+                    };
+            }
+        }
+        Ok(h)
     }
 
     /// Sample covariance of the simulation errors at `theta`.
@@ -540,6 +695,47 @@ impl<'a> OdeProblem<'a> {
         self.rinv = rinv;
         Ok(())
     }
+}
+
+fn no_derivatives() -> SysidError {
+    SysidError::invalid(
+        "jacobian",
+        "the sensitivity equations need the model's derivatives (df/dx, df/dp, dh/dx, \
+         dh/dp); give them, or use finite differences",
+    )
+}
+
+fn check_derivatives(
+    what: &'static str,
+    v: &Mat<f64>,
+    dx: &Mat<f64>,
+    dp: &Mat<f64>,
+    rows: usize,
+    nx: usize,
+    np: usize,
+) -> Result<()> {
+    if v.nrows() != rows
+        || v.ncols() != 1
+        || dx.nrows() != rows
+        || dx.ncols() != nx
+        || dp.nrows() != rows
+        || dp.ncols() != np
+    {
+        return Err(SysidError::invalid(
+            what,
+            format!(
+                "its derivatives have shapes {}x{}, {}x{}, {}x{}; expected {rows}x1, \
+                 {rows}x{nx} (d/dx) and {rows}x{np} (d/dp, every parameter)",
+                v.nrows(),
+                v.ncols(),
+                dx.nrows(),
+                dx.ncols(),
+                dp.nrows(),
+                dp.ncols()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 impl Problem for OdeProblem<'_> {
@@ -748,4 +944,96 @@ pub fn simulate(
         }
     }
     Ok(out)
+}
+
+/// The simulated outputs of every experiment (stacked, `N x l`) at the structure's values
+/// and their derivatives with respect to the searched quantities (free parameters, then
+/// free initial-state entries): `d yhat[t, i] / d theta_k` in row `t l + i`, column `k`,
+/// by the method of `options.jacobian`.
+///
+/// ```
+/// use faer::{Mat, MatRef};
+/// use sysid_core::greybox::ode::{jacobian, Derivatives, OdeJacobian, OdeModel, OdeOptions,
+///                                 OdeStructure};
+/// // dx/dt = -a x + u, y = x: the sensitivity s = dx/da obeys ds/dt = -a s - x.
+/// struct M;
+/// impl OdeModel for M {
+///     fn rhs(&mut self, _t: f64, x: MatRef<'_, f64>, u: &[f64], p: MatRef<'_, f64>)
+///         -> sysid_core::Result<Mat<f64>> {
+///         Ok(Mat::from_fn(1, x.ncols(), |_, c| -p[(0, c)] * x[(0, c)] + u[0]))
+///     }
+///     fn output(&mut self, _t: f64, x: MatRef<'_, f64>, _u: &[f64], _p: MatRef<'_, f64>)
+///         -> sysid_core::Result<Mat<f64>> { Ok(x.to_owned()) }
+///     fn rhs_derivatives(&mut self, _t: f64, x: &[f64], u: &[f64], p: &[f64])
+///         -> sysid_core::Result<Option<Derivatives>> {
+///         Ok(Some((Mat::from_fn(1, 1, |_, _| -p[0] * x[0] + u[0]),
+///                  Mat::from_fn(1, 1, |_, _| -p[0]), Mat::from_fn(1, 1, |_, _| -x[0]))))
+///     }
+///     fn output_derivatives(&mut self, _t: f64, x: &[f64], _u: &[f64], _p: &[f64])
+///         -> sysid_core::Result<Option<Derivatives>> {
+///         Ok(Some((Mat::from_fn(1, 1, |_, _| x[0]), Mat::from_fn(1, 1, |_, _| 1.0),
+///                  Mat::zeros(1, 1))))
+///     }
+/// }
+/// let u = Mat::from_fn(50, 1, |_, _| 1.0);
+/// let st = OdeStructure { nx: 1, p: vec![2.0], free_p: vec![0], x0: vec![vec![0.0]],
+///                         free_x0: vec![], typical: vec![1.0] };
+/// let mut o = OdeOptions::default();
+/// o.dt = 0.05;
+/// o.jacobian = OdeJacobian::Sensitivity;
+/// let (y, j) = jacobian(&mut M, &[u.as_ref()], &st, &o).unwrap();
+/// // x(t) = (1 - e^{-a t}) / a, dx/da = t e^{-a t} / a - (1 - e^{-a t}) / a^2
+/// let t: f64 = 49.0 * 0.05;
+/// let exact = t * (-2.0 * t).exp() / 2.0 - (1.0 - (-2.0 * t).exp()) / 4.0;
+/// assert!((j[(49, 0)] - exact).abs() < 1e-6 && y.nrows() == 50);
+/// ```
+pub fn jacobian(
+    model: &mut dyn OdeModel,
+    inputs: &[MatRef<'_, f64>],
+    structure: &OdeStructure,
+    options: &OdeOptions,
+) -> Result<(Mat<f64>, Mat<f64>)> {
+    if inputs.is_empty() {
+        return Err(SysidError::invalid("data", "no experiment given"));
+    }
+    let p = Mat::from_fn(structure.p.len(), 1, |i, _| structure.p[i]);
+    let x0 = structure
+        .x0
+        .first()
+        .ok_or_else(|| SysidError::invalid("x0", "one initial state per experiment"))?;
+    let u0 = inputs[0];
+    let ut: Vec<f64> = (0..u0.ncols())
+        .map(|j| if u0.nrows() > 0 { u0[(0, j)] } else { 0.0 })
+        .collect();
+    let xm = Mat::from_fn(structure.nx, 1, |i, _| x0.get(i).copied().unwrap_or(0.0));
+    let l = model.output(0.0, xm.as_ref(), &ut, p.as_ref())?.nrows();
+    let ys: Vec<Mat<f64>> = inputs.iter().map(|u| Mat::zeros(u.nrows(), l)).collect();
+    let exps: Vec<_> = inputs
+        .iter()
+        .zip(&ys)
+        .map(|(u, y)| (*u, y.as_ref()))
+        .collect();
+    let n: usize = inputs.iter().map(|u| u.nrows()).sum();
+    let mut prob = OdeProblem::new(model, &exps, structure.clone(), options.clone())?;
+    let th = prob.theta0();
+    let q = th.len();
+    let mut yhat = Mat::<f64>::zeros(n, l);
+    let mut jac = Mat::<f64>::zeros(n * l, q);
+    let mut t = 0usize;
+    let ok = prob.run(&th, true, &mut |r, dy, cols| {
+        for i in 0..l {
+            yhat[(t, i)] = -r[i];
+            for &k in cols {
+                jac[(t * l + i, k)] = dy[(i, k)];
+            }
+        }
+        t += 1;
+    })?;
+    if !ok {
+        return Err(SysidError::numerical(
+            "nonlinear grey-box simulation",
+            "the simulated output is not finite",
+        ));
+    }
+    Ok((yhat, jac))
 }

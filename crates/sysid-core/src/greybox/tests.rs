@@ -99,3 +99,120 @@ fn reparameterized_is_the_chain_rule() {
         sol.stop
     );
 }
+
+/// A damped pendulum `x0' = x1, x1' = -w2 sin x0 - c x1 + b u`, `y = (x0, x0 x1)`, with
+/// its derivatives for the sensitivity equations.
+struct Pendulum;
+impl super::ode::OdeModel for Pendulum {
+    fn rhs(
+        &mut self,
+        _t: f64,
+        x: faer::MatRef<'_, f64>,
+        u: &[f64],
+        p: faer::MatRef<'_, f64>,
+    ) -> crate::Result<Mat<f64>> {
+        Ok(Mat::from_fn(2, x.ncols(), |i, c| {
+            if i == 0 {
+                x[(1, c)]
+            } else {
+                -p[(0, c)] * x[(0, c)].sin() - p[(1, c)] * x[(1, c)] + p[(2, c)] * u[0]
+            }
+        }))
+    }
+    fn output(
+        &mut self,
+        _t: f64,
+        x: faer::MatRef<'_, f64>,
+        _u: &[f64],
+        _p: faer::MatRef<'_, f64>,
+    ) -> crate::Result<Mat<f64>> {
+        Ok(Mat::from_fn(2, x.ncols(), |i, c| {
+            if i == 0 {
+                x[(0, c)]
+            } else {
+                x[(0, c)] * x[(1, c)]
+            }
+        }))
+    }
+    fn rhs_derivatives(
+        &mut self,
+        _t: f64,
+        x: &[f64],
+        u: &[f64],
+        p: &[f64],
+    ) -> crate::Result<Option<super::ode::Derivatives>> {
+        let f = mat![[x[1]], [-p[0] * x[0].sin() - p[1] * x[1] + p[2] * u[0]]];
+        let fx = mat![[0.0, 1.0], [-p[0] * x[0].cos(), -p[1]]];
+        let fp = mat![[0.0, 0.0, 0.0], [-x[0].sin(), -x[1], u[0]]];
+        Ok(Some((f, fx, fp)))
+    }
+    fn output_derivatives(
+        &mut self,
+        _t: f64,
+        x: &[f64],
+        _u: &[f64],
+        _p: &[f64],
+    ) -> crate::Result<Option<super::ode::Derivatives>> {
+        let h = mat![[x[0]], [x[0] * x[1]]];
+        Ok(Some((h, mat![[1.0, 0.0], [x[1], x[0]]], Mat::zeros(2, 3))))
+    }
+}
+
+#[test]
+fn sensitivity_jacobian_is_the_derivative_of_the_simulation() {
+    use super::ode::{jacobian, Integrator, OdeJacobian, OdeOptions, OdeStructure};
+    let u = Mat::from_fn(120, 1, |t, _| ((t / 15) % 2) as f64 * 2.0 - 1.0);
+    let st = OdeStructure {
+        nx: 2,
+        p: vec![9.0, 0.4, 2.0],
+        free_p: vec![0, 2],
+        x0: vec![vec![0.6, -0.2]],
+        free_x0: vec![(0, 1)],
+        typical: vec![1.0; 3],
+    };
+    for integ in [
+        Integrator::Rk4 { substeps: 2 },
+        Integrator::Adaptive {
+            rtol: 1e-11,
+            atol: 1e-13,
+        },
+    ] {
+        let o = OdeOptions {
+            dt: 0.05,
+            integrator: integ,
+            jacobian: OdeJacobian::Sensitivity,
+            ..Default::default()
+        };
+        let (y, j) = jacobian(&mut Pendulum, &[u.as_ref()], &st, &o).unwrap();
+        // central differences of the simulation
+        let mut o_fd = o.clone();
+        o_fd.jacobian = OdeJacobian::FiniteDifference;
+        for k in 0..3 {
+            let h = 1e-6;
+            let shifted = |d: f64| {
+                let mut s = st.clone();
+                if k < 2 {
+                    s.p[s.free_p[k]] += d;
+                } else {
+                    s.x0[0][1] += d;
+                }
+                jacobian(&mut Pendulum, &[u.as_ref()], &s, &o_fd).unwrap().0
+            };
+            let (yp, ym) = (shifted(h), shifted(-h));
+            let mut worst = 0.0f64;
+            let mut scale = 0.0f64;
+            for t in 0..y.nrows() {
+                for i in 0..2 {
+                    let fd = (yp[(t, i)] - ym[(t, i)]) / (2.0 * h);
+                    worst = worst.max((j[(t * 2 + i, k)] - fd).abs());
+                    scale = scale.max(fd.abs());
+                }
+            }
+            let tol = match integ {
+                Integrator::Rk4 { .. } => 1e-7,
+                Integrator::Adaptive { .. } => 1e-5,
+            };
+            assert!(worst < tol * scale, "{integ:?} k={k}: {worst} of {scale}");
+        }
+    }
+}
