@@ -142,6 +142,10 @@ pub struct Predictor<'a> {
     /// Within the structured path, use the modal coordinates of `A - K C` when well
     /// conditioned ([`Predictor::evaluate_modal`]).
     pub(super) modal: bool,
+    /// Within the modal path, carry only the first row of each complex pair's sensitivities
+    /// (the second is its rotation, see [`Predictor::evaluate_modal`]); `false` carries both
+    /// (the reference, kept for tests).
+    pub(super) halve: bool,
     /// The weighting-independent sums of the last modal `J^T W J` (`theta`, Gram of the
     /// sensitivities, their cross sums with the regressor, `sum z z^T`): a re-weighted
     /// Gauss-Newton matrix at the same point (the covariance after an unweighted search)
@@ -287,6 +291,7 @@ impl<'a> Predictor<'a> {
             col_lo: 0,
             structured: true,
             modal: true,
+            halve: std::env::var_os("SYSID_AB_NOHALVE").is_none(), // TEMP A/B knob
             gram_cache: None,
         })
     }
@@ -564,13 +569,6 @@ impl Predictor<'_> {
     /// `O(N min(l, n) p_d^2)`. The chain rule through `T` and the predictor map gives the
     /// result in `theta`.
     fn evaluate_modal(&mut self, th: &[f64], grad_only: bool, md: &Modal) -> Result<Evaluation> {
-        let cached = if grad_only {
-            None
-        } else {
-            self.gram_cache.take().filter(|c| c.0.as_slice() == th)
-        };
-        // accumulate the sums (else they come from the cache, or are not needed)
-        let acc = !grad_only && cached.is_none();
         let t_in = std::time::Instant::now();
         let (n, m, l, np) = (self.n, self.m, self.l, self.p);
         let pm = self.unpack(th);
@@ -611,11 +609,63 @@ impl Predictor<'_> {
             }
         }
         let pd = dcols.len();
-        let mut eoff = vec![0usize; pd + 1];
-        for c in 0..pd {
-            eoff[c + 1] = eoff[c] + md.block[dcols[c].1].1;
+        // Carried sensitivities. A 2x2 block `[[a, b], [-b, a]]` commutes with the rotation
+        // `R = [[0, -1], [1, 0]]`, and `R e_0 = e_1`: the sensitivity of a parameter in the
+        // block's second row is `R` times that of the same parameter (same forcing, same
+        // initial condition) in its first row, to the last bit. With `halve` only first rows
+        // are carried (`twin`: the second-row column derived from it), so the recursion, the
+        // Gram matrix and the cross sums cover `p_e / 2` numbers per complex pair column
+        // instead of `p_e`: the Gram costs a quarter.
+        let stride = |kind: u8| match kind {
+            0 => n,
+            1 => m,
+            2 => l,
+            _ => 1,
+        };
+        let mut carried: Vec<(usize, Option<usize>)> = Vec::with_capacity(pd);
+        for (c, &(ph, i, kind, j)) in dcols.iter().enumerate() {
+            let (b0, bs) = md.block[i];
+            if self.halve && bs == 2 {
+                if i == b0 + 1 {
+                    continue;
+                }
+                let tw = c + stride(kind);
+                debug_assert!(
+                    dcols[tw].0 == ph + stride(kind)
+                        && dcols[tw].1 == i + 1
+                        && dcols[tw].2 == kind
+                        && dcols[tw].3 == j
+                );
+                carried.push((c, Some(tw)));
+            } else {
+                carried.push((c, None));
+            }
         }
-        let pe = eoff[pd];
+        // offsets of the carried numbers; `at[c][q]` = (carried index, sign) of entry `q` of
+        // the sensitivity block of column `c`
+        let mut eoff = vec![0usize; carried.len() + 1];
+        let mut at = vec![[(0usize, 0.0f64); 2]; pd];
+        for (k, &(c, twin)) in carried.iter().enumerate() {
+            let bs = md.block[dcols[c].1].1;
+            eoff[k + 1] = eoff[k] + bs;
+            for q in 0..bs {
+                at[c][q] = (eoff[k] + q, 1.0);
+            }
+            if let Some(tw) = twin {
+                // R s = (-s_1, s_0)
+                at[tw] = [(eoff[k] + 1, -1.0), (eoff[k], 1.0)];
+            }
+        }
+        let pe = eoff[carried.len()];
+        let cached = if grad_only {
+            None
+        } else {
+            self.gram_cache
+                .take()
+                .filter(|c| c.0.as_slice() == th && c.1.nrows() == pe)
+        };
+        // accumulate the sums (else they come from the cache, or are not needed)
+        let acc = !grad_only && cached.is_none();
         let nz = n + m;
         let rinv = self.rinv.clone();
         let w = rinv.transpose() * &rinv;
@@ -649,9 +699,9 @@ impl Predictor<'_> {
             sc.fill(0.0);
             if let Some(c0) = x0_at[ex] {
                 for i in 0..n {
-                    let c = c0 + i;
                     let (b0, _) = md.block[i];
-                    sc[eoff[c] + (i - b0)] = 1.0;
+                    let (h, sg) = at[c0 + i][i - b0];
+                    sc[h] = sg;
                 }
             }
             let len = y.nrows();
@@ -705,13 +755,17 @@ impl Predictor<'_> {
                     }
                     v[k] = a;
                 }
-                for (c, &(_, i, _, _)) in dcols.iter().enumerate() {
-                    let (b0, bs) = md.block[i];
+                for (k, &(c, twin)) in carried.iter().enumerate() {
+                    let (b0, bs) = md.block[dcols[c].1];
+                    let o = eoff[k];
                     let mut a = 0.0;
                     for q in 0..bs {
-                        a += sc[eoff[c] + q] * v[b0 + q];
+                        a += sc[o + q] * v[b0 + q];
                     }
                     gd[c] -= a;
+                    if let Some(tw) = twin {
+                        gd[tw] -= sc[o] * v[b0 + 1] - sc[o + 1] * v[b0];
+                    }
                 }
                 if acc {
                     for a in 0..nz {
@@ -726,9 +780,10 @@ impl Predictor<'_> {
                 }
                 row += 1;
                 // S'(t+1) = Lambda S' + F, blockwise
-                for (c, &(_, i, kind, j)) in dcols.iter().enumerate() {
+                for (k, &(c, _)) in carried.iter().enumerate() {
+                    let (_, i, kind, j) = dcols[c];
                     let (b0, bs) = md.block[i];
-                    let o = eoff[c];
+                    let o = eoff[k];
                     for q in 0..bs {
                         let mut a = 0.0;
                         for r in 0..bs {
@@ -835,14 +890,15 @@ impl Predictor<'_> {
                 let (b2, bs2) = md.block[dcols[c2].1];
                 let mut acc = 0.0;
                 for qa in 0..bs {
+                    let (ra, sa) = at[c][qa];
                     for qb in 0..bs2 {
-                        let (ra, rb) = (eoff[c] + qa, eoff[c2] + qb);
+                        let (rb, sb) = at[c2][qb];
                         let gv = if ra >= rb {
                             gram[(ra, rb)]
                         } else {
                             gram[(rb, ra)]
                         };
-                        acc += mq[(b0 + qa, b2 + qb)] * gv;
+                        acc += mq[(b0 + qa, b2 + qb)] * (sa * sb * gv);
                     }
                 }
                 h[(dcols[c].0, dcols[c2].0)] = acc;
@@ -863,7 +919,8 @@ impl Predictor<'_> {
                     let (b0, bs) = md.block[d.1];
                     let mut acc = 0.0;
                     for qa in 0..bs {
-                        acc += wc[(i, b0 + qa)] * cross[(j, eoff[c] + qa)];
+                        let (r, sg) = at[c][qa];
+                        acc += wc[(i, b0 + qa)] * (sg * cross[(j, r)]);
                     }
                     h[(sij, d.0)] = acc;
                     h[(d.0, sij)] = acc;
