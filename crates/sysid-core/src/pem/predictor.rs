@@ -884,10 +884,13 @@ impl Predictor<'_> {
             (gram, cross, zz) = (c.1, c.2, c.3);
         }
         let mut h = Mat::<f64>::zeros(np, np);
-        for c in 0..pd {
-            let (b0, bs) = md.block[dcols[c].1];
-            for c2 in 0..=c {
-                let (b2, bs2) = md.block[dcols[c2].1];
+        // dynamic block: lower triangle (dcols' phi indices increase with c), column by
+        // column so that the Gram matrix is read down its columns; mirrored after
+        for c2 in 0..pd {
+            let (b2, bs2) = md.block[dcols[c2].1];
+            let col2 = dcols[c2].0;
+            for c in c2..pd {
+                let (b0, bs) = md.block[dcols[c].1];
                 let mut acc = 0.0;
                 for qa in 0..bs {
                     let (ra, sa) = at[c][qa];
@@ -901,8 +904,12 @@ impl Predictor<'_> {
                         acc += mq[(b0 + qa, b2 + qb)] * (sa * sb * gv);
                     }
                 }
-                h[(dcols[c].0, dcols[c2].0)] = acc;
-                h[(dcols[c2].0, dcols[c].0)] = acc;
+                h[(dcols[c].0, col2)] = acc;
+            }
+        }
+        for c2 in 0..pd {
+            for c in c2 + 1..pd {
+                h[(dcols[c2].0, dcols[c].0)] = h[(dcols[c].0, dcols[c2].0)];
             }
         }
         for i in 0..l {
@@ -927,52 +934,49 @@ impl Predictor<'_> {
                 }
             }
         }
-        // H_phi = M^T H' M: M^T on every column, then on every row
-        let mut col = vec![0.0; np];
-        let mut zt = Mat::<f64>::zeros(np, np);
-        for c in 0..np {
-            for i in 0..np {
-                col[i] = h[(i, c)];
-            }
-            let o = self.modal_mt(md, &col);
-            // stored transposed: zt[(c, i)] = (M^T H')[(i, c)]
-            for i in 0..np {
-                zt[(c, i)] = o[i];
-            }
-        }
-        let mut hphi = h;
-        for r in 0..np {
-            for j in 0..np {
-                col[j] = zt[(j, r)];
-            }
-            let o = self.modal_mt(md, &col);
-            // H_phi is symmetric: row r written as column r (contiguous)
-            for j in 0..np {
-                hphi[(j, r)] = o[j];
-            }
-        }
+        crate::optim::prof("chain-assemble", t_in);
+        let t_mt = std::time::Instant::now();
+        // H_phi = M^T H' M = M^T (M^T H')^T (H' symmetric), column by column
+        let z = self.modal_mt_cols(md, &h);
+        drop(h);
+        let hphi = self.modal_mt_cols(md, &z.transpose().to_owned());
+        drop(z);
+        crate::optim::prof("chain-modal", t_mt);
+        let t_tm = std::time::Instant::now();
         // H_theta = T^T H_phi T with the sparse T
         let mut y = Mat::<f64>::zeros(np, np);
         for (c, tc) in tmap.iter().enumerate() {
+            let yc = y.col_as_slice_mut(c);
             for &(r, v) in tc {
-                for i in 0..np {
-                    y[(i, c)] += v * hphi[(i, r)];
+                for (a, b) in yc.iter_mut().zip(hphi.col_as_slice(r)) {
+                    *a += v * b;
                 }
             }
         }
-        let mut hth = zt;
+        drop(hphi);
+        let mut hth = Mat::<f64>::zeros(np, np);
         for c2 in 0..np {
+            let yc = y.col_as_slice(c2);
+            let hc = hth.col_as_slice_mut(c2);
             for (c1, tc) in tmap.iter().enumerate() {
-                hth[(c1, c2)] = tc.iter().map(|&(r, v)| v * y[(r, c2)]).sum();
+                hc[c1] = tc.iter().map(|&(r, v)| v * yc[r]).sum();
             }
         }
-        for i in 0..np {
-            for j in 0..i {
-                let a = 0.5 * (hth[(i, j)] + hth[(j, i)]);
-                hth[(i, j)] = a;
-                hth[(j, i)] = a;
+        drop(y);
+        // symmetrise in 64 x 64 tiles
+        const TILE: usize = 64;
+        for jb in (0..np).step_by(TILE) {
+            for ib in (jb..np).step_by(TILE) {
+                for j in jb..(jb + TILE).min(np) {
+                    for i in ib.max(j + 1)..(ib + TILE).min(np) {
+                        let a = 0.5 * (hth[(i, j)] + hth[(j, i)]);
+                        hth[(i, j)] = a;
+                        hth[(j, i)] = a;
+                    }
+                }
             }
         }
+        crate::optim::prof("chain-predictor", t_tm);
         crate::optim::prof("modal-chain", t_in);
         self.gram_cache = Some((th.to_vec(), gram, cross, zz));
         Ok(Evaluation {
@@ -980,6 +984,78 @@ impl Predictor<'_> {
             gradient,
             gauss_newton: hth,
         })
+    }
+
+    /// `M^T X` for every column of `X` ([`Self::modal_mt`] on contiguous slices: the inner
+    /// loops run down columns of `T` and `T^-1`).
+    fn modal_mt_cols(&self, md: &Modal, x: &Mat<f64>) -> Mat<f64> {
+        let (n, m, l) = (self.n, self.m, self.l);
+        let (ia, ib, ic, _, ik) = self.column_offsets();
+        let mut out = x.clone();
+        // column b of T, column i of T^-1
+        let tcol: Vec<Vec<f64>> = (0..n)
+            .map(|b| (0..n).map(|j| md.t[(j, b)]).collect())
+            .collect();
+        let ticol: Vec<Vec<f64>> = (0..n)
+            .map(|i| (0..n).map(|a| md.ti[(a, i)]).collect())
+            .collect();
+        // blocks T^-1 X (rows of the state): (offset, width)
+        let mut left = vec![(ib, m)];
+        if let Some(k0) = ik {
+            left.push((k0, l));
+        }
+        for o in self.x0_off.iter().flatten() {
+            left.push((*o, 1));
+        }
+        let mut tmp = vec![0.0; n * n];
+        for c in 0..x.ncols() {
+            let xs = x.col_as_slice(c);
+            let os = out.col_as_slice_mut(c);
+            // A: out[i, j] = sum_a Ti[a, i] sum_b X[a, b] T[j, b]
+            tmp.fill(0.0);
+            for a in 0..n {
+                let row = &mut tmp[a * n..a * n + n];
+                for (b, tb) in tcol.iter().enumerate() {
+                    let s = xs[ia + a * n + b];
+                    for (r, tv) in row.iter_mut().zip(tb) {
+                        *r += s * tv;
+                    }
+                }
+            }
+            for (i, ti) in ticol.iter().enumerate() {
+                let dst = &mut os[ia + i * n..ia + i * n + n];
+                dst.fill(0.0);
+                for (a, &s) in ti.iter().enumerate() {
+                    for (d, v) in dst.iter_mut().zip(&tmp[a * n..a * n + n]) {
+                        *d += s * v;
+                    }
+                }
+            }
+            for &(off, wd) in &left {
+                for (i, ti) in ticol.iter().enumerate() {
+                    let dst = &mut os[off + i * wd..off + i * wd + wd];
+                    dst.fill(0.0);
+                    for (a, &s) in ti.iter().enumerate() {
+                        let src = &xs[off + a * wd..off + a * wd + wd];
+                        for (d, v) in dst.iter_mut().zip(src) {
+                            *d += s * v;
+                        }
+                    }
+                }
+            }
+            // C: out[r, j] = sum_b X[r, b] T[j, b]; D unchanged
+            for r in 0..l {
+                let dst = &mut os[ic + r * n..ic + r * n + n];
+                dst.fill(0.0);
+                for (b, tb) in tcol.iter().enumerate() {
+                    let s = xs[ic + r * n + b];
+                    for (d, tv) in dst.iter_mut().zip(tb) {
+                        *d += s * tv;
+                    }
+                }
+            }
+        }
+        out
     }
 
     /// `M^T x` for the modal change of basis `phi' = M phi` (`phi' = (T^-1 Abar T, T^-1 Bbar,
