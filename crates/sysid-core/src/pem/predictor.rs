@@ -1122,7 +1122,16 @@ impl Predictor<'_> {
     /// -X K, -X x0)` for `X = E_ab`; `None` when local coordinates are off or inexact (a fixed
     /// non-zero `K` or a given non-zero `x0`).
     pub(super) fn similarity_tangent(&self, th: &[f64]) -> Option<Mat<f64>> {
-        if !self.local || self.n == 0 {
+        if !self.local {
+            return None;
+        }
+        self.orbit_tangent(th)
+    }
+
+    /// The tangent of [`Self::similarity_tangent`] whether or not the search uses local
+    /// coordinates.
+    fn orbit_tangent(&self, th: &[f64]) -> Option<Mat<f64>> {
+        if self.n == 0 {
             return None;
         }
 
@@ -1785,6 +1794,10 @@ impl Problem for Predictor<'_> {
             .count();
         let u = svd.U();
         Ok(Some(u.subcols(rank, self.p - rank).to_owned()))
+    }
+
+    fn invariant_directions(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
+        Ok(self.orbit_tangent(th))
     }
 
     fn gradient_only(&mut self, th: &[f64]) -> Result<Option<Evaluation>> {
