@@ -291,7 +291,7 @@ impl<'a> Predictor<'a> {
             col_lo: 0,
             structured: true,
             modal: true,
-            halve: std::env::var_os("SYSID_AB_NOHALVE").is_none(), // TEMP A/B knob
+            halve: true,
             gram_cache: None,
         })
     }
