@@ -130,6 +130,15 @@ pub trait Problem {
     fn gradient_only(&mut self, _theta: &[f64]) -> Result<Option<Evaluation>> {
         Ok(None)
     }
+    /// Directions (p x r, any basis) along which the cost is invariant at `theta`, such as the
+    /// similarity orbit of a fully parameterised state-space model: null directions of the
+    /// Gauss-Newton matrix there. A chord step of a large problem (the matrix of an earlier
+    /// point with the gradient of the current one) removes them from the current gradient,
+    /// which is not orthogonal to them, before solving with the tiny damping floor.
+    /// `None` (the default): there are none, or the provider does not say.
+    fn invariant_directions(&mut self, _theta: &[f64]) -> Result<Option<Mat<f64>>> {
+        Ok(None)
+    }
 }
 
 /// Regularisation toward a nominal value: `lambda/2 (theta - nominal)^T R (theta - nominal)`.

@@ -213,6 +213,8 @@ struct Reduced {
     solver: Solver,
     /// The blocked parameters it was formed with.
     blocked: Vec<bool>,
+    /// The point it was formed at.
+    at: Vec<f64>,
 }
 
 /// Smallest damping (relative to the largest eigenvalue) of a Cholesky solve: the similarity
@@ -309,6 +311,7 @@ fn reduce(
         condition,
         solver: Solver::Eigen { t, v, lam },
         blocked: blocked.to_vec(),
+        at: pt.theta.clone(),
     };
     red.set_gradient(&pt.g);
     Ok(red)
@@ -354,6 +357,7 @@ fn reduce_cholesky(pt: &Point, blocked: &[bool]) -> Reduced {
         condition: f64::NAN,
         solver: Solver::Cholesky { hs, lmax },
         blocked: blocked.to_vec(),
+        at: pt.theta.clone(),
     };
     red.set_gradient(&pt.g);
     prof("reduce-cholesky", t0);
@@ -361,6 +365,33 @@ fn reduce_cholesky(pt: &Point, blocked: &[bool]) -> Reduced {
 }
 
 impl Reduced {
+    /// For a chord step of the Cholesky solver: removes from the scaled gradient its part
+    /// along the directions `dirs` (p x r) in which the cost was invariant where the matrix
+    /// was formed. They are null directions of that matrix, which the damping floor would
+    /// otherwise amplify: the new gradient is not orthogonal to them.
+    fn remove_directions(&mut self, dirs: &Mat<f64>) {
+        if !matches!(self.solver, Solver::Cholesky { .. }) || dirs.nrows() != self.gs.len() {
+            return;
+        }
+        let ds = Mat::from_fn(dirs.nrows(), dirs.ncols(), |i, j| {
+            if self.blocked[i] {
+                0.0
+            } else {
+                self.d[i] * dirs[(i, j)]
+            }
+        });
+        if ds.ncols() == 0 || !ds.norm_max().is_finite() {
+            return;
+        }
+        let q = ds.qr().compute_thin_Q();
+        let g = Mat::from_fn(self.gs.len(), 1, |i, _| self.gs[i]);
+        let c = q.transpose() * &g;
+        let r = &g - &q * &c;
+        for (i, v) in self.gs.iter_mut().enumerate() {
+            *v = r[(i, 0)];
+        }
+    }
+
     /// Sets the scaled reduced gradient from the full gradient `g` (also used to reuse the
     /// factorisation at a new point for a chord step).
     fn set_gradient(&mut self, g: &[f64]) {
@@ -548,6 +579,13 @@ pub fn minimize(
         let red = match last_red.take() {
             Some(mut r) if stale && r.blocked == blocked => {
                 r.set_gradient(&pt.g);
+                if matches!(r.solver, Solver::Cholesky { .. }) {
+                    let t0 = std::time::Instant::now();
+                    if let Some(dirs) = problem.invariant_directions(&r.at)? {
+                        r.remove_directions(&dirs);
+                    }
+                    prof("chord-projection", t0);
+                }
                 r
             }
             _ => reduce(problem, options, &pt, &blocked)?,

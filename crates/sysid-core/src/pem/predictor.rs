@@ -142,6 +142,10 @@ pub struct Predictor<'a> {
     /// Within the structured path, use the modal coordinates of `A - K C` when well
     /// conditioned ([`Predictor::evaluate_modal`]).
     pub(super) modal: bool,
+    /// Within the modal path, carry only the first row of each complex pair's sensitivities
+    /// (the second is its rotation, see [`Predictor::evaluate_modal`]); `false` carries both
+    /// (the reference, kept for tests).
+    pub(super) halve: bool,
     /// The weighting-independent sums of the last modal `J^T W J` (`theta`, Gram of the
     /// sensitivities, their cross sums with the regressor, `sum z z^T`): a re-weighted
     /// Gauss-Newton matrix at the same point (the covariance after an unweighted search)
@@ -287,6 +291,7 @@ impl<'a> Predictor<'a> {
             col_lo: 0,
             structured: true,
             modal: true,
+            halve: true,
             gram_cache: None,
         })
     }
@@ -564,13 +569,6 @@ impl Predictor<'_> {
     /// `O(N min(l, n) p_d^2)`. The chain rule through `T` and the predictor map gives the
     /// result in `theta`.
     fn evaluate_modal(&mut self, th: &[f64], grad_only: bool, md: &Modal) -> Result<Evaluation> {
-        let cached = if grad_only {
-            None
-        } else {
-            self.gram_cache.take().filter(|c| c.0.as_slice() == th)
-        };
-        // accumulate the sums (else they come from the cache, or are not needed)
-        let acc = !grad_only && cached.is_none();
         let t_in = std::time::Instant::now();
         let (n, m, l, np) = (self.n, self.m, self.l, self.p);
         let pm = self.unpack(th);
@@ -611,11 +609,63 @@ impl Predictor<'_> {
             }
         }
         let pd = dcols.len();
-        let mut eoff = vec![0usize; pd + 1];
-        for c in 0..pd {
-            eoff[c + 1] = eoff[c] + md.block[dcols[c].1].1;
+        // Carried sensitivities. A 2x2 block `[[a, b], [-b, a]]` commutes with the rotation
+        // `R = [[0, -1], [1, 0]]`, and `R e_0 = e_1`: the sensitivity of a parameter in the
+        // block's second row is `R` times that of the same parameter (same forcing, same
+        // initial condition) in its first row, to the last bit. With `halve` only first rows
+        // are carried (`twin`: the second-row column derived from it), so the recursion, the
+        // Gram matrix and the cross sums cover `p_e / 2` numbers per complex pair column
+        // instead of `p_e`: the Gram costs a quarter.
+        let stride = |kind: u8| match kind {
+            0 => n,
+            1 => m,
+            2 => l,
+            _ => 1,
+        };
+        let mut carried: Vec<(usize, Option<usize>)> = Vec::with_capacity(pd);
+        for (c, &(ph, i, kind, j)) in dcols.iter().enumerate() {
+            let (b0, bs) = md.block[i];
+            if self.halve && bs == 2 {
+                if i == b0 + 1 {
+                    continue;
+                }
+                let tw = c + stride(kind);
+                debug_assert!(
+                    dcols[tw].0 == ph + stride(kind)
+                        && dcols[tw].1 == i + 1
+                        && dcols[tw].2 == kind
+                        && dcols[tw].3 == j
+                );
+                carried.push((c, Some(tw)));
+            } else {
+                carried.push((c, None));
+            }
         }
-        let pe = eoff[pd];
+        // offsets of the carried numbers; `at[c][q]` = (carried index, sign) of entry `q` of
+        // the sensitivity block of column `c`
+        let mut eoff = vec![0usize; carried.len() + 1];
+        let mut at = vec![[(0usize, 0.0f64); 2]; pd];
+        for (k, &(c, twin)) in carried.iter().enumerate() {
+            let bs = md.block[dcols[c].1].1;
+            eoff[k + 1] = eoff[k] + bs;
+            for q in 0..bs {
+                at[c][q] = (eoff[k] + q, 1.0);
+            }
+            if let Some(tw) = twin {
+                // R s = (-s_1, s_0)
+                at[tw] = [(eoff[k] + 1, -1.0), (eoff[k], 1.0)];
+            }
+        }
+        let pe = eoff[carried.len()];
+        let cached = if grad_only {
+            None
+        } else {
+            self.gram_cache
+                .take()
+                .filter(|c| c.0.as_slice() == th && c.1.nrows() == pe)
+        };
+        // accumulate the sums (else they come from the cache, or are not needed)
+        let acc = !grad_only && cached.is_none();
         let nz = n + m;
         let rinv = self.rinv.clone();
         let w = rinv.transpose() * &rinv;
@@ -649,9 +699,9 @@ impl Predictor<'_> {
             sc.fill(0.0);
             if let Some(c0) = x0_at[ex] {
                 for i in 0..n {
-                    let c = c0 + i;
                     let (b0, _) = md.block[i];
-                    sc[eoff[c] + (i - b0)] = 1.0;
+                    let (h, sg) = at[c0 + i][i - b0];
+                    sc[h] = sg;
                 }
             }
             let len = y.nrows();
@@ -705,13 +755,17 @@ impl Predictor<'_> {
                     }
                     v[k] = a;
                 }
-                for (c, &(_, i, _, _)) in dcols.iter().enumerate() {
-                    let (b0, bs) = md.block[i];
+                for (k, &(c, twin)) in carried.iter().enumerate() {
+                    let (b0, bs) = md.block[dcols[c].1];
+                    let o = eoff[k];
                     let mut a = 0.0;
                     for q in 0..bs {
-                        a += sc[eoff[c] + q] * v[b0 + q];
+                        a += sc[o + q] * v[b0 + q];
                     }
                     gd[c] -= a;
+                    if let Some(tw) = twin {
+                        gd[tw] -= sc[o] * v[b0 + 1] - sc[o + 1] * v[b0];
+                    }
                 }
                 if acc {
                     for a in 0..nz {
@@ -726,9 +780,10 @@ impl Predictor<'_> {
                 }
                 row += 1;
                 // S'(t+1) = Lambda S' + F, blockwise
-                for (c, &(_, i, kind, j)) in dcols.iter().enumerate() {
+                for (k, &(c, _)) in carried.iter().enumerate() {
+                    let (_, i, kind, j) = dcols[c];
                     let (b0, bs) = md.block[i];
-                    let o = eoff[c];
+                    let o = eoff[k];
                     for q in 0..bs {
                         let mut a = 0.0;
                         for r in 0..bs {
@@ -829,24 +884,32 @@ impl Predictor<'_> {
             (gram, cross, zz) = (c.1, c.2, c.3);
         }
         let mut h = Mat::<f64>::zeros(np, np);
-        for c in 0..pd {
-            let (b0, bs) = md.block[dcols[c].1];
-            for c2 in 0..=c {
-                let (b2, bs2) = md.block[dcols[c2].1];
+        // dynamic block: lower triangle (dcols' phi indices increase with c), column by
+        // column so that the Gram matrix is read down its columns; mirrored after
+        for c2 in 0..pd {
+            let (b2, bs2) = md.block[dcols[c2].1];
+            let col2 = dcols[c2].0;
+            for c in c2..pd {
+                let (b0, bs) = md.block[dcols[c].1];
                 let mut acc = 0.0;
                 for qa in 0..bs {
+                    let (ra, sa) = at[c][qa];
                     for qb in 0..bs2 {
-                        let (ra, rb) = (eoff[c] + qa, eoff[c2] + qb);
+                        let (rb, sb) = at[c2][qb];
                         let gv = if ra >= rb {
                             gram[(ra, rb)]
                         } else {
                             gram[(rb, ra)]
                         };
-                        acc += mq[(b0 + qa, b2 + qb)] * gv;
+                        acc += mq[(b0 + qa, b2 + qb)] * (sa * sb * gv);
                     }
                 }
-                h[(dcols[c].0, dcols[c2].0)] = acc;
-                h[(dcols[c2].0, dcols[c].0)] = acc;
+                h[(dcols[c].0, col2)] = acc;
+            }
+        }
+        for c2 in 0..pd {
+            for c in c2 + 1..pd {
+                h[(dcols[c2].0, dcols[c].0)] = h[(dcols[c].0, dcols[c2].0)];
             }
         }
         for i in 0..l {
@@ -863,59 +926,57 @@ impl Predictor<'_> {
                     let (b0, bs) = md.block[d.1];
                     let mut acc = 0.0;
                     for qa in 0..bs {
-                        acc += wc[(i, b0 + qa)] * cross[(j, eoff[c] + qa)];
+                        let (r, sg) = at[c][qa];
+                        acc += wc[(i, b0 + qa)] * (sg * cross[(j, r)]);
                     }
                     h[(sij, d.0)] = acc;
                     h[(d.0, sij)] = acc;
                 }
             }
         }
-        // H_phi = M^T H' M: M^T on every column, then on every row
-        let mut col = vec![0.0; np];
-        let mut zt = Mat::<f64>::zeros(np, np);
-        for c in 0..np {
-            for i in 0..np {
-                col[i] = h[(i, c)];
-            }
-            let o = self.modal_mt(md, &col);
-            // stored transposed: zt[(c, i)] = (M^T H')[(i, c)]
-            for i in 0..np {
-                zt[(c, i)] = o[i];
-            }
-        }
-        let mut hphi = h;
-        for r in 0..np {
-            for j in 0..np {
-                col[j] = zt[(j, r)];
-            }
-            let o = self.modal_mt(md, &col);
-            // H_phi is symmetric: row r written as column r (contiguous)
-            for j in 0..np {
-                hphi[(j, r)] = o[j];
-            }
-        }
+        crate::optim::prof("chain-assemble", t_in);
+        let t_mt = std::time::Instant::now();
+        // H_phi = M^T H' M = M^T (M^T H')^T (H' symmetric), column by column
+        let z = self.modal_mt_cols(md, &h);
+        drop(h);
+        let hphi = self.modal_mt_cols(md, &z.transpose().to_owned());
+        drop(z);
+        crate::optim::prof("chain-modal", t_mt);
+        let t_tm = std::time::Instant::now();
         // H_theta = T^T H_phi T with the sparse T
         let mut y = Mat::<f64>::zeros(np, np);
         for (c, tc) in tmap.iter().enumerate() {
+            let yc = y.col_as_slice_mut(c);
             for &(r, v) in tc {
-                for i in 0..np {
-                    y[(i, c)] += v * hphi[(i, r)];
+                for (a, b) in yc.iter_mut().zip(hphi.col_as_slice(r)) {
+                    *a += v * b;
                 }
             }
         }
-        let mut hth = zt;
+        drop(hphi);
+        let mut hth = Mat::<f64>::zeros(np, np);
         for c2 in 0..np {
+            let yc = y.col_as_slice(c2);
+            let hc = hth.col_as_slice_mut(c2);
             for (c1, tc) in tmap.iter().enumerate() {
-                hth[(c1, c2)] = tc.iter().map(|&(r, v)| v * y[(r, c2)]).sum();
+                hc[c1] = tc.iter().map(|&(r, v)| v * yc[r]).sum();
             }
         }
-        for i in 0..np {
-            for j in 0..i {
-                let a = 0.5 * (hth[(i, j)] + hth[(j, i)]);
-                hth[(i, j)] = a;
-                hth[(j, i)] = a;
+        drop(y);
+        // symmetrise in 64 x 64 tiles
+        const TILE: usize = 64;
+        for jb in (0..np).step_by(TILE) {
+            for ib in (jb..np).step_by(TILE) {
+                for j in jb..(jb + TILE).min(np) {
+                    for i in ib.max(j + 1)..(ib + TILE).min(np) {
+                        let a = 0.5 * (hth[(i, j)] + hth[(j, i)]);
+                        hth[(i, j)] = a;
+                        hth[(j, i)] = a;
+                    }
+                }
             }
         }
+        crate::optim::prof("chain-predictor", t_tm);
         crate::optim::prof("modal-chain", t_in);
         self.gram_cache = Some((th.to_vec(), gram, cross, zz));
         Ok(Evaluation {
@@ -923,6 +984,78 @@ impl Predictor<'_> {
             gradient,
             gauss_newton: hth,
         })
+    }
+
+    /// `M^T X` for every column of `X` ([`Self::modal_mt`] on contiguous slices: the inner
+    /// loops run down columns of `T` and `T^-1`).
+    fn modal_mt_cols(&self, md: &Modal, x: &Mat<f64>) -> Mat<f64> {
+        let (n, m, l) = (self.n, self.m, self.l);
+        let (ia, ib, ic, _, ik) = self.column_offsets();
+        let mut out = x.clone();
+        // column b of T, column i of T^-1
+        let tcol: Vec<Vec<f64>> = (0..n)
+            .map(|b| (0..n).map(|j| md.t[(j, b)]).collect())
+            .collect();
+        let ticol: Vec<Vec<f64>> = (0..n)
+            .map(|i| (0..n).map(|a| md.ti[(a, i)]).collect())
+            .collect();
+        // blocks T^-1 X (rows of the state): (offset, width)
+        let mut left = vec![(ib, m)];
+        if let Some(k0) = ik {
+            left.push((k0, l));
+        }
+        for o in self.x0_off.iter().flatten() {
+            left.push((*o, 1));
+        }
+        let mut tmp = vec![0.0; n * n];
+        for c in 0..x.ncols() {
+            let xs = x.col_as_slice(c);
+            let os = out.col_as_slice_mut(c);
+            // A: out[i, j] = sum_a Ti[a, i] sum_b X[a, b] T[j, b]
+            tmp.fill(0.0);
+            for a in 0..n {
+                let row = &mut tmp[a * n..a * n + n];
+                for (b, tb) in tcol.iter().enumerate() {
+                    let s = xs[ia + a * n + b];
+                    for (r, tv) in row.iter_mut().zip(tb) {
+                        *r += s * tv;
+                    }
+                }
+            }
+            for (i, ti) in ticol.iter().enumerate() {
+                let dst = &mut os[ia + i * n..ia + i * n + n];
+                dst.fill(0.0);
+                for (a, &s) in ti.iter().enumerate() {
+                    for (d, v) in dst.iter_mut().zip(&tmp[a * n..a * n + n]) {
+                        *d += s * v;
+                    }
+                }
+            }
+            for &(off, wd) in &left {
+                for (i, ti) in ticol.iter().enumerate() {
+                    let dst = &mut os[off + i * wd..off + i * wd + wd];
+                    dst.fill(0.0);
+                    for (a, &s) in ti.iter().enumerate() {
+                        let src = &xs[off + a * wd..off + a * wd + wd];
+                        for (d, v) in dst.iter_mut().zip(src) {
+                            *d += s * v;
+                        }
+                    }
+                }
+            }
+            // C: out[r, j] = sum_b X[r, b] T[j, b]; D unchanged
+            for r in 0..l {
+                let dst = &mut os[ic + r * n..ic + r * n + n];
+                dst.fill(0.0);
+                for (b, tb) in tcol.iter().enumerate() {
+                    let s = xs[ic + r * n + b];
+                    for (d, tv) in dst.iter_mut().zip(tb) {
+                        *d += s * tv;
+                    }
+                }
+            }
+        }
+        out
     }
 
     /// `M^T x` for the modal change of basis `phi' = M phi` (`phi' = (T^-1 Abar T, T^-1 Bbar,
@@ -989,7 +1122,16 @@ impl Predictor<'_> {
     /// -X K, -X x0)` for `X = E_ab`; `None` when local coordinates are off or inexact (a fixed
     /// non-zero `K` or a given non-zero `x0`).
     pub(super) fn similarity_tangent(&self, th: &[f64]) -> Option<Mat<f64>> {
-        if !self.local || self.n == 0 {
+        if !self.local {
+            return None;
+        }
+        self.orbit_tangent(th)
+    }
+
+    /// The tangent of [`Self::similarity_tangent`] whether or not the search uses local
+    /// coordinates.
+    fn orbit_tangent(&self, th: &[f64]) -> Option<Mat<f64>> {
+        if self.n == 0 {
             return None;
         }
 
@@ -1652,6 +1794,10 @@ impl Problem for Predictor<'_> {
             .count();
         let u = svd.U();
         Ok(Some(u.subcols(rank, self.p - rank).to_owned()))
+    }
+
+    fn invariant_directions(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
+        Ok(self.orbit_tangent(th))
     }
 
     fn gradient_only(&mut self, th: &[f64]) -> Result<Option<Evaluation>> {

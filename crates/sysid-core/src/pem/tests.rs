@@ -462,3 +462,102 @@ fn structured_evaluation_is_identical_for_any_thread_count() {
     assert_eq!(serial.gradient, parallel.gradient);
     assert!(serial.gauss_newton == parallel.gauss_newton);
 }
+
+/// The modal Gram matrix formed from the first rows of the complex pairs only (the second
+/// row's sensitivity is a rotation of the first's) equals the one carrying both rows, and the
+/// plain one, to round-off: complex pairs and real poles, with every layout option that adds
+/// state-moving columns (K, several initial states). With repeated poles (a complex pair
+/// twice, a real pole twice) the modal form may be refused (ill-conditioned eigenvectors):
+/// then the evaluation falls back to the structured path, and either way equals the plain one.
+#[test]
+fn halved_modal_gram_equals_the_full_one() {
+    let n = 8;
+    for repeated in [false, true] {
+        // in random coordinates: 0.6 +- 0.3i, 0.3 +- 0.5i (or 0.6 +- 0.3i again),
+        // -0.4 and 0.5 (or 0.5 twice), -0.7 +- 0.2i
+        let mut blk = Mat::<f64>::zeros(n, n);
+        let second = if repeated { (0.6, 0.3) } else { (0.3, 0.5) };
+        for (o, re, im) in [(0, 0.6, 0.3), (2, second.0, second.1), (6, -0.7, 0.2)] {
+            blk[(o, o)] = re;
+            blk[(o + 1, o + 1)] = re;
+            blk[(o, o + 1)] = im;
+            blk[(o + 1, o)] = -im;
+        }
+        blk[(4, 4)] = if repeated { 0.5 } else { -0.4 };
+        blk[(5, 5)] = 0.5;
+        let mut tr = noise(n, n, 41) * faer::Scale(0.5);
+        for i in 0..n {
+            tr[(i, i)] += 1.0;
+        }
+        let tri = faer::linalg::solvers::DenseSolveCore::inverse(&tr.partial_piv_lu());
+        let a = &tr * &blk * &tri;
+        let b = noise(n, 2, 42);
+        let c = noise(3, n, 43);
+        let d = noise(3, 2, 44) * faer::Scale(0.2);
+        let sys = StateSpace::new(a, b, c, d).unwrap();
+        let near = |re: f64, im: f64| {
+            let p = sys.poles().unwrap();
+            p.iter()
+                .filter(|z| (z.0 - re).hypot(z.1 - im) < 1e-6)
+                .count()
+        };
+        let twice = if repeated { 2 } else { 1 };
+        assert_eq!((near(0.5, 0.0), near(0.6, 0.3)), (twice, twice));
+        let modal = super::predictor::modal_form(sys.a.as_ref()).is_some();
+        assert!(modal || repeated);
+        let kz = Mat::<f64>::zeros(n, 3);
+        let u1 = noise(120, 2, 45);
+        let u2 = noise(70, 2, 46);
+        let e1 = noise(120, 3, 47) * faer::Scale(0.3);
+        let e2 = noise(70, 3, 48) * faer::Scale(0.3);
+        let y1 = data(&sys, &kz, &u1, &e1, &[0.2; 8]);
+        let y2 = data(&sys, &kz, &u2, &e2, &[0.0; 8]);
+        let views = [(u1.as_ref(), y1.as_ref()), (u2.as_ref(), y2.as_ref())];
+        for (focus, est_k, x0) in [
+            (Focus::Prediction, true, vec![InitialState::Estimate]),
+            (
+                Focus::Simulation,
+                false,
+                vec![InitialState::Estimate, InitialState::Zero],
+            ),
+        ] {
+            let mut o = PemOptions::default();
+            o.focus = focus;
+            o.estimate_d = true;
+            o.estimate_k = est_k;
+            o.x0 = x0;
+            o.block = 9;
+            let mut pr = Predictor::new(&sys, Some(kz.as_ref()), &views, &o).unwrap();
+            let th = pr.pack(&sys, kz.as_ref(), &[vec![0.1; n], vec![-0.1; n]]);
+            pr.reweight_at(&th).unwrap();
+            pr.halve = true;
+            let half = pr.evaluate(&th, true).unwrap();
+            pr.halve = false;
+            let full = pr.evaluate(&th, true).unwrap();
+            pr.halve = true;
+            pr.structured = false;
+            let plain = pr.evaluate(&th, true).unwrap();
+            pr.structured = true;
+            let scale = full.gauss_newton.norm_max();
+            let dh = (&half.gauss_newton - &full.gauss_newton).norm_max();
+            assert!(dh < 1e-13 * scale, "{focus:?}: {dh} vs {scale}");
+            let dp = (&half.gauss_newton - &plain.gauss_newton).norm_max();
+            assert!(dp < 1e-11 * scale, "{focus:?}: {dp} vs {scale}");
+            let gs = full.gradient.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            for ((a, b), c) in half
+                .gradient
+                .iter()
+                .zip(&full.gradient)
+                .zip(&plain.gradient)
+            {
+                assert!((a - b).abs() < 1e-13 * gs, "{a} vs {b}");
+                assert!((a - c).abs() < 1e-11 * gs, "{a} vs {c}");
+            }
+            let chord = pr.gradient_only(&th).unwrap().unwrap();
+            for (a, b) in chord.gradient.iter().zip(&full.gradient) {
+                assert!((a - b).abs() < 1e-13 * gs, "{a} vs {b}");
+            }
+            assert!((half.cost - plain.cost).abs() < 1e-12 * plain.cost);
+        }
+    }
+}
