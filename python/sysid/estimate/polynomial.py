@@ -401,8 +401,9 @@ def _references(reference: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> li
     for r, (u, _) in zip(refs, exps):
         a = np.asarray(r, dtype=float)
         a = a.reshape(-1, 1) if a.ndim == 1 else a
-        if a.shape != u.shape:
-            raise DataError(f"reference must have the input's shape {u.shape}, got {a.shape}")
+        if a.ndim != 2 or a.shape[0] != u.shape[0] or a.shape[1] == 0:
+            raise DataError(f"reference must have the input's {u.shape[0]} rows (one column "
+                            f"per reference channel), got shape {a.shape}")
         out.append(np.ascontiguousarray(a))
     return out
 
@@ -413,9 +414,10 @@ def iv4(data: Any, na: Any, nb: Any, nk: Any = 1, *, reference: Any = None) -> P
     Consistent for coloured noise ``v`` where least squares (:func:`arx`) is biased. MIMO
     with the orders of :func:`arx` (``na`` outputs x outputs, ``nb``/``nk`` outputs x
     inputs); several experiments are used together (each filtered from rest). For
-    closed-loop data pass the reference signal (same shape as the input; a list with one
-    array per experiment) as ``reference``: the instruments are then built from it instead
-    of the (noise-correlated) input.
+    closed-loop data pass the reference signal (``(N, n_ref)``, a list with one array per
+    experiment) as ``reference``: the instruments are then the parts of ``y`` and ``u``
+    explained by the reference (a least-squares FIR projection on its lags), which the
+    feedback cannot correlate with the noise, instead of the (noise-correlated) input.
 
     Examples
     --------

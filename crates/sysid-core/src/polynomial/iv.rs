@@ -9,7 +9,10 @@
 //! that no instrument is correlated with the noise). The four stages: (1) least squares;
 //! (2) IV with `x` simulated from the stage-1 model; (3) an AR model `L_i` (order = number of
 //! parameters of the equation) of the stage-2 equation error; (4) IV on the data prefiltered
-//! by `L_i`, with `x` simulated from the stage-2 model. Sums run over the rows of every
+//! by `L_i`, with `x` simulated from the stage-2 model. With a reference (closed loop) the
+//! instruments of every stage are instead the parts of `y` and `u` explained by the
+//! reference (a least-squares FIR projection on its lags), which the feedback cannot
+//! correlate with the noise; stage 1 is then IV with those instruments. Sums run over the rows of every
 //! experiment separately (each filtered and simulated from rest): no sample of one experiment
 //! enters a regressor or instrument of another.
 
@@ -21,14 +24,14 @@ use super::filter::{filter, monic};
 use crate::error::{check_finite, Result, SysidError};
 
 /// One experiment for [`iv4_multi`]: inputs `u` (N x nu), outputs `y` (N x ny) and optional
-/// instrument inputs `r` (N x nu, the reference on closed-loop data).
+/// reference `r` (N x nr, closed-loop data; given in every experiment or in none).
 #[derive(Debug, Clone, Copy)]
 pub struct IvRecord<'a> {
     /// Inputs (N x nu).
     pub u: MatRef<'a, f64>,
     /// Outputs (N x ny).
     pub y: MatRef<'a, f64>,
-    /// Instrument inputs (N x nu) or `None` for the input itself.
+    /// Reference (N x nr) or `None` for open-loop data.
     pub r: Option<MatRef<'a, f64>>,
 }
 
@@ -240,13 +243,16 @@ fn ar_prefilter(w: &[Vec<f64>], n: usize) -> Vec<f64> {
     }
 }
 
-/// Noise-free simulations of the model from every experiment's instrument inputs; refuses
-/// an unstable model (whose simulation grows without bound).
-fn instruments(o: &ArxOrders, theta: &[Vec<f64>], recs: &[Rec]) -> Result<Vec<Vec<Vec<f64>>>> {
+/// Instrument signals of one experiment: `(x, r)` standing in for `(y, u)`.
+type Inst = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
+/// Noise-free simulations `(x, u)` of the model from every experiment's inputs, or `None`
+/// when the model is unstable (its simulation grows without bound).
+fn simulated(o: &ArxOrders, theta: &[Vec<f64>], recs: &[Rec]) -> Option<Vec<Inst>> {
     let mut out = Vec::with_capacity(recs.len());
     for rec in recs {
         let n = rec.y.first().map_or(0, |c| c.len());
-        let x = simulate(o, theta, &rec.r, n);
+        let x = simulate(o, theta, &rec.u, n);
         let scale = rec
             .y
             .iter()
@@ -254,45 +260,96 @@ fn instruments(o: &ArxOrders, theta: &[Vec<f64>], recs: &[Rec]) -> Result<Vec<Ve
             .fold(0.0f64, |m, v| m.max(v.abs()))
             .max(f64::MIN_POSITIVE);
         let big = x.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-        if !(big <= 1e8 * scale) {
-            return Err(SysidError::numerical(
-                "iv4",
-                "the intermediate model is unstable, so its simulated instruments diverge; \
-                 lower the orders, check the delays, or pass a reference for closed-loop data",
-            ));
+        if !(big <= 1e6 * scale) {
+            return None;
         }
-        out.push(x);
+        out.push((x, rec.u.clone()));
     }
-    Ok(out)
+    Some(out)
+}
+
+/// Lags of the instrument inputs in [`projected`].
+const PROJECTION_LAGS: usize = 30;
+
+/// The parts of `y` and `u` explained by the instrument inputs `r`: the least-squares FIR
+/// projection (lags `0..=PROJECTION_LAGS` of every `r_j`, pooled over the experiments) of
+/// each output and input channel. Functions of `r` only, so uncorrelated with the noise even
+/// under feedback, and as correlated with the regressors as a linear filter of `r` allows.
+fn projected(recs: &[Rec]) -> Result<Vec<Inst>> {
+    let nr = recs[0].r.len();
+    let total: usize = recs.iter().map(|r| r.y[0].len()).sum();
+    let lags = PROJECTION_LAGS.min(total / (4 * nr.max(1))).max(1);
+    let p = nr * (lags + 1);
+    let targets = recs[0].y.len() + recs[0].u.len();
+    let mut g = Mat::<f64>::zeros(p, p);
+    let mut h = Mat::<f64>::zeros(p, targets);
+    let mut phi = vec![0.0; p];
+    let lagged = |rec: &Rec, t: usize, phi: &mut [f64]| {
+        for (j, rj) in rec.r.iter().enumerate() {
+            for l in 0..=lags {
+                phi[j * (lags + 1) + l] = if t >= l { rj[t - l] } else { 0.0 };
+            }
+        }
+    };
+    for rec in recs {
+        for t in 0..rec.y[0].len() {
+            lagged(rec, t, &mut phi);
+            for a in 0..p {
+                for b in 0..=a {
+                    g[(a, b)] += phi[a] * phi[b];
+                }
+                for (c, ch) in rec.y.iter().chain(&rec.u).enumerate() {
+                    h[(a, c)] += phi[a] * ch[t];
+                }
+            }
+        }
+    }
+    for a in 0..p {
+        for b in a + 1..p {
+            g[(a, b)] = g[(b, a)];
+        }
+    }
+    check_rank(&g)?;
+    let coef = g.partial_piv_lu().solve(&h);
+    let ny = recs[0].y.len();
+    Ok(recs
+        .iter()
+        .map(|rec| {
+            let n = rec.y[0].len();
+            let mut chans = vec![vec![0.0; n]; targets];
+            for t in 0..n {
+                lagged(rec, t, &mut phi);
+                for (c, ch) in chans.iter_mut().enumerate() {
+                    ch[t] = (0..p).map(|a| phi[a] * coef[(a, c)]).sum();
+                }
+            }
+            let u = chans.split_off(ny);
+            (chans, u)
+        })
+        .collect())
 }
 
 fn prefiltered(l: &[f64], chans: &[Vec<f64>]) -> Vec<Vec<f64>> {
     chans.iter().map(|c| filter(l, &[1.0], c)).collect()
 }
 
-/// One IV stage of every equation with instruments simulated from `model` (prefiltered by
-/// each equation's AR model when `prefilter`); returns the parameters and, for the last
-/// stage, the covariance and noise variance.
+/// One IV stage of every equation with the instruments `inst` (`None`: the regressors, that
+/// is least squares), all signals prefiltered by each equation's AR model when `prefilter`.
 fn stage(
     o: &ArxOrders,
     recs: &[Rec],
-    model: Option<&[Vec<f64>]>,
+    inst: Option<&[Inst]>,
     prefilter: Option<&[Vec<f64>]>,
-) -> Result<Vec<Sums>> {
-    let ny = o.na.len();
-    let xs = match model {
-        Some(m) => Some(instruments(o, m, recs)?),
-        None => None,
-    };
-    (0..ny)
+) -> Vec<Sums> {
+    (0..o.na.len())
         .map(|i| {
             let l = prefilter.map_or(vec![1.0], |p| p[i].clone());
             let sigs: Vec<[Vec<Vec<f64>>; 4]> = recs
                 .iter()
                 .enumerate()
                 .map(|(e, rec)| {
-                    let (x, r) = match &xs {
-                        Some(xs) => (&xs[e], &rec.r),
+                    let (x, r) = match inst {
+                        Some(z) => (&z[e].0, &z[e].1),
                         None => (&rec.y, &rec.u),
                     };
                     [
@@ -307,7 +364,7 @@ fn stage(
                 .iter()
                 .map(|s| [&s[0][..], &s[1][..], &s[2][..], &s[3][..]])
                 .collect();
-            Ok(iv_sums(o, i, &refs))
+            iv_sums(o, i, &refs)
         })
         .collect()
 }
@@ -381,11 +438,15 @@ pub fn iv4_multi(records: &[IvRecord<'_>], orders: &ArxOrders) -> Result<Iv4Fit>
         let bad = rec.u.nrows() != n
             || rec.u.ncols() != nu
             || rec.y.ncols() != ny
-            || rec.r.is_some_and(|r| r.nrows() != n || r.ncols() != nu);
+            || rec.r.map(|r| r.ncols()) != first.r.map(|r| r.ncols())
+            || rec.r.is_some_and(|r| r.nrows() != n || r.ncols() == 0);
         if bad {
             return Err(SysidError::ShapeMismatch {
                 what: "u, y, reference".into(),
-                expected: format!("(N, {nu}), (N, {ny}) and (N, {nu}) in every experiment"),
+                expected: format!(
+                    "(N, {nu}), (N, {ny}) and a reference with N rows in every experiment \
+                     or in none (the same number of columns in each)"
+                ),
                 got: format!(
                     "({}, {}), ({}, {}){}",
                     rec.u.nrows(),
@@ -427,17 +488,38 @@ pub fn iv4_multi(records: &[IvRecord<'_>], orders: &ArxOrders) -> Result<Iv4Fit>
     let solve_all = |sums: &[Sums]| -> Result<Vec<Vec<f64>>> {
         sums.iter().map(|(r, v, _, _)| solve(r, v)).collect()
     };
-    // Stage 1: least squares (instruments = regressors).
-    let th1 = solve_all(&stage(orders, &recs, None, None)?)?;
-    // Stage 2: instruments simulated from the stage-1 model driven by r.
-    let th2 = solve_all(&stage(orders, &recs, Some(&th1), None)?)?;
+    let closed_loop = records.iter().any(|r| r.r.is_some());
+    // Closed loop: instruments are the parts of y and u explained by the reference (fixed
+    // through the stages). Open loop: stage 1 is least squares and the instruments are
+    // simulated from the previous stage's model (the projection if that model is unstable).
+    let fixed = if closed_loop {
+        Some(projected(&recs)?)
+    } else {
+        None
+    };
+    let instruments = |theta: &[Vec<f64>]| -> Result<Vec<Inst>> {
+        match &fixed {
+            Some(z) => Ok(z.clone()),
+            None => match simulated(orders, theta, &recs) {
+                Some(z) => Ok(z),
+                None => projected(&recs),
+            },
+        }
+    };
+    // Stage 1: least squares (open loop) or IV with the reference instruments.
+    let th1 = solve_all(&stage(orders, &recs, fixed.as_deref(), None))?;
+    // Stage 2: instruments from the stage-1 model.
+    let z1 = instruments(&th1)?;
+    let th2 = solve_all(&stage(orders, &recs, Some(&z1), None))?;
     // Stage 3: AR prefilters of the stage-2 equation errors.
     let l = prefilters(orders, &th2, &recs);
     // Stage 4: prefiltered IV with instruments from the stage-2 model.
-    let th4 = solve_all(&stage(orders, &recs, Some(&th2), Some(&l))?)?;
+    let z2 = instruments(&th2)?;
+    let th4 = solve_all(&stage(orders, &recs, Some(&z2), Some(&l)))?;
     // Covariance at the estimate: prefilter and instruments rebuilt from it.
     let l4 = prefilters(orders, &th4, &recs);
-    let sums = stage(orders, &recs, Some(&th4), Some(&l4))?;
+    let z4 = instruments(&th4)?;
+    let sums = stage(orders, &recs, Some(&z4), Some(&l4));
     let mut covariance = Vec::with_capacity(ny);
     let mut noise_variance = Vec::with_capacity(ny);
     for (i, (r, _, s, rows)) in sums.iter().enumerate() {
