@@ -453,8 +453,11 @@ pub fn iv4_multi(records: &[IvRecord<'_>], orders: &ArxOrders) -> Result<Iv4Fit>
                     rec.u.ncols(),
                     n,
                     rec.y.ncols(),
-                    rec.r
-                        .map_or(String::new(), |r| format!(", ({}, {})", r.nrows(), r.ncols()))
+                    rec.r.map_or(String::new(), |r| format!(
+                        ", ({}, {})",
+                        r.nrows(),
+                        r.ncols()
+                    ))
                 ),
             });
         }
@@ -583,6 +586,13 @@ pub fn iv4(
         nb: vec![vec![nb]],
         nk: vec![vec![nk]],
     };
-    let fit = iv4_multi(&[IvRecord { u: um, y: ym, r: rm }], &o)?;
+    let fit = iv4_multi(
+        &[IvRecord {
+            u: um,
+            y: ym,
+            r: rm,
+        }],
+        &o,
+    )?;
     Ok(fit.theta.into_iter().next().unwrap_or_default())
 }

@@ -105,7 +105,10 @@ fn shifted(s: &[f64], t: usize, k: usize) -> f64 {
 }
 
 /// Checks one output's experiments against `orders`; returns the total sample count.
-fn check_experiments(experiments: &[(&[f64], MatRef<'_, f64>)], orders: &MisoOrders) -> Result<usize> {
+fn check_experiments(
+    experiments: &[(&[f64], MatRef<'_, f64>)],
+    orders: &MisoOrders,
+) -> Result<usize> {
     let Some(first) = experiments.first() else {
         return Err(SysidError::invalid(
             "experiments",
@@ -236,9 +239,7 @@ impl MisoProblem {
         let nx = seg.x.len();
         let ya = filter(&p.d, &p.c, &seg.y);
         let cf: Vec<Vec<f64>> = p.f.iter().map(|f| conv(&p.c, f)).collect();
-        let xf: Vec<Vec<f64>> = (0..nx)
-            .map(|j| filter(&p.d, &cf[j], &seg.x[j]))
-            .collect();
+        let xf: Vec<Vec<f64>> = (0..nx).map(|j| filter(&p.d, &cf[j], &seg.x[j])).collect();
         let wf: Vec<Vec<f64>> = (0..nx)
             .map(|j| {
                 if o.nf[j] > 0 {
@@ -466,7 +467,12 @@ pub fn initial_guess_multi(
     let m = experiments[0].1.ncols();
     let y: Sig = experiments.iter().map(|e| e.0.to_vec()).collect();
     let x: Vec<Sig> = (0..m)
-        .map(|j| experiments.iter().map(|(_, u)| delayed(*u, j, o.nk[j])).collect())
+        .map(|j| {
+            experiments
+                .iter()
+                .map(|(_, u)| delayed(*u, j, o.nk[j]))
+                .collect()
+        })
         .collect();
     let n = experiments.iter().map(|e| e.0.len()).max().unwrap_or(0);
     let has_f = o.nf.iter().any(|&f| f > 0);
@@ -536,8 +542,7 @@ pub fn initial_guess_multi(
             b[0] = bb;
             f[0] = ff;
         } else {
-            let regs: Vec<(&Sig, usize, usize)> =
-                (0..m).map(|j| (&x[j], 0, o.nb[j])).collect();
+            let regs: Vec<(&Sig, usize, usize)> = (0..m).map(|j| (&x[j], 0, o.nb[j])).collect();
             let th = lagged_ls(&ya, &regs)?;
             let mut i = 0;
             for j in 0..m {

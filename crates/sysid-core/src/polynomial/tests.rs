@@ -325,19 +325,19 @@ fn multi_experiment_cost_is_the_sum_and_recovers_noise_free() {
         }
     }
     // Noise-free recovery from the two records (OE, then ARMAX and BJ structures).
-    let est = super::pem::estimate_multi(&exps, o, None, &Options::default(), &mut |_| {
-        Flow::Continue
-    })
-    .unwrap();
+    let est =
+        super::pem::estimate_multi(&exps, o, None, &Options::default(), &mut |_| Flow::Continue)
+            .unwrap();
     close(&est.solution.theta, &[0.5, 0.3, -1.2, 0.5], 1e-8);
     let ya = |u: &[f64]| filter(&[0.8, 0.2], &[1.0, -0.7], &delay(u, 2));
     let (ya1, ya2) = (ya(&u1), ya(&u2));
     let exps = [(&ya1[..], m1.as_ref()), (&ya2[..], m2.as_ref())];
     for o in [siso(2, 1, 0, 0, 1, 2), siso(2, 1, 1, 1, 0, 2)] {
-        let est = super::pem::estimate_multi(&exps, o.clone(), None, &Options::default(), &mut |_| {
-            Flow::Continue
-        })
-        .unwrap();
+        let est =
+            super::pem::estimate_multi(&exps, o.clone(), None, &Options::default(), &mut |_| {
+                Flow::Continue
+            })
+            .unwrap();
         let want: Vec<f64> = if o.na == 1 {
             vec![-0.7, 0.8, 0.2, 0.0]
         } else {
@@ -345,7 +345,11 @@ fn multi_experiment_cost_is_the_sum_and_recovers_noise_free() {
         };
         let th = &est.solution.theta;
         // the noise-model parameters are not identifiable from noise-free data: compare A/B/F
-        let keep: Vec<usize> = if o.na == 1 { vec![0, 1, 2] } else { vec![0, 1, 4] };
+        let keep: Vec<usize> = if o.na == 1 {
+            vec![0, 1, 2]
+        } else {
+            vec![0, 1, 4]
+        };
         for k in keep {
             assert!((th[k] - want[k]).abs() < 1e-8, "{o:?}: {th:?}");
         }
@@ -362,12 +366,17 @@ fn iv4_mimo_two_experiments_noise_free() {
     };
     let sim = |n: usize, s: u64| {
         // from rest: the loop below starts at t = 2, so the first inputs are zero
-        let u = Mat::from_fn(n, 2, |t, j| if t < 2 { 0.0 } else { noise(n, s + j as u64)[t] });
+        let u = Mat::from_fn(n, 2, |t, j| {
+            if t < 2 {
+                0.0
+            } else {
+                noise(n, s + j as u64)[t]
+            }
+        });
         let mut y = Mat::<f64>::zeros(n, 2);
         for t in 2..n {
-            y[(t, 0)] = 0.6 * y[(t - 1, 0)] - 0.2 * y[(t - 1, 1)]
-                + u[(t - 1, 0)]
-                + 0.3 * u[(t - 2, 1)];
+            y[(t, 0)] =
+                0.6 * y[(t - 1, 0)] - 0.2 * y[(t - 1, 1)] + u[(t - 1, 0)] + 0.3 * u[(t - 2, 1)];
             y[(t, 1)] = 0.1 * y[(t - 1, 0)] + 0.5 * y[(t - 1, 1)] + 0.7 * u[(t - 1, 1)]
                 - 0.4 * u[(t - 1, 0)];
         }
