@@ -134,7 +134,8 @@ def main() -> None:
             )
             print(
                 f"| {n} | {ours_case} | {g(a, 'seconds', '.3f')} | {g(a, 'cpu', '.3f')} | "
-                f"{peer_case} | {g(b, 'seconds', '.3f')} | {g(b, 'cpu', '.3f')} | {ratio} | {g(a, 'peak_mb', '.0f')} | "
+                f"{peer_case} | {g(b, 'seconds', '.3f')} | {g(b, 'cpu', '.3f')} | {ratio} | "
+                f"{g(a, 'peak_mb', '.0f')} | "
                 f"{g(b, 'peak_mb', '.0f')} | {g(a, 'fit', '.2f')} | {g(b, 'fit', '.2f')} |",
                 flush=True,
             )

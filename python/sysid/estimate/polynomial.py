@@ -202,8 +202,8 @@ def _pem(
     cb, close_bar = iteration_callback(progress, method, int(max_iter) * ny)
     try:
         rs = [_sysid.polynomial_pem(
-            [(np.ascontiguousarray(y[:, i]), u) for u, y in exps], na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i],
-            nk_g[i],
+            [(np.ascontiguousarray(y[:, i]), u) for u, y in exps], na_v[i], nb_g[i], nc_v[i],
+            nd_v[i], nf_g[i], nk_g[i],
             None if init is None else _start(init, i, na_v[i], nb_g[i], nc_v[i], nd_v[i],
                                              nf_g[i]),
             as_int(max_iter, "max_iter", 0), 1e-9, cb) for i in range(ny)]
