@@ -258,3 +258,37 @@ def test_mimo_2x2_std_calibrated_monte_carlo():
                                                                                   2, 3, 6, 7]])
     _calibrated(arx_est, arx_sd)
     _calibrated(oe_est, oe_sd)
+
+
+def test_mimo_2x2_armax_bj_std_calibrated_monte_carlo():
+    # 2 x 2 ARMAX (diagonal A, C per output) and 2 x 2 BJ (MISO per output), 200 runs each.
+    ax_est, ax_sd, bj_est, bj_sd = [], [], [], []
+    for run in range(200):
+        rng = np.random.default_rng(13000 + run)
+        u = rng.standard_normal((400, 2))
+        e = 0.3 * rng.standard_normal((400, 2))
+        y = np.column_stack([
+            signal.lfilter([0, 1.0], [1, -0.5], u[:, 0]) + signal.lfilter([0, 0.4], [1, -0.5],
+                                                                         u[:, 1])
+            + signal.lfilter([1, 0.4], [1, -0.5], e[:, 0]),
+            signal.lfilter([0, -0.6], [1, 0.3], u[:, 0]) + signal.lfilter([0, 0.9], [1, 0.3],
+                                                                         u[:, 1])
+            + signal.lfilter([1, -0.3], [1, 0.3], e[:, 1]),
+        ])
+        m = sysid.armax(sysid.IOData(u, y, 1.0), 1, 1, 1, 1)
+        ax_est.append(m.uncertainty.theta.copy())
+        ax_sd.append(np.sqrt(np.diag(m.uncertainty.covariance)))
+        yb = np.column_stack([
+            signal.lfilter([0, 1.0], [1, -0.5], u[:, 0]) + signal.lfilter([0, 0.4], [1, -0.3],
+                                                                         u[:, 1])
+            + signal.lfilter([1], [1, -0.6], e[:, 0]),
+            signal.lfilter([0, -0.6], [1, 0.2], u[:, 0]) + signal.lfilter([0, 0.9], [1, -0.7],
+                                                                         u[:, 1])
+            + signal.lfilter([1, 0.5], [1], e[:, 1]),
+        ])
+        m = sysid.bj(sysid.IOData(u, yb, 1.0), [[1, 1], [1, 1]], [0, 1], [1, 0],
+                     [[1, 1], [1, 1]], 1)
+        bj_est.append(m.uncertainty.theta.copy())
+        bj_sd.append(np.sqrt(np.diag(m.uncertainty.covariance)))
+    _calibrated(ax_est, ax_sd)
+    _calibrated(bj_est, bj_sd)
