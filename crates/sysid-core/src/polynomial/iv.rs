@@ -135,7 +135,8 @@ fn check_rank(r: &Mat<f64>) -> Result<()> {
     let s = r
         .singular_values()
         .map_err(|e| SysidError::numerical("iv4", format!("{e:?}")))?;
-    if s.is_empty() || !(s[s.len() - 1] > 1e-12 * s[0]) {
+    let full = s.last().is_some_and(|&l| l > 1e-12 * s[0]);
+    if !full {
         let rank = s.iter().filter(|&&v| v > 1e-12 * s[0]).count();
         return Err(SysidError::NotPersistentlyExciting {
             rank,
@@ -260,7 +261,8 @@ fn simulated(o: &ArxOrders, theta: &[Vec<f64>], recs: &[Rec]) -> Option<Vec<Inst
             .fold(0.0f64, |m, v| m.max(v.abs()))
             .max(f64::MIN_POSITIVE);
         let big = x.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-        if !(big <= 1e6 * scale) {
+        let bounded = big.is_finite() && big <= 1e6 * scale;
+        if !bounded {
             return None;
         }
         out.push((x, rec.u.clone()));

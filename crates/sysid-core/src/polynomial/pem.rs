@@ -73,6 +73,9 @@ impl MisoOrders {
 /// A signal of several experiments: one vector per experiment.
 type Sig = Vec<Vec<f64>>;
 
+/// Residual `e`, equation error `v` and filtered inputs `w_j` of one experiment.
+type Signals = (Vec<f64>, Vec<f64>, Vec<Vec<f64>>);
+
 /// One experiment of a [`MisoProblem`]: the output and the delayed inputs.
 struct Segment {
     y: Vec<f64>,
@@ -199,7 +202,7 @@ impl MisoProblem {
     }
 
     /// Residuals and the intermediate signals `(e, v, w_j)` of one experiment.
-    fn signals(seg: &Segment, p: &MisoPolys) -> (Vec<f64>, Vec<f64>, Vec<Vec<f64>>) {
+    fn signals(seg: &Segment, p: &MisoPolys) -> Signals {
         let w: Vec<Vec<f64>> = (0..seg.x.len())
             .map(|j| filter(&p.b[j], &p.f[j], &seg.x[j]))
             .collect();
@@ -227,12 +230,11 @@ impl MisoProblem {
         &self,
         seg: &Segment,
         p: &MisoPolys,
-        e: &[f64],
-        v: &[f64],
-        w: &[Vec<f64>],
+        signals: &Signals,
         gn: &mut Mat<f64>,
         grad: &mut [f64],
     ) {
+        let (e, v, w) = signals;
         let o = &self.orders;
         let np = o.n_params();
         let n = seg.y.len();
@@ -333,8 +335,8 @@ impl Problem for MisoProblem {
         let np = o.n_params();
         let mut gn = Mat::<f64>::zeros(np, np);
         let mut grad = vec![0.0; np];
-        for (seg, (e, v, w)) in self.segs.iter().zip(&sigs) {
-            self.accumulate(seg, &p, e, v, w, &mut gn, &mut grad);
+        for (seg, sig) in self.segs.iter().zip(&sigs) {
+            self.accumulate(seg, &p, sig, &mut gn, &mut grad);
         }
         ev.gradient = grad;
         ev.gauss_newton = gn;
