@@ -292,3 +292,34 @@ def test_mimo_2x2_armax_bj_std_calibrated_monte_carlo():
         bj_sd.append(np.sqrt(np.diag(m.uncertainty.covariance)))
     _calibrated(ax_est, ax_sd)
     _calibrated(bj_est, bj_sd)
+
+
+def test_iv4_mimo_closed_loop_two_experiments():
+    # The docs' 2 x 2 closed loop (u = r - 0.3 y), split into two records: the reference
+    # instruments recover the plant; least squares does not.
+    rng = np.random.default_rng(14)
+    us, ys, rs = [], [], []
+    for n in (12000, 8000):
+        r = rng.standard_normal((n, 2))
+        v = 0.5 * _coloured(rng, n)
+        y, u = np.zeros((n, 2)), np.zeros((n, 2))
+        for t in range(n):
+            if t:
+                y[t, 0] = 0.6 * y[t - 1, 0] - 0.2 * y[t - 1, 1] + u[t - 1, 0] + 0.3 * u[t - 1, 1]
+                y[t, 1] = 0.1 * y[t - 1, 0] + 0.5 * y[t - 1, 1] + 0.7 * u[t - 1, 1]
+            y[t] += v[t]
+            u[t] = r[t] - 0.3 * y[t]
+        us.append(u), ys.append(y), rs.append(r)
+    d = sysid.IOData(us, ys, 1.0)
+    orders = dict(na=[[1, 1], [1, 1]], nb=[[1, 1], [1, 1]], nk=1)
+    true = np.r_[-0.6, 0.2, -0.1, -0.5, 1.0, 0.3, 0.0, 0.7]
+
+    def coefs(m):
+        return np.r_[m.a[0][0], m.a[0][1], m.a[1][0], m.a[1][1], m.b[0][0], m.b[0][1],
+                     m.b[1][0], m.b[1][1]]
+
+    cl = sysid.iv4(d, **orders, reference=rs)
+    err = np.abs(coefs(cl) - true)
+    sd = np.concatenate([np.sqrt(np.diag(c)) for c in cl.covariance])[[0, 1, 4, 5, 2, 3, 6, 7]]
+    assert err.max() < 0.03 and np.all(err < 4 * sd + 1e-3), (err, sd)
+    assert np.abs(coefs(sysid.arx(d, **orders)) - true).max() > 0.1
