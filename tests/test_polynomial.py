@@ -214,5 +214,5 @@ def test_iv4_noise_free_and_unbiased():
     assert err_iv < 0.05 and err_ls > 2 * err_iv
     ref = sysid.iv4(_data(y, u), 2, 2, 1, reference=u + 0.1 * rng.standard_normal(3000))
     assert not np.allclose(ref.a[0][0], iv.a[0][0])  # the instrument option matters
-    with pytest.raises(DataError, match="single input"):
+    with pytest.raises(sysid.SysidError, match="persistently exciting"):  # two equal inputs
         sysid.iv4(sysid.IOData(np.c_[u, u], y[:, None], 1.0), 1, 1, 1)

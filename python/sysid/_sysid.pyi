@@ -382,8 +382,7 @@ def arx_struc(
 ) -> _Array: ...
 def poly_filter(b: list[float], a: list[float], x: _Array) -> _Array: ...
 def polynomial_pem(
-    y: _Array,
-    u: _Array,
+    experiments: list[tuple[_Array, _Array]],
     na: int,
     nb: list[int],
     nc: int,
@@ -396,8 +395,11 @@ def polynomial_pem(
     progress: Any | None = None,
 ) -> dict[str, Any]: ...
 def iv4(
-    y: _Array, u: _Array, na: int, nb: int, nk: int, reference: _Array | None = None
-) -> _Array: ...
+    experiments: list[tuple[_Array, _Array, _Array | None]],
+    na: list[list[int]],
+    nb: list[list[int]],
+    nk: list[list[int]],
+) -> list[dict[str, Any]]: ...
 # nonlinear models (issue 14)
 _Orders = tuple[list[int], list[int], list[int], list[int]]
 _Rbf = tuple[_Array, _Array, _Array, _Array]

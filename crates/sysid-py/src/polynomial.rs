@@ -9,6 +9,7 @@ use pyo3::types::PyDict;
 use sysid_core::optim::{Flow, Options};
 use sysid_core::polynomial::arx::{ArxCompressor, ArxOrders};
 use sysid_core::polynomial::filter;
+use sysid_core::polynomial::iv::{self, IvRecord};
 use sysid_core::polynomial::pem::{self, MisoOrders};
 
 type Experiments<'a> = Vec<(PyReadonlyArray2<'a, f64>, PyReadonlyArray2<'a, f64>)>;
@@ -144,14 +145,14 @@ pub fn poly_filter<'py>(
     Ok(slice_to_numpy(py, &y))
 }
 
-/// Prediction-error estimate of one output: `A y = sum B_j/F_j u_j(t-nk_j) + C/D e`.
+/// Prediction-error estimate of one output: `A y = sum B_j/F_j u_j(t-nk_j) + C/D e`, from
+/// one or several experiments `(y, u)` (the cost summed over them, each from rest).
 #[pyfunction]
-#[pyo3(signature = (y, u, na, nb, nc, nd, nf, nk, theta0=None, max_iter=100, tol=1e-9, progress=None))]
+#[pyo3(signature = (experiments, na, nb, nc, nd, nf, nk, theta0=None, max_iter=100, tol=1e-9, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn polynomial_pem<'py>(
     py: Python<'py>,
-    y: PyReadonlyArray1<'_, f64>,
-    u: PyReadonlyArray2<'_, f64>,
+    experiments: Vec<(PyReadonlyArray1<'_, f64>, PyReadonlyArray2<'_, f64>)>,
     na: usize,
     nb: Vec<usize>,
     nc: usize,
@@ -163,8 +164,15 @@ pub fn polynomial_pem<'py>(
     tol: f64,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let ys = y.as_slice()?.to_vec();
-    let uv = view_nd(u.as_array());
+    let ys: Vec<Vec<f64>> = experiments
+        .iter()
+        .map(|(y, _)| y.as_array().to_vec())
+        .collect();
+    let exps: Vec<(&[f64], faer::MatRef<'_, f64>)> = ys
+        .iter()
+        .zip(&experiments)
+        .map(|(y, (_, u))| (y.as_slice(), view_nd(u.as_array())))
+        .collect();
     let orders = MisoOrders {
         na,
         nb,
@@ -184,10 +192,10 @@ pub fn polynomial_pem<'py>(
                     Ok(v) if v.is_truthy(py).unwrap_or(false) => Flow::Stop,
                     _ => Flow::Continue,
                 };
-            pem::estimate(&ys, uv, orders, theta0.as_deref(), &opts, &mut obs)
+            pem::estimate_multi(&exps, orders, theta0.as_deref(), &opts, &mut obs)
         }
         None => py.detach(|| {
-            pem::estimate(&ys, uv, orders, theta0.as_deref(), &opts, &mut |_| {
+            pem::estimate_multi(&exps, orders, theta0.as_deref(), &opts, &mut |_| {
                 Flow::Continue
             })
         }),
@@ -205,27 +213,41 @@ pub fn polynomial_pem<'py>(
     Ok(d)
 }
 
-/// IV4 estimate `[a.., b..]` of a single-input single-output ARX structure.
+type IvExperiments<'a> = Vec<(
+    PyReadonlyArray2<'a, f64>,
+    PyReadonlyArray2<'a, f64>,
+    Option<PyReadonlyArray2<'a, f64>>,
+)>;
+
+/// IV4 estimate of a MIMO ARX structure from experiments `(u, y, reference or None)`: per
+/// output a dict with `theta` (`[a_i1.., .., b_i1.., ..]`), `covariance`, `noise_variance`.
 #[pyfunction]
-#[pyo3(signature = (y, u, na, nb, nk, reference=None))]
 pub fn iv4<'py>(
     py: Python<'py>,
-    y: PyReadonlyArray1<'_, f64>,
-    u: PyReadonlyArray1<'_, f64>,
-    na: usize,
-    nb: usize,
-    nk: usize,
-    reference: Option<PyReadonlyArray1<'_, f64>>,
-) -> PyResult<Bound<'py, numpy::PyArray1<f64>>> {
-    let (ys, us) = (y.as_slice()?.to_vec(), u.as_slice()?.to_vec());
-    let rs = match reference {
-        Some(r) => Some(r.as_slice()?.to_vec()),
-        None => None,
-    };
-    let th = py
-        .detach(|| sysid_core::polynomial::iv::iv4(&ys, &us, na, nb, nk, rs.as_deref()))
-        .py()?;
-    Ok(slice_to_numpy(py, &th))
+    experiments: IvExperiments<'_>,
+    na: Vec<Vec<usize>>,
+    nb: Vec<Vec<usize>>,
+    nk: Vec<Vec<usize>>,
+) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    let recs: Vec<IvRecord<'_>> = experiments
+        .iter()
+        .map(|(u, y, r)| IvRecord {
+            u: view_nd(u.as_array()),
+            y: view_nd(y.as_array()),
+            r: r.as_ref().map(|r| view_nd(r.as_array())),
+        })
+        .collect();
+    let orders = ArxOrders { na, nb, nk };
+    let fit = py.detach(|| iv::iv4_multi(&recs, &orders)).py()?;
+    (0..fit.theta.len())
+        .map(|i| {
+            let d = PyDict::new(py);
+            d.set_item("theta", slice_to_numpy(py, &fit.theta[i]))?;
+            d.set_item("covariance", mat_to_numpy(py, &fit.covariance[i]))?;
+            d.set_item("noise_variance", fit.noise_variance[i])?;
+            Ok(d)
+        })
+        .collect()
 }
 
 /// Registers the functions of this file.

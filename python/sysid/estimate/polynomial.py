@@ -191,10 +191,7 @@ def _pem(
     init: PolynomialModel | None = None,
 ) -> PolynomialModel:
     exps = _exps(data)
-    if len(exps) != 1:
-        raise DataError(f"{method}: one experiment only so far; merge or pick one experiment")
-    u, y = exps[0]
-    ny, nu = y.shape[1], u.shape[1]
+    ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     nb_g, nf_g, nk_g = _grid(nb, ny, nu, "nb"), _grid(nf, ny, nu, "nf"), _grid(nk, ny, nu, "nk")
     na_v, nc_v, nd_v = _col(na, ny, "na"), _col(nc, ny, "nc"), _col(nd, ny, "nd")
     if min(na_v + nc_v + nd_v, default=0) < 0:
@@ -205,8 +202,8 @@ def _pem(
     cb, close_bar = iteration_callback(progress, method, int(max_iter) * ny)
     try:
         rs = [_sysid.polynomial_pem(
-            np.ascontiguousarray(y[:, i]), u, na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i],
-            nk_g[i],
+            [(np.ascontiguousarray(y[:, i]), u) for u, y in exps], na_v[i], nb_g[i], nc_v[i],
+            nd_v[i], nf_g[i], nk_g[i],
             None if init is None else _start(init, i, na_v[i], nb_g[i], nc_v[i], nd_v[i],
                                              nf_g[i]),
             as_int(max_iter, "max_iter", 0), 1e-9, cb) for i in range(ny)]
@@ -392,14 +389,35 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int =
     return int(table[int(np.argmin(table[:, 3])), 2])
 
 
-def iv4(
-    data: Any, na: int, nb: int, nk: int = 1, *, reference: np.ndarray | None = None
-) -> PolynomialModel:
+def _references(reference: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> list[Any]:
+    """One instrument-input array per experiment (``None`` entries: the input itself)."""
+    if reference is None:
+        return [None] * len(exps)
+    refs = list(reference) if isinstance(reference, (list, tuple)) else [reference]
+    if len(refs) != len(exps):
+        raise DataError(f"reference: give one array per experiment ({len(exps)}), got "
+                        f"{len(refs)}")
+    out = []
+    for r, (u, _) in zip(refs, exps):
+        a = np.asarray(r, dtype=float)
+        a = a.reshape(-1, 1) if a.ndim == 1 else a
+        if a.ndim != 2 or a.shape[0] != u.shape[0] or a.shape[1] == 0:
+            raise DataError(f"reference must have the input's {u.shape[0]} rows (one column "
+                            f"per reference channel), got shape {a.shape}")
+        out.append(np.ascontiguousarray(a))
+    return out
+
+
+def iv4(data: Any, na: Any, nb: Any, nk: Any = 1, *, reference: Any = None) -> PolynomialModel:
     """Four-stage instrumental-variable estimate of ``A(q) y = B(q) u(t-nk) + v``.
 
-    Consistent for coloured noise ``v`` where least squares (:func:`arx`) is biased. For
-    closed-loop data pass the reference signal as ``reference``: the instruments are then
-    built from it instead of the (noise-correlated) input. Single input and output.
+    Consistent for coloured noise ``v`` where least squares (:func:`arx`) is biased. MIMO
+    with the orders of :func:`arx` (``na`` outputs x outputs, ``nb``/``nk`` outputs x
+    inputs); several experiments are used together (each filtered from rest). For
+    closed-loop data pass the reference signal (``(N, n_ref)``, a list with one array per
+    experiment) as ``reference``: the instruments are then the parts of ``y`` and ``u``
+    explained by the reference (a least-squares FIR projection on its lags), which the
+    feedback cannot correlate with the noise, instead of the (noise-correlated) input.
 
     Examples
     --------
@@ -414,61 +432,23 @@ def iv4(
     True
     """
     exps = _exps(data)
-    if len(exps) != 1 or exps[0][0].shape[1] != 1 or exps[0][1].shape[1] != 1:
-        raise DataError("iv4: one experiment with a single input and a single output")
-    u, y = exps[0][0][:, 0].copy(), exps[0][1][:, 0].copy()
-    r = None if reference is None else np.ascontiguousarray(reference, float).ravel()
-    na_, nb_, nk_ = (_grid(v, 1, 1, n)[0][0] for v, n in ((na, "na"), (nb, "nb"), (nk, "nk")))
-    th = _sysid.iv4(y, u, na_, nb_, nk_, r)
-    m = PolynomialModel([[th[:na_]]], [[th[na_:]]], [[nk_]], data.dt)
-    m.info = {"method": "iv4"}
-    cov, lam = _iv_covariance(y, u, u if r is None else r, th, na_, nb_, nk_)
-    m.noise_variance = np.array([lam])
-    m.covariance = [cov]  # type: ignore[attr-defined]
-    _attach_uncertainty(m, [cov], "arx", "instrumental-variable")
+    ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
+    if nu == 0:
+        raise DataError("iv4 needs an input signal (use ar/arma for time series)")
+    na_g, nb_g, nk_g = _grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"), _grid(nk, ny, nu, "nk")
+    refs = _references(reference, exps)
+    fits = _sysid.iv4([(u, y, r) for (u, y), r in zip(exps, refs)], na_g, nb_g, nk_g)
+    a, b = [], []
+    for i, f in enumerate(fits):
+        th = np.asarray(f["theta"])
+        pieces = np.split(th, np.cumsum([*na_g[i], *nb_g[i]])[:-1])
+        a.append([np.asarray(x) for x in pieces[:ny]])
+        b.append([np.asarray(x) for x in pieces[ny:]])
+    m = PolynomialModel(a, b, nk_g, data.dt)
+    m.info = {"method": "iv4", "closed_loop": reference is not None}
+    cov = [np.asarray(f["covariance"]) for f in fits]
+    m.noise_variance = np.array([f["noise_variance"] for f in fits])
+    m.covariance = cov  # type: ignore[attr-defined]
+    m.parameters = [np.asarray(f["theta"]) for f in fits]  # type: ignore[attr-defined]
+    _attach_uncertainty(m, cov, "arx", "instrumental-variable")
     return m
-
-
-def _lags(x: np.ndarray, t0: int, t1: int, lags: range) -> np.ndarray:
-    return np.column_stack([x[t0 - k:t1 - k] for k in lags]) if len(lags) else \
-        np.zeros((t1 - t0, 0))
-
-
-def _iv_covariance(y: np.ndarray, u: np.ndarray, r: np.ndarray, th: np.ndarray, na: int,
-                   nb: int, nk: int, block: int = 20000) -> tuple[np.ndarray, float]:
-    """Asymptotic covariance ``lambda R^-1 S R^-T`` of the final IV4 stage (``R = sum z phi^T``,
-    ``S = sum z z^T`` with the prefiltered regressors ``phi`` and instruments ``z`` rebuilt at
-    the estimate; ``lambda`` the variance of the prefiltered equation error), accumulated in
-    blocks of samples."""
-    from scipy import signal
-
-    a, b = np.r_[1.0, th[:na]], th[na:]
-    ud, rd = (np.r_[np.zeros(nk), x[: x.size - nk]] for x in (u, r))
-    w = signal.lfilter(a, [1.0], y) - signal.lfilter(b, [1.0], ud)
-    nl = na + nb  # the AR prefilter L of the equation error, as stage 3 of iv4
-    start_l = nl
-    G = np.zeros((nl, nl))
-    g = np.zeros(nl)
-    for t0 in range(start_l, w.size, block):
-        t1 = min(w.size, t0 + block)
-        X = -_lags(w, t0, t1, range(1, nl + 1))
-        G += X.T @ X
-        g += X.T @ w[t0:t1]
-    ell = np.r_[1.0, np.linalg.lstsq(G, g, rcond=None)[0]] if nl else np.ones(1)
-    x = signal.lfilter(b, a, rd)
-    yf, uf, xf, rf, wf = (signal.lfilter(ell, [1.0], s) for s in (y, u, x, r, w))
-    start = max(na, nk + nb) + nl
-    p = na + nb
-    R = np.zeros((p, p))
-    S = np.zeros((p, p))
-    for t0 in range(start, y.size, block):
-        t1 = min(y.size, t0 + block)
-        phi = np.hstack([-_lags(yf, t0, t1, range(1, na + 1)),
-                         _lags(uf, t0, t1, range(nk, nk + nb))])
-        z = np.hstack([-_lags(xf, t0, t1, range(1, na + 1)),
-                       _lags(rf, t0, t1, range(nk, nk + nb))])
-        R += z.T @ phi
-        S += z.T @ z
-    lam = float(np.mean(wf[start:] ** 2))
-    Ri = np.linalg.inv(R)
-    return lam * Ri @ S @ Ri.T, lam

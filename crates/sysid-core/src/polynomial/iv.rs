@@ -1,73 +1,561 @@
-//! Instrumental variables: the four-stage IV4 method for single-input single-output ARX
-//! structures `A(q) y = B(q) u(t - nk) + v` (Ljung, System Identification, 1999, sec. 15.3).
+//! Instrumental variables: the four-stage IV4 method for (MIMO) ARX structures
+//! `A(q) y = B(q) u + v` (Ljung, System Identification, 1999, sec. 15.3), over one or
+//! several experiments.
+//!
+//! Each output's equation `y_i + sum_k A_ik y_k = sum_j B_ij u_j(t - nk_ij) + v_i` is solved
+//! from `sum z(t) phi(t)^T theta = sum z(t) y_i(t)`, where `phi` holds the lagged outputs and
+//! inputs and the instruments `z` the same lags of a noise-free simulated output `x` and of
+//! the instrument input `r` (the input itself in open loop; the reference in closed loop, so
+//! that no instrument is correlated with the noise). The four stages: (1) least squares;
+//! (2) IV with `x` simulated from the stage-1 model; (3) an AR model `L_i` (order = number of
+//! parameters of the equation) of the stage-2 equation error; (4) IV on the data prefiltered
+//! by `L_i`, with `x` simulated from the stage-2 model. With a reference (closed loop) the
+//! instruments of every stage are instead the parts of `y` and `u` explained by the
+//! reference (a least-squares FIR projection on its lags), which the feedback cannot
+//! correlate with the noise; stage 1 is then IV with those instruments. Sums run over the rows of every
+//! experiment separately (each filtered and simulated from rest): no sample of one experiment
+//! enters a regressor or instrument of another.
 
 use faer::linalg::solvers::Solve;
+use faer::{Mat, MatRef};
 
+use super::arx::ArxOrders;
 use super::filter::{filter, monic};
-use crate::error::{Result, SysidError};
+use crate::error::{check_finite, Result, SysidError};
 
-/// Solves `sum z(t) phi(t)^T theta = sum z(t) y(t)` (rows from `start`), where
-/// `phi(t) = [-y(t-1..na), u(t-nk..nk+nb-1)]` and `z(t)` the same with `x` in place of `y`
-/// and `r` in place of `u`. Accumulated sample by sample into p x p sums.
-fn iv_solve(
-    y: &[f64],
-    u: &[f64],
-    x: &[f64],
-    r: &[f64],
-    na: usize,
-    nb: usize,
-    nk: usize,
-) -> Result<Vec<f64>> {
-    let p = na + nb;
-    let start = na.max(nk + nb);
-    let mut m = vec![0.0; p * p];
+/// One experiment for [`iv4_multi`]: inputs `u` (N x nu), outputs `y` (N x ny) and optional
+/// reference `r` (N x nr, closed-loop data; given in every experiment or in none).
+#[derive(Debug, Clone, Copy)]
+pub struct IvRecord<'a> {
+    /// Inputs (N x nu).
+    pub u: MatRef<'a, f64>,
+    /// Outputs (N x ny).
+    pub y: MatRef<'a, f64>,
+    /// Reference (N x nr) or `None` for open-loop data.
+    pub r: Option<MatRef<'a, f64>>,
+}
+
+/// Result of [`iv4_multi`], one entry per output equation.
+#[derive(Debug, Clone)]
+pub struct Iv4Fit {
+    /// `theta[i]`: `[a_i1.., a_i2.., .., b_i1.., b_i2.., ..]` (the layout of the ARX fit).
+    pub theta: Vec<Vec<f64>>,
+    /// Asymptotic covariance `lambda R^-1 S R^-T` of the last stage (`R = sum z phi^T`,
+    /// `S = sum z z^T` of the prefiltered regressors and instruments at the estimate).
+    pub covariance: Vec<Mat<f64>>,
+    /// `lambda`: mean square of the prefiltered equation error at the estimate.
+    pub noise_variance: Vec<f64>,
+}
+
+/// Channels of one experiment, each a vector over time.
+struct Rec {
+    y: Vec<Vec<f64>>,
+    u: Vec<Vec<f64>>,
+    r: Vec<Vec<f64>>,
+}
+
+fn columns(m: MatRef<'_, f64>) -> Vec<Vec<f64>> {
+    (0..m.ncols())
+        .map(|j| (0..m.nrows()).map(|t| m[(t, j)]).collect())
+        .collect()
+}
+
+/// Number of parameters of equation `i`.
+fn n_params(o: &ArxOrders, i: usize) -> usize {
+    o.na[i].iter().sum::<usize>() + o.nb[i].iter().sum::<usize>()
+}
+
+/// First row of equation `i` whose lags all lie inside the record.
+fn first_row(o: &ArxOrders, i: usize) -> usize {
+    let a = o.na[i].iter().copied().max().unwrap_or(0);
+    let b = o.nb[i]
+        .iter()
+        .zip(&o.nk[i])
+        .map(|(&nb, &nk)| if nb > 0 { nk + nb - 1 } else { 0 })
+        .max()
+        .unwrap_or(0);
+    a.max(b)
+}
+
+/// Regressor row of equation `i` at time `t`: `[-y_k(t-1..na_ik) per k, u_j(t-nk_ij-l) per j]`.
+fn row(o: &ArxOrders, i: usize, y: &[Vec<f64>], u: &[Vec<f64>], t: usize, out: &mut [f64]) {
+    let mut c = 0;
+    for (k, &na) in o.na[i].iter().enumerate() {
+        for l in 1..=na {
+            out[c] = -y[k][t - l];
+            c += 1;
+        }
+    }
+    for (j, &nb) in o.nb[i].iter().enumerate() {
+        for l in 0..nb {
+            out[c] = u[j][t - o.nk[i][j] - l];
+            c += 1;
+        }
+    }
+}
+
+/// Sums `R = sum z phi^T`, `v = sum z y_i`, `S = sum z z^T` and the row count of equation `i`
+/// over the experiments `(y, u, x, r)`.
+type Sums = (Mat<f64>, Vec<f64>, Mat<f64>, usize);
+
+fn iv_sums(o: &ArxOrders, i: usize, exps: &[[&[Vec<f64>]; 4]]) -> Sums {
+    let p = n_params(o, i);
+    let start = first_row(o, i);
+    let mut rm = vec![0.0; p * p];
+    let mut sm = vec![0.0; p * p];
     let mut v = vec![0.0; p];
     let mut phi = vec![0.0; p];
     let mut z = vec![0.0; p];
-    for t in start..y.len() {
-        for k in 0..na {
-            phi[k] = -y[t - 1 - k];
-            z[k] = -x[t - 1 - k];
-        }
-        for k in 0..nb {
-            phi[na + k] = u[t - nk - k];
-            z[na + k] = r[t - nk - k];
-        }
-        for a in 0..p {
-            for b in 0..p {
-                m[a * p + b] += z[a] * phi[b];
+    let mut rows = 0;
+    for [y, u, x, r] in exps {
+        for t in start..y[i].len() {
+            row(o, i, y, u, t, &mut phi);
+            row(o, i, x, r, t, &mut z);
+            for a in 0..p {
+                let za = z[a];
+                for b in 0..p {
+                    rm[a * p + b] += za * phi[b];
+                    sm[a * p + b] += za * z[b];
+                }
+                v[a] += za * y[i][t];
             }
-            v[a] += z[a] * y[t];
+            rows += 1;
         }
     }
-    let mat = faer::Mat::from_fn(p, p, |a, b| m[a * p + b]);
-    let rhs = faer::Mat::from_fn(p, 1, |a, _| v[a]);
-    let s = mat
+    (
+        Mat::from_fn(p, p, |a, b| rm[a * p + b]),
+        v,
+        Mat::from_fn(p, p, |a, b| sm[a * p + b]),
+        rows,
+    )
+}
+
+fn check_rank(r: &Mat<f64>) -> Result<()> {
+    let p = r.nrows();
+    let s = r
         .singular_values()
         .map_err(|e| SysidError::numerical("iv4", format!("{e:?}")))?;
-    if s.is_empty() || s[s.len() - 1] <= 1e-12 * s[0] {
+    let full = s.last().is_some_and(|&l| l > 1e-12 * s[0]);
+    if !full {
+        let rank = s.iter().filter(|&&v| v > 1e-12 * s[0]).count();
         return Err(SysidError::NotPersistentlyExciting {
-            rank: 0,
+            rank,
             rows: p,
             tol: 1e-12,
         });
     }
-    let sol = mat.partial_piv_lu().solve(&rhs);
-    Ok((0..p).map(|a| sol[(a, 0)]).collect())
+    Ok(())
 }
 
-fn split(theta: &[f64], na: usize) -> (Vec<f64>, Vec<f64>) {
-    (monic(&theta[..na]), theta[na..].to_vec())
+fn solve(r: &Mat<f64>, v: &[f64]) -> Result<Vec<f64>> {
+    check_rank(r)?;
+    let rhs = Mat::from_fn(v.len(), 1, |a, _| v[a]);
+    let sol = r.partial_piv_lu().solve(&rhs);
+    Ok((0..v.len()).map(|a| sol[(a, 0)]).collect())
 }
 
-fn delayed(x: &[f64], nk: usize) -> Vec<f64> {
-    (0..x.len())
-        .map(|t| if t >= nk { x[t - nk] } else { 0.0 })
+/// Splits equation `i`'s parameters into `(a[k], b[j])`.
+fn unpack(o: &ArxOrders, i: usize, th: &[f64]) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    let mut c = 0;
+    let mut take = |n: usize| {
+        let s = th[c..c + n].to_vec();
+        c += n;
+        s
+    };
+    let a = o.na[i].iter().map(|&n| take(n)).collect();
+    let b = o.nb[i].iter().map(|&n| take(n)).collect();
+    (a, b)
+}
+
+/// Noise-free simulation from rest of the MIMO ARX model `theta` driven by `r`.
+fn simulate(o: &ArxOrders, theta: &[Vec<f64>], r: &[Vec<f64>], n: usize) -> Vec<Vec<f64>> {
+    let ny = o.na.len();
+    let parts: Vec<_> = (0..ny).map(|i| unpack(o, i, &theta[i])).collect();
+    let mut y = vec![vec![0.0; n]; ny];
+    for t in 0..n {
+        for i in 0..ny {
+            let (a, b) = &parts[i];
+            let mut s = 0.0;
+            for (k, ak) in a.iter().enumerate() {
+                for (l, c) in ak.iter().enumerate() {
+                    if t > l {
+                        s -= c * y[k][t - l - 1];
+                    }
+                }
+            }
+            for (j, bj) in b.iter().enumerate() {
+                let nk = o.nk[i][j];
+                for (l, c) in bj.iter().enumerate() {
+                    if t >= nk + l {
+                        s += c * r[j][t - nk - l];
+                    }
+                }
+            }
+            y[i][t] = s;
+        }
+    }
+    y
+}
+
+/// Equation error `A_i y - B_i u` of equation `i` (zero before the record).
+fn equation_error(o: &ArxOrders, i: usize, th: &[f64], y: &[Vec<f64>], u: &[Vec<f64>]) -> Vec<f64> {
+    let (a, b) = unpack(o, i, th);
+    let mut w = y[i].clone();
+    for (k, ak) in a.iter().enumerate() {
+        let mut p = vec![0.0];
+        p.extend_from_slice(ak);
+        let f = filter(&p, &[1.0], &y[k]);
+        w.iter_mut().zip(&f).for_each(|(wt, ft)| *wt += ft);
+    }
+    for (j, bj) in b.iter().enumerate() {
+        let mut p = vec![0.0; o.nk[i][j]];
+        p.extend_from_slice(bj);
+        let f = filter(&p, &[1.0], &u[j]);
+        w.iter_mut().zip(&f).for_each(|(wt, ft)| *wt -= ft);
+    }
+    w
+}
+
+/// Monic AR polynomial of order `n` fitted to the experiments' `w` by least squares (`1` when
+/// the fit is singular).
+fn ar_prefilter(w: &[Vec<f64>], n: usize) -> Vec<f64> {
+    if n == 0 {
+        return vec![1.0];
+    }
+    let mut g = Mat::<f64>::zeros(n, n);
+    let mut h = vec![0.0; n];
+    let mut x = vec![0.0; n];
+    for we in w {
+        for t in n..we.len() {
+            for k in 0..n {
+                x[k] = -we[t - 1 - k];
+            }
+            for a in 0..n {
+                for b in 0..n {
+                    g[(a, b)] += x[a] * x[b];
+                }
+                h[a] += x[a] * we[t];
+            }
+        }
+    }
+    match solve(&g, &h) {
+        Ok(l) if l.iter().all(|v| v.is_finite()) => monic(&l),
+        _ => vec![1.0],
+    }
+}
+
+/// Instrument signals of one experiment: `(x, r)` standing in for `(y, u)`.
+type Inst = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
+/// Noise-free simulations `(x, u)` of the model from every experiment's inputs, or `None`
+/// when the model is unstable (its simulation grows without bound).
+fn simulated(o: &ArxOrders, theta: &[Vec<f64>], recs: &[Rec]) -> Option<Vec<Inst>> {
+    let mut out = Vec::with_capacity(recs.len());
+    for rec in recs {
+        let n = rec.y.first().map_or(0, |c| c.len());
+        let x = simulate(o, theta, &rec.u, n);
+        let scale = rec
+            .y
+            .iter()
+            .flatten()
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+            .max(f64::MIN_POSITIVE);
+        let big = x.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        let bounded = big.is_finite() && big <= 1e6 * scale;
+        if !bounded {
+            return None;
+        }
+        out.push((x, rec.u.clone()));
+    }
+    Some(out)
+}
+
+/// Lags of the instrument inputs in [`projected`].
+const PROJECTION_LAGS: usize = 30;
+
+/// The parts of `y` and `u` explained by the instrument inputs `r`: the least-squares FIR
+/// projection (lags `0..=PROJECTION_LAGS` of every `r_j`, pooled over the experiments) of
+/// each output and input channel. Functions of `r` only, so uncorrelated with the noise even
+/// under feedback, and as correlated with the regressors as a linear filter of `r` allows.
+fn projected(recs: &[Rec]) -> Result<Vec<Inst>> {
+    let nr = recs[0].r.len();
+    let total: usize = recs.iter().map(|r| r.y[0].len()).sum();
+    let lags = PROJECTION_LAGS.min(total / (4 * nr.max(1))).max(1);
+    let p = nr * (lags + 1);
+    let targets = recs[0].y.len() + recs[0].u.len();
+    let mut g = Mat::<f64>::zeros(p, p);
+    let mut h = Mat::<f64>::zeros(p, targets);
+    let mut phi = vec![0.0; p];
+    let lagged = |rec: &Rec, t: usize, phi: &mut [f64]| {
+        for (j, rj) in rec.r.iter().enumerate() {
+            for l in 0..=lags {
+                phi[j * (lags + 1) + l] = if t >= l { rj[t - l] } else { 0.0 };
+            }
+        }
+    };
+    for rec in recs {
+        for t in 0..rec.y[0].len() {
+            lagged(rec, t, &mut phi);
+            for a in 0..p {
+                for b in 0..=a {
+                    g[(a, b)] += phi[a] * phi[b];
+                }
+                for (c, ch) in rec.y.iter().chain(&rec.u).enumerate() {
+                    h[(a, c)] += phi[a] * ch[t];
+                }
+            }
+        }
+    }
+    for a in 0..p {
+        for b in a + 1..p {
+            g[(a, b)] = g[(b, a)];
+        }
+    }
+    check_rank(&g)?;
+    let coef = g.partial_piv_lu().solve(&h);
+    let ny = recs[0].y.len();
+    Ok(recs
+        .iter()
+        .map(|rec| {
+            let n = rec.y[0].len();
+            let mut chans = vec![vec![0.0; n]; targets];
+            for t in 0..n {
+                lagged(rec, t, &mut phi);
+                for (c, ch) in chans.iter_mut().enumerate() {
+                    ch[t] = (0..p).map(|a| phi[a] * coef[(a, c)]).sum();
+                }
+            }
+            let u = chans.split_off(ny);
+            (chans, u)
+        })
+        .collect())
+}
+
+fn prefiltered(l: &[f64], chans: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    chans.iter().map(|c| filter(l, &[1.0], c)).collect()
+}
+
+/// One IV stage of every equation with the instruments `inst` (`None`: the regressors, that
+/// is least squares), all signals prefiltered by each equation's AR model when `prefilter`.
+fn stage(
+    o: &ArxOrders,
+    recs: &[Rec],
+    inst: Option<&[Inst]>,
+    prefilter: Option<&[Vec<f64>]>,
+) -> Vec<Sums> {
+    (0..o.na.len())
+        .map(|i| {
+            let l = prefilter.map_or(vec![1.0], |p| p[i].clone());
+            let sigs: Vec<[Vec<Vec<f64>>; 4]> = recs
+                .iter()
+                .enumerate()
+                .map(|(e, rec)| {
+                    let (x, r) = match inst {
+                        Some(z) => (&z[e].0, &z[e].1),
+                        None => (&rec.y, &rec.u),
+                    };
+                    [
+                        prefiltered(&l, &rec.y),
+                        prefiltered(&l, &rec.u),
+                        prefiltered(&l, x),
+                        prefiltered(&l, r),
+                    ]
+                })
+                .collect();
+            let refs: Vec<[&[Vec<f64>]; 4]> = sigs
+                .iter()
+                .map(|s| [&s[0][..], &s[1][..], &s[2][..], &s[3][..]])
+                .collect();
+            iv_sums(o, i, &refs)
+        })
         .collect()
 }
 
-/// IV4 estimate `[a_1..a_na, b_0..b_{nb-1}]` of `A y = B u(t-nk) + v`. With `reference`
-/// (closed-loop data), the instruments are built from the reference instead of the input.
+fn prefilters(o: &ArxOrders, theta: &[Vec<f64>], recs: &[Rec]) -> Vec<Vec<f64>> {
+    (0..o.na.len())
+        .map(|i| {
+            let w: Vec<Vec<f64>> = recs
+                .iter()
+                .map(|r| equation_error(o, i, &theta[i], &r.y, &r.u))
+                .collect();
+            ar_prefilter(&w, n_params(o, i))
+        })
+        .collect()
+}
+
+fn check_orders(o: &ArxOrders, ny: usize, nu: usize) -> Result<()> {
+    let ok = o.na.len() == ny
+        && o.nb.len() == ny
+        && o.nk.len() == ny
+        && o.na.iter().all(|r| r.len() == ny)
+        && o.nb.iter().all(|r| r.len() == nu)
+        && o.nk.iter().all(|r| r.len() == nu);
+    if !ok {
+        return Err(SysidError::invalid(
+            "orders",
+            format!("na must be {ny} x {ny}, nb and nk {ny} x {nu} (outputs x inputs)"),
+        ));
+    }
+    if (0..ny).any(|i| o.nb[i].iter().all(|&b| b == 0)) {
+        return Err(SysidError::invalid(
+            "nb",
+            "iv4 needs at least one B coefficient in every output's equation",
+        ));
+    }
+    Ok(())
+}
+
+/// IV4 estimate of a MIMO ARX structure from several experiments; with `r` in a record
+/// (closed-loop data), the instruments are built from it instead of the input.
+///
+/// ```
+/// use faer::Mat;
+/// use sysid_core::polynomial::{arx::ArxOrders, iv::{iv4_multi, IvRecord}};
+/// let n = 400;
+/// let u = Mat::from_fn(n, 1, |t, _| ((t * 7919 % 17) as f64) - 8.0);
+/// let mut y = Mat::<f64>::zeros(n, 1);
+/// for t in 1..n { y[(t, 0)] = 0.5 * y[(t - 1, 0)] + u[(t - 1, 0)]; }
+/// let o = ArxOrders { na: vec![vec![1]], nb: vec![vec![1]], nk: vec![vec![1]] };
+/// let fit = iv4_multi(&[IvRecord { u: u.as_ref(), y: y.as_ref(), r: None }], &o).unwrap();
+/// assert!((fit.theta[0][0] + 0.5).abs() < 1e-8 && (fit.theta[0][1] - 1.0).abs() < 1e-8);
+/// ```
+pub fn iv4_multi(records: &[IvRecord<'_>], orders: &ArxOrders) -> Result<Iv4Fit> {
+    let Some(first) = records.first() else {
+        return Err(SysidError::invalid(
+            "experiments",
+            "needs at least one (u, y) record",
+        ));
+    };
+    let (ny, nu) = (first.y.ncols(), first.u.ncols());
+    if ny == 0 || nu == 0 {
+        return Err(SysidError::invalid(
+            "data",
+            "iv4 needs at least one input and one output",
+        ));
+    }
+    check_orders(orders, ny, nu)?;
+    let mut recs = Vec::with_capacity(records.len());
+    for rec in records {
+        let n = rec.y.nrows();
+        let bad = rec.u.nrows() != n
+            || rec.u.ncols() != nu
+            || rec.y.ncols() != ny
+            || rec.r.map(|r| r.ncols()) != first.r.map(|r| r.ncols())
+            || rec.r.is_some_and(|r| r.nrows() != n || r.ncols() == 0);
+        if bad {
+            return Err(SysidError::ShapeMismatch {
+                what: "u, y, reference".into(),
+                expected: format!(
+                    "(N, {nu}), (N, {ny}) and a reference with N rows in every experiment \
+                     or in none (the same number of columns in each)"
+                ),
+                got: format!(
+                    "({}, {}), ({}, {}){}",
+                    rec.u.nrows(),
+                    rec.u.ncols(),
+                    n,
+                    rec.y.ncols(),
+                    rec.r.map_or(String::new(), |r| format!(
+                        ", ({}, {})",
+                        r.nrows(),
+                        r.ncols()
+                    ))
+                ),
+            });
+        }
+        check_finite("u", rec.u)?;
+        check_finite("y", rec.y)?;
+        if let Some(r) = rec.r {
+            check_finite("reference", r)?;
+        }
+        let u = columns(rec.u);
+        recs.push(Rec {
+            y: columns(rec.y),
+            r: rec.r.map_or_else(|| u.clone(), columns),
+            u,
+        });
+    }
+    let total: usize = records.iter().map(|r| r.y.nrows()).sum();
+    let pmax = (0..ny).map(|i| n_params(orders, i)).max().unwrap_or(0);
+    let lag = (0..ny).map(|i| first_row(orders, i)).max().unwrap_or(0);
+    let need = pmax
+        .saturating_add(lag)
+        .saturating_mul(4)
+        .saturating_add(10);
+    if total < need {
+        return Err(SysidError::InsufficientData {
+            context: format!("iv4 with {pmax} parameters per equation (largest lag {lag})"),
+            needed: need,
+            got: total,
+            fix: "use a longer record or smaller orders",
+        });
+    }
+    let solve_all = |sums: &[Sums]| -> Result<Vec<Vec<f64>>> {
+        sums.iter().map(|(r, v, _, _)| solve(r, v)).collect()
+    };
+    let closed_loop = records.iter().any(|r| r.r.is_some());
+    // Closed loop: instruments are the parts of y and u explained by the reference (fixed
+    // through the stages). Open loop: stage 1 is least squares and the instruments are
+    // simulated from the previous stage's model (the projection if that model is unstable).
+    let fixed = if closed_loop {
+        Some(projected(&recs)?)
+    } else {
+        None
+    };
+    let instruments = |theta: &[Vec<f64>]| -> Result<Vec<Inst>> {
+        match &fixed {
+            Some(z) => Ok(z.clone()),
+            None => match simulated(orders, theta, &recs) {
+                Some(z) => Ok(z),
+                None => projected(&recs),
+            },
+        }
+    };
+    // Stage 1: least squares (open loop) or IV with the reference instruments.
+    let th1 = solve_all(&stage(orders, &recs, fixed.as_deref(), None))?;
+    // Stage 2: instruments from the stage-1 model.
+    let z1 = instruments(&th1)?;
+    let th2 = solve_all(&stage(orders, &recs, Some(&z1), None))?;
+    // Stage 3: AR prefilters of the stage-2 equation errors.
+    let l = prefilters(orders, &th2, &recs);
+    // Stage 4: prefiltered IV with instruments from the stage-2 model.
+    let z2 = instruments(&th2)?;
+    let th4 = solve_all(&stage(orders, &recs, Some(&z2), Some(&l)))?;
+    // Covariance at the estimate: prefilter and instruments rebuilt from it.
+    let l4 = prefilters(orders, &th4, &recs);
+    let z4 = instruments(&th4)?;
+    let sums = stage(orders, &recs, Some(&z4), Some(&l4));
+    let mut covariance = Vec::with_capacity(ny);
+    let mut noise_variance = Vec::with_capacity(ny);
+    for (i, (r, _, s, rows)) in sums.iter().enumerate() {
+        let start = first_row(orders, i);
+        let (mut ss, mut cnt) = (0.0, 0usize);
+        for rec in &recs {
+            let w = equation_error(orders, i, &th4[i], &rec.y, &rec.u);
+            let wf = filter(&l4[i], &[1.0], &w);
+            for v in wf.iter().skip(start) {
+                ss += v * v;
+                cnt += 1;
+            }
+        }
+        let lam = ss / cnt.max(1) as f64;
+        let p = r.nrows();
+        let ri = r.partial_piv_lu().solve(Mat::<f64>::identity(p, p));
+        let cov = &ri * s * ri.transpose() * faer::Scale(lam);
+        debug_assert_eq!(*rows, cnt);
+        covariance.push(cov);
+        noise_variance.push(lam);
+    }
+    Ok(Iv4Fit {
+        theta: th4,
+        covariance,
+        noise_variance,
+    })
+}
+
+/// IV4 estimate `[a_1..a_na, b_0..b_{nb-1}]` of the single-input single-output
+/// `A y = B u(t-nk) + v`. With `reference` (closed-loop data), the instruments are built from
+/// the reference instead of the input.
 ///
 /// ```
 /// use sysid_core::polynomial::{filter::filter, iv::iv4};
@@ -92,48 +580,21 @@ pub fn iv4(
             "u, y (and reference) need equal lengths",
         ));
     }
-    if nb == 0 {
-        return Err(SysidError::invalid("nb", "iv4 needs nb >= 1"));
-    }
-    let p = na.saturating_add(nb);
-    let need = p.saturating_add(nk).saturating_mul(4).saturating_add(10);
-    if y.len() < need {
-        return Err(SysidError::InsufficientData {
-            context: format!("iv4 with {p} parameters (na={na}, nb={nb}, nk={nk})"),
-            needed: need,
-            got: y.len(),
-            fix: "use a longer record or smaller orders",
-        });
-    }
-    let r = reference.unwrap_or(u);
-    // Stage 1: least squares (instruments = regressors), or reference-lag IV in closed loop.
-    let th1 = if reference.is_some() {
-        let rl = delayed(r, nb + nk);
-        iv_solve(y, u, &rl, r, na, nb, nk)?
-    } else {
-        iv_solve(y, u, y, u, na, nb, nk)?
+    let ym = MatRef::from_column_major_slice(y, y.len(), 1);
+    let um = MatRef::from_column_major_slice(u, u.len(), 1);
+    let rm = reference.map(|r| MatRef::from_column_major_slice(r, r.len(), 1));
+    let o = ArxOrders {
+        na: vec![vec![na]],
+        nb: vec![vec![nb]],
+        nk: vec![vec![nk]],
     };
-    // Stage 2: instruments from the simulated noise-free output of stage 1.
-    let (a1, b1) = split(&th1, na);
-    let x1 = filter(&b1, &a1, &delayed(r, nk));
-    let th2 = iv_solve(y, u, &x1, r, na, nb, nk)?;
-    // Stage 3: AR model L of the equation error, order na + nb.
-    let (a2, b2) = split(&th2, na);
-    let ay = filter(&a2, &[1.0], y);
-    let bu = filter(&b2, &[1.0], &delayed(u, nk));
-    let w: Vec<f64> = ay.iter().zip(&bu).map(|(a, b)| a - b).collect();
-    let nl = na + nb;
-    let zero = vec![0.0; w.len()];
-    let lth = iv_solve(&w, &zero, &w, &zero, nl, 0, 0).unwrap_or_else(|_| vec![0.0; nl]);
-    let l = monic(&lth);
-    // Stage 4: prefiltered IV with instruments from the stage-2 model.
-    let x2 = filter(&b2, &a2, &delayed(r, nk));
-    let (yf, uf, xf, rf) = (
-        filter(&l, &[1.0], y),
-        filter(&l, &[1.0], u),
-        filter(&l, &[1.0], &x2),
-        filter(&l, &[1.0], r),
-    );
-    let th = iv_solve(&yf, &uf, &xf, &rf, na, nb, nk)?;
-    Ok(th)
+    let fit = iv4_multi(
+        &[IvRecord {
+            u: um,
+            y: ym,
+            r: rm,
+        }],
+        &o,
+    )?;
+    Ok(fit.theta.into_iter().next().unwrap_or_default())
 }

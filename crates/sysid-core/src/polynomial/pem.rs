@@ -70,12 +70,25 @@ impl MisoOrders {
     }
 }
 
-/// Prediction-error problem of one output: residual `e = D/C (A y - sum B_j/F_j x_j)`,
-/// `x_j(t) = u_j(t - nk_j)`, zero initial conditions.
-pub struct MisoProblem {
-    orders: MisoOrders,
+/// A signal of several experiments: one vector per experiment.
+type Sig = Vec<Vec<f64>>;
+
+/// Residual `e`, equation error `v` and filtered inputs `w_j` of one experiment.
+type Signals = (Vec<f64>, Vec<f64>, Vec<Vec<f64>>);
+
+/// One experiment of a [`MisoProblem`]: the output and the delayed inputs.
+struct Segment {
     y: Vec<f64>,
     x: Vec<Vec<f64>>,
+}
+
+/// Prediction-error problem of one output: residual `e = D/C (A y - sum B_j/F_j x_j)`,
+/// `x_j(t) = u_j(t - nk_j)`, zero initial conditions. With several experiments the cost,
+/// gradient and Gauss-Newton matrix are sums over the experiments, each filtered from rest
+/// (no sample of one experiment enters a regressor of another).
+pub struct MisoProblem {
+    orders: MisoOrders,
+    segs: Vec<Segment>,
     block: usize,
 }
 
@@ -94,15 +107,31 @@ fn shifted(s: &[f64], t: usize, k: usize) -> f64 {
     }
 }
 
-impl MisoProblem {
-    /// Output column `y` (length N) and inputs `u` (N x m).
-    pub fn new(y: &[f64], u: MatRef<'_, f64>, orders: MisoOrders) -> Result<Self> {
-        let m = u.ncols();
-        if orders.nb.len() != m || orders.nf.len() != m || orders.nk.len() != m {
-            return Err(SysidError::invalid(
-                "orders",
-                format!("nb, nf and nk need one entry per input ({m})"),
-            ));
+/// Checks one output's experiments against `orders`; returns the total sample count.
+fn check_experiments(
+    experiments: &[(&[f64], MatRef<'_, f64>)],
+    orders: &MisoOrders,
+) -> Result<usize> {
+    let Some(first) = experiments.first() else {
+        return Err(SysidError::invalid(
+            "experiments",
+            "needs at least one (y, u) record",
+        ));
+    };
+    let m = first.1.ncols();
+    if orders.nb.len() != m || orders.nf.len() != m || orders.nk.len() != m {
+        return Err(SysidError::invalid(
+            "orders",
+            format!("nb, nf and nk need one entry per input ({m})"),
+        ));
+    }
+    for (y, u) in experiments {
+        if u.ncols() != m {
+            return Err(SysidError::ShapeMismatch {
+                what: "u".into(),
+                expected: format!("{m} columns in every experiment"),
+                got: format!("{} columns", u.ncols()),
+            });
         }
         if m > 0 && u.nrows() != y.len() {
             return Err(SysidError::ShapeMismatch {
@@ -111,7 +140,7 @@ impl MisoProblem {
                 got: format!("{} rows", u.nrows()),
             });
         }
-        check_finite("u", u)?;
+        check_finite("u", *u)?;
         if let Some(t) = y.iter().position(|v| !v.is_finite()) {
             return Err(SysidError::NonFinite {
                 what: "y",
@@ -119,41 +148,65 @@ impl MisoProblem {
                 channel: 0,
             });
         }
-        let p = orders.n_params();
-        if p == 0 {
-            return Err(SysidError::invalid(
-                "orders",
-                "the structure has no parameters",
-            ));
-        }
-        let need = p.saturating_mul(2).saturating_add(2);
-        if y.len() < need || orders.nk.iter().any(|&k| k >= y.len()) {
-            return Err(SysidError::InsufficientData {
-                context: format!(
-                    "a polynomial model with {p} parameters and delays nk={:?}",
-                    orders.nk
-                ),
-                needed: need.max(orders.nk.iter().max().map_or(0, |k| k.saturating_add(1))),
-                got: y.len(),
-                fix: "use a longer record or smaller orders",
-            });
-        }
-        let x = (0..m).map(|j| delayed(u, j, orders.nk[j])).collect();
+    }
+    let p = orders.n_params();
+    if p == 0 {
+        return Err(SysidError::invalid(
+            "orders",
+            "the structure has no parameters",
+        ));
+    }
+    let total: usize = experiments.iter().map(|e| e.0.len()).sum();
+    let longest = experiments.iter().map(|e| e.0.len()).max().unwrap_or(0);
+    let need = p.saturating_mul(2).saturating_add(2);
+    if total < need || orders.nk.iter().any(|&k| k >= longest) {
+        return Err(SysidError::InsufficientData {
+            context: format!(
+                "a polynomial model with {p} parameters and delays nk={:?}",
+                orders.nk
+            ),
+            needed: need.max(orders.nk.iter().max().map_or(0, |k| k.saturating_add(1))),
+            got: total,
+            fix: "use a longer record or smaller orders",
+        });
+    }
+    Ok(total)
+}
+
+impl MisoProblem {
+    /// Output column `y` (length N) and inputs `u` (N x m).
+    pub fn new(y: &[f64], u: MatRef<'_, f64>, orders: MisoOrders) -> Result<Self> {
+        Self::new_multi(&[(y, u)], orders)
+    }
+
+    /// Several experiments `(y, u)` of the same output and inputs (lengths may differ).
+    pub fn new_multi(
+        experiments: &[(&[f64], MatRef<'_, f64>)],
+        orders: MisoOrders,
+    ) -> Result<Self> {
+        check_experiments(experiments, &orders)?;
+        let segs = experiments
+            .iter()
+            .map(|(y, u)| Segment {
+                y: y.to_vec(),
+                x: (0..u.ncols())
+                    .map(|j| delayed(*u, j, orders.nk[j]))
+                    .collect(),
+            })
+            .collect();
         Ok(Self {
             orders,
-            y: y.to_vec(),
-            x,
+            segs,
             block: 128,
         })
     }
 
-    /// Residuals and the intermediate signals `(e, v, w_j)`.
-    fn signals(&self, p: &MisoPolys) -> (Vec<f64>, Vec<f64>, Vec<Vec<f64>>) {
-        let w: Vec<Vec<f64>> = (0..self.x.len())
-            .map(|j| filter(&p.b[j], &p.f[j], &self.x[j]))
+    /// Residuals and the intermediate signals `(e, v, w_j)` of one experiment.
+    fn signals(seg: &Segment, p: &MisoPolys) -> Signals {
+        let w: Vec<Vec<f64>> = (0..seg.x.len())
+            .map(|j| filter(&p.b[j], &p.f[j], &seg.x[j]))
             .collect();
-        let ay = filter(&p.a, &[1.0], &self.y);
-        let mut v = ay;
+        let mut v = filter(&p.a, &[1.0], &seg.y);
         for wj in &w {
             for (vt, wt) in v.iter_mut().zip(wj) {
                 *vt -= wt;
@@ -163,9 +216,93 @@ impl MisoProblem {
         (e, v, w)
     }
 
-    /// Residuals at `theta`.
+    /// Residuals at `theta`, experiment after experiment (each from rest).
     pub fn residuals(&self, theta: &[f64]) -> Vec<f64> {
-        self.signals(&self.orders.polys(theta)).0
+        let p = self.orders.polys(theta);
+        self.segs
+            .iter()
+            .flat_map(|s| Self::signals(s, &p).0)
+            .collect()
+    }
+
+    /// Adds one experiment's `J^T J` and `J^T e` (blocks of `self.block` rows) to `gn`, `grad`.
+    fn accumulate(
+        &self,
+        seg: &Segment,
+        p: &MisoPolys,
+        signals: &Signals,
+        gn: &mut Mat<f64>,
+        grad: &mut [f64],
+    ) {
+        let (e, v, w) = signals;
+        let o = &self.orders;
+        let np = o.n_params();
+        let n = seg.y.len();
+        let nx = seg.x.len();
+        let ya = filter(&p.d, &p.c, &seg.y);
+        let cf: Vec<Vec<f64>> = p.f.iter().map(|f| conv(&p.c, f)).collect();
+        let xf: Vec<Vec<f64>> = (0..nx).map(|j| filter(&p.d, &cf[j], &seg.x[j])).collect();
+        let wf: Vec<Vec<f64>> = (0..nx)
+            .map(|j| {
+                if o.nf[j] > 0 {
+                    filter(&p.d, &cf[j], &w[j])
+                } else {
+                    Vec::new()
+                }
+            })
+            .collect();
+        let ec = if o.nc > 0 {
+            filter(&[1.0], &p.c, e)
+        } else {
+            Vec::new()
+        };
+        let vc = if o.nd > 0 {
+            filter(&[1.0], &p.c, v)
+        } else {
+            Vec::new()
+        };
+        let mut jb = Mat::<f64>::zeros(self.block, np);
+        let mut eb = Mat::<f64>::zeros(self.block, 1);
+        let mut t0 = 0;
+        while t0 < n {
+            let rows = self.block.min(n - t0);
+            for r in 0..rows {
+                let t = t0 + r;
+                let mut c = 0;
+                for k in 1..=o.na {
+                    jb[(r, c)] = shifted(&ya, t, k);
+                    c += 1;
+                }
+                for j in 0..nx {
+                    for k in 0..o.nb[j] {
+                        jb[(r, c)] = -shifted(&xf[j], t, k);
+                        c += 1;
+                    }
+                }
+                for k in 1..=o.nc {
+                    jb[(r, c)] = -shifted(&ec, t, k);
+                    c += 1;
+                }
+                for k in 1..=o.nd {
+                    jb[(r, c)] = shifted(&vc, t, k);
+                    c += 1;
+                }
+                for j in 0..nx {
+                    for k in 1..=o.nf[j] {
+                        jb[(r, c)] = shifted(&wf[j], t, k);
+                        c += 1;
+                    }
+                }
+                eb[(r, 0)] = e[t];
+            }
+            let jr = jb.as_ref().subrows(0, rows);
+            *gn += jr.transpose() * jr;
+            let g = jr.transpose() * eb.as_ref().subrows(0, rows);
+            for a in 0..np {
+                grad[a] += g[(a, 0)];
+            }
+            t0 += rows;
+        }
     }
 }
 
@@ -182,8 +319,12 @@ impl Problem for MisoProblem {
     fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
         let o = &self.orders;
         let p = o.polys(theta);
-        let (e, v, w) = self.signals(&p);
-        let cost = 0.5 * e.iter().map(|x| x * x).sum::<f64>();
+        let sigs: Vec<_> = self.segs.iter().map(|s| Self::signals(s, &p)).collect();
+        let cost = 0.5
+            * sigs
+                .iter()
+                .map(|(e, _, _)| e.iter().map(|x| x * x).sum::<f64>())
+                .sum::<f64>();
         if !cost.is_finite() {
             return Ok(Evaluation::cost_only(f64::INFINITY));
         }
@@ -192,74 +333,10 @@ impl Problem for MisoProblem {
             return Ok(ev);
         }
         let np = o.n_params();
-        let n = self.y.len();
-        let ya = filter(&p.d, &p.c, &self.y);
-        let cf: Vec<Vec<f64>> = p.f.iter().map(|f| conv(&p.c, f)).collect();
-        let xf: Vec<Vec<f64>> = (0..self.x.len())
-            .map(|j| filter(&p.d, &cf[j], &self.x[j]))
-            .collect();
-        let wf: Vec<Vec<f64>> = (0..self.x.len())
-            .map(|j| {
-                if o.nf[j] > 0 {
-                    filter(&p.d, &cf[j], &w[j])
-                } else {
-                    Vec::new()
-                }
-            })
-            .collect();
-        let ec = if o.nc > 0 {
-            filter(&[1.0], &p.c, &e)
-        } else {
-            Vec::new()
-        };
-        let vc = if o.nd > 0 {
-            filter(&[1.0], &p.c, &v)
-        } else {
-            Vec::new()
-        };
         let mut gn = Mat::<f64>::zeros(np, np);
         let mut grad = vec![0.0; np];
-        let mut jb = Mat::<f64>::zeros(self.block, np);
-        let mut eb = Mat::<f64>::zeros(self.block, 1);
-        let mut t0 = 0;
-        while t0 < n {
-            let rows = self.block.min(n - t0);
-            for r in 0..rows {
-                let t = t0 + r;
-                let mut c = 0;
-                for k in 1..=o.na {
-                    jb[(r, c)] = shifted(&ya, t, k);
-                    c += 1;
-                }
-                for j in 0..self.x.len() {
-                    for k in 0..o.nb[j] {
-                        jb[(r, c)] = -shifted(&xf[j], t, k);
-                        c += 1;
-                    }
-                }
-                for k in 1..=o.nc {
-                    jb[(r, c)] = -shifted(&ec, t, k);
-                    c += 1;
-                }
-                for k in 1..=o.nd {
-                    jb[(r, c)] = shifted(&vc, t, k);
-                    c += 1;
-                }
-                for j in 0..self.x.len() {
-                    for k in 1..=o.nf[j] {
-                        jb[(r, c)] = shifted(&wf[j], t, k);
-                        c += 1;
-                    }
-                }
-                eb[(r, 0)] = e[t];
-            }
-            let jr = jb.as_ref().subrows(0, rows);
-            gn += jr.transpose() * jr;
-            let g = jr.transpose() * eb.as_ref().subrows(0, rows);
-            for a in 0..np {
-                grad[a] += g[(a, 0)];
-            }
-            t0 += rows;
+        for (seg, sig) in self.segs.iter().zip(&sigs) {
+            self.accumulate(seg, &p, sig, &mut gn, &mut grad);
         }
         ev.gradient = grad;
         ev.gauss_newton = gn;
@@ -267,8 +344,13 @@ impl Problem for MisoProblem {
     }
 }
 
-/// Least squares of `target` on lagged signals: `regs` lists `(signal, first_lag, n_lags)`.
-fn lagged_ls(target: &[f64], regs: &[(&[f64], usize, usize)]) -> Result<Vec<f64>> {
+fn fmap(b: &[f64], a: &[f64], s: &Sig) -> Sig {
+    s.iter().map(|x| filter(b, a, x)).collect()
+}
+
+/// Least squares of `target` on lagged signals: `regs` lists `(signal, first_lag, n_lags)`;
+/// rows `t >= max(first_lag + n_lags)` of every experiment.
+fn lagged_ls(target: &Sig, regs: &[(&Sig, usize, usize)]) -> Result<Vec<f64>> {
     let p: usize = regs.iter().map(|r| r.2).sum();
     if p == 0 {
         return Ok(Vec::new());
@@ -276,16 +358,18 @@ fn lagged_ls(target: &[f64], regs: &[(&[f64], usize, usize)]) -> Result<Vec<f64>
     let start = regs.iter().map(|r| r.1 + r.2).max().unwrap_or(0);
     let mut acc = QrAccumulator::new(p + 1, 256);
     let mut row = vec![0.0; p + 1];
-    for t in start..target.len() {
-        let mut c = 0;
-        for (s, first, nl) in regs {
-            for k in *first..*first + *nl {
-                row[c] = s[t - k];
-                c += 1;
+    for (ex, tgt) in target.iter().enumerate() {
+        for t in start..tgt.len() {
+            let mut c = 0;
+            for (s, first, nl) in regs {
+                for k in *first..*first + *nl {
+                    row[c] = s[ex][t - k];
+                    c += 1;
+                }
             }
+            row[p] = tgt[t];
+            acc.push_row(&row);
         }
-        row[p] = target[t];
-        acc.push_row(&row);
     }
     let r = acc.finish();
     let dmax = (0..p).map(|d| r[(d, d)]).fold(0.0, f64::max);
@@ -312,14 +396,25 @@ pub fn steiglitz_mcbride(
     nf: usize,
     iters: usize,
 ) -> Result<(Vec<f64>, Vec<f64>)> {
+    steiglitz_mcbride_multi(&vec![y.to_vec()], &vec![x.to_vec()], nb, nf, iters)
+}
+
+/// [`steiglitz_mcbride`] over several experiments (each filtered from rest).
+fn steiglitz_mcbride_multi(
+    y: &Sig,
+    x: &Sig,
+    nb: usize,
+    nf: usize,
+    iters: usize,
+) -> Result<(Vec<f64>, Vec<f64>)> {
     let mut f = vec![0.0; nf];
     let mut b = vec![0.0; nb];
     for _ in 0..iters.max(1) {
         let fp = monic(&f);
         let (yf, xf) = if is_stable(&fp) {
-            (filter(&[1.0], &fp, y), filter(&[1.0], &fp, x))
+            (fmap(&[1.0], &fp, y), fmap(&[1.0], &fp, x))
         } else {
-            (y.to_vec(), x.to_vec())
+            (y.clone(), x.clone())
         };
         let th = lagged_ls(&yf, &[(&yf, 1, nf), (&xf, 0, nb)])?;
         let fnew: Vec<f64> = th[..nf].iter().map(|v| -v).collect();
@@ -345,13 +440,43 @@ fn stable_or_zero(c: Vec<f64>) -> Vec<f64> {
     }
 }
 
+/// `target - sum_j B_j/F_j x_j` per experiment.
+fn minus_filtered(target: &Sig, x: &[Sig], b: &[Vec<f64>], f: &[Vec<f64>]) -> Sig {
+    let mut v = target.clone();
+    for j in 0..x.len() {
+        let fj = monic(&f[j]);
+        for (ve, xe) in v.iter_mut().zip(&x[j]) {
+            let w = filter(&b[j], &fj, xe);
+            ve.iter_mut().zip(&w).for_each(|(vt, wt)| *vt -= wt);
+        }
+    }
+    v
+}
+
 /// Starting parameters: ARX / Hannan-Rissanen for `A, B, C`; Steiglitz-McBride (one input) or
 /// least squares with `F = 1` for OE parts; Hannan-Rissanen on the output-error residual for
 /// the noise model `C/D` of Box-Jenkins structures.
 pub fn initial_guess(y: &[f64], u: MatRef<'_, f64>, o: &MisoOrders) -> Result<Vec<f64>> {
-    let m = u.ncols();
-    let x: Vec<Vec<f64>> = (0..m).map(|j| delayed(u, j, o.nk[j])).collect();
-    let n = y.len();
+    initial_guess_multi(&[(y, u)], o)
+}
+
+/// [`initial_guess`] from several experiments (every regression row inside one experiment).
+pub fn initial_guess_multi(
+    experiments: &[(&[f64], MatRef<'_, f64>)],
+    o: &MisoOrders,
+) -> Result<Vec<f64>> {
+    check_experiments(experiments, o)?;
+    let m = experiments[0].1.ncols();
+    let y: Sig = experiments.iter().map(|e| e.0.to_vec()).collect();
+    let x: Vec<Sig> = (0..m)
+        .map(|j| {
+            experiments
+                .iter()
+                .map(|(_, u)| delayed(*u, j, o.nk[j]))
+                .collect()
+        })
+        .collect();
+    let n = experiments.iter().map(|e| e.0.len()).max().unwrap_or(0);
     let has_f = o.nf.iter().any(|&f| f > 0);
     let mut a = vec![0.0; o.na];
     let mut b: Vec<Vec<f64>> = o.nb.iter().map(|&k| vec![0.0; k]).collect();
@@ -362,41 +487,43 @@ pub fn initial_guess(y: &[f64], u: MatRef<'_, f64>, o: &MisoOrders) -> Result<Ve
     let high = (o.na.max(o.nc).max(o.nd) + o.nf.iter().copied().max().unwrap_or(0) + 4)
         .min(n / 10)
         .max(1);
-    let innov = |target: &[f64], xs: &[Vec<f64>], ar_only: bool| -> Result<Vec<f64>> {
-        let mut regs: Vec<(&[f64], usize, usize)> = vec![(target, 1, high)];
+    let innov = |target: &Sig, xs: &[Sig], ar_only: bool| -> Result<Sig> {
+        let mut regs: Vec<(&Sig, usize, usize)> = vec![(target, 1, high)];
         if !ar_only {
             for xj in xs {
-                regs.push((xj.as_slice(), 0, high));
+                regs.push((xj, 0, high));
             }
         }
         let th = lagged_ls(target, &regs)?;
-        let mut e = target.to_vec();
-        for t in 0..n {
-            let mut s = 0.0;
-            let mut c = 0;
-            for (sig, first, nl) in &regs {
-                for k in *first..*first + *nl {
-                    s += th[c] * shifted(sig, t, k);
-                    c += 1;
+        let mut out = target.clone();
+        for (ex, e) in out.iter_mut().enumerate() {
+            for (t, et) in e.iter_mut().enumerate() {
+                let mut s = 0.0;
+                let mut c = 0;
+                for (sig, first, nl) in &regs {
+                    for k in *first..*first + *nl {
+                        s += th[c] * shifted(&sig[ex], t, k);
+                        c += 1;
+                    }
                 }
+                *et -= s;
             }
-            e[t] -= s;
         }
-        Ok(e)
+        Ok(out)
     };
     if !has_f {
         // A, B (and C, D if any) jointly: ARX or Hannan-Rissanen.
         let ehat = if o.nc > 0 || o.nd > 0 {
-            innov(y, &x, false)?
+            innov(&y, &x, false)?
         } else {
-            vec![0.0; n]
+            y.iter().map(|e| vec![0.0; e.len()]).collect()
         };
-        let mut regs: Vec<(&[f64], usize, usize)> = vec![(y, 1, o.na)];
+        let mut regs: Vec<(&Sig, usize, usize)> = vec![(&y, 1, o.na)];
         for j in 0..m {
-            regs.push((x[j].as_slice(), 0, o.nb[j]));
+            regs.push((&x[j], 0, o.nb[j]));
         }
-        regs.push((ehat.as_slice(), 1, o.nc));
-        let th = lagged_ls(y, &regs)?;
+        regs.push((&ehat, 1, o.nc));
+        let th = lagged_ls(&y, &regs)?;
         a = th[..o.na].iter().map(|v| -v).collect();
         let mut i = o.na;
         for j in 0..m {
@@ -406,25 +533,18 @@ pub fn initial_guess(y: &[f64], u: MatRef<'_, f64>, o: &MisoOrders) -> Result<Ve
         c = stable_or_zero(th[i..i + o.nc].to_vec());
         if o.nd > 0 {
             // D from an AR fit of the equation error.
-            let mut v = filter(&monic(&a), &[1.0], y);
-            for j in 0..m {
-                let w = filter(&b[j], &[1.0], &x[j]);
-                v.iter_mut().zip(&w).for_each(|(vt, wt)| *vt -= wt);
-            }
-            let th = lagged_ls(&v, &[(v.as_slice(), 1, o.nd)])?;
+            let v = minus_filtered(&fmap(&monic(&a), &[1.0], &y), &x, &b, &f);
+            let th = lagged_ls(&v, &[(&v, 1, o.nd)])?;
             d = th.iter().map(|t| -t).collect();
         }
     } else {
-        let ya = filter(&monic(&a), &[1.0], y);
+        let ya = fmap(&monic(&a), &[1.0], &y);
         if m == 1 {
-            let (bb, ff) = steiglitz_mcbride(&ya, &x[0], o.nb[0], o.nf[0], 30)?;
+            let (bb, ff) = steiglitz_mcbride_multi(&ya, &x[0], o.nb[0], o.nf[0], 30)?;
             b[0] = bb;
             f[0] = ff;
         } else {
-            let mut regs: Vec<(&[f64], usize, usize)> = Vec::new();
-            for j in 0..m {
-                regs.push((x[j].as_slice(), 0, o.nb[j]));
-            }
+            let regs: Vec<(&Sig, usize, usize)> = (0..m).map(|j| (&x[j], 0, o.nb[j])).collect();
             let th = lagged_ls(&ya, &regs)?;
             let mut i = 0;
             for j in 0..m {
@@ -433,13 +553,9 @@ pub fn initial_guess(y: &[f64], u: MatRef<'_, f64>, o: &MisoOrders) -> Result<Ve
             }
         }
         if o.nc > 0 || o.nd > 0 {
-            let mut v = ya.clone();
-            for j in 0..m {
-                let w = filter(&b[j], &monic(&f[j]), &x[j]);
-                v.iter_mut().zip(&w).for_each(|(vt, wt)| *vt -= wt);
-            }
+            let v = minus_filtered(&ya, &x, &b, &f);
             let ehat = innov(&v, &[], true)?;
-            let th = lagged_ls(&v, &[(v.as_slice(), 1, o.nd), (ehat.as_slice(), 1, o.nc)])?;
+            let th = lagged_ls(&v, &[(&v, 1, o.nd), (&ehat, 1, o.nc)])?;
             d = th[..o.nd].iter().map(|t| -t).collect();
             c = stable_or_zero(th[o.nd..].to_vec());
         }
@@ -479,7 +595,21 @@ pub fn estimate(
     options: &Options,
     observer: &mut dyn FnMut(&Iteration) -> Flow,
 ) -> Result<MisoEstimate> {
-    let mut prob = MisoProblem::new(y, u, orders.clone())?;
+    estimate_multi(&[(y, u)], orders, theta0, options, observer)
+}
+
+/// [`estimate`] from several experiments `(y, u)`: the cost is the sum of the experiments'
+/// squared prediction errors, each experiment's predictor started from rest; the noise
+/// variance is `2 cost / (total samples)` and the covariance `noise_variance (J^T J)^+` with
+/// `J^T J` summed over the experiments.
+pub fn estimate_multi(
+    experiments: &[(&[f64], MatRef<'_, f64>)],
+    orders: MisoOrders,
+    theta0: Option<&[f64]>,
+    options: &Options,
+    observer: &mut dyn FnMut(&Iteration) -> Flow,
+) -> Result<MisoEstimate> {
+    let mut prob = MisoProblem::new_multi(experiments, orders.clone())?;
     let mut th0 = match theta0 {
         Some(t) => {
             if t.len() != orders.n_params() {
@@ -494,7 +624,7 @@ pub fn estimate(
             }
             t.to_vec()
         }
-        None => initial_guess(y, u, &orders)?,
+        None => initial_guess_multi(experiments, &orders)?,
     };
     if !prob.admissible(&th0) {
         if theta0.is_some() {
@@ -506,8 +636,8 @@ pub fn estimate(
         th0 = vec![0.0; orders.n_params()];
     }
     let solution = minimize(&mut prob, &th0, options, observer)?;
-    let n = y.len() as f64;
-    let noise_variance = 2.0 * solution.cost / n;
+    let n: usize = experiments.iter().map(|e| e.0.len()).sum();
+    let noise_variance = 2.0 * solution.cost / n as f64;
     let cov = crate::optim::covariance(solution.gauss_newton.as_ref(), noise_variance, 1e-10)?;
     Ok(MisoEstimate {
         solution,
