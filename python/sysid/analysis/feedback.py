@@ -32,17 +32,25 @@ from ..errors import DataError, InsufficientDataError
 __all__ = ["FeedbackTest", "check_feedback", "feedback_pvalues"]
 
 
-def _residual(x: np.ndarray, target: np.ndarray, rtol: float = 1e-9) -> tuple[float, int]:
-    """Residual sum of squares of ``target`` (a row of L) regressed on the rows ``x`` of L,
-    and the numerical rank of ``x`` (rows scaled to unit norm; exactly dependent rows, as
-    noise-free outputs give, do not count)."""
+def _row_space(x: np.ndarray, rtol: float = 1e-9) -> tuple[np.ndarray, int]:
+    """Orthonormal basis (rows) of the row space of ``x`` (rows of L) and its numerical rank
+    (rows scaled to unit norm; exactly dependent rows, as noise-free outputs give, do not
+    count)."""
     norms = np.linalg.norm(x, axis=1)
     xs = x[norms > 0] / norms[norms > 0, None]
     if xs.shape[0] == 0:
-        return float(target @ target), 0
+        return np.zeros((0, x.shape[1])), 0
     _, s, vt = np.linalg.svd(xs, full_matrices=False)
     r = int(np.sum(s > rtol * s[0]))
-    v = vt[:r]
+    return vt[:r], r
+
+
+def _residual(basis: tuple[np.ndarray, int], target: np.ndarray) -> tuple[float, int]:
+    """Residual sum of squares of ``target`` (a row of L) regressed on the rows whose
+    :func:`_row_space` is ``basis``, and their numerical rank."""
+    v, r = basis
+    if r == 0:
+        return float(target @ target), 0
     res = target - (target @ v.T) @ v
     return float(res @ res), r
 
@@ -113,14 +121,16 @@ def feedback_pvalues(factor: Any) -> tuple[np.ndarray, np.ndarray, int, int]:
     up = np.arange(f * m, (f + p) * m)
     yp = np.arange((f + p) * m, (f + p) * m + p * l)
     Fs, ps = np.zeros(m), np.ones(m)
-    rss_r_rank = [_residual(L[up], L[i]) for i in range(m)]
-    full = np.vstack([L[up], L[yp]])
+    # one SVD per regressor set, shared by the m inputs
+    past_u = _row_space(L[up])
+    rss_r_rank = [_residual(past_u, L[i]) for i in range(m)]
+    past_uy = _row_space(np.vstack([L[up], L[yp]]))
     q, df2 = p * l, n_cols - p * (m + l)
     for i in range(m):
         ui = L[i]
         total = float(ui @ ui)
         rss_r, r_r = rss_r_rank[i]
-        rss_f, r_f = _residual(full, ui)
+        rss_f, r_f = _residual(past_uy, ui)
         q, df2 = r_f - r_r, n_cols - r_f
         if q <= 0 or df2 <= 0 or total <= 0 or rss_r <= 1e-10 * total:
             continue  # deterministic input or no new regressor: no power, no claim
