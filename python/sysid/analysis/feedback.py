@@ -121,9 +121,13 @@ def feedback_pvalues(factor: Any) -> tuple[np.ndarray, np.ndarray, int, int]:
     up = np.arange(f * m, (f + p) * m)
     yp = np.arange((f + p) * m, (f + p) * m + p * l)
     Fs, ps = np.zeros(m), np.ones(m)
-    # one SVD per regressor set, shared by the m inputs
-    past_u = _row_space(L[up])
-    rss_r_rank = [_residual(past_u, L[i]) for i in range(m)]
+    # L is lower triangular: the rows U_f[0], U_p, Y_p vanish beyond column (f + p) m + p l,
+    # so the regressions use the leading columns only; one SVD per regressor set, shared by
+    # the m inputs
+    c = (f + p) * m + p * l
+    L = L[:, :c]
+    past_u = _row_space(L[up, : (f + p) * m])
+    rss_r_rank = [_residual(past_u, L[i, : (f + p) * m]) for i in range(m)]
     past_uy = _row_space(np.vstack([L[up], L[yp]]))
     q, df2 = p * l, n_cols - p * (m + l)
     for i in range(m):

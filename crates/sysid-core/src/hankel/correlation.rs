@@ -173,9 +173,9 @@ impl Segment {
 #[inline]
 fn add_outer(lag: &mut Mat<f64>, col0: usize, a: &[f64], b: &[f64]) {
     for (j, bj) in b.iter().enumerate() {
-        let mut col = lag.as_mut().col_mut(col0 + j);
-        for (i, ai) in a.iter().enumerate() {
-            col[i] += ai * bj;
+        let col = &mut lag.col_as_slice_mut(col0 + j)[..a.len()];
+        for (c, ai) in col.iter_mut().zip(a) {
+            *c += ai * bj;
         }
     }
 }
@@ -388,12 +388,20 @@ impl CorrelationSums {
 
     /// Appends samples to the open experiment.
     pub fn push(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> Result<()> {
+        self.push_impl(u, y, true)
+    }
+
+    /// [`CorrelationSums::push`]; `check: false` when the caller has just checked the chunk
+    /// (shapes and finite values) with [`check_chunk`].
+    fn push_impl(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>, check: bool) -> Result<()> {
         let u = if self.layout.n_inputs == 0 {
             u.subrows(0, 0)
         } else {
             u
         };
-        check_chunk(&self.layout, u, y, self.open_samples)?;
+        if check {
+            check_chunk(&self.layout, u, y, self.open_samples)?;
+        }
         let n = y.nrows();
         if n == 0 {
             return Ok(());
@@ -406,13 +414,12 @@ impl CorrelationSums {
             let s = b * br;
             let len = br.min(n - s);
             let mut x = vec![0.0; len * d];
-            for t in 0..len {
-                let row = &mut x[t * d..(t + 1) * d];
-                for c in 0..m {
-                    row[c] = (u[(s + t, c)] - center[c]) * inv[c];
-                }
-                for c in 0..(d - m) {
-                    row[m + c] = (y[(s + t, c)] - center[m + c]) * inv[m + c];
+            let (ub, yb) = (u.subrows(s, len), y.subrows(s, len));
+            for (c, (cc, ic)) in center.iter().zip(&inv).enumerate() {
+                let (src, col) = if c < m { (ub, c) } else { (yb, c - m) };
+                let src = src.col(col);
+                for (t, v) in src.iter().enumerate() {
+                    x[t * d + c] = (v - cc) * ic;
                 }
             }
             Segment::from_rows(&x, len, d, w)
@@ -458,21 +465,25 @@ impl CorrelationSums {
         }
         let t_cols = seg.n - w + 1;
         let (head, tail) = (&seg.head, &seg.tail);
+        let k = self.gram.nrows();
         for a in 0..w {
             for b in a..w {
                 let tau = b - a;
-                for i in 0..d {
-                    for j in 0..d {
-                        let mut v = seg.lag[(i, tau * d + j)];
+                for j in 0..d {
+                    let lag_col = seg.lag.col_as_slice(tau * d + j);
+                    for i in 0..d {
+                        let mut v = lag_col[i];
                         for t in 0..a {
                             v -= head[t * d + i] * head[(t + tau) * d + j];
                         }
                         for q in a..(w - 1 - tau) {
                             v -= tail[q * d + i] * tail[(q + tau) * d + j];
                         }
-                        self.gram[(a * d + i, b * d + j)] += v;
+                        let (r, c) = (a * d + i, b * d + j);
+                        debug_assert!(r < k && c < k);
+                        self.gram.col_as_slice_mut(c)[r] += v;
                         if a != b {
-                            self.gram[(b * d + j, a * d + i)] += v;
+                            self.gram.col_as_slice_mut(r)[c] += v;
                         }
                     }
                 }
@@ -758,7 +769,9 @@ impl Compressor for CorrelationCompressor {
             let (c, s) = CorrelationSums::center_scale(u0, y);
             let mut sums = CorrelationSums::new(self.layout, c, s)?;
             sums.set_blocking(self.options.block_rows, self.options.parallel);
+            let out = sums.push_impl(u, y, false);
             self.sums = Some(sums);
+            return out;
         }
         self.sums.as_mut().unwrap().push(u, y)
     }
