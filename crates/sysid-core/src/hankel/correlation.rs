@@ -414,7 +414,9 @@ impl CorrelationSums {
             let s = b * br;
             let len = br.min(n - s);
             let mut x = vec![0.0; len * d];
-            let (ub, yb) = (u.subrows(s, len), y.subrows(s, len));
+            // u has no rows when there are no inputs (output-only data)
+            let ub = if m == 0 { u } else { u.subrows(s, len) };
+            let yb = y.subrows(s, len);
             for (c, (cc, ic)) in center.iter().zip(&inv).enumerate() {
                 let (src, col) = if c < m { (ub, c) } else { (yb, c - m) };
                 let src = src.col(col);
