@@ -88,6 +88,7 @@ mod tests {
         let a = Mat::from_fn(1000, 1, |_, _| 0.1);
         let s = channel_stats(&[a.as_ref()]);
         assert_eq!(s.abs_max, vec![0.1]);
-        assert!(s.std[0] < 1e-15);
+        // a sequential sum of 1000 values 0.1 is off by a few ulps: the spread is round-off
+        assert!(s.std[0] < 1e-12 * 0.1);
     }
 }
