@@ -49,7 +49,9 @@ fn main() {
         let c1 = cpu_seconds();
         let sub = Subspace::new(&f, &SubspaceOptions::default()).unwrap();
         let t2 = std::time::Instant::now();
-        let id = sub.fit(8.min(sub.max_order()), &FitOptions::default()).unwrap();
+        let id = sub
+            .fit(8.min(sub.max_order()), &FitOptions::default())
+            .unwrap();
         let t3 = std::time::Instant::now();
         let flops = 4.0 * i as f64 * ((m + l) * (m + l)) as f64 * n as f64;
         eprintln!(

@@ -73,7 +73,10 @@ mod tests {
         let b = Mat::from_fn(20, 3, |i, j| ((i * 5 + j) % 7) as f64 * -0.91 + 2.0);
         let s = channel_stats(&[a.as_ref(), b.as_ref()]);
         for j in 0..3 {
-            let v: Vec<f64> = (0..50).map(|i| a[(i, j)]).chain((0..20).map(|i| b[(i, j)])).collect();
+            let v: Vec<f64> = (0..50)
+                .map(|i| a[(i, j)])
+                .chain((0..20).map(|i| b[(i, j)]))
+                .collect();
             let mean = v.iter().sum::<f64>() / 70.0;
             let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / 70.0;
             let big = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
