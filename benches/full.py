@@ -89,7 +89,9 @@ def gemm_rates() -> dict:
     return out
 
 
-def case_data(n: int, m: int, l: int, order: int, seed: int = 2024) -> tuple[Path, Path, np.ndarray]:
+def case_data(
+    n: int, m: int, l: int, order: int, seed: int = 2024
+) -> tuple[Path, Path, np.ndarray]:
     """The seeded record of benches/run.py (cached in benches/.data) and its validation."""
     from data import generate
 
@@ -329,10 +331,6 @@ def main() -> None:
         out_json.write_text(json.dumps(results, indent=1))
         write_report(name, results)
     print(f"whole run {time.perf_counter() - t_run:.0f} s", file=sys.stderr)
-
-
-def _f(x: float | None, spec: str = ".3g") -> str:
-    return "-" if x is None else format(x, spec)
 
 
 def write_report(name: str, results: dict) -> None:

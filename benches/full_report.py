@@ -61,10 +61,11 @@ def _floor(p: dict) -> list[str]:
     ]
     for r in p["rows"]:
         fl = r["floor_seconds"]
+        cold, warm = r.get("seconds"), r.get("warm_seconds")
         out.append(
-            f"| {r['n']:.0e} | {fl:.3f} | {_f(r.get('seconds'))} | {_f(r.get('warm_seconds'))} | "
-            f"{_f(r.get('compress_seconds'))} | {_f(r['seconds'] / fl if r.get('seconds') else None, '.2f')}x | "
-            f"{_f(r['warm_seconds'] / fl if r.get('warm_seconds') else None, '.2f')}x | "
+            f"| {r['n']:.0e} | {fl:.3f} | {_f(cold)} | {_f(warm)} | "
+            f"{_f(r.get('compress_seconds'))} | {_f(cold / fl if cold else None, '.2f')}x | "
+            f"{_f(warm / fl if warm else None, '.2f')}x | "
             f"{_f(r.get('pole_error'), '.1e')} |"
         )
     return out + [""]
