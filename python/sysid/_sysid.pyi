@@ -14,6 +14,7 @@ __all__ = [
     "hw_estimate",
     "hw_simulate",
     "AUTO_MIN_RELATIVE_PIVOT",
+    "channel_stats",
     "arx_fit",
     "iv4",
     "arx_struc",
