@@ -32,27 +32,19 @@ from ..errors import DataError, InsufficientDataError
 __all__ = ["FeedbackTest", "check_feedback", "feedback_pvalues"]
 
 
-def _row_space(x: np.ndarray, rtol: float = 1e-9) -> tuple[np.ndarray, int]:
-    """Orthonormal basis (rows) of the row space of ``x`` (rows of L) and its numerical rank
-    (rows scaled to unit norm; exactly dependent rows, as noise-free outputs give, do not
-    count)."""
+def _residuals(x: np.ndarray, targets: np.ndarray, rtol: float = 1e-9) -> tuple[np.ndarray, int]:
+    """Residual sums of squares of each row of ``targets`` (rows of L) regressed on the rows
+    ``x`` of L, and the numerical rank of ``x`` (rows scaled to unit norm; exactly dependent
+    rows, as noise-free outputs give, do not count). One least-squares solve (LAPACK's
+    SVD-based ``gelsd``, singular values below ``rtol`` times the largest dropped) for all
+    targets."""
     norms = np.linalg.norm(x, axis=1)
     xs = x[norms > 0] / norms[norms > 0, None]
     if xs.shape[0] == 0:
-        return np.zeros((0, x.shape[1])), 0
-    _, s, vt = np.linalg.svd(xs, full_matrices=False)
-    r = int(np.sum(s > rtol * s[0]))
-    return vt[:r], r
-
-
-def _residual(basis: tuple[np.ndarray, int], target: np.ndarray) -> tuple[float, int]:
-    """Residual sum of squares of ``target`` (a row of L) regressed on the rows whose
-    :func:`_row_space` is ``basis``, and their numerical rank."""
-    v, r = basis
-    if r == 0:
-        return float(target @ target), 0
-    res = target - (target @ v.T) @ v
-    return float(res @ res), r
+        return np.einsum("ij,ij->i", targets, targets), 0
+    coef, _, r, _ = np.linalg.lstsq(xs.T, targets.T, rcond=rtol)
+    res = targets - (xs.T @ coef).T
+    return np.einsum("ij,ij->i", res, res), int(r)
 
 
 def f_sf(F: float, d1: float, d2: float) -> float:
@@ -122,19 +114,17 @@ def feedback_pvalues(factor: Any) -> tuple[np.ndarray, np.ndarray, int, int]:
     yp = np.arange((f + p) * m, (f + p) * m + p * l)
     Fs, ps = np.zeros(m), np.ones(m)
     # L is lower triangular: the rows U_f[0], U_p, Y_p vanish beyond column (f + p) m + p l,
-    # so the regressions use the leading columns only; one SVD per regressor set, shared by
-    # the m inputs
+    # so the regressions use the leading columns only; one solve per regressor set, shared
+    # by the m inputs
     c = (f + p) * m + p * l
     L = L[:, :c]
-    past_u = _row_space(L[up, : (f + p) * m])
-    rss_r_rank = [_residual(past_u, L[i, : (f + p) * m]) for i in range(m)]
-    past_uy = _row_space(np.vstack([L[up], L[yp]]))
+    rss_rs, r_r = _residuals(L[up, : (f + p) * m], L[:m, : (f + p) * m])
+    rss_fs, r_f = _residuals(np.vstack([L[up], L[yp]]), L[:m])
     q, df2 = p * l, n_cols - p * (m + l)
     for i in range(m):
         ui = L[i]
         total = float(ui @ ui)
-        rss_r, r_r = rss_r_rank[i]
-        rss_f, r_f = _residual(past_uy, ui)
+        rss_r, rss_f = float(rss_rs[i]), float(rss_fs[i])
         q, df2 = r_f - r_r, n_cols - r_f
         if q <= 0 or df2 <= 0 or total <= 0 or rss_r <= 1e-10 * total:
             continue  # deterministic input or no new regressor: no power, no claim
