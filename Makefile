@@ -40,7 +40,7 @@ bench: build
 bench-quick: build
 	$(BIN)/python benches/run.py --quick
 
-# every figure of issue 16 in one run (about 15 min on 2 idle cores; parts: --parts NAME)
+# every figure of issue 16 in one run (about 25 min on 2 idle cores; parts: --parts NAME)
 bench-full: build
 	$(BIN)/python benches/full.py
 

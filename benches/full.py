@@ -1,6 +1,6 @@
 """Every benchmark figure of issue 16 from one run, or part by part.
 
-    python benches/full.py                        # everything (about 15 min on 2 idle cores)
+    python benches/full.py                        # everything (about 25 min on 2 idle cores)
     python benches/full.py --parts sippy floor    # some parts; the others keep their rows
     python benches/full.py --smoke                # small sizes, a few minutes: checks the run
 
