@@ -56,8 +56,8 @@ def _floor(p: dict) -> list[str]:
         "the `SubspaceEstimator(...)` call of the cold run.",
         "",
         "| N | floor (s) | whole cold (s) | whole warm (s) | compression, cold (s) | "
-        "cold / floor | warm / floor | pole error |",
-        "|---|---|---|---|---|---|---|---|",
+        "cold / floor | warm / floor | compression / floor | pole error |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in p["rows"]:
         fl = r["floor_seconds"]
@@ -66,6 +66,7 @@ def _floor(p: dict) -> list[str]:
             f"| {r['n']:.0e} | {fl:.3f} | {_f(cold)} | {_f(warm)} | "
             f"{_f(r.get('compress_seconds'))} | {_f(cold / fl if cold else None, '.2f')}x | "
             f"{_f(warm / fl if warm else None, '.2f')}x | "
+            f"{_f(r['compress_seconds'] / fl if r.get('compress_seconds') else None, '.2f')}x | "
             f"{_f(r.get('pole_error'), '.1e')} |"
         )
     return out + [""]
