@@ -4,7 +4,7 @@ VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.deps-installed
 
-.PHONY: demo test test-rust test-python lint build bench bench-quick bench-full clean fuzz
+.PHONY: demo test test-rust test-python lint build bench bench-quick bench-full bench-grid clean fuzz
 
 $(STAMP): pyproject.toml Makefile
 	$(PY) -m venv $(VENV)
@@ -40,7 +40,12 @@ bench: build
 bench-quick: build
 	$(BIN)/python benches/run.py --quick
 
+# every figure of issue 16 in one run (about 25 min on 2 idle cores; parts: --parts NAME)
 bench-full: build
+	$(BIN)/python benches/full.py
+
+# the peer grid of benches/run.py (hours: every tool up to 10^6 samples)
+bench-grid: build
 	$(BIN)/python benches/run.py --full
 
 # Fuzz the compressors and the estimators for FUZZ_SECONDS each (needs a nightly toolchain

@@ -99,12 +99,13 @@ def grid(kind: str) -> list[dict]:
 
 
 def run_one(
-    py: Path, tool: str, data: Path, val: Path, case: dict, timeout: float, mem_gb: float
+    py: Path, tool: str, data: Path, val: Path, case: dict, timeout: float, mem_gb: float,
+    repeat: int = 1,
 ) -> dict:
     cmd = [
         str(py), str(HERE / "worker.py"), "--tool", tool, "--data", str(data),
         "--m", str(case["m"]), "--horizon", str(case["i"]), "--order", str(case["order"]),
-        "--memory-limit-gb", str(mem_gb), "--validation", str(val),
+        "--memory-limit-gb", str(mem_gb), "--validation", str(val), "--repeat", str(repeat),
     ]
     env = {"PYTHONPATH": str(ROOT / "python"), "PATH": "/usr/bin:/bin"}
     t0 = time.perf_counter()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 import numpy as np
@@ -53,7 +54,10 @@ def unmask(x: Any, name: str) -> Any:
     A masked sample is a missing sample: it is never silently replaced by the value under
     the mask.
     """
-    if not isinstance(x, np.ma.MaskedArray):
+    # `np.ma` is imported on first attribute access (0.1-0.2 s); a masked array cannot exist
+    # before it is, so plain arrays skip it
+    ma = sys.modules.get("numpy.ma")
+    if ma is None or not isinstance(x, ma.MaskedArray):
         return x
     mask = np.ma.getmaskarray(x)
     if mask.any():

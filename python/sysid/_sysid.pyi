@@ -16,6 +16,7 @@ __all__ = [
     "hw_mimo_estimate",
     "hw_mimo_simulate",
     "AUTO_MIN_RELATIVE_PIVOT",
+    "channel_stats",
     "arx_fit",
     "iv4",
     "arx_struc",
@@ -99,6 +100,8 @@ def compress(
     chunk_rows: int | None = None,
     compressor: str = "auto",
 ) -> HankelFactor: ...
+
+def channel_stats(parts: list[_Array]) -> tuple[_Array, _Array, _Array]: ...
 
 @final
 class Subspace:

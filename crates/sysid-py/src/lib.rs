@@ -18,6 +18,7 @@ mod realization;
 mod recursive;
 mod search;
 mod simulate;
+mod stats;
 mod streaming;
 mod subspace;
 
@@ -36,5 +37,6 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     greybox::register(m)?;
     narx::register(m)?;
     hw::register(m)?;
+    stats::register(m)?;
     Ok(())
 }

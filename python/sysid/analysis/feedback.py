@@ -32,19 +32,19 @@ from ..errors import DataError, InsufficientDataError
 __all__ = ["FeedbackTest", "check_feedback", "feedback_pvalues"]
 
 
-def _residual(x: np.ndarray, target: np.ndarray, rtol: float = 1e-9) -> tuple[float, int]:
-    """Residual sum of squares of ``target`` (a row of L) regressed on the rows ``x`` of L,
-    and the numerical rank of ``x`` (rows scaled to unit norm; exactly dependent rows, as
-    noise-free outputs give, do not count)."""
+def _residuals(x: np.ndarray, targets: np.ndarray, rtol: float = 1e-9) -> tuple[np.ndarray, int]:
+    """Residual sums of squares of each row of ``targets`` (rows of L) regressed on the rows
+    ``x`` of L, and the numerical rank of ``x`` (rows scaled to unit norm; exactly dependent
+    rows, as noise-free outputs give, do not count). One least-squares solve (LAPACK's
+    SVD-based ``gelsd``, singular values below ``rtol`` times the largest dropped) for all
+    targets."""
     norms = np.linalg.norm(x, axis=1)
     xs = x[norms > 0] / norms[norms > 0, None]
     if xs.shape[0] == 0:
-        return float(target @ target), 0
-    _, s, vt = np.linalg.svd(xs, full_matrices=False)
-    r = int(np.sum(s > rtol * s[0]))
-    v = vt[:r]
-    res = target - (target @ v.T) @ v
-    return float(res @ res), r
+        return np.einsum("ij,ij->i", targets, targets), 0
+    coef, _, r, _ = np.linalg.lstsq(xs.T, targets.T, rcond=rtol)
+    res = targets - (xs.T @ coef).T
+    return np.einsum("ij,ij->i", res, res), int(r)
 
 
 def f_sf(F: float, d1: float, d2: float) -> float:
@@ -113,14 +113,18 @@ def feedback_pvalues(factor: Any) -> tuple[np.ndarray, np.ndarray, int, int]:
     up = np.arange(f * m, (f + p) * m)
     yp = np.arange((f + p) * m, (f + p) * m + p * l)
     Fs, ps = np.zeros(m), np.ones(m)
-    rss_r_rank = [_residual(L[up], L[i]) for i in range(m)]
-    full = np.vstack([L[up], L[yp]])
+    # L is lower triangular: the rows U_f[0], U_p, Y_p vanish beyond column (f + p) m + p l,
+    # so the regressions use the leading columns only; one solve per regressor set, shared
+    # by the m inputs
+    c = (f + p) * m + p * l
+    L = L[:, :c]
+    rss_rs, r_r = _residuals(L[up, : (f + p) * m], L[:m, : (f + p) * m])
+    rss_fs, r_f = _residuals(np.vstack([L[up], L[yp]]), L[:m])
     q, df2 = p * l, n_cols - p * (m + l)
     for i in range(m):
         ui = L[i]
         total = float(ui @ ui)
-        rss_r, r_r = rss_r_rank[i]
-        rss_f, r_f = _residual(full, ui)
+        rss_r, rss_f = float(rss_rs[i]), float(rss_fs[i])
         q, df2 = r_f - r_r, n_cols - r_f
         if q <= 0 or df2 <= 0 or total <= 0 or rss_r <= 1e-10 * total:
             continue  # deterministic input or no new regressor: no power, no claim

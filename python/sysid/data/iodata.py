@@ -390,6 +390,13 @@ class IOData(_Segments, _RawConstructors, _FileFormats):
             np.all(self._u_scale == 1.0) and np.all(self._y_scale == 1.0)
         )
 
+    def _trend_info(self) -> tuple[bool, np.ndarray, np.ndarray]:
+        """(any nonzero trend removed, input scales, output scales) without building
+        :attr:`trend` (which allocates record-sized zero arrays)."""
+        removed = any(t is not None and bool(np.any(t != 0))
+                      for e in self._exps for t in (e.tu, e.ty))
+        return removed, self._u_scale.copy(), self._y_scale.copy()
+
     @property
     def trend(self) -> Trend:
         """What pre-processing removed: ``original = scale * data + trend`` per channel."""

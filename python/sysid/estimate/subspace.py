@@ -74,13 +74,13 @@ def _preprocessing(data: IOData, from_factor: bool) -> dict[str, Any]:
     """What the record says was done to it before fitting (trend removed, scaling)."""
     if from_factor:
         return {"source": "a precomputed HankelFactor (pre-processing unknown)"}
-    tr = data.trend
+    detrended, u_scale, y_scale = data._trend_info()
     return {
         "experiments": data.n_experiments,
         "samples": data.lengths,
-        "detrended": any(np.any(a != 0) for a in tr.u_trend + tr.y_trend),
-        "input_scale": tr.u_scale.tolist(),
-        "output_scale": tr.y_scale.tolist(),
+        "detrended": detrended,
+        "input_scale": u_scale.tolist(),
+        "output_scale": y_scale.tolist(),
     }
 
 
@@ -89,8 +89,8 @@ def _check_signals(data: IOData) -> None:
     for kind, idx, names in (("output", 1, data.output_names), ("input", 0, data.input_names)):
         if not names:
             continue
-        x = np.concatenate([e[idx] for e in data.experiments])
-        big = np.max(np.abs(x), axis=0)
+        # one pass in Rust (NumPy's column reductions of (samples, channels) arrays are slow)
+        big, mean, std = _sysid.channel_stats([e[idx] for e in data.experiments])
         for j, n in enumerate(names):
             if big[j] > 1e150 or 0 < big[j] < 1e-150:
                 raise DataError(
@@ -98,7 +98,6 @@ def _check_signals(data: IOData) -> None:
                     "computes with (products of samples overflow or underflow); rescale the "
                     "channel to order 1 first, e.g. sysid.scale(data) or data in other units"
                 )
-        mean, std = x.mean(0), x.std(0)
         for j, n in enumerate(names):
             if std[j] == 0 and kind == "output":
                 raise DataError(

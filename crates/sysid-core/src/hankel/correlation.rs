@@ -37,7 +37,8 @@ use rayon::prelude::*;
 pub struct CorrelationOptions {
     /// Samples per block (the unit of parallel work and of the pairwise reduction); 0 picks
     /// a size whose block-Hankel view (`block_rows x (p + f)(m + l)` doubles, which the GEMM
-    /// may pack) stays near 4 MB, at least 256 samples.
+    /// may pack) stays near 4 MB unless `64 (p + f)` samples need more (at most 16 MB), at
+    /// least 256 samples.
     pub block_rows: usize,
     /// Threshold on the smallest relative Cholesky pivot `min La_ii^2 / max Ga_ii` of the
     /// centred, scaled Gram matrix below which the result is flagged ill-conditioned (and,
@@ -81,18 +82,21 @@ impl Segment {
         }
     }
 
-    /// Sums of `n` row-major samples `x` (n x d).
-    fn from_rows(x: &[f64], n: usize, d: usize, w: usize) -> Self {
-        debug_assert_eq!(x.len(), n * d);
+    /// Sums of `n` row-major samples, the first `n d` entries of `x`, which holds `w - 1`
+    /// rows of zeros after them: with that padding one GEMM over the overlapping Hankel view
+    /// forms every lagged sum, the pairs near the end of the block included (the padded
+    /// products are exact zeros).
+    fn from_padded_rows(x: &[f64], n: usize, d: usize, w: usize) -> Self {
+        debug_assert_eq!(x.len(), (n + w - 1) * d);
+        debug_assert!(x[n * d..].iter().all(|v| *v == 0.0));
         let mut lag = Mat::<f64>::zeros(d, w * d);
-        let nf = n.saturating_sub(w - 1);
-        if nf > 0 && d > 0 {
-            // SAFETY: rows t < nf of the overlapping Hankel view read x[t d .. t d + w d],
-            // which ends at (nf - 1 + w) d = n d, inside x; both views only read.
+        if n > 0 && d > 0 {
+            // SAFETY: rows t < n of the overlapping Hankel view read x[t d .. t d + w d],
+            // which ends at (n - 1 + w) d = x.len(); both views only read.
             let (xt, xw) = unsafe {
                 (
-                    MatRef::from_raw_parts(x.as_ptr(), nf, d, d as isize, 1),
-                    MatRef::from_raw_parts(x.as_ptr(), nf, w * d, d as isize, 1),
+                    MatRef::from_raw_parts(x.as_ptr(), n, d, d as isize, 1),
+                    MatRef::from_raw_parts(x.as_ptr(), n, w * d, d as isize, 1),
                 )
             };
             matmul(
@@ -104,16 +108,7 @@ impl Segment {
                 Par::Seq,
             );
         }
-        for t in nf..n {
-            for tau in 0..(n - t) {
-                add_outer(
-                    &mut lag,
-                    tau * d,
-                    &x[t * d..(t + 1) * d],
-                    &x[(t + tau) * d..(t + tau + 1) * d],
-                );
-            }
-        }
+        let x = &x[..n * d];
         let mut sum = vec![0.0; d];
         for t in 0..n {
             for (s, v) in sum.iter_mut().zip(&x[t * d..(t + 1) * d]) {
@@ -173,9 +168,9 @@ impl Segment {
 #[inline]
 fn add_outer(lag: &mut Mat<f64>, col0: usize, a: &[f64], b: &[f64]) {
     for (j, bj) in b.iter().enumerate() {
-        let mut col = lag.as_mut().col_mut(col0 + j);
-        for (i, ai) in a.iter().enumerate() {
-            col[i] += ai * bj;
+        let col = &mut lag.col_as_slice_mut(col0 + j)[..a.len()];
+        for (c, ai) in col.iter_mut().zip(a) {
+            *c += ai * bj;
         }
     }
 }
@@ -332,8 +327,13 @@ impl CorrelationSums {
     }
 
     fn auto_block_rows(layout: &HankelLayout) -> usize {
+        // each block boundary costs about w^2 d^2 / 2 scalar multiply-adds (the cross terms
+        // of the merge) against 2 w d^2 per sample in the GEMM: at least 64 w samples per
+        // block keep the merges near 1 % of the work; the Hankel view stays near 4 MB when
+        // that allows, and below 16 MB
         let width = layout.k().max(1) * std::mem::size_of::<f64>();
-        ((4usize << 20) / width).max(256)
+        let rows = ((4usize << 20) / width).max(64 * layout.window());
+        rows.min((16usize << 20) / width).max(256)
     }
 
     /// The layout.
@@ -388,12 +388,20 @@ impl CorrelationSums {
 
     /// Appends samples to the open experiment.
     pub fn push(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> Result<()> {
+        self.push_impl(u, y, true)
+    }
+
+    /// [`CorrelationSums::push`]; `check: false` when the caller has just checked the chunk
+    /// (shapes and finite values) with [`check_chunk`].
+    fn push_impl(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>, check: bool) -> Result<()> {
         let u = if self.layout.n_inputs == 0 {
             u.subrows(0, 0)
         } else {
             u
         };
-        check_chunk(&self.layout, u, y, self.open_samples)?;
+        if check {
+            check_chunk(&self.layout, u, y, self.open_samples)?;
+        }
         let n = y.nrows();
         if n == 0 {
             return Ok(());
@@ -405,17 +413,19 @@ impl CorrelationSums {
         let block = |b: usize| {
             let s = b * br;
             let len = br.min(n - s);
-            let mut x = vec![0.0; len * d];
-            for t in 0..len {
-                let row = &mut x[t * d..(t + 1) * d];
-                for c in 0..m {
-                    row[c] = (u[(s + t, c)] - center[c]) * inv[c];
-                }
-                for c in 0..(d - m) {
-                    row[m + c] = (y[(s + t, c)] - center[m + c]) * inv[m + c];
+            // w - 1 rows of zero padding after the block (see Segment::from_padded_rows)
+            let mut x = vec![0.0; (len + w - 1) * d];
+            // u has no rows when there are no inputs (output-only data)
+            let ub = if m == 0 { u } else { u.subrows(s, len) };
+            let yb = y.subrows(s, len);
+            for (c, (cc, ic)) in center.iter().zip(&inv).enumerate() {
+                let (src, col) = if c < m { (ub, c) } else { (yb, c - m) };
+                let src = src.col(col);
+                for (t, v) in src.iter().enumerate() {
+                    x[t * d + c] = (v - cc) * ic;
                 }
             }
-            Segment::from_rows(&x, len, d, w)
+            Segment::from_padded_rows(&x, len, d, w)
         };
         // batches bound the memory of pending segments; the sequence of segments pushed,
         // hence the result, does not depend on the batch size or the thread count
@@ -458,21 +468,25 @@ impl CorrelationSums {
         }
         let t_cols = seg.n - w + 1;
         let (head, tail) = (&seg.head, &seg.tail);
+        let k = self.gram.nrows();
         for a in 0..w {
             for b in a..w {
                 let tau = b - a;
-                for i in 0..d {
-                    for j in 0..d {
-                        let mut v = seg.lag[(i, tau * d + j)];
+                for j in 0..d {
+                    let lag_col = seg.lag.col_as_slice(tau * d + j);
+                    for i in 0..d {
+                        let mut v = lag_col[i];
                         for t in 0..a {
                             v -= head[t * d + i] * head[(t + tau) * d + j];
                         }
                         for q in a..(w - 1 - tau) {
                             v -= tail[q * d + i] * tail[(q + tau) * d + j];
                         }
-                        self.gram[(a * d + i, b * d + j)] += v;
+                        let (r, c) = (a * d + i, b * d + j);
+                        debug_assert!(r < k && c < k);
+                        self.gram.col_as_slice_mut(c)[r] += v;
                         if a != b {
-                            self.gram[(b * d + j, a * d + i)] += v;
+                            self.gram.col_as_slice_mut(r)[c] += v;
                         }
                     }
                 }
@@ -758,7 +772,9 @@ impl Compressor for CorrelationCompressor {
             let (c, s) = CorrelationSums::center_scale(u0, y);
             let mut sums = CorrelationSums::new(self.layout, c, s)?;
             sums.set_blocking(self.options.block_rows, self.options.parallel);
+            let out = sums.push_impl(u, y, false);
             self.sums = Some(sums);
+            return out;
         }
         self.sums.as_mut().unwrap().push(u, y)
     }

@@ -358,3 +358,21 @@ fn rejects_bad_input() {
     assert!(CorrelationSums::new(layout, vec![0.0], vec![1.0, 1.0]).is_err());
     assert!(CorrelationSums::new(layout, vec![0.0, 0.0], vec![1.0, 0.0]).is_err());
 }
+
+#[test]
+fn output_only_records_match_the_explicit_gram_matrix() {
+    // no inputs: the input views have no rows at all (several blocks, two pushes)
+    let layout = HankelLayout::new(0, 2, 3, 3).unwrap();
+    let (_, y) = record(3000, 0, 2, 5);
+    let u = Mat::<f64>::zeros(0, 0);
+    let opts = CorrelationOptions {
+        block_rows: 256,
+        ..CorrelationOptions::default()
+    };
+    let mut c = CorrelationCompressor::with_options(layout, opts);
+    c.push(u.as_ref(), y.as_ref().subrows(0, 1700)).unwrap();
+    c.push(u.as_ref(), y.as_ref().subrows(1700, 1300)).unwrap();
+    let f = c.finish().unwrap();
+    let g = explicit_gram(&layout, &[(Mat::zeros(3000, 0), y.clone())]);
+    assert!(rel_gram_err(f.l(), &g) < 1e-12);
+}
