@@ -353,6 +353,18 @@ def arx_struc(
     nb_range: list[int],
     nk_range: list[int],
 ) -> _Array: ...
+def arx_summary(
+    experiments: list[tuple[_Array, _Array]],
+    na: list[list[int]],
+    nb: list[list[int]],
+    nk: list[list[int]],
+) -> list[tuple[_Array, int]]: ...
+def arx_matrix_filter(
+    a: list[list[list[float]]],
+    w: _Array,
+    y: _Array | None = None,
+    horizon: int = 1,
+) -> _Array: ...
 def poly_filter(b: list[float], a: list[float], x: _Array) -> _Array: ...
 def polynomial_pem(
     y: _Array,

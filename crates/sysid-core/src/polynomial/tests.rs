@@ -293,3 +293,71 @@ fn iv4_noise_free_and_colored_noise() {
     let thr = super::iv::iv4(&y, &u, 2, 2, 1, Some(&u)).unwrap();
     close(&thr, &[-1.5, 0.7, 1.0, 0.5], 0.05);
 }
+
+#[test]
+fn output_summary_reproduces_least_squares_and_sums() {
+    let n = 300;
+    let u = noise(n, 21);
+    let e = noise(n, 22);
+    let y0 = filter(&[1.0, 0.5], &[1.0, -1.2, 0.5], &delay(&u, 1));
+    let y: Vec<f64> = y0.iter().zip(&e).map(|(a, b)| a + 0.1 * b).collect();
+    let um = Mat::from_fn(n, 1, |t, _| u[t]);
+    let ym = Mat::from_fn(n, 1, |t, _| y[t]);
+    let mut c = ArxCompressor::new(1, 1, 4).unwrap();
+    c.push(um.as_ref(), ym.as_ref()).unwrap();
+    let o = ArxOrders {
+        na: vec![vec![2]],
+        nb: vec![vec![2]],
+        nk: vec![vec![1]],
+    };
+    let r = c.factor();
+    let s = c.output_summary(r.as_ref(), 0, &o).unwrap();
+    let fit = c.solve_with_factor(r.as_ref(), 0, &o, 0.0, None).unwrap();
+    // back substitution on the summary gives the least-squares parameters (regression signs)
+    let p = 4;
+    let mut th = vec![0.0; p];
+    for d in (0..p).rev() {
+        let mut v = s[(d, p)];
+        for k in d + 1..p {
+            v -= s[(d, k)] * th[k];
+        }
+        th[d] = v / s[(d, d)];
+    }
+    let poly: Vec<f64> = th
+        .iter()
+        .enumerate()
+        .map(|(k, v)| if k < 2 { -v } else { *v })
+        .collect();
+    close(&poly, &fit.theta, 1e-10);
+    // rho^2 / rows is the least-squares loss
+    assert!((s[(p, p)].powi(2) / fit.n_rows as f64 - fit.loss).abs() < 1e-12);
+    assert!(c.output_summary(r.as_ref(), 1, &o).is_err());
+}
+
+#[test]
+fn matrix_filter_simulates_and_predicts_a_coupled_model() {
+    use super::filter::arx_matrix_filter;
+    let n = 50;
+    let a = vec![
+        vec![vec![-0.5], vec![0.2, 0.1]],
+        vec![vec![0.1], vec![-0.3]],
+    ];
+    let w = Mat::from_fn(n, 2, |t, i| noise(2 * n, 31)[2 * t + i]);
+    let y = arx_matrix_filter(&a, w.as_ref(), None).unwrap();
+    for t in 2..n {
+        let y0 = w[(t, 0)] + 0.5 * y[(t - 1, 0)] - 0.2 * y[(t - 1, 1)] - 0.1 * y[(t - 2, 1)];
+        let y1 = w[(t, 1)] - 0.1 * y[(t - 1, 0)] + 0.3 * y[(t - 1, 1)];
+        assert!((y[(t, 0)] - y0).abs() < 1e-13 && (y[(t, 1)] - y1).abs() < 1e-13);
+    }
+    // the measured record of the model itself: every horizon predicts it exactly
+    for k in [1, 2, 5, 100] {
+        let p = arx_matrix_filter(&a, w.as_ref(), Some((y.as_ref(), k))).unwrap();
+        for t in 0..n {
+            assert!((p[(t, 0)] - y[(t, 0)]).abs() < 1e-12);
+        }
+    }
+    assert!(arx_matrix_filter(&a[..1], w.as_ref(), None).is_err());
+    let short = Mat::<f64>::zeros(n - 1, 2);
+    assert!(arx_matrix_filter(&a, w.as_ref(), Some((short.as_ref(), 1))).is_err());
+    assert!(arx_matrix_filter(&a, w.as_ref(), Some((y.as_ref(), 0))).is_err());
+}
