@@ -240,24 +240,40 @@ def _tune(summary: np.ndarray, n_rows: int, prior: _Prior, noise: str
         c0.append(max(float(np.mean(theta_ls[o:o + n] ** 2)), 1e-12 * ysq / n_rows, 1e-300))
         o += n
 
-    def fun(z: np.ndarray) -> tuple[float, np.ndarray]:
+    def fun(z: np.ndarray, grad: bool = True) -> tuple[float, np.ndarray]:
         x, s2 = (z[:-1], np.exp(z[-1])) if noise == "ml" else (z, s2_ls)
         P, dP = prior(x)
-        v, g, ds = marginal_likelihood(summary, n_rows, P, s2, dP)
+        v, g, ds = marginal_likelihood(summary, n_rows, P, s2, dP if grad else None)
         if not np.isfinite(v):
             return 1e300, np.zeros_like(z)
         return v, (np.r_[g, ds * s2] if noise == "ml" else g)
 
-    def start(scale: float, lam: float, rho_: float) -> np.ndarray:
+    def start(scale: float, lam: float, rho_: float = 0.0) -> np.ndarray:
         x = np.concatenate([
             _to_x(prior.name, np.array([c * scale, lam, rho_][:nh])) for c in c0])
         return np.r_[x, np.log(s2_ls)] if noise == "ml" else x
 
-    grid = [(s, lam, rho_) for s in 10.0 ** np.arange(-3, 4)
-            for lam in ((0.5,) if prior.name == "ridge" else (0.3, 0.6, 0.8, 0.9, 0.95, 0.98))
-            for rho_ in ((0.0,) if prior.name != "dc" else (0.0, 0.5, 0.9))]
-    best = min((fun(start(*g))[0], i) for i, g in enumerate(grid))
-    z0 = start(*grid[best[1]])
+    # Coarse grid: every block scaled by one factor, so that for each (lambda, rho) one
+    # eigendecomposition R1 P R1^T = Q diag(e) Q^T gives the likelihood at every scale in O(p).
+    scales = 10.0 ** np.linspace(-4, 4, 33)
+    shapes = [(lam, rho_) for lam in ((0.5,) if prior.name == "ridge" else
+                                      (0.5, 0.8, 0.9, 0.95))
+              for rho_ in ((0.0,) if prior.name != "dc" else (0.3, 0.9))]
+    best = (np.inf, 1.0, shapes[0])
+    for lam, rho_ in shapes:
+        z1 = start(1.0, lam, rho_)
+        P1, _ = prior(z1[:-1] if noise == "ml" else z1)
+        e, Q = np.linalg.eigh(R1 @ P1 @ R1.T)
+        e = np.clip(e, 0.0, None)
+        q2 = (Q.T @ r) ** 2
+        g = s2_ls + scales[:, None] * e[None, :]
+        vals = (rho * rho / s2_ls + (n_rows - p) * np.log(s2_ls)
+                + np.sum(q2[None, :] / g + np.log(g), axis=1))
+        k = int(np.argmin(vals))
+        if vals[k] < best[0]:
+            best = (float(vals[k]), float(scales[k]), (lam, rho_))
+    z0 = start(best[1], *best[2])
+    best_v = fun(z0, False)[0]
     lo = np.concatenate([[np.log(c) - 30, -9.0, -4.0][:nh] for c in c0])
     hi = np.concatenate([[np.log(c) + 30, 9.0, 4.0][:nh] for c in c0])
     if noise == "ml":
@@ -265,14 +281,14 @@ def _tune(summary: np.ndarray, n_rows: int, prior: _Prior, noise: str
     z0 = np.clip(z0, lo, hi)
     res = optimize.minimize(fun, z0, jac=True, method="L-BFGS-B",
                             bounds=list(zip(lo, hi)), options={"maxiter": 500})
-    z = res.x if res.fun <= best[0] else z0
-    value = min(float(res.fun), best[0])
+    z = res.x if res.fun <= best_v else z0
+    value = min(float(res.fun), best_v)
     if not np.isfinite(value) or value >= 1e300:
         raise NumericalError("arxregul: the marginal likelihood is not finite at any start "
                              "point; check the data (constant or non-finite signals?)")
     x, s2 = (z[:-1], float(np.exp(z[-1]))) if noise == "ml" else (z, s2_ls)
     info = {"iterations": int(res.nit), "evaluations": int(res.nfev),
-            "stop": str(res.message), "success": bool(res.success), "grid_points": len(grid),
+            "stop": str(res.message), "success": bool(res.success), "grid_points": len(shapes) * scales.size,
             "n_blocks": nb}
     return x, s2, value, info
 
@@ -413,8 +429,8 @@ def arxregul(data: Any, na: Any, nb: Any, nk: Any = 1, kernel: str = "tc", *,
 def regularized_fits(data: Any, na: Any, nb: Any, nk: Any, reg: ArxRegularization
                      ) -> list[dict[str, Any]]:
     """Per output: posterior mean ``theta = P R1^T (lam I + R1 P R1^T)^-1 r`` (regression
-    signs), residual mean square and posterior covariance
-    ``(P - P R1^T S^-1 R1 P)`` (``S = lam I + R1 P R1^T``), from the summaries."""
+    signs), residual mean square and posterior covariance ``P - P R1^T S^-1 R1 P``
+    (``S = lam I + R1 P R1^T``), from the summaries, through the SVD of ``R1 P^(1/2)``."""
     sums, g = summaries(data, na, nb, nk)
     if [list(map(list, x)) for x in g] != [list(map(list, x)) for x in reg.orders]:
         raise DataError(f"the regularisation was tuned for orders {reg.orders}, not {g}; "
@@ -424,12 +440,16 @@ def regularized_fits(data: Any, na: Any, nb: Any, nk: Any, reg: ArxRegularizatio
         P, lam = reg.prior[i], float(reg.lam[i])
         p = P.shape[0]
         R1, r, rho = s[:p, :p], s[:p, p], s[p, p]
-        PR = P @ R1.T
-        S = lam * np.eye(p) + R1 @ PR
-        cf = linalg.cho_factor(S, lower=True)
-        theta = PR @ linalg.cho_solve(cf, r)
+        # P = L L^T, R1 L = U diag(sv) V^T: theta = L V diag(sv / (sv^2 + lam)) U^T r and
+        # covariance L V diag(lam / (sv^2 + lam)) V^T L^T (positive semi-definite by
+        # construction, exact as lam -> 0 on the range of P).
+        w, Q = np.linalg.eigh(0.5 * (P + P.T))
+        L = Q * np.sqrt(np.clip(w, 0.0, None))
+        U, sv, Vt = np.linalg.svd(R1 @ L, full_matrices=False)
+        LV = L @ Vt.T
+        theta = LV @ (sv / (sv * sv + lam) * (U.T @ r))
         rss = rho * rho + float(np.sum((r - R1 @ theta) ** 2))
-        cov = P - PR @ linalg.cho_solve(cf, PR.T)
+        cov = (LV * (lam / (sv * sv + lam))) @ LV.T
         out.append({"theta": theta, "loss": rss / n, "cov": 0.5 * (cov + cov.T),
                     "n_rows": n})
     return out
