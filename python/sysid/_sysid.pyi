@@ -365,6 +365,16 @@ def arx_matrix_filter(
     y: _Array | None = None,
     horizon: int = 1,
 ) -> _Array: ...
+def arx_marginal_likelihood(
+    summary: _Array,
+    n_rows: int,
+    prior: _Array,
+    dprior: list[_Array],
+    sigma2: float,
+) -> tuple[float, list[float], float]: ...
+def arx_regularized_solve(
+    summary: _Array, prior: _Array, lam: float
+) -> tuple[_Array, _Array, float]: ...
 def poly_filter(b: list[float], a: list[float], x: _Array) -> _Array: ...
 def polynomial_pem(
     y: _Array,

@@ -282,12 +282,55 @@ pub fn iv4<'py>(
     Ok(slice_to_numpy(py, &th))
 }
 
+/// `-2 log p(y) - N log 2 pi` of a kernel-prior regression from its summary, with the
+/// gradient over `dprior` and the derivative with respect to `sigma2`
+/// (`sysid_core::polynomial::regul::marginal_likelihood`).
+#[pyfunction]
+pub fn arx_marginal_likelihood(
+    py: Python<'_>,
+    summary: PyReadonlyArray2<'_, f64>,
+    n_rows: usize,
+    prior: PyReadonlyArray2<'_, f64>,
+    dprior: Vec<PyReadonlyArray2<'_, f64>>,
+    sigma2: f64,
+) -> PyResult<(f64, Vec<f64>, f64)> {
+    let s = view_nd(summary.as_array());
+    let pr = view_nd(prior.as_array());
+    let ds: Vec<_> = dprior.iter().map(|d| view_nd(d.as_array())).collect();
+    py.detach(|| sysid_core::polynomial::regul::marginal_likelihood(s, n_rows, pr, &ds, sigma2))
+        .py()
+}
+
+/// The regularised (posterior) solution `(theta, covariance, rss)` of a summarised
+/// regression with penalty `lam theta^T prior^-1 theta`
+/// (`sysid_core::polynomial::regul::regularized_solve`).
+#[pyfunction]
+pub fn arx_regularized_solve<'py>(
+    py: Python<'py>,
+    summary: PyReadonlyArray2<'_, f64>,
+    prior: PyReadonlyArray2<'_, f64>,
+    lam: f64,
+) -> PyResult<(
+    Bound<'py, numpy::PyArray1<f64>>,
+    Bound<'py, numpy::PyArray2<f64>>,
+    f64,
+)> {
+    let s = view_nd(summary.as_array());
+    let pr = view_nd(prior.as_array());
+    let (th, cov, rss) = py
+        .detach(|| sysid_core::polynomial::regul::regularized_solve(s, pr, lam))
+        .py()?;
+    Ok((slice_to_numpy(py, &th), mat_to_numpy(py, &cov), rss))
+}
+
 /// Registers the functions of this file.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(arx_fit, m)?)?;
     m.add_function(wrap_pyfunction!(arx_struc, m)?)?;
     m.add_function(wrap_pyfunction!(arx_summary, m)?)?;
     m.add_function(wrap_pyfunction!(arx_matrix_filter, m)?)?;
+    m.add_function(wrap_pyfunction!(arx_marginal_likelihood, m)?)?;
+    m.add_function(wrap_pyfunction!(arx_regularized_solve, m)?)?;
     m.add_function(wrap_pyfunction!(poly_filter, m)?)?;
     m.add_function(wrap_pyfunction!(polynomial_pem, m)?)?;
     m.add_function(wrap_pyfunction!(iv4, m)?)?;

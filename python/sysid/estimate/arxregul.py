@@ -15,7 +15,9 @@ with ``R1^T R1 = Phi^T Phi``, ``R1^T r = Phi^T y``, ``|r|^2 + rho^2 = y^T y``, o
     -2 log p(y) - N log(2 pi) = rho^2 / sigma^2 + (N - p) log sigma^2 + r^T S^-1 r + log det S
 
 and, with ``a = S^-1 r``, ``d/d eta_k = sum(G * dP/d eta_k)``, ``G = R1^T (S^-1 - a a^T) R1``.
-No inverse of ``P`` is formed (TC and SS kernels are badly conditioned for long blocks).
+No inverse of ``P`` is formed (TC and SS kernels are badly conditioned for long blocks). The
+value and gradient are computed in Rust (``sysid_core::polynomial::regul``, sequential faer
+on ``p x p`` matrices; threaded BLAS on such small matrices costs more than it saves).
 
 The prior is block diagonal: one block per polynomial of the equation (each ``A_ik`` and each
 ``B_ij``), each with its own hyper-parameters (the choice of Chen et al. for ARX), indices
@@ -39,7 +41,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import linalg, optimize
+from scipy import optimize
 
 from .. import _sysid
 from .._checks import as_int_grid
@@ -175,24 +177,10 @@ def marginal_likelihood(summary: np.ndarray, n_rows: int, prior: np.ndarray,
     >>> bool(np.isclose(marginal_likelihood(R, 20, np.eye(2), 0.5)[0], dense))
     True
     """
-    p = prior.shape[0]
-    R1, r, rho = summary[:p, :p], summary[:p, p], summary[p, p]
-    S = sigma2 * np.eye(p) + R1 @ prior @ R1.T
-    try:
-        cf = linalg.cho_factor(S, lower=True, check_finite=True)
-    except (linalg.LinAlgError, ValueError):
-        return np.inf, np.zeros(len(dprior or [])), 0.0
-    a = linalg.cho_solve(cf, r)
-    logdet = 2.0 * np.sum(np.log(np.diag(cf[0])))
-    value = rho * rho / sigma2 + (n_rows - p) * np.log(sigma2) + r @ a + logdet
-    if dprior is None:
-        return float(value), np.zeros(0), 0.0
-    Sinv = linalg.cho_solve(cf, np.eye(p))
-    W = Sinv - np.outer(a, a)
-    G = R1.T @ W @ R1
-    grad = np.array([np.sum(G * d) for d in dprior])
-    dsig = -rho * rho / sigma2 ** 2 + (n_rows - p) / sigma2 + np.trace(W)
-    return float(value), grad, float(dsig)
+    v, g, ds = _sysid.arx_marginal_likelihood(
+        np.ascontiguousarray(summary, float), int(n_rows), np.ascontiguousarray(prior, float),
+        [np.ascontiguousarray(d, float) for d in (dprior or [])], float(sigma2))
+    return float(v), np.asarray(g), float(ds)
 
 
 # -- tuning -----------------------------------------------------------------------------------
@@ -230,10 +218,11 @@ def _tune(summary: np.ndarray, n_rows: int, prior: _Prior, noise: str
           ) -> tuple[np.ndarray, float, float, dict[str, Any]]:
     """Coordinates, sigma^2, value and optimiser info maximising the marginal likelihood."""
     p = prior.p
-    R1, r, rho = summary[:p, :p], summary[:p, p], summary[p, p]
+    r, rho = summary[:p, p], summary[p, p]
     ysq = float(r @ r + rho * rho)
     s2_ls = max(rho * rho / (n_rows - p), 1e-12 * ysq / n_rows, np.finfo(float).tiny)
-    theta_ls = np.linalg.lstsq(R1, r, rcond=None)[0]
+    theta_ls = _sysid.arx_regularized_solve(np.ascontiguousarray(summary, float), np.eye(p),
+                                            0.0)[0]  # least squares (pseudo-inverse)
     nh, nb = prior.nh, len(prior.sizes)
     c0, o = [], 0
     for n in prior.sizes:
@@ -253,25 +242,17 @@ def _tune(summary: np.ndarray, n_rows: int, prior: _Prior, noise: str
             _to_x(prior.name, np.array([c * scale, lam, rho_][:nh])) for c in c0])
         return np.r_[x, np.log(s2_ls)] if noise == "ml" else x
 
-    # Coarse grid: every block scaled by one factor, so that for each (lambda, rho) one
-    # eigendecomposition R1 P R1^T = Q diag(e) Q^T gives the likelihood at every scale in O(p).
-    scales = 10.0 ** np.linspace(-4, 4, 33)
+    # Coarse grid: every block's scale c0 times one factor, decays and correlations shared.
+    scales = 10.0 ** np.linspace(-4, 4, 17)
     shapes = [(lam, rho_) for lam in ((0.5,) if prior.name == "ridge" else
                                       (0.5, 0.8, 0.9, 0.95))
               for rho_ in ((0.0,) if prior.name != "dc" else (0.3, 0.9))]
     best = (np.inf, 1.0, shapes[0])
     for lam, rho_ in shapes:
-        z1 = start(1.0, lam, rho_)
-        P1, _ = prior(z1[:-1] if noise == "ml" else z1)
-        e, Q = np.linalg.eigh(R1 @ P1 @ R1.T)
-        e = np.clip(e, 0.0, None)
-        q2 = (Q.T @ r) ** 2
-        g = s2_ls + scales[:, None] * e[None, :]
-        vals = (rho * rho / s2_ls + (n_rows - p) * np.log(s2_ls)
-                + np.sum(q2[None, :] / g + np.log(g), axis=1))
-        k = int(np.argmin(vals))
-        if vals[k] < best[0]:
-            best = (float(vals[k]), float(scales[k]), (lam, rho_))
+        for sc in scales:
+            v = fun(start(sc, lam, rho_), False)[0]
+            if v < best[0]:
+                best = (v, float(sc), (lam, rho_))
     z0 = start(best[1], *best[2])
     best_v = fun(z0, False)[0]
     lo = np.concatenate([[np.log(c) - 30, -9.0, -4.0][:nh] for c in c0])
@@ -288,8 +269,8 @@ def _tune(summary: np.ndarray, n_rows: int, prior: _Prior, noise: str
                              "point; check the data (constant or non-finite signals?)")
     x, s2 = (z[:-1], float(np.exp(z[-1]))) if noise == "ml" else (z, s2_ls)
     info = {"iterations": int(res.nit), "evaluations": int(res.nfev),
-            "stop": str(res.message), "success": bool(res.success), "grid_points": len(shapes) * scales.size,
-            "n_blocks": nb}
+            "stop": str(res.message), "success": bool(res.success),
+            "grid_points": len(shapes) * scales.size, "n_blocks": nb}
     return x, s2, value, info
 
 
@@ -430,7 +411,8 @@ def regularized_fits(data: Any, na: Any, nb: Any, nk: Any, reg: ArxRegularizatio
                      ) -> list[dict[str, Any]]:
     """Per output: posterior mean ``theta = P R1^T (lam I + R1 P R1^T)^-1 r`` (regression
     signs), residual mean square and posterior covariance ``P - P R1^T S^-1 R1 P``
-    (``S = lam I + R1 P R1^T``), from the summaries, through the SVD of ``R1 P^(1/2)``."""
+    (``S = lam I + R1 P R1^T``), from the summaries, through the SVD of ``R1 P^(1/2)`` (in
+    Rust: ``sysid_core::polynomial::regul::regularized_solve``)."""
     sums, g = summaries(data, na, nb, nk)
     if [list(map(list, x)) for x in g] != [list(map(list, x)) for x in reg.orders]:
         raise DataError(f"the regularisation was tuned for orders {reg.orders}, not {g}; "
@@ -438,18 +420,8 @@ def regularized_fits(data: Any, na: Any, nb: Any, nk: Any, reg: ArxRegularizatio
     out = []
     for i, (s, n) in enumerate(sums):
         P, lam = reg.prior[i], float(reg.lam[i])
-        p = P.shape[0]
-        R1, r, rho = s[:p, :p], s[:p, p], s[p, p]
-        # P = L L^T, R1 L = U diag(sv) V^T: theta = L V diag(sv / (sv^2 + lam)) U^T r and
-        # covariance L V diag(lam / (sv^2 + lam)) V^T L^T (positive semi-definite by
-        # construction, exact as lam -> 0 on the range of P).
-        w, Q = np.linalg.eigh(0.5 * (P + P.T))
-        L = Q * np.sqrt(np.clip(w, 0.0, None))
-        U, sv, Vt = np.linalg.svd(R1 @ L, full_matrices=False)
-        LV = L @ Vt.T
-        theta = LV @ (sv / (sv * sv + lam) * (U.T @ r))
-        rss = rho * rho + float(np.sum((r - R1 @ theta) ** 2))
-        cov = (LV * (lam / (sv * sv + lam))) @ LV.T
-        out.append({"theta": theta, "loss": rss / n, "cov": 0.5 * (cov + cov.T),
+        theta, cov, rss = _sysid.arx_regularized_solve(np.ascontiguousarray(s, float),
+                                                       np.ascontiguousarray(P, float), lam)
+        out.append({"theta": theta, "loss": rss / n, "cov": np.asarray(cov),
                     "n_rows": n})
     return out

@@ -212,7 +212,7 @@ class PolynomialModel(ModelMixin):
         """
         _rest(x0)
         u = self._check_u(u)
-        n, ny = u.shape[0], self.n_outputs
+        ny = self.n_outputs
         w = np.column_stack([self._deterministic(u, i) for i in range(ny)])
         if not self.coupled:
             return np.column_stack(
