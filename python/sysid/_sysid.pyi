@@ -371,6 +371,7 @@ def arx_marginal_likelihood(
     prior: _Array,
     dprior: list[_Array],
     sigma2: float,
+    gradient: bool = True,
 ) -> tuple[float, list[float], float]: ...
 def arx_regularized_solve(
     summary: _Array, prior: _Array, lam: float

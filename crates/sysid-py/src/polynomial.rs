@@ -286,6 +286,7 @@ pub fn iv4<'py>(
 /// gradient over `dprior` and the derivative with respect to `sigma2`
 /// (`sysid_core::polynomial::regul::marginal_likelihood`).
 #[pyfunction]
+#[pyo3(signature = (summary, n_rows, prior, dprior, sigma2, gradient=true))]
 pub fn arx_marginal_likelihood(
     py: Python<'_>,
     summary: PyReadonlyArray2<'_, f64>,
@@ -293,12 +294,15 @@ pub fn arx_marginal_likelihood(
     prior: PyReadonlyArray2<'_, f64>,
     dprior: Vec<PyReadonlyArray2<'_, f64>>,
     sigma2: f64,
+    gradient: bool,
 ) -> PyResult<(f64, Vec<f64>, f64)> {
     let s = view_nd(summary.as_array());
     let pr = view_nd(prior.as_array());
     let ds: Vec<_> = dprior.iter().map(|d| view_nd(d.as_array())).collect();
-    py.detach(|| sysid_core::polynomial::regul::marginal_likelihood(s, n_rows, pr, &ds, sigma2))
-        .py()
+    py.detach(|| {
+        sysid_core::polynomial::regul::marginal_likelihood(s, n_rows, pr, &ds, sigma2, gradient)
+    })
+    .py()
 }
 
 /// The regularised (posterior) solution `(theta, covariance, rss)` of a summarised

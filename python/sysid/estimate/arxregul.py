@@ -179,8 +179,9 @@ def marginal_likelihood(summary: np.ndarray, n_rows: int, prior: np.ndarray,
     """
     v, g, ds = _sysid.arx_marginal_likelihood(
         np.ascontiguousarray(summary, float), int(n_rows), np.ascontiguousarray(prior, float),
-        [np.ascontiguousarray(d, float) for d in (dprior or [])], float(sigma2))
-    return float(v), np.asarray(g), float(ds)
+        [np.ascontiguousarray(d, float) for d in (dprior or [])], float(sigma2),
+        dprior is not None)
+    return float(v), np.asarray(g), (float(ds) if dprior is not None else 0.0)
 
 
 # -- tuning -----------------------------------------------------------------------------------
@@ -199,14 +200,15 @@ class _Prior:
         self.nh = _NHYP[name]
         self.p = sum(sizes)
 
-    def __call__(self, x: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
+    def __call__(self, x: np.ndarray, grad: bool = True
+                 ) -> tuple[np.ndarray, list[np.ndarray]]:
         P = np.zeros((self.p, self.p))
         dP: list[np.ndarray] = []
         o = 0
         for b, n in enumerate(self.sizes):
             Pb, dPb = _kernel(self.name, n, x[b * self.nh:(b + 1) * self.nh])
             P[o:o + n, o:o + n] = Pb
-            for d in dPb:
+            for d in (dPb if grad else []):
                 full = np.zeros((self.p, self.p))
                 full[o:o + n, o:o + n] = d
                 dP.append(full)
@@ -231,7 +233,7 @@ def _tune(summary: np.ndarray, n_rows: int, prior: _Prior, noise: str
 
     def fun(z: np.ndarray, grad: bool = True) -> tuple[float, np.ndarray]:
         x, s2 = (z[:-1], np.exp(z[-1])) if noise == "ml" else (z, s2_ls)
-        P, dP = prior(x)
+        P, dP = prior(x, grad)
         v, g, ds = marginal_likelihood(summary, n_rows, P, s2, dP if grad else None)
         if not np.isfinite(v):
             return 1e300, np.zeros_like(z)

@@ -16,14 +16,24 @@
 //! `P` is never inverted (TC and stable-spline kernels are badly conditioned for long blocks).
 //! Cost `O(p^3)` per evaluation, independent of `N`.
 
+use faer::linalg::matmul::matmul;
 use faer::linalg::solvers::Solve;
-use faer::{Mat, MatRef, Side};
+use faer::{Accum, Mat, MatRef, Par, Side};
 
 use crate::error::{check_finite, Result, SysidError};
 
+/// `a * b` on one thread (the matrices here are a few dozen rows: threads cost more than
+/// they save, above all on a loaded machine).
+fn mul(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    let mut c = Mat::zeros(a.nrows(), b.ncols());
+    matmul(c.as_mut(), Accum::Replace, a, b, 1.0, Par::Seq);
+    c
+}
+
 /// Value, gradient with respect to the parameters of `dprior`, and derivative with respect to
-/// `sigma2`, of `L` above. A prior that makes `S` numerically not positive definite gives
-/// `(inf, zeros, 0)`, so a line search backs off.
+/// `sigma2`, of `L` above (`gradient = false`: the value only, about half the work; the
+/// gradient is then empty and the derivative NaN). A prior that makes `S` numerically not
+/// positive definite gives `(inf, zeros, 0)`, so a line search backs off.
 ///
 /// ```
 /// use faer::Mat;
@@ -31,7 +41,7 @@ use crate::error::{check_finite, Result, SysidError};
 /// // one parameter, Phi = [1, 1]^T, y = [1, 1]^T: R1 = sqrt 2, r = sqrt 2, rho = 0
 /// let s = Mat::from_fn(2, 2, |i, j| if i == 0 { 2f64.sqrt() } else { 0.0 });
 /// let p = Mat::from_fn(1, 1, |_, _| 1.0);
-/// let (v, _, _) = marginal_likelihood(s.as_ref(), 2, p.as_ref(), &[], 1.0).unwrap();
+/// let (v, _, _) = marginal_likelihood(s.as_ref(), 2, p.as_ref(), &[], 1.0, false).unwrap();
 /// // dense: Sigma = [[2, 1], [1, 2]], y^T Sigma^-1 y = 2/3, log det = log 3
 /// assert!((v - (2.0 / 3.0 + 3f64.ln())).abs() < 1e-12);
 /// ```
@@ -41,6 +51,7 @@ pub fn marginal_likelihood(
     prior: MatRef<'_, f64>,
     dprior: &[MatRef<'_, f64>],
     sigma2: f64,
+    gradient: bool,
 ) -> Result<(f64, Vec<f64>, f64)> {
     let p = prior.nrows();
     if summary.nrows() != p + 1 || summary.ncols() != p + 1 || prior.ncols() != p {
@@ -82,7 +93,7 @@ pub fn marginal_likelihood(
     let r1 = summary.submatrix(0, 0, p, p);
     let r = summary.submatrix(0, p, p, 1);
     let rho = summary[(p, p)];
-    let mut s = r1 * prior * r1.transpose();
+    let mut s = mul(mul(r1, prior).as_ref(), r1.transpose());
     for i in 0..p {
         s[(i, i)] += sigma2;
     }
@@ -101,13 +112,16 @@ pub fn marginal_likelihood(
     if !value.is_finite() {
         return inf;
     }
+    if !gradient {
+        return Ok((value, Vec::new(), f64::NAN));
+    }
     let mut w = llt.solve(Mat::<f64>::identity(p, p));
     for i in 0..p {
         for j in 0..p {
             w[(i, j)] -= a[(i, 0)] * a[(j, 0)];
         }
     }
-    let g = r1.transpose() * &w * r1;
+    let g = mul(mul(r1.transpose(), w.as_ref()).as_ref(), r1);
     let grad = dprior
         .iter()
         .map(|d| {
@@ -184,19 +198,19 @@ pub fn regularized_solve(
     })?;
     let w = eig.S().column_vector();
     let l = Mat::from_fn(p, p, |i, j| eig.U()[(i, j)] * w[j].max(0.0).sqrt());
-    let m = r1 * &l;
+    let m = mul(r1, l.as_ref());
     let svd = m
         .thin_svd()
         .map_err(|e| SysidError::numerical("regularised ARX (SVD)", format!("{e:?}")))?;
     let s = svd.S().column_vector();
-    let lv = &l * svd.V();
+    let lv = mul(l.as_ref(), svd.V());
     let ur = svd.U().transpose() * r;
     let k = s.nrows();
     let coef = Mat::from_fn(k, 1, |i, _| s[i] / (s[i] * s[i] + lam) * ur[(i, 0)]);
     let th = &lv * &coef;
     let theta: Vec<f64> = (0..p).map(|i| th[(i, 0)]).collect();
     let scaled = Mat::from_fn(p, k, |i, j| lv[(i, j)] * lam / (s[j] * s[j] + lam));
-    let cov0 = &scaled * lv.transpose();
+    let cov0 = mul(scaled.as_ref(), lv.transpose());
     let cov = Mat::from_fn(p, p, |i, j| 0.5 * (cov0[(i, j)] + cov0[(j, i)]));
     let fitted = r1 * &th;
     let rss = rho * rho

@@ -401,8 +401,11 @@ fn marginal_likelihood_matches_dense_and_finite_differences() {
         (ds - fds).abs() < 1e-6 * fds.abs().max(1.0),
         "{ds} vs {fds}"
     );
-    assert!(marginal_likelihood(s.as_ref(), n, dp.as_ref(), &[], -1.0).is_err());
-    assert!(marginal_likelihood(s.as_ref(), 2, dp.as_ref(), &[], 1.0).is_err());
+    let (v2, g2, _) =
+        marginal_likelihood(s.as_ref(), n, prior(2.0).as_ref(), &[], sigma2, false).unwrap();
+    assert!(v2 == v && g2.is_empty());
+    assert!(marginal_likelihood(s.as_ref(), n, dp.as_ref(), &[], -1.0, true).is_err());
+    assert!(marginal_likelihood(s.as_ref(), 2, dp.as_ref(), &[], 1.0, true).is_err());
 }
 
 #[test]
