@@ -74,9 +74,10 @@ def _fir_case(rng, n=200, taps=50):
 
 def test_tc_dc_regularisation_beats_least_squares_monte_carlo():
     """Chen, Ohlsson & Ljung (2012): with a 50-tap FIR on 200 samples of a lightly damped
-    system, the tuned TC and DC priors cut the impulse-response error of least squares."""
+    system, the tuned TC and DC priors cut the impulse-response error of least squares
+    (30 seeded records: the margins below are wide, TC 0.30 against LS 0.84 on 50)."""
     err = {"ls": [], "tc": [], "dc": []}
-    for run in range(50):
+    for run in range(30):
         d, h = _fir_case(np.random.default_rng(100 + run))
         err["ls"].append(np.sum((sysid.arx(d, 0, 50, 1).b[0][0] - h) ** 2))
         for k in ("tc", "dc"):
