@@ -305,6 +305,13 @@ pub fn arx_marginal_likelihood(
     .py()
 }
 
+/// `(theta, covariance, rss)` of [`arx_regularized_solve`].
+type Solved<'py> = (
+    Bound<'py, numpy::PyArray1<f64>>,
+    Bound<'py, numpy::PyArray2<f64>>,
+    f64,
+);
+
 /// The regularised (posterior) solution `(theta, covariance, rss)` of a summarised
 /// regression with penalty `lam theta^T prior^-1 theta`
 /// (`sysid_core::polynomial::regul::regularized_solve`).
@@ -314,11 +321,7 @@ pub fn arx_regularized_solve<'py>(
     summary: PyReadonlyArray2<'_, f64>,
     prior: PyReadonlyArray2<'_, f64>,
     lam: f64,
-) -> PyResult<(
-    Bound<'py, numpy::PyArray1<f64>>,
-    Bound<'py, numpy::PyArray2<f64>>,
-    f64,
-)> {
+) -> PyResult<Solved<'py>> {
     let s = view_nd(summary.as_array());
     let pr = view_nd(prior.as_array());
     let (th, cov, rss) = py

@@ -386,8 +386,15 @@ fn marginal_likelihood_matches_dense_and_finite_differences() {
         quad + ld
     };
     let dp = prior(1.0);
-    let (v, g, ds) =
-        marginal_likelihood(s.as_ref(), n, prior(2.0).as_ref(), &[dp.as_ref()], sigma2).unwrap();
+    let (v, g, ds) = marginal_likelihood(
+        s.as_ref(),
+        n,
+        prior(2.0).as_ref(),
+        &[dp.as_ref()],
+        sigma2,
+        true,
+    )
+    .unwrap();
     assert!((v - dense(2.0, sigma2)).abs() < 1e-10 * v.abs().max(1.0));
     let h = 1e-6;
     let fd = (dense(2.0 + h, sigma2) - dense(2.0 - h, sigma2)) / (2.0 * h);
