@@ -152,20 +152,6 @@ def test_bad_input(u1):
         sysid.selstruc(sysid.arxstruc(d, [1], [1], [1]), "xyz", 600)
 
 
-def test_docs_dryer_example(capsys):
-    import re
-    from pathlib import Path
-
-    text = (Path(__file__).parents[1] / "docs" / "polynomial.md").read_text()
-    ns: dict = {}
-    for i, block in enumerate(re.findall(r"```python\n(.*?)```", text, re.S)):
-        exec(compile(block, f"docs/polynomial.md[python block {i}]", "exec"), ns)
-    out = capsys.readouterr().out
-    assert "(3, 4, 2)" in out
-    assert ns["fit"](ns["arx"]) > 80 and ns["fit"](ns["oe"]) > 80
-    assert ns["oe"].info["stop"][0] in ("cost tolerance", "step tolerance", "gradient tolerance")
-
-
 def test_conversions_agree(u1):
     y = signal.lfilter([0.5, 0.3], [1.0, -1.2, 0.5], _delay(u1, 1))
     m = sysid.oe(_data(y, u1), 2, 2, 1)

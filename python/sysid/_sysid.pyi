@@ -20,6 +20,10 @@ __all__ = [
     "arx_fit",
     "iv4",
     "arx_struc",
+    "arx_summary",
+    "arx_matrix_filter",
+    "arx_marginal_likelihood",
+    "arx_regularized_solve",
     "poly_filter",
     "polynomial_pem",
     "__version__",
@@ -383,6 +387,29 @@ def arx_struc(
     nb_range: list[int],
     nk_range: list[int],
 ) -> _Array: ...
+def arx_summary(
+    experiments: list[tuple[_Array, _Array]],
+    na: list[list[int]],
+    nb: list[list[int]],
+    nk: list[list[int]],
+) -> list[tuple[_Array, int]]: ...
+def arx_matrix_filter(
+    a: list[list[list[float]]],
+    w: _Array,
+    y: _Array | None = None,
+    horizon: int = 1,
+) -> _Array: ...
+def arx_marginal_likelihood(
+    summary: _Array,
+    n_rows: int,
+    prior: _Array,
+    dprior: list[_Array],
+    sigma2: float,
+    gradient: bool = True,
+) -> tuple[float, list[float], float]: ...
+def arx_regularized_solve(
+    summary: _Array, prior: _Array, lam: float
+) -> tuple[_Array, _Array, float]: ...
 def poly_filter(b: list[float], a: list[float], x: _Array) -> _Array: ...
 def polynomial_pem(
     experiments: list[tuple[_Array, _Array]],

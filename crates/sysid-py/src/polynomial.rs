@@ -46,19 +46,7 @@ pub fn arx_fit<'py>(
     lam: f64,
     reg_factor: Option<PyReadonlyArray2<'_, f64>>,
 ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-    let max_lag = na
-        .iter()
-        .flatten()
-        .copied()
-        .chain(
-            nb.iter()
-                .flatten()
-                .zip(nk.iter().flatten())
-                .map(|(b, k)| b.saturating_add(*k).saturating_sub(1)),
-        )
-        .max()
-        .unwrap_or(0)
-        .max(1);
+    let max_lag = orders_max_lag(&na, &nb, &nk);
     let orders = ArxOrders { na, nb, nk };
     let m = reg_factor.as_ref().map(|r| view_nd(r.as_array()));
     let ny = experiments.first().map_or(0, |e| e.1.as_array().ncols());
@@ -87,6 +75,72 @@ pub fn arx_fit<'py>(
             Ok(d)
         })
         .collect()
+}
+
+/// The largest lag a structure needs: `na`, and `nk + nb - 1` of every channel (at least 1).
+fn orders_max_lag(na: &[Vec<usize>], nb: &[Vec<usize>], nk: &[Vec<usize>]) -> usize {
+    na.iter()
+        .flatten()
+        .copied()
+        .chain(
+            nb.iter()
+                .flatten()
+                .zip(nk.iter().flatten())
+                .map(|(b, k)| b.saturating_add(*k).saturating_sub(1)),
+        )
+        .max()
+        .unwrap_or(0)
+        .max(1)
+}
+
+/// Per output, the compressed regression `[[R11, r], [0, rho]]` (`(p+1) x (p+1)`, upper
+/// triangular) of `[Phi_i y_i]` and the number of regression rows: the summaries a regularised
+/// ARX fit and its marginal likelihood are computed from.
+#[pyfunction]
+pub fn arx_summary<'py>(
+    py: Python<'py>,
+    experiments: Experiments<'_>,
+    na: Vec<Vec<usize>>,
+    nb: Vec<Vec<usize>>,
+    nk: Vec<Vec<usize>>,
+) -> PyResult<Vec<(Bound<'py, numpy::PyArray2<f64>>, usize)>> {
+    let max_lag = orders_max_lag(&na, &nb, &nk);
+    let orders = ArxOrders { na, nb, nk };
+    let ny = experiments.first().map_or(0, |e| e.1.as_array().ncols());
+    let views: Vec<_> = experiments
+        .iter()
+        .map(|(u, y)| (view_nd(u.as_array()), view_nd(y.as_array())))
+        .collect();
+    let (sums, rows) = py
+        .detach(|| -> sysid_core::Result<_> {
+            let c = compress_core(&views, max_lag)?;
+            let r = c.factor();
+            let s = (0..ny)
+                .map(|i| c.output_summary(r.as_ref(), i, &orders))
+                .collect::<sysid_core::Result<Vec<_>>>()?;
+            Ok((s, c.n_rows()))
+        })
+        .py()?;
+    Ok(sums.iter().map(|s| (mat_to_numpy(py, s), rows)).collect())
+}
+
+/// Simulation (`y = None`) or `horizon`-step prediction of a coupled MIMO ARX model from its
+/// `A` coefficients `a[i][k]` and input part `w` (`N x ny`).
+#[pyfunction]
+#[pyo3(signature = (a, w, y=None, horizon=1))]
+pub fn arx_matrix_filter<'py>(
+    py: Python<'py>,
+    a: Vec<Vec<Vec<f64>>>,
+    w: PyReadonlyArray2<'_, f64>,
+    y: Option<PyReadonlyArray2<'_, f64>>,
+    horizon: usize,
+) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
+    let wv = view_nd(w.as_array());
+    let yv = y.as_ref().map(|y| view_nd(y.as_array()));
+    let out = py
+        .detach(|| filter::arx_matrix_filter(&a, wv, yv.map(|y| (y, horizon))))
+        .py()?;
+    Ok(mat_to_numpy(py, &out))
 }
 
 fn compress_core(
@@ -250,10 +304,62 @@ pub fn iv4<'py>(
         .collect()
 }
 
+/// `-2 log p(y) - N log 2 pi` of a kernel-prior regression from its summary, with the
+/// gradient over `dprior` and the derivative with respect to `sigma2`
+/// (`sysid_core::polynomial::regul::marginal_likelihood`).
+#[pyfunction]
+#[pyo3(signature = (summary, n_rows, prior, dprior, sigma2, gradient=true))]
+pub fn arx_marginal_likelihood(
+    py: Python<'_>,
+    summary: PyReadonlyArray2<'_, f64>,
+    n_rows: usize,
+    prior: PyReadonlyArray2<'_, f64>,
+    dprior: Vec<PyReadonlyArray2<'_, f64>>,
+    sigma2: f64,
+    gradient: bool,
+) -> PyResult<(f64, Vec<f64>, f64)> {
+    let s = view_nd(summary.as_array());
+    let pr = view_nd(prior.as_array());
+    let ds: Vec<_> = dprior.iter().map(|d| view_nd(d.as_array())).collect();
+    py.detach(|| {
+        sysid_core::polynomial::regul::marginal_likelihood(s, n_rows, pr, &ds, sigma2, gradient)
+    })
+    .py()
+}
+
+/// `(theta, covariance, rss)` of [`arx_regularized_solve`].
+type Solved<'py> = (
+    Bound<'py, numpy::PyArray1<f64>>,
+    Bound<'py, numpy::PyArray2<f64>>,
+    f64,
+);
+
+/// The regularised (posterior) solution `(theta, covariance, rss)` of a summarised
+/// regression with penalty `lam theta^T prior^-1 theta`
+/// (`sysid_core::polynomial::regul::regularized_solve`).
+#[pyfunction]
+pub fn arx_regularized_solve<'py>(
+    py: Python<'py>,
+    summary: PyReadonlyArray2<'_, f64>,
+    prior: PyReadonlyArray2<'_, f64>,
+    lam: f64,
+) -> PyResult<Solved<'py>> {
+    let s = view_nd(summary.as_array());
+    let pr = view_nd(prior.as_array());
+    let (th, cov, rss) = py
+        .detach(|| sysid_core::polynomial::regul::regularized_solve(s, pr, lam))
+        .py()?;
+    Ok((slice_to_numpy(py, &th), mat_to_numpy(py, &cov), rss))
+}
+
 /// Registers the functions of this file.
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(arx_fit, m)?)?;
     m.add_function(wrap_pyfunction!(arx_struc, m)?)?;
+    m.add_function(wrap_pyfunction!(arx_summary, m)?)?;
+    m.add_function(wrap_pyfunction!(arx_matrix_filter, m)?)?;
+    m.add_function(wrap_pyfunction!(arx_marginal_likelihood, m)?)?;
+    m.add_function(wrap_pyfunction!(arx_regularized_solve, m)?)?;
     m.add_function(wrap_pyfunction!(poly_filter, m)?)?;
     m.add_function(wrap_pyfunction!(polynomial_pem, m)?)?;
     m.add_function(wrap_pyfunction!(iv4, m)?)?;

@@ -100,10 +100,10 @@ def arx(
     nb: Any,
     nk: Any = 1,
     *,
-    regularization: float = 0.0,
+    regularization: Any = 0.0,
     kernel: np.ndarray | None = None,
 ) -> PolynomialModel:
-    """Least-squares ARX ``A(q) y(t) = B(q) u(t - nk) + e(t)``.
+    """Least-squares (or regularised) ARX ``A(q) y(t) = B(q) u(t - nk) + e(t)``.
 
     Parameters
     ----------
@@ -113,11 +113,18 @@ def arx(
         Orders of ``A`` (off-diagonal entries couple outputs).
     nb, nk : int or array_like (n_outputs, n_inputs)
         Number of ``B`` coefficients and input delays.
-    regularization : float
-        Weight ``lambda`` of the penalty ``lambda |M theta|^2`` (ridge when ``kernel`` is None).
+    regularization : float, str, (lam, R) or ArxRegularization
+        * a number ``lambda``: the penalty ``lambda |M theta|^2`` (ridge when ``kernel`` is
+          None); 0 is plain least squares;
+        * ``"tc"``, ``"ss"``, ``"dc"`` or ``"ridge"``: a kernel prior tuned by empirical Bayes
+          (:func:`sysid.arxregul`), the estimate its posterior mean and ``covariance`` its
+          posterior covariance; ``info["regularization"]`` holds the tuning result;
+        * ``(lam, R)``: MATLAB's ``Lambda`` and ``R`` (``lam theta^T R theta``; one pair, or
+          per-output sequences of them);
+        * an :class:`~sysid.estimate.arxregul.ArxRegularization` from :func:`sysid.arxregul`.
     kernel : ndarray, optional
-        The factor ``M`` (for example the inverse Cholesky factor of a TC kernel); it must
-        have as many columns as each output's equation has parameters.
+        With a number ``regularization``: the factor ``M`` (for example the inverse Cholesky
+        factor of a kernel); as many columns as each output's equation has parameters.
 
     Returns
     -------
@@ -137,10 +144,22 @@ def arx(
     exps = _exps(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     na_g, nb_g, nk_g = _grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"), _grid(nk, ny, nu, "nk")
+    if isinstance(regularization, str) or hasattr(regularization, "prior"):
+        return _arx_posterior(data, na_g, nb_g, nk_g, regularization, kernel)
+    if isinstance(regularization, (tuple, list)):
+        return _arx_pairs(data, exps, na_g, nb_g, nk_g, regularization, kernel)
+    if isinstance(regularization, bool) or not isinstance(regularization, (int, float, np.number)):
+        raise DataError("regularization must be a number, a kernel name ('tc', 'ss', 'dc', "
+                        f"'ridge'), a (lam, R) pair or an ArxRegularization, got "
+                        f"{type(regularization).__name__}")
     if not (regularization >= 0 and np.isfinite(regularization)):
         raise DataError(f"regularization must be a finite number >= 0, got {regularization}")
     fac = None if kernel is None else np.ascontiguousarray(kernel, float)
     fits = _sysid.arx_fit(exps, na_g, nb_g, nk_g, float(regularization), fac)
+    return _arx_model(data, fits, nk_g)
+
+
+def _arx_model(data: Any, fits: list[Any], nk_g: list[list[int]]) -> PolynomialModel:
     model = PolynomialModel(
         a=[[np.asarray(x) for x in f["a"]] for f in fits],
         b=[[np.asarray(x) for x in f["b"]] for f in fits],
@@ -149,9 +168,72 @@ def arx(
         noise_variance=[f["loss"] for f in fits],
     )
     model.info = {"method": "arx", "loss": [f["loss"] for f in fits]}
-    model.covariance = [f["loss"] * f["unscaled_cov"] for f in fits]  # type: ignore[attr-defined]
+    model.covariance = [f["covariance"] if "covariance" in f else  # type: ignore[attr-defined]
+                        f["loss"] * f["unscaled_cov"] for f in fits]
     model.parameters = [f["theta"] for f in fits]  # type: ignore[attr-defined]
-    _attach_uncertainty(model, model.covariance, "arx", "least-squares")  # type: ignore[attr-defined]
+    _attach_uncertainty(model, model.covariance, "arx",  # type: ignore[attr-defined]
+                        "posterior" if "covariance" in fits[0] else "least-squares")
+    return model
+
+
+def _arx_pairs(data: Any, exps: Any, na_g: Any, nb_g: Any, nk_g: Any, pairs: Any,
+               kernel: Any) -> PolynomialModel:
+    """ARX with MATLAB's ``(Lambda, R)`` per output: ``R = M^T M`` by an eigen-factor, solved
+    by the streaming QR with the penalty rows appended (``lam = 0``: plain least squares)."""
+    if kernel is not None:
+        raise DataError("kernel= goes with a numeric regularization; a (lam, R) pair carries R")
+    ny = len(na_g)
+    if len(pairs) == 2 and np.ndim(pairs[0]) == 0:
+        pairs = [pairs] * ny
+    if len(pairs) != ny or any(len(pr) != 2 for pr in pairs):
+        raise DataError(f"regularization=(lam, R): one pair, or {ny} pairs (one per output)")
+    fits = []
+    for i, (lam, R) in enumerate(pairs):
+        lam = float(lam)
+        if not (lam >= 0 and np.isfinite(lam)):
+            raise DataError(f"lam must be a finite number >= 0, got {lam}")
+        R = np.asarray(R, float)
+        w, V = np.linalg.eigh(0.5 * (R + R.T)) if R.ndim == 2 and R.shape[0] == R.shape[1] \
+            else (None, None)
+        if w is None or not np.all(np.isfinite(R)) or w.min() < -1e-10 * max(1.0, w.max()):
+            raise DataError(f"R of output {i} must be a finite symmetric positive "
+                            f"semi-definite matrix, got shape {R.shape}")
+        M = np.ascontiguousarray(np.sqrt(np.clip(w, 0, None))[:, None] * V.T)
+        fits.append(_sysid.arx_fit(exps, na_g, nb_g, nk_g, lam, M)[i])
+    model = _arx_model(data, fits, nk_g)
+    model.info["regularization"] = {"lam": [float(p[0]) for p in pairs]}
+    return model
+
+
+def _arx_posterior(data: Any, na_g: Any, nb_g: Any, nk_g: Any, reg: Any,
+                   kernel: Any) -> PolynomialModel:
+    """ARX as the posterior mean of a tuned kernel prior (:mod:`.arxregul`)."""
+    from .arxregul import arxregul, regularized_fits
+
+    if kernel is not None:
+        raise DataError("kernel= goes with a numeric regularization, not with a kernel name")
+    if isinstance(reg, str):
+        reg = arxregul(data, na_g, nb_g, nk_g, reg)
+    ny = len(na_g)
+    fits = []
+    for i, f in enumerate(regularized_fits(data, na_g, nb_g, nk_g, reg)):
+        th, cov = np.array(f["theta"]), np.array(f["cov"])
+        na_tot = sum(na_g[i])
+        sign = np.r_[-np.ones(na_tot), np.ones(th.size - na_tot)]
+        th *= sign
+        a, o = [], 0
+        for k in range(ny):
+            a.append(th[o:o + na_g[i][k]])
+            o += na_g[i][k]
+        b = []
+        for n in nb_g[i]:
+            b.append(th[o:o + n])
+            o += n
+        fits.append({"a": a, "b": b, "theta": th, "loss": f["loss"],
+                     "covariance": sign[:, None] * cov * sign[None, :]})
+    model = _arx_model(data, fits, nk_g)
+    model.info["method"] = f"arx ({reg.kernel} regularised)"
+    model.info["regularization"] = reg
     return model
 
 

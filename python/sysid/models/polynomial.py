@@ -212,22 +212,17 @@ class PolynomialModel(ModelMixin):
         """
         _rest(x0)
         u = self._check_u(u)
-        n, ny = u.shape[0], self.n_outputs
+        ny = self.n_outputs
         w = np.column_stack([self._deterministic(u, i) for i in range(ny)])
         if not self.coupled:
             return np.column_stack(
                 [_sysid.poly_filter([1.0], list(_monic(self.a[i][i])), w[:, i]) for i in range(ny)]
             )
-        y = np.zeros((n, ny))
-        for t in range(n):
-            for i in range(ny):
-                s = w[t, i]
-                for k in range(ny):
-                    ak = self.a[i][k]
-                    for lag in range(1, min(ak.size, t) + 1):
-                        s -= ak[lag - 1] * y[t - lag, k]
-                y[t, i] = s
-        return y
+        return np.asarray(_sysid.arx_matrix_filter(self._a_lists(), np.ascontiguousarray(w)))
+
+    def _a_lists(self) -> list[list[list[float]]]:
+        return [[[float(v) for v in self.a[i][k]] for k in range(self.n_outputs)]
+                for i in range(self.n_outputs)]
 
     def residuals(self, u: Any, y: Any) -> np.ndarray:
         """One-step prediction errors ``e = D/C (A y - sum B/F u)`` (matrix ``A`` for a
@@ -285,26 +280,16 @@ class PolynomialModel(ModelMixin):
 
         ``P_0 = y`` and ``P_j(t) = w(t) - sum_{l>=1} A_l P_{max(j - l, 0)}(t - l)``: the
         prediction ``j`` steps ahead uses measured outputs where they are known and
-        shorter-range predictions where not (future innovations have mean zero).
+        shorter-range predictions where not (future innovations have mean zero). The
+        recursion runs in Rust (``sysid_core::polynomial::filter::arx_matrix_filter``).
         """
         if y.shape != (u.shape[0], self.n_outputs):
             raise DataError(f"y has shape {y.shape} but should be ({u.shape[0]}, "
                             f"{self.n_outputs})")
-        n, ny = y.shape
+        ny = y.shape[1]
         w = np.column_stack([self._deterministic(u, i) for i in range(ny)])
-        na = max(self.a[i][q].size for i in range(ny) for q in range(ny))
-        lags = np.zeros((na + 1, ny, ny))  # lags[l][i, q]: coefficient of y_q(t - l) in row i
-        for i in range(ny):
-            for q in range(ny):
-                lags[1: self.a[i][q].size + 1, i, q] = self.a[i][q]
-        preds = [y]
-        for j in range(1, k + 1):
-            p = w.copy()
-            for lag in range(1, na + 1):
-                if lag < n:
-                    p[lag:] -= preds[max(j - lag, 0)][: n - lag] @ lags[lag].T
-            preds.append(p)
-        return preds[k]
+        return np.asarray(_sysid.arx_matrix_filter(self._a_lists(), np.ascontiguousarray(w),
+                                                   np.ascontiguousarray(y), k))
 
     def freqresp(self, w: Any, std: bool = False) -> Any:
         """Frequency response ``(len(w), n_outputs, n_inputs)`` at ``w`` (rad/s); with

@@ -156,29 +156,16 @@ impl ArxCompressor {
         self.acc.clone().finish()
     }
 
-    /// Least squares for output `i` of `orders`, with optional regularisation
-    /// `lambda * |M theta|^2` (`M = None`: the identity, i.e. ridge).
-    pub fn solve_output(
-        &self,
-        i: usize,
-        orders: &ArxOrders,
-        lambda: f64,
-        m: Option<MatRef<'_, f64>>,
-    ) -> Result<ArxFit> {
-        let r = self.factor();
-        self.solve_with_factor(r.as_ref(), i, orders, lambda, m)
-    }
-
-    /// As [`Self::solve_output`] on an already finished factor (for order searches).
-    pub fn solve_with_factor(
-        &self,
-        r: MatRef<'_, f64>,
-        i: usize,
-        orders: &ArxOrders,
-        lambda: f64,
-        m: Option<MatRef<'_, f64>>,
-    ) -> Result<ArxFit> {
+    /// Columns of the factor that output `i`'s regression of `orders` selects, and its target
+    /// column; checks the orders and that there are more rows than parameters.
+    fn columns(&self, i: usize, orders: &ArxOrders) -> Result<(Vec<usize>, usize)> {
         let (ny, nu) = (self.n_outputs, self.n_inputs);
+        if i >= ny {
+            return Err(SysidError::invalid(
+                "output",
+                format!("output {i} does not exist; the data have {ny} output(s)"),
+            ));
+        }
         if orders.na.len() != ny
             || orders.nb.len() != ny
             || orders.nk.len() != ny
@@ -230,7 +217,76 @@ impl ArxCompressor {
                 fix: "use a longer record or smaller orders",
             });
         }
-        let target = self.col(nu + i, 0);
+        Ok((cols, self.col(nu + i, 0)))
+    }
+
+    /// The compressed regression of output `i` of `orders`: the upper-triangular
+    /// `(p + 1) x (p + 1)` factor `[[R11, r], [0, rho]]` of `[Phi_i  y_i]` (`p` parameters in
+    /// the order of [`ArxFit::theta`], regressor signs: `y(t - lag)` columns, so the `A`
+    /// coefficients are `-theta_a`). `R11^T R11 = Phi^T Phi`, `R11^T r = Phi^T y` and
+    /// `|r|^2 + rho^2 = y^T y`: everything a regularised fit or a marginal likelihood needs,
+    /// of a size independent of the record length.
+    ///
+    /// ```
+    /// use faer::Mat;
+    /// use sysid_core::polynomial::arx::{ArxCompressor, ArxOrders};
+    /// let n = 100;
+    /// let u = Mat::from_fn(n, 1, |t, _| ((t * 7919) % 13) as f64 - 6.0);
+    /// let y = Mat::from_fn(n, 1, |t, _| if t > 0 { 2.0 * u[(t - 1, 0)] } else { 0.0 });
+    /// let mut c = ArxCompressor::new(1, 1, 1).unwrap();
+    /// c.push(u.as_ref(), y.as_ref()).unwrap();
+    /// let o = ArxOrders { na: vec![vec![0]], nb: vec![vec![1]], nk: vec![vec![1]] };
+    /// let s = c.output_summary(c.factor().as_ref(), 0, &o).unwrap();
+    /// assert!((s[(0, 1)] / s[(0, 0)] - 2.0).abs() < 1e-12 && s[(1, 1)].abs() < 1e-9);
+    /// ```
+    pub fn output_summary(
+        &self,
+        r: MatRef<'_, f64>,
+        i: usize,
+        orders: &ArxOrders,
+    ) -> Result<Mat<f64>> {
+        let (cols, target) = self.columns(i, orders)?;
+        let p = cols.len();
+        let k = r.nrows();
+        let s = Mat::from_fn(k, p + 1, |row, c| {
+            r[(row, if c < p { cols[c] } else { target })]
+        });
+        let rs = s.qr().thin_R().to_owned();
+        Ok(Mat::from_fn(p + 1, p + 1, |a, b| {
+            if a <= b && a < rs.nrows() {
+                rs[(a, b)]
+            } else {
+                0.0
+            }
+        }))
+    }
+
+    /// Least squares for output `i` of `orders`, with optional regularisation
+    /// `lambda * |M theta|^2` (`M = None`: the identity, i.e. ridge).
+    pub fn solve_output(
+        &self,
+        i: usize,
+        orders: &ArxOrders,
+        lambda: f64,
+        m: Option<MatRef<'_, f64>>,
+    ) -> Result<ArxFit> {
+        let r = self.factor();
+        self.solve_with_factor(r.as_ref(), i, orders, lambda, m)
+    }
+
+    /// As [`Self::solve_output`] on an already finished factor (for order searches).
+    pub fn solve_with_factor(
+        &self,
+        r: MatRef<'_, f64>,
+        i: usize,
+        orders: &ArxOrders,
+        lambda: f64,
+        m: Option<MatRef<'_, f64>>,
+    ) -> Result<ArxFit> {
+        let (ny, nu) = (self.n_outputs, self.n_inputs);
+        let (cols, target) = self.columns(i, orders)?;
+        let p = cols.len();
+        let nrows = self.acc.n_rows();
         let k = r.nrows();
         let extra = if lambda > 0.0 {
             m.map_or(p, |m| m.nrows())

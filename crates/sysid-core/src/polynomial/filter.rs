@@ -1,4 +1,9 @@
-//! Filtering by rational polynomials in `q^-1` and their stability.
+//! Filtering by rational polynomials in `q^-1` and their stability, and the matrix
+//! difference equation of a coupled MIMO ARX model (simulation and k-step prediction).
+
+use faer::{Mat, MatRef};
+
+use crate::error::{check_finite, Result, SysidError};
 
 /// `y = B(q)/A(q) x` from rest, with `A` monic (`a[0] == 1`, or empty meaning `A = 1`).
 ///
@@ -78,4 +83,122 @@ pub fn monic(c: &[f64]) -> Vec<f64> {
     v.push(1.0);
     v.extend_from_slice(c);
     v
+}
+
+/// The matrix difference equation of a (coupled) MIMO ARX model,
+/// `y_i(t) = w_i(t) - sum_k sum_{l>=1} a[i][k][l-1] y_k(t - l)`, from rest.
+///
+/// `a[i][k]` holds the coefficients `a_1..` of output `k` in the equation of output `i`
+/// (any lengths), `w` (`N x ny`) the input part `sum_j B_ij u_j(t - nk_ij)` of every output.
+///
+/// * `measured = None`: simulation (the model's own past outputs).
+/// * `measured = Some((y, k))`: the `k`-step-ahead prediction `yhat(t | t - k)`: with
+///   `P_0 = y` and `P_j(t) = w(t) - sum_{l>=1} A_l P_{max(j - l, 0)}(t - l)`, measured outputs
+///   where they are known at `t - k` and shorter-range predictions where not (future
+///   innovations have mean zero). `P_1` is the one-step predictor `y - e`.
+///
+/// Memory: `na + 1` arrays of `N x ny` (`na` the longest `A` entry), whatever `k`.
+///
+/// ```
+/// use faer::Mat;
+/// use sysid_core::polynomial::filter::arx_matrix_filter;
+/// // y(t) = 0.5 y(t-1) + w(t): simulation of a unit pulse, then one-step prediction
+/// let a = vec![vec![vec![-0.5]]];
+/// let w = Mat::from_fn(3, 1, |t, _| if t == 0 { 1.0 } else { 0.0 });
+/// let y = arx_matrix_filter(&a, w.as_ref(), None).unwrap();
+/// assert_eq!((y[(1, 0)], y[(2, 0)]), (0.5, 0.25));
+/// let meas = Mat::from_fn(3, 1, |_, _| 2.0);
+/// let p = arx_matrix_filter(&a, w.as_ref(), Some((meas.as_ref(), 1))).unwrap();
+/// assert_eq!((p[(0, 0)], p[(1, 0)]), (1.0, 1.0));
+/// ```
+pub fn arx_matrix_filter(
+    a: &[Vec<Vec<f64>>],
+    w: MatRef<'_, f64>,
+    measured: Option<(MatRef<'_, f64>, usize)>,
+) -> Result<Mat<f64>> {
+    let (n, ny) = (w.nrows(), w.ncols());
+    if a.len() != ny || a.iter().any(|row| row.len() != ny) {
+        return Err(SysidError::ShapeMismatch {
+            what: "A coefficients".into(),
+            expected: format!("{ny} x {ny} polynomials (one per output pair)"),
+            got: format!(
+                "{} rows of lengths {:?}",
+                a.len(),
+                a.iter().map(Vec::len).collect::<Vec<_>>()
+            ),
+        });
+    }
+    if a.iter().flatten().flatten().any(|v| !v.is_finite()) {
+        return Err(SysidError::invalid(
+            "A coefficients",
+            "contain NaN or infinity; re-estimate the model",
+        ));
+    }
+    check_finite("w", w)?;
+    let na = a.iter().flatten().map(Vec::len).max().unwrap_or(0);
+    let Some((y, k)) = measured else {
+        let mut out = Mat::<f64>::zeros(n, ny);
+        for t in 0..n {
+            for i in 0..ny {
+                let mut s = w[(t, i)];
+                for (kk, ak) in a[i].iter().enumerate() {
+                    for lag in 1..=ak.len().min(t) {
+                        s -= ak[lag - 1] * out[(t - lag, kk)];
+                    }
+                }
+                out[(t, i)] = s;
+            }
+        }
+        return Ok(out);
+    };
+    if y.nrows() != n || y.ncols() != ny {
+        return Err(SysidError::ShapeMismatch {
+            what: "y".into(),
+            expected: format!("({n}, {ny}) like the input part"),
+            got: format!("({}, {})", y.nrows(), y.ncols()),
+        });
+    }
+    if k == 0 {
+        return Err(SysidError::invalid("horizon", "must be at least 1"));
+    }
+    check_finite("y", y)?;
+    // lags[l][(i, q)]: coefficient of y_q(t - l) in the equation of output i.
+    let lags: Vec<Mat<f64>> = (0..=na)
+        .map(|l| {
+            Mat::from_fn(ny, ny, |i, q| {
+                if l >= 1 && l <= a[i][q].len() {
+                    a[i][q][l - 1]
+                } else {
+                    0.0
+                }
+            })
+        })
+        .collect();
+    // ring[j % (na + 1)] holds P_j for the last na + 1 values of j (P_0 = y kept aside).
+    let mut ring: Vec<Mat<f64>> = vec![Mat::zeros(0, 0); na + 1];
+    let mut last = y.to_owned();
+    for j in 1..=k.min(n.max(1)) {
+        let mut p = w.to_owned();
+        for lag in 1..=na.min(n.saturating_sub(1)) {
+            let src = j.saturating_sub(lag);
+            let prev: MatRef<'_, f64> = if src == 0 {
+                y
+            } else {
+                ring[src % (na + 1)].as_ref()
+            };
+            let al = &lags[lag];
+            for t in lag..n {
+                for i in 0..ny {
+                    let mut dot = 0.0;
+                    for q in 0..ny {
+                        dot += prev[(t - lag, q)] * al[(i, q)];
+                    }
+                    p[(t, i)] -= dot;
+                }
+            }
+        }
+        last = p.clone();
+        ring[j % (na + 1)] = p;
+    }
+    Ok(last)
 }

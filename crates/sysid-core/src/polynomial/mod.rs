@@ -23,11 +23,14 @@
 //!   into `J^T J` in blocks of samples, as a [`crate::optim::Problem`]; predictor stability
 //!   (`C`, `F_j` stable) is the admissible set. Starting values: least squares (ARX),
 //!   Hannan-Rissanen (ARMAX, noise models), Steiglitz-McBride (OE).
+//! * [`regul`]: the marginal likelihood (value and gradient) of a kernel-prior regression from
+//!   the compressed summary of [`arx`], for the empirical-Bayes tuning of regularised ARX.
 
 pub mod arx;
 pub mod filter;
 pub mod iv;
 pub mod pem;
+pub mod regul;
 
 #[cfg(test)]
 mod tests;

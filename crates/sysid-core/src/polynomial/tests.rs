@@ -399,4 +399,167 @@ fn iv4_mimo_two_experiments_noise_free() {
     let fit = super::iv::iv4_multi(&recs, &o).unwrap();
     close(&fit.theta[0], &[-0.6, 0.2, 1.0, 0.3], 1e-8);
     close(&fit.theta[1], &[-0.1, -0.5, -0.4, 0.7], 1e-8);
+fn output_summary_reproduces_least_squares_and_sums() {
+    let n = 300;
+    let u = noise(n, 21);
+    let e = noise(n, 22);
+    let y0 = filter(&[1.0, 0.5], &[1.0, -1.2, 0.5], &delay(&u, 1));
+    let y: Vec<f64> = y0.iter().zip(&e).map(|(a, b)| a + 0.1 * b).collect();
+    let um = Mat::from_fn(n, 1, |t, _| u[t]);
+    let ym = Mat::from_fn(n, 1, |t, _| y[t]);
+    let mut c = ArxCompressor::new(1, 1, 4).unwrap();
+    c.push(um.as_ref(), ym.as_ref()).unwrap();
+    let o = ArxOrders {
+        na: vec![vec![2]],
+        nb: vec![vec![2]],
+        nk: vec![vec![1]],
+    };
+    let r = c.factor();
+    let s = c.output_summary(r.as_ref(), 0, &o).unwrap();
+    let fit = c.solve_with_factor(r.as_ref(), 0, &o, 0.0, None).unwrap();
+    // back substitution on the summary gives the least-squares parameters (regression signs)
+    let p = 4;
+    let mut th = vec![0.0; p];
+    for d in (0..p).rev() {
+        let mut v = s[(d, p)];
+        for k in d + 1..p {
+            v -= s[(d, k)] * th[k];
+        }
+        th[d] = v / s[(d, d)];
+    }
+    let poly: Vec<f64> = th
+        .iter()
+        .enumerate()
+        .map(|(k, v)| if k < 2 { -v } else { *v })
+        .collect();
+    close(&poly, &fit.theta, 1e-10);
+    // rho^2 / rows is the least-squares loss
+    assert!((s[(p, p)].powi(2) / fit.n_rows as f64 - fit.loss).abs() < 1e-12);
+    assert!(c.output_summary(r.as_ref(), 1, &o).is_err());
+}
+
+#[test]
+fn matrix_filter_simulates_and_predicts_a_coupled_model() {
+    use super::filter::arx_matrix_filter;
+    let n = 50;
+    let a = vec![
+        vec![vec![-0.5], vec![0.2, 0.1]],
+        vec![vec![0.1], vec![-0.3]],
+    ];
+    let w = Mat::from_fn(n, 2, |t, i| noise(2 * n, 31)[2 * t + i]);
+    let y = arx_matrix_filter(&a, w.as_ref(), None).unwrap();
+    for t in 2..n {
+        let y0 = w[(t, 0)] + 0.5 * y[(t - 1, 0)] - 0.2 * y[(t - 1, 1)] - 0.1 * y[(t - 2, 1)];
+        let y1 = w[(t, 1)] - 0.1 * y[(t - 1, 0)] + 0.3 * y[(t - 1, 1)];
+        assert!((y[(t, 0)] - y0).abs() < 1e-13 && (y[(t, 1)] - y1).abs() < 1e-13);
+    }
+    // the measured record of the model itself: every horizon predicts it exactly
+    for k in [1, 2, 5, 100] {
+        let p = arx_matrix_filter(&a, w.as_ref(), Some((y.as_ref(), k))).unwrap();
+        for t in 0..n {
+            assert!((p[(t, 0)] - y[(t, 0)]).abs() < 1e-12);
+        }
+    }
+    assert!(arx_matrix_filter(&a[..1], w.as_ref(), None).is_err());
+    let short = Mat::<f64>::zeros(n - 1, 2);
+    assert!(arx_matrix_filter(&a, w.as_ref(), Some((short.as_ref(), 1))).is_err());
+    assert!(arx_matrix_filter(&a, w.as_ref(), Some((y.as_ref(), 0))).is_err());
+}
+
+#[test]
+fn marginal_likelihood_matches_dense_and_finite_differences() {
+    use super::regul::marginal_likelihood;
+    // Phi (n x 2), y: dense -2 log p(y) - n log 2 pi against the summary formula.
+    let n = 12;
+    let e = noise(3 * n, 41);
+    let phi = Mat::from_fn(n, 2, |t, j| e[2 * t + j]);
+    let y = Mat::from_fn(n, 1, |t, _| e[2 * n + t] + 0.5 * phi[(t, 0)]);
+    let z = Mat::from_fn(n, 3, |t, j| if j < 2 { phi[(t, j)] } else { y[(t, 0)] });
+    let s = z.qr().thin_R().to_owned();
+    let prior = |c: f64| Mat::from_fn(2, 2, |i, j| c * 0.7f64.powi(i.max(j) as i32 + 1));
+    let sigma2 = 0.3;
+    let dense = |c: f64, s2: f64| {
+        let mut sig = &phi * prior(c) * phi.transpose();
+        for i in 0..n {
+            sig[(i, i)] += s2;
+        }
+        let llt = sig.llt(faer::Side::Lower).unwrap();
+        let a = faer::linalg::solvers::Solve::solve(&llt, &y);
+        let quad: f64 = (0..n).map(|i| y[(i, 0)] * a[(i, 0)]).sum();
+        let ld: f64 = (0..n).map(|i| 2.0 * llt.L()[(i, i)].ln()).sum();
+        quad + ld
+    };
+    let dp = prior(1.0);
+    let (v, g, ds) = marginal_likelihood(
+        s.as_ref(),
+        n,
+        prior(2.0).as_ref(),
+        &[dp.as_ref()],
+        sigma2,
+        true,
+    )
+    .unwrap();
+    assert!((v - dense(2.0, sigma2)).abs() < 1e-10 * v.abs().max(1.0));
+    let h = 1e-6;
+    let fd = (dense(2.0 + h, sigma2) - dense(2.0 - h, sigma2)) / (2.0 * h);
+    assert!(
+        (g[0] - fd).abs() < 1e-6 * fd.abs().max(1.0),
+        "{} vs {fd}",
+        g[0]
+    );
+    let fds = (dense(2.0, sigma2 + h) - dense(2.0, sigma2 - h)) / (2.0 * h);
+    assert!(
+        (ds - fds).abs() < 1e-6 * fds.abs().max(1.0),
+        "{ds} vs {fds}"
+    );
+    let (v2, g2, _) =
+        marginal_likelihood(s.as_ref(), n, prior(2.0).as_ref(), &[], sigma2, false).unwrap();
+    assert!(v2 == v && g2.is_empty());
+    assert!(marginal_likelihood(s.as_ref(), n, dp.as_ref(), &[], -1.0, true).is_err());
+    assert!(marginal_likelihood(s.as_ref(), 2, dp.as_ref(), &[], 1.0, true).is_err());
+}
+
+#[test]
+fn regularized_solve_tends_to_least_squares_and_matches_the_normal_equations() {
+    use super::regul::regularized_solve;
+    let n = 40;
+    let e = noise(4 * n, 51);
+    let z = Mat::from_fn(n, 4, |t, j| e[4 * t + j]);
+    let s = z.qr().thin_R().to_owned();
+    let p = 3;
+    let prior = Mat::from_fn(p, p, |i, j| 0.8f64.powi(i.max(j) as i32 + 1));
+    // lam -> 0: least squares R1^-1 r
+    let (th0, _, rss0) = regularized_solve(s.as_ref(), prior.as_ref(), 0.0).unwrap();
+    let mut ls = vec![0.0; p];
+    for d in (0..p).rev() {
+        let mut v = s[(d, p)];
+        for k in d + 1..p {
+            v -= s[(d, k)] * ls[k];
+        }
+        ls[d] = v / s[(d, d)];
+    }
+    close(&th0, &ls, 1e-10);
+    assert!((rss0 - s[(p, p)].powi(2)).abs() < 1e-10);
+    // lam > 0: (R1^T R1 + lam P^-1) theta = R1^T r
+    let lam = 0.7;
+    let (th, cov, _) = regularized_solve(s.as_ref(), prior.as_ref(), lam).unwrap();
+    let r1 = s.submatrix(0, 0, p, p);
+    let pinv = prior.as_ref().llt(faer::Side::Lower).unwrap();
+    let pi = faer::linalg::solvers::Solve::solve(&pinv, Mat::<f64>::identity(p, p));
+    let a = r1.transpose() * r1 + Mat::from_fn(p, p, |i, j| lam * pi[(i, j)]);
+    let rhs = r1.transpose() * s.submatrix(0, p, p, 1);
+    let thm = Mat::from_fn(p, 1, |i, _| th[i]);
+    let res = &a * &thm - &rhs;
+    for i in 0..p {
+        assert!(res[(i, 0)].abs() < 1e-9);
+    }
+    // covariance = lam (R1^T R1 + lam P^-1)^-1
+    let prod = &a * &cov;
+    for i in 0..p {
+        for j in 0..p {
+            let want = if i == j { lam } else { 0.0 };
+            assert!((prod[(i, j)] - want).abs() < 1e-9);
+        }
+    }
+    assert!(regularized_solve(s.as_ref(), prior.as_ref(), -1.0).is_err());
 }
