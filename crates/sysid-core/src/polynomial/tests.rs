@@ -399,6 +399,9 @@ fn iv4_mimo_two_experiments_noise_free() {
     let fit = super::iv::iv4_multi(&recs, &o).unwrap();
     close(&fit.theta[0], &[-0.6, 0.2, 1.0, 0.3], 1e-8);
     close(&fit.theta[1], &[-0.1, -0.5, -0.4, 0.7], 1e-8);
+}
+
+#[test]
 fn output_summary_reproduces_least_squares_and_sums() {
     let n = 300;
     let u = noise(n, 21);
