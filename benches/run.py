@@ -37,11 +37,12 @@ TOOLS = ("sysid-auto", "sysid-correlation", "sysid-qr", "numpy-qr", "sippy", "nf
 def ensure_peers() -> Path | None:
     py = PEERS / "bin" / "python"
     if not py.exists():
-        print("creating benches/.venv-peers (sippy-unipi, nfoursid, control)", file=sys.stderr)
+        print("creating benches/.venv-peers (sippy-unipi, nfoursid, control, statsmodels)",
+              file=sys.stderr)
         subprocess.run([sys.executable, "-m", "venv", str(PEERS)], check=True)
         r = subprocess.run(
             [str(py), "-m", "pip", "install", "-q", "numpy", "scipy", "pandas", "sippy-unipi",
-             "nfoursid", "control"],
+             "nfoursid", "control", "statsmodels"],
         )
         if r.returncode != 0:
             print("could not install the peers; they are reported as failed", file=sys.stderr)
