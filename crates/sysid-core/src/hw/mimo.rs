@@ -23,7 +23,9 @@ use faer::{Mat, MatRef};
 use super::Nonlinearity;
 use crate::error::{Result, SysidError};
 use crate::linalg::spectral_radius;
-use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution};
+use crate::optim::{
+    minimize, Evaluation, Flow, Iteration, NormalEquations, Options, Problem, Solution,
+};
 
 /// The structure of a MIMO Hammerstein-Wiener model with a state-space linear block.
 #[derive(Debug, Clone)]
@@ -260,42 +262,13 @@ impl Problem for MimoHwProblem<'_> {
     }
 
     fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
-        let p = self.n_params();
-        let mut cost = 0.0;
-        let mut g = vec![0.0; p];
-        let mut h = Mat::<f64>::zeros(if jacobian { p } else { 0 }, if jacobian { p } else { 0 });
+        let mut sums = NormalEquations::new(self.n_params(), jacobian);
         for (u, y) in &self.records {
             self.structure.run(theta, *u, jacobian, |t, i, yhat, jr| {
-                let r = y[(t, i)] - yhat;
-                cost += 0.5 * r * r;
-                if jacobian {
-                    for a in 0..p {
-                        let ja = jr[a];
-                        if ja != 0.0 {
-                            g[a] -= ja * r;
-                            for b in 0..=a {
-                                h[(a, b)] += ja * jr[b];
-                            }
-                        }
-                    }
-                }
+                sums.add(y[(t, i)] - yhat, Some(jr))
             });
         }
-        if jacobian {
-            for a in 0..p {
-                for b in 0..a {
-                    h[(b, a)] = h[(a, b)];
-                }
-            }
-        }
-        if !cost.is_finite() {
-            cost = f64::INFINITY;
-        }
-        Ok(Evaluation {
-            cost,
-            gradient: if jacobian { g } else { Vec::new() },
-            gauss_newton: h,
-        })
+        Ok(sums.finish())
     }
 
     fn admissible(&mut self, theta: &[f64]) -> bool {

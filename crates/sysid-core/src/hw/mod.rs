@@ -17,12 +17,13 @@
 //! linear term, the piecewise-linear map keeps its value at
 //! its last breakpoint fixed.
 
-use faer::Mat;
 
 use crate::error::{Result, SysidError};
 
 pub mod mimo;
-use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution};
+use crate::optim::{
+    minimize, Evaluation, Flow, Iteration, NormalEquations, Options, Problem, Solution,
+};
 use crate::polynomial::filter::is_stable;
 
 /// A static nonlinearity with its free parameters.
@@ -330,42 +331,14 @@ impl Problem for HwProblem<'_> {
     }
 
     fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
-        let p = self.n_params();
-        let mut cost = 0.0;
-        let mut g = vec![0.0; p];
-        let mut h = Mat::<f64>::zeros(if jacobian { p } else { 0 }, if jacobian { p } else { 0 });
-        let mut row = Vec::with_capacity(p);
+        let mut sums = NormalEquations::new(self.n_params(), jacobian);
+        let mut row = Vec::with_capacity(self.n_params());
         for (u, y) in &self.records {
             let jac = if jacobian { Some(&mut row) } else { None };
-            self.structure.run(theta, u, jac, |t, yhat, jr, _| {
-                let r = y[t] - yhat;
-                cost += 0.5 * r * r;
-                if let Some(jr) = jr {
-                    // residual Jacobian is -jr
-                    for a in 0..p {
-                        g[a] -= jr[a] * r;
-                        let ja = jr[a];
-                        if ja != 0.0 {
-                            for b in 0..=a {
-                                h[(a, b)] += ja * jr[b];
-                            }
-                        }
-                    }
-                }
-            });
+            self.structure
+                .run(theta, u, jac, |t, yhat, jr, _| sums.add(y[t] - yhat, jr));
         }
-        if jacobian {
-            for a in 0..p {
-                for b in 0..a {
-                    h[(b, a)] = h[(a, b)];
-                }
-            }
-        }
-        Ok(Evaluation {
-            cost,
-            gradient: if jacobian { g } else { Vec::new() },
-            gauss_newton: h,
-        })
+        Ok(sums.finish())
     }
 
     fn admissible(&mut self, theta: &[f64]) -> bool {

@@ -38,12 +38,14 @@
 //! the data do not determine.
 
 mod covariance;
+mod normal;
 mod reparam;
 mod search;
 #[cfg(test)]
 mod tests;
 
 pub use covariance::{covariance, Covariance};
+pub use normal::NormalEquations;
 pub use reparam::{ParameterMap, Reparameterized};
 pub use search::minimize;
 pub(crate) use search::prof;
