@@ -17,7 +17,6 @@
 //! linear term, the piecewise-linear map keeps its value at
 //! its last breakpoint fixed.
 
-
 use crate::error::{Result, SysidError};
 
 pub mod mimo;

@@ -93,22 +93,14 @@ pub fn identify_frd(
             }
         }
     }
-    let lfac = lq_lower(z.as_ref());
-    let l22 = lfac.as_ref().submatrix(rows_u, rows_u, q * l, q * l);
-    let svd = l22
-        .thin_svd()
-        .map_err(|e| SysidError::numerical("frequency-domain SVD", format!("{e:?}")))?;
-    let sv: Vec<f64> = svd.S().column_vector().iter().copied().collect();
-    let smax = sv.first().copied().unwrap_or(0.0);
-    if !smax.is_finite() || smax <= 0.0 {
-        return Err(SysidError::numerical(
-            "frequency-domain SVD",
-            "the response carries nothing beyond a constant; is it zero?",
-        ));
-    }
-    let rank = sv.iter().filter(|&&x| x > 1e-12 * smax).count();
+    let (u_sv, sv, rank) = output_subspace(
+        z.as_ref(),
+        rows_u,
+        q * l,
+        "the response carries nothing beyond a constant; is it zero?",
+    )?;
     let max = ((q - 1) * l).min(rank).min(2 * nf * m);
-    let (_, a, c) = order_and_ac(svd.U(), &sv, order, max, q, l)?;
+    let (_, a, c) = order_and_ac(u_sv.as_ref(), &sv, order, max, q, l)?;
     let (b, d) = fit_bd(omega, g_re, g_im, &w, a.as_ref(), c.as_ref())?;
     let sys = StateSpace::new(a, b, c, d).map_err(|_| {
         SysidError::numerical(
@@ -193,22 +185,14 @@ pub fn identify_spectra(
             }
         }
     }
-    let lfac = lq_lower(z.as_ref());
-    let l22 = lfac.as_ref().submatrix(rows_u, rows_u, q * l, q * l);
-    let svd = l22
-        .thin_svd()
-        .map_err(|e| SysidError::numerical("frequency-domain SVD", format!("{e:?}")))?;
-    let sv: Vec<f64> = svd.S().column_vector().iter().copied().collect();
-    let smax = sv.first().copied().unwrap_or(0.0);
-    if !smax.is_finite() || smax <= 0.0 {
-        return Err(SysidError::numerical(
-            "frequency-domain SVD",
-            "the output spectra carry nothing beyond the input's; are the outputs zero?",
-        ));
-    }
-    let rank = sv.iter().filter(|&&x| x > 1e-12 * smax).count();
+    let (u_sv, sv, rank) = output_subspace(
+        z.as_ref(),
+        rows_u,
+        q * l,
+        "the output spectra carry nothing beyond the input's; are the outputs zero?",
+    )?;
     let max = ((q - 1) * l).min(rank);
-    let (n, a, c) = order_and_ac(svd.U(), &sv, order, max, q, l)?;
+    let (n, a, c) = order_and_ac(u_sv.as_ref(), &sv, order, max, q, l)?;
     // B, D (and the transient) by least squares: unknowns vec(B), vec(D), x_t
     let nt = n * m + l * m + if transient { n } else { 0 };
     let mut design = Mat::<f64>::zeros(2 * l * nf, nt);
@@ -370,6 +354,33 @@ fn fit_bd(
         }
     }
     Ok((b, d))
+}
+
+/// The LQ factor of the stacked data `z`, its output block (rows after the first `rows_u`,
+/// `rows` of them) projected off the inputs, and that block's left singular vectors,
+/// singular values and numerical rank (relative tolerance 1e-12); `empty` is the error when
+/// the block is zero.
+fn output_subspace(
+    z: MatRef<'_, f64>,
+    rows_u: usize,
+    rows: usize,
+    empty: &str,
+) -> Result<(Mat<f64>, Vec<f64>, usize)> {
+    let lfac = lq_lower(z);
+    let l22 = lfac.as_ref().submatrix(rows_u, rows_u, rows, rows);
+    let svd = l22
+        .thin_svd()
+        .map_err(|e| SysidError::numerical("frequency-domain SVD", format!("{e:?}")))?;
+    let sv: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+    let smax = sv.first().copied().unwrap_or(0.0);
+    if !smax.is_finite() || smax <= 0.0 {
+        return Err(SysidError::numerical(
+            "frequency-domain SVD",
+            empty.to_string(),
+        ));
+    }
+    let rank = sv.iter().filter(|&&x| x > 1e-12 * smax).count();
+    Ok((svd.U().to_owned(), sv, rank))
 }
 
 #[cfg(test)]
