@@ -172,6 +172,87 @@ pub fn lq_lower(m: MatRef<'_, f64>) -> Mat<f64> {
     l
 }
 
+/// Lower-triangular L with `L L^T = M M^T` for `M = [T | 0] + c r^T`: `T` (k x k) lower
+/// triangular, `c` of length k, `r` of length `n >= k` (M is k x n, its last `n - k` columns
+/// come from the rank-one term only). Equals [`lq_lower`] of the explicit M up to round-off,
+/// in `O(k n)` flops instead of `O(k^2 n)`: the rank-one update of a triangular factorisation
+/// by Givens rotations (Golub & Van Loan, section 6.5.1, on `M^T`), on the calling thread.
+///
+/// ```
+/// use faer::mat;
+/// use sysid_core::linalg::{lq_lower, lq_lower_rank_one};
+/// let t = mat![[2.0, 0.0], [1.0, 3.0]];
+/// let (c, r) = ([0.5, -1.0], [1.0, 2.0, 0.5]);
+/// let m = faer::Mat::<f64>::from_fn(2, 3, |i, j| (if j < 2 { t[(i, j)] } else { 0.0 }) + c[i] * r[j]);
+/// let (a, b) = (lq_lower_rank_one(t.as_ref(), &c, &r), lq_lower(m.as_ref()));
+/// assert!((&a - &b).norm_max() < 1e-14);
+/// ```
+pub fn lq_lower_rank_one(t: MatRef<'_, f64>, c: &[f64], r: &[f64]) -> Mat<f64> {
+    let k = t.nrows();
+    let n = r.len();
+    assert!(
+        t.ncols() == k && c.len() == k && n >= k,
+        "lq_lower_rank_one: shapes"
+    );
+    if k == 0 {
+        return Mat::zeros(0, 0);
+    }
+    // rows of M^T = [T^T; 0] + r c^T, row-major: row i of T^T is nonzero from column i
+    let mut rt = vec![0.0; n * k];
+    for j in 0..k {
+        for i in 0..=j {
+            rt[i * k + j] = t[(j, i)];
+        }
+    }
+    let givens = |a: f64, b: f64| -> (f64, f64) {
+        let h = a.hypot(b);
+        if h == 0.0 {
+            (1.0, 0.0)
+        } else {
+            (a / h, b / h)
+        }
+    };
+    let rotate = |rt: &mut [f64], i: usize, from: usize, cs: f64, sn: f64| {
+        let (top, bottom) = rt.split_at_mut((i + 1) * k);
+        let x = &mut top[i * k + from..(i + 1) * k];
+        let y = &mut bottom[from..k];
+        for (xj, yj) in x.iter_mut().zip(y.iter_mut()) {
+            let (a, b) = (*xj, *yj);
+            *xj = cs * a + sn * b;
+            *yj = cs * b - sn * a;
+        }
+    };
+    // Q^T r = |r| e_0 by rotations of rows (i - 1, i), bottom up: the triangle becomes
+    // upper Hessenberg (row i nonzero from column i - 1)
+    let mut w = r.to_vec();
+    for i in (1..n).rev() {
+        let (cs, sn) = givens(w[i - 1], w[i]);
+        w[i - 1] = cs * w[i - 1] + sn * w[i];
+        w[i] = 0.0;
+        let from = i - 1;
+        if from < k {
+            rotate(&mut rt, i - 1, from, cs, sn);
+        }
+    }
+    for (x, cj) in rt[..k].iter_mut().zip(c) {
+        *x += w[0] * cj;
+    }
+    // back to upper triangular: rotations of rows (i, i + 1), top down
+    for i in 0..k.min(n - 1) {
+        let (cs, sn) = givens(rt[i * k + i], rt[(i + 1) * k + i]);
+        rotate(&mut rt, i, i, cs, sn);
+        rt[(i + 1) * k + i] = 0.0;
+    }
+    let mut l = Mat::<f64>::zeros(k, k);
+    for i in 0..k {
+        let sign = if rt[i * k + i] < 0.0 { -1.0 } else { 1.0 };
+        for j in i..k {
+            l[(j, i)] = sign * rt[i * k + j];
+        }
+    }
+    l
+}
+
 /// Streaming triangularisation of a tall matrix given row by row.
 ///
 /// Rows are buffered below the current upper-triangular `R` (k x k); every `chunk_rows`
@@ -328,6 +409,63 @@ mod tests {
             }
             for j in i + 1..3 {
                 assert_eq!(l[(i, j)], 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn rank_one_lq_matches_householder_lq() {
+        // T lower triangular (some zero pivots: rank-deficient), offsets large against the
+        // triangle as centred data with big means give; n = k, k + 1, k + 3 columns
+        let mut st: u64 = 7;
+        let mut rnd = move || {
+            st = st
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((st >> 11) as f64) / ((1u64 << 53) as f64) - 0.5
+        };
+        for &(k, extra, offset) in &[
+            (1usize, 0usize, 1.0),
+            (1, 1, 1e3),
+            (5, 1, 1.0),
+            (12, 1, 1e4),
+            (12, 3, 1e-3),
+            (30, 0, 10.0),
+            (30, 1, 1e6),
+        ] {
+            let n = k + extra;
+            let t = Mat::from_fn(k, k, |i, j| {
+                if j > i || (i == j && i % 7 == 3) {
+                    0.0
+                } else {
+                    rnd()
+                }
+            });
+            let c: Vec<f64> = (0..k).map(|_| offset * rnd()).collect();
+            let r: Vec<f64> = (0..n).map(|_| rnd()).collect();
+            let m = Mat::from_fn(k, n, |i, j| {
+                (if j < k { t[(i, j)] } else { 0.0 }) + c[i] * r[j]
+            });
+            let fast = lq_lower_rank_one(t.as_ref(), &c, &r);
+            let gram_fast = &fast * fast.transpose();
+            let gram = &m * m.transpose();
+            let scale = gram.norm_max();
+            assert!(
+                (&gram_fast - &gram).norm_max() <= 1e-13 * scale,
+                "k {k} n {n}: {:e}",
+                (&gram_fast - &gram).norm_max() / scale
+            );
+            for i in 0..k {
+                assert!(fast[(i, i)] >= 0.0);
+                for j in i + 1..k {
+                    assert_eq!(fast[(i, j)], 0.0);
+                }
+            }
+            if (0..k).all(|i| i % 7 != 3) {
+                // full rank: the triangle with a non-negative diagonal is unique
+                let slow = lq_lower(m.as_ref());
+                let size = slow.norm_max();
+                assert!((&fast - &slow).norm_max() <= 1e-12 * size, "k {k} n {n}");
             }
         }
     }

@@ -26,7 +26,7 @@
 
 use super::{check_chunk, Block, Compressor, FactorSource, HankelFactor, HankelLayout};
 use crate::error::{Result, SysidError};
-use crate::linalg::{cholesky_lower_seq, lq_lower};
+use crate::linalg::{cholesky_lower_seq, lq_lower, lq_lower_rank_one};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par, Side};
 use rayon::prelude::*;
@@ -469,19 +469,40 @@ impl CorrelationSums {
         let t_cols = seg.n - w + 1;
         let (head, tail) = (&seg.head, &seg.tail);
         let k = self.gram.nrows();
-        for a in 0..w {
-            for b in a..w {
-                let tau = b - a;
+        // G_ab = S_tau - H_a(tau) - T_a(tau) with H_a = sum_{t<a} z_t z_{t+tau}^T (head rows,
+        // accumulated for increasing a) and T_a = sum_{a<=q<=w-2-tau} of the tail rows
+        // (accumulated for decreasing a): O(w^2 d^2) work, every partial sum a plain sum
+        let dd = d * d;
+        let mut tails = vec![0.0; w * dd];
+        let mut heads = vec![0.0; dd];
+        let add_outer_rows = |acc: &mut [f64], a: &[f64], b: &[f64]| {
+            for (j, bj) in b.iter().enumerate() {
+                for (c, ai) in acc[j * d..(j + 1) * d].iter_mut().zip(a) {
+                    *c += ai * bj;
+                }
+            }
+        };
+        for tau in 0..w {
+            let na = w - tau;
+            let mut acc = vec![0.0; dd];
+            for a in (0..na).rev() {
+                if a + tau + 2 <= w {
+                    let (ra, rb) = (
+                        &tail[a * d..(a + 1) * d],
+                        &tail[(a + tau) * d..(a + tau + 1) * d],
+                    );
+                    add_outer_rows(&mut acc, ra, rb);
+                }
+                tails[a * dd..(a + 1) * dd].copy_from_slice(&acc);
+            }
+            heads.fill(0.0);
+            for a in 0..na {
+                let b = a + tau;
+                let t_a = &tails[a * dd..(a + 1) * dd];
                 for j in 0..d {
                     let lag_col = seg.lag.col_as_slice(tau * d + j);
                     for i in 0..d {
-                        let mut v = lag_col[i];
-                        for t in 0..a {
-                            v -= head[t * d + i] * head[(t + tau) * d + j];
-                        }
-                        for q in a..(w - 1 - tau) {
-                            v -= tail[q * d + i] * tail[(q + tau) * d + j];
-                        }
+                        let v = lag_col[i] - heads[j * d + i] - t_a[j * d + i];
                         let (r, c) = (a * d + i, b * d + j);
                         debug_assert!(r < k && c < k);
                         self.gram.col_as_slice_mut(c)[r] += v;
@@ -490,7 +511,13 @@ impl CorrelationSums {
                         }
                     }
                 }
+                if a + 1 < na {
+                    let (ra, rb) = (&head[a * d..(a + 1) * d], &head[b * d..(b + 1) * d]);
+                    add_outer_rows(&mut heads, ra, rb);
+                }
             }
+        }
+        for a in 0..w {
             for i in 0..d {
                 let mut v = seg.sum[i];
                 for t in 0..a {
@@ -627,18 +654,44 @@ impl CorrelationSums {
                 fix: "use a longer record or a smaller horizon",
             });
         }
-        // augmented Gram matrix [[X X^T, X 1], [1^T X^T, T]]
+        // rows of the data matrix from natural order (sample offset a, channel c) to the
+        // canonical order [U_f; U_p; Y_p; Y_f], with the shift and scale of each row
+        let (uf, _) = self.layout.block(Block::UFuture);
+        let (up, _) = self.layout.block(Block::UPast);
+        let (yp, _) = self.layout.block(Block::YPast);
+        let (yf, _) = self.layout.block(Block::YFuture);
+        let mut perm = vec![0usize; k];
+        let (mut s_rows, mut c_rows) = (vec![0.0; k], vec![0.0; k]);
+        for a in 0..w {
+            for c in 0..d {
+                let dst = match (c < m, a < p) {
+                    (true, true) => up + a * m + c,
+                    (true, false) => uf + (a - p) * m + c,
+                    (false, true) => yp + a * l + (c - m),
+                    (false, false) => yf + (a - p) * l + (c - m),
+                };
+                perm[a * d + c] = dst;
+                s_rows[dst] = self.scale[c];
+                c_rows[dst] = self.center[c];
+            }
+        }
+        // augmented Gram matrix [[X X^T, X 1], [1^T X^T, T]], rows and columns in canonical
+        // order (the constant row last)
         let mut ga = Mat::<f64>::zeros(k + 1, k + 1);
-        ga.as_mut()
-            .submatrix_mut(0, 0, k, k)
-            .copy_from(self.gram.as_ref());
+        for j in 0..k {
+            let col = self.gram.col_as_slice(j);
+            let dst = ga.col_as_slice_mut(perm[j]);
+            for (i, v) in col.iter().enumerate() {
+                dst[perm[i]] = *v;
+            }
+        }
         for i in 0..k {
-            ga[(i, k)] = self.col_sum[i];
-            ga[(k, i)] = self.col_sum[i];
+            ga[(perm[i], k)] = self.col_sum[i];
+            ga[(k, perm[i])] = self.col_sum[i];
         }
         ga[(k, k)] = self.n_columns as f64;
         let max_diag = (0..=k).map(|i| ga[(i, i)]).fold(0.0, f64::max);
-        let (la, source, pivot) = match cholesky_lower_seq(ga.as_ref()) {
+        let (la, source, pivot, triangular) = match cholesky_lower_seq(ga.as_ref()) {
             Some(la) => {
                 let min_piv = (0..=k)
                     .map(|i| la[(i, i)] * la[(i, i)])
@@ -656,7 +709,7 @@ impl CorrelationSums {
                         relative_pivot: rel,
                     }
                 };
-                (la, src, rel)
+                (la, src, rel, true)
             }
             None => {
                 let evd = ga.self_adjoint_eigen(Side::Lower).map_err(|e| {
@@ -676,31 +729,32 @@ impl CorrelationSums {
                         relative_pivot: 0.0,
                     },
                     0.0,
+                    false,
                 )
             }
         };
-        // rows of E La, permuted from natural to canonical order
-        let (uf, _) = self.layout.block(Block::UFuture);
-        let (up, _) = self.layout.block(Block::UPast);
-        let (yp, _) = self.layout.block(Block::YPast);
-        let (yf, _) = self.layout.block(Block::YFuture);
-        let mut h = Mat::<f64>::zeros(k, k + 1);
-        for a in 0..w {
-            for c in 0..d {
-                let r = a * d + c;
-                let dst = match (c < m, a < p) {
-                    (true, true) => up + a * m + c,
-                    (true, false) => uf + (a - p) * m + c,
-                    (false, true) => yp + a * l + (c - m),
-                    (false, false) => yf + (a - p) * l + (c - m),
-                };
-                let (s, cc) = (self.scale[c], self.center[c]);
-                for j in 0..=k {
-                    h[(dst, j)] = s * la[(r, j)] + cc * la[(k, j)];
-                }
-            }
-        }
-        let l_mat = lq_lower(h.as_ref());
+        // L: the LQ triangle of E La with E = [diag(s) | c]; when La is the Cholesky factor,
+        // E La = [diag(s) La_11 | 0] + c La_k (triangular plus rank one)
+        let l_mat = if triangular {
+            let t = Mat::from_fn(
+                k,
+                k,
+                |i, j| {
+                    if j <= i {
+                        s_rows[i] * la[(i, j)]
+                    } else {
+                        0.0
+                    }
+                },
+            );
+            let r: Vec<f64> = (0..=k).map(|j| la[(k, j)]).collect();
+            lq_lower_rank_one(t.as_ref(), &c_rows, &r)
+        } else {
+            let h = Mat::from_fn(k, k + 1, |i, j| {
+                s_rows[i] * la[(i, j)] + c_rows[i] * la[(k, j)]
+            });
+            lq_lower(h.as_ref())
+        };
         Ok(
             HankelFactor::from_parts(self.layout, l_mat, self.n_columns, self.n_experiments)?
                 .with_source(source)
