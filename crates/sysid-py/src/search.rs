@@ -62,6 +62,7 @@ pub fn solution_items(
     out.set_item("evaluations", sol.evaluations)?;
     out.set_item("cost", sol.cost)?;
     out.set_item("history", sol.history.clone())?;
+    out.set_item("weighted_history", sol.weighted_history.clone())?;
     out.set_item("stop", sol.stop.as_str())?;
     out.set_item("condition", sol.condition)?;
     out.set_item("active_bounds", sol.active_bounds.clone())?;

@@ -328,7 +328,7 @@ class _LinearFit:
         info = {
             "method": "greyest", "iterations": res["iterations"],
             "evaluations": res["evaluations"], "cost": list(res["loss_history"]),
-            "weighted_cost": list(res["history"]), "stop": res["stop"],
+            "weighted_cost": list(res["weighted_history"]), "stop": res["stop"],
             "condition": res["condition"], "rank": int(res["rank"]), "n_free": int(z.size),
             "n_samples": int(res["n_samples"]), "focus": self.focus, "noise": self.noise,
             "x0_values": x0s, "multistart": starts, "loss": res["loss"],

@@ -125,7 +125,7 @@ def nlgreyest(data: IOData, s: NonlinearGreyBox, *, x0: Any, weighting: str, mul
     info = {
         "method": "greyest (nonlinear)", "iterations": best["iterations"],
         "evaluations": best["evaluations"], "cost": list(best["loss_history"]),
-        "weighted_cost": list(best["history"]), "stop": best["stop"],
+        "weighted_cost": list(best["weighted_history"]), "stop": best["stop"],
         "condition": best["condition"], "rank": int(best["rank"]), "n_free": len(qnames),
         "n_samples": int(best["n_samples"]), "focus": "simulation", "x0_values": list(X),
         "multistart": starts, "loss": best["loss"], "seconds": best["seconds"],

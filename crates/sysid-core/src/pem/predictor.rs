@@ -450,6 +450,8 @@ impl<'a> Predictor<'a> {
     pub(crate) fn reweight_at(&mut self, th: &[f64]) -> Result<()> {
         let l = self.l;
         let mut lam = self.innovation_covariance(th);
+        // the criterion is the determinant of the covariance itself, not of the floored one
+        self.losses.push(determinant(&lam));
         for i in 0..l {
             lam[(i, i)] += self.floor[i];
         }
@@ -460,8 +462,6 @@ impl<'a> Predictor<'a> {
             )
         })?;
         let r = llt.L().to_owned();
-        self.losses
-            .push((0..l).map(|i| r[(i, i)] * r[(i, i)]).product::<f64>());
         // invert the lower-triangular factor
         let mut rinv = Mat::<f64>::identity(l, l);
         faer::linalg::triangular_solve::solve_lower_triangular_in_place(
@@ -1810,6 +1810,17 @@ impl Problem for Predictor<'_> {
             return self.evaluate_structured(th, true).map(Some);
         }
         Ok(None)
+    }
+
+    /// With the re-estimated weighting: `det(Lambda)` at the last accepted point (the
+    /// weighted cost is `N l / 2` at every iterate; each accepted step lowers the determinant,
+    /// since `tr(W_old Lambda_new) < l` and `det(W_old Lambda_new) <= (tr / l)^l`).
+    fn criterion(&self) -> Option<f64> {
+        if self.reweight {
+            self.losses.last().copied()
+        } else {
+            None
+        }
     }
 
     fn accepted(&mut self, th: &[f64]) -> Result<bool> {
