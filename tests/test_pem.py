@@ -216,7 +216,7 @@ def test_reported_criterion_is_the_determinant_the_search_decreases():
     assert np.all(np.diff(cost) <= 0) and cost[-1] < cost[0] * (1 - 1e-4)
     e = _prediction_errors(m, u, y, info["x0_values"][0])
     assert cost[-1] == pytest.approx(np.linalg.det(e.T @ e / N), rel=1e-10)
-    assert info["loss"] == info["cost"]
+    assert info["loss_history"] == info["cost"]
     # the weighted cost is what stays put: N l / 2 up to the weighting's tiny floor
     assert np.allclose(info["weighted_cost"], N * 2 / 2, rtol=1e-8)
     # identity weighting: the reported criterion is the sum of squares it minimises
@@ -225,7 +225,7 @@ def test_reported_criterion_is_the_determinant_the_search_decreases():
     assert i2["criterion"] == "sum of squares" and i2["cost"] == i2["weighted_cost"]
     e2 = _prediction_errors(ident, u, y, i2["x0_values"][0])
     assert i2["cost"][-1] == pytest.approx(0.5 * np.sum(e2 ** 2), rel=1e-10)
-    assert i2["loss"][-1] == pytest.approx(np.linalg.det(e2.T @ e2 / N), rel=1e-10)
+    assert i2["loss_history"][-1] == pytest.approx(np.linalg.det(e2.T @ e2 / N), rel=1e-10)
 
 
 def _mc_run(true, seed, N=600):

@@ -58,6 +58,17 @@ pub fn solution_items(
     out.set_item("covariance", mat_to_numpy(py, &cov.covariance))?;
     out.set_item("rank", cov.rank)?;
     out.set_item("unidentifiable", mat_to_numpy(py, &cov.unidentifiable))?;
+    search_items(out, py, sol)
+}
+
+/// The optimiser's report alone (iterations, evaluations, `cost` and `history` of the
+/// reported criterion, `weighted_history`, stop reason, condition, active bounds, gradient),
+/// for bindings whose covariance is scaled their own way.
+pub fn search_items(
+    out: &Bound<'_, PyDict>,
+    py: Python<'_>,
+    sol: &optim::Solution,
+) -> PyResult<()> {
     out.set_item("iterations", sol.iterations)?;
     out.set_item("evaluations", sol.evaluations)?;
     out.set_item("cost", sol.cost)?;

@@ -11,7 +11,6 @@ independent of the record length), and never leaves the set of stable predictors
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -19,7 +18,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int
-from .._progress import iteration_callback
+from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
 from ..errors import DataError
 from ..models.statespace import StateSpaceModel
@@ -105,14 +104,6 @@ def _regularization(reg: Any, p_start: np.ndarray | None) -> tuple[float, Any, A
     return lam, R, nom
 
 
-def _progress_printer(criterion: str) -> Callable[..., None]:
-    """One line per iteration (for logs), naming the criterion the search decreases."""
-    def line(it: int, cost: float, step: float, grad: float, damping: float) -> None:
-        print(f"pem iteration {it:3d}: cost {cost:.6g} ({criterion})  step {step:.3g}  "
-              f"gradient {grad:.3g}  damping {damping:.2g}", file=sys.stdout)
-    return line
-
-
 def pem(
     data: Any,
     model: StateSpaceModel,
@@ -178,7 +169,7 @@ def pem(
         ``"criterion"``: ``"det"``, the determinant of the error covariance
         ``det(E^T E / N)`` (not its log; the maximum-likelihood loss, MATLAB's "loss
         function") for ``weighting="noise"``, ``"sum of squares"``, ``1/2 sum |e|^2``, for
-        ``weighting="identity"``; ``"loss"``: the determinant for either weighting;
+        ``weighting="identity"``; ``"loss_history"``: the determinant under either weighting;
         ``"weighted_cost"``: ``1/2 sum e^T W e`` with the weighting of each iterate (``N l / 2``
         throughout with the noise weighting); the stop reason and the condition number.
         ``uncertainty`` holds the parameter covariance (:class:`sysid.ParameterUncertainty`), so
@@ -257,8 +248,8 @@ def pem(
             and regularization["nominal"] == "model":
         nom = np.concatenate([start_theta] + [np.zeros(n) for m in modes if
                                               isinstance(m, str) and m == "estimate"])
-    cb, close_bar = iteration_callback(progress, "pem", max_iter, _progress_printer(
-        "det" if weighting == "noise" else "sum of squares"))
+    cb, close_bar = iteration_callback(progress, "pem", max_iter, iteration_printer(
+        "pem", "det" if weighting == "noise" else "sum of squares"))
     try:
         res = _sysid.pem_refine(
             A, B, C, D, K, exps, focus=focus, estimate_d=bool(feedthrough), estimate_k=estimate_k,
@@ -294,7 +285,7 @@ def pem(
         "cost": list(res["history"]),
         "criterion": "det" if weighting == "noise" else "sum of squares",
         "weighted_cost": list(res["weighted_history"]),
-        "loss": list(res["loss_history"]),
+        "loss_history": list(res["loss_history"]),
         "stop": res["stop"],
         "condition": res["condition"],
         "focus": focus,
