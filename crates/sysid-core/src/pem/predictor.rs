@@ -1,6 +1,6 @@
 //! The innovation predictor as an [`optim::Problem`] and the [`pem`] driver.
 
-use crate::error::{check_finite, Result, SysidError};
+use crate::error::{check_finite, check_io, Result, SysidError};
 use crate::linalg::spectral_radius;
 use crate::model::StateSpace;
 use crate::optim::{self, Covariance, Evaluation, Flow, Iteration, Problem, Solution};
@@ -180,21 +180,7 @@ impl<'a> Predictor<'a> {
         let mut n_samples = 0;
         let mut floor = vec![0.0; l];
         for (e, (u, y)) in experiments.iter().enumerate() {
-            if u.ncols() != m || y.ncols() != l || u.nrows() != y.nrows() {
-                return Err(SysidError::ShapeMismatch {
-                    what: format!("experiment {e} (u, y)"),
-                    expected: format!("(N, {m}) and (N, {l})"),
-                    got: format!(
-                        "({}, {}) and ({}, {})",
-                        u.nrows(),
-                        u.ncols(),
-                        y.nrows(),
-                        y.ncols()
-                    ),
-                });
-            }
-            check_finite("u", *u)?;
-            check_finite("y", *y)?;
+            check_io(&format!("experiment {e} (u, y)"), *u, *y, m, l)?;
             n_samples += y.nrows();
             for j in 0..l {
                 for t in 0..y.nrows() {
