@@ -3,7 +3,7 @@
 
 use crate::convert::{mat_to_numpy, slice_to_numpy, view_nd};
 use crate::errors::IntoPy;
-use crate::search::{observer, search_items, Slot};
+use crate::search::{run, search_items};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -240,15 +240,9 @@ pub fn polynomial_pem<'py>(
     opts.max_iter = max_iter;
     opts.tol_gradient = tol;
     opts.tol_step = tol;
-    let mut callback_error: Slot = None;
-    let est = py.detach(|| {
-        let mut observer = observer(&progress, &mut callback_error);
-        pem::estimate_multi(&exps, orders, theta0.as_deref(), &opts, &mut observer)
-    });
-    if let Some(e) = callback_error {
-        return Err(e);
-    }
-    let est = est.py()?;
+    let est = run(py, &progress, |obs| {
+        pem::estimate_multi(&exps, orders, theta0.as_deref(), &opts, obs)
+    })?;
     let d = PyDict::new(py);
     search_items(&d, py, &est.solution)?;
     d.set_item("theta", slice_to_numpy(py, &est.solution.theta))?;

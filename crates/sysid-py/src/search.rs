@@ -2,6 +2,7 @@
 //! callback as an observer, and the search's solution and covariance as dict items.
 
 use crate::convert::{mat_to_numpy, slice_to_numpy};
+use crate::errors::IntoPy;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::optim::{self, Flow, Iteration};
@@ -46,6 +47,22 @@ pub fn observer<'a>(
             }
         })
     }
+}
+
+/// Runs `search` (a core estimator taking the observer) with the GIL released, `progress`
+/// as its observer; the first exception raised by the callback is re-raised, a core error
+/// becomes the matching `sysid.errors` exception.
+pub fn run<T: Send>(
+    py: Python<'_>,
+    progress: &Option<Py<PyAny>>,
+    search: impl FnOnce(&mut dyn FnMut(&Iteration) -> Flow) -> sysid_core::Result<T> + Send,
+) -> PyResult<T> {
+    let mut slot: Slot = None;
+    let result = py.detach(|| search(&mut observer(progress, &mut slot)));
+    if let Some(e) = slot {
+        return Err(e);
+    }
+    result.py()
 }
 
 /// The optimiser's report and the parameter covariance, as items of `out`.

@@ -1,7 +1,7 @@
 //! The innovation predictor as an [`optim::Problem`] and the [`pem`] driver.
 
 use crate::error::{check_finite, check_io, Result, SysidError};
-use crate::linalg::spectral_radius;
+use crate::linalg::{determinant, spectral_radius};
 use crate::model::StateSpace;
 use crate::optim::{self, Covariance, Evaluation, Flow, Iteration, Problem, Solution};
 use faer::linalg::matmul::matmul;
@@ -95,13 +95,6 @@ pub struct PemResult {
     /// `det(Lambda)` (the maximum-likelihood loss, MATLAB's "loss function") at the start and
     /// after every accepted iteration.
     pub loss_history: Vec<f64>,
-}
-
-fn determinant(m: &Mat<f64>) -> f64 {
-    match m.llt(Side::Lower) {
-        Ok(f) => (0..m.nrows()).map(|i| f.L()[(i, i)].powi(2)).product(),
-        Err(_) => 0.0,
-    }
 }
 
 /// `(theta, Gram of the modal sensitivities, cross sums with the regressor, sum z z^T)`.
