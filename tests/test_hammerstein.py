@@ -132,3 +132,33 @@ def test_protocol_saving_and_errors(tmp_path):
         sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl="saturation")
     with pytest.raises(sysid.DataError, match="breakpoints"):
         sysid.PiecewiseLinear([1.0, 0.0])
+
+
+def _runs(calls):
+    """The callback's calls cut into searches (the iteration count restarts at 1)."""
+    runs = []
+    for c in calls:
+        if c[0] == 1:
+            runs.append([])
+        runs[-1].append(c)
+    return runs
+
+
+def test_progress_is_the_shared_observer():
+    # the same callback as sysid.pem, once per accepted step of every start's search; the
+    # chosen search's calls are the iterations and costs of info; False stops everything
+    u = _u(600, 5, 2.0)
+    rng = np.random.default_rng(6)
+    dz = np.where(u > 0.5, u - 0.5, np.where(u < -0.3, u + 0.3, 0.0))
+    d = sysid.IOData(u, linear(dz) + 0.02 * rng.standard_normal(u.size), 1.0)
+    calls = []
+    m = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.DeadZone(), progress=lambda *a: calls.append(a))
+    runs = _runs(calls)
+    assert all(len(c) == 5 for c in calls) and 1 <= len(runs) <= m.info["n_starts"]
+    for r in runs:
+        assert [c[0] for c in r] == list(range(1, len(r) + 1))
+    cost = m.info["cost"]
+    assert len(cost) == m.info["iterations"] + 1 and np.all(np.diff(cost) < 0)
+    assert [[c[1] for c in r] for r in runs].count(cost[1:]) >= 1
+    stopped = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.DeadZone(), progress=lambda *a: False)
+    assert stopped.info["stop"] == "cancelled" and stopped.info["iterations"] == 1

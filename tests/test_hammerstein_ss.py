@@ -84,3 +84,23 @@ def test_protocol_saving_and_errors(tmp_path):
         sysid.nlhw_ss(d, 2, output_nl=sysid.UserFunction(np.tanh))
     with pytest.raises(sysid.DataError, match="shape"):
         m.simulate(np.zeros((10, 3)))
+
+
+def test_progress_is_the_shared_observer():
+    u = _inputs(400, 7)
+    y = _simulate(u, lambda v: np.clip(v, -0.5, 0.6), lambda v: v)
+    calls = []
+    m = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 2, input_nl=sysid.Saturation(),
+                      progress=lambda *a: calls.append(a))
+    cost = m.info["cost"]
+    assert len(cost) == m.info["iterations"] + 1 and cost[-1] < cost[0]
+    # the chosen search's calls: the last run of iterations 1..k with the costs of info
+    tail = calls[-m.info["iterations"]:]
+    if [c[1] for c in tail] != cost[1:]:   # an earlier start won: find its run
+        starts = [i for i, c in enumerate(calls) if c[0] == 1] + [len(calls)]
+        runs = [calls[a:b] for a, b in zip(starts, starts[1:])]
+        tail = next(r for r in runs if [c[1] for c in r] == cost[1:])
+    assert [c[0] for c in tail] == list(range(1, m.info["iterations"] + 1))
+    stopped = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 2, input_nl=sysid.Saturation(),
+                            progress=lambda *a: False)
+    assert stopped.info["stop"] == "cancelled" and stopped.info["iterations"] == 1

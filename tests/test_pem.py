@@ -185,6 +185,49 @@ def test_refined_never_worse_and_progress_and_regularisation(capsys):
     assert _pole_err(reg, start) < 0.1 * _pole_err(free, start)
 
 
+def _prediction_errors(m, u, y, x0):
+    """One-step prediction errors of an innovation-form model, by a plain numpy loop."""
+    A, B, C, D, K = m.A, m.B, m.C, m.D, m.K
+    x, e = np.array(x0, float), np.empty_like(y)
+    for t in range(y.shape[0]):
+        e[t] = y[t] - C @ x - D @ u[t]
+        x = A @ x + B @ u[t] + K @ e[t]
+    return e
+
+
+def test_reported_criterion_is_the_determinant_the_search_decreases():
+    # the default weighting is re-estimated from the residuals every iteration, so the weighted
+    # cost is N l / 2 at every iterate: the history, the progress callback and the final value
+    # report det(E^T E / N) instead, which every accepted step lowers
+    true = _truth()
+    rng = np.random.default_rng(11)
+    N = 600
+    u = rng.standard_normal((N, 2))
+    y = _data(true, u, 0.3 * rng.standard_normal((N, 2)))
+    start = sysid.n4sid(sysid.IOData(u=u, y=y), order=4, horizon=8, feedthrough=False)
+    seen = []
+    m = sysid.pem((u, y), start, progress=lambda *a: seen.append(a))
+    info = m.info["pem"]
+    cost = np.array(info["cost"])
+    assert info["criterion"] == "det" and info["iterations"] >= 2
+    assert len(cost) == info["iterations"] + 1
+    assert [s[0] for s in seen] == list(range(1, info["iterations"] + 1))
+    assert [s[1] for s in seen] == info["cost"][1:]
+    assert np.all(np.diff(cost) <= 0) and cost[-1] < cost[0] * (1 - 1e-4)
+    e = _prediction_errors(m, u, y, info["x0_values"][0])
+    assert cost[-1] == pytest.approx(np.linalg.det(e.T @ e / N), rel=1e-10)
+    assert info["loss_history"] == info["cost"]
+    # the weighted cost is what stays put: N l / 2 up to the weighting's tiny floor
+    assert np.allclose(info["weighted_cost"], N * 2 / 2, rtol=1e-8)
+    # identity weighting: the reported criterion is the sum of squares it minimises
+    ident = sysid.pem((u, y), start, weighting="identity", max_iter=5)
+    i2 = ident.info["pem"]
+    assert i2["criterion"] == "sum of squares" and i2["cost"] == i2["weighted_cost"]
+    e2 = _prediction_errors(ident, u, y, i2["x0_values"][0])
+    assert i2["cost"][-1] == pytest.approx(0.5 * np.sum(e2 ** 2), rel=1e-10)
+    assert i2["loss_history"][-1] == pytest.approx(np.linalg.det(e2.T @ e2 / N), rel=1e-10)
+
+
 def _mc_run(true, seed, N=600):
     rng = np.random.default_rng(seed)
     u = rng.standard_normal((N, 2))

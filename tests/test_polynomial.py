@@ -125,10 +125,8 @@ def test_options_change_results(u1):
     assert not np.allclose(sysid.arx(d, 2, 2, 2).b[0][0], base.b[0][0])
     one = sysid.oe(d, 1, 1, 1, max_iter=1)
     full = sysid.oe(d, 1, 1, 1)
-    assert one.info["iterations"][0] <= 1 and one.info["cost"][0] >= full.info["cost"][0]
-    calls = []
-    sysid.armax(d, 1, 1, 1, 1, progress=lambda i, c: calls.append((i, c)))
-    assert calls and calls[0][0] == 1
+    assert one.info["iterations"][0] <= 1
+    assert one.info["cost"][0][-1] >= full.info["cost"][0][-1]
     table = sysid.arxstruc(d, [1, 2, 3], [1, 2], [1, 2])
     assert sysid.selstruc(table, "aic", 600) != sysid.selstruc(table[table[:, 2] == 2], "aic", 600)
     aic = sysid.selstruc(table, "aic", 600)
@@ -202,3 +200,31 @@ def test_iv4_noise_free_and_unbiased():
     assert not np.allclose(ref.a[0][0], iv.a[0][0])  # the instrument option matters
     with pytest.raises(sysid.SysidError, match="persistently exciting"):  # two equal inputs
         sysid.iv4(sysid.IOData(np.c_[u, u], y[:, None], 1.0), 1, 1, 1)
+
+
+def test_progress_is_the_shared_observer(u1, capsys):
+    # the same callback as sysid.pem: (iteration, cost, step, gradient, damping) after every
+    # accepted step, the values of info; False stops ("cancelled"); an exception is re-raised
+    rng = np.random.default_rng(4)
+    e = 0.3 * rng.standard_normal(600)
+    y = signal.lfilter([0.0, 1.0], [1.0, -0.8], u1) + signal.lfilter([1.0, 0.5], [1.0], e)
+    d = _data(y, u1)
+    calls = []
+    m = sysid.armax(d, 1, 1, 1, 1, progress=lambda *a: calls.append(a))
+    cost = m.info["cost"][0]
+    assert m.info["iterations"][0] >= 2 and len(cost) == m.info["iterations"][0] + 1
+    assert [c[0] for c in calls] == list(range(1, m.info["iterations"][0] + 1))
+    assert [c[1] for c in calls] == cost[1:] and all(len(c) == 5 for c in calls)
+    assert np.all(np.diff(cost) < 0) and m.info["criterion"] == "sum of squares"
+    assert m.info["stop"][0] != "cancelled"
+    stopped = sysid.oe(d, 1, 1, 1, progress=lambda *a: False)
+    assert stopped.info["stop"] == ["cancelled"] and stopped.info["iterations"] == [1]
+
+    def boom(*a):
+        raise KeyError("from the callback")
+    with pytest.raises(KeyError, match="from the callback"):
+        sysid.bj(d, 1, 1, 1, 1, 1, progress=boom)
+    printed = sysid.armax(d, 1, 1, 1, 1, max_iter=2, progress=True)
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == printed.info["iterations"][0] > 0
+    assert lines[0].startswith("armax iteration   1: cost ")

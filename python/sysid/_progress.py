@@ -12,7 +12,7 @@ from __future__ import annotations
 import sys
 from typing import Any, Callable
 
-__all__ = ["Bar", "show", "iteration_callback"]
+__all__ = ["Bar", "show", "iteration_callback", "iteration_printer"]
 
 
 def show(progress: bool | None) -> bool:
@@ -79,6 +79,21 @@ class Bar:
         self.close()
 
 
+def iteration_printer(desc: str, criterion: str) -> Callable[..., None]:
+    """One line per iteration on stdout (the ``log_line`` of :func:`iteration_callback`).
+
+    Examples
+    --------
+    >>> from sysid._progress import iteration_printer
+    >>> iteration_printer("oe", "sum of squares")(1, 2.5, 0.1, 1e-3, 1e-4)
+    oe iteration   1: cost 2.5 (sum of squares)  step 0.1  gradient 0.001  damping 0.0001
+    """
+    def line(it: int, cost: float, step: float, grad: float, damping: float) -> None:
+        print(f"{desc} iteration {it:3d}: cost {cost:.6g} ({criterion})  step {step:.3g}  "
+              f"gradient {grad:.3g}  damping {damping:.2g}", file=sys.stdout)
+    return line
+
+
 def iteration_callback(
     progress: bool | None | Callable[..., Any],
     desc: str,
@@ -87,10 +102,12 @@ def iteration_callback(
 ) -> tuple[Callable[..., Any] | None, Callable[[], None]]:
     """The per-iteration callback of an iterative estimator and a function closing it.
 
-    ``progress`` may be a callable (used as is: ``callable(iteration, cost, ...)``, a
-    ``False`` return stops the estimator), ``None`` (a bar on a terminal, else nothing),
-    ``True`` (a bar on a terminal; in a log, ``log_line`` per iteration when given) or
-    ``False``. The bar shows the iterations against ``max_iter`` and the current cost.
+    ``progress`` may be a callable (used as is: ``callable(iteration, cost, step_norm,
+    gradient_norm, damping)`` after every accepted step of the shared optimiser, a ``False``
+    return stops the estimator, an exception stops it and is re-raised), ``None`` (a bar on a
+    terminal, else nothing), ``True`` (a bar on a terminal; in a log, ``log_line`` per
+    iteration when given) or ``False``. The bar shows the iterations against ``max_iter``
+    and the current cost.
     """
     if callable(progress):
         return progress, lambda: None

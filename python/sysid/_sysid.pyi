@@ -422,7 +422,7 @@ def polynomial_pem(
     theta0: list[float] | None = None,
     max_iter: int = 100,
     tol: float = 1e-9,
-    progress: Any | None = None,
+    progress: Callable[..., Any] | None = None,
 ) -> dict[str, Any]: ...
 def iv4(
     experiments: list[tuple[_Array, _Array, _Array | None]],
@@ -486,7 +486,7 @@ def hw_estimate(
     theta0: list[float],
     max_iter: int = 100,
     tol: float = 1e-10,
-    progress: Any | None = None,
+    progress: Callable[..., Any] | None = None,
 ) -> dict[str, Any]: ...
 def hw_simulate(
     input: tuple[str, int, list[float]],
@@ -506,7 +506,7 @@ def hw_mimo_estimate(
     theta0: list[float],
     max_iter: int = 100,
     tol: float = 1e-10,
-    progress: Callable[[int, float], Any] | None = None,
+    progress: Callable[..., Any] | None = None,
 ) -> dict[str, Any]: ...
 def hw_mimo_simulate(
     inputs: list[tuple[str, int, list[float]]],

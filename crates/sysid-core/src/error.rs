@@ -189,3 +189,41 @@ pub fn check_finite(what: &'static str, x: faer::MatRef<'_, f64>) -> Result<()> 
     }
     Ok(())
 }
+
+/// Checks one experiment: `u` is `(N, m)` and `y` is `(N, l)` with the same `N` (not compared
+/// when `m == 0`: an input-free record may pass an empty `u`), and every entry is finite.
+/// `what` names the pair in the message ("u, y", "experiment 2 (u, y)", ...).
+///
+/// ```
+/// use faer::Mat;
+/// use sysid_core::error::check_io;
+/// let (u, y) = (Mat::<f64>::zeros(10, 2), Mat::<f64>::zeros(10, 1));
+/// assert!(check_io("u, y", u.as_ref(), y.as_ref(), 2, 1).is_ok());
+/// let e = check_io("u, y", u.as_ref(), y.as_ref(), 1, 1).unwrap_err();
+/// assert!(e.to_string().contains("(N, 1) and (N, 1)"));
+/// let short = Mat::<f64>::zeros(9, 1);
+/// assert!(check_io("u, y", u.as_ref(), short.as_ref(), 2, 1).is_err());
+/// ```
+pub fn check_io(
+    what: &str,
+    u: faer::MatRef<'_, f64>,
+    y: faer::MatRef<'_, f64>,
+    m: usize,
+    l: usize,
+) -> Result<()> {
+    if u.ncols() != m || y.ncols() != l || (m > 0 && u.nrows() != y.nrows()) {
+        return Err(SysidError::ShapeMismatch {
+            what: what.to_string(),
+            expected: format!("(N, {m}) and (N, {l})"),
+            got: format!(
+                "({}, {}) and ({}, {})",
+                u.nrows(),
+                u.ncols(),
+                y.nrows(),
+                y.ncols()
+            ),
+        });
+    }
+    check_finite("u", u)?;
+    check_finite("y", y)
+}

@@ -375,6 +375,15 @@ pub fn rank(a: MatRef<'_, f64>, rtol: f64) -> Result<usize> {
     Ok(s.iter().filter(|&&x| x > rtol * smax && x > 0.0).count())
 }
 
+/// Determinant of a symmetric positive semi-definite matrix (a residual covariance) from its
+/// Cholesky factor; 0 when the factorisation fails (singular or indefinite).
+pub(crate) fn determinant(m: &Mat<f64>) -> f64 {
+    match m.llt(faer::Side::Lower) {
+        Ok(f) => (0..m.nrows()).map(|i| f.L()[(i, i)].powi(2)).product(),
+        Err(_) => 0.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

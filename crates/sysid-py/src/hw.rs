@@ -6,12 +6,13 @@
 
 use crate::convert::{mat_to_numpy, slice_to_numpy, vec1, view};
 use crate::errors::IntoPy;
+use crate::search::{run, search_items};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::hw::mimo::{self, MimoHwStructure};
 use sysid_core::hw::{self, HwStructure, Nonlinearity};
-use sysid_core::optim::{covariance, Flow, Options};
+use sysid_core::optim::{covariance, Options};
 use sysid_core::SysidError;
 
 type Nl = (String, usize, Vec<f64>);
@@ -54,6 +55,16 @@ fn structure(input: &Nl, output: &Nl, nb: usize, nf: usize, nk: usize) -> PyResu
     Ok(s)
 }
 
+/// The search options of both estimators: `tol` for the cost, step and gradient tests.
+fn options(max_iter: usize, tol: f64) -> Options {
+    let mut opts = Options::default();
+    opts.max_iter = max_iter;
+    opts.tol_gradient = tol;
+    opts.tol_step = tol;
+    opts.tol_cost = tol;
+    opts
+}
+
 /// Prediction-error estimate from `theta0`; returns a dict (theta, cost, history,
 /// iterations, stop, covariance).
 #[pyfunction]
@@ -75,32 +86,16 @@ pub fn hw_estimate<'py>(
     let s = structure(&input, &output, nb, nf, nk)?;
     let data: Vec<(Vec<f64>, Vec<f64>)> = records.iter().map(|(u, y)| (vec1(u), vec1(y))).collect();
     let refs: Vec<(&[f64], &[f64])> = data.iter().map(|(u, y)| (&u[..], &y[..])).collect();
-    let mut opts = Options::default();
-    opts.max_iter = max_iter;
-    opts.tol_gradient = tol;
-    opts.tol_step = tol;
-    opts.tol_cost = tol;
-    let sol = match progress {
-        Some(cb) => {
-            let mut obs =
-                |it: &sysid_core::optim::Iteration| match cb.call1(py, (it.iteration, it.cost)) {
-                    Ok(v) if v.is_truthy(py).unwrap_or(false) => Flow::Stop,
-                    _ => Flow::Continue,
-                };
-            hw::estimate(&s, &refs, &theta0, &opts, &mut obs)
-        }
-        None => py.detach(|| hw::estimate(&s, &refs, &theta0, &opts, &mut |_| Flow::Continue)),
-    }
-    .py()?;
+    let opts = options(max_iter, tol);
+    let sol = run(py, &progress, |obs| {
+        hw::estimate(&s, &refs, &theta0, &opts, obs)
+    })?;
     let n: usize = data.iter().map(|d| d.0.len()).sum();
     let var = 2.0 * sol.cost / (n.saturating_sub(theta0.len()).max(1)) as f64;
     let cov = covariance(sol.gauss_newton.as_ref(), var, 1e-10).py()?;
     let d = PyDict::new(py);
+    search_items(&d, py, &sol)?;
     d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
-    d.set_item("cost", sol.cost)?;
-    d.set_item("iterations", sol.iterations)?;
-    d.set_item("stop", sol.stop.as_str())?;
-    d.set_item("history", slice_to_numpy(py, &sol.history))?;
     d.set_item("noise_variance", var)?;
     d.set_item("covariance", mat_to_numpy(py, &cov.covariance))?;
     Ok(d)
@@ -170,33 +165,15 @@ pub fn hw_mimo_estimate<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = mimo_structure(&inputs, &outputs, order, feedthrough)?;
     let refs: Vec<_> = records.iter().map(|(u, y)| (view(u), view(y))).collect();
-    let mut opts = Options::default();
-    opts.max_iter = max_iter;
-    opts.tol_gradient = tol;
-    opts.tol_step = tol;
-    opts.tol_cost = tol;
-    let sol = match progress {
-        Some(cb) => {
-            let mut obs =
-                |it: &sysid_core::optim::Iteration| match cb.call1(py, (it.iteration, it.cost)) {
-                    Ok(v) if v.is_truthy(py).unwrap_or(false) => Flow::Stop,
-                    _ => Flow::Continue,
-                };
-            mimo::estimate_mimo(&s, &refs, &theta0, &opts, &mut obs)
-        }
-        None => {
-            py.detach(|| mimo::estimate_mimo(&s, &refs, &theta0, &opts, &mut |_| Flow::Continue))
-        }
-    }
-    .py()?;
+    let opts = options(max_iter, tol);
+    let sol = run(py, &progress, |obs| {
+        mimo::estimate_mimo(&s, &refs, &theta0, &opts, obs)
+    })?;
     let n: usize = refs.iter().map(|(_, y)| y.nrows() * y.ncols()).sum();
     let var = 2.0 * sol.cost / (n.saturating_sub(theta0.len()).max(1)) as f64;
     let d = PyDict::new(py);
+    search_items(&d, py, &sol)?;
     d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
-    d.set_item("cost", sol.cost)?;
-    d.set_item("iterations", sol.iterations)?;
-    d.set_item("stop", sol.stop.as_str())?;
-    d.set_item("history", slice_to_numpy(py, &sol.history))?;
     d.set_item("noise_variance", var)?;
     Ok(d)
 }

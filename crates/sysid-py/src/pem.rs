@@ -1,8 +1,7 @@
 //! Bindings of the prediction-error refinement (`sysid_core::pem`).
 
 use crate::convert::{mat_to_numpy, slice_to_numpy, state_space as model, vec1, view};
-use crate::errors::IntoPy;
-use crate::search::{observer, solution_items, Slot};
+use crate::search::{run, solution_items};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -96,15 +95,7 @@ pub fn pem_refine<'py>(
         .iter()
         .map(|(u, y)| (view(u), view(y)))
         .collect();
-    let mut callback_error: Slot = None;
-    let result = py.detach(|| {
-        let mut observer = observer(&progress, &mut callback_error);
-        pem::pem(&sys, kv, &views, &o, &mut observer)
-    });
-    if let Some(e) = callback_error {
-        return Err(e);
-    }
-    let r = result.py()?;
+    let r = run(py, &progress, |obs| pem::pem(&sys, kv, &views, &o, obs))?;
     let out = PyDict::new(py);
     out.set_item("a", mat_to_numpy(py, &r.sys.a))?;
     out.set_item("b", mat_to_numpy(py, &r.sys.b))?;

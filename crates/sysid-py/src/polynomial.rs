@@ -3,10 +3,11 @@
 
 use crate::convert::{mat_to_numpy, slice_to_numpy, view_nd};
 use crate::errors::IntoPy;
+use crate::search::{run, search_items};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sysid_core::optim::{Flow, Options};
+use sysid_core::optim::Options;
 use sysid_core::polynomial::arx::{ArxCompressor, ArxOrders};
 use sysid_core::polynomial::filter;
 use sysid_core::polynomial::iv::{self, IvRecord};
@@ -239,29 +240,13 @@ pub fn polynomial_pem<'py>(
     opts.max_iter = max_iter;
     opts.tol_gradient = tol;
     opts.tol_step = tol;
-    let est = match progress {
-        Some(cb) => {
-            let mut obs =
-                |it: &sysid_core::optim::Iteration| match cb.call1(py, (it.iteration, it.cost)) {
-                    Ok(v) if v.is_truthy(py).unwrap_or(false) => Flow::Stop,
-                    _ => Flow::Continue,
-                };
-            pem::estimate_multi(&exps, orders, theta0.as_deref(), &opts, &mut obs)
-        }
-        None => py.detach(|| {
-            pem::estimate_multi(&exps, orders, theta0.as_deref(), &opts, &mut |_| {
-                Flow::Continue
-            })
-        }),
-    }
-    .py()?;
+    let est = run(py, &progress, |obs| {
+        pem::estimate_multi(&exps, orders, theta0.as_deref(), &opts, obs)
+    })?;
     let d = PyDict::new(py);
+    search_items(&d, py, &est.solution)?;
     d.set_item("theta", slice_to_numpy(py, &est.solution.theta))?;
     d.set_item("theta0", slice_to_numpy(py, &est.theta0))?;
-    d.set_item("cost", est.solution.cost)?;
-    d.set_item("iterations", est.solution.iterations)?;
-    d.set_item("stop", est.solution.stop.as_str())?;
-    d.set_item("history", slice_to_numpy(py, &est.solution.history))?;
     d.set_item("noise_variance", est.noise_variance)?;
     d.set_item("covariance", mat_to_numpy(py, &est.covariance))?;
     Ok(d)

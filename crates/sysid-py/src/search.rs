@@ -2,6 +2,7 @@
 //! callback as an observer, and the search's solution and covariance as dict items.
 
 use crate::convert::{mat_to_numpy, slice_to_numpy};
+use crate::errors::IntoPy;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::optim::{self, Flow, Iteration};
@@ -48,6 +49,22 @@ pub fn observer<'a>(
     }
 }
 
+/// Runs `search` (a core estimator taking the observer) with the GIL released, `progress`
+/// as its observer; the first exception raised by the callback is re-raised, a core error
+/// becomes the matching `sysid.errors` exception.
+pub fn run<T: Send>(
+    py: Python<'_>,
+    progress: &Option<Py<PyAny>>,
+    search: impl FnOnce(&mut dyn FnMut(&Iteration) -> Flow) -> sysid_core::Result<T> + Send,
+) -> PyResult<T> {
+    let mut slot: Slot = None;
+    let result = py.detach(|| search(&mut observer(progress, &mut slot)));
+    if let Some(e) = slot {
+        return Err(e);
+    }
+    result.py()
+}
+
 /// The optimiser's report and the parameter covariance, as items of `out`.
 pub fn solution_items(
     out: &Bound<'_, PyDict>,
@@ -58,10 +75,22 @@ pub fn solution_items(
     out.set_item("covariance", mat_to_numpy(py, &cov.covariance))?;
     out.set_item("rank", cov.rank)?;
     out.set_item("unidentifiable", mat_to_numpy(py, &cov.unidentifiable))?;
+    search_items(out, py, sol)
+}
+
+/// The optimiser's report alone (iterations, evaluations, `cost` and `history` of the
+/// reported criterion, `weighted_history`, stop reason, condition, active bounds, gradient),
+/// for bindings whose covariance is scaled their own way.
+pub fn search_items(
+    out: &Bound<'_, PyDict>,
+    py: Python<'_>,
+    sol: &optim::Solution,
+) -> PyResult<()> {
     out.set_item("iterations", sol.iterations)?;
     out.set_item("evaluations", sol.evaluations)?;
     out.set_item("cost", sol.cost)?;
     out.set_item("history", sol.history.clone())?;
+    out.set_item("weighted_history", sol.weighted_history.clone())?;
     out.set_item("stop", sol.stop.as_str())?;
     out.set_item("condition", sol.condition)?;
     out.set_item("active_bounds", sol.active_bounds.clone())?;

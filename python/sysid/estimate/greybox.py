@@ -21,23 +21,24 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int
+from .._progress import iteration_printer
 from ..data.iodata import IOData
 from ..errors import DataError, SysidError
 from ..models.greybox import GreyBox
 from ..models.greydelay import shift_taps, tap_states
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
-from .greyresult import GreyEstimate, _warn_unidentifiable
-from .pem import _experiments, _progress_printer
+from .greyresult import GreyEstimate, _costs, _criterion, _warn_unidentifiable
+from .pem import _experiments
 
 __all__ = ["greyest", "GreyEstimate"]
 
 _FOCUS = ("prediction", "simulation")
 
 
-def _progress(progress: Any) -> Any:
+def _progress(progress: Any, criterion: str) -> Any:
     if progress is True:
-        return _progress_printer
+        return iteration_printer("greyest", criterion)
     if progress is False or progress is None:
         return None
     if callable(progress):
@@ -136,7 +137,7 @@ def greyest(
         raise DataError(f"weighting must be 'noise' or 'identity', got {weighting!r}")
     multistart = as_int(multistart, "multistart", 0)
     max_iter = as_int(max_iter, "max_iter", 0)
-    cb = _progress(progress)
+    cb = _progress(progress, _criterion(weighting))
     if isinstance(structure, NonlinearGreyBox):
         return nlgreyest(data, structure, x0=x0, weighting=weighting, multistart=multistart,
                          rng=rng, max_iter=max_iter, tol=float(tol), progress=cb)
@@ -327,8 +328,8 @@ class _LinearFit:
 
         info = {
             "method": "greyest", "iterations": res["iterations"],
-            "evaluations": res["evaluations"], "cost": list(res["loss_history"]),
-            "weighted_cost": list(res["history"]), "stop": res["stop"],
+            "evaluations": res["evaluations"], **_costs(res, self.reweight),
+            "stop": res["stop"],
             "condition": res["condition"], "rank": int(res["rank"]), "n_free": int(z.size),
             "n_samples": int(res["n_samples"]), "focus": self.focus, "noise": self.noise,
             "x0_values": x0s, "multistart": starts, "loss": res["loss"],

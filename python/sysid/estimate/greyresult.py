@@ -43,7 +43,9 @@ class GreyEstimate:
     initial_states : list of ndarray
         Initial state of every experiment.
     info : dict
-        Iterations, cost history (``det`` of the error covariance), stop reason, rank, ...
+        Iterations, ``cost`` history (of ``criterion``: ``"det"`` of the error covariance
+        with the noise weighting, else ``"sum of squares"``; the values the progress callback
+        got), ``weighted_cost``, ``loss_history`` (det), stop reason, rank, ...
     """
 
     def __init__(self, parameters: ParameterTable, covariance: np.ndarray, free_names: list[str],
@@ -75,7 +77,8 @@ class GreyEstimate:
         i = self.info
         return "\n".join([
             repr(self), str(self.parameters),
-            f"loss det(Lambda) {i['cost'][0]:.4g} -> {i['cost'][-1]:.4g} in "
+            f"{_LABEL.get(i.get('criterion', 'det'), 'cost')} {i['cost'][0]:.4g} -> "
+            f"{i['cost'][-1]:.4g} in "
             f"{i['iterations']} iterations ({i['stop']}); rank {i['rank']} of "
             f"{i['n_free']} free quantities; {i['n_samples']} samples"])
 
@@ -97,7 +100,23 @@ class GreyEstimate:
     def __repr__(self) -> str:
         nf = len(self.free_names)
         return (f"GreyEstimate({len(self.parameters)} parameters, {nf} free, "
-                f"{self.info['stop']}, loss {self.info['cost'][-1]:.4g})")
+                f"{self.info['stop']}, {self.info.get('criterion', 'det')} "
+                f"{self.info['cost'][-1]:.4g})")
+
+
+_LABEL = {"det": "loss det(Lambda)", "sum of squares": "sum of squares"}
+
+
+def _criterion(weighting: str) -> str:
+    return "det" if weighting == "noise" else "sum of squares"
+
+
+def _costs(res: dict[str, Any], reweight: bool) -> dict[str, Any]:
+    """The search's histories as ``info`` items: ``cost`` (the criterion it decreases, the
+    values the progress callback gets), ``weighted_cost`` and ``loss_history`` (det)."""
+    return {"cost": list(res["history"]), "criterion": _criterion(
+        "noise" if reweight else "identity"), "weighted_cost": list(res["weighted_history"]),
+        "loss_history": list(res["loss_history"])}
 
 
 def _warn_unidentifiable(null: np.ndarray, names: list[str], scale: np.ndarray) -> None:

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError
 from ..models.hammerstein import HammersteinWienerModel, Nonlinearity, UserFunction
 
@@ -41,7 +42,7 @@ def nlhw(
     output_nl: Nonlinearity | None = None,
     max_iter: int = 100,
     tol: float = 1e-10,
-    progress: Callable[[int, float], Any] | None = None,
+    progress: bool | None | Callable[..., Any] = None,
 ) -> HammersteinWienerModel:
     """Hammerstein-Wiener model ``y = g(B/F f(u(t - nk))) + e`` (one input, one output).
 
@@ -58,14 +59,19 @@ def nlhw(
         ``None`` is the identity (``output_nl=None``: Hammerstein, ``input_nl=None``: Wiener).
     max_iter, tol : int, float
         Optimiser iterations and step/gradient tolerance.
-    progress : callable, optional
-        ``progress(iteration, cost)`` after each accepted step; a true return stops.
+    progress : bool or callable, optional
+        As for :func:`sysid.pem`: a bar (``None``: on a terminal only; ``True``: also one
+        line per iteration in a log), ``False`` for silence, or a callable getting
+        ``(iteration, cost, step_norm, gradient_norm, damping)`` after every accepted step of
+        every start's search (``False`` returned stops the search and skips the remaining
+        starts).
 
     Returns
     -------
     HammersteinWienerModel
-        With ``info`` (iterations, stop reason, cost history, start) and the parameter
-        covariance in ``info["covariance"]``.
+        With ``info``: ``iterations``, ``cost`` (``1/2 sum e^2`` at the start and after each
+        iteration of the chosen start's search), ``criterion``, ``stop`` (reason), the start,
+        and the parameter covariance in ``info["covariance"]``.
 
     Examples
     --------
@@ -108,25 +114,33 @@ def nlhw(
     u_all = np.concatenate([r[0] for r in records])
     lin_b = b0
     res, theta0, x_all = None, None, np.zeros(0)
-    for start_in in fin.starts(u_all):
-        fin.params = start_in
-        # B absorbs the gain of the starting nonlinearity: B f(u) ~ B_linear u
-        fu = fin(u_all)
-        b0 = lin_b
-        if not isinstance(fin, UserFunction) and float(fu @ fu) > 0 and float(fu @ u_all):
-            b0 = lin_b * float(fu @ u_all) / float(fu @ fu)
-        start = HammersteinWienerModel(fin, Nonlinearity(), b0, f0, int(nk), dt)
-        xs = np.concatenate([start.signals(r[0])[2] for r in records])
-        for start_out in fout.starts(xs):
-            th0 = np.concatenate([start_in, b0, f0, start_out])
-            try:
-                r = _sysid.hw_estimate(records, fin.spec(), fout.spec(), int(nb), int(nf),
-                                       int(nk), th0.tolist(), int(max_iter), float(tol),
-                                       progress)
-            except DataError:
-                continue  # an inadmissible start (unstable F): try the next one
-            if res is None or r["cost"] < res["cost"]:
-                res, theta0, x_all = r, th0, xs
+    cb, close_bar = iteration_callback(progress, "nlhw", int(max_iter),
+                                       iteration_printer("nlhw", "sum of squares"))
+    try:
+        for start_in in fin.starts(u_all):
+            if res is not None and res["stop"] == "cancelled":
+                break
+            fin.params = start_in
+            # B absorbs the gain of the starting nonlinearity: B f(u) ~ B_linear u
+            fu = fin(u_all)
+            b0 = lin_b
+            if not isinstance(fin, UserFunction) and float(fu @ fu) > 0 and float(fu @ u_all):
+                b0 = lin_b * float(fu @ u_all) / float(fu @ fu)
+            start = HammersteinWienerModel(fin, Nonlinearity(), b0, f0, int(nk), dt)
+            xs = np.concatenate([start.signals(r[0])[2] for r in records])
+            for start_out in fout.starts(xs):
+                th0 = np.concatenate([start_in, b0, f0, start_out])
+                try:
+                    r = _sysid.hw_estimate(records, fin.spec(), fout.spec(), int(nb), int(nf),
+                                           int(nk), th0.tolist(), int(max_iter), float(tol), cb)
+                except DataError:
+                    continue  # an inadmissible start (unstable F): try the next one
+                if res is None or r["cost"] < res["cost"] or r["stop"] == "cancelled":
+                    res, theta0, x_all = r, th0, xs
+                if r["stop"] == "cancelled":
+                    break
+    finally:
+        close_bar()
     if res is None:
         raise DataError("no admissible start for the Hammerstein-Wiener search; check nb, nf "
                         "and nk against a linear fit (sysid.oe)")
@@ -136,7 +150,7 @@ def nlhw(
     b, f = th[na:na + int(nb)], th[na + int(nb):na + int(nb) + int(nf)]
     fout.params = th[na + int(nb) + int(nf):]
     info = {"method": "nlhw", "iterations": int(res["iterations"]), "stop": res["stop"],
-            "cost_history": np.asarray(res["history"]), "theta0": theta0,
+            "cost": list(res["history"]), "criterion": "sum of squares", "theta0": theta0,
             "n_starts": len(fin.starts(u_all)) * len(fout.starts(x_all)),
             "covariance": np.asarray(res["covariance"]),
             "u_range": (float(u_all.min()), float(u_all.max())),

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError
 from ..models.hammerstein import Nonlinearity, UserFunction
 from ..models.hammerstein_ss import HammersteinWienerSSModel
@@ -49,7 +50,7 @@ def nlhw_ss(
     feedthrough: bool = False,
     max_iter: int = 200,
     tol: float = 1e-10,
-    progress: Callable[[int, float], Any] | None = None,
+    progress: bool | None | Callable[..., Any] = None,
 ) -> HammersteinWienerSSModel:
     """Hammerstein-Wiener model with per-channel static nonlinearities around a MIMO
     state-space linear block: ``w_j = f_j(u_j)``, ``x(t+1) = A x + B w``, ``v = C x + D w``,
@@ -69,13 +70,15 @@ def nlhw_ss(
         Estimate a direct term ``D`` (default ``D = 0``).
     max_iter, tol : int, float
         Optimiser iterations and step/gradient tolerance.
-    progress : callable, optional
-        ``progress(iteration, cost)`` after each accepted step; a true return stops.
+    progress : bool or callable, optional
+        As for :func:`sysid.nlhw` (a bar, silence, or a callable getting ``(iteration, cost,
+        step_norm, gradient_norm, damping)``; ``False`` returned stops).
 
     Returns
     -------
     HammersteinWienerSSModel
-        With ``info`` (iterations, stop reason, cost history, the linear start's cost).
+        With ``info``: ``iterations``, ``cost`` (``1/2 sum |e|^2`` at the start and after each
+        iteration of the chosen start's search), ``criterion``, ``stop`` (reason), the start.
 
     Examples
     --------
@@ -128,33 +131,42 @@ def nlhw_ss(
     in_starts = [f.starts(u_all[:, j]) for j, f in enumerate(fin)]
     res, th0, v_all = None, None, np.zeros((0, p))
     # start k: every channel's k-th starting point (the last one when it has fewer)
-    for k in range(max(len(s_) for s_ in in_starts)):
-        Bk, Dk = B.copy(), None if D is None else D.copy()
-        for j, f in enumerate(fin):  # B's column absorbs the starting nonlinearity's gain
-            f.params = in_starts[j][min(k, len(in_starts[j]) - 1)]
-            fu = f(u_all[:, j])
-            if not isinstance(f, UserFunction) and float(fu @ fu) > 0 and float(
-                    fu @ u_all[:, j]):
-                g = float(fu @ u_all[:, j]) / float(fu @ fu)
-                Bk[:, j] *= g
-                if Dk is not None:
-                    Dk[:, j] *= g
-        start = HammersteinWienerSSModel(fin, [Nonlinearity()] * p, A, Bk, C, Dk, dt)
-        vs = np.vstack([start.simulate(r[0]) for r in records])
-        out_starts = [g.starts(vs[:, i]) for i, g in enumerate(fout)]
-        for q in range(max(len(s_) for s_ in out_starts)):
-            for i, g in enumerate(fout):
-                g.params = out_starts[i][min(q, len(out_starts[i]) - 1)]
-            start = HammersteinWienerSSModel(fin, fout, A, Bk, C, Dk, dt)
-            fi, fo = start.specs()
-            try:
-                r = _sysid.hw_mimo_estimate(records, fi, fo, int(order), bool(feedthrough),
-                                            start.theta.tolist(), int(max_iter), float(tol),
-                                            progress)
-            except DataError:
-                continue  # an inadmissible start: try the next one
-            if res is None or r["cost"] < res["cost"]:
-                res, th0, v_all = r, start.theta, vs
+    cb, close_bar = iteration_callback(progress, "nlhw_ss", int(max_iter),
+                                       iteration_printer("nlhw_ss", "sum of squares"))
+    try:
+        for k in range(max(len(s_) for s_ in in_starts)):
+            if res is not None and res["stop"] == "cancelled":
+                break
+            Bk, Dk = B.copy(), None if D is None else D.copy()
+            for j, f in enumerate(fin):  # B's column absorbs the starting nonlinearity's gain
+                f.params = in_starts[j][min(k, len(in_starts[j]) - 1)]
+                fu = f(u_all[:, j])
+                if not isinstance(f, UserFunction) and float(fu @ fu) > 0 and float(
+                        fu @ u_all[:, j]):
+                    g = float(fu @ u_all[:, j]) / float(fu @ fu)
+                    Bk[:, j] *= g
+                    if Dk is not None:
+                        Dk[:, j] *= g
+            start = HammersteinWienerSSModel(fin, [Nonlinearity()] * p, A, Bk, C, Dk, dt)
+            vs = np.vstack([start.simulate(r[0]) for r in records])
+            out_starts = [g.starts(vs[:, i]) for i, g in enumerate(fout)]
+            for q in range(max(len(s_) for s_ in out_starts)):
+                for i, g in enumerate(fout):
+                    g.params = out_starts[i][min(q, len(out_starts[i]) - 1)]
+                start = HammersteinWienerSSModel(fin, fout, A, Bk, C, Dk, dt)
+                fi, fo = start.specs()
+                try:
+                    r = _sysid.hw_mimo_estimate(
+                        records, fi, fo, int(order), bool(feedthrough), start.theta.tolist(),
+                        int(max_iter), float(tol), cb)
+                except DataError:
+                    continue  # an inadmissible start: try the next one
+                if res is None or r["cost"] < res["cost"] or r["stop"] == "cancelled":
+                    res, th0, v_all = r, start.theta, vs
+                if r["stop"] == "cancelled":
+                    break
+    finally:
+        close_bar()
     if res is None:
         raise DataError("no admissible start for the Hammerstein-Wiener search; check the "
                         "order against a linear fit (sysid.n4sid)")
@@ -172,7 +184,7 @@ def nlhw_ss(
         g.params, k = th[k:k + np.size(g.params)], k + np.size(g.params)
     info = {"method": "nlhw_ss", "iterations": int(res["iterations"]), "stop": res["stop"],
             "n_starts": max(len(s_) for s_ in in_starts),
-            "cost_history": np.asarray(res["history"]), "theta0": th0,
+            "cost": list(res["history"]), "criterion": "sum of squares", "theta0": th0,
             "u_ranges": [(float(c.min()), float(c.max())) for c in u_all.T],
             "v_ranges": [(float(c.min()), float(c.max())) for c in v_all.T]}
     return HammersteinWienerSSModel(fin, fout, A, B, C, D, dt,

@@ -21,7 +21,7 @@ from ..errors import DataError, SysidError
 from ..models.nlgreybox import NonlinearGreyBox
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
-from .greyresult import GreyEstimate, _warn_unidentifiable
+from .greyresult import GreyEstimate, _costs, _warn_unidentifiable
 
 __all__ = ["nlgreyest"]
 
@@ -124,8 +124,8 @@ def nlgreyest(data: IOData, s: NonlinearGreyBox, *, x0: Any, weighting: str, mul
     est = s.with_values(vals, x0=X, dt=dt)
     info = {
         "method": "greyest (nonlinear)", "iterations": best["iterations"],
-        "evaluations": best["evaluations"], "cost": list(best["loss_history"]),
-        "weighted_cost": list(best["history"]), "stop": best["stop"],
+        "evaluations": best["evaluations"], **_costs(best, weighting == "noise"),
+        "stop": best["stop"],
         "condition": best["condition"], "rank": int(best["rank"]), "n_free": len(qnames),
         "n_samples": int(best["n_samples"]), "focus": "simulation", "x0_values": list(X),
         "multistart": starts, "loss": best["loss"], "seconds": best["seconds"],

@@ -11,7 +11,6 @@ independent of the record length), and never leaves the set of stable predictors
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -19,7 +18,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int
-from .._progress import iteration_callback
+from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
 from ..errors import DataError
 from ..models.statespace import StateSpaceModel
@@ -105,11 +104,6 @@ def _regularization(reg: Any, p_start: np.ndarray | None) -> tuple[float, Any, A
     return lam, R, nom
 
 
-def _progress_printer(it: int, cost: float, step: float, grad: float, damping: float) -> None:
-    print(f"pem iteration {it:3d}: cost {cost:.6g}  step {step:.3g}  gradient {grad:.3g}  "
-          f"damping {damping:.2g}", file=sys.stdout)
-
-
 def pem(
     data: Any,
     model: StateSpaceModel,
@@ -156,7 +150,8 @@ def pem(
         :mod:`sysid._progress`): by default only on a terminal; ``True`` asks for it (when
         stderr is not a terminal, one line per iteration on stdout instead, for logs);
         ``False`` silences it; a callable gets ``(iteration, cost, step_norm,
-        gradient_norm, damping)`` and may return ``False`` to stop.
+        gradient_norm, damping)`` (``cost``: the criterion of ``info["pem"]["cost"]``) and may
+        return ``False`` to stop.
     local_coordinates : bool
         Search in data-driven local coordinates (default); ``False`` searches all entries.
     weighting : {"noise", "identity"}, optional
@@ -169,11 +164,17 @@ def pem(
     Returns
     -------
     StateSpaceModel
-        ``info["pem"]`` holds iterations, the cost (``det`` of the error covariance, the
-        maximum-likelihood loss) at the start and after each iteration, the weighted cost the
-        search minimised, the stop reason and the condition number; ``uncertainty`` the parameter
-        covariance (:class:`sysid.ParameterUncertainty`), so that ``poles(std=True)``,
-        ``freqresp(w, std=True)``, ``damp(std=True)`` and Bode bands work.
+        ``info["pem"]`` holds iterations, ``"cost"``: the criterion the search decreases at
+        the start and after each iteration (the values the progress callback gets), named by
+        ``"criterion"``: ``"det"``, the determinant of the error covariance
+        ``det(E^T E / N)`` (not its log; the maximum-likelihood loss, MATLAB's "loss
+        function") for ``weighting="noise"``, ``"sum of squares"``, ``1/2 sum |e|^2``, for
+        ``weighting="identity"``; ``"loss_history"``: the determinant under either weighting;
+        ``"weighted_cost"``: ``1/2 sum e^T W e`` with the weighting of each iterate (``N l / 2``
+        throughout with the noise weighting); the stop reason and the condition number.
+        ``uncertainty`` holds the parameter covariance (:class:`sysid.ParameterUncertainty`), so
+        that ``poles(std=True)``, ``freqresp(w, std=True)``, ``damp(std=True)`` and Bode bands
+        work.
 
     Examples
     --------
@@ -247,7 +248,8 @@ def pem(
             and regularization["nominal"] == "model":
         nom = np.concatenate([start_theta] + [np.zeros(n) for m in modes if
                                               isinstance(m, str) and m == "estimate"])
-    cb, close_bar = iteration_callback(progress, "pem", max_iter, _progress_printer)
+    cb, close_bar = iteration_callback(progress, "pem", max_iter, iteration_printer(
+        "pem", "det" if weighting == "noise" else "sum of squares"))
     try:
         res = _sysid.pem_refine(
             A, B, C, D, K, exps, focus=focus, estimate_d=bool(feedthrough), estimate_k=estimate_k,
@@ -280,8 +282,10 @@ def pem(
     info["pem"] = {
         "iterations": res["iterations"],
         "evaluations": res["evaluations"],
-        "cost": list(res["loss_history"]),
-        "weighted_cost": list(res["history"]),
+        "cost": list(res["history"]),
+        "criterion": "det" if weighting == "noise" else "sum of squares",
+        "weighted_cost": list(res["weighted_history"]),
+        "loss_history": list(res["loss_history"]),
         "stop": res["stop"],
         "condition": res["condition"],
         "focus": focus,
@@ -337,8 +341,7 @@ def _start_loss(data: IOData, start: StateSpaceModel, focus: str, feedthrough: b
         return float("inf")
     if m.info["pem"]["stabilized"]:
         return float("inf")
-    key = "cost" if m.info["pem"]["weighting"] == "noise" else "weighted_cost"
-    return float(m.info["pem"][key][0])
+    return float(m.info["pem"]["cost"][0])
 
 
 def ssest(

@@ -11,7 +11,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int, as_int_grid
-from .._progress import iteration_callback
+from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError
 from ..models.polynomial import PolynomialModel
 from ..models.uncertainty import ParameterUncertainty
@@ -269,7 +269,7 @@ def _pem(
     nk: Any,
     method: str,
     max_iter: int,
-    progress: bool | None | Callable[[int, float], Any],
+    progress: bool | None | Callable[..., Any],
     init: PolynomialModel | None = None,
 ) -> PolynomialModel:
     exps = _exps(data)
@@ -279,9 +279,11 @@ def _pem(
     if min(na_v + nc_v + nd_v, default=0) < 0:
         raise DataError("na, nc and nd must be non-negative integers")
     parts: dict[str, list[Any]] = {k: [] for k in "abcdf"}
-    info: dict[str, Any] = {"method": method, "iterations": [], "cost": [], "stop": []}
+    info: dict[str, Any] = {"method": method, "iterations": [], "cost": [],
+                            "criterion": "sum of squares", "stop": []}
     cov, var = [], []
-    cb, close_bar = iteration_callback(progress, method, int(max_iter) * ny)
+    cb, close_bar = iteration_callback(progress, method, int(max_iter) * ny,
+                                       iteration_printer(method, "sum of squares"))
     try:
         rs = [_sysid.polynomial_pem(
             [(np.ascontiguousarray(y[:, i]), u) for u, y in exps], na_v[i], nb_g[i], nc_v[i],
@@ -308,7 +310,7 @@ def _pem(
         parts["d"].append(take(nd_v[i]))
         parts["f"].append([take(n) for n in nf_g[i]])
         info["iterations"].append(r["iterations"])
-        info["cost"].append(r["cost"])
+        info["cost"].append(list(r["history"]))
         info["stop"].append(r["stop"])
         cov.append(r["covariance"])
         var.append(r["noise_variance"])
@@ -336,7 +338,7 @@ def armax(
     nk: Any = 1,
     *,
     max_iter: int = 100,
-    progress: bool | None | Callable[[int, float], Any] = None,
+    progress: bool | None | Callable[..., Any] = None,
 ) -> PolynomialModel:
     """ARMAX ``A y = B u(t-nk) + C e`` by prediction-error minimisation (per output).
 
@@ -361,7 +363,7 @@ def oe(
     nk: Any = 1,
     *,
     max_iter: int = 100,
-    progress: bool | None | Callable[[int, float], Any] = None,
+    progress: bool | None | Callable[..., Any] = None,
     init: PolynomialModel | None = None,
 ) -> PolynomialModel:
     """Output error ``y = B/F u(t-nk) + e``.
@@ -380,7 +382,7 @@ def bj(
     nk: Any = 1,
     *,
     max_iter: int = 100,
-    progress: bool | None | Callable[[int, float], Any] = None,
+    progress: bool | None | Callable[..., Any] = None,
 ) -> PolynomialModel:
     """Box-Jenkins ``y = B/F u(t-nk) + C/D e``."""
     return _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress)

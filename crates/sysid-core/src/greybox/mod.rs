@@ -258,9 +258,4 @@ pub(crate) fn free_covariance(h: &Mat<f64>, fixed: &[bool]) -> Result<Covariance
     })
 }
 
-pub(crate) fn determinant(m: &Mat<f64>) -> f64 {
-    match m.llt(faer::Side::Lower) {
-        Ok(f) => (0..m.nrows()).map(|i| f.L()[(i, i)].powi(2)).product(),
-        Err(_) => 0.0,
-    }
-}
+pub(crate) use crate::linalg::determinant;

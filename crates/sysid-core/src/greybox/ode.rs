@@ -813,6 +813,16 @@ impl Problem for OdeProblem<'_> {
         })
     }
 
+    /// With the re-estimated weighting: `det(Lambda)` at the last accepted point (see
+    /// [`crate::pem::Predictor`]'s).
+    fn criterion(&self) -> Option<f64> {
+        if self.opt.reweight {
+            self.losses.last().copied()
+        } else {
+            None
+        }
+    }
+
     fn accepted(&mut self, th: &[f64]) -> Result<bool> {
         if self.opt.reweight {
             self.reweight_at(th)?;

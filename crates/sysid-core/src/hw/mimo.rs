@@ -298,21 +298,7 @@ pub fn estimate_mimo(
     }
     let (m, p) = (structure.inputs.len(), structure.outputs.len());
     for (u, y) in records {
-        if u.nrows() != y.nrows() || u.ncols() != m || y.ncols() != p {
-            return Err(SysidError::ShapeMismatch {
-                what: "u, y".into(),
-                expected: format!("(N, {m}) and (N, {p})"),
-                got: format!(
-                    "({}, {}) and ({}, {})",
-                    u.nrows(),
-                    u.ncols(),
-                    y.nrows(),
-                    y.ncols()
-                ),
-            });
-        }
-        crate::error::check_finite("u", *u)?;
-        crate::error::check_finite("y", *y)?;
+        crate::error::check_io("u, y", *u, *y, m, p)?;
     }
     let mut problem = MimoHwProblem {
         structure: structure.clone(),

@@ -382,19 +382,13 @@ pub fn estimate(
         ));
     }
     for (u, y) in records {
-        if u.len() != y.len() {
-            return Err(SysidError::ShapeMismatch {
-                what: "u".into(),
-                expected: format!("{} samples like y", y.len()),
-                got: format!("{}", u.len()),
-            });
-        }
-        if u.iter().chain(y.iter()).any(|v| !v.is_finite()) {
-            return Err(SysidError::invalid(
-                "data",
-                "non-finite sample; interpolate or cut it out first",
-            ));
-        }
+        crate::error::check_io(
+            "u, y",
+            faer::MatRef::from_column_major_slice(u, u.len(), 1),
+            faer::MatRef::from_column_major_slice(y, y.len(), 1),
+            1,
+            1,
+        )?;
     }
     let mut problem = HwProblem {
         structure: structure.clone(),

@@ -2,7 +2,7 @@
 
 use faer::MatRef;
 
-use crate::error::{check_finite, Result, SysidError};
+use crate::error::{check_finite, check_io, Result, SysidError};
 
 /// Which signal a lagged variable reads.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -253,24 +253,7 @@ impl LagSpec {
         let mut rows = 0;
         for r in records {
             let n = r.y.nrows();
-            if r.y.ncols() != self.n_outputs
-                || r.u.ncols() != self.n_inputs
-                || (self.n_inputs > 0 && r.u.nrows() != n)
-            {
-                return Err(SysidError::ShapeMismatch {
-                    what: "u, y".into(),
-                    expected: format!("(N, {}) and (N, {})", self.n_inputs, self.n_outputs),
-                    got: format!(
-                        "({}, {}) and ({}, {})",
-                        r.u.nrows(),
-                        r.u.ncols(),
-                        n,
-                        r.y.ncols()
-                    ),
-                });
-            }
-            check_finite("u", r.u)?;
-            check_finite("y", r.y)?;
+            check_io("u, y", r.u, r.y, self.n_inputs, self.n_outputs)?;
             if self.has_noise() {
                 match r.e {
                     Some(e) if e.nrows() == n && e.ncols() == self.n_outputs => {

@@ -4,7 +4,7 @@ use faer::{Mat, MatRef};
 
 use super::basis::{Basis, Term};
 use super::regressors::{LagSpec, Signal};
-use crate::error::{check_finite, Result, SysidError};
+use crate::error::{check_finite, check_io, Result, SysidError};
 
 /// One output's equation `y_i(t) = sum_k coefs[k] terms[k](x(t))`.
 #[derive(Debug, Clone, PartialEq)]
@@ -240,16 +240,8 @@ impl NarxModel {
         horizon: usize,
         custom: &mut CustomFn<'_>,
     ) -> Result<Mat<f64>> {
-        self.check_u(u)?;
         let (n, ny, lag) = (y.nrows(), self.spec.n_outputs, self.spec.max_lag);
-        if y.ncols() != ny || u.nrows() != n {
-            return Err(SysidError::ShapeMismatch {
-                what: "u, y".into(),
-                expected: format!("(N, {}) and (N, {ny})", self.spec.n_inputs),
-                got: format!("({}, {}) and ({n}, {})", u.nrows(), u.ncols(), y.ncols()),
-            });
-        }
-        check_finite("y", y)?;
+        check_io("u, y", u, y, self.spec.n_inputs, ny)?;
         if horizon == 0 {
             return Err(SysidError::invalid("horizon", "must be at least 1"));
         }

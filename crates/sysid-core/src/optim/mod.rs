@@ -126,6 +126,16 @@ pub trait Problem {
     fn accepted(&mut self, _theta: &[f64]) -> Result<bool> {
         Ok(false)
     }
+    /// The criterion the search reports (in [`Solution::history`], [`Solution::cost`] and to
+    /// the observer) at the start and at the point last passed to [`Problem::accepted`], when
+    /// it is not the cost itself: a provider that re-defines its cost between steps (a noise
+    /// weighting re-estimated from the residuals, which makes the weighted cost `N l / 2` at
+    /// every iterate) reports what those steps decrease (the determinant of the residual
+    /// covariance). `None` (the default): the cost with regularisation. The weighted cost is
+    /// reported beside it ([`Solution::weighted_history`], [`Iteration::weighted_cost`]).
+    fn criterion(&self) -> Option<f64> {
+        None
+    }
     /// Cost and gradient at `theta` without the Gauss-Newton matrix (left empty), when the
     /// provider forms them much more cheaply than a full evaluation; `None` (the default) when
     /// it cannot. Used only with [`Options::reuse_gauss_newton`] `> 0`.
@@ -252,8 +262,12 @@ impl StopReason {
 pub struct Iteration {
     /// Iteration number, from 1.
     pub iteration: usize,
-    /// Cost after the step (with regularisation).
+    /// The reported criterion after the step ([`Problem::criterion`]; by default the cost
+    /// with regularisation).
     pub cost: f64,
+    /// The cost the search minimises after the step (with regularisation, and with the
+    /// weighting of the new point when the provider re-weights).
+    pub weighted_cost: f64,
     /// Euclidean norm of the step taken.
     pub step_norm: f64,
     /// Infinity norm of the (free, reduced) gradient before the step.
@@ -276,10 +290,14 @@ pub enum Flow {
 pub struct Solution {
     /// The final parameters.
     pub theta: Vec<f64>,
-    /// The final cost (with regularisation).
+    /// The reported criterion at the solution ([`Problem::criterion`]; by default the cost
+    /// with regularisation).
     pub cost: f64,
-    /// Cost at the start and after each accepted iteration.
+    /// The reported criterion at the start and after each accepted iteration.
     pub history: Vec<f64>,
+    /// The cost the search minimises (with regularisation) at the start and after each
+    /// accepted iteration; equal to `history` unless the provider reports a criterion.
+    pub weighted_history: Vec<f64>,
     /// Accepted iterations.
     pub iterations: usize,
     /// Cost evaluations (including rejected trials).

@@ -156,6 +156,10 @@ impl Problem for Reparameterized<'_> {
         self.inner.accepted(&th)
     }
 
+    fn criterion(&self) -> Option<f64> {
+        self.inner.criterion()
+    }
+
     fn gradient_only(&mut self, p: &[f64]) -> Result<Option<Evaluation>> {
         let (th, m) = self.with_jacobian(p)?;
         match self.inner.gradient_only(&th)? {

@@ -551,7 +551,8 @@ pub fn minimize(
         ));
     }
     let fixed: Vec<bool> = options.fixed.clone().unwrap_or_else(|| vec![false; p]);
-    let mut history = vec![pt.cost];
+    let mut weighted_history = vec![pt.cost];
+    let mut history = vec![problem.criterion().unwrap_or(pt.cost)];
     let mut mu = options.initial_damping.max(0.0);
     let mut iterations = 0usize;
     let mut condition = f64::NAN;
@@ -709,10 +710,13 @@ pub fn minimize(
                 evaluate_point(problem, options, trial, &mut evals)?
             }
         };
-        history.push(pt.cost);
+        weighted_history.push(pt.cost);
+        let reported = problem.criterion().unwrap_or(pt.cost);
+        history.push(reported);
         let info = Iteration {
             iteration: iterations,
-            cost: pt.cost,
+            cost: reported,
+            weighted_cost: pt.cost,
             step_norm,
             gradient_norm: gnorm,
             damping: used,
@@ -744,8 +748,9 @@ pub fn minimize(
     }
     let active_bounds = at_bounds(options, &pt.theta);
     Ok(Solution {
-        cost: pt.cost,
+        cost: *history.last().unwrap_or(&pt.cost),
         history,
+        weighted_history,
         iterations,
         evaluations: evals,
         stop,

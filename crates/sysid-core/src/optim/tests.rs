@@ -399,3 +399,52 @@ fn cholesky_steps_reach_the_same_minimum() {
     assert!(pr.visited.iter().all(|t| t[0] <= 0.5 && t[2] == 0.0));
     assert_eq!(s.theta[0], 0.5);
 }
+
+/// Rosenbrock reporting `sqrt(2 cost)` (the residual norm) as its criterion, set in `accepted`.
+struct Reporting {
+    inner: Ls<fn(&[f64]) -> (Vec<f64>, Vec<Vec<f64>>)>,
+    last: Option<f64>,
+}
+
+impl Problem for Reporting {
+    fn n_params(&self) -> usize {
+        2
+    }
+    fn evaluate(&mut self, th: &[f64], jac: bool) -> crate::Result<Evaluation> {
+        self.inner.evaluate(th, jac)
+    }
+    fn accepted(&mut self, th: &[f64]) -> crate::Result<bool> {
+        let c = self.inner.evaluate(th, false)?.cost;
+        self.last = Some((2.0 * c).sqrt());
+        Ok(false)
+    }
+    fn criterion(&self) -> Option<f64> {
+        self.last
+    }
+}
+
+#[test]
+fn a_reported_criterion_replaces_the_cost_in_history_observer_and_result() {
+    let th0 = [-1.2, 1.0];
+    let mut prob = Reporting {
+        inner: ls(2, rosen),
+        last: None,
+    };
+    let c0 = prob.inner.evaluate(&th0, false).unwrap().cost;
+    prob.last = Some((2.0 * c0).sqrt());
+    let mut seen = Vec::new();
+    let mut weighted = Vec::new();
+    let sol = minimize(&mut prob, &th0, &Options::default(), &mut |it| {
+        seen.push(it.cost);
+        weighted.push(it.weighted_cost);
+        Flow::Continue
+    })
+    .unwrap();
+    assert!(sol.iterations > 3);
+    assert_eq!(seen, sol.history[1..].to_vec());
+    assert_eq!(weighted, sol.weighted_history[1..].to_vec());
+    assert_eq!(sol.cost, *sol.history.last().unwrap());
+    for (h, w) in sol.history.iter().zip(&sol.weighted_history) {
+        assert!((h - (2.0 * w).sqrt()).abs() <= 1e-12 * (1.0 + h));
+    }
+}

@@ -1,7 +1,7 @@
 //! The innovation predictor as an [`optim::Problem`] and the [`pem`] driver.
 
-use crate::error::{check_finite, Result, SysidError};
-use crate::linalg::spectral_radius;
+use crate::error::{check_finite, check_io, Result, SysidError};
+use crate::linalg::{determinant, spectral_radius};
 use crate::model::StateSpace;
 use crate::optim::{self, Covariance, Evaluation, Flow, Iteration, Problem, Solution};
 use faer::linalg::matmul::matmul;
@@ -97,13 +97,6 @@ pub struct PemResult {
     pub loss_history: Vec<f64>,
 }
 
-fn determinant(m: &Mat<f64>) -> f64 {
-    match m.llt(Side::Lower) {
-        Ok(f) => (0..m.nrows()).map(|i| f.L()[(i, i)].powi(2)).product(),
-        Err(_) => 0.0,
-    }
-}
-
 /// `(theta, Gram of the modal sensitivities, cross sums with the regressor, sum z z^T)`.
 type GramCache = (Vec<f64>, Mat<f64>, Mat<f64>, Mat<f64>);
 
@@ -180,21 +173,7 @@ impl<'a> Predictor<'a> {
         let mut n_samples = 0;
         let mut floor = vec![0.0; l];
         for (e, (u, y)) in experiments.iter().enumerate() {
-            if u.ncols() != m || y.ncols() != l || u.nrows() != y.nrows() {
-                return Err(SysidError::ShapeMismatch {
-                    what: format!("experiment {e} (u, y)"),
-                    expected: format!("(N, {m}) and (N, {l})"),
-                    got: format!(
-                        "({}, {}) and ({}, {})",
-                        u.nrows(),
-                        u.ncols(),
-                        y.nrows(),
-                        y.ncols()
-                    ),
-                });
-            }
-            check_finite("u", *u)?;
-            check_finite("y", *y)?;
+            check_io(&format!("experiment {e} (u, y)"), *u, *y, m, l)?;
             n_samples += y.nrows();
             for j in 0..l {
                 for t in 0..y.nrows() {
@@ -450,6 +429,8 @@ impl<'a> Predictor<'a> {
     pub(crate) fn reweight_at(&mut self, th: &[f64]) -> Result<()> {
         let l = self.l;
         let mut lam = self.innovation_covariance(th);
+        // the criterion is the determinant of the covariance itself, not of the floored one
+        self.losses.push(determinant(&lam));
         for i in 0..l {
             lam[(i, i)] += self.floor[i];
         }
@@ -460,8 +441,6 @@ impl<'a> Predictor<'a> {
             )
         })?;
         let r = llt.L().to_owned();
-        self.losses
-            .push((0..l).map(|i| r[(i, i)] * r[(i, i)]).product::<f64>());
         // invert the lower-triangular factor
         let mut rinv = Mat::<f64>::identity(l, l);
         faer::linalg::triangular_solve::solve_lower_triangular_in_place(
@@ -1810,6 +1789,17 @@ impl Problem for Predictor<'_> {
             return self.evaluate_structured(th, true).map(Some);
         }
         Ok(None)
+    }
+
+    /// With the re-estimated weighting: `det(Lambda)` at the last accepted point (the
+    /// weighted cost is `N l / 2` at every iterate; each accepted step lowers the determinant,
+    /// since `tr(W_old Lambda_new) < l` and `det(W_old Lambda_new) <= (tr / l)^l`).
+    fn criterion(&self) -> Option<f64> {
+        if self.reweight {
+            self.losses.last().copied()
+        } else {
+            None
+        }
     }
 
     fn accepted(&mut self, th: &[f64]) -> Result<bool> {

@@ -2,7 +2,7 @@
 
 use faer::{Mat, MatRef};
 
-use crate::error::{check_finite, Result, SysidError};
+use crate::error::{check_io, Result, SysidError};
 use crate::linalg::QrAccumulator;
 
 /// The compressed summary of one or more records: the triangular factor of the matrix whose
@@ -97,28 +97,7 @@ impl ArxCompressor {
 
     /// Adds one experiment (rows `max_lag..N`).
     pub fn push(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> Result<()> {
-        if u.ncols() != self.n_inputs || y.ncols() != self.n_outputs {
-            return Err(SysidError::ShapeMismatch {
-                what: "u, y".into(),
-                expected: format!("(N, {}) and (N, {})", self.n_inputs, self.n_outputs),
-                got: format!(
-                    "({}, {}) and ({}, {})",
-                    u.nrows(),
-                    u.ncols(),
-                    y.nrows(),
-                    y.ncols()
-                ),
-            });
-        }
-        if self.n_inputs > 0 && u.nrows() != y.nrows() {
-            return Err(SysidError::ShapeMismatch {
-                what: "u".into(),
-                expected: format!("{} rows like y", y.nrows()),
-                got: format!("{} rows", u.nrows()),
-            });
-        }
-        check_finite("u", u)?;
-        check_finite("y", y)?;
+        check_io("u, y", u, y, self.n_inputs, self.n_outputs)?;
         let n = y.nrows();
         if n <= self.max_lag {
             return Err(SysidError::InsufficientData {

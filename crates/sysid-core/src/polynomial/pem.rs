@@ -4,7 +4,7 @@
 use faer::{Mat, MatRef};
 
 use super::filter::{conv, filter, is_stable, monic};
-use crate::error::{check_finite, Result, SysidError};
+use crate::error::{check_io, Result, SysidError};
 use crate::linalg::QrAccumulator;
 use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution};
 
@@ -126,28 +126,8 @@ fn check_experiments(
         ));
     }
     for (y, u) in experiments {
-        if u.ncols() != m {
-            return Err(SysidError::ShapeMismatch {
-                what: "u".into(),
-                expected: format!("{m} columns in every experiment"),
-                got: format!("{} columns", u.ncols()),
-            });
-        }
-        if m > 0 && u.nrows() != y.len() {
-            return Err(SysidError::ShapeMismatch {
-                what: "u".into(),
-                expected: format!("{} rows like y", y.len()),
-                got: format!("{} rows", u.nrows()),
-            });
-        }
-        check_finite("u", *u)?;
-        if let Some(t) = y.iter().position(|v| !v.is_finite()) {
-            return Err(SysidError::NonFinite {
-                what: "y",
-                sample: t,
-                channel: 0,
-            });
-        }
+        let yv = MatRef::from_column_major_slice(y, y.len(), 1);
+        check_io("u, y", *u, yv, m, 1)?;
     }
     let p = orders.n_params();
     if p == 0 {
