@@ -24,11 +24,11 @@
 //! neighbouring segments come from their boundary samples), so the result does not depend on
 //! the number of threads.
 
+use super::lagsum::lag_sums;
 use super::{check_chunk, Block, Compressor, FactorSource, HankelFactor, HankelLayout};
 use crate::error::{Result, SysidError};
 use crate::linalg::{cholesky_lower_seq, lq_lower};
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatRef, Par, Side};
+use faer::{Mat, MatRef, Side};
 use rayon::prelude::*;
 
 /// Knobs of the correlation compressor.
@@ -83,31 +83,17 @@ impl Segment {
     }
 
     /// Sums of `n` row-major samples, the first `n d` entries of `x`, which holds `w - 1`
-    /// rows of zeros after them: with that padding one GEMM over the overlapping Hankel view
-    /// forms every lagged sum, the pairs near the end of the block included (the padded
+    /// rows of zeros after them: with that padding one product over the overlapping Hankel
+    /// view ([`lag_sums`], read in place) forms every lagged sum, the pairs near the end of the block included (the padded
     /// products are exact zeros).
     fn from_padded_rows(x: &[f64], n: usize, d: usize, w: usize) -> Self {
         debug_assert_eq!(x.len(), (n + w - 1) * d);
         debug_assert!(x[n * d..].iter().all(|v| *v == 0.0));
-        let mut lag = Mat::<f64>::zeros(d, w * d);
-        if n > 0 && d > 0 {
-            // SAFETY: rows t < n of the overlapping Hankel view read x[t d .. t d + w d],
-            // which ends at (n - 1 + w) d = x.len(); both views only read.
-            let (xt, xw) = unsafe {
-                (
-                    MatRef::from_raw_parts(x.as_ptr(), n, d, d as isize, 1),
-                    MatRef::from_raw_parts(x.as_ptr(), n, w * d, d as isize, 1),
-                )
-            };
-            matmul(
-                lag.as_mut(),
-                Accum::Replace,
-                xt.transpose(),
-                xw,
-                1.0,
-                Par::Seq,
-            );
-        }
+        // row-major d x (w d) sums, then into the column-major lag matrix
+        let wd = w * d;
+        let mut rm = vec![0.0; d * wd];
+        lag_sums(x, n, d, w, &mut rm);
+        let lag = Mat::from_fn(d, wd, |i, c| rm[i * wd + c]);
         let x = &x[..n * d];
         let mut sum = vec![0.0; d];
         for t in 0..n {
