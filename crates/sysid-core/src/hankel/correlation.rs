@@ -36,9 +36,8 @@ use rayon::prelude::*;
 #[non_exhaustive]
 pub struct CorrelationOptions {
     /// Samples per block (the unit of parallel work and of the pairwise reduction); 0 picks
-    /// a size whose block-Hankel view (`block_rows x (p + f)(m + l)` doubles, which the GEMM
-    /// may pack) stays near 4 MB unless `64 (p + f)` samples need more (at most 16 MB), at
-    /// least 256 samples.
+    /// `256 (p + f)` samples (the merges of neighbouring blocks then cost about 1 % of the
+    /// lagged sums), fewer if the block would exceed 4 MB, at least 256.
     pub block_rows: usize,
     /// Threshold on the smallest relative Cholesky pivot `min La_ii^2 / max Ga_ii` of the
     /// centred, scaled Gram matrix below which the result is flagged ill-conditioned (and,
@@ -149,6 +148,15 @@ impl Segment {
             tail,
         }
     }
+}
+
+/// Sum in four interleaved partial sums (not latency-bound like one running sum).
+fn sum4(v: impl Iterator<Item = f64>) -> f64 {
+    let mut s = [0.0; 4];
+    for (i, x) in v.enumerate() {
+        s[i % 4] += x;
+    }
+    (s[0] + s[1]) + (s[2] + s[3])
 }
 
 #[inline]
@@ -273,15 +281,16 @@ impl CorrelationSums {
         for x in [u, y] {
             let n = x.nrows();
             for c in 0..x.ncols() {
+                let col = x.col(c);
                 let mean = if n == 0 {
                     0.0
                 } else {
-                    (0..n).map(|t| x[(t, c)]).sum::<f64>() / n as f64
+                    sum4(col.iter().copied()) / n as f64
                 };
                 let var = if n == 0 {
                     0.0
                 } else {
-                    (0..n).map(|t| (x[(t, c)] - mean).powi(2)).sum::<f64>() / n as f64
+                    sum4(col.iter().map(|v| (v - mean).powi(2))) / n as f64
                 };
                 let spread = if var > 0.0 && var.is_finite() {
                     var.sqrt()
@@ -314,12 +323,12 @@ impl CorrelationSums {
 
     fn auto_block_rows(layout: &HankelLayout) -> usize {
         // each block boundary costs about w^2 d^2 / 2 scalar multiply-adds (the cross terms
-        // of the merge) against 2 w d^2 per sample in the GEMM: at least 64 w samples per
-        // block keep the merges near 1 % of the work; the Hankel view stays near 4 MB when
-        // that allows, and below 16 MB
-        let width = layout.k().max(1) * std::mem::size_of::<f64>();
-        let rows = ((4usize << 20) / width).max(64 * layout.window());
-        rows.min((16usize << 20) / width).max(256)
+        // of the merge) against 2 w d^2 vectorised ones per sample in the lagged sums:
+        // 256 w samples per block keep the merges near 1 % of the time; the block's samples
+        // (read in place by the kernel, never packed) stay below 4 MB, at least 256 rows
+        let w = layout.window();
+        let row = (layout.n_inputs + layout.n_outputs).max(1) * std::mem::size_of::<f64>();
+        (256 * w).min((4usize << 20) / row).max(256)
     }
 
     /// The layout.
