@@ -12,7 +12,7 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
 use std::time::Instant;
 use sysid_core::hankel::{
-    lag_sums, Compressor, CorrelationCompressor, CorrelationOptions, HankelLayout,
+    lag_sums, Compressor, CorrelationSums, CorrelationCompressor, CorrelationOptions, HankelLayout,
 };
 
 /// Process CPU time in seconds (Linux), wall time elsewhere.
@@ -111,6 +111,10 @@ fn main() {
         let y = Mat::from_fn(big_n, l, |_, _| next());
         let layout = HankelLayout::new(m, l, 20, 20).unwrap();
         let flops = 2.0 * (40 * d * d * big_n) as f64;
+        let (_, cs) = best(reps, || {
+            std::hint::black_box(CorrelationSums::center_scale(u.as_ref(), y.as_ref()));
+        });
+        println!("center_scale {m}x{m} N={big_n}: CPU {:8.2} ms", cs * 1e3);
         if big_only && d != 16 {
             continue;
         }
