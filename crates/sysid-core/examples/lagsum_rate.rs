@@ -12,7 +12,7 @@ use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
 use std::time::Instant;
 use sysid_core::hankel::{
-    lag_sums, Compressor, CorrelationSums, CorrelationCompressor, CorrelationOptions, HankelLayout,
+    lag_sums, Compressor, CorrelationCompressor, CorrelationOptions, CorrelationSums, HankelLayout,
 };
 
 /// Process CPU time in seconds (Linux), wall time elsewhere.
@@ -46,7 +46,9 @@ fn best<F: FnMut()>(reps: usize, mut f: F) -> (f64, f64) {
             f();
             (t.elapsed().as_secs_f64(), cpu_now() - c)
         })
-        .fold((f64::INFINITY, f64::INFINITY), |a, b| (a.0.min(b.0), a.1.min(b.1)))
+        .fold((f64::INFINITY, f64::INFINITY), |a, b| {
+            (a.0.min(b.0), a.1.min(b.1))
+        })
 }
 
 fn main() {
@@ -58,7 +60,11 @@ fn main() {
     println!("n = {n} samples per block, w = {w}, best CPU time of 30 (one thread)");
     // `--big` (second argument): only the 8 x 8 compressor on one thread, for profiling
     let big_only = std::env::args().nth(2).as_deref() == Some("--big");
-    for &d in if big_only { &[][..] } else { &[1usize, 2, 6, 16][..] } {
+    for &d in if big_only {
+        &[][..]
+    } else {
+        &[1usize, 2, 6, 16][..]
+    } {
         let wd = w * d;
         let mut s = 1u64;
         let x: Vec<f64> = (0..(n + w - 1) * d)
@@ -84,7 +90,14 @@ fn main() {
                     MatRef::from_raw_parts(x.as_ptr(), n, wd, d as isize, 1),
                 )
             };
-            matmul(lag.as_mut(), Accum::Replace, xt.transpose(), xw, 1.0, Par::Seq);
+            matmul(
+                lag.as_mut(),
+                Accum::Replace,
+                xt.transpose(),
+                xw,
+                1.0,
+                Par::Seq,
+            );
         });
         let diff = (0..d)
             .flat_map(|i| (0..wd).map(move |c| (i, c)))
@@ -98,7 +111,10 @@ fn main() {
             flops / tf * 1e-9
         );
     }
-    for &(m, l, big_n, reps) in &[(3usize, 3usize, 100_000usize, 20usize), (8, 8, 1_000_000, 3)] {
+    for &(m, l, big_n, reps) in &[
+        (3usize, 3usize, 100_000usize, 20usize),
+        (8, 8, 1_000_000, 3),
+    ] {
         let d = m + l;
         let mut s = 5u64;
         let mut next = move || {
@@ -118,7 +134,11 @@ fn main() {
         if big_only && d != 16 {
             continue;
         }
-        for parallel in if big_only { &[false][..] } else { &[false, true][..] } {
+        for parallel in if big_only {
+            &[false][..]
+        } else {
+            &[false, true][..]
+        } {
             let parallel = *parallel;
             let mut o = CorrelationOptions::default();
             o.parallel = parallel;

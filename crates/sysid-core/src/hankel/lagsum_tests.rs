@@ -38,7 +38,7 @@ fn check(kernel: Kernel, name: &str) {
     let mut seed = 7u64;
     for &d in &[1usize, 2, 3, 4, 5, 6, 7, 8, 11, 16, 17] {
         for &w in &[1usize, 2, 3, 5, 13, 40] {
-            for &n in &[0usize, 1, 2, 3, 7, 39, 64, 65, 301, 1500] {
+            for &n in &[0usize, 1, 2, 3, 5, 6, 7, 12, 39, 64, 65, 301, 1500] {
                 let wd = w * d;
                 // not padded with zeros: the kernel must read x[(n..n + w - 1) d] as given
                 let x: Vec<f64> = (0..(n + w - 1) * d).map(|_| lcg(&mut seed)).collect();
