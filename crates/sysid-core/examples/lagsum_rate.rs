@@ -60,7 +60,9 @@ fn main() {
     println!("n = {n} samples per block, w = {w}, best CPU time of 30 (one thread)");
     // `--big` (second argument): only the 8 x 8 compressor on one thread, for profiling
     let big_only = std::env::args().nth(2).as_deref() == Some("--big");
-    for &d in if big_only {
+    // `--small`: only the 3 x 3 compressor on one thread
+    let small_only = std::env::args().nth(2).as_deref() == Some("--small");
+    for &d in if big_only || small_only {
         &[][..]
     } else {
         &[1usize, 2, 6, 16][..]
@@ -131,10 +133,27 @@ fn main() {
             std::hint::black_box(CorrelationSums::center_scale(u.as_ref(), y.as_ref()));
         });
         println!("center_scale {m}x{m} N={big_n}: CPU {:8.2} ms", cs * 1e3);
-        if big_only && d != 16 {
+        let (cen, sca) = CorrelationSums::center_scale(u.as_ref(), y.as_ref());
+        let mut pushed = None;
+        let (_, tp) = best(reps, || {
+            let mut c = CorrelationSums::new(layout, cen.clone(), sca.clone()).unwrap();
+            c.set_blocking(0, false);
+            c.push(u.as_ref(), y.as_ref()).unwrap();
+            pushed = Some(c);
+        });
+        let (_, tf) = best(reps, || {
+            let c = pushed.clone().unwrap();
+            std::hint::black_box(c.into_factor(1e-10).unwrap());
+        });
+        println!(
+            "sums {m}x{m} N={big_n}: push CPU {:8.2} ms, into_factor CPU {:8.2} ms",
+            tp * 1e3,
+            tf * 1e3
+        );
+        if (big_only && d != 16) || (small_only && d != 6) {
             continue;
         }
-        for parallel in if big_only {
+        for parallel in if big_only || small_only {
             &[false][..]
         } else {
             &[false, true][..]

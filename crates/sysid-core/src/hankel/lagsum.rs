@@ -258,24 +258,20 @@ pub(super) mod portable {
     /// [`super::lag_sums`] on any CPU.
     pub(in crate::hankel) fn lag_sums(x: &[f64], n: usize, d: usize, w: usize, out: &mut [f64]) {
         let wd = w * d;
-        super::drive(
-            n,
-            d,
-            w,
-            |mr, nv, t0, t1, i0, c0| {
-                if nv == 0 {
-                    for i in 0..d {
-                        for c in c0..wd {
-                            let mut s = 0.0f64;
-                            for t in t0..t1 {
-                                s += x[t * d + i] * x[t * d + c];
-                            }
-                            out[i * wd + c] += s;
+        super::drive(n, d, w, |mr, nv, t0, t1, i0, c0| {
+            if nv == 0 {
+                for i in 0..d {
+                    for c in c0..wd {
+                        let mut s = 0.0f64;
+                        for t in t0..t1 {
+                            s += x[t * d + i] * x[t * d + c];
                         }
+                        out[i * wd + c] += s;
                     }
-                    return;
                 }
-                macro_rules! go {
+                return;
+            }
+            macro_rules! go {
                     ($($mr:literal, $nv:literal);*) => {
                         match (mr, nv) {
                             $(($mr, $nv) => tile::<$mr, {4 * $nv}>(x, d, t0, t1, i0, c0, out, wd),)*
@@ -283,14 +279,13 @@ pub(super) mod portable {
                         }
                     };
                 }
-                go!(1, 1; 1, 2; 1, 3; 1, 4;
+            go!(1, 1; 1, 2; 1, 3; 1, 4;
                     2, 1; 2, 2; 2, 3; 2, 4;
                     3, 1; 3, 2; 3, 3; 3, 4;
                     4, 1; 4, 2; 4, 3; 4, 4;
                     5, 1; 5, 2; 5, 3; 5, 4;
                     6, 1; 6, 2; 6, 3; 6, 4)
-            },
-        );
+        });
     }
 
     #[allow(clippy::too_many_arguments)]
