@@ -24,11 +24,11 @@
 //! neighbouring segments come from their boundary samples), so the result does not depend on
 //! the number of threads.
 
+use super::lagsum::lag_sums;
 use super::{check_chunk, Block, Compressor, FactorSource, HankelFactor, HankelLayout};
 use crate::error::{Result, SysidError};
 use crate::linalg::{cholesky_lower_seq, lq_lower, lq_lower_rank_one};
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatRef, Par, Side};
+use faer::{Mat, MatRef, Side};
 use rayon::prelude::*;
 
 /// Knobs of the correlation compressor.
@@ -36,9 +36,9 @@ use rayon::prelude::*;
 #[non_exhaustive]
 pub struct CorrelationOptions {
     /// Samples per block (the unit of parallel work and of the pairwise reduction); 0 picks
-    /// a size whose block-Hankel view (`block_rows x (p + f)(m + l)` doubles, which the GEMM
-    /// may pack) stays near 4 MB unless `64 (p + f)` samples need more (at most 16 MB), at
-    /// least 256 samples.
+    /// `256 (p + f)` samples (the merges of neighbouring blocks then cost about 1 % of the
+    /// lagged sums), fewer if the block would exceed 512 KB (but at least `64 (p + f)`
+    /// samples), at least 256.
     pub block_rows: usize,
     /// Threshold on the smallest relative Cholesky pivot `min La_ii^2 / max Ga_ii` of the
     /// centred, scaled Gram matrix below which the result is flagged ill-conditioned (and,
@@ -83,31 +83,17 @@ impl Segment {
     }
 
     /// Sums of `n` row-major samples, the first `n d` entries of `x`, which holds `w - 1`
-    /// rows of zeros after them: with that padding one GEMM over the overlapping Hankel view
-    /// forms every lagged sum, the pairs near the end of the block included (the padded
+    /// rows of zeros after them: with that padding one product over the overlapping Hankel
+    /// view ([`lag_sums`], read in place) forms every lagged sum, the pairs near the end of the block included (the padded
     /// products are exact zeros).
     fn from_padded_rows(x: &[f64], n: usize, d: usize, w: usize) -> Self {
         debug_assert_eq!(x.len(), (n + w - 1) * d);
         debug_assert!(x[n * d..].iter().all(|v| *v == 0.0));
-        let mut lag = Mat::<f64>::zeros(d, w * d);
-        if n > 0 && d > 0 {
-            // SAFETY: rows t < n of the overlapping Hankel view read x[t d .. t d + w d],
-            // which ends at (n - 1 + w) d = x.len(); both views only read.
-            let (xt, xw) = unsafe {
-                (
-                    MatRef::from_raw_parts(x.as_ptr(), n, d, d as isize, 1),
-                    MatRef::from_raw_parts(x.as_ptr(), n, w * d, d as isize, 1),
-                )
-            };
-            matmul(
-                lag.as_mut(),
-                Accum::Replace,
-                xt.transpose(),
-                xw,
-                1.0,
-                Par::Seq,
-            );
-        }
+        // row-major d x (w d) sums, then into the column-major lag matrix
+        let wd = w * d;
+        let mut rm = vec![0.0; d * wd];
+        lag_sums(x, n, d, w, &mut rm);
+        let lag = Mat::from_fn(d, wd, |i, c| rm[i * wd + c]);
         let x = &x[..n * d];
         let mut sum = vec![0.0; d];
         for t in 0..n {
@@ -163,6 +149,18 @@ impl Segment {
             tail,
         }
     }
+}
+
+/// Sum in eight interleaved partial sums (not latency-bound like one running sum).
+fn sum8(v: impl Iterator<Item = f64>) -> f64 {
+    let mut s = [0.0; 8];
+    let mut v = v.peekable();
+    while v.peek().is_some() {
+        for si in s.iter_mut() {
+            *si += v.next().unwrap_or(0.0);
+        }
+    }
+    s.iter().sum()
 }
 
 #[inline]
@@ -287,15 +285,24 @@ impl CorrelationSums {
         for x in [u, y] {
             let n = x.nrows();
             for c in 0..x.ncols() {
+                let col = x.col(c);
+                let owned;
+                let col: &[f64] = match col.try_as_col_major() {
+                    Some(c) => c.as_slice(),
+                    None => {
+                        owned = col.iter().copied().collect::<Vec<f64>>();
+                        &owned
+                    }
+                };
                 let mean = if n == 0 {
                     0.0
                 } else {
-                    (0..n).map(|t| x[(t, c)]).sum::<f64>() / n as f64
+                    sum8(col.iter().copied()) / n as f64
                 };
                 let var = if n == 0 {
                     0.0
                 } else {
-                    (0..n).map(|t| (x[(t, c)] - mean).powi(2)).sum::<f64>() / n as f64
+                    sum8(col.iter().map(|v| (v - mean) * (v - mean))) / n as f64
                 };
                 let spread = if var > 0.0 && var.is_finite() {
                     var.sqrt()
@@ -328,12 +335,14 @@ impl CorrelationSums {
 
     fn auto_block_rows(layout: &HankelLayout) -> usize {
         // each block boundary costs about w^2 d^2 / 2 scalar multiply-adds (the cross terms
-        // of the merge) against 2 w d^2 per sample in the GEMM: at least 64 w samples per
-        // block keep the merges near 1 % of the work; the Hankel view stays near 4 MB when
-        // that allows, and below 16 MB
-        let width = layout.k().max(1) * std::mem::size_of::<f64>();
-        let rows = ((4usize << 20) / width).max(64 * layout.window());
-        rows.min((16usize << 20) / width).max(256)
+        // of the merge) against 2 w d^2 vectorised ones per sample in the lagged sums:
+        // 256 w samples per block keep the merges near 1 % of the time. The kernel reads the
+        // block in place right after the copy into it: a block that fits a core's L2 cache
+        // (512 KB here) measured 5-10 % faster at 8 x 8 than 1.3 MB ones, so fewer samples
+        // when the block would exceed 512 KB, down to 64 w (merges near 3 %), at least 256
+        let w = layout.window();
+        let row = (layout.n_inputs + layout.n_outputs).max(1) * std::mem::size_of::<f64>();
+        (256 * w).min((512usize << 10) / row).max(64 * w).max(256)
     }
 
     /// The layout.

@@ -27,6 +27,7 @@
 mod correlation;
 mod factor;
 mod kind;
+mod lagsum;
 mod qr;
 
 pub use correlation::{
@@ -34,6 +35,7 @@ pub use correlation::{
 };
 pub use factor::{Block, FactorSource, HankelFactor};
 pub use kind::{compress_experiments, AnyCompressor, CompressorKind, AUTO_MIN_RELATIVE_PIVOT};
+pub use lagsum::lag_sums;
 pub use qr::QrCompressor;
 
 use crate::error::{Result, SysidError};
@@ -223,3 +225,6 @@ mod tests;
 
 #[cfg(test)]
 mod correlation_tests;
+
+#[cfg(test)]
+mod lagsum_tests;
