@@ -26,6 +26,7 @@
 //! given `A`, `C` ([`bd_x0`]). Nothing here depends on the record length.
 
 pub mod bd_x0;
+pub mod checks;
 pub mod closed_loop;
 pub mod frequency;
 pub mod order;
