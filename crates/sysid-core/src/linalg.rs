@@ -79,14 +79,7 @@ pub fn cholesky_lower_seq(a: MatRef<'_, f64>) -> Option<Mat<f64>> {
 /// wake-ups cost more than the work, and far more on a loaded machine.
 pub fn mul_seq(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
     let mut out = Mat::<f64>::zeros(a.nrows(), b.ncols());
-    faer::linalg::matmul::matmul(
-        out.as_mut(),
-        faer::Accum::Replace,
-        a,
-        b,
-        1.0,
-        Par::Seq,
-    );
+    faer::linalg::matmul::matmul(out.as_mut(), faer::Accum::Replace, a, b, 1.0, Par::Seq);
     out
 }
 
@@ -213,11 +206,20 @@ pub fn pinv_seq(a: MatRef<'_, f64>, rtol: f64) -> Result<Mat<f64>> {
         return Ok(Mat::zeros(n, m));
     }
     let (s, u, v) = svd_seq("pseudo-inverse (SVD)", a, true, true)?;
-    let (u, v) = (u.unwrap_or_else(|| Mat::zeros(m, 0)), v.unwrap_or_else(|| Mat::zeros(n, 0)));
+    let (u, v) = (
+        u.unwrap_or_else(|| Mat::zeros(m, 0)),
+        v.unwrap_or_else(|| Mat::zeros(n, 0)),
+    );
     Ok(pinv_from_svd(&s, u.as_ref(), v.as_ref(), rtol, true))
 }
 
-fn pinv_from_svd(s: &[f64], u: MatRef<'_, f64>, v: MatRef<'_, f64>, rtol: f64, seq: bool) -> Mat<f64> {
+fn pinv_from_svd(
+    s: &[f64],
+    u: MatRef<'_, f64>,
+    v: MatRef<'_, f64>,
+    rtol: f64,
+    seq: bool,
+) -> Mat<f64> {
     let cut = rtol * s[0];
     let r = s.iter().filter(|&&x| x > cut && x > 0.0).count();
     let mut vs = v.subcols(0, r).to_owned();

@@ -204,9 +204,7 @@ pub fn feedback_regressions<'py>(
     Bound<'py, PyArray1<f64>>,
 )> {
     let f = &factor.inner;
-    let r = py
-        .detach(|| checks::feedback_regressions(f, rtol))
-        .py()?;
+    let r = py.detach(|| checks::feedback_regressions(f, rtol)).py()?;
     Ok((
         slice_to_numpy(py, &r.rss_restricted),
         slice_to_numpy(py, &r.rss_full),

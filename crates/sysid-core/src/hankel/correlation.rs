@@ -24,7 +24,9 @@
 //! neighbouring segments come from their boundary samples), so the result does not depend on
 //! the number of threads.
 
-use super::{check_chunk, Block, Compressor, FactorSource, HankelFactor, HankelLayout};
+use super::{
+    check_chunk, check_shapes, Block, Compressor, FactorSource, HankelFactor, HankelLayout,
+};
 use crate::error::{Result, SysidError};
 use crate::linalg::{cholesky_lower_seq, lq_lower};
 use faer::linalg::matmul::matmul;
@@ -282,20 +284,26 @@ impl CorrelationSums {
     /// Shift and power-of-two scale per channel estimated from a chunk (mean and standard
     /// deviation), as [`CorrelationCompressor`] does with the first chunk it receives.
     pub fn center_scale(u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> (Vec<f64>, Vec<f64>) {
+        Self::center_scale_finite(u, y).0
+    }
+
+    /// [`CorrelationSums::center_scale`] and whether every value is finite, in the two
+    /// vectorised passes of [`crate::stats::channel_stats`] (mean, then spread).
+    fn center_scale_finite(u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> ((Vec<f64>, Vec<f64>), bool) {
         let mut center = Vec::new();
         let mut scale = Vec::new();
+        let mut finite = true;
         for x in [u, y] {
-            let n = x.nrows();
-            for c in 0..x.ncols() {
-                let mean = if n == 0 {
-                    0.0
+            if x.ncols() == 0 {
+                continue;
+            }
+            let st = crate::stats::channel_stats(&[x]);
+            finite &= st.abs_max.iter().all(|v| v.is_finite());
+            for (&mean, &sd) in st.mean.iter().zip(&st.std) {
+                let (mean, var) = if x.nrows() == 0 {
+                    (0.0, 0.0)
                 } else {
-                    (0..n).map(|t| x[(t, c)]).sum::<f64>() / n as f64
-                };
-                let var = if n == 0 {
-                    0.0
-                } else {
-                    (0..n).map(|t| (x[(t, c)] - mean).powi(2)).sum::<f64>() / n as f64
+                    (mean, sd * sd)
                 };
                 let spread = if var > 0.0 && var.is_finite() {
                     var.sqrt()
@@ -311,7 +319,7 @@ impl CorrelationSums {
                 scale.push(2f64.powi(e as i32));
             }
         }
-        (center, scale)
+        ((center, scale), finite)
     }
 
     /// Sets the block size (0: automatic, see [`CorrelationOptions::block_rows`]) and whether
@@ -765,11 +773,16 @@ impl Compressor for CorrelationCompressor {
             } else {
                 u
             };
-            check_chunk(&self.layout, u0, y, 0)?;
+            // shapes here; finite values through the statistics' pass (the exact check,
+            // which locates the first bad value, only when that pass saw one)
+            check_shapes(&self.layout, u0, y)?;
             if y.nrows() == 0 {
                 return Ok(());
             }
-            let (c, s) = CorrelationSums::center_scale(u0, y);
+            let ((c, s), finite) = CorrelationSums::center_scale_finite(u0, y);
+            if !finite {
+                check_chunk(&self.layout, u0, y, 0)?;
+            }
             let mut sums = CorrelationSums::new(self.layout, c, s)?;
             sums.set_blocking(self.options.block_rows, self.options.parallel);
             let out = sums.push_impl(u, y, false);

@@ -182,7 +182,10 @@ pub fn excitation_order(factor: &HankelFactor, needed: usize, tol: f64) -> Resul
     let lm = factor.l();
     let cols = (f + p) * m;
     // input rows in time order: U_p (rows f m .. (f + p) m) then U_f (rows 0 .. f m)
-    let rows: Vec<usize> = (f * m..(f + p) * m).chain(0..f * m).take(depth * m).collect();
+    let rows: Vec<usize> = (f * m..(f + p) * m)
+        .chain(0..f * m)
+        .take(depth * m)
+        .collect();
     let mut mrows = Mat::<f64>::zeros(rows.len(), cols);
     for (k, &i) in rows.iter().enumerate() {
         mrows.row_mut(k).copy_from(lm.row(i).subcols(0, cols));
@@ -207,7 +210,9 @@ pub fn excitation_order(factor: &HankelFactor, needed: usize, tol: f64) -> Resul
 /// pivot that is not positive, or `a.nrows()` when `a` is positive definite.
 fn first_nonpositive_pivot(a: faer::MatMut<'_, f64>) -> usize {
     use faer::dyn_stack::{MemBuffer, MemStack};
-    use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch, LltError};
+    use faer::linalg::cholesky::llt::factor::{
+        cholesky_in_place, cholesky_in_place_scratch, LltError,
+    };
     let n = a.nrows();
     let mut buf = MemBuffer::new(cholesky_in_place_scratch::<f64>(
         n,

@@ -235,13 +235,7 @@ pub fn identify(
     if m > 0 {
         let (uf_s, uf_n) = lay.block(Block::UFuture);
         let l11 = lmat.submatrix(uf_s, uf_s, uf_n, uf_n);
-        let kb = KBlocks::new(
-            a.as_ref(),
-            c.as_ref(),
-            o_pinv.as_ref(),
-            o1_pinv.as_ref(),
-            f,
-        );
+        let kb = KBlocks::new(a.as_ref(), c.as_ref(), o_pinv.as_ref(), o1_pinv.as_ref(), f);
         // unknowns: B (n x m) then D (l x m) if estimated, column-major; the column of
         // unknown (r, s) is vec(𝒦(E_rs) L11): row j (n + l) + i holds
         // sum_q T_q[i, r] L11[q m + s, j] (S_q for D), only q m + s >= j (L11 is lower
