@@ -23,7 +23,7 @@ impl PySubspace {
         let method = Method::parse(method).py()?;
         let f = factor.inner.clone();
         let inner = py
-            .detach(|| Subspace::new(&f, &SubspaceOptions::with_method(method)))
+            .detach(|| Subspace::from_owned(f, &SubspaceOptions::with_method(method)))
             .py()?;
         Ok(Self { inner })
     }

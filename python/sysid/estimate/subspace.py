@@ -40,6 +40,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int
+from ..analysis.feedback import feedback_pvalues
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
 from ..errors import DataError, FeedbackWarning, InsufficientDataError, OrderError
@@ -313,8 +314,6 @@ class SubspaceEstimator:
         if self._feedback_p is None:
             p = 1.0
             if self.factor.n_inputs:
-                from ..analysis.feedback import feedback_pvalues
-
                 pv = feedback_pvalues(self.factor)[1]
                 p = float(min(1.0, len(pv) * float(np.min(pv))))
             self._feedback_p = p
