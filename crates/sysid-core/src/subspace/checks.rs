@@ -140,7 +140,7 @@ pub fn row_regression(
 
 /// True when the upper-triangular `r` has `||r||_F ||r^{-1}||_F < 1 / rtol`: then
 /// `s_min / s_max >= 1 / (||r||_F ||r^{-1}||_F) > rtol`, all singular values pass the cut.
-fn well_conditioned(r: MatRef<'_, f64>, rtol: f64) -> bool {
+pub(crate) fn well_conditioned(r: MatRef<'_, f64>, rtol: f64) -> bool {
     let n = r.nrows();
     if (0..n).any(|i| r[(i, i)] == 0.0 || !r[(i, i)].is_finite()) {
         return false;
