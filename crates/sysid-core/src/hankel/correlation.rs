@@ -477,19 +477,30 @@ impl CorrelationSums {
         let t_cols = seg.n - w + 1;
         let (head, tail) = (&seg.head, &seg.tail);
         let k = self.gram.nrows();
-        for a in 0..w {
-            for b in a..w {
-                let tau = b - a;
+        // gram block (a, a + tau) = lag[tau] - C_tau(a), the pairs that fall outside the
+        // Hankel columns: C_tau(a) = sum_{t < a} head_t head_{t+tau}^T
+        // + sum_{a <= q <= w-2-tau} tail_q tail_{q+tau}^T, one rank-one update per step of a
+        // (O(w^2 d^2) in all; the corrections are accumulated apart from the large lag sums)
+        let mut corr = vec![0.0f64; d * d];
+        for tau in 0..w {
+            corr.fill(0.0);
+            for q in 0..(w - 1 - tau) {
+                let (ti, tj) = (
+                    &tail[q * d..(q + 1) * d],
+                    &tail[(q + tau) * d..(q + tau + 1) * d],
+                );
+                for (j, tjv) in tj.iter().enumerate() {
+                    for (cv, tiv) in corr[j * d..(j + 1) * d].iter_mut().zip(ti) {
+                        *cv += tiv * tjv;
+                    }
+                }
+            }
+            for a in 0..(w - tau) {
+                let b = a + tau;
                 for j in 0..d {
                     let lag_col = seg.lag.col_as_slice(tau * d + j);
                     for i in 0..d {
-                        let mut v = lag_col[i];
-                        for t in 0..a {
-                            v -= head[t * d + i] * head[(t + tau) * d + j];
-                        }
-                        for q in a..(w - 1 - tau) {
-                            v -= tail[q * d + i] * tail[(q + tau) * d + j];
-                        }
+                        let v = lag_col[i] - corr[j * d + i];
                         let (r, c) = (a * d + i, b * d + j);
                         debug_assert!(r < k && c < k);
                         self.gram.col_as_slice_mut(c)[r] += v;
@@ -498,7 +509,21 @@ impl CorrelationSums {
                         }
                     }
                 }
+                if a + 1 < w - tau {
+                    // C_tau(a + 1) = C_tau(a) + head_a head_{a+tau}^T - tail_a tail_{a+tau}^T
+                    let (hi, hj) = (&head[a * d..(a + 1) * d], &head[b * d..(b + 1) * d]);
+                    let (ti, tj) = (&tail[a * d..(a + 1) * d], &tail[b * d..(b + 1) * d]);
+                    for j in 0..d {
+                        let (hjv, tjv) = (hj[j], tj[j]);
+                        for ((cv, hiv), tiv) in corr[j * d..(j + 1) * d].iter_mut().zip(hi).zip(ti)
+                        {
+                            *cv += hiv * hjv - tiv * tjv;
+                        }
+                    }
+                }
             }
+        }
+        for a in 0..w {
             for i in 0..d {
                 let mut v = seg.sum[i];
                 for t in 0..a {
