@@ -47,10 +47,15 @@ pub fn qr_r_in_place(a: MatMut<'_, f64>) {
 /// (deterministic for any thread count, as [`qr_r_in_place`]); `None` when a pivot is not
 /// positive.
 pub fn cholesky_lower_seq(a: MatRef<'_, f64>) -> Option<Mat<f64>> {
+    cholesky_lower_seq_owned(a.to_owned())
+}
+
+/// [`cholesky_lower_seq`] in the storage of `a` (taken by value: no copy).
+pub fn cholesky_lower_seq_owned(a: Mat<f64>) -> Option<Mat<f64>> {
     use faer::dyn_stack::{MemBuffer, MemStack};
     use faer::linalg::cholesky::llt::factor;
     let n = a.nrows();
-    let mut l = a.to_owned();
+    let mut l = a;
     let mut buf = MemBuffer::new(factor::cholesky_in_place_scratch::<f64>(
         n,
         Par::Seq,
@@ -276,11 +281,20 @@ pub fn lstsq_seq(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
 /// Lower-triangular L with `L L^T = M M^T` (the L of the LQ factorisation of M), with a
 /// non-negative diagonal. M may have more columns than rows; L is `M.nrows() x M.nrows()`.
 pub fn lq_lower(m: MatRef<'_, f64>) -> Mat<f64> {
-    let rows = m.nrows();
-    if m.ncols() == 0 || rows == 0 {
+    if m.ncols() == 0 || m.nrows() == 0 {
+        return Mat::zeros(m.nrows(), m.nrows());
+    }
+    lq_lower_of_transpose(m.transpose().to_owned())
+}
+
+/// [`lq_lower`] of `M`, given `M^T` by value (its storage becomes the QR workspace: no
+/// transposed copy).
+pub fn lq_lower_of_transpose(mt: Mat<f64>) -> Mat<f64> {
+    let rows = mt.ncols();
+    if mt.nrows() == 0 || rows == 0 {
         return Mat::zeros(rows, rows);
     }
-    let mut r = m.transpose().to_owned();
+    let mut r = mt;
     qr_r_in_place(r.as_mut()); // upper trapezoidal in its first min(cols, rows) rows
     let mut l = Mat::<f64>::zeros(rows, rows);
     for i in 0..r.nrows().min(rows) {

@@ -28,7 +28,7 @@ use super::{
     check_chunk, check_shapes, Block, Compressor, FactorSource, HankelFactor, HankelLayout,
 };
 use crate::error::{Result, SysidError};
-use crate::linalg::{cholesky_lower_seq, lq_lower};
+use crate::linalg::{cholesky_lower_seq_owned, lq_lower_of_transpose};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par, Side};
 use rayon::prelude::*;
@@ -671,7 +671,8 @@ impl CorrelationSums {
         }
         ga[(k, k)] = self.n_columns as f64;
         let max_diag = (0..=k).map(|i| ga[(i, i)]).fold(0.0, f64::max);
-        let (la, source, pivot) = match cholesky_lower_seq(ga.as_ref()) {
+        // factored in place; rebuilt from the sums for the (rare) eigendecomposition path
+        let (la, source, pivot) = match cholesky_lower_seq_owned(ga) {
             Some(la) => {
                 let min_piv = (0..=k)
                     .map(|i| la[(i, i)] * la[(i, i)])
@@ -692,6 +693,15 @@ impl CorrelationSums {
                 (la, src, rel)
             }
             None => {
+                let mut ga = Mat::<f64>::zeros(k + 1, k + 1);
+                ga.as_mut()
+                    .submatrix_mut(0, 0, k, k)
+                    .copy_from(self.gram.as_ref());
+                for i in 0..k {
+                    ga[(i, k)] = self.col_sum[i];
+                    ga[(k, i)] = self.col_sum[i];
+                }
+                ga[(k, k)] = self.n_columns as f64;
                 let evd = ga.self_adjoint_eigen(Side::Lower).map_err(|e| {
                     SysidError::numerical(
                         "correlation compressor (eigendecomposition)",
@@ -717,7 +727,8 @@ impl CorrelationSums {
         let (up, _) = self.layout.block(Block::UPast);
         let (yp, _) = self.layout.block(Block::YPast);
         let (yf, _) = self.layout.block(Block::YFuture);
-        let mut h = Mat::<f64>::zeros(k, k + 1);
+        // H = E La (k x (k + 1)) is built transposed, as the workspace of its LQ
+        let mut ht = Mat::<f64>::zeros(k + 1, k);
         for a in 0..w {
             for c in 0..d {
                 let r = a * d + c;
@@ -728,12 +739,12 @@ impl CorrelationSums {
                     (false, false) => yf + (a - p) * l + (c - m),
                 };
                 let (s, cc) = (self.scale[c], self.center[c]);
-                for j in 0..=k {
-                    h[(dst, j)] = s * la[(r, j)] + cc * la[(k, j)];
+                for (j, out) in ht.col_mut(dst).iter_mut().enumerate() {
+                    *out = s * la[(r, j)] + cc * la[(k, j)];
                 }
             }
         }
-        let l_mat = lq_lower(h.as_ref());
+        let l_mat = lq_lower_of_transpose(ht);
         Ok(
             HankelFactor::from_parts(self.layout, l_mat, self.n_columns, self.n_experiments)?
                 .with_source(source)
