@@ -86,6 +86,7 @@ const LANES: usize = 8;
 
 /// Per channel: the sum of `x` (or of `(x - mean)^2` when `mean` is given), `max |x|`, and
 /// whether every value is finite; `x` row-major with `c` channels.
+#[allow(clippy::eq_op)] // `v - v`: 0 for finite values, NaN otherwise
 fn lane_sums(x: &[f64], c: usize, mean: Option<&[f64]>) -> (Vec<f64>, Vec<f64>, bool) {
     let width = LANES * c;
     let mut acc = vec![0.0f64; width];
