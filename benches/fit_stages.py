@@ -1,11 +1,16 @@
-"""CPU time of each stage of one default fit (3 in, 3 out, horizon 20, order 8, N = 10^5).
+"""CPU time of each stage of one default fit (horizon 20, order 8), cold and warm.
 
     OPENBLAS_NUM_THREADS=1 RAYON_NUM_THREADS=1 python benches/fit_stages.py [--n 100000] [--reps 10]
+    python benches/fit_stages.py --m 8 --l 8 --n 1000000 --reps 3     # the 8 x 8 floor case
 
 Times (process CPU, so that a loaded machine inflates them less than wall time) the calls
 that ``SubspaceEstimator(IOData(u, y), horizon=20).fit(order=8)`` makes, one by one, then
-the public call itself; prints the minimum and median over the repetitions. With one thread
-each the CPU time is the work done (docs/performance.md, "Per-fit cost").
+the public call itself; prints the first round (``cold``: the first fit of the process,
+right after ``import sysid``) and the minimum and median over the next repetitions. With one
+thread each the CPU time is the work done (docs/performance.md, "Per-fit cost"); wall times
+are printed beside (they include waiting for threads on a loaded machine). The record is
+the seeded one of benches/full.py (``benches/.data/rec_n<N>_m<m>_l<l>_x8_s2024.npy``,
+created when missing).
 """
 
 from __future__ import annotations
@@ -23,6 +28,8 @@ HERE = Path(__file__).resolve().parent
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--n", type=int, default=100_000)
+    ap.add_argument("--m", type=int, default=3)
+    ap.add_argument("--l", type=int, default=3)
     ap.add_argument("--reps", type=int, default=10)
     a = ap.parse_args()
     sys.path.insert(0, str(HERE))
@@ -34,20 +41,21 @@ def main() -> None:
     from sysid.estimate import subspace as S
 
     (HERE / ".data").mkdir(exist_ok=True)
-    path = HERE / ".data" / f"stages_n{a.n}.npy"
+    path = HERE / ".data" / f"rec_n{a.n}_m{a.m}_l{a.l}_x8_s2024.npy"
     if not path.exists():
-        generate(path, a.n, 3, 3, 8, 2024)
+        np.save(path.with_suffix(".poles.npy"), generate(path, a.n, a.m, a.l, 8, 2024))
     z = np.load(path)
-    u, y = np.ascontiguousarray(z[:, :3]), np.ascontiguousarray(z[:, 3:])
-    pt = time.process_time
+    u, y = np.ascontiguousarray(z[:, : a.m]), np.ascontiguousarray(z[:, a.m :])
+    del z
+    pt, wt = time.process_time, time.perf_counter
 
-    def stages() -> dict[str, float]:
-        r: dict[str, float] = {}
+    def stages() -> dict[str, tuple[float, float]]:
+        r: dict[str, tuple[float, float]] = {}
 
         def timed(name: str, fn, *args):  # type: ignore[no-untyped-def]
-            t = pt()
+            t, w = pt(), wt()
             out = fn(*args)
-            r[name] = pt() - t
+            r[name] = (pt() - t, wt() - w)
             return out
 
         d = timed("IOData", lambda: sysid.IOData(u=u, y=y))
@@ -63,14 +71,20 @@ def main() -> None:
               lambda: sysid.SubspaceEstimator(d, horizon=20).fit(order=8))
         return r
 
-    stages()
-    acc: dict[str, list[float]] = {}
+    cold = stages()
+    acc: dict[str, list[tuple[float, float]]] = {}
     for _ in range(a.reps):
         for k, v in stages().items():
             acc.setdefault(k, []).append(v)
+    print(f"{a.m} in, {a.l} out, N = {a.n}, horizon 20, order 8; CPU (wall) in ms")
+    print(f"{'stage':20s} {'cold':>17s} {'min':>17s} {'median':>17s}")
     for k, v in acc.items():
-        v.sort()
-        print(f"{k:20s} min {v[0] * 1e3:7.2f} ms   median {v[len(v) // 2] * 1e3:7.2f} ms")
+        cpu = sorted(c for c, _ in v)
+        wall = sorted(w for _, w in v)
+        h = len(v) // 2
+        print(f"{k:20s} {cold[k][0] * 1e3:8.2f} ({cold[k][1] * 1e3:7.2f})"
+              f" {cpu[0] * 1e3:8.2f} ({wall[0] * 1e3:7.2f})"
+              f" {cpu[h] * 1e3:8.2f} ({wall[h] * 1e3:7.2f})")
 
 
 if __name__ == "__main__":

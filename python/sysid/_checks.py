@@ -39,7 +39,12 @@ def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = Fa
         raise ShapeError(f"{name} has no samples (shape {arr.shape})")
     if ncols is not None and arr.shape[1] != ncols:
         raise ShapeError(f"{name} has shape {arr.shape} but should have {ncols} column(s)")
-    if not np.isfinite(arr).all():
+    # a NaN or Inf makes the sum non-finite; the sum is one vectorised pass with no
+    # temporary (np.isfinite(arr).all() writes a boolean array as large as the record),
+    # and only a non-finite (or overflowing) sum takes the elementwise check
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = arr.sum()
+    if not np.isfinite(total) and not np.isfinite(arr).all():
         bad = np.argwhere(~np.isfinite(arr))[0]
         raise NonFiniteError(
             f"{name} has a non-finite value (NaN or Inf) at sample {bad[0]}, channel {bad[1]}; "

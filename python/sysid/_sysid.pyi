@@ -34,6 +34,8 @@ __all__ = [
     "kalman_gain",
     "StreamingCompressor",
     "CorrelationSums",
+    "feedback_regressions",
+    "excitation_order",
     "Subspace",
     "ClosedLoopSubspace",
     "RecursiveFactor",
@@ -106,6 +108,12 @@ def compress(
 ) -> HankelFactor: ...
 
 def channel_stats(parts: list[_Array]) -> tuple[_Array, _Array, _Array]: ...
+
+def feedback_regressions(
+    factor: HankelFactor, rtol: float = 1e-9
+) -> tuple[_Array, _Array, int, int, _Array]: ...
+
+def excitation_order(factor: HankelFactor, needed: int, tol: float = 1e-9) -> int: ...
 
 @final
 class Subspace:

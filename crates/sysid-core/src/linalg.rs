@@ -47,10 +47,15 @@ pub fn qr_r_in_place(a: MatMut<'_, f64>) {
 /// (deterministic for any thread count, as [`qr_r_in_place`]); `None` when a pivot is not
 /// positive.
 pub fn cholesky_lower_seq(a: MatRef<'_, f64>) -> Option<Mat<f64>> {
+    cholesky_lower_seq_owned(a.to_owned())
+}
+
+/// [`cholesky_lower_seq`] in the storage of `a` (taken by value: no copy).
+pub fn cholesky_lower_seq_owned(a: Mat<f64>) -> Option<Mat<f64>> {
     use faer::dyn_stack::{MemBuffer, MemStack};
     use faer::linalg::cholesky::llt::factor;
     let n = a.nrows();
-    let mut l = a.to_owned();
+    let mut l = a;
     let mut buf = MemBuffer::new(factor::cholesky_in_place_scratch::<f64>(
         n,
         Par::Seq,
@@ -70,6 +75,99 @@ pub fn cholesky_lower_seq(a: MatRef<'_, f64>) -> Option<Mat<f64>> {
         }
     }
     Some(l)
+}
+
+/// The product `a b`, on the calling thread.
+///
+/// The small products after the compression use this instead of faer's `*`, which runs
+/// with the global (rayon) parallelism: for matrices of a few hundred rows the thread
+/// wake-ups cost more than the work, and far more on a loaded machine.
+pub fn mul_seq(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
+    let mut out = Mat::<f64>::zeros(a.nrows(), b.ncols());
+    faer::linalg::matmul::matmul(out.as_mut(), faer::Accum::Replace, a, b, 1.0, Par::Seq);
+    out
+}
+
+/// Thin SVD on the calling thread: the singular values (largest first) and, when asked,
+/// the first `min(rows, cols)` left and right singular vectors. `step` names the caller in
+/// the error when the SVD does not converge.
+#[allow(clippy::type_complexity)]
+pub fn svd_seq(
+    step: &'static str,
+    a: MatRef<'_, f64>,
+    want_u: bool,
+    want_v: bool,
+) -> Result<(Vec<f64>, Option<Mat<f64>>, Option<Mat<f64>>)> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::svd::{svd, svd_scratch, ComputeSvdVectors};
+    let (m, n) = (a.nrows(), a.ncols());
+    let size = m.min(n);
+    if size == 0 {
+        return Ok((
+            Vec::new(),
+            want_u.then(|| Mat::zeros(m, 0)),
+            want_v.then(|| Mat::zeros(n, 0)),
+        ));
+    }
+    let how = |w: bool| {
+        if w {
+            ComputeSvdVectors::Thin
+        } else {
+            ComputeSvdVectors::No
+        }
+    };
+    let mut s = faer::diag::Diag::<f64>::zeros(size);
+    let mut u = want_u.then(|| Mat::<f64>::zeros(m, size));
+    let mut v = want_v.then(|| Mat::<f64>::zeros(n, size));
+    let mut buf = MemBuffer::new(svd_scratch::<f64>(
+        m,
+        n,
+        how(want_u),
+        how(want_v),
+        Par::Seq,
+        Default::default(),
+    ));
+    svd(
+        a,
+        s.as_mut(),
+        u.as_mut().map(|x| x.as_mut()),
+        v.as_mut().map(|x| x.as_mut()),
+        Par::Seq,
+        MemStack::new(&mut buf),
+        Default::default(),
+    )
+    .map_err(|e| SysidError::numerical(step, format!("{e:?}")))?;
+    Ok((s.column_vector().iter().copied().collect(), u, v))
+}
+
+/// Eigenvalues of a symmetric matrix (its lower triangle is read), ascending, on the
+/// calling thread.
+pub fn sym_eigenvalues_seq(a: MatRef<'_, f64>) -> Result<Vec<f64>> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::evd::{self_adjoint_evd, self_adjoint_evd_scratch, ComputeEigenvectors};
+    let n = a.nrows();
+    if n == 0 {
+        return Ok(Vec::new());
+    }
+    let mut s = faer::diag::Diag::<f64>::zeros(n);
+    let mut buf = MemBuffer::new(self_adjoint_evd_scratch::<f64>(
+        n,
+        ComputeEigenvectors::No,
+        Par::Seq,
+        Default::default(),
+    ));
+    self_adjoint_evd(
+        a,
+        s.as_mut(),
+        None,
+        Par::Seq,
+        MemStack::new(&mut buf),
+        Default::default(),
+    )
+    .map_err(|e| SysidError::numerical("symmetric eigenvalues", format!("{e:?}")))?;
+    let mut ev: Vec<f64> = s.column_vector().iter().copied().collect();
+    ev.sort_by(f64::total_cmp);
+    Ok(ev)
 }
 
 /// Eigenvalues of a square matrix as `(re, im)` pairs.
@@ -101,25 +199,52 @@ pub fn pinv(a: MatRef<'_, f64>, rtol: f64) -> Result<Mat<f64>> {
     let svd = a
         .thin_svd()
         .map_err(|e| SysidError::numerical("pseudo-inverse (SVD)", format!("{e:?}")))?;
-    let s = svd.S().column_vector();
-    let smax = s[0];
-    let cut = rtol * smax;
-    let r = (0..s.nrows()).filter(|&i| s[i] > cut && s[i] > 0.0).count();
-    let u = svd.U().subcols(0, r);
-    let v = svd.V().subcols(0, r);
-    let mut vs = v.to_owned();
+    let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+    Ok(pinv_from_svd(&s, svd.U(), svd.V(), rtol, false))
+}
+
+/// [`pinv`] on the calling thread, for the small matrices of the subspace fit (see
+/// [`mul_seq`]).
+pub fn pinv_seq(a: MatRef<'_, f64>, rtol: f64) -> Result<Mat<f64>> {
+    let (m, n) = (a.nrows(), a.ncols());
+    if m == 0 || n == 0 {
+        return Ok(Mat::zeros(n, m));
+    }
+    let (s, u, v) = svd_seq("pseudo-inverse (SVD)", a, true, true)?;
+    let (u, v) = (
+        u.unwrap_or_else(|| Mat::zeros(m, 0)),
+        v.unwrap_or_else(|| Mat::zeros(n, 0)),
+    );
+    Ok(pinv_from_svd(&s, u.as_ref(), v.as_ref(), rtol, true))
+}
+
+fn pinv_from_svd(
+    s: &[f64],
+    u: MatRef<'_, f64>,
+    v: MatRef<'_, f64>,
+    rtol: f64,
+    seq: bool,
+) -> Mat<f64> {
+    let cut = rtol * s[0];
+    let r = s.iter().filter(|&&x| x > cut && x > 0.0).count();
+    let mut vs = v.subcols(0, r).to_owned();
     for j in 0..r {
         let inv = 1.0 / s[j];
-        for i in 0..n {
+        for i in 0..vs.nrows() {
             vs[(i, j)] *= inv;
         }
     }
-    Ok(&vs * u.transpose())
+    let ut = u.subcols(0, r).transpose();
+    if seq {
+        mul_seq(vs.as_ref(), ut)
+    } else {
+        &vs * ut
+    }
 }
 
 /// Solves `X A = B` for X in the least-squares sense (minimum norm), i.e. `X = B A^+`.
 pub fn rsolve_lstsq(b: MatRef<'_, f64>, a: MatRef<'_, f64>, rtol: f64) -> Result<Mat<f64>> {
-    Ok(b * pinv(a, rtol)?)
+    Ok(mul_seq(b, pinv(a, rtol)?.as_ref()))
 }
 
 /// Least-squares solution `X` of `A X = B` (A tall, full column rank) by Householder QR of
@@ -156,11 +281,20 @@ pub fn lstsq_seq(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
 /// Lower-triangular L with `L L^T = M M^T` (the L of the LQ factorisation of M), with a
 /// non-negative diagonal. M may have more columns than rows; L is `M.nrows() x M.nrows()`.
 pub fn lq_lower(m: MatRef<'_, f64>) -> Mat<f64> {
-    let rows = m.nrows();
-    if m.ncols() == 0 || rows == 0 {
+    if m.ncols() == 0 || m.nrows() == 0 {
+        return Mat::zeros(m.nrows(), m.nrows());
+    }
+    lq_lower_of_transpose(m.transpose().to_owned())
+}
+
+/// [`lq_lower`] of `M`, given `M^T` by value (its storage becomes the QR workspace: no
+/// transposed copy).
+pub fn lq_lower_of_transpose(mt: Mat<f64>) -> Mat<f64> {
+    let rows = mt.ncols();
+    if mt.nrows() == 0 || rows == 0 {
         return Mat::zeros(rows, rows);
     }
-    let mut r = m.transpose().to_owned();
+    let mut r = mt;
     qr_r_in_place(r.as_mut()); // upper trapezoidal in its first min(cols, rows) rows
     let mut l = Mat::<f64>::zeros(rows, rows);
     for i in 0..r.nrows().min(rows) {
@@ -368,9 +502,7 @@ pub fn rank(a: MatRef<'_, f64>, rtol: f64) -> Result<usize> {
     if a.nrows() == 0 || a.ncols() == 0 {
         return Ok(0);
     }
-    let s = a
-        .singular_values()
-        .map_err(|e| SysidError::numerical("rank (SVD)", format!("{e:?}")))?;
+    let (s, _, _) = svd_seq("rank (SVD)", a, false, false)?;
     let smax = s[0];
     Ok(s.iter().filter(|&&x| x > rtol * smax && x > 0.0).count())
 }

@@ -16,10 +16,12 @@ pub struct ChannelStats {
 
 /// Statistics of the columns of `parts` (all with the same number of columns).
 ///
-/// The sums run sample by sample in order, the way NumPy reduces a C-ordered `(samples,
-/// channels)` array along its first axis, so `mean` and `std` equal `x.mean(0)` and
-/// `x.std(0)` of the concatenated record bit for bit in that layout. Two passes over the
-/// data, no copy.
+/// Two passes over the data (the mean, then the spread about it), no copy. Parts stored
+/// row-major (a C-ordered `(samples, channels)` array) run through lanes of 8 samples that
+/// the compiler vectorises, about the memory bandwidth; sums are then taken in a different
+/// order than sample by sample, so `mean` and `std` agree with NumPy's `x.mean(0)`,
+/// `x.std(0)` to round-off. Records with a non-finite value take the sample-by-sample loop
+/// (NaN propagates into `abs_max`, as `abs(x).max(0)`).
 ///
 /// ```
 /// use faer::mat;
@@ -31,6 +33,129 @@ pub struct ChannelStats {
 /// assert_eq!(s.std, vec![1.0, 2.0]);
 /// ```
 pub fn channel_stats(parts: &[MatRef<'_, f64>]) -> ChannelStats {
+    let c = parts.first().map_or(0, |p| p.ncols());
+    let n: usize = parts.iter().map(|p| p.nrows()).sum();
+    let nf = n as f64;
+    let (mut abs_max, mut sum, mut finite) = (vec![0.0f64; c], vec![0.0f64; c], true);
+    for p in parts {
+        let (sum_p, max_p, fin_p) = match row_major(*p) {
+            Some(x) => lane_sums(x, c, None),
+            None => strided_sums(*p, None),
+        };
+        finite &= fin_p;
+        for j in 0..c {
+            sum[j] += sum_p[j];
+            abs_max[j] = abs_max[j].max(max_p[j]);
+        }
+    }
+    if !finite {
+        return channel_stats_ordered(parts);
+    }
+    let mean: Vec<f64> = sum.iter().map(|s| s / nf).collect();
+    let mut ss = vec![0.0f64; c];
+    for p in parts {
+        let (ss_p, _, _) = match row_major(*p) {
+            Some(x) => lane_sums(x, c, Some(&mean)),
+            None => strided_sums(*p, Some(&mean)),
+        };
+        for j in 0..c {
+            ss[j] += ss_p[j];
+        }
+    }
+    let std = ss.iter().map(|s| (s / nf).sqrt()).collect();
+    ChannelStats { abs_max, mean, std }
+}
+
+/// The samples of `p` as one row-major slice, when they are stored so.
+fn row_major<'a>(p: MatRef<'a, f64>) -> Option<&'a [f64]> {
+    let (r, c) = (p.nrows(), p.ncols());
+    if r == 0 || c == 0 {
+        return Some(&[]);
+    }
+    let rows_ok = r == 1 || p.row_stride() == c as isize;
+    let cols_ok = c == 1 || p.col_stride() == 1;
+    if rows_ok && cols_ok {
+        // SAFETY: the r c values are contiguous (checked strides) and live as long as `p`.
+        Some(unsafe { std::slice::from_raw_parts(p.as_ptr(), r * c) })
+    } else {
+        None
+    }
+}
+
+const LANES: usize = 8;
+
+/// Per channel: the sum of `x` (or of `(x - mean)^2` when `mean` is given), `max |x|`, and
+/// whether every value is finite; `x` row-major with `c` channels.
+#[allow(clippy::eq_op)] // `v - v`: 0 for finite values, NaN otherwise
+fn lane_sums(x: &[f64], c: usize, mean: Option<&[f64]>) -> (Vec<f64>, Vec<f64>, bool) {
+    let width = LANES * c;
+    let mut acc = vec![0.0f64; width];
+    let mut big = vec![0.0f64; width];
+    let mut bad = vec![0.0f64; width];
+    let mut chunks = x.chunks_exact(width);
+    match mean {
+        None => {
+            for ch in &mut chunks {
+                for (((a, m), b), v) in acc.iter_mut().zip(&mut big).zip(&mut bad).zip(ch) {
+                    *a += v;
+                    let av = v.abs();
+                    *m = if av > *m { av } else { *m };
+                    *b += v - v; // NaN unless finite
+                }
+            }
+        }
+        Some(mu) => {
+            let mus: Vec<f64> = (0..width).map(|k| mu[k % c]).collect();
+            for ch in &mut chunks {
+                for ((a, m), v) in acc.iter_mut().zip(&mus).zip(ch) {
+                    let d = v - m;
+                    *a += d * d;
+                }
+            }
+        }
+    }
+    let (mut s, mut mx) = (vec![0.0f64; c], vec![0.0f64; c]);
+    for k in 0..width {
+        s[k % c] += acc[k];
+        mx[k % c] = mx[k % c].max(big[k]);
+    }
+    let mut finite = bad.iter().all(|b| *b == 0.0);
+    for row in chunks.remainder().chunks_exact(c) {
+        for (j, v) in row.iter().enumerate() {
+            match mean {
+                None => {
+                    s[j] += v;
+                    mx[j] = mx[j].max(v.abs());
+                    finite &= v.is_finite();
+                }
+                Some(mu) => s[j] += (v - mu[j]) * (v - mu[j]),
+            }
+        }
+    }
+    (s, mx, finite)
+}
+
+/// [`lane_sums`] for any strides, column by column.
+fn strided_sums(p: MatRef<'_, f64>, mean: Option<&[f64]>) -> (Vec<f64>, Vec<f64>, bool) {
+    let c = p.ncols();
+    let (mut s, mut mx, mut finite) = (vec![0.0f64; c], vec![0.0f64; c], true);
+    for j in 0..c {
+        for v in p.col(j).iter() {
+            match mean {
+                None => {
+                    s[j] += v;
+                    mx[j] = mx[j].max(v.abs());
+                    finite &= v.is_finite();
+                }
+                Some(mu) => s[j] += (v - mu[j]) * (v - mu[j]),
+            }
+        }
+    }
+    (s, mx, finite)
+}
+
+/// The sample-by-sample statistics (records with non-finite values).
+fn channel_stats_ordered(parts: &[MatRef<'_, f64>]) -> ChannelStats {
     let c = parts.first().map_or(0, |p| p.ncols());
     let n: usize = parts.iter().map(|p| p.nrows()).sum();
     let mut abs_max = vec![0.0f64; c];
@@ -80,10 +205,33 @@ mod tests {
             let mean = v.iter().sum::<f64>() / 70.0;
             let var = v.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / 70.0;
             let big = v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-            assert_eq!(s.mean[j], mean);
-            assert_eq!(s.std[j], var.sqrt());
+            assert!((s.mean[j] - mean).abs() <= 1e-14 * mean.abs().max(1.0));
+            assert!((s.std[j] - var.sqrt()).abs() <= 1e-14 * var.sqrt());
             assert_eq!(s.abs_max[j], big);
         }
+    }
+
+    #[test]
+    fn row_major_lanes_strided_and_nonfinite_paths_agree() {
+        // 203 rows: 25 full lanes of 8 samples and a remainder of 3
+        let a = Mat::from_fn(203, 3, |i, j| ((i * 13 + j * 5) % 17) as f64 * 0.29 - 2.0);
+        let rm: Vec<f64> = (0..203)
+            .flat_map(|i| (0..3).map(move |j| ((i * 13 + j * 5) % 17) as f64 * 0.29 - 2.0))
+            .collect();
+        let v = MatRef::from_row_major_slice(&rm, 203, 3);
+        let (x, y) = (channel_stats(&[a.as_ref()]), channel_stats(&[v]));
+        for j in 0..3 {
+            assert!((x.mean[j] - y.mean[j]).abs() < 1e-14);
+            assert!((x.std[j] - y.std[j]).abs() < 1e-14);
+            assert_eq!(x.abs_max[j], y.abs_max[j]);
+        }
+        let mut bad = rm.clone();
+        bad[3 * 100 + 1] = f64::NAN;
+        let s = channel_stats(&[MatRef::from_row_major_slice(&bad, 203, 3)]);
+        assert!(s.abs_max[1].is_nan() && s.mean[1].is_nan() && !s.mean[0].is_nan());
+        bad[3 * 100 + 1] = f64::INFINITY;
+        let s = channel_stats(&[MatRef::from_row_major_slice(&bad, 203, 3)]);
+        assert!(s.abs_max[1].is_infinite() && s.abs_max[0].is_finite());
     }
 
     #[test]

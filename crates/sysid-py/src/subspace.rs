@@ -6,7 +6,9 @@ use crate::hankel::PyHankelFactor;
 use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sysid_core::subspace::{bd_x0, frequency, FitOptions, Method, Subspace, SubspaceOptions};
+use sysid_core::subspace::{
+    bd_x0, checks, frequency, FitOptions, Method, Subspace, SubspaceOptions,
+};
 
 /// Weighted SVD of a compressed record for one method.
 #[pyclass(name = "Subspace", module = "sysid._sysid", frozen)]
@@ -21,7 +23,7 @@ impl PySubspace {
         let method = Method::parse(method).py()?;
         let f = factor.inner.clone();
         let inner = py
-            .detach(|| Subspace::new(&f, &SubspaceOptions::with_method(method)))
+            .detach(|| Subspace::from_owned(f, &SubspaceOptions::with_method(method)))
             .py()?;
         Ok(Self { inner })
     }
@@ -185,7 +187,50 @@ pub fn spectra_subspace<'py>(
     Ok(d)
 }
 
+/// The feedback test's regressions on a factor: `(rss_restricted, rss_full, rank_restricted,
+/// rank_full, total)` (see `sysid_core::subspace::checks::feedback_regressions`).
+#[pyfunction]
+#[pyo3(signature = (factor, rtol=1e-9))]
+#[allow(clippy::type_complexity)]
+pub fn feedback_regressions<'py>(
+    py: Python<'py>,
+    factor: &PyHankelFactor,
+    rtol: f64,
+) -> PyResult<(
+    Bound<'py, PyArray1<f64>>,
+    Bound<'py, PyArray1<f64>>,
+    usize,
+    usize,
+    Bound<'py, PyArray1<f64>>,
+)> {
+    let f = &factor.inner;
+    let r = py.detach(|| checks::feedback_regressions(f, rtol)).py()?;
+    Ok((
+        slice_to_numpy(py, &r.rss_restricted),
+        slice_to_numpy(py, &r.rss_full),
+        r.rank_restricted,
+        r.rank_full,
+        slice_to_numpy(py, &r.total),
+    ))
+}
+
+/// Persistent-excitation order of the input read from a factor (see
+/// `sysid_core::subspace::checks::excitation_order`).
+#[pyfunction]
+#[pyo3(signature = (factor, needed, tol=1e-9))]
+pub fn excitation_order(
+    py: Python<'_>,
+    factor: &PyHankelFactor,
+    needed: usize,
+    tol: f64,
+) -> PyResult<usize> {
+    let f = &factor.inner;
+    py.detach(|| checks::excitation_order(f, needed, tol)).py()
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(feedback_regressions, m)?)?;
+    m.add_function(wrap_pyfunction!(excitation_order, m)?)?;
     m.add_function(wrap_pyfunction!(spectra_subspace, m)?)?;
     m.add_class::<PySubspace>()?;
     m.add_function(wrap_pyfunction!(frd_subspace, m)?)?;

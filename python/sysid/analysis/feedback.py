@@ -32,21 +32,6 @@ from ..errors import DataError, InsufficientDataError
 __all__ = ["FeedbackTest", "check_feedback", "feedback_pvalues"]
 
 
-def _residuals(x: np.ndarray, targets: np.ndarray, rtol: float = 1e-9) -> tuple[np.ndarray, int]:
-    """Residual sums of squares of each row of ``targets`` (rows of L) regressed on the rows
-    ``x`` of L, and the numerical rank of ``x`` (rows scaled to unit norm; exactly dependent
-    rows, as noise-free outputs give, do not count). One least-squares solve (LAPACK's
-    SVD-based ``gelsd``, singular values below ``rtol`` times the largest dropped) for all
-    targets."""
-    norms = np.linalg.norm(x, axis=1)
-    xs = x[norms > 0] / norms[norms > 0, None]
-    if xs.shape[0] == 0:
-        return np.einsum("ij,ij->i", targets, targets), 0
-    coef, _, r, _ = np.linalg.lstsq(xs.T, targets.T, rcond=rtol)
-    res = targets - (xs.T @ coef).T
-    return np.einsum("ij,ij->i", res, res), int(r)
-
-
 def f_sf(F: float, d1: float, d2: float) -> float:
     """Survival function ``P(X > F)`` of the F distribution with ``(d1, d2)`` degrees of freedom.
 
@@ -107,23 +92,18 @@ def feedback_pvalues(factor: Any) -> tuple[np.ndarray, np.ndarray, int, int]:
     Returns ``(F, p_values, df_num, df_den)``; an input that its own past predicts exactly
     (a sum of sinusoids, a step) cannot be tested and gets ``F = 0, p = 1``.
     """
-    m, l, p, f = factor.n_inputs, factor.n_outputs, factor.past, factor.future
-    L = np.asarray(factor.l)
+    m, l, p = factor.n_inputs, factor.n_outputs, factor.past
     n_cols = int(factor.n_columns)
-    up = np.arange(f * m, (f + p) * m)
-    yp = np.arange((f + p) * m, (f + p) * m + p * l)
     Fs, ps = np.zeros(m), np.ones(m)
-    # L is lower triangular: the rows U_f[0], U_p, Y_p vanish beyond column (f + p) m + p l,
-    # so the regressions use the leading columns only; one solve per regressor set, shared
-    # by the m inputs
-    c = (f + p) * m + p * l
-    L = L[:, :c]
-    rss_rs, r_r = _residuals(L[up, : (f + p) * m], L[:m, : (f + p) * m])
-    rss_fs, r_f = _residuals(np.vstack([L[up], L[yp]]), L[:m])
+    # the regressions of u(t) on U_p (restricted) and on U_p, Y_p (full), on the rows of the
+    # triangular factor, in the Rust core on the calling thread (a threaded LAPACK call here
+    # cost a loaded machine seconds on the first fit): one Householder QR per regressor set
+    # for all inputs, singular values below 1e-9 of the largest dropped (rows scaled to unit
+    # norm) as LAPACK gelsd's rule
+    rss_rs, rss_fs, r_r, r_f, totals = _sysid.feedback_regressions(factor, 1e-9)
     q, df2 = p * l, n_cols - p * (m + l)
     for i in range(m):
-        ui = L[i]
-        total = float(ui @ ui)
+        total = float(totals[i])
         rss_r, rss_f = float(rss_rs[i]), float(rss_fs[i])
         q, df2 = r_f - r_r, n_cols - r_f
         if q <= 0 or df2 <= 0 or total <= 0 or rss_r <= 1e-10 * total:

@@ -40,6 +40,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int
+from ..analysis.feedback import feedback_pvalues
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
 from ..errors import DataError, FeedbackWarning, InsufficientDataError, OrderError
@@ -313,8 +314,6 @@ class SubspaceEstimator:
         if self._feedback_p is None:
             p = 1.0
             if self.factor.n_inputs:
-                from ..analysis.feedback import feedback_pvalues
-
                 pv = feedback_pvalues(self.factor)[1]
                 p = float(min(1.0, len(pv) * float(np.min(pv))))
             self._feedback_p = p
@@ -505,24 +504,10 @@ class SubspaceEstimator:
         data): the largest ``d <= min(needed, past + future)`` for which the input's block
         Hankel matrix with ``d`` block rows has full rank (eigenvalues of its Gram matrix
         above ``tol`` times the largest, as :func:`sysid.persistent_excitation_order`)."""
-        f = self.factor
-        m = f.n_inputs
         if needed not in self._pe_cache:
-            L = f.l
-            # input rows in time order: U_p (rows f m .. (f + p) m) then U_f (rows 0 .. f m)
-            rows = np.r_[np.arange(f.future * m, (f.future + f.past) * m), np.arange(f.future * m)]
-            depth = min(needed, f.past + f.future)
-            M = L[rows[: depth * m]]
-            G = M @ M.T
-            top = np.linalg.eigvalsh(G)[-1]
-            got = 0
-            for d in range(1, depth + 1):
-                if np.linalg.eigvalsh(G[: d * m, : d * m])[0] > tol * top:
-                    got = d
-                else:
-                    break
-            # beyond the window the factor cannot tell: do not claim a deficiency there
-            self._pe_cache[needed] = needed if got == f.past + f.future else got
+            # in the Rust core on the calling thread: one Cholesky of G - tol top I answers
+            # every d (the first non-positive pivot), no threaded LAPACK call
+            self._pe_cache[needed] = int(_sysid.excitation_order(self.factor, needed, tol))
         return self._pe_cache[needed]
 
     def __repr__(self) -> str:

@@ -25,7 +25,9 @@
 //! the number of threads.
 
 use super::lagsum::lag_sums;
-use super::{check_chunk, Block, Compressor, FactorSource, HankelFactor, HankelLayout};
+use super::{
+    check_chunk, check_shapes, Block, Compressor, FactorSource, HankelFactor, HankelLayout,
+};
 use crate::error::{Result, SysidError};
 use crate::linalg::{cholesky_lower_seq, lq_lower, lq_lower_rank_one};
 use faer::{Mat, MatRef, Side};
@@ -151,18 +153,6 @@ impl Segment {
     }
 }
 
-/// Sum in eight interleaved partial sums (not latency-bound like one running sum).
-fn sum8(v: impl Iterator<Item = f64>) -> f64 {
-    let mut s = [0.0; 8];
-    let mut v = v.peekable();
-    while v.peek().is_some() {
-        for si in s.iter_mut() {
-            *si += v.next().unwrap_or(0.0);
-        }
-    }
-    s.iter().sum()
-}
-
 #[inline]
 fn add_outer(lag: &mut Mat<f64>, col0: usize, a: &[f64], b: &[f64]) {
     for (j, bj) in b.iter().enumerate() {
@@ -280,29 +270,26 @@ impl CorrelationSums {
     /// Shift and power-of-two scale per channel estimated from a chunk (mean and standard
     /// deviation), as [`CorrelationCompressor`] does with the first chunk it receives.
     pub fn center_scale(u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> (Vec<f64>, Vec<f64>) {
+        Self::center_scale_finite(u, y).0
+    }
+
+    /// [`CorrelationSums::center_scale`] and whether every value is finite, in the two
+    /// vectorised passes of [`crate::stats::channel_stats`] (mean, then spread).
+    fn center_scale_finite(u: MatRef<'_, f64>, y: MatRef<'_, f64>) -> ((Vec<f64>, Vec<f64>), bool) {
         let mut center = Vec::new();
         let mut scale = Vec::new();
+        let mut finite = true;
         for x in [u, y] {
-            let n = x.nrows();
-            for c in 0..x.ncols() {
-                let col = x.col(c);
-                let owned;
-                let col: &[f64] = match col.try_as_col_major() {
-                    Some(c) => c.as_slice(),
-                    None => {
-                        owned = col.iter().copied().collect::<Vec<f64>>();
-                        &owned
-                    }
-                };
-                let mean = if n == 0 {
-                    0.0
+            if x.ncols() == 0 {
+                continue;
+            }
+            let st = crate::stats::channel_stats(&[x]);
+            finite &= st.abs_max.iter().all(|v| v.is_finite());
+            for (&mean, &sd) in st.mean.iter().zip(&st.std) {
+                let (mean, var) = if x.nrows() == 0 {
+                    (0.0, 0.0)
                 } else {
-                    sum8(col.iter().copied()) / n as f64
-                };
-                let var = if n == 0 {
-                    0.0
-                } else {
-                    sum8(col.iter().map(|v| (v - mean) * (v - mean))) / n as f64
+                    (mean, sd * sd)
                 };
                 let spread = if var > 0.0 && var.is_finite() {
                     var.sqrt()
@@ -318,7 +305,7 @@ impl CorrelationSums {
                 scale.push(2f64.powi(e as i32));
             }
         }
-        (center, scale)
+        ((center, scale), finite)
     }
 
     /// Sets the block size (0: automatic, see [`CorrelationOptions::block_rows`]) and whether
@@ -828,11 +815,16 @@ impl Compressor for CorrelationCompressor {
             } else {
                 u
             };
-            check_chunk(&self.layout, u0, y, 0)?;
+            // shapes here; finite values through the statistics' pass (the exact check,
+            // which locates the first bad value, only when that pass saw one)
+            check_shapes(&self.layout, u0, y)?;
             if y.nrows() == 0 {
                 return Ok(());
             }
-            let (c, s) = CorrelationSums::center_scale(u0, y);
+            let ((c, s), finite) = CorrelationSums::center_scale_finite(u0, y);
+            if !finite {
+                check_chunk(&self.layout, u0, y, 0)?;
+            }
             let mut sums = CorrelationSums::new(self.layout, c, s)?;
             sums.set_blocking(self.options.block_rows, self.options.parallel);
             let out = sums.push_impl(u, y, false);

@@ -178,6 +178,30 @@ pub(crate) fn check_chunk(
     y: MatRef<'_, f64>,
     offset: usize,
 ) -> Result<()> {
+    check_shapes(layout, u, y)?;
+    let shift = |e: SysidError| match e {
+        SysidError::NonFinite {
+            what,
+            sample,
+            channel,
+        } => SysidError::NonFinite {
+            what,
+            sample: sample + offset,
+            channel,
+        },
+        other => other,
+    };
+    crate::error::check_finite("u", u).map_err(shift)?;
+    crate::error::check_finite("y", y).map_err(shift)?;
+    Ok(())
+}
+
+/// The shape part of [`check_chunk`]: channel counts and matching lengths.
+pub(crate) fn check_shapes(
+    layout: &HankelLayout,
+    u: MatRef<'_, f64>,
+    y: MatRef<'_, f64>,
+) -> Result<()> {
     if u.ncols() != layout.n_inputs {
         return Err(SysidError::ShapeMismatch {
             what: "u".into(),
@@ -203,20 +227,6 @@ pub(crate) fn check_chunk(
             got: format!("({}, {})", u.nrows(), u.ncols()),
         });
     }
-    let shift = |e: SysidError| match e {
-        SysidError::NonFinite {
-            what,
-            sample,
-            channel,
-        } => SysidError::NonFinite {
-            what,
-            sample: sample + offset,
-            channel,
-        },
-        other => other,
-    };
-    crate::error::check_finite("u", u).map_err(shift)?;
-    crate::error::check_finite("y", y).map_err(shift)?;
     Ok(())
 }
 

@@ -26,6 +26,7 @@
 //! given `A`, `C` ([`bd_x0`]). Nothing here depends on the record length.
 
 pub mod bd_x0;
+pub mod checks;
 pub mod closed_loop;
 pub mod frequency;
 pub mod order;
@@ -159,6 +160,11 @@ pub struct Subspace {
 impl Subspace {
     /// Checks excitation and computes the weighted SVD of `factor` for `opts.method`.
     pub fn new(factor: &HankelFactor, opts: &SubspaceOptions) -> Result<Self> {
+        Self::from_owned(factor.clone(), opts)
+    }
+
+    /// [`Subspace::new`] taking the factor by value (no copy of L).
+    pub fn from_owned(factor: HankelFactor, opts: &SubspaceOptions) -> Result<Self> {
         let lay = factor.layout();
         if lay.future < 2 {
             return Err(SysidError::invalid(
@@ -182,10 +188,10 @@ impl Subspace {
                 fix: "use a longer record or a smaller horizon",
             });
         }
-        weighting::check_excitation(factor, opts.input_rank_tol)?;
-        let weighted = weighting::weighted_svd(factor, opts.method)?;
+        weighting::check_excitation(&factor, opts.input_rank_tol)?;
+        let weighted = weighting::weighted_svd(&factor, opts.method)?;
         Ok(Self {
-            factor: factor.clone(),
+            factor,
             method: opts.method,
             weighted,
         })

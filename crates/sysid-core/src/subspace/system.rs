@@ -18,7 +18,7 @@ use super::weighting::Weighted;
 use super::{FitOptions, Identified};
 use crate::error::{Result, SysidError};
 use crate::hankel::{Block, HankelFactor};
-use crate::linalg::{pinv, spectral_radius, symmetrize};
+use crate::linalg::{mul_seq, pinv_seq, spectral_radius, symmetrize};
 use crate::model::StateSpace;
 use crate::riccati::kalman_gain;
 use faer::{Mat, MatRef};
@@ -32,7 +32,7 @@ pub fn observability(a: MatRef<'_, f64>, c: MatRef<'_, f64>, rows: usize) -> Mat
     let mut ca = c.to_owned();
     for j in 0..rows {
         o.as_mut().subrows_mut(j * l, l).copy_from(&ca);
-        ca = &ca * a;
+        ca = mul_seq(ca.as_ref(), a);
     }
     o
 }
@@ -48,57 +48,128 @@ pub fn shift_invariance(
     let c = gamma.subrows(0, l).to_owned();
     let up = gamma.subrows(0, fl - l);
     let down = gamma.subrows(l, fl - l);
-    let a = pinv(up, PINV_TOL)? * down;
+    let a = mul_seq(pinv_seq(up, PINV_TOL)?.as_ref(), down);
     if stable && spectral_radius(a.as_ref())? >= 1.0 {
         let mut padded = Mat::<f64>::zeros(fl, n);
         padded.as_mut().subrows_mut(0, fl - l).copy_from(down);
-        let a_st = pinv(gamma, PINV_TOL)? * &padded;
+        let a_st = mul_seq(pinv_seq(gamma, PINV_TOL)?.as_ref(), padded.as_ref());
         return Ok((a_st, c, true));
     }
     Ok((a, c, false))
 }
 
-struct KMap<'a> {
-    a: MatRef<'a, f64>,
-    c: MatRef<'a, f64>,
-    o_pinv: Mat<f64>,
-    o1_pinv: Mat<f64>,
-    ca: Vec<Mat<f64>>, // C A^j, j = 0..f-2
-    f: usize,
+/// The linear map `(B, D) -> 𝒦(B, D)` ((n + l) x f m) as blocks: column block `q` of
+/// `𝒦(B, D)` is `T_q B + S_q D` with `T_q` ((n + l) x n) and `S_q` ((n + l) x l).
+///
+/// With `Γ_f^+ = [P_0 .. P_{f-1}]`, `Γ_{f-1}^+ = [P1_0 .. P1_{f-2}]` (blocks of l columns),
+/// `M_q = sum_{j > q} P_j C A^{j-q-1}` and `M1_q` likewise from `P1`: `T_0 = [I - A M_0;
+/// -C M_0]`, `S_0 = [-A P_0; I - C P_0]`, and for `q >= 1` `T_q = [M1_{q-1} - A M_q; -C M_q]`,
+/// `S_q = [P1_{q-1} - A P_q; -C P_q]` (Van Overschee & De Moor 1996, sec. 4.3.3, where
+/// `𝒦` is the product of the block Toeplitz matrix of (B, D) with these projections).
+struct KBlocks {
+    t: Vec<Mat<f64>>,
+    s: Vec<Mat<f64>>,
 }
 
-impl KMap<'_> {
-    /// 𝒦(B, D) ((n + l) x f m).
-    fn eval(&self, b: MatRef<'_, f64>, d: MatRef<'_, f64>) -> Mat<f64> {
-        let (n, m, l, f) = (self.a.nrows(), b.ncols(), self.c.nrows(), self.f);
-        // block Toeplitz H_f: (j, q) = D if j == q, C A^{j-q-1} B if j > q
-        let markov: Vec<Mat<f64>> = self.ca.iter().map(|ca| ca * b).collect();
-        let mut h = Mat::<f64>::zeros(f * l, f * m);
-        for j in 0..f {
-            for q in 0..=j {
-                let blk = if j == q {
-                    d
-                } else {
-                    markov[j - q - 1].as_ref()
-                };
-                h.as_mut().submatrix_mut(j * l, q * m, l, m).copy_from(blk);
-            }
+impl KBlocks {
+    fn new(
+        a: MatRef<'_, f64>,
+        c: MatRef<'_, f64>,
+        o_pinv: MatRef<'_, f64>,
+        o1_pinv: MatRef<'_, f64>,
+        f: usize,
+    ) -> Self {
+        let (n, l) = (a.nrows(), c.nrows());
+        // C A^j, j = 0..f-2
+        let mut ca: Vec<Mat<f64>> = Vec::with_capacity(f.saturating_sub(1));
+        let mut cur = c.to_owned();
+        for _ in 0..f.saturating_sub(1) {
+            let next = mul_seq(cur.as_ref(), a);
+            ca.push(cur);
+            cur = next;
         }
-        let gh = &self.o_pinv * &h; // n x f m
-        let h1 = h.as_ref().submatrix(0, 0, (f - 1) * l, (f - 1) * m);
-        let g1h = &self.o1_pinv * h1; // n x (f-1) m
-        let mut k = Mat::<f64>::zeros(n + l, f * m);
-        k.as_mut().submatrix_mut(0, 0, n, m).copy_from(b);
-        k.as_mut()
-            .submatrix_mut(0, m, n, (f - 1) * m)
-            .copy_from(&g1h);
-        k.as_mut().submatrix_mut(n, 0, l, m).copy_from(d);
-        let agh = self.a * &gh;
-        let cgh = self.c * &gh;
-        let mut top = k.as_mut().subrows_mut(0, n);
-        top -= &agh;
-        let mut bot = k.as_mut().subrows_mut(n, l);
-        bot -= &cgh;
+        // M_q = sum_{j=q+1}^{last} P_j C A^{j-q-1}, from the blocks P_j of `pinv`
+        let m_blocks = |pinv: MatRef<'_, f64>, blocks: usize| -> Vec<Mat<f64>> {
+            (0..blocks)
+                .map(|q| {
+                    let mut mq = Mat::<f64>::zeros(n, n);
+                    for j in q + 1..blocks {
+                        faer::linalg::matmul::matmul(
+                            mq.as_mut(),
+                            faer::Accum::Add,
+                            pinv.subcols(j * l, l),
+                            ca[j - q - 1].as_ref(),
+                            1.0,
+                            faer::Par::Seq,
+                        );
+                    }
+                    mq
+                })
+                .collect()
+        };
+        let m0 = m_blocks(o_pinv, f);
+        let m1 = m_blocks(o1_pinv, f - 1);
+        let mut t = Vec::with_capacity(f);
+        let mut s = Vec::with_capacity(f);
+        for q in 0..f {
+            let pq = o_pinv.subcols(q * l, l);
+            let mut tq = Mat::<f64>::zeros(n + l, n);
+            let mut sq = Mat::<f64>::zeros(n + l, l);
+            if q == 0 {
+                for i in 0..n {
+                    tq[(i, i)] = 1.0;
+                }
+                for i in 0..l {
+                    sq[(n + i, i)] = 1.0;
+                }
+            } else {
+                tq.as_mut().subrows_mut(0, n).copy_from(&m1[q - 1]);
+                sq.as_mut()
+                    .subrows_mut(0, n)
+                    .copy_from(o1_pinv.subcols((q - 1) * l, l));
+            }
+            for (blk, rhs) in [(&mut tq, m0[q].as_ref()), (&mut sq, pq)] {
+                let (top, bot) = blk.as_mut().split_at_row_mut(n);
+                for (dst, lhs) in [(top, a), (bot, c)] {
+                    faer::linalg::matmul::matmul(
+                        dst,
+                        faer::Accum::Add,
+                        lhs,
+                        rhs,
+                        -1.0,
+                        faer::Par::Seq,
+                    );
+                }
+            }
+            t.push(tq);
+            s.push(sq);
+        }
+        Self { t, s }
+    }
+
+    /// `𝒦(B, D)` ((n + l) x f m).
+    fn eval(&self, b: MatRef<'_, f64>, d: MatRef<'_, f64>) -> Mat<f64> {
+        let (rows, m, f) = (self.t[0].nrows(), b.ncols(), self.t.len());
+        let mut k = Mat::<f64>::zeros(rows, f * m);
+        for q in 0..f {
+            let mut blk = k.as_mut().subcols_mut(q * m, m);
+            faer::linalg::matmul::matmul(
+                blk.as_mut(),
+                faer::Accum::Add,
+                self.t[q].as_ref(),
+                b,
+                1.0,
+                faer::Par::Seq,
+            );
+            faer::linalg::matmul::matmul(
+                blk,
+                faer::Accum::Add,
+                self.s[q].as_ref(),
+                d,
+                1.0,
+                faer::Par::Seq,
+            );
+        }
         k
     }
 }
@@ -126,8 +197,8 @@ pub fn identify(
     let (a, c, stabilized) = shift_invariance(gamma.as_ref(), l, opts.stable)?;
 
     let o = observability(a.as_ref(), c.as_ref(), f);
-    let o_pinv = pinv(o.as_ref(), PINV_TOL)?;
-    let o1_pinv = pinv(o.as_ref().subrows(0, (f - 1) * l), PINV_TOL)?;
+    let o_pinv = pinv_seq(o.as_ref(), PINV_TOL)?;
+    let o1_pinv = pinv_seq(o.as_ref().subrows(0, (f - 1) * l), PINV_TOL)?;
 
     // projections as truncated rows of L
     let (yf_s, _) = lay.block(Block::YFuture);
@@ -138,17 +209,24 @@ pub fn identify(
     z_i1.as_mut().subcols_mut(r1 + l, k_rows - r1 - l).fill(0.0);
     let y_ii = lmat.subrows(yf_s, l);
 
-    let x_i = &o_pinv * &z_i; // n x k
+    let x_i = mul_seq(o_pinv.as_ref(), z_i.as_ref()); // n x k
     let mut p = Mat::<f64>::zeros(n + l, k_rows);
-    p.as_mut().subrows_mut(0, n).copy_from(&o1_pinv * &z_i1);
+    p.as_mut()
+        .subrows_mut(0, n)
+        .copy_from(mul_seq(o1_pinv.as_ref(), z_i1.as_ref()));
     p.as_mut().subrows_mut(n, l).copy_from(y_ii);
     {
-        let ax = &a * &x_i;
-        let cx = &c * &x_i;
-        let mut top = p.as_mut().subrows_mut(0, n);
-        top -= &ax;
-        let mut bot = p.as_mut().subrows_mut(n, l);
-        bot -= &cx;
+        let (top, bot) = p.as_mut().split_at_row_mut(n);
+        for (dst, lhs) in [(top, a.as_ref()), (bot, c.as_ref())] {
+            faer::linalg::matmul::matmul(
+                dst,
+                faer::Accum::Add,
+                lhs,
+                x_i.as_ref(),
+                -1.0,
+                faer::Par::Seq,
+            );
+        }
     }
 
     let mut b = Mat::<f64>::zeros(n, m);
@@ -157,47 +235,46 @@ pub fn identify(
     if m > 0 {
         let (uf_s, uf_n) = lay.block(Block::UFuture);
         let l11 = lmat.submatrix(uf_s, uf_s, uf_n, uf_n);
-        let kmap = KMap {
-            a: a.as_ref(),
-            c: c.as_ref(),
-            o_pinv,
-            o1_pinv,
-            ca: (0..f.saturating_sub(1))
-                .scan(c.clone(), |acc, _| {
-                    let cur = acc.clone();
-                    *acc = &*acc * &a;
-                    Some(cur)
-                })
-                .collect(),
-            f,
-        };
-        // unknowns: B (n x m) then D (l x m) if estimated, column-major
+        let kb = KBlocks::new(a.as_ref(), c.as_ref(), o_pinv.as_ref(), o1_pinv.as_ref(), f);
+        // unknowns: B (n x m) then D (l x m) if estimated, column-major; the column of
+        // unknown (r, s) is vec(𝒦(E_rs) L11): row j (n + l) + i holds
+        // sum_q T_q[i, r] L11[q m + s, j] (S_q for D), only q m + s >= j (L11 is lower
+        // triangular)
         let n_b = n * m;
         let n_theta = n_b + if opts.feedthrough { l * m } else { 0 };
-        let rows = (n + l) * uf_n;
+        let nl = n + l;
+        let rows = nl * uf_n;
         let mut design = Mat::<f64>::zeros(rows, n_theta);
-        let mut eb = Mat::<f64>::zeros(n, m);
-        let mut ed = Mat::<f64>::zeros(l, m);
-        for t in 0..n_theta {
-            eb.fill(0.0);
-            ed.fill(0.0);
-            if t < n_b {
-                eb[(t % n, t / n)] = 1.0;
-            } else {
-                let s = t - n_b;
-                ed[(s % l, s / l)] = 1.0;
-            }
-            let kt = kmap.eval(eb.as_ref(), ed.as_ref()) * l11; // (n + l) x f m
-            for j in 0..uf_n {
-                for i in 0..n + l {
-                    design[(j * (n + l) + i, t)] = kt[(i, j)];
+        for sidx in 0..m {
+            for q in 0..f {
+                let row = q * m + sidx;
+                let (tq, sq) = (&kb.t[q], &kb.s[q]);
+                for j in 0..=row.min(uf_n - 1) {
+                    let coef = l11[(row, j)];
+                    if coef == 0.0 {
+                        continue;
+                    }
+                    for r in 0..n {
+                        let col = design.as_mut().col_mut(sidx * n + r);
+                        let src = tq.col(r);
+                        let dst = col.subrows_mut(j * nl, nl);
+                        zip_axpy(dst, coef, src);
+                    }
+                    if opts.feedthrough {
+                        for r in 0..l {
+                            let col = design.as_mut().col_mut(n_b + sidx * l + r);
+                            let src = sq.col(r);
+                            let dst = col.subrows_mut(j * nl, nl);
+                            zip_axpy(dst, coef, src);
+                        }
+                    }
                 }
             }
         }
         let mut rhs = Mat::<f64>::zeros(rows, 1);
         for j in 0..uf_n {
-            for i in 0..n + l {
-                rhs[(j * (n + l) + i, 0)] = p[(i, uf_s + j)];
+            for i in 0..nl {
+                rhs[(j * nl + i, 0)] = p[(i, uf_s + j)];
             }
         }
         let theta = if n_theta > 0 {
@@ -214,12 +291,12 @@ pub fn identify(
                 d[(s % l, s / l)] = theta[(t, 0)];
             }
         }
-        let kt = kmap.eval(b.as_ref(), d.as_ref()) * l11;
+        let kt = mul_seq(kb.eval(b.as_ref(), d.as_ref()).as_ref(), l11);
         let mut fit_cols = resid.as_mut().subcols_mut(uf_s, uf_n);
         fit_cols -= &kt;
     }
 
-    let mut cov = &resid * resid.transpose();
+    let mut cov = mul_seq(resid.as_ref(), resid.transpose());
     let scale = 1.0 / factor.n_columns() as f64;
     for j in 0..n + l {
         for i in 0..n + l {
@@ -258,4 +335,12 @@ pub fn identify(
         s,
         stabilized,
     })
+}
+
+/// `dst += coef * src` (columns of equal length).
+#[inline]
+fn zip_axpy(dst: faer::ColMut<'_, f64>, coef: f64, src: faer::ColRef<'_, f64>) {
+    for (d, s) in dst.iter_mut().zip(src.iter()) {
+        *d += coef * s;
+    }
 }

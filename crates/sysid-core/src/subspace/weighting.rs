@@ -1,9 +1,12 @@
 //! The weighted SVD of each method, computed on the factor L alone.
+//!
+//! Everything here runs on the calling thread: the matrices have a few hundred rows at most,
+//! and faer's global (rayon) parallelism costs more in thread wake-ups than it saves.
 
 use super::Method;
 use crate::error::{Result, SysidError};
 use crate::hankel::{Block, HankelFactor};
-use crate::linalg::{lq_lower, pinv};
+use crate::linalg::{lq_lower, mul_seq, pinv_seq, svd_seq};
 use faer::{Mat, MatRef};
 
 /// Singular values and the basis that yields the extended observability matrix.
@@ -38,9 +41,12 @@ pub fn check_excitation(factor: &HankelFactor, rtol: f64) -> Result<()> {
         return Ok(());
     }
     let l11 = factor.l().submatrix(s, s, n, n);
-    let sv = l11
-        .singular_values()
-        .map_err(|e| SysidError::numerical("excitation check (SVD)", format!("{e:?}")))?;
+    // L11 is lower triangular: when ||L11||_F ||L11^{-1}||_F < 1 / rtol every singular value
+    // passes the cut (s_min / s_max >= 1 / that bound) and the SVD is not needed
+    if super::checks::well_conditioned(l11.transpose(), rtol) {
+        return Ok(());
+    }
+    let (sv, _, _) = svd_seq("excitation check (SVD)", l11, false, false)?;
     let smax = sv[0];
     let rank = sv.iter().filter(|&&x| x > rtol * smax && x > 0.0).count();
     if rank < n {
@@ -70,7 +76,7 @@ pub fn weighted_svd(factor: &HankelFactor, method: Method) -> Result<Weighted> {
             let l32 = l.submatrix(yf.0, wp_s, yf.1, wp_n);
             let l22 = l.submatrix(wp_s, wp_s, wp_n, wp_n);
             let l2 = l.submatrix(wp_s, 0, wp_n, uf.1 + wp_n);
-            l32 * pinv(l22, 1e-12)? * l2
+            mul_seq(mul_seq(l32, pinv_seq(l22, 1e-12)?.as_ref()).as_ref(), l2)
         }
         Method::Cva => {
             let y_perp = l.submatrix(yf.0, wp_s, yf.1, wp_n + yf.1);
@@ -82,12 +88,16 @@ pub fn weighted_svd(factor: &HankelFactor, method: Method) -> Result<Weighted> {
                 .fold(f64::INFINITY, f64::min);
             let w = if dmin > 1e-10 * dmax {
                 let mut w = l32.to_owned();
-                t.solve_lower_triangular_in_place(w.as_mut());
+                faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+                    t.as_ref(),
+                    w.as_mut(),
+                    faer::Par::Seq,
+                );
                 w
             } else {
                 // noise-free or redundant outputs: Y_f Π Y_f^T is singular; whiten on its
                 // range only (truncated pseudo-inverse), where L32 lives too
-                pinv(t.as_ref(), 1e-10)? * l32
+                mul_seq(pinv_seq(t.as_ref(), 1e-10)?.as_ref(), l32)
             };
             transform = Some(t);
             w
@@ -107,10 +117,8 @@ pub fn weighted_svd(factor: &HankelFactor, method: Method) -> Result<Weighted> {
             "this weighting needs past inputs (PI-MOESP) but the data have no inputs",
         ));
     }
-    let svd = m
-        .thin_svd()
-        .map_err(|e| SysidError::numerical("weighted SVD", format!("{e:?}")))?;
-    let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
+    // the left singular vectors only (the right ones are never used)
+    let (s, u, _) = svd_seq("weighted SVD", m.as_ref(), true, false)?;
     let smax = s.first().copied().unwrap_or(0.0);
     if smax.is_nan() || smax <= 0.0 || !smax.is_finite() {
         return Err(SysidError::numerical(
@@ -120,9 +128,9 @@ pub fn weighted_svd(factor: &HankelFactor, method: Method) -> Result<Weighted> {
         ));
     }
     let rank = s.iter().filter(|&&x| x > 1e-12 * smax).count();
-    let u = svd.U().to_owned();
+    let u = u.unwrap_or_else(|| Mat::zeros(m.nrows(), 0));
     let basis = match transform {
-        Some(t) => &t * &u,
+        Some(t) => mul_seq(t.as_ref(), u.as_ref()),
         None => u,
     };
     Ok(Weighted {
