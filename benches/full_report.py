@@ -18,12 +18,21 @@ def _head(p: dict) -> list[str]:
     ]
 
 
+def _cold(r: dict) -> str:
+    """The cold time, with the range over fresh processes when there were several."""
+    runs = r.get("cold_runs")
+    if not runs or len(runs) < 2:
+        return _f(r.get("seconds"))
+    return f"{_f(r.get('seconds'))} ({_f(min(runs))}-{_f(max(runs))})"
+
+
 def _sippy(p: dict) -> list[str]:
     out = ["## The default against SIPPY (3 in, 3 out, horizon 20, order 8)", ""] + _head(p)
     out += [
         "Cold: the first identification in a fresh process (`SubspaceEstimator(IOData(u, y), "
-        "horizon=20).fit(order=8)`, data in memory, `import sysid` done); warm: the best of "
-        "the next four in the same process. SIPPY: `system_identification(y.T, u.T, "
+        "horizon=20).fit(order=8)`, data in memory, `import sysid` done), the median of three "
+        "fresh processes (their range in brackets); warm: the best of the next four in any of "
+        "them; ratios use the median. SIPPY: `system_identification(y.T, u.T, "
         "\"N4SID\", SS_fixed_order=8, SS_f=20, SS_p=20)`, once. Pole error: largest distance "
         "of an identified pole from its matched true one; fit: simulation fit on a fresh "
         "record.",
@@ -38,7 +47,7 @@ def _sippy(p: dict) -> list[str]:
         d, q, s = by.get("sysid-auto", {}), by.get("sysid-qr", {}), by.get("sippy", {})
         cold, warm, ss = d.get("seconds"), d.get("warm_seconds"), s.get("seconds")
         out.append(
-            f"| {n:.0e} | {_f(cold)} | {_f(warm)} | {_f(q.get('seconds'))} | "
+            f"| {n:.0e} | {_cold(d)} | {_f(warm)} | {_f(q.get('seconds'))} | "
             f"{_f(ss) if s.get('ok') else 'failed: ' + s.get('error', '?')[:60]} | "
             f"{_f(ss / cold if ss and cold else None, '.0f')}x | "
             f"{_f(ss / warm if ss and warm else None, '.0f')}x | "
@@ -52,8 +61,9 @@ def _floor(p: dict) -> list[str]:
     out = ["## The default against the compute floor (8 in, 8 out, horizon 20)", ""] + _head(p)
     out += [
         "Floor: `4 i (m + l)^2 N` flops (the lagged sums) at the GEMM rate above. Whole: the "
-        "identification (cold, and warm = best of two more in the same process); compression: "
-        "the `SubspaceEstimator(...)` call of the cold run.",
+        "identification (cold: the first in a fresh process, median of three processes with "
+        "their range; warm: the best of two more in the same processes); compression: the "
+        "`SubspaceEstimator(...)` call of the median cold run.",
         "",
         "| N | floor (s) | whole cold (s) | whole warm (s) | compression, cold (s) | "
         "cold / floor | warm / floor | compression / floor | pole error |",
@@ -63,7 +73,7 @@ def _floor(p: dict) -> list[str]:
         fl = r["floor_seconds"]
         cold, warm = r.get("seconds"), r.get("warm_seconds")
         out.append(
-            f"| {r['n']:.0e} | {fl:.3f} | {_f(cold)} | {_f(warm)} | "
+            f"| {r['n']:.0e} | {fl:.3f} | {_cold(r)} | {_f(warm)} | "
             f"{_f(r.get('compress_seconds'))} | {_f(cold / fl if cold else None, '.2f')}x | "
             f"{_f(warm / fl if warm else None, '.2f')}x | "
             f"{_f(r['compress_seconds'] / fl if r.get('compress_seconds') else None, '.2f')}x | "
