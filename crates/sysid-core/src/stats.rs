@@ -122,17 +122,31 @@ fn lane_sums(x: &[f64], c: usize, mean: Option<&[f64]>) -> (Vec<f64>, Vec<f64>, 
     let mut finite = bad.iter().all(|b| *b == 0.0);
     for row in chunks.remainder().chunks_exact(c) {
         for (j, v) in row.iter().enumerate() {
-            match mean {
-                None => {
-                    s[j] += v;
-                    mx[j] = mx[j].max(v.abs());
-                    finite &= v.is_finite();
-                }
-                Some(mu) => s[j] += (v - mu[j]) * (v - mu[j]),
-            }
+            accumulate(&mut s, &mut mx, &mut finite, j, *v, mean);
         }
     }
     (s, mx, finite)
+}
+
+/// One value of channel `j` into the sums: the value itself (with its magnitude and
+/// finiteness) without `mean`, its squared deviation from `mean[j]` with it.
+#[inline]
+fn accumulate(
+    s: &mut [f64],
+    mx: &mut [f64],
+    finite: &mut bool,
+    j: usize,
+    v: f64,
+    mean: Option<&[f64]>,
+) {
+    match mean {
+        None => {
+            s[j] += v;
+            mx[j] = mx[j].max(v.abs());
+            *finite &= v.is_finite();
+        }
+        Some(mu) => s[j] += (v - mu[j]) * (v - mu[j]),
+    }
 }
 
 /// [`lane_sums`] for any strides, column by column.
@@ -141,14 +155,7 @@ fn strided_sums(p: MatRef<'_, f64>, mean: Option<&[f64]>) -> (Vec<f64>, Vec<f64>
     let (mut s, mut mx, mut finite) = (vec![0.0f64; c], vec![0.0f64; c], true);
     for j in 0..c {
         for v in p.col(j).iter() {
-            match mean {
-                None => {
-                    s[j] += v;
-                    mx[j] = mx[j].max(v.abs());
-                    finite &= v.is_finite();
-                }
-                Some(mu) => s[j] += (v - mu[j]) * (v - mu[j]),
-            }
+            accumulate(&mut s, &mut mx, &mut finite, j, *v, mean);
         }
     }
     (s, mx, finite)

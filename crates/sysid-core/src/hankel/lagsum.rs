@@ -119,6 +119,19 @@ fn drive(
     }
 }
 
+/// Every register-tile shape (rows x groups of 4 columns) the drivers use, handed to the
+/// dispatching macro `$go` of each kernel (one list for the AVX2 and the portable tiles).
+macro_rules! tile_shapes {
+    ($go:ident) => {
+        $go!(1, 1; 1, 2; 1, 3; 1, 4;
+            2, 1; 2, 2; 2, 3; 2, 4;
+            3, 1; 3, 2; 3, 3; 3, 4;
+            4, 1; 4, 2; 4, 3; 4, 4;
+            5, 1; 5, 2; 5, 3; 5, 4;
+            6, 1; 6, 2; 6, 3; 6, 4)
+    };
+}
+
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
     use std::arch::x86_64::*;
@@ -202,12 +215,7 @@ mod avx2 {
                 }
             };
         }
-        go!(1, 1; 1, 2; 1, 3; 1, 4;
-            2, 1; 2, 2; 2, 3; 2, 4;
-            3, 1; 3, 2; 3, 3; 3, 4;
-            4, 1; 4, 2; 4, 3; 4, 4;
-            5, 1; 5, 2; 5, 3; 5, 4;
-            6, 1; 6, 2; 6, 3; 6, 4)
+        tile_shapes!(go)
     }
 
     /// `out[i0 + r, c0 + 4 v + k] += sum_{t0 <= t < t1} x[t d + i0 + r] x[t d + c0 + 4 v + k]`
@@ -279,12 +287,7 @@ pub(super) mod portable {
                         }
                     };
                 }
-            go!(1, 1; 1, 2; 1, 3; 1, 4;
-                    2, 1; 2, 2; 2, 3; 2, 4;
-                    3, 1; 3, 2; 3, 3; 3, 4;
-                    4, 1; 4, 2; 4, 3; 4, 4;
-                    5, 1; 5, 2; 5, 3; 5, 4;
-                    6, 1; 6, 2; 6, 3; 6, 4)
+            tile_shapes!(go)
         });
     }
 
