@@ -1,6 +1,7 @@
 """SLICOT's published IB01AD/IB01BD/IB01CD results on the hair-dryer record.
 
-Reference: ../shared/reference/slicot_dryer.md (numbers typed from there, cited per constant).
+Reference: docs/reference/slicot_dryer.md (SLICOT's published IB01?D example results,
+BSD-3-Clause; numbers typed from there, cited per constant).
 Data: the bundled DaISy copy, ``sysid.datasets.path("dryer")`` (its SHA-256 is checked in
 tests/test_datasets.py).
 """
