@@ -209,3 +209,22 @@ def check_covariance(P: np.ndarray, name: str) -> np.ndarray:
             f"eigenvalue {low:.3g}"
         )
     return P
+
+
+def experiment_arrays(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The experiments of an IOData record as C-contiguous float64 ``(u, y)`` pairs (views when
+    they already are); a clear DataError for anything that is not an IOData record.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid._checks import experiment_arrays
+    >>> data = sysid.IOData(np.ones((5, 1)), np.ones(5))
+    >>> [(u.shape, y.shape) for u, y in experiment_arrays(data)]
+    [((5, 1), (5, 1))]
+    """
+    try:
+        exps = data.experiments
+    except AttributeError:
+        raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))") from None
+    return [(np.ascontiguousarray(u, float), np.ascontiguousarray(y, float)) for u, y in exps]

@@ -184,6 +184,16 @@ impl OdeModel for PyOde<'_> {
     }
 }
 
+/// The integration options shared by the fit and the Jacobian (search options left default).
+fn ode_options(dt: f64, integrator: Integrator, fd_step: f64, jacobian: OdeJacobian) -> OdeOptions {
+    let mut o = OdeOptions::default();
+    o.dt = dt;
+    o.integrator = integrator;
+    o.fd_step = fd_step;
+    o.jacobian = jacobian;
+    o
+}
+
 fn jacobian_kind(
     name: &str,
     fd: &Option<Py<PyAny>>,
@@ -350,12 +360,13 @@ pub fn greybox_ode<'py>(
     tol_gradient: f64,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let mut o = OdeOptions::default();
-    o.dt = dt;
-    o.integrator = integrator(integrator_name, substeps, rtol, atol)?;
+    let mut o = ode_options(
+        dt,
+        integrator(integrator_name, substeps, rtol, atol)?,
+        fd_step,
+        jacobian_kind(jacobian, &rhs_derivatives, &output_derivatives)?,
+    );
     o.reweight = reweight;
-    o.fd_step = fd_step;
-    o.jacobian = jacobian_kind(jacobian, &rhs_derivatives, &output_derivatives)?;
     o.optim = search_options(
         max_iter,
         tol_cost,
@@ -489,11 +500,12 @@ pub fn greybox_ode_jacobian<'py>(
     rhs_derivatives: Option<Py<PyAny>>,
     output_derivatives: Option<Py<PyAny>>,
 ) -> PyResult<JacobianOut<'py>> {
-    let mut o = OdeOptions::default();
-    o.dt = dt;
-    o.integrator = integrator(integrator_name, substeps, rtol, atol)?;
-    o.fd_step = fd_step;
-    o.jacobian = jacobian_kind(jacobian, &rhs_derivatives, &output_derivatives)?;
+    let o = ode_options(
+        dt,
+        integrator(integrator_name, substeps, rtol, atol)?,
+        fd_step,
+        jacobian_kind(jacobian, &rhs_derivatives, &output_derivatives)?,
+    );
     let st = OdeStructure {
         nx,
         p,

@@ -44,19 +44,11 @@ import numpy as np
 from scipy import optimize
 
 from .. import _sysid
-from .._checks import as_int_grid
+from .._checks import as_int_grid, experiment_arrays
 from ..errors import DataError, NumericalError
 
 KERNELS = ("tc", "ss", "dc", "ridge")
 _NHYP = {"tc": 2, "ss": 2, "dc": 3, "ridge": 1}
-
-
-def _exps(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
-    try:
-        exps = data.experiments
-    except AttributeError:
-        raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))") from None
-    return [(np.ascontiguousarray(u, float), np.ascontiguousarray(y, float)) for u, y in exps]
 
 
 # -- kernels --------------------------------------------------------------------------------
@@ -344,7 +336,7 @@ def summaries(data: Any, na: Any, nb: Any, nk: Any
               ) -> tuple[list[tuple[np.ndarray, int]], tuple[list[list[int]], ...]]:
     """Per output, the compressed regression ``(summary, n_rows)`` (one streaming pass in
     Rust) and the orders as ``(ny x ny, ny x nu, ny x nu)`` grids."""
-    exps = _exps(data)
+    exps = experiment_arrays(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     g = (as_int_grid(na, (ny, ny), "na"), as_int_grid(nb, (ny, nu), "nb"),
          as_int_grid(nk, (ny, nu), "nk"))

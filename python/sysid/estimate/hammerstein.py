@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import experiment_arrays
 from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError
 from ..models.hammerstein import HammersteinWienerModel, Nonlinearity, UserFunction
@@ -86,10 +87,7 @@ def nlhw(
     """
     from .polynomial import oe
 
-    try:
-        exps = [(np.asarray(u, float), np.asarray(y, float)) for u, y in data.experiments]
-    except AttributeError:
-        raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))") from None
+    exps = experiment_arrays(data)
     if exps[0][0].shape[1] != 1 or exps[0][1].shape[1] != 1:
         raise DataError("nlhw handles one input and one output; select channels with "
                         "data.select(...)")

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import experiment_arrays
 from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError
 from ..models.hammerstein import Nonlinearity, UserFunction
@@ -97,10 +98,7 @@ def nlhw_ss(
     from ..data.iodata import IOData
     from .subspace import n4sid
 
-    try:
-        exps = [(np.asarray(u, float), np.asarray(y, float)) for u, y in data.experiments]
-    except AttributeError:
-        raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))") from None
+    exps = experiment_arrays(data)
     m, p = exps[0][0].shape[1], exps[0][1].shape[1]
     if int(order) != order or order < 1:
         raise DataError(f"order must be a positive integer, got {order!r}")

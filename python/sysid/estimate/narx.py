@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import experiment_arrays
 from ..errors import DataError
 from ..models.customreg import CustomRegressor
 from ..models.narx import NARXModel, PolynomialBasis, RBFBasis
@@ -30,14 +31,6 @@ def _per(v: Any, n: int, name: str) -> list[int]:
     if a.shape != (n,) or np.any(a < 0) or not np.all(np.equal(np.mod(a, 1), 0)):
         raise DataError(f"{name} must be a non-negative integer or {n} of them, got {v!r}")
     return [int(x) for x in a]
-
-
-def _exps(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
-    try:
-        exps = data.experiments
-    except AttributeError:
-        raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))") from None
-    return [(np.ascontiguousarray(u, float), np.ascontiguousarray(y, float)) for u, y in exps]
 
 
 def _lag_matrix(u: np.ndarray, y: np.ndarray, na: list[int], nb: list[int], nk: list[int]
@@ -172,7 +165,7 @@ def nlarx(
     >>> print(m.terms_table())
     y0 = -0.605 y0(t-1) + 0.588 u0(t-1) - 0.24 u0(t-2) - 0.163 y0(t-2)^2
     """
-    exps = _exps(data)
+    exps = experiment_arrays(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     na_, nb_, nk_ = _per(na, ny, "na"), _per(nb, nu, "nb"), _per(nk, nu, "nk")
     if criterion not in CRITERIA:
@@ -223,7 +216,7 @@ def nlarx(
                          noise_variance=var, custom=custom, **names)
 
     if criterion == "validation":
-        vexps = _exps(validation)
+        vexps = experiment_arrays(validation)
         for i, s in enumerate(sel):
             best = (np.inf, keep[i])
             for k in range(1, len(s["terms"]) + 1):

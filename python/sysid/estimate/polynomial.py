@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, as_int_grid
+from .._checks import as_int, as_int_grid, experiment_arrays
 from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError
 from ..models.polynomial import PolynomialModel
@@ -86,14 +86,6 @@ def _col(v: Any, ny: int, name: str) -> list[int]:
     return [r[0] for r in as_int_grid(a.reshape(-1, 1) if a.ndim else a, (ny, 1), name)]
 
 
-def _exps(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
-    try:
-        exps = data.experiments
-    except AttributeError:
-        raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))") from None
-    return [(np.ascontiguousarray(u, float), np.ascontiguousarray(y, float)) for u, y in exps]
-
-
 def arx(
     data: Any,
     na: Any,
@@ -141,7 +133,7 @@ def arx(
     >>> np.round(m.a[0][0], 8).tolist(), np.round(m.b[0][0], 8).tolist()
     ([-0.5], [1.0])
     """
-    exps = _exps(data)
+    exps = experiment_arrays(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     na_g, nb_g, nk_g = _grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"), _grid(nk, ny, nu, "nk")
     if isinstance(regularization, str) or hasattr(regularization, "prior"):
@@ -272,7 +264,7 @@ def _pem(
     progress: bool | None | Callable[..., Any],
     init: PolynomialModel | None = None,
 ) -> PolynomialModel:
-    exps = _exps(data)
+    exps = experiment_arrays(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     nb_g, nf_g, nk_g = _grid(nb, ny, nu, "nb"), _grid(nf, ny, nu, "nf"), _grid(nk, ny, nu, "nk")
     na_v, nc_v, nd_v = _col(na, ny, "na"), _col(nc, ny, "nc"), _col(nd, ny, "nd")
@@ -407,7 +399,7 @@ def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
     >>> sysid.selstruc(table, "bic", 400)
     (1, 1, 1)
     """
-    exps = _exps(data)
+    exps = experiment_arrays(data)
     rng = [list(map(int, np.atleast_1d(v))) for v in (na, nb, nk)]
     return np.asarray(_sysid.arx_struc(exps, *rng))
 
@@ -441,14 +433,14 @@ def ar(data: Any, na: int, *, max_iter: int = 100) -> PolynomialModel:
     >>> bool(abs(m.a[0][0][0] + 0.8) < 0.03)
     True
     """
-    if _exps(data)[0][0].shape[1] != 0:
+    if experiment_arrays(data)[0][0].shape[1] != 0:
         raise DataError("ar/arma model time series: pass data without inputs (IOData(None, y))")
     return _pem(data, na, 0, 0, 0, 0, 0, "ar", max_iter, None)
 
 
 def arma(data: Any, na: int, nc: int, *, max_iter: int = 100) -> PolynomialModel:
     """ARMA time-series model ``A(q) y = C(q) e`` (data without inputs)."""
-    if _exps(data)[0][0].shape[1] != 0:
+    if experiment_arrays(data)[0][0].shape[1] != 0:
         raise DataError("ar/arma model time series: pass data without inputs (IOData(None, y))")
     return _pem(data, na, 0, nc, 0, 0, 0, "arma", max_iter, None)
 
@@ -515,7 +507,7 @@ def iv4(data: Any, na: Any, nb: Any, nk: Any = 1, *, reference: Any = None) -> P
     >>> bool(abs(m.a[0][0][0] + 0.5) < 0.05)
     True
     """
-    exps = _exps(data)
+    exps = experiment_arrays(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     if nu == 0:
         raise DataError("iv4 needs an input signal (use ar/arma for time series)")

@@ -53,20 +53,7 @@ pub fn marginal_likelihood(
     sigma2: f64,
     gradient: bool,
 ) -> Result<(f64, Vec<f64>, f64)> {
-    let p = prior.nrows();
-    if summary.nrows() != p + 1 || summary.ncols() != p + 1 || prior.ncols() != p {
-        return Err(SysidError::ShapeMismatch {
-            what: "summary, prior".into(),
-            expected: format!("({0}, {0}) and ({1}, {1})", p + 1, p),
-            got: format!(
-                "({}, {}) and ({}, {})",
-                summary.nrows(),
-                summary.ncols(),
-                prior.nrows(),
-                prior.ncols()
-            ),
-        });
-    }
+    let p = check_summary_prior(summary, prior)?;
     if let Some(d) = dprior.iter().find(|d| d.nrows() != p || d.ncols() != p) {
         return Err(SysidError::ShapeMismatch {
             what: "prior derivative".into(),
@@ -164,20 +151,7 @@ pub fn regularized_solve(
     prior: MatRef<'_, f64>,
     lam: f64,
 ) -> Result<(Vec<f64>, Mat<f64>, f64)> {
-    let p = prior.nrows();
-    if summary.nrows() != p + 1 || summary.ncols() != p + 1 || prior.ncols() != p {
-        return Err(SysidError::ShapeMismatch {
-            what: "summary, prior".into(),
-            expected: format!("({0}, {0}) and ({1}, {1})", p + 1, p),
-            got: format!(
-                "({}, {}) and ({}, {})",
-                summary.nrows(),
-                summary.ncols(),
-                prior.nrows(),
-                prior.ncols()
-            ),
-        });
-    }
+    let p = check_summary_prior(summary, prior)?;
     if !(lam >= 0.0 && lam.is_finite()) {
         return Err(SysidError::invalid(
             "lam",
@@ -218,4 +192,23 @@ pub fn regularized_solve(
             .map(|i| (r[(i, 0)] - fitted[(i, 0)]).powi(2))
             .sum::<f64>();
     Ok((theta, cov, rss))
+}
+
+/// The number of parameters `p` when `summary` is `(p + 1) x (p + 1)` and `prior` `p x p`.
+fn check_summary_prior(summary: MatRef<'_, f64>, prior: MatRef<'_, f64>) -> Result<usize> {
+    let p = prior.nrows();
+    if summary.nrows() != p + 1 || summary.ncols() != p + 1 || prior.ncols() != p {
+        return Err(SysidError::ShapeMismatch {
+            what: "summary, prior".into(),
+            expected: format!("({0}, {0}) and ({1}, {1})", p + 1, p),
+            got: format!(
+                "({}, {}) and ({}, {})",
+                summary.nrows(),
+                summary.ncols(),
+                prior.nrows(),
+                prior.ncols()
+            ),
+        });
+    }
+    Ok(p)
 }
