@@ -47,15 +47,10 @@ pub fn qr_r_in_place(a: MatMut<'_, f64>) {
 /// (deterministic for any thread count, as [`qr_r_in_place`]); `None` when a pivot is not
 /// positive.
 pub fn cholesky_lower_seq(a: MatRef<'_, f64>) -> Option<Mat<f64>> {
-    cholesky_lower_seq_owned(a.to_owned())
-}
-
-/// [`cholesky_lower_seq`] in the storage of `a` (taken by value: no copy).
-pub fn cholesky_lower_seq_owned(a: Mat<f64>) -> Option<Mat<f64>> {
     use faer::dyn_stack::{MemBuffer, MemStack};
     use faer::linalg::cholesky::llt::factor;
     let n = a.nrows();
-    let mut l = a;
+    let mut l = a.to_owned();
     let mut buf = MemBuffer::new(factor::cholesky_in_place_scratch::<f64>(
         n,
         Par::Seq,
@@ -190,22 +185,10 @@ pub fn spectral_radius(a: MatRef<'_, f64>) -> Result<f64> {
 }
 
 /// Moore-Penrose pseudo-inverse through the thin SVD; singular values below
-/// `rtol * s_max` are treated as zero.
+/// `rtol * s_max` are treated as zero. On the calling thread: the matrices here are small
+/// (a few hundred rows at most), where thread wake-ups cost more than the work (see
+/// [`mul_seq`]), and the result does not depend on the thread count.
 pub fn pinv(a: MatRef<'_, f64>, rtol: f64) -> Result<Mat<f64>> {
-    let (m, n) = (a.nrows(), a.ncols());
-    if m == 0 || n == 0 {
-        return Ok(Mat::zeros(n, m));
-    }
-    let svd = a
-        .thin_svd()
-        .map_err(|e| SysidError::numerical("pseudo-inverse (SVD)", format!("{e:?}")))?;
-    let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
-    Ok(pinv_from_svd(&s, svd.U(), svd.V(), rtol, false))
-}
-
-/// [`pinv`] on the calling thread, for the small matrices of the subspace fit (see
-/// [`mul_seq`]).
-pub fn pinv_seq(a: MatRef<'_, f64>, rtol: f64) -> Result<Mat<f64>> {
     let (m, n) = (a.nrows(), a.ncols());
     if m == 0 || n == 0 {
         return Ok(Mat::zeros(n, m));
@@ -215,16 +198,6 @@ pub fn pinv_seq(a: MatRef<'_, f64>, rtol: f64) -> Result<Mat<f64>> {
         u.unwrap_or_else(|| Mat::zeros(m, 0)),
         v.unwrap_or_else(|| Mat::zeros(n, 0)),
     );
-    Ok(pinv_from_svd(&s, u.as_ref(), v.as_ref(), rtol, true))
-}
-
-fn pinv_from_svd(
-    s: &[f64],
-    u: MatRef<'_, f64>,
-    v: MatRef<'_, f64>,
-    rtol: f64,
-    seq: bool,
-) -> Mat<f64> {
     let cut = rtol * s[0];
     let r = s.iter().filter(|&&x| x > cut && x > 0.0).count();
     let mut vs = v.subcols(0, r).to_owned();
@@ -234,12 +207,7 @@ fn pinv_from_svd(
             vs[(i, j)] *= inv;
         }
     }
-    let ut = u.subcols(0, r).transpose();
-    if seq {
-        mul_seq(vs.as_ref(), ut)
-    } else {
-        &vs * ut
-    }
+    Ok(mul_seq(vs.as_ref(), u.subcols(0, r).transpose()))
 }
 
 /// Solves `X A = B` for X in the least-squares sense (minimum norm), i.e. `X = B A^+`.
@@ -281,20 +249,11 @@ pub fn lstsq_seq(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
 /// Lower-triangular L with `L L^T = M M^T` (the L of the LQ factorisation of M), with a
 /// non-negative diagonal. M may have more columns than rows; L is `M.nrows() x M.nrows()`.
 pub fn lq_lower(m: MatRef<'_, f64>) -> Mat<f64> {
-    if m.ncols() == 0 || m.nrows() == 0 {
-        return Mat::zeros(m.nrows(), m.nrows());
-    }
-    lq_lower_of_transpose(m.transpose().to_owned())
-}
-
-/// [`lq_lower`] of `M`, given `M^T` by value (its storage becomes the QR workspace: no
-/// transposed copy).
-pub fn lq_lower_of_transpose(mt: Mat<f64>) -> Mat<f64> {
-    let rows = mt.ncols();
-    if mt.nrows() == 0 || rows == 0 {
+    let rows = m.nrows();
+    if m.ncols() == 0 || rows == 0 {
         return Mat::zeros(rows, rows);
     }
-    let mut r = mt;
+    let mut r = m.transpose().to_owned();
     qr_r_in_place(r.as_mut()); // upper trapezoidal in its first min(cols, rows) rows
     let mut l = Mat::<f64>::zeros(rows, rows);
     for i in 0..r.nrows().min(rows) {

@@ -478,9 +478,10 @@ impl CorrelationSums {
                 }
             }
         };
+        let mut acc = vec![0.0; dd];
         for tau in 0..w {
             let na = w - tau;
-            let mut acc = vec![0.0; dd];
+            acc.fill(0.0);
             for a in (0..na).rev() {
                 if a + tau + 2 <= w {
                     let (ra, rb) = (

@@ -18,7 +18,7 @@ use super::weighting::Weighted;
 use super::{FitOptions, Identified};
 use crate::error::{Result, SysidError};
 use crate::hankel::{Block, HankelFactor};
-use crate::linalg::{mul_seq, pinv_seq, spectral_radius, symmetrize};
+use crate::linalg::{mul_seq, pinv, spectral_radius, symmetrize};
 use crate::model::StateSpace;
 use crate::riccati::kalman_gain;
 use faer::{Mat, MatRef};
@@ -48,11 +48,11 @@ pub fn shift_invariance(
     let c = gamma.subrows(0, l).to_owned();
     let up = gamma.subrows(0, fl - l);
     let down = gamma.subrows(l, fl - l);
-    let a = mul_seq(pinv_seq(up, PINV_TOL)?.as_ref(), down);
+    let a = mul_seq(pinv(up, PINV_TOL)?.as_ref(), down);
     if stable && spectral_radius(a.as_ref())? >= 1.0 {
         let mut padded = Mat::<f64>::zeros(fl, n);
         padded.as_mut().subrows_mut(0, fl - l).copy_from(down);
-        let a_st = mul_seq(pinv_seq(gamma, PINV_TOL)?.as_ref(), padded.as_ref());
+        let a_st = mul_seq(pinv(gamma, PINV_TOL)?.as_ref(), padded.as_ref());
         return Ok((a_st, c, true));
     }
     Ok((a, c, false))
@@ -197,8 +197,8 @@ pub fn identify(
     let (a, c, stabilized) = shift_invariance(gamma.as_ref(), l, opts.stable)?;
 
     let o = observability(a.as_ref(), c.as_ref(), f);
-    let o_pinv = pinv_seq(o.as_ref(), PINV_TOL)?;
-    let o1_pinv = pinv_seq(o.as_ref().subrows(0, (f - 1) * l), PINV_TOL)?;
+    let o_pinv = pinv(o.as_ref(), PINV_TOL)?;
+    let o1_pinv = pinv(o.as_ref().subrows(0, (f - 1) * l), PINV_TOL)?;
 
     // projections as truncated rows of L
     let (yf_s, _) = lay.block(Block::YFuture);

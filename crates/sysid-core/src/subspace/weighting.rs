@@ -6,7 +6,7 @@
 use super::Method;
 use crate::error::{Result, SysidError};
 use crate::hankel::{Block, HankelFactor};
-use crate::linalg::{lq_lower, mul_seq, pinv_seq, svd_seq};
+use crate::linalg::{lq_lower, mul_seq, pinv, svd_seq};
 use faer::{Mat, MatRef};
 
 /// Singular values and the basis that yields the extended observability matrix.
@@ -76,7 +76,7 @@ pub fn weighted_svd(factor: &HankelFactor, method: Method) -> Result<Weighted> {
             let l32 = l.submatrix(yf.0, wp_s, yf.1, wp_n);
             let l22 = l.submatrix(wp_s, wp_s, wp_n, wp_n);
             let l2 = l.submatrix(wp_s, 0, wp_n, uf.1 + wp_n);
-            mul_seq(mul_seq(l32, pinv_seq(l22, 1e-12)?.as_ref()).as_ref(), l2)
+            mul_seq(mul_seq(l32, pinv(l22, 1e-12)?.as_ref()).as_ref(), l2)
         }
         Method::Cva => {
             let y_perp = l.submatrix(yf.0, wp_s, yf.1, wp_n + yf.1);
@@ -97,7 +97,7 @@ pub fn weighted_svd(factor: &HankelFactor, method: Method) -> Result<Weighted> {
             } else {
                 // noise-free or redundant outputs: Y_f Π Y_f^T is singular; whiten on its
                 // range only (truncated pseudo-inverse), where L32 lives too
-                mul_seq(pinv_seq(t.as_ref(), 1e-10)?.as_ref(), l32)
+                mul_seq(pinv(t.as_ref(), 1e-10)?.as_ref(), l32)
             };
             transform = Some(t);
             w
