@@ -236,12 +236,7 @@ def test_no_import_cycle_between_modules():
 
 
 # Type-only back-edges tolerated for now; delete an entry as soon as its edge is gone; add none.
-# (IOData's mix-ins, being folded into plain helpers on branch `layout`.)
-TOLERATED_TYPE_EDGES: set[tuple[str, str]] = {
-    ("sysid.data.formats", "sysid.data.iodata"),
-    ("sysid.data.raw", "sysid.data.iodata"),
-    ("sysid.data.segments", "sysid.data.iodata"),
-}
+TOLERATED_TYPE_EDGES: set[tuple[str, str]] = set()
 
 
 def test_no_import_cycle_with_type_only_imports():

@@ -15,7 +15,8 @@ import numpy as np
 from scipy import signal
 
 from ..errors import DataError, InsufficientDataError
-from .iodata import IOData, _Exp
+from .iodata import IOData
+from .segments import _Exp
 
 __all__ = ["butter_sos", "filtfilt", "lowpass", "highpass", "bandpass", "resample", "decimate"]
 

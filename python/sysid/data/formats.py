@@ -1,8 +1,10 @@
 """Readers and writers: pandas DataFrames, CSV, NumPy ``.npz`` and MATLAB ``.mat`` files.
 
 They are methods of :class:`~sysid.IOData` (``from_pandas``/``to_pandas``,
-``from_csv``/``to_csv``, ``from_npz``/``to_npz``, ``from_mat``/``to_mat``), defined here in a
-base class of it. Every writer keeps names, units, sample time, experiments and start times,
+``from_csv``/``to_csv``, ``from_npz``/``to_npz``, ``from_mat``/``to_mat``): plain functions
+of the record (or of its class, for readers), bound as methods in :mod:`sysid.data.iodata`;
+this module never imports that one. Every writer keeps names, units, sample time, experiments
+and start times,
 and the matching reader gives the record back unchanged.
 """
 
@@ -12,14 +14,11 @@ import re
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from ..errors import DataError
-
-if TYPE_CHECKING:
-    from .iodata import IOData, _Exp
 
 __all__: list[str] = []
 
@@ -65,398 +64,386 @@ def _open_text(p: Path) -> Any:
     return open(p, encoding="utf-8")
 
 
-class _FileFormats:
-    """Readers and writers of :class:`~sysid.IOData` (a base class of it)."""
+def to_pandas(data: Any) -> Any:
+    """A DataFrame: one column per channel plus ``experiment``, indexed by ``time``.
 
-    _exps: list[_Exp]
-    dt: float
-    input_names: list[str]
-    output_names: list[str]
-    input_units: list[str]
-    output_units: list[str]
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> df = sysid.IOData(u=np.ones(3), y=np.zeros(3), dt=0.5).to_pandas()
+    >>> list(df.columns)
+    ['experiment', 'u0', 'y0']
+    """
+    pd = _pandas()
+    frames = []
+    for k, (e, t) in enumerate(zip(data._exps, data.times)):
+        cols: dict[str, Any] = {"experiment": np.full(len(t), k)}
+        for j, n in enumerate(data.input_names):
+            cols[n] = e.u[:, j]
+        for j, n in enumerate(data.output_names):
+            cols[n] = e.y[:, j]
+        frames.append(pd.DataFrame(cols, index=pd.Index(t, name="time")))
+    df = pd.concat(frames)
+    df.attrs.update(
+        {
+            "dt": data.dt,
+            "inputs": list(data.input_names),
+            "outputs": list(data.output_names),
+            "units": dict(zip(data.input_names + data.output_names,
+                              data.input_units + data.output_units)),
+        }
+    )
+    return df
 
-    # ---------------------------------------------------------------- pandas
 
-    def to_pandas(self) -> Any:
-        """A DataFrame: one column per channel plus ``experiment``, indexed by ``time``.
+def from_pandas(
+    cls: Any,
+    df: Any,
+    inputs: Sequence[str] | None = None,
+    outputs: Sequence[str] | None = None,
+    *,
+    time: str | None = None,
+    dt: float | None = None,
+    experiment: str | None = None,
+    units: dict[str, str] | None = None,
+    nan: str = "error",
+    max_gap: int = 5,
+) -> Any:
+    """A record from a DataFrame's columns.
 
-        Examples
-        --------
-        >>> import numpy as np, sysid
-        >>> df = sysid.IOData(u=np.ones(3), y=np.zeros(3), dt=0.5).to_pandas()
-        >>> list(df.columns)
-        ['experiment', 'u0', 'y0']
-        """
-        pd = _pandas()
-        frames = []
-        for k, (e, t) in enumerate(zip(self._exps, self.times)):
-            cols: dict[str, Any] = {"experiment": np.full(len(t), k)}
-            for j, n in enumerate(self.input_names):
-                cols[n] = e.u[:, j]
-            for j, n in enumerate(self.output_names):
-                cols[n] = e.y[:, j]
-            frames.append(pd.DataFrame(cols, index=pd.Index(t, name="time")))
-        df = pd.concat(frames)
-        df.attrs.update(
-            {
-                "dt": self.dt,
-                "inputs": list(self.input_names),
-                "outputs": list(self.output_names),
-                "units": dict(zip(self.input_names + self.output_names,
-                                  self.input_units + self.output_units)),
-            }
+    Parameters
+    ----------
+    df : pandas.DataFrame
+    inputs, outputs : list of str
+        Column names. Default: those stored by :meth:`to_pandas` in ``df.attrs``.
+    time : str, optional
+        Column holding the time in seconds; default the index when it is numeric and
+        ``dt`` is not given (a ``DatetimeIndex`` is converted to seconds).
+    dt : float, optional
+        Sample time (when there is no time information).
+    experiment : str, optional
+        Column numbering the experiments (default ``"experiment"`` if present).
+    units : dict, optional
+        Unit per column name.
+    nan, max_gap :
+        Handling of missing values (single-experiment frames), as in :meth:`from_raw`.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> d = sysid.IOData(u=np.ones(3), y=np.arange(3.0), dt=0.5)
+    >>> sysid.IOData.from_pandas(d.to_pandas()) == d
+    True
+    """
+    pd = _pandas()
+    if not isinstance(df, pd.DataFrame):
+        raise DataError(f"from_pandas takes a pandas DataFrame, got {type(df).__name__}")
+    inputs = list(df.attrs.get("inputs", [])) if inputs is None else list(inputs)
+    if outputs is None:
+        if "outputs" not in df.attrs:
+            raise DataError("name the output columns: IOData.from_pandas(df, inputs, outputs)")
+        outputs = list(df.attrs["outputs"])
+    outputs = list(outputs)
+    missing = [c for c in inputs + outputs if c not in df.columns]
+    if missing:
+        raise DataError(
+            f"column(s) {missing} not in the DataFrame (columns: {list(df.columns)})"
         )
-        return df
-
-    @classmethod
-    def from_pandas(
-        cls,
-        df: Any,
-        inputs: Sequence[str] | None = None,
-        outputs: Sequence[str] | None = None,
-        *,
-        time: str | None = None,
-        dt: float | None = None,
-        experiment: str | None = None,
-        units: dict[str, str] | None = None,
-        nan: str = "error",
-        max_gap: int = 5,
-    ) -> IOData:
-        """A record from a DataFrame's columns.
-
-        Parameters
-        ----------
-        df : pandas.DataFrame
-        inputs, outputs : list of str
-            Column names. Default: those stored by :meth:`to_pandas` in ``df.attrs``.
-        time : str, optional
-            Column holding the time in seconds; default the index when it is numeric and
-            ``dt`` is not given (a ``DatetimeIndex`` is converted to seconds).
-        dt : float, optional
-            Sample time (when there is no time information).
-        experiment : str, optional
-            Column numbering the experiments (default ``"experiment"`` if present).
-        units : dict, optional
-            Unit per column name.
-        nan, max_gap :
-            Handling of missing values (single-experiment frames), as in :meth:`from_raw`.
-
-        Examples
-        --------
-        >>> import numpy as np, sysid
-        >>> d = sysid.IOData(u=np.ones(3), y=np.arange(3.0), dt=0.5)
-        >>> sysid.IOData.from_pandas(d.to_pandas()) == d
-        True
-        """
-        pd = _pandas()
-        if not isinstance(df, pd.DataFrame):
-            raise DataError(f"from_pandas takes a pandas DataFrame, got {type(df).__name__}")
-        inputs = list(df.attrs.get("inputs", [])) if inputs is None else list(inputs)
-        if outputs is None:
-            if "outputs" not in df.attrs:
-                raise DataError("name the output columns: IOData.from_pandas(df, inputs, outputs)")
-            outputs = list(df.attrs["outputs"])
-        outputs = list(outputs)
-        missing = [c for c in inputs + outputs if c not in df.columns]
-        if missing:
-            raise DataError(
-                f"column(s) {missing} not in the DataFrame (columns: {list(df.columns)})"
+    units = dict(df.attrs.get("units", {})) if units is None else dict(units)
+    if experiment is None and "experiment" in df.columns:
+        experiment = "experiment"
+    groups = [df] if experiment is None else [g for _, g in df.groupby(experiment, sort=True)]
+    us, ys, ts = [], [], []
+    for g in groups:
+        us.append(g[inputs].to_numpy(dtype=float) if inputs else None)
+        ys.append(g[outputs].to_numpy(dtype=float))
+        if time is not None:
+            ts.append(g[time].to_numpy(dtype=float))
+        elif dt is None and isinstance(g.index, pd.DatetimeIndex):
+            ts.append((g.index - groups[0].index[0]).total_seconds().to_numpy())
+        elif dt is None and g.index.dtype.kind in "if" and not _default_index(g.index):
+            ts.append(g.index.to_numpy(dtype=float))
+        elif dt is None and _time_column(g) is not None:
+            ts.append(g[_time_column(g)].to_numpy(dtype=float))
+    if dt is None and not ts:
+        dt = df.attrs.get("dt")
+        if dt is None:
+            warnings.warn(
+                "the DataFrame carries no sample time (no dt=, no time column, a default "
+                "0, 1, 2, ... index): assuming dt = 1 s; pass dt=... or time='column'",
+                UserWarning, stacklevel=2,
             )
-        units = dict(df.attrs.get("units", {})) if units is None else dict(units)
-        if experiment is None and "experiment" in df.columns:
-            experiment = "experiment"
-        groups = [df] if experiment is None else [g for _, g in df.groupby(experiment, sort=True)]
-        us, ys, ts = [], [], []
-        for g in groups:
-            us.append(g[inputs].to_numpy(dtype=float) if inputs else None)
-            ys.append(g[outputs].to_numpy(dtype=float))
-            if time is not None:
-                ts.append(g[time].to_numpy(dtype=float))
-            elif dt is None and isinstance(g.index, pd.DatetimeIndex):
-                ts.append((g.index - groups[0].index[0]).total_seconds().to_numpy())
-            elif dt is None and g.index.dtype.kind in "if" and not _default_index(g.index):
-                ts.append(g.index.to_numpy(dtype=float))
-            elif dt is None and _time_column(g) is not None:
-                ts.append(g[_time_column(g)].to_numpy(dtype=float))
-        if dt is None and not ts:
-            dt = df.attrs.get("dt")
-            if dt is None:
-                warnings.warn(
-                    "the DataFrame carries no sample time (no dt=, no time column, a default "
-                    "0, 1, 2, ... index): assuming dt = 1 s; pass dt=... or time='column'",
-                    UserWarning, stacklevel=2,
+    kw: dict[str, Any] = {
+        "input_names": inputs,
+        "output_names": outputs,
+        "input_units": [units.get(c, "") for c in inputs],
+        "output_units": [units.get(c, "") for c in outputs],
+    }
+    if nan != "error":
+        if len(groups) != 1:
+            raise DataError("nan= repairs single-experiment frames; split them first")
+        return cls.from_raw(us[0], ys[0], dt, time=ts[0] if ts else None, nan=nan,
+                            max_gap=max_gap, **kw)
+    return cls(
+        us if inputs else None,
+        ys,
+        dt,
+        time=ts if ts else None,
+        **kw,
+    )
+
+
+def to_csv(data: Any, path: str | Path) -> None:
+    """Write a CSV file: header ``time,experiment,<inputs>,<outputs>``, one row a sample.
+
+    Units are written into the header as ``name [unit]``; :meth:`from_csv` reads them back.
+    A name ending in ``.gz`` writes a gzip-compressed file.
+    """
+    head = ["time", "experiment"] + [
+        f"{n} [{u}]" if u else n
+        for n, u in zip(data.input_names + data.output_names,
+                        data.input_units + data.output_units)
+    ]
+    rows = [
+        np.column_stack([t, np.full(len(t), k), e.u, e.y])
+        for k, (e, t) in enumerate(zip(data._exps, data.times))
+    ]
+    np.savetxt(
+        path, np.vstack(rows), delimiter=",", header=",".join(head), comments="",
+        fmt="%.17g",
+    )
+
+
+def from_csv(
+    cls: Any,
+    path: str | Path,
+    inputs: Sequence[str | int] | None = None,
+    outputs: Sequence[str | int] | None = None,
+    *,
+    time: str | int | None = None,
+    dt: float | None = None,
+    experiment: str | int | None = None,
+    delimiter: str | None = None,
+    nan: str = "error",
+    max_gap: int = 5,
+) -> Any:
+    """Read a CSV file with a header row (the format of :meth:`to_csv`, or any other).
+
+    Columns are chosen by header name or 0-based index; ``name [unit]`` headers give
+    units. Without ``inputs``/``outputs``, a file written by :meth:`to_csv` is read back
+    whole. Empty fields become NaN and are handled as ``nan`` says (see
+    :meth:`from_raw`; only for single-experiment files). Trailing delimiters are ignored.
+    The delimiter is guessed from the header (comma, semicolon, tab, else white space,
+    as in ``.dat`` files) unless given. Files ending in ``.gz``, ``.bz2`` or ``.xz`` are
+    decompressed while reading.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid, tempfile, os
+    >>> d = sysid.IOData(u=np.arange(4.0), y=np.ones(4), dt=0.5, output_units=["m"])
+    >>> f = os.path.join(tempfile.mkdtemp(), "rec.csv.gz")
+    >>> d.to_csv(f)
+    >>> back = sysid.IOData.from_csv(f, inputs=["u0"], outputs=["y0"])
+    >>> back == d, back.output_units
+    (True, ['m'])
+    """
+    p = Path(path)
+    if not p.exists():
+        raise DataError(f"no such file: {p}")
+    try:
+        with _open_text(p) as fh:
+            header = fh.readline().strip()
+    except UnicodeDecodeError:
+        raise DataError(f"{p.name} is not a text file (binary content); give a CSV or "
+                        "whitespace-separated text file") from None
+    if delimiter is None:
+        delimiter = next((d for d in (",", ";", "\t") if d in header), None)
+    raw_names = [h.strip().strip('"') for h in header.split(delimiter)]
+    while raw_names and raw_names[-1] == "":
+        raw_names.pop()
+    names, unit_of = [], {}
+    for h in raw_names:
+        m = re.fullmatch(r"(.*?)\s*\[(.*)\]", h)
+        n = m.group(1) if m else h
+        names.append(n)
+        unit_of[n] = m.group(2) if m else ""
+    data = np.genfromtxt(p, delimiter=delimiter, skip_header=1, dtype=float)
+    data = np.atleast_2d(data)[:, : len(names)]
+
+    def col(c: str | int) -> int:
+        if isinstance(c, (int, np.integer)):
+            if not 0 <= c < len(names):
+                hint = "" if len(names) > 1 else (
+                    f"; the header was read as one column with delimiter={delimiter!r}: "
+                    "pass delimiter=... (e.g. ' ' or '\\t')"
                 )
-        kw: dict[str, Any] = {
-            "input_names": inputs,
-            "output_names": outputs,
-            "input_units": [units.get(c, "") for c in inputs],
-            "output_units": [units.get(c, "") for c in outputs],
-        }
-        if nan != "error":
-            if len(groups) != 1:
-                raise DataError("nan= repairs single-experiment frames; split them first")
-            return cls.from_raw(us[0], ys[0], dt, time=ts[0] if ts else None, nan=nan,
-                                max_gap=max_gap, **kw)
+                raise DataError(
+                    f"column {c} out of range: the file has {len(names)} columns{hint}"
+                )
+            return int(c)
+        if c not in names:
+            raise DataError(f"no column {c!r} in {p.name}; its columns are {names}")
+        return names.index(c)
+
+    if inputs is None and outputs is None and names[:2] == ["time", "experiment"]:
+        # our own format: which are inputs is not stored, so everything after is outputs
+        raise DataError(
+            f"{p.name}: say which columns are inputs and outputs, e.g. "
+            f"IOData.from_csv(path, inputs=[...], outputs=[...]); columns: {names[2:]}"
+        )
+    if outputs is None:
+        raise DataError(f"name the output columns of {p.name}; its columns are {names}")
+    iu = [col(c) for c in (inputs or [])]
+    iy = [col(c) for c in outputs]
+    if time is None and "time" in names and dt is None:
+        time = "time"
+    if experiment is None and "experiment" in names:
+        experiment = "experiment"
+    tcol = None if time is None else col(time)
+    ecol = None if experiment is None else col(experiment)
+    kw: dict[str, Any] = {
+        "input_names": [names[i] for i in iu],
+        "output_names": [names[i] for i in iy],
+        "input_units": [unit_of[names[i]] for i in iu],
+        "output_units": [unit_of[names[i]] for i in iy],
+    }
+    if ecol is not None:
+        ks = data[:, ecol]
+        parts = [data[ks == k] for k in np.unique(ks)]
         return cls(
-            us if inputs else None,
-            ys,
+            [q[:, iu] for q in parts] if iu else None,
+            [q[:, iy] for q in parts],
             dt,
-            time=ts if ts else None,
+            time=None if tcol is None else [q[:, tcol] for q in parts],
             **kw,
         )
+    return cls.from_raw(
+        data[:, iu] if iu else None,
+        data[:, iy],
+        dt,
+        time=None if tcol is None else data[:, tcol],
+        nan=nan,
+        max_gap=max_gap,
+        **kw,
+    )
 
-    # ---------------------------------------------------------------- CSV
 
-    def to_csv(self, path: str | Path) -> None:
-        """Write a CSV file: header ``time,experiment,<inputs>,<outputs>``, one row a sample.
+def _arrays(data: Any) -> dict[str, Any]:
+    out: dict[str, Any] = {
+        "dt": data.dt,
+        "t0": np.array([e.t0 for e in data._exps]),
+        "input_names": np.array(data.input_names, dtype=str),
+        "output_names": np.array(data.output_names, dtype=str),
+        "input_units": np.array(data.input_units, dtype=str),
+        "output_units": np.array(data.output_units, dtype=str),
+        "n_experiments": data.n_experiments,
+    }
+    for k, e in enumerate(data._exps):
+        out[f"u_{k}"] = e.u
+        out[f"y_{k}"] = e.y
+    return out
 
-        Units are written into the header as ``name [unit]``; :meth:`from_csv` reads them back.
-        A name ending in ``.gz`` writes a gzip-compressed file.
-        """
-        head = ["time", "experiment"] + [
-            f"{n} [{u}]" if u else n
-            for n, u in zip(self.input_names + self.output_names,
-                            self.input_units + self.output_units)
-        ]
-        rows = [
-            np.column_stack([t, np.full(len(t), k), e.u, e.y])
-            for k, (e, t) in enumerate(zip(self._exps, self.times))
-        ]
-        np.savetxt(
-            path, np.vstack(rows), delimiter=",", header=",".join(head), comments="",
-            fmt="%.17g",
+
+def _from_arrays(cls: Any, get: Any, what: str) -> Any:
+    try:
+        n = int(np.asarray(get("n_experiments")).ravel()[0])
+        dt = float(np.asarray(get("dt")).ravel()[0])
+        t0 = np.asarray(get("t0"), dtype=float).ravel()
+
+        def strs(key: str) -> list[str]:
+            out = []
+            for s in np.asarray(get(key), dtype=object).ravel():
+                while isinstance(s, np.ndarray):  # MATLAB cells arrive nested
+                    s = s.ravel()[0] if s.size else ""
+                out.append(str(s).strip())
+            return out
+
+        us = [np.asarray(get(f"u_{k}"), dtype=float) for k in range(n)]
+        ys = [np.asarray(get(f"y_{k}"), dtype=float) for k in range(n)]
+    except KeyError as e:
+        raise DataError(f"{what} was not written by IOData (missing {e}); "
+                        "read it with numpy or scipy.io and build IOData yourself") from None
+    in_names = strs("input_names") if us[0].size and us[0].shape[-1] else []
+    us = [u.reshape(len(y), len(in_names)) for u, y in zip(us, ys)]
+    out_names = strs("output_names")
+    ys = [y.reshape(-1, len(out_names)) for y in ys]
+    return cls(
+        us if in_names else None,
+        ys,
+        dt,
+        time=[t + np.arange(len(y)) * dt for t, y in zip(t0, ys)],
+        input_names=in_names,
+        output_names=out_names,
+        input_units=strs("input_units")[: len(in_names)] if in_names else [],
+        output_units=strs("output_units")[: len(out_names)],
+    )
+
+
+def to_npz(data: Any, path: str | Path) -> None:
+    """Save to a NumPy ``.npz`` archive (all experiments, names, units, dt, start times)."""
+    np.savez(path, **_arrays(data))
+
+
+def from_npz(cls: Any, path: str | Path) -> Any:
+    """Load a record saved by :meth:`to_npz`.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid, tempfile, os
+    >>> d = sysid.IOData(u=np.ones((4, 2)), y=np.arange(4.0), dt=0.1, output_units=["m"])
+    >>> f = os.path.join(tempfile.mkdtemp(), "rec.npz")
+    >>> d.to_npz(f)
+    >>> sysid.IOData.from_npz(f) == d
+    True
+    """
+    with np.load(path, allow_pickle=False) as z:
+        return _from_arrays(cls, lambda k: z[k], str(path))
+
+
+def to_mat(data: Any, path: str | Path) -> None:
+    """Save to a MATLAB ``.mat`` file (``scipy.io.savemat``); one experiment also gets the
+    plain variables ``u``, ``y``, ``dt`` that MATLAB users expect."""
+    from scipy.io import savemat
+
+    d = _arrays(data)
+    d = {k: (np.array(list(v), dtype=object) if k.endswith(("names", "units")) else v)
+         for k, v in d.items()}
+    if data.n_experiments == 1:
+        d["u"], d["y"] = data._exps[0].u, data._exps[0].y
+    savemat(path, d)
+
+
+def from_mat(
+    cls: Any,
+    path: str | Path,
+    *,
+    u: str = "u",
+    y: str = "y",
+    dt: float | str | None = None,
+    input_names: Sequence[str] | None = None,
+    output_names: Sequence[str] | None = None,
+) -> Any:
+    """Load a MATLAB ``.mat`` file: one written by :meth:`to_mat`, or any file with
+    input/output matrices under the variable names ``u`` and ``y`` (samples in rows).
+
+    ``dt`` may be a number or the name of a variable holding it.
+    """
+    from scipy.io import loadmat
+
+    m = loadmat(path)
+    if "n_experiments" in m and dt is None and u == "u" and y == "y":
+        return _from_arrays(cls, lambda k: m[k], str(path))
+    if y not in m:
+        have = sorted(k for k in m if not k.startswith("__"))
+        raise DataError(f"no variable {y!r} in {path}; it holds {have}")
+    if isinstance(dt, str):
+        if dt not in m:
+            raise DataError(f"no variable {dt!r} (sample time) in {path}")
+        dt = float(np.asarray(m[dt]).ravel()[0])
+    uu = m.get(u)
+    yy = np.asarray(m[y], dtype=float)
+    if yy.ndim == 2 and yy.shape[0] < yy.shape[1] and yy.shape[0] <= 16:
+        raise DataError(
+            f"{y!r} in {path} has shape {yy.shape}: samples must be rows; transpose it"
         )
-
-    @classmethod
-    def from_csv(
-        cls,
-        path: str | Path,
-        inputs: Sequence[str | int] | None = None,
-        outputs: Sequence[str | int] | None = None,
-        *,
-        time: str | int | None = None,
-        dt: float | None = None,
-        experiment: str | int | None = None,
-        delimiter: str | None = None,
-        nan: str = "error",
-        max_gap: int = 5,
-    ) -> IOData:
-        """Read a CSV file with a header row (the format of :meth:`to_csv`, or any other).
-
-        Columns are chosen by header name or 0-based index; ``name [unit]`` headers give
-        units. Without ``inputs``/``outputs``, a file written by :meth:`to_csv` is read back
-        whole. Empty fields become NaN and are handled as ``nan`` says (see
-        :meth:`from_raw`; only for single-experiment files). Trailing delimiters are ignored.
-        The delimiter is guessed from the header (comma, semicolon, tab, else white space,
-        as in ``.dat`` files) unless given. Files ending in ``.gz``, ``.bz2`` or ``.xz`` are
-        decompressed while reading.
-
-        Examples
-        --------
-        >>> import numpy as np, sysid, tempfile, os
-        >>> d = sysid.IOData(u=np.arange(4.0), y=np.ones(4), dt=0.5, output_units=["m"])
-        >>> f = os.path.join(tempfile.mkdtemp(), "rec.csv.gz")
-        >>> d.to_csv(f)
-        >>> back = sysid.IOData.from_csv(f, inputs=["u0"], outputs=["y0"])
-        >>> back == d, back.output_units
-        (True, ['m'])
-        """
-        p = Path(path)
-        if not p.exists():
-            raise DataError(f"no such file: {p}")
-        try:
-            with _open_text(p) as fh:
-                header = fh.readline().strip()
-        except UnicodeDecodeError:
-            raise DataError(f"{p.name} is not a text file (binary content); give a CSV or "
-                            "whitespace-separated text file") from None
-        if delimiter is None:
-            delimiter = next((d for d in (",", ";", "\t") if d in header), None)
-        raw_names = [h.strip().strip('"') for h in header.split(delimiter)]
-        while raw_names and raw_names[-1] == "":
-            raw_names.pop()
-        names, unit_of = [], {}
-        for h in raw_names:
-            m = re.fullmatch(r"(.*?)\s*\[(.*)\]", h)
-            n = m.group(1) if m else h
-            names.append(n)
-            unit_of[n] = m.group(2) if m else ""
-        data = np.genfromtxt(p, delimiter=delimiter, skip_header=1, dtype=float)
-        data = np.atleast_2d(data)[:, : len(names)]
-
-        def col(c: str | int) -> int:
-            if isinstance(c, (int, np.integer)):
-                if not 0 <= c < len(names):
-                    hint = "" if len(names) > 1 else (
-                        f"; the header was read as one column with delimiter={delimiter!r}: "
-                        "pass delimiter=... (e.g. ' ' or '\\t')"
-                    )
-                    raise DataError(
-                        f"column {c} out of range: the file has {len(names)} columns{hint}"
-                    )
-                return int(c)
-            if c not in names:
-                raise DataError(f"no column {c!r} in {p.name}; its columns are {names}")
-            return names.index(c)
-
-        if inputs is None and outputs is None and names[:2] == ["time", "experiment"]:
-            # our own format: which are inputs is not stored, so everything after is outputs
-            raise DataError(
-                f"{p.name}: say which columns are inputs and outputs, e.g. "
-                f"IOData.from_csv(path, inputs=[...], outputs=[...]); columns: {names[2:]}"
-            )
-        if outputs is None:
-            raise DataError(f"name the output columns of {p.name}; its columns are {names}")
-        iu = [col(c) for c in (inputs or [])]
-        iy = [col(c) for c in outputs]
-        if time is None and "time" in names and dt is None:
-            time = "time"
-        if experiment is None and "experiment" in names:
-            experiment = "experiment"
-        tcol = None if time is None else col(time)
-        ecol = None if experiment is None else col(experiment)
-        kw: dict[str, Any] = {
-            "input_names": [names[i] for i in iu],
-            "output_names": [names[i] for i in iy],
-            "input_units": [unit_of[names[i]] for i in iu],
-            "output_units": [unit_of[names[i]] for i in iy],
-        }
-        if ecol is not None:
-            ks = data[:, ecol]
-            parts = [data[ks == k] for k in np.unique(ks)]
-            return cls(
-                [q[:, iu] for q in parts] if iu else None,
-                [q[:, iy] for q in parts],
-                dt,
-                time=None if tcol is None else [q[:, tcol] for q in parts],
-                **kw,
-            )
-        return cls.from_raw(
-            data[:, iu] if iu else None,
-            data[:, iy],
-            dt,
-            time=None if tcol is None else data[:, tcol],
-            nan=nan,
-            max_gap=max_gap,
-            **kw,
-        )
-
-    # ---------------------------------------------------------------- NPZ and MAT
-
-    def _arrays(self) -> dict[str, Any]:
-        out: dict[str, Any] = {
-            "dt": self.dt,
-            "t0": np.array([e.t0 for e in self._exps]),
-            "input_names": np.array(self.input_names, dtype=str),
-            "output_names": np.array(self.output_names, dtype=str),
-            "input_units": np.array(self.input_units, dtype=str),
-            "output_units": np.array(self.output_units, dtype=str),
-            "n_experiments": self.n_experiments,
-        }
-        for k, e in enumerate(self._exps):
-            out[f"u_{k}"] = e.u
-            out[f"y_{k}"] = e.y
-        return out
-
-    @classmethod
-    def _from_arrays(cls, get: Any, what: str) -> IOData:
-        try:
-            n = int(np.asarray(get("n_experiments")).ravel()[0])
-            dt = float(np.asarray(get("dt")).ravel()[0])
-            t0 = np.asarray(get("t0"), dtype=float).ravel()
-
-            def strs(key: str) -> list[str]:
-                out = []
-                for s in np.asarray(get(key), dtype=object).ravel():
-                    while isinstance(s, np.ndarray):  # MATLAB cells arrive nested
-                        s = s.ravel()[0] if s.size else ""
-                    out.append(str(s).strip())
-                return out
-
-            us = [np.asarray(get(f"u_{k}"), dtype=float) for k in range(n)]
-            ys = [np.asarray(get(f"y_{k}"), dtype=float) for k in range(n)]
-        except KeyError as e:
-            raise DataError(f"{what} was not written by IOData (missing {e}); "
-                            "read it with numpy or scipy.io and build IOData yourself") from None
-        in_names = strs("input_names") if us[0].size and us[0].shape[-1] else []
-        us = [u.reshape(len(y), len(in_names)) for u, y in zip(us, ys)]
-        out_names = strs("output_names")
-        ys = [y.reshape(-1, len(out_names)) for y in ys]
-        return cls(
-            us if in_names else None,
-            ys,
-            dt,
-            time=[t + np.arange(len(y)) * dt for t, y in zip(t0, ys)],
-            input_names=in_names,
-            output_names=out_names,
-            input_units=strs("input_units")[: len(in_names)] if in_names else [],
-            output_units=strs("output_units")[: len(out_names)],
-        )
-
-    def to_npz(self, path: str | Path) -> None:
-        """Save to a NumPy ``.npz`` archive (all experiments, names, units, dt, start times)."""
-        np.savez(path, **self._arrays())
-
-    @classmethod
-    def from_npz(cls, path: str | Path) -> IOData:
-        """Load a record saved by :meth:`to_npz`.
-
-        Examples
-        --------
-        >>> import numpy as np, sysid, tempfile, os
-        >>> d = sysid.IOData(u=np.ones((4, 2)), y=np.arange(4.0), dt=0.1, output_units=["m"])
-        >>> f = os.path.join(tempfile.mkdtemp(), "rec.npz")
-        >>> d.to_npz(f)
-        >>> sysid.IOData.from_npz(f) == d
-        True
-        """
-        with np.load(path, allow_pickle=False) as z:
-            return cls._from_arrays(lambda k: z[k], str(path))
-
-    def to_mat(self, path: str | Path) -> None:
-        """Save to a MATLAB ``.mat`` file (``scipy.io.savemat``); one experiment also gets the
-        plain variables ``u``, ``y``, ``dt`` that MATLAB users expect."""
-        from scipy.io import savemat
-
-        d = self._arrays()
-        d = {k: (np.array(list(v), dtype=object) if k.endswith(("names", "units")) else v)
-             for k, v in d.items()}
-        if self.n_experiments == 1:
-            d["u"], d["y"] = self._exps[0].u, self._exps[0].y
-        savemat(path, d)
-
-    @classmethod
-    def from_mat(
-        cls,
-        path: str | Path,
-        *,
-        u: str = "u",
-        y: str = "y",
-        dt: float | str | None = None,
-        input_names: Sequence[str] | None = None,
-        output_names: Sequence[str] | None = None,
-    ) -> IOData:
-        """Load a MATLAB ``.mat`` file: one written by :meth:`to_mat`, or any file with
-        input/output matrices under the variable names ``u`` and ``y`` (samples in rows).
-
-        ``dt`` may be a number or the name of a variable holding it.
-        """
-        from scipy.io import loadmat
-
-        m = loadmat(path)
-        if "n_experiments" in m and dt is None and u == "u" and y == "y":
-            return cls._from_arrays(lambda k: m[k], str(path))
-        if y not in m:
-            have = sorted(k for k in m if not k.startswith("__"))
-            raise DataError(f"no variable {y!r} in {path}; it holds {have}")
-        if isinstance(dt, str):
-            if dt not in m:
-                raise DataError(f"no variable {dt!r} (sample time) in {path}")
-            dt = float(np.asarray(m[dt]).ravel()[0])
-        uu = m.get(u)
-        yy = np.asarray(m[y], dtype=float)
-        if yy.ndim == 2 and yy.shape[0] < yy.shape[1] and yy.shape[0] <= 16:
-            raise DataError(
-                f"{y!r} in {path} has shape {yy.shape}: samples must be rows; transpose it"
-            )
-        return cls(uu, yy, dt, input_names=input_names, output_names=output_names)
+    return cls(uu, yy, dt, input_names=input_names, output_names=output_names)

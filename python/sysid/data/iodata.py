@@ -24,9 +24,11 @@ import numpy as np
 
 from .._checks import as_2d, as_dt
 from ..errors import DataError, InsufficientDataError, ShapeError
-from .formats import _FileFormats, _pandas
-from .raw import _RawConstructors
-from .segments import SplitData, _Segments
+from . import formats as _formats
+from . import raw as _raw
+from . import segments as _segments
+from .formats import _pandas
+from .segments import SplitData, _Exp
 from .trend import Trend
 from .units import check_unit, sample_time
 
@@ -81,39 +83,12 @@ def _plural(n: int, word: str) -> str:
     return f"{n} {word}" + ("" if n == 1 else "s")
 
 
-@dataclass(frozen=True)
-class _Exp:
-    """One experiment: arrays and, when a trend was removed, the trend values per sample."""
-
-    u: np.ndarray
-    y: np.ndarray
-    t0: float = 0.0
-    tu: np.ndarray | None = None
-    ty: np.ndarray | None = None
-
-    def rows(self, sl: slice | np.ndarray, dt: float) -> _Exp:
-        idx = np.arange(self.y.shape[0])[sl]
-        start = int(idx[0]) if idx.size else 0
-        return _Exp(
-            self.u[sl], self.y[sl], self.t0 + start * dt,
-            None if self.tu is None else self.tu[sl],
-            None if self.ty is None else self.ty[sl],
-        )
-
-    def cols(self, iu: list[int], iy: list[int]) -> _Exp:
-        return _Exp(
-            self.u[:, iu], self.y[:, iy], self.t0,
-            None if self.tu is None else self.tu[:, iu],
-            None if self.ty is None else self.ty[:, iy],
-        )
-
-
 # --------------------------------------------------------------------------------------------
 # IOData
 # --------------------------------------------------------------------------------------------
 
 
-class IOData(_Segments, _RawConstructors, _FileFormats):
+class IOData:
     """Measured inputs and outputs, time-first, possibly several experiments.
 
     Parameters
@@ -147,6 +122,26 @@ class IOData(_Segments, _RawConstructors, _FileFormats):
     >>> d.experiments[0][1].shape
     (100, 2)
     """
+
+    # Readers, writers, selection and splitting are plain functions of the data (their
+    # modules never import this one); bound here as methods, signatures and docs unchanged.
+    from_raw = classmethod(_raw.from_raw)
+    from_irregular = classmethod(_raw.from_irregular)
+    to_pandas = _formats.to_pandas
+    from_pandas = classmethod(_formats.from_pandas)
+    to_csv = _formats.to_csv
+    from_csv = classmethod(_formats.from_csv)
+    to_npz = _formats.to_npz
+    from_npz = classmethod(_formats.from_npz)
+    to_mat = _formats.to_mat
+    from_mat = classmethod(_formats.from_mat)
+    experiment = _segments.experiment
+    slice = _segments.slice_samples
+    time_slice = _segments.time_slice
+    __getitem__ = _segments.getitem
+    select = _segments.select
+    split = _segments.split
+    merge = _segments.merge
 
     def __init__(
         self,

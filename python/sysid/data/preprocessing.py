@@ -20,8 +20,9 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import DataError, InsufficientDataError
-from .iodata import IOData, _Exp
+from .iodata import IOData
 from .raw import _fill, _runs
+from .segments import _Exp, channel_index, unknown_names
 
 __all__ = [
     "find_spikes",
@@ -120,10 +121,10 @@ def despike(
     True
     """
     names = data.output_names if channels is None else list(channels)
-    iu = data._index([n for n in names if n in data.input_names], data.input_names, "input")
+    iu = channel_index([n for n in names if n in data.input_names], data.input_names, "input")
     unknown = [n for n in names if n not in data.input_names and n not in data.output_names]
     if unknown:
-        raise DataError(data._unknown_names(unknown))
+        raise DataError(unknown_names(data, unknown))
     iy = [data.output_names.index(n) for n in names if n in data.output_names]
     exps = []
     for e in data._exps:
@@ -396,7 +397,7 @@ def drop_quiet(
         names = list(channels)
     unknown = [n for n in names if n not in data.input_names + data.output_names]
     if unknown:
-        raise DataError(data._unknown_names(unknown))
+        raise DataError(unknown_names(data, unknown))
     allx = [
         np.column_stack(
             [e.u[:, data.input_names.index(n)] if n in data.input_names

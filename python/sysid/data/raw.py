@@ -3,23 +3,20 @@
 :func:`repair_nan` interpolates short gaps and cuts a record at long ones;
 :meth:`IOData.from_raw <sysid.IOData.from_raw>` and
 :meth:`IOData.from_irregular <sysid.IOData.from_irregular>` build a clean, uniformly sampled
-record from raw arrays (they are methods of a base class of :class:`~sysid.IOData` defined
-here).
+record from raw arrays (plain functions of the class, bound as its class methods in
+:mod:`sysid.data.iodata`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from .._checks import as_2d
 from ..errors import DataError, InsufficientDataError, NonFiniteError, ShapeError
 from .units import sample_time
-
-if TYPE_CHECKING:
-    from .iodata import IOData
 
 __all__ = ["repair_nan"]
 
@@ -131,156 +128,150 @@ def repair_nan(
     return out
 
 
-class _RawConstructors:
-    """``IOData.from_raw`` and ``IOData.from_irregular`` (a base class of :class:`IOData`)."""
+def from_raw(
+    cls: Any,
+    u: Any,
+    y: Any,
+    dt: float | None = None,
+    *,
+    time: Any = None,
+    nan: str = "error",
+    max_gap: int = 5,
+    min_length: int = 2,
+    input_names: Sequence[str] | None = None,
+    output_names: Sequence[str] | None = None,
+    input_units: Sequence[str] | None = None,
+    output_units: Sequence[str] | None = None,
+) -> Any:
+    """A record from raw arrays that may contain NaN drop-outs.
 
-    # ---------------------------------------------------------------- raw and irregular data
+    Parameters
+    ----------
+    u, y : array_like
+        One experiment each, ``(n_samples, channels)``; ``u`` may be ``None``.
+    dt, time : optional
+        Sample time or time vector, as for :class:`IOData`.
+    nan : {"error", "interpolate", "split"}
+        ``"error"`` raises on any NaN/Inf; ``"interpolate"`` fills gaps of at most
+        ``max_gap`` consecutive samples linearly (per channel) and splits the record at
+        longer ones; ``"split"`` cuts the record at every gap, each clean run becoming
+        its own experiment.
+    max_gap : int
+        Longest gap (samples) that ``"interpolate"`` fills.
+    min_length : int
+        Clean runs shorter than this are dropped.
 
-    @classmethod
-    def from_raw(
-        cls,
-        u: Any,
-        y: Any,
-        dt: float | None = None,
-        *,
-        time: Any = None,
-        nan: str = "error",
-        max_gap: int = 5,
-        min_length: int = 2,
-        input_names: Sequence[str] | None = None,
-        output_names: Sequence[str] | None = None,
-        input_units: Sequence[str] | None = None,
-        output_units: Sequence[str] | None = None,
-    ) -> IOData:
-        """A record from raw arrays that may contain NaN drop-outs.
-
-        Parameters
-        ----------
-        u, y : array_like
-            One experiment each, ``(n_samples, channels)``; ``u`` may be ``None``.
-        dt, time : optional
-            Sample time or time vector, as for :class:`IOData`.
-        nan : {"error", "interpolate", "split"}
-            ``"error"`` raises on any NaN/Inf; ``"interpolate"`` fills gaps of at most
-            ``max_gap`` consecutive samples linearly (per channel) and splits the record at
-            longer ones; ``"split"`` cuts the record at every gap, each clean run becoming
-            its own experiment.
-        max_gap : int
-            Longest gap (samples) that ``"interpolate"`` fills.
-        min_length : int
-            Clean runs shorter than this are dropped.
-
-        Examples
-        --------
-        >>> import numpy as np, sysid
-        >>> y = np.arange(12.0); y[3] = np.nan; y[6:9] = np.nan
-        >>> sysid.IOData.from_raw(None, y, nan="interpolate", max_gap=1).lengths
-        [6, 3]
-        >>> sysid.IOData.from_raw(None, y, nan="split").lengths
-        [3, 2, 3]
-        """
-        ua = None if u is None else _raw2d(u, "u")
-        ya = _raw2d(y, "y")
-        if ua is not None and ua.shape[0] != ya.shape[0]:
-            raise ShapeError(f"u has {ua.shape[0]} samples but y has {ya.shape[0]}")
-        t0 = 0.0
-        if time is not None:
-            t = np.asarray(time, dtype=float).ravel()
-            if t.size != ya.shape[0]:
-                raise ShapeError(f"time has {t.size} instants but y has {ya.shape[0]} samples")
-            h = sample_time(t)
-            if dt is not None and abs(float(dt) - h) > 0.01 * h:
-                raise DataError(f"dt = {dt} disagrees with the time vector (median {h:g} s)")
-            dt, t0 = h, float(t[0])
-        runs = repair_nan(ua, ya, nan=nan, max_gap=max_gap, min_length=min_length)
-        h = 1.0 if dt is None else float(dt)
-        return cls(
-            None if ua is None else [r[0] for r in runs],
-            [r[1] for r in runs],
-            h,
-            time=[t0 + r[2] * h + np.arange(len(r[1])) * h for r in runs],
-            input_names=input_names,
-            output_names=output_names,
-            input_units=input_units,
-            output_units=output_units,
-        )
-
-    @classmethod
-    def from_irregular(
-        cls,
-        time: Any,
-        u: Any,
-        y: Any,
-        dt: float | None = None,
-        *,
-        method: str = "linear",
-        input_names: Sequence[str] | None = None,
-        output_names: Sequence[str] | None = None,
-        input_units: Sequence[str] | None = None,
-        output_units: Sequence[str] | None = None,
-    ) -> IOData:
-        """A uniformly sampled record interpolated from irregularly timed samples.
-
-        Parameters
-        ----------
-        time : array_like
-            Strictly increasing sample instants (repeats are an error: remove them first).
-        u, y : array_like
-            Values at those instants (``u`` may be ``None``).
-        dt : float, optional
-            New sample time; default the median spacing of ``time``.
-        method : {"linear", "cubic"}
-            Interpolation (``"cubic"``: SciPy's ``CubicSpline``). No anti-alias filter is
-            applied: choose ``dt`` no longer than the typical spacing.
-
-        Examples
-        --------
-        >>> import numpy as np, sysid
-        >>> t = np.array([0.0, 0.1, 0.2, 0.35, 0.4, 0.5])
-        >>> d = sysid.IOData.from_irregular(t, None, 2 * t, dt=0.1)
-        >>> d.y.ravel()
-        array([0. , 0.2, 0.4, 0.6, 0.8, 1. ])
-        """
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> y = np.arange(12.0); y[3] = np.nan; y[6:9] = np.nan
+    >>> sysid.IOData.from_raw(None, y, nan="interpolate", max_gap=1).lengths
+    [6, 3]
+    >>> sysid.IOData.from_raw(None, y, nan="split").lengths
+    [3, 2, 3]
+    """
+    ua = None if u is None else _raw2d(u, "u")
+    ya = _raw2d(y, "y")
+    if ua is not None and ua.shape[0] != ya.shape[0]:
+        raise ShapeError(f"u has {ua.shape[0]} samples but y has {ya.shape[0]}")
+    t0 = 0.0
+    if time is not None:
         t = np.asarray(time, dtype=float).ravel()
-        ya = as_2d(y, "y")
-        ua = None if u is None else as_2d(u, "u")
-        if t.size != ya.shape[0] or (ua is not None and ua.shape[0] != t.size):
-            raise ShapeError("time, u and y must have the same number of samples")
-        if t.size < 2 or not np.isfinite(t).all():
-            raise DataError("time must hold at least 2 finite instants")
-        d = np.diff(t)
-        if (d <= 0).any():
-            i = int(np.flatnonzero(d <= 0)[0])
-            raise DataError(
-                f"time is not strictly increasing at sample {i + 1} ({t[i]:g} then {t[i + 1]:g});"
-                " sort the samples and remove duplicates first"
-            )
-        h = float(np.median(d)) if dt is None else float(dt)
-        if not np.isfinite(h) or h <= 0:
-            raise DataError(f"dt must be positive, got {dt}")
-        grid = t[0] + np.arange(int(np.floor((t[-1] - t[0]) / h + 1e-9)) + 1) * h
-        if method == "linear":
-            def interp(x: np.ndarray) -> np.ndarray:
-                return np.column_stack([np.interp(grid, t, c) for c in x.T]).reshape(
-                    grid.size, x.shape[1]
-                )
-        elif method == "cubic":
-            from scipy.interpolate import CubicSpline
+        if t.size != ya.shape[0]:
+            raise ShapeError(f"time has {t.size} instants but y has {ya.shape[0]} samples")
+        h = sample_time(t)
+        if dt is not None and abs(float(dt) - h) > 0.01 * h:
+            raise DataError(f"dt = {dt} disagrees with the time vector (median {h:g} s)")
+        dt, t0 = h, float(t[0])
+    runs = repair_nan(ua, ya, nan=nan, max_gap=max_gap, min_length=min_length)
+    h = 1.0 if dt is None else float(dt)
+    return cls(
+        None if ua is None else [r[0] for r in runs],
+        [r[1] for r in runs],
+        h,
+        time=[t0 + r[2] * h + np.arange(len(r[1])) * h for r in runs],
+        input_names=input_names,
+        output_names=output_names,
+        input_units=input_units,
+        output_units=output_units,
+    )
 
-            def interp(x: np.ndarray) -> np.ndarray:
-                return CubicSpline(t, x, axis=0)(grid)
-        else:
-            raise DataError(f"method must be 'linear' or 'cubic', got {method!r}")
-        return cls(
-            None if ua is None else interp(ua),
-            interp(ya),
-            h,
-            time=grid,
-            input_names=input_names,
-            output_names=output_names,
-            input_units=input_units,
-            output_units=output_units,
+
+def from_irregular(
+    cls: Any,
+    time: Any,
+    u: Any,
+    y: Any,
+    dt: float | None = None,
+    *,
+    method: str = "linear",
+    input_names: Sequence[str] | None = None,
+    output_names: Sequence[str] | None = None,
+    input_units: Sequence[str] | None = None,
+    output_units: Sequence[str] | None = None,
+) -> Any:
+    """A uniformly sampled record interpolated from irregularly timed samples.
+
+    Parameters
+    ----------
+    time : array_like
+        Strictly increasing sample instants (repeats are an error: remove them first).
+    u, y : array_like
+        Values at those instants (``u`` may be ``None``).
+    dt : float, optional
+        New sample time; default the median spacing of ``time``.
+    method : {"linear", "cubic"}
+        Interpolation (``"cubic"``: SciPy's ``CubicSpline``). No anti-alias filter is
+        applied: choose ``dt`` no longer than the typical spacing.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> t = np.array([0.0, 0.1, 0.2, 0.35, 0.4, 0.5])
+    >>> d = sysid.IOData.from_irregular(t, None, 2 * t, dt=0.1)
+    >>> d.y.ravel()
+    array([0. , 0.2, 0.4, 0.6, 0.8, 1. ])
+    """
+    t = np.asarray(time, dtype=float).ravel()
+    ya = as_2d(y, "y")
+    ua = None if u is None else as_2d(u, "u")
+    if t.size != ya.shape[0] or (ua is not None and ua.shape[0] != t.size):
+        raise ShapeError("time, u and y must have the same number of samples")
+    if t.size < 2 or not np.isfinite(t).all():
+        raise DataError("time must hold at least 2 finite instants")
+    d = np.diff(t)
+    if (d <= 0).any():
+        i = int(np.flatnonzero(d <= 0)[0])
+        raise DataError(
+            f"time is not strictly increasing at sample {i + 1} ({t[i]:g} then {t[i + 1]:g});"
+            " sort the samples and remove duplicates first"
         )
+    h = float(np.median(d)) if dt is None else float(dt)
+    if not np.isfinite(h) or h <= 0:
+        raise DataError(f"dt must be positive, got {dt}")
+    grid = t[0] + np.arange(int(np.floor((t[-1] - t[0]) / h + 1e-9)) + 1) * h
+    if method == "linear":
+        def interp(x: np.ndarray) -> np.ndarray:
+            return np.column_stack([np.interp(grid, t, c) for c in x.T]).reshape(
+                grid.size, x.shape[1]
+            )
+    elif method == "cubic":
+        from scipy.interpolate import CubicSpline
+
+        def interp(x: np.ndarray) -> np.ndarray:
+            return CubicSpline(t, x, axis=0)(grid)
+    else:
+        raise DataError(f"method must be 'linear' or 'cubic', got {method!r}")
+    return cls(
+        None if ua is None else interp(ua),
+        interp(ya),
+        h,
+        time=grid,
+        input_names=input_names,
+        output_names=output_names,
+        input_units=input_units,
+        output_units=output_units,
+    )
 
 
 def _raw2d(x: Any, name: str) -> np.ndarray:

@@ -16,6 +16,7 @@ from scipy import stats
 
 from ..data.formats import _pandas
 from ..data.iodata import IOData
+from ..data.segments import channel_index
 from ..errors import DataError, ShapeError
 
 __all__ = ["FRD", "FRDComparison"]
@@ -202,11 +203,8 @@ class FRD:
 
     def select(self, outputs: Any = None, inputs: Any = None) -> FRD:
         """The sub-response of some outputs and inputs (names or indices)."""
-        rows = max(self.n_inputs, self.n_outputs, 1)  # time-first: samples >= channels
-        dummy = IOData(u=np.zeros((rows, self.n_inputs)), y=np.zeros((rows, self.n_outputs)),
-                       input_names=self.input_names, output_names=self.output_names)
-        iu = dummy._index(inputs, self.input_names, "input")
-        iy = dummy._index(outputs, self.output_names, "output")
+        iu = channel_index(inputs, self.input_names, "input")
+        iy = channel_index(outputs, self.output_names, "output")
 
         def sub(a: np.ndarray | None) -> np.ndarray | None:
             return None if a is None else a[:, iy][:, :, iu]
