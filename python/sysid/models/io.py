@@ -40,8 +40,8 @@ from ..nonlinear.hw_ss_model import HammersteinWienerSSModel
 from ..nonlinear.narx_model import NARXModel
 from ..polynomial.model import PolynomialModel
 from .continuous import ContinuousStateSpace
+from .schema import check_file
 from .serialize import (
-    FORMAT,
     REGISTRY,
     VERSION,
     PathLike,
@@ -55,8 +55,6 @@ from .statespace import StateSpaceModel
 
 __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict", "register_model"]
 
-LEGACY_FORMAT = "sysid-state-space-model"  # version 1: state-space models only
-
 for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel,
              HammersteinWienerModel, HammersteinWienerSSModel, NonlinearGreyBox):
     register_model(_cls)
@@ -65,9 +63,10 @@ for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel,
 def model_from_dict(d: dict[str, Any]) -> Any:
     """Inverse of :func:`sysid.model_to_dict`: the registered family's ``from_dict``.
 
-    Checks the format tag and the version; version-1 files (state-space only) still load.
-    Anything else raises one :class:`~sysid.DataError` "not a sysid model file: <what is
-    wrong>".
+    Checks the dict against the file schema first (:mod:`sysid.models.schema`: the format
+    tag, the version, every array, and the body of the state-space families); version-1 files
+    (state-space only) still load. Anything else raises one :class:`~sysid.DataError` "not a
+    sysid model file: field <name>: found <what>, expected <what>".
 
     Examples
     --------
@@ -76,17 +75,7 @@ def model_from_dict(d: dict[str, Any]) -> Any:
     >>> sysid.model_from_dict(sysid.model_to_dict(m)).simulate([1.0, 1.0, 1.0])[:, 0]
     array([0. , 1. , 1.5])
     """
-    if not isinstance(d, dict) or d.get("format") not in (FORMAT, LEGACY_FORMAT):
-        got = d.get("format") if isinstance(d, dict) else type(d).__name__
-        raise DataError(f"not a sysid model file: expected format {FORMAT!r}, got {got!r}")
-    raw_version = d.get("version")
-    if isinstance(raw_version, bool) or not isinstance(raw_version, int) or raw_version < 1:
-        raise DataError(f"not a sysid model file: missing or invalid format version "
-                        f"{raw_version!r} (expected an integer 1..{VERSION})")
-    if raw_version > VERSION:
-        raise DataError(f"model file version {raw_version} is newer than this sysid "
-                        f"understands ({VERSION}); upgrade sysid")
-    family = "StateSpaceModel" if d["format"] == LEGACY_FORMAT else str(d.get("family"))
+    family = check_file(d, VERSION)
     cls = REGISTRY.get(family)
     if cls is None:
         raise DataError(f"unknown model family {family!r}: import the module that defines it "

@@ -197,19 +197,27 @@ def save_model(model: Any, path: PathLike, *, format: str | None = None) -> None
     path = Path(path)
     fmt = file_format(path, format)
     d = model_to_dict(model)
-    if fmt == "json":
-        path.write_text(json.dumps(d, indent=1) + "\n", encoding="utf-8")
-        return
-    arrays = {k: _decode(v) for k, v in d.items()
-              if isinstance(v, dict) and "__ndarray__" in v}
-    meta = {k: v for k, v in d.items() if k not in arrays}
-    payload: dict[str, Any] = {"__meta__": np.array(json.dumps(meta)), **arrays}
-    with open(path, "wb") as f:
-        np.savez(f, **payload)
+    # written whole to a temporary file beside the target, then renamed over it: a failure
+    # (or Ctrl-C) midway leaves the previous file as it was
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        with open(tmp, "wb") as f:
+            if fmt == "json":
+                f.write((json.dumps(d, indent=1) + "\n").encode("utf-8"))
+            else:
+                arrays = {k: _decode(v) for k, v in d.items()
+                          if isinstance(v, dict) and "__ndarray__" in v}
+                meta = {k: v for k, v in d.items() if k not in arrays}
+                np.savez(f, __meta__=np.array(json.dumps(meta)), **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
 
 
 def read_model_file(path: PathLike, fmt: str | None) -> dict[str, Any]:
-    """The dict stored in a model file (arrays decoded)."""
+    """The dict stored in a model file, as written (tagged arrays not decoded; the top-level
+    arrays of an NPZ file as arrays): :func:`sysid.model_from_dict` checks it, then decodes."""
     path = Path(path)
     key = file_format(path, fmt)
     if not path.exists():
@@ -221,11 +229,13 @@ def read_model_file(path: PathLike, fmt: str | None) -> dict[str, Any]:
             raise DataError(f"{str(path)!r} is not valid JSON: {e}") from e
         if not isinstance(d, dict):
             raise DataError(f"{str(path)!r} is not a sysid model file")
-        return {k: _decode(v) for k, v in d.items()}
+        return d
     with open(path, "rb") as fh, np.load(fh, allow_pickle=False) as z:
         if not isinstance(z, np.lib.npyio.NpzFile) or "__meta__" not in z:
             raise DataError(f"{str(path)!r} is not a sysid model file (no metadata)")
-        d = {k: _decode(v) for k, v in json.loads(str(z["__meta__"])).items()}
+        d = json.loads(str(z["__meta__"]))
+        if not isinstance(d, dict):
+            raise DataError(f"{str(path)!r} is not a sysid model file (metadata is not a dict)")
         for k in z.files:
             if k != "__meta__":
                 d[k] = z[k]
