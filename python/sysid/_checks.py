@@ -228,3 +228,34 @@ def experiment_arrays(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
     except AttributeError:
         raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))") from None
     return [(np.ascontiguousarray(u, float), np.ascontiguousarray(y, float)) for u, y in exps]
+
+
+def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
+                        names: Any = None, side: int = 0) -> None:
+    """Refuse a record in which an input (``side=1``: an output) is zero or constant in
+    every experiment: the dynamics ``who`` estimates would not be determined by the data.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid._checks import require_inputs_vary
+    >>> require_inputs_vary([(np.zeros((5, 1)), np.ones((5, 1)))], "bj")
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: input u0 is 0 in every sample: bj cannot estimate ...
+    """
+    kind = ("input", "output")[side]
+    nu = exps[0][side].shape[1] if exps else 0
+    for j in range(nu):
+        cols = [e[side][:, j] for e in exps if len(e[side])]
+        if not cols:
+            continue
+        first = cols[0][0]
+        if all(np.all(c == first) for c in cols):
+            name = names[j] if names is not None and j < len(names) else f"{kind[0]}{j}"
+            fix = ("drop it (data.select), or fit an output-only model (sysid.ar, sysid.arma)"
+                   if side == 0 else "drop it (data.select)")
+            raise DataError(f"{kind} {name} is {first:g} in every sample: {who} cannot estimate "
+                            f"{'how the output responds to it' if side == 0 else 'its dynamics'}"
+                            f"; check the channel (the wrong column, a stuck "
+                            f"{'actuator' if side == 0 else 'sensor'}?), {fix}")

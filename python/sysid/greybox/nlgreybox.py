@@ -35,6 +35,8 @@ from .greybox import Param, Parameters, as_params
 
 __all__ = ["NonlinearGreyBox"]
 
+_MAX_SUBSTEPS = 10_000
+
 _INTEGRATORS = ("rk4", "adaptive")
 _JACOBIANS = ("auto", "fd", "sensitivity")
 #: relative central-difference step for derivatives of f and h not given by the user
@@ -160,6 +162,11 @@ class NonlinearGreyBox(ModelMixin):
         self.x0_free = np.broadcast_to(np.asarray(x0_free, dtype=bool),
                                        (self.x0.shape[0], self.nx)).copy() \
             if np.ndim(x0_free) < 2 else np.asarray(x0_free, dtype=bool)
+        if isinstance(substeps, bool) or int(substeps) != substeps or not \
+                1 <= substeps <= _MAX_SUBSTEPS:
+            raise DataError(f"substeps must be an integer from 1 to {_MAX_SUBSTEPS} (fixed "
+                            f"Runge-Kutta steps per sample), got {substeps!r}; for fast or "
+                            "stiff dynamics use integrator='adaptive'")
         self.integrator, self.substeps = integrator, int(substeps)
         self.rtol, self.atol = float(rtol), float(atol)
         self.vectorized = bool(vectorized)

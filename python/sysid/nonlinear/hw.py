@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import experiment_arrays
+from .._checks import experiment_arrays, require_inputs_vary
 from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError
 from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction
@@ -91,11 +91,19 @@ def nlhw(
     if exps[0][0].shape[1] != 1 or exps[0][1].shape[1] != 1:
         raise DataError("nlhw handles one input and one output; select channels with "
                         "data.select(...)")
+    require_inputs_vary(exps, "nlhw", getattr(data, "input_names", None))
     for v, name in ((nb, "nb"), (nf, "nf"), (nk, "nk")):
         if int(v) != v or v < (1 if name == "nb" else 0):
             raise DataError(f"{name} must be a{' positive' if name == 'nb' else ' non-negative'}"
                             f" integer, got {v!r}")
     fin, fout = _check_nl(input_nl, "input_nl"), _check_nl(output_nl, "output_nl")
+    n_par = int(nb) + int(nf) + sum(np.size(getattr(f, "params", ())) for f in (fin, fout)
+                                     if not isinstance(f, UserFunction))
+    n_samples = sum(len(y) for _, y in exps)
+    if n_par >= n_samples:  # before any regressor is allocated
+        raise DataError(f"nlhw with these orders and nonlinearities has {n_par} parameters "
+                        f"but the record has {n_samples} samples; lower the orders or the "
+                        "nonlinearities' sizes (degree, units, breakpoints)")
     if isinstance(fout, UserFunction):
         raise DataError("a UserFunction can only be the input nonlinearity")
     records = []

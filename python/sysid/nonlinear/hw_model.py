@@ -54,6 +54,26 @@ class Nonlinearity:
         return f"{type(self).__name__}({p})"
 
 
+_MAX_DEGREE = 100
+
+
+def _bounds(lower: Any, upper: Any, who: str) -> tuple[float | None, float | None]:
+    """Start values of a two-sided nonlinearity: finite numbers, lower < upper."""
+    out = []
+    for name, v in (("lower", lower), ("upper", upper)):
+        if v is not None:
+            try:
+                v = float(v)
+            except (TypeError, ValueError):
+                raise DataError(f"{who}: {name} must be a number or None, got {v!r}") from None
+            if not np.isfinite(v):
+                raise DataError(f"{who}: {name} must be finite, got {v!r}")
+        out.append(v)
+    if out[0] is not None and out[1] is not None and not out[0] < out[1]:
+        raise DataError(f"{who}: lower ({out[0]:g}) must be below upper ({out[1]:g}); swap them")
+    return out[0], out[1]
+
+
 class Saturation(Nonlinearity):
     """``clip(x, lower, upper)`` (unit slope); ``lower``/``upper`` start values (default: the
     1 % and 99 % quantiles of the signal).
@@ -69,7 +89,7 @@ class Saturation(Nonlinearity):
     kind = "saturation"
 
     def __init__(self, lower: float | None = None, upper: float | None = None) -> None:
-        self.lower, self.upper = lower, upper
+        self.lower, self.upper = _bounds(lower, upper, type(self).__name__)
         self.params = np.array([np.nan, np.nan])
 
     def initial(self, x: Any) -> np.ndarray:
@@ -106,7 +126,7 @@ class DeadZone(Nonlinearity):
     kind = "deadzone"
 
     def __init__(self, lower: float | None = None, upper: float | None = None) -> None:
-        self.lower, self.upper = lower, upper
+        self.lower, self.upper = _bounds(lower, upper, type(self).__name__)
         self.params = np.array([np.nan, np.nan])
 
     def initial(self, x: Any) -> np.ndarray:
@@ -143,6 +163,10 @@ class PolynomialNonlinearity(Nonlinearity):
     def __init__(self, degree: int = 3) -> None:
         if int(degree) != degree or degree < 2:
             raise DataError(f"degree must be an integer >= 2, got {degree!r}")
+        if degree > _MAX_DEGREE:  # x**degree overflows double precision for |x| > 2
+            raise DataError(f"degree must be at most {_MAX_DEGREE}, got {degree!r}: powers that "
+                            "high overflow double precision; use PiecewiseLinear or "
+                            "SigmoidNetwork for a flexible curve")
         self.degree = int(degree)
         self.params = np.zeros(self.degree - 1)
 

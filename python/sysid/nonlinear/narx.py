@@ -15,7 +15,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import experiment_arrays
-from ..errors import DataError
+from ..errors import DataError, InsufficientDataError
 from .customreg import CustomRegressor
 from .narx_model import NARXModel, PolynomialBasis, RBFBasis
 
@@ -168,6 +168,11 @@ def nlarx(
     exps = experiment_arrays(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     na_, nb_, nk_ = _per(na, ny, "na"), _per(nb, nu, "nb"), _per(nk, nu, "nk")
+    shortest = min(len(y) for _, y in exps)
+    lag = max([*na_, *(k + b - 1 for b, k in zip(nb_, nk_) if b > 0), 0])
+    if lag >= shortest:  # before the regressors are allocated
+        raise InsufficientDataError(f"the largest lag ({lag}) must be below the samples of the "
+                                    f"shortest experiment ({shortest}); lower na, nb or nk")
     if criterion not in CRITERIA:
         raise DataError(f"criterion must be one of {CRITERIA}, got {criterion!r}")
     if criterion == "validation" and validation is None:

@@ -322,6 +322,11 @@ def etfe(
             "length or use spa / welch_frf"
         )
     n = lens.pop()
+    if n < 4:
+        raise InsufficientDataError(
+            f"etfe needs at least 4 samples per experiment (got {n}): n samples give "
+            f"n // 2 frequencies above zero; measure a longer record"
+        )
     Zs = [np.fft.rfft(z, axis=0) for z in _z(data)]  # (nf, m+l)
     nf = Zs[0].shape[0]
     Puu = sum(np.einsum("fa,fb->fab", Z[:, :m], Z[:, :m].conj()) for Z in Zs) / n

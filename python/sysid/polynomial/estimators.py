@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, as_int_grid, experiment_arrays
+from .._checks import as_int, as_int_grid, experiment_arrays, require_inputs_vary
 from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError
 from ..models.uncertainty import ParameterUncertainty
@@ -134,6 +134,8 @@ def arx(
     ([-0.5], [1.0])
     """
     exps = experiment_arrays(data)
+    require_inputs_vary(exps, "arx", getattr(data, "input_names", None))
+    require_inputs_vary(exps, "arx", getattr(data, "output_names", None), side=1)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     na_g, nb_g, nk_g = _grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"), _grid(nk, ny, nu, "nk")
     if isinstance(regularization, str) or hasattr(regularization, "prior"):
@@ -265,6 +267,8 @@ def _pem(
     init: PolynomialModel | None = None,
 ) -> PolynomialModel:
     exps = experiment_arrays(data)
+    require_inputs_vary(exps, method, getattr(data, "input_names", None))
+    require_inputs_vary(exps, method, getattr(data, "output_names", None), side=1)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     nb_g, nf_g, nk_g = _grid(nb, ny, nu, "nb"), _grid(nf, ny, nu, "nf"), _grid(nk, ny, nu, "nk")
     na_v, nc_v, nd_v = _col(na, ny, "na"), _col(nc, ny, "nc"), _col(nd, ny, "nd")

@@ -215,9 +215,9 @@ class PolynomialModel(ModelMixin):
         ny = self.n_outputs
         w = np.column_stack([self._deterministic(u, i) for i in range(ny)])
         if not self.coupled:
-            return np.column_stack(
-                [_sysid.poly_filter([1.0], list(_monic(self.a[i][i])), w[:, i]) for i in range(ny)]
-            )
+            return np.column_stack([  # a column of w is strided: the filter takes contiguous
+                _sysid.poly_filter([1.0], list(_monic(self.a[i][i])), np.ascontiguousarray(w[:, i]))
+                for i in range(ny)])
         return np.asarray(_sysid.arx_matrix_filter(self._a_lists(), np.ascontiguousarray(w)))
 
     def _a_lists(self) -> list[list[list[float]]]:

@@ -93,11 +93,19 @@ def _model(d: dict[str, Any], dt: float, method: str, **info: Any) -> StateSpace
     )
 
 
+_MAX_MARKOV = 1e150
+
+
 def _realize(method: str, markov: Any, order: int | None, rows: int | None, cols: int | None,
              dt: float | None, rank_tol: float = 1e-8) -> tuple[dict[str, Any], float]:
     h, dt_h = _markov(markov)
     dt = float(dt if dt is not None else (dt_h if dt_h is not None else 1.0))
     count, l, m = h.shape
+    big = float(np.max(np.abs(h))) if h.size else 0.0
+    if big > _MAX_MARKOV:  # products in the Hankel SVD would overflow double precision
+        raise DataError(f"Markov parameters up to {big:.3g} are too large to realise in double "
+                        f"precision (limit {_MAX_MARKOV:g}); divide them by a common scale "
+                        "(for example their largest magnitude) and scale B and D back")
     out = _sysid.realize(
         method, np.ascontiguousarray(h.reshape(count * l, m)), l,
         _count(order, "order"), _count(rows, "rows"), _count(cols, "cols"), float(rank_tol),

@@ -28,6 +28,8 @@ from __future__ import annotations
 
 from typing import Any, Protocol, Union
 
+import numpy as np
+
 from .. import _sysid
 from .._checks import as_int
 from ..errors import DataError
@@ -83,6 +85,8 @@ def closed_loop_fit(
     if regularization not in REGULARIZATIONS:
         raise DataError(f"regularization must be one of {REGULARIZATIONS}, got "
                         f"{regularization!r}")
+    if not (isinstance(ridge, (int, float)) and np.isfinite(ridge) and ridge >= 0):
+        raise DataError(f"ridge must be a finite number >= 0, got {ridge!r}")
     for name, flag in (("feedthrough", feedthrough), ("kalman", kalman)):
         if not isinstance(flag, bool):
             raise DataError(f"{name} must be True or False, got {flag!r}")

@@ -115,6 +115,9 @@ def frd_subspace(
     omega = np.asarray(frd.omega, dtype=float)
     g = np.asarray(frd.response, dtype=complex)
     nf, l, m = g.shape
+    if np.any(omega < 0) or not np.all(np.isfinite(omega)):
+        raise DataError(f"frequencies must be finite and >= 0, got min {omega.min():g} rad/s; "
+                        "keep the non-negative half of a two-sided response")
     if continuous:
         pos = omega[omega > 0]
         if pos.size == 0:
@@ -139,6 +142,9 @@ def frd_subspace(
         if not isinstance(order, str):
             horizon = max(horizon, int(order) + 1)
     q = as_int(horizon, "horizon", 2)
+    if q * l > 2 * nf * m:  # the Hankel matrix has q*l rows and 2*nf*m real columns
+        raise DataError(f"horizon={q} needs at least {-(-q * l // (2 * m))} frequencies "
+                        f"({nf} given): lower the horizon or measure more frequencies")
     n = None
     if isinstance(order, str):
         if order != "auto":
