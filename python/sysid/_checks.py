@@ -252,7 +252,7 @@ def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
             continue
         first = cols[0][0]
         if all(np.all(c == first) for c in cols):
-            name = names[j] if names is not None and j < len(names) else f"{kind[0]}{j}"
+            name = names[j] if names is not None and j < len(names) else f"{'uy'[side]}{j}"
             fix = ("drop it (data.select), or fit an output-only model (sysid.ar, sysid.arma)"
                    if side == 0 else "drop it (data.select)")
             raise DataError(f"{kind} {name} is {first:g} in every sample: {who} cannot estimate "
