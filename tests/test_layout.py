@@ -329,6 +329,8 @@ def test_readme_where_things_are_points_at_existing_names_and_files():
     section = section[: section.index("\n## ", 3)]
     rows = [r for r in section.splitlines() if r.startswith("| ") and not r.startswith("| concept")]
     assert len(rows) > 20
+    # a family announced for this wave ("(planned, issue NN)") is checked once it lands
+    rows = [r for r in rows if "(planned" not in r]
     problems = []
     for row in rows:
         _, names, py, rs = [c.strip() for c in row.strip().strip("|").split("|")]
