@@ -42,8 +42,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import _sysid
 from ..errors import DataError
+from ..models.discretisation import expm
 
 __all__ = ["split_delays", "input_taps", "fractional_columns", "foh_columns", "tap_states",
            "shift_taps"]
@@ -95,12 +95,6 @@ def input_taps(delays: np.ndarray, dt: float, hold: str = "zoh") -> list[tuple[i
     return taps
 
 
-def _expm(M: np.ndarray, dirs: list[np.ndarray]) -> tuple[np.ndarray, list[np.ndarray]]:
-    E, L = _sysid.expm_frechet(np.ascontiguousarray(M, dtype=float),
-                               [np.ascontiguousarray(d, dtype=float) for d in dirs])
-    return E, list(L)
-
-
 def _aug(A: np.ndarray, b: np.ndarray, t: float) -> np.ndarray:
     n = A.shape[0]
     M = np.zeros((n + 1, n + 1))
@@ -123,8 +117,8 @@ def fractional_columns(A: np.ndarray, b: np.ndarray, dt: float, r: float,
     True
     """
     n = A.shape[0]
-    E1, L1 = _expm(_aug(A, b, dt - r), [_aug(dA, db, dt - r) for dA, db in dirs])
-    E2, L2 = _expm(_aug(A, b, r), [_aug(dA, db, r) for dA, db in dirs])
+    E1, L1 = expm(_aug(A, b, dt - r), [_aug(dA, db, dt - r) for dA, db in dirs])
+    E2, L2 = expm(_aug(A, b, r), [_aug(dA, db, r) for dA, db in dirs])
     F1, gr = E1[:n, :n], E2[:n, n]
     g0, g1 = E1[:n, n].copy(), F1 @ gr
     ders = [(d1[:n, n].copy(), d1[:n, :n] @ gr + F1 @ d2[:n, n]) for d1, d2 in zip(L1, L2)]
@@ -156,8 +150,8 @@ def foh_columns(A: np.ndarray, b: np.ndarray, C: np.ndarray, D: np.ndarray, Ad: 
     as the plain first-order hold does), which adds ``Ad G`` to ``B`` and ``C G`` to ``D``.
     """
     n, h = A.shape[0], dt
-    E1, L1 = _expm(_aug_foh(A, b, r, 1.0), [_aug_foh(dA, db, r, 0.0) for dA, db, *_ in dirs])
-    E2, L2 = _expm(_aug_foh(A, b, h - r, 1.0),
+    E1, L1 = expm(_aug_foh(A, b, r, 1.0), [_aug_foh(dA, db, r, 0.0) for dA, db, *_ in dirs])
+    E2, L2 = expm(_aug_foh(A, b, h - r, 1.0),
                    [_aug_foh(dA, db, h - r, 0.0) for dA, db, *_ in dirs])
 
     def first(E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

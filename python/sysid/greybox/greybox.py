@@ -39,8 +39,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import _sysid
 from ..errors import DataError
+from ..models.discretisation import expm, from_blocks, hold_blocks
 from .delays import check_fraction, delayed_blocks, input_taps, split_delays, tap_states
 
 __all__ = ["Param", "param", "fixed", "Parameters", "GreyBox", "IdentifiabilityWarning"]
@@ -178,36 +178,6 @@ def _takes_dt(fn: Callable[..., Any]) -> bool:
         q.kind == q.VAR_KEYWORD for q in sig.parameters.values())
 
 
-def _expm(M: np.ndarray, dirs: list[np.ndarray]) -> tuple[np.ndarray, list[np.ndarray]]:
-    """``exp(M)`` and its Fréchet derivatives (Rust core: scaling and squaring; no LAPACK
-    threads for these small matrices)."""
-    E, L = _sysid.expm_frechet(np.ascontiguousarray(M, dtype=float),
-                               [np.ascontiguousarray(d, dtype=float) for d in dirs])
-    return E, list(L)
-
-
-def _hold_blocks(A: np.ndarray, B: np.ndarray, dt: float, hold: str) -> np.ndarray:
-    n, m = B.shape
-    if hold == "zoh":
-        M = np.zeros((n + m, n + m))
-        M[:n, :n], M[:n, n:] = A * dt, B * dt
-        return M
-    M = np.zeros((n + 2 * m, n + 2 * m))
-    M[:n, :n], M[:n, n:n + m] = A * dt, B * dt
-    M[n:n + m, n + m:] = np.eye(m)
-    return M
-
-
-def _from_blocks(E: np.ndarray, C: np.ndarray, D: np.ndarray, n: int, m: int, hold: str
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(Ad, Bd, Dd - D)`` from the exponential of the augmented matrix."""
-    Ad = E[:n, :n]
-    if hold == "zoh":
-        return Ad, E[:n, n:n + m], np.zeros_like(D)
-    G1, G2 = E[:n, n:n + m], E[:n, n + m:]
-    return Ad, G1 + (Ad - np.eye(n)) @ G2, C @ G2
-
-
 class GreyBox:
     """A linear grey-box structure: system matrices as a function of named parameters.
 
@@ -341,8 +311,8 @@ class GreyBox:
         A, B, C, D = mats["A"], mats["B"], mats["C"], mats["D"]
         assert A is not None and B is not None and C is not None and D is not None
         n, m = B.shape
-        E = _expm(_hold_blocks(A, B, dt, self.hold), [])[0]
-        Ad, Bd, dD = _from_blocks(E, C, D, n, m, self.hold)
+        E = expm(hold_blocks(A, B, dt, self.hold), [])[0]
+        Ad, Bd, dD = from_blocks(E, C, D, n, m, self.hold)
         return {**mats, "A": Ad, "B": Bd, "D": D + dD}
 
     def sampled_derivatives(self, values: Any, dt: float, names: list[str]
@@ -363,15 +333,15 @@ class GreyBox:
         A, B, C, D = base["A"], base["B"], base["C"], base["D"]
         assert A is not None and B is not None and C is not None and D is not None
         n, m = B.shape
-        M = _hold_blocks(A, B, dt, self.hold)
+        M = hold_blocks(A, B, dt, self.hold)
         dMs = []
         for d in raw:
-            dM = _hold_blocks(d["A"], d["B"], dt, self.hold)
+            dM = hold_blocks(d["A"], d["B"], dt, self.hold)
             if self.hold == "foh":
                 dM[n:n + m, n + m:] = 0.0
             dMs.append(dM)
-        E, dEs = _expm(M, dMs)
-        Ad, Bd, dD0 = _from_blocks(E, C, D, n, m, self.hold)
+        E, dEs = expm(M, dMs)
+        Ad, Bd, dD0 = from_blocks(E, C, D, n, m, self.hold)
         out = []
         for d, dE in zip(raw, dEs):
             if self.hold == "zoh":

@@ -7,7 +7,7 @@
 Measured data are samples every ``dt``; between samples the input is held constant
 (zero-order hold, ``"zoh"``) or interpolated linearly (first-order hold, ``"foh"``). Both are
 exact discretisations, computed once from the exponential of an augmented matrix
-(``scipy.linalg.expm``):
+(:mod:`sysid.models.discretisation`, on the Rust core's ``expm_frechet``):
 
 - ZOH: ``expm([[A, B], [0, 0]] dt) = [[Ad, G1], [0, I]]``, ``Bd = G1``.
 - FOH: ``expm([[A, B, 0], [0, 0, I/dt], [0, 0, 0]] dt)`` holds ``Ad``, ``G1`` and ``G2 =
@@ -33,6 +33,7 @@ import scipy.linalg
 
 from .._checks import as_2d
 from ..errors import DataError, NumericalError
+from .discretisation import expm, hold_blocks
 from .linear import transmission_zeros
 from .protocol import ModelMixin, TimeResponse
 from .statespace import StateSpaceModel, ss_parameter_count
@@ -356,10 +357,7 @@ def _hold_integrals(A: np.ndarray, B: np.ndarray, dt: float
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``Ad = e^{A dt}``, ``G1``, ``G2`` from one exponential of the FOH augmented matrix."""
     n, m = B.shape
-    big = np.zeros((n + 2 * m, n + 2 * m))
-    big[:n, :n], big[:n, n:n + m] = A, B
-    big[n:n + m, n + m:] = np.eye(m) / dt
-    E = scipy.linalg.expm(big * dt)
+    E = expm(hold_blocks(A, B, dt, "foh"))[0]
     return E[:n, :n], E[:n, n:n + m], E[:n, n + m:]
 
 
@@ -369,9 +367,7 @@ def _discretise(sys: ContinuousStateSpace, dt: float, method: str
     A, B, C, D = sys.A, sys.B, sys.C, sys.D
     n, m = B.shape
     if method == "zoh":
-        big = np.zeros((n + m, n + m))
-        big[:n, :n], big[:n, n:] = A, B
-        E = scipy.linalg.expm(big * dt)
+        E = expm(hold_blocks(A, B, dt, "zoh"))[0]
         return E[:n, :n], E[:n, n:], C.copy(), D.copy(), np.zeros((n, m))
     if method == "foh":
         Ad, G1, G2 = _hold_integrals(A, B, dt)
