@@ -90,9 +90,6 @@ def closed_loop_fit(
     for name, flag in (("feedthrough", feedthrough), ("kalman", kalman)):
         if not isinstance(flag, bool):
             raise DataError(f"{name} must be True or False, got {flag!r}")
-    if est.future > est.past + 1:
-        raise DataError(f"closed-loop methods need future <= past + 1 (got past={est.past}, "
-                        f"future={est.future}); use a longer past horizon")
     key = (method, bool(feedthrough), regularization, float(ridge))
     cache = est._svd
     if key not in cache:

@@ -334,7 +334,8 @@ impl ClosedLoop {
             return Err(SysidError::invalid(
                 "future horizon",
                 format!(
-                    "closed-loop methods need 2 <= future <= past + 1 (got past={p}, future={f})"
+                    "closed-loop methods need 2 <= future <= past + 1 (got past={p}, \
+                     future={f}); use a longer past horizon or a shorter future one"
                 ),
             ));
         }
