@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_int
+from .._display import HTMLResult
 from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..errors import DataError, NumericalError, SysidError
@@ -73,7 +74,7 @@ def n_parameters(n: int, m: int, l: int, *, feedthrough: bool = True, noise_mode
                               n_experiments=n_experiments)
 
 
-class Criteria:
+class Criteria(HTMLResult):
     """AIC, AICc, BIC and FPE of one model on one record.
 
     Attributes
@@ -155,7 +156,7 @@ def criteria(model: Any, data: Any, *, x0: Any = "estimate",
 
 
 # -- order selection ----------------------------------------------------------------------
-class OrderSelection:
+class OrderSelection(HTMLResult):
     """Results of an order (and weighting) sweep on one compression.
 
     Attributes

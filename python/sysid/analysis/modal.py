@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._display import HTMLResult
 from ..data.formats import _pandas
 from ..errors import DataError
 from ..models.checks import discrete_statespace
@@ -33,7 +34,7 @@ from ..models.statespace import StateSpaceModel
 __all__ = ["ModalAnalysis", "modal_analysis"]
 
 
-class ModalAnalysis:
+class ModalAnalysis(HTMLResult):
     """Modes of a model, sorted by natural frequency.
 
     Attributes

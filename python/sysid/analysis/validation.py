@@ -36,6 +36,7 @@ from typing import Any, Union
 import numpy as np
 
 from .._checks import as_2d, as_int
+from .._display import HTMLResult
 from ..data.iodata import IOData
 from ..errors import DataError, ShapeError
 from ..models.checks import check_model
@@ -250,7 +251,7 @@ def _metrics(y: np.ndarray, yhat: np.ndarray) -> dict[str, np.ndarray]:
 
 
 # -- compare ----------------------------------------------------------------------------
-class CompareResult:
+class CompareResult(HTMLResult):
     """Measured versus model outputs, with fit numbers per experiment and output.
 
     Attributes

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_2d, as_dt
+from .._display import HTMLResult
 from ..errors import DataError, InsufficientDataError, ShapeError
 from .formats import _FileFormats, _pandas
 from .raw import _RawConstructors
@@ -357,6 +358,13 @@ class IOData(_Segments, _RawConstructors, _FileFormats):
     def __len__(self) -> int:
         return self.n_samples
 
+    def _repr_html_(self) -> str:
+        """Notebook display: channel statistics and a small plot each (see
+        :mod:`sysid._display`)."""
+        from .._display import iodata_html
+
+        return iodata_html(self)
+
     def __repr__(self) -> str:
         exp = f" in {self.n_experiments} experiments" if self.n_experiments > 1 else ""
         tr = ", detrended" if self.has_trend else ""
@@ -471,7 +479,7 @@ class IOData(_Segments, _RawConstructors, _FileFormats):
 
 
 @dataclass
-class DataSummary:
+class DataSummary(HTMLResult):
     """Per-channel statistics of a record (from :meth:`IOData.summary`)."""
 
     title: str

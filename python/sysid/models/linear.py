@@ -11,6 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from .._display import HTMLResult
+
 __all__ = ["transmission_zeros", "DampingTable", "damping_table"]
 
 
@@ -80,7 +82,7 @@ def transmission_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarra
     return z[np.argsort(np.abs(z), kind="stable")]
 
 
-class DampingTable:
+class DampingTable(HTMLResult):
     """Poles with their natural frequency, damping ratio and time constant.
 
     Attributes

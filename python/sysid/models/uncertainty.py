@@ -38,6 +38,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from .._display import HTMLResult
 from ..errors import DataError
 
 __all__ = ["ParameterUncertainty", "Propagation", "UncertaintyWarning"]
@@ -78,7 +79,7 @@ def _real_vector(x: Any, what: str = "fn(model)") -> np.ndarray:
     return a.astype(float)
 
 
-class ParameterUncertainty:
+class ParameterUncertainty(HTMLResult):
     """Covariance of the free parameters of an estimated model, and its propagation.
 
     Parameters
