@@ -193,6 +193,9 @@ _LAZY = {
     "PiecewiseLinear": "models.hammerstein",
     "SigmoidNetwork": "models.hammerstein",
     "UserFunction": "models.hammerstein",
+    # issue 30 (branch report): many records at once
+    "identify_many": "batch.many",
+    "BatchResult": "batch.stream",
 }
 
 
@@ -375,4 +378,7 @@ __all__ = [
     "model_to_dict",
     "model_from_dict",
     "report",
+    # issue 30 (branch report): many records at once
+    "identify_many",
+    "BatchResult",
 ]
