@@ -34,8 +34,9 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
 
     Parameters
     ----------
-    records : list, dict, folder, Dask bag or Dask dataframe
-        A list of :class:`~sysid.IOData` (ids ``"0", "1", ...``) or of ``(id, IOData)``; a
+    records : list, iterator, dict, folder, Dask bag or Dask dataframe
+        A list (or a lazy iterator: records made as workers take them) of
+        :class:`~sysid.IOData` (ids ``"0", "1", ...``) or of ``(id, IOData)``; a
         dict ``{id: IOData}``; a folder of CSV/Parquet files (one record per file, id = file
         name without suffix; columns by ``inputs``/``outputs``); a Dask bag of such items; a
         Dask dataframe partitioned by record id (column ``record_id``; a record must not span
@@ -83,7 +84,7 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
     cols = Columns(tuple(inputs) if inputs else None, tuple(outputs) if outputs else None,
                    dt, time_column)
     work = tasks(records, record_id)
-    if type(records).__module__.split(".")[0] != "dask":  # small to list: a known total
+    if hasattr(records, "__len__") or isinstance(records, (str, Path)):  # a known total
         work = list(work)  # type: ignore[assignment]
     return run_batch(work, fit or default_fit, cols, Path(out), workers, retries,
                      show(progress), flush_every)
