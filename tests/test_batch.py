@@ -138,3 +138,56 @@ def test_dask_cluster_killed_worker_corrupt_record_bag_and_dataframe(tmp_path, m
                                   outputs=["y"], dt=0.1, out=tmp_path / "d.parquet",
                                   progress=False).to_pandas()
         check_rows(dfd, ["d0", "d1", "d2", "d3"])
+
+
+CTRL_C = '''
+import os, sys, time
+from pathlib import Path
+import numpy as np
+import sysid
+
+def slow_fit(data):
+    (Path(sys.argv[2]) / f"{os.getpid()}.pid").write_text("")
+    time.sleep(0.4)
+    return sysid.n4sid(data, 1)
+
+if __name__ == "__main__":
+    m = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]])
+    u = np.random.default_rng(0).standard_normal((300, 1))
+    recs = [sysid.IOData(u=u, y=m.simulate(u)) for _ in range(200)]
+    sysid.identify_many(recs, fit=slow_fit, workers=2, out=sys.argv[1], flush_every=1,
+                        progress=False)
+'''
+
+
+def test_ctrl_c_stops_the_workers_and_keeps_the_finished_rows(tmp_path):
+    """SIGINT to the calling process: it stops within seconds, its worker processes are
+    gone, and the rows finished before are in the table."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    import pandas as pd
+
+    script, out, pids = tmp_path / "run.py", tmp_path / "out", tmp_path / "pids"
+    script.write_text(CTRL_C)
+    pids.mkdir()
+    env = {**os.environ, "PYTHONPATH": str(Path(sysid.__file__).parents[1])}
+    with subprocess.Popen([sys.executable, str(script), str(out), str(pids)], env=env,
+                          stderr=subprocess.PIPE, text=True) as proc:
+        deadline = time.monotonic() + 120
+        while len(list(out.glob("part-*.parquet"))) < 3 and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert proc.poll() is None
+        t0 = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+    assert time.monotonic() - t0 < 30 and proc.returncode != 0
+    assert "KeyboardInterrupt" in err
+    df = pd.read_parquet(out)
+    assert 3 <= len(df) < 200 and df["error"].isna().all()
+    time.sleep(1.0)
+    for p in pids.glob("*.pid"):  # every worker that ran is gone
+        with pytest.raises(ProcessLookupError):
+            os.kill(int(p.stem), 0)

@@ -46,7 +46,9 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
         available, else ``ssest`` at the subspace automatic order). Must be picklable (a
         module-level function) to run in other processes.
     out : str or Path
-        The Parquet file written (replaced). Columns: ``record_id, family, order, fit``
+        The folder of the Parquet table (a dataset of ``part-NNNNN.parquet`` files, one per
+        ``flush_every`` rows, each complete when it appears; earlier parts are replaced;
+        read it with ``pandas.read_parquet(out)``). Columns: ``record_id, family, order, fit``
         (simulation fit % on the record), ``stable, max_abs_pole, n_parameters,
         parameters`` (the model as JSON), ``n_samples, seconds`` (read + fit time),
         ``error`` (null when fitted), ``attempts``.
@@ -61,7 +63,7 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
     progress : bool, optional
         A bar over the whole batch (default: on a terminal).
     flush_every : int
-        Rows per Parquet row group: what a crash of the calling process can lose at most.
+        Rows per part file (or every 5 s): what a crash of the calling process can lose.
 
     Returns
     -------

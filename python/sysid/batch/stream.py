@@ -29,7 +29,7 @@ class BatchResult:
     Attributes
     ----------
     path : Path
-        The Parquet file (one row per record).
+        The folder of Parquet parts (one row per record; ``pandas.read_parquet(path)``).
     n_ok, n_failed : int
     seconds : float
         Wall time of the batch.
@@ -43,10 +43,11 @@ class BatchResult:
         self.seconds, self.workers = seconds, workers
 
     def to_pandas(self) -> Any:
-        """The table (read back from the Parquet file)."""
+        """The table (read back from the Parquet parts)."""
         import pyarrow.parquet as pq
 
-        return pq.read_table(self.path).to_pandas()
+        return pq.read_table(sorted(str(p) for p in self.path.glob("part-*.parquet"))
+                             ).to_pandas()
 
     def model(self, record_id: str) -> Any:
         """The model of one record, rebuilt from its ``parameters`` JSON."""
@@ -73,11 +74,12 @@ DIED = ("WorkerDied: the process fitting this record exited (killed, out of memo
 
 
 class RowWriter:
-    """Rows to a Parquet file in row groups; ``close()`` leaves a valid file."""
+    """Rows to a Parquet dataset: a folder of ``part-NNNNN.parquet`` files, one per flush,
+    each complete when it appears (written aside, then renamed), so a crash of any process
+    loses at most the rows not yet flushed. Earlier parts in the folder are removed."""
 
     def __init__(self, path: Path, flush_every: int) -> None:
         import pyarrow as pa
-        import pyarrow.parquet as pq
 
         self.schema = pa.schema([
             ("record_id", pa.string()), ("family", pa.string()), ("order", pa.int64()),
@@ -85,13 +87,17 @@ class RowWriter:
             ("n_parameters", pa.int64()), ("parameters", pa.string()),
             ("n_samples", pa.int64()), ("seconds", pa.float64()), ("error", pa.string()),
             ("attempts", pa.int64())])
-        path.parent.mkdir(parents=True, exist_ok=True)
+        if path.exists() and not path.is_dir():
+            raise DataError(f"out={str(path)!r} is a file; identify_many writes a folder of "
+                            "Parquet parts (read it with pandas.read_parquet(folder))")
+        path.mkdir(parents=True, exist_ok=True)
+        for old in path.glob("part-*.parquet"):
+            old.unlink()
         self.path, self.flush_every = path, max(1, int(flush_every))
         self._pa = pa
-        self._writer = pq.ParquetWriter(str(path), self.schema)
         self._rows: list[dict[str, Any]] = []
         self._last = time.monotonic()
-        self.n_ok = self.n_failed = 0
+        self.n_ok = self.n_failed = self.parts = 0
 
     def add(self, row: dict[str, Any]) -> None:
         self._rows.append(row)
@@ -103,15 +109,25 @@ class RowWriter:
             self.flush()
 
     def flush(self) -> None:
+        import pyarrow.parquet as pq
+
         if self._rows:
             cols = {k: [r[k] for r in self._rows] for k in SCHEMA_FIELDS}
-            self._writer.write_table(self._pa.table(cols, schema=self.schema))
+            name = self.path / f"part-{self.parts:05d}.parquet"
+            tmp = self.path / f".{name.name}.tmp"
+            pq.write_table(self._pa.table(cols, schema=self.schema), str(tmp))
+            tmp.replace(name)
+            self.parts += 1
             self._rows = []
         self._last = time.monotonic()
 
     def close(self) -> None:
         self.flush()
-        self._writer.close()
+        if self.parts == 0:  # an empty batch: still a readable table
+            self._rows = []
+            import pyarrow.parquet as pq
+
+            pq.write_table(self.schema.empty_table(), str(self.path / "part-00000.parquet"))
 
 
 def run_batch(work: Iterable[tuple[str, Any]], fit: Callable[[Any], Any], cols: Columns,

@@ -82,5 +82,9 @@ def run_one(rid: str, source: Any, fit: Callable[[Any], Any], cols: Columns,
 
 def one_thread() -> None:
     """Worker initialiser: one compute thread per process (the processes are the
-    parallelism; results do not depend on the thread count)."""
+    parallelism; results do not depend on the thread count), and Ctrl-C left to the caller,
+    which stops the workers itself."""
+    import signal
+
     os.environ["RAYON_NUM_THREADS"] = "1"
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
