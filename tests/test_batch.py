@@ -191,3 +191,15 @@ def test_ctrl_c_stops_the_workers_and_keeps_the_finished_rows(tmp_path):
     for p in pids.glob("*.pid"):  # every worker that ran is gone
         with pytest.raises(ProcessLookupError):
             os.kill(int(p.stem), 0)
+
+
+def test_guide_runs(tmp_path, monkeypatch, capsys):
+    """docs/batch.md's example runs and prints the table it describes."""
+    import re
+
+    monkeypatch.chdir(tmp_path)
+    text = (Path(__file__).parents[1] / "docs" / "batch.md").read_text()
+    for i, block in enumerate(re.findall(r"```python\n(.*?)```", text, re.S)):
+        exec(compile(block, f"docs/batch.md[{i}]", "exec"), {})
+    out = capsys.readouterr().out
+    assert "loop3" in out and "record_id" in out and (tmp_path / "loops.parquet").is_dir()

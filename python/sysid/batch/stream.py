@@ -64,9 +64,10 @@ class BatchResult:
                 f"{self.seconds:.1f} s on {self.workers}; {self.path})")
 
     def _repr_html_(self) -> str:
-        from .._display import result_html
+        """Notebook display: the counts and the table without the model JSON."""
+        from .._display import _wrap, frame_table
 
-        return result_html(self)
+        return _wrap(repr(self), frame_table(self.to_pandas().drop(columns=["parameters"])))
 
 
 DIED = ("WorkerDied: the process fitting this record exited (killed, out of memory, or a "
