@@ -10,7 +10,8 @@ subspace automatic order). Reported: records per second with 1 and 2 local worke
 and their ratio (goal >= 1.7); the per-record overhead = wall time x workers / records minus
 the mean in-worker time (read + fit + describe, the table's ``seconds``), relative to that
 time (goal < 10 %); and the same records fitted in this process in a plain loop (no workers,
-no Parquet), the floor the workers are measured against. Results go to
+no Parquet, one compute thread as in the workers), the floor the workers are
+measured against. Results go to
 benches/results/fleet.md.
 """
 
@@ -26,8 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-import sysid
-from sysid.batch.worker import default_fit
+# one compute thread here too, as in the workers: the floor is the same fit, unshared
+os.environ.setdefault("RAYON_NUM_THREADS", "1")
+
+import sysid  # noqa: E402
+from sysid.batch.worker import default_fit  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 N_SAMPLES, ORDER, M, L = 10_000, 4, 3, 3
@@ -110,7 +114,8 @@ def main() -> None:
         "",
         f"Throughput ratio, 2 workers / 1 worker: **{ratio:.2f}x** (goal >= 1.7x).",
         "",
-        f"Plain loop in the calling process (first {k} records, no workers, no Parquet): "
+        f"Plain loop in the calling process (first {k} records, one compute thread as in the "
+        "workers, no processes, no Parquet): "
         f"{floor:.3f} s/record, so one worker process runs at "
         f"{100 * floor / (r1['wall'] / n):.0f} % of the in-process rate.",
         "",
