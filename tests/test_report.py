@@ -94,5 +94,5 @@ def test_time_series_and_continuous_models(tmp_path):
     data = sysid.IOData(u=u, y=y, dt=0.05)
     text = sysid.report(c, data, tmp_path / "c")["html"].read_text()
     specs = [json.loads(s.split(">", 1)[1].split("</script>")[0]) for s in text.split(
-        '<script type="application/json" id=')[1:]]
+        '<script type="application/json" id="fig')[1:]]
     assert any(s["title"] == "pole-zero map (s plane)" for s in specs)
