@@ -15,7 +15,7 @@ import numpy as np
 
 __all__ = ["MAX_POINTS", "channel_label", "time_figures", "bode_figures", "residual_figures",
            "error_spectrum_figures", "step_figures", "pzmap_figure", "singular_value_figure",
-           "stabilization_figure", "consistent_phase"]
+           "stabilization_figure", "stabilization_classes", "consistent_phase"]
 
 MAX_POINTS = 20000
 BLUE, RED, GREEN, ORANGE, GREY = "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#888888"
@@ -294,17 +294,17 @@ def singular_value_figure(sel: Any) -> dict[str, Any] | None:
 FREQ_TOL, DAMP_TOL = 0.01, 0.05
 
 
-def stabilization_figure(sel: Any, frd: Any = None) -> dict[str, Any] | None:
-    """Stabilisation diagram: each order's poles (one per conjugate pair) at their natural
-    frequency. A pole is *new*, *stable in frequency* (a pole of the next lower order within
-    1 % in frequency) or *stable in frequency and damping* (and within 5 % in damping);
-    unstable poles are crosses. The estimate's magnitude (scaled) is drawn behind."""
+def stabilization_classes(sel: Any, method: str | None = None,
+                          ) -> tuple[dict[str, list[tuple[float, int]]], list[int]]:
+    """``({class: [(frequency Hz, order), ...]}, orders)`` of every pole of every order of
+    the sweep (one per conjugate pair). Classes: ``"new"``; ``"f"`` (stable in frequency: the
+    nearest pole of the next lower order within :data:`FREQ_TOL`); ``"fd"`` (and in damping,
+    within :data:`DAMP_TOL`); ``"unstable"``."""
     cats: dict[str, list[tuple[float, int]]] = {"new": [], "f": [], "fd": [], "unstable": []}
     prev = None
-    rows = list(sel.damping(sel.method))
-    if not rows:
-        return None
-    for order, d in rows:
+    orders = []
+    for order, d in sel.damping(method or sel.method):
+        orders.append(order)
         keep = np.isfinite(d.wn_hz) & (d.poles.imag >= 0)
         f, z = d.wn_hz[keep], d.zeta[keep]
         inside = (np.abs(d.poles[keep]) < 1) if d.dt else (d.poles[keep].real < 0)
@@ -317,22 +317,34 @@ def stabilization_figure(sel: Any, frd: Any = None) -> dict[str, Any] | None:
                         else "f"
             cats["unstable" if not ok else kind].append((float(fi), order))
         prev = (f, z)
-    style = {"new": ("new", "#9ecae1", "open"), "f": ("stable in frequency", BLUE, "open"),
-             "fd": ("stable in frequency and damping", BLUE, "filled"),
-             "unstable": ("unstable", RED, "x")}
+    return cats, orders
+
+
+#: Legend name, colour and marker of each class of :func:`stabilization_classes`.
+STAB_STYLE = {"new": ("new", "#9ecae1", "open"), "f": ("stable in frequency", BLUE, "open"),
+              "fd": ("stable in frequency and damping", BLUE, "filled"),
+              "unstable": ("unstable", RED, "x")}
+
+
+def stabilization_figure(sel: Any, frd: Any = None) -> dict[str, Any] | None:
+    """Stabilisation diagram (:func:`stabilization_classes`) with the estimate's magnitude
+    (log, scaled to the order axis) behind."""
+    cats, orders = stabilization_classes(sel)
+    if not orders:
+        return None
     s = []
     for key, pts in cats.items():
         if pts:
             a = np.array(pts)
-            name, color, marker = style[key]
+            name, color, marker = STAB_STYLE[key]
             s.append(series(f"{name} ({len(pts)})", a[:, 0], a[:, 1], color, mode="markers",
                             marker=marker))
-    top = max(o for o, _ in rows)
+    top = max(orders)
     if frd is not None and frd.response.shape[2] and frd.omega.size > 2:
         keep = frd.omega > 0
         g = np.log10(np.maximum(np.abs(frd.response[keep, 0, 0]), 1e-300))
-        g = 0.5 + (top) * (g - g.min()) / max(g.max() - g.min(), 1e-12)
+        g = 0.5 + top * (g - g.min()) / max(g.max() - g.min(), 1e-12)
         s.insert(0, series(f"|G| of the {frd.method or 'estimate'} (log, scaled)",
                            frd.omega[keep] / (2 * np.pi), g, GREY, width=0.8))
-    return figure(f"stabilisation diagram ({sel.method}, orders {rows[0][0]}..{top}); chosen "
+    return figure(f"stabilisation diagram ({sel.method}, orders {orders[0]}..{top}); chosen "
                   f"order {sel.order}", "natural frequency [Hz]", "model order", s, logx=True)
