@@ -256,7 +256,7 @@ def test_warnings_of_the_run_reach_the_page_and_one_line_on_stderr(tmp_path, cap
     on the terminal as one line (no Python source line)."""
     import warnings
 
-    from sysid.estimate import subspace
+    from sysid.subspace import estimator as subspace
 
     original = subspace.SubspaceEstimator.__init__
 

@@ -4,7 +4,7 @@ spectra, Bode with confidence bands, poles, and the order choice.
 :func:`report` writes a folder with ``index.html`` (one self-contained page: tables, foldable
 sections, zoomable charts drawn by an inline script, no network needed), ``fit.csv`` and, when
 the model can be saved, ``model.json``; with an
-:class:`~sysid.analysis.criteria.OrderSelection` it adds the order sweep (``orders.csv``,
+:class:`~sysid.validation.criteria.OrderSelection` it adds the order sweep (``orders.csv``,
 singular values, stabilisation diagram). Warnings raised while the report is computed (and
 those passed in ``warnings=``, e.g. from the identification run) are shown at the top with
 what to do. ``sysid identify --report`` uses it.
@@ -24,11 +24,11 @@ import numpy as np
 from ..data.iodata import IOData
 from ..errors import DataError, SysidError
 from ..models.checks import check_model
+from ..validation.compare import compare, error_spectrum
+from ..validation.criteria import _pct
+from ..validation.residuals import residuals
 from . import report_figures as rf
-from .criteria import _pct
 from .report_page import Page, reissue, relevant, status, warning_items
-from .validation import compare, error_spectrum
-from .whiteness import residuals
 
 __all__ = ["report"]
 
@@ -140,7 +140,7 @@ def _build(model: Any, data: IOData, root: Path, sel: Any, which: str,
         page.figure(f) for f in rf.residual_figures(res)), open_=False, sid="residuals")
     frd = None
     if model.ninputs:
-        from .frf import spa
+        from ..nonparametric.frf import spa
 
         try:
             frd = spa(data)
