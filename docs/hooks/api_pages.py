@@ -18,7 +18,10 @@ TITLES = {
     "polynomial": "Polynomial models", "greybox": "Grey-box models",
     "nonlinear": "Nonlinear models", "nonparametric": "Non-parametric estimates",
     "realization": "Realisation", "identify": "Automatic identification",
-    "plot": "Plots", "errors": "Errors", "core": "Core",
+    "plot": "Plots", "errors": "Errors", "core": "Core", "batch": "Many records at once",
+    "timeseries": "Time series", "tf": "Transfer functions", "process": "Process models",
+    "oma": "Operational modal analysis", "recursive": "Recursive estimators",
+    "nlss": "Nonlinear state space",
 }
 
 
