@@ -70,8 +70,10 @@ def run(n: int, workers: int, out: Path) -> dict[str, float]:
     wall = time.perf_counter() - t0
     df = res.to_pandas()
     fit_s = float(df["seconds"].mean())
+    cpu = float(df["cpu_seconds"].sum())
     overhead = wall * workers / n - fit_s
     return {"wall": wall, "rate": n / wall, "fit_s": fit_s, "overhead": overhead,
+            "cpu_s": cpu / n, "cores": cpu / wall,
             "ok": res.n_ok, "failed": res.n_failed,
             "mean_fit": float(df["fit"].mean()), "orders": sorted(set(df["order"].dropna()))}
 
@@ -102,17 +104,20 @@ def main() -> None:
         f"{n} records of {N_SAMPLES} samples, {M} inputs x {L} outputs, order {ORDER}; fit: "
         "identify_many's default.",
         "",
-        "| workers | wall [s] | records/s | mean in-worker s/record | overhead s/record | "
-        "overhead / fit | ok | errors |",
-        "|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| workers | wall [s] | records/s | in-worker s/record | in-worker CPU s/record | "
+        "CPU cores obtained | overhead s/record | overhead / in-worker | ok | errors |",
+        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for w, r in ((1, r1), (2, r2)):
         lines.append(f"| {w} | {r['wall']:.1f} | {r['rate']:.3f} | {r['fit_s']:.3f} | "
+                     f"{r['cpu_s']:.3f} | {r['cores']:.2f} | "
                      f"{r['overhead']:.3f} | {100 * r['overhead'] / r['fit_s']:.1f} % | "
                      f"{r['ok']} | {r['failed']} |")
     lines += [
         "",
-        f"Throughput ratio, 2 workers / 1 worker: **{ratio:.2f}x** (goal >= 1.7x).",
+        f"Throughput ratio, 2 workers / 1 worker: **{ratio:.2f}x** (goal >= 1.7x). CPU cores "
+        f"obtained = CPU seconds of all workers / wall time: {r1['cores']:.2f} with one "
+        f"worker, {r2['cores']:.2f} with two (the share of the machine the workers got).",
         "",
         f"Plain loop in the calling process (first {k} records, one compute thread as in the "
         "workers, no processes, no Parquet): "

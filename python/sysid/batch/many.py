@@ -50,7 +50,8 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
         ``flush_every`` rows, each complete when it appears; earlier parts are replaced;
         read it with ``pandas.read_parquet(out)``). Columns: ``record_id, family, order, fit``
         (simulation fit % on the record), ``stable, max_abs_pole, n_parameters,
-        parameters`` (the model as JSON), ``n_samples, seconds`` (read + fit time),
+        parameters`` (the model as JSON), ``n_samples, seconds, cpu_seconds`` (wall and CPU
+        time of read + fit + describe in the worker),
         ``error`` (null when fitted), ``attempts``.
     workers : int, optional
         Local processes (default: the machine's cores); ignored with a Dask client.

@@ -86,8 +86,8 @@ class RowWriter:
             ("record_id", pa.string()), ("family", pa.string()), ("order", pa.int64()),
             ("fit", pa.float64()), ("stable", pa.bool_()), ("max_abs_pole", pa.float64()),
             ("n_parameters", pa.int64()), ("parameters", pa.string()),
-            ("n_samples", pa.int64()), ("seconds", pa.float64()), ("error", pa.string()),
-            ("attempts", pa.int64())])
+            ("n_samples", pa.int64()), ("seconds", pa.float64()),
+            ("cpu_seconds", pa.float64()), ("error", pa.string()), ("attempts", pa.int64())])
         if path.exists() and not path.is_dir():
             raise DataError(f"out={str(path)!r} is a file; identify_many writes a folder of "
                             "Parquet parts (read it with pandas.read_parquet(folder))")

@@ -18,7 +18,8 @@ from .records import Columns, load
 __all__ = ["SCHEMA_FIELDS", "default_fit", "run_one", "error_row", "one_thread"]
 
 SCHEMA_FIELDS = ("record_id", "family", "order", "fit", "stable", "max_abs_pole",
-                 "n_parameters", "parameters", "n_samples", "seconds", "error", "attempts")
+                 "n_parameters", "parameters", "n_samples", "seconds", "cpu_seconds", "error",
+                 "attempts")
 
 
 def default_fit(data: Any) -> Any:
@@ -34,7 +35,8 @@ def default_fit(data: Any) -> Any:
     return sysid.ssest(data, order)
 
 
-def _row(rid: str, model: Any, data: Any, seconds: float, attempts: int) -> dict[str, Any]:
+def _row(rid: str, model: Any, data: Any, seconds: float, cpu: float,
+         attempts: int) -> dict[str, Any]:
     import sysid
 
     fit = float(np.mean(sysid.compare(model, data).fit))
@@ -54,26 +56,28 @@ def _row(rid: str, model: Any, data: Any, seconds: float, attempts: int) -> dict
             "order": None if order is None else int(order), "fit": fit, "stable": stable,
             "max_abs_pole": rho, "n_parameters": int(model.n_parameters),
             "parameters": params, "n_samples": int(data.n_samples), "seconds": seconds,
-            "error": None, "attempts": attempts}
+            "cpu_seconds": cpu, "error": None, "attempts": attempts}
 
 
 def error_row(rid: str, error: str, attempts: int, seconds: float = float("nan"),
               n_samples: int | None = None) -> dict[str, Any]:
     return {"record_id": rid, "family": None, "order": None, "fit": None, "stable": None,
             "max_abs_pole": None, "n_parameters": None, "parameters": None,
-            "n_samples": n_samples, "seconds": seconds, "error": error, "attempts": attempts}
+            "n_samples": n_samples, "seconds": seconds, "cpu_seconds": None, "error": error,
+            "attempts": attempts}
 
 
 def run_one(rid: str, source: Any, fit: Callable[[Any], Any], cols: Columns,
             attempts: int = 1) -> dict[str, Any]:
     """One record, on a worker: read, fit, describe; any exception becomes an error row."""
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     n = None
     try:
         data = load(source, cols, rid)
         n = data.n_samples
         model = fit(data)
-        return _row(rid, model, data, time.perf_counter() - t0, attempts)
+        return _row(rid, model, data, time.perf_counter() - t0, time.process_time() - c0,
+                    attempts)
     except Exception as e:  # noqa: BLE001 - a bad record must not stop the batch
         where = traceback.extract_tb(e.__traceback__)[-1]
         return error_row(rid, f"{type(e).__name__}: {e} ({Path(where.filename).name}:"
