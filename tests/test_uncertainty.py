@@ -442,9 +442,10 @@ def test_modal_table_std_and_html_report_pole_table(tmp_path):
     html = (rep / "index.html").read_text()
     assert 'id="poles"' in html and "std damping" in html
     assert sysid.load_model(rep / "model.json").info["uncertainty"]["n_boot"] == 30
-    from sysid.analysis.report import _pole_table
+    from sysid.analysis.report import _pole_section
+    from sysid.analysis.report_page import Page
 
-    plain = _pole_table(sysid.StateSpaceModel(m.A, m.B, m.C, dt=0.1), lambda *a: repr(a))
+    plain = _pole_section(Page("t"), sysid.StateSpaceModel(m.A, m.B, m.C, dt=0.1), [])
     assert "pole" in plain and "std damping" not in plain
 
 
