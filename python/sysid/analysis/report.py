@@ -253,7 +253,8 @@ def _parameter_table(model: Any, table: Callable[[str, list[str], list[list[Any]
 
 def _pole_table(model: Any, table: Callable[[str, list[str], list[list[Any]]], str]) -> str:
     """Poles with frequency and damping, and their standard deviations when the model has
-    an uncertainty (NaN, shown as n/a, where first order does not hold)."""
+    an uncertainty (first order; Monte Carlo, marked *, for poles that coincide with
+    another)."""
     import warnings
 
     from ..models.uncertainty import UncertaintyWarning
@@ -264,8 +265,8 @@ def _pole_table(model: Any, table: Callable[[str, list[str], list[list[Any]]], s
         warnings.simplefilter("ignore", UncertaintyWarning)
         t = damp(model, std=has)
 
-    def g(x: float) -> str:
-        return "n/a" if not np.isfinite(x) else f"{x:.4g}"
+    def g(x: float, mark: str = "") -> str:
+        return "n/a" if not np.isfinite(x) else f"{x:.4g}{mark}"
     header = ["pole", "|pole|", "wn [Hz]", "damping"]
     if has:
         header += ["std Re", "std Im", "std wn [Hz]", "std damping"]
@@ -274,10 +275,15 @@ def _pole_table(model: Any, table: Callable[[str, list[str], list[list[Any]]], s
         row = [f"{p.real:.5g}{p.imag:+.5g}j", f"{abs(p):.4f}", g(t.wn_hz[k]), g(t.zeta[k])]
         if has and t.pole_std is not None and t.wn_hz_std is not None and \
                 t.zeta_std is not None:
-            row += [g(t.pole_std[k].real), g(t.pole_std[k].imag), g(t.wn_hz_std[k]),
-                    g(t.zeta_std[k])]
+            mc = "*" if t.std_method is not None and t.std_method[k] == "monte-carlo" else ""
+            row += [g(t.pole_std[k].real, mc), g(t.pole_std[k].imag, mc),
+                    g(t.wn_hz_std[k], mc), g(t.zeta_std[k], mc)]
         rows.append(row)
+    marked = has and t.std_method is not None and bool(np.any(t.std_method == "monte-carlo"))
     note = ("<p>Standard deviations: first order, from the model's parameter uncertainty ("
-            f"{html.escape(str(model.uncertainty.method))}).</p>" if has else "")
+            f"{html.escape(str(model.uncertainty.method))})"
+            + ("; * marks poles that coincide with another within their uncertainty, where "
+               "first order does not hold: Monte Carlo from the same covariance" if marked
+               else "") + ".</p>" if has else "")
     return table("poles", header, rows) + note
 

@@ -257,8 +257,10 @@ class StateSpaceModel(ModelMixin):
             ``(poles, sd)`` with ``sd`` complex, ``sd.real`` the std of the real part and
             ``sd.imag`` that of the imaginary part of each pole.
         method : {"linear", "monte-carlo"}
-            First-order perturbation with left and right eigenvectors (poles too close to
-            another pole for it to hold get NaN and an ``UncertaintyWarning``), or sampling.
+            First-order perturbation with left and right eigenvectors, or sampling. Poles
+            that coincide with another (numerically, or within their uncertainty), where
+            first order does not hold, get the Monte Carlo value and an
+            ``UncertaintyWarning`` says so.
 
         Examples
         --------
