@@ -251,7 +251,7 @@ class SubspaceEstimator:
         self.compressor = compressor
         warn_if_fallback(self.factor, requested=compressor)
         self._svd: dict[Any, Any] = {}
-        self._pe_cache: dict[int, int] = {}
+        self._pe_cache: dict[int | str, int] = {}
         self._feedback_p: float | None = None
         self._feedback_warned = False
         self._subspace(None)  # checks the record (length, excitation) right away
@@ -500,14 +500,26 @@ class SubspaceEstimator:
         return model
 
     def _excitation_order(self, needed: int, tol: float = 1e-9) -> int:
-        """Persistent-excitation order of the input, read from the factor (no pass over the
-        data): the largest ``d <= min(needed, past + future)`` for which the input's block
-        Hankel matrix with ``d`` block rows has full rank (eigenvalues of its Gram matrix
-        above ``tol`` times the largest, as :func:`sysid.persistent_excitation_order`)."""
+        """Persistent-excitation order of the input, up to ``needed``.
+
+        With the data: the excited lines of the input's spectrum
+        (:func:`sysid.persistent_excitation_order`, computed once per estimator, one FFT per
+        input). Built from a factor alone: the rank of the input rows of the factor (the
+        largest ``d <= min(needed, past + future)`` for which the input's block Hankel
+        matrix with ``d`` block rows has eigenvalues of its Gram matrix above ``tol`` times
+        the largest), which takes a band-limited multisine for a poorly exciting input."""
         if needed not in self._pe_cache:
-            # in the Rust core on the calling thread: one Cholesky of G - tol top I answers
-            # every d (the first non-positive pivot), no threaded LAPACK call
-            self._pe_cache[needed] = int(_sysid.excitation_order(self.factor, needed, tol))
+            if not self._from_factor:
+                if "spectrum" not in self._pe_cache:
+                    from ..data.excitation import spectral_excitation_order
+
+                    us = [np.ascontiguousarray(u) for u, _ in self.data.experiments]
+                    self._pe_cache["spectrum"] = spectral_excitation_order(us)
+                self._pe_cache[needed] = min(needed, self._pe_cache["spectrum"])
+            else:
+                # in the Rust core on the calling thread: one Cholesky of G - tol top I
+                # answers every d (the first non-positive pivot), no threaded LAPACK call
+                self._pe_cache[needed] = int(_sysid.excitation_order(self.factor, needed, tol))
         return self._pe_cache[needed]
 
     def __repr__(self) -> str:
