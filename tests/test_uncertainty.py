@@ -14,7 +14,8 @@ from scipy import signal
 import sysid
 from sysid import _sysid
 from sysid.errors import DataError
-from sysid.models.uncertainty import ParameterUncertainty, UncertaintyWarning, pole_std
+from sysid.models.pole_uncertainty import pole_std
+from sysid.models.uncertainty import ParameterUncertainty, UncertaintyWarning
 
 
 def _truth() -> sysid.StateSpaceModel:

@@ -20,7 +20,8 @@ from .. import _sysid
 from .._checks import as_int
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
-from ..errors import DataError
+from ..data.offsets import check_offsets
+from ..errors import DataError, OffsetWarning
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
 
@@ -192,6 +193,7 @@ def pem(
     True
     """
     data = _experiments(data)
+    check_offsets(data)  # issue 26: the one offset check (OffsetWarning)
     if not isinstance(model, StateSpaceModel):
         raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
     if focus not in _FOCUS:
@@ -334,9 +336,13 @@ def _start_loss(data: IOData, start: StateSpaceModel, focus: str, feedthrough: b
                 x0: Any, noise: str) -> float:
     """det of the error covariance of a candidate start (initial states fitted), the cost the
     refinement will minimise; inf when its predictor is unstable."""
+    import warnings
+
     try:
-        m = pem(data, start, focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
-                max_iter=0)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", OffsetWarning)  # said once, by the caller
+            m = pem(data, start, focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
+                    max_iter=0)
     except Exception:  # noqa: BLE001 - an unusable candidate is skipped
         return float("inf")
     if m.info["pem"]["stabilized"]:
@@ -431,8 +437,11 @@ def ssest(
         raise DataError("no subspace start could be computed for this order; lower the order")
     candidates.sort(key=lambda c: c[0])
     best = candidates[0]
-    model = pem(data, best[3], focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
-                max_iter=max_iter, tol=tol, regularization=regularization, progress=progress)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OffsetWarning)  # said once, by the subspace start
+        model = pem(data, best[3], focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
+                    max_iter=max_iter, tol=tol, regularization=regularization,
+                    progress=progress)
     model.info["start"] = {
         "method": best[1],
         "bd_x0": best[2],

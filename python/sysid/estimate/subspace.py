@@ -43,6 +43,7 @@ from .._checks import as_int
 from ..analysis.feedback import feedback_pvalues
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
+from ..data.offsets import check_offsets
 from ..errors import DataError, FeedbackWarning, InsufficientDataError, OrderError
 from ..models.statespace import StateSpaceModel
 from .streaming import compression_info, warn_if_fallback
@@ -86,7 +87,8 @@ def _preprocessing(data: IOData, from_factor: bool) -> dict[str, Any]:
 
 
 def _check_signals(data: IOData) -> None:
-    """Refuse constant outputs; warn about offsets much larger than the variation."""
+    """Refuse constant outputs; warn (OffsetWarning) about offsets much larger than the
+    variation."""
     for kind, idx, names in (("output", 1, data.output_names), ("input", 0, data.input_names)):
         if not names:
             continue
@@ -105,15 +107,8 @@ def _check_signals(data: IOData) -> None:
                     f"output {n} is constant ({mean[j]:g}): there is nothing to identify; "
                     "check the channel (a stuck sensor, the wrong column?) or drop it"
                 )
-            if not data.has_trend and abs(mean[j]) > 10 * std[j] > 0:
-                warnings.warn(
-                    f"{kind} {n} has an offset ({mean[j]:.4g}) much larger than its variation "
-                    f"(std {std[j]:.3g}) and the data were not detrended: the model will "
-                    "spend a state on the offset (a pole near 1); remove it first with "
-                    "sysid.detrend(data) (command line: --detrend mean or --detrend linear)",
-                    UserWarning,
-                    stacklevel=3,
-                )
+    # the one offset check of every linear estimator (sysid.data.offsets)
+    check_offsets(data)
 
 
 def _refuse_white_noise(data: IOData, lags: int = 20, level: float = 0.05) -> None:
@@ -431,15 +426,15 @@ class SubspaceEstimator:
         ):
             if not isinstance(flag, (bool, np.bool_)):
                 raise DataError(f"{name} must be True or False, got {flag!r}")
-        if self.factor.n_inputs:
-            # warn (ExcitationWarning) when the input cannot support order n
-            warn_excitation(self._excitation_order(2 * n), n, stacklevel=2)
         try:
             res = sub.fit(n, bool(feedthrough), bool(kalman), bool(stable))
         except OrderError as e:
             if not self._horizon_note:
                 raise
             raise OrderError(f"{e}{self._horizon_note}") from None
+        if self.factor.n_inputs:
+            # warn (ExcitationWarning) when the input cannot support order n
+            warn_excitation(self._excitation_order(2 * n), n, stacklevel=2)
         x0_est = None
         B, D = res["B"], res["D"]
         if x0:

@@ -269,7 +269,7 @@ class StateSpaceModel(ModelMixin):
         array([ 0.5+0.j, -0.2+0.j])
         """
         if std:
-            from .uncertainty import pole_std
+            from .pole_uncertainty import pole_std
 
             return pole_std(self, method)
         return np.linalg.eigvals(self.A).astype(complex)
@@ -420,7 +420,7 @@ class StateSpaceModel(ModelMixin):
         """Pole frequencies (rad/s, Hz) and damping; see :func:`sysid.damp` (``std=True``:
         with first-order standard deviations from :attr:`uncertainty`)."""
         if std:
-            from .uncertainty import damping_std
+            from .pole_uncertainty import damping_std
 
             d = damping_std(self, self.dt)
             return DampingTable(d["poles"], d["s"].astype(complex), self.dt, std=d)
