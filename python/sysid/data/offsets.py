@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import user_stacklevel
 from ..errors import OffsetWarning
 
 __all__ = ["check_offsets", "OFFSET_RATIO"]
@@ -45,19 +46,6 @@ def offsets(data: Any) -> list[tuple[str, str, float, float]]:
             if abs(mean[j]) > OFFSET_RATIO * std[j] > 0:
                 out.append((kind, str(name), float(mean[j]), float(std[j])))
     return out
-
-
-def _caller_level() -> int:
-    """``stacklevel`` of the first frame outside the sysid package (the user's call, however
-    deep inside sysid the check runs)."""
-    import os
-    import sys
-
-    pkg = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
-    frame, level = sys._getframe(1), 1
-    while frame is not None and frame.f_code.co_filename.startswith(pkg):
-        frame, level = frame.f_back, level + 1
-    return level
 
 
 def check_offsets(data: Any, *, stacklevel: int | None = None) -> bool:
@@ -91,5 +79,5 @@ def check_offsets(data: Any, *, stacklevel: int | None = None) -> bool:
         "validation fits far below zero). Remove it first: d, trend = sysid.detrend(data, "
         "'mean', return_trend=True), then trend.apply(validation) for other records (command "
         "line: --detrend mean); or use sysid.identify(data), which removes it and restores it "
-        "in its predictions"), stacklevel=_caller_level() if stacklevel is None else stacklevel)
+        "in its predictions"), stacklevel=user_stacklevel() if stacklevel is None else stacklevel)
     return True

@@ -106,7 +106,7 @@ def closed_loop_fit(
         "R": res["R"],
         "S": res["S"],
     }
-    return StateSpaceModel(
+    model = StateSpaceModel(
         res["A"], res["B"], res["C"], res["D"], res["K"] if kalman else None,
         dt=est.data.dt,
         noise_cov=res["noise_cov"] if kalman else None,
@@ -114,3 +114,7 @@ def closed_loop_fit(
         output_names=est.data.output_names,
         info=info,
     )
+    from .subspace import _warn_unstable
+
+    _warn_unstable(model, method, closed_loop=True)
+    return model
