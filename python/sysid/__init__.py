@@ -197,6 +197,8 @@ _LAZY = {
     "OffsetWarning": "errors",
     "StabilityWarning": "errors",
     "check_offsets": "data.offsets",
+    "CompareSet": "analysis.comparison",
+    "TrendedModel": "models.trended",
 }
 
 
@@ -383,4 +385,6 @@ __all__ = [
     "OffsetWarning",
     "StabilityWarning",
     "check_offsets",
+    "CompareSet",
+    "TrendedModel",
 ]

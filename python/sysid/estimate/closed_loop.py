@@ -31,6 +31,7 @@ from typing import TYPE_CHECKING, Union
 from .. import _sysid
 from .._checks import as_int
 from ..errors import DataError
+from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
 
 if TYPE_CHECKING:
@@ -114,7 +115,5 @@ def closed_loop_fit(
         output_names=est.data.output_names,
         info=info,
     )
-    from .subspace import _warn_unstable
-
-    _warn_unstable(model, method, closed_loop=True)
+    warn_unstable(model, method, closed_loop=True)
     return model

@@ -39,7 +39,7 @@ from typing import Any, Literal, Union
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, user_stacklevel
+from .._checks import as_int
 from ..analysis.feedback import feedback_pvalues
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
@@ -49,8 +49,8 @@ from ..errors import (
     FeedbackWarning,
     InsufficientDataError,
     OrderError,
-    StabilityWarning,
 )
+from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
 from .streaming import compression_info, warn_if_fallback
 
@@ -115,27 +115,6 @@ def _check_signals(data: IOData) -> None:
                 )
     # the one offset check of every linear estimator (sysid.data.offsets)
     check_offsets(data)
-
-
-def _warn_unstable(model: StateSpaceModel, method: str, closed_loop: bool = False) -> None:
-    """:class:`~sysid.errors.StabilityWarning` when a subspace fit returns an unstable model
-    (a pole on or outside the unit circle), naming the pole and what to do."""
-    if model.nstates == 0:
-        return
-    poles = model.poles()
-    k = int(np.argmax(np.abs(poles)))
-    if abs(poles[k]) < 1.0:
-        return
-    warnings.warn(StabilityWarning(
-        f"{method} returned an unstable model: pole {poles[k]:.4g} has modulus "
-        f"{abs(poles[k]):.4f} >= 1, so its simulation diverges. Unless the process itself is "
-        "unstable, " + ("refine it with sysid.pem(data, model, focus='simulation') (which "
-                        "keeps the simulation stable), or try a lower order or another horizon"
-                        if closed_loop else
-                        "use stable=True (reflects the unstable poles inside the unit circle), "
-                        "another weighting (method='moesp' or 'cva'), a lower order or a longer "
-                        "horizon, or refine with sysid.ssest(data, order, focus='simulation')")),
-        stacklevel=user_stacklevel())
 
 
 def _refuse_white_noise(data: IOData, lags: int = 20, level: float = 0.05) -> None:
@@ -519,7 +498,7 @@ class SubspaceEstimator:
             model.info["uncertainty"] = {"method": "bootstrap",
                                          "n_boot": model.uncertainty.n_boot,  # type: ignore
                                          "n_failed": model.uncertainty.n_failed}  # type: ignore
-        _warn_unstable(model, info["method"])
+        warn_unstable(model, info["method"])
         return model
 
     def _excitation_order(self, needed: int, tol: float = 1e-9) -> int:
