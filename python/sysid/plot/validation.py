@@ -46,7 +46,7 @@ def plot_compare(result: Any, experiment: int = 0, fig: Any = None) -> Any:
 
 
 def plot_compare_set(cset: Any, experiment: int = 0, fig: Any = None) -> Any:
-    """Measured outputs and every model's of a :class:`~sysid.analysis.comparison.CompareSet`
+    """Measured outputs and every model's of a :class:`~sysid.validation.comparison.CompareSet`
     (a model that diverged is named in the legend, not drawn)."""
     first = cset.results[0]
     y = first.y[experiment]
