@@ -77,3 +77,22 @@ def test_bad_arguments_are_clear():
         sysid.compare(data, true, data)
     # the old positional horizon still works
     assert sysid.compare(true, data, 1).kind == "1-step prediction"
+
+
+def test_docs_validation_several_models_block_runs():
+    """docs/validation.md's block on several models and pole uncertainty runs as shown."""
+    import re
+    import warnings
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "validation.md").read_text()
+    block = next(b for b in re.findall(r"```python\n(.*?)```", text, flags=re.S)
+                 if "cs = sysid.compare(" in b)
+    ns: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.StabilityWarning)
+        exec(compile(block, "docs/validation.md[several models]", "exec"), ns)
+    cs = ns["cs"]
+    assert cs.diverged.tolist() == [False, False, True] and cs.best == 1
+    assert set(ns["table"].std_method) == {"linear"}
+    assert np.all(np.isfinite(ns["table"].wn_hz_std))
