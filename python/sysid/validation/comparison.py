@@ -99,10 +99,11 @@ class CompareSet:
 
     def summary(self) -> str:
         """A text table: one row per model, its fit per output, and divergence."""
-        head = f"{'model':<28}" + "".join(f" {n[:14]:>14}" for n in self.output_names)
+        w = [max(10, min(24, len(n))) for n in self.output_names]
+        head = f"{'model':<28}" + "".join(f" {n[:k]:>{k}}" for n, k in zip(self.output_names, w))
         lines = [f"{self.kind} fit % of {len(self)} models", head]
         for k, (name, r) in enumerate(zip(self.names, self.results)):
-            fits = "".join(f" {f:14.2f}" for f in r.fit.mean(axis=0))
+            fits = "".join(f" {f:{c}.2f}" for f, c in zip(r.fit.mean(axis=0), w))
             flag = "  diverged (unstable on this record)" if self.diverged[k] else ""
             best = "  best" if k == self.best else ""
             lines.append(f"{name[:28]:<28}{fits}{flag}{best}")
