@@ -109,6 +109,7 @@ def warn_unstable(model: Any, method: str, closed_loop: bool = False) -> None:
     k = int(np.argmax(np.abs(poles)))
     if abs(poles[k]) < 1.0:
         return
+    others = " or ".join(f"method={w!r}" for w in ("moesp", "n4sid", "cva") if w != method)
     warnings.warn(StabilityWarning(
         f"{method} returned an unstable model: pole {poles[k]:.4g} has modulus "
         f"{abs(poles[k]):.4f} >= 1, so its simulation diverges. Unless the process itself is "
@@ -116,6 +117,6 @@ def warn_unstable(model: Any, method: str, closed_loop: bool = False) -> None:
                         "keeps the simulation stable), or try a lower order or another horizon"
                         if closed_loop else
                         "use stable=True (reflects the unstable poles inside the unit circle), "
-                        "another weighting (method='moesp' or 'cva'), a lower order or a longer "
+                        f"another weighting ({others}), a lower order or a longer "
                         "horizon, or refine with sysid.ssest(data, order, focus='simulation')")),
         stacklevel=user_stacklevel())
