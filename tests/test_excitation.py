@@ -84,7 +84,7 @@ def test_poor_inputs_still_warn():
     # three sines and a little noise: the subspace fit runs (the noise keeps its input rows
     # of full rank) but order 4 needs 8 excited frequencies, and the input has 6
     three = np.sin(0.3 * T) + np.sin(0.9 * T) + np.sin(1.7 * T)
-    three = three + 1e-4 * np.random.default_rng(3).standard_normal(N)
+    three = three + 1e-5 * np.random.default_rng(3).standard_normal(N)
     assert sysid.persistent_excitation_order(three, 20) == 6
     assert _excitation_warnings(lambda: sysid.n4sid(_record(three), 4))
     assert not _excitation_warnings(lambda: sysid.n4sid(_record(three), 3))

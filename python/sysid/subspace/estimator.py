@@ -504,24 +504,25 @@ class SubspaceEstimator:
     def _excitation_order(self, needed: int, tol: float = 1e-9) -> int:
         """Persistent-excitation order of the input, up to ``needed``.
 
-        With the data: the excited lines of the input's spectrum
-        (:func:`sysid.persistent_excitation_order`, computed once per estimator, one FFT per
-        input). Built from a factor alone: the rank of the input rows of the factor (the
+        First the rank of the input rows of the factor, with no pass over the data (the
         largest ``d <= min(needed, past + future)`` for which the input's block Hankel
         matrix with ``d`` block rows has eigenvalues of its Gram matrix above ``tol`` times
-        the largest), which takes a band-limited multisine for a poorly exciting input."""
+        the largest): full rank means persistently exciting. Only when it is not, the
+        excited lines of the input's spectrum decide (:mod:`sysid.data.excitation`, once per
+        estimator): the lag rank takes a band-limited multisine for a poorly exciting input
+        however many lines it has. Built from a factor alone, the rank decides."""
         if needed not in self._pe_cache:
-            if not self._from_factor:
+            # in the Rust core on the calling thread: one Cholesky of G - tol top I answers
+            # every d (the first non-positive pivot), no threaded LAPACK call
+            got = int(_sysid.excitation_order(self.factor, needed, tol))
+            if got < needed and not self._from_factor:
                 if "spectrum" not in self._pe_cache:
                     from ..data.excitation import spectral_excitation_order
 
                     us = [np.ascontiguousarray(u) for u, _ in self.data.experiments]
                     self._pe_cache["spectrum"] = spectral_excitation_order(us)
-                self._pe_cache[needed] = min(needed, self._pe_cache["spectrum"])
-            else:
-                # in the Rust core on the calling thread: one Cholesky of G - tol top I
-                # answers every d (the first non-positive pivot), no threaded LAPACK call
-                self._pe_cache[needed] = int(_sysid.excitation_order(self.factor, needed, tol))
+                got = min(needed, self._pe_cache["spectrum"])
+            self._pe_cache[needed] = got
         return self._pe_cache[needed]
 
     def __repr__(self) -> str:
