@@ -167,7 +167,11 @@ def test_demo_runs_as_a_module_and_writes_a_report(tmp_path):
     out = proc.stdout
     assert "validation fit (simulation): air temperature:" in out
     assert "order choice: order 4" in out
-    check_report(tmp_path / "r", ["air temperature"])
+    page = check_report(tmp_path / "r", ["air temperature"])
+    # issue 26: the bootstrap's pole table has a std for every pole (was all "n/a")
+    poles = page.tables["poles"]
+    cols = [poles[0].index(c) for c in ("std Re", "std Im", "std wn [Hz]", "std damping")]
+    assert len(poles) > 1 and all(row[c] != "n/a" for row in poles[1:] for c in cols)
     fit = float(out.split("validation fit (simulation): air temperature:")[1].split("%")[0])
     assert 80 < fit < 95
 

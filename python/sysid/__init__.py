@@ -204,6 +204,12 @@ _LAZY = {
     # issue 30 (branch report): many records at once
     "identify_many": "batch.many",
     "BatchResult": "batch.stream",
+    # issue 26 (branch diag): honest diagnostics
+    "OffsetWarning": "errors",
+    "StabilityWarning": "errors",
+    "check_offsets": "data.offsets",
+    "CompareSet": "validation.comparison",
+    "TrendedModel": "models.trended",
 }
 
 
@@ -389,4 +395,10 @@ __all__ = [
     # issue 30 (branch report): many records at once
     "identify_many",
     "BatchResult",
+    # issue 26 (branch diag): honest diagnostics
+    "OffsetWarning",
+    "StabilityWarning",
+    "check_offsets",
+    "CompareSet",
+    "TrendedModel",
 ]

@@ -152,7 +152,7 @@ def modal_analysis(model: StateSpaceModel, dt: float | None = None, std: bool = 
     d = _sysid.modal_analysis(model.A, model.C, dt)
     out = ModalAnalysis(d, dt, list(model.output_names))
     if std:
-        from ..models.uncertainty import damping_std
+        from ..models.pole_uncertainty import damping_std
 
         sd = damping_std(model, dt)
         idx = [int(np.argmin(np.abs(sd["poles"] - z))) for z in out.eigenvalues]

@@ -296,7 +296,8 @@ def _parameter_table(page: Page, model: Any) -> str:
 
 def _pole_section(page: Page, model: Any, notes: list[str]) -> str:
     """Poles with frequency and damping, their standard deviations when the model has an
-    uncertainty (NaN, shown as n/a, where first order does not hold), and the map."""
+    uncertainty (first order; Monte Carlo, marked *, for poles that coincide with another),
+    and the map."""
     from ..models.uncertainty import UncertaintyWarning
     from .lti import damp
 
@@ -309,8 +310,8 @@ def _pole_section(page: Page, model: Any, notes: list[str]) -> str:
         notes.append(f"no pole table: {e}")
         return "<p>This model has no poles.</p>"
 
-    def g(x: float) -> str:
-        return "n/a" if not np.isfinite(x) else f"{x:.4g}"
+    def g(x: float, mark: str = "") -> str:
+        return "n/a" if not np.isfinite(x) else f"{x:.4g}{mark}"
     header = ["pole", "|pole|", "wn [Hz]", "damping"]
     if has:
         header += ["std Re", "std Im", "std wn [Hz]", "std damping"]
@@ -319,9 +320,14 @@ def _pole_section(page: Page, model: Any, notes: list[str]) -> str:
         row = [f"{p.real:.5g}{p.imag:+.5g}j", f"{abs(p):.4f}", g(t.wn_hz[k]), g(t.zeta[k])]
         if has and t.pole_std is not None and t.wn_hz_std is not None and \
                 t.zeta_std is not None:
-            row += [g(t.pole_std[k].real), g(t.pole_std[k].imag), g(t.wn_hz_std[k]),
-                    g(t.zeta_std[k])]
+            mc = "*" if t.std_method is not None and t.std_method[k] == "monte-carlo" else ""
+            row += [g(t.pole_std[k].real, mc), g(t.pole_std[k].imag, mc),
+                    g(t.wn_hz_std[k], mc), g(t.zeta_std[k], mc)]
         rows.append(row)
+    marked = has and t.std_method is not None and bool(np.any(t.std_method == "monte-carlo"))
     note = ("<p>Standard deviations: first order, from the model's parameter uncertainty ("
-            f"{esc(str(model.uncertainty.method))}).</p>" if has else "")
+            f"{esc(str(model.uncertainty.method))})"
+            + ("; * marks poles that coincide with another within their uncertainty, where "
+               "first order does not hold: Monte Carlo from the same covariance" if marked
+               else "") + ".</p>" if has else "")
     return page.table("poles", header, rows) + note + page.figure(rf.pzmap_figure(model))

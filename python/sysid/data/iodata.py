@@ -415,6 +415,20 @@ class IOData(_Segments, _RawConstructors, _FileFormats):
             self._y_scale.copy(),
         )
 
+    def _minus_trend(self, trend_of: Any) -> IOData:
+        """This record minus a given trend: ``trend_of(n) -> (u_trend, y_trend)`` per
+        experiment of ``n`` samples (original units), recorded like ``detrend``'s so that
+        :meth:`retrend` adds it back (used by :meth:`Trend.apply`)."""
+        exps = []
+        for e in self._exps:
+            tu, ty = trend_of(e.y.shape[0])
+            parts = []
+            for x, old, sc, t in ((e.u, e.tu, self._u_scale, tu), (e.y, e.ty, self._y_scale, ty)):
+                prev = np.zeros_like(x) if old is None else old
+                parts.append((x - t / sc, prev + t))  # t / sc: in this record's units
+            exps.append(_Exp(parts[0][0], parts[1][0], e.t0, parts[0][1], parts[1][1]))
+        return self._derive(exps)
+
     def retrend(self) -> IOData:
         """The record in original units: trend and scaling added back.
 

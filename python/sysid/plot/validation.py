@@ -45,6 +45,30 @@ def plot_compare(result: Any, experiment: int = 0, fig: Any = None) -> Any:
     return fig
 
 
+def plot_compare_set(cset: Any, experiment: int = 0, fig: Any = None) -> Any:
+    """Measured outputs and every model's of a :class:`~sysid.validation.comparison.CompareSet`
+    (a model that diverged is named in the legend, not drawn)."""
+    first = cset.results[0]
+    y = first.y[experiment]
+    fig, axes = _fig(fig, y.shape[1])
+    t = np.arange(y.shape[0]) * first.dt
+    for j in range(y.shape[1]):
+        ax = axes[j, 0]
+        ax.plot(t, y[:, j], color="0.3", lw=1.0, label="measured")
+        for k, (name, r) in enumerate(zip(cset.names, cset.results)):
+            if r.diverged[experiment]:
+                ax.plot([], [], color=f"C{k}", label=f"{name}: diverged")
+                continue
+            ax.plot(t, r.yhat[experiment][:, j], color=f"C{k}", lw=1.0,
+                    label=f"{name} (fit {r.fit[experiment, j]:.1f} %)")
+        ax.set_ylabel(first.output_names[j])
+        ax.legend(loc="best", fontsize=8)
+        ax.grid(True, alpha=0.3)
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.tight_layout()
+    return fig
+
+
 def plot_residuals(res: Any, fig: Any = None) -> Any:
     """Auto-correlations (left) and input cross-correlations (right) with the bound."""
     l, m = len(res.output_names), len(res.input_names)

@@ -12,6 +12,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_int, as_int_grid, experiment_arrays
 from .._progress import iteration_callback, iteration_printer
+from ..data.offsets import check_offsets
 from ..errors import DataError
 from ..models.uncertainty import ParameterUncertainty
 from .model import PolynomialModel
@@ -134,6 +135,7 @@ def arx(
     ([-0.5], [1.0])
     """
     exps = experiment_arrays(data)
+    check_offsets(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     na_g, nb_g, nk_g = _grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"), _grid(nk, ny, nu, "nk")
     if isinstance(regularization, str) or hasattr(regularization, "prior"):
@@ -265,6 +267,7 @@ def _pem(
     init: PolynomialModel | None = None,
 ) -> PolynomialModel:
     exps = experiment_arrays(data)
+    check_offsets(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     nb_g, nf_g, nk_g = _grid(nb, ny, nu, "nb"), _grid(nf, ny, nu, "nf"), _grid(nk, ny, nu, "nk")
     na_v, nc_v, nd_v = _col(na, ny, "na"), _col(nc, ny, "nc"), _col(nd, ny, "nd")
@@ -400,6 +403,7 @@ def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
     (1, 1, 1)
     """
     exps = experiment_arrays(data)
+    check_offsets(data)
     rng = [list(map(int, np.atleast_1d(v))) for v in (na, nb, nk)]
     return np.asarray(_sysid.arx_struc(exps, *rng))
 
@@ -508,6 +512,7 @@ def iv4(data: Any, na: Any, nb: Any, nk: Any = 1, *, reference: Any = None) -> P
     True
     """
     exps = experiment_arrays(data)
+    check_offsets(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     if nu == 0:
         raise DataError("iv4 needs an input signal (use ar/arma for time series)")

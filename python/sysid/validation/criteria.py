@@ -477,7 +477,7 @@ def select_order(
 def _warn_once(caught: list[Any]) -> None:
     """Re-emit the warnings of a sweep: each distinct one once, and the excitation warning
     only for the lowest order that raised it (it would repeat for every higher order)."""
-    from ..errors import ExcitationWarning
+    from ..errors import ExcitationWarning, StabilityWarning
 
     seen: set[tuple[type, str]] = set()
     excitation = [w for w in caught if issubclass(w.category, ExcitationWarning)]
@@ -490,6 +490,8 @@ def _warn_once(caught: list[Any]) -> None:
                 msg += " (the same holds for every higher order of the sweep)"
             warnings.warn(msg, w.category, stacklevel=3)
             continue
+        if issubclass(w.category, StabilityWarning):
+            continue  # a sweep's unstable candidates: the table shows them, the pick warns
         key = (w.category, str(w.message))
         if key not in seen:
             seen.add(key)
