@@ -193,6 +193,18 @@ _LAZY = {
     "PiecewiseLinear": "models.hammerstein",
     "SigmoidNetwork": "models.hammerstein",
     "UserFunction": "models.hammerstein",
+    # issue 27 (branch tfproc): transfer functions, process models, analysis helpers
+    "TransferFunction": "tf.model",
+    "tfest": "tf.tfest",
+    "ProcessModel": "process.model",
+    "procest": "process.procest",
+    "stepinfo": "analysis.stepinfo",
+    "StepInfo": "analysis.stepinfo",
+    "margin": "analysis.margin",
+    "Margins": "analysis.margin",
+    "nyquist": "analysis.nyquist",
+    "NyquistResponse": "analysis.nyquist",
+    "minreal": "analysis.minreal",
 }
 
 
@@ -375,4 +387,16 @@ __all__ = [
     "model_to_dict",
     "model_from_dict",
     "report",
+    # issue 27 (branch tfproc): transfer functions, process models, analysis helpers
+    "TransferFunction",
+    "tfest",
+    "ProcessModel",
+    "procest",
+    "stepinfo",
+    "StepInfo",
+    "margin",
+    "Margins",
+    "nyquist",
+    "NyquistResponse",
+    "minreal",
 ]
