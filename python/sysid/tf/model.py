@@ -303,6 +303,8 @@ class TransferFunction(ModelMixin):
         z0 = -G @ u[0] if u.shape[0] else np.zeros(Ad.shape[0])
         if x0 is not None:
             z0 = z0 + np.asarray(x0, dtype=float).reshape(-1)
+        if Ad.shape[0] == 0:  # a pure gain
+            return shift_columns(u, taps) @ Dt.T
         ss = StateSpaceModel(Ad, Bt, Cd, Dt, dt=dt)
         return ss.simulate(shift_columns(u, taps), z0 if np.any(z0) else None)
 

@@ -372,9 +372,11 @@ def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
         nk = delays
         if np.any(np.abs(nk - np.round(nk)) > 1e-9):
             raise DataError("a discrete model's iodelay counts whole samples; round it")
-    poly = sysid.oe(data, nze + 1, npo, np.round(nk).astype(int), max_iter=max_iter,
+    # one-sample lag as MATLAB's discrete tfest (no feedthrough), plus the delay
+    poly = sysid.oe(data, nze + 1, npo, 1 + np.round(nk).astype(int), max_iter=max_iter,
                     progress=progress)
-    nums = [[poly.b[i][j] for j in range(data.n_inputs)] for i in range(data.n_outputs)]
+    nums = [[np.concatenate([np.zeros(1 + int(round(nk[i, j]))), poly.b[i][j]])
+             for j in range(data.n_inputs)] for i in range(data.n_outputs)]
     dens = [[np.concatenate([[1.0], poly.f[i][j]]) for j in range(data.n_inputs)]
             for i in range(data.n_outputs)]
 
@@ -385,7 +387,7 @@ def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
     pairs = [[z_form(nums[i][j], dens[i][j]) for j in range(data.n_inputs)]
              for i in range(data.n_outputs)]
     G = TransferFunction([[p[0] for p in r] for r in pairs], [[p[1] for p in r] for r in pairs],
-                         dt=data.dt, iodelay=np.round(nk), input_names=data.input_names,
+                         dt=data.dt, input_names=data.input_names,
                          output_names=data.output_names,
                          info={**poly.info, "method": "tfest (discrete, output error)"})
     G.uncertainty = getattr(poly, "uncertainty", None)
