@@ -29,7 +29,7 @@ __all__ = ["TransferFunction"]
 def _grid(x: Any, name: str) -> list[list[np.ndarray]]:
     """A coefficient array (SISO) or nested ``[outputs][inputs]`` lists as arrays."""
     if isinstance(x, np.ndarray) and x.ndim == 1 or (
-            isinstance(x, (list, tuple)) and x and np.ndim(x[0]) == 0):
+            isinstance(x, (list, tuple)) and x and isinstance(x[0], (int, float, np.number))):
         x = [[x]]
     try:
         out = [[np.atleast_1d(np.asarray(c, dtype=float)) for c in row] for row in x]

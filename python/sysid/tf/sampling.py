@@ -33,8 +33,8 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
+from .. import _sysid
 from ..errors import DataError
 
 __all__ = ["canonical", "sample_pair", "split_delay", "shift_columns"]
@@ -94,12 +94,17 @@ def split_delay(tau: float, dt: float) -> tuple[int, float]:
     return lo, round((x - lo) * dt, 15)
 
 
+def _expm(M: np.ndarray) -> np.ndarray:
+    """``exp(M)`` in the Rust core (no LAPACK threads for these small matrices)."""
+    return np.asarray(_sysid.expm_frechet(np.ascontiguousarray(M, dtype=float), [])[0])
+
+
 def _foh_shift(A: np.ndarray, b: np.ndarray, dt: float, r: float) -> np.ndarray:
     """The state shift ``G`` of a first-order hold with ``l = 0`` (rest: ``z(0) = -G u(0)``)."""
     n = A.shape[0]
     M = np.zeros((n + 2, n + 2))
     M[:n, :n], M[:n, n], M[n, n + 1] = A * (dt - r), b * (dt - r), dt - r
-    return np.asarray(scipy.linalg.expm(M)[:n, n + 1] / dt)
+    return _expm(M)[:n, n + 1] / dt
 
 
 def sample_pair(A: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray, dt: float,
@@ -114,7 +119,7 @@ def sample_pair(A: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray, dt: 
     from ..models import greydelay
 
     n = A.shape[0]
-    Ad = np.asarray(scipy.linalg.expm(A * dt)) if n else np.zeros((0, 0))
+    Ad = _expm(A * dt) if n else np.zeros((0, 0))
     if hold == "zoh":
         if n:
             g0, g1, _ = greydelay.fractional_columns(A, b, dt, r, [])

@@ -53,6 +53,7 @@ def _delays(iodelay: Any, l: int, m: int) -> tuple[np.ndarray, bool]:
 
 def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
           dt: float | None = None, hold: str = "zoh", initial_state: str = "zero",
+          init: TransferFunction | None = None,
           max_delay: float | None = None, max_iter: int = 100, tol: float = 1e-10,
           progress: bool | None | Callable[..., Any] = None) -> TransferFunction:
     """Estimate a transfer-function model (MATLAB's ``tfest``).
@@ -86,6 +87,8 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         How the input behaves between samples (time-domain data).
     initial_state : {"zero", "estimate"}
         Start from rest, or estimate the initial state of each experiment.
+    init : TransferFunction, optional
+        Start the refinement from this model (continuous, same orders) instead of SRIVC.
     max_delay : float, optional
         Upper bound on estimated delays (seconds; default a tenth of the record).
     max_iter, tol : int, float
@@ -110,13 +113,11 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     >>> np.round(G.den[0][0], 6), np.round(G.num[0][0], 6), round(float(G.iodelay[0, 0]), 6)
     (array([1. , 0.8, 4. ]), array([0.5, 2. ]), 0.13)
     """
-    from ..models.frd import FRD
-
     if hold not in _HOLDS:
         raise DataError(f"hold must be 'zoh' or 'foh', got {hold!r}")
     if initial_state not in ("zero", "estimate"):
         raise DataError(f"initial_state must be 'zero' or 'estimate', got {initial_state!r}")
-    if isinstance(data, FRD):
+    if hasattr(data, "omega") and hasattr(data, "response"):  # an FRD
         from .frequency import tfest_frd
 
         return tfest_frd(data, n_poles, n_zeros, iodelay=iodelay, dt=dt, max_iter=max_iter,
@@ -137,14 +138,14 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     cb, close = _progress(progress, max_iter)
     try:
         return _continuous(data, npo, nze, delays, auto, hold, initial_state, max_delay,
-                           max_iter, tol, cb)
+                           max_iter, tol, cb, _init(init, npo, nze))
     finally:
         close()
 
 
 def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
                 hold: str, initial_state: str, max_delay: float | None, max_iter: int,
-                tol: float, cb: Any) -> TransferFunction:
+                tol: float, cb: Any, init: Any) -> TransferFunction:
     l, m = data.n_outputs, data.n_inputs
     exps_all = [(np.asarray(u, float), np.asarray(y, float)) for u, y in data.experiments]
     N = sum(u.shape[0] for u, _ in exps_all)
@@ -154,7 +155,10 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
     for i in range(l):
         exps = [(u, y[:, i]) for u, y in exps_all]
         check_experiments(exps, int(np.sum(npo[i] + nze[i] + 1)))
-        starts = _starts(exps, data.dt, npo[i], nze[i], delays[i], auto, hold, dmax)
+        starts = _starts(exps, data.dt, npo[i], nze[i], delays[i], auto, hold, dmax) \
+            if init is None else [(init.den[i][j], init.num[i][j],
+                                   float(init.iodelay[i, j]) if auto else float(delays[i, j]))
+                                  for j in range(m)]
         pairs = [_pair(a, b, t, auto, dmax, data.output_names[i], data.input_names[j])
                  for j, (a, b, t) in enumerate(starts)]
         res = refine(pairs, exps, data.dt, hold, x0_mode=initial_state, max_iter=max_iter,
@@ -180,6 +184,26 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
     _attach(G, tables, covs, auto)
     _fit_percent(G, data)
     return G
+
+
+def _init(init: Any, npo: np.ndarray, nze: np.ndarray) -> Any:
+    if init is None:
+        return None
+    if not isinstance(init, TransferFunction) or init.dt > 0:
+        raise DataError("init must be a continuous sysid.TransferFunction")
+    if (init.noutputs, init.ninputs) != npo.shape:
+        raise DataError(f"init has {init.noutputs} x {init.ninputs} pairs, the data "
+                        f"{npo.shape[0]} x {npo.shape[1]}")
+    for i, j in init.pairs():
+        if init.den[i][j].size - 1 != npo[i, j] or init.num[i][j].size - 1 > nze[i, j]:
+            raise DataError(f"init pair ({i}, {j}) has {init.den[i][j].size - 1} poles and "
+                            f"{init.num[i][j].size - 1} zeros; tfest was asked for "
+                            f"{npo[i, j]} and {nze[i, j]}")
+    nums = [[np.concatenate([np.zeros(nze[i, j] + 1 - init.num[i][j].size), init.num[i][j]])
+             for j in range(init.ninputs)] for i in range(init.noutputs)]
+    out = TransferFunction(nums, init.den, iodelay=init.iodelay, hold=init.hold)
+    out.num = nums  # keep the requested number of numerator coefficients
+    return out
 
 
 def _progress(progress: Any, max_iter: int) -> Any:
