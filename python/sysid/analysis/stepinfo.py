@@ -149,7 +149,7 @@ def stepinfo(sys: Any, t: Any = None, *, yfinal: Any = None, yinit: Any = None,
     >>> info = sysid.stepinfo(sysid.TransferFunction([1.0], [1.0, 1.0]))   # 1 / (s + 1)
     >>> round(info.rise_time, 4), round(info.settling_time, 4)     # ln 9, ln 50
     (2.1972, 3.912)
-    >>> round(sysid.stepinfo(sysid.TransferFunction([1.0], [1.0, 0.6, 1.0])).overshoot, 3)
+    >>> round(sysid.stepinfo(sysid.TransferFunction([1.0], [1.0, 0.6, 1.0])).overshoot, 2)
     37.23
     """
     if not 0 < threshold < 1:
