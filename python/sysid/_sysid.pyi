@@ -56,6 +56,9 @@ __all__ = [
     "greybox_ode_simulate",
     "greybox_ode_jacobian",
     "expm_frechet",
+    # issue 27 (branch tfproc): transfer functions
+    "tf_filtered_gram",
+    "tf_fit_frequency",
 ]
 
 _Array = npt.NDArray[np.float64]

@@ -24,7 +24,9 @@ pub fn tf_filtered_gram<'py>(
     skip: usize,
 ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
     let (ad, bd, cw, dw, v) = (view(&ad), view(&bd), view(&cw), view(&dw), view(&v));
-    let g = py.detach(|| tf::filtered_gram(ad, bd, cw, dw, v, skip)).py()?;
+    let g = py
+        .detach(|| tf::filtered_gram(ad, bd, cw, dw, v, skip))
+        .py()?;
     Ok(mat_to_numpy(py, &g))
 }
 

@@ -11,7 +11,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 
 from ..errors import DataError
 
@@ -49,7 +48,6 @@ def minreal(sys: Any, tol: float | None = None) -> Any:
 
 
 def _tf(G: Any, tol: float) -> Any:
-    from ..process.model import ProcessModel
     from ..tf.model import TransferFunction
 
     nums, dens = [], []
@@ -71,7 +69,6 @@ def _tf(G: Any, tol: float) -> Any:
             rd.append(np.real(np.poly(keep_p)) if keep_p else np.ones(1))
         nums.append(rn)
         dens.append(rd)
-    del ProcessModel
     return TransferFunction(nums, dens, dt=G.dt, iodelay=G.iodelay, hold=G.hold,
                             input_names=G.input_names, output_names=G.output_names,
                             info={**G.info, "minreal": True})
@@ -106,7 +103,6 @@ def _ss(sys: Any, tol: float) -> Any:
     A1, B1, C1 = Vc.T @ A @ Vc, Vc.T @ B, C @ Vc
     Vo = _reachable(A1.T, C1.T, tol)
     A2, B2, C2 = Vo.T @ A1 @ Vo, Vo.T @ B1, C1 @ Vo
-    del scipy.linalg
     kw = {"input_names": sys.input_names, "output_names": sys.output_names}
     from ..models.continuous import ContinuousStateSpace
     from ..models.statespace import StateSpaceModel

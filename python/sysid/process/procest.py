@@ -71,7 +71,7 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
     >>> {k: round(v, 6) for k, v in m.values.items()}
     {'Kp': 2.0, 'Tp1': 1.5, 'Td': 0.37}
     """
-    from ..tf.refine import PairStructure, check_experiments, refine
+    from ..tf.refine import check_experiments, refine
     from ..tf.tfest import _fit_percent, _progress
 
     t = ProcessType.parse(type_code)

@@ -7,7 +7,6 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int
 from ..errors import DataError
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
@@ -252,8 +251,8 @@ def _siso_start(exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt: float, n:
 def _delay_grid(exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt: float, dmax: float
                 ) -> list[float]:
     """Candidate delays (whole samples) around the ARX delay estimate of input ``j``."""
-    from ..estimate.polynomial import delayest
     from ..data.iodata import IOData
+    from ..estimate.polynomial import delayest
 
     u = np.concatenate([u[:, j] for u, _ in exps])
     y = np.concatenate([y for _, y in exps])
@@ -339,7 +338,7 @@ def _attach(G: TransferFunction, tables: list[Any], covs: list[np.ndarray], auto
         t = np.asarray(t, dtype=float)
         nums, dens, dl = [], [], proto.iodelay.copy()
         o = 0
-        for i, (k, res) in enumerate(shapes):
+        for i, (_k, res) in enumerate(shapes):
             row_n, row_d = [], []
             for j, p in enumerate(res["p"]):
                 n = proto.den[i][j].size - 1

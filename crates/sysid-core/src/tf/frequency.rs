@@ -189,7 +189,11 @@ pub fn fit_frequency(
     observer: &mut dyn FnMut(&Iteration) -> Flow,
 ) -> Result<FrequencyFit> {
     let k = model.x.len();
-    for (what, len) in [("w", model.w.len()), ("h", h.len()), ("weight", weight.len())] {
+    for (what, len) in [
+        ("w", model.w.len()),
+        ("h", h.len()),
+        ("weight", weight.len()),
+    ] {
         if len != k {
             return Err(SysidError::ShapeMismatch {
                 what: what.into(),

@@ -16,14 +16,25 @@ fn lcg(seed: &mut u64) -> f64 {
 fn gram_matches_direct_accumulation() {
     let mut seed = 7u64;
     let (nx, q, r, n) = (3, 2, 4, 1500);
-    let ad = Mat::from_fn(nx, nx, |i, j| if i == j { 0.5 } else { 0.1 * lcg(&mut seed) });
+    let ad = Mat::from_fn(
+        nx,
+        nx,
+        |i, j| if i == j { 0.5 } else { 0.1 * lcg(&mut seed) },
+    );
     let bd = Mat::from_fn(nx, q, |_, _| lcg(&mut seed));
     let cw = Mat::from_fn(r, nx, |_, _| lcg(&mut seed));
     let dw = Mat::from_fn(r, q, |_, _| lcg(&mut seed));
     let v = Mat::from_fn(n, q, |_, _| lcg(&mut seed));
     let skip = 10;
-    let g = filtered_gram(ad.as_ref(), bd.as_ref(), cw.as_ref(), dw.as_ref(), v.as_ref(), skip)
-        .unwrap();
+    let g = filtered_gram(
+        ad.as_ref(),
+        bd.as_ref(),
+        cw.as_ref(),
+        dw.as_ref(),
+        v.as_ref(),
+        skip,
+    )
+    .unwrap();
     let mut x = Mat::<f64>::zeros(nx, 1);
     let mut expect = Mat::<f64>::zeros(r, r);
     for t in 0..n {
@@ -42,11 +53,25 @@ fn gram_matches_direct_accumulation() {
 fn gram_rejects_bad_shapes_and_nan() {
     let z = Mat::<f64>::zeros(2, 2);
     let v = Mat::<f64>::zeros(5, 1);
-    let e = filtered_gram(z.as_ref(), z.as_ref(), z.as_ref(), z.as_ref(), v.as_ref(), 0);
+    let e = filtered_gram(
+        z.as_ref(),
+        z.as_ref(),
+        z.as_ref(),
+        z.as_ref(),
+        v.as_ref(),
+        0,
+    );
     assert!(e.unwrap_err().to_string().contains("bd has shape"));
     let mut v = Mat::<f64>::zeros(5, 2);
     v[(3, 1)] = f64::NAN;
-    let e = filtered_gram(z.as_ref(), z.as_ref(), z.as_ref(), z.as_ref(), v.as_ref(), 0);
+    let e = filtered_gram(
+        z.as_ref(),
+        z.as_ref(),
+        z.as_ref(),
+        z.as_ref(),
+        v.as_ref(),
+        0,
+    );
     assert!(e.unwrap_err().to_string().contains("sample 3"));
 }
 
@@ -82,6 +107,10 @@ fn frequency_fit_recovers_second_order_with_delay() {
         assert!((a - b).abs() < 1e-8, "{:?}", fit.solution.theta);
     }
     let g = model.response(&fit.solution.theta);
-    let err = g.iter().zip(&h).map(|(a, b)| (a - b).norm()).fold(0.0, f64::max);
+    let err = g
+        .iter()
+        .zip(&h)
+        .map(|(a, b)| (a - b).norm())
+        .fold(0.0, f64::max);
     assert!(err < 1e-9);
 }
