@@ -228,7 +228,7 @@ class TransferFunction(ModelMixin):
             return ContinuousStateSpace(A, B, C, D, hold=self.hold, input_names=self.input_names,
                                         output_names=self.output_names, info=self.info)
         Ad, Bt, Cd, Dt, taps, _ = self.sampled_taps(float(dt))
-        from ..models.greydelay import tap_states
+        from ..greybox.delays import tap_states
 
         A, B, C, D, _ = tap_states({"A": Ad, "B": Bt, "C": Cd, "D": Dt}, taps, self.ninputs)
         return StateSpaceModel(A, B, C, D, dt=float(dt), input_names=self.input_names,
@@ -250,7 +250,7 @@ class TransferFunction(ModelMixin):
         return A, B, C, D
 
     def _discrete_ss(self) -> StateSpaceModel:
-        from ..models.greydelay import tap_states
+        from ..greybox.delays import tap_states
 
         blocks = [blk for _, _, blk in self._blocks()]
         A, B, C, D = self._stack([(b[0], b[1][:, None], b[2], b[3][:, None]) for b in blocks])

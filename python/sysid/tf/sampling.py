@@ -12,7 +12,7 @@ realised in controllable canonical form, whose states are ``x_i = s^{i-1} / A(s)
 with ``alpha``, ``beta`` the coefficients of ``A`` and ``B`` in ascending powers. A delay
 ``tau = l h + r`` (``0 <= r <= h``, ``h`` the sample time) is sampled exactly under a zero-order
 hold (two input taps, shifts ``l`` and ``l + 1``) or a first-order hold (three taps,
-``l - 1, l, l + 1``; two when ``l = 0``), see :mod:`sysid.models.greydelay`. The interval ``l``
+``l - 1, l, l + 1``; two when ``l = 0``), see :mod:`sysid.greybox.delays`. The interval ``l``
 is kept fixed while ``r`` runs over ``[0, h]``, so the sampled model is a continuous function of
 the delay (what the output-error search needs to estimate it).
 
@@ -116,7 +116,7 @@ def sample_pair(A: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray, dt: 
 
     The caller sums ``B col * u(t - shift)``; output ``y = c x + sum D col u(t - shift)``.
     """
-    from ..models import greydelay
+    from ..greybox import delays as greydelay
 
     n = A.shape[0]
     Ad = _expm(A * dt) if n else np.zeros((0, 0))

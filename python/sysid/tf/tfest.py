@@ -252,7 +252,7 @@ def _delay_grid(exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt: float, dm
                 ) -> list[float]:
     """Candidate delays (whole samples) around the ARX delay estimate of input ``j``."""
     from ..data.iodata import IOData
-    from ..estimate.polynomial import delayest
+    from ..polynomial.estimators import delayest
 
     u = np.concatenate([u[:, j] for u, _ in exps])
     y = np.concatenate([y for _, y in exps])
@@ -419,7 +419,7 @@ def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
 
 
 def _delayest_one(data: Any, i: int, j: int) -> int:
-    from ..estimate.polynomial import delayest
+    from ..polynomial.estimators import delayest
 
     sub = data.select(outputs=[i], inputs=[j]) if hasattr(data, "select") else data
     return delayest(sub)
