@@ -71,8 +71,8 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
     >>> {k: round(v, 6) for k, v in m.values.items()}
     {'Kp': 2.0, 'Tp1': 1.5, 'Td': 0.37}
     """
+    from ..tf.options import fit_percent, progress_callback
     from ..tf.refine import check_experiments, refine
-    from ..tf.tfest import _fit_percent, _progress
 
     t = ProcessType.parse(type_code)
     if not hasattr(data, "experiments") or not hasattr(data, "dt"):
@@ -105,7 +105,7 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
                                 * data.dt]), y) for u, y in exps_all]
         fit_hold = "foh"
     l, m = data.n_outputs, data.n_inputs
-    cb, close = _progress(progress, max_iter)
+    cb, close = progress_callback(progress, max_iter)
     values, covs, infos = [], [], []
     try:
         for i in range(l):
@@ -139,7 +139,7 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
         "n_samples": infos[0]["n_samples"], "initial_state": initial_state,
         "fixed": sorted(fixed)})
     _attach(model, covs, fixed)
-    _fit_percent(model, data)
+    fit_percent(model, data)
     return model
 
 
@@ -261,10 +261,10 @@ def _full_cov(res: dict[str, Any], t: ProcessType, names: list[str], m: int) -> 
 
 
 def _attach(model: ProcessModel, covs: list[np.ndarray], fixed: dict[str, float]) -> None:
-    from ..tf.tfest import _blockdiag
+    from ..tf.options import blockdiag
 
     names, theta = model.parameter_names(), model.parameter_vector()
-    P = _blockdiag(covs)
+    P = blockdiag(covs)
     is_fixed = np.array([n.split(":")[-1] in fixed for n in names])
     model.parameters = ParameterTable(names, theta, np.sqrt(np.clip(np.diag(P), 0, None)),
                                       is_fixed)

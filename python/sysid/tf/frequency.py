@@ -25,6 +25,7 @@ from ..errors import DataError
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 from .model import TransferFunction
+from .options import blockdiag, delays, orders, progress_callback
 
 __all__ = ["tfest_frd", "sanathanan_koerner"]
 
@@ -116,14 +117,12 @@ def _delay_grid(omega: np.ndarray, h: np.ndarray, dt: float) -> list[float]:
 def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
               max_iter: int, tol: float, progress: Any) -> TransferFunction:
     """The FRD branch of :func:`sysid.tfest` (see the module documentation)."""
-    from .tfest import _delays, _orders, _progress
-
     l, m = frd.n_outputs, frd.n_inputs
-    npo = _orders(n_poles, l, m, "n_poles", 0)
-    nze = np.maximum(npo - 1, 0) if n_zeros is None else _orders(n_zeros, l, m, "n_zeros", 0)
+    npo = orders(n_poles, l, m, "n_poles", 0)
+    nze = np.maximum(npo - 1, 0) if n_zeros is None else orders(n_zeros, l, m, "n_zeros", 0)
     if np.any(nze > npo):
         raise DataError("n_zeros must not exceed n_poles (the model would be improper)")
-    delays, auto = _delays(iodelay, l, m)
+    given, auto = delays(iodelay, l, m)
     dtv = 0.0 if dt is None else float(dt)
     if dtv and (frd.dt is None or abs(dtv - float(frd.dt)) > 1e-9 * dtv):
         raise DataError(f"a discrete model needs the FRD's sample time: the FRD has dt="
@@ -139,7 +138,7 @@ def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
         weights, noise = 1.0 / frd.std, 0.5
     else:
         weights, noise = np.ones(frd.response.shape), None
-    cb, close = _progress(progress, max_iter)
+    cb, close = progress_callback(progress, max_iter)
     nums, dens, names, thetas, covs = [], [], [], [], []
     dl = np.zeros((l, m))
     try:
@@ -148,11 +147,11 @@ def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
             for j in range(m):
                 n, z = int(npo[i, j]), int(nze[i, j])
                 r = _fit_pair(omega, frd.response[:, i, j], weights[:, i, j], n, z, dtv,
-                              float(delays[i, j]), auto, noise, max_iter, tol, cb)
+                              float(given[i, j]), auto, noise, max_iter, tol, cb)
                 th = r["theta"]
                 rd.append(np.concatenate([[1.0], th[:n]]))
                 rn.append(th[n:n + z + 1])
-                dl[i, j] = th[-1] if not dtv else float(delays[i, j])
+                dl[i, j] = th[-1] if not dtv else float(given[i, j])
                 pre = f"{frd.output_names[i]}<-{frd.input_names[j]}:"
                 names += [f"{pre}a{k + 1}" for k in range(n)] + \
                     [f"{pre}b{k}" for k in range(z + 1)] + [f"{pre}iodelay"]
@@ -169,8 +168,6 @@ def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
 def _assemble(frd: Any, nums: list[Any], dens: list[Any], dl: np.ndarray, dtv: float,
               names: list[str], thetas: list[np.ndarray], covs: list[np.ndarray],
               auto: bool) -> TransferFunction:
-    from .tfest import _blockdiag
-
     if dtv:  # z^-1 polynomials (numerator after its lag) -> descending powers of z
         nums = [[np.concatenate([np.zeros(1 + int(round(d))), b]) for b, d in zip(rn, dr)]
                 for rn, dr in zip(nums, dl)]
@@ -187,7 +184,7 @@ def _assemble(frd: Any, nums: list[Any], dens: list[Any], dl: np.ndarray, dtv: f
                          output_names=frd.output_names, info=info)
     theta = np.concatenate(thetas)
     fixed = np.array([n.endswith("iodelay") and not auto for n in names])
-    P = _blockdiag(covs)
+    P = blockdiag(covs)
     G.parameters = ParameterTable(names, theta, np.sqrt(np.clip(np.diag(P), 0, None)), fixed)
     l, m = G.noutputs, G.ninputs
     n_den, o = [], 0

@@ -11,43 +11,13 @@ from ..errors import DataError
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 from .model import TransferFunction
+from .options import blockdiag, delays, fit_percent, orders, progress_callback
 from .refine import PairStructure, check_experiments, refine
 from .srivc import srivc
 
 __all__ = ["tfest"]
 
 _HOLDS = ("zoh", "foh")
-
-
-def _orders(x: Any, l: int, m: int, name: str, lo: int) -> np.ndarray:
-    a = np.asarray(x)
-    if a.dtype.kind not in "iuf" or not np.all(a == np.round(a)):
-        raise DataError(f"{name} must be a whole number (or one per output/input pair), got {x!r}")
-    try:
-        out = np.broadcast_to(a.astype(int), (l, m)).copy()
-    except ValueError:
-        raise DataError(f"{name} must be one number or an array ({l}, {m}) for {l} output(s) "
-                        f"and {m} input(s), got shape {a.shape}") from None
-    if np.any(out < lo) or np.any(out > 30):
-        raise DataError(f"{name} must lie in {lo}..30, got {out.ravel().tolist()}")
-    return out
-
-
-def _delays(iodelay: Any, l: int, m: int) -> tuple[np.ndarray, bool]:
-    if iodelay is None:
-        return np.zeros((l, m)), False
-    if isinstance(iodelay, str):
-        if iodelay != "auto":
-            raise DataError(f"iodelay must be None, seconds, or 'auto', got {iodelay!r}")
-        return np.zeros((l, m)), True
-    try:
-        d = np.broadcast_to(np.asarray(iodelay, dtype=float), (l, m)).copy()
-    except (ValueError, TypeError):
-        raise DataError(f"iodelay must be seconds (one value or ({l}, {m})) or 'auto', got "
-                        f"{iodelay!r}") from None
-    if not np.all(np.isfinite(d)) or np.any(d < 0):
-        raise DataError(f"iodelay must be finite and >= 0 seconds, got {d.ravel().tolist()}")
-    return d, False
 
 
 def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
@@ -127,16 +97,16 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     l, m = data.n_outputs, data.n_inputs
     if m == 0:
         raise DataError("tfest needs at least one input; for a time series use sysid.ar")
-    npo = _orders(n_poles, l, m, "n_poles", 0)
-    nze = np.maximum(npo - 1, 0) if n_zeros is None else _orders(n_zeros, l, m, "n_zeros", 0)
+    npo = orders(n_poles, l, m, "n_poles", 0)
+    nze = np.maximum(npo - 1, 0) if n_zeros is None else orders(n_zeros, l, m, "n_zeros", 0)
     if np.any(nze > npo):
         raise DataError("n_zeros must not exceed n_poles (the model would be improper)")
-    delays, auto = _delays(iodelay, l, m)
+    fixed_delays, auto = delays(iodelay, l, m)
     if dt is not None:
-        return _discrete(data, npo, nze, delays, auto, dt, max_iter, progress)
-    cb, close = _progress(progress, max_iter)
+        return _discrete(data, npo, nze, fixed_delays, auto, dt, max_iter, progress)
+    cb, close = progress_callback(progress, max_iter)
     try:
-        return _continuous(data, npo, nze, delays, auto, hold, initial_state, max_delay,
+        return _continuous(data, npo, nze, fixed_delays, auto, hold, initial_state, max_delay,
                            max_iter, tol, cb, _init(init, npo, nze))
     finally:
         close()
@@ -181,7 +151,7 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
                          input_names=data.input_names, output_names=data.output_names,
                          info=info)
     _attach(G, tables, covs, auto)
-    _fit_percent(G, data)
+    fit_percent(G, data)
     return G
 
 
@@ -203,13 +173,6 @@ def _init(init: Any, npo: np.ndarray, nze: np.ndarray) -> Any:
     out = TransferFunction(nums, init.den, iodelay=init.iodelay, hold=init.hold)
     out.num = nums  # keep the requested number of numerator coefficients
     return out
-
-
-def _progress(progress: Any, max_iter: int) -> Any:
-    from .._progress import iteration_callback, iteration_printer
-
-    return iteration_callback(progress, "tfest", max_iter,
-                              iteration_printer("tfest", "sum of squares / 2"))
 
 
 def _start_filter(n: int, lam: float) -> np.ndarray:
@@ -330,7 +293,7 @@ def _attach(G: TransferFunction, tables: list[Any], covs: list[np.ndarray], auto
     theta = np.concatenate(values)
     fixed = np.array(["iodelay" in n and not auto for n in names])
     G.parameters = ParameterTable(names, theta, np.concatenate(stds), fixed)
-    P = _blockdiag(covs)
+    P = blockdiag(covs)
     shapes = [(len(nm), res) for nm, res in tables]
     proto = G
 
@@ -356,28 +319,6 @@ def _attach(G: TransferFunction, tables: list[Any], covs: list[np.ndarray], auto
                                 output_names=proto.output_names)
 
     G.uncertainty = ParameterUncertainty(theta, P, build, names=names)
-
-
-def _blockdiag(mats: list[np.ndarray]) -> np.ndarray:
-    k = sum(m.shape[0] for m in mats)
-    out, o = np.zeros((k, k)), 0
-    for m in mats:
-        out[o:o + m.shape[0], o:o + m.shape[0]] = m
-        o += m.shape[0]
-    return out
-
-
-def _fit_percent(G: TransferFunction, data: Any) -> None:
-    num = den = 0.0
-    fits = []
-    for i in range(G.noutputs):
-        num = den = 0.0
-        for u, y in data.experiments:
-            yh = G.simulate(u, dt=data.dt)[:, i]
-            num += float(np.sum((y[:, i] - yh) ** 2))
-            den += float(np.sum((y[:, i] - np.mean(y[:, i])) ** 2))
-        fits.append(100.0 * (1 - np.sqrt(num / den)) if den > 0 else float("nan"))
-    G.info["fit_percent"] = [round(f, 4) for f in fits]
 
 
 def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
@@ -414,7 +355,7 @@ def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
                          output_names=data.output_names,
                          info={**poly.info, "method": "tfest (discrete, output error)"})
     G.uncertainty = getattr(poly, "uncertainty", None)
-    _fit_percent(G, data)
+    fit_percent(G, data)
     return G
 
 
