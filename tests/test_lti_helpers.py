@@ -113,3 +113,40 @@ def test_bad_input_gives_clear_errors():
         sysid.minreal(3)
     with pytest.raises(DataError, match="omega"):
         sysid.margin(sysid.TransferFunction([1.0], [1.0, 1.0]), omega=[-1.0, 2.0])
+
+
+def test_delayest_on_real_records():
+    """The dryer's delay is three samples (Ljung, System Identification, the dryer example;
+    MATLAB's delayest on the same record); offsets, halves of the record and the channel
+    scale do not change it; the multi-input winding record gets its delays jointly without
+    hitting the range edge (the single-input search put one at nk_max = 10)."""
+    import warnings
+
+    d = sysid.datasets.load_dryer()
+    assert sysid.delayest(d) == 3
+    u, y = d.experiments[0]
+    for off in (100.0, -1e3):
+        assert sysid.delayest(sysid.IOData(u + off, 3 * y + off, d.dt)) == 3
+    assert sysid.delayest(sysid.IOData(u[:500], y[:500], d.dt)) == 3
+    assert sysid.delayest(sysid.IOData(u[500:], y[500:], d.dt)) == 3
+    w = sysid.datasets.load_winding()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        nk = sysid.delayest(w)
+    assert nk.shape == (2, 5) and np.all(nk < 10)
+
+
+def test_delayest_multi_input_and_errors():
+    from scipy import signal
+
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal((800, 2))
+    y = signal.lfilter([0, 0, 0, 0, 0.7], [1, -0.5], u[:, 0]) + \
+        signal.lfilter([0, 0, 1.0], [1, -0.2], u[:, 1]) + 0.01 * rng.standard_normal(800)
+    assert sysid.delayest(sysid.IOData(u, y[:, None], 1.0)).tolist() == [[4, 2]]
+    with pytest.raises(DataError, match="nk_min <= nk_max"):
+        sysid.delayest(sysid.IOData(u, y[:, None], 1.0), nk_min=5, nk_max=2)
+    with pytest.raises(DataError, match="too few"):
+        sysid.delayest(sysid.IOData(u[:20], y[:20, None], 1.0))
+    with pytest.raises(DataError, match="time series"):
+        sysid.delayest(sysid.IOData(None, y[:, None], 1.0))

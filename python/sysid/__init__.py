@@ -108,7 +108,7 @@ _LAZY = {
     "d2c": "models.continuous",
     "damp": "analysis.lti",
     "decimate": "data.filtering",
-    "delayest": "polynomial.estimators",
+    "delayest": "polynomial.delayest",  # issue 27 (branch tfproc): its own module
     "despike": "data.preprocessing",
     "detrend": "data.preprocessing",
     "drop_quiet": "data.preprocessing",

@@ -215,7 +215,7 @@ def _delay_grid(exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt: float, dm
                 ) -> list[float]:
     """Candidate delays (whole samples) around the ARX delay estimate of input ``j``."""
     from ..data.iodata import IOData
-    from ..polynomial.estimators import delayest
+    from ..polynomial.delayest import delayest
 
     u = np.concatenate([u[:, j] for u, _ in exps])
     y = np.concatenate([y for _, y in exps])
@@ -360,7 +360,7 @@ def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
 
 
 def _delayest_one(data: Any, i: int, j: int) -> int:
-    from ..polynomial.estimators import delayest
+    from ..polynomial.delayest import delayest
 
     sub = data.select(outputs=[i], inputs=[j]) if hasattr(data, "select") else data
     return delayest(sub)
