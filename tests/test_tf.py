@@ -156,3 +156,15 @@ def test_bad_input_gives_clear_errors(call, match):
     d = sysid.IOData(u, np.cumsum(u) * 0.01, dt=0.1)
     with pytest.raises(DataError, match=match):
         call(d)
+
+
+def test_unidentifiable_zero_and_delay_warn_and_report_inf():
+    """At b0 = 0 a zero and the delay enter the response the same way (d/db0 and d/dtau are
+    parallel): the warning names them and their std is inf, not a small number."""
+    true = sysid.TransferFunction([2.0], [1.0, 3.0, 2.0], iodelay=0.23)
+    u = np.random.default_rng(2).standard_normal(400)
+    y = true.simulate(u, dt=0.05) + 1e-3 * np.random.default_rng(3).standard_normal((400, 1))
+    with pytest.warns(sysid.IdentifiabilityWarning, match="b0.*iodelay"):
+        G = sysid.tfest(sysid.IOData(u, y, dt=0.05), 2, 1, iodelay="auto", init=true)
+    assert np.isinf(G.parameters["y0<-u0:b0"]["std"])
+    assert np.isfinite(G.parameters["y0<-u0:a1"]["std"])

@@ -106,7 +106,7 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
         fit_hold = "foh"
     l, m = data.n_outputs, data.n_inputs
     cb, close = progress_callback(progress, max_iter)
-    values, covs, infos = [], [], []
+    values, covs, infos, weak = [], [], [], []
     try:
         for i in range(l):
             exps = [(u, y[:, i]) for u, y in exps_all]
@@ -125,6 +125,7 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
                 vals.append(v)
             values.append(vals)
             covs.append(_full_cov(res, t, names, m))
+            weak.append(_weak(res, t, names, m))
             infos.append(res)
     finally:
         close()
@@ -138,7 +139,7 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
         "noise_variance": [r["noise_variance"] for r in infos],
         "n_samples": infos[0]["n_samples"], "initial_state": initial_state,
         "fixed": sorted(fixed)})
-    _attach(model, covs, fixed)
+    _attach(model, covs, fixed, weak)
     fit_percent(model, data)
     return model
 
@@ -260,13 +261,29 @@ def _full_cov(res: dict[str, Any], t: ProcessType, names: list[str], m: int) -> 
     return out
 
 
-def _attach(model: ProcessModel, covs: list[np.ndarray], fixed: dict[str, float]) -> None:
+def _weak(res: dict[str, Any], t: ProcessType, names: list[str], m: int) -> list[int]:
+    """The unidentifiable entries in the table order of one output (see ``_full_cov``)."""
+    k = len(names)
+    order: list[int] = []
+    for j in range(m):
+        order += list(range(j * k, (j + 1) * k))
+        if t.delay:
+            order.append(m * k + res["delay_index"].index(j) if j in res["delay_index"] else -1)
+    return [a for a, i in enumerate(order) if i in set(res.get("unidentifiable", []))]
+
+
+def _attach(model: ProcessModel, covs: list[np.ndarray], fixed: dict[str, float],
+            weak: list[list[int]]) -> None:
     from ..tf.options import blockdiag
 
     names, theta = model.parameter_names(), model.parameter_vector()
     P = blockdiag(covs)
     is_fixed = np.array([n.split(":")[-1] in fixed for n in names])
-    model.parameters = ParameterTable(names, theta, np.sqrt(np.clip(np.diag(P), 0, None)),
-                                      is_fixed)
+    sd = np.sqrt(np.clip(np.diag(P), 0, None))
+    o = 0
+    for c, w in zip(covs, weak):
+        sd[[o + a for a in w]] = np.inf
+        o += c.shape[0]
+    model.parameters = ParameterTable(names, theta, sd, is_fixed)
     model.uncertainty = ParameterUncertainty(theta, P, model.with_parameter_vector,
                                              names=names)

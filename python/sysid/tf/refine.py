@@ -193,13 +193,41 @@ def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarr
     assert res is not None and mp is not None
     S = mp.scale
     cov = np.asarray(res["covariance"])[:S.size, :S.size] * np.outer(S, S)
+    names = [n for p in pairs for n in p.names] + [f"{pairs[j].names[0].split(':')[0]}:iodelay"
+                                                   if pairs[j].names else f"iodelay{j}"
+                                                   for j in mp.delay_idx]
+    weak = _unidentifiable(np.asarray(res["unidentifiable"])[:S.size], names)
     lam = float(np.asarray(res["innovation_covariance"])[0, 0])
     return {"p": [p.p0 for p in pairs], "delays": [p.delay for p in pairs],
             "delay_index": mp.delay_idx, "covariance": cov, "noise_variance": lam,
             "iterations": int(res["iterations"]), "stop": res["stop"],
             "cost_history": history, "interval_moves": moves,
             "n_samples": int(res["n_samples"]), "rank": int(res["rank"]),
-            "condition": float(res["condition"])}
+            "condition": float(res["condition"]), "unidentifiable": weak}
+
+
+def _unidentifiable(null: np.ndarray, names: list[str]) -> list[int]:
+    """Indices of the parameters in directions the data do not determine, with an
+    :class:`~sysid.IdentifiabilityWarning` naming them (their std is then reported as inf)."""
+    import warnings
+
+    from ..greybox.greybox import IdentifiabilityWarning
+
+    if null.size == 0 or null.ndim != 2 or null.shape[1] == 0:
+        return []
+    idx: set[int] = set()
+    parts = []
+    for v in null.T:
+        # any part along the direction makes the variance unbounded (round-off aside)
+        big = np.flatnonzero(np.abs(v) >= 1e-6 * np.max(np.abs(v)))
+        idx |= set(int(i) for i in big)
+        parts.append(", ".join(names[i] if i < len(names) else f"p{i}" for i in big))
+    warnings.warn("the data cannot determine these parameters separately: " + "; ".join(parts)
+                  + " (a zero far beyond the bandwidth trades off against the delay, for "
+                  "example). Lower n_zeros, fix the delay or use more informative data; their "
+                  "standard deviations are reported as inf.", IdentifiabilityWarning,
+                  stacklevel=4)
+    return sorted(idx)
 
 
 def check_experiments(exps: list[tuple[np.ndarray, np.ndarray]], n_par: int) -> None:

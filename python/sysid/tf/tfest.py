@@ -289,7 +289,9 @@ def _attach(G: TransferFunction, tables: list[Any], covs: list[np.ndarray], auto
                             [res["delays"][j] for j in res["delay_index"]]])
         names += nm
         values.append(v)
-        stds.append(np.sqrt(np.clip(np.diag(cov), 0, None)))
+        sd = np.sqrt(np.clip(np.diag(cov), 0, None))
+        sd[res.get("unidentifiable", [])] = np.inf
+        stds.append(sd)
     theta = np.concatenate(values)
     fixed = np.array(["iodelay" in n and not auto for n in names])
     G.parameters = ParameterTable(names, theta, np.concatenate(stds), fixed)
