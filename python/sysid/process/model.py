@@ -40,7 +40,8 @@ class ProcessModel(TransferFunction):
     >>> m = sysid.ProcessModel("P1D", Kp=2.0, Tp1=1.5, Td=0.37)
     >>> m
     ProcessModel(P1D: Kp=2, Tp1=1.5, Td=0.37)
-    >>> print(m.to_tf())
+    >>> print(m)
+    ProcessModel(P1D: Kp=2, Tp1=1.5, Td=0.37)
     y0 <- u0:  1.33333 / (s + 0.666667) * exp(-0.37 s)
     """
 
@@ -129,6 +130,9 @@ class ProcessModel(TransferFunction):
         return cls(d["type"], d["values"], hold=d.get("hold", "zoh"),
                    input_names=d.get("input_names"), output_names=d.get("output_names"),
                    info=d.get("info"))
+
+    def __str__(self) -> str:
+        return f"{self!r}\n{TransferFunction.__str__(self)}"
 
     def __repr__(self) -> str:
         if self.noutputs == self.ninputs == 1:
