@@ -168,3 +168,15 @@ def test_unidentifiable_zero_and_delay_warn_and_report_inf():
         G = sysid.tfest(sysid.IOData(u, y, dt=0.05), 2, 1, iodelay="auto", init=true)
     assert np.isinf(G.parameters["y0<-u0:b0"]["std"])
     assert np.isfinite(G.parameters["y0<-u0:a1"]["std"])
+
+
+def test_initial_state_estimate_recovers_a_record_not_at_rest():
+    true = sysid.TransferFunction([1.0, 0.5], [1.0, 2.0, 5.0])
+    u = np.random.default_rng(5).standard_normal(600)
+    y = true.simulate(np.concatenate([np.ones(100), u]), dt=0.02)[100:]
+    data = sysid.IOData(u, y, dt=0.02)
+    G = sysid.tfest(data, 2, 1, initial_state="estimate")
+    np.testing.assert_allclose(G.den[0][0], true.den[0][0], atol=1e-6)
+    np.testing.assert_allclose(G.num[0][0], true.num[0][0], atol=1e-6)
+    rest = sysid.tfest(data, 2, 1)
+    assert abs(rest.den[0][0][2] - 5.0) > 1e-3      # from rest the transient biases the fit

@@ -51,7 +51,9 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
     hold : {"zoh", "foh"}
         Inter-sample behaviour of the input.
     initial_state : {"zero", "estimate"}
-        Start from rest, or estimate the initial state of each experiment.
+        Start from rest, or estimate the initial state of each experiment (the model's
+        state; the input before the record, which the dead time would still deliver, is taken
+        as zero).
     max_delay : float, optional
         Upper bound on the dead time (default a tenth of the record).
     max_iter, tol, progress
@@ -140,7 +142,8 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
         "n_samples": infos[0]["n_samples"], "initial_state": initial_state,
         "fixed": sorted(fixed)})
     _attach(model, covs, fixed, weak)
-    fit_percent(model, data)
+    if initial_state == "zero":  # the fit of a simulation from rest, as the model was fitted
+        fit_percent(model, data)
     return model
 
 

@@ -55,7 +55,9 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     hold : {"zoh", "foh"}
         How the input behaves between samples (time-domain data).
     initial_state : {"zero", "estimate"}
-        Start from rest, or estimate the initial state of each experiment.
+        Start from rest, or estimate the initial state of each experiment (the model's
+        state; the input before the record, which a delay would still deliver, is taken as
+        zero).
     init : TransferFunction, optional
         Start the refinement from this model (continuous, same orders) instead of SRIVC.
     max_delay : float, optional
@@ -151,7 +153,8 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
                          input_names=data.input_names, output_names=data.output_names,
                          info=info)
     _attach(G, tables, covs, auto)
-    fit_percent(G, data)
+    if initial_state == "zero":  # the fit of a simulation from rest, as the model was fitted
+        fit_percent(G, data)
     return G
 
 
