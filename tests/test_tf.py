@@ -180,3 +180,15 @@ def test_initial_state_estimate_recovers_a_record_not_at_rest():
     np.testing.assert_allclose(G.num[0][0], true.num[0][0], atol=1e-6)
     rest = sysid.tfest(data, 2, 1)
     assert abs(rest.den[0][0][2] - 5.0) > 1e-3      # from rest the transient biases the fit
+
+
+def test_stopping_on_the_iteration_limit_warns():
+    from sysid.tf.refine import ConvergenceWarning
+
+    true = sysid.TransferFunction([0.5, 2.0], [1.0, 0.8, 4.0])
+    u = np.random.default_rng(0).standard_normal(300)
+    y = true.simulate(u, dt=0.05) + 0.05 * np.random.default_rng(1).standard_normal((300, 1))
+    start = sysid.TransferFunction([0.3, 1.0], [1.0, 2.0, 2.0])
+    with pytest.warns(ConvergenceWarning, match="max_iter"):
+        G = sysid.tfest(sysid.IOData(u, y, dt=0.05), 2, 1, init=start, max_iter=1)
+    assert G.info["cost"][0] <= G.info["cost_start"][0]

@@ -26,7 +26,11 @@ from ..errors import DataError
 from .model import assemble
 from .sampling import canonical, sample_pair, shift_columns
 
-__all__ = ["PairStructure", "refine"]
+__all__ = ["PairStructure", "refine", "ConvergenceWarning"]
+
+
+class ConvergenceWarning(UserWarning):
+    """The search stopped on its iteration limit, before a convergence test was met."""
 
 Coef = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
@@ -190,6 +194,12 @@ def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarr
     ps, taus = mp.split(v)
     pairs = [PairStructure(p.coef, q, p.fixed, p.lower, p.upper, t, p.delay_free,
                            p.delay_max, p.names) for p, q, t in zip(pairs, ps, taus)]
+    if res["stop"] == "maximum iterations":
+        import warnings
+
+        warnings.warn(f"the output-error search stopped after max_iter={max_iter} iterations "
+                      "before converging (the result is the best point reached, never worse "
+                      "than the start); raise max_iter", ConvergenceWarning, stacklevel=4)
     assert res is not None and mp is not None
     S = mp.scale
     cov = np.asarray(res["covariance"])[:S.size, :S.size] * np.outer(S, S)
