@@ -1,6 +1,7 @@
-"""Polynomial estimators: ``arx``, ``armax``, ``oe``, ``bj``, ``ar``, ``arma``, ``arxstruc``,
-``selstruc`` and ``delayest`` (least squares by streaming QR in Rust; the iterative structures
-through the shared Gauss-Newton optimiser of ``sysid-core``)."""
+"""Polynomial estimators: ``arx``, ``armax``, ``oe``, ``bj``, ``ar``, ``arma``, ``arxstruc``
+and ``selstruc`` (least squares by streaming QR in Rust; the iterative structures through the
+shared Gauss-Newton optimiser of ``sysid-core``); ``delayest`` is in
+:mod:`sysid.polynomial.delayest`."""
 
 from __future__ import annotations
 
