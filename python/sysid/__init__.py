@@ -108,7 +108,7 @@ _LAZY = {
     "d2c": "models.continuous",
     "damp": "analysis.lti",
     "decimate": "data.filtering",
-    "delayest": "polynomial.estimators",
+    "delayest": "polynomial.delayest",  # issue 27 (branch tfproc): its own module
     "despike": "data.preprocessing",
     "detrend": "data.preprocessing",
     "drop_quiet": "data.preprocessing",
@@ -210,6 +210,18 @@ _LAZY = {
     "check_offsets": "data.offsets",
     "CompareSet": "validation.comparison",
     "TrendedModel": "models.trended",
+    # issue 27 (branch tfproc): transfer functions, process models, analysis helpers
+    "TransferFunction": "tf.model",
+    "tfest": "tf.tfest",
+    "ProcessModel": "process.model",
+    "procest": "process.procest",
+    "stepinfo": "analysis.stepinfo",
+    "StepInfo": "analysis.stepinfo",
+    "margin": "analysis.margin",
+    "Margins": "analysis.margin",
+    "nyquist": "analysis.nyquist",
+    "NyquistResponse": "analysis.nyquist",
+    "minreal": "analysis.minreal",
 }
 
 
@@ -401,4 +413,16 @@ __all__ = [
     "check_offsets",
     "CompareSet",
     "TrendedModel",
+    # issue 27 (branch tfproc): transfer functions, process models, analysis helpers
+    "TransferFunction",
+    "tfest",
+    "ProcessModel",
+    "procest",
+    "stepinfo",
+    "StepInfo",
+    "margin",
+    "Margins",
+    "nyquist",
+    "NyquistResponse",
+    "minreal",
 ]

@@ -1,6 +1,7 @@
-"""Polynomial estimators: ``arx``, ``armax``, ``oe``, ``bj``, ``ar``, ``arma``, ``arxstruc``,
-``selstruc`` and ``delayest`` (least squares by streaming QR in Rust; the iterative structures
-through the shared Gauss-Newton optimiser of ``sysid-core``)."""
+"""Polynomial estimators: ``arx``, ``armax``, ``oe``, ``bj``, ``ar``, ``arma``, ``arxstruc``
+and ``selstruc`` (least squares by streaming QR in Rust; the iterative structures through the
+shared Gauss-Newton optimiser of ``sysid-core``); ``delayest`` is in
+:mod:`sysid.polynomial.delayest`."""
 
 from __future__ import annotations
 
@@ -447,26 +448,6 @@ def arma(data: Any, na: int, nc: int, *, max_iter: int = 100) -> PolynomialModel
     if experiment_arrays(data)[0][0].shape[1] != 0:
         raise DataError("ar/arma model time series: pass data without inputs (IOData(None, y))")
     return _pem(data, na, 0, nc, 0, 0, 0, "arma", max_iter, None)
-
-
-def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int = 10) -> int:
-    """Input delay of a single-input single-output record: the ``nk`` whose ARX(na, nb, nk)
-    has the smallest loss, all from one compression (as MATLAB's ``delayest``).
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> from scipy import signal
-    >>> rng = np.random.default_rng(0)
-    >>> u = rng.standard_normal(500)
-    >>> y = signal.lfilter([0, 0, 0, 0.7], [1, -0.5], u) + 0.01 * rng.standard_normal(500)
-    >>> sysid.polynomial.estimators.delayest(sysid.IOData(u[:, None], y[:, None], 1.0))
-    3
-    """
-    if not 0 <= nk_min <= nk_max:
-        raise DataError(f"need 0 <= nk_min <= nk_max, got {nk_min}, {nk_max}")
-    table = arxstruc(data, [na], [nb], list(range(nk_min, nk_max + 1)))
-    return int(table[int(np.argmin(table[:, 3])), 2])
 
 
 def _references(reference: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> list[Any]:
