@@ -193,6 +193,10 @@ _LAZY = {
     "PiecewiseLinear": "models.hammerstein",
     "SigmoidNetwork": "models.hammerstein",
     "UserFunction": "models.hammerstein",
+    # issue 26 (branch pem): the cheap criterion of a model, the iterative estimators' warnings
+    "pem_loss": "estimate.pem",
+    "StabilityWarning": "errors",
+    "IterationLimitWarning": "errors",
 }
 
 
@@ -375,4 +379,8 @@ __all__ = [
     "model_to_dict",
     "model_from_dict",
     "report",
+    # issue 26 (branch pem): the cheap criterion of a model, the iterative estimators' warnings
+    "pem_loss",
+    "StabilityWarning",
+    "IterationLimitWarning",
 ]
