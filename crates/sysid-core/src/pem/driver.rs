@@ -308,7 +308,7 @@ fn finish(
     })
 }
 
-/// The criterion [`pem`] would start from for this model, without searching: the initial
+/// The criterion [`pem`] would start from for `model` on the data, without searching: the initial
 /// states fitted by least squares (where estimated), then `det(Lambda)` when `options.reweight`
 /// (the maximum-likelihood loss) or `1/2 sum |e|^2` otherwise. One pass for the states and one
 /// for the criterion: cheap enough to score many candidate models.
@@ -323,13 +323,13 @@ fn finish(
 /// let mut o = PemOptions::default();
 /// o.focus = Focus::Simulation;
 /// o.reweight = false;
-/// let c = criterion(&truth, None, &[(u.as_ref(), y.as_ref())], &o).unwrap();
+/// let c = criterion(&[(u.as_ref(), y.as_ref())], &truth, None, &o).unwrap();
 /// assert!(c < 1e-20);
 /// ```
 pub fn criterion(
+    experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
     model: &StateSpace,
     k: Option<MatRef<'_, f64>>,
-    experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
     options: &PemOptions,
 ) -> Result<f64> {
     let mut prob = Predictor::new(model, k, experiments, options)?;

@@ -29,6 +29,11 @@ pub(super) fn gram_add(gram: MatMut<'_, f64>, rows: MatRef<'_, f64>, par: Par) {
     );
 }
 
+/// `dst = alpha a b` on the calling thread (the small per-sample products).
+pub(super) fn product(dst: MatMut<'_, f64>, a: MatRef<'_, f64>, b: MatRef<'_, f64>, alpha: f64) {
+    faer::linalg::matmul::matmul(dst, Accum::Replace, a, b, alpha, Par::Seq);
+}
+
 /// The parallelism of the products whose cost grows with the square of `cols` columns:
 /// faer's global one from 64 columns (results agree to round-off for any thread count).
 pub(super) fn parallelism(cols: usize) -> Par {

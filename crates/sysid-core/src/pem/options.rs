@@ -9,7 +9,13 @@ use crate::optim::{self, Covariance, Solution};
 use faer::{Mat, MatRef};
 use std::str::FromStr;
 
-/// What the predictor's errors are.
+/// What the predictor's errors are; parses from `"prediction"` and `"simulation"`.
+///
+/// ```
+/// use sysid_core::pem::Focus;
+/// assert_eq!("simulation".parse::<Focus>().unwrap(), Focus::Simulation);
+/// assert!("sim".parse::<Focus>().is_err());
+/// ```
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Focus {
     /// One-step-ahead prediction errors of the innovation form (K estimated or fixed).
@@ -33,29 +39,38 @@ impl Focus {
     }
 }
 
-impl FromStr for Focus {
-    type Err = SysidError;
+/// `FromStr` for an option whose values are a fixed table of names: the error names the
+/// option and what it accepts.
+macro_rules! parse_from_table {
+    ($ty:ty, $name:literal, $what:literal, [$(($key:literal, $val:expr)),+ $(,)?]) => {
+        impl FromStr for $ty {
+            type Err = SysidError;
 
-    /// Parses `"prediction"` or `"simulation"`.
-    ///
-    /// ```
-    /// use sysid_core::pem::Focus;
-    /// assert_eq!("simulation".parse::<Focus>().unwrap(), Focus::Simulation);
-    /// assert!("sim".parse::<Focus>().is_err());
-    /// ```
-    fn from_str(s: &str) -> Result<Self> {
-        match s {
-            "prediction" => Ok(Focus::Prediction),
-            "simulation" => Ok(Focus::Simulation),
-            other => Err(SysidError::invalid(
-                "focus",
-                format!("must be \"prediction\" or \"simulation\", got {other:?}"),
-            )),
+            fn from_str(s: &str) -> Result<Self> {
+                choose($name, s, &[$(($key, $val)),+], $what)
+            }
         }
-    }
+    };
 }
 
-/// The initial state of one experiment.
+parse_from_table! { Focus, "focus", "must be \"prediction\" or \"simulation\"",
+[("prediction", Focus::Prediction), ("simulation", Focus::Simulation)] }
+
+/// The value named `s` in `table`, or an error on option `name` saying `what` is allowed.
+fn choose<T: Clone>(name: &'static str, s: &str, table: &[(&str, T)], what: &str) -> Result<T> {
+    table
+        .iter()
+        .find(|(key, _)| *key == s)
+        .map(|(_, v)| v.clone())
+        .ok_or_else(|| SysidError::invalid(name, format!("{what}, got {s:?}")))
+}
+
+/// The initial state of one experiment; `"estimate"` and `"zero"` parse to the first two.
+///
+/// ```
+/// use sysid_core::pem::InitialState;
+/// assert_eq!("zero".parse::<InitialState>().unwrap(), InitialState::Zero);
+/// ```
 #[derive(Debug, Clone, PartialEq)]
 pub enum InitialState {
     /// Estimated with the other parameters (started at its least-squares value).
@@ -66,26 +81,8 @@ pub enum InitialState {
     Given(Vec<f64>),
 }
 
-impl FromStr for InitialState {
-    type Err = SysidError;
-
-    /// Parses `"estimate"` or `"zero"` (a given state is a vector, not a string).
-    ///
-    /// ```
-    /// use sysid_core::pem::InitialState;
-    /// assert_eq!("zero".parse::<InitialState>().unwrap(), InitialState::Zero);
-    /// ```
-    fn from_str(s: &str) -> Result<Self> {
-        match s {
-            "estimate" => Ok(InitialState::Estimate),
-            "zero" => Ok(InitialState::Zero),
-            other => Err(SysidError::invalid(
-                "x0",
-                format!("entries must be \"estimate\", \"zero\" or an array, got {other:?}"),
-            )),
-        }
-    }
-}
+parse_from_table! { InitialState, "x0", "entries must be \"estimate\", \"zero\" or an array",
+[("estimate", InitialState::Estimate), ("zero", InitialState::Zero)] }
 
 /// Options of [`pem`](super::pem). Build with `PemOptions::default()` and set fields.
 #[derive(Debug, Clone)]

@@ -4,7 +4,7 @@
 //! `J^T W r` block by block. `O(N l p^2)`: the reference the structured forms are tested
 //! against, and the initial-state pre-step (only the columns from `col_lo` on).
 
-use super::normal::{gram_add, mirror_lower, parallelism};
+use super::normal::{gram_add, mirror_lower, parallelism, product};
 use super::predictor::{Filter, Predictor};
 use crate::error::Result;
 use crate::optim::Evaluation;
@@ -105,37 +105,16 @@ impl Predictor<'_> {
                     *v = u[(t, j)];
                 }
                 let (pm, rinv) = (&f.pm, &f.rinv);
-                matmul(
-                    cs.as_mut(),
-                    Accum::Replace,
-                    pm.c.as_ref(),
-                    s.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
+                product(cs.as_mut(), pm.c.as_ref(), s.as_ref(), 1.0);
                 self.add_direct(&f, &mut cs, &ut, lo);
                 // weighted Jacobian rows: -R^-1 dŷ
                 let rows = jb.as_mut().subrows_mut(row * l, l);
-                matmul(
-                    rows,
-                    Accum::Replace,
-                    rinv.as_ref(),
-                    cs.as_ref(),
-                    -1.0,
-                    Par::Seq,
-                );
+                product(rows, rinv.as_ref(), cs.as_ref(), -1.0);
                 for i in 0..l {
                     rb[(row * l + i, 0)] = f.we[i];
                 }
                 row += 1;
-                matmul(
-                    s2.as_mut(),
-                    Accum::Replace,
-                    pm.abar.as_ref(),
-                    s.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
+                product(s2.as_mut(), pm.abar.as_ref(), s.as_ref(), 1.0);
                 self.add_forcing(&f, &mut s2, &ut, lo);
                 std::mem::swap(&mut s, &mut s2);
                 if row == blk || t + 1 == len {

@@ -15,13 +15,13 @@
 
 use super::modal::Modal;
 use super::normal::{
-    gradient_to_theta, gram_add, matrix_to_theta, mirror_lower, parallelism, StaticSums,
+    gradient_to_theta, gram_add, matrix_to_theta, mirror_lower, parallelism, product, StaticSums,
 };
 use super::predictor::{Filter, Predictor};
 use crate::error::Result;
 use crate::optim::Evaluation;
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, Par, Side};
+use faer::{Accum, Mat, Side};
 
 /// A dynamic column of the modal form: (phi index, state row, forcing, forcing index).
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -202,17 +202,10 @@ impl Predictor<'_> {
                         }
                     }
                     let rows = jb.as_mut().subrows_mut(row * r, r);
-                    matmul(rows, Accum::Replace, lt.as_ref(), s.as_ref(), 1.0, Par::Seq);
+                    product(rows, lt.as_ref(), s.as_ref(), 1.0);
                     row += 1;
                 }
-                matmul(
-                    s2.as_mut(),
-                    Accum::Replace,
-                    f.pm.abar.as_ref(),
-                    s.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
+                product(s2.as_mut(), f.pm.abar.as_ref(), s.as_ref(), 1.0);
                 for (c, d) in cols.iter().enumerate() {
                     s2[(d.row, c)] += match d.forcing {
                         Forcing::State => f.x[d.j],
@@ -323,12 +316,10 @@ impl Predictor<'_> {
         let mut gram = Mat::<f64>::zeros(hp, hp);
         let mut cross = Mat::<f64>::zeros(if acc { nz } else { 0 }, hp);
         let mut vbuf = Mat::<f64>::zeros(if acc { blk } else { 0 }, hp);
+        let (mut v, mut z) = (vec![0.0; n], vec![0.0; nz]);
         let mut sums = StaticSums::new(l, nz, blk, acc);
         let mut gd = vec![0.0; pd];
-        let mut sc = vec![0.0; pe];
-        let mut sn = vec![0.0; pe];
-        let mut v = vec![0.0; n];
-        let mut z = vec![0.0; nz];
+        let (mut sc, mut sn) = (vec![0.0; pe], vec![0.0; pe]);
         for (ex, (u, y)) in self.exps.iter().enumerate() {
             f.restart(ex);
             sc.fill(0.0);
