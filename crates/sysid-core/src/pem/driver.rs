@@ -20,9 +20,10 @@ use faer::{Mat, MatRef};
 /// an unstable model must pass to be preferred over the stable one.
 const CHI2_1_99: f64 = 6.635;
 
-/// Spectral radius of `A` at or above this after a search kept `A` stable: the bound was
-/// (nearly) active, so the unconstrained search is tried as well.
-const NEAR_BOUNDARY: f64 = 0.99;
+/// Spectral radius of `A` at or above this after a search kept `A` stable, or a trial step
+/// refused for an unstable `A`: the bound was (nearly) active, so the unconstrained search
+/// is tried as well.
+const NEAR_BOUNDARY: f64 = 0.999;
 
 impl Problem for Predictor<'_> {
     fn n_params(&self) -> usize {
@@ -40,6 +41,10 @@ impl Problem for Predictor<'_> {
             Some(md) => self.evaluate_modal(th, false, &md),
             None => self.evaluate_structured(th, false),
         }
+    }
+
+    fn n_residuals(&self) -> Option<usize> {
+        Some(self.n_samples * self.l)
     }
 
     fn admissible(&mut self, th: &[f64]) -> bool {
@@ -242,7 +247,8 @@ pub fn pem(
     let rho = |prob: &Predictor<'_>, th: &[f64]| {
         spectral_radius(prob.unpack(th).a.as_ref()).unwrap_or(f64::INFINITY)
     };
-    if auto && a_stable && rho(&prob, &solution.theta) >= NEAR_BOUNDARY {
+    let active = prob.a_bound_hits > 0 || rho(&prob, &solution.theta) >= NEAR_BOUNDARY;
+    if auto && a_stable && active {
         // the bound was active: does an unstable model fit significantly better?
         prob.enforce_stability = false;
         let kept = solution.theta.clone();

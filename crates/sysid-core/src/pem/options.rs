@@ -120,6 +120,8 @@ impl Default for PemOptions {
             tol_cost: 1e-6,
             // J^T W J costs O(N min(l, n) p^2), the gradient O(N n^2 p): chord steps
             reuse_gauss_newton: 3,
+            // stop once the expected decrease is a hundredth of a residual variance
+            tol_statistical: 1e-2,
             ..Default::default()
         };
         PemOptions {

@@ -58,6 +58,8 @@ pub struct Predictor<'a> {
     /// Gauss-Newton matrix at the same point (the covariance after an unweighted search)
     /// costs a gradient pass instead of a full one.
     pub(super) gram_cache: Option<GramCache>,
+    /// Trial points refused only because `A` was unstable (the stability bound was active).
+    pub(super) a_bound_hits: usize,
 }
 
 /// The model matrices at one parameter vector, with the predictor's `A - K C`, `B - K D`.
@@ -310,6 +312,7 @@ impl<'a> Predictor<'a> {
             modal: true,
             halve: true,
             gram_cache: None,
+            a_bound_hits: 0,
         })
     }
 
@@ -399,15 +402,18 @@ impl<'a> Predictor<'a> {
         }
     }
 
-    /// Whether `theta` is inside the admissible set ([`stable_enough`]).
-    pub(super) fn is_admissible(&self, th: &[f64]) -> bool {
+    /// Whether `theta` is inside the admissible set ([`stable_enough`]); a point refused only
+    /// because `A` is unstable is counted in `a_bound_hits`.
+    pub(super) fn is_admissible(&mut self, th: &[f64]) -> bool {
         let pm = self.unpack(th);
-        stable_enough(
-            pm.a.as_ref(),
-            pm.k.as_ref(),
-            pm.c.as_ref(),
-            self.enforce_stability,
-        )
+        let (a, k, c) = (pm.a.as_ref(), pm.k.as_ref(), pm.c.as_ref());
+        if stable_enough(a, k, c, self.enforce_stability) {
+            return true;
+        }
+        if self.enforce_stability && stable_enough(a, k, c, false) {
+            self.a_bound_hits += 1;
+        }
+        false
     }
 
     /// `det(Lambda)` at the start and after every accepted step (the maximum-likelihood loss).
