@@ -222,6 +222,9 @@ _LAZY = {
     "nyquist": "analysis.nyquist",
     "NyquistResponse": "analysis.nyquist",
     "minreal": "analysis.minreal",
+    # issue 26 (branch pem): the cheap criterion of a model, the iterative estimators' warnings
+    "pem_loss": "pem.pem",
+    "IterationLimitWarning": "errors",
 }
 
 
@@ -425,4 +428,7 @@ __all__ = [
     "nyquist",
     "NyquistResponse",
     "minreal",
+    # issue 26 (branch pem): the cheap criterion of a model, the iterative estimators' warnings
+    "pem_loss",
+    "IterationLimitWarning",
 ]

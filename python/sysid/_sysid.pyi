@@ -59,6 +59,8 @@ __all__ = [
     # issue 27 (branch tfproc): transfer functions
     "tf_filtered_gram",
     "tf_fit_frequency",
+    # issue 26 (branch pem)
+    "pem_criterion",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -287,6 +289,7 @@ def pem_refine(
     x0: list[Any] | None = None,
     reweight: bool = True,
     local_coordinates: bool = True,
+    enforce_stability: bool | None = None,
     max_iter: int = 50,
     tol_cost: float = 1e-6,
     tol_step: float = 1e-9,
@@ -550,3 +553,19 @@ def tf_fit_frequency(
     tol: float = 1e-10,
     progress: Callable[..., Any] | None = None,
 ) -> dict[str, Any]: ...
+# issue 26 (branch pem): the cheap criterion of a model
+def pem_criterion(
+    a: _Array,
+    b: _Array,
+    c: _Array,
+    d: _Array,
+    k: _Array | None,
+    experiments: list[tuple[_Array, _Array]],
+    *,
+    focus: str = "prediction",
+    estimate_d: bool = False,
+    estimate_k: bool = True,
+    x0: list[Any] | None = None,
+    reweight: bool = True,
+    enforce_stability: bool | None = None,
+) -> float: ...

@@ -30,6 +30,7 @@ __all__ = [
     "FeedbackWarning",
     "OffsetWarning",
     "StabilityWarning",
+    "IterationLimitWarning",
 ]
 
 
@@ -89,3 +90,9 @@ class StabilityWarning(UserWarning):
     """An estimator returned an unstable model (a pole on or outside the unit circle): its
     simulation diverges. The message names the largest pole modulus and what to do (for
     example ``ssest(..., focus="simulation")`` or ``stable=True`` / ``enforce_stability``)."""
+
+
+class IterationLimitWarning(UserWarning):
+    """An iterative search stopped at its iteration cap before a convergence test was met;
+    the model is the best iterate found. The message says how far from converged it was and
+    what to do (raise ``max_iter``, or refine again from the returned model)."""
