@@ -108,7 +108,7 @@ _LAZY = {
     "d2c": "models.continuous",
     "damp": "analysis.lti",
     "decimate": "data.filtering",
-    "delayest": "polynomial.estimators",
+    "delayest": "polynomial.delayest",  # issue 27 (branch tfproc): its own module
     "despike": "data.preprocessing",
     "detrend": "data.preprocessing",
     "drop_quiet": "data.preprocessing",
@@ -201,6 +201,30 @@ _LAZY = {
     "PiecewiseLinear": "nonlinear.hw_model",
     "SigmoidNetwork": "nonlinear.hw_model",
     "UserFunction": "nonlinear.hw_model",
+    # issue 30 (branch report): many records at once
+    "identify_many": "batch.many",
+    "BatchResult": "batch.stream",
+    # issue 26 (branch diag): honest diagnostics
+    "OffsetWarning": "errors",
+    "StabilityWarning": "errors",
+    "check_offsets": "data.offsets",
+    "CompareSet": "validation.comparison",
+    "TrendedModel": "models.trended",
+    # issue 27 (branch tfproc): transfer functions, process models, analysis helpers
+    "TransferFunction": "tf.model",
+    "tfest": "tf.tfest",
+    "ProcessModel": "process.model",
+    "procest": "process.procest",
+    "stepinfo": "analysis.stepinfo",
+    "StepInfo": "analysis.stepinfo",
+    "margin": "analysis.margin",
+    "Margins": "analysis.margin",
+    "nyquist": "analysis.nyquist",
+    "NyquistResponse": "analysis.nyquist",
+    "minreal": "analysis.minreal",
+    # issue 26 (branch pem): the cheap criterion of a model, the iterative estimators' warnings
+    "pem_loss": "pem.pem",
+    "IterationLimitWarning": "errors",
 }
 
 
@@ -383,4 +407,28 @@ __all__ = [
     "model_to_dict",
     "model_from_dict",
     "report",
+    # issue 30 (branch report): many records at once
+    "identify_many",
+    "BatchResult",
+    # issue 26 (branch diag): honest diagnostics
+    "OffsetWarning",
+    "StabilityWarning",
+    "check_offsets",
+    "CompareSet",
+    "TrendedModel",
+    # issue 27 (branch tfproc): transfer functions, process models, analysis helpers
+    "TransferFunction",
+    "tfest",
+    "ProcessModel",
+    "procest",
+    "stepinfo",
+    "StepInfo",
+    "margin",
+    "Margins",
+    "nyquist",
+    "NyquistResponse",
+    "minreal",
+    # issue 26 (branch pem): the cheap criterion of a model, the iterative estimators' warnings
+    "pem_loss",
+    "IterationLimitWarning",
 ]

@@ -259,3 +259,24 @@ def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
                             f"{'how the output responds to it' if side == 0 else 'its dynamics'}"
                             f"; check the channel (the wrong column, a stuck "
                             f"{'actuator' if side == 0 else 'sensor'}?), {fix}")
+
+
+def user_stacklevel() -> int:
+    """``stacklevel`` for ``warnings.warn`` called by the caller of this function that points
+    at the first frame outside the sysid package (the user's line, however deep inside sysid
+    the warning is raised).
+
+    Examples
+    --------
+    >>> from sysid._checks import user_stacklevel
+    >>> user_stacklevel() >= 1
+    True
+    """
+    import os
+    import sys
+
+    pkg = os.path.dirname(os.path.abspath(__file__)) + os.sep
+    frame, level = sys._getframe(1), 1
+    while frame is not None and frame.f_code.co_filename.startswith(pkg):
+        frame, level = frame.f_back, level + 1
+    return level

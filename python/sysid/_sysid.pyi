@@ -56,6 +56,11 @@ __all__ = [
     "greybox_ode_simulate",
     "greybox_ode_jacobian",
     "expm_frechet",
+    # issue 27 (branch tfproc): transfer functions
+    "tf_filtered_gram",
+    "tf_fit_frequency",
+    # issue 26 (branch pem)
+    "pem_criterion",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -284,6 +289,7 @@ def pem_refine(
     x0: list[Any] | None = None,
     reweight: bool = True,
     local_coordinates: bool = True,
+    enforce_stability: bool | None = None,
     max_iter: int = 50,
     tol_cost: float = 1e-6,
     tol_step: float = 1e-9,
@@ -524,3 +530,42 @@ def hw_mimo_simulate(
     theta: list[float],
     u: _Array,
 ) -> _Array: ...
+
+# issue 27 (branch tfproc): transfer functions
+def tf_filtered_gram(
+    ad: _Array, bd: _Array, cw: _Array, dw: _Array, v: _Array, skip: int = 0
+) -> _Array: ...
+def tf_fit_frequency(
+    x: tuple[_Array, _Array],
+    w: tuple[_Array, _Array],
+    h: tuple[_Array, _Array],
+    weight: list[float],
+    lead: int,
+    den: list[int],
+    num: list[int],
+    theta0: list[float],
+    *,
+    fixed: list[bool] | None = None,
+    lower: list[float] | None = None,
+    upper: list[float] | None = None,
+    noise_variance: float | None = None,
+    max_iter: int = 100,
+    tol: float = 1e-10,
+    progress: Callable[..., Any] | None = None,
+) -> dict[str, Any]: ...
+# issue 26 (branch pem): the cheap criterion of a model
+def pem_criterion(
+    a: _Array,
+    b: _Array,
+    c: _Array,
+    d: _Array,
+    k: _Array | None,
+    experiments: list[tuple[_Array, _Array]],
+    *,
+    focus: str = "prediction",
+    estimate_d: bool = False,
+    estimate_k: bool = True,
+    x0: list[Any] | None = None,
+    reweight: bool = True,
+    enforce_stability: bool | None = None,
+) -> float: ...

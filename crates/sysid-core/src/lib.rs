@@ -56,6 +56,7 @@ pub mod polynomial;
 pub mod realization;
 pub mod stats;
 pub mod subspace;
+pub mod tf;
 
 pub use error::{Result, SysidError};
 pub use model::StateSpace;

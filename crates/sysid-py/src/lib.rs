@@ -21,6 +21,8 @@ mod simulate;
 mod stats;
 mod streaming;
 mod subspace;
+// issue 27 (branch tfproc): transfer functions
+mod tf;
 
 #[pymodule]
 fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -38,5 +40,7 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     narx::register(m)?;
     hw::register(m)?;
     stats::register(m)?;
+    // issue 27 (branch tfproc): transfer functions
+    tf::register(m)?;
     Ok(())
 }

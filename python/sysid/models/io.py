@@ -55,6 +55,9 @@ from .statespace import StateSpaceModel
 
 __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict", "register_model"]
 
+# issue 27 (branch tfproc): families in their own packages, registered on import
+_LAZY_FAMILIES = {"TransferFunction": "sysid.tf.model", "ProcessModel": "sysid.process.model"}
+
 for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel,
              HammersteinWienerModel, HammersteinWienerSSModel, NonlinearGreyBox):
     register_model(_cls)
@@ -77,6 +80,11 @@ def model_from_dict(d: dict[str, Any]) -> Any:
     """
     family = check_file(d, VERSION)
     cls = REGISTRY.get(family)
+    if cls is None and family in _LAZY_FAMILIES:  # families registered when first imported
+        import importlib
+
+        importlib.import_module(_LAZY_FAMILIES[family])
+        cls = REGISTRY.get(family)
     if cls is None:
         raise DataError(f"unknown model family {family!r}: import the module that defines it "
                         "and register the class with sysid.register_model before loading")

@@ -8,25 +8,10 @@ from collections.abc import Callable
 from typing import Any
 
 from .._checks import as_int
-from ..data.iodata import IOData
-from ..errors import DataError
+from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
 from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator
-from .pem import _experiments, pem
-
-
-def _start_loss(data: IOData, start: StateSpaceModel, focus: str, feedthrough: bool,
-                x0: Any, noise: str) -> float:
-    """det of the error covariance of a candidate start (initial states fitted), the cost the
-    refinement will minimise; inf when its predictor is unstable."""
-    try:
-        m = pem(data, start, focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
-                max_iter=0)
-    except Exception:  # noqa: BLE001 - an unusable candidate is skipped
-        return float("inf")
-    if m.info["pem"]["stabilized"]:
-        return float("inf")
-    return float(m.info["pem"]["cost"][0])
+from .pem import _experiments, pem, pem_loss
 
 
 def ssest(
@@ -44,6 +29,7 @@ def ssest(
     tol: float = 1e-6,
     regularization: dict[str, Any] | None = None,
     progress: bool | None | Callable[..., Any] = None,
+    enforce_stability: bool | None = None,
 ) -> StateSpaceModel:
     """Estimate a state-space model: the best subspace start, refined by :func:`pem`.
 
@@ -56,8 +42,8 @@ def ssest(
     ----------
     data : IOData or (u, y)
     order : int
-    focus, feedthrough, x0, noise, max_iter, tol, regularization, progress
-        As for :func:`pem`.
+    focus, feedthrough, x0, noise, max_iter, tol, regularization, progress, enforce_stability
+        As for :func:`pem` (the candidates are scored by :func:`sysid.pem_loss`).
     horizon : int, optional
         Subspace horizon (default :func:`sysid.default_horizon`).
     methods : tuple of str
@@ -104,14 +90,21 @@ def ssest(
                 if method is not None:
                     raise
                 continue
-            loss = _start_loss(data, cand, focus, feedthrough, x0, noise)
+            try:
+                loss = pem_loss(data, cand, focus=focus, feedthrough=feedthrough, x0=x0,
+                                noise=noise, enforce_stability=enforce_stability)
+            except SysidError:
+                loss = float("inf")
             candidates.append((loss, name, use_x0, cand))
     if not candidates:
         raise DataError("no subspace start could be computed for this order; lower the order")
     candidates.sort(key=lambda c: c[0])
     best = candidates[0]
-    model = pem(data, best[3], focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
-                max_iter=max_iter, tol=tol, regularization=regularization, progress=progress)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OffsetWarning)  # said once, by the subspace start
+        model = pem(data, best[3], focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
+                    max_iter=max_iter, tol=tol, regularization=regularization,
+                    progress=progress, enforce_stability=enforce_stability)
     model.info["start"] = {
         "method": best[1],
         "bd_x0": best[2],

@@ -48,7 +48,6 @@ pub use covariance::{covariance, Covariance};
 pub use normal::NormalEquations;
 pub use reparam::{ParameterMap, Reparameterized};
 pub use search::minimize;
-pub(crate) use search::prof;
 
 use crate::error::Result;
 use faer::Mat;
@@ -151,6 +150,11 @@ pub trait Problem {
     fn invariant_directions(&mut self, _theta: &[f64]) -> Result<Option<Mat<f64>>> {
         Ok(None)
     }
+    /// The number of scalar residuals in the cost (for [`Options::tol_statistical`]);
+    /// `None` (the default) when the provider does not say.
+    fn n_residuals(&self) -> Option<usize> {
+        None
+    }
 }
 
 /// Regularisation toward a nominal value: `lambda/2 (theta - nominal)^T R (theta - nominal)`.
@@ -177,6 +181,12 @@ pub struct Options {
     /// Stop when the Gauss-Newton predicted decrease `g^T H^+ g / 2` is below
     /// `tol_gradient * cost` (first-order optimality, independent of scaling).
     pub tol_gradient: f64,
+    /// Stop at statistical convergence: when the Gauss-Newton predicted decrease is below
+    /// `tol_statistical * sigma^2`, with `sigma^2 = 2 cost / n` the residual variance
+    /// ([`Problem::n_residuals`] residuals). A decrease that small moves the estimate by
+    /// `sqrt(2 tol_statistical)` standard deviations at most and changes no test on it.
+    /// Zero (the default) switches it off, as does a provider that does not count residuals.
+    pub tol_statistical: f64,
     /// Lower bounds (length p; `-inf` for none), or `None`.
     pub lower: Option<Vec<f64>>,
     /// Upper bounds (length p; `+inf` for none), or `None`.
@@ -214,6 +224,7 @@ impl Default for Options {
             tol_cost: 1e-7,
             tol_step: 1e-9,
             tol_gradient: 1e-9,
+            tol_statistical: 0.0,
             lower: None,
             upper: None,
             fixed: None,
@@ -235,6 +246,8 @@ pub enum StopReason {
     StepTolerance,
     /// The predicted decrease fell below `tol_gradient * cost` (or the cost is zero).
     GradientTolerance,
+    /// The predicted decrease fell below `tol_statistical` residual variances.
+    Statistical,
     /// No damping produced a decrease of the cost: a (local) minimum to working precision.
     NoDescent,
     /// `max_iter` iterations were taken.
@@ -250,6 +263,7 @@ impl StopReason {
             StopReason::CostTolerance => "cost tolerance",
             StopReason::StepTolerance => "step tolerance",
             StopReason::GradientTolerance => "gradient tolerance",
+            StopReason::Statistical => "statistical convergence",
             StopReason::NoDescent => "no further decrease",
             StopReason::MaxIterations => "maximum iterations",
             StopReason::Cancelled => "cancelled",

@@ -604,6 +604,13 @@ pub fn minimize(
             stop = StopReason::GradientTolerance;
             break;
         }
+        let sigma2 = problem
+            .n_residuals()
+            .map(|nr| 2.0 * pt.raw.cost / nr.max(1) as f64);
+        if !stale && sigma2.is_some_and(|s2| dec <= options.tol_statistical * s2) {
+            stop = StopReason::Statistical;
+            break;
+        }
         let mut accepted: Option<(Vec<f64>, f64, f64, f64)> = None;
         for try_ in 0..60 {
             if stale && try_ > 0 {

@@ -40,6 +40,28 @@ fn data(sys: &StateSpace, k: &Mat<f64>, u: &Mat<f64>, e: &Mat<f64>, x0: &[f64]) 
     y
 }
 
+fn options(focus: Focus, d: bool, k: bool, x0: Vec<InitialState>, block: usize) -> PemOptions {
+    let mut o = PemOptions::default();
+    o.focus = focus;
+    o.estimate_d = d;
+    o.estimate_k = k;
+    o.x0 = x0;
+    o.block = block;
+    o
+}
+
+/// The full evaluation with the paths `(structured, modal, halve)`, the defaults restored.
+fn evaluate_with(
+    pr: &mut Predictor,
+    th: &[f64],
+    paths: (bool, bool, bool),
+) -> crate::optim::Evaluation {
+    (pr.structured, pr.modal, pr.halve) = paths;
+    let ev = pr.evaluate(th, true).unwrap();
+    (pr.structured, pr.modal, pr.halve) = (true, true, true);
+    ev
+}
+
 fn sorted_poles(sys: &StateSpace) -> Vec<(f64, f64)> {
     let mut p = sys.poles().unwrap();
     p.sort_by(|a, b| a.partial_cmp(b).unwrap());
@@ -313,7 +335,7 @@ fn local_coordinates_and_gradient_check() {
     let q = pr.search_basis(&th).unwrap().unwrap();
     assert_eq!(q.ncols(), th.len() - 9);
     // the similarity directions are a null space of J^T W J and orthogonal to the gradient
-    let tan = pr.similarity_tangent(&th).unwrap();
+    let tan = pr.orbit_tangent(&th).unwrap();
     let ht = &ev.gauss_newton * &tan;
     let scale = ev.gauss_newton.norm_max() * tan.norm_max();
     eprintln!("H tan {} of {scale}", ht.norm_max());
@@ -371,17 +393,12 @@ fn structured_gauss_newton_equals_the_plain_one() {
             vec![InitialState::Given(vec![0.1, 0.2, 0.3])],
         ),
     ] {
-        let mut o = PemOptions::default();
-        o.focus = focus;
-        o.estimate_d = est_d;
-        o.estimate_k = est_k;
-        o.x0 = x0;
-        o.block = 7;
+        let o = options(focus, est_d, est_k, x0, 7);
         let mut pr = Predictor::new(&sys, Some(k.as_ref()), &views, &o).unwrap();
         let x0s = vec![vec![0.1, -0.2, 0.3], vec![0.05, 0.0, 0.1]];
         let th = pr.pack(&sys, k.as_ref(), &x0s);
         pr.reweight_at(&th).unwrap();
-        assert!(super::predictor::modal_form((&sys.a - &k * &sys.c).as_ref()).is_some());
+        assert!(super::modal::modal_form((&sys.a - &k * &sys.c).as_ref()).is_some());
         let fast = pr.evaluate(&th, true).unwrap();
         pr.modal = false;
         let kron = pr.evaluate(&th, true).unwrap();
@@ -412,9 +429,7 @@ fn structured_gauss_newton_equals_the_plain_one() {
         th2[0] += 0.01;
         pr.reweight_at(&th2).unwrap();
         let cached = pr.evaluate(&th, true).unwrap();
-        pr.modal = false;
-        let fresh = pr.evaluate(&th, true).unwrap();
-        pr.modal = true;
+        let fresh = evaluate_with(&mut pr, &th, (true, false, true));
         let scale = fresh.gauss_newton.norm_max();
         let dc = (&cached.gauss_newton - &fresh.gauss_newton).norm_max();
         assert!(dc < 1e-11 * scale, "{dc} vs {scale}");
@@ -440,13 +455,8 @@ fn structured_evaluation_is_identical_for_any_thread_count() {
     let sys = StateSpace::new(a, b, c, Mat::zeros(6, 2)).unwrap();
     let k = noise(n, 6, 34) * faer::Scale(0.1);
     let u = noise(400, 2, 35);
-    let y = data(
-        &sys,
-        &k,
-        &u,
-        &(noise(400, 6, 36) * faer::Scale(0.2)),
-        &[0.0; 6],
-    );
+    let e = noise(400, 6, 36) * faer::Scale(0.2);
+    let y = data(&sys, &k, &u, &e, &[0.0; 6]);
     let views = [(u.as_ref(), y.as_ref())];
     let o = PemOptions::default();
     let mut pr = Predictor::new(&sys, Some(k.as_ref()), &views, &o).unwrap();
@@ -503,7 +513,7 @@ fn halved_modal_gram_equals_the_full_one() {
         };
         let twice = if repeated { 2 } else { 1 };
         assert_eq!((near(0.5, 0.0), near(0.6, 0.3)), (twice, twice));
-        let modal = super::predictor::modal_form(sys.a.as_ref()).is_some();
+        let modal = super::modal::modal_form(sys.a.as_ref()).is_some();
         assert!(modal || repeated);
         let kz = Mat::<f64>::zeros(n, 3);
         let u1 = noise(120, 2, 45);
@@ -521,23 +531,13 @@ fn halved_modal_gram_equals_the_full_one() {
                 vec![InitialState::Estimate, InitialState::Zero],
             ),
         ] {
-            let mut o = PemOptions::default();
-            o.focus = focus;
-            o.estimate_d = true;
-            o.estimate_k = est_k;
-            o.x0 = x0;
-            o.block = 9;
+            let o = options(focus, true, est_k, x0, 9);
             let mut pr = Predictor::new(&sys, Some(kz.as_ref()), &views, &o).unwrap();
             let th = pr.pack(&sys, kz.as_ref(), &[vec![0.1; n], vec![-0.1; n]]);
             pr.reweight_at(&th).unwrap();
-            pr.halve = true;
-            let half = pr.evaluate(&th, true).unwrap();
-            pr.halve = false;
-            let full = pr.evaluate(&th, true).unwrap();
-            pr.halve = true;
-            pr.structured = false;
-            let plain = pr.evaluate(&th, true).unwrap();
-            pr.structured = true;
+            let half = evaluate_with(&mut pr, &th, (true, true, true));
+            let full = evaluate_with(&mut pr, &th, (true, true, false));
+            let plain = evaluate_with(&mut pr, &th, (false, true, true));
             let scale = full.gauss_newton.norm_max();
             let dh = (&half.gauss_newton - &full.gauss_newton).norm_max();
             assert!(dh < 1e-13 * scale, "{focus:?}: {dh} vs {scale}");
