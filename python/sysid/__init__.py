@@ -193,6 +193,13 @@ _LAZY = {
     "PiecewiseLinear": "models.hammerstein",
     "SigmoidNetwork": "models.hammerstein",
     "UserFunction": "models.hammerstein",
+    # issue 29 (branch nlss): BLA, PNLSS, neural state space
+    "bla": "nlss.bla",
+    "bla_model": "nlss.bla",
+    "pnlss": "nlss.pnlss",
+    "PNLSSModel": "nlss.pnlss",
+    "nlssest": "nlss.neural",
+    "NeuralStateSpaceModel": "nlss.neural",
 }
 
 
@@ -375,4 +382,11 @@ __all__ = [
     "model_to_dict",
     "model_from_dict",
     "report",
+    # issue 29 (branch nlss): BLA, PNLSS, neural state space
+    "bla",
+    "bla_model",
+    "pnlss",
+    "PNLSSModel",
+    "nlssest",
+    "NeuralStateSpaceModel",
 ]
