@@ -21,6 +21,8 @@ mod simulate;
 mod stats;
 mod streaming;
 mod subspace;
+// issue 29 (branch nlss)
+mod nlss;
 
 #[pymodule]
 fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -38,5 +40,7 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     narx::register(m)?;
     hw::register(m)?;
     stats::register(m)?;
+    // issue 29 (branch nlss)
+    nlss::register(m)?;
     Ok(())
 }

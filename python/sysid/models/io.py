@@ -55,6 +55,9 @@ from .statespace import StateSpaceModel
 
 __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict", "register_model"]
 
+# issue 29 (branch nlss): families whose module is imported on first load
+_LAZY_FAMILIES = {"PNLSSModel": "sysid.nlss.pnlss", "NeuralStateSpaceModel": "sysid.nlss.neural"}
+
 LEGACY_FORMAT = "sysid-state-space-model"  # version 1: state-space models only
 
 for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel,
@@ -88,6 +91,11 @@ def model_from_dict(d: dict[str, Any]) -> Any:
                         f"understands ({VERSION}); upgrade sysid")
     family = "StateSpaceModel" if d["format"] == LEGACY_FORMAT else str(d.get("family"))
     cls = REGISTRY.get(family)
+    if cls is None and family in _LAZY_FAMILIES:  # registered when their module loads
+        import importlib
+
+        importlib.import_module(_LAZY_FAMILIES[family])
+        cls = REGISTRY.get(family)
     if cls is None:
         raise DataError(f"unknown model family {family!r}: import the module that defines it "
                         "and register the class with sysid.register_model before loading")
