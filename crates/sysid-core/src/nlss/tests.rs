@@ -180,3 +180,32 @@ fn divergence_is_reported_and_rejected() {
     );
     assert!(e.is_err());
 }
+
+#[test]
+fn neural_section_gradient_matches_finite_differences() {
+    use super::neural::NeuralSs;
+    let m = NeuralSs::new(2, 1, 2, &[5, 3], Some(&[4]), &[3], 3);
+    let np = m.n_params();
+    let mut p: Vec<f64> = signal(np, 1, 21).iter().map(|v| 0.6 * v).collect();
+    p[..4].copy_from_slice(&[0.5, 0.1, -0.2, 0.4]);
+    let u = signal(80, 1, 5);
+    let y = signal(80, 2, 6);
+    let mut g = vec![0.0; np];
+    let l0 = m.section(&p, &u, &y, 10, 25, 0.01, &mut g).unwrap();
+    let mut dummy = vec![0.0; np];
+    for a in 0..np {
+        let h = 1e-6;
+        let (mut pp, mut pm) = (p.clone(), p.clone());
+        pp[a] += h;
+        pm[a] -= h;
+        let lp = m.section(&pp, &u, &y, 10, 25, 0.01, &mut dummy).unwrap();
+        let lm = m.section(&pm, &u, &y, 10, 25, 0.01, &mut dummy).unwrap();
+        let fd = (lp - lm) / (2.0 * h);
+        assert!(
+            (fd - g[a]).abs() < 1e-6 * (1.0 + fd.abs()),
+            "param {a}: {fd} vs {}",
+            g[a]
+        );
+    }
+    assert!(l0 > 0.0);
+}
