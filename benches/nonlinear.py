@@ -24,7 +24,11 @@ import numpy as np
 
 import sysid
 
-SHARED = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "data")
+_ROOT = os.path.dirname(os.path.abspath(__file__))
+SHARED = os.environ.get("SYSID_SHARED_DATA") or next(
+    (p for p in (os.path.join(_ROOT, "..", "..", "shared", "data"),
+                 os.path.join(_ROOT, "..", "..", "..", "shared", "data")) if os.path.isdir(p)),
+    os.path.join(_ROOT, "..", "..", "shared", "data"))
 
 
 def metrics(y, yh):

@@ -195,6 +195,7 @@ def multisine(
     seed: Any = None,
     grid: str = "full",
     group: int = 4,
+    grid_seed: int = 0,
 ) -> np.ndarray:
     """Sum of sinusoids on the FFT grid of one period, with a low crest factor.
 
@@ -226,6 +227,9 @@ def multisine(
         on the left-out lines too; Pintelon & Schoukens 2012, Section 3.4).
     group : int
         Group size of the random-odd grid.
+    grid_seed : int
+        Seed of the random-odd choice, separate from ``seed`` so that realisations with
+        different random phases (``seed``) share one grid, as the robust BLA expects.
 
     Examples
     --------
@@ -256,7 +260,7 @@ def multisine(
         if k_all.size and (k_all.min() < 1 or k_all.max() >= n / 2.0):
             raise DataError(f"lines must lie in 1..{int(np.ceil(n / 2.0)) - 1} for period {n}")
     rng = _rng(seed)
-    k_all = _grid_lines(k_all, grid, group, rng)
+    k_all = _grid_lines(k_all, grid, group, np.random.default_rng(grid_seed))
     if k_all.size < m:
         raise DataError(
             f"only {k_all.size} FFT line(s) in the band for {m} channel(s); widen the band "

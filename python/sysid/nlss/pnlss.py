@@ -176,7 +176,8 @@ def _degrees(degree: Any) -> list[int]:
     try:
         out = sorted({int(d) for d in ds})
     except (TypeError, ValueError):
-        raise DataError(f"degree must be an integer or a list of integers, got {degree!r}")
+        raise DataError(f"degree must be an integer or a list of integers, got {degree!r}") \
+            from None
     if not out:
         raise DataError("degree needs at least one value")
     if max(out) < 2:

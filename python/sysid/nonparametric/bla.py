@@ -38,16 +38,17 @@ def _periods(x: np.ndarray, n_per: int, periods: int, transient: int) -> np.ndar
 
 
 def _excited(U: np.ndarray, lines: Any, n_per: int) -> np.ndarray:
-    """Excited DFT lines (1 .. n_per // 2 - 1): given, or where the input power is not
-    negligible (above 1e-8 of its largest value, summed over channels and realisations)."""
+    """Excited DFT lines (1 .. n_per // 2 - 1): given, or where the input power of every
+    experiment is not negligible (above 1e-8 of the largest; a random-odd grid leaves out
+    different lines in each realisation, and those are dropped)."""
     if lines is not None:
         k = np.unique(np.asarray(lines, dtype=int).ravel())
         if k.size == 0 or k.min() < 1 or k.max() >= n_per / 2.0:
             raise DataError(f"lines must lie in 1..{int(np.ceil(n_per / 2.0)) - 1}")
         return k
-    power = np.sum(np.abs(U) ** 2, axis=(0, 1, 3))[: (n_per + 1) // 2]
-    power[0] = 0.0
-    k = np.flatnonzero(power > 1e-8 * power.max())
+    power = np.sum(np.abs(U) ** 2, axis=(1, 3))[:, : (n_per + 1) // 2]
+    power[:, 0] = 0.0
+    k = np.flatnonzero(np.all(power > 1e-8 * power.max(), axis=0))
     if k.size == 0:
         raise DataError("the input excites no frequency line; is the input zero?")
     return k
