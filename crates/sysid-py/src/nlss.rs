@@ -16,6 +16,9 @@ use sysid_core::optim::{Flow, Options};
 use sysid_core::SysidError;
 
 type Terms2 = Vec<Vec<usize>>;
+type Pair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
+type Owned = Vec<(Vec<f64>, Vec<f64>, usize)>;
+type Records<'a> = [(PyReadonlyArray2<'a, f64>, PyReadonlyArray2<'a, f64>, usize)];
 
 fn slice<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<&'a [f64]> {
     a.as_slice().map_err(|_| {
@@ -68,7 +71,7 @@ pub fn pnlss_simulate<'py>(
     theta: Vec<f64>,
     u: PyReadonlyArray2<'_, f64>,
     x0: Option<Vec<f64>>,
-) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>)> {
+) -> PyResult<Pair<'py>> {
     let m = model(nx, nu, ny, zeta, eta)?;
     let us = slice(&u, "u")?;
     let (y, x) = py.detach(|| m.simulate(&theta, us, x0.as_deref())).py()?;
@@ -211,7 +214,7 @@ pub fn neural_ss_train<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let m = neural_model(dims, f_hidden, g_hidden, h_hidden, lags);
-    let seg = |v: &[(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>, usize)]| -> PyResult<Vec<(Vec<f64>, Vec<f64>, usize)>> {
+    let seg = |v: &Records<'_>| -> PyResult<Owned> {
         v.iter()
             .map(|(u, y, at)| Ok((slice(u, "u")?.to_vec(), slice(y, "y")?.to_vec(), *at)))
             .collect()

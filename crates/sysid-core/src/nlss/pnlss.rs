@@ -244,11 +244,7 @@ impl Pnlss {
         let o = self.off();
         let (nx, nu, ny, p) = (self.nx, self.nu, self.ny, o.p);
         let (ne, nf) = (self.zeta.len(), self.eta.len());
-        let n = if nu > 0 {
-            d.u.len() / nu
-        } else {
-            d.y.len() / ny
-        };
+        let n = d.u.len().checked_div(nu).unwrap_or(d.y.len() / ny);
         let mut w = self.work();
         let mut x = vec![0.0; nx];
         let mut yh = vec![0.0; ny];
@@ -422,7 +418,9 @@ impl Problem for PnlssProblem<'_> {
 /// let data = [PnlssData { u: &u, y: &y, skip: 0 }];
 /// let sol = estimate(&model, &data, &[0.4, 1.0, 1.0, 0.0, 0.0], &Options::default(),
 ///                    &mut |_| Flow::Continue).unwrap();
-/// assert!((sol.theta[4] + 0.1).abs() < 1e-8);
+/// // the state basis is free (x -> s x rescales B, C and E): compare the outputs
+/// let (yh, _) = model.simulate(&sol.theta, &u, None).unwrap();
+/// assert!(yh.iter().zip(&y).all(|(a, b)| (a - b).abs() < 1e-8));
 /// ```
 pub fn estimate(
     model: &Pnlss,

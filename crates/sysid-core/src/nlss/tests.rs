@@ -126,12 +126,14 @@ fn known_coefficients_recovered_from_noise_free_data() {
     // part at its true value; the nonlinear coefficients start at zero.
     let mut th0 = truth.clone();
     th0[12..].iter_mut().for_each(|v| *v = 0.0);
-    let mut opts = Options::default();
-    opts.fixed = Some((0..truth.len()).map(|k| k < 12).collect());
-    opts.max_iter = 200;
-    opts.tol_cost = 1e-30;
-    opts.tol_gradient = 1e-30;
-    opts.tol_step = 1e-14;
+    let opts = Options {
+        fixed: Some((0..truth.len()).map(|k| k < 12).collect()),
+        max_iter: 200,
+        tol_cost: 1e-30,
+        tol_gradient: 1e-30,
+        tol_step: 1e-14,
+        ..Default::default()
+    };
     let sol = estimate(&m, &data, &th0, &opts, &mut |_| Flow::Continue).unwrap();
     let err = sol
         .theta

@@ -98,6 +98,7 @@ impl Rng {
 impl NeuralSs {
     /// Loss `sum (yhat - y)^2 * w` of one section and its gradient (added into `grad`);
     /// `None` when the simulation diverged (nothing added).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn section(
         &self,
         p: &[f64],
