@@ -225,6 +225,13 @@ _LAZY = {
     # issue 26 (branch pem): the cheap criterion of a model, the iterative estimators' warnings
     "pem_loss": "pem.pem",
     "IterationLimitWarning": "errors",
+    # issue 29 (branch nlss): BLA, PNLSS, neural state space
+    "bla": "nonparametric.bla",
+    "bla_model": "nonparametric.bla",
+    "pnlss": "nlss.pnlss",
+    "PNLSSModel": "nlss.pnlss",
+    "nlssest": "nlss.neural",
+    "NeuralStateSpaceModel": "nlss.neural",
 }
 
 
@@ -431,4 +438,11 @@ __all__ = [
     # issue 26 (branch pem): the cheap criterion of a model, the iterative estimators' warnings
     "pem_loss",
     "IterationLimitWarning",
+    # issue 29 (branch nlss): BLA, PNLSS, neural state space
+    "bla",
+    "bla_model",
+    "pnlss",
+    "PNLSSModel",
+    "nlssest",
+    "NeuralStateSpaceModel",
 ]

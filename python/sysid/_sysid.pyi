@@ -569,3 +569,73 @@ def pem_criterion(
     reweight: bool = True,
     enforce_stability: bool | None = None,
 ) -> float: ...
+# issue 29 (branch nlss): PNLSS and neural state space
+def pnlss_monomials(nx: int, nu: int, terms: str, degrees: list[int]) -> list[list[int]]: ...
+def pnlss_simulate(
+    nx: int,
+    nu: int,
+    ny: int,
+    zeta: list[list[int]],
+    eta: list[list[int]],
+    theta: list[float],
+    u: _Array,
+    x0: list[float] | None = None,
+) -> tuple[_Array, _Array]: ...
+def pnlss_estimate(
+    nx: int,
+    nu: int,
+    ny: int,
+    zeta: list[list[int]],
+    eta: list[list[int]],
+    records: list[tuple[_Array, _Array, int]],
+    theta0: _Array,
+    max_iter: int = 100,
+    tol: float = 1e-8,
+    fixed: list[bool] | None = None,
+    progress: Callable[..., Any] | None = None,
+) -> dict[str, Any]: ...
+def neural_ss_simulate(
+    dims: tuple[int, int, int],
+    f_hidden: list[int],
+    g_hidden: list[int] | None,
+    h_hidden: list[int],
+    lags: int,
+    params: _Array,
+    u: _Array,
+    x0: list[float],
+) -> _Array: ...
+def neural_ss_encode(
+    dims: tuple[int, int, int],
+    f_hidden: list[int],
+    g_hidden: list[int] | None,
+    h_hidden: list[int],
+    lags: int,
+    params: _Array,
+    u: _Array,
+    y: _Array,
+    t: int,
+) -> _Array: ...
+def neural_ss_train(
+    dims: tuple[int, int, int],
+    f_hidden: list[int],
+    g_hidden: list[int] | None,
+    h_hidden: list[int],
+    lags: int,
+    params0: _Array,
+    train: list[tuple[_Array, _Array, int]],
+    val: list[tuple[_Array, _Array, int]],
+    epochs: int = 200,
+    batch: int = 16,
+    horizon: int = 100,
+    learning_rate: float = 1e-3,
+    patience: int = 20,
+    seed: int = 0,
+    progress: Callable[..., Any] | None = None,
+) -> dict[str, Any]: ...
+def neural_ss_n_params(
+    dims: tuple[int, int, int],
+    f_hidden: list[int],
+    g_hidden: list[int] | None,
+    h_hidden: list[int],
+    lags: int,
+) -> int: ...

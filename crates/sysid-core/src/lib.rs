@@ -50,6 +50,7 @@ pub mod hw;
 pub mod linalg;
 pub mod model;
 pub mod narx;
+pub mod nlss;
 pub mod optim;
 pub mod pem;
 pub mod polynomial;

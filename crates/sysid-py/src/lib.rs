@@ -23,6 +23,8 @@ mod streaming;
 mod subspace;
 // issue 27 (branch tfproc): transfer functions
 mod tf;
+// issue 29 (branch nlss)
+mod nlss;
 
 #[pymodule]
 fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -42,5 +44,7 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     stats::register(m)?;
     // issue 27 (branch tfproc): transfer functions
     tf::register(m)?;
+    // issue 29 (branch nlss)
+    nlss::register(m)?;
     Ok(())
 }

@@ -195,6 +195,9 @@ def multisine(
     rms: float = 1.0,
     periods: int = 1,
     seed: Any = None,
+    grid: str = "full",
+    group: int = 4,
+    grid_seed: int = 0,
 ) -> np.ndarray:
     """Sum of sinusoids on the FFT grid of one period, with a low crest factor.
 
@@ -217,6 +220,18 @@ def multisine(
         Root-mean-square value of each channel.
     periods : int
         Number of repeated periods (steady state: drop the first when identifying).
+    seed : int or numpy.random.Generator, optional
+        Random phases and the random-odd grid.
+    grid : {"full", "odd", "random-odd"}
+        Which lines of the band are excited: all, the odd ones only (even nonlinear
+        distortions then fall on unexcited lines), or the odd ones with one line chosen at
+        random left out of every ``group`` consecutive odd lines (odd distortions then show
+        on the left-out lines too; Pintelon & Schoukens 2012, Section 3.4).
+    group : int
+        Group size of the random-odd grid.
+    grid_seed : int
+        Seed of the random-odd choice, separate from ``seed`` so that realisations with
+        different random phases (``seed``) share one grid, as the robust BLA expects.
 
     Examples
     --------
@@ -224,6 +239,13 @@ def multisine(
     >>> u = sysid.multisine(1024, band=(0.0, 0.5))
     >>> bool(sysid.crest_factor(u)[0] < 1.8)
     True
+
+    A random-odd multisine with random phases (one realisation per seed):
+
+    >>> u = sysid.multisine(64, band=(0, 1), phases="random", grid="random-odd", seed=1)
+    >>> k = np.flatnonzero(np.abs(np.fft.rfft(u[:, 0])) > 1e-8)
+    >>> bool(np.all(k % 2 == 1)), k.size
+    (True, 12)
     """
     n = _n(n_samples)
     m = _n(n_channels, "n_channels")
@@ -239,6 +261,8 @@ def multisine(
         k_all = np.unique(np.asarray(lines, dtype=int).ravel())
         if k_all.size and (k_all.min() < 1 or k_all.max() >= n / 2.0):
             raise DataError(f"lines must lie in 1..{int(np.ceil(n / 2.0)) - 1} for period {n}")
+    rng = _rng(seed)
+    k_all = _grid_lines(k_all, grid, group, np.random.default_rng(grid_seed))
     if k_all.size < m:
         raise DataError(
             f"only {k_all.size} FFT line(s) in the band for {m} channel(s); widen the band "
@@ -246,7 +270,6 @@ def multisine(
         )
     if phases not in ("schroeder", "random"):
         raise DataError(f"phases must be 'schroeder' or 'random', got {phases!r}")
-    rng = _rng(seed)
     t = np.arange(n)
     out = np.empty((n, m))
     for j in range(m):
@@ -259,6 +282,24 @@ def multisine(
         x = np.cos(2 * np.pi * np.outer(t, kj) / n + ph).sum(axis=1)
         out[:, j] = rms * x / np.sqrt(np.mean(x * x))
     return np.tile(out, (p, 1))
+
+
+def _grid_lines(k: np.ndarray, grid: str, group: int, rng: Any) -> np.ndarray:
+    """The excited lines of a full, odd or random-odd grid."""
+    if grid == "full":
+        return k
+    if grid not in ("odd", "random-odd"):
+        raise DataError(f"grid must be 'full', 'odd' or 'random-odd', got {grid!r}")
+    k = k[k % 2 == 1]
+    if grid == "random-odd":
+        g = _n(group, "group")
+        if g < 2:
+            raise DataError(f"group must be at least 2 for a random-odd grid, got {group}")
+        keep = np.ones(k.size, bool)
+        for s in range(0, k.size - g + 1, g):
+            keep[s + rng.integers(g)] = False
+        k = k[keep]
+    return k
 
 
 def chirp(

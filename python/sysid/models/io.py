@@ -55,8 +55,10 @@ from .statespace import StateSpaceModel
 
 __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict", "register_model"]
 
-# issue 27 (branch tfproc): families in their own packages, registered on import
-_LAZY_FAMILIES = {"TransferFunction": "sysid.tf.model", "ProcessModel": "sysid.process.model"}
+# families in their own packages (issues 27, 29), imported on first load
+_LAZY_FAMILIES = {"TransferFunction": "sysid.tf.model", "ProcessModel": "sysid.process.model",
+                  "PNLSSModel": "sysid.nlss.pnlss",
+                  "NeuralStateSpaceModel": "sysid.nlss.neural"}
 
 for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel,
              HammersteinWienerModel, HammersteinWienerSSModel, NonlinearGreyBox):

@@ -1,0 +1,387 @@
+//! Training of [`NeuralSs`]: truncated simulation errors, back-propagation through each
+//! section, Adam, the best validation epoch kept.
+
+use super::NeuralSs;
+use crate::error::{Result, SysidError};
+use crate::optim::Flow;
+
+/// Options of [`train`].
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct TrainOptions {
+    /// Maximum passes over the training data.
+    pub epochs: usize,
+    /// Sections per gradient step.
+    pub batch: usize,
+    /// Samples per section.
+    pub horizon: usize,
+    /// Adam step size.
+    pub learning_rate: f64,
+    /// Stop after this many epochs without a better validation error.
+    pub patience: usize,
+    /// Seed of the section sampling.
+    pub seed: u64,
+    /// Gradients longer than this are scaled down to it.
+    pub clip: f64,
+}
+
+impl Default for TrainOptions {
+    fn default() -> Self {
+        TrainOptions {
+            epochs: 200,
+            batch: 16,
+            horizon: 100,
+            learning_rate: 1e-3,
+            patience: 20,
+            seed: 0,
+            clip: 10.0,
+        }
+    }
+}
+
+/// Reported to the observer after every epoch.
+#[derive(Debug, Clone, Copy)]
+pub struct EpochReport {
+    /// Epoch, from 1.
+    pub epoch: usize,
+    /// Mean squared section error of the epoch's training sections.
+    pub train: f64,
+    /// Mean squared simulation error on the validation segments (the training error
+    /// without them).
+    pub validation: f64,
+}
+
+/// The result of [`train`].
+#[derive(Debug, Clone)]
+pub struct TrainResult {
+    /// Parameters of the best epoch (or the start, if no epoch beat it).
+    pub params: Vec<f64>,
+    /// Validation error at the start and after each epoch.
+    pub validation: Vec<f64>,
+    /// Training error of each epoch.
+    pub train: Vec<f64>,
+    /// Best epoch (0: the start).
+    pub best_epoch: usize,
+    /// Why it stopped: "patience", "epochs" or "cancelled".
+    pub stop: &'static str,
+    /// Sections skipped because their simulation diverged.
+    pub diverged: usize,
+}
+
+/// A record: inputs and outputs row-major; training sections start in `[lags, end -
+/// horizon]`, validation simulates from `start` (encoder at `start`) to the end.
+#[derive(Debug, Clone, Copy)]
+pub struct Segment<'a> {
+    /// Inputs.
+    pub u: &'a [f64],
+    /// Outputs.
+    pub y: &'a [f64],
+    /// First sample (validation) or end (training, exclusive).
+    pub at: usize,
+}
+
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E3779B97F4A7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58476D1CE4E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D049BB133111EB);
+        z ^ (z >> 31)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+impl NeuralSs {
+    /// Loss `sum (yhat - y)^2 * w` of one section and its gradient (added into `grad`);
+    /// `None` when the simulation diverged (nothing added).
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn section(
+        &self,
+        p: &[f64],
+        u: &[f64],
+        y: &[f64],
+        t0: usize,
+        len: usize,
+        w: f64,
+        grad: &mut [f64],
+    ) -> Option<f64> {
+        let o = self.offsets();
+        let (nx, nu, ny) = (self.nx, self.nu, self.ny);
+        let (na_f, na_g) = (self.f.n_acts(), self.g.as_ref().map_or(0, |g| g.n_acts()));
+        let mut phi = vec![0.0; self.h.n_in()];
+        self.phi(u, y, t0, &mut phi);
+        let mut ah = vec![0.0; self.h.n_acts()];
+        let ho = self.h.forward(&p[o[5]..o[6]], &phi, &mut ah);
+        let mut xs = vec![0.0; (len + 1) * nx];
+        xs[..nx].copy_from_slice(&ah[ho..ho + nx]);
+        let (mut af, mut ag) = (vec![0.0; len * na_f], vec![0.0; len * na_g]);
+        let mut e = vec![0.0; len * ny];
+        let mut z = vec![0.0; nx + nu];
+        let mut loss = 0.0;
+        for k in 0..len {
+            let t = t0 + k;
+            let (xk, xn) = xs.split_at_mut((k + 1) * nx);
+            let ok = self.step(
+                p,
+                &xk[k * nx..],
+                &u[t * nu..(t + 1) * nu],
+                &mut e[k * ny..(k + 1) * ny],
+                &mut xn[..nx],
+                &mut z,
+                &mut af[k * na_f..(k + 1) * na_f],
+                &mut ag[k * na_g..(k + 1) * na_g],
+            );
+            for i in 0..ny {
+                let r = e[k * ny + i] - y[t * ny + i];
+                loss += w * r * r;
+                e[k * ny + i] = 2.0 * w * r;
+            }
+            if !ok && k + 1 < len {
+                return None;
+            }
+        }
+        if !loss.is_finite() {
+            return None;
+        }
+        // reverse sweep: lam = dL/dx(k+1)
+        let mut lam = vec![0.0; nx];
+        let mut lx = vec![0.0; nx + nu];
+        let wmax = [&self.f, &self.h].iter().map(|m| m.n_acts()).max().unwrap()
+            + self.g.as_ref().map_or(0, |g| g.n_acts());
+        let mut scratch = vec![0.0; 2 * wmax];
+        for k in (0..len).rev() {
+            let t = t0 + k;
+            let x = &xs[k * nx..(k + 1) * nx];
+            let uk = &u[t * nu..(t + 1) * nu];
+            let ek = &e[k * ny..(k + 1) * ny];
+            lx.iter_mut().for_each(|v| *v = 0.0);
+            for i in 0..ny {
+                for j in 0..nx {
+                    grad[o[1] + i * nx + j] += ek[i] * x[j];
+                    lx[j] += p[o[1] + i * nx + j] * ek[i];
+                }
+                for j in 0..nu {
+                    grad[o[2] + i * nu + j] += ek[i] * uk[j];
+                }
+            }
+            if let Some(g) = &self.g {
+                let (gp, _) = grad[o[4]..].split_at_mut(o[5] - o[4]);
+                g.backward(
+                    &p[o[4]..o[5]],
+                    &ag[k * na_g..(k + 1) * na_g],
+                    ek,
+                    gp,
+                    &mut lx,
+                    &mut scratch,
+                );
+            }
+            if k + 1 < len {
+                for i in 0..nx {
+                    for j in 0..nx {
+                        grad[i * nx + j] += lam[i] * x[j];
+                        lx[j] += p[i * nx + j] * lam[i];
+                    }
+                    for j in 0..nu {
+                        grad[o[0] + i * nu + j] += lam[i] * uk[j];
+                    }
+                }
+                let (gp, _) = grad[o[3]..].split_at_mut(o[4] - o[3]);
+                self.f.backward(
+                    &p[o[3]..o[4]],
+                    &af[k * na_f..(k + 1) * na_f],
+                    &lam,
+                    gp,
+                    &mut lx,
+                    &mut scratch,
+                );
+            }
+            lam.copy_from_slice(&lx[..nx]);
+        }
+        let mut gin = vec![0.0; self.h.n_in()];
+        let (gp, _) = grad[o[5]..].split_at_mut(o[6] - o[5]);
+        self.h
+            .backward(&p[o[5]..o[6]], &ah, &lam, gp, &mut gin, &mut scratch);
+        Some(loss)
+    }
+
+    /// Mean squared simulation error over validation segments (infinite if one diverges).
+    fn validation(&self, p: &[f64], val: &[Segment<'_>]) -> f64 {
+        let (mut s, mut n) = (0.0, 0usize);
+        for v in val {
+            let x0 = match self.encode(p, v.u, v.y, v.at) {
+                Ok(x) => x,
+                Err(_) => return f64::INFINITY,
+            };
+            let (nu, ny) = (self.nu, self.ny);
+            match self.simulate(p, &v.u[v.at * nu..], &x0) {
+                Ok(yh) => {
+                    for (a, b) in yh.iter().zip(&v.y[v.at * ny..]) {
+                        s += (a - b) * (a - b);
+                    }
+                    n += yh.len();
+                }
+                Err(_) => return f64::INFINITY,
+            }
+        }
+        if n == 0 {
+            f64::INFINITY
+        } else {
+            s / n as f64
+        }
+    }
+}
+
+/// Trains from `p0` on sections of `train_data` (each `at` = end of its training part),
+/// keeping the parameters with the lowest error on `val` (simulated from the encoder's state
+/// at each `at`; without validation segments the training error decides).
+///
+/// ```
+/// use sysid_core::nlss::neural::{train, NeuralSs, Segment, TrainOptions};
+/// use sysid_core::optim::Flow;
+/// let m = NeuralSs::new(1, 1, 1, &[4], None, &[], 1);
+/// let u: Vec<f64> = (0..300).map(|t| ((t * 37) % 11) as f64 / 11.0 - 0.5).collect();
+/// let mut p = vec![0.0; m.n_params()];
+/// p[0] = 0.5; p[1] = 1.0; p[2] = 1.0;
+/// let y = m.simulate(&p, &u, &[0.0]).unwrap();
+/// p[0] = 0.3;
+/// let mut opts = TrainOptions::default();
+/// opts.epochs = 30; opts.horizon = 20; opts.learning_rate = 1e-2;
+/// let seg = [Segment { u: &u, y: &y, at: 300 }];
+/// let r = train(&m, &p, &seg, &[], &opts, &mut |_| Flow::Continue).unwrap();
+/// assert!(r.validation.last().unwrap() < &r.validation[0]);
+/// ```
+pub fn train(
+    model: &NeuralSs,
+    p0: &[f64],
+    train_data: &[Segment<'_>],
+    val: &[Segment<'_>],
+    opts: &TrainOptions,
+    observer: &mut dyn FnMut(&EpochReport) -> Flow,
+) -> Result<TrainResult> {
+    model.check(p0)?;
+    let hz = opts.horizon.max(1);
+    let starts: Vec<(usize, usize)> = train_data
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| s.at >= model.lags + hz)
+        .map(|(i, s)| (i, s.at - hz - model.lags + 1))
+        .collect();
+    let total: usize = starts.iter().map(|s| s.1).sum();
+    if total == 0 {
+        return Err(SysidError::InsufficientData {
+            context: "neural state-space training sections".into(),
+            needed: model.lags + hz,
+            got: train_data.iter().map(|s| s.at).max().unwrap_or(0),
+            fix: "shorten the horizon or the encoder lags, or give a longer record",
+        });
+    }
+    let np = p0.len();
+    let mut p = p0.to_vec();
+    let (mut m1, mut m2) = (vec![0.0; np], vec![0.0; np]);
+    let mut rng = Rng(opts.seed ^ 0x5EED);
+    let score = |p: &[f64]| {
+        if val.is_empty() {
+            let segs: Vec<Segment<'_>> = train_data
+                .iter()
+                .map(|s| Segment {
+                    u: &s.u[..s.at * model.nu],
+                    y: &s.y[..s.at * model.ny],
+                    at: model.lags,
+                })
+                .collect();
+            model.validation(p, &segs)
+        } else {
+            model.validation(p, val)
+        }
+    };
+    let mut best = (score(&p), p.clone(), 0usize);
+    let mut res = TrainResult {
+        params: Vec::new(),
+        validation: vec![best.0],
+        train: Vec::new(),
+        best_epoch: 0,
+        stop: "epochs",
+        diverged: 0,
+    };
+    // about four passes over every sample per epoch, and at least ten steps
+    let per_epoch = (4 * total.div_ceil(hz)).max(10 * opts.batch);
+    let w = 1.0 / (hz * model.ny * opts.batch) as f64;
+    let mut steps = 0i32;
+    let (b1, b2) = (0.9f64, 0.999f64);
+    let mut grad = vec![0.0; np];
+    for epoch in 1..=opts.epochs {
+        let (mut tl, mut tn) = (0.0, 0usize);
+        let mut done = 0;
+        while done < per_epoch {
+            grad.iter_mut().for_each(|g| *g = 0.0);
+            let mut used = 0;
+            for _ in 0..opts.batch {
+                let mut k = rng.below(total);
+                let mut rec = 0;
+                while k >= starts[rec].1 {
+                    k -= starts[rec].1;
+                    rec += 1;
+                }
+                let s = &train_data[starts[rec].0];
+                let t0 = model.lags + k;
+                match model.section(&p, s.u, s.y, t0, hz, w, &mut grad) {
+                    Some(l) => {
+                        tl += l;
+                        tn += 1;
+                        used += 1;
+                    }
+                    None => res.diverged += 1,
+                }
+            }
+            done += opts.batch;
+            if used == 0 {
+                continue;
+            }
+            let norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
+            let c = if norm > opts.clip {
+                opts.clip / norm
+            } else {
+                1.0
+            };
+            steps += 1;
+            let (c1, c2) = (1.0 - b1.powi(steps), 1.0 - b2.powi(steps));
+            for i in 0..np {
+                let g = grad[i] * c;
+                m1[i] = b1 * m1[i] + (1.0 - b1) * g;
+                m2[i] = b2 * m2[i] + (1.0 - b2) * g * g;
+                p[i] -= opts.learning_rate * (m1[i] / c1) / ((m2[i] / c2).sqrt() + 1e-8);
+            }
+        }
+        let v = score(&p);
+        let train_mse = if tn > 0 {
+            tl * opts.batch as f64 / tn as f64
+        } else {
+            f64::INFINITY
+        };
+        res.train.push(train_mse);
+        res.validation.push(v);
+        if v < best.0 {
+            best = (v, p.clone(), epoch);
+        }
+        let flow = observer(&EpochReport {
+            epoch,
+            train: train_mse,
+            validation: v,
+        });
+        if flow == Flow::Stop {
+            res.stop = "cancelled";
+            break;
+        }
+        if epoch - best.2 >= opts.patience {
+            res.stop = "patience";
+            break;
+        }
+    }
+    res.params = best.1;
+    res.best_epoch = best.2;
+    Ok(res)
+}

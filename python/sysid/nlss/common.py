@@ -1,0 +1,104 @@
+"""What the nonlinear state-space estimators share: data scaling, the linear start, the
+state-basis balancing and the transient left out of the cost."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..data.iodata import IOData
+from ..errors import DataError
+from ..models.statespace import StateSpaceModel
+
+
+class Scaling:
+    """Affine channel scaling ``u_s = (u - u_offset) / u_scale`` (and likewise ``y``)."""
+
+    def __init__(self, u_offset: Any, u_scale: Any, y_offset: Any, y_scale: Any) -> None:
+        self.u_offset, self.u_scale = np.asarray(u_offset, float), np.asarray(u_scale, float)
+        self.y_offset, self.y_scale = np.asarray(y_offset, float), np.asarray(y_scale, float)
+
+    @classmethod
+    def of(cls, data: IOData) -> Scaling:
+        u = np.vstack([e[0] for e in data.experiments])
+        y = np.vstack([e[1] for e in data.experiments])
+        su, sy = u.std(axis=0), y.std(axis=0)
+        for name, s, names in (("input", su, data.input_names), ("output", sy, data.output_names)):
+            if np.any(s == 0):
+                bad = [names[j] for j in np.flatnonzero(s == 0)]
+                raise DataError(f"{name} {', '.join(map(str, bad))} is constant: a nonlinear "
+                                "state-space model needs every channel to vary; drop it")
+        return cls(u.mean(axis=0), su, y.mean(axis=0), sy)
+
+    def u(self, u: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray((u - self.u_offset) / self.u_scale)
+
+    def y(self, y: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray((y - self.y_offset) / self.y_scale)
+
+    def y_back(self, ys: np.ndarray) -> np.ndarray:
+        return ys * self.y_scale + self.y_offset
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"u_offset": self.u_offset, "u_scale": self.u_scale,
+                "y_offset": self.y_offset, "y_scale": self.y_scale}
+
+    def to_scaled(self, m: StateSpaceModel) -> StateSpaceModel:
+        """A linear model in engineering units, shown in the scaled channels."""
+        su, sy = np.diag(self.u_scale), np.diag(1.0 / self.y_scale)
+        return StateSpaceModel(m.A, m.B @ su, sy @ m.C, sy @ m.D @ su, dt=m.dt)
+
+
+def scaled_data(data: IOData, sc: Scaling) -> IOData:
+    """The record in scaled channels (offsets removed, unit standard deviations)."""
+    return IOData([sc.u(u) for u, _ in data.experiments], [sc.y(y) for _, y in data.experiments],
+                  data.dt)
+
+
+def linear_start(data: IOData, sd: IOData, sc: Scaling, order: int, init: Any,
+                 periods: int | None) -> StateSpaceModel:
+    """The linear model the nonlinear fit starts from, in scaled channels: ``init`` (in
+    engineering units), the BLA's parametric model for periodic data with equal-length
+    experiments, else an output-error refinement (``ssest``) of a subspace model."""
+    import sysid
+
+    if init is not None:
+        ss = init.to_statespace() if hasattr(init, "to_statespace") else init
+        if not isinstance(ss, StateSpaceModel):
+            raise DataError("init must be a sysid.StateSpaceModel (or have to_statespace())")
+        if (ss.ninputs, ss.noutputs, ss.nstates) != (data.n_inputs, data.n_outputs, order):
+            raise DataError(f"init has {ss.nstates} states, {ss.ninputs} inputs and "
+                            f"{ss.noutputs} outputs; the data and order need {order}, "
+                            f"{data.n_inputs} and {data.n_outputs}")
+        return sc.to_scaled(ss)
+    lens = {u.shape[0] for u, _ in sd.experiments}
+    if periods is not None and len(lens) == 1 and lens.pop() % periods == 0:
+        f = sysid.bla(sd, periods=periods, transient=1 if periods > 2 else 0)
+        return sysid.bla_model(f, order)
+    return sysid.ssest(sd, order, focus="simulation", progress=False, max_iter=30)
+
+
+def balanced(m: StateSpaceModel, us: list[np.ndarray]) -> StateSpaceModel:
+    """The linear model in the basis where its simulated states have unit variance, so that
+    monomials and network weights of the states are well scaled."""
+    n = m.nstates
+    probe = StateSpaceModel(m.A, m.B, np.eye(n), np.zeros((n, m.ninputs)), dt=m.dt)
+    xs = np.vstack([np.asarray(probe.simulate(u)) for u in us])
+    s = xs.std(axis=0)
+    s = np.where(s > 1e-12 * max(s.max(), 1e-300), s, 1.0)
+    T, Ti = np.diag(s), np.diag(1.0 / s)
+    return StateSpaceModel(Ti @ m.A @ T, Ti @ m.B, m.C @ T, m.D, dt=m.dt)
+
+
+def settle_samples(m: StateSpaceModel, n: int) -> int:
+    """Samples for the slowest pole to decay to 0.1 %, at most a quarter of the record."""
+    rho = float(np.max(np.abs(m.poles()))) if m.nstates else 0.0
+    k = 0 if rho == 0 else (n // 4 if rho >= 1 else int(np.ceil(np.log(1e-3) / np.log(rho))))
+    return int(min(max(k, 0), n // 4))
+
+
+def check_order(order: Any) -> int:
+    from .._checks import as_int
+
+    return as_int(order, "order", 1)

@@ -1,0 +1,385 @@
+"""Neural state-space models (MATLAB's ``nlssest``): small networks around a linear part.
+
+.. code-block:: text
+
+    x(t+1) = A x + B u + f(x, u)       y = C x + D u + g(x, u)       x(t0) = h(past)
+
+in scaled channels; ``f`` (and optionally ``g``) are tanh multilayer perceptrons whose last
+layer starts at zero, so training starts at the linear model (the BLA's for periodic data);
+``h`` is an encoder of the past ``L`` inputs and outputs (a linear map fitted to the linear
+model's states, plus a network) that gives the initial state of every training section.
+Training (Rust core, no deep-learning framework): Adam on the mean squared simulation error
+of short sections (truncated simulation, back-propagation through each section), the epoch
+with the lowest simulation error on held-out data kept (Beintema, Schoukens & Tóth 2023
+describe this encoder/truncated-simulation scheme).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._progress import Bar, show
+from ..data.iodata import IOData
+from ..errors import DataError
+from ..models.protocol import ModelMixin
+from ..models.serialize import register_model
+from ..models.statespace import StateSpaceModel
+from .common import Scaling, balanced, check_order, linear_start, scaled_data
+
+__all__ = ["NeuralStateSpaceModel", "nlssest"]
+
+
+@register_model
+class NeuralStateSpaceModel(ModelMixin):
+    """A neural state-space model (see the module documentation) from :func:`nlssest`.
+
+    Attributes
+    ----------
+    params : ndarray
+        ``[A, B, C, D, f, g, h]`` (scaled channels, row-major; networks layer by layer:
+        weights ``out x in`` then biases; the encoder's linear term first).
+    hidden, output_hidden, encoder_hidden : tuple of int
+        Hidden widths of ``f``, ``g`` (``None``: no output network) and the encoder.
+    lags : int
+        Past samples the encoder reads.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> m = sysid.NeuralStateSpaceModel.from_linear(
+    ...     sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=1.0), hidden=(4,))
+    >>> m.simulate([1.0, 1.0, 0.0])[:, 0]
+    array([0. , 1. , 1.5])
+    """
+
+    def __init__(self, params: Any, *, dims: Sequence[int], hidden: Sequence[int],
+                 output_hidden: Sequence[int] | None, encoder_hidden: Sequence[int],
+                 lags: int, scaling: dict[str, Any] | None = None, dt: float = 1.0,
+                 input_names: Any = None, output_names: Any = None,
+                 info: dict[str, Any] | None = None) -> None:
+        self.nstates, self.ninputs, self.noutputs = (int(v) for v in dims)
+        self.hidden = tuple(int(h) for h in hidden)
+        self.output_hidden = None if output_hidden is None else tuple(int(h) for h in
+                                                                     output_hidden)
+        self.encoder_hidden = tuple(int(h) for h in encoder_hidden)
+        self.lags = int(lags)
+        self.params = np.ascontiguousarray(params, dtype=float).ravel()
+        need = _sysid.neural_ss_n_params(*self._struct())
+        if self.params.size != need:
+            raise DataError(f"params has {self.params.size} values; the structure needs {need}")
+        m, l_ = self.ninputs, self.noutputs
+        sc = scaling or {"u_offset": np.zeros(m), "u_scale": np.ones(m),
+                         "y_offset": np.zeros(l_), "y_scale": np.ones(l_)}
+        self.scaling = Scaling(sc["u_offset"], sc["u_scale"], sc["y_offset"], sc["y_scale"])
+        self.dt = float(dt)
+        self.input_names = list(input_names) if input_names is not None else \
+            [f"u{j}" for j in range(m)]
+        self.output_names = list(output_names) if output_names is not None else \
+            [f"y{j}" for j in range(l_)]
+        self.info = dict(info or {"method": "nlssest"})
+
+    @classmethod
+    def from_linear(cls, lin: StateSpaceModel, *, hidden: Sequence[int] = (16,),
+                    output_hidden: Sequence[int] | None = None,
+                    encoder_hidden: Sequence[int] = (), lags: int = 1, seed: int = 0,
+                    scaling: dict[str, Any] | None = None,
+                    encoder_linear: Any = None) -> NeuralStateSpaceModel:
+        """The linear model with networks whose outputs start at zero (random hidden
+        weights of variance ``1/fan_in``, seeded)."""
+        n, m, l_ = lin.nstates, lin.ninputs, lin.noutputs
+        rng = np.random.default_rng(seed)
+        parts = [np.ravel(a) for a in (lin.A, lin.B, lin.C, lin.D)]
+        parts.append(_net(rng, n + m, hidden, n, skip=None))
+        if output_hidden is not None:
+            parts.append(_net(rng, n + m, output_hidden, l_, skip=None))
+        nin = lags * (m + l_)
+        skip = np.zeros((n, nin)) if encoder_linear is None else np.asarray(encoder_linear)
+        parts.append(_net(rng, nin, encoder_hidden, n, skip=skip))
+        return cls(np.concatenate(parts), dims=(n, m, l_), hidden=hidden,
+                   output_hidden=output_hidden, encoder_hidden=encoder_hidden, lags=lags,
+                   scaling=scaling, dt=lin.dt)
+
+    def _struct(self) -> tuple[Any, ...]:
+        return ((self.nstates, self.ninputs, self.noutputs), list(self.hidden),
+                None if self.output_hidden is None else list(self.output_hidden),
+                list(self.encoder_hidden), self.lags)
+
+    @property
+    def n_parameters(self) -> int:
+        """Parameters of the simulation model (the encoder's excluded)."""
+        n, m, l_ = self.nstates, self.ninputs, self.noutputs
+        enc = _sysid.neural_ss_n_params((n, m, l_), [], None, list(self.encoder_hidden),
+                                        self.lags) - (n * n + n * m + l_ * n + l_ * m
+                                                      + n * (n + m) + n)
+        return int(self.params.size - enc)
+
+    def _arr(self, a: Any, width: int, name: str) -> np.ndarray:
+        x = np.asarray(a, dtype=float)
+        x = x.reshape(-1, 1) if x.ndim == 1 else x
+        if x.ndim != 2 or x.shape[1] != width:
+            raise DataError(f"{name} must be (n_samples, {width}), got {np.shape(a)}")
+        if not np.isfinite(x).all():
+            raise DataError(f"{name} has non-finite values (NaN or Inf)")
+        return x
+
+    def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
+        """Output ``(n_samples, noutputs)`` from ``x0`` (scaled-state coordinates; zero by
+        default); :meth:`initial_state` estimates one from past data."""
+        us = self.scaling.u(self._arr(u, self.ninputs, "u"))
+        x = [0.0] * self.nstates if x0 is None else [float(v) for v in np.ravel(x0)]
+        y = _sysid.neural_ss_simulate(*self._struct(), self.params, us, x)
+        return self.scaling.y_back(np.asarray(y).reshape(-1, self.noutputs))
+
+    def initial_state(self, u_past: Any, y_past: Any) -> np.ndarray:
+        """The encoder's state after the given past (at least ``lags`` samples)."""
+        up = self.scaling.u(self._arr(u_past, self.ninputs, "u_past"))
+        yp = self.scaling.y(self._arr(y_past, self.noutputs, "y_past"))
+        if up.shape[0] != yp.shape[0]:
+            raise DataError("u_past and y_past need the same number of samples")
+        return np.asarray(_sysid.neural_ss_encode(*self._struct(), self.params, up, yp,
+                                                  up.shape[0]))
+
+    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+        """An output-error model has no noise model: its prediction is its simulation."""
+        return self.simulate(u)
+
+    def linear(self) -> StateSpaceModel:
+        """The linear part ``(A, B, C, D)`` in engineering units."""
+        n, m, l_ = self.nstates, self.ninputs, self.noutputs
+        o = np.cumsum([0, n * n, n * m, l_ * n, l_ * m])
+        A, B, C, D = (self.params[o[i]:o[i + 1]] for i in range(4))
+        sc = self.scaling
+        return StateSpaceModel(A.reshape(n, n), B.reshape(n, m) / sc.u_scale,
+                               sc.y_scale[:, None] * C.reshape(l_, n),
+                               sc.y_scale[:, None] * D.reshape(l_, m) / sc.u_scale, dt=self.dt,
+                               input_names=self.input_names, output_names=self.output_names)
+
+    def to_statespace(self) -> StateSpaceModel:
+        """The linear part (poles, zeros)."""
+        return self.linear()
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """Frequency response of the linear part."""
+        return np.asarray(self.linear().freqresp(omega))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"params": self.params, "dims": [self.nstates, self.ninputs, self.noutputs],
+                "hidden": list(self.hidden), "output_hidden": None if self.output_hidden is
+                None else list(self.output_hidden), "encoder_hidden": list(self.encoder_hidden),
+                "lags": self.lags, "scaling": self.scaling.to_dict(), "dt": self.dt,
+                "input_names": self.input_names, "output_names": self.output_names,
+                "info": self.info}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> NeuralStateSpaceModel:
+        return cls(d["params"], dims=d["dims"], hidden=d["hidden"],
+                   output_hidden=d["output_hidden"], encoder_hidden=d["encoder_hidden"],
+                   lags=d["lags"], scaling=d["scaling"], dt=d["dt"],
+                   input_names=d["input_names"], output_names=d["output_names"],
+                   info=d.get("info"))
+
+    def summary(self) -> str:
+        t = self.info.get("training", {})
+        return (f"{self!r}\n  parameters: {self.n_parameters} (+ encoder)\n  epochs: "
+                f"{len(t.get('train', []))}, best {t.get('best_epoch', '-')}, stop: "
+                f"{t.get('stop', '-')}")
+
+    def __repr__(self) -> str:
+        return (f"NeuralStateSpaceModel(nstates={self.nstates}, ninputs={self.ninputs}, "
+                f"noutputs={self.noutputs}, hidden={self.hidden}, dt={self.dt:g})")
+
+
+def _net(rng: np.random.Generator, nin: int, hidden: Sequence[int], nout: int,
+         skip: Any) -> np.ndarray:
+    sizes = [nin, *hidden, nout]
+    parts = [] if skip is None else [np.ravel(skip)]
+    for k in range(len(sizes) - 1):
+        a, b = sizes[k], sizes[k + 1]
+        last = k == len(sizes) - 2
+        w = np.zeros((b, a)) if last else rng.standard_normal((b, a)) / np.sqrt(a)
+        parts += [w.ravel(), np.zeros(b)]
+    return np.concatenate(parts)
+
+
+def _phi(u: np.ndarray, y: np.ndarray, lags: int) -> np.ndarray:
+    """Rows ``[y(t-1..t-L), u(t-1..t-L)]`` for ``t = L .. N-1``."""
+    N = u.shape[0]
+    ys = [y[lags - 1 - k:N - 1 - k] for k in range(lags)]
+    us = [u[lags - 1 - k:N - 1 - k] for k in range(lags)]
+    return np.hstack(ys + us)
+
+
+def _widths(h: Any, name: str) -> tuple[int, ...]:
+    t = (h,) if np.ndim(h) == 0 else tuple(h)
+    if not all(isinstance(v, (int, np.integer)) and v > 0 for v in t):
+        raise DataError(f"{name} must be a positive integer or a tuple of them, got {h!r}")
+    return tuple(int(v) for v in t)
+
+
+def nlssest(
+    data: IOData,
+    order: int,
+    *,
+    hidden: Any = 16,
+    output_hidden: Any = None,
+    encoder_hidden: Any = (),
+    lags: int | None = None,
+    horizon: int = 100,
+    epochs: int = 200,
+    batch: int = 16,
+    learning_rate: float = 3e-3,
+    patience: int = 20,
+    validation: Any = 0.2,
+    periods: int | None = None,
+    init: Any = None,
+    seed: int = 0,
+    progress: bool | None | Callable[..., Any] = None,
+) -> NeuralStateSpaceModel:
+    """Neural state-space model trained on truncated simulation errors.
+
+    Parameters
+    ----------
+    data : IOData
+        Estimation record(s).
+    order : int
+        Number of states.
+    hidden, output_hidden, encoder_hidden : int or tuple of int
+        Hidden widths of the state network ``f``, the output network ``g`` (``None``: the
+        output equation stays linear) and the encoder network (``()``: the encoder is linear).
+    lags : int, optional
+        Past samples the encoder reads (default ``max(2 order, 4)``).
+    horizon : int
+        Samples per training section.
+    epochs, batch, learning_rate : int, int, float
+        Adam's passes over the data, sections per step and step size.
+    patience : int
+        Stop after this many epochs without a lower validation error.
+    validation : float or IOData
+        The fraction of each experiment's end held out (its simulation error, from the
+        encoder's state, decides which epoch is kept), or separate records.
+    periods : int, optional
+        Periods per experiment: the linear start is then the BLA's model.
+    init : StateSpaceModel, optional
+        Linear start (engineering units).
+    seed : int
+        Seeds the weights and the section sampling (same seed, same model).
+    progress : bool or callable, optional
+        A bar over the epochs with the validation error (on a terminal by default); a
+        callable gets ``(epoch, validation_mse, train_mse)`` and may return ``False`` to stop.
+
+    Returns
+    -------
+    NeuralStateSpaceModel
+        ``info["training"]``: the validation and training errors per epoch, the best
+        epoch, why it stopped.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(1500)
+    >>> x = np.zeros(1501)
+    >>> for t in range(1500):
+    ...     x[t + 1] = 0.8 * x[t] + 0.5 * np.tanh(2 * u[t])
+    >>> d = sysid.IOData(u, x[:-1], 1.0)
+    >>> m = sysid.nlssest(d, 1, hidden=8, epochs=20, learning_rate=1e-2, progress=False)
+    >>> lin = m.info["training"]["validation"][0]
+    >>> bool(min(m.info["training"]["validation"]) < 0.5 * lin)
+    True
+    """
+    if not isinstance(data, IOData):
+        raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
+    from .._checks import as_int
+
+    n = check_order(order)
+    hid, enc = _widths(hidden, "hidden"), _widths(encoder_hidden, "encoder_hidden") \
+        if encoder_hidden != () else ()
+    out = None if output_hidden is None else _widths(output_hidden, "output_hidden")
+    L = max(2 * n, 4) if lags is None else as_int(lags, "lags", 1)
+    H = as_int(horizon, "horizon", 2)
+    if data.n_inputs == 0:
+        raise DataError("nlssest needs inputs")
+    sc = Scaling.of(data)
+    sd = scaled_data(data, sc)
+    train, val = _split(sd, sc, validation, L, H)
+    lin_data = IOData([u[:at] for u, _, at in train], [y[:at] for _, y, at in train], data.dt)
+    whole = isinstance(validation, IOData) or float(validation) == 0.0
+    lin = balanced(linear_start(data, lin_data, sc, n, init, periods if whole else None),
+                   [u for u, _, _ in train])
+    W = _encoder_fit(lin, train, L)
+    start = NeuralStateSpaceModel.from_linear(lin, hidden=hid, output_hidden=out,
+                                              encoder_hidden=enc, lags=L, seed=seed,
+                                              scaling=sc.to_dict(), encoder_linear=W)
+    cb, close = _epoch_callback(progress, epochs)
+    try:
+        res = _sysid.neural_ss_train(*start._struct(), start.params, train, val, epochs=epochs,
+                                     batch=batch, horizon=H, learning_rate=learning_rate,
+                                     patience=patience, seed=seed, progress=cb)
+    finally:
+        close()
+    info = {"method": "nlssest", "start": lin.info.get("method") if lin.info else "linear",
+            "training": {k: res[k] for k in ("validation", "train", "best_epoch", "stop",
+                                              "diverged")}, "horizon": H, "seed": seed}
+    return NeuralStateSpaceModel(res["params"], dims=(n, data.n_inputs, data.n_outputs),
+                                 hidden=hid, output_hidden=out, encoder_hidden=enc, lags=L,
+                                 scaling=sc.to_dict(), dt=data.dt,
+                                 input_names=data.input_names, output_names=data.output_names,
+                                 info=info)
+
+
+def _split(sd: IOData, sc: Scaling, validation: Any, L: int, H: int) -> tuple[list, list]:
+    """Training records ``(u, y, end)`` and validation records ``(u, y, start)``."""
+    c = np.ascontiguousarray
+    if isinstance(validation, IOData):
+        train = [(c(u), c(y), u.shape[0]) for u, y in sd.experiments]
+        val = [(sc.u(u), sc.y(y), L) for u, y in validation.experiments]
+        return train, val
+    frac = float(validation)
+    if not 0.0 <= frac < 0.9:
+        raise DataError(f"validation must be a fraction in [0, 0.9) or an IOData, got "
+                        f"{validation!r}")
+    train, val = [], []
+    for u, y in sd.experiments:
+        N = u.shape[0]
+        at = int(round(N * (1 - frac)))
+        if at < L + H:
+            raise DataError(f"an experiment of {N} samples leaves {at} for training, fewer "
+                            f"than lags + horizon = {L + H}; shorten them or give more data")
+        train.append((c(u), c(y), at))
+        if frac > 0 and N - at > 0:
+            val.append((c(u), c(y), at))
+    return train, val
+
+
+def _encoder_fit(lin: StateSpaceModel, train: list, L: int) -> np.ndarray:
+    """Least-squares map from the past window to the linear model's simulated state."""
+    n = lin.nstates
+    probe = StateSpaceModel(lin.A, lin.B, np.eye(n), np.zeros((n, lin.ninputs)), dt=lin.dt)
+    P, X = [], []
+    for u, y, at in train:
+        x = np.asarray(probe.simulate(u[:at]))
+        P.append(_phi(u[:at], y[:at], L))
+        X.append(x[L:at])
+    Pm, Xm = np.vstack(P), np.vstack(X)
+    skip = max(0, Pm.shape[0] // 10)  # the transient from rest is not the map's business
+    W, *_ = np.linalg.lstsq(Pm[skip:], Xm[skip:], rcond=1e-10)
+    return np.ascontiguousarray(W.T)
+
+
+def _epoch_callback(progress: Any, epochs: int) -> tuple[Any, Callable[[], None]]:
+    if callable(progress):
+        return progress, lambda: None
+    if progress is not None and not isinstance(progress, bool):
+        raise DataError(f"progress must be True, False, None or a callable, got {progress!r}")
+    if not show(progress):
+        return None, lambda: None
+    bar = Bar(epochs, "nlssest", unit="epoch")
+
+    def cb(epoch: int, val: float, train: float) -> None:
+        bar.update(1, validation=f"{val:.4g}", train=f"{train:.4g}")
+
+    return cb, bar.close

@@ -1,0 +1,308 @@
+"""Polynomial nonlinear state-space models (PNLSS): the model and its estimator.
+
+.. code-block:: text
+
+    x(t+1) = A x(t) + B u(t) + E zeta(x(t), u(t))
+      y(t) = C x(t) + D u(t) + F eta(x(t), u(t))
+
+in scaled channels (offsets removed, unit standard deviations; the model converts), with
+``zeta``, ``eta`` all monomials of the chosen total degrees in the states and/or inputs
+(Paduart, Lauwers, Swevers, Smolders, Schoukens & Pintelon, Automatica 46, 2010). The fit
+starts from a linear model (the BLA's for periodic data) and minimises the simulation error
+with the shared optimiser; the Jacobian comes from forward sensitivities in the Rust core.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._progress import iteration_callback, iteration_printer
+from ..data.iodata import IOData
+from ..errors import DataError
+from ..models.protocol import ModelMixin
+from ..models.serialize import register_model
+from ..models.statespace import StateSpaceModel
+from .common import Scaling, balanced, check_order, linear_start, scaled_data, settle_samples
+
+__all__ = ["PNLSSModel", "pnlss"]
+
+
+@register_model
+class PNLSSModel(ModelMixin):
+    """A polynomial nonlinear state-space model (see the module documentation).
+
+    Parameters
+    ----------
+    A, B, C, D, E, F : array_like
+        Coefficients in scaled channels (``E``: ``nstates x len(zeta)``, ``F``:
+        ``noutputs x len(eta)``).
+    zeta, eta : list of list of int
+        Monomials as index lists into ``z = [x; u]`` (``[0, 0, 2]`` is ``x0^2 u0`` for two
+        states; ``[]`` is the constant 1).
+    scaling : dict
+        ``u_offset, u_scale, y_offset, y_scale`` of the channels.
+    dt : float
+    input_names, output_names : list of str, optional
+    info : dict, optional
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> m = sysid.PNLSSModel([[0.5]], [[1.0]], [[1.0]], [[0.0]], [[-0.1]], np.zeros((1, 0)),
+    ...                      zeta=[[0, 0]], eta=[])
+    >>> m.simulate([1.0, 1.0, 0.0])[:, 0]
+    array([0. , 1. , 1.4])
+    >>> m
+    PNLSSModel(nstates=1, ninputs=1, noutputs=1, 1 state monomial(s), 0 output monomial(s), dt=1)
+    """
+
+    def __init__(self, A: Any, B: Any, C: Any, D: Any, E: Any, F: Any, *,
+                 zeta: Any, eta: Any, scaling: dict[str, Any] | None = None, dt: float = 1.0,
+                 input_names: Any = None, output_names: Any = None,
+                 info: dict[str, Any] | None = None) -> None:
+        self.A, self.B = np.atleast_2d(np.asarray(A, float)), np.atleast_2d(np.asarray(B, float))
+        self.C, self.D = np.atleast_2d(np.asarray(C, float)), np.atleast_2d(np.asarray(D, float))
+        self.zeta = [[int(v) for v in t] for t in zeta]
+        self.eta = [[int(v) for v in t] for t in eta]
+        n, m, l_ = self.A.shape[0], self.B.shape[1], self.C.shape[0]
+        self.E = np.asarray(E, float).reshape(n, len(self.zeta))
+        self.F = np.asarray(F, float).reshape(l_, len(self.eta))
+        if self.A.shape != (n, n) or self.B.shape[0] != n or self.C.shape[1] != n \
+                or self.D.shape != (l_, m):
+            raise DataError(f"A {self.A.shape}, B {self.B.shape}, C {self.C.shape} and D "
+                            f"{self.D.shape} do not fit together")
+        sc = scaling or {"u_offset": np.zeros(m), "u_scale": np.ones(m),
+                         "y_offset": np.zeros(l_), "y_scale": np.ones(l_)}
+        self.scaling = Scaling(sc["u_offset"], sc["u_scale"], sc["y_offset"], sc["y_scale"])
+        self.dt = float(dt)
+        self.input_names = list(input_names) if input_names is not None else \
+            [f"u{j}" for j in range(m)]
+        self.output_names = list(output_names) if output_names is not None else \
+            [f"y{j}" for j in range(l_)]
+        self.info = dict(info or {"method": "pnlss"})
+
+    nstates = property(lambda self: self.A.shape[0])
+    ninputs = property(lambda self: self.B.shape[1])
+    noutputs = property(lambda self: self.C.shape[0])
+
+    @property
+    def n_parameters(self) -> int:
+        """Number of coefficients (the state basis makes ``nstates^2`` of them redundant)."""
+        return int(self.theta.size - self.nstates ** 2)
+
+    @property
+    def theta(self) -> np.ndarray:
+        """All coefficients ``[A, B, C, D, E, F]`` row-major (the core's parameter vector)."""
+        return np.concatenate([a.ravel() for a in (self.A, self.B, self.C, self.D, self.E,
+                                                   self.F)])
+
+    def _struct(self) -> tuple[Any, ...]:
+        return (self.nstates, self.ninputs, self.noutputs, self.zeta, self.eta)
+
+    def _u(self, u: Any) -> np.ndarray:
+        a = np.asarray(u, dtype=float)
+        a = a.reshape(-1, 1) if a.ndim == 1 else a
+        if a.ndim != 2 or a.shape[1] != self.ninputs:
+            raise DataError(f"u must be (n_samples, {self.ninputs}), got {np.shape(u)}")
+        if not np.isfinite(a).all():
+            raise DataError("u has non-finite values (NaN or Inf)")
+        return self.scaling.u(a)
+
+    def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
+        """Output ``(n_samples, noutputs)`` from ``x0`` (scaled-state coordinates; zero by
+        default). Raises :class:`~sysid.NumericalError` when the state diverges."""
+        us = self._u(u)
+        x = None if x0 is None else [float(v) for v in np.ravel(x0)]
+        y, _ = _sysid.pnlss_simulate(*self._struct(), self.theta, us, x)
+        return self.scaling.y_back(np.asarray(y).reshape(-1, self.noutputs))
+
+    def states(self, u: Any, x0: Any = None) -> np.ndarray:
+        """Simulated states ``(n_samples, nstates)`` (scaled coordinates)."""
+        x = None if x0 is None else [float(v) for v in np.ravel(x0)]
+        _, xs = _sysid.pnlss_simulate(*self._struct(), self.theta, self._u(u), x)
+        return np.asarray(xs).reshape(-1, self.nstates)
+
+    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+        """An output-error model has no noise model: its prediction is its simulation."""
+        return self.simulate(u)
+
+    def linear(self) -> StateSpaceModel:
+        """The linear part ``(A, B, C, D)`` in engineering units."""
+        sc = self.scaling
+        return StateSpaceModel(self.A, self.B / sc.u_scale, sc.y_scale[:, None] * self.C,
+                               sc.y_scale[:, None] * self.D / sc.u_scale, dt=self.dt,
+                               input_names=self.input_names, output_names=self.output_names)
+
+    def to_statespace(self) -> StateSpaceModel:
+        """The linear part (poles, zeros and frequency response are those of it)."""
+        return self.linear()
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """Frequency response of the linear part (``E = F = 0``)."""
+        return np.asarray(self.linear().freqresp(omega))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"A": self.A, "B": self.B, "C": self.C, "D": self.D, "E": self.E, "F": self.F,
+                "zeta": self.zeta, "eta": self.eta, "scaling": self.scaling.to_dict(),
+                "dt": self.dt, "input_names": self.input_names,
+                "output_names": self.output_names, "info": self.info}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> PNLSSModel:
+        return cls(d["A"], d["B"], d["C"], d["D"], d["E"], d["F"], zeta=d["zeta"],
+                   eta=d["eta"], scaling=d["scaling"], dt=d["dt"],
+                   input_names=d["input_names"], output_names=d["output_names"],
+                   info=d.get("info"))
+
+    def summary(self) -> str:
+        fit = self.info.get("fit", {})
+        return (f"{self!r}\n  parameters: {self.theta.size}\n  iterations: "
+                f"{fit.get('iterations', '-')}, stop: {fit.get('stop', '-')}\n  cost: "
+                f"{fit.get('cost', [float('nan')])[0]:.6g} -> "
+                f"{fit.get('cost', [float('nan')])[-1]:.6g}")
+
+    def __repr__(self) -> str:
+        return (f"PNLSSModel(nstates={self.nstates}, ninputs={self.ninputs}, "
+                f"noutputs={self.noutputs}, {len(self.zeta)} state monomial(s), "
+                f"{len(self.eta)} output monomial(s), dt={self.dt:g})")
+
+
+def _degrees(degree: Any) -> list[int]:
+    ds = [degree] if np.ndim(degree) == 0 else list(degree)
+    try:
+        out = sorted({int(d) for d in ds})
+    except (TypeError, ValueError):
+        raise DataError(f"degree must be an integer or a list of integers, got {degree!r}") \
+            from None
+    if not out:
+        raise DataError("degree needs at least one value")
+    if max(out) < 2:
+        raise DataError(f"degree must be at least 2 (1 is the linear part), got {degree!r}")
+    return list(range(2, out[0] + 1)) if np.ndim(degree) == 0 else [d for d in out if d >= 2]
+
+
+def pnlss(
+    data: IOData,
+    order: int,
+    *,
+    degree: Any = 3,
+    terms: str = "full",
+    output_terms: str | None = None,
+    periods: int | None = None,
+    init: Any = None,
+    transient: int | None = None,
+    max_iter: int = 100,
+    tol: float = 1e-8,
+    progress: bool | None | Callable[..., Any] = None,
+) -> PNLSSModel:
+    """Polynomial nonlinear state-space model fitted on the simulation error.
+
+    Parameters
+    ----------
+    data : IOData
+        Estimation record(s).
+    order : int
+        Number of states.
+    degree : int or list of int
+        Monomial degrees: an integer ``d`` means all degrees ``2..d``, a list exactly those
+        (``[3]``: cubic terms only).
+    terms : {"full", "states", "inputs"}
+        Variables of the state-equation monomials ``zeta``: states and inputs, states only,
+        or inputs only.
+    output_terms : {"full", "states", "inputs", "none"}, optional
+        Variables of the output-equation monomials ``eta`` (default: as ``terms``);
+        ``"none"`` keeps the output equation linear (fewer parameters).
+    periods : int, optional
+        Periods in each experiment, for periodic excitation: the linear start is then the
+        BLA's parametric model (:func:`sysid.bla_model`) and the first period of each
+        experiment is left out of the cost as the transient.
+    init : StateSpaceModel, optional
+        Linear start of ``order`` states (engineering units) instead.
+    transient : int, optional
+        Leading samples of each experiment left out of the cost (default: one period for
+        periodic data, else the settling time of the linear start, at most a quarter).
+    max_iter, tol : int, float
+        Iterations and the relative cost/step tolerance of the search.
+    progress : bool or callable, optional
+        The shared progress machinery (a bar on a terminal; a callable receives
+        ``(iteration, cost, step, gradient, damping)`` and may return ``False`` to stop).
+
+    Returns
+    -------
+    PNLSSModel
+        ``info["fit"]``: iterations, costs, stop reason, the linear start's cost.
+
+    Examples
+    --------
+    A Wiener-type system (first-order filter, then a cubic output map), four random-phase
+    multisines of two periods:
+
+    >>> import numpy as np, sysid
+    >>> truth = sysid.PNLSSModel([[0.8]], [[0.5]], [[1.0]], [[0.0]], np.zeros((1, 0)),
+    ...                          [[0.3]], zeta=[], eta=[[0, 0, 0]])
+    >>> u = sysid.multisine(200, band=(0, 0.5), phases="random", seed=1, periods=2)
+    >>> d = sysid.IOData(u, truth.simulate(u), 1.0)
+    >>> m = sysid.pnlss(d, 1, degree=[3], terms="states", output_terms="states",
+    ...                 periods=2, progress=False)
+    >>> bool(sysid.compare(m, d, x0="zero").fit[0, 0] > 99.9)
+    True
+    """
+    if not isinstance(data, IOData):
+        raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
+    n = check_order(order)
+    degs = _degrees(degree)
+    if data.n_inputs == 0:
+        raise DataError("pnlss needs inputs; for output-only records use sysid.ar/arma")
+    sc = Scaling.of(data)
+    sd = scaled_data(data, sc)
+    lin = balanced(linear_start(data, sd, sc, n, init, periods), [u for u, _ in sd.experiments])
+    if np.max(np.abs(lin.poles())) >= 1:
+        raise DataError("the linear start is unstable: its simulation cannot seed a "
+                        "simulation-error fit; give a stable init= or another order")
+    m_, l_ = data.n_inputs, data.n_outputs
+    # a constant term in each equation: the channel offsets removed by the scaling (and
+    # the mean of the nonlinear terms) enter the scaled equations as constants
+    zeta = [[]] + _sysid.pnlss_monomials(n, m_, terms, degs)
+    ot = terms if output_terms is None else output_terms
+    eta = [[]] + ([] if ot == "none" else _sysid.pnlss_monomials(n, m_, ot, degs))
+    recs = []
+    for u, y in sd.experiments:
+        N = u.shape[0]
+        skip = transient if transient is not None else (
+            N // periods if periods and periods > 1 else settle_samples(lin, N))
+        recs.append((u, y, int(skip)))
+    theta0 = np.concatenate([lin.A.ravel(), lin.B.ravel(), lin.C.ravel(), lin.D.ravel(),
+                             np.zeros(n * len(zeta) + l_ * len(eta))])
+    cb, close = iteration_callback(progress, "pnlss", max_iter,
+                                   iteration_printer("pnlss", "sum of squares"))
+    try:
+        res = _sysid.pnlss_estimate(n, m_, l_, zeta, eta, recs, theta0, max_iter=max_iter,
+                                    tol=tol, progress=cb if cb is not None else _tick)
+    finally:
+        close()
+    th = np.asarray(res["theta"])
+    o = np.cumsum([0, n * n, n * m_, l_ * n, l_ * m_, n * len(zeta), l_ * len(eta)])
+    parts = [th[o[i]:o[i + 1]] for i in range(6)]
+    info = {"method": "pnlss", "degree": degs, "terms": terms, "output_terms": ot,
+            "start": lin.info.get("method") if lin.info else "linear",
+            "fit": {"iterations": res["iterations"], "evaluations": res["evaluations"],
+                    "cost": list(res["history"]), "stop": res["stop"],
+                    "n_parameters": int(th.size), "transient": [r[2] for r in recs]}}
+    if res["stop"] in ("maximum iterations", "cancelled"):
+        import warnings
+
+        warnings.warn(f"pnlss stopped at {res['stop']} after {res['iterations']} iterations; "
+                      "the model may improve with more (max_iter=)", RuntimeWarning,
+                      stacklevel=2)
+    return PNLSSModel(parts[0].reshape(n, n), parts[1].reshape(n, m_), parts[2].reshape(l_, n),
+                      parts[3].reshape(l_, m_), parts[4], parts[5], zeta=zeta, eta=eta,
+                      scaling=sc.to_dict(), dt=data.dt, input_names=data.input_names,
+                      output_names=data.output_names, info=info)
+
+
+def _tick(*_: Any) -> None:
+    """Runs Python once per iteration, so that Ctrl-C interrupts the search."""

@@ -1,0 +1,82 @@
+"""Best linear approximation (robust method) and the random-odd multisine."""
+
+import numpy as np
+import pytest
+
+import sysid
+from sysid.errors import DataError
+
+G = sysid.StateSpaceModel([[1.2, -0.5], [1.0, 0.0]], [[1.0], [0.0]], [[0.2, 0.1]], dt=1.0)
+
+
+def _records(f, R, n=512, P=3, noise=0.0, seed=0):
+    rng = np.random.default_rng(seed)
+    us = [sysid.multisine(n, band=(0, 0.9), phases="random", seed=seed + r, periods=P)
+          for r in range(R)]
+    ys = [f(G.simulate(u)) + noise * rng.standard_normal((n * P, 1)) for u in us]
+    return sysid.IOData(us, ys, 1.0)
+
+
+def test_linear_noise_free_is_exact():
+    d = _records(lambda x: x, 2)
+    f = sysid.bla(d, periods=3, transient=1)
+    assert np.max(np.abs(f.response - G.freqresp(f.omega))) < 1e-10
+    assert np.max(f.info["distortion_std"]) < 1e-10
+
+
+def test_wiener_bla_matches_bussgang():
+    # Wiener system x = G u, y = x + 0.2 x^3 under a Gaussian-like input: the BLA is
+    # G * E[f'(x)] = G (1 + 0.6 var(x)) (Bussgang); random-phase multisines of 230 lines are
+    # asymptotically Gaussian, the difference O(1/lines) is far below the band used here.
+    d = _records(lambda x: x + 0.2 * x**3, 16, seed=3)
+    f = sysid.bla(d, periods=3, transient=1)
+    var_x = np.mean([np.var(G.simulate(u)) for u, _ in d.experiments])
+    theory = G.freqresp(f.omega) * (1 + 0.6 * var_x)
+    z = np.abs(f.response - theory).ravel() / f.std.ravel()
+    assert np.mean(z < 3.0) > 0.95
+    rel = np.abs(np.mean(f.response / theory) - 1)
+    assert rel < 0.01
+    # the distortion std is what the spread over realisations says, and is not noise
+    assert np.all(f.info["noise_std"] < 1e-10)
+    assert np.all(f.info["distortion_std"] > 0)
+
+
+def test_noise_std_is_calibrated():
+    # linear system, white output noise: |G_bla - G|^2 / std^2 follows F(2, dof) with the
+    # dof of the estimated variance, mean dof / (dof - 2). R = 8 realisations (dof 14, mean
+    # 7/6, std of the mean over 230 lines 0.09: bound 0.35 is ~4 sigma); the noise part from
+    # 8 x 2 period differences (dof 32, mean 16/15, std of the mean 0.05: bound 0.2).
+    d = _records(lambda x: x, 8, P=4, noise=0.05, seed=7)
+    f = sysid.bla(d, periods=4, transient=1)
+    err2 = np.abs(f.response - G.freqresp(f.omega)) ** 2
+    assert abs(np.mean(err2 / f.std ** 2) - 14 / 12) < 0.35
+    assert abs(np.mean(err2 / f.info["noise_std"] ** 2) - 32 / 30) < 0.2
+
+
+def test_bla_model_recovers_linear_block():
+    d = _records(lambda x: x, 2)
+    m = sysid.bla_model(sysid.bla(d, periods=3, transient=1), 2)
+    assert np.allclose(np.sort_complex(m.poles()), np.sort_complex(G.poles()), atol=1e-6)
+
+
+def test_random_odd_grid():
+    u = sysid.multisine(256, band=(0, 1), phases="random", grid="random-odd", seed=2)
+    k = np.flatnonzero(np.abs(np.fft.rfft(u[:, 0])) > 1e-8)
+    assert np.all(k % 2 == 1)
+    odd = np.arange(1, 128, 2)
+    assert k.size == odd.size - odd.size // 4
+    u2 = sysid.multisine(256, band=(0, 1), grid="odd")
+    k2 = np.flatnonzero(np.abs(np.fft.rfft(u2[:, 0])) > 1e-8)
+    assert np.array_equal(k2, odd)
+    with pytest.raises(DataError, match="grid"):
+        sysid.multisine(64, grid="even")
+
+
+def test_bad_input():
+    d = _records(lambda x: x, 1)
+    with pytest.raises(DataError, match="periods"):
+        sysid.bla(sysid.IOData(d.u[:1000], d.y[:1000], 1.0), periods=3)
+    with pytest.raises(DataError, match="transient"):
+        sysid.bla(d, periods=3, transient=3)
+    with pytest.raises(DataError, match="bla"):
+        sysid.bla_model(sysid.FRD([0.1], [1.0]), 1)

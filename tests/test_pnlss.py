@@ -1,0 +1,87 @@
+"""PNLSS: recovery of a known system, save/load, bad input, divergence."""
+
+import numpy as np
+import pytest
+
+import sysid
+from sysid.errors import DataError, NumericalError
+
+
+def _truth():
+    # two states, cubic state and output terms
+    return sysid.PNLSSModel(
+        [[0.7, 0.2], [-0.3, 0.6]], [[1.0], [0.5]], [[1.0, 0.0]], [[0.0]],
+        [[-0.03, 0.0, 0.01, 0.0], [0.0, 0.01, 0.0, -0.02]], [[0.02, 0.0, 0.0, 0.0]],
+        zeta=[[0, 0, 0], [0, 0, 1], [0, 1, 1], [1, 1, 1]],
+        eta=[[0, 0, 0], [0, 0, 1], [0, 1, 1], [1, 1, 1]], dt=0.1)
+
+
+def _data(truth, seed, periods=2, n=300):
+    u = sysid.multisine(n, band=(0, 0.6), phases="random", seed=seed, periods=periods,
+                        rms=0.5)
+    return sysid.IOData(u, truth.simulate(u), truth.dt)
+
+
+def test_noise_free_system_recovered():
+    truth = _truth()
+    d = _data(truth, 1)
+    m = sysid.pnlss(d, 2, degree=[3], terms="states", periods=2, progress=False, tol=1e-12,
+                    max_iter=200)
+    # the state basis is free: compare the input-output map, on the estimation data and
+    # on a fresh realisation, to 1e-6 of the output's size
+    for data in (d, _data(truth, 5)):
+        y, yh = data.y, m.simulate(data.u)
+        assert np.max(np.abs(yh - y)) < 1e-6 * np.max(np.abs(y))
+    assert m.info["fit"]["cost"][-1] < 1e-10 * m.info["fit"]["cost"][0]
+
+
+def test_nonlinear_fit_beats_its_linear_start_and_compare_works():
+    truth = _truth()
+    d = _data(truth, 2)
+    m = sysid.pnlss(d, 2, degree=3, terms="full", output_terms="none", periods=2,
+                    progress=False)
+    cost = m.info["fit"]["cost"]
+    assert cost[-1] <= cost[0]
+    lin = sysid.bla_model(sysid.bla(d, periods=2), 2)
+    fm = sysid.compare(m, _data(truth, 9), x0="zero").fit[0, 0]
+    fl = sysid.compare(lin, _data(truth, 9), x0="zero").fit[0, 0]
+    assert fm > fl
+
+
+def test_save_load_round_trip(tmp_path):
+    m = _truth()
+    for ext in ("json", "npz"):
+        p = tmp_path / f"m.{ext}"
+        sysid.save_model(m, p)
+        back = sysid.load_model(p)
+        u = np.random.default_rng(0).standard_normal((50, 1))
+        assert isinstance(back, sysid.PNLSSModel)
+        np.testing.assert_array_equal(back.simulate(u), m.simulate(u))
+        assert back.zeta == m.zeta and back.output_names == m.output_names
+
+
+def test_protocol_and_linear_part():
+    m = _truth()
+    assert isinstance(m, sysid.Model)
+    w = np.linspace(0.1, 3, 4)
+    np.testing.assert_allclose(m.freqresp(w), m.linear().freqresp(w))
+    assert m.n_parameters == m.theta.size - 4
+    assert "PNLSSModel" in repr(m) and "parameters" in m.summary()
+
+
+def test_divergence_and_bad_input():
+    m = sysid.PNLSSModel([[0.5]], [[1.0]], [[1.0]], [[0.0]], [[1.0]], np.zeros((1, 0)),
+                         zeta=[[0, 0]], eta=[])
+    with pytest.raises(NumericalError, match="diverged"):
+        m.simulate(np.full(100, 3.0))
+    with pytest.raises(DataError, match="u must be"):
+        m.simulate(np.ones((10, 2)))
+    d = _data(_truth(), 1)
+    with pytest.raises(DataError, match="degree"):
+        sysid.pnlss(d, 2, degree=1)
+    with pytest.raises(DataError, match="terms"):
+        sysid.pnlss(d, 2, terms="everything", periods=2)
+    with pytest.raises(DataError, match="constant"):
+        sysid.pnlss(sysid.IOData(np.ones(100), np.arange(100.0), 1.0), 1)
+    with pytest.raises(DataError, match="init"):
+        sysid.pnlss(d, 2, init=sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1))
