@@ -193,6 +193,12 @@ _LAZY = {
     "PiecewiseLinear": "models.hammerstein",
     "SigmoidNetwork": "models.hammerstein",
     "UserFunction": "models.hammerstein",
+    # issue 27 (branch tsonline): online estimators, time series, output-only modal analysis
+    "RecursiveARX": "recursive.estimators",
+    "RecursiveARMAX": "recursive.estimators",
+    "RecursiveOE": "recursive.estimators",
+    "RecursiveBJ": "recursive.estimators",
+    "RecursiveResult": "recursive.estimators",
 }
 
 
@@ -375,4 +381,10 @@ __all__ = [
     "model_to_dict",
     "model_from_dict",
     "report",
+    # issue 27 (branch tsonline): online estimators, time series, output-only modal analysis
+    "RecursiveARX",
+    "RecursiveARMAX",
+    "RecursiveOE",
+    "RecursiveBJ",
+    "RecursiveResult",
 ]

@@ -21,6 +21,8 @@ mod simulate;
 mod stats;
 mod streaming;
 mod subspace;
+// issue 27 (branch tsonline): online estimators
+mod recursive_estimators;
 
 #[pymodule]
 fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -38,5 +40,7 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     narx::register(m)?;
     hw::register(m)?;
     stats::register(m)?;
+    // issue 27 (branch tsonline)
+    recursive_estimators::register(m)?;
     Ok(())
 }
