@@ -191,10 +191,10 @@ def identify(
     ``compare`` (validation simulation), ``prediction`` (validation 1-step), ``residuals``
     and, with ``report``, the written ``files``.
     """
-    from .analysis.criteria import select_order
-    from .analysis.validation import compare
-    from .analysis.whiteness import residuals
-    from .estimate.subspace import SubspaceEstimator
+    from .subspace.estimator import SubspaceEstimator
+    from .validation.compare import compare
+    from .validation.criteria import select_order
+    from .validation.residuals import residuals
 
     say = progress or (lambda _msg: None)
     say(f"compressing {est_data.n_samples} samples "
@@ -459,7 +459,7 @@ def _header(path: Path) -> list[str]:
 
 
 def _identify(args: argparse.Namespace) -> int:
-    from .estimate.subspace import _method
+    from .subspace.estimator import _method
 
     _method(args.method)  # before reading and compressing anything
     _check_report_dir(args.report)

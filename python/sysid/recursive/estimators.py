@@ -250,7 +250,7 @@ class _Recursive:
 
     def to_model(self) -> Any:
         """The current estimate as a :class:`~sysid.PolynomialModel`."""
-        from ..models.polynomial import PolynomialModel
+        from ..polynomial.model import PolynomialModel
 
         p = self._split()
         m = len(p["b"])

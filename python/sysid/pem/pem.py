@@ -1,0 +1,331 @@
+"""Prediction-error refinement of state-space models: :func:`pem` (the one-call estimator
+:func:`sysid.ssest` is in :mod:`sysid.pem.ssest`).
+
+The model ``x(t+1) = A x + B u + K e``, ``y = C x + D u + e`` is refined by minimising the
+prediction errors of its Kalman predictor (``focus="prediction"``) or its simulation errors
+(``focus="simulation"``, ``K = 0``) over all experiments of the record, weighted by the inverse
+of their covariance (re-estimated between iterations: the determinant criterion). The search is
+the one Gauss-Newton / Levenberg-Marquardt optimiser of the Rust core (``sysid_core::optim``),
+in data-driven local coordinates, with analytic sensitivities accumulated blockwise (memory
+independent of the record length), and never leaves the set of stable predictors.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import as_int
+from .._progress import iteration_callback, iteration_printer
+from ..data.iodata import IOData
+from ..errors import DataError
+from ..models.statespace import StateSpaceModel
+from ..models.uncertainty import ParameterUncertainty
+
+__all__ = ["pem", "PemUncertainty"]
+
+_FOCUS = ("prediction", "simulation")
+_NOISE = ("estimate", "none", "fixed")
+
+
+#: The interim name of :class:`sysid.ParameterUncertainty` (kept for compatibility).
+PemUncertainty = ParameterUncertainty
+
+
+def _stabilize(A: np.ndarray) -> np.ndarray:
+    """Reflect eigenvalues outside the unit circle to ``1 / conj(z)`` (a real matrix)."""
+    w, V = np.linalg.eig(A)
+    bad = np.abs(w) >= 1.0
+    w = np.where(bad, 0.99 / np.conj(w) * np.where(np.abs(w) == 1.0, 1.0, 1.0), w)
+    w = np.where(np.abs(w) >= 1.0, 0.99 * w / np.abs(w), w)
+    return np.real(V @ np.diag(w) @ np.linalg.inv(V))
+
+
+def _radius(M: np.ndarray) -> float:
+    return float(np.max(np.abs(np.linalg.eigvals(M)))) if M.size else 0.0
+
+
+def _experiments(data: Any) -> IOData:
+    if isinstance(data, IOData):
+        return data
+    if isinstance(data, tuple) and len(data) == 2:
+        return IOData(u=data[0], y=data[1])
+    raise DataError(f"data must be a sysid.IOData or a (u, y) pair, got {type(data).__name__}")
+
+
+def _x0_modes(x0: Any, count: int, n: int) -> list[Any]:
+    if isinstance(x0, str):
+        if x0 not in ("estimate", "zero"):
+            raise DataError(f"x0 must be 'estimate', 'zero' or an array, got {x0!r}")
+        return [x0] * count
+    if x0 is None:
+        return ["zero"] * count
+    if isinstance(x0, (list, tuple)) and len(x0) == count and count > 1 and (
+            isinstance(x0[0], str) or np.ndim(x0[0]) == 1):
+        items = list(x0)
+    else:
+        items = [x0] * count
+    out: list[Any] = []
+    for it in items:
+        if isinstance(it, str):
+            out.extend(_x0_modes(it, 1, n))
+        else:
+            arr = np.asarray(it, dtype=float).ravel()
+            if arr.size != n:
+                raise DataError(f"x0 has {arr.size} entries but the model has {n} states")
+            out.append(arr)
+    return out
+
+
+def _regularization(reg: Any, p_start: np.ndarray | None) -> tuple[float, Any, Any]:
+    if reg is None:
+        return 0.0, None, None
+    if not isinstance(reg, dict) or "lambda" not in reg:
+        raise DataError("regularization must be a dict with 'lambda' and optionally 'R' and "
+                        "'nominal' ('zero', 'model' or an array)")
+    lam = float(reg["lambda"])
+    if not np.isfinite(lam) or lam < 0:
+        raise DataError(f"regularization lambda must be finite and >= 0, got {lam}")
+    R = reg.get("R")
+    R = None if R is None else np.asarray(R, dtype=float)
+    nom = reg.get("nominal", "zero")
+    if isinstance(nom, str):
+        if nom == "zero":
+            nom = None
+        elif nom == "model":
+            nom = p_start
+        else:
+            raise DataError(f"regularization nominal must be 'zero', 'model' or an array, "
+                            f"got {nom!r}")
+    else:
+        nom = np.asarray(nom, dtype=float).ravel()
+    return lam, R, nom
+
+
+def pem(
+    data: Any,
+    model: StateSpaceModel,
+    *,
+    focus: str = "prediction",
+    feedthrough: bool | None = None,
+    x0: Any = "estimate",
+    noise: str = "estimate",
+    max_iter: int = 50,
+    tol: float = 1e-6,
+    regularization: dict[str, Any] | None = None,
+    progress: bool | None | Callable[..., Any] = None,
+    local_coordinates: bool = True,
+    weighting: str | None = None,
+) -> StateSpaceModel:
+    """Refine a state-space model by minimising its prediction (or simulation) errors.
+
+    Parameters
+    ----------
+    data : IOData or (u, y)
+        Estimation data (every experiment is used; remove means first).
+    model : StateSpaceModel
+        The start (for example a subspace estimate).
+    focus : {"prediction", "simulation"}
+        One-step prediction errors of the innovation form, or simulation errors (``K = 0``).
+    feedthrough : bool, optional
+        Estimate ``D`` (``True``) or force ``D = 0`` (``False``); default: estimate it when
+        the start's ``D`` is non-zero.
+    x0 : "estimate", "zero", array, or a list with one per experiment
+        Initial states: estimated with the model (default), zero, or given.
+    noise : {"estimate", "none", "fixed"}
+        Estimate ``K``; no noise model (``K = 0``, an output-error model); or keep the start's
+        ``K``. Ignored for ``focus="simulation"``.
+    max_iter : int
+        Iteration cap.
+    tol : float
+        Stop when an iteration lowers the cost by less than this fraction.
+    regularization : dict, optional
+        ``{"lambda": float, "R": (p, p) array, "nominal": "zero" | "model" | array}``: adds
+        ``lambda/2 (theta - nominal)^T R (theta - nominal)`` to the cost (MATLAB's
+        ``Regularization``).
+    progress : bool or callable, optional
+        A progress bar over the iterations with the cost (sysid's one progress machinery,
+        :mod:`sysid._progress`): by default only on a terminal; ``True`` asks for it (when
+        stderr is not a terminal, one line per iteration on stdout instead, for logs);
+        ``False`` silences it; a callable gets ``(iteration, cost, step_norm,
+        gradient_norm, damping)`` (``cost``: the criterion of ``info["pem"]["cost"]``) and may
+        return ``False`` to stop.
+    local_coordinates : bool
+        Search in data-driven local coordinates (default); ``False`` searches all entries.
+    weighting : {"noise", "identity"}, optional
+        ``"noise"``: weight the errors by the inverse of their covariance, re-estimated between
+        iterations (the determinant criterion, maximum likelihood for Gaussian innovations);
+        ``"identity"``: plain sum of squares. Default ``"noise"`` for prediction focus and
+        ``"identity"`` for simulation focus (simulation errors are not white, and on the
+        shipped records the plain sum gives the better validation fit; see docs/pem.md).
+
+    Returns
+    -------
+    StateSpaceModel
+        ``info["pem"]`` holds iterations, ``"cost"``: the criterion the search decreases at
+        the start and after each iteration (the values the progress callback gets), named by
+        ``"criterion"``: ``"det"``, the determinant of the error covariance
+        ``det(E^T E / N)`` (not its log; the maximum-likelihood loss, MATLAB's "loss
+        function") for ``weighting="noise"``, ``"sum of squares"``, ``1/2 sum |e|^2``, for
+        ``weighting="identity"``; ``"loss_history"``: the determinant under either weighting;
+        ``"weighted_cost"``: ``1/2 sum e^T W e`` with the weighting of each iterate (``N l / 2``
+        throughout with the noise weighting); the stop reason and the condition number.
+        ``uncertainty`` holds the parameter covariance (:class:`sysid.ParameterUncertainty`), so
+        that ``poles(std=True)``, ``freqresp(w, std=True)``, ``damp(std=True)`` and Bode bands
+        work.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> true = sysid.StateSpaceModel([[0.9, 0.2], [-0.2, 0.9]], [[1.0], [0.0]], [[1.0, 0.5]])
+    >>> u = rng.standard_normal(400)
+    >>> data = sysid.IOData(u=u, y=true.simulate(u) + 0.05 * rng.standard_normal((400, 1)))
+    >>> start = sysid.moesp(data, order=2, horizon=5, feedthrough=False)
+    >>> m = sysid.pem(data, start, focus="simulation")
+    >>> m.info["pem"]["stop"] in ("cost tolerance", "gradient tolerance", "step tolerance",
+    ...                           "no further decrease")
+    True
+    >>> bool(np.allclose(np.sort_complex(m.poles()), np.sort_complex(true.poles()), atol=0.02))
+    True
+    """
+    data = _experiments(data)
+    if not isinstance(model, StateSpaceModel):
+        raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
+    if focus not in _FOCUS:
+        raise DataError(f"focus must be 'prediction' or 'simulation', got {focus!r}")
+    if weighting is None:
+        weighting = "noise" if focus == "prediction" else "identity"
+    if weighting not in ("noise", "identity"):
+        raise DataError(f"weighting must be 'noise' or 'identity', got {weighting!r}")
+    if noise not in _NOISE:
+        raise DataError(f"noise must be 'estimate', 'none' or 'fixed', got {noise!r}")
+    if data.n_inputs != model.ninputs or data.n_outputs != model.noutputs:
+        raise DataError(
+            f"the model has {model.ninputs} input(s) and {model.noutputs} output(s) but the "
+            f"data have {data.n_inputs} and {data.n_outputs}")
+    max_iter = as_int(max_iter, "max_iter", 0)
+    tol = float(tol)
+    if not (np.isfinite(tol) and tol >= 0):
+        raise DataError(f"tol must be finite and >= 0, got {tol}")
+    n, l = model.nstates, model.noutputs
+    A, B, C = model.A.copy(), model.B.copy(), model.C.copy()
+    D = model.D.copy()
+    if feedthrough is None:
+        feedthrough = bool(np.any(D != 0))
+    if not feedthrough:
+        D = np.zeros_like(D)
+    K = None
+    if focus == "prediction" and noise != "none":
+        K = model.K.copy() if model.K is not None else np.zeros((n, l))
+    estimate_k = focus == "prediction" and noise == "estimate"
+    # an unstable start: stabilise first and record it
+    stabilized = None
+    if focus == "simulation" or K is None:
+        if _radius(A) >= 1.0:
+            A = _stabilize(A)
+            stabilized = "unstable poles of A reflected into the unit circle"
+    elif _radius(A - K @ C) >= 1.0:
+        if _radius(A) < 1.0:
+            K = np.zeros((n, l))
+            stabilized = "unstable predictor: started from K = 0"
+        else:
+            A = _stabilize(A)
+            K = np.zeros((n, l))
+            stabilized = "unstable poles of A reflected and K = 0"
+        if noise == "fixed":
+            raise DataError("the start's predictor A - K C is unstable and noise='fixed' keeps "
+                            "K: give a stabilising K or use noise='estimate'")
+    exps = data.experiments
+    modes = _x0_modes(x0, len(exps), n)
+    start_theta = np.concatenate([A.ravel(), B.ravel(), C.ravel()]
+                                 + ([D.ravel()] if feedthrough else [])
+                                 + ([K.ravel()] if estimate_k and K is not None else []))
+    lam, R, nom = _regularization(regularization, None)
+    if regularization is not None and isinstance(regularization.get("nominal"), str) \
+            and regularization["nominal"] == "model":
+        nom = np.concatenate([start_theta] + [np.zeros(n) for m in modes if
+                                              isinstance(m, str) and m == "estimate"])
+    cb, close_bar = iteration_callback(progress, "pem", max_iter, iteration_printer(
+        "pem", "det" if weighting == "noise" else "sum of squares"))
+    try:
+        res = _sysid.pem_refine(
+            A, B, C, D, K, exps, focus=focus, estimate_d=bool(feedthrough), estimate_k=estimate_k,
+            x0=[m if isinstance(m, str) else np.ascontiguousarray(m) for m in modes],
+            reweight=weighting == "noise", local_coordinates=bool(local_coordinates),
+            max_iter=max_iter, tol_cost=tol, reg_lambda=lam, reg_r=R, reg_nominal=nom, progress=cb)
+    finally:
+        close_bar()
+    Kres = res["k"] if K is not None else None
+    x0s = res["x0"]
+    est_x0 = [i for i, m in enumerate(modes) if isinstance(m, str) and m == "estimate"]
+
+    def build(theta: np.ndarray) -> StateSpaceModel:
+        theta = np.asarray(theta, dtype=float)
+        m_, o = model.ninputs, 0
+
+        def take(r: int, c: int) -> np.ndarray:
+            nonlocal o
+            out = theta[o:o + r * c].reshape(r, c)
+            o += r * c
+            return out
+        a, b, c = take(n, n), take(n, m_), take(l, n)
+        d = take(l, m_) if feedthrough else res["d"]
+        k = take(n, l) if estimate_k else Kres
+        return StateSpaceModel(a, b, c, d, k, dt=data.dt)
+
+    info = dict(model.info) if model.info else {}
+    info["method"] = "pem"
+    info["start_method"] = model.info.get("method") if model.info else None
+    info["pem"] = {
+        "iterations": res["iterations"],
+        "evaluations": res["evaluations"],
+        "cost": list(res["history"]),
+        "criterion": "det" if weighting == "noise" else "sum of squares",
+        "weighted_cost": list(res["weighted_history"]),
+        "loss_history": list(res["loss_history"]),
+        "stop": res["stop"],
+        "condition": res["condition"],
+        "focus": focus,
+        "weighting": weighting,
+        "feedthrough": bool(feedthrough),
+        "noise": noise if focus == "prediction" else "none",
+        "x0": ["estimate" if isinstance(m, str) and m == "estimate" else
+               ("zero" if isinstance(m, str) else "given") for m in modes],
+        "stabilized": stabilized,
+        "n_parameters": int(res["theta"].size),
+        "rank": int(res["rank"]),
+        "n_samples": int(res["n_samples"]),
+        "x0_values": x0s,
+        "estimated_x0": est_x0,
+    }
+    out = StateSpaceModel(
+        res["a"], res["b"], res["c"], res["d"], Kres, dt=data.dt,
+        noise_cov=res["innovation_covariance"], x0=x0s[0] if len(x0s) == 1 else None,
+        input_names=data.input_names, output_names=data.output_names, info=info)
+    out.uncertainty = _uncertainty(
+        res["theta"], res["covariance"], build, int(res["rank"]),
+        _names(n, model.ninputs, l, bool(feedthrough), estimate_k and K is not None, len(est_x0)))
+    return out
+
+
+def _uncertainty(theta: np.ndarray, cov: np.ndarray, build: Callable[[np.ndarray], Any],
+                 rank: int, names: list[str]) -> ParameterUncertainty:
+    return ParameterUncertainty(theta, cov, build, names=names[:len(theta)]
+                                + [f"theta{i}" for i in range(len(names), len(theta))],
+                                dof=rank, method="gauss-newton")
+
+
+def _names(n: int, m: int, l: int, feedthrough: bool, estimate_k: bool,
+           n_x0: int) -> list[str]:
+    out = []
+    for name, r, c, on in (("A", n, n, True), ("B", n, m, True), ("C", l, n, True),
+                           ("D", l, m, feedthrough), ("K", n, l, estimate_k)):
+        if on:
+            out += [f"{name}[{i},{j}]" for i in range(r) for j in range(c)]
+    for e in range(n_x0):
+        out += [f"x0[{e}][{i}]" for i in range(n)]
+    return out
