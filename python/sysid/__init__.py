@@ -79,11 +79,9 @@ _LAZY = {
     "UncertaintyWarning": "models.uncertainty",
     "Spectra": "nonparametric.spectra",
     "StabilizationDiagram": "realization.realize",
-    "ar": "polynomial.estimators",
     "fixed": "greybox.greybox",
     "greyest": "greybox.greyest",
     "param": "greybox.greybox",
-    "arma": "polynomial.estimators",
     "armax": "polynomial.estimators",
     "arx": "polynomial.estimators",
     "arxstruc": "polynomial.estimators",
@@ -207,6 +205,10 @@ _LAZY = {
     "RecursiveOE": "recursive.estimators",
     "RecursiveBJ": "recursive.estimators",
     "RecursiveResult": "recursive.estimators",
+    "ar": "timeseries.ar",
+    "arma": "timeseries.ar",
+    "forecast": "timeseries.forecast",
+    "Forecast": "timeseries.forecast",
 }
 
 
@@ -395,4 +397,6 @@ __all__ = [
     "RecursiveOE",
     "RecursiveBJ",
     "RecursiveResult",
+    "forecast",
+    "Forecast",
 ]
