@@ -209,6 +209,9 @@ _LAZY = {
     "arma": "timeseries.ar",
     "forecast": "timeseries.forecast",
     "Forecast": "timeseries.forecast",
+    "ssi": "oma.ssi",
+    "SSIResult": "oma.ssi",
+    "mac": "oma.ssi",
 }
 
 
@@ -399,4 +402,7 @@ __all__ = [
     "RecursiveResult",
     "forecast",
     "Forecast",
+    "ssi",
+    "SSIResult",
+    "mac",
 ]
