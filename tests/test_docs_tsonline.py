@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-GUIDES = ["online.md"]
+GUIDES = ["online.md", "timeseries.md", "oma.md"]
 
 
 @pytest.mark.parametrize("guide", GUIDES)
