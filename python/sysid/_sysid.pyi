@@ -39,6 +39,7 @@ __all__ = [
     "Subspace",
     "ClosedLoopSubspace",
     "RecursiveFactor",
+    "RecursiveEstimator",
     "frd_subspace",
     "spectra_subspace",
     "estimate_bd_x0",
@@ -526,6 +527,7 @@ def hw_mimo_simulate(
 ) -> _Array: ...
 
 # issue 27 (branch tsonline): online estimators
+@final
 class RecursiveEstimator:
     def __new__(
         cls,

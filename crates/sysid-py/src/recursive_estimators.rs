@@ -7,6 +7,9 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use sysid_core::recursive::{Method, Recursive, Structure};
 
+/// What `run` returns: the prior predictions and, when stored, the parameter trajectory.
+type RunOutput<'py> = (Bound<'py, PyArray1<f64>>, Option<Bound<'py, PyArray2<f64>>>);
+
 /// An online estimator of a single-output polynomial model.
 #[pyclass(name = "RecursiveEstimator", module = "sysid._sysid")]
 #[derive(Clone)]
@@ -109,7 +112,7 @@ impl PyRecursiveEstimator {
         u: PyReadonlyArray2<'py, f64>,
         y: PyReadonlyArray1<'py, f64>,
         store_parameters: bool,
-    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Option<Bound<'py, PyArray2<f64>>>)> {
+    ) -> PyResult<RunOutput<'py>> {
         let (us, ys) = (u.as_slice()?, y.as_slice()?);
         let n = ys.len();
         let np = self.inner.n_params();
@@ -165,7 +168,7 @@ impl PyRecursiveEstimator {
     #[getter]
     fn covariance<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let n = self.inner.n_params();
-        Ok(slice_to_numpy(py, self.inner.covariance()).reshape([n, n])?)
+        slice_to_numpy(py, self.inner.covariance()).reshape([n, n])
     }
 
     /// Sets `P`.

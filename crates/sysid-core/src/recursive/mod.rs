@@ -559,7 +559,7 @@ fn stable(c: &[f64], work: &mut [f64]) -> bool {
     a.copy_from_slice(c);
     for m in (1..=n).rev() {
         let k = a[m - 1];
-        if !(k.abs() < 1.0) {
+        if k.is_nan() || k.abs() >= 1.0 {
             return false;
         }
         let den = 1.0 - k * k;
