@@ -4,14 +4,15 @@ VENV ?= .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.deps-installed
 
-.PHONY: demo test test-rust test-python lint build bench bench-quick bench-full bench-grid clean fuzz
+.PHONY: demo test test-rust test-python lint docs build bench bench-quick bench-full bench-grid clean fuzz
 
 $(STAMP): pyproject.toml Makefile
 	$(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q "maturin>=1.7,<2" "numpy>=1.24" "scipy>=1.10" \
 		"pytest>=7" "hypothesis>=6" "matplotlib>=3.6" "pandas>=1.5" "ruff>=0.5" \
-		"control>=0.10" "dask[array]>=2023.1" "distributed>=2023.1" "pyarrow>=12" "mypy>=1.10" "tqdm>=4.60"
+		"control>=0.10" "dask[array]>=2023.1" "distributed>=2023.1" "pyarrow>=12" "mypy>=1.10" "tqdm>=4.60" \
+		"selenium>=4.10" "mkdocs>=1.5" "mkdocstrings[python]>=0.24"
 	touch $(STAMP)
 
 build: $(STAMP)
@@ -33,6 +34,10 @@ lint: build
 	cargo clippy --release --all-targets -- -D warnings
 	$(BIN)/ruff check python tests benches examples
 	$(BIN)/python -m mypy.stubtest sysid._sysid
+
+# the API reference and guides as a site in site/ (MkDocs + mkdocstrings; warnings are errors)
+docs: build
+	$(BIN)/mkdocs build --strict --quiet
 
 bench: build
 	$(BIN)/python benches/run.py
@@ -57,4 +62,4 @@ fuzz:
 	done
 
 clean:
-	rm -rf $(VENV) target
+	rm -rf $(VENV) target site

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import json
 import subprocess
 import sys
 from html.parser import HTMLParser
@@ -26,6 +27,9 @@ class Page(HTMLParser):
     def __init__(self) -> None:
         super().__init__()
         self.images: list[str] = []
+        self.charts: list[str] = []
+        self.specs: dict[str, str] = {}
+        self._json: str | None = None
         self.tables: dict[str, list[list[str]]] = {}
         self._table: str | None = None
         self._cell: list[str] | None = None
@@ -36,6 +40,11 @@ class Page(HTMLParser):
         a = dict(attrs)
         if tag == "img":
             self.images.append(a["src"])
+        elif tag == "div" and a.get("class") == "sysid-chart":
+            self.charts.append(a["data-spec"])
+        elif tag == "script" and a.get("type") == "application/json":
+            self._json = a["id"]
+            self.specs[self._json] = ""
         elif tag == "table":
             self._table = a.get("id", f"table{len(self.tables)}")
             self.tables[self._table] = []
@@ -54,8 +63,12 @@ class Page(HTMLParser):
             self._table = None
         elif tag == "title":
             self._in_title = False
+        elif tag == "script":
+            self._json = None
 
     def handle_data(self, data):
+        if self._json is not None:
+            self.specs[self._json] += data
         if self._cell is not None:
             self._cell.append(data)
         if self._in_title:
@@ -67,10 +80,18 @@ def check_report(root: Path, outputs: list[str]) -> Page:
     page.feed((root / "index.html").read_text(encoding="utf-8"))
     page.close()
     assert page.title == "sysid report"
-    assert len(page.images) >= 8
-    for src in page.images:
-        data = (root / src).read_bytes()
-        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 2000, src
+    assert page.images == []  # one self-contained page: charts are inline data
+    assert len(page.charts) >= 10 and set(page.charts) == set(page.specs)
+    for fid in page.charts:
+        spec = json.loads(page.specs[fid])
+        assert spec["x"]["label"] and spec["y"]["label"], spec["title"]
+        assert spec["series"] and all(len(s["x"]) == len(s["y"]) for s in spec["series"])
+    titles = [json.loads(v)["title"] for v in page.specs.values()]
+    for out in outputs:  # every output is named on its time-response and Bode charts
+        assert any(t.startswith(f"{out}: ") for t in titles)
+        assert any(t.startswith("magnitude: ") and out in t for t in titles)
+    assert any(t.startswith("stabilisation diagram") for t in titles)
+    assert "summary-fit" in page.tables and "residual-tests" in page.tables
     fit = page.tables["fit"]
     assert fit[0][:3] == ["output", "simulation fit %", "1-step fit %"]
     assert [row[0] for row in fit[1:]] == outputs
@@ -146,7 +167,11 @@ def test_demo_runs_as_a_module_and_writes_a_report(tmp_path):
     out = proc.stdout
     assert "validation fit (simulation): air temperature:" in out
     assert "order choice: order 4" in out
-    check_report(tmp_path / "r", ["air temperature"])
+    page = check_report(tmp_path / "r", ["air temperature"])
+    # issue 26: the bootstrap's pole table has a std for every pole (was all "n/a")
+    poles = page.tables["poles"]
+    cols = [poles[0].index(c) for c in ("std Re", "std Im", "std wn [Hz]", "std damping")]
+    assert len(poles) > 1 and all(row[c] != "n/a" for row in poles[1:] for c in cols)
     fit = float(out.split("validation fit (simulation): air temperature:")[1].split("%")[0])
     assert 80 < fit < 95
 
@@ -227,3 +252,34 @@ def test_identify_without_validation_data_uses_bic():
     assert out["which"] == "estimation" and out["selection"].criterion == "bic"
     assert out["model"].nstates == out["selection"].picks["bic"]
     assert "files" not in out
+
+
+def test_warnings_of_the_run_reach_the_page_and_one_line_on_stderr(tmp_path, capsys,
+                                                                    monkeypatch):
+    """A warning raised while identifying is in the report's summary with what to do, and
+    on the terminal as one line (no Python source line)."""
+    import warnings
+
+    from sysid.subspace import estimator as subspace
+
+    original = subspace.SubspaceEstimator.__init__
+
+    def warn_then_init(self, *a, **k):
+        warnings.warn("the input excites too few frequencies (test)", sysid.ExcitationWarning,
+                      stacklevel=2)
+        original(self, *a, **k)
+
+    monkeypatch.setattr(subspace.SubspaceEstimator, "__init__", warn_then_init)
+    data = dryer_csv(tmp_path / "d.csv")
+    with warnings.catch_warnings():
+        warnings.simplefilter("default")
+        code = main(["identify", str(data), "--inputs", "heater", "--outputs", "temperature",
+                     "--order", "3", "--quiet", "--report", str(tmp_path / "r")])
+    assert code == 0
+    err = capsys.readouterr().err
+    line = ("sysid: warning: ExcitationWarning: the input excites too few frequencies (test)")
+    assert err.count(line) == 1 and "warnings.warn(" not in err
+    page = (tmp_path / "r" / "index.html").read_text()
+    summary = page.split('id="summary"')[1].split("</section>")[0]
+    assert "Warnings (1)" in summary and "too few frequencies (test)" in summary
+    assert "sysid.check_excitation" in summary  # what to do

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -136,7 +138,12 @@ def test_stability_enforcement_is_opt_in_and_recorded():
     data = sysid.IOData(u=u, y=y)
     for seed_h in (3, 4, 5, 6):
         est = sysid.SubspaceEstimator(data, horizon=seed_h)
-        free = est.fit(1, kalman=False)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            free = est.fit(1, kalman=False)
+        # an unstable result is said (issue 26), a stable one is not
+        said = [w for w in caught if issubclass(w.category, sysid.StabilityWarning)]
+        assert bool(said) == (not free.is_stable())
         forced = est.fit(1, kalman=False, stable=True)
         assert forced.is_stable()
         assert forced.info["stable_enforced"] is True

@@ -14,6 +14,7 @@ from scipy import signal
 import sysid
 from sysid import _sysid
 from sysid.errors import DataError
+from sysid.models.pole_uncertainty import pole_std
 from sysid.models.uncertainty import ParameterUncertainty, UncertaintyWarning
 
 
@@ -188,25 +189,53 @@ def test_damping_table_std_columns_match_propagation():
     assert sysid.damp(m).zeta_std is None
 
 
-def test_near_repeated_poles_are_reported_honestly():
+def test_coincident_poles_get_the_monte_carlo_std_and_say_so():
+    """Poles closer than their uncertainty: first order does not exist there, so the std is
+    the Monte Carlo value (said in an UncertaintyWarning), never NaN."""
     def build(t):
         return sysid.StateSpaceModel([[t[0], 0.0], [0.0, t[1]]], [[1.0], [1.0]], [[1.0, 1.0]])
-    m = build([0.5, 0.5 + 1e-4])
-    m.uncertainty = ParameterUncertainty([0.5, 0.5 + 1e-4], 1e-4 * np.eye(2), build)
-    with pytest.warns(UncertaintyWarning, match="too close"):
-        p, sd = m.poles(std=True)
-    assert np.all(np.isnan(sd.real))
-    with pytest.warns(UncertaintyWarning):
-        assert np.all(np.isnan(sysid.damp(m, std=True).zeta_std))
-    # sampling is still available and gives a finite spread of the right size
-    _, mc = m.poles(std=True, method="monte-carlo", )
-    assert np.all(np.isfinite(mc.real)) and np.all(mc.real > 0.003)
-    # well separated: no warning
+    for theta in ([0.5, 0.5 + 1e-4], [0.5, 0.5]):   # near-repeated, and exactly repeated
+        m = build(theta)
+        m.uncertainty = ParameterUncertainty(theta, 1e-4 * np.eye(2), build)
+        with pytest.warns(UncertaintyWarning, match="Monte Carlo"):
+            p, sd = m.poles(std=True)
+        _, mc = pole_std(m, "monte-carlo", n=2000, rng=1)
+        assert np.all(np.isfinite(sd.real)) and np.all(sd.real > 0.003)
+        np.testing.assert_allclose(sd.real, mc.real, rtol=0.15)
+        with pytest.warns(UncertaintyWarning, match="Monte Carlo"):
+            t = sysid.damp(m, std=True)
+        assert np.all(np.isfinite(t.zeta_std)) and np.all(np.isfinite(t.wn_hz_std))
+        assert list(t.std_method) == ["monte-carlo"] * 2
+    # well separated: first order, no warning
     far = build([0.5, -0.5])
     far.uncertainty = ParameterUncertainty([0.5, -0.5], 1e-4 * np.eye(2), build)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         np.testing.assert_allclose(far.poles(std=True)[1].real, [0.01, 0.01])
+        assert list(sysid.damp(far, std=True).std_method) == ["linear"] * 2
+
+
+def test_distinct_poles_with_large_uncertainty_keep_their_first_order_std():
+    """Issue 26: poles 0.4 apart with std ~0.1 got NaN ("near-repeated"); they are distinct,
+    so they get the eigenvalue-derivative std, which matches sampling here."""
+    def build(t):
+        A = np.array([[t[0], t[2]], [0.0, t[1]]])
+        return sysid.StateSpaceModel(A, [[1.0], [1.0]], [[1.0, 0.5]], dt=0.1)
+    theta = np.array([0.3, 0.7, 0.2])
+    m = build(theta)
+    P = np.diag([0.07, 0.07, 0.05]) ** 2
+    m.uncertainty = ParameterUncertainty(theta, P, build)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        p, sd = m.poles(std=True)
+        t = sysid.damp(m, std=True)
+    np.testing.assert_allclose(sd.real[np.argsort(p.real)], [0.07, 0.07], rtol=1e-6)
+    _, mc = pole_std(m, "monte-carlo", n=4000, rng=0)
+    np.testing.assert_allclose(sd.real, mc.real, rtol=0.1)
+    assert np.all(np.isfinite(t.wn_hz_std)) and np.all(t.wn_hz_std > 0)
+    # the damping table's frequency std is the first-order image of the pole std:
+    # wn = |log z| / dt for a real pole z, d wn = dz / (z dt)
+    np.testing.assert_allclose(np.sort(t.wn_std), np.sort(0.07 / (p.real * 0.1)), rtol=1e-4)
 
 
 @settings(max_examples=20, deadline=None)
@@ -442,9 +471,10 @@ def test_modal_table_std_and_html_report_pole_table(tmp_path):
     html = (rep / "index.html").read_text()
     assert 'id="poles"' in html and "std damping" in html
     assert sysid.load_model(rep / "model.json").info["uncertainty"]["n_boot"] == 30
-    from sysid.analysis.report import _pole_table
+    from sysid.analysis.report import _pole_section
+    from sysid.analysis.report_page import Page
 
-    plain = _pole_table(sysid.StateSpaceModel(m.A, m.B, m.C, dt=0.1), lambda *a: repr(a))
+    plain = _pole_section(Page("t"), sysid.StateSpaceModel(m.A, m.B, m.C, dt=0.1), [])
     assert "pole" in plain and "std damping" not in plain
 
 

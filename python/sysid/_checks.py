@@ -228,3 +228,24 @@ def experiment_arrays(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
     except AttributeError:
         raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))") from None
     return [(np.ascontiguousarray(u, float), np.ascontiguousarray(y, float)) for u, y in exps]
+
+
+def user_stacklevel() -> int:
+    """``stacklevel`` for ``warnings.warn`` called by the caller of this function that points
+    at the first frame outside the sysid package (the user's line, however deep inside sysid
+    the warning is raised).
+
+    Examples
+    --------
+    >>> from sysid._checks import user_stacklevel
+    >>> user_stacklevel() >= 1
+    True
+    """
+    import os
+    import sys
+
+    pkg = os.path.dirname(os.path.abspath(__file__)) + os.sep
+    frame, level = sys._getframe(1), 1
+    while frame is not None and frame.f_code.co_filename.startswith(pkg):
+        frame, level = frame.f_back, level + 1
+    return level

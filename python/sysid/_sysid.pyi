@@ -57,6 +57,9 @@ __all__ = [
     "greybox_ode_simulate",
     "greybox_ode_jacobian",
     "expm_frechet",
+    # issue 27 (branch tfproc): transfer functions
+    "tf_filtered_gram",
+    "tf_fit_frequency",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -526,6 +529,28 @@ def hw_mimo_simulate(
     u: _Array,
 ) -> _Array: ...
 
+# issue 27 (branch tfproc): transfer functions
+def tf_filtered_gram(
+    ad: _Array, bd: _Array, cw: _Array, dw: _Array, v: _Array, skip: int = 0
+) -> _Array: ...
+def tf_fit_frequency(
+    x: tuple[_Array, _Array],
+    w: tuple[_Array, _Array],
+    h: tuple[_Array, _Array],
+    weight: list[float],
+    lead: int,
+    den: list[int],
+    num: list[int],
+    theta0: list[float],
+    *,
+    fixed: list[bool] | None = None,
+    lower: list[float] | None = None,
+    upper: list[float] | None = None,
+    noise_variance: float | None = None,
+    max_iter: int = 100,
+    tol: float = 1e-10,
+    progress: Callable[..., Any] | None = None,
+) -> dict[str, Any]: ...
 # issue 27 (branch tsonline): online estimators
 @final
 class RecursiveEstimator:

@@ -15,6 +15,7 @@ import argparse
 import csv
 import sys
 import time
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any, Callable
@@ -188,9 +189,24 @@ def identify(
     uncertainty (``n_boot`` records) so the report's pole table has standard deviations.
 
     The summary holds ``model``, ``selection`` (:class:`~sysid.criteria.OrderSelection`),
-    ``compare`` (validation simulation), ``prediction`` (validation 1-step), ``residuals``
-    and, with ``report``, the written ``files``.
+    ``compare``, ``prediction`` (validation 1-step), ``residuals``, ``warnings`` (of the run:
+    in the report's summary, and re-issued) and, with ``report``, the written ``files``.
     """
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        out = _pipeline(est_data, val_data, order=order, method=method, horizon=horizon,
+                        report=report, preprocessing=preprocessing, progress=progress,
+                        uncertainty=uncertainty, n_boot=n_boot, compressor=compressor,
+                        bars=bars, caught=caught)
+    from .analysis.report_page import reissue
+
+    out["warnings"] = reissue(caught)
+    return out
+
+
+def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, method: str,
+              horizon: int | None, report: Any, preprocessing: Any, progress: Any, uncertainty:
+              str | None, n_boot: int, compressor: str, bars: Any, caught: list[Any]) -> Any:
     from .subspace.estimator import SubspaceEstimator
     from .validation.compare import compare
     from .validation.criteria import select_order
@@ -252,16 +268,17 @@ def identify(
                            "prediction": pred, "residuals": res, "which": which}
     if report is not None:
         say(f"writing the report to {report}")
-        out["files"] = _write_report(Path(report), out, check)
+        out["files"] = _write_report(Path(report), out, check, list(caught))
     say("done")
     return out
 
 
-def _write_report(root: Path, out: dict[str, Any], check: Any) -> dict[str, Path]:
+def _write_report(root: Path, out: dict[str, Any], check: Any,
+                  run_warnings: list[Any]) -> dict[str, Path]:
     from .analysis.report import report
 
     return report(out["model"], check, root, selection=out["selection"], which=out["which"],
-                  max_lag=out["residuals"].max_lag)
+                  max_lag=out["residuals"].max_lag, warnings=run_warnings)
 
 
 def _print_summary(out: dict[str, Any]) -> None:
@@ -555,7 +572,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``sysid`` command: errors become one readable line and exit code 2."""
     args = _parser().parse_args(argv)
     try:
-        return int(args.func(args))
+        with warnings.catch_warnings():
+            warnings.showwarning = _show_warning  # one line each, no source line
+            return int(args.func(args))
     except (SysidError, ImportError) as e:
         print(f"sysid: error: {_one_line(e)}", file=sys.stderr)
         return 2
@@ -566,6 +585,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"sysid: error: unexpected {type(e).__name__}: {_one_line(e)} (please report "
               "this with the command line)", file=sys.stderr)
         return 2
+
+
+def _show_warning(message: Any, category: type[Warning], *_: Any, **__: Any) -> None:
+    print(f"sysid: warning: {category.__name__}: {' '.join(str(message).split())}",
+          file=sys.stderr)
 
 
 def _one_line(e: BaseException) -> str:

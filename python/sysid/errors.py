@@ -28,6 +28,8 @@ __all__ = [
     "RiccatiError",
     "ExcitationWarning",
     "FeedbackWarning",
+    "OffsetWarning",
+    "StabilityWarning",
 ]
 
 
@@ -74,3 +76,16 @@ class ExcitationWarning(UserWarning):
 class FeedbackWarning(UserWarning):
     """The input depends on past outputs (feedback): open-loop subspace methods are biased;
     use ``method="pbsid"`` or ``"ssarx"`` (see :func:`sysid.check_feedback`)."""
+
+
+class OffsetWarning(UserWarning):
+    """A channel sits on an offset much larger than its variation and the data were not
+    detrended: linear models (no constant term) fit the offset instead of the dynamics.
+    Remove it with :func:`sysid.detrend` (``return_trend=True`` gives the trend to apply to
+    validation data) or use :func:`sysid.identify`, which removes and restores it."""
+
+
+class StabilityWarning(UserWarning):
+    """An estimator returned an unstable model (a pole on or outside the unit circle): its
+    simulation diverges. The message names the largest pole modulus and what to do (for
+    example ``ssest(..., focus="simulation")`` or ``stable=True`` / ``enforce_stability``)."""

@@ -57,6 +57,7 @@ pub mod realization;
 pub mod recursive;
 pub mod stats;
 pub mod subspace;
+pub mod tf;
 
 pub use error::{Result, SysidError};
 pub use model::StateSpace;

@@ -21,6 +21,8 @@ mod simulate;
 mod stats;
 mod streaming;
 mod subspace;
+// issue 27 (branch tfproc): transfer functions
+mod tf;
 // issue 27 (branch tsonline): online estimators
 mod recursive_estimators;
 
@@ -40,6 +42,8 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     narx::register(m)?;
     hw::register(m)?;
     stats::register(m)?;
+    // issue 27 (branch tfproc): transfer functions
+    tf::register(m)?;
     // issue 27 (branch tsonline)
     recursive_estimators::register(m)?;
     Ok(())

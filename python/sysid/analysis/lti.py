@@ -97,7 +97,7 @@ def damp(model: Any, std: bool = False) -> DampingTable:
     if std:
         if not float(model.dt):
             raise DataError("damp(std=True) needs a discrete-time model with uncertainty")
-        from ..models.uncertainty import damping_std
+        from ..models.pole_uncertainty import damping_std
 
         d = damping_std(model, model.dt)
         return DampingTable(d["poles"], d["s"].astype(complex), model.dt, std=d)

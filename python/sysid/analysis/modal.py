@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._display import HTMLResult
 from ..data.formats import _pandas
 from ..errors import DataError
 from ..models.checks import discrete_statespace
@@ -33,7 +34,7 @@ from ..models.statespace import StateSpaceModel
 __all__ = ["ModalAnalysis", "modal_analysis"]
 
 
-class ModalAnalysis:
+class ModalAnalysis(HTMLResult):
     """Modes of a model, sorted by natural frequency.
 
     Attributes
@@ -151,7 +152,7 @@ def modal_analysis(model: StateSpaceModel, dt: float | None = None, std: bool = 
     d = _sysid.modal_analysis(model.A, model.C, dt)
     out = ModalAnalysis(d, dt, list(model.output_names))
     if std:
-        from ..models.uncertainty import damping_std
+        from ..models.pole_uncertainty import damping_std
 
         sd = damping_std(model, dt)
         idx = [int(np.argmin(np.abs(sd["poles"] - z))) for z in out.eigenvalues]

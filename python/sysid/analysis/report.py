@@ -1,17 +1,23 @@
-"""An HTML report of any model against data: fit, residual tests, spectra, Bode, poles.
+"""An interactive HTML report of any model against data: summary, fit, residual tests,
+spectra, Bode with confidence bands, poles, and the order choice.
 
-:func:`report` writes a folder with ``index.html``, the figures (PNG, matplotlib ``Agg``),
-``fit.csv`` and, when the model can be saved, ``model.json``; with an
+:func:`report` writes a folder with ``index.html`` (one self-contained page: tables, foldable
+sections, zoomable charts drawn by an inline script, no network needed), ``fit.csv`` and, when
+the model can be saved, ``model.json``; with an
 :class:`~sysid.validation.criteria.OrderSelection` it adds the order sweep (``orders.csv``,
-singular values, criteria, stabilisation diagram). ``sysid identify --report`` uses it.
+singular values, stabilisation diagram). Warnings raised while the report is computed (and
+those passed in ``warnings=``, e.g. from the identification run) are shown at the top with
+what to do. ``sysid identify --report`` uses it.
 """
 
 from __future__ import annotations
 
 import csv
 import html
+import warnings as _warnings
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -21,12 +27,20 @@ from ..models.checks import check_model
 from ..validation.compare import compare, error_spectrum
 from ..validation.criteria import _pct
 from ..validation.residuals import residuals
+from . import report_figures as rf
+from .report_page import Page, reissue, relevant, status, warning_items
 
 __all__ = ["report"]
 
+esc = html.escape
+HINT = ('<p class="hint">Charts: drag a box to zoom, double-click to reset; hover for '
+        "values.</p>")
+
 
 def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
-           which: str = "validation", max_lag: int | None = None) -> dict[str, Path]:
+           which: str = "validation", max_lag: int | None = None,
+           warnings: Iterable[Any] | None = None, title: str = "sysid report"
+           ) -> dict[str, Path]:
     """Write an HTML report of ``model`` on ``data`` into the folder ``path``.
 
     Parameters
@@ -34,7 +48,8 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
     model : sysid.Model
         Any model (state-space, continuous, polynomial, your own class).
     data : IOData or (u, y)
-        Data to validate on (a continuous model needs an IOData).
+        Data to validate on (a continuous model needs an IOData). Channel units of an
+        IOData label the charts.
     path : str or Path
         Output folder (created).
     selection : OrderSelection, optional
@@ -43,6 +58,13 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
         What the data are, for the captions (``"validation"`` or ``"estimation"``).
     max_lag : int, optional
         Largest residual lag (default ``min(25, N / 5)``).
+    warnings : iterable, optional
+        Warnings of the run that produced the model, shown in the summary with what to do:
+        :class:`warnings.WarningMessage` objects (``catch_warnings(record=True)``),
+        ``(category name, message)`` pairs or strings. Warnings raised while the report is
+        computed are added, and re-issued after the page is written.
+    title : str
+        The page title.
 
     Returns
     -------
@@ -55,25 +77,53 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
     >>> m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]], K=[[0.5]])
     >>> u, e = np.random.default_rng(0).standard_normal((2, 300, 1))
     >>> files = sysid.report(m, (u, m.simulate(u) + 0.1 * e), tempfile.mkdtemp())
-    >>> sorted(files)[:4]
-    ['bode', 'compare', 'error_spectrum', 'fit']
+    >>> sorted(files)
+    ['fit', 'html', 'model']
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from ..plot import _pyplot
-    from ..plot.model import plot_bode, plot_pzmap
-
     check_model(model)
     root = Path(path)
     root.mkdir(parents=True, exist_ok=True)
-    plt = _pyplot()
+    data = data if isinstance(data, IOData) else IOData(*data, dt=model.dt or 1.0,
+                                                        input_names=list(model.input_names),
+                                                        output_names=list(model.output_names))
+    found = [_as_pair(w) for w in (warnings or [])
+             if not isinstance(w, _warnings.WarningMessage) or relevant([w])]
+    with _warnings.catch_warnings(record=True) as caught:
+        _warnings.simplefilter("always")
+        files, page = _build(model, data, root, selection, which, max_lag, title, found)
+    own = [_as_pair(w) for w in relevant(caught)]
+    page.parts.insert(1, _summary(model, page.facts, selection, found + own))
+    files["html"] = root / "index.html"
+    files["html"].write_text(page.html(), encoding="utf-8")
+    reissue(caught)  # the caller still sees them
+    return files
+
+
+def _as_pair(w: Any) -> tuple[str, str]:
+    if isinstance(w, tuple):
+        return str(w[0]), str(w[1])
+    if isinstance(w, str):
+        return "Warning", w
+    return getattr(w.category, "__name__", "Warning"), " ".join(str(w.message).split())
+
+
+def _units(data: IOData) -> dict[str, str]:
+    return {n: u for n, u in zip(data.input_names + data.output_names,
+                                 data.input_units + data.output_units) if u}
+
+
+def _build(model: Any, data: IOData, root: Path, sel: Any, which: str,
+           max_lag: int | None, title: str, found: list[tuple[str, str]]
+           ) -> tuple[dict[str, Path], Page]:
     sim = compare(model, data)
     pred = compare(model, data, horizon=1)
     shortest = min(y.shape[0] for y in sim.y)
     res = residuals(model, data, max_lag=max_lag or min(25, max(1, shortest // 5)))
-    spec = error_spectrum(model, data)
+    units = _units(data)
     files: dict[str, Path] = {}
+    page = Page(title)
+    page.facts = {"sim": sim, "pred": pred, "res": res, "which": which}
+    page.add(f"<h1>{esc(title)}</h1>")
     notes: list[str] = []
     if callable(getattr(model, "to_dict", None)):
         from ..models.serialize import save_model
@@ -82,9 +132,54 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
         save_model(model, files["model"])
     else:
         notes.append(f"{type(model).__name__} has no to_dict(): model file not written")
+    files["fit"] = _write_fit(root, model, sim, pred, res)
+    page.section(f"Fit on the {which} data", _fit_body(page, model, sim, pred, res, data)
+                 + HINT + "".join(page.figure(f) for f in rf.time_figures(
+                     sim, pred, data.times, units, which)), sid="fit")
+    page.section("Residual analysis", _residual_body(page, res) + "".join(
+        page.figure(f) for f in rf.residual_figures(res)), open_=False, sid="residuals")
+    frd = None
+    if model.ninputs:
+        from ..nonparametric.frf import spa
 
-    files["fit"] = root / "fit.csv"
-    with open(files["fit"], "w", newline="") as f:
+        try:
+            frd = spa(data)
+        except SysidError as e:
+            notes.append(f"no spa estimate on the Bode plot: {e}")
+        body = ("<p>The model (blue, with its 95 % band when it has a parameter uncertainty) "
+                "and the spa (Blackman-Tukey) estimate (red, with its confidence band). Phases"
+                " on one branch: the model's unwrapped from (-180, 180] at the lowest "
+                "frequency, the estimate's moved by multiples of 360 to the nearest.</p>")
+        if getattr(model, "uncertainty", None) is None:
+            body += "<p>No model band: the model has no parameter uncertainty.</p>"
+        page.section("Frequency response", body + "".join(
+            page.figure(f) for f in rf.bode_figures(model, frd, units)), sid="bode")
+        page.section("Step response", "".join(page.figure(f) for f in rf.step_figures(
+            model, units)), open_=False, sid="step")
+    else:
+        notes.append("time-series model (no inputs): no Bode plot or step response; the "
+                     "error spectrum shows what the model leaves unexplained")
+    spec = error_spectrum(model, data)
+    page.section("Simulation error spectrum", "".join(
+        page.figure(f) for f in rf.error_spectrum_figures(spec, units)), open_=False,
+        sid="spectrum")
+    page.section("Poles", _pole_section(page, model, notes), open_=False, sid="poles")
+    params = _parameter_table(page, model)
+    if params:
+        page.section("Parameters", params, sid="parameters")
+    if sel is not None:
+        files["orders"] = root / "orders.csv"
+        sel.to_pandas().to_csv(files["orders"], index=False)
+        page.section("Order choice", _order_body(page, sel, frd), sid="orders")
+    links = ", ".join(f'<a href="{esc(p.name)}">{esc(p.name)}</a>' for p in files.values())
+    page.section("Files and notes", f"<p>Files: {links}</p>" + "".join(
+        f"<p><em>{esc(n)}</em></p>" for n in notes), open_=False, sid="files")
+    return files, page
+
+
+def _write_fit(root: Path, model: Any, sim: Any, pred: Any, res: Any) -> Path:
+    path = root / "fit.csv"
+    with open(path, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["output", "simulation fit %", "1-step fit %", "simulation VAF %",
                     "simulation RMSE", "whiteness p", "independence p"])
@@ -92,148 +187,97 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
             w.writerow([name, f"{sim.fit.mean(0)[j]:.4f}", f"{pred.fit.mean(0)[j]:.4f}",
                         f"{sim.vaf.mean(0)[j]:.4f}", f"{sim.rmse.mean(0)[j]:.6g}",
                         f"{res.ljung_box_pvalue[j]:.4g}", f"{res.independence_pvalue[j]:.4g}"])
+    return path
 
-    def save(name: str, fig: Any) -> None:
-        files[name] = root / f"{name}.png"
-        fig.savefig(files[name], dpi=90, bbox_inches="tight")  # no clipped axis labels
-        plt.close(fig)
 
-    if selection is not None:
-        from ..plot.validation import plot_singular_values
-
-        files["orders"] = root / "orders.csv"
-        selection.to_pandas().to_csv(files["orders"], index=False)
-        if selection.method in selection.singular_values:
-            ax = plot_singular_values(selection.singular_values[selection.method],
-                                      selection.order)
-            ax.set_title("singular values (order choice)")
-            save("singular_values", ax.figure)
-        save("order_selection", selection.plot())
-        save("stabilization", selection.stabilization_plot().figure)
-    save("compare", sim.plot())
-    if shortest > 2 * _WINDOW:
-        save("compare_window", _window(sim.plot(), _WINDOW))
-    save("residuals", res.plot())
-    save("error_spectrum", spec.plot())
-    if model.ninputs == 0:
-        notes.append("time-series model (no inputs): no Bode plot or step response; the "
-                     "error spectrum shows what the model leaves unexplained")
-    else:
-        save("bode", _bode_with_spa(model, data, plot_bode, notes))
+def _stability(model: Any) -> tuple[bool | None, str]:
     try:
-        save("pzmap", plot_pzmap(model).figure)
-    except DataError as e:  # no poles()/zeros() nor to_statespace()
-        plt.close("all")
-        notes.append(f"no pole-zero map: {e}")
-    from .lti import step
-
-    if model.ninputs:
-        save("step", step(model).plot())
-    files["html"] = root / "index.html"
-    files["html"].write_text(_html(model, sim, pred, res, selection, which, files, notes),
-                             encoding="utf-8")
-    return files
+        p = np.asarray(model.poles(), dtype=complex)
+    except Exception:  # noqa: BLE001 - a model without poles
+        return None, "no poles (this model family does not define them)"
+    if not p.size:
+        return True, "static model (no poles)"
+    if model.dt:
+        r = float(np.max(np.abs(p)))
+        return r < 1, f"largest |pole| {r:.4f}"
+    a = float(np.max(p.real))
+    return a < 0, f"largest Re(pole) {a:.4g}"
 
 
-_WINDOW = 500  # samples shown in the zoomed comparison of a long record
-
-
-def _window(fig: Any, n: int) -> Any:
-    """The comparison figure zoomed on its first ``n`` samples (a long record is a block)."""
-    for ax in fig.axes:
-        lines = [ln for ln in ax.get_lines() if len(ln.get_xdata()) > n]
-        if lines:
-            x = np.asarray(lines[0].get_xdata(), dtype=float)
-            ax.set_xlim(x[0], x[n - 1])
-            ax.relim(visible_only=True)
-    fig.suptitle(f"first {n} samples")
-    return fig
-
-
-def _bode_with_spa(model: Any, data: Any, plot_bode: Any, notes: list[str]) -> Any:
-    """The model's Bode plot with the non-parametric (spa) estimate beside it."""
-    from ..nonparametric.frf import spa
-
-    try:
-        frd = spa(data if isinstance(data, IOData) else IOData(*data))
-    except SysidError as e:
-        notes.append(f"no spa estimate on the Bode plot: {e}")
-        return plot_bode(model)
-    return plot_bode([model, frd], labels=["model", "spa (non-parametric)"])
-
-
-def _html(model: Any, sim: Any, pred: Any, res: Any, sel: Any, which: str,
-          files: dict[str, Path], notes: list[str]) -> str:
-    esc = html.escape
-
-    def table(tid: str, header: list[str], rows: list[list[Any]]) -> str:
-        th = "".join(f"<th>{esc(h)}</th>" for h in header)
-        body = "".join("<tr>" + "".join(f"<td>{esc(str(c))}</td>" for c in r) + "</tr>"
-                       for r in rows)
-        return f'<table id="{tid}" border="1" cellpadding="3"><tr>{th}</tr>{body}</table>'
-
-    fit_rows = [[name, f"{sim.fit.mean(0)[j]:.2f}", f"{pred.fit.mean(0)[j]:.2f}",
-                 f"{res.ljung_box_pvalue[j]:.3g}", "yes" if res.whiteness[j] else "no"]
-                for j, name in enumerate(model.output_names)]
-    captions = (
-        ("compare", f"{which} data: measured and simulated outputs"),
-        ("compare_window", f"{which} data: the first {_WINDOW} samples"),
-        ("residuals", "residual correlations with 99 % bounds"),
-        ("error_spectrum", "spectrum of the simulation error"),
-        ("singular_values", "singular values"),
-        ("order_selection", "order selection"),
-        ("stabilization", "stabilisation diagram"),
-        ("bode", "Bode plot: the model and the spa (Blackman-Tukey) estimate"),
-        ("pzmap", "pole-zero map"),
-        ("step", "step response"),
-    )
-    imgs = "".join(
-        f'<figure><img src="{esc(files[k].name)}" alt="{esc(k)}"><figcaption>{esc(cap)}'
-        "</figcaption></figure>"
-        for k, cap in captions if k in files
-    )
-    details = res.summary()
-    from .lti import damp
-
-    poles = ""
-    try:
-        details += "\n\n" + repr(damp(model))
-        poles = "<h2>Poles</h2>\n" + _pole_table(model, table)
-    except DataError:
-        pass
-    params = _parameter_table(model, table)
-    sweep = ""
+def _summary(model: Any, facts: dict[str, Any], sel: Any,
+             found: list[tuple[str, str]]) -> str:
+    sim, pred, res, which = facts["sim"], facts["pred"], facts["res"], facts["which"]
+    order = getattr(model, "nstates", None)
+    chosen = f"{type(model).__name__}" + (f" of order {order}" if order is not None else "")
+    method = (getattr(model, "info", None) or {}).get("method")
+    lines = [f'<p id="chosen-model"><strong>Chosen model:</strong> {esc(chosen)}'
+             + (f" ({esc(str(method))})" if method else "") + "</p>"]
     if sel is not None:
-        order_rows = [[r.get("model", r["method"]), r["order"], f"{r['singular_value']:.4g}",
-                       f"{r['aic']:.2f}", f"{r['bic']:.2f}", _pct(r["fit_validation"]).strip(),
-                       "yes" if r["stable"] else "no"] for r in sel.rows if r["error"] is None]
-        sweep = (f"<p>Order choice: {esc(sel.reason)}</p>\n<h2>Order sweep</h2>\n"
-                 + table("orders", ["method", "order", "singular value", "AIC", "BIC",
-                                    "validation fit %", "stable"], order_rows))
-    links = ", ".join(f'<a href="{esc(p.name)}">{esc(p.name)}</a>' for k, p in files.items()
-                      if p.suffix in (".json", ".csv"))
-    note = "".join(f"<p><em>{esc(n)}</em></p>" for n in notes)
-    return f"""<!DOCTYPE html>
-<html><head><meta charset="utf-8"><title>sysid report</title>
-<style>body{{font-family:sans-serif;max-width:1100px;margin:auto}}img{{max-width:100%}}
-td,th{{text-align:right}}</style></head><body>
-<h1>sysid identification report</h1>
-<p>{esc(repr(model))}</p>
-{sweep}
-<pre>{esc(details)}</pre>
-{params}
-{poles}
-<h2>Fit on the {esc(which)} data</h2>
-{table("fit", ["output", "simulation fit %", "1-step fit %", "whiteness p", "white"], fit_rows)}
-<p>Files: {links}</p>
-{note}
-{imgs}
-</body></html>
-"""
+        lines.append(f"<p><strong>Why this order:</strong> {esc(sel.reason)}</p>")
+    stable, how = _stability(model)
+    st = "n/a" if stable is None else status(stable, "stable", "UNSTABLE")
+    lines.append(f"<p><strong>Stability:</strong> {st} ({esc(how)})</p>")
+    rows = []
+    for j, name in enumerate(model.output_names):
+        rows.append([name, f"{sim.fit.mean(0)[j]:.1f}", f"{pred.fit.mean(0)[j]:.1f}",
+                     f"{res.ljung_box_pvalue[j]:.3g}",
+                     status(bool(res.whiteness[j]), "white", "not white"),
+                     f"{res.independence_pvalue[j]:.3g}",
+                     status(bool(res.independence[j]), "independent", "correlated")])
+    head = ["output", f"{which} simulation fit %", "1-step fit %", "whiteness p",
+            "residuals", "independence p", "residual vs input"]
+    th = "".join(f"<th>{esc(h)}</th>" for h in head)
+    body = "".join("<tr>" + "".join(f"<td>{c if '<span' in c else esc(c)}</td>" for c in r)
+                   + "</tr>" for r in rows)
+    lines.append(f'<table id="summary-fit"><thead><tr>{th}</tr></thead><tbody>{body}'
+                 "</tbody></table>")
+    if not all(res.whiteness):
+        lines.append("<p>Residuals not white: the noise model or some dynamics are missing; "
+                     "try a higher order or a prediction-error refinement (sysid.ssest).</p>")
+    if not all(res.independence):
+        lines.append("<p>Residuals correlated with the input: dynamics are missing (or the "
+                     "data are closed-loop); try a higher order or check feedback "
+                     "(sysid.check_feedback).</p>")
+    lines.append(f"<h3>Warnings ({len(found)})</h3>" + warning_items(found))
+    return f'<section class="summary" id="summary"><h2>Summary</h2>{"".join(lines)}</section>'
 
 
-def _parameter_table(model: Any, table: Callable[[str, list[str], list[list[Any]]], str]
-                     ) -> str:
+def _fit_body(page: Page, model: Any, sim: Any, pred: Any, res: Any, data: IOData) -> str:
+    rows = [[name, f"{sim.fit.mean(0)[j]:.2f}", f"{pred.fit.mean(0)[j]:.2f}",
+             f"{sim.vaf.mean(0)[j]:.2f}", f"{sim.rmse.mean(0)[j]:.4g}",
+             f"{res.ljung_box_pvalue[j]:.3g}", "yes" if res.whiteness[j] else "no"]
+            for j, name in enumerate(model.output_names)]
+    return (f"<p>{esc(repr(model))}</p><p>{esc(repr(data))}</p>" + page.table(
+        "fit", ["output", "simulation fit %", "1-step fit %", "simulation VAF %",
+                "simulation RMSE", "whiteness p", "white"], rows))
+
+
+def _residual_body(page: Page, res: Any) -> str:
+    rows = [[name, f"{res.ljung_box[j]:.4g}", f"{res.ljung_box_pvalue[j]:.3g}",
+             "yes" if res.whiteness[j] else "no", f"{res.independence_stat[j]:.4g}",
+             f"{res.independence_pvalue[j]:.3g}", "yes" if res.independence[j] else "no"]
+            for j, name in enumerate(res.output_names)]
+    return (f"<p>One-step prediction errors, lags up to {res.max_lag}, level "
+            f"{100 * res.alpha:g} %; bound {res.bound:.3g}.</p>" + page.table(
+                "residual-tests", ["output", "Ljung-Box Q", "p", "white", "independence S",
+                                   "p", "independent of inputs"], rows))
+
+
+def _order_body(page: Page, sel: Any, frd: Any) -> str:
+    rows = [[r.get("model", r["method"]), r["order"], f"{r['singular_value']:.4g}",
+             f"{r['aic']:.2f}", f"{r['bic']:.2f}", _pct(r["fit_validation"]).strip(),
+             "yes" if r["stable"] else "no"] for r in sel.rows if r["error"] is None]
+    return (f"<p>{esc(sel.reason)}</p>" + page.table(
+        "orders", ["method", "order", "singular value", "AIC", "BIC", "validation fit %",
+                   "stable"], rows)
+        + page.figure(rf.singular_value_figure(sel))
+        + f"<p>Stabilisation diagram: a pole is stable in frequency when a pole of the next "
+          f"lower order lies within {100 * rf.FREQ_TOL:g} % of its natural frequency, and in "
+          f"damping too when its damping is within {100 * rf.DAMP_TOL:g} %.</p>"
+        + page.figure(rf.stabilization_figure(sel, frd)))
+
+
+def _parameter_table(page: Page, model: Any) -> str:
     """The grey-box parameter table (name, value, std, fixed, active bound, 95 % interval,
     unit) when the model carries one (``info["greybox"]["parameters"]``, set by greyest)."""
     info = getattr(model, "info", None) or {}
@@ -246,26 +290,28 @@ def _parameter_table(model: Any, table: Callable[[str, list[str], list[list[Any]
     body = [[r["name"], g(r["value"]), g(r["std"]), "fixed" if r["fixed"] else "",
              r["bound"], "" if r["fixed"] else f"[{g(r['ci95'][0])}, {g(r['ci95'][1])}]",
              r["unit"], r["description"]] for r in rows]
-    return "<h2>Parameters</h2>\n" + table(
-        "parameters", ["parameter", "value", "std", "fixed", "bound active", "95 % interval",
-                       "unit", "description"], body)
+    return page.table("parameters", ["parameter", "value", "std", "fixed", "bound active",
+                                     "95 % interval", "unit", "description"], body)
 
 
-def _pole_table(model: Any, table: Callable[[str, list[str], list[list[Any]]], str]) -> str:
-    """Poles with frequency and damping, and their standard deviations when the model has
-    an uncertainty (NaN, shown as n/a, where first order does not hold)."""
-    import warnings
-
+def _pole_section(page: Page, model: Any, notes: list[str]) -> str:
+    """Poles with frequency and damping, their standard deviations when the model has an
+    uncertainty (first order; Monte Carlo, marked *, for poles that coincide with another),
+    and the map."""
     from ..models.uncertainty import UncertaintyWarning
     from .lti import damp
 
     has = getattr(model, "uncertainty", None) is not None
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UncertaintyWarning)
-        t = damp(model, std=has)
+    try:
+        with _warnings.catch_warnings():
+            _warnings.simplefilter("ignore", UncertaintyWarning)
+            t = damp(model, std=has)
+    except DataError as e:
+        notes.append(f"no pole table: {e}")
+        return "<p>This model has no poles.</p>"
 
-    def g(x: float) -> str:
-        return "n/a" if not np.isfinite(x) else f"{x:.4g}"
+    def g(x: float, mark: str = "") -> str:
+        return "n/a" if not np.isfinite(x) else f"{x:.4g}{mark}"
     header = ["pole", "|pole|", "wn [Hz]", "damping"]
     if has:
         header += ["std Re", "std Im", "std wn [Hz]", "std damping"]
@@ -274,10 +320,14 @@ def _pole_table(model: Any, table: Callable[[str, list[str], list[list[Any]]], s
         row = [f"{p.real:.5g}{p.imag:+.5g}j", f"{abs(p):.4f}", g(t.wn_hz[k]), g(t.zeta[k])]
         if has and t.pole_std is not None and t.wn_hz_std is not None and \
                 t.zeta_std is not None:
-            row += [g(t.pole_std[k].real), g(t.pole_std[k].imag), g(t.wn_hz_std[k]),
-                    g(t.zeta_std[k])]
+            mc = "*" if t.std_method is not None and t.std_method[k] == "monte-carlo" else ""
+            row += [g(t.pole_std[k].real, mc), g(t.pole_std[k].imag, mc),
+                    g(t.wn_hz_std[k], mc), g(t.zeta_std[k], mc)]
         rows.append(row)
+    marked = has and t.std_method is not None and bool(np.any(t.std_method == "monte-carlo"))
     note = ("<p>Standard deviations: first order, from the model's parameter uncertainty ("
-            f"{html.escape(str(model.uncertainty.method))}).</p>" if has else "")
-    return table("poles", header, rows) + note
-
+            f"{esc(str(model.uncertainty.method))})"
+            + ("; * marks poles that coincide with another within their uncertainty, where "
+               "first order does not hold: Monte Carlo from the same covariance" if marked
+               else "") + ".</p>" if has else "")
+    return page.table("poles", header, rows) + note + page.figure(rf.pzmap_figure(model))

@@ -3,10 +3,12 @@
 Every generator returns a float array shaped ``(n_samples, n_channels)``. Random ones take a
 ``seed`` (an int or a ``numpy.random.Generator``) so experiments are reproducible.
 
-An input is *persistently exciting of order n* when the ``n m x n m`` sample covariance of
-``n`` stacked lags ``[u(t); u(t+1); ...; u(t+n-1)]`` is nonsingular. A system of order ``n``
-needs an input persistently exciting of order ``2 n`` to be identifiable from the data (one
-sinusoid excites order 2; white noise every order).
+An input is *persistently exciting of order n* when its spectrum is nonzero at ``n``
+frequencies (equivalently, the ``n m x n m`` covariance of ``n`` stacked lags
+``[u(t); u(t+1); ...; u(t+n-1)]`` of a stationary input is nonsingular); it is read from the
+input's spectrum (:mod:`sysid.data.excitation`). A system of order ``n`` needs an input
+persistently exciting of order ``2 n`` to be identifiable from the data (one sinusoid
+excites order 2; white noise every order).
 """
 
 from __future__ import annotations
@@ -327,22 +329,33 @@ def _lag_gram(us: list[np.ndarray], mo: int) -> tuple[np.ndarray, int]:
     return G, cols
 
 
-def persistent_excitation_order(u: Any, max_order: int = 20, *, tol: float = 1e-9) -> int:
+def persistent_excitation_order(u: Any, max_order: int = 20, *, method: str = "spectrum",
+                                tol: float | None = None) -> int:
     """The order of persistent excitation of an input, up to ``max_order``.
 
-    The largest ``n <= max_order`` for which the ``n m x n m`` sample covariance of
-    ``n`` stacked lags of ``u`` is nonsingular (its smallest eigenvalue above ``tol`` times
-    its largest). Several experiments (a list of arrays) contribute their lag columns
-    together.
+    ``method="spectrum"`` (default) counts the excited lines of the input's two-sided
+    spectrum: a signal is persistently exciting of order ``n`` exactly when its spectrum is
+    nonzero at ``n`` frequencies (one sinusoid: 2, a multisine with ``p`` lines: ``2 p``,
+    white noise: every order), a bin counting as excited above ``tol`` (default ``1e-5``)
+    times the strongest one; several inputs count the weakest direction
+    (:mod:`sysid.data.excitation`). ``method="covariance"`` is MATLAB's ``pexcit`` rule: the
+    largest ``n`` for which the ``n m x n m`` sample covariance of ``n`` stacked lags is
+    nonsingular (smallest eigenvalue above ``tol``, default ``1e-9``, times the largest). It
+    calls a band-limited input poorly exciting (its lag covariance is ill-conditioned
+    however many lines it has) and a sine with a little noise richly exciting.
+
+    Several experiments (a list of arrays): the best one decides (``"spectrum"``), or their
+    lag columns count together (``"covariance"``).
 
     Parameters
     ----------
     u : array_like or list of array_like
         ``(n_samples, n_inputs)``.
     max_order : int
-        Largest order tested (the answer ``max_order`` means "at least").
-    tol : float
-        Relative eigenvalue threshold for rank.
+        Largest order reported (the answer ``max_order`` means "at least").
+    method : {"spectrum", "covariance"}
+    tol : float, optional
+        Relative threshold (see above).
 
     Examples
     --------
@@ -352,6 +365,12 @@ def persistent_excitation_order(u: Any, max_order: int = 20, *, tol: float = 1e-
     2
     >>> sysid.persistent_excitation_order(np.random.default_rng(0).standard_normal(500), 10)
     10
+    >>> lines = np.arange(5, 64)       # 59 lines in the lowest 3 % of the band
+    >>> ms = np.cos(2 * np.pi * np.outer(np.arange(2048), lines) / 2048 + lines ** 2).sum(1)
+    >>> sysid.persistent_excitation_order(ms, 20)
+    20
+    >>> sysid.persistent_excitation_order(ms, 20, method="covariance")
+    4
     """
     mo = _n(max_order, "max_order")
     us = [as_2d(x, "u") for x in (u if isinstance(u, list) else [u])]
@@ -360,8 +379,19 @@ def persistent_excitation_order(u: Any, max_order: int = 20, *, tol: float = 1e-
         raise DataError("the record has no inputs; persistent excitation concerns inputs")
     if any(x.shape[1] != m for x in us):
         raise DataError("all experiments must have the same number of inputs")
-    longest = max(x.shape[0] for x in us)
-    mo = min(mo, longest)
+    if method == "spectrum":
+        from .excitation import TOL, spectral_excitation_order
+
+        return min(mo, spectral_excitation_order(us, TOL if tol is None else float(tol)))
+    if method != "covariance":
+        raise DataError(f"method must be 'spectrum' or 'covariance', got {method!r}")
+    return _covariance_order(us, mo, 1e-9 if tol is None else float(tol))
+
+
+def _covariance_order(us: list[np.ndarray], mo: int, tol: float) -> int:
+    """MATLAB ``pexcit``'s rule: rank of the stacked-lag covariance (see above)."""
+    m = us[0].shape[1]
+    mo = min(mo, max(x.shape[0] for x in us))
     G, cols = _lag_gram(us, mo)
     if cols == 0:
         raise DataError(f"every experiment is shorter than max_order = {mo}")

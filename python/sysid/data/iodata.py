@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_2d, as_dt
+from .._display import HTMLResult
 from ..errors import DataError, InsufficientDataError, ShapeError
 from .formats import _FileFormats, _pandas
 from .raw import _RawConstructors
@@ -357,6 +358,13 @@ class IOData(_Segments, _RawConstructors, _FileFormats):
     def __len__(self) -> int:
         return self.n_samples
 
+    def _repr_html_(self) -> str:
+        """Notebook display: channel statistics and a small plot each (see
+        :mod:`sysid._display`)."""
+        from .._display import iodata_html
+
+        return iodata_html(self)
+
     def __repr__(self) -> str:
         exp = f" in {self.n_experiments} experiments" if self.n_experiments > 1 else ""
         tr = ", detrended" if self.has_trend else ""
@@ -406,6 +414,20 @@ class IOData(_Segments, _RawConstructors, _FileFormats):
             self._u_scale.copy(),
             self._y_scale.copy(),
         )
+
+    def _minus_trend(self, trend_of: Any) -> IOData:
+        """This record minus a given trend: ``trend_of(n) -> (u_trend, y_trend)`` per
+        experiment of ``n`` samples (original units), recorded like ``detrend``'s so that
+        :meth:`retrend` adds it back (used by :meth:`Trend.apply`)."""
+        exps = []
+        for e in self._exps:
+            tu, ty = trend_of(e.y.shape[0])
+            parts = []
+            for x, old, sc, t in ((e.u, e.tu, self._u_scale, tu), (e.y, e.ty, self._y_scale, ty)):
+                prev = np.zeros_like(x) if old is None else old
+                parts.append((x - t / sc, prev + t))  # t / sc: in this record's units
+            exps.append(_Exp(parts[0][0], parts[1][0], e.t0, parts[0][1], parts[1][1]))
+        return self._derive(exps)
 
     def retrend(self) -> IOData:
         """The record in original units: trend and scaling added back.
@@ -471,7 +493,7 @@ class IOData(_Segments, _RawConstructors, _FileFormats):
 
 
 @dataclass
-class DataSummary:
+class DataSummary(HTMLResult):
     """Per-channel statistics of a record (from :meth:`IOData.summary`)."""
 
     title: str

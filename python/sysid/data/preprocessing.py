@@ -165,7 +165,8 @@ def detrend(
     breakpoints: Sequence[int] | Sequence[Sequence[int]] | None = None,
     inputs: bool = True,
     outputs: bool = True,
-) -> IOData:
+    return_trend: bool = False,
+) -> Any:
     """Remove a mean, a line or a continuous piecewise line from every channel.
 
     The removed trend is recorded per sample (see :attr:`IOData.trend`), so
@@ -183,6 +184,17 @@ def detrend(
         one per experiment.
     inputs, outputs : bool
         Which channels to detrend.
+    return_trend : bool
+        Also return the removed trend as a :class:`~sysid.Trend` that applies to other
+        records (MATLAB's ``getTrend``): ``d, tr = detrend(data, return_trend=True)``, then
+        ``tr.apply(validation)`` removes the same offsets and slopes from validation data,
+        ``tr.restore(y)`` adds them back to model outputs and ``tr.attach(model)`` predicts
+        raw data. Offsets and slopes (per second) are averaged over experiments, weighted by
+        their samples; ``"piecewise"`` trends do not apply to other records.
+
+    Returns
+    -------
+    IOData, or (IOData, Trend) with ``return_trend=True``
 
     Examples
     --------
@@ -192,6 +204,10 @@ def detrend(
     >>> p = sysid.detrend(d, "piecewise", breakpoints=[50])
     >>> bool(np.abs(p.y).max() < 1e-9)
     True
+    >>> est = sysid.IOData(u=np.arange(4.0), y=5.0 + 2.0 * np.arange(4.0), dt=0.5)
+    >>> d2, tr = sysid.detrend(est, "linear", return_trend=True)
+    >>> np.round(tr.y_offset, 9).tolist(), np.round(tr.y_slope, 9).tolist()   # per second
+    ([5.0], [4.0])
     """
     if kind not in ("mean", "constant", "linear", "piecewise"):
         raise DataError(f"kind must be 'mean', 'linear' or 'piecewise', got {kind!r}")
@@ -208,7 +224,7 @@ def detrend(
         raise DataError("breakpoints are only used with kind='piecewise'")
     else:
         bps = [[]] * n_exp
-    exps = []
+    exps, coefs = [], []
     for k, e in enumerate(data._exps):
         n = e.y.shape[0]
         for b in bps[k]:
@@ -222,16 +238,51 @@ def detrend(
                 f"experiment {k} has {n} samples, too few for a {kind} trend"
             )
         pinv = np.linalg.pinv(basis)
-        parts = {}
+        parts, coef = {}, {}
         for name, x, tr, sc, on in (
             ("u", e.u, e.tu, data._u_scale, inputs),
             ("y", e.y, e.ty, data._y_scale, outputs),
         ):
-            fitted = basis @ (pinv @ x) if on and x.shape[1] else np.zeros_like(x)
+            c = pinv @ x if on and x.shape[1] else np.zeros((basis.shape[1], x.shape[1]))
+            coef[name] = c
+            fitted = basis @ c
             old = np.zeros_like(x) if tr is None else tr
             parts[name] = (x - fitted, old + sc * fitted)
         exps.append(_Exp(parts["u"][0], parts["y"][0], e.t0, parts["u"][1], parts["y"][1]))
-    return data._derive(exps)
+        coefs.append((n, coef))
+    out = data._derive(exps)
+    if not return_trend:
+        return out
+    return out, _trend_of(out, kind, coefs)
+
+
+def _trend_of(data: IOData, kind: str, coefs: list[tuple[int, dict[str, np.ndarray]]]) -> Any:
+    """The :class:`Trend` of one detrend call: per-sample values, and for a mean or a line
+    the sample-weighted average offsets and slopes (per second) that apply to other data."""
+    from .trend import Trend
+
+    exps = data._exps
+    u_tr = [np.zeros_like(e.u) if e.tu is None else e.tu for e in exps]
+    y_tr = [np.zeros_like(e.y) if e.ty is None else e.ty for e in exps]
+    ones = (np.ones(data.n_inputs), np.ones(data.n_outputs))
+    if kind == "piecewise":
+        return Trend(u_tr, y_tr, *ones, dt=data.dt)
+    w = np.array([n for n, _ in coefs], float)
+    w = w / w.sum()
+    offs, slopes = [], []
+    for name in ("u", "y"):
+        offs.append(sum(wk * c[name][0] for wk, (_, c) in zip(w, coefs)))
+        if kind == "linear":
+            # the basis is time scaled to [0, 1] over the experiment: per second, divide by
+            # its duration (n - 1) dt
+            slopes.append(sum(wk * c[name][1] / (max(n - 1, 1) * data.dt)
+                              for wk, (n, c) in zip(w, coefs)))
+        else:
+            slopes.append(np.zeros_like(offs[-1]))
+    return Trend(u_tr, y_tr, *ones, kind="linear" if kind == "linear" else "mean",
+                 offsets=(np.asarray(offs[0], float), np.asarray(offs[1], float)),
+                 slopes=(np.asarray(slopes[0], float), np.asarray(slopes[1], float)),
+                 dt=data.dt)
 
 
 def scale(data: IOData, by: str | Any = "std") -> IOData:

@@ -1,4 +1,13 @@
-"""What pre-processing removed from a record (:class:`Trend`), so that it can be added back."""
+"""What pre-processing removed from a record (:class:`Trend`), so that it can be added back,
+and applied to other records (MATLAB's ``getTrend``/``retrend``).
+
+``d, tr = sysid.detrend(data, "linear", return_trend=True)`` returns, besides the detrended
+record, the offsets and slopes it removed. ``tr.apply(validation)`` removes the *estimation*
+record's offsets and slopes from another record (validation data must be treated like the
+estimation data, not detrended on their own), ``tr.restore(...)`` adds them back to a record
+or to model outputs, and ``tr.attach(model)`` gives a model that takes and returns raw data
+(:class:`~sysid.models.trended.TrendedModel`).
+"""
 
 from __future__ import annotations
 
@@ -7,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_2d
-from ..errors import ShapeError
+from ..errors import DataError, ShapeError
 
 __all__ = ["Trend"]
 
@@ -25,6 +34,15 @@ class Trend:
         Per experiment, shaped like its ``u`` and ``y``.
     u_scale, y_scale : ndarray
         One factor per input and output channel.
+    kind : {"mean", "linear"} or None
+        With ``detrend(..., return_trend=True)``: what was removed, as offsets and slopes
+        that apply to other records (None: only the per-sample values above).
+    u_offset, y_offset, u_slope, y_slope : ndarray or None
+        Per channel: the removed trend is ``offset + slope * t``, ``t`` in seconds from the
+        first sample of each experiment (slopes are zero for ``"mean"``); several
+        experiments give their sample-weighted average.
+    dt : float or None
+        Sample time of the record the trend was fitted on.
 
     Examples
     --------
@@ -41,11 +59,20 @@ class Trend:
         y_trend: list[np.ndarray],
         u_scale: np.ndarray,
         y_scale: np.ndarray,
+        *,
+        kind: str | None = None,
+        offsets: tuple[np.ndarray, np.ndarray] | None = None,
+        slopes: tuple[np.ndarray, np.ndarray] | None = None,
+        dt: float | None = None,
     ) -> None:
         self.u_trend = u_trend
         self.y_trend = y_trend
         self.u_scale = u_scale
         self.y_scale = y_scale
+        self.kind = kind
+        self.u_offset, self.y_offset = offsets if offsets is not None else (None, None)
+        self.u_slope, self.y_slope = slopes if slopes is not None else (None, None)
+        self.dt = dt
 
     def add_outputs(self, y: Any, experiment: int = 0, start: int = 0) -> np.ndarray:
         """Map model outputs (in processed units) of one experiment back to original units.
@@ -76,7 +103,96 @@ class Trend:
             raise ShapeError(f"u does not fit inside experiment {experiment}")
         return arr * self.u_scale + tr[start : start + arr.shape[0]]
 
+    # -- applying the estimation record's trend to other data (getTrend / retrend) ----------
+    def _parametric(self) -> None:
+        if self.kind is None or self.u_offset is None:
+            raise DataError(
+                "this Trend holds per-sample values of one record only; get one that applies "
+                "to other data with d, trend = sysid.detrend(data, 'mean' or 'linear', "
+                "return_trend=True)")
+
+    def values(self, n: int, which: str = "y", dt: float | None = None) -> np.ndarray:
+        """The trend ``offset + slope * t`` over ``n`` samples from ``t = 0``, for the
+        outputs (``which="y"``) or inputs (``"u"``), shape ``(n, channels)``."""
+        self._parametric()
+        off, slope = (self.y_offset, self.y_slope) if which == "y" else (self.u_offset,
+                                                                          self.u_slope)
+        step = float(dt if dt is not None else (self.dt or 1.0))
+        t = np.arange(n)[:, None] * step
+        return np.asarray(off)[None, :] + t * np.asarray(slope)[None, :]
+
+    def remove_inputs(self, u: Any, dt: float | None = None) -> np.ndarray:
+        """Raw inputs ``(n, n_inputs)`` minus the trend (what a model fitted on the detrended
+        record expects)."""
+        arr = as_2d(u, "u", ncols=len(self.u_scale))
+        return arr - self.values(arr.shape[0], "u", dt)
+
+    def remove_outputs(self, y: Any, dt: float | None = None) -> np.ndarray:
+        """Raw outputs ``(n, n_outputs)`` minus the trend."""
+        arr = as_2d(y, "y", ncols=len(self.y_scale))
+        return arr - self.values(arr.shape[0], "y", dt)
+
+    def restore_outputs(self, y: Any, dt: float | None = None) -> np.ndarray:
+        """Detrended (model) outputs ``(n, n_outputs)`` plus the trend: raw units."""
+        arr = as_2d(y, "y", ncols=len(self.y_scale))
+        return arr + self.values(arr.shape[0], "y", dt)
+
+    def apply(self, data: Any) -> Any:
+        """Another record with *this* trend removed (MATLAB: ``detrend(z, T)``).
+
+        Validation data must be processed like the estimation data: subtract the estimation
+        record's offsets (and slopes), not their own mean. The result remembers what was
+        removed, so ``tr.apply(v).retrend()`` is ``v``.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> est = sysid.IOData(u=[1.0, 3.0], y=[10.0, 14.0])
+        >>> d, tr = sysid.detrend(est, "mean", return_trend=True)
+        >>> v = tr.apply(sysid.IOData(u=[2.0, 2.0], y=[12.0, 13.0]))
+        >>> np.round(v.u, 12).ravel().tolist(), np.round(v.y, 12).ravel().tolist()
+        ([0.0, 0.0], [0.0, 1.0])
+        >>> np.round(v.retrend().y, 12).ravel().tolist()
+        [12.0, 13.0]
+        """
+        self._parametric()
+        if data.n_inputs != len(self.u_scale) or data.n_outputs != len(self.y_scale):
+            raise ShapeError(
+                f"the trend has {len(self.u_scale)} input(s) and {len(self.y_scale)} output(s) "
+                f"but the data have {data.n_inputs} and {data.n_outputs}")
+        return data._minus_trend(lambda n: (self.values(n, "u", data.dt),
+                                            self.values(n, "y", data.dt)))
+
+    def restore(self, x: Any) -> Any:
+        """Add this trend back: to a record (:class:`~sysid.IOData`, like ``retrend``) or to
+        model outputs (an array ``(n, n_outputs)``, from ``t = 0``).
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> d, tr = sysid.detrend(sysid.IOData(u=[1.0, 3.0], y=[10.0, 14.0]), "mean",
+        ...                       return_trend=True)
+        >>> np.round(tr.restore(np.zeros((2, 1))), 12).ravel().tolist()
+        [12.0, 12.0]
+        """
+        if hasattr(x, "experiments"):
+            return x.retrend()
+        return self.restore_outputs(x)
+
+    def attach(self, model: Any) -> Any:
+        """``model`` (fitted on the detrended record) wrapped to take and return raw data:
+        a :class:`~sysid.models.trended.TrendedModel`."""
+        from ..models.trended import TrendedModel
+
+        self._parametric()
+        return TrendedModel(model, self)
+
     def __repr__(self) -> str:
+        if self.kind is not None and self.u_offset is not None:
+            return (f"Trend({self.kind}, input offset {np.round(self.u_offset, 6)}, output "
+                    f"offset {np.round(self.y_offset, 6)}"
+                    + (f", output slope {np.round(self.y_slope, 6)} per s"
+                       if self.kind == "linear" else "") + ")")
         return (
             f"Trend({len(self.y_trend)} experiment(s), input scale {np.round(self.u_scale, 6)}, "
             f"output scale {np.round(self.y_scale, 6)})"

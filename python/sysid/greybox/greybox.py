@@ -514,6 +514,12 @@ class GreyBox:
 
         return cls(fn, params, continuous=continuous, dt=dt, **kwargs)
 
+    def _repr_html_(self) -> str:
+        """Notebook display: facts, parameters, poles (see :mod:`sysid._display`)."""
+        from .._display import greybox_html
+
+        return greybox_html(self)
+
     def __repr__(self) -> str:
         p = len(self.params)
         kind = "continuous" if self.continuous else "discrete"

@@ -20,13 +20,14 @@ from typing import Any
 
 import numpy as np
 
+from .._display import HTMLResult
 from ..models.paramtable import ParameterTable
 from .greybox import IdentifiabilityWarning
 
 __all__ = ["GreyEstimate"]
 
 
-class GreyEstimate:
+class GreyEstimate(HTMLResult):
     """The result of :func:`greyest`.
 
     Attributes

@@ -10,7 +10,10 @@ from typing import Any
 
 from ..errors import DataError
 
-__all__ = ["REQUIRED", "FREQUENCY", "check_model", "as_statespace", "discrete_statespace"]
+__all__ = [
+    "REQUIRED", "FREQUENCY", "check_model", "as_statespace", "discrete_statespace",
+    "warn_unstable",
+]
 
 #: Names a model must have to satisfy :class:`sysid.Model` (checked by :func:`check_model`).
 REQUIRED = ("simulate", "predict", "freqresp", "dt", "ninputs", "noutputs", "input_names",
@@ -78,3 +81,42 @@ def discrete_statespace(model: Any, purpose: str) -> Any:
         raise DataError(f"{type(model).__name__}.to_statespace() returned a "
                         f"{type(ss).__name__}, not a state-space model")
     return ss
+
+
+def warn_unstable(model: Any, method: str, closed_loop: bool = False) -> None:
+    """:class:`~sysid.errors.StabilityWarning` when a subspace fit returns an unstable model
+    (a pole on or outside the unit circle), naming the pole and what to do.
+
+    Examples
+    --------
+    >>> import warnings, sysid
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     warn_unstable(sysid.StateSpaceModel([[1.2]], [[1.0]], [[1.0]]), "n4sid")
+    >>> w[0].category.__name__
+    'StabilityWarning'
+    """
+    import warnings
+
+    import numpy as np
+
+    from .._checks import user_stacklevel
+    from ..errors import StabilityWarning
+
+    if model.nstates == 0:
+        return
+    poles = model.poles()
+    k = int(np.argmax(np.abs(poles)))
+    if abs(poles[k]) < 1.0:
+        return
+    others = " or ".join(f"method={w!r}" for w in ("moesp", "n4sid", "cva") if w != method)
+    warnings.warn(StabilityWarning(
+        f"{method} returned an unstable model: pole {poles[k]:.4g} has modulus "
+        f"{abs(poles[k]):.4f} >= 1, so its simulation diverges. Unless the process itself is "
+        "unstable, " + ("refine it with sysid.pem(data, model, focus='simulation') (which "
+                        "keeps the simulation stable), or try a lower order or another horizon"
+                        if closed_loop else
+                        "use stable=True (reflects the unstable poles inside the unit circle), "
+                        f"another weighting ({others}), a lower order or a longer "
+                        "horizon, or refine with sysid.ssest(data, order, focus='simulation')")),
+        stacklevel=user_stacklevel())

@@ -265,6 +265,12 @@ class FRD:
 
         return plot_frd(self, models=models, fig=fig)
 
+    def _repr_html_(self) -> str:
+        """Notebook display: frequency range and magnitude plots (see :mod:`sysid._display`)."""
+        from .._display import frd_html
+
+        return frd_html(self)
+
     def __repr__(self) -> str:
         l, m = self.n_outputs, self.n_inputs
         meth = f" ({self.method})" if self.method else ""

@@ -57,6 +57,9 @@ __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict", "regi
 
 LEGACY_FORMAT = "sysid-state-space-model"  # version 1: state-space models only
 
+# issue 27 (branch tfproc): families in their own packages, registered on import
+_LAZY_FAMILIES = {"TransferFunction": "sysid.tf.model", "ProcessModel": "sysid.process.model"}
+
 for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel,
              HammersteinWienerModel, HammersteinWienerSSModel, NonlinearGreyBox):
     register_model(_cls)
@@ -88,6 +91,11 @@ def model_from_dict(d: dict[str, Any]) -> Any:
                         f"understands ({VERSION}); upgrade sysid")
     family = "StateSpaceModel" if d["format"] == LEGACY_FORMAT else str(d.get("family"))
     cls = REGISTRY.get(family)
+    if cls is None and family in _LAZY_FAMILIES:  # families registered when first imported
+        import importlib
+
+        importlib.import_module(_LAZY_FAMILIES[family])
+        cls = REGISTRY.get(family)
     if cls is None:
         raise DataError(f"unknown model family {family!r}: import the module that defines it "
                         "and register the class with sysid.register_model before loading")

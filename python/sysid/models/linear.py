@@ -11,6 +11,8 @@ from typing import Any
 
 import numpy as np
 
+from .._display import HTMLResult
+
 __all__ = ["transmission_zeros", "DampingTable", "damping_table"]
 
 
@@ -80,7 +82,7 @@ def transmission_zeros(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarra
     return z[np.argsort(np.abs(z), kind="stable")]
 
 
-class DampingTable:
+class DampingTable(HTMLResult):
     """Poles with their natural frequency, damping ratio and time constant.
 
     Attributes
@@ -98,8 +100,11 @@ class DampingTable:
     tau : ndarray
         Time constant ``-1 / Re(s)`` in seconds (``inf`` on the stability boundary).
     pole_std, wn_std, wn_hz_std, zeta_std : ndarray or None
-        First-order standard deviations (``damp(model, std=True)``, from the model's
-        parameter uncertainty); ``pole_std`` is complex (std of the real and imaginary parts).
+        Standard deviations (``damp(model, std=True)``, from the model's parameter
+        uncertainty); ``pole_std`` is complex (std of the real and imaginary parts).
+    std_method : ndarray of str or None
+        Per pole, how its std was obtained: ``"linear"`` (first order) or ``"monte-carlo"``
+        (a pole that coincides with another, where first order does not hold).
     """
 
     def __init__(self, poles: np.ndarray, s: np.ndarray, dt: float | None,
@@ -107,8 +112,11 @@ class DampingTable:
         order = np.lexsort((s.imag, np.abs(s)))
         self.poles, self.s, self.dt = poles[order], s[order], dt
         self.pole_std = self.wn_std = self.wn_hz_std = self.zeta_std = None
+        self.std_method: np.ndarray | None = None
         if std is not None:
             self.pole_std = std["pole_std"][order]
+            if "std_method" in std:
+                self.std_method = np.asarray(std["std_method"])[order]
             self.wn_std, self.wn_hz_std = std["wn_std"][order], std["wn_hz_std"][order]
             self.zeta_std = std["zeta_std"][order]
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -133,6 +141,8 @@ class DampingTable:
         if self.pole_std is not None:
             cols.update({"std Re(pole)": self.pole_std.real, "std Im(pole)": self.pole_std.imag,
                          "std wn [Hz]": self.wn_hz_std, "std damping": self.zeta_std})
+            if self.std_method is not None:
+                cols["std method"] = self.std_method
         return pd.DataFrame(cols)
 
     def __len__(self) -> int:

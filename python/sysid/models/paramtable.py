@@ -104,3 +104,14 @@ class ParameterTable:
 
     def __repr__(self) -> str:
         return str(self)
+
+    def _repr_html_(self) -> str:
+        """Notebook display: the table (see :mod:`sysid._display`)."""
+        from .._display import _wrap, table
+
+        rows = [[n, self.value[i], self.std[i], bool(self.fixed[i]), self.bound[i],
+                 "" if self.fixed[i] else f"[{self.lower[i]:.4g}, {self.upper[i]:.4g}]",
+                 self.units[i], self.descriptions[i]] for i, n in enumerate(self.names)]
+        return _wrap(f"{len(self)} parameters", table(
+            ["parameter", "value", "std", "fixed", "bound active", "95 % interval", "unit",
+             "description"], rows, tid="parameters", max_rows=None))

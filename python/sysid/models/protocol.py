@@ -242,6 +242,12 @@ class ModelMixin:
         """Response to a unit pulse ``u(0) = 1`` on each input, from rest (by simulation)."""
         return sampled_response(self, "impulse", n_samples)
 
+    def _repr_html_(self) -> str:
+        """Notebook display: facts, poles (see :mod:`sysid._display`)."""
+        from .._display import model_html
+
+        return model_html(self)
+
     def save(self, path: Any, *, format: str | None = None) -> None:
         """Write the model to a ``.json`` or ``.npz`` file; see :func:`sysid.save_model`."""
         from .serialize import save_model

@@ -257,8 +257,10 @@ class StateSpaceModel(ModelMixin):
             ``(poles, sd)`` with ``sd`` complex, ``sd.real`` the std of the real part and
             ``sd.imag`` that of the imaginary part of each pole.
         method : {"linear", "monte-carlo"}
-            First-order perturbation with left and right eigenvectors (poles too close to
-            another pole for it to hold get NaN and an ``UncertaintyWarning``), or sampling.
+            First-order perturbation with left and right eigenvectors, or sampling. Poles
+            that coincide with another (numerically, or within their uncertainty), where
+            first order does not hold, get the Monte Carlo value and an
+            ``UncertaintyWarning`` says so.
 
         Examples
         --------
@@ -267,7 +269,7 @@ class StateSpaceModel(ModelMixin):
         array([ 0.5+0.j, -0.2+0.j])
         """
         if std:
-            from .uncertainty import pole_std
+            from .pole_uncertainty import pole_std
 
             return pole_std(self, method)
         return np.linalg.eigvals(self.A).astype(complex)
@@ -418,7 +420,7 @@ class StateSpaceModel(ModelMixin):
         """Pole frequencies (rad/s, Hz) and damping; see :func:`sysid.damp` (``std=True``:
         with first-order standard deviations from :attr:`uncertainty`)."""
         if std:
-            from .uncertainty import damping_std
+            from .pole_uncertainty import damping_std
 
             d = damping_std(self, self.dt)
             return DampingTable(d["poles"], d["s"].astype(complex), self.dt, std=d)

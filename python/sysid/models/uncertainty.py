@@ -13,8 +13,9 @@ differences along the eigenvectors of ``P`` (only the directions that ``P`` span
 unidentifiable directions of an over-parameterised model are never stepped along), or a Monte
 Carlo estimate from models drawn from ``N(theta, P)``. Poles use the analytic first-order
 perturbation ``d lambda = w^H dA v / (w^H v)`` (left and right eigenvectors) where the model
-has an ``A`` matrix; a pole that lies too close to another pole for a first-order expansion to
-hold gets ``NaN`` and an :class:`UncertaintyWarning` rather than a misleading small number.
+has an ``A`` matrix (:mod:`sysid.models.pole_uncertainty`); a pole that coincides with
+another (numerically, or within their uncertainty), where the first-order expansion does not
+exist, gets the Monte Carlo value instead and an :class:`UncertaintyWarning` says so.
 
 Examples
 --------
@@ -32,12 +33,12 @@ array([0.01, 0.02])
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple
 
 import numpy as np
 
+from .._display import HTMLResult
 from ..errors import DataError
 
 __all__ = ["ParameterUncertainty", "Propagation", "UncertaintyWarning"]
@@ -78,7 +79,7 @@ def _real_vector(x: Any, what: str = "fn(model)") -> np.ndarray:
     return a.astype(float)
 
 
-class ParameterUncertainty:
+class ParameterUncertainty(HTMLResult):
     """Covariance of the free parameters of an estimated model, and its propagation.
 
     Parameters
@@ -368,90 +369,6 @@ def _match(ref: np.ndarray, p: np.ndarray) -> np.ndarray:
 def _complex_std(G: np.ndarray) -> np.ndarray:
     """std of the real and imaginary parts from a complex scaled Jacobian, as one complex."""
     return (np.sqrt(np.sum(G.real**2, axis=1)) + 1j * np.sqrt(np.sum(G.imag**2, axis=1)))
-
-
-def pole_jacobian(model: Any, *, step: float = 1e-3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Poles, their complex scaled Jacobian ``G`` (``G G^H``-type covariance) and a mask of the
-    poles for which a first-order expansion is not trustworthy.
-
-    State-space models use ``d lambda_i = w_i^H dA v_i / (w_i^H v_i)`` with the derivative of
-    ``A`` along each identifiable direction; other models difference their ``poles()`` and
-    match them to the nominal ones.
-    """
-    unc = require(model)
-    nominal = unc.build(unc.theta)
-    A = getattr(nominal, "A", None)
-    if isinstance(A, np.ndarray) and A.ndim == 2:
-        from scipy.linalg import eig
-
-        lam, W, V = eig(A, left=True, right=True)
-        _, dA = unc.scaled_jacobian(lambda m: m.A, step=step)
-        n = A.shape[0]
-        dA = dA.reshape(n, n, -1)
-        denom = np.einsum("ij,ij->j", W.conj(), V)
-        G = np.einsum("ai,abk,bi->ik", W.conj(), dA, V) / denom[:, None]
-    else:
-        lam = np.asarray(nominal.poles(), dtype=complex)
-        _, G = unc.scaled_jacobian(lambda m: _match(lam, np.asarray(m.poles(), complex)),
-                                   step=step)
-        G = G.astype(complex)
-    sd = np.abs(_complex_std(G))
-    bad = np.zeros(lam.size, bool)
-    for i in range(lam.size):
-        others = np.delete(lam, i)
-        sep = float(np.min(np.abs(others - lam[i]))) if others.size else np.inf
-        # first order holds while the pole's 3-sigma region stays well away from its neighbours
-        bad[i] = sd[i] > 0 and 6.0 * sd[i] >= sep
-    return lam.astype(complex), G, bad
-
-
-def pole_std(model: Any, method: str = "linear", *, n: int = 1000, rng: Any = None
-             ) -> tuple[np.ndarray, np.ndarray]:
-    """Poles and their std (complex: ``sd.real`` of the real parts, ``sd.imag`` of the
-    imaginary parts); see :meth:`StateSpaceModel.poles`."""
-    if method not in _METHODS:
-        raise DataError(f"method must be 'linear' or 'monte-carlo', got {method!r}")
-    if method == "monte-carlo":
-        unc = require(model)
-        lam = np.asarray(unc.build(unc.theta).poles(), complex)
-        draws = np.array([_match(lam, np.asarray(m.poles(), complex))
-                          for m in unc.sample(n, rng)])
-        sd = draws.real.std(axis=0, ddof=1) + 1j * draws.imag.std(axis=0, ddof=1)
-        return lam, sd
-    lam, G, bad = pole_jacobian(model)
-    sd = _complex_std(G)
-    if bad.any():
-        warnings.warn(
-            f"{int(bad.sum())} pole(s) lie too close to another pole for a first-order standard "
-            "deviation (near-repeated poles); reported as NaN. Use poles(std=True, "
-            "method='monte-carlo') for a sampling estimate.", UncertaintyWarning, stacklevel=3)
-        sd = np.where(bad, np.nan + 1j * np.nan, sd)
-    return lam, sd
-
-
-def damping_std(model: Any, dt: float) -> dict[str, np.ndarray]:
-    """Poles, ``s = log(z)/dt``, natural frequency (rad/s, Hz), damping and their std (first
-    order, through the pole Jacobian)."""
-    lam, G, bad = pole_jacobian(model)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.where(lam != 0, np.log(np.where(lam != 0, lam, 1.0)) / dt, -np.inf)
-        Gs = G / (lam[:, None] * dt)
-        wn = np.abs(s)
-        dwn = (np.conj(s)[:, None] * Gs).real / wn[:, None]
-        dzeta = -Gs.real / wn[:, None] + (s.real / wn**2)[:, None] * dwn
-        wn_sd = np.sqrt(np.sum(dwn**2, axis=1))
-        zeta_sd = np.sqrt(np.sum(dzeta**2, axis=1))
-    bad = bad | ~np.isfinite(s) | (wn == 0)
-    if bad.any():
-        warnings.warn(f"{int(bad.sum())} pole(s) near another pole or at z = 0: their damping and "
-                      "frequency std are reported as NaN", UncertaintyWarning, stacklevel=3)
-    nan = np.full(lam.size, np.nan)
-    return {
-        "poles": lam, "s": s,
-        "pole_std": np.where(bad, np.nan + 1j * np.nan, _complex_std(G)),
-        "wn_std": np.where(bad, nan, wn_sd), "wn_hz_std": np.where(bad, nan, wn_sd / (2 * np.pi)),
-        "zeta_std": np.where(bad, nan, zeta_sd),
-    }
 
 
 def freqresp_std(model: Any, omega: Any) -> tuple[np.ndarray, np.ndarray]:

@@ -21,6 +21,7 @@ from .. import _sysid
 from .._checks import as_int
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
+from ..data.offsets import check_offsets
 from ..errors import DataError
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
@@ -193,6 +194,7 @@ def pem(
     True
     """
     data = _experiments(data)
+    check_offsets(data)  # issue 26: the one offset check (OffsetWarning)
     if not isinstance(model, StateSpaceModel):
         raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
     if focus not in _FOCUS:

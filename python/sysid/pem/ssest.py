@@ -9,7 +9,7 @@ from typing import Any
 
 from .._checks import as_int
 from ..data.iodata import IOData
-from ..errors import DataError
+from ..errors import DataError, OffsetWarning
 from ..models.statespace import StateSpaceModel
 from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator
 from .pem import _experiments, pem
@@ -20,8 +20,10 @@ def _start_loss(data: IOData, start: StateSpaceModel, focus: str, feedthrough: b
     """det of the error covariance of a candidate start (initial states fitted), the cost the
     refinement will minimise; inf when its predictor is unstable."""
     try:
-        m = pem(data, start, focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
-                max_iter=0)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", OffsetWarning)  # said once, by the caller
+            m = pem(data, start, focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
+                    max_iter=0)
     except Exception:  # noqa: BLE001 - an unusable candidate is skipped
         return float("inf")
     if m.info["pem"]["stabilized"]:
@@ -110,8 +112,11 @@ def ssest(
         raise DataError("no subspace start could be computed for this order; lower the order")
     candidates.sort(key=lambda c: c[0])
     best = candidates[0]
-    model = pem(data, best[3], focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
-                max_iter=max_iter, tol=tol, regularization=regularization, progress=progress)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OffsetWarning)  # said once, by the subspace start
+        model = pem(data, best[3], focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
+                    max_iter=max_iter, tol=tol, regularization=regularization,
+                    progress=progress)
     model.info["start"] = {
         "method": best[1],
         "bd_x0": best[2],

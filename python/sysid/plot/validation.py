@@ -45,6 +45,30 @@ def plot_compare(result: Any, experiment: int = 0, fig: Any = None) -> Any:
     return fig
 
 
+def plot_compare_set(cset: Any, experiment: int = 0, fig: Any = None) -> Any:
+    """Measured outputs and every model's of a :class:`~sysid.validation.comparison.CompareSet`
+    (a model that diverged is named in the legend, not drawn)."""
+    first = cset.results[0]
+    y = first.y[experiment]
+    fig, axes = _fig(fig, y.shape[1])
+    t = np.arange(y.shape[0]) * first.dt
+    for j in range(y.shape[1]):
+        ax = axes[j, 0]
+        ax.plot(t, y[:, j], color="0.3", lw=1.0, label="measured")
+        for k, (name, r) in enumerate(zip(cset.names, cset.results)):
+            if r.diverged[experiment]:
+                ax.plot([], [], color=f"C{k}", label=f"{name}: diverged")
+                continue
+            ax.plot(t, r.yhat[experiment][:, j], color=f"C{k}", lw=1.0,
+                    label=f"{name} (fit {r.fit[experiment, j]:.1f} %)")
+        ax.set_ylabel(first.output_names[j])
+        ax.legend(loc="best", fontsize=8)
+        ax.grid(True, alpha=0.3)
+    axes[-1, 0].set_xlabel("time [s]")
+    fig.tight_layout()
+    return fig
+
+
 def plot_residuals(res: Any, fig: Any = None) -> Any:
     """Auto-correlations (left) and input cross-correlations (right) with the bound."""
     l, m = len(res.output_names), len(res.input_names)
@@ -149,34 +173,25 @@ def plot_order_selection(table: Any, fig: Any = None) -> Any:
 def plot_stabilization(table: Any, ax: Any = None, hz: bool = True) -> Any:
     """Stabilisation diagram: pole frequencies versus model order.
 
-    A pole is drawn filled when a pole of the next lower order lies within 1 % in
-    frequency and 5 % in damping (a "stable" mode, in the modal-analysis sense), hollow
-    otherwise; crosses mark unstable poles.
+    The classes of :func:`sysid.analysis.report_figures.stabilization_classes`: a pole is
+    *new*, *stable in frequency* (the nearest pole of the next lower order within 1 %) or
+    *stable in frequency and damping* (and within 5 % in damping); crosses mark unstable
+    poles.
     """
+    from ..analysis.report_figures import STAB_STYLE, stabilization_classes
+
     plt = _pyplot()
     if ax is None:
         _, ax = plt.subplots(figsize=(7, 4))
-    prev = None
-    settled_pts: list[tuple[float, int]] = []
-    new_pts: list[tuple[float, int]] = []
-    unstable_pts: list[tuple[float, int]] = []
-    for order, damp in table.damping(table.method):
-        f = damp.wn_hz if hz else damp.wn
-        keep = np.isfinite(f) & (damp.poles.imag >= 0)
-        f, z, inside = f[keep], damp.zeta[keep], np.abs(damp.poles[keep]) < 1
-        for fi, zi, st in zip(f, z, inside):
-            settled = prev is not None and bool(np.any(
-                (np.abs(prev[0] - fi) <= 0.01 * max(fi, 1e-12))
-                & (np.abs(prev[1] - zi) <= 0.05 * max(abs(zi), 1e-2))
-            ))
-            (unstable_pts if not st else settled_pts if settled else new_pts).append((fi, order))
-        prev = (f, z)
-    for pts, style, kw in ((new_pts, "o", {"mfc": "none", "color": "C0", "label": "new"}),
-                           (settled_pts, "o", {"color": "C0", "label": "settled"}),
-                           (unstable_pts, "x", {"color": "C3", "label": "unstable"})):
+    cats, _ = stabilization_classes(table, table.method)
+    scale = 1.0 if hz else 2 * np.pi
+    for key, pts in cats.items():
         if pts:
             arr = np.array(pts)
-            ax.plot(arr[:, 0], arr[:, 1], style, ls="none", **kw)
+            name, color, marker = STAB_STYLE[key]
+            kw = ({"marker": "x"} if marker == "x" else
+                  {"marker": "o", "mfc": "none" if marker == "open" else color})
+            ax.plot(arr[:, 0] * scale, arr[:, 1], ls="none", color=color, label=name, **kw)
     ax.legend(fontsize=7, loc="upper right")
     ax.set_xlabel("natural frequency [Hz]" if hz else "natural frequency [rad/s]")
     ax.set_ylabel("model order")

@@ -45,6 +45,7 @@ from scipy import optimize
 
 from .. import _sysid
 from .._checks import as_int_grid, experiment_arrays
+from .._display import HTMLResult
 from ..errors import DataError, NumericalError
 
 KERNELS = ("tc", "ss", "dc", "ridge")
@@ -269,7 +270,7 @@ def _tune(summary: np.ndarray, n_rows: int, prior: _Prior, noise: str
 
 
 @dataclass
-class ArxRegularization:
+class ArxRegularization(HTMLResult):
     """Tuned regularisation of an ARX structure (the result of :func:`arxregul`).
 
     Per output ``i``: ``lam[i]`` and ``R[i]`` are MATLAB's ``Lambda`` and ``R`` (the penalty

@@ -1,6 +1,7 @@
-"""Polynomial estimators: ``arx``, ``armax``, ``oe``, ``bj``, ``arxstruc``,
-``selstruc`` and ``delayest`` (least squares by streaming QR in Rust; the iterative structures
-through the shared Gauss-Newton optimiser of ``sysid-core``)."""
+"""Polynomial estimators: ``arx``, ``armax``, ``oe``, ``bj``, ``arxstruc`` and
+``selstruc`` (least squares by streaming QR in Rust; the iterative structures through the
+shared Gauss-Newton optimiser of ``sysid-core``); ``delayest`` is in
+:mod:`sysid.polynomial.delayest`."""
 
 from __future__ import annotations
 
@@ -12,6 +13,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_int, as_int_grid, experiment_arrays
 from .._progress import iteration_callback, iteration_printer
+from ..data.offsets import check_offsets
 from ..errors import DataError
 from ..models.uncertainty import ParameterUncertainty
 from .model import PolynomialModel
@@ -134,6 +136,7 @@ def arx(
     ([-0.5], [1.0])
     """
     exps = experiment_arrays(data)
+    check_offsets(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     na_g, nb_g, nk_g = _grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"), _grid(nk, ny, nu, "nk")
     if isinstance(regularization, str) or hasattr(regularization, "prior"):
@@ -265,6 +268,7 @@ def _pem(
     init: PolynomialModel | None = None,
 ) -> PolynomialModel:
     exps = experiment_arrays(data)
+    check_offsets(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     nb_g, nf_g, nk_g = _grid(nb, ny, nu, "nb"), _grid(nf, ny, nu, "nf"), _grid(nk, ny, nu, "nk")
     na_v, nc_v, nd_v = _col(na, ny, "na"), _col(nc, ny, "nc"), _col(nd, ny, "nd")
@@ -400,6 +404,7 @@ def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
     (1, 1, 1)
     """
     exps = experiment_arrays(data)
+    check_offsets(data)
     rng = [list(map(int, np.atleast_1d(v))) for v in (na, nb, nk)]
     return np.asarray(_sysid.arx_struc(exps, *rng))
 
@@ -421,24 +426,6 @@ def selstruc(
     return int(best[0]), int(best[1]), int(best[2])
 
 
-def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int = 10) -> int:
-    """Input delay of a single-input single-output record: the ``nk`` whose ARX(na, nb, nk)
-    has the smallest loss, all from one compression (as MATLAB's ``delayest``).
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> from scipy import signal
-    >>> rng = np.random.default_rng(0)
-    >>> u = rng.standard_normal(500)
-    >>> y = signal.lfilter([0, 0, 0, 0.7], [1, -0.5], u) + 0.01 * rng.standard_normal(500)
-    >>> sysid.polynomial.estimators.delayest(sysid.IOData(u[:, None], y[:, None], 1.0))
-    3
-    """
-    if not 0 <= nk_min <= nk_max:
-        raise DataError(f"need 0 <= nk_min <= nk_max, got {nk_min}, {nk_max}")
-    table = arxstruc(data, [na], [nb], list(range(nk_min, nk_max + 1)))
-    return int(table[int(np.argmin(table[:, 3])), 2])
 
 
 def _references(reference: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> list[Any]:
@@ -484,6 +471,7 @@ def iv4(data: Any, na: Any, nb: Any, nk: Any = 1, *, reference: Any = None) -> P
     True
     """
     exps = experiment_arrays(data)
+    check_offsets(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     if nu == 0:
         raise DataError("iv4 needs an input signal (use ar/arma for time series)")

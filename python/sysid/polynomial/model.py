@@ -316,7 +316,7 @@ class PolynomialModel(ModelMixin):
         :attr:`uncertainty`) the pair ``(poles, sd)`` as for
         :meth:`sysid.StateSpaceModel.poles`."""
         if std:
-            from ..models.uncertainty import pole_std
+            from ..models.pole_uncertainty import pole_std
 
             return pole_std(self, method)
         r = []

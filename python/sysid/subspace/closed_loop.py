@@ -31,6 +31,7 @@ from typing import Any, Protocol, Union
 from .. import _sysid
 from .._checks import as_int
 from ..errors import DataError
+from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
 
 
@@ -114,7 +115,7 @@ def closed_loop_fit(
         "R": res["R"],
         "S": res["S"],
     }
-    return StateSpaceModel(
+    model = StateSpaceModel(
         res["A"], res["B"], res["C"], res["D"], res["K"] if kalman else None,
         dt=est.data.dt,
         noise_cov=res["noise_cov"] if kalman else None,
@@ -122,3 +123,5 @@ def closed_loop_fit(
         output_names=est.data.output_names,
         info=info,
     )
+    warn_unstable(model, method, closed_loop=True)
+    return model

@@ -42,7 +42,14 @@ from .. import _sysid
 from .._checks import as_int
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
-from ..errors import DataError, FeedbackWarning, InsufficientDataError, OrderError
+from ..data.offsets import check_offsets
+from ..errors import (
+    DataError,
+    FeedbackWarning,
+    InsufficientDataError,
+    OrderError,
+)
+from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
 from ..validation.feedback import feedback_pvalues
 from .streaming import compression_info, warn_if_fallback
@@ -86,7 +93,8 @@ def _preprocessing(data: IOData, from_factor: bool) -> dict[str, Any]:
 
 
 def _check_signals(data: IOData) -> None:
-    """Refuse constant outputs; warn about offsets much larger than the variation."""
+    """Refuse constant outputs; warn (OffsetWarning) about offsets much larger than the
+    variation."""
     for kind, idx, names in (("output", 1, data.output_names), ("input", 0, data.input_names)):
         if not names:
             continue
@@ -105,15 +113,8 @@ def _check_signals(data: IOData) -> None:
                     f"output {n} is constant ({mean[j]:g}): there is nothing to identify; "
                     "check the channel (a stuck sensor, the wrong column?) or drop it"
                 )
-            if not data.has_trend and abs(mean[j]) > 10 * std[j] > 0:
-                warnings.warn(
-                    f"{kind} {n} has an offset ({mean[j]:.4g}) much larger than its variation "
-                    f"(std {std[j]:.3g}) and the data were not detrended: the model will "
-                    "spend a state on the offset (a pole near 1); remove it first with "
-                    "sysid.detrend(data) (command line: --detrend mean or --detrend linear)",
-                    UserWarning,
-                    stacklevel=3,
-                )
+    # the one offset check of every linear estimator (sysid.data.offsets)
+    check_offsets(data)
 
 
 def _refuse_white_noise(data: IOData, lags: int = 20, level: float = 0.05) -> None:
@@ -251,7 +252,7 @@ class SubspaceEstimator:
         self.compressor = compressor
         warn_if_fallback(self.factor, requested=compressor)
         self._svd: dict[Any, Any] = {}
-        self._pe_cache: dict[int, int] = {}
+        self._pe_cache: dict[int | str, int] = {}
         self._feedback_p: float | None = None
         self._feedback_warned = False
         self._subspace(None)  # checks the record (length, excitation) right away
@@ -431,15 +432,15 @@ class SubspaceEstimator:
         ):
             if not isinstance(flag, (bool, np.bool_)):
                 raise DataError(f"{name} must be True or False, got {flag!r}")
-        if self.factor.n_inputs:
-            # warn (ExcitationWarning) when the input cannot support order n
-            warn_excitation(self._excitation_order(2 * n), n, stacklevel=2)
         try:
             res = sub.fit(n, bool(feedthrough), bool(kalman), bool(stable))
         except OrderError as e:
             if not self._horizon_note:
                 raise
             raise OrderError(f"{e}{self._horizon_note}") from None
+        if self.factor.n_inputs:
+            # warn (ExcitationWarning) when the input cannot support order n
+            warn_excitation(self._excitation_order(2 * n), n, stacklevel=2)
         x0_est = None
         B, D = res["B"], res["D"]
         if x0:
@@ -497,17 +498,31 @@ class SubspaceEstimator:
             model.info["uncertainty"] = {"method": "bootstrap",
                                          "n_boot": model.uncertainty.n_boot,  # type: ignore
                                          "n_failed": model.uncertainty.n_failed}  # type: ignore
+        warn_unstable(model, info["method"])
         return model
 
     def _excitation_order(self, needed: int, tol: float = 1e-9) -> int:
-        """Persistent-excitation order of the input, read from the factor (no pass over the
-        data): the largest ``d <= min(needed, past + future)`` for which the input's block
-        Hankel matrix with ``d`` block rows has full rank (eigenvalues of its Gram matrix
-        above ``tol`` times the largest, as :func:`sysid.persistent_excitation_order`)."""
+        """Persistent-excitation order of the input, up to ``needed``.
+
+        First the rank of the input rows of the factor, with no pass over the data (the
+        largest ``d <= min(needed, past + future)`` for which the input's block Hankel
+        matrix with ``d`` block rows has eigenvalues of its Gram matrix above ``tol`` times
+        the largest): full rank means persistently exciting. Only when it is not, the
+        excited lines of the input's spectrum decide (:mod:`sysid.data.excitation`, once per
+        estimator): the lag rank takes a band-limited multisine for a poorly exciting input
+        however many lines it has. Built from a factor alone, the rank decides."""
         if needed not in self._pe_cache:
             # in the Rust core on the calling thread: one Cholesky of G - tol top I answers
             # every d (the first non-positive pivot), no threaded LAPACK call
-            self._pe_cache[needed] = int(_sysid.excitation_order(self.factor, needed, tol))
+            got = int(_sysid.excitation_order(self.factor, needed, tol))
+            if got < needed and not self._from_factor:
+                if "spectrum" not in self._pe_cache:
+                    from ..data.excitation import spectral_excitation_order
+
+                    us = [np.ascontiguousarray(u) for u, _ in self.data.experiments]
+                    self._pe_cache["spectrum"] = spectral_excitation_order(us)
+                got = min(needed, self._pe_cache["spectrum"])
+            self._pe_cache[needed] = got
         return self._pe_cache[needed]
 
     def __repr__(self) -> str:

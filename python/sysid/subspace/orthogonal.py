@@ -32,6 +32,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int
+from .._display import HTMLResult
 from ..data.iodata import IOData
 from ..errors import DataError
 from ..models.statespace import StateSpaceModel
@@ -41,7 +42,7 @@ __all__ = ["OrthogonalDecomposition", "orthogonal_decomposition", "svc_order"]
 Order = Union[int, str]
 
 
-class OrthogonalDecomposition:
+class OrthogonalDecomposition(HTMLResult):
     """Deterministic and stochastic submodels of :func:`orthogonal_decomposition`.
 
     Attributes

@@ -36,8 +36,9 @@ from typing import Any, Union
 import numpy as np
 
 from .._checks import as_2d, as_int
+from .._display import HTMLResult
 from ..data.iodata import IOData
-from ..errors import DataError, ShapeError
+from ..errors import DataError, NumericalError, ShapeError
 from ..models.checks import check_model
 
 __all__ = [
@@ -113,6 +114,16 @@ def _horizon(horizon: Any) -> int | None:
 
 def _run(model: Any, u: np.ndarray, y: np.ndarray, horizon: int | None,
          x0: np.ndarray | None) -> np.ndarray:
+    """The model's simulation or prediction of ``y``; a run that overflows (a model that
+    diverges on this record) gives ``inf`` outputs, reported as a fit of ``-inf``."""
+    try:
+        return _run_raw(model, u, y, horizon, x0)
+    except NumericalError:
+        return np.full(y.shape, np.inf)
+
+
+def _run_raw(model: Any, u: np.ndarray, y: np.ndarray, horizon: int | None,
+             x0: np.ndarray | None) -> np.ndarray:
     if horizon is None:
         out = model.simulate(u, x0=x0) if x0 is not None else model.simulate(u)
     elif x0 is not None:
@@ -163,8 +174,12 @@ def estimate_x0(model: Any, u: Any, y: Any, horizon: int | None = None) -> np.nd
         e = np.zeros(n)
         e[i] = 1.0
         phi[:, i] = _run(model, u0, y0, h, e).ravel()
-    x0, *_ = np.linalg.lstsq(phi, (y[:W] - base).ravel(), rcond=None)
-    return x0
+    target = (y[:W] - base).ravel()
+    if not (np.all(np.isfinite(phi)) and np.all(np.isfinite(target))):
+        return np.zeros(n)  # the model diverges on this record: no state fits it
+    with np.errstate(over="ignore", invalid="ignore"):
+        x0, *_ = np.linalg.lstsq(phi, target, rcond=None)
+    return x0 if np.all(np.isfinite(x0)) else np.zeros(n)
 
 
 def _window(model: Any, horizon: int | None, N: int) -> int:
@@ -250,7 +265,15 @@ def _metrics(y: np.ndarray, yhat: np.ndarray) -> dict[str, np.ndarray]:
 
 
 # -- compare ----------------------------------------------------------------------------
-class CompareResult:
+def _diverged(y: np.ndarray, yhat: np.ndarray) -> bool:
+    """A model output that overflowed or grew beyond ``1e8`` times the measured range."""
+    if not np.all(np.isfinite(yhat)):
+        return True
+    scale = float(np.max(np.abs(y))) if y.size else 0.0
+    return bool(yhat.size and np.max(np.abs(yhat)) > 1e8 * max(scale, 1e-300))
+
+
+class CompareResult(HTMLResult):
     """Measured versus model outputs, with fit numbers per experiment and output.
 
     Attributes
@@ -265,6 +288,10 @@ class CompareResult:
         Initial state used per experiment.
     fit, vaf, rmse : ndarray
         Shape ``(n_experiments, noutputs)``; see :func:`fit_metrics`.
+    diverged : ndarray of bool
+        Per experiment: the model's output diverged on it (not finite, or beyond ``1e8``
+        times the measured range: an unstable model on a long record); its fit is ``-inf``
+        and the comparison is reported, not raised.
     """
 
     def __init__(self, model: Any, horizon: int | None, u: list[np.ndarray],
@@ -277,6 +304,10 @@ class CompareResult:
         self.fit = np.array([d["fit"] for d in metrics])
         self.vaf = np.array([d["vaf"] for d in metrics])
         self.rmse = np.array([d["rmse"] for d in metrics])
+        #: per experiment: the model's output diverged (not finite, or grew beyond 1e8 times
+        #: the measured range); its fit is -inf
+        self.diverged = np.array([_diverged(a, b) for a, b in zip(y, yhat)])
+        self.fit[self.diverged] = -np.inf
 
     @property
     def kind(self) -> str:
@@ -296,7 +327,8 @@ class CompareResult:
         for e in range(self.fit.shape[0]):
             for j, name in enumerate(self.output_names):
                 rows.append({"experiment": e, "output": name, "fit %": self.fit[e, j],
-                             "VAF %": self.vaf[e, j], "RMSE": self.rmse[e, j]})
+                             "VAF %": self.vaf[e, j], "RMSE": self.rmse[e, j],
+                             "diverged": bool(self.diverged[e])})
         return pd.DataFrame(rows)
 
     def summary(self) -> str:
@@ -306,7 +338,9 @@ class CompareResult:
         for e in range(self.fit.shape[0]):
             for j, name in enumerate(self.output_names):
                 lines.append(f"{e:>4} {name[:20]:<20} {self.fit[e, j]:9.2f} {self.vaf[e, j]:9.2f} "
-                             f"{self.rmse[e, j]:11.4g}")
+                             f"{self.rmse[e, j]:11.4g}"
+                             + ("  diverged (unstable on this record)" if self.diverged[e]
+                                else ""))
         return "\n".join(lines)
 
     def plot(self, experiment: int = 0, fig: Any = None) -> Any:
@@ -318,19 +352,27 @@ class CompareResult:
     def __repr__(self) -> str:
         fits = ", ".join(f"{n}: {f:.1f}" for n, f in zip(self.output_names, self.fit.mean(0)))
         ne = len(self.y)
-        return f"CompareResult({self.kind}, {ne} experiment{'s' * (ne != 1)}, fit % [{fits}])"
+        div = ", diverged" if self.diverged.any() else ""
+        return (f"CompareResult({self.kind}, {ne} experiment{'s' * (ne != 1)}, fit % "
+                f"[{fits}]{div})")
 
 
-def compare(model: Any, data: Any, horizon: int | None = None, *,
-            x0: X0 = "estimate") -> CompareResult:
-    """Compare a model's simulation or ``horizon``-step prediction with measured outputs.
+def compare(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
+    """Compare models' simulations or ``horizon``-step predictions with measured outputs.
+
+    ``compare(data, m1, m2, ...)`` (MATLAB's order) compares several models on the same
+    record and returns a :class:`~sysid.validation.comparison.CompareSet`; ``compare(model,
+    data)`` (or ``compare(data, model)``) one model, a :class:`CompareResult`. A model that
+    diverges on the data (an unstable model on a long record) is reported with a fit of
+    ``-inf`` and ``diverged`` set, never raised.
 
     Parameters
     ----------
-    model : sysid.Model
-        Any model (state-space, continuous, polynomial, your own class).
-    data : IOData or (u, y)
-        Validation data, ideally not used for estimation.
+    *args
+        ``data, model, ...`` or ``model, data[, horizon]``. ``data`` is an
+        :class:`~sysid.IOData` (validation data, ideally not used for estimation) or a pair
+        ``(u, y)``; each model any :class:`sysid.Model` (state-space, continuous,
+        polynomial, a :class:`~sysid.models.trended.TrendedModel` for raw data, your own).
     horizon : int or None
         ``None`` (default) simulates from the inputs alone; ``k`` predicts ``k`` steps
         ahead with the Kalman predictor (needs ``model.K``; without it the predictor never
@@ -341,7 +383,7 @@ def compare(model: Any, data: Any, horizon: int | None = None, *,
 
     Returns
     -------
-    CompareResult
+    CompareResult or CompareSet
 
     Examples
     --------
@@ -355,7 +397,33 @@ def compare(model: Any, data: Any, horizon: int | None = None, *,
     True
     >>> bool(sysid.compare(m, (u, y), x0="zero").fit[0, 0] < r.fit[0, 0])
     True
+    >>> bad = sysid.StateSpaceModel([[1.5]], [[1.0]], [[1.0]])     # diverges
+    >>> both = sysid.compare((u, y), m, bad)
+    >>> both.fit[:, 0, 0].round(1).tolist(), both.diverged.tolist()
+    ([95.5, -inf], [False, True])
     """
+    from .comparison import split_arguments
+
+    data, models, horizon = split_arguments(args, horizon)
+    if len(models) > 1:
+        from .comparison import CompareSet
+
+        return CompareSet([compare_one(m, data, horizon, x0) for m in models])
+    return compare_one(models[0], data, horizon, x0)
+
+
+def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareResult:
+    """:func:`compare` for one model."""
+    from ..models.trended import TrendedModel
+
+    if isinstance(model, TrendedModel):  # compare the inner model on the detrended record
+        if not isinstance(data, IOData):
+            data = IOData(u=data[0], y=data[1], dt=model.dt)
+        inner = compare_one(model.model, model.trend.apply(data), horizon, x0)
+        raw = data.experiments
+        yh = [model.trend.restore_outputs(b, model.dt) for b in inner.yhat]
+        return CompareResult(model, inner.horizon, [u for u, _ in raw], [y for _, y in raw],
+                             yh, inner.x0)
     model, recs = _records(model, data)
     h = _horizon(horizon)
     runner = _simulator(model, x0, h)

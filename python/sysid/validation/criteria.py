@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_int
+from .._display import HTMLResult
 from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..errors import DataError, NumericalError, SysidError
@@ -73,7 +74,7 @@ def n_parameters(n: int, m: int, l: int, *, feedthrough: bool = True, noise_mode
                               n_experiments=n_experiments)
 
 
-class Criteria:
+class Criteria(HTMLResult):
     """AIC, AICc, BIC and FPE of one model on one record.
 
     Attributes
@@ -155,7 +156,7 @@ def criteria(model: Any, data: Any, *, x0: Any = "estimate",
 
 
 # -- order selection ----------------------------------------------------------------------
-class OrderSelection:
+class OrderSelection(HTMLResult):
     """Results of an order (and weighting) sweep on one compression.
 
     Attributes
@@ -476,7 +477,7 @@ def select_order(
 def _warn_once(caught: list[Any]) -> None:
     """Re-emit the warnings of a sweep: each distinct one once, and the excitation warning
     only for the lowest order that raised it (it would repeat for every higher order)."""
-    from ..errors import ExcitationWarning
+    from ..errors import ExcitationWarning, StabilityWarning
 
     seen: set[tuple[type, str]] = set()
     excitation = [w for w in caught if issubclass(w.category, ExcitationWarning)]
@@ -489,6 +490,8 @@ def _warn_once(caught: list[Any]) -> None:
                 msg += " (the same holds for every higher order of the sweep)"
             warnings.warn(msg, w.category, stacklevel=3)
             continue
+        if issubclass(w.category, StabilityWarning):
+            continue  # a sweep's unstable candidates: the table shows them, the pick warns
         key = (w.category, str(w.message))
         if key not in seen:
             seen.add(key)

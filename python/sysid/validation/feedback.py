@@ -26,6 +26,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int
+from .._display import HTMLResult
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
 
@@ -114,7 +115,7 @@ def feedback_pvalues(factor: Any) -> tuple[np.ndarray, np.ndarray, int, int]:
     return Fs, ps, q, df2
 
 
-class FeedbackTest:
+class FeedbackTest(HTMLResult):
     """Result of :func:`check_feedback`.
 
     Attributes

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_int
+from .._display import HTMLResult
 from ..errors import DataError
 from .compare import X0, _records, _run, _x0_for
 
@@ -32,7 +33,7 @@ def _xcorr_sums(a: np.ndarray, b: np.ndarray, lags: np.ndarray) -> np.ndarray:
     return out
 
 
-class ResidualAnalysis:
+class ResidualAnalysis(HTMLResult):
     """Correlation tests of the one-step prediction errors (innovations).
 
     Attributes

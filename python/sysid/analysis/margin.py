@@ -1,0 +1,170 @@
+"""Gain and phase margins of a single-input single-output loop (MATLAB's ``margin``).
+
+With the open-loop response ``L(j omega)`` (any sysid model, delays included):
+
+- phase crossovers ``omega_pc``: ``angle L = -180 deg (mod 360)``; the gain margin is
+  ``1 / |L(j omega_pc)|`` (the factor by which the gain may grow before the loop is unstable);
+- gain crossovers ``omega_gc``: ``|L| = 1``; the phase margin is ``180 deg + angle L``
+  (wrapped to ``(-180, 180]``).
+
+Crossovers are bracketed on a dense logarithmic grid and refined by Brent's method on the
+exact response; with several, the reported margins are the smallest (MATLAB's convention:
+the gain margin closest to 1 in decibels, the smallest phase margin). :meth:`Margins.all`
+lists every crossover (``allmargin``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..errors import DataError
+
+__all__ = ["margin", "Margins"]
+
+
+class Margins:
+    """Stability margins (see :func:`margin`).
+
+    Attributes
+    ----------
+    gain_margin : float
+        Absolute gain margin (``inf`` without phase crossover); ``gain_margin_db`` in dB.
+    phase_margin : float
+        Degrees (``inf`` without gain crossover).
+    phase_crossover, gain_crossover : float
+        The frequencies (rad/s) where they are read (``nan`` when absent).
+    phase_crossovers, gain_crossovers : ndarray
+        Every crossover found, with ``gain_margins`` and ``phase_margins``.
+    """
+
+    def __init__(self, wpc: np.ndarray, gms: np.ndarray, wgc: np.ndarray,
+                 pms: np.ndarray) -> None:
+        self.phase_crossovers, self.gain_margins = wpc, gms
+        self.gain_crossovers, self.phase_margins = wgc, pms
+        if gms.size:
+            k = int(np.argmin(np.abs(np.log(gms))))
+            self.gain_margin, self.phase_crossover = float(gms[k]), float(wpc[k])
+        else:
+            self.gain_margin, self.phase_crossover = float("inf"), float("nan")
+        if pms.size:
+            k = int(np.argmin(np.abs(pms)))
+            self.phase_margin, self.gain_crossover = float(pms[k]), float(wgc[k])
+        else:
+            self.phase_margin, self.gain_crossover = float("inf"), float("nan")
+
+    @property
+    def gain_margin_db(self) -> float:
+        """Gain margin in decibels."""
+        return float(20 * np.log10(self.gain_margin)) if self.gain_margin > 0 else -np.inf
+
+    def as_tuple(self) -> tuple[float, float, float, float]:
+        """``(gm, pm, wcg, wcp)`` in MATLAB's order (``wcg`` the phase crossover)."""
+        return self.gain_margin, self.phase_margin, self.phase_crossover, self.gain_crossover
+
+    def __repr__(self) -> str:
+        return (f"Margins(gain={self.gain_margin:.4g} ({self.gain_margin_db:.3g} dB) at "
+                f"{self.phase_crossover:.4g} rad/s, phase={self.phase_margin:.4g} deg at "
+                f"{self.gain_crossover:.4g} rad/s)")
+
+
+def _siso(sys: Any) -> Any:
+    if not hasattr(sys, "freqresp"):
+        raise DataError(f"margin needs a model with freqresp (a sysid model), got "
+                        f"{type(sys).__name__}")
+    if getattr(sys, "ninputs", 1) != 1 or getattr(sys, "noutputs", 1) != 1:
+        raise DataError("margin is defined for a single-input single-output loop; select one "
+                        "pair (model.select or a TransferFunction of one pair)")
+    return sys
+
+
+def _range(sys: Any, omega: Any) -> np.ndarray:
+    if omega is not None:
+        w = np.asarray(omega, dtype=float).ravel()
+        if w.size < 2 or np.any(w <= 0) or not np.all(np.isfinite(w)):
+            raise DataError("omega must hold at least two positive finite frequencies")
+        return np.sort(w)
+    dt = float(getattr(sys, "dt", 0.0) or 0.0)
+    p = np.asarray(sys.poles()) if hasattr(sys, "poles") else np.zeros(0)
+    if dt > 0:
+        p = np.log(p[np.abs(p) > 0].astype(complex)) / dt
+        top = np.pi / dt
+    else:
+        top = None
+    mag = np.abs(p[np.abs(p) > 1e-12]) if p.size else np.ones(1)
+    if mag.size == 0:
+        mag = np.ones(1)
+    lo = float(np.min(mag)) / 1000
+    hi = float(np.max(mag)) * 1000 if top is None else top * (1 - 1e-9)
+    delay = float(np.max(getattr(sys, "iodelay", 0.0), initial=0.0))
+    n = 4000 + (int(50 * delay * hi) if top is None and delay > 0 else 0)
+    return np.geomspace(min(lo, hi / 1e6), hi, min(n, 200000))
+
+
+def margin(sys: Any, *, omega: Any = None) -> Margins:
+    """Gain margin, phase margin and their crossover frequencies of an open loop.
+
+    Parameters
+    ----------
+    sys : model
+        Single-input single-output open loop (any sysid model: transfer function, state
+        space, process model; continuous or discrete; delays included).
+    omega : array_like, optional
+        Frequency grid (rad/s) to search; default spans the poles by three decades each way
+        (up to the Nyquist frequency for discrete models).
+
+    Returns
+    -------
+    Margins
+
+    Examples
+    --------
+    >>> import sysid
+    >>> m = sysid.margin(sysid.TransferFunction([4.0], [1.0, 3.0, 2.0, 0.0]))   # 4 / (s (s+1)(s+2))
+    >>> round(m.gain_margin, 6), round(m.phase_crossover, 6)                    # 6/4 at sqrt 2
+    (1.5, 1.414214)
+    """
+    sys = _siso(sys)
+    w = _range(sys, omega)
+
+    def L(x: float) -> complex:
+        return complex(np.asarray(sys.freqresp([x]))[0, 0, 0])
+
+    g = np.asarray(sys.freqresp(w))[:, 0, 0]
+    ph = np.unwrap(np.angle(g))
+    # phase crossovers: (phase + pi) crosses a multiple of 2 pi
+    k = (ph + np.pi) / (2 * np.pi)
+    wpc = []
+    for i in np.flatnonzero(np.floor(k[:-1]) != np.floor(k[1:])):
+        target = np.floor(max(k[i], k[i + 1])) * 2 * np.pi - np.pi
+        base = ph[i] - np.angle(g[i])          # the unwrapping offset at w[i]
+
+        def f(x: float, t: float = target, b: float = base, i: int = i) -> float:
+            a = np.angle(L(x)) + b
+            # keep continuity with the grid's unwrapped phase
+            a += 2 * np.pi * np.round((ph[i] - a) / (2 * np.pi))
+            return a - t
+        wpc.append(_root(f, w[i], w[i + 1]))
+    mag = np.abs(g)
+    wgc = [_root(lambda x: abs(L(x)) - 1.0, w[i], w[i + 1])
+           for i in np.flatnonzero((mag[:-1] - 1) * (mag[1:] - 1) < 0)]
+    wpc_a = np.array([x for x in wpc if np.isfinite(x)])
+    wgc_a = np.array([x for x in wgc if np.isfinite(x)])
+    gms = np.array([1.0 / abs(L(x)) for x in wpc_a])
+    pms = np.array([(np.degrees(np.angle(L(x))) + 180.0 + 180.0) % 360.0 - 180.0
+                    for x in wgc_a])
+    return Margins(wpc_a, gms, wgc_a, pms)
+
+
+def _root(f: Any, a: float, b: float) -> float:
+    try:
+        fa, fb = f(a), f(b)
+        if fa == 0:
+            return a
+        if fa * fb > 0:
+            return float("nan")
+        return float(brentq(f, a, b, xtol=1e-14, rtol=4 * np.finfo(float).eps))
+    except (ValueError, RuntimeError):
+        return float("nan")

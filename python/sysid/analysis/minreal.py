@@ -1,0 +1,112 @@
+"""Minimal realisation: cancel what does not reach the output (MATLAB's ``minreal``).
+
+- :class:`~sysid.TransferFunction`: in each pair, a pole and a zero closer than ``tol``
+  (relative to their magnitude) cancel, and the gain is kept.
+- State-space models: the controllable and observable part, by two staircase
+  (orthogonal Hessenberg) reductions: ``ctrb``/``obsv`` rank decisions from an SVD at ``tol``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..errors import DataError
+
+__all__ = ["minreal"]
+
+
+def minreal(sys: Any, tol: float | None = None) -> Any:
+    """The model without its cancelling or unreachable parts.
+
+    Parameters
+    ----------
+    sys : TransferFunction, StateSpaceModel or ContinuousStateSpace
+    tol : float, optional
+        Cancellation (transfer function) or rank (state space) tolerance; default
+        ``sqrt(eps)``.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> G = sysid.TransferFunction([1.0, 1.0], [1.0, 3.0, 2.0])     # (s + 1) / ((s + 1)(s + 2))
+    >>> print(sysid.minreal(G))
+    y0 <- u0:  1 / (s + 2)
+    """
+    tol = float(np.sqrt(np.finfo(float).eps)) if tol is None else float(tol)
+    if not tol > 0:
+        raise DataError(f"tol must be positive, got {tol}")
+    from ..tf.model import TransferFunction
+
+    if isinstance(sys, TransferFunction):
+        return _tf(sys, tol)
+    if hasattr(sys, "A") and hasattr(sys, "B") and hasattr(sys, "C"):
+        return _ss(sys, tol)
+    raise DataError(f"minreal needs a TransferFunction or a state-space model, got "
+                    f"{type(sys).__name__}")
+
+
+def _tf(G: Any, tol: float) -> Any:
+    from ..tf.model import TransferFunction
+
+    nums, dens = [], []
+    for i in range(G.noutputs):
+        rn, rd = [], []
+        for j in range(G.ninputs):
+            num, den = G.num[i][j], G.den[i][j]
+            z, p = list(np.roots(num)), list(np.roots(den))
+            keep_p = []
+            for pk in p:
+                d = [abs(pk - zk) for zk in z]
+                k = int(np.argmin(d)) if d else -1
+                if k >= 0 and d[k] <= tol * max(1.0, abs(pk)):
+                    z.pop(k)
+                else:
+                    keep_p.append(pk)
+            k0 = num[0] if num.size else 0.0
+            rn.append(np.real(k0 * np.poly(z)) if z else np.array([k0]))
+            rd.append(np.real(np.poly(keep_p)) if keep_p else np.ones(1))
+        nums.append(rn)
+        dens.append(rd)
+    return TransferFunction(nums, dens, dt=G.dt, iodelay=G.iodelay, hold=G.hold,
+                            input_names=G.input_names, output_names=G.output_names,
+                            info={**G.info, "minreal": True})
+
+
+def _reachable(A: np.ndarray, B: np.ndarray, tol: float) -> np.ndarray:
+    """Orthonormal basis of the controllable subspace (staircase with SVD rank decisions)."""
+    n = A.shape[0]
+    scale = max(np.linalg.norm(A), np.linalg.norm(B), 1.0)
+    basis = np.zeros((n, 0))
+    block = B
+    for _ in range(n):
+        if basis.shape[1]:
+            block = block - basis @ (basis.T @ block)
+        if block.size == 0:
+            break
+        U, s, _ = np.linalg.svd(block, full_matrices=False)
+        r = int(np.sum(s > tol * scale))
+        if r == 0:
+            break
+        basis = np.hstack([basis, U[:, :r]])
+        if basis.shape[1] >= n:
+            break
+        block = A @ U[:, :r]
+    q, _ = np.linalg.qr(basis) if basis.shape[1] else (basis, None)
+    return q
+
+
+def _ss(sys: Any, tol: float) -> Any:
+    A, B, C, D = (np.asarray(x, float) for x in (sys.A, sys.B, sys.C, sys.D))
+    Vc = _reachable(A, B, tol)
+    A1, B1, C1 = Vc.T @ A @ Vc, Vc.T @ B, C @ Vc
+    Vo = _reachable(A1.T, C1.T, tol)
+    A2, B2, C2 = Vo.T @ A1 @ Vo, Vo.T @ B1, C1 @ Vo
+    kw = {"input_names": sys.input_names, "output_names": sys.output_names}
+    from ..models.continuous import ContinuousStateSpace
+    from ..models.statespace import StateSpaceModel
+
+    if isinstance(sys, ContinuousStateSpace):
+        return ContinuousStateSpace(A2, B2, C2, D, hold=sys.hold, **kw)
+    return StateSpaceModel(A2, B2, C2, D, dt=sys.dt, **kw)

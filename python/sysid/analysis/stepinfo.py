@@ -1,0 +1,226 @@
+"""Step-response characteristics with MATLAB's definitions (``stepinfo``).
+
+For a response ``y(t)`` from ``y_init`` to ``y_final`` (``dy = y_final - y_init``):
+
+- rise time: from ``y_init + 0.1 dy`` to ``y_init + 0.9 dy`` (first crossings, linearly
+  interpolated between samples; ``rise_limits``);
+- settling time: the last time ``|y - y_final|`` exceeds ``2 % |dy|`` (``threshold``),
+  interpolated; transient time the same with ``2 %`` of the largest ``|y - y_final|``;
+- settling min/max: extremes of ``y`` after the rise;
+- overshoot: ``100 (max y - y_final) / dy`` (>= 0, on the side of ``dy``); undershoot:
+  ``100 (y_init - min y) / dy`` in the other direction;
+- peak: largest ``|y - y_init|`` and its time.
+
+A model's step response is computed on a fine grid (continuous models exactly sampled) and
+``y_final`` is its steady-state gain.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..errors import DataError
+
+__all__ = ["stepinfo", "StepInfo"]
+
+_KEYS = ("rise_time", "transient_time", "settling_time", "settling_min", "settling_max",
+         "overshoot", "undershoot", "peak", "peak_time", "steady_state")
+
+
+class StepInfo:
+    """Step-response characteristics of each output/input pair (see :func:`stepinfo`).
+
+    Attributes are arrays ``(noutputs, ninputs)``; for one pair, floats. ``as_dict()`` gives
+    MATLAB's field names (``RiseTime``, ``SettlingTime``, ...).
+    """
+
+    def __init__(self, values: dict[str, np.ndarray]) -> None:
+        self._v = values
+        single = values["rise_time"].size == 1
+        for k, v in values.items():
+            setattr(self, k, float(v.ravel()[0]) if single else v)
+
+    def as_dict(self) -> dict[str, Any]:
+        """MATLAB's field names and values."""
+        names = {"rise_time": "RiseTime", "transient_time": "TransientTime",
+                 "settling_time": "SettlingTime", "settling_min": "SettlingMin",
+                 "settling_max": "SettlingMax", "overshoot": "Overshoot",
+                 "undershoot": "Undershoot", "peak": "Peak", "peak_time": "PeakTime",
+                 "steady_state": "SteadyStateValue"}
+        return {names[k]: getattr(self, k) for k in _KEYS}
+
+    def to_pandas(self) -> Any:
+        """One row per output/input pair."""
+        import pandas as pd
+
+        l, m = self._v["rise_time"].shape
+        rows = [{"output": i, "input": j, **{k: float(self._v[k][i, j]) for k in _KEYS}}
+                for i in range(l) for j in range(m)]
+        return pd.DataFrame(rows)
+
+    def __repr__(self) -> str:
+        if self._v["rise_time"].size == 1:
+            return "StepInfo(" + ", ".join(f"{k}={getattr(self, k):.4g}" for k in _KEYS) + ")"
+        return f"StepInfo({self._v['rise_time'].shape[0]} x {self._v['rise_time'].shape[1]})"
+
+
+def _cross(t: np.ndarray, y: np.ndarray, level: float, sign: float) -> float:
+    """First time ``sign * (y - level) >= 0``, interpolated linearly."""
+    idx = np.flatnonzero(sign * (y - level) >= 0)
+    if idx.size == 0:
+        return float("nan")
+    k = int(idx[0])
+    if k == 0:
+        return float(t[0])
+    y0, y1 = y[k - 1], y[k]
+    return float(t[k - 1] + (level - y0) / (y1 - y0) * (t[k] - t[k - 1]))
+
+
+def _settle(t: np.ndarray, e: np.ndarray, bound: float) -> float:
+    """Time after which ``e <= bound`` for good (interpolated on the last exit)."""
+    out = np.flatnonzero(e > bound)
+    if out.size == 0:
+        return float(t[0])
+    k = int(out[-1])
+    if k == t.size - 1:
+        return float("nan")
+    e0, e1 = e[k], e[k + 1]
+    return float(t[k] + (e0 - bound) / (e0 - e1) * (t[k + 1] - t[k]))
+
+
+def _one(t: np.ndarray, y: np.ndarray, yinit: float, yfinal: float, thr: float,
+         lim: tuple[float, float]) -> dict[str, float]:
+    dy = yfinal - yinit
+    if not np.isfinite(yfinal) or dy == 0:
+        nan = float("nan")
+        k = int(np.argmax(np.abs(y - yinit)))
+        return {"rise_time": nan, "transient_time": nan, "settling_time": nan,
+                "settling_min": nan, "settling_max": nan, "overshoot": nan,
+                "undershoot": nan, "peak": float(abs(y[k] - yinit)), "peak_time": float(t[k]),
+                "steady_state": float(yfinal)}
+    s = np.sign(dy)
+    t_lo = _cross(t, y, yinit + lim[0] * dy, s)
+    t_hi = _cross(t, y, yinit + lim[1] * dy, s)
+    e = np.abs(y - yfinal)
+    after = y[np.searchsorted(t, t_hi):] if np.isfinite(t_hi) else y[-1:]
+    k = int(np.argmax(np.abs(y - yinit)))
+    return {
+        "rise_time": t_hi - t_lo,
+        "transient_time": _settle(t, e, thr * float(np.max(e))),
+        "settling_time": _settle(t, e, thr * abs(dy)),
+        "settling_min": float(np.min(after)), "settling_max": float(np.max(after)),
+        "overshoot": max(0.0, 100.0 * float(np.max(s * (y - yfinal))) / abs(dy)),
+        "undershoot": max(0.0, 100.0 * float(np.max(-s * (y - yinit))) / abs(dy)),
+        "peak": float(abs(y[k] - yinit)), "peak_time": float(t[k]),
+        "steady_state": float(yfinal),
+    }
+
+
+def stepinfo(sys: Any, t: Any = None, *, yfinal: Any = None, yinit: Any = None,
+             threshold: float = 0.02, rise_limits: tuple[float, float] = (0.1, 0.9),
+             n_samples: int = 4000) -> StepInfo:
+    """Rise time, settling time, overshoot and peak of a step response (MATLAB's
+    ``stepinfo``).
+
+    Parameters
+    ----------
+    sys : model, TimeResponse or array_like
+        A sysid model (its step response is computed), a
+        :class:`~sysid.models.protocol.TimeResponse` from ``step``, or samples ``y``
+        (``(n,)`` or ``(n, outputs)``) with their times ``t``.
+    t : array_like, optional
+        Sample times of ``y`` (needed for arrays).
+    yfinal : float or array_like, optional
+        Steady-state value (default: the model's steady-state gain; the last sample for data).
+    yinit : float or array_like, optional
+        Initial value (default ``y[0]``; zero for a model).
+    threshold : float
+        Settling band as a fraction (MATLAB's ``SettlingTimeThreshold``, 2 %).
+    rise_limits : (float, float)
+        Rise-time fractions (MATLAB's ``RiseTimeLimits``).
+    n_samples : int
+        Grid size of a model's step response.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> info = sysid.stepinfo(sysid.TransferFunction([1.0], [1.0, 1.0]))   # 1 / (s + 1)
+    >>> round(info.rise_time, 4), round(info.settling_time, 4)     # ln 9, ln 50
+    (2.1972, 3.912)
+    >>> round(sysid.stepinfo(sysid.TransferFunction([1.0], [1.0, 0.6, 1.0])).overshoot, 2)
+    37.23
+    """
+    if not 0 < threshold < 1:
+        raise DataError(f"threshold must lie in (0, 1), got {threshold}")
+    lo, hi = float(rise_limits[0]), float(rise_limits[1])
+    if not 0 <= lo < hi <= 1:
+        raise DataError(f"rise_limits must satisfy 0 <= low < high <= 1, got {rise_limits}")
+    tt, Y, yf, yi = _response(sys, t, n_samples)
+    l, m = Y.shape[1], Y.shape[2]
+    yf = _fill(yfinal, (l, m), "yfinal") if yfinal is not None else yf
+    yi = _fill(yinit, (l, m), "yinit") if yinit is not None else yi
+    out = {k: np.empty((l, m)) for k in _KEYS}
+    for i in range(l):
+        for j in range(m):
+            for k, v in _one(tt, Y[:, i, j], yi[i, j], yf[i, j], threshold, (lo, hi)).items():
+                out[k][i, j] = v
+    return StepInfo(out)
+
+
+def _fill(x: Any, shape: tuple[int, int], name: str) -> np.ndarray:
+    try:
+        return np.broadcast_to(np.asarray(x, dtype=float), shape).copy()
+    except ValueError:
+        raise DataError(f"{name} must be one number or an array {shape}") from None
+
+
+def _response(sys: Any, t: Any, n: int
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    from ..models.protocol import TimeResponse
+
+    if isinstance(sys, TimeResponse):
+        Y = np.asarray(sys.y, dtype=float)
+        return np.asarray(sys.t, float), Y, Y[-1], Y[0]
+    if hasattr(sys, "freqresp") and hasattr(sys, "dt"):
+        return _model_step(sys, n)
+    if t is None:
+        raise DataError("stepinfo of samples needs their times t: stepinfo(y, t)")
+    y = np.asarray(sys, dtype=float)
+    if y.ndim == 1:
+        y = y[:, None]
+    if y.ndim != 2:
+        raise DataError(f"y must be (n_samples,) or (n_samples, outputs), got shape {y.shape}")
+    tt = np.asarray(t, dtype=float).ravel()
+    if tt.size != y.shape[0] or tt.size < 2 or np.any(np.diff(tt) <= 0):
+        raise DataError(f"t must be increasing with one time per sample ({y.shape[0]}), got "
+                        f"{tt.size} values")
+    if not (np.all(np.isfinite(y)) and np.all(np.isfinite(tt))):
+        raise DataError("y and t must be finite")
+    Y = y[:, :, None]
+    return tt, Y, Y[-1], Y[0]
+
+
+def _model_step(sys: Any, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    p = np.asarray(sys.poles()) if hasattr(sys, "poles") else np.zeros(0)
+    delay = float(np.max(getattr(sys, "iodelay", 0.0), initial=0.0))
+    if sys.dt and sys.dt > 0:
+        r = np.abs(p)
+        rho = float(np.max(r)) if r.size else 0.0
+        N = 200 if rho >= 1 or rho == 0 else int(np.ceil(np.log(1e-4) / np.log(rho))) + 10
+        N = int(min(max(N, 20), 100000)) + int(delay)
+        resp = sys.step(N)
+        Y = np.asarray(resp.y)
+        gain = np.asarray(sys.freqresp([0.0])[0].real)
+        return np.asarray(resp.t, float), Y, gain, np.zeros_like(gain)
+    re = -p.real
+    slow = float(np.min(re[re > 1e-12])) if np.any(re > 1e-12) else 0.0
+    if slow == 0.0 or np.any(re < -1e-12):
+        t_final = 100.0 if slow == 0.0 else 10.0 / slow
+    else:
+        t_final = 10.0 / slow + 1.2 * delay
+    resp = sys.step(n, dt=t_final / (n - 1))
+    gain = np.asarray(sys.freqresp([0.0])[0].real) if np.all(np.abs(p) > 1e-12) else \
+        np.full((resp.y.shape[1], resp.y.shape[2]), np.inf)
+    return np.asarray(resp.t, float), np.asarray(resp.y), gain, np.zeros_like(gain)

@@ -1,0 +1,83 @@
+"""One offset check for every linear estimator: a mean much larger than the variation.
+
+A linear model ``y = G(q) u + H(q) e`` has no constant term, so a record whose channels sit
+on offsets (a temperature in kelvin, a flow around its operating point) makes the estimator
+spend its parameters on the offset instead of the dynamics: a pole near 1, a wrong static
+gain, validation fits far below zero. Every linear estimator (subspace, ``ssest``/``pem``,
+ARX, ARMAX, OE, BJ, IV) asks :func:`check_offsets` first, and one
+:class:`~sysid.errors.OffsetWarning` says what to do: ``sysid.detrend(data,
+return_trend=True)`` (then ``trend.apply(validation)`` for the validation data), or
+:func:`sysid.identify`, which removes the offsets and restores them in its predictions.
+
+A channel is flagged when ``|mean| > 10 std`` (the offset dwarfs the variation), unless the
+record was detrended (:attr:`IOData.has_trend`).
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import user_stacklevel
+from ..errors import OffsetWarning
+
+__all__ = ["check_offsets", "OFFSET_RATIO"]
+
+#: A channel whose mean exceeds this many standard deviations is flagged.
+OFFSET_RATIO = 10.0
+
+
+def offsets(data: Any) -> list[tuple[str, str, float, float]]:
+    """``(kind, name, mean, std)`` of every channel with ``|mean| > OFFSET_RATIO std > 0``
+    (empty for a detrended record)."""
+    if getattr(data, "has_trend", False):
+        return []
+    out = []
+    for kind, idx, names in (("input", 0, data.input_names), ("output", 1, data.output_names)):
+        if not names:
+            continue
+        # one pass in Rust (NumPy's column reductions of (samples, channels) arrays are slow)
+        _, mean, std = _sysid.channel_stats(
+            [np.ascontiguousarray(e[idx], float) for e in data.experiments])
+        for j, name in enumerate(names):
+            if abs(mean[j]) > OFFSET_RATIO * std[j] > 0:
+                out.append((kind, str(name), float(mean[j]), float(std[j])))
+    return out
+
+
+def check_offsets(data: Any, *, stacklevel: int | None = None) -> bool:
+    """Warn (:class:`~sysid.errors.OffsetWarning`) when a channel of ``data`` sits on an offset
+    much larger than its variation and the record was not detrended; True if it warned. The
+    warning points at the first caller outside sysid (or ``stacklevel`` frames up).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid, warnings
+    >>> u = np.random.default_rng(0).standard_normal(200)
+    >>> raw = sysid.IOData(u=u, y=300.0 + np.cumsum(u) * 0.01, dt=1.0)
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     check_offsets(raw)
+    True
+    >>> w[0].category.__name__
+    'OffsetWarning'
+    >>> check_offsets(sysid.detrend(raw, "mean"))
+    False
+    """
+    found = offsets(data)
+    if not found:
+        return False
+    what = "; ".join(f"{kind} {name} has an offset ({mean:.4g}) much larger than its variation "
+                     f"(std {std:.3g})" for kind, name, mean, std in found[:4])
+    more = f" (and {len(found) - 4} more channels)" if len(found) > 4 else ""
+    warnings.warn(OffsetWarning(
+        f"{what}{more}, and the data were not detrended: a linear model has no constant term "
+        "and spends its parameters on the offset (a pole near 1, a wrong static gain, "
+        "validation fits far below zero). Remove it first: d, trend = sysid.detrend(data, "
+        "'mean', return_trend=True), then trend.apply(validation) for other records (command "
+        "line: --detrend mean); or use sysid.identify(data), which removes it and restores it "
+        "in its predictions"), stacklevel=user_stacklevel() if stacklevel is None else stacklevel)
+    return True

@@ -1,0 +1,213 @@
+"""Standard deviations of poles, natural frequencies and damping ratios, from a model's
+:class:`~sysid.models.uncertainty.ParameterUncertainty`.
+
+First order through the eigenvalue derivative: for ``A v = lambda v`` and ``w^H A =
+lambda w^H``, ``d lambda = w^H dA v / (w^H v)`` along each identifiable direction of the
+parameter covariance (models without ``A`` difference their matched ``poles()``). Where two
+poles coincide, numerically or within their uncertainty, the derivative does not exist or
+does not describe the spread (the poles move like the square root of the perturbation):
+there the standard deviation is the Monte Carlo value from models drawn from the same
+covariance, and an :class:`~sysid.models.uncertainty.UncertaintyWarning` says so. Conjugate
+pairs get one value.
+
+Examples
+--------
+>>> import numpy as np, sysid
+>>> from sysid.models.uncertainty import ParameterUncertainty
+>>> build = lambda t: sysid.StateSpaceModel([[t[0], 0.0], [0.0, t[1]]], [[1.0], [1.0]],
+...                                         [[1.0, 1.0]])
+>>> m = build([0.5, -0.4])
+>>> m.uncertainty = ParameterUncertainty([0.5, -0.4], np.diag([1e-4, 4e-4]), build)
+>>> np.round(pole_std(m)[1].real, 6)
+array([0.01, 0.02])
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+
+from ..errors import DataError
+from .uncertainty import _METHODS, UncertaintyWarning, _complex_std, _match, require
+
+__all__ = ["coincident_poles", "damping_std", "pole_jacobian", "pole_std"]
+
+
+def pole_jacobian(model: Any, *, step: float = 1e-3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Poles, their complex scaled Jacobian ``G`` (``G G^H``-type covariance) and a mask of the
+    poles that coincide with another pole, where a first-order expansion does not exist.
+
+    State-space models use ``d lambda_i = w_i^H dA v_i / (w_i^H v_i)`` with the derivative of
+    ``A`` along each identifiable direction; other models difference their ``poles()`` and
+    match them to the nominal ones. See :func:`coincident_poles` for the mask.
+    """
+    unc = require(model)
+    nominal = unc.build(unc.theta)
+    A = getattr(nominal, "A", None)
+    if isinstance(A, np.ndarray) and A.ndim == 2:
+        from scipy.linalg import eig
+
+        lam, W, V = eig(A, left=True, right=True)
+        _, dA = unc.scaled_jacobian(lambda m: m.A, step=step)
+        n = A.shape[0]
+        dA = dA.reshape(n, n, -1)
+        denom = np.einsum("ij,ij->j", W.conj(), V)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            G = np.einsum("ai,abk,bi->ik", W.conj(), dA, V) / denom[:, None]
+    else:
+        lam = np.asarray(nominal.poles(), dtype=complex)
+        _, G = unc.scaled_jacobian(lambda m: _match(lam, np.asarray(m.poles(), complex)),
+                                   step=step)
+        G = G.astype(complex)
+    return lam.astype(complex), G, coincident_poles(lam, np.abs(_complex_std(G)))
+
+
+def coincident_poles(lam: Any, sd: Any) -> np.ndarray:
+    """Mask of the poles that coincide with another pole, numerically or within their
+    uncertainty: where the first-order (eigenvalue-derivative) standard deviation does not
+    exist or does not hold.
+
+    Pole ``i`` coincides with pole ``j`` when ``|lambda_i - lambda_j|`` is at round-off level
+    (``1e-7`` of the largest modulus, at least ``1e-7``), or not larger than the larger of
+    their first-order standard deviations ``sd`` (moduli): the data cannot tell the two
+    apart, and near a repeated eigenvalue the poles move like the square root of the
+    perturbation, not linearly. Distinct poles whose uncertainty regions stay apart keep
+    their first-order standard deviation, however close they are.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> coincident_poles(np.array([0.5, 0.8, 0.81]), np.array([0.01, 0.002, 0.003]))
+    array([False, False, False])
+    >>> coincident_poles(np.array([0.5, 0.8, 0.81]), np.array([0.01, 0.02, 0.01]))
+    array([False,  True,  True])
+    """
+    lam = np.asarray(lam, complex).ravel()
+    sd = np.asarray(sd, float).ravel()
+    if lam.size < 2:
+        return ~np.isfinite(sd)
+    dist = np.abs(lam[:, None] - lam[None, :])
+    np.fill_diagonal(dist, np.inf)
+    tiny = 1e-7 * max(1.0, float(np.max(np.abs(lam))))
+    reach = np.maximum(sd[:, None], sd[None, :])
+    close = (dist <= tiny) | (dist <= np.where(np.isfinite(reach), reach, np.inf))
+    return close.any(axis=1) | ~np.isfinite(sd)
+
+
+_MC_DRAWS = 2000
+
+
+def _pole_draws(model: Any, lam: np.ndarray, n: int = _MC_DRAWS, rng: Any = 0) -> np.ndarray:
+    """Poles of ``n`` models drawn from the parameter covariance, matched to ``lam``
+    (``(n, len(lam))``); the seed is fixed so that reports are reproducible."""
+    unc = require(model)
+    return np.array([_match(lam, np.asarray(m.poles(), complex)) for m in unc.sample(n, rng)])
+
+
+def _partners(lam: np.ndarray) -> np.ndarray:
+    """Index of each pole's complex-conjugate partner (itself for a real pole)."""
+    idx = np.arange(lam.size)
+    for i, z in enumerate(lam):
+        if z.imag != 0:
+            d = np.abs(lam - np.conj(z))
+            d[i] = np.inf
+            j = int(np.argmin(d))
+            if d[j] <= 1e-7 * max(1.0, abs(z)):
+                idx[i] = j
+    return idx
+
+
+def _pooled_std(lam: np.ndarray, x: np.ndarray, odd: bool = False) -> np.ndarray:
+    """Sample std of each column of ``x`` (draws of a quantity per pole), pooled with the
+    conjugate partner's column (negated when ``odd``, as for imaginary parts): a conjugate
+    pair gets one std, whatever way the matching assigned the draws within the pair."""
+    part = _partners(lam)
+    out = np.empty(lam.size)
+    for i, j in enumerate(part):
+        v = x[:, i] if i == j else np.r_[x[:, i], -x[:, j] if odd else x[:, j]]
+        v = v[np.isfinite(v)]
+        out[i] = v.std(ddof=1) if v.size > 1 else np.nan
+    return out
+
+
+def _draws_std(lam: np.ndarray, draws: np.ndarray) -> np.ndarray:
+    """Complex std (real and imaginary parts) of matched pole draws, pooled over pairs."""
+    return _pooled_std(lam, draws.real) + 1j * _pooled_std(lam, draws.imag, odd=True)
+
+
+def _warn_monte_carlo(mask: np.ndarray, lam: np.ndarray, what: str) -> None:
+    which = ", ".join(f"{z:.4g}" for z in lam[mask][:6]) + (" ..." if mask.sum() > 6 else "")
+    warnings.warn(
+        f"{int(mask.sum())} pole(s) ({which}) coincide with another pole within their "
+        f"uncertainty, where a first-order {what} does not hold: reported the Monte Carlo "
+        f"value from {_MC_DRAWS} models drawn from the parameter covariance (first order for "
+        "the other poles)", UncertaintyWarning, stacklevel=4)
+
+
+def pole_std(model: Any, method: str = "linear", *, n: int = 1000, rng: Any = None
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """Poles and their std (complex: ``sd.real`` of the real parts, ``sd.imag`` of the
+    imaginary parts); see :meth:`StateSpaceModel.poles`.
+
+    ``method="linear"`` propagates to first order through the eigenvalue derivative (left
+    and right eigenvectors); poles that coincide with another (:func:`coincident_poles`)
+    get the Monte Carlo value instead, with an :class:`UncertaintyWarning` saying so.
+    """
+    if method not in _METHODS:
+        raise DataError(f"method must be 'linear' or 'monte-carlo', got {method!r}")
+    if method == "monte-carlo":
+        unc = require(model)
+        lam = np.asarray(unc.build(unc.theta).poles(), complex)
+        return lam, _draws_std(lam, _pole_draws(model, lam, n, rng))
+    lam, G, bad = pole_jacobian(model)
+    sd = _complex_std(G)
+    if bad.any():
+        sd = np.where(bad, _draws_std(lam, _pole_draws(model, lam)), sd)
+        _warn_monte_carlo(bad, lam, "standard deviation")
+    return lam, sd
+
+
+def _damping_parts(z: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Natural frequency (rad/s) and damping of discrete poles ``z`` (any shape)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.log(np.where(z != 0, z, np.nan)) / dt
+        wn = np.abs(s)
+        return wn, -s.real / wn
+
+
+def damping_std(model: Any, dt: float) -> dict[str, np.ndarray]:
+    """Poles, ``s = log(z)/dt``, natural frequency (rad/s, Hz), damping and their std (first
+    order through the pole Jacobian; Monte Carlo for poles that coincide with another, as
+    :func:`pole_std`). A pole at ``z = 0`` (infinitely fast) has NaN std."""
+    lam, G, bad = pole_jacobian(model)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.where(lam != 0, np.log(np.where(lam != 0, lam, 1.0)) / dt, -np.inf)
+        Gs = G / (lam[:, None] * dt)
+        wn = np.abs(s)
+        dwn = (np.conj(s)[:, None] * Gs).real / wn[:, None]
+        dzeta = -Gs.real / wn[:, None] + (s.real / wn**2)[:, None] * dwn
+        wn_sd = np.sqrt(np.sum(dwn**2, axis=1))
+        zeta_sd = np.sqrt(np.sum(dzeta**2, axis=1))
+    pole_sd = _complex_std(G)
+    at_zero = ~np.isfinite(s) | (wn == 0)
+    mc = bad & ~at_zero
+    if mc.any():
+        draws = _pole_draws(model, lam)
+        w_d, z_d = _damping_parts(draws, dt)
+        pole_sd = np.where(mc, _draws_std(lam, draws), pole_sd)
+        wn_sd = np.where(mc, _pooled_std(lam, w_d), wn_sd)
+        zeta_sd = np.where(mc, _pooled_std(lam, z_d), zeta_sd)
+        _warn_monte_carlo(mc, lam, "damping and frequency std")
+    if at_zero.any():
+        warnings.warn(f"{int(at_zero.sum())} pole(s) at z = 0 (infinitely fast): their damping "
+                      "and frequency std are reported as NaN", UncertaintyWarning, stacklevel=3)
+    nan = np.full(lam.size, np.nan)
+    return {
+        "poles": lam, "s": s, "pole_std": pole_sd,
+        "wn_std": np.where(at_zero, nan, wn_sd),
+        "wn_hz_std": np.where(at_zero, nan, wn_sd / (2 * np.pi)),
+        "zeta_std": np.where(at_zero, nan, zeta_sd),
+        "std_method": np.where(mc, "monte-carlo", "linear"),
+    }

@@ -1,0 +1,118 @@
+"""A model that takes and returns raw data: a model fitted on a detrended record, with the
+trend (offsets, slopes) that was removed from it.
+
+``d, tr = sysid.detrend(raw, return_trend=True)``, ``m = sysid.n4sid(d, 4)``, then
+``tr.attach(m)`` (or ``TrendedModel(m, tr)``) simulates and predicts in raw units:
+
+.. math::
+
+    \\hat y_{raw} = \\mathrm{model}(u_{raw} - u_0(t)) + y_0(t)
+
+with ``u_0(t), y_0(t)`` the trend from the first sample of the record (``offset + slope
+t``). :func:`sysid.compare` estimates the initial state on the detrended record, so the
+fit numbers equal those of ``model`` on ``tr.apply(raw)`` (for offsets; a linear trend
+changes the variance the fit is normalised by).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .protocol import ModelMixin
+
+__all__ = ["TrendedModel"]
+
+
+class TrendedModel(ModelMixin):
+    """``model`` (fitted on detrended data) that takes and returns raw data.
+
+    Parameters
+    ----------
+    model : sysid.Model
+        Any model of the protocol, fitted on the detrended record.
+    trend : Trend
+        From ``sysid.detrend(data, "mean" or "linear", return_trend=True)``.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> true = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]], dt=1.0)
+    >>> du = rng.standard_normal(300)
+    >>> raw = sysid.IOData(u=20.0 + du, y=50.0 + true.simulate(du), dt=1.0)
+    >>> d, tr = sysid.detrend(raw, "mean", return_trend=True)
+    >>> m = tr.attach(sysid.n4sid(d, 1))
+    >>> m
+    TrendedModel(StateSpaceModel(nstates=1, ...), Trend(mean, ...))
+    >>> yhat = m.simulate(raw.u)                 # raw inputs in, raw outputs out
+    >>> bool(abs(yhat.mean() - raw.y.mean()) < 0.1)
+    True
+    """
+
+    def __init__(self, model: Any, trend: Any) -> None:
+        from ..errors import DataError
+
+        if not callable(getattr(trend, "restore_outputs", None)):
+            raise DataError(f"trend must be a sysid.Trend, got {type(trend).__name__}")
+        trend._parametric()
+        if (len(trend.u_scale), len(trend.y_scale)) != (model.ninputs, model.noutputs):
+            raise DataError(
+                f"the trend has {len(trend.u_scale)} input(s) and {len(trend.y_scale)} "
+                f"output(s) but the model {model.ninputs} and {model.noutputs}")
+        self.model = model
+        self.trend = trend
+
+    # -- the protocol: names and sizes from the model --------------------------------------
+    @property
+    def dt(self) -> float:
+        return float(self.model.dt)
+
+    @property
+    def ninputs(self) -> int:
+        return int(self.model.ninputs)
+
+    @property
+    def noutputs(self) -> int:
+        return int(self.model.noutputs)
+
+    @property
+    def input_names(self) -> list[str]:
+        return list(self.model.input_names)
+
+    @property
+    def output_names(self) -> list[str]:
+        return list(self.model.output_names)
+
+    @property
+    def n_parameters(self) -> int:
+        return int(self.model.n_parameters)
+
+    @property
+    def info(self) -> dict[str, Any]:
+        return {**dict(self.model.info), "trend": repr(self.trend)}
+
+    # -- raw data in, raw data out ---------------------------------------------------------
+    def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
+        """Raw outputs for raw inputs (``x0``: the inner model's initial state)."""
+        du = self.trend.remove_inputs(u, self.dt)
+        y = self.model.simulate(du) if x0 is None else self.model.simulate(du, x0=x0)
+        return self.trend.restore_outputs(y, self.dt)
+
+    def predict(self, u: Any, y: Any, horizon: int = 1, **kw: Any) -> np.ndarray:
+        """``horizon``-step predictions of the raw outputs from raw data."""
+        du = self.trend.remove_inputs(u, self.dt)
+        dy = self.trend.remove_outputs(y, self.dt)
+        out = self.model.predict(du, dy, horizon, **kw)
+        return self.trend.restore_outputs(out, self.dt)
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """The inner model's frequency response (a trend does not change it)."""
+        return np.asarray(self.model.freqresp(omega))
+
+    def poles(self) -> np.ndarray:
+        return np.asarray(self.model.poles())
+
+    def __repr__(self) -> str:
+        return f"TrendedModel({self.model!r}, {self.trend!r})"

@@ -1,0 +1,124 @@
+"""Input delays from data (MATLAB's ``delayest``): the ``nk`` whose ARX(na, nb, nk) model
+leaves the smallest residual.
+
+Real records carry offsets (a heater at 5 V, a temperature at 40 degC); an ARX model without
+an intercept fits them through its coefficients and the loss then says little about the
+delay, so the means of each experiment are removed first. With several inputs the delays are
+chosen together: each input alone gives a start, then a coordinate search changes one
+input's delay at a time in the ARX model with all inputs until none improves the loss (the
+other inputs are part of the model, not noise). A delay on the edge of the searched range is
+reported with a warning, because the minimum may lie beyond it.
+
+Examples
+--------
+>>> import sysid
+>>> sysid.delayest(sysid.datasets.load_dryer())      # Ljung's dryer: three samples
+3
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import as_int, experiment_arrays
+from ..errors import DataError
+
+__all__ = ["delayest", "DelayWarning"]
+
+
+class DelayWarning(UserWarning):
+    """The estimated delay sits on the edge of the searched range."""
+
+
+def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int = 10
+             ) -> Any:
+    """Input delay(s) in samples.
+
+    Parameters
+    ----------
+    data : IOData
+        One or several experiments; one or several inputs and outputs.
+    na, nb : int
+        Orders of the ARX models compared (``na >= 0``, ``nb >= 1``).
+    nk_min, nk_max : int
+        Range of delays searched (samples).
+
+    Returns
+    -------
+    int or ndarray
+        The delay of a single-input single-output record; ``(noutputs, ninputs)`` otherwise.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal((600, 2))
+    >>> y = signal.lfilter([0, 0, 0, 0.7], [1, -0.5], u[:, 0]) + \\
+    ...     signal.lfilter([0, 1.0], [1, -0.2], u[:, 1]) + 5.0   # an offset, as real records
+    >>> sysid.delayest(sysid.IOData(u, y[:, None], 1.0))
+    array([[3, 1]])
+    """
+    na = as_int(na, "na", 0, 50)
+    nb = as_int(nb, "nb", 1, 50)
+    nk_min = as_int(nk_min, "nk_min", 0)
+    nk_max = as_int(nk_max, "nk_max", 0)
+    if nk_min > nk_max:
+        raise DataError(f"need nk_min <= nk_max, got {nk_min} and {nk_max}")
+    exps = experiment_arrays(data)
+    m, l = exps[0][0].shape[1], exps[0][1].shape[1]
+    if m == 0:
+        raise DataError("delayest needs inputs: a time series has no input delay")
+    shortest = min(u.shape[0] for u, _ in exps)
+    need = 2 * (nk_max + max(na, nb) + na + m * nb) + 2
+    if shortest < need:
+        raise DataError(f"the shortest experiment has {shortest} samples, too few to compare "
+                        f"delays up to nk_max={nk_max} with ARX({na}, {nb}): give at least "
+                        f"{need} samples or a smaller nk_max")
+    centred = [(np.ascontiguousarray(u - u.mean(axis=0)), y - y.mean(axis=0)) for u, y in exps]
+    out = np.zeros((l, m), dtype=int)
+    grid = list(range(nk_min, nk_max + 1))
+    for i in range(l):
+        one = [(u, np.ascontiguousarray(y[:, [i]])) for u, y in centred]
+        out[i] = _output_delays(one, na, nb, grid)
+    edge = (out == nk_max) & (nk_max > nk_min)
+    if np.any(edge):
+        warnings.warn(f"the estimated delay equals nk_max={nk_max} for "
+                      f"{int(edge.sum())} pair(s): the loss may fall further beyond; "
+                      "search a larger range (nk_max)", DelayWarning, stacklevel=2)
+    return int(out[0, 0]) if l == m == 1 else out
+
+
+def _output_delays(exps: list[tuple[np.ndarray, np.ndarray]], na: int, nb: int,
+                   grid: list[int]) -> np.ndarray:
+    m = exps[0][0].shape[1]
+    nk = []
+    for j in range(m):
+        sub = [(np.ascontiguousarray(u[:, [j]]), y) for u, y in exps]
+        table = np.asarray(_sysid.arx_struc(sub, [na], [nb], grid))
+        nk.append(int(table[int(np.argmin(table[:, 3])), 2]))
+    if m == 1:
+        return np.array(nk)
+
+    def loss(k: list[int]) -> float:
+        return float(_sysid.arx_fit(exps, [[na]], [[nb] * m], [k])[0]["loss"])
+
+    best = loss(nk)
+    for _ in range(5):                   # coordinate sweeps until no input's delay moves
+        moved = False
+        for j in range(m):
+            for cand in grid:
+                if cand == nk[j]:
+                    continue
+                trial = list(nk)
+                trial[j] = cand
+                v = loss(trial)
+                if v < best * (1 - 1e-12):
+                    best, nk, moved = v, trial, True
+        if not moved:
+            break
+    return np.array(nk)

@@ -1,0 +1,214 @@
+"""``tfest`` from frequency-response data: Sanathanan-Koerner iterations, then weighted
+nonlinear least squares.
+
+For each output/input pair with measured ``H_k = H(omega_k)`` and weights ``W_k``:
+
+1. Sanathanan-Koerner (1963): with the previous denominator ``D_{i-1}`` fixed, the error
+   ``W (N - H D) / D_{i-1}`` is linear in the coefficients; a few weighted linear
+   least-squares solves (frequency scaled by the geometric mean of the grid for conditioning)
+   converge to a good start. A known delay is removed from ``H`` first; ``"auto"`` delays are
+   chosen from a grid by the fitted cost.
+2. The exact weighted cost ``1/2 sum |W (N/D e^{-j omega tau} - H)|^2`` is minimised on the
+   shared Gauss-Newton search (Rust core, :func:`sysid._sysid.tf_fit_frequency`) with the
+   delay free or fixed; the covariance is the Gauss-Newton one, with the residual variance
+   ``1/2`` when the weights are ``1/std`` of the FRD, estimated from the residuals otherwise.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from ..errors import DataError
+from ..models.paramtable import ParameterTable
+from ..models.uncertainty import ParameterUncertainty
+from .model import TransferFunction
+from .options import blockdiag, delays, orders, progress_callback
+
+__all__ = ["tfest_frd", "sanathanan_koerner"]
+
+
+def sanathanan_koerner(x: np.ndarray, h: np.ndarray, w: np.ndarray, den_pow: list[int],
+                       lead: int, num_pow: list[int], iters: int = 20
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """``(a, b)`` of ``N/D`` (powers as in the Rust fit) by Sanathanan-Koerner iterations.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.tf.frequency import sanathanan_koerner
+    >>> s = 1j * np.logspace(-1, 1, 30)
+    >>> a, b = sanathanan_koerner(s, 2 / (s + 3), np.ones(30), [0], 1, [0])
+    >>> np.round(a, 8), np.round(b, 8)
+    (array([3.]), array([2.]))
+    """
+    prev = np.ones(x.size, dtype=complex)
+    a = np.zeros(len(den_pow))
+    b = np.zeros(len(num_pow))
+    for _ in range(iters):
+        sc = w / np.abs(prev)
+        cols = [-h * x ** p for p in den_pow] + [x ** q for q in num_pow]
+        M = np.column_stack(cols) * sc[:, None] if cols else np.zeros((x.size, 0))
+        rhs = h * x ** lead * sc
+        Mr = np.vstack([M.real, M.imag])
+        rr = np.concatenate([rhs.real, rhs.imag])
+        norms = np.linalg.norm(Mr, axis=0)
+        norms[norms == 0] = 1.0
+        th = np.linalg.lstsq(Mr / norms, rr, rcond=None)[0] / norms
+        a_new, b_new = th[:len(den_pow)], th[len(den_pow):]
+        prev = x ** lead + sum(ai * x ** p for ai, p in zip(a_new, den_pow))
+        done = np.allclose(a_new, a, rtol=1e-12, atol=0) and np.allclose(b_new, b, rtol=1e-12,
+                                                                          atol=0)
+        a, b = a_new, b_new
+        if done:
+            break
+    return a, b
+
+
+def _fit_pair(omega: np.ndarray, h: np.ndarray, wgt: np.ndarray, n: int, m: int, dt: float,
+              tau0: float, free: bool, noise: float | None, max_iter: int, tol: float,
+              cb: Any) -> dict[str, Any]:
+    cont = not dt
+    if cont:
+        w0 = float(np.exp(np.mean(np.log(omega[omega > 0])))) if np.any(omega > 0) else 1.0
+        x = 1j * omega / w0
+        lead, den_pow, num_pow = n, list(range(n - 1, -1, -1)), list(range(m, -1, -1))
+    else:
+        w0 = 1.0
+        x = np.exp(-1j * omega * dt)
+        lag = 1 + int(round(tau0))       # one-sample lag (no feedthrough), as MATLAB
+        lead, den_pow, num_pow = 0, list(range(1, n + 1)), list(range(lag, lag + m + 1))
+    wvar = 1j * omega if cont else np.zeros(omega.size, complex)
+    best = None
+    for tau in (_delay_grid(omega, h, dt) if free else [0.0 if dt else tau0]):
+        hd = h * np.exp(wvar * tau)
+        a, b = sanathanan_koerner(x, hd, wgt, den_pow, lead, num_pow)
+        th0 = list(a) + list(b) + [tau * w0]
+        res = _sysid.tf_fit_frequency(
+            (x.real.copy(), x.imag.copy()), ((wvar / w0).real.copy(), (wvar / w0).imag.copy()),
+            (h.real.copy(), h.imag.copy()), list(map(float, wgt)), lead, den_pow, num_pow,
+            list(map(float, th0)), fixed=[False] * (n + m + 1) + [not (free and cont)],
+            lower=[-np.inf] * (n + m + 1) + [0.0], noise_variance=noise, max_iter=max_iter,
+            tol=tol, progress=cb)
+        if best is None or res["cost"] < best["cost"]:
+            best = res
+    assert best is not None
+    # back from the scaled frequency: s = w0 s'
+    k = n + m + 1
+    scale = np.ones(k + 1)
+    if cont:
+        scale[:n] = [w0 ** (i + 1) for i in range(n)]
+        scale[n:k] = [w0 ** (n + i - m) for i in range(m + 1)]
+        scale[k] = 1.0 / w0
+    best["theta"] = np.asarray(best["theta"]) * scale
+    best["covariance"] = np.asarray(best["covariance"]) * np.outer(scale, scale)
+    return best
+
+
+def _delay_grid(omega: np.ndarray, h: np.ndarray, dt: float) -> list[float]:
+    if dt:
+        return [0.0]
+    wmax = float(np.max(omega))
+    return list(np.linspace(0.0, 2.0 * np.pi / wmax * 8, 17)) if wmax > 0 else [0.0]
+
+
+def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
+              max_iter: int, tol: float, progress: Any) -> TransferFunction:
+    """The FRD branch of :func:`sysid.tfest` (see the module documentation)."""
+    l, m = frd.n_outputs, frd.n_inputs
+    npo = orders(n_poles, l, m, "n_poles", 0)
+    nze = np.maximum(npo - 1, 0) if n_zeros is None else orders(n_zeros, l, m, "n_zeros", 0)
+    if np.any(nze > npo):
+        raise DataError("n_zeros must not exceed n_poles (the model would be improper)")
+    given, auto = delays(iodelay, l, m)
+    dtv = 0.0 if dt is None else float(dt)
+    if dtv and (frd.dt is None or abs(dtv - float(frd.dt)) > 1e-9 * dtv):
+        raise DataError(f"a discrete model needs the FRD's sample time: the FRD has dt="
+                        f"{frd.dt}, dt={dt} was given")
+    omega = frd.omega
+    k_par = int(np.max(npo + nze + 2))
+    if omega.size * 2 < k_par:
+        raise DataError(f"the FRD has {omega.size} frequencies, too few for {k_par} "
+                        "parameters: measure more frequencies or lower n_poles")
+    if frd.std is not None:
+        if np.any(frd.std <= 0):
+            raise DataError("the FRD's std has zero entries: drop them or remove the std")
+        weights, noise = 1.0 / frd.std, 0.5
+    else:
+        weights, noise = np.ones(frd.response.shape), None
+    cb, close = progress_callback(progress, max_iter)
+    nums, dens, names, thetas, covs = [], [], [], [], []
+    dl = np.zeros((l, m))
+    try:
+        for i in range(l):
+            rn, rd = [], []
+            for j in range(m):
+                n, z = int(npo[i, j]), int(nze[i, j])
+                r = _fit_pair(omega, frd.response[:, i, j], weights[:, i, j], n, z, dtv,
+                              float(given[i, j]), auto, noise, max_iter, tol, cb)
+                th = r["theta"]
+                rd.append(np.concatenate([[1.0], th[:n]]))
+                rn.append(th[n:n + z + 1])
+                dl[i, j] = th[-1] if not dtv else float(given[i, j])
+                pre = f"{frd.output_names[i]}<-{frd.input_names[j]}:"
+                names += [f"{pre}a{k + 1}" for k in range(n)] + \
+                    [f"{pre}b{k}" for k in range(z + 1)] + [f"{pre}iodelay"]
+                thetas.append(th)
+                covs.append(r["covariance"])
+            nums.append(rn)
+            dens.append(rd)
+    finally:
+        close()
+    G = _assemble(frd, nums, dens, dl, dtv, names, thetas, covs, auto)
+    return G
+
+
+def _assemble(frd: Any, nums: list[Any], dens: list[Any], dl: np.ndarray, dtv: float,
+              names: list[str], thetas: list[np.ndarray], covs: list[np.ndarray],
+              auto: bool) -> TransferFunction:
+    if dtv:  # z^-1 polynomials (numerator after its lag) -> descending powers of z
+        nums = [[np.concatenate([np.zeros(1 + int(round(d))), b]) for b, d in zip(rn, dr)]
+                for rn, dr in zip(nums, dl)]
+        dl = np.zeros_like(dl)
+        pad = [[(np.pad(b, (0, max(a.size, b.size) - b.size)),
+                 np.pad(a, (0, max(a.size, b.size) - a.size))) for b, a in zip(rn, rd)]
+               for rn, rd in zip(nums, dens)]
+        nums = [[p[0] for p in r] for r in pad]
+        dens = [[p[1] for p in r] for r in pad]
+    info = {"method": "tfest (frequency response: Sanathanan-Koerner + weighted NLS)",
+            "n_frequencies": int(frd.omega.size), "weighting": "1/std" if frd.std is not None
+            else "none", "n_delays_estimated": int(dl.size) if auto else 0}
+    G = TransferFunction(nums, dens, dt=dtv, iodelay=dl, input_names=frd.input_names,
+                         output_names=frd.output_names, info=info)
+    theta = np.concatenate(thetas)
+    fixed = np.array([n.endswith("iodelay") and not auto for n in names])
+    P = blockdiag(covs)
+    G.parameters = ParameterTable(names, theta, np.sqrt(np.clip(np.diag(P), 0, None)), fixed)
+    l, m = G.noutputs, G.ninputs
+    n_den, o = [], 0
+    for th in thetas:
+        n_den.append(sum(":a" in x for x in names[o:o + th.size]))
+        o += th.size
+
+    def build(t: np.ndarray) -> TransferFunction:
+        o, rn, rd, dd = 0, [], [], np.zeros((l, m))
+        for i in range(l):
+            nn, ddn = [], []
+            for j in range(m):
+                k = thetas[i * m + j].size
+                q = t[o:o + k]
+                n = n_den[i * m + j]
+                ddn.append(np.concatenate([[1.0], q[:n]]))
+                nn.append(q[n:k - 1])
+                dd[i, j] = max(q[-1], 0.0)
+                o += k
+            rn.append(nn)
+            rd.append(ddn)
+        return TransferFunction(rn, rd, dt=dtv, iodelay=np.round(dd) if dtv else dd,
+                                input_names=G.input_names, output_names=G.output_names)
+
+    if not dtv:
+        G.uncertainty = ParameterUncertainty(theta, P, build, names=names)
+    return G

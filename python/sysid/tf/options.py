@@ -1,0 +1,72 @@
+"""Argument checks and small helpers shared by :func:`sysid.tfest` (time and frequency
+domain) and :func:`sysid.procest`."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..errors import DataError
+
+__all__ = ["orders", "delays", "progress_callback", "blockdiag", "fit_percent"]
+
+
+def orders(x: Any, l: int, m: int, name: str, lo: int) -> np.ndarray:
+    a = np.asarray(x)
+    if a.dtype.kind not in "iuf" or not np.all(a == np.round(a)):
+        raise DataError(f"{name} must be a whole number (or one per output/input pair), got {x!r}")
+    try:
+        out = np.broadcast_to(a.astype(int), (l, m)).copy()
+    except ValueError:
+        raise DataError(f"{name} must be one number or an array ({l}, {m}) for {l} output(s) "
+                        f"and {m} input(s), got shape {a.shape}") from None
+    if np.any(out < lo) or np.any(out > 30):
+        raise DataError(f"{name} must lie in {lo}..30, got {out.ravel().tolist()}")
+    return out
+
+
+def delays(iodelay: Any, l: int, m: int) -> tuple[np.ndarray, bool]:
+    if iodelay is None:
+        return np.zeros((l, m)), False
+    if isinstance(iodelay, str):
+        if iodelay != "auto":
+            raise DataError(f"iodelay must be None, seconds, or 'auto', got {iodelay!r}")
+        return np.zeros((l, m)), True
+    try:
+        d = np.broadcast_to(np.asarray(iodelay, dtype=float), (l, m)).copy()
+    except (ValueError, TypeError):
+        raise DataError(f"iodelay must be seconds (one value or ({l}, {m})) or 'auto', got "
+                        f"{iodelay!r}") from None
+    if not np.all(np.isfinite(d)) or np.any(d < 0):
+        raise DataError(f"iodelay must be finite and >= 0 seconds, got {d.ravel().tolist()}")
+    return d, False
+
+
+def progress_callback(progress: Any, max_iter: int) -> Any:
+    from .._progress import iteration_callback, iteration_printer
+
+    return iteration_callback(progress, "tfest", max_iter,
+                              iteration_printer("tfest", "sum of squares / 2"))
+
+
+def blockdiag(mats: list[np.ndarray]) -> np.ndarray:
+    k = sum(m.shape[0] for m in mats)
+    out, o = np.zeros((k, k)), 0
+    for m in mats:
+        out[o:o + m.shape[0], o:o + m.shape[0]] = m
+        o += m.shape[0]
+    return out
+
+
+def fit_percent(G: Any, data: Any) -> None:
+    num = den = 0.0
+    fits = []
+    for i in range(G.noutputs):
+        num = den = 0.0
+        for u, y in data.experiments:
+            yh = G.simulate(u, dt=data.dt)[:, i]
+            num += float(np.sum((y[:, i] - yh) ** 2))
+            den += float(np.sum((y[:, i] - np.mean(y[:, i])) ** 2))
+        fits.append(100.0 * (1 - np.sqrt(num / den)) if den > 0 else float("nan"))
+    G.info["fit_percent"] = [round(f, 4) for f in fits]

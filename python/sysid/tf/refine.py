@@ -1,0 +1,248 @@
+"""Output-error refinement of continuous-time rational models on sampled data, shared by
+:func:`sysid.tfest` and :func:`sysid.procest`.
+
+One output ``y = sum_j G_j(s; p_j) e^{-s tau_j} u_j + e`` with any parameterisation
+``p_j -> (num_j, den_j)`` of each pair: the pairs are realised (controllable canonical form),
+sampled exactly with the data's hold and their delays (:mod:`sysid.tf.sampling`), and the
+simulation error is minimised by the grey-box predictor on the shared Gauss-Newton search
+(``_sysid.greybox_linear`` with focus ``"simulation"``; the map from ``p`` to the sampled
+matrices is differentiated by central differences, exact to about ``1e-10``). A delay moves
+freely inside one sample interval ``[l h, (l + 1) h]`` (the sampled model is smooth there);
+when it ends on an edge the interval moves and the search resumes. The covariance of ``p``
+and the delays is the Gauss-Newton one with the residual variance (shared
+:mod:`sysid_core::optim::covariance`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from ..errors import DataError
+from .model import assemble
+from .sampling import canonical, sample_pair, shift_columns
+
+__all__ = ["PairStructure", "refine", "ConvergenceWarning"]
+
+
+class ConvergenceWarning(UserWarning):
+    """The search stopped on its iteration limit, before a convergence test was met."""
+
+Coef = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
+
+
+@dataclass
+class PairStructure:
+    """One input's rational model: ``coef(p) -> (num, den)`` (descending powers)."""
+
+    coef: Coef
+    p0: np.ndarray
+    fixed: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    delay: float = 0.0
+    delay_free: bool = False
+    delay_max: float = np.inf
+    names: list[str] = field(default_factory=list)
+
+
+class _Map:
+    """``z -> theta`` of the grey-box predictor for fixed delay intervals."""
+
+    def __init__(self, pairs: Sequence[PairStructure], dt: float, hold: str,
+                 whole: list[int], exps: list[tuple[np.ndarray, np.ndarray]],
+                 x0_mode: str) -> None:
+        self.pairs, self.dt, self.hold, self.whole = pairs, dt, hold, whole
+        self.sizes = [p.p0.size for p in pairs]
+        self.delay_idx = [j for j, p in enumerate(pairs) if p.delay_free or p.delay > 0]
+        self.m = len(pairs)
+        v0 = self.vector([p.p0 for p in pairs], [p.delay for p in pairs])
+        self.scale = np.maximum(np.abs(v0), 1e-3)
+        for k, _ in enumerate(self.delay_idx):
+            self.scale[sum(self.sizes) + k] = dt
+        base = self.sampled(v0)
+        self.taps, self.n = base[4], base[0].shape[0]
+        self.x0_mode = x0_mode
+        self.u0 = [u[0] for u, _ in exps]
+        self.n_x0 = self.n * len(exps) if x0_mode == "estimate" else 0
+
+    def vector(self, ps: Sequence[np.ndarray], taus: Sequence[float]) -> np.ndarray:
+        return np.concatenate(list(ps) + [np.array([taus[j] for j in self.delay_idx])])
+
+    def split(self, v: np.ndarray) -> tuple[list[np.ndarray], list[float]]:
+        ps, o = [], 0
+        for k in self.sizes:
+            ps.append(v[o:o + k])
+            o += k
+        taus = [p.delay for p in self.pairs]
+        for k, j in enumerate(self.delay_idx):
+            taus[j] = float(v[o + k])
+        return ps, taus
+
+    def sampled(self, v: np.ndarray) -> tuple[Any, ...]:
+        ps, taus = self.split(v)
+        blocks, canon = [], []
+        for j, (pair, p, tau) in enumerate(zip(self.pairs, ps, taus)):
+            num, den = pair.coef(p)
+            A, b, c, d = canonical(den, num)
+            r = tau - self.whole[j] * self.dt
+            blocks.append((0, j, sample_pair(A, b, c, d, self.dt, self.whole[j], r, self.hold)))
+            canon.append((A, b, c, d))
+        return assemble(blocks, canon, 1, self.m)
+
+    def theta(self, z: np.ndarray) -> np.ndarray:
+        nv = z.size - self.n_x0
+        Ad, Bt, Cd, Dt, _, G = self.sampled(z[:nv] * self.scale)
+        x0s = [-G @ u0 for u0 in self.u0]
+        if self.n_x0:
+            x0s = [x + z[nv + e * self.n:nv + (e + 1) * self.n] for e, x in enumerate(x0s)]
+        return np.concatenate([Ad.ravel(), Bt.ravel(), Cd.ravel(), Dt.ravel(), *x0s])
+
+    def __call__(self, z: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
+        z = np.asarray(z, dtype=float)
+        th = self.theta(z)
+        if not jac:
+            return th, None
+        M = np.zeros((th.size, z.size))
+        for i in range(z.size):
+            h = 6e-6 * max(1.0, abs(z[i]))
+            up, dn = z.copy(), z.copy()
+            up[i] += h
+            dn[i] -= h
+            M[:, i] = (self.theta(up) - self.theta(dn)) / (2 * h)
+        return th, M
+
+
+def _bounds(pairs: Sequence[PairStructure], mp: _Map) -> tuple[np.ndarray, ...]:
+    lo = np.concatenate([p.lower for p in pairs])
+    hi = np.concatenate([p.upper for p in pairs])
+    fx = np.concatenate([p.fixed for p in pairs])
+    dlo, dhi, dfx = [], [], []
+    for j in mp.delay_idx:
+        w = mp.whole[j]
+        dlo.append(w * mp.dt)
+        dhi.append(min((w + 1) * mp.dt, pairs[j].delay_max))
+        dfx.append(not pairs[j].delay_free)
+    lo = np.concatenate([lo, dlo]) / mp.scale
+    hi = np.concatenate([hi, dhi]) / mp.scale
+    fx = np.concatenate([fx, np.array(dfx, dtype=bool)])
+    return lo, hi, fx
+
+
+def _run(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarray]], dt: float,
+         hold: str, whole: list[int], x0_mode: str, max_iter: int, tol: float,
+         progress: Any) -> tuple[dict[str, Any], _Map]:
+    mp = _Map(pairs, dt, hold, whole, exps, x0_mode)
+    lo, hi, fx = _bounds(pairs, mp)
+    v0 = mp.vector([p.p0 for p in pairs], [p.delay for p in pairs])
+    z0 = np.clip(v0 / mp.scale, lo, hi)
+    nz = z0.size
+    z0 = np.concatenate([z0, np.zeros(mp.n_x0)])
+    inf = np.full(mp.n_x0, np.inf)
+    data = [(np.ascontiguousarray(shift_columns(u, mp.taps)), np.ascontiguousarray(y[:, None]))
+            for u, y in exps]
+    res = _sysid.greybox_linear(
+        (mp.n, len(mp.taps), 1), data, mp, list(map(float, z0)), focus="simulation",
+        with_k=False, reweight=False, x0_params=list(range(nz, nz + mp.n_x0)),
+        lower=list(np.concatenate([lo, -inf])), upper=list(np.concatenate([hi, inf])),
+        fixed=list(map(bool, np.concatenate([fx, np.zeros(mp.n_x0, bool)]))),
+        max_iter=max_iter, tol_cost=tol, tol_step=tol, tol_gradient=tol * 1e-2,
+        progress=progress)
+    return res, mp
+
+
+def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarray]],
+           dt: float, hold: str, *, x0_mode: str = "zero", max_iter: int = 100,
+           tol: float = 1e-10, progress: Any = None) -> dict[str, Any]:
+    """Output-error fit of one output; returns ``p`` per pair, the delays, the covariance of
+    ``[p..., estimated delays...]`` (physical units), ``std``, the search report."""
+    whole = [int(np.floor(p.delay / dt + 1e-9)) for p in pairs]
+    res, mp = _run(pairs, exps, dt, hold, whole, x0_mode, max_iter, tol, progress)
+    history: list[float] = list(res["history"])
+    moves = 0
+    while moves < 20:
+        v = np.asarray(res["p"])[:mp.scale.size] * mp.scale
+        ps, taus = mp.split(v)
+        pairs = [PairStructure(p.coef, q, p.fixed, p.lower, p.upper, t, p.delay_free,
+                               p.delay_max, p.names) for p, q, t in zip(pairs, ps, taus)]
+        trial = list(whole)
+        for j in mp.delay_idx:
+            if not pairs[j].delay_free:
+                continue
+            w, tau = whole[j], taus[j]
+            if tau >= (w + 0.75) * dt and (w + 1) * dt < pairs[j].delay_max:
+                trial[j] = w + 1
+            elif tau <= (w + 0.25) * dt and w > 0:
+                trial[j] = w - 1
+        if trial == whole:
+            break
+        # the neighbouring sample interval, from the edge: kept only if it fits better
+        moved = [PairStructure(p.coef, p.p0, p.fixed, p.lower, p.upper,
+                               float(np.clip(p.delay, t * dt, (t + 1) * dt)), p.delay_free,
+                               p.delay_max, p.names) for p, t in zip(pairs, trial)]
+        res2, mp2 = _run(moved, exps, dt, hold, trial, x0_mode, max_iter, tol, progress)
+        moves += 1
+        if not res2["cost"] < res["cost"] * (1 - 1e-12):
+            break
+        res, mp, whole, pairs = res2, mp2, trial, moved
+        history += list(res["history"])
+    v = np.asarray(res["p"])[:mp.scale.size] * mp.scale
+    ps, taus = mp.split(v)
+    pairs = [PairStructure(p.coef, q, p.fixed, p.lower, p.upper, t, p.delay_free,
+                           p.delay_max, p.names) for p, q, t in zip(pairs, ps, taus)]
+    if res["stop"] == "maximum iterations":
+        import warnings
+
+        warnings.warn(f"the output-error search stopped after max_iter={max_iter} iterations "
+                      "before converging (the result is the best point reached, never worse "
+                      "than the start); raise max_iter", ConvergenceWarning, stacklevel=4)
+    assert res is not None and mp is not None
+    S = mp.scale
+    cov = np.asarray(res["covariance"])[:S.size, :S.size] * np.outer(S, S)
+    names = [n for p in pairs for n in p.names] + [f"{pairs[j].names[0].split(':')[0]}:iodelay"
+                                                   if pairs[j].names else f"iodelay{j}"
+                                                   for j in mp.delay_idx]
+    weak = _unidentifiable(np.asarray(res["unidentifiable"])[:S.size], names)
+    lam = float(np.asarray(res["innovation_covariance"])[0, 0])
+    return {"p": [p.p0 for p in pairs], "delays": [p.delay for p in pairs],
+            "delay_index": mp.delay_idx, "covariance": cov, "noise_variance": lam,
+            "iterations": int(res["iterations"]), "stop": res["stop"],
+            "cost_history": history, "interval_moves": moves,
+            "n_samples": int(res["n_samples"]), "rank": int(res["rank"]),
+            "condition": float(res["condition"]), "unidentifiable": weak}
+
+
+def _unidentifiable(null: np.ndarray, names: list[str]) -> list[int]:
+    """Indices of the parameters in directions the data do not determine, with an
+    :class:`~sysid.IdentifiabilityWarning` naming them (their std is then reported as inf)."""
+    import warnings
+
+    from ..greybox.greybox import IdentifiabilityWarning
+
+    if null.size == 0 or null.ndim != 2 or null.shape[1] == 0:
+        return []
+    idx: set[int] = set()
+    parts = []
+    for v in null.T:
+        # any part along the direction makes the variance unbounded (round-off aside)
+        big = np.flatnonzero(np.abs(v) >= 1e-6 * np.max(np.abs(v)))
+        idx |= set(int(i) for i in big)
+        parts.append(", ".join(names[i] if i < len(names) else f"p{i}" for i in big))
+    warnings.warn("the data cannot determine these parameters separately: " + "; ".join(parts)
+                  + " (a zero far beyond the bandwidth trades off against the delay, for "
+                  "example). Lower n_zeros, fix the delay or use more informative data; their "
+                  "standard deviations are reported as inf.", IdentifiabilityWarning,
+                  stacklevel=4)
+    return sorted(idx)
+
+
+def check_experiments(exps: list[tuple[np.ndarray, np.ndarray]], n_par: int) -> None:
+    """Enough samples for the parameters."""
+    N = sum(u.shape[0] for u, _ in exps)
+    if N < 2 * n_par + 2:
+        raise DataError(f"the data have {N} samples but the model has {n_par} parameters: "
+                        f"give at least {2 * n_par + 2} samples or fewer poles and zeros")

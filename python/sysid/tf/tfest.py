@@ -1,0 +1,371 @@
+"""``sysid.tfest``: transfer-function models from time-domain or frequency-response data."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from ..errors import DataError
+from ..models.paramtable import ParameterTable
+from ..models.uncertainty import ParameterUncertainty
+from .model import TransferFunction
+from .options import blockdiag, delays, fit_percent, orders, progress_callback
+from .refine import PairStructure, check_experiments, refine
+from .srivc import srivc
+
+__all__ = ["tfest"]
+
+_HOLDS = ("zoh", "foh")
+
+
+def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
+          dt: float | None = None, hold: str = "zoh", initial_state: str = "zero",
+          init: TransferFunction | None = None,
+          max_delay: float | None = None, max_iter: int = 100, tol: float = 1e-10,
+          progress: bool | None | Callable[..., Any] = None) -> TransferFunction:
+    """Estimate a transfer-function model (MATLAB's ``tfest``).
+
+    .. math::
+
+        y_i(t) = \\sum_j \\frac{B_{ij}(s)}{A_{ij}(s)} e^{-s \\tau_{ij}} u_j(t) + e_i(t)
+
+    From sampled data (an :class:`~sysid.IOData`): refined instrumental variables for
+    continuous-time models (SRIVC) give the start, then the simulation error is minimised on
+    the shared Gauss-Newton search, the model sampled exactly with the input's ``hold``
+    (fractional delays included). From frequency-response data (an :class:`~sysid.FRD`):
+    Sanathanan-Koerner iterations, then weighted nonlinear least squares (weights ``1/std``
+    when the FRD has a confidence band). Several outputs: one model per output, each a sum of
+    single-input rational functions with their own poles.
+
+    Parameters
+    ----------
+    data : IOData or FRD
+    n_poles : int or array_like (noutputs, ninputs)
+        Number of poles of each pair.
+    n_zeros : int or array_like, optional
+        Number of zeros (default ``n_poles - 1``; at most ``n_poles``).
+    iodelay : None, float, array_like or "auto"
+        Input-output delays in seconds, fixed; ``"auto"`` estimates them (any value, not only
+        whole samples). ``None``: no delay.
+    dt : float, optional
+        ``None`` for a continuous-time model; the data's sample time for a discrete-time
+        model (output error ``B(q)/F(q)``, delays in whole samples).
+    hold : {"zoh", "foh"}
+        How the input behaves between samples (time-domain data).
+    initial_state : {"zero", "estimate"}
+        Start from rest, or estimate the initial state of each experiment (the model's
+        state; the input before the record, which a delay would still deliver, is taken as
+        zero).
+    init : TransferFunction, optional
+        Start the refinement from this model (continuous, same orders) instead of SRIVC.
+    max_delay : float, optional
+        Upper bound on estimated delays (seconds; default a tenth of the record).
+    max_iter, tol : int, float
+        Search limits.
+    progress : bool or callable, optional
+        Progress display (see :mod:`sysid._progress`).
+
+    Returns
+    -------
+    TransferFunction
+        With ``parameters`` (a :class:`~sysid.models.paramtable.ParameterTable` with std),
+        ``uncertainty`` (:class:`~sysid.models.uncertainty.ParameterUncertainty`) and
+        ``info`` (method, iterations, stop reason, cost, fit per output).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> true = sysid.TransferFunction([0.5, 2.0], [1.0, 0.8, 4.0], iodelay=0.13)
+    >>> u = np.random.default_rng(0).standard_normal(600)
+    >>> data = sysid.IOData(u, true.simulate(u, dt=0.05), dt=0.05)
+    >>> G = sysid.tfest(data, 2, 1, iodelay="auto")
+    >>> np.round(G.den[0][0], 6), np.round(G.num[0][0], 6), round(float(G.iodelay[0, 0]), 6)
+    (array([1. , 0.8, 4. ]), array([0.5, 2. ]), 0.13)
+    """
+    if hold not in _HOLDS:
+        raise DataError(f"hold must be 'zoh' or 'foh', got {hold!r}")
+    if initial_state not in ("zero", "estimate"):
+        raise DataError(f"initial_state must be 'zero' or 'estimate', got {initial_state!r}")
+    if hasattr(data, "omega") and hasattr(data, "response"):  # an FRD
+        from .frequency import tfest_frd
+
+        return tfest_frd(data, n_poles, n_zeros, iodelay=iodelay, dt=dt, max_iter=max_iter,
+                         tol=tol, progress=progress)
+    if not hasattr(data, "experiments") or not hasattr(data, "dt"):
+        raise DataError(f"tfest needs a sysid.IOData or sysid.FRD, got {type(data).__name__}; "
+                        "wrap arrays as sysid.IOData(u, y, dt=...)")
+    l, m = data.n_outputs, data.n_inputs
+    if m == 0:
+        raise DataError("tfest needs at least one input; for a time series use sysid.ar")
+    npo = orders(n_poles, l, m, "n_poles", 0)
+    nze = np.maximum(npo - 1, 0) if n_zeros is None else orders(n_zeros, l, m, "n_zeros", 0)
+    if np.any(nze > npo):
+        raise DataError("n_zeros must not exceed n_poles (the model would be improper)")
+    fixed_delays, auto = delays(iodelay, l, m)
+    if dt is not None:
+        return _discrete(data, npo, nze, fixed_delays, auto, dt, max_iter, progress)
+    cb, close = progress_callback(progress, max_iter)
+    try:
+        return _continuous(data, npo, nze, fixed_delays, auto, hold, initial_state, max_delay,
+                           max_iter, tol, cb, _init(init, npo, nze))
+    finally:
+        close()
+
+
+def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
+                hold: str, initial_state: str, max_delay: float | None, max_iter: int,
+                tol: float, cb: Any, init: Any) -> TransferFunction:
+    l, m = data.n_outputs, data.n_inputs
+    exps_all = [(np.asarray(u, float), np.asarray(y, float)) for u, y in data.experiments]
+    N = sum(u.shape[0] for u, _ in exps_all)
+    dmax = max_delay if max_delay is not None else 0.1 * N * data.dt / len(exps_all)
+    rows_num, rows_den, tables, covs, info_out = [], [], [], [], []
+    est_delays = np.zeros((l, m))
+    for i in range(l):
+        exps = [(u, y[:, i]) for u, y in exps_all]
+        check_experiments(exps, int(np.sum(npo[i] + nze[i] + 1)))
+        starts = _starts(exps, data.dt, npo[i], nze[i], delays[i], auto, hold, dmax) \
+            if init is None else [(init.den[i][j], init.num[i][j],
+                                   float(init.iodelay[i, j]) if auto else float(delays[i, j]))
+                                  for j in range(m)]
+        pairs = [_pair(a, b, t, auto, dmax, data.output_names[i], data.input_names[j])
+                 for j, (a, b, t) in enumerate(starts)]
+        res = refine(pairs, exps, data.dt, hold, x0_mode=initial_state, max_iter=max_iter,
+                     tol=tol, progress=cb)
+        nums, dens = [], []
+        for j, p in enumerate(res["p"]):
+            n = int(npo[i, j])
+            dens.append(np.concatenate([[1.0], p[:n]]))
+            nums.append(p[n:])
+        est_delays[i] = res["delays"]
+        rows_num.append(nums)
+        rows_den.append(dens)
+        names = [nm for p in pairs for nm in p.names] + [
+            f"{data.output_names[i]}<-{data.input_names[j]}:iodelay" for j in res["delay_index"]]
+        tables.append((names, res))
+        covs.append(res["covariance"])
+        info_out.append(res)
+    info = _info(info_out, auto, hold, initial_state)
+    info["n_delays_estimated"] = int(l * m) if auto else 0
+    G = TransferFunction(rows_num, rows_den, iodelay=est_delays, hold=hold,
+                         input_names=data.input_names, output_names=data.output_names,
+                         info=info)
+    _attach(G, tables, covs, auto)
+    if initial_state == "zero":  # the fit of a simulation from rest, as the model was fitted
+        fit_percent(G, data)
+    return G
+
+
+def _init(init: Any, npo: np.ndarray, nze: np.ndarray) -> Any:
+    if init is None:
+        return None
+    if not isinstance(init, TransferFunction) or init.dt > 0:
+        raise DataError("init must be a continuous sysid.TransferFunction")
+    if (init.noutputs, init.ninputs) != npo.shape:
+        raise DataError(f"init has {init.noutputs} x {init.ninputs} pairs, the data "
+                        f"{npo.shape[0]} x {npo.shape[1]}")
+    for i, j in init.pairs():
+        if init.den[i][j].size - 1 != npo[i, j] or init.num[i][j].size - 1 > nze[i, j]:
+            raise DataError(f"init pair ({i}, {j}) has {init.den[i][j].size - 1} poles and "
+                            f"{init.num[i][j].size - 1} zeros; tfest was asked for "
+                            f"{npo[i, j]} and {nze[i, j]}")
+    nums = [[np.concatenate([np.zeros(nze[i, j] + 1 - init.num[i][j].size), init.num[i][j]])
+             for j in range(init.ninputs)] for i in range(init.noutputs)]
+    out = TransferFunction(nums, init.den, iodelay=init.iodelay, hold=init.hold)
+    out.num = nums  # keep the requested number of numerator coefficients
+    return out
+
+
+def _start_filter(n: int, lam: float) -> np.ndarray:
+    return np.real(np.poly(-lam * np.ones(n))) if n else np.ones(1)
+
+
+def _oe_cost(exps: list[tuple[np.ndarray, np.ndarray]], j: int, a: np.ndarray,
+             b: np.ndarray, tau: float, dt: float, hold: str) -> float:
+    g = TransferFunction(b, a, iodelay=tau, hold=hold)
+    return float(sum(np.sum((y - g.simulate(u[:, j], dt=dt)[:, 0]) ** 2) for u, y in exps))
+
+
+def _siso_start(exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt: float, n: int, nz: int,
+                tau: float, hold: str, lams: Any = None
+                ) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """The best SRIVC start over a few initial filters ``(s + lam)^n`` (by the simulation
+    error): ``(a, b, cost, lam)``."""
+    wn = np.pi / dt
+    best: tuple[float, np.ndarray, np.ndarray, float] | None = None
+    for lam in (lams if lams is not None else (wn / 100, wn / 20, wn / 5)):
+        a_list, b_list = [], []
+        for u, y in exps:
+            a, b, _ = srivc(np.ascontiguousarray(u[:, j]), np.ascontiguousarray(y), dt, n, nz,
+                            tau, hold, _start_filter(n, lam))
+            a_list.append(a)
+            b_list.append(b)
+        a, b = np.mean(a_list, axis=0), np.mean(b_list, axis=0)
+        if not np.all(np.isfinite(a)) or not np.all(np.isfinite(b)):
+            continue
+        c = _oe_cost(exps, j, a, b, tau, dt, hold)
+        if best is None or c < best[0]:
+            best = (c, a, b, lam)
+    if best is None:
+        raise DataError("the instrumental-variable start failed (no finite estimate): check "
+                        "that the input excites the system, or lower n_poles")
+    return best[1], best[2], best[0], best[3]
+
+
+def _delay_grid(exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt: float, dmax: float
+                ) -> list[float]:
+    """Candidate delays (whole samples) around the ARX delay estimate of input ``j``."""
+    from ..data.iodata import IOData
+    from ..polynomial.delayest import delayest
+
+    u = np.concatenate([u[:, j] for u, _ in exps])
+    y = np.concatenate([y for _, y in exps])
+    kmax = max(int(min(dmax, 0.25 * u.size * dt) / dt), 1)
+    try:
+        nk = delayest(IOData(u[:, None], y[:, None], dt), 2, 2, 0, min(kmax + 1, 60))
+    except Exception:  # the grid below still covers the start
+        nk = 1
+    # a strictly proper ZOH-sampled system without delay has nk = 1
+    return [k * dt for k in range(max(nk - 2, 0), min(nk + 1, kmax) + 1) if k * dt <= dmax]
+
+
+def _starts(exps: list[tuple[np.ndarray, np.ndarray]], dt: float, npo: np.ndarray,
+            nze: np.ndarray, delays: np.ndarray, auto: bool, hold: str, dmax: float
+            ) -> list[tuple[np.ndarray, np.ndarray, float]]:
+    """Per input ``(a, b, delay)``: SRIVC, inputs fitted in turn on what the others leave
+    (three sweeps when there are several); ``auto`` delays from a few whole-sample candidates
+    around the ARX delay estimate."""
+    m = npo.size
+    cur = [(np.ones(1), np.zeros(1), float(delays[j])) for j in range(m)]
+    grids = [_delay_grid(exps, j, dt, dmax) if auto else [float(delays[j])] for j in range(m)]
+    lams: list[Any] = [None] * m
+    for _ in range(1 if m == 1 else 3):
+        for j in range(m):
+            rest = [(u, y - sum(TransferFunction(cur[k][1], cur[k][0], iodelay=cur[k][2],
+                                                 hold=hold).simulate(u[:, k], dt=dt)[:, 0]
+                                for k in range(m) if k != j))
+                    for u, y in exps]
+            best = None
+            for tau in grids[j]:
+                a, b, c, lam = _siso_start(rest, j, dt, int(npo[j]), int(nze[j]), tau, hold,
+                                           lams[j])
+                lams[j] = [lam]
+                if best is None or c < best[3]:
+                    best = (a, b, tau, c)
+            assert best is not None
+            cur[j] = best[:3]
+    return cur
+
+
+def _pair(a: np.ndarray, b: np.ndarray, tau: float, auto: bool, dmax: float, yname: str,
+          uname: str) -> PairStructure:
+    n = a.size - 1
+
+    def coef(p: np.ndarray, n: int = n) -> tuple[np.ndarray, np.ndarray]:
+        return p[n:], np.concatenate([[1.0], p[:n]])
+
+    p0 = np.concatenate([a[1:], b])
+    k = p0.size
+    names = [f"{yname}<-{uname}:a{i + 1}" for i in range(n)] + \
+        [f"{yname}<-{uname}:b{i}" for i in range(b.size)]
+    return PairStructure(coef, p0, np.zeros(k, bool), np.full(k, -np.inf), np.full(k, np.inf),
+                         tau, auto, dmax, names)
+
+
+def _info(results: list[dict[str, Any]], auto: bool, hold: str, x0: str) -> dict[str, Any]:
+    return {"method": "tfest (SRIVC + output error)",
+            "iterations": [r["iterations"] for r in results],
+            "stop": [r["stop"] for r in results],
+            "cost": [float(r["cost_history"][-1]) for r in results],
+            "cost_start": [float(r["cost_history"][0]) for r in results],
+            "noise_variance": [r["noise_variance"] for r in results],
+            "n_samples": results[0]["n_samples"], "hold": hold, "initial_state": x0,
+            "delays": "estimated" if auto else "fixed"}
+
+
+def _attach(G: TransferFunction, tables: list[Any], covs: list[np.ndarray], auto: bool) -> None:
+    names, values, stds = [], [], []
+    for (nm, res), cov in zip(tables, covs):
+        v = np.concatenate([np.concatenate(res["p"]),
+                            [res["delays"][j] for j in res["delay_index"]]])
+        names += nm
+        values.append(v)
+        sd = np.sqrt(np.clip(np.diag(cov), 0, None))
+        sd[res.get("unidentifiable", [])] = np.inf
+        stds.append(sd)
+    theta = np.concatenate(values)
+    fixed = np.array(["iodelay" in n and not auto for n in names])
+    G.parameters = ParameterTable(names, theta, np.concatenate(stds), fixed)
+    P = blockdiag(covs)
+    shapes = [(len(nm), res) for nm, res in tables]
+    proto = G
+
+    def build(t: np.ndarray) -> TransferFunction:
+        t = np.asarray(t, dtype=float)
+        nums, dens, dl = [], [], proto.iodelay.copy()
+        o = 0
+        for i, (_k, res) in enumerate(shapes):
+            row_n, row_d = [], []
+            for j, p in enumerate(res["p"]):
+                n = proto.den[i][j].size - 1
+                q = t[o:o + p.size]
+                row_d.append(np.concatenate([[1.0], q[:n]]))
+                row_n.append(q[n:])
+                o += p.size
+            for j in res["delay_index"]:
+                dl[i, j] = t[o]
+                o += 1
+            nums.append(row_n)
+            dens.append(row_d)
+        return TransferFunction(nums, dens, iodelay=np.maximum(dl, 0), hold=proto.hold,
+                                input_names=proto.input_names,
+                                output_names=proto.output_names)
+
+    G.uncertainty = ParameterUncertainty(theta, P, build, names=names)
+
+
+def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
+              dt: float, max_iter: int, progress: Any) -> TransferFunction:
+    """Discrete-time variant: output error ``B(q)/F(q) q^-nk`` per output (``sysid.oe``)."""
+    import sysid
+
+    if abs(float(dt) - data.dt) > 1e-9 * data.dt:
+        raise DataError(f"dt={dt} differs from the data's sample time {data.dt}: resample the "
+                        "data first (sysid.resample) or pass dt=data.dt")
+    if auto:
+        nk = np.array([[_delayest_one(data, i, j) for j in range(data.n_inputs)]
+                       for i in range(data.n_outputs)])
+    else:
+        nk = delays
+        if np.any(np.abs(nk - np.round(nk)) > 1e-9):
+            raise DataError("a discrete model's iodelay counts whole samples; round it")
+    # one-sample lag as MATLAB's discrete tfest (no feedthrough), plus the delay
+    poly = sysid.oe(data, nze + 1, npo, 1 + np.round(nk).astype(int), max_iter=max_iter,
+                    progress=progress)
+    nums = [[np.concatenate([np.zeros(1 + int(round(nk[i, j]))), poly.b[i][j]])
+             for j in range(data.n_inputs)] for i in range(data.n_outputs)]
+    dens = [[np.concatenate([[1.0], poly.f[i][j]]) for j in range(data.n_inputs)]
+            for i in range(data.n_outputs)]
+
+    def z_form(b: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        k = max(b.size - 1, f.size - 1)
+        return np.pad(b, (0, k - b.size + 1)), np.pad(f, (0, k - f.size + 1))
+
+    pairs = [[z_form(nums[i][j], dens[i][j]) for j in range(data.n_inputs)]
+             for i in range(data.n_outputs)]
+    G = TransferFunction([[p[0] for p in r] for r in pairs], [[p[1] for p in r] for r in pairs],
+                         dt=data.dt, input_names=data.input_names,
+                         output_names=data.output_names,
+                         info={**poly.info, "method": "tfest (discrete, output error)"})
+    G.uncertainty = getattr(poly, "uncertainty", None)
+    fit_percent(G, data)
+    return G
+
+
+def _delayest_one(data: Any, i: int, j: int) -> int:
+    from ..polynomial.delayest import delayest
+
+    sub = data.select(outputs=[i], inputs=[j]) if hasattr(data, "select") else data
+    return delayest(sub)

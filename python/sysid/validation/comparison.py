@@ -1,0 +1,129 @@
+"""Several models compared on one record: ``sysid.compare(data, m1, m2, ...)`` (MATLAB's
+``compare(z, m1, m2)``) returns a :class:`CompareSet`, one
+:class:`~sysid.validation.compare.CompareResult` per model, with a table of their fits, the
+best model, and one plot with the measured outputs and every model's. A model that diverges
+on the record is in the table with a fit of ``-inf`` and flagged, not raised.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..data.iodata import IOData
+from ..errors import DataError
+
+__all__ = ["CompareSet", "split_arguments"]
+
+
+def _is_data(x: Any) -> bool:
+    return isinstance(x, IOData) or (isinstance(x, tuple) and len(x) == 2)
+
+
+def split_arguments(args: tuple[Any, ...], horizon: Any) -> tuple[Any, list[Any], Any]:
+    """``(data, models, horizon)`` from ``compare``'s positional arguments: ``data, m1, m2,
+    ...`` or ``model, data[, horizon]``."""
+    if not args:
+        raise DataError("compare needs data and at least one model: compare(data, m1, m2, ...)")
+    if _is_data(args[0]):
+        data, models = args[0], list(args[1:])
+    elif len(args) in (2, 3) and _is_data(args[1]):
+        data, models = args[1], [args[0]]
+        if len(args) == 3:
+            if horizon is not None:
+                raise DataError("horizon given twice (positionally and by keyword)")
+            horizon = args[2]
+    else:
+        raise DataError(
+            "compare takes compare(data, m1, m2, ...) or compare(model, data): data is a "
+            "sysid.IOData or a pair (u, y), got "
+            + ", ".join(type(a).__name__ for a in args))
+    if not models:
+        raise DataError("compare needs at least one model after the data")
+    if any(_is_data(m) for m in models):
+        raise DataError("compare takes one record: compare(data, m1, m2, ...)")
+    return data, models, horizon
+
+
+class CompareSet:
+    """The comparison of several models with one record.
+
+    Attributes
+    ----------
+    results : list of CompareResult
+        One per model, in the order given.
+    fit : ndarray
+        ``(n_models, n_experiments, n_outputs)`` NRMSE fit in % (``-inf`` where a model
+        diverged).
+    diverged : ndarray of bool
+        Per model: it diverged on some experiment.
+    names : list of str
+        A label per model (``info["method"]`` and order where known).
+    """
+
+    def __init__(self, results: list[Any]) -> None:
+        self.results = results
+        self.fit = np.array([r.fit for r in results])
+        self.diverged = np.array([bool(r.diverged.any()) for r in results])
+        self.names = [_label(r.model, k) for k, r in enumerate(results)]
+        self.output_names = list(results[0].output_names)
+        self.kind = results[0].kind
+
+    def __len__(self) -> int:
+        return len(self.results)
+
+    def __getitem__(self, k: int) -> Any:
+        return self.results[k]
+
+    @property
+    def mean_fit(self) -> np.ndarray:
+        """Fit averaged over outputs and experiments, one per model (``-inf`` if diverged)."""
+        return np.array([r.mean_fit for r in self.results])
+
+    @property
+    def best(self) -> int:
+        """Index of the model with the highest mean fit."""
+        return int(np.argmax(self.mean_fit))
+
+    def to_pandas(self) -> Any:
+        """One row per (model, experiment, output): fit, VAF, RMSE and divergence."""
+        import pandas as pd
+
+        frames = []
+        for name, r in zip(self.names, self.results):
+            df = r.to_pandas()
+            df.insert(0, "model", name)
+            frames.append(df)
+        return pd.concat(frames, ignore_index=True)
+
+    def summary(self) -> str:
+        """A text table: one row per model, its fit per output, and divergence."""
+        w = [max(10, min(24, len(n))) for n in self.output_names]
+        head = f"{'model':<28}" + "".join(f" {n[:k]:>{k}}" for n, k in zip(self.output_names, w))
+        lines = [f"{self.kind} fit % of {len(self)} models", head]
+        for k, (name, r) in enumerate(zip(self.names, self.results)):
+            fits = "".join(f" {f:{c}.2f}" for f, c in zip(r.fit.mean(axis=0), w))
+            flag = "  diverged (unstable on this record)" if self.diverged[k] else ""
+            best = "  best" if k == self.best else ""
+            lines.append(f"{name[:28]:<28}{fits}{flag}{best}")
+        return "\n".join(lines)
+
+    def plot(self, experiment: int = 0, fig: Any = None) -> Any:
+        """Measured outputs and every model's (diverged ones listed, not drawn)."""
+        from ..plot.validation import plot_compare_set
+
+        return plot_compare_set(self, experiment=experiment, fig=fig)
+
+    def __repr__(self) -> str:
+        parts = ", ".join(f"{n}: {'diverged' if d else f'{f:.1f}'}"
+                          for n, f, d in zip(self.names, self.mean_fit, self.diverged))
+        return f"CompareSet({self.kind}, fit % [{parts}])"
+
+
+def _label(model: Any, k: int) -> str:
+    info = getattr(model, "info", None) or {}
+    method = info.get("method") if isinstance(info, dict) else None
+    order = getattr(model, "nstates", None)
+    base = f"{k + 1}: {method or type(model).__name__}"
+    return base + (f" (order {order})" if isinstance(order, (int, np.integer)) else "")

@@ -1,0 +1,98 @@
+"""compare with several models (MATLAB's compare(z, m1, m2, ...)), and a model that diverges
+on the validation data reported with fit -inf, not raised (issue 26)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import sysid
+
+
+def _data(n=3000, seed=0):
+    rng = np.random.default_rng(seed)
+    true = sysid.StateSpaceModel([[0.9, 0.2], [-0.2, 0.9]], [[1.0], [0.5]], [[1.0, 0.0]],
+                                 dt=0.1)
+    u = rng.standard_normal(n)
+    y = true.simulate(u) + 0.05 * rng.standard_normal((n, 1))
+    return true, sysid.IOData(u=u, y=y, dt=0.1)
+
+
+def test_a_diverging_model_is_reported_not_raised():
+    true, data = _data()
+    unstable = sysid.StateSpaceModel([[1.3]], [[1.0]], [[1.0]], dt=0.1)  # overflows on 3000
+    r = sysid.compare(unstable, data)           # was: NumericalError
+    assert r.diverged.tolist() == [True] and r.fit[0, 0] == -np.inf
+    assert "diverged" in repr(r) and "diverged" in r.summary()
+    assert bool(r.to_pandas()["diverged"].iloc[0])
+    # prediction too, and a mildly unstable model that does not overflow but explodes
+    mild = sysid.StateSpaceModel([[1.02]], [[1.0]], [[1.0]], dt=0.1)
+    assert sysid.compare(mild, data).diverged[0]
+    assert sysid.compare(unstable, data, horizon=5).fit[0, 0] == -np.inf
+
+
+def test_several_models_matlab_order():
+    true, data = _data()
+    good = sysid.n4sid(data, 2)
+    worse = sysid.n4sid(data, 1)
+    unstable = sysid.StateSpaceModel([[1.3]], [[1.0]], [[1.0]], dt=0.1)
+    cs = sysid.compare(data, good, worse, unstable)
+    assert isinstance(cs, sysid.CompareSet) and len(cs) == 3
+    assert cs.fit.shape == (3, 1, 1)
+    np.testing.assert_allclose(cs.fit[0], sysid.compare(good, data).fit)
+    np.testing.assert_allclose(cs.fit[1], sysid.compare(data, worse).fit)
+    assert cs.fit[0, 0, 0] > cs.fit[1, 0, 0] > -np.inf and cs.fit[2, 0, 0] == -np.inf
+    assert cs.diverged.tolist() == [False, False, True] and cs.best == 0
+    text = cs.summary()
+    assert "diverged" in text and "best" in text and text.count("\n") == 4
+    assert "diverged" in repr(cs)
+    df = cs.to_pandas()
+    assert len(df) == 3 and list(df["diverged"]) == [False, False, True]
+    assert df["model"].nunique() == 3
+    # the same with predictions, keyword horizon
+    cp = sysid.compare(data, good, worse, horizon=1)
+    assert cp.kind == "1-step prediction" and cp.fit[0, 0, 0] > 90
+
+
+def test_compare_set_plot():
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    true, data = _data(500)
+    cs = sysid.compare(data, sysid.n4sid(data, 2),
+                       sysid.StateSpaceModel([[1.3]], [[1.0]], [[1.0]], dt=0.1))
+    fig = cs.plot()
+    labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert labels[0] == "measured" and any("diverged" in t for t in labels)
+
+
+def test_bad_arguments_are_clear():
+    true, data = _data(200)
+    with pytest.raises(sysid.DataError, match="compare"):
+        sysid.compare(true)
+    with pytest.raises(sysid.DataError, match="at least one model"):
+        sysid.compare(data)
+    with pytest.raises(sysid.DataError, match="one record"):
+        sysid.compare(data, true, data)
+    # the old positional horizon still works
+    assert sysid.compare(true, data, 1).kind == "1-step prediction"
+
+
+def test_docs_validation_several_models_block_runs():
+    """docs/validation.md's block on several models and pole uncertainty runs as shown."""
+    import re
+    import warnings
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "validation.md").read_text()
+    block = next(b for b in re.findall(r"```python\n(.*?)```", text, flags=re.S)
+                 if "cs = sysid.compare(" in b)
+    ns: dict = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.StabilityWarning)
+        exec(compile(block, "docs/validation.md[several models]", "exec"), ns)
+    cs = ns["cs"]
+    assert cs.diverged.tolist() == [False, False, True] and cs.best == 1
+    assert set(ns["table"].std_method) == {"linear"}
+    assert np.all(np.isfinite(ns["table"].wn_hz_std))

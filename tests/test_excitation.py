@@ -1,0 +1,104 @@
+"""The excitation check agrees with the input's spectrum (issue 26): a band-limited multisine
+with 59 lines is persistently exciting of order 118 (it was called order 4, and every fit
+warned), the shipped real records raise no excitation warning, and truly poor inputs (one
+sinusoid, a step at the start of the record, three sines) still warn."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import sysid
+from sysid.errors import ExcitationWarning
+
+N = 2048
+T = np.arange(N)
+
+
+def _multisine(lines, noise=1e-5, seed=0):
+    """Lines (DFT bins of N) with Schroeder-like phases, unit power, a little input noise
+    (a measured or quantised reference signal)."""
+    lines = np.asarray(lines)
+    u = np.cos(2 * np.pi * np.outer(T, lines) / N + np.pi * lines**2 / lines.size).sum(1)
+    u /= u.std()
+    return u + noise * np.random.default_rng(seed).standard_normal(N)
+
+
+def _record(u, seed=1):
+    true = sysid.StateSpaceModel([[0.9, 0.2], [-0.2, 0.9]], [[1.0], [0.5]], [[1.0, 0.0]],
+                                 dt=1.0)
+    y = true.simulate(u) + 0.01 * np.random.default_rng(seed).standard_normal((N, 1))
+    return sysid.IOData(u=u, y=y, dt=1.0)
+
+
+def _excitation_warnings(fn):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        fn()
+    return [w for w in caught if issubclass(w.category, ExcitationWarning)]
+
+
+def test_band_limited_multisine_with_59_lines_is_richly_exciting():
+    u = _multisine(np.arange(1, 60) * 2)      # 59 lines in the lowest 12 % of the band
+    # the lag-covariance rank (MATLAB's pexcit rule) calls it order 5 ...
+    assert sysid.persistent_excitation_order(u, 20, method="covariance") < 8
+    # ... but 59 distinct frequencies make it persistently exciting of order 118
+    assert sysid.persistent_excitation_order(u, 20) == 20
+    assert sysid.persistent_excitation_order(u, 200) >= 110
+    for fit in (lambda: sysid.n4sid(_record(u), 2), lambda: sysid.moesp(_record(u), 4),
+                lambda: sysid.check_excitation(u, 10)):
+        assert not _excitation_warnings(fit)
+
+
+@pytest.mark.parametrize("name", ["dryer", "robot_arm", "winding", "f16", "f16_level3"])
+def test_no_excitation_warning_on_the_shipped_real_records(name):
+    data = getattr(sysid.datasets, f"load_{name}")()
+    assert sysid.persistent_excitation_order(data.u, 20) == 20
+    if data.n_samples > 5000:   # the F-16: the check only (its fits are tested elsewhere)
+        return
+    d = sysid.detrend(data, "mean")
+    est = sysid.SubspaceEstimator(d)
+    for order in (2, 4, 6, 8):
+        assert not _excitation_warnings(lambda o=order: est.fit(o)), (name, order)
+
+
+def test_the_f16_shaker_reference_voltage_is_exciting():
+    """The generator's voltage (a clean 2-15 Hz multisine): order 4 by the lag-covariance
+    rule, far more by its lines."""
+    raw = np.loadtxt(sysid.datasets.path("f16"), delimiter=",", skiprows=1,
+                     usecols=1, max_rows=16384)
+    assert sysid.persistent_excitation_order(raw, 40) == 40
+
+
+def test_poor_inputs_still_warn():
+    sine = np.sin(0.3 * T)
+    assert sysid.persistent_excitation_order(sine, 20) == 2
+    with pytest.warns(ExcitationWarning, match="order 2 only"):
+        sysid.check_excitation(sine, order=2)
+    step = np.ones(N)                          # a step applied at the first sample
+    assert sysid.persistent_excitation_order(step, 20) == 1
+    with pytest.warns(ExcitationWarning, match="order 1 only"):
+        sysid.check_excitation(step, order=1)
+    # three sines and a little noise: the subspace fit runs (the noise keeps its input rows
+    # of full rank) but order 4 needs 8 excited frequencies, and the input has 6
+    three = np.sin(0.3 * T) + np.sin(0.9 * T) + np.sin(1.7 * T)
+    three = three + 1e-5 * np.random.default_rng(3).standard_normal(N)
+    assert sysid.persistent_excitation_order(three, 20) == 6
+    assert _excitation_warnings(lambda: sysid.n4sid(_record(three), 4))
+    assert not _excitation_warnings(lambda: sysid.n4sid(_record(three), 3))
+
+
+def test_several_inputs_count_the_weakest_direction_whatever_the_units():
+    rng = np.random.default_rng(4)
+    u = rng.standard_normal((N, 2))
+    assert sysid.persistent_excitation_order(u, 20) == 20
+    # units do not matter
+    assert sysid.persistent_excitation_order(u * [1e-3, 1e3], 20) == 20
+    # identical inputs: the difference never moves
+    same = np.column_stack([u[:, 0], 2.0 * u[:, 0]])
+    assert sysid.persistent_excitation_order(same, 20) <= 1
+    # each input on its own 10 lines (zippered multisine): 20 lines each
+    a, b = _multisine(np.arange(1, 11) * 40, 0.0), _multisine(np.arange(1, 11) * 40 + 20, 0.0)
+    assert sysid.persistent_excitation_order(np.column_stack([a, b]), 40) == 20

@@ -1,0 +1,152 @@
+"""stepinfo, margin, nyquist, minreal (issue 27): analytic values, python-control as the
+peer oracle, and clear errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import sysid
+from sysid.errors import DataError
+
+control = pytest.importorskip("control")
+
+LOOPS = [([4.0], [1.0, 3.0, 2.0, 0.0]), ([10.0], [1.0, 2.0, 10.0, 5.0]),
+         ([2.0, 1.0], [1.0, 0.5, 3.0, 0.2]), ([0.5, 2.0], [1.0, 0.8, 4.0])]
+
+
+def test_stepinfo_analytic_first_and_second_order():
+    i = sysid.stepinfo(sysid.TransferFunction([1.0], [1.0, 1.0]))
+    assert i.rise_time == pytest.approx(np.log(9), abs=1e-6)
+    assert i.settling_time == pytest.approx(np.log(50), abs=1e-6)
+    z = 0.3
+    j = sysid.stepinfo(sysid.TransferFunction([1.0], [1.0, 2 * z, 1.0]))
+    assert j.overshoot == pytest.approx(100 * np.exp(-np.pi * z / np.sqrt(1 - z * z)), abs=1e-4)
+    assert j.peak_time == pytest.approx(np.pi / np.sqrt(1 - z * z), abs=2e-2)
+
+
+@pytest.mark.parametrize("num, den", [([1.0], [1.0, 0.6, 1.0]), ([2.0, 1.0], [1.0, 3.0, 2.5, 1.0]),
+                                      ([-0.5, 1.0], [1.0, 1.0, 1.0])])
+def test_stepinfo_matches_python_control(num, den):
+    G = sysid.TransferFunction(num, den)
+    t = np.linspace(0, 40, 80001)
+    ref = control.step_info(control.tf(num, den), T=t)
+    mine = sysid.stepinfo(G.step(t.size, dt=t[1]), yfinal=G.dcgain()).as_dict()
+    for k in ("RiseTime", "SettlingTime", "Overshoot", "Undershoot", "Peak", "PeakTime",
+              "SettlingMin", "SettlingMax"):
+        assert mine[k] == pytest.approx(ref[k], abs=1e-3, rel=1e-3), k
+
+
+@pytest.mark.parametrize("num, den", LOOPS)
+def test_margin_matches_python_control(num, den):
+    gm, pm, _, wpc, wgc, _ = control.stability_margins(control.tf(num, den))
+    m = sysid.margin(sysid.TransferFunction(num, den))
+    assert m.gain_margin == pytest.approx(gm, rel=1e-9)
+    assert m.phase_margin == pytest.approx(pm, rel=1e-9)
+    if np.isfinite(wpc):
+        assert m.phase_crossover == pytest.approx(wpc, rel=1e-9)
+    assert m.gain_crossover == pytest.approx(wgc, rel=1e-9)
+
+
+def test_margin_with_delay_and_discrete():
+    m = sysid.margin(sysid.TransferFunction([1.0], [1.0, 1.0], iodelay=1.0))
+    w = m.phase_crossover          # w + atan(w) = pi, gm = sqrt(1 + w^2)
+    assert w + np.arctan(w) == pytest.approx(np.pi, abs=1e-10)
+    assert m.gain_margin == pytest.approx(np.sqrt(1 + w * w), rel=1e-10)
+    ref = control.stability_margins(control.tf([0.3, 0.1], [1.0, -1.2, 0.5], 0.1))
+    d = sysid.margin(sysid.TransferFunction([0.3, 0.1], [1.0, -1.2, 0.5], dt=0.1))
+    assert d.gain_margin == pytest.approx(ref[0], rel=1e-9)
+    assert d.phase_margin == pytest.approx(ref[1], rel=1e-9)
+    ss = sysid.TransferFunction([4.0], [1.0, 3.0, 2.0, 0.0]).to_statespace()
+    assert sysid.margin(ss).gain_margin == pytest.approx(1.5, rel=1e-9)
+
+
+@pytest.mark.parametrize("num, den", LOOPS + [([10.0], [1.0, 3.0, 3.0, 1.0]),
+                                              ([1.0, 2.0], [1.0, 1.0, 0.0, 0.0]),
+                                              ([2.0], [1.0, -1.0])])
+def test_nyquist_encirclements_match_python_control(num, den):
+    r = sysid.nyquist(sysid.TransferFunction(num, den))
+    assert r.encirclements == control.nyquist_response(control.tf(num, den)).count
+    closed = np.roots(np.polyadd(den, num))
+    assert r.closed_loop_unstable == int(np.sum(closed.real > 1e-9))
+
+
+def test_nyquist_plot():
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    ax = sysid.nyquist(sysid.TransferFunction([10.0], [1.0, 3.0, 3.0, 1.0])).plot()
+    assert "N = 2" in ax.get_title()
+
+
+def test_minreal_cancels_and_reduces():
+    G = sysid.minreal(sysid.TransferFunction([2.0, 2.0], [1.0, 3.0, 2.0]))
+    np.testing.assert_allclose(G.den[0][0], [1.0, 2.0])
+    np.testing.assert_allclose(G.num[0][0], [2.0])
+    ss = sysid.StateSpaceModel(np.diag([0.5, 0.3, 0.1]), [[1.0], [0.0], [1.0]],
+                               [[1.0, 1.0, 0.0]], dt=1.0)
+    m = sysid.minreal(ss)
+    assert m.nstates == 1
+    np.testing.assert_allclose(m.freqresp([0.2, 1.0]), ss.freqresp([0.2, 1.0]), atol=1e-12)
+    # 0.3 is not reachable (B has no part there) and 0.1 not observable (C has none)
+    np.testing.assert_allclose(m.poles(), [0.5])
+
+
+def test_bad_input_gives_clear_errors():
+    mimo = sysid.TransferFunction([[[1.0], [1.0]]], [[[1.0, 1.0], [1.0, 2.0]]])
+    with pytest.raises(DataError, match="single-input single-output"):
+        sysid.margin(mimo)
+    with pytest.raises(DataError, match="single-input single-output"):
+        sysid.nyquist(mimo)
+    with pytest.raises(DataError, match="freqresp"):
+        sysid.margin("G")
+    with pytest.raises(DataError, match="needs their times"):
+        sysid.stepinfo(np.ones(5))
+    with pytest.raises(DataError, match="threshold"):
+        sysid.stepinfo(sysid.TransferFunction([1.0], [1.0, 1.0]), threshold=2.0)
+    with pytest.raises(DataError, match="rise_limits"):
+        sysid.stepinfo(sysid.TransferFunction([1.0], [1.0, 1.0]), rise_limits=(0.9, 0.1))
+    with pytest.raises(DataError, match="tol"):
+        sysid.minreal(sysid.TransferFunction([1.0], [1.0, 1.0]), tol=-1)
+    with pytest.raises(DataError, match="TransferFunction or a state-space"):
+        sysid.minreal(3)
+    with pytest.raises(DataError, match="omega"):
+        sysid.margin(sysid.TransferFunction([1.0], [1.0, 1.0]), omega=[-1.0, 2.0])
+
+
+def test_delayest_on_real_records():
+    """The dryer's delay is three samples (Ljung, System Identification, the dryer example;
+    MATLAB's delayest on the same record); offsets, halves of the record and the channel
+    scale do not change it; the multi-input winding record gets its delays jointly without
+    hitting the range edge (the single-input search put one at nk_max = 10)."""
+    import warnings
+
+    d = sysid.datasets.load_dryer()
+    assert sysid.delayest(d) == 3
+    u, y = d.experiments[0]
+    for off in (100.0, -1e3):
+        assert sysid.delayest(sysid.IOData(u + off, 3 * y + off, d.dt)) == 3
+    assert sysid.delayest(sysid.IOData(u[:500], y[:500], d.dt)) == 3
+    assert sysid.delayest(sysid.IOData(u[500:], y[500:], d.dt)) == 3
+    w = sysid.datasets.load_winding()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        nk = sysid.delayest(w)
+    assert nk.shape == (2, 5) and np.all(nk < 10)
+
+
+def test_delayest_multi_input_and_errors():
+    from scipy import signal
+
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal((800, 2))
+    y = signal.lfilter([0, 0, 0, 0, 0.7], [1, -0.5], u[:, 0]) + \
+        signal.lfilter([0, 0, 1.0], [1, -0.2], u[:, 1]) + 0.01 * rng.standard_normal(800)
+    assert sysid.delayest(sysid.IOData(u, y[:, None], 1.0)).tolist() == [[4, 2]]
+    with pytest.raises(DataError, match="nk_min <= nk_max"):
+        sysid.delayest(sysid.IOData(u, y[:, None], 1.0), nk_min=5, nk_max=2)
+    with pytest.raises(DataError, match="too few"):
+        sysid.delayest(sysid.IOData(u[:20], y[:20, None], 1.0))
+    with pytest.raises(DataError, match="time series"):
+        sysid.delayest(sysid.IOData(None, y[:, None], 1.0))

@@ -1,0 +1,87 @@
+"""detrend returns a trend that applies to other data (MATLAB's getTrend/retrend), and a
+model that carries it predicts raw data (issue 26)."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import sysid
+
+
+def _raw(n, seed, offset_u=20.0, offset_y=300.0, slope_y=0.0):
+    rng = np.random.default_rng(seed)
+    true = sysid.StateSpaceModel([[0.9, 0.2], [-0.2, 0.9]], [[1.0], [0.5]], [[1.0, 0.0]],
+                                 dt=0.5)
+    du = rng.standard_normal(n)
+    t = np.arange(n) * 0.5
+    y = offset_y + slope_y * t + true.simulate(du)[:, 0] + 0.05 * rng.standard_normal(n)
+    return sysid.IOData(u=offset_u + du, y=y, dt=0.5)
+
+
+def test_apply_removes_the_estimation_offsets_from_validation_data():
+    est, val = _raw(800, 0), _raw(400, 1)
+    d, tr = sysid.detrend(est, "mean", return_trend=True)
+    np.testing.assert_allclose(tr.u_offset, est.u.mean(0))
+    np.testing.assert_allclose(tr.y_offset, est.y.mean(0))
+    assert tr.kind == "mean" and np.all(tr.y_slope == 0)
+    v = tr.apply(val)
+    # the estimation record's offsets, not the validation record's own mean
+    np.testing.assert_allclose(v.y, val.y - est.y.mean(0), atol=1e-12)
+    np.testing.assert_allclose(v.u, val.u - est.u.mean(0), atol=1e-12)
+    np.testing.assert_allclose(v.retrend().y, val.y, atol=1e-12)
+    np.testing.assert_allclose(tr.restore(v).u, val.u, atol=1e-12)
+    assert not v.y.mean() == pytest.approx(0.0, abs=1e-9)  # not detrended on its own
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sysid.OffsetWarning)  # applied: no offset warning
+        sysid.n4sid(v, 2)
+
+
+def test_linear_trend_per_second_applies_from_each_records_start():
+    est = _raw(800, 0, slope_y=0.2)
+    d, tr = sysid.detrend(est, "linear", return_trend=True)
+    assert tr.kind == "linear" and abs(tr.y_slope[0] - 0.2) < 0.01
+    assert np.abs(d.y.mean()) < 1e-9
+    val = _raw(400, 1, slope_y=0.2)
+    v = tr.apply(val)
+    # offset + slope t removed, t from the validation record's first sample
+    t = np.arange(400) * 0.5
+    expect = val.y[:, 0] - tr.y_offset[0] - tr.y_slope[0] * t
+    np.testing.assert_allclose(v.y[:, 0], expect, atol=1e-9)
+    np.testing.assert_allclose(tr.restore_outputs(v.y), val.y, atol=1e-9)
+
+
+def test_a_model_carrying_the_trend_predicts_raw_data():
+    est, val = _raw(1500, 0), _raw(800, 1)
+    d, tr = sysid.detrend(est, "mean", return_trend=True)
+    inner = sysid.n4sid(d, 2)
+    m = tr.attach(inner)
+    assert isinstance(m, sysid.TrendedModel) and m.dt == 0.5 and m.ninputs == 1
+    yhat = m.simulate(val.u)
+    assert abs(yhat.mean() - val.y.mean()) < 0.5    # raw units: around 300
+    raw = sysid.compare(m, val)
+    ref = sysid.compare(inner, tr.apply(val))
+    np.testing.assert_allclose(raw.fit, ref.fit, rtol=1e-9)
+    assert raw.fit[0, 0] > 90
+    np.testing.assert_allclose(raw.yhat[0], tr.restore_outputs(ref.yhat[0]), atol=1e-9)
+    # the model fitted on raw data instead is far worse (and said so)
+    with pytest.warns(sysid.OffsetWarning):
+        bad = sysid.arx(est, 2, 2, 1)
+    assert sysid.compare(bad, val).fit[0, 0] < raw.fit[0, 0]
+    # several records: compare the raw-data model with others on raw validation data
+    cs = sysid.compare(val, m, tr.attach(sysid.moesp(d, 2)))
+    assert cs.fit.min() > 90
+
+
+def test_piecewise_and_per_sample_trends_do_not_apply_elsewhere():
+    est = _raw(200, 0)
+    d, tr = sysid.detrend(est, "piecewise", breakpoints=[100], return_trend=True)
+    with pytest.raises(sysid.DataError, match="return_trend"):
+        tr.apply(est)
+    with pytest.raises(sysid.DataError, match="return_trend"):
+        sysid.detrend(est).trend.apply(est)
+    _, tr2 = sysid.detrend(est, "mean", return_trend=True)
+    with pytest.raises(sysid.ShapeError):
+        tr2.apply(sysid.IOData(u=np.ones((10, 2)), y=np.ones(10)))
