@@ -110,9 +110,17 @@ def _systems(ys: list[np.ndarray], dt: float, orders: list[int], i: int,
 
     est = SubspaceEstimator(IOData(None, ys if len(ys) > 1 else ys[0], dt), horizon=i,
                             method="n4sid")
+    import warnings
+
+    from ..errors import StabilityWarning
+
     out = []
     for n in orders:
-        m = est.fit(n, kalman=False)
+        # a stabilisation diagram over-fits on purpose: unstable noise modes at high orders
+        # are expected and shown (negative damping), not a reason to warn
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", StabilityWarning)
+            m = est.fit(n, kalman=False)
         out.append((np.asarray(m.A), np.asarray(m.C)))
     return out, np.asarray(est.singular_values)
 
