@@ -1,70 +1,179 @@
-"""Recursive subspace identification: equal to the batch estimate without forgetting,
-tracking a drifting pole with forgetting."""
-
-from __future__ import annotations
+"""Online estimators (sysid.RecursiveARX/ARMAX/OE/BJ): equivalence with batch least squares,
+tracking of jumps and drifts, step/run identity, settable state and bad input."""
 
 import numpy as np
 import pytest
+from scipy import signal
 
 import sysid
 
 
-def test_each_update_equals_the_batch_estimate_without_forgetting():
-    rng = np.random.default_rng(0)
-    true = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]],
-                                 K=[[0.5], [0.1]])
-    n = 3000
+def _arx_data(n=2000, seed=0, noise=0.1):
+    rng = np.random.default_rng(seed)
     u = rng.standard_normal(n)
-    y = true.simulate(u) + sysid.StateSpaceModel(true.A, true.K, true.C, [[1.0]]).simulate(
-        0.3 * rng.standard_normal(n))
-    rs = sysid.RecursiveSubspace(order=2, horizon=6)
-    cuts = [0, 5, 40, 500, 1300, 3000]
-    for a, b in zip(cuts[:-1], cuts[1:]):
-        model = rs.update(u[a:b], y[a:b])
-        if b < 2 * 6 * 2 + 11:
-            assert model is None
-            continue
-        batch = sysid.SubspaceEstimator(sysid.IOData(u=u[:b], y=y[:b]), 6).fit(
-            2, feedthrough=False, kalman=False)
-        np.testing.assert_allclose(model.markov(20), batch.markov(20), rtol=1e-8, atol=1e-10)
-        np.testing.assert_allclose(np.sort_complex(model.poles()),
-                                   np.sort_complex(batch.poles()), atol=1e-9)
-    assert model.info["n_samples"] == n and model.info["effective_columns"] == n - 11
+    e = noise * rng.standard_normal(n)
+    y = signal.lfilter([0, 1.0, 0.5], [1, -1.5, 0.7], u) + signal.lfilter([1], [1, -1.5, 0.7], e)
+    return u, y
 
 
-def test_forgetting_tracks_a_drifting_pole():
-    rng = np.random.default_rng(1)
-    n, chunk = 20_000, 500
-    a = np.linspace(0.5, 0.85, n)  # the pole drifts slowly
-    u = rng.standard_normal(n)
-    e = 0.1 * rng.standard_normal(n)
+def test_rls_equals_batch_least_squares():
+    u, y = _arx_data()
+    est = sysid.RecursiveARX(2, 2, 1, initial_covariance=1e10)
+    est.run(u, y)
+    # the batch estimator drops the first na rows; two leading zeros make its regression the
+    # recursive one's (which starts from rest)
+    z = np.zeros(2)
+    batch = sysid.arx(sysid.IOData(np.r_[z, u][:, None], np.r_[z, y][:, None], 1.0), 2, 2, 1)
+    th = np.r_[batch.a[0][0], batch.b[0][0]]
+    np.testing.assert_allclose(est.parameters, th, rtol=1e-9, atol=1e-11)
+
+
+def test_rls_is_exactly_the_regularised_solution():
+    # theta0 = 0, P0 = p0 I, lambda = 1: argmin |Y - Phi theta|^2 + |theta|^2 / p0
+    u, y = _arx_data(400, seed=1)
+    p0 = 3.0
+    est = sysid.RecursiveARX(2, 2, 1, initial_covariance=p0)
+    est.run(u, y)
+    z = np.zeros(2)
+    yp, up = np.r_[z, y], np.r_[z, u]
+    Phi = np.column_stack([-yp[1:-1], -yp[:-2], up[1:-1], up[:-2]])
+    th = np.linalg.solve(Phi.T @ Phi + np.eye(4) / p0, Phi.T @ y)
+    np.testing.assert_allclose(est.parameters, th, rtol=1e-10, atol=1e-12)
+    # P is then (Phi^T Phi + I / p0)^-1
+    np.testing.assert_allclose(est.covariance, np.linalg.inv(Phi.T @ Phi + np.eye(4) / p0),
+                               rtol=1e-8, atol=1e-14)
+
+
+def _jump_and_drift(n=6000, seed=2):
+    """y = a(t) y(t-1) + b(t) u(t-1) + e: a jumps 0.5 -> -0.3 at n/2, b drifts 1 -> 2."""
+    rng = np.random.default_rng(seed)
+    u, e = rng.standard_normal(n), 0.05 * rng.standard_normal(n)
+    a = np.where(np.arange(n) < n // 2, 0.5, -0.3)
+    b = 1.0 + np.arange(n) / n
     y = np.zeros(n)
-    x = 0.0
-    for t in range(n):
-        y[t] = x + e[t]
-        x = a[t] * x + u[t]
-    tracked = sysid.RecursiveSubspace(order=1, horizon=4, forgetting=0.995)
-    frozen = sysid.RecursiveSubspace(order=1, horizon=4)
-    errs, errs_frozen = [], []
-    for k in range(0, n, chunk):
-        m1 = tracked.update(u[k:k + chunk], y[k:k + chunk])
-        m2 = frozen.update(u[k:k + chunk], y[k:k + chunk])
-        if k >= 2_000:
-            now = a[k + chunk - 1]
-            errs.append(abs(m1.poles()[0].real - now))
-            errs_frozen.append(abs(m2.poles()[0].real - now))
-    # memory about 200 samples: lag error about 200 * da/dt = 0.0035 plus noise
-    assert max(errs) < 0.03, max(errs)
-    assert errs_frozen[-1] > 0.1 and max(errs) < 0.3 * errs_frozen[-1]
+    for t in range(1, n):
+        y[t] = a[t] * y[t - 1] + b[t] * u[t - 1] + e[t]
+    return u, y, np.column_stack([-a, b])
 
 
-def test_arguments_and_repr():
-    with pytest.raises(sysid.DataError, match="forgetting"):
-        sysid.RecursiveSubspace(1, 4, forgetting=1.2)
-    rs = sysid.RecursiveSubspace(1, 4)
-    with pytest.raises(sysid.InsufficientDataError):
-        _ = rs.factor
-    rs.update(np.ones(3), np.ones(3))
-    with pytest.raises(sysid.DataError, match="chunks"):
-        rs.update(np.ones((3, 2)), np.ones(3))
-    assert "RecursiveSubspace(order=1" in repr(rs)
+@pytest.mark.parametrize("kw", [dict(method="forgetting", forgetting=0.97),
+                                dict(method="kalman", process_noise=1e-5, noise_variance=0.0025)])
+def test_tracks_a_jump_and_a_drift(kw):
+    u, y, truth = _jump_and_drift()
+    n = y.size
+    res = sysid.RecursiveARX(1, 1, **kw).run(u, y)
+    err = np.abs(res.parameters - truth)
+    # settled 300 samples after the jump and through the drift: within 0.05 of the truth
+    assert err[n // 2 + 300:].max() < 0.05
+    assert err[500:n // 2].max() < 0.05
+    # without forgetting the estimate cannot follow (a check that the test can fail)
+    frozen = sysid.RecursiveARX(1, 1).run(u, y)
+    assert np.abs(frozen.parameters - truth)[-1].max() > 0.3
+
+
+@pytest.mark.parametrize("make", [
+    lambda m: sysid.RecursiveARX(2, 2, 1, method=m),
+    lambda m: sysid.RecursiveARMAX(2, 2, 1, 0, method=m),
+    lambda m: sysid.RecursiveOE(2, 2, 1, method=m),
+    lambda m: sysid.RecursiveBJ(2, 1, 1, 2, 1, method=m),
+])
+@pytest.mark.parametrize("method", ["forgetting", "kalman", "normalized_gradient", "gradient"])
+def test_step_and_run_are_bit_identical(make, method):
+    u, y = _arx_data(300, seed=3)
+    if method == "gradient":
+        u, y = 0.3 * u, 0.3 * y  # a fixed gain needs small signals to stay stable
+    a, b = make(method), make(method)
+    res = a.run(u[:150], y[:150])
+    res2 = a.run(u[150:], y[150:])  # records in pieces continue the same state
+    yh = np.array([b.step([u[t]], y[t]) for t in range(300)])
+    assert np.array_equal(np.r_[res.yhat, res2.yhat], yh)
+    assert np.array_equal(a.parameters, b.parameters)
+    assert np.array_equal(a.covariance, b.covariance)
+    assert a.samples == b.samples == 300
+
+
+def test_oe_and_bj_converge_to_the_batch_estimates():
+    rng = np.random.default_rng(4)
+    n = 30000
+    u, e = rng.standard_normal(n), 0.2 * rng.standard_normal(n)
+    y = signal.lfilter([0, 1.0], [1, -0.7], u) + signal.lfilter([1, 0.5], [1, -0.6], e)
+    bj = sysid.RecursiveBJ(1, 1, 1, 1)
+    bj.run(u, y)
+    np.testing.assert_allclose(bj.parameters, [1.0, 0.5, -0.6, -0.7], atol=0.03)
+    oe = sysid.RecursiveOE(1, 1)
+    oe.run(u, y)
+    np.testing.assert_allclose(oe.parameters, [1.0, -0.7], atol=0.03)
+    m = oe.to_model()
+    assert isinstance(m, sysid.PolynomialModel)
+    np.testing.assert_allclose(m.f[0][0], oe.parameters[1:])
+
+
+def test_methods_and_settings_change_the_result():
+    u, y = _arx_data(500, seed=5)
+    outs = [sysid.RecursiveARX(2, 2, **kw).run(u, y).parameters[-1] for kw in [
+        {}, dict(forgetting=0.95), dict(method="kalman"), dict(method="kalman", noise_variance=5.0),
+        dict(method="normalized_gradient"), dict(method="normalized_gradient", gain=0.1),
+        dict(initial_covariance=1.0), dict(initial_parameters=[0.1, 0, 0, 0]),
+    ]]
+    for i in range(len(outs)):
+        for j in range(i):
+            assert not np.array_equal(outs[i], outs[j]), (i, j)
+
+
+def test_state_is_settable_and_copies_are_independent():
+    u, y = _arx_data(300, seed=6)
+    est = sysid.RecursiveARX(2, 2)
+    est.run(u[:100], y[:100])
+    twin = est.copy()
+    est.run(u[100:], y[100:])
+    twin.run(u[100:], y[100:])
+    assert np.array_equal(est.parameters, twin.parameters)
+    est.parameters = [0.1, 0.2, 0.3, 0.4]
+    est.covariance = 2 * np.eye(4)
+    np.testing.assert_array_equal(est.parameters, [0.1, 0.2, 0.3, 0.4])
+    np.testing.assert_array_equal(est.covariance, 2 * np.eye(4))
+    assert est.names == ["a1", "a2", "b1_1", "b1_2"]
+    assert est.regressor.shape == (4,)
+    assert "RecursiveARX" in repr(est) and "samples" in repr(est.run(u, y))
+
+
+def test_multi_input_arx():
+    rng = np.random.default_rng(7)
+    u = rng.standard_normal((3000, 2))
+    y = signal.lfilter([0, 1.0], [1, -0.5], u[:, 0]) + signal.lfilter([0, 0, -2.0], [1, -0.5],
+                                                                       u[:, 1])
+    est = sysid.RecursiveARX(1, [1, 1], [1, 2])
+    est.run(u, y)
+    # y = 0.5 y1 + u0(t-1) - 2 u1(t-2) exactly (same denominator)
+    np.testing.assert_allclose(est.parameters, [-0.5, 1.0, -2.0], atol=1e-6)
+
+
+def test_bad_input_is_refused_with_a_clear_message():
+    with pytest.raises(sysid.DataError, match="forgetting factor"):
+        sysid.RecursiveARX(1, 1, forgetting=1.5)
+    with pytest.raises(sysid.DataError, match="method must be"):
+        sysid.RecursiveARX(1, 1, method="rls")
+    with pytest.raises(sysid.DataError, match="na must be"):
+        sysid.RecursiveARX(-1, 1)
+    with pytest.raises(sysid.DataError, match="nk has 3 entries"):
+        sysid.RecursiveARX(1, [1, 1], [1, 1, 1])
+    with pytest.raises(sysid.DataError, match="no parameters"):
+        sysid.RecursiveARX(0, 0)
+    with pytest.raises(sysid.ShapeError, match="process_noise"):
+        sysid.RecursiveARX(1, 1, method="kalman", process_noise=np.eye(3))
+    with pytest.raises(sysid.DataError, match="initial_covariance"):
+        sysid.RecursiveARX(1, 1, initial_covariance=-1.0)
+    est = sysid.RecursiveARX(1, 1)
+    with pytest.raises(sysid.NonFiniteError, match="sample 3"):
+        est.run(np.ones(5), np.r_[0, 0, 0, np.nan, 0])
+    with pytest.raises(sysid.ShapeError, match="one value per input"):
+        est.step([1.0, 2.0], 0.0)
+    with pytest.raises(sysid.ShapeError, match="one output"):
+        est.run(np.ones(5), np.ones((5, 2)))
+    with pytest.raises(sysid.ShapeError, match="samples"):
+        est.run(np.ones(5), np.ones(4))
+    with pytest.raises(sysid.ShapeError):
+        est.parameters = [1.0, 2.0, 3.0]
+    with pytest.raises(sysid.DataError, match="symmetric"):
+        est.covariance = [[1.0, 2.0], [0.0, 1.0]]
+    assert est.samples == 0  # nothing was consumed by the refused calls

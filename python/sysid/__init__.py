@@ -79,11 +79,9 @@ _LAZY = {
     "UncertaintyWarning": "models.uncertainty",
     "Spectra": "nonparametric.spectra",
     "StabilizationDiagram": "realization.realize",
-    "ar": "polynomial.estimators",
     "fixed": "greybox.greybox",
     "greyest": "greybox.greyest",
     "param": "greybox.greybox",
-    "arma": "polynomial.estimators",
     "armax": "polynomial.estimators",
     "arx": "polynomial.estimators",
     "arxstruc": "polynomial.estimators",
@@ -232,6 +230,19 @@ _LAZY = {
     "PNLSSModel": "nlss.pnlss",
     "nlssest": "nlss.neural",
     "NeuralStateSpaceModel": "nlss.neural",
+    # issue 27 (branch tsonline): online estimators, time series, output-only modal analysis
+    "RecursiveARX": "recursive.estimators",
+    "RecursiveARMAX": "recursive.estimators",
+    "RecursiveOE": "recursive.estimators",
+    "RecursiveBJ": "recursive.estimators",
+    "RecursiveResult": "recursive.estimators",
+    "ar": "timeseries.ar",
+    "arma": "timeseries.ar",
+    "forecast": "timeseries.forecast",
+    "Forecast": "timeseries.forecast",
+    "ssi": "oma.ssi",
+    "SSIResult": "oma.ssi",
+    "mac": "oma.ssi",
 }
 
 
@@ -445,4 +456,15 @@ __all__ = [
     "PNLSSModel",
     "nlssest",
     "NeuralStateSpaceModel",
+    # issue 27 (branch tsonline): online estimators, time series, output-only modal analysis
+    "RecursiveARX",
+    "RecursiveARMAX",
+    "RecursiveOE",
+    "RecursiveBJ",
+    "RecursiveResult",
+    "forecast",
+    "Forecast",
+    "ssi",
+    "SSIResult",
+    "mac",
 ]

@@ -39,6 +39,7 @@ __all__ = [
     "Subspace",
     "ClosedLoopSubspace",
     "RecursiveFactor",
+    "RecursiveEstimator",
     "frd_subspace",
     "spectra_subspace",
     "estimate_bd_x0",
@@ -639,3 +640,43 @@ def neural_ss_n_params(
     h_hidden: list[int],
     lags: int,
 ) -> int: ...
+# issue 27 (branch tsonline): online estimators
+@final
+class RecursiveEstimator:
+    def __new__(
+        cls,
+        na: int,
+        nb: list[int],
+        nc: int,
+        nd: int,
+        nf: list[int],
+        nk: list[int],
+        method: str = "forgetting",
+        forgetting: float = 1.0,
+        process_noise: _Array | None = None,
+        noise_variance: float = 1.0,
+        gain: float = 1.0,
+        bias: float = ...,
+        theta0: _Array | None = None,
+        p0: float = 1e4,
+    ) -> RecursiveEstimator: ...
+    def step(self, u: list[float], y: float) -> float: ...
+    def run(
+        self, u: _Array, y: _Array, store_parameters: bool = False
+    ) -> tuple[_Array, _Array | None]: ...
+    @property
+    def parameters(self) -> _Array: ...
+    def set_parameters(self, theta: _Array) -> None: ...
+    @property
+    def covariance(self) -> _Array: ...
+    def set_covariance(self, p: _Array) -> None: ...
+    @property
+    def regressor(self) -> _Array: ...
+    @property
+    def samples(self) -> int: ...
+    @property
+    def rejected(self) -> int: ...
+    @property
+    def n_parameters(self) -> int: ...
+    def reset_history(self) -> None: ...
+    def copy(self) -> RecursiveEstimator: ...

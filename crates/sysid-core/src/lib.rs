@@ -55,6 +55,7 @@ pub mod optim;
 pub mod pem;
 pub mod polynomial;
 pub mod realization;
+pub mod recursive;
 pub mod stats;
 pub mod subspace;
 pub mod tf;

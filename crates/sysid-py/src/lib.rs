@@ -25,6 +25,8 @@ mod subspace;
 mod tf;
 // issue 29 (branch nlss)
 mod nlss;
+// issue 27 (branch tsonline): online estimators
+mod recursive_estimators;
 
 #[pymodule]
 fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -46,5 +48,7 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     tf::register(m)?;
     // issue 29 (branch nlss)
     nlss::register(m)?;
+    // issue 27 (branch tsonline)
+    recursive_estimators::register(m)?;
     Ok(())
 }

@@ -1,5 +1,5 @@
-"""Polynomial estimators: ``arx``, ``armax``, ``oe``, ``bj``, ``ar``, ``arma``, ``arxstruc``
-and ``selstruc`` (least squares by streaming QR in Rust; the iterative structures through the
+"""Polynomial estimators: ``arx``, ``armax``, ``oe``, ``bj``, ``arxstruc`` and
+``selstruc`` (least squares by streaming QR in Rust; the iterative structures through the
 shared Gauss-Newton optimiser of ``sysid-core``); ``delayest`` is in
 :mod:`sysid.polynomial.delayest`."""
 
@@ -430,28 +430,6 @@ def selstruc(
     return int(best[0]), int(best[1]), int(best[2])
 
 
-def ar(data: Any, na: int, *, max_iter: int = 100) -> PolynomialModel:
-    """Autoregressive time-series model ``A(q) y = e`` (data without inputs).
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> from scipy import signal
-    >>> y = signal.lfilter([1], [1, -0.8], np.random.default_rng(0).standard_normal(4000))
-    >>> m = sysid.polynomial.estimators.ar(sysid.IOData(None, y[:, None], 1.0), 1)
-    >>> bool(abs(m.a[0][0][0] + 0.8) < 0.03)
-    True
-    """
-    if experiment_arrays(data)[0][0].shape[1] != 0:
-        raise DataError("ar/arma model time series: pass data without inputs (IOData(None, y))")
-    return _pem(data, na, 0, 0, 0, 0, 0, "ar", max_iter, None)
-
-
-def arma(data: Any, na: int, nc: int, *, max_iter: int = 100) -> PolynomialModel:
-    """ARMA time-series model ``A(q) y = C(q) e`` (data without inputs)."""
-    if experiment_arrays(data)[0][0].shape[1] != 0:
-        raise DataError("ar/arma model time series: pass data without inputs (IOData(None, y))")
-    return _pem(data, na, 0, nc, 0, 0, 0, "arma", max_iter, None)
 
 
 def _references(reference: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> list[Any]:

@@ -1,0 +1,322 @@
+r"""Stochastic subspace identification of vibration records without a measured input.
+
+A structure driven by unmeasured broadband forces is the stochastic state-space model
+``x(t+1) = A x + w``, ``y = C x + v``. Its output covariances
+``R_k = E[y(t+k) y(t)^T] = C A^(k-1) G`` factor like Markov parameters, so
+
+* **SSI-cov** (covariance driven): the block Toeplitz matrix ``T[a, b] = R_(i+a-b)``
+  (``i`` block rows, lags 1..2i-1) equals ``O_i Gamma_i``; its SVD truncated at order ``n``
+  gives the observability matrix ``O = U_n S_n^(1/2)``, ``C`` its first block row and ``A``
+  from its shift invariance ``O_up A = O_down`` (least squares);
+* **SSI-data** (data driven): the output-only N4SID projection of future on past outputs
+  (:class:`sysid.SubspaceEstimator` on data without input), then ``A, C`` the same way.
+
+Poles become frequencies and damping ratios through ``s = ln(z) / dt``; mode shapes are
+``C`` times the eigenvectors. One SVD serves every order of the stabilisation diagram: a
+mode is *stable* when a mode of the previous order lies within ``freq_tol`` in frequency,
+``damping_tol`` in damping ratio and has a MAC above ``min_mac``.
+
+Standard deviations come from ``blocks`` contiguous segments of the record: each segment is
+identified at the same order, its modes matched to the full record's (nearest frequency
+with MAC above 0.8; shapes aligned in scale and phase), and the std of the mean is the
+segments' sample std divided by ``sqrt(blocks)`` (batch means). It assumes the segments are
+long against the correlation time of the response (many periods of the slowest mode).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .._checks import as_int, experiment_arrays
+from ..errors import DataError, InsufficientDataError
+
+_METHODS = ("cov", "data")
+
+
+def mac(phi1: Any, phi2: Any) -> np.ndarray:
+    """Modal assurance criterion between mode shapes: ``|phi1_i^H phi2_j|^2 /
+    (|phi1_i|^2 |phi2_j|^2)``.
+
+    Parameters
+    ----------
+    phi1, phi2 : array_like (n_modes, n_channels) or (n_channels,)
+        Complex or real mode shapes, one per row.
+
+    Returns
+    -------
+    ndarray (n_modes1, n_modes2)
+        1 for collinear shapes, 0 for orthogonal ones.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> sysid.mac([[1, 2], [1, -1]], [[2, 4], [0, 1]]).round(3)
+    array([[1. , 0.8],
+           [0.1, 0.5]])
+    """
+    a = np.atleast_2d(np.asarray(phi1, dtype=complex))
+    b = np.atleast_2d(np.asarray(phi2, dtype=complex))
+    if a.shape[1] != b.shape[1]:
+        raise DataError(f"mode shapes have {a.shape[1]} and {b.shape[1]} channels; compare "
+                        "shapes over the same channels")
+    num = np.abs(a.conj() @ b.T) ** 2
+    den = np.outer(np.sum(np.abs(a) ** 2, 1), np.sum(np.abs(b) ** 2, 1))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(den > 0, num / np.where(den > 0, den, 1), 0.0)
+
+
+def _correlations(ys: list[np.ndarray], kmax: int) -> np.ndarray:
+    """``R_k = E[y(t+k) y(t)^T]``, k = 0..kmax, pooled over the experiments."""
+    l = ys[0].shape[1]
+    R = np.zeros((kmax + 1, l, l))
+    count = np.zeros(kmax + 1)
+    for y in ys:
+        N = y.shape[0]
+        for k in range(kmax + 1):
+            R[k] += y[k:].T @ y[: N - k]
+            count[k] += N - k
+    return R / count[:, None, None]
+
+
+def _cov_svd(ys: list[np.ndarray], i: int) -> tuple[np.ndarray, np.ndarray]:
+    R = _correlations(ys, 2 * i)
+    l = R.shape[1]
+    T = np.empty((i * l, i * l))
+    for a in range(i):
+        for b in range(i):
+            T[a * l:(a + 1) * l, b * l:(b + 1) * l] = R[i + a - b]
+    U, s, _ = np.linalg.svd(T)
+    return U, s
+
+
+def _ac_from_observability(U: np.ndarray, s: np.ndarray, n: int, l: int
+                           ) -> tuple[np.ndarray, np.ndarray]:
+    O = U[:, :n] * np.sqrt(s[:n])
+    A = np.linalg.lstsq(O[:-l], O[l:], rcond=None)[0]
+    return A, O[:l]
+
+
+def _systems(ys: list[np.ndarray], dt: float, orders: list[int], i: int,
+             method: str) -> tuple[list[tuple[np.ndarray, np.ndarray]], np.ndarray]:
+    """``(A, C)`` per order and the singular values."""
+    l = ys[0].shape[1]
+    if method == "cov":
+        U, s = _cov_svd(ys, i)
+        return [_ac_from_observability(U, s, n, l) for n in orders], s
+    from ..data.iodata import IOData
+    from ..subspace.estimator import SubspaceEstimator
+
+    est = SubspaceEstimator(IOData(None, ys if len(ys) > 1 else ys[0], dt), horizon=i,
+                            method="n4sid")
+    import warnings
+
+    from ..errors import StabilityWarning
+
+    out = []
+    for n in orders:
+        # a stabilisation diagram over-fits on purpose: unstable noise modes at high orders
+        # are expected and shown (negative damping), not a reason to warn
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", StabilityWarning)
+            m = est.fit(n, kalman=False)
+        out.append((np.asarray(m.A), np.asarray(m.C)))
+    return out, np.asarray(est.singular_values)
+
+
+def _modes(A: np.ndarray, C: np.ndarray, dt: float, names: list[str]) -> Any:
+    from ..analysis.modal import modal_analysis
+    from ..models.statespace import StateSpaceModel
+
+    m = StateSpaceModel(A, np.zeros((A.shape[0], 0)), C, dt=dt, output_names=names)
+    modes = modal_analysis(m)
+    return modes.select(np.isfinite(modes.frequencies_hz))
+
+
+def _status(prev: Any, cur: Any, freq_tol: float, damping_tol: float,
+            min_mac: float) -> np.ndarray:
+    st = np.zeros(len(cur), dtype=int)
+    if prev is None or not len(prev) or not len(cur):
+        return st
+    M = mac(cur.mode_shapes, prev.mode_shapes)
+    for k in range(len(cur)):
+        df = np.abs(prev.frequencies_hz - cur.frequencies_hz[k])
+        j = int(np.argmin(df))
+        if df[j] <= freq_tol * max(cur.frequencies_hz[k], 1e-12):
+            st[k] = 1
+            if (abs(prev.damping[j] - cur.damping[k]) <= damping_tol * max(
+                    abs(cur.damping[k]), 1e-12) and M[k, j] >= min_mac):
+                st[k] = 2
+    return st
+
+
+class SSIResult:
+    """What :func:`ssi` returns: the stabilisation diagram and the modes at each order.
+
+    Attributes
+    ----------
+    orders : list of int
+    modes : list of ModalAnalysis
+        Modes at each order (``frequencies_hz``, ``damping``, ``mode_shapes``).
+    status : list of ndarray
+        Per mode: 2 stable (frequency, damping and MAC), 1 frequency only, 0 new.
+    singular_values : ndarray
+        Of the Toeplitz (cov) or projection (data) matrix: a gap suggests the order.
+    method, horizon, dt
+    """
+
+    def __init__(self, orders: list[int], modes: list[Any], status: list[np.ndarray],
+                 s: np.ndarray, method: str, horizon: int, dt: float, ys: list[np.ndarray],
+                 blocks: int, names: list[str]) -> None:
+        self.orders, self.modes, self.status = orders, modes, status
+        self.singular_values, self.method, self.horizon, self.dt = s, method, horizon, dt
+        self._ys, self._blocks, self._names = ys, blocks, names
+
+    @property
+    def diagram(self) -> Any:
+        """The :class:`sysid.StabilizationDiagram` (shared with ERA's)."""
+        from ..realization.realize import StabilizationDiagram
+
+        return StabilizationDiagram(self.orders, self.modes, self.status)
+
+    def stable_frequencies(self, min_count: int = 3) -> np.ndarray:
+        """Frequencies (Hz) of modes stable at ``min_count`` or more orders (clustered)."""
+        return np.asarray(self.diagram.stable_frequencies(min_count))
+
+    def plot(self, *, ax: Any = None) -> Any:
+        """The stabilisation diagram (frequency against order); returns the axes."""
+        return self.diagram.plot(ax=ax)
+
+    def modes_at(self, order: int, *, std: bool = True) -> Any:
+        """The modes at ``order`` (one of :attr:`orders`) with, when ``std``, the batch-means
+        standard deviations ``extra["sd_hz"]``, ``extra["sd_damping"]`` and
+        ``mode_shape_std`` (complex: std of real and imaginary parts; shapes normalised with
+        their largest entry 1)."""
+        if order not in self.orders:
+            raise DataError(f"order {order} is not in the diagram's orders {self.orders}; "
+                            "pick one of them or run ssi with it")
+        full = self.modes[self.orders.index(order)]
+        if not std:
+            return full
+        return _block_std(full, self._ys, self.dt, order, self.horizon, self.method,
+                          self._blocks, self._names)
+
+    def __repr__(self) -> str:
+        return (f"SSIResult(SSI-{self.method}, horizon {self.horizon}, orders "
+                f"{self.orders[0]}..{self.orders[-1]}, stable modes at "
+                f"{np.round(self.stable_frequencies(), 3).tolist()} Hz)")
+
+
+def _block_std(full: Any, ys: list[np.ndarray], dt: float, order: int, i: int, method: str,
+               blocks: int, names: list[str]) -> Any:
+    segs = []
+    for b in range(blocks):
+        parts = []
+        for y in ys:
+            n = y.shape[0] // blocks
+            parts.append(y[b * n:(b + 1) * n])
+        (A, C), = _systems(parts, dt, [order], i, method)[0]
+        segs.append(_modes(A, C, dt, names))
+    k = len(full)
+    f = np.full((blocks, k), np.nan)
+    z = np.full((blocks, k), np.nan)
+    sh = np.full((blocks, k, full.mode_shapes.shape[1]), np.nan, dtype=complex)
+    for b, seg in enumerate(segs):
+        if not len(seg):
+            continue
+        M = mac(full.mode_shapes, seg.mode_shapes)
+        for j in range(k):
+            cand = np.where(M[j] >= 0.8)[0]
+            if cand.size == 0:
+                continue
+            c = cand[np.argmin(np.abs(seg.frequencies_hz[cand] - full.frequencies_hz[j]))]
+            f[b, j], z[b, j] = seg.frequencies_hz[c], seg.damping[c]
+            phi, ref = seg.mode_shapes[c], full.mode_shapes[j]
+            sh[b, j] = phi * (np.vdot(phi, ref) / np.vdot(phi, phi))
+    out = full.select(np.arange(k))
+    found = np.sum(np.isfinite(f), axis=0)
+    import warnings
+
+    with np.errstate(invalid="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)  # modes found in < 2 segments: NaN
+        scale = np.where(found >= 3, 1 / np.sqrt(np.maximum(found, 1)), np.nan)
+        out.extra["sd_hz"] = np.nanstd(f, axis=0, ddof=1) * scale if blocks > 1 else f[0] * np.nan
+        out.extra["sd_damping"] = np.nanstd(z, axis=0, ddof=1) * scale
+        out.mode_shape_std = (np.nanstd(sh.real, axis=0, ddof=1)
+                              + 1j * np.nanstd(sh.imag, axis=0, ddof=1)) * scale[:, None]
+    out.extra["blocks_found"] = found.astype(float)
+    return out
+
+
+def ssi(data: Any, orders: Any, *, method: str = "cov", horizon: int | None = None,
+        blocks: int = 10, freq_tol: float = 0.01, damping_tol: float = 0.05,
+        min_mac: float = 0.95) -> SSIResult:
+    """Output-only modal analysis by stochastic subspace identification.
+
+    Parameters
+    ----------
+    data : IOData
+        Response records (accelerations, velocities, strains), ``(n_samples, n_channels)``;
+        inputs, if the record has any, are ignored (output-only). Remove the means first.
+    orders : iterable of int
+        Increasing model orders for the stabilisation diagram (two per mode).
+    method : {"cov", "data"}
+        Covariance-driven (SSI-cov, default) or data-driven (SSI-data, output-only N4SID).
+    horizon : int, optional
+        Block rows ``i``; ``i * n_channels`` must exceed the largest order. Default: the
+        smallest ``i`` that allows it, at least 10. Longer horizons resolve closer modes.
+    blocks : int
+        Segments for the standard deviations of :meth:`SSIResult.modes_at` (>= 2).
+    freq_tol, damping_tol, min_mac : float
+        Stability criteria of the diagram.
+
+    Returns
+    -------
+    SSIResult
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> A = np.array([[0.98, 0.15], [-0.15, 0.98]])     # one mode at ~2.4 Hz, dt = 0.1
+    >>> rng = np.random.default_rng(0)
+    >>> x = np.zeros(2); y = np.empty((20000, 2))
+    >>> for t in range(20000):
+    ...     y[t] = [x[0], x[0] + 0.5 * x[1]]; x = A @ x + rng.standard_normal(2)
+    >>> res = sysid.ssi(sysid.IOData(None, y, 0.1), range(2, 9, 2))
+    >>> f_true = np.angle(np.linalg.eigvals(A)).max() / (2 * np.pi * 0.1)
+    >>> bool(abs(res.stable_frequencies()[0] - f_true) < 0.01)
+    True
+    """
+    from ..data.iodata import IOData
+
+    if not isinstance(data, IOData):
+        raise DataError("data must be an IOData record: sysid.IOData(None, y, dt) for "
+                        "output-only response data")
+    if method not in _METHODS:
+        raise DataError(f"method must be 'cov' (SSI-cov) or 'data' (SSI-data), got {method!r}")
+    ords = [as_int(o, "orders", 1) for o in np.atleast_1d(np.asarray(orders, dtype=object))]
+    if not ords or any(b <= a for a, b in zip(ords, ords[1:])):
+        raise DataError(f"orders must be a non-empty increasing sequence, got {ords}")
+    blocks = as_int(blocks, "blocks", 2)
+    ys = [y for _, y in experiment_arrays(data)]
+    l = ys[0].shape[1]
+    i = as_int(horizon, "horizon", 1) if horizon is not None else max(10, -(-(ords[-1] + 1) // l))
+    if i * l <= ords[-1]:
+        raise DataError(f"horizon {i} with {l} channel(s) allows orders up to {i * l - 1}, "
+                        f"got {ords[-1]}; choose horizon > {ords[-1] // l}")
+    shortest = min(y.shape[0] for y in ys)
+    if shortest < blocks * 4 * i:
+        raise InsufficientDataError(
+            f"ssi with horizon {i} and {blocks} blocks needs at least {blocks * 4 * i} samples "
+            f"per experiment, got {shortest}; use a longer record, fewer blocks or a shorter "
+            "horizon")
+    systems, s = _systems(ys, float(data.dt), ords, i, method)
+    names = list(data.output_names)
+    modes, status, prev = [], [], None
+    for A, C in systems:
+        cur = _modes(A, C, float(data.dt), names)
+        status.append(_status(prev, cur, freq_tol, damping_tol, min_mac))
+        modes.append(cur)
+        prev = cur
+    return SSIResult(ords, modes, status, s, method, i, float(data.dt), ys, blocks, names)

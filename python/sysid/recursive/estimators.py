@@ -1,0 +1,433 @@
+r"""Online estimators of single-output polynomial models.
+
+The model ``A(q) y(t) = sum_j B_j(q)/F_j(q) u_j(t - nk_j) + C(q)/D(q) e(t)`` is written as
+a pseudo-linear regression ``y(t) = phi(t)^T theta + e(t)`` with
+``theta = [a, b_1, .., b_m, c, d, f_1, .., f_m]`` (MATLAB's order). Each sample gives the
+prior prediction ``yhat(t) = phi(t)^T theta(t-1)``, the error ``eps = y - yhat`` and the
+update ``theta(t) = theta(t-1) + K(t) eps(t)`` with
+
+* ``"forgetting"``: ``K = P psi / (lambda + psi^T P psi)``,
+  ``P <- (P - K psi^T P) / lambda`` (recursive least squares for ARX);
+* ``"kalman"``: ``K = P psi / (R2 + psi^T P psi)``, ``P <- P - K psi^T P + R1``;
+* ``"normalized_gradient"``: ``K = gamma psi / (bias + psi^T psi)``;
+* ``"gradient"``: ``K = gamma psi``;
+
+where ``psi`` is the gradient of the prediction (``phi`` filtered by ``D/C``, ``D/(C F_j)``
+or ``1/C``; ``psi = phi`` for ARX): the recursive prediction-error method. ``step`` and
+``run`` execute the same Rust code, so a record processed either way gives bit-identical
+results.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import as_2d, as_int
+from ..errors import DataError, ShapeError
+
+_METHODS = ("forgetting", "kalman", "normalized_gradient", "gradient")
+
+
+def _orders(v: Any, name: str, lo: int = 0) -> list[int]:
+    vals = list(np.atleast_1d(np.asarray(v, dtype=object)).ravel())
+    if not vals:
+        raise DataError(f"{name} needs one entry per input, got none")
+    return [as_int(x, name, lo) for x in vals]
+
+
+def _per_input(v: Any, m: int, name: str, lo: int = 0) -> list[int]:
+    vals = _orders(v, name, lo)
+    if len(vals) == 1:
+        return vals * m
+    if len(vals) != m:
+        raise DataError(f"{name} has {len(vals)} entries but the model has {m} input(s); "
+                        f"give one per input or a single number for all")
+    return vals
+
+
+class RecursiveResult:
+    """What :meth:`run` returns: the prior predictions and the parameter trajectory.
+
+    Attributes
+    ----------
+    yhat : ndarray (n_samples,)
+        One-step predictions ``yhat(t | t-1)`` made before each update.
+    error : ndarray (n_samples,)
+        Prediction errors ``y - yhat``.
+    parameters : ndarray (n_samples, n_parameters) or None
+        ``theta`` after each sample (``store_parameters=True``).
+    names : list of str
+        Parameter names (``a1``, ``b1_1``, ...).
+    """
+
+    def __init__(self, yhat: np.ndarray, error: np.ndarray, parameters: np.ndarray | None,
+                 names: list[str], dt: float) -> None:
+        self.yhat, self.error, self.parameters, self.names, self.dt = (
+            yhat, error, parameters, names, dt)
+
+    def to_pandas(self) -> Any:
+        """A DataFrame indexed by time: ``yhat``, ``error`` and one column per parameter."""
+        import pandas as pd
+
+        cols: dict[str, Any] = {"yhat": self.yhat, "error": self.error}
+        if self.parameters is not None:
+            cols.update({n: self.parameters[:, i] for i, n in enumerate(self.names)})
+        return pd.DataFrame(cols, index=np.arange(self.yhat.size) * self.dt)
+
+    def plot(self, fig: Any = None) -> Any:
+        """Parameter trajectories (top) and prediction errors (bottom); returns the figure."""
+        import matplotlib.pyplot as plt
+
+        fig = fig or plt.figure()
+        ax1, ax2 = fig.subplots(2, 1, sharex=True)
+        t = np.arange(self.yhat.size) * self.dt
+        if self.parameters is not None:
+            for i, n in enumerate(self.names):
+                ax1.plot(t, self.parameters[:, i], label=n)
+            ax1.legend(fontsize="small", ncol=4)
+        ax1.set_ylabel("parameters")
+        ax2.plot(t, self.error, lw=0.5)
+        ax2.set_ylabel("prediction error")
+        ax2.set_xlabel("time")
+        return fig
+
+    def __repr__(self) -> str:
+        rms = float(np.sqrt(np.mean(self.error ** 2))) if self.error.size else float("nan")
+        return (f"RecursiveResult({self.yhat.size} samples, {len(self.names)} parameters, "
+                f"rms prediction error {rms:.4g})")
+
+
+class _Recursive:
+    """Shared machinery of the four online estimators (see the module documentation)."""
+
+    _kind = ""
+
+    def __init__(self, na: int, nb: Any, nc: int, nd: int, nf: Any, nk: Any, *,
+                 method: str, forgetting: float, process_noise: Any, noise_variance: float,
+                 gain: float, bias: float, initial_parameters: Any, initial_covariance: Any,
+                 dt: float) -> None:
+        if method not in _METHODS:
+            raise DataError(f"method must be one of {', '.join(map(repr, _METHODS))}, "
+                            f"got {method!r}")
+        nb_v = _orders(nb, "nb")
+        m = len(nb_v)
+        nf_v, nk_v = _per_input(nf, m, "nf"), _per_input(nk, m, "nk")
+        self._orders = (as_int(na, "na", 0), nb_v, as_int(nc, "nc", 0), as_int(nd, "nd", 0),
+                        nf_v, nk_v)
+        self.method, self.dt = method, float(dt)
+        p = sum(self._orders[0:1]) + sum(nb_v) + nc + nd + sum(nf_v)
+        q = None
+        if process_noise is not None:
+            q = np.asarray(process_noise, dtype=float)
+            q = q * np.eye(p) if q.ndim == 0 else q
+            if q.shape != (p, p):
+                raise ShapeError(f"process_noise has shape {q.shape} but should be ({p}, {p}) "
+                                 f"or a number (times the identity)")
+            q = np.ascontiguousarray(q)
+        P0 = np.asarray(initial_covariance, dtype=float)
+        theta0 = None if initial_parameters is None else np.ascontiguousarray(
+            np.asarray(initial_parameters, dtype=float).ravel())
+        self._core = _sysid.RecursiveEstimator(
+            *self._orders, method=method, forgetting=float(forgetting), process_noise=q,
+            noise_variance=float(noise_variance), gain=float(gain), bias=float(bias),
+            theta0=theta0, p0=float(P0) if P0.ndim == 0 else 1.0)
+        if P0.ndim != 0:
+            self.covariance = P0
+
+    # -- state ---------------------------------------------------------------------------
+    @property
+    def ninputs(self) -> int:
+        """Number of inputs."""
+        return len(self._orders[1])
+
+    @property
+    def n_parameters(self) -> int:
+        """Number of parameters."""
+        return int(self._core.n_parameters)
+
+    @property
+    def parameters(self) -> np.ndarray:
+        """Current ``theta = [a, b_j, c, d, f_j]`` (settable)."""
+        return np.asarray(self._core.parameters)
+
+    @parameters.setter
+    def parameters(self, theta: Any) -> None:
+        self._core.set_parameters(np.ascontiguousarray(np.asarray(theta, float).ravel()))
+
+    @property
+    def covariance(self) -> np.ndarray:
+        """Current ``P`` (settable; for the forgetting factor and Kalman methods the
+        parameter covariance up to the noise variance)."""
+        return np.asarray(self._core.covariance)
+
+    @covariance.setter
+    def covariance(self, P: Any) -> None:
+        P = np.asarray(P, dtype=float)
+        P = P * np.eye(self.n_parameters) if P.ndim == 0 else P
+        self._core.set_covariance(np.ascontiguousarray(P))
+
+    @property
+    def regressor(self) -> np.ndarray:
+        """The regressor ``phi`` of the last sample."""
+        return np.asarray(self._core.regressor)
+
+    @property
+    def samples(self) -> int:
+        """Samples processed so far."""
+        return int(self._core.samples)
+
+    @property
+    def rejected(self) -> int:
+        """Updates refused because they would have made the estimate non-finite."""
+        return int(self._core.rejected)
+
+    @property
+    def names(self) -> list[str]:
+        """Parameter names in the order of :attr:`parameters`."""
+        na, nb, nc, nd, nf, _ = self._orders
+        out = [f"a{i + 1}" for i in range(na)]
+        out += [f"b{j + 1}_{i + 1}" for j, n in enumerate(nb) for i in range(n)]
+        out += [f"c{i + 1}" for i in range(nc)] + [f"d{i + 1}" for i in range(nd)]
+        return out + [f"f{j + 1}_{i + 1}" for j, n in enumerate(nf) for i in range(n)]
+
+    def _split(self) -> dict[str, Any]:
+        na, nb, nc, nd, nf, _ = self._orders
+        th = self.parameters
+        cuts = np.cumsum([na, *nb, nc, nd, *nf])[:-1]
+        parts = np.split(th, cuts)
+        m = len(nb)
+        return {"a": parts[0], "b": parts[1:1 + m], "c": parts[1 + m], "d": parts[2 + m],
+                "f": parts[3 + m:]}
+
+    # -- data ----------------------------------------------------------------------------
+    def _u_row(self, u: Any) -> list[float]:
+        row = np.asarray(u, dtype=float).ravel()
+        if row.size != self.ninputs:
+            raise ShapeError(f"u has {row.size} value(s) but the model has {self.ninputs} "
+                             f"input(s); pass one value per input")
+        return [float(v) for v in row]
+
+    def step(self, u: Any, y: float) -> float:
+        """Process one sample (``u`` at time t, one value per input; ``y`` at time t);
+        returns the prediction ``yhat(t | t-1)`` made before the update."""
+        yv = np.asarray(y, dtype=float)
+        if yv.size != 1:
+            raise ShapeError(f"y must be one number per sample (single output), got shape "
+                             f"{yv.shape}; use run() for a record")
+        return float(self._core.step(self._u_row(u), float(yv.ravel()[0])))
+
+    def run(self, u: Any, y: Any, *, store_parameters: bool = True) -> RecursiveResult:
+        """Process a record ``u (n_samples, ninputs)``, ``y (n_samples,)`` in the Rust core
+        (GIL released, Ctrl-C honoured); the estimator's state carries over, so records
+        can be fed in pieces."""
+        y2 = as_2d(y, "y")
+        if y2.shape[1] != 1:
+            raise ShapeError(f"y has shape {y2.shape}: online estimators model one output; "
+                             f"make one estimator per output")
+        u2 = as_2d(u, "u", ncols=self.ninputs)
+        if u2.shape[0] != y2.shape[0]:
+            raise ShapeError(f"u has {u2.shape[0]} samples but y has {y2.shape[0]}")
+        yv = np.ascontiguousarray(y2[:, 0])
+        yhat, th = self._core.run(np.ascontiguousarray(u2), yv, bool(store_parameters))
+        return RecursiveResult(np.asarray(yhat), yv - yhat, None if th is None
+                               else np.asarray(th), self.names, self.dt)
+
+    def reset_history(self) -> None:
+        """Forget the signal history (keep the parameters and ``P``): the next sample
+        starts a new record from rest."""
+        self._core.reset_history()
+
+    def copy(self) -> Any:
+        """An independent copy of the estimator and its state."""
+        import copy
+
+        new = copy.copy(self)
+        new._core = self._core.copy()
+        return new
+
+    def to_model(self) -> Any:
+        """The current estimate as a :class:`~sysid.PolynomialModel`."""
+        from ..polynomial.model import PolynomialModel
+
+        p = self._split()
+        m = len(p["b"])
+        model = PolynomialModel([[p["a"]]], [list(p["b"])], [self._orders[5]], self.dt,
+                                c=[p["c"]], d=[p["d"]], f=[list(p["f"])])
+        model.info = {"method": f"recursive {self._kind} ({self.method})",
+                      "samples": self.samples}
+        del m
+        return model
+
+    def __repr__(self) -> str:
+        na, nb, nc, nd, nf, nk = self._orders
+        return (f"Recursive{self._kind.upper()}(na={na}, nb={nb}, nc={nc}, nd={nd}, nf={nf}, "
+                f"nk={nk}, method={self.method!r}, {self.samples} samples)")
+
+
+_SETTINGS_DOC = """
+    method : {"forgetting", "kalman", "normalized_gradient", "gradient"}
+        How the parameters follow the data (see :mod:`sysid.recursive.estimators`).
+    forgetting : float
+        Forgetting factor ``lambda`` in ``(0, 1]`` (method ``"forgetting"``).
+    process_noise : float or array_like (p, p), optional
+        ``R1`` of method ``"kalman"`` (default ``0.1 I``).
+    noise_variance : float
+        ``R2`` of method ``"kalman"``.
+    gain, bias : float
+        ``gamma`` and the bias of the gradient methods.
+    initial_parameters : array_like, optional
+        ``theta(0)`` (zeros by default).
+    initial_covariance : float or array_like (p, p)
+        ``P(0)`` (a number: times the identity; default 1e4).
+    dt : float
+        Sample time of the models :meth:`to_model` returns.
+"""
+
+
+def _settings(kw: dict[str, Any]) -> dict[str, Any]:
+    return kw
+
+
+class RecursiveARX(_Recursive):
+    __doc__ = """Online ARX ``A(q) y(t) = B(q) u(t - nk) + e(t)``.
+
+    Parameters
+    ----------
+    na : int
+        Order of ``A``.
+    nb, nk : int or sequence of int
+        ``B`` coefficients and delay per input.
+""" + _SETTINGS_DOC + """
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(500); y = np.zeros(500)
+    >>> for t in range(1, 500): y[t] = 0.5 * y[t - 1] + u[t - 1]
+    >>> est = sysid.RecursiveARX(1, 1)
+    >>> res = est.run(u, y)
+    >>> np.round(est.parameters, 6)
+    array([-0.5,  1. ])
+    """
+    _kind = "arx"
+
+    def __init__(self, na: int, nb: Any, nk: Any = 1, *, method: str = "forgetting",
+                 forgetting: float = 1.0, process_noise: Any = None,
+                 noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
+                 initial_parameters: Any = None, initial_covariance: Any = 1e4,
+                 dt: float = 1.0) -> None:
+        nbv = _orders(nb, "nb")
+        super().__init__(na, nbv, 0, 0, [0] * len(nbv), nk, method=method,
+                         forgetting=forgetting, process_noise=process_noise,
+                         noise_variance=noise_variance, gain=gain, bias=bias,
+                         initial_parameters=initial_parameters,
+                         initial_covariance=initial_covariance, dt=dt)
+
+
+class RecursiveARMAX(_Recursive):
+    __doc__ = """Online ARMAX ``A(q) y(t) = B(q) u(t - nk) + C(q) e(t)`` (recursive
+    prediction-error method: the regressor filtered by ``1/C``).
+
+    Parameters
+    ----------
+    na, nc : int
+        Orders of ``A`` and ``C``.
+    nb, nk : int or sequence of int
+        ``B`` coefficients and delay per input.
+""" + _SETTINGS_DOC + """
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(1)
+    >>> u = rng.standard_normal(20000); e = 0.3 * rng.standard_normal(20000)
+    >>> y = np.zeros(20000)
+    >>> for t in range(1, 20000): y[t] = 0.8 * y[t-1] + u[t-1] + e[t] + 0.5 * e[t-1]
+    >>> est = sysid.RecursiveARMAX(1, 1, 1)
+    >>> _ = est.run(u, y)
+    >>> np.round(est.parameters, 1)
+    array([-0.8,  1. ,  0.5])
+    """
+    _kind = "armax"
+
+    def __init__(self, na: int, nb: Any, nc: int, nk: Any = 1, *, method: str = "forgetting",
+                 forgetting: float = 1.0, process_noise: Any = None,
+                 noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
+                 initial_parameters: Any = None, initial_covariance: Any = 1e4,
+                 dt: float = 1.0) -> None:
+        nbv = _orders(nb, "nb")
+        super().__init__(na, nbv, nc, 0, [0] * len(nbv), nk, method=method,
+                         forgetting=forgetting, process_noise=process_noise,
+                         noise_variance=noise_variance, gain=gain, bias=bias,
+                         initial_parameters=initial_parameters,
+                         initial_covariance=initial_covariance, dt=dt)
+
+
+class RecursiveOE(_Recursive):
+    __doc__ = """Online output-error model ``y(t) = B(q)/F(q) u(t - nk) + e(t)``.
+
+    Parameters
+    ----------
+    nb, nf, nk : int or sequence of int
+        ``B`` coefficients, ``F`` order and delay per input.
+""" + _SETTINGS_DOC + """
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> rng = np.random.default_rng(2)
+    >>> u = rng.standard_normal(20000)
+    >>> y = signal.lfilter([0, 1.0], [1, -0.7], u) + 0.2 * rng.standard_normal(20000)
+    >>> est = sysid.RecursiveOE(1, 1)
+    >>> _ = est.run(u, y)
+    >>> np.round(est.parameters, 1)
+    array([ 1. , -0.7])
+    """
+    _kind = "oe"
+
+    def __init__(self, nb: Any, nf: Any, nk: Any = 1, *, method: str = "forgetting",
+                 forgetting: float = 1.0, process_noise: Any = None,
+                 noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
+                 initial_parameters: Any = None, initial_covariance: Any = 1e4,
+                 dt: float = 1.0) -> None:
+        super().__init__(0, nb, 0, 0, nf, nk, method=method, forgetting=forgetting,
+                         process_noise=process_noise, noise_variance=noise_variance,
+                         gain=gain, bias=bias, initial_parameters=initial_parameters,
+                         initial_covariance=initial_covariance, dt=dt)
+
+
+class RecursiveBJ(_Recursive):
+    __doc__ = """Online Box-Jenkins ``y(t) = B(q)/F(q) u(t - nk) + C(q)/D(q) e(t)``.
+
+    Parameters
+    ----------
+    nb, nf, nk : int or sequence of int
+        ``B`` coefficients, ``F`` order and delay per input.
+    nc, nd : int
+        Orders of ``C`` and ``D``.
+""" + _SETTINGS_DOC + """
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> rng = np.random.default_rng(3)
+    >>> u = rng.standard_normal(40000); e = 0.2 * rng.standard_normal(40000)
+    >>> y = signal.lfilter([0, 1.0], [1, -0.7], u) + signal.lfilter([1, 0.5], [1, -0.6], e)
+    >>> est = sysid.RecursiveBJ(1, 1, 1, 1)
+    >>> _ = est.run(u, y)
+    >>> np.round(est.parameters, 1)
+    array([ 1. ,  0.5, -0.6, -0.7])
+    """
+    _kind = "bj"
+
+    def __init__(self, nb: Any, nc: int, nd: int, nf: Any, nk: Any = 1, *,
+                 method: str = "forgetting", forgetting: float = 1.0,
+                 process_noise: Any = None, noise_variance: float = 1.0, gain: float = 1.0,
+                 bias: float = 2.2e-16, initial_parameters: Any = None,
+                 initial_covariance: Any = 1e4, dt: float = 1.0) -> None:
+        super().__init__(0, nb, nc, nd, nf, nk, method=method, forgetting=forgetting,
+                         process_noise=process_noise, noise_variance=noise_variance,
+                         gain=gain, bias=bias, initial_parameters=initial_parameters,
+                         initial_covariance=initial_covariance, dt=dt)

@@ -1,0 +1,208 @@
+r"""Forecasts of time-series models with confidence bands.
+
+Any model is put in innovation form ``x(t+1) = A x + B u + K e``, ``y = C x + D u + e``
+(``cov e = Lambda``): a state-space model as it is, a polynomial time-series model
+``y = C(q)/(A(q) D(q)) e`` through the realisation of ``H - 1``. The Kalman predictor runs
+over the past record to ``xhat(N | N-1)``; the forecast ``j`` steps on is
+``C A^j xhat`` (plus the response to given future inputs), with the error covariance of the
+``j+1``-step predictor
+
+.. math:: \Sigma_j = \sum_{i=0}^{j} M_i \Lambda M_i^T, \quad M_0 = I, \; M_i = C A^{i-1} K,
+
+which grows from ``Lambda`` toward the covariance of the output. The bands are
+``mean +- z sqrt(diag Sigma_j)`` for Gaussian innovations; parameter uncertainty is not
+included (it is of order ``1/N`` against the innovations).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .._checks import as_2d, as_int
+from ..errors import DataError, ShapeError
+
+
+class Forecast:
+    """What :func:`forecast` returns.
+
+    Attributes
+    ----------
+    t : ndarray (horizon,)
+        Times of the forecast samples (continuing the past record's).
+    mean : ndarray (horizon, noutputs)
+        The forecast.
+    std : ndarray (horizon, noutputs)
+        Standard deviation of the forecast error.
+    covariance : ndarray (horizon, noutputs, noutputs)
+        Forecast error covariance per step.
+    level : float
+        Confidence level of :attr:`lower` / :attr:`upper`.
+    """
+
+    def __init__(self, t: np.ndarray, mean: np.ndarray, cov: np.ndarray, level: float,
+                 output_names: list[str], past: np.ndarray, past_t: np.ndarray) -> None:
+        from scipy.stats import norm
+
+        self.t, self.mean, self.covariance, self.level = t, mean, cov, level
+        self.std = np.sqrt(np.einsum("kii->ki", cov))
+        self._z = float(norm.ppf(0.5 + level / 2))
+        self.output_names, self._past, self._past_t = output_names, past, past_t
+
+    @property
+    def lower(self) -> np.ndarray:
+        """Lower band ``mean - z std`` at :attr:`level`."""
+        return self.mean - self._z * self.std
+
+    @property
+    def upper(self) -> np.ndarray:
+        """Upper band ``mean + z std`` at :attr:`level`."""
+        return self.mean + self._z * self.std
+
+    def to_pandas(self) -> Any:
+        """A DataFrame indexed by time: mean, std, lower, upper per output."""
+        import pandas as pd
+
+        cols = {}
+        for i, n in enumerate(self.output_names):
+            cols.update({f"{n}": self.mean[:, i], f"{n} std": self.std[:, i],
+                         f"{n} lower": self.lower[:, i], f"{n} upper": self.upper[:, i]})
+        return pd.DataFrame(cols, index=self.t)
+
+    def plot(self, fig: Any = None, n_past: int = 200) -> Any:
+        """The last ``n_past`` samples, the forecast and its band, one axis per output."""
+        import matplotlib.pyplot as plt
+
+        fig = fig or plt.figure()
+        axes = np.atleast_1d(fig.subplots(len(self.output_names), 1, sharex=True, squeeze=False)
+                             [:, 0])
+        for i, ax in enumerate(axes):
+            ax.plot(self._past_t[-n_past:], self._past[-n_past:, i], "k", lw=0.8, label="past")
+            ax.plot(self.t, self.mean[:, i], "C0", label="forecast")
+            ax.fill_between(self.t, self.lower[:, i], self.upper[:, i], color="C0", alpha=0.25,
+                            label=f"{self.level:.0%} band")
+            ax.set_ylabel(self.output_names[i])
+        axes[0].legend(fontsize="small")
+        axes[-1].set_xlabel("time")
+        return fig
+
+    def __repr__(self) -> str:
+        return (f"Forecast({self.mean.shape[0]} steps, {self.mean.shape[1]} output(s), "
+                f"{self.level:.0%} bands)")
+
+
+def _innovation_form(model: Any) -> tuple[np.ndarray, ...]:
+    """``(A, B, C, D, K, Lambda)`` of the model's innovation form."""
+    from ..models.statespace import StateSpaceModel
+
+    if isinstance(model, StateSpaceModel):
+        n, l = model.A.shape[0], model.C.shape[0]
+        K = model.K if model.K is not None else np.zeros((n, l))
+        lam = model.noise_cov
+        return model.A, model.B, model.C, model.D, K, (None if lam is None else
+                                                       np.asarray(lam, float))
+    from ..polynomial.model import PolynomialModel
+
+    if not isinstance(model, PolynomialModel):
+        raise DataError(f"forecast takes a StateSpaceModel or a PolynomialModel, got "
+                        f"{type(model).__name__}; convert it with to_statespace() first")
+    if model.n_inputs != 0 or model.n_outputs != 1:
+        raise DataError("forecast of a polynomial model: only time-series models (no input, "
+                        "one output, from ar/arma); for input/output models use "
+                        "model.to_statespace() with a noise model (ssest/n4sid)")
+    num = np.r_[1.0, model.c[0]]
+    den = np.convolve(np.r_[1.0, model.a[0][0]], np.r_[1.0, model.d[0]])
+    n = max(num.size, den.size)
+    num, den = np.pad(num, (0, n - num.size)), np.pad(den, (0, n - den.size))
+    r = n - 1  # H = 1 + (num - den) / den: its strictly proper part in observer form
+    A = np.zeros((r, r))
+    A[:, 0] = -den[1:]
+    A[: r - 1, 1:] = np.eye(r - 1)
+    K = (num[1:] - den[1:]).reshape(r, 1)
+    C = np.zeros((1, r))
+    if r:
+        C[0, 0] = 1.0
+    lam = np.atleast_2d(float(np.asarray(model.noise_variance).ravel()[0]))
+    return A, np.zeros((A.shape[0], 0)), C, np.zeros((1, 0)), K, lam
+
+
+def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
+             level: float = 0.95) -> Forecast:
+    """Forecast ``horizon`` samples beyond a record, with confidence bands
+    (MATLAB's ``forecast``).
+
+    Parameters
+    ----------
+    model : StateSpaceModel or PolynomialModel
+        A model with a noise model: ``ar``/``arma`` results, or a state-space model in
+        innovation form (``n4sid``/``ssest`` of time series or of input/output data).
+    past : IOData or array_like (n_samples, noutputs)
+        The record the forecast continues (its last sample is the last one known).
+    horizon : int
+        Number of samples to forecast.
+    future_inputs : array_like (horizon, ninputs), optional
+        Inputs over the forecast, for models with inputs.
+    level : float
+        Confidence level of the bands (default 0.95).
+
+    Returns
+    -------
+    Forecast
+        ``mean``, ``std``, ``covariance``, ``lower``/``upper``, ``plot()``, ``to_pandas()``.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> m = sysid.polynomial.model.PolynomialModel([[[-0.8]]], [[]], np.zeros((1, 0)), 1.0)
+    >>> f = sysid.forecast(m, [0.0, 0.0, 1.0], 3)     # y(t) = 0.8 y(t-1) + e(t), var e = 1
+    >>> f.mean[:, 0]
+    array([0.8  , 0.64 , 0.512])
+    >>> np.round(f.std[:, 0] ** 2, 4)                 # 1, 1 + 0.8^2, 1 + 0.8^2 + 0.8^4
+    array([1.    , 1.64  , 2.0496])
+    """
+    from ..data.iodata import IOData
+
+    h = as_int(horizon, "horizon", 1)
+    if not (isinstance(level, (int, float)) and 0 < level < 1):
+        raise DataError(f"level must be a number in (0, 1), e.g. 0.95; got {level!r}")
+    A, B, C, D, K, lam = _innovation_form(model)
+    n, m, l = A.shape[0], B.shape[1], C.shape[0]
+    if isinstance(past, IOData):
+        u, y, dt = past.u, past.y, past.dt
+        if len(past.experiments) > 1:
+            raise DataError("forecast continues one record: pass one experiment "
+                            "(data.experiment(i)) as past")
+    else:
+        y, u, dt = as_2d(past, "past", ncols=l), None, float(getattr(model, "dt", 1.0) or 1.0)
+    y = as_2d(y, "past", ncols=l)
+    u = np.zeros((y.shape[0], 0)) if u is None else as_2d(u, "past inputs", ncols=m,
+                                                            allow_empty=True)
+    if m and future_inputs is None:
+        raise DataError(f"the model has {m} input(s): give future_inputs of shape ({h}, {m})")
+    uf = np.zeros((h, 0)) if not m else as_2d(future_inputs, "future_inputs", ncols=m)
+    if uf.shape[0] != h:
+        raise ShapeError(f"future_inputs has {uf.shape[0]} rows but horizon is {h}")
+    x = np.zeros(n)
+    e = np.empty_like(y)
+    for t in range(y.shape[0]):  # Kalman predictor over the past
+        e[t] = y[t] - C @ x - D @ u[t]
+        x = A @ x + B @ u[t] + K @ e[t]
+    if lam is None:  # no stored innovation covariance: the sample one of the past
+        lam = np.atleast_2d(e.T @ e / max(y.shape[0], 1))
+    mean = np.empty((h, l))
+    cov = np.empty((h, l, l))
+    S = lam.copy()
+    M = np.eye(l)
+    Ak = np.eye(n)
+    for j in range(h):
+        mean[j] = C @ x + D @ uf[j]
+        x = A @ x + B @ uf[j]
+        cov[j] = S
+        M = C @ Ak @ K
+        Ak = A @ Ak
+        S = S + M @ lam @ M.T
+    t0 = y.shape[0] * dt
+    names = list(getattr(model, "output_names", [f"y{i}" for i in range(l)]))
+    return Forecast(t0 + dt * np.arange(h), mean, cov, float(level), names, y,
+                    dt * np.arange(y.shape[0]))

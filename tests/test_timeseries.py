@@ -1,0 +1,172 @@
+"""Time series: sysid.ar (four methods) against independent oracles, calibrated standard
+deviations, output-only n4sid/ssest, and sysid.forecast with calibrated bands."""
+
+import numpy as np
+import pytest
+from scipy import signal
+
+import sysid
+
+A2 = [1.0, -1.5, 0.7]  # AR(2), poles 0.75 +- 0.37i
+
+
+def _ar2(n, seed):
+    return signal.lfilter([1.0], A2, np.random.default_rng(seed).standard_normal(n))
+
+
+def _yule_walker_oracle(y, n):
+    """Plain Yule-Walker: the full Toeplitz matrix of biased autocovariances, solved densely."""
+    N = y.size
+    r = np.array([y[: N - k] @ y[k:] / N for k in range(n + 1)])
+    R = np.array([[r[abs(i - j)] for j in range(n)] for i in range(n)])
+    return np.linalg.solve(R, -r[1:])
+
+
+def _burg_oracle(y, n):
+    """Burg written as a loop over samples (a second, independent implementation)."""
+    f, b, a = list(y), list(y), [1.0]
+    for m in range(1, n + 1):
+        num = den = 0.0
+        for t in range(m, len(y)):
+            num += f[t] * b[t - 1]
+            den += f[t] ** 2 + b[t - 1] ** 2
+        k = -2 * num / den
+        a = [(a[i] if i < len(a) else 0.0) + k * (a[m - i] if m - i < len(a) else 0.0)
+             for i in range(m + 1)]
+        f, b = ([0.0] * m + [f[t] + k * b[t - 1] for t in range(m, len(y))],
+                [0.0] * m + [b[t - 1] + k * f[t] for t in range(m, len(y))])
+    return np.array(a[1:])
+
+
+def test_ar_methods_match_independent_oracles():
+    y = _ar2(3000, 0)
+    np.testing.assert_allclose(sysid.ar(y, 2, "yw").a[0][0], _yule_walker_oracle(y, 2),
+                               rtol=1e-12)
+    np.testing.assert_allclose(sysid.ar(y, 3, "burg").a[0][0], _burg_oracle(y, 3), rtol=1e-10)
+    Phi = -np.column_stack([y[1:-1], y[:-2]])
+    ls = np.linalg.lstsq(Phi, y[2:], rcond=None)[0]
+    np.testing.assert_allclose(sysid.ar(y, 2, "ls").a[0][0], ls, rtol=1e-10)
+    yr = y[::-1]
+    Pb = -np.column_stack([yr[1:-1], yr[:-2]])
+    fb = np.linalg.lstsq(np.vstack([Phi, Pb]), np.r_[y[2:], yr[2:]], rcond=None)[0]
+    np.testing.assert_allclose(sysid.ar(y, 2).a[0][0], fb, rtol=1e-10)
+
+
+def test_ar_matches_statsmodels_when_available():
+    sm = pytest.importorskip("statsmodels.regression.linear_model",
+                             reason="statsmodels is a peer (benches/.venv-peers), not a "
+                                    "dependency; the numpy oracles above cover the methods")
+    y = _ar2(2000, 1)
+    rho, _ = sm.yule_walker(y, order=2, method="mle", demean=False)
+    np.testing.assert_allclose(sysid.ar(y, 2, "yw").a[0][0], -rho, rtol=1e-10)
+    rho, _ = sm.burg(y, order=2, demean=False)
+    np.testing.assert_allclose(sysid.ar(y, 2, "burg").a[0][0], -rho, rtol=1e-8)
+
+
+@pytest.mark.parametrize("method", ["fb", "burg", "yw", "ls"])
+def test_ar_is_consistent(method):
+    errs = [np.abs(sysid.ar(_ar2(n, 2), 2, method).a[0][0] - A2[1:]).max()
+            for n in (500, 50000)]
+    assert errs[1] < 0.02 and errs[1] < errs[0]
+
+
+@pytest.mark.parametrize("method", ["burg", "ls"])
+def test_ar_std_is_calibrated_by_monte_carlo(method):
+    # 300 runs: the sample std of a1 is within ~8 % of the truth (chi distribution, 2 sigma)
+    # and the 95 % interval coverage within 0.92..0.98 has probability > 0.99 if calibrated
+    est, sd = [], []
+    for s in range(300):
+        m = sysid.ar(_ar2(400, 100 + s), 2, method)
+        est.append(m.a[0][0])
+        sd.append(m.std["a"][0][0])
+    est, sd = np.array(est), np.array(sd)
+    ratio = est.std(axis=0) / sd.mean(axis=0)
+    assert np.all((ratio > 0.85) & (ratio < 1.15)), ratio
+    cover = (np.abs(est - A2[1:]) < 1.96 * sd).mean(axis=0)
+    assert np.all((cover > 0.90) & (cover < 0.99)), cover
+
+
+def test_ar_pools_experiments_and_ar_arma_keep_working_on_iodata():
+    ys = [_ar2(2000, 3), _ar2(1500, 4)]
+    both = sysid.ar(sysid.IOData(None, [y[:, None] for y in ys], 1.0), 2, "ls").a[0][0]
+    Phi = np.vstack([-np.column_stack([y[1:-1], y[:-2]]) for y in ys])
+    ref = np.linalg.lstsq(Phi, np.concatenate([y[2:] for y in ys]), rcond=None)[0]
+    np.testing.assert_allclose(both, ref, rtol=1e-10)
+    y = signal.lfilter([1, 0.5], [1, -0.7], np.random.default_rng(5).standard_normal(4000))
+    m = sysid.arma(sysid.IOData(None, y[:, None], 0.1), 1, 1)
+    assert abs(m.a[0][0][0] + 0.7) < 0.05 and abs(m.c[0][0] - 0.5) < 0.05 and m.dt == 0.1
+
+
+def test_output_only_n4sid_and_ssest():
+    y = _ar2(4000, 6)[:, None]
+    d = sysid.IOData(None, y, 1.0)
+    true = np.roots(A2)
+    for m in (sysid.n4sid(d, 2), sysid.ssest(d, 2)):
+        assert m.ninputs == 0
+        p = np.sort_complex(m.poles())
+        assert np.abs(p - np.sort_complex(true)).max() < 0.05
+
+
+def test_forecast_of_an_ar1_is_analytic():
+    m = sysid.ar(signal.lfilter([1], [1, -0.8], np.random.default_rng(7).standard_normal(5000)),
+                 1)
+    a, lam = -m.a[0][0][0], float(m.noise_variance[0])
+    f = sysid.forecast(m, [0.3, -0.2, 1.5], 4)
+    np.testing.assert_allclose(f.mean[:, 0], 1.5 * a ** np.arange(1, 5), rtol=1e-12)
+    np.testing.assert_allclose(f.std[:, 0] ** 2,
+                               lam * np.cumsum(a ** (2 * np.arange(4))), rtol=1e-12)
+    assert f.t.tolist() == [3.0, 4.0, 5.0, 6.0]
+    assert np.all(f.lower < f.mean) and np.all(f.upper > f.mean)
+    assert "4 steps" in repr(f)
+
+
+def test_forecast_equals_the_models_own_k_step_predictor():
+    y = _ar2(3000, 8)[:, None]
+    d = sysid.IOData(None, y, 1.0)
+    for m in (sysid.n4sid(d, 2), sysid.arma(d, 2, 1)):
+        N = 2000
+        for k in (1, 3, 7):
+            pred = m.predict(np.zeros((N + k, 0)), y[: N + k], k)[N + k - 1]
+            fc = sysid.forecast(m, y[:N], k).mean[k - 1]
+            np.testing.assert_allclose(fc, pred, rtol=1e-8, atol=1e-10)
+
+
+def test_forecast_bands_cover_at_their_level():
+    # 400 independent realisations of the true AR(2): 95 % bands at 1 and 10 steps cover
+    # 0.92..0.98 (binomial 2.5 sigma at p = 0.95)
+    m = sysid.polynomial.model.PolynomialModel([[A2[1:]]], [[]], np.zeros((1, 0)), 1.0)
+    hits = np.zeros((400, 2))
+    for s in range(400):
+        y = _ar2(220, 1000 + s)
+        f = sysid.forecast(m, y[:200], 10)
+        for i, k in enumerate((1, 10)):
+            hits[s, i] = f.lower[k - 1, 0] <= y[200 + k - 1] <= f.upper[k - 1, 0]
+    cover = hits.mean(axis=0)
+    assert np.all((cover > 0.92) & (cover < 0.98)), cover
+
+
+def test_bad_input_names_the_fix():
+    y = _ar2(100, 9)
+    with pytest.raises(sysid.DataError, match="method must be"):
+        sysid.ar(y, 2, "mle")
+    with pytest.raises(sysid.DataError, match="without inputs"):
+        sysid.ar(sysid.IOData(np.ones((100, 1)), y[:, None], 1.0), 2)
+    with pytest.raises(sysid.DataError, match="n4sid"):
+        sysid.ar(sysid.IOData(None, np.ones((100, 2)), 1.0), 2)
+    with pytest.raises(sysid.InsufficientDataError, match="lower order"):
+        sysid.ar(y[:5], 3)
+    with pytest.raises(sysid.DataError, match="identically zero"):
+        sysid.ar(np.zeros(50), 2, "burg")
+    with pytest.raises(sysid.DataError, match="na must be"):
+        sysid.ar(y, 0)
+    m = sysid.ar(y, 2)
+    with pytest.raises(sysid.DataError, match="horizon"):
+        sysid.forecast(m, y, 0)
+    with pytest.raises(sysid.DataError, match="level"):
+        sysid.forecast(m, y, 3, level=95)
+    with pytest.raises(sysid.ShapeError):
+        sysid.forecast(m, np.ones((10, 2)), 3)
+    with pytest.raises(sysid.DataError, match="future_inputs"):
+        sysid.forecast(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), y, 3)
+    with pytest.raises(sysid.DataError, match="to_statespace"):
+        sysid.forecast(object(), y, 3)
