@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int, experiment_arrays
+from .._checks import as_int, experiment_arrays, require_inputs_vary
 from ..errors import DataError, InsufficientDataError
 
 _METHODS = ("burg", "yw", "ls", "fb")
@@ -49,6 +49,7 @@ def _series(data: Any, na: int, name: str) -> tuple[list[np.ndarray], float]:
         raise DataError(f"{name} models one channel; the data have {exps[0][1].shape[1]} "
                         "outputs: fit one per channel, or sysid.n4sid(data, order) for a "
                         "multichannel state-space time-series model")
+    require_inputs_vary(exps, name, getattr(data, "output_names", None), side=1)
     ys = [y[:, 0] for _, y in exps]
     if min(y.size for y in ys) <= 2 * na:
         raise InsufficientDataError(
