@@ -155,7 +155,7 @@ def test_bad_input_names_the_fix():
         sysid.ar(sysid.IOData(None, np.ones((100, 2)), 1.0), 2)
     with pytest.raises(sysid.InsufficientDataError, match="lower order"):
         sysid.ar(y[:5], 3)
-    with pytest.raises(sysid.DataError, match="identically zero"):
+    with pytest.raises(sysid.DataError, match="y0 is 0 in every sample"):
         sysid.ar(np.zeros(50), 2, "burg")
     with pytest.raises(sysid.DataError, match="na must be"):
         sysid.ar(y, 0)
