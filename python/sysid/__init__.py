@@ -193,6 +193,10 @@ _LAZY = {
     "PiecewiseLinear": "models.hammerstein",
     "SigmoidNetwork": "models.hammerstein",
     "UserFunction": "models.hammerstein",
+    # issue 26 (branch identify): the automatic path
+    "identify": "identify.core",
+    "IdentifyResult": "identify.result",
+    "IdentifiedModel": "identify.result",
 }
 
 
@@ -375,4 +379,8 @@ __all__ = [
     "model_to_dict",
     "model_from_dict",
     "report",
+    # issue 26 (branch identify): the automatic path
+    "identify",
+    "IdentifyResult",
+    "IdentifiedModel",
 ]

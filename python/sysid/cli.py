@@ -192,8 +192,6 @@ def identify(
     and, with ``report``, the written ``files``.
     """
     from .analysis.criteria import select_order
-    from .analysis.validation import compare
-    from .analysis.whiteness import residuals
     from .estimate.subspace import SubspaceEstimator
 
     say = progress or (lambda _msg: None)
@@ -241,6 +239,15 @@ def identify(
         "future": est.future, "x0": x0}
     model.info["preprocessing"] = {**model.info.get("preprocessing", {}),
                                    **dict(preprocessing or {})}
+    return _validate(model, sel, est_data, val_data, report, say)
+
+
+def _validate(model: Any, sel: Any, est_data: IOData, val_data: IOData | None,
+              report: str | Path | None, say: Callable[[str], None]) -> dict[str, Any]:
+    """Simulation and prediction fits, residuals and the report of one model."""
+    from .analysis.validation import compare
+    from .analysis.whiteness import residuals
+
     check = val_data if val_data is not None else est_data
     which = "validation" if val_data is not None else "estimation"
     say(f"validating on the {which} data")
@@ -458,10 +465,42 @@ def _header(path: Path) -> list[str]:
     return [c.strip() for c in first.split(delim)]
 
 
+def automatic(est_data: IOData, val_data: IOData | None, *, report: str | Path | None = None,
+              preprocessing: dict[str, Any] | None = None,
+              progress: Callable[[str], None] | None = None,
+              bars: bool | None = False) -> dict[str, Any]:
+    """The command line's default path: :func:`sysid.identify` (offsets, checks, candidate
+    families and orders chosen on held-out parts of the estimation data), then the same
+    validation and report as :func:`identify`. The summary adds ``identify`` (the
+    :class:`~sysid.IdentifyResult`)."""
+    from .analysis.criteria import select_order
+    from .identify.core import identify as auto
+
+    say = progress or (lambda _msg: None)
+    say("sysid.identify: candidate families and orders, chosen on held-out parts of the "
+        "estimation data")
+    res = auto(est_data, val_data, progress=bars)
+    say(f"chosen: {res.choice} ({res.seconds:.1f} s)")
+    model = res.model.statespace
+    model.info["preprocessing"] = {**model.info.get("preprocessing", {}),
+                                   **dict(preprocessing or {}),
+                                   "identify_offsets": model.info.get("offsets")
+                                   or {"u": res.model.u_offset.tolist(),
+                                       "y": res.model.y_offset.tolist()}}
+    est_c = res.model.remove_offsets(est_data)
+    val_c = res.model.remove_offsets(val_data) if val_data is not None else None
+    sel = select_order(est_c, models=[model], validation=val_c)
+    out = _validate(model, sel, est_c, val_c, report, say)
+    out["identify"] = res
+    return out
+
+
 def _identify(args: argparse.Namespace) -> int:
     from .estimate.subspace import _method
 
-    _method(args.method)  # before reading and compressing anything
+    auto = args.method == "auto" and args.order == "auto"
+    if not auto:
+        _method("moesp" if args.method == "auto" else args.method)  # before reading anything
     _check_report_dir(args.report)
     if args.horizon is not None and args.horizon < 1:
         raise DataError(f"--horizon must be a positive integer, got {args.horizon}")
@@ -501,7 +540,14 @@ def _identify(args: argparse.Namespace) -> int:
     kw = {"dt": dt, "input_names": pre["inputs"], "output_names": pre["outputs"]}
     est_data = IOData(u=u[:k] if ui else None, y=y[:k], **kw)
     val_data = IOData(u=u[k:] if ui else None, y=y[k:], **kw) if k < N else None
-    out = identify(est_data, val_data, order=args.order, method=args.method,
+    if auto and ui and args.uncertainty == "none" and args.horizon is None:
+        out = automatic(est_data, val_data, report=args.report, preprocessing=pre,
+                        progress=say, bars=_bars(args))
+        print(out["identify"].summary())
+        _print_summary(out)
+        return 0
+    out = identify(est_data, val_data, order=args.order,
+                   method="moesp" if args.method == "auto" else args.method,
                    horizon=args.horizon, report=args.report, preprocessing=pre, progress=say,
                    compressor=args.compressor, bars=_bars(args),
                    uncertainty=None if args.uncertainty == "none" else args.uncertainty,
@@ -524,9 +570,11 @@ def _parser() -> argparse.ArgumentParser:
     ide.add_argument("--inputs", default="", help="input columns, comma separated")
     ide.add_argument("--outputs", required=True, help="output columns, comma separated")
     ide.add_argument("--order", default="auto", help="model order or 'auto' (default)")
-    ide.add_argument("--method", default="moesp",
-                     help="moesp (default), ordinary-moesp, pi-moesp, n4sid, cva; closed loop: "
-                          "pbsid or ssarx")
+    ide.add_argument("--method", default="auto",
+                     help="auto (default: sysid.identify chooses the family, order and "
+                          "feedthrough on held-out parts of the estimation data, when --order "
+                          "is auto), or one subspace method: moesp, ordinary-moesp, pi-moesp, "
+                          "n4sid, cva; closed loop: pbsid or ssarx")
     ide.add_argument("--horizon", type=int, default=None, help="past/future horizon")
     ide.add_argument("--split", default="0.5",
                      help="estimation part: fraction (0.5) or sample count (500); 1 = all")

@@ -346,10 +346,10 @@ def _start_loss(data: IOData, start: StateSpaceModel, focus: str, feedthrough: b
 
 def ssest(
     data: Any,
-    order: int,
+    order: Any = "auto",
     *,
     focus: str = "prediction",
-    feedthrough: bool = False,
+    feedthrough: Any = False,
     x0: Any = "estimate",
     noise: str = "estimate",
     horizon: int | None = None,
@@ -370,8 +370,18 @@ def ssest(
     Parameters
     ----------
     data : IOData or (u, y)
-    order : int
-    focus, feedthrough, x0, noise, max_iter, tol, regularization, progress
+    order : int, "auto" or sequence of int
+        Model order. ``"auto"`` (default): the order whose subspace models best simulate
+        parts of the record held out (:meth:`SubspaceEstimator.order_selection`); a sequence
+        (``range(1, 11)``): each order refined on the first 2/3 of the record and scored by
+        simulation fit on the last 1/3, the smallest within 0.5 points of the best wins and
+        is refined on the whole record. Table and reason in ``info["order_selection"]``.
+    feedthrough : bool or "auto"
+        Estimate ``D``. Default ``False`` (no feedthrough, as MATLAB's ``ssest``; the same
+        default for every sysid estimator). ``"auto"``: fitted with ``D``, kept when an entry
+        of ``D`` exceeds twice its standard deviation, else re-fitted without (recorded in
+        ``info["feedthrough_selection"]``).
+    focus, x0, noise, max_iter, tol, regularization, progress
         As for :func:`pem`.
     horizon : int, optional
         Subspace horizon (default :func:`sysid.default_horizon`).
@@ -404,6 +414,14 @@ def ssest(
     from .subspace import SubspaceEstimator
 
     data = _experiments(data)
+    if isinstance(order, str) or np.ndim(order) or isinstance(feedthrough, str):
+        # order="auto", a range of orders, or feedthrough="auto": chosen from the data
+        from ..identify.structure import ssest_select
+
+        return ssest_select(data, order, focus=focus, feedthrough=feedthrough, x0=x0,
+                            noise=noise, horizon=horizon, methods=methods, method=method,
+                            max_iter=max_iter, tol=tol, regularization=regularization,
+                            progress=progress)
     order = as_int(order, "order", 1)
     est = SubspaceEstimator(data, horizon)
     candidates = []
