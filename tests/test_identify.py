@@ -127,6 +127,27 @@ def test_ssest_feedthrough_auto_decides_from_the_data(d):
     assert abs(m.D[0, 0] - d) < 0.05
 
 
+@pytest.mark.parametrize("d", [0.0, 0.8])
+def test_subspace_feedthrough_auto_decides_by_held_out_fit(d):
+    rng = np.random.default_rng(2)
+    true = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]],
+                                 [[d]])
+    u = rng.standard_normal((800, 1))
+    y = true.simulate(u) + 0.05 * rng.standard_normal((800, 1))
+    m = quiet(sysid.moesp, sysid.IOData(u=u, y=y), feedthrough="auto")
+    sel = m.info["feedthrough_selection"]
+    assert sel["feedthrough"] is (d != 0), sel
+    assert m.nstates == 2 and abs(m.D[0, 0] - d) < 0.05
+
+
+def test_feedthrough_auto_on_the_winding_record_estimates_d():
+    # the winding record's validation fit (moesp, order chosen): 74.7 % with D, 64.6 % without
+    est, val = record("winding")
+    m = quiet(sysid.moesp, est, feedthrough="auto")
+    assert m.info["feedthrough_selection"]["feedthrough"] is True
+    assert quiet(sysid.compare, m, val).mean_fit > 72
+
+
 # -- identify ------------------------------------------------------------------------------
 @pytest.mark.parametrize("name", ["dryer", "robot_arm"])
 def test_identify_beats_the_plain_po_moesp_reference_on_held_out_data(name):
@@ -182,3 +203,34 @@ def test_identify_is_callable_as_a_package_and_a_function():
     import sysid.identify.crossval  # noqa: F401 - the submodule import must not shadow it
 
     assert callable(sysid.identify)
+
+
+def test_the_command_line_uses_identify_by_default(tmp_path, capsys):
+    from sysid.cli import main
+
+    d = np.loadtxt(sysid.datasets.path("dryer"))
+    path = tmp_path / "dryer.csv"
+    np.savetxt(path, d, delimiter=",", header="heater,temperature", comments="")
+    rep = tmp_path / "out"
+    assert main(["identify", str(path), "--inputs", "heater", "--outputs", "temperature",
+                 "--dt", "0.08", "--split", "500", "--report", str(rep), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "sysid.identify:" in out and "held-out fit" in out
+    model = sysid.load_model(rep / "model.json")
+    assert model.nstates >= 3 and model.info["identify"]["family"]
+    offs = model.info["preprocessing"]["identify_offsets"]
+    assert offs["y"][0] == pytest.approx(d[:500, 1].mean())
+
+
+def test_the_identify_guide_runs():
+    """docs/identify.md: every python block executes."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "docs" / "identify.md").read_text()
+    ns: dict = {}
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    assert len(blocks) == 3
+    for i, block in enumerate(blocks):
+        quiet(exec, compile(block, f"docs/identify.md[python block {i}]", "exec"), ns)
+    assert ns["res"].model.is_stable() and ns["m"].nstates >= 3

@@ -385,6 +385,37 @@ class SubspaceEstimator:
         self._svd[cache_key] = out
         return dict(out)
 
+    def feedthrough_selection(self, method: str | None = None, order: Order = "auto"
+                              ) -> tuple[bool, dict[str, Any]]:
+        """Whether ``fit(feedthrough="auto")`` estimates ``D``: the held-out simulation fits
+        (as :meth:`order_selection`) with and without it; ``D`` only when it gains more than
+        0.5 fit points (no feedthrough, MATLAB's default, otherwise). Closed-loop methods and
+        data that cannot be split: no ``D``."""
+        key = self.method if method is None else _method(method)
+        if key in CLOSED_LOOP or not self.factor.n_inputs or self._from_factor:
+            return False, {"feedthrough": False, "reason": "not decided from data (closed-loop "
+                           "method, no inputs or no data): no feedthrough"}
+        from ..identify.crossval import TOL, cross_validated_order
+
+        orders = None if isinstance(order, str) else [as_int(order, "order", 1)]
+        best = {}
+        try:
+            for ft in (False, True):
+                c = cross_validated_order(self.data, method=key, past=self.past,
+                                          future=self.future, feedthrough=ft, orders=orders)
+                best[ft] = c.table[c.order]
+                if orders is None:
+                    self._svd[("cv", key, ft)] = c.as_dict()
+        except Exception as e:  # noqa: BLE001 - too short to split
+            return False, {"feedthrough": False, "reason": f"could not be cross-validated "
+                           f"({e}): no feedthrough"}
+        use = bool(best[True] > best[False] + TOL)
+        return use, {"feedthrough": use, "held_out_fit": {"with D": best[True],
+                                                          "without D": best[False]},
+                     "reason": f"held-out simulation fit {best[True]:.1f} % with D, "
+                               f"{best[False]:.1f} % without: "
+                               + ("D estimated" if use else f"D = 0 (gain below {TOL:g})")}
+
     @property
     def max_order(self) -> int:
         """Largest order the horizon allows."""
@@ -395,7 +426,7 @@ class SubspaceEstimator:
         order: Order = "auto",
         *,
         method: str | None = None,
-        feedthrough: bool | None = None,
+        feedthrough: bool | str | None = None,
         kalman: bool = True,
         stable: bool = False,
         x0: bool = False,
@@ -414,8 +445,10 @@ class SubspaceEstimator:
             ``info["order_selection"]``).
         method : str, optional
             Weighting for this fit (default: the estimator's).
-        feedthrough : bool, optional
-            Estimate ``D``; ``False`` forces ``D = 0``. Default: ``True`` for the open-loop
+        feedthrough : bool or "auto", optional
+            Estimate ``D``; ``False`` forces ``D = 0``; ``"auto"``: decided by held-out
+            simulation fit (:meth:`feedthrough_selection`, recorded in
+            ``info["feedthrough_selection"]``). Default: ``True`` for the open-loop
             methods, ``False`` for ``"pbsid"``/``"ssarx"`` (estimating ``D`` under feedback is
             consistent only when the controller has no direct feedthrough).
         kalman : bool
@@ -443,6 +476,12 @@ class SubspaceEstimator:
         key = self.method if method is None else _method(method)
         if feedthrough is None:
             feedthrough = key not in CLOSED_LOOP
+        ft_selection = None
+        if isinstance(feedthrough, str):
+            if feedthrough != "auto":
+                raise DataError(f"feedthrough must be True, False or 'auto', got "
+                                f"{feedthrough!r}")
+            feedthrough, ft_selection = self.feedthrough_selection(key, order)
         if key in CLOSED_LOOP:
             from .closed_loop import closed_loop_fit
 
@@ -512,6 +551,8 @@ class SubspaceEstimator:
         }
         if selection is not None:
             info["order_selection"] = selection
+        if ft_selection is not None:
+            info["feedthrough_selection"] = ft_selection
         model = StateSpaceModel(
             res["A"],
             B,
@@ -567,7 +608,7 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         order: Order = "auto",
         *,
         horizon: int | None = None,
-        feedthrough: bool = True,
+        feedthrough: bool | str = True,
         kalman: bool = True,
         stable: bool = False,
         x0: bool = False,
