@@ -193,6 +193,10 @@ _LAZY = {
     "PiecewiseLinear": "models.hammerstein",
     "SigmoidNetwork": "models.hammerstein",
     "UserFunction": "models.hammerstein",
+    # issue 26 (branch pem): the cheap criterion of a model, the iterative estimators' warnings
+    "pem_loss": "estimate.pem",
+    "StabilityWarning": "errors",
+    "IterationLimitWarning": "errors",
     # issue 26 (branch identify): the automatic path
     "identify": "identify.core",
     "IdentifyResult": "identify.result",
@@ -379,6 +383,10 @@ __all__ = [
     "model_to_dict",
     "model_from_dict",
     "report",
+    # issue 26 (branch pem): the cheap criterion of a model, the iterative estimators' warnings
+    "pem_loss",
+    "StabilityWarning",
+    "IterationLimitWarning",
     # issue 26 (branch identify): the automatic path
     "identify",
     "IdentifyResult",

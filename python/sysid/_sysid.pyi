@@ -56,6 +56,8 @@ __all__ = [
     "greybox_ode_simulate",
     "greybox_ode_jacobian",
     "expm_frechet",
+    # issue 26 (branch pem)
+    "pem_criterion",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -284,6 +286,7 @@ def pem_refine(
     x0: list[Any] | None = None,
     reweight: bool = True,
     local_coordinates: bool = True,
+    enforce_stability: bool | None = None,
     max_iter: int = 50,
     tol_cost: float = 1e-6,
     tol_step: float = 1e-9,
@@ -524,3 +527,19 @@ def hw_mimo_simulate(
     theta: list[float],
     u: _Array,
 ) -> _Array: ...
+# issue 26 (branch pem): the cheap criterion of a model
+def pem_criterion(
+    a: _Array,
+    b: _Array,
+    c: _Array,
+    d: _Array,
+    k: _Array | None,
+    experiments: list[tuple[_Array, _Array]],
+    *,
+    focus: str = "prediction",
+    estimate_d: bool = False,
+    estimate_k: bool = True,
+    x0: list[Any] | None = None,
+    reweight: bool = True,
+    enforce_stability: bool | None = None,
+) -> float: ...

@@ -28,6 +28,9 @@ __all__ = [
     "RiccatiError",
     "ExcitationWarning",
     "FeedbackWarning",
+    # issue 26 (branch pem): iterative estimators' warnings
+    "StabilityWarning",
+    "IterationLimitWarning",
 ]
 
 
@@ -74,3 +77,18 @@ class ExcitationWarning(UserWarning):
 class FeedbackWarning(UserWarning):
     """The input depends on past outputs (feedback): open-loop subspace methods are biased;
     use ``method="pbsid"`` or ``"ssarx"`` (see :func:`sysid.check_feedback`)."""
+
+
+# issue 26 (branch pem): what an iterative estimator says about the model it returns
+
+
+class StabilityWarning(UserWarning):
+    """The returned model is unstable (a pole on or outside the unit circle); the message
+    names the largest pole modulus and the option that keeps the model stable
+    (``enforce_stability=True``, or ``focus="simulation"``)."""
+
+
+class IterationLimitWarning(UserWarning):
+    """An iterative search stopped at its iteration cap before a convergence test was met;
+    the model is the best iterate found. The message says how far from converged it was and
+    what to do (raise ``max_iter``, or refine again from the returned model)."""

@@ -257,15 +257,7 @@ pub fn greybox_linear<'py>(
     tol_gradient: f64,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let focus = match focus {
-        "prediction" => Focus::Prediction,
-        "simulation" => Focus::Simulation,
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "focus must be \"prediction\" or \"simulation\", got {other:?}"
-            )))
-        }
-    };
+    let focus: Focus = focus.parse().py()?;
     let mut o = LinearOptions::default();
     o.focus = focus;
     o.with_k = with_k;

@@ -1,19 +1,66 @@
 //! Bindings of the prediction-error refinement (`sysid_core::pem`).
 
 use crate::convert::{mat_to_numpy, slice_to_numpy, state_space as model, vec1, view};
+use crate::errors::IntoPy;
 use crate::search::{run, solution_items};
+use faer::MatRef;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::optim::Regularization;
-use sysid_core::pem::{self, Focus, InitialState, PemOptions};
+use sysid_core::pem::{self, InitialState, PemOptions};
+
+type Experiments<'py> = Vec<(PyReadonlyArray2<'py, f64>, PyReadonlyArray2<'py, f64>)>;
+
+/// The initial-state choices: `None` (zero), `"estimate"`, `"zero"` or an array, per entry.
+fn x0_modes(list: Option<Vec<Option<Bound<'_, PyAny>>>>) -> PyResult<Vec<InitialState>> {
+    let Some(list) = list else {
+        return Ok(vec![InitialState::Estimate]);
+    };
+    let mut modes = Vec::new();
+    for item in list {
+        modes.push(match item {
+            None => InitialState::Zero,
+            Some(obj) => match obj.extract::<String>() {
+                Ok(s) => s.parse().py()?,
+                Err(_) => InitialState::Given(vec1(&obj.extract::<PyReadonlyArray1<'_, f64>>()?)),
+            },
+        });
+    }
+    Ok(modes)
+}
+
+/// The options every pem binding shares.
+fn options(
+    focus: &str,
+    estimate_d: bool,
+    estimate_k: bool,
+    x0: Option<Vec<Option<Bound<'_, PyAny>>>>,
+    reweight: bool,
+    enforce_stability: Option<bool>,
+) -> PyResult<PemOptions> {
+    let mut o = PemOptions::default();
+    o.focus = focus.parse().py()?;
+    o.estimate_d = estimate_d;
+    o.estimate_k = estimate_k;
+    o.reweight = reweight;
+    o.enforce_stability = enforce_stability;
+    o.x0 = x0_modes(x0)?;
+    Ok(o)
+}
+
+fn views<'a>(experiments: &'a Experiments<'_>) -> Vec<(MatRef<'a, f64>, MatRef<'a, f64>)> {
+    experiments
+        .iter()
+        .map(|(u, y)| (view(u), view(y)))
+        .collect()
+}
 
 /// Refines a state-space model by prediction-error minimisation; returns a dict.
 #[pyfunction]
 #[pyo3(signature = (a, b, c, d, k, experiments, *, focus="prediction", estimate_d=false,
-    estimate_k=true, x0=None, reweight=true, local_coordinates=true, max_iter=50,
-    tol_cost=1e-6, tol_step=1e-9, tol_gradient=1e-9, reg_lambda=0.0, reg_r=None,
+    estimate_k=true, x0=None, reweight=true, local_coordinates=true, enforce_stability=None,
+    max_iter=50, tol_cost=1e-6, tol_step=1e-9, tol_gradient=1e-9, reg_lambda=0.0, reg_r=None,
     reg_nominal=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn pem_refine<'py>(
@@ -23,13 +70,14 @@ pub fn pem_refine<'py>(
     c: PyReadonlyArray2<'_, f64>,
     d: PyReadonlyArray2<'_, f64>,
     k: Option<PyReadonlyArray2<'_, f64>>,
-    experiments: Vec<(PyReadonlyArray2<'py, f64>, PyReadonlyArray2<'py, f64>)>,
+    experiments: Experiments<'py>,
     focus: &str,
     estimate_d: bool,
     estimate_k: bool,
     x0: Option<Vec<Option<Bound<'py, PyAny>>>>,
     reweight: bool,
     local_coordinates: bool,
+    enforce_stability: Option<bool>,
     max_iter: usize,
     tol_cost: f64,
     tol_step: f64,
@@ -40,19 +88,14 @@ pub fn pem_refine<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let sys = model(&a, &b, &c, &d)?;
-    let mut o = PemOptions::default();
-    o.focus = match focus {
-        "prediction" => Focus::Prediction,
-        "simulation" => Focus::Simulation,
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "focus must be \"prediction\" or \"simulation\", got {other:?}"
-            )))
-        }
-    };
-    o.estimate_d = estimate_d;
-    o.estimate_k = estimate_k;
-    o.reweight = reweight;
+    let mut o = options(
+        focus,
+        estimate_d,
+        estimate_k,
+        x0,
+        reweight,
+        enforce_stability,
+    )?;
     o.local_coordinates = local_coordinates;
     o.optim.max_iter = max_iter;
     o.optim.tol_cost = tol_cost;
@@ -65,37 +108,9 @@ pub fn pem_refine<'py>(
             nominal: reg_nominal.as_ref().map(vec1),
         });
     }
-    if let Some(list) = x0 {
-        let mut modes = Vec::new();
-        for item in list {
-            modes.push(match item {
-                None => InitialState::Zero,
-                Some(obj) => {
-                    if let Ok(s) = obj.extract::<String>() {
-                        match s.as_str() {
-                            "estimate" => InitialState::Estimate,
-                            "zero" => InitialState::Zero,
-                            other => {
-                                return Err(PyValueError::new_err(format!(
-                                    "x0 entries must be \"estimate\", \"zero\" or an array, got {other:?}"
-                                )))
-                            }
-                        }
-                    } else {
-                        let arr: PyReadonlyArray1<'_, f64> = obj.extract()?;
-                        InitialState::Given(vec1(&arr))
-                    }
-                }
-            });
-        }
-        o.x0 = modes;
-    }
     let kv = k.as_ref().map(|k| view(k));
-    let views: Vec<_> = experiments
-        .iter()
-        .map(|(u, y)| (view(u), view(y)))
-        .collect();
-    let r = run(py, &progress, |obs| pem::pem(&sys, kv, &views, &o, obs))?;
+    let exps = views(&experiments);
+    let r = run(py, &progress, |obs| pem::pem(&sys, kv, &exps, &o, obs))?;
     let out = PyDict::new(py);
     out.set_item("a", mat_to_numpy(py, &r.sys.a))?;
     out.set_item("b", mat_to_numpy(py, &r.sys.b))?;
@@ -110,12 +125,48 @@ pub fn pem_refine<'py>(
     )?;
     out.set_item("theta", slice_to_numpy(py, &r.theta))?;
     out.set_item("loss_history", r.loss_history.clone())?;
+    out.set_item("spectral_radius", r.spectral_radius)?;
     solution_items(&out, py, &r.solution, &r.covariance)?;
     out.set_item("n_samples", r.n_samples)?;
     Ok(out)
 }
 
+/// The criterion `pem_refine` would start from (initial states fitted), without a search.
+#[pyfunction]
+#[pyo3(signature = (a, b, c, d, k, experiments, *, focus="prediction", estimate_d=false,
+    estimate_k=true, x0=None, reweight=true, enforce_stability=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn pem_criterion<'py>(
+    py: Python<'py>,
+    a: PyReadonlyArray2<'_, f64>,
+    b: PyReadonlyArray2<'_, f64>,
+    c: PyReadonlyArray2<'_, f64>,
+    d: PyReadonlyArray2<'_, f64>,
+    k: Option<PyReadonlyArray2<'_, f64>>,
+    experiments: Experiments<'py>,
+    focus: &str,
+    estimate_d: bool,
+    estimate_k: bool,
+    x0: Option<Vec<Option<Bound<'py, PyAny>>>>,
+    reweight: bool,
+    enforce_stability: Option<bool>,
+) -> PyResult<f64> {
+    let sys = model(&a, &b, &c, &d)?;
+    let o = options(
+        focus,
+        estimate_d,
+        estimate_k,
+        x0,
+        reweight,
+        enforce_stability,
+    )?;
+    let kv = k.as_ref().map(|k| view(k));
+    let exps = views(&experiments);
+    py.detach(|| pem::criterion(&sys, kv, &exps, &o)).py()
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pem_refine, m)?)?;
+    m.add_function(wrap_pyfunction!(pem_criterion, m)?)?;
     Ok(())
 }

@@ -11,7 +11,9 @@ independent of the record length), and never leaves the set of stable predictors
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -20,13 +22,12 @@ from .. import _sysid
 from .._checks import as_int
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
-from ..errors import DataError
+from ..errors import DataError, IterationLimitWarning, StabilityWarning, SysidError
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
 
-__all__ = ["pem", "ssest", "PemUncertainty"]
+__all__ = ["pem", "pem_loss", "ssest", "PemUncertainty"]
 
-_FOCUS = ("prediction", "simulation")
 _NOISE = ("estimate", "none", "fixed")
 
 
@@ -104,6 +105,156 @@ def _regularization(reg: Any, p_start: np.ndarray | None) -> tuple[float, Any, A
     return lam, R, nom
 
 
+@dataclass
+class _Setup:
+    """The start's matrices and the options as the core takes them (see :func:`_setup`)."""
+
+    data: IOData
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    K: np.ndarray | None
+    feedthrough: bool
+    estimate_k: bool
+    weighting: str
+    modes: list[Any]
+    focus: str
+    enforce_stability: bool | None
+    stabilized: str | None
+
+    def kwargs(self) -> dict[str, Any]:
+        return {"focus": self.focus, "estimate_d": self.feedthrough,
+                "estimate_k": self.estimate_k, "reweight": self.weighting == "noise",
+                "enforce_stability": self.enforce_stability,
+                "x0": [m if isinstance(m, str) else np.ascontiguousarray(m) for m in self.modes]}
+
+
+def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: bool | None, x0: Any,
+           noise: str, weighting: str | None, enforce_stability: bool | None) -> _Setup:
+    """Checks the arguments and prepares the start (``focus`` itself is parsed by the core)."""
+    data = _experiments(data)
+    if not isinstance(model, StateSpaceModel):
+        raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
+    if weighting is None:
+        weighting = "noise" if focus == "prediction" else "identity"
+    if weighting not in ("noise", "identity"):
+        raise DataError(f"weighting must be 'noise' or 'identity', got {weighting!r}")
+    if noise not in _NOISE:
+        raise DataError(f"noise must be 'estimate', 'none' or 'fixed', got {noise!r}")
+    if enforce_stability is not None and not isinstance(enforce_stability, (bool, np.bool_)):
+        raise DataError(f"enforce_stability must be True, False or None, got "
+                        f"{enforce_stability!r}")
+    if data.n_inputs != model.ninputs or data.n_outputs != model.noutputs:
+        raise DataError(
+            f"the model has {model.ninputs} input(s) and {model.noutputs} output(s) but the "
+            f"data have {data.n_inputs} and {data.n_outputs}")
+    n, l = model.nstates, model.noutputs
+    A, B, C, D = model.A.copy(), model.B.copy(), model.C.copy(), model.D.copy()
+    if feedthrough is None:
+        feedthrough = bool(np.any(D != 0))
+    if not feedthrough:
+        D = np.zeros_like(D)
+    K = None
+    if focus == "prediction" and noise != "none":
+        K = model.K.copy() if model.K is not None else np.zeros((n, l))
+    # an unstable start: stabilise first and record it
+    stabilized = None
+    if focus != "prediction" or K is None or enforce_stability:
+        if _radius(A) >= 1.0:
+            A = _stabilize(A)
+            stabilized = "unstable poles of A reflected into the unit circle"
+    if K is not None and _radius(A - K @ C) >= 1.0:
+        if noise == "fixed":
+            raise DataError("the start's predictor A - K C is unstable and noise='fixed' keeps "
+                            "K: give a stabilising K or use noise='estimate'")
+        if _radius(A) >= 1.0:
+            A = _stabilize(A)
+            stabilized = "unstable poles of A reflected and K = 0"
+        else:
+            stabilized = "unstable predictor: started from K = 0"
+        K = np.zeros((n, l))
+    return _Setup(data, A, B, C, D, K, bool(feedthrough),
+                  focus == "prediction" and noise == "estimate", weighting,
+                  _x0_modes(x0, data.n_experiments, n), focus, enforce_stability, stabilized)
+
+
+def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None) -> None:
+    """The warnings of a refinement: an unstable model, a search stopped at its cap."""
+    rho = float(res["spectral_radius"])
+    if rho >= 1.0:
+        why = ("an unstable model fits the data significantly better than the best stable "
+               "one (likelihood-ratio test at 1 %)" if enforce is None else
+               "enforce_stability=False keeps only the predictor stable")
+        warnings.warn(
+            f"the refined model is unstable (largest pole modulus {rho:.4g}): {why}; pass "
+            f"enforce_stability=True (or focus='simulation') for a stable model",
+            StabilityWarning, stacklevel=3)
+    if res["stop"] == "maximum iterations" and max_iter > 0:
+        hist = list(res["history"])
+        last = abs(hist[-2] - hist[-1]) / max(abs(hist[-2]), 1e-300) if len(hist) > 1 else 0.0
+        warnings.warn(
+            f"the {focus} search stopped at max_iter={max_iter} before converging (the last "
+            f"iteration still lowered the criterion by {100 * last:.2g} %); the model is the "
+            f"best iterate: raise max_iter, or refine again with sysid.pem(data, model)",
+            IterationLimitWarning, stacklevel=3)
+
+
+def pem_loss(
+    data: Any,
+    model: StateSpaceModel,
+    *,
+    focus: str = "prediction",
+    feedthrough: bool | None = None,
+    x0: Any = "estimate",
+    noise: str = "estimate",
+    weighting: str | None = None,
+    enforce_stability: bool | None = None,
+) -> float:
+    """The criterion :func:`pem` would start from for ``model``, without refining it.
+
+    One pass over the data fits the estimated initial states by least squares, one more
+    gives the criterion: ``det(E^T E / N)`` of the prediction (or simulation) errors for
+    ``weighting="noise"`` (default for prediction), ``1/2 sum |e|^2`` for
+    ``weighting="identity"`` (default for simulation). Cheap enough to score many candidate
+    models (orders, structures, starts) before refining the best.
+
+    Parameters
+    ----------
+    data, model, focus, feedthrough, x0, noise, weighting, enforce_stability
+        As for :func:`pem`.
+
+    Returns
+    -------
+    float
+        The criterion, or ``inf`` when the model is not admissible for that focus (an
+        unstable predictor, or for simulation an unstable ``A``): :func:`pem` would have to
+        stabilise it first.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> true = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]])
+    >>> u = rng.standard_normal(300)
+    >>> data = sysid.IOData(u=u, y=true.simulate(u) + 0.1 * rng.standard_normal((300, 1)))
+    >>> worse = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    >>> sysid.pem_loss(data, true, focus="simulation") < sysid.pem_loss(data, worse,
+    ...                                                                  focus="simulation")
+    True
+    """
+    st = _setup(data, model, focus, feedthrough, x0, noise, weighting, enforce_stability)
+    if st.stabilized:
+        return float("inf")
+    try:
+        return float(_sysid.pem_criterion(st.A, st.B, st.C, st.D, st.K, st.data.experiments,
+                                          **st.kwargs()))
+    except DataError as e:
+        if "start model" in str(e):
+            return float("inf")
+        raise
+
+
 def pem(
     data: Any,
     model: StateSpaceModel,
@@ -118,6 +269,7 @@ def pem(
     progress: bool | None | Callable[..., Any] = None,
     local_coordinates: bool = True,
     weighting: str | None = None,
+    enforce_stability: bool | None = None,
 ) -> StateSpaceModel:
     """Refine a state-space model by minimising its prediction (or simulation) errors.
 
@@ -160,6 +312,13 @@ def pem(
         ``"identity"``: plain sum of squares. Default ``"noise"`` for prediction focus and
         ``"identity"`` for simulation focus (simulation errors are not white, and on the
         shipped records the plain sum gives the better validation fit; see docs/pem.md).
+    enforce_stability : bool, optional
+        Keep ``A`` stable (MATLAB's ``EnforceStability``). ``focus="simulation"`` always
+        does. ``None`` (default): with ``focus="prediction"`` the predictor ``A - K C`` is
+        always stable and ``A`` is kept stable unless an unstable model fits significantly
+        better (likelihood-ratio test at the 1 % level); then a
+        :class:`sysid.StabilityWarning` names the largest pole modulus. ``False``: only the
+        predictor is kept stable (a warning still says when the model is unstable).
 
     Returns
     -------
@@ -171,7 +330,10 @@ def pem(
         function") for ``weighting="noise"``, ``"sum of squares"``, ``1/2 sum |e|^2``, for
         ``weighting="identity"``; ``"loss_history"``: the determinant under either weighting;
         ``"weighted_cost"``: ``1/2 sum e^T W e`` with the weighting of each iterate (``N l / 2``
-        throughout with the noise weighting); the stop reason and the condition number.
+        throughout with the noise weighting); the stop reason and the condition number;
+        ``"spectral_radius"``, the largest pole modulus of the result. The result's
+        criterion is never above its start's. Stopping at ``max_iter`` warns
+        (:class:`sysid.IterationLimitWarning`).
         ``uncertainty`` holds the parameter covariance (:class:`sysid.ParameterUncertainty`), so
         that ``poles(std=True)``, ``freqresp(w, std=True)``, ``damp(std=True)`` and Bode bands
         work.
@@ -191,55 +353,15 @@ def pem(
     >>> bool(np.allclose(np.sort_complex(m.poles()), np.sort_complex(true.poles()), atol=0.02))
     True
     """
-    data = _experiments(data)
-    if not isinstance(model, StateSpaceModel):
-        raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
-    if focus not in _FOCUS:
-        raise DataError(f"focus must be 'prediction' or 'simulation', got {focus!r}")
-    if weighting is None:
-        weighting = "noise" if focus == "prediction" else "identity"
-    if weighting not in ("noise", "identity"):
-        raise DataError(f"weighting must be 'noise' or 'identity', got {weighting!r}")
-    if noise not in _NOISE:
-        raise DataError(f"noise must be 'estimate', 'none' or 'fixed', got {noise!r}")
-    if data.n_inputs != model.ninputs or data.n_outputs != model.noutputs:
-        raise DataError(
-            f"the model has {model.ninputs} input(s) and {model.noutputs} output(s) but the "
-            f"data have {data.n_inputs} and {data.n_outputs}")
+    st = _setup(data, model, focus, feedthrough, x0, noise, weighting, enforce_stability)
     max_iter = as_int(max_iter, "max_iter", 0)
     tol = float(tol)
     if not (np.isfinite(tol) and tol >= 0):
         raise DataError(f"tol must be finite and >= 0, got {tol}")
+    data, A, B, C, D, K = st.data, st.A, st.B, st.C, st.D, st.K
     n, l = model.nstates, model.noutputs
-    A, B, C = model.A.copy(), model.B.copy(), model.C.copy()
-    D = model.D.copy()
-    if feedthrough is None:
-        feedthrough = bool(np.any(D != 0))
-    if not feedthrough:
-        D = np.zeros_like(D)
-    K = None
-    if focus == "prediction" and noise != "none":
-        K = model.K.copy() if model.K is not None else np.zeros((n, l))
-    estimate_k = focus == "prediction" and noise == "estimate"
-    # an unstable start: stabilise first and record it
-    stabilized = None
-    if focus == "simulation" or K is None:
-        if _radius(A) >= 1.0:
-            A = _stabilize(A)
-            stabilized = "unstable poles of A reflected into the unit circle"
-    elif _radius(A - K @ C) >= 1.0:
-        if _radius(A) < 1.0:
-            K = np.zeros((n, l))
-            stabilized = "unstable predictor: started from K = 0"
-        else:
-            A = _stabilize(A)
-            K = np.zeros((n, l))
-            stabilized = "unstable poles of A reflected and K = 0"
-        if noise == "fixed":
-            raise DataError("the start's predictor A - K C is unstable and noise='fixed' keeps "
-                            "K: give a stabilising K or use noise='estimate'")
-    exps = data.experiments
-    modes = _x0_modes(x0, len(exps), n)
+    feedthrough, estimate_k, weighting, modes = (st.feedthrough, st.estimate_k, st.weighting,
+                                                 st.modes)
     start_theta = np.concatenate([A.ravel(), B.ravel(), C.ravel()]
                                  + ([D.ravel()] if feedthrough else [])
                                  + ([K.ravel()] if estimate_k and K is not None else []))
@@ -252,12 +374,13 @@ def pem(
         "pem", "det" if weighting == "noise" else "sum of squares"))
     try:
         res = _sysid.pem_refine(
-            A, B, C, D, K, exps, focus=focus, estimate_d=bool(feedthrough), estimate_k=estimate_k,
-            x0=[m if isinstance(m, str) else np.ascontiguousarray(m) for m in modes],
-            reweight=weighting == "noise", local_coordinates=bool(local_coordinates),
-            max_iter=max_iter, tol_cost=tol, reg_lambda=lam, reg_r=R, reg_nominal=nom, progress=cb)
+            A, B, C, D, K, data.experiments, **st.kwargs(),
+            local_coordinates=bool(local_coordinates), max_iter=max_iter, tol_cost=tol,
+            reg_lambda=lam, reg_r=R, reg_nominal=nom, progress=cb)
     finally:
         close_bar()
+    _warn(res, focus, max_iter, enforce_stability)
+    stabilized = st.stabilized
     Kres = res["k"] if K is not None else None
     x0s = res["x0"]
     est_x0 = [i for i, m in enumerate(modes) if isinstance(m, str) and m == "estimate"]
@@ -295,6 +418,8 @@ def pem(
         "x0": ["estimate" if isinstance(m, str) and m == "estimate" else
                ("zero" if isinstance(m, str) else "given") for m in modes],
         "stabilized": stabilized,
+        "spectral_radius": float(res["spectral_radius"]),
+        "enforce_stability": enforce_stability,
         "n_parameters": int(res["theta"].size),
         "rank": int(res["rank"]),
         "n_samples": int(res["n_samples"]),
@@ -330,20 +455,6 @@ def _names(n: int, m: int, l: int, feedthrough: bool, estimate_k: bool,
     return out
 
 
-def _start_loss(data: IOData, start: StateSpaceModel, focus: str, feedthrough: bool,
-                x0: Any, noise: str) -> float:
-    """det of the error covariance of a candidate start (initial states fitted), the cost the
-    refinement will minimise; inf when its predictor is unstable."""
-    try:
-        m = pem(data, start, focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
-                max_iter=0)
-    except Exception:  # noqa: BLE001 - an unusable candidate is skipped
-        return float("inf")
-    if m.info["pem"]["stabilized"]:
-        return float("inf")
-    return float(m.info["pem"]["cost"][0])
-
-
 def ssest(
     data: Any,
     order: Any = "auto",
@@ -359,6 +470,7 @@ def ssest(
     tol: float = 1e-6,
     regularization: dict[str, Any] | None = None,
     progress: bool | None | Callable[..., Any] = None,
+    enforce_stability: bool | None = None,
 ) -> StateSpaceModel:
     """Estimate a state-space model: the best subspace start, refined by :func:`pem`.
 
@@ -381,8 +493,8 @@ def ssest(
         default for every sysid estimator). ``"auto"``: fitted with ``D``, kept when an entry
         of ``D`` exceeds twice its standard deviation, else re-fitted without (recorded in
         ``info["feedthrough_selection"]``).
-    focus, x0, noise, max_iter, tol, regularization, progress
-        As for :func:`pem`.
+    focus, x0, noise, max_iter, tol, regularization, progress, enforce_stability
+        As for :func:`pem` (the candidates are scored by :func:`pem_loss`).
     horizon : int, optional
         Subspace horizon (default :func:`sysid.default_horizon`).
     methods : tuple of str
@@ -421,12 +533,10 @@ def ssest(
         return ssest_select(data, order, focus=focus, feedthrough=feedthrough, x0=x0,
                             noise=noise, horizon=horizon, methods=methods, method=method,
                             max_iter=max_iter, tol=tol, regularization=regularization,
-                            progress=progress)
+                            progress=progress, enforce_stability=enforce_stability)
     order = as_int(order, "order", 1)
     est = SubspaceEstimator(data, horizon)
     candidates = []
-    import warnings
-
     from .subspace import CLOSED_LOOP
 
     names = methods if method is None else (method,)
@@ -443,14 +553,19 @@ def ssest(
                 if method is not None:
                     raise
                 continue
-            loss = _start_loss(data, cand, focus, feedthrough, x0, noise)
+            try:
+                loss = pem_loss(data, cand, focus=focus, feedthrough=feedthrough, x0=x0,
+                                noise=noise, enforce_stability=enforce_stability)
+            except SysidError:
+                loss = float("inf")
             candidates.append((loss, name, use_x0, cand))
     if not candidates:
         raise DataError("no subspace start could be computed for this order; lower the order")
     candidates.sort(key=lambda c: c[0])
     best = candidates[0]
     model = pem(data, best[3], focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
-                max_iter=max_iter, tol=tol, regularization=regularization, progress=progress)
+                max_iter=max_iter, tol=tol, regularization=regularization, progress=progress,
+                enforce_stability=enforce_stability)
     model.info["start"] = {
         "method": best[1],
         "bd_x0": best[2],

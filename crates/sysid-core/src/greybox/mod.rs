@@ -187,15 +187,8 @@ pub fn linear(
         let mut prob = Reparameterized::new(&mut pred, map, np);
         p = optim::minimize(&mut prob, &p, &o, &mut |_| Flow::Continue)?.theta;
     }
-    pred.losses().clear();
     let th = map.map(&p, false)?.0;
-    if options.reweight {
-        pred.reweight_at(&th)?;
-    } else {
-        let lam = pred.innovation_covariance(&th);
-        let det = determinant(&lam);
-        pred.losses().push(det);
-    }
+    pred.start_history(&th)?;
     let solution = {
         let mut prob = Reparameterized::new(&mut pred, map, np);
         optim::minimize(&mut prob, &p, &options.optim, observer)?

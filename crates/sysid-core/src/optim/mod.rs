@@ -48,7 +48,6 @@ pub use covariance::{covariance, Covariance};
 pub use normal::NormalEquations;
 pub use reparam::{ParameterMap, Reparameterized};
 pub use search::minimize;
-pub(crate) use search::prof;
 
 use crate::error::Result;
 use faer::Mat;

@@ -30,8 +30,17 @@
 //! Stability of the predictor (of `A - K C`, or of `A` when simulating) is the admissible
 //! set: the search never evaluates an unstable predictor.
 
+mod coordinates;
+mod driver;
+mod modal;
+mod normal;
+mod options;
 mod predictor;
+mod rows;
+mod sensitivities;
 #[cfg(test)]
 mod tests;
 
-pub use predictor::{pem, Focus, InitialState, PemOptions, PemResult, Predictor};
+pub use driver::{criterion, pem};
+pub use options::{stable_enough, Focus, InitialState, PemOptions, PemResult};
+pub use predictor::Predictor;

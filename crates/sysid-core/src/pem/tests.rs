@@ -313,7 +313,7 @@ fn local_coordinates_and_gradient_check() {
     let q = pr.search_basis(&th).unwrap().unwrap();
     assert_eq!(q.ncols(), th.len() - 9);
     // the similarity directions are a null space of J^T W J and orthogonal to the gradient
-    let tan = pr.similarity_tangent(&th).unwrap();
+    let tan = pr.orbit_tangent(&th).unwrap();
     let ht = &ev.gauss_newton * &tan;
     let scale = ev.gauss_newton.norm_max() * tan.norm_max();
     eprintln!("H tan {} of {scale}", ht.norm_max());
@@ -381,7 +381,7 @@ fn structured_gauss_newton_equals_the_plain_one() {
         let x0s = vec![vec![0.1, -0.2, 0.3], vec![0.05, 0.0, 0.1]];
         let th = pr.pack(&sys, k.as_ref(), &x0s);
         pr.reweight_at(&th).unwrap();
-        assert!(super::predictor::modal_form((&sys.a - &k * &sys.c).as_ref()).is_some());
+        assert!(super::modal::modal_form((&sys.a - &k * &sys.c).as_ref()).is_some());
         let fast = pr.evaluate(&th, true).unwrap();
         pr.modal = false;
         let kron = pr.evaluate(&th, true).unwrap();
@@ -503,7 +503,7 @@ fn halved_modal_gram_equals_the_full_one() {
         };
         let twice = if repeated { 2 } else { 1 };
         assert_eq!((near(0.5, 0.0), near(0.6, 0.3)), (twice, twice));
-        let modal = super::predictor::modal_form(sys.a.as_ref()).is_some();
+        let modal = super::modal::modal_form(sys.a.as_ref()).is_some();
         assert!(modal || repeated);
         let kz = Mat::<f64>::zeros(n, 3);
         let u1 = noise(120, 2, 45);

@@ -1,0 +1,80 @@
+//! Data-driven local coordinates (McKelvey, Helmersson & Ribarits 2004).
+//!
+//! A fully parameterised model is only determined up to a change of state basis. The tangent
+//! space of the similarity orbit `{(T^-1 A T, T^-1 B, C T, D, T^-1 K, T^-1 x0)}` at `theta`
+//! is spanned, for `T = I + X` with `X = E_ab`, by `(A X - X A, -X B, C X, 0, -X K, -X x0)`.
+//! The search moves in its orthogonal complement. This is exact when every quantity the
+//! similarity moves is a parameter or zero; with a fixed non-zero `K` or a given non-zero `x0`
+//! there is no orbit in the parameters and the search uses all directions.
+
+use super::predictor::Predictor;
+use super::InitialState;
+use crate::error::{Result, SysidError};
+use faer::Mat;
+
+impl Predictor<'_> {
+    /// Tangent vectors (p x n^2) of the similarity orbit at `theta`; `None` when there is no
+    /// orbit in the parameters (a fixed non-zero `K` or a given non-zero `x0`).
+    pub(super) fn orbit_tangent(&self, th: &[f64]) -> Option<Mat<f64>> {
+        if self.n == 0 {
+            return None;
+        }
+        let pm = self.unpack(th);
+        let (n, m, l) = (self.n, self.m, self.l);
+        let k_ok = self.est_k || (0..n).all(|i| (0..l).all(|j| pm.k[(i, j)] == 0.0));
+        let x0_ok = self
+            .x0_mode
+            .iter()
+            .all(|s| !matches!(s, InitialState::Given(v) if v.iter().any(|&x| x != 0.0)));
+        if !k_ok || !x0_ok {
+            return None;
+        }
+        let off = self.offsets();
+        let mut tan = Mat::<f64>::zeros(self.p, n * n);
+        for a in 0..n {
+            for b in 0..n {
+                let col = a * n + b;
+                for i in 0..n {
+                    tan[(off.a + i * n + b, col)] += pm.a[(i, a)];
+                }
+                for j in 0..n {
+                    tan[(off.a + a * n + j, col)] -= pm.a[(b, j)];
+                }
+                for j in 0..m {
+                    tan[(off.b + a * m + j, col)] -= pm.b[(b, j)];
+                }
+                for i in 0..l {
+                    tan[(off.c + i * n + b, col)] += pm.c[(i, a)];
+                }
+                if let Some(ik) = off.k {
+                    for j in 0..l {
+                        tan[(ik + a * l + j, col)] -= pm.k[(b, j)];
+                    }
+                }
+                for (ex, o) in self.x0_off.iter().enumerate() {
+                    if let Some(o) = o {
+                        tan[(o + a, col)] -= pm.x0[ex][b];
+                    }
+                }
+            }
+        }
+        Some(tan)
+    }
+
+    /// An orthonormal basis of the complement of the orbit's tangent space at `theta`, or
+    /// `None` when local coordinates are off or there is no orbit.
+    pub(super) fn local_basis(&self, th: &[f64]) -> Result<Option<Mat<f64>>> {
+        let Some(tan) = self.local.then(|| self.orbit_tangent(th)).flatten() else {
+            return Ok(None);
+        };
+        let svd = tan
+            .svd()
+            .map_err(|e| SysidError::numerical("local coordinates (SVD)", format!("{e:?}")))?;
+        let sv = svd.S().column_vector();
+        let smax = if sv.nrows() > 0 { sv[0] } else { 0.0 };
+        let rank = (0..sv.nrows())
+            .filter(|&i| sv[i] > 1e-10 * smax && sv[i] > 0.0)
+            .count();
+        Ok(Some(svd.U().subcols(rank, self.p - rank).to_owned()))
+    }
+}

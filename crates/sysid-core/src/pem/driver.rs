@@ -1,0 +1,340 @@
+//! The predictor as an [`optim::Problem`], the [`pem`] driver and the cheap [`criterion`] of
+//! a given model.
+//!
+//! What the driver guarantees: the result's criterion is never above its start's (the start
+//! is returned when the search could not improve on it); with simulation focus or
+//! `enforce_stability = Some(true)` the model is stable; with the default
+//! (`enforce_stability = None`) a prediction-focus model is stable unless an unstable one is
+//! better by a likelihood-ratio test at the 1 % level, and [`PemResult::spectral_radius`]
+//! says which.
+
+use super::options::{Focus, InitialState, PemOptions, PemResult};
+use super::predictor::Predictor;
+use crate::error::{Result, SysidError};
+use crate::linalg::spectral_radius;
+use crate::model::StateSpace;
+use crate::optim::{self, Evaluation, Flow, Iteration, Problem, StopReason};
+use faer::{Mat, MatRef};
+
+/// The 99 % quantile of chi-square with one degree of freedom: the likelihood-ratio bound
+/// an unstable model must pass to be preferred over the stable one.
+const CHI2_1_99: f64 = 6.635;
+
+/// Spectral radius of `A` at or above this after a search kept `A` stable: the bound was
+/// (nearly) active, so the unconstrained search is tried as well.
+const NEAR_BOUNDARY: f64 = 0.99;
+
+impl Problem for Predictor<'_> {
+    fn n_params(&self) -> usize {
+        self.p
+    }
+
+    fn evaluate(&mut self, th: &[f64], jacobian: bool) -> Result<Evaluation> {
+        if !jacobian {
+            return Ok(Evaluation::cost_only(self.cost(th)));
+        }
+        if !(self.structured && self.col_lo == 0 && self.n > 0) {
+            return self.evaluate_rows(th);
+        }
+        match self.modal.then(|| self.modal_at(th)).flatten() {
+            Some(md) => self.evaluate_modal(th, false, &md),
+            None => self.evaluate_structured(th, false),
+        }
+    }
+
+    fn admissible(&mut self, th: &[f64]) -> bool {
+        self.is_admissible(th)
+    }
+
+    fn search_basis(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
+        self.local_basis(th)
+    }
+
+    fn invariant_directions(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
+        Ok(self.orbit_tangent(th))
+    }
+
+    fn gradient_only(&mut self, th: &[f64]) -> Result<Option<Evaluation>> {
+        if !(self.structured && self.col_lo == 0 && self.n > 0) {
+            return Ok(None);
+        }
+        match self.modal.then(|| self.modal_at(th)).flatten() {
+            Some(md) => self.evaluate_modal(th, true, &md).map(Some),
+            None => self.evaluate_structured(th, true).map(Some),
+        }
+    }
+
+    /// With the re-estimated weighting: `det(Lambda)` at the last accepted point (the
+    /// weighted cost is `N l / 2` at every iterate; each accepted step lowers the determinant,
+    /// since `tr(W_old Lambda_new) < l` and `det(W_old Lambda_new) <= (tr / l)^l`).
+    fn criterion(&self) -> Option<f64> {
+        self.reweight.then(|| self.losses.last().copied()).flatten()
+    }
+
+    fn accepted(&mut self, th: &[f64]) -> Result<bool> {
+        if self.reweight {
+            self.reweight_at(th)?;
+            return Ok(true);
+        }
+        let loss = self.loss(th);
+        self.losses.push(loss);
+        Ok(false)
+    }
+}
+
+impl Predictor<'_> {
+    /// Starts the loss history at `theta`: the weighting from its errors when re-weighting
+    /// (`W = I` otherwise) and `det(Lambda)` there.
+    pub(crate) fn start_history(&mut self, th: &[f64]) -> Result<()> {
+        self.losses.clear();
+        self.rinv = Mat::identity(self.l, self.l);
+        if self.reweight {
+            return self.reweight_at(th);
+        }
+        let loss = self.loss(th);
+        self.losses.push(loss);
+        Ok(())
+    }
+
+    /// The criterion the search decreases at `theta` with the current weighting:
+    /// `det(Lambda)` when re-weighting, `1/2 sum |e|^2` otherwise.
+    fn criterion_at(&self, th: &[f64]) -> f64 {
+        if self.reweight {
+            self.loss(th)
+        } else {
+            self.cost(th)
+        }
+    }
+
+    /// The start's parameters with estimated initial states at their least-squares values
+    /// (the residual is linear in them: one Gauss-Newton step with the rest fixed).
+    fn start_theta(
+        &mut self,
+        start: &StateSpace,
+        k0: Option<MatRef<'_, f64>>,
+        focus: Focus,
+    ) -> Result<Vec<f64>> {
+        let k_start = match (focus, k0) {
+            (Focus::Prediction, Some(k)) => k.to_owned(),
+            _ => self.k_fixed.clone(),
+        };
+        let x0s: Vec<Vec<f64>> = self
+            .x0_mode
+            .iter()
+            .map(|s| match s {
+                InitialState::Given(v) => v.clone(),
+                _ => vec![0.0; self.n],
+            })
+            .collect();
+        let theta = self.pack(start, k_start.as_ref(), &x0s);
+        if !self.is_admissible(&theta) {
+            return Err(SysidError::invalid(
+                "start model",
+                match (focus, self.enforce_stability) {
+                    (Focus::Simulation, _) => {
+                        "A of the start model is unstable: stabilise it first (for example \
+                         reflect the unstable poles) or use focus=\"prediction\""
+                    }
+                    (Focus::Prediction, true) => {
+                        "A or the predictor A - K C of the start model is unstable and \
+                         enforce_stability is set: stabilise the start first"
+                    }
+                    (Focus::Prediction, false) => {
+                        "the predictor A - K C of the start model is unstable: stabilise it \
+                         first or start from a Kalman gain of the model"
+                    }
+                },
+            ));
+        }
+        self.rinv = Mat::identity(self.l, self.l);
+        let Some(lo) = self.x0_off.iter().flatten().copied().min() else {
+            return Ok(theta);
+        };
+        let mut fixed = vec![true; self.p];
+        fixed[lo..].iter_mut().for_each(|f| *f = false);
+        let o = optim::Options {
+            max_iter: 1,
+            initial_damping: 0.0,
+            tol_gradient: 0.0,
+            fixed: Some(fixed),
+            ..Default::default()
+        };
+        let local = self.local;
+        self.local = false;
+        self.col_lo = lo;
+        let sol = optim::minimize(self, &theta, &o, &mut |_| Flow::Continue);
+        self.local = local;
+        self.col_lo = 0;
+        Ok(sol?.theta)
+    }
+}
+
+/// One search from `theta` (the history started there); the start is kept when the search
+/// ends above it.
+fn search(
+    prob: &mut Predictor<'_>,
+    theta: &[f64],
+    options: &PemOptions,
+    observer: &mut dyn FnMut(&Iteration) -> Flow,
+) -> Result<optim::Solution> {
+    prob.start_history(theta)?;
+    let start = prob.losses.last().copied().unwrap_or(f64::INFINITY);
+    let start_cost = prob.criterion_at(theta);
+    let mut sol = optim::minimize(prob, theta, &options.optim, observer)?;
+    let worse = if prob.reweight {
+        prob.criterion_at(&sol.theta) > start
+    } else {
+        prob.criterion_at(&sol.theta) > start_cost
+    };
+    if worse {
+        // never worse than the start: return it (its Gauss-Newton matrix is formed below)
+        sol.theta = theta.to_vec();
+        sol.stop = StopReason::NoDescent;
+        sol.cost = sol.history[0];
+        sol.gauss_newton = Mat::zeros(0, 0);
+    }
+    Ok(sol)
+}
+
+/// The likelihood-ratio statistic of an unconstrained criterion `free` against a constrained
+/// one `kept` over `n` samples and `l` outputs (`det` criteria: `N ln(kept / free)`; sums of
+/// squares: `N l ln(kept / free)`).
+fn likelihood_ratio(kept: f64, free: f64, n: usize, l: usize, det: bool) -> f64 {
+    let scale = if det { n } else { n * l } as f64;
+    scale * (kept / free).ln()
+}
+
+/// Refines a start model by minimising its prediction (or simulation) errors over one or more
+/// experiments `(u, y)`, each `(N_e, m)` and `(N_e, l)`.
+///
+/// The start must give a stable predictor (A - K C, or A for simulation); `k0` is its Kalman
+/// gain (zero when `None`). The observer sees every accepted iteration and may stop the search.
+///
+/// ```
+/// use faer::{mat, Mat};
+/// use sysid_core::{StateSpace, simulate::simulate};
+/// use sysid_core::pem::{pem, PemOptions, Focus};
+/// use sysid_core::optim::Flow;
+/// let truth = StateSpace::new(mat![[0.8]], mat![[1.0]], mat![[0.5]], mat![[0.0]]).unwrap();
+/// let u = Mat::from_fn(200, 1, |t, _| ((t * 7919 % 13) as f64) - 6.0);
+/// let y = simulate(&truth, u.as_ref(), None).unwrap();
+/// let start = StateSpace::new(mat![[0.6]], mat![[1.0]], mat![[0.4]], mat![[0.0]]).unwrap();
+/// let mut o = PemOptions::default();
+/// o.focus = Focus::Simulation;
+/// let r = pem(&start, None, &[(u.as_ref(), y.as_ref())], &o, &mut |_| Flow::Continue).unwrap();
+/// assert!((r.sys.a[(0, 0)] - 0.8).abs() < 1e-8);
+/// ```
+pub fn pem(
+    start: &StateSpace,
+    k0: Option<MatRef<'_, f64>>,
+    experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
+    options: &PemOptions,
+    observer: &mut dyn FnMut(&Iteration) -> Flow,
+) -> Result<PemResult> {
+    let mut prob = Predictor::new(start, k0, experiments, options)?;
+    let auto = options.enforce_stability.is_none() && options.focus == Focus::Prediction;
+    let a_stable = matches!(spectral_radius(start.a.as_ref()), Ok(r) if r < 1.0);
+    // the default keeps A stable from a stable start; an unstable start is searched freely
+    prob.enforce_stability = prob.enforce_stability || (auto && a_stable);
+    let theta = prob.start_theta(start, k0, options.focus)?;
+    let mut solution = search(&mut prob, &theta, options, observer)?;
+    let mut losses = prob.losses.clone();
+    let rho = |prob: &Predictor<'_>, th: &[f64]| {
+        spectral_radius(prob.unpack(th).a.as_ref()).unwrap_or(f64::INFINITY)
+    };
+    if auto && a_stable && rho(&prob, &solution.theta) >= NEAR_BOUNDARY {
+        // the bound was active: does an unstable model fit significantly better?
+        prob.enforce_stability = false;
+        let kept = solution.theta.clone();
+        let free = search(&mut prob, &kept, options, observer)?;
+        let (ck, cf) = (prob.criterion_at(&kept), prob.criterion_at(&free.theta));
+        let lr = likelihood_ratio(ck, cf, prob.n_samples, prob.l, prob.reweight);
+        if lr > CHI2_1_99 && rho(&prob, &free.theta) >= 1.0 {
+            solution = merge(solution, free);
+            losses.extend(prob.losses.iter().skip(1));
+        } else {
+            prob.enforce_stability = true;
+        }
+    }
+    finish(prob, solution, losses)
+}
+
+/// `first` followed by `second` (started at `first`'s end): one report of both searches.
+fn merge(first: optim::Solution, mut second: optim::Solution) -> optim::Solution {
+    let mut history = first.history;
+    history.extend(second.history.iter().skip(1));
+    let mut weighted = first.weighted_history;
+    weighted.extend(second.weighted_history.iter().skip(1));
+    second.history = history;
+    second.weighted_history = weighted;
+    second.iterations += first.iterations;
+    second.evaluations += first.evaluations;
+    second
+}
+
+/// The result at the solution, with the covariance from `W = Lambda^-1`.
+fn finish(
+    mut prob: Predictor<'_>,
+    mut solution: optim::Solution,
+    loss_history: Vec<f64>,
+) -> Result<PemResult> {
+    let theta = solution.theta.clone();
+    let pm = prob.unpack(&theta);
+    let lam = prob.innovation_covariance(&theta);
+    let h = if prob.reweight && solution.gauss_newton.nrows() == prob.p {
+        solution.gauss_newton.clone()
+    } else {
+        prob.reweight = true;
+        prob.reweight_at(&theta)?;
+        prob.evaluate(&theta, true)?.gauss_newton
+    };
+    let covariance = optim::covariance(h.as_ref(), 1.0, 1e-10)?;
+    if solution.condition.is_nan() {
+        // a large search does not form the eigenvalues; those of the covariance say the same
+        solution.condition = covariance.condition;
+    }
+    let radius = spectral_radius(pm.a.as_ref())?;
+    Ok(PemResult {
+        sys: StateSpace::new(pm.a, pm.b, pm.c, pm.d)?,
+        k: pm.k,
+        x0: pm.x0,
+        innovation_covariance: lam,
+        theta,
+        solution,
+        covariance,
+        n_samples: prob.n_samples,
+        loss_history,
+        spectral_radius: radius,
+    })
+}
+
+/// The criterion [`pem`] would start from for this model, without searching: the initial
+/// states fitted by least squares (where estimated), then `det(Lambda)` when `options.reweight`
+/// (the maximum-likelihood loss) or `1/2 sum |e|^2` otherwise. One pass for the states and one
+/// for the criterion: cheap enough to score many candidate models.
+///
+/// ```
+/// use faer::{mat, Mat};
+/// use sysid_core::{StateSpace, simulate::simulate};
+/// use sysid_core::pem::{criterion, PemOptions, Focus};
+/// let truth = StateSpace::new(mat![[0.8]], mat![[1.0]], mat![[0.5]], mat![[0.0]]).unwrap();
+/// let u = Mat::from_fn(200, 1, |t, _| ((t * 7919 % 13) as f64) - 6.0);
+/// let y = simulate(&truth, u.as_ref(), None).unwrap();
+/// let mut o = PemOptions::default();
+/// o.focus = Focus::Simulation;
+/// o.reweight = false;
+/// let c = criterion(&truth, None, &[(u.as_ref(), y.as_ref())], &o).unwrap();
+/// assert!(c < 1e-20);
+/// ```
+pub fn criterion(
+    model: &StateSpace,
+    k: Option<MatRef<'_, f64>>,
+    experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
+    options: &PemOptions,
+) -> Result<f64> {
+    let mut prob = Predictor::new(model, k, experiments, options)?;
+    prob.enforce_stability = options.enforce_stability == Some(true);
+    prob.enforce_stability |= options.focus == Focus::Simulation;
+    let theta = prob.start_theta(model, k, options.focus)?;
+    Ok(prob.criterion_at(&theta))
+}

@@ -1,0 +1,178 @@
+//! The real modal form of the predictor matrix and the change of basis it induces on the
+//! parameters.
+//!
+//! `Lambda = T^-1 Abar T` is block diagonal with 1x1 (real pole) and 2x2 (complex pair)
+//! blocks. In the modal coordinates `phi' = (T^-1 Abar T, T^-1 Bbar, C T, D, T^-1 K, T^-1 x0)`
+//! (a linear map `phi' = M phi` at the current point) the sensitivity of every state-moving
+//! parameter lives in one block. `M^T` is applied by `n x n` products per column
+//! ([`Predictor::modal_mt_cols`]), never as a dense `p x p` matrix.
+
+use super::predictor::Predictor;
+use faer::{Mat, MatRef};
+
+/// A real block-diagonal (modal) form `Lambda = T^-1 Abar T` with 1x1 and 2x2 blocks.
+pub(super) struct Modal {
+    pub t: Mat<f64>,
+    pub ti: Mat<f64>,
+    pub lam: Mat<f64>,
+    /// For each state index: (first row, size) of its block.
+    pub block: Vec<(usize, usize)>,
+}
+
+/// Column `idx` of the eigenvectors rotated to be real, into column `k` of `t`.
+fn real_vector(t: &mut Mat<f64>, v: faer::ColRef<'_, faer::c64>, k: usize) {
+    let n = v.nrows();
+    let mut big = 0usize;
+    for i in 0..n {
+        if v[i].norm() > v[big].norm() {
+            big = i;
+        }
+    }
+    let ph = v[big].conj() * (1.0 / v[big].norm());
+    for i in 0..n {
+        t[(i, k)] = (v[i] * ph).re;
+    }
+}
+
+/// The modal form of `abar`, or `None` when its eigenvectors are ill-conditioned (then the
+/// plain structured evaluation is used).
+pub(super) fn modal_form(abar: MatRef<'_, f64>) -> Option<Modal> {
+    use faer::linalg::solvers::DenseSolveCore;
+    let n = abar.nrows();
+    let eig = crate::realization::modal::eigen_decomposition(abar).ok()?;
+    let mut t = Mat::<f64>::zeros(n, n);
+    let mut lam = Mat::<f64>::zeros(n, n);
+    let mut block = vec![(0usize, 0usize); n];
+    let mut k = 0usize;
+    let scale = 1.0 + eig.values.iter().map(|z| z.norm()).fold(0.0, f64::max);
+    for (idx, z) in eig.values.iter().enumerate() {
+        let v = eig.vectors.col(idx);
+        if z.im.abs() <= 1e-13 * scale {
+            if k >= n {
+                return None;
+            }
+            real_vector(&mut t, v, k);
+            lam[(k, k)] = z.re;
+            block[k] = (k, 1);
+            k += 1;
+        } else if z.im > 0.0 {
+            if k + 1 >= n {
+                return None;
+            }
+            for i in 0..n {
+                t[(i, k)] = v[i].re;
+                t[(i, k + 1)] = v[i].im;
+            }
+            lam[(k, k)] = z.re;
+            lam[(k, k + 1)] = z.im;
+            lam[(k + 1, k)] = -z.im;
+            lam[(k + 1, k + 1)] = z.re;
+            block[k] = (k, 2);
+            block[k + 1] = (k, 2);
+            k += 2;
+        }
+    }
+    if k != n {
+        return None;
+    }
+    let ti = t.partial_piv_lu().inverse();
+    let norm1 = |m: &Mat<f64>| {
+        (0..n)
+            .map(|j| (0..n).map(|i| m[(i, j)].abs()).sum::<f64>())
+            .fold(0.0, f64::max)
+    };
+    let cond = norm1(&t) * norm1(&ti);
+    if !cond.is_finite() || cond > 1e6 {
+        return None;
+    }
+    let check = &ti * abar * &t - &lam;
+    let anorm = abar.norm_max().max(1e-300);
+    // NaN in the check counts as a failure
+    let accurate = check.norm_max() <= 1e-11 * anorm * cond;
+    if !accurate {
+        return None;
+    }
+    Some(Modal { t, ti, lam, block })
+}
+
+/// `dst[i, :] = sum_a ti[a][i] src(a)` for the rows of an `n x w` block: `T^-1`-transposed
+/// applied from the left.
+fn left_block(ticol: &[Vec<f64>], src: &[f64], dst: &mut [f64], w: usize) {
+    for (i, ti) in ticol.iter().enumerate() {
+        let d = &mut dst[i * w..i * w + w];
+        d.fill(0.0);
+        for (a, &s) in ti.iter().enumerate() {
+            for (dv, v) in d.iter_mut().zip(&src[a * w..a * w + w]) {
+                *dv += s * v;
+            }
+        }
+    }
+}
+
+/// `dst[r, :] = sum_b src[r, b] T[:, b]` for the rows of an `r x n` block.
+fn right_block(tcol: &[Vec<f64>], src: &[f64], dst: &mut [f64], rows: usize) {
+    let n = tcol.len();
+    for r in 0..rows {
+        let d = &mut dst[r * n..r * n + n];
+        d.fill(0.0);
+        for (b, tb) in tcol.iter().enumerate() {
+            let s = src[r * n + b];
+            for (dv, tv) in d.iter_mut().zip(tb) {
+                *dv += s * tv;
+            }
+        }
+    }
+}
+
+impl Predictor<'_> {
+    /// `M^T X` for every column of `X`, for the modal change of basis `phi' = M phi`
+    /// (row-major blocks): `A -> T^-T X T^T`, `B, K, x0 -> T^-T X`, `C -> X T^T`, `D`
+    /// unchanged. `O(n^2 (n + m + l))` per column, on contiguous slices.
+    pub(super) fn modal_mt_cols(&self, md: &Modal, x: &Mat<f64>) -> Mat<f64> {
+        let (n, m, l) = (self.n, self.m, self.l);
+        let off = self.offsets();
+        let mut out = x.clone();
+        let tcol: Vec<Vec<f64>> = (0..n)
+            .map(|b| (0..n).map(|j| md.t[(j, b)]).collect())
+            .collect();
+        let ticol: Vec<Vec<f64>> = (0..n)
+            .map(|i| (0..n).map(|a| md.ti[(a, i)]).collect())
+            .collect();
+        // blocks T^-T X (rows of the state): (offset, width)
+        let mut left = vec![(off.b, m)];
+        if let Some(k0) = off.k {
+            left.push((k0, l));
+        }
+        for o in self.x0_off.iter().flatten() {
+            left.push((*o, 1));
+        }
+        let mut tmp = vec![0.0; n * n];
+        for c in 0..x.ncols() {
+            let xs = x.col_as_slice(c);
+            let os = out.col_as_slice_mut(c);
+            right_block(&tcol, &xs[off.a..off.a + n * n], &mut tmp, n);
+            left_block(&ticol, &tmp, &mut os[off.a..off.a + n * n], n);
+            for &(o, wd) in &left {
+                left_block(&ticol, &xs[o..o + n * wd], &mut os[o..o + n * wd], wd);
+            }
+            right_block(
+                &tcol,
+                &xs[off.c..off.c + l * n],
+                &mut os[off.c..off.c + l * n],
+                l,
+            );
+        }
+        out
+    }
+
+    /// `M^T x` for one vector (see [`Self::modal_mt_cols`]).
+    pub(super) fn modal_mt(&self, md: &Modal, x: &[f64]) -> Vec<f64> {
+        let col = Mat::from_fn(x.len(), 1, |i, _| x[i]);
+        self.modal_mt_cols(md, &col).col_as_slice(0).to_vec()
+    }
+
+    /// The modal form of the predictor matrix at `theta` (see [`modal_form`]).
+    pub(super) fn modal_at(&self, th: &[f64]) -> Option<Modal> {
+        modal_form(self.unpack(th).abar.as_ref())
+    }
+}

@@ -1,0 +1,215 @@
+//! The normal equations `J^T W J`, `J^T W r` in the predictor parameters
+//! `phi = (Abar, Bbar, C, D, K, x0)` (`Abar = A - K C`, `Bbar = B - K D`) and their map back
+//! to `theta = (A, B, C, D, K, x0)`.
+//!
+//! In `phi` the state does not depend on `C` and `D`: their Jacobian rows are `e_i (x) z(t)^T`
+//! with the regressor `z = (x, u)`, so their blocks are `W (x) sum z z^T` (static-static) and
+//! the gradient `-sum (W e) z^T`. The chain rule `J_theta = J_phi T` uses the sparse
+//! derivative `T = dphi/dtheta` ([`Predictor::predictor_map`]).
+
+use super::predictor::{Predictor, Unpacked};
+use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
+use faer::{Accum, Mat, MatMut, MatRef, Par};
+
+/// Sparse columns of `T = dphi/dtheta`: `(row, value)` pairs per column.
+pub(super) type SparseCols = Vec<Vec<(usize, f64)>>;
+
+/// Adds `rows^T rows` to the lower triangle of `gram` (one block of Jacobian rows).
+pub(super) fn gram_add(gram: MatMut<'_, f64>, rows: MatRef<'_, f64>, par: Par) {
+    tri::matmul(
+        gram,
+        BlockStructure::TriangularLower,
+        Accum::Add,
+        rows.transpose(),
+        BlockStructure::Rectangular,
+        rows,
+        BlockStructure::Rectangular,
+        1.0,
+        par,
+    );
+}
+
+/// The parallelism of the products whose cost grows with the square of `cols` columns:
+/// faer's global one from 64 columns (results agree to round-off for any thread count).
+pub(super) fn parallelism(cols: usize) -> Par {
+    if cols >= 64 {
+        faer::get_global_parallelism()
+    } else {
+        Par::Seq
+    }
+}
+
+/// Running sums of the regressor `z = (x, u)` over the samples: `sum (W e) z^T` always, and
+/// with `acc` also `sum z z^T` (lower triangle) and the block of `z` rows of the current
+/// block of samples.
+pub(super) struct StaticSums {
+    pub gz: Mat<f64>,
+    pub zz: Mat<f64>,
+    pub zbuf: Mat<f64>,
+    acc: bool,
+}
+
+impl StaticSums {
+    pub fn new(l: usize, nz: usize, block: usize, acc: bool) -> Self {
+        StaticSums {
+            gz: Mat::zeros(l, nz),
+            zz: Mat::zeros(nz, nz),
+            zbuf: Mat::zeros(if acc { block } else { 0 }, nz),
+            acc,
+        }
+    }
+
+    /// Adds one sample: regressor `z`, weighted error `wz = W e`, row `row` of the block.
+    pub fn add(&mut self, z: &[f64], wz: &[f64], row: usize) {
+        for (i, &w) in wz.iter().enumerate() {
+            for (j, &zj) in z.iter().enumerate() {
+                self.gz[(i, j)] += w * zj;
+            }
+        }
+        if self.acc {
+            for a in 0..z.len() {
+                for b in 0..=a {
+                    self.zz[(a, b)] += z[a] * z[b];
+                }
+                self.zbuf[(row, a)] = z[a];
+            }
+        }
+    }
+}
+
+impl Predictor<'_> {
+    /// The parameter index of entry `(i, j)` of `[C D]` (`None` for a `D` that is fixed).
+    pub(super) fn static_index(&self, i: usize, j: usize) -> Option<usize> {
+        let off = self.offsets();
+        if j < self.n {
+            Some(off.c + i * self.n + j)
+        } else {
+            off.d.map(|d| d + i * self.m + (j - self.n))
+        }
+    }
+
+    /// The gradient in `phi` of the static parameters: `-sum (W e) z^T`.
+    pub(super) fn static_gradient(&self, gz: &Mat<f64>, g: &mut [f64]) {
+        for i in 0..self.l {
+            for j in 0..self.n + self.m {
+                if let Some(s) = self.static_index(i, j) {
+                    g[s] = -gz[(i, j)];
+                }
+            }
+        }
+    }
+
+    /// The static-static block `W (x) sum z z^T` of `J^T W J` in `phi`, into `h`.
+    pub(super) fn static_block(&self, w: &Mat<f64>, zz: &Mat<f64>, h: &mut Mat<f64>) {
+        let nz = self.n + self.m;
+        for i in 0..self.l {
+            for j in 0..nz {
+                let Some(sij) = self.static_index(i, j) else {
+                    continue;
+                };
+                for i2 in 0..self.l {
+                    for j2 in 0..nz {
+                        if let Some(s2) = self.static_index(i2, j2) {
+                            h[(sij, s2)] = w[(i, i2)] * zz[(j.max(j2), j.min(j2))];
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// `T = dphi/dtheta` at the model `pm`, as sparse columns.
+    pub(super) fn predictor_map(&self, pm: &Unpacked) -> SparseCols {
+        let (n, m, l) = (self.n, self.m, self.l);
+        let off = self.offsets();
+        let mut t: SparseCols = (0..self.p).map(|c| vec![(c, 1.0)]).collect();
+        for r in 0..l {
+            for i in 0..n {
+                let kir = pm.k[(i, r)];
+                if kir == 0.0 {
+                    continue;
+                }
+                for j in 0..n {
+                    t[off.c + r * n + j].push((off.a + i * n + j, -kir));
+                }
+                if let Some(id) = off.d {
+                    for j in 0..m {
+                        t[id + r * m + j].push((off.b + i * m + j, -kir));
+                    }
+                }
+            }
+        }
+        if let Some(ik) = off.k {
+            for i in 0..n {
+                for r in 0..l {
+                    let col = &mut t[ik + i * l + r];
+                    for j in 0..n {
+                        if pm.c[(r, j)] != 0.0 {
+                            col.push((off.a + i * n + j, -pm.c[(r, j)]));
+                        }
+                    }
+                    for j in 0..m {
+                        if pm.d[(r, j)] != 0.0 {
+                            col.push((off.b + i * m + j, -pm.d[(r, j)]));
+                        }
+                    }
+                }
+            }
+        }
+        t
+    }
+}
+
+/// `T^T g` for the sparse `T`.
+pub(super) fn gradient_to_theta(tmap: &SparseCols, g: &[f64]) -> Vec<f64> {
+    tmap.iter()
+        .map(|col| col.iter().map(|&(r, v)| v * g[r]).sum())
+        .collect()
+}
+
+/// `T^T H T` for the sparse `T` and a symmetric `H`, made exactly symmetric (in 64 x 64
+/// tiles, so that the mirror reads memory in order).
+pub(super) fn matrix_to_theta(tmap: &SparseCols, h: &Mat<f64>) -> Mat<f64> {
+    let np = tmap.len();
+    // Y = H T, column by column
+    let mut y = Mat::<f64>::zeros(np, np);
+    for (c, tc) in tmap.iter().enumerate() {
+        let yc = y.col_as_slice_mut(c);
+        for &(r, v) in tc {
+            for (a, b) in yc.iter_mut().zip(h.col_as_slice(r)) {
+                *a += v * b;
+            }
+        }
+    }
+    let mut hth = Mat::<f64>::zeros(np, np);
+    for c2 in 0..np {
+        let yc = y.col_as_slice(c2);
+        let hc = hth.col_as_slice_mut(c2);
+        for (c1, tc) in tmap.iter().enumerate() {
+            hc[c1] = tc.iter().map(|&(r, v)| v * yc[r]).sum();
+        }
+    }
+    drop(y);
+    const TILE: usize = 64;
+    for jb in (0..np).step_by(TILE) {
+        for ib in (jb..np).step_by(TILE) {
+            for j in jb..(jb + TILE).min(np) {
+                for i in ib.max(j + 1)..(ib + TILE).min(np) {
+                    let a = 0.5 * (hth[(i, j)] + hth[(j, i)]);
+                    hth[(i, j)] = a;
+                    hth[(j, i)] = a;
+                }
+            }
+        }
+    }
+    hth
+}
+
+/// Mirrors the lower triangle of `h` into its upper one.
+pub(super) fn mirror_lower(h: &mut Mat<f64>) {
+    for j in 0..h.ncols() {
+        for i in j + 1..h.nrows() {
+            h[(j, i)] = h[(i, j)];
+        }
+    }
+}

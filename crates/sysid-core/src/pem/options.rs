@@ -1,0 +1,190 @@
+//! What the refinement is asked to do ([`PemOptions`], [`Focus`], [`InitialState`]) and what
+//! it returns ([`PemResult`]). The rules that follow from the focus (whether K is estimated,
+//! which matrix must be stable) are decided here, once.
+
+use crate::error::{Result, SysidError};
+use crate::linalg::spectral_radius;
+use crate::model::StateSpace;
+use crate::optim::{self, Covariance, Solution};
+use faer::{Mat, MatRef};
+use std::str::FromStr;
+
+/// What the predictor's errors are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Focus {
+    /// One-step-ahead prediction errors of the innovation form (K estimated or fixed).
+    Prediction,
+    /// Simulation errors (K = 0).
+    Simulation,
+}
+
+impl Focus {
+    /// Its name as the option string (`"prediction"`, `"simulation"`).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Focus::Prediction => "prediction",
+            Focus::Simulation => "simulation",
+        }
+    }
+
+    /// Whether K is a parameter: only for prediction, and only when asked.
+    pub fn estimates_k(self, requested: bool) -> bool {
+        requested && self == Focus::Prediction
+    }
+}
+
+impl FromStr for Focus {
+    type Err = SysidError;
+
+    /// Parses `"prediction"` or `"simulation"`.
+    ///
+    /// ```
+    /// use sysid_core::pem::Focus;
+    /// assert_eq!("simulation".parse::<Focus>().unwrap(), Focus::Simulation);
+    /// assert!("sim".parse::<Focus>().is_err());
+    /// ```
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "prediction" => Ok(Focus::Prediction),
+            "simulation" => Ok(Focus::Simulation),
+            other => Err(SysidError::invalid(
+                "focus",
+                format!("must be \"prediction\" or \"simulation\", got {other:?}"),
+            )),
+        }
+    }
+}
+
+/// The initial state of one experiment.
+#[derive(Debug, Clone, PartialEq)]
+pub enum InitialState {
+    /// Estimated with the other parameters (started at its least-squares value).
+    Estimate,
+    /// Zero.
+    Zero,
+    /// A given value (length n), not estimated.
+    Given(Vec<f64>),
+}
+
+impl FromStr for InitialState {
+    type Err = SysidError;
+
+    /// Parses `"estimate"` or `"zero"` (a given state is a vector, not a string).
+    ///
+    /// ```
+    /// use sysid_core::pem::InitialState;
+    /// assert_eq!("zero".parse::<InitialState>().unwrap(), InitialState::Zero);
+    /// ```
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "estimate" => Ok(InitialState::Estimate),
+            "zero" => Ok(InitialState::Zero),
+            other => Err(SysidError::invalid(
+                "x0",
+                format!("entries must be \"estimate\", \"zero\" or an array, got {other:?}"),
+            )),
+        }
+    }
+}
+
+/// Options of [`pem`](super::pem). Build with `PemOptions::default()` and set fields.
+#[derive(Debug, Clone)]
+#[non_exhaustive]
+pub struct PemOptions {
+    /// Prediction (default) or simulation errors.
+    pub focus: Focus,
+    /// Estimate D (`true`) or keep it at its start value (`false`, default).
+    pub estimate_d: bool,
+    /// Estimate K (default) or keep it fixed at its start value (prediction focus only).
+    pub estimate_k: bool,
+    /// Initial state per experiment; a single entry applies to all. Default: estimated.
+    pub x0: Vec<InitialState>,
+    /// Re-estimate the weighting `W = Lambda^-1` between iterations (default `true`);
+    /// `false` keeps `W = I`.
+    pub reweight: bool,
+    /// Search in data-driven local coordinates (default `true`).
+    pub local_coordinates: bool,
+    /// Keep `A` itself stable as well as the predictor (MATLAB's `EnforceStability`; always
+    /// so for simulation focus, where the predictor is `A`). `None` (default): for prediction
+    /// focus from a stable start, `A` is kept stable unless an unstable model fits
+    /// significantly better (a likelihood-ratio test at the 1 % level, see
+    /// [`pem`](super::pem)); `Some(false)`: only the predictor is kept stable.
+    pub enforce_stability: Option<bool>,
+    /// Samples per block in the accumulation of the normal equations.
+    pub block: usize,
+    /// Options of the search (tolerances, iteration cap, regularisation, ...).
+    pub optim: optim::Options,
+}
+
+impl Default for PemOptions {
+    fn default() -> Self {
+        let o = optim::Options {
+            max_iter: 50,
+            tol_cost: 1e-6,
+            // J^T W J costs O(N min(l, n) p^2), the gradient O(N n^2 p): chord steps
+            reuse_gauss_newton: 3,
+            ..Default::default()
+        };
+        PemOptions {
+            focus: Focus::Prediction,
+            estimate_d: false,
+            estimate_k: true,
+            x0: vec![InitialState::Estimate],
+            reweight: true,
+            local_coordinates: true,
+            enforce_stability: None,
+            block: 128,
+            optim: o,
+        }
+    }
+}
+
+/// The admissible set of the search, decided once for every caller: the predictor
+/// `A - K C` (which is `A` when `K = 0`, as for simulation) has all poles inside the unit
+/// circle, and so does `A` when `enforce_stability`.
+///
+/// ```
+/// use faer::mat;
+/// use sysid_core::pem::stable_enough;
+/// let a = mat![[1.1]];
+/// let (k, c) = (mat![[0.5]], mat![[1.0]]);
+/// assert!(stable_enough(a.as_ref(), k.as_ref(), c.as_ref(), false));
+/// assert!(!stable_enough(a.as_ref(), k.as_ref(), c.as_ref(), true));
+/// ```
+pub fn stable_enough(
+    a: MatRef<'_, f64>,
+    k: MatRef<'_, f64>,
+    c: MatRef<'_, f64>,
+    enforce_stability: bool,
+) -> bool {
+    let inside = |m: MatRef<'_, f64>| matches!(spectral_radius(m), Ok(r) if r < 1.0);
+    let abar = a - k * c;
+    inside(abar.as_ref()) && (!enforce_stability || inside(a))
+}
+
+/// The refined model and what the search did.
+#[derive(Debug, Clone)]
+pub struct PemResult {
+    /// The refined (A, B, C, D).
+    pub sys: StateSpace,
+    /// The refined Kalman gain (zero for simulation focus).
+    pub k: Mat<f64>,
+    /// The initial state of each experiment (estimated, zero or given).
+    pub x0: Vec<Vec<f64>>,
+    /// Sample covariance of the prediction errors at the solution, l x l.
+    pub innovation_covariance: Mat<f64>,
+    /// The free parameters at the solution (layout in [`Predictor`](super::Predictor)).
+    pub theta: Vec<f64>,
+    /// What the search did.
+    pub solution: Solution,
+    /// Covariance of `theta` from the Gauss-Newton matrix with `W = Lambda^-1`.
+    pub covariance: Covariance,
+    /// Number of samples used.
+    pub n_samples: usize,
+    /// `det(Lambda)` (the maximum-likelihood loss, MATLAB's "loss function") at the start and
+    /// after every accepted iteration.
+    pub loss_history: Vec<f64>,
+    /// Spectral radius of the refined `A` (above 1: an unstable model, allowed only for
+    /// prediction focus without `enforce_stability`).
+    pub spectral_radius: f64,
+}

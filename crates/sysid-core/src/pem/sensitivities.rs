@@ -1,0 +1,436 @@
+//! The state sensitivities `S(t) = dx(t)/dphi` of the predictor parameters that move the
+//! state (`Abar, Bbar, K, x0`), run beside the predictor and folded blockwise into the normal
+//! equations.
+//!
+//! `S(t+1) = Abar S(t) + F(t)`, with `F` the direct derivative of the right-hand side: for
+//! `Abar_ij` it is `x_j(t)` in row `i`, for `Bbar_ij` `u_j(t)`, for `K_ij` `y_j(t)`; the
+//! initial state's columns start at the identity. `dŷ/dphi = C S` for these, so
+//! `sum S^T C^T W C S` is the dynamic block and `sum_t z_j(t) (W C S)_i(t)` the
+//! static-dynamic one.
+//!
+//! Two forms share this loop: in the original basis ([`Predictor::evaluate_structured`], `S`
+//! is `n x p_d`, its block of `J^T W J` formed from `min(l, n)` rows per sample) and in the
+//! modal basis of `Abar` ([`Predictor::evaluate_modal`], each sensitivity lives in one 1x1
+//! or 2x2 block: `p_e <= 2 p_d` numbers per sample and `O(N p_e^2)` for their Gram matrix).
+
+use super::modal::Modal;
+use super::normal::{
+    gradient_to_theta, gram_add, matrix_to_theta, mirror_lower, parallelism, StaticSums,
+};
+use super::predictor::{Filter, Predictor};
+use crate::error::Result;
+use crate::optim::Evaluation;
+use faer::linalg::matmul::matmul;
+use faer::{Accum, Mat, Par, Side};
+
+/// A dynamic column of the modal form: (phi index, state row, forcing, forcing index).
+#[derive(Clone, Copy, PartialEq, Eq)]
+struct Dynamic {
+    phi: usize,
+    row: usize,
+    forcing: Forcing,
+    j: usize,
+}
+
+/// What drives a sensitivity column: a state, an input, an output, or only its start.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Forcing {
+    State,
+    Input,
+    Output,
+    Start,
+}
+
+impl Predictor<'_> {
+    /// The dynamic columns in `phi` order (`Abar`, `Bbar`, `K`, each estimated `x0`), and per
+    /// experiment the index of its first `x0` column.
+    fn dynamic_columns(&self) -> (Vec<Dynamic>, Vec<Option<usize>>) {
+        let (n, m, l) = (self.n, self.m, self.l);
+        let off = self.offsets();
+        let mut cols = Vec::new();
+        let block = |base: usize, w: usize, forcing: Forcing, cols: &mut Vec<Dynamic>| {
+            for row in 0..n {
+                for j in 0..w {
+                    cols.push(Dynamic {
+                        phi: base + row * w + j,
+                        row,
+                        forcing,
+                        j,
+                    });
+                }
+            }
+        };
+        block(off.a, n, Forcing::State, &mut cols);
+        block(off.b, m, Forcing::Input, &mut cols);
+        if let Some(k) = off.k {
+            block(k, l, Forcing::Output, &mut cols);
+        }
+        let mut x0_at = Vec::with_capacity(self.x0_off.len());
+        for off in &self.x0_off {
+            x0_at.push(off.map(|o| {
+                let at = cols.len();
+                block(o, 1, Forcing::Start, &mut cols);
+                at
+            }));
+        }
+        (cols, x0_at)
+    }
+
+    /// The static-dynamic block and the dynamic gradient into `h`, `g` (in `phi`), then both
+    /// mapped to `theta`. `cross(i, c)` is `sum_t (W C S)_i(t) z_j(t)` for the static row
+    /// `(i, j)` and dynamic column `c`; `h` already holds the dynamic block.
+    #[allow(clippy::too_many_arguments)]
+    fn finish(
+        &self,
+        f: &Filter,
+        sums: &StaticSums,
+        cols: &[Dynamic],
+        gd: &[f64],
+        mut h: Option<Mat<f64>>,
+        w: &Mat<f64>,
+        cross: &dyn Fn(usize, usize, usize) -> f64,
+        modal: Option<&Modal>,
+    ) -> Evaluation {
+        let mut g = vec![0.0; self.p];
+        self.static_gradient(&sums.gz, &mut g);
+        for (c, d) in cols.iter().enumerate() {
+            g[d.phi] = gd[c];
+        }
+        let tmap = self.predictor_map(&f.pm);
+        let gphi = match modal {
+            Some(md) => self.modal_mt(md, &g),
+            None => g,
+        };
+        let gradient = gradient_to_theta(&tmap, &gphi);
+        let Some(mut h) = h.take() else {
+            return Evaluation {
+                cost: f.finite_cost(),
+                gradient,
+                gauss_newton: Mat::zeros(0, 0),
+            };
+        };
+        self.static_block(w, &sums.zz, &mut h);
+        for i in 0..self.l {
+            for j in 0..self.n + self.m {
+                let Some(sij) = self.static_index(i, j) else {
+                    continue;
+                };
+                for (c, d) in cols.iter().enumerate() {
+                    let v = cross(i, j, c);
+                    h[(sij, d.phi)] = v;
+                    h[(d.phi, sij)] = v;
+                }
+            }
+        }
+        if let Some(md) = modal {
+            // H_phi = M^T H' M = M^T (M^T H')^T (H' symmetric)
+            let z = self.modal_mt_cols(md, &h);
+            drop(h);
+            h = self.modal_mt_cols(md, &z.transpose().to_owned());
+        }
+        Evaluation {
+            cost: f.finite_cost(),
+            gradient,
+            gauss_newton: matrix_to_theta(&tmap, &h),
+        }
+    }
+
+    /// Cost, `J^T W r` and `J^T W J` through the predictor parameterisation, the
+    /// sensitivities in the original state basis. The dynamic block `sum S^T C^T W C S` is
+    /// formed from `min(l, n)` rows per sample (`R^-1 C`, or the Cholesky factor of
+    /// `C^T W C` when `l > n`). With `grad_only` the Gauss-Newton matrix is skipped (left
+    /// empty): the sensitivities and the gradient cost `O(N n^2 p_d)`.
+    pub(super) fn evaluate_structured(&self, th: &[f64], grad_only: bool) -> Result<Evaluation> {
+        let (n, m, l) = (self.n, self.m, self.l);
+        let mut f = Filter::new(self.unpack(th), self.rinv.clone());
+        let blk = self.block;
+        let (cols, x0_at) = self.dynamic_columns();
+        let pd = cols.len();
+        let nz = n + m;
+        let w = f.rinv.transpose() * &f.rinv;
+        let q = &f.rinv * &f.pm.c;
+        let wc = &w * &f.pm.c;
+        // rows whose Gram matrix is C^T W C
+        let lt: Mat<f64> = match (l > n, (q.transpose() * &q).llt(Side::Lower)) {
+            (true, Ok(fac)) => fac.L().transpose().to_owned(),
+            _ => q.clone(),
+        };
+        let r = lt.nrows();
+        let par = parallelism(pd);
+        let acc = !grad_only;
+        let hp = if acc { pd } else { 0 };
+        let mut hd = Mat::<f64>::zeros(hp, hp);
+        let mut gd = vec![0.0; pd];
+        // rows k * nz + j: sum_t z_j(t) S_k(t)
+        let mut cross = Mat::<f64>::zeros(if acc { n * nz } else { 0 }, hp);
+        let mut sums = StaticSums::new(l, nz, blk, acc);
+        let mut jb = Mat::<f64>::zeros(if acc { blk * r } else { 0 }, hp);
+        let mut sbuf = Mat::<f64>::zeros(if acc { n * blk } else { 0 }, hp);
+        let mut s = Mat::<f64>::zeros(n, pd);
+        let mut s2 = s.clone();
+        let mut v = vec![0.0; n];
+        let mut z = vec![0.0; nz];
+        for (ex, (u, y)) in self.exps.iter().enumerate() {
+            f.restart(ex);
+            s.fill(0.0);
+            if let Some(c0) = x0_at[ex] {
+                for i in 0..n {
+                    s[(i, c0 + i)] = 1.0;
+                }
+            }
+            let len = y.nrows();
+            let mut row = 0usize;
+            for t in 0..len {
+                f.errors(*u, *y, t);
+                f.weigh();
+                z[..n].copy_from_slice(&f.x);
+                for j in 0..m {
+                    z[n + j] = u[(t, j)];
+                }
+                sums.add(&z, &f.wz, row);
+                // dynamic gradient: -S^T C^T W e
+                for (k, vk) in v.iter_mut().enumerate() {
+                    *vk = (0..l).map(|i| f.pm.c[(i, k)] * f.wz[i]).sum();
+                }
+                for (c, gc) in gd.iter_mut().enumerate() {
+                    *gc -= (0..n).map(|k| s[(k, c)] * v[k]).sum::<f64>();
+                }
+                if acc {
+                    for c in 0..pd {
+                        for k in 0..n {
+                            sbuf[(k * blk + row, c)] = s[(k, c)];
+                        }
+                    }
+                    let rows = jb.as_mut().subrows_mut(row * r, r);
+                    matmul(rows, Accum::Replace, lt.as_ref(), s.as_ref(), 1.0, Par::Seq);
+                    row += 1;
+                }
+                matmul(
+                    s2.as_mut(),
+                    Accum::Replace,
+                    f.pm.abar.as_ref(),
+                    s.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+                for (c, d) in cols.iter().enumerate() {
+                    s2[(d.row, c)] += match d.forcing {
+                        Forcing::State => f.x[d.j],
+                        Forcing::Input => u[(t, d.j)],
+                        Forcing::Output => y[(t, d.j)],
+                        Forcing::Start => 0.0,
+                    };
+                }
+                std::mem::swap(&mut s, &mut s2);
+                if acc && (row == blk || t + 1 == len) {
+                    gram_add(hd.as_mut(), jb.as_ref().subrows(0, row * r), par);
+                    let zr = sums.zbuf.as_ref().subrows(0, row);
+                    for k in 0..n {
+                        let sk = sbuf.as_ref().subrows(k * blk, row);
+                        let dst = cross.as_mut().subrows_mut(k * nz, nz);
+                        matmul(dst, Accum::Add, zr.transpose(), sk, 1.0, par);
+                    }
+                    row = 0;
+                }
+                f.advance(*u, *y, t);
+            }
+        }
+        let h = acc.then(|| {
+            let mut h = Mat::<f64>::zeros(self.p, self.p);
+            mirror_lower(&mut hd);
+            for (a, da) in cols.iter().enumerate() {
+                for (b, db) in cols.iter().enumerate() {
+                    h[(da.phi, db.phi)] = hd[(a, b)];
+                }
+            }
+            h
+        });
+        let cross_at = |i: usize, j: usize, c: usize| -> f64 {
+            (0..n).map(|k| wc[(i, k)] * cross[(k * nz + j, c)]).sum()
+        };
+        Ok(self.finish(&f, &sums, &cols, &gd, h, &w, &cross_at, None))
+    }
+
+    /// As [`Self::evaluate_structured`], with the state-moving parameters taken in the modal
+    /// coordinates of `Abar` ([`Modal`]): `S` is stored compactly, its recursion costs
+    /// `O(p_e)` and `sum S^T C^T W C S` comes from the Gram matrix of those numbers.
+    ///
+    /// A 2x2 block `[[a, b], [-b, a]]` commutes with the rotation `R = [[0, -1], [1, 0]]`,
+    /// and `R e_0 = e_1`: the sensitivity of a parameter in the block's second row is `R`
+    /// times that of the same parameter in its first row, to the last bit. With `halve` only
+    /// first rows are carried (the Gram matrix costs a quarter).
+    pub(super) fn evaluate_modal(
+        &mut self,
+        th: &[f64],
+        grad_only: bool,
+        md: &Modal,
+    ) -> Result<Evaluation> {
+        let (n, m, l) = (self.n, self.m, self.l);
+        let mut f = Filter::new(self.unpack(th), self.rinv.clone());
+        let blk = self.block;
+        let cq = &f.pm.c * &md.t;
+        let (cols, x0_at) = self.dynamic_columns();
+        let pd = cols.len();
+        let stride = |fc: Forcing| match fc {
+            Forcing::State => n,
+            Forcing::Input => m,
+            Forcing::Output => l,
+            Forcing::Start => 1,
+        };
+        // carried columns (with the second-row twin derived from them)
+        let mut carried: Vec<(usize, Option<usize>)> = Vec::with_capacity(pd);
+        for (c, d) in cols.iter().enumerate() {
+            let (b0, bs) = md.block[d.row];
+            if self.halve && bs == 2 {
+                if d.row == b0 + 1 {
+                    continue;
+                }
+                carried.push((c, Some(c + stride(d.forcing))));
+            } else {
+                carried.push((c, None));
+            }
+        }
+        // `at[c][q]` = (carried number, sign) of entry q of column c's sensitivity block
+        let mut eoff = vec![0usize; carried.len() + 1];
+        let mut at = vec![[(0usize, 0.0f64); 2]; pd];
+        for (k, &(c, twin)) in carried.iter().enumerate() {
+            let bs = md.block[cols[c].row].1;
+            eoff[k + 1] = eoff[k] + bs;
+            for (q, a) in at[c].iter_mut().take(bs).enumerate() {
+                *a = (eoff[k] + q, 1.0);
+            }
+            if let Some(tw) = twin {
+                // R s = (-s_1, s_0)
+                at[tw] = [(eoff[k] + 1, -1.0), (eoff[k], 1.0)];
+            }
+        }
+        let pe = eoff[carried.len()];
+        let cached = match grad_only {
+            true => None,
+            false => self
+                .gram_cache
+                .take()
+                .filter(|c| c.0.as_slice() == th && c.1.nrows() == pe),
+        };
+        // accumulate the sums (else they come from the cache, or are not needed)
+        let acc = !grad_only && cached.is_none();
+        let nz = n + m;
+        let w = f.rinv.transpose() * &f.rinv;
+        let wc = &w * &cq;
+        let mq = cq.transpose() * &wc;
+        let par = parallelism(pe);
+        let hp = if acc { pe } else { 0 };
+        let mut gram = Mat::<f64>::zeros(hp, hp);
+        let mut cross = Mat::<f64>::zeros(if acc { nz } else { 0 }, hp);
+        let mut vbuf = Mat::<f64>::zeros(if acc { blk } else { 0 }, hp);
+        let mut sums = StaticSums::new(l, nz, blk, acc);
+        let mut gd = vec![0.0; pd];
+        let mut sc = vec![0.0; pe];
+        let mut sn = vec![0.0; pe];
+        let mut v = vec![0.0; n];
+        let mut z = vec![0.0; nz];
+        for (ex, (u, y)) in self.exps.iter().enumerate() {
+            f.restart(ex);
+            sc.fill(0.0);
+            if let Some(c0) = x0_at[ex] {
+                for i in 0..n {
+                    let (h, sg) = at[c0 + i][i - md.block[i].0];
+                    sc[h] = sg;
+                }
+            }
+            let len = y.nrows();
+            let mut row = 0usize;
+            for t in 0..len {
+                f.errors(*u, *y, t);
+                f.weigh();
+                // modal state x' = T^-1 x, regressor z = (x', u)
+                for (a, za) in z.iter_mut().take(n).enumerate() {
+                    *za = (0..n).map(|b| md.ti[(a, b)] * f.x[b]).sum();
+                }
+                for j in 0..m {
+                    z[n + j] = u[(t, j)];
+                }
+                sums.add(&z, &f.wz, row);
+                for (k, vk) in v.iter_mut().enumerate() {
+                    *vk = (0..l).map(|i| cq[(i, k)] * f.wz[i]).sum();
+                }
+                for (k, &(c, twin)) in carried.iter().enumerate() {
+                    let (b0, bs) = md.block[cols[c].row];
+                    let o = eoff[k];
+                    gd[c] -= (0..bs).map(|q| sc[o + q] * v[b0 + q]).sum::<f64>();
+                    if let Some(tw) = twin {
+                        gd[tw] -= sc[o] * v[b0 + 1] - sc[o + 1] * v[b0];
+                    }
+                }
+                if acc {
+                    vbuf.as_mut()
+                        .row_mut(row)
+                        .copy_from(faer::RowRef::from_slice(&sc));
+                    row += 1;
+                }
+                // S'(t+1) = Lambda S' + F, blockwise
+                for (k, &(c, _)) in carried.iter().enumerate() {
+                    let d = cols[c];
+                    let (b0, bs) = md.block[d.row];
+                    let o = eoff[k];
+                    for q in 0..bs {
+                        sn[o + q] = (0..bs).map(|r| md.lam[(b0 + q, b0 + r)] * sc[o + r]).sum();
+                    }
+                    sn[o + (d.row - b0)] += match d.forcing {
+                        Forcing::State => z[d.j],
+                        Forcing::Input => u[(t, d.j)],
+                        Forcing::Output => y[(t, d.j)],
+                        Forcing::Start => 0.0,
+                    };
+                }
+                std::mem::swap(&mut sc, &mut sn);
+                if acc && (row == blk || t + 1 == len) {
+                    let vr = vbuf.as_ref().subrows(0, row);
+                    gram_add(gram.as_mut(), vr, par);
+                    let zr = sums.zbuf.as_ref().subrows(0, row);
+                    matmul(cross.as_mut(), Accum::Add, zr.transpose(), vr, 1.0, par);
+                    row = 0;
+                }
+                f.advance(*u, *y, t);
+            }
+        }
+        if let Some(c) = cached {
+            (gram, cross, sums.zz) = (c.1, c.2, c.3);
+        }
+        let h = (!grad_only).then(|| {
+            // dynamic block, lower triangle then mirrored
+            let mut h = Mat::<f64>::zeros(self.p, self.p);
+            for (c2, d2) in cols.iter().enumerate() {
+                let (b2, bs2) = md.block[d2.row];
+                for (c, d) in cols.iter().enumerate().skip(c2) {
+                    let (b0, bs) = md.block[d.row];
+                    let mut a = 0.0;
+                    for (qa, &(ra, sa)) in at[c].iter().take(bs).enumerate() {
+                        for (qb, &(rb, sb)) in at[c2].iter().take(bs2).enumerate() {
+                            let gv = gram[(ra.max(rb), ra.min(rb))];
+                            a += mq[(b0 + qa, b2 + qb)] * (sa * sb * gv);
+                        }
+                    }
+                    h[(d.phi, d2.phi)] = a;
+                    h[(d2.phi, d.phi)] = a;
+                }
+            }
+            h
+        });
+        let cross_at = |i: usize, j: usize, c: usize| -> f64 {
+            let b0 = md.block[cols[c].row].0;
+            let bs = md.block[cols[c].row].1;
+            (0..bs)
+                .map(|qa| {
+                    let (r, sg) = at[c][qa];
+                    wc[(i, b0 + qa)] * (sg * cross[(j, r)])
+                })
+                .sum()
+        };
+        let ev = self.finish(&f, &sums, &cols, &gd, h, &w, &cross_at, Some(md));
+        if !grad_only {
+            self.gram_cache = Some((th.to_vec(), gram, cross, sums.zz));
+        }
+        Ok(ev)
+    }
+}
