@@ -37,8 +37,8 @@ def main() -> None:
 
     import sysid
     from sysid import _sysid
-    from sysid.analysis.feedback import feedback_pvalues
-    from sysid.estimate import subspace as S
+    from sysid.subspace import estimator as S
+    from sysid.validation.feedback import feedback_pvalues
 
     (HERE / ".data").mkdir(exist_ok=True)
     path = HERE / ".data" / f"rec_n{a.n}_m{a.m}_l{a.l}_x8_s2024.npy"

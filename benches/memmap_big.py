@@ -32,7 +32,7 @@ if mode == "read":
     s = 0.0
     for a in range(0, z.shape[0], 1 << 20):
         s += float(np.asarray(z[a:a + (1 << 20)]).sum())
-        from sysid.estimate.streaming import _release_pages
+        from sysid.subspace.streaming import _release_pages
         _release_pages(z, a, min(z.shape[0], a + (1 << 20)))
 else:
     import sysid

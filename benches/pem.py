@@ -120,7 +120,7 @@ def _rss_child(N: int) -> None:
 
 def subspace_start(u: np.ndarray, y: np.ndarray, n: int) -> sysid.StateSpaceModel:
     """The start a user (and ``sysid.ssest``) refines: a subspace estimate with its K."""
-    from sysid.estimate.subspace import SubspaceEstimator
+    from sysid.subspace.estimator import SubspaceEstimator
 
     return SubspaceEstimator(sysid.IOData(u=u, y=y), None).fit(n, method="moesp",
                                                                feedthrough=False)

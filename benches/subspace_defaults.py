@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 import sysid
-from sysid.estimate.subspace import SubspaceEstimator
+from sysid.subspace.estimator import SubspaceEstimator
 
 SHARED = Path("/work/shared/data/daisy")
 

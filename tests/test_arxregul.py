@@ -8,7 +8,7 @@ from scipy import signal
 import sysid
 from sysid import _sysid
 from sysid.errors import DataError, ShapeError
-from sysid.estimate import arxregul as ar
+from sysid.polynomial import arxregul as ar
 
 
 def _data(u, y):

@@ -250,7 +250,7 @@ def test_f_survival_function_matches_scipy():
     """The feedback test's own F tail (no scipy.stats import on every fit) equals SciPy's."""
     from scipy import stats
 
-    from sysid.analysis.feedback import f_sf
+    from sysid.validation.feedback import f_sf
 
     for d1 in (1, 3, 12, 60, 400):
         for d2 in (3, 40, 1000, 50_000):

@@ -7,7 +7,7 @@ import pytest
 
 import sysid
 from sysid import _sysid
-from sysid.analysis.criteria import CRITERIA, Criteria, n_parameters
+from sysid.validation.criteria import CRITERIA, Criteria, n_parameters
 
 needs_engine = pytest.mark.skipif(not hasattr(_sysid, "Subspace"),
                                   reason="the subspace engine is not in this build yet")

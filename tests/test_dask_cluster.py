@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from sysid import _sysid
-from sysid.estimate.streaming import compress_dask, compress_stream
+from sysid.subspace.streaming import compress_dask, compress_stream
 
 da = pytest.importorskip("dask.array")
 distributed = pytest.importorskip("distributed")

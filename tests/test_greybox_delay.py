@@ -8,8 +8,8 @@ from scipy.linalg import expm
 
 import sysid
 from sysid.errors import DataError
-from sysid.models.greybox import Parameters
-from sysid.models.greydelay import split_delays
+from sysid.greybox.delays import split_delays
+from sysid.greybox.greybox import Parameters
 
 A0 = np.array([[-0.7, 1.3], [-2.0, -0.4]])
 B0 = np.array([[0.0, 1.0, 0.3], [1.0, -0.5, 0.2]])

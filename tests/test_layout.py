@@ -3,8 +3,9 @@ top-level namespace shows only public names.
 
 The import graph is read from the source with :mod:`ast` (nothing is imported): an edge
 ``a -> b`` for every ``import``/``from ... import`` in module ``a`` that names module ``b`` of
-the package, at module level or inside a function, except under ``if TYPE_CHECKING:``
-(annotations only, never executed). Importing ``sysid.x.y`` also runs the package
+the package, at module level or inside a function; a second graph adds the imports under
+``if TYPE_CHECKING:`` (annotations only, never executed, but a cycle there is still two
+modules that cannot be read apart). Importing ``sysid.x.y`` also runs the package
 ``__init__`` files above it; those implicit edges are left out, as Python initialises parent
 packages first.
 """
@@ -43,12 +44,13 @@ def _is_type_checking(test: ast.expr) -> bool:
     )
 
 
-def _imports(tree: ast.AST) -> list[ast.Import | ast.ImportFrom]:
-    """Every import statement, skipping the bodies of ``if TYPE_CHECKING:`` blocks."""
+def _imports(tree: ast.AST, type_only: bool = False) -> list[ast.Import | ast.ImportFrom]:
+    """Every import statement, skipping the bodies of ``if TYPE_CHECKING:`` blocks unless
+    ``type_only``."""
     out: list[ast.Import | ast.ImportFrom] = []
 
     def visit(node: ast.AST) -> None:
-        if isinstance(node, ast.If) and _is_type_checking(node.test):
+        if not type_only and isinstance(node, ast.If) and _is_type_checking(node.test):
             for child in node.orelse:
                 visit(child)
             return
@@ -61,14 +63,16 @@ def _imports(tree: ast.AST) -> list[ast.Import | ast.ImportFrom]:
     return out
 
 
-def import_graph(modules: dict[str, Path]) -> dict[str, set[str]]:
-    """``{module: {modules of the package it imports}}``."""
+def import_graph(modules: dict[str, Path], type_only: bool = False) -> dict[str, set[str]]:
+    """``{module: {modules of the package it imports}}`` (with ``type_only``, the imports
+    under ``if TYPE_CHECKING:`` too)."""
     graph: dict[str, set[str]] = {}
     for name, path in modules.items():
         is_pkg = path.name == "__init__.py"
         package = name if is_pkg else name.rpartition(".")[0]
         edges: set[str] = set()
-        for node in _imports(ast.parse(path.read_text(encoding="utf-8"), str(path))):
+        tree = ast.parse(path.read_text(encoding="utf-8"), str(path))
+        for node in _imports(tree, type_only):
             if isinstance(node, ast.Import):
                 targets = [a.name for a in node.names]
             else:
@@ -209,6 +213,7 @@ def test_import_reader_resolves_relative_imports_and_skips_type_checking(tmp_pat
     }
     graph = import_graph(modules)
     assert graph["p.q.a"] == {"p.q.b", "p._checks", "p.x.y", "p.q.d"}
+    assert import_graph(modules, type_only=True)["p.q.a"] == graph["p.q.a"] | {"p.q.c"}
 
 
 # ------------------------------------------------------------------------------ the package
@@ -228,6 +233,66 @@ def test_no_import_cycle_between_modules():
     assert not cycles, "import cycle(s) in python/sysid:\n" + "\n".join(
         "  " + " -> ".join(c) for c in cycles
     )
+
+
+# Type-only back-edges tolerated for now; delete an entry as soon as its edge is gone; add none.
+# (IOData's mix-ins, being folded into plain helpers on branch `layout`.)
+TOLERATED_TYPE_EDGES: set[tuple[str, str]] = {
+    ("sysid.data.formats", "sysid.data.iodata"),
+    ("sysid.data.raw", "sysid.data.iodata"),
+    ("sysid.data.segments", "sysid.data.iodata"),
+}
+
+
+def test_no_import_cycle_with_type_only_imports():
+    """Imports under ``if TYPE_CHECKING:`` count too: two modules that name each other's types
+    are one concept split in two (fold them, or name the type structurally)."""
+    graph = import_graph(_modules(), type_only=True)
+    for a, b in TOLERATED_TYPE_EDGES:
+        graph[a].discard(b)
+    cycles = find_cycles(graph)
+    assert not cycles, "import cycle(s) counting type-only imports:\n" + "\n".join(
+        "  " + " -> ".join(c) for c in cycles
+    )
+
+
+_IMPORT_EACH = r"""
+import importlib, json, sys, traceback
+import sysid  # the compiled core can be initialised once per process: keep it loaded
+failed = {}
+for name in sys.argv[1:]:
+    for k in [k for k in sys.modules if k.startswith("sysid") and k != "sysid._sysid"]:
+        del sys.modules[k]
+    try:
+        importlib.import_module(name)
+    except BaseException:  # noqa: BLE001 - reported by the test
+        failed[name] = traceback.format_exc(limit=3)
+print(json.dumps(failed))
+"""
+
+
+@pytest.fixture(scope="module")
+def import_failures() -> dict[str, str]:
+    """Each module imported first, after every ``sysid`` module but the compiled core is
+    dropped from ``sys.modules`` (one subprocess for all: seconds, not one interpreter each)."""
+    import json
+    import subprocess
+    import sys
+
+    names = _source_modules()
+    out = subprocess.run([sys.executable, "-c", _IMPORT_EACH, *names], capture_output=True,
+                         text=True, timeout=300, check=True)
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def _source_modules() -> list[str]:
+    """Modules written in Python, except ``sysid.__main__`` (importing it runs the CLI)."""
+    return sorted(n for n, p in _modules().items() if p.suffix == ".py" and n != "sysid.__main__")
+
+
+@pytest.mark.parametrize("name", _source_modules())
+def test_every_module_imports_on_its_own(name, import_failures):
+    assert name not in import_failures, import_failures.get(name)
 
 
 # Add none.

@@ -271,7 +271,7 @@ def test_cli_report_is_a_file(capsys, tmp_path, csv_file):
 
 def test_cli_help_lists_every_method(capsys):
     from sysid.cli import main
-    from sysid.estimate.subspace import METHODS
+    from sysid.subspace.estimator import METHODS
 
     with pytest.raises(SystemExit):
         main(["identify", "--help"])
@@ -660,7 +660,7 @@ def test_cli_detrend_linear(capsys, tmp_path):
 
 
 def test_order_reason_names_excluded_orders():
-    from sysid.analysis.criteria import OrderSelection
+    from sysid.validation.criteria import OrderSelection
 
     def row(n, fit, stable):
         return {"method": "moesp", "order": n, "singular_value": 1.0 / n, "error": None,

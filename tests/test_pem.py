@@ -342,13 +342,18 @@ def test_tol_weighting_and_local_coordinates_change_the_result():
 
 
 def test_module_doctests():
-    """sysid.estimate has no __init__ until the layout lands; run its doctests here."""
+    """The doctests of sysid.pem.pem and sysid.pem.ssest."""
     import doctest
 
-    from sysid.estimate import pem as module
+    from sysid.pem import pem as module
+    from sysid.pem import ssest as module2
 
-    result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
-    assert result.failed == 0 and result.attempted > 10
+    attempted = 0
+    for m in (module, module2):
+        result = doctest.testmod(m, optionflags=doctest.NORMALIZE_WHITESPACE)
+        assert result.failed == 0
+        attempted += result.attempted
+    assert attempted > 10
 
 
 @pytest.mark.parametrize(

@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 
 from sysid import _sysid
 from sysid.errors import DataError, InsufficientDataError, NonFiniteError
-from sysid.estimate.streaming import CompressionFallbackWarning, compress_dask, compress_stream
+from sysid.subspace.streaming import CompressionFallbackWarning, compress_dask, compress_stream
 
 
 def noisy_record(n: int, m: int, l: int, seed: int) -> tuple[np.ndarray, np.ndarray]:

@@ -7,7 +7,7 @@ import pytest
 
 import sysid
 from sysid import _sysid
-from sysid.analysis.whiteness import ResidualAnalysis
+from sysid.validation.residuals import ResidualAnalysis
 
 needs_engine = pytest.mark.skipif(not hasattr(_sysid, "Subspace"),
                                   reason="the subspace engine is not in this build yet")

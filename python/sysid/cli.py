@@ -191,8 +191,8 @@ def identify(
     ``compare`` (validation simulation), ``prediction`` (validation 1-step), ``residuals``
     and, with ``report``, the written ``files``.
     """
-    from .analysis.criteria import select_order
-    from .estimate.subspace import SubspaceEstimator
+    from .subspace.estimator import SubspaceEstimator
+    from .validation.criteria import select_order
 
     say = progress or (lambda _msg: None)
     say(f"compressing {est_data.n_samples} samples "
@@ -245,8 +245,8 @@ def identify(
 def _validate(model: Any, sel: Any, est_data: IOData, val_data: IOData | None,
               report: str | Path | None, say: Callable[[str], None]) -> dict[str, Any]:
     """Simulation and prediction fits, residuals and the report of one model."""
-    from .analysis.validation import compare
-    from .analysis.whiteness import residuals
+    from .validation.compare import compare
+    from .validation.residuals import residuals
 
     check = val_data if val_data is not None else est_data
     which = "validation" if val_data is not None else "estimation"
@@ -473,7 +473,7 @@ def automatic(est_data: IOData, val_data: IOData | None, *, report: str | Path |
     families and orders chosen on held-out parts of the estimation data), then the same
     validation and report as :func:`identify`. The summary adds ``identify`` (the
     :class:`~sysid.IdentifyResult`)."""
-    from .analysis.criteria import select_order
+    from .validation.criteria import select_order
     from .identify.core import identify as auto
 
     say = progress or (lambda _msg: None)
@@ -496,7 +496,7 @@ def automatic(est_data: IOData, val_data: IOData | None, *, report: str | Path |
 
 
 def _identify(args: argparse.Namespace) -> int:
-    from .estimate.subspace import _method
+    from .subspace.estimator import _method
 
     auto = args.method == "auto" and args.order == "auto"
     if not auto:

@@ -2,7 +2,7 @@
 
 :func:`report` writes a folder with ``index.html``, the figures (PNG, matplotlib ``Agg``),
 ``fit.csv`` and, when the model can be saved, ``model.json``; with an
-:class:`~sysid.analysis.criteria.OrderSelection` it adds the order sweep (``orders.csv``,
+:class:`~sysid.validation.criteria.OrderSelection` it adds the order sweep (``orders.csv``,
 singular values, criteria, stabilisation diagram). ``sysid identify --report`` uses it.
 """
 
@@ -18,9 +18,9 @@ import numpy as np
 from ..data.iodata import IOData
 from ..errors import DataError, SysidError
 from ..models.checks import check_model
-from .criteria import _pct
-from .validation import compare, error_spectrum
-from .whiteness import residuals
+from ..validation.compare import compare, error_spectrum
+from ..validation.criteria import _pct
+from ..validation.residuals import residuals
 
 __all__ = ["report"]
 
@@ -152,7 +152,7 @@ def _window(fig: Any, n: int) -> Any:
 
 def _bode_with_spa(model: Any, data: Any, plot_bode: Any, notes: list[str]) -> Any:
     """The model's Bode plot with the non-parametric (spa) estimate beside it."""
-    from .frf import spa
+    from ..nonparametric.frf import spa
 
     try:
         frd = spa(data if isinstance(data, IOData) else IOData(*data))

@@ -130,7 +130,7 @@ class _Board:
 
 def _subspace_candidates(board: _Board, full: IOData, methods: tuple[str, ...],
                          max_order: int | None) -> None:
-    from ..estimate.subspace import SubspaceEstimator, default_horizon
+    from ..subspace.estimator import SubspaceEstimator, default_horizon
 
     ests = []
     ch = full.n_inputs + full.n_outputs

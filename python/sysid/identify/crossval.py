@@ -167,7 +167,7 @@ def cross_validated_order(
     >>> cross_validated_order(sysid.IOData(u=u, y=y)).order
     3
     """
-    from ..estimate.subspace import SubspaceEstimator, default_horizon
+    from ..subspace.estimator import SubspaceEstimator, default_horizon
 
     table: dict[int, list[float]] = {}
     for fit_part, held in folds(data):

@@ -55,7 +55,7 @@ def ssest_select(data: IOData, order: Any, *, feedthrough: Any, **kw: Any) -> An
     """:func:`sysid.ssest` with the order and/or the feedthrough chosen from the data."""
     import sysid
 
-    from ..estimate.subspace import SubspaceEstimator
+    from ..subspace.estimator import SubspaceEstimator
 
     if isinstance(feedthrough, str):
         if feedthrough != "auto":
@@ -86,7 +86,7 @@ def _order(data: IOData, order: Any, feedthrough: bool, kw: dict[str, Any]) -> d
     """An order: given, "auto" (subspace cross-validation) or the best of a sequence."""
     import sysid
 
-    from ..estimate.subspace import SubspaceEstimator
+    from ..subspace.estimator import SubspaceEstimator
 
     if isinstance(order, (int, np.integer)):
         return {"order": int(order), "criterion": "given", "reason": "given", "table": {}}

@@ -34,12 +34,12 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import DataError
+from ..greybox.nlgreybox import NonlinearGreyBox
+from ..nonlinear.hw_model import HammersteinWienerModel
+from ..nonlinear.hw_ss_model import HammersteinWienerSSModel
+from ..nonlinear.narx_model import NARXModel
+from ..polynomial.model import PolynomialModel
 from .continuous import ContinuousStateSpace
-from .hammerstein import HammersteinWienerModel
-from .hammerstein_ss import HammersteinWienerSSModel
-from .narx import NARXModel
-from .nlgreybox import NonlinearGreyBox
-from .polynomial import PolynomialModel
 from .serialize import (
     FORMAT,
     REGISTRY,

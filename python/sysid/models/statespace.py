@@ -29,7 +29,7 @@ def ss_parameter_count(n: int, m: int, l: int, *, feedthrough: bool = True,
                        noise_model: bool = True, x0: bool = False,
                        n_experiments: int = 1) -> int:
     """Identifiable parameters ``n (2 l + m) + [D] l m + [x0] n n_exp`` of an innovation-form
-    model (``n (l + m)`` without ``K``); see :mod:`sysid.analysis.criteria`.
+    model (``n (l + m)`` without ``K``); see :mod:`sysid.validation.criteria`.
 
     Examples
     --------

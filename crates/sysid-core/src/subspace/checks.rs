@@ -11,7 +11,7 @@ use crate::linalg::{mul_seq, qr_r_in_place, svd_seq, sym_eigenvalues_seq};
 use faer::{Mat, MatRef, Par};
 
 /// Residual sums of squares of the feedback test's two regressions (see
-/// `sysid.analysis.feedback`): the first input sample of the future, `u(t)` (the first `m`
+/// `sysid.validation.feedback`): the first input sample of the future, `u(t)` (the first `m`
 /// rows of L), regressed on the past inputs alone (restricted) and on the past inputs and
 /// outputs (full).
 #[derive(Debug, Clone, PartialEq)]

@@ -1,2 +1,0 @@
-"""Estimators: subspace identification, realisation from impulse responses, streaming
-compression of long records."""

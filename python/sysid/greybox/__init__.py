@@ -1,0 +1,1 @@
+"""Grey-box models: linear GreyBox with greyest, NonlinearGreyBox, delays, estimation results."""

@@ -1,0 +1,138 @@
+"""The result of grey-box estimation (:class:`GreyEstimate`) and the identifiability warning,
+shared by the linear and nonlinear branches of :func:`sysid.greyest`.
+
+Examples
+--------
+>>> import numpy as np, sysid
+>>> s = sysid.GreyBox(lambda p: ([[p.a]], [[1.0]], [[1.0]], [[0.0]]), {"a": 0.5},
+...                   continuous=False)
+>>> u = np.sin(np.arange(100) * 0.3)
+>>> y = sysid.StateSpaceModel([[0.7]], [[1.0]], [[1.0]]).simulate(u)
+>>> fit = sysid.greyest(sysid.IOData(u=u, y=y), s, x0="zero")
+>>> round(fit.parameters["a"]["value"], 8)
+0.7
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+
+from ..models.paramtable import ParameterTable
+from .greybox import IdentifiabilityWarning
+
+__all__ = ["GreyEstimate"]
+
+
+class GreyEstimate:
+    """The result of :func:`greyest`.
+
+    Attributes
+    ----------
+    parameters : ParameterTable
+        Name, value, std, fixed, active bound, 95 % interval (``.to_pandas()``).
+    covariance, correlation : ndarray
+        Of the free parameters (order of ``free_names``).
+    free_names : list of str
+    model : Model
+        The estimated model (with ``uncertainty``), usable by ``compare``, ``residuals``, plots.
+    structure : GreyBox or NonlinearGreyBox
+        The structure at the estimated values.
+    initial_states : list of ndarray
+        Initial state of every experiment.
+    info : dict
+        Iterations, ``cost`` history (of ``criterion``: ``"det"`` of the error covariance
+        with the noise weighting, else ``"sum of squares"``; the values the progress callback
+        got), ``weighted_cost``, ``loss_history`` (det), stop reason, rank, ...
+    """
+
+    def __init__(self, parameters: ParameterTable, covariance: np.ndarray, free_names: list[str],
+                 model: Any, structure: Any, initial_states: list[np.ndarray],
+                 info: dict[str, Any]) -> None:
+        self.parameters = parameters
+        self.covariance = covariance
+        self.free_names = free_names
+        self.model = model
+        self.structure = structure
+        self.initial_states = initial_states
+        self.info = info
+
+    @property
+    def correlation(self) -> np.ndarray:
+        """Correlation matrix of the free parameters."""
+        s = np.sqrt(np.clip(np.diag(self.covariance), 0, None))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            c = self.covariance / np.outer(s, s)
+        c[np.outer(s, s) == 0] = np.nan
+        return c
+
+    def to_pandas(self) -> Any:
+        """The parameter table as a :class:`pandas.DataFrame`."""
+        return self.parameters.to_pandas()
+
+    def summary(self) -> str:
+        """Parameters, fit and how the search ended, as text."""
+        i = self.info
+        return "\n".join([
+            repr(self), str(self.parameters),
+            f"{_LABEL.get(i.get('criterion', 'det'), 'cost')} {i['cost'][0]:.4g} -> "
+            f"{i['cost'][-1]:.4g} in "
+            f"{i['iterations']} iterations ({i['stop']}); rank {i['rank']} of "
+            f"{i['n_free']} free quantities; {i['n_samples']} samples"])
+
+    def plot(self, ax: Any = None) -> Any:
+        """Free parameters with their 95 % intervals, relative to their values."""
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            _, ax = plt.subplots()
+        t = self.parameters
+        idx = [i for i in range(len(t)) if not t.fixed[i]]
+        val = t.value[idx]
+        scale = np.where(val != 0, np.abs(val), 1.0)
+        ax.errorbar(np.arange(len(idx)), val / scale, yerr=1.96 * t.std[idx] / scale, fmt="o")
+        ax.set_xticks(np.arange(len(idx)), [t.names[i] for i in idx], rotation=45)
+        ax.set_ylabel("estimate / |estimate| with 95 % interval")
+        return ax
+
+    def __repr__(self) -> str:
+        nf = len(self.free_names)
+        return (f"GreyEstimate({len(self.parameters)} parameters, {nf} free, "
+                f"{self.info['stop']}, {self.info.get('criterion', 'det')} "
+                f"{self.info['cost'][-1]:.4g})")
+
+
+_LABEL = {"det": "loss det(Lambda)", "sum of squares": "sum of squares"}
+
+
+def _criterion(weighting: str) -> str:
+    return "det" if weighting == "noise" else "sum of squares"
+
+
+def _costs(res: dict[str, Any], reweight: bool) -> dict[str, Any]:
+    """The search's histories as ``info`` items: ``cost`` (the criterion it decreases, the
+    values the progress callback gets), ``weighted_cost`` and ``loss_history`` (det)."""
+    return {"cost": list(res["history"]), "criterion": _criterion(
+        "noise" if reweight else "identity"), "weighted_cost": list(res["weighted_history"]),
+        "loss_history": list(res["loss_history"])}
+
+
+def _warn_unidentifiable(null: np.ndarray, names: list[str], scale: np.ndarray) -> None:
+    """An :class:`IdentifiabilityWarning` naming the parameters in each direction the data
+    do not determine (null vectors of the Gauss-Newton matrix)."""
+    if null.size == 0 or null.shape[1] == 0:
+        return
+    parts = []
+    for v in null.T:
+        v = v * scale
+        v = v / np.linalg.norm(v)
+        big = np.abs(v) >= 0.05 * np.max(np.abs(v))
+        combo = " + ".join(f"{v[i]:.3g}*{names[i]}" for i in np.nonzero(big)[0])
+        parts.append(f"{', '.join(names[i] for i in np.nonzero(big)[0])} (the combination "
+                     f"{combo} does not change the fit)")
+    warnings.warn("the data cannot determine these parameters separately: "
+                  + "; ".join(parts) + ". Fix one of them, reparameterise, or use more "
+                  "informative data; their standard deviations are along the identifiable "
+                  "directions only.", IdentifiabilityWarning, stacklevel=3)

@@ -1,0 +1,2 @@
+"""Nonlinear black-box models: NARX (nlarx), Hammerstein-Wiener (nlhw, nlhw_ss), basis-
+augmented linear models."""

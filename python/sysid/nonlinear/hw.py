@@ -1,0 +1,159 @@
+"""``nlhw``: Hammerstein-Wiener estimation by prediction error with the shared optimiser.
+
+Starts from a linear output-error fit (:func:`sysid.oe`) and near-identity nonlinearities,
+then minimises the simulation error over every parameter with the Gauss-Newton /
+Levenberg-Marquardt search of ``sysid-core`` (``optim/``), the admissible set being a stable
+``F``. The sensitivities are run sample by sample in Rust (``hw/``).
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import experiment_arrays
+from .._progress import iteration_callback, iteration_printer
+from ..errors import DataError
+from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction
+
+__all__ = ["nlhw"]
+
+
+def _check_nl(nl: Any, name: str) -> Nonlinearity:
+    if nl is None:
+        return Nonlinearity()
+    if not isinstance(nl, Nonlinearity):
+        raise DataError(f"{name} must be a sysid nonlinearity (Saturation, DeadZone, "
+                        f"PolynomialNonlinearity, PiecewiseLinear, SigmoidNetwork, "
+                        f"UserFunction) or None, got {nl!r}")
+    return copy.deepcopy(nl)
+
+
+def nlhw(
+    data: Any,
+    nb: int,
+    nf: int,
+    nk: int = 1,
+    *,
+    input_nl: Nonlinearity | None = None,
+    output_nl: Nonlinearity | None = None,
+    max_iter: int = 100,
+    tol: float = 1e-10,
+    progress: bool | None | Callable[..., Any] = None,
+) -> HammersteinWienerModel:
+    """Hammerstein-Wiener model ``y = g(B/F f(u(t - nk))) + e`` (one input, one output).
+
+    Parameters
+    ----------
+    data : IOData
+        Estimation record (one input, one output; several experiments are used together).
+    nb, nf, nk : int
+        Orders of ``B`` and ``F`` and the input delay of the linear block.
+    input_nl, output_nl : Nonlinearity or None
+        :class:`~sysid.Saturation`, :class:`~sysid.DeadZone`,
+        :class:`~sysid.PolynomialNonlinearity`, :class:`~sysid.PiecewiseLinear`,
+        :class:`~sysid.SigmoidNetwork`, or (input only) a fixed :class:`~sysid.UserFunction`;
+        ``None`` is the identity (``output_nl=None``: Hammerstein, ``input_nl=None``: Wiener).
+    max_iter, tol : int, float
+        Optimiser iterations and step/gradient tolerance.
+    progress : bool or callable, optional
+        As for :func:`sysid.pem`: a bar (``None``: on a terminal only; ``True``: also one
+        line per iteration in a log), ``False`` for silence, or a callable getting
+        ``(iteration, cost, step_norm, gradient_norm, damping)`` after every accepted step of
+        every start's search (``False`` returned stops the search and skips the remaining
+        starts).
+
+    Returns
+    -------
+    HammersteinWienerModel
+        With ``info``: ``iterations``, ``cost`` (``1/2 sum e^2`` at the start and after each
+        iteration of the chosen start's search), ``criterion``, ``stop`` (reason), the start,
+        and the parameter covariance in ``info["covariance"]``.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.uniform(-1, 1, 600)
+    >>> w = np.clip(u, -0.4, 0.4); y = np.zeros(600)
+    >>> for t in range(1, 600): y[t] = 0.8 * y[t - 1] + 0.5 * w[t - 1]
+    >>> m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl=sysid.Saturation())
+    >>> np.round(m.input_nl.params, 6).tolist(), np.round(m.poles().real, 6).tolist()
+    ([-0.4, 0.4], [0.8])
+    """
+    from ..polynomial.estimators import oe
+
+    exps = experiment_arrays(data)
+    if exps[0][0].shape[1] != 1 or exps[0][1].shape[1] != 1:
+        raise DataError("nlhw handles one input and one output; select channels with "
+                        "data.select(...)")
+    for v, name in ((nb, "nb"), (nf, "nf"), (nk, "nk")):
+        if int(v) != v or v < (1 if name == "nb" else 0):
+            raise DataError(f"{name} must be a{' positive' if name == 'nb' else ' non-negative'}"
+                            f" integer, got {v!r}")
+    fin, fout = _check_nl(input_nl, "input_nl"), _check_nl(output_nl, "output_nl")
+    if isinstance(fout, UserFunction):
+        raise DataError("a UserFunction can only be the input nonlinearity")
+    records = []
+    for u, y in exps:
+        uu = fin(u[:, 0]) if isinstance(fin, UserFunction) else u[:, 0]
+        records.append((np.ascontiguousarray(uu), np.ascontiguousarray(y[:, 0])))
+    dt = float(getattr(data, "dt", 1.0) or 1.0)
+    # linear start: output error on the (transformed) input
+    from ..data.iodata import IOData
+
+    lin = oe(IOData([r[0][:, None] for r in records], [r[1][:, None] for r in records], dt),
+             int(nb), int(nf), int(nk))
+    b0, f0 = np.asarray(lin.b[0][0], float), np.asarray(lin.f[0][0], float)
+    u_all = np.concatenate([r[0] for r in records])
+    lin_b = b0
+    res, theta0, x_all = None, None, np.zeros(0)
+    cb, close_bar = iteration_callback(progress, "nlhw", int(max_iter),
+                                       iteration_printer("nlhw", "sum of squares"))
+    try:
+        for start_in in fin.starts(u_all):
+            if res is not None and res["stop"] == "cancelled":
+                break
+            fin.params = start_in
+            # B absorbs the gain of the starting nonlinearity: B f(u) ~ B_linear u
+            fu = fin(u_all)
+            b0 = lin_b
+            if not isinstance(fin, UserFunction) and float(fu @ fu) > 0 and float(fu @ u_all):
+                b0 = lin_b * float(fu @ u_all) / float(fu @ fu)
+            start = HammersteinWienerModel(fin, Nonlinearity(), b0, f0, int(nk), dt)
+            xs = np.concatenate([start.signals(r[0])[2] for r in records])
+            for start_out in fout.starts(xs):
+                th0 = np.concatenate([start_in, b0, f0, start_out])
+                try:
+                    r = _sysid.hw_estimate(records, fin.spec(), fout.spec(), int(nb), int(nf),
+                                           int(nk), th0.tolist(), int(max_iter), float(tol), cb)
+                except DataError:
+                    continue  # an inadmissible start (unstable F): try the next one
+                if res is None or r["cost"] < res["cost"] or r["stop"] == "cancelled":
+                    res, theta0, x_all = r, th0, xs
+                if r["stop"] == "cancelled":
+                    break
+    finally:
+        close_bar()
+    if res is None:
+        raise DataError("no admissible start for the Hammerstein-Wiener search; check nb, nf "
+                        "and nk against a linear fit (sysid.oe)")
+    th = np.asarray(res["theta"], float)
+    na, nbeta = fin.params.size, fout.params.size
+    fin.params = th[:na]
+    b, f = th[na:na + int(nb)], th[na + int(nb):na + int(nb) + int(nf)]
+    fout.params = th[na + int(nb) + int(nf):]
+    info = {"method": "nlhw", "iterations": int(res["iterations"]), "stop": res["stop"],
+            "cost": list(res["history"]), "criterion": "sum of squares", "theta0": theta0,
+            "n_starts": len(fin.starts(u_all)) * len(fout.starts(x_all)),
+            "covariance": np.asarray(res["covariance"]),
+            "u_range": (float(u_all.min()), float(u_all.max())),
+            "x_range": (float(x_all.min()), float(x_all.max())), "n_output_params": nbeta}
+    return HammersteinWienerModel(fin, fout, b, f, int(nk), dt,
+                                  noise_variance=float(res["noise_variance"]), info=info,
+                                  input_names=getattr(data, "input_names", None),
+                                  output_names=getattr(data, "output_names", None))

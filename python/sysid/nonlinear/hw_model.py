@@ -1,0 +1,448 @@
+"""Hammerstein-Wiener models: static nonlinearities around a linear output-error block.
+
+``w(t) = f(u(t))``, ``x(t) = B(q)/F(q) w(t - nk)``, ``y(t) = g(x(t)) + e(t)`` (one input, one
+output). The nonlinearities are normalised to unit gain (unit slope, unit linear term, or a
+fixed value at the last breakpoint) so that the gain lives in ``B``. Simulation runs in Rust
+(``sysid-core``, ``hw/``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from ..errors import DataError
+from ..models.protocol import ModelMixin
+
+__all__ = ["Nonlinearity", "Saturation", "DeadZone", "PolynomialNonlinearity",
+           "PiecewiseLinear", "SigmoidNetwork", "UserFunction", "HammersteinWienerModel"]
+
+
+class Nonlinearity:
+    """A static nonlinearity with free parameters ``params`` (see the subclasses)."""
+
+    kind = "identity"
+
+    def __init__(self) -> None:
+        self.params = np.zeros(0)
+
+    def spec(self) -> tuple[str, int, list[float]]:
+        """``(kind, n, breakpoints)`` for the Rust core."""
+        return self.kind, 0, []
+
+    def initial(self, x: np.ndarray) -> np.ndarray:
+        """Starting parameters from the signal the nonlinearity sees (near identity)."""
+        return np.zeros(0)
+
+    def starts(self, x: np.ndarray) -> list[np.ndarray]:
+        """Starting points tried by :func:`sysid.nlhw` (the best final cost is kept)."""
+        return [self.initial(x)]
+
+    def __call__(self, x: Any) -> np.ndarray:
+        """Evaluate at ``x`` with the current ``params``."""
+        return np.asarray(x, float)
+
+    def to_dict(self) -> dict[str, Any]:
+        """For saving."""
+        return {"kind": self.kind, "params": self.params}
+
+    def __repr__(self) -> str:
+        p = np.array2string(np.asarray(self.params), precision=4, separator=", ")
+        return f"{type(self).__name__}({p})"
+
+
+class Saturation(Nonlinearity):
+    """``clip(x, lower, upper)`` (unit slope); ``lower``/``upper`` start values (default: the
+    1 % and 99 % quantiles of the signal).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> s = sysid.Saturation(-0.5, 0.5); s.params = s.initial(None)
+    >>> s([-2.0, 0.1, 3.0]).tolist()
+    [-0.5, 0.1, 0.5]
+    """
+
+    kind = "saturation"
+
+    def __init__(self, lower: float | None = None, upper: float | None = None) -> None:
+        self.lower, self.upper = lower, upper
+        self.params = np.array([np.nan, np.nan])
+
+    def initial(self, x: Any) -> np.ndarray:
+        lo = self.lower if self.lower is not None else float(np.quantile(x, 0.01))
+        hi = self.upper if self.upper is not None else float(np.quantile(x, 0.99))
+        return np.array([lo, hi], float)
+
+    def starts(self, x: Any) -> list[np.ndarray]:
+        if self.lower is not None and self.upper is not None:
+            return [self.initial(x)]
+        out = []
+        for q in (0.01, 0.1, 0.25):
+            lo = self.lower if self.lower is not None else float(np.quantile(x, q))
+            hi = self.upper if self.upper is not None else float(np.quantile(x, 1 - q))
+            out.append(np.array([lo, hi], float))
+        return out
+
+    def __call__(self, x: Any) -> np.ndarray:
+        return np.clip(np.asarray(x, float), self.params[0], self.params[1])
+
+
+class DeadZone(Nonlinearity):
+    """Zero between ``lower`` and ``upper``, unit slope outside (default start: +-5 % of the
+    signal's standard deviation).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> d = sysid.DeadZone(-0.2, 0.2); d.params = d.initial(None)
+    >>> d([-1.0, 0.1, 1.0]).tolist()
+    [-0.8, 0.0, 0.8]
+    """
+
+    kind = "deadzone"
+
+    def __init__(self, lower: float | None = None, upper: float | None = None) -> None:
+        self.lower, self.upper = lower, upper
+        self.params = np.array([np.nan, np.nan])
+
+    def initial(self, x: Any) -> np.ndarray:
+        s = 0.05 * float(np.std(x)) if x is not None else 0.05
+        return np.array([self.lower if self.lower is not None else -s,
+                         self.upper if self.upper is not None else s], float)
+
+    def starts(self, x: Any) -> list[np.ndarray]:
+        if self.lower is not None and self.upper is not None:
+            return [self.initial(x)]
+        s = float(np.std(x))
+        return [self.initial(x), np.array([self.lower if self.lower is not None else -0.3 * s,
+                                           self.upper if self.upper is not None else 0.3 * s])]
+
+    def __call__(self, x: Any) -> np.ndarray:
+        x = np.asarray(x, float)
+        lo, hi = self.params
+        return np.where(x > hi, x - hi, np.where(x < lo, x - lo, 0.0))
+
+
+class PolynomialNonlinearity(Nonlinearity):
+    """``x + c_2 x^2 + ... + c_d x^d`` (unit linear term).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> p = sysid.PolynomialNonlinearity(3); p.params = [0.0, 0.5]
+    >>> p([2.0]).tolist()
+    [6.0]
+    """
+
+    kind = "polynomial"
+
+    def __init__(self, degree: int = 3) -> None:
+        if int(degree) != degree or degree < 2:
+            raise DataError(f"degree must be an integer >= 2, got {degree!r}")
+        self.degree = int(degree)
+        self.params = np.zeros(self.degree - 1)
+
+    def spec(self) -> tuple[str, int, list[float]]:
+        return self.kind, self.degree, []
+
+    def initial(self, x: Any) -> np.ndarray:
+        return np.zeros(self.degree - 1)
+
+    def __call__(self, x: Any) -> np.ndarray:
+        x = np.asarray(x, float)
+        return x + sum(c * x ** (k + 2) for k, c in enumerate(np.asarray(self.params, float)))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": self.kind, "params": self.params, "degree": self.degree}
+
+
+class PiecewiseLinear(Nonlinearity):
+    """Linear interpolation between values at chosen ``breakpoints`` (end segments
+    extended); the value at the last breakpoint is held at the breakpoint (gain
+    normalisation), the others are free.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> p = sysid.PiecewiseLinear([-1.0, 0.0, 1.0]); p.params = p.initial(None)
+    >>> p([-2.0, 0.5]).tolist()
+    [-2.0, 0.5]
+    """
+
+    kind = "pwl"
+
+    def __init__(self, breakpoints: Any) -> None:
+        self.breakpoints = np.asarray(breakpoints, float).ravel()
+        if self.breakpoints.size < 2 or np.any(np.diff(self.breakpoints) <= 0):
+            raise DataError("breakpoints must be at least two strictly increasing values")
+        self.params = self.breakpoints[:-1].copy()
+
+    def spec(self) -> tuple[str, int, list[float]]:
+        return self.kind, 0, self.breakpoints.tolist()
+
+    def initial(self, x: Any) -> np.ndarray:
+        return self.breakpoints[:-1].copy()
+
+    def __call__(self, x: Any) -> np.ndarray:
+        z = self.breakpoints
+        v = np.append(np.asarray(self.params, float), z[-1])
+        x = np.asarray(x, float)
+        s = np.clip(np.searchsorted(z, x, side="right") - 1, 0, z.size - 2)
+        lam = (x - z[s]) / (z[s + 1] - z[s])
+        return (1 - lam) * v[s] + lam * v[s + 1]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": self.kind, "params": self.params, "breakpoints": self.breakpoints}
+
+
+class SigmoidNetwork(Nonlinearity):
+    """``c x + sum_k a_k tanh(b_k x + d_k)`` with ``units`` units, ``a_1 = 1`` (gain
+    normalisation); ``params = [c, b_1, d_1, a_2, b_2, d_2, ...]``.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> s = sysid.SigmoidNetwork(2); s.params = s.initial([-1.0, 1.0])
+    >>> s.params.shape
+    (6,)
+    """
+
+    kind = "sigmoid"
+
+    def __init__(self, units: int = 3) -> None:
+        if int(units) != units or units < 1:
+            raise DataError(f"units must be a positive integer, got {units!r}")
+        self.units = int(units)
+        self.params = np.zeros(3 * self.units)
+
+    def spec(self) -> tuple[str, int, list[float]]:
+        return self.kind, self.units, []
+
+    def initial(self, x: Any) -> np.ndarray:
+        s = float(np.std(x)) or 1.0
+        centres = np.linspace(-1, 1, self.units) * s if self.units > 1 else np.zeros(1)
+        p = np.column_stack([np.full(self.units, 0.5), np.full(self.units, 1.0 / s),
+                             -1.0 / s * centres]).ravel()
+        p[0] = 0.5 / s  # the linear coefficient c
+        return p
+
+    def __call__(self, x: Any) -> np.ndarray:
+        x = np.asarray(x, float)
+        p = np.asarray(self.params, float).reshape(-1, 3)
+        amps = np.concatenate([[1.0], p[1:, 0]])
+        return p[0, 0] * x + sum(a * np.tanh(b * x + d) for a, (_, b, d) in zip(amps, p))
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"kind": self.kind, "params": self.params, "units": self.units}
+
+
+class UserFunction(Nonlinearity):
+    """A fixed, user-supplied input nonlinearity ``w = func(u)`` (no free parameters; the
+    linear block and the output nonlinearity are estimated on ``func(u)``). Not saved by
+    :func:`sysid.save_model` (a Python function is not data).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> sysid.UserFunction(np.sign)([-2.0, 3.0]).tolist()
+    [-1.0, 1.0]
+    """
+
+    kind = "user"
+
+    def __init__(self, func: Callable[[np.ndarray], Any]) -> None:
+        if not callable(func):
+            raise DataError("UserFunction needs a callable func(u) -> array")
+        self.func = func
+        self.params = np.zeros(0)
+
+    def spec(self) -> tuple[str, int, list[float]]:
+        return "identity", 0, []
+
+    def __call__(self, x: Any) -> np.ndarray:
+        x = np.asarray(x, float)
+        out = np.asarray(self.func(x), float)
+        if out.shape != x.shape or not np.all(np.isfinite(out)):
+            raise DataError("UserFunction must return finite values of the input's shape")
+        return out
+
+
+_KINDS = {c.kind: c for c in (Nonlinearity, Saturation, DeadZone, PolynomialNonlinearity,
+                              PiecewiseLinear, SigmoidNetwork)}
+
+
+def nonlinearity_from_dict(d: dict[str, Any]) -> Nonlinearity:
+    """Inverse of ``Nonlinearity.to_dict``."""
+    kind = str(d["kind"])
+    if kind == "user":
+        raise DataError("a model with a UserFunction cannot be loaded: the function is not "
+                        "saved")
+    if kind == "polynomial":
+        nl: Nonlinearity = PolynomialNonlinearity(int(d["degree"]))
+    elif kind == "pwl":
+        nl = PiecewiseLinear(d["breakpoints"])
+    elif kind == "sigmoid":
+        nl = SigmoidNetwork(int(d["units"]))
+    else:
+        nl = _KINDS[kind]()
+    nl.params = np.asarray(d["params"], float).ravel()
+    return nl
+
+
+class HammersteinWienerModel(ModelMixin):
+    """A Hammerstein-Wiener model (see the module docstring).
+
+    Parameters
+    ----------
+    input_nl, output_nl : Nonlinearity
+        With their fitted ``params``.
+    b, f : array_like
+        ``B`` coefficients ``b_0..`` and free ``F`` coefficients ``f_1..``.
+    nk : int
+        Input delay.
+    dt : float
+        Sample time.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> sat = sysid.Saturation(); sat.params = np.array([-0.5, 0.5])
+    >>> m = sysid.HammersteinWienerModel(sat, sysid.Nonlinearity(), [1.0], [-0.5], 1, 1.0)
+    >>> m.simulate(np.full(4, 2.0)).ravel().tolist()
+    [0.0, 0.5, 0.75, 0.875]
+    >>> m.poles()
+    array([0.5+0.j])
+    """
+
+    def __init__(self, input_nl: Nonlinearity, output_nl: Nonlinearity, b: Any, f: Any,
+                 nk: int, dt: float, *, noise_variance: float = 1.0,
+                 info: dict[str, Any] | None = None, input_names: Any = None,
+                 output_names: Any = None) -> None:
+        self.input_nl, self.output_nl = input_nl, output_nl
+        self.b = np.asarray(b, float).ravel()
+        self.f = np.asarray(f, float).ravel()
+        self.nk, self.dt = int(nk), float(dt)
+        self.noise_variance = float(noise_variance)
+        self.info: dict[str, Any] = dict(info or {})
+        self.input_names = ["u0"] if input_names is None else [str(n) for n in input_names]
+        self.output_names = ["y0"] if output_names is None else [str(n) for n in output_names]
+        if self.b.size < 1:
+            raise DataError("b needs at least one coefficient")
+
+    ninputs = property(lambda self: 1, doc="Number of inputs (1).")
+    noutputs = property(lambda self: 1, doc="Number of outputs (1).")
+
+    @property
+    def theta(self) -> np.ndarray:
+        """Parameters ``[input_nl, b, f, output_nl]`` in the estimator's order."""
+        return np.concatenate([self.input_nl.params, self.b, self.f, self.output_nl.params])
+
+    @property
+    def n_parameters(self) -> int:
+        """Number of free parameters."""
+        return int(self.theta.size)
+
+    def _u(self, u: Any) -> np.ndarray:
+        u = np.asarray(u, float)
+        if u.ndim == 2 and u.shape[1] == 1:
+            u = u[:, 0]
+        if u.ndim != 1:
+            raise DataError(f"u has shape {u.shape} but should be (n_samples, 1)")
+        if isinstance(self.input_nl, UserFunction):
+            u = self.input_nl(u)
+        return np.ascontiguousarray(u)
+
+    def signals(self, u: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(y, w, x)``: output, input-nonlinearity output and linear-block output."""
+        y, w, x = _sysid.hw_simulate(self.input_nl.spec(), self.output_nl.spec(), self.b.size,
+                                     self.f.size, self.nk, self.theta.tolist(), self._u(u))
+        return np.asarray(y), np.asarray(w), np.asarray(x)
+
+    def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
+        """Noise-free output ``(n, 1)`` from rest."""
+        if x0 is not None and not (isinstance(x0, str) and x0 == "zero"):
+            raise DataError("Hammerstein-Wiener models start from rest: x0 must be None")
+        return self.signals(u)[0][:, None]
+
+    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+        """The output-error predictor does not use measured outputs: equals ``simulate``."""
+        return self.simulate(u)
+
+    def linear(self) -> Any:
+        """The linear block ``B/F`` as a :class:`~sysid.PolynomialModel`."""
+        from ..polynomial.model import PolynomialModel
+
+        return PolynomialModel([[np.zeros(0)]], [[self.b]], [[self.nk]], self.dt, f=[[self.f]])
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """Frequency response of the linear block (between the nonlinearities)."""
+        return np.asarray(self.linear().freqresp(omega))
+
+    def poles(self) -> np.ndarray:
+        """Poles of the linear block (roots of ``F``)."""
+        return np.roots(np.concatenate([[1.0], self.f])).astype(complex) if self.f.size \
+            else np.zeros(0, complex)
+
+    def summary(self) -> str:
+        """Nonlinearities, linear block and fit."""
+        return "\n".join([repr(self), f"  input:  {self.input_nl!r}",
+                          f"  B: {np.array2string(self.b, precision=5)}",
+                          f"  F: 1 {np.array2string(self.f, precision=5)}",
+                          f"  output: {self.output_nl!r}",
+                          f"  residual variance {self.noise_variance:.4g}, "
+                          f"{self.info.get('iterations', '-')} iterations "
+                          f"({self.info.get('stop', '-')})"])
+
+    def __repr__(self) -> str:
+        kind = ("Hammerstein-Wiener" if type(self.output_nl) is not Nonlinearity
+                and type(self.input_nl) is not Nonlinearity else
+                "Wiener" if type(self.input_nl) is Nonlinearity else "Hammerstein")
+        return (f"HammersteinWienerModel({kind}, nb={self.b.size}, nf={self.f.size}, "
+                f"nk={self.nk}, dt={self.dt:g})")
+
+    def to_pandas(self) -> Any:
+        """Parameters as a table."""
+        import pandas as pd
+
+        names = ([f"input[{k}]" for k in range(self.input_nl.params.size)]
+                 + [f"b{k}" for k in range(self.b.size)]
+                 + [f"f{k + 1}" for k in range(self.f.size)]
+                 + [f"output[{k}]" for k in range(self.output_nl.params.size)])
+        return pd.DataFrame({"parameter": names, "value": self.theta})
+
+    def plot(self, fig: Any = None) -> Any:
+        """The two nonlinearities over the range seen in estimation; returns the figure."""
+        import matplotlib.pyplot as plt
+
+        fig = fig or plt.figure(figsize=(8, 3))
+        for k, (nl, key, name) in enumerate([(self.input_nl, "u_range", "input"),
+                                             (self.output_nl, "x_range", "output")]):
+            lo, hi = self.info.get(key, (-1.0, 1.0))
+            x = np.linspace(lo, hi, 200)
+            ax = fig.add_subplot(1, 2, k + 1)
+            ax.plot(x, nl(x))
+            ax.set_title(f"{name} nonlinearity")
+        fig.tight_layout()
+        return fig
+
+    def to_dict(self) -> dict[str, Any]:
+        """For :func:`sysid.save_model` (not with a :class:`UserFunction`)."""
+        if isinstance(self.input_nl, UserFunction):
+            raise DataError("a model with a UserFunction input cannot be saved")
+        return {"input_nl": self.input_nl.to_dict(), "output_nl": self.output_nl.to_dict(),
+                "b": self.b, "f": self.f, "nk": self.nk, "dt": self.dt,
+                "noise_variance": self.noise_variance, "info": self.info,
+                "input_names": self.input_names, "output_names": self.output_names}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> HammersteinWienerModel:
+        """Inverse of :meth:`to_dict`."""
+        return cls(nonlinearity_from_dict(dict(d["input_nl"])),
+                   nonlinearity_from_dict(dict(d["output_nl"])), d["b"], d["f"], int(d["nk"]),
+                   float(d["dt"]), noise_variance=float(d.get("noise_variance", 1.0)),
+                   info=d.get("info"), input_names=d.get("input_names"),
+                   output_names=d.get("output_names"))

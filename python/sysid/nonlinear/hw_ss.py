@@ -1,0 +1,191 @@
+"""``nlhw_ss``: MIMO Hammerstein-Wiener estimation around a state-space linear block.
+
+Starts from a linear subspace fit (:func:`sysid.n4sid`) of the record and near-identity
+nonlinearities, then minimises the simulation error of every output over all parameters
+with the shared Gauss-Newton / Levenberg-Marquardt search (``sysid-core`` ``optim/``), the
+sensitivities run sample by sample in Rust (``hw/mimo.rs``). The admissible set is a stable
+``A``.
+"""
+
+from __future__ import annotations
+
+import copy
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import experiment_arrays
+from .._progress import iteration_callback, iteration_printer
+from ..errors import DataError
+from .hw_model import Nonlinearity, UserFunction
+from .hw_ss_model import HammersteinWienerSSModel
+
+__all__ = ["nlhw_ss"]
+
+
+def _per_channel(nl: Any, n: int, name: str) -> list[Nonlinearity]:
+    items = list(nl) if isinstance(nl, (list, tuple)) else [nl] * n
+    if len(items) != n:
+        raise DataError(f"{name} needs one nonlinearity per channel ({n}), got {len(items)}")
+    out = []
+    for f in items:
+        if f is None:
+            out.append(Nonlinearity())
+        elif isinstance(f, Nonlinearity):
+            out.append(copy.deepcopy(f))
+        else:
+            raise DataError(f"{name} entries must be sysid nonlinearities (Saturation, "
+                            f"DeadZone, PolynomialNonlinearity, PiecewiseLinear, "
+                            f"SigmoidNetwork, UserFunction) or None, got {f!r}")
+    return out
+
+
+def nlhw_ss(
+    data: Any,
+    order: int,
+    *,
+    input_nl: Any = None,
+    output_nl: Any = None,
+    feedthrough: bool = False,
+    max_iter: int = 200,
+    tol: float = 1e-10,
+    progress: bool | None | Callable[..., Any] = None,
+) -> HammersteinWienerSSModel:
+    """Hammerstein-Wiener model with per-channel static nonlinearities around a MIMO
+    state-space linear block: ``w_j = f_j(u_j)``, ``x(t+1) = A x + B w``, ``v = C x + D w``,
+    ``y_i = g_i(v_i) + e_i``.
+
+    Parameters
+    ----------
+    data : IOData
+        Estimation record (any numbers of inputs and outputs; several experiments are used
+        together).
+    order : int
+        State dimension of the linear block.
+    input_nl, output_nl : Nonlinearity, list or None
+        One nonlinearity for every channel, or a list with one per input / output (``None``
+        entries: identity). ``output_nl=None``: Hammerstein; ``input_nl=None``: Wiener.
+    feedthrough : bool
+        Estimate a direct term ``D`` (default ``D = 0``).
+    max_iter, tol : int, float
+        Optimiser iterations and step/gradient tolerance.
+    progress : bool or callable, optional
+        As for :func:`sysid.nlhw` (a bar, silence, or a callable getting ``(iteration, cost,
+        step_norm, gradient_norm, damping)``; ``False`` returned stops).
+
+    Returns
+    -------
+    HammersteinWienerSSModel
+        With ``info``: ``iterations``, ``cost`` (``1/2 sum |e|^2`` at the start and after each
+        iteration of the chosen start's search), ``criterion``, ``stop`` (reason), the start.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.uniform(-1, 1, (600, 2)); w = np.clip(u, -0.5, 0.5); x = np.zeros(2)
+    >>> y = np.zeros((600, 2))
+    >>> for t in range(600):
+    ...     y[t] = x; x = np.array([[0.8, 0.0], [0.1, 0.5]]) @ x + w[t]
+    >>> m = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 2, input_nl=sysid.Saturation())
+    >>> np.round(np.sort(m.poles().real), 6).tolist()
+    [0.5, 0.8]
+    >>> [np.round(f.params, 6).tolist() for f in m.input_nls]
+    [[-0.5, 0.5], [-0.5, 0.5]]
+    """
+    from ..data.iodata import IOData
+    from ..subspace.estimator import n4sid
+
+    exps = experiment_arrays(data)
+    m, p = exps[0][0].shape[1], exps[0][1].shape[1]
+    if int(order) != order or order < 1:
+        raise DataError(f"order must be a positive integer, got {order!r}")
+    fin = _per_channel(input_nl, m, "input_nl")
+    fout = _per_channel(output_nl, p, "output_nl")
+    if any(isinstance(g, UserFunction) for g in fout):
+        raise DataError("a UserFunction can only be an input nonlinearity")
+    records = []
+    for u, y in exps:
+        uu = u.copy()
+        for j, f in enumerate(fin):
+            if isinstance(f, UserFunction):
+                uu[:, j] = f(uu[:, j])
+        records.append((np.ascontiguousarray(uu), np.ascontiguousarray(y)))
+    dt = float(getattr(data, "dt", 1.0) or 1.0)
+    # linear start: subspace fit on the (transformed) inputs
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        lin = n4sid(IOData([r[0] for r in records], [r[1] for r in records], dt), int(order),
+                   feedthrough=bool(feedthrough))
+    A, B, C = np.asarray(lin.A), np.asarray(lin.B).copy(), np.asarray(lin.C)
+    D = np.asarray(lin.D).copy() if feedthrough else None
+    if np.max(np.abs(np.linalg.eigvals(A))) >= 1:
+        raise DataError("the linear start (n4sid) is unstable; try another order")
+    u_all = np.vstack([r[0] for r in records])
+    in_starts = [f.starts(u_all[:, j]) for j, f in enumerate(fin)]
+    res, th0, v_all = None, None, np.zeros((0, p))
+    # start k: every channel's k-th starting point (the last one when it has fewer)
+    cb, close_bar = iteration_callback(progress, "nlhw_ss", int(max_iter),
+                                       iteration_printer("nlhw_ss", "sum of squares"))
+    try:
+        for k in range(max(len(s_) for s_ in in_starts)):
+            if res is not None and res["stop"] == "cancelled":
+                break
+            Bk, Dk = B.copy(), None if D is None else D.copy()
+            for j, f in enumerate(fin):  # B's column absorbs the starting nonlinearity's gain
+                f.params = in_starts[j][min(k, len(in_starts[j]) - 1)]
+                fu = f(u_all[:, j])
+                if not isinstance(f, UserFunction) and float(fu @ fu) > 0 and float(
+                        fu @ u_all[:, j]):
+                    g = float(fu @ u_all[:, j]) / float(fu @ fu)
+                    Bk[:, j] *= g
+                    if Dk is not None:
+                        Dk[:, j] *= g
+            start = HammersteinWienerSSModel(fin, [Nonlinearity()] * p, A, Bk, C, Dk, dt)
+            vs = np.vstack([start.simulate(r[0]) for r in records])
+            out_starts = [g.starts(vs[:, i]) for i, g in enumerate(fout)]
+            for q in range(max(len(s_) for s_ in out_starts)):
+                for i, g in enumerate(fout):
+                    g.params = out_starts[i][min(q, len(out_starts[i]) - 1)]
+                start = HammersteinWienerSSModel(fin, fout, A, Bk, C, Dk, dt)
+                fi, fo = start.specs()
+                try:
+                    r = _sysid.hw_mimo_estimate(
+                        records, fi, fo, int(order), bool(feedthrough), start.theta.tolist(),
+                        int(max_iter), float(tol), cb)
+                except DataError:
+                    continue  # an inadmissible start: try the next one
+                if res is None or r["cost"] < res["cost"] or r["stop"] == "cancelled":
+                    res, th0, v_all = r, start.theta, vs
+                if r["stop"] == "cancelled":
+                    break
+    finally:
+        close_bar()
+    if res is None:
+        raise DataError("no admissible start for the Hammerstein-Wiener search; check the "
+                        "order against a linear fit (sysid.n4sid)")
+    th = np.asarray(res["theta"], float)
+    k = 0
+    for f in fin:
+        f.params, k = th[k:k + np.size(f.params)], k + np.size(f.params)
+    n = int(order)
+    A, k = th[k:k + n * n].reshape(n, n), k + n * n
+    B, k = th[k:k + n * m].reshape(n, m), k + n * m
+    C, k = th[k:k + p * n].reshape(p, n), k + p * n
+    if feedthrough:
+        D, k = th[k:k + p * m].reshape(p, m), k + p * m
+    for g in fout:
+        g.params, k = th[k:k + np.size(g.params)], k + np.size(g.params)
+    info = {"method": "nlhw_ss", "iterations": int(res["iterations"]), "stop": res["stop"],
+            "n_starts": max(len(s_) for s_ in in_starts),
+            "cost": list(res["history"]), "criterion": "sum of squares", "theta0": th0,
+            "u_ranges": [(float(c.min()), float(c.max())) for c in u_all.T],
+            "v_ranges": [(float(c.min()), float(c.max())) for c in v_all.T]}
+    return HammersteinWienerSSModel(fin, fout, A, B, C, D, dt,
+                                    noise_variance=float(res["noise_variance"]), info=info,
+                                    input_names=getattr(data, "input_names", None),
+                                    output_names=getattr(data, "output_names", None))

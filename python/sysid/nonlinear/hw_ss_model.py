@@ -1,0 +1,212 @@
+"""MIMO Hammerstein-Wiener models with a state-space linear block.
+
+``w_j = f_j(u_j)`` per input, ``x(t+1) = A x(t) + B w(t)``, ``v = C x + D w``, ``y_i = g_i(v_i)``
+per output; simulation (from rest) and the estimator's sensitivities run in Rust
+(``sysid-core``, ``hw/mimo.rs``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from ..errors import DataError
+from ..models.protocol import ModelMixin
+from .hw_model import Nonlinearity, UserFunction, nonlinearity_from_dict
+
+__all__ = ["HammersteinWienerSSModel"]
+
+
+class HammersteinWienerSSModel(ModelMixin):
+    """Hammerstein-Wiener model with per-channel static nonlinearities around a (MIMO)
+    state-space linear block.
+
+    Parameters
+    ----------
+    input_nls, output_nls : list of Nonlinearity
+        One per input and one per output (``Nonlinearity()`` is the identity).
+    A, B, C : array_like
+        The linear block (``n x n``, ``n x m``, ``p x n``).
+    D : array_like, optional
+        Direct term ``p x m``; ``None``: no feedthrough (``D = 0``, not estimated).
+    dt : float
+        Sample time.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> sat = sysid.Saturation(); sat.params = np.array([-0.5, 0.5])
+    >>> m = sysid.HammersteinWienerSSModel([sat], [sysid.Nonlinearity()], [[0.8]], [[0.5]],
+    ...                                   [[1.0]], dt=1.0)
+    >>> np.round(m.simulate(np.ones(4)).ravel(), 6).tolist()
+    [0.0, 0.25, 0.45, 0.61]
+    >>> np.round(m.poles().real, 6).tolist()
+    [0.8]
+    """
+
+    def __init__(self, input_nls: Any, output_nls: Any, A: Any, B: Any, C: Any, D: Any = None,
+                 dt: float = 1.0, *, noise_variance: Any = None,
+                 info: dict[str, Any] | None = None, input_names: Any = None,
+                 output_names: Any = None) -> None:
+        self.input_nls = list(input_nls)
+        self.output_nls = list(output_nls)
+        self.A = np.atleast_2d(np.asarray(A, float))
+        self.B = np.atleast_2d(np.asarray(B, float))
+        self.C = np.atleast_2d(np.asarray(C, float))
+        n, m, p = self.A.shape[0], len(self.input_nls), len(self.output_nls)
+        self.feedthrough = D is not None
+        self.D = np.zeros((p, m)) if D is None else np.atleast_2d(np.asarray(D, float))
+        if (self.A.shape != (n, n) or self.B.shape != (n, m) or self.C.shape != (p, n)
+                or self.D.shape != (p, m)):
+            raise DataError(f"A, B, C, D must be ({n}, {n}), ({n}, {m}), ({p}, {n}), "
+                            f"({p}, {m}) for {m} input and {p} output nonlinearities; got "
+                            f"{self.A.shape}, {self.B.shape}, {self.C.shape}, {self.D.shape}")
+        for nl in self.input_nls + self.output_nls:
+            if not isinstance(nl, Nonlinearity):
+                raise DataError(f"nonlinearities must be sysid nonlinearities, got {nl!r}")
+        if any(isinstance(g, UserFunction) for g in self.output_nls):
+            raise DataError("a UserFunction can only be an input nonlinearity")
+        self.dt = float(dt)
+        self.noise_variance = (np.ones(p) if noise_variance is None
+                               else np.broadcast_to(np.asarray(noise_variance, float), (p,)))
+        self.info: dict[str, Any] = dict(info or {})
+        self.input_names = ([f"u{j}" for j in range(m)] if input_names is None
+                            else [str(s) for s in input_names])
+        self.output_names = ([f"y{i}" for i in range(p)] if output_names is None
+                             else [str(s) for s in output_names])
+
+    ninputs = property(lambda self: len(self.input_nls), doc="Number of inputs.")
+    noutputs = property(lambda self: len(self.output_nls), doc="Number of outputs.")
+    order = property(lambda self: int(self.A.shape[0]), doc="State dimension.")
+
+    @property
+    def theta(self) -> np.ndarray:
+        """Parameters in the estimator's order: input nonlinearities, ``A``, ``B``, ``C``,
+        (``D``), output nonlinearities (matrices row-major)."""
+        parts = [f.params for f in self.input_nls] + [self.A.ravel(), self.B.ravel(),
+                                                      self.C.ravel()]
+        if self.feedthrough:
+            parts.append(self.D.ravel())
+        parts += [g.params for g in self.output_nls]
+        return np.concatenate([np.asarray(v, float).ravel() for v in parts])
+
+    @property
+    def n_parameters(self) -> int:
+        """Number of parameters (the state-space part is not unique: similarity transforms
+        leave ``n^2`` directions free)."""
+        return int(self.theta.size)
+
+    def specs(self) -> tuple[list[Any], list[Any]]:
+        """The nonlinearities as the Rust functions take them."""
+        return [f.spec() for f in self.input_nls], [g.spec() for g in self.output_nls]
+
+    def _u(self, u: Any) -> np.ndarray:
+        u = np.asarray(u, float)
+        if u.ndim == 1 and self.ninputs == 1:
+            u = u[:, None]
+        if u.ndim != 2 or u.shape[1] != self.ninputs:
+            raise DataError(f"u has shape {u.shape} but should be (n_samples, {self.ninputs})")
+        u = u.copy()
+        for j, f in enumerate(self.input_nls):
+            if isinstance(f, UserFunction):
+                u[:, j] = f(u[:, j])
+        return np.ascontiguousarray(u)
+
+    def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
+        """Noise-free outputs ``(n, noutputs)`` from rest."""
+        if x0 is not None and not (isinstance(x0, str) and x0 == "zero"):
+            raise DataError("Hammerstein-Wiener models start from rest: x0 must be None")
+        fi, fo = self.specs()
+        return np.asarray(_sysid.hw_mimo_simulate(fi, fo, self.order, self.feedthrough,
+                                                  self.theta.tolist(), self._u(u)))
+
+    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+        """The output-error predictor does not use measured outputs: equals ``simulate``."""
+        return self.simulate(u)
+
+    def linear(self) -> Any:
+        """The linear block as a :class:`~sysid.StateSpaceModel`."""
+        from ..models.statespace import StateSpaceModel
+
+        return StateSpaceModel(self.A, self.B, self.C, self.D, dt=self.dt)
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """Frequency response of the linear block (between the nonlinearities)."""
+        return np.asarray(self.linear().freqresp(omega))
+
+    def poles(self) -> np.ndarray:
+        """Poles of the linear block (eigenvalues of ``A``)."""
+        return np.linalg.eigvals(self.A).astype(complex)
+
+    def summary(self) -> str:
+        """Nonlinearities, poles and fit."""
+        lines = [repr(self)]
+        lines += [f"  input {n}: {f!r}" for n, f in zip(self.input_names, self.input_nls)]
+        lines += [f"  output {n}: {g!r}" for n, g in zip(self.output_names, self.output_nls)]
+        lines.append(f"  poles: {np.array2string(np.sort_complex(self.poles()), precision=5)}")
+        lines.append(f"  residual variance {np.array2string(self.noise_variance, precision=4)}"
+                     f", {self.info.get('iterations', '-')} iterations "
+                     f"({self.info.get('stop', '-')})")
+        return "\n".join(lines)
+
+    def __repr__(self) -> str:
+        hin = any(type(f) is not Nonlinearity for f in self.input_nls)
+        wout = any(type(g) is not Nonlinearity for g in self.output_nls)
+        kind = ("Hammerstein-Wiener" if hin and wout else "Hammerstein" if hin else
+                "Wiener" if wout else "linear")
+        return (f"HammersteinWienerSSModel({kind}, {self.ninputs} input(s), {self.noutputs} "
+                f"output(s), order {self.order}, dt={self.dt:g})")
+
+    def to_pandas(self) -> Any:
+        """Parameters as a table."""
+        import pandas as pd
+
+        names = [f"{n}:in[{k}]" for n, f in zip(self.input_names, self.input_nls)
+                 for k in range(np.size(f.params))]
+        for key, mat in (("A", self.A), ("B", self.B), ("C", self.C)) + (
+                (("D", self.D),) if self.feedthrough else ()):
+            names += [f"{key}[{r},{c}]" for r in range(mat.shape[0]) for c in range(mat.shape[1])]
+        names += [f"{n}:out[{k}]" for n, g in zip(self.output_names, self.output_nls)
+                  for k in range(np.size(g.params))]
+        return pd.DataFrame({"parameter": names, "value": self.theta})
+
+    def plot(self, fig: Any = None) -> Any:
+        """Every nonlinearity over the range seen in estimation; returns the figure."""
+        import matplotlib.pyplot as plt
+
+        nls = [(f, r, f"input {n}") for f, r, n in zip(
+            self.input_nls, self.info.get("u_ranges", [(-1, 1)] * self.ninputs),
+            self.input_names)]
+        nls += [(g, r, f"output {n}") for g, r, n in zip(
+            self.output_nls, self.info.get("v_ranges", [(-1, 1)] * self.noutputs),
+            self.output_names)]
+        fig = fig or plt.figure(figsize=(3 * len(nls), 3))
+        for k, (nl, (lo, hi), name) in enumerate(nls):
+            x = np.linspace(lo, hi, 200)
+            ax = fig.add_subplot(1, len(nls), k + 1)
+            ax.plot(x, nl(x))
+            ax.set_title(name)
+        fig.tight_layout()
+        return fig
+
+    def to_dict(self) -> dict[str, Any]:
+        """For :func:`sysid.save_model` (not with a :class:`UserFunction`)."""
+        if any(isinstance(f, UserFunction) for f in self.input_nls):
+            raise DataError("a model with a UserFunction input cannot be saved")
+        return {"input_nls": [f.to_dict() for f in self.input_nls],
+                "output_nls": [g.to_dict() for g in self.output_nls],
+                "A": self.A, "B": self.B, "C": self.C,
+                "D": self.D if self.feedthrough else None, "dt": self.dt,
+                "noise_variance": self.noise_variance, "info": self.info,
+                "input_names": self.input_names, "output_names": self.output_names}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> HammersteinWienerSSModel:
+        """Inverse of :meth:`to_dict`."""
+        return cls([nonlinearity_from_dict(dict(f)) for f in d["input_nls"]],
+                   [nonlinearity_from_dict(dict(g)) for g in d["output_nls"]],
+                   d["A"], d["B"], d["C"], d.get("D"), float(d["dt"]),
+                   noise_variance=d.get("noise_variance"), info=d.get("info"),
+                   input_names=d.get("input_names"), output_names=d.get("output_names"))

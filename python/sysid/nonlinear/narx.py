@@ -1,0 +1,280 @@
+"""``nlarx``: NARX / NARMAX estimation with FROLS term selection (Rust core, streaming).
+
+The candidate terms are generated and orthogonalised block by block in ``sysid-core``
+(``narx/frols.rs``): the full regressor matrix is never built. Each output gets its own
+selection from the shared candidates; the number of terms is chosen by an information
+criterion on the exact least-squares residuals of each prefix of the selection order, or by
+free-run validation error.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import experiment_arrays
+from ..errors import DataError
+from .customreg import CustomRegressor
+from .narx_model import NARXModel, PolynomialBasis, RBFBasis
+
+__all__ = ["nlarx"]
+
+CRITERIA = ("aic", "bic", "fpe", "validation", None)
+
+
+def _per(v: Any, n: int, name: str) -> list[int]:
+    a = np.atleast_1d(np.asarray(v))
+    if a.size == 1:
+        a = np.full(n, int(a[0]))
+    if a.shape != (n,) or np.any(a < 0) or not np.all(np.equal(np.mod(a, 1), 0)):
+        raise DataError(f"{name} must be a non-negative integer or {n} of them, got {v!r}")
+    return [int(x) for x in a]
+
+
+def _lag_matrix(u: np.ndarray, y: np.ndarray, na: list[int], nb: list[int], nk: list[int]
+                ) -> np.ndarray:
+    """Lagged variables ``(n - L, nv)`` of one record (for fitting an RBF basis)."""
+    L = max([*na, *[b + k - 1 for b, k in zip(nb, nk) if b], 1])
+    n = y.shape[0]
+    cols = [y[L - lag:n - lag, k] for k in range(len(na)) for lag in range(1, na[k] + 1)]
+    cols += [u[L - lag:n - lag, j] for j in range(len(nb)) for lag in range(nk[j], nk[j] + nb[j])]
+    return np.column_stack(cols)
+
+
+def _custom(custom: list[Any], exps: list[tuple[np.ndarray, np.ndarray]], orders: Any,
+            ne: int, names: dict[str, Any]) -> dict[str, Any]:
+    """Arguments and values (one ``(N, n_custom)`` array per experiment) of the custom
+    regressors for ``_sysid.narx_frols``; empty without custom regressors."""
+    if not custom:
+        return {}
+    if not all(isinstance(c, CustomRegressor) for c in custom):
+        raise DataError("custom must be a list of sysid.CustomRegressor")
+    na_, nb_, nk_, _ = orders
+    ny, nu = len(na_), len(nb_)
+    outs = names["output_names"] or [f"y{i}" for i in range(ny)]
+    ins = names["input_names"] or [f"u{j}" for j in range(nu)]
+    args = [c.resolve(list(outs), list(ins)) for c in custom]
+    L = max([*na_, *[b + k - 1 for b, k in zip(nb_, nk_) if b], ne, 1,
+             *[lag for a in args for _, _, lag in a]])
+    vals = []
+    for u, y in exps:
+        if y.shape[0] <= L:
+            raise DataError(f"a record of {y.shape[0]} samples is too short for lags up to {L}")
+        vals.append(np.ascontiguousarray(np.column_stack(
+            [c.values(u, y, L, list(outs), list(ins)) for c in custom])))
+    return {"custom_args": args, "custom_values": vals}
+
+
+def _prefix(r: np.ndarray, k: int) -> tuple[np.ndarray, float]:
+    """Least squares of the first ``k`` terms from the factor of ``[Phi_S, y]``."""
+    K = r.shape[1] - 1
+    rss = float(np.sum(r[k:, K] ** 2))
+    if k == 0:
+        return np.zeros(0), rss
+    from scipy.linalg import solve_triangular
+
+    return solve_triangular(r[:k, :k], r[:k, K]), rss
+
+
+def _score(rss: float, n: int, k: int, criterion: str) -> float:
+    v = max(rss / n, 1e-300)
+    if criterion == "aic":
+        return n * np.log(v) + 2 * k
+    if criterion == "bic":
+        return n * np.log(v) + k * np.log(n)
+    return n * np.log(v) + n * np.log((n + k) / max(n - k, 1))  # fpe
+
+
+def _free_run_rmse(model: NARXModel, exps: list[tuple[np.ndarray, np.ndarray]]) -> float:
+    from ..errors import NumericalError
+
+    err, count = 0.0, 0
+    for u, y in exps:
+        try:
+            ys = model.simulate(u, x0=y[:model.max_lag])
+        except NumericalError:
+            return np.inf
+        err += float(np.sum((ys - y)[model.max_lag:] ** 2))
+        count += y[model.max_lag:].size
+    return float(np.sqrt(err / max(count, 1)))
+
+
+def nlarx(
+    data: Any,
+    na: Any,
+    nb: Any,
+    nk: Any = 1,
+    *,
+    basis: PolynomialBasis | RBFBasis | None = None,
+    max_terms: int = 10,
+    criterion: str | None = "aic",
+    validation: Any = None,
+    noise_terms: int = 0,
+    n_iterations: int = 5,
+    err_tol: float = 1e-10,
+    custom: Any = None,
+) -> NARXModel:
+    """NARX / NARMAX model with terms chosen by FROLS (forward-regression orthogonal least
+    squares with the error reduction ratio).
+
+    Parameters
+    ----------
+    data : IOData
+        Estimation record; several experiments are used together.
+    na : int or list (n_outputs)
+        Output lags ``1..na`` of each output (shared by every output's equation).
+    nb, nk : int or list (n_inputs)
+        Input lags ``nk..nk + nb - 1``.
+    basis : PolynomialBasis or RBFBasis
+        Candidate terms (default ``PolynomialBasis(2)``).
+    max_terms : int
+        Term budget per output (process terms).
+    criterion : "aic", "bic", "fpe", "validation" or None
+        How many of the selected terms to keep: the prefix minimising the criterion on the
+        estimation residuals, the smallest free-run RMSE on ``validation`` data, or all
+        (``None``; selection still stops when the residual is below ``err_tol``).
+    validation : IOData, optional
+        Validation record for ``criterion="validation"``.
+    noise_terms : int
+        NARMAX: residual lags ``1..noise_terms``; up to ``max_terms`` noise terms are chosen
+        after the process terms by the extended-least-squares iteration (``n_iterations``
+        rounds of residuals, selection and refit).
+    n_iterations : int
+        Extended-least-squares rounds (NARMAX only).
+    err_tol : float
+        Stop selecting when the unexplained fraction ``1 - sum ERR`` falls below this.
+    custom : list of CustomRegressor, optional
+        User-supplied regressors (MATLAB's ``customreg``), candidates beside the basis's
+        terms; each enters linearly if chosen.
+
+    Returns
+    -------
+    NARXModel
+        With ``err`` per term and ``info`` (criterion values, candidates, rows).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.uniform(-1, 1, (400, 1)); y = np.zeros((400, 1))
+    >>> for t in range(2, 400):
+    ...     y[t] = -0.605 * y[t-1] - 0.163 * y[t-2]**2 + 0.588 * u[t-1] - 0.24 * u[t-2]
+    >>> m = sysid.nlarx(sysid.IOData(u, y, 1.0), 2, 2, basis=sysid.PolynomialBasis(2))
+    >>> print(m.terms_table())
+    y0 = -0.605 y0(t-1) + 0.588 u0(t-1) - 0.24 u0(t-2) - 0.163 y0(t-2)^2
+    """
+    exps = experiment_arrays(data)
+    ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
+    na_, nb_, nk_ = _per(na, ny, "na"), _per(nb, nu, "nb"), _per(nk, nu, "nk")
+    if criterion not in CRITERIA:
+        raise DataError(f"criterion must be one of {CRITERIA}, got {criterion!r}")
+    if criterion == "validation" and validation is None:
+        raise DataError("criterion='validation' needs validation data (validation=IOData)")
+    if int(max_terms) != max_terms or max_terms < 1:
+        raise DataError(f"max_terms must be a positive integer, got {max_terms!r}")
+    if int(noise_terms) != noise_terms or noise_terms < 0:
+        raise DataError(f"noise_terms must be a non-negative integer, got {noise_terms!r}")
+    basis = PolynomialBasis(2) if basis is None else basis
+    if not isinstance(basis, (PolynomialBasis, RBFBasis)):
+        raise DataError(f"basis must be a PolynomialBasis or an RBFBasis, got {basis!r}")
+    if isinstance(basis, RBFBasis):
+        if noise_terms:
+            raise DataError("noise_terms (NARMAX) needs a PolynomialBasis")
+        basis = basis.fitted(np.vstack([_lag_matrix(u, y, na_, nb_, nk_) for u, y in exps]))
+    degree, rbf = basis.rust_args()
+    orders = (na_, nb_, nk_, [0] * ny)
+    names = dict(input_names=getattr(data, "input_names", None),
+                 output_names=getattr(data, "output_names", None))
+    custom = list(custom or [])
+    cust = _custom(custom, exps, orders, noise_terms, names)
+    sel, n_cands = _sysid.narx_frols([(u, y, None) for u, y in exps], orders, degree, rbf,
+                                     int(max_terms), [[] for _ in range(ny)], float(err_tol),
+                                     **cust)
+    n_rows = int(sel[0]["n_rows"])
+    keep, scores = [], []
+    for s in sel:
+        K = len(s["terms"])
+        if criterion in ("aic", "bic", "fpe"):
+            sc = [_score(_prefix(s["r"], k)[1], n_rows, k, criterion) for k in range(K + 1)]
+            keep.append(int(np.argmin(sc)))
+            scores.append(sc)
+        else:
+            keep.append(K)
+    dt = float(getattr(data, "dt", 1.0) or 1.0)
+
+    def build(ks: list[int]) -> NARXModel:
+        terms, coefs, errs, var = [], [], [], []
+        for s, k in zip(sel, ks):
+            th, rss = _prefix(s["r"], k)
+            terms.append(s["terms"][:k])
+            coefs.append(th)
+            errs.append(np.asarray(s["err"])[:k])
+            var.append(rss / n_rows)
+        return NARXModel(na_, nb_, nk_, basis, terms, coefs, dt, err=errs,
+                         noise_variance=var, custom=custom, **names)
+
+    if criterion == "validation":
+        vexps = experiment_arrays(validation)
+        for i, s in enumerate(sel):
+            best = (np.inf, keep[i])
+            for k in range(1, len(s["terms"]) + 1):
+                trial = list(keep)
+                trial[i] = k
+                rmse = _free_run_rmse(build(trial), vexps)
+                if rmse < best[0]:
+                    best = (rmse, k)
+            keep[i] = best[1]
+            scores.append([best[0]])
+    model = build(keep)
+    info: dict[str, Any] = {"method": "nlarx", "selection": "FROLS", "criterion": criterion,
+                            "n_candidates": int(n_cands), "n_rows": n_rows,
+                            "max_terms": int(max_terms), "criterion_values": scores}
+    if noise_terms:
+        model = _narmax(model, exps, orders, degree, rbf, int(noise_terms), int(max_terms),
+                        int(n_iterations), float(err_tol), names, info, criterion, cust)
+    model.info.update(info)
+    return model
+
+
+def _narmax(model: NARXModel, exps: list[tuple[np.ndarray, np.ndarray]], orders: Any,
+            degree: int | None, rbf: Any, ne: int, max_noise: int, n_iterations: int,
+            err_tol: float, names: dict[str, Any], info: dict[str, Any],
+            criterion: str | None, cust: dict[str, Any]) -> NARXModel:
+    """Extended least squares: residuals of the current model, noise terms chosen after the
+    (forced) process terms, refit; repeated ``n_iterations`` times."""
+    na_, nb_, nk_, _ = orders
+    ny = len(na_)
+    process = [list(t) for t in model.terms]
+    ne_ = [ne] * ny
+    history = []
+    current = model
+    for _ in range(max(n_iterations, 1)):
+        recs = [(u, y, np.ascontiguousarray(y - current.predict(u, y, 1))) for u, y in exps]
+        sel, _ = _sysid.narx_frols(recs, (na_, nb_, nk_, ne_), degree, rbf,
+                                   max(len(p) for p in process) + max_noise, process, err_tol,
+                                   **cust)
+        terms, coefs, errs, var = [], [], [], []
+        for s, p in zip(sel, process):
+            k = len(s["terms"])
+            if criterion in ("aic", "bic", "fpe"):  # noise terms kept by the same criterion
+                n = int(s["n_rows"])
+                sc = [_score(_prefix(s["r"], j)[1], n, j, criterion)
+                      for j in range(len(p), k + 1)]
+                k = len(p) + int(np.argmin(sc))
+            th, rss = _prefix(s["r"], k)
+            terms.append(s["terms"][:k])
+            coefs.append(th)
+            errs.append(np.asarray(s["err"])[:k])
+            var.append(rss / s["n_rows"])
+        new = NARXModel(na_, nb_, nk_, current.basis, terms, coefs, current.dt, ne=ne_,
+                        err=errs, noise_variance=var, custom=current.custom, **names)
+        history.append(float(np.sum(var)))
+        same = [t for t in new.terms] == [t for t in current.terms] and all(
+            np.allclose(a, b, rtol=1e-8, atol=1e-12) for a, b in zip(new.coefs, current.coefs))
+        current = new
+        if same:
+            break
+    info["els_residual_variance"] = history
+    return current

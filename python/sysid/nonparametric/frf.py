@@ -1,0 +1,373 @@
+"""Non-parametric frequency-response estimates: Welch (:func:`welch_frf`), Blackman-Tukey
+(:func:`spa`) and the smoothed empirical transfer-function estimate (:func:`etfe`), each an
+:class:`~sysid.FRD` with a confidence band. Spectra and coherence are in
+:mod:`sysid.nonparametric.spectra`, correlation in :mod:`sysid.nonparametric.correlation`.
+
+Conventions. Channels are stacked ``z = [u; y]``. The cross-spectrum of channels ``a`` and
+``b`` is ``S_ab = E[Z_a Z_b^*]`` (``scipy.signal.csd(z_b, z_a)``), so for ``y = G u + v``
+with ``v`` independent of ``u``
+
+.. math::
+
+    S_{yu} = G S_{uu}, \\qquad G = S_{yu} S_{uu}^{-1}, \\qquad
+    S_{vv} = S_{yy} - S_{yu} S_{uu}^{-1} S_{uy}.
+
+Each method averages the equivalent of ``K`` independent spectral estimates (Ljung, *System
+Identification*, 1999, ch. 6): ``K = N / sum(w(tau)^2)`` for a lag window ``w``
+(Blackman-Tukey), the effective number of Welch averages (overlap accounted for, Welch 1967),
+``1 / sum(W_k^2)`` per experiment for a normalised frequency window ``W`` (smoothed ETFE).
+With ``m`` inputs the variance of each entry is estimated as ``sigma^2 = [S_vv]_ii
+[S_uu^{-1}]_jj / (K - m)`` and the error, normalised by it, follows an F distribution with
+``(2, 2 (K - m))`` degrees of freedom (Gaussian data): the confidence band at level ``p`` is the
+circle of radius ``sigma sqrt(F^{-1}(p))`` around the estimate, which tends to
+``sigma sqrt(-ln(1 - p))`` for large ``K``. Frequencies are angular, in rad/s.
+
+Spectra are one-sided densities in units^2/Hz, as ``scipy.signal.welch``. Several
+experiments are averaged (no segment or lag spans two). Frequencies where the input
+spectrum is singular (no excitation) are left out of frequency responses and listed in
+``FRD.info["dropped"]``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from scipy import ndimage, signal
+
+from .._checks import as_int
+from ..data.iodata import IOData
+from ..errors import DataError, ExcitationError, InsufficientDataError
+from ..models.frd import FRD
+from .correlation import _lag_covariances
+from .spectra import (
+    _band,
+    _default_nperseg,
+    _frf_from_S,
+    _need_data,
+    _welch_matrix,
+    _z,
+)
+
+__all__ = ["welch_frf", "spa", "etfe", "default_lags"]
+
+#: Lag window width over the last significant lag: the Hann window then weighs every lag
+#: with a visible correlation by at least ``0.5 (1 + cos(pi / 6)) = 0.93``.
+LAGS_PER_SIGNIFICANT_LAG = 6
+#: A correlation is significant above this many standard deviations of its noise.
+SIGNIFICANCE = 4.5
+
+
+def default_lags(data: IOData, remove_mean: bool = True) -> tuple[int, dict[str, Any]]:
+    """Lag window width for :func:`spa` chosen from where the covariances decay into noise.
+
+    The correlation coefficients ``r_ab(tau)`` of the input-input and output-input channel
+    pairs (both signs of the lag) are compared with their noise level under independence,
+    ``sqrt((1 + 2 sum_k r_aa(k) r_bb(k)) / N)`` (Bartlett's formula), for lags up to
+    ``min(N / 10, shortest experiment - 1, 2000)``. The last lag ``tau_d`` at which any of
+    them exceeds ``4.5`` noise levels is where the response has decayed into the noise;
+    the window is ``M = 6 tau_d`` (at least 10, at most the lag limit), so the Hann window
+    still weighs ``tau_d`` by 0.93 and the bias it leaves is small next to the band.
+
+    Returns
+    -------
+    (int, dict)
+        ``M`` and the record of the choice (``lags_rule``, ``significant_lag``,
+        ``max_lag``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal((20000, 1))
+    >>> slow = sysid.StateSpaceModel([[0.95]], [[1.0]], [[1.0]])
+    >>> fast = sysid.StateSpaceModel([[0.3]], [[1.0]], [[1.0]])
+    >>> m_slow = sysid.default_lags(sysid.IOData(u=u, y=slow.simulate(u)))[0]
+    >>> m_fast = sysid.default_lags(sysid.IOData(u=u, y=fast.simulate(u)))[0]
+    >>> bool(m_slow > 4 * m_fast)
+    True
+    """
+    data = _need_data(data)
+    shortest = min(data.lengths)
+    limit = int(max(1, min(data.n_samples // 10, shortest - 1, 2000)))
+    R, total = _lag_covariances(_z(data), limit, remove_mean)
+    sd = np.sqrt(np.clip(np.diag(R[0]), np.finfo(float).tiny, None))
+    rho = R / np.outer(sd, sd)
+    auto = np.einsum("kaa->ka", rho)
+    spread = 1.0 + 2.0 * np.einsum("ka,kb->ab", auto[1:], auto[1:])
+    noise = np.sqrt(np.clip(spread, 1.0, None) / total)
+    m = data.n_inputs
+    pairs = np.ones_like(noise, dtype=bool)
+    pairs[m:, m:] = False  # output-output correlations carry the noise model, not G
+    if m == 0:
+        pairs[:] = True
+    big = (np.abs(rho[1:]) > SIGNIFICANCE * noise[None]) & pairs[None]
+    hits = np.nonzero(big.any(axis=(1, 2)))[0]
+    tau_d = int(hits[-1] + 1) if hits.size else 0
+    M = int(min(limit, max(10, LAGS_PER_SIGNIFICANT_LAG * tau_d)))
+    return M, {"lags_rule": "data: 6 x last significant lag", "significant_lag": tau_d,
+               "max_lag": limit}
+
+
+# --------------------------------------------------------------------------------------------
+# frequency responses
+# --------------------------------------------------------------------------------------------
+
+
+def _need_excitation(keep: np.ndarray, what: str) -> None:
+    if not np.any(keep):
+        raise ExcitationError(
+            f"{what}: the input has no power at any frequency (an all-zero or constant "
+            "input?), so there is no frequency response to estimate; check the input "
+            "channels, or use output-only analysis (sysid.spectra) for time series"
+        )
+
+
+def welch_frf(
+    data: IOData,
+    *,
+    nperseg: int | None = None,
+    noverlap: int | None = None,
+    window: str = "hann",
+    nfft: int | None = None,
+    confidence: float = 0.99,
+) -> FRD:
+    """Frequency response ``G = S_yu S_uu^{-1}`` from Welch-averaged cross spectra (the H1
+    estimator, MIMO), with coherence and a confidence band.
+
+    Parameters
+    ----------
+    data : IOData
+        Inputs and outputs (several experiments are averaged).
+    nperseg : int, optional
+        Segment length (default ``min(256, shortest experiment / 4)`` rounded to a power of 2).
+    noverlap : int, optional
+        Overlap (default half a segment).
+    window : str
+        Window name for ``scipy.signal.get_window``.
+    nfft : int, optional
+        FFT length (zero padding).
+    confidence : float
+        Level of the band.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> g = sysid.StateSpaceModel([[0.6]], [[1.0]], [[1.0]])
+    >>> u = rng.standard_normal((4000, 1))
+    >>> frd = sysid.welch_frf(sysid.IOData(u=u, y=g.simulate(u)), nperseg=128)
+    >>> bool(frd.compare(g).relative_error.max() < 0.05)
+    True
+    """
+    data = _need_data(data)
+    nperseg = _default_nperseg(data) if nperseg is None else as_int(nperseg, "nperseg", 2)
+    noverlap = nperseg // 2 if noverlap is None else as_int(noverlap, "noverlap", 0)
+    if noverlap >= nperseg:
+        raise DataError(f"noverlap ({noverlap}) must be smaller than nperseg ({nperseg})")
+    S, f, k_eff, count = _welch_matrix(_z(data), nperseg, noverlap, window, nfft, data.dt, True)
+    m = data.n_inputs
+    if count <= m:
+        raise InsufficientDataError(
+            f"{count} segment(s) for {m} input(s): the H1 estimate needs more segments than "
+            "inputs; lower nperseg"
+        )
+    # segment means are removed: the zero-frequency bin carries no information
+    S, f = S[1:], f[1:]
+    G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m)
+    _need_excitation(keep, "welch_frf")
+    std, dof = _band(ratio, k_eff, m, "lower nperseg")
+    return FRD(
+        2 * np.pi * f[keep], G, coherence=coh, std=std, dof=dof,
+        confidence=confidence, dt=data.dt, input_names=data.input_names,
+        output_names=data.output_names, method="welch",
+        info={"nperseg": nperseg, "noverlap": noverlap, "window": window, "segments": count,
+              "effective_averages": k_eff, "multiple_coherence": mcoh,
+              "dropped": 2 * np.pi * f[~keep]},
+    )
+
+
+def spa(
+    data: IOData,
+    *,
+    lags: int | None = None,
+    omega: Any = None,
+    n_freq: int = 128,
+    remove_mean: bool = True,
+    confidence: float = 0.99,
+) -> FRD:
+    """Blackman-Tukey spectral analysis (as MATLAB's ``spa``): covariances up to ``lags``
+    with a Hann lag window, Fourier transformed; ``G = S_yu S_uu^{-1}`` with coherence and a
+    confidence band.
+
+    Parameters
+    ----------
+    data : IOData
+    lags : int, optional
+        Lag window width ``M``; larger ``M`` means less bias, more variance. Default: chosen
+        from the data by :func:`default_lags` (six times the last lag at which an input-input
+        or output-input correlation stands out of its noise), so that the lag window does
+        not bias the estimate beyond its band; the rule and the lag are recorded in
+        ``info`` (``"lags"``, ``"lags_rule"``, ``"significant_lag"``). MATLAB's fixed
+        ``min(N / 10, 30)`` truncates slowly decaying responses and makes the band
+        dishonest.
+    omega : array_like, optional
+        Angular frequencies (rad/s); default ``n_freq`` points up to Nyquist.
+    remove_mean : bool
+        Subtract each experiment's mean first.
+    confidence : float
+        Level of the band.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> g = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    >>> u = rng.standard_normal((3000, 1))
+    >>> frd = sysid.spa(sysid.IOData(u=u, y=g.simulate(u)), lags=40)
+    >>> bool(frd.compare(g).relative_error.max() < 0.05)
+    True
+    """
+    data = _need_data(data)
+    N = data.n_samples
+    lag_info: dict[str, Any] = {"lags_rule": "given"}
+    if lags is None:
+        if N // 10 < 2:
+            raise InsufficientDataError(
+                f"spa's default lag window needs at least 20 samples, the record has {N}; "
+                f"pass lags=... (>= 1, below the shortest experiment) or use more data"
+            )
+        M, lag_info = default_lags(data, remove_mean)
+    else:
+        M = as_int(lags, "lags", 1)
+    if M >= min(data.lengths):
+        raise InsufficientDataError(
+            f"lags = {M} needs experiments longer than {M} samples (shortest: "
+            f"{min(data.lengths)})"
+        )
+    if omega is None:
+        n_freq = as_int(n_freq, "n_freq", 2)
+        w = np.arange(1, n_freq + 1) * np.pi / (n_freq * data.dt)
+    else:
+        w = np.asarray(omega, dtype=float).ravel()
+        if not (np.isfinite(w).all() and (w >= 0).all()):
+            raise DataError("omega must hold finite non-negative frequencies in rad/s")
+    R, total = _lag_covariances(_z(data), M, remove_mean)
+    tau = np.arange(M + 1)
+    lagw = 0.5 * (1.0 + np.cos(np.pi * tau / M))
+    # Phi(w) = sum_{tau=-M}^{M} w(tau) R(tau) e^{-i w tau dt}, R(-tau) = R(tau)^T
+    E = np.exp(-1j * np.outer(w * data.dt, tau)) * lagw  # (n_freq, M+1)
+    S = np.einsum("ft,tab->fab", E, R) + np.einsum("ft,tba->fab", E.conj(), R)
+    S -= R[0][None]  # tau = 0 counted twice
+    S *= 2.0 * data.dt  # one-sided density, as the Welch estimate
+    m = data.n_inputs
+    G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m)
+    _need_excitation(keep, "spa")
+    std, dof = _band(ratio, total / (lagw[0] ** 2 + 2.0 * (lagw[1:] ** 2).sum()), m,
+                     "lower lags")
+    return FRD(
+        w[keep], G, coherence=coh, std=std, dof=dof, confidence=confidence,
+        dt=data.dt, input_names=data.input_names, output_names=data.output_names,
+        method="blackman-tukey",
+        info={"lags": M, "window": "hann", "multiple_coherence": mcoh, "dropped": w[~keep],
+              **lag_info},
+    )
+
+
+def etfe(
+    data: IOData,
+    *,
+    smoothing: int | None = None,
+    window: str = "hann",
+    min_power: float = 1e-12,
+    confidence: float = 0.99,
+) -> FRD:
+    """Empirical transfer-function estimate ``Y(omega_k) / U(omega_k)`` on the FFT grid.
+
+    Parameters
+    ----------
+    data : IOData
+        Single-input records: one experiment, or several of equal length (averaged as
+        ``sum Y U^* / sum |U|^2``). With ``m`` inputs: ``m`` or more experiments of equal
+        length (``G = (sum Y U^H)(sum U U^H)^{-1}`` per frequency), or ``smoothing``.
+    smoothing : int, optional
+        Width in FFT bins of a frequency window (``window``) that smooths ``Y U^H`` and
+        ``U U^H`` before dividing: trades resolution for variance, gives coherence and a
+        confidence band, and makes MIMO estimates from one experiment possible
+        (``smoothing > m``).
+    window : str
+        Frequency-window shape (``scipy.signal.get_window`` name).
+    min_power : float
+        Bins whose input power (trace of ``U U^H``) is below this fraction of the largest
+        are left out: with a periodic multisine, ``1e-3`` keeps the excited lines only.
+    confidence : float
+        Level of the band (smoothed estimates only).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> u = np.random.default_rng(0).standard_normal(64)
+    >>> y = np.convolve(u, [1.0, 0.5])[:64]
+    >>> frd = sysid.etfe(sysid.IOData(u=u, y=y))
+    >>> Y, U = np.fft.rfft(y), np.fft.rfft(u)
+    >>> bool(np.allclose(frd.response[:, 0, 0], Y / U))
+    True
+    """
+    data = _need_data(data)
+    m, l = data.n_inputs, data.n_outputs
+    lens = set(data.lengths)
+    if len(lens) != 1:
+        raise DataError(
+            f"etfe needs experiments of equal length (got {sorted(lens)}); cut them to one "
+            "length or use spa / welch_frf"
+        )
+    n = lens.pop()
+    Zs = [np.fft.rfft(z, axis=0) for z in _z(data)]  # (nf, m+l)
+    nf = Zs[0].shape[0]
+    Puu = sum(np.einsum("fa,fb->fab", Z[:, :m], Z[:, :m].conj()) for Z in Zs) / n
+    Pyu = sum(np.einsum("fa,fb->fab", Z[:, m:], Z[:, :m].conj()) for Z in Zs) / n
+    Pyy = sum(np.einsum("fa,fb->fab", Z[:, m:], Z[:, m:].conj()) for Z in Zs) / n
+    info: dict[str, Any] = {"smoothing": smoothing, "n_fft": n}
+    if smoothing is None:
+        if data.n_experiments < m:
+            raise DataError(
+                f"an unsmoothed ETFE with {m} inputs needs at least {m} experiments; give "
+                f"smoothing > {m} (bins) or use spa / welch_frf"
+            )
+        S = np.zeros((nf, m + l, m + l), dtype=complex)
+        S[:, :m, :m], S[:, m:, :m] = Puu, Pyu
+        S[:, :m, m:] = np.conj(np.swapaxes(Pyu, 1, 2))
+        S[:, m:, m:] = Pyy
+        G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, min_power)
+        _need_excitation(keep, "etfe")
+        w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
+        info["dropped"] = w[~keep]
+        coh_out = coh if data.n_experiments > m else None
+        return FRD(w[keep], G, coherence=coh_out, dt=data.dt, confidence=confidence,
+                   input_names=data.input_names, output_names=data.output_names,
+                   method="etfe", info=info)
+    width = as_int(smoothing, "smoothing", 2)
+    if width <= m:
+        raise DataError(f"smoothing must exceed the number of inputs ({m}), got {width}")
+    W = signal.get_window(window, width + 2)[1:-1] if window != "boxcar" else np.ones(width)
+    W = W / W.sum()
+    # smooth over the two-sided spectrum (periodic in frequency): mirror the one-sided one
+    def smooth(P: np.ndarray) -> np.ndarray:
+        full = np.concatenate([np.conj(P[1 : nf - (n % 2 == 0)][::-1]), P, ], axis=0)
+        pad = nf - 1 - (n % 2 == 0)
+        sm = (ndimage.convolve1d(full.real, W, axis=0, mode="wrap")
+              + 1j * ndimage.convolve1d(full.imag, W, axis=0, mode="wrap"))
+        return sm[pad:]
+
+    S = np.zeros((nf, m + l, m + l), dtype=complex)
+    S[:, :m, :m], S[:, m:, :m] = smooth(Puu), smooth(Pyu)
+    S[:, :m, m:] = np.conj(np.swapaxes(S[:, m:, :m], 1, 2))
+    S[:, m:, m:] = smooth(Pyy)
+    G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, min_power)
+    _need_excitation(keep, "etfe")
+    w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
+    info.update({"window": window, "multiple_coherence": mcoh, "dropped": w[~keep]})
+    std, dof = _band(ratio, data.n_experiments / float((W**2).sum()), m, "increase smoothing")
+    return FRD(w[keep], G, coherence=coh, std=std, dof=dof, confidence=confidence,
+               dt=data.dt, input_names=data.input_names, output_names=data.output_names,
+               method="etfe", info=info)

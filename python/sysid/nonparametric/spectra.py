@@ -1,0 +1,342 @@
+"""Power spectra and coherence of every channel pair, and the spectral machinery that the
+frequency-response estimators share.
+
+Conventions (as :mod:`sysid.nonparametric.frf`): channels are stacked ``z = [u; y]``; the
+cross-spectrum of channels ``a`` and ``b`` is ``S_ab = E[Z_a Z_b^*]``
+(``scipy.signal.csd(z_b, z_a)``); spectra are one-sided densities in units^2/Hz, as
+``scipy.signal.welch``, at angular frequencies in rad/s. Several experiments are averaged (no
+segment spans two).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+from scipy import signal
+
+from .._checks import as_int
+from ..data.iodata import IOData
+from ..errors import DataError, InsufficientDataError
+
+__all__ = ["Spectra", "Coherence", "spectra", "periodogram", "coherence"]
+
+_COND_LIMIT = 1e10
+
+
+def _need_data(data: Any, inputs: bool = True) -> IOData:
+    if not isinstance(data, IOData):
+        raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
+    if inputs and data.n_inputs == 0:
+        raise DataError("a frequency response needs inputs; this record is a time series")
+    return data
+
+
+def _z(data: IOData) -> list[np.ndarray]:
+    return [np.hstack([u, y]) for u, y in data.experiments]
+
+
+def _names(data: IOData) -> list[str]:
+    return list(data.input_names) + list(data.output_names)
+
+
+# --------------------------------------------------------------------------------------------
+# spectral machinery
+# --------------------------------------------------------------------------------------------
+
+
+def _welch_matrix(
+    zs: list[np.ndarray], nperseg: int, noverlap: int, window: Any, nfft: int | None,
+    dt: float, detrend: bool,
+) -> tuple[np.ndarray, np.ndarray, float, int]:
+    """One-sided density cross-spectral matrix ``(n_freq, nc, nc)``, freqs (Hz), K_eff, K."""
+    win = signal.get_window(window, nperseg) if not isinstance(window, np.ndarray) else window
+    if win.size != nperseg:
+        raise DataError(f"window has {win.size} samples, nperseg is {nperseg}")
+    nfft = nperseg if nfft is None else int(nfft)
+    step = nperseg - noverlap
+    nc = zs[0].shape[1]
+    nf = nfft // 2 + 1
+    S = np.zeros((nf, nc, nc), dtype=complex)
+    count = 0
+    for z in zs:
+        if z.shape[0] < nperseg:
+            continue
+        segs = np.lib.stride_tricks.sliding_window_view(z, nperseg, axis=0)[::step]
+        segs = segs.transpose(0, 2, 1)  # (K, nperseg, nc)
+        if detrend:
+            segs = segs - segs.mean(axis=1, keepdims=True)
+        Z = np.fft.rfft(segs * win[None, :, None], n=nfft, axis=1)  # (K, nf, nc)
+        S += np.einsum("kfa,kfb->fab", Z, Z.conj())
+        count += Z.shape[0]
+    if count == 0:
+        raise InsufficientDataError(
+            f"every experiment is shorter than nperseg = {nperseg}; lower nperseg"
+        )
+    scale = dt / (win @ win) / count
+    S *= scale
+    S[1 : nf - (1 if nfft % 2 == 0 else 0)] *= 2.0
+    f = np.fft.rfftfreq(nfft, dt)
+    # effective number of averages (Welch 1967): overlapping segments are correlated
+    rho = 0.0
+    w2 = win * win
+    j = 1
+    while j * step < nperseg:
+        c = (win[: nperseg - j * step] * win[j * step :]).sum() / w2.sum()
+        rho += (1.0 - j / max(count, 1)) * c * c
+        j += 1
+    k_eff = count / (1.0 + 2.0 * rho)
+    return S, f, k_eff, count
+
+
+def _frf_from_S(
+    S: np.ndarray, m: int, min_power: float = 1e-12
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """G, pairwise coherence, multiple coherence, noise-to-input ratio factor, kept mask."""
+    Suu = S[:, :m, :m]
+    Syu = S[:, m:, :m]
+    Syy = S[:, m:, m:]
+    nf, l = S.shape[0], S.shape[1] - m
+    keep = np.ones(nf, dtype=bool)
+    top = max(np.abs(np.einsum("fii->f", Suu)).max(), np.finfo(float).tiny)
+    for k in range(nf):
+        tr = np.trace(Suu[k]).real
+        if tr <= min_power * top or np.linalg.cond(Suu[k]) > _COND_LIMIT:
+            keep[k] = False
+    Suu, Syu, Syy = Suu[keep], Syu[keep], Syy[keep]
+    Suu_inv = np.linalg.inv(Suu)
+    G = Syu @ Suu_inv
+    du = np.einsum("fjj->fj", Suu).real
+    dy = np.einsum("fii->fi", Syy).real
+    tiny = np.finfo(float).tiny
+    coh = np.abs(Syu) ** 2 / np.maximum(dy[:, :, None] * du[:, None, :], tiny)
+    explained = np.einsum("fij,fji->fi", G, np.conj(np.swapaxes(Syu, 1, 2))).real
+    mcoh = explained / np.maximum(dy, tiny)
+    Svv = np.maximum(dy - explained, 0.0)
+    ratio = Svv[:, :, None] * np.einsum("fjj->fj", Suu_inv).real[:, None, :]
+    return G, np.clip(coh, 0, 1), np.clip(mcoh, 0, 1), np.maximum(ratio, 0.0), keep, l
+
+
+def _band(ratio: np.ndarray, K: float, m: int, fix: str) -> tuple[np.ndarray, float]:
+    """Standard deviation and F degrees of freedom from ``K`` equivalent averages."""
+    if K - m < 1.0:
+        raise InsufficientDataError(
+            f"the estimate averages the equivalent of {K:.1f} spectra for {m} input(s): too "
+            f"few for a confidence band; {fix}"
+        )
+    return np.sqrt(ratio / (K - m)), 2.0 * (K - m)
+
+
+def _default_nperseg(data: IOData) -> int:
+    shortest = min(data.lengths)
+    return int(min(256, 2 ** max(3, int(np.log2(max(shortest // 4, 8))))))
+
+
+# --------------------------------------------------------------------------------------------
+# spectra, coherence, correlation
+# --------------------------------------------------------------------------------------------
+
+
+class Spectra:
+    """Auto and cross power spectral densities of every channel pair.
+
+    Attributes
+    ----------
+    omega : ndarray
+        Angular frequencies (rad/s).
+    matrix : ndarray
+        ``(n_freq, nc, nc)`` complex, ``matrix[:, a, b] = S_ab`` (one-sided density,
+        units^2/Hz), channels ordered inputs then outputs.
+    names : list of str
+        Channel names in that order.
+    method : str
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> d = sysid.IOData(u=np.random.default_rng(0).standard_normal(2048), y=np.zeros(2048))
+    >>> s = sysid.spectra(d, nperseg=256)
+    >>> s.psd("u0").shape
+    (129,)
+    """
+
+    def __init__(self, omega: np.ndarray, matrix: np.ndarray, names: list[str], method: str,
+                 info: dict[str, Any] | None = None) -> None:
+        self.omega = omega
+        self.matrix = matrix
+        self.names = names
+        self.method = method
+        self.info = dict(info or {})
+
+    @property
+    def hz(self) -> np.ndarray:
+        return self.omega / (2 * np.pi)
+
+    def _i(self, name: str) -> int:
+        if name not in self.names:
+            raise DataError(f"no channel {name!r}; channels are {self.names}")
+        return self.names.index(name)
+
+    def psd(self, name: str) -> np.ndarray:
+        """Power spectral density of one channel (real, units^2/Hz)."""
+        i = self._i(name)
+        return self.matrix[:, i, i].real.copy()
+
+    def csd(self, a: str, b: str) -> np.ndarray:
+        """Cross spectral density ``S_ab = E[Z_a Z_b^*]`` (equals ``scipy.signal.csd(b, a)``)."""
+        return self.matrix[:, self._i(a), self._i(b)].copy()
+
+    def plot(self, channels: Sequence[str] | None = None, *, ax: Any = None) -> Any:
+        """Log-log plot of the auto spectra."""
+        from ..plot.data import plot_spectra
+
+        return plot_spectra(self, channels=channels, ax=ax)
+
+    def __repr__(self) -> str:
+        return (f"Spectra ({self.method}): {self.omega.size} frequencies up to "
+                f"{self.omega[-1]:.3g} rad/s, channels {self.names}")
+
+
+def spectra(
+    data: IOData,
+    *,
+    nperseg: int | None = None,
+    noverlap: int | None = None,
+    window: str = "hann",
+    nfft: int | None = None,
+    detrend: bool = True,
+) -> Spectra:
+    """Welch estimate of all auto and cross spectra (as ``scipy.signal.welch``/``csd``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> x = np.random.default_rng(1).standard_normal(4096)
+    >>> s = sysid.spectra(sysid.IOData(u=None, y=x, dt=0.5), nperseg=128)
+    >>> bool(abs(s.psd("y0")[1:-1].mean() - 2 * 0.5) < 0.1)   # white: 2 sigma^2 dt
+    True
+    """
+    data = _need_data(data, inputs=False)
+    nperseg = _default_nperseg(data) if nperseg is None else as_int(nperseg, "nperseg", 2)
+    noverlap = nperseg // 2 if noverlap is None else as_int(noverlap, "noverlap", 0)
+    if noverlap >= nperseg:
+        raise DataError(f"noverlap ({noverlap}) must be smaller than nperseg ({nperseg})")
+    S, f, k_eff, count = _welch_matrix(_z(data), nperseg, noverlap, window, nfft, data.dt,
+                                       detrend)
+    return Spectra(2 * np.pi * f, S, _names(data), "welch",
+                   {"nperseg": nperseg, "segments": count, "effective_averages": k_eff})
+
+
+def periodogram(data: IOData, *, window: str = "boxcar", detrend: bool = True) -> Spectra:
+    """Periodogram of every channel pair (one segment per experiment, the longest setting
+    the FFT length; experiments averaged). As ``scipy.signal.periodogram``.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> x = np.random.default_rng(2).standard_normal(100)
+    >>> p = sysid.periodogram(sysid.IOData(u=None, y=x))
+    >>> bool(np.allclose(p.psd("y0"), signal.periodogram(x)[1]))
+    True
+    """
+    data = _need_data(data, inputs=False)
+    nfft = max(data.lengths)
+    S = None
+    for z in _z(data):
+        s, f, _, _ = _welch_matrix([z], z.shape[0], 0, window, nfft, data.dt, detrend)
+        S = s * z.shape[0] if S is None else S + s * z.shape[0]
+    assert S is not None
+    return Spectra(2 * np.pi * f, S / data.n_samples, _names(data), "periodogram",
+                   {"window": window})
+
+
+class Coherence:
+    """Magnitude-squared coherence of every output with every input.
+
+    Attributes
+    ----------
+    omega : ndarray
+        rad/s.
+    values : ndarray
+        ``(n_freq, n_outputs, n_inputs)``, ``|S_yu|^2 / (S_yy S_uu)`` in [0, 1].
+    multiple : ndarray
+        ``(n_freq, n_outputs)``: share of each output's power explained linearly by all
+        inputs together (equals ``values`` for one input).
+    """
+
+    def __init__(self, omega: np.ndarray, values: np.ndarray, multiple: np.ndarray,
+                 input_names: list[str], output_names: list[str]) -> None:
+        self.omega = omega
+        self.values = values
+        self.multiple = multiple
+        self.input_names = input_names
+        self.output_names = output_names
+
+    @property
+    def hz(self) -> np.ndarray:
+        return self.omega / (2 * np.pi)
+
+    def pair(self, output: str, input: str) -> np.ndarray:
+        """Coherence of one output/input pair."""
+        if output not in self.output_names or input not in self.input_names:
+            raise DataError(f"unknown pair ({output!r}, {input!r}); outputs "
+                            f"{self.output_names}, inputs {self.input_names}")
+        return self.values[:, self.output_names.index(output), self.input_names.index(input)]
+
+    def band(self, threshold: float = 0.6) -> np.ndarray:
+        """Boolean ``(n_freq, l, m)``: where the coherence exceeds ``threshold`` (flight-test
+        practice trusts frequency responses only there)."""
+        return self.values > threshold
+
+    def plot(self, *, fig: Any = None, threshold: float | None = 0.6) -> Any:
+        """One panel per input, every output's coherence against frequency."""
+        from ..plot.data import plot_coherence
+
+        return plot_coherence(self, fig=fig, threshold=threshold)
+
+    def __repr__(self) -> str:
+        mean = self.values.mean(axis=0)
+        pairs = ", ".join(
+            f"{o}/{i} {mean[a, b]:.2f}" for a, o in enumerate(self.output_names)
+            for b, i in enumerate(self.input_names)
+        )
+        return f"Coherence: {self.omega.size} frequencies; mean per pair: {pairs}"
+
+
+def coherence(
+    data: IOData,
+    *,
+    nperseg: int | None = None,
+    noverlap: int | None = None,
+    window: str = "hann",
+) -> Coherence:
+    """Magnitude-squared coherence per output/input pair (Welch; as
+    ``scipy.signal.coherence``) and the multiple coherence of each output.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> u = np.random.default_rng(0).standard_normal(4096)
+    >>> c = sysid.coherence(sysid.IOData(u=u, y=np.convolve(u, [1.0, 0.5])[:4096]))
+    >>> bool(c.values.min() > 0.99)
+    True
+    """
+    data = _need_data(data)
+    s = spectra(data, nperseg=nperseg, noverlap=noverlap, window=window)
+    m = data.n_inputs
+    S = s.matrix
+    du = np.einsum("fjj->fj", S[:, :m, :m]).real
+    dy = np.einsum("fii->fi", S[:, m:, m:]).real
+    tiny = np.finfo(float).tiny
+    vals = np.abs(S[:, m:, :m]) ** 2 / np.maximum(dy[:, :, None] * du[:, None, :], tiny)
+    mult = np.zeros_like(dy)
+    for k in range(S.shape[0]):
+        Suu = S[k, :m, :m]
+        if np.linalg.cond(Suu) < _COND_LIMIT:
+            Syu = S[k, m:, :m]
+            mult[k] = np.einsum("ij,ji->i", Syu @ np.linalg.inv(Suu), Syu.conj().T).real
+    mult = mult / np.maximum(dy, tiny)
+    return Coherence(s.omega, np.clip(vals, 0, 1), np.clip(mult, 0, 1), list(data.input_names),
+                     list(data.output_names))

@@ -1,0 +1,1 @@
+"""Prediction-error refinement of state-space models: pem and ssest."""

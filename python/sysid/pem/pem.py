@@ -1,0 +1,456 @@
+"""Prediction-error refinement of state-space models: :func:`pem` (the one-call estimator
+:func:`sysid.ssest` is in :mod:`sysid.pem.ssest`).
+
+The model ``x(t+1) = A x + B u + K e``, ``y = C x + D u + e`` is refined by minimising the
+prediction errors of its Kalman predictor (``focus="prediction"``) or its simulation errors
+(``focus="simulation"``, ``K = 0``) over all experiments of the record, weighted by the inverse
+of their covariance (re-estimated between iterations: the determinant criterion). The search is
+the one Gauss-Newton / Levenberg-Marquardt optimiser of the Rust core (``sysid_core::optim``),
+in data-driven local coordinates, with analytic sensitivities accumulated blockwise (memory
+independent of the record length), and never leaves the set of stable predictors.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import as_int
+from .._progress import iteration_callback, iteration_printer
+from ..data.iodata import IOData
+from ..errors import DataError, IterationLimitWarning, StabilityWarning
+from ..models.statespace import StateSpaceModel
+from ..models.uncertainty import ParameterUncertainty
+
+__all__ = ["pem", "pem_loss", "PemUncertainty"]
+
+_NOISE = ("estimate", "none", "fixed")
+
+
+#: The interim name of :class:`sysid.ParameterUncertainty` (kept for compatibility).
+PemUncertainty = ParameterUncertainty
+
+
+def _stabilize(A: np.ndarray) -> np.ndarray:
+    """Reflect eigenvalues outside the unit circle to ``1 / conj(z)`` (a real matrix)."""
+    w, V = np.linalg.eig(A)
+    bad = np.abs(w) >= 1.0
+    w = np.where(bad, 0.99 / np.conj(w) * np.where(np.abs(w) == 1.0, 1.0, 1.0), w)
+    w = np.where(np.abs(w) >= 1.0, 0.99 * w / np.abs(w), w)
+    return np.real(V @ np.diag(w) @ np.linalg.inv(V))
+
+
+def _radius(M: np.ndarray) -> float:
+    return float(np.max(np.abs(np.linalg.eigvals(M)))) if M.size else 0.0
+
+
+def _experiments(data: Any) -> IOData:
+    if isinstance(data, IOData):
+        return data
+    if isinstance(data, tuple) and len(data) == 2:
+        return IOData(u=data[0], y=data[1])
+    raise DataError(f"data must be a sysid.IOData or a (u, y) pair, got {type(data).__name__}")
+
+
+def _x0_modes(x0: Any, count: int, n: int) -> list[Any]:
+    if isinstance(x0, str):
+        if x0 not in ("estimate", "zero"):
+            raise DataError(f"x0 must be 'estimate', 'zero' or an array, got {x0!r}")
+        return [x0] * count
+    if x0 is None:
+        return ["zero"] * count
+    if isinstance(x0, (list, tuple)) and len(x0) == count and count > 1 and (
+            isinstance(x0[0], str) or np.ndim(x0[0]) == 1):
+        items = list(x0)
+    else:
+        items = [x0] * count
+    out: list[Any] = []
+    for it in items:
+        if isinstance(it, str):
+            out.extend(_x0_modes(it, 1, n))
+        else:
+            arr = np.asarray(it, dtype=float).ravel()
+            if arr.size != n:
+                raise DataError(f"x0 has {arr.size} entries but the model has {n} states")
+            out.append(arr)
+    return out
+
+
+def _regularization(reg: Any, p_start: np.ndarray | None) -> tuple[float, Any, Any]:
+    if reg is None:
+        return 0.0, None, None
+    if not isinstance(reg, dict) or "lambda" not in reg:
+        raise DataError("regularization must be a dict with 'lambda' and optionally 'R' and "
+                        "'nominal' ('zero', 'model' or an array)")
+    lam = float(reg["lambda"])
+    if not np.isfinite(lam) or lam < 0:
+        raise DataError(f"regularization lambda must be finite and >= 0, got {lam}")
+    R = reg.get("R")
+    R = None if R is None else np.asarray(R, dtype=float)
+    nom = reg.get("nominal", "zero")
+    if isinstance(nom, str):
+        if nom == "zero":
+            nom = None
+        elif nom == "model":
+            nom = p_start
+        else:
+            raise DataError(f"regularization nominal must be 'zero', 'model' or an array, "
+                            f"got {nom!r}")
+    else:
+        nom = np.asarray(nom, dtype=float).ravel()
+    return lam, R, nom
+
+
+@dataclass
+class _Setup:
+    """The start's matrices and the options as the core takes them (see :func:`_setup`)."""
+
+    data: IOData
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+    K: np.ndarray | None
+    feedthrough: bool
+    estimate_k: bool
+    weighting: str
+    modes: list[Any]
+    focus: str
+    enforce_stability: bool | None
+    stabilized: str | None
+
+    def kwargs(self) -> dict[str, Any]:
+        return {"focus": self.focus, "estimate_d": self.feedthrough,
+                "estimate_k": self.estimate_k, "reweight": self.weighting == "noise",
+                "enforce_stability": self.enforce_stability,
+                "x0": [m if isinstance(m, str) else np.ascontiguousarray(m) for m in self.modes]}
+
+
+def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: bool | None, x0: Any,
+           noise: str, weighting: str | None, enforce_stability: bool | None) -> _Setup:
+    """Checks the arguments and prepares the start (``focus`` itself is parsed by the core)."""
+    data = _experiments(data)
+    if not isinstance(model, StateSpaceModel):
+        raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
+    if weighting is None:
+        weighting = "noise" if focus == "prediction" else "identity"
+    if weighting not in ("noise", "identity"):
+        raise DataError(f"weighting must be 'noise' or 'identity', got {weighting!r}")
+    if noise not in _NOISE:
+        raise DataError(f"noise must be 'estimate', 'none' or 'fixed', got {noise!r}")
+    if enforce_stability is not None and not isinstance(enforce_stability, (bool, np.bool_)):
+        raise DataError(f"enforce_stability must be True, False or None, got "
+                        f"{enforce_stability!r}")
+    if data.n_inputs != model.ninputs or data.n_outputs != model.noutputs:
+        raise DataError(
+            f"the model has {model.ninputs} input(s) and {model.noutputs} output(s) but the "
+            f"data have {data.n_inputs} and {data.n_outputs}")
+    n, l = model.nstates, model.noutputs
+    A, B, C, D = model.A.copy(), model.B.copy(), model.C.copy(), model.D.copy()
+    if feedthrough is None:
+        feedthrough = bool(np.any(D != 0))
+    if not feedthrough:
+        D = np.zeros_like(D)
+    K = None
+    if focus == "prediction" and noise != "none":
+        K = model.K.copy() if model.K is not None else np.zeros((n, l))
+    # an unstable start: stabilise first and record it
+    stabilized = None
+    if focus != "prediction" or K is None or enforce_stability:
+        if _radius(A) >= 1.0:
+            A = _stabilize(A)
+            stabilized = "unstable poles of A reflected into the unit circle"
+    if K is not None and _radius(A - K @ C) >= 1.0:
+        if noise == "fixed":
+            raise DataError("the start's predictor A - K C is unstable and noise='fixed' keeps "
+                            "K: give a stabilising K or use noise='estimate'")
+        if _radius(A) >= 1.0:
+            A = _stabilize(A)
+            stabilized = "unstable poles of A reflected and K = 0"
+        else:
+            stabilized = "unstable predictor: started from K = 0"
+        K = np.zeros((n, l))
+    return _Setup(data, A, B, C, D, K, bool(feedthrough),
+                  focus == "prediction" and noise == "estimate", weighting,
+                  _x0_modes(x0, data.n_experiments, n), focus, enforce_stability, stabilized)
+
+
+def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None) -> None:
+    """The warnings of a refinement: an unstable model, a search stopped at its cap."""
+    rho = float(res["spectral_radius"])
+    if rho >= 1.0:
+        why = ("an unstable model fits the data significantly better than the best stable "
+               "one (likelihood-ratio test at 1 %)" if enforce is None else
+               "enforce_stability=False keeps only the predictor stable")
+        warnings.warn(
+            f"the refined model is unstable (largest pole modulus {rho:.4g}): {why}; pass "
+            f"enforce_stability=True (or focus='simulation') for a stable model",
+            StabilityWarning, stacklevel=3)
+    if res["stop"] == "maximum iterations" and max_iter > 0:
+        hist = list(res["history"])
+        last = abs(hist[-2] - hist[-1]) / max(abs(hist[-2]), 1e-300) if len(hist) > 1 else 0.0
+        warnings.warn(
+            f"the {focus} search stopped at max_iter={max_iter} before converging (the last "
+            f"iteration still lowered the criterion by {100 * last:.2g} %); the model is the "
+            f"best iterate: raise max_iter, or refine again with sysid.pem(data, model)",
+            IterationLimitWarning, stacklevel=3)
+
+
+def pem_loss(
+    data: Any,
+    model: StateSpaceModel,
+    *,
+    focus: str = "prediction",
+    feedthrough: bool | None = None,
+    x0: Any = "estimate",
+    noise: str = "estimate",
+    weighting: str | None = None,
+    enforce_stability: bool | None = None,
+) -> float:
+    """The criterion :func:`pem` would start from for ``model``, without refining it.
+
+    One pass over the data fits the estimated initial states by least squares, one more
+    gives the criterion: ``det(E^T E / N)`` of the prediction (or simulation) errors for
+    ``weighting="noise"`` (default for prediction), ``1/2 sum |e|^2`` for
+    ``weighting="identity"`` (default for simulation). Cheap enough to score many candidate
+    models (orders, structures, starts) before refining the best.
+
+    Parameters
+    ----------
+    data, model, focus, feedthrough, x0, noise, weighting, enforce_stability
+        As for :func:`pem`.
+
+    Returns
+    -------
+    float
+        The criterion, or ``inf`` when the model is not admissible for that focus (an
+        unstable predictor, or for simulation an unstable ``A``): :func:`pem` would have to
+        stabilise it first.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> true = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]])
+    >>> u = rng.standard_normal(300)
+    >>> data = sysid.IOData(u=u, y=true.simulate(u) + 0.1 * rng.standard_normal((300, 1)))
+    >>> worse = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    >>> sysid.pem_loss(data, true, focus="simulation") < sysid.pem_loss(data, worse,
+    ...                                                                  focus="simulation")
+    True
+    """
+    st = _setup(data, model, focus, feedthrough, x0, noise, weighting, enforce_stability)
+    if st.stabilized:
+        return float("inf")
+    try:
+        return float(_sysid.pem_criterion(st.A, st.B, st.C, st.D, st.K, st.data.experiments,
+                                          **st.kwargs()))
+    except DataError as e:
+        if "start model" in str(e):
+            return float("inf")
+        raise
+
+
+def pem(
+    data: Any,
+    model: StateSpaceModel,
+    *,
+    focus: str = "prediction",
+    feedthrough: bool | None = None,
+    x0: Any = "estimate",
+    noise: str = "estimate",
+    max_iter: int = 50,
+    tol: float = 1e-6,
+    regularization: dict[str, Any] | None = None,
+    progress: bool | None | Callable[..., Any] = None,
+    local_coordinates: bool = True,
+    weighting: str | None = None,
+    enforce_stability: bool | None = None,
+) -> StateSpaceModel:
+    """Refine a state-space model by minimising its prediction (or simulation) errors.
+
+    Parameters
+    ----------
+    data : IOData or (u, y)
+        Estimation data (every experiment is used; remove means first).
+    model : StateSpaceModel
+        The start (for example a subspace estimate).
+    focus : {"prediction", "simulation"}
+        One-step prediction errors of the innovation form, or simulation errors (``K = 0``).
+    feedthrough : bool, optional
+        Estimate ``D`` (``True``) or force ``D = 0`` (``False``); default: estimate it when
+        the start's ``D`` is non-zero.
+    x0 : "estimate", "zero", array, or a list with one per experiment
+        Initial states: estimated with the model (default), zero, or given.
+    noise : {"estimate", "none", "fixed"}
+        Estimate ``K``; no noise model (``K = 0``, an output-error model); or keep the start's
+        ``K``. Ignored for ``focus="simulation"``.
+    max_iter : int
+        Iteration cap.
+    tol : float
+        Stop when an iteration lowers the cost by less than this fraction.
+    regularization : dict, optional
+        ``{"lambda": float, "R": (p, p) array, "nominal": "zero" | "model" | array}``: adds
+        ``lambda/2 (theta - nominal)^T R (theta - nominal)`` to the cost (MATLAB's
+        ``Regularization``).
+    progress : bool or callable, optional
+        A progress bar over the iterations with the cost (sysid's one progress machinery,
+        :mod:`sysid._progress`): by default only on a terminal; ``True`` asks for it (when
+        stderr is not a terminal, one line per iteration on stdout instead, for logs);
+        ``False`` silences it; a callable gets ``(iteration, cost, step_norm,
+        gradient_norm, damping)`` (``cost``: the criterion of ``info["pem"]["cost"]``) and may
+        return ``False`` to stop.
+    local_coordinates : bool
+        Search in data-driven local coordinates (default); ``False`` searches all entries.
+    weighting : {"noise", "identity"}, optional
+        ``"noise"``: weight the errors by the inverse of their covariance, re-estimated between
+        iterations (the determinant criterion, maximum likelihood for Gaussian innovations);
+        ``"identity"``: plain sum of squares. Default ``"noise"`` for prediction focus and
+        ``"identity"`` for simulation focus (simulation errors are not white, and on the
+        shipped records the plain sum gives the better validation fit; see docs/pem.md).
+    enforce_stability : bool, optional
+        Keep ``A`` stable (MATLAB's ``EnforceStability``). ``focus="simulation"`` always
+        does. ``None`` (default): with ``focus="prediction"`` the predictor ``A - K C`` is
+        always stable and ``A`` is kept stable unless an unstable model fits significantly
+        better (likelihood-ratio test at the 1 % level); then a
+        :class:`sysid.StabilityWarning` names the largest pole modulus. ``False``: only the
+        predictor is kept stable (a warning still says when the model is unstable).
+
+    Returns
+    -------
+    StateSpaceModel
+        ``info["pem"]`` holds iterations, ``"cost"``: the criterion the search decreases at
+        the start and after each iteration (the values the progress callback gets), named by
+        ``"criterion"``: ``"det"``, the determinant of the error covariance
+        ``det(E^T E / N)`` (not its log; the maximum-likelihood loss, MATLAB's "loss
+        function") for ``weighting="noise"``, ``"sum of squares"``, ``1/2 sum |e|^2``, for
+        ``weighting="identity"``; ``"loss_history"``: the determinant under either weighting;
+        ``"weighted_cost"``: ``1/2 sum e^T W e`` with the weighting of each iterate (``N l / 2``
+        throughout with the noise weighting); the stop reason and the condition number;
+        ``"spectral_radius"``, the largest pole modulus of the result. The result's
+        criterion is never above its start's. Stopping at ``max_iter`` warns
+        (:class:`sysid.IterationLimitWarning`).
+        ``uncertainty`` holds the parameter covariance (:class:`sysid.ParameterUncertainty`), so
+        that ``poles(std=True)``, ``freqresp(w, std=True)``, ``damp(std=True)`` and Bode bands
+        work.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> true = sysid.StateSpaceModel([[0.9, 0.2], [-0.2, 0.9]], [[1.0], [0.0]], [[1.0, 0.5]])
+    >>> u = rng.standard_normal(400)
+    >>> data = sysid.IOData(u=u, y=true.simulate(u) + 0.05 * rng.standard_normal((400, 1)))
+    >>> start = sysid.moesp(data, order=2, horizon=5, feedthrough=False)
+    >>> m = sysid.pem(data, start, focus="simulation")
+    >>> m.info["pem"]["stop"] in ("cost tolerance", "gradient tolerance", "step tolerance",
+    ...                           "no further decrease")
+    True
+    >>> bool(np.allclose(np.sort_complex(m.poles()), np.sort_complex(true.poles()), atol=0.02))
+    True
+    """
+    st = _setup(data, model, focus, feedthrough, x0, noise, weighting, enforce_stability)
+    max_iter = as_int(max_iter, "max_iter", 0)
+    tol = float(tol)
+    if not (np.isfinite(tol) and tol >= 0):
+        raise DataError(f"tol must be finite and >= 0, got {tol}")
+    data, A, B, C, D, K = st.data, st.A, st.B, st.C, st.D, st.K
+    n, l = model.nstates, model.noutputs
+    feedthrough, estimate_k, weighting, modes = (st.feedthrough, st.estimate_k, st.weighting,
+                                                 st.modes)
+    start_theta = np.concatenate([A.ravel(), B.ravel(), C.ravel()]
+                                 + ([D.ravel()] if feedthrough else [])
+                                 + ([K.ravel()] if estimate_k and K is not None else []))
+    lam, R, nom = _regularization(regularization, None)
+    if regularization is not None and isinstance(regularization.get("nominal"), str) \
+            and regularization["nominal"] == "model":
+        nom = np.concatenate([start_theta] + [np.zeros(n) for m in modes if
+                                              isinstance(m, str) and m == "estimate"])
+    cb, close_bar = iteration_callback(progress, "pem", max_iter, iteration_printer(
+        "pem", "det" if weighting == "noise" else "sum of squares"))
+    try:
+        res = _sysid.pem_refine(
+            A, B, C, D, K, data.experiments, **st.kwargs(),
+            local_coordinates=bool(local_coordinates), max_iter=max_iter, tol_cost=tol,
+            reg_lambda=lam, reg_r=R, reg_nominal=nom, progress=cb)
+    finally:
+        close_bar()
+    _warn(res, focus, max_iter, enforce_stability)
+    stabilized = st.stabilized
+    Kres = res["k"] if K is not None else None
+    x0s = res["x0"]
+    est_x0 = [i for i, m in enumerate(modes) if isinstance(m, str) and m == "estimate"]
+
+    def build(theta: np.ndarray) -> StateSpaceModel:
+        theta = np.asarray(theta, dtype=float)
+        m_, o = model.ninputs, 0
+
+        def take(r: int, c: int) -> np.ndarray:
+            nonlocal o
+            out = theta[o:o + r * c].reshape(r, c)
+            o += r * c
+            return out
+        a, b, c = take(n, n), take(n, m_), take(l, n)
+        d = take(l, m_) if feedthrough else res["d"]
+        k = take(n, l) if estimate_k else Kres
+        return StateSpaceModel(a, b, c, d, k, dt=data.dt)
+
+    info = dict(model.info) if model.info else {}
+    info["method"] = "pem"
+    info["start_method"] = model.info.get("method") if model.info else None
+    info["pem"] = {
+        "iterations": res["iterations"],
+        "evaluations": res["evaluations"],
+        "cost": list(res["history"]),
+        "criterion": "det" if weighting == "noise" else "sum of squares",
+        "weighted_cost": list(res["weighted_history"]),
+        "loss_history": list(res["loss_history"]),
+        "stop": res["stop"],
+        "condition": res["condition"],
+        "focus": focus,
+        "weighting": weighting,
+        "feedthrough": bool(feedthrough),
+        "noise": noise if focus == "prediction" else "none",
+        "x0": ["estimate" if isinstance(m, str) and m == "estimate" else
+               ("zero" if isinstance(m, str) else "given") for m in modes],
+        "stabilized": stabilized,
+        "spectral_radius": float(res["spectral_radius"]),
+        "enforce_stability": enforce_stability,
+        "n_parameters": int(res["theta"].size),
+        "rank": int(res["rank"]),
+        "n_samples": int(res["n_samples"]),
+        "x0_values": x0s,
+        "estimated_x0": est_x0,
+    }
+    out = StateSpaceModel(
+        res["a"], res["b"], res["c"], res["d"], Kres, dt=data.dt,
+        noise_cov=res["innovation_covariance"], x0=x0s[0] if len(x0s) == 1 else None,
+        input_names=data.input_names, output_names=data.output_names, info=info)
+    out.uncertainty = _uncertainty(
+        res["theta"], res["covariance"], build, int(res["rank"]),
+        _names(n, model.ninputs, l, bool(feedthrough), estimate_k and K is not None, len(est_x0)))
+    return out
+
+
+def _uncertainty(theta: np.ndarray, cov: np.ndarray, build: Callable[[np.ndarray], Any],
+                 rank: int, names: list[str]) -> ParameterUncertainty:
+    return ParameterUncertainty(theta, cov, build, names=names[:len(theta)]
+                                + [f"theta{i}" for i in range(len(names), len(theta))],
+                                dof=rank, method="gauss-newton")
+
+
+def _names(n: int, m: int, l: int, feedthrough: bool, estimate_k: bool,
+           n_x0: int) -> list[str]:
+    out = []
+    for name, r, c, on in (("A", n, n, True), ("B", n, m, True), ("C", l, n, True),
+                           ("D", l, m, feedthrough), ("K", n, l, estimate_k)):
+        if on:
+            out += [f"{name}[{i},{j}]" for i in range(r) for j in range(c)]
+    for e in range(n_x0):
+        out += [f"x0[{e}][{i}]" for i in range(n)]
+    return out

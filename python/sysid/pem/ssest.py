@@ -1,0 +1,134 @@
+"""The one-call state-space estimator :func:`ssest`: the best subspace start (several
+weightings, with and without ``x0``), refined by :func:`sysid.pem`."""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from .._checks import as_int
+from ..errors import DataError, SysidError
+from ..models.statespace import StateSpaceModel
+from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator
+from .pem import _experiments, pem, pem_loss
+
+__all__ = ["ssest"]
+
+
+def ssest(
+    data: Any,
+    order: Any = "auto",
+    *,
+    focus: str = "prediction",
+    feedthrough: Any = False,
+    x0: Any = "estimate",
+    noise: str = "estimate",
+    horizon: int | None = None,
+    methods: tuple[str, ...] = ("moesp", "n4sid", "cva"),
+    method: str | None = None,
+    max_iter: int = 50,
+    tol: float = 1e-6,
+    regularization: dict[str, Any] | None = None,
+    progress: bool | None | Callable[..., Any] = None,
+    enforce_stability: bool | None = None,
+) -> StateSpaceModel:
+    """Estimate a state-space model: the best subspace start, refined by :func:`pem`.
+
+    The candidates are the subspace weightings in ``methods``, each with ``B, D`` from the
+    regression on the compressed data and (single-experiment records) from least squares on
+    the data jointly with ``x0``; the one with the lowest cost that :func:`pem` will minimise
+    (the determinant of the error covariance, initial states fitted) is refined.
+
+    Parameters
+    ----------
+    data : IOData or (u, y)
+    order : int, "auto" or sequence of int
+        Model order. ``"auto"`` (default): the order whose subspace models best simulate
+        parts of the record held out (:meth:`SubspaceEstimator.order_selection`); a sequence
+        (``range(1, 11)``): each order refined on the first 2/3 of the record and scored by
+        simulation fit on the last 1/3, the smallest within 0.5 points of the best wins and
+        is refined on the whole record. Table and reason in ``info["order_selection"]``.
+    feedthrough : bool or "auto"
+        Estimate ``D``. Default ``False`` (no feedthrough, as MATLAB's ``ssest``; the same
+        default for every sysid estimator). ``"auto"``: fitted with ``D``, kept when an entry
+        of ``D`` exceeds twice its standard deviation, else re-fitted without (recorded in
+        ``info["feedthrough_selection"]``).
+    focus, x0, noise, max_iter, tol, regularization, progress, enforce_stability
+        As for :func:`pem` (the candidates are scored by :func:`pem_loss`).
+    horizon : int, optional
+        Subspace horizon (default :func:`sysid.default_horizon`).
+    methods : tuple of str
+        Subspace weightings tried for the start.
+    method : str, optional
+        One subspace method for the start (overrides ``methods``); ``"pbsid"`` or
+        ``"ssarx"`` for closed-loop data (their start is consistent under feedback, and the
+        start's ``B, D`` are then not re-fitted on the data with ``x0``, which would be an
+        output-error fit).
+
+    Returns
+    -------
+    StateSpaceModel
+        With ``info["pem"]`` and ``info["start"]`` (the chosen candidate and every
+        candidate's loss).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> true = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]], K=[[0.5]])
+    >>> u = rng.standard_normal(500)
+    >>> e = 0.1 * rng.standard_normal((500, 1))
+    >>> y = true.simulate(u) + 0.0
+    >>> m = sysid.ssest(sysid.IOData(u=u, y=y + e), order=1)
+    >>> bool(abs(m.poles()[0] - 0.8) < 0.05)
+    True
+    """
+    data = _experiments(data)
+    if isinstance(order, str) or np.ndim(order) or isinstance(feedthrough, str):
+        # order="auto", a range of orders, or feedthrough="auto": chosen from the data
+        from ..identify.structure import ssest_select
+
+        return ssest_select(data, order, focus=focus, feedthrough=feedthrough, x0=x0,
+                            noise=noise, horizon=horizon, methods=methods, method=method,
+                            max_iter=max_iter, tol=tol, regularization=regularization,
+                            progress=progress, enforce_stability=enforce_stability)
+    order = as_int(order, "order", 1)
+    est = SubspaceEstimator(data, horizon)
+    candidates = []
+
+    names = methods if method is None else (method,)
+    for name in names:
+        x0_options = (False, True) if data.n_experiments == 1 else (False,)
+        if name in CLOSED_LOOP:
+            x0_options = (False,)
+        for use_x0 in x0_options:
+            try:
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    cand = est.fit(order, method=name, feedthrough=feedthrough, x0=use_x0)
+            except Exception:  # noqa: BLE001 - a failing weighting is just not a candidate
+                if method is not None:
+                    raise
+                continue
+            try:
+                loss = pem_loss(data, cand, focus=focus, feedthrough=feedthrough, x0=x0,
+                                noise=noise, enforce_stability=enforce_stability)
+            except SysidError:
+                loss = float("inf")
+            candidates.append((loss, name, use_x0, cand))
+    if not candidates:
+        raise DataError("no subspace start could be computed for this order; lower the order")
+    candidates.sort(key=lambda c: c[0])
+    best = candidates[0]
+    model = pem(data, best[3], focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
+                max_iter=max_iter, tol=tol, regularization=regularization, progress=progress,
+                enforce_stability=enforce_stability)
+    model.info["start"] = {
+        "method": best[1],
+        "bd_x0": best[2],
+        "losses": {f"{c[1]}{'+x0' if c[2] else ''}": c[0] for c in candidates},
+    }
+    return model

@@ -1,0 +1,2 @@
+"""Polynomial models (ARX, ARMAX, OE, BJ, IV4, ARX with regularisation), structure and delay
+selection."""

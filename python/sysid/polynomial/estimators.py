@@ -1,0 +1,530 @@
+"""Polynomial estimators: ``arx``, ``armax``, ``oe``, ``bj``, ``ar``, ``arma``, ``arxstruc``,
+``selstruc`` and ``delayest`` (least squares by streaming QR in Rust; the iterative structures
+through the shared Gauss-Newton optimiser of ``sysid-core``)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import as_int, as_int_grid, experiment_arrays
+from .._progress import iteration_callback, iteration_printer
+from ..errors import DataError
+from ..models.uncertainty import ParameterUncertainty
+from .model import PolynomialModel
+
+
+# -- parameter uncertainty: one ParameterUncertainty over every output's coefficients ------
+def _refs(model: PolynomialModel, kind: str) -> list[tuple[str, int, int | None]]:
+    """The coefficient arrays in the order of the estimators' parameter vectors: per output,
+    ARX ``[a_i1.., a_i2.., ..., b_i1.., ...]``; PEM ``[a_ii, b_i1.., c_i, d_i, f_i1..]``."""
+    ny, nu = model.n_outputs, model.n_inputs
+    out: list[tuple[str, int, int | None]] = []
+    for i in range(ny):
+        if kind == "arx":
+            out += [("a", i, k) for k in range(ny)] + [("b", i, j) for j in range(nu)]
+        else:
+            out += [("a", i, i)] + [("b", i, j) for j in range(nu)] + [("c", i, None),
+                                                                        ("d", i, None)]
+            out += [("f", i, j) for j in range(nu)]
+    return out
+
+
+def _get(model: PolynomialModel, ref: tuple[str, int, int | None]) -> np.ndarray:
+    name, i, j = ref
+    arr = getattr(model, name)[i]
+    return np.asarray(arr if j is None else arr[j])
+
+
+def _attach_uncertainty(model: PolynomialModel, covs: list[np.ndarray], kind: str,
+                        method: str) -> None:
+    """``model.uncertainty`` from the per-output covariances (block diagonal: the outputs'
+    equations are estimated separately)."""
+    import copy
+
+    from scipy.linalg import block_diag
+
+    refs = _refs(model, kind)
+    sizes = [_get(model, r).size for r in refs]
+    theta = np.concatenate([_get(model, r) for r in refs]) if refs else np.zeros(0)
+    P = block_diag(*[np.atleast_2d(np.asarray(c, float)) for c in covs if np.size(c)])
+    if P.shape != (theta.size, theta.size):
+        return  # a covariance that does not match the coefficients is not attached
+    names = [f"{r[0]}[{r[1]}]" + (f"[{r[2]}]" if r[2] is not None else "") + f"[{k}]"
+             for r, n in zip(refs, sizes) for k in range(n)]
+    template = copy.deepcopy(model)
+    template.uncertainty = None
+
+    def build(t: np.ndarray) -> PolynomialModel:
+        m = copy.copy(template)
+        m.a = [list(row) for row in template.a]
+        m.b = [list(row) for row in template.b]
+        m.f = [list(row) for row in template.f]
+        m.c, m.d = list(template.c), list(template.d)
+        o = 0
+        for (name, i, j), n in zip(refs, sizes):
+            piece = np.asarray(t[o:o + n], dtype=float)
+            o += n
+            if j is None:
+                getattr(m, name)[i] = piece
+            else:
+                getattr(m, name)[i][j] = piece
+        return m
+
+    model.uncertainty = ParameterUncertainty(theta, P, build, names=names, method=method)
+
+
+def _grid(v: Any, ny: int, ncol: int, name: str) -> list[list[int]]:
+    return as_int_grid(v, (ny, ncol), name)
+
+
+def _col(v: Any, ny: int, name: str) -> list[int]:
+    a = np.array(v, dtype=object)
+    return [r[0] for r in as_int_grid(a.reshape(-1, 1) if a.ndim else a, (ny, 1), name)]
+
+
+def arx(
+    data: Any,
+    na: Any,
+    nb: Any,
+    nk: Any = 1,
+    *,
+    regularization: Any = 0.0,
+    kernel: np.ndarray | None = None,
+) -> PolynomialModel:
+    """Least-squares (or regularised) ARX ``A(q) y(t) = B(q) u(t - nk) + e(t)``.
+
+    Parameters
+    ----------
+    data : IOData
+        Estimation record (several experiments are used together).
+    na : int or array_like (n_outputs, n_outputs)
+        Orders of ``A`` (off-diagonal entries couple outputs).
+    nb, nk : int or array_like (n_outputs, n_inputs)
+        Number of ``B`` coefficients and input delays.
+    regularization : float, str, (lam, R) or ArxRegularization
+        * a number ``lambda``: the penalty ``lambda |M theta|^2`` (ridge when ``kernel`` is
+          None); 0 is plain least squares;
+        * ``"tc"``, ``"ss"``, ``"dc"`` or ``"ridge"``: a kernel prior tuned by empirical Bayes
+          (:func:`sysid.arxregul`), the estimate its posterior mean and ``covariance`` its
+          posterior covariance; ``info["regularization"]`` holds the tuning result;
+        * ``(lam, R)``: MATLAB's ``Lambda`` and ``R`` (``lam theta^T R theta``; one pair, or
+          per-output sequences of them);
+        * an :class:`~sysid.polynomial.arxregul.ArxRegularization` from :func:`sysid.arxregul`.
+    kernel : ndarray, optional
+        With a number ``regularization``: the factor ``M`` (for example the inverse Cholesky
+        factor of a kernel); as many columns as each output's equation has parameters.
+
+    Returns
+    -------
+    PolynomialModel
+        With ``info`` (loss per output) and ``covariance`` per output.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal((300, 1)); y = np.zeros((300, 1))
+    >>> for t in range(1, 300): y[t] = 0.5 * y[t - 1] + u[t - 1]
+    >>> m = sysid.polynomial.estimators.arx(sysid.IOData(u, y, 1.0), 1, 1, 1)
+    >>> np.round(m.a[0][0], 8).tolist(), np.round(m.b[0][0], 8).tolist()
+    ([-0.5], [1.0])
+    """
+    exps = experiment_arrays(data)
+    ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
+    na_g, nb_g, nk_g = _grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"), _grid(nk, ny, nu, "nk")
+    if isinstance(regularization, str) or hasattr(regularization, "prior"):
+        return _arx_posterior(data, na_g, nb_g, nk_g, regularization, kernel)
+    if isinstance(regularization, (tuple, list)):
+        return _arx_pairs(data, exps, na_g, nb_g, nk_g, regularization, kernel)
+    if isinstance(regularization, bool) or not isinstance(regularization, (int, float, np.number)):
+        raise DataError("regularization must be a number, a kernel name ('tc', 'ss', 'dc', "
+                        f"'ridge'), a (lam, R) pair or an ArxRegularization, got "
+                        f"{type(regularization).__name__}")
+    if not (regularization >= 0 and np.isfinite(regularization)):
+        raise DataError(f"regularization must be a finite number >= 0, got {regularization}")
+    fac = None if kernel is None else np.ascontiguousarray(kernel, float)
+    fits = _sysid.arx_fit(exps, na_g, nb_g, nk_g, float(regularization), fac)
+    return _arx_model(data, fits, nk_g)
+
+
+def _arx_model(data: Any, fits: list[Any], nk_g: list[list[int]]) -> PolynomialModel:
+    model = PolynomialModel(
+        a=[[np.asarray(x) for x in f["a"]] for f in fits],
+        b=[[np.asarray(x) for x in f["b"]] for f in fits],
+        nk=nk_g,
+        dt=data.dt,
+        noise_variance=[f["loss"] for f in fits],
+    )
+    model.info = {"method": "arx", "loss": [f["loss"] for f in fits]}
+    model.covariance = [f["covariance"] if "covariance" in f else  # type: ignore[attr-defined]
+                        f["loss"] * f["unscaled_cov"] for f in fits]
+    model.parameters = [f["theta"] for f in fits]  # type: ignore[attr-defined]
+    _attach_uncertainty(model, model.covariance, "arx",  # type: ignore[attr-defined]
+                        "posterior" if "covariance" in fits[0] else "least-squares")
+    return model
+
+
+def _arx_pairs(data: Any, exps: Any, na_g: Any, nb_g: Any, nk_g: Any, pairs: Any,
+               kernel: Any) -> PolynomialModel:
+    """ARX with MATLAB's ``(Lambda, R)`` per output: ``R = M^T M`` by an eigen-factor, solved
+    by the streaming QR with the penalty rows appended (``lam = 0``: plain least squares)."""
+    if kernel is not None:
+        raise DataError("kernel= goes with a numeric regularization; a (lam, R) pair carries R")
+    ny = len(na_g)
+    if len(pairs) == 2 and np.ndim(pairs[0]) == 0:
+        pairs = [pairs] * ny
+    if len(pairs) != ny or any(len(pr) != 2 for pr in pairs):
+        raise DataError(f"regularization=(lam, R): one pair, or {ny} pairs (one per output)")
+    fits = []
+    for i, (lam, R) in enumerate(pairs):
+        lam = float(lam)
+        if not (lam >= 0 and np.isfinite(lam)):
+            raise DataError(f"lam must be a finite number >= 0, got {lam}")
+        R = np.asarray(R, float)
+        w, V = np.linalg.eigh(0.5 * (R + R.T)) if R.ndim == 2 and R.shape[0] == R.shape[1] \
+            else (None, None)
+        if w is None or not np.all(np.isfinite(R)) or w.min() < -1e-10 * max(1.0, w.max()):
+            raise DataError(f"R of output {i} must be a finite symmetric positive "
+                            f"semi-definite matrix, got shape {R.shape}")
+        M = np.ascontiguousarray(np.sqrt(np.clip(w, 0, None))[:, None] * V.T)
+        fits.append(_sysid.arx_fit(exps, na_g, nb_g, nk_g, lam, M)[i])
+    model = _arx_model(data, fits, nk_g)
+    model.info["regularization"] = {"lam": [float(p[0]) for p in pairs]}
+    return model
+
+
+def _arx_posterior(data: Any, na_g: Any, nb_g: Any, nk_g: Any, reg: Any,
+                   kernel: Any) -> PolynomialModel:
+    """ARX as the posterior mean of a tuned kernel prior (:mod:`.arxregul`)."""
+    from .arxregul import arxregul, regularized_fits
+
+    if kernel is not None:
+        raise DataError("kernel= goes with a numeric regularization, not with a kernel name")
+    if isinstance(reg, str):
+        reg = arxregul(data, na_g, nb_g, nk_g, reg)
+    ny = len(na_g)
+    fits = []
+    for i, f in enumerate(regularized_fits(data, na_g, nb_g, nk_g, reg)):
+        th, cov = np.array(f["theta"]), np.array(f["cov"])
+        na_tot = sum(na_g[i])
+        sign = np.r_[-np.ones(na_tot), np.ones(th.size - na_tot)]
+        th *= sign
+        a, o = [], 0
+        for k in range(ny):
+            a.append(th[o:o + na_g[i][k]])
+            o += na_g[i][k]
+        b = []
+        for n in nb_g[i]:
+            b.append(th[o:o + n])
+            o += n
+        fits.append({"a": a, "b": b, "theta": th, "loss": f["loss"],
+                     "covariance": sign[:, None] * cov * sign[None, :]})
+    model = _arx_model(data, fits, nk_g)
+    model.info["method"] = f"arx ({reg.kernel} regularised)"
+    model.info["regularization"] = reg
+    return model
+
+
+def _fit(c: np.ndarray, n: int) -> list[float]:
+    out = np.zeros(n)
+    out[: min(n, c.size)] = c[:n]
+    return out.tolist()
+
+
+def _start(
+    init: PolynomialModel, i: int, na: int, nb: list[int], nc: int, nd: int, nf: list[int]
+) -> list[float]:
+    """Starting parameters of output ``i`` from another polynomial model (``F`` from its
+    ``F``, or from its ``A`` when it has none, as when refining an ARX model into OE)."""
+    if init.n_inputs != len(nb) or init.n_outputs <= i:
+        raise DataError("init has other input/output counts than the data")
+    a = init.a[i][i]
+    th = _fit(a, na)
+    th += [v for j, n in enumerate(nb) for v in _fit(init.b[i][j], n)]
+    th += _fit(init.c[i], nc) + _fit(init.d[i], nd)
+    for j, n in enumerate(nf):
+        th += _fit(init.f[i][j] if init.f[i][j].size else a, n)
+    return th
+
+
+def _pem(
+    data: Any,
+    na: Any,
+    nb: Any,
+    nc: Any,
+    nd: Any,
+    nf: Any,
+    nk: Any,
+    method: str,
+    max_iter: int,
+    progress: bool | None | Callable[..., Any],
+    init: PolynomialModel | None = None,
+) -> PolynomialModel:
+    exps = experiment_arrays(data)
+    ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
+    nb_g, nf_g, nk_g = _grid(nb, ny, nu, "nb"), _grid(nf, ny, nu, "nf"), _grid(nk, ny, nu, "nk")
+    na_v, nc_v, nd_v = _col(na, ny, "na"), _col(nc, ny, "nc"), _col(nd, ny, "nd")
+    if min(na_v + nc_v + nd_v, default=0) < 0:
+        raise DataError("na, nc and nd must be non-negative integers")
+    parts: dict[str, list[Any]] = {k: [] for k in "abcdf"}
+    info: dict[str, Any] = {"method": method, "iterations": [], "cost": [],
+                            "criterion": "sum of squares", "stop": []}
+    cov, var = [], []
+    cb, close_bar = iteration_callback(progress, method, int(max_iter) * ny,
+                                       iteration_printer(method, "sum of squares"))
+    try:
+        rs = [_sysid.polynomial_pem(
+            [(np.ascontiguousarray(y[:, i]), u) for u, y in exps], na_v[i], nb_g[i], nc_v[i],
+            nd_v[i], nf_g[i], nk_g[i],
+            None if init is None else _start(init, i, na_v[i], nb_g[i], nc_v[i], nd_v[i],
+                                             nf_g[i]),
+            as_int(max_iter, "max_iter", 0), 1e-9, cb) for i in range(ny)]
+    finally:
+        close_bar()
+    for i in range(ny):
+        r = rs[i]
+        th = np.asarray(r["theta"])
+        cuts = np.cumsum([na_v[i], *nb_g[i], nc_v[i], nd_v[i], *nf_g[i]])
+        pieces = np.split(th, cuts[:-1])
+        it = iter(pieces)
+
+        def take(_n: int, it: Any = it) -> np.ndarray:
+            return np.asarray(next(it))
+
+        a = take(na_v[i])
+        parts["a"].append([a if k == i else np.zeros(0) for k in range(ny)])
+        parts["b"].append([take(n) for n in nb_g[i]])
+        parts["c"].append(take(nc_v[i]))
+        parts["d"].append(take(nd_v[i]))
+        parts["f"].append([take(n) for n in nf_g[i]])
+        info["iterations"].append(r["iterations"])
+        info["cost"].append(list(r["history"]))
+        info["stop"].append(r["stop"])
+        cov.append(r["covariance"])
+        var.append(r["noise_variance"])
+    m = PolynomialModel(
+        parts["a"],
+        parts["b"],
+        nk_g,
+        data.dt,
+        c=parts["c"],
+        d=parts["d"],
+        f=parts["f"],
+        noise_variance=var,
+    )
+    m.info = info
+    m.covariance = cov  # type: ignore[attr-defined]
+    _attach_uncertainty(m, cov, "pem", "gauss-newton")
+    return m
+
+
+def armax(
+    data: Any,
+    na: Any,
+    nb: Any,
+    nc: Any,
+    nk: Any = 1,
+    *,
+    max_iter: int = 100,
+    progress: bool | None | Callable[..., Any] = None,
+) -> PolynomialModel:
+    """ARMAX ``A y = B u(t-nk) + C e`` by prediction-error minimisation (per output).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(1)
+    >>> u = rng.standard_normal((2000, 1)); e = 0.1 * rng.standard_normal(2000)
+    >>> y = np.zeros((2000, 1))
+    >>> for t in range(1, 2000): y[t] = 0.7 * y[t-1] + u[t-1, 0] + e[t] + 0.5 * e[t-1]
+    >>> m = sysid.polynomial.estimators.armax(sysid.IOData(u, y, 1.0), 1, 1, 1)
+    >>> bool(abs(m.c[0][0] - 0.5) < 0.1)
+    True
+    """
+    return _pem(data, na, nb, nc, 0, 0, nk, "armax", max_iter, progress)
+
+
+def oe(
+    data: Any,
+    nb: Any,
+    nf: Any,
+    nk: Any = 1,
+    *,
+    max_iter: int = 100,
+    progress: bool | None | Callable[..., Any] = None,
+    init: PolynomialModel | None = None,
+) -> PolynomialModel:
+    """Output error ``y = B/F u(t-nk) + e``.
+
+    Starts from Steiglitz-McBride (one input) or from ``init`` (an ARX model's ``A`` becomes
+    ``F``), then Gauss-Newton on the simulation error; ``F`` is kept stable."""
+    return _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, init)
+
+
+def bj(
+    data: Any,
+    nb: Any,
+    nc: Any,
+    nd: Any,
+    nf: Any,
+    nk: Any = 1,
+    *,
+    max_iter: int = 100,
+    progress: bool | None | Callable[..., Any] = None,
+) -> PolynomialModel:
+    """Box-Jenkins ``y = B/F u(t-nk) + C/D e``."""
+    return _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress)
+
+
+def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
+    """Loss of every ARX structure in the ranges, from one compression.
+
+    Returns rows ``[na, nb, nk, loss, n_parameters]`` (loss: mean squared residual);
+    structures whose regression is rank deficient are left out.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(400)
+    >>> e = 0.1 * rng.standard_normal(400)  # equation error: the ARX(1, 1, 1) structure
+    >>> y = signal.lfilter([0, 1.0], [1, -0.5], u) + signal.lfilter([1], [1, -0.5], e)
+    >>> d = sysid.IOData(u[:, None], y[:, None], 1.0)
+    >>> table = sysid.arxstruc(d, [1, 2], [1, 2], [1])
+    >>> sysid.selstruc(table, "bic", 400)
+    (1, 1, 1)
+    """
+    exps = experiment_arrays(data)
+    rng = [list(map(int, np.atleast_1d(v))) for v in (na, nb, nk)]
+    return np.asarray(_sysid.arx_struc(exps, *rng))
+
+
+def selstruc(
+    table: np.ndarray, criterion: str = "aic", n_samples: int | None = None
+) -> tuple[int, int, int]:
+    """Choose ``(na, nb, nk)`` from an :func:`arxstruc` table by ``aic``, ``bic``/``mdl``."""
+    if n_samples is None:
+        raise DataError("selstruc needs n_samples (the number of estimation samples)")
+    loss, p = table[:, 3], table[:, 4]
+    if criterion == "aic":
+        score = np.log(loss) + 2 * p / n_samples
+    elif criterion in ("bic", "mdl"):
+        score = np.log(loss) + p * np.log(n_samples) / n_samples
+    else:
+        raise DataError(f"unknown criterion {criterion!r}; use 'aic', 'bic' or 'mdl'")
+    best = table[int(np.argmin(score))]
+    return int(best[0]), int(best[1]), int(best[2])
+
+
+def ar(data: Any, na: int, *, max_iter: int = 100) -> PolynomialModel:
+    """Autoregressive time-series model ``A(q) y = e`` (data without inputs).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> y = signal.lfilter([1], [1, -0.8], np.random.default_rng(0).standard_normal(4000))
+    >>> m = sysid.polynomial.estimators.ar(sysid.IOData(None, y[:, None], 1.0), 1)
+    >>> bool(abs(m.a[0][0][0] + 0.8) < 0.03)
+    True
+    """
+    if experiment_arrays(data)[0][0].shape[1] != 0:
+        raise DataError("ar/arma model time series: pass data without inputs (IOData(None, y))")
+    return _pem(data, na, 0, 0, 0, 0, 0, "ar", max_iter, None)
+
+
+def arma(data: Any, na: int, nc: int, *, max_iter: int = 100) -> PolynomialModel:
+    """ARMA time-series model ``A(q) y = C(q) e`` (data without inputs)."""
+    if experiment_arrays(data)[0][0].shape[1] != 0:
+        raise DataError("ar/arma model time series: pass data without inputs (IOData(None, y))")
+    return _pem(data, na, 0, nc, 0, 0, 0, "arma", max_iter, None)
+
+
+def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int = 10) -> int:
+    """Input delay of a single-input single-output record: the ``nk`` whose ARX(na, nb, nk)
+    has the smallest loss, all from one compression (as MATLAB's ``delayest``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(500)
+    >>> y = signal.lfilter([0, 0, 0, 0.7], [1, -0.5], u) + 0.01 * rng.standard_normal(500)
+    >>> sysid.polynomial.estimators.delayest(sysid.IOData(u[:, None], y[:, None], 1.0))
+    3
+    """
+    if not 0 <= nk_min <= nk_max:
+        raise DataError(f"need 0 <= nk_min <= nk_max, got {nk_min}, {nk_max}")
+    table = arxstruc(data, [na], [nb], list(range(nk_min, nk_max + 1)))
+    return int(table[int(np.argmin(table[:, 3])), 2])
+
+
+def _references(reference: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> list[Any]:
+    """One instrument-input array per experiment (``None`` entries: the input itself)."""
+    if reference is None:
+        return [None] * len(exps)
+    refs = list(reference) if isinstance(reference, (list, tuple)) else [reference]
+    if len(refs) != len(exps):
+        raise DataError(f"reference: give one array per experiment ({len(exps)}), got "
+                        f"{len(refs)}")
+    out = []
+    for r, (u, _) in zip(refs, exps):
+        a = np.asarray(r, dtype=float)
+        a = a.reshape(-1, 1) if a.ndim == 1 else a
+        if a.ndim != 2 or a.shape[0] != u.shape[0] or a.shape[1] == 0:
+            raise DataError(f"reference must have the input's {u.shape[0]} rows (one column "
+                            f"per reference channel), got shape {a.shape}")
+        out.append(np.ascontiguousarray(a))
+    return out
+
+
+def iv4(data: Any, na: Any, nb: Any, nk: Any = 1, *, reference: Any = None) -> PolynomialModel:
+    """Four-stage instrumental-variable estimate of ``A(q) y = B(q) u(t-nk) + v``.
+
+    Consistent for coloured noise ``v`` where least squares (:func:`arx`) is biased. MIMO
+    with the orders of :func:`arx` (``na`` outputs x outputs, ``nb``/``nk`` outputs x
+    inputs); several experiments are used together (each filtered from rest). For
+    closed-loop data pass the reference signal (``(N, n_ref)``, a list with one array per
+    experiment) as ``reference``: the instruments are then the parts of ``y`` and ``u``
+    explained by the reference (a least-squares FIR projection on its lags), which the
+    feedback cannot correlate with the noise, instead of the (noise-correlated) input.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(3000)
+    >>> v = signal.lfilter([1], [1, -0.9], rng.standard_normal(3000))
+    >>> y = signal.lfilter([0, 1.0], [1, -0.5], u) + 0.5 * v
+    >>> m = sysid.iv4(sysid.IOData(u[:, None], y[:, None], 1.0), 1, 1, 1)
+    >>> bool(abs(m.a[0][0][0] + 0.5) < 0.05)
+    True
+    """
+    exps = experiment_arrays(data)
+    ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
+    if nu == 0:
+        raise DataError("iv4 needs an input signal (use ar/arma for time series)")
+    na_g, nb_g, nk_g = _grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"), _grid(nk, ny, nu, "nk")
+    refs = _references(reference, exps)
+    fits = _sysid.iv4([(u, y, r) for (u, y), r in zip(exps, refs)], na_g, nb_g, nk_g)
+    a, b = [], []
+    for i, f in enumerate(fits):
+        th = np.asarray(f["theta"])
+        pieces = np.split(th, np.cumsum([*na_g[i], *nb_g[i]])[:-1])
+        a.append([np.asarray(x) for x in pieces[:ny]])
+        b.append([np.asarray(x) for x in pieces[ny:]])
+    m = PolynomialModel(a, b, nk_g, data.dt)
+    m.info = {"method": "iv4", "closed_loop": reference is not None}
+    cov = [np.asarray(f["covariance"]) for f in fits]
+    m.noise_variance = np.array([f["noise_variance"] for f in fits])
+    m.covariance = cov  # type: ignore[attr-defined]
+    m.parameters = [np.asarray(f["theta"]) for f in fits]  # type: ignore[attr-defined]
+    _attach_uncertainty(m, cov, "arx", "instrumental-variable")
+    return m

@@ -1,0 +1,458 @@
+"""Polynomial (transfer-function) models in the backward shift ``q^-1``.
+
+For output ``i``: ``A(q) y_i(t) = sum_j B_ij(q)/F_ij(q) u_j(t - nk_ij) + C_i(q)/D_i(q) e_i(t)``;
+MIMO ARX models may couple outputs through a matrix polynomial ``A`` (``a[i][k]``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from ..errors import DataError
+from ..models.protocol import ModelMixin
+
+Poly = np.ndarray
+
+
+def _monic(c: Any) -> np.ndarray:
+    return np.concatenate([[1.0], np.asarray(c, dtype=float).ravel()])
+
+
+def _fmt(name: str, coef: np.ndarray, monic: bool) -> str:
+    if coef.size == 0:
+        return f"{name}(q) = 0"
+    parts = []
+    for k, v in enumerate(coef):
+        term = "1" if (k == 0 and monic) else f"{abs(v):.4g}" + (f" q^-{k}" if k else "")
+        parts.append(("-" if v < 0 else "+", term))
+    head = ("-" if parts[0][0] == "-" else "") + parts[0][1]
+    return f"{name}(q) = " + head + "".join(f" {sg} {t}" for sg, t in parts[1:])
+
+
+def _rest(x0: Any) -> None:
+    if x0 is not None and not (isinstance(x0, str) and x0 == "zero"):
+        raise DataError("polynomial models start from rest: x0 must be None or 'zero'")
+
+
+def _names(names: Any, count: int, what: str) -> list[str]:
+    out = [str(n) for n in names]
+    if len(out) != count:
+        raise DataError(f"{len(out)} {what} names given for {count} {what}s")
+    return out
+
+
+def _trim(num: np.ndarray) -> np.ndarray:
+    t = np.trim_zeros(num, "f")
+    return t if t.size else np.zeros(1)
+
+
+class PolynomialModel(ModelMixin):
+    """A (MIMO) polynomial model; see the module docstring for the equations.
+
+    Parameters
+    ----------
+    a : list of lists of arrays
+        ``a[i][k]``: free coefficients ``a_1..a_na`` of output ``k`` in the equation of
+        output ``i`` (the diagonal entries are the monic ``A_i`` without the leading 1).
+    b, f : list of lists of arrays
+        ``b[i][j]`` (``b_0..``) and ``f[i][j]`` (free coefficients of the monic ``F_ij``).
+    c, d : list of arrays
+        Free coefficients of the monic ``C_i`` and ``D_i``.
+    nk : array_like of int, shape (n_outputs, n_inputs)
+        Input delays.
+    dt : float
+        Sample time.
+    noise_variance : array_like, optional
+        Innovation variance per output.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> m = PolynomialModel(a=[[np.array([-0.5])]], b=[[np.array([1.0])]], nk=[[1]], dt=1.0)
+    >>> m.simulate(np.ones((3, 1))).ravel().tolist()
+    [0.0, 1.0, 1.5]
+    """
+
+    def __init__(
+        self,
+        a: Any,
+        b: Any,
+        nk: Any,
+        dt: float,
+        *,
+        c: Any = None,
+        d: Any = None,
+        f: Any = None,
+        noise_variance: Any = None,
+    ) -> None:
+        self.a = [[np.asarray(x, dtype=float).ravel() for x in row] for row in a]
+        ny = len(self.a)
+        self.b = [[np.asarray(x, dtype=float).ravel() for x in row] for row in b]
+        nu = len(self.b[0]) if self.b else 0
+        self.nk = np.asarray(nk, dtype=int).reshape(ny, nu)
+        self.c = [np.asarray(x, dtype=float).ravel() for x in (c or [[]] * ny)]
+        self.d = [np.asarray(x, dtype=float).ravel() for x in (d or [[]] * ny)]
+        self.f = [
+            [np.asarray(x, dtype=float).ravel() for x in row]
+            for row in (f or [[[]] * nu for _ in range(ny)])
+        ]
+        self.dt = float(dt)
+        self.noise_variance = (
+            np.ones(ny) if noise_variance is None else np.asarray(noise_variance, float)
+        )
+        self.uncertainty: Any = None
+        self.info: dict[str, Any] = {}
+        if len(self.b) != ny or any(len(r) != ny for r in self.a):
+            raise DataError(f"a must be {ny} x {ny} and b must have {ny} rows")
+
+    @property
+    def n_outputs(self) -> int:
+        """Number of outputs."""
+        return len(self.a)
+
+    @property
+    def n_inputs(self) -> int:
+        """Number of inputs."""
+        return len(self.b[0]) if self.b else 0
+
+    @property
+    def coupled(self) -> bool:
+        """``True`` when ``A`` couples outputs (off-diagonal terms)."""
+        return any(
+            self.a[i][k].size
+            for i in range(self.n_outputs)
+            for k in range(self.n_outputs)
+            if i != k
+        )
+
+    # -- the model protocol (sysid.Model) ------------------------------------------------
+    ninputs = property(lambda self: self.n_inputs, doc="Number of inputs (protocol name).")
+    noutputs = property(lambda self: self.n_outputs, doc="Number of outputs (protocol name).")
+
+    @property
+    def input_names(self) -> list[str]:
+        """Input channel names (``u0, u1, ...`` unless set)."""
+        names = getattr(self, "_input_names", None)
+        return list(names) if names is not None else [f"u{j}" for j in range(self.n_inputs)]
+
+    @input_names.setter
+    def input_names(self, names: Any) -> None:
+        self._input_names = None if names is None else _names(names, self.n_inputs, "input")
+
+    @property
+    def output_names(self) -> list[str]:
+        """Output channel names (``y0, y1, ...`` unless set)."""
+        names = getattr(self, "_output_names", None)
+        return list(names) if names is not None else [f"y{i}" for i in range(self.n_outputs)]
+
+    @output_names.setter
+    def output_names(self, names: Any) -> None:
+        self._output_names = None if names is None else _names(names, self.n_outputs, "output")
+
+    @property
+    def n_parameters(self) -> int:
+        """Free coefficients: every entry of ``a``, ``b``, ``c``, ``d`` and ``f``.
+
+        Examples
+        --------
+        >>> PolynomialModel([[[-0.5, 0.1]]], [[[1.0, 0.3]]], [[1]], 1.0, c=[[0.2]]).n_parameters
+        5
+        """
+        count = sum(x.size for row in self.a for x in row)
+        count += sum(x.size for row in self.b for x in row)
+        count += sum(x.size for row in self.f for x in row)
+        return int(count + sum(x.size for x in self.c) + sum(x.size for x in self.d))
+
+    def to_dict(self) -> dict[str, Any]:
+        """Coefficients, delays, sample time, names and info (see :func:`sysid.save_model`)."""
+        return {"a": [list(row) for row in self.a], "b": [list(row) for row in self.b],
+                "f": [list(row) for row in self.f], "c": list(self.c), "d": list(self.d),
+                "nk": self.nk, "dt": self.dt, "noise_variance": self.noise_variance,
+                "input_names": self.input_names, "output_names": self.output_names,
+                "info": self.info}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> PolynomialModel:
+        """Inverse of :meth:`to_dict`."""
+        m = cls(d["a"], d["b"], d["nk"], float(d["dt"]), c=d.get("c"), d=d.get("d"),
+                f=d.get("f"), noise_variance=d.get("noise_variance"))
+        m.input_names, m.output_names = d.get("input_names"), d.get("output_names")
+        m.info = dict(d.get("info") or {})
+        return m
+
+    def _check_u(self, u: Any) -> np.ndarray:
+        u = np.ascontiguousarray(u, dtype=float)
+        if u.ndim == 1:
+            u = u[:, None]
+        if u.ndim != 2 or u.shape[1] != self.n_inputs:
+            raise DataError(f"u has shape {u.shape} but should be (n_samples, {self.n_inputs})")
+        if not np.all(np.isfinite(u)):
+            raise DataError("u has non-finite values; clean the input first")
+        return u
+
+    def _deterministic(self, u: np.ndarray, i: int) -> np.ndarray:
+        """``sum_j B_ij/F_ij u_j(t - nk_ij)`` (Rust filter)."""
+        n = u.shape[0]
+        w = np.zeros(n)
+        for j in range(self.n_inputs):
+            x = np.zeros(n)
+            k = int(self.nk[i, j])
+            if k < n:
+                x[k:] = u[: n - k, j]
+            w += _sysid.poly_filter(list(self.b[i][j]), list(_monic(self.f[i][j])), x)
+        return w
+
+    def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
+        """Noise-free output for input ``u`` (from rest), ``(n_samples, n_outputs)``.
+
+        ``x0`` must be ``None`` or ``"zero"``: polynomial filters start from rest.
+        """
+        _rest(x0)
+        u = self._check_u(u)
+        ny = self.n_outputs
+        w = np.column_stack([self._deterministic(u, i) for i in range(ny)])
+        if not self.coupled:
+            return np.column_stack(
+                [_sysid.poly_filter([1.0], list(_monic(self.a[i][i])), w[:, i]) for i in range(ny)]
+            )
+        return np.asarray(_sysid.arx_matrix_filter(self._a_lists(), np.ascontiguousarray(w)))
+
+    def _a_lists(self) -> list[list[list[float]]]:
+        return [[[float(v) for v in self.a[i][k]] for k in range(self.n_outputs)]
+                for i in range(self.n_outputs)]
+
+    def residuals(self, u: Any, y: Any) -> np.ndarray:
+        """One-step prediction errors ``e = D/C (A y - sum B/F u)`` (matrix ``A`` for a
+        coupled MIMO ARX model)."""
+        u = self._check_u(u)
+        y = np.asarray(y, dtype=float).reshape(u.shape[0], -1)
+        if self.coupled:
+            return y - self._coupled_predict(u, y, 1)
+        out = []
+        for i in range(self.n_outputs):
+            v = _sysid.poly_filter(list(_monic(self.a[i][i])), [1.0], np.ascontiguousarray(y[:, i]))
+            v = v - self._deterministic(u, i)
+            out.append(_sysid.poly_filter(list(_monic(self.d[i])), list(_monic(self.c[i])), v))
+        return np.column_stack(out)
+
+    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
+        """``horizon``-step-ahead prediction ``yhat(t | t - horizon)``.
+
+        With ``H_i = C_i / (A_i D_i)`` the noise filter of output ``i`` and ``h_0 = 1, h_1,
+        ...`` its impulse response, ``yhat(t | t - k) = y(t) - sum_{j<k} h_j e(t - j)``,
+        where ``e`` are the one-step prediction errors (:meth:`residuals`): the part of
+        ``y(t)`` driven by innovations not yet seen at ``t - k`` is removed. ``k = 1``
+        gives ``y - e``; as ``k`` grows the prediction tends to the simulation. A coupled
+        MIMO ARX model iterates its matrix difference equation instead.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> m = PolynomialModel([[[-0.5]]], [[[0.0]]], [[1]], 1.0)   # y = e / (1 - 0.5 q^-1)
+        >>> m.predict(np.zeros((3, 1)), [1.0, 0.5, 0.25], horizon=2)[:, 0]
+        array([0.  , 0.  , 0.25])
+        """
+        _rest(x0)
+        if isinstance(horizon, bool) or int(horizon) != horizon or horizon < 1:
+            raise DataError(f"horizon must be a positive integer, got {horizon!r}")
+        k = int(horizon)
+        y2 = np.asarray(y, dtype=float)
+        y2 = y2.reshape(len(y2), -1)
+        if self.coupled:
+            return self._coupled_predict(self._check_u(u), y2, k)
+        e = self.residuals(u, y2)
+        out = y2 - e
+        if k > 1:
+            for i in range(self.n_outputs):
+                pulse = np.zeros(k)
+                pulse[0] = 1.0
+                den = np.convolve(_monic(self.a[i][i]), _monic(self.d[i]))
+                h = _sysid.poly_filter(list(_monic(self.c[i])), list(den), pulse)
+                # yhat = y - sum_{j<k} h_j e(t - j): remove the innovations after t - k
+                out[:, i] = y2[:, i] - np.convolve(e[:, i], h)[: y2.shape[0]]
+        return out
+
+    def _coupled_predict(self, u: np.ndarray, y: np.ndarray, k: int) -> np.ndarray:
+        """``yhat(t | t - k)`` of a MIMO ARX model ``sum_l A_l y(t - l) = w(t) + e(t)``.
+
+        ``P_0 = y`` and ``P_j(t) = w(t) - sum_{l>=1} A_l P_{max(j - l, 0)}(t - l)``: the
+        prediction ``j`` steps ahead uses measured outputs where they are known and
+        shorter-range predictions where not (future innovations have mean zero). The
+        recursion runs in Rust (``sysid_core::polynomial::filter::arx_matrix_filter``).
+        """
+        if y.shape != (u.shape[0], self.n_outputs):
+            raise DataError(f"y has shape {y.shape} but should be ({u.shape[0]}, "
+                            f"{self.n_outputs})")
+        ny = y.shape[1]
+        w = np.column_stack([self._deterministic(u, i) for i in range(ny)])
+        return np.asarray(_sysid.arx_matrix_filter(self._a_lists(), np.ascontiguousarray(w),
+                                                   np.ascontiguousarray(y), k))
+
+    def freqresp(self, w: Any, std: bool = False) -> Any:
+        """Frequency response ``(len(w), n_outputs, n_inputs)`` at ``w`` (rad/s); with
+        ``std=True`` (needs :attr:`uncertainty`) the pair ``(H, sd)``, ``sd`` complex (std of
+        the real and imaginary parts, first order)."""
+        if std:
+            from ..models.uncertainty import freqresp_std
+
+            return freqresp_std(self, w)
+        if self.coupled:
+            raise DataError("frequency response of a coupled MIMO ARX model is not implemented")
+        z1 = np.exp(-1j * np.asarray(w, float) * self.dt)
+        out = np.zeros((z1.size, self.n_outputs, self.n_inputs), complex)
+        for i in range(self.n_outputs):
+            a = np.polyval(_monic(self.a[i][i])[::-1], z1)
+            for j in range(self.n_inputs):
+                bb = np.polyval(self.b[i][j][::-1], z1) * z1 ** int(self.nk[i, j])
+                ff = np.polyval(_monic(self.f[i][j])[::-1], z1)
+                out[:, i, j] = bb / (a * ff)
+        return out
+
+    def poles(self, std: bool = False, method: str = "linear") -> Any:
+        """Roots of ``A_i F_ij`` over all channels (uncoupled ``A``); with ``std=True`` (needs
+        :attr:`uncertainty`) the pair ``(poles, sd)`` as for
+        :meth:`sysid.StateSpaceModel.poles`."""
+        if std:
+            from ..models.uncertainty import pole_std
+
+            return pole_std(self, method)
+        r = []
+        for i in range(self.n_outputs):
+            r.append(np.roots(_monic(self.a[i][i])))
+            for j in range(self.n_inputs):
+                r.append(np.roots(_monic(self.f[i][j])))
+        return np.concatenate(r) if r else np.zeros(0)
+
+    def _channel_tf(self, i: int, j: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(num, den)`` of channel ``(i, j)`` in powers of ``z`` (equal lengths)."""
+        if self.coupled:
+            raise DataError("transfer functions of a coupled MIMO ARX model are not implemented")
+        num = np.concatenate([np.zeros(int(self.nk[i, j])), self.b[i][j]])
+        den = np.convolve(_monic(self.a[i][i]), _monic(self.f[i][j]))
+        n = max(num.size, den.size)
+        return np.pad(num, (0, n - num.size)), np.pad(den, (0, n - den.size))
+
+    def zeros(self) -> np.ndarray:
+        """Zeros of every ``B_ij`` (in ``z``), concatenated."""
+        out = [
+            np.roots(self._channel_tf(i, j)[0])
+            for i in range(self.n_outputs)
+            for j in range(self.n_inputs)
+        ]
+        return np.concatenate(out) if out else np.zeros(0)
+
+    def to_scipy(self) -> Any:
+        """SciPy ``dlti`` transfer function (single input, single output)."""
+        from scipy import signal
+
+        if (self.n_outputs, self.n_inputs) != (1, 1):
+            raise DataError("to_scipy: only single-input single-output models; use to_statespace")
+        num, den = self._channel_tf(0, 0)
+        return signal.dlti(_trim(num), den, dt=self.dt)
+
+    def to_control(self) -> Any:
+        """python-control ``TransferFunction`` (MIMO as nested lists of channels)."""
+        import control
+
+        nums = [
+            [self._channel_tf(i, j)[0] for j in range(self.n_inputs)] for i in range(self.n_outputs)
+        ]
+        dens = [
+            [self._channel_tf(i, j)[1] for j in range(self.n_inputs)] for i in range(self.n_outputs)
+        ]
+        return control.tf(nums, dens, self.dt)
+
+    def to_statespace(self) -> Any:
+        """Deterministic part as a :class:`~sysid.StateSpaceModel` (one block per channel)."""
+        from scipy import signal
+
+        from ..models.statespace import StateSpaceModel
+
+        ny, nu = self.n_outputs, self.n_inputs
+        blocks = []
+        for i in range(ny):
+            for j in range(nu):
+                num, den = self._channel_tf(i, j)
+                blocks.append((i, j, *signal.tf2ss(_trim(num), den)))
+        n = sum(b[2].shape[0] for b in blocks)
+        A, B, C, D = np.zeros((n, n)), np.zeros((n, nu)), np.zeros((ny, n)), np.zeros((ny, nu))
+        k = 0
+        for i, j, a, b, c, d in blocks:
+            r = a.shape[0]
+            A[k : k + r, k : k + r] = a
+            B[k : k + r, j] = b[:, 0]
+            C[i, k : k + r] = c[0]
+            D[i, j] = d[0, 0]
+            k += r
+        return StateSpaceModel(A, B, C, D, dt=self.dt, input_names=self.input_names,
+                               output_names=self.output_names)
+
+    def __repr__(self) -> str:
+        lines = [
+            f"PolynomialModel: {self.n_outputs} output(s), {self.n_inputs} input(s), dt={self.dt:g}"
+        ]
+        for i in range(self.n_outputs):
+            rhs = " + ".join(
+                f"B{j + 1}(q)/F{j + 1}(q) u{j + 1}(t-{self.nk[i, j]})"
+                if self.f[i][j].size
+                else f"B{j + 1}(q) u{j + 1}(t-{self.nk[i, j]})"
+                for j in range(self.n_inputs)
+            )
+            noise = (
+                "C(q)/D(q) e(t)" if self.d[i].size else ("C(q) e(t)" if self.c[i].size else "e(t)")
+            )
+            lines.append(f"  y{i + 1}: A(q) y(t) = {rhs + ' + ' if rhs else ''}{noise}")
+            lines.append("    " + _fmt("A", _monic(self.a[i][i]), True))
+            for j in range(self.n_inputs):
+                lines.append("    " + _fmt(f"B{j + 1}", self.b[i][j], False))
+                if self.f[i][j].size:
+                    lines.append("    " + _fmt(f"F{j + 1}", _monic(self.f[i][j]), True))
+            if self.c[i].size:
+                lines.append("    " + _fmt("C", _monic(self.c[i]), True))
+            if self.d[i].size:
+                lines.append("    " + _fmt("D", _monic(self.d[i]), True))
+        return "\n".join(lines)
+
+    # -- parameter uncertainty (sysid.models.uncertainty) ---------------------------------
+    def _coefficients(self) -> list[np.ndarray]:
+        """Every coefficient array, in the order a, b, c, d, f (row by row)."""
+        return ([x for row in self.a for x in row] + [x for row in self.b for x in row]
+                + list(self.c) + list(self.d) + [x for row in self.f for x in row])
+
+    @property
+    def std(self) -> dict[str, Any] | None:
+        """Standard deviations of the coefficients, nested like ``a, b, c, d, f``; ``None``
+        without :attr:`uncertainty`.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> rng = np.random.default_rng(0)
+        >>> u = rng.standard_normal((500, 1))
+        >>> y = np.zeros((500, 1))
+        >>> for t in range(1, 500): y[t] = 0.5 * y[t - 1] + u[t - 1] + 0.1 * rng.standard_normal()
+        >>> m = sysid.arx(sysid.IOData(u, y, 1.0), 1, 1, 1)
+        >>> sd = m.std
+        >>> bool(0.002 < sd["a"][0][0][0] < 0.01), bool(0.002 < sd["b"][0][0][0] < 0.01)
+        (True, True)
+        """
+        if self.uncertainty is None:
+            return None
+        from ..models.uncertainty import complex_std
+
+        _, sd = complex_std(self, lambda m: np.concatenate(
+            [np.zeros(0)] + [np.asarray(x, float).ravel() for x in m._coefficients()]))
+        it = iter(sd.tolist())
+
+        def take(x: np.ndarray) -> np.ndarray:
+            return np.array([next(it) for _ in range(np.asarray(x).size)])
+
+        a = [[take(x) for x in row] for row in self.a]
+        b = [[take(x) for x in row] for row in self.b]
+        c = [take(x) for x in self.c]
+        d = [take(x) for x in self.d]
+        f = [[take(x) for x in row] for row in self.f]
+        return {"a": a, "b": b, "c": c, "d": d, "f": f}

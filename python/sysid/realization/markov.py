@@ -1,0 +1,230 @@
+"""Markov parameters (impulse responses) estimated from input/output data.
+
+- :func:`impulse_response`: least-squares FIR, optionally regularised with a TC kernel whose
+  hyperparameters are tuned by marginal likelihood (as MATLAB's ``impulseest`` does);
+- :func:`okid` (Juang, Phan, Horta and Longman 1993): observer Markov parameters from a short
+  ARX regression, then the system's, for lightly damped systems and arbitrary inputs;
+- :func:`impulse_from_frf`: the inverse FFT of a frequency response on the FFT grid.
+
+Each returns a :class:`~sysid.MarkovEstimate` shaped ``(count, noutputs, ninputs)``, which
+:func:`sysid.era` realises (``est.era(order)``). The numerics run in the Rust core.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from ..data.iodata import IOData
+from ..errors import DataError, NonFiniteError, ShapeError
+from .realize import MarkovEstimate, _count
+
+__all__ = ["impulse_response", "okid", "impulse_from_frf"]
+
+
+def _experiments(data: Any) -> tuple[list[tuple[np.ndarray, np.ndarray]], float]:
+    if not isinstance(data, IOData):
+        raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}; "
+                        "wrap arrays with sysid.IOData(u, y, dt)")
+    exps = data.experiments
+    if exps[0][0].shape[1] == 0:
+        raise DataError("Markov parameters need inputs: this IOData has none")
+    return [(np.asarray(u, dtype=float), np.asarray(y, dtype=float)) for u, y in exps], data.dt
+
+
+def impulse_response(data: IOData, length: int, *, regularization: str | None = "tc",
+                     hyper: tuple[float, float] | None = None,
+                     feedthrough: bool = True) -> MarkovEstimate:
+    """Markov parameters by least-squares FIR, optionally TC-regularised.
+
+    Fits ``y(t) = sum_{k<length} h_k u(t-k) + e(t)`` over all experiments of ``data`` (means
+    are not removed: detrend first if needed). The record is compressed once into a triangular
+    factor; tuning the TC kernel then costs about 30 eigendecompositions of size
+    ``length * ninputs``, so for very long responses (lightly damped systems sampled fast)
+    :func:`okid` is the cheaper route.
+
+    Parameters
+    ----------
+    data : IOData
+        Input/output record(s).
+    length : int
+        Number of Markov parameters ``h_0 .. h_{length-1}``.
+    regularization : {"tc", None}
+        ``"tc"``: prior ``E[h_k h_j] = c lambda^max(k, j)`` (per output, inputs scaled to unit
+        variance), hyperparameters by marginal likelihood unless ``hyper`` fixes them;
+        ``None``: plain least squares.
+    hyper : (float, float), optional
+        Fixed TC ``(c, lambda)`` for unit-variance inputs.
+    feedthrough : bool
+        Estimate ``h_0 = D``; if False it is zero.
+
+    Returns
+    -------
+    MarkovEstimate
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> true = sysid.StateSpaceModel([[0.7]], [[1.0]], [[1.0]])
+    >>> u = rng.standard_normal(400)
+    >>> data = sysid.IOData(u, true.simulate(u) + 0.01 * rng.standard_normal((400, 1)))
+    >>> est = sysid.impulse_response(data, 30)
+    >>> bool(np.allclose(est.markov[:5, 0, 0], true.markov(5)[:, 0, 0], atol=0.01))
+    True
+    """
+    exps, dt = _experiments(data)
+    n = _count(length, "length")
+    if n is None:
+        raise DataError("length is required: the number of Markov parameters to estimate")
+    if regularization not in ("tc", None):
+        raise DataError(f"regularization must be 'tc' or None, got {regularization!r}")
+    out = _sysid.fir(exps, n, bool(feedthrough), regularization or "none", hyper)
+    l, m = exps[0][1].shape[1], exps[0][0].shape[1]
+    h = np.asarray(out["markov"]).reshape(-1, l, m)
+    info = {k: out[k] for k in ("scale", "decay", "noise_variance", "samples")}
+    return MarkovEstimate(h, dt, "fir-tc" if regularization else "fir", info)
+
+
+def okid(data: IOData, observer_order: int, count: int | None = None, *,
+         feedthrough: bool = True) -> MarkovEstimate:
+    """Observer/Kalman filter identification of Markov parameters.
+
+    Regresses ``y(t)`` on ``u(t)`` and ``observer_order`` past inputs and outputs (the
+    observer Markov parameters), then recovers the system's Markov parameters, as many as
+    wanted, by the OKID recursion. A short observer captures a lightly damped system, with
+    any input and noise in innovation form.
+
+    Parameters
+    ----------
+    data : IOData
+        Input/output record(s).
+    observer_order : int
+        Lags p of the regression; ``p * noutputs`` should exceed the expected order.
+    count : int, optional
+        Markov parameters returned (default ``4 * observer_order + 1``).
+    feedthrough : bool
+        Estimate ``h_0 = D``; if False it is zero.
+
+    Returns
+    -------
+    MarkovEstimate
+        ``info["observer_markov"]`` is ``(p, l, m + l)``; ``info["residual_cov"]`` the
+        covariance of the one-step prediction errors.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(1)
+    >>> true = sysid.StateSpaceModel([[0.95, 0.25], [-0.25, 0.95]], [[1.0], [0.0]], [[1.0, 0.0]])
+    >>> u = rng.standard_normal(2000)
+    >>> data = sysid.IOData(u, true.simulate(u) + 0.05 * rng.standard_normal((2000, 1)))
+    >>> r = sysid.okid(data, observer_order=10, count=60).era(order=2)
+    >>> bool(np.allclose(np.sort(np.abs(r.model.poles())), np.abs(true.poles()), atol=0.01))
+    True
+    """
+    exps, dt = _experiments(data)
+    p = _count(observer_order, "observer_order")
+    if p is None:
+        raise DataError("observer_order is required: the number of past samples in the observer")
+    c = _count(count, "count") or 4 * p + 1
+    out = _sysid.okid(exps, p, c, bool(feedthrough))
+    l, m = exps[0][1].shape[1], exps[0][0].shape[1]
+    h = np.asarray(out["markov"]).reshape(-1, l, m)
+    info = {
+        "observer_markov": np.asarray(out["observer_markov"]).reshape(-1, l, m + l),
+        "residual_cov": np.asarray(out["residual_cov"]),
+        "samples": out["samples"],
+        "observer_order": p,
+    }
+    return MarkovEstimate(h, dt, "okid", info)
+
+
+def impulse_from_frf(frf: Any, n_fft: int | None = None, *, dt: float | None = None,
+                     fill_missing: bool = False) -> MarkovEstimate:
+    """Markov parameters as the inverse FFT of a frequency response on the FFT grid.
+
+    For a record of ``n_fft`` samples in periodic steady state (a periodic input, the
+    transient dropped), the ETFE ``Y/U`` at ``omega_k = 2 pi k / (n_fft dt)`` is exact, and
+    its inverse FFT is the impulse response folded over one period,
+    ``sum_j h_{k + j n_fft}``, which equals ``h_k`` once the response has decayed within a
+    period. ERA then realises it (the approach of seed 001: ETFE, inverse FFT, ERA).
+
+    Parameters
+    ----------
+    frf : FRD or array_like
+        A :class:`sysid.FRD` (e.g. from :func:`sysid.etfe`) or a complex array
+        ``(n_fft // 2 + 1, noutputs, ninputs)`` on the full grid from 0 to the Nyquist
+        frequency.
+    n_fft : int, optional
+        Length of the period; taken from the FRD (``info["n_fft"]``) if omitted.
+    dt : float, optional
+        Sample time; taken from the FRD if omitted, else 1.
+    fill_missing : bool
+        Set bins absent from the FRD (unexcited lines) to zero instead of raising; the
+        impulse response is then band-limited.
+
+    Returns
+    -------
+    MarkovEstimate
+        ``n_fft`` Markov parameters (method ``"ifft"``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> true = sysid.StateSpaceModel([[0.8, 0.3], [-0.3, 0.8]], [[1.0], [0.0]], [[1.0, 1.0]])
+    >>> u = np.tile(np.random.default_rng(0).standard_normal(256), 2)
+    >>> y = true.simulate(u)
+    >>> frd = sysid.etfe(sysid.IOData(u[256:], y[256:]))   # one period in steady state
+    >>> est = sysid.impulse_from_frf(frd)
+    >>> bool(np.allclose(est.markov[:50], true.markov(50), atol=1e-10))
+    True
+    """
+    omega = None
+    if hasattr(frf, "response") and hasattr(frf, "omega"):
+        omega = np.asarray(frf.omega, dtype=float)
+        if dt is None:
+            dt = getattr(frf, "dt", None)
+        if n_fft is None:
+            n_fft = (getattr(frf, "info", None) or {}).get("n_fft")
+        g = np.asarray(frf.response)
+    else:
+        g = np.asarray(frf)
+    if g.ndim == 1:
+        g = g[:, None, None]
+    if g.ndim != 3:
+        raise ShapeError(
+            f"the frequency response must be (n_freq, noutputs, ninputs), got {g.shape}")
+    if not np.isfinite(g).all():
+        raise NonFiniteError("the frequency response has non-finite values (NaN or Inf)")
+    dt = float(dt if dt is not None else 1.0)
+    if n_fft is None:
+        if omega is not None:
+            raise DataError("n_fft is required: the FRD does not record its FFT length")
+        n_fft = 2 * (g.shape[0] - 1)
+    n_fft = _count(n_fft, "n_fft")
+    assert n_fft is not None
+    nf = n_fft // 2 + 1
+    full = np.zeros((nf,) + g.shape[1:], dtype=complex)
+    if omega is None:
+        if g.shape[0] != nf:
+            raise ShapeError(f"a frequency response for n_fft = {n_fft} needs {nf} bins, got "
+                             f"{g.shape[0]}")
+        full[:] = g
+    else:
+        k = omega * n_fft * dt / (2 * np.pi)
+        idx = np.rint(k).astype(int)
+        if np.any(np.abs(k - idx) > 1e-6) or np.any(idx < 0) or np.any(idx >= nf):
+            raise DataError("the FRD frequencies are not on the FFT grid of n_fft samples; "
+                            "use an unsmoothed ETFE of one period (or pass n_fft)")
+        full[idx] = g
+        missing = np.setdiff1d(np.arange(nf), idx)
+        if missing.size and not fill_missing:
+            raise DataError(
+                f"{missing.size} of the {nf} FFT bins are missing from the FRD (unexcited "
+                "lines?); excite the whole band, or pass fill_missing=True for a band-limited "
+                "impulse response")
+    h = np.fft.irfft(full, n=n_fft, axis=0)
+    return MarkovEstimate(h, dt, "ifft", {"samples": n_fft})

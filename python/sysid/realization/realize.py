@@ -1,0 +1,416 @@
+"""Realisation: state-space models from Markov parameters.
+
+State-space models from Markov parameters ``h_0 = D, h_k = C A^{k-1} B``:
+
+- :func:`ho_kalman` (Ho and Kalman 1966): exact Markov parameters, order = rank of the
+  block-Hankel matrix;
+- :func:`kung` (Kung 1978): SVD truncation and the shift invariance of the observability
+  matrix, for noisy Markov parameters;
+- :func:`era` (Juang and Pappa 1985): any Hankel shape, MIMO, with the Hankel singular values
+  for the order and the modal accuracy indicators MAC (modal amplitude coherence) and MPC
+  (modal phase collinearity) that separate physical modes from noise modes.
+
+Markov parameters from input/output data (:func:`impulse_response`, :func:`okid`,
+:func:`impulse_from_frf`) are estimated in :mod:`sysid.realization.markov` and arrive here as
+:class:`MarkovEstimate`.
+
+Markov parameters are arrays shaped ``(count, noutputs, ninputs)``, the layout of
+:meth:`sysid.StateSpaceModel.markov`. The numerics run in the Rust core.
+
+Examples
+--------
+>>> import numpy as np, sysid
+>>> true = sysid.StateSpaceModel([[0.9, 0.2], [-0.2, 0.9]], [[1.0], [0.0]], [[1.0, 0.5]])
+>>> r = sysid.era(true.markov(40))
+>>> r.model.nstates
+2
+>>> bool(np.allclose(np.sort_complex(r.model.poles()), np.sort_complex(true.poles())))
+True
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import as_int
+from ..analysis.modal import ModalAnalysis, modal_analysis
+from ..errors import DataError, NonFiniteError, ShapeError
+from ..models.statespace import StateSpaceModel
+
+__all__ = [
+    "ho_kalman",
+    "kung",
+    "era",
+    "EraResult",
+    "MarkovEstimate",
+    "era_stabilization",
+    "StabilizationDiagram",
+]
+
+
+def _markov(markov: Any) -> tuple[np.ndarray, float | None]:
+    """Markov parameters as a finite float array ``(count, l, m)`` and the dt they carry."""
+    dt = None
+    if isinstance(markov, MarkovEstimate):
+        dt = markov.dt
+        markov = markov.markov
+    if isinstance(markov, (str, bytes)):
+        raise ShapeError("markov must be a numeric array (count, noutputs, ninputs), got a string")
+    h = np.asarray(markov)
+    if h.dtype.kind not in "biuf":
+        raise DataError(f"markov must be real and numeric, got dtype {h.dtype}")
+    h = h.astype(np.float64, copy=False)
+    if h.ndim == 1:
+        h = h[:, None, None]
+    if h.ndim != 3:
+        raise ShapeError(
+            f"markov must have shape (count, noutputs, ninputs) like StateSpaceModel.markov(), "
+            f"got {h.ndim}-D with shape {h.shape}"
+        )
+    if 0 in h.shape:
+        raise ShapeError(f"markov is empty (shape {h.shape})")
+    if not np.isfinite(h).all():
+        k, i, j = np.argwhere(~np.isfinite(h))[0]
+        raise NonFiniteError(
+            f"markov has a non-finite value (NaN or Inf) in Markov parameter {k}, output {i}, "
+            f"input {j}; the realisation needs finite impulse responses"
+        )
+    return h, dt
+
+
+def _count(x: int | None, name: str) -> int | None:
+    return None if x is None else as_int(x, name, alt="None")
+
+
+def _model(d: dict[str, Any], dt: float, method: str, **info: Any) -> StateSpaceModel:
+    return StateSpaceModel(
+        d["a"], d["b"], d["c"], d["d"], dt=dt,
+        info={"method": method, "singular_values": d["singular_values"],
+              "rows": d["rows"], "cols": d["cols"], **info},
+    )
+
+
+def _realize(method: str, markov: Any, order: int | None, rows: int | None, cols: int | None,
+             dt: float | None, rank_tol: float = 1e-8) -> tuple[dict[str, Any], float]:
+    h, dt_h = _markov(markov)
+    dt = float(dt if dt is not None else (dt_h if dt_h is not None else 1.0))
+    count, l, m = h.shape
+    out = _sysid.realize(
+        method, np.ascontiguousarray(h.reshape(count * l, m)), l,
+        _count(order, "order"), _count(rows, "rows"), _count(cols, "cols"), float(rank_tol),
+    )
+    return out, dt
+
+
+def ho_kalman(markov: Any, order: int | None = None, *, rows: int | None = None,
+              cols: int | None = None, rank_tol: float = 1e-8, dt: float | None = None
+              ) -> StateSpaceModel:
+    """Ho-Kalman realisation from exact Markov parameters.
+
+    Parameters
+    ----------
+    markov : array_like or MarkovEstimate
+        ``(count, noutputs, ninputs)``: ``h_0 = D, h_1 = CB, ...``.
+    order : int, optional
+        Model order; by default the numerical rank of the block-Hankel matrix.
+    rows, cols : int, optional
+        Block rows and columns of the Hankel matrix; ``rows + cols <= count - 1`` (the shifted
+        matrix needs one more parameter). By default the parameters are split evenly.
+    rank_tol : float
+        Singular values below ``rank_tol`` times the largest do not count towards the rank.
+    dt : float, optional
+        Sample time of the model (taken from a MarkovEstimate, else 1).
+
+    Returns
+    -------
+    StateSpaceModel
+        ``info["singular_values"]`` holds the Hankel singular values.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> true = sysid.StateSpaceModel([[0.5, 0.1], [0.0, -0.3]], [[1.0], [1.0]], [[1.0, 2.0]])
+    >>> sysid.ho_kalman(true.markov(12)).nstates
+    2
+    """
+    out, dt = _realize("ho_kalman", markov, order, rows, cols, dt, rank_tol)
+    return _model(out, dt, "ho_kalman")
+
+
+def kung(markov: Any, order: int | None = None, *, rows: int | None = None,
+         cols: int | None = None, dt: float | None = None) -> StateSpaceModel:
+    """Kung's SVD realisation from (noisy) Markov parameters.
+
+    The order is ``order`` or the largest gap of the log Hankel singular values; A comes from
+    the shift invariance of the observability matrix (least squares over all block rows).
+
+    Parameters
+    ----------
+    markov : array_like or MarkovEstimate
+        ``(count, noutputs, ninputs)``.
+    order : int, optional
+        Model order.
+    rows, cols : int, optional
+        Block rows (at least 2) and columns of the Hankel matrix.
+    dt : float, optional
+        Sample time of the model.
+
+    Returns
+    -------
+    StateSpaceModel
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> h = 0.8 ** np.arange(30.0)
+    >>> h[0] = 0.0
+    >>> m = sysid.kung(h, order=1)
+    >>> round(float(m.A[0, 0]), 10)
+    0.8
+    """
+    out, dt = _realize("kung", markov, order, rows, cols, dt)
+    return _model(out, dt, "kung")
+
+
+class EraResult:
+    """ERA model with its Hankel singular values and per-mode accuracy indicators.
+
+    Attributes
+    ----------
+    model : StateSpaceModel
+        The realised model.
+    singular_values : ndarray
+        Singular values of the block-Hankel matrix (for the order choice).
+    eigenvalues : ndarray
+        Discrete-time poles, in the order of ``mac`` and ``mpc``.
+    mac : ndarray
+        Modal amplitude coherence of each pole, in [0, 1] (near 1: supported by the data).
+    mpc : ndarray
+        Modal phase collinearity of each pole's mode shape, in [0, 1] (1: a normal mode; always
+        1 with a single output).
+    rows, cols : int
+        Hankel block rows and columns used.
+    """
+
+    def __init__(self, d: dict[str, Any], dt: float) -> None:
+        self.model = _model(d, dt, "era")
+        self.singular_values = np.asarray(d["singular_values"])
+        self.eigenvalues = np.asarray(d["eig_re"]) + 1j * np.asarray(d["eig_im"])
+        self.mac = np.asarray(d["mac"])
+        self.mpc = np.asarray(d["mpc"])
+        self.rows = int(d["rows"])
+        self.cols = int(d["cols"])
+        self.model.info.update(mac=self.mac, mpc=self.mpc)
+
+    @property
+    def order(self) -> int:
+        """Model order."""
+        return self.model.nstates
+
+    def modes(self) -> ModalAnalysis:
+        """Modal analysis of the model (frequencies in Hz and rad/s, damping, shapes).
+
+        Each mode carries the MAC and MPC of its pole in ``extra``.
+        """
+        res = modal_analysis(self.model)
+        mac = np.empty(len(res.eigenvalues))
+        mpc = np.empty(len(res.eigenvalues))
+        for k, z in enumerate(res.eigenvalues):
+            i = int(np.argmin(np.abs(self.eigenvalues - z)))
+            mac[k], mpc[k] = self.mac[i], self.mpc[i]
+        res.extra = {"mac": mac, "mpc": mpc}
+        return res
+
+    def plot(self, *, ax: Any = None) -> Any:
+        """Hankel singular values with the chosen order (matplotlib axes)."""
+        from ..plot.realization import plot_hankel_singular_values
+
+        return plot_hankel_singular_values(self.singular_values, self.order, ax=ax)
+
+    def __repr__(self) -> str:
+        return (
+            f"EraResult(order={self.order}, hankel {self.rows}x{self.cols} blocks, "
+            f"min MAC={self.mac.min():.3f}, min MPC={self.mpc.min():.3f})\n"
+            + self.modes().table()
+        )
+
+
+def era(markov: Any, order: int | None = None, *, rows: int | None = None,
+        cols: int | None = None, dt: float | None = None) -> EraResult:
+    """Eigensystem Realisation Algorithm with modal accuracy indicators.
+
+    Parameters
+    ----------
+    markov : array_like or MarkovEstimate
+        ``(count, noutputs, ninputs)``: ``h_0 = D, h_1 = CB, ...``.
+    order : int, optional
+        Model order; by default the largest gap of the log Hankel singular values.
+    rows, cols : int, optional
+        Block rows and columns of the Hankel matrix, ``rows + cols <= count - 1``.
+        More block rows than the order (times the outputs) and columns spanning the slowest
+        decay give the best modal estimates.
+    dt : float, optional
+        Sample time (taken from a MarkovEstimate, else 1): used for frequencies in Hz.
+
+    Returns
+    -------
+    EraResult
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> true = sysid.StateSpaceModel([[0.9, 0.3], [-0.3, 0.9]], [[1.0], [0.0]],
+    ...                              [[1.0, 0.0], [0.5, 1.0]], dt=0.01)
+    >>> r = sysid.era(true.markov(41), rows=10, cols=30, dt=0.01)
+    >>> r.order, bool(np.all(r.mac > 0.999))
+    (2, True)
+    >>> f_true = sysid.modal_analysis(true).frequencies_hz
+    >>> bool(np.allclose(r.modes().frequencies_hz, f_true))
+    True
+    """
+    out, dt = _realize("era", markov, order, rows, cols, dt)
+    return EraResult(out, dt)
+
+
+class MarkovEstimate:
+    """Markov parameters estimated from input/output data.
+
+    Attributes
+    ----------
+    markov : ndarray
+        ``(count, noutputs, ninputs)``, ``h_0 = D`` first.
+    dt : float
+        Sample time of the data.
+    method : str
+        ``"fir"`` (least squares), ``"fir-tc"`` (TC-regularised) or ``"okid"``.
+    info : dict
+        Method details: TC hyperparameters and noise variances, or OKID's observer Markov
+        parameters ``(p, l, m + l)`` and residual covariance.
+    """
+
+    def __init__(self, markov: np.ndarray, dt: float, method: str, info: dict[str, Any]) -> None:
+        self.markov = markov
+        self.dt = dt
+        self.method = method
+        self.info = info
+
+    def era(self, order: int | None = None, *, rows: int | None = None,
+            cols: int | None = None) -> EraResult:
+        """ERA on these Markov parameters (see :func:`sysid.era`)."""
+        return era(self, order, rows=rows, cols=cols)
+
+    def __repr__(self) -> str:
+        c, l, m = self.markov.shape
+        return (f"MarkovEstimate({self.method}: {c} Markov parameters, {l} output(s), "
+                f"{m} input(s), dt={self.dt:g}, {self.info.get('samples', '?')} equations)")
+
+
+class StabilizationDiagram:
+    """ERA modes over a range of orders, each flagged by its stability across orders.
+
+    Attributes
+    ----------
+    orders : list of int
+        Model orders realised.
+    modes : list of ModalAnalysis
+        The modes at each order (with ``extra["mac"]`` and ``extra["mpc"]``).
+    status : list of ndarray
+        Per mode: 2 = frequency and damping agree with a mode of the previous order and MAC is
+        above ``min_mac``; 1 = frequency agrees only; 0 = new.
+    """
+
+    def __init__(self, orders: list[int], modes: list[ModalAnalysis],
+                 status: list[np.ndarray]) -> None:
+        self.orders = orders
+        self.modes = modes
+        self.status = status
+
+    def stable_frequencies(self, min_count: int = 3) -> np.ndarray:
+        """Frequencies (Hz) of modes fully stable at ``min_count`` or more orders (clustered)."""
+        f = np.sort(np.concatenate([m.frequencies_hz[s == 2] for m, s in
+                                    zip(self.modes, self.status)] or [np.empty(0)]))
+        out: list[float] = []
+        start = 0
+        for i in range(1, f.size + 1):
+            if i == f.size or f[i] > f[i - 1] * 1.01:
+                if i - start >= min_count:
+                    out.append(float(np.median(f[start:i])))
+                start = i
+        return np.asarray(out)
+
+    def plot(self, *, ax: Any = None) -> Any:
+        """Frequency against order (matplotlib axes)."""
+        from ..plot.realization import plot_stabilization
+
+        return plot_stabilization(self, ax=ax)
+
+    def __repr__(self) -> str:
+        return (f"StabilizationDiagram(orders {self.orders[0]}..{self.orders[-1]}, stable "
+                f"modes at {np.round(self.stable_frequencies(), 3).tolist()} Hz)")
+
+
+def era_stabilization(markov: Any, orders: Any, *, rows: int | None = None,
+                      cols: int | None = None, dt: float | None = None,
+                      freq_tol: float = 0.01, damping_tol: float = 0.05,
+                      min_mac: float = 0.9) -> StabilizationDiagram:
+    """Stabilisation diagram: ERA at each order, modes compared with the previous order.
+
+    Physical modes reappear at the same frequency and damping as the order grows; noise
+    modes wander. A mode is flagged stable when a mode of the previous order lies within
+    ``freq_tol`` (relative) in frequency and ``damping_tol`` (relative) in damping and its MAC
+    exceeds ``min_mac``.
+
+    Parameters
+    ----------
+    markov : array_like or MarkovEstimate
+        Markov parameters ``(count, noutputs, ninputs)``.
+    orders : iterable of int
+        Increasing model orders.
+    rows, cols : int, optional
+        Hankel block rows and columns (as in :func:`era`).
+    dt : float, optional
+        Sample time (from a MarkovEstimate, else 1).
+    freq_tol, damping_tol, min_mac : float
+        Stability criteria.
+
+    Returns
+    -------
+    StabilizationDiagram
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> true = sysid.StateSpaceModel([[0.9, 0.3], [-0.3, 0.9]], [[1.0], [0.0]], [[1.0, 0.0]],
+    ...                              dt=0.01)
+    >>> h = true.markov(81) + 1e-4 * np.random.default_rng(0).standard_normal((81, 1, 1))
+    >>> d = sysid.era_stabilization(h, range(2, 12, 2), dt=0.01)
+    >>> f = sysid.modal_analysis(true).frequencies_hz
+    >>> bool(np.allclose(d.stable_frequencies(), f, rtol=1e-3))
+    True
+    """
+    orders = [int(o) for o in orders]
+    if not orders or any(b <= a for a, b in zip(orders, orders[1:])):
+        raise DataError(f"orders must be a non-empty increasing sequence, got {orders}")
+    modes_list: list[ModalAnalysis] = []
+    status: list[np.ndarray] = []
+    prev: ModalAnalysis | None = None
+    for order in orders:
+        modes = era(markov, order, rows=rows, cols=cols, dt=dt).modes()
+        st = np.zeros(len(modes), dtype=int)
+        if prev is not None and len(prev):
+            for k in range(len(modes)):
+                df = np.abs(prev.frequencies_hz - modes.frequencies_hz[k])
+                j = int(np.argmin(df))
+                if df[j] <= freq_tol * max(modes.frequencies_hz[k], 1e-12):
+                    st[k] = 1
+                    dz = abs(prev.damping[j] - modes.damping[k])
+                    if (dz <= damping_tol * max(abs(modes.damping[k]), 1e-12)
+                            and modes.extra["mac"][k] >= min_mac):
+                        st[k] = 2
+        modes_list.append(modes)
+        status.append(st)
+        prev = modes
+    return StabilizationDiagram(orders, modes_list, status)

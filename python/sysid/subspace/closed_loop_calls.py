@@ -1,0 +1,99 @@
+"""The one-call closed-loop estimators :func:`sysid.pbsid` and :func:`sysid.ssarx`
+(``SubspaceEstimator(data, ..., method=...).fit(order)`` in one call; the methods themselves
+are in :mod:`sysid.subspace.closed_loop`)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..data.iodata import IOData
+from ..models.statespace import StateSpaceModel
+from .estimator import Order, SubspaceEstimator
+
+__all__ = ["pbsid", "ssarx"]
+
+
+def _one_call(method: str) -> Any:
+    def fit(
+        data: IOData,
+        order: Order = "auto",
+        *,
+        horizon: int | None = None,
+        past: int | None = None,
+        future: int | None = None,
+        feedthrough: bool = False,
+        regularization: str = "none",
+        ridge: float = 1e-3,
+    ) -> StateSpaceModel:
+        from .closed_loop import closed_loop_fit
+
+        est = SubspaceEstimator(data, horizon, past=past, future=future, method=method)
+        return closed_loop_fit(est, method, order, feedthrough=feedthrough,
+                               regularization=regularization, ridge=ridge)
+
+    fit.__name__ = method
+    fit.__qualname__ = method
+    return fit
+
+
+pbsid = _one_call("pbsid")
+pbsid.__doc__ = """Identify a state-space model from closed-loop data with PBSID-opt.
+
+    Equivalent to ``SubspaceEstimator(data, horizon, method="pbsid").fit(order, ...)``;
+    consistent under feedback when the loop has a delay (see
+    :mod:`sysid.subspace.closed_loop`).
+
+    Parameters
+    ----------
+    data : IOData
+    order : int or "auto"
+    horizon, past, future : int, optional
+        VARX order (past) and observability horizon (future <= past + 1).
+    feedthrough : bool
+        Estimate ``D`` (only with a controller without direct feedthrough).
+    regularization : {"none", "ridge", "tc"}
+        Of the VARX.
+    ridge : float
+        Ridge weight (``regularization="ridge"``).
+
+    Returns
+    -------
+    StateSpaceModel
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> n = 4000; r = rng.standard_normal(n); e = 0.5 * rng.standard_normal(n)
+    >>> u, y = np.zeros(n), np.zeros(n)
+    >>> for t in range(1, n):
+    ...     y[t] = 0.8 * y[t - 1] + u[t - 1] + e[t]
+    ...     u[t] = r[t] - 0.3 * y[t]
+    >>> m = sysid.pbsid(sysid.IOData(u=u, y=y), order=1, horizon=10)
+    >>> bool(abs(m.poles()[0] - 0.8) < 0.02)
+    True
+    """
+
+ssarx = _one_call("ssarx")
+ssarx.__doc__ = """Identify a state-space model from closed-loop data with SSARX (Jansson).
+
+    Equivalent to ``SubspaceEstimator(data, horizon, method="ssarx").fit(order, ...)``; same
+    parameters as :func:`pbsid`.
+
+    Returns
+    -------
+    StateSpaceModel
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> n = 4000; r = rng.standard_normal(n); e = 0.5 * rng.standard_normal(n)
+    >>> u, y = np.zeros(n), np.zeros(n)
+    >>> for t in range(1, n):
+    ...     y[t] = 0.8 * y[t - 1] + u[t - 1] + e[t]
+    ...     u[t] = r[t] - 0.3 * y[t]
+    >>> m = sysid.ssarx(sysid.IOData(u=u, y=y), order=1, horizon=10)
+    >>> bool(abs(m.poles()[0] - 0.8) < 0.02)
+    True
+    """

@@ -1,0 +1,639 @@
+"""Subspace identification: one pass compresses the data, every fit reuses the compression.
+
+The estimator builds the triangular factor ``L`` of the block-Hankel data matrix once (the
+only step that touches every sample, in the Rust core with the GIL released). The weighted
+SVD, the order choice and the system matrices then work on ``L`` alone, so trying other
+orders or weightings is cheap.
+
+Methods (``method=``):
+
+``"moesp"`` (default, alias ``"po-moesp"``)
+    PO-MOESP (Verhaegen 1994): past inputs and outputs as instruments; consistent with
+    process and measurement noise.
+``"ordinary-moesp"``
+    MOESP without instruments: only future inputs and outputs (Verhaegen & Dewilde 1992,
+    the seed slides' ordinary MOESP); consistent for output-error (measurement-noise-only)
+    data, biased with process noise.
+``"pi-moesp"``
+    MOESP with past inputs as instruments (Verhaegen & Dewilde 1992).
+``"n4sid"``
+    N4SID (Van Overschee & De Moor 1994): oblique projection, unit weights.
+``"cva"``
+    Canonical variate analysis (Larimore 1990): the future outputs whitened first; the
+    singular values are canonical correlations (between 0 and 1).
+``"pbsid"``, ``"ssarx"``
+    Closed-loop methods (PBSID-opt, Chiuso 2007; SSARX, Jansson 2003): a VARX of the
+    predictor first, so that they stay consistent under feedback when the loop has a delay
+    (see :mod:`sysid.subspace.closed_loop`). The open-loop methods warn
+    (:class:`sysid.FeedbackWarning`) when the record shows feedback.
+
+Singular values follow SLICOT's convention: the data are not divided by ``sqrt(N)``
+(``cva`` reports canonical correlations instead, which do not scale with N).
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any, Literal, Union
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import as_int
+from ..data.input_design import warn_excitation
+from ..data.iodata import IOData
+from ..errors import DataError, FeedbackWarning, InsufficientDataError, OrderError
+from ..models.statespace import StateSpaceModel
+from ..validation.feedback import feedback_pvalues
+from .streaming import compression_info, warn_if_fallback
+
+__all__ = [
+    "SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "METHODS",
+]
+
+METHODS = ("moesp", "ordinary-moesp", "pi-moesp", "n4sid", "cva", "pbsid", "ssarx")
+CLOSED_LOOP = ("pbsid", "ssarx")
+_ALIASES = {"po-moesp": "moesp", "pomoesp": "moesp", "moesp-ordinary": "ordinary-moesp",
+            "pbsid-opt": "pbsid"}
+#: combined p-value below which the open-loop methods warn of feedback (strict: the warning
+#: must not fire by chance on open-loop data)
+FEEDBACK_WARNING_LEVEL = 1e-6
+
+Order = Union[int, Literal["auto"]]
+
+
+def _method(method: str) -> str:
+    if not isinstance(method, str):
+        raise DataError(f"method must be one of {METHODS}, got {method!r}")
+    key = _ALIASES.get(method.lower(), method.lower())
+    if key not in METHODS:
+        raise DataError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
+    return key
+
+
+def _preprocessing(data: IOData, from_factor: bool) -> dict[str, Any]:
+    """What the record says was done to it before fitting (trend removed, scaling)."""
+    if from_factor:
+        return {"source": "a precomputed HankelFactor (pre-processing unknown)"}
+    detrended, u_scale, y_scale = data._trend_info()
+    return {
+        "experiments": data.n_experiments,
+        "samples": data.lengths,
+        "detrended": detrended,
+        "input_scale": u_scale.tolist(),
+        "output_scale": y_scale.tolist(),
+    }
+
+
+def _check_signals(data: IOData) -> None:
+    """Refuse constant outputs; warn about offsets much larger than the variation."""
+    for kind, idx, names in (("output", 1, data.output_names), ("input", 0, data.input_names)):
+        if not names:
+            continue
+        # one pass in Rust (NumPy's column reductions of (samples, channels) arrays are slow)
+        big, mean, std = _sysid.channel_stats([e[idx] for e in data.experiments])
+        for j, n in enumerate(names):
+            if big[j] > 1e150 or 0 < big[j] < 1e-150:
+                raise DataError(
+                    f"{kind} {n} has values of order {big[j]:.0e}, outside the range sysid "
+                    "computes with (products of samples overflow or underflow); rescale the "
+                    "channel to order 1 first, e.g. sysid.scale(data) or data in other units"
+                )
+        for j, n in enumerate(names):
+            if std[j] == 0 and kind == "output":
+                raise DataError(
+                    f"output {n} is constant ({mean[j]:g}): there is nothing to identify; "
+                    "check the channel (a stuck sensor, the wrong column?) or drop it"
+                )
+            if not data.has_trend and abs(mean[j]) > 10 * std[j] > 0:
+                warnings.warn(
+                    f"{kind} {n} has an offset ({mean[j]:.4g}) much larger than its variation "
+                    f"(std {std[j]:.3g}) and the data were not detrended: the model will "
+                    "spend a state on the offset (a pole near 1); remove it first with "
+                    "sysid.detrend(data) (command line: --detrend mean or --detrend linear)",
+                    UserWarning,
+                    stacklevel=3,
+                )
+
+
+def _refuse_white_noise(data: IOData, lags: int = 20, level: float = 0.05) -> None:
+    """Output-only data that pass a Ljung-Box whiteness test have no dynamics to identify."""
+    from scipy import stats
+
+    pvals = []
+    for j in range(data.n_outputs):
+        q, n_tot = 0.0, 0
+        for _, y in data.experiments:
+            x = y[:, j] - y[:, j].mean()
+            N = x.size
+            if N <= lags + 1:
+                continue
+            c0 = float(x @ x)
+            if c0 == 0.0:
+                continue
+            r = np.array([x[k:] @ x[:-k] for k in range(1, lags + 1)]) / c0
+            q += N * (N + 2) * float(np.sum(r**2 / (N - np.arange(1, lags + 1))))
+            n_tot += 1
+        if n_tot == 0:
+            return
+        pvals.append(float(stats.chi2.sf(q, lags * n_tot)))
+    if min(pvals) > level:
+        raise DataError(
+            "order='auto' on output-only data that look like white noise (Ljung-Box p = "
+            + ", ".join(f"{n}: {p:.2g}" for n, p in zip(data.output_names, pvals))
+            + f" at {lags} lags): there are no dynamics to identify (an order-0 model y = e "
+            "describes them); pass an explicit order to fit one anyway"
+        )
+
+
+def default_horizon(n_samples: int, n_inputs: int, n_outputs: int) -> int:
+    """The horizon used when none is given.
+
+    ``i = min(20, max(2, N_min // (20 (m + l))))`` where ``N_min`` is the shortest
+    experiment: the data matrix ``2 i (m + l)`` rows then has at least ten times as many
+    columns as rows, and orders up to about ``i * l`` can be identified.
+
+    Examples
+    --------
+    >>> from sysid.subspace.estimator import default_horizon
+    >>> default_horizon(1000, 1, 1)
+    20
+    >>> default_horizon(200, 2, 2)
+    2
+    """
+    return int(min(20, max(2, n_samples // (20 * (n_inputs + n_outputs)))))
+
+
+class SubspaceEstimator:
+    """Compress a record once, then fit state-space models of any order and weighting.
+
+    Parameters
+    ----------
+    data : IOData
+        The record (several experiments allowed; no Hankel column spans two).
+    horizon : int, optional
+        Past and future horizon ``i`` (block rows); default :func:`default_horizon`.
+    past, future : int, optional
+        Separate past and future horizons (override ``horizon``).
+    method : str
+        Default weighting for :attr:`singular_values` and :meth:`fit`: one of
+        :data:`METHODS` (``"moesp"``, ``"ordinary-moesp"``, ``"pi-moesp"``, ``"n4sid"``,
+        ``"cva"``, and for closed-loop data ``"pbsid"``, ``"ssarx"``).
+    chunk_rows : int, optional
+        Hankel columns per QR update in the compressor (memory ``(k + chunk) k`` doubles).
+    compressor : {"auto", "qr", "correlation"}
+        ``"auto"`` (default): the fast correlation path (lagged correlation sums and
+        Cholesky, about ``p + f`` times fewer flops) when its Gram matrix is well enough
+        conditioned for the factor to match the exact one, else the exact QR pass
+        (``factor.source == "qr-fallback"``); the decision and the relative pivot it was
+        made from are in ``model.info["compression"]``. ``"qr"``: always exact;
+        ``"correlation"``: fast, with the exact pass and a ``CompressionFallbackWarning``
+        only when its Gram matrix is numerically singular. See docs/performance.md.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> true = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.8]], [[1.0], [0.5]], [[1.0, 0.0]])
+    >>> u = rng.standard_normal((500, 1))
+    >>> est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=true.simulate(u)), horizon=5)
+    >>> est.auto_order
+    2
+    >>> model = est.fit(order="auto")
+    >>> np.allclose(np.sort_complex(model.poles()), np.sort_complex(true.poles()))
+    True
+    """
+
+    def __init__(
+        self,
+        data: IOData,
+        horizon: int | None = None,
+        *,
+        past: int | None = None,
+        future: int | None = None,
+        method: str = "moesp",
+        chunk_rows: int | None = None,
+        compressor: str = "auto",
+    ) -> None:
+        if not isinstance(data, IOData):
+            raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
+        self.data = data
+        self._from_factor = False
+        self.method = _method(method)
+        lengths = data.lengths
+        shortest, longest = min(lengths), max(lengths)
+        self._horizon_note = ""
+        if horizon is None:
+            horizon = default_horizon(shortest, data.n_inputs, data.n_outputs)
+            if horizon < default_horizon(longest, data.n_inputs, data.n_outputs):
+                k = lengths.index(shortest)
+                self._horizon_note = (
+                    f" (the default horizon {horizon} was set by experiment {k}, which has only "
+                    f"{shortest} samples; drop that experiment or pass horizon=...)"
+                )
+        horizon = as_int(horizon, "horizon", 1)
+        self.past = as_int(past if past is not None else horizon, "past", 1)
+        self.future = as_int(future if future is not None else horizon, "future", 1)
+        if chunk_rows is not None:
+            chunk_rows = as_int(chunk_rows, "chunk_rows", 1)
+        _check_signals(data)
+        if self.past + self.future > longest:
+            which = "horizon" if past is None and future is None else "past/future"
+            raise InsufficientDataError(
+                f"{which} too large for the data: a window of past + future = "
+                f"{self.past} + {self.future} samples needs at least {self.past + self.future} "
+                f"samples per experiment but the longest has {longest}; choose "
+                f"horizon <= {max(longest // 2, 1)} (a few times the expected order)"
+            )
+        self.factor = _sysid.compress(
+            data.experiments, self.past, self.future, chunk_rows, compressor
+        )
+        self.compressor = compressor
+        warn_if_fallback(self.factor, requested=compressor)
+        self._svd: dict[Any, Any] = {}
+        self._pe_cache: dict[int, int] = {}
+        self._feedback_p: float | None = None
+        self._feedback_warned = False
+        self._subspace(None)  # checks the record (length, excitation) right away
+
+    @classmethod
+    def from_factor(
+        cls,
+        factor: Any,
+        *,
+        dt: float = 1.0,
+        method: str = "moesp",
+        input_names: list[str] | None = None,
+        output_names: list[str] | None = None,
+    ) -> SubspaceEstimator:
+        """An estimator on an already computed :class:`~sysid._sysid.HankelFactor`.
+
+        For factors computed out of core, merged across experiments or machines, or loaded
+        from disk. Fits with ``x0=True`` need the data and are not available.
+        """
+        if not isinstance(factor, _sysid.HankelFactor):
+            raise DataError(
+                f"factor must be a HankelFactor (from sysid.compress_stream or "
+                f"SubspaceEstimator(...).factor), got {type(factor).__name__}"
+            )
+        self = cls.__new__(cls)
+        self._horizon_note = ""
+        m, l = factor.n_inputs, factor.n_outputs
+        # a placeholder record that carries only channel counts, names and dt
+        rows = max(m, l, 1)  # time-first: at least as many samples as channels
+        self.data = IOData(
+            u=np.zeros((rows, m)),
+            y=np.zeros((rows, l)),
+            dt=dt,
+            input_names=input_names,
+            output_names=output_names,
+        )
+        self._from_factor = True
+        self.method = _method(method)
+        self.past, self.future = factor.past, factor.future
+        self.factor = factor
+        self.compressor = "given"
+        self._svd = {}
+        self._pe_cache = {}
+        self._feedback_p = None
+        self._feedback_warned = False
+        return self
+
+    def _subspace(self, method: str | None) -> Any:
+        key = self.method if method is None else _method(method)
+        if key not in self._svd:
+            if key in CLOSED_LOOP:
+                self._svd[key] = _sysid.ClosedLoopSubspace(self.factor, key)
+            else:
+                self._svd[key] = _sysid.Subspace(self.factor, key)
+        return self._svd[key]
+
+    def feedback_pvalue(self) -> float:
+        """Combined p-value of the feedback test (:func:`sysid.check_feedback`) computed on
+        this estimator's factor (no pass over the data); 1.0 without inputs."""
+        if self._feedback_p is None:
+            p = 1.0
+            if self.factor.n_inputs:
+                pv = feedback_pvalues(self.factor)[1]
+                p = float(min(1.0, len(pv) * float(np.min(pv))))
+            self._feedback_p = p
+        return self._feedback_p
+
+    def _warn_feedback(self, key: str) -> None:
+        if key in CLOSED_LOOP or self._feedback_warned:
+            return
+        p = self.feedback_pvalue()
+        self._feedback_warned = True
+        if p < FEEDBACK_WARNING_LEVEL:
+            warnings.warn(
+                f"the record shows feedback (past outputs predict the input, p = {p:.2g}): "
+                f"the open-loop method {key!r} is biased under feedback; use method='pbsid' "
+                "or 'ssarx' (see sysid.check_feedback)",
+                FeedbackWarning,
+                stacklevel=3,
+            )
+
+    @property
+    def singular_values(self) -> np.ndarray:
+        """Singular values of the weighted projection for :attr:`method` (order choice)."""
+        return self._subspace(None).singular_values
+
+    def singular_values_for(self, method: str) -> np.ndarray:
+        """Singular values under another weighting, reusing the compression."""
+        return self._subspace(method).singular_values
+
+    @property
+    def auto_order(self) -> int:
+        """Order at the largest gap of the log singular values (SLICOT's rule).
+
+        A fast first look; on real records it often stops at 1-2 where the data support
+        more, so ``fit(order="auto")`` uses :meth:`order_selection` instead."""
+        return self._subspace(None).auto_order()
+
+    def order_selection(self, method: str | None = None, feedthrough: bool = True
+                        ) -> dict[str, Any]:
+        """The order ``fit(order="auto")`` takes, with the table and the reason.
+
+        With inputs and the data at hand: the order whose models, fitted on part of the
+        record, best simulate the part held out (two contiguous halves, or the experiments;
+        :func:`sysid.identify.crossval.cross_validated_order`), the smallest within 0.5 fit
+        points of the best. Otherwise (time series, an estimator built from a factor, a
+        record too short to split): the largest gap of the log singular values
+        (:attr:`auto_order`). The result is recorded in ``model.info["order_selection"]``.
+        """
+        key = self.method if method is None else _method(method)
+        cache_key = ("cv", key, bool(feedthrough))
+        if cache_key in self._svd:
+            return dict(self._svd[cache_key])
+        sub = self._subspace(key)
+        out: dict[str, Any]
+        if self.factor.n_inputs and not self._from_factor:
+            from ..identify.crossval import cross_validated_order
+
+            try:
+                out = cross_validated_order(self.data, method=key, past=self.past,
+                                            future=self.future,
+                                            feedthrough=bool(feedthrough)).as_dict()
+                out["order"] = min(out["order"], sub.max_order)
+            except Exception as e:  # noqa: BLE001 - too short to split: the SVD rule
+                out = {"order": int(sub.auto_order()), "criterion": "singular-value gap",
+                       "reason": f"largest gap of the log singular values (the record could "
+                                 f"not be cross-validated: {e})", "table": {}}
+        else:
+            out = {"order": int(sub.auto_order()), "criterion": "singular-value gap",
+                   "reason": "largest gap of the log singular values", "table": {}}
+        self._svd[cache_key] = out
+        return dict(out)
+
+    def feedthrough_selection(self, method: str | None = None, order: Order = "auto"
+                              ) -> tuple[bool, dict[str, Any]]:
+        """Whether ``fit(feedthrough="auto")`` estimates ``D``: the held-out simulation fits
+        (as :meth:`order_selection`) with and without it; ``D`` only when it gains more than
+        0.5 fit points (no feedthrough, MATLAB's default, otherwise). Closed-loop methods and
+        data that cannot be split: no ``D``."""
+        key = self.method if method is None else _method(method)
+        if key in CLOSED_LOOP or not self.factor.n_inputs or self._from_factor:
+            return False, {"feedthrough": False, "reason": "not decided from data (closed-loop "
+                           "method, no inputs or no data): no feedthrough"}
+        from ..identify.crossval import TOL, cross_validated_order
+
+        orders = None if isinstance(order, str) else [as_int(order, "order", 1)]
+        best = {}
+        try:
+            for ft in (False, True):
+                c = cross_validated_order(self.data, method=key, past=self.past,
+                                          future=self.future, feedthrough=ft, orders=orders)
+                best[ft] = c.table[c.order]
+                if orders is None:
+                    self._svd[("cv", key, ft)] = c.as_dict()
+        except Exception as e:  # noqa: BLE001 - too short to split
+            return False, {"feedthrough": False, "reason": f"could not be cross-validated "
+                           f"({e}): no feedthrough"}
+        use = bool(best[True] > best[False] + TOL)
+        return use, {"feedthrough": use, "held_out_fit": {"with D": best[True],
+                                                          "without D": best[False]},
+                     "reason": f"held-out simulation fit {best[True]:.1f} % with D, "
+                               f"{best[False]:.1f} % without: "
+                               + ("D estimated" if use else f"D = 0 (gain below {TOL:g})")}
+
+    @property
+    def max_order(self) -> int:
+        """Largest order the horizon allows."""
+        return self._subspace(None).max_order
+
+    def fit(
+        self,
+        order: Order = "auto",
+        *,
+        method: str | None = None,
+        feedthrough: bool | str | None = None,
+        kalman: bool = True,
+        stable: bool = False,
+        x0: bool = False,
+        uncertainty: str | None = None,
+        n_boot: int = 100,
+        rng: Any = None,
+        regularization: str = "none",
+    ) -> StateSpaceModel:
+        """Estimate ``A, B, C, D, K`` and the noise covariances for one order.
+
+        Parameters
+        ----------
+        order : int or "auto"
+            Model order; ``"auto"``: chosen by simulation error cross-validated inside the
+            record (:meth:`order_selection`; table and reason in
+            ``info["order_selection"]``).
+        method : str, optional
+            Weighting for this fit (default: the estimator's).
+        feedthrough : bool or "auto", optional
+            Estimate ``D``; ``False`` forces ``D = 0``; ``"auto"``: decided by held-out
+            simulation fit (:meth:`feedthrough_selection`, recorded in
+            ``info["feedthrough_selection"]``). Default: ``True`` for the open-loop
+            methods, ``False`` for ``"pbsid"``/``"ssarx"`` (estimating ``D`` under feedback is
+            consistent only when the controller has no direct feedthrough).
+        kalman : bool
+            Estimate the noise model (``K`` from the Riccati equation, innovation covariance).
+        stable : bool
+            Enforce a stable ``A`` (Maciejowski's zero-padded shift); recorded in ``info``.
+        x0 : bool
+            Also estimate ``B, D`` jointly with the initial state by least squares on the data
+            (one more pass over the record; single-experiment data only).
+        uncertainty : {None, "bootstrap"}
+            ``"bootstrap"``: attach the parameter uncertainty from a residual bootstrap of
+            ``n_boot`` records (see :mod:`sysid.subspace.bootstrap`), so that
+            ``poles(std=True)``, ``freqresp(w, std=True)`` and Bode bands work.
+        n_boot : int
+            Bootstrap records (``uncertainty="bootstrap"``).
+        rng : seed or numpy Generator, optional
+            Random numbers of the bootstrap.
+        regularization : {"none", "ridge", "tc"}
+            Closed-loop methods only: regularisation of their VARX.
+
+        Returns
+        -------
+        StateSpaceModel
+        """
+        key = self.method if method is None else _method(method)
+        if feedthrough is None:
+            feedthrough = key not in CLOSED_LOOP
+        ft_selection = None
+        if isinstance(feedthrough, str):
+            if feedthrough != "auto":
+                raise DataError(f"feedthrough must be True, False or 'auto', got "
+                                f"{feedthrough!r}")
+            feedthrough, ft_selection = self.feedthrough_selection(key, order)
+        if key in CLOSED_LOOP:
+            from .closed_loop import closed_loop_fit
+
+            if x0 or stable or uncertainty is not None:
+                raise DataError(f"x0, stable and uncertainty are not available with "
+                                f"method={key!r} (an open-loop re-fit or simulation would "
+                                "ignore the feedback); refine with sysid.pem for both")
+
+            return closed_loop_fit(self, key, order, feedthrough=feedthrough, kalman=kalman,
+                                   regularization=regularization)
+        sub = self._subspace(method)
+        self._warn_feedback(key)
+        if isinstance(order, str):
+            if order != "auto":
+                raise DataError(f"order must be an integer or 'auto', got {order!r}")
+            if self.factor.n_inputs == 0 and not self._from_factor:
+                _refuse_white_noise(self.data)
+            selection = self.order_selection(method=key, feedthrough=bool(feedthrough))
+            n = selection["order"]
+        else:
+            selection = None
+            n = as_int(order, "order", 1)
+        for name, flag in (
+            ("feedthrough", feedthrough),
+            ("kalman", kalman),
+            ("stable", stable),
+            ("x0", x0),
+        ):
+            if not isinstance(flag, (bool, np.bool_)):
+                raise DataError(f"{name} must be True or False, got {flag!r}")
+        if self.factor.n_inputs:
+            # warn (ExcitationWarning) when the input cannot support order n
+            warn_excitation(self._excitation_order(2 * n), n, stacklevel=2)
+        try:
+            res = sub.fit(n, bool(feedthrough), bool(kalman), bool(stable))
+        except OrderError as e:
+            if not self._horizon_note:
+                raise
+            raise OrderError(f"{e}{self._horizon_note}") from None
+        x0_est = None
+        B, D = res["B"], res["D"]
+        if x0:
+            if self._from_factor:
+                raise DataError("x0=True needs the data; this estimator was built from a factor")
+            if self.data.n_experiments != 1:
+                raise DataError("x0=True needs a single-experiment record")
+            u, y = self.data.experiments[0]
+            B, D, x0_est = _sysid.estimate_bd_x0(res["A"], res["C"], u, y, bool(feedthrough))
+        info = {
+            "method": method and _method(method) or self.method,
+            "order": n,
+            "past": self.past,
+            "future": self.future,
+            "singular_values": sub.singular_values,
+            "n_columns": self.factor.n_columns,
+            "compression": compression_info(self.factor, self.compressor),
+            "stable_enforced": bool(stable),
+            "Q": res["Q"],
+            "R": res["R"],
+            "S": res["S"],
+            "settings": {"method": method and _method(method) or self.method, "order": n,
+                         "order_rule": "auto" if isinstance(order, str) else "given",
+                         "past": self.past, "future": self.future,
+                         "feedthrough": bool(feedthrough), "kalman": bool(kalman),
+                         "stable": bool(stable), "x0": bool(x0)},
+            "preprocessing": _preprocessing(self.data, self._from_factor),
+        }
+        if selection is not None:
+            info["order_selection"] = selection
+        if ft_selection is not None:
+            info["feedthrough_selection"] = ft_selection
+        model = StateSpaceModel(
+            res["A"],
+            B,
+            res["C"],
+            D,
+            res["K"],
+            dt=self.data.dt,
+            noise_cov=res["noise_cov"],
+            x0=x0_est,
+            input_names=self.data.input_names,
+            output_names=self.data.output_names,
+            info=info,
+        )
+        if uncertainty is not None:
+            if uncertainty != "bootstrap":
+                raise DataError(f"uncertainty must be None or 'bootstrap', got {uncertainty!r}")
+            from .bootstrap import bootstrap_uncertainty
+
+            def refit(rec: IOData) -> StateSpaceModel:
+                # the fast compressor: exact up to rounding (it falls back to QR itself when
+                # its Gram matrix is ill-conditioned), 2-3x faster on short records
+                est = SubspaceEstimator(rec, past=self.past, future=self.future,
+                                        method=self.method, compressor="correlation")
+                return est.fit(n, method=method, feedthrough=feedthrough, stable=stable, x0=x0)
+
+            model.uncertainty = bootstrap_uncertainty(self, model, refit, n_boot, rng)
+            model.info["uncertainty"] = {"method": "bootstrap",
+                                         "n_boot": model.uncertainty.n_boot,  # type: ignore
+                                         "n_failed": model.uncertainty.n_failed}  # type: ignore
+        return model
+
+    def _excitation_order(self, needed: int, tol: float = 1e-9) -> int:
+        """Persistent-excitation order of the input, read from the factor (no pass over the
+        data): the largest ``d <= min(needed, past + future)`` for which the input's block
+        Hankel matrix with ``d`` block rows has full rank (eigenvalues of its Gram matrix
+        above ``tol`` times the largest, as :func:`sysid.persistent_excitation_order`)."""
+        if needed not in self._pe_cache:
+            # in the Rust core on the calling thread: one Cholesky of G - tol top I answers
+            # every d (the first non-positive pivot), no threaded LAPACK call
+            self._pe_cache[needed] = int(_sysid.excitation_order(self.factor, needed, tol))
+        return self._pe_cache[needed]
+
+    def __repr__(self) -> str:
+        return (
+            f"SubspaceEstimator(method={self.method!r}, past={self.past}, future={self.future}, "
+            f"{self.factor.n_columns} Hankel columns, {self.data.n_experiments} experiment(s))"
+        )
+
+
+def _shortcut(method: str):  # type: ignore[no-untyped-def]
+    def fit(
+        data: IOData,
+        order: Order = "auto",
+        *,
+        horizon: int | None = None,
+        feedthrough: bool | str = True,
+        kalman: bool = True,
+        stable: bool = False,
+        x0: bool = False,
+    ) -> StateSpaceModel:
+        est = SubspaceEstimator(data, horizon, method=method)
+        return est.fit(order, feedthrough=feedthrough, kalman=kalman, stable=stable, x0=x0)
+
+    fit.__name__ = method.replace("-", "_")
+    fit.__doc__ = f"""Identify a state-space model with {method.upper()} in one call.
+
+    Equivalent to ``SubspaceEstimator(data, horizon, method="{method}").fit(order, ...)``.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(1)
+    >>> true = sysid.StateSpaceModel([[0.7]], [[1.0]], [[1.0]])
+    >>> u = rng.standard_normal(300)
+    >>> m = sysid.{fit.__name__}(sysid.IOData(u=u, y=true.simulate(u)), order=1, horizon=4)
+    >>> bool(abs(m.poles()[0] - 0.7) < 1e-8)
+    True
+    """
+    return fit
+
+
+moesp = _shortcut("moesp")
+n4sid = _shortcut("n4sid")
+cva = _shortcut("cva")

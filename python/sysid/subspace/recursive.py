@@ -1,0 +1,135 @@
+"""Recursive subspace identification: update the compressed factor chunk by chunk.
+
+:class:`RecursiveSubspace` keeps the triangular factor ``R`` of the block-Hankel Gram matrix
+``G = sum_t lambda^{age(t)} h(t) h(t)^T`` (exponential forgetting ``lambda``) and folds each
+new chunk in by a blocked QR update in the Rust core, so the cost of an update depends on
+the chunk and the horizon, never on how much data came before. After each update the
+current model is the subspace fit on that factor (the same weighted SVD and least squares as
+:class:`sysid.SubspaceEstimator`); without forgetting it equals the batch estimate on all
+data so far, to round-off.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import as_int
+from ..errors import DataError, InsufficientDataError
+from ..models.statespace import StateSpaceModel
+
+__all__ = ["RecursiveSubspace"]
+
+
+class RecursiveSubspace:
+    """Subspace identification that follows the data, with optional forgetting.
+
+    Parameters
+    ----------
+    order : int
+        Model order fitted after each update.
+    horizon : int
+        Past and future horizon of the data matrix.
+    forgetting : float
+        ``lambda`` in (0, 1]: a column's weight decays by ``lambda`` per new column (memory
+        about ``1 / (1 - lambda)`` samples); 1 keeps all data.
+    method : str
+        Weighting (``"moesp"``, ``"n4sid"``, ``"cva"``, ``"pbsid"``, ``"ssarx"``, ...).
+    feedthrough, kalman : bool
+        As in :meth:`sysid.SubspaceEstimator.fit`.
+    dt : float
+        Sample time of the models.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> true = sysid.StateSpaceModel([[0.7]], [[1.0]], [[1.0]])
+    >>> u = rng.standard_normal(600)
+    >>> y = true.simulate(u)
+    >>> rs = sysid.RecursiveSubspace(order=1, horizon=4)
+    >>> for k in range(0, 600, 200):
+    ...     model = rs.update(u[k:k + 200], y[k:k + 200])
+    >>> bool(abs(model.poles()[0] - 0.7) < 1e-9)
+    True
+    """
+
+    def __init__(self, order: int, horizon: int, *, forgetting: float = 1.0,
+                 method: str = "moesp", feedthrough: bool = False, kalman: bool = False,
+                 dt: float = 1.0) -> None:
+        from .estimator import _method
+
+        self.order = as_int(order, "order", 1)
+        self.horizon = as_int(horizon, "horizon", 2)
+        forgetting = float(forgetting)
+        if not 0.0 < forgetting <= 1.0:
+            raise DataError(f"forgetting must lie in (0, 1], got {forgetting}")
+        self.forgetting = forgetting
+        self.method = _method(method)
+        self.feedthrough = bool(feedthrough)
+        self.kalman = bool(kalman)
+        self.dt = float(dt)
+        self._rec: Any = None
+        self.model: StateSpaceModel | None = None
+        self.n_samples = 0
+
+    @staticmethod
+    def _as2d(x: Any, name: str) -> np.ndarray:
+        a = np.asarray(x, dtype=float)
+        if a.ndim == 1:
+            a = a[:, None]
+        if a.ndim != 2:
+            raise DataError(f"{name} must be 1-D or 2-D (samples x channels), got {a.ndim}-D")
+        return np.ascontiguousarray(a)
+
+    def update(self, u: Any, y: Any) -> StateSpaceModel | None:
+        """Fold a chunk in and return the current model (``None`` until the factor has more
+        columns than rows, i.e. about ``2 horizon (m + l)`` samples).
+
+        Parameters
+        ----------
+        u : array_like
+            ``(samples, m)`` or 1-D; ``None`` or empty for output-only data.
+        y : array_like
+            ``(samples, l)`` or 1-D.
+        """
+        yy = self._as2d(y, "y")
+        uu = (np.zeros((yy.shape[0], 0)) if u is None or np.size(u) == 0
+              else self._as2d(u, "u"))
+        if self._rec is None:
+            self._rec = _sysid.RecursiveFactor(uu.shape[1], yy.shape[1], self.horizon,
+                                               self.horizon, self.forgetting)
+            self._m, self._l = uu.shape[1], yy.shape[1]
+        elif uu.shape[1] != self._m or yy.shape[1] != self._l:
+            raise DataError(f"chunks must keep {self._m} input(s) and {self._l} output(s)")
+        self._rec.update(uu, yy)
+        self.n_samples += yy.shape[0]
+        k = 2 * self.horizon * (self._m + self._l)
+        if self._rec.n_columns < k:
+            return None
+        self.model = self._fit()
+        return self.model
+
+    def _fit(self) -> StateSpaceModel:
+        from .estimator import SubspaceEstimator
+
+        est = SubspaceEstimator.from_factor(self._rec.factor(), dt=self.dt, method=self.method)
+        model = est.fit(self.order, feedthrough=self.feedthrough, kalman=self.kalman)
+        model.info.update({"recursive": True, "forgetting": self.forgetting,
+                           "n_samples": self.n_samples,
+                           "effective_columns": self._rec.effective_columns})
+        return model
+
+    @property
+    def factor(self) -> Any:
+        """The current :class:`~sysid._sysid.HankelFactor`."""
+        if self._rec is None or self._rec.n_columns == 0:
+            raise InsufficientDataError("no Hankel column yet: update with more samples")
+        return self._rec.factor()
+
+    def __repr__(self) -> str:
+        return (f"RecursiveSubspace(order={self.order}, horizon={self.horizon}, "
+                f"forgetting={self.forgetting}, method={self.method!r}, "
+                f"{self.n_samples} samples)")

@@ -1,0 +1,2 @@
+"""Model validation: compare, residual whiteness, information criteria and order selection,
+feedback tests."""

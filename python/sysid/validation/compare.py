@@ -1,0 +1,475 @@
+"""Validation: compare a model with measured data, and test its residuals.
+
+:func:`compare`
+    Simulation (``horizon=None``) or ``k``-step-ahead Kalman prediction against the
+    measured outputs, per output NRMSE fit (MATLAB's ``compare`` definition), VAF and RMSE.
+:func:`residuals` (in :mod:`sysid.validation.residuals`)
+    Auto-correlation of the one-step prediction errors and their cross-correlation with the
+    inputs, with confidence bounds, a Ljung-Box portmanteau test of whiteness per output and
+    Ljung's chi-square test of independence from past inputs.
+:func:`error_spectrum`
+    Power spectrum of the simulation error beside that of the output: the frequencies at
+    which a model is wrong stand out.
+
+The initial state is estimated by default (``x0="estimate"``): the model's response is linear
+in ``x0``, so its free response from each unit state forms a regressor and ``x0`` follows by
+least squares on the record. ``x0="zero"``, ``"model"`` (the state stored with the model) or
+an array are the alternatives.
+
+Data may be an :class:`~sysid.IOData` (several experiments allowed: each gets its own
+initial state and its own row of fit numbers) or a pair ``(u, y)``.
+
+Any model satisfying :class:`sysid.Model` is accepted. The initial state is estimated for
+state-space models (those with ``A, B, C, D`` and ``nstates``), and for the simulation of a
+model with ``to_statespace()`` (its state-space form simulates the same map); other models,
+and predictions of polynomial models, start from rest, and ``x0`` may then only be
+``"estimate"`` or ``"zero"``. A
+continuous-time model (``dt == 0``) meets the data at their sample time with its ``hold``
+(ZOH or FOH, exact; its initial state is the continuous state), so the data must be an
+:class:`~sysid.IOData`.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Union
+
+import numpy as np
+
+from .._checks import as_2d, as_int
+from ..data.iodata import IOData
+from ..errors import DataError, ShapeError
+from ..models.checks import check_model
+
+__all__ = [
+    "CompareResult",
+    "ErrorSpectrum",
+    "compare",
+    "error_spectrum",
+    "fit_metrics",
+    "estimate_x0",
+]
+
+X0 = Union[str, np.ndarray, None]
+
+
+# -- argument handling ------------------------------------------------------------------
+def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndarray]]]:
+    """The model at the data's rate and the experiments of ``data`` as (u, y) pairs,
+    checked against the model's channels.
+
+    A continuous-time model (``dt == 0``) is replaced by the model at the data's sample
+    time: :meth:`~sysid.ContinuousStateSpace.sampled` (exact hold, continuous initial
+    state), or ``c2d(dt)`` for another continuous class.
+    """
+    check_model(model)
+    if isinstance(data, IOData):
+        recs = data.experiments
+    elif isinstance(data, tuple) and len(data) == 2:
+        u, y = data
+        y = as_2d(y, "y")
+        u = np.zeros((y.shape[0], 0)) if u is None else as_2d(u, "u")
+        recs = [(u, y)]
+    else:
+        raise DataError(
+            f"data must be a sysid.IOData or a pair (u, y), got {type(data).__name__}"
+        )
+    m, l = model.ninputs, model.noutputs
+    for u, y in recs:
+        if u.shape[1] != m or y.shape[1] != l:
+            raise ShapeError(
+                f"the model has {m} input(s) and {l} output(s) but the data have "
+                f"{u.shape[1]} input(s) and {y.shape[1]} output(s); select the same channels "
+                "the model was identified on"
+            )
+        if u.shape[0] != y.shape[0]:
+            raise ShapeError(f"u has {u.shape[0]} samples but y has {y.shape[0]}")
+    if not model.dt:
+        if not isinstance(data, IOData):
+            raise DataError("a continuous-time model needs the data's sample time: pass the "
+                            "data as a sysid.IOData (with dt), or discretise with model.c2d(dt)")
+        for name in ("sampled", "c2d"):
+            if hasattr(model, name):
+                return getattr(model, name)(data.dt), recs
+        raise DataError(f"{type(model).__name__} is continuous-time (dt == 0) but has no "
+                        "sampled(dt) or c2d(dt) method to meet sampled data")
+    if isinstance(data, IOData) and not np.isclose(data.dt, model.dt, rtol=1e-9):
+        raise DataError(
+            f"the data are sampled every {data.dt:g} s but the model every {model.dt:g} s; "
+            "resample the data or use a model of the same sample time"
+        )
+    return model, recs
+
+
+def _stateful(model: Any) -> bool:
+    """A state-space model: its initial state can be estimated and given."""
+    return all(hasattr(model, k) for k in ("A", "B", "C", "D", "nstates"))
+
+
+def _horizon(horizon: Any) -> int | None:
+    if horizon is None or (isinstance(horizon, float) and np.isinf(horizon)):
+        return None
+    return as_int(horizon, "horizon", alt="None (simulation)")
+
+
+def _run(model: Any, u: np.ndarray, y: np.ndarray, horizon: int | None,
+         x0: np.ndarray | None) -> np.ndarray:
+    if horizon is None:
+        out = model.simulate(u, x0=x0) if x0 is not None else model.simulate(u)
+    elif x0 is not None:
+        out = model.predict(u, y, horizon, x0=x0)
+    else:
+        out = model.predict(u, y, horizon)
+    out = np.asarray(out, dtype=float)
+    if out.size != y.size:
+        raise ShapeError(f"{type(model).__name__} returned {out.shape} outputs for data of "
+                         f"shape {y.shape}")
+    return out.reshape(y.shape)
+
+
+def estimate_x0(model: Any, u: Any, y: Any, horizon: int | None = None) -> np.ndarray:
+    """Least-squares initial state for simulation (``horizon=None``) or prediction.
+
+    The output is ``yhat(x0) = yhat(0) + Phi x0`` where column ``i`` of ``Phi`` is the free
+    response from the ``i``-th unit state (computed with the same simulator or predictor, so
+    the estimate is exact for whatever is being compared). ``x0`` minimises
+    ``||y - yhat(x0)||``. Needs a state-space model (``A, B, C, D``); use
+    ``model.to_statespace()`` for others.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]])
+    >>> u = np.ones(20)
+    >>> y = m.simulate(u, x0=[3.0])
+    >>> np.round(sysid.estimate_x0(m, u, y), 10)
+    array([3.])
+    """
+    if not _stateful(model):
+        raise DataError(f"estimate_x0 needs a state-space model; {type(model).__name__} has no "
+                        "A, B, C, D (pass model.to_statespace())")
+    u = as_2d(u, "u", ncols=model.ninputs, allow_empty=model.ninputs == 0)
+    y = as_2d(y, "y", ncols=model.noutputs)
+    if u.shape[0] != y.shape[0]:
+        raise ShapeError(f"u has {u.shape[0]} samples but y has {y.shape[0]}")
+    n = model.nstates
+    if n == 0:
+        return np.zeros(0)
+    h = _horizon(horizon)
+    W = _window(model, h, y.shape[0])
+    base = _run(model, u[:W], y[:W], h, None)
+    u0, y0 = np.zeros((W, u.shape[1])), np.zeros((W, y.shape[1]))
+    phi = np.empty((W * y.shape[1], n))
+    for i in range(n):
+        e = np.zeros(n)
+        e[i] = 1.0
+        phi[:, i] = _run(model, u0, y0, h, e).ravel()
+    x0, *_ = np.linalg.lstsq(phi, (y[:W] - base).ravel(), rcond=None)
+    return x0
+
+
+def _window(model: Any, horizon: int | None, N: int) -> int:
+    """Samples over which the free response from x0 is above 1e-13 of its start.
+
+    The state is seen through ``A`` (simulation) or the predictor ``A - K C``; past the
+    window its influence is below round-off, so the regression ignores those samples (this
+    keeps the estimate O(n^2 W) instead of O(n^2 N) on long records).
+    """
+    F = model.A
+    if horizon is not None and getattr(model, "K", None) is not None:
+        F = model.A - model.K @ model.C
+    rho = float(np.max(np.abs(np.linalg.eigvals(F)))) if F.size else 0.0
+    if rho >= 0.9999:
+        return N
+    decay = 1 if rho == 0 else int(np.ceil(np.log(1e-13) / np.log(rho)))
+    # transient growth of non-normal matrices: leave generous room
+    W = 4 * decay + 10 * model.nstates + (horizon or 0)
+    return int(min(N, max(W, 50)))
+
+
+def _x0_for(model: Any, x0: Any, u: np.ndarray, y: np.ndarray, horizon: int | None,
+            index: int, count: int) -> np.ndarray | None:
+    if not _stateful(model):
+        if x0 is None or (isinstance(x0, str) and x0 in ("estimate", "zero")):
+            return None  # no state to estimate: the model starts from rest
+        raise DataError(f"{type(model).__name__} has no state-space form here: x0 must be "
+                        "'estimate' or 'zero' (it starts from rest)")
+    if isinstance(x0, str):
+        if x0 == "estimate":
+            return estimate_x0(model, u, y, horizon)
+        if x0 == "zero":
+            return None
+        if x0 == "model":
+            if getattr(model, "x0", None) is None:
+                raise DataError("x0='model' but the model carries no initial state")
+            return model.x0
+        raise DataError(f"x0 must be 'estimate', 'zero', 'model' or an array, got {x0!r}")
+    if x0 is None:
+        return None
+    if (isinstance(x0, (list, tuple)) and count > 1 and len(x0) == count
+            and np.ndim(x0[0]) >= 1):  # one state vector per experiment
+        x0 = x0[index]
+    arr = np.asarray(x0, dtype=float).ravel()
+    if arr.size != model.nstates:
+        raise ShapeError(f"x0 has {arr.size} entries but the model has {model.nstates} states")
+    return arr
+
+
+def fit_metrics(y: Any, yhat: Any) -> dict[str, np.ndarray]:
+    """NRMSE fit, VAF (both %) and RMSE per output column.
+
+    ``fit = 100 (1 - ||y - yhat|| / ||y - mean(y)||)`` (MATLAB's ``compare``; 100 is
+    perfect, 0 is no better than the mean, negative is worse), ``vaf = 100 (1 - var(y - yhat)
+    / var(y))`` and ``rmse = sqrt(mean((y - yhat)^2))``. Fit and VAF are undefined (NaN)
+    for a constant output channel.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> y = np.array([0.0, 1.0, 2.0, 3.0])
+    >>> sysid.fit_metrics(y, y + 0.1)["fit"]
+    array([91.05572809])
+    """
+    y = as_2d(y, "y")
+    yhat = as_2d(yhat, "yhat", ncols=y.shape[1])
+    if yhat.shape != y.shape:
+        raise ShapeError(f"yhat has shape {yhat.shape} but y has {y.shape}")
+    return _metrics(y, yhat)
+
+
+def _metrics(y: np.ndarray, yhat: np.ndarray) -> dict[str, np.ndarray]:
+    err = y - yhat
+    # an unstable model's simulation may overflow: its fit is then -inf, not a warning
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        dev = np.linalg.norm(y - y.mean(0), axis=0)
+        fit = 100.0 * (1.0 - np.linalg.norm(err, axis=0) / dev)
+        vaf = 100.0 * (1.0 - err.var(0) / y.var(0))
+        rmse = np.sqrt(np.mean(err**2, axis=0))
+    fit = np.where(np.isnan(fit) & ~np.isfinite(rmse), -np.inf, fit)
+    fit = np.where(dev == 0, np.nan, fit)  # undefined for a constant channel (documented)
+    return {"fit": fit, "vaf": vaf, "rmse": rmse}
+
+
+# -- compare ----------------------------------------------------------------------------
+class CompareResult:
+    """Measured versus model outputs, with fit numbers per experiment and output.
+
+    Attributes
+    ----------
+    horizon : int or None
+        ``None`` for simulation, else the prediction horizon.
+    y, yhat : list of ndarray
+        Measured and model outputs per experiment, ``(n_samples, noutputs)``.
+    u : list of ndarray
+        Inputs per experiment.
+    x0 : list of ndarray or None
+        Initial state used per experiment.
+    fit, vaf, rmse : ndarray
+        Shape ``(n_experiments, noutputs)``; see :func:`fit_metrics`.
+    """
+
+    def __init__(self, model: Any, horizon: int | None, u: list[np.ndarray],
+                 y: list[np.ndarray], yhat: list[np.ndarray], x0: list[Any]) -> None:
+        self.model, self.horizon = model, horizon
+        self.u, self.y, self.yhat, self.x0 = u, y, yhat, x0
+        self.output_names = list(model.output_names)
+        self.dt = model.dt
+        metrics = [_metrics(a, b) for a, b in zip(y, yhat)]
+        self.fit = np.array([d["fit"] for d in metrics])
+        self.vaf = np.array([d["vaf"] for d in metrics])
+        self.rmse = np.array([d["rmse"] for d in metrics])
+
+    @property
+    def kind(self) -> str:
+        """``"simulation"`` or ``"k-step prediction"``."""
+        return "simulation" if self.horizon is None else f"{self.horizon}-step prediction"
+
+    @property
+    def mean_fit(self) -> float:
+        """Fit averaged over outputs and experiments (a single score)."""
+        return float(np.mean(self.fit))
+
+    def to_pandas(self) -> Any:
+        """One row per (experiment, output) with fit, VAF and RMSE."""
+        import pandas as pd
+
+        rows = []
+        for e in range(self.fit.shape[0]):
+            for j, name in enumerate(self.output_names):
+                rows.append({"experiment": e, "output": name, "fit %": self.fit[e, j],
+                             "VAF %": self.vaf[e, j], "RMSE": self.rmse[e, j]})
+        return pd.DataFrame(rows)
+
+    def summary(self) -> str:
+        """A text table of the fit numbers."""
+        lines = [f"{self.kind} of {self.model!r}",
+                 f"{'exp':>4} {'output':<20} {'fit %':>9} {'VAF %':>9} {'RMSE':>11}"]
+        for e in range(self.fit.shape[0]):
+            for j, name in enumerate(self.output_names):
+                lines.append(f"{e:>4} {name[:20]:<20} {self.fit[e, j]:9.2f} {self.vaf[e, j]:9.2f} "
+                             f"{self.rmse[e, j]:11.4g}")
+        return "\n".join(lines)
+
+    def plot(self, experiment: int = 0, fig: Any = None) -> Any:
+        """Measured and model outputs over time, one axis per output; returns the figure."""
+        from ..plot.validation import plot_compare
+
+        return plot_compare(self, experiment=experiment, fig=fig)
+
+    def __repr__(self) -> str:
+        fits = ", ".join(f"{n}: {f:.1f}" for n, f in zip(self.output_names, self.fit.mean(0)))
+        ne = len(self.y)
+        return f"CompareResult({self.kind}, {ne} experiment{'s' * (ne != 1)}, fit % [{fits}])"
+
+
+def compare(model: Any, data: Any, horizon: int | None = None, *,
+            x0: X0 = "estimate") -> CompareResult:
+    """Compare a model's simulation or ``horizon``-step prediction with measured outputs.
+
+    Parameters
+    ----------
+    model : sysid.Model
+        Any model (state-space, continuous, polynomial, your own class).
+    data : IOData or (u, y)
+        Validation data, ideally not used for estimation.
+    horizon : int or None
+        ``None`` (default) simulates from the inputs alone; ``k`` predicts ``k`` steps
+        ahead with the Kalman predictor (needs ``model.K``; without it the predictor never
+        looks at the measured outputs and prediction equals simulation).
+    x0 : "estimate", "zero", "model" or array
+        Initial state: least squares on each experiment (default), zero, the model's own, or
+        given (one array, or a list with one per experiment).
+
+    Returns
+    -------
+    CompareResult
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]])
+    >>> u = rng.standard_normal(200)
+    >>> y = m.simulate(u, x0=[5.0]) + 0.1 * rng.standard_normal((200, 1))
+    >>> r = sysid.compare(m, (u, y))
+    >>> bool(r.fit[0, 0] > 90)
+    True
+    >>> bool(sysid.compare(m, (u, y), x0="zero").fit[0, 0] < r.fit[0, 0])
+    True
+    """
+    model, recs = _records(model, data)
+    h = _horizon(horizon)
+    runner = _simulator(model, x0, h)
+    us, ys, yh, x0s = [], [], [], []
+    for i, (u, y) in enumerate(recs):
+        x = _x0_for(runner, x0, u, y, h, i, len(recs))
+        us.append(u)
+        ys.append(y)
+        yh.append(_run(runner, u, y, h, x))
+        x0s.append(x)
+    for i, (_, y) in enumerate(recs):
+        flat = np.ptp(y, axis=0) == 0
+        if flat.any():
+            names = getattr(model, "output_names", None) or [f"y{j}" for j in range(y.shape[1])]
+            which = ", ".join(str(names[j]) for j in np.flatnonzero(flat))
+            raise DataError(
+                f"output {which} is constant"
+                + (f" in experiment {i}" if len(recs) > 1 else "")
+                + ": the fit (NRMSE against the mean) is undefined for a constant signal; "
+                "compare on a record where the output varies, or look at the residuals"
+            )
+    return CompareResult(model, h, us, ys, yh, x0s)
+
+
+def _simulator(model: Any, x0: Any, horizon: int | None) -> Any:
+    """For a simulation with ``x0="estimate"`` of a model without a state (polynomial, ...),
+    its ``to_statespace()``: the same input-output map, whose initial state can be fitted."""
+    if (horizon is not None or _stateful(model) or not isinstance(x0, str)
+            or x0 != "estimate" or not hasattr(model, "to_statespace")):
+        return model
+    try:
+        ss = model.to_statespace()
+    except DataError:  # e.g. a coupled MIMO ARX model: simulate from rest
+        return model
+    return ss if _stateful(ss) else model
+
+
+# -- spectrum of the simulation error ---------------------------------------------------
+class ErrorSpectrum:
+    """Welch power spectra of the simulation error and of the measured output.
+
+    Attributes
+    ----------
+    freq : ndarray
+        Frequencies in Hz.
+    error_psd, output_psd : ndarray
+        ``(len(freq), noutputs)`` one-sided power spectral densities (units^2 / Hz).
+    """
+
+    def __init__(self, model: Any, freq: np.ndarray, err: np.ndarray,
+                 out: np.ndarray) -> None:
+        self.model, self.freq, self.error_psd, self.output_psd = model, freq, err, out
+        self.output_names = list(model.output_names)
+
+    def worst_frequency(self) -> np.ndarray:
+        """Frequency (Hz, above zero) of the largest simulation-error power, per output."""
+        return self.freq[np.argmax(self.error_psd[1:], axis=0) + 1]
+
+    def relative_error(self) -> np.ndarray:
+        """Error-to-output power ratio per frequency, ``(len(freq), noutputs)``."""
+        return self.error_psd / np.maximum(self.output_psd, 1e-300)
+
+    def plot(self, fig: Any = None) -> Any:
+        """Both spectra on a log scale, one axis per output."""
+        from ..plot.validation import plot_error_spectrum
+
+        return plot_error_spectrum(self, fig=fig)
+
+    def __repr__(self) -> str:
+        return (f"ErrorSpectrum({len(self.freq)} frequencies up to {self.freq[-1]:g} Hz, "
+                f"{len(self.output_names)} output(s))")
+
+
+def error_spectrum(model: Any, data: Any, *, x0: X0 = "estimate",
+                   nperseg: int | None = None) -> ErrorSpectrum:
+    """Power spectrum of the simulation error ``y - yhat`` beside the output's (Welch).
+
+    Where the error spectrum approaches the output spectrum the model explains nothing;
+    a peak in the error marks a mode the model misses or misplaces.
+
+    Parameters
+    ----------
+    model : sysid.Model
+    data : IOData or (u, y)
+    x0 : "estimate", "zero", "model" or array
+        Initial state of the simulation.
+    nperseg : int, optional
+        Welch segment length (default ``min(256, shortest experiment)``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]])
+    >>> u = np.random.default_rng(0).standard_normal(512)
+    >>> s = sysid.error_spectrum(m, (u, m.simulate(u) + np.sin(0.5 * np.arange(512))[:, None]))
+    >>> bool(abs(s.worst_frequency()[0] - 0.5 / (2 * np.pi)) < 0.01)
+    True
+    """
+    cmp = compare(model, data, None, x0=x0)
+    shortest = min(y.shape[0] for y in cmp.y)
+    if nperseg is None:
+        nperseg = min(256, shortest)
+    else:
+        nperseg = as_int(nperseg, "nperseg", 4, shortest)
+    fs = 1.0 / cmp.dt
+    err_sum, out_sum, weight = 0.0, 0.0, 0
+    freq = np.zeros(0)
+    for y, yh in zip(cmp.y, cmp.yhat):
+        import scipy.signal
+
+        freq, pe = scipy.signal.welch(y - yh, fs=fs, nperseg=int(nperseg), axis=0)
+        _, py = scipy.signal.welch(y, fs=fs, nperseg=int(nperseg), axis=0)
+        err_sum = err_sum + pe * y.shape[0]
+        out_sum = out_sum + py * y.shape[0]
+        weight += y.shape[0]
+    return ErrorSpectrum(cmp.model, freq, np.asarray(err_sum) / weight,
+                         np.asarray(out_sum) / weight)

@@ -1,0 +1,215 @@
+"""Residual analysis: are the one-step prediction errors white and independent of the input?
+
+:func:`residuals` correlates the innovations of any :class:`sysid.Model` with themselves and
+with the inputs, with confidence bounds, a Ljung-Box portmanteau test of whiteness per output
+and Ljung's chi-square test of independence from past inputs.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .._checks import as_int
+from ..errors import DataError
+from .compare import X0, _records, _run, _x0_for
+
+__all__ = ["ResidualAnalysis", "residuals"]
+
+
+def _xcorr_sums(a: np.ndarray, b: np.ndarray, lags: np.ndarray) -> np.ndarray:
+    """``sum_t a(t) b(t - tau)^T`` for each lag, shape (len(lags), a.cols, b.cols)."""
+    N = a.shape[0]
+    out = np.zeros((lags.size, a.shape[1], b.shape[1]))
+    for k, tau in enumerate(lags):
+        if abs(tau) >= N:
+            continue
+        if tau >= 0:
+            out[k] = a[tau:].T @ b[: N - tau]
+        else:
+            out[k] = a[: N + tau].T @ b[-tau:]
+    return out
+
+
+class ResidualAnalysis:
+    """Correlation tests of the one-step prediction errors (innovations).
+
+    Attributes
+    ----------
+    e : list of ndarray
+        One-step prediction errors per experiment, ``(n_samples, noutputs)``.
+    lags : ndarray
+        ``0 .. max_lag`` for :attr:`autocorr`.
+    autocorr : ndarray
+        ``(max_lag + 1, l, l)`` normalised correlations ``r_ij(tau) = E[e_i(t) e_j(t - tau)]``.
+    xlags : ndarray
+        ``-max_lag .. max_lag`` for :attr:`crosscorr`.
+    crosscorr : ndarray
+        ``(2 max_lag + 1, l, m)`` normalised ``E[e_i(t) u_j(t - tau)]``; positive lags look at
+        past inputs (missing dynamics), negative ones at future inputs (feedback).
+    bound : float
+        ``z_{1 - alpha/2} / sqrt(N)``: the band a white, input-independent residual stays in
+        with probability ``1 - alpha`` at each lag.
+    ljung_box, ljung_box_pvalue : ndarray
+        Portmanteau statistic ``Q = N (N + 2) sum_{tau=1}^{M} r_ii(tau)^2 / (N - tau)`` per
+        output and its p-value under ``chi2(M)``.
+    whiteness : ndarray of bool
+        ``p >= alpha`` per output: whiteness is not rejected.
+    independence_stat, independence_pvalue : ndarray
+        Ljung's (1999, eq. 16.62) test per output: ``S = N r^T R_phi^{-1} r / lambda`` with
+        ``r`` the covariances of the residual with ``phi(t) = [u(t); ...; u(t - M)]``,
+        ``R_phi`` the covariance of ``phi``; ``chi2(m (M + 1))`` under independence.
+    independence : ndarray of bool
+        ``p >= alpha`` per output.
+    """
+
+    def __init__(self, model: Any, e: list[np.ndarray], u: list[np.ndarray],
+                 max_lag: int, alpha: float) -> None:
+        self.model, self.e, self.max_lag, self.alpha = model, e, max_lag, alpha
+        self.output_names, self.input_names = list(model.output_names), list(model.input_names)
+        M = max_lag
+        ec = [x - x.mean(0) for x in e]
+        uc = [x - x.mean(0) for x in u]
+        N = sum(x.shape[0] for x in e)
+        self.n_samples = N
+        self.lags = np.arange(M + 1)
+        self.xlags = np.arange(-M, M + 1)
+        ree = sum(_xcorr_sums(x, x, self.lags) for x in ec) / N
+        se = np.sqrt(np.maximum(np.diag(ree[0]), 1e-300))
+        self.autocorr = ree / np.outer(se, se)[None]
+        m = model.ninputs
+        if m:
+            reu = sum(_xcorr_sums(a, b, self.xlags) for a, b in zip(ec, uc)) / N
+            su = np.sqrt(np.maximum(np.diag(sum(b.T @ b for b in uc) / N), 1e-300))
+            self.crosscorr = reu / np.outer(se, su)[None]
+        else:
+            self.crosscorr = np.zeros((2 * M + 1, len(se), 0))
+        import scipy.stats
+
+        z = scipy.stats.norm.ppf(1 - alpha / 2)
+        self.bound = float(z / np.sqrt(N))
+        r = np.array([self.autocorr[1:, i, i] for i in range(len(se))])  # (l, M)
+        self.ljung_box = N * (N + 2) * np.sum(r**2 / (N - self.lags[1:]), axis=1)
+        self.ljung_box_pvalue = scipy.stats.chi2.sf(self.ljung_box, M)
+        self.whiteness = self.ljung_box_pvalue >= alpha
+        self.independence_stat = np.full(len(se), np.nan)
+        self.independence_pvalue = np.full(len(se), np.nan)
+        if m:
+            # phi(t) = [u(t); u(t-1); ...; u(t-M)], over samples with a full past
+            rows_phi, rows_e = [], []
+            for a, b in zip(ec, uc):
+                if b.shape[0] <= M:
+                    continue
+                rows_phi.append(np.hstack([b[M - k: b.shape[0] - k] for k in range(M + 1)]))
+                rows_e.append(a[M:])
+            if rows_phi:
+                phi, ee = np.vstack(rows_phi), np.vstack(rows_e)
+                n_eff = phi.shape[0]
+                Rphi = phi.T @ phi / n_eff
+                rr = ee.T @ phi / n_eff  # (l, m (M + 1))
+                lam = np.mean(ee**2, axis=0)
+                sol = np.linalg.lstsq(Rphi, rr.T, rcond=1e-12)[0]  # (m(M+1), l)
+                self.independence_stat = n_eff * np.einsum("ij,ji->i", rr, sol) / lam
+                self.independence_pvalue = scipy.stats.chi2.sf(self.independence_stat,
+                                                               m * (M + 1))
+        self.independence = self.independence_pvalue >= alpha
+
+    @property
+    def is_white(self) -> bool:
+        """Whiteness accepted for every output."""
+        return bool(np.all(self.whiteness))
+
+    def to_pandas(self) -> Any:
+        """One row per output: Ljung-Box and independence statistics with their verdicts."""
+        import pandas as pd
+
+        return pd.DataFrame({
+            "output": self.output_names, "ljung_box": self.ljung_box,
+            "ljung_box_p": self.ljung_box_pvalue, "white": self.whiteness,
+            "independence": self.independence_stat,
+            "independence_p": self.independence_pvalue, "independent": self.independence,
+        })
+
+    def summary(self) -> str:
+        """A text table of the tests."""
+        M = self.max_lag
+        lines = [f"residual analysis of {self.model!r}",
+                 f"{self.n_samples} samples, lags 1..{M}, alpha = {self.alpha:g}, "
+                 f"bound +-{self.bound:.4f}",
+                 f"{'output':<20} {'Ljung-Box Q':>12} {'p':>8} {'white':>6} "
+                 f"{'indep. S':>10} {'p':>8} {'indep.':>7}"]
+        for i, name in enumerate(self.output_names):
+            lines.append(
+                f"{name[:20]:<20} {self.ljung_box[i]:12.2f} {self.ljung_box_pvalue[i]:8.3g} "
+                f"{'yes' if self.whiteness[i] else 'NO':>6} {self.independence_stat[i]:10.2f} "
+                f"{self.independence_pvalue[i]:8.3g} {'yes' if self.independence[i] else 'NO':>7}"
+            )
+        return "\n".join(lines)
+
+    def plot(self, fig: Any = None) -> Any:
+        """Auto-correlation per output and cross-correlation per (output, input) with bounds."""
+        from ..plot.validation import plot_residuals
+
+        return plot_residuals(self, fig=fig)
+
+    def __repr__(self) -> str:
+        w = ", ".join(f"{n}: {'white' if ok else 'NOT white'} (p={p:.2g})" for n, ok, p in
+                      zip(self.output_names, self.whiteness, self.ljung_box_pvalue))
+        return f"ResidualAnalysis({self.n_samples} samples, max_lag={self.max_lag}, {w})"
+
+
+def residuals(model: Any, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
+              alpha: float = 0.01) -> ResidualAnalysis:
+    """Whiteness and independence tests of the one-step prediction errors.
+
+    A model that captures the dynamics and the noise leaves innovations that are white and
+    uncorrelated with past inputs. Means are removed before correlating.
+
+    Parameters
+    ----------
+    model : sysid.Model
+        Any model; a state-space model needs ``K`` for a meaningful test of the noise
+        model (without it the errors are simulation errors, coloured whenever there is
+        process noise).
+    data : IOData or (u, y)
+    max_lag : int
+        Largest lag ``M`` tested.
+    x0 : "estimate", "zero", "model" or array
+        Initial predictor state (see :func:`compare`).
+    alpha : float
+        Significance level of the tests and of the plotted bounds.
+
+    Returns
+    -------
+    ResidualAnalysis
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]], K=[[0.5]])
+    >>> u, e = rng.standard_normal((2, 2000, 1))
+    >>> x, y = 0.0, np.empty((2000, 1))
+    >>> for t in range(2000):
+    ...     y[t] = x + e[t]
+    ...     x = 0.9 * x + u[t, 0] + 0.5 * e[t, 0]
+    >>> sysid.residuals(m, (u, y)).is_white
+    True
+    >>> sysid.residuals(m.__class__([[0.5]], [[1.0]], [[1.0]], K=[[0.0]]), (u, y)).is_white
+    False
+    """
+    model, recs = _records(model, data)
+    max_lag = as_int(max_lag, "max_lag")
+    if not 0 < float(alpha) < 1:
+        raise DataError(f"alpha must lie strictly between 0 and 1, got {alpha!r}")
+    N = min(y.shape[0] for _, y in recs)
+    if max_lag >= N:
+        raise DataError(f"max_lag={max_lag} needs more than {max_lag} samples per experiment; "
+                        f"the shortest has {N}")
+    es, us = [], []
+    for i, (u, y) in enumerate(recs):
+        x = _x0_for(model, x0, u, y, 1, i, len(recs))
+        es.append(y - _run(model, u, y, 1, x))
+        us.append(u)
+    return ResidualAnalysis(model, es, us, int(max_lag), float(alpha))
