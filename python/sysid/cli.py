@@ -473,8 +473,8 @@ def automatic(est_data: IOData, val_data: IOData | None, *, report: str | Path |
     families and orders chosen on held-out parts of the estimation data), then the same
     validation and report as :func:`identify`. The summary adds ``identify`` (the
     :class:`~sysid.IdentifyResult`)."""
-    from .validation.criteria import select_order
     from .identify.core import identify as auto
+    from .validation.criteria import select_order
 
     say = progress or (lambda _msg: None)
     say("sysid.identify: candidate families and orders, chosen on held-out parts of the "
