@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import sysid
-from sysid.identify.crossval import choose, cross_validated_order
+from sysid.validation.crossval import choose, cross_validated_order
 
 SPLITS = {"dryer": ([0], [1], 500), "robot_arm": ([0], [1], 800),
           "winding": ([0, 1, 2, 3, 4], [5, 6], 1666)}
@@ -88,7 +88,8 @@ def test_auto_order_recovers_the_true_order_of_noise_free_data():
     true = sysid.StateSpaceModel(np.diag([0.9, 0.5, -0.3, 0.1]), np.ones((4, 1)),
                                  np.array([[1.0, 0.7, 0.4, 0.2]]))
     u = rng.standard_normal((600, 1))
-    assert cross_validated_order(sysid.IOData(u=u, y=true.simulate(u))).order == 4
+    data = sysid.IOData(u=u, y=true.simulate(u))
+    assert cross_validated_order(data, sysid.SubspaceEstimator).order == 4
 
 
 def test_choose_prefers_a_smaller_order_only_within_the_tolerance():
@@ -184,11 +185,11 @@ def test_identify_result_presents_itself_and_predicts_raw_data():
     np.testing.assert_allclose(res.model.u_offset, 2.0, atol=0.2)
     sim = res.model.simulate(u + 2.0)  # raw in, raw out
     assert abs(sim.mean() - y.mean()) < 0.2
-    assert "identify" in repr(res) and "held-out fit" in res.summary()
+    assert "IdentifyResult" in repr(res) and "held-out fit" in res.summary()
     df = res.to_pandas()
     assert {"family", "order", "held_out_fit", "stable", "seconds"} <= set(df.columns)
-    assert df["held_out_fit"].iloc[0] == df["held_out_fit"].max()
-    assert sum(r["chosen"] for r in res.leaderboard) == 1
+    chosen = [r for r in res.leaderboard if r["chosen"]]
+    assert len(chosen) == 1 and chosen[0]["held_out_fit"] >= df["held_out_fit"].max() - 0.5
     assert "offsets" in res.checks and "feedback" in res.checks
 
 
@@ -200,7 +201,7 @@ def test_identify_refuses_output_only_data_and_too_short_records():
 
 
 def test_identify_is_callable_as_a_package_and_a_function():
-    import sysid.identify.crossval  # noqa: F401 - the submodule import must not shadow it
+    import sysid.identify.core  # noqa: F401 - the submodule import must not shadow it
 
     assert callable(sysid.identify)
 

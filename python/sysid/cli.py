@@ -465,36 +465,6 @@ def _header(path: Path) -> list[str]:
     return [c.strip() for c in first.split(delim)]
 
 
-def automatic(est_data: IOData, val_data: IOData | None, *, report: str | Path | None = None,
-              preprocessing: dict[str, Any] | None = None,
-              progress: Callable[[str], None] | None = None,
-              bars: bool | None = False) -> dict[str, Any]:
-    """The command line's default path: :func:`sysid.identify` (offsets, checks, candidate
-    families and orders chosen on held-out parts of the estimation data), then the same
-    validation and report as :func:`identify`. The summary adds ``identify`` (the
-    :class:`~sysid.IdentifyResult`)."""
-    from .identify.core import identify as auto
-    from .validation.criteria import select_order
-
-    say = progress or (lambda _msg: None)
-    say("sysid.identify: candidate families and orders, chosen on held-out parts of the "
-        "estimation data")
-    res = auto(est_data, val_data, progress=bars)
-    say(f"chosen: {res.choice} ({res.seconds:.1f} s)")
-    model = res.model.statespace
-    model.info["preprocessing"] = {**model.info.get("preprocessing", {}),
-                                   **dict(preprocessing or {}),
-                                   "identify_offsets": model.info.get("offsets")
-                                   or {"u": res.model.u_offset.tolist(),
-                                       "y": res.model.y_offset.tolist()}}
-    est_c = res.model.remove_offsets(est_data)
-    val_c = res.model.remove_offsets(val_data) if val_data is not None else None
-    sel = select_order(est_c, models=[model], validation=val_c)
-    out = _validate(model, sel, est_c, val_c, report, say)
-    out["identify"] = res
-    return out
-
-
 def _identify(args: argparse.Namespace) -> int:
     from .subspace.estimator import _method
 
@@ -541,9 +511,11 @@ def _identify(args: argparse.Namespace) -> int:
     est_data = IOData(u=u[:k] if ui else None, y=y[:k], **kw)
     val_data = IOData(u=u[k:] if ui else None, y=y[k:], **kw) if k < N else None
     if auto and ui and args.uncertainty == "none" and args.horizon is None:
-        out = automatic(est_data, val_data, report=args.report, preprocessing=pre,
-                        progress=say, bars=_bars(args))
-        print(out["identify"].summary())
+        from .identify.command import prepare
+
+        p = prepare(est_data, val_data, pre, _bars(args), say)
+        out = _validate(p["model"], p["selection"], p["est"], p["val"], args.report, say)
+        print(p["result"].summary())
         _print_summary(out)
         return 0
     out = identify(est_data, val_data, order=args.order,

@@ -1,6 +1,6 @@
 """The automatic path: :func:`sysid.identify` (see :mod:`sysid.identify.core`), and the
-order and feedthrough choices it shares with the estimators (:mod:`.crossval`,
-:mod:`.structure`).
+order and feedthrough choices it shares with the estimators
+(:mod:`sysid.validation.crossval`, :mod:`.structure`).
 
 ``sysid.identify`` is both this package and the function: the package is callable, so
 ``sysid.identify(data)`` works whichever was imported first.

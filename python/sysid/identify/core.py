@@ -10,7 +10,8 @@
    N4SID, CVA) at every order the horizon allows (up to 20), with and without feedthrough;
    the best configurations refined by ``ssest`` with both focuses; an output-error model
    for a single input and output.
-4. The candidate with the best held-out fit is re-fitted on the whole estimation record; if
+4. The candidate with the best held-out fit (the smallest order within 0.5 points, as the
+   order rule of ``order="auto"``) is re-fitted on the whole estimation record; if
    that model is unstable, the next one is taken. ``validation`` data, when given, are
    only reported on.
 """
@@ -26,7 +27,7 @@ import numpy as np
 from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
-from .crossval import MAX_ORDER, folds, simulation_fit
+from ..validation.crossval import MAX_ORDER, TOL, folds, simulation_fit
 from .result import IdentifiedModel, IdentifyResult
 
 __all__ = ["identify"]
@@ -123,8 +124,15 @@ class _Board:
         return max(fits) if fits else -np.inf
 
     def ranked(self) -> list[dict[str, Any]]:
-        def key(r: dict[str, Any]) -> tuple[bool, float, int]:
-            return (not r["stable"], -r["held_out_fit"], r["order"])
+        """Stable candidates first; among those within the order rule's slack of the best
+        held-out fit (:func:`sysid.validation.crossval.choose`: 0.5 points, at most 5 % of
+        the best's error) the smallest order first, then by held-out fit."""
+        best = self.best_fit()
+        slack = max(min(TOL, 0.05 * (100.0 - best)), 1e-6) if np.isfinite(best) else 0.0
+
+        def key(r: dict[str, Any]) -> tuple[bool, bool, int, float]:
+            near = bool(r["stable"] and r["held_out_fit"] >= best - slack)
+            return (not r["stable"], not near, r["order"] if near else 0, -r["held_out_fit"])
         return sorted(self.rows, key=key)
 
 

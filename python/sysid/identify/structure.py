@@ -9,7 +9,7 @@ import numpy as np
 
 from ..data.iodata import IOData
 from ..errors import DataError
-from .crossval import TOL, choose, simulation_fit
+from ..validation.crossval import TOL, choose, simulation_fit
 
 __all__ = ["ssest_select", "split", "significant_feedthrough"]
 

@@ -356,34 +356,15 @@ class SubspaceEstimator:
 
         With inputs and the data at hand: the order whose models, fitted on part of the
         record, best simulate the part held out (two contiguous halves, or the experiments;
-        :func:`sysid.identify.crossval.cross_validated_order`), the smallest within 0.5 fit
+        :func:`sysid.validation.crossval.cross_validated_order`), the smallest within 0.5 fit
         points of the best. Otherwise (time series, an estimator built from a factor, a
         record too short to split): the largest gap of the log singular values
         (:attr:`auto_order`). The result is recorded in ``model.info["order_selection"]``.
         """
-        key = self.method if method is None else _method(method)
-        cache_key = ("cv", key, bool(feedthrough))
-        if cache_key in self._svd:
-            return dict(self._svd[cache_key])
-        sub = self._subspace(key)
-        out: dict[str, Any]
-        if self.factor.n_inputs and not self._from_factor:
-            from ..identify.crossval import cross_validated_order
+        from .order_choice import order_selection
 
-            try:
-                out = cross_validated_order(self.data, method=key, past=self.past,
-                                            future=self.future,
-                                            feedthrough=bool(feedthrough)).as_dict()
-                out["order"] = min(out["order"], sub.max_order)
-            except Exception as e:  # noqa: BLE001 - too short to split: the SVD rule
-                out = {"order": int(sub.auto_order()), "criterion": "singular-value gap",
-                       "reason": f"largest gap of the log singular values (the record could "
-                                 f"not be cross-validated: {e})", "table": {}}
-        else:
-            out = {"order": int(sub.auto_order()), "criterion": "singular-value gap",
-                   "reason": "largest gap of the log singular values", "table": {}}
-        self._svd[cache_key] = out
-        return dict(out)
+        return order_selection(self, self.method if method is None else _method(method),
+                               bool(feedthrough))
 
     def feedthrough_selection(self, method: str | None = None, order: Order = "auto"
                               ) -> tuple[bool, dict[str, Any]]:
@@ -391,30 +372,10 @@ class SubspaceEstimator:
         (as :meth:`order_selection`) with and without it; ``D`` only when it gains more than
         0.5 fit points (no feedthrough, MATLAB's default, otherwise). Closed-loop methods and
         data that cannot be split: no ``D``."""
-        key = self.method if method is None else _method(method)
-        if key in CLOSED_LOOP or not self.factor.n_inputs or self._from_factor:
-            return False, {"feedthrough": False, "reason": "not decided from data (closed-loop "
-                           "method, no inputs or no data): no feedthrough"}
-        from ..identify.crossval import TOL, cross_validated_order
+        from .order_choice import feedthrough_selection
 
-        orders = None if isinstance(order, str) else [as_int(order, "order", 1)]
-        best = {}
-        try:
-            for ft in (False, True):
-                c = cross_validated_order(self.data, method=key, past=self.past,
-                                          future=self.future, feedthrough=ft, orders=orders)
-                best[ft] = c.table[c.order]
-                if orders is None:
-                    self._svd[("cv", key, ft)] = c.as_dict()
-        except Exception as e:  # noqa: BLE001 - too short to split
-            return False, {"feedthrough": False, "reason": f"could not be cross-validated "
-                           f"({e}): no feedthrough"}
-        use = bool(best[True] > best[False] + TOL)
-        return use, {"feedthrough": use, "held_out_fit": {"with D": best[True],
-                                                          "without D": best[False]},
-                     "reason": f"held-out simulation fit {best[True]:.1f} % with D, "
-                               f"{best[False]:.1f} % without: "
-                               + ("D estimated" if use else f"D = 0 (gain below {TOL:g})")}
+        key = self.method if method is None else _method(method)
+        return feedthrough_selection(self, key, order, key in CLOSED_LOOP)
 
     @property
     def max_order(self) -> int:

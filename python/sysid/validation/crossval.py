@@ -81,22 +81,28 @@ def _io(exps: list[tuple[np.ndarray, np.ndarray]], kw: dict[str, Any]) -> IOData
 
 
 def simulation_fit(model: Any, data: IOData) -> float:
-    """Mean simulation fit (NRMSE %, x0 fitted by least squares); ``-inf`` for a model that
-    diverges (a model with a pole just outside the unit circle is scored on what it does over
-    the block). The initial state by least squares as :func:`sysid.compare` (slow modes make
-    the problem ill-conditioned; normal equations would lose them)."""
+    """Held-out simulation fit (NRMSE %, mean over outputs and experiments); ``-inf`` for a
+    model that diverges (a model with a pole just outside the unit circle is scored on what
+    it does over the block).
+
+    The initial state and a constant offset per output are fitted by least squares (as
+    :func:`sysid.compare` fits the initial state): every block keeps some offset after the
+    record's means are removed, and without the free offset a slow mode of an over-fitted
+    model (a pole near 1 excited by ``x0``) would absorb it and look better than it predicts.
+    """
     fits = []
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         for u, y in data.experiments:
             try:
                 ys = model.simulate(u)
-                n = model.nstates
-                if n:
-                    phi = np.stack([model.simulate(np.zeros_like(u), x0=np.eye(n)[i]).ravel()
-                                    for i in range(n)], 1)
-                    x0 = np.linalg.lstsq(phi, (y - ys).ravel(), rcond=None)[0]
-                    ys = ys + (phi @ x0).reshape(ys.shape)
+                n, l = model.nstates, y.shape[1]
+                cols = [np.kron(np.ones((u.shape[0], 1)), np.eye(l))]  # (N l, l) offsets
+                cols += [model.simulate(np.zeros_like(u), x0=np.eye(n)[i]).reshape(-1, 1)
+                         for i in range(n)]
+                phi = np.hstack(cols)
+                theta = np.linalg.lstsq(phi, (y - ys).ravel(), rcond=None)[0]
+                ys = ys + (phi @ theta).reshape(ys.shape)
             except Exception:  # noqa: BLE001 - a model that cannot be simulated scores -inf
                 return -np.inf
             dev = np.linalg.norm(y - y.mean(0), axis=0)
@@ -126,6 +132,7 @@ def choose(table: dict[int, float], tol: float = TOL) -> tuple[int, str]:
 
 def cross_validated_order(
     data: IOData,
+    estimator: Any,
     *,
     method: str = "moesp",
     past: int | None = None,
@@ -140,6 +147,8 @@ def cross_validated_order(
     ----------
     data : IOData
         The estimation record (the user's validation data are never needed).
+    estimator : type
+        :class:`sysid.SubspaceEstimator` (or a class with its constructor and ``fit``).
     method : str
         Subspace weighting.
     past, future : int, optional
@@ -158,25 +167,24 @@ def cross_validated_order(
     Examples
     --------
     >>> import numpy as np, sysid
-    >>> from sysid.identify.crossval import cross_validated_order
+    >>> from sysid.validation.crossval import cross_validated_order
     >>> rng = np.random.default_rng(0)
     >>> true = sysid.StateSpaceModel([[0.9, 0.3, 0], [-0.3, 0.9, 0], [0, 0, 0.5]],
     ...                              [[1.0], [0.0], [1.0]], [[1.0, 0.5, 1.0]])
     >>> u = rng.standard_normal(1000)
     >>> y = true.simulate(u) + 0.1 * rng.standard_normal((1000, 1))
-    >>> cross_validated_order(sysid.IOData(u=u, y=y)).order
+    >>> cross_validated_order(sysid.IOData(u=u, y=y), sysid.SubspaceEstimator).order
     3
     """
-    from ..subspace.estimator import SubspaceEstimator, default_horizon
-
     table: dict[int, list[float]] = {}
     for fit_part, held in folds(data):
-        h = default_horizon(min(fit_part.lengths), data.n_inputs, data.n_outputs)
-        p = min(past or h, max(1, min(fit_part.lengths) // 4))
-        f = min(future or h, max(1, min(fit_part.lengths) // 4))
+        # the given horizons, clipped to a quarter of the fitted part; else the part's default
+        shortest = min(fit_part.lengths)
+        kw = {k: min(v, max(1, shortest // 4)) for k, v in (("past", past), ("future", future))
+              if v is not None}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            est = SubspaceEstimator(fit_part, past=p, future=f, method=method)
+            est = estimator(fit_part, method=method, **kw)
         top = min(est.max_order, MAX_ORDER)
         for n in orders or range(1, top + 1):
             if n > est.max_order:
