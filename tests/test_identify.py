@@ -165,8 +165,8 @@ def test_identify_beats_the_plain_po_moesp_reference_on_held_out_data(name):
 
 @pytest.mark.xfail(strict=True, reason="known shortfall (issue 26): on the winding record the "
                    "held-out blocks of the estimation part rank the candidates within ~1 point "
-                   "of each other and the choice (order 3, no D) validates at 67.7 % where "
-                   "the plain PO-MOESP reaches 75.7 %; see benches/results/realdata.md")
+                   "of each other and the choice validates ~8 points below the plain PO-MOESP "
+                   "at order 6; see benches/results/realdata.md")
 def test_identify_on_the_winding_record_with_subspace_candidates_only():
     raw_est, raw_val = record("winding", centred=False)
     est, val = record("winding")
