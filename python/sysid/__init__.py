@@ -52,7 +52,7 @@ from .validation.criteria import criteria  # a function named like its module: b
 # package now and drop the attribute the import system binds to it, so that `sysid.pem` is the
 # function whatever is imported later (reach the package's modules with
 # `from sysid.pem import ssest` or `importlib.import_module("sysid.pem.ssest")`).
-for _pkg in ("pem",):
+for _pkg in ("pem", "identify"):
     _importlib.import_module(f".{_pkg}", __name__)
     del globals()[_pkg]
 
@@ -243,6 +243,10 @@ _LAZY = {
     "ssi": "oma.ssi",
     "SSIResult": "oma.ssi",
     "mac": "oma.ssi",
+    # issue 26 (branch identify): the automatic path
+    "identify": "identify.core",
+    "IdentifyResult": "identify.result",
+    "IdentifiedModel": "identify.result",
 }
 
 
@@ -467,4 +471,8 @@ __all__ = [
     "ssi",
     "SSIResult",
     "mac",
+    # issue 26 (branch identify): the automatic path
+    "identify",
+    "IdentifyResult",
+    "IdentifiedModel",
 ]

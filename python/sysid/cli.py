@@ -208,9 +208,7 @@ def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, me
               horizon: int | None, report: Any, preprocessing: Any, progress: Any, uncertainty:
               str | None, n_boot: int, compressor: str, bars: Any, caught: list[Any]) -> Any:
     from .subspace.estimator import SubspaceEstimator
-    from .validation.compare import compare
     from .validation.criteria import select_order
-    from .validation.residuals import residuals
 
     say = progress or (lambda _msg: None)
     say(f"compressing {est_data.n_samples} samples "
@@ -257,6 +255,17 @@ def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, me
         "future": est.future, "x0": x0}
     model.info["preprocessing"] = {**model.info.get("preprocessing", {}),
                                    **dict(preprocessing or {})}
+    return _validate(model, sel, est_data, val_data, report, say, caught)
+
+
+def _validate(model: Any, sel: Any, est_data: IOData, val_data: IOData | None,
+              report: str | Path | None, say: Callable[[str], None],
+              caught: list[Any] | None = None) -> dict[str, Any]:
+    """Simulation and prediction fits, residuals and the report of one model (``caught``:
+    the warnings of the run so far, for the report's summary)."""
+    from .validation.compare import compare
+    from .validation.residuals import residuals
+
     check = val_data if val_data is not None else est_data
     which = "validation" if val_data is not None else "estimation"
     say(f"validating on the {which} data")
@@ -268,7 +277,7 @@ def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, me
                            "prediction": pred, "residuals": res, "which": which}
     if report is not None:
         say(f"writing the report to {report}")
-        out["files"] = _write_report(Path(report), out, check, list(caught))
+        out["files"] = _write_report(Path(report), out, check, list(caught or []))
     say("done")
     return out
 
@@ -478,7 +487,9 @@ def _header(path: Path) -> list[str]:
 def _identify(args: argparse.Namespace) -> int:
     from .subspace.estimator import _method
 
-    _method(args.method)  # before reading and compressing anything
+    auto = args.method == "auto" and args.order == "auto"
+    if not auto:
+        _method("moesp" if args.method == "auto" else args.method)  # before reading anything
     _check_report_dir(args.report)
     if args.horizon is not None and args.horizon < 1:
         raise DataError(f"--horizon must be a positive integer, got {args.horizon}")
@@ -518,7 +529,21 @@ def _identify(args: argparse.Namespace) -> int:
     kw = {"dt": dt, "input_names": pre["inputs"], "output_names": pre["outputs"]}
     est_data = IOData(u=u[:k] if ui else None, y=y[:k], **kw)
     val_data = IOData(u=u[k:] if ui else None, y=y[k:], **kw) if k < N else None
-    out = identify(est_data, val_data, order=args.order, method=args.method,
+    if auto and ui and args.uncertainty == "none" and args.horizon is None:
+        from .analysis.report_page import reissue
+        from .identify.command import prepare
+
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            p = prepare(est_data, val_data, pre, _bars(args), say)
+            out = _validate(p["model"], p["selection"], p["est"], p["val"], args.report, say,
+                            caught)
+        out["warnings"] = reissue(caught)
+        print(p["result"].summary())
+        _print_summary(out)
+        return 0
+    out = identify(est_data, val_data, order=args.order,
+                   method="moesp" if args.method == "auto" else args.method,
                    horizon=args.horizon, report=args.report, preprocessing=pre, progress=say,
                    compressor=args.compressor, bars=_bars(args),
                    uncertainty=None if args.uncertainty == "none" else args.uncertainty,
@@ -541,9 +566,11 @@ def _parser() -> argparse.ArgumentParser:
     ide.add_argument("--inputs", default="", help="input columns, comma separated")
     ide.add_argument("--outputs", required=True, help="output columns, comma separated")
     ide.add_argument("--order", default="auto", help="model order or 'auto' (default)")
-    ide.add_argument("--method", default="moesp",
-                     help="moesp (default), ordinary-moesp, pi-moesp, n4sid, cva; closed loop: "
-                          "pbsid or ssarx")
+    ide.add_argument("--method", default="auto",
+                     help="auto (default: sysid.identify chooses the family, order and "
+                          "feedthrough on held-out parts of the estimation data, when --order "
+                          "is auto), or one subspace method: moesp, ordinary-moesp, pi-moesp, "
+                          "n4sid, cva; closed loop: pbsid or ssarx")
     ide.add_argument("--horizon", type=int, default=None, help="past/future horizon")
     ide.add_argument("--split", default="0.5",
                      help="estimation part: fraction (0.5) or sample count (500); 1 = all")

@@ -7,19 +7,23 @@ import warnings
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+
 from .._checks import as_int
 from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
 from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator
 from .pem import _experiments, pem, pem_loss
 
+__all__ = ["ssest"]
+
 
 def ssest(
     data: Any,
-    order: int,
+    order: Any = "auto",
     *,
     focus: str = "prediction",
-    feedthrough: bool = False,
+    feedthrough: Any = False,
     x0: Any = "estimate",
     noise: str = "estimate",
     horizon: int | None = None,
@@ -41,9 +45,19 @@ def ssest(
     Parameters
     ----------
     data : IOData or (u, y)
-    order : int
-    focus, feedthrough, x0, noise, max_iter, tol, regularization, progress, enforce_stability
-        As for :func:`pem` (the candidates are scored by :func:`sysid.pem_loss`).
+    order : int, "auto" or sequence of int
+        Model order. ``"auto"`` (default): the order whose subspace models best simulate
+        parts of the record held out (:meth:`SubspaceEstimator.order_selection`); a sequence
+        (``range(1, 11)``): each order refined on the first 2/3 of the record and scored by
+        simulation fit on the last 1/3, the smallest within 0.5 points of the best wins and
+        is refined on the whole record. Table and reason in ``info["order_selection"]``.
+    feedthrough : bool or "auto"
+        Estimate ``D``. Default ``False`` (no feedthrough, as MATLAB's ``ssest``; the same
+        default for every sysid estimator). ``"auto"``: fitted with ``D``, kept when an entry
+        of ``D`` exceeds twice its standard deviation, else re-fitted without (recorded in
+        ``info["feedthrough_selection"]``).
+    focus, x0, noise, max_iter, tol, regularization, progress, enforce_stability
+        As for :func:`pem` (the candidates are scored by :func:`pem_loss`).
     horizon : int, optional
         Subspace horizon (default :func:`sysid.default_horizon`).
     methods : tuple of str
@@ -73,9 +87,18 @@ def ssest(
     True
     """
     data = _experiments(data)
+    if isinstance(order, str) or np.ndim(order) or isinstance(feedthrough, str):
+        # order="auto", a range of orders, or feedthrough="auto": chosen from the data
+        from ..identify.structure import ssest_select
+
+        return ssest_select(data, order, focus=focus, feedthrough=feedthrough, x0=x0,
+                            noise=noise, horizon=horizon, methods=methods, method=method,
+                            max_iter=max_iter, tol=tol, regularization=regularization,
+                            progress=progress, enforce_stability=enforce_stability)
     order = as_int(order, "order", 1)
     est = SubspaceEstimator(data, horizon)
     candidates = []
+
     names = methods if method is None else (method,)
     for name in names:
         x0_options = (False, True) if data.n_experiments == 1 else (False,)

@@ -345,8 +345,38 @@ class SubspaceEstimator:
 
     @property
     def auto_order(self) -> int:
-        """Order at the largest gap of the log singular values (SLICOT's rule)."""
+        """Order at the largest gap of the log singular values (SLICOT's rule).
+
+        A fast first look; on real records it often stops at 1-2 where the data support
+        more, so ``fit(order="auto")`` uses :meth:`order_selection` instead."""
         return self._subspace(None).auto_order()
+
+    def order_selection(self, method: str | None = None, feedthrough: bool = True
+                        ) -> dict[str, Any]:
+        """The order ``fit(order="auto")`` takes, with the table and the reason.
+
+        With inputs and the data at hand: the order whose models, fitted on part of the
+        record, best simulate the part held out (two contiguous halves, or the experiments;
+        :func:`sysid.validation.crossval.cross_validated_order`), the smallest within 0.5 fit
+        points of the best. Otherwise (time series, an estimator built from a factor, a
+        record too short to split): the largest gap of the log singular values
+        (:attr:`auto_order`). The result is recorded in ``model.info["order_selection"]``.
+        """
+        from .order_choice import order_selection
+
+        return order_selection(self, self.method if method is None else _method(method),
+                               bool(feedthrough))
+
+    def feedthrough_selection(self, method: str | None = None, order: Order = "auto"
+                              ) -> tuple[bool, dict[str, Any]]:
+        """Whether ``fit(feedthrough="auto")`` estimates ``D``: the held-out simulation fits
+        (as :meth:`order_selection`) with and without it; ``D`` only when it gains more than
+        0.5 fit points (no feedthrough, MATLAB's default, otherwise). Closed-loop methods and
+        data that cannot be split: no ``D``."""
+        from .order_choice import feedthrough_selection
+
+        key = self.method if method is None else _method(method)
+        return feedthrough_selection(self, key, order, key in CLOSED_LOOP)
 
     @property
     def max_order(self) -> int:
@@ -358,7 +388,7 @@ class SubspaceEstimator:
         order: Order = "auto",
         *,
         method: str | None = None,
-        feedthrough: bool | None = None,
+        feedthrough: bool | str | None = None,
         kalman: bool = True,
         stable: bool = False,
         x0: bool = False,
@@ -372,11 +402,15 @@ class SubspaceEstimator:
         Parameters
         ----------
         order : int or "auto"
-            Model order; ``"auto"`` takes :attr:`auto_order`.
+            Model order; ``"auto"``: chosen by simulation error cross-validated inside the
+            record (:meth:`order_selection`; table and reason in
+            ``info["order_selection"]``).
         method : str, optional
             Weighting for this fit (default: the estimator's).
-        feedthrough : bool, optional
-            Estimate ``D``; ``False`` forces ``D = 0``. Default: ``True`` for the open-loop
+        feedthrough : bool or "auto", optional
+            Estimate ``D``; ``False`` forces ``D = 0``; ``"auto"``: decided by held-out
+            simulation fit (:meth:`feedthrough_selection`, recorded in
+            ``info["feedthrough_selection"]``). Default: ``True`` for the open-loop
             methods, ``False`` for ``"pbsid"``/``"ssarx"`` (estimating ``D`` under feedback is
             consistent only when the controller has no direct feedthrough).
         kalman : bool
@@ -404,6 +438,12 @@ class SubspaceEstimator:
         key = self.method if method is None else _method(method)
         if feedthrough is None:
             feedthrough = key not in CLOSED_LOOP
+        ft_selection = None
+        if isinstance(feedthrough, str):
+            if feedthrough != "auto":
+                raise DataError(f"feedthrough must be True, False or 'auto', got "
+                                f"{feedthrough!r}")
+            feedthrough, ft_selection = self.feedthrough_selection(key, order)
         if key in CLOSED_LOOP:
             from .closed_loop import closed_loop_fit
 
@@ -421,8 +461,10 @@ class SubspaceEstimator:
                 raise DataError(f"order must be an integer or 'auto', got {order!r}")
             if self.factor.n_inputs == 0 and not self._from_factor:
                 _refuse_white_noise(self.data)
-            n = sub.auto_order()
+            selection = self.order_selection(method=key, feedthrough=bool(feedthrough))
+            n = selection["order"]
         else:
+            selection = None
             n = as_int(order, "order", 1)
         for name, flag in (
             ("feedthrough", feedthrough),
@@ -469,6 +511,10 @@ class SubspaceEstimator:
                          "stable": bool(stable), "x0": bool(x0)},
             "preprocessing": _preprocessing(self.data, self._from_factor),
         }
+        if selection is not None:
+            info["order_selection"] = selection
+        if ft_selection is not None:
+            info["feedthrough_selection"] = ft_selection
         model = StateSpaceModel(
             res["A"],
             B,
@@ -538,7 +584,7 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         order: Order = "auto",
         *,
         horizon: int | None = None,
-        feedthrough: bool = True,
+        feedthrough: bool | str = True,
         kalman: bool = True,
         stable: bool = False,
         x0: bool = False,

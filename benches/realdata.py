@@ -1,0 +1,506 @@
+"""Real records: sysid's automatic path and defaults against peers and a plain NumPy/SciPy
+reference, scored on held-out validation data.
+
+    .venv/bin/python benches/realdata.py                 # every record (several minutes)
+    .venv/bin/python benches/realdata.py --records dryer robot_arm
+    .venv/bin/python benches/realdata.py --no-peers      # without SIPPY / nfoursid
+
+Records (``/work/shared/data``, see its README; the DaISy records and the F-16 ground
+vibration test). Splits: the README's where it gives one (dryer 1:500 / 501:1000, robot arm
+1:800 / 801:1024, heat-flux wall 1:1200 / 1201:1680), otherwise the first 2/3 for estimation
+and the last 1/3 for validation; the F-16 levels are estimated on periods 2-3 of their own
+file (16 384 samples, the first period holds the transient) and validated on period 2 of the
+level-2 validation file. pH is nonlinear and included as such; the ball and beam is integrating
+and used as recorded (not differenced); the distillation column uses its noise-free channels
+(inputs 2-6, outputs 22-24: 60 / 30 samples).
+
+Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
+mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
+validation data (as MATLAB's ``compare``), computed by :func:`sysid.compare` for every tool
+(each model is handed over as ``A, B, C, D``). Stability: the largest pole modulus.
+
+Tools. ``sysid.identify`` gets the raw records (it removes and records offsets itself); every
+other tool gets the records with the estimation means removed (the same means from the
+validation part), as a user would after sysid's offset warning.
+
+- ``identify``: ``sysid.identify(est)`` with no settings.
+- ``ssest``: ``sysid.ssest(est, order="auto")``; ``n4sid``, ``moesp``, ``cva``: at their
+  defaults (``order="auto"``, default horizon).
+- ``sippy``, ``nfoursid``: the peers (benches/.venv-peers, see benches/run.py), each at its
+  best settings from a grid of orders (1-10, 12, 16, 20) and horizons (10, 20) chosen on the
+  estimation data only: fitted on its first 2/3, scored by simulation fit on its last 1/3,
+  the winner re-fitted on the whole estimation part. SIPPY: N4SID; nfoursid: its N4SID.
+- ``numpy-pomoesp``: a plain PO-MOESP written here in NumPy (LQ of the Hankel matrices,
+  SVD of the projection, ``A, C`` from the shift, ``B, D, x0`` by least squares), its order
+  chosen the same way on the estimation data.
+- ``scipy-ls``: that model refined by ``scipy.optimize.least_squares`` on the simulation error
+  of the estimation data (all entries of ``A, B, C, D, x0``; finite-difference Jacobian).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+SHARED = Path("/work/shared/data")
+ORDERS = (1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 12, 16, 20)
+HORIZONS = (10, 20)
+
+
+# -- records ------------------------------------------------------------------------------
+def _daisy(name: str, ins: list[int], outs: list[int], n_est: int | None = None):
+    d = np.loadtxt(SHARED / "daisy" / f"{name}.dat")
+    n_est = n_est if n_est is not None else (2 * d.shape[0]) // 3
+    u, y = d[:, ins], d[:, outs]
+    return (u[:n_est], y[:n_est]), (u[n_est:], y[n_est:])
+
+
+def _f16(level: str):
+    def read(f: str) -> np.ndarray:
+        return np.genfromtxt(SHARED / "f16" / f, delimiter=",", skip_header=1)[:, :5]
+    est = read(f"F16Data_FullMSine_{level}.csv")[8192:3 * 8192]
+    val = read("F16Data_FullMSine_Level2_Validation.csv")[8192:2 * 8192]
+    return (est[:, [0]], est[:, 2:5]), (val[:, [0]], val[:, 2:5])
+
+
+RECORDS = {
+    "dryer": lambda: _daisy("dryer", [0], [1], 500),
+    "robot_arm": lambda: _daisy("robot_arm", [0], [1], 800),
+    "flutter": lambda: _daisy("flutter", [0], [1]),
+    "thermic_res_wall": lambda: _daisy("thermic_res_wall", [0, 1], [2], 1200),
+    "winding": lambda: _daisy("winding", [0, 1, 2, 3, 4], [5, 6]),
+    "cstr": lambda: _daisy("cstr", [1], [2, 3]),
+    "ballbeam": lambda: _daisy("ballbeam", [0], [1]),
+    "destill": lambda: _daisy("destill", [1, 2, 3, 4, 5], [21, 22, 23]),
+    "ph": lambda: _daisy("pHdata", [1, 2], [3]),
+    "f16_level1": lambda: _f16("Level1"),
+    "f16_level3": lambda: _f16("Level3"),
+}
+
+
+# -- plain NumPy / SciPy reference (also run by the peers' worker: NumPy only) -------------
+def simulate(A, B, C, D, u, x0=None):
+    """x(t+1) = A x + B u, y = C x + D u: the modes of A filtered by scipy.signal.lfilter."""
+    x0 = np.zeros(A.shape[0]) if x0 is None else np.asarray(x0, float)
+    with np.errstate(all="ignore"):
+        return modal_sim(A, B, C, D, x0, u)
+
+
+def free_response(A, C, N):
+    """The (N l) x n matrix of C A^t, t = 0..N-1 (from the eigen-decomposition of A)."""
+    lam, V = np.linalg.eig(A)
+    with np.errstate(all="ignore"):
+        P = lam[None, :] ** np.arange(N)[:, None]  # N x n
+        O = np.real(np.einsum("ln,tn,nk->tlk", C @ V, P, np.linalg.inv(V)))
+    return O.reshape(N * C.shape[0], A.shape[0])
+
+
+def sim_fit(A, B, C, D, u, y):
+    """Simulation fit (NRMSE %, mean over outputs) with x0 by least squares."""
+    ys = simulate(A, B, C, D, u)
+    if not np.all(np.isfinite(ys)):
+        return -np.inf
+    O = free_response(A, C, u.shape[0])
+    r = (y - ys).ravel()
+    if np.all(np.isfinite(O)):
+        x0 = np.linalg.lstsq(O, r, rcond=None)[0]
+        ys = ys + (O @ x0).reshape(y.shape)
+    dev = np.linalg.norm(y - y.mean(0), axis=0)
+    return float(np.mean(100 * (1 - np.linalg.norm(y - ys, axis=0) / dev)))
+
+
+def hankel(x, i, j):
+    """Block Hankel matrix with i block rows and j columns of a (samples, channels) array."""
+    return np.vstack([x[k:k + j].T for k in range(i)])
+
+
+def po_moesp_ac(u, y, n_max, i):
+    """PO-MOESP: the singular vectors of the projection; returns f(n) -> (A, C)."""
+    m, l = u.shape[1], y.shape[1]
+    j = u.shape[0] - 2 * i + 1
+    Up, Uf = hankel(u, i, j), hankel(u[i:], i, j)
+    Yp, Yf = hankel(y, i, j), hankel(y[i:], i, j)
+    Z = np.vstack([Uf, Up, Yp, Yf])
+    R = np.linalg.qr(Z.T, mode="r").T  # LQ: Z = R Q^T
+    a, b = m * i, 2 * m * i + l * i
+    R32 = R[b:, a:b]
+    U, s, _ = np.linalg.svd(R32, full_matrices=False)
+
+    def ac(n):
+        Ob = U[:, :n] * np.sqrt(s[:n])
+        C = Ob[:l]
+        A = np.linalg.lstsq(Ob[:-l], Ob[l:], rcond=None)[0]
+        return A, C
+    return ac
+
+
+def bd_x0(A, C, u, y):
+    """B, D, x0 by linear least squares on the output equation."""
+    N, m = u.shape
+    n, l = A.shape[0], C.shape[0]
+    cols = [free_response(A, C, N)]
+    from scipy.signal import lfilter
+
+    lam, V = np.linalg.eig(A)
+    CV, Vi = C @ V, np.linalg.inv(V)
+    for jj in range(m):
+        # states driven by input jj through each unit column of B: x_k = V z, z filtered
+        Z = np.stack([lfilter([0.0, 1.0], [1.0, -lam[q]], u[:, jj]) for q in range(n)], 1)
+        for k in range(n):
+            cols.append(np.real((Z * Vi[:, k]) @ CV.T).reshape(-1, 1))
+    for r in range(l):
+        for jj in range(m):
+            col = np.zeros((N, l))
+            col[:, r] = u[:, jj]
+            cols.append(col.reshape(-1, 1))
+    theta = np.linalg.lstsq(np.hstack(cols), y.ravel(), rcond=None)[0]
+    x0, b = theta[:n], theta[n:n + n * m]
+    B = b.reshape(m, n).T
+    D = theta[n + n * m:].reshape(l, m)
+    return B, D, x0
+
+
+_AC_CACHE: dict = {}
+
+
+def po_moesp(u, y, n, i):
+    key = (u.shape, float(u.sum()), float(y.sum()), i)  # one SVD per record and horizon
+    if key not in _AC_CACHE:
+        _AC_CACHE.clear()
+        _AC_CACHE[key] = po_moesp_ac(u, y, n, i)
+    A, C = _AC_CACHE[key](n)
+    B, D, _ = bd_x0(A, C, u, y)
+    return A, B, C, D
+
+
+def grid_choice(fit_fn, u, y, orders, horizons):
+    """The (order, horizon) with the best simulation fit on the last third of the estimation
+    data, fitted on its first two thirds."""
+    k = (2 * u.shape[0]) // 3
+    best = (-np.inf, None)
+    for i in horizons:
+        for n in orders:
+            if n > i * y.shape[1] or k < 2 * i * (u.shape[1] + y.shape[1]) + 10:
+                continue
+            try:
+                A, B, C, D = fit_fn(u[:k], y[:k], n, i)
+                f = sim_fit(A, B, C, D, u[k:], y[k:])
+            except Exception:  # noqa: BLE001 - a failed fit is not a candidate
+                continue
+            if np.isfinite(f) and f > best[0]:
+                best = (f, (n, i))
+    return best[1]
+
+
+def numpy_pomoesp(u, y):
+    n, i = grid_choice(po_moesp, u, y, ORDERS, HORIZONS)
+    A, B, C, D = po_moesp(u, y, n, i)
+    return (A, B, C, D), {"order": n, "horizon": i}
+
+
+def modal_sim(A, B, C, D, x0, u):
+    """A faster simulation for the refinement: decoupled complex modes filtered by lfilter."""
+    from scipy.signal import lfilter
+
+    lam, V = np.linalg.eig(A)
+    Vi = np.linalg.inv(V)
+    Bu = u @ (Vi @ B).T
+    z = np.empty((u.shape[0], A.shape[0]), complex)
+    z0 = Vi @ x0
+    for k in range(A.shape[0]):
+        z[:, k] = lfilter([0.0, 1.0], [1.0, -lam[k]], Bu[:, k])
+        z[:, k] += z0[k] * lam[k] ** np.arange(u.shape[0])
+    return np.real(z @ (C @ V).T) + u @ D.T
+
+
+def scipy_refine(u, y, start):
+    from scipy.optimize import least_squares
+
+    A, B, C, D = start
+    n, m, l = A.shape[0], B.shape[1], C.shape[0]
+    _, _, x0 = bd_x0(A, C, u, y)
+    sizes = [n * n, n * m, l * n, l * m, n]
+
+    def unpack(p):
+        o = np.cumsum([0] + sizes)
+        return (p[o[0]:o[1]].reshape(n, n), p[o[1]:o[2]].reshape(n, m),
+                p[o[2]:o[3]].reshape(l, n), p[o[3]:o[4]].reshape(l, m), p[o[4]:o[5]])
+
+    def res(p):
+        a, b, c, d, x = unpack(p)
+        with np.errstate(all="ignore"):
+            e = (modal_sim(a, b, c, d, x, u) - y).ravel()
+        return np.where(np.isfinite(e), e, 1e10)
+
+    p0 = np.concatenate([A.ravel(), B.ravel(), C.ravel(), D.ravel(), x0])
+    r = least_squares(res, p0, max_nfev=50, x_scale="jac")
+    a, b, c, d, _ = unpack(r.x)
+    return (a, b, c, d), {"nfev": int(r.nfev), "status": int(r.status)}
+
+
+# -- peers (run under benches/.venv-peers by `--worker`) ------------------------------------
+def sippy_fit(u, y, n, i):
+    try:
+        from sippy import system_identification
+    except ImportError:  # sippy-unipi >= 1.0 installs the package as sippy_unipi
+        from sippy_unipi import system_identification
+
+    sys_id = system_identification(y.T, u.T, "N4SID", SS_fixed_order=n, SS_f=i, SS_p=i,
+                                   SS_D_required=True)
+    return (np.atleast_2d(sys_id.A), np.atleast_2d(sys_id.B), np.atleast_2d(sys_id.C),
+            np.atleast_2d(sys_id.D))
+
+
+def nfoursid_fit(u, y, n, i):
+    import pandas as pd
+    from nfoursid.nfoursid import NFourSID
+
+    cols_u = [f"u{k}" for k in range(u.shape[1])]
+    cols_y = [f"y{k}" for k in range(y.shape[1])]
+    df = pd.DataFrame(np.hstack([u, y]), columns=cols_u + cols_y)
+    nf = NFourSID(df, output_columns=cols_y, input_columns=cols_u, num_block_rows=i)
+    nf.subspace_identification()
+    ss, _ = nf.system_identification(rank=n)
+    return ss.a, ss.b, ss.c, ss.d
+
+
+def worker(tool: str, path: str) -> None:
+    z = np.load(path)
+    u, y = z["u"], z["y"]
+    fn = {"sippy": sippy_fit, "nfoursid": nfoursid_fit}[tool]
+    t = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        choice = grid_choice(fn, u, y, ORDERS, HORIZONS)
+        if choice is None:
+            raise RuntimeError("no setting of the grid gave a usable model")
+        A, B, C, D = fn(u, y, *choice)
+    print(json.dumps({"A": np.asarray(A).tolist(), "B": np.asarray(B).tolist(),
+                      "C": np.asarray(C).tolist(), "D": np.asarray(D).tolist(),
+                      "order": choice[0], "horizon": choice[1],
+                      "seconds": time.perf_counter() - t}))
+
+
+def run_peer(tool: str, u, y, tmp: Path, timeout: float = 900.0):
+    py = HERE / ".venv-peers" / "bin" / "python"
+    if not py.exists():
+        raise RuntimeError("benches/.venv-peers missing (python benches/run.py --quick makes it)")
+    np.savez(tmp, u=u, y=y)
+    r = subprocess.run([str(py), __file__, "--worker", tool, str(tmp)], capture_output=True,
+                       text=True, timeout=timeout)
+    lines = [ln for ln in r.stdout.splitlines() if ln.startswith("{")]
+    if not lines:
+        raise RuntimeError((r.stderr.strip().splitlines() or ["no output"])[-1][:200])
+    d = json.loads(lines[-1])
+    mats = tuple(np.atleast_2d(np.asarray(d[k], float)) for k in "ABCD")
+    return mats, {"order": d["order"], "horizon": d["horizon"], "seconds": d["seconds"]}
+
+
+# -- sysid ------------------------------------------------------------------------------------
+def _sysid_tools():
+    import sysid
+
+    def sub(name):
+        return lambda est: getattr(sysid, name)(est)
+
+    def ssest(est):
+        try:
+            return sysid.ssest(est, order="auto")
+        except Exception:  # noqa: BLE001 - before order="auto" existed: the subspace choice
+            return sysid.ssest(est, order=sysid.SubspaceEstimator(est).auto_order)
+
+    tools = {"ssest": ssest, "n4sid": sub("n4sid"), "moesp": sub("moesp"), "cva": sub("cva")}
+    return tools
+
+
+def score(mats, val, dt):
+    import sysid
+
+    A, B, C, D = (np.atleast_2d(np.asarray(x, float)) for x in mats)
+    model = sysid.StateSpaceModel(A, B, C, D, dt=dt)
+    rho = float(np.max(np.abs(np.linalg.eigvals(A)))) if A.size else 0.0
+    try:
+        with warnings.catch_warnings(), np.errstate(all="ignore"):
+            warnings.simplefilter("ignore")
+            f = float(sysid.compare(model, val).mean_fit)
+    except Exception:  # noqa: BLE001 - a diverging model scores -inf
+        f = -np.inf
+    return (f if np.isfinite(f) else -np.inf), rho, A.shape[0]
+
+
+SYSID_TOOLS = ("identify", "ssest", "n4sid", "moesp", "cva")
+
+
+def run_record(name: str, peers: bool, tmpdir: Path, tools: set[str] | None = None,
+               reuse: dict | None = None) -> list[dict]:
+    import sysid
+
+    (ue, ye), (uv, yv) = RECORDS[name]()
+    mu, my = ue.mean(0), ye.mean(0)
+    est = sysid.IOData(u=ue - mu, y=ye - my)
+    val = sysid.IOData(u=uv - mu, y=yv - my)
+    rows = []
+
+    def add(tool, fn):
+        if tools is not None and tool not in tools:
+            return
+        if reuse and (name, tool) in reuse and tool not in SYSID_TOOLS:
+            rows.append(dict(reuse[(name, tool)], reused=True))
+            print(json.dumps(rows[-1]), flush=True)
+            return
+        t = time.perf_counter()
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                mats, extra = fn()
+            secs = extra.pop("seconds", time.perf_counter() - t)
+            f, rho, n = score(mats, val, 1.0)
+            f = extra.pop("fit_raw", f)
+            row = {"record": name, "tool": tool, "fit": f, "max_pole": rho, "order": n,
+                   "seconds": secs, **extra}
+        except Exception as e:  # noqa: BLE001 - reported, not raised
+            row = {"record": name, "tool": tool, "fit": -np.inf, "max_pole": np.nan,
+                   "order": None, "seconds": time.perf_counter() - t,
+                   "error": f"{type(e).__name__}: {e}"[:160]}
+        rows.append(row)
+        print(json.dumps(row), flush=True)
+
+    if hasattr(sysid, "identify"):
+        def ident():
+            res = sysid.identify(sysid.IOData(u=ue, y=ye), progress=False)
+            m = res.model.statespace
+            # the fit on the raw validation data (offsets removed as the model records them;
+            # NRMSE does not change with them): scored like every other tool, from A, B, C, D
+            val_id = res.model.remove_offsets((uv, yv))
+            f, rho, n = score((m.A, m.B, m.C, m.D), val_id, 1.0)
+            return (m.A, m.B, m.C, m.D), {"choice": res.choice, "fit_raw": f,
+                                          "seconds": res.seconds}
+        add("identify", ident)
+    for tool, fn in _sysid_tools().items():
+        def f(fn=fn):
+            m = fn(est)
+            return (m.A, m.B, m.C, m.D), {}
+        add(tool, f)
+    add("numpy-pomoesp", lambda: numpy_pomoesp(est.u, est.y))
+    if True:
+        def refine():
+            mats, _ = numpy_pomoesp(est.u, est.y)
+            return scipy_refine(est.u, est.y, mats)
+        add("scipy-ls", refine)
+    if peers:
+        for tool in ("sippy", "nfoursid"):
+            add(tool, lambda tool=tool: run_peer(tool, est.u, est.y, tmpdir / f"{name}.npz"))
+    return rows
+
+
+def _cell(r: dict) -> str:
+    if r.get("error"):
+        return "failed"
+    f = r["fit"]
+    fs = "-inf" if not np.isfinite(f) else ("< -999" if f < -999 else f"{f:.1f}")
+    flag = "" if r["max_pole"] < 1 else " (unstable)"
+    return f"{fs} (n={r['order']}){flag}"
+
+
+def write_md(rows: list[dict], path: Path, argv: list[str]) -> None:
+    tools = list(dict.fromkeys(r["tool"] for r in rows))
+    records = list(dict.fromkeys(r["record"] for r in rows))
+    by = {(r["record"], r["tool"]): r for r in rows}
+    lines = [
+        "# Real records: validation simulation fit (NRMSE %, mean over outputs)",
+        "",
+        f"Command: `.venv/bin/python benches/realdata.py {' '.join(argv)}`".replace("  ", " "),
+        f"({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}; splits and tools: see the "
+        "docstring of benches/realdata.py). Cells: fit % (model order); `(unstable)` when "
+        "a pole has modulus >= 1.",
+        "",
+        "| record | " + " | ".join(tools)
+        + " | identify - best other | identify - best stable other | goal met |",
+        "|---" * (len(tools) + 4) + "|",
+    ]
+    for rec in records:
+        cells = [_cell(by[(rec, t)]) if (rec, t) in by else "" for t in tools]
+        others = [by[(rec, t)] for t in tools if t != "identify" and (rec, t) in by]
+        gap = gap_s = met = ""
+        if (rec, "identify") in by and others:
+            me = by[(rec, "identify")]
+            best = max(r["fit"] for r in others)
+            stable = [r["fit"] for r in others if r["max_pole"] < 1]
+            best_s = max(stable) if stable else -np.inf
+
+            def fmt(g):
+                return f"{g:+.1f}" if np.isfinite(g) else ("-inf" if g < 0 else "+inf")
+            gap, gap_s = fmt(me["fit"] - best), fmt(me["fit"] - best_s)
+            # the issue's goal: stable and within 0.5 points of the best other, wherever any
+            # other reaches a positive fit
+            ok = best <= 0 or (me["max_pole"] < 1 and me["fit"] >= best - 0.5)
+            met = "yes" if ok else ("stable others: yes" if (
+                best_s <= 0 or (me["max_pole"] < 1 and me["fit"] >= best_s - 0.5)) else "no")
+        lines.append(f"| {rec} | " + " | ".join(cells) + f" | {gap} | {gap_s} | {met} |")
+    lines += ["", "Seconds per record and tool:", "",
+              "| record | " + " | ".join(tools) + " |", "|---" * (len(tools) + 1) + "|"]
+    for rec in records:
+        lines.append(f"| {rec} | " + " | ".join(
+            f"{by[(rec, t)]['seconds']:.1f}" if (rec, t) in by else "" for t in tools) + " |")
+    if any(r.get("reused") for r in rows):
+        lines += ["", "Rows of the reference and peer tools were reused from an earlier run of "
+                  "the same script (`--reuse`; they do not depend on sysid's code)."]
+    errs = [r for r in rows if r.get("error")]
+    if errs:
+        lines += ["", "Failures:", ""] + [f"- {r['record']} / {r['tool']}: {r['error']}"
+                                           for r in errs]
+    path.write_text("\n".join(lines) + "\n")
+
+
+def main() -> None:
+    if len(sys.argv) > 1 and sys.argv[1] == "--worker":
+        worker(sys.argv[2], sys.argv[3])
+        return
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--records", nargs="*", default=list(RECORDS))
+    ap.add_argument("--no-peers", action="store_true")
+    ap.add_argument("--out", default=str(HERE / "results" / "realdata.md"))
+    ap.add_argument("--tools", nargs="*", default=None, help="only these tools")
+    ap.add_argument("--reuse", nargs="*", default=[],
+                    help="results .json files whose reference and peer rows (not sysid's) "
+                         "are taken instead of re-running them (marked in the table)")
+    ap.add_argument("--table-from", default=None,
+                    help="rewrite the table from a results .json (no fitting)")
+    args = ap.parse_args()
+    if args.table_from:
+        rows = json.loads(Path(args.table_from).read_text())
+        for r in rows:
+            r["fit"] = float(r["fit"])
+            r["max_pole"] = float(r["max_pole"]) if r["max_pole"] is not None else np.nan
+        write_md(rows, Path(args.out), [a for a in sys.argv[1:] if a != args.table_from
+                                        and a != "--table-from"])
+        print(Path(args.out).read_text())
+        return
+    tmpdir = HERE / ".data"
+    tmpdir.mkdir(exist_ok=True)
+    reuse = {}
+    for f in args.reuse:
+        for r in json.loads(Path(f).read_text()):
+            if not r.get("error"):
+                r["fit"] = float(r["fit"])
+                r["max_pole"] = float(r["max_pole"])
+                reuse[(r["record"], r["tool"])] = r
+    rows = []
+    for rec in args.records:
+        rows += run_record(rec, not args.no_peers, tmpdir,
+                           set(args.tools) if args.tools else None, reuse)
+        write_md(rows, Path(args.out), sys.argv[1:])
+        Path(args.out).with_suffix(".json").write_text(json.dumps(rows, indent=1, default=str))
+    print(Path(args.out).read_text())
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,174 @@
+"""What :func:`sysid.identify` returns: the chosen model (with the offsets it was identified
+around, so that it predicts raw data) and the leaderboard of every candidate tried."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..data.iodata import IOData
+from ..errors import DataError
+
+__all__ = ["IdentifiedModel", "IdentifyResult"]
+
+COLUMNS = ("family", "order", "feedthrough", "focus", "criterion", "held_out_fit", "stable",
+           "max_abs_pole", "seconds", "note")
+
+
+class IdentifiedModel:
+    """A linear model identified around operating-point offsets.
+
+    ``y = y_offset + G (u - u_offset)``: :meth:`simulate` and :meth:`predict` take and return
+    raw (un-detrended) signals; :attr:`statespace` is the model of the deviations.
+
+    Attributes
+    ----------
+    statespace : StateSpaceModel
+        The model of the deviations from the offsets (``A, B, C, D, K``).
+    u_offset, y_offset : ndarray
+        The estimation record's input and output means, removed before identification.
+    """
+
+    def __init__(self, statespace: Any, u_offset: Any, y_offset: Any) -> None:
+        self.statespace = statespace
+        self.u_offset = np.asarray(u_offset, float).ravel()
+        self.y_offset = np.asarray(y_offset, float).ravel()
+        for k in ("dt", "ninputs", "noutputs", "input_names", "output_names", "nstates"):
+            setattr(self, k, getattr(statespace, k))
+        self.info = dict(statespace.info or {})
+        self.info["offsets"] = {"u": self.u_offset.tolist(), "y": self.y_offset.tolist()}
+
+    @property
+    def n_parameters(self) -> int:
+        return int(self.statespace.n_parameters)
+
+    def remove_offsets(self, data: Any) -> IOData:
+        """``data`` (raw, an IOData or a ``(u, y)`` pair) minus the offsets."""
+        if isinstance(data, tuple):
+            data = IOData(u=data[0], y=data[1], dt=self.dt)
+        if not isinstance(data, IOData):
+            raise DataError(f"data must be a sysid.IOData or a (u, y) pair, got "
+                            f"{type(data).__name__}")
+        if data.n_inputs != self.ninputs or data.n_outputs != self.noutputs:
+            raise DataError(f"the model has {self.ninputs} input(s) and {self.noutputs} "
+                            f"output(s) but the data have {data.n_inputs} and "
+                            f"{data.n_outputs}")
+        us = [u - self.u_offset for u, _ in data.experiments]
+        ys = [y - self.y_offset for _, y in data.experiments]
+        kw = {"dt": data.dt, "input_names": data.input_names, "output_names": data.output_names}
+        if len(us) == 1:
+            return IOData(u=us[0], y=ys[0], **kw)
+        return IOData(u=us, y=ys, **kw)
+
+    def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
+        """Output for raw inputs ``(n_samples, ninputs)``, in raw units."""
+        u = np.asarray(u, float).reshape(-1, self.ninputs)
+        return self.statespace.simulate(u - self.u_offset, x0) + self.y_offset
+
+    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+        """``horizon``-step prediction from raw ``u`` and ``y``, in raw units."""
+        u = np.asarray(u, float).reshape(-1, self.ninputs)
+        y = np.asarray(y, float).reshape(-1, self.noutputs)
+        return (self.statespace.predict(u - self.u_offset, y - self.y_offset, horizon)
+                + self.y_offset)
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        return self.statespace.freqresp(omega)
+
+    def poles(self) -> np.ndarray:
+        return self.statespace.poles()
+
+    def is_stable(self) -> bool:
+        return bool(self.statespace.is_stable())
+
+    def compare(self, data: Any, horizon: int | None = None, **kw: Any) -> Any:
+        """:func:`sysid.compare` on raw data (offsets removed; the fit is unchanged by them)."""
+        import sysid
+
+        return sysid.compare(self.statespace, self.remove_offsets(data), horizon, **kw)
+
+    def __repr__(self) -> str:
+        s = self.statespace
+        return (f"IdentifiedModel({s.info.get('identify', {}).get('family', 'model')}, "
+                f"order {s.nstates}, {s.ninputs} input(s), {s.noutputs} output(s), "
+                f"offsets removed)")
+
+
+class IdentifyResult:
+    """The outcome of :func:`sysid.identify`.
+
+    Attributes
+    ----------
+    model : IdentifiedModel
+        The chosen model, re-fitted on the whole estimation record (predicts raw data).
+    leaderboard : list of dict
+        Every candidate: family, order, feedthrough, focus, criterion, held-out fit (%,
+        simulation of each block of the estimation record by the model fitted on the
+        others, averaged),
+        stability, seconds.
+    choice : str
+        The chosen row, in words.
+    checks : dict
+        Offsets, excitation and feedback findings.
+    validation_fit : float or None
+        Simulation fit (%) of :attr:`model` on the ``validation`` data, when given (reported
+        only: it played no part in the choice).
+    seconds : float
+    """
+
+    def __init__(self, model: IdentifiedModel, leaderboard: list[dict[str, Any]], choice: str,
+                 checks: dict[str, Any], validation_fit: float | None, seconds: float,
+                 interrupted: bool = False) -> None:
+        self.model, self.leaderboard, self.choice = model, leaderboard, choice
+        self.checks, self.validation_fit, self.seconds = checks, validation_fit, seconds
+        self.interrupted = interrupted
+
+    def to_pandas(self) -> Any:
+        """The leaderboard as a DataFrame, best held-out fit first."""
+        import pandas as pd
+
+        return pd.DataFrame(self.leaderboard, columns=list(COLUMNS))
+
+    def summary(self) -> str:
+        """The choice, the checks and the leaderboard as text."""
+        lines = [f"sysid.identify: {self.choice} ({self.seconds:.1f} s"
+                 + (", interrupted" if self.interrupted else "") + ")"]
+        if self.validation_fit is not None:
+            lines.append(f"validation fit (reported only): {self.validation_fit:.1f} %")
+        for k, v in self.checks.items():
+            lines.append(f"{k}: {v}")
+        lines.append(f"{'family':<10} {'order':>5} {'D':>3} {'focus':<10} {'held-out fit %':>14} "
+                     f"{'stable':>6} {'s':>6}")
+        for r in self.leaderboard:
+            f = r["held_out_fit"]
+            fs = f"{f:14.2f}" if np.isfinite(f) and f > -1e4 else f"{'< -1e4':>14}"
+            ft = "yes" if r["feedthrough"] else "no"
+            lines.append(f"{r['family']:<10} {r['order']:>5} {ft:>3} "
+                         f"{r['focus'] or '-':<10} {fs} {'yes' if r['stable'] else 'NO':>6} "
+                         f"{r['seconds']:6.2f}")
+        return "\n".join(lines)
+
+    def plot(self, ax: Any = None) -> Any:
+        """Held-out fit against order, one marker per family; returns the axes."""
+        import matplotlib.pyplot as plt
+
+        if ax is None:
+            _, ax = plt.subplots()
+        fams = sorted({r["family"] for r in self.leaderboard})
+        for fam in fams:
+            rows = [r for r in self.leaderboard if r["family"] == fam
+                    and np.isfinite(r["held_out_fit"])]
+            ax.plot([r["order"] for r in rows], [max(r["held_out_fit"], -100) for r in rows],
+                    "o", label=fam, alpha=0.7)
+        s = self.model.statespace
+        best = self.leaderboard[0]
+        ax.plot([s.nstates], [best["held_out_fit"]], "k*", ms=14, label="chosen")
+        ax.set_xlabel("order")
+        ax.set_ylabel("held-out simulation fit (%)")
+        ax.legend(fontsize="small")
+        return ax
+
+    def __repr__(self) -> str:
+        return (f"IdentifyResult({self.choice}; {len(self.leaderboard)} candidates, "
+                f"{self.seconds:.1f} s)")

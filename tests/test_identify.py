@@ -1,0 +1,237 @@
+"""Issue 26 (items 2-4): order and feedthrough chosen from the data, and ``sysid.identify``.
+
+Real records: the shipped DaISy copies (``sysid.datasets``) with the splits of the records'
+README (dryer 1:500 / 501:1000, robot arm 1:800 / 801:1024, winding first 2/3 / last 1/3).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import sysid
+from sysid.validation.crossval import choose, cross_validated_order
+
+SPLITS = {"dryer": ([0], [1], 500), "robot_arm": ([0], [1], 800),
+          "winding": ([0, 1, 2, 3, 4], [5, 6], 1666)}
+
+
+def record(name: str, centred: bool = True):
+    ins, outs, k = SPLITS[name]
+    d = np.loadtxt(sysid.datasets.path(name))
+    u, y = d[:, ins], d[:, outs]
+    if centred:
+        u, y = u - u[:k].mean(0), y - y[:k].mean(0)
+    return sysid.IOData(u=u[:k], y=y[:k]), sysid.IOData(u=u[k:], y=y[k:])
+
+
+def quiet(fn, *a, **k):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return fn(*a, **k)
+
+
+def plain_po_moesp(data: sysid.IOData, n: int, i: int = 10) -> sysid.StateSpaceModel:
+    """The reference of the issue, as a user writes it: PO-MOESP in NumPy (LQ, SVD, A and C
+    from the shift), B, D and x0 by least squares on the data."""
+    (u, y), = data.experiments
+    m, l = u.shape[1], y.shape[1]
+    j = u.shape[0] - 2 * i + 1
+
+    def hank(x, s):
+        return np.vstack([x[s + k:s + k + j].T for k in range(i)])
+    Z = np.vstack([hank(u, i), hank(u, 0), hank(y, 0), hank(y, i)])
+    R = np.linalg.qr(Z.T, mode="r").T
+    U, s, _ = np.linalg.svd(R[2 * m * i + l * i:, m * i:2 * m * i + l * i])
+    Ob = U[:, :n] * np.sqrt(s[:n])
+    C, A = Ob[:l], np.linalg.lstsq(Ob[:-l], Ob[l:], rcond=None)[0]
+    N = u.shape[0]
+    cols, M = [], C.copy()
+    free = np.empty((N, l, n))
+    for t in range(N):
+        free[t], M = M, M @ A
+    cols.append(free.reshape(N * l, n))
+    for jj in range(m):
+        for k in range(n):
+            Bk = np.zeros((n, m))
+            Bk[k, jj] = 1.0
+            cols.append(sysid.StateSpaceModel(A, Bk, C).simulate(u).reshape(-1, 1))
+    for r in range(l):
+        for jj in range(m):
+            col = np.zeros((N, l))
+            col[:, r] = u[:, jj]
+            cols.append(col.reshape(-1, 1))
+    th = np.linalg.lstsq(np.hstack(cols), y.ravel(), rcond=None)[0]
+    B = th[n:n + n * m].reshape(m, n).T
+    return sysid.StateSpaceModel(A, B, C, th[n + n * m:].reshape(l, m))
+
+
+# -- order="auto" ------------------------------------------------------------------------
+def test_auto_order_on_the_dryer_is_not_one_or_two_and_says_why():
+    est, val = record("dryer")
+    for fit in (sysid.moesp, sysid.n4sid):
+        m = quiet(fit, est)
+        sel = m.info["order_selection"]
+        assert m.nstates >= 3, sel  # the singular-value gap picked 2 here
+        assert sel["criterion"] == "cross-validated simulation fit"
+        assert set(sel["table"]) >= set(range(1, 9)) and "order" in sel["reason"]
+        # and the automatic model is as good on fresh data as the literature's order 4
+        ref = quiet(fit, est, order=4)
+        assert (quiet(sysid.compare, m, val).mean_fit
+                > quiet(sysid.compare, ref, val).mean_fit - 0.5)
+
+
+def test_auto_order_recovers_the_true_order_of_noise_free_data():
+    rng = np.random.default_rng(3)
+    true = sysid.StateSpaceModel(np.diag([0.9, 0.5, -0.3, 0.1]), np.ones((4, 1)),
+                                 np.array([[1.0, 0.7, 0.4, 0.2]]))
+    u = rng.standard_normal((600, 1))
+    data = sysid.IOData(u=u, y=true.simulate(u))
+    assert cross_validated_order(data, sysid.SubspaceEstimator).order == 4
+
+
+def test_choose_prefers_a_smaller_order_only_within_the_tolerance():
+    assert choose({1: 50.0, 2: 80.0, 3: 80.3, 4: 79.0})[0] == 2
+    assert choose({1: 50.0, 2: 80.0, 3: 81.0})[0] == 3
+    assert choose({1: 99.0, 2: 99.99, 3: 99.999})[0] == 3  # 5 % of the error: 0.0005
+
+
+def test_ssest_with_a_range_of_orders_cross_validates_the_refined_models():
+    est, val = record("dryer")
+    m = quiet(sysid.ssest, est, order=range(1, 7))
+    sel = m.info["order_selection"]
+    assert sorted(sel["table"]) == list(range(1, 7))
+    assert m.nstates == sel["order"] >= 3
+    assert "refined" in sel["criterion"]
+    assert quiet(sysid.compare, m, val).mean_fit > 80
+
+
+def test_ssest_order_auto():
+    est, _ = record("dryer")
+    m = quiet(sysid.ssest, est)  # order="auto" is the default
+    assert m.nstates >= 3 and m.info["order_selection"]["order"] == m.nstates
+
+
+# -- feedthrough="auto" ------------------------------------------------------------------
+@pytest.mark.parametrize("d", [0.0, 0.8])
+def test_ssest_feedthrough_auto_decides_from_the_data(d):
+    rng = np.random.default_rng(1)
+    true = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]],
+                                 [[d]])
+    u = rng.standard_normal((800, 1))
+    y = true.simulate(u) + 0.05 * rng.standard_normal((800, 1))
+    m = quiet(sysid.ssest, sysid.IOData(u=u, y=y), 2, feedthrough="auto")
+    sel = m.info["feedthrough_selection"]
+    assert sel["feedthrough"] is (d != 0), sel
+    assert abs(m.D[0, 0] - d) < 0.05
+
+
+@pytest.mark.parametrize("d", [0.0, 0.8])
+def test_subspace_feedthrough_auto_decides_by_held_out_fit(d):
+    rng = np.random.default_rng(2)
+    true = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]],
+                                 [[d]])
+    u = rng.standard_normal((800, 1))
+    y = true.simulate(u) + 0.05 * rng.standard_normal((800, 1))
+    m = quiet(sysid.moesp, sysid.IOData(u=u, y=y), feedthrough="auto")
+    sel = m.info["feedthrough_selection"]
+    assert sel["feedthrough"] is (d != 0), sel
+    assert m.nstates == 2 and abs(m.D[0, 0] - d) < 0.05
+
+
+def test_feedthrough_auto_on_the_winding_record_estimates_d():
+    # the winding record's validation fit (moesp, order chosen): 74.7 % with D, 64.6 % without
+    est, val = record("winding")
+    m = quiet(sysid.moesp, est, feedthrough="auto")
+    assert m.info["feedthrough_selection"]["feedthrough"] is True
+    assert quiet(sysid.compare, m, val).mean_fit > 72
+
+
+# -- identify ------------------------------------------------------------------------------
+@pytest.mark.parametrize("name", ["dryer", "robot_arm"])
+def test_identify_beats_the_plain_po_moesp_reference_on_held_out_data(name):
+    raw_est, raw_val = record(name, centred=False)
+    est, val = record(name)
+    res = quiet(sysid.identify, raw_est, raw_val, progress=False)
+    assert res.model.is_stable()
+    ours = res.model.compare(raw_val).mean_fit
+    assert ours == pytest.approx(res.validation_fit)
+    # the reference at the literature's order (README: dryer 4; robot arm 4, 6 slightly better)
+    ref = max(quiet(sysid.compare, plain_po_moesp(est, n), val).mean_fit for n in (4, 6))
+    assert ours >= ref - 0.5, (ours, ref, res.summary())
+
+
+@pytest.mark.xfail(strict=True, reason="known shortfall (issue 26): on the winding record the "
+                   "held-out blocks of the estimation part rank the candidates within ~1 point "
+                   "of each other and the choice validates ~8 points below the plain PO-MOESP "
+                   "at order 6; see benches/results/realdata.md")
+def test_identify_on_the_winding_record_with_subspace_candidates_only():
+    raw_est, raw_val = record("winding", centred=False)
+    est, val = record("winding")
+    res = quiet(sysid.identify, raw_est, raw_val, refine=False, progress=False)
+    ref = quiet(sysid.compare, plain_po_moesp(est, 6), val).mean_fit
+    assert res.model.is_stable() and res.validation_fit >= ref - 0.5, res.summary()
+
+
+def test_identify_result_presents_itself_and_predicts_raw_data():
+    rng = np.random.default_rng(0)
+    true = sysid.StateSpaceModel([[0.8, 0.3], [-0.3, 0.8]], [[1.0], [0.0]], [[1.0, 0.5]])
+    u = rng.standard_normal((600, 1))
+    y = true.simulate(u) + 5.0 + 0.02 * rng.standard_normal((600, 1))
+    res = sysid.identify(sysid.IOData(u=u + 2.0, y=y), refine=False, progress=False)
+    assert res.model.nstates == 2
+    np.testing.assert_allclose(res.model.u_offset, 2.0, atol=0.2)
+    sim = res.model.simulate(u + 2.0)  # raw in, raw out
+    assert abs(sim.mean() - y.mean()) < 0.2
+    assert "IdentifyResult" in repr(res) and "held-out fit" in res.summary()
+    df = res.to_pandas()
+    assert {"family", "order", "held_out_fit", "stable", "seconds"} <= set(df.columns)
+    chosen = [r for r in res.leaderboard if r["chosen"]]
+    assert len(chosen) == 1 and chosen[0]["held_out_fit"] >= df["held_out_fit"].max() - 0.5
+    assert "offsets" in res.checks and "feedback" in res.checks
+
+
+def test_identify_refuses_output_only_data_and_too_short_records():
+    with pytest.raises(sysid.errors.DataError, match="inputs"):
+        sysid.identify(sysid.IOData(u=None, y=np.random.default_rng(0).standard_normal(100)))
+    with pytest.raises(sysid.errors.SysidError):
+        sysid.identify(sysid.IOData(u=np.arange(12.0), y=np.arange(12.0) ** 2))
+
+
+def test_identify_is_callable_as_a_package_and_a_function():
+    import sysid.identify.core  # noqa: F401 - the submodule import must not shadow it
+
+    assert callable(sysid.identify)
+
+
+def test_the_command_line_uses_identify_by_default(tmp_path, capsys):
+    from sysid.cli import main
+
+    d = np.loadtxt(sysid.datasets.path("dryer"))
+    path = tmp_path / "dryer.csv"
+    np.savetxt(path, d, delimiter=",", header="heater,temperature", comments="")
+    rep = tmp_path / "out"
+    assert main(["identify", str(path), "--inputs", "heater", "--outputs", "temperature",
+                 "--dt", "0.08", "--split", "500", "--report", str(rep), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "sysid.identify:" in out and "held-out fit" in out
+    model = sysid.load_model(rep / "model.json")
+    assert model.nstates >= 3 and model.info["identify"]["family"]
+    offs = model.info["preprocessing"]["identify_offsets"]
+    assert offs["y"][0] == pytest.approx(d[:500, 1].mean())
+
+
+def test_the_identify_guide_runs():
+    """docs/identify.md: every python block executes."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "docs" / "identify.md").read_text()
+    ns: dict = {}
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    assert len(blocks) == 3
+    for i, block in enumerate(blocks):
+        quiet(exec, compile(block, f"docs/identify.md[python block {i}]", "exec"), ns)
+    assert ns["res"].model.is_stable() and ns["m"].nstates >= 3
