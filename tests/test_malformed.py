@@ -635,7 +635,7 @@ def test_cli_saves_the_validated_model(capsys, tmp_path, csv_file):
 
     rep = tmp_path / "rep"
     assert main(["identify", str(csv_file), "--inputs", "u", "--outputs", "y",
-                 "--report", str(rep), "--quiet"]) == 0
+                 "--method", "moesp", "--report", str(rep), "--quiet"]) == 0
     import csv as _csv
 
     m = sysid.load_model(rep / "model.json")
