@@ -62,6 +62,14 @@ __all__ = [
     "tf_fit_frequency",
     # issue 26 (branch pem)
     "pem_criterion",
+    # issue 29 (branch nlss)
+    "pnlss_monomials",
+    "pnlss_simulate",
+    "pnlss_estimate",
+    "neural_ss_n_params",
+    "neural_ss_simulate",
+    "neural_ss_encode",
+    "neural_ss_train",
 ]
 
 _Array = npt.NDArray[np.float64]
