@@ -49,6 +49,29 @@ class Scaling:
         su, sy = np.diag(self.u_scale), np.diag(1.0 / self.y_scale)
         return StateSpaceModel(m.A, m.B @ su, sy @ m.C, sy @ m.D @ su, dt=m.dt)
 
+    def to_units(self, A: Any, B: Any, C: Any, D: Any, model: Any) -> StateSpaceModel:
+        """The scaled-channel linear part ``(A, B, C, D)`` in engineering units (the inverse
+        of :meth:`to_scaled`), with ``model``'s sample time and channel names."""
+        ys = self.y_scale[:, None]
+        return StateSpaceModel(A, B / self.u_scale, ys * C, ys * D / self.u_scale, dt=model.dt,
+                               input_names=model.input_names, output_names=model.output_names)
+
+
+class LinearPart:
+    """``to_statespace`` and ``freqresp`` of a nonlinear state-space model: those of its
+    linear part (the host defines ``linear()``)."""
+
+    def linear(self) -> StateSpaceModel:  # pragma: no cover - defined by the host
+        raise NotImplementedError
+
+    def to_statespace(self) -> StateSpaceModel:
+        """The linear part (poles, zeros and frequency response are those of it)."""
+        return self.linear()
+
+    def freqresp(self, omega: Any) -> np.ndarray:
+        """Frequency response of the linear part."""
+        return np.asarray(self.linear().freqresp(omega))
+
 
 def scaled_data(data: IOData, sc: Scaling) -> IOData:
     """The record in scaled channels (offsets removed, unit standard deviations)."""

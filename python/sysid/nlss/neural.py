@@ -28,13 +28,13 @@ from ..errors import DataError
 from ..models.protocol import ModelMixin
 from ..models.serialize import register_model
 from ..models.statespace import StateSpaceModel
-from .common import Scaling, balanced, check_order, linear_start, scaled_data
+from .common import LinearPart, Scaling, balanced, check_order, linear_start, scaled_data
 
 __all__ = ["NeuralStateSpaceModel", "nlssest"]
 
 
 @register_model
-class NeuralStateSpaceModel(ModelMixin):
+class NeuralStateSpaceModel(LinearPart, ModelMixin):
     """A neural state-space model (see the module documentation) from :func:`nlssest`.
 
     Attributes
@@ -152,19 +152,8 @@ class NeuralStateSpaceModel(ModelMixin):
         n, m, l_ = self.nstates, self.ninputs, self.noutputs
         o = np.cumsum([0, n * n, n * m, l_ * n, l_ * m])
         A, B, C, D = (self.params[o[i]:o[i + 1]] for i in range(4))
-        sc = self.scaling
-        return StateSpaceModel(A.reshape(n, n), B.reshape(n, m) / sc.u_scale,
-                               sc.y_scale[:, None] * C.reshape(l_, n),
-                               sc.y_scale[:, None] * D.reshape(l_, m) / sc.u_scale, dt=self.dt,
-                               input_names=self.input_names, output_names=self.output_names)
-
-    def to_statespace(self) -> StateSpaceModel:
-        """The linear part (poles, zeros)."""
-        return self.linear()
-
-    def freqresp(self, omega: Any) -> np.ndarray:
-        """Frequency response of the linear part."""
-        return np.asarray(self.linear().freqresp(omega))
+        return self.scaling.to_units(A.reshape(n, n), B.reshape(n, m), C.reshape(l_, n),
+                                     D.reshape(l_, m), self)
 
     def to_dict(self) -> dict[str, Any]:
         return {"params": self.params, "dims": [self.nstates, self.ninputs, self.noutputs],

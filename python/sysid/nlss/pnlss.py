@@ -26,13 +26,21 @@ from ..errors import DataError
 from ..models.protocol import ModelMixin
 from ..models.serialize import register_model
 from ..models.statespace import StateSpaceModel
-from .common import Scaling, balanced, check_order, linear_start, scaled_data, settle_samples
+from .common import (
+    LinearPart,
+    Scaling,
+    balanced,
+    check_order,
+    linear_start,
+    scaled_data,
+    settle_samples,
+)
 
 __all__ = ["PNLSSModel", "pnlss"]
 
 
 @register_model
-class PNLSSModel(ModelMixin):
+class PNLSSModel(LinearPart, ModelMixin):
     """A polynomial nonlinear state-space model (see the module documentation).
 
     Parameters
@@ -132,18 +140,7 @@ class PNLSSModel(ModelMixin):
 
     def linear(self) -> StateSpaceModel:
         """The linear part ``(A, B, C, D)`` in engineering units."""
-        sc = self.scaling
-        return StateSpaceModel(self.A, self.B / sc.u_scale, sc.y_scale[:, None] * self.C,
-                               sc.y_scale[:, None] * self.D / sc.u_scale, dt=self.dt,
-                               input_names=self.input_names, output_names=self.output_names)
-
-    def to_statespace(self) -> StateSpaceModel:
-        """The linear part (poles, zeros and frequency response are those of it)."""
-        return self.linear()
-
-    def freqresp(self, omega: Any) -> np.ndarray:
-        """Frequency response of the linear part (``E = F = 0``)."""
-        return np.asarray(self.linear().freqresp(omega))
+        return self.scaling.to_units(self.A, self.B, self.C, self.D, self)
 
     def to_dict(self) -> dict[str, Any]:
         return {"A": self.A, "B": self.B, "C": self.C, "D": self.D, "E": self.E, "F": self.F,
