@@ -1,12 +1,15 @@
 """Many records at once: sysid.identify_many with 1 and 2 worker processes.
 
     python benches/fleet.py                       # the issue's size: 1000 records
-    python benches/fleet.py --records 40          # a short run (what results/fleet.md shows)
+    python benches/fleet.py --records 40          # a short run
+    python benches/fleet.py --fit identify        # identify_many's default fit (slower)
 
 Records: random stable 3 x 3 systems of order 4 (poles 0.5..0.95), white-noise inputs,
 10 000 samples, output noise 10 %; made lazily in the calling process as workers take them.
-Fit: the default of identify_many (``sysid.identify`` when present, else ``ssest`` at the
-subspace automatic order). Reported: records per second with 1 and 2 local worker processes
+Fit (``--fit``): ``ssest`` (the default here) refines the order-4 subspace estimate by
+prediction errors, as a fleet of loops of known structure is fitted; ``identify`` is
+identify_many's own default, the automatic path (several seconds a record).
+Reported: records per second with 1 and 2 local worker processes
 and their ratio (goal >= 1.7); the per-record overhead = wall time x workers / records minus
 the mean in-worker time (read + fit + describe, the table's ``seconds``), relative to that
 time (goal < 10 %); and the same records fitted in this process in a plain loop (no workers,
@@ -25,10 +28,12 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-import numpy as np
+# one compute thread in every pool of this process too, as in the workers, set before numpy
+# loads: the floor is the same fit, unshared
+for _v in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS", "RAYON_NUM_THREADS"):
+    os.environ.setdefault(_v, "1")
 
-# one compute thread here too, as in the workers: the floor is the same fit, unshared
-os.environ.setdefault("RAYON_NUM_THREADS", "1")
+import numpy as np  # noqa: E402
 
 import sysid  # noqa: E402
 from sysid.batch.worker import default_fit  # noqa: E402
@@ -59,14 +64,22 @@ def record(seed: int) -> sysid.IOData:
     return sysid.IOData(u=u, y=y)
 
 
+def ssest_known_order(data: sysid.IOData) -> sysid.StateSpaceModel:
+    """The fleet's structure is known (order 4): subspace start, prediction-error refinement."""
+    return sysid.ssest(data, ORDER)
+
+
+FITS = {"ssest": ssest_known_order, "identify": default_fit}
+
+
 def records(n: int) -> Iterator[tuple[str, sysid.IOData]]:
     for i in range(n):
         yield f"rec{i:05d}", record(i)
 
 
-def run(n: int, workers: int, out: Path) -> dict[str, float]:
+def run(n: int, workers: int, out: Path, fit) -> dict[str, float]:
     t0 = time.perf_counter()
-    res = sysid.identify_many(records(n), workers=workers, out=out, progress=False)
+    res = sysid.identify_many(records(n), fit=fit, workers=workers, out=out, progress=False)
     wall = time.perf_counter() - t0
     df = res.to_pandas()
     fit_s = float(df["seconds"].mean())
@@ -81,28 +94,30 @@ def run(n: int, workers: int, out: Path) -> dict[str, float]:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--records", type=int, default=1000)
+    ap.add_argument("--fit", choices=sorted(FITS), default="ssest")
     ap.add_argument("--out", default=str(HERE / "results" / "fleet.md"))
     args = ap.parse_args()
-    n = args.records
+    n, fit = args.records, FITS[args.fit]
     tmp = Path(tempfile.mkdtemp())
     t0 = time.perf_counter()
     k = min(n, 10)
     for i in range(k):  # the floor: a plain loop in this process on the first records
-        default_fit(record(i))
+        fit(record(i))
     floor = (time.perf_counter() - t0) / k
-    r1 = run(n, 1, tmp / "w1.parquet")
-    r2 = run(n, 2, tmp / "w2.parquet")
+    r1 = run(n, 1, tmp / "w1.parquet", fit)
+    r2 = run(n, 2, tmp / "w2.parquet", fit)
     ratio = r2["rate"] / r1["rate"]
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     lines = [
         "# identify_many: 1 and 2 worker processes",
         "",
-        f"Command: `python benches/fleet.py --records {n}` ({time.strftime('%Y-%m-%d %H:%M')}"
+        f"Command: `python benches/fleet.py --records {n} --fit {args.fit}` "
+        f"({time.strftime('%Y-%m-%d %H:%M')}"
         f" UTC, {platform.machine()}, {os.cpu_count()} cores, load average {load:.1f} at the "
         "end: the machine was shared).",
         "",
         f"{n} records of {N_SAMPLES} samples, {M} inputs x {L} outputs, order {ORDER}; fit: "
-        "identify_many's default.",
+        f"`{args.fit}` ({fit.__doc__.splitlines()[0].strip()})",
         "",
         "| workers | wall [s] | records/s | in-worker s/record | in-worker CPU s/record | "
         "CPU cores obtained | overhead s/record | overhead / in-worker | ok | errors |",

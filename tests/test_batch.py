@@ -40,6 +40,13 @@ def fit_or_die(data: sysid.IOData):
     return sysid.n4sid(data, 2)
 
 
+def fit_reports_threads(data: sysid.IOData):
+    """Fails on purpose with the worker's thread settings, which the error row then shows."""
+    from sysid.batch.worker import THREAD_VARIABLES
+
+    raise RuntimeError(" ".join(f"{k}={os.environ.get(k)}" for k in THREAD_VARIABLES))
+
+
 def check_rows(df, good: list[str]) -> None:
     ok = df[df["error"].isna()]
     assert sorted(ok["record_id"]) == sorted(good)
@@ -66,6 +73,22 @@ def test_local_processes_survive_a_killed_worker_and_a_corrupt_record(tmp_path, 
     assert err["corrupt"].startswith("ShapeError: u has 50 samples but y has 40")
     assert res.n_ok == 6 and res.n_failed == 2 and "2 local processes" in repr(res)
     assert res.model("r3").nstates == 2
+
+
+def test_local_workers_start_with_one_thread_in_every_pool(tmp_path, monkeypatch):
+    # a worker whose BLAS pool has every core makes two workers on two cores fight (measured:
+    # twice the CPU time for the same wall time); the pools read their variable at load
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "8")
+    monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
+    res = sysid.identify_many({"a": record(0)}, fit=fit_reports_threads, workers=1,
+                              out=tmp_path / "t.parquet", progress=False)
+    err = res.to_pandas()["error"].iloc[0]
+    from sysid.batch.worker import THREAD_VARIABLES
+
+    for k in THREAD_VARIABLES:
+        assert f"{k}=1" in err
+    # the caller's environment is back as it was
+    assert os.environ["OPENBLAS_NUM_THREADS"] == "8" and "OMP_NUM_THREADS" not in os.environ
 
 
 def test_folder_of_files_in_this_process(tmp_path):

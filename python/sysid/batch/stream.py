@@ -18,7 +18,7 @@ from typing import Any
 from .._progress import Bar
 from ..errors import DataError
 from .records import Columns
-from .worker import SCHEMA_FIELDS, error_row, one_thread, run_one
+from .worker import SCHEMA_FIELDS, error_row, one_thread, one_thread_env, run_one
 
 __all__ = ["run_batch", "RowWriter", "DIED", "BatchResult"]
 
@@ -160,7 +160,8 @@ def run_batch(work: Iterable[tuple[str, Any]], fit: Callable[[Any], Any], cols: 
                 for rid, src in work:
                     done(run_one(rid, src, fit, cols))
             else:
-                _local(iter(work), fit, cols, int(workers), retries, done)
+                with one_thread_env():
+                    _local(iter(work), fit, cols, int(workers), retries, done)
     finally:
         writer.close()
     return BatchResult(out, writer.n_ok, writer.n_failed, time.perf_counter() - t0, where)

@@ -7,7 +7,8 @@ import json
 import os
 import time
 import traceback
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -15,7 +16,8 @@ import numpy as np
 
 from .records import Columns, load
 
-__all__ = ["SCHEMA_FIELDS", "default_fit", "run_one", "error_row", "one_thread"]
+__all__ = ["SCHEMA_FIELDS", "default_fit", "run_one", "error_row", "one_thread",
+           "one_thread_env"]
 
 SCHEMA_FIELDS = ("record_id", "family", "order", "fit", "stable", "max_abs_pole",
                  "n_parameters", "parameters", "n_samples", "seconds", "cpu_seconds", "error",
@@ -82,6 +84,34 @@ def run_one(rid: str, source: Any, fit: Callable[[Any], Any], cols: Columns,
         where = traceback.extract_tb(e.__traceback__)[-1]
         return error_row(rid, f"{type(e).__name__}: {e} ({Path(where.filename).name}:"
                               f"{where.lineno})", attempts, time.perf_counter() - t0, n)
+
+
+#: the thread pools a worker's libraries start: OpenBLAS/MKL/Accelerate (numpy, SciPy),
+#: OpenMP, and the Rust core's rayon pool. Each reads its variable once, when it loads.
+THREAD_VARIABLES = ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS",
+                    "VECLIB_MAXIMUM_THREADS", "RAYON_NUM_THREADS")
+
+
+@contextmanager
+def one_thread_env() -> Iterator[None]:
+    """The environment the worker processes are spawned with: one thread in every pool.
+
+    The pools read their variable when the library loads, which in a spawned worker happens
+    before any initialiser runs (importing the fit imports numpy), so the variables must be
+    in the environment the process starts with. Without them each worker's BLAS calls use
+    every core, and two workers on two cores fight over them. The caller's own environment
+    is restored on exit (its already-loaded libraries are not affected either way).
+    """
+    saved = {k: os.environ.get(k) for k in THREAD_VARIABLES}
+    os.environ.update({k: "1" for k in THREAD_VARIABLES})
+    try:
+        yield
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
 
 
 def one_thread() -> None:
