@@ -35,7 +35,7 @@ PEERS = HERE / ".venv-peers" / "bin" / "python"
 DATA = HERE / ".data"
 UNITS = 10
 TOOLS = ("sysid-arx", "sysid-sigmoidnet", "sysid-wavenet", "sysid-treepartition",
-         "sysidentpy-narxnn")
+         "sysidentpy-narxnn", "sysidentpy-frols")
 
 
 def make(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -105,25 +105,41 @@ def peer_worker(u, y, uv, yv) -> tuple[float, float]:
     t = time.perf_counter()
     model.fit(X=u[:, None], y=y[:, None])
     elapsed = time.perf_counter() - t
-    ys = np.asarray(model.predict(X=uv[:, None], y=yv[:2, None].copy() if False else yv[:, None]))
+    ys = np.asarray(model.predict(X=uv[:, None], y=yv[:, None]))
     return elapsed, fit_percent(yv, ys.ravel()[: yv.size])
+
+
+def frols_worker(u, y, uv, yv) -> tuple[float, float]:
+    from sysidentpy.basis_function import Polynomial
+    from sysidentpy.model_structure_selection import FROLS
+    from sysidentpy.parameter_estimation import LeastSquares
+
+    t = time.perf_counter()
+    m = FROLS(order_selection=True, info_criteria="aic", n_info_values=15, ylag=2, xlag=2,
+              estimator=LeastSquares(), basis_function=Polynomial(degree=3))
+    m.fit(X=u[:, None], y=y[:, None])
+    elapsed = time.perf_counter() - t
+    ys = np.asarray(m.predict(X=uv[:, None], y=yv[:, None])).ravel()[: yv.size]
+    return elapsed, fit_percent(yv, ys)
 
 
 def worker(tool: str, path: str) -> dict:
     d = np.load(path)
     u, y, uv, yv = d["u"], d["y"], d["uv"], d["yv"]
-    if tool.startswith("sysid"):
+    if tool.startswith("sysid-"):
         elapsed, fit = sysid_worker(tool, u, y, uv, yv)
+    elif tool == "sysidentpy-frols":
+        elapsed, fit = frols_worker(u, y, uv, yv)
     else:
         elapsed, fit = peer_worker(u, y, uv, yv)
     return {"time": elapsed, "fit": fit}
 
 
 def run(tool: str, n: int, timeout: float) -> dict:
-    py = sys.executable if tool.startswith("sysid") else str(PEERS)
+    py = sys.executable if tool.startswith("sysid-") else str(PEERS)
     if not Path(py).exists():
         return {"error": "benches/.venv-peers missing (pip install sysidentpy torch)"}
-    env_path = str(ROOT / "python") if tool.startswith("sysid") else ""
+    env_path = str(ROOT / "python") if tool.startswith("sysid-") else ""
     cmd = [py, __file__, "--worker", tool, str(data_file(n))]
     try:
         r = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout,
@@ -151,13 +167,16 @@ def main() -> None:
                                                                        else "") + "`", "",
              "Wiener system (see the script's docstring), lags na = nb = 2, nk = 1, 10 units; "
              "one thread per tool. Fit: free-run validation fit (%) on 2000 fresh samples. "
-             "Ratios: sysid's time / sysidentpy NARXNN's time (below 1: sysid faster) and "
-             "sysid's fit minus NARXNN's fit (points).", "",
+             "Ratios: sysid's time / the peer's time (below 1: sysid faster) and sysid's fit "
+             "minus the peer's fit (points); the peer is sysidentpy's NARXNN when it runs, else "
+             "its polynomial FROLS NARX (degree 3, terms by AIC).", "",
              "| N | tool | time (s) | fit (%) | time ratio | fit difference |",
              "|---|---|---|---|---|---|"]
     for n in sizes:
         res = {t: run(t, n, a.timeout) for t in TOOLS}
         peer = res["sysidentpy-narxnn"]
+        if "error" in peer:  # the neural peer could not run: ratios against FROLS
+            peer = res["sysidentpy-frols"]
         for t in TOOLS:
             r = res[t]
             if "error" in r:

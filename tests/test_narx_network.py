@@ -197,3 +197,21 @@ def test_linearize_at_the_truth_matches_its_derivative():
     lin = truth.linearize(at=[0.2, -0.1, 0.3, 0.0])
     assert lin.noutputs == 1 and np.all(np.isfinite(truth.freqresp([0.1, 1.0])))
     assert truth.poles().size == 2 and truth.n_parameters == 17
+
+
+def test_guide_section_runs_and_prints_what_it_shows(capsys):
+    """The network section of docs/nonlinear.md runs and prints the numbers it shows."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).parents[1] / "docs" / "nonlinear.md").read_text()
+    section = text.split("## Network nonlinearities")[1].split("\n## ")[0]
+    ns: dict = {"np": np, "sysid": sysid}
+    for i, block in enumerate(re.findall(r"```python\n(.*?)```", section, re.S)):
+        exec(compile(block, f"docs/nonlinear.md[network block {i}]", "exec"), ns)
+    out = capsys.readouterr().out
+    shown = "".join(re.findall(r"Output \(this machine\):\n\n((?:    .*\n)+)", section))
+    assert [ln.strip() for ln in shown.splitlines()] == [ln.strip() for ln in out.splitlines()]
+    fits = ns["w_fits"]
+    assert all(v > fits["arx(2,2,1)"] for k, v in fits.items() if "simulation" in k)
+    assert all(v[1] < 1.364 for v in ns["ph_nets"].values())  # below polynomial NARX's
