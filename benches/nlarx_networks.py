@@ -148,7 +148,10 @@ def run(tool: str, n: int, timeout: float) -> dict:
     except subprocess.TimeoutExpired:
         return {"error": f"timeout {timeout:.0f} s"}
     if r.returncode != 0:
-        return {"error": (r.stderr.strip().splitlines() or ["failed"])[-1][:120]}
+        last = (r.stderr.strip().splitlines() or ["failed"])[-1]
+        if "libcublas" in last or "libcud" in last:
+            return {"error": "torch does not import (no CUDA libraries; see notes)"}
+        return {"error": last[:120]}
     return json.loads(r.stdout.strip().splitlines()[-1])
 
 
