@@ -11,7 +11,9 @@ use crate::errors::IntoPy;
 use numpy::{PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict};
-use sysid_core::narx::network::model::{NetworkNarx, Nonlinearity, TreeNode, TreePartition, UnitNetwork};
+use sysid_core::narx::network::model::{
+    NetworkNarx, Nonlinearity, TreeNode, TreePartition, UnitNetwork,
+};
 use sysid_core::narx::network::tree::{fit_tree, TreeOptions};
 use sysid_core::narx::network::units::UnitKind;
 use sysid_core::narx::network::{fit_prediction, fit_simulation};
@@ -32,7 +34,10 @@ pub enum NlArg {
 }
 
 fn invalid(name: &'static str, reason: impl Into<String>) -> PyErr {
-    crate::errors::to_py(SysidError::InvalidArgument { name, reason: reason.into() })
+    crate::errors::to_py(SysidError::InvalidArgument {
+        name,
+        reason: reason.into(),
+    })
 }
 
 fn kinds(codes: &[i64]) -> PyResult<Vec<UnitKind>> {
@@ -49,17 +54,25 @@ fn kinds(codes: &[i64]) -> PyResult<Vec<UnitKind>> {
 
 fn decode(a: NlArg) -> PyResult<Nonlinearity> {
     Ok(match a {
-        NlArg::Network(k, theta, linear) => Nonlinearity::Network(UnitNetwork { kinds: kinds(&k)?, theta, linear }),
+        NlArg::Network(k, theta, linear) => Nonlinearity::Network(UnitNetwork {
+            kinds: kinds(&k)?,
+            theta,
+            linear,
+        }),
         NlArg::Tree(var, thr, left, right, coefs) => {
             let n = var.len();
             if thr.len() != n || left.len() != n || right.len() != n || coefs.len() != n {
-                return Err(invalid("tree", "var, threshold, left, right and coefs need one entry per node"));
+                return Err(invalid(
+                    "tree",
+                    "var, threshold, left, right and coefs need one entry per node",
+                ));
             }
             let nodes = (0..n)
                 .map(|i| TreeNode {
                     var: var[i],
                     threshold: thr[i],
-                    children: (left[i] >= 0 && right[i] >= 0).then_some((left[i] as usize, right[i] as usize)),
+                    children: (left[i] >= 0 && right[i] >= 0)
+                        .then_some((left[i] as usize, right[i] as usize)),
                     coefs: coefs[i].clone(),
                 })
                 .collect();
@@ -71,16 +84,24 @@ fn decode(a: NlArg) -> PyResult<Nonlinearity> {
 fn encode(nl: &Nonlinearity) -> NlArg {
     match nl {
         Nonlinearity::Network(n) => NlArg::Network(
-            n.kinds.iter().map(|k| match k {
-                UnitKind::Sigmoid => 0,
-                UnitKind::Wavelet => 1,
-                UnitKind::Scaling => 2,
-            }).collect(),
+            n.kinds
+                .iter()
+                .map(|k| match k {
+                    UnitKind::Sigmoid => 0,
+                    UnitKind::Wavelet => 1,
+                    UnitKind::Scaling => 2,
+                })
+                .collect(),
             n.theta.clone(),
             n.linear.clone(),
         ),
         Nonlinearity::Tree(t) => {
-            let ch = |i: usize| t.nodes[i].children.map(|(l, r)| (l as i64, r as i64)).unwrap_or((-1, -1));
+            let ch = |i: usize| {
+                t.nodes[i]
+                    .children
+                    .map(|(l, r)| (l as i64, r as i64))
+                    .unwrap_or((-1, -1))
+            };
             NlArg::Tree(
                 t.nodes.iter().map(|n| n.var).collect(),
                 t.nodes.iter().map(|n| n.threshold).collect(),
@@ -96,8 +117,16 @@ fn spec(nu: usize, ny: usize, o: &Orders) -> PyResult<LagSpec> {
     LagSpec::new(nu, ny, &o.0, &o.1, &o.2, &vec![0; ny]).py()
 }
 
-fn model(orders: &Orders, shift: Vec<f64>, scale: Vec<f64>, outputs: Vec<NlArg>) -> PyResult<NetworkNarx> {
-    let nl = outputs.into_iter().map(decode).collect::<PyResult<Vec<_>>>()?;
+fn model(
+    orders: &Orders,
+    shift: Vec<f64>,
+    scale: Vec<f64>,
+    outputs: Vec<NlArg>,
+) -> PyResult<NetworkNarx> {
+    let nl = outputs
+        .into_iter()
+        .map(decode)
+        .collect::<PyResult<Vec<_>>>()?;
     let sp = spec(orders.1.len(), orders.0.len(), orders)?;
     NetworkNarx::new(sp, shift, scale, nl).py()
 }
@@ -120,7 +149,16 @@ fn observe(progress: &Option<Py<PyAny>>, slot: &mut Option<PyErr>, it: &Iteratio
     Python::attach(|py| {
         let r = match progress {
             Some(cb) => cb
-                .call1(py, (it.iteration, it.cost, it.step_norm, it.gradient_norm, it.damping))
+                .call1(
+                    py,
+                    (
+                        it.iteration,
+                        it.cost,
+                        it.step_norm,
+                        it.gradient_norm,
+                        it.damping,
+                    ),
+                )
                 .map(|v| v.bind(py).is(&*PyBool::new(py, false))),
             None => py.check_signals().map(|_| false),
         };
@@ -136,11 +174,15 @@ fn observe(progress: &Option<Py<PyAny>>, slot: &mut Option<PyErr>, it: &Iteratio
 }
 
 fn records<'a>(exps: &'a Experiments<'_>) -> Vec<Record<'a>> {
-    exps.iter().map(|(u, y)| Record::new(view(u), view(y))).collect()
+    exps.iter()
+        .map(|(u, y)| Record::new(view(u), view(y)))
+        .collect()
 }
 
 fn shape(exps: &Experiments<'_>) -> (usize, usize) {
-    exps.first().map(|(u, y)| (u.as_array().ncols(), y.as_array().ncols())).unwrap_or((0, 1))
+    exps.first()
+        .map(|(u, y)| (u.as_array().ncols(), y.as_array().ncols()))
+        .unwrap_or((0, 1))
 }
 
 /// Trains the unit network of output `output` for one-step prediction from `theta0`.
@@ -169,9 +211,17 @@ pub fn narx_network_fit<'py>(
     let opts = options(max_iter, tol, bounds);
     let mut slot = None;
     let res = py.detach(|| {
-        fit_prediction(&sp, &shift, &scale, &recs, output, ks, &theta0, &opts, &mut |it| {
-            observe(&progress, &mut slot, it)
-        })
+        fit_prediction(
+            &sp,
+            &shift,
+            &scale,
+            &recs,
+            output,
+            ks,
+            &theta0,
+            &opts,
+            &mut |it| observe(&progress, &mut slot, it),
+        )
     });
     if let Some(e) = slot {
         return Err(e);
@@ -246,7 +296,8 @@ pub fn narx_network_refine<'py>(
     let recs = records(&experiments);
     let opts = options(max_iter, tol, bounds);
     let mut slot = None;
-    let res = py.detach(|| fit_simulation(m, &recs, &opts, &mut |it| observe(&progress, &mut slot, it)));
+    let res =
+        py.detach(|| fit_simulation(m, &recs, &opts, &mut |it| observe(&progress, &mut slot, it)));
     if let Some(e) = slot {
         return Err(e);
     }

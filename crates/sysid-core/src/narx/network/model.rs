@@ -120,8 +120,11 @@ impl TreePartition {
         } else {
             Err(SysidError::invalid(
                 "tree",
-                format!("the nodes do not form a tree on {nz} regressors with {} coefficients \
-                         per node", nz + 1),
+                format!(
+                    "the nodes do not form a tree on {nz} regressors with {} coefficients \
+                         per node",
+                    nz + 1
+                ),
             ))
         }
     }
@@ -185,7 +188,9 @@ impl NetworkNarx {
                 format!("need one value per regressor ({nz})"),
             ));
         }
-        if scale.iter().any(|s| !(s.is_finite() && *s > 0.0)) || shift.iter().any(|s| !s.is_finite()) {
+        if scale.iter().any(|s| !(s.is_finite() && *s > 0.0))
+            || shift.iter().any(|s| !s.is_finite())
+        {
             return Err(SysidError::invalid("scale", "must be finite and positive"));
         }
         if outputs.len() != spec.n_outputs {
@@ -243,7 +248,13 @@ impl NetworkNarx {
         }))
     }
 
-    fn step(&self, t: usize, get: impl Fn(Signal, usize, usize) -> f64, z: &mut [f64], out: &mut [f64]) {
+    fn step(
+        &self,
+        t: usize,
+        get: impl Fn(Signal, usize, usize) -> f64,
+        z: &mut [f64],
+        out: &mut [f64],
+    ) {
         let mut x = [0.0; 64];
         let nz = z.len();
         let mut heap;
@@ -295,10 +306,15 @@ impl NetworkNarx {
         for t in lag..n {
             {
                 let yr = y.as_ref();
-                self.step(t, |s, ch, tt| match s {
-                    Signal::Output => yr[(tt, ch)],
-                    _ => u[(tt, ch)],
-                }, &mut z, &mut out);
+                self.step(
+                    t,
+                    |s, ch, tt| match s {
+                        Signal::Output => yr[(tt, ch)],
+                        _ => u[(tt, ch)],
+                    },
+                    &mut z,
+                    &mut out,
+                );
             }
             for (i, &v) in out.iter().enumerate() {
                 if !v.is_finite() || v.abs() >= BLOWUP {
@@ -319,7 +335,12 @@ impl NetworkNarx {
 
     /// `horizon`-step prediction `yhat(t | t - horizon)`: measured outputs up to
     /// `t - horizon`, simulated after. Rows `t < max_lag` repeat the measured output.
-    pub fn predict(&self, u: MatRef<'_, f64>, y: MatRef<'_, f64>, horizon: usize) -> Result<Mat<f64>> {
+    pub fn predict(
+        &self,
+        u: MatRef<'_, f64>,
+        y: MatRef<'_, f64>,
+        horizon: usize,
+    ) -> Result<Mat<f64>> {
         let (n, ny, lag) = (y.nrows(), self.spec.n_outputs, self.spec.max_lag);
         check_io("u, y", u, y, self.spec.n_inputs, ny)?;
         if horizon == 0 {
@@ -338,11 +359,16 @@ impl NetworkNarx {
             let origin = t as isize - horizon as isize; // last measured sample
             let first = (origin + 1).max(lag as isize) as usize;
             for s in first..=t {
-                self.step(s, |sig, ch, tt| match sig {
-                    Signal::Output if (tt as isize) <= origin || tt < lag => y[(tt, ch)],
-                    Signal::Output => loc[(tt - first) * ny + ch],
-                    _ => u[(tt, ch)],
-                }, &mut z, &mut row);
+                self.step(
+                    s,
+                    |sig, ch, tt| match sig {
+                        Signal::Output if (tt as isize) <= origin || tt < lag => y[(tt, ch)],
+                        Signal::Output => loc[(tt - first) * ny + ch],
+                        _ => u[(tt, ch)],
+                    },
+                    &mut z,
+                    &mut row,
+                );
                 for (i, &v) in row.iter().enumerate() {
                     loc[(s - first) * ny + i] = if v.abs() < BLOWUP { v } else { f64::NAN };
                 }

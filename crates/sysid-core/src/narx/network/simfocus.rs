@@ -36,7 +36,13 @@ fn n_own(nl: &Nonlinearity, nz: usize) -> usize {
 }
 
 /// Value of `nl` at `z`, its gradient with respect to its own parameters (`dth`) and to `z`.
-fn value_grads(nl: &Nonlinearity, z: &[f64], dth: &mut [f64], dz: &mut [f64], tmp: &mut [f64]) -> f64 {
+fn value_grads(
+    nl: &Nonlinearity,
+    z: &[f64],
+    dth: &mut [f64],
+    dz: &mut [f64],
+    tmp: &mut [f64],
+) -> f64 {
     let nz = z.len();
     dth.iter_mut().for_each(|v| *v = 0.0);
     match nl {
@@ -45,7 +51,11 @@ fn value_grads(nl: &Nonlinearity, z: &[f64], dth: &mut [f64], dz: &mut [f64], tm
             dl[0] = 1.0;
             dl[1..=nz].copy_from_slice(z);
             dz.copy_from_slice(&n.linear[1..=nz]);
-            let mut v = n.linear[0] + z.iter().zip(&n.linear[1..=nz]).map(|(a, b)| a * b).sum::<f64>();
+            let mut v = n.linear[0]
+                + z.iter()
+                    .zip(&n.linear[1..=nz])
+                    .map(|(a, b)| a * b)
+                    .sum::<f64>();
             for (k, kind) in n.kinds.iter().enumerate() {
                 let p = &n.theta[k * (nz + 1)..(k + 1) * (nz + 1)];
                 let d = &mut dt[k * (nz + 1)..(k + 1) * (nz + 1)];
@@ -82,7 +92,12 @@ impl<'a> SimFocus<'a> {
             offsets.push(offsets.last().copied().unwrap_or(0) + n_own(nl, nz));
         }
         let rows = rows * model_outputs(&offsets);
-        Ok(Self { model, records, offsets, rows })
+        Ok(Self {
+            model,
+            records,
+            offsets,
+            rows,
+        })
     }
 
     /// The model's parameters, output after output (the search's coordinates).
@@ -94,7 +109,10 @@ impl<'a> SimFocus<'a> {
                     th.extend_from_slice(&n.theta);
                     th.extend_from_slice(&n.linear);
                 }
-                Nonlinearity::Tree(t) => t.nodes.iter().for_each(|nd| th.extend_from_slice(&nd.coefs)),
+                Nonlinearity::Tree(t) => t
+                    .nodes
+                    .iter()
+                    .for_each(|nd| th.extend_from_slice(&nd.coefs)),
             }
         }
         th
@@ -114,7 +132,8 @@ impl<'a> SimFocus<'a> {
                 }
                 Nonlinearity::Tree(t) => {
                     for (j, nd) in t.nodes.iter_mut().enumerate() {
-                        nd.coefs.copy_from_slice(&own[j * (nz + 1)..(j + 1) * (nz + 1)]);
+                        nd.coefs
+                            .copy_from_slice(&own[j * (nz + 1)..(j + 1) * (nz + 1)]);
                     }
                 }
             }
@@ -134,11 +153,21 @@ impl Problem for SimFocus<'_> {
 
     fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
         let m = self.model_at(theta);
-        let (p, ny, nz, lag) = (self.n_params(), m.spec.n_outputs, m.spec.n_vars(), m.spec.max_lag);
+        let (p, ny, nz, lag) = (
+            self.n_params(),
+            m.spec.n_outputs,
+            m.spec.n_vars(),
+            m.spec.max_lag,
+        );
         let mut ne = NormalEquations::new(p, jacobian);
         let (mut x, mut z, mut tmp) = (vec![0.0; nz], vec![0.0; nz], vec![0.0; nz]);
         let mut dz = vec![0.0; nz];
-        let width = self.offsets.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
+        let width = self
+            .offsets
+            .windows(2)
+            .map(|w| w[1] - w[0])
+            .max()
+            .unwrap_or(0);
         let mut dth = vec![0.0; width];
         let ring = lag + 1;
         let sp = if jacobian { p } else { 0 };

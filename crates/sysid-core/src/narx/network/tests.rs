@@ -11,7 +11,9 @@ use crate::optim::{Flow, Options, Problem};
 fn input(n: usize, seed: u64) -> Mat<f64> {
     let mut s = seed;
     Mat::from_fn(n, 1, |_, _| {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
     })
 }
@@ -29,10 +31,17 @@ fn net(kind: UnitKind) -> UnitNetwork {
 }
 
 fn simulated(kind: UnitKind, n: usize) -> (Mat<f64>, Mat<f64>, NetworkNarx) {
-    let m = NetworkNarx::new(spec(), vec![0.0; 4], vec![1.0; 4],
-                             vec![Nonlinearity::Network(net(kind))]).unwrap();
+    let m = NetworkNarx::new(
+        spec(),
+        vec![0.0; 4],
+        vec![1.0; 4],
+        vec![Nonlinearity::Network(net(kind))],
+    )
+    .unwrap();
     let u = input(n, 3);
-    let y = m.simulate(u.as_ref(), Mat::<f64>::zeros(2, 1).as_ref()).unwrap();
+    let y = m
+        .simulate(u.as_ref(), Mat::<f64>::zeros(2, 1).as_ref())
+        .unwrap();
     (u, y, m)
 }
 
@@ -49,14 +58,22 @@ fn unit_gradients_match_finite_differences() {
             a[j] += h;
             b[j] -= h;
             let fd = (kind.value(&a, &z) - kind.value(&b, &z)) / (2.0 * h);
-            assert!((fd - dp[j]).abs() < 1e-8, "{kind:?} p{j}: {fd} vs {}", dp[j]);
+            assert!(
+                (fd - dp[j]).abs() < 1e-8,
+                "{kind:?} p{j}: {fd} vs {}",
+                dp[j]
+            );
         }
         for j in 0..3 {
             let (mut a, mut b) = (z, z);
             a[j] += h;
             b[j] -= h;
             let fd = (kind.value(&p, &a) - kind.value(&p, &b)) / (2.0 * h);
-            assert!((fd - dz[j]).abs() < 1e-8, "{kind:?} z{j}: {fd} vs {}", dz[j]);
+            assert!(
+                (fd - dz[j]).abs() < 1e-8,
+                "{kind:?} z{j}: {fd} vs {}",
+                dz[j]
+            );
         }
     }
 }
@@ -83,7 +100,11 @@ fn varpro_gradient_matches_finite_differences() {
             let fd = (pr.evaluate(&a, false).unwrap().cost - pr.evaluate(&b, false).unwrap().cost)
                 / (2.0 * h);
             let tol = 1e-6 * (1.0 + fd.abs());
-            assert!((fd - ev.gradient[j]).abs() < tol, "{kind:?} {j}: {fd} vs {}", ev.gradient[j]);
+            assert!(
+                (fd - ev.gradient[j]).abs() < tol,
+                "{kind:?} {j}: {fd} vs {}",
+                ev.gradient[j]
+            );
         }
     }
 }
@@ -107,8 +128,11 @@ fn simulation_jacobian_matches_finite_differences() {
         b[j] -= h;
         let fd = (pr.evaluate(&a, false).unwrap().cost - pr.evaluate(&b, false).unwrap().cost)
             / (2.0 * h);
-        assert!((fd - ev.gradient[j]).abs() < 1e-6 * (1.0 + fd.abs()), "{j}: {fd} vs {}",
-                ev.gradient[j]);
+        assert!(
+            (fd - ev.gradient[j]).abs() < 1e-6 * (1.0 + fd.abs()),
+            "{j}: {fd} vs {}",
+            ev.gradient[j]
+        );
     }
     // at the truth the simulation error vanishes
     let mut pr = SimFocus::new(m, &recs).unwrap();
@@ -122,14 +146,35 @@ fn sigmoid_network_recovered_from_a_nearby_start() {
     let sp = spec();
     let recs = [Record::new(u.as_ref(), y.as_ref())];
     let (sh, sc) = (vec![0.0; 4], vec![1.0; 4]);
-    let th0: Vec<f64> = net(UnitKind::Sigmoid).theta.iter().map(|v| v + 0.05).collect();
+    let th0: Vec<f64> = net(UnitKind::Sigmoid)
+        .theta
+        .iter()
+        .map(|v| v + 0.05)
+        .collect();
     let mut opts = Options::default();
     opts.max_iter = 200;
-    let (fit, sol) = super::fit_prediction(&sp, &sh, &sc, &recs, 0, vec![UnitKind::Sigmoid; 2],
-                                           &th0, &opts, &mut |_| Flow::Continue).unwrap();
+    let (fit, sol) = super::fit_prediction(
+        &sp,
+        &sh,
+        &sc,
+        &recs,
+        0,
+        vec![UnitKind::Sigmoid; 2],
+        &th0,
+        &opts,
+        &mut |_| Flow::Continue,
+    )
+    .unwrap();
     assert!(sol.cost < 1e-22, "cost {}", sol.cost);
-    let Nonlinearity::Network(truth) = &m.outputs[0] else { unreachable!() };
-    for (a, b) in fit.theta.iter().zip(&truth.theta).chain(fit.linear.iter().zip(&truth.linear)) {
+    let Nonlinearity::Network(truth) = &m.outputs[0] else {
+        unreachable!()
+    };
+    for (a, b) in fit
+        .theta
+        .iter()
+        .zip(&truth.theta)
+        .chain(fit.linear.iter().zip(&truth.linear))
+    {
         assert!((a - b).abs() < 1e-7, "{a} vs {b}");
     }
 }
@@ -141,12 +186,24 @@ fn tree_recovers_a_piecewise_affine_arx_system() {
     let mut y = Mat::<f64>::zeros(n, 1);
     for t in 1..n {
         let (yp, up) = (y[(t - 1, 0)], u[(t - 1, 0)]);
-        y[(t, 0)] = if yp <= 0.1 { 0.5 * yp + up + 0.2 } else { -0.3 * yp + 0.5 * up - 0.1 };
+        y[(t, 0)] = if yp <= 0.1 {
+            0.5 * yp + up + 0.2
+        } else {
+            -0.3 * yp + 0.5 * up - 0.1
+        };
     }
     let sp = LagSpec::new(1, 1, &[1], &[1], &[1], &[0]).unwrap();
     let recs = [Record::new(u.as_ref(), y.as_ref())];
-    let fit = fit_tree(&sp, &[0.0, 0.0], &[1.0, 1.0], &recs, 0, &TreeOptions::default(),
-                       &mut || false).unwrap();
+    let fit = fit_tree(
+        &sp,
+        &[0.0, 0.0],
+        &[1.0, 1.0],
+        &recs,
+        0,
+        &TreeOptions::default(),
+        &mut || false,
+    )
+    .unwrap();
     let tree = &fit.tree;
     assert_eq!(tree.nodes.len(), 3, "{:?} {:?}", fit.rss, fit.stop);
     assert_eq!(tree.nodes[0].var, 0);

@@ -88,13 +88,23 @@ pub fn fit_tree(
     let nz = spec.n_vars();
     check_matrix_size("regressors", n, nz + 1)?;
     if shift.len() != nz || scale.len() != nz || output >= spec.n_outputs {
-        return Err(SysidError::invalid("shift, scale, output", "do not fit the lags"));
+        return Err(SysidError::invalid(
+            "shift, scale, output",
+            "do not fit the lags",
+        ));
     }
-    let min_leaf = if options.min_leaf == 0 { (3 * (nz + 1)).max(10) } else { options.min_leaf };
+    let min_leaf = if options.min_leaf == 0 {
+        (3 * (nz + 1)).max(10)
+    } else {
+        options.min_leaf
+    };
     if min_leaf < nz + 2 || options.max_leaves == 0 {
         return Err(SysidError::invalid(
             "min_leaf, max_leaves",
-            format!("need min_leaf >= {} (regressors + 2) and max_leaves >= 1", nz + 2),
+            format!(
+                "need min_leaf >= {} (regressors + 2) and max_leaves >= 1",
+                nz + 2
+            ),
         ));
     }
     let mut data = Vec::with_capacity(n * (nz + 1));
@@ -104,9 +114,18 @@ pub fn fit_tree(
     });
     let yy: f64 = (0..n).map(|i| data[i * (nz + 1) + nz].powi(2)).sum();
     let tiny = 1e-20 * yy.max(f64::MIN_POSITIVE);
-    let ctx = Ctx { data: &data, nz, min_leaf };
+    let ctx = Ctx {
+        data: &data,
+        nz,
+        min_leaf,
+    };
     let (coefs, sse) = ctx.fit(&(0..n).collect::<Vec<_>>())?;
-    let mut nodes = vec![TreeNode { var: 0, threshold: 0.0, children: None, coefs }];
+    let mut nodes = vec![TreeNode {
+        var: 0,
+        threshold: 0.0,
+        children: None,
+        coefs,
+    }];
     let mut cells = vec![ctx.cell(0, (0..n).collect(), sse)?];
     let bic = |rss: f64, leaves: usize| {
         let k = (leaves * (nz + 1) + leaves - 1) as f64;
@@ -125,15 +144,20 @@ pub fn fit_tree(
             .enumerate()
             .filter_map(|(i, c)| c.split.map(|s| (i, c.sse - s.2)))
             .max_by(|a, b| a.1.total_cmp(&b.1));
-        let Some((i, gain)) = best else { break "no admissible split" };
+        let Some((i, gain)) = best else {
+            break "no admissible split";
+        };
         let total = *rss.last().unwrap_or(&0.0);
         if bic(total - gain, cells.len() + 1) >= bic(total, cells.len()) {
             break "information criterion";
         }
         let cell = cells.swap_remove(i);
         let (var, thr, _) = cell.split.expect("chosen for its split");
-        let (li, ri): (Vec<usize>, Vec<usize>) =
-            cell.idx.iter().copied().partition(|&j| data[j * (nz + 1) + var] <= thr);
+        let (li, ri): (Vec<usize>, Vec<usize>) = cell
+            .idx
+            .iter()
+            .copied()
+            .partition(|&j| data[j * (nz + 1) + var] <= thr);
         let (lc, ls) = ctx.fit(&li)?;
         let (rc, rs) = ctx.fit(&ri)?;
         let (l, r) = (nodes.len(), nodes.len() + 1);
@@ -141,7 +165,12 @@ pub fn fit_tree(
         nodes[cell.node].threshold = thr;
         nodes[cell.node].children = Some((l, r));
         for c in [lc, rc] {
-            nodes.push(TreeNode { var: 0, threshold: 0.0, children: None, coefs: c });
+            nodes.push(TreeNode {
+                var: 0,
+                threshold: 0.0,
+                children: None,
+                coefs: c,
+            });
         }
         cells.push(ctx.cell(l, li, ls)?);
         cells.push(ctx.cell(r, ri, rs)?);
@@ -179,7 +208,12 @@ impl Ctx<'_> {
 
     fn cell(&self, node: usize, idx: Vec<usize>, sse: f64) -> Result<Cell> {
         let split = self.best_split(&idx)?;
-        Ok(Cell { node, idx, sse, split })
+        Ok(Cell {
+            node,
+            idx,
+            sse,
+            split,
+        })
     }
 
     /// The best split of the samples `idx` (variable, threshold, exact children sse).
@@ -224,8 +258,13 @@ impl Ctx<'_> {
                 }
             }
         }
-        let Some((v, thr, _)) = best else { return Ok(None) };
-        let (li, ri): (Vec<usize>, Vec<usize>) = idx.iter().copied().partition(|&j| d[j * (nz + 1) + v] <= thr);
+        let Some((v, thr, _)) = best else {
+            return Ok(None);
+        };
+        let (li, ri): (Vec<usize>, Vec<usize>) = idx
+            .iter()
+            .copied()
+            .partition(|&j| d[j * (nz + 1) + v] <= thr);
         let s = self.fit(&li)?.1 + self.fit(&ri)?.1;
         Ok(Some((v, thr, s)))
     }

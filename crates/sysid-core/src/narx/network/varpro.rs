@@ -59,7 +59,10 @@ impl<'a> VarPro<'a> {
             return Err(SysidError::invalid("output", "no such output channel"));
         }
         if shift.len() != spec.n_vars() || scale.len() != spec.n_vars() {
-            return Err(SysidError::invalid("shift, scale", "one value per regressor"));
+            return Err(SysidError::invalid(
+                "shift, scale",
+                "one value per regressor",
+            ));
         }
         Ok(Self {
             spec,
@@ -82,7 +85,14 @@ impl<'a> VarPro<'a> {
     }
 
     fn for_rows(&self, f: impl FnMut(&[f64], f64)) {
-        for_each_row(self.spec, self.shift, self.scale, self.records, self.output, f);
+        for_each_row(
+            self.spec,
+            self.shift,
+            self.scale,
+            self.records,
+            self.output,
+            f,
+        );
     }
 
     /// Writes the row `[1, z, g_1(z), ..]` of `Phi` into `row[..n_linear]` and, with `dp`,
@@ -94,7 +104,9 @@ impl<'a> VarPro<'a> {
         row[1..=nz].copy_from_slice(z);
         for (k, kind) in self.kinds.iter().enumerate() {
             let p = &theta[k * (nz + 1)..(k + 1) * (nz + 1)];
-            let d = dp.as_deref_mut().map(|d| &mut d[k * (nz + 1)..(k + 1) * (nz + 1)]);
+            let d = dp
+                .as_deref_mut()
+                .map(|d| &mut d[k * (nz + 1)..(k + 1) * (nz + 1)]);
             row[1 + nz + k] = kind.value_grad(p, z, d, None);
         }
     }
@@ -179,8 +191,7 @@ impl Problem for VarPro<'_> {
 pub(crate) fn solve_triangular_ls(r: &Mat<f64>, q: usize) -> Result<(Vec<f64>, f64)> {
     let r11 = r.as_ref().submatrix(0, 0, q, q);
     let qy: Vec<f64> = (0..q).map(|i| r[(i, q)]).collect();
-    if !qy.iter().all(|v| v.is_finite()) || !r11.norm_max().is_finite() || !r[(q, q)].is_finite()
-    {
+    if !qy.iter().all(|v| v.is_finite()) || !r11.norm_max().is_finite() || !r[(q, q)].is_finite() {
         return Ok((vec![f64::NAN; q], f64::INFINITY));
     }
     let pi = pinv(r11, RTOL)?;
