@@ -18,7 +18,13 @@ import numpy as np
 
 from .. import _sysid
 from .._progress import iteration_callback, iteration_printer
-from ..errors import DataError, InsufficientDataError, IterationLimitWarning, NumericalError
+from ..errors import (
+    DataError,
+    InsufficientDataError,
+    IterationLimitWarning,
+    NumericalError,
+    StabilityWarning,
+)
 from .hw_model import SigmoidNetwork
 from .narx_model import lag_names
 from .narx_network_model import NetworkNARXModel, from_rust_nl
@@ -286,8 +292,10 @@ def _refine(model: NetworkNARXModel, recs: list[tuple[np.ndarray, np.ndarray]], 
         nls, rep = _sysid.narx_network_refine(recs, *args, max_iter=int(max_iter),
                                               tol=float(tol), progress=cb, bounds=(lo, hi))
     except NumericalError as e:
-        warnings.warn(f"the simulation-focus refinement could not start ({e}); the model "
-                      "is the prediction fit", IterationLimitWarning, stacklevel=4)
+        warnings.warn(f"the simulation-focus refinement could not start: the prediction "
+                      f"fit's free run diverges on the estimation data ({e}); the model is the "
+                      "prediction fit: use fewer units or smaller lags", StabilityWarning,
+                      stacklevel=4)
         info["refine"] = {"iterations": 0, "stop": "failed to start", "cost": float("nan")}
         return model
     finally:

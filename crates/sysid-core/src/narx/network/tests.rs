@@ -151,8 +151,10 @@ fn sigmoid_network_recovered_from_a_nearby_start() {
         .iter()
         .map(|v| v + 0.05)
         .collect();
-    let mut opts = Options::default();
-    opts.max_iter = 200;
+    let opts = Options {
+        max_iter: 200,
+        ..Default::default()
+    };
     let (fit, sol) = super::fit_prediction(
         &sp,
         &sh,
