@@ -215,3 +215,24 @@ def test_guide_section_runs_and_prints_what_it_shows(capsys):
     fits = ns["w_fits"]
     assert all(v > fits["arx(2,2,1)"] for k, v in fits.items() if "simulation" in k)
     assert all(v[1] < 1.364 for v in ns["ph_nets"].values())  # below polynomial NARX's
+
+
+def test_ctrl_c_stops_the_training_loop():
+    """SIGINT during a long search (no progress callback) raises KeyboardInterrupt promptly:
+    the search checks for signals after every iteration."""
+    import os
+    import signal
+    import threading
+    import time
+
+    est = _wiener(20000, 13)
+    timer = threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT))
+    t0 = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            sysid.nlarx(est, 2, 2, 1, basis=sysid.SigmoidNetwork(20), max_iter=10000,
+                        progress=False)
+    finally:
+        timer.cancel()
+    assert time.perf_counter() - t0 < 60
