@@ -247,6 +247,10 @@ _LAZY = {
     "identify": "identify.core",
     "IdentifyResult": "identify.result",
     "IdentifiedModel": "identify.result",
+    # issue 27 (branch nlnet): network nonlinearities of nlarx
+    "NetworkNARXModel": "nonlinear.narx_network_model",
+    "WaveletNetwork": "nonlinear.narx_network",
+    "TreePartition": "nonlinear.narx_network",
 }
 
 
@@ -475,4 +479,8 @@ __all__ = [
     "identify",
     "IdentifyResult",
     "IdentifiedModel",
+    # issue 27 (branch nlnet): network nonlinearities of nlarx
+    "NetworkNARXModel",
+    "WaveletNetwork",
+    "TreePartition",
 ]

@@ -70,6 +70,13 @@ __all__ = [
     "neural_ss_simulate",
     "neural_ss_encode",
     "neural_ss_train",
+    # issue 27 (branch nlnet): network nonlinearities of nlarx
+    "narx_network_fit",
+    "narx_tree_fit",
+    "narx_network_refine",
+    "narx_network_simulate",
+    "narx_network_predict",
+    "narx_network_evaluate",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -688,3 +695,52 @@ class RecursiveEstimator:
     def n_parameters(self) -> int: ...
     def reset_history(self) -> None: ...
     def copy(self) -> RecursiveEstimator: ...
+
+# issue 27 (branch nlnet): network nonlinearities of nlarx
+_Nl = tuple[Any, ...]
+_Orders3 = tuple[list[int], list[int], list[int]]
+
+def narx_network_fit(
+    experiments: list[tuple[_Array, _Array]],
+    orders: _Orders3,
+    shift: list[float],
+    scale: list[float],
+    output: int,
+    kinds: list[int],
+    theta0: list[float],
+    max_iter: int = 100,
+    tol: float = 1e-7,
+    progress: Callable[..., Any] | None = None,
+    bounds: tuple[list[float], list[float]] | None = None,
+) -> tuple[_Nl, dict[str, Any]]: ...
+def narx_tree_fit(
+    experiments: list[tuple[_Array, _Array]],
+    orders: _Orders3,
+    shift: list[float],
+    scale: list[float],
+    output: int,
+    max_leaves: int = 16,
+    min_leaf: int = 0,
+) -> tuple[_Nl, dict[str, Any]]: ...
+def narx_network_refine(
+    experiments: list[tuple[_Array, _Array]],
+    orders: _Orders3,
+    shift: list[float],
+    scale: list[float],
+    outputs: list[_Nl],
+    max_iter: int = 100,
+    tol: float = 1e-7,
+    progress: Callable[..., Any] | None = None,
+    bounds: tuple[list[float], list[float]] | None = None,
+) -> tuple[list[_Nl], dict[str, Any]]: ...
+def narx_network_simulate(
+    orders: _Orders3, shift: list[float], scale: list[float], outputs: list[_Nl], u: _Array,
+    y0: _Array,
+) -> _Array: ...
+def narx_network_predict(
+    orders: _Orders3, shift: list[float], scale: list[float], outputs: list[_Nl], u: _Array,
+    y: _Array, horizon: int,
+) -> _Array: ...
+def narx_network_evaluate(
+    orders: _Orders3, shift: list[float], scale: list[float], outputs: list[_Nl], x: _Array,
+) -> _Array: ...

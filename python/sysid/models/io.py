@@ -58,7 +58,8 @@ __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict", "regi
 # families in their own packages (issues 27, 29), imported on first load
 _LAZY_FAMILIES = {"TransferFunction": "sysid.tf.model", "ProcessModel": "sysid.process.model",
                   "PNLSSModel": "sysid.nlss.pnlss",
-                  "NeuralStateSpaceModel": "sysid.nlss.neural"}
+                  "NeuralStateSpaceModel": "sysid.nlss.neural",
+                  "NetworkNARXModel": "sysid.nonlinear.narx_network_model"}
 
 for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel,
              HammersteinWienerModel, HammersteinWienerSSModel, NonlinearGreyBox):

@@ -18,6 +18,8 @@ from .._checks import experiment_arrays
 from ..errors import DataError, InsufficientDataError
 from .customreg import CustomRegressor
 from .narx_model import NARXModel, PolynomialBasis, RBFBasis
+from .narx_network import is_network, nlarx_network
+from .narx_network_model import NetworkNARXModel
 
 __all__ = ["nlarx"]
 
@@ -107,7 +109,7 @@ def nlarx(
     nb: Any,
     nk: Any = 1,
     *,
-    basis: PolynomialBasis | RBFBasis | None = None,
+    basis: Any = None,
     max_terms: int = 10,
     criterion: str | None = "aic",
     validation: Any = None,
@@ -115,7 +117,10 @@ def nlarx(
     n_iterations: int = 5,
     err_tol: float = 1e-10,
     custom: Any = None,
-) -> NARXModel:
+    focus: str = "prediction",
+    max_iter: int = 100,
+    progress: Any = None,
+) -> NARXModel | NetworkNARXModel:
     """NARX / NARMAX model with terms chosen by FROLS (forward-regression orthogonal least
     squares with the error reduction ratio).
 
@@ -127,8 +132,13 @@ def nlarx(
         Output lags ``1..na`` of each output (shared by every output's equation).
     nb, nk : int or list (n_inputs)
         Input lags ``nk..nk + nb - 1``.
-    basis : PolynomialBasis or RBFBasis
-        Candidate terms (default ``PolynomialBasis(2)``).
+    basis : PolynomialBasis, RBFBasis, SigmoidNetwork, WaveletNetwork or TreePartition
+        Candidate terms (default ``PolynomialBasis(2)``), or a network nonlinearity of all
+        lagged variables (MATLAB's ``idSigmoidNetwork``, ``idWaveletNetwork``,
+        ``idTreePartition``): then the result is a :class:`~sysid.NetworkNARXModel`, trained
+        by separable least squares (the term-selection arguments do not apply). A
+        :class:`~sysid.NetworkNARXModel` (a sigmoid or wavelet network) is refined from its
+        parameters (MATLAB's ``nlarx(data, sys0)``).
     max_terms : int
         Term budget per output (process terms).
     criterion : "aic", "bic", "fpe", "validation" or None
@@ -149,10 +159,21 @@ def nlarx(
         User-supplied regressors (MATLAB's ``customreg``), candidates beside the basis's
         terms; each enters linearly if chosen.
 
+    focus : "prediction" or "simulation"
+        Network nonlinearities only: train for one-step prediction, or refine every
+        parameter afterwards for free-run simulation (MATLAB's ``Focus``).
+    max_iter : int
+        Network nonlinearities only: iteration cap of each search.
+    progress : bool or callable, optional
+        Network nonlinearities only: a progress bar over the iterations (by default on a
+        terminal), or ``callable(iteration, cost, step_norm, gradient_norm, damping)``
+        (``False`` returned stops the search).
+
     Returns
     -------
-    NARXModel
-        With ``err`` per term and ``info`` (criterion values, candidates, rows).
+    NARXModel or NetworkNARXModel
+        With ``err`` per term and ``info`` (criterion values, candidates, rows); a network
+        model's ``info`` holds each search's iterations, cost history and stop reason.
 
     Examples
     --------
@@ -182,8 +203,22 @@ def nlarx(
     if int(noise_terms) != noise_terms or noise_terms < 0:
         raise DataError(f"noise_terms must be a non-negative integer, got {noise_terms!r}")
     basis = PolynomialBasis(2) if basis is None else basis
+    if is_network(basis):
+        if noise_terms or custom:
+            raise DataError("noise_terms and custom regressors need a PolynomialBasis or "
+                            "RBFBasis; a network nonlinearity takes the lagged inputs and outputs")
+        return nlarx_network(exps, na_, nb_, nk_,
+                             np.vstack([_lag_matrix(u, y, na_, nb_, nk_) for u, y in exps]),
+                             basis, dt=float(getattr(data, "dt", 1.0) or 1.0),
+                             names=dict(input_names=getattr(data, "input_names", None),
+                                        output_names=getattr(data, "output_names", None)),
+                             focus=focus, max_iter=max_iter, tol=1e-4, progress=progress)
+    if focus != "prediction":
+        raise DataError("focus='simulation' needs a network nonlinearity (SigmoidNetwork, "
+                        "WaveletNetwork, TreePartition); FROLS selects for prediction")
     if not isinstance(basis, (PolynomialBasis, RBFBasis)):
-        raise DataError(f"basis must be a PolynomialBasis or an RBFBasis, got {basis!r}")
+        raise DataError(f"basis must be a PolynomialBasis, an RBFBasis or a network "
+                        f"(SigmoidNetwork, WaveletNetwork, TreePartition), got {basis!r}")
     if isinstance(basis, RBFBasis):
         if noise_terms:
             raise DataError("noise_terms (NARMAX) needs a PolynomialBasis")

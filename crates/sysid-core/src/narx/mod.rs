@@ -21,9 +21,12 @@
 //!   streaming Householder QR of the chosen columns and the targets, so they are exact least
 //!   squares whatever the conditioning of the selection path.
 //! * [`simulate`]: free-run simulation, k-step prediction and residuals.
+//! * [`network`]: sigmoid and wavelet networks and tree partitions on the same lagged
+//!   variables, trained by separable least squares on the shared optimiser.
 
 pub mod basis;
 pub mod frols;
+pub mod network;
 pub mod regressors;
 pub mod simulate;
 
