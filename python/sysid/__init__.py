@@ -247,6 +247,8 @@ _LAZY = {
     "identify": "identify.core",
     "IdentifyResult": "identify.result",
     "IdentifiedModel": "identify.result",
+    # issue 29 (branch nlss2): the decoupled PNLSS model
+    "DecoupledPNLSSModel": "nlss.decoupled",
 }
 
 
@@ -475,4 +477,6 @@ __all__ = [
     "identify",
     "IdentifyResult",
     "IdentifiedModel",
+    # issue 29 (branch nlss2): the decoupled PNLSS model
+    "DecoupledPNLSSModel",
 ]

@@ -70,6 +70,9 @@ __all__ = [
     "neural_ss_simulate",
     "neural_ss_encode",
     "neural_ss_train",
+    # issue 29 (branch nlss2): decoupled PNLSS
+    "decoupled_simulate",
+    "decoupled_estimate",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -589,6 +592,7 @@ def pnlss_simulate(
     theta: list[float],
     u: _Array,
     x0: list[float] | None = None,
+    range: tuple[list[float], list[float]] | None = None,
 ) -> tuple[_Array, _Array]: ...
 def pnlss_estimate(
     nx: int,
@@ -602,6 +606,7 @@ def pnlss_estimate(
     tol: float = 1e-8,
     fixed: list[bool] | None = None,
     progress: Callable[..., Any] | None = None,
+    range: tuple[list[float], list[float]] | None = None,
 ) -> dict[str, Any]: ...
 def neural_ss_simulate(
     dims: tuple[int, int, int],
@@ -688,3 +693,24 @@ class RecursiveEstimator:
     def n_parameters(self) -> int: ...
     def reset_history(self) -> None: ...
     def copy(self) -> RecursiveEstimator: ...
+# issue 29 (branch nlss2): decoupled PNLSS
+def decoupled_simulate(
+    dims: tuple[int, int, int],
+    branches: int,
+    degrees: list[int],
+    theta: list[float],
+    u: _Array,
+    x0: list[float] | None = None,
+    range: tuple[list[float], list[float]] | None = None,
+) -> tuple[_Array, _Array]: ...
+def decoupled_estimate(
+    dims: tuple[int, int, int],
+    branches: int,
+    degrees: list[int],
+    records: list[tuple[_Array, _Array, int]],
+    theta0: _Array,
+    max_iter: int = 100,
+    tol: float = 1e-8,
+    progress: Callable[..., Any] | None = None,
+    range: tuple[list[float], list[float]] | None = None,
+) -> dict[str, Any]: ...
