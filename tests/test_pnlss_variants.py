@@ -100,3 +100,19 @@ def test_decoupled_variant_fits_with_fewer_parameters(tmp_path):
     np.testing.assert_allclose(dec.freqresp([0.1, 1.0]), dec.linear().freqresp([0.1, 1.0]))
     with pytest.raises(DataError, match="branches"):
         sysid.pnlss(d, 2, branches=0, progress=False)
+
+
+def test_period_averaging_fits_on_the_averaged_period():
+    # noise-free periodic data: fitting on the average of periods 2..4 (two copies, the
+    # first the transient) recovers the saturating system as well as the full record does
+    u = np.tile(np.random.default_rng(6).uniform(-1, 1, 300), 4)
+    y = _saturating(np.tile(u[:300], 8))[-1200:]  # steady state
+    d = sysid.IOData(u, y, 1.0)
+    m = sysid.pnlss(d, 1, degree=3, periods=4, average=True, tol=1e-6, progress=False)
+    assert m.info["fit"]["transient"] == [300]
+    assert sysid.compare(m, _record(1), x0="zero").fit[0, 0] > 90
+    with pytest.raises(DataError, match="periods"):
+        sysid.pnlss(d, 1, average=True, progress=False)
+    with pytest.raises(DataError, match="whole periods"):
+        sysid.pnlss(sysid.IOData(u[:1001], y[:1001], 1.0), 1, periods=4, average=True,
+                    progress=False)

@@ -214,6 +214,7 @@ def pnlss(
     terms: str = "full",
     output_terms: str | None = None,
     periods: int | None = None,
+    average: bool = False,
     init: Any = None,
     transient: int | None = None,
     extrapolation: str = "clamp",
@@ -244,6 +245,11 @@ def pnlss(
         Periods in each experiment, for periodic excitation: the linear start is then the
         BLA's parametric model (:func:`sysid.bla_model`) and the first period of each
         experiment is left out of the cost as the transient.
+    average : bool
+        With ``periods``: fit on each experiment's average over its periods after the first
+        (noise down by the square root of their number, the record as many times shorter),
+        simulated over two averaged periods with the first as the transient (the steady
+        state of a periodic input).
     init : StateSpaceModel, optional
         Linear start of ``order`` states (engineering units) instead.
     transient : int, optional
@@ -313,6 +319,9 @@ def pnlss(
         skip = transient if transient is not None else (
             N // periods if periods and periods > 1 else settle_samples(lin, N))
         recs.append((u, y, int(skip)))
+    if average:
+        recs = _averaged(sd, periods)
+        us = [r[0] for r in recs]
     cb, close = iteration_callback(progress, "pnlss", max_iter,
                                    iteration_printer("pnlss", "sum of squares"))
     common = {"scaling": sc.to_dict(), "dt": data.dt, "input_names": data.input_names,
@@ -369,6 +378,24 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
     return {"A": p[0].reshape(n, n), "B": p[1].reshape(n, m_), "C": p[2].reshape(l_, n),
             "D": p[3].reshape(l_, m_), "E": p[4], "F": p[5], "zeta": zeta, "eta": eta,
             "clamp": box, "output_terms": ot}, res
+
+
+def _averaged(sd: IOData, periods: int | None) -> list[Any]:
+    """Each experiment's average over its periods after the first, twice (the first copy the
+    transient)."""
+    if not periods or periods < 2:
+        raise DataError("average=True needs periods= of at least 2 (the first is dropped)")
+    out = []
+    for u, y in sd.experiments:
+        N = u.shape[0]
+        if N % periods:
+            raise DataError(f"an experiment of {N} samples is not {periods} whole periods")
+        P = N // periods
+        ua = u[P:].reshape(periods - 1, P, -1).mean(axis=0)
+        ya = y[P:].reshape(periods - 1, P, -1).mean(axis=0)
+        out.append((np.ascontiguousarray(np.vstack([ua, ua])),
+                    np.ascontiguousarray(np.vstack([ya, ya])), P))
+    return out
 
 
 def _report(res: dict[str, Any], recs: list[Any]) -> dict[str, Any]:
