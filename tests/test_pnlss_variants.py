@@ -116,3 +116,8 @@ def test_period_averaging_fits_on_the_averaged_period():
     with pytest.raises(DataError, match="whole periods"):
         sysid.pnlss(sysid.IOData(u[:1001], y[:1001], 1.0), 1, periods=4, average=True,
                     progress=False)
+    two = sysid.IOData([u, u[:600]], [y, y[:600]], 1.0)
+    m2 = sysid.pnlss(two, 1, degree=3, periods=[4, 2], average=True, tol=1e-6, progress=False)
+    assert m2.info["fit"]["transient"] == [300, 300]
+    with pytest.raises(DataError, match="one per experiment"):
+        sysid.pnlss(two, 1, periods=[4], progress=False)

@@ -213,7 +213,7 @@ def pnlss(
     degree: Any = 3,
     terms: str = "full",
     output_terms: str | None = None,
-    periods: int | None = None,
+    periods: Any = None,
     average: bool = False,
     init: Any = None,
     transient: int | None = None,
@@ -241,10 +241,11 @@ def pnlss(
     output_terms : {"full", "states", "inputs", "none"}, optional
         Variables of the output-equation monomials ``eta`` (default: as ``terms``);
         ``"none"`` keeps the output equation linear (fewer parameters).
-    periods : int, optional
-        Periods in each experiment, for periodic excitation: the linear start is then the
-        BLA's parametric model (:func:`sysid.bla_model`) and the first period of each
-        experiment is left out of the cost as the transient.
+    periods : int or list of int, optional
+        Periods in each experiment (one number for all, or one per experiment), for periodic
+        excitation: the linear start is then the BLA's parametric model
+        (:func:`sysid.bla_model`; with one number for equal-length experiments) and the
+        first period of each experiment is left out of the cost as the transient.
     average : bool
         With ``periods``: fit on each experiment's average over its periods after the first
         (noise down by the square root of their number, the record as many times shorter),
@@ -306,7 +307,9 @@ def pnlss(
         raise DataError("pnlss needs inputs; for output-only records use sysid.ar/arma")
     sc = Scaling.of(data)
     sd = scaled_data(data, sc)
-    lin = balanced(linear_start(data, sd, sc, n, init, periods), [u for u, _ in sd.experiments])
+    pers = _periods(periods, len(sd.experiments))
+    one = periods if pers is not None and np.ndim(periods) == 0 else None
+    lin = balanced(linear_start(data, sd, sc, n, init, one), [u for u, _ in sd.experiments])
     if np.max(np.abs(lin.poles())) >= 1:
         raise DataError("the linear start is unstable: its simulation cannot seed a "
                         "simulation-error fit; give a stable init= or another order")
@@ -314,13 +317,13 @@ def pnlss(
         raise DataError(f"extrapolation must be 'clamp' or 'polynomial', got {extrapolation!r}")
     us = [u for u, _ in sd.experiments]
     recs = []
-    for u, y in sd.experiments:
+    for k, (u, y) in enumerate(sd.experiments):
         N = u.shape[0]
         skip = transient if transient is not None else (
-            N // periods if periods and periods > 1 else settle_samples(lin, N))
+            N // pers[k] if pers and pers[k] > 1 else settle_samples(lin, N))
         recs.append((u, y, int(skip)))
     if average:
-        recs = _averaged(sd, periods)
+        recs = _averaged(sd, pers)
         us = [r[0] for r in recs]
     cb, close = iteration_callback(progress, "pnlss", max_iter,
                                    iteration_printer("pnlss", "sum of squares"))
@@ -380,19 +383,29 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
             "clamp": box, "output_terms": ot}, res
 
 
-def _averaged(sd: IOData, periods: int | None) -> list[Any]:
+def _periods(periods: Any, n_exp: int) -> list[int] | None:
+    if periods is None:
+        return None
+    ps = [periods] * n_exp if np.ndim(periods) == 0 else list(periods)
+    if len(ps) != n_exp or not all(isinstance(p, (int, np.integer)) and p >= 1 for p in ps):
+        raise DataError(f"periods must be a positive integer or one per experiment ({n_exp}), "
+                        f"got {periods!r}")
+    return [int(p) for p in ps]
+
+
+def _averaged(sd: IOData, pers: list[int] | None) -> list[Any]:
     """Each experiment's average over its periods after the first, twice (the first copy the
     transient)."""
-    if not periods or periods < 2:
+    if not pers or min(pers) < 2:
         raise DataError("average=True needs periods= of at least 2 (the first is dropped)")
     out = []
-    for u, y in sd.experiments:
+    for (u, y), p in zip(sd.experiments, pers):
         N = u.shape[0]
-        if N % periods:
-            raise DataError(f"an experiment of {N} samples is not {periods} whole periods")
-        P = N // periods
-        ua = u[P:].reshape(periods - 1, P, -1).mean(axis=0)
-        ya = y[P:].reshape(periods - 1, P, -1).mean(axis=0)
+        if N % p:
+            raise DataError(f"an experiment of {N} samples is not {p} whole periods")
+        P = N // p
+        ua = u[P:].reshape(p - 1, P, -1).mean(axis=0)
+        ya = y[P:].reshape(p - 1, P, -1).mean(axis=0)
         out.append((np.ascontiguousarray(np.vstack([ua, ua])),
                     np.ascontiguousarray(np.vstack([ya, ya])), P))
     return out
