@@ -251,6 +251,8 @@ _LAZY = {
     "NetworkNARXModel": "nonlinear.narx_network_model",
     "WaveletNetwork": "nonlinear.narx_network",
     "TreePartition": "nonlinear.narx_network",
+    # issue 29 (branch nlss2): the decoupled PNLSS model
+    "DecoupledPNLSSModel": "nlss.decoupled",
 }
 
 
@@ -483,4 +485,6 @@ __all__ = [
     "NetworkNARXModel",
     "WaveletNetwork",
     "TreePartition",
+    # issue 29 (branch nlss2): the decoupled PNLSS model
+    "DecoupledPNLSSModel",
 ]

@@ -77,6 +77,9 @@ __all__ = [
     "narx_network_simulate",
     "narx_network_predict",
     "narx_network_evaluate",
+    # issue 29 (branch nlss2): decoupled PNLSS
+    "decoupled_simulate",
+    "decoupled_estimate",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -596,6 +599,7 @@ def pnlss_simulate(
     theta: list[float],
     u: _Array,
     x0: list[float] | None = None,
+    range: tuple[list[float], list[float]] | None = None,
 ) -> tuple[_Array, _Array]: ...
 def pnlss_estimate(
     nx: int,
@@ -609,6 +613,7 @@ def pnlss_estimate(
     tol: float = 1e-8,
     fixed: list[bool] | None = None,
     progress: Callable[..., Any] | None = None,
+    range: tuple[list[float], list[float]] | None = None,
 ) -> dict[str, Any]: ...
 def neural_ss_simulate(
     dims: tuple[int, int, int],
@@ -744,3 +749,24 @@ def narx_network_predict(
 def narx_network_evaluate(
     orders: _Orders3, shift: list[float], scale: list[float], outputs: list[_Nl], x: _Array,
 ) -> _Array: ...
+# issue 29 (branch nlss2): decoupled PNLSS
+def decoupled_simulate(
+    dims: tuple[int, int, int],
+    branches: int,
+    degrees: list[int],
+    theta: list[float],
+    u: _Array,
+    x0: list[float] | None = None,
+    range: tuple[list[float], list[float]] | None = None,
+) -> tuple[_Array, _Array]: ...
+def decoupled_estimate(
+    dims: tuple[int, int, int],
+    branches: int,
+    degrees: list[int],
+    records: list[tuple[_Array, _Array, int]],
+    theta0: _Array,
+    max_iter: int = 100,
+    tol: float = 1e-8,
+    progress: Callable[..., Any] | None = None,
+    range: tuple[list[float], list[float]] | None = None,
+) -> dict[str, Any]: ...

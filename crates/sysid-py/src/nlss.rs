@@ -11,7 +11,7 @@ use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::nlss::neural::{self, EpochReport, NeuralSs, Segment, TrainOptions};
-use sysid_core::nlss::{self, Monomials, Pnlss, PnlssData, Terms};
+use sysid_core::nlss::{self, Decoupled, Monomials, Pnlss, PnlssData, Terms};
 use sysid_core::optim::{Flow, Options};
 use sysid_core::SysidError;
 
@@ -29,14 +29,27 @@ fn slice<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<&
     })
 }
 
-fn model(nx: usize, nu: usize, ny: usize, zeta: Terms2, eta: Terms2) -> PyResult<Pnlss> {
-    Ok(Pnlss::new(
+type Range = Option<(Vec<f64>, Vec<f64>)>;
+
+fn model(
+    nx: usize,
+    nu: usize,
+    ny: usize,
+    zeta: Terms2,
+    eta: Terms2,
+    range: Range,
+) -> PyResult<Pnlss> {
+    let m = Pnlss::new(
         nx,
         nu,
         ny,
         Monomials::from_terms(nx, nu, zeta).py()?,
         Monomials::from_terms(nx, nu, eta).py()?,
-    ))
+    );
+    match range {
+        Some((lo, hi)) => Ok(m.with_range(lo, hi).py()?),
+        None => Ok(m),
+    }
 }
 
 /// The monomials (index lists into `z = [x; u]`) of the given degrees in the variables
@@ -57,9 +70,10 @@ pub fn pnlss_monomials(nx: usize, nu: usize, terms: &str, degrees: Vec<usize>) -
     Ok(Monomials::new(nx, nu, t, &degrees).py()?.terms().to_vec())
 }
 
-/// Simulated outputs and states (row-major `(N, ny)` and `(N, nx)` flattened) from `x0`.
+/// Simulated outputs and states (row-major `(N, ny)` and `(N, nx)` flattened) from `x0`;
+/// `range = (lo, hi)` clamps the monomials' arguments `[x; u]`.
 #[pyfunction]
-#[pyo3(signature = (nx, nu, ny, zeta, eta, theta, u, x0=None))]
+#[pyo3(signature = (nx, nu, ny, zeta, eta, theta, u, x0=None, range=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn pnlss_simulate<'py>(
     py: Python<'py>,
@@ -71,17 +85,18 @@ pub fn pnlss_simulate<'py>(
     theta: Vec<f64>,
     u: PyReadonlyArray2<'_, f64>,
     x0: Option<Vec<f64>>,
+    range: Range,
 ) -> PyResult<Pair<'py>> {
-    let m = model(nx, nu, ny, zeta, eta)?;
+    let m = model(nx, nu, ny, zeta, eta, range)?;
     let us = slice(&u, "u")?;
     let (y, x) = py.detach(|| m.simulate(&theta, us, x0.as_deref())).py()?;
     Ok((slice_to_numpy(py, &y), slice_to_numpy(py, &x)))
 }
 
 /// Simulation-error fit from `theta0`; records are `(u, y, skip)`. Returns a dict with the
-/// optimiser's report and `theta`.
+/// optimiser's report and `theta`; `range` as in [`pnlss_simulate`].
 #[pyfunction]
-#[pyo3(signature = (nx, nu, ny, zeta, eta, records, theta0, max_iter=100, tol=1e-8, fixed=None, progress=None))]
+#[pyo3(signature = (nx, nu, ny, zeta, eta, records, theta0, max_iter=100, tol=1e-8, fixed=None, progress=None, range=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn pnlss_estimate<'py>(
     py: Python<'py>,
@@ -96,8 +111,9 @@ pub fn pnlss_estimate<'py>(
     tol: f64,
     fixed: Option<Vec<bool>>,
     progress: Option<Py<PyAny>>,
+    range: Range,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let m = model(nx, nu, ny, zeta, eta)?;
+    let m = model(nx, nu, ny, zeta, eta, range)?;
     let mut data = Vec::with_capacity(records.len());
     for (u, y, skip) in &records {
         data.push(PnlssData {
@@ -127,7 +143,83 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pnlss_monomials, m)?)?;
     m.add_function(wrap_pyfunction!(pnlss_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(pnlss_estimate, m)?)?;
+    m.add_function(wrap_pyfunction!(decoupled_simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(decoupled_estimate, m)?)?;
     register_neural(m)
+}
+
+fn decoupled(
+    dims: (usize, usize, usize),
+    branches: usize,
+    degrees: Vec<usize>,
+    range: Range,
+) -> PyResult<Decoupled> {
+    let m = Decoupled::new(dims.0, dims.1, dims.2, branches, degrees).py()?;
+    match range {
+        Some((lo, hi)) => Ok(m.with_range(lo, hi).py()?),
+        None => Ok(m),
+    }
+}
+
+/// Decoupled PNLSS simulation: outputs and states (row-major, flattened) from `x0`;
+/// `range = (lo, hi)` clamps the branch arguments.
+#[pyfunction]
+#[pyo3(signature = (dims, branches, degrees, theta, u, x0=None, range=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn decoupled_simulate<'py>(
+    py: Python<'py>,
+    dims: (usize, usize, usize),
+    branches: usize,
+    degrees: Vec<usize>,
+    theta: Vec<f64>,
+    u: PyReadonlyArray2<'_, f64>,
+    x0: Option<Vec<f64>>,
+    range: Range,
+) -> PyResult<Pair<'py>> {
+    let m = decoupled(dims, branches, degrees, range)?;
+    let us = slice(&u, "u")?;
+    let (y, x) = py.detach(|| m.simulate(&theta, us, x0.as_deref())).py()?;
+    Ok((slice_to_numpy(py, &y), slice_to_numpy(py, &x)))
+}
+
+/// Decoupled PNLSS simulation-error fit from `theta0`; records are `(u, y, skip)`.
+#[pyfunction]
+#[pyo3(signature = (dims, branches, degrees, records, theta0, max_iter=100, tol=1e-8, progress=None, range=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn decoupled_estimate<'py>(
+    py: Python<'py>,
+    dims: (usize, usize, usize),
+    branches: usize,
+    degrees: Vec<usize>,
+    records: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>, usize)>,
+    theta0: PyReadonlyArray1<'_, f64>,
+    max_iter: usize,
+    tol: f64,
+    progress: Option<Py<PyAny>>,
+    range: Range,
+) -> PyResult<Bound<'py, PyDict>> {
+    let m = decoupled(dims, branches, degrees, range)?;
+    let mut data = Vec::with_capacity(records.len());
+    for (u, y, skip) in &records {
+        data.push(PnlssData {
+            u: slice(u, "u")?,
+            y: slice(y, "y")?,
+            skip: *skip,
+        });
+    }
+    let th0 = crate::convert::vec1(&theta0);
+    let mut opts = Options::default();
+    opts.max_iter = max_iter;
+    opts.tol_cost = tol;
+    opts.tol_step = tol;
+    opts.tol_gradient = tol * tol;
+    let sol = run(py, &progress, |obs| {
+        nlss::estimate_decoupled(&m, &data, &th0, &opts, obs)
+    })?;
+    let d = PyDict::new(py);
+    search_items(&d, py, &sol)?;
+    d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
+    Ok(d)
 }
 
 fn neural_model(

@@ -114,6 +114,16 @@ def balanced(m: StateSpaceModel, us: list[np.ndarray]) -> StateSpaceModel:
     return StateSpaceModel(Ti @ m.A @ T, Ti @ m.B, m.C @ T, m.D, dt=m.dt)
 
 
+def envelope(xs: list[np.ndarray], us: list[np.ndarray],
+              widen: float) -> tuple[np.ndarray, np.ndarray]:
+    """The range of ``[x; u]`` over the records, widened by ``widen`` times its span on
+    each side (a span of zero counts as one)."""
+    z = np.hstack([np.vstack(xs), np.vstack(us)])
+    lo, hi = z.min(axis=0), z.max(axis=0)
+    span = np.where(hi > lo, hi - lo, 1.0)
+    return lo - widen * span, hi + widen * span
+
+
 def settle_samples(m: StateSpaceModel, n: int) -> int:
     """Samples for the slowest pole to decay to 0.1 %, at most a quarter of the record."""
     rho = float(np.max(np.abs(m.poles()))) if m.nstates else 0.0

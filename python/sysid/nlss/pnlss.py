@@ -31,6 +31,7 @@ from .common import (
     Scaling,
     balanced,
     check_order,
+    envelope,
     linear_start,
     scaled_data,
     settle_samples,
@@ -53,6 +54,10 @@ class PNLSSModel(LinearPart, ModelMixin):
         states; ``[]`` is the constant 1).
     scaling : dict
         ``u_offset, u_scale, y_offset, y_scale`` of the channels.
+    clamp : tuple of array_like, optional
+        ``(lo, hi)``: the box (scaled coordinates, states then inputs) the monomials'
+        arguments are clamped to, so that outside the region the model was fitted on the
+        nonlinear terms stay at their boundary values (``None``: plain polynomials).
     dt : float
     input_names, output_names : list of str, optional
     info : dict, optional
@@ -69,7 +74,8 @@ class PNLSSModel(LinearPart, ModelMixin):
     """
 
     def __init__(self, A: Any, B: Any, C: Any, D: Any, E: Any, F: Any, *,
-                 zeta: Any, eta: Any, scaling: dict[str, Any] | None = None, dt: float = 1.0,
+                 zeta: Any, eta: Any, scaling: dict[str, Any] | None = None,
+                 clamp: Any = None, dt: float = 1.0,
                  input_names: Any = None, output_names: Any = None,
                  info: dict[str, Any] | None = None) -> None:
         self.A, self.B = np.atleast_2d(np.asarray(A, float)), np.atleast_2d(np.asarray(B, float))
@@ -86,6 +92,7 @@ class PNLSSModel(LinearPart, ModelMixin):
         sc = scaling or {"u_offset": np.zeros(m), "u_scale": np.ones(m),
                          "y_offset": np.zeros(l_), "y_scale": np.ones(l_)}
         self.scaling = Scaling(sc["u_offset"], sc["u_scale"], sc["y_offset"], sc["y_scale"])
+        self.clamp = None if clamp is None else _box(clamp, n + m)
         self.dt = float(dt)
         self.input_names = list(input_names) if input_names is not None else \
             [f"u{j}" for j in range(m)]
@@ -111,6 +118,9 @@ class PNLSSModel(LinearPart, ModelMixin):
     def _struct(self) -> tuple[Any, ...]:
         return (self.nstates, self.ninputs, self.noutputs, self.zeta, self.eta)
 
+    def _range(self) -> tuple[list[float], list[float]] | None:
+        return None if self.clamp is None else (list(self.clamp[0]), list(self.clamp[1]))
+
     def _u(self, u: Any) -> np.ndarray:
         a = np.asarray(u, dtype=float)
         a = a.reshape(-1, 1) if a.ndim == 1 else a
@@ -125,13 +135,14 @@ class PNLSSModel(LinearPart, ModelMixin):
         default). Raises :class:`~sysid.NumericalError` when the state diverges."""
         us = self._u(u)
         x = None if x0 is None else [float(v) for v in np.ravel(x0)]
-        y, _ = _sysid.pnlss_simulate(*self._struct(), self.theta, us, x)
+        y, _ = _sysid.pnlss_simulate(*self._struct(), self.theta, us, x, self._range())
         return self.scaling.y_back(np.asarray(y).reshape(-1, self.noutputs))
 
     def states(self, u: Any, x0: Any = None) -> np.ndarray:
         """Simulated states ``(n_samples, nstates)`` (scaled coordinates)."""
         x = None if x0 is None else [float(v) for v in np.ravel(x0)]
-        _, xs = _sysid.pnlss_simulate(*self._struct(), self.theta, self._u(u), x)
+        _, xs = _sysid.pnlss_simulate(*self._struct(), self.theta, self._u(u), x,
+                                      self._range())
         return np.asarray(xs).reshape(-1, self.nstates)
 
     def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
@@ -145,13 +156,14 @@ class PNLSSModel(LinearPart, ModelMixin):
     def to_dict(self) -> dict[str, Any]:
         return {"A": self.A, "B": self.B, "C": self.C, "D": self.D, "E": self.E, "F": self.F,
                 "zeta": self.zeta, "eta": self.eta, "scaling": self.scaling.to_dict(),
+                "clamp": None if self.clamp is None else [self.clamp[0], self.clamp[1]],
                 "dt": self.dt, "input_names": self.input_names,
                 "output_names": self.output_names, "info": self.info}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> PNLSSModel:
         return cls(d["A"], d["B"], d["C"], d["D"], d["E"], d["F"], zeta=d["zeta"],
-                   eta=d["eta"], scaling=d["scaling"], dt=d["dt"],
+                   eta=d["eta"], scaling=d["scaling"], clamp=d.get("clamp"), dt=d["dt"],
                    input_names=d["input_names"], output_names=d["output_names"],
                    info=d.get("info"))
 
@@ -166,6 +178,18 @@ class PNLSSModel(LinearPart, ModelMixin):
         return (f"PNLSSModel(nstates={self.nstates}, ninputs={self.ninputs}, "
                 f"noutputs={self.noutputs}, {len(self.zeta)} state monomial(s), "
                 f"{len(self.eta)} output monomial(s), dt={self.dt:g})")
+
+
+def _box(clamp: Any, nz: int) -> tuple[np.ndarray, np.ndarray]:
+    try:
+        lo, hi = (np.asarray(v, dtype=float).ravel() for v in clamp)
+    except (TypeError, ValueError):
+        raise DataError("clamp must be a pair (lo, hi) of arrays") from None
+    if lo.size != nz or hi.size != nz or np.isnan(lo).any() or np.isnan(hi).any() \
+            or np.any(lo > hi):
+        raise DataError(f"clamp needs {nz} lower and upper bounds (states then inputs) "
+                        "with lo <= hi")
+    return lo, hi
 
 
 def _degrees(degree: Any) -> list[int]:
@@ -189,9 +213,13 @@ def pnlss(
     degree: Any = 3,
     terms: str = "full",
     output_terms: str | None = None,
-    periods: int | None = None,
+    periods: Any = None,
+    average: bool = False,
     init: Any = None,
     transient: int | None = None,
+    extrapolation: str = "clamp",
+    branches: int | None = None,
+    seed: int = 0,
     max_iter: int = 100,
     tol: float = 1e-8,
     progress: bool | None | Callable[..., Any] = None,
@@ -213,15 +241,38 @@ def pnlss(
     output_terms : {"full", "states", "inputs", "none"}, optional
         Variables of the output-equation monomials ``eta`` (default: as ``terms``);
         ``"none"`` keeps the output equation linear (fewer parameters).
-    periods : int, optional
-        Periods in each experiment, for periodic excitation: the linear start is then the
-        BLA's parametric model (:func:`sysid.bla_model`) and the first period of each
-        experiment is left out of the cost as the transient.
+    periods : int or list of int, optional
+        Periods in each experiment (one number for all, or one per experiment), for periodic
+        excitation: the linear start is then the BLA's parametric model
+        (:func:`sysid.bla_model`; with one number for equal-length experiments) and the
+        first period of each experiment is left out of the cost as the transient.
+    average : bool
+        With ``periods``: fit on each experiment's average over its periods after the first
+        (noise down by the square root of their number, the record as many times shorter),
+        simulated over two averaged periods with the first as the transient (the steady
+        state of a periodic input).
     init : StateSpaceModel, optional
         Linear start of ``order`` states (engineering units) instead.
     transient : int, optional
         Leading samples of each experiment left out of the cost (default: one period for
         periodic data, else the settling time of the linear start, at most a quarter).
+    extrapolation : {"clamp", "polynomial"}
+        ``"clamp"`` (default) evaluates the monomials at ``[x; u]`` clamped to a box: during
+        the fit the range of the linear start's states and of the inputs, widened by half
+        its span on each side (a bounded simulation: the polynomial cannot blow the state
+        up), and in the returned model the range the fitted model's states and the inputs
+        cover on the estimation data, widened by a tenth of its span (inside the fit's box,
+        so the fit's simulation is unchanged). Beyond it the nonlinear terms keep their
+        boundary values instead of growing as powers: records that leave the estimation
+        range stay bounded. ``"polynomial"``: plain monomials everywhere.
+    branches : int, optional
+        Fit the decoupled variant instead (:class:`~sysid.DecoupledPNLSSModel`): the state
+        equation's polynomial is ``W g(V [x; u])``, ``branches`` univariate polynomials of
+        the chosen degrees of linear forms of the states and inputs (``terms`` and
+        ``output_terms`` do not apply; the output equation is linear plus a constant).
+        Far fewer parameters than all monomials when there are many states.
+    seed : int
+        Seeds the decoupled variant's initial branch directions.
     max_iter, tol : int, float
         Iterations and the relative cost/step tolerance of the search.
     progress : bool or callable, optional
@@ -230,8 +281,8 @@ def pnlss(
 
     Returns
     -------
-    PNLSSModel
-        ``info["fit"]``: iterations, costs, stop reason, the linear start's cost.
+    PNLSSModel or DecoupledPNLSSModel
+        ``info["fit"]``: iterations, costs, stop reason, parameters, transient.
 
     Examples
     --------
@@ -256,49 +307,124 @@ def pnlss(
         raise DataError("pnlss needs inputs; for output-only records use sysid.ar/arma")
     sc = Scaling.of(data)
     sd = scaled_data(data, sc)
-    lin = balanced(linear_start(data, sd, sc, n, init, periods), [u for u, _ in sd.experiments])
+    pers = _periods(periods, len(sd.experiments))
+    one = periods if pers is not None and np.ndim(periods) == 0 else None
+    lin = balanced(linear_start(data, sd, sc, n, init, one), [u for u, _ in sd.experiments])
     if np.max(np.abs(lin.poles())) >= 1:
         raise DataError("the linear start is unstable: its simulation cannot seed a "
                         "simulation-error fit; give a stable init= or another order")
-    m_, l_ = data.n_inputs, data.n_outputs
+    if extrapolation not in ("clamp", "polynomial"):
+        raise DataError(f"extrapolation must be 'clamp' or 'polynomial', got {extrapolation!r}")
+    us = [u for u, _ in sd.experiments]
+    recs = []
+    for k, (u, y) in enumerate(sd.experiments):
+        N = u.shape[0]
+        skip = transient if transient is not None else (
+            N // pers[k] if pers and pers[k] > 1 else settle_samples(lin, N))
+        recs.append((u, y, int(skip)))
+    if average:
+        recs = _averaged(sd, pers)
+        us = [r[0] for r in recs]
+    cb, close = iteration_callback(progress, "pnlss", max_iter,
+                                   iteration_printer("pnlss", "sum of squares"))
+    common = {"scaling": sc.to_dict(), "dt": data.dt, "input_names": data.input_names,
+              "output_names": data.output_names}
+    info: dict[str, Any] = {"degree": degs, "extrapolation": extrapolation,
+                            "start": lin.info.get("method") if lin.info else "linear"}
+    try:
+        if branches is not None:
+            from .decoupled import DecoupledPNLSSModel, fit_decoupled
+
+            kw, res = fit_decoupled(lin, us, recs, degs, branches, extrapolation == "clamp",
+                                    max_iter, tol, cb if cb is not None else _tick, seed)
+            info.update(method="pnlss (decoupled)", branches=int(branches),
+                        fit=_report(res, recs))
+            _warn_short(res)
+            return DecoupledPNLSSModel(**kw, **common, info=info)
+        fit = _fit_coupled(lin, us, recs, terms, output_terms, degs, extrapolation, max_iter,
+                           tol, cb if cb is not None else _tick)
+    finally:
+        close()
+    kw, res = fit
+    info.update(method="pnlss", terms=terms, output_terms=kw.pop("output_terms"),
+                fit=_report(res, recs))
+    _warn_short(res)
+    return PNLSSModel(**kw, **common, info=info)
+
+
+def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], terms: str,
+                 output_terms: str | None, degs: list[int], extrapolation: str, max_iter: int,
+                 tol: float, cb: Any) -> tuple[dict[str, Any], dict[str, Any]]:
+    n, m_, l_ = lin.nstates, lin.ninputs, lin.noutputs
+    probe = StateSpaceModel(lin.A, lin.B, np.eye(n), np.zeros((n, m_)), dt=lin.dt)
+    fit_box = None if extrapolation == "polynomial" else envelope(
+        [np.asarray(probe.simulate(u)) for u in us], us, 0.5)
+    rng = None if fit_box is None else (list(fit_box[0]), list(fit_box[1]))
     # a constant term in each equation: the channel offsets removed by the scaling (and
     # the mean of the nonlinear terms) enter the scaled equations as constants
     zeta = [[]] + _sysid.pnlss_monomials(n, m_, terms, degs)
     ot = terms if output_terms is None else output_terms
     eta = [[]] + ([] if ot == "none" else _sysid.pnlss_monomials(n, m_, ot, degs))
-    recs = []
-    for u, y in sd.experiments:
-        N = u.shape[0]
-        skip = transient if transient is not None else (
-            N // periods if periods and periods > 1 else settle_samples(lin, N))
-        recs.append((u, y, int(skip)))
     theta0 = np.concatenate([lin.A.ravel(), lin.B.ravel(), lin.C.ravel(), lin.D.ravel(),
                              np.zeros(n * len(zeta) + l_ * len(eta))])
-    cb, close = iteration_callback(progress, "pnlss", max_iter,
-                                   iteration_printer("pnlss", "sum of squares"))
-    try:
-        res = _sysid.pnlss_estimate(n, m_, l_, zeta, eta, recs, theta0, max_iter=max_iter,
-                                    tol=tol, progress=cb if cb is not None else _tick)
-    finally:
-        close()
+    res = _sysid.pnlss_estimate(n, m_, l_, zeta, eta, recs, theta0, max_iter=max_iter,
+                                tol=tol, progress=cb, range=rng)
     th = np.asarray(res["theta"])
+    box = None
+    if fit_box is not None:
+        xs = [np.asarray(_sysid.pnlss_simulate(n, m_, l_, zeta, eta, list(th), u, None,
+                                               rng)[1]).reshape(-1, n) for u in us]
+        env = envelope(xs, us, 0.1)
+        box = (np.maximum(env[0], fit_box[0]), np.minimum(env[1], fit_box[1]))
     o = np.cumsum([0, n * n, n * m_, l_ * n, l_ * m_, n * len(zeta), l_ * len(eta)])
-    parts = [th[o[i]:o[i + 1]] for i in range(6)]
-    info = {"method": "pnlss", "degree": degs, "terms": terms, "output_terms": ot,
-            "start": lin.info.get("method") if lin.info else "linear",
-            "fit": {"iterations": res["iterations"], "evaluations": res["evaluations"],
-                    "cost": list(res["history"]), "stop": res["stop"],
-                    "n_parameters": int(th.size), "transient": [r[2] for r in recs]}}
+    p = [th[o[i]:o[i + 1]] for i in range(6)]
+    return {"A": p[0].reshape(n, n), "B": p[1].reshape(n, m_), "C": p[2].reshape(l_, n),
+            "D": p[3].reshape(l_, m_), "E": p[4], "F": p[5], "zeta": zeta, "eta": eta,
+            "clamp": box, "output_terms": ot}, res
+
+
+def _periods(periods: Any, n_exp: int) -> list[int] | None:
+    if periods is None:
+        return None
+    ps = [periods] * n_exp if np.ndim(periods) == 0 else list(periods)
+    if len(ps) != n_exp or not all(isinstance(p, (int, np.integer)) and p >= 1 for p in ps):
+        raise DataError(f"periods must be a positive integer or one per experiment ({n_exp}), "
+                        f"got {periods!r}")
+    return [int(p) for p in ps]
+
+
+def _averaged(sd: IOData, pers: list[int] | None) -> list[Any]:
+    """Each experiment's average over its periods after the first, twice (the first copy the
+    transient)."""
+    if not pers or min(pers) < 2:
+        raise DataError("average=True needs periods= of at least 2 (the first is dropped)")
+    out = []
+    for (u, y), p in zip(sd.experiments, pers):
+        N = u.shape[0]
+        if N % p:
+            raise DataError(f"an experiment of {N} samples is not {p} whole periods")
+        P = N // p
+        ua = u[P:].reshape(p - 1, P, -1).mean(axis=0)
+        ya = y[P:].reshape(p - 1, P, -1).mean(axis=0)
+        out.append((np.ascontiguousarray(np.vstack([ua, ua])),
+                    np.ascontiguousarray(np.vstack([ya, ya])), P))
+    return out
+
+
+def _report(res: dict[str, Any], recs: list[Any]) -> dict[str, Any]:
+    return {"iterations": res["iterations"], "evaluations": res["evaluations"],
+            "cost": list(res["history"]), "stop": res["stop"],
+            "n_parameters": int(np.asarray(res["theta"]).size),
+            "transient": [r[2] for r in recs]}
+
+
+def _warn_short(res: dict[str, Any]) -> None:
     if res["stop"] in ("maximum iterations", "cancelled"):
         import warnings
 
         warnings.warn(f"pnlss stopped at {res['stop']} after {res['iterations']} iterations; "
                       "the model may improve with more (max_iter=)", RuntimeWarning,
-                      stacklevel=2)
-    return PNLSSModel(parts[0].reshape(n, n), parts[1].reshape(n, m_), parts[2].reshape(l_, n),
-                      parts[3].reshape(l_, m_), parts[4], parts[5], zeta=zeta, eta=eta,
-                      scaling=sc.to_dict(), dt=data.dt, input_names=data.input_names,
-                      output_names=data.output_names, info=info)
+                      stacklevel=3)
 
 
 def _tick(*_: Any) -> None:

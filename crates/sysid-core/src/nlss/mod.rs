@@ -18,13 +18,18 @@
 //! propagated sample by sample, the rows of the Jacobian accumulated block by block into
 //! `J^T J` and `J^T r` (no `N x p` array). A simulation whose state leaves a bound or turns
 //! non-finite is reported as diverged: the cost is infinite and the search rejects the step.
+//! [`Decoupled`] replaces the state equation's multivariate polynomial by a few univariate
+//! polynomials of linear forms of `[x; u]` (far fewer parameters for many states). Both may
+//! clamp the polynomials' arguments to a box (bounded simulation outside the fitted range).
 //! [`neural`] holds the neural state-space model and its training.
 
+mod decoupled;
 mod monomials;
 pub mod neural;
 mod pnlss;
 #[cfg(test)]
 mod tests;
 
+pub use decoupled::{estimate_decoupled, Decoupled};
 pub use monomials::{Monomials, Terms};
 pub use pnlss::{estimate, Pnlss, PnlssData};

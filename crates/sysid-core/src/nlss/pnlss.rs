@@ -32,6 +32,11 @@ pub struct Pnlss {
     pub eta: Monomials,
     /// A simulation whose state exceeds this in absolute value has diverged.
     pub bound: f64,
+    /// Lower ends of the box the monomials' arguments `z = [x; u]` are clamped to (empty:
+    /// no clamping; see [`Pnlss::with_range`]).
+    pub lo: Vec<f64>,
+    /// Upper ends of that box.
+    pub hi: Vec<f64>,
 }
 
 /// One record: inputs `u` (`N x nu` row-major), outputs `y` (`N x ny` row-major), and the
@@ -62,6 +67,8 @@ struct Work {
     ze: Vec<f64>,
     et: Vec<f64>,
     xn: Vec<f64>,
+    /// Whether each state lies inside the box (its monomial derivatives count).
+    free: Vec<bool>,
 }
 
 impl Pnlss {
@@ -74,7 +81,54 @@ impl Pnlss {
             zeta,
             eta,
             bound: 1e8,
+            lo: Vec::new(),
+            hi: Vec::new(),
         }
+    }
+
+    /// The model with the monomials evaluated at `z = [x; u]` clamped to the box
+    /// `lo <= z <= hi` (one bound per state and input): outside the region the polynomial
+    /// was fitted on, the nonlinear terms stay at their boundary values instead of growing
+    /// without bound, so a simulation cannot diverge through them. The linear part is not
+    /// clamped.
+    ///
+    /// ```
+    /// use sysid_core::nlss::{Monomials, Pnlss, Terms};
+    /// let zeta = Monomials::new(1, 1, Terms::States, &[2]).unwrap();
+    /// let m = Pnlss::new(1, 1, 1, zeta, Monomials::empty(1))
+    ///     .with_range(vec![-1.0, -10.0], vec![1.0, 10.0])
+    ///     .unwrap();
+    /// // x(t+1) = 0.5 x + u - 0.1 clamp(x, -1, 1)^2
+    /// let (y, _) = m.simulate(&[0.5, 1.0, 1.0, 0.0, -0.1], &[3.0, 0.0], None).unwrap();
+    /// assert_eq!(y, vec![0.0, 3.0]);
+    /// let (y, _) = m.simulate(&[0.5, 1.0, 1.0, 0.0, -0.1], &[3.0, 0.0, 0.0], None).unwrap();
+    /// assert!((y[2] - (1.5 - 0.1)).abs() < 1e-15);
+    /// ```
+    pub fn with_range(mut self, lo: Vec<f64>, hi: Vec<f64>) -> Result<Self> {
+        let nz = self.nx + self.nu;
+        if lo.len() != nz || hi.len() != nz {
+            return Err(SysidError::invalid(
+                "range",
+                format!(
+                    "needs {nz} lower and upper bounds (states then inputs), got {} and {}",
+                    lo.len(),
+                    hi.len()
+                ),
+            ));
+        }
+        if lo
+            .iter()
+            .zip(&hi)
+            .any(|(a, b)| a.is_nan() || b.is_nan() || a > b)
+        {
+            return Err(SysidError::invalid(
+                "range",
+                "each lower bound must be a number not above its upper bound",
+            ));
+        }
+        self.lo = lo;
+        self.hi = hi;
+        Ok(self)
     }
 
     fn off(&self) -> Off {
@@ -105,6 +159,7 @@ impl Pnlss {
             ze: vec![0.0; self.zeta.len()],
             et: vec![0.0; self.eta.len()],
             xn: vec![0.0; self.nx],
+            free: vec![true; self.nx],
         }
     }
 
@@ -114,6 +169,15 @@ impl Pnlss {
         let (n, m) = (self.nx, self.nu);
         w.z[..n].copy_from_slice(x);
         w.z[n..].copy_from_slice(u);
+        if !self.lo.is_empty() {
+            for (k, v) in w.z.iter_mut().enumerate() {
+                let c = v.clamp(self.lo[k], self.hi[k]);
+                if k < n {
+                    w.free[k] = c == *v;
+                }
+                *v = c;
+            }
+        }
         self.zeta.eval(&w.z, &mut w.ze);
         self.eta.eval(&w.z, &mut w.et);
         let (ne, nf) = (w.ze.len(), w.et.len());
@@ -262,6 +326,10 @@ impl Pnlss {
             if jac {
                 self.zeta.dx(&w.z, &mut dze);
                 self.eta.dx(&w.z, &mut det);
+                for j in (0..nx).filter(|&j| !w.free[j]) {
+                    dze.iter_mut().skip(j).step_by(nx).for_each(|v| *v = 0.0);
+                    det.iter_mut().skip(j).step_by(nx).for_each(|v| *v = 0.0);
+                }
             }
             if t >= d.skip {
                 for i in 0..ny {
@@ -369,7 +437,7 @@ impl Pnlss {
 
 /// `H += Jb^T Jb` (lower triangle used later), `g -= Jb^T r` over the first `rows` rows,
 /// then clears the block.
-fn flush(jb: &mut Mat<f64>, rb: &Mat<f64>, rows: usize, ev: &mut Evaluation) {
+pub(super) fn flush(jb: &mut Mat<f64>, rb: &Mat<f64>, rows: usize, ev: &mut Evaluation) {
     let j = jb.as_ref().subrows(0, rows);
     let r = rb.as_ref().subrows(0, rows);
     matmul(

@@ -31,11 +31,43 @@ fn model() -> (Pnlss, Vec<f64>) {
     (m, th)
 }
 
-fn residuals(m: &Pnlss, th: &[f64], u: &[f64], y: &[f64], skip: usize) -> Vec<f64> {
-    let (yh, _) = m.simulate(th, u, None).unwrap();
+/// What the Jacobian check needs of a model.
+trait Fitted {
+    fn sim(&self, th: &[f64], u: &[f64]) -> Vec<f64>;
+    fn eval(&self, th: &[f64], data: &[PnlssData<'_>]) -> crate::optim::Evaluation;
+    fn np(&self) -> usize;
+}
+
+impl Fitted for Pnlss {
+    fn sim(&self, th: &[f64], u: &[f64]) -> Vec<f64> {
+        self.simulate(th, u, None).unwrap().0
+    }
+    fn eval(&self, th: &[f64], data: &[PnlssData<'_>]) -> crate::optim::Evaluation {
+        self.cost(th, data, true)
+    }
+    fn np(&self) -> usize {
+        self.n_params()
+    }
+}
+
+impl Fitted for Decoupled {
+    fn sim(&self, th: &[f64], u: &[f64]) -> Vec<f64> {
+        self.simulate(th, u, None).unwrap().0
+    }
+    fn eval(&self, th: &[f64], data: &[PnlssData<'_>]) -> crate::optim::Evaluation {
+        self.cost(th, data, true)
+    }
+    fn np(&self) -> usize {
+        self.n_params()
+    }
+}
+
+fn residuals(m: &dyn Fitted, th: &[f64], u: &[f64], y: &[f64], skip: usize) -> Vec<f64> {
+    let yh = m.sim(th, u);
+    let ny = y.len() / (u.len());
     y.iter()
         .zip(&yh)
-        .skip(skip * m.ny)
+        .skip(skip * ny)
         .map(|(a, b)| a - b)
         .collect()
 }
@@ -68,6 +100,35 @@ fn monomial_derivatives_match_finite_differences() {
 #[test]
 fn sensitivity_jacobian_matches_finite_differences() {
     let (m, th) = model();
+    check_jacobian(&m, &th);
+}
+
+#[test]
+fn clamped_sensitivity_jacobian_matches_finite_differences() {
+    // the monomials' arguments clamped to a box the simulation leaves at times: the
+    // clamped states contribute no monomial derivative
+    let (m, th) = model();
+    let (_, xs) = m.simulate(&th, &signal(60, 1, 3), None).unwrap();
+    let (lo, hi): (Vec<f64>, Vec<f64>) = (0..2)
+        .map(|j| {
+            let v: Vec<f64> = xs.iter().skip(j).step_by(2).copied().collect();
+            let (a, b) = v
+                .iter()
+                .fold((f64::MAX, f64::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+            (a + 0.2 * (b - a), b - 0.2 * (b - a))
+        })
+        .chain(std::iter::once((-0.3, 0.3)))
+        .unzip();
+    let mc = m.clone().with_range(lo, hi).unwrap();
+    let (_, xc) = mc.simulate(&th, &signal(60, 1, 3), None).unwrap();
+    assert!(xc.iter().step_by(2).any(|&x| x < mc.lo[0] || x > mc.hi[0]));
+    check_jacobian(&mc, &th);
+    assert!(m.clone().with_range(vec![0.0; 2], vec![1.0; 2]).is_err());
+    assert!(m.with_range(vec![1.0; 3], vec![0.0; 3]).is_err());
+}
+
+fn check_jacobian(m: &dyn Fitted, th: &[f64]) {
+    let th = th.to_vec();
     let n = 60;
     let u = signal(n, 1, 3);
     let y = signal(n, 2, 4);
@@ -76,16 +137,16 @@ fn sensitivity_jacobian_matches_finite_differences() {
         y: &y,
         skip: 5,
     }];
-    let ev = m.cost(&th, &data, true);
-    let p = m.n_params();
-    let r0 = residuals(&m, &th, &u, &y, 5);
+    let ev = m.eval(&th, &data);
+    let p = m.np();
+    let r0 = residuals(m, &th, &u, &y, 5);
     let mut jac = vec![vec![0.0; r0.len()]; p];
     for a in 0..p {
         let h = 1e-6 * (1.0 + th[a].abs());
         let (mut tp, mut tm) = (th.clone(), th.clone());
         tp[a] += h;
         tm[a] -= h;
-        let (rp, rm) = (residuals(&m, &tp, &u, &y, 5), residuals(&m, &tm, &u, &y, 5));
+        let (rp, rm) = (residuals(m, &tp, &u, &y, 5), residuals(m, &tm, &u, &y, 5));
         for k in 0..r0.len() {
             jac[a][k] = (rp[k] - rm[k]) / (2.0 * h);
         }
@@ -210,4 +271,91 @@ fn neural_section_gradient_matches_finite_differences() {
         );
     }
     assert!(l0 > 0.0);
+}
+
+/// A 2-state, 1-input, 2-output decoupled model with 2 branches of degrees 2 and 3.
+fn decoupled() -> (Decoupled, Vec<f64>) {
+    let m = Decoupled::new(2, 1, 2, 2, vec![2, 3]).unwrap();
+    let (_, mut th) = model();
+    th.truncate(12);
+    // V (2 x 3), W (2 x 2), c (2 x 2), e0 (2), f0 (2)
+    th.extend([0.8, -0.4, 0.5, 0.2, 0.9, -0.6]);
+    th.extend([0.3, -0.2, 0.1, 0.25]);
+    th.extend([0.5, -0.4, -0.3, 0.2]);
+    th.extend([0.05, -0.02, 0.1, -0.1]);
+    assert_eq!(th.len(), m.n_params());
+    (m, th)
+}
+
+#[test]
+fn decoupled_sensitivity_jacobian_matches_finite_differences() {
+    let (m, th) = decoupled();
+    check_jacobian(&m, &th);
+    // with the branch arguments clamped to the middle 60 % of their range
+    let (_, xs) = m.simulate(&th, &signal(60, 1, 3), None).unwrap();
+    let u = signal(60, 1, 3);
+    let (mut lo, mut hi) = (vec![f64::MAX; 2], vec![f64::MIN; 2]);
+    for t in 0..60 {
+        let z = [xs[2 * t], xs[2 * t + 1], u[t]];
+        for k in 0..2 {
+            let s: f64 = (0..3).map(|j| th[12 + 3 * k + j] * z[j]).sum();
+            lo[k] = lo[k].min(s);
+            hi[k] = hi[k].max(s);
+        }
+    }
+    let (lo, hi): (Vec<f64>, Vec<f64>) = (0..2)
+        .map(|k| (lo[k] + 0.2 * (hi[k] - lo[k]), hi[k] - 0.2 * (hi[k] - lo[k])))
+        .unzip();
+    let mc = m.clone().with_range(lo, hi).unwrap();
+    let (yc, _) = mc.simulate(&th, &u, None).unwrap();
+    let (y, _) = m.simulate(&th, &u, None).unwrap();
+    assert!(yc.iter().zip(&y).any(|(a, b)| (a - b).abs() > 1e-6));
+    check_jacobian(&mc, &th);
+    assert!(m.clone().with_range(vec![0.0], vec![1.0]).is_err());
+    assert!(Decoupled::new(2, 1, 2, 0, vec![2]).is_err());
+    assert!(Decoupled::new(2, 1, 2, 1, vec![1]).is_err());
+}
+
+#[test]
+fn decoupled_known_model_reproduced_from_noise_free_data() {
+    // The branch scales are free (W_k c_k is what matters) and so is the state basis: the
+    // linear part and V are held at their true values and the simulated output compared.
+    let (m, truth) = decoupled();
+    let n = 600;
+    let u: Vec<f64> = signal(n, 1, 11).iter().map(|v| 2.0 * v).collect();
+    let (y, _) = m.simulate(&truth, &u, None).unwrap();
+    let data = [PnlssData {
+        u: &u,
+        y: &y,
+        skip: 0,
+    }];
+    let mut th0 = truth.clone();
+    th0[18..22].iter_mut().for_each(|v| *v = 0.0); // W = 0: the start is linear
+    th0[22..26].copy_from_slice(&[1.0, 1.0, 1.0, 1.0]);
+    th0[26..].iter_mut().for_each(|v| *v = 0.0);
+    let opts = Options {
+        fixed: Some((0..truth.len()).map(|k| k < 18).collect()),
+        max_iter: 300,
+        tol_cost: 1e-30,
+        tol_gradient: 1e-30,
+        tol_step: 1e-14,
+        ..Default::default()
+    };
+    let sol = estimate_decoupled(&m, &data, &th0, &opts, &mut |_| Flow::Continue).unwrap();
+    let (yh, _) = m.simulate(&sol.theta, &u, None).unwrap();
+    let err = yh
+        .iter()
+        .zip(&y)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    assert!(err < 1e-9, "output error {err}");
+    // the products W_ik c_kd are identified
+    for i in 0..2 {
+        for k in 0..2 {
+            for d in 0..2 {
+                let p = |t: &[f64]| t[18 + 2 * i + k] * t[22 + 2 * k + d];
+                assert!((p(&sol.theta) - p(&truth)).abs() < 1e-6, "W c {i} {k} {d}");
+            }
+        }
+    }
 }
