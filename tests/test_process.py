@@ -79,7 +79,7 @@ def test_procest_std_calibrated_by_monte_carlo():
     cover = np.mean(np.abs(est - truth) <= 1.96 * std, axis=0)
     assert np.all((cover >= 0.90) & (cover <= 0.99)), cover
     ratio = est.std(axis=0) / std.mean(axis=0)
-    assert np.all((ratio > 0.8) & (ratio < 1.25)), ratio
+    assert np.all((ratio > 0.8) & (ratio < 1.2)), ratio  # within 20 %
 
 
 @pytest.mark.parametrize("kwargs, match", [
