@@ -60,8 +60,9 @@ def test_known_structure_is_recovered(method):
 
 def test_standard_deviations_are_calibrated_by_monte_carlo():
     # one mode, 200 records: the 95 % intervals of frequency and damping cover 0.90..0.99
-    # (binomial: 0.95 +- 2.5 sigma = 0.912..0.988 at 200 runs); the batch-means std is
-    # conservative on short blocks (measured: 1.14x for f, 1.28x for damping), bounded here
+    # (binomial: 0.95 +- 2.5 sigma = 0.912..0.988 at 200 runs) and the jackknife std is
+    # within 20 % of the sample std of the estimates (whose own sampling error is 5 % at
+    # 200 runs)
     A = np.array([[0.98, 0.15], [-0.15, 0.98]])
     model = sysid.StateSpaceModel(A, np.eye(2), np.array([[1.0, 0.0], [1.0, 0.5]]), dt=0.1)
     lam = np.linalg.eigvals(A)[0]
@@ -78,7 +79,7 @@ def test_standard_deviations_are_calibrated_by_monte_carlo():
     cover = (np.abs(est - [f_true, z_true]) < 1.96 * sd).mean(axis=0)
     assert np.all((cover > 0.90) & (cover < 0.99)), cover
     ratio = sd.mean(axis=0) / est.std(axis=0)
-    assert np.all((ratio > 0.8) & (ratio < 1.5)), ratio
+    assert np.all((ratio > 0.8) & (ratio < 1.2)), ratio
 
 
 def test_f16_ground_vibration_first_flexible_mode():

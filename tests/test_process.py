@@ -79,7 +79,7 @@ def test_procest_std_calibrated_by_monte_carlo():
     cover = np.mean(np.abs(est - truth) <= 1.96 * std, axis=0)
     assert np.all((cover >= 0.90) & (cover <= 0.99)), cover
     ratio = est.std(axis=0) / std.mean(axis=0)
-    assert np.all((ratio > 0.8) & (ratio < 1.25)), ratio
+    assert np.all((ratio > 0.8) & (ratio < 1.2)), ratio  # within 20 %
 
 
 @pytest.mark.parametrize("kwargs, match", [
@@ -102,3 +102,25 @@ def test_bad_input_gives_clear_errors(kwargs, match):
         sysid.procest(np.zeros((10, 2)), "P1D")
     with pytest.raises(DataError, match="missing"):
         sysid.ProcessModel("P1D", Kp=1.0)
+
+
+def test_procest_underdamped_std_calibrated_by_monte_carlo():
+    """A second structure, P2DU (gain, natural period, damping ratio, fractional dead time),
+    200 noisy records of 400 samples: 95 % intervals cover 90-99 % (binomial sd 1.5 % at 200
+    runs) and the reported std is within 20 % of the spread (the sample std of 200 runs is
+    within +-10 % of the truth with probability 0.95)."""
+    true = sysid.ProcessModel("P2DU", Kp=1.5, Tw=0.8, Zeta=0.3, Td=0.23)
+    u = np.repeat(np.random.default_rng(1).choice([-1.0, 1.0], 60), 10)[:400]
+    y0 = true.simulate(u, dt=0.1)
+    rng = np.random.default_rng(12)
+    est, std = [], []
+    for _ in range(200):
+        d = sysid.IOData(u, y0 + 0.1 * rng.standard_normal(y0.shape), dt=0.1)
+        m = sysid.procest(d, "P2DU", init=true.values)
+        est.append(m.parameters.value)
+        std.append(m.parameters.std)
+    est, std = np.array(est), np.array(std)
+    cover = np.mean(np.abs(est - [1.5, 0.8, 0.3, 0.23]) <= 1.96 * std, axis=0)
+    assert np.all((cover >= 0.90) & (cover <= 0.99)), cover
+    ratio = est.std(axis=0) / std.mean(axis=0)
+    assert np.all((ratio > 0.8) & (ratio < 1.2)), ratio

@@ -98,7 +98,7 @@ def test_tfest_std_calibrated_by_monte_carlo():
     cover = np.mean(np.abs(est - truth) <= 1.96 * std, axis=0)
     assert np.all((cover >= 0.90) & (cover <= 0.99)), cover
     ratio = est.std(axis=0) / std.mean(axis=0)
-    assert np.all((ratio > 0.8) & (ratio < 1.25)), ratio
+    assert np.all((ratio > 0.8) & (ratio < 1.2)), ratio  # within 20 %
 
 
 def test_transfer_function_interop_and_saving(tmp_path):
@@ -192,3 +192,74 @@ def test_stopping_on_the_iteration_limit_warns():
     with pytest.warns(ConvergenceWarning, match="max_iter"):
         G = sysid.tfest(sysid.IOData(u, y, dt=0.05), 2, 1, init=start, max_iter=1)
     assert G.info["cost"][0] <= G.info["cost_start"][0]
+
+
+@pytest.mark.parametrize("hold, delays", [("zoh", (0.13, 0.0)), ("foh", (0.13, 0.02)),
+                                          ("foh", (0.03, 0.27))])
+def test_refinement_jacobian_is_exact(hold, delays):
+    """The analytic Jacobian of the sampled model (complex step through the coefficients,
+    Fréchet derivatives of the exponentials, closed forms for the delay fraction) agrees with
+    central differences to their own accuracy, for two pairs with free fractional delays
+    (whole-sample parts 0 and >= 1), a process parameterisation and estimated initial
+    states."""
+    from sysid.process.structure import ProcessType
+    from sysid.tf.refine import PairStructure, _Map
+
+    t = ProcessType.parse("P2ZU")
+    names = t.names
+
+    def proc(p):
+        return t.coefficients(dict(zip(names, p)))
+
+    def rat(p):
+        return p[2:], np.concatenate([[1.0], p[:2]])
+
+    pairs = [PairStructure(rat, np.array([0.8, 4.0, 0.5, 2.0]), np.zeros(4, bool),
+                           np.full(4, -np.inf), np.full(4, np.inf), delays[0], True, 1.0),
+             PairStructure(proc, np.array([1.5, 0.8, 0.3, 0.4]), np.zeros(4, bool),
+                           np.full(4, -np.inf), np.full(4, np.inf), delays[1], True, 1.0)]
+    dt = 0.05
+    whole = [int(np.floor(p.delay / dt + 1e-9)) for p in pairs]
+    rng = np.random.default_rng(0)
+    exps = [(rng.standard_normal((20, 2)), rng.standard_normal(20))] * 2
+    mp = _Map(pairs, dt, hold, whole, exps, "estimate")
+    z = np.concatenate([mp.vector([p.p0 for p in pairs], [p.delay for p in pairs]) / mp.scale,
+                        rng.standard_normal(mp.n_x0)])
+    z[len(z) - mp.n_x0 - 2:len(z) - mp.n_x0] += 0.2   # delays inside their intervals
+    th, J = mp(z, True)
+    np.testing.assert_allclose(th, mp.theta(z), rtol=0, atol=1e-14)
+    fd = np.empty_like(J)
+    for i in range(z.size):
+        h = 1e-6
+        up, dn = z.copy(), z.copy()
+        up[i] += h
+        dn[i] -= h
+        fd[:, i] = (mp.theta(up) - mp.theta(dn)) / (2 * h)
+    np.testing.assert_allclose(J, fd, rtol=0, atol=1e-7 * np.abs(fd).max())
+
+
+def test_tfest_frd_std_calibrated_by_monte_carlo():
+    """300 FRDs of (0.5 s + 2) / (s^2 + 0.8 s + 4) e^{-0.13 s} with a 2 % complex Gaussian
+    band (weights 1/std; the delay held at its value to keep the test short, the time-domain
+    test above calibrates an estimated one): the 95 % intervals cover 90-99 % (binomial sd
+    of the coverage 1.3 % at 300 runs: 0.95 +- 3 sd) and the reported std matches the
+    spread within 20 % (the sample std of 300 runs is within +-8 % of the truth with
+    probability 0.95)."""
+    true = sysid.TransferFunction([0.5, 2.0], [1.0, 0.8, 4.0], iodelay=0.13)
+    w = np.logspace(-1, 1.3, 40)
+    H0 = true.freqresp(w)
+    std = 0.02 * np.abs(H0)
+    rng = np.random.default_rng(5)
+    est, sd = [], []
+    for _ in range(300):
+        noise = (rng.standard_normal(H0.shape) + 1j * rng.standard_normal(H0.shape))
+        G = sysid.tfest(sysid.FRD(w, H0 + std * noise / np.sqrt(2), std=std), 2, 1,
+                        iodelay=0.13)
+        est.append(G.parameters.value[:4])
+        sd.append(G.parameters.std[:4])
+    est, sd = np.array(est), np.array(sd)
+    truth = np.array([0.8, 4.0, 0.5, 2.0])
+    cover = np.mean(np.abs(est - truth) <= 1.96 * sd, axis=0)
+    assert np.all((cover >= 0.90) & (cover <= 0.99)), cover
+    ratio = est.std(axis=0) / sd.mean(axis=0)
+    assert np.all((ratio > 0.8) & (ratio < 1.2)), ratio

@@ -70,12 +70,12 @@ class Margins:
                 f"{self.gain_crossover:.4g} rad/s)")
 
 
-def _siso(sys: Any) -> Any:
+def _siso(sys: Any, what: str = "margin") -> Any:
     if not hasattr(sys, "freqresp"):
-        raise DataError(f"margin needs a model with freqresp (a sysid model), got "
+        raise DataError(f"{what} needs a model with freqresp (a sysid model), got "
                         f"{type(sys).__name__}")
     if getattr(sys, "ninputs", 1) != 1 or getattr(sys, "noutputs", 1) != 1:
-        raise DataError("margin is defined for a single-input single-output loop; select one "
+        raise DataError(f"{what} is defined for a single-input single-output loop; select one "
                         "pair (model.select or a TransferFunction of one pair)")
     return sys
 

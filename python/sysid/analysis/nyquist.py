@@ -86,7 +86,7 @@ def nyquist(sys: Any, *, omega: Any = None, n_points: int = 20000) -> NyquistRes
     """
     from .margin import _range, _siso
 
-    sys = _siso(sys)
+    sys = _siso(sys, "nyquist")
     dt = float(getattr(sys, "dt", 0.0) or 0.0)
     p = np.asarray(sys.poles()) if hasattr(sys, "poles") else np.zeros(0)
     on_axis = np.abs(np.abs(p) - 1) < 1e-9 if dt > 0 else np.abs(p.real) < 1e-9

@@ -73,10 +73,11 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
     >>> {k: round(v, 6) for k, v in m.values.items()}
     {'Kp': 2.0, 'Tp1': 1.5, 'Td': 0.37}
     """
-    from ..tf.options import fit_percent, progress_callback
+    from ..tf.options import fit_percent, progress_callback, search_limits
     from ..tf.refine import check_experiments, refine
 
     t = ProcessType.parse(type_code)
+    max_iter, tol = search_limits(max_iter, tol, max_delay)
     if not hasattr(data, "experiments") or not hasattr(data, "dt"):
         raise DataError(f"procest needs a sysid.IOData, got {type(data).__name__}; wrap arrays "
                         "as sysid.IOData(u, y, dt=...)")

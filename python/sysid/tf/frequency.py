@@ -121,7 +121,8 @@ def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
     npo = orders(n_poles, l, m, "n_poles", 0)
     nze = np.maximum(npo - 1, 0) if n_zeros is None else orders(n_zeros, l, m, "n_zeros", 0)
     if np.any(nze > npo):
-        raise DataError("n_zeros must not exceed n_poles (the model would be improper)")
+        raise DataError("n_zeros must not exceed n_poles (the model would be improper); give "
+                        "n_zeros <= n_poles")
     given, auto = delays(iodelay, l, m)
     dtv = 0.0 if dt is None else float(dt)
     if dtv and (frd.dt is None or abs(dtv - float(frd.dt)) > 1e-9 * dtv):

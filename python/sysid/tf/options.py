@@ -9,7 +9,8 @@ import numpy as np
 
 from ..errors import DataError
 
-__all__ = ["orders", "delays", "progress_callback", "blockdiag", "fit_percent"]
+__all__ = ["orders", "delays", "search_limits", "progress_callback", "blockdiag",
+           "fit_percent"]
 
 
 def orders(x: Any, l: int, m: int, name: str, lo: int) -> np.ndarray:
@@ -41,6 +42,35 @@ def delays(iodelay: Any, l: int, m: int) -> tuple[np.ndarray, bool]:
     if not np.all(np.isfinite(d)) or np.any(d < 0):
         raise DataError(f"iodelay must be finite and >= 0 seconds, got {d.ravel().tolist()}")
     return d, False
+
+
+def search_limits(max_iter: Any, tol: Any, max_delay: Any) -> tuple[int, float]:
+    """Checked ``(max_iter, tol)``; ``max_delay`` must be ``None`` or positive seconds.
+
+    Examples
+    --------
+    >>> from sysid.tf.options import search_limits
+    >>> search_limits(50, 1e-8, None)
+    (50, 1e-08)
+    """
+    from .._checks import as_int
+
+    it = as_int(max_iter, "max_iter", 0)
+    try:
+        t = float(tol)
+    except (TypeError, ValueError):
+        t = float("nan")
+    if not (np.isfinite(t) and t > 0):
+        raise DataError(f"tol must be a positive finite number (e.g. 1e-10), got {tol!r}")
+    if max_delay is not None:
+        try:
+            d = float(max_delay)
+        except (TypeError, ValueError):
+            d = float("nan")
+        if not (np.isfinite(d) and d > 0):
+            raise DataError(f"max_delay must be None or a positive number of seconds, got "
+                            f"{max_delay!r}")
+    return it, t
 
 
 def progress_callback(progress: Any, max_iter: int) -> Any:

@@ -5,8 +5,9 @@ One output ``y = sum_j G_j(s; p_j) e^{-s tau_j} u_j + e`` with any parameterisat
 ``p_j -> (num_j, den_j)`` of each pair: the pairs are realised (controllable canonical form),
 sampled exactly with the data's hold and their delays (:mod:`sysid.tf.sampling`), and the
 simulation error is minimised by the grey-box predictor on the shared Gauss-Newton search
-(``_sysid.greybox_linear`` with focus ``"simulation"``; the map from ``p`` to the sampled
-matrices is differentiated by central differences, exact to about ``1e-10``). A delay moves
+(``_sysid.greybox_linear`` with focus ``"simulation"``; the map from ``p`` and the delays to
+the sampled matrices is differentiated exactly, :mod:`sysid.tf.sensitivity`: complex step
+through the rational coefficients, Fréchet derivatives of the sampling exponentials). A delay moves
 freely inside one sample interval ``[l h, (l + 1) h]`` (the sampled model is smooth there);
 when it ends on an edge the interval moves and the search resumes. The covariance of ``p``
 and the delays is the Gauss-Newton one with the residual variance (shared
@@ -25,6 +26,7 @@ from .. import _sysid
 from ..errors import DataError
 from .model import assemble
 from .sampling import canonical, sample_pair, shift_columns
+from .sensitivity import pair_derivatives
 
 __all__ = ["PairStructure", "refine", "ConvergenceWarning"]
 
@@ -104,17 +106,52 @@ class _Map:
 
     def __call__(self, z: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
         z = np.asarray(z, dtype=float)
-        th = self.theta(z)
         if not jac:
-            return th, None
+            return self.theta(z), None
+        return self.theta_and_jacobian(z)
+
+    def theta_and_jacobian(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``theta(z)`` and ``d theta / d z``, exact (:mod:`sysid.tf.sensitivity`)."""
+        nv = z.size - self.n_x0
+        v = z[:nv] * self.scale
+        ps, taus = self.split(v)
+        derivs = []
+        for j, (pair, p, tau) in enumerate(zip(self.pairs, ps, taus)):
+            r = tau - self.whole[j] * self.dt
+            derivs.append(pair_derivatives(pair.coef, p, self.dt, self.whole[j], r,
+                                           self.hold))
+        th = self._assembled([(d.Ad, d.cols, d.G, d.c) for d in derivs])
+        if self.n_x0:
+            th[th.size - self.n_x0:] += z[nv:]
         M = np.zeros((th.size, z.size))
-        for i in range(z.size):
-            h = 6e-6 * max(1.0, abs(z[i]))
-            up, dn = z.copy(), z.copy()
-            up[i] += h
-            dn[i] -= h
-            M[:, i] = (self.theta(up) - self.theta(dn)) / (2 * h)
+        offs = np.concatenate([[0], np.cumsum(self.sizes)])
+        for j, d in enumerate(derivs):
+            cols = [offs[j] + k for k in range(self.sizes[j])]
+            if j in self.delay_idx:
+                cols.append(int(offs[-1]) + self.delay_idx.index(j))
+            else:
+                cols.append(-1)
+            for k, col in enumerate(cols):
+                if col < 0:
+                    continue
+                parts = [(np.zeros_like(e.Ad), [(s, np.zeros_like(bc), np.zeros_like(dc))
+                                                for s, bc, dc in e.cols],
+                          np.zeros_like(e.G), np.zeros_like(e.c)) for e in derivs]
+                parts[j] = (d.d_Ad[k], d.d_cols[k], d.d_G[k], d.d_c[k])
+                M[:, col] = self._assembled(parts)
+        M[:, :nv] *= self.scale
+        if self.n_x0:
+            M[th.size - self.n_x0:, nv:] = np.eye(self.n_x0)
         return th, M
+
+    def _assembled(self, parts: list[tuple[Any, ...]]) -> np.ndarray:
+        """``theta`` (initial states at rest) from per-pair ``(Ad, cols, G, c)``; linear in
+        them, so it maps derivatives too."""
+        blocks = [(0, j, (a, cols, g)) for j, (a, cols, g, _) in enumerate(parts)]
+        canon = [(None, None, c, None) for *_, c in parts]
+        Ad, Bt, Cd, Dt, _, G = assemble(blocks, canon, 1, self.m)
+        return np.concatenate([Ad.ravel(), Bt.ravel(), Cd.ravel(), Dt.ravel(),
+                               *[-G @ u0 for u0 in self.u0]])
 
 
 def _bounds(pairs: Sequence[PairStructure], mp: _Map) -> tuple[np.ndarray, ...]:

@@ -11,7 +11,7 @@ from ..errors import DataError
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 from .model import TransferFunction
-from .options import blockdiag, delays, fit_percent, orders, progress_callback
+from .options import blockdiag, delays, fit_percent, orders, progress_callback, search_limits
 from .refine import PairStructure, check_experiments, refine
 from .srivc import srivc
 
@@ -86,6 +86,7 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     """
     if hold not in _HOLDS:
         raise DataError(f"hold must be 'zoh' or 'foh', got {hold!r}")
+    max_iter, tol = search_limits(max_iter, tol, max_delay)
     if initial_state not in ("zero", "estimate"):
         raise DataError(f"initial_state must be 'zero' or 'estimate', got {initial_state!r}")
     if hasattr(data, "omega") and hasattr(data, "response"):  # an FRD
@@ -102,7 +103,8 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     npo = orders(n_poles, l, m, "n_poles", 0)
     nze = np.maximum(npo - 1, 0) if n_zeros is None else orders(n_zeros, l, m, "n_zeros", 0)
     if np.any(nze > npo):
-        raise DataError("n_zeros must not exceed n_poles (the model would be improper)")
+        raise DataError("n_zeros must not exceed n_poles (the model would be improper); give "
+                        "n_zeros <= n_poles")
     fixed_delays, auto = delays(iodelay, l, m)
     if dt is not None:
         return _discrete(data, npo, nze, fixed_delays, auto, dt, max_iter, progress)

@@ -127,6 +127,24 @@ def _innovation_form(model: Any) -> tuple[np.ndarray, ...]:
     return A, np.zeros((A.shape[0], 0)), C, np.zeros((1, 0)), K, lam
 
 
+def _predictor_states(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+                      K: np.ndarray, u: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """``xhat(t | t-1)`` for ``t = 0..N`` (from rest): the Kalman predictor
+    ``x(t+1) = (A - K C) x + (B - K D) u + K y`` run by the Rust core, its output chosen as
+    the next state."""
+    from .. import _sysid
+
+    n = A.shape[0]
+    Ap = A - K @ C
+    Bp = np.hstack([B - K @ D, K])
+    if n == 0:
+        return np.zeros((y.shape[0] + 1, 0))
+    nxt = _sysid.simulate(np.ascontiguousarray(Ap), np.ascontiguousarray(Bp),
+                          np.ascontiguousarray(Ap), np.ascontiguousarray(Bp),
+                          np.ascontiguousarray(np.hstack([u, y])))
+    return np.vstack([np.zeros((1, n)), np.asarray(nxt)])
+
+
 def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
              level: float = 0.95) -> Forecast:
     """Forecast ``horizon`` samples beyond a record, with confidence bands
@@ -183,11 +201,9 @@ def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
     uf = np.zeros((h, 0)) if not m else as_2d(future_inputs, "future_inputs", ncols=m)
     if uf.shape[0] != h:
         raise ShapeError(f"future_inputs has {uf.shape[0]} rows but horizon is {h}")
-    x = np.zeros(n)
-    e = np.empty_like(y)
-    for t in range(y.shape[0]):  # Kalman predictor over the past
-        e[t] = y[t] - C @ x - D @ u[t]
-        x = A @ x + B @ u[t] + K @ e[t]
+    xs = _predictor_states(A, B, C, D, K, u, y)
+    x = xs[-1]
+    e = y - xs[:-1] @ C.T - u @ D.T
     if lam is None:  # no stored innovation covariance: the sample one of the past
         lam = np.atleast_2d(e.T @ e / max(y.shape[0], 1))
     mean = np.empty((h, l))
