@@ -70,6 +70,8 @@ __all__ = [
     "neural_ss_simulate",
     "neural_ss_encode",
     "neural_ss_train",
+    # issue 31 (branch rules): option names, stabilisation, lagged products from the core
+    "option_name",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -688,3 +690,6 @@ class RecursiveEstimator:
     def n_parameters(self) -> int: ...
     def reset_history(self) -> None: ...
     def copy(self) -> RecursiveEstimator: ...
+
+# issue 31 (branch rules): option names, stabilisation, lagged products from the core
+def option_name(option: str, value: str) -> str: ...

@@ -4,28 +4,14 @@ use crate::convert::{mat_to_numpy, slice_to_numpy};
 use crate::errors::IntoPy;
 use crate::hankel::PyHankelFactor;
 use numpy::PyArray1;
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sysid_core::subspace::closed_loop::{
-    ClosedLoop, ClosedLoopMethod, ClosedLoopOptions, VarxRegularization,
-};
+use sysid_core::subspace::closed_loop::{ClosedLoop, ClosedLoopOptions, VarxRegularization};
 
 /// VARX and weighted SVD of a compressed record for PBSID-opt or SSARX.
 #[pyclass(name = "ClosedLoopSubspace", module = "sysid._sysid", frozen)]
 pub struct PyClosedLoop {
     inner: ClosedLoop,
-}
-
-fn regularization(name: &str, ridge: f64) -> PyResult<VarxRegularization> {
-    match name {
-        "none" => Ok(VarxRegularization::None),
-        "ridge" => Ok(VarxRegularization::Ridge(ridge)),
-        "tc" => Ok(VarxRegularization::Tc),
-        other => Err(PyValueError::new_err(format!(
-            "unknown regularization {other:?}; choose \"none\", \"ridge\" or \"tc\""
-        ))),
-    }
 }
 
 #[pymethods]
@@ -41,8 +27,8 @@ impl PyClosedLoop {
         feedthrough: bool,
     ) -> PyResult<Self> {
         let mut opts = ClosedLoopOptions::default();
-        opts.method = ClosedLoopMethod::parse(method).py()?;
-        opts.regularization = self::regularization(regularization, ridge)?;
+        opts.method = method.parse().py()?;
+        opts.regularization = VarxRegularization::from_name(regularization, ridge).py()?;
         opts.feedthrough = feedthrough;
         let f = factor.inner.clone();
         let inner = py.detach(|| ClosedLoop::new(&f, &opts)).py()?;

@@ -6,7 +6,6 @@ use crate::errors::IntoPy;
 use faer::{Mat, MatRef};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::greybox::ode::{
@@ -194,21 +193,20 @@ fn ode_options(dt: f64, integrator: Integrator, fd_step: f64, jacobian: OdeJacob
     o
 }
 
+/// The Jacobian named `name`; the sensitivity equations need both derivative callbacks.
 fn jacobian_kind(
     name: &str,
     fd: &Option<Py<PyAny>>,
     hd: &Option<Py<PyAny>>,
 ) -> PyResult<OdeJacobian> {
-    match name {
-        "fd" => Ok(OdeJacobian::FiniteDifference),
-        "sensitivity" if fd.is_some() && hd.is_some() => Ok(OdeJacobian::Sensitivity),
-        "sensitivity" => Err(PyValueError::new_err(
-            "jacobian=\"sensitivity\" needs rhs_derivatives and output_derivatives",
-        )),
-        other => Err(PyValueError::new_err(format!(
-            "jacobian must be \"fd\" or \"sensitivity\", got {other:?}"
-        ))),
+    let kind: OdeJacobian = name.parse().py()?;
+    if kind == OdeJacobian::Sensitivity && (fd.is_none() || hd.is_none()) {
+        return Err(crate::errors::to_py(SysidError::InvalidArgument {
+            name: "jacobian",
+            reason: "\"sensitivity\" needs rhs_derivatives and output_derivatives".into(),
+        }));
     }
+    Ok(kind)
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -303,16 +301,6 @@ pub fn greybox_linear<'py>(
     Ok(out)
 }
 
-fn integrator(name: &str, substeps: usize, rtol: f64, atol: f64) -> PyResult<Integrator> {
-    match name {
-        "rk4" => Ok(Integrator::Rk4 { substeps }),
-        "adaptive" => Ok(Integrator::Adaptive { rtol, atol }),
-        other => Err(PyValueError::new_err(format!(
-            "integrator must be \"rk4\" or \"adaptive\", got {other:?}"
-        ))),
-    }
-}
-
 /// Estimates a nonlinear grey-box model; `f(t, x, u, p)` and `h(t, x, u, p)` take `x` as
 /// `(nx, K)` and `p` as `(np, K)` arrays (K perturbed columns) and return `(nx, K)`, `(l, K)`.
 #[pyfunction]
@@ -354,7 +342,7 @@ pub fn greybox_ode<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut o = ode_options(
         dt,
-        integrator(integrator_name, substeps, rtol, atol)?,
+        Integrator::from_name(integrator_name, substeps, rtol, atol).py()?,
         fd_step,
         jacobian_kind(jacobian, &rhs_derivatives, &output_derivatives)?,
     );
@@ -431,7 +419,7 @@ pub fn greybox_ode_simulate<'py>(
 ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
     let mut o = OdeOptions::default();
     o.dt = dt;
-    o.integrator = integrator(integrator_name, substeps, rtol, atol)?;
+    o.integrator = Integrator::from_name(integrator_name, substeps, rtol, atol).py()?;
     let st = OdeStructure {
         nx,
         p,
@@ -494,7 +482,7 @@ pub fn greybox_ode_jacobian<'py>(
 ) -> PyResult<JacobianOut<'py>> {
     let o = ode_options(
         dt,
-        integrator(integrator_name, substeps, rtol, atol)?,
+        Integrator::from_name(integrator_name, substeps, rtol, atol).py()?,
         fd_step,
         jacobian_kind(jacobian, &rhs_derivatives, &output_derivatives)?,
     );
@@ -539,14 +527,14 @@ pub fn expm_frechet<'py>(
 ) -> PyResult<ExpmOut<'py>> {
     let xv = view(&x);
     if xv.nrows() != xv.ncols() {
-        return Err(PyValueError::new_err("x must be square"));
+        return Err(pyo3::exceptions::PyValueError::new_err("x must be square"));
     }
     let ds: Vec<Mat<f64>> = dirs.iter().map(|d| view(d).to_owned()).collect();
     if ds
         .iter()
         .any(|d| d.nrows() != xv.nrows() || d.ncols() != xv.ncols())
     {
-        return Err(PyValueError::new_err(
+        return Err(pyo3::exceptions::PyValueError::new_err(
             "every direction must have the shape of x",
         ));
     }

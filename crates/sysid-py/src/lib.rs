@@ -27,6 +27,8 @@ mod tf;
 mod nlss;
 // issue 27 (branch tsonline): online estimators
 mod recursive_estimators;
+// issue 31 (branch rules): option names from the core
+mod names;
 
 #[pymodule]
 fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -50,5 +52,7 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     nlss::register(m)?;
     // issue 27 (branch tsonline)
     recursive_estimators::register(m)?;
+    // issue 31 (branch rules)
+    names::register(m)?;
     Ok(())
 }

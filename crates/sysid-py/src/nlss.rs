@@ -43,17 +43,7 @@ fn model(nx: usize, nu: usize, ny: usize, zeta: Terms2, eta: Terms2) -> PyResult
 /// `terms` selects ("full", "states" or "inputs").
 #[pyfunction]
 pub fn pnlss_monomials(nx: usize, nu: usize, terms: &str, degrees: Vec<usize>) -> PyResult<Terms2> {
-    let t = match terms {
-        "full" => Terms::Full,
-        "states" => Terms::States,
-        "inputs" => Terms::Inputs,
-        other => {
-            return Err(crate::errors::to_py(SysidError::InvalidArgument {
-                name: "terms",
-                reason: format!("must be 'full', 'states' or 'inputs', got {other:?}"),
-            }))
-        }
-    };
+    let t: Terms = terms.parse().py()?;
     Ok(Monomials::new(nx, nu, t, &degrees).py()?.terms().to_vec())
 }
 

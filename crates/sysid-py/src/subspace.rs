@@ -20,7 +20,7 @@ pub struct PySubspace {
 impl PySubspace {
     #[new]
     fn new(py: Python<'_>, factor: &PyHankelFactor, method: &str) -> PyResult<Self> {
-        let method = Method::parse(method).py()?;
+        let method: Method = method.parse().py()?;
         let f = factor.inner.clone();
         let inner = py
             .detach(|| Subspace::from_owned(f, &SubspaceOptions::with_method(method)))

@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import as_option
 from ..errors import DataError
 from ..models.protocol import ModelMixin
 from .greybox import Param, Parameters, as_params
@@ -37,7 +38,6 @@ __all__ = ["NonlinearGreyBox"]
 
 _MAX_SUBSTEPS = 10_000
 
-_INTEGRATORS = ("rk4", "adaptive")
 _JACOBIANS = ("auto", "fd", "sensitivity")
 #: relative central-difference step for derivatives of f and h not given by the user
 _CD_STEP = float(np.finfo(float).eps ** (1 / 3))
@@ -148,8 +148,7 @@ class NonlinearGreyBox(ModelMixin):
                 raise DataError(f"{name} must be a callable (t, x, u, p) -> array")
         self.dfdx, self.dfdp, self.dhdx, self.dhdp = dfdx, dfdp, dhdx, dhdp
         self.jacobian = jacobian
-        if integrator not in _INTEGRATORS:
-            raise DataError(f"integrator must be 'rk4' or 'adaptive', got {integrator!r}")
+        integrator = as_option(integrator, "integrator")
         self.f, self.h = f, h
         self.params: dict[str, Param] = as_params(params)
         self.nx = int(nx)

@@ -97,6 +97,33 @@ pub enum Integrator {
     },
 }
 
+crate::names::option_names! { OdeJacobian, "jacobian", false, [
+    ("fd", OdeJacobian::FiniteDifference), ("sensitivity", OdeJacobian::Sensitivity),
+] }
+
+crate::names::option_names! { Integrator, "integrator", false, [
+    ("rk4", Integrator::Rk4 { substeps: 1 }),
+    ("adaptive", Integrator::Adaptive { rtol: 1e-8, atol: 1e-10 }),
+] }
+
+impl Integrator {
+    /// The integrator named `name` (`"rk4"` with `substeps`, `"adaptive"` with `rtol`,
+    /// `atol`).
+    ///
+    /// ```
+    /// use sysid_core::greybox::ode::Integrator;
+    /// let i = Integrator::from_name("rk4", 4, 1e-8, 1e-10).unwrap();
+    /// assert_eq!(i, Integrator::Rk4 { substeps: 4 });
+    /// assert!(Integrator::from_name("euler", 1, 1e-8, 1e-10).is_err());
+    /// ```
+    pub fn from_name(name: &str, substeps: usize, rtol: f64, atol: f64) -> Result<Self> {
+        Ok(match name.parse()? {
+            Integrator::Rk4 { .. } => Integrator::Rk4 { substeps },
+            Integrator::Adaptive { .. } => Integrator::Adaptive { rtol, atol },
+        })
+    }
+}
+
 /// Options of [`estimate`].
 #[derive(Debug, Clone)]
 #[non_exhaustive]
