@@ -12,7 +12,8 @@ import pytest
 
 import sysid
 from sysid import _sysid
-from sysid.errors import DataError
+from sysid.errors import DataError, NonFiniteError
+from sysid.pem.pem import _stabilize
 
 OPTIONS = {
     "method": ("moesp", "po-moesp", "N4SID"),
@@ -61,3 +62,36 @@ def test_python_presents_the_core_error() -> None:
     with pytest.raises(DataError, match="integrator must be a string"):
         sysid.NonlinearGreyBox(lambda t, x, u, p: -x, lambda t, x, u, p: x, {"a": 1.0}, nx=1,
                                integrator=4)
+
+
+def _stabilize_by_eig(A: np.ndarray) -> np.ndarray:
+    """The former Python rule: eigenvalues with |z| >= 1 moved to 0.99 / conj(z)."""
+    w, V = np.linalg.eig(A)
+    w = np.where(np.abs(w) >= 1.0, 0.99 / np.conj(w), w)
+    return np.real(V @ np.diag(w) @ np.linalg.inv(V))
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_stabilisation_equals_the_eigenvalue_reflection(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    n = 2 + seed % 5
+    A = 1.5 * rng.standard_normal((n, n)) / np.sqrt(n)
+    if np.max(np.abs(np.linalg.eigvals(A))) < 1.0:
+        A *= 1.5 / np.max(np.abs(np.linalg.eigvals(A)))
+    S = _stabilize(A)
+    assert S.dtype == np.float64 and S.shape == A.shape
+    np.testing.assert_allclose(S, _stabilize_by_eig(A), rtol=0, atol=1e-10 * np.abs(A).max())
+    wa, ws = np.linalg.eigvals(A), np.linalg.eigvals(S)
+    assert np.max(np.abs(ws)) < 1.0
+    # stable poles kept, unstable ones reflected to 0.99 / conj(z)
+    want = np.where(np.abs(wa) >= 1.0, 0.99 / np.conj(wa), wa)
+    for z in want:
+        assert np.min(np.abs(ws - z)) < 1e-8
+
+
+def test_stabilisation_keeps_a_stable_matrix_and_refuses_bad_ones() -> None:
+    A = np.array([[0.5, 0.1], [0.0, -0.3]])
+    np.testing.assert_array_equal(_stabilize(A), A)
+    np.testing.assert_allclose(_stabilize(np.array([[2.0]])), [[0.495]], rtol=1e-15)
+    with pytest.raises(NonFiniteError):
+        _stabilize(np.array([[np.nan]]))

@@ -72,6 +72,7 @@ __all__ = [
     "neural_ss_train",
     # issue 31 (branch rules): option names, stabilisation, lagged products from the core
     "option_name",
+    "reflect_unstable_poles",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -693,3 +694,4 @@ class RecursiveEstimator:
 
 # issue 31 (branch rules): option names, stabilisation, lagged products from the core
 def option_name(option: str, value: str) -> str: ...
+def reflect_unstable_poles(a: _Array, shrink: float = 0.99) -> _Array: ...

@@ -27,7 +27,8 @@ mod tf;
 mod nlss;
 // issue 27 (branch tsonline): online estimators
 mod recursive_estimators;
-// issue 31 (branch rules): option names from the core
+// issue 31 (branch rules): option names and stabilisation from the core
+mod linalg;
 mod names;
 
 #[pymodule]
@@ -53,6 +54,7 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // issue 27 (branch tsonline)
     recursive_estimators::register(m)?;
     // issue 31 (branch rules)
+    linalg::register(m)?;
     names::register(m)?;
     Ok(())
 }
