@@ -13,6 +13,7 @@ import pytest
 import sysid
 from sysid import _sysid
 from sysid.errors import DataError, NonFiniteError
+from sysid.nonparametric.correlation import _lag_covariances
 from sysid.pem.pem import _stabilize
 
 OPTIONS = {
@@ -95,3 +96,32 @@ def test_stabilisation_keeps_a_stable_matrix_and_refuses_bad_ones() -> None:
     np.testing.assert_allclose(_stabilize(np.array([[2.0]])), [[0.495]], rtol=1e-15)
     with pytest.raises(NonFiniteError):
         _stabilize(np.array([[np.nan]]))
+
+
+def _lag_covariances_fft(zs: list[np.ndarray], max_lag: int, remove_mean: bool) -> np.ndarray:
+    """The former FFT computation of ``(1/N) sum_t z(t + tau) z(t)^T``."""
+    nc = zs[0].shape[1]
+    R = np.zeros((max_lag + 1, nc, nc))
+    total = 0
+    for z in zs:
+        x = z - z.mean(axis=0) if remove_mean else z
+        n = x.shape[0]
+        total += n
+        nfft = int(2 ** np.ceil(np.log2(2 * n)))
+        X = np.fft.rfft(x, n=nfft, axis=0)
+        C = np.fft.irfft(np.einsum("fa,fb->fab", X, X.conj()), n=nfft, axis=0)
+        L = min(max_lag, n - 1)
+        R[: L + 1] += C[: L + 1]
+    return R / total
+
+
+@pytest.mark.parametrize("remove_mean", [True, False])
+@pytest.mark.parametrize("max_lag", [0, 1, 25, 300])
+def test_lag_covariances_equal_the_fft_ones(remove_mean: bool, max_lag: int) -> None:
+    rng = np.random.default_rng(max_lag)
+    zs = [rng.standard_normal((n, 3)) + 0.5 for n in (1000, 137, 5)]
+    zs.append(np.asfortranarray(rng.standard_normal((64, 3))))  # any memory layout
+    R, total = _lag_covariances(zs, max_lag, remove_mean)
+    assert total == sum(z.shape[0] for z in zs) and R.shape == (max_lag + 1, 3, 3)
+    np.testing.assert_allclose(R, _lag_covariances_fft(zs, max_lag, remove_mean),
+                               rtol=0, atol=1e-12)

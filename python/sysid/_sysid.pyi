@@ -73,6 +73,7 @@ __all__ = [
     # issue 31 (branch rules): option names, stabilisation, lagged products from the core
     "option_name",
     "reflect_unstable_poles",
+    "lagged_products",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -695,3 +696,4 @@ class RecursiveEstimator:
 # issue 31 (branch rules): option names, stabilisation, lagged products from the core
 def option_name(option: str, value: str) -> str: ...
 def reflect_unstable_poles(a: _Array, shrink: float = 0.99) -> _Array: ...
+def lagged_products(parts: list[_Array], max_lag: int) -> _Array: ...
