@@ -187,12 +187,16 @@ pub fn compress_experiments(
     if longest < w {
         return Err(SysidError::InsufficientData {
             context: format!(
-                "the horizon (past={} + future={} = a window of {w} samples)",
-                layout.past, layout.future
+                "the horizon (past={} + future={} = a window of {w} samples; the longest \
+                 experiment allows horizon <= {})",
+                layout.past,
+                layout.future,
+                (longest / 2).max(1)
             ),
             needed: w,
             got: longest,
-            fix: "choose a smaller horizon (past/future) or give a longer record",
+            fix: "choose a smaller horizon (a few times the expected order) or give a longer \
+                  record",
         });
     }
     let run = |kind: CompressorKind| -> Result<HankelFactor> {
