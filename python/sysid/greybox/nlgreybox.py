@@ -273,7 +273,7 @@ class NonlinearGreyBox(ModelMixin):
         return lambda t, X, u, P: self._call(self.h, t, X, u, P)
 
     def core_options(self) -> dict[str, Any]:
-        """Integrator keywords of the core functions."""
+        """The integrator as the core functions take it (their ``integration`` dict)."""
         return {"integrator_name": self.integrator, "substeps": self.substeps,
                 "rtol": self.rtol, "atol": self.atol}
 
@@ -286,10 +286,10 @@ class NonlinearGreyBox(ModelMixin):
         return self.jacobian
 
     def jacobian_options(self, free: list[str]) -> dict[str, Any]:
-        """Keywords of the core functions for the Jacobian: the method and, for the
-        sensitivity equations, the point-wise derivative callables ``(t, x, u, p) ->
-        (value, d/dx, d/dp)`` (user derivatives, or central differences of ``f``/``h`` in
-        the free parameters)."""
+        """The Jacobian as the core functions take it (their ``jacobian`` dict): the
+        method and, for the sensitivity equations, the point-wise derivative callables
+        ``(t, x, u, p) -> (value, d/dx, d/dp)`` (user derivatives, or central differences of
+        ``f``/``h`` in the free parameters)."""
         if self.jacobian_method == "fd":
             return {"jacobian": "fd"}
         return {"jacobian": "sensitivity",
@@ -353,7 +353,7 @@ class NonlinearGreyBox(ModelMixin):
         x = self.x0[0] if x0 is None else np.asarray(x0, dtype=float).reshape(self.nx)
         return np.asarray(_sysid.greybox_ode_simulate(
             self.rhs(), self.out(), np.ascontiguousarray(u), self.nx, list(self.values),
-            list(map(float, x)), dt, **self.core_options()))
+            list(map(float, x)), dt, integration=self.core_options()))
 
     def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
         """No noise model: the simulation."""
