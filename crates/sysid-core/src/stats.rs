@@ -211,7 +211,7 @@ fn channel_stats_ordered(parts: &[MatRef<'_, f64>]) -> ChannelStats {
 pub fn lagged_products(parts: &[&[f64]], d: usize, max_lag: usize) -> Vec<f64> {
     let mut r = vec![0.0; (max_lag + 1) * d * d];
     for x in parts {
-        let n = if d == 0 { 0 } else { x.len() / d };
+        let n = x.len().checked_div(d).unwrap_or(0);
         if n == 0 {
             continue;
         }

@@ -253,6 +253,9 @@ pub struct JacobianArgs {
     fd_step: f64,
 }
 
+/// An optional Python callable.
+type Callback = Option<Py<PyAny>>;
+
 /// An ODE model's structure: `(nx, p, free_p, x0, free_x0, typical)`.
 type StructureArgs = (
     usize,
@@ -280,7 +283,7 @@ fn ode_options(
     dt: f64,
     integration: Option<IntegrationArgs>,
     jacobian: Option<JacobianArgs>,
-) -> PyResult<(OdeOptions, Option<Py<PyAny>>, Option<Py<PyAny>>)> {
+) -> PyResult<(OdeOptions, Callback, Callback)> {
     let i = integration.unwrap_or(IntegrationArgs {
         integrator_name: "rk4".into(),
         substeps: 1,
@@ -472,6 +475,7 @@ type JacobianOut<'py> = (
 /// differences (`jacobian="fd"`) or the sensitivity equations (`"sensitivity"`).
 #[pyfunction]
 #[pyo3(signature = (f, h, inputs, structure, dt, *, integration=None, jacobian=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn greybox_ode_jacobian<'py>(
     py: Python<'py>,
     f: Py<PyAny>,
