@@ -46,8 +46,9 @@ def _jacobian(s, u, dt, vals=None, x01=-0.2):
     vals = VALS if vals is None else vals
     free = s.free_names
     return _sysid.greybox_ode_jacobian(
-        s.rhs(), s.out(), [u], 2, [vals[k] for k in s.names], [0, 1, 2], [[0.6, x01]],
-        [(0, 1)], [1.0] * 4, dt, **s.core_options(), **s.jacobian_options(free))
+        s.rhs(), s.out(), [u], (2, [vals[k] for k in s.names], [0, 1, 2], [[0.6, x01]],
+                                [(0, 1)], [1.0] * 4),
+        dt, integration=s.core_options(), jacobian=s.jacobian_options(free))
 
 
 @pytest.mark.parametrize("integrator,given,tol", [

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from . import _sysid
 from .errors import DataError, NonFiniteError, ShapeError
 
 
@@ -74,6 +75,15 @@ def unmask(x: Any, name: str) -> Any:
             "IOData.from_raw (which interpolates short gaps) or cut them out"
         )
     return np.ma.getdata(x)
+
+
+def as_option(value: Any, option: str, name: str | None = None) -> str:
+    """The canonical name of the option string ``value``: the core parses it (its list of
+    names is the only one) and raises its own error for an unknown name; ``name`` is the
+    argument's name in the message for a value that is not a string (default ``option``)."""
+    if not isinstance(value, str):
+        raise DataError(f"{name or option} must be a string, got {value!r}")
+    return str(_sysid.option_name(option, value))
 
 
 def as_dt(dt: Any, name: str = "dt") -> float:

@@ -80,9 +80,17 @@ __all__ = [
     # issue 29 (branch nlss2): decoupled PNLSS
     "decoupled_simulate",
     "decoupled_estimate",
+    # issue 31 (branch rules): option names, stabilisation, lagged products from the core
+    "option_name",
+    "reflect_unstable_poles",
+    "lagged_products",
 ]
 
 _Array = npt.NDArray[np.float64]
+# an ODE model's (nx, p, free_p, x0, free_x0, typical)
+_OdeStructure = tuple[
+    int, list[float], list[int], list[list[float]], list[tuple[int, int]], list[float]
+]
 
 @final
 class HankelFactor:
@@ -329,43 +337,20 @@ def greybox_linear(
     with_k: bool = False,
     reweight: bool = True,
     x0_params: list[int] = ...,
-    lower: list[float] | None = None,
-    upper: list[float] | None = None,
-    fixed: list[bool] | None = None,
-    max_iter: int = 100,
-    tol_cost: float = 1e-10,
-    tol_step: float = 1e-10,
-    tol_gradient: float = 1e-12,
+    search: dict[str, Any] | None = None,
     progress: Any = None,
 ) -> dict[str, Any]: ...
 def greybox_ode(
     f: Any,
     h: Any,
     experiments: list[tuple[_Array, _Array]],
-    nx: int,
-    p: list[float],
-    free_p: list[int],
-    x0: list[list[float]],
-    free_x0: list[tuple[int, int]],
-    typical: list[float],
+    structure: _OdeStructure,
     dt: float,
     *,
-    integrator_name: str = "rk4",
-    substeps: int = 1,
-    rtol: float = 1e-8,
-    atol: float = 1e-10,
     reweight: bool = True,
-    fd_step: float = 1e-6,
-    jacobian: str = "fd",
-    rhs_derivatives: Any = None,
-    output_derivatives: Any = None,
-    lower: list[float] | None = None,
-    upper: list[float] | None = None,
-    fixed: list[bool] | None = None,
-    max_iter: int = 100,
-    tol_cost: float = 1e-10,
-    tol_step: float = 1e-10,
-    tol_gradient: float = 1e-12,
+    integration: dict[str, Any] | None = None,
+    jacobian: dict[str, Any] | None = None,
+    search: dict[str, Any] | None = None,
     progress: Any = None,
 ) -> dict[str, Any]: ...
 def greybox_ode_simulate(
@@ -377,31 +362,17 @@ def greybox_ode_simulate(
     x0: list[float],
     dt: float,
     *,
-    integrator_name: str = "rk4",
-    substeps: int = 1,
-    rtol: float = 1e-8,
-    atol: float = 1e-10,
+    integration: dict[str, Any] | None = None,
 ) -> _Array: ...
 def greybox_ode_jacobian(
     f: Any,
     h: Any,
     inputs: list[_Array],
-    nx: int,
-    p: list[float],
-    free_p: list[int],
-    x0: list[list[float]],
-    free_x0: list[tuple[int, int]],
-    typical: list[float],
+    structure: _OdeStructure,
     dt: float,
     *,
-    integrator_name: str = "rk4",
-    substeps: int = 1,
-    rtol: float = 1e-8,
-    atol: float = 1e-10,
-    fd_step: float = 1e-6,
-    jacobian: str = "fd",
-    rhs_derivatives: Any = None,
-    output_derivatives: Any = None,
+    integration: dict[str, Any] | None = None,
+    jacobian: dict[str, Any] | None = None,
 ) -> tuple[_Array, _Array]: ...
 def expm_frechet(x: _Array, dirs: list[_Array]) -> tuple[_Array, list[_Array]]: ...
 
@@ -770,3 +741,7 @@ def decoupled_estimate(
     progress: Callable[..., Any] | None = None,
     range: tuple[list[float], list[float]] | None = None,
 ) -> dict[str, Any]: ...
+# issue 31 (branch rules): option names, stabilisation, lagged products from the core
+def option_name(option: str, value: str) -> str: ...
+def reflect_unstable_poles(a: _Array, shrink: float = 0.99) -> _Array: ...
+def lagged_products(parts: list[_Array], max_lag: int) -> _Array: ...

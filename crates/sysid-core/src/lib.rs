@@ -49,6 +49,7 @@ pub mod hankel;
 pub mod hw;
 pub mod linalg;
 pub mod model;
+pub mod names;
 pub mod narx;
 pub mod nlss;
 pub mod optim;

@@ -184,6 +184,56 @@ pub fn spectral_radius(a: MatRef<'_, f64>) -> Result<f64> {
         .fold(0.0, f64::max))
 }
 
+/// `A` with every eigenvalue `z` on or outside the unit circle moved to `shrink / conj(z)`
+/// (its reflection into the circle, pulled in by `shrink <= 1`); the other eigenvalues and
+/// all eigenvectors are kept. Conjugate pairs stay pairs, so the result is real: it is
+/// `A + V diag(z' - z) V^-1` over the moved eigenvalues, the imaginary round-off dropped.
+/// A with no such eigenvalue is returned unchanged.
+///
+/// ```
+/// use faer::mat;
+/// use sysid_core::linalg::{reflect_unstable_poles, spectral_radius};
+/// let a = mat![[2.0, 0.0], [0.0, 0.5]];
+/// let s = reflect_unstable_poles(a.as_ref(), 0.99).unwrap();
+/// assert!((s[(0, 0)] - 0.495).abs() < 1e-15 && s[(1, 1)] == 0.5);
+/// assert!(spectral_radius(s.as_ref()).unwrap() < 1.0);
+/// ```
+pub fn reflect_unstable_poles(a: MatRef<'_, f64>, shrink: f64) -> Result<Mat<f64>> {
+    use faer::linalg::solvers::DenseSolveCore;
+    crate::error::check_finite("A", a)?;
+    let n = a.nrows();
+    if a.ncols() != n {
+        return Err(SysidError::ShapeMismatch {
+            what: "A".into(),
+            expected: format!("({n}, {n})"),
+            got: format!("({n}, {})", a.ncols()),
+        });
+    }
+    if n == 0 || spectral_radius(a)? < 1.0 {
+        return Ok(a.to_owned());
+    }
+    let e = a
+        .eigen()
+        .map_err(|e| SysidError::numerical("eigendecomposition of A", format!("{e:?}")))?;
+    let (v, w) = (e.U(), e.S().column_vector());
+    let vi = v.to_owned().partial_piv_lu().inverse();
+    let mut out = a.to_owned();
+    for k in 0..n {
+        let z = w[k];
+        if z.norm() < 1.0 {
+            continue;
+        }
+        let dz = faer::c64::new(shrink, 0.0) / z.conj() - z;
+        for j in 0..n {
+            let row = dz * vi[(k, j)];
+            for i in 0..n {
+                out[(i, j)] += (v[(i, k)] * row).re;
+            }
+        }
+    }
+    Ok(out)
+}
+
 /// Moore-Penrose pseudo-inverse through the thin SVD; singular values below
 /// `rtol * s_max` are treated as zero. On the calling thread: the matrices here are small
 /// (a few hundred rows at most), where thread wake-ups cost more than the work (see

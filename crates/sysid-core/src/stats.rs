@@ -194,8 +194,80 @@ fn channel_stats_ordered(parts: &[MatRef<'_, f64>]) -> ChannelStats {
     ChannelStats { abs_max, mean, std }
 }
 
+/// Lagged products `R[tau][a][b] = sum_t x_a(t + tau) x_b(t)`, `tau = 0..=max_lag`, summed
+/// over the experiments `parts` (no lag spans two; lags beyond an experiment add nothing).
+///
+/// Each part holds `n` samples of `d` channels row-major (`x[t d + a]`). The sums come
+/// from [`lag_sums`](crate::hankel::lag_sums) read in place over the record, the last
+/// `max_lag` samples through a small zero-padded copy: no copy of the record. Returned
+/// row-major as `(max_lag + 1, d, d)`.
+///
+/// ```
+/// use sysid_core::stats::lagged_products;
+/// // one channel, x = [1, 2, 3]: R[0] = 14, R[1] = 2*1 + 3*2 = 8, R[2] = 3, R[3] = 0
+/// let r = lagged_products(&[&[1.0, 2.0, 3.0][..]], 1, 3);
+/// assert_eq!(r, vec![14.0, 8.0, 3.0, 0.0]);
+/// ```
+pub fn lagged_products(parts: &[&[f64]], d: usize, max_lag: usize) -> Vec<f64> {
+    let mut r = vec![0.0; (max_lag + 1) * d * d];
+    for x in parts {
+        let n = x.len().checked_div(d).unwrap_or(0);
+        if n == 0 {
+            continue;
+        }
+        let w = max_lag.min(n - 1) + 1;
+        let wd = w * d;
+        let mut c = vec![0.0; d * wd];
+        crate::hankel::lag_sums(x, n + 1 - w, d, w, &mut c);
+        if w > 1 {
+            let mut tail = vec![0.0; (2 * w - 2) * d];
+            tail[..(w - 1) * d].copy_from_slice(&x[(n + 1 - w) * d..n * d]);
+            crate::hankel::lag_sums(&tail, w - 1, d, w, &mut c);
+        }
+        for tau in 0..w {
+            for a in 0..d {
+                for b in 0..d {
+                    r[(tau * d + a) * d + b] += c[b * wd + tau * d + a];
+                }
+            }
+        }
+    }
+    r
+}
+
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn lagged_products_match_the_definition() {
+        let (n, d, lag) = (37, 3, 6);
+        let mut seed = 7u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        };
+        let x: Vec<f64> = (0..n * d).map(|_| next()).collect();
+        let short: Vec<f64> = (0..4 * d).map(|_| next()).collect();
+        let r = super::lagged_products(&[&x, &short], d, lag);
+        for tau in 0..=lag {
+            for a in 0..d {
+                for b in 0..d {
+                    let mut want = 0.0;
+                    for part in [&x, &short] {
+                        let m = part.len() / d;
+                        for t in 0..m.saturating_sub(tau) {
+                            want += part[(t + tau) * d + a] * part[t * d + b];
+                        }
+                    }
+                    let got = r[(tau * d + a) * d + b];
+                    assert!(
+                        (got - want).abs() < 1e-13,
+                        "tau {tau} ({a}, {b}): {got} vs {want}"
+                    );
+                }
+            }
+        }
+    }
+
     use super::*;
     use faer::Mat;
 

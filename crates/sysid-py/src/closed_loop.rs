@@ -1,31 +1,17 @@
 //! Bindings of `sysid_core::subspace::closed_loop`: PBSID-opt and SSARX on a compressed record.
 
-use crate::convert::{mat_to_numpy, slice_to_numpy};
+use crate::convert::slice_to_numpy;
 use crate::errors::IntoPy;
 use crate::hankel::PyHankelFactor;
 use numpy::PyArray1;
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use sysid_core::subspace::closed_loop::{
-    ClosedLoop, ClosedLoopMethod, ClosedLoopOptions, VarxRegularization,
-};
+use sysid_core::subspace::closed_loop::{ClosedLoop, ClosedLoopOptions, VarxRegularization};
 
 /// VARX and weighted SVD of a compressed record for PBSID-opt or SSARX.
 #[pyclass(name = "ClosedLoopSubspace", module = "sysid._sysid", frozen)]
 pub struct PyClosedLoop {
     inner: ClosedLoop,
-}
-
-fn regularization(name: &str, ridge: f64) -> PyResult<VarxRegularization> {
-    match name {
-        "none" => Ok(VarxRegularization::None),
-        "ridge" => Ok(VarxRegularization::Ridge(ridge)),
-        "tc" => Ok(VarxRegularization::Tc),
-        other => Err(PyValueError::new_err(format!(
-            "unknown regularization {other:?}; choose \"none\", \"ridge\" or \"tc\""
-        ))),
-    }
 }
 
 #[pymethods]
@@ -41,8 +27,8 @@ impl PyClosedLoop {
         feedthrough: bool,
     ) -> PyResult<Self> {
         let mut opts = ClosedLoopOptions::default();
-        opts.method = ClosedLoopMethod::parse(method).py()?;
-        opts.regularization = self::regularization(regularization, ridge)?;
+        opts.method = method.parse().py()?;
+        opts.regularization = VarxRegularization::from_name(regularization, ridge).py()?;
         opts.feedthrough = feedthrough;
         let f = factor.inner.clone();
         let inner = py.detach(|| ClosedLoop::new(&f, &opts)).py()?;
@@ -66,21 +52,7 @@ impl PyClosedLoop {
     /// Returns a dict with A, B, C, D, K, noise_cov, Q, R, S, stabilized (always False).
     fn fit<'py>(&self, py: Python<'py>, order: usize) -> PyResult<Bound<'py, PyDict>> {
         let id = py.detach(|| self.inner.fit(order)).py()?;
-        let d = PyDict::new(py);
-        d.set_item("A", mat_to_numpy(py, &id.sys.a))?;
-        d.set_item("B", mat_to_numpy(py, &id.sys.b))?;
-        d.set_item("C", mat_to_numpy(py, &id.sys.c))?;
-        d.set_item("D", mat_to_numpy(py, &id.sys.d))?;
-        d.set_item("K", id.k.as_ref().map(|k| mat_to_numpy(py, k)))?;
-        d.set_item(
-            "noise_cov",
-            id.innovation_cov.as_ref().map(|k| mat_to_numpy(py, k)),
-        )?;
-        d.set_item("Q", mat_to_numpy(py, &id.q))?;
-        d.set_item("R", mat_to_numpy(py, &id.r))?;
-        d.set_item("S", mat_to_numpy(py, &id.s))?;
-        d.set_item("stabilized", id.stabilized)?;
-        Ok(d)
+        crate::subspace::identified_dict(py, &id)
     }
 }
 

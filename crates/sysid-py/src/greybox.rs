@@ -6,7 +6,6 @@ use crate::errors::IntoPy;
 use faer::{Mat, MatRef};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyReadonlyArray1, PyReadonlyArray2};
-use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::greybox::ode::{
@@ -184,59 +183,137 @@ impl OdeModel for PyOde<'_> {
     }
 }
 
-/// The integration options shared by the fit and the Jacobian (search options left default).
-fn ode_options(dt: f64, integrator: Integrator, fd_step: f64, jacobian: OdeJacobian) -> OdeOptions {
-    let mut o = OdeOptions::default();
-    o.dt = dt;
-    o.integrator = integrator;
-    o.fd_step = fd_step;
-    o.jacobian = jacobian;
-    o
+/// The search options of the grey-box fits, from a dict with `max_iter` (other keys
+/// missing take the defaults).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct SearchArgs {
+    #[pyo3(default)]
+    lower: Option<Vec<f64>>,
+    #[pyo3(default)]
+    upper: Option<Vec<f64>>,
+    #[pyo3(default)]
+    fixed: Option<Vec<bool>>,
+    max_iter: usize,
+    #[pyo3(default = 1e-10)]
+    tol_cost: f64,
+    #[pyo3(default = 1e-10)]
+    tol_step: f64,
+    #[pyo3(default = 1e-12)]
+    tol_gradient: f64,
 }
 
-fn jacobian_kind(
-    name: &str,
-    fd: &Option<Py<PyAny>>,
-    hd: &Option<Py<PyAny>>,
-) -> PyResult<OdeJacobian> {
-    match name {
-        "fd" => Ok(OdeJacobian::FiniteDifference),
-        "sensitivity" if fd.is_some() && hd.is_some() => Ok(OdeJacobian::Sensitivity),
-        "sensitivity" => Err(PyValueError::new_err(
-            "jacobian=\"sensitivity\" needs rhs_derivatives and output_derivatives",
-        )),
-        other => Err(PyValueError::new_err(format!(
-            "jacobian must be \"fd\" or \"sensitivity\", got {other:?}"
-        ))),
+impl SearchArgs {
+    fn options(args: Option<SearchArgs>) -> optim::Options {
+        let a = args.unwrap_or(SearchArgs {
+            lower: None,
+            upper: None,
+            fixed: None,
+            max_iter: 100,
+            tol_cost: 1e-10,
+            tol_step: 1e-10,
+            tol_gradient: 1e-12,
+        });
+        let mut o = optim::Options::default();
+        o.max_iter = a.max_iter;
+        o.tol_cost = a.tol_cost;
+        o.tol_step = a.tol_step;
+        o.tol_gradient = a.tol_gradient;
+        o.lower = a.lower;
+        o.upper = a.upper;
+        o.fixed = a.fixed;
+        o
     }
 }
 
-#[allow(clippy::too_many_arguments)]
-fn search_options(
-    max_iter: usize,
-    tol_cost: f64,
-    tol_step: f64,
-    tol_gradient: f64,
-    lower: Option<Vec<f64>>,
-    upper: Option<Vec<f64>>,
-    fixed: Option<Vec<bool>>,
-) -> optim::Options {
-    let mut o = optim::Options::default();
-    o.max_iter = max_iter;
-    o.tol_cost = tol_cost;
-    o.tol_step = tol_step;
-    o.tol_gradient = tol_gradient;
-    o.lower = lower;
-    o.upper = upper;
-    o.fixed = fixed;
-    o
+/// The integrator of an ODE model, from a dict with `integrator_name` (other keys missing
+/// take the defaults).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct IntegrationArgs {
+    integrator_name: String,
+    #[pyo3(default = 1)]
+    substeps: usize,
+    #[pyo3(default = 1e-8)]
+    rtol: f64,
+    #[pyo3(default = 1e-10)]
+    atol: f64,
+}
+
+/// How the Jacobian of an ODE model's outputs is formed, from a dict with `jacobian`.
+#[derive(FromPyObject, Default)]
+#[pyo3(from_item_all)]
+pub struct JacobianArgs {
+    jacobian: String,
+    #[pyo3(default)]
+    rhs_derivatives: Option<Py<PyAny>>,
+    #[pyo3(default)]
+    output_derivatives: Option<Py<PyAny>>,
+    #[pyo3(default = 1e-6)]
+    fd_step: f64,
+}
+
+/// An optional Python callable.
+type Callback = Option<Py<PyAny>>;
+
+/// An ODE model's structure: `(nx, p, free_p, x0, free_x0, typical)`.
+type StructureArgs = (
+    usize,
+    Vec<f64>,
+    Vec<usize>,
+    Vec<Vec<f64>>,
+    Vec<(usize, usize)>,
+    Vec<f64>,
+);
+
+fn ode_structure((nx, p, free_p, x0, free_x0, typical): StructureArgs) -> OdeStructure {
+    OdeStructure {
+        nx,
+        p,
+        free_p,
+        x0,
+        free_x0,
+        typical,
+    }
+}
+
+/// The options of an ODE fit, simulation or Jacobian (search options left default), and the
+/// derivative callables; the sensitivity equations need both.
+fn ode_options(
+    dt: f64,
+    integration: Option<IntegrationArgs>,
+    jacobian: Option<JacobianArgs>,
+) -> PyResult<(OdeOptions, Callback, Callback)> {
+    let i = integration.unwrap_or(IntegrationArgs {
+        integrator_name: "rk4".into(),
+        substeps: 1,
+        rtol: 1e-8,
+        atol: 1e-10,
+    });
+    let j = jacobian.unwrap_or(JacobianArgs {
+        jacobian: "fd".into(),
+        fd_step: 1e-6,
+        ..Default::default()
+    });
+    let mut o = OdeOptions::default();
+    o.dt = dt;
+    o.integrator = Integrator::from_name(&i.integrator_name, i.substeps, i.rtol, i.atol).py()?;
+    o.fd_step = j.fd_step;
+    o.jacobian = j.jacobian.parse().py()?;
+    let both = j.rhs_derivatives.is_some() && j.output_derivatives.is_some();
+    if o.jacobian == OdeJacobian::Sensitivity && !both {
+        return Err(crate::errors::to_py(SysidError::InvalidArgument {
+            name: "jacobian",
+            reason: "\"sensitivity\" needs rhs_derivatives and output_derivatives".into(),
+        }));
+    }
+    Ok((o, j.rhs_derivatives, j.output_derivatives))
 }
 
 /// Estimates a linear grey-box structure; `structure(p, jac) -> (theta, dtheta/dp or None)`.
 #[pyfunction]
 #[pyo3(signature = (dims, experiments, structure, p0, *, focus="prediction", with_k=false,
-    reweight=true, x0_params=vec![], lower=None, upper=None, fixed=None, max_iter=100,
-    tol_cost=1e-10, tol_step=1e-10, tol_gradient=1e-12, progress=None))]
+    reweight=true, x0_params=vec![], search=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn greybox_linear<'py>(
     py: Python<'py>,
@@ -248,13 +325,7 @@ pub fn greybox_linear<'py>(
     with_k: bool,
     reweight: bool,
     x0_params: Vec<usize>,
-    lower: Option<Vec<f64>>,
-    upper: Option<Vec<f64>>,
-    fixed: Option<Vec<bool>>,
-    max_iter: usize,
-    tol_cost: f64,
-    tol_step: f64,
-    tol_gradient: f64,
+    search: Option<SearchArgs>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let focus: Focus = focus.parse().py()?;
@@ -263,15 +334,7 @@ pub fn greybox_linear<'py>(
     o.with_k = with_k;
     o.reweight = reweight;
     o.x0_params = x0_params;
-    o.optim = search_options(
-        max_iter,
-        tol_cost,
-        tol_step,
-        tol_gradient,
-        lower,
-        upper,
-        fixed,
-    );
+    o.optim = SearchArgs::options(search);
     let views: Vec<_> = experiments
         .iter()
         .map(|(u, y)| (view(u), view(y)))
@@ -303,79 +366,29 @@ pub fn greybox_linear<'py>(
     Ok(out)
 }
 
-fn integrator(name: &str, substeps: usize, rtol: f64, atol: f64) -> PyResult<Integrator> {
-    match name {
-        "rk4" => Ok(Integrator::Rk4 { substeps }),
-        "adaptive" => Ok(Integrator::Adaptive { rtol, atol }),
-        other => Err(PyValueError::new_err(format!(
-            "integrator must be \"rk4\" or \"adaptive\", got {other:?}"
-        ))),
-    }
-}
-
 /// Estimates a nonlinear grey-box model; `f(t, x, u, p)` and `h(t, x, u, p)` take `x` as
 /// `(nx, K)` and `p` as `(np, K)` arrays (K perturbed columns) and return `(nx, K)`, `(l, K)`.
 #[pyfunction]
-#[pyo3(signature = (f, h, experiments, nx, p, free_p, x0, free_x0, typical, dt, *,
-    integrator_name="rk4", substeps=1, rtol=1e-8, atol=1e-10, reweight=true, fd_step=1e-6,
-    jacobian="fd", rhs_derivatives=None, output_derivatives=None,
-    lower=None, upper=None, fixed=None, max_iter=100, tol_cost=1e-10, tol_step=1e-10,
-    tol_gradient=1e-12, progress=None))]
+#[pyo3(signature = (f, h, experiments, structure, dt, *, reweight=true, integration=None,
+    jacobian=None, search=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn greybox_ode<'py>(
     py: Python<'py>,
     f: Py<PyAny>,
     h: Py<PyAny>,
     experiments: Vec<(PyReadonlyArray2<'py, f64>, PyReadonlyArray2<'py, f64>)>,
-    nx: usize,
-    p: Vec<f64>,
-    free_p: Vec<usize>,
-    x0: Vec<Vec<f64>>,
-    free_x0: Vec<(usize, usize)>,
-    typical: Vec<f64>,
+    structure: StructureArgs,
     dt: f64,
-    integrator_name: &str,
-    substeps: usize,
-    rtol: f64,
-    atol: f64,
     reweight: bool,
-    fd_step: f64,
-    jacobian: &str,
-    rhs_derivatives: Option<Py<PyAny>>,
-    output_derivatives: Option<Py<PyAny>>,
-    lower: Option<Vec<f64>>,
-    upper: Option<Vec<f64>>,
-    fixed: Option<Vec<bool>>,
-    max_iter: usize,
-    tol_cost: f64,
-    tol_step: f64,
-    tol_gradient: f64,
+    integration: Option<IntegrationArgs>,
+    jacobian: Option<JacobianArgs>,
+    search: Option<SearchArgs>,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let mut o = ode_options(
-        dt,
-        integrator(integrator_name, substeps, rtol, atol)?,
-        fd_step,
-        jacobian_kind(jacobian, &rhs_derivatives, &output_derivatives)?,
-    );
+    let (mut o, rhs_derivatives, output_derivatives) = ode_options(dt, integration, jacobian)?;
     o.reweight = reweight;
-    o.optim = search_options(
-        max_iter,
-        tol_cost,
-        tol_step,
-        tol_gradient,
-        lower,
-        upper,
-        fixed,
-    );
-    let st = OdeStructure {
-        nx,
-        p,
-        free_p,
-        x0,
-        free_x0,
-        typical,
-    };
+    o.optim = SearchArgs::options(search);
+    let st = ode_structure(structure);
     let views: Vec<_> = experiments
         .iter()
         .map(|(u, y)| (view(u), view(y)))
@@ -412,8 +425,7 @@ pub fn greybox_ode<'py>(
 
 /// Simulates a nonlinear grey-box model (`f`, `h` as for [`greybox_ode`], called with K = 1).
 #[pyfunction]
-#[pyo3(signature = (f, h, u, nx, p, x0, dt, *, integrator_name="rk4", substeps=1, rtol=1e-8,
-    atol=1e-10))]
+#[pyo3(signature = (f, h, u, nx, p, x0, dt, *, integration=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn greybox_ode_simulate<'py>(
     py: Python<'py>,
@@ -424,14 +436,9 @@ pub fn greybox_ode_simulate<'py>(
     p: Vec<f64>,
     x0: Vec<f64>,
     dt: f64,
-    integrator_name: &str,
-    substeps: usize,
-    rtol: f64,
-    atol: f64,
+    integration: Option<IntegrationArgs>,
 ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
-    let mut o = OdeOptions::default();
-    o.dt = dt;
-    o.integrator = integrator(integrator_name, substeps, rtol, atol)?;
+    let (o, _, _) = ode_options(dt, integration, None)?;
     let st = OdeStructure {
         nx,
         p,
@@ -467,45 +474,20 @@ type JacobianOut<'py> = (
 /// the free parameters and free initial-state entries (row `t l + i`), by forward
 /// differences (`jacobian="fd"`) or the sensitivity equations (`"sensitivity"`).
 #[pyfunction]
-#[pyo3(signature = (f, h, inputs, nx, p, free_p, x0, free_x0, typical, dt, *,
-    integrator_name="rk4", substeps=1, rtol=1e-8, atol=1e-10, fd_step=1e-6, jacobian="fd",
-    rhs_derivatives=None, output_derivatives=None))]
+#[pyo3(signature = (f, h, inputs, structure, dt, *, integration=None, jacobian=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn greybox_ode_jacobian<'py>(
     py: Python<'py>,
     f: Py<PyAny>,
     h: Py<PyAny>,
     inputs: Vec<PyReadonlyArray2<'py, f64>>,
-    nx: usize,
-    p: Vec<f64>,
-    free_p: Vec<usize>,
-    x0: Vec<Vec<f64>>,
-    free_x0: Vec<(usize, usize)>,
-    typical: Vec<f64>,
+    structure: StructureArgs,
     dt: f64,
-    integrator_name: &str,
-    substeps: usize,
-    rtol: f64,
-    atol: f64,
-    fd_step: f64,
-    jacobian: &str,
-    rhs_derivatives: Option<Py<PyAny>>,
-    output_derivatives: Option<Py<PyAny>>,
+    integration: Option<IntegrationArgs>,
+    jacobian: Option<JacobianArgs>,
 ) -> PyResult<JacobianOut<'py>> {
-    let o = ode_options(
-        dt,
-        integrator(integrator_name, substeps, rtol, atol)?,
-        fd_step,
-        jacobian_kind(jacobian, &rhs_derivatives, &output_derivatives)?,
-    );
-    let st = OdeStructure {
-        nx,
-        p,
-        free_p,
-        x0,
-        free_x0,
-        typical,
-    };
+    let (o, rhs_derivatives, output_derivatives) = ode_options(dt, integration, jacobian)?;
+    let st = ode_structure(structure);
     let views: Vec<_> = inputs.iter().map(|u| view(u)).collect();
     let mut cb_err: Slot = None;
     let result = py.detach(|| {
@@ -539,14 +521,14 @@ pub fn expm_frechet<'py>(
 ) -> PyResult<ExpmOut<'py>> {
     let xv = view(&x);
     if xv.nrows() != xv.ncols() {
-        return Err(PyValueError::new_err("x must be square"));
+        return Err(pyo3::exceptions::PyValueError::new_err("x must be square"));
     }
     let ds: Vec<Mat<f64>> = dirs.iter().map(|d| view(d).to_owned()).collect();
     if ds
         .iter()
         .any(|d| d.nrows() != xv.nrows() || d.ncols() != xv.ncols())
     {
-        return Err(PyValueError::new_err(
+        return Err(pyo3::exceptions::PyValueError::new_err(
             "every direction must have the shape of x",
         ));
     }

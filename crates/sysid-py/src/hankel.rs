@@ -84,22 +84,7 @@ impl PyHankelFactor {
         relative_pivot: Option<f64>,
     ) -> PyResult<PyHankelFactor> {
         let layout = HankelLayout::new(n_inputs, n_outputs, past, future).py()?;
-        let rp = relative_pivot.unwrap_or(0.0);
-        let source = match source {
-            "qr" => FactorSource::Qr,
-            "correlation" => FactorSource::Correlation,
-            "correlation-ill-conditioned" => FactorSource::CorrelationIllConditioned {
-                clipped: 0,
-                relative_pivot: rp,
-            },
-            "qr-fallback" => FactorSource::QrFallback { relative_pivot: rp },
-            other => {
-                return Err(crate::errors::to_py(SysidError::InvalidArgument {
-                    name: "source",
-                    reason: format!("unknown factor source {other:?}"),
-                }))
-            }
-        };
+        let source = FactorSource::from_name(source, relative_pivot.unwrap_or(0.0)).py()?;
         let inner = HankelFactor::from_parts(layout, view(&l).to_owned(), n_columns, n_experiments)
             .py()?
             .with_source(source)

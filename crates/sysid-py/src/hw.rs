@@ -24,22 +24,7 @@ type Signals<'py> = (
 
 fn nl(spec: &Nl) -> PyResult<Nonlinearity> {
     let (kind, n, bp) = spec;
-    Ok(match kind.as_str() {
-        "identity" => Nonlinearity::Identity,
-        "saturation" => Nonlinearity::Saturation,
-        "deadzone" => Nonlinearity::DeadZone,
-        "polynomial" => Nonlinearity::Polynomial { degree: *n },
-        "pwl" => Nonlinearity::PiecewiseLinear {
-            breakpoints: bp.clone(),
-        },
-        "sigmoid" => Nonlinearity::Sigmoid { units: *n },
-        other => {
-            return Err(crate::errors::to_py(SysidError::InvalidArgument {
-                name: "nonlinearity",
-                reason: format!("unknown kind {other:?}"),
-            }))
-        }
-    })
+    Nonlinearity::from_spec(kind, *n, bp).py()
 }
 
 fn structure(input: &Nl, output: &Nl, nb: usize, nf: usize, nk: usize) -> PyResult<HwStructure> {

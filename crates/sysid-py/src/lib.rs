@@ -29,6 +29,9 @@ mod nlss;
 mod recursive_estimators;
 // issue 27 (branch nlnet): network nonlinearities of nlarx
 mod narx_network;
+// issue 31 (branch rules): option names and stabilisation from the core
+mod linalg;
+mod names;
 
 #[pymodule]
 fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
@@ -54,5 +57,8 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     recursive_estimators::register(m)?;
     // issue 27 (branch nlnet)
     narx_network::register(m)?;
+    // issue 31 (branch rules)
+    linalg::register(m)?;
+    names::register(m)?;
     Ok(())
 }

@@ -56,17 +56,7 @@ fn model(
 /// `terms` selects ("full", "states" or "inputs").
 #[pyfunction]
 pub fn pnlss_monomials(nx: usize, nu: usize, terms: &str, degrees: Vec<usize>) -> PyResult<Terms2> {
-    let t = match terms {
-        "full" => Terms::Full,
-        "states" => Terms::States,
-        "inputs" => Terms::Inputs,
-        other => {
-            return Err(crate::errors::to_py(SysidError::InvalidArgument {
-                name: "terms",
-                reason: format!("must be 'full', 'states' or 'inputs', got {other:?}"),
-            }))
-        }
-    };
+    let t: Terms = terms.parse().py()?;
     Ok(Monomials::new(nx, nu, t, &degrees).py()?.terms().to_vec())
 }
 

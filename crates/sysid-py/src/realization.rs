@@ -76,16 +76,16 @@ pub fn realize<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let h = unstack(view(&markov), noutputs)?;
     let opts = options(order, rows, cols, rank_tol);
-    match method {
-        "ho_kalman" => {
+    match method.parse::<rz::RealizationMethod>().py()? {
+        rz::RealizationMethod::HoKalman => {
             let r = py.detach(|| rz::ho_kalman(&h, &opts)).py()?;
             realization_dict(py, &r)
         }
-        "kung" => {
+        rz::RealizationMethod::Kung => {
             let r = py.detach(|| rz::kung(&h, &opts)).py()?;
             realization_dict(py, &r)
         }
-        "era" => {
+        rz::RealizationMethod::Era => {
             let e = py.detach(|| rz::era(&h, &opts)).py()?;
             let d = realization_dict(py, &e.realization)?;
             let re: Vec<f64> = e.eigenvalues.iter().map(|z| z.re).collect();
@@ -96,10 +96,6 @@ pub fn realize<'py>(
             d.set_item("mpc", slice_to_numpy(py, &e.mpc))?;
             Ok(d)
         }
-        other => Err(crate::errors::to_py(SysidError::InvalidArgument {
-            name: "method",
-            reason: format!("unknown realisation method {other:?}; use ho_kalman, kung or era"),
-        })),
     }
 }
 
@@ -126,16 +122,7 @@ pub fn fir<'py>(
     let mut opts = FirOptions::default();
     opts.length = length;
     opts.feedthrough = feedthrough;
-    opts.regularization = match regularization {
-        "none" => Regularization::None,
-        "tc" => Regularization::Tc { hyper },
-        other => {
-            return Err(crate::errors::to_py(SysidError::InvalidArgument {
-                name: "regularization",
-                reason: format!("unknown regularisation {other:?}; use 'tc' or None"),
-            }))
-        }
-    };
+    opts.regularization = Regularization::from_name(regularization, hyper).py()?;
     let v = views(&experiments);
     let est = py.detach(|| rz::fir(&v, &opts)).py()?;
     let d = PyDict::new(py);

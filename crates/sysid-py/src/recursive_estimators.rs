@@ -5,7 +5,7 @@ use crate::errors::IntoPy;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use sysid_core::recursive::{Method, Recursive, Structure};
+use sysid_core::recursive::{Method, MethodSettings, Recursive, Structure};
 
 /// What `run` returns: the prior predictions and, when stored, the parameter trajectory.
 type RunOutput<'py> = (Bound<'py, PyArray1<f64>>, Option<Bound<'py, PyArray2<f64>>>);
@@ -15,40 +15,6 @@ type RunOutput<'py> = (Bound<'py, PyArray1<f64>>, Option<Bound<'py, PyArray2<f64
 #[derive(Clone)]
 pub struct PyRecursiveEstimator {
     inner: Recursive,
-}
-
-fn method_of(
-    name: &str,
-    forgetting: f64,
-    process_noise: Option<PyReadonlyArray2<'_, f64>>,
-    noise_variance: f64,
-    gain: f64,
-    bias: f64,
-    p: usize,
-) -> PyResult<Method> {
-    Ok(match name {
-        "forgetting" => Method::Forgetting { lambda: forgetting },
-        "kalman" => {
-            let r1 = match process_noise {
-                Some(a) => a.as_array().iter().copied().collect(),
-                None => (0..p * p)
-                    .map(|i| if i % (p + 1) == 0 { 0.1 } else { 0.0 })
-                    .collect(),
-            };
-            Method::Kalman {
-                r1,
-                r2: noise_variance,
-            }
-        }
-        "normalized_gradient" => Method::NormalizedGradient { gamma: gain, bias },
-        "gradient" => Method::Gradient { gamma: gain },
-        other => {
-            return Err(PyValueError::new_err(format!(
-                "method must be \"forgetting\", \"kalman\", \"normalized_gradient\" or \
-                 \"gradient\", got {other:?}"
-            )))
-        }
-    })
 }
 
 #[pymethods]
@@ -83,15 +49,14 @@ impl PyRecursiveEstimator {
             nk,
         };
         let p = s.n_params().py()?;
-        let m = method_of(
-            method,
+        let settings = MethodSettings {
             forgetting,
-            process_noise,
+            process_noise: process_noise.map(|a| a.as_array().iter().copied().collect()),
             noise_variance,
             gain,
             bias,
-            p,
-        )?;
+        };
+        let m = Method::from_name(method, p, &settings).py()?;
         let t0: Option<Vec<f64>> = theta0.map(|t| t.as_array().to_vec());
         Ok(Self {
             inner: Recursive::new(s, m, t0.as_deref(), Some(p0)).py()?,

@@ -1,7 +1,8 @@
 //! Bindings of `sysid_core::stats`: per-channel statistics of a record.
 
 use crate::convert::{slice_to_numpy, view};
-use numpy::{PyArray1, PyReadonlyArray2};
+use crate::errors::IntoPy;
+use numpy::{IntoPyArray, PyArray1, PyArray3, PyReadonlyArray2};
 use pyo3::prelude::*;
 use sysid_core::stats::channel_stats as core_channel_stats;
 use sysid_core::SysidError;
@@ -35,7 +36,36 @@ pub fn channel_stats<'py>(
     ))
 }
 
+/// `R[tau, a, b] = sum_t x_a(t + tau) x_b(t)` for `tau = 0..=max_lag`, summed over the
+/// C-contiguous `(samples, channels)` arrays `parts` (experiments; no lag spans two).
+#[pyfunction]
+pub fn lagged_products<'py>(
+    py: Python<'py>,
+    parts: Vec<PyReadonlyArray2<'_, f64>>,
+    max_lag: usize,
+) -> PyResult<Bound<'py, PyArray3<f64>>> {
+    let d = parts.first().map_or(0, |p| p.as_array().ncols());
+    if parts.iter().any(|p| p.as_array().ncols() != d) {
+        return Err(crate::errors::to_py(SysidError::InvalidArgument {
+            name: "parts",
+            reason: "every array needs the same number of columns".into(),
+        }));
+    }
+    sysid_core::error::check_matrix_size("max_lag", max_lag.saturating_add(1), d * d).py()?;
+    let slices: Vec<&[f64]> = parts
+        .iter()
+        .map(|p| p.as_slice())
+        .collect::<Result<_, _>>()?;
+    let r = py.detach(|| sysid_core::stats::lagged_products(&slices, d, max_lag));
+    Ok(
+        numpy::ndarray::Array3::from_shape_vec((max_lag + 1, d, d), r)
+            .expect("lagged_products returns (max_lag + 1) d d values")
+            .into_pyarray(py),
+    )
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(channel_stats, m)?)?;
+    m.add_function(wrap_pyfunction!(lagged_products, m)?)?;
     Ok(())
 }

@@ -7,8 +7,33 @@ use numpy::{PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::subspace::{
-    bd_x0, checks, frequency, FitOptions, Method, Subspace, SubspaceOptions,
+    bd_x0, checks, frequency, FitOptions, Identified, Method, Subspace, SubspaceOptions,
 };
+use sysid_core::StateSpace;
+
+/// A dict with the system's A, B, C, D.
+fn system_dict<'py>(py: Python<'py>, sys: &StateSpace) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (key, m) in [("A", &sys.a), ("B", &sys.b), ("C", &sys.c), ("D", &sys.d)] {
+        d.set_item(key, mat_to_numpy(py, m))?;
+    }
+    Ok(d)
+}
+
+/// A fit as a dict: A, B, C, D, K, noise_cov (None without Kalman), Q, R, S, stabilized.
+pub fn identified_dict<'py>(py: Python<'py>, id: &Identified) -> PyResult<Bound<'py, PyDict>> {
+    let d = system_dict(py, &id.sys)?;
+    d.set_item("K", id.k.as_ref().map(|k| mat_to_numpy(py, k)))?;
+    d.set_item(
+        "noise_cov",
+        id.innovation_cov.as_ref().map(|k| mat_to_numpy(py, k)),
+    )?;
+    for (key, m) in [("Q", &id.q), ("R", &id.r), ("S", &id.s)] {
+        d.set_item(key, mat_to_numpy(py, m))?;
+    }
+    d.set_item("stabilized", id.stabilized)?;
+    Ok(d)
+}
 
 /// Weighted SVD of a compressed record for one method.
 #[pyclass(name = "Subspace", module = "sysid._sysid", frozen)]
@@ -20,7 +45,7 @@ pub struct PySubspace {
 impl PySubspace {
     #[new]
     fn new(py: Python<'_>, factor: &PyHankelFactor, method: &str) -> PyResult<Self> {
-        let method = Method::parse(method).py()?;
+        let method: Method = method.parse().py()?;
         let f = factor.inner.clone();
         let inner = py
             .detach(|| Subspace::from_owned(f, &SubspaceOptions::with_method(method)))
@@ -56,21 +81,7 @@ impl PySubspace {
         opts.kalman = kalman;
         opts.stable = stable;
         let id = py.detach(|| self.inner.fit(order, &opts)).py()?;
-        let d = PyDict::new(py);
-        d.set_item("A", mat_to_numpy(py, &id.sys.a))?;
-        d.set_item("B", mat_to_numpy(py, &id.sys.b))?;
-        d.set_item("C", mat_to_numpy(py, &id.sys.c))?;
-        d.set_item("D", mat_to_numpy(py, &id.sys.d))?;
-        d.set_item("K", id.k.as_ref().map(|k| mat_to_numpy(py, k)))?;
-        d.set_item(
-            "noise_cov",
-            id.innovation_cov.as_ref().map(|k| mat_to_numpy(py, k)),
-        )?;
-        d.set_item("Q", mat_to_numpy(py, &id.q))?;
-        d.set_item("R", mat_to_numpy(py, &id.r))?;
-        d.set_item("S", mat_to_numpy(py, &id.s))?;
-        d.set_item("stabilized", id.stabilized)?;
-        Ok(d)
+        identified_dict(py, &id)
     }
 }
 
@@ -134,11 +145,7 @@ pub fn frd_subspace<'py>(
             frequency::identify_frd(&om, &rr, &ii, w.as_deref(), order, horizon)
         })
         .py()?;
-    let d = PyDict::new(py);
-    d.set_item("A", mat_to_numpy(py, &id.sys.a))?;
-    d.set_item("B", mat_to_numpy(py, &id.sys.b))?;
-    d.set_item("C", mat_to_numpy(py, &id.sys.c))?;
-    d.set_item("D", mat_to_numpy(py, &id.sys.d))?;
+    let d = system_dict(py, &id.sys)?;
     d.set_item("singular_values", slice_to_numpy(py, &id.singular_values))?;
     Ok(d)
 }
@@ -178,11 +185,7 @@ pub fn spectra_subspace<'py>(
             )
         })
         .py()?;
-    let d = PyDict::new(py);
-    d.set_item("A", mat_to_numpy(py, &id.sys.a))?;
-    d.set_item("B", mat_to_numpy(py, &id.sys.b))?;
-    d.set_item("C", mat_to_numpy(py, &id.sys.c))?;
-    d.set_item("D", mat_to_numpy(py, &id.sys.d))?;
+    let d = system_dict(py, &id.sys)?;
     d.set_item("singular_values", slice_to_numpy(py, &id.singular_values))?;
     Ok(d)
 }

@@ -283,8 +283,9 @@ class _LinearFit:
         res = _sysid.greybox_linear(
             (self.n, self.m, self.l), self.exps, lambda z, jac: self.theta(z, jac),
             list(map(float, z0)), focus=self.focus, with_k=self.with_k,
-            reweight=self.reweight, x0_params=self.x0_params, lower=list(self.lower),
-            upper=list(self.upper), max_iter=max_iter, tol_cost=tol, progress=cb)
+            reweight=self.reweight, x0_params=self.x0_params,
+            search={"lower": list(self.lower), "upper": list(self.upper), "max_iter": max_iter,
+                    "tol_cost": tol}, progress=cb)
         res["loss"] = float(np.linalg.det(res["innovation_covariance"]))
         res["start"] = z0
         return res

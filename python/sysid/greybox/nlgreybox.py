@@ -29,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import as_option
 from ..errors import DataError
 from ..models.protocol import ModelMixin
 from .greybox import Param, Parameters, as_params
@@ -37,7 +38,6 @@ __all__ = ["NonlinearGreyBox"]
 
 _MAX_SUBSTEPS = 10_000
 
-_INTEGRATORS = ("rk4", "adaptive")
 _JACOBIANS = ("auto", "fd", "sensitivity")
 #: relative central-difference step for derivatives of f and h not given by the user
 _CD_STEP = float(np.finfo(float).eps ** (1 / 3))
@@ -148,8 +148,7 @@ class NonlinearGreyBox(ModelMixin):
                 raise DataError(f"{name} must be a callable (t, x, u, p) -> array")
         self.dfdx, self.dfdp, self.dhdx, self.dhdp = dfdx, dfdp, dhdx, dhdp
         self.jacobian = jacobian
-        if integrator not in _INTEGRATORS:
-            raise DataError(f"integrator must be 'rk4' or 'adaptive', got {integrator!r}")
+        integrator = as_option(integrator, "integrator")
         self.f, self.h = f, h
         self.params: dict[str, Param] = as_params(params)
         self.nx = int(nx)
@@ -274,7 +273,7 @@ class NonlinearGreyBox(ModelMixin):
         return lambda t, X, u, P: self._call(self.h, t, X, u, P)
 
     def core_options(self) -> dict[str, Any]:
-        """Integrator keywords of the core functions."""
+        """The integrator as the core functions take it (their ``integration`` dict)."""
         return {"integrator_name": self.integrator, "substeps": self.substeps,
                 "rtol": self.rtol, "atol": self.atol}
 
@@ -287,10 +286,10 @@ class NonlinearGreyBox(ModelMixin):
         return self.jacobian
 
     def jacobian_options(self, free: list[str]) -> dict[str, Any]:
-        """Keywords of the core functions for the Jacobian: the method and, for the
-        sensitivity equations, the point-wise derivative callables ``(t, x, u, p) ->
-        (value, d/dx, d/dp)`` (user derivatives, or central differences of ``f``/``h`` in
-        the free parameters)."""
+        """The Jacobian as the core functions take it (their ``jacobian`` dict): the
+        method and, for the sensitivity equations, the point-wise derivative callables
+        ``(t, x, u, p) -> (value, d/dx, d/dp)`` (user derivatives, or central differences of
+        ``f``/``h`` in the free parameters)."""
         if self.jacobian_method == "fd":
             return {"jacobian": "fd"}
         return {"jacobian": "sensitivity",
@@ -354,7 +353,7 @@ class NonlinearGreyBox(ModelMixin):
         x = self.x0[0] if x0 is None else np.asarray(x0, dtype=float).reshape(self.nx)
         return np.asarray(_sysid.greybox_ode_simulate(
             self.rhs(), self.out(), np.ascontiguousarray(u), self.nx, list(self.values),
-            list(map(float, x)), dt, **self.core_options()))
+            list(map(float, x)), dt, integration=self.core_options()))
 
     def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
         """No noise model: the simulation."""

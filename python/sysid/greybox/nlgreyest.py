@@ -71,11 +71,13 @@ def nlgreyest(data: IOData, s: NonlinearGreyBox, *, x0: Any, weighting: str, mul
 
     def run(p: np.ndarray, cb: Any) -> dict[str, Any]:
         t0 = time.perf_counter()
+        structure = (s.nx, list(map(float, p)), free_idx, [list(map(float, r)) for r in X0],
+                     free_x0, typical)
         res = _sysid.greybox_ode(
-            s.rhs(), s.out(), exps, s.nx, list(map(float, p)), free_idx,
-            [list(map(float, r)) for r in X0], free_x0, typical, dt,
-            reweight=weighting == "noise", lower=lower, upper=upper, max_iter=max_iter,
-            tol_cost=tol, progress=cb, **s.core_options(), **s.jacobian_options(free))
+            s.rhs(), s.out(), exps, structure, dt, reweight=weighting == "noise",
+            integration=s.core_options(), jacobian=s.jacobian_options(free),
+            search={"lower": lower, "upper": upper, "max_iter": max_iter, "tol_cost": tol},
+            progress=cb)
         res["seconds"] = time.perf_counter() - t0
         res["loss"] = float(np.linalg.det(np.atleast_2d(res["innovation_covariance"])))
         return res

@@ -1,7 +1,7 @@
 """Auto and cross correlation of every channel pair, with confidence bounds.
 
-The lag covariances ``R[tau] = (1/N) sum_t z(t + tau) z(t)^T`` are computed by FFT over all
-experiments (no lag spans two); :func:`sysid.spa` smooths the same covariances with a lag
+The lag covariances ``R[tau] = (1/N) sum_t z(t + tau) z(t)^T`` are the core's lagged sums
+over all experiments (no lag spans two); :func:`sysid.spa` smooths the same covariances with a lag
 window.
 """
 
@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from .. import _sysid
 from .._checks import as_int
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
@@ -23,21 +24,12 @@ __all__ = ["Correlation", "correlation"]
 def _lag_covariances(
     zs: list[np.ndarray], max_lag: int, remove_mean: bool
 ) -> tuple[np.ndarray, int]:
-    """``R[tau] = (1/N) sum_t z(t + tau) z(t)^T`` for tau = 0..max_lag, over experiments."""
-    nc = zs[0].shape[1]
-    R = np.zeros((max_lag + 1, nc, nc))
-    total = 0
-    for z in zs:
-        x = z - z.mean(axis=0) if remove_mean else z
-        n = x.shape[0]
-        total += n
-        nfft = int(2 ** np.ceil(np.log2(2 * n)))
-        X = np.fft.rfft(x, n=nfft, axis=0)
-        # R_ab(tau) = sum_t x_a(t + tau) x_b(t): inverse FFT of X_a conj(X_b)
-        C = np.fft.irfft(np.einsum("fa,fb->fab", X, X.conj()), n=nfft, axis=0)
-        L = min(max_lag, n - 1)
-        R[: L + 1] += C[: L + 1]
-    return R / total, total
+    """``R[tau] = (1/N) sum_t z(t + tau) z(t)^T`` for tau = 0..max_lag, over experiments
+    (the core's lagged sums, read in place)."""
+    xs = [np.ascontiguousarray(z - z.mean(axis=0) if remove_mean else z, dtype=float)
+          for z in zs]
+    total = sum(x.shape[0] for x in xs)
+    return _sysid.lagged_products(xs, int(max_lag)) / total, total
 
 
 class Correlation:

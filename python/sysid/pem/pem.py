@@ -38,12 +38,9 @@ PemUncertainty = ParameterUncertainty
 
 
 def _stabilize(A: np.ndarray) -> np.ndarray:
-    """Reflect eigenvalues outside the unit circle to ``1 / conj(z)`` (a real matrix)."""
-    w, V = np.linalg.eig(A)
-    bad = np.abs(w) >= 1.0
-    w = np.where(bad, 0.99 / np.conj(w) * np.where(np.abs(w) == 1.0, 1.0, 1.0), w)
-    w = np.where(np.abs(w) >= 1.0, 0.99 * w / np.abs(w), w)
-    return np.real(V @ np.diag(w) @ np.linalg.inv(V))
+    """Reflect eigenvalues outside the unit circle to ``0.99 / conj(z)`` (a real matrix;
+    the core's ``reflect_unstable_poles``)."""
+    return _sysid.reflect_unstable_poles(np.ascontiguousarray(A, dtype=float), 0.99)
 
 
 def _radius(M: np.ndarray) -> float:

@@ -25,10 +25,8 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_int
+from .._checks import as_2d, as_int, as_option
 from ..errors import DataError, ShapeError
-
-_METHODS = ("forgetting", "kalman", "normalized_gradient", "gradient")
 
 
 def _orders(v: Any, name: str, lo: int = 0) -> list[int]:
@@ -109,9 +107,7 @@ class _Recursive:
                  method: str, forgetting: float, process_noise: Any, noise_variance: float,
                  gain: float, bias: float, initial_parameters: Any, initial_covariance: Any,
                  dt: float) -> None:
-        if method not in _METHODS:
-            raise DataError(f"method must be one of {', '.join(map(repr, _METHODS))}, "
-                            f"got {method!r}")
+        method = as_option(method, "recursive_method", "method")
         nb_v = _orders(nb, "nb")
         m = len(nb_v)
         nf_v, nk_v = _per_input(nf, m, "nf"), _per_input(nk, m, "nk")

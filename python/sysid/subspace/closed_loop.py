@@ -31,7 +31,7 @@ from typing import Any, Protocol, Union
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int
+from .._checks import as_int, as_option
 from ..errors import DataError
 from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
@@ -83,9 +83,7 @@ def closed_loop_fit(
     -------
     StateSpaceModel
     """
-    if regularization not in REGULARIZATIONS:
-        raise DataError(f"regularization must be one of {REGULARIZATIONS}, got "
-                        f"{regularization!r}")
+    regularization = as_option(regularization, "regularization")
     if not (isinstance(ridge, (int, float)) and np.isfinite(ridge) and ridge >= 0):
         raise DataError(f"ridge must be a finite number >= 0, got {ridge!r}")
     for name, flag in (("feedthrough", feedthrough), ("kalman", kalman)):

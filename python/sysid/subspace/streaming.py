@@ -20,7 +20,7 @@ from typing import Any, Union
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_int
+from .._checks import as_2d, as_int, as_option
 from .._progress import Bar, show
 from ..errors import DataError
 
@@ -275,8 +275,7 @@ def compress_stream(
     'qr-fallback'
 
     """
-    if compressor not in COMPRESSORS:
-        raise DataError(f"compressor must be one of {COMPRESSORS}, got {compressor!r}")
+    compressor = as_option(compressor, "compressor")
     chunk_size = as_int(chunk_size, "chunk_size")
     past = as_int(past, "past")
     future = past if future is None else as_int(future, "future")

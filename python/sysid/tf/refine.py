@@ -185,9 +185,11 @@ def _run(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarray
     res = _sysid.greybox_linear(
         (mp.n, len(mp.taps), 1), data, mp, list(map(float, z0)), focus="simulation",
         with_k=False, reweight=False, x0_params=list(range(nz, nz + mp.n_x0)),
-        lower=list(np.concatenate([lo, -inf])), upper=list(np.concatenate([hi, inf])),
-        fixed=list(map(bool, np.concatenate([fx, np.zeros(mp.n_x0, bool)]))),
-        max_iter=max_iter, tol_cost=tol, tol_step=tol, tol_gradient=tol * 1e-2,
+        search={"lower": list(np.concatenate([lo, -inf])),
+                "upper": list(np.concatenate([hi, inf])),
+                "fixed": list(map(bool, np.concatenate([fx, np.zeros(mp.n_x0, bool)]))),
+                "max_iter": max_iter, "tol_cost": tol, "tol_step": tol,
+                "tol_gradient": tol * 1e-2},
         progress=progress)
     return res, mp
 

@@ -47,7 +47,34 @@ pub enum FactorSource {
     },
 }
 
+crate::names::option_names! { FactorSource, "source", false, [
+    ("qr", FactorSource::Qr), ("correlation", FactorSource::Correlation),
+    ("correlation-ill-conditioned", FactorSource::CorrelationIllConditioned {
+        clipped: 0, relative_pivot: 0.0 }),
+    ("qr-fallback", FactorSource::QrFallback { relative_pivot: 0.0 }),
+] }
+
 impl FactorSource {
+    /// The source named `name` (see [`FactorSource::name`]) with the recorded pivot.
+    ///
+    /// ```
+    /// use sysid_core::hankel::FactorSource;
+    /// let s = FactorSource::from_name("qr-fallback", 1e-9).unwrap();
+    /// assert_eq!(s, FactorSource::QrFallback { relative_pivot: 1e-9 });
+    /// ```
+    pub fn from_name(name: &str, relative_pivot: f64) -> crate::error::Result<Self> {
+        Ok(match name.parse()? {
+            FactorSource::CorrelationIllConditioned { clipped, .. } => {
+                FactorSource::CorrelationIllConditioned {
+                    clipped,
+                    relative_pivot,
+                }
+            }
+            FactorSource::QrFallback { .. } => FactorSource::QrFallback { relative_pivot },
+            other => other,
+        })
+    }
+
     /// Short name: `"qr"`, `"correlation"`, `"correlation-ill-conditioned"` or `"qr-fallback"`.
     pub fn name(&self) -> &'static str {
         match self {

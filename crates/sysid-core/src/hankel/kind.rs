@@ -36,6 +36,15 @@ pub enum CompressorKind {
 /// checks Markov parameters within `1e-8` of the exact path.
 pub const AUTO_MIN_RELATIVE_PIVOT: f64 = 1e-6;
 
+crate::names::option_names! { CompressorKind, "compressor", false, [
+    ("auto", CompressorKind::Auto(CorrelationOptions {
+        min_relative_pivot: AUTO_MIN_RELATIVE_PIVOT,
+        ..CorrelationOptions::default()
+    })),
+    ("qr", CompressorKind::Qr { chunk_rows: None }),
+    ("correlation", CompressorKind::Correlation(CorrelationOptions::default())),
+] }
+
 impl CompressorKind {
     /// Parses `"auto"`, `"qr"` or `"correlation"`; `chunk_rows` sets the windows per QR update or the
     /// samples per block of the correlation sums.
@@ -46,32 +55,18 @@ impl CompressorKind {
     /// assert!(CompressorKind::parse("svd", None).is_err());
     /// ```
     pub fn parse(name: &str, chunk_rows: Option<usize>) -> Result<Self> {
-        match name {
-            "qr" => Ok(CompressorKind::Qr { chunk_rows }),
-            "correlation" => {
-                let mut opts = CorrelationOptions::default();
-                if let Some(r) = chunk_rows {
-                    opts.block_rows = r.max(1);
-                }
-                Ok(CompressorKind::Correlation(opts))
+        Ok(match (name.parse()?, chunk_rows) {
+            (CompressorKind::Qr { .. }, rows) => CompressorKind::Qr { chunk_rows: rows },
+            (CompressorKind::Correlation(mut o), Some(r)) => {
+                o.block_rows = r.max(1);
+                CompressorKind::Correlation(o)
             }
-            "auto" => {
-                let mut opts = CorrelationOptions {
-                    min_relative_pivot: AUTO_MIN_RELATIVE_PIVOT,
-                    ..CorrelationOptions::default()
-                };
-                if let Some(r) = chunk_rows {
-                    opts.block_rows = r.max(1);
-                }
-                Ok(CompressorKind::Auto(opts))
+            (CompressorKind::Auto(mut o), Some(r)) => {
+                o.block_rows = r.max(1);
+                CompressorKind::Auto(o)
             }
-            other => Err(SysidError::invalid(
-                "compressor",
-                format!(
-                    "unknown compressor {other:?}; available: \"auto\", \"qr\", \"correlation\""
-                ),
-            )),
-        }
+            (kind, None) => kind,
+        })
     }
 
     /// The name [`CompressorKind::parse`] accepts for this kind.
@@ -192,12 +187,16 @@ pub fn compress_experiments(
     if longest < w {
         return Err(SysidError::InsufficientData {
             context: format!(
-                "the horizon (past={} + future={} = a window of {w} samples)",
-                layout.past, layout.future
+                "the horizon (past={} + future={} = a window of {w} samples; the longest \
+                 experiment allows horizon <= {})",
+                layout.past,
+                layout.future,
+                (longest / 2).max(1)
             ),
             needed: w,
             got: longest,
-            fix: "choose a smaller horizon (past/future) or give a longer record",
+            fix: "choose a smaller horizon (a few times the expected order) or give a longer \
+                  record",
         });
     }
     let run = |kind: CompressorKind| -> Result<HankelFactor> {

@@ -55,7 +55,34 @@ pub enum Nonlinearity {
     },
 }
 
+crate::names::option_names! { Nonlinearity, "nonlinearity", false, [
+    ("identity", Nonlinearity::Identity), ("saturation", Nonlinearity::Saturation),
+    ("deadzone", Nonlinearity::DeadZone), ("polynomial", Nonlinearity::Polynomial { degree: 2 }),
+    ("pwl", Nonlinearity::PiecewiseLinear { breakpoints: Vec::new() }),
+    ("sigmoid", Nonlinearity::Sigmoid { units: 1 }),
+] }
+
 impl Nonlinearity {
+    /// The nonlinearity of kind `kind` with `n` (a polynomial's degree, a sigmoid network's
+    /// units) and the breakpoints of a piecewise-linear one (the others ignore them).
+    ///
+    /// ```
+    /// use sysid_core::hw::Nonlinearity;
+    /// let p = Nonlinearity::from_spec("polynomial", 3, &[]).unwrap();
+    /// assert_eq!(p, Nonlinearity::Polynomial { degree: 3 });
+    /// assert!(Nonlinearity::from_spec("spline", 3, &[]).is_err());
+    /// ```
+    pub fn from_spec(kind: &str, n: usize, breakpoints: &[f64]) -> Result<Self> {
+        Ok(match kind.parse()? {
+            Nonlinearity::Polynomial { .. } => Nonlinearity::Polynomial { degree: n },
+            Nonlinearity::PiecewiseLinear { .. } => Nonlinearity::PiecewiseLinear {
+                breakpoints: breakpoints.to_vec(),
+            },
+            Nonlinearity::Sigmoid { .. } => Nonlinearity::Sigmoid { units: n },
+            other => other,
+        })
+    }
+
     /// Number of free parameters.
     pub fn n_params(&self) -> usize {
         match self {

@@ -13,6 +13,10 @@ pub enum Terms {
     Inputs,
 }
 
+crate::names::option_names! { Terms, "terms", false, [
+    ("full", Terms::Full), ("states", Terms::States), ("inputs", Terms::Inputs),
+] }
+
 /// A list of monomials, each a non-decreasing list of variable indices into `z = [x; u]`
 /// (`[0, 0, 3]` is `z0^2 z3`).
 ///

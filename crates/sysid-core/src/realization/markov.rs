@@ -41,6 +41,26 @@ pub enum Regularization {
     },
 }
 
+crate::names::option_names! { Regularization, "regularization", false, [
+    ("none", Regularization::None), ("tc", Regularization::Tc { hyper: None }),
+] }
+
+impl Regularization {
+    /// The regularisation named `name` (`"none"` or `"tc"`, with fixed `hyper` or tuned).
+    ///
+    /// ```
+    /// use sysid_core::realization::Regularization;
+    /// assert_eq!(Regularization::from_name("tc", None).unwrap(), Regularization::Tc { hyper: None });
+    /// assert!(Regularization::from_name("ridge", None).is_err());
+    /// ```
+    pub fn from_name(name: &str, hyper: Option<(f64, f64)>) -> Result<Self> {
+        Ok(match name.parse()? {
+            Regularization::Tc { .. } => Regularization::Tc { hyper },
+            other => other,
+        })
+    }
+}
+
 /// Options of [`fir`].
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]

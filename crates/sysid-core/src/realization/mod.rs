@@ -42,6 +42,22 @@ use crate::error::{Result, SysidError};
 use crate::model::StateSpace;
 use faer::{Mat, MatRef};
 
+/// Which realisation algorithm: Ho-Kalman, Kung or ERA.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RealizationMethod {
+    /// [`ho_kalman`].
+    HoKalman,
+    /// [`kung`].
+    Kung,
+    /// [`era`].
+    Era,
+}
+
+crate::names::option_names! { RealizationMethod, "method", false, [
+    ("ho_kalman", RealizationMethod::HoKalman), ("kung", RealizationMethod::Kung),
+    ("era", RealizationMethod::Era),
+] }
+
 /// Options shared by the realisation algorithms.
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]

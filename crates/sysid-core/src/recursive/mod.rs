@@ -45,7 +45,7 @@ mod update;
 
 use crate::error::{Result, SysidError};
 use lagged::{Iir, Lagged};
-pub use update::Method;
+pub use update::{Method, MethodSettings};
 
 /// Orders of the polynomial structure (single output, `nb.len()` inputs).
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -34,7 +34,60 @@ pub enum Method {
     },
 }
 
+crate::names::option_names! { Method, "method", false, [
+    ("forgetting", Method::Forgetting { lambda: 1.0 }),
+    ("kalman", Method::Kalman { r1: Vec::new(), r2: 1.0 }),
+    ("normalized_gradient", Method::NormalizedGradient { gamma: 1.0, bias: f64::EPSILON }),
+    ("gradient", Method::Gradient { gamma: 1.0 }),
+] }
+
+/// The settings of every [`Method`], of which [`Method::from_name`] takes those it needs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MethodSettings {
+    /// Forgetting factor (`"forgetting"`).
+    pub forgetting: f64,
+    /// Process-noise covariance, row-major p x p (`"kalman"`; `None`: `0.1 I`).
+    pub process_noise: Option<Vec<f64>>,
+    /// Measurement-noise variance (`"kalman"`).
+    pub noise_variance: f64,
+    /// Adaptation gain (the gradient methods).
+    pub gain: f64,
+    /// Bias of the normalised gradient.
+    pub bias: f64,
+}
+
 impl Method {
+    /// The method named `name` for `p` parameters, with its settings from `s`.
+    ///
+    /// ```
+    /// use sysid_core::recursive::{Method, MethodSettings};
+    /// let s = MethodSettings { forgetting: 0.99, process_noise: None, noise_variance: 1.0,
+    ///     gain: 1.0, bias: 0.0 };
+    /// assert_eq!(Method::from_name("forgetting", 2, &s).unwrap(),
+    ///            Method::Forgetting { lambda: 0.99 });
+    /// assert!(Method::from_name("lms", 2, &s).is_err());
+    /// ```
+    pub fn from_name(name: &str, p: usize, s: &MethodSettings) -> Result<Self> {
+        Ok(match name.parse()? {
+            Method::Forgetting { .. } => Method::Forgetting {
+                lambda: s.forgetting,
+            },
+            Method::Kalman { .. } => Method::Kalman {
+                r1: s.process_noise.clone().unwrap_or_else(|| {
+                    (0..p * p)
+                        .map(|i| if i % (p + 1) == 0 { 0.1 } else { 0.0 })
+                        .collect()
+                }),
+                r2: s.noise_variance,
+            },
+            Method::NormalizedGradient { .. } => Method::NormalizedGradient {
+                gamma: s.gain,
+                bias: s.bias,
+            },
+            Method::Gradient { .. } => Method::Gradient { gamma: s.gain },
+        })
+    }
+
     /// Checks the settings for `p` parameters.
     pub(super) fn check(&self, p: usize) -> Result<()> {
         let bad = |name: &'static str, why: String| Err(SysidError::invalid(name, why));

@@ -60,17 +60,16 @@ pub enum ClosedLoopMethod {
     Ssarx,
 }
 
+crate::names::option_names! { ClosedLoopMethod, "method", true, [
+    ("pbsid", ClosedLoopMethod::Pbsid), ("pbsid-opt", ClosedLoopMethod::Pbsid),
+    ("pbsidopt", ClosedLoopMethod::Pbsid), ("ssarx", ClosedLoopMethod::Ssarx),
+] }
+
 impl ClosedLoopMethod {
-    /// Parses `"pbsid" | "pbsid-opt" | "ssarx"`.
+    /// Parses `"pbsid" | "pbsid-opt" | "ssarx"` (ASCII case ignored); the same as
+    /// `name.parse()`.
     pub fn parse(name: &str) -> Result<Self> {
-        match name.to_ascii_lowercase().as_str() {
-            "pbsid" | "pbsid-opt" | "pbsidopt" => Ok(Self::Pbsid),
-            "ssarx" => Ok(Self::Ssarx),
-            other => Err(SysidError::invalid(
-                "method",
-                format!("unknown closed-loop method {other:?}; choose pbsid or ssarx"),
-            )),
-        }
+        name.parse()
     }
 }
 
@@ -86,6 +85,31 @@ pub enum VarxRegularization {
     /// Prior variance `c α^k` on every coefficient of lag k (lag 0 for `u(t)`), `(c, α)`
     /// tuned per output by maximising the marginal likelihood on a grid.
     Tc,
+}
+
+/// Ridge weight of `"ridge"` parsed without a value (the Python default).
+pub const DEFAULT_RIDGE: f64 = 1e-3;
+
+crate::names::option_names! { VarxRegularization, "regularization", false, [
+    ("none", VarxRegularization::None), ("ridge", VarxRegularization::Ridge(DEFAULT_RIDGE)),
+    ("tc", VarxRegularization::Tc),
+] }
+
+impl VarxRegularization {
+    /// The regularisation named `name` (`"none"`, `"ridge"`, `"tc"`), ridge weight `ridge`.
+    ///
+    /// ```
+    /// use sysid_core::subspace::closed_loop::VarxRegularization;
+    /// let r = VarxRegularization::from_name("ridge", 0.1).unwrap();
+    /// assert_eq!(r, VarxRegularization::Ridge(0.1));
+    /// assert!(VarxRegularization::from_name("lasso", 0.1).is_err());
+    /// ```
+    pub fn from_name(name: &str, ridge: f64) -> Result<Self> {
+        Ok(match name.parse()? {
+            VarxRegularization::Ridge(_) => VarxRegularization::Ridge(ridge),
+            other => other,
+        })
+    }
 }
 
 /// Options of [`ClosedLoop::new`].

@@ -56,24 +56,23 @@ pub enum Method {
     Cva,
 }
 
+crate::names::option_names! { Method, "method", true, [
+    ("moesp", Method::Moesp), ("po-moesp", Method::Moesp), ("pomoesp", Method::Moesp),
+    ("ordinary-moesp", Method::OrdinaryMoesp), ("moesp-ordinary", Method::OrdinaryMoesp),
+    ("pi-moesp", Method::PiMoesp), ("n4sid", Method::N4sid), ("cva", Method::Cva),
+] }
+
 impl Method {
-    /// Parses `"moesp" | "po-moesp" | "ordinary-moesp" | "pi-moesp" | "n4sid" | "cva"`.
+    /// Parses `"moesp" | "po-moesp" | "ordinary-moesp" | "pi-moesp" | "n4sid" | "cva"`
+    /// (ASCII case ignored); the same as `name.parse()`.
+    ///
+    /// ```
+    /// use sysid_core::subspace::Method;
+    /// assert_eq!(Method::parse("N4SID").unwrap(), Method::N4sid);
+    /// assert_eq!("po-moesp".parse::<Method>().unwrap(), Method::Moesp);
+    /// ```
     pub fn parse(name: &str) -> Result<Self> {
-        Ok(match name.to_ascii_lowercase().as_str() {
-            "moesp" | "po-moesp" => Method::Moesp,
-            "ordinary-moesp" => Method::OrdinaryMoesp,
-            "pi-moesp" => Method::PiMoesp,
-            "n4sid" => Method::N4sid,
-            "cva" => Method::Cva,
-            other => {
-                return Err(SysidError::invalid(
-                    "method",
-                    format!(
-                        "unknown method {other:?}; choose moesp, ordinary-moesp, pi-moesp, n4sid or cva"
-                    ),
-                ))
-            }
-        })
+        name.parse()
     }
 }
 
