@@ -269,3 +269,37 @@ def test_the_identify_guide_runs():
     for i, block in enumerate(blocks):
         quiet(exec, compile(block, f"docs/identify.md[python block {i}]", "exec"), ns)
     assert ns["res"].model.is_stable() and ns["m"].nstates >= 3
+
+
+def test_identify_returns_an_unstable_model_only_when_the_data_insist():
+    # an open-loop unstable plant: every stable candidate simulates the held-out blocks
+    # worse than the unstable ones, so the model is unstable, with a warning naming the pole
+    rng = np.random.default_rng(4)
+    plant = sysid.StateSpaceModel([[1.01, 0.0], [0.0, 0.6]], [[1.0], [1.0]], [[1.0, 1.0]])
+    u = rng.standard_normal((600, 1))
+    data = sysid.IOData(u=u, y=plant.simulate(u) + 0.05 * rng.standard_normal((600, 1)))
+    with pytest.warns(sysid.errors.StabilityWarning, match="largest pole modulus 1.01"):
+        res = sysid.identify(data, refine=False, progress=False)
+    assert not res.model.is_stable()
+    assert np.max(np.abs(res.model.poles())) == pytest.approx(1.01, abs=2e-3)
+    # asked for a stable model, it gets the best stable one, without a warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        stable = sysid.identify(data, refine=False, enforce_stability=True, progress=False)
+    assert stable.model.is_stable()
+    with pytest.raises(sysid.errors.DataError, match="enforce_stability"):
+        sysid.identify(data, enforce_stability="yes")
+
+
+def test_identify_time_budget_keeps_the_subspace_sweep_and_says_it_stopped():
+    est, _ = record("dryer")
+    with pytest.warns(UserWarning, match="time_budget"):
+        res = sysid.identify(est, time_budget=1e-3, progress=False)
+    assert res.out_of_time and "time budget spent" in res.summary()
+    fams = {r["family"] for r in res.leaderboard}
+    assert {"moesp", "n4sid", "cva"} <= fams and res.model.is_stable()
+    full = {r["family"] for r in quiet(sysid.identify, est, time_budget=None,
+                                       progress=False).leaderboard}
+    assert "pem" in full and "pem" not in fams
+    with pytest.raises(sysid.errors.DataError, match="time_budget"):
+        sysid.identify(est, time_budget=-1.0)

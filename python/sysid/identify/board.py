@@ -57,17 +57,24 @@ class Board:
         self.out_of_time = False
 
     def time_left(self) -> bool:
-        """False once the time budget is spent (then no more candidates are scored)."""
-        if self.deadline is not None and time.perf_counter() > self.deadline:
+        """False once the time budget (CPU seconds of this process) is spent."""
+        if self.deadline is not None and time.process_time() > self.deadline:
             self.out_of_time = True
         return not self.out_of_time
 
+    def stopper(self) -> Any:
+        """A progress callback for iterative fits: stops them once the budget is spent."""
+        def cb(*_: Any) -> bool:
+            return self.time_left()
+        return cb
+
     def add(self, family: str, order: int, feedthrough: bool, focus: str | None,
-            criterion: str, fit_fn: Any, refit: Any, start: dict[str, Any] | None = None
-            ) -> dict[str, Any] | None:
+            criterion: str, fit_fn: Any, refit: Any, start: dict[str, Any] | None = None,
+            budgeted: bool = True) -> dict[str, Any] | None:
         """Score a candidate: ``fit_fn(k)`` fits it on fold ``k``, ``refit(data)`` on the whole
-        record; ``start`` is the leaderboard row it was refined from, if any."""
-        if not self.time_left():
+        record; ``start`` is the leaderboard row it was refined from, if any. ``budgeted``
+        candidates are skipped once the time budget is spent (the subspace sweep is not)."""
+        if budgeted and not self.time_left():
             return None
         t = time.perf_counter()
         row: dict[str, Any] = {"family": family, "order": order, "feedthrough": feedthrough,
@@ -94,7 +101,10 @@ class Board:
             row.update(held_out_fit=-np.inf, mean_fit=-np.inf, fold_fits=[],
                        max_abs_pole=np.nan, stable=False,
                        note=f"{type(e).__name__}: {e}"[:120])
-        if start is not None and row["held_out_fit"] < start["held_out_fit"] - slack(
+        if budgeted and not self.time_left():
+            row["note"] = "time budget spent while it was fitted: not chosen"
+            row["worse_than_start"] = True
+        elif start is not None and row["held_out_fit"] < start["held_out_fit"] - slack(
                 start["held_out_fit"]):
             row["note"] = (f"held-out fit below its start's ({start['held_out_fit']:.1f} %): "
                            "not chosen")
@@ -138,7 +148,7 @@ class Board:
         near = [r for r in self.rows if self.eligible(r, stable_only)
                 and r["held_out_fit"] >= best - s]
         # refined candidates first (few; each the refinement of a near-best start)
-        return sorted(near, key=lambda r: (r["criterion"] == "subspace", -r["held_out_fit"]))
+        return sorted(near, key=lambda r: (r["criterion"].startswith("subspace"), -r["held_out_fit"]))
 
     def ranked(self, allow_unstable: bool = False) -> list[dict[str, Any]]:
         """Eligible stable candidates first (unstable ones too when ``allow_unstable``);

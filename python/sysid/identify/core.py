@@ -43,6 +43,8 @@ CLOSED_LOOP = ("pbsid", "ssarx")
 N_REFINE = 3
 #: candidates the held-out blocks cannot tell apart that are re-fitted and compared by BIC
 N_FINAL = 12
+#: unstable subspace candidates re-fitted with a stable A when no candidate is stable
+N_STABILISED = 10
 
 
 def _offsets(data: IOData) -> tuple[IOData, np.ndarray, np.ndarray]:
@@ -93,19 +95,36 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
     top = min(min(e.max_order for e in ests), max_order or MAX_ORDER)
     whole: dict[int, Any] = {}  # the whole record's compression, once per record
 
-    def refit(data: IOData, m: str, n: int, ft: bool) -> Any:
+    def refit(data: IOData, m: str, n: int, ft: bool, stable: bool = False) -> Any:
         if id(data) not in whole:
             whole.clear()
             whole[id(data)] = SubspaceEstimator(data, h_full)
-        return whole[id(data)].fit(n, method=m, feedthrough=ft)
+        return whole[id(data)].fit(n, method=m, feedthrough=ft, stable=stable)
 
     for meth in methods:
         for ft in (False, True):
             for n in range(1, top + 1):
-                board.add(meth, n, ft, None, "subspace",
-                          lambda k, m=meth, n=n, ft=ft: ests[k].fit(n, method=m, feedthrough=ft,
-                                                                    kalman=False),
-                          lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft))
+                row = board.add(meth, n, ft, None, "subspace",
+                                lambda k, m=meth, n=n, ft=ft: ests[k].fit(
+                                    n, method=m, feedthrough=ft, kalman=False),
+                                lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft),
+                                budgeted=False)
+                if row is not None:  # its stabilised variant, scored only when needed
+                    row["stabilised"] = (
+                        lambda k, m=meth, n=n, ft=ft: ests[k].fit(
+                            n, method=m, feedthrough=ft, kalman=False, stable=True),
+                        lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft, True))
+
+
+def _stabilised_candidates(board: Board) -> None:
+    """No stable candidate: the best subspace candidates with a stable ``A`` enforced
+    (Maciejowski's zero-padded shift), so that a stable model can still be returned."""
+    rows = sorted((r for r in board.rows if "stabilised" in r and np.isfinite(
+        r["held_out_fit"])), key=lambda r: -r["held_out_fit"])
+    for r in rows[:N_STABILISED]:
+        fit_fn, refit = r["stabilised"]
+        board.add(r["family"], r["order"], r["feedthrough"], None, "subspace, stable A",
+                  fit_fn, refit, budgeted=False)
 
 
 def _starts(board: Board, count: int) -> list[dict[str, Any]]:
@@ -133,7 +152,7 @@ def _refined_candidates(board: Board) -> None:
 
             def fit(k: int, r: dict[str, Any] = r, ft: bool = ft, focus: str = focus) -> Any:
                 return sysid.pem(board.folds[k][0], r["fit_fn"](k), focus=focus,
-                                 feedthrough=ft, progress=False)
+                                 feedthrough=ft, progress=board.stopper())
 
             def refit(data: IOData, r: dict[str, Any] = r, ft: bool = ft,
                       focus: str = focus) -> Any:
@@ -162,7 +181,7 @@ def identify(
     max_order: int | None = None,
     refine: bool = True,
     enforce_stability: bool | None = None,
-    time_budget: float | None = None,
+    time_budget: float | None = 60.0,
     progress: bool | None = None,
 ) -> IdentifyResult:
     """Identify a linear model from a record with no settings: offsets, checks, candidate
@@ -185,9 +204,13 @@ def identify(
         simulates every held-out block better than the best stable one: an integrating or
         unstable plant), then a :class:`sysid.StabilityWarning` names its largest pole.
         ``True``: only stable models. ``False``: the best held-out fit, stable or not.
-    time_budget : float, optional
-        Seconds after which no further candidate is scored (the best so far is re-fitted
-        and returned; ``result.out_of_time`` says so). Default: no limit.
+    time_budget : float or None
+        CPU seconds of this process (default 60) after which no further refinement is
+        scored: the subspace sweep is always complete (it works on compressions of the
+        record), the refinements are scored most promising first until the budget is spent,
+        and the choice is made among what was scored (``result.out_of_time`` and a warning
+        say so). CPU time, not wall-clock time, so that other work on a busy machine does
+        not change the result; ``None``: the full search, whatever it takes.
     progress : bool, optional
         A progress bar over the candidates (default: only when stderr is a terminal).
         Ctrl-C stops the search and returns the best candidate found so far.
@@ -238,7 +261,7 @@ def identify(
             f"{shortest} samples, 20 needed); pass a longer record or fit one model directly")
     methods = SUBSPACE + (CLOSED_LOOP if feedback else ())
     interrupted = False
-    deadline = None if time_budget is None else t0 + float(time_budget)
+    deadline = None if time_budget is None else time.process_time() + float(time_budget)
     with Bar(None, "identify", unit="candidates", enabled=show(progress)) as bar:
         board = Board(parts, bar, deadline)
         try:
@@ -256,6 +279,8 @@ def identify(
                       f"({len(board.rows)} scored): the best so far is returned; raise "
                       "time_budget for the full search", UserWarning, stacklevel=2)
     insist = board.insisting() if enforce_stability is None else None
+    if enforce_stability is not False and insist is None and not np.isfinite(board.best_fit()):
+        _stabilised_candidates(board)
     ranked = board.ranked(allow_unstable=enforce_stability is False or insist is not None)
     model, chosen = _choose(board, ranked, centred, enforce_stability is True or (
         enforce_stability is None and insist is None))
@@ -271,7 +296,7 @@ def identify(
                       StabilityWarning, stacklevel=2)
     for r in ranked:
         r["chosen"] = r is chosen
-    rows = [{k: v for k, v in r.items() if k not in ("refit", "fit_fn", "start")}
+    rows = [{k: v for k, v in r.items() if k not in ("refit", "fit_fn", "start", "stabilised")}
             for r in ranked]
     desc = (f"{chosen['family']}"
             + (f" ({chosen['focus']} focus)" if chosen["focus"] else "")
@@ -303,7 +328,11 @@ def _choose(board: Board, ranked: list[dict[str, Any]], data: IOData, stable_onl
     smallest BIC (its simulation errors there against its parameter count); when none
     re-fits well, the next candidates of the ranking."""
     fitted = []
-    for r in board.near_best(stable_only)[:N_FINAL]:
+    near = board.near_best(stable_only)[:N_FINAL]
+    if board.out_of_time:  # one refined re-fit at most (each is a search on the whole record)
+        refined = [r for r in near if not r["criterion"].startswith("subspace")]
+        near = [r for r in near if r["criterion"].startswith("subspace") or r is refined[0]]
+    for r in near:
         m = _refit_one(r, data, stable_only)
         if m is not None:
             try:
