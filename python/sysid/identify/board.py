@@ -34,8 +34,9 @@ def slack(best: float) -> float:
 def bic(model: Any, data: IOData) -> float:
     """Bayesian information criterion of a model fitted on ``data``, from its simulation
     errors there (initial state and output offsets fitted): ``N log det(E^T E / N) + p log
-    N`` with ``p = n (m + l + 1) + m l`` (the last term with a feedthrough), the identifiable
-    parameter count of ``A, B, C``, ``D`` and the initial state."""
+    N`` with ``p = n (m + l + 1) + m l`` (the last term with a feedthrough) ``+ n l`` (with a
+    Kalman gain), the identifiable parameter count of ``A, B, C``, ``D``, ``K`` and the
+    initial state."""
     errs = simulation_errors(model, data)
     E = np.vstack([e for _, e in errs])
     N = E.shape[0]
@@ -44,6 +45,8 @@ def bic(model: Any, data: IOData) -> float:
         return -np.inf if sign == 0 else np.inf
     n, m, l = model.nstates, model.ninputs, model.noutputs
     p = n * (m + l + 1) + (m * l if np.any(np.asarray(model.D) != 0) else 0)
+    if getattr(model, "K", None) is not None and np.any(np.asarray(model.K) != 0):
+        p += n * l  # a noise model estimated from the same data
     return float(N * logdet + p * np.log(N))
 
 
@@ -148,7 +151,8 @@ class Board:
         near = [r for r in self.rows if self.eligible(r, stable_only)
                 and r["held_out_fit"] >= best - s]
         # refined candidates first (few; each the refinement of a near-best start)
-        return sorted(near, key=lambda r: (r["criterion"].startswith("subspace"), -r["held_out_fit"]))
+        return sorted(near, key=lambda r: (r["criterion"].startswith("subspace"),
+                                           -r["held_out_fit"]))
 
     def ranked(self, allow_unstable: bool = False) -> list[dict[str, Any]]:
         """Eligible stable candidates first (unstable ones too when ``allow_unstable``);

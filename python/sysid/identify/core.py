@@ -91,7 +91,7 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
     for fit_part, _ in board.folds:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            ests.append(SubspaceEstimator(fit_part, fold_horizon(full, fit_part)))
+            ests.append(SubspaceEstimator(fit_part, fold_horizon(h_full, fit_part)))
     top = min(min(e.max_order for e in ests), max_order or MAX_ORDER)
     whole: dict[int, Any] = {}  # the whole record's compression, once per record
 

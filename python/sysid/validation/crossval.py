@@ -66,30 +66,29 @@ class OrderChoice:
 def fold_count(data: IOData) -> int:
     """How many blocks :func:`folds` cuts a record into for the automatic choices: one per
     experiment; for one experiment ``FOLDS``, fewer when a block would hold less than
-    ``MIN_BLOCK`` samples per channel (at least two).
+    ``MIN_BLOCK`` samples per channel (at least three of 20 samples, or two).
 
     Examples
     --------
     >>> import numpy as np, sysid
     >>> from sysid.validation.crossval import fold_count
     >>> fold_count(sysid.IOData(u=np.zeros(1000), y=np.ones(1000))), fold_count(
-    ...     sysid.IOData(u=np.zeros(100), y=np.ones(100)))
+    ...     sysid.IOData(u=np.zeros(50), y=np.ones(50)))
     (5, 2)
     """
     if data.n_experiments > 1:
         return data.n_experiments
     per = MIN_BLOCK * (data.n_inputs + data.n_outputs)
-    return int(max(2, min(FOLDS, data.lengths[0] // max(per, 20))))
+    N = data.lengths[0]
+    # a short record: three blocks of at least 20 samples keep two thirds for each fit
+    return int(max(2, min(FOLDS, N // max(per, 20)), min(3, N // 20)))
 
 
-def fold_horizon(data: IOData, fit_part: IOData) -> int:
-    """The subspace horizon for a fold: the whole record's default (the model class of the
+def fold_horizon(h: int, fit_part: IOData) -> int:
+    """The subspace horizon for a fold: ``h``, the whole record's (the model class of the
     final fit), unless the fitted part is too short for a data matrix with three times as
     many columns as rows."""
-    from ..subspace.estimator import default_horizon
-
-    ch = data.n_inputs + data.n_outputs
-    h = default_horizon(min(data.lengths), data.n_inputs, data.n_outputs)
+    ch = fit_part.n_inputs + fit_part.n_outputs
     cols = sum(max(n - 2 * h + 1, 0) for n in fit_part.lengths)
     return h if cols >= 6 * ch * h else max(2, min(h, max(fit_part.lengths) // (6 * ch)))
 
@@ -245,11 +244,16 @@ def cross_validated_order(
     3
     """
     table: dict[int, list[float]] = {}
+    h = 0
+    if past is None and future is None:  # the whole record's default horizon
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            h = estimator(data, method=method).past
     for fit_part, held in folds(data, fold_count(data)):
         # the given horizons, clipped to a quarter of the fitted part; else the record's
         longest = max(fit_part.lengths)
         kw = {k: min(v, max(1, longest // 4)) for k, v in (("past", past), ("future", future))
-              if v is not None} or {"horizon": fold_horizon(data, fit_part)}
+              if v is not None} or {"horizon": fold_horizon(h, fit_part)}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             est = estimator(fit_part, method=method, **kw)
