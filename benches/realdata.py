@@ -350,11 +350,14 @@ def run_record(name: str, peers: bool, tmpdir: Path, tools: set[str] | None = No
     rows = []
 
     def add(tool, fn):
-        if tools is not None and tool not in tools:
-            return
-        if reuse and (name, tool) in reuse and tool not in SYSID_TOOLS:
+        # a tool left out of --tools is taken from the --reuse files when they have it; a
+        # reference or peer tool (independent of sysid's code) is taken from them always
+        left_out = tools is not None and tool not in tools
+        if reuse and (name, tool) in reuse and (left_out or tool not in SYSID_TOOLS):
             rows.append(dict(reuse[(name, tool)], reused=True))
             print(json.dumps(rows[-1]), flush=True)
+            return
+        if left_out:
             return
         t = time.perf_counter()
         try:
@@ -375,14 +378,17 @@ def run_record(name: str, peers: bool, tmpdir: Path, tools: set[str] | None = No
 
     if hasattr(sysid, "identify"):
         def ident():
+            cpu = time.process_time()
             res = sysid.identify(sysid.IOData(u=ue, y=ye), progress=False)
+            cpu = time.process_time() - cpu
             m = res.model.statespace
             # the fit on the raw validation data (offsets removed as the model records them;
             # NRMSE does not change with them): scored like every other tool, from A, B, C, D
             val_id = res.model.remove_offsets((uv, yv))
             f, rho, n = score((m.A, m.B, m.C, m.D), val_id, 1.0)
             return (m.A, m.B, m.C, m.D), {"choice": res.choice, "fit_raw": f,
-                                          "seconds": res.seconds}
+                                          "seconds": res.seconds, "cpu_seconds": cpu,
+                                          "out_of_time": res.out_of_time}
         add("identify", ident)
     for tool, fn in _sysid_tools().items():
         def f(fn=fn):
@@ -450,9 +456,19 @@ def write_md(rows: list[dict], path: Path, argv: list[str]) -> None:
     for rec in records:
         lines.append(f"| {rec} | " + " | ".join(
             f"{by[(rec, t)]['seconds']:.1f}" if (rec, t) in by else "" for t in tools) + " |")
+    ident = [r for r in rows if r["tool"] == "identify" and "cpu_seconds" in r]
+    if ident:
+        lines += ["", "`sysid.identify`: wall-clock and CPU seconds (the process's, all threads) "
+                  "and the choice:", "", "| record | wall s | CPU s | time budget spent | choice |",
+                  "|---|---|---|---|---|"]
+        lines += [f"| {r['record']} | {r['seconds']:.1f} | {r['cpu_seconds']:.1f} | "
+                  f"{'yes' if r.get('out_of_time') else 'no'} | {r.get('choice', '')} |"
+                  for r in ident]
     if any(r.get("reused") for r in rows):
-        lines += ["", "Rows of the reference and peer tools were reused from an earlier run of "
-                  "the same script (`--reuse`; they do not depend on sysid's code)."]
+        lines += ["", "Rows marked reused were taken from an earlier run of the same script "
+                  "(`--reuse`): the reference and peer tools (they do not depend on sysid's "
+                  "code) and the sysid tools left out of `--tools`. Reused: "
+                  + ", ".join(sorted({r["tool"] for r in rows if r.get("reused")})) + "."]
     errs = [r for r in rows if r.get("error")]
     if errs:
         lines += ["", "Failures:", ""] + [f"- {r['record']} / {r['tool']}: {r['error']}"

@@ -163,10 +163,44 @@ def test_identify_beats_the_plain_po_moesp_reference_on_held_out_data(name):
     assert ours >= ref - 0.5, (ours, ref, res.summary())
 
 
-@pytest.mark.xfail(strict=True, reason="known shortfall (issue 26): on the winding record the "
-                   "held-out blocks of the estimation part rank the candidates within ~1 point "
-                   "of each other and the choice validates ~8 points below the plain PO-MOESP "
-                   "at order 6; see benches/results/realdata.md")
+def scipy_refined(data: sysid.IOData, start: sysid.StateSpaceModel) -> sysid.StateSpaceModel:
+    """The issue's second reference: every entry of A, B, C, D and x0 refined by SciPy's
+    ``least_squares`` on the simulation error, as a user writes it."""
+    from scipy.optimize import least_squares
+
+    (u, y), = data.experiments
+    n, m, l = start.nstates, start.ninputs, start.noutputs
+    x0 = sysid.estimate_x0(start, u, y)
+    shapes = [(n, n), (n, m), (l, n), (l, m), (n,)]
+    sizes = np.cumsum([0] + [int(np.prod(s)) for s in shapes])
+
+    def unpack(p):
+        return [p[a:b].reshape(s) for a, b, s in zip(sizes[:-1], sizes[1:], shapes)]
+
+    def res(p):
+        A, B, C, D, x = unpack(p)
+        try:
+            e = (sysid.StateSpaceModel(A, B, C, D).simulate(u, x0=x) - y).ravel()
+        except sysid.errors.NumericalError:  # a trial step that diverges
+            return np.full(y.size, 1e10)
+        return np.where(np.isfinite(e), e, 1e10)
+    p0 = np.concatenate([start.A.ravel(), start.B.ravel(), start.C.ravel(), start.D.ravel(),
+                         x0])
+    A, B, C, D, _ = unpack(least_squares(res, p0, max_nfev=50, x_scale="jac").x)
+    return sysid.StateSpaceModel(A, B, C, D)
+
+
+def test_identify_reaches_the_scipy_refinement_on_the_dryer():
+    # main validated 85.8 % here (a subspace model of order 4), the reference 86.8 %: the
+    # held-out blocks cannot tell orders 3-6 apart, the BIC of the refined re-fits can
+    raw_est, raw_val = record("dryer", centred=False)
+    est, val = record("dryer")
+    res = quiet(sysid.identify, raw_est, raw_val, progress=False)
+    ref = quiet(sysid.compare, quiet(scipy_refined, est, plain_po_moesp(est, 4)), val).mean_fit
+    assert ref > 86.0  # the reference itself (validation 86.8 %)
+    assert res.model.is_stable() and res.validation_fit >= ref - 0.5, (ref, res.summary())
+
+
 def test_identify_on_the_winding_record_with_subspace_candidates_only():
     raw_est, raw_val = record("winding", centred=False)
     est, val = record("winding")
@@ -235,3 +269,37 @@ def test_the_identify_guide_runs():
     for i, block in enumerate(blocks):
         quiet(exec, compile(block, f"docs/identify.md[python block {i}]", "exec"), ns)
     assert ns["res"].model.is_stable() and ns["m"].nstates >= 3
+
+
+def test_identify_returns_an_unstable_model_only_when_the_data_insist():
+    # an open-loop unstable plant: every stable candidate simulates the held-out blocks
+    # worse than the unstable ones, so the model is unstable, with a warning naming the pole
+    rng = np.random.default_rng(4)
+    plant = sysid.StateSpaceModel([[1.01, 0.0], [0.0, 0.6]], [[1.0], [1.0]], [[1.0, 1.0]])
+    u = rng.standard_normal((600, 1))
+    data = sysid.IOData(u=u, y=plant.simulate(u) + 0.05 * rng.standard_normal((600, 1)))
+    with pytest.warns(sysid.errors.StabilityWarning, match="largest pole modulus 1.01"):
+        res = sysid.identify(data, refine=False, progress=False)
+    assert not res.model.is_stable()
+    assert np.max(np.abs(res.model.poles())) == pytest.approx(1.01, abs=2e-3)
+    # asked for a stable model, it gets the best stable one, without a warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        stable = sysid.identify(data, refine=False, enforce_stability=True, progress=False)
+    assert stable.model.is_stable()
+    with pytest.raises(sysid.errors.DataError, match="enforce_stability"):
+        sysid.identify(data, enforce_stability="yes")
+
+
+def test_identify_time_budget_keeps_the_subspace_sweep_and_says_it_stopped():
+    est, _ = record("dryer")
+    with pytest.warns(UserWarning, match="time_budget"):
+        res = sysid.identify(est, time_budget=1e-3, progress=False)
+    assert res.out_of_time and "time budget spent" in res.summary()
+    fams = {r["family"] for r in res.leaderboard}
+    assert {"moesp", "n4sid", "cva"} <= fams and res.model.is_stable()
+    full = {r["family"] for r in quiet(sysid.identify, est, time_budget=None,
+                                       progress=False).leaderboard}
+    assert "pem" in full and "pem" not in fams
+    with pytest.raises(sysid.errors.DataError, match="time_budget"):
+        sysid.identify(est, time_budget=-1.0)

@@ -205,10 +205,6 @@ def test_plots_draw() -> None:
     plt.close("all")
 
 
-@pytest.mark.xfail(strict=True, reason="known shortfall (issue 26, open): order='auto' by "
-                   "cross-validated simulation fit picks order 7 on the winding record, which "
-                   "validates at 43 % on the second tension (orders 2-6: 59-69 %); the "
-                   "two held-out blocks disagree by up to 25 points per order")
 def test_winding_workflow_example(capsys: pytest.CaptureFixture[str]) -> None:
     example = Path(__file__).resolve().parents[1] / "examples" / "winding_workflow.py"
     mod = runpy.run_path(str(example))

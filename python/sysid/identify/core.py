@@ -4,16 +4,20 @@
    model (:class:`IdentifiedModel` predicts raw data).
 2. Checks: the input's persistent-excitation order and a feedback test are recorded; under
    feedback the closed-loop subspace methods (PBSID, SSARX) join the candidates.
-3. Candidates are scored by two-fold cross-validation inside the estimation record: fitted
-   on one half, scored by their simulation fit on the other (initial state fitted), both
-   ways, averaged (or leave one experiment out): every subspace weighting (MOESP,
-   N4SID, CVA) at every order the horizon allows (up to 20), with and without feedthrough;
-   the best configurations refined by ``ssest`` with both focuses; an output-error model
-   for a single input and output.
-4. The candidate with the best held-out fit (the smallest order within 0.5 points, as the
-   order rule of ``order="auto"``) is re-fitted on the whole estimation record; if
-   that model is unstable, the next one is taken. ``validation`` data, when given, are
-   only reported on.
+3. Candidates are scored on blocks of the estimation record held out from their fit: the
+   record is cut into five contiguous blocks (fewer on short records; several experiments:
+   one each), each held out once while the rest fits the candidate, which then simulates
+   it (initial state fitted); the score is the median of the five held-out fits
+   (:mod:`.board`). Candidates: every subspace weighting (MOESP, N4SID, CVA) at every order
+   the horizon allows (up to 20), with and without feedthrough; the best of each of the
+   smallest orders near the best refined by prediction-error search on the simulation error
+   (and the best one on the prediction error); output-error models for one input and output.
+   A refinement scored clearly below its start on the held-out blocks is never chosen.
+4. The held-out blocks rank the candidates but cannot tell apart those within half a fit
+   point of the best (5 % of its error at most): those are re-fitted on the whole record and
+   the one with the smallest BIC of its simulation errors is returned; unstable candidates
+   only when the data insist (:meth:`.board.Board.insisting`) or ``enforce_stability=False``.
+   ``validation`` data, when given, are only reported on.
 """
 
 from __future__ import annotations
@@ -27,20 +31,20 @@ import numpy as np
 from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
-from ..validation.crossval import MAX_ORDER, TOL, folds, simulation_fit
+from ..validation.crossval import MAX_ORDER, fold_count, fold_horizon, folds
+from .board import Board, bic
 from .result import IdentifiedModel, IdentifyResult
 
 __all__ = ["identify"]
 
 SUBSPACE = ("moesp", "n4sid", "cva")
 CLOSED_LOOP = ("pbsid", "ssarx")
-#: subspace configurations (order, feedthrough) refined by ssest
+#: subspace candidates (distinct order and feedthrough) refined by prediction-error search
 N_REFINE = 3
-#: blocks of the estimation record, each held out once (the rest fits the candidates)
-FOLDS = 3
-#: fit points a re-fit on the whole record may lose against its held-out score on the
-#: record's own blocks before the next candidate is taken
-REFIT_LOSS = 2.0
+#: candidates the held-out blocks cannot tell apart that are re-fitted and compared by BIC
+N_FINAL = 12
+#: unstable subspace candidates re-fitted with a stable A when no candidate is stable
+N_STABILISED = 10
 
 
 def _offsets(data: IOData) -> tuple[IOData, np.ndarray, np.ndarray]:
@@ -78,111 +82,88 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
     return checks, feedback
 
 
-class _Board:
-    """Candidates with their held-out scores and a way to re-fit each on the whole record.
-
-    Each candidate is fitted on every fold's fitted part and scored on its held-out part;
-    the score is the mean held-out simulation fit (two folds: each half of the record held
-    out once, so a record whose halves differ cannot favour one candidate by chance)."""
-
-    def __init__(self, folds: list[tuple[IOData, IOData]], bar: Bar) -> None:
-        self.rows: list[dict[str, Any]] = []
-        self.folds, self.bar = folds, bar
-
-    def add(self, family: str, order: int, feedthrough: bool, focus: str | None,
-            criterion: str, fit_fn: Any, refit: Any) -> None:
-        """``fit_fn(k)`` fits on fold ``k``; ``refit(data)`` on the whole record."""
-        t = time.perf_counter()
-        row: dict[str, Any] = {"family": family, "order": order, "feedthrough": feedthrough,
-                               "focus": focus, "criterion": criterion, "refit": refit}
-        try:
-            fits, rho = [], 0.0
-            for k, (_, held) in enumerate(self.folds):
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    model = fit_fn(k)
-                fits.append(simulation_fit(model, held))
-                poles = model.poles()
-                rho = max(rho, float(np.max(np.abs(poles))) if len(poles) else 0.0)
-                if not np.isfinite(fits[-1]):
-                    break
-            row["held_out_fit"] = float(np.mean(fits))
-            row["max_abs_pole"] = rho
-            row["stable"] = rho < 1.0
-            row["note"] = ""
-        except KeyboardInterrupt:
-            raise
-        except Exception as e:  # noqa: BLE001 - a failed candidate is listed, not raised
-            row.update(held_out_fit=-np.inf, max_abs_pole=np.nan, stable=False,
-                       note=f"{type(e).__name__}: {e}"[:120])
-        row["seconds"] = time.perf_counter() - t
-        self.rows.append(row)
-        self.bar.update(1, best=f"{self.best_fit():.1f}%")
-
-    def best_fit(self) -> float:
-        fits = [r["held_out_fit"] for r in self.rows if r["stable"]]
-        return max(fits) if fits else -np.inf
-
-    def ranked(self) -> list[dict[str, Any]]:
-        """Stable candidates first; among those within the order rule's slack of the best
-        held-out fit (:func:`sysid.validation.crossval.choose`: 0.5 points, at most 5 % of
-        the best's error) the smallest order first, then by held-out fit."""
-        best = self.best_fit()
-        slack = max(min(TOL, 0.05 * (100.0 - best)), 1e-6) if np.isfinite(best) else 0.0
-
-        def key(r: dict[str, Any]) -> tuple[bool, bool, int, float]:
-            near = bool(r["stable"] and r["held_out_fit"] >= best - slack)
-            return (not r["stable"], not near, r["order"] if near else 0, -r["held_out_fit"])
-        return sorted(self.rows, key=key)
-
-
-def _subspace_candidates(board: _Board, full: IOData, methods: tuple[str, ...],
+def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
                          max_order: int | None) -> None:
     from ..subspace.estimator import SubspaceEstimator, default_horizon
 
     ests = []
-    ch = full.n_inputs + full.n_outputs
+    h_full = default_horizon(min(full.lengths), full.n_inputs, full.n_outputs)
     for fit_part, _ in board.folds:
-        # the whole record's horizon (the orders it supports), unless the part is too short
-        # for a data matrix with three times as many columns as rows
-        h = min(default_horizon(min(full.lengths), full.n_inputs, full.n_outputs),
-                max(2, min(fit_part.lengths) // (6 * ch)))
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            ests.append(SubspaceEstimator(fit_part, h))
+            ests.append(SubspaceEstimator(fit_part, fold_horizon(h_full, fit_part)))
     top = min(min(e.max_order for e in ests), max_order or MAX_ORDER)
+    whole: dict[int, Any] = {}  # the whole record's compression, once per record
+
+    def refit(data: IOData, m: str, n: int, ft: bool, stable: bool = False) -> Any:
+        if id(data) not in whole:
+            whole.clear()
+            whole[id(data)] = SubspaceEstimator(data, h_full)
+        return whole[id(data)].fit(n, method=m, feedthrough=ft, stable=stable)
+
     for meth in methods:
         for ft in (False, True):
             for n in range(1, top + 1):
-                board.add(meth, n, ft, None, "subspace",
-                          lambda k, m=meth, n=n, ft=ft: ests[k].fit(n, method=m, feedthrough=ft,
-                                                                    kalman=False),
-                          lambda data, m=meth, n=n, ft=ft: SubspaceEstimator(
-                              data, method=m).fit(n, feedthrough=ft))
+                row = board.add(meth, n, ft, None, "subspace",
+                                lambda k, m=meth, n=n, ft=ft: ests[k].fit(
+                                    n, method=m, feedthrough=ft, kalman=False),
+                                lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft),
+                                budgeted=False)
+                if row is not None:  # its stabilised variant, scored only when needed
+                    row["stabilised"] = (
+                        lambda k, m=meth, n=n, ft=ft: ests[k].fit(
+                            n, method=m, feedthrough=ft, kalman=False, stable=True),
+                        lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft, True))
 
 
-def _refined_candidates(board: _Board) -> None:
+def _stabilised_candidates(board: Board) -> None:
+    """No stable candidate: the best subspace candidates with a stable ``A`` enforced
+    (Maciejowski's zero-padded shift), so that a stable model can still be returned."""
+    rows = sorted((r for r in board.rows if "stabilised" in r and np.isfinite(
+        r["held_out_fit"])), key=lambda r: -r["held_out_fit"])
+    for r in rows[:N_STABILISED]:
+        fit_fn, refit = r["stabilised"]
+        board.add(r["family"], r["order"], r["feedthrough"], None, "subspace, stable A",
+                  fit_fn, refit, budgeted=False)
+
+
+def _starts(board: Board, count: int) -> list[dict[str, Any]]:
+    """Starts for the refinement: the best stable subspace candidate of each order among
+    those the held-out blocks cannot tell from the best, smallest orders first (``count``
+    of them); the best candidate's order when the near-best ones are all of one order."""
+    best: dict[int, dict[str, Any]] = {}
+    for r in board.near_best():
+        if r["criterion"] == "subspace" and r["order"] not in best:
+            best[r["order"]] = r
+    return [best[n] for n in sorted(best)[:count]]
+
+
+def _refined_candidates(board: Board) -> None:
+    """Each of the best subspace candidates refined by prediction-error search on the
+    simulation error (its own feedthrough choice, initial state estimated), from the same
+    fold's subspace model; the best also with prediction focus, and for one input and
+    output an output-error model."""
     import sysid
 
-    configs: list[tuple[int, bool]] = []
-    for r in board.ranked():
-        c = (r["order"], r["feedthrough"])
-        if r["criterion"] == "subspace" and r["stable"] and c not in configs:
-            configs.append(c)
-        if len(configs) == N_REFINE:
-            break
-    for n, ft in configs:
-        for focus in ("simulation", "prediction"):
-            def fit(k: int, n: int = n, ft: bool = ft, focus: str = focus) -> Any:
-                return sysid.ssest(board.folds[k][0], n, focus=focus, feedthrough=ft,
-                                   progress=False)
+    starts = _starts(board, N_REFINE)
+    for focus in ("simulation", "prediction"):
+        for r in starts if focus == "simulation" else starts[:1]:
+            ft = r["feedthrough"]
 
-            def refit(data: IOData, n: int = n, ft: bool = ft, focus: str = focus) -> Any:
-                return sysid.ssest(data, n, focus=focus, feedthrough=ft, progress=False)
-            board.add("ssest", n, ft, focus, "prediction error", fit, refit)
+            def fit(k: int, r: dict[str, Any] = r, ft: bool = ft, focus: str = focus) -> Any:
+                return sysid.pem(board.folds[k][0], r["fit_fn"](k), focus=focus,
+                                 feedthrough=ft, progress=board.stopper())
+
+            def refit(data: IOData, r: dict[str, Any] = r, ft: bool = ft,
+                      focus: str = focus) -> Any:
+                return sysid.pem(data, r["refit"](data), focus=focus, feedthrough=ft,
+                                 progress=False)
+            board.add("pem", r["order"], ft, focus, f"prediction error from {r['family']}",
+                      fit, refit, start=r)
     first = board.folds[0][0]
-    if first.n_inputs == 1 and first.n_outputs == 1 and configs:
-        for n, ft in configs[:2]:
+    if first.n_inputs == 1 and first.n_outputs == 1:
+        for r in starts[:2]:
+            n, ft = r["order"], r["feedthrough"]
             if n > 8:
                 continue
             nk, nb = (0, n + 1) if ft else (1, n)
@@ -199,6 +180,8 @@ def identify(
     *,
     max_order: int | None = None,
     refine: bool = True,
+    enforce_stability: bool | None = None,
+    time_budget: float | None = 60.0,
     progress: bool | None = None,
 ) -> IdentifyResult:
     """Identify a linear model from a record with no settings: offsets, checks, candidate
@@ -213,9 +196,21 @@ def identify(
     max_order : int, optional
         Largest order tried (default: what the horizon allows, at most 20).
     refine : bool
-        Also try ``ssest`` refinements (both focuses) and, for one input and output, an
-        output-error model of the best subspace configurations (default). ``False`` keeps
-        to subspace models (seconds on long records).
+        Also refine the best subspace candidates by prediction-error search (simulation
+        focus, and prediction focus for the best) and, for one input and output, fit
+        output-error models (default). ``False`` keeps to subspace models.
+    enforce_stability : bool, optional
+        ``None`` (default): a stable model unless the data insist (an unstable candidate
+        simulates every held-out block better than the best stable one: an integrating or
+        unstable plant), then a :class:`sysid.StabilityWarning` names its largest pole.
+        ``True``: only stable models. ``False``: the best held-out fit, stable or not.
+    time_budget : float or None
+        CPU seconds of this process (default 60) after which no further refinement is
+        scored: the subspace sweep is always complete (it works on compressions of the
+        record), the refinements are scored most promising first until the budget is spent,
+        and the choice is made among what was scored (``result.out_of_time`` and a warning
+        say so). CPU time, not wall-clock time, so that other work on a busy machine does
+        not change the result; ``None``: the full search, whatever it takes.
     progress : bool, optional
         A progress bar over the candidates (default: only when stderr is a terminal).
         Ctrl-C stops the search and returns the best candidate found so far.
@@ -249,20 +244,26 @@ def identify(
     if data.n_inputs == 0:
         raise DataError("identify needs inputs; for output-only data use sysid.n4sid(data) "
                         "(a time-series model) or the oma tools")
+    if enforce_stability not in (None, True, False):
+        raise DataError(f"enforce_stability must be True, False or None, got "
+                        f"{enforce_stability!r}")
+    if time_budget is not None and not (np.isfinite(time_budget) and time_budget > 0):
+        raise DataError(f"time_budget must be a positive number of seconds, got {time_budget!r}")
     centred, mu, my = _offsets(data)
     checks, feedback = _checks(centred)
     checks["offsets"] = (f"input means {np.round(mu, 6).tolist()}, output means "
                          f"{np.round(my, 6).tolist()} removed (kept with the model)")
-    parts = folds(centred, FOLDS)
-    if min(min(h.lengths) for _, h in parts) < 20:
+    parts = folds(centred, fold_count(centred))
+    shortest = min(min(h.lengths) for _, h in parts)
+    if shortest < 20:
         raise InsufficientDataError(
-            "the record is too short to hold out a part for the choice (a held-out block has "
-            f"{min(min(h.lengths) for _, h in parts)} samples, 20 needed); pass a longer "
-            "record or fit one model directly")
+            f"the record is too short to hold out a part for the choice (a held-out block has "
+            f"{shortest} samples, 20 needed); pass a longer record or fit one model directly")
     methods = SUBSPACE + (CLOSED_LOOP if feedback else ())
     interrupted = False
+    deadline = None if time_budget is None else time.process_time() + float(time_budget)
     with Bar(None, "identify", unit="candidates", enabled=show(progress)) as bar:
-        board = _Board(parts, bar)
+        board = Board(parts, bar, deadline)
         try:
             _subspace_candidates(board, centred, methods, max_order)
             if refine:
@@ -273,11 +274,30 @@ def identify(
             interrupted = True
             warnings.warn("identify interrupted: the best candidate found so far is returned",
                           UserWarning, stacklevel=2)
-    ranked = board.ranked()
-    model, chosen = _refit(ranked, centred, parts)
+    if board.out_of_time:
+        warnings.warn(f"identify stopped scoring candidates after time_budget={time_budget} s "
+                      f"({len(board.rows)} scored): the best so far is returned; raise "
+                      "time_budget for the full search", UserWarning, stacklevel=2)
+    insist = board.insisting() if enforce_stability is None else None
+    if enforce_stability is not False and insist is None and not np.isfinite(board.best_fit()):
+        _stabilised_candidates(board)
+    ranked = board.ranked(allow_unstable=enforce_stability is False or insist is not None)
+    model, chosen = _choose(board, ranked, centred, enforce_stability is True or (
+        enforce_stability is None and insist is None))
+    if not model.is_stable():
+        from ..errors import StabilityWarning
+
+        rho = float(np.max(np.abs(model.poles())))
+        why = ("it simulates every held-out block better than the best stable candidate "
+               "(an integrating or unstable plant)" if insist is not None else
+               "enforce_stability=False")
+        warnings.warn(f"identify returns an unstable model (largest pole modulus {rho:.4g}): "
+                      f"{why}; pass enforce_stability=True for the best stable model",
+                      StabilityWarning, stacklevel=2)
     for r in ranked:
         r["chosen"] = r is chosen
-    rows = [{k: v for k, v in r.items() if k != "refit"} for r in ranked]
+    rows = [{k: v for k, v in r.items() if k not in ("refit", "fit_fn", "start", "stabilised")}
+            for r in ranked]
     desc = (f"{chosen['family']}"
             + (f" ({chosen['focus']} focus)" if chosen["focus"] else "")
             + f", order {chosen['order']}, {'with' if chosen['feedthrough'] else 'no'} "
@@ -295,32 +315,57 @@ def identify(
                 vfit = float(result_model.compare(validation).mean_fit)
         except Exception:  # noqa: BLE001 - reported, never raised: a diverging model
             vfit = -np.inf
-    return IdentifyResult(result_model, rows, desc, checks, vfit,
-                          time.perf_counter() - t0, interrupted)
+    out = IdentifyResult(result_model, rows, desc, checks, vfit, time.perf_counter() - t0,
+                         interrupted)
+    out.out_of_time = board.out_of_time
+    return out
 
 
-def _refit(ranked: list[dict[str, Any]], data: IOData,
-           parts: list[tuple[IOData, IOData]]) -> tuple[Any, dict[str, Any]]:
-    """The best candidate re-fitted on the whole record; the next one if that is unstable or
-    simulates the record's blocks clearly worse (by more than ``REFIT_LOSS`` points) than
-    the candidate's held-out fits promised (a fit on more data that went wrong)."""
-    for r in ranked:
-        if not np.isfinite(r["held_out_fit"]):
-            break
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                m = r["refit"](data)
-        except Exception:  # noqa: BLE001 - try the next candidate
-            continue
-        if not m.is_stable():
-            r["note"] = "re-fit on the whole record unstable"
-            continue
-        own = float(np.mean([simulation_fit(m, held) for _, held in parts]))
-        if own < r["held_out_fit"] - REFIT_LOSS:
-            r["note"] = f"re-fit on the whole record simulates it worse ({own:.1f} %)"
-            continue
+def _choose(board: Board, ranked: list[dict[str, Any]], data: IOData, stable_only: bool
+            ) -> tuple[Any, dict[str, Any]]:
+    """Among the candidates the held-out blocks cannot tell apart (within the slack of the
+    best score; at most ``N_FINAL``), the one whose re-fit on the whole record has the
+    smallest BIC (its simulation errors there against its parameter count); when none
+    re-fits well, the next candidates of the ranking."""
+    fitted = []
+    near = board.near_best(stable_only)[:N_FINAL]
+    if board.out_of_time:  # one refined re-fit at most (each is a search on the whole record)
+        refined = [r for r in near if not r["criterion"].startswith("subspace")]
+        near = [r for r in near if r["criterion"].startswith("subspace") or r is refined[0]]
+    for r in near:
+        m = _refit_one(r, data, stable_only)
+        if m is not None:
+            try:
+                r["bic"] = bic(m, data)
+            except Exception:  # noqa: BLE001 - cannot be simulated on the record
+                r["note"] = "re-fit on the whole record cannot be simulated"
+                continue
+            fitted.append((r["bic"], r, m))
+    if fitted:
+        _, r, m = min(fitted, key=lambda t: t[0])
         return m, r
+    for r in ranked:
+        if not board.eligible(r, stable_only) or "bic" in r:
+            continue
+        m = _refit_one(r, data, stable_only)
+        if m is not None:
+            return m, r
     raise DataError("no candidate gave a stable model on this record; check the data "
                     "(offsets, an integrating process: difference the output) or fit one "
                     "model directly")
+
+
+def _refit_one(r: dict[str, Any], data: IOData, stable_only: bool) -> Any:
+    """Candidate ``r`` re-fitted on the whole record, or None (noted) when that fails or is
+    unstable where a stable model is wanted."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            m = r["refit"](data)
+    except Exception as e:  # noqa: BLE001 - try the next candidate
+        r["note"] = f"re-fit on the whole record failed ({type(e).__name__})"
+        return None
+    if stable_only and not m.is_stable():
+        r["note"] = "re-fit on the whole record unstable"
+        return None
+    return m

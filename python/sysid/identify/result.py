@@ -12,8 +12,8 @@ from ..errors import DataError
 
 __all__ = ["IdentifiedModel", "IdentifyResult"]
 
-COLUMNS = ("family", "order", "feedthrough", "focus", "criterion", "held_out_fit", "stable",
-           "max_abs_pole", "seconds", "note")
+COLUMNS = ("family", "order", "feedthrough", "focus", "criterion", "held_out_fit", "mean_fit",
+           "stable", "max_abs_pole", "seconds", "note", "chosen")
 
 
 class IdentifiedModel:
@@ -103,10 +103,10 @@ class IdentifyResult:
     model : IdentifiedModel
         The chosen model, re-fitted on the whole estimation record (predicts raw data).
     leaderboard : list of dict
-        Every candidate: family, order, feedthrough, focus, criterion, held-out fit (%,
-        simulation of each block of the estimation record by the model fitted on the
-        others, averaged),
-        stability, seconds.
+        Every candidate: family, order, feedthrough, focus, criterion, held-out fit (%, the
+        median over the blocks of the estimation record of the simulation fit of the model
+        fitted on the rest), mean fit and ``fold_fits`` (every block's), stability (every
+        fold's model), seconds, a note, and ``chosen``.
     choice : str
         The chosen row, in words.
     checks : dict
@@ -123,6 +123,8 @@ class IdentifyResult:
         self.model, self.leaderboard, self.choice = model, leaderboard, choice
         self.checks, self.validation_fit, self.seconds = checks, validation_fit, seconds
         self.interrupted = interrupted
+        #: whether ``time_budget`` ran out before every candidate was scored
+        self.out_of_time = False
 
     def to_pandas(self) -> Any:
         """The leaderboard as a DataFrame, best held-out fit first."""
@@ -133,7 +135,8 @@ class IdentifyResult:
     def summary(self) -> str:
         """The choice, the checks and the leaderboard as text."""
         lines = [f"sysid.identify: {self.choice} ({self.seconds:.1f} s"
-                 + (", interrupted" if self.interrupted else "") + ")"]
+                 + (", interrupted" if self.interrupted else "")
+                 + (", time budget spent" if self.out_of_time else "") + ")"]
         if self.validation_fit is not None:
             lines.append(f"validation fit (reported only): {self.validation_fit:.1f} %")
         for k, v in self.checks.items():

@@ -356,7 +356,7 @@ class SubspaceEstimator:
         """The order ``fit(order="auto")`` takes, with the table and the reason.
 
         With inputs and the data at hand: the order whose models, fitted on part of the
-        record, best simulate the part held out (two contiguous halves, or the experiments;
+        record, best simulate the part held out (five contiguous blocks, or the experiments;
         :func:`sysid.validation.crossval.cross_validated_order`), the smallest within 0.5 fit
         points of the best. Otherwise (time series, an estimator built from a factor, a
         record too short to split): the largest gap of the log singular values

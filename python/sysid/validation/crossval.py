@@ -5,13 +5,14 @@ dynamics, coloured noise, nonlinearity), so the largest gap of their logarithms 
 after the first one or two and picks order 1-2 where the data support more. What an engineer
 checks instead is how well a model of each order *simulates data it was not fitted on*. This
 module does that without touching the user's validation data: the estimation record is cut
-into contiguous blocks (two halves, or the experiments themselves), models of every order are
-fitted on all blocks but one and simulated on the one left out (initial state fitted by least
-squares), and the order whose held-out simulation fit is best wins; a smaller order within
-``tol`` fit points (and 5 % of the best's error) of the best is preferred (the models of
-half the data are noisier, and a smaller model generalises better). Fits are on compressions
-of the blocks, so a sweep costs about one pass over the record per block plus one simulation
-per order and block.
+into five contiguous blocks (fewer on short records; or the experiments themselves), models
+of every order are fitted on the rest and simulated on the block left out (initial state
+fitted by least squares), and the order whose median held-out simulation fit is best wins (the
+median: a record often holds one block unlike the others, which would otherwise decide
+alone); a smaller order within ``tol`` fit points (and 5 % of the best's error) of the best
+is preferred (a smaller model generalises better). Fits are on compressions of the blocks,
+so a sweep costs about one pass over the record per block plus one simulation per order and
+block.
 """
 
 from __future__ import annotations
@@ -24,13 +25,19 @@ import numpy as np
 
 from ..data.iodata import IOData
 
-__all__ = ["OrderChoice", "cross_validated_order", "folds", "simulation_fit"]
+__all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
+           "simulation_errors",
+           "simulation_fit"]
 
 #: fit points a smaller order may give up and still win (held-out fits of half-record
 #: models scatter by about this much between neighbouring orders)
 TOL = 0.5
 #: largest order tried by the automatic choice
 MAX_ORDER = 20
+#: blocks of a record, each held out once (the rest fits the candidates)
+FOLDS = 5
+#: samples per channel a held-out block keeps at least (fewer blocks on short records)
+MIN_BLOCK = 20
 
 
 @dataclass
@@ -41,7 +48,7 @@ class OrderChoice:
     ----------
     order : int
     table : dict
-        ``{order: held-out simulation fit %}`` (mean over outputs and blocks).
+        ``{order: held-out simulation fit %}`` (mean over outputs, median over blocks).
     reason : str
     criterion : str
     """
@@ -56,21 +63,61 @@ class OrderChoice:
                 "table": {int(k): float(v) for k, v in self.table.items()}}
 
 
+def fold_count(data: IOData) -> int:
+    """How many blocks :func:`folds` cuts a record into for the automatic choices: one per
+    experiment; for one experiment ``FOLDS``, fewer when a block would hold less than
+    ``MIN_BLOCK`` samples per channel (at least three of 20 samples, or two).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.crossval import fold_count
+    >>> fold_count(sysid.IOData(u=np.zeros(1000), y=np.ones(1000))), fold_count(
+    ...     sysid.IOData(u=np.zeros(50), y=np.ones(50)))
+    (5, 2)
+    """
+    if data.n_experiments > 1:
+        return data.n_experiments
+    per = MIN_BLOCK * (data.n_inputs + data.n_outputs)
+    N = data.lengths[0]
+    # a short record: three blocks of at least 20 samples keep two thirds for each fit
+    return int(max(2, min(FOLDS, N // max(per, 20)), min(3, N // 20)))
+
+
+def fold_horizon(h: int, fit_part: IOData) -> int:
+    """The subspace horizon for a fold: ``h``, the whole record's (the model class of the
+    final fit), unless the fitted part is too short for a data matrix with three times as
+    many columns as rows."""
+    ch = fit_part.n_inputs + fit_part.n_outputs
+    cols = sum(max(n - 2 * h + 1, 0) for n in fit_part.lengths)
+    return h if cols >= 6 * ch * h else max(2, min(h, max(fit_part.lengths) // (6 * ch)))
+
+
 def folds(data: IOData, k: int = 2) -> list[tuple[IOData, IOData]]:
     """(fit, held-out) pairs: leave one experiment out, or for one experiment its ``k``
-    contiguous blocks (each held out once, the rest fitted as separate experiments)."""
+    contiguous blocks, each held out once; the fitted part is what lies before and after the
+    held-out block (at most two contiguous experiments, so no data are lost to block edges).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.crossval import folds
+    >>> d = sysid.IOData(u=np.arange(10.0), y=np.arange(10.0))
+    >>> [(f.lengths, h.lengths) for f, h in folds(d, 5)][2]
+    ([4, 4], [2])
+    """
     exps = data.experiments
     kw = {"dt": data.dt, "input_names": data.input_names, "output_names": data.output_names}
-    if len(exps) >= 2:
-        blocks = [[e] for e in exps]
-    else:
-        u, y = exps[0]
-        edges = np.linspace(0, u.shape[0], k + 1).astype(int)
-        blocks = [[(u[a:b], y[a:b])] for a, b in zip(edges[:-1], edges[1:])]
     out = []
-    for i in range(len(blocks)):
-        rest = [e for j, b in enumerate(blocks) if j != i for e in b]
-        out.append((_io(rest, kw), _io(blocks[i], kw)))
+    if len(exps) >= 2:
+        for i in range(len(exps)):
+            out.append((_io([e for j, e in enumerate(exps) if j != i], kw), _io([exps[i]], kw)))
+        return out
+    u, y = exps[0]
+    edges = np.linspace(0, u.shape[0], k + 1).astype(int)
+    for a, b in zip(edges[:-1], edges[1:]):
+        rest = [(u[s:t], y[s:t]) for s, t in ((0, a), (b, u.shape[0])) if t > s]
+        out.append((_io(rest, kw), _io([(u[a:b], y[a:b])], kw)))
     return out
 
 
@@ -78,6 +125,34 @@ def _io(exps: list[tuple[np.ndarray, np.ndarray]], kw: dict[str, Any]) -> IOData
     if len(exps) == 1:
         return IOData(u=exps[0][0], y=exps[0][1], **kw)
     return IOData(u=[e[0] for e in exps], y=[e[1] for e in exps], **kw)
+
+
+def simulation_errors(model: Any, data: IOData) -> list[tuple[np.ndarray, np.ndarray]]:
+    """``(y, y - yhat)`` per experiment: the model's simulation with its initial state and a
+    constant offset per output fitted by least squares (see :func:`simulation_fit`).
+    Raises when the model cannot be simulated on the data."""
+    out = []
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")
+        for u, y in data.experiments:
+            ys = model.simulate(u)
+            n, l = model.nstates, y.shape[1]
+            cols = [np.kron(np.ones((u.shape[0], 1)), np.eye(l))]  # (N l, l) offsets
+            cols += [model.simulate(np.zeros_like(u), x0=np.eye(n)[i]).reshape(-1, 1)
+                     for i in range(n)]
+            phi = np.hstack(cols)
+            if not (np.all(np.isfinite(phi)) and np.all(np.isfinite(ys))):
+                raise FloatingPointError("the model diverges on these data")
+            # columns scaled to unit norm (free responses of slow and fast modes differ by
+            # orders of magnitude); the small Gram system solved instead of a least-squares
+            # call on the tall matrix, which multi-threaded BLAS makes 100 times slower on a
+            # busy machine (thousands of candidates are scored)
+            scale = np.linalg.norm(phi, axis=0)
+            scale[scale == 0] = 1.0
+            phi = phi / scale
+            theta = np.linalg.lstsq(phi.T @ phi, phi.T @ (y - ys).ravel(), rcond=1e-12)[0]
+            out.append((y, y - ys - (phi @ theta).reshape(ys.shape)))
+    return out
 
 
 def simulation_fit(model: Any, data: IOData) -> float:
@@ -90,23 +165,15 @@ def simulation_fit(model: Any, data: IOData) -> float:
     record's means are removed, and without the free offset a slow mode of an over-fitted
     model (a pole near 1 excited by ``x0``) would absorb it and look better than it predicts.
     """
+    try:
+        errs = simulation_errors(model, data)
+    except Exception:  # noqa: BLE001 - a model that cannot be simulated scores -inf
+        return -np.inf
     fits = []
-    with warnings.catch_warnings(), np.errstate(all="ignore"):
-        warnings.simplefilter("ignore")
-        for u, y in data.experiments:
-            try:
-                ys = model.simulate(u)
-                n, l = model.nstates, y.shape[1]
-                cols = [np.kron(np.ones((u.shape[0], 1)), np.eye(l))]  # (N l, l) offsets
-                cols += [model.simulate(np.zeros_like(u), x0=np.eye(n)[i]).reshape(-1, 1)
-                         for i in range(n)]
-                phi = np.hstack(cols)
-                theta = np.linalg.lstsq(phi, (y - ys).ravel(), rcond=None)[0]
-                ys = ys + (phi @ theta).reshape(ys.shape)
-            except Exception:  # noqa: BLE001 - a model that cannot be simulated scores -inf
-                return -np.inf
+    with np.errstate(all="ignore"):
+        for y, e in errs:
             dev = np.linalg.norm(y - y.mean(0), axis=0)
-            f = 100.0 * (1.0 - np.linalg.norm(y - ys, axis=0) / np.where(dev > 0, dev, np.nan))
+            f = 100.0 * (1.0 - np.linalg.norm(e, axis=0) / np.where(dev > 0, dev, np.nan))
             fits.append(np.nanmean(f))
     out = float(np.mean(fits))
     return out if np.isfinite(out) else -np.inf
@@ -177,11 +244,16 @@ def cross_validated_order(
     3
     """
     table: dict[int, list[float]] = {}
-    for fit_part, held in folds(data):
-        # the given horizons, clipped to a quarter of the fitted part; else the part's default
-        shortest = min(fit_part.lengths)
-        kw = {k: min(v, max(1, shortest // 4)) for k, v in (("past", past), ("future", future))
-              if v is not None}
+    h = 0
+    if past is None and future is None:  # the whole record's default horizon
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            h = estimator(data, method=method).past
+    for fit_part, held in folds(data, fold_count(data)):
+        # the given horizons, clipped to a quarter of the fitted part; else the record's
+        longest = max(fit_part.lengths)
+        kw = {k: min(v, max(1, longest // 4)) for k, v in (("past", past), ("future", future))
+              if v is not None} or {"horizon": fold_horizon(h, fit_part)}
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             est = estimator(fit_part, method=method, **kw)
@@ -196,7 +268,7 @@ def cross_validated_order(
                 table.setdefault(n, []).append(simulation_fit(m, held))
             except Exception:  # noqa: BLE001 - an order the block cannot support
                 table.setdefault(n, []).append(-np.inf)
-    mean = {n: float(np.mean(v)) if len(v) == max(map(len, table.values())) else -np.inf
-            for n, v in table.items()}
-    n, why = choose(mean, tol)
-    return OrderChoice(n, mean, why)
+    med = {n: float(np.median(v)) if len(v) == max(map(len, table.values())) else -np.inf
+           for n, v in table.items()}
+    n, why = choose(med, tol)
+    return OrderChoice(n, med, why)

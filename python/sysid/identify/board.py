@@ -1,0 +1,168 @@
+"""The leaderboard of :func:`sysid.identify`: candidates scored on blocks of the estimation
+record held out from their fit, ranked, and the rules that pick one.
+
+Each candidate is fitted on every fold's fitted part and simulated on its held-out block
+(initial state and a constant offset per output fitted, :func:`simulation_fit`). Its score is
+the **median** of the held-out fits over the folds: a record often holds one block unlike the
+others (a saturation, a change of operating point, a stretch where some input is idle), and the
+mean of the fits would then rank the candidates by that block alone; the median ranks them by
+what they do on a typical stretch of the record, which is what fresh data from the same plant
+will be. The mean and every fold's fit are kept in the leaderboard.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from typing import Any
+
+import numpy as np
+
+from .._progress import Bar
+from ..data.iodata import IOData
+from ..validation.crossval import TOL, simulation_errors, simulation_fit
+
+__all__ = ["Board", "slack", "bic"]
+
+
+def slack(best: float) -> float:
+    """Fit points a simpler candidate may give up against the best and still be preferred:
+    ``TOL`` (0.5), at most 5 % of the best's error (noise-free data: round-off only)."""
+    return max(min(TOL, 0.05 * (100.0 - best)), 1e-6) if np.isfinite(best) else 0.0
+
+
+def bic(model: Any, data: IOData) -> float:
+    """Bayesian information criterion of a model fitted on ``data``, from its simulation
+    errors there (initial state and output offsets fitted): ``N log det(E^T E / N) + p log
+    N`` with ``p = n (m + l + 1) + m l`` (the last term with a feedthrough) ``+ n l`` (with a
+    Kalman gain), the identifiable parameter count of ``A, B, C``, ``D``, ``K`` and the
+    initial state."""
+    errs = simulation_errors(model, data)
+    E = np.vstack([e for _, e in errs])
+    N = E.shape[0]
+    sign, logdet = np.linalg.slogdet(E.T @ E / N)
+    if sign <= 0 or not np.isfinite(logdet):
+        return -np.inf if sign == 0 else np.inf
+    n, m, l = model.nstates, model.ninputs, model.noutputs
+    p = n * (m + l + 1) + (m * l if np.any(np.asarray(model.D) != 0) else 0)
+    if getattr(model, "K", None) is not None and np.any(np.asarray(model.K) != 0):
+        p += n * l  # a noise model estimated from the same data
+    return float(N * logdet + p * np.log(N))
+
+
+class Board:
+    """Candidates with their held-out scores and a way to re-fit each on the whole record."""
+
+    def __init__(self, folds: list[tuple[IOData, IOData]], bar: Bar,
+                 deadline: float | None = None) -> None:
+        self.rows: list[dict[str, Any]] = []
+        self.folds, self.bar, self.deadline = folds, bar, deadline
+        self.out_of_time = False
+
+    def time_left(self) -> bool:
+        """False once the time budget (CPU seconds of this process) is spent."""
+        if self.deadline is not None and time.process_time() > self.deadline:
+            self.out_of_time = True
+        return not self.out_of_time
+
+    def stopper(self) -> Any:
+        """A progress callback for iterative fits: stops them once the budget is spent."""
+        def cb(*_: Any) -> bool:
+            return self.time_left()
+        return cb
+
+    def add(self, family: str, order: int, feedthrough: bool, focus: str | None,
+            criterion: str, fit_fn: Any, refit: Any, start: dict[str, Any] | None = None,
+            budgeted: bool = True) -> dict[str, Any] | None:
+        """Score a candidate: ``fit_fn(k)`` fits it on fold ``k``, ``refit(data)`` on the whole
+        record; ``start`` is the leaderboard row it was refined from, if any. ``budgeted``
+        candidates are skipped once the time budget is spent (the subspace sweep is not)."""
+        if budgeted and not self.time_left():
+            return None
+        t = time.perf_counter()
+        row: dict[str, Any] = {"family": family, "order": order, "feedthrough": feedthrough,
+                               "focus": focus, "criterion": criterion, "refit": refit,
+                               "fit_fn": fit_fn, "start": start, "note": ""}
+        try:
+            fits, rho = [], 0.0
+            for k, (_, held) in enumerate(self.folds):
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    model = fit_fn(k)
+                fits.append(simulation_fit(model, held))
+                poles = model.poles()
+                rho = max(rho, float(np.max(np.abs(poles))) if len(poles) else 0.0)
+            f = np.asarray(fits)
+            row["held_out_fit"] = float(np.median(f))
+            row["mean_fit"] = float(np.mean(f)) if np.all(np.isfinite(f)) else -np.inf
+            row["fold_fits"] = [float(x) for x in f]
+            row["max_abs_pole"] = rho
+            row["stable"] = rho < 1.0
+        except KeyboardInterrupt:
+            raise
+        except Exception as e:  # noqa: BLE001 - a failed candidate is listed, not raised
+            row.update(held_out_fit=-np.inf, mean_fit=-np.inf, fold_fits=[],
+                       max_abs_pole=np.nan, stable=False,
+                       note=f"{type(e).__name__}: {e}"[:120])
+        if budgeted and not self.time_left():
+            row["note"] = "time budget spent while it was fitted: not chosen"
+            row["worse_than_start"] = True
+        elif start is not None and row["held_out_fit"] < start["held_out_fit"] - slack(
+                start["held_out_fit"]):
+            row["note"] = (f"held-out fit below its start's ({start['held_out_fit']:.1f} %): "
+                           "not chosen")
+            row["worse_than_start"] = True
+        row["seconds"] = time.perf_counter() - t
+        self.rows.append(row)
+        self.bar.update(1, best=f"{self.best_fit():.1f}%")
+        return row
+
+    def eligible(self, r: dict[str, Any], stable_only: bool = True) -> bool:
+        return (bool(np.isfinite(r["held_out_fit"])) and not r.get("worse_than_start")
+                and (r["stable"] or not stable_only))
+
+    def best_fit(self, stable_only: bool = True) -> float:
+        fits = [r["held_out_fit"] for r in self.rows if self.eligible(r, stable_only)]
+        return max(fits) if fits else -np.inf
+
+    def insisting(self) -> dict[str, Any] | None:
+        """An unstable candidate the data insist on: better than the best stable candidate
+        on every held-out block (a sign test at ``2**-K``, K >= 4 blocks) and by more than
+        the slack on the median (an integrating or open-loop unstable plant)."""
+        stable = [r for r in self.rows if self.eligible(r)]
+        unstable = [r for r in self.rows if self.eligible(r, False) and not r["stable"]]
+        if not unstable or len(self.folds) < 4:
+            return None
+        best_u = max(unstable, key=lambda r: r["held_out_fit"])
+        if not stable:
+            return best_u if all(np.isfinite(best_u["fold_fits"])) else None
+        best_s = max(stable, key=lambda r: r["held_out_fit"])
+        wins = all(a > b for a, b in zip(best_u["fold_fits"], best_s["fold_fits"]))
+        if wins and best_u["held_out_fit"] > best_s["held_out_fit"] + slack(
+                best_u["held_out_fit"]):
+            return best_u
+        return None
+
+    def near_best(self, stable_only: bool = True) -> list[dict[str, Any]]:
+        """Eligible candidates within :func:`slack` of the best score (the held-out blocks
+        cannot tell them apart): refined ones first, then by score."""
+        best = self.best_fit(stable_only)
+        s = slack(best)
+        near = [r for r in self.rows if self.eligible(r, stable_only)
+                and r["held_out_fit"] >= best - s]
+        # refined candidates first (few; each the refinement of a near-best start)
+        return sorted(near, key=lambda r: (r["criterion"].startswith("subspace"),
+                                           -r["held_out_fit"]))
+
+    def ranked(self, allow_unstable: bool = False) -> list[dict[str, Any]]:
+        """Eligible stable candidates first (unstable ones too when ``allow_unstable``);
+        among those within :func:`slack` of the best score the smallest order first, then
+        by score; the rest by score."""
+        best = self.best_fit(not allow_unstable)
+        s = slack(best)
+
+        def key(r: dict[str, Any]) -> tuple[bool, bool, int, float]:
+            ok = self.eligible(r, not allow_unstable)
+            near = bool(ok and r["held_out_fit"] >= best - s)
+            return (not ok, not near, r["order"] if near else 0, -r["held_out_fit"])
+        return sorted(self.rows, key=key)
