@@ -18,7 +18,10 @@ inputs in the outputs then "predict" it further: with the outputs as regressors,
 multisine record of a few thousand samples was declared fed back (p < 1e-14). The ARX
 innovations are free of the inputs' past; the input depends on them only through a
 controller. A noise-free loop is not flagged: its innovations vanish (and without noise the
-open-loop methods are not biased either).
+open-loop methods are not biased either). Not solved: a *nonlinear* system driven by a
+periodic input still looks fed back, because the nonlinear distortions in its outputs are
+functions of the input's past that a linear ARX model leaves in the innovations (the F-16
+record with the shaker voltage as input: p = 1e-37 on 8192 samples, 1e-89 before).
 """
 
 from __future__ import annotations
