@@ -134,7 +134,7 @@ AUTO = {
 def test_feedthrough_auto_decides_from_the_data_with_one_rule(name, d):
     data = record(d, seed=3)
     m = quiet(AUTO[name], data)
-    want, why = choose_feedthrough(data, 2)
+    want, why = choose_feedthrough(sysid.SubspaceEstimator(data), 2)
     assert want is (d != 0), why
     assert abs(m.D[0, 0] - d) < 0.05, (name, m.D)
     sel = m.info.get("feedthrough_selection")

@@ -367,7 +367,10 @@ def pem(
     """
     ft_selection = None
     if check_feedthrough(feedthrough) == "auto":
-        feedthrough, ft_selection = choose_feedthrough(_experiments(data), model.nstates)
+        from ..subspace.estimator import SubspaceEstimator
+
+        feedthrough, ft_selection = choose_feedthrough(SubspaceEstimator(_experiments(data)),
+                                                       model.nstates)
     st = _setup(data, model, focus, feedthrough, x0, noise, weighting, enforce_stability)
     if st.dropped_d:
         warnings.warn("the start model has a non-zero D and feedthrough=False (the default "

@@ -91,7 +91,8 @@ def ssest(
     data = _experiments(data)
     if check_feedthrough(feedthrough) == "auto":
         # decided once from the data (the rule every estimator shares), then a fixed choice
-        use, why = choose_feedthrough(data, order, method=method, horizon=horizon)
+        use, why = choose_feedthrough(SubspaceEstimator(data, horizon, method=method or "moesp"),
+                                      order)
         model = ssest(data, order, focus=focus, feedthrough=use, x0=x0, noise=noise,
                       horizon=horizon, methods=methods, method=method, max_iter=max_iter,
                       tol=tol, regularization=regularization, progress=progress,

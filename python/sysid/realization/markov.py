@@ -36,10 +36,11 @@ def _experiments(data: Any) -> tuple[list[tuple[np.ndarray, np.ndarray]], float]
 
 def _feedthrough(data: IOData, value: Any) -> bool:
     """``feedthrough`` as a bool: ``"auto"`` decided by the rule every estimator shares."""
+    from ..subspace.estimator import SubspaceEstimator
     from ..subspace.feedthrough import check_feedthrough, choose_feedthrough
 
     if check_feedthrough(value) == "auto":
-        return choose_feedthrough(data)[0]
+        return choose_feedthrough(SubspaceEstimator(data))[0]
     return bool(value)
 
 

@@ -53,30 +53,18 @@ from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
 from ..validation.feedback import feedback_pvalues
 from .feedthrough import FEEDTHROUGH_DEFAULT, check_feedthrough, choose_feedthrough
+from .methods import CLOSED_LOOP, METHODS, _method
 from .streaming import compression_info, warn_if_fallback
 
 __all__ = [
     "SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "METHODS",
 ]
 
-METHODS = ("moesp", "ordinary-moesp", "pi-moesp", "n4sid", "cva", "pbsid", "ssarx")
-CLOSED_LOOP = ("pbsid", "ssarx")
-_ALIASES = {"po-moesp": "moesp", "pomoesp": "moesp", "moesp-ordinary": "ordinary-moesp",
-            "pbsid-opt": "pbsid"}
 #: combined p-value below which the open-loop methods warn of feedback (strict: the warning
 #: must not fire by chance on open-loop data)
 FEEDBACK_WARNING_LEVEL = 1e-6
 
 Order = Union[int, Literal["auto"]]
-
-
-def _method(method: str) -> str:
-    if not isinstance(method, str):
-        raise DataError(f"method must be one of {METHODS}, got {method!r}")
-    key = _ALIASES.get(method.lower(), method.lower())
-    if key not in METHODS:
-        raise DataError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    return key
 
 
 def _preprocessing(data: IOData, from_factor: bool) -> dict[str, Any]:

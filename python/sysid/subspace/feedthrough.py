@@ -26,6 +26,7 @@ import numpy as np
 
 from .._checks import as_int
 from ..errors import DataError
+from .methods import CLOSED_LOOP, _method
 
 __all__ = ["FEEDTHROUGH_DEFAULT", "check_feedthrough", "choose_feedthrough"]
 
@@ -55,22 +56,20 @@ def _undecided(why: str) -> tuple[bool, dict[str, Any]]:
                    "reason": f"not decided from the data ({why}): no feedthrough"}
 
 
-def choose_feedthrough(source: Any, order: Any = "auto", *, method: str | None = None,
-                       horizon: int | None = None) -> tuple[bool, dict[str, Any]]:
+def choose_feedthrough(est: Any, order: Any = "auto", *, method: str | None = None
+                       ) -> tuple[bool, dict[str, Any]]:
     """Whether ``feedthrough="auto"`` estimates ``D`` for this record, and why.
 
     Parameters
     ----------
-    source : IOData or SubspaceEstimator
-        The estimation record (or an estimator on it, whose horizons and cached order
-        choices are reused).
+    est : SubspaceEstimator
+        An estimator on the estimation record (its horizons and cached order choices are
+        reused; the held-out fits use its class).
     order : int, "auto" or sequence of int
         The order(s) the held-out fits compare at; ``"auto"``: each side at its own
         automatic order.
     method : str, optional
-        Subspace weighting of the held-out fits (default: the estimator's, else ``"moesp"``).
-    horizon : int, optional
-        Horizon when ``source`` is an IOData.
+        Subspace weighting of the held-out fits (default: the estimator's).
 
     Returns
     -------
@@ -85,14 +84,11 @@ def choose_feedthrough(source: Any, order: Any = "auto", *, method: str | None =
     >>> true = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]], [[0.7]])
     >>> u = rng.standard_normal((600, 1))
     >>> y = true.simulate(u) + 0.02 * rng.standard_normal((600, 1))
-    >>> choose_feedthrough(sysid.IOData(u=u, y=y), 1)[0]
+    >>> choose_feedthrough(sysid.SubspaceEstimator(sysid.IOData(u=u, y=y)), 1)[0]
     True
     """
     from ..validation.crossval import TOL, cross_validated_order
-    from .estimator import CLOSED_LOOP, SubspaceEstimator, _method
 
-    est = source if isinstance(source, SubspaceEstimator) else SubspaceEstimator(
-        source, horizon, method=method or "moesp")
     key = est.method if method is None else _method(method)
     if key in CLOSED_LOOP:
         return _undecided(f"closed-loop method {key!r}")

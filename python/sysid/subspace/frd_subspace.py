@@ -111,7 +111,9 @@ def frd_subspace(
 
         why = None
         if ft == "auto":
-            ft, why = choose_feedthrough(frd, order)
+            from .estimator import SubspaceEstimator
+
+            ft, why = choose_feedthrough(SubspaceEstimator(frd), order)
         if method == "dft":
             dmodel = _from_dft(frd, order, horizon, weights, bool(ft))
         elif method == "spa":
