@@ -340,7 +340,7 @@ mod tests {
 
     /// The F statistic of the feedback test on a simulated record.
     fn feedback_f(u: &Mat<f64>, y: &Mat<f64>, p: usize) -> f64 {
-        use crate::hankel::{HankelLayout, QrCompressor};
+        use crate::hankel::{Compressor, HankelLayout, QrCompressor};
         let mut c = QrCompressor::new(HankelLayout::new(1, 1, p, 1).unwrap());
         c.push(u.as_ref(), y.as_ref()).unwrap();
         let fac = c.finish().unwrap();
