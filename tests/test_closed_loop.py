@@ -138,7 +138,8 @@ def test_feedback_result_presentation():
     res = sysid.check_feedback(data, lags=8)
     assert "feedback detected" in repr(res)
     text = res.summary()
-    assert "pbsid" in text and "F(8," in text
+    # F(innovation lags (8 - 8 // 2) x 1 output, ...)
+    assert "pbsid" in text and "F(4," in text and res.df[0] == 4
     df = res.to_pandas()
     assert list(df.columns) == ["F", "p_value"] and df.shape == (1, 2)
     pytest.importorskip("matplotlib")

@@ -170,5 +170,5 @@ def test_sweep_settings_change_the_table():
     lean = sysid.select_order(est, [4], x0="zero", feedthrough=False, kalman=False)
     assert lean.rows[0]["n_params"] == n_parameters(4, 1, 1, feedthrough=False,
                                                    noise_model=False)
-    assert base.rows[3]["n_params"] == n_parameters(4, 1, 1, x0=True)
+    assert base.rows[3]["n_params"] == n_parameters(4, 1, 1, feedthrough=False, x0=True)
     assert lean.model().K is None and np.all(lean.model().D == 0)

@@ -24,7 +24,7 @@ def _poles(m):
 
 def test_exact_discrete_frd_gives_the_system():
     w = np.linspace(0.0, np.pi / 0.1, 60)
-    model = sysid.frd_subspace(sysid.FRD(w, TRUE.freqresp(w), dt=0.1))
+    model = sysid.frd_subspace(sysid.FRD(w, TRUE.freqresp(w), dt=0.1), feedthrough=True)
     assert model.nstates == 3 and model.dt == 0.1
     np.testing.assert_allclose(_poles(model), _poles(TRUE), atol=1e-8)
     np.testing.assert_allclose(model.freqresp(w), TRUE.freqresp(w), atol=1e-8)
@@ -47,7 +47,8 @@ def test_noisy_frd_converges_as_frequencies_grow():
             w = np.linspace(0.01, np.pi / 0.1, nf)
             g = TRUE.freqresp(w)
             g = g + 0.05 * (rng.standard_normal(g.shape) + 1j * rng.standard_normal(g.shape))
-            model = sysid.frd_subspace(sysid.FRD(w, g, dt=0.1), 3, horizon=6)
+            model = sysid.frd_subspace(sysid.FRD(w, g, dt=0.1), 3, horizon=6,
+                                       feedthrough=True)  # TRUE has a D
             e.append(np.max(np.abs(_poles(model) - _poles(TRUE))))
         errs.append(np.mean(e))
     # about 1/sqrt(n_freq): measured 0.0088, 0.0047, 0.0013
@@ -61,7 +62,7 @@ def test_weights_and_errors():
     g[5] += 10.0  # an outlier, removed by a zero weight
     weights = np.ones(40)
     weights[5] = 0.0
-    model = sysid.frd_subspace(sysid.FRD(w, g, dt=0.1), 3, weights=weights)
+    model = sysid.frd_subspace(sysid.FRD(w, g, dt=0.1), 3, weights=weights, feedthrough=True)
     np.testing.assert_allclose(_poles(model), _poles(TRUE), atol=1e-8)
     with pytest.raises(sysid.DataError, match="dt"):
         sysid.frd_subspace(sysid.FRD(w, g), 3)
@@ -95,7 +96,7 @@ def test_input_output_spectra_of_a_record():
     rng = np.random.default_rng(2)
     u = rng.standard_normal((1024, 2))
     data = sysid.IOData(u=u, y=TRUE.simulate(u), dt=0.1)
-    model = sysid.frd_subspace(data, 3, method="dft")
+    model = sysid.frd_subspace(data, 3, method="dft", feedthrough=True)  # TRUE has a D
     np.testing.assert_allclose(_poles(model), _poles(TRUE), atol=1e-8)
     np.testing.assert_allclose(model.D, TRUE.D, atol=1e-8)
     w = np.linspace(0.0, np.pi / 0.1, 9)

@@ -249,8 +249,9 @@ def test_tc_regularised_fir_beats_least_squares_on_short_noisy_records() -> None
 def test_fir_options_change_the_estimate() -> None:
     true = random_system(2, 1, 1, 3, rmax=0.8)
     data = innovation_data(true, np.zeros((2, 1)), 300, 0.1, 1)
-    free = sysid.impulse_response(data, 20, regularization=None)
-    fixed = sysid.impulse_response(data, 20, hyper=(1e-6, 0.5))
+    # random_system has a D: h_0 is estimated only when asked (the default is h_0 = 0)
+    free = sysid.impulse_response(data, 20, regularization=None, feedthrough=True)
+    fixed = sysid.impulse_response(data, 20, hyper=(1e-6, 0.5), feedthrough=True)
     strict = sysid.impulse_response(data, 20, feedthrough=False, regularization=None)
     assert np.all(strict.markov[0] == 0) and np.any(free.markov[0] != 0)
     assert np.linalg.norm(fixed.markov) < 0.1 * np.linalg.norm(free.markov)  # heavy shrinkage
@@ -263,7 +264,7 @@ def test_okid_mimo_noise_free_is_exact_and_pools_experiments() -> None:
     d1 = innovation_data(true, np.zeros((4, 3)), 300, 0.0, 1)
     d2 = innovation_data(true, np.zeros((4, 3)), 300, 0.0, 2)
     both = sysid.IOData([d1.u, d2.u], [d1.y, d2.y], dt=1.0)
-    est = sysid.okid(both, observer_order=4, count=40)
+    est = sysid.okid(both, observer_order=4, count=40, feedthrough=True)  # true has a D
     assert est.markov.shape == (40, 3, 2)
     assert est.info["observer_markov"].shape == (4, 3, 5)
     np.testing.assert_allclose(est.markov, true.markov(40), atol=1e-8)
@@ -374,10 +375,10 @@ def test_impulse_from_frf_rejects_gaps_unless_told() -> None:
 def test_okid_feedthrough_flag_and_default_count() -> None:
     true = random_system(3, 1, 2, 4, rmax=0.8)
     data = innovation_data(true, np.zeros((3, 2)), 400, 0.0, 1)
-    with_d = sysid.okid(data, observer_order=4)
+    with_d = sysid.okid(data, observer_order=4, feedthrough=True)
     assert with_d.markov.shape[0] == 17
     np.testing.assert_allclose(with_d.markov[0], true.D, atol=1e-9)
-    strictly = sysid.okid(data, observer_order=4, feedthrough=False)
+    strictly = sysid.okid(data, observer_order=4)  # the default: no feedthrough
     assert np.all(strictly.markov[0] == 0)
     assert not np.allclose(strictly.markov[1:5], true.markov(5)[1:], atol=1e-3)  # D is missed
 

@@ -27,7 +27,7 @@ def test_noise_free_random_mimo_systems_are_recovered(seed):
     est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=horizon)
     for method in METHODS:
         assert est.singular_values_for(method).size > 0
-        model = est.fit("auto", method=method, kalman=False)
+        model = est.fit("auto", method=method, kalman=False, feedthrough=True)  # d != 0
         assert model.nstates == n, f"{method}: order {model.nstates} != {n}"
         h_true = markov(a, b, c, d, 40)
         h_est = model.markov(40)
@@ -171,7 +171,7 @@ def test_separate_past_and_future_horizons():
     est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), past=8, future=4)
     assert (est.past, est.future) == (8, 4)
     assert est.factor.l.shape == (12 * 3, 12 * 3)
-    model = est.fit(4, kalman=False)
+    model = est.fit(4, kalman=False, feedthrough=True)  # random_system has a D
     np.testing.assert_allclose(model.markov(20), markov(a, b, c, d, 20), atol=1e-8)
 
 
@@ -191,7 +191,7 @@ def test_multiple_experiments_identify_one_model():
     est = sysid.SubspaceEstimator(sysid.IOData(u=us, y=ys), horizon=5)
     assert est.factor.n_experiments == 3
     assert est.factor.n_columns == 3 * (300 - 10 + 1)
-    model = est.fit("auto", kalman=False)
+    model = est.fit("auto", kalman=False, feedthrough=True)  # random_system has a D
     np.testing.assert_allclose(model.markov(20), markov(a, b, c, d, 20), atol=1e-8)
 
 

@@ -194,6 +194,7 @@ def frd_subspace(
     horizon: int,
     order: int | None = None,
     weights: _Array | None = None,
+    feedthrough: str = "zero",
 ) -> dict[str, Any]: ...
 def spectra_subspace(
     omega: _Array,
@@ -205,6 +206,7 @@ def spectra_subspace(
     order: int | None = None,
     weights: _Array | None = None,
     transient: bool = True,
+    feedthrough: str = "zero",
 ) -> dict[str, Any]: ...
 def estimate_bd_x0(
     a: _Array, c: _Array, u: _Array, y: _Array, feedthrough: bool
@@ -240,7 +242,7 @@ def realize(
 def fir(
     experiments: list[tuple[_Array, _Array]],
     length: int,
-    feedthrough: bool = True,
+    feedthrough: bool = False,
     regularization: str = "tc",
     hyper: tuple[float, float] | None = None,
 ) -> dict[str, Any]: ...
@@ -248,7 +250,7 @@ def okid(
     experiments: list[tuple[_Array, _Array]],
     observer_order: int,
     count: int,
-    feedthrough: bool = True,
+    feedthrough: bool = False,
 ) -> dict[str, Any]: ...
 def solve_discrete_lyapunov(a: _Array, q: _Array) -> _Array: ...
 def gramians(a: _Array, b: _Array, c: _Array, d: _Array) -> tuple[_Array, _Array]: ...

@@ -180,8 +180,13 @@ def identify(
     n_boot: int = 100,
     compressor: str = "auto",
     bars: bool | None = False,
+    feedthrough: bool | str = False,
 ) -> dict[str, Any]:
     """Identify, validate and (optionally) write a report; returns a summary dict.
+
+    ``feedthrough``: estimate ``D`` (default ``False``, as every sysid state-space
+    estimator; ``"auto"``: decided once from the estimation data,
+    :func:`sysid.subspace.feedthrough.choose_feedthrough`).
 
     ``compressor`` is passed to :class:`~sysid.SubspaceEstimator` (its decision is in
     ``model.info["compression"]``); ``bars`` draws progress bars in the order sweep (None:
@@ -197,7 +202,7 @@ def identify(
         out = _pipeline(est_data, val_data, order=order, method=method, horizon=horizon,
                         report=report, preprocessing=preprocessing, progress=progress,
                         uncertainty=uncertainty, n_boot=n_boot, compressor=compressor,
-                        bars=bars, caught=caught)
+                        bars=bars, caught=caught, feedthrough=feedthrough)
     from .analysis.report_page import reissue
 
     out["warnings"] = reissue(caught)
@@ -206,8 +211,10 @@ def identify(
 
 def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, method: str,
               horizon: int | None, report: Any, preprocessing: Any, progress: Any, uncertainty:
-              str | None, n_boot: int, compressor: str, bars: Any, caught: list[Any]) -> Any:
+              str | None, n_boot: int, compressor: str, bars: Any, caught: list[Any],
+              feedthrough: bool | str = False) -> Any:
     from .subspace.estimator import SubspaceEstimator
+    from .subspace.feedthrough import check_feedthrough, choose_feedthrough
     from .validation.criteria import select_order
 
     say = progress or (lambda _msg: None)
@@ -230,10 +237,14 @@ def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, me
                 f"order {order} is larger than the data and horizon support (at most "
                 f"{est.max_order} with horizon {est.past}); lower --order or raise --horizon"
             )
+    if check_feedthrough(feedthrough) == "auto":
+        feedthrough, why = choose_feedthrough(est, "auto" if order == "auto" else int(order))
+        say(f"feedthrough: {why['reason']}")
     top = min(est.max_order, max(10, 2 * est.auto_order, 0 if order == "auto" else int(order)))
     while True:
         say(f"sweeping orders 1..{top} on one compression")
-        sel = select_order(est, range(1, top + 1), validation=val_data, progress=bars)
+        sel = select_order(est, range(1, top + 1), validation=val_data, progress=bars,
+                           feedthrough=bool(feedthrough))
         if order != "auto" or sel.order < top or top >= est.max_order:
             break
         # the best order sits at the edge of the sweep: look further
@@ -248,7 +259,8 @@ def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, me
     # the model saved and reported is the one the sweep validated (same fit, same settings);
     # the bootstrap adds its uncertainty without changing the estimate
     model = (sel.model(n, est.method) if uncertainty is None
-             else est.fit(n, x0=x0, uncertainty=uncertainty, n_boot=n_boot, rng=0))
+             else est.fit(n, x0=x0, uncertainty=uncertainty, n_boot=n_boot, rng=0,
+                          feedthrough=bool(feedthrough)))
     model.info["settings"] = {**model.info.get("settings", {}), "method": est.method,
                               "order": n, "order_rule": (
         sel.criterion if order == "auto" else "given"), "past": est.past,
@@ -547,7 +559,8 @@ def _identify(args: argparse.Namespace) -> int:
                    horizon=args.horizon, report=args.report, preprocessing=pre, progress=say,
                    compressor=args.compressor, bars=_bars(args),
                    uncertainty=None if args.uncertainty == "none" else args.uncertainty,
-                   n_boot=args.n_boot)
+                   n_boot=args.n_boot,
+                   feedthrough={"no": False, "yes": True}.get(args.feedthrough, "auto"))
     _print_summary(out)
     return 0
 
@@ -571,6 +584,10 @@ def _parser() -> argparse.ArgumentParser:
                           "feedthrough on held-out parts of the estimation data, when --order "
                           "is auto), or one subspace method: moesp, ordinary-moesp, pi-moesp, "
                           "n4sid, cva; closed loop: pbsid or ssarx")
+    ide.add_argument("--feedthrough", choices=("no", "yes", "auto"), default="no",
+                     help="with a subspace --method: estimate D (yes), not (no, default, as "
+                          "every sysid estimator) or decide from held-out parts of the "
+                          "estimation data (auto); --method auto decides it itself")
     ide.add_argument("--horizon", type=int, default=None, help="past/future horizon")
     ide.add_argument("--split", default="0.5",
                      help="estimation part: fraction (0.5) or sample count (500); 1 = all")

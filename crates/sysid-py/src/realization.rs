@@ -110,7 +110,7 @@ fn views<'a>(
 
 /// Least-squares FIR estimate; `regularization` is "none" or "tc".
 #[pyfunction]
-#[pyo3(signature = (experiments, length, feedthrough=true, regularization="tc", hyper=None))]
+#[pyo3(signature = (experiments, length, feedthrough=false, regularization="tc", hyper=None))]
 pub fn fir<'py>(
     py: Python<'py>,
     experiments: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>)>,
@@ -136,7 +136,7 @@ pub fn fir<'py>(
 
 /// OKID: observer and system Markov parameters.
 #[pyfunction]
-#[pyo3(signature = (experiments, observer_order, count, feedthrough=true))]
+#[pyo3(signature = (experiments, observer_order, count, feedthrough=false))]
 pub fn okid<'py>(
     py: Python<'py>,
     experiments: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>)>,

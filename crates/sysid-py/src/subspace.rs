@@ -115,7 +115,7 @@ pub fn estimate_bd_x0<'py>(
 /// row-major `l x m` response at `omega[k]`, rad/sample): dict with A, B, C, D and
 /// singular_values. `order=None` takes the largest log gap.
 #[pyfunction]
-#[pyo3(signature = (omega, g_re, g_im, n_outputs, horizon, order=None, weights=None))]
+#[pyo3(signature = (omega, g_re, g_im, n_outputs, horizon, order=None, weights=None, feedthrough="zero"))]
 #[allow(clippy::too_many_arguments)]
 pub fn frd_subspace<'py>(
     py: Python<'py>,
@@ -126,7 +126,9 @@ pub fn frd_subspace<'py>(
     horizon: usize,
     order: Option<usize>,
     weights: Option<PyReadonlyArray1<'_, f64>>,
+    feedthrough: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let ft = frequency::Feedthrough::parse(feedthrough).py()?;
     let om = vec1(&omega);
     let w = weights.as_ref().map(vec1);
     let (gr, gi) = (view(&g_re), view(&g_im));
@@ -142,7 +144,7 @@ pub fn frd_subspace<'py>(
         .detach(|| {
             let rr: Vec<_> = re.iter().map(|x| x.as_ref()).collect();
             let ii: Vec<_> = im.iter().map(|x| x.as_ref()).collect();
-            frequency::identify_frd(&om, &rr, &ii, w.as_deref(), order, horizon)
+            frequency::identify_frd(&om, &rr, &ii, w.as_deref(), order, horizon, ft)
         })
         .py()?;
     let d = system_dict(py, &id.sys)?;
@@ -153,7 +155,7 @@ pub fn frd_subspace<'py>(
 /// Frequency-domain subspace identification from one record's input and output DFTs
 /// (rows: frequencies): dict with A, B, C, D and singular_values.
 #[pyfunction]
-#[pyo3(signature = (omega, u_re, u_im, y_re, y_im, horizon, order=None, weights=None, transient=true))]
+#[pyo3(signature = (omega, u_re, u_im, y_re, y_im, horizon, order=None, weights=None, transient=true, feedthrough="zero"))]
 #[allow(clippy::too_many_arguments)]
 pub fn spectra_subspace<'py>(
     py: Python<'py>,
@@ -166,7 +168,9 @@ pub fn spectra_subspace<'py>(
     order: Option<usize>,
     weights: Option<PyReadonlyArray1<'_, f64>>,
     transient: bool,
+    feedthrough: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let ft = frequency::Feedthrough::parse(feedthrough).py()?;
     let om = vec1(&omega);
     let w = weights.as_ref().map(vec1);
     let (ur, ui, yr, yi) = (view(&u_re), view(&u_im), view(&y_re), view(&y_im));
@@ -182,6 +186,7 @@ pub fn spectra_subspace<'py>(
                 order,
                 horizon,
                 transient,
+                ft,
             )
         })
         .py()?;

@@ -108,8 +108,9 @@ class StateSpaceModel(ModelMixin):
                 f"B has {B.size} entries but A is {n}x{n}: B must be {n}x(number of inputs), "
                 f"e.g. a column of {n} values for one input"
             )
-        B = B.reshape(n, -1) if B.size == 0 or B.ndim < 2 else B
-        B = as_matrix(B, "B", (n, None)) if B.size else np.zeros((n, B.shape[1]))
+        if B.size == 0:  # no inputs (or no states): (n, m) zeros, m from a 2-D B
+            B = np.zeros((n, B.shape[1] if B.ndim == 2 and B.shape[0] == n else 0))
+        B = as_matrix(B.reshape(n, -1) if B.ndim < 2 else B, "B", (n, None)) if B.size else B
         C = np.asarray(unmask(C, "C"), dtype=float)
         if C.ndim < 2 and C.size != n:
             raise ShapeError(

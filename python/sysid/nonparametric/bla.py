@@ -167,7 +167,8 @@ def bla(
                method="bla", info=info)
 
 
-def bla_model(frd: FRD, order: int, *, refine: bool = True, max_iter: int = 50) -> Any:
+def bla_model(frd: FRD, order: int, *, refine: bool = True, max_iter: int = 50,
+              feedthrough: bool = False) -> Any:
     """A linear state-space model of a BLA: weighted frequency-domain subspace, then refined.
 
     The subspace fit weights each line by the inverse variance of the BLA (its ``std``);
@@ -185,6 +186,8 @@ def bla_model(frd: FRD, order: int, *, refine: bool = True, max_iter: int = 50) 
         Run the output-error refinement (kept only if it lowers the weighted FRF misfit).
     max_iter : int
         Iterations of the refinement.
+    feedthrough : bool
+        Estimate ``D`` (default ``False``: ``D = 0``, as every sysid state-space estimator).
 
     Returns
     -------
@@ -209,7 +212,7 @@ def bla_model(frd: FRD, order: int, *, refine: bool = True, max_iter: int = 50) 
     if frd.std is not None and np.all(frd.std > 0):
         w = 1.0 / np.mean(frd.std ** 2, axis=(1, 2))
         w = w / w.mean()
-    model = sysid.frd_subspace(frd, int(order), weights=w)
+    model = sysid.frd_subspace(frd, int(order), weights=w, feedthrough=feedthrough)
     if not refine:
         return model
     avg_u, avg_y = frd.info["averaged"]
@@ -226,7 +229,7 @@ def bla_model(frd: FRD, order: int, *, refine: bool = True, max_iter: int = 50) 
 
     try:
         ref = sysid.pem(d, model, focus="simulation", max_iter=max_iter, progress=False,
-                        x0="estimate")
+                        x0="estimate", feedthrough=feedthrough)
     except Exception:  # noqa: BLE001 - the subspace model stands when the refinement fails
         return model
     del n_per

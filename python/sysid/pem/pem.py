@@ -27,6 +27,7 @@ from ..data.offsets import check_offsets
 from ..errors import DataError, IterationLimitWarning, StabilityWarning
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
+from ..subspace.feedthrough import FEEDTHROUGH_DEFAULT, check_feedthrough, choose_feedthrough
 
 __all__ = ["pem", "pem_loss", "PemUncertainty"]
 
@@ -121,6 +122,7 @@ class _Setup:
     focus: str
     enforce_stability: bool | None
     stabilized: str | None
+    dropped_d: bool = False
 
     def kwargs(self) -> dict[str, Any]:
         return {"focus": self.focus, "estimate_d": self.feedthrough,
@@ -129,7 +131,7 @@ class _Setup:
                 "x0": [m if isinstance(m, str) else np.ascontiguousarray(m) for m in self.modes]}
 
 
-def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: bool | None, x0: Any,
+def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: Any,
            noise: str, weighting: str | None, enforce_stability: bool | None) -> _Setup:
     """Checks the arguments and prepares the start (``focus`` itself is parsed by the core)."""
     data = _experiments(data)
@@ -150,8 +152,8 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: bool | No
             f"data have {data.n_inputs} and {data.n_outputs}")
     n, l = model.nstates, model.noutputs
     A, B, C, D = model.A.copy(), model.B.copy(), model.C.copy(), model.D.copy()
-    if feedthrough is None:
-        feedthrough = bool(np.any(D != 0))
+    feedthrough = check_feedthrough(feedthrough, auto=False)  # "auto": decided by the caller
+    dropped_d = not feedthrough and bool(np.any(D != 0))
     if not feedthrough:
         D = np.zeros_like(D)
     K = None
@@ -175,7 +177,8 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: bool | No
         K = np.zeros((n, l))
     return _Setup(data, A, B, C, D, K, bool(feedthrough),
                   focus == "prediction" and noise == "estimate", weighting,
-                  _x0_modes(x0, data.n_experiments, n), focus, enforce_stability, stabilized)
+                  _x0_modes(x0, data.n_experiments, n), focus, enforce_stability, stabilized,
+                  dropped_d)
 
 
 def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None) -> None:
@@ -204,7 +207,7 @@ def pem_loss(
     model: StateSpaceModel,
     *,
     focus: str = "prediction",
-    feedthrough: bool | None = None,
+    feedthrough: bool = FEEDTHROUGH_DEFAULT,
     x0: Any = "estimate",
     noise: str = "estimate",
     weighting: str | None = None,
@@ -220,8 +223,10 @@ def pem_loss(
 
     Parameters
     ----------
-    data, model, focus, feedthrough, x0, noise, weighting, enforce_stability
+    data, model, focus, x0, noise, weighting, enforce_stability
         As for :func:`pem`.
+    feedthrough : bool
+        As for :func:`pem` (``"auto"`` is not taken: score each choice).
 
     Returns
     -------
@@ -259,7 +264,7 @@ def pem(
     model: StateSpaceModel,
     *,
     focus: str = "prediction",
-    feedthrough: bool | None = None,
+    feedthrough: bool | str = FEEDTHROUGH_DEFAULT,
     x0: Any = "estimate",
     noise: str = "estimate",
     max_iter: int = 50,
@@ -280,9 +285,12 @@ def pem(
         The start (for example a subspace estimate).
     focus : {"prediction", "simulation"}
         One-step prediction errors of the innovation form, or simulation errors (``K = 0``).
-    feedthrough : bool, optional
-        Estimate ``D`` (``True``) or force ``D = 0`` (``False``); default: estimate it when
-        the start's ``D`` is non-zero.
+    feedthrough : bool or "auto"
+        Estimate ``D`` (``True``) or force ``D = 0`` (``False``, the default: MATLAB's, and
+        the same for every sysid state-space estimator; a start with a non-zero ``D`` then
+        warns that its ``D`` is dropped). ``"auto"``: decided from the data by the rule
+        every estimator shares (:func:`sysid.subspace.feedthrough.choose_feedthrough`, at the
+        start's order; recorded in ``info["feedthrough_selection"]``).
     x0 : "estimate", "zero", array, or a list with one per experiment
         Initial states: estimated with the model (default), zero, or given.
     noise : {"estimate", "none", "fixed"}
@@ -354,7 +362,18 @@ def pem(
     >>> bool(np.allclose(np.sort_complex(m.poles()), np.sort_complex(true.poles()), atol=0.02))
     True
     """
+    ft_selection = None
+    if check_feedthrough(feedthrough) == "auto":
+        from ..subspace.estimator import SubspaceEstimator
+
+        feedthrough, ft_selection = choose_feedthrough(SubspaceEstimator(_experiments(data)),
+                                                       model.nstates)
     st = _setup(data, model, focus, feedthrough, x0, noise, weighting, enforce_stability)
+    if st.dropped_d:
+        warnings.warn("the start model has a non-zero D and feedthrough=False (the default "
+                      "of every sysid estimator): it is refined with D = 0; pass "
+                      "feedthrough=True to refine D as well",
+                      UserWarning, stacklevel=2)
     check_offsets(st.data)  # issue 26: the one offset check (OffsetWarning)
     max_iter = as_int(max_iter, "max_iter", 0)
     tol = float(tol)
@@ -416,6 +435,7 @@ def pem(
         "focus": focus,
         "weighting": weighting,
         "feedthrough": bool(feedthrough),
+        "start_d_dropped": st.dropped_d,
         "noise": noise if focus == "prediction" else "none",
         "x0": ["estimate" if isinstance(m, str) and m == "estimate" else
                ("zero" if isinstance(m, str) else "given") for m in modes],
@@ -428,6 +448,8 @@ def pem(
         "x0_values": x0s,
         "estimated_x0": est_x0,
     }
+    if ft_selection is not None:
+        info["feedthrough_selection"] = ft_selection
     out = StateSpaceModel(
         res["a"], res["b"], res["c"], res["d"], Kres, dt=data.dt,
         noise_cov=res["innovation_covariance"], x0=x0s[0] if len(x0s) == 1 else None,

@@ -13,6 +13,7 @@ from .._checks import as_int
 from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
 from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator
+from ..subspace.feedthrough import FEEDTHROUGH_DEFAULT, check_feedthrough, choose_feedthrough
 from .pem import _experiments, pem, pem_loss
 
 __all__ = ["ssest"]
@@ -23,7 +24,7 @@ def ssest(
     order: Any = "auto",
     *,
     focus: str = "prediction",
-    feedthrough: Any = False,
+    feedthrough: Any = FEEDTHROUGH_DEFAULT,
     x0: Any = "estimate",
     noise: str = "estimate",
     horizon: int | None = None,
@@ -52,10 +53,11 @@ def ssest(
         simulation fit on the last 1/3, the smallest within 0.5 points of the best wins and
         is refined on the whole record. Table and reason in ``info["order_selection"]``.
     feedthrough : bool or "auto"
-        Estimate ``D``. Default ``False`` (no feedthrough, as MATLAB's ``ssest``; the same
-        default for every sysid estimator). ``"auto"``: fitted with ``D``, kept when an entry
-        of ``D`` exceeds twice its standard deviation, else re-fitted without (recorded in
-        ``info["feedthrough_selection"]``).
+        Estimate ``D``. Default ``False``: ``D = 0`` (MATLAB's ``ssest`` default, and the same
+        for every sysid state-space estimator). ``True`` estimates ``D``; ``"auto"`` decides
+        from the data: ``D`` only when it raises the held-out simulation fit of the subspace
+        models by more than 0.5 points (:func:`sysid.subspace.feedthrough.choose_feedthrough`,
+        recorded in ``info["feedthrough_selection"]``), then refined with that choice.
     focus, x0, noise, max_iter, tol, regularization, progress, enforce_stability
         As for :func:`pem` (the candidates are scored by :func:`pem_loss`).
     horizon : int, optional
@@ -87,8 +89,18 @@ def ssest(
     True
     """
     data = _experiments(data)
-    if isinstance(order, str) or np.ndim(order) or isinstance(feedthrough, str):
-        # order="auto", a range of orders, or feedthrough="auto": chosen from the data
+    if check_feedthrough(feedthrough) == "auto":
+        # decided once from the data (the rule every estimator shares), then a fixed choice
+        use, why = choose_feedthrough(SubspaceEstimator(data, horizon, method=method or "moesp"),
+                                      order)
+        model = ssest(data, order, focus=focus, feedthrough=use, x0=x0, noise=noise,
+                      horizon=horizon, methods=methods, method=method, max_iter=max_iter,
+                      tol=tol, regularization=regularization, progress=progress,
+                      enforce_stability=enforce_stability)
+        model.info["feedthrough_selection"] = why
+        return model
+    if isinstance(order, str) or np.ndim(order):
+        # order="auto" or a range of orders: chosen from the data
         from ..identify.structure import ssest_select
 
         return ssest_select(data, order, focus=focus, feedthrough=feedthrough, x0=x0,

@@ -366,12 +366,24 @@ class PolynomialModel(ModelMixin):
         return control.tf(nums, dens, self.dt)
 
     def to_statespace(self) -> Any:
-        """Deterministic part as a :class:`~sysid.StateSpaceModel` (one block per channel)."""
+        """Deterministic part as a :class:`~sysid.StateSpaceModel` (one block per channel);
+        for a time series (no inputs) the noise model ``C / (A D)`` in innovations form
+        (``K``, ``B`` and ``D`` empty), whose free response :func:`sysid.compare` fits.
+
+        Examples
+        --------
+        >>> m = PolynomialModel([[[-0.5]]], [[]], [[]], 1.0)   # AR(1): y = e / (1 - 0.5 q^-1)
+        >>> ss = m.to_statespace()
+        >>> ss.poles().real, ss.K.shape, ss.B.shape
+        (array([0.5]), (1, 1), (1, 0))
+        """
         from scipy import signal
 
         from ..models.statespace import StateSpaceModel
 
         ny, nu = self.n_outputs, self.n_inputs
+        if nu == 0:
+            return self._noise_statespace()
         blocks = []
         for i in range(ny):
             for j in range(nu):
@@ -388,6 +400,35 @@ class PolynomialModel(ModelMixin):
             D[i, j] = d[0, 0]
             k += r
         return StateSpaceModel(A, B, C, D, dt=self.dt, input_names=self.input_names,
+                               output_names=self.output_names)
+
+    def _noise_statespace(self) -> Any:
+        """The time series ``y_i = C_i / (A_i D_i) e_i`` as one innovations-form block per
+        output (monic polynomials: the direct term of each block is 1, the innovation)."""
+        from scipy import signal
+
+        from ..models.statespace import StateSpaceModel
+
+        if self.coupled:
+            raise DataError("the state-space form of a coupled MIMO AR model is not "
+                            "implemented")
+        ny = self.n_outputs
+        blocks = []
+        for i in range(ny):
+            num, den = _monic(self.c[i]), np.convolve(_monic(self.a[i][i]), _monic(self.d[i]))
+            k = max(num.size, den.size)
+            num, den = np.pad(num, (0, k - num.size)), np.pad(den, (0, k - den.size))
+            a, b, c, _ = signal.tf2ss(num, den) if k > 1 else (np.zeros((0, 0)),) * 4
+            blocks.append((np.atleast_2d(a), np.reshape(b, (-1, 1)), np.reshape(c, (1, -1))))
+        n = sum(b[0].shape[0] for b in blocks)
+        A, K, C = np.zeros((n, n)), np.zeros((n, ny)), np.zeros((ny, n))
+        o = 0
+        for i, (a, b, c) in enumerate(blocks):
+            r = a.shape[0]
+            A[o:o + r, o:o + r], K[o:o + r, i], C[i, o:o + r] = a, b[:, 0], c[0]
+            o += r
+        return StateSpaceModel(A, np.zeros((n, 0)), C, np.zeros((ny, 0)), K, dt=self.dt,
+                               noise_cov=np.diag(self.noise_variance),
                                output_names=self.output_names)
 
     def __repr__(self) -> str:

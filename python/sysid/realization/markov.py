@@ -34,9 +34,19 @@ def _experiments(data: Any) -> tuple[list[tuple[np.ndarray, np.ndarray]], float]
     return [(np.asarray(u, dtype=float), np.asarray(y, dtype=float)) for u, y in exps], data.dt
 
 
+def _feedthrough(data: IOData, value: Any) -> bool:
+    """``feedthrough`` as a bool: ``"auto"`` decided by the rule every estimator shares."""
+    from ..subspace.estimator import SubspaceEstimator
+    from ..subspace.feedthrough import check_feedthrough, choose_feedthrough
+
+    if check_feedthrough(value) == "auto":
+        return choose_feedthrough(SubspaceEstimator(data))[0]
+    return bool(value)
+
+
 def impulse_response(data: IOData, length: int, *, regularization: str | None = "tc",
                      hyper: tuple[float, float] | None = None,
-                     feedthrough: bool = True) -> MarkovEstimate:
+                     feedthrough: bool | str = False) -> MarkovEstimate:
     """Markov parameters by least-squares FIR, optionally TC-regularised.
 
     Fits ``y(t) = sum_{k<length} h_k u(t-k) + e(t)`` over all experiments of ``data`` (means
@@ -57,8 +67,10 @@ def impulse_response(data: IOData, length: int, *, regularization: str | None = 
         ``None``: plain least squares.
     hyper : (float, float), optional
         Fixed TC ``(c, lambda)`` for unit-variance inputs.
-    feedthrough : bool
-        Estimate ``h_0 = D``; if False it is zero.
+    feedthrough : bool or "auto"
+        Estimate ``h_0 = D``; if False (the default, as every sysid state-space estimator)
+        it is zero. ``"auto"``: decided from the data
+        (:func:`sysid.subspace.feedthrough.choose_feedthrough`).
 
     Returns
     -------
@@ -81,7 +93,7 @@ def impulse_response(data: IOData, length: int, *, regularization: str | None = 
         raise DataError("length is required: the number of Markov parameters to estimate")
     if regularization not in ("tc", None):
         raise DataError(f"regularization must be 'tc' or None, got {regularization!r}")
-    out = _sysid.fir(exps, n, bool(feedthrough), regularization or "none", hyper)
+    out = _sysid.fir(exps, n, _feedthrough(data, feedthrough), regularization or "none", hyper)
     l, m = exps[0][1].shape[1], exps[0][0].shape[1]
     h = np.asarray(out["markov"]).reshape(-1, l, m)
     info = {k: out[k] for k in ("scale", "decay", "noise_variance", "samples")}
@@ -89,7 +101,7 @@ def impulse_response(data: IOData, length: int, *, regularization: str | None = 
 
 
 def okid(data: IOData, observer_order: int, count: int | None = None, *,
-         feedthrough: bool = True) -> MarkovEstimate:
+         feedthrough: bool | str = False) -> MarkovEstimate:
     """Observer/Kalman filter identification of Markov parameters.
 
     Regresses ``y(t)`` on ``u(t)`` and ``observer_order`` past inputs and outputs (the
@@ -105,8 +117,10 @@ def okid(data: IOData, observer_order: int, count: int | None = None, *,
         Lags p of the regression; ``p * noutputs`` should exceed the expected order.
     count : int, optional
         Markov parameters returned (default ``4 * observer_order + 1``).
-    feedthrough : bool
-        Estimate ``h_0 = D``; if False it is zero.
+    feedthrough : bool or "auto"
+        Estimate ``h_0 = D``; if False (the default, as every sysid state-space estimator)
+        it is zero. ``"auto"``: decided from the data
+        (:func:`sysid.subspace.feedthrough.choose_feedthrough`).
 
     Returns
     -------
@@ -130,7 +144,7 @@ def okid(data: IOData, observer_order: int, count: int | None = None, *,
     if p is None:
         raise DataError("observer_order is required: the number of past samples in the observer")
     c = _count(count, "count") or 4 * p + 1
-    out = _sysid.okid(exps, p, c, bool(feedthrough))
+    out = _sysid.okid(exps, p, c, _feedthrough(data, feedthrough))
     l, m = exps[0][1].shape[1], exps[0][0].shape[1]
     h = np.asarray(out["markov"]).reshape(-1, l, m)
     info = {

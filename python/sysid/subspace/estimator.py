@@ -52,30 +52,19 @@ from ..errors import (
 from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
 from ..validation.feedback import feedback_pvalues
+from .feedthrough import FEEDTHROUGH_DEFAULT, check_feedthrough, choose_feedthrough
+from .methods import CLOSED_LOOP, METHODS, _method
 from .streaming import compression_info, warn_if_fallback
 
 __all__ = [
     "SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "METHODS",
 ]
 
-METHODS = ("moesp", "ordinary-moesp", "pi-moesp", "n4sid", "cva", "pbsid", "ssarx")
-CLOSED_LOOP = ("pbsid", "ssarx")
-_ALIASES = {"po-moesp": "moesp", "pomoesp": "moesp", "moesp-ordinary": "ordinary-moesp",
-            "pbsid-opt": "pbsid"}
 #: combined p-value below which the open-loop methods warn of feedback (strict: the warning
 #: must not fire by chance on open-loop data)
 FEEDBACK_WARNING_LEVEL = 1e-6
 
 Order = Union[int, Literal["auto"]]
-
-
-def _method(method: str) -> str:
-    if not isinstance(method, str):
-        raise DataError(f"method must be one of {METHODS}, got {method!r}")
-    key = _ALIASES.get(method.lower(), method.lower())
-    if key not in METHODS:
-        raise DataError(f"unknown method {method!r}; choose one of {', '.join(METHODS)}")
-    return key
 
 
 def _preprocessing(data: IOData, from_factor: bool) -> dict[str, Any]:
@@ -351,8 +340,8 @@ class SubspaceEstimator:
         more, so ``fit(order="auto")`` uses :meth:`order_selection` instead."""
         return self._subspace(None).auto_order()
 
-    def order_selection(self, method: str | None = None, feedthrough: bool = True
-                        ) -> dict[str, Any]:
+    def order_selection(self, method: str | None = None,
+                        feedthrough: bool = FEEDTHROUGH_DEFAULT) -> dict[str, Any]:
         """The order ``fit(order="auto")`` takes, with the table and the reason.
 
         With inputs and the data at hand: the order whose models, fitted on part of the
@@ -372,11 +361,9 @@ class SubspaceEstimator:
         """Whether ``fit(feedthrough="auto")`` estimates ``D``: the held-out simulation fits
         (as :meth:`order_selection`) with and without it; ``D`` only when it gains more than
         0.5 fit points (no feedthrough, MATLAB's default, otherwise). Closed-loop methods and
-        data that cannot be split: no ``D``."""
-        from .order_choice import feedthrough_selection
-
-        key = self.method if method is None else _method(method)
-        return feedthrough_selection(self, key, order, key in CLOSED_LOOP)
+        data that cannot be split: no ``D``. The one rule of every estimator
+        (:func:`sysid.subspace.feedthrough.choose_feedthrough`)."""
+        return choose_feedthrough(self, order, method=method)
 
     @property
     def max_order(self) -> int:
@@ -388,7 +375,7 @@ class SubspaceEstimator:
         order: Order = "auto",
         *,
         method: str | None = None,
-        feedthrough: bool | str | None = None,
+        feedthrough: bool | str = FEEDTHROUGH_DEFAULT,
         kalman: bool = True,
         stable: bool = False,
         x0: bool = False,
@@ -407,12 +394,13 @@ class SubspaceEstimator:
             ``info["order_selection"]``).
         method : str, optional
             Weighting for this fit (default: the estimator's).
-        feedthrough : bool or "auto", optional
-            Estimate ``D``; ``False`` forces ``D = 0``; ``"auto"``: decided by held-out
+        feedthrough : bool or "auto"
+            Estimate ``D``. Default ``False``: ``D = 0``, MATLAB's default and the same for
+            every sysid state-space estimator (:mod:`sysid.subspace.feedthrough`).
+            ``True`` estimates ``D`` (with ``"pbsid"``/``"ssarx"`` consistent only when the
+            controller has no direct feedthrough); ``"auto"``: decided by held-out
             simulation fit (:meth:`feedthrough_selection`, recorded in
-            ``info["feedthrough_selection"]``). Default: ``True`` for the open-loop
-            methods, ``False`` for ``"pbsid"``/``"ssarx"`` (estimating ``D`` under feedback is
-            consistent only when the controller has no direct feedthrough).
+            ``info["feedthrough_selection"]``).
         kalman : bool
             Estimate the noise model (``K`` from the Riccati equation, innovation covariance).
         stable : bool
@@ -436,13 +424,8 @@ class SubspaceEstimator:
         StateSpaceModel
         """
         key = self.method if method is None else _method(method)
-        if feedthrough is None:
-            feedthrough = key not in CLOSED_LOOP
         ft_selection = None
-        if isinstance(feedthrough, str):
-            if feedthrough != "auto":
-                raise DataError(f"feedthrough must be True, False or 'auto', got "
-                                f"{feedthrough!r}")
+        if check_feedthrough(feedthrough) == "auto":
             feedthrough, ft_selection = self.feedthrough_selection(key, order)
         if key in CLOSED_LOOP:
             from .closed_loop import closed_loop_fit
@@ -452,8 +435,11 @@ class SubspaceEstimator:
                                 f"method={key!r} (an open-loop re-fit or simulation would "
                                 "ignore the feedback); refine with sysid.pem for both")
 
-            return closed_loop_fit(self, key, order, feedthrough=feedthrough, kalman=kalman,
-                                   regularization=regularization)
+            cl = closed_loop_fit(self, key, order, feedthrough=feedthrough, kalman=kalman,
+                                 regularization=regularization)
+            if ft_selection is not None:
+                cl.info["feedthrough_selection"] = ft_selection
+            return cl
         sub = self._subspace(method)
         self._warn_feedback(key)
         if isinstance(order, str):
@@ -584,7 +570,7 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         order: Order = "auto",
         *,
         horizon: int | None = None,
-        feedthrough: bool | str = True,
+        feedthrough: bool | str = FEEDTHROUGH_DEFAULT,
         kalman: bool = True,
         stable: bool = False,
         x0: bool = False,
@@ -595,7 +581,9 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
     fit.__name__ = method.replace("-", "_")
     fit.__doc__ = f"""Identify a state-space model with {method.upper()} in one call.
 
-    Equivalent to ``SubspaceEstimator(data, horizon, method="{method}").fit(order, ...)``.
+    Equivalent to ``SubspaceEstimator(data, horizon, method="{method}").fit(order, ...)``;
+    no feedthrough (``D = 0``) unless ``feedthrough=True`` (or ``"auto"``: decided from the
+    data), as every sysid state-space estimator.
 
     Examples
     --------

@@ -24,6 +24,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_int
 from ..errors import DataError
+from .feedthrough import check_feedthrough, choose_feedthrough
 
 __all__ = ["frd_subspace"]
 
@@ -40,6 +41,7 @@ def frd_subspace(
     weights: Any = None,
     lags: int | None = None,
     method: str = "spa",
+    feedthrough: bool | str = False,
 ) -> Any:
     """State-space model from frequency-response data (McKelvey, Akçay & Ljung 1996).
 
@@ -70,6 +72,12 @@ def frd_subspace(
         input and output DFTs of the (single-experiment) record (``"dft"``, McKelvey, Akçay &
         Ljung's spectra form, with the transient term estimated: exact for noise-free
         records, periodic or not).
+    feedthrough : bool or "auto"
+        Estimate ``D``. Default ``False``: no direct term, as every sysid state-space
+        estimator (with ``continuous=True`` the continuous-time ``D`` is zero: the discrete
+        fit is constrained to ``G(-1) = 0``, which Tustin's map sends to infinite frequency).
+        ``"auto"`` (``IOData`` input only): decided from the record by held-out simulation
+        fit (:func:`sysid.subspace.feedthrough.choose_feedthrough`).
 
     Returns
     -------
@@ -82,6 +90,8 @@ def frd_subspace(
     >>> true = sysid.StateSpaceModel([[0.9, 0.2], [-0.2, 0.9]], [[1.0], [0.0]], [[1.0, 0.5]])
     >>> w = np.linspace(0.01, np.pi, 50)
     >>> model = sysid.frd_subspace(sysid.FRD(w, true.freqresp(w), dt=1.0), order=2)
+    >>> float(model.D[0, 0])
+    0.0
     >>> bool(np.allclose(np.sort_complex(model.poles()), np.sort_complex(true.poles())))
     True
     >>> ct = sysid.ContinuousStateSpace([[0.0, 1.0], [-4.0, -0.4]], [[0.0], [1.0]], [[1.0, 0.0]])
@@ -94,22 +104,34 @@ def frd_subspace(
     from ..models.frd import FRD
     from ..models.statespace import StateSpaceModel
 
+    ft = check_feedthrough(feedthrough)
     if isinstance(frd, IOData):
         from ..models.continuous import d2c
         from ..nonparametric.frf import spa
 
+        why = None
+        if ft == "auto":
+            from .estimator import SubspaceEstimator
+
+            ft, why = choose_feedthrough(SubspaceEstimator(frd), order)
         if method == "dft":
-            dmodel = _from_dft(frd, order, horizon, weights)
+            dmodel = _from_dft(frd, order, horizon, weights, bool(ft))
         elif method == "spa":
             est = spa(frd) if lags is None else spa(frd, lags=lags)
-            dmodel = frd_subspace(est, order, horizon=horizon, weights=weights)
+            dmodel = frd_subspace(est, order, horizon=horizon, weights=weights,
+                                  feedthrough=bool(ft))
         else:
             raise DataError(f"method must be 'spa' or 'dft', got {method!r}")
+        if why is not None:
+            dmodel.info["feedthrough_selection"] = why
         if not continuous:
             return dmodel
-        ct = d2c(dmodel, "zoh")
+        ct = d2c(dmodel, "zoh")  # the zero-order hold keeps D: no D stays no D
         ct.info.update(dmodel.info)
         return ct
+    if ft == "auto":
+        raise DataError("feedthrough='auto' decides from a time record (held-out simulation "
+                        "fit); for an FRD pass True or False, or give the IOData")
     if not isinstance(frd, FRD):
         raise DataError(f"frd must be a sysid.FRD, got {type(frd).__name__}")
     omega = np.asarray(frd.omega, dtype=float)
@@ -155,10 +177,11 @@ def frd_subspace(
     if weights is not None:
         w = np.ascontiguousarray(np.broadcast_to(np.asarray(weights, dtype=float), (nf,)))
     flat = g.reshape(nf, l * m)
+    mode = "estimate" if ft else ("zero-at-nyquist" if continuous else "zero")
     res = _sysid.frd_subspace(np.ascontiguousarray(wd), np.ascontiguousarray(flat.real),
-                              np.ascontiguousarray(flat.imag), l, q, n, w)
+                              np.ascontiguousarray(flat.imag), l, q, n, w, mode)
     info = {"method": "frequency-subspace", "horizon": q, "order": res["A"].shape[0],
-            "singular_values": res["singular_values"]}
+            "singular_values": res["singular_values"], "feedthrough": bool(ft)}
     model = StateSpaceModel(res["A"], res["B"], res["C"], res["D"], dt=dt,
                             input_names=frd.input_names, output_names=frd.output_names,
                             info=info)
@@ -172,7 +195,8 @@ def frd_subspace(
     return ct
 
 
-def _from_dft(data: Any, order: Order, horizon: int | None, weights: Any) -> Any:
+def _from_dft(data: Any, order: Order, horizon: int | None, weights: Any,
+              feedthrough: bool) -> Any:
     """Discrete model from the DFTs of a single-experiment record."""
     from ..models.statespace import StateSpaceModel
 
@@ -194,9 +218,9 @@ def _from_dft(data: Any, order: Order, horizon: int | None, weights: Any) -> Any
         w = np.ascontiguousarray(np.broadcast_to(np.asarray(weights, float), (wd.size,)))
     c = np.ascontiguousarray
     res = _sysid.spectra_subspace(c(wd), c(U.real), c(U.imag), c(Y.real), c(Y.imag), q, nord,
-                                  w, True)
+                                  w, True, "estimate" if feedthrough else "zero")
     info = {"method": "frequency-subspace-dft", "horizon": q, "order": res["A"].shape[0],
-            "singular_values": res["singular_values"]}
+            "singular_values": res["singular_values"], "feedthrough": feedthrough}
     return StateSpaceModel(res["A"], res["B"], res["C"], res["D"], dt=data.dt,
                            input_names=data.input_names, output_names=data.output_names,
                            info=info)

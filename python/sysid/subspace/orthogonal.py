@@ -36,6 +36,7 @@ from .._display import HTMLResult
 from ..data.iodata import IOData
 from ..errors import DataError
 from ..models.statespace import StateSpaceModel
+from .feedthrough import check_feedthrough
 
 __all__ = ["OrthogonalDecomposition", "orthogonal_decomposition", "svc_order"]
 
@@ -180,7 +181,7 @@ def orthogonal_decomposition(
     *,
     horizon: int | None = None,
     horizon_stoch: int | None = None,
-    feedthrough: bool = True,
+    feedthrough: bool | str = False,
     stoch_method: str = "cva",
 ) -> OrthogonalDecomposition:
     """Deterministic and stochastic submodels, each with its own order (Picci & Katayama).
@@ -200,8 +201,10 @@ def orthogonal_decomposition(
         Horizon of the deterministic step (default :func:`sysid.default_horizon`).
     horizon_stoch : int, optional
         Horizon of the stochastic step (default: as ``horizon``).
-    feedthrough : bool
-        Estimate ``D_d``.
+    feedthrough : bool or "auto"
+        Estimate ``D_d``. Default ``False`` (``D_d = 0``, as every sysid state-space
+        estimator); ``"auto"``: decided from the data
+        (:func:`sysid.subspace.feedthrough.choose_feedthrough`).
     stoch_method : str
         Weighting of the stochastic step (``"cva"`` or ``"moesp"``).
 
@@ -231,10 +234,9 @@ def orthogonal_decomposition(
     if data.n_inputs == 0:
         raise DataError("the orthogonal decomposition needs at least one input; for "
                         "output-only data use SubspaceEstimator on the outputs alone")
-    if not isinstance(feedthrough, bool):
-        raise DataError(f"feedthrough must be True or False, got {feedthrough!r}")
     det_est = SubspaceEstimator(data, horizon, method="pi-moesp")
-    det = det_est.fit(order_det, feedthrough=feedthrough, kalman=False)
+    det = det_est.fit(order_det, feedthrough=check_feedthrough(feedthrough), kalman=False)
+    feedthrough = bool(det.info["settings"]["feedthrough"])
     A, C = det.A, det.C
     residuals = []
     for u, y in data.experiments:

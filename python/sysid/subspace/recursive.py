@@ -19,6 +19,7 @@ from .. import _sysid
 from .._checks import as_int
 from ..errors import DataError, InsufficientDataError
 from ..models.statespace import StateSpaceModel
+from .feedthrough import check_feedthrough
 
 __all__ = ["RecursiveSubspace"]
 
@@ -38,7 +39,9 @@ class RecursiveSubspace:
     method : str
         Weighting (``"moesp"``, ``"n4sid"``, ``"cva"``, ``"pbsid"``, ``"ssarx"``, ...).
     feedthrough, kalman : bool
-        As in :meth:`sysid.SubspaceEstimator.fit`.
+        As in :meth:`sysid.SubspaceEstimator.fit` (``feedthrough`` default ``False``:
+        ``D = 0``, as every sysid state-space estimator; ``"auto"`` is not taken, the data
+        arrive after the choice).
     dt : float
         Sample time of the models.
 
@@ -68,7 +71,7 @@ class RecursiveSubspace:
             raise DataError(f"forgetting must lie in (0, 1], got {forgetting}")
         self.forgetting = forgetting
         self.method = _method(method)
-        self.feedthrough = bool(feedthrough)
+        self.feedthrough = check_feedthrough(feedthrough, auto=False)
         self.kalman = bool(kalman)
         self.dt = float(dt)
         self._rec: Any = None

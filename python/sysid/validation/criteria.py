@@ -385,7 +385,7 @@ def select_order(
     x0: str = "estimate",
     criterion: str | None = None,
     fit_tol: float = 0.5,
-    feedthrough: bool = True,
+    feedthrough: bool | str = False,
     kalman: bool = True,
     models: Sequence[Any] | None = None,
     progress: bool | None = None,
@@ -415,7 +415,9 @@ def select_order(
     fit_tol : float
         Percentage points of validation fit a smaller order may give up and still win.
     feedthrough, kalman : bool
-        Passed to :meth:`SubspaceEstimator.fit`.
+        Passed to :meth:`SubspaceEstimator.fit` (``feedthrough`` default ``False``: no ``D``,
+        as every sysid state-space estimator; ``"auto"``: one decision from the data for the
+        whole sweep, :func:`sysid.subspace.feedthrough.choose_feedthrough`).
     models : sequence of sysid.Model, optional
         Candidate models of any family (state-space, polynomial, your own) to rank instead of
         a subspace sweep; the "order" of each is its ``nstates`` or else its
@@ -460,6 +462,10 @@ def select_order(
 
     meths = [_method(m) for m in meths]
     orders_ = _check_orders(orders, est.max_order)
+    from ..subspace.feedthrough import check_feedthrough, choose_feedthrough
+
+    if check_feedthrough(feedthrough) == "auto":  # one decision for the whole sweep
+        feedthrough = choose_feedthrough(est, orders_, method=meths[0])[0]
     _check_validation(validation, est.data.n_inputs, est.data.n_outputs, est.data.dt)
     est_data = None if getattr(est, "_from_factor", False) else est.data
     rows, fitted, svs, svd_picks = [], {}, {}, {}

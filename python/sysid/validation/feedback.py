@@ -1,20 +1,27 @@
 """Detection of feedback in a record: do past outputs help predict the input?
 
-In open loop the input is generated independently of the noise, so once the input's own past
-is known, past outputs carry no further information about the next input. Under feedback
-``u(t) = r(t) - F y(t)`` they do. :func:`check_feedback` tests this with the regression of
-``u(t)`` on ``p`` lags of ``u`` and of ``y`` (an F test of the ``p l`` output coefficients
-per input channel, Bonferroni-combined over inputs; Granger 1969, Caines & Chan 1975). The
-regressions run on the triangular factor of the compressed record, so the test costs one
-compression pass; :class:`sysid.SubspaceEstimator` runs the same test on its own factor (no
-extra pass) and warns (:class:`sysid.FeedbackWarning`) when an open-loop method is used on
-data with feedback.
+In open loop the input is generated independently of the noise, so the noise in past outputs
+carries no information about the next input. Under feedback ``u(t) = r(t) - F y(t)`` it does.
+:func:`check_feedback` tests this with the regression of ``u(t)`` on ``p`` lags of ``u`` and
+on the *innovations* of the past outputs: each ``y(t - k)`` less its least-squares prediction
+from ``p / 2`` lags of ``y`` and ``u`` (an ARX model fitted inside the window), for
+``k = 1 .. p - p / 2`` (an F test of those coefficients per input channel,
+Bonferroni-combined over inputs; Granger 1969, Caines & Chan 1975). The regressions run on
+the triangular factor of the compressed record, so the test costs one compression pass;
+:class:`sysid.SubspaceEstimator` runs the same test on its own factor (no extra pass) and
+warns (:class:`sysid.FeedbackWarning`) when an open-loop method is used on data with feedback.
 
-The null hypothesis is exact when the input is white or autoregressive of order at most
-``lags``; an input that is a filtered signal with a long memory can give a (small) positive
-bias with very long, noise-free records. A noise-free loop is not flagged: its outputs are a
-function of the past inputs, so they add nothing (and without noise the open-loop methods
-are not biased either).
+Why innovations and not the outputs themselves: in open loop the outputs also carry the inputs
+older than the window (through the state). An input with a long memory, a band-limited
+multisine above all, is predicted by its own ``p`` lags to 1e-6 but not exactly, and the older
+inputs in the outputs then "predict" it further: with the outputs as regressors, an open-loop
+multisine record of a few thousand samples was declared fed back (p < 1e-14). The ARX
+innovations are free of the inputs' past; the input depends on them only through a
+controller. A noise-free loop is not flagged: its innovations vanish (and without noise the
+open-loop methods are not biased either). Not solved: a *nonlinear* system driven by a
+periodic input still looks fed back, because the nonlinear distortions in its outputs are
+functions of the input's past that a linear ARX model leaves in the innovations (the F-16
+record with the shaker voltage as input: p = 1e-37 on 8192 samples, 1e-89 before).
 """
 
 from __future__ import annotations
@@ -88,7 +95,8 @@ def _betacf(a: float, b: float, x: float) -> float:
 
 
 def feedback_pvalues(factor: Any) -> tuple[np.ndarray, np.ndarray, int, int]:
-    """Per-input F statistics and p-values of "past outputs predict u(t)" on a Hankel factor.
+    """Per-input F statistics and p-values of "past output innovations predict u(t)" on a
+    Hankel factor.
 
     Returns ``(F, p_values, df_num, df_den)``; an input that its own past predicts exactly
     (a sum of sinusoids, a step) cannot be tested and gets ``F = 0, p = 1``.
@@ -128,7 +136,8 @@ class FeedbackTest(HTMLResult):
         Bonferroni-combined over inputs: ``min(1, m * min(p_values))``.
     lags : int
     df : tuple of int
-        Degrees of freedom ``(p l, N_eff - p (m + l))`` of each F test.
+        Degrees of freedom of each F test: the rank the innovations add, and ``N_eff`` less
+        the rank of all regressors.
     alpha : float
         Level at which :attr:`detected` is decided.
     detected : bool
@@ -193,8 +202,10 @@ def check_feedback(data: IOData, lags: int | None = None, *, alpha: float = 0.01
                    ) -> FeedbackTest:
     """Test whether the input depends on past outputs (a feedback loop).
 
-    Regresses each ``u_i(t)`` on ``lags`` past inputs and outputs and tests, with an F test,
-    whether the output lags improve the prediction (means removed per experiment first).
+    Regresses each ``u_i(t)`` on ``lags`` past inputs and on the innovations of the past
+    outputs (see the module notes) and tests, with an F test, whether the innovations improve
+    the prediction (means removed per experiment first). Periodic and band-limited inputs
+    (multisines) are tested correctly: only the noise in the outputs can reveal a loop.
 
     Parameters
     ----------

@@ -67,7 +67,8 @@ impl Regularization {
 pub struct FirOptions {
     /// Number of Markov parameters estimated, `h_0 .. h_{length-1}`.
     pub length: usize,
-    /// Estimate `h_0 = D`; if false it is fixed at zero (a strictly proper system).
+    /// Estimate `h_0 = D`; if false (the default, as every sysid state-space estimator) it
+    /// is fixed at zero (a strictly proper system).
     pub feedthrough: bool,
     /// Regularisation (default: TC with tuned hyperparameters).
     pub regularization: Regularization,
@@ -77,7 +78,7 @@ impl Default for FirOptions {
     fn default() -> Self {
         Self {
             length: 50,
-            feedthrough: true,
+            feedthrough: false,
             regularization: Regularization::Tc { hyper: None },
         }
     }
@@ -106,7 +107,7 @@ pub struct OkidOptions {
     pub observer_order: usize,
     /// Number of system Markov parameters returned, `h_0 .. h_{count-1}` (may exceed p).
     pub count: usize,
-    /// Estimate `h_0 = D`; if false it is fixed at zero.
+    /// Estimate `h_0 = D`; if false (the default) it is fixed at zero.
     pub feedthrough: bool,
 }
 
@@ -115,7 +116,7 @@ impl Default for OkidOptions {
         Self {
             observer_order: 20,
             count: 100,
-            feedthrough: true,
+            feedthrough: false,
         }
     }
 }
@@ -644,6 +645,7 @@ mod tests {
         let fo = FirOptions {
             length: 60,
             regularization: Regularization::None,
+            feedthrough: true, // random_system has a D
             ..Default::default()
         };
         let f = fir(&[(u.as_ref(), y.as_ref())], &fo).unwrap();
@@ -651,6 +653,7 @@ mod tests {
         let oo = OkidOptions {
             observer_order: 4,
             count: 80,
+            feedthrough: true,
             ..Default::default()
         };
         let o = okid(&[(u.as_ref(), y.as_ref())], &oo).unwrap();
@@ -665,6 +668,7 @@ mod tests {
             let (u, y) = noisy_data(&sys, 250, 0.3, 100 + seed);
             let mut fo = FirOptions {
                 length: 80,
+                feedthrough: true,
                 ..Default::default()
             };
             let tc = fir(&[(u.as_ref(), y.as_ref())], &fo).unwrap();
@@ -685,6 +689,7 @@ mod tests {
         let oo = OkidOptions {
             observer_order: 5,
             count: 20,
+            feedthrough: true,
             ..Default::default()
         };
         let whole = okid(&[(u.as_ref(), y.as_ref())], &oo).unwrap();

@@ -7,22 +7,22 @@
 
 use crate::error::Result;
 use crate::hankel::HankelFactor;
-use crate::linalg::{mul_seq, qr_r_in_place, svd_seq, sym_eigenvalues_seq};
+use crate::linalg::{mul_seq, qr_r_in_place, rsolve_lstsq, svd_seq, sym_eigenvalues_seq};
 use faer::{Mat, MatRef, Par};
 
 /// Residual sums of squares of the feedback test's two regressions (see
 /// `sysid.validation.feedback`): the first input sample of the future, `u(t)` (the first `m`
 /// rows of L), regressed on the past inputs alone (restricted) and on the past inputs and
-/// outputs (full).
+/// the past outputs' innovations (full).
 #[derive(Debug, Clone, PartialEq)]
 pub struct FeedbackRegressions {
     /// Residual sum of squares of each input on the past inputs.
     pub rss_restricted: Vec<f64>,
-    /// Residual sum of squares of each input on the past inputs and outputs.
+    /// Residual sum of squares of each input on the past inputs and output innovations.
     pub rss_full: Vec<f64>,
     /// Numerical rank of the past-input regressors.
     pub rank_restricted: usize,
-    /// Numerical rank of the past-input and past-output regressors.
+    /// Numerical rank of the past-input and output-innovation regressors.
     pub rank_full: usize,
     /// Sum of squares of each input (`u(t)^T u(t)`).
     pub total: Vec<f64>,
@@ -32,14 +32,30 @@ pub struct FeedbackRegressions {
 /// below which regressor directions are dropped (rows scaled to unit norm first).
 ///
 /// In the row order `[U_f; U_p; Y_p; Y_f]` of L, `u(t)` is rows `0..m`, the past inputs rows
-/// `f m .. (f + p) m` and the past outputs the next `p l` rows; L is lower triangular, so
-/// only the leading `(f + p) m` (restricted) or `(f + p) m + p l` (full) columns enter.
+/// `f m .. (f + p) m` (time order: the last block is `u(t - 1)`) and the past outputs the next
+/// `p l` rows; L is lower triangular, so only the leading `(f + p) m` (restricted) or
+/// `(f + p) m + p l` (full) columns enter.
+///
+/// The full regression does not take the past outputs themselves but their innovations
+/// ([`output_innovations`]): in open loop the outputs also carry the inputs older than the
+/// window (through the state), and an input with a long memory (a band-limited multisine,
+/// which its own `p` lags predict to 1e-6 but not exactly) is then "predicted" by them,
+/// a false detection on any long record. The innovations are free of the inputs' past; under
+/// feedback the input depends on them through the controller.
 pub fn feedback_regressions(factor: &HankelFactor, rtol: f64) -> Result<FeedbackRegressions> {
     let lay = factor.layout();
     let (m, l, p, f) = (lay.n_inputs, lay.n_outputs, lay.past, lay.future);
     let lm = factor.l();
     let c_full = (f + p) * m + p * l;
     let c_restr = (f + p) * m;
+    let innov = output_innovations(lm.subcols(0, c_full), m, l, p, f)?;
+    let mut full = Mat::<f64>::zeros(p * m + innov.nrows(), c_full);
+    full.as_mut()
+        .submatrix_mut(0, 0, p * m, c_full)
+        .copy_from(lm.submatrix(f * m, 0, p * m, c_full));
+    full.as_mut()
+        .submatrix_mut(p * m, 0, innov.nrows(), c_full)
+        .copy_from(innov.as_ref());
     let total = (0..m)
         .map(|i| {
             let r = lm.row(i).subcols(0, c_full);
@@ -51,11 +67,7 @@ pub fn feedback_regressions(factor: &HankelFactor, rtol: f64) -> Result<Feedback
         lm.submatrix(0, 0, m, c_restr),
         rtol,
     )?;
-    let (rss_full, rank_full) = row_regression(
-        lm.submatrix(f * m, 0, p * (m + l), c_full),
-        lm.submatrix(0, 0, m, c_full),
-        rtol,
-    )?;
+    let (rss_full, rank_full) = row_regression(full.as_ref(), lm.submatrix(0, 0, m, c_full), rtol)?;
     Ok(FeedbackRegressions {
         rss_restricted,
         rss_full,
@@ -63,6 +75,62 @@ pub fn feedback_regressions(factor: &HankelFactor, rtol: f64) -> Result<Feedback
         rank_full,
         total,
     })
+}
+
+/// The one-step innovations of the past outputs inside the window, as rows over the columns
+/// of `lm` (the leading columns of L): `y(t - k)`, `k = 1 ..= p - q` with `q = p / 2`, less
+/// its least-squares regression on `y(t - k - 1 .. t - k - q)` and `u(t - k - q .. t - k)`
+/// (an ARX model of order `q`, the direct term included, fitted on the factor). A row at
+/// round-off level (a noise-free record: the outputs are a function of the inputs) is zeroed,
+/// so the test makes no claim from it.
+fn output_innovations(
+    lm: MatRef<'_, f64>,
+    m: usize,
+    l: usize,
+    p: usize,
+    f: usize,
+) -> Result<Mat<f64>> {
+    let q = p / 2;
+    let cols = lm.ncols();
+    let u_row = |k: usize| f * m + (p - k) * m; // first row of u(t - k), 1 <= k <= p
+    let y_row = |k: usize| (f + p) * m + (p - k) * l;
+    let mut out = Mat::<f64>::zeros((p - q) * l, cols);
+    for k in 1..=p - q {
+        let mut x = Mat::<f64>::zeros(q * l + (q + 1) * m, cols);
+        let mut r = 0;
+        for j in k + 1..=k + q {
+            x.as_mut()
+                .submatrix_mut(r, 0, l, cols)
+                .copy_from(lm.submatrix(y_row(j), 0, l, cols));
+            r += l;
+        }
+        for j in k..=k + q {
+            x.as_mut()
+                .submatrix_mut(r, 0, m, cols)
+                .copy_from(lm.submatrix(u_row(j), 0, m, cols));
+            r += m;
+        }
+        for i in 0..x.nrows() {
+            let nrm = x.row(i).norm_l2();
+            if nrm > 0.0 {
+                x.row_mut(i).iter_mut().for_each(|v| *v /= nrm);
+            }
+        }
+        let target = lm.submatrix(y_row(k), 0, l, cols);
+        let coef = rsolve_lstsq(target, x.as_ref(), 1e-10)?;
+        let fitted = mul_seq(coef.as_ref(), x.as_ref());
+        for i in 0..l {
+            let scale = target.row(i).norm_l2();
+            let o = (k - 1) * l + i;
+            for c in 0..cols {
+                out[(o, c)] = target[(i, c)] - fitted[(i, c)];
+            }
+            if out.row(o).norm_l2() <= 1e-9 * scale {
+                out.row_mut(o).fill(0.0);
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// Residual sums of squares of each row of `targets` regressed (least squares, minimum
@@ -268,5 +336,57 @@ mod tests {
                 assert_eq!(got, k, "n = {n}, k = {k}");
             }
         }
+    }
+
+    /// The F statistic of the feedback test on a simulated record.
+    fn feedback_f(u: &Mat<f64>, y: &Mat<f64>, p: usize) -> f64 {
+        use crate::hankel::{Compressor, HankelLayout, QrCompressor};
+        let mut c = QrCompressor::new(HankelLayout::new(1, 1, p, 1).unwrap());
+        c.push(u.as_ref(), y.as_ref()).unwrap();
+        let fac = c.finish().unwrap();
+        let r = feedback_regressions(&fac, 1e-9).unwrap();
+        let (q, df2) = (
+            r.rank_full - r.rank_restricted,
+            fac.n_columns() - r.rank_full,
+        );
+        (r.rss_restricted[0] - r.rss_full[0]).max(0.0) / q as f64 / (r.rss_full[0] / df2 as f64)
+    }
+
+    #[test]
+    fn feedback_test_ignores_a_long_memory_input_and_sees_the_loop() {
+        use rand::{rngs::StdRng, SeedableRng};
+        use rand_distr::{Distribution, Normal};
+        let n = 2048;
+        let mut rng = StdRng::seed_from_u64(7);
+        let g = Normal::new(0.0, 1.0).unwrap();
+        // a band-limited multisine (period 512, lines 1..127): its 20 lags predict it to 1e-6
+        let ms: Vec<f64> = (0..n)
+            .map(|t| {
+                (1..128)
+                    .map(|k| {
+                        let ph = (k * k) as f64 * 0.7;
+                        (2.0 * std::f64::consts::PI * (k * t) as f64 / 512.0 + ph).cos()
+                    })
+                    .sum::<f64>()
+                    / 8.0
+            })
+            .collect();
+        let e: Vec<f64> = (0..n).map(|_| 0.3 * g.sample(&mut rng)).collect();
+        let (mut uo, mut yo) = (Mat::<f64>::zeros(n, 1), Mat::<f64>::zeros(n, 1));
+        let (mut uc, mut yc) = (Mat::<f64>::zeros(n, 1), Mat::<f64>::zeros(n, 1));
+        for t in 0..n {
+            uo[(t, 0)] = ms[t];
+            if t > 0 {
+                yo[(t, 0)] = 0.9 * yo[(t - 1, 0)] + uo[(t - 1, 0)] + e[t];
+                yc[(t, 0)] = 0.9 * yc[(t - 1, 0)] + uc[(t - 1, 0)] + e[t];
+            }
+            uc[(t, 0)] = ms[t] - 0.3 * yc[(t, 0)];
+        }
+        // open loop: F near 1 (before the innovations, F was about 6 here: p < 1e-14)
+        let open = feedback_f(&uo, &yo, 20);
+        assert!(open < 2.5, "open loop F = {open}");
+        // closed loop with the same reference: detected
+        let closed = feedback_f(&uc, &yc, 20);
+        assert!(closed > 20.0, "closed loop F = {closed}");
     }
 }

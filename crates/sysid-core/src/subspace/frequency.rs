@@ -23,6 +23,60 @@ use crate::linalg::{lq_lower, pinv};
 use crate::model::StateSpace;
 use faer::{Mat, MatRef};
 
+/// The direct term `D` of a frequency-domain fit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum Feedthrough {
+    /// `D = 0`, a strictly proper model (the default of every sysid state-space estimator).
+    #[default]
+    Zero,
+    /// `D` estimated jointly with `B`.
+    Estimate,
+    /// `G(-1) = 0`, i.e. `D = C (I + A)^{-1} B`: the continuous-time model Tustin's map gives
+    /// back has no direct term (its response at infinite frequency is that at `z = -1`).
+    ZeroAtNyquist,
+}
+
+impl Feedthrough {
+    /// Parses `"zero"`, `"estimate"` or `"zero-at-nyquist"`.
+    ///
+    /// ```
+    /// use sysid_core::subspace::frequency::Feedthrough;
+    /// assert_eq!(Feedthrough::parse("estimate").unwrap(), Feedthrough::Estimate);
+    /// assert!(Feedthrough::parse("yes").is_err());
+    /// ```
+    pub fn parse(s: &str) -> Result<Self> {
+        match s {
+            "zero" => Ok(Self::Zero),
+            "estimate" => Ok(Self::Estimate),
+            "zero-at-nyquist" => Ok(Self::ZeroAtNyquist),
+            _ => Err(SysidError::invalid(
+                "feedthrough",
+                "must be 'zero', 'estimate' or 'zero-at-nyquist'",
+            )),
+        }
+    }
+
+    /// `C (I + A)^{-1}` when `D` is tied to `B` by `G(-1) = 0`, else `None`.
+    fn nyquist_gain(self, a: MatRef<'_, f64>, c: MatRef<'_, f64>) -> Result<Option<Mat<f64>>> {
+        if self != Self::ZeroAtNyquist {
+            return Ok(None);
+        }
+        let n = a.nrows();
+        let ipa = Mat::from_fn(n, n, |i, j| a[(i, j)] + if i == j { 1.0 } else { 0.0 });
+        Ok(Some(c * pinv(ipa.as_ref(), 1e-14)?))
+    }
+
+    /// `D` from the fitted `B` (and the estimated `D` when it is free).
+    fn direct_term(self, nyq: Option<&Mat<f64>>, b: &Mat<f64>, free: Mat<f64>) -> Mat<f64> {
+        match (self, nyq) {
+            (Self::Estimate, _) => free,
+            (_, Some(g)) => g * b,
+            _ => Mat::zeros(free.nrows(), free.ncols()),
+        }
+    }
+}
+
 /// Result of [`identify_frd`].
 #[derive(Debug, Clone)]
 pub struct FrdIdentified {
@@ -33,7 +87,8 @@ pub struct FrdIdentified {
 }
 
 /// Identifies `(A, B, C, D)` of `order` (or the largest log gap when `None`) from `G_k`
-/// (real and imaginary parts, each `l x m`) at `omega` (rad/sample) with horizon `q`.
+/// (real and imaginary parts, each `l x m`) at `omega` (rad/sample) with horizon `q`; `D`
+/// as `feedthrough` says.
 pub fn identify_frd(
     omega: &[f64],
     g_re: &[MatRef<'_, f64>],
@@ -41,6 +96,7 @@ pub fn identify_frd(
     weights: Option<&[f64]>,
     order: Option<usize>,
     q: usize,
+    feedthrough: Feedthrough,
 ) -> Result<FrdIdentified> {
     let nf = omega.len();
     if nf == 0 || g_re.len() != nf || g_im.len() != nf {
@@ -101,7 +157,7 @@ pub fn identify_frd(
     )?;
     let max = ((q - 1) * l).min(rank).min(2 * nf * m);
     let (_, a, c) = order_and_ac(u_sv.as_ref(), &sv, order, max, q, l)?;
-    let (b, d) = fit_bd(omega, g_re, g_im, &w, a.as_ref(), c.as_ref())?;
+    let (b, d) = fit_bd(omega, g_re, g_im, &w, a.as_ref(), c.as_ref(), feedthrough)?;
     let sys = StateSpace::new(a, b, c, d).map_err(|_| {
         SysidError::numerical(
             "system matrices",
@@ -118,8 +174,8 @@ pub fn identify_frd(
 /// of `u_re`, `u_im`: `nf x m`) and `Y_k` (`nf x l`) at `omega` (rad/sample), with
 /// `Y_k = G(z_k) U_k + C (z_k I - A)^{-1} z_k x_t` where the transient `x_t` (the initial
 /// minus the final state, scaled as the DFT) is estimated with B and D when `transient` is
-/// set (McKelvey, Akçay & Ljung 1996, the input/output spectra form). Exact for noise-free
-/// records, periodic or not.
+/// set (McKelvey, Akçay & Ljung 1996, the input/output spectra form); `D` as `feedthrough`
+/// says. Exact for noise-free records, periodic or not.
 #[allow(clippy::too_many_arguments)]
 pub fn identify_spectra(
     omega: &[f64],
@@ -131,6 +187,7 @@ pub fn identify_spectra(
     order: Option<usize>,
     q: usize,
     transient: bool,
+    feedthrough: Feedthrough,
 ) -> Result<FrdIdentified> {
     let nf = omega.len();
     let (m, l) = (u_re.ncols(), y_re.ncols());
@@ -193,29 +250,40 @@ pub fn identify_spectra(
     )?;
     let max = ((q - 1) * l).min(rank);
     let (n, a, c) = order_and_ac(u_sv.as_ref(), &sv, order, max, q, l)?;
-    // B, D (and the transient) by least squares: unknowns vec(B), vec(D), x_t
-    let nt = n * m + l * m + if transient { n } else { 0 };
+    // B, D (and the transient) by least squares: unknowns vec(B), vec(D) when free, x_t
+    let nd = if feedthrough == Feedthrough::Estimate {
+        l * m
+    } else {
+        0
+    };
+    let nt = n * m + nd + if transient { n } else { 0 };
+    let nyq = feedthrough.nyquist_gain(a.as_ref(), c.as_ref())?;
     let mut design = Mat::<f64>::zeros(2 * l * nf, nt);
     let mut rhs = Mat::<f64>::zeros(2 * l * nf, 1);
     for k in 0..nf {
         let (co, si) = (omega[k].cos(), omega[k].sin());
         let (fr, fi) = resolvent(a.as_ref(), c.as_ref(), co, si)?;
+        // D tied to B (G(-1) = 0): the B columns carry F_k + C (I + A)^{-1}
+        let tied = nyq.as_ref().map(|g| &fr + g);
+        let fb = tied.as_ref().unwrap_or(&fr);
         for r in 0..l {
             let (re_row, im_row) = (2 * l * k + r, 2 * l * k + l + r);
             for i in 0..m {
                 let (ur, ui) = (u_re[(k, i)], u_im[(k, i)]);
                 for p in 0..n {
                     let col = i * n + p; // B[p, i], column-major
-                    design[(re_row, col)] = w[k] * (fr[(r, p)] * ur - fi[(r, p)] * ui);
-                    design[(im_row, col)] = w[k] * (fr[(r, p)] * ui + fi[(r, p)] * ur);
+                    design[(re_row, col)] = w[k] * (fb[(r, p)] * ur - fi[(r, p)] * ui);
+                    design[(im_row, col)] = w[k] * (fb[(r, p)] * ui + fi[(r, p)] * ur);
                 }
-                let col = n * m + i * l + r; // D[r, i]
-                design[(re_row, col)] = w[k] * ur;
-                design[(im_row, col)] = w[k] * ui;
+                if nd > 0 {
+                    let col = n * m + i * l + r; // D[r, i]
+                    design[(re_row, col)] = w[k] * ur;
+                    design[(im_row, col)] = w[k] * ui;
+                }
             }
             if transient {
                 for p in 0..n {
-                    let col = n * m + l * m + p; // F_k z_k x_t
+                    let col = n * m + nd + p; // F_k z_k x_t
                     design[(re_row, col)] = w[k] * (fr[(r, p)] * co - fi[(r, p)] * si);
                     design[(im_row, col)] = w[k] * (fr[(r, p)] * si + fi[(r, p)] * co);
                 }
@@ -226,7 +294,14 @@ pub fn identify_spectra(
     }
     let th = pinv(design.as_ref(), 1e-13)? * &rhs;
     let b = Mat::from_fn(n, m, |p, i| th[(i * n + p, 0)]);
-    let d = Mat::from_fn(l, m, |r, i| th[(n * m + i * l + r, 0)]);
+    let free = Mat::from_fn(l, m, |r, i| {
+        if nd > 0 {
+            th[(n * m + i * l + r, 0)]
+        } else {
+            0.0
+        }
+    });
+    let d = feedthrough.direct_term(nyq.as_ref(), &b, free);
     let sys = StateSpace::new(a, b, c, d).map_err(|_| {
         SysidError::numerical(
             "system matrices",
@@ -295,7 +370,8 @@ fn resolvent(
     ))
 }
 
-/// B and D minimising `Σ_k w_k^2 |G_k - D - C (z_k I - A)^{-1} B|^2`, column by column.
+/// B and D minimising `Σ_k w_k^2 |G_k - D - C (z_k I - A)^{-1} B|^2`, column by column,
+/// with `D` free, zero or tied to `B` as `feedthrough` says.
 fn fit_bd(
     omega: &[f64],
     g_re: &[MatRef<'_, f64>],
@@ -303,10 +379,17 @@ fn fit_bd(
     w: &[f64],
     a: MatRef<'_, f64>,
     c: MatRef<'_, f64>,
+    feedthrough: Feedthrough,
 ) -> Result<(Mat<f64>, Mat<f64>)> {
     let (n, l, m, nf) = (a.nrows(), c.nrows(), g_re[0].ncols(), omega.len());
+    let nd = if feedthrough == Feedthrough::Estimate {
+        l
+    } else {
+        0
+    };
+    let nyq = feedthrough.nyquist_gain(a, c)?;
     // F_k = C (z_k I - A)^{-1} in real form from [[cI - A, -sI], [sI, cI - A]]
-    let mut design = Mat::<f64>::zeros(2 * l * nf, n + l);
+    let mut design = Mat::<f64>::zeros(2 * l * nf, n + nd);
     for k in 0..nf {
         let (co, si) = (omega[k].cos(), omega[k].sin());
         let mut big = Mat::<f64>::zeros(2 * n, 2 * n);
@@ -324,14 +407,19 @@ fn fit_bd(
         let inv = pinv(big.as_ref(), 1e-14)?;
         let xr = inv.as_ref().submatrix(0, 0, n, n);
         let xi = inv.as_ref().submatrix(n, 0, n, n);
-        let fr = c * xr;
+        let fr = match &nyq {
+            Some(g) => c * xr + g,
+            None => c * xr,
+        };
         let fi = c * xi;
         for r in 0..l {
             for j in 0..n {
                 design[(2 * l * k + r, j)] = w[k] * fr[(r, j)];
                 design[(2 * l * k + l + r, j)] = w[k] * fi[(r, j)];
             }
-            design[(2 * l * k + r, n + r)] = w[k];
+            if nd > 0 {
+                design[(2 * l * k + r, n + r)] = w[k];
+            }
         }
     }
     let dp = pinv(design.as_ref(), 1e-13)?;
@@ -349,10 +437,11 @@ fn fit_bd(
         for i in 0..n {
             b[(i, j)] = th[(i, 0)];
         }
-        for r in 0..l {
+        for r in 0..nd {
             d[(r, j)] = th[(n + r, 0)];
         }
     }
+    let d = feedthrough.direct_term(nyq.as_ref(), &b, d);
     Ok((b, d))
 }
 
@@ -405,7 +494,7 @@ mod tests {
         let g = resp(a.as_ref(), b.as_ref(), c.as_ref(), d.as_ref());
         let re: Vec<MatRef<'_, f64>> = g.iter().map(|x| x.0.as_ref()).collect();
         let im: Vec<MatRef<'_, f64>> = g.iter().map(|x| x.1.as_ref()).collect();
-        let id = identify_frd(&omega, &re, &im, None, None, 6).unwrap();
+        let id = identify_frd(&omega, &re, &im, None, None, 6, Feedthrough::Estimate).unwrap();
         assert_eq!(id.sys.a.nrows(), 3);
         let g2 = resp(
             id.sys.a.as_ref(),
@@ -415,6 +504,39 @@ mod tests {
         );
         for (x, y) in g.iter().zip(g2.iter()) {
             assert!((&x.0 - &y.0).norm_max() < 1e-9 && (&x.1 - &y.1).norm_max() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn direct_term_zero_or_tied_to_b_is_exact() {
+        let a = faer::mat![[0.7, 0.3], [-0.3, 0.7]];
+        let b = faer::mat![[1.0], [0.5]];
+        let c = faer::mat![[1.0, 0.2]];
+        let ipa = faer::mat![[1.7, 0.3], [-0.3, 1.7]];
+        let tied = &c * pinv(ipa.as_ref(), 1e-14).unwrap() * &b;
+        let omega: Vec<f64> = (0..30).map(|k| 0.05 + 3.0 * k as f64 / 30.0).collect();
+        for (mode, d) in [
+            (Feedthrough::Zero, faer::mat![[0.0]]),
+            (Feedthrough::ZeroAtNyquist, tied),
+        ] {
+            let g: Vec<_> = omega
+                .iter()
+                .map(|&om| fit_bd_response(a.as_ref(), b.as_ref(), c.as_ref(), d.as_ref(), om))
+                .collect();
+            let re: Vec<MatRef<'_, f64>> = g.iter().map(|x| x.0.as_ref()).collect();
+            let im: Vec<MatRef<'_, f64>> = g.iter().map(|x| x.1.as_ref()).collect();
+            let id = identify_frd(&omega, &re, &im, None, Some(2), 5, mode).unwrap();
+            assert!(
+                (&id.sys.d - &d).norm_max() < 1e-9,
+                "{mode:?}: D = {:?}",
+                id.sys.d
+            );
+            for (k, &om) in omega.iter().enumerate() {
+                let s = &id.sys;
+                let (r, i) =
+                    fit_bd_response(s.a.as_ref(), s.b.as_ref(), s.c.as_ref(), s.d.as_ref(), om);
+                assert!((&r - &g[k].0).norm_max() < 1e-9 && (&i - &g[k].1).norm_max() < 1e-9);
+            }
         }
     }
 

@@ -109,7 +109,8 @@ impl SubspaceOptions {
 #[derive(Debug, Clone)]
 #[non_exhaustive]
 pub struct FitOptions {
-    /// Estimate D (otherwise D = 0).
+    /// Estimate D (otherwise D = 0, the default of every sysid state-space estimator, as
+    /// MATLAB's).
     pub feedthrough: bool,
     /// Estimate the noise model: K from the Riccati equation and the innovation covariance.
     pub kalman: bool,
@@ -120,7 +121,7 @@ pub struct FitOptions {
 impl Default for FitOptions {
     fn default() -> Self {
         Self {
-            feedthrough: true,
+            feedthrough: false,
             kalman: true,
             stable: false,
         }

@@ -101,6 +101,7 @@ fn noise_free_mimo_systems_are_recovered_for_every_method() {
                     n,
                     &FitOptions {
                         kalman: false,
+                        feedthrough: true, // random_system has a D
                         ..FitOptions::default()
                     },
                 )
