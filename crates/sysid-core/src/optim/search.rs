@@ -494,20 +494,6 @@ impl Reduced {
     }
 }
 
-/// The damping after an accepted step with gain ratio `rho` (actual over predicted decrease):
-/// Nielsen's smooth rule, `mu * max(1/3, 1 - (2 rho - 1)^3)`, lowered after a step its model
-/// predicted well and raised (at most doubled) after a poor one. A chord step (a reused
-/// Gauss-Newton matrix) only ever lowers it: its good prediction is evidence for the model,
-/// a poor one is evidence against the reused matrix, not the damping, and the next step forms
-/// the matrix anew.
-fn next_damping(mu: f64, rho: f64, stale: bool) -> f64 {
-    let factor = (1.0 - (2.0 * rho.clamp(0.0, 1.0) - 1.0).powi(3)).max(1.0 / 3.0);
-    if stale && factor >= 1.0 {
-        return mu;
-    }
-    (mu * factor).max(if factor > 1.0 { 1e-12 } else { 0.0 })
-}
-
 fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
@@ -669,7 +655,12 @@ pub fn minimize(
                 let pred = -(lin + 0.5 * quad);
                 let rho = if pred > 0.0 { actual / pred } else { 0.0 };
                 let used = mu;
-                mu = next_damping(mu, rho, stale);
+                // the damping follows the Gauss-Newton model, not a reused one
+                if !stale && rho > 0.75 {
+                    mu /= 3.0;
+                } else if !stale && rho < 0.25 {
+                    mu = (mu * 2.0).max(1e-12);
+                }
                 if std::env::var_os("SYSID_PROFILE").is_some() {
                     eprintln!("PROF step mu {used:e} rho {rho} pred {pred:e} actual {actual:e} try {try_}");
                 }

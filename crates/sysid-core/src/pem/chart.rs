@@ -10,7 +10,9 @@
 //! 20 the Gram matrix of the modal sensitivities shrinks from about `n (n + m + 1)` to about
 //! `n (2 + m + 1)` carried numbers per sample.
 //!
-//! The chart applies when the predictor matrix is `A` itself (no Kalman gain: simulation
+//! The chart applies when it removes at least half of the state sensitivities (those of `A`,
+//! `B` and `x0`: `n^2 - sum bs^2 >= sum bs^2 + n (m + 1)`, so for orders well above the
+//! number of inputs), when the predictor matrix is `A` itself (no Kalman gain: simulation
 //! focus, or prediction without a noise model), when `A` of the start has a well-conditioned
 //! real modal form, and when no non-zero initial state is given (the change of basis would
 //! have to move it). The refined model is returned in the chart's state basis.
@@ -44,6 +46,11 @@ pub(super) fn modal_start(
     }
     let md = modal_form(start.a.as_ref())?;
     let chart: Chart = md.block.iter().map(|b| b.0).collect();
+    // worth it when it removes at least half of the state sensitivities (those of A, B, x0)
+    let kept = (0..n).map(|i| md.block[i].1).sum::<usize>();
+    if n * n - kept < kept + n * (start.n_inputs() + 1) {
+        return None;
+    }
     let a = Mat::from_fn(n, n, |i, j| {
         if chart[i] == chart[j] {
             md.lam[(i, j)]

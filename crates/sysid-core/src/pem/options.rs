@@ -108,7 +108,7 @@ pub struct PemOptions {
     /// [`pem`](super::pem)); `Some(false)`: only the predictor is kept stable.
     pub enforce_stability: Option<bool>,
     /// Search in the modal chart where it applies (default `true`; see `pem::chart`: no
-    /// Kalman gain, a well-conditioned modal form; the model returns in its state basis).
+    /// Kalman gain, a well-conditioned modal form; the result returns in the start's basis).
     pub modal_chart: bool,
     /// Samples per block in the accumulation of the normal equations.
     pub block: usize,
