@@ -12,10 +12,11 @@
 //!
 //! The chart applies when it removes at least half of the state sensitivities (those of `A`,
 //! `B` and `x0`: `n^2 - sum bs^2 >= sum bs^2 + n (m + 1)`, so for orders well above the
-//! number of inputs), when the predictor matrix is `A` itself (no Kalman gain: simulation
-//! focus, or prediction without a noise model), when `A` of the start has a well-conditioned
-//! real modal form, and when no non-zero initial state is given (the change of basis would
-//! have to move it). The refined model is returned in the chart's state basis.
+//! number of inputs) and leaves at most `eigen_limit` free parameters (the search then solves
+//! its steps in local coordinates), when the predictor matrix is `A` itself (no Kalman gain:
+//! simulation focus, or prediction without a noise model), when `A` of the start has a
+//! well-conditioned real modal form, and when no non-zero initial state is given. The result
+//! is mapped back to the start's state basis ([`to_start_basis`]).
 
 use super::modal::{modal_form, Modal};
 use super::options::{Focus, InitialState, PemOptions, PemResult};
@@ -28,11 +29,13 @@ use faer::{Mat, MatRef};
 pub(super) type Chart = Vec<usize>;
 
 /// The start in its real modal basis `(T^-1 A T, T^-1 B, C T, D)`, the chart and the modal
-/// form of the start's `A` (with `T`), or `None` when the chart does not apply.
+/// form of the start's `A` (with `T`), or `None` when the chart does not apply (over
+/// `experiments` experiments).
 pub(super) fn modal_start(
     start: &StateSpace,
     k0: Option<MatRef<'_, f64>>,
     opts: &PemOptions,
+    experiments: usize,
 ) -> Option<(StateSpace, Chart, Modal)> {
     let n = start.n_states();
     let no_gain = opts.focus == Focus::Simulation
@@ -49,6 +52,18 @@ pub(super) fn modal_start(
     // worth it when it removes at least half of the state sensitivities (those of A, B, x0)
     let kept = (0..n).map(|i| md.block[i].1).sum::<usize>();
     if n * n - kept < kept + n * (start.n_inputs() + 1) {
+        return None;
+    }
+    // and only where the steps are solved in local coordinates (eigen path of the search):
+    // on the large-problem path (one Cholesky solve per step) it converged to a worse point
+    // on the synthetic 2 x 28 record of benches/pem_speed.py
+    let (m, l) = (start.n_inputs(), start.n_outputs());
+    let x0s = match opts.x0.as_slice() {
+        [one] => usize::from(*one == InitialState::Estimate) * experiments,
+        all => all.iter().filter(|s| **s == InitialState::Estimate).count(),
+    };
+    let free = kept + n * m + l * n + usize::from(opts.estimate_d) * l * m + x0s * n;
+    if free > opts.optim.eigen_limit {
         return None;
     }
     let a = Mat::from_fn(n, n, |i, j| {
@@ -89,7 +104,10 @@ pub(super) fn to_start_basis(prob: &Predictor<'_>, md: &Modal, mut r: PemResult)
         let v = t * col(x);
         *x = v.col_as_slice(0).to_vec();
     }
-    r.theta = prob.modal_mt_cols(&inv, &col(&r.theta)).col_as_slice(0).to_vec();
+    r.theta = prob
+        .modal_mt_cols(&inv, &col(&r.theta))
+        .col_as_slice(0)
+        .to_vec();
     r.solution.theta = r.theta.clone();
     if r.solution.gradient.len() == prob.p {
         let g = prob.modal_mt_cols(md, &col(&r.solution.gradient));

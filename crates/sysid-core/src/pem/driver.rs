@@ -236,14 +236,17 @@ pub fn pem(
     options: &PemOptions,
     observer: &mut dyn FnMut(&Iteration) -> Flow,
 ) -> Result<PemResult> {
-    match super::chart::modal_start(start, k0, options) {
+    match super::chart::modal_start(start, k0, options, experiments.len()) {
         Some((sys, chart, md)) => {
             let mut prob = Predictor::new(&sys, k0, experiments, options)?;
             let layout = Predictor::new(&sys, k0, experiments, options)?;
             prob.chart = Some(chart);
             let mask = prob.chart_mask();
             let mut charted = options.clone();
-            let fixed = charted.optim.fixed.get_or_insert_with(|| vec![false; mask.len()]);
+            let fixed = charted
+                .optim
+                .fixed
+                .get_or_insert_with(|| vec![false; mask.len()]);
             if fixed.len() == mask.len() {
                 fixed.iter_mut().zip(&mask).for_each(|(f, &h)| *f |= h);
             }

@@ -597,8 +597,9 @@ fn modal_chart_gauss_newton_equals_the_plain_one() {
     let n = sys.n_states();
     let kz = Mat::<f64>::zeros(n, 3);
     let (u1, u2) = (noise(110, 2, 54), noise(60, 2, 55));
-    let y1 = data(&sys, &kz, &u1, &(noise(110, 3, 56) * faer::Scale(0.3)), &[0.2; 7]);
-    let y2 = data(&sys, &kz, &u2, &(noise(60, 3, 57) * faer::Scale(0.3)), &[0.0; 7]);
+    let e = |rows: usize, seed: u64| noise(rows, 3, seed) * faer::Scale(0.3);
+    let y1 = data(&sys, &kz, &u1, &e(110, 56), &[0.2; 7]);
+    let y2 = data(&sys, &kz, &u2, &e(60, 57), &[0.0; 7]);
     let views = [(u1.as_ref(), y1.as_ref()), (u2.as_ref(), y2.as_ref())];
     for x0 in [
         vec![InitialState::Estimate],
@@ -640,12 +641,20 @@ fn modal_chart_gauss_newton_equals_the_plain_one() {
             let v: Vec<f64> = (0..pr.p).map(|i| tan[(i, col)]).collect();
             assert!(v.iter().zip(&held).all(|(x, &h)| !h || *x == 0.0));
             let hv: f64 = (0..pr.p)
-                .map(|i| (0..pr.p).map(|j| fast.gauss_newton[(i, j)] * v[j]).sum::<f64>().abs())
+                .map(|i| {
+                    (0..pr.p)
+                        .map(|j| fast.gauss_newton[(i, j)] * v[j])
+                        .sum::<f64>()
+                        .abs()
+                })
                 .fold(0.0, f64::max);
             assert!(hv < 1e-10 * scale, "{hv}");
         }
         let basis = pr.local_basis(&th).unwrap().unwrap();
-        assert_eq!(basis.ncols(), pr.p - held.iter().filter(|&&h| h).count() - 13);
+        assert_eq!(
+            basis.ncols(),
+            pr.p - held.iter().filter(|&&h| h).count() - 13
+        );
     }
 }
 
@@ -661,16 +670,33 @@ fn modal_chart_search_reaches_the_full_search_minimum() {
         tr[(i, i)] += 1.0;
     }
     let tri = faer::linalg::solvers::DenseSolveCore::inverse(&tr.partial_piv_lu());
-    let sys = StateSpace::new(&tr * &blk.a * &tri, &tr * &blk.b, &blk.c * &tri, blk.d.clone())
-        .unwrap();
+    let sys = StateSpace::new(
+        &tr * &blk.a * &tri,
+        &tr * &blk.b,
+        &blk.c * &tri,
+        blk.d.clone(),
+    )
+    .unwrap();
     let kz = Mat::<f64>::zeros(n, 3);
     let u = noise(600, 2, 62);
     for sigma in [0.0, 0.2] {
-        let y = data(&sys, &kz, &u, &(noise(600, 3, 63) * faer::Scale(sigma)), &[0.0; 7]);
+        let y = data(
+            &sys,
+            &kz,
+            &u,
+            &(noise(600, 3, 63) * faer::Scale(sigma)),
+            &[0.0; 7],
+        );
         let start = perturbed_any(&sys, 0.02, 64);
         let mut costs = Vec::new();
         for on in [true, false] {
-            let mut o = options(Focus::Simulation, true, false, vec![InitialState::Estimate], 64);
+            let mut o = options(
+                Focus::Simulation,
+                true,
+                false,
+                vec![InitialState::Estimate],
+                64,
+            );
             o.reweight = false;
             o.modal_chart = on;
             o.optim.max_iter = 200;
@@ -678,7 +704,11 @@ fn modal_chart_search_reaches_the_full_search_minimum() {
             o.optim.tol_cost = 1e-12;
             let r = run(&start, None, &[(&u, &y)], &o);
             if sigma == 0.0 {
-                assert!(pole_err(&r.sys, &sys) < 1e-7, "{on}: {}", pole_err(&r.sys, &sys));
+                assert!(
+                    pole_err(&r.sys, &sys) < 1e-7,
+                    "{on}: {}",
+                    pole_err(&r.sys, &sys)
+                );
             }
             costs.push(r.solution.cost);
         }
