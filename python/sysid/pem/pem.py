@@ -312,7 +312,13 @@ def pem(
         gradient_norm, damping)`` (``cost``: the criterion of ``info["pem"]["cost"]``) and may
         return ``False`` to stop.
     local_coordinates : bool
-        Search in data-driven local coordinates (default); ``False`` searches all entries.
+        Search in data-driven local coordinates (default); ``False`` searches all entries in
+        the start's state basis. Without a noise model (``focus="simulation"`` or
+        ``noise="none"``) and an order well above the number of inputs (the chart must remove at
+        least half of the state sensitivities) the local coordinates are the modal chart: ``A``
+        is held in its real block-diagonal (modal) form, the entries outside its 1x1 and 2x2
+        blocks at zero, so each iteration costs a fraction of a full one; the refined model
+        and its covariance are mapped back to the start's state basis.
     weighting : {"noise", "identity"}, optional
         ``"noise"``: weight the errors by the inverse of their covariance, re-estimated between
         iterations (the determinant criterion, maximum likelihood for Gaussian innovations);

@@ -5,7 +5,9 @@
 //! is spanned, for `T = I + X` with `X = E_ab`, by `(A X - X A, -X B, C X, 0, -X K, -X x0)`.
 //! The search moves in its orthogonal complement. This is exact when every quantity the
 //! similarity moves is a parameter or zero; with a fixed non-zero `K` or a given non-zero `x0`
-//! there is no orbit in the parameters and the search uses all directions.
+//! there is no orbit in the parameters and the search uses all directions. In the modal chart
+//! ([`super::chart`]) the orbit is that of the similarities that keep the chart's blocks, and
+//! the complement is taken among the parameters the chart does not hold.
 
 use super::predictor::Predictor;
 use super::InitialState;
@@ -13,7 +15,7 @@ use crate::error::{Result, SysidError};
 use faer::Mat;
 
 impl Predictor<'_> {
-    /// Tangent vectors (p x n^2) of the similarity orbit at `theta`; `None` when there is no
+    /// Tangent vectors (p x n^2; fewer in the modal chart) of the similarity orbit at `theta`; `None` when there is no
     /// orbit in the parameters (a fixed non-zero `K` or a given non-zero `x0`).
     pub(super) fn orbit_tangent(&self, th: &[f64]) -> Option<Mat<f64>> {
         if self.n == 0 {
@@ -30,31 +32,33 @@ impl Predictor<'_> {
             return None;
         }
         let off = self.offsets();
-        let mut tan = Mat::<f64>::zeros(self.p, n * n);
-        for a in 0..n {
-            for b in 0..n {
-                let col = a * n + b;
-                for i in 0..n {
-                    tan[(off.a + i * n + b, col)] += pm.a[(i, a)];
+        // in the modal chart only the similarities that keep its blocks stay in the chart
+        let pairs: Vec<(usize, usize)> = (0..n)
+            .flat_map(|a| (0..n).map(move |b| (a, b)))
+            .filter(|&(a, b)| !self.held(a, b))
+            .collect();
+        let mut tan = Mat::<f64>::zeros(self.p, pairs.len());
+        for (col, &(a, b)) in pairs.iter().enumerate() {
+            for i in 0..n {
+                tan[(off.a + i * n + b, col)] += pm.a[(i, a)];
+            }
+            for j in 0..n {
+                tan[(off.a + a * n + j, col)] -= pm.a[(b, j)];
+            }
+            for j in 0..m {
+                tan[(off.b + a * m + j, col)] -= pm.b[(b, j)];
+            }
+            for i in 0..l {
+                tan[(off.c + i * n + b, col)] += pm.c[(i, a)];
+            }
+            if let Some(ik) = off.k {
+                for j in 0..l {
+                    tan[(ik + a * l + j, col)] -= pm.k[(b, j)];
                 }
-                for j in 0..n {
-                    tan[(off.a + a * n + j, col)] -= pm.a[(b, j)];
-                }
-                for j in 0..m {
-                    tan[(off.b + a * m + j, col)] -= pm.b[(b, j)];
-                }
-                for i in 0..l {
-                    tan[(off.c + i * n + b, col)] += pm.c[(i, a)];
-                }
-                if let Some(ik) = off.k {
-                    for j in 0..l {
-                        tan[(ik + a * l + j, col)] -= pm.k[(b, j)];
-                    }
-                }
-                for (ex, o) in self.x0_off.iter().enumerate() {
-                    if let Some(o) = o {
-                        tan[(o + a, col)] -= pm.x0[ex][b];
-                    }
+            }
+            for (ex, o) in self.x0_off.iter().enumerate() {
+                if let Some(o) = o {
+                    tan[(o + a, col)] -= pm.x0[ex][b];
                 }
             }
         }
@@ -67,7 +71,11 @@ impl Predictor<'_> {
         let Some(tan) = self.local.then(|| self.orbit_tangent(th)).flatten() else {
             return Ok(None);
         };
-        let svd = tan
+        // the complement within the parameters that move (all but those the chart holds)
+        let mask = self.chart_mask();
+        let free: Vec<usize> = (0..self.p).filter(|&i| !mask[i]).collect();
+        let tf = Mat::from_fn(free.len(), tan.ncols(), |i, j| tan[(free[i], j)]);
+        let svd = tf
             .svd()
             .map_err(|e| SysidError::numerical("local coordinates (SVD)", format!("{e:?}")))?;
         let sv = svd.S().column_vector();
@@ -75,6 +83,13 @@ impl Predictor<'_> {
         let rank = (0..sv.nrows())
             .filter(|&i| sv[i] > 1e-10 * smax && sv[i] > 0.0)
             .count();
-        Ok(Some(svd.U().subcols(rank, self.p - rank).to_owned()))
+        let u = svd.U().subcols(rank, free.len() - rank);
+        let mut basis = Mat::<f64>::zeros(self.p, u.ncols());
+        for (i, &fi) in free.iter().enumerate() {
+            for j in 0..u.ncols() {
+                basis[(fi, j)] = u[(i, j)];
+            }
+        }
+        Ok(Some(basis))
     }
 }

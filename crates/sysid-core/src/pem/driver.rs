@@ -236,7 +236,38 @@ pub fn pem(
     options: &PemOptions,
     observer: &mut dyn FnMut(&Iteration) -> Flow,
 ) -> Result<PemResult> {
-    let mut prob = Predictor::new(start, k0, experiments, options)?;
+    match super::chart::modal_start(start, k0, options, experiments.len()) {
+        Some((sys, chart, md)) => {
+            let mut prob = Predictor::new(&sys, k0, experiments, options)?;
+            let layout = Predictor::new(&sys, k0, experiments, options)?;
+            prob.chart = Some(chart);
+            let mask = prob.chart_mask();
+            let mut charted = options.clone();
+            let fixed = charted
+                .optim
+                .fixed
+                .get_or_insert_with(|| vec![false; mask.len()]);
+            if fixed.len() == mask.len() {
+                fixed.iter_mut().zip(&mask).for_each(|(f, &h)| *f |= h);
+            }
+            let r = pem_from(prob, &sys, k0, &charted, observer)?;
+            Ok(super::chart::to_start_basis(&layout, &md, r))
+        }
+        None => {
+            let prob = Predictor::new(start, k0, experiments, options)?;
+            pem_from(prob, start, k0, options, observer)
+        }
+    }
+}
+
+/// [`pem`] from a built problem.
+fn pem_from(
+    mut prob: Predictor<'_>,
+    start: &StateSpace,
+    k0: Option<MatRef<'_, f64>>,
+    options: &PemOptions,
+    observer: &mut dyn FnMut(&Iteration) -> Flow,
+) -> Result<PemResult> {
     let auto = options.enforce_stability.is_none() && options.focus == Focus::Prediction;
     let a_stable = matches!(spectral_radius(start.a.as_ref()), Ok(r) if r < 1.0);
     // the default keeps A stable from a stable start; an unstable start is searched freely

@@ -27,9 +27,14 @@
 //! are `(A X - X A, -X B, C X, 0, -X K, -X x0)`. This is exact when every quantity the
 //! similarity moves is a parameter or zero; with a fixed non-zero `K` or a given non-zero `x0`
 //! the search uses all directions (the damped Gauss-Newton step is minimum-norm anyway).
+//! Without a Kalman gain the search moves in the modal chart instead (module `chart`): `A` in its
+//! real block-diagonal form with the entries outside the blocks held at zero, so that the
+//! Gauss-Newton products are formed over about `n (m + l + 2)` parameters rather than
+//! `n (n + m + l)`.
 //! Stability of the predictor (of `A - K C`, or of `A` when simulating) is the admissible
 //! set: the search never evaluates an unstable predictor.
 
+mod chart;
 mod coordinates;
 mod driver;
 mod modal;

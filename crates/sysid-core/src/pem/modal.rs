@@ -171,8 +171,13 @@ impl Predictor<'_> {
         self.modal_mt_cols(md, &col).col_as_slice(0).to_vec()
     }
 
-    /// The modal form of the predictor matrix at `theta` (see [`modal_form`]).
+    /// The modal form of the predictor matrix at `theta` (see [`modal_form`]); in the modal
+    /// chart, block by block ([`chart_modal`](super::chart::chart_modal)).
     pub(super) fn modal_at(&self, th: &[f64]) -> Option<Modal> {
-        modal_form(self.unpack(th).abar.as_ref())
+        let abar = self.unpack(th).abar;
+        match &self.chart {
+            Some(chart) => super::chart::chart_modal(abar.as_ref(), chart),
+            None => modal_form(abar.as_ref()),
+        }
     }
 }

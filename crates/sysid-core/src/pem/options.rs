@@ -107,6 +107,9 @@ pub struct PemOptions {
     /// significantly better (a likelihood-ratio test at the 1 % level, see
     /// [`pem`](super::pem)); `Some(false)`: only the predictor is kept stable.
     pub enforce_stability: Option<bool>,
+    /// Search in the modal chart where it applies (default `true`; see `pem::chart`: no
+    /// Kalman gain, a well-conditioned modal form; the result returns in the start's basis).
+    pub modal_chart: bool,
     /// Samples per block in the accumulation of the normal equations.
     pub block: usize,
     /// Options of the search (tolerances, iteration cap, regularisation, ...).
@@ -131,6 +134,7 @@ impl Default for PemOptions {
             x0: vec![InitialState::Estimate],
             reweight: true,
             local_coordinates: true,
+            modal_chart: true,
             enforce_stability: None,
             block: 128,
             optim: o,

@@ -60,6 +60,9 @@ pub struct Predictor<'a> {
     pub(super) gram_cache: Option<GramCache>,
     /// Trial points refused only because `A` was unstable (the stability bound was active).
     pub(super) a_bound_hits: usize,
+    /// The modal chart (see [`super::chart`]): the entries of `A` outside its blocks are
+    /// held at zero and their sensitivities never formed; `None`: every entry moves.
+    pub(super) chart: Option<super::chart::Chart>,
 }
 
 /// The model matrices at one parameter vector, with the predictor's `A - K C`, `B - K D`.
@@ -313,6 +316,7 @@ impl<'a> Predictor<'a> {
             halve: true,
             gram_cache: None,
             a_bound_hits: 0,
+            chart: None,
         })
     }
 

@@ -273,6 +273,10 @@ impl Predictor<'_> {
         // carried columns (with the second-row twin derived from them)
         let mut carried: Vec<(usize, Option<usize>)> = Vec::with_capacity(pd);
         for (c, d) in cols.iter().enumerate() {
+            if d.forcing == Forcing::State && self.held(d.row, d.j) {
+                // held at zero by the modal chart: no sensitivity (zero in `at`)
+                continue;
+            }
             let (b0, bs) = md.block[d.row];
             if self.halve && bs == 2 {
                 if d.row == b0 + 1 {

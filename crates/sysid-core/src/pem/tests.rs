@@ -561,3 +561,171 @@ fn halved_modal_gram_equals_the_full_one() {
         }
     }
 }
+
+/// A model in the chart's form: a complex pair in a general 2x2 block, two real poles in one
+/// 2x2 block, a real pole, a complex pair in rotation form (blocks 0-1, 2-3, 4, 5-6).
+fn chart_model() -> (StateSpace, Vec<usize>) {
+    let n = 7;
+    let mut a = Mat::<f64>::zeros(n, n);
+    for (i, j, v) in [
+        (0, 0, 0.5),
+        (0, 1, 0.4),
+        (1, 0, -0.3),
+        (1, 1, 0.6),
+        (2, 2, 0.4),
+        (2, 3, 0.3),
+        (3, 2, 0.2),
+        (3, 3, -0.2),
+        (4, 4, 0.2),
+        (5, 5, -0.6),
+        (5, 6, 0.5),
+        (6, 5, -0.5),
+        (6, 6, -0.6),
+    ] {
+        a[(i, j)] = v;
+    }
+    let sys = StateSpace::new(a, noise(n, 2, 51), noise(3, n, 52), noise(3, 2, 53)).unwrap();
+    (sys, vec![0, 0, 2, 2, 4, 5, 5])
+}
+
+/// In the modal chart the Gauss-Newton matrix and gradient of the parameters that move equal
+/// the plain ones (every Jacobian row), the held entries of `A` get zero rows and columns,
+/// and the chord gradient is the full one.
+#[test]
+fn modal_chart_gauss_newton_equals_the_plain_one() {
+    let (sys, chart) = chart_model();
+    let n = sys.n_states();
+    let kz = Mat::<f64>::zeros(n, 3);
+    let (u1, u2) = (noise(110, 2, 54), noise(60, 2, 55));
+    let e = |rows: usize, seed: u64| noise(rows, 3, seed) * faer::Scale(0.3);
+    let y1 = data(&sys, &kz, &u1, &e(110, 56), &[0.2; 7]);
+    let y2 = data(&sys, &kz, &u2, &e(60, 57), &[0.0; 7]);
+    let views = [(u1.as_ref(), y1.as_ref()), (u2.as_ref(), y2.as_ref())];
+    for x0 in [
+        vec![InitialState::Estimate],
+        vec![InitialState::Estimate, InitialState::Zero],
+    ] {
+        let o = options(Focus::Simulation, true, false, x0, 8);
+        let mut pr = Predictor::new(&sys, None, &views, &o).unwrap();
+        pr.chart = Some(chart.clone());
+        let th = pr.pack(&sys, kz.as_ref(), &[vec![0.1; n], vec![-0.1; n]]);
+        pr.reweight_at(&th).unwrap();
+        assert!(pr.modal_at(&th).is_some());
+        let fast = evaluate_with(&mut pr, &th, (true, true, true));
+        let plain = evaluate_with(&mut pr, &th, (false, true, true));
+        let held = pr.chart_mask();
+        assert_eq!(held.iter().filter(|&&h| h).count(), n * n - 4 - 4 - 1 - 4);
+        let scale = plain.gauss_newton.norm_max();
+        let gs = plain.gradient.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        for i in 0..pr.p {
+            if held[i] {
+                assert_eq!(fast.gradient[i], 0.0);
+                assert!((0..pr.p).all(|j| fast.gauss_newton[(i, j)] == 0.0));
+                continue;
+            }
+            assert!((fast.gradient[i] - plain.gradient[i]).abs() < 1e-11 * gs);
+            for j in (0..pr.p).filter(|&j| !held[j]) {
+                let d = (fast.gauss_newton[(i, j)] - plain.gauss_newton[(i, j)]).abs();
+                assert!(d < 1e-11 * scale, "({i}, {j}): {d} vs {scale}");
+            }
+        }
+        let chord = pr.gradient_only(&th).unwrap().unwrap();
+        for (a, b) in chord.gradient.iter().zip(&fast.gradient) {
+            assert!((a - b).abs() < 1e-12 * gs, "{a} vs {b}");
+        }
+        // the orbit that keeps the blocks: 4 + 4 + 1 + 4 directions, orthogonal to the
+        // gradient and null directions of the Gauss-Newton matrix
+        let tan = pr.orbit_tangent(&th).unwrap();
+        assert_eq!(tan.ncols(), 13);
+        for col in 0..tan.ncols() {
+            let v: Vec<f64> = (0..pr.p).map(|i| tan[(i, col)]).collect();
+            assert!(v.iter().zip(&held).all(|(x, &h)| !h || *x == 0.0));
+            let hv: f64 = (0..pr.p)
+                .map(|i| {
+                    (0..pr.p)
+                        .map(|j| fast.gauss_newton[(i, j)] * v[j])
+                        .sum::<f64>()
+                        .abs()
+                })
+                .fold(0.0, f64::max);
+            assert!(hv < 1e-10 * scale, "{hv}");
+        }
+        let basis = pr.local_basis(&th).unwrap().unwrap();
+        assert_eq!(
+            basis.ncols(),
+            pr.p - held.iter().filter(|&&h| h).count() - 13
+        );
+    }
+}
+
+/// A search in the modal chart recovers a noise-free system and, on noisy data, reaches the
+/// criterion of the search over every entry of `A` (the same minimum).
+#[test]
+fn modal_chart_search_reaches_the_full_search_minimum() {
+    let (blk, _) = chart_model();
+    let n = blk.n_states();
+    // the same system in a random state basis
+    let mut tr = noise(n, n, 61) * faer::Scale(0.5);
+    for i in 0..n {
+        tr[(i, i)] += 1.0;
+    }
+    let tri = faer::linalg::solvers::DenseSolveCore::inverse(&tr.partial_piv_lu());
+    let sys = StateSpace::new(
+        &tr * &blk.a * &tri,
+        &tr * &blk.b,
+        &blk.c * &tri,
+        blk.d.clone(),
+    )
+    .unwrap();
+    let kz = Mat::<f64>::zeros(n, 3);
+    let u = noise(600, 2, 62);
+    for sigma in [0.0, 0.2] {
+        let y = data(
+            &sys,
+            &kz,
+            &u,
+            &(noise(600, 3, 63) * faer::Scale(sigma)),
+            &[0.0; 7],
+        );
+        let start = perturbed_any(&sys, 0.02, 64);
+        let mut costs = Vec::new();
+        for on in [true, false] {
+            let mut o = options(
+                Focus::Simulation,
+                true,
+                false,
+                vec![InitialState::Estimate],
+                64,
+            );
+            o.reweight = false;
+            o.modal_chart = on;
+            o.optim.max_iter = 200;
+            o.optim.tol_statistical = 0.0;
+            o.optim.tol_cost = 1e-12;
+            let r = run(&start, None, &[(&u, &y)], &o);
+            if sigma == 0.0 {
+                assert!(
+                    pole_err(&r.sys, &sys) < 1e-7,
+                    "{on}: {}",
+                    pole_err(&r.sys, &sys)
+                );
+            }
+            costs.push(r.solution.cost);
+        }
+        if sigma > 0.0 {
+            let rel = (costs[0] - costs[1]).abs() / costs[1];
+            assert!(rel < 1e-6, "{costs:?}");
+        }
+    }
+}
+
+fn perturbed_any(sys: &StateSpace, eps: f64, seed: u64) -> StateSpace {
+    let (n, m, l) = (sys.n_states(), sys.n_inputs(), sys.n_outputs());
+    StateSpace::new(
+        &sys.a + &noise(n, n, seed) * faer::Scale(eps),
+        &sys.b + &noise(n, m, seed + 1) * faer::Scale(eps),
+        &sys.c + &noise(l, n, seed + 2) * faer::Scale(eps),
+        sys.d.clone(),
+    )
+    .unwrap()
+}
