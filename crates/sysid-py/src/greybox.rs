@@ -278,7 +278,7 @@ pub fn greybox_linear<'py>(
         .collect();
     let mut map_err: Slot = None;
     let mut obs_err: Slot = None;
-    let result = py.detach(|| {
+    let result = crate::search::watch(py, || {
         let mut map = PyMap {
             f: structure,
             err: &mut map_err,
@@ -289,7 +289,7 @@ pub fn greybox_linear<'py>(
     if let Some(e) = map_err.or(obs_err) {
         return Err(e);
     }
-    let r = result.py()?;
+    let r = result?.py()?;
     let out = PyDict::new(py);
     out.set_item("p", slice_to_numpy(py, &r.p))?;
     out.set_item("theta", slice_to_numpy(py, &r.theta))?;
@@ -382,7 +382,7 @@ pub fn greybox_ode<'py>(
         .collect();
     let mut cb_err: Slot = None;
     let mut obs_err: Slot = None;
-    let result = py.detach(|| {
+    let result = crate::search::watch(py, || {
         let mut model = PyOde {
             f,
             h,
@@ -396,7 +396,7 @@ pub fn greybox_ode<'py>(
     if let Some(e) = cb_err.or(obs_err) {
         return Err(e);
     }
-    let r = result.py()?;
+    let r = result?.py()?;
     let out = PyDict::new(py);
     out.set_item("theta", slice_to_numpy(py, &r.theta))?;
     out.set_item(
@@ -442,7 +442,7 @@ pub fn greybox_ode_simulate<'py>(
     };
     let uv = view(&u);
     let mut cb_err: Slot = None;
-    let result = py.detach(|| {
+    let result = crate::search::watch(py, || {
         let mut model = PyOde {
             f,
             h,
@@ -455,7 +455,7 @@ pub fn greybox_ode_simulate<'py>(
     if let Some(e) = cb_err {
         return Err(e);
     }
-    Ok(mat_to_numpy(py, &result.py()?))
+    Ok(mat_to_numpy(py, &result?.py()?))
 }
 
 type JacobianOut<'py> = (
@@ -508,7 +508,7 @@ pub fn greybox_ode_jacobian<'py>(
     };
     let views: Vec<_> = inputs.iter().map(|u| view(u)).collect();
     let mut cb_err: Slot = None;
-    let result = py.detach(|| {
+    let result = crate::search::watch(py, || {
         let mut model = PyOde {
             f,
             h,
@@ -521,7 +521,7 @@ pub fn greybox_ode_jacobian<'py>(
     if let Some(e) = cb_err {
         return Err(e);
     }
-    let (y, j) = result.py()?;
+    let (y, j) = result?.py()?;
     Ok((mat_to_numpy(py, &y), mat_to_numpy(py, &j)))
 }
 

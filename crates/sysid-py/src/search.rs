@@ -1,22 +1,79 @@
-//! What every binding of the shared optimiser (`sysid_core::optim`) needs: the progress
-//! callback as an observer, and the search's solution and covariance as dict items.
+//! What every long computation of the bindings needs: the GIL released while it runs, Ctrl-C
+//! seen within a few milliseconds ([`watch`], [`detach`]), the progress callback of the shared
+//! optimiser (`sysid_core::optim`) as an observer ([`run`]), and the search's solution and
+//! covariance as dict items.
+//!
+//! Interruption: the computation runs inside a [`sysid_core::interrupt::scope`] whose poll
+//! asks the interpreter for pending signals (`PyErr_CheckSignals`, which runs the Python
+//! handler: by default it raises `KeyboardInterrupt`). The core's loops call
+//! `interrupt::check()` every few milliseconds of work; the first exception the handler
+//! raises stops them and is re-raised here unchanged. Nothing keeps running: the core returns
+//! only when every worker of its parallel sections has seen the flag.
 
 use crate::convert::{mat_to_numpy, slice_to_numpy};
 use crate::errors::IntoPy;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use std::cell::RefCell;
+use sysid_core::interrupt::{self, Flag};
 use sysid_core::optim::{self, Flow, Iteration};
+
+thread_local! {
+    /// The exception raised by the signal handler during the current computation.
+    static PENDING: RefCell<Option<PyErr>> = const { RefCell::new(None) };
+}
+
+/// The scope's poll: runs pending signal handlers (on the main thread; elsewhere Python
+/// reports none) and keeps the first exception they raise.
+fn poll_signals() -> bool {
+    Python::attach(|py| match py.check_signals() {
+        Ok(()) => false,
+        Err(e) => {
+            PENDING.with(|p| {
+                p.borrow_mut().get_or_insert(e);
+            });
+            true
+        }
+    })
+}
+
+/// The exception that interrupted the computation, if any (taken: asked once).
+pub fn take_pending() -> Option<PyErr> {
+    PENDING.with(|p| p.borrow_mut().take())
+}
+
+/// Runs `work` with the GIL released, interruptible: a signal handler's exception (Ctrl-C's
+/// `KeyboardInterrupt`) raised meanwhile is returned instead of `work`'s value.
+pub fn watch<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
+    let out = py.detach(|| interrupt::scope(poll_signals, work));
+    match take_pending() {
+        Some(e) => Err(e),
+        None => Ok(out),
+    }
+}
+
+/// [`watch`] for a core computation: its error becomes the matching `sysid.errors` exception.
+pub fn detach<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce() -> sysid_core::Result<T> + Send,
+) -> PyResult<T> {
+    watch(py, work)?.py()
+}
 
 /// The first Python error raised inside a callback (re-raised after the search).
 pub type Slot = Option<PyErr>;
 
 /// Calls `progress(iteration, cost, step_norm, gradient_norm, damping)` after every
-/// iteration; `False` returned stops the search, an exception stops it and lands in `slot`.
+/// iteration; `False` returned stops the search, an exception stops it (and the rest of the
+/// computation, through the interrupt flag) and lands in `slot`. An interrupt stops it too.
 pub fn observer<'a>(
     progress: &'a Option<Py<PyAny>>,
     slot: &'a mut Slot,
 ) -> impl FnMut(&Iteration) -> Flow + 'a {
     move |it: &Iteration| -> Flow {
+        if interrupt::requested() {
+            return Flow::Stop;
+        }
         let Some(cb) = progress else {
             return Flow::Continue;
         };
@@ -42,6 +99,8 @@ pub fn observer<'a>(
                     if slot.is_none() {
                         *slot = Some(e);
                     }
+                    // whatever the core runs after this search (refits, candidates) stops too
+                    Flag::current().set();
                     Flow::Stop
                 }
             }
@@ -49,16 +108,23 @@ pub fn observer<'a>(
     }
 }
 
-/// Runs `search` (a core estimator taking the observer) with the GIL released, `progress`
-/// as its observer; the first exception raised by the callback is re-raised, a core error
-/// becomes the matching `sysid.errors` exception.
+/// Runs `search` (a core estimator taking the observer) as [`watch`] does, `progress` as its
+/// observer; a signal's exception or else the first exception raised by the callback is
+/// re-raised, a core error becomes the matching `sysid.errors` exception.
 pub fn run<T: Send>(
     py: Python<'_>,
     progress: &Option<Py<PyAny>>,
     search: impl FnOnce(&mut dyn FnMut(&Iteration) -> Flow) -> sysid_core::Result<T> + Send,
 ) -> PyResult<T> {
     let mut slot: Slot = None;
-    let result = py.detach(|| search(&mut observer(progress, &mut slot)));
+    let result = watch(py, || search(&mut observer(progress, &mut slot)));
+    finish(result, slot)
+}
+
+/// The outcome of a watched search whose observer filled `slot`: the signal's exception,
+/// else the callback's, else the core's result.
+pub fn finish<T>(result: PyResult<sysid_core::Result<T>>, slot: Slot) -> PyResult<T> {
+    let result = result?;
     if let Some(e) = slot {
         return Err(e);
     }
