@@ -5,8 +5,10 @@
 //! [`POLL_INTERVAL`] whether to stop (the Python binding asks the interpreter for a pending
 //! signal there), and once `poll` has said yes every later [`check`] of the scope fails with
 //! [`SysidError::Interrupted`]. Parallel sections hand the scope's [`Flag`] to their workers
-//! ([`Flag::current`] before the section, [`Flag::enter`] in each task); a worker's
-//! [`check`] only reads the flag.
+//! ([`Flag::current`] before the section, [`Flag::check`] in each task); a worker's check
+//! only reads the flag. A caller that cannot poll from inside the computation (the Python
+//! binding: only the main thread sees signals, and it may be waiting on a parallel section)
+//! runs it on another thread under [`Flag::enter`] and sets the flag itself.
 //!
 //! Outside any scope [`check`] is a thread-local read and never fails, so a Rust user of the
 //! crate pays nothing. Long loops call `check()?` every few milliseconds of work (a block of
@@ -51,6 +53,12 @@ thread_local! {
 pub struct Flag(Option<Arc<AtomicBool>>);
 
 impl Flag {
+    /// A new flag, not set: the stop flag of a computation run with [`Flag::enter`] on
+    /// another thread while its owner watches for a reason to stop (and then sets it).
+    pub fn new() -> Flag {
+        Flag(Some(Arc::new(AtomicBool::new(false))))
+    }
+
     /// The flag of the current thread's scope, to hand to parallel workers.
     pub fn current() -> Flag {
         Flag(FLAG.with(|f| f.borrow().clone()))
@@ -79,8 +87,8 @@ impl Flag {
         }
     }
 
-    /// Runs `f` with this flag as the thread's (a worker of a parallel section): its
-    /// [`check`] calls read the flag and never poll.
+    /// Runs `f` with this flag as the thread's (a worker of a parallel section, or a thread
+    /// computing for an owner that watches): its [`check`] calls read the flag, never poll.
     pub fn enter<R>(&self, f: impl FnOnce() -> R) -> R {
         let _restore = Restore::install(self.0.clone(), None);
         f()

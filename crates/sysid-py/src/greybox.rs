@@ -42,6 +42,7 @@ struct PyMap<'s> {
 
 impl ParameterMap for PyMap<'_> {
     fn map(&mut self, p: &[f64], jac: bool) -> sysid_core::Result<(Vec<f64>, Option<Mat<f64>>)> {
+        sysid_core::interrupt::check()?;
         Python::attach(|py| {
             let r = (|| -> PyResult<(Vec<f64>, Option<Mat<f64>>)> {
                 let out = self.f.call1(py, (slice_to_numpy(py, p), jac))?;
@@ -153,6 +154,7 @@ impl OdeModel for PyOde<'_> {
         u: &[f64],
         p: MatRef<'_, f64>,
     ) -> sysid_core::Result<Mat<f64>> {
+        sysid_core::interrupt::check()?; // Ctrl-C between calls of Python
         self.call(true, t, x, u, p)
     }
     fn output(
@@ -162,6 +164,7 @@ impl OdeModel for PyOde<'_> {
         u: &[f64],
         p: MatRef<'_, f64>,
     ) -> sysid_core::Result<Mat<f64>> {
+        sysid_core::interrupt::check()?; // Ctrl-C between calls of Python
         self.call(false, t, x, u, p)
     }
     fn rhs_derivatives(

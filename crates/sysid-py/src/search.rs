@@ -3,28 +3,31 @@
 //! optimiser (`sysid_core::optim`) as an observer ([`run`]), and the search's solution and
 //! covariance as dict items.
 //!
-//! Interruption: the computation runs inside a [`sysid_core::interrupt::scope`] whose poll
-//! asks the interpreter for pending signals (`PyErr_CheckSignals`, which runs the Python
-//! handler: by default it raises `KeyboardInterrupt`). The core's loops call
-//! `interrupt::check()` every few milliseconds of work; the first exception the handler
-//! raises stops them and is re-raised here unchanged. Nothing keeps running: the core returns
-//! only when every worker of its parallel sections has seen the flag.
+//! Interruption: the computation runs on a helper thread under a [`Flag`] of
+//! `sysid_core::interrupt` while the calling (main) thread, with the GIL released, asks the
+//! interpreter for pending signals every 10 ms (`PyErr_CheckSignals`, which runs the Python
+//! handler: by default it raises `KeyboardInterrupt`). The first exception a handler raises
+//! sets the flag; the core's loops call `interrupt::check()` every few milliseconds of work,
+//! in every thread of their parallel sections, and return; the exception is re-raised here
+//! unchanged. The helper is joined before returning: no thread keeps running.
 
 use crate::convert::{mat_to_numpy, slice_to_numpy};
 use crate::errors::IntoPy;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::cell::RefCell;
+use std::sync::Mutex;
 use sysid_core::interrupt::{self, Flag};
 use sysid_core::optim::{self, Flow, Iteration};
 
 thread_local! {
-    /// The exception raised by the signal handler during the current computation.
+    /// The exception raised by a signal handler during the current computation (for
+    /// `errors::to_py` of `SysidError::Interrupted`).
     static PENDING: RefCell<Option<PyErr>> = const { RefCell::new(None) };
 }
 
-/// The scope's poll: runs pending signal handlers (on the main thread; elsewhere Python
-/// reports none) and keeps the first exception they raise.
+/// Runs pending signal handlers (on the main thread; elsewhere Python reports none) and
+/// keeps the first exception they raise.
 fn poll_signals() -> bool {
     Python::attach(|py| match py.check_signals() {
         Ok(()) => false,
@@ -42,10 +45,51 @@ pub fn take_pending() -> Option<PyErr> {
     PENDING.with(|p| p.borrow_mut().take())
 }
 
+/// Stack of the helper thread (the size of a main thread's).
+const STACK: usize = 8 << 20;
+
+/// Runs `work` on a helper thread under a fresh flag while this thread polls for signals
+/// every [`interrupt::POLL_INTERVAL`] (a panic of `work` is resumed here). Should no thread
+/// be had, `work` runs here and polls from inside (its own `interrupt::check` calls).
+fn run_watched<T: Send>(work: impl FnOnce() -> T + Send) -> T {
+    let flag = Flag::new();
+    let owner = std::thread::current();
+    let job = Mutex::new(Some(work));
+    let take = || job.lock().ok().and_then(|mut j| j.take());
+    let spawned = std::thread::scope(|s| {
+        let handle = std::thread::Builder::new()
+            .name("sysid-compute".into())
+            .stack_size(STACK)
+            .spawn_scoped(s, || {
+                let out = take().map(|w| flag.enter(w));
+                owner.unpark();
+                out
+            })
+            .ok()?;
+        while !handle.is_finished() {
+            std::thread::park_timeout(interrupt::POLL_INTERVAL);
+            if !flag.is_set() && !handle.is_finished() && poll_signals() {
+                flag.set();
+            }
+        }
+        match handle.join() {
+            Ok(out) => out,
+            Err(panic) => std::panic::resume_unwind(panic),
+        }
+    });
+    match spawned {
+        Some(out) => out,
+        None => {
+            let work = take().expect("the job runs once");
+            interrupt::scope(poll_signals, work)
+        }
+    }
+}
+
 /// Runs `work` with the GIL released, interruptible: a signal handler's exception (Ctrl-C's
 /// `KeyboardInterrupt`) raised meanwhile is returned instead of `work`'s value.
 pub fn watch<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
-    let out = py.detach(|| interrupt::scope(poll_signals, work));
+    let out = py.detach(|| run_watched(work));
     match take_pending() {
         Some(e) => Err(e),
         None => Ok(out),

@@ -260,19 +260,14 @@ def identify(
             f"{min(min(h.lengths) for _, h in parts)} samples, 20 needed); pass a longer "
             "record or fit one model directly")
     methods = SUBSPACE + (CLOSED_LOOP if feedback else ())
+    # Ctrl-C stops identify (KeyboardInterrupt), as it stops every other computation: a
+    # batch (identify_many) or a script must not carry on with a half-chosen model
     interrupted = False
     with Bar(None, "identify", unit="candidates", enabled=show(progress)) as bar:
         board = _Board(parts, bar)
-        try:
-            _subspace_candidates(board, centred, methods, max_order)
-            if refine:
-                _refined_candidates(board)
-        except KeyboardInterrupt:
-            if not board.rows:
-                raise
-            interrupted = True
-            warnings.warn("identify interrupted: the best candidate found so far is returned",
-                          UserWarning, stacklevel=2)
+        _subspace_candidates(board, centred, methods, max_order)
+        if refine:
+            _refined_candidates(board)
     ranked = board.ranked()
     model, chosen = _refit(ranked, centred, parts)
     for r in ranked:
