@@ -121,7 +121,7 @@ CASES: dict[str, tuple[str, str]] = {
         "est.fit(6, uncertainty='bootstrap', n_boot=1_000_000)"),
     "monte_carlo": (
         "m = sysid.pem(record(5_000), sysid.n4sid(record(5_000), 6), progress=False)\n"
-        "w = np.linspace(0.01, 3.0, 4000)",
+        "w = np.linspace(0.01, 3.0, 500)",
         "m.uncertainty.propagate(lambda s: np.abs(s.freqresp(w)).ravel(), 'monte-carlo', "
         "n=100_000)"),
     "recursive_arx": (
