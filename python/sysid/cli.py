@@ -629,6 +629,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"sysid: error: unexpected {type(e).__name__}: {_one_line(e)} (please report "
               "this with the command line)", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        # Ctrl-C: the computation stopped, every file written so far is whole (sysid._atomic)
+        print("sysid: interrupted (KeyboardInterrupt); files already written are complete",
+              file=sys.stderr)
+        return 130
 
 
 def _show_warning(message: Any, category: type[Warning], *_: Any, **__: Any) -> None:

@@ -105,6 +105,9 @@ pub enum SysidError {
         /// Why the solver gave up.
         reason: String,
     },
+    /// The computation was stopped from outside (Ctrl-C; see [`crate::interrupt`]).
+    #[error("interrupted: the computation was stopped before it finished")]
+    Interrupted,
 }
 
 /// Result with [`SysidError`].

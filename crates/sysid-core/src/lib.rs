@@ -47,6 +47,7 @@ pub mod error;
 pub mod greybox;
 pub mod hankel;
 pub mod hw;
+pub mod interrupt;
 pub mod linalg;
 pub mod model;
 pub mod names;

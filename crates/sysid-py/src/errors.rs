@@ -23,6 +23,11 @@ fn class_name(e: &SysidError) -> &'static str {
 
 /// Converts a core error into the matching `sysid.errors` exception.
 pub fn to_py(e: SysidError) -> PyErr {
+    if e == SysidError::Interrupted {
+        // the signal handler's own exception when there is one (see `search::watch`)
+        return crate::search::take_pending()
+            .unwrap_or_else(|| pyo3::exceptions::PyKeyboardInterrupt::new_err(e.to_string()));
+    }
     Python::attach(|py| {
         let msg = e.to_string();
         match py

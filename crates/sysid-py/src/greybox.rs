@@ -41,6 +41,7 @@ struct PyMap<'s> {
 
 impl ParameterMap for PyMap<'_> {
     fn map(&mut self, p: &[f64], jac: bool) -> sysid_core::Result<(Vec<f64>, Option<Mat<f64>>)> {
+        sysid_core::interrupt::check()?;
         Python::attach(|py| {
             let r = (|| -> PyResult<(Vec<f64>, Option<Mat<f64>>)> {
                 let out = self.f.call1(py, (slice_to_numpy(py, p), jac))?;
@@ -152,6 +153,7 @@ impl OdeModel for PyOde<'_> {
         u: &[f64],
         p: MatRef<'_, f64>,
     ) -> sysid_core::Result<Mat<f64>> {
+        sysid_core::interrupt::check()?; // Ctrl-C between calls of Python
         self.call(true, t, x, u, p)
     }
     fn output(
@@ -161,6 +163,7 @@ impl OdeModel for PyOde<'_> {
         u: &[f64],
         p: MatRef<'_, f64>,
     ) -> sysid_core::Result<Mat<f64>> {
+        sysid_core::interrupt::check()?; // Ctrl-C between calls of Python
         self.call(false, t, x, u, p)
     }
     fn rhs_derivatives(
@@ -341,7 +344,7 @@ pub fn greybox_linear<'py>(
         .collect();
     let mut map_err: Slot = None;
     let mut obs_err: Slot = None;
-    let result = py.detach(|| {
+    let result = crate::search::watch(py, || {
         let mut map = PyMap {
             f: structure,
             err: &mut map_err,
@@ -352,7 +355,7 @@ pub fn greybox_linear<'py>(
     if let Some(e) = map_err.or(obs_err) {
         return Err(e);
     }
-    let r = result.py()?;
+    let r = result?.py()?;
     let out = PyDict::new(py);
     out.set_item("p", slice_to_numpy(py, &r.p))?;
     out.set_item("theta", slice_to_numpy(py, &r.theta))?;
@@ -395,7 +398,7 @@ pub fn greybox_ode<'py>(
         .collect();
     let mut cb_err: Slot = None;
     let mut obs_err: Slot = None;
-    let result = py.detach(|| {
+    let result = crate::search::watch(py, || {
         let mut model = PyOde {
             f,
             h,
@@ -409,7 +412,7 @@ pub fn greybox_ode<'py>(
     if let Some(e) = cb_err.or(obs_err) {
         return Err(e);
     }
-    let r = result.py()?;
+    let r = result?.py()?;
     let out = PyDict::new(py);
     out.set_item("theta", slice_to_numpy(py, &r.theta))?;
     out.set_item(
@@ -449,7 +452,7 @@ pub fn greybox_ode_simulate<'py>(
     };
     let uv = view(&u);
     let mut cb_err: Slot = None;
-    let result = py.detach(|| {
+    let result = crate::search::watch(py, || {
         let mut model = PyOde {
             f,
             h,
@@ -462,7 +465,7 @@ pub fn greybox_ode_simulate<'py>(
     if let Some(e) = cb_err {
         return Err(e);
     }
-    Ok(mat_to_numpy(py, &result.py()?))
+    Ok(mat_to_numpy(py, &result?.py()?))
 }
 
 type JacobianOut<'py> = (
@@ -490,7 +493,7 @@ pub fn greybox_ode_jacobian<'py>(
     let st = ode_structure(structure);
     let views: Vec<_> = inputs.iter().map(|u| view(u)).collect();
     let mut cb_err: Slot = None;
-    let result = py.detach(|| {
+    let result = crate::search::watch(py, || {
         let mut model = PyOde {
             f,
             h,
@@ -503,7 +506,7 @@ pub fn greybox_ode_jacobian<'py>(
     if let Some(e) = cb_err {
         return Err(e);
     }
-    let (y, j) = result.py()?;
+    let (y, j) = result?.py()?;
     Ok((mat_to_numpy(py, &y), mat_to_numpy(py, &j)))
 }
 

@@ -158,10 +158,8 @@ pub fn compress(
         .map(|(u, y)| (view_nd(u.as_array()), view_nd(y.as_array())))
         .collect();
     let kind = CompressorKind::parse(compressor, chunk_rows).py()?;
-    let result = py.detach(|| compress_experiments(layout, &views, kind));
-    Ok(PyHankelFactor {
-        inner: result.py()?,
-    })
+    let result = crate::search::detach(py, || compress_experiments(layout, &views, kind));
+    Ok(PyHankelFactor { inner: result? })
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -150,10 +150,10 @@ pub fn narx_frols<'py>(
             )
         })
         .collect();
-    let (sels, rs, terms, m) = py
-        .detach(|| -> sysid_core::Result<_> {
-            let cands = Candidates::with_custom(&b, sp.n_lagged(), sp.n_custom())?;
-            let index = |t: &Vec<i64>| -> sysid_core::Result<usize> {
+    let (sels, rs, terms, m) = crate::search::detach(py, || -> sysid_core::Result<_> {
+        let cands = Candidates::with_custom(&b, sp.n_lagged(), sp.n_custom())?;
+        let index =
+            |t: &Vec<i64>| -> sysid_core::Result<usize> {
                 let t = decode(t, sp.n_lagged());
                 cands.terms.iter().position(|c| *c == t).ok_or_else(|| {
                     SysidError::InvalidArgument {
@@ -162,28 +162,27 @@ pub fn narx_frols<'py>(
                     }
                 })
             };
-            let forced_idx = forced
-                .iter()
-                .map(|f| f.iter().map(index).collect::<sysid_core::Result<Vec<_>>>())
-                .collect::<sysid_core::Result<Vec<_>>>()?;
-            let mut opts = FrolsOptions::with_max_terms(max_terms);
-            opts.err_tol = err_tol;
-            opts.block_rows = block_rows;
-            let recs = records(&views, &cviews);
-            let sels = frols::frols(&sp, &cands, &recs, &forced_idx, &opts)?;
-            let chosen: Vec<Vec<usize>> = sels.iter().map(|s| s.terms.clone()).collect();
-            let rs = frols::fit(&sp, &cands, &recs, &chosen)?;
-            let terms: Vec<Vec<Vec<i64>>> = chosen
-                .iter()
-                .map(|c| {
-                    c.iter()
-                        .map(|&k| encode(&cands.terms[k], sp.n_lagged()))
-                        .collect()
-                })
-                .collect();
-            Ok((sels, rs, terms, cands.len()))
-        })
-        .py()?;
+        let forced_idx = forced
+            .iter()
+            .map(|f| f.iter().map(index).collect::<sysid_core::Result<Vec<_>>>())
+            .collect::<sysid_core::Result<Vec<_>>>()?;
+        let mut opts = FrolsOptions::with_max_terms(max_terms);
+        opts.err_tol = err_tol;
+        opts.block_rows = block_rows;
+        let recs = records(&views, &cviews);
+        let sels = frols::frols(&sp, &cands, &recs, &forced_idx, &opts)?;
+        let chosen: Vec<Vec<usize>> = sels.iter().map(|s| s.terms.clone()).collect();
+        let rs = frols::fit(&sp, &cands, &recs, &chosen)?;
+        let terms: Vec<Vec<Vec<i64>>> = chosen
+            .iter()
+            .map(|c| {
+                c.iter()
+                    .map(|&k| encode(&cands.terms[k], sp.n_lagged()))
+                    .collect()
+            })
+            .collect();
+        Ok((sels, rs, terms, cands.len()))
+    })?;
     let out = sels
         .iter()
         .zip(&rs)
@@ -232,15 +231,13 @@ pub fn narx_fit<'py>(
             )
         })
         .collect();
-    let rs = py
-        .detach(|| -> sysid_core::Result<Vec<Mat<f64>>> {
-            let ts: Vec<Vec<Term>> = terms
-                .iter()
-                .map(|t| t.iter().map(|v| decode(v, sp.n_lagged())).collect())
-                .collect();
-            frols::fit_terms(&sp, &b, &records(&views, &cviews), &ts)
-        })
-        .py()?;
+    let rs = crate::search::detach(py, || -> sysid_core::Result<Vec<Mat<f64>>> {
+        let ts: Vec<Vec<Term>> = terms
+            .iter()
+            .map(|t| t.iter().map(|v| decode(v, sp.n_lagged())).collect())
+            .collect();
+        frols::fit_terms(&sp, &b, &records(&views, &cviews), &ts)
+    })?;
     Ok(rs.iter().map(|r| mat_to_numpy(py, r)).collect())
 }
 
@@ -290,7 +287,7 @@ where
                 "the model has custom regressors: pass their functions".into(),
             ))
         };
-        return py.detach(|| run(&mut none)).py();
+        return crate::search::detach(py, || run(&mut none));
     }
     let failure: RefCell<Option<PyErr>> = RefCell::new(None);
     let mut call = |c: usize, args: &[f64]| -> sysid_core::Result<f64> {

@@ -311,7 +311,7 @@ pub fn neural_ss_train<'py>(
     opts.patience = patience;
     opts.seed = seed;
     let mut slot: Option<PyErr> = None;
-    let res = py.detach(|| {
+    let res = crate::search::watch(py, || {
         let ts: Vec<Segment<'_>> = tr
             .iter()
             .map(|(u, y, at)| Segment { u, y, at: *at })
@@ -326,7 +326,7 @@ pub fn neural_ss_train<'py>(
                     Some(cb) => cb
                         .call1(py, (r.epoch, r.validation, r.train))
                         .map(|v| v.bind(py).is(&*pyo3::types::PyBool::new(py, false))),
-                    None => py.check_signals().map(|_| false),
+                    None => Ok(false),
                 };
                 match out {
                     Ok(true) => Flow::Stop,
@@ -339,10 +339,7 @@ pub fn neural_ss_train<'py>(
             })
         })
     });
-    if let Some(e) = slot {
-        return Err(e);
-    }
-    let r = res.py()?;
+    let r = crate::search::finish(res, slot)?;
     let d = PyDict::new(py);
     d.set_item("params", slice_to_numpy(py, &r.params))?;
     d.set_item("validation", r.validation)?;

@@ -162,7 +162,7 @@ pub fn pem_criterion<'py>(
     )?;
     let kv = k.as_ref().map(|k| view(k));
     let exps = views(&experiments);
-    py.detach(|| pem::criterion(&exps, &sys, kv, &o)).py()
+    crate::search::detach(py, || pem::criterion(&exps, &sys, kv, &o))
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

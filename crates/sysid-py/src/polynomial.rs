@@ -15,25 +15,6 @@ use sysid_core::polynomial::pem::{self, MisoOrders};
 
 type Experiments<'a> = Vec<(PyReadonlyArray2<'a, f64>, PyReadonlyArray2<'a, f64>)>;
 
-fn compress(experiments: &Experiments<'_>, max_lag: usize) -> PyResult<ArxCompressor> {
-    let (nu, ny) = match experiments.first() {
-        Some((u, y)) => (u.as_array().ncols(), y.as_array().ncols()),
-        None => {
-            return Err(crate::errors::to_py(
-                sysid_core::SysidError::InvalidArgument {
-                    name: "experiments",
-                    reason: "needs at least one (u, y) record".into(),
-                },
-            ))
-        }
-    };
-    let mut c = ArxCompressor::new(nu, ny, max_lag).py()?;
-    for (u, y) in experiments {
-        c.push(view_nd(u.as_array()), view_nd(y.as_array())).py()?;
-    }
-    Ok(c)
-}
-
 /// Least-squares ARX of every output; `reg_factor` M gives the penalty `lam |M theta|^2` of
 /// each output's equation.
 #[pyfunction]
@@ -179,10 +160,13 @@ pub fn arx_struc<'py>(
         .max()
         .unwrap_or(1)
         .max(1);
-    let c = compress(&experiments, max_lag)?;
-    let rows = py
-        .detach(|| c.arxstruc(&na_range, &nb_range, &nk_range))
-        .py()?;
+    let views: Vec<_> = experiments
+        .iter()
+        .map(|(u, y)| (view_nd(u.as_array()), view_nd(y.as_array())))
+        .collect();
+    let rows = crate::search::detach(py, || {
+        compress_core(&views, max_lag)?.arxstruc(&na_range, &nb_range, &nk_range)
+    })?;
     let m = faer::Mat::from_fn(rows.len(), 5, |i, j| rows[i][j]);
     Ok(mat_to_numpy(py, &m))
 }

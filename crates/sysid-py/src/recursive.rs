@@ -39,8 +39,12 @@ impl PyRecursiveFactor {
         y: PyReadonlyArray2<'_, f64>,
     ) -> PyResult<()> {
         let (uv, yv) = (view(&u), view(&y));
-        let inner = &mut self.inner;
-        py.detach(|| inner.update(uv, yv)).py()
+        // into a copy (a k x k triangle and the tail), kept only when complete: an interrupted
+        // update leaves the factor as it was
+        let mut next = self.inner.clone();
+        crate::search::detach(py, || next.update(uv, yv))?;
+        self.inner = next;
+        Ok(())
     }
 
     /// The current factor.

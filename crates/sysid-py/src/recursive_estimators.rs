@@ -89,25 +89,16 @@ impl PyRecursiveEstimator {
         } else {
             Vec::new()
         };
-        let mut slot: Option<PyErr> = None;
-        let inner = &mut self.inner;
-        let done = py
-            .detach(|| {
-                let th = store_parameters.then_some(thetas.as_mut_slice());
-                inner.run(us, ys, &mut yhat, th, 1 << 16, &mut || {
-                    Python::attach(|py| match py.check_signals() {
-                        Ok(()) => false,
-                        Err(e) => {
-                            slot = Some(e);
-                            true
-                        }
-                    })
-                })
+        // run on a copy, kept only when complete: Ctrl-C (asked every 4096 samples, see
+        // crate::search) leaves the estimator as it was
+        let mut next = self.inner.clone();
+        let done = crate::search::detach(py, || {
+            let th = store_parameters.then_some(thetas.as_mut_slice());
+            next.run(us, ys, &mut yhat, th, 1 << 12, &mut || {
+                sysid_core::interrupt::requested()
             })
-            .py()?;
-        if let Some(e) = slot {
-            return Err(e);
-        }
+        })?;
+        self.inner = next;
         debug_assert!(done == n);
         let yh = PyArray1::from_vec(py, yhat);
         let th = if store_parameters {

@@ -1,22 +1,123 @@
-//! What every binding of the shared optimiser (`sysid_core::optim`) needs: the progress
-//! callback as an observer, and the search's solution and covariance as dict items.
+//! What every long computation of the bindings needs: the GIL released while it runs, Ctrl-C
+//! seen within a few milliseconds ([`watch`], [`detach`]), the progress callback of the shared
+//! optimiser (`sysid_core::optim`) as an observer ([`run`]), and the search's solution and
+//! covariance as dict items.
+//!
+//! Interruption: the computation runs on a helper thread under a [`Flag`] of
+//! `sysid_core::interrupt` while the calling (main) thread, with the GIL released, asks the
+//! interpreter for pending signals every 10 ms (`PyErr_CheckSignals`, which runs the Python
+//! handler: by default it raises `KeyboardInterrupt`). The first exception a handler raises
+//! sets the flag; the core's loops call `interrupt::check()` every few milliseconds of work,
+//! in every thread of their parallel sections, and return; the exception is re-raised here
+//! unchanged. The helper is joined before returning: no thread keeps running.
 
 use crate::convert::{mat_to_numpy, slice_to_numpy};
 use crate::errors::IntoPy;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use std::cell::RefCell;
+use std::sync::Mutex;
+use sysid_core::interrupt::{self, Flag};
 use sysid_core::optim::{self, Flow, Iteration};
+
+thread_local! {
+    /// The exception raised by a signal handler during the current computation (for
+    /// `errors::to_py` of `SysidError::Interrupted`).
+    static PENDING: RefCell<Option<PyErr>> = const { RefCell::new(None) };
+}
+
+/// Runs pending signal handlers (on the main thread; elsewhere Python reports none) and
+/// keeps the first exception they raise.
+fn poll_signals() -> bool {
+    Python::attach(|py| match py.check_signals() {
+        Ok(()) => false,
+        Err(e) => {
+            PENDING.with(|p| {
+                p.borrow_mut().get_or_insert(e);
+            });
+            true
+        }
+    })
+}
+
+/// The exception that interrupted the computation, if any (taken: asked once).
+pub fn take_pending() -> Option<PyErr> {
+    PENDING.with(|p| p.borrow_mut().take())
+}
+
+/// Stack of the helper thread (the size of a main thread's).
+const STACK: usize = 8 << 20;
+
+/// Runs `work` on a helper thread under a fresh flag while this thread polls for signals
+/// every [`interrupt::POLL_INTERVAL`] (a panic of `work` is resumed here). Should no thread
+/// be had, `work` runs here and polls from inside (its own `interrupt::check` calls).
+fn run_watched<T: Send>(work: impl FnOnce() -> T + Send) -> T {
+    let flag = Flag::new();
+    let owner = std::thread::current();
+    let job = Mutex::new(Some(work));
+    let take = || job.lock().ok().and_then(|mut j| j.take());
+    let spawned = std::thread::scope(|s| {
+        let handle = std::thread::Builder::new()
+            .name("sysid-compute".into())
+            .stack_size(STACK)
+            .spawn_scoped(s, || {
+                let out = take().map(|w| flag.enter(w));
+                owner.unpark();
+                out
+            })
+            .ok()?;
+        while !handle.is_finished() {
+            std::thread::park_timeout(interrupt::POLL_INTERVAL);
+            if !flag.is_set() && !handle.is_finished() && poll_signals() {
+                flag.set();
+            }
+        }
+        match handle.join() {
+            Ok(out) => out,
+            Err(panic) => std::panic::resume_unwind(panic),
+        }
+    });
+    match spawned {
+        Some(out) => out,
+        None => {
+            let work = take().expect("the job runs once");
+            interrupt::scope(poll_signals, work)
+        }
+    }
+}
+
+/// Runs `work` with the GIL released, interruptible: a signal handler's exception (Ctrl-C's
+/// `KeyboardInterrupt`) raised meanwhile is returned instead of `work`'s value.
+pub fn watch<T: Send>(py: Python<'_>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
+    let out = py.detach(|| run_watched(work));
+    match take_pending() {
+        Some(e) => Err(e),
+        None => Ok(out),
+    }
+}
+
+/// [`watch`] for a core computation: its error becomes the matching `sysid.errors` exception.
+pub fn detach<T: Send>(
+    py: Python<'_>,
+    work: impl FnOnce() -> sysid_core::Result<T> + Send,
+) -> PyResult<T> {
+    watch(py, work)?.py()
+}
 
 /// The first Python error raised inside a callback (re-raised after the search).
 pub type Slot = Option<PyErr>;
 
 /// Calls `progress(iteration, cost, step_norm, gradient_norm, damping)` after every
-/// iteration; `False` returned stops the search, an exception stops it and lands in `slot`.
+/// iteration; `False` returned stops the search, an exception stops it (and the rest of the
+/// computation, through the interrupt flag) and lands in `slot`. An interrupt stops it too.
 pub fn observer<'a>(
     progress: &'a Option<Py<PyAny>>,
     slot: &'a mut Slot,
 ) -> impl FnMut(&Iteration) -> Flow + 'a {
     move |it: &Iteration| -> Flow {
+        if interrupt::requested() {
+            return Flow::Stop;
+        }
         let Some(cb) = progress else {
             return Flow::Continue;
         };
@@ -42,6 +143,8 @@ pub fn observer<'a>(
                     if slot.is_none() {
                         *slot = Some(e);
                     }
+                    // whatever the core runs after this search (refits, candidates) stops too
+                    Flag::current().set();
                     Flow::Stop
                 }
             }
@@ -49,16 +152,23 @@ pub fn observer<'a>(
     }
 }
 
-/// Runs `search` (a core estimator taking the observer) with the GIL released, `progress`
-/// as its observer; the first exception raised by the callback is re-raised, a core error
-/// becomes the matching `sysid.errors` exception.
+/// Runs `search` (a core estimator taking the observer) as [`watch`] does, `progress` as its
+/// observer; a signal's exception or else the first exception raised by the callback is
+/// re-raised, a core error becomes the matching `sysid.errors` exception.
 pub fn run<T: Send>(
     py: Python<'_>,
     progress: &Option<Py<PyAny>>,
     search: impl FnOnce(&mut dyn FnMut(&Iteration) -> Flow) -> sysid_core::Result<T> + Send,
 ) -> PyResult<T> {
     let mut slot: Slot = None;
-    let result = py.detach(|| search(&mut observer(progress, &mut slot)));
+    let result = watch(py, || search(&mut observer(progress, &mut slot)));
+    finish(result, slot)
+}
+
+/// The outcome of a watched search whose observer filled `slot`: the signal's exception,
+/// else the callback's, else the core's result.
+pub fn finish<T>(result: PyResult<sysid_core::Result<T>>, slot: Slot) -> PyResult<T> {
+    let result = result?;
     if let Some(e) = slot {
         return Err(e);
     }

@@ -60,8 +60,11 @@ impl PyStreamingCompressor {
     ) -> PyResult<()> {
         let (uv, yv) = (view(&u), view(&y));
         let n = yv.nrows();
-        let inner = self.inner.as_mut().ok_or_else(finished)?;
-        py.detach(|| inner.push(uv, yv)).py()?;
+        // pushed into a copy (a k x k triangle and the tail), kept only when complete: an
+        // interrupted push leaves the compressor as it was
+        let mut next = self.inner.clone().ok_or_else(finished)?;
+        crate::search::detach(py, || next.push(uv, yv))?;
+        self.inner = Some(next);
         self.samples += n;
         Ok(())
     }
@@ -78,7 +81,7 @@ impl PyStreamingCompressor {
     /// Closes the last experiment and returns the `HankelFactor`.
     fn finish(&mut self, py: Python<'_>) -> PyResult<PyHankelFactor> {
         let inner = self.inner.take().ok_or_else(finished)?;
-        let f = py.detach(|| inner.finish()).py()?;
+        let f = crate::search::detach(py, || inner.finish())?;
         Ok(PyHankelFactor { inner: f })
     }
 
@@ -149,8 +152,11 @@ impl PyCorrelationSums {
         y: PyReadonlyArray2<'_, f64>,
     ) -> PyResult<()> {
         let (uv, yv) = (view(&u), view(&y));
-        let inner = &mut self.inner;
-        py.detach(|| inner.push(uv, yv)).py()
+        // into a copy, kept only when complete (see StreamingCompressor.push)
+        let mut next = self.inner.clone();
+        crate::search::detach(py, || next.push(uv, yv))?;
+        self.inner = next;
+        Ok(())
     }
 
     /// Closes the open experiment.
@@ -169,7 +175,7 @@ impl PyCorrelationSums {
     #[pyo3(signature = (min_relative_pivot=1e-10))]
     fn to_factor(&self, py: Python<'_>, min_relative_pivot: f64) -> PyResult<PyHankelFactor> {
         let s = self.inner.clone();
-        let f = py.detach(|| s.into_factor(min_relative_pivot)).py()?;
+        let f = crate::search::detach(py, || s.into_factor(min_relative_pivot))?;
         Ok(PyHankelFactor { inner: f })
     }
 

@@ -1,7 +1,6 @@
 //! Bindings of `sysid_core::tf`: the SRIVC Gram matrix and the frequency-domain fit.
 
 use crate::convert::{mat_to_numpy, slice_to_numpy, view};
-use crate::errors::IntoPy;
 use crate::search::{run, solution_items};
 use faer::c64;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
@@ -24,9 +23,7 @@ pub fn tf_filtered_gram<'py>(
     skip: usize,
 ) -> PyResult<Bound<'py, numpy::PyArray2<f64>>> {
     let (ad, bd, cw, dw, v) = (view(&ad), view(&bd), view(&cw), view(&dw), view(&v));
-    let g = py
-        .detach(|| tf::filtered_gram(ad, bd, cw, dw, v, skip))
-        .py()?;
+    let g = crate::search::detach(py, || tf::filtered_gram(ad, bd, cw, dw, v, skip))?;
     Ok(mat_to_numpy(py, &g))
 }
 

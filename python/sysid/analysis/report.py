@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from .._atomic import atomic_path, write_text
 from ..data.iodata import IOData
 from ..errors import DataError, SysidError
 from ..models.checks import check_model
@@ -94,7 +95,7 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
     own = [_as_pair(w) for w in relevant(caught)]
     page.parts.insert(1, _summary(model, page.facts, selection, found + own))
     files["html"] = root / "index.html"
-    files["html"].write_text(page.html(), encoding="utf-8")
+    write_text(files["html"], page.html())
     reissue(caught)  # the caller still sees them
     return files
 
@@ -169,7 +170,8 @@ def _build(model: Any, data: IOData, root: Path, sel: Any, which: str,
         page.section("Parameters", params, sid="parameters")
     if sel is not None:
         files["orders"] = root / "orders.csv"
-        sel.to_pandas().to_csv(files["orders"], index=False)
+        with atomic_path(files["orders"]) as tmp:
+            sel.to_pandas().to_csv(tmp, index=False)
         page.section("Order choice", _order_body(page, sel, frd), sid="orders")
     links = ", ".join(f'<a href="{esc(p.name)}">{esc(p.name)}</a>' for p in files.values())
     page.section("Files and notes", f"<p>Files: {links}</p>" + "".join(
@@ -179,7 +181,7 @@ def _build(model: Any, data: IOData, root: Path, sel: Any, which: str,
 
 def _write_fit(root: Path, model: Any, sim: Any, pred: Any, res: Any) -> Path:
     path = root / "fit.csv"
-    with open(path, "w", newline="") as f:
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["output", "simulation fit %", "1-step fit %", "simulation VAF %",
                     "simulation RMSE", "whiteness p", "independence p"])

@@ -15,6 +15,7 @@ from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
+from .._atomic import atomic_path
 from .._progress import Bar
 from ..errors import DataError
 from .records import Columns
@@ -115,9 +116,8 @@ class RowWriter:
         if self._rows:
             cols = {k: [r[k] for r in self._rows] for k in SCHEMA_FIELDS}
             name = self.path / f"part-{self.parts:05d}.parquet"
-            tmp = self.path / f".{name.name}.tmp"
-            pq.write_table(self._pa.table(cols, schema=self.schema), str(tmp))
-            tmp.replace(name)
+            with atomic_path(name) as tmp:  # a reader never sees half a part
+                pq.write_table(self._pa.table(cols, schema=self.schema), str(tmp))
             self.parts += 1
             self._rows = []
         self._last = time.monotonic()
@@ -128,7 +128,8 @@ class RowWriter:
             self._rows = []
             import pyarrow.parquet as pq
 
-            pq.write_table(self.schema.empty_table(), str(self.path / "part-00000.parquet"))
+            with atomic_path(self.path / "part-00000.parquet") as tmp:
+                pq.write_table(self.schema.empty_table(), str(tmp))
 
 
 def run_batch(work: Iterable[tuple[str, Any]], fit: Callable[[Any], Any], cols: Columns,

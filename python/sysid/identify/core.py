@@ -260,20 +260,15 @@ def identify(
             f"the record is too short to hold out a part for the choice (a held-out block has "
             f"{shortest} samples, 20 needed); pass a longer record or fit one model directly")
     methods = SUBSPACE + (CLOSED_LOOP if feedback else ())
+    # Ctrl-C stops identify (KeyboardInterrupt), as it stops every other computation: a
+    # batch (identify_many) or a script must not carry on with a half-chosen model
     interrupted = False
     deadline = None if time_budget is None else time.process_time() + float(time_budget)
     with Bar(None, "identify", unit="candidates", enabled=show(progress)) as bar:
         board = Board(parts, bar, deadline)
-        try:
-            _subspace_candidates(board, centred, methods, max_order)
-            if refine:
-                _refined_candidates(board)
-        except KeyboardInterrupt:
-            if not board.rows:
-                raise
-            interrupted = True
-            warnings.warn("identify interrupted: the best candidate found so far is returned",
-                          UserWarning, stacklevel=2)
+        _subspace_candidates(board, centred, methods, max_order)
+        if refine:
+            _refined_candidates(board)
     if board.out_of_time:
         warnings.warn(f"identify stopped scoring candidates after time_budget={time_budget} s "
                       f"({len(board.rows)} scored): the best so far is returned; raise "

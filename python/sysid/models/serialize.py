@@ -37,6 +37,7 @@ from typing import Any, TypeVar, Union
 
 import numpy as np
 
+from .._atomic import atomic_path
 from .._sysid import __version__
 from ..errors import DataError
 
@@ -197,22 +198,16 @@ def save_model(model: Any, path: PathLike, *, format: str | None = None) -> None
     path = Path(path)
     fmt = file_format(path, format)
     d = model_to_dict(model)
-    # written whole to a temporary file beside the target, then renamed over it: a failure
-    # (or Ctrl-C) midway leaves the previous file as it was
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "wb") as f:
-            if fmt == "json":
-                f.write((json.dumps(d, indent=1) + "\n").encode("utf-8"))
-            else:
-                arrays = {k: _decode(v) for k, v in d.items()
-                          if isinstance(v, dict) and "__ndarray__" in v}
-                meta = {k: v for k, v in d.items() if k not in arrays}
-                np.savez(f, __meta__=np.array(json.dumps(meta)), **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
+    # written whole or not at all: a failure (or Ctrl-C) midway leaves the previous file as it
+    # was (see sysid._atomic)
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        if fmt == "json":
+            f.write((json.dumps(d, indent=1) + "\n").encode("utf-8"))
+        else:
+            arrays = {k: _decode(v) for k, v in d.items()
+                      if isinstance(v, dict) and "__ndarray__" in v}
+            meta = {k: v for k, v in d.items() if k not in arrays}
+            np.savez(f, __meta__=np.array(json.dumps(meta)), **arrays)
 
 
 def read_model_file(path: PathLike, fmt: str | None) -> dict[str, Any]:

@@ -426,12 +426,15 @@ impl CorrelationSums {
         // batches bound the memory of pending segments; the sequence of segments pushed,
         // hence the result, does not depend on the batch size or the thread count
         const BATCH: usize = 32;
+        // Ctrl-C: asked before every block, in every task
+        let flag = crate::interrupt::Flag::current();
+        let block = |b: usize| flag.check().map(|()| block(b));
         for b0 in (0..n_blocks).step_by(BATCH) {
             let b1 = (b0 + BATCH).min(n_blocks);
             let segs: Vec<Segment> = if self.parallel && b1 - b0 > 1 {
-                (b0..b1).into_par_iter().map(block).collect()
+                (b0..b1).into_par_iter().map(block).collect::<Result<_>>()?
             } else {
-                (b0..b1).map(block).collect()
+                (b0..b1).map(block).collect::<Result<_>>()?
             };
             for s in segs {
                 self.push_segment(s);

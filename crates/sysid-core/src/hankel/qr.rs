@@ -216,23 +216,28 @@ impl Compressor for QrCompressor {
             // 2. whole blocks, each from scratch (in parallel), merged in block order
             let n_full = (n_win - next) / bw;
             let (k, cr) = (layout.k(), self.chunk_rows);
+            // Ctrl-C: asked every `chunk_rows` windows, in every task
+            let flag = crate::interrupt::Flag::current();
             for b0 in (0..n_full).step_by(BATCH_BLOCKS) {
                 let b1 = (b0 + BATCH_BLOCKS).min(n_full);
                 let (tu, ty) = (self.tail_u.as_ref(), self.tail_y.as_ref());
-                let block = |b: usize| {
+                let block = |b: usize| -> Result<Mat<f64>> {
                     let mut acc = QrAccumulator::new(k, cr);
                     let mut col = vec![0.0; k];
                     let first = next + b * bw;
                     for s in first..first + bw {
+                        if (s - first) % cr == 0 {
+                            flag.check()?;
+                        }
                         fill_window(&layout, tu, ty, tl, u, y, s, &mut col);
                         acc.push_row(&col);
                     }
-                    acc.finish()
+                    Ok(acc.finish())
                 };
                 let rs: Vec<Mat<f64>> = if self.parallel && b1 - b0 > 1 {
-                    (b0..b1).into_par_iter().map(block).collect()
+                    (b0..b1).into_par_iter().map(block).collect::<Result<_>>()?
                 } else {
-                    (b0..b1).map(block).collect()
+                    (b0..b1).map(block).collect::<Result<_>>()?
                 };
                 for rb in rs {
                     self.merge_block(rb);

@@ -132,18 +132,21 @@ fn pass<F>(
     q: usize,
     want_sq: bool,
     probes: &F,
-) -> Sums
+) -> Result<Sums>
 where
     F: Fn(&Record<'_>, usize, usize, &[f64]) -> Vec<f64> + Sync,
 {
     let m = cands.len();
     let nv = spec.n_vars();
-    let group = |bs: &[(usize, usize, usize)]| {
+    // Ctrl-C: asked before every block, in every task
+    let flag = crate::interrupt::Flag::current();
+    let group = |bs: &[(usize, usize, usize)]| -> Result<Sums> {
         let mut s = Sums::zeros(m, np, q, want_sq);
         let maxlen = bs.iter().map(|b| b.2).max().unwrap_or(0);
         let mut x = vec![0.0; maxlen * nv];
         let mut scratch = vec![0.0; cands.accumulate_scratch_len(maxlen, np)];
         for &(r, t0, len) in bs {
+            flag.check()?;
             let rec = &records[r];
             let x = &mut x[..len * nv];
             spec.fill_block(rec, t0, len, x);
@@ -158,20 +161,20 @@ where
             let sq = if want_sq { Some(&mut s.sq[..]) } else { None };
             cands.accumulate(x, len, &p, np, &mut s.cross, sq, sc);
         }
-        s
+        Ok(s)
     };
     // fixed groups of blocks summed in order: the result does not depend on the threads
     const GROUP: usize = 16;
     let parts: Vec<Sums> = if parallel && blocks.len() > GROUP {
-        blocks.par_chunks(GROUP).map(group).collect()
+        blocks.par_chunks(GROUP).map(group).collect::<Result<_>>()?
     } else {
-        blocks.chunks(GROUP).map(group).collect()
+        blocks.chunks(GROUP).map(group).collect::<Result<_>>()?
     };
     let mut total = Sums::zeros(m, np, q, want_sq);
     for p in &parts {
         total.add(p);
     }
-    total
+    Ok(total)
 }
 
 fn block_len(cands: &Candidates, opts: &FrolsOptions) -> usize {
@@ -262,7 +265,7 @@ pub fn frols(
         ny,
         true,
         &targets,
-    );
+    )?;
     let mut states: Vec<State> = (0..ny)
         .map(|i| {
             let yy = s0.gram[i * ny + i];
@@ -382,7 +385,7 @@ pub fn frols(
             q,
             false,
             &probes,
-        );
+        )?;
         for (a, &i) in active.iter().enumerate() {
             let st = &mut states[i];
             let (s, c) = st.pending.take().expect("set above");
@@ -463,6 +466,9 @@ pub fn fit_terms(
     let mut row = Vec::new();
     for rec in records {
         for t in spec.max_lag..rec.y.nrows() {
+            if t % 4096 == 0 {
+                crate::interrupt::check()?;
+            }
             spec.fill_with(t, &mut x, |s, ch, tt| match s {
                 Signal::Output => rec.y[(tt, ch)],
                 Signal::Input => rec.u[(tt, ch)],

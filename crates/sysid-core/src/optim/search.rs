@@ -142,6 +142,7 @@ fn evaluate_point(
 ) -> Result<Point> {
     *evals += 1;
     let t0 = std::time::Instant::now();
+    crate::interrupt::check()?;
     let raw = problem.evaluate(&theta, true)?;
     prof("full", t0);
     let p = theta.len();
@@ -639,6 +640,7 @@ pub fn minimize(
             // the trial is judged on its cost alone; the Jacobian is formed once accepted
             evals += 1;
             let t0 = std::time::Instant::now();
+            crate::interrupt::check()?;
             let raw = problem.evaluate(&trial, false)?;
             prof("cost", t0);
             let cand_cost = regularise(options, &trial, &raw).0;
@@ -692,6 +694,7 @@ pub fn minimize(
         let mut chord = None;
         if frozen < options.reuse_gauss_newton && rho > 0.75 {
             let t0 = std::time::Instant::now();
+            crate::interrupt::check()?;
             let go = problem.gradient_only(&trial)?;
             prof("gradient", t0);
             if let Some(mut raw) = go {

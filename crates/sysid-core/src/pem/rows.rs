@@ -99,6 +99,9 @@ impl Predictor<'_> {
             let len = y.nrows();
             let mut row = 0usize;
             for t in 0..len {
+                if t % 4096 == 4095 {
+                    crate::interrupt::check()?; // Ctrl-C
+                }
                 f.errors(*u, *y, t);
                 f.weigh();
                 for (j, v) in ut.iter_mut().enumerate() {

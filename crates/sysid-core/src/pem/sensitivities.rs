@@ -181,6 +181,9 @@ impl Predictor<'_> {
             let len = y.nrows();
             let mut row = 0usize;
             for t in 0..len {
+                if t % 4096 == 4095 {
+                    crate::interrupt::check()?; // Ctrl-C
+                }
                 f.errors(*u, *y, t);
                 f.weigh();
                 z[..n].copy_from_slice(&f.x);
@@ -336,6 +339,9 @@ impl Predictor<'_> {
             let len = y.nrows();
             let mut row = 0usize;
             for t in 0..len {
+                if t % 4096 == 4095 {
+                    crate::interrupt::check()?; // Ctrl-C
+                }
                 f.errors(*u, *y, t);
                 f.weigh();
                 // modal state x' = T^-1 x, regressor z = (x', u)

@@ -110,6 +110,9 @@ impl ArxCompressor {
         let k = self.acc.k();
         let mut row = vec![0.0; k];
         for t in self.max_lag..n {
+            if t % 4096 == 0 {
+                crate::interrupt::check()?; // Ctrl-C
+            }
             for j in 0..self.n_inputs {
                 for lag in 0..=self.max_lag {
                     row[self.col(j, lag)] = u[(t - lag, j)];
@@ -410,6 +413,7 @@ impl ArxCompressor {
         for &na in na_range {
             for &nb in nb_range {
                 for &nk in nk_range {
+                    crate::interrupt::check()?;
                     if na + nb == 0 || (nb > 0 && nk + nb - 1 > self.max_lag) || na > self.max_lag {
                         continue;
                     }

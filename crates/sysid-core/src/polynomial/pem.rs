@@ -340,6 +340,9 @@ fn lagged_ls(target: &Sig, regs: &[(&Sig, usize, usize)]) -> Result<Vec<f64>> {
     let mut row = vec![0.0; p + 1];
     for (ex, tgt) in target.iter().enumerate() {
         for t in start..tgt.len() {
+            if t % 4096 == 0 {
+                crate::interrupt::check()?; // Ctrl-C
+            }
             let mut c = 0;
             for (s, first, nl) in regs {
                 for k in *first..*first + *nl {

@@ -102,6 +102,7 @@ impl RecursiveFactor {
             .collect();
         let mut start = 0;
         while start < n_new {
+            crate::interrupt::check()?;
             let b = (n_new - start).min(self.block_rows);
             let mut stack = Mat::<f64>::zeros(k + b, k);
             let sr = half[b];

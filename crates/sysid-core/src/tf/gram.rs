@@ -65,6 +65,9 @@ pub fn filtered_gram(
     let mut w = vec![0.0; r];
     let mut vt = vec![0.0; q];
     for t in 0..n {
+        if t % 4096 == 0 {
+            crate::interrupt::check()?; // Ctrl-C
+        }
         for (k, e) in vt.iter_mut().enumerate() {
             *e = v[(t, k)];
         }

@@ -317,6 +317,7 @@ pub fn train(
         let (mut tl, mut tn) = (0.0, 0usize);
         let mut done = 0;
         while done < per_epoch {
+            crate::interrupt::check()?;
             grad.iter_mut().for_each(|g| *g = 0.0);
             let mut used = 0;
             for _ in 0..opts.batch {
