@@ -1,5 +1,5 @@
-"""Order and feedthrough of a refined state-space model chosen from the data (``ssest`` with
-``order="auto"``, a range of orders, or ``feedthrough="auto"``)."""
+"""The order of a refined state-space model chosen from the data (``ssest`` with
+``order="auto"`` or a range of orders)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from ..data.iodata import IOData
 from ..errors import DataError
 from ..validation.crossval import TOL, choose, simulation_fit
 
-__all__ = ["ssest_select", "split", "significant_feedthrough"]
+__all__ = ["ssest_select", "split"]
 
 
 def split(data: IOData, fraction: float = 2 / 3) -> tuple[IOData, IOData]:
@@ -30,43 +30,13 @@ def split(data: IOData, fraction: float = 2 / 3) -> tuple[IOData, IOData]:
     return io(a), io(b)
 
 
-def significant_feedthrough(model: Any, level: float = 2.0) -> tuple[bool, str]:
-    """Whether some entry of ``D`` exceeds ``level`` times its standard deviation."""
-    unc = getattr(model, "uncertainty", None)
-    D = np.asarray(model.D)
-    if unc is None or not D.size:
-        return bool(np.any(D != 0)), "no uncertainty: kept as estimated"
-    idx = [i for i, nm in enumerate(unc.names) if nm.startswith("D[")]
-    if not idx:
-        return False, "D not estimated"
-    std = np.asarray(unc.std)[idx]
-    val = np.asarray(unc.theta)[idx]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        z = np.abs(val) / std
-    z = np.where(np.isfinite(z), z, 0.0)
-    k = int(np.argmax(z))
-    keep = bool(z[k] > level)
-    why = (f"largest |D| / std = {z[k]:.1f} ({unc.names[idx[k]]}): "
-           + ("significant, D kept" if keep else f"below {level:g}, D = 0"))
-    return keep, why
-
-
 def ssest_select(data: IOData, order: Any, *, feedthrough: Any, **kw: Any) -> Any:
-    """:func:`sysid.ssest` with the order and/or the feedthrough chosen from the data."""
+    """:func:`sysid.ssest` with the order chosen from the data (``feedthrough="auto"`` is
+    decided before, by :func:`sysid.subspace.feedthrough.choose_feedthrough`)."""
     import sysid
 
     from ..subspace.estimator import SubspaceEstimator
 
-    if isinstance(feedthrough, str):
-        if feedthrough != "auto":
-            raise DataError(f"feedthrough must be True, False or 'auto', got {feedthrough!r}")
-        n = _order(data, order, True, kw)
-        with_d = sysid.ssest(data, n["order"], feedthrough=True, **kw)
-        keep, why = significant_feedthrough(with_d)
-        model = with_d if keep else sysid.ssest(data, n["order"], feedthrough=False, **kw)
-        model.info["feedthrough_selection"] = {"feedthrough": keep, "reason": why}
-        model.info["order_selection"] = n
-        return model
     if isinstance(order, str):
         if order != "auto":
             raise DataError(f"order must be an integer, a sequence of integers or 'auto', "
