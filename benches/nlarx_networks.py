@@ -9,13 +9,15 @@ Data: a Wiener system (second-order linear block x(t) = 1.3 x(t-1) - 0.5 x(t-2) 
 + 0.2 u(t-2), then y = tanh(x) + e, u uniform on [-0.6, 0.6], e ~ N(0, 0.01^2)); estimation
 and validation records from different seeds. Every tool gets lags na = nb = 2, nk = 1 and 10
 hidden units (sysidentpy: ylag = xlag = 2, Polynomial(degree=1) regressors, one hidden layer
-of 10 sigmoid units, Adam, 200 epochs, one-step-ahead training as its default; sysid:
+of 10 sigmoid units, its defaults otherwise (Adam, learning rate 0.01, batches of 100,
+200 epochs, one-step-ahead training), random_state=0; sysid:
 ``nlarx(..., basis=SigmoidNetwork(10))`` etc., prediction focus, separable least squares on
 the shared Gauss-Newton optimiser). Fit: 100 (1 - |y - ysim| / |y - mean y|) of the free-run
-simulation from the measured first two outputs. Every (case, tool) runs in its own subprocess
-with a timeout. sysidentpy and CPU-only torch live in benches/.venv-peers
-(``pip install sysidentpy torch --index-url https://download.pytorch.org/whl/cpu``), never in
-sysid's environment. Results: benches/results/nlarx_networks.md.
+simulation from the measured first two outputs (sysidentpy: ``predict`` with
+``steps_ahead=None``, its free run). Every (case, tool) runs in its own subprocess with a
+timeout. sysidentpy and torch live in benches/.venv-peers only (``benches/.venv-peers/bin/python
+-m pip install sysidentpy torch``: PyPI's torch with its nvidia-* dependency wheels, run on the
+CPU), never in sysid's environment. Results: benches/results/nlarx_networks.md.
 """
 
 from __future__ import annotations
@@ -101,7 +103,8 @@ def peer_worker(u, y, uv, yv) -> tuple[float, float]:
 
     model = NARXNN(net=Net(), ylag=2, xlag=2, basis_function=Polynomial(degree=1),
                    model_type="NARMAX", loss_func="mse_loss", optimizer="Adam", epochs=200,
-                   verbose=False, optim_params={"betas": (0.9, 0.999), "eps": 1e-05})
+                   verbose=False, optim_params={"betas": (0.9, 0.999), "eps": 1e-05},
+                   random_state=0)
     t = time.perf_counter()
     model.fit(X=u[:, None], y=y[:, None])
     elapsed = time.perf_counter() - t
