@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 
 import numpy as np
 from hypothesis import settings
@@ -11,6 +12,13 @@ from hypothesis import settings
 settings.register_profile("ci", derandomize=True, print_blob=True)
 if os.environ.get("CI"):
     settings.load_profile("ci")
+
+# A test run started in the background by a non-interactive shell inherits SIGINT ignored,
+# and so would every process the Ctrl-C tests start (an ignored signal stays ignored across
+# exec, and Python then installs no KeyboardInterrupt handler): catch it here, so that the
+# children start with the default and the tests send a signal that is heard.
+if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
 def random_system(n, m, l, rng, rmin=0.3, rmax=0.9, feedthrough=True):
     """A random stable (A, B, C, D) with well-separated pole moduli in [rmin, rmax]."""

@@ -154,7 +154,7 @@ CASES = [
     ("recursive forgetting", lambda: sysid.RecursiveARX(1, 1, forgetting=1.5),
      errors.DataError, "forgetting factor", r"in \(0, 1\]"),
     ("recursive method", lambda: sysid.RecursiveARX(1, 1, method="rls"), errors.DataError,
-     "method must be", "'forgetting'"),
+     "method must be", "\"forgetting\""),
     ("recursive orders", lambda: sysid.RecursiveARX(1, [1, 1], [1, 1, 1]), errors.DataError,
      "nk has 3 entries", "one per input"),
     ("recursive empty", lambda: sysid.RecursiveARX(0, 0), errors.DataError,

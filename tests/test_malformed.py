@@ -658,8 +658,13 @@ def test_cli_detrend_linear(capsys, tmp_path):
     np.savetxt(p, np.c_[U + 0.01 * t[:, None], Y + 100 + 0.05 * t[:, None]], delimiter=",",
                header="u,y", comments="")
     rep = tmp_path / "rep"
-    assert main(["identify", str(p), "--inputs", "u", "--outputs", "y", "--report",
-                 str(rep), "--quiet", "--detrend", "linear"]) == 0
+    # after the lines are removed a slow residue remains, which order-2 models with a pole at
+    # 1.016 follow on every held-out block: identify may return one, with a StabilityWarning
+    # (said on the terminal and in the report); this test is about the recorded detrend
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.StabilityWarning)
+        assert main(["identify", str(p), "--inputs", "u", "--outputs", "y", "--report",
+                     str(rep), "--quiet", "--detrend", "linear"]) == 0
     m = sysid.load_model(rep / "model.json")
     assert "removed_lines" in m.info["preprocessing"]
 

@@ -26,11 +26,12 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     Examples
     --------
     >>> import os, tempfile
+    >>> from pathlib import Path
     >>> from sysid._atomic import atomic_path
     >>> target = os.path.join(tempfile.mkdtemp(), "out.txt")
     >>> with atomic_path(target) as tmp:
     ...     _ = tmp.write_text("complete")
-    >>> open(target).read()
+    >>> Path(target).read_text()
     'complete'
     >>> try:
     ...     with atomic_path(target) as tmp:
@@ -38,7 +39,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     ...         raise KeyboardInterrupt
     ... except KeyboardInterrupt:
     ...     pass
-    >>> open(target).read(), sorted(os.listdir(os.path.dirname(target)))
+    >>> Path(target).read_text(), sorted(os.listdir(os.path.dirname(target)))
     ('complete', ['out.txt'])
     """
     path = Path(path)
