@@ -347,3 +347,34 @@ def test_callback_exception_stops_a_python_loop():
     with pytest.raises(Stop):
         sysid.tfest(sysid.IOData(u=u, y=y, dt=1.0), 2, 1, progress=cb)
     assert len(calls) == 1
+
+
+@pytest.mark.parametrize("name", ["rec.csv", "rec.csv.gz", "rec.npz", "rec.mat"])
+def test_interrupted_iodata_writes_leave_the_previous_file(tmp_path, monkeypatch, name):
+    """IOData.to_csv / to_npz / to_mat interrupted before the rename: the previous file is
+    untouched and no temporary file is left; a new name gets no file at all."""
+    _, data = _small_record()
+    write = {"csv": data.to_csv, "gz": data.to_csv, "npz": data.to_npz, "mat": data.to_mat}
+    save = write[name.rsplit(".", 1)[1]]
+    path = tmp_path / name
+    save(path)
+    before = path.read_bytes()
+    _interrupt_at_rename(monkeypatch)
+    with pytest.raises(KeyboardInterrupt):
+        save(path)
+    with pytest.raises(KeyboardInterrupt):
+        save(tmp_path / f"new-{name}")
+    assert path.read_bytes() == before
+    assert [p.name for p in tmp_path.iterdir()] == [name]
+
+
+def test_iodata_writers_round_trip(tmp_path):
+    """The atomic writers still write what the readers read (``.npz`` appended as numpy does)."""
+    _, data = _small_record()
+    data.to_csv(tmp_path / "r.csv.gz")
+    back = sysid.IOData.from_csv(tmp_path / "r.csv.gz", inputs=["u0"], outputs=["y0"])
+    assert np.allclose(back.y, data.y)
+    data.to_npz(tmp_path / "r")
+    assert sysid.IOData.from_npz(tmp_path / "r.npz") == data
+    data.to_mat(tmp_path / "r.mat")
+    assert np.allclose(sysid.IOData.from_mat(tmp_path / "r.mat").y, data.y)

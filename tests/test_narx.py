@@ -112,8 +112,8 @@ def test_one_experiment_equals_its_split_rows_are_not_mixed():
 
 def test_blocking_does_not_change_the_selection():
     u, y = cubic(700, 8, noise=0.05)
-    orders = ([2], [2], [1], [0])
-    runs = [_sysid.narx_frols([(u, y, None)], orders, 3, None, 8, [[]], 1e-10, b)
+    structure = {"orders": ([2], [2], [1], [0]), "degree": 3}
+    runs = [_sysid.narx_frols([(u, y, None)], structure, 8, [[]], 1e-10, b)
             for b in (0, 5, 64, 1000)]
     for sel, _ in runs[1:]:
         assert sel[0]["terms"] == runs[0][0][0]["terms"]

@@ -1,6 +1,6 @@
 """Type stubs of the compiled core (``sysid._sysid``); see the Python wrappers for docs."""
 
-from typing import Any, Callable, final
+from typing import Any, Callable, TypedDict, final
 
 import numpy as np
 import numpy.typing as npt
@@ -439,47 +439,44 @@ def iv4(
 # nonlinear models (issue 14)
 _Orders = tuple[list[int], list[int], list[int], list[int]]
 _Rbf = tuple[_Array, _Array, _Array, _Array]
+
+class _NarxStructure(TypedDict, total=False):
+    """The model structure the narx_* functions share (only ``orders`` is required)."""
+
+    orders: _Orders
+    degree: int | None
+    rbf: _Rbf | None
+    custom_args: list[list[tuple[int, int, int]]]
+
 _Equations = list[tuple[list[list[int]], list[float]]]
 def narx_frols(
     experiments: list[tuple[_Array, _Array, _Array | None]],
-    orders: _Orders,
-    degree: int | None,
-    rbf: _Rbf | None,
+    structure: _NarxStructure,
     max_terms: int,
     forced: list[list[list[int]]],
     err_tol: float = 1e-10,
     block_rows: int = 0,
-    custom_args: list[list[tuple[int, int, int]]] = ...,
     custom_values: list[_Array] = ...,
 ) -> tuple[list[dict[str, Any]], int]: ...
 def narx_fit(
     experiments: list[tuple[_Array, _Array, _Array | None]],
-    orders: _Orders,
-    degree: int | None,
-    rbf: _Rbf | None,
+    structure: _NarxStructure,
     terms: list[list[list[int]]],
-    custom_args: list[list[tuple[int, int, int]]] = ...,
     custom_values: list[_Array] = ...,
 ) -> list[_Array]: ...
 def narx_simulate(
-    orders: _Orders,
-    degree: int | None,
-    rbf: _Rbf | None,
+    structure: _NarxStructure,
     equations: _Equations,
     u: _Array,
     y0: _Array,
-    custom_args: list[list[tuple[int, int, int]]] = ...,
     custom_fns: list[Callable[..., float]] = ...,
 ) -> _Array: ...
 def narx_predict(
-    orders: _Orders,
-    degree: int | None,
-    rbf: _Rbf | None,
+    structure: _NarxStructure,
     equations: _Equations,
     u: _Array,
     y: _Array,
     horizon: int,
-    custom_args: list[list[tuple[int, int, int]]] = ...,
     custom_fns: list[Callable[..., float]] = ...,
 ) -> _Array: ...
 def hw_estimate(

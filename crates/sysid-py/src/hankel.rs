@@ -152,7 +152,12 @@ pub fn compress(
     }
     let m = experiments[0].0.as_array().ncols();
     let l = experiments[0].1.as_array().ncols();
-    let layout = HankelLayout::new(m, l, past, future).py()?;
+    let longest = experiments
+        .iter()
+        .map(|(_, y)| y.as_array().nrows())
+        .max()
+        .unwrap_or(0);
+    let layout = HankelLayout::for_record(m, l, past, future, longest).py()?;
     let views: Vec<(MatRef<'_, f64>, MatRef<'_, f64>)> = experiments
         .iter()
         .map(|(u, y)| (view_nd(u.as_array()), view_nd(y.as_array())))

@@ -114,31 +114,50 @@ fn records<'a>(views: &'a [Views<'a>], custom: &'a [MatRef<'a, f64>]) -> Vec<Rec
 
 type Orders = (Vec<usize>, Vec<usize>, Vec<usize>, Vec<usize>);
 
+/// The model structure every NARX call shares, from a dict with `orders` (na, nb, nk, ne),
+/// `degree` or `rbf` (the basis) and `custom_args` (missing keys take the defaults).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct Structure<'py> {
+    orders: Orders,
+    #[pyo3(default)]
+    degree: Option<usize>,
+    #[pyo3(default)]
+    rbf: Option<Rbf<'py>>,
+    #[pyo3(default)]
+    custom_args: CustomArgs,
+}
+
+impl Structure<'_> {
+    /// The basis and the regressor spec for `nu` inputs and `ny` outputs.
+    fn build(self, nu: usize, ny: usize) -> PyResult<(Basis, LagSpec)> {
+        let b = basis(self.degree, self.rbf)?;
+        let sp = spec(nu, ny, &self.orders, &self.custom_args)?;
+        Ok((b, sp))
+    }
+}
+
 /// FROLS selection for every output, then the streaming QR factor of `[chosen terms, y_i]`.
 /// Returns, per output, a dict with `terms` (encoded), `err`, `rss`, `r`, `n_rows`, and the
 /// number of candidates.
 #[pyfunction]
-#[pyo3(signature = (experiments, orders, degree, rbf, max_terms, forced, err_tol=1e-10, block_rows=0, custom_args=vec![], custom_values=vec![]))]
+#[pyo3(signature = (experiments, structure, max_terms, forced, err_tol=1e-10, block_rows=0, custom_values=vec![]))]
 #[allow(clippy::too_many_arguments)]
 pub fn narx_frols<'py>(
     py: Python<'py>,
     experiments: Experiments<'_>,
-    orders: Orders,
-    degree: Option<usize>,
-    rbf: Option<Rbf<'_>>,
+    structure: Structure<'_>,
     max_terms: usize,
     forced: Vec<Vec<Vec<i64>>>,
     err_tol: f64,
     block_rows: usize,
-    custom_args: CustomArgs,
     custom_values: Vec<PyReadonlyArray2<'_, f64>>,
 ) -> PyResult<(Vec<Bound<'py, PyDict>>, usize)> {
-    let b = basis(degree, rbf)?;
     let (nu, ny) = experiments
         .first()
         .map(|(u, y, _)| (u.as_array().ncols(), y.as_array().ncols()))
         .unwrap_or((0, 1));
-    let sp = spec(nu, ny, &orders, &custom_args)?;
+    let (b, sp) = structure.build(nu, ny)?;
     let cviews: Vec<MatRef<'_, f64>> = custom_values.iter().map(view).collect();
     let views: Vec<_> = experiments
         .iter()
@@ -202,24 +221,19 @@ pub fn narx_frols<'py>(
 
 /// Streaming QR factor of `[terms_i, y_i]` per output for given (encoded) terms.
 #[pyfunction]
-#[pyo3(signature = (experiments, orders, degree, rbf, terms, custom_args=vec![], custom_values=vec![]))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (experiments, structure, terms, custom_values=vec![]))]
 pub fn narx_fit<'py>(
     py: Python<'py>,
     experiments: Experiments<'_>,
-    orders: Orders,
-    degree: Option<usize>,
-    rbf: Option<Rbf<'_>>,
+    structure: Structure<'_>,
     terms: Vec<Vec<Vec<i64>>>,
-    custom_args: CustomArgs,
     custom_values: Vec<PyReadonlyArray2<'_, f64>>,
 ) -> PyResult<Vec<Bound<'py, PyArray2<f64>>>> {
-    let b = basis(degree, rbf)?;
     let (nu, ny) = experiments
         .first()
         .map(|(u, y, _)| (u.as_array().ncols(), y.as_array().ncols()))
         .unwrap_or((0, 1));
-    let sp = spec(nu, ny, &orders, &custom_args)?;
+    let (b, sp) = structure.build(nu, ny)?;
     let cviews: Vec<MatRef<'_, f64>> = custom_values.iter().map(view).collect();
     let views: Vec<_> = experiments
         .iter()
@@ -241,18 +255,13 @@ pub fn narx_fit<'py>(
     Ok(rs.iter().map(|r| mat_to_numpy(py, r)).collect())
 }
 
-#[allow(clippy::too_many_arguments)]
 fn model(
     nu: usize,
     ny: usize,
-    orders: &Orders,
-    degree: Option<usize>,
-    rbf: Option<Rbf<'_>>,
+    structure: Structure<'_>,
     equations: Vec<(Vec<Vec<i64>>, Vec<f64>)>,
-    custom_args: &CustomArgs,
 ) -> PyResult<NarxModel> {
-    let b = basis(degree, rbf)?;
-    let sp = spec(nu, ny, orders, custom_args)?;
+    let (b, sp) = structure.build(nu, ny)?;
     let eqs = equations
         .into_iter()
         .map(|(t, c)| Equation {
@@ -314,59 +323,35 @@ where
 /// Free-run simulation; `y0` holds the first `max_lag` outputs; `custom_fns` evaluate the
 /// custom regressors (arguments `custom_args`).
 #[pyfunction]
-#[pyo3(signature = (orders, degree, rbf, equations, u, y0, custom_args=vec![], custom_fns=vec![]))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (structure, equations, u, y0, custom_fns=vec![]))]
 pub fn narx_simulate<'py>(
     py: Python<'py>,
-    orders: Orders,
-    degree: Option<usize>,
-    rbf: Option<Rbf<'_>>,
+    structure: Structure<'_>,
     equations: Vec<(Vec<Vec<i64>>, Vec<f64>)>,
     u: PyReadonlyArray2<'_, f64>,
     y0: PyReadonlyArray2<'_, f64>,
-    custom_args: CustomArgs,
     custom_fns: Vec<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let (uv, yv) = (view(&u), view(&y0));
-    let m = model(
-        uv.ncols(),
-        yv.ncols(),
-        &orders,
-        degree,
-        rbf,
-        equations,
-        &custom_args,
-    )?;
+    let m = model(uv.ncols(), yv.ncols(), structure, equations)?;
     let y = with_custom(py, &custom_fns, |f| m.simulate_with(uv, yv, f))?;
     Ok(mat_to_numpy(py, &y))
 }
 
 /// `horizon`-step prediction from measured `u`, `y`.
 #[pyfunction]
-#[pyo3(signature = (orders, degree, rbf, equations, u, y, horizon, custom_args=vec![], custom_fns=vec![]))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (structure, equations, u, y, horizon, custom_fns=vec![]))]
 pub fn narx_predict<'py>(
     py: Python<'py>,
-    orders: Orders,
-    degree: Option<usize>,
-    rbf: Option<Rbf<'_>>,
+    structure: Structure<'_>,
     equations: Vec<(Vec<Vec<i64>>, Vec<f64>)>,
     u: PyReadonlyArray2<'_, f64>,
     y: PyReadonlyArray2<'_, f64>,
     horizon: usize,
-    custom_args: CustomArgs,
     custom_fns: Vec<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let (uv, yv) = (view(&u), view(&y));
-    let m = model(
-        uv.ncols(),
-        yv.ncols(),
-        &orders,
-        degree,
-        rbf,
-        equations,
-        &custom_args,
-    )?;
+    let m = model(uv.ncols(), yv.ncols(), structure, equations)?;
     let p = with_custom(py, &custom_fns, |f| m.predict_with(uv, yv, horizon, f))?;
     Ok(mat_to_numpy(py, &p))
 }

@@ -10,6 +10,7 @@ and the matching reader gives the record back unchanged.
 
 from __future__ import annotations
 
+import gzip
 import re
 import warnings
 from collections.abc import Sequence
@@ -18,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from .._atomic import atomic_path
 from ..errors import DataError
 
 __all__: list[str] = []
@@ -197,7 +199,8 @@ def to_csv(data: Any, path: str | Path) -> None:
     """Write a CSV file: header ``time,experiment,<inputs>,<outputs>``, one row a sample.
 
     Units are written into the header as ``name [unit]``; :meth:`from_csv` reads them back.
-    A name ending in ``.gz`` writes a gzip-compressed file.
+    A name ending in ``.gz`` writes a gzip-compressed file. The file is written whole or not
+    at all (see ``sysid._atomic``).
     """
     head = ["time", "experiment"] + [
         f"{n} [{u}]" if u else n
@@ -208,10 +211,14 @@ def to_csv(data: Any, path: str | Path) -> None:
         np.column_stack([t, np.full(len(t), k), e.u, e.y])
         for k, (e, t) in enumerate(zip(data._exps, data.times))
     ]
-    np.savetxt(
-        path, np.vstack(rows), delimiter=",", header=",".join(head), comments="",
-        fmt="%.17g",
-    )
+    path = Path(path)
+    with atomic_path(path) as tmp, (
+        gzip.open(tmp, "wb") if path.name.endswith(".gz") else open(tmp, "wb")
+    ) as f:
+        np.savetxt(
+            f, np.vstack(rows), delimiter=",", header=",".join(head), comments="",
+            fmt="%.17g",
+        )
 
 
 def from_csv(
@@ -380,8 +387,15 @@ def _from_arrays(cls: Any, get: Any, what: str) -> Any:
 
 
 def to_npz(data: Any, path: str | Path) -> None:
-    """Save to a NumPy ``.npz`` archive (all experiments, names, units, dt, start times)."""
-    np.savez(path, **_arrays(data))
+    """Save to a NumPy ``.npz`` archive (all experiments, names, units, dt, start times);
+    ``.npz`` is appended to a name without it, as :func:`numpy.savez` does. The file is
+    written whole or not at all (see ``sysid._atomic``)."""
+    path = Path(path)
+    if not path.name.endswith(".npz"):
+        path = path.with_name(path.name + ".npz")
+    arrays = _arrays(data)
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        np.savez(f, **arrays)
 
 
 def from_npz(cls: Any, path: str | Path) -> Any:
@@ -402,7 +416,8 @@ def from_npz(cls: Any, path: str | Path) -> Any:
 
 def to_mat(data: Any, path: str | Path) -> None:
     """Save to a MATLAB ``.mat`` file (``scipy.io.savemat``); one experiment also gets the
-    plain variables ``u``, ``y``, ``dt`` that MATLAB users expect."""
+    plain variables ``u``, ``y``, ``dt`` that MATLAB users expect. The file is written whole
+    or not at all (see ``sysid._atomic``)."""
     from scipy.io import savemat
 
     d = _arrays(data)
@@ -410,7 +425,8 @@ def to_mat(data: Any, path: str | Path) -> None:
          for k, v in d.items()}
     if data.n_experiments == 1:
         d["u"], d["y"] = data._exps[0].u, data._exps[0].y
-    savemat(path, d)
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        savemat(f, d)
 
 
 def from_mat(

@@ -45,6 +45,17 @@ def _lag_matrix(u: np.ndarray, y: np.ndarray, na: list[int], nb: list[int], nk: 
     return np.column_stack(cols)
 
 
+def _structure(orders: Any, degree: int | None, rbf: Any, cust: dict[str, Any]) -> dict[str, Any]:
+    """The model structure the NARX bindings share (orders, basis, custom regressors)."""
+    return {"orders": orders, "degree": degree, "rbf": rbf,
+            "custom_args": cust.get("custom_args", [])}
+
+
+def _values(cust: dict[str, Any]) -> dict[str, Any]:
+    """The custom regressors' values over the records, as keyword arguments."""
+    return {"custom_values": cust["custom_values"]} if "custom_values" in cust else {}
+
+
 def _custom(custom: list[Any], exps: list[tuple[np.ndarray, np.ndarray]], orders: Any,
             ne: int, names: dict[str, Any]) -> dict[str, Any]:
     """Arguments and values (one ``(N, n_custom)`` array per experiment) of the custom
@@ -229,9 +240,10 @@ def nlarx(
                  output_names=getattr(data, "output_names", None))
     custom = list(custom or [])
     cust = _custom(custom, exps, orders, noise_terms, names)
-    sel, n_cands = _sysid.narx_frols([(u, y, None) for u, y in exps], orders, degree, rbf,
+    structure = _structure(orders, degree, rbf, cust)
+    sel, n_cands = _sysid.narx_frols([(u, y, None) for u, y in exps], structure,
                                      int(max_terms), [[] for _ in range(ny)], float(err_tol),
-                                     **cust)
+                                     **_values(cust))
     n_rows = int(sel[0]["n_rows"])
     keep, scores = [], []
     for s in sel:
@@ -292,9 +304,9 @@ def _narmax(model: NARXModel, exps: list[tuple[np.ndarray, np.ndarray]], orders:
     current = model
     for _ in range(max(n_iterations, 1)):
         recs = [(u, y, np.ascontiguousarray(y - current.predict(u, y, 1))) for u, y in exps]
-        sel, _ = _sysid.narx_frols(recs, (na_, nb_, nk_, ne_), degree, rbf,
+        sel, _ = _sysid.narx_frols(recs, _structure((na_, nb_, nk_, ne_), degree, rbf, cust),
                                    max(len(p) for p in process) + max_noise, process, err_tol,
-                                   **cust)
+                                   **_values(cust))
         terms, coefs, errs, var = [], [], [], []
         for s, p in zip(sel, process):
             k = len(s["terms"])

@@ -288,13 +288,13 @@ class NARXModel(ModelMixin):
 
     def _rust(self, fn: str, *arrays: Any, fns: Any = None) -> np.ndarray:
         degree, rbf = self.basis.rust_args()
-        orders = (self.na, self.nb, self.nk, self.ne)
+        structure = {"orders": (self.na, self.nb, self.nk, self.ne), "degree": degree,
+                     "rbf": rbf, "custom_args": self._custom_args if self.custom else []}
         eqs = [(t, c.tolist()) for t, c in zip(self.terms, self.coefs)]
         if not self.custom:
-            return np.asarray(getattr(_sysid, f"narx_{fn}")(orders, degree, rbf, eqs, *arrays))
+            return np.asarray(getattr(_sysid, f"narx_{fn}")(structure, eqs, *arrays))
         fns = [c.scalar() for c in self.custom] if fns is None else fns
-        return np.asarray(getattr(_sysid, f"narx_{fn}")(
-            orders, degree, rbf, eqs, *arrays, custom_args=self._custom_args, custom_fns=fns))
+        return np.asarray(getattr(_sysid, f"narx_{fn}")(structure, eqs, *arrays, custom_fns=fns))
 
     def _u(self, u: Any, n: int | None = None) -> np.ndarray:
         u = np.asarray(u, dtype=float)

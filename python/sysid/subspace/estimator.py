@@ -46,7 +46,6 @@ from ..data.offsets import check_offsets
 from ..errors import (
     DataError,
     FeedbackWarning,
-    InsufficientDataError,
     OrderError,
 )
 from ..models.checks import warn_unstable
@@ -227,14 +226,7 @@ class SubspaceEstimator:
         if chunk_rows is not None:
             chunk_rows = as_int(chunk_rows, "chunk_rows", 1)
         _check_signals(data)
-        if self.past + self.future > longest:
-            which = "horizon" if past is None and future is None else "past/future"
-            raise InsufficientDataError(
-                f"{which} too large for the data: a window of past + future = "
-                f"{self.past} + {self.future} samples needs at least {self.past + self.future} "
-                f"samples per experiment but the longest has {longest}; choose "
-                f"horizon <= {max(longest // 2, 1)} (a few times the expected order)"
-            )
+        # the window against the record, then the data-matrix size: both in the core
         self.factor = _sysid.compress(
             data.experiments, self.past, self.future, chunk_rows, compressor
         )

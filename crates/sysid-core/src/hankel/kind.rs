@@ -177,28 +177,13 @@ pub fn compress_experiments(
     experiments: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
     kind: CompressorKind,
 ) -> Result<HankelFactor> {
-    kind.check(&layout)?;
-    let w = layout.window();
     let longest = experiments
         .iter()
         .map(|(_, y)| y.nrows())
         .max()
         .unwrap_or(0);
-    if longest < w {
-        return Err(SysidError::InsufficientData {
-            context: format!(
-                "the horizon (past={} + future={} = a window of {w} samples; the longest \
-                 experiment allows horizon <= {})",
-                layout.past,
-                layout.future,
-                (longest / 2).max(1)
-            ),
-            needed: w,
-            got: longest,
-            fix: "choose a smaller horizon (a few times the expected order) or give a longer \
-                  record",
-        });
-    }
+    super::check_window(layout.past, layout.future, longest)?;
+    kind.check(&layout)?;
     let run = |kind: CompressorKind| -> Result<HankelFactor> {
         let mut c = kind.build(layout);
         for (u, y) in experiments {

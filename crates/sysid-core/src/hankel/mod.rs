@@ -54,7 +54,52 @@ pub struct HankelLayout {
     pub future: usize,
 }
 
+/// Checks that a window of `past + future` samples fits in the longest experiment
+/// (`longest` samples), before anything is sized from the horizons: a horizon too large for
+/// the record is [`SysidError::InsufficientData`] naming the largest horizon the record allows,
+/// whatever the data matrix would have cost. Zero horizons are left to [`HankelLayout::new`].
+///
+/// ```
+/// use sysid_core::hankel::check_window;
+/// assert!(check_window(5, 5, 100).is_ok());
+/// let e = check_window(1 << 40, 1, 100).unwrap_err().to_string();
+/// assert!(e.contains("horizon <= 50"), "{e}");
+/// ```
+pub fn check_window(past: usize, future: usize, longest: usize) -> Result<()> {
+    if past == 0 || future == 0 {
+        return Ok(());
+    }
+    let w = past.saturating_add(future);
+    if w <= longest {
+        return Ok(());
+    }
+    Err(SysidError::InsufficientData {
+        context: format!(
+            "the horizon past={past} + future={future} (past/future: a window of {w} samples, \
+             too large for this record; the longest experiment allows horizon <= {})",
+            (longest / 2).max(1)
+        ),
+        needed: w,
+        got: longest,
+        fix: "choose a smaller horizon (a few times the expected order) or give a longer record",
+    })
+}
+
 impl HankelLayout {
+    /// Checks the window against the longest experiment ([`check_window`]) and then builds the
+    /// layout ([`HankelLayout::new`]), so a horizon too large for the record is reported as such
+    /// before the data-matrix size limit is looked at.
+    pub fn for_record(
+        n_inputs: usize,
+        n_outputs: usize,
+        past: usize,
+        future: usize,
+        longest: usize,
+    ) -> Result<Self> {
+        check_window(past, future, longest)?;
+        Self::new(n_inputs, n_outputs, past, future)
+    }
+
     /// Checks and builds a layout.
     pub fn new(n_inputs: usize, n_outputs: usize, past: usize, future: usize) -> Result<Self> {
         if n_outputs == 0 {
