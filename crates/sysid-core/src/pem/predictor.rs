@@ -138,6 +138,22 @@ impl Filter {
         }
     }
 
+    /// The weighed errors at sample `t` ([`Self::errors`], then [`Self::weigh`]), the step
+    /// of every sensitivity pass; every 4096 samples it checks for Ctrl-C.
+    pub fn weighed_errors(
+        &mut self,
+        u: MatRef<'_, f64>,
+        y: MatRef<'_, f64>,
+        t: usize,
+    ) -> Result<()> {
+        if t % 4096 == 4095 {
+            crate::interrupt::check()?;
+        }
+        self.errors(u, y, t);
+        self.weigh();
+        Ok(())
+    }
+
     /// `R^-1 e` (added to the cost) and `W e`.
     pub fn weigh(&mut self) {
         let l = self.e.len();

@@ -99,11 +99,7 @@ impl Predictor<'_> {
             let len = y.nrows();
             let mut row = 0usize;
             for t in 0..len {
-                if t % 4096 == 4095 {
-                    crate::interrupt::check()?; // Ctrl-C
-                }
-                f.errors(*u, *y, t);
-                f.weigh();
+                f.weighed_errors(*u, *y, t)?;
                 for (j, v) in ut.iter_mut().enumerate() {
                     *v = u[(t, j)];
                 }

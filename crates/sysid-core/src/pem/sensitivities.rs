@@ -181,11 +181,7 @@ impl Predictor<'_> {
             let len = y.nrows();
             let mut row = 0usize;
             for t in 0..len {
-                if t % 4096 == 4095 {
-                    crate::interrupt::check()?; // Ctrl-C
-                }
-                f.errors(*u, *y, t);
-                f.weigh();
+                f.weighed_errors(*u, *y, t)?;
                 z[..n].copy_from_slice(&f.x);
                 for j in 0..m {
                     z[n + j] = u[(t, j)];
@@ -339,11 +335,7 @@ impl Predictor<'_> {
             let len = y.nrows();
             let mut row = 0usize;
             for t in 0..len {
-                if t % 4096 == 4095 {
-                    crate::interrupt::check()?; // Ctrl-C
-                }
-                f.errors(*u, *y, t);
-                f.weigh();
+                f.weighed_errors(*u, *y, t)?;
                 // modal state x' = T^-1 x, regressor z = (x', u)
                 for (a, za) in z.iter_mut().take(n).enumerate() {
                     *za = (0..n).map(|b| md.ti[(a, b)] * f.x[b]).sum();
