@@ -13,11 +13,11 @@
 //! clamped to a box (the branch then holds its boundary value and has no slope), which
 //! bounds the simulation outside the range the model was fitted on.
 
-use super::pnlss::flush;
+use super::simulation::{self, check_range, NonlinearTerms};
+use super::PnlssData;
 use crate::error::{Result, SysidError};
-use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution};
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, Par};
+use crate::optim::{Evaluation, Flow, Iteration, Options, Solution};
+use faer::Mat;
 
 /// Structure of a decoupled PNLSS model; the parameters are
 /// `theta = [A, B, C, D, V, W, c, e0, f0]`, each row-major (`V` is `r x (nx + nu)`, `W` is
@@ -53,9 +53,6 @@ pub struct Decoupled {
 
 #[derive(Clone, Copy)]
 struct Off {
-    b: usize,
-    c: usize,
-    d: usize,
     v: usize,
     w: usize,
     k: usize,
@@ -65,12 +62,12 @@ struct Off {
 }
 
 /// One step's branch values: arguments (clamped), values and slopes.
-struct Work {
+pub(super) struct Work {
+    o: Off,
     z: Vec<f64>,
     s: Vec<f64>,
     g: Vec<f64>,
     gp: Vec<f64>,
-    xn: Vec<f64>,
 }
 
 impl Decoupled {
@@ -110,23 +107,7 @@ impl Decoupled {
 
     /// The model with the branch arguments clamped to `lo <= s <= hi` (one pair per branch).
     pub fn with_range(mut self, lo: Vec<f64>, hi: Vec<f64>) -> Result<Self> {
-        let r = self.branches;
-        if lo.len() != r || hi.len() != r {
-            return Err(SysidError::invalid(
-                "range",
-                format!("needs {r} lower and upper bounds (one per branch)"),
-            ));
-        }
-        if lo
-            .iter()
-            .zip(&hi)
-            .any(|(a, b)| a.is_nan() || b.is_nan() || a > b)
-        {
-            return Err(SysidError::invalid(
-                "range",
-                "each lower bound must be a number not above its upper bound",
-            ));
-        }
+        check_range(&lo, &hi, self.branches, "one per branch")?;
         self.lo = lo;
         self.hi = hi;
         Ok(self)
@@ -134,18 +115,12 @@ impl Decoupled {
 
     fn off(&self) -> Off {
         let (n, m, l, r) = (self.nx, self.nu, self.ny, self.branches);
-        let b = n * n;
-        let c = b + n * m;
-        let d = c + l * n;
-        let v = d + l * m;
+        let v = n * n + n * m + l * n + l * m;
         let w = v + r * (n + m);
         let k = w + n * r;
         let e0 = k + r * self.degrees.len();
         let f0 = e0 + n;
         Off {
-            b,
-            c,
-            d,
             v,
             w,
             k,
@@ -160,21 +135,64 @@ impl Decoupled {
         self.off().p
     }
 
+    /// Simulated outputs (`N x ny`) and states (`N x nx`), row-major, from `x0` (zero when
+    /// `None`). A diverging simulation is an error naming the sample.
+    pub fn simulate(
+        &self,
+        theta: &[f64],
+        u: &[f64],
+        x0: Option<&[f64]>,
+    ) -> Result<(Vec<f64>, Vec<f64>)> {
+        simulation::simulate(self, theta, u, x0)
+    }
+
+    /// `1/2 sum r^2` over the records, with gradient and Gauss-Newton matrix when asked; an
+    /// infinite cost when a simulation diverges.
+    pub fn cost(&self, theta: &[f64], data: &[PnlssData<'_>], jacobian: bool) -> Evaluation {
+        simulation::cost(self, theta, data, jacobian)
+    }
+}
+
+impl NonlinearTerms for Decoupled {
+    type Work = Work;
+    const NAME: &'static str = "decoupled pnlss";
+    const SIMULATION: &'static str = "decoupled pnlss simulation";
+    const NEEDS_INPUTS: bool = true;
+
+    fn dims(&self) -> (usize, usize, usize) {
+        (self.nx, self.nu, self.ny)
+    }
+
+    fn n_params(&self) -> usize {
+        self.off().p
+    }
+
+    fn bound(&self) -> f64 {
+        self.bound
+    }
+
     fn work(&self) -> Work {
         let r = self.branches;
         Work {
+            o: self.off(),
             z: vec![0.0; self.nx + self.nu],
             s: vec![0.0; r],
             g: vec![0.0; r],
             gp: vec![0.0; r],
-            xn: vec![0.0; self.nx],
         }
     }
 
-    /// One step: output into `y`, next state into `w.xn`; `false` when the next state is
-    /// non-finite or beyond the bound.
-    fn step(&self, th: &[f64], o: Off, x: &[f64], u: &[f64], y: &mut [f64], w: &mut Work) -> bool {
-        let (n, m, nz, nd) = (self.nx, self.nu, self.nx + self.nu, self.degrees.len());
+    /// `W g(V z) + e0` and `f0`, the branch arguments clamped to the box.
+    fn add_nonlinear(
+        &self,
+        th: &[f64],
+        x: &[f64],
+        u: &[f64],
+        w: &mut Work,
+        y: &mut [f64],
+        xn: &mut [f64],
+    ) {
+        let (n, nz, nd, o) = (self.nx, self.nx + self.nu, self.degrees.len(), w.o);
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(p, q)| p * q).sum::<f64>();
         w.z[..n].copy_from_slice(x);
         w.z[n..].copy_from_slice(u);
@@ -198,225 +216,58 @@ impl Decoupled {
             w.gp[k] = if free { gp } else { 0.0 };
         }
         for (i, yi) in y.iter_mut().enumerate() {
-            *yi = dot(&th[o.c + i * n..o.c + (i + 1) * n], x)
-                + dot(&th[o.d + i * m..o.d + (i + 1) * m], u)
-                + th[o.f0 + i];
+            *yi += th[o.f0 + i];
         }
         let r = self.branches;
-        let mut ok = true;
-        for i in 0..n {
-            let v = dot(&th[i * n..(i + 1) * n], x)
-                + dot(&th[o.b + i * m..o.b + (i + 1) * m], u)
-                + dot(&th[o.w + i * r..o.w + (i + 1) * r], &w.g)
-                + th[o.e0 + i];
-            ok &= v.is_finite() && v.abs() <= self.bound;
-            w.xn[i] = v;
+        for (i, v) in xn.iter_mut().enumerate() {
+            *v += dot(&th[o.w + i * r..o.w + (i + 1) * r], &w.g);
+            *v += th[o.e0 + i];
         }
-        ok
     }
 
-    fn check(&self, theta: &[f64], u: &[f64], y: Option<&[f64]>) -> Result<usize> {
-        if theta.len() != self.n_params() {
-            return Err(SysidError::invalid(
-                "theta",
-                format!("needs {} parameters, got {}", self.n_params(), theta.len()),
-            ));
-        }
-        if self.nu == 0 || u.len() % self.nu != 0 {
-            return Err(SysidError::invalid(
-                "u",
-                "needs at least one input; its length must be a multiple of the input count",
-            ));
-        }
-        let n = u.len() / self.nu;
-        if let Some(y) = y {
-            if y.len() != n * self.ny {
-                return Err(SysidError::invalid(
-                    "y",
-                    format!(
-                        "needs {} x {} values to match u, got {}",
-                        n,
-                        self.ny,
-                        y.len()
-                    ),
-                ));
-            }
-        }
-        Ok(n)
+    /// The output equation is linear in the state.
+    fn add_output_slope(&self, _th: &[f64], _i: usize, _w: &Work, _ceff: &mut [f64]) {}
+
+    fn add_output_direct(&self, _th: &[f64], i: usize, w: &Work, jb: &mut Mat<f64>, row: usize) {
+        jb[(row, w.o.f0 + i)] += 1.0;
     }
 
-    /// Simulated outputs (`N x ny`) and states (`N x nx`), row-major, from `x0` (zero when
-    /// `None`). A diverging simulation is an error naming the sample.
-    pub fn simulate(
-        &self,
-        theta: &[f64],
-        u: &[f64],
-        x0: Option<&[f64]>,
-    ) -> Result<(Vec<f64>, Vec<f64>)> {
-        let n = self.check(theta, u, None)?;
-        let o = self.off();
-        let (nx, nu, ny) = (self.nx, self.nu, self.ny);
-        let mut x = x0.map_or(vec![0.0; nx], |v| v.to_vec());
-        if x.len() != nx {
-            return Err(SysidError::invalid("x0", format!("needs {nx} values")));
-        }
-        let (mut y, mut xs) = (vec![0.0; n * ny], vec![0.0; n * nx]);
-        let mut w = self.work();
-        for t in 0..n {
-            xs[t * nx..(t + 1) * nx].copy_from_slice(&x);
-            let (ut, yt) = (&u[t * nu..(t + 1) * nu], &mut y[t * ny..(t + 1) * ny]);
-            if !self.step(theta, o, &x, ut, yt, &mut w) && t + 1 < n {
-                return Err(SysidError::numerical(
-                    "decoupled pnlss simulation",
-                    format!(
-                        "the state diverged (beyond {:e} or non-finite) at sample {}",
-                        self.bound,
-                        t + 1
-                    ),
-                ));
-            }
-            x.copy_from_slice(&w.xn);
-        }
-        Ok((y, xs))
-    }
-
-    /// `1/2 sum r^2` over the records, with gradient and Gauss-Newton matrix when asked; an
-    /// infinite cost when a simulation diverges.
-    pub fn cost(&self, theta: &[f64], data: &[super::PnlssData<'_>], jacobian: bool) -> Evaluation {
-        let p = self.n_params();
-        let mut ev = Evaluation::cost_only(0.0);
-        if jacobian {
-            ev.gradient = vec![0.0; p];
-            ev.gauss_newton = Mat::zeros(p, p);
-        }
-        for d in data {
-            if !self.record(theta, d, &mut ev, jacobian) {
-                return Evaluation::cost_only(f64::INFINITY);
-            }
-        }
-        if jacobian {
-            let h = &mut ev.gauss_newton;
-            for a in 0..p {
-                for b in 0..a {
-                    h[(b, a)] = h[(a, b)];
+    /// `W diag(g') V_x`.
+    fn add_state_slope(&self, th: &[f64], w: &Work, aeff: &mut Mat<f64>) {
+        let (nx, nz, r, o) = (self.nx, self.nx + self.nu, self.branches, w.o);
+        for i in 0..nx {
+            for j in 0..nx {
+                for k in 0..r {
+                    aeff[(i, j)] += th[o.w + i * r + k] * w.gp[k] * th[o.v + k * nz + j];
                 }
             }
         }
-        ev
     }
 
-    fn record(&self, th: &[f64], d: &super::PnlssData<'_>, ev: &mut Evaluation, jac: bool) -> bool {
-        const BLK: usize = 32;
-        let o = self.off();
-        let (nx, nu, ny, r, nd) = (self.nx, self.nu, self.ny, self.branches, self.degrees.len());
-        let nz = nx + nu;
-        let n = d.u.len() / nu;
-        let mut w = self.work();
-        let (mut x, mut yh) = (vec![0.0; nx], vec![0.0; ny]);
-        let q = if jac { o.p } else { 0 };
-        let (mut s, mut s2) = (Mat::<f64>::zeros(nx, q), Mat::<f64>::zeros(nx, q));
-        let mut jb = Mat::<f64>::zeros(BLK * ny, q);
-        let mut rb = Mat::<f64>::zeros(BLK * ny, 1);
-        let mut aeff = Mat::<f64>::zeros(nx, nx);
-        let mut rows = 0;
-        for t in 0..n {
-            let u = &d.u[t * nu..(t + 1) * nu];
-            let ok = self.step(th, o, &x, u, &mut yh, &mut w);
-            if t >= d.skip {
-                for i in 0..ny {
-                    let res = d.y[t * ny + i] - yh[i];
-                    ev.cost += 0.5 * res * res;
-                    if jac {
-                        rb[(rows, 0)] = res;
-                        for a in 0..o.p {
-                            let mut v = 0.0;
-                            for j in 0..nx {
-                                v += th[o.c + i * nx + j] * s[(j, a)];
-                            }
-                            jb[(rows, a)] = v;
-                        }
-                        for j in 0..nx {
-                            jb[(rows, o.c + i * nx + j)] += x[j];
-                        }
-                        for j in 0..nu {
-                            jb[(rows, o.d + i * nu + j)] += u[j];
-                        }
-                        jb[(rows, o.f0 + i)] += 1.0;
-                        rows += 1;
-                    }
+    fn add_state_direct(&self, th: &[f64], _x: &[f64], w: &Work, s2: &mut Mat<f64>) {
+        let (nx, nz, r, nd, o) = (
+            self.nx,
+            self.nx + self.nu,
+            self.branches,
+            self.degrees.len(),
+            w.o,
+        );
+        for i in 0..nx {
+            for k in 0..r {
+                let wik = th[o.w + i * r + k];
+                s2[(i, o.w + i * r + k)] += w.g[k];
+                for (jd, &deg) in self.degrees.iter().enumerate() {
+                    s2[(i, o.k + k * nd + jd)] += wik * w.s[k].powi(deg as i32);
                 }
-                if jac && (rows == BLK * ny || t + 1 == n) {
-                    flush(&mut jb, &rb, rows, ev);
-                    rows = 0;
+                let a = wik * w.gp[k];
+                if a != 0.0 {
+                    for j in 0..nz {
+                        s2[(i, o.v + k * nz + j)] += a * w.z[j];
+                    }
                 }
             }
-            if !ok && t + 1 < n {
-                return false;
-            }
-            if jac && t + 1 < n {
-                // A + W diag(g') V_x
-                for i in 0..nx {
-                    for j in 0..nx {
-                        let mut v = th[i * nx + j];
-                        for k in 0..r {
-                            v += th[o.w + i * r + k] * w.gp[k] * th[o.v + k * nz + j];
-                        }
-                        aeff[(i, j)] = v;
-                    }
-                }
-                matmul(
-                    s2.as_mut(),
-                    Accum::Replace,
-                    aeff.as_ref(),
-                    s.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
-                for i in 0..nx {
-                    for j in 0..nx {
-                        s2[(i, i * nx + j)] += x[j];
-                    }
-                    for j in 0..nu {
-                        s2[(i, o.b + i * nu + j)] += u[j];
-                    }
-                    for k in 0..r {
-                        let wik = th[o.w + i * r + k];
-                        s2[(i, o.w + i * r + k)] += w.g[k];
-                        for (jd, &deg) in self.degrees.iter().enumerate() {
-                            s2[(i, o.k + k * nd + jd)] += wik * w.s[k].powi(deg as i32);
-                        }
-                        let a = wik * w.gp[k];
-                        if a != 0.0 {
-                            for j in 0..nz {
-                                s2[(i, o.v + k * nz + j)] += a * w.z[j];
-                            }
-                        }
-                    }
-                    s2[(i, o.e0 + i)] += 1.0;
-                }
-                std::mem::swap(&mut s, &mut s2);
-            }
-            x.copy_from_slice(&w.xn);
+            s2[(i, o.e0 + i)] += 1.0;
         }
-        if jac && rows > 0 {
-            flush(&mut jb, &rb, rows, ev);
-        }
-        ev.cost.is_finite()
-    }
-}
-
-struct DecoupledProblem<'a> {
-    model: &'a Decoupled,
-    data: &'a [super::PnlssData<'a>],
-}
-
-impl Problem for DecoupledProblem<'_> {
-    fn n_params(&self) -> usize {
-        self.model.n_params()
-    }
-
-    fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
-        Ok(self.model.cost(theta, self.data, jacobian))
     }
 }
 
@@ -439,38 +290,10 @@ impl Problem for DecoupledProblem<'_> {
 /// ```
 pub fn estimate_decoupled(
     model: &Decoupled,
-    data: &[super::PnlssData<'_>],
+    data: &[PnlssData<'_>],
     theta0: &[f64],
     options: &Options,
     observer: &mut dyn FnMut(&Iteration) -> Flow,
 ) -> Result<Solution> {
-    if data.is_empty() {
-        return Err(SysidError::invalid("data", "no records"));
-    }
-    for d in data {
-        let n = model.check(theta0, d.u, Some(d.y))?;
-        if n <= d.skip {
-            return Err(SysidError::InsufficientData {
-                context: "a decoupled pnlss record after its transient".into(),
-                needed: d.skip + 1,
-                got: n,
-                fix: "use a longer record or a shorter transient",
-            });
-        }
-        if d.u.iter().chain(d.y).any(|v| !v.is_finite()) {
-            return Err(SysidError::invalid(
-                "data",
-                "has non-finite values (NaN or Inf)",
-            ));
-        }
-    }
-    if !model.cost(theta0, data, false).cost.is_finite() {
-        return Err(SysidError::numerical(
-            "decoupled pnlss",
-            "the initial model's simulation diverges on the data; start from a stable linear \
-             model",
-        ));
-    }
-    let mut prob = DecoupledProblem { model, data };
-    minimize(&mut prob, theta0, options, observer)
+    simulation::estimate(model, data, theta0, options, observer)
 }

@@ -27,6 +27,7 @@ mod decoupled;
 mod monomials;
 pub mod neural;
 mod pnlss;
+mod simulation;
 #[cfg(test)]
 mod tests;
 

@@ -1,10 +1,10 @@
 //! The PNLSS model: simulation and the simulation-error problem with forward sensitivities.
 
+use super::simulation::{self, check_range, NonlinearTerms};
 use super::Monomials;
-use crate::error::{Result, SysidError};
-use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution};
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, Par};
+use crate::error::Result;
+use crate::optim::{Evaluation, Flow, Iteration, Options, Solution};
+use faer::Mat;
 
 /// Structure of a PNLSS model; the parameters are `theta = [A, B, C, D, E, F]`, each
 /// row-major (`E` is `nx x zeta.len()`, `F` is `ny x eta.len()`).
@@ -53,22 +53,22 @@ pub struct PnlssData<'a> {
 
 #[derive(Clone, Copy)]
 struct Off {
-    b: usize,
-    c: usize,
-    d: usize,
     e: usize,
     f: usize,
     p: usize,
 }
 
-/// Work buffers of one simulation step.
-struct Work {
+/// Values of one simulation step kept for the sensitivities.
+pub(super) struct Work {
+    o: Off,
     z: Vec<f64>,
     ze: Vec<f64>,
     et: Vec<f64>,
-    xn: Vec<f64>,
     /// Whether each state lies inside the box (its monomial derivatives count).
     free: Vec<bool>,
+    /// `d zeta / dx` and `d eta / dx` (zero columns for clamped states).
+    dze: Vec<f64>,
+    det: Vec<f64>,
 }
 
 impl Pnlss {
@@ -105,27 +105,7 @@ impl Pnlss {
     /// assert!((y[2] - (1.5 - 0.1)).abs() < 1e-15);
     /// ```
     pub fn with_range(mut self, lo: Vec<f64>, hi: Vec<f64>) -> Result<Self> {
-        let nz = self.nx + self.nu;
-        if lo.len() != nz || hi.len() != nz {
-            return Err(SysidError::invalid(
-                "range",
-                format!(
-                    "needs {nz} lower and upper bounds (states then inputs), got {} and {}",
-                    lo.len(),
-                    hi.len()
-                ),
-            ));
-        }
-        if lo
-            .iter()
-            .zip(&hi)
-            .any(|(a, b)| a.is_nan() || b.is_nan() || a > b)
-        {
-            return Err(SysidError::invalid(
-                "range",
-                "each lower bound must be a number not above its upper bound",
-            ));
-        }
+        check_range(&lo, &hi, self.nx + self.nu, "states then inputs")?;
         self.lo = lo;
         self.hi = hi;
         Ok(self)
@@ -133,15 +113,9 @@ impl Pnlss {
 
     fn off(&self) -> Off {
         let (n, m, l) = (self.nx, self.nu, self.ny);
-        let b = n * n;
-        let c = b + n * m;
-        let d = c + l * n;
-        let e = d + l * m;
+        let e = n * n + n * m + l * n + l * m;
         let f = e + n * self.zeta.len();
         Off {
-            b,
-            c,
-            d,
             e,
             f,
             p: f + l * self.eta.len(),
@@ -153,20 +127,65 @@ impl Pnlss {
         self.off().p
     }
 
+    /// Simulated outputs (`N x ny`) and states (`N x nx`), row-major, from `x0` (zero when
+    /// `None`). A diverging simulation is an error naming the sample.
+    pub fn simulate(
+        &self,
+        theta: &[f64],
+        u: &[f64],
+        x0: Option<&[f64]>,
+    ) -> Result<(Vec<f64>, Vec<f64>)> {
+        simulation::simulate(self, theta, u, x0)
+    }
+
+    /// Sum of squares `1/2 sum r^2` over the records, its gradient and Gauss-Newton matrix
+    /// (with `jacobian`); an infinite cost when a simulation diverges.
+    pub fn cost(&self, theta: &[f64], data: &[PnlssData<'_>], jacobian: bool) -> Evaluation {
+        simulation::cost(self, theta, data, jacobian)
+    }
+}
+
+impl NonlinearTerms for Pnlss {
+    type Work = Work;
+    const NAME: &'static str = "pnlss";
+    const SIMULATION: &'static str = "pnlss simulation";
+
+    fn dims(&self) -> (usize, usize, usize) {
+        (self.nx, self.nu, self.ny)
+    }
+
+    fn n_params(&self) -> usize {
+        self.off().p
+    }
+
+    fn bound(&self) -> f64 {
+        self.bound
+    }
+
     fn work(&self) -> Work {
+        let nx = self.nx;
         Work {
-            z: vec![0.0; self.nx + self.nu],
+            o: self.off(),
+            z: vec![0.0; nx + self.nu],
             ze: vec![0.0; self.zeta.len()],
             et: vec![0.0; self.eta.len()],
-            xn: vec![0.0; self.nx],
-            free: vec![true; self.nx],
+            free: vec![true; nx],
+            dze: vec![0.0; self.zeta.len() * nx],
+            det: vec![0.0; self.eta.len() * nx],
         }
     }
 
-    /// One step: the output at `x, u` into `y`, the next state into `w.xn`; `false` when the
-    /// next state is non-finite or beyond the bound.
-    fn step(&self, th: &[f64], o: Off, x: &[f64], u: &[f64], y: &mut [f64], w: &mut Work) -> bool {
-        let (n, m) = (self.nx, self.nu);
+    /// `E zeta(z)` and `F eta(z)` at `z = [x; u]`, clamped to the box.
+    fn add_nonlinear(
+        &self,
+        th: &[f64],
+        x: &[f64],
+        u: &[f64],
+        w: &mut Work,
+        y: &mut [f64],
+        xn: &mut [f64],
+    ) {
+        let (n, o) = (self.nx, w.o);
         w.z[..n].copy_from_slice(x);
         w.z[n..].copy_from_slice(u);
         if !self.lo.is_empty() {
@@ -183,292 +202,62 @@ impl Pnlss {
         let (ne, nf) = (w.ze.len(), w.et.len());
         let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(p, q)| p * q).sum::<f64>();
         for (i, yi) in y.iter_mut().enumerate() {
-            *yi = dot(&th[o.c + i * n..o.c + (i + 1) * n], x)
-                + dot(&th[o.d + i * m..o.d + (i + 1) * m], u)
-                + dot(&th[o.f + i * nf..o.f + (i + 1) * nf], &w.et);
+            *yi += dot(&th[o.f + i * nf..o.f + (i + 1) * nf], &w.et);
         }
-        let mut ok = true;
-        for i in 0..n {
-            let v = dot(&th[i * n..(i + 1) * n], x)
-                + dot(&th[o.b + i * m..o.b + (i + 1) * m], u)
-                + dot(&th[o.e + i * ne..o.e + (i + 1) * ne], &w.ze);
-            ok &= v.is_finite() && v.abs() <= self.bound;
-            w.xn[i] = v;
+        for (i, v) in xn.iter_mut().enumerate() {
+            *v += dot(&th[o.e + i * ne..o.e + (i + 1) * ne], &w.ze);
         }
-        ok
     }
 
-    /// Checks `theta` and a record's shapes.
-    fn check(&self, theta: &[f64], u: &[f64], y: Option<&[f64]>) -> Result<usize> {
-        if theta.len() != self.n_params() {
-            return Err(SysidError::invalid(
-                "theta",
-                format!("needs {} parameters, got {}", self.n_params(), theta.len()),
-            ));
+    fn prepare_jacobian(&self, w: &mut Work) {
+        let nx = self.nx;
+        self.zeta.dx(&w.z, &mut w.dze);
+        self.eta.dx(&w.z, &mut w.det);
+        for j in (0..nx).filter(|&j| !w.free[j]) {
+            w.dze.iter_mut().skip(j).step_by(nx).for_each(|v| *v = 0.0);
+            w.det.iter_mut().skip(j).step_by(nx).for_each(|v| *v = 0.0);
         }
-        let nu = self.nu.max(1);
-        let n = if self.nu == 0 {
-            y.map_or(0, |y| y.len() / self.ny.max(1))
-        } else {
-            u.len() / nu
-        };
-        if self.nu > 0 && u.len() != n * self.nu {
-            return Err(SysidError::invalid(
-                "u",
-                "length is not a multiple of the input count",
-            ));
-        }
-        if let Some(y) = y {
-            if y.len() != n * self.ny {
-                return Err(SysidError::invalid(
-                    "y",
-                    format!(
-                        "needs {} x {} values to match u, got {}",
-                        n,
-                        self.ny,
-                        y.len()
-                    ),
-                ));
-            }
-        }
-        Ok(n)
     }
 
-    /// Simulated outputs (`N x ny`) and states (`N x nx`), row-major, from `x0` (zero when
-    /// `None`). A diverging simulation is an error naming the sample.
-    pub fn simulate(
-        &self,
-        theta: &[f64],
-        u: &[f64],
-        x0: Option<&[f64]>,
-    ) -> Result<(Vec<f64>, Vec<f64>)> {
-        let n = self.check(theta, u, None)?;
-        let o = self.off();
-        let (nx, nu, ny) = (self.nx, self.nu, self.ny);
-        let mut x = x0.map_or(vec![0.0; nx], |v| v.to_vec());
-        if x.len() != nx {
-            return Err(SysidError::invalid("x0", format!("needs {nx} values")));
-        }
-        let (mut y, mut xs) = (vec![0.0; n * ny], vec![0.0; n * nx]);
-        let mut w = self.work();
-        for t in 0..n {
-            xs[t * nx..(t + 1) * nx].copy_from_slice(&x);
-            let ok = self.step(
-                theta,
-                o,
-                &x,
-                &u[t * nu..(t + 1) * nu],
-                &mut y[t * ny..(t + 1) * ny],
-                &mut w,
-            );
-            if !ok && t + 1 < n {
-                return Err(SysidError::numerical(
-                    "pnlss simulation",
-                    format!(
-                        "the state diverged (beyond {:e} or non-finite) at sample {}; the \
-                         input leaves the range the model was estimated on",
-                        self.bound,
-                        t + 1
-                    ),
-                ));
-            }
-            x.copy_from_slice(&w.xn);
-        }
-        Ok((y, xs))
-    }
-
-    /// Sum of squares `1/2 sum r^2` over the records, its gradient and Gauss-Newton matrix
-    /// (with `jacobian`); an infinite cost when a simulation diverges.
-    pub fn cost(&self, theta: &[f64], data: &[PnlssData<'_>], jacobian: bool) -> Evaluation {
-        let p = self.n_params();
-        let mut ev = Evaluation::cost_only(0.0);
-        if jacobian {
-            ev.gradient = vec![0.0; p];
-            ev.gauss_newton = Mat::zeros(p, p);
-        }
-        for d in data {
-            if !self.record(theta, d, &mut ev, jacobian) {
-                return Evaluation::cost_only(f64::INFINITY);
-            }
-        }
-        if jacobian {
-            let h = &mut ev.gauss_newton;
-            for a in 0..p {
-                for b in 0..a {
-                    h[(b, a)] = h[(a, b)];
-                }
-            }
-        }
-        ev
-    }
-
-    /// Adds one record to `ev`; `false` when the simulation diverged.
-    fn record(&self, th: &[f64], d: &PnlssData<'_>, ev: &mut Evaluation, jac: bool) -> bool {
-        const BLK: usize = 32;
-        let o = self.off();
-        let (nx, nu, ny, p) = (self.nx, self.nu, self.ny, o.p);
-        let (ne, nf) = (self.zeta.len(), self.eta.len());
-        let n = d.u.len().checked_div(nu).unwrap_or(d.y.len() / ny);
-        let mut w = self.work();
-        let mut x = vec![0.0; nx];
-        let mut yh = vec![0.0; ny];
-        let q = if jac { p } else { 0 };
-        let mut s = Mat::<f64>::zeros(nx, q);
-        let mut s2 = Mat::<f64>::zeros(nx, q);
-        let mut jb = Mat::<f64>::zeros(BLK * ny, q);
-        let mut rb = Mat::<f64>::zeros(BLK * ny, 1);
-        let (mut dze, mut det) = (vec![0.0; ne * nx], vec![0.0; nf * nx]);
-        let mut aeff = Mat::<f64>::zeros(nx, nx);
-        let mut rows = 0;
-        for t in 0..n {
-            let u = &d.u[t * nu..(t + 1) * nu];
-            let ok = self.step(th, o, &x, u, &mut yh, &mut w);
-            if jac {
-                self.zeta.dx(&w.z, &mut dze);
-                self.eta.dx(&w.z, &mut det);
-                for j in (0..nx).filter(|&j| !w.free[j]) {
-                    dze.iter_mut().skip(j).step_by(nx).for_each(|v| *v = 0.0);
-                    det.iter_mut().skip(j).step_by(nx).for_each(|v| *v = 0.0);
-                }
-            }
-            if t >= d.skip {
-                for i in 0..ny {
-                    let r = d.y[t * ny + i] - yh[i];
-                    ev.cost += 0.5 * r * r;
-                    if jac {
-                        rb[(rows, 0)] = r;
-                        self.output_row(th, o, i, &x, u, &w, &det, &s, &mut jb, rows);
-                        rows += 1;
-                    }
-                }
-                if jac && (rows == BLK * ny || t + 1 == n) {
-                    flush(&mut jb, &rb, rows, ev);
-                    rows = 0;
-                }
-            }
-            if !ok && t + 1 < n {
-                return false;
-            }
-            if jac && t + 1 < n {
-                for i in 0..nx {
-                    for j in 0..nx {
-                        let mut v = th[i * nx + j];
-                        for k in 0..ne {
-                            v += th[o.e + i * ne + k] * dze[k * nx + j];
-                        }
-                        aeff[(i, j)] = v;
-                    }
-                }
-                matmul(
-                    s2.as_mut(),
-                    Accum::Replace,
-                    aeff.as_ref(),
-                    s.as_ref(),
-                    1.0,
-                    Par::Seq,
-                );
-                for i in 0..nx {
-                    for j in 0..nx {
-                        s2[(i, i * nx + j)] += x[j];
-                    }
-                    for j in 0..nu {
-                        s2[(i, o.b + i * nu + j)] += u[j];
-                    }
-                    for j in 0..ne {
-                        s2[(i, o.e + i * ne + j)] += w.ze[j];
-                    }
-                }
-                std::mem::swap(&mut s, &mut s2);
-            }
-            x.copy_from_slice(&w.xn);
-        }
-        if jac && rows > 0 {
-            flush(&mut jb, &rb, rows, ev);
-        }
-        ev.cost.is_finite()
-    }
-
-    /// Row `rows` of the block: `d yhat_i / d theta = (C + F deta/dx)_i S + direct terms`.
-    #[allow(clippy::too_many_arguments)]
-    fn output_row(
-        &self,
-        th: &[f64],
-        o: Off,
-        i: usize,
-        x: &[f64],
-        u: &[f64],
-        w: &Work,
-        det: &[f64],
-        s: &Mat<f64>,
-        jb: &mut Mat<f64>,
-        row: usize,
-    ) {
-        let (nx, nu, nf) = (self.nx, self.nu, self.eta.len());
-        let mut ceff = vec![0.0; nx];
-        for j in 0..nx {
-            ceff[j] = th[o.c + i * nx + j];
-        }
+    /// `F deta/dx`, row `i`.
+    fn add_output_slope(&self, th: &[f64], i: usize, w: &Work, ceff: &mut [f64]) {
+        let (nx, nf) = (self.nx, self.eta.len());
         for k in 0..nf {
-            let fk = th[o.f + i * nf + k];
+            let fk = th[w.o.f + i * nf + k];
             if fk != 0.0 {
                 for j in 0..nx {
-                    ceff[j] += fk * det[k * nx + j];
+                    ceff[j] += fk * w.det[k * nx + j];
                 }
             }
         }
-        for a in 0..o.p {
-            let mut v = 0.0;
-            for j in 0..nx {
-                v += ceff[j] * s[(j, a)];
-            }
-            jb[(row, a)] = v;
-        }
-        for j in 0..nx {
-            jb[(row, o.c + i * nx + j)] += x[j];
-        }
-        for j in 0..nu {
-            jb[(row, o.d + i * nu + j)] += u[j];
-        }
+    }
+
+    fn add_output_direct(&self, _th: &[f64], i: usize, w: &Work, jb: &mut Mat<f64>, row: usize) {
+        let nf = self.eta.len();
         for k in 0..nf {
-            jb[(row, o.f + i * nf + k)] += w.et[k];
+            jb[(row, w.o.f + i * nf + k)] += w.et[k];
         }
     }
-}
 
-/// `H += Jb^T Jb` (lower triangle used later), `g -= Jb^T r` over the first `rows` rows,
-/// then clears the block.
-pub(super) fn flush(jb: &mut Mat<f64>, rb: &Mat<f64>, rows: usize, ev: &mut Evaluation) {
-    let j = jb.as_ref().subrows(0, rows);
-    let r = rb.as_ref().subrows(0, rows);
-    matmul(
-        ev.gauss_newton.as_mut(),
-        Accum::Add,
-        j.transpose(),
-        j,
-        1.0,
-        Par::Seq,
-    );
-    let p = j.ncols();
-    let mut g = Mat::<f64>::zeros(p, 1);
-    matmul(g.as_mut(), Accum::Replace, j.transpose(), r, 1.0, Par::Seq);
-    for a in 0..p {
-        ev.gradient[a] -= g[(a, 0)];
-    }
-    jb.as_mut().subrows_mut(0, rows).fill(0.0);
-}
-
-struct PnlssProblem<'a> {
-    model: &'a Pnlss,
-    data: &'a [PnlssData<'a>],
-}
-
-impl Problem for PnlssProblem<'_> {
-    fn n_params(&self) -> usize {
-        self.model.n_params()
+    /// `E dzeta/dx`.
+    fn add_state_slope(&self, th: &[f64], w: &Work, aeff: &mut Mat<f64>) {
+        let (nx, ne) = (self.nx, self.zeta.len());
+        for i in 0..nx {
+            for j in 0..nx {
+                for k in 0..ne {
+                    aeff[(i, j)] += th[w.o.e + i * ne + k] * w.dze[k * nx + j];
+                }
+            }
+        }
     }
 
-    fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
-        Ok(self.model.cost(theta, self.data, jacobian))
+    fn add_state_direct(&self, _th: &[f64], _x: &[f64], w: &Work, s2: &mut Mat<f64>) {
+        let ne = self.zeta.len();
+        for i in 0..self.nx {
+            for j in 0..ne {
+                s2[(i, w.o.e + i * ne + j)] += w.ze[j];
+            }
+        }
     }
 }
 
@@ -497,37 +286,5 @@ pub fn estimate(
     options: &Options,
     observer: &mut dyn FnMut(&Iteration) -> Flow,
 ) -> Result<Solution> {
-    if data.is_empty() {
-        return Err(SysidError::invalid("data", "no records"));
-    }
-    for d in data {
-        let n = model.check(theta0, d.u, Some(d.y))?;
-        if n <= d.skip {
-            return Err(SysidError::InsufficientData {
-                context: "a pnlss record after its transient".into(),
-                needed: d.skip + 1,
-                got: n,
-                fix: "use a longer record or a shorter transient",
-            });
-        }
-        for (name, a, w) in [("u", d.u, model.nu), ("y", d.y, model.ny)] {
-            if let Some(k) = a.iter().position(|v| !v.is_finite()) {
-                return Err(SysidError::NonFinite {
-                    what: name,
-                    sample: k / w.max(1),
-                    channel: k % w.max(1),
-                });
-            }
-        }
-    }
-    let start = model.cost(theta0, data, false);
-    if !start.cost.is_finite() {
-        return Err(SysidError::numerical(
-            "pnlss",
-            "the initial model's simulation diverges on the data; start from a stable linear \
-             model (the BLA or a subspace model)",
-        ));
-    }
-    let mut prob = PnlssProblem { model, data };
-    minimize(&mut prob, theta0, options, observer)
+    simulation::estimate(model, data, theta0, options, observer)
 }
