@@ -1,3 +1,4 @@
+use super::simulation::{self, NonlinearTerms};
 use super::*;
 use crate::optim::{Flow, Options};
 
@@ -31,39 +32,8 @@ fn model() -> (Pnlss, Vec<f64>) {
     (m, th)
 }
 
-/// What the Jacobian check needs of a model.
-trait Fitted {
-    fn sim(&self, th: &[f64], u: &[f64]) -> Vec<f64>;
-    fn eval(&self, th: &[f64], data: &[PnlssData<'_>]) -> crate::optim::Evaluation;
-    fn np(&self) -> usize;
-}
-
-impl Fitted for Pnlss {
-    fn sim(&self, th: &[f64], u: &[f64]) -> Vec<f64> {
-        self.simulate(th, u, None).unwrap().0
-    }
-    fn eval(&self, th: &[f64], data: &[PnlssData<'_>]) -> crate::optim::Evaluation {
-        self.cost(th, data, true)
-    }
-    fn np(&self) -> usize {
-        self.n_params()
-    }
-}
-
-impl Fitted for Decoupled {
-    fn sim(&self, th: &[f64], u: &[f64]) -> Vec<f64> {
-        self.simulate(th, u, None).unwrap().0
-    }
-    fn eval(&self, th: &[f64], data: &[PnlssData<'_>]) -> crate::optim::Evaluation {
-        self.cost(th, data, true)
-    }
-    fn np(&self) -> usize {
-        self.n_params()
-    }
-}
-
-fn residuals(m: &dyn Fitted, th: &[f64], u: &[f64], y: &[f64], skip: usize) -> Vec<f64> {
-    let yh = m.sim(th, u);
+fn residuals<M: NonlinearTerms>(m: &M, th: &[f64], u: &[f64], y: &[f64], skip: usize) -> Vec<f64> {
+    let yh = simulation::simulate(m, th, u, None).unwrap().0;
     let ny = y.len() / (u.len());
     y.iter()
         .zip(&yh)
@@ -127,7 +97,7 @@ fn clamped_sensitivity_jacobian_matches_finite_differences() {
     assert!(m.with_range(vec![1.0; 3], vec![0.0; 3]).is_err());
 }
 
-fn check_jacobian(m: &dyn Fitted, th: &[f64]) {
+fn check_jacobian<M: NonlinearTerms>(m: &M, th: &[f64]) {
     let th = th.to_vec();
     let n = 60;
     let u = signal(n, 1, 3);
@@ -137,8 +107,8 @@ fn check_jacobian(m: &dyn Fitted, th: &[f64]) {
         y: &y,
         skip: 5,
     }];
-    let ev = m.eval(&th, &data);
-    let p = m.np();
+    let ev = simulation::cost(m, &th, &data, true);
+    let p = m.n_params();
     let r0 = residuals(m, &th, &u, &y, 5);
     let mut jac = vec![vec![0.0; r0.len()]; p];
     for a in 0..p {
@@ -171,41 +141,53 @@ fn check_jacobian(m: &dyn Fitted, th: &[f64]) {
     assert!((c - ev.cost).abs() < 1e-12 * c);
 }
 
-#[test]
-fn known_coefficients_recovered_from_noise_free_data() {
-    let (m, truth) = model();
-    let n = 600;
-    let u: Vec<f64> = signal(n, 1, 11).iter().map(|v| 2.0 * v).collect();
-    let (y, _) = m.simulate(&truth, &u, None).unwrap();
+/// Fits `m` from `th0`, the first `n_fixed` parameters held, to its noise-free simulation
+/// from `truth` (600 samples); the solution and the largest output error.
+fn refit<M: NonlinearTerms>(
+    m: &M,
+    truth: &[f64],
+    th0: &[f64],
+    n_fixed: usize,
+    max_iter: usize,
+) -> (crate::optim::Solution, f64) {
+    let u: Vec<f64> = signal(600, 1, 11).iter().map(|v| 2.0 * v).collect();
+    let (y, _) = simulation::simulate(m, truth, &u, None).unwrap();
     let data = [PnlssData {
         u: &u,
         y: &y,
         skip: 0,
     }];
-    // The simulation error is invariant under a change of state basis (the full monomial
-    // sets span the same space in any basis), so the basis is pinned by holding the linear
-    // part at its true value; the nonlinear coefficients start at zero.
-    let mut th0 = truth.clone();
-    th0[12..].iter_mut().for_each(|v| *v = 0.0);
     let opts = Options {
-        fixed: Some((0..truth.len()).map(|k| k < 12).collect()),
-        max_iter: 200,
+        fixed: Some((0..truth.len()).map(|k| k < n_fixed).collect()),
+        max_iter,
         tol_cost: 1e-30,
         tol_gradient: 1e-30,
         tol_step: 1e-14,
         ..Default::default()
     };
-    let sol = estimate(&m, &data, &th0, &opts, &mut |_| Flow::Continue).unwrap();
+    let sol = simulation::estimate(m, &data, th0, &opts, &mut |_| Flow::Continue).unwrap();
+    let (yh, _) = simulation::simulate(m, &sol.theta, &u, None).unwrap();
+    let err = yh
+        .iter()
+        .zip(&y)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    (sol, err)
+}
+
+#[test]
+fn known_coefficients_recovered_from_noise_free_data() {
+    let (m, truth) = model();
+    // The simulation error is invariant under a change of state basis (the full monomial
+    // sets span the same space in any basis), so the basis is pinned by holding the linear
+    // part at its true value; the nonlinear coefficients start at zero.
+    let mut th0 = truth.clone();
+    th0[12..].iter_mut().for_each(|v| *v = 0.0);
+    let (sol, fit) = refit(&m, &truth, &th0, 12, 200);
     let err = sol
         .theta
         .iter()
         .zip(&truth)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
-    let (yh, _) = m.simulate(&sol.theta, &u, None).unwrap();
-    let fit = yh
-        .iter()
-        .zip(&y)
         .map(|(a, b)| (a - b).abs())
         .fold(0.0, f64::max);
     assert!(fit < 1e-9, "output error {fit}");
@@ -321,33 +303,11 @@ fn decoupled_known_model_reproduced_from_noise_free_data() {
     // The branch scales are free (W_k c_k is what matters) and so is the state basis: the
     // linear part and V are held at their true values and the simulated output compared.
     let (m, truth) = decoupled();
-    let n = 600;
-    let u: Vec<f64> = signal(n, 1, 11).iter().map(|v| 2.0 * v).collect();
-    let (y, _) = m.simulate(&truth, &u, None).unwrap();
-    let data = [PnlssData {
-        u: &u,
-        y: &y,
-        skip: 0,
-    }];
     let mut th0 = truth.clone();
     th0[18..22].iter_mut().for_each(|v| *v = 0.0); // W = 0: the start is linear
     th0[22..26].copy_from_slice(&[1.0, 1.0, 1.0, 1.0]);
     th0[26..].iter_mut().for_each(|v| *v = 0.0);
-    let opts = Options {
-        fixed: Some((0..truth.len()).map(|k| k < 18).collect()),
-        max_iter: 300,
-        tol_cost: 1e-30,
-        tol_gradient: 1e-30,
-        tol_step: 1e-14,
-        ..Default::default()
-    };
-    let sol = estimate_decoupled(&m, &data, &th0, &opts, &mut |_| Flow::Continue).unwrap();
-    let (yh, _) = m.simulate(&sol.theta, &u, None).unwrap();
-    let err = yh
-        .iter()
-        .zip(&y)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f64::max);
+    let (sol, err) = refit(&m, &truth, &th0, 18, 300);
     assert!(err < 1e-9, "output error {err}");
     // the products W_ik c_kd are identified
     for i in 0..2 {
