@@ -560,61 +560,52 @@ def pem_criterion(
 ) -> float: ...
 # issue 29 (branch nlss): PNLSS and neural state space
 def pnlss_monomials(nx: int, nu: int, terms: str, degrees: list[int]) -> list[list[int]]: ...
+_Range = tuple[list[float], list[float]]
+_Records = list[tuple[_Array, _Array, int]]
+
+class _PnlssStructure(TypedDict, total=False):
+    """A PNLSS structure (all but ``range`` required)."""
+
+    nx: int
+    nu: int
+    ny: int
+    zeta: list[list[int]]
+    eta: list[list[int]]
+    range: _Range | None
+
 def pnlss_simulate(
-    nx: int,
-    nu: int,
-    ny: int,
-    zeta: list[list[int]],
-    eta: list[list[int]],
-    theta: list[float],
-    u: _Array,
-    x0: list[float] | None = None,
-    range: tuple[list[float], list[float]] | None = None,
+    structure: _PnlssStructure, theta: list[float], u: _Array, x0: list[float] | None = None
 ) -> tuple[_Array, _Array]: ...
 def pnlss_estimate(
-    nx: int,
-    nu: int,
-    ny: int,
-    zeta: list[list[int]],
-    eta: list[list[int]],
-    records: list[tuple[_Array, _Array, int]],
+    structure: _PnlssStructure,
+    records: _Records,
     theta0: _Array,
     max_iter: int = 100,
     tol: float = 1e-8,
     fixed: list[bool] | None = None,
     progress: Callable[..., Any] | None = None,
-    range: tuple[list[float], list[float]] | None = None,
 ) -> dict[str, Any]: ...
+
+class _NeuralStructure(TypedDict, total=False):
+    """A neural state-space structure (all but ``g_hidden`` required)."""
+
+    dims: tuple[int, int, int]
+    f_hidden: list[int]
+    g_hidden: list[int] | None
+    h_hidden: list[int]
+    lags: int
+
 def neural_ss_simulate(
-    dims: tuple[int, int, int],
-    f_hidden: list[int],
-    g_hidden: list[int] | None,
-    h_hidden: list[int],
-    lags: int,
-    params: _Array,
-    u: _Array,
-    x0: list[float],
+    structure: _NeuralStructure, params: _Array, u: _Array, x0: list[float]
 ) -> _Array: ...
 def neural_ss_encode(
-    dims: tuple[int, int, int],
-    f_hidden: list[int],
-    g_hidden: list[int] | None,
-    h_hidden: list[int],
-    lags: int,
-    params: _Array,
-    u: _Array,
-    y: _Array,
-    t: int,
+    structure: _NeuralStructure, params: _Array, u: _Array, y: _Array, t: int
 ) -> _Array: ...
 def neural_ss_train(
-    dims: tuple[int, int, int],
-    f_hidden: list[int],
-    g_hidden: list[int] | None,
-    h_hidden: list[int],
-    lags: int,
+    structure: _NeuralStructure,
     params0: _Array,
-    train: list[tuple[_Array, _Array, int]],
-    val: list[tuple[_Array, _Array, int]],
+    train: _Records,
+    val: _Records,
     epochs: int = 200,
     batch: int = 16,
     horizon: int = 100,
@@ -623,13 +614,7 @@ def neural_ss_train(
     seed: int = 0,
     progress: Callable[..., Any] | None = None,
 ) -> dict[str, Any]: ...
-def neural_ss_n_params(
-    dims: tuple[int, int, int],
-    f_hidden: list[int],
-    g_hidden: list[int] | None,
-    h_hidden: list[int],
-    lags: int,
-) -> int: ...
+def neural_ss_n_params(structure: _NeuralStructure) -> int: ...
 # issue 27 (branch tsonline): online estimators
 @final
 class RecursiveEstimator:
@@ -675,70 +660,64 @@ class RecursiveEstimator:
 _Nl = tuple[Any, ...]
 _Orders3 = tuple[list[int], list[int], list[int]]
 
+class _NetworkStructure(TypedDict, total=False):
+    """The structure the narx_network_* functions share (``outputs`` absent while fitting)."""
+
+    orders: _Orders3
+    shift: list[float]
+    scale: list[float]
+    outputs: list[_Nl]
+
 def narx_network_fit(
     experiments: list[tuple[_Array, _Array]],
-    orders: _Orders3,
-    shift: list[float],
-    scale: list[float],
+    structure: _NetworkStructure,
     output: int,
     kinds: list[int],
     theta0: list[float],
     max_iter: int = 100,
     tol: float = 1e-7,
     progress: Callable[..., Any] | None = None,
-    bounds: tuple[list[float], list[float]] | None = None,
+    bounds: _Range | None = None,
 ) -> tuple[_Nl, dict[str, Any]]: ...
 def narx_tree_fit(
     experiments: list[tuple[_Array, _Array]],
-    orders: _Orders3,
-    shift: list[float],
-    scale: list[float],
+    structure: _NetworkStructure,
     output: int,
     max_leaves: int = 16,
     min_leaf: int = 0,
 ) -> tuple[_Nl, dict[str, Any]]: ...
 def narx_network_refine(
     experiments: list[tuple[_Array, _Array]],
-    orders: _Orders3,
-    shift: list[float],
-    scale: list[float],
-    outputs: list[_Nl],
+    structure: _NetworkStructure,
     max_iter: int = 100,
     tol: float = 1e-7,
     progress: Callable[..., Any] | None = None,
-    bounds: tuple[list[float], list[float]] | None = None,
+    bounds: _Range | None = None,
 ) -> tuple[list[_Nl], dict[str, Any]]: ...
-def narx_network_simulate(
-    orders: _Orders3, shift: list[float], scale: list[float], outputs: list[_Nl], u: _Array,
-    y0: _Array,
-) -> _Array: ...
+def narx_network_simulate(structure: _NetworkStructure, u: _Array, y0: _Array) -> _Array: ...
 def narx_network_predict(
-    orders: _Orders3, shift: list[float], scale: list[float], outputs: list[_Nl], u: _Array,
-    y: _Array, horizon: int,
+    structure: _NetworkStructure, u: _Array, y: _Array, horizon: int
 ) -> _Array: ...
-def narx_network_evaluate(
-    orders: _Orders3, shift: list[float], scale: list[float], outputs: list[_Nl], x: _Array,
-) -> _Array: ...
+def narx_network_evaluate(structure: _NetworkStructure, x: _Array) -> _Array: ...
 # issue 29 (branch nlss2): decoupled PNLSS
+class _DecoupledStructure(TypedDict, total=False):
+    """A decoupled PNLSS structure (all but ``range`` required)."""
+
+    dims: tuple[int, int, int]
+    branches: int
+    degrees: list[int]
+    range: _Range | None
+
 def decoupled_simulate(
-    dims: tuple[int, int, int],
-    branches: int,
-    degrees: list[int],
-    theta: list[float],
-    u: _Array,
-    x0: list[float] | None = None,
-    range: tuple[list[float], list[float]] | None = None,
+    structure: _DecoupledStructure, theta: list[float], u: _Array, x0: list[float] | None = None
 ) -> tuple[_Array, _Array]: ...
 def decoupled_estimate(
-    dims: tuple[int, int, int],
-    branches: int,
-    degrees: list[int],
-    records: list[tuple[_Array, _Array, int]],
+    structure: _DecoupledStructure,
+    records: _Records,
     theta0: _Array,
     max_iter: int = 100,
     tol: float = 1e-8,
     progress: Callable[..., Any] | None = None,
-    range: tuple[list[float], list[float]] | None = None,
 ) -> dict[str, Any]: ...
 # issue 31 (branch rules): option names, stabilisation, lagged products from the core
 def option_name(option: str, value: str) -> str: ...

@@ -8,9 +8,11 @@
 
 use crate::convert::{mat_to_numpy, view};
 use crate::errors::IntoPy;
+use crate::search::{detach, run, search_items};
 use numpy::{PyArray2, PyReadonlyArray2};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict};
+use pyo3::types::PyDict;
+use sysid_core::interrupt;
 use sysid_core::narx::network::model::{
     NetworkNarx, Nonlinearity, TreeNode, TreePartition, UnitNetwork,
 };
@@ -18,7 +20,7 @@ use sysid_core::narx::network::tree::{fit_tree, TreeOptions};
 use sysid_core::narx::network::units::UnitKind;
 use sysid_core::narx::network::{fit_prediction, fit_simulation};
 use sysid_core::narx::regressors::{LagSpec, Record};
-use sysid_core::optim::{Flow, Iteration, Options};
+use sysid_core::optim::Options;
 use sysid_core::SysidError;
 
 type Orders = (Vec<usize>, Vec<usize>, Vec<usize>);
@@ -117,18 +119,30 @@ fn spec(nu: usize, ny: usize, o: &Orders) -> PyResult<LagSpec> {
     LagSpec::new(nu, ny, &o.0, &o.1, &o.2, &vec![0; ny]).py()
 }
 
-fn model(
-    orders: &Orders,
+/// What every network NARX call shares, from a dict with `orders = (na, nb, nk)`, the
+/// regressors' `shift` and `scale`, and the nonlinearities `outputs` (one per output; absent
+/// while they are being fitted).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct Structure {
+    orders: Orders,
     shift: Vec<f64>,
     scale: Vec<f64>,
+    #[pyo3(default)]
     outputs: Vec<NlArg>,
-) -> PyResult<NetworkNarx> {
-    let nl = outputs
-        .into_iter()
-        .map(decode)
-        .collect::<PyResult<Vec<_>>>()?;
-    let sp = spec(orders.1.len(), orders.0.len(), orders)?;
-    NetworkNarx::new(sp, shift, scale, nl).py()
+}
+
+impl Structure {
+    fn model(self) -> PyResult<NetworkNarx> {
+        let nl = self
+            .outputs
+            .into_iter()
+            .map(decode)
+            .collect::<PyResult<Vec<_>>>()?;
+        let o = &self.orders;
+        let sp = spec(o.1.len(), o.0.len(), o)?;
+        NetworkNarx::new(sp, self.shift, self.scale, nl).py()
+    }
 }
 
 fn options(max_iter: usize, tol: f64, bounds: Option<(Vec<f64>, Vec<f64>)>) -> Options {
@@ -140,37 +154,6 @@ fn options(max_iter: usize, tol: f64, bounds: Option<(Vec<f64>, Vec<f64>)>) -> O
         o.upper = Some(hi);
     }
     o
-}
-
-/// Calls `progress(iteration, cost, step_norm, gradient_norm, damping)` after every
-/// iteration (a `False` return stops), or without one checks for Ctrl-C; the first Python
-/// error lands in `slot` and stops the search.
-fn observe(progress: &Option<Py<PyAny>>, slot: &mut Option<PyErr>, it: &Iteration) -> Flow {
-    Python::attach(|py| {
-        let r = match progress {
-            Some(cb) => cb
-                .call1(
-                    py,
-                    (
-                        it.iteration,
-                        it.cost,
-                        it.step_norm,
-                        it.gradient_norm,
-                        it.damping,
-                    ),
-                )
-                .map(|v| v.bind(py).is(&*PyBool::new(py, false))),
-            None => py.check_signals().map(|_| false),
-        };
-        match r {
-            Ok(true) => Flow::Stop,
-            Ok(false) => Flow::Continue,
-            Err(e) => {
-                slot.get_or_insert(e);
-                Flow::Stop
-            }
-        }
-    })
 }
 
 fn records<'a>(exps: &'a Experiments<'_>) -> Vec<Record<'a>> {
@@ -188,14 +171,12 @@ fn shape(exps: &Experiments<'_>) -> (usize, usize) {
 /// Trains the unit network of output `output` for one-step prediction from `theta0`.
 /// Returns the network tuple and the search report (`sysid._sysid` dict items).
 #[pyfunction]
-#[pyo3(signature = (experiments, orders, shift, scale, output, kinds, theta0, max_iter=100, tol=1e-7, progress=None, bounds=None))]
+#[pyo3(signature = (experiments, structure, output, kinds, theta0, max_iter=100, tol=1e-7, progress=None, bounds=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn narx_network_fit<'py>(
     py: Python<'py>,
     experiments: Experiments<'_>,
-    orders: Orders,
-    shift: Vec<f64>,
-    scale: Vec<f64>,
+    structure: Structure,
     output: usize,
     kinds: Vec<i64>,
     theta0: Vec<f64>,
@@ -205,30 +186,16 @@ pub fn narx_network_fit<'py>(
     bounds: Option<(Vec<f64>, Vec<f64>)>,
 ) -> PyResult<(NlArg, Bound<'py, PyDict>)> {
     let (nu, ny) = shape(&experiments);
-    let sp = spec(nu, ny, &orders)?;
+    let sp = spec(nu, ny, &structure.orders)?;
     let ks = self::kinds(&kinds)?;
     let recs = records(&experiments);
     let opts = options(max_iter, tol, bounds);
-    let mut slot = None;
-    let res = py.detach(|| {
-        fit_prediction(
-            &sp,
-            &shift,
-            &scale,
-            &recs,
-            output,
-            ks,
-            &theta0,
-            &opts,
-            &mut |it| observe(&progress, &mut slot, it),
-        )
-    });
-    if let Some(e) = slot {
-        return Err(e);
-    }
-    let (net, sol) = res.py()?;
+    let (shift, scale) = (&structure.shift, &structure.scale);
+    let (net, sol) = run(py, &progress, |obs| {
+        fit_prediction(&sp, shift, scale, &recs, output, ks, &theta0, &opts, obs)
+    })?;
     let d = PyDict::new(py);
-    crate::search::search_items(&d, py, &sol)?;
+    search_items(&d, py, &sol)?;
     d.set_item("n_rows", sp.check_records(&recs).py()?)?;
     Ok((encode(&Nonlinearity::Network(net)), d))
 }
@@ -236,38 +203,32 @@ pub fn narx_network_fit<'py>(
 /// Grows the tree partition of output `output`. Returns the tree tuple and a dict with
 /// `rss` (after each split), `n_rows`, `stop`.
 #[pyfunction]
-#[pyo3(signature = (experiments, orders, shift, scale, output, max_leaves=16, min_leaf=0))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (experiments, structure, output, max_leaves=16, min_leaf=0))]
 pub fn narx_tree_fit<'py>(
     py: Python<'py>,
     experiments: Experiments<'_>,
-    orders: Orders,
-    shift: Vec<f64>,
-    scale: Vec<f64>,
+    structure: Structure,
     output: usize,
     max_leaves: usize,
     min_leaf: usize,
 ) -> PyResult<(NlArg, Bound<'py, PyDict>)> {
     let (nu, ny) = shape(&experiments);
-    let sp = spec(nu, ny, &orders)?;
+    let sp = spec(nu, ny, &structure.orders)?;
     let recs = records(&experiments);
     let opts = TreeOptions::new(max_leaves, min_leaf);
-    let mut slot: Option<PyErr> = None;
-    let res = py.detach(|| {
-        fit_tree(&sp, &shift, &scale, &recs, output, &opts, &mut || {
-            Python::attach(|py| match py.check_signals() {
-                Ok(()) => false,
-                Err(e) => {
-                    slot.get_or_insert(e);
-                    true
-                }
-            })
-        })
-    });
-    if let Some(e) = slot {
-        return Err(e);
-    }
-    let fit = res.py()?;
+    let (shift, scale) = (&structure.shift, &structure.scale);
+    // Ctrl-C stops growing between splits; the interrupt is raised after
+    let fit = detach(py, || {
+        fit_tree(
+            &sp,
+            shift,
+            scale,
+            &recs,
+            output,
+            &opts,
+            &mut interrupt::requested,
+        )
+    })?;
     let d = PyDict::new(py);
     d.set_item("rss", fit.rss.clone())?;
     d.set_item("n_rows", fit.n_rows)?;
@@ -278,32 +239,22 @@ pub fn narx_tree_fit<'py>(
 /// Refines every parameter for free-run simulation. Returns the nonlinearities and the
 /// search report.
 #[pyfunction]
-#[pyo3(signature = (experiments, orders, shift, scale, outputs, max_iter=100, tol=1e-7, progress=None, bounds=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (experiments, structure, max_iter=100, tol=1e-7, progress=None, bounds=None))]
 pub fn narx_network_refine<'py>(
     py: Python<'py>,
     experiments: Experiments<'_>,
-    orders: Orders,
-    shift: Vec<f64>,
-    scale: Vec<f64>,
-    outputs: Vec<NlArg>,
+    structure: Structure,
     max_iter: usize,
     tol: f64,
     progress: Option<Py<PyAny>>,
     bounds: Option<(Vec<f64>, Vec<f64>)>,
 ) -> PyResult<(Vec<NlArg>, Bound<'py, PyDict>)> {
-    let m = model(&orders, shift, scale, outputs)?;
+    let m = structure.model()?;
     let recs = records(&experiments);
     let opts = options(max_iter, tol, bounds);
-    let mut slot = None;
-    let res =
-        py.detach(|| fit_simulation(m, &recs, &opts, &mut |it| observe(&progress, &mut slot, it)));
-    if let Some(e) = slot {
-        return Err(e);
-    }
-    let (m, sol) = res.py()?;
+    let (m, sol) = run(py, &progress, |obs| fit_simulation(m, &recs, &opts, obs))?;
     let d = PyDict::new(py);
-    crate::search::search_items(&d, py, &sol)?;
+    search_items(&d, py, &sol)?;
     Ok((m.outputs.iter().map(encode).collect(), d))
 }
 
@@ -311,14 +262,11 @@ pub fn narx_network_refine<'py>(
 #[pyfunction]
 pub fn narx_network_simulate<'py>(
     py: Python<'py>,
-    orders: Orders,
-    shift: Vec<f64>,
-    scale: Vec<f64>,
-    outputs: Vec<NlArg>,
+    structure: Structure,
     u: PyReadonlyArray2<'_, f64>,
     y0: PyReadonlyArray2<'_, f64>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let m = model(&orders, shift, scale, outputs)?;
+    let m = structure.model()?;
     let (u, y0) = (view(&u), view(&y0));
     let y = py.detach(|| m.simulate(u, y0)).py()?;
     Ok(mat_to_numpy(py, &y))
@@ -326,18 +274,14 @@ pub fn narx_network_simulate<'py>(
 
 /// `horizon`-step prediction from measured `u`, `y`.
 #[pyfunction]
-#[allow(clippy::too_many_arguments)]
 pub fn narx_network_predict<'py>(
     py: Python<'py>,
-    orders: Orders,
-    shift: Vec<f64>,
-    scale: Vec<f64>,
-    outputs: Vec<NlArg>,
+    structure: Structure,
     u: PyReadonlyArray2<'_, f64>,
     y: PyReadonlyArray2<'_, f64>,
     horizon: usize,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let m = model(&orders, shift, scale, outputs)?;
+    let m = structure.model()?;
     let (u, y) = (view(&u), view(&y));
     let p = py.detach(|| m.predict(u, y, horizon)).py()?;
     Ok(mat_to_numpy(py, &p))
@@ -347,13 +291,10 @@ pub fn narx_network_predict<'py>(
 #[pyfunction]
 pub fn narx_network_evaluate<'py>(
     py: Python<'py>,
-    orders: Orders,
-    shift: Vec<f64>,
-    scale: Vec<f64>,
-    outputs: Vec<NlArg>,
+    structure: Structure,
     x: PyReadonlyArray2<'_, f64>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let m = model(&orders, shift, scale, outputs)?;
+    let m = structure.model()?;
     let x = view(&x);
     let v = py.detach(|| m.evaluate(x)).py()?;
     Ok(mat_to_numpy(py, &v))

@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::nlss::neural::{self, EpochReport, NeuralSs, Segment, TrainOptions};
 use sysid_core::nlss::{self, Decoupled, Monomials, Pnlss, PnlssData, Terms};
-use sysid_core::optim::{Flow, Options};
+use sysid_core::optim::{Flow, Iteration, Options, Solution};
 use sysid_core::SysidError;
 
 type Terms2 = Vec<Vec<usize>>;
@@ -31,25 +31,119 @@ fn slice<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<&
 
 type Range = Option<(Vec<f64>, Vec<f64>)>;
 
-fn model(
+/// A PNLSS structure, from a dict with `nx`, `nu`, `ny`, `zeta` and `eta` (the monomials
+/// as index lists into `z = [x; u]`) and optionally `range = (lo, hi)`, which clamps the
+/// monomials' arguments.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct PnlssStructure {
     nx: usize,
     nu: usize,
     ny: usize,
     zeta: Terms2,
     eta: Terms2,
+    #[pyo3(default)]
     range: Range,
-) -> PyResult<Pnlss> {
-    let m = Pnlss::new(
-        nx,
-        nu,
-        ny,
-        Monomials::from_terms(nx, nu, zeta).py()?,
-        Monomials::from_terms(nx, nu, eta).py()?,
-    );
+}
+
+impl PnlssStructure {
+    fn model(self) -> PyResult<Pnlss> {
+        let (nx, nu) = (self.nx, self.nu);
+        let m = Pnlss::new(
+            nx,
+            nu,
+            self.ny,
+            Monomials::from_terms(nx, nu, self.zeta).py()?,
+            Monomials::from_terms(nx, nu, self.eta).py()?,
+        );
+        with_range(m, self.range, Pnlss::with_range)
+    }
+}
+
+/// A decoupled PNLSS structure, from a dict with `dims = (nx, nu, ny)`, `branches`,
+/// `degrees` and optionally `range = (lo, hi)`, which clamps the branch arguments.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct DecoupledStructure {
+    dims: (usize, usize, usize),
+    branches: usize,
+    degrees: Vec<usize>,
+    #[pyo3(default)]
+    range: Range,
+}
+
+impl DecoupledStructure {
+    fn model(self) -> PyResult<Decoupled> {
+        let (nx, nu, ny) = self.dims;
+        let m = Decoupled::new(nx, nu, ny, self.branches, self.degrees).py()?;
+        with_range(m, self.range, Decoupled::with_range)
+    }
+}
+
+/// `m` with its arguments' box, when one is given.
+fn with_range<M>(
+    m: M,
+    range: Range,
+    set: impl FnOnce(M, Vec<f64>, Vec<f64>) -> sysid_core::Result<M>,
+) -> PyResult<M> {
     match range {
-        Some((lo, hi)) => Ok(m.with_range(lo, hi).py()?),
+        Some((lo, hi)) => Ok(set(m, lo, hi).py()?),
         None => Ok(m),
     }
+}
+
+/// Outputs and states of a simulation on `u`, as flat arrays.
+fn simulated<'py>(
+    py: Python<'py>,
+    u: &PyReadonlyArray2<'_, f64>,
+    simulate: impl FnOnce(&[f64]) -> sysid_core::Result<(Vec<f64>, Vec<f64>)> + Send,
+) -> PyResult<Pair<'py>> {
+    let us = slice(u, "u")?;
+    let (y, x) = py.detach(|| simulate(us)).py()?;
+    Ok((slice_to_numpy(py, &y), slice_to_numpy(py, &x)))
+}
+
+/// A simulation-error fit from `theta0` on `(u, y, skip)` records: the optimiser's report
+/// and `theta` in a dict.
+#[allow(clippy::too_many_arguments)]
+fn fitted<'py>(
+    py: Python<'py>,
+    records: &Records<'_>,
+    theta0: &PyReadonlyArray1<'_, f64>,
+    max_iter: usize,
+    tol: f64,
+    fixed: Option<Vec<bool>>,
+    progress: &Option<Py<PyAny>>,
+    estimate: impl FnOnce(
+            &[PnlssData<'_>],
+            &[f64],
+            &Options,
+            &mut dyn FnMut(&Iteration) -> Flow,
+        ) -> sysid_core::Result<Solution>
+        + Send,
+) -> PyResult<Bound<'py, PyDict>> {
+    let data = records
+        .iter()
+        .map(|(u, y, skip)| {
+            Ok(PnlssData {
+                u: slice(u, "u")?,
+                y: slice(y, "y")?,
+                skip: *skip,
+            })
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let th0 = crate::convert::vec1(theta0);
+    let mut opts = Options::default();
+    opts.max_iter = max_iter;
+    opts.tol_cost = tol;
+    opts.tol_step = tol;
+    opts.tol_gradient = tol * tol;
+    opts.fixed = fixed;
+    let sol = run(py, progress, |obs| estimate(&data, &th0, &opts, obs))?;
+    let d = PyDict::new(py);
+    search_items(&d, py, &sol)?;
+    d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
+    Ok(d)
 }
 
 /// The monomials (index lists into `z = [x; u]`) of the given degrees in the variables
@@ -60,72 +154,41 @@ pub fn pnlss_monomials(nx: usize, nu: usize, terms: &str, degrees: Vec<usize>) -
     Ok(Monomials::new(nx, nu, t, &degrees).py()?.terms().to_vec())
 }
 
-/// Simulated outputs and states (row-major `(N, ny)` and `(N, nx)` flattened) from `x0`;
-/// `range = (lo, hi)` clamps the monomials' arguments `[x; u]`.
+/// Simulated outputs and states (row-major `(N, ny)` and `(N, nx)` flattened) from `x0`.
 #[pyfunction]
-#[pyo3(signature = (nx, nu, ny, zeta, eta, theta, u, x0=None, range=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (structure, theta, u, x0=None))]
 pub fn pnlss_simulate<'py>(
     py: Python<'py>,
-    nx: usize,
-    nu: usize,
-    ny: usize,
-    zeta: Terms2,
-    eta: Terms2,
+    structure: PnlssStructure,
     theta: Vec<f64>,
     u: PyReadonlyArray2<'_, f64>,
     x0: Option<Vec<f64>>,
-    range: Range,
 ) -> PyResult<Pair<'py>> {
-    let m = model(nx, nu, ny, zeta, eta, range)?;
-    let us = slice(&u, "u")?;
-    let (y, x) = py.detach(|| m.simulate(&theta, us, x0.as_deref())).py()?;
-    Ok((slice_to_numpy(py, &y), slice_to_numpy(py, &x)))
+    let m = structure.model()?;
+    simulated(py, &u, |us| m.simulate(&theta, us, x0.as_deref()))
 }
 
 /// Simulation-error fit from `theta0`; records are `(u, y, skip)`. Returns a dict with the
-/// optimiser's report and `theta`; `range` as in [`pnlss_simulate`].
+/// optimiser's report and `theta`.
 #[pyfunction]
-#[pyo3(signature = (nx, nu, ny, zeta, eta, records, theta0, max_iter=100, tol=1e-8, fixed=None, progress=None, range=None))]
+#[pyo3(signature = (structure, records, theta0, max_iter=100, tol=1e-8, fixed=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn pnlss_estimate<'py>(
     py: Python<'py>,
-    nx: usize,
-    nu: usize,
-    ny: usize,
-    zeta: Terms2,
-    eta: Terms2,
+    structure: PnlssStructure,
     records: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>, usize)>,
     theta0: PyReadonlyArray1<'_, f64>,
     max_iter: usize,
     tol: f64,
     fixed: Option<Vec<bool>>,
     progress: Option<Py<PyAny>>,
-    range: Range,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let m = model(nx, nu, ny, zeta, eta, range)?;
-    let mut data = Vec::with_capacity(records.len());
-    for (u, y, skip) in &records {
-        data.push(PnlssData {
-            u: slice(u, "u")?,
-            y: slice(y, "y")?,
-            skip: *skip,
-        });
-    }
-    let th0 = crate::convert::vec1(&theta0);
-    let mut opts = Options::default();
-    opts.max_iter = max_iter;
-    opts.tol_cost = tol;
-    opts.tol_step = tol;
-    opts.tol_gradient = tol * tol;
-    opts.fixed = fixed;
-    let sol = run(py, &progress, |obs| {
-        nlss::estimate(&m, &data, &th0, &opts, obs)
-    })?;
-    let d = PyDict::new(py);
-    search_items(&d, py, &sol)?;
-    d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
-    Ok(d)
+    let m = structure.model()?;
+    let est =
+        |d: &[PnlssData<'_>], th0: &[f64], o: &Options, obs: &mut dyn FnMut(&Iteration) -> Flow| {
+            nlss::estimate(&m, d, th0, o, obs)
+        };
+    fitted(py, &records, &theta0, max_iter, tol, fixed, &progress, est)
 }
 
 /// Registers the functions.
@@ -138,113 +201,79 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     register_neural(m)
 }
 
-fn decoupled(
-    dims: (usize, usize, usize),
-    branches: usize,
-    degrees: Vec<usize>,
-    range: Range,
-) -> PyResult<Decoupled> {
-    let m = Decoupled::new(dims.0, dims.1, dims.2, branches, degrees).py()?;
-    match range {
-        Some((lo, hi)) => Ok(m.with_range(lo, hi).py()?),
-        None => Ok(m),
-    }
-}
-
-/// Decoupled PNLSS simulation: outputs and states (row-major, flattened) from `x0`;
-/// `range = (lo, hi)` clamps the branch arguments.
+/// Decoupled PNLSS simulation: outputs and states (row-major, flattened) from `x0`.
 #[pyfunction]
-#[pyo3(signature = (dims, branches, degrees, theta, u, x0=None, range=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (structure, theta, u, x0=None))]
 pub fn decoupled_simulate<'py>(
     py: Python<'py>,
-    dims: (usize, usize, usize),
-    branches: usize,
-    degrees: Vec<usize>,
+    structure: DecoupledStructure,
     theta: Vec<f64>,
     u: PyReadonlyArray2<'_, f64>,
     x0: Option<Vec<f64>>,
-    range: Range,
 ) -> PyResult<Pair<'py>> {
-    let m = decoupled(dims, branches, degrees, range)?;
-    let us = slice(&u, "u")?;
-    let (y, x) = py.detach(|| m.simulate(&theta, us, x0.as_deref())).py()?;
-    Ok((slice_to_numpy(py, &y), slice_to_numpy(py, &x)))
+    let m = structure.model()?;
+    simulated(py, &u, |us| m.simulate(&theta, us, x0.as_deref()))
 }
 
 /// Decoupled PNLSS simulation-error fit from `theta0`; records are `(u, y, skip)`.
 #[pyfunction]
-#[pyo3(signature = (dims, branches, degrees, records, theta0, max_iter=100, tol=1e-8, progress=None, range=None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (structure, records, theta0, max_iter=100, tol=1e-8, progress=None))]
 pub fn decoupled_estimate<'py>(
     py: Python<'py>,
-    dims: (usize, usize, usize),
-    branches: usize,
-    degrees: Vec<usize>,
+    structure: DecoupledStructure,
     records: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>, usize)>,
     theta0: PyReadonlyArray1<'_, f64>,
     max_iter: usize,
     tol: f64,
     progress: Option<Py<PyAny>>,
-    range: Range,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let m = decoupled(dims, branches, degrees, range)?;
-    let mut data = Vec::with_capacity(records.len());
-    for (u, y, skip) in &records {
-        data.push(PnlssData {
-            u: slice(u, "u")?,
-            y: slice(y, "y")?,
-            skip: *skip,
-        });
-    }
-    let th0 = crate::convert::vec1(&theta0);
-    let mut opts = Options::default();
-    opts.max_iter = max_iter;
-    opts.tol_cost = tol;
-    opts.tol_step = tol;
-    opts.tol_gradient = tol * tol;
-    let sol = run(py, &progress, |obs| {
-        nlss::estimate_decoupled(&m, &data, &th0, &opts, obs)
-    })?;
-    let d = PyDict::new(py);
-    search_items(&d, py, &sol)?;
-    d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
-    Ok(d)
+    let m = structure.model()?;
+    let est =
+        |d: &[PnlssData<'_>], th0: &[f64], o: &Options, obs: &mut dyn FnMut(&Iteration) -> Flow| {
+            nlss::estimate_decoupled(&m, d, th0, o, obs)
+        };
+    fitted(py, &records, &theta0, max_iter, tol, None, &progress, est)
 }
 
-fn neural_model(
+/// A neural state-space structure, from a dict with `dims = (nx, nu, ny)`, the hidden
+/// widths `f_hidden`, `g_hidden` (`None`: no output network) and `h_hidden` (the encoder),
+/// and the encoder's `lags`.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct NeuralStructure {
     dims: (usize, usize, usize),
     f_hidden: Vec<usize>,
+    #[pyo3(default)]
     g_hidden: Option<Vec<usize>>,
     h_hidden: Vec<usize>,
     lags: usize,
-) -> NeuralSs {
-    NeuralSs::new(
-        dims.0,
-        dims.1,
-        dims.2,
-        &f_hidden,
-        g_hidden.as_deref(),
-        &h_hidden,
-        lags,
-    )
+}
+
+impl NeuralStructure {
+    fn model(&self) -> NeuralSs {
+        let (nx, nu, ny) = self.dims;
+        NeuralSs::new(
+            nx,
+            nu,
+            ny,
+            &self.f_hidden,
+            self.g_hidden.as_deref(),
+            &self.h_hidden,
+            self.lags,
+        )
+    }
 }
 
 /// Neural state-space simulation from `x0` (row-major `(N, ny)` flattened).
 #[pyfunction]
-#[allow(clippy::too_many_arguments)]
 pub fn neural_ss_simulate<'py>(
     py: Python<'py>,
-    dims: (usize, usize, usize),
-    f_hidden: Vec<usize>,
-    g_hidden: Option<Vec<usize>>,
-    h_hidden: Vec<usize>,
-    lags: usize,
+    structure: NeuralStructure,
     params: PyReadonlyArray1<'_, f64>,
     u: PyReadonlyArray2<'_, f64>,
     x0: Vec<f64>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let m = neural_model(dims, f_hidden, g_hidden, h_hidden, lags);
+    let m = structure.model();
     let p = crate::convert::vec1(&params);
     let us = slice(&u, "u")?;
     let y = py.detach(|| m.simulate(&p, us, &x0)).py()?;
@@ -253,20 +282,15 @@ pub fn neural_ss_simulate<'py>(
 
 /// The encoder's state at sample `t` of a record.
 #[pyfunction]
-#[allow(clippy::too_many_arguments)]
 pub fn neural_ss_encode<'py>(
     py: Python<'py>,
-    dims: (usize, usize, usize),
-    f_hidden: Vec<usize>,
-    g_hidden: Option<Vec<usize>>,
-    h_hidden: Vec<usize>,
-    lags: usize,
+    structure: NeuralStructure,
     params: PyReadonlyArray1<'_, f64>,
     u: PyReadonlyArray2<'_, f64>,
     y: PyReadonlyArray2<'_, f64>,
     t: usize,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
-    let m = neural_model(dims, f_hidden, g_hidden, h_hidden, lags);
+    let m = structure.model();
     let p = crate::convert::vec1(&params);
     let x = m.encode(&p, slice(&u, "u")?, slice(&y, "y")?, t).py()?;
     Ok(slice_to_numpy(py, &x))
@@ -275,15 +299,11 @@ pub fn neural_ss_encode<'py>(
 /// Trains from `params0`; `train` and `val` are `(u, y, at)` records. `progress(epoch,
 /// validation, train)` after every epoch (`False` stops). Returns a dict.
 #[pyfunction]
-#[pyo3(signature = (dims, f_hidden, g_hidden, h_hidden, lags, params0, train, val, epochs=200, batch=16, horizon=100, learning_rate=1e-3, patience=20, seed=0, progress=None))]
+#[pyo3(signature = (structure, params0, train, val, epochs=200, batch=16, horizon=100, learning_rate=1e-3, patience=20, seed=0, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn neural_ss_train<'py>(
     py: Python<'py>,
-    dims: (usize, usize, usize),
-    f_hidden: Vec<usize>,
-    g_hidden: Option<Vec<usize>>,
-    h_hidden: Vec<usize>,
-    lags: usize,
+    structure: NeuralStructure,
     params0: PyReadonlyArray1<'_, f64>,
     train: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>, usize)>,
     val: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>, usize)>,
@@ -295,7 +315,7 @@ pub fn neural_ss_train<'py>(
     seed: u64,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let m = neural_model(dims, f_hidden, g_hidden, h_hidden, lags);
+    let m = structure.model();
     let seg = |v: &Records<'_>| -> PyResult<Owned> {
         v.iter()
             .map(|(u, y, at)| Ok((slice(u, "u")?.to_vec(), slice(y, "y")?.to_vec(), *at)))
@@ -352,14 +372,8 @@ pub fn neural_ss_train<'py>(
 
 /// Parameter count of a neural state-space structure.
 #[pyfunction]
-pub fn neural_ss_n_params(
-    dims: (usize, usize, usize),
-    f_hidden: Vec<usize>,
-    g_hidden: Option<Vec<usize>>,
-    h_hidden: Vec<usize>,
-    lags: usize,
-) -> usize {
-    neural_model(dims, f_hidden, g_hidden, h_hidden, lags).n_params()
+pub fn neural_ss_n_params(structure: NeuralStructure) -> usize {
+    structure.model().n_params()
 }
 
 /// Registers the neural state-space functions.

@@ -122,8 +122,10 @@ class DecoupledPNLSSModel(LinearPart, ModelMixin):
         return np.concatenate([np.ravel(a) for a in (self.A, self.B, self.C, self.D, self.V,
                                                      self.W, self.c, self.e0, self.f0)])
 
-    def _dims(self) -> tuple[int, int, int]:
-        return (self.nstates, self.ninputs, self.noutputs)
+    def _struct(self) -> dict[str, Any]:
+        rng = None if self.clamp is None else (list(self.clamp[0]), list(self.clamp[1]))
+        return {"dims": (self.nstates, self.ninputs, self.noutputs), "branches": self.branches,
+                "degrees": self.degrees, "range": rng}
 
     def _run(self, u: Any, x0: Any) -> tuple[np.ndarray, np.ndarray]:
         a = np.asarray(u, dtype=float)
@@ -133,9 +135,7 @@ class DecoupledPNLSSModel(LinearPart, ModelMixin):
         if not np.isfinite(a).all():
             raise DataError("u has non-finite values (NaN or Inf)")
         x = None if x0 is None else [float(v) for v in np.ravel(x0)]
-        rng = None if self.clamp is None else (list(self.clamp[0]), list(self.clamp[1]))
-        y, xs = _sysid.decoupled_simulate(self._dims(), self.branches, self.degrees,
-                                          list(self.theta), self.scaling.u(a), x, rng)
+        y, xs = _sysid.decoupled_simulate(self._struct(), list(self.theta), self.scaling.u(a), x)
         return np.asarray(y).reshape(-1, self.noutputs), np.asarray(xs).reshape(-1, self.nstates)
 
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
@@ -211,8 +211,9 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
     # during the fit, so a box on their arguments would not stay meaningful: the fit rejects
     # diverging steps instead, and the returned model clamps to the range its own arguments
     # cover on the estimation data.
+    struct = {"dims": (n, m_, l_), "branches": r, "degrees": degrees}
     fit = lambda th0, it: _sysid.decoupled_estimate(  # noqa: E731
-        (n, m_, l_), r, degrees, recs, th0, max_iter=it, tol=tol, progress=progress)
+        struct, recs, th0, max_iter=it, tol=tol, progress=progress)
     trials = [fit(start(k), min(STARTS_ITER, max_iter)) for k in range(STARTS)]
     best = min(trials, key=lambda t: t["cost"])
     res = best if best["stop"] == "cancelled" or max_iter <= STARTS_ITER else \
@@ -229,8 +230,8 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
                           "c": p[6].reshape(r, nd), "e0": p[7], "f0": p[8], "degrees": degrees,
                           "clamp": None}
     if clamp:
-        xs = [np.asarray(_sysid.decoupled_simulate((n, m_, l_), r, degrees, list(th), u)[1])
-              .reshape(-1, n) for u in us]
+        xs = [np.asarray(_sysid.decoupled_simulate(struct, list(th), u)[1]).reshape(-1, n)
+              for u in us]
         S = np.hstack([np.vstack(xs), np.vstack(us)]) @ kw["V"].T
         kw["clamp"] = envelope([S[:, :0]], [S], 0.1)
     return kw, res

@@ -68,7 +68,7 @@ class NeuralStateSpaceModel(LinearPart, ModelMixin):
         self.encoder_hidden = tuple(int(h) for h in encoder_hidden)
         self.lags = int(lags)
         self.params = np.ascontiguousarray(params, dtype=float).ravel()
-        need = _sysid.neural_ss_n_params(*self._struct())
+        need = _sysid.neural_ss_n_params(self._struct())
         if self.params.size != need:
             raise DataError(f"params has {self.params.size} values; the structure needs {need}")
         m, l_ = self.ninputs, self.noutputs
@@ -103,18 +103,17 @@ class NeuralStateSpaceModel(LinearPart, ModelMixin):
                    output_hidden=output_hidden, encoder_hidden=encoder_hidden, lags=lags,
                    scaling=scaling, dt=lin.dt)
 
-    def _struct(self) -> tuple[Any, ...]:
-        return ((self.nstates, self.ninputs, self.noutputs), list(self.hidden),
-                None if self.output_hidden is None else list(self.output_hidden),
-                list(self.encoder_hidden), self.lags)
+    def _struct(self) -> dict[str, Any]:
+        return {"dims": (self.nstates, self.ninputs, self.noutputs), "f_hidden": list(self.hidden),
+                "g_hidden": None if self.output_hidden is None else list(self.output_hidden),
+                "h_hidden": list(self.encoder_hidden), "lags": self.lags}
 
     @property
     def n_parameters(self) -> int:
         """Parameters of the simulation model (the encoder's excluded)."""
         n, m, l_ = self.nstates, self.ninputs, self.noutputs
-        enc = _sysid.neural_ss_n_params((n, m, l_), [], None, list(self.encoder_hidden),
-                                        self.lags) - (n * n + n * m + l_ * n + l_ * m
-                                                      + n * (n + m) + n)
+        enc = _sysid.neural_ss_n_params({**self._struct(), "f_hidden": [], "g_hidden": None}) \
+            - (n * n + n * m + l_ * n + l_ * m + n * (n + m) + n)
         return int(self.params.size - enc)
 
     def _arr(self, a: Any, width: int, name: str) -> np.ndarray:
@@ -131,7 +130,7 @@ class NeuralStateSpaceModel(LinearPart, ModelMixin):
         default); :meth:`initial_state` estimates one from past data."""
         us = self.scaling.u(self._arr(u, self.ninputs, "u"))
         x = [0.0] * self.nstates if x0 is None else [float(v) for v in np.ravel(x0)]
-        y = _sysid.neural_ss_simulate(*self._struct(), self.params, us, x)
+        y = _sysid.neural_ss_simulate(self._struct(), self.params, us, x)
         return self.scaling.y_back(np.asarray(y).reshape(-1, self.noutputs))
 
     def initial_state(self, u_past: Any, y_past: Any) -> np.ndarray:
@@ -140,7 +139,7 @@ class NeuralStateSpaceModel(LinearPart, ModelMixin):
         yp = self.scaling.y(self._arr(y_past, self.noutputs, "y_past"))
         if up.shape[0] != yp.shape[0]:
             raise DataError("u_past and y_past need the same number of samples")
-        return np.asarray(_sysid.neural_ss_encode(*self._struct(), self.params, up, yp,
+        return np.asarray(_sysid.neural_ss_encode(self._struct(), self.params, up, yp,
                                                   up.shape[0]))
 
     def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
@@ -305,7 +304,7 @@ def nlssest(
                                               scaling=sc.to_dict(), encoder_linear=W)
     cb, close = _epoch_callback(progress, epochs)
     try:
-        res = _sysid.neural_ss_train(*start._struct(), start.params, train, val, epochs=epochs,
+        res = _sysid.neural_ss_train(start._struct(), start.params, train, val, epochs=epochs,
                                      batch=batch, horizon=H, learning_rate=learning_rate,
                                      patience=patience, seed=seed, progress=cb)
     finally:

@@ -115,11 +115,10 @@ class PNLSSModel(LinearPart, ModelMixin):
         return np.concatenate([a.ravel() for a in (self.A, self.B, self.C, self.D, self.E,
                                                    self.F)])
 
-    def _struct(self) -> tuple[Any, ...]:
-        return (self.nstates, self.ninputs, self.noutputs, self.zeta, self.eta)
-
-    def _range(self) -> tuple[list[float], list[float]] | None:
-        return None if self.clamp is None else (list(self.clamp[0]), list(self.clamp[1]))
+    def _struct(self) -> dict[str, Any]:
+        rng = None if self.clamp is None else (list(self.clamp[0]), list(self.clamp[1]))
+        return {"nx": self.nstates, "nu": self.ninputs, "ny": self.noutputs, "zeta": self.zeta,
+                "eta": self.eta, "range": rng}
 
     def _u(self, u: Any) -> np.ndarray:
         a = np.asarray(u, dtype=float)
@@ -135,14 +134,13 @@ class PNLSSModel(LinearPart, ModelMixin):
         default). Raises :class:`~sysid.NumericalError` when the state diverges."""
         us = self._u(u)
         x = None if x0 is None else [float(v) for v in np.ravel(x0)]
-        y, _ = _sysid.pnlss_simulate(*self._struct(), self.theta, us, x, self._range())
+        y, _ = _sysid.pnlss_simulate(self._struct(), self.theta, us, x)
         return self.scaling.y_back(np.asarray(y).reshape(-1, self.noutputs))
 
     def states(self, u: Any, x0: Any = None) -> np.ndarray:
         """Simulated states ``(n_samples, nstates)`` (scaled coordinates)."""
         x = None if x0 is None else [float(v) for v in np.ravel(x0)]
-        _, xs = _sysid.pnlss_simulate(*self._struct(), self.theta, self._u(u), x,
-                                      self._range())
+        _, xs = _sysid.pnlss_simulate(self._struct(), self.theta, self._u(u), x)
         return np.asarray(xs).reshape(-1, self.nstates)
 
     def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
@@ -367,13 +365,13 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
     eta = [[]] + ([] if ot == "none" else _sysid.pnlss_monomials(n, m_, ot, degs))
     theta0 = np.concatenate([lin.A.ravel(), lin.B.ravel(), lin.C.ravel(), lin.D.ravel(),
                              np.zeros(n * len(zeta) + l_ * len(eta))])
-    res = _sysid.pnlss_estimate(n, m_, l_, zeta, eta, recs, theta0, max_iter=max_iter,
-                                tol=tol, progress=cb, range=rng)
+    struct = {"nx": n, "nu": m_, "ny": l_, "zeta": zeta, "eta": eta, "range": rng}
+    res = _sysid.pnlss_estimate(struct, recs, theta0, max_iter=max_iter, tol=tol, progress=cb)
     th = np.asarray(res["theta"])
     box = None
     if fit_box is not None:
-        xs = [np.asarray(_sysid.pnlss_simulate(n, m_, l_, zeta, eta, list(th), u, None,
-                                               rng)[1]).reshape(-1, n) for u in us]
+        xs = [np.asarray(_sysid.pnlss_simulate(struct, list(th), u)[1]).reshape(-1, n)
+              for u in us]
         env = envelope(xs, us, 0.1)
         box = (np.maximum(env[0], fit_box[0]), np.minimum(env[1], fit_box[1]))
     o = np.cumsum([0, n * n, n * m_, l_ * n, l_ * m_, n * len(zeta), l_ * len(eta)])

@@ -198,7 +198,7 @@ def nlarx_network(exps: list[tuple[np.ndarray, np.ndarray]], na: list[int], nb: 
         shift, scale = _standardise(lags, lag_names(na, nb, nk, [0] * ny, list(ins),
                                                     list(outs)))
     n_rows, nz = lags.shape
-    orders = (na, nb, nk)
+    struct = {"orders": (na, nb, nk), "shift": shift.tolist(), "scale": scale.tolist()}
     recs = [(np.ascontiguousarray(u, float), np.ascontiguousarray(y, float)) for u, y in exps]
     info: dict[str, Any] = {"method": "nlarx", "focus": focus, "n_rows": int(n_rows)}
     if isinstance(basis, TreePartition):
@@ -208,8 +208,8 @@ def nlarx_network(exps: list[tuple[np.ndarray, np.ndarray]], na: list[int], nb: 
                                         f"{2 * (nz + 1)} rows, got {n_rows}; use a longer record")
         nls, trees = [], []
         for i in range(ny):
-            t, rep = _sysid.narx_tree_fit(recs, orders, shift.tolist(), scale.tolist(), i,
-                                          basis.max_leaves, int(basis.min_leaf or 0))
+            t, rep = _sysid.narx_tree_fit(recs, struct, i, basis.max_leaves,
+                                          int(basis.min_leaf or 0))
             nls.append(from_rust_nl(t, nz))
             trees.append({"rss": list(rep["rss"]), "stop": rep["stop"]})
         info["tree"] = trees
@@ -236,8 +236,8 @@ def nlarx_network(exps: list[tuple[np.ndarray, np.ndarray]], na: list[int], nb: 
             cb, close = iteration_callback(progress, f"nlarx {name} ({outs[i]})", max_iter,
                                            iteration_printer("nlarx", "sum of squares / 2"))
             try:
-                t, rep = _sysid.narx_network_fit(recs, orders, shift.tolist(), scale.tolist(),
-                                                 i, codes, th0.tolist(), max_iter=int(max_iter),
+                t, rep = _sysid.narx_network_fit(recs, struct, i, codes, th0.tolist(),
+                                                 max_iter=int(max_iter),
                                                  tol=float(tol), progress=cb,
                                                  bounds=(lo.tolist(), hi.tolist()))
             finally:
@@ -273,7 +273,6 @@ def _warn(rep: dict[str, Any], what: str, max_iter: int) -> None:
 def _refine(model: NetworkNARXModel, recs: list[tuple[np.ndarray, np.ndarray]], max_iter: int,
             tol: float, progress: Any, info: dict[str, Any]) -> NetworkNARXModel:
     """Every parameter refined for free-run simulation from the prediction fit."""
-    args = model._args()
     nz = model.shift.size
     lo, hi = [], []
     for d in model.nonlinearities:
@@ -289,7 +288,7 @@ def _refine(model: NetworkNARXModel, recs: list[tuple[np.ndarray, np.ndarray]], 
     cb, close = iteration_callback(progress, f"nlarx {model.name} (simulation)", max_iter,
                                    iteration_printer("nlarx", "sum of squares / 2"))
     try:
-        nls, rep = _sysid.narx_network_refine(recs, *args, max_iter=int(max_iter),
+        nls, rep = _sysid.narx_network_refine(recs, model._args(), max_iter=int(max_iter),
                                               tol=float(tol), progress=cb, bounds=(lo, hi))
     except NumericalError as e:
         warnings.warn(f"the simulation-focus refinement could not start: the prediction "

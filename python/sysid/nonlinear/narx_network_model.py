@@ -145,9 +145,10 @@ class NetworkNARXModel(ModelMixin):
         return lag_names(self.na, self.nb, self.nk, [0] * self.noutputs, self.input_names,
                          self.output_names)
 
-    def _args(self) -> tuple[Any, ...]:
-        return ((self.na, self.nb, self.nk), self.shift.tolist(), self.scale.tolist(),
-                [_rust_nl(d) for d in self.nonlinearities])
+    def _args(self) -> dict[str, Any]:
+        return {"orders": (self.na, self.nb, self.nk), "shift": self.shift.tolist(),
+                "scale": self.scale.tolist(),
+                "outputs": [_rust_nl(d) for d in self.nonlinearities]}
 
     def _u(self, u: Any, n: int | None = None) -> np.ndarray:
         u = np.asarray(u, dtype=float)
@@ -169,7 +170,7 @@ class NetworkNARXModel(ModelMixin):
             y0 = np.asarray(x0, float).reshape(-1, ny)[:lag]
             if y0.shape[0] < lag:
                 raise DataError(f"x0 must hold the first {lag} outputs, shape ({lag}, {ny})")
-        return np.asarray(_sysid.narx_network_simulate(*self._args(), u, np.ascontiguousarray(y0)))
+        return np.asarray(_sysid.narx_network_simulate(self._args(), u, np.ascontiguousarray(y0)))
 
     def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
         """``horizon``-step prediction ``yhat(t | t - horizon)`` from measured ``u``, ``y``."""
@@ -180,14 +181,14 @@ class NetworkNARXModel(ModelMixin):
         u = self._u(u, y.shape[0])
         if int(horizon) != horizon or horizon < 1:
             raise DataError(f"horizon must be a positive integer, got {horizon!r}")
-        return np.asarray(_sysid.narx_network_predict(*self._args(), u, np.ascontiguousarray(y),
+        return np.asarray(_sysid.narx_network_predict(self._args(), u, np.ascontiguousarray(y),
                                                       int(horizon)))
 
     def evaluate(self, x: Any) -> np.ndarray:
         """The nonlinearities ``F_i`` at lagged variables ``x`` ``(n, nz)`` (engineering
         units, columns in the order of :attr:`regressor_names`): ``(n, noutputs)``."""
         x = np.atleast_2d(np.asarray(x, float))
-        return np.asarray(_sysid.narx_network_evaluate(*self._args(), np.ascontiguousarray(x)))
+        return np.asarray(_sysid.narx_network_evaluate(self._args(), np.ascontiguousarray(x)))
 
     def linearize(self, at: Any = None) -> Any:
         """The linear ARX model of the first-order expansion at the lagged variables ``at``
