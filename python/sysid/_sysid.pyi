@@ -78,8 +78,6 @@ __all__ = [
     "narx_network_predict",
     "narx_network_evaluate",
     # issue 29 (branch nlss2): decoupled PNLSS
-    "decoupled_simulate",
-    "decoupled_estimate",
     # issue 31 (branch rules): option names, stabilisation, lagged products from the core
     "option_name",
     "reflect_unstable_poles",
@@ -573,11 +571,21 @@ class _PnlssStructure(TypedDict, total=False):
     eta: list[list[int]]
     range: _Range | None
 
+class _DecoupledStructure(TypedDict, total=False):
+    """A decoupled PNLSS structure (all but ``range`` required)."""
+
+    dims: tuple[int, int, int]
+    branches: int
+    degrees: list[int]
+    range: _Range | None
+
+_PolyStructure = _PnlssStructure | _DecoupledStructure
+
 def pnlss_simulate(
-    structure: _PnlssStructure, theta: list[float], u: _Array, x0: list[float] | None = None
+    structure: _PolyStructure, theta: list[float], u: _Array, x0: list[float] | None = None
 ) -> tuple[_Array, _Array]: ...
 def pnlss_estimate(
-    structure: _PnlssStructure,
+    structure: _PolyStructure,
     records: _Records,
     theta0: _Array,
     max_iter: int = 100,
@@ -699,26 +707,6 @@ def narx_network_predict(
     structure: _NetworkStructure, u: _Array, y: _Array, horizon: int
 ) -> _Array: ...
 def narx_network_evaluate(structure: _NetworkStructure, x: _Array) -> _Array: ...
-# issue 29 (branch nlss2): decoupled PNLSS
-class _DecoupledStructure(TypedDict, total=False):
-    """A decoupled PNLSS structure (all but ``range`` required)."""
-
-    dims: tuple[int, int, int]
-    branches: int
-    degrees: list[int]
-    range: _Range | None
-
-def decoupled_simulate(
-    structure: _DecoupledStructure, theta: list[float], u: _Array, x0: list[float] | None = None
-) -> tuple[_Array, _Array]: ...
-def decoupled_estimate(
-    structure: _DecoupledStructure,
-    records: _Records,
-    theta0: _Array,
-    max_iter: int = 100,
-    tol: float = 1e-8,
-    progress: Callable[..., Any] | None = None,
-) -> dict[str, Any]: ...
 # issue 31 (branch rules): option names, stabilisation, lagged products from the core
 def option_name(option: str, value: str) -> str: ...
 def reflect_unstable_poles(a: _Array, shrink: float = 0.99) -> _Array: ...

@@ -1,8 +1,8 @@
 //! Bindings of `sysid_core::nlss`: PNLSS monomials, simulation and estimation, and the
 //! neural state-space training.
 //!
-//! A PNLSS structure crosses the boundary as `(nx, nu, ny, zeta, eta)`, the monomials as
-//! lists of variable indices into `z = [x; u]`.
+//! A structure crosses the boundary as a dict ([`PnlssStructure`], [`DecoupledStructure`],
+//! [`NeuralStructure`]); PNLSS monomials as lists of variable indices into `z = [x; u]`.
 
 use crate::convert::slice_to_numpy;
 use crate::errors::IntoPy;
@@ -92,58 +92,55 @@ fn with_range<M>(
     }
 }
 
-/// Outputs and states of a simulation on `u`, as flat arrays.
-fn simulated<'py>(
-    py: Python<'py>,
-    u: &PyReadonlyArray2<'_, f64>,
-    simulate: impl FnOnce(&[f64]) -> sysid_core::Result<(Vec<f64>, Vec<f64>)> + Send,
-) -> PyResult<Pair<'py>> {
-    let us = slice(u, "u")?;
-    let (y, x) = py.detach(|| simulate(us)).py()?;
-    Ok((slice_to_numpy(py, &y), slice_to_numpy(py, &x)))
+/// Either polynomial structure (a dict of one or the other).
+#[derive(FromPyObject)]
+pub enum Structure {
+    /// Coupled monomials.
+    Pnlss(PnlssStructure),
+    /// Univariate branches.
+    Decoupled(DecoupledStructure),
 }
 
-/// A simulation-error fit from `theta0` on `(u, y, skip)` records: the optimiser's report
-/// and `theta` in a dict.
-#[allow(clippy::too_many_arguments)]
-fn fitted<'py>(
-    py: Python<'py>,
-    records: &Records<'_>,
-    theta0: &PyReadonlyArray1<'_, f64>,
-    max_iter: usize,
-    tol: f64,
-    fixed: Option<Vec<bool>>,
-    progress: &Option<Py<PyAny>>,
-    estimate: impl FnOnce(
-            &[PnlssData<'_>],
-            &[f64],
-            &Options,
-            &mut dyn FnMut(&Iteration) -> Flow,
-        ) -> sysid_core::Result<Solution>
-        + Send,
-) -> PyResult<Bound<'py, PyDict>> {
-    let data = records
-        .iter()
-        .map(|(u, y, skip)| {
-            Ok(PnlssData {
-                u: slice(u, "u")?,
-                y: slice(y, "y")?,
-                skip: *skip,
-            })
+/// A polynomial state-space model of either kind.
+enum Model {
+    Pnlss(Pnlss),
+    Decoupled(Decoupled),
+}
+
+impl Structure {
+    fn model(self) -> PyResult<Model> {
+        Ok(match self {
+            Structure::Pnlss(s) => Model::Pnlss(s.model()?),
+            Structure::Decoupled(s) => Model::Decoupled(s.model()?),
         })
-        .collect::<PyResult<Vec<_>>>()?;
-    let th0 = crate::convert::vec1(theta0);
-    let mut opts = Options::default();
-    opts.max_iter = max_iter;
-    opts.tol_cost = tol;
-    opts.tol_step = tol;
-    opts.tol_gradient = tol * tol;
-    opts.fixed = fixed;
-    let sol = run(py, progress, |obs| estimate(&data, &th0, &opts, obs))?;
-    let d = PyDict::new(py);
-    search_items(&d, py, &sol)?;
-    d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
-    Ok(d)
+    }
+}
+
+impl Model {
+    fn simulate(
+        &self,
+        theta: &[f64],
+        u: &[f64],
+        x0: Option<&[f64]>,
+    ) -> sysid_core::Result<(Vec<f64>, Vec<f64>)> {
+        match self {
+            Model::Pnlss(m) => m.simulate(theta, u, x0),
+            Model::Decoupled(m) => m.simulate(theta, u, x0),
+        }
+    }
+
+    fn estimate(
+        &self,
+        data: &[PnlssData<'_>],
+        theta0: &[f64],
+        options: &Options,
+        observer: &mut dyn FnMut(&Iteration) -> Flow,
+    ) -> sysid_core::Result<Solution> {
+        match self {
+            Model::Pnlss(m) => nlss::estimate(m, data, theta0, options, observer),
+            Model::Decoupled(m) => nlss::estimate_decoupled(m, data, theta0, options, observer),
+        }
+    }
 }
 
 /// The monomials (index lists into `z = [x; u]`) of the given degrees in the variables
@@ -154,28 +151,31 @@ pub fn pnlss_monomials(nx: usize, nu: usize, terms: &str, degrees: Vec<usize>) -
     Ok(Monomials::new(nx, nu, t, &degrees).py()?.terms().to_vec())
 }
 
-/// Simulated outputs and states (row-major `(N, ny)` and `(N, nx)` flattened) from `x0`.
+/// Simulated outputs and states (row-major `(N, ny)` and `(N, nx)` flattened) from `x0`, of
+/// a PNLSS or decoupled PNLSS structure.
 #[pyfunction]
 #[pyo3(signature = (structure, theta, u, x0=None))]
 pub fn pnlss_simulate<'py>(
     py: Python<'py>,
-    structure: PnlssStructure,
+    structure: Structure,
     theta: Vec<f64>,
     u: PyReadonlyArray2<'_, f64>,
     x0: Option<Vec<f64>>,
 ) -> PyResult<Pair<'py>> {
     let m = structure.model()?;
-    simulated(py, &u, |us| m.simulate(&theta, us, x0.as_deref()))
+    let us = slice(&u, "u")?;
+    let (y, x) = py.detach(|| m.simulate(&theta, us, x0.as_deref())).py()?;
+    Ok((slice_to_numpy(py, &y), slice_to_numpy(py, &x)))
 }
 
-/// Simulation-error fit from `theta0`; records are `(u, y, skip)`. Returns a dict with the
-/// optimiser's report and `theta`.
+/// Simulation-error fit of a PNLSS or decoupled PNLSS structure from `theta0`; records are
+/// `(u, y, skip)`. Returns a dict with the optimiser's report and `theta`.
 #[pyfunction]
 #[pyo3(signature = (structure, records, theta0, max_iter=100, tol=1e-8, fixed=None, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn pnlss_estimate<'py>(
     py: Python<'py>,
-    structure: PnlssStructure,
+    structure: Structure,
     records: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>, usize)>,
     theta0: PyReadonlyArray1<'_, f64>,
     max_iter: usize,
@@ -184,11 +184,28 @@ pub fn pnlss_estimate<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let m = structure.model()?;
-    let est =
-        |d: &[PnlssData<'_>], th0: &[f64], o: &Options, obs: &mut dyn FnMut(&Iteration) -> Flow| {
-            nlss::estimate(&m, d, th0, o, obs)
-        };
-    fitted(py, &records, &theta0, max_iter, tol, fixed, &progress, est)
+    let data = records
+        .iter()
+        .map(|(u, y, skip)| {
+            Ok(PnlssData {
+                u: slice(u, "u")?,
+                y: slice(y, "y")?,
+                skip: *skip,
+            })
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let th0 = crate::convert::vec1(&theta0);
+    let mut opts = Options::default();
+    opts.max_iter = max_iter;
+    opts.tol_cost = tol;
+    opts.tol_step = tol;
+    opts.tol_gradient = tol * tol;
+    opts.fixed = fixed;
+    let sol = run(py, &progress, |obs| m.estimate(&data, &th0, &opts, obs))?;
+    let d = PyDict::new(py);
+    search_items(&d, py, &sol)?;
+    d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
+    Ok(d)
 }
 
 /// Registers the functions.
@@ -196,43 +213,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pnlss_monomials, m)?)?;
     m.add_function(wrap_pyfunction!(pnlss_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(pnlss_estimate, m)?)?;
-    m.add_function(wrap_pyfunction!(decoupled_simulate, m)?)?;
-    m.add_function(wrap_pyfunction!(decoupled_estimate, m)?)?;
     register_neural(m)
-}
-
-/// Decoupled PNLSS simulation: outputs and states (row-major, flattened) from `x0`.
-#[pyfunction]
-#[pyo3(signature = (structure, theta, u, x0=None))]
-pub fn decoupled_simulate<'py>(
-    py: Python<'py>,
-    structure: DecoupledStructure,
-    theta: Vec<f64>,
-    u: PyReadonlyArray2<'_, f64>,
-    x0: Option<Vec<f64>>,
-) -> PyResult<Pair<'py>> {
-    let m = structure.model()?;
-    simulated(py, &u, |us| m.simulate(&theta, us, x0.as_deref()))
-}
-
-/// Decoupled PNLSS simulation-error fit from `theta0`; records are `(u, y, skip)`.
-#[pyfunction]
-#[pyo3(signature = (structure, records, theta0, max_iter=100, tol=1e-8, progress=None))]
-pub fn decoupled_estimate<'py>(
-    py: Python<'py>,
-    structure: DecoupledStructure,
-    records: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>, usize)>,
-    theta0: PyReadonlyArray1<'_, f64>,
-    max_iter: usize,
-    tol: f64,
-    progress: Option<Py<PyAny>>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let m = structure.model()?;
-    let est =
-        |d: &[PnlssData<'_>], th0: &[f64], o: &Options, obs: &mut dyn FnMut(&Iteration) -> Flow| {
-            nlss::estimate_decoupled(&m, d, th0, o, obs)
-        };
-    fitted(py, &records, &theta0, max_iter, tol, None, &progress, est)
 }
 
 /// A neural state-space structure, from a dict with `dims = (nx, nu, ny)`, the hidden

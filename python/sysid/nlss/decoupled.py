@@ -135,7 +135,7 @@ class DecoupledPNLSSModel(LinearPart, ModelMixin):
         if not np.isfinite(a).all():
             raise DataError("u has non-finite values (NaN or Inf)")
         x = None if x0 is None else [float(v) for v in np.ravel(x0)]
-        y, xs = _sysid.decoupled_simulate(self._struct(), list(self.theta), self.scaling.u(a), x)
+        y, xs = _sysid.pnlss_simulate(self._struct(), list(self.theta), self.scaling.u(a), x)
         return np.asarray(y).reshape(-1, self.noutputs), np.asarray(xs).reshape(-1, self.nstates)
 
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
@@ -212,7 +212,7 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
     # diverging steps instead, and the returned model clamps to the range its own arguments
     # cover on the estimation data.
     struct = {"dims": (n, m_, l_), "branches": r, "degrees": degrees}
-    fit = lambda th0, it: _sysid.decoupled_estimate(  # noqa: E731
+    fit = lambda th0, it: _sysid.pnlss_estimate(  # noqa: E731
         struct, recs, th0, max_iter=it, tol=tol, progress=progress)
     trials = [fit(start(k), min(STARTS_ITER, max_iter)) for k in range(STARTS)]
     best = min(trials, key=lambda t: t["cost"])
@@ -230,7 +230,7 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
                           "c": p[6].reshape(r, nd), "e0": p[7], "f0": p[8], "degrees": degrees,
                           "clamp": None}
     if clamp:
-        xs = [np.asarray(_sysid.decoupled_simulate(struct, list(th), u)[1]).reshape(-1, n)
+        xs = [np.asarray(_sysid.pnlss_simulate(struct, list(th), u)[1]).reshape(-1, n)
               for u in us]
         S = np.hstack([np.vstack(xs), np.vstack(us)]) @ kw["V"].T
         kw["clamp"] = envelope([S[:, :0]], [S], 0.1)
