@@ -28,6 +28,7 @@ pub mod basis;
 pub mod frols;
 pub mod network;
 pub mod regressors;
+mod run;
 pub mod simulate;
 
 #[cfg(test)]

@@ -4,7 +4,8 @@ use faer::{Mat, MatRef};
 
 use super::basis::{Basis, Term};
 use super::regressors::{LagSpec, Signal};
-use crate::error::{check_finite, check_io, Result, SysidError};
+use super::run::{self, Outputs};
+use crate::error::{check_io, Result, SysidError};
 
 /// One output's equation `y_i(t) = sum_k coefs[k] terms[k](x(t))`.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,9 +37,6 @@ fn no_custom(_: usize, _: &[f64]) -> Result<f64> {
         "the model has custom regressors: simulate it with their functions",
     ))
 }
-
-/// Outputs larger than this are taken as a diverged simulation.
-const BLOWUP: f64 = 1e150;
 
 impl NarxModel {
     /// Checks the parts and builds the model.
@@ -132,17 +130,6 @@ impl NarxModel {
             .sum()
     }
 
-    fn check_u(&self, u: MatRef<'_, f64>) -> Result<()> {
-        if u.ncols() != self.spec.n_inputs {
-            return Err(SysidError::ShapeMismatch {
-                what: "u".into(),
-                expected: format!("(N, {})", self.spec.n_inputs),
-                got: format!("({}, {})", u.nrows(), u.ncols()),
-            });
-        }
-        check_finite("u", u)
-    }
-
     /// Free-run simulation from `n = u.nrows()` inputs: the first `max_lag` outputs are
     /// `y0` (`max_lag x n_outputs`, for example the measured ones), later ones are simulated
     /// (noise terms are zero). Fails, naming the sample, when the output blows up.
@@ -158,57 +145,12 @@ impl NarxModel {
         y0: MatRef<'_, f64>,
         custom: &mut CustomFn<'_>,
     ) -> Result<Mat<f64>> {
-        self.check_u(u)?;
-        let (n, ny, lag) = (u.nrows(), self.spec.n_outputs, self.spec.max_lag);
-        if y0.nrows() != lag || y0.ncols() != ny {
-            return Err(SysidError::ShapeMismatch {
-                what: "initial outputs".into(),
-                expected: format!("({lag}, {ny})"),
-                got: format!("({}, {})", y0.nrows(), y0.ncols()),
-            });
-        }
-        check_finite("initial outputs", y0)?;
-        let mut y = Mat::<f64>::zeros(n, ny);
-        for t in 0..n.min(lag) {
-            for i in 0..ny {
-                y[(t, i)] = y0[(t, i)];
-            }
-        }
-        let mut x = vec![0.0; self.spec.n_vars()];
-        let used: Vec<bool> = (0..self.spec.n_custom())
-            .map(|c| self.uses_custom(c))
-            .collect();
-        let mut cv = vec![0.0; used.len()];
-        for t in lag..n {
-            {
-                let yr = y.as_ref();
-                let get = |s: Signal, ch: usize, tt: usize| match s {
-                    Signal::Output => yr[(tt, ch)],
-                    Signal::Input => u[(tt, ch)],
-                    Signal::Noise | Signal::Custom => 0.0,
-                };
-                self.custom_values(t, &used, &get, custom, &mut cv)?;
-                self.spec.fill_with(t, &mut x, |s, ch, tt| match s {
-                    Signal::Custom => cv[ch],
-                    _ => get(s, ch, tt),
-                });
-            }
-            for i in 0..ny {
-                let v = self.output(i, &x);
-                if !v.is_finite() || v.abs() >= BLOWUP {
-                    return Err(SysidError::numerical(
-                        "free-run simulation",
-                        format!(
-                            "the output diverged at sample {t} (|y{i}| > 1e150): the model is \
-                             unstable for this input; use fewer terms, a lower degree, or \
-                             inputs within the range of the estimation data"
-                        ),
-                    ));
-                }
-                y[(t, i)] = v;
-            }
-        }
-        Ok(y)
+        run::free_run(
+            &mut WithCustom::new(self, custom),
+            u,
+            y0,
+            "use fewer terms, a lower degree, or inputs within the range of the estimation data",
+        )
     }
 
     /// One-step residuals `e(t) = y(t) - yhat(t | t-1)` (computed recursively for the noise
@@ -299,45 +241,57 @@ impl NarxModel {
             }
             return Ok(out);
         }
-        // local simulation of `horizon` steps from every origin
-        let mut loc = vec![0.0; horizon * ny];
-        for t in lag..n {
-            let origin = t as isize - horizon as isize; // last measured sample
-            let first = (origin + 1).max(lag as isize) as usize;
-            for s in first..=t {
-                {
-                    let get = |sig: Signal, ch: usize, tt: usize| -> f64 {
-                        let measured = (tt as isize) <= origin || tt < lag;
-                        match sig {
-                            Signal::Input => u[(tt, ch)],
-                            Signal::Output if measured => y[(tt, ch)],
-                            Signal::Output => loc[(tt - first) * ny + ch],
-                            Signal::Noise if (tt as isize) <= origin => e[(tt, ch)],
-                            Signal::Noise | Signal::Custom => 0.0,
-                        }
-                    };
-                    self.custom_values(s, &used, &get, custom, &mut cv)?;
-                    self.spec.fill_with(s, &mut x, |sig, ch, tt| match sig {
-                        Signal::Custom => cv[ch],
-                        _ => get(sig, ch, tt),
-                    });
-                }
-                for i in 0..ny {
-                    let v = self.output(i, &x);
-                    loc[(s - first) * ny + i] = if v.abs() < BLOWUP { v } else { f64::NAN };
-                }
-            }
-            for i in 0..ny {
-                let v = loc[(t - first) * ny + i];
-                if !v.is_finite() {
-                    return Err(SysidError::numerical(
-                        "k-step prediction",
-                        format!("the prediction diverged at sample {t}; use a shorter horizon"),
-                    ));
-                }
-                out[(t, i)] = v;
-            }
+        let e = noise.then_some(e.as_ref());
+        run::k_step(&mut WithCustom::new(self, custom), u, y, e, horizon)
+    }
+}
+
+/// A NARX model with the functions of its custom regressors: how its outputs at one sample
+/// follow from the lagged values.
+struct WithCustom<'m, 'f, 'c> {
+    model: &'m NarxModel,
+    custom: &'f mut CustomFn<'c>,
+    used: Vec<bool>,
+    cv: Vec<f64>,
+    x: Vec<f64>,
+}
+
+impl<'m, 'f, 'c> WithCustom<'m, 'f, 'c> {
+    fn new(model: &'m NarxModel, custom: &'f mut CustomFn<'c>) -> Self {
+        let used: Vec<bool> = (0..model.spec.n_custom())
+            .map(|c| model.uses_custom(c))
+            .collect();
+        WithCustom {
+            model,
+            custom,
+            cv: vec![0.0; used.len()],
+            used,
+            x: vec![0.0; model.spec.n_vars()],
         }
-        Ok(out)
+    }
+}
+
+impl Outputs for WithCustom<'_, '_, '_> {
+    fn spec(&self) -> &LagSpec {
+        &self.model.spec
+    }
+
+    fn outputs(
+        &mut self,
+        t: usize,
+        get: impl Fn(Signal, usize, usize) -> f64,
+        out: &mut [f64],
+    ) -> Result<()> {
+        let m = self.model;
+        m.custom_values(t, &self.used, &get, self.custom, &mut self.cv)?;
+        let cv = &self.cv;
+        m.spec.fill_with(t, &mut self.x, |s, ch, tt| match s {
+            Signal::Custom => cv[ch],
+            _ => get(s, ch, tt),
+        });
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = m.output(i, &self.x);
+        }
+        Ok(())
     }
 }

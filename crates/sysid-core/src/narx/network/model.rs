@@ -6,6 +6,7 @@ use faer::{Mat, MatRef};
 use super::units::UnitKind;
 use crate::error::{check_finite, check_io, Result, SysidError};
 use crate::narx::regressors::{LagSpec, Signal};
+use crate::narx::run::{self, Outputs};
 
 /// `F(z) = d + l^T z + sum_k a_k g_k(z; p_k)`: a linear term plus nonlinear units.
 #[derive(Debug, Clone, PartialEq)]
@@ -163,9 +164,6 @@ pub struct NetworkNarx {
     pub outputs: Vec<Nonlinearity>,
 }
 
-/// Outputs larger than this are taken as a diverged simulation.
-const BLOWUP: f64 = 1e150;
-
 impl NetworkNarx {
     /// Checks the parts and builds the model.
     pub fn new(
@@ -271,66 +269,15 @@ impl NetworkNarx {
         }
     }
 
-    fn check_u(&self, u: MatRef<'_, f64>) -> Result<()> {
-        if u.ncols() != self.spec.n_inputs {
-            return Err(SysidError::ShapeMismatch {
-                what: "u".into(),
-                expected: format!("(N, {})", self.spec.n_inputs),
-                got: format!("({}, {})", u.nrows(), u.ncols()),
-            });
-        }
-        check_finite("u", u)
-    }
-
     /// Free-run simulation: the first `max_lag` outputs are `y0` (`max_lag x n_outputs`),
     /// later ones simulated. Fails, naming the sample, when the output blows up.
     pub fn simulate(&self, u: MatRef<'_, f64>, y0: MatRef<'_, f64>) -> Result<Mat<f64>> {
-        self.check_u(u)?;
-        let (n, ny, lag) = (u.nrows(), self.spec.n_outputs, self.spec.max_lag);
-        if y0.nrows() != lag || y0.ncols() != ny {
-            return Err(SysidError::ShapeMismatch {
-                what: "initial outputs".into(),
-                expected: format!("({lag}, {ny})"),
-                got: format!("({}, {})", y0.nrows(), y0.ncols()),
-            });
-        }
-        check_finite("initial outputs", y0)?;
-        let mut y = Mat::<f64>::zeros(n, ny);
-        for t in 0..n.min(lag) {
-            for i in 0..ny {
-                y[(t, i)] = y0[(t, i)];
-            }
-        }
-        let mut z = vec![0.0; self.spec.n_vars()];
-        let mut out = vec![0.0; ny];
-        for t in lag..n {
-            {
-                let yr = y.as_ref();
-                self.step(
-                    t,
-                    |s, ch, tt| match s {
-                        Signal::Output => yr[(tt, ch)],
-                        _ => u[(tt, ch)],
-                    },
-                    &mut z,
-                    &mut out,
-                );
-            }
-            for (i, &v) in out.iter().enumerate() {
-                if !v.is_finite() || v.abs() >= BLOWUP {
-                    return Err(SysidError::numerical(
-                        "free-run simulation",
-                        format!(
-                            "the output diverged at sample {t} (|y{i}| > 1e150): the model is \
-                             unstable for this input; use fewer units or inputs within the \
-                             range of the estimation data"
-                        ),
-                    ));
-                }
-                y[(t, i)] = v;
-            }
-        }
-        Ok(y)
+        run::free_run(
+            &mut Stepper::new(self),
+            u,
+            y0,
+            "use fewer units or inputs within the range of the estimation data",
+        )
     }
 
     /// `horizon`-step prediction `yhat(t | t - horizon)`: measured outputs up to
@@ -341,49 +288,42 @@ impl NetworkNarx {
         y: MatRef<'_, f64>,
         horizon: usize,
     ) -> Result<Mat<f64>> {
-        let (n, ny, lag) = (y.nrows(), self.spec.n_outputs, self.spec.max_lag);
-        check_io("u, y", u, y, self.spec.n_inputs, ny)?;
+        check_io("u, y", u, y, self.spec.n_inputs, self.spec.n_outputs)?;
         if horizon == 0 {
             return Err(SysidError::invalid("horizon", "must be at least 1"));
         }
-        let mut out = Mat::<f64>::zeros(n, ny);
-        for t in 0..n.min(lag) {
-            for i in 0..ny {
-                out[(t, i)] = y[(t, i)];
-            }
+        run::k_step(&mut Stepper::new(self), u, y, None, horizon)
+    }
+}
+
+/// A network NARX model with its standardised-regressor buffer: how its outputs at one
+/// sample follow from the lagged values.
+struct Stepper<'a> {
+    model: &'a NetworkNarx,
+    z: Vec<f64>,
+}
+
+impl<'a> Stepper<'a> {
+    fn new(model: &'a NetworkNarx) -> Self {
+        Stepper {
+            model,
+            z: vec![0.0; model.spec.n_vars()],
         }
-        let mut z = vec![0.0; self.spec.n_vars()];
-        let mut row = vec![0.0; ny];
-        let mut loc = vec![0.0; horizon * ny];
-        for t in lag..n {
-            let origin = t as isize - horizon as isize; // last measured sample
-            let first = (origin + 1).max(lag as isize) as usize;
-            for s in first..=t {
-                self.step(
-                    s,
-                    |sig, ch, tt| match sig {
-                        Signal::Output if (tt as isize) <= origin || tt < lag => y[(tt, ch)],
-                        Signal::Output => loc[(tt - first) * ny + ch],
-                        _ => u[(tt, ch)],
-                    },
-                    &mut z,
-                    &mut row,
-                );
-                for (i, &v) in row.iter().enumerate() {
-                    loc[(s - first) * ny + i] = if v.abs() < BLOWUP { v } else { f64::NAN };
-                }
-            }
-            for i in 0..ny {
-                let v = loc[(t - first) * ny + i];
-                if !v.is_finite() {
-                    return Err(SysidError::numerical(
-                        "k-step prediction",
-                        format!("the prediction diverged at sample {t}; use a shorter horizon"),
-                    ));
-                }
-                out[(t, i)] = v;
-            }
-        }
-        Ok(out)
+    }
+}
+
+impl Outputs for Stepper<'_> {
+    fn spec(&self) -> &LagSpec {
+        &self.model.spec
+    }
+
+    fn outputs(
+        &mut self,
+        t: usize,
+        get: impl Fn(Signal, usize, usize) -> f64,
+        out: &mut [f64],
+    ) -> Result<()> {
+        self.model.step(t, get, &mut self.z, out);
+        Ok(())
     }
 }

@@ -45,6 +45,28 @@ fn simulated(kind: UnitKind, n: usize) -> (Mat<f64>, Mat<f64>, NetworkNarx) {
     (u, y, m)
 }
 
+/// Central difference `(f(x + h e_j) - f(x - h e_j)) / 2h`, `h = 1e-6`.
+fn central(x: &[f64], j: usize, mut f: impl FnMut(&[f64]) -> f64) -> f64 {
+    let h = 1e-6;
+    let (mut a, mut b) = (x.to_vec(), x.to_vec());
+    a[j] += h;
+    b[j] -= h;
+    (f(&a) - f(&b)) / (2.0 * h)
+}
+
+/// The gradient of a problem's cost at `th` against central differences.
+fn check_gradient(pr: &mut impl Problem, th: &[f64]) {
+    let g = pr.evaluate(th, true).unwrap().gradient;
+    for j in 0..th.len() {
+        let fd = central(th, j, |a| pr.evaluate(a, false).unwrap().cost);
+        assert!(
+            (fd - g[j]).abs() < 1e-6 * (1.0 + fd.abs()),
+            "{j}: {fd} vs {}",
+            g[j]
+        );
+    }
+}
+
 #[test]
 fn unit_gradients_match_finite_differences() {
     let z = [0.3, -0.7, 0.2];
@@ -52,12 +74,8 @@ fn unit_gradients_match_finite_differences() {
         let p = [0.9, 0.4, -0.5, 0.1];
         let (mut dp, mut dz) = ([0.0; 4], [0.0; 3]);
         kind.value_grad(&p, &z, Some(&mut dp), Some(&mut dz));
-        let h = 1e-6;
         for j in 0..4 {
-            let (mut a, mut b) = (p, p);
-            a[j] += h;
-            b[j] -= h;
-            let fd = (kind.value(&a, &z) - kind.value(&b, &z)) / (2.0 * h);
+            let fd = central(&p, j, |a| kind.value(a, &z));
             assert!(
                 (fd - dp[j]).abs() < 1e-8,
                 "{kind:?} p{j}: {fd} vs {}",
@@ -65,10 +83,7 @@ fn unit_gradients_match_finite_differences() {
             );
         }
         for j in 0..3 {
-            let (mut a, mut b) = (z, z);
-            a[j] += h;
-            b[j] -= h;
-            let fd = (kind.value(&p, &a) - kind.value(&p, &b)) / (2.0 * h);
+            let fd = central(&z, j, |a| kind.value(&p, a));
             assert!(
                 (fd - dz[j]).abs() < 1e-8,
                 "{kind:?} z{j}: {fd} vs {}",
@@ -91,21 +106,7 @@ fn varpro_gradient_matches_finite_differences() {
         let (sh, sc) = (vec![0.0; 4], vec![1.0; 4]);
         let mut pr = VarPro::new(&sp, &sh, &sc, &recs, 0, vec![kind, kind]).unwrap();
         let th: Vec<f64> = net(kind).theta.iter().map(|v| v * 1.1 + 0.05).collect();
-        let ev = pr.evaluate(&th, true).unwrap();
-        let h = 1e-6;
-        for j in 0..th.len() {
-            let (mut a, mut b) = (th.clone(), th.clone());
-            a[j] += h;
-            b[j] -= h;
-            let fd = (pr.evaluate(&a, false).unwrap().cost - pr.evaluate(&b, false).unwrap().cost)
-                / (2.0 * h);
-            let tol = 1e-6 * (1.0 + fd.abs());
-            assert!(
-                (fd - ev.gradient[j]).abs() < tol,
-                "{kind:?} {j}: {fd} vs {}",
-                ev.gradient[j]
-            );
-        }
+        check_gradient(&mut pr, &th);
     }
 }
 
@@ -120,20 +121,7 @@ fn simulation_jacobian_matches_finite_differences() {
     let recs = [Record::new(u.as_ref(), y.as_ref())];
     let mut pr = SimFocus::new(m2, &recs).unwrap();
     let th = pr.params();
-    let ev = pr.evaluate(&th, true).unwrap();
-    let h = 1e-6;
-    for j in 0..th.len() {
-        let (mut a, mut b) = (th.clone(), th.clone());
-        a[j] += h;
-        b[j] -= h;
-        let fd = (pr.evaluate(&a, false).unwrap().cost - pr.evaluate(&b, false).unwrap().cost)
-            / (2.0 * h);
-        assert!(
-            (fd - ev.gradient[j]).abs() < 1e-6 * (1.0 + fd.abs()),
-            "{j}: {fd} vs {}",
-            ev.gradient[j]
-        );
-    }
+    check_gradient(&mut pr, &th);
     // at the truth the simulation error vanishes
     let mut pr = SimFocus::new(m, &recs).unwrap();
     let th = pr.params();
