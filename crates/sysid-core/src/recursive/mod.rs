@@ -47,67 +47,45 @@ use crate::error::{Result, SysidError};
 use lagged::{Iir, Lagged};
 pub use update::{Method, MethodSettings};
 
-/// Orders of the polynomial structure (single output, `nb.len()` inputs).
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Structure {
-    /// Order of `A` (free coefficients).
-    pub na: usize,
-    /// Number of `B_j` coefficients per input.
-    pub nb: Vec<usize>,
-    /// Order of `C`.
-    pub nc: usize,
-    /// Order of `D`.
-    pub nd: usize,
-    /// Order of `F_j` per input.
-    pub nf: Vec<usize>,
-    /// Input delays per input.
-    pub nk: Vec<usize>,
+/// Orders of the polynomial structure (single output, `nb.len()` inputs): the prediction-error
+/// estimators' [`crate::polynomial::pem::MisoOrders`].
+pub use crate::polynomial::pem::MisoOrders as Structure;
+
+/// Checks the lengths agree and the size is one an online estimator supports; returns the
+/// number of parameters.
+fn check_structure(s: &Structure) -> Result<usize> {
+    let m = s.nb.len();
+    if s.nf.len() != m || s.nk.len() != m {
+        return Err(SysidError::invalid(
+            "structure",
+            format!(
+                "nb, nf and nk need one entry per input; got {}, {} and {}",
+                m,
+                s.nf.len(),
+                s.nk.len()
+            ),
+        ));
+    }
+    let p = s.n_params();
+    if p == 0 {
+        return Err(SysidError::invalid(
+            "structure",
+            "the model has no parameters; give at least one positive order".to_string(),
+        ));
+    }
+    if p > 4096 {
+        return Err(SysidError::invalid(
+            "structure",
+            format!("{p} parameters is more than an online estimator supports (4096)"),
+        ));
+    }
+    Ok(p)
 }
 
-impl Structure {
-    /// Checks the lengths agree; returns the number of parameters.
-    ///
-    /// ```
-    /// use sysid_core::recursive::Structure;
-    /// let s = Structure { na: 2, nb: vec![2], nc: 1, nd: 0, nf: vec![0], nk: vec![1] };
-    /// assert_eq!(s.n_params().unwrap(), 5);
-    /// ```
-    pub fn n_params(&self) -> Result<usize> {
-        let m = self.nb.len();
-        if self.nf.len() != m || self.nk.len() != m {
-            return Err(SysidError::invalid(
-                "structure",
-                format!(
-                    "nb, nf and nk need one entry per input; got {}, {} and {}",
-                    m,
-                    self.nf.len(),
-                    self.nk.len()
-                ),
-            ));
-        }
-        let p = self.na
-            + self.nb.iter().sum::<usize>()
-            + self.nc
-            + self.nd
-            + self.nf.iter().sum::<usize>();
-        if p == 0 {
-            return Err(SysidError::invalid(
-                "structure",
-                "the model has no parameters; give at least one positive order".to_string(),
-            ));
-        }
-        if p > 4096 {
-            return Err(SysidError::invalid(
-                "structure",
-                format!("{p} parameters is more than an online estimator supports (4096)"),
-            ));
-        }
-        Ok(p)
-    }
-
-    fn filtered(&self) -> bool {
-        self.nc + self.nd + self.nf.iter().sum::<usize>() > 0
-    }
+/// Whether the structure has filters (`C`, `D` or an `F_j`): the regressors are then
+/// filtered and the update is a pseudo-linear regression.
+fn filtered(s: &Structure) -> bool {
+    s.nc + s.nd + s.nf.iter().sum::<usize>() > 0
 }
 
 /// An online estimator: parameters, covariance `P` and the regressor history.
@@ -172,7 +150,7 @@ impl Recursive {
         theta0: Option<&[f64]>,
         p0: Option<f64>,
     ) -> Result<Self> {
-        let np = s.n_params()?;
+        let np = check_structure(&s)?;
         method.check(np)?;
         let p0 = p0.unwrap_or(1e4);
         if !(p0.is_finite() && p0 > 0.0) {
@@ -189,7 +167,7 @@ impl Recursive {
             .map(|j| Lagged::new((s.nk[j] + s.nb[j]).max(1)))
             .collect();
         let w = s.nf.iter().map(|&n| Lagged::new(n.max(1))).collect();
-        let filt = s.filtered().then(|| Filters::new(&s));
+        let filt = filtered(&s).then(|| Filters::new(&s));
         let mut est = Recursive {
             theta: vec![0.0; np],
             p,
@@ -524,7 +502,7 @@ impl Recursive {
         self.e.clear();
         self.v.clear();
         self.w.iter_mut().for_each(Lagged::clear);
-        if self.s.filtered() {
+        if filtered(&self.s) {
             self.filt = Some(Filters::new(&self.s));
         }
     }

@@ -8,15 +8,20 @@ fn noise(seed: &mut u64) -> f64 {
     (*seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
 }
 
-fn arx_structure() -> Structure {
+/// The single-input structure of orders `[na, nb, nc, nd, nf, nk]`.
+fn siso(na: usize, nb: usize, nc: usize, nd: usize, nf: usize, nk: usize) -> Structure {
     Structure {
-        na: 2,
-        nb: vec![2],
-        nc: 0,
-        nd: 0,
-        nf: vec![0],
-        nk: vec![1],
+        na,
+        nb: vec![nb],
+        nc,
+        nd,
+        nf: vec![nf],
+        nk: vec![nk],
     }
+}
+
+fn arx_structure() -> Structure {
+    siso(2, 2, 0, 0, 0, 1)
 }
 
 /// ARX(2, 2, 1) data: y = 1.5 y1 - 0.7 y2 + u1 + 0.5 u2 + 0.1 e.
@@ -85,14 +90,7 @@ fn step_and_run_are_bit_identical() {
         },
         Method::Gradient { gamma: 0.1 },
     ] {
-        let s = Structure {
-            na: 2,
-            nb: vec![2],
-            nc: 1,
-            nd: 1,
-            nf: vec![1],
-            nk: vec![0],
-        };
+        let s = siso(2, 2, 1, 1, 1, 0);
         let mut a = Recursive::new(s.clone(), method.clone(), None, None).unwrap();
         let mut b = a.clone();
         let mut ya = vec![0.0; 200];
@@ -117,14 +115,7 @@ fn armax_and_oe_converge() {
     for t in 1..n {
         y[t] = 0.8 * y[t - 1] + u[t - 1] + e[t] + 0.5 * e[t - 1];
     }
-    let s = Structure {
-        na: 1,
-        nb: vec![1],
-        nc: 1,
-        nd: 0,
-        nf: vec![0],
-        nk: vec![1],
-    };
+    let s = siso(1, 1, 1, 0, 0, 1);
     let mut est = Recursive::new(s, Method::Forgetting { lambda: 1.0 }, None, None).unwrap();
     let mut yh = vec![0.0; n];
     est.run(&u, &y, &mut yh, None, 1024, &mut || false).unwrap();
@@ -139,14 +130,7 @@ fn armax_and_oe_converge() {
         x[t] = 0.7 * x[t - 1] + u[t - 1];
     }
     let y: Vec<f64> = x.iter().zip(&e).map(|(a, b)| a + b).collect();
-    let s = Structure {
-        na: 0,
-        nb: vec![1],
-        nc: 0,
-        nd: 0,
-        nf: vec![1],
-        nk: vec![1],
-    };
+    let s = siso(0, 1, 0, 0, 1, 1);
     let mut est = Recursive::new(s, Method::Forgetting { lambda: 1.0 }, None, None).unwrap();
     est.run(&u, &y, &mut yh, None, 1024, &mut || false).unwrap();
     let th = est.theta();
