@@ -52,26 +52,21 @@ fn gram_matches_direct_accumulation() {
 #[test]
 fn gram_rejects_bad_shapes_and_nan() {
     let z = Mat::<f64>::zeros(2, 2);
-    let v = Mat::<f64>::zeros(5, 1);
-    let e = filtered_gram(
-        z.as_ref(),
-        z.as_ref(),
-        z.as_ref(),
-        z.as_ref(),
-        v.as_ref(),
-        0,
-    );
+    let gram = |v: &Mat<f64>| {
+        filtered_gram(
+            z.as_ref(),
+            z.as_ref(),
+            z.as_ref(),
+            z.as_ref(),
+            v.as_ref(),
+            0,
+        )
+    };
+    let e = gram(&Mat::<f64>::zeros(5, 1));
     assert!(e.unwrap_err().to_string().contains("bd has shape"));
     let mut v = Mat::<f64>::zeros(5, 2);
     v[(3, 1)] = f64::NAN;
-    let e = filtered_gram(
-        z.as_ref(),
-        z.as_ref(),
-        z.as_ref(),
-        z.as_ref(),
-        v.as_ref(),
-        0,
-    );
+    let e = gram(&v);
     assert!(e.unwrap_err().to_string().contains("sample 3"));
 }
 
