@@ -359,14 +359,20 @@ pub fn greybox_linear<'py>(
     let out = PyDict::new(py);
     out.set_item("p", slice_to_numpy(py, &r.p))?;
     out.set_item("theta", slice_to_numpy(py, &r.theta))?;
+    fit_items(&out, py, &r.fit)?;
+    Ok(out)
+}
+
+/// The error covariance, sample count, loss history, search report and covariance of a
+/// determinant-criterion fit, as items of `out`.
+fn fit_items(out: &Bound<'_, PyDict>, py: Python<'_>, fit: &greybox::CriterionFit) -> PyResult<()> {
     out.set_item(
         "innovation_covariance",
-        mat_to_numpy(py, &r.innovation_covariance),
+        mat_to_numpy(py, &fit.innovation_covariance),
     )?;
-    out.set_item("n_samples", r.n_samples)?;
-    out.set_item("loss_history", r.loss_history.clone())?;
-    solution_items(&out, py, &r.solution, &r.covariance)?;
-    Ok(out)
+    out.set_item("n_samples", fit.n_samples)?;
+    out.set_item("loss_history", fit.loss_history.clone())?;
+    solution_items(out, py, &fit.solution, &fit.covariance)
 }
 
 /// Estimates a nonlinear grey-box model; `f(t, x, u, p)` and `h(t, x, u, p)` take `x` as
@@ -415,14 +421,8 @@ pub fn greybox_ode<'py>(
     let r = result?.py()?;
     let out = PyDict::new(py);
     out.set_item("theta", slice_to_numpy(py, &r.theta))?;
-    out.set_item(
-        "innovation_covariance",
-        mat_to_numpy(py, &r.innovation_covariance),
-    )?;
-    out.set_item("n_samples", r.n_samples)?;
-    out.set_item("loss_history", r.loss_history.clone())?;
     out.set_item("rhs_calls", r.rhs_calls)?;
-    solution_items(&out, py, &r.solution, &r.covariance)?;
+    fit_items(&out, py, &r.fit)?;
     Ok(out)
 }
 

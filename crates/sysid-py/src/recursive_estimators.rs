@@ -5,7 +5,7 @@ use crate::errors::IntoPy;
 use numpy::{PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use sysid_core::recursive::{Method, MethodSettings, Recursive, Structure};
+use sysid_core::recursive::{check_structure, Method, MethodSettings, Recursive, Structure};
 
 /// What `run` returns: the prior predictions and, when stored, the parameter trajectory.
 type RunOutput<'py> = (Bound<'py, PyArray1<f64>>, Option<Bound<'py, PyArray2<f64>>>);
@@ -48,7 +48,7 @@ impl PyRecursiveEstimator {
             nf,
             nk,
         };
-        let p = s.n_params().py()?;
+        let p = check_structure(&s).py()?;
         let settings = MethodSettings {
             forgetting,
             process_noise: process_noise.map(|a| a.as_array().iter().copied().collect()),

@@ -58,6 +58,47 @@ impl Default for LinearOptions {
     }
 }
 
+/// What a fit on the determinant criterion reports besides its parameters (linear and ODE
+/// grey-box models alike).
+#[derive(Debug, Clone)]
+pub struct CriterionFit {
+    /// Sample covariance of the errors, l x l.
+    pub innovation_covariance: Mat<f64>,
+    /// What the search did.
+    pub solution: Solution,
+    /// Covariance of the searched parameters (`H^+` with `W = Lambda^-1`; fixed ones: zero
+    /// rows and columns).
+    pub covariance: Covariance,
+    /// Number of samples.
+    pub n_samples: usize,
+    /// `det(Lambda)` at the start and after every accepted iteration.
+    pub loss_history: Vec<f64>,
+}
+
+impl CriterionFit {
+    /// The report of `solution`, its covariance from the Gauss-Newton matrix `h` at the
+    /// solution (weighted by `Lambda^-1`) restricted to the parameters `fixed` leaves free
+    /// (`None`: all).
+    pub(crate) fn new(
+        solution: Solution,
+        h: &Mat<f64>,
+        fixed: Option<&[bool]>,
+        innovation_covariance: Mat<f64>,
+        n_samples: usize,
+        loss_history: Vec<f64>,
+    ) -> Result<Self> {
+        let all_free = vec![false; h.nrows()];
+        let covariance = free_covariance(h, fixed.unwrap_or(&all_free))?;
+        Ok(CriterionFit {
+            innovation_covariance,
+            solution,
+            covariance,
+            n_samples,
+            loss_history,
+        })
+    }
+}
+
 /// The estimate of a linear grey-box structure.
 #[derive(Debug, Clone)]
 pub struct LinearResult {
@@ -65,16 +106,8 @@ pub struct LinearResult {
     pub p: Vec<f64>,
     /// The inner parameters `(A, B, C, D, [K], x0 per experiment)` at the solution.
     pub theta: Vec<f64>,
-    /// Sample covariance of the prediction errors, l x l.
-    pub innovation_covariance: Mat<f64>,
-    /// What the search did.
-    pub solution: Solution,
-    /// Covariance of `p` (`H^+` with `W = Lambda^-1`).
-    pub covariance: Covariance,
-    /// Number of samples.
-    pub n_samples: usize,
-    /// `det(Lambda)` at the start and after every accepted iteration.
-    pub loss_history: Vec<f64>,
+    /// Prediction-error covariance, search, covariance of `p`, samples, losses.
+    pub fit: CriterionFit,
 }
 
 /// Estimates the parameters of a linear grey-box structure.
@@ -205,20 +238,12 @@ pub fn linear(
         let mut prob = Reparameterized::new(&mut pred, map, np);
         prob.evaluate(&p, true)?.gauss_newton
     };
-    let fixed = options
-        .optim
-        .fixed
-        .clone()
-        .unwrap_or_else(|| vec![false; np]);
-    let covariance = free_covariance(&h, &fixed)?;
+    let fixed = options.optim.fixed.as_deref();
+    let n = pred.n_samples();
     Ok(LinearResult {
         p,
         theta,
-        innovation_covariance: lam,
-        n_samples: pred.n_samples(),
-        solution,
-        covariance,
-        loss_history,
+        fit: CriterionFit::new(solution, &h, fixed, lam, n, loss_history)?,
     })
 }
 

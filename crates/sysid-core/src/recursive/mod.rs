@@ -53,7 +53,13 @@ pub use crate::polynomial::pem::MisoOrders as Structure;
 
 /// Checks the lengths agree and the size is one an online estimator supports; returns the
 /// number of parameters.
-fn check_structure(s: &Structure) -> Result<usize> {
+///
+/// ```
+/// use sysid_core::recursive::{check_structure, Structure};
+/// let s = Structure { na: 2, nb: vec![2], nc: 1, nd: 0, nf: vec![0], nk: vec![1] };
+/// assert_eq!(check_structure(&s).unwrap(), 5);
+/// ```
+pub fn check_structure(s: &Structure) -> Result<usize> {
     let m = s.nb.len();
     if s.nf.len() != m || s.nk.len() != m {
         return Err(SysidError::invalid(

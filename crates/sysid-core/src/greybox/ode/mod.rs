@@ -20,9 +20,9 @@
 //! the experiments, the cost and normal equations), `integrate` (the integrators and the
 //! sensitivity equations).
 
-use super::{determinant, free_covariance};
+use super::{determinant, CriterionFit};
 use crate::error::{Result, SysidError};
-use crate::optim::{self, Covariance, Flow, Iteration, Problem, Solution};
+use crate::optim::{self, Flow, Iteration, Problem};
 use faer::{Mat, MatRef};
 
 mod integrate;
@@ -192,16 +192,8 @@ pub struct OdeStructure {
 pub struct OdeResult {
     /// The searched quantities (free parameters, then free initial-state entries).
     pub theta: Vec<f64>,
-    /// Sample covariance of the simulation errors, l x l.
-    pub innovation_covariance: Mat<f64>,
-    /// What the search did.
-    pub solution: Solution,
-    /// Covariance of `theta` (`H^+` with `W = Lambda^-1`).
-    pub covariance: Covariance,
-    /// Number of samples.
-    pub n_samples: usize,
-    /// `det(Lambda)` at the start and after every accepted iteration.
-    pub loss_history: Vec<f64>,
+    /// Simulation-error covariance, search, covariance of `theta`, samples, losses.
+    pub fit: CriterionFit,
     /// Right-hand-side evaluations (calls, each on all columns; with sensitivities, calls
     /// of [`OdeModel::rhs_derivatives`] count too).
     pub rhs_calls: usize,
@@ -245,7 +237,6 @@ pub fn estimate(
 ) -> Result<OdeResult> {
     let mut prob = OdeProblem::new(model, experiments, structure, options.clone())?;
     let th0 = prob.theta0();
-    let q = th0.len();
     if options.reweight {
         prob.reweight_at(&th0)?;
     } else {
@@ -263,20 +254,19 @@ pub fn estimate(
         prob.losses.pop();
         prob.evaluate(&theta, true)?.gauss_newton
     };
-    let fixed = options
-        .optim
-        .fixed
-        .clone()
-        .unwrap_or_else(|| vec![false; q]);
-    let covariance = free_covariance(&h, &fixed)?;
+    let fixed = options.optim.fixed.as_deref();
+    let fit = CriterionFit::new(
+        solution,
+        &h,
+        fixed,
+        lam,
+        prob.n_samples,
+        prob.losses.clone(),
+    )?;
     Ok(OdeResult {
         theta,
-        innovation_covariance: lam,
-        covariance,
-        n_samples: prob.n_samples,
-        loss_history: prob.losses.clone(),
+        fit,
         rhs_calls: prob.rhs_calls,
-        solution,
     })
 }
 

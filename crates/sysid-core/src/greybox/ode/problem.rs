@@ -208,12 +208,7 @@ impl<'a> OdeProblem<'a> {
                 let time = t as f64 * dt;
                 if sens {
                     let yh = self.sensitivity_output(time, &x, &ut, &p, &cols, &mut dy)?;
-                    let mut finite = true;
-                    for i in 0..l {
-                        res[i] = y[(t, i)] - yh[(i, 0)];
-                        finite &= res[i].is_finite();
-                    }
-                    if !finite {
+                    if !residual(y.row(t), &yh, &mut res) {
                         return Ok(false);
                     }
                     sink(&res, &dy, &cols);
@@ -233,12 +228,7 @@ impl<'a> OdeProblem<'a> {
                         ),
                     ));
                 }
-                let mut finite = true;
-                for i in 0..l {
-                    res[i] = y[(t, i)] - yh[(i, 0)];
-                    finite &= res[i].is_finite();
-                }
-                if !finite {
+                if !residual(y.row(t), &yh, &mut res) {
                     return Ok(false);
                 }
                 if jac {
@@ -402,4 +392,14 @@ impl Problem for OdeProblem<'_> {
         self.losses.push(determinant(&lam));
         Ok(false)
     }
+}
+
+/// `res = y(t) - yhat` (column 0 of `yh`, the nominal point); whether every entry is finite.
+fn residual(y: faer::RowRef<'_, f64>, yh: &Mat<f64>, res: &mut [f64]) -> bool {
+    let mut finite = true;
+    for (i, r) in res.iter_mut().enumerate() {
+        *r = y[i] - yh[(i, 0)];
+        finite &= r.is_finite();
+    }
+    finite
 }
