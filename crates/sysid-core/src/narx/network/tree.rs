@@ -111,7 +111,7 @@ pub fn fit_tree(
     for_each_row(spec, shift, scale, records, output, |z, y| {
         data.extend_from_slice(z);
         data.push(y);
-    });
+    })?;
     let yy: f64 = (0..n).map(|i| data[i * (nz + 1) + nz].powi(2)).sum();
     let tiny = 1e-20 * yy.max(f64::MIN_POSITIVE);
     let ctx = Ctx {
@@ -242,6 +242,10 @@ impl Ctx<'_> {
             order.sort_by(|a, b| key(*a).total_cmp(&key(*b)));
             left.iter_mut().for_each(|x| *x = 0.0);
             for pos in 0..order.len() - 1 {
+                // Ctrl-C: a scan of a large cell takes seconds
+                if pos % 1024 == 0 {
+                    crate::interrupt::check()?;
+                }
                 load(order[pos], &mut row);
                 rank_one(&mut left, &row, 1.0);
                 let nl = pos + 1;

@@ -84,7 +84,7 @@ impl<'a> VarPro<'a> {
         1 + self.nz() + self.kinds.len()
     }
 
-    fn for_rows(&self, f: impl FnMut(&[f64], f64)) {
+    fn for_rows(&self, f: impl FnMut(&[f64], f64)) -> Result<()> {
         for_each_row(
             self.spec,
             self.shift,
@@ -92,7 +92,7 @@ impl<'a> VarPro<'a> {
             self.records,
             self.output,
             f,
-        );
+        )
     }
 
     /// Writes the row `[1, z, g_1(z), ..]` of `Phi` into `row[..n_linear]` and, with `dp`,
@@ -120,7 +120,7 @@ impl<'a> VarPro<'a> {
             self.phi_row(theta, z, &mut row, None);
             row[q] = y;
             acc.push_row(&row);
-        });
+        })?;
         solve_triangular_ls(&acc.finish(), q)
     }
 
@@ -169,7 +169,7 @@ impl Problem for VarPro<'_> {
                 *g -= dv * res;
             }
             acc.push_row(&row);
-        });
+        })?;
         let r = acc.finish();
         let r22 = r.as_ref().submatrix(q, q, p, p);
         let gauss_newton: Mat<f64> = mul_seq(r22.transpose(), r22);
@@ -207,7 +207,8 @@ pub(crate) fn solve_triangular_ls(r: &Mat<f64>, q: usize) -> Result<(Vec<f64>, f
 }
 
 /// Calls `f(z, y)` for every regression row of the records: the standardised lagged
-/// variables `z = (x - shift) / scale` and the target `y_output(t)`, `t >= max_lag`.
+/// variables `z = (x - shift) / scale` and the target `y_output(t)`, `t >= max_lag`; stops
+/// on Ctrl-C (asked every 4096 rows).
 pub(crate) fn for_each_row(
     spec: &LagSpec,
     shift: &[f64],
@@ -215,11 +216,14 @@ pub(crate) fn for_each_row(
     records: &[Record<'_>],
     output: usize,
     mut f: impl FnMut(&[f64], f64),
-) {
+) -> Result<()> {
     let nz = spec.n_vars();
     let (mut x, mut z) = (vec![0.0; nz], vec![0.0; nz]);
     for r in records {
         for t in spec.max_lag..r.y.nrows() {
+            if t % 4096 == 0 {
+                crate::interrupt::check()?;
+            }
             spec.fill_with(t, &mut x, |s, ch, tt| match s {
                 Signal::Output => r.y[(tt, ch)],
                 _ => r.u[(tt, ch)],
@@ -230,4 +234,5 @@ pub(crate) fn for_each_row(
             f(&z, r.y[(t, output)]);
         }
     }
+    Ok(())
 }
