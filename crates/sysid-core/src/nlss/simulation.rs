@@ -142,11 +142,11 @@ fn check<M: NonlinearTerms>(m: &M, theta: &[f64], u: &[f64], y: Option<&[f64]>) 
             format!("a {} model needs at least one input", M::NAME),
         ));
     }
-    let n = if nu == 0 {
-        y.map_or(0, |y| y.len() / ny.max(1))
-    } else {
-        u.len() / nu
-    };
+    // without inputs the record's length is the outputs'
+    let n = u
+        .len()
+        .checked_div(nu)
+        .unwrap_or_else(|| y.map_or(0, |y| y.len() / ny.max(1)));
     if nu > 0 && u.len() != n * nu {
         return Err(SysidError::invalid(
             "u",
