@@ -3,13 +3,13 @@
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import pytest
 
 import sysid
 from sysid.subspace.feedthrough import choose_feedthrough
+
+from conftest import quiet
 
 #: a plant with a direct term and one without (same poles)
 A = [[0.8, 0.2], [-0.2, 0.7]]
@@ -22,12 +22,6 @@ def record(d: float, n: int = 800, noise: float = 0.05, seed: int = 1) -> sysid.
     true = sysid.StateSpaceModel(A, B, C, [[d]])
     u = rng.standard_normal((n, 1))
     return sysid.IOData(u=u, y=true.simulate(u) + noise * rng.standard_normal((n, 1)))
-
-
-def quiet(f, *a, **k):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return f(*a, **k)
 
 
 # -- the default: D = 0 everywhere ---------------------------------------------------------
