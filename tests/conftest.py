@@ -41,6 +41,18 @@ def daisy_split(name, centred=True):
     return sysid.IOData(u=u[:k], y=y[:k]), sysid.IOData(u=u[k:], y=y[k:])
 
 
+def feedthrough_record(d, n=800, noise=0.05, seed=1):
+    """A record of a second-order plant with direct term ``d`` (the same poles for every
+    ``d``): white input, output noise of standard deviation ``noise``."""
+    import sysid
+
+    rng = np.random.default_rng(seed)
+    true = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]],
+                                 [[d]])
+    u = rng.standard_normal((n, 1))
+    return sysid.IOData(u=u, y=true.simulate(u) + noise * rng.standard_normal((n, 1)))
+
+
 def quiet(fn, *a, **k):
     """``fn(*a, **k)`` with every warning silenced."""
     with warnings.catch_warnings():

@@ -15,7 +15,7 @@ from _guides import guide_text, python_blocks, run_guide
 import sysid
 from sysid.validation.crossval import choose, cross_validated_order
 
-from conftest import daisy_split, quiet
+from conftest import daisy_split, feedthrough_record, quiet
 
 
 def plain_po_moesp(data: sysid.IOData, n: int, i: int = 10) -> sysid.StateSpaceModel:
@@ -102,12 +102,7 @@ def test_ssest_order_auto():
 # -- feedthrough="auto" ------------------------------------------------------------------
 @pytest.mark.parametrize("d", [0.0, 0.8])
 def test_ssest_feedthrough_auto_decides_from_the_data(d):
-    rng = np.random.default_rng(1)
-    true = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]],
-                                 [[d]])
-    u = rng.standard_normal((800, 1))
-    y = true.simulate(u) + 0.05 * rng.standard_normal((800, 1))
-    m = quiet(sysid.ssest, sysid.IOData(u=u, y=y), 2, feedthrough="auto")
+    m = quiet(sysid.ssest, feedthrough_record(d, seed=1), 2, feedthrough="auto")
     sel = m.info["feedthrough_selection"]
     assert sel["feedthrough"] is (d != 0), sel
     assert abs(m.D[0, 0] - d) < 0.05
@@ -115,12 +110,7 @@ def test_ssest_feedthrough_auto_decides_from_the_data(d):
 
 @pytest.mark.parametrize("d", [0.0, 0.8])
 def test_subspace_feedthrough_auto_decides_by_held_out_fit(d):
-    rng = np.random.default_rng(2)
-    true = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]],
-                                 [[d]])
-    u = rng.standard_normal((800, 1))
-    y = true.simulate(u) + 0.05 * rng.standard_normal((800, 1))
-    m = quiet(sysid.moesp, sysid.IOData(u=u, y=y), feedthrough="auto")
+    m = quiet(sysid.moesp, feedthrough_record(d, seed=2), feedthrough="auto")
     sel = m.info["feedthrough_selection"]
     assert sel["feedthrough"] is (d != 0), sel
     assert m.nstates == 2 and abs(m.D[0, 0] - d) < 0.05
