@@ -182,3 +182,12 @@ def test_recursive_process_noise_is_sized_from_the_checked_structure(monkeypatch
     for est in runs:
         est.run(u, y)
     assert not np.allclose(runs[0].parameters, runs[1].parameters)  # the noise is taken
+
+
+@pytest.mark.parametrize("kwargs", [{"degree": 5}, {"degree": 3, "branches": 30}])
+def test_pnlss_refuses_more_parameters_than_residuals(data, kwargs):
+    """The parameter count is checked against the residuals before the optimiser sizes its
+    normal equations by it (order 4, degree 9 on 300 samples panicked allocating 10 010^2)."""
+    short = data.slice(0, 120)
+    with pytest.raises(DataError, match=r"parameters but the record gives \d+ residuals"):
+        sysid.pnlss(short, 2, progress=False, max_iter=2, **kwargs)

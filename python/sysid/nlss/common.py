@@ -190,6 +190,16 @@ def settle_samples(m: StateSpaceModel, n: int) -> int:
     return int(min(max(k, 0), n // 4))
 
 
+def check_parameters(n_par: int, recs: list[Any], fix: str) -> None:
+    """Refuses a simulation-error fit of ``n_par`` parameters on records ``(u, y, transient)``
+    that give no more residuals than that, before the optimiser sizes anything by the
+    parameter count; ``fix`` says what to lower."""
+    n_res = sum(max(y.shape[0] - int(skip), 0) * y.shape[1] for _, y, skip in recs)
+    if n_par >= n_res:
+        raise DataError(f"the model has {n_par} parameters but the record gives {n_res} "
+                        f"residuals (after the transient); lower {fix}, or give more data")
+
+
 def check_order(order: Any) -> int:
     from .._checks import as_int
 

@@ -24,7 +24,16 @@ from ..errors import DataError
 from ..models.protocol import ModelMixin
 from ..models.serialize import register_model
 from ..models.statespace import StateSpaceModel
-from .common import LinearPart, channels, clamp_box, envelope, fit_summary, linear_states, signal
+from .common import (
+    LinearPart,
+    channels,
+    check_parameters,
+    clamp_box,
+    envelope,
+    fit_summary,
+    linear_states,
+    signal,
+)
 
 __all__ = ["DecoupledPNLSSModel"]
 
@@ -172,8 +181,10 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
     r = int(branches)
     if r < 1:
         raise DataError(f"branches must be a positive integer, got {branches!r}")
-    Z = np.hstack([np.vstack(linear_states(lin, us)), np.vstack(us)])
     nd = len(degrees)
+    check_parameters(n * n + n * m_ + l_ * n + l_ * m_ + r * (2 * n + m_ + nd) + n + l_, recs,
+                     "branches, the degrees or the order")
+    Z = np.hstack([np.vstack(linear_states(lin, us)), np.vstack(us)])
 
     def start(k: int) -> np.ndarray:
         V = np.random.default_rng([seed, k]).standard_normal((r, n + m_))

@@ -32,6 +32,7 @@ from .common import (
     balanced,
     channels,
     check_order,
+    check_parameters,
     clamp_box,
     envelope,
     fit_summary,
@@ -258,6 +259,12 @@ def pnlss(
     PNLSSModel or DecoupledPNLSSModel
         ``info["fit"]``: iterations, costs, stop reason, parameters, transient.
 
+    Raises
+    ------
+    DataError
+        Among others, when the model has at least as many parameters as the record gives
+        residuals after the transient (checked before the search is sized).
+
     Examples
     --------
     A Wiener-type system (first-order filter, then a cubic output map), four random-phase
@@ -340,6 +347,7 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
     eta = [[]] + ([] if ot == "none" else _sysid.pnlss_monomials(n, m_, ot, degs))
     theta0 = np.concatenate([lin.A.ravel(), lin.B.ravel(), lin.C.ravel(), lin.D.ravel(),
                              np.zeros(n * len(zeta) + l_ * len(eta))])
+    check_parameters(theta0.size, recs, "the degree, the terms or the order")
     res = _sysid.pnlss_estimate(n, m_, l_, zeta, eta, recs, theta0, max_iter=max_iter,
                                 tol=tol, progress=cb, range=rng)
     th = np.asarray(res["theta"])
