@@ -29,7 +29,15 @@ def orders(x: Any, l: int, m: int, name: str, lo: int) -> np.ndarray:
 
 def pole_zero_orders(n_poles: Any, n_zeros: Any, l: int, m: int) -> tuple[np.ndarray, np.ndarray]:
     """Poles and zeros per output/input pair (``n_zeros=None``: one fewer than the poles),
-    checked proper."""
+    checked proper.
+
+    Examples
+    --------
+    >>> from sysid.tf.options import pole_zero_orders
+    >>> npo, nze = pole_zero_orders(2, None, 1, 2)
+    >>> npo.tolist(), nze.tolist()
+    ([[2, 2]], [[1, 1]])
+    """
     npo = orders(n_poles, l, m, "n_poles", 0)
     nze = np.maximum(npo - 1, 0) if n_zeros is None else orders(n_zeros, l, m, "n_zeros", 0)
     if np.any(nze > npo):
