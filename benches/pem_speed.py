@@ -141,27 +141,7 @@ def run_scipy(u, y, start, sysid_iterations):
         return {"s_per_jacobian": round(per_jac, 2),
                 "wall_s": f">= {per_jac * sysid_iterations:.0f}", "iterations": None,
                 "final_cost": None}
-    best = [np.inf, 0]
-    c0, t0 = time.process_time(), time.perf_counter()
-
-    def timed(th):
-        if time.perf_counter() - t0 > SCIPY_BUDGET:
-            raise _OutOfTime
-        r = resid(th)
-        best[0] = min(best[0], 0.5 * float(r @ r))
-        best[1] += 1
-        return r
-
-    out = {"s_per_jacobian": round(per_jac, 2)}
-    try:
-        r = least_squares(timed, th0, method="trf")
-        out.update(wall_s=round(time.perf_counter() - t0, 2), iterations=int(r.njev),
-                   final_cost=float(r.cost), status=r.message)
-    except _OutOfTime:
-        out.update(wall_s=f">= {SCIPY_BUDGET:.0f} (stopped)", iterations=None,
-                   final_cost=best[0], evaluations=best[1])
-    out["cpu_s"] = round(time.process_time() - c0, 2)
-    return out
+    return {"s_per_jacobian": round(per_jac, 2), **_scipy_fit(resid, th0)}
 
 
 def floor_s(u, y, n, iterations, rate):
@@ -214,8 +194,9 @@ def _timed(fn):
 
 
 def _scipy_fit(resid, th0):
-    """least_squares as a user writes it, to convergence or SCIPY_BUDGET seconds."""
-    best = [np.inf]
+    """least_squares as a user writes it, to convergence or SCIPY_BUDGET seconds (then the
+    lowest cost it had evaluated and the evaluations, marked as stopped)."""
+    best = [np.inf, 0]
     c0, t0 = time.process_time(), time.perf_counter()
 
     def timed(th):
@@ -223,14 +204,16 @@ def _scipy_fit(resid, th0):
             raise _OutOfTime
         r = resid(th)
         best[0] = min(best[0], 0.5 * float(r @ r))
+        best[1] += 1
         return r
 
     try:
         r = least_squares(timed, th0, method="trf")
         out = {"wall_s": round(time.perf_counter() - t0, 2), "iterations": int(r.njev),
-               "final_cost": float(r.cost)}
+               "final_cost": float(r.cost), "status": r.message}
     except _OutOfTime:
-        out = {"wall_s": f">= {SCIPY_BUDGET:.0f} (stopped)", "final_cost": best[0]}
+        out = {"wall_s": f">= {SCIPY_BUDGET:.0f} (stopped)", "iterations": None,
+               "final_cost": best[0], "evaluations": best[1]}
     out["cpu_s"] = round(time.process_time() - c0, 2)
     return out
 

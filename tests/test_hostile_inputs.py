@@ -126,3 +126,68 @@ def test_era_of_huge_markov_parameters_says_what_to_do():
 def test_etfe_of_one_sample_is_refused():
     with pytest.raises(InsufficientDataError, match="at least 4 samples"):
         sysid.etfe(sysid.IOData(u=np.ones(1), y=np.ones(1)))
+
+
+# -- the streaming and recursive paths: a bad input is refused before it sizes anything -----
+
+def _never(what):
+    """A stand-in for a constructor that allocates from its arguments: the test fails if it
+    is reached."""
+    def built(*args, **kwargs):
+        raise AssertionError(f"{what} was built (and sized) before the input was checked")
+    return built
+
+
+@pytest.mark.parametrize("u, y, error", [
+    (np.ones((10, 1)), np.ones((100, 1)), "u has 10 samples but y has 100"),
+    (np.ones((100, 1)), np.r_[np.ones(50), np.nan, np.ones(49)], "non-finite"),
+    (np.ones((100, 1)), np.full((100, 1), "a"), "real numeric"),
+])
+def test_recursive_subspace_checks_the_first_chunk_before_sizing_its_factor(
+        monkeypatch, u, y, error):
+    monkeypatch.setattr(sysid._sysid, "RecursiveFactor", _never("the recursive factor"))
+    rs = sysid.RecursiveSubspace(order=1, horizon=2000)  # k = 8000: a 512 MB factor
+    with pytest.raises(DataError, match=error):
+        rs.update(u, y)
+
+
+@pytest.mark.parametrize("u, y, error", [
+    (np.ones((10, 1)), np.ones((100, 1)), "u has 10 samples but y has 100"),
+    (np.ones((100, 1)), np.r_[np.ones(50), np.nan, np.ones(49)], "non-finite"),
+])
+def test_compress_stream_checks_the_first_chunk_before_sizing_the_compressor(
+        monkeypatch, u, y, error):
+    from sysid.subspace.streaming import compress_stream
+
+    monkeypatch.setattr(sysid._sysid, "StreamingCompressor", _never("the compressor"))
+    with pytest.raises(DataError, match=error):
+        compress_stream(iter([(u, y)]), past=2000, compressor="qr", progress=False)
+
+
+def test_recursive_process_noise_is_sized_from_the_checked_structure(monkeypatch):
+    """A scalar process noise becomes a p x p matrix: p comes from the structure the core
+    accepted (at most 4096 parameters), not from the orders as given."""
+    eye = np.eye
+
+    def small_eye(n, *args, **kwargs):
+        assert n <= 4096, f"a {n} x {n} identity was built before the structure was checked"
+        return eye(n, *args, **kwargs)
+
+    monkeypatch.setattr(np, "eye", small_eye)
+    with pytest.raises(DataError, match="more than an online estimator supports"):
+        sysid.RecursiveARX(20000, 1, method="kalman", process_noise=1.0)
+    rng = np.random.default_rng(0)
+    u, y = rng.standard_normal(200), rng.standard_normal(200)
+    runs = [sysid.RecursiveARX(2, 1, method="kalman", process_noise=q) for q in (None, 0.5)]
+    for est in runs:
+        est.run(u, y)
+    assert not np.allclose(runs[0].parameters, runs[1].parameters)  # the noise is taken
+
+
+@pytest.mark.parametrize("kwargs", [{"degree": 5}, {"degree": 3, "branches": 30}])
+def test_pnlss_refuses_more_parameters_than_residuals(data, kwargs):
+    """The parameter count is checked against the residuals before the optimiser sizes its
+    normal equations by it (order 4, degree 9 on 300 samples panicked allocating 10 010^2)."""
+    short = data.slice(0, 120)
+    with pytest.raises(DataError, match=r"parameters but the record gives \d+ residuals"):
+        sysid.pnlss(short, 2, progress=False, max_iter=2, **kwargs)

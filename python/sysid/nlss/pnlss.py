@@ -30,11 +30,17 @@ from .common import (
     LinearPart,
     Scaling,
     balanced,
+    channels,
     check_order,
+    check_parameters,
+    clamp_box,
     envelope,
+    fit_summary,
     linear_start,
+    linear_states,
     scaled_data,
     settle_samples,
+    signal,
 )
 
 __all__ = ["PNLSSModel", "pnlss"]
@@ -89,15 +95,10 @@ class PNLSSModel(LinearPart, ModelMixin):
                 or self.D.shape != (l_, m):
             raise DataError(f"A {self.A.shape}, B {self.B.shape}, C {self.C.shape} and D "
                             f"{self.D.shape} do not fit together")
-        sc = scaling or {"u_offset": np.zeros(m), "u_scale": np.ones(m),
-                         "y_offset": np.zeros(l_), "y_scale": np.ones(l_)}
-        self.scaling = Scaling(sc["u_offset"], sc["u_scale"], sc["y_offset"], sc["y_scale"])
-        self.clamp = None if clamp is None else _box(clamp, n + m)
+        self.scaling, self.input_names, self.output_names = channels(
+            scaling, m, l_, input_names, output_names)
+        self.clamp = None if clamp is None else clamp_box(clamp, n + m, " (states then inputs)")
         self.dt = float(dt)
-        self.input_names = list(input_names) if input_names is not None else \
-            [f"u{j}" for j in range(m)]
-        self.output_names = list(output_names) if output_names is not None else \
-            [f"y{j}" for j in range(l_)]
         self.info = dict(info or {"method": "pnlss"})
 
     nstates = property(lambda self: self.A.shape[0])
@@ -122,13 +123,7 @@ class PNLSSModel(LinearPart, ModelMixin):
         return None if self.clamp is None else (list(self.clamp[0]), list(self.clamp[1]))
 
     def _u(self, u: Any) -> np.ndarray:
-        a = np.asarray(u, dtype=float)
-        a = a.reshape(-1, 1) if a.ndim == 1 else a
-        if a.ndim != 2 or a.shape[1] != self.ninputs:
-            raise DataError(f"u must be (n_samples, {self.ninputs}), got {np.shape(u)}")
-        if not np.isfinite(a).all():
-            raise DataError("u has non-finite values (NaN or Inf)")
-        return self.scaling.u(a)
+        return self.scaling.u(signal(u, self.ninputs, "u"))
 
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
         """Output ``(n_samples, noutputs)`` from ``x0`` (scaled-state coordinates; zero by
@@ -144,10 +139,6 @@ class PNLSSModel(LinearPart, ModelMixin):
         _, xs = _sysid.pnlss_simulate(*self._struct(), self.theta, self._u(u), x,
                                       self._range())
         return np.asarray(xs).reshape(-1, self.nstates)
-
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
-        """An output-error model has no noise model: its prediction is its simulation."""
-        return self.simulate(u)
 
     def linear(self) -> StateSpaceModel:
         """The linear part ``(A, B, C, D)`` in engineering units."""
@@ -168,28 +159,12 @@ class PNLSSModel(LinearPart, ModelMixin):
                    info=d.get("info"))
 
     def summary(self) -> str:
-        fit = self.info.get("fit", {})
-        return (f"{self!r}\n  parameters: {self.theta.size}\n  iterations: "
-                f"{fit.get('iterations', '-')}, stop: {fit.get('stop', '-')}\n  cost: "
-                f"{fit.get('cost', [float('nan')])[0]:.6g} -> "
-                f"{fit.get('cost', [float('nan')])[-1]:.6g}")
+        return fit_summary(self)
 
     def __repr__(self) -> str:
         return (f"PNLSSModel(nstates={self.nstates}, ninputs={self.ninputs}, "
                 f"noutputs={self.noutputs}, {len(self.zeta)} state monomial(s), "
                 f"{len(self.eta)} output monomial(s), dt={self.dt:g})")
-
-
-def _box(clamp: Any, nz: int) -> tuple[np.ndarray, np.ndarray]:
-    try:
-        lo, hi = (np.asarray(v, dtype=float).ravel() for v in clamp)
-    except (TypeError, ValueError):
-        raise DataError("clamp must be a pair (lo, hi) of arrays") from None
-    if lo.size != nz or hi.size != nz or np.isnan(lo).any() or np.isnan(hi).any() \
-            or np.any(lo > hi):
-        raise DataError(f"clamp needs {nz} lower and upper bounds (states then inputs) "
-                        "with lo <= hi")
-    return lo, hi
 
 
 def _degrees(degree: Any) -> list[int]:
@@ -284,6 +259,12 @@ def pnlss(
     PNLSSModel or DecoupledPNLSSModel
         ``info["fit"]``: iterations, costs, stop reason, parameters, transient.
 
+    Raises
+    ------
+    DataError
+        Among others, when the model has at least as many parameters as the record gives
+        residuals after the transient (checked before the search is sized).
+
     Examples
     --------
     A Wiener-type system (first-order filter, then a cubic output map), four random-phase
@@ -356,9 +337,8 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
                  output_terms: str | None, degs: list[int], extrapolation: str, max_iter: int,
                  tol: float, cb: Any) -> tuple[dict[str, Any], dict[str, Any]]:
     n, m_, l_ = lin.nstates, lin.ninputs, lin.noutputs
-    probe = StateSpaceModel(lin.A, lin.B, np.eye(n), np.zeros((n, m_)), dt=lin.dt)
-    fit_box = None if extrapolation == "polynomial" else envelope(
-        [np.asarray(probe.simulate(u)) for u in us], us, 0.5)
+    fit_box = None if extrapolation == "polynomial" else envelope(linear_states(lin, us), us,
+                                                                  0.5)
     rng = None if fit_box is None else (list(fit_box[0]), list(fit_box[1]))
     # a constant term in each equation: the channel offsets removed by the scaling (and
     # the mean of the nonlinear terms) enter the scaled equations as constants
@@ -367,6 +347,7 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
     eta = [[]] + ([] if ot == "none" else _sysid.pnlss_monomials(n, m_, ot, degs))
     theta0 = np.concatenate([lin.A.ravel(), lin.B.ravel(), lin.C.ravel(), lin.D.ravel(),
                              np.zeros(n * len(zeta) + l_ * len(eta))])
+    check_parameters(theta0.size, recs, "the degree, the terms or the order")
     res = _sysid.pnlss_estimate(n, m_, l_, zeta, eta, recs, theta0, max_iter=max_iter,
                                 tol=tol, progress=cb, range=rng)
     th = np.asarray(res["theta"])

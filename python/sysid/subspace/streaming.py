@@ -22,7 +22,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_2d, as_int, as_option
 from .._progress import Bar, show
-from ..errors import DataError
+from ..errors import DataError, ShapeError
 
 __all__ = [
     "compress_stream",
@@ -124,6 +124,29 @@ def _release_pages(arr: np.ndarray, start: int, stop: int) -> None:
             mm.madvise(mmap.MADV_DONTNEED, lo, hi - lo)
     except (ValueError, OSError, TypeError, BufferError):
         return
+
+
+def as_chunk(u: Any, y: Any, allow_empty: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """A chunk ``(u, y)`` of a stream checked whole (numeric, finite, ``(samples, channels)``,
+    ``u`` and ``y`` equally long; ``u`` ``None`` or empty for output-only data), so that a
+    bad first chunk is refused before it sizes a compressor.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.subspace.streaming import as_chunk
+    >>> u, y = as_chunk(None, np.ones(4))
+    >>> u.shape, y.shape
+    ((4, 0), (4, 1))
+    """
+    y2 = as_2d(y, "y", allow_empty=allow_empty)
+    u2 = np.zeros((y2.shape[0], 0)) if u is None else as_2d(u, "u", allow_empty=True)
+    if u2.size == 0:
+        u2 = np.zeros((y2.shape[0], 0))
+    if u2.shape[0] != y2.shape[0]:
+        raise ShapeError(f"u has {u2.shape[0]} samples but y has {y2.shape[0]} in a chunk; "
+                         "each (u, y) chunk must be equally long")
+    return np.ascontiguousarray(u2), np.ascontiguousarray(y2)
 
 
 def _array_chunks(u: Any, y: Any, chunk_size: int) -> Iterator[tuple[np.ndarray, np.ndarray]]:
@@ -297,13 +320,7 @@ def compress_stream(
                         "each chunk of the source must be a (u, y) pair (u may be None for "
                         f"output-only data), got {type(chunk).__name__}"
                     )
-                u, y = chunk
-                y2 = as_2d(y, "y")
-                if u is None:
-                    u = np.zeros((y2.shape[0], 0))
-                u2 = as_2d(u, "u", allow_empty=True)
-                if u2.shape[0] == 0 and y2.shape[0] > 0:
-                    u2 = np.zeros((y2.shape[0], 0))
+                u2, y2 = as_chunk(*chunk)
                 if comp is None:
                     comp = _sysid.StreamingCompressor(
                         u2.shape[1], y2.shape[1], past, future, compressor
