@@ -70,6 +70,8 @@ class Board:
         self.rows: list[dict[str, Any]] = []
         self.folds, self.bar, self.deadline = folds, bar, deadline
         self.out_of_time = False
+        #: set by :meth:`insisting` when an unstable candidate wins only by following a drift
+        self.drift: dict[str, Any] | None = None
 
     def time_left(self) -> bool:
         """False once the time budget (CPU seconds of this process) is spent."""
@@ -173,7 +175,9 @@ class Board:
     def insisting(self) -> dict[str, Any] | None:
         """An unstable candidate the data insist on: better than the best stable candidate
         on every held-out block (a sign test at ``2**-K``, K >= 4 blocks) and by more than
-        the slack on the score (an integrating or open-loop unstable plant)."""
+        the slack on the score (an integrating or open-loop unstable plant), also once the
+        record's drift is taken out (:meth:`_trend_fits`; otherwise it follows a drift and
+        :attr:`drift` records it)."""
         stable = [r for r in self.rows if self.eligible(r)]
         unstable = [r for r in self.rows if self.eligible(r, False) and not r["stable"]]
         if not unstable or len(self.folds) < 4:
@@ -182,11 +186,44 @@ class Board:
         if not stable:
             return best_u if all(np.isfinite(best_u["fold_fits"])) else None
         best_s = max(stable, key=lambda r: r["held_out_fit"])
-        wins = all(a > b for a, b in zip(best_u["fold_fits"], best_s["fold_fits"]))
-        if wins and best_u["held_out_fit"] > best_s["held_out_fit"] + slack(
-                best_u["held_out_fit"]):
-            return best_u
+        if self._wins(best_u["fold_fits"], best_s["fold_fits"]):
+            if all(self._wins(*self._trend_fits([best_u, best_s], d)) for d in (False, True)):
+                return best_u
+            self.drift = {"unstable": best_u, "stable": best_s}
         return None
+
+    def _wins(self, fu: list[float], fs: list[float]) -> bool:
+        """Better on every block, and by more than the slack on the score."""
+        return (len(fu) == len(fs) == len(self.folds)
+                and all(a > b for a, b in zip(fu, fs))
+                and trimmed_mean(fu) > trimmed_mean(fs) + slack(trimmed_mean(fu)))
+
+    def _trend_fits(self, rows: list[dict[str, Any]], detrended: bool
+                    ) -> list[list[float]]:
+        """The held-out fits of ``rows`` with a straight line per output fitted on every
+        held-out block (with the initial state), the models fitted on every fold's fitted
+        part as scored (``detrended=False``) or re-fitted on it with a straight line removed
+        from each channel (:func:`sysid.detrend`): the record's drift taken out of the
+        blocks, and of the fitted parts too. A slow unstable mode can follow a drift (an
+        output trend the input does not explain, or the residue of a removed one) on every
+        block; an unstable model that wins only with the drift left in follows it, not the
+        plant, and the data do not insist on it."""
+        from ..data.preprocessing import detrend
+
+        fits: list[list[float]] = [[] for _ in rows]
+        for k, (fit_part, held) in enumerate(self.folds):
+            part = detrend(fit_part, "linear") if detrended else None
+            for i, r in enumerate(rows):
+                try:
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")
+                        model = r["refit"](part) if detrended else r["fit_fn"](k)
+                    fits[i].append(simulation_fit(model, held, trend=True))
+                except KeyboardInterrupt:
+                    raise
+                except Exception:  # noqa: BLE001 - a fit that fails now scores -inf
+                    fits[i].append(-np.inf)
+        return fits
 
     def near_best(self, stable_only: bool = True) -> list[dict[str, Any]]:
         """Eligible candidates the held-out blocks cannot tell from the best

@@ -8,9 +8,10 @@
    record is cut into five contiguous blocks (fewer on short records; several experiments:
    one each), each held out once while the rest fits the candidate, which then simulates
    it (initial state fitted); the score is the mean of the five held-out fits without the
-   lowest and the highest (:mod:`.board`). Candidates: every subspace weighting (MOESP, N4SID, CVA) at every order
-   the horizon allows (up to 20), with and without feedthrough; the best of each of the
-   smallest orders near the best refined by prediction-error search on the simulation error
+   lowest and the highest (:mod:`.board`). Candidates: every subspace weighting (MOESP,
+   N4SID, CVA) at every order the horizon allows (up to 20), with and without feedthrough;
+   the best of each of the smallest orders near the best refined by prediction-error search
+   on the simulation error
    (every output's errors relative to its scale, as the fit % counts them: ``pem``'s
    ``weighting="output"``) and the best one on the prediction error; output-error models for
    one input and output. A refinement scored clearly below its start on the held-out blocks
@@ -20,6 +21,8 @@
    point of the best (5 % of its error at most): those are re-fitted on the whole record and
    the one with the smallest BIC of its simulation errors is returned; unstable candidates
    only when the data insist (:meth:`.board.Board.insisting`) or ``enforce_stability=False``.
+   An unstable candidate that wins only while the record's drift is left in is not one
+   the data insist on (``checks["drift"]`` says so).
    ``validation`` data, when given, are only reported on.
 """
 
@@ -285,6 +288,16 @@ def identify(
                       f"({len(board.rows)} scored): the best so far is returned; raise "
                       "time_budget for the full search", UserWarning, stacklevel=2)
     insist = board.insisting() if enforce_stability is None else None
+    if board.drift is not None:
+        u = board.drift["unstable"]
+        checks["drift"] = (
+            f"the record drifts: an unstable {u['family']} model of order {u['order']} "
+            f"(largest pole modulus {u['max_abs_pole']:.4g}) simulates every held-out block "
+            f"better than the best stable one, but not once the record's trend is taken out "
+            f"(a line per channel): it follows a drift, not the plant; the stable model is "
+            f"returned "
+            f"(remove the trend, sysid.detrend(data, 'linear'), or difference the output if "
+            f"the plant integrates)")
     if enforce_stability is not False and insist is None and not np.isfinite(board.best_fit()):
         _stabilised_candidates(board)
     ranked = board.ranked(allow_unstable=enforce_stability is False or insist is not None)

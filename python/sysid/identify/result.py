@@ -105,8 +105,8 @@ class IdentifyResult:
     leaderboard : list of dict
         Every candidate: family, order, feedthrough, focus, criterion, held-out fit (%, the
         mean without the lowest and highest, over the blocks of the estimation record, of the
-        simulation fit of the model fitted on the rest), mean fit and ``fold_fits`` (every block's), stability (every
-        fold's model), seconds, a note, and ``chosen``.
+        simulation fit of the model fitted on the rest), mean fit and ``fold_fits`` (every
+        block's), stability (every fold's model), seconds, a note, and ``chosen``.
     choice : str
         The chosen row, in words.
     checks : dict
