@@ -101,3 +101,17 @@ def test_a_drifting_record_gives_a_stable_model_and_says_it_drifts(seed):
     assert res.model.is_stable()
     assert "drift" in res.checks and "detrend" in res.checks["drift"]
     assert "drift" in res.summary()
+
+
+def test_free_responses_of_the_dual_are_those_of_every_initial_state():
+    from sysid.validation.crossval import _free_responses
+
+    rng = np.random.default_rng(3)
+    for n, m, l in [(1, 1, 1), (4, 2, 1), (9, 1, 3)]:
+        A = rng.standard_normal((n, n))
+        A *= 0.95 / max(1e-9, np.max(np.abs(np.linalg.eigvals(A))))
+        model = sysid.StateSpaceModel(A, rng.standard_normal((n, m)),
+                                      rng.standard_normal((l, n)))
+        direct = np.hstack([model.simulate(np.zeros((40, m)), x0=np.eye(n)[i]).reshape(-1, 1)
+                            for i in range(n)])
+        assert np.allclose(_free_responses(model, 40), direct, rtol=1e-10, atol=1e-12)
