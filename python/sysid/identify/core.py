@@ -215,8 +215,10 @@ def identify(
         output-error models (default). ``False`` keeps to subspace models.
     enforce_stability : bool, optional
         ``None`` (default): a stable model unless the data insist (an unstable candidate
-        simulates every held-out block better than the best stable one: an integrating or
-        unstable plant), then a :class:`sysid.StabilityWarning` names its largest pole.
+        simulates every held-out block better than the best stable one, also once the
+        record's drift is taken out: an integrating or unstable plant), then a
+        :class:`sysid.StabilityWarning` names its largest pole; one that wins only with the
+        drift left in is not returned (``result.checks["drift"]`` says so).
         ``True``: only stable models. ``False``: the best held-out fit, stable or not.
     time_budget : float or None
         CPU seconds of this process (default 60) after which no further refinement is
