@@ -7,16 +7,22 @@
 3. Candidates are scored on blocks of the estimation record held out from their fit: the
    record is cut into five contiguous blocks (fewer on short records; several experiments:
    one each), each held out once while the rest fits the candidate, which then simulates
-   it (initial state fitted); the score is the median of the five held-out fits
-   (:mod:`.board`). Candidates: every subspace weighting (MOESP, N4SID, CVA) at every order
-   the horizon allows (up to 20), with and without feedthrough; the best of each of the
-   smallest orders near the best refined by prediction-error search on the simulation error
-   (and the best one on the prediction error); output-error models for one input and output.
-   A refinement scored clearly below its start on the held-out blocks is never chosen.
+   it (initial state fitted); the score is the mean of the five held-out fits without the
+   lowest and the highest (:mod:`.board`). Candidates: every subspace weighting (MOESP,
+   N4SID, CVA) at every order the horizon allows (up to 20), with and without feedthrough;
+   the best of each of the smallest orders near the best refined by prediction-error search
+   on the simulation error
+   (every output's errors relative to its scale, as the fit % counts them: ``pem``'s
+   ``weighting="output"``) and the best one on the prediction error; output-error models for
+   one input and output. A refinement scored clearly below its start on the held-out blocks
+   is never chosen; one below it on most blocks is stopped there. A refinement re-fitted on
+   the whole record runs to convergence (up to ``FINAL_ITER`` iterations).
 4. The held-out blocks rank the candidates but cannot tell apart those within half a fit
    point of the best (5 % of its error at most): those are re-fitted on the whole record and
    the one with the smallest BIC of its simulation errors is returned; unstable candidates
    only when the data insist (:meth:`.board.Board.insisting`) or ``enforce_stability=False``.
+   An unstable candidate that wins only while the record's drift is left in is not one
+   the data insist on (``checks["drift"]`` says so).
    ``validation`` data, when given, are only reported on.
 """
 
@@ -45,6 +51,10 @@ N_REFINE = 3
 N_FINAL = 12
 #: unstable subspace candidates re-fitted with a stable A when no candidate is stable
 N_STABILISED = 10
+#: iteration cap of a refinement re-fitted on the whole record (only near-best ones are): the
+#: model returned is converged, not stopped at pem's default cap of 50 (a start far from the
+#: minimum needs more); the held-out blocks score refinements at the default cap (cheaper)
+FINAL_ITER = 300
 
 
 def _offsets(data: IOData) -> tuple[IOData, np.ndarray, np.ndarray]:
@@ -147,17 +157,21 @@ def _refined_candidates(board: Board) -> None:
 
     starts = _starts(board, N_REFINE)
     for focus in ("simulation", "prediction"):
+        # simulation focus: every output's errors relative to its scale, as the held-out fit
+        # (the mean of the outputs' fit %) counts them; prediction: the determinant criterion
+        wt = "output" if focus == "simulation" else None
         for r in starts if focus == "simulation" else starts[:1]:
             ft = r["feedthrough"]
 
-            def fit(k: int, r: dict[str, Any] = r, ft: bool = ft, focus: str = focus) -> Any:
+            def fit(k: int, r: dict[str, Any] = r, ft: bool = ft, focus: str = focus,
+                    wt: str | None = wt) -> Any:
                 return sysid.pem(board.folds[k][0], r["fit_fn"](k), focus=focus,
-                                 feedthrough=ft, progress=board.stopper())
+                                 feedthrough=ft, weighting=wt, progress=board.stopper())
 
             def refit(data: IOData, r: dict[str, Any] = r, ft: bool = ft,
-                      focus: str = focus) -> Any:
+                      focus: str = focus, wt: str | None = wt) -> Any:
                 return sysid.pem(data, r["refit"](data), focus=focus, feedthrough=ft,
-                                 progress=False)
+                                 weighting=wt, max_iter=FINAL_ITER, progress=False)
             board.add("pem", r["order"], ft, focus, f"prediction error from {r['family']}",
                       fit, refit, start=r)
     first = board.folds[0][0]
@@ -201,8 +215,10 @@ def identify(
         output-error models (default). ``False`` keeps to subspace models.
     enforce_stability : bool, optional
         ``None`` (default): a stable model unless the data insist (an unstable candidate
-        simulates every held-out block better than the best stable one: an integrating or
-        unstable plant), then a :class:`sysid.StabilityWarning` names its largest pole.
+        simulates every held-out block better than the best stable one, also once the
+        record's drift is taken out: an integrating or unstable plant), then a
+        :class:`sysid.StabilityWarning` names its largest pole; one that wins only with the
+        drift left in is not returned (``result.checks["drift"]`` says so).
         ``True``: only stable models. ``False``: the best held-out fit, stable or not.
     time_budget : float or None
         CPU seconds of this process (default 60) after which no further refinement is
@@ -274,6 +290,16 @@ def identify(
                       f"({len(board.rows)} scored): the best so far is returned; raise "
                       "time_budget for the full search", UserWarning, stacklevel=2)
     insist = board.insisting() if enforce_stability is None else None
+    if board.drift is not None:
+        u = board.drift["unstable"]
+        checks["drift"] = (
+            f"the record drifts: an unstable {u['family']} model of order {u['order']} "
+            f"(largest pole modulus {u['max_abs_pole']:.4g}) simulates every held-out block "
+            f"better than the best stable one, but not once the record's trend is taken out "
+            f"(a line per channel): it follows a drift, not the plant; the stable model is "
+            f"returned "
+            f"(remove the trend, sysid.detrend(data, 'linear'), or difference the output if "
+            f"the plant integrates)")
     if enforce_stability is not False and insist is None and not np.isfinite(board.best_fit()):
         _stabilised_candidates(board)
     ranked = board.ranked(allow_unstable=enforce_stability is False or insist is not None)

@@ -123,6 +123,8 @@ class _Setup:
     enforce_stability: bool | None
     stabilized: str | None
     dropped_d: bool = False
+    #: ``weighting="output"``: each output's scale; ``data``, ``C``, ``D``, ``K`` are scaled
+    scale: np.ndarray | None = None
 
     def kwargs(self) -> dict[str, Any]:
         return {"focus": self.focus, "estimate_d": self.feedthrough,
@@ -139,8 +141,8 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: 
         raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
     if weighting is None:
         weighting = "noise" if focus == "prediction" else "identity"
-    if weighting not in ("noise", "identity"):
-        raise DataError(f"weighting must be 'noise' or 'identity', got {weighting!r}")
+    if weighting not in ("noise", "identity", "output"):
+        raise DataError(f"weighting must be 'noise', 'identity' or 'output', got {weighting!r}")
     if noise not in _NOISE:
         raise DataError(f"noise must be 'estimate', 'none' or 'fixed', got {noise!r}")
     if enforce_stability is not None and not isinstance(enforce_stability, (bool, np.bool_)):
@@ -175,10 +177,40 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: 
         else:
             stabilized = "unstable predictor: started from K = 0"
         K = np.zeros((n, l))
+    scale = None
+    if weighting == "output":  # the plain sum of squares of each output relative to its scale
+        data, scale = _scaled_outputs(data)
+        C, D = C / scale[:, None], D / scale[:, None]
+        K = K * scale[None, :] if K is not None else None
     return _Setup(data, A, B, C, D, K, bool(feedthrough),
                   focus == "prediction" and noise == "estimate", weighting,
                   _x0_modes(x0, data.n_experiments, n), focus, enforce_stability, stabilized,
-                  dropped_d)
+                  dropped_d, scale)
+
+
+def _scaled_outputs(data: IOData) -> tuple[IOData, np.ndarray]:
+    """``data`` with each output divided by its root mean square over every experiment (1 for
+    a constant zero output), and those scales."""
+    y = np.vstack([e[1] for e in data.experiments])
+    scale = np.sqrt(np.mean(y ** 2, axis=0))
+    scale = np.where(scale > 0, scale, 1.0)
+    kw = {"dt": data.dt, "input_names": data.input_names, "output_names": data.output_names}
+    us = [e[0] for e in data.experiments]
+    ys = [e[1] / scale for e in data.experiments]
+    return (IOData(u=us[0], y=ys[0], **kw) if len(us) == 1 else IOData(u=us, y=ys, **kw)), scale
+
+
+def _unscaled(model: StateSpaceModel, scale: np.ndarray | None) -> StateSpaceModel:
+    """A model fitted to outputs divided by ``scale``, in the original output units."""
+    if scale is None:
+        return model
+    s = scale[:, None]
+    return StateSpaceModel(
+        model.A, model.B, s * model.C, s * model.D,
+        None if model.K is None else model.K / scale[None, :], dt=model.dt,
+        noise_cov=None if model.noise_cov is None else s * model.noise_cov * scale[None, :],
+        x0=model.x0, input_names=model.input_names, output_names=model.output_names,
+        info=model.info)
 
 
 def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None) -> None:
@@ -319,12 +351,16 @@ def pem(
         is held in its real block-diagonal (modal) form, the entries outside its 1x1 and 2x2
         blocks at zero, so each iteration costs a fraction of a full one; the refined model
         and its covariance are mapped back to the start's state basis.
-    weighting : {"noise", "identity"}, optional
+    weighting : {"noise", "identity", "output"}, optional
         ``"noise"``: weight the errors by the inverse of their covariance, re-estimated between
         iterations (the determinant criterion, maximum likelihood for Gaussian innovations);
         ``"identity"``: plain sum of squares. Default ``"noise"`` for prediction focus and
         ``"identity"`` for simulation focus (simulation errors are not white, and on the
         shipped records the plain sum gives the better validation fit; see docs/pem.md).
+        ``"output"``: the plain sum of squares of each output's errors divided by that
+        output's mean square (the fit % of every output counts alike, whatever its units;
+        ``info["pem"]["output_scale"]``, the criterion in those units); the same as
+        ``"identity"`` for one output.
     enforce_stability : bool, optional
         Keep ``A`` stable (MATLAB's ``EnforceStability``). ``focus="simulation"`` always
         does. ``None`` (default): with ``focus="prediction"`` the predictor ``A - K C`` is
@@ -424,7 +460,7 @@ def pem(
         a, b, c = take(n, n), take(n, m_), take(l, n)
         d = take(l, m_) if feedthrough else res["d"]
         k = take(n, l) if estimate_k else Kres
-        return StateSpaceModel(a, b, c, d, k, dt=data.dt)
+        return _unscaled(StateSpaceModel(a, b, c, d, k, dt=data.dt), st.scale)
 
     info = dict(model.info) if model.info else {}
     info["method"] = "pem"
@@ -434,6 +470,7 @@ def pem(
         "evaluations": res["evaluations"],
         "cost": list(res["history"]),
         "criterion": "det" if weighting == "noise" else "sum of squares",
+        "output_scale": None if st.scale is None else st.scale.tolist(),
         "weighted_cost": list(res["weighted_history"]),
         "loss_history": list(res["loss_history"]),
         "stop": res["stop"],
@@ -460,6 +497,7 @@ def pem(
         res["a"], res["b"], res["c"], res["d"], Kres, dt=data.dt,
         noise_cov=res["innovation_covariance"], x0=x0s[0] if len(x0s) == 1 else None,
         input_names=data.input_names, output_names=data.output_names, info=info)
+    out = _unscaled(out, st.scale)
     out.uncertainty = _uncertainty(
         res["theta"], res["covariance"], build, int(res["rank"]),
         _names(n, model.ninputs, l, bool(feedthrough), estimate_k and K is not None, len(est_x0)))
