@@ -328,6 +328,22 @@ def pem_refine(
     reg_nominal: _Array | None = None,
     progress: Any = None,
 ) -> dict[str, Any]: ...
+def pem_frequency_refine(
+    a: _Array,
+    b: _Array,
+    c: _Array,
+    d: _Array,
+    omega: _Array,
+    re: _Array,
+    im: _Array,
+    weight: _Array,
+    *,
+    estimate_d: bool = False,
+    modal_chart: bool = True,
+    max_iter: int = 50,
+    tol_cost: float = 1e-6,
+    progress: Any = None,
+) -> dict[str, Any]: ...
 # grey-box models (issue 12)
 def greybox_linear(
     dims: tuple[int, int, int],
