@@ -113,7 +113,12 @@ def run_sysid(u, y, start, periods=None):
            "criterion": info["criterion"], "start_cost": info["cost"][0],
            "final_cost": info["cost"][-1]}
     if periods is not None:
-        row.update(lines=info["lines"], residual_scale=round(info["residual_scale"], 2))
+        # the time-domain criterion of the other row (1/2 sum |e|^2 of the simulation errors,
+        # x0 fitted) at this model, so that both rows can be compared on one cost
+        td = sysid.pem_loss((u, y), m, focus="simulation", feedthrough=True,
+                            weighting="identity")
+        row.update(lines=info["lines"], residual_scale=round(info["residual_scale"], 2),
+                   time_domain_cost=td)
     return row, m
 
 
@@ -321,6 +326,7 @@ def main(which: list[str]) -> None:
         start = start_model(u, y, n)
         s, model = run_sysid(u, y, start)
         s["validation_fit"] = validation_fit(name, model)
+        s["start_validation_fit"] = validation_fit(name, start)
         if name in PERIODS:
             fd, fmodel = run_sysid(u, y, start, PERIODS[name])
             fd["validation_fit"] = validation_fit(name, fmodel)

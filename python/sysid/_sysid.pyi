@@ -62,6 +62,7 @@ __all__ = [
     "tf_fit_frequency",
     # issue 26 (branch pem)
     "pem_criterion",
+    "pem_frequency_refine",
     # issue 29 (branch nlss)
     "pnlss_monomials",
     "pnlss_simulate",

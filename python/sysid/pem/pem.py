@@ -514,13 +514,14 @@ def _pem_periodic(data: Any, model: StateSpaceModel, periods: int | None, feedth
     _warn(res, "frequency-domain", max_iter, True)
     n, m_, l = model.nstates, model.ninputs, model.noutputs
     d_fixed = res["d"]
+    dt = float(frd.dt) if frd.dt is not None else 1.0  # pem_lines refused an FRD without dt
 
     def build(theta: np.ndarray) -> StateSpaceModel:
         th = np.asarray(theta, dtype=float)
         o = [0, n * n, n * n + n * m_, n * (n + m_ + l)]
         d = th[o[3]:o[3] + l * m_].reshape(l, m_) if ft else d_fixed
         return StateSpaceModel(th[:o[1]].reshape(n, n), th[o[1]:o[2]].reshape(n, m_),
-                               th[o[2]:o[3]].reshape(l, n), d, dt=frd.dt)
+                               th[o[2]:o[3]].reshape(l, n), d, dt=dt)
 
     info = dict(model.info) if model.info else {}
     info["method"] = "pem"
@@ -534,7 +535,7 @@ def _pem_periodic(data: Any, model: StateSpaceModel, periods: int | None, feedth
         "spectral_radius": float(res["spectral_radius"]), "enforce_stability": True,
         "n_parameters": int(res["theta"].size), "rank": int(res["rank"]), **extra,
     }
-    out = StateSpaceModel(res["a"], res["b"], res["c"], res["d"], None, dt=frd.dt,
+    out = StateSpaceModel(res["a"], res["b"], res["c"], res["d"], None, dt=dt,
                           input_names=frd.input_names, output_names=frd.output_names,
                           info=info)
     out.uncertainty = _uncertainty(res["theta"], res["covariance"], build, int(res["rank"]),
