@@ -33,7 +33,7 @@ from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
 from ..nonparametric.bla import bla
 
-__all__ = ["periodic_lines", "pem_lines", "lines_cost"]
+__all__ = ["periodic_lines", "lines_cost"]
 
 CRITERION = "weighted sum of squares on the excited lines"
 
@@ -98,8 +98,19 @@ def _weights(frd: FRD) -> np.ndarray:
 
 
 def lines_cost(frd: FRD, model: Any) -> float:
-    """``sum |G_model - G_k|^2 / s2`` on the lines of ``frd`` (the criterion of
-    :func:`pem_lines`)."""
+    """``sum |G_model - G_k|^2 / s2`` on the lines of ``frd``: the criterion that
+    ``sysid.pem(..., periods=)`` minimises, for scoring candidate models.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.pem.periodic import lines_cost
+    >>> g = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    >>> w = np.linspace(0.1, 3.0, 8)
+    >>> f = sysid.FRD(w, g.freqresp(w), std=np.full((8, 1, 1), 0.1), dt=1.0)
+    >>> lines_cost(f, g) < 1e-20 < lines_cost(f, sysid.StateSpaceModel([[0.4]], [[1.0]], [[1.0]]))
+    True
+    """
     e = model.freqresp(frd.omega) - frd.response
     return float(0.5 * np.sum(_weights(frd) * np.abs(e) ** 2))
 
@@ -108,7 +119,8 @@ def pem_lines(frd: FRD, model: StateSpaceModel, *, feedthrough: bool, max_iter: 
               tol: float, progress: bool | None | Callable[..., Any],
               stabilize: Callable[[np.ndarray], np.ndarray]) -> tuple[dict[str, Any], Any]:
     """Runs the core's frequency-domain refinement of ``model`` on the lines of ``frd``;
-    returns the core's dict and what :func:`sysid.pem` reports beside it."""
+    returns the core's dict and what :func:`sysid.pem` reports beside it (internal: called by
+    :func:`sysid.pem` with ``periods=`` or an FRD)."""
     if frd.dt is None:
         raise DataError("the lines need the sample time (frd.dt) to place e^{j w dt}")
     if frd.n_inputs != model.ninputs or frd.n_outputs != model.noutputs:

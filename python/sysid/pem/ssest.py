@@ -97,7 +97,7 @@ def ssest(
     data = _experiments(data)
     if periods is not None:
         return _ssest_periodic(data, order, periods, feedthrough, horizon, methods, method,
-                               max_iter, tol, progress)
+                               max_iter, tol, progress, regularization)
     if check_feedthrough(feedthrough) == "auto":
         # decided once from the data (the rule every estimator shares), then a fixed choice
         use, why = choose_feedthrough(SubspaceEstimator(data, horizon, method=method or "moesp"),
@@ -159,12 +159,16 @@ def ssest(
 
 def _ssest_periodic(data: Any, order: Any, periods: int, feedthrough: Any,
                     horizon: int | None, methods: tuple[str, ...], method: str | None,
-                    max_iter: int, tol: float, progress: Any) -> StateSpaceModel:
+                    max_iter: int, tol: float, progress: Any,
+                    regularization: Any) -> StateSpaceModel:
     """:func:`ssest` on the excited lines of periodic data: the stable candidate with the
     lowest weighted misfit on the lines, refined there."""
     from ..subspace.frd_subspace import frd_subspace
     from .periodic import lines_cost, periodic_lines
 
+    if regularization is not None:
+        raise DataError("regularization does not apply to the frequency-domain refinement of "
+                        "periodic data; leave it out, or call ssest without periods=")
     if isinstance(order, str) or np.ndim(order):
         raise DataError("with periods= give the order as an integer (the order search runs "
                         "in the time domain: call ssest without periods= to choose it)")

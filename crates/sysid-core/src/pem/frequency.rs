@@ -457,7 +457,8 @@ pub fn pem_frequency(
             start.a.clone(),
             start.b.clone(),
             start.c.clone(),
-            vec![(0, n)],
+            // all of A one block (none for a static model)
+            if n > 0 { vec![(0, n)] } else { Vec::new() },
         ),
     };
     let p = n * (n + m + l) + usize::from(opts.estimate_d) * l * m;

@@ -105,9 +105,11 @@ fn noise_free_lines_give_the_system_to_round_off() {
     let s = truth();
     let d = data(&s, 40);
     for modal in [true, false] {
-        let mut o = FrequencyOptions::default();
-        o.estimate_d = true;
-        o.modal_chart = modal;
+        let mut o = FrequencyOptions {
+            estimate_d: true,
+            modal_chart: modal,
+            ..Default::default()
+        };
         o.optim.max_iter = 100;
         o.optim.tol_cost = 0.0;
         let r = pem_frequency(&perturbed(&s, 0.03), &lines(&d), &o, &mut cont).unwrap();
@@ -130,9 +132,11 @@ fn gradient_is_the_derivative_of_the_cost() {
     let s = truth();
     let d = data(&s, 25);
     let start = perturbed(&s, 0.05);
-    let mut o = FrequencyOptions::default();
-    o.estimate_d = true;
-    o.modal_chart = false;
+    let mut o = FrequencyOptions {
+        estimate_d: true,
+        modal_chart: false,
+        ..Default::default()
+    };
     o.optim.max_iter = 0;
     let r = pem_frequency(&start, &lines(&d), &o, &mut cont).unwrap();
     let g = &r.solution.gradient;
@@ -173,16 +177,18 @@ fn gradient_is_the_derivative_of_the_cost() {
 fn bad_lines_are_clear_errors() {
     let s = truth();
     let d = data(&s, 3);
-    // 3 lines x 4 entries x 2 = 24 real residuals < 4 (2 + 2) + 4 identifiable parameters? no:
-    // 16 + 4 = 20 fit; give two lines
+    // two lines of a 2 x 2 system: 16 real residuals < 4 (2 + 2) + 4 = 20 identifiable
+    // parameters
     let d2 = Data {
         omega: d.omega[..2].to_vec(),
         re: d.re.subrows(0, 2).to_owned(),
         im: d.im.subrows(0, 2).to_owned(),
         weight: d.weight.subrows(0, 2).to_owned(),
     };
-    let mut o = FrequencyOptions::default();
-    o.estimate_d = true;
+    let o = FrequencyOptions {
+        estimate_d: true,
+        ..Default::default()
+    };
     let e = pem_frequency(&s, &lines(&d2), &o, &mut cont).unwrap_err();
     assert!(matches!(e, SysidError::InsufficientData { .. }), "{e}");
     let wrong = Mat::<f64>::zeros(3, 3);
