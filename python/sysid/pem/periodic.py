@@ -83,12 +83,23 @@ def periodic_lines(data: IOData, periods: Any) -> FRD:
     return bla(data, P)
 
 
-def _weights(frd: FRD) -> np.ndarray:
+def line_weights(frd: FRD) -> np.ndarray:
     """Weights of the real and imaginary parts of each entry: ``2 / s2`` with ``s2`` the
-    variance of the complex entry (``noise_std**2`` of a BLA, else ``std**2``; each part
-    carries half of it), the variances floored at 1e-12 of their median so that noise-free
-    lines do not divide by zero. ``1/2 sum w |e|^2`` is then the negative log-likelihood."""
-    std = frd.info.get("noise_std", frd.std)
+    variance of the complex entry (``std**2``: for a BLA the noise variance from the periods,
+    with several realisations noise plus nonlinear distortions; else ``noise_std**2``; each
+    part carries half of it), the variances floored at 1e-12 of their median so that
+    noise-free lines do not divide by zero. ``1/2 sum w |e|^2`` is then the negative
+    log-likelihood.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.pem.periodic import line_weights
+    >>> f = sysid.FRD([1.0, 2.0], np.ones(2), std=np.array([0.5, 1.0])[:, None, None])
+    >>> line_weights(f).ravel().tolist()
+    [8.0, 2.0]
+    """
+    std = frd.std if frd.std is not None else frd.info.get("noise_std")
     if std is None or not np.all(np.isfinite(std)):
         raise DataError("the frequency-domain refinement weights each line by its noise "
                         "variance: give periodic data with periods >= 2, or an FRD with std")
@@ -112,7 +123,7 @@ def lines_cost(frd: FRD, model: Any) -> float:
     True
     """
     e = model.freqresp(frd.omega) - frd.response
-    return float(0.5 * np.sum(_weights(frd) * np.abs(e) ** 2))
+    return float(0.5 * np.sum(line_weights(frd) * np.abs(e) ** 2))
 
 
 def pem_lines(frd: FRD, model: StateSpaceModel, *, feedthrough: bool, max_iter: int,
@@ -141,7 +152,7 @@ def pem_lines(frd: FRD, model: StateSpaceModel, *, feedthrough: bool, max_iter: 
             np.ascontiguousarray(A), np.ascontiguousarray(model.B),
             np.ascontiguousarray(model.C), np.ascontiguousarray(D),
             np.ascontiguousarray(frd.omega * float(frd.dt)), np.ascontiguousarray(g.real),
-            np.ascontiguousarray(g.imag), np.ascontiguousarray(_weights(frd).reshape(nk, -1)),
+            np.ascontiguousarray(g.imag), np.ascontiguousarray(line_weights(frd).reshape(nk, -1)),
             estimate_d=bool(feedthrough), max_iter=max_iter, tol_cost=tol, progress=cb)
     finally:
         close_bar()

@@ -164,7 +164,7 @@ def _ssest_periodic(data: Any, order: Any, periods: int, feedthrough: Any,
     """:func:`ssest` on the excited lines of periodic data: the stable candidate with the
     lowest weighted misfit on the lines, refined there."""
     from ..subspace.frd_subspace import frd_subspace
-    from .periodic import lines_cost, periodic_lines
+    from .periodic import line_weights, lines_cost, periodic_lines
 
     if regularization is not None:
         raise DataError("regularization does not apply to the frequency-domain refinement of "
@@ -187,7 +187,7 @@ def _ssest_periodic(data: Any, order: Any, periods: int, feedthrough: Any,
             except SysidError:
                 continue
         try:
-            w = 1.0 / np.mean(frd.info["noise_std"] ** 2, axis=(1, 2))
+            w = np.mean(line_weights(frd), axis=(1, 2))
             candidates.append(("frd_subspace", frd_subspace(frd, order, weights=w / w.mean(),
                                                             feedthrough=bool(ft))))
         except SysidError:

@@ -410,7 +410,7 @@ fn check_lines(lines: &Lines<'_>, l: usize, m: usize) -> Result<()> {
 /// use faer::{mat, Mat};
 /// use sysid_core::model::StateSpace;
 /// use sysid_core::pem::{pem_frequency, FrequencyOptions, Lines};
-/// let truth = StateSpace::new(mat![[0.5]], mat![[1.0]], mat![[1.0]], mat![[0.0]]).unwrap();
+/// // lines of G(z) = 1 / (z - 0.5)
 /// let omega: Vec<f64> = (1..20).map(|k| 0.15 * k as f64).collect();
 /// let g: Vec<(f64, f64)> = omega.iter().map(|w| {
 ///     let (c, s) = (w.cos() - 0.5, w.sin());
@@ -425,7 +425,6 @@ fn check_lines(lines: &Lines<'_>, l: usize, m: usize) -> Result<()> {
 ///     sysid_core::optim::Flow::Continue
 /// }).unwrap();
 /// assert!((r.sys.a[(0, 0)] - 0.5).abs() < 1e-8);
-/// # let _ = truth;
 /// ```
 pub fn pem_frequency(
     start: &StateSpace,
