@@ -1,6 +1,8 @@
 //! Bindings of the prediction-error refinement (`sysid_core::pem`).
 
-use crate::convert::{mat_to_numpy, slice_to_numpy, state_space as model, vec1, view};
+use crate::convert::{
+    mat_to_numpy, slice_to_numpy, state_space as model, state_space_items, vec1, view,
+};
 use crate::errors::IntoPy;
 use crate::search::{run, solution_items};
 use faer::MatRef;
@@ -112,10 +114,7 @@ pub fn pem_refine<'py>(
     let exps = views(&experiments);
     let r = run(py, &progress, |obs| pem::pem(&sys, kv, &exps, &o, obs))?;
     let out = PyDict::new(py);
-    out.set_item("a", mat_to_numpy(py, &r.sys.a))?;
-    out.set_item("b", mat_to_numpy(py, &r.sys.b))?;
-    out.set_item("c", mat_to_numpy(py, &r.sys.c))?;
-    out.set_item("d", mat_to_numpy(py, &r.sys.d))?;
+    state_space_items(&out, py, &r.sys)?;
     out.set_item("k", mat_to_numpy(py, &r.k))?;
     let x0s: Vec<_> = r.x0.iter().map(|v| slice_to_numpy(py, v)).collect();
     out.set_item("x0", x0s)?;
@@ -204,10 +203,7 @@ pub fn pem_frequency_refine<'py>(
         pem::pem_frequency(&sys, &lines, &o, obs)
     })?;
     let out = PyDict::new(py);
-    out.set_item("a", mat_to_numpy(py, &r.sys.a))?;
-    out.set_item("b", mat_to_numpy(py, &r.sys.b))?;
-    out.set_item("c", mat_to_numpy(py, &r.sys.c))?;
-    out.set_item("d", mat_to_numpy(py, &r.sys.d))?;
+    state_space_items(&out, py, &r.sys)?;
     out.set_item("theta", slice_to_numpy(py, &r.theta))?;
     out.set_item("spectral_radius", r.spectral_radius)?;
     out.set_item("n_residuals", r.n_residuals)?;
