@@ -62,6 +62,7 @@ __all__ = [
     "tf_fit_frequency",
     # issue 26 (branch pem)
     "pem_criterion",
+    "pem_frequency_refine",
     # issue 29 (branch nlss)
     "pnlss_monomials",
     "pnlss_simulate",
@@ -326,6 +327,22 @@ def pem_refine(
     reg_lambda: float = 0.0,
     reg_r: _Array | None = None,
     reg_nominal: _Array | None = None,
+    progress: Any = None,
+) -> dict[str, Any]: ...
+def pem_frequency_refine(
+    a: _Array,
+    b: _Array,
+    c: _Array,
+    d: _Array,
+    omega: _Array,
+    re: _Array,
+    im: _Array,
+    weight: _Array,
+    *,
+    estimate_d: bool = False,
+    modal_chart: bool = True,
+    max_iter: int = 50,
+    tol_cost: float = 1e-6,
     progress: Any = None,
 ) -> dict[str, Any]: ...
 # grey-box models (issue 12)

@@ -25,6 +25,7 @@ from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
 from ..errors import DataError, IterationLimitWarning, StabilityWarning
+from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
 from ..subspace.feedthrough import FEEDTHROUGH_DEFAULT, check_feedthrough, choose_feedthrough
@@ -306,6 +307,7 @@ def pem(
     local_coordinates: bool = True,
     weighting: str | None = None,
     enforce_stability: bool | None = None,
+    periods: int | None = None,
 ) -> StateSpaceModel:
     """Refine a state-space model by minimising its prediction (or simulation) errors.
 
@@ -368,6 +370,16 @@ def pem(
         better (likelihood-ratio test at the 1 % level); then a
         :class:`sysid.StabilityWarning` names the largest pole modulus. ``False``: only the
         predictor is kept stable (a warning still says when the model is unstable).
+    periods : int, optional
+        The data are periodic: every experiment holds this many whole periods in steady
+        state (at least 2; drop a transient period first). The model is then fitted in the
+        frequency domain on the excited lines only (:mod:`sysid.pem.periodic`): the response
+        averaged over the periods (:func:`sysid.bla`), each entry weighted by the inverse of
+        its noise variance from the periods, ``A`` held in its real modal form, no initial
+        state and no noise model (``K = 0``: ``focus``, ``x0`` and ``noise`` do not apply;
+        ``weighting`` may only be ``"noise"``). The model is stable and in the modal basis.
+        ``data`` may also be an :class:`sysid.FRD` with ``std`` (for example from
+        :func:`sysid.bla`), fitted the same way.
 
     Returns
     -------
@@ -404,6 +416,9 @@ def pem(
     >>> bool(np.allclose(np.sort_complex(m.poles()), np.sort_complex(true.poles()), atol=0.02))
     True
     """
+    if periods is not None or isinstance(data, FRD):
+        return _pem_periodic(data, model, periods, feedthrough, max_iter, tol, progress,
+                             weighting, regularization)
     ft_selection = None
     if check_feedthrough(feedthrough) == "auto":
         from ..subspace.estimator import SubspaceEstimator
@@ -501,6 +516,68 @@ def pem(
     out.uncertainty = _uncertainty(
         res["theta"], res["covariance"], build, int(res["rank"]),
         _names(n, model.ninputs, l, bool(feedthrough), estimate_k and K is not None, len(est_x0)))
+    return out
+
+
+def _pem_periodic(data: Any, model: StateSpaceModel, periods: int | None, feedthrough: Any,
+                  max_iter: int, tol: float, progress: Any, weighting: str | None,
+                  regularization: Any) -> StateSpaceModel:
+    """:func:`pem` on the excited lines of periodic data (or of an FRD with std)."""
+    from .periodic import CRITERION, pem_lines, periodic_lines
+
+    if not isinstance(model, StateSpaceModel):
+        raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
+    if weighting not in (None, "noise") or regularization is not None:
+        raise DataError("the frequency-domain refinement of periodic data weights each line "
+                        "by its noise variance and takes no regularization: leave weighting "
+                        "and regularization out, or refine in the time domain (no periods=)")
+    frd = data if isinstance(data, FRD) else periodic_lines(_experiments(data), periods)
+    ft = check_feedthrough(feedthrough)
+    if ft == "auto":
+        if isinstance(data, FRD):
+            raise DataError("feedthrough='auto' decides from a time record; pass True or False")
+        from ..subspace.estimator import SubspaceEstimator
+
+        ft, _ = choose_feedthrough(SubspaceEstimator(_experiments(data)), model.nstates)
+    if not ft and np.any(model.D != 0):
+        warnings.warn("the start model has a non-zero D and feedthrough=False (the default "
+                      "of every sysid estimator): it is refined with D = 0; pass "
+                      "feedthrough=True to refine D as well", UserWarning, stacklevel=3)
+    max_iter = as_int(max_iter, "max_iter", 0)
+    tol = float(tol)
+    if not (np.isfinite(tol) and tol >= 0):
+        raise DataError(f"tol must be finite and >= 0, got {tol}")
+    res, extra = pem_lines(frd, model, feedthrough=bool(ft), max_iter=max_iter, tol=tol,
+                           progress=progress, stabilize=_stabilize)
+    _warn(res, "frequency-domain", max_iter, True)
+    n, m_, l = model.nstates, model.ninputs, model.noutputs
+    d_fixed = res["d"]
+    dt = float(frd.dt) if frd.dt is not None else 1.0  # pem_lines refused an FRD without dt
+
+    def build(theta: np.ndarray) -> StateSpaceModel:
+        th = np.asarray(theta, dtype=float)
+        o = [0, n * n, n * n + n * m_, n * (n + m_ + l)]
+        d = th[o[3]:o[3] + l * m_].reshape(l, m_) if ft else d_fixed
+        return StateSpaceModel(th[:o[1]].reshape(n, n), th[o[1]:o[2]].reshape(n, m_),
+                               th[o[2]:o[3]].reshape(l, n), d, dt=dt)
+
+    info = dict(model.info) if model.info else {}
+    info["method"] = "pem"
+    info["start_method"] = model.info.get("method") if model.info else None
+    info["pem"] = {
+        "iterations": res["iterations"], "evaluations": res["evaluations"],
+        "cost": list(res["history"]), "criterion": CRITERION,
+        "weighted_cost": list(res["weighted_history"]), "stop": res["stop"],
+        "condition": res["condition"], "focus": "simulation", "weighting": "noise",
+        "feedthrough": bool(ft), "noise": "none", "x0": [],
+        "spectral_radius": float(res["spectral_radius"]), "enforce_stability": True,
+        "n_parameters": int(res["theta"].size), "rank": int(res["rank"]), **extra,
+    }
+    out = StateSpaceModel(res["a"], res["b"], res["c"], res["d"], None, dt=dt,
+                          input_names=frd.input_names, output_names=frd.output_names,
+                          info=info)
+    out.uncertainty = _uncertainty(res["theta"], res["covariance"], build, int(res["rank"]),
+                                   _names(n, m_, l, bool(ft), False, 0))
     return out
 
 

@@ -1,0 +1,115 @@
+"""sysid.pem on periodic data: the frequency-domain refinement on the excited lines
+(issue 28, python/sysid/pem/periodic.py, crates/sysid-core/src/pem/frequency.rs)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import sysid
+from sysid.errors import DataError
+
+
+def _periodic(model, n_per, periods, noise=0.0, seed=0, band=(0.0, 0.9)):
+    """``periods`` steady-state periods (one more simulated first and dropped)."""
+    u = sysid.multisine(n_per, band=band, periods=periods + 1, seed=seed, phases="random")
+    y = model.simulate(u)[n_per:]
+    u = u[n_per:]
+    rng = np.random.default_rng(seed + 100)
+    y = y + noise * rng.standard_normal(y.shape)
+    return sysid.IOData(u=u, y=y)
+
+
+def _true4():
+    A = [[0.6, 0.5, 0.0, 0.0], [-0.5, 0.6, 0.0, 0.0], [0.0, 0.0, -0.2, 0.8],
+         [0.0, 0.0, -0.8, -0.2]]
+    T = np.array([[1.0, 0.3, 0.0, 0.2], [0.0, 1.0, 0.4, 0.0], [0.1, 0.0, 1.0, 0.3],
+                  [0.0, 0.2, 0.0, 1.0]])
+    A = T @ np.array(A) @ np.linalg.inv(T)
+    return sysid.StateSpaceModel(A, [[1.0], [0.2], [0.5], [-0.3]],
+                                 [[1.0, 0.0, 0.3, 0.1], [0.0, 0.7, -0.4, 0.5]],
+                                 [[0.1], [-0.05]])
+
+
+def test_noise_free_periodic_data_give_the_system_to_machine_precision():
+    true = _true4()
+    data = _periodic(true, 256, 4)
+    start = sysid.moesp(data, order=4, feedthrough=True)
+    start = sysid.StateSpaceModel(0.95 * start.A, start.B * 1.1, start.C, start.D)
+    m = sysid.pem(data, start, periods=4, feedthrough=True, max_iter=100, tol=0.0)
+    info = m.info["pem"]
+    assert info["domain"] == "frequency" and info["modal"]
+    assert info["x0"] == [] and info["lines"] > 0
+    w = np.linspace(0.01, np.pi, 37)
+    assert np.max(np.abs(m.freqresp(w) - true.freqresp(w))) < 1e-9
+    assert np.max(np.abs(np.sort_complex(m.poles()) - np.sort_complex(true.poles()))) < 1e-9
+    assert info["cost"][-1] < 1e-12 * info["cost"][0]
+
+
+def test_noisy_periodic_estimate_agrees_with_the_time_domain_one():
+    true = sysid.StateSpaceModel([[1.2, -0.5], [1.0, 0.0]], [[1.0], [0.0]], [[0.4, 0.3]])
+    data = _periodic(true, 512, 8, noise=0.2, seed=3)
+    start = sysid.moesp(data, order=2)
+    fd = sysid.pem(data, start, periods=8)
+    td = sysid.pem(data, start, focus="simulation", max_iter=100)
+    p_fd, sd_fd = fd.poles(std=True)
+    p_td, sd_td = td.poles(std=True)
+    i, j = np.argsort(p_fd.imag), np.argsort(p_td.imag)
+    p_fd, sd_fd, p_td, sd_td = p_fd[i], sd_fd[i], p_td[j], sd_td[j]
+    p_true = np.sort_complex(true.poles())[np.argsort(np.sort_complex(true.poles()).imag)]
+    for part in (np.real, np.imag):
+        s_fd, s_td = part(sd_fd), part(sd_td)
+        assert np.all(s_fd > 0) and np.all(s_td > 0)
+        # the two estimates from the same record: within a few predicted std of each other
+        assert np.all(np.abs(part(p_fd) - part(p_td)) < 3 * np.hypot(s_fd, s_td))
+        # and of the truth, so the frequency-domain std is no fiction
+        assert np.all(np.abs(part(p_fd) - part(p_true)) < 4 * s_fd)
+        # similar precision: same data, same information on the excited lines
+        assert np.all(s_fd < 2 * s_td) and np.all(s_td < 2 * s_fd)
+    w = np.linspace(0.05, 2.5, 9)
+    H, sd = fd.freqresp(w, std=True)
+    Ht = td.freqresp(w)
+    assert np.all(np.abs((H - Ht).real) < 4 * sd.real + 1e-12)
+    assert np.all(np.abs((H - Ht).imag) < 4 * sd.imag + 1e-12)
+    assert 0.5 < fd.info["pem"]["residual_scale"] < 2.0
+
+
+def test_an_frd_with_std_is_fitted_the_same_way():
+    true = sysid.StateSpaceModel([[0.7, 0.3], [-0.3, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]])
+    data = _periodic(true, 256, 4, noise=0.05, seed=1)
+    start = sysid.moesp(data, order=2)
+    a = sysid.pem(data, start, periods=4)
+    b = sysid.pem(sysid.bla(data, periods=4), start)
+    w = np.linspace(0.05, 3.0, 11)
+    assert np.allclose(a.freqresp(w), b.freqresp(w), rtol=1e-10, atol=1e-12)
+
+
+def test_bad_periodic_input_gives_clear_errors():
+    true = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    data = _periodic(true, 128, 3)
+    start = sysid.moesp(data, order=1)
+    with pytest.raises(DataError, match="does not divide the record length"):
+        sysid.pem(data, start, periods=5)
+    with pytest.raises(DataError, match="at least 2"):
+        sysid.pem(sysid.IOData(u=data.u[:128], y=data.y[:128]), start, periods=1)
+    quiet = sysid.IOData(u=np.zeros_like(data.u), y=data.y)
+    with pytest.raises(DataError, match="excites no frequency line"):
+        sysid.pem(quiet, start, periods=3)
+    with pytest.raises(DataError, match="weighting"):
+        sysid.pem(data, start, periods=3, weighting="identity")
+    with pytest.raises(DataError, match="periods"):
+        sysid.pem(data, start, periods=0)
+
+
+def test_ssest_with_periods_scores_starts_on_the_lines_and_refines_there():
+    true = sysid.StateSpaceModel([[1.2, -0.5], [1.0, 0.0]], [[1.0], [0.0]], [[0.4, 0.3]])
+    data = _periodic(true, 512, 8, noise=0.2, seed=5)
+    m = sysid.ssest(data, 2, periods=8)
+    assert m.info["pem"]["domain"] == "frequency"
+    assert set(m.info["start"]["losses"]) >= {"moesp", "frd_subspace"}
+    p, sd = m.poles(std=True)
+    order = np.argsort(p.imag)
+    pt = true.poles()[np.argsort(true.poles().imag)]
+    assert np.all(np.abs(p[order] - pt) < 4 * np.abs(sd[order]))
+    with pytest.raises(DataError, match="integer"):
+        sysid.ssest(data, "auto", periods=8)
