@@ -348,3 +348,4 @@ def test_docs_data_examples_run_on_the_bundled_records() -> None:
     assert repr(ns["data"]) == "IOData: 2500 samples, 5 inputs, 2 outputs, dt = 0.1 s"
     frd = ns["frd"]
     assert isinstance(frd, sysid.FRD) and frd.omega.size == 267  # "keeps the 267 excited lines"
+    assert ns["found"][:3] == (8192, 9, (0,))  # the measured force repeats up to its noise

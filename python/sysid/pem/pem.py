@@ -307,7 +307,8 @@ def pem(
     local_coordinates: bool = True,
     weighting: str | None = None,
     enforce_stability: bool | None = None,
-    periods: int | None = None,
+    periods: int | str | None = None,
+    transient: int | None = None,
 ) -> StateSpaceModel:
     """Refine a state-space model by minimising its prediction (or simulation) errors.
 
@@ -370,9 +371,13 @@ def pem(
         better (likelihood-ratio test at the 1 % level); then a
         :class:`sysid.StabilityWarning` names the largest pole modulus. ``False``: only the
         predictor is kept stable (a warning still says when the model is unstable).
-    periods : int, optional
-        The data are periodic: every experiment holds this many whole periods in steady
-        state (at least 2; drop a transient period first). The model is then fitted in the
+    periods : int or "auto", optional
+        The data are periodic: every experiment holds this many whole periods (at least 2
+        after the ``transient`` ones). ``"auto"``: detected from the input
+        (:func:`sysid.detect_period`, exact repetition; a trailing partial period is
+        dropped); when the input is not periodic, or fewer than 2 periods remain after the
+        transient, the refinement runs in the time domain as without ``periods`` and
+        ``info["pem"]["periodicity"]`` says why. The model is then fitted in the
         frequency domain on the excited lines only (:mod:`sysid.pem.periodic`): the response
         averaged over the periods (:func:`sysid.bla`), each entry weighted by the inverse of
         its noise variance from the periods, ``A`` held in its real modal form, no initial
@@ -380,6 +385,12 @@ def pem(
         ``weighting`` may only be ``"noise"``). The model is stable and in the modal basis.
         ``data`` may also be an :class:`sysid.FRD` with ``std`` (for example from
         :func:`sysid.bla`), fitted the same way.
+    transient : int, optional
+        Leading periods dropped because the output's response to the start of the
+        excitation has not settled. Default: 1 with ``periods="auto"`` (the usual practice
+        with a multisine applied from rest), 0 with a declared ``periods`` (its periods are
+        in steady state, as before). ``info["pem"]["periodicity"]`` records the period, the
+        whole periods, the transient and (``"auto"``) the detection.
 
     Returns
     -------
@@ -416,9 +427,19 @@ def pem(
     >>> bool(np.allclose(np.sort_complex(m.poles()), np.sort_complex(true.poles()), atol=0.02))
     True
     """
-    if periods is not None or isinstance(data, FRD):
-        return _pem_periodic(data, model, periods, feedthrough, max_iter, tol, progress,
+    periodicity = None
+    if isinstance(data, FRD):
+        return _pem_periodic(data, model, data, feedthrough, max_iter, tol, progress,
                              weighting, regularization)
+    if periods is not None or transient is not None:
+        from .periodic import resolve_periods
+
+        frd, periodicity = resolve_periods(_experiments(data), periods, transient)
+        if frd is not None:
+            out = _pem_periodic(data, model, frd, feedthrough, max_iter, tol, progress,
+                                weighting, regularization)
+            out.info["pem"]["periodicity"] = periodicity
+            return out
     ft_selection = None
     if check_feedthrough(feedthrough) == "auto":
         from ..subspace.estimator import SubspaceEstimator
@@ -481,6 +502,7 @@ def pem(
     info["method"] = "pem"
     info["start_method"] = model.info.get("method") if model.info else None
     info["pem"] = {
+        "domain": "time",
         "iterations": res["iterations"],
         "evaluations": res["evaluations"],
         "cost": list(res["history"]),
@@ -506,6 +528,8 @@ def pem(
         "x0_values": x0s,
         "estimated_x0": est_x0,
     }
+    if periodicity is not None:
+        info["pem"]["periodicity"] = periodicity
     if ft_selection is not None:
         info["feedthrough_selection"] = ft_selection
     out = StateSpaceModel(
@@ -519,11 +543,11 @@ def pem(
     return out
 
 
-def _pem_periodic(data: Any, model: StateSpaceModel, periods: int | None, feedthrough: Any,
+def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
                   max_iter: int, tol: float, progress: Any, weighting: str | None,
                   regularization: Any) -> StateSpaceModel:
     """:func:`pem` on the excited lines of periodic data (or of an FRD with std)."""
-    from .periodic import CRITERION, pem_lines, periodic_lines
+    from .periodic import CRITERION, pem_lines
 
     if not isinstance(model, StateSpaceModel):
         raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
@@ -531,7 +555,6 @@ def _pem_periodic(data: Any, model: StateSpaceModel, periods: int | None, feedth
         raise DataError("the frequency-domain refinement of periodic data weights each line "
                         "by its noise variance and takes no regularization: leave weighting "
                         "and regularization out, or refine in the time domain (no periods=)")
-    frd = data if isinstance(data, FRD) else periodic_lines(_experiments(data), periods)
     ft = check_feedthrough(feedthrough)
     if ft == "auto":
         if isinstance(data, FRD):

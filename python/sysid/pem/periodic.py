@@ -33,23 +33,25 @@ from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
 from ..nonparametric.bla import bla
 
-__all__ = ["periodic_lines", "lines_cost"]
+__all__ = ["periodic_lines", "lines_cost", "resolve_periods"]
 
 CRITERION = "weighted sum of squares on the excited lines"
 
 
-def periodic_lines(data: IOData, periods: Any) -> FRD:
+def periodic_lines(data: IOData, periods: Any, transient: Any = 0) -> FRD:
     """The averaged frequency response on the excited lines of periodic data, with the noise
     variance of each entry from the spread over the periods (:func:`sysid.bla`).
 
     Parameters
     ----------
     data : IOData
-        Every experiment holds ``periods`` whole periods in steady state (drop the first
-        period when it carries the transient); with ``m`` inputs, ``m`` experiments with
-        different phases per realisation.
+        Every experiment holds ``periods`` whole periods; with ``m`` inputs, ``m``
+        experiments with different phases per realisation.
     periods : int
-        Periods in each experiment, at least 2 (the noise variance comes from their spread).
+        Periods in each experiment.
+    transient : int
+        Leading periods dropped (they carry the transient); at least 2 periods must remain
+        (the noise variance comes from their spread).
 
     Returns
     -------
@@ -70,17 +72,64 @@ def periodic_lines(data: IOData, periods: Any) -> FRD:
     if not isinstance(data, IOData):
         raise DataError(f"periods= needs a sysid.IOData, got {type(data).__name__}")
     P = as_int(periods, "periods", 1)
-    if P < 2:
-        raise DataError(f"periods={P}: the noise variance on the lines comes from the spread "
-                        "over the periods, so at least 2 are needed; measure more periods or "
-                        "leave periods out (time-domain refinement)")
+    T = as_int(transient, "transient", 0)
+    if P - T < 2:
+        raise DataError(f"periods={P}, transient={T}: the noise variance on the lines comes "
+                        "from the spread over the steady-state periods, so at least 2 are "
+                        "needed; measure more periods, drop fewer, or leave periods out "
+                        "(time-domain refinement)")
     lengths = [u.shape[0] for u, _ in data.experiments]
     bad = [n for n in lengths if n % P]
     if bad:
         raise DataError(f"periods={P} does not divide the record length {bad[0]} (samples "
                         f"per experiment {lengths}): give the number of whole periods in "
-                        "each experiment, or cut the record to whole periods")
-    return bla(data, P)
+                        "each experiment, cut the record to whole periods, or pass "
+                        "periods='auto'")
+    return bla(data, P, transient=T)
+
+
+def resolve_periods(data: IOData, periods: Any,
+                    transient: Any) -> tuple[FRD | None, dict[str, Any]]:
+    """The lines of ``sysid.pem``/``ssest``'s ``periods=``, ``transient=``: declared (an int;
+    ``transient`` default 0, the periods are in steady state) or detected (``"auto"``,
+    :func:`sysid.detect_period` on the input; ``transient`` default 1, the first period
+    carries the transient; a trailing partial period is dropped). Returns the lines, or
+    ``None`` when ``"auto"`` finds no period or fewer than 2 periods after the transient (the
+    caller then refines in the time domain), and what ``info["pem"]["periodicity"]`` says."""
+    if periods is None:
+        raise DataError("transient= drops leading periods of periodic data: give periods= "
+                        "(an int or 'auto') as well, or leave transient out")
+    if not isinstance(data, IOData):
+        raise DataError(f"periods= needs a sysid.IOData, got {type(data).__name__}")
+    if not (isinstance(periods, str) and periods == "auto"):
+        if isinstance(periods, str):
+            raise DataError(f"periods must be an int or 'auto', got {periods!r}")
+        T = 0 if transient is None else transient
+        frd = periodic_lines(data, periods, T)
+        return frd, {"periods": "declared", "period": frd.info["n_per"],
+                     "whole_periods": frd.info["periods"], "transient": frd.info["transient"]}
+    from ..data.periodicity import detect
+
+    T = as_int(1 if transient is None else transient, "transient", 0)
+    found, why = detect(data)
+    info: dict[str, Any] = {"periods": "auto", "detected": found is not None, "reason": why}
+    if found is None:
+        info["reason"] = f"time domain: {why}"
+        return None, info
+    info.update(period=found.period, whole_periods=found.periods, transient=T,
+                unused_samples=list(found.unused), mismatch=found.mismatch)
+    if found.periods - T < 2:
+        info["reason"] = (f"time domain: {why}, {found.periods - T} after the {T} transient "
+                          "one(s); the noise variance needs 2 or more")
+        return None, info
+    cut = found.period * found.periods
+    if any(found.unused):
+        info["reason"] = (f"{why} (the last {max(found.unused)} samples, a partial period, "
+                          "dropped)")
+        data = IOData([u[:cut] for u, _ in data.experiments],
+                      [y[:cut] for _, y in data.experiments], data.dt,
+                      input_names=data.input_names, output_names=data.output_names)
+    return periodic_lines(data, found.periods, T), info
 
 
 def line_weights(frd: FRD) -> np.ndarray:

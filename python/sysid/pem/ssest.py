@@ -35,7 +35,8 @@ def ssest(
     regularization: dict[str, Any] | None = None,
     progress: bool | None | Callable[..., Any] = None,
     enforce_stability: bool | None = None,
-    periods: int | None = None,
+    periods: int | str | None = None,
+    transient: int | None = None,
 ) -> StateSpaceModel:
     """Estimate a state-space model: the best subspace start, refined by :func:`pem`.
 
@@ -70,11 +71,17 @@ def ssest(
         ``"ssarx"`` for closed-loop data (their start is consistent under feedback, and the
         start's ``B, D`` are then not re-fitted on the data with ``x0``, which would be an
         output-error fit).
-    periods : int, optional
-        Periodic data (whole periods in steady state, at least 2): the candidates (the
-        subspace weightings, and the frequency-domain subspace fit of the averaged response,
-        :func:`sysid.frd_subspace`) are scored on the excited lines and the best is refined
-        there (:func:`pem` with ``periods``; ``focus``, ``x0`` and ``noise`` do not apply).
+    periods : int or "auto", optional
+        Periodic data (at least 2 whole periods after the ``transient`` ones): the
+        candidates (the subspace weightings, and the frequency-domain subspace fit of the
+        averaged response, :func:`sysid.frd_subspace`) are scored on the excited lines and
+        the best is refined there (:func:`pem` with ``periods``; ``focus``, ``x0`` and
+        ``noise`` do not apply). ``"auto"``: the period detected from the input
+        (:func:`sysid.detect_period`); not periodic: the time-domain estimate, with the
+        reason in ``info["pem"]["periodicity"]``.
+    transient : int, optional
+        Leading periods dropped: default 1 with ``periods="auto"``, 0 with a declared
+        ``periods`` (as :func:`pem`).
 
     Returns
     -------
@@ -95,9 +102,20 @@ def ssest(
     True
     """
     data = _experiments(data)
-    if periods is not None:
-        return _ssest_periodic(data, order, periods, feedthrough, horizon, methods, method,
-                               max_iter, tol, progress, regularization)
+    if periods is not None or transient is not None:
+        from .periodic import resolve_periods
+
+        frd, periodicity = resolve_periods(data, periods, transient)
+        if frd is not None:
+            model = _ssest_periodic(data, order, frd, feedthrough, horizon, methods, method,
+                                    max_iter, tol, progress, regularization)
+        else:
+            model = ssest(data, order, focus=focus, feedthrough=feedthrough, x0=x0,
+                          noise=noise, horizon=horizon, methods=methods, method=method,
+                          max_iter=max_iter, tol=tol, regularization=regularization,
+                          progress=progress, enforce_stability=enforce_stability)
+        model.info.setdefault("pem", {})["periodicity"] = periodicity
+        return model
     if check_feedthrough(feedthrough) == "auto":
         # decided once from the data (the rule every estimator shares), then a fixed choice
         use, why = choose_feedthrough(SubspaceEstimator(data, horizon, method=method or "moesp"),
@@ -157,14 +175,14 @@ def ssest(
     return model
 
 
-def _ssest_periodic(data: Any, order: Any, periods: int, feedthrough: Any,
+def _ssest_periodic(data: Any, order: Any, frd: Any, feedthrough: Any,
                     horizon: int | None, methods: tuple[str, ...], method: str | None,
                     max_iter: int, tol: float, progress: Any,
                     regularization: Any) -> StateSpaceModel:
     """:func:`ssest` on the excited lines of periodic data: the stable candidate with the
     lowest weighted misfit on the lines, refined there."""
     from ..subspace.frd_subspace import frd_subspace
-    from .periodic import line_weights, lines_cost, periodic_lines
+    from .periodic import line_weights, lines_cost
 
     if regularization is not None:
         raise DataError("regularization does not apply to the frequency-domain refinement of "
@@ -176,7 +194,6 @@ def _ssest_periodic(data: Any, order: Any, periods: int, feedthrough: Any,
     ft = check_feedthrough(feedthrough)
     if ft == "auto":
         ft, _ = choose_feedthrough(SubspaceEstimator(data, horizon), order)
-    frd = periodic_lines(data, periods)
     est = SubspaceEstimator(data, horizon)
     candidates = []
     with warnings.catch_warnings():
