@@ -226,3 +226,21 @@ def test_auto_periods_fall_back_to_the_time_domain_and_say_why():
         sysid.pem(data, start, periods="yes")
     with pytest.raises(DataError, match="at least 2"):
         sysid.pem(two, start, periods=2, transient=1)
+
+
+def test_auto_periods_with_two_realisations_keep_their_common_whole_periods():
+    true = sysid.StateSpaceModel([[0.7, 0.2], [-0.2, 0.7]], [[1.0], [0.3]], [[1.0, 0.0]])
+    a = _raw_periodic(true, 128, 6, noise=0.05, seed=1)
+    b = _raw_periodic(true, 128, 7, noise=0.05, seed=2)
+    data = sysid.IOData([a.u, b.u], [a.y, b.y], 1.0)
+    found = sysid.detect_period(data)
+    assert (found.period, found.periods, found.unused) == (128, 6, (0, 128))
+    m = sysid.pem(data, sysid.moesp(data, order=2), periods="auto")
+    per = m.info["pem"]["periodicity"]
+    assert m.info["pem"]["domain"] == "frequency" and per["unused_samples"] == [0, 128]
+    cut = sysid.IOData([a.u, b.u[:768]], [a.y, b.y[:768]], 1.0)
+    assert np.allclose(m.A, sysid.pem(cut, sysid.moesp(data, order=2), periods=6,
+                                      transient=1).A)
+    # a second realisation with another period: no common period
+    c = _raw_periodic(true, 100, 6, seed=3)
+    assert sysid.detect_period(sysid.IOData([a.u, c.u], [a.y, c.y], 1.0)) is None

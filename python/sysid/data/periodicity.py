@@ -95,14 +95,17 @@ def period_of(u: np.ndarray, tol: float, min_periods: int) -> tuple[int | None, 
         return None, np.inf, "the input is constant"
     r = _mismatch(x, var)
     # screen with the FFT values (rounding ~1e-13 of the variance), confirm directly
-    for lag in np.flatnonzero(r[2:top + 1] <= tol + 1e-9) + 2:
+    lags = np.arange(2, top + 1)
+    near = r[lags] <= tol + 1e-9
+    near &= 2.0 * r[lags] <= np.minimum(r[lags - 1], r[lags + 1]) + 1e-9
+    for lag in lags[near]:
         e = _exact(x, var, int(lag))
         if e <= tol and all(2.0 * e <= _exact(x, var, int(k)) for k in (lag - 1, lag + 1)):
             return int(lag), e, f"the input repeats every {lag} samples"
     best = int(np.argmin(r[2:top + 1])) + 2
-    return None, float(r[best]), (f"the input does not repeat: the smallest mismatch m(L) "
-                                  f"over L = 2..{top} is {r[best]:.3g} (at L = {best}; "
-                                  f"tol = {tol:g}, and a dip below its neighbours needed)")
+    return None, float(r[best]), (f"the input does not repeat: no lag L in 2..{top} where "
+                                  f"the mismatch m(L) is below tol = {tol:g} and a sharp dip "
+                                  f"(smallest m(L): {r[best]:.3g}, at L = {best})")
 
 
 def detect_period(data: Any, *, tol: float = TOL, min_periods: int = 2) -> Periodicity | None:

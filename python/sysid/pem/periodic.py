@@ -124,8 +124,8 @@ def resolve_periods(data: IOData, periods: Any,
         return None, info
     cut = found.period * found.periods
     if any(found.unused):
-        info["reason"] = (f"{why} (the last {max(found.unused)} samples, a partial period, "
-                          "dropped)")
+        info["reason"] = (f"{why} (the samples after them dropped: {list(found.unused)}; a "
+                          "partial period)")
         data = IOData([u[:cut] for u, _ in data.experiments],
                       [y[:cut] for _, y in data.experiments], data.dt,
                       input_names=data.input_names, output_names=data.output_names)
