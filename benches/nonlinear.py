@@ -74,7 +74,7 @@ def f16():
     P = 8192
     train = sysid.IOData([l1.u[P:], l3.u], [l1.y[P:], l3.y], l1.dt)
     return train, {"level 2": (l2.u, l2.y)}, P, \
-        dict(order=10, na=4, nb=4, hidden=16, lags=20, periods=None)
+        dict(order=10, na=4, nb=4, hidden=16, lags=20, periods=[8, 3])
 
 
 class Offset:
@@ -148,9 +148,11 @@ def fits(train, s):
                   d, n, input_nl=sysid.SigmoidNetwork(3), output_nl=sysid.SigmoidNetwork(3),
                   progress=Budget())))
     terms = "full" if n + m <= 5 else "inputs"
-    timed(f"pnlss (degree 2-3, {terms}, states out)",
+    per = s["periods"]
+    weighted = ", frequency-weighted" if per is not None else ""
+    timed(f"pnlss (degree 2-3, {terms}, states out{weighted})",
           lambda: sysid.pnlss(train, n, degree=3, terms=terms, output_terms="none",
-                              max_iter=50, progress=Budget()))
+                              periods=per, max_iter=50, progress=Budget()))
     r = max(2, n // 2)
     timed(f"pnlss decoupled (degree 2-3, {r} branches)",
           lambda: sysid.pnlss(train, n, degree=3, branches=r, max_iter=50,

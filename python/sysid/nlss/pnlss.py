@@ -219,6 +219,7 @@ def pnlss(
     transient: int | None = None,
     extrapolation: str = "clamp",
     branches: int | None = None,
+    weighting: str = "auto",
     seed: int = 0,
     max_iter: int = 100,
     tol: float = 1e-8,
@@ -271,6 +272,15 @@ def pnlss(
         the chosen degrees of linear forms of the states and inputs (``terms`` and
         ``output_terms`` do not apply; the output equation is linear plus a constant).
         Far fewer parameters than all monomials when there are many states.
+    weighting : {"auto", "bla", "none"}
+        ``"bla"``: with ``periods``, the classic frequency-domain PNLSS cost: the simulation
+        error of the steady state, averaged over the periods after the transient, on the
+        mean and the excited DFT lines, each weighted by the inverse noise variance of the
+        measured output's averaged spectrum (estimated over the periods; see
+        :mod:`sysid.nlss.freqweight`); needs at least two periods after a transient of whole
+        periods in every experiment. ``"none"``: the time-domain simulation error of every
+        sample after the transient. ``"auto"`` (default): ``"bla"`` where it applies (periodic
+        data, the coupled model, ``average=False``), else ``"none"``.
     seed : int
         Seeds the decoupled variant's initial branch directions.
     max_iter, tol : int, float
@@ -322,6 +332,7 @@ def pnlss(
         skip = transient if transient is not None else (
             N // pers[k] if pers and pers[k] > 1 else settle_samples(lin, N))
         recs.append((u, y, int(skip)))
+    weights = _weights(weighting, sd, pers, recs, average or branches is not None)
     if average:
         recs = _averaged(sd, pers)
         us = [r[0] for r in recs]
@@ -330,6 +341,7 @@ def pnlss(
     common = {"scaling": sc.to_dict(), "dt": data.dt, "input_names": data.input_names,
               "output_names": data.output_names}
     info: dict[str, Any] = {"degree": degs, "extrapolation": extrapolation,
+                            "weighting": "none" if weights is None else "bla",
                             "start": lin.info.get("method") if lin.info else "linear"}
     try:
         if branches is not None:
@@ -342,7 +354,7 @@ def pnlss(
             _warn_short(res)
             return DecoupledPNLSSModel(**kw, **common, info=info)
         fit = _fit_coupled(lin, us, recs, terms, output_terms, degs, extrapolation, max_iter,
-                           tol, cb if cb is not None else _tick)
+                           tol, cb if cb is not None else _tick, weights)
     finally:
         close()
     kw, res = fit
@@ -354,7 +366,8 @@ def pnlss(
 
 def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], terms: str,
                  output_terms: str | None, degs: list[int], extrapolation: str, max_iter: int,
-                 tol: float, cb: Any) -> tuple[dict[str, Any], dict[str, Any]]:
+                 tol: float, cb: Any,
+                 weights: Any = None) -> tuple[dict[str, Any], dict[str, Any]]:
     n, m_, l_ = lin.nstates, lin.ninputs, lin.noutputs
     probe = StateSpaceModel(lin.A, lin.B, np.eye(n), np.zeros((n, m_)), dt=lin.dt)
     fit_box = None if extrapolation == "polynomial" else envelope(
@@ -367,8 +380,13 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
     eta = [[]] + ([] if ot == "none" else _sysid.pnlss_monomials(n, m_, ot, degs))
     theta0 = np.concatenate([lin.A.ravel(), lin.B.ravel(), lin.C.ravel(), lin.D.ravel(),
                              np.zeros(n * len(zeta) + l_ * len(eta))])
-    res = _sysid.pnlss_estimate(n, m_, l_, zeta, eta, recs, theta0, max_iter=max_iter,
-                                tol=tol, progress=cb, range=rng)
+    if weights is None:
+        res = _sysid.pnlss_estimate(n, m_, l_, zeta, eta, recs, theta0, max_iter=max_iter,
+                                    tol=tol, progress=cb, range=rng)
+    else:
+        res = _sysid.pnlss_estimate_weighted(n, m_, l_, zeta, eta, recs, weights, theta0,
+                                             max_iter=max_iter, tol=tol, progress=cb,
+                                             range=rng)
     th = np.asarray(res["theta"])
     box = None
     if fit_box is not None:
@@ -381,6 +399,26 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
     return {"A": p[0].reshape(n, n), "B": p[1].reshape(n, m_), "C": p[2].reshape(l_, n),
             "D": p[3].reshape(l_, m_), "E": p[4], "F": p[5], "zeta": zeta, "eta": eta,
             "clamp": box, "output_terms": ot}, res
+
+
+def _weights(weighting: str, sd: IOData, pers: list[int] | None, recs: list[Any],
+             excluded: bool) -> Any:
+    """The lines and weights of the frequency-weighted cost, or ``None`` (time domain)."""
+    if weighting not in ("auto", "bla", "none"):
+        raise DataError(f"weighting must be 'auto', 'bla' or 'none', got {weighting!r}")
+    if weighting == "none" or (weighting == "auto" and (pers is None or excluded)):
+        return None
+    if pers is None or excluded:
+        raise DataError("weighting='bla' needs periods= and applies to the coupled model "
+                        "without average=True (drop branches= / average=, or use 'none')")
+    from .freqweight import line_weights
+
+    w = line_weights(sd, pers, [r[2] for r in recs])
+    if w is None and weighting == "bla":
+        raise DataError("weighting='bla' needs at least two whole periods after a transient "
+                        "of whole periods in every experiment; give more periods, a "
+                        "transient= of whole periods, or weighting='none'")
+    return w
 
 
 def _periods(periods: Any, n_exp: int) -> list[int] | None:
