@@ -148,11 +148,14 @@ def fits(train, s):
                   d, n, input_nl=sysid.SigmoidNetwork(3), output_nl=sysid.SigmoidNetwork(3),
                   progress=Budget())))
     terms = "full" if n + m <= 5 else "inputs"
-    per = s["periods"]
-    weighted = ", frequency-weighted" if per is not None else ""
-    timed(f"pnlss (degree 2-3, {terms}, states out{weighted})",
+    timed(f"pnlss (degree 2-3, {terms}, states out)",
           lambda: sysid.pnlss(train, n, degree=3, terms=terms, output_terms="none",
-                              periods=per, max_iter=50, progress=Budget()))
+                              max_iter=50, progress=Budget()))
+    if s["periods"] is not None:
+        timed(f"pnlss weighted (degree 2-3, {terms}, weighting='bla')",
+              lambda: sysid.pnlss(train, n, degree=3, terms=terms, output_terms="none",
+                                  periods=s["periods"], weighting="bla", max_iter=50,
+                                  progress=Budget()))
     r = max(2, n // 2)
     timed(f"pnlss decoupled (degree 2-3, {r} branches)",
           lambda: sysid.pnlss(train, n, degree=3, branches=r, max_iter=50,

@@ -1,9 +1,9 @@
 """The frequency weighting of a PNLSS fit on periodic records.
 
 On periodic data the classic PNLSS cost (Paduart et al., Automatica 46, 2010) is the
-simulation error of the steady state, averaged over the periods, on the excited DFT lines
-(and the mean), each line weighted by the inverse noise variance of the measured output's
-averaged spectrum:
+simulation error of the steady state, averaged over the periods, on the DFT lines of one
+period (excited or not: the nonlinear distortions show on the others too), each line
+weighted by the inverse noise variance of the measured output's averaged spectrum:
 
 .. code-block:: text
 
@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..data.iodata import IOData
-from ..nonparametric.bla import _excited, _periods
+from ..nonparametric.bla import _periods
 
 __all__ = ["line_weights"]
 
@@ -33,10 +33,9 @@ def line_weights(sd: IOData, periods: list[int],
     or ``None`` when an experiment has fewer than two whole periods after its transient (no
     noise variance) or a transient that is not whole periods.
 
-    The lines are the mean (line 0) and the lines the input excites (those of
-    :func:`sysid.bla`); the noise variance of each line is averaged over ``SMOOTH`` excited
-    neighbours on each side (a variance from few periods is itself noisy) and floored at
-    ``FLOOR`` times the output's mean line power.
+    The lines are all those of one period, ``0 .. P // 2``; the noise variance of each is
+    averaged over ``SMOOTH`` neighbours on each side (a variance from few periods is itself
+    noisy) and floored at ``FLOOR`` times the output's mean line power.
 
     Examples
     --------
@@ -45,8 +44,8 @@ def line_weights(sd: IOData, periods: list[int],
     >>> y = np.convolve(u[:, 0], [1.0, 0.5])[:256, None]
     >>> y = y + 0.01 * np.random.default_rng(0).standard_normal(y.shape)
     >>> (P, lines, w), = line_weights(sysid.IOData(u, y, 1.0), [4], [64])
-    >>> P, lines[0], len(w) == len(lines)
-    (64, 0, True)
+    >>> P, lines[0], lines[-1], len(w) == len(lines)
+    (64, 0, 32, True)
     """
     out = []
     for (u, y), p, skip in zip(sd.experiments, periods, skips):
@@ -57,10 +56,8 @@ def line_weights(sd: IOData, periods: list[int],
         if skip % P or p - skip // P < 2:
             return None
         T = skip // P
-        U = _periods(u, P, p, T)  # (p - T, P, m)
-        Y = _periods(y, P, p, T)
-        k = np.r_[0, _excited(U[None], None, P)]
-        Yk = Y[:, k, :]
+        k = np.arange(P // 2 + 1)
+        Yk = _periods(y, P, p, T)[:, k, :]  # (p - T, K, l)
         s2 = np.var(Yk, axis=0, ddof=1) / Yk.shape[0]  # (K, l): of the period average
         s2 = _smooth(s2)
         power = np.mean(np.abs(Yk.mean(axis=0)) ** 2, axis=0)

@@ -219,7 +219,7 @@ def pnlss(
     transient: int | None = None,
     extrapolation: str = "clamp",
     branches: int | None = None,
-    weighting: str = "auto",
+    weighting: str = "none",
     seed: int = 0,
     max_iter: int = 100,
     tol: float = 1e-8,
@@ -272,15 +272,16 @@ def pnlss(
         the chosen degrees of linear forms of the states and inputs (``terms`` and
         ``output_terms`` do not apply; the output equation is linear plus a constant).
         Far fewer parameters than all monomials when there are many states.
-    weighting : {"auto", "bla", "none"}
-        ``"bla"``: with ``periods``, the classic frequency-domain PNLSS cost: the simulation
-        error of the steady state, averaged over the periods after the transient, on the
-        mean and the excited DFT lines, each weighted by the inverse noise variance of the
-        measured output's averaged spectrum (estimated over the periods; see
+    weighting : {"none", "bla"}
+        ``"none"`` (default): the time-domain simulation error of every sample after the
+        transient. ``"bla"``: with ``periods``, the classic frequency-domain PNLSS cost: the
+        simulation error of the steady state, averaged over the periods after the transient,
+        on the mean and the excited DFT lines, each weighted by the inverse noise variance of
+        the measured output's averaged spectrum (estimated over the periods; see
         :mod:`sysid.nlss.freqweight`); needs at least two periods after a transient of whole
-        periods in every experiment. ``"none"``: the time-domain simulation error of every
-        sample after the transient. ``"auto"`` (default): ``"bla"`` where it applies (periodic
-        data, the coupled model, ``average=False``), else ``"none"``.
+        periods in every experiment, the coupled model and ``average=False``. It is not the
+        default: on the F-16 records it validated worse than the time-domain cost
+        (``benches/results/nonlinear.md``).
     seed : int
         Seeds the decoupled variant's initial branch directions.
     max_iter, tol : int, float
@@ -404,9 +405,9 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
 def _weights(weighting: str, sd: IOData, pers: list[int] | None, recs: list[Any],
              excluded: bool) -> Any:
     """The lines and weights of the frequency-weighted cost, or ``None`` (time domain)."""
-    if weighting not in ("auto", "bla", "none"):
-        raise DataError(f"weighting must be 'auto', 'bla' or 'none', got {weighting!r}")
-    if weighting == "none" or (weighting == "auto" and (pers is None or excluded)):
+    if weighting not in ("bla", "none"):
+        raise DataError(f"weighting must be 'none' or 'bla', got {weighting!r}")
+    if weighting == "none":
         return None
     if pers is None or excluded:
         raise DataError("weighting='bla' needs periods= and applies to the coupled model "
@@ -414,7 +415,7 @@ def _weights(weighting: str, sd: IOData, pers: list[int] | None, recs: list[Any]
     from .freqweight import line_weights
 
     w = line_weights(sd, pers, [r[2] for r in recs])
-    if w is None and weighting == "bla":
+    if w is None:
         raise DataError("weighting='bla' needs at least two whole periods after a transient "
                         "of whole periods in every experiment; give more periods, a "
                         "transient= of whole periods, or weighting='none'")

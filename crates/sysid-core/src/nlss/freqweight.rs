@@ -33,57 +33,128 @@ pub struct LineWeights {
     pub weights: Vec<f64>,
 }
 
-/// Square-root-weighted cosine and sine tables of one record (`K x P` per output).
+/// The DFT of one record's period on its lines: a radix-2 FFT when the period is a power of
+/// two, else cosine and sine tables (`K x P`); and the square roots of its weights.
 struct Tables {
     period: usize,
-    /// Per output: `sqrt(w_ik) cos(2 pi k tau / P)` and `-sqrt(w_ik) sin(..)`, `K x P`.
-    cos: Vec<Mat<f64>>,
-    sin: Vec<Mat<f64>>,
+    lines: Vec<usize>,
+    /// `cos(2 pi k tau / P)` and `-sin(..)`, `K x P` (empty with the FFT).
+    cos: Mat<f64>,
+    sin: Mat<f64>,
+    /// The FFT's twiddle factors `exp(-2 pi j m / P)`, `m < P / 2` (empty without).
+    twiddle: Vec<(f64, f64)>,
+    /// `sqrt(w_ik)`, `K x ny`.
+    root: Mat<f64>,
 }
 
 impl Tables {
     fn new(w: &LineWeights, ny: usize) -> Self {
         let (p, k) = (w.period, w.lines.len());
-        let mut cos = Vec::with_capacity(ny);
-        let mut sin = Vec::with_capacity(ny);
-        for i in 0..ny {
-            let s = |a: usize| w.weights[a * ny + i].sqrt();
-            let ang = |a: usize, t: usize| {
-                // (k t mod P) keeps the angle small and exact for long periods
-                2.0 * std::f64::consts::PI * ((w.lines[a] * t) % p) as f64 / p as f64
-            };
-            cos.push(Mat::from_fn(k, p, |a, t| s(a) * ang(a, t).cos()));
-            sin.push(Mat::from_fn(k, p, |a, t| -s(a) * ang(a, t).sin()));
-        }
+        let fft = p.is_power_of_two() && p >= 2;
+        // (k t mod P) keeps the angle small and exact for long periods
+        let ang = |a: usize, t: usize| 2.0 * std::f64::consts::PI * ((a * t) % p) as f64 / p as f64;
+        let (kt, pt) = if fft { (0, 0) } else { (k, p) };
         Tables {
             period: p,
-            cos,
-            sin,
+            lines: w.lines.clone(),
+            cos: Mat::from_fn(kt, pt, |a, t| ang(w.lines[a], t).cos()),
+            sin: Mat::from_fn(kt, pt, |a, t| -ang(w.lines[a], t).sin()),
+            twiddle: if fft {
+                (0..p / 2)
+                    .map(|m| (ang(m, 1).cos(), -ang(m, 1).sin()))
+                    .collect()
+            } else {
+                Vec::new()
+            },
+            root: Mat::from_fn(k, ny, |a, i| w.weights[a * ny + i].sqrt()),
         }
+    }
+
+    /// Real and imaginary parts (`K x c`) of the DFT on the lines of the columns of `x`
+    /// (`P x c`).
+    fn dft(&self, x: &Mat<f64>) -> (Mat<f64>, Mat<f64>) {
+        if self.twiddle.is_empty() {
+            return (&self.cos * x, &self.sin * x);
+        }
+        let (p, k) = (self.period, self.lines.len());
+        let (mut re, mut im) = (Mat::zeros(k, x.ncols()), Mat::zeros(k, x.ncols()));
+        let (mut a, mut b) = (vec![0.0; p], vec![0.0; p]);
+        for c in 0..x.ncols() {
+            a.iter_mut().enumerate().for_each(|(t, v)| *v = x[(t, c)]);
+            b.fill(0.0);
+            fft(&mut a, &mut b, &self.twiddle);
+            for (row, &l) in self.lines.iter().enumerate() {
+                re[(row, c)] = a[l];
+                im[(row, c)] = b[l];
+            }
+        }
+        (re, im)
     }
 
     /// Adds the weighted cost of the period-averaged residuals `r` (`P ny x 1`, row
     /// `tau ny + i`) and, when `jac` is `Some` (`P ny x p`, same rows), its gradient and
     /// Gauss-Newton matrix to `ev`.
     fn add(&self, r: &Mat<f64>, jac: Option<&Mat<f64>>, ev: &mut Evaluation) {
-        let (p, ny) = (self.period, self.cos.len());
+        let (p, ny) = (self.period, self.root.ncols());
+        let weigh = |m: &mut Mat<f64>, i: usize| {
+            for a in 0..m.nrows() {
+                let s = self.root[(a, i)];
+                m.row_mut(a).iter_mut().for_each(|v| *v *= s);
+            }
+        };
         for i in 0..ny {
             let ri = Mat::from_fn(p, 1, |t, _| r[(t * ny + i, 0)]);
-            let ji = jac.map(|j| Mat::from_fn(p, j.ncols(), |t, a| j[(t * ny + i, a)]));
-            for tab in [&self.cos[i], &self.sin[i]] {
-                let rk = tab * &ri;
-                ev.cost += 0.5 * (0..rk.nrows()).map(|a| rk[(a, 0)].powi(2)).sum::<f64>();
-                if let Some(ji) = &ji {
-                    let jk = tab * ji;
-                    let h = ev.gauss_newton.as_mut();
-                    matmul(h, Accum::Add, jk.transpose(), jk.as_ref(), 1.0, Par::Seq);
-                    let g = jk.transpose() * &rk;
-                    for a in 0..g.nrows() {
-                        ev.gradient[a] -= g[(a, 0)];
-                    }
+            let (mut rc, mut rs) = self.dft(&ri);
+            weigh(&mut rc, i);
+            weigh(&mut rs, i);
+            ev.cost += 0.5
+                * (0..rc.nrows())
+                    .map(|a| rc[(a, 0)].powi(2) + rs[(a, 0)].powi(2))
+                    .sum::<f64>();
+            let Some(j) = jac else { continue };
+            let ji = Mat::from_fn(p, j.ncols(), |t, a| j[(t * ny + i, a)]);
+            let (mut jc, mut js) = self.dft(&ji);
+            weigh(&mut jc, i);
+            weigh(&mut js, i);
+            for (jk, rk) in [(&jc, &rc), (&js, &rs)] {
+                let h = ev.gauss_newton.as_mut();
+                matmul(h, Accum::Add, jk.transpose(), jk.as_ref(), 1.0, Par::Seq);
+                let g = jk.transpose() * rk;
+                for a in 0..g.nrows() {
+                    ev.gradient[a] -= g[(a, 0)];
                 }
             }
         }
+    }
+}
+
+/// In-place radix-2 decimation-in-time FFT of `(re, im)` (length a power of two) with the
+/// twiddle factors `exp(-2 pi j m / n)`, `m < n / 2`.
+fn fft(re: &mut [f64], im: &mut [f64], tw: &[(f64, f64)]) {
+    let n = re.len();
+    let bits = n.trailing_zeros();
+    for i in 0..n {
+        let j = i.reverse_bits() >> (usize::BITS - bits);
+        if i < j {
+            re.swap(i, j);
+            im.swap(i, j);
+        }
+    }
+    let mut len = 2;
+    while len <= n {
+        let step = n / len;
+        for start in (0..n).step_by(len) {
+            for m in 0..len / 2 {
+                let (wr, wi) = tw[m * step];
+                let (a, b) = (start + m, start + m + len / 2);
+                let (xr, xi) = (re[b] * wr - im[b] * wi, re[b] * wi + im[b] * wr);
+                re[b] = re[a] - xr;
+                im[b] = im[a] - xi;
+                re[a] += xr;
+                im[a] += xi;
+            }
+        }
+        len *= 2;
     }
 }
 
@@ -347,9 +418,41 @@ mod tests {
     }
 
     #[test]
+    fn fft_equals_the_direct_dft() {
+        let n = 64;
+        let x: Vec<f64> = (0..n).map(|t| ((t * 29 % 17) as f64 - 8.0) / 8.0).collect();
+        let tw: Vec<(f64, f64)> = (0..n / 2)
+            .map(|m| {
+                let a = 2.0 * PI * m as f64 / n as f64;
+                (a.cos(), -a.sin())
+            })
+            .collect();
+        let (mut re, mut im) = (x.clone(), vec![0.0; n]);
+        fft(&mut re, &mut im, &tw);
+        for k in 0..n {
+            let (mut a, mut b) = (0.0, 0.0);
+            for (t, v) in x.iter().enumerate() {
+                let ang = 2.0 * PI * ((k * t) % n) as f64 / n as f64;
+                a += v * ang.cos();
+                b -= v * ang.sin();
+            }
+            assert!(
+                (re[k] - a).abs() < 1e-12 && (im[k] - b).abs() < 1e-12,
+                "line {k}"
+            );
+        }
+    }
+
+    #[test]
     fn gradient_matches_finite_differences() {
+        // a period of 24 takes the table DFT, one of 32 the FFT
+        for p in [24, 32] {
+            gradient_check(p);
+        }
+    }
+
+    fn gradient_check(p: usize) {
         let (m, th) = model();
-        let p = 24;
         let u = multisine(p, 8, 3);
         let (y, _) = m.simulate(&th, &u, None).unwrap();
         let mut th1 = th.clone();
@@ -361,11 +464,11 @@ mod tests {
             y: &y,
             skip: p,
         }];
-        let lines: Vec<usize> = (0..=12).collect();
+        let lines: Vec<usize> = (0..=p / 2).collect();
         let w = [LineWeights {
             period: p,
+            weights: (0..2 * lines.len()).map(|k| 1.0 + (k % 3) as f64).collect(),
             lines,
-            weights: (0..26).map(|k| 1.0 + (k % 3) as f64).collect(),
         }];
         let ev = weighted_cost(&m, &data, &w, &th1, true).unwrap();
         for a in 0..th1.len() {
