@@ -507,8 +507,10 @@ mod tests {
             lines: (0..=32).collect(),
             weights: vec![1.0; 66],
         }];
-        let mut opts = Options::default();
-        opts.max_iter = 200;
+        let opts = Options {
+            max_iter: 200,
+            ..Default::default()
+        };
         let sol = estimate_weighted(&m, &data, &w, &th0, &opts, &mut |_| Flow::Continue).unwrap();
         let (yh, _) = m.simulate(&sol.theta, &u, None).unwrap();
         let err = yh[2 * p..]
