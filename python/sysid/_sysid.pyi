@@ -85,6 +85,8 @@ __all__ = [
     "option_name",
     "reflect_unstable_poles",
     "lagged_products",
+    # issue 29 (branch pnlss): frequency-weighted PNLSS
+    "pnlss_estimate_weighted",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -599,6 +601,20 @@ def pnlss_estimate(
     max_iter: int = 100,
     tol: float = 1e-8,
     fixed: list[bool] | None = None,
+    progress: Callable[..., Any] | None = None,
+    range: tuple[list[float], list[float]] | None = None,
+) -> dict[str, Any]: ...
+def pnlss_estimate_weighted(
+    nx: int,
+    nu: int,
+    ny: int,
+    zeta: list[list[int]],
+    eta: list[list[int]],
+    records: list[tuple[_Array, _Array, int]],
+    weights: list[tuple[int, list[int], list[float]]],
+    theta0: _Array,
+    max_iter: int = 100,
+    tol: float = 1e-8,
     progress: Callable[..., Any] | None = None,
     range: tuple[list[float], list[float]] | None = None,
 ) -> dict[str, Any]: ...

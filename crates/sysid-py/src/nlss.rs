@@ -15,12 +15,15 @@ use sysid_core::nlss::{self, Decoupled, Monomials, Pnlss, PnlssData, Terms};
 use sysid_core::optim::{Flow, Options};
 use sysid_core::SysidError;
 
-type Terms2 = Vec<Vec<usize>>;
+pub(crate) type Terms2 = Vec<Vec<usize>>;
 type Pair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
 type Owned = Vec<(Vec<f64>, Vec<f64>, usize)>;
 type Records<'a> = [(PyReadonlyArray2<'a, f64>, PyReadonlyArray2<'a, f64>, usize)];
 
-fn slice<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<&'a [f64]> {
+pub(crate) fn slice<'a>(
+    a: &'a PyReadonlyArray2<'_, f64>,
+    name: &'static str,
+) -> PyResult<&'a [f64]> {
     a.as_slice().map_err(|_| {
         crate::errors::to_py(SysidError::InvalidArgument {
             name,
@@ -29,9 +32,9 @@ fn slice<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<&
     })
 }
 
-type Range = Option<(Vec<f64>, Vec<f64>)>;
+pub(crate) type Range = Option<(Vec<f64>, Vec<f64>)>;
 
-fn model(
+pub(crate) fn model(
     nx: usize,
     nu: usize,
     ny: usize,

@@ -194,6 +194,7 @@ def pnlss(
     transient: int | None = None,
     extrapolation: str = "clamp",
     branches: int | None = None,
+    weighting: str = "none",
     seed: int = 0,
     max_iter: int = 100,
     tol: float = 1e-8,
@@ -246,6 +247,16 @@ def pnlss(
         the chosen degrees of linear forms of the states and inputs (``terms`` and
         ``output_terms`` do not apply; the output equation is linear plus a constant).
         Far fewer parameters than all monomials when there are many states.
+    weighting : {"none", "bla"}
+        ``"none"`` (default): the time-domain simulation error of every sample after the
+        transient. ``"bla"``: with ``periods``, the classic frequency-domain PNLSS cost: the
+        simulation error of the steady state, averaged over the periods after the transient,
+        on the mean and the excited DFT lines, each weighted by the inverse noise variance of
+        the measured output's averaged spectrum (estimated over the periods; see
+        :mod:`sysid.nlss.freqweight`); needs at least two periods after a transient of whole
+        periods in every experiment, the coupled model and ``average=False``. It is not the
+        default: on the F-16 records it validated worse than the time-domain cost
+        (``benches/results/nonlinear.md``).
     seed : int
         Seeds the decoupled variant's initial branch directions.
     max_iter, tol : int, float
@@ -303,6 +314,7 @@ def pnlss(
         skip = transient if transient is not None else (
             N // pers[k] if pers and pers[k] > 1 else settle_samples(lin, N))
         recs.append((u, y, int(skip)))
+    weights = _weights(weighting, sd, pers, recs, average or branches is not None)
     if average:
         recs = _averaged(sd, pers)
         us = [r[0] for r in recs]
@@ -311,6 +323,7 @@ def pnlss(
     common = {"scaling": sc.to_dict(), "dt": data.dt, "input_names": data.input_names,
               "output_names": data.output_names}
     info: dict[str, Any] = {"degree": degs, "extrapolation": extrapolation,
+                            "weighting": "none" if weights is None else "bla",
                             "start": lin.info.get("method") if lin.info else "linear"}
     try:
         if branches is not None:
@@ -323,7 +336,7 @@ def pnlss(
             _warn_short(res)
             return DecoupledPNLSSModel(**kw, **common, info=info)
         fit = _fit_coupled(lin, us, recs, terms, output_terms, degs, extrapolation, max_iter,
-                           tol, cb if cb is not None else _tick)
+                           tol, cb if cb is not None else _tick, weights)
     finally:
         close()
     kw, res = fit
@@ -335,7 +348,8 @@ def pnlss(
 
 def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], terms: str,
                  output_terms: str | None, degs: list[int], extrapolation: str, max_iter: int,
-                 tol: float, cb: Any) -> tuple[dict[str, Any], dict[str, Any]]:
+                 tol: float, cb: Any,
+                 weights: Any = None) -> tuple[dict[str, Any], dict[str, Any]]:
     n, m_, l_ = lin.nstates, lin.ninputs, lin.noutputs
     fit_box = None if extrapolation == "polynomial" else envelope(linear_states(lin, us), us,
                                                                   0.5)
@@ -348,8 +362,13 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
     theta0 = np.concatenate([lin.A.ravel(), lin.B.ravel(), lin.C.ravel(), lin.D.ravel(),
                              np.zeros(n * len(zeta) + l_ * len(eta))])
     check_parameters(theta0.size, recs, "the degree, the terms or the order")
-    res = _sysid.pnlss_estimate(n, m_, l_, zeta, eta, recs, theta0, max_iter=max_iter,
-                                tol=tol, progress=cb, range=rng)
+    if weights is None:
+        res = _sysid.pnlss_estimate(n, m_, l_, zeta, eta, recs, theta0, max_iter=max_iter,
+                                    tol=tol, progress=cb, range=rng)
+    else:
+        res = _sysid.pnlss_estimate_weighted(n, m_, l_, zeta, eta, recs, weights, theta0,
+                                             max_iter=max_iter, tol=tol, progress=cb,
+                                             range=rng)
     th = np.asarray(res["theta"])
     box = None
     if fit_box is not None:
@@ -362,6 +381,26 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
     return {"A": p[0].reshape(n, n), "B": p[1].reshape(n, m_), "C": p[2].reshape(l_, n),
             "D": p[3].reshape(l_, m_), "E": p[4], "F": p[5], "zeta": zeta, "eta": eta,
             "clamp": box, "output_terms": ot}, res
+
+
+def _weights(weighting: str, sd: IOData, pers: list[int] | None, recs: list[Any],
+             excluded: bool) -> Any:
+    """The lines and weights of the frequency-weighted cost, or ``None`` (time domain)."""
+    if weighting not in ("bla", "none"):
+        raise DataError(f"weighting must be 'none' or 'bla', got {weighting!r}")
+    if weighting == "none":
+        return None
+    if pers is None or excluded:
+        raise DataError("weighting='bla' needs periods= and applies to the coupled model "
+                        "without average=True (drop branches= / average=, or use 'none')")
+    from .freqweight import line_weights
+
+    w = line_weights(sd, pers, [r[2] for r in recs])
+    if w is None:
+        raise DataError("weighting='bla' needs at least two whole periods after a transient "
+                        "of whole periods in every experiment; give more periods, a "
+                        "transient= of whole periods, or weighting='none'")
+    return w
 
 
 def _periods(periods: Any, n_exp: int) -> list[int] | None:

@@ -287,7 +287,7 @@ impl Pnlss {
             ev.gauss_newton = Mat::zeros(p, p);
         }
         for d in data {
-            if !self.record(theta, d, &mut ev, jacobian) {
+            if !self.record(theta, d, &mut ev, jacobian, &mut flush) {
                 return Evaluation::cost_only(f64::INFINITY);
             }
         }
@@ -302,8 +302,17 @@ impl Pnlss {
         ev
     }
 
-    /// Adds one record to `ev`; `false` when the simulation diverged.
-    fn record(&self, th: &[f64], d: &PnlssData<'_>, ev: &mut Evaluation, jac: bool) -> bool {
+    /// Adds one record to `ev`; `false` when the simulation diverged. Blocks of Jacobian rows
+    /// (`d yhat / d theta`, in time order after the transient) and residuals go to `sink`
+    /// ([`flush`] for the time-domain cost), which must clear the block's rows.
+    pub(super) fn record(
+        &self,
+        th: &[f64],
+        d: &PnlssData<'_>,
+        ev: &mut Evaluation,
+        jac: bool,
+        sink: &mut Sink<'_>,
+    ) -> bool {
         const BLK: usize = 32;
         let o = self.off();
         let (nx, nu, ny, p) = (self.nx, self.nu, self.ny, o.p);
@@ -342,7 +351,7 @@ impl Pnlss {
                     }
                 }
                 if jac && (rows == BLK * ny || t + 1 == n) {
-                    flush(&mut jb, &rb, rows, ev);
+                    sink(&mut jb, &rb, rows, ev);
                     rows = 0;
                 }
             }
@@ -383,7 +392,7 @@ impl Pnlss {
             x.copy_from_slice(&w.xn);
         }
         if jac && rows > 0 {
-            flush(&mut jb, &rb, rows, ev);
+            sink(&mut jb, &rb, rows, ev);
         }
         ev.cost.is_finite()
     }
@@ -434,6 +443,9 @@ impl Pnlss {
         }
     }
 }
+
+/// Receives a block of Jacobian rows, residuals, the row count and the evaluation.
+pub(super) type Sink<'a> = dyn FnMut(&mut Mat<f64>, &Mat<f64>, usize, &mut Evaluation) + 'a;
 
 /// `H += Jb^T Jb` (lower triangle used later), `g -= Jb^T r` over the first `rows` rows,
 /// then clears the block.
@@ -497,6 +509,18 @@ pub fn estimate(
     options: &Options,
     observer: &mut dyn FnMut(&Iteration) -> Flow,
 ) -> Result<Solution> {
+    estimate_checks(model, data, theta0)?;
+    let mut prob = PnlssProblem { model, data };
+    minimize(&mut prob, theta0, options, observer)
+}
+
+/// The checks of [`estimate`] (records, shapes, finite values, a transient shorter than the
+/// record, a start whose simulation does not diverge); the start's time-domain cost.
+pub(super) fn estimate_checks(
+    model: &Pnlss,
+    data: &[PnlssData<'_>],
+    theta0: &[f64],
+) -> Result<f64> {
     if data.is_empty() {
         return Err(SysidError::invalid("data", "no records"));
     }
@@ -528,6 +552,5 @@ pub fn estimate(
              model (the BLA or a subspace model)",
         ));
     }
-    let mut prob = PnlssProblem { model, data };
-    minimize(&mut prob, theta0, options, observer)
+    Ok(start.cost)
 }
