@@ -309,6 +309,9 @@ def compress_stream(
         raise DataError("source has no experiments")
     totals = [n for _, n in exps]
     total = None if any(n is None for n in totals) else sum(n for n in totals if n is not None)
+    # known lengths (arrays, memmaps, Parquet): the horizon is checked against the longest
+    # experiment before the compressor is sized; a generator's record is checked at finish
+    longest = None if total is None else max(n for n in totals if n is not None)
     bar = Bar(total, f"compress ({compressor})", unit="samples", enabled=show(progress),
               unit_scale=True)
     comp = None
@@ -323,7 +326,7 @@ def compress_stream(
                 u2, y2 = as_chunk(*chunk)
                 if comp is None:
                     comp = _sysid.StreamingCompressor(
-                        u2.shape[1], y2.shape[1], past, future, compressor
+                        u2.shape[1], y2.shape[1], past, future, compressor, longest=longest
                     )
                 comp.push(u2, y2)
                 bar.update(y2.shape[0])
@@ -359,11 +362,13 @@ def _rereadable(source: Any) -> bool:
 
 
 def _partial_sums(
-    block: np.ndarray, m: int, past: int, future: int, center: np.ndarray, scale: np.ndarray
+    block: np.ndarray, m: int, past: int, future: int, center: np.ndarray, scale: np.ndarray,
+    longest: int | None = None,
 ) -> Any:
     """Correlation sums of one Dask block (runs on a worker)."""
     block = np.asarray(block, dtype=np.float64)
-    s = _sysid.CorrelationSums(m, block.shape[1] - m, past, future, center, scale)
+    s = _sysid.CorrelationSums(m, block.shape[1] - m, past, future, center, scale,
+                               longest=longest)
     s.push(block[:, :m], block[:, m:])
     return s
 
@@ -419,8 +424,12 @@ def compress_dask(
     center, scale = _sysid.CorrelationSums.center_scale(
         np.ascontiguousarray(head[:, :m]), np.ascontiguousarray(head[:, m:])
     )
+    # the horizon against the record's length, before any worker sizes its sums (an exact
+    # compressor allocates nothing before its first window: a check that costs nothing)
+    n = int(z.shape[0])
+    _sysid.StreamingCompressor(m, int(z.shape[1]) - m, past, future, "qr", 1, longest=n)
     blocks = z.to_delayed().ravel()
-    tasks = [dask.delayed(_partial_sums)(b, m, past, future, center, scale) for b in blocks]
+    tasks = [dask.delayed(_partial_sums)(b, m, past, future, center, scale, n) for b in blocks]
     parts = list(dask.compute(*tasks))
     factor = _merge_tree(parts).to_factor(min_relative_pivot)
     warn_if_fallback(factor)

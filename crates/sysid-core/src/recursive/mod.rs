@@ -64,6 +64,10 @@ pub struct Structure {
     pub nk: Vec<usize>,
 }
 
+/// Longest delay line (input delay `nk` plus `nb` coefficients) an online estimator keeps
+/// per input, in samples.
+pub const MAX_DELAY_LINE: usize = 1 << 16;
+
 impl Structure {
     /// Checks the lengths agree; returns the number of parameters.
     ///
@@ -85,11 +89,35 @@ impl Structure {
                 ),
             ));
         }
-        let p = self.na
-            + self.nb.iter().sum::<usize>()
-            + self.nc
-            + self.nd
-            + self.nf.iter().sum::<usize>();
+        // orders as given can be anything: added with checks, the delays bounded (each input
+        // keeps a delay line of nk + nb samples)
+        for j in 0..m {
+            let line = self.nk[j].checked_add(self.nb[j]);
+            if line.is_none_or(|n| n > MAX_DELAY_LINE) {
+                return Err(SysidError::invalid(
+                    "structure",
+                    format!(
+                        "input {j}: delay nk={} with nb={} needs a delay line of more than \
+                         {MAX_DELAY_LINE} samples, more than an online estimator keeps; shift \
+                         the input by the delay before the estimator (u(t - nk)) or resample",
+                        self.nk[j], self.nb[j]
+                    ),
+                ));
+            }
+        }
+        let p = [self.na, self.nc, self.nd]
+            .into_iter()
+            .chain(self.nb.iter().copied())
+            .chain(self.nf.iter().copied())
+            .try_fold(0usize, |acc, n| acc.checked_add(n));
+        let Some(p) = p else {
+            return Err(SysidError::invalid(
+                "structure",
+                "the orders add up to more parameters than can be counted; give orders of a \
+                 few times the expected dynamics"
+                    .to_string(),
+            ));
+        };
         if p == 0 {
             return Err(SysidError::invalid(
                 "structure",
