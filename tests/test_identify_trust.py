@@ -77,7 +77,31 @@ def test_a_refinement_below_its_start_on_most_blocks_is_stopped_early():
         return sysid.StateSpaceModel(good.A * 0.5, good.B, good.C, good.D)
     row = board.add("pem", 3, False, "simulation", "refined", bad, None, start=start)
     assert row["worse_than_start"] and "stopped" in row["note"]
-    assert len(calls) == 3  # three of five blocks below its start decide it
+    assert len(calls) < 5  # the blocks below its start decide it before the last
+    assert not board.eligible(row)
+
+
+def test_a_refinement_below_the_best_candidate_on_most_blocks_is_stopped_early():
+    """Not below its own (poor) start, but below the best candidate scored so far on most
+    blocks: it cannot catch up, so the remaining blocks are not fitted."""
+    est, _ = _two_scales()
+    parts = sysid.validation.crossval.folds(est, 5)
+    board = Board(parts, _Bar())
+    good = sysid.moesp(est, order=3)
+    poor = sysid.StateSpaceModel(good.A * 0.3, good.B, good.C, good.D)
+    mid = sysid.StateSpaceModel(good.A * 0.6, good.B, good.C, good.D)
+    start = board.add("moesp", 3, False, None, "subspace", lambda k: poor, None,
+                      budgeted=False)
+    board.add("moesp", 3, False, None, "subspace", lambda k: good, None, budgeted=False)
+    calls = []
+
+    def refined(k):
+        calls.append(k)
+        return mid
+    row = board.add("pem", 3, False, "simulation", "refined", refined, None, start=start)
+    assert row["held_out_fit"] > start["held_out_fit"]  # better than its start
+    assert row["worse_than_start"] and "stopped" in row["note"]
+    assert len(calls) < 5
     assert not board.eligible(row)
 
 
@@ -115,3 +139,33 @@ def test_free_responses_of_the_dual_are_those_of_every_initial_state():
         direct = np.hstack([model.simulate(np.zeros((40, m)), x0=np.eye(n)[i]).reshape(-1, 1)
                             for i in range(n)])
         assert np.allclose(_free_responses(model, 40), direct, rtol=1e-10, atol=1e-12)
+
+
+def test_refinement_stops_once_its_implied_fit_has_settled():
+    """identify's refinements stop when the last iterations raised the fit their criterion
+    implies by less than a tenth of what the held-out blocks resolve; the implied fit is the
+    simulation fit for the output weighting (the criterion identify scores them by)."""
+    from sysid.identify.core import SETTLE_POINTS, SETTLE_WINDOW, implied_fit, settled
+    from sysid.validation.crossval import simulation_errors
+
+    rng = np.random.default_rng(3)
+    true = sysid.StateSpaceModel([[0.9, 0.2], [-0.2, 0.9]], [[1.0], [0.0]], [[1.0, 0.5],
+                                                                               [0.3, -1.0]])
+    u = rng.standard_normal(800)
+    y = true.simulate(u) + 0.1 * rng.standard_normal((800, 2))
+    data = sysid.IOData(u=u, y=y)
+    start = sysid.moesp(data, order=2, horizon=8, feedthrough=False)
+    m = sysid.pem(data, start, focus="simulation", weighting="output", max_iter=3,
+                  progress=False)
+    e = np.vstack([err for _, err in simulation_errors(m, data)])
+    actual = np.mean(100 * (1 - np.linalg.norm(e, axis=0) / np.linalg.norm(y, axis=0)))
+    assert abs(implied_fit(m.info["pem"]["cost"][-1], data, "output") - actual) < 2.0
+    # a cost that keeps falling is not stopped; one that stopped falling is
+    cb = settled(data, "output")
+    falling = [cb(i, 100.0 * 0.9 ** i) for i in range(3 * SETTLE_WINDOW)]
+    assert all(falling)
+    cb = settled(data, "output")
+    cost = m.info["pem"]["cost"][-1]
+    flat = [cb(i, cost * (1 - 1e-9 * i)) for i in range(SETTLE_WINDOW + 2)]
+    assert flat[:SETTLE_WINDOW] == [True] * SETTLE_WINDOW and flat[-1] is False
+    assert SETTLE_POINTS > 0

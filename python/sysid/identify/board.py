@@ -123,8 +123,9 @@ class Board:
                        max_abs_pole=np.nan, stable=False,
                        note=f"{type(e).__name__}: {e}"[:120])
         if hopeless:
-            row["note"] = (f"below its start on {len(fits)} of {len(self.folds)} held-out "
-                           "blocks, most of them: stopped, not chosen")
+            row["note"] = (f"below its start or the best candidate on most of the "
+                           f"{len(self.folds)} held-out blocks after {len(fits)}: stopped, "
+                           "not chosen")
             row["worse_than_start"] = True
         elif budgeted and not self.time_left():
             row["note"] = "time budget spent while it was fitted: not chosen"
@@ -140,16 +141,28 @@ class Board:
         return row
 
     def _below_start(self, fits: list[float], start: dict[str, Any]) -> bool:
-        """A refinement below its start (by more than :func:`slack`) on most of the held-out
-        blocks, whatever it does on the blocks not yet scored: no typical stretch of the
-        record favours it, so it is not fitted on the remaining blocks and not chosen (the
-        costly refinements of high orders are mostly these)."""
-        ref = start.get("fold_fits") or []
-        if len(ref) != len(self.folds):
-            return False
-        s = slack(start["held_out_fit"])
-        below = sum(a < b - s for a, b in zip(fits, ref))
-        return below > len(self.folds) // 2
+        """A refinement below its start, or below the best stable candidate scored so far
+        (by more than :func:`slack`), on most of the held-out blocks, whatever it does on the
+        blocks not yet scored: no typical stretch of the record favours it; or one whose
+        score would stay below theirs by more than the slack even if it did as well as they
+        do, plus the slack, on every block not yet scored: it cannot catch up. It is not
+        fitted on the remaining blocks and not chosen (the costly refinements of high orders
+        are mostly these)."""
+        best = self.best() if len(fits) < len(self.folds) else None  # (once all are scored,
+        # the held-out score decides whether it is near the best)
+        for ref_row in (start, best) if best is not None and best is not start else (start,):
+            ref = ref_row.get("fold_fits") or []
+            if len(ref) != len(self.folds):
+                continue
+            s = slack(ref_row["held_out_fit"])
+            if sum(a < b - s for a, b in zip(fits, ref)) > len(self.folds) // 2:
+                return True
+            # even as good as the reference plus the slack on every block not yet scored, its
+            # score would stay below the reference's by more than the slack
+            if len(fits) < len(ref) and trimmed_mean(
+                    list(fits) + [b + s for b in ref[len(fits):]]) < ref_row["held_out_fit"] - s:
+                return True
+        return False
 
     def eligible(self, r: dict[str, Any], stable_only: bool = True) -> bool:
         return (bool(np.isfinite(r["held_out_fit"])) and not r.get("worse_than_start")
