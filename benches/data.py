@@ -9,6 +9,7 @@ so that records larger than memory can be made.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -70,3 +71,14 @@ def generate(
     out.flush()
     del out
     return np.linalg.eigvals(a)
+
+
+def estimation_validation_file(path: Path, make: Any, n: int, n_val: int) -> Path:
+    """``path``, an .npz of an estimation record (``u``, ``y``: ``make(n, seed=1)``) and a
+    validation record (``uv``, ``yv``: ``make(n_val, seed=2)``), written on first use."""
+    path.parent.mkdir(exist_ok=True)
+    if not path.exists():
+        u, y = make(n, 1)
+        uv, yv = make(n_val, 2)
+        np.savez(path, u=u, y=y, uv=uv, yv=yv)
+    return path

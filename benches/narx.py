@@ -45,13 +45,9 @@ def make(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def data_file(n: int) -> Path:
-    DATA.mkdir(exist_ok=True)
-    p = DATA / f"narx_{n}.npz"
-    if not p.exists():
-        u, y = make(n, 1)
-        uv, yv = make(1000, 2)
-        np.savez(p, u=u, y=y, uv=uv, yv=yv)
-    return p
+    from data import estimation_validation_file
+
+    return estimation_validation_file(DATA / f"narx_{n}.npz", make, n, 1000)
 
 
 def worker(tool: str, path: str, lags: int, degree: int) -> dict:

@@ -50,13 +50,9 @@ def make(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def data_file(n: int) -> Path:
-    DATA.mkdir(exist_ok=True)
-    p = DATA / f"nlarx_networks_{n}.npz"
-    if not p.exists():
-        u, y = make(n, 1)
-        uv, yv = make(2000, 2)
-        np.savez(p, u=u, y=y, uv=uv, yv=yv)
-    return p
+    from data import estimation_validation_file
+
+    return estimation_validation_file(DATA / f"nlarx_networks_{n}.npz", make, n, 2000)
 
 
 def fit_percent(y: np.ndarray, ys: np.ndarray) -> float:

@@ -74,7 +74,7 @@ def f16():
     P = 8192
     train = sysid.IOData([l1.u[P:], l3.u], [l1.y[P:], l3.y], l1.dt)
     return train, {"level 2": (l2.u, l2.y)}, P, \
-        dict(order=10, na=4, nb=4, hidden=16, lags=20, periods=None)
+        dict(order=10, na=4, nb=4, hidden=16, lags=20, periods=[8, 3])
 
 
 class Offset:
@@ -151,6 +151,11 @@ def fits(train, s):
     timed(f"pnlss (degree 2-3, {terms}, states out)",
           lambda: sysid.pnlss(train, n, degree=3, terms=terms, output_terms="none",
                               max_iter=50, progress=Budget()))
+    if s["periods"] is not None:
+        timed(f"pnlss weighted (degree 2-3, {terms}, weighting='bla')",
+              lambda: sysid.pnlss(train, n, degree=3, terms=terms, output_terms="none",
+                                  periods=s["periods"], weighting="bla", max_iter=50,
+                                  progress=Budget()))
     r = max(2, n // 2)
     timed(f"pnlss decoupled (degree 2-3, {r} branches)",
           lambda: sysid.pnlss(train, n, degree=3, branches=r, max_iter=50,

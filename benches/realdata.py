@@ -260,16 +260,9 @@ def sippy_fit(u, y, n, i):
 
 
 def nfoursid_fit(u, y, n, i):
-    import pandas as pd
-    from nfoursid.nfoursid import NFourSID
+    from worker import run_nfoursid  # the scaling benchmark's call of nfoursid
 
-    cols_u = [f"u{k}" for k in range(u.shape[1])]
-    cols_y = [f"y{k}" for k in range(y.shape[1])]
-    df = pd.DataFrame(np.hstack([u, y]), columns=cols_u + cols_y)
-    nf = NFourSID(df, output_columns=cols_y, input_columns=cols_u, num_block_rows=i)
-    nf.subspace_identification()
-    ss, _ = nf.system_identification(rank=n)
-    return ss.a, ss.b, ss.c, ss.d
+    return run_nfoursid(u, y, i, n)[0]
 
 
 def worker(tool: str, path: str) -> None:

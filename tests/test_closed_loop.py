@@ -12,6 +12,7 @@ import warnings
 
 import numpy as np
 import pytest
+from _guides import guide_text, python_blocks, run_guide
 
 import sysid
 
@@ -197,15 +198,8 @@ def test_bad_arguments():
 
 
 def test_docs_examples_run():
-    import re
-    from pathlib import Path
-
-    doc = Path(__file__).resolve().parents[1] / "docs" / "closed_loop.md"
-    blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), flags=re.S)
-    assert len(blocks) == 6
-    ns: dict = {}
-    for i, block in enumerate(blocks):  # the blocks build on each other
-        exec(compile(block, f"docs/closed_loop.md[python block {i}]", "exec"), ns)
+    assert len(python_blocks(guide_text("closed_loop.md"))) == 6
+    ns = run_guide("closed_loop.md")
     assert ns["test"].detected
     assert abs(ns["model"].dcgain()[0, 0] - 2.5) < 0.3
     assert abs(ns["biased"].dcgain()[0, 0] - 2.5) > 0.7

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _guides import guide_text, python_blocks, run_guide
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -342,14 +343,9 @@ def test_file_round_trips_for_any_shape(lengths: list[int], m: int, l: int, dt: 
 
 def test_docs_data_examples_run_on_the_bundled_records() -> None:
     """docs/data.md's code blocks, run in order on the copies bundled with sysid."""
-    import re
-
-    doc = Path(__file__).resolve().parents[1] / "docs" / "data.md"
-    blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), flags=re.S)
-    assert len(blocks) >= 2
-    ns: dict[str, object] = {}
-    for i, block in enumerate(blocks):
-        exec(compile(block, f"docs/data.md[python block {i}]", "exec"), ns)
+    assert len(python_blocks(guide_text("data.md"))) >= 2
+    ns = run_guide("data.md")
     assert repr(ns["data"]) == "IOData: 2500 samples, 5 inputs, 2 outputs, dt = 0.1 s"
     frd = ns["frd"]
     assert isinstance(frd, sysid.FRD) and frd.omega.size == 267  # "keeps the 267 excited lines"
+    assert ns["found"][:3] == (8192, 9, (0,))  # the measured force repeats up to its noise

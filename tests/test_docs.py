@@ -7,6 +7,7 @@ import importlib
 import pkgutil
 
 import pytest
+from _guides import assert_prints_shown, guide_text, run_guide
 
 import sysid
 
@@ -29,43 +30,13 @@ def test_docstring_examples(name):
 
 def test_polynomial_guide(capsys):
     """docs/polynomial.md runs, and prints the numbers the guide shows."""
-    import re
-    from pathlib import Path
-
-    text = (Path(__file__).parents[1] / "docs" / "polynomial.md").read_text()
-    ns: dict = {}
-    for i, block in enumerate(re.findall(r"```python\n(.*?)```", text, re.S)):
-        exec(compile(block, f"docs/polynomial.md[python block {i}]", "exec"), ns)
-    out = capsys.readouterr().out
-    shown = "".join(re.findall(r"Output \(this machine\):\n\n((?:    .*\n)+)", text))
-    shown_lines = [ln.strip() for ln in shown.splitlines()]
-    run_lines = [ln.strip() for ln in out.splitlines()]
-    assert len(shown_lines) == len(run_lines), f"the guide shows:\n{shown}\nthe run prints:\n{out}"
-    num = r"[-+]?\d*\.?\d+(?:e[-+]?\d+)?"
-    for a, b in zip(shown_lines, run_lines):  # same words; numbers within rounding
-        assert re.sub(num, "#", a) == re.sub(num, "#", b), (a, b)
-        for x, y in zip(re.findall(num, a), re.findall(num, b)):
-            assert abs(float(x) - float(y)) <= max(0.15, 0.02 * abs(float(x))), (a, b)
+    ns = run_guide("polynomial.md")
+    assert_prints_shown(guide_text("polynomial.md"), capsys.readouterr().out, atol=0.15)
     assert ns["oe"].info["stop"][0] in ("cost tolerance", "step tolerance", "gradient tolerance")
 
 
 # issue 27 (branch tfproc): the transfer-function and process-model guide
 def test_tf_process_guide(capsys):
     """docs/tf_process.md runs, and prints the numbers the guide shows."""
-    import re
-    from pathlib import Path
-
-    text = (Path(__file__).parents[1] / "docs" / "tf_process.md").read_text()
-    ns: dict = {}
-    for i, block in enumerate(re.findall(r"```python\n(.*?)```", text, re.S)):
-        exec(compile(block, f"docs/tf_process.md[python block {i}]", "exec"), ns)
-    out = capsys.readouterr().out
-    shown = "".join(re.findall(r"Output \(this machine\):\n\n((?:    .*\n)+)", text))
-    shown_lines = [ln.strip() for ln in shown.splitlines()]
-    run_lines = [ln.strip() for ln in out.splitlines()]
-    assert len(shown_lines) == len(run_lines), f"the guide shows:\n{shown}\nthe run prints:\n{out}"
-    num = r"[-+]?\d*\.?\d+(?:e[-+]?\d+)?"
-    for a, b in zip(shown_lines, run_lines):  # same words; numbers within rounding
-        assert re.sub(num, "#", a) == re.sub(num, "#", b), (a, b)
-        for x, y in zip(re.findall(num, a), re.findall(num, b)):
-            assert abs(float(x) - float(y)) <= max(1e-3, 0.02 * abs(float(x))), (a, b)
+    run_guide("tf_process.md")
+    assert_prints_shown(guide_text("tf_process.md"), capsys.readouterr().out, atol=1e-3)

@@ -3,32 +3,13 @@
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 import pytest
 
 import sysid
 from sysid.subspace.feedthrough import choose_feedthrough
 
-#: a plant with a direct term and one without (same poles)
-A = [[0.8, 0.2], [-0.2, 0.7]]
-B = [[1.0], [0.5]]
-C = [[1.0, 0.0]]
-
-
-def record(d: float, n: int = 800, noise: float = 0.05, seed: int = 1) -> sysid.IOData:
-    rng = np.random.default_rng(seed)
-    true = sysid.StateSpaceModel(A, B, C, [[d]])
-    u = rng.standard_normal((n, 1))
-    return sysid.IOData(u=u, y=true.simulate(u) + noise * rng.standard_normal((n, 1)))
-
-
-def quiet(f, *a, **k):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return f(*a, **k)
-
+from conftest import feedthrough_record, quiet
 
 # -- the default: D = 0 everywhere ---------------------------------------------------------
 DEFAULTS = {
@@ -50,12 +31,12 @@ DEFAULTS = {
 
 @pytest.mark.parametrize("name", sorted(DEFAULTS))
 def test_every_state_space_estimator_defaults_to_no_feedthrough(name):
-    m = quiet(DEFAULTS[name], record(0.8))
+    m = quiet(DEFAULTS[name], feedthrough_record(0.8))
     assert np.all(np.asarray(m.D) == 0.0), (name, m.D)
 
 
 def test_recursive_subspace_and_impulse_response_default_to_no_feedthrough():
-    data = record(0.8)
+    data = feedthrough_record(0.8)
     rs = sysid.RecursiveSubspace(order=2, horizon=5)
     u, y = data.experiments[0]
     m = quiet(rs.update, u, y)
@@ -67,7 +48,7 @@ def test_recursive_subspace_and_impulse_response_default_to_no_feedthrough():
 def test_the_cli_subspace_path_defaults_to_no_feedthrough():
     from sysid.cli import identify
 
-    data = record(0.8)
+    data = feedthrough_record(0.8)
     u, y = data.experiments[0]
     est, val = (sysid.IOData(u=u[:500], y=y[:500]), sysid.IOData(u=u[500:], y=y[500:]))
     out = quiet(identify, est, val, order=2)
@@ -88,12 +69,12 @@ def test_feedthrough_true_estimates_d(name):
         "frd_subspace (dft)": lambda d: sysid.frd_subspace(d, 2, method="dft",
                                                           feedthrough=True),
     }
-    m = quiet(calls[name], record(0.8))
+    m = quiet(calls[name], feedthrough_record(0.8))
     assert abs(m.D[0, 0] - 0.8) < 0.05, (name, m.D)
 
 
 def test_pem_says_when_it_drops_the_start_d():
-    data = record(0.8)
+    data = feedthrough_record(0.8)
     start = quiet(sysid.n4sid, data, 2, feedthrough=True)
     with pytest.warns(UserWarning, match="non-zero D"):
         m = sysid.pem(data, start)
@@ -132,7 +113,7 @@ AUTO = {
 @pytest.mark.parametrize("name", sorted(AUTO))
 @pytest.mark.parametrize("d", [0.0, 0.8])
 def test_feedthrough_auto_decides_from_the_data_with_one_rule(name, d):
-    data = record(d, seed=3)
+    data = feedthrough_record(d, seed=3)
     m = quiet(AUTO[name], data)
     want, why = choose_feedthrough(sysid.SubspaceEstimator(data), 2)
     assert want is (d != 0), why
@@ -144,13 +125,13 @@ def test_feedthrough_auto_decides_from_the_data_with_one_rule(name, d):
 
 
 def test_feedthrough_auto_under_feedback_keeps_d_zero_and_says_why():
-    m = quiet(sysid.pbsid, record(0.8), 2, feedthrough="auto")
+    m = quiet(sysid.pbsid, feedthrough_record(0.8), 2, feedthrough="auto")
     assert np.all(m.D == 0)
     assert "closed-loop" in m.info["feedthrough_selection"]["reason"]
 
 
 def test_feedthrough_auto_in_okid_and_select_order():
-    data = record(0.8, seed=4)
+    data = feedthrough_record(0.8, seed=4)
     h = quiet(sysid.impulse_response, data, 20, feedthrough="auto")
     assert abs(h.markov[0][0, 0] - 0.8) < 0.05
     sel = quiet(sysid.select_order, data, [2], feedthrough="auto")
@@ -159,7 +140,7 @@ def test_feedthrough_auto_in_okid_and_select_order():
 
 @pytest.mark.parametrize("bad", ["yes", 1, None])
 def test_feedthrough_rejects_anything_but_true_false_auto(bad):
-    data = record(0.0)
+    data = feedthrough_record(0.0)
     for call in (lambda: sysid.n4sid(data, 2, feedthrough=bad),
                  lambda: sysid.ssest(data, 2, feedthrough=bad),
                  lambda: sysid.pem(data, quiet(sysid.n4sid, data, 2), feedthrough=bad)):

@@ -6,6 +6,7 @@ import warnings
 
 import numpy as np
 import pytest
+from _guides import guide_text, python_blocks, run_guide
 
 import sysid
 from sysid.errors import DataError
@@ -473,17 +474,10 @@ def test_nonlinear_bounds_fixed_and_options():
 
 
 def test_docs_examples_run():
-    import re
-    from pathlib import Path
-
-    doc = Path(__file__).resolve().parents[1] / "docs" / "greybox.md"
-    blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), flags=re.S)
-    assert len(blocks) >= 4
-    namespace: dict = {}
+    assert len(python_blocks(guide_text("greybox.md"))) >= 4
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", sysid.IdentifiabilityWarning)
-        for i, block in enumerate(blocks):  # the blocks build on each other
-            exec(compile(block, f"docs/greybox.md[python block {i}]", "exec"), namespace)
+        namespace = run_guide("greybox.md")
     assert namespace["worst"] < 0.1
     assert "IdentifiabilityWarning" in type(namespace["caught"][0].message).__name__ or \
         "a, b" in str(namespace["caught"][0].message)

@@ -126,3 +126,193 @@ def test_era_of_huge_markov_parameters_says_what_to_do():
 def test_etfe_of_one_sample_is_refused():
     with pytest.raises(InsufficientDataError, match="at least 4 samples"):
         sysid.etfe(sysid.IOData(u=np.ones(1), y=np.ones(1)))
+
+
+# -- the streaming and recursive paths: a bad input is refused before it sizes anything -----
+
+def _never(what):
+    """A stand-in for a constructor that allocates from its arguments: the test fails if it
+    is reached."""
+    def built(*args, **kwargs):
+        raise AssertionError(f"{what} was built (and sized) before the input was checked")
+    return built
+
+
+@pytest.mark.parametrize("u, y, error", [
+    (np.ones((10, 1)), np.ones((100, 1)), "u has 10 samples but y has 100"),
+    (np.ones((100, 1)), np.r_[np.ones(50), np.nan, np.ones(49)], "non-finite"),
+    (np.ones((100, 1)), np.full((100, 1), "a"), "real numeric"),
+])
+def test_recursive_subspace_checks_the_first_chunk_before_sizing_its_factor(
+        monkeypatch, u, y, error):
+    monkeypatch.setattr(sysid._sysid, "RecursiveFactor", _never("the recursive factor"))
+    rs = sysid.RecursiveSubspace(order=1, horizon=2000)  # k = 8000: a 512 MB factor
+    with pytest.raises(DataError, match=error):
+        rs.update(u, y)
+
+
+@pytest.mark.parametrize("u, y, error", [
+    (np.ones((10, 1)), np.ones((100, 1)), "u has 10 samples but y has 100"),
+    (np.ones((100, 1)), np.r_[np.ones(50), np.nan, np.ones(49)], "non-finite"),
+])
+def test_compress_stream_checks_the_first_chunk_before_sizing_the_compressor(
+        monkeypatch, u, y, error):
+    from sysid.subspace.streaming import compress_stream
+
+    monkeypatch.setattr(sysid._sysid, "StreamingCompressor", _never("the compressor"))
+    with pytest.raises(DataError, match=error):
+        compress_stream(iter([(u, y)]), past=2000, compressor="qr", progress=False)
+
+
+def test_recursive_process_noise_is_sized_from_the_checked_structure(monkeypatch):
+    """A scalar process noise becomes a p x p matrix: p comes from the structure the core
+    accepted (at most 4096 parameters), not from the orders as given."""
+    eye = np.eye
+
+    def small_eye(n, *args, **kwargs):
+        assert n <= 4096, f"a {n} x {n} identity was built before the structure was checked"
+        return eye(n, *args, **kwargs)
+
+    monkeypatch.setattr(np, "eye", small_eye)
+    with pytest.raises(DataError, match="more than an online estimator supports"):
+        sysid.RecursiveARX(20000, 1, method="kalman", process_noise=1.0)
+    rng = np.random.default_rng(0)
+    u, y = rng.standard_normal(200), rng.standard_normal(200)
+    runs = [sysid.RecursiveARX(2, 1, method="kalman", process_noise=q) for q in (None, 0.5)]
+    for est in runs:
+        est.run(u, y)
+    assert not np.allclose(runs[0].parameters, runs[1].parameters)  # the noise is taken
+
+
+@pytest.mark.parametrize("kwargs", [{"degree": 5}, {"degree": 3, "branches": 30}])
+def test_pnlss_refuses_more_parameters_than_residuals(data, kwargs):
+    """The parameter count is checked against the residuals before the optimiser sizes its
+    normal equations by it (order 4, degree 9 on 300 samples panicked allocating 10 010^2)."""
+    short = data.slice(0, 120)
+    with pytest.raises(DataError, match=r"parameters but the record gives \d+ residuals"):
+        sysid.pnlss(short, 2, progress=False, max_iter=2, **kwargs)
+
+
+# -- sizes that reached the allocator (issue 31, "Sizes reach the allocator") ---------------
+
+def _under_memory_limit(code, extra_gib=1.0):
+    """Runs ``code`` in a fresh interpreter whose address space is limited to what it has
+    after importing sysid plus ``extra_gib``: an allocation the input should have prevented
+    fails there (a Rust panic or abort) instead of swapping the machine. Returns stdout."""
+    import subprocess
+    import sys
+    import textwrap
+
+    if not sys.platform.startswith("linux"):
+        pytest.skip("the address-space limit is read from /proc")
+    prelude = textwrap.dedent(f"""
+        import resource, numpy as np, sysid
+        from sysid import _sysid
+        from sysid.errors import DataError
+        vm = [int(line.split()[1]) for line in open("/proc/self/status")
+              if line.startswith("VmSize")][0] * 1024
+        lim = vm + int({extra_gib} * 2**30)
+        resource.setrlimit(resource.RLIMIT_AS, (lim, lim))
+    """)
+    run = subprocess.run([sys.executable, "-c", prelude + textwrap.dedent(code)],
+                         capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    return run.stdout
+
+
+def _sized_first(real, what):
+    """Wraps a native constructor: building it means the input was not refused first."""
+    def built(*args, **kwargs):
+        real(*args, **kwargs)
+        raise AssertionError(f"{what} was built (and sized) before the input was refused")
+    return built
+
+
+@pytest.mark.parametrize("compressor", ["qr", "auto", "correlation"])
+def test_compress_stream_checks_a_known_length_before_sizing(monkeypatch, compressor):
+    """past=2000 on 500 samples: the horizon is refused from the arrays' length, not after a
+    4.9 GB ("qr") or 0.5 GB ("auto") compressor has read them."""
+    from sysid.subspace.streaming import compress_stream
+
+    real = sysid._sysid.StreamingCompressor
+    monkeypatch.setattr(sysid._sysid, "StreamingCompressor", _sized_first(real, "the compressor"))
+    u, y = np.ones((500, 1)), np.ones((500, 1))
+    for source in [(u, y), [(u, y), (u[:300], y[:300])]]:
+        with pytest.raises(InsufficientDataError, match=r"horizon <= 250"):
+            compress_stream(source, past=2000, compressor=compressor, progress=False)
+
+
+def test_compress_dask_checks_the_length_before_the_workers_size_their_sums(monkeypatch):
+    da = pytest.importorskip("dask.array")
+    from sysid.subspace import streaming
+
+    monkeypatch.setattr(streaming, "_partial_sums", _never("a worker's correlation sums"))
+    u = da.ones((500, 1), chunks=(250, 1))
+    with pytest.raises(InsufficientDataError, match=r"horizon <= 250"):
+        streaming.compress_dask(u, u, past=1000)
+
+
+def test_streams_of_unknown_length_allocate_nothing_before_a_window_is_complete():
+    """A generator's length is known only at its end: the exact compressor and the recursive
+    factor size their work (2.5 GB, 0.5 GB + a copy for past = 2000) only when a first
+    window is complete, so a stream too short for one is refused at finish within 1 GiB."""
+    out = _under_memory_limit("""
+        from sysid.errors import InsufficientDataError
+        from sysid.subspace.streaming import compress_stream
+        u, y = np.ones((500, 1)), np.ones((500, 1))
+        try:
+            compress_stream(iter([(u, y)]), past=2000, compressor="qr", progress=False)
+        except InsufficientDataError as e:
+            print("refused:", e)
+        rs = sysid.RecursiveSubspace(order=1, horizon=2000)
+        print("updated:", rs.update(u[:100], y[:100]))
+    """)
+    assert "refused:" in out and "needs at least 4000 but got 500" in out and "updated: None" in out
+
+
+def test_recursive_subspace_checks_its_whole_working_set():
+    """k = 10 000: the 0.8 GB triangle passed the check, the update's copy and (5 k x k)
+    stack (5.6 GB in all) did not."""
+    rs = sysid.RecursiveSubspace(order=1, horizon=2500)
+    with pytest.raises(DataError, match="a recursive update holds the k x k factor"):
+        rs.update(np.ones((100, 1)), np.ones((100, 1)))
+
+
+def test_recursive_arx_delay_is_bounded():
+    """nk = 10**12 sized a delay line of 8 TB and aborted the process."""
+    with pytest.raises(DataError, match="delay line of more than 65536 samples"):
+        sysid.RecursiveARX(2, 1, nk=10**12)
+    est = sysid.RecursiveARX(1, 1, nk=1000)  # long but bounded
+    est.run(np.ones(50), np.ones(50))
+
+
+def test_pnlss_normal_equations_are_checked_before_allocating():
+    """About 25 000 parameters (4 states, 2 inputs, degrees 2..9): a 5 GB J^T J panicked in
+    the allocator (AllocError -> PanicException); refused by the search before any provider
+    is evaluated."""
+    out = _under_memory_limit("""
+        nx, nu, ny = 4, 2, 1
+        zeta = [[]] + _sysid.pnlss_monomials(nx, nu, "full", list(range(2, 10)))
+        eta = [[]] + _sysid.pnlss_monomials(nx, nu, "full", list(range(2, 10)))
+        p = nx * nx + nx * nu + ny * nx + ny * nu + nx * len(zeta) + ny * len(eta)
+        theta0 = np.zeros(p)
+        theta0[: nx * nx] = 0.5 * np.eye(nx).ravel()
+        u = np.random.default_rng(0).standard_normal((300, nu))
+        y = np.ascontiguousarray(u[:, :1])
+        try:
+            struct = {"nx": nx, "nu": nu, "ny": ny, "zeta": zeta, "eta": eta}
+            _sysid.pnlss_estimate(struct, [(u, y, 0)], theta0, max_iter=1)
+        except DataError as e:
+            print("refused:", p, e)
+    """)
+    assert "refused:" in out and "normal equations" in out and "GiB limit" in out
+
+
+def test_nlssest_refuses_absurd_batches_and_widths(data):
+    """batch = 10**9 ran without end; hidden = 10**6 on 300 samples ran past 120 s."""
+    short = data.slice(0, 300)
+    with pytest.raises(DataError, match=r"batch <= \d+"):
+        sysid.nlssest(short, 1, hidden=4, batch=10**9, progress=False)
+    with pytest.raises(DataError, match=r"parameters but the training record gives \d+ "
+                                        r"residuals"):
+        sysid.nlssest(short, 1, hidden=10**6, progress=False)

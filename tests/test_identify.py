@@ -10,27 +10,12 @@ import warnings
 
 import numpy as np
 import pytest
+from _guides import guide_text, python_blocks, run_guide
 
 import sysid
 from sysid.validation.crossval import choose, cross_validated_order
 
-SPLITS = {"dryer": ([0], [1], 500), "robot_arm": ([0], [1], 800),
-          "winding": ([0, 1, 2, 3, 4], [5, 6], 1666)}
-
-
-def record(name: str, centred: bool = True):
-    ins, outs, k = SPLITS[name]
-    d = np.loadtxt(sysid.datasets.path(name))
-    u, y = d[:, ins], d[:, outs]
-    if centred:
-        u, y = u - u[:k].mean(0), y - y[:k].mean(0)
-    return sysid.IOData(u=u[:k], y=y[:k]), sysid.IOData(u=u[k:], y=y[k:])
-
-
-def quiet(fn, *a, **k):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return fn(*a, **k)
+from conftest import daisy_split, feedthrough_record, quiet
 
 
 def plain_po_moesp(data: sysid.IOData, n: int, i: int = 10) -> sysid.StateSpaceModel:
@@ -70,7 +55,7 @@ def plain_po_moesp(data: sysid.IOData, n: int, i: int = 10) -> sysid.StateSpaceM
 
 # -- order="auto" ------------------------------------------------------------------------
 def test_auto_order_on_the_dryer_is_not_one_or_two_and_says_why():
-    est, val = record("dryer")
+    est, val = daisy_split("dryer")
     for fit in (sysid.moesp, sysid.n4sid):
         m = quiet(fit, est)
         sel = m.info["order_selection"]
@@ -99,7 +84,7 @@ def test_choose_prefers_a_smaller_order_only_within_the_tolerance():
 
 
 def test_ssest_with_a_range_of_orders_cross_validates_the_refined_models():
-    est, val = record("dryer")
+    est, val = daisy_split("dryer")
     m = quiet(sysid.ssest, est, order=range(1, 7))
     sel = m.info["order_selection"]
     assert sorted(sel["table"]) == list(range(1, 7))
@@ -109,7 +94,7 @@ def test_ssest_with_a_range_of_orders_cross_validates_the_refined_models():
 
 
 def test_ssest_order_auto():
-    est, _ = record("dryer")
+    est, _ = daisy_split("dryer")
     m = quiet(sysid.ssest, est)  # order="auto" is the default
     assert m.nstates >= 3 and m.info["order_selection"]["order"] == m.nstates
 
@@ -117,12 +102,7 @@ def test_ssest_order_auto():
 # -- feedthrough="auto" ------------------------------------------------------------------
 @pytest.mark.parametrize("d", [0.0, 0.8])
 def test_ssest_feedthrough_auto_decides_from_the_data(d):
-    rng = np.random.default_rng(1)
-    true = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]],
-                                 [[d]])
-    u = rng.standard_normal((800, 1))
-    y = true.simulate(u) + 0.05 * rng.standard_normal((800, 1))
-    m = quiet(sysid.ssest, sysid.IOData(u=u, y=y), 2, feedthrough="auto")
+    m = quiet(sysid.ssest, feedthrough_record(d, seed=1), 2, feedthrough="auto")
     sel = m.info["feedthrough_selection"]
     assert sel["feedthrough"] is (d != 0), sel
     assert abs(m.D[0, 0] - d) < 0.05
@@ -130,12 +110,7 @@ def test_ssest_feedthrough_auto_decides_from_the_data(d):
 
 @pytest.mark.parametrize("d", [0.0, 0.8])
 def test_subspace_feedthrough_auto_decides_by_held_out_fit(d):
-    rng = np.random.default_rng(2)
-    true = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]],
-                                 [[d]])
-    u = rng.standard_normal((800, 1))
-    y = true.simulate(u) + 0.05 * rng.standard_normal((800, 1))
-    m = quiet(sysid.moesp, sysid.IOData(u=u, y=y), feedthrough="auto")
+    m = quiet(sysid.moesp, feedthrough_record(d, seed=2), feedthrough="auto")
     sel = m.info["feedthrough_selection"]
     assert sel["feedthrough"] is (d != 0), sel
     assert m.nstates == 2 and abs(m.D[0, 0] - d) < 0.05
@@ -143,7 +118,7 @@ def test_subspace_feedthrough_auto_decides_by_held_out_fit(d):
 
 def test_feedthrough_auto_on_the_winding_record_estimates_d():
     # the winding record's validation fit (moesp, order chosen): 74.7 % with D, 64.6 % without
-    est, val = record("winding")
+    est, val = daisy_split("winding")
     m = quiet(sysid.moesp, est, feedthrough="auto")
     assert m.info["feedthrough_selection"]["feedthrough"] is True
     assert quiet(sysid.compare, m, val).mean_fit > 72
@@ -152,8 +127,8 @@ def test_feedthrough_auto_on_the_winding_record_estimates_d():
 # -- identify ------------------------------------------------------------------------------
 @pytest.mark.parametrize("name", ["dryer", "robot_arm"])
 def test_identify_beats_the_plain_po_moesp_reference_on_held_out_data(name):
-    raw_est, raw_val = record(name, centred=False)
-    est, val = record(name)
+    raw_est, raw_val = daisy_split(name, centred=False)
+    est, val = daisy_split(name)
     res = quiet(sysid.identify, raw_est, raw_val, progress=False)
     assert res.model.is_stable()
     ours = res.model.compare(raw_val).mean_fit
@@ -193,8 +168,8 @@ def scipy_refined(data: sysid.IOData, start: sysid.StateSpaceModel) -> sysid.Sta
 def test_identify_reaches_the_scipy_refinement_on_the_dryer():
     # main validated 85.8 % here (a subspace model of order 4), the reference 86.8 %: the
     # held-out blocks cannot tell orders 3-6 apart, the BIC of the refined re-fits can
-    raw_est, raw_val = record("dryer", centred=False)
-    est, val = record("dryer")
+    raw_est, raw_val = daisy_split("dryer", centred=False)
+    est, val = daisy_split("dryer")
     res = quiet(sysid.identify, raw_est, raw_val, progress=False)
     ref = quiet(sysid.compare, quiet(scipy_refined, est, plain_po_moesp(est, 4)), val).mean_fit
     assert ref > 86.0  # the reference itself (validation 86.8 %)
@@ -202,8 +177,8 @@ def test_identify_reaches_the_scipy_refinement_on_the_dryer():
 
 
 def test_identify_on_the_winding_record_with_subspace_candidates_only():
-    raw_est, raw_val = record("winding", centred=False)
-    est, val = record("winding")
+    raw_est, raw_val = daisy_split("winding", centred=False)
+    est, val = daisy_split("winding")
     res = quiet(sysid.identify, raw_est, raw_val, refine=False, progress=False)
     ref = quiet(sysid.compare, plain_po_moesp(est, 6), val).mean_fit
     assert res.model.is_stable() and res.validation_fit >= ref - 0.5, res.summary()
@@ -259,15 +234,8 @@ def test_the_command_line_uses_identify_by_default(tmp_path, capsys):
 
 def test_the_identify_guide_runs():
     """docs/identify.md: every python block executes."""
-    import re
-    from pathlib import Path
-
-    text = (Path(__file__).parents[1] / "docs" / "identify.md").read_text()
-    ns: dict = {}
-    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
-    assert len(blocks) == 3
-    for i, block in enumerate(blocks):
-        quiet(exec, compile(block, f"docs/identify.md[python block {i}]", "exec"), ns)
+    assert len(python_blocks(guide_text("identify.md"))) == 3
+    ns = quiet(run_guide, "identify.md")
     assert ns["res"].model.is_stable() and ns["m"].nstates >= 3
 
 
@@ -292,7 +260,7 @@ def test_identify_returns_an_unstable_model_only_when_the_data_insist():
 
 
 def test_identify_time_budget_keeps_the_subspace_sweep_and_says_it_stopped():
-    est, _ = record("dryer")
+    est, _ = daisy_split("dryer")
     with pytest.warns(UserWarning, match="time_budget"):
         res = sysid.identify(est, time_budget=1e-3, progress=False)
     assert res.out_of_time and "time budget spent" in res.summary()

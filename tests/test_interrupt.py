@@ -113,6 +113,11 @@ CASES: dict[str, tuple[str, str]] = {
     "nlssest": (
         "d = record(50_000, m=1, l=1, n=3)",
         "sysid.nlssest(d, 3, hidden=64, epochs=100_000, patience=100_000, progress=False)"),
+    # one Adam step of 39 000 sections of 100 samples: Ctrl-C is asked per section
+    "nlssest_batch": (
+        "d = record(50_000, m=1, l=1, n=3)",
+        "sysid.nlssest(d, 3, hidden=64, batch=39_000, epochs=100_000, patience=100_000, "
+        "progress=False)"),
     "nlarx": (
         "d = record(200_000, m=1, l=1, n=3)",
         "sysid.nlarx(d, 6, 6, 1, basis=sysid.PolynomialBasis(3), max_terms=80)"),

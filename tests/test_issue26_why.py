@@ -15,22 +15,7 @@ import pytest
 
 import sysid
 
-SPLITS = {"dryer": ([0], [1], 500), "robot_arm": ([0], [1], 800),
-          "winding": ([0, 1, 2, 3, 4], [5, 6], 1666)}
-
-
-def record(name: str) -> tuple[sysid.IOData, sysid.IOData]:
-    ins, outs, k = SPLITS[name]
-    d = np.loadtxt(sysid.datasets.path(name))
-    u, y = d[:, ins], d[:, outs]
-    u, y = u - u[:k].mean(0), y - y[:k].mean(0)
-    return sysid.IOData(u=u[:k], y=y[:k]), sysid.IOData(u=u[k:], y=y[k:])
-
-
-def quiet(fn, *a, **k):
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return fn(*a, **k)
+from conftest import daisy_split, quiet
 
 
 def caught(fn, *a, **k):
@@ -48,7 +33,7 @@ def test_ssest_of_a_high_order_is_stable_or_says_so():
     predictor stable, as today's ``enforce_stability=False`` does: on the robot arm at order
     12 that search ends at a pole of modulus 1.023, said by nothing. (The issue's order-8
     records are not shipped; the robot arm at order 8 stays stable either way.)"""
-    est, val = record("robot_arm")
+    est, val = daisy_split("robot_arm")
     m, cats = caught(sysid.ssest, est, 12)
     assert m.is_stable() or sysid.StabilityWarning in cats
     assert np.isfinite(quiet(sysid.compare, m, val).mean_fit)
@@ -56,7 +41,7 @@ def test_ssest_of_a_high_order_is_stable_or_says_so():
 
 def test_ssest_says_when_it_stops_at_the_iteration_cap():
     """b5716c2: a search stopped by ``max_iter`` said nothing (no IterationLimitWarning)."""
-    est, _ = record("dryer")
+    est, _ = daisy_split("dryer")
     m, cats = caught(sysid.ssest, est, 8, max_iter=1)
     assert m.info["pem"]["stop"] == "maximum iterations"
     assert sysid.IterationLimitWarning in cats
@@ -68,7 +53,7 @@ def test_ssest_is_never_worse_than_its_subspace_start(name):
     """The refined model simulates the estimation record at least as well as the subspace
     model it started from (sum of squared simulation errors, initial state fitted, as the
     criterion of ``focus="simulation"``)."""
-    est, _ = record(name)
+    est, _ = daisy_split(name)
     m = quiet(sysid.ssest, est, 4, focus="simulation")
     s = m.info["start"]
     start = quiet(sysid.SubspaceEstimator(est).fit, 4, method=s["method"], x0=s["bd_x0"])
@@ -82,7 +67,7 @@ def test_ssest_is_never_worse_than_its_subspace_start(name):
 # -- "Feedthrough defaults disagree: n4sid estimates D, ssest/pem do not" -------------------
 def test_every_state_space_estimator_has_the_same_feedthrough_default():
     """b5716c2: ``n4sid``, ``moesp`` and ``cva`` estimated ``D`` by default."""
-    est, _ = record("dryer")
+    est, _ = daisy_split("dryer")
     models = {"n4sid": sysid.n4sid(est, 4), "moesp": sysid.moesp(est, 4),
               "cva": sysid.cva(est, 4), "ssest": quiet(sysid.ssest, est, 4)}
     models["pem"] = quiet(sysid.pem, est, models["n4sid"])
@@ -96,7 +81,7 @@ def test_order_auto_on_real_records_is_above_two(name):
     """b5716c2: ``order="auto"`` was the largest gap of the log singular values
     (``SubspaceEstimator.auto_order``, still there), which gives 2 on both records (and 4 on
     the robot arm, so it is not here); today 3 and 6."""
-    est, _ = record(name)
+    est, _ = daisy_split(name)
     m = quiet(sysid.n4sid, est)
     assert m.nstates >= 3, m.info["order_selection"]
 
@@ -164,7 +149,7 @@ def test_the_estimation_trend_applies_to_validation_data():
 # -- "compare raises NumericalError when a model diverges, and takes one model at a time" ---
 def test_compare_reports_a_diverging_model_among_several():
     """b5716c2: ``compare(model, data)`` took one model and raised on one that diverged."""
-    est, val = record("dryer")
+    est, val = daisy_split("dryer")
     good = sysid.n4sid(est, 4)
     bad = sysid.StateSpaceModel(1.5 * good.A, good.B, good.C, good.D, dt=good.dt)
     res = quiet(sysid.compare, val, good, bad)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _guides import run_guide
 
 import sysid
 from sysid import _sysid
@@ -258,13 +259,7 @@ def test_errors():
 
 def test_docs_nonlinear_examples_and_their_claims(capsys):
     """Runs every ```python block of docs/nonlinear.md; the stated outcomes hold."""
-    import re
-    from pathlib import Path
-
-    text = (Path(__file__).parents[1] / "docs" / "nonlinear.md").read_text()
-    ns: dict = {}
-    for i, block in enumerate(re.findall(r"```python\n(.*?)```", text, re.S)):
-        exec(compile(block, f"docs/nonlinear.md[python block {i}]", "exec"), ns)
+    ns = run_guide("nonlinear.md")
     out = capsys.readouterr().out
     assert "y0(t-2)^2" in out and "e_y0(t-1)" in out
     assert set(BILLINGS) == set(_term_set(ns["m"]))

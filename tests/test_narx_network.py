@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _guides import assert_prints_shown, guide_text, run_blocks
 
 import sysid
 from sysid.errors import DataError, InsufficientDataError
@@ -200,18 +201,15 @@ def test_linearize_at_the_truth_matches_its_derivative():
 
 
 def test_guide_section_runs_and_prints_what_it_shows(capsys):
-    """The network section of docs/nonlinear.md runs and prints the numbers it shows."""
-    import re
-    from pathlib import Path
-
-    text = (Path(__file__).parents[1] / "docs" / "nonlinear.md").read_text()
-    section = text.split("## Network nonlinearities")[1].split("\n## ")[0]
-    ns: dict = {"np": np, "sysid": sysid}
-    for i, block in enumerate(re.findall(r"```python\n(.*?)```", section, re.S)):
-        exec(compile(block, f"docs/nonlinear.md[network block {i}]", "exec"), ns)
-    out = capsys.readouterr().out
-    shown = "".join(re.findall(r"Output \(this machine\):\n\n((?:    .*\n)+)", section))
-    assert [ln.strip() for ln in shown.splitlines()] == [ln.strip() for ln in out.splitlines()]
+    """The network section of docs/nonlinear.md runs and prints the numbers it shows: the
+    network fits are local minima of a nonconvex search, and the rounding of the vector
+    kernels differs between processors (AVX2 against AVX-512), so a fit may settle up to a
+    few points away on another machine (seen: 88.3 against 90.8); the claims below hold
+    on both."""
+    section = guide_text("nonlinear.md", "Network nonlinearities")
+    ns = run_blocks(section, "docs/nonlinear.md (network section)",
+                    {"np": np, "sysid": sysid})
+    assert_prints_shown(section, capsys.readouterr().out, atol=3.0, rtol=0.0)
     fits = ns["w_fits"]
     assert all(v > fits["arx(2,2,1)"] for k, v in fits.items() if "simulation" in k)
     assert all(v[1] < 1.364 for v in ns["ph_nets"].values())  # below polynomial NARX's

@@ -6,6 +6,7 @@ import warnings
 
 import numpy as np
 import pytest
+from _guides import guide_text, python_blocks, run_guide
 
 import sysid
 from sysid import _sysid
@@ -304,15 +305,8 @@ def test_bad_arguments():
 
 
 def test_docs_examples_run():
-    import re
-    from pathlib import Path
-
-    doc = Path(__file__).resolve().parents[1] / "docs" / "pem.md"
-    blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), flags=re.S)
-    assert len(blocks) >= 3
-    namespace: dict = {}
-    for i, block in enumerate(blocks):  # the blocks build on each other
-        exec(compile(block, f"docs/pem.md[python block {i}]", "exec"), namespace)
+    assert len(python_blocks(guide_text("pem.md"))) >= 3
+    namespace = run_guide("pem.md")
     assert namespace["fit_pem"] > namespace["fit_start"]
 
 

@@ -9,6 +9,8 @@ import pytest
 import sysid
 from sysid.errors import DataError
 
+from conftest import assert_std_calibrated, monte_carlo
+
 U = np.repeat(np.random.default_rng(1).choice([-1.0, 1.0], 60), 10)
 
 CASES = [
@@ -67,19 +69,9 @@ def test_procest_std_calibrated_by_monte_carlo():
     true = sysid.ProcessModel("P1D", Kp=2.0, Tp1=1.5, Td=0.37)
     u = U[:300]
     y0 = true.simulate(u, dt=0.1)
-    rng = np.random.default_rng(11)
-    est, std = [], []
-    for _ in range(200):
-        d = sysid.IOData(u, y0 + 0.1 * rng.standard_normal(y0.shape), dt=0.1)
-        m = sysid.procest(d, "P1D", init=true.values)
-        est.append(m.parameters.value)
-        std.append(m.parameters.std)
-    est, std = np.array(est), np.array(std)
-    truth = np.array([2.0, 1.5, 0.37])
-    cover = np.mean(np.abs(est - truth) <= 1.96 * std, axis=0)
-    assert np.all((cover >= 0.90) & (cover <= 0.99)), cover
-    ratio = est.std(axis=0) / std.mean(axis=0)
-    assert np.all((ratio > 0.8) & (ratio < 1.2)), ratio  # within 20 %
+    est, std = monte_carlo(lambda d: sysid.procest(d, "P1D", init=true.values), u, y0, 0.1,
+                           noise=0.1, seed=11)
+    assert_std_calibrated(est, std, [2.0, 1.5, 0.37])
 
 
 @pytest.mark.parametrize("kwargs, match", [
@@ -112,15 +104,6 @@ def test_procest_underdamped_std_calibrated_by_monte_carlo():
     true = sysid.ProcessModel("P2DU", Kp=1.5, Tw=0.8, Zeta=0.3, Td=0.23)
     u = np.repeat(np.random.default_rng(1).choice([-1.0, 1.0], 60), 10)[:400]
     y0 = true.simulate(u, dt=0.1)
-    rng = np.random.default_rng(12)
-    est, std = [], []
-    for _ in range(200):
-        d = sysid.IOData(u, y0 + 0.1 * rng.standard_normal(y0.shape), dt=0.1)
-        m = sysid.procest(d, "P2DU", init=true.values)
-        est.append(m.parameters.value)
-        std.append(m.parameters.std)
-    est, std = np.array(est), np.array(std)
-    cover = np.mean(np.abs(est - [1.5, 0.8, 0.3, 0.23]) <= 1.96 * std, axis=0)
-    assert np.all((cover >= 0.90) & (cover <= 0.99)), cover
-    ratio = est.std(axis=0) / std.mean(axis=0)
-    assert np.all((ratio > 0.8) & (ratio < 1.2)), ratio
+    est, std = monte_carlo(lambda d: sysid.procest(d, "P2DU", init=true.values), u, y0, 0.1,
+                           noise=0.1, seed=12)
+    assert_std_calibrated(est, std, [1.5, 0.8, 0.3, 0.23])

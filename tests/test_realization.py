@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _guides import guide_text, python_blocks, run_guide
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -329,14 +330,8 @@ def test_stabilization_diagram_and_plots(tmp_path: Path) -> None:
 
 
 def test_docs_examples_run() -> None:
-    import re
-
-    doc = Path(__file__).resolve().parents[1] / "docs" / "realization.md"
-    blocks = re.findall(r"```python\n(.*?)```", doc.read_text(), flags=re.S)
-    assert len(blocks) >= 3
-    namespace: dict = {}
-    for i, block in enumerate(blocks):  # the blocks build on each other
-        exec(compile(block, f"docs/realization.md[python block {i}]", "exec"), namespace)
+    assert len(python_blocks(guide_text("realization.md"))) >= 3
+    namespace = run_guide("realization.md")
     assert namespace["small"].nstates == 2
 
 

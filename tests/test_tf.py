@@ -10,6 +10,8 @@ import pytest
 import sysid
 from sysid.errors import DataError
 
+from conftest import assert_std_calibrated, monte_carlo
+
 
 def _prbs(n, hold=5, seed=0):
     rng = np.random.default_rng(seed)
@@ -86,19 +88,9 @@ def test_tfest_std_calibrated_by_monte_carlo():
     true = sysid.TransferFunction([1.2], [1.0, 0.8], iodelay=0.23)
     u = _prbs(300, 10, 2)
     y0 = true.simulate(u, dt=0.1)
-    rng = np.random.default_rng(7)
-    est, std = [], []
-    for _ in range(200):
-        data = sysid.IOData(u, y0 + 0.05 * rng.standard_normal(y0.shape), dt=0.1)
-        G = sysid.tfest(data, 1, 0, iodelay="auto", init=true)
-        est.append(G.parameters.value)
-        std.append(G.parameters.std)
-    est, std = np.array(est), np.array(std)
-    truth = np.array([0.8, 1.2, 0.23])
-    cover = np.mean(np.abs(est - truth) <= 1.96 * std, axis=0)
-    assert np.all((cover >= 0.90) & (cover <= 0.99)), cover
-    ratio = est.std(axis=0) / std.mean(axis=0)
-    assert np.all((ratio > 0.8) & (ratio < 1.2)), ratio  # within 20 %
+    est, std = monte_carlo(lambda d: sysid.tfest(d, 1, 0, iodelay="auto", init=true), u, y0,
+                           0.1, noise=0.05, seed=7)
+    assert_std_calibrated(est, std, [0.8, 1.2, 0.23])
 
 
 def test_transfer_function_interop_and_saving(tmp_path):
@@ -257,9 +249,4 @@ def test_tfest_frd_std_calibrated_by_monte_carlo():
                         iodelay=0.13)
         est.append(G.parameters.value[:4])
         sd.append(G.parameters.std[:4])
-    est, sd = np.array(est), np.array(sd)
-    truth = np.array([0.8, 4.0, 0.5, 2.0])
-    cover = np.mean(np.abs(est - truth) <= 1.96 * sd, axis=0)
-    assert np.all((cover >= 0.90) & (cover <= 0.99)), cover
-    ratio = est.std(axis=0) / sd.mean(axis=0)
-    assert np.all((ratio > 0.8) & (ratio < 1.2)), ratio
+    assert_std_calibrated(est, sd, [0.8, 4.0, 0.5, 2.0])

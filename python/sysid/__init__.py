@@ -135,6 +135,8 @@ _LAZY = {
     "lowpass": "data.filtering",
     "modal_analysis": "analysis.modal",
     "multisine": "data.input_design",
+    "detect_period": "data.periodicity",
+    "Periodicity": "data.periodicity",
     "n_parameters": "validation.criteria",
     "obsv": "analysis.controllability",
     "oe": "polynomial.estimators",
@@ -462,6 +464,9 @@ __all__ = [
     # issue 29 (branch nlss): BLA, PNLSS, neural state space
     "bla",
     "bla_model",
+    # issue 28 (branch pemfreq2): the period of a periodic input
+    "detect_period",
+    "Periodicity",
     "pnlss",
     "PNLSSModel",
     "nlssest",

@@ -99,6 +99,9 @@ def iteration_callback(
     desc: str,
     max_iter: int,
     log_line: Callable[..., None] | None = None,
+    *,
+    unit: str = "it",
+    postfix: Callable[..., dict[str, str]] | None = None,
 ) -> tuple[Callable[..., Any] | None, Callable[[], None]]:
     """The per-iteration callback of an iterative estimator and a function closing it.
 
@@ -106,8 +109,18 @@ def iteration_callback(
     gradient_norm, damping)`` after every accepted step of the shared optimiser, a ``False``
     return stops the estimator, an exception stops it and is re-raised), ``None`` (a bar on a
     terminal, else nothing), ``True`` (a bar on a terminal; in a log, ``log_line`` per
-    iteration when given) or ``False``. The bar shows the iterations against ``max_iter``
-    and the current cost.
+    iteration when given) or ``False``. The bar counts ``unit`` against ``max_iter`` and
+    shows ``postfix(*callback_arguments)`` (default: the current cost, the second argument).
+
+    Examples
+    --------
+    >>> from sysid._progress import iteration_callback
+    >>> cb, close = iteration_callback(False, "fit", 10)
+    >>> cb is None
+    True
+    >>> mine = lambda *a: None
+    >>> iteration_callback(mine, "fit", 10)[0] is mine
+    True
     """
     if callable(progress):
         return progress, lambda: None
@@ -120,9 +133,14 @@ def iteration_callback(
     terminal = bool(getattr(sys.stderr, "isatty", lambda: False)())
     if not terminal and log_line is not None:
         return log_line, lambda: None
-    bar = Bar(max_iter, desc, unit="it")
+    bar = Bar(max_iter, desc, unit=unit)
+    shown = postfix if postfix is not None else _cost
 
-    def cb(it: int, cost: float, *rest: Any) -> None:
-        bar.update(1, cost=f"{cost:.6g}")
+    def cb(*args: Any) -> None:
+        bar.update(1, **shown(*args))
 
     return cb, bar.close
+
+
+def _cost(it: int, cost: float, *rest: Any) -> dict[str, str]:
+    return {"cost": f"{cost:.6g}"}

@@ -62,6 +62,7 @@ __all__ = [
     "tf_fit_frequency",
     # issue 26 (branch pem)
     "pem_criterion",
+    "pem_frequency_refine",
     # issue 29 (branch nlss)
     "pnlss_monomials",
     "pnlss_simulate",
@@ -82,6 +83,8 @@ __all__ = [
     "option_name",
     "reflect_unstable_poles",
     "lagged_products",
+    # issue 29 (branch pnlss): frequency-weighted PNLSS
+    "pnlss_estimate_weighted",
 ]
 
 _Array = npt.NDArray[np.float64]
@@ -268,6 +271,7 @@ class StreamingCompressor:
         future: int,
         compressor: str = "qr",
         chunk_rows: int | None = None,
+        longest: int | None = None,
     ) -> StreamingCompressor: ...
     def push(self, u: _Array, y: _Array) -> None: ...
     def end_experiment(self) -> None: ...
@@ -287,6 +291,7 @@ class CorrelationSums:
         future: int,
         center: _Array,
         scale: _Array,
+        longest: int | None = None,
     ) -> CorrelationSums: ...
     @staticmethod
     def center_scale(u: _Array, y: _Array) -> tuple[_Array, _Array]: ...
@@ -324,6 +329,22 @@ def pem_refine(
     reg_lambda: float = 0.0,
     reg_r: _Array | None = None,
     reg_nominal: _Array | None = None,
+    progress: Any = None,
+) -> dict[str, Any]: ...
+def pem_frequency_refine(
+    a: _Array,
+    b: _Array,
+    c: _Array,
+    d: _Array,
+    omega: _Array,
+    re: _Array,
+    im: _Array,
+    weight: _Array,
+    *,
+    estimate_d: bool = False,
+    modal_chart: bool = True,
+    max_iter: int = 50,
+    tol_cost: float = 1e-6,
     progress: Any = None,
 ) -> dict[str, Any]: ...
 # grey-box models (issue 12)
@@ -591,6 +612,15 @@ def pnlss_estimate(
     max_iter: int = 100,
     tol: float = 1e-8,
     fixed: list[bool] | None = None,
+    progress: Callable[..., Any] | None = None,
+) -> dict[str, Any]: ...
+def pnlss_estimate_weighted(
+    structure: _PolyStructure,
+    records: _Records,
+    weights: list[tuple[int, list[int], list[float]]],
+    theta0: _Array,
+    max_iter: int = 100,
+    tol: float = 1e-8,
     progress: Callable[..., Any] | None = None,
 ) -> dict[str, Any]: ...
 

@@ -425,13 +425,15 @@ impl QrAccumulator {
     ///
     /// `chunk_rows` is capped so that the work matrix stays within
     /// [`crate::error::MAX_MATRIX_BYTES`] (the result does not depend on it beyond round-off).
+    /// The work matrix is allocated with the first row: an accumulator that never receives
+    /// one (a stream too short for a single window) costs nothing.
     pub fn new(k: usize, chunk_rows: usize) -> Self {
         let cap = (crate::error::MAX_MATRIX_BYTES / 8 / k.max(1)).saturating_sub(k);
         let chunk_rows = chunk_rows.min(cap).max(1);
         Self {
             k,
             chunk_rows,
-            work: Mat::zeros(k + chunk_rows, k),
+            work: Mat::zeros(0, 0),
             pending: 0,
             rows: 0,
         }
@@ -451,6 +453,9 @@ impl QrAccumulator {
     #[inline]
     pub fn push_row(&mut self, row: &[f64]) {
         debug_assert_eq!(row.len(), self.k);
+        if self.work.nrows() == 0 {
+            self.work = Mat::zeros(self.k + self.chunk_rows, self.k);
+        }
         let r = self.k + self.pending;
         for (j, v) in row.iter().enumerate() {
             self.work[(r, j)] = *v;
@@ -484,6 +489,9 @@ impl QrAccumulator {
         self.flush();
         let k = self.k;
         let mut r = Mat::<f64>::zeros(k, k);
+        if self.work.nrows() == 0 {
+            return r; // no rows: R = 0
+        }
         for i in 0..k {
             let sign = if self.work[(i, i)] < 0.0 { -1.0 } else { 1.0 };
             for j in i..k {
@@ -529,6 +537,26 @@ pub(crate) fn determinant(m: &Mat<f64>) -> f64 {
 mod tests {
     use super::*;
     use faer::mat;
+
+    #[test]
+    fn accumulator_sizes_its_work_matrix_with_the_first_row() {
+        // a stream too short for one window (past = 2000) allocated the 2.5 GB work
+        // matrix of the exact compressor before the record was known to be too short
+        let acc = QrAccumulator::new(8000, 32_000);
+        assert_eq!(acc.work.nrows(), 0);
+        assert_eq!(acc.finish().norm_max(), 0.0);
+        let mut acc = QrAccumulator::new(3, 4);
+        acc.push_row(&[3.0, 0.0, 4.0]);
+        assert_eq!(acc.work.nrows(), 3 + 4);
+        let r = acc.finish();
+        let g = r.transpose() * &r;
+        let want = [[9.0, 0.0, 12.0], [0.0, 0.0, 0.0], [12.0, 0.0, 16.0]];
+        for (i, row) in want.iter().enumerate() {
+            for (j, w) in row.iter().enumerate() {
+                assert!((g[(i, j)] - w).abs() < 1e-12, "{i} {j}: {}", g[(i, j)]);
+            }
+        }
+    }
 
     #[test]
     fn pinv_inverts_full_rank() {

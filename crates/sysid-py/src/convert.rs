@@ -46,6 +46,18 @@ pub fn slice_to_numpy<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f6
     Array1::from(v.to_vec()).into_pyarray(py)
 }
 
+/// The matrices of `sys` as items `"a"`, `"b"`, `"c"`, `"d"` of `out`.
+pub fn state_space_items(
+    out: &Bound<'_, pyo3::types::PyDict>,
+    py: Python<'_>,
+    sys: &StateSpace,
+) -> PyResult<()> {
+    for (key, m) in [("a", &sys.a), ("b", &sys.b), ("c", &sys.c), ("d", &sys.d)] {
+        out.set_item(key, mat_to_numpy(py, m))?;
+    }
+    Ok(())
+}
+
 /// A core `StateSpace` from four numpy matrices (shapes and finiteness checked by the core).
 pub fn state_space(
     a: &PyReadonlyArray2<'_, f64>,

@@ -25,6 +25,8 @@ mod subspace;
 mod tf;
 // issue 29 (branch nlss)
 mod nlss;
+// issue 29 (branch pnlss): frequency-weighted PNLSS
+mod nlss_freq;
 // issue 27 (branch tsonline): online estimators
 mod recursive_estimators;
 // issue 27 (branch nlnet): network nonlinearities of nlarx
@@ -53,6 +55,8 @@ fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
     tf::register(m)?;
     // issue 29 (branch nlss)
     nlss::register(m)?;
+    // issue 29 (branch pnlss)
+    nlss_freq::register(m)?;
     // issue 27 (branch tsonline)
     recursive_estimators::register(m)?;
     // issue 27 (branch nlnet)

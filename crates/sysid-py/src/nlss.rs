@@ -18,9 +18,12 @@ use sysid_core::SysidError;
 type Terms2 = Vec<Vec<usize>>;
 type Pair<'py> = (Bound<'py, PyArray1<f64>>, Bound<'py, PyArray1<f64>>);
 type Owned = Vec<(Vec<f64>, Vec<f64>, usize)>;
-type Records<'a> = [(PyReadonlyArray2<'a, f64>, PyReadonlyArray2<'a, f64>, usize)];
+pub(crate) type Records<'a> = [(PyReadonlyArray2<'a, f64>, PyReadonlyArray2<'a, f64>, usize)];
 
-fn slice<'a>(a: &'a PyReadonlyArray2<'_, f64>, name: &'static str) -> PyResult<&'a [f64]> {
+pub(crate) fn slice<'a>(
+    a: &'a PyReadonlyArray2<'_, f64>,
+    name: &'static str,
+) -> PyResult<&'a [f64]> {
     a.as_slice().map_err(|_| {
         crate::errors::to_py(SysidError::InvalidArgument {
             name,
@@ -102,13 +105,13 @@ pub enum Structure {
 }
 
 /// A polynomial state-space model of either kind.
-enum Model {
+pub(crate) enum Model {
     Pnlss(Pnlss),
     Decoupled(Decoupled),
 }
 
 impl Structure {
-    fn model(self) -> PyResult<Model> {
+    pub(crate) fn model(self) -> PyResult<Model> {
         Ok(match self {
             Structure::Pnlss(s) => Model::Pnlss(s.model()?),
             Structure::Decoupled(s) => Model::Decoupled(s.model()?),
@@ -184,7 +187,20 @@ pub fn pnlss_estimate<'py>(
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let m = structure.model()?;
-    let data = records
+    let data = records_data(&records)?;
+    let th0 = crate::convert::vec1(&theta0);
+    let mut opts = fit_options(max_iter, tol);
+    opts.fixed = fixed;
+    let sol = run(py, &progress, |obs| m.estimate(&data, &th0, &opts, obs))?;
+    let d = PyDict::new(py);
+    search_items(&d, py, &sol)?;
+    d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
+    Ok(d)
+}
+
+/// The records `(u, y, skip)` as the core reads them.
+pub(crate) fn records_data<'a>(records: &'a Records<'_>) -> PyResult<Vec<PnlssData<'a>>> {
+    records
         .iter()
         .map(|(u, y, skip)| {
             Ok(PnlssData {
@@ -193,19 +209,17 @@ pub fn pnlss_estimate<'py>(
                 skip: *skip,
             })
         })
-        .collect::<PyResult<Vec<_>>>()?;
-    let th0 = crate::convert::vec1(&theta0);
+        .collect()
+}
+
+/// The optimiser's options of a simulation-error fit.
+pub(crate) fn fit_options(max_iter: usize, tol: f64) -> Options {
     let mut opts = Options::default();
     opts.max_iter = max_iter;
     opts.tol_cost = tol;
     opts.tol_step = tol;
     opts.tol_gradient = tol * tol;
-    opts.fixed = fixed;
-    let sol = run(py, &progress, |obs| m.estimate(&data, &th0, &opts, obs))?;
-    let d = PyDict::new(py);
-    search_items(&d, py, &sol)?;
-    d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
-    Ok(d)
+    opts
 }
 
 /// Registers the functions.

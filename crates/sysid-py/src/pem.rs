@@ -1,6 +1,8 @@
 //! Bindings of the prediction-error refinement (`sysid_core::pem`).
 
-use crate::convert::{mat_to_numpy, slice_to_numpy, state_space as model, vec1, view};
+use crate::convert::{
+    mat_to_numpy, slice_to_numpy, state_space as model, state_space_items, vec1, view,
+};
 use crate::errors::IntoPy;
 use crate::search::{run, solution_items};
 use faer::MatRef;
@@ -8,7 +10,7 @@ use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::optim::Regularization;
-use sysid_core::pem::{self, InitialState, PemOptions};
+use sysid_core::pem::{self, FrequencyOptions, InitialState, Lines, PemOptions};
 
 type Experiments<'py> = Vec<(PyReadonlyArray2<'py, f64>, PyReadonlyArray2<'py, f64>)>;
 
@@ -112,10 +114,7 @@ pub fn pem_refine<'py>(
     let exps = views(&experiments);
     let r = run(py, &progress, |obs| pem::pem(&sys, kv, &exps, &o, obs))?;
     let out = PyDict::new(py);
-    out.set_item("a", mat_to_numpy(py, &r.sys.a))?;
-    out.set_item("b", mat_to_numpy(py, &r.sys.b))?;
-    out.set_item("c", mat_to_numpy(py, &r.sys.c))?;
-    out.set_item("d", mat_to_numpy(py, &r.sys.d))?;
+    state_space_items(&out, py, &r.sys)?;
     out.set_item("k", mat_to_numpy(py, &r.k))?;
     let x0s: Vec<_> = r.x0.iter().map(|v| slice_to_numpy(py, v)).collect();
     out.set_item("x0", x0s)?;
@@ -165,8 +164,58 @@ pub fn pem_criterion<'py>(
     crate::search::detach(py, || pem::criterion(&exps, &sys, kv, &o))
 }
 
+/// Refines a state-space model on the excited lines of periodic data (frequency domain);
+/// returns a dict.
+#[pyfunction]
+#[pyo3(signature = (a, b, c, d, omega, re, im, weight, *, estimate_d=false, modal_chart=true,
+    max_iter=50, tol_cost=1e-6, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn pem_frequency_refine<'py>(
+    py: Python<'py>,
+    a: PyReadonlyArray2<'_, f64>,
+    b: PyReadonlyArray2<'_, f64>,
+    c: PyReadonlyArray2<'_, f64>,
+    d: PyReadonlyArray2<'_, f64>,
+    omega: PyReadonlyArray1<'_, f64>,
+    re: PyReadonlyArray2<'_, f64>,
+    im: PyReadonlyArray2<'_, f64>,
+    weight: PyReadonlyArray2<'_, f64>,
+    estimate_d: bool,
+    modal_chart: bool,
+    max_iter: usize,
+    tol_cost: f64,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let sys = model(&a, &b, &c, &d)?;
+    let mut o = FrequencyOptions::default();
+    o.estimate_d = estimate_d;
+    o.modal_chart = modal_chart;
+    o.optim.max_iter = max_iter;
+    o.optim.tol_cost = tol_cost;
+    let omega = vec1(&omega);
+    let lines = Lines {
+        omega: &omega,
+        re: view(&re),
+        im: view(&im),
+        weight: view(&weight),
+    };
+    let r = run(py, &progress, |obs| {
+        pem::pem_frequency(&sys, &lines, &o, obs)
+    })?;
+    let out = PyDict::new(py);
+    state_space_items(&out, py, &r.sys)?;
+    out.set_item("theta", slice_to_numpy(py, &r.theta))?;
+    out.set_item("spectral_radius", r.spectral_radius)?;
+    out.set_item("n_residuals", r.n_residuals)?;
+    out.set_item("residual_scale", r.residual_scale)?;
+    out.set_item("modal", r.modal)?;
+    solution_items(&out, py, &r.solution, &r.covariance)?;
+    Ok(out)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(pem_refine, m)?)?;
     m.add_function(wrap_pyfunction!(pem_criterion, m)?)?;
+    m.add_function(wrap_pyfunction!(pem_frequency_refine, m)?)?;
     Ok(())
 }

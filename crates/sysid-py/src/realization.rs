@@ -3,7 +3,9 @@
 //! Markov parameters cross the boundary stacked as a 2-D array `(count * l, m)`; the Python
 //! layer reshapes them to `(count, l, m)`. Complex values travel as real and imaginary parts.
 
-use crate::convert::{mat_to_numpy, slice_to_numpy, state_space as model, view, view_nd};
+use crate::convert::{
+    mat_to_numpy, slice_to_numpy, state_space as model, state_space_items, view, view_nd,
+};
 use crate::errors::IntoPy;
 use faer::{Mat, MatRef};
 use numpy::{PyArray1, PyArray2, PyReadonlyArray2};
@@ -50,10 +52,7 @@ fn options(
 
 fn realization_dict<'py>(py: Python<'py>, r: &Realization) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    d.set_item("a", mat_to_numpy(py, &r.model.a))?;
-    d.set_item("b", mat_to_numpy(py, &r.model.b))?;
-    d.set_item("c", mat_to_numpy(py, &r.model.c))?;
-    d.set_item("d", mat_to_numpy(py, &r.model.d))?;
+    state_space_items(&d, py, &r.model)?;
     d.set_item("singular_values", slice_to_numpy(py, &r.singular_values))?;
     d.set_item("rows", r.rows)?;
     d.set_item("cols", r.cols)?;
@@ -218,10 +217,7 @@ pub fn balanced_truncation<'py>(
     let r = order.unwrap_or(sys.n_states());
     let bal = py.detach(|| rz::balanced_truncation(&sys, r)).py()?;
     let out = PyDict::new(py);
-    out.set_item("a", mat_to_numpy(py, &bal.model.a))?;
-    out.set_item("b", mat_to_numpy(py, &bal.model.b))?;
-    out.set_item("c", mat_to_numpy(py, &bal.model.c))?;
-    out.set_item("d", mat_to_numpy(py, &bal.model.d))?;
+    state_space_items(&out, py, &bal.model)?;
     out.set_item(
         "hankel_singular_values",
         slice_to_numpy(py, &bal.hankel_singular_values),

@@ -19,6 +19,21 @@ fn finished() -> PyErr {
     })
 }
 
+/// The layout, checked against the longest experiment when the caller knows it.
+fn layout(
+    m: usize,
+    l: usize,
+    past: usize,
+    future: usize,
+    longest: Option<usize>,
+) -> PyResult<HankelLayout> {
+    match longest {
+        Some(n) => HankelLayout::for_record(m, l, past, future, n),
+        None => HankelLayout::new(m, l, past, future),
+    }
+    .py()
+}
+
 /// A compressor fed chunk by chunk: `push(u, y)`, `end_experiment()`, `finish()`.
 #[pyclass(name = "StreamingCompressor", module = "sysid._sysid")]
 pub struct PyStreamingCompressor {
@@ -30,7 +45,8 @@ pub struct PyStreamingCompressor {
 #[pymethods]
 impl PyStreamingCompressor {
     #[new]
-    #[pyo3(signature = (n_inputs, n_outputs, past, future, compressor="qr", chunk_rows=None))]
+    #[pyo3(signature = (n_inputs, n_outputs, past, future, compressor="qr", chunk_rows=None, longest=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         n_inputs: usize,
         n_outputs: usize,
@@ -38,10 +54,11 @@ impl PyStreamingCompressor {
         future: usize,
         compressor: &str,
         chunk_rows: Option<usize>,
+        longest: Option<usize>,
     ) -> PyResult<Self> {
-        let layout = HankelLayout::new(n_inputs, n_outputs, past, future).py()?;
+        let layout = layout(n_inputs, n_outputs, past, future, longest)?;
         let kind = CompressorKind::parse(compressor, chunk_rows).py()?;
-        kind.check(&layout).py()?;
+        kind.check_stream(&layout, longest).py()?;
         let inner = kind.build(layout);
         let kind = kind.name();
         Ok(Self {
@@ -119,6 +136,7 @@ pub struct PyCorrelationSums {
 #[pymethods]
 impl PyCorrelationSums {
     #[new]
+    #[pyo3(signature = (n_inputs, n_outputs, past, future, center, scale, longest=None))]
     fn new(
         n_inputs: usize,
         n_outputs: usize,
@@ -126,8 +144,9 @@ impl PyCorrelationSums {
         future: usize,
         center: PyReadonlyArray1<'_, f64>,
         scale: PyReadonlyArray1<'_, f64>,
+        longest: Option<usize>,
     ) -> PyResult<Self> {
-        let layout = HankelLayout::new(n_inputs, n_outputs, past, future).py()?;
+        let layout = layout(n_inputs, n_outputs, past, future, longest)?;
         Ok(Self {
             inner: CorrelationSums::new(layout, vec1(&center), vec1(&scale)).py()?,
         })

@@ -25,9 +25,9 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import as_dt
 from .._display import HTMLResult
 from ..data.formats import _pandas
-from ..errors import DataError
 from ..models.checks import discrete_statespace
 from ..models.statespace import StateSpaceModel
 
@@ -146,9 +146,7 @@ def modal_analysis(model: StateSpaceModel, dt: float | None = None, std: bool = 
     """
     if not isinstance(model, StateSpaceModel):
         model = discrete_statespace(model, "modal analysis")
-    dt = float(model.dt if dt is None else dt)
-    if not np.isfinite(dt) or dt <= 0:
-        raise DataError(f"dt must be a positive number of seconds, got {dt}")
+    dt = as_dt(model.dt if dt is None else dt)
     d = _sysid.modal_analysis(model.A, model.C, dt)
     out = ModalAnalysis(d, dt, list(model.output_names))
     if std:

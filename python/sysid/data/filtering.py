@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
+from .._checks import as_dt
 from ..errors import DataError, InsufficientDataError
 from .iodata import IOData
 from .segments import _Exp
@@ -150,9 +151,7 @@ def resample(data: IOData, dt: float, *, max_denominator: int = 100) -> IOData:
     >>> r.dt, r.n_samples
     (0.025, 120)
     """
-    new_dt = float(dt)
-    if not np.isfinite(new_dt) or new_dt <= 0:
-        raise DataError(f"dt must be a positive number of seconds, got {dt}")
+    new_dt = as_dt(dt)
     ratio = Fraction(data.dt / new_dt).limit_denominator(max_denominator)  # up / down
     up, down = ratio.numerator, ratio.denominator
     if up == 0:

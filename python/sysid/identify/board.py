@@ -3,11 +3,13 @@ record held out from their fit, ranked, and the rules that pick one.
 
 Each candidate is fitted on every fold's fitted part and simulated on its held-out block
 (initial state and a constant offset per output fitted, :func:`simulation_fit`). Its score is
-the **median** of the held-out fits over the folds: a record often holds one block unlike the
-others (a saturation, a change of operating point, a stretch where some input is idle), and the
-mean of the fits would then rank the candidates by that block alone; the median ranks them by
-what they do on a typical stretch of the record, which is what fresh data from the same plant
-will be. The mean and every fold's fit are kept in the leaderboard.
+the **trimmed mean** of the held-out fits over the folds, without the lowest and the highest
+(:func:`trimmed_mean`; the median for up to four blocks): a record often holds one block unlike
+the others (a saturation, a change of operating point, a stretch where some input is idle), and
+the mean of the fits would then rank the candidates by that block alone; the trimmed mean ranks
+them by what they do on the typical stretches of the record, which is what fresh data from the
+same plant will be, and with less noise than the median of five (which rests on one block).
+The mean and every fold's fit are kept in the leaderboard.
 """
 
 from __future__ import annotations
@@ -29,6 +31,16 @@ def slack(best: float) -> float:
     """Fit points a simpler candidate may give up against the best and still be preferred:
     ``TOL`` (0.5), at most 5 % of the best's error (noise-free data: round-off only)."""
     return max(min(TOL, 0.05 * (100.0 - best)), 1e-6) if np.isfinite(best) else 0.0
+
+
+def trimmed_mean(fits: Any) -> float:
+    """The mean of the held-out fits without the lowest and the highest (the median for up
+    to four blocks)."""
+    f = np.sort(np.asarray(fits, float))
+    if f.size <= 4:
+        return float(np.median(f))
+    with np.errstate(invalid="ignore"):
+        return float(np.mean(f[1:-1]))
 
 
 def bic(model: Any, data: IOData) -> float:
@@ -58,6 +70,8 @@ class Board:
         self.rows: list[dict[str, Any]] = []
         self.folds, self.bar, self.deadline = folds, bar, deadline
         self.out_of_time = False
+        #: set by :meth:`insisting` when an unstable candidate wins only by following a drift
+        self.drift: dict[str, Any] | None = None
 
     def time_left(self) -> bool:
         """False once the time budget (CPU seconds of this process) is spent."""
@@ -83,6 +97,7 @@ class Board:
         row: dict[str, Any] = {"family": family, "order": order, "feedthrough": feedthrough,
                                "focus": focus, "criterion": criterion, "refit": refit,
                                "fit_fn": fit_fn, "start": start, "note": ""}
+        hopeless = False
         try:
             fits, rho = [], 0.0
             for k, (_, held) in enumerate(self.folds):
@@ -92,8 +107,11 @@ class Board:
                 fits.append(simulation_fit(model, held))
                 poles = model.poles()
                 rho = max(rho, float(np.max(np.abs(poles))) if len(poles) else 0.0)
+                if start is not None and self._below_start(fits, start):
+                    hopeless = True  # the remaining blocks cannot save it: not fitted
+                    break
             f = np.asarray(fits)
-            row["held_out_fit"] = float(np.median(f))
+            row["held_out_fit"] = trimmed_mean(f)
             row["mean_fit"] = float(np.mean(f)) if np.all(np.isfinite(f)) else -np.inf
             row["fold_fits"] = [float(x) for x in f]
             row["max_abs_pole"] = rho
@@ -104,7 +122,12 @@ class Board:
             row.update(held_out_fit=-np.inf, mean_fit=-np.inf, fold_fits=[],
                        max_abs_pole=np.nan, stable=False,
                        note=f"{type(e).__name__}: {e}"[:120])
-        if budgeted and not self.time_left():
+        if hopeless:
+            row["note"] = (f"below its start or the best candidate on most of the "
+                           f"{len(self.folds)} held-out blocks after {len(fits)}: stopped, "
+                           "not chosen")
+            row["worse_than_start"] = True
+        elif budgeted and not self.time_left():
             row["note"] = "time budget spent while it was fitted: not chosen"
             row["worse_than_start"] = True
         elif start is not None and row["held_out_fit"] < start["held_out_fit"] - slack(
@@ -117,18 +140,57 @@ class Board:
         self.bar.update(1, best=f"{self.best_fit():.1f}%")
         return row
 
+    def _below_start(self, fits: list[float], start: dict[str, Any]) -> bool:
+        """A refinement below its start, or below the best stable candidate scored so far
+        (by more than :func:`slack`), on most of the held-out blocks, whatever it does on the
+        blocks not yet scored: no typical stretch of the record favours it; or one whose
+        score would stay below theirs by more than the slack even if it did as well as they
+        do, plus the slack, on every block not yet scored: it cannot catch up. It is not
+        fitted on the remaining blocks and not chosen (the costly refinements of high orders
+        are mostly these)."""
+        best = self.best() if len(fits) < len(self.folds) else None  # (once all are scored,
+        # the held-out score decides whether it is near the best)
+        for ref_row in (start, best) if best is not None and best is not start else (start,):
+            ref = ref_row.get("fold_fits") or []
+            if len(ref) != len(self.folds):
+                continue
+            s = slack(ref_row["held_out_fit"])
+            if sum(a < b - s for a, b in zip(fits, ref)) > len(self.folds) // 2:
+                return True
+            # even as good as the reference plus the slack on every block not yet scored, its
+            # score would stay below the reference's by more than the slack
+            if len(fits) < len(ref) and trimmed_mean(
+                    list(fits) + [b + s for b in ref[len(fits):]]) < ref_row["held_out_fit"] - s:
+                return True
+        return False
+
     def eligible(self, r: dict[str, Any], stable_only: bool = True) -> bool:
         return (bool(np.isfinite(r["held_out_fit"])) and not r.get("worse_than_start")
                 and (r["stable"] or not stable_only))
 
     def best_fit(self, stable_only: bool = True) -> float:
-        fits = [r["held_out_fit"] for r in self.rows if self.eligible(r, stable_only)]
-        return max(fits) if fits else -np.inf
+        best = self.best(stable_only)
+        return best["held_out_fit"] if best is not None else -np.inf
+
+    def best(self, stable_only: bool = True) -> dict[str, Any] | None:
+        """The eligible candidate with the best score (None when there is none)."""
+        rows = [r for r in self.rows if self.eligible(r, stable_only)]
+        return max(rows, key=lambda r: r["held_out_fit"]) if rows else None
+
+    def is_near(self, r: dict[str, Any], best: dict[str, Any] | None,
+                stable_only: bool = True) -> bool:
+        """``r`` is eligible and the held-out blocks cannot tell it from ``best``: its score
+        is within :func:`slack` of the best's."""
+        if best is None or not self.eligible(r, stable_only):
+            return False
+        return bool(r["held_out_fit"] >= best["held_out_fit"] - slack(best["held_out_fit"]))
 
     def insisting(self) -> dict[str, Any] | None:
         """An unstable candidate the data insist on: better than the best stable candidate
         on every held-out block (a sign test at ``2**-K``, K >= 4 blocks) and by more than
-        the slack on the median (an integrating or open-loop unstable plant)."""
+        the slack on the score (an integrating or open-loop unstable plant), also once the
+        record's drift is taken out (:meth:`_trend_fits`; otherwise it follows a drift and
+        :attr:`drift` records it)."""
         stable = [r for r in self.rows if self.eligible(r)]
         unstable = [r for r in self.rows if self.eligible(r, False) and not r["stable"]]
         if not unstable or len(self.folds) < 4:
@@ -137,32 +199,63 @@ class Board:
         if not stable:
             return best_u if all(np.isfinite(best_u["fold_fits"])) else None
         best_s = max(stable, key=lambda r: r["held_out_fit"])
-        wins = all(a > b for a, b in zip(best_u["fold_fits"], best_s["fold_fits"]))
-        if wins and best_u["held_out_fit"] > best_s["held_out_fit"] + slack(
-                best_u["held_out_fit"]):
-            return best_u
+        if self._wins(best_u["fold_fits"], best_s["fold_fits"]):
+            if all(self._wins(*self._trend_fits([best_u, best_s], d)) for d in (False, True)):
+                return best_u
+            self.drift = {"unstable": best_u, "stable": best_s}
         return None
 
+    def _wins(self, fu: list[float], fs: list[float]) -> bool:
+        """Better on every block, and by more than the slack on the score."""
+        return (len(fu) == len(fs) == len(self.folds)
+                and all(a > b for a, b in zip(fu, fs))
+                and trimmed_mean(fu) > trimmed_mean(fs) + slack(trimmed_mean(fu)))
+
+    def _trend_fits(self, rows: list[dict[str, Any]], detrended: bool
+                    ) -> list[list[float]]:
+        """The held-out fits of ``rows`` with a straight line per output fitted on every
+        held-out block (with the initial state), the models fitted on every fold's fitted
+        part as scored (``detrended=False``) or re-fitted on it with a straight line removed
+        from each channel (:func:`sysid.detrend`): the record's drift taken out of the
+        blocks, and of the fitted parts too. A slow unstable mode can follow a drift (an
+        output trend the input does not explain, or the residue of a removed one) on every
+        block; an unstable model that wins only with the drift left in follows it, not the
+        plant, and the data do not insist on it."""
+        from ..data.preprocessing import detrend
+
+        fits: list[list[float]] = [[] for _ in rows]
+        for k, (fit_part, held) in enumerate(self.folds):
+            part = detrend(fit_part, "linear") if detrended else None
+            for i, r in enumerate(rows):
+                try:
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")
+                        model = r["refit"](part) if detrended else r["fit_fn"](k)
+                    fits[i].append(simulation_fit(model, held, trend=True))
+                except KeyboardInterrupt:
+                    raise
+                except Exception:  # noqa: BLE001 - a fit that fails now scores -inf
+                    fits[i].append(-np.inf)
+        return fits
+
     def near_best(self, stable_only: bool = True) -> list[dict[str, Any]]:
-        """Eligible candidates within :func:`slack` of the best score (the held-out blocks
-        cannot tell them apart): refined ones first, then by score."""
-        best = self.best_fit(stable_only)
-        s = slack(best)
-        near = [r for r in self.rows if self.eligible(r, stable_only)
-                and r["held_out_fit"] >= best - s]
+        """Eligible candidates the held-out blocks cannot tell from the best
+        (:meth:`is_near`): refined ones first, then by score."""
+        best = self.best(stable_only)
+        near = [r for r in self.rows if self.is_near(r, best, stable_only)]
         # refined candidates first (few; each the refinement of a near-best start)
         return sorted(near, key=lambda r: (r["criterion"].startswith("subspace"),
                                            -r["held_out_fit"]))
 
     def ranked(self, allow_unstable: bool = False) -> list[dict[str, Any]]:
         """Eligible stable candidates first (unstable ones too when ``allow_unstable``);
-        among those within :func:`slack` of the best score the smallest order first, then
+        among those the blocks cannot tell from the best (:meth:`is_near`) the smallest order
+        first, then
         by score; the rest by score."""
-        best = self.best_fit(not allow_unstable)
-        s = slack(best)
+        best = self.best(not allow_unstable)
 
         def key(r: dict[str, Any]) -> tuple[bool, bool, int, float]:
             ok = self.eligible(r, not allow_unstable)
-            near = bool(ok and r["held_out_fit"] >= best - s)
+            near = self.is_near(r, best, not allow_unstable)
             return (not ok, not near, r["order"] if near else 0, -r["held_out_fit"])
         return sorted(self.rows, key=key)

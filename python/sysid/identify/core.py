@@ -7,16 +7,25 @@
 3. Candidates are scored on blocks of the estimation record held out from their fit: the
    record is cut into five contiguous blocks (fewer on short records; several experiments:
    one each), each held out once while the rest fits the candidate, which then simulates
-   it (initial state fitted); the score is the median of the five held-out fits
-   (:mod:`.board`). Candidates: every subspace weighting (MOESP, N4SID, CVA) at every order
-   the horizon allows (up to 20), with and without feedthrough; the best of each of the
-   smallest orders near the best refined by prediction-error search on the simulation error
-   (and the best one on the prediction error); output-error models for one input and output.
-   A refinement scored clearly below its start on the held-out blocks is never chosen.
+   it (initial state fitted); the score is the mean of the five held-out fits without the
+   lowest and the highest (:mod:`.board`). Candidates: every subspace weighting (MOESP,
+   N4SID, CVA) at every order the horizon allows (up to 20), with and without feedthrough;
+   the best of each of the smallest orders near the best refined by prediction-error search
+   on the simulation error
+   (every output's errors relative to its scale, as the fit % counts them: ``pem``'s
+   ``weighting="output"``) and the best one on the prediction error; output-error models for
+   one input and output. A refinement scored clearly below its start on the held-out blocks
+   is never chosen; one below it, or below the best candidate so far, on most blocks is
+   stopped there. On the held-out blocks a refinement's search stops once it has settled
+   (:func:`settled`: its last iterations raised the fit its criterion implies by less than a
+   tenth of what the blocks resolve); re-fitted on the whole record it runs to convergence
+   (up to ``FINAL_ITER`` iterations: a search can crawl along a plateau and then drop).
 4. The held-out blocks rank the candidates but cannot tell apart those within half a fit
    point of the best (5 % of its error at most): those are re-fitted on the whole record and
    the one with the smallest BIC of its simulation errors is returned; unstable candidates
    only when the data insist (:meth:`.board.Board.insisting`) or ``enforce_stability=False``.
+   An unstable candidate that wins only while the record's drift is left in is not one
+   the data insist on (``checks["drift"]`` says so).
    ``validation`` data, when given, are only reported on.
 """
 
@@ -31,7 +40,7 @@ import numpy as np
 from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
-from ..validation.crossval import MAX_ORDER, fold_count, fold_horizon, folds
+from ..validation.crossval import MAX_ORDER, TOL, fold_count, fold_horizon, folds
 from .board import Board, bic
 from .result import IdentifiedModel, IdentifyResult
 
@@ -45,6 +54,18 @@ N_REFINE = 3
 N_FINAL = 12
 #: unstable subspace candidates re-fitted with a stable A when no candidate is stable
 N_STABILISED = 10
+#: iteration cap of a refinement re-fitted on the whole record (only near-best ones are): the
+#: model returned is converged, not stopped at pem's default cap of 50 nor once settled (a
+#: start far from the minimum needs more, and a search can crawl along a plateau before it
+#: drops); the held-out blocks score refinements settled, at most at the default cap (cheaper)
+FINAL_ITER = 300
+#: a refinement has settled once its last ``SETTLE_WINDOW`` iterations raised the fit its
+#: criterion implies on the data it is fitted to by less than ``SETTLE_POINTS`` fit points
+#: (a tenth of the smallest difference the held-out blocks resolve, :data:`TOL`): further
+#: iterations cannot change the choice, so the search stops there (statistical convergence at
+#: the resolution of the score, not of the optimiser)
+SETTLE_WINDOW = 5
+SETTLE_POINTS = TOL / 10
 
 
 def _offsets(data: IOData) -> tuple[IOData, np.ndarray, np.ndarray]:
@@ -127,6 +148,47 @@ def _stabilised_candidates(board: Board) -> None:
                   fit_fn, refit, budgeted=False)
 
 
+def implied_fit(cost: float, data: IOData, weighting: str | None) -> float:
+    """The fit % (mean over outputs, roughly) that a refinement's criterion ``cost`` implies
+    on ``data``: with ``weighting="output"`` the cost is half the sum over outputs of the
+    squared errors relative to each output's mean square, ``N l`` times the mean squared
+    NRMSE; with the noise weighting (prediction focus) it is ``det(E^T E / N)``, against
+    ``det(Y^T Y / N)`` of the outputs (a geometric mean of the outputs' NRMSE)."""
+    y = np.vstack([e[1] for e in data.experiments])
+    n, l = y.shape
+    if weighting == "output":
+        r = np.sqrt(max(2.0 * cost, 0.0) / (n * l))
+    else:
+        sign, logdet = np.linalg.slogdet(y.T @ y / n)
+        r = np.exp((np.log(max(cost, 1e-300)) - logdet) / (2 * l)) if sign > 0 else np.inf
+    return float(100.0 * (1.0 - r))
+
+
+def settled(data: IOData, weighting: str | None, then: Any = None) -> Any:
+    """A progress callback for :func:`sysid.pem` that stops the search once it has settled:
+    its last ``SETTLE_WINDOW`` iterations raised :func:`implied_fit` by less than
+    ``SETTLE_POINTS``; ``then`` (another callback, e.g. the time budget's) may stop it
+    earlier.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.identify.core import settled
+    >>> d = sysid.IOData(u=np.ones(100), y=np.linspace(-1, 1, 100))
+    >>> cb = settled(d, "output")
+    >>> [cb(i, 10.0) for i in range(7)][-1]  # the same cost for six calls: settled
+    False
+    """
+    fits: list[float] = []
+
+    def cb(*a: Any) -> bool:
+        fits.append(implied_fit(float(a[1]), data, weighting))
+        if len(fits) > SETTLE_WINDOW and fits[-1] - fits[-1 - SETTLE_WINDOW] < SETTLE_POINTS:
+            return False
+        return True if then is None else bool(then(*a))
+    return cb
+
+
 def _starts(board: Board, count: int) -> list[dict[str, Any]]:
     """Starts for the refinement: the best stable subspace candidate of each order among
     those the held-out blocks cannot tell from the best, smallest orders first (``count``
@@ -147,17 +209,22 @@ def _refined_candidates(board: Board) -> None:
 
     starts = _starts(board, N_REFINE)
     for focus in ("simulation", "prediction"):
+        # simulation focus: every output's errors relative to its scale, as the held-out fit
+        # (the mean of the outputs' fit %) counts them; prediction: the determinant criterion
+        wt = "output" if focus == "simulation" else None
         for r in starts if focus == "simulation" else starts[:1]:
             ft = r["feedthrough"]
 
-            def fit(k: int, r: dict[str, Any] = r, ft: bool = ft, focus: str = focus) -> Any:
-                return sysid.pem(board.folds[k][0], r["fit_fn"](k), focus=focus,
-                                 feedthrough=ft, progress=board.stopper())
+            def fit(k: int, r: dict[str, Any] = r, ft: bool = ft, focus: str = focus,
+                    wt: str | None = wt) -> Any:
+                part = board.folds[k][0]
+                return sysid.pem(part, r["fit_fn"](k), focus=focus, feedthrough=ft,
+                                 weighting=wt, progress=settled(part, wt, board.stopper()))
 
             def refit(data: IOData, r: dict[str, Any] = r, ft: bool = ft,
-                      focus: str = focus) -> Any:
+                      focus: str = focus, wt: str | None = wt) -> Any:
                 return sysid.pem(data, r["refit"](data), focus=focus, feedthrough=ft,
-                                 progress=False)
+                                 weighting=wt, max_iter=FINAL_ITER, progress=False)
             board.add("pem", r["order"], ft, focus, f"prediction error from {r['family']}",
                       fit, refit, start=r)
     first = board.folds[0][0]
@@ -201,8 +268,10 @@ def identify(
         output-error models (default). ``False`` keeps to subspace models.
     enforce_stability : bool, optional
         ``None`` (default): a stable model unless the data insist (an unstable candidate
-        simulates every held-out block better than the best stable one: an integrating or
-        unstable plant), then a :class:`sysid.StabilityWarning` names its largest pole.
+        simulates every held-out block better than the best stable one, also once the
+        record's drift is taken out: an integrating or unstable plant), then a
+        :class:`sysid.StabilityWarning` names its largest pole; one that wins only with the
+        drift left in is not returned (``result.checks["drift"]`` says so).
         ``True``: only stable models. ``False``: the best held-out fit, stable or not.
     time_budget : float or None
         CPU seconds of this process (default 60) after which no further refinement is
@@ -274,6 +343,16 @@ def identify(
                       f"({len(board.rows)} scored): the best so far is returned; raise "
                       "time_budget for the full search", UserWarning, stacklevel=2)
     insist = board.insisting() if enforce_stability is None else None
+    if board.drift is not None:
+        u = board.drift["unstable"]
+        checks["drift"] = (
+            f"the record drifts: an unstable {u['family']} model of order {u['order']} "
+            f"(largest pole modulus {u['max_abs_pole']:.4g}) simulates every held-out block "
+            f"better than the best stable one, but not once the record's trend is taken out "
+            f"(a line per channel): it follows a drift, not the plant; the stable model is "
+            f"returned "
+            f"(remove the trend, sysid.detrend(data, 'linear'), or difference the output if "
+            f"the plant integrates)")
     if enforce_stability is not False and insist is None and not np.isfinite(board.best_fit()):
         _stabilised_candidates(board)
     ranked = board.ranked(allow_unstable=enforce_stability is False or insist is not None)

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from .._checks import as_2d
+from .._checks import as_2d, as_dt
 from ..errors import DataError, NumericalError
 from .discretisation import expm, hold_blocks
 from .linear import transmission_zeros
@@ -347,10 +347,7 @@ def _sample_time(t: Any, dt: Any, n: int) -> float:
     if dt is None:
         raise DataError("a continuous-time model needs the sample time of the data: pass dt "
                         "(or t), or discretise it with c2d")
-    dt = float(dt)
-    if not np.isfinite(dt) or dt <= 0:
-        raise DataError(f"dt must be a positive number of seconds, got {dt}")
-    return dt
+    return as_dt(dt)
 
 
 def _hold_integrals(A: np.ndarray, B: np.ndarray, dt: float

@@ -1,5 +1,6 @@
-"""What the nonlinear state-space estimators share: data scaling, the linear start, the
-state-basis balancing and the transient left out of the cost."""
+"""What the nonlinear state-space models and estimators share: data scaling, channel names,
+input checks, the linear start, the state-basis balancing and the transient left out of the
+cost."""
 
 from __future__ import annotations
 
@@ -57,9 +58,55 @@ class Scaling:
                                input_names=model.input_names, output_names=model.output_names)
 
 
+def channels(scaling: dict[str, Any] | None, m: int, l_: int, input_names: Any,
+             output_names: Any) -> tuple[Scaling, list[str], list[str]]:
+    """A model's channel scaling (none when ``scaling`` is ``None``) and its input and output
+    names (``u0, u1, ...`` and ``y0, y1, ...`` when not given), for ``m`` inputs and ``l_``
+    outputs."""
+    sc = scaling or {"u_offset": np.zeros(m), "u_scale": np.ones(m),
+                     "y_offset": np.zeros(l_), "y_scale": np.ones(l_)}
+    ins = list(input_names) if input_names is not None else [f"u{j}" for j in range(m)]
+    outs = list(output_names) if output_names is not None else [f"y{j}" for j in range(l_)]
+    return Scaling(sc["u_offset"], sc["u_scale"], sc["y_offset"], sc["y_scale"]), ins, outs
+
+
+def clamp_box(clamp: Any, size: int, of: str = "") -> tuple[np.ndarray, np.ndarray]:
+    """``clamp = (lo, hi)`` as two arrays of ``size`` bounds with ``lo <= hi`` (``of`` says
+    what they bound, in the message)."""
+    try:
+        lo, hi = (np.asarray(v, dtype=float).ravel() for v in clamp)
+    except (TypeError, ValueError):
+        raise DataError("clamp must be a pair (lo, hi) of arrays") from None
+    if lo.size != size or hi.size != size or np.isnan(lo).any() or np.isnan(hi).any() \
+            or np.any(lo > hi):
+        raise DataError(f"clamp needs {size} lower and upper bounds{of} with lo <= hi")
+    return lo, hi
+
+
+def signal(a: Any, width: int, name: str) -> np.ndarray:
+    """``a`` as a finite ``(n_samples, width)`` float array (1-D: one channel)."""
+    x = np.asarray(a, dtype=float)
+    x = x.reshape(-1, 1) if x.ndim == 1 else x
+    if x.ndim != 2 or x.shape[1] != width:
+        raise DataError(f"{name} must be (n_samples, {width}), got {np.shape(a)}")
+    if not np.isfinite(x).all():
+        raise DataError(f"{name} has non-finite values (NaN or Inf)")
+    return x
+
+
+def fit_summary(model: Any) -> str:
+    """``summary()`` of a model fitted by the shared optimiser (``info["fit"]``)."""
+    fit = model.info.get("fit", {})
+    cost = fit.get("cost", [float("nan")])
+    return (f"{model!r}\n  parameters: {model.theta.size}\n  iterations: "
+            f"{fit.get('iterations', '-')}, stop: {fit.get('stop', '-')}\n  cost: "
+            f"{cost[0]:.6g} -> {cost[-1]:.6g}")
+
+
 class LinearPart:
     """``to_statespace`` and ``freqresp`` of a nonlinear state-space model: those of its
-    linear part (the host defines ``linear()``)."""
+    linear part (the host defines ``linear()``); ``predict``: its simulation (the host
+    defines ``simulate()``)."""
 
     def linear(self) -> StateSpaceModel:  # pragma: no cover - defined by the host
         raise NotImplementedError
@@ -71,6 +118,13 @@ class LinearPart:
     def freqresp(self, omega: Any) -> np.ndarray:
         """Frequency response of the linear part."""
         return np.asarray(self.linear().freqresp(omega))
+
+    def simulate(self, u: Any, x0: Any = None) -> np.ndarray:  # pragma: no cover - the host's
+        raise NotImplementedError
+
+    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+        """An output-error model has no noise model: its prediction is its simulation."""
+        return self.simulate(u)
 
 
 def scaled_data(data: IOData, sc: Scaling) -> IOData:
@@ -102,12 +156,17 @@ def linear_start(data: IOData, sd: IOData, sc: Scaling, order: int, init: Any,
     return sysid.ssest(sd, order, focus="simulation", progress=False, max_iter=30)
 
 
+def linear_states(m: StateSpaceModel, us: list[np.ndarray]) -> list[np.ndarray]:
+    """The states of the linear model ``m`` simulated from rest over each input record."""
+    n = m.nstates
+    probe = StateSpaceModel(m.A, m.B, np.eye(n), np.zeros((n, m.ninputs)), dt=m.dt)
+    return [np.asarray(probe.simulate(u)) for u in us]
+
+
 def balanced(m: StateSpaceModel, us: list[np.ndarray]) -> StateSpaceModel:
     """The linear model in the basis where its simulated states have unit variance, so that
     monomials and network weights of the states are well scaled."""
-    n = m.nstates
-    probe = StateSpaceModel(m.A, m.B, np.eye(n), np.zeros((n, m.ninputs)), dt=m.dt)
-    xs = np.vstack([np.asarray(probe.simulate(u)) for u in us])
+    xs = np.vstack(linear_states(m, us))
     s = xs.std(axis=0)
     s = np.where(s > 1e-12 * max(s.max(), 1e-300), s, 1.0)
     T, Ti = np.diag(s), np.diag(1.0 / s)
@@ -129,6 +188,16 @@ def settle_samples(m: StateSpaceModel, n: int) -> int:
     rho = float(np.max(np.abs(m.poles()))) if m.nstates else 0.0
     k = 0 if rho == 0 else (n // 4 if rho >= 1 else int(np.ceil(np.log(1e-3) / np.log(rho))))
     return int(min(max(k, 0), n // 4))
+
+
+def check_parameters(n_par: int, recs: list[Any], fix: str) -> None:
+    """Refuses a simulation-error fit of ``n_par`` parameters on records ``(u, y, transient)``
+    that give no more residuals than that, before the optimiser sizes anything by the
+    parameter count; ``fix`` says what to lower."""
+    n_res = sum(max(y.shape[0] - int(skip), 0) * y.shape[1] for _, y, skip in recs)
+    if n_par >= n_res:
+        raise DataError(f"the model has {n_par} parameters but the record gives {n_res} "
+                        f"residuals (after the transient); lower {fix}, or give more data")
 
 
 def check_order(order: Any) -> int:

@@ -24,7 +24,16 @@ from ..errors import DataError
 from ..models.protocol import ModelMixin
 from ..models.serialize import register_model
 from ..models.statespace import StateSpaceModel
-from .common import LinearPart, Scaling, envelope
+from .common import (
+    LinearPart,
+    channels,
+    check_parameters,
+    clamp_box,
+    envelope,
+    fit_summary,
+    linear_states,
+    signal,
+)
 
 __all__ = ["DecoupledPNLSSModel"]
 
@@ -89,20 +98,10 @@ class DecoupledPNLSSModel(LinearPart, ModelMixin):
             raise DataError(f"A {self.A.shape}, B {self.B.shape}, C {self.C.shape}, D "
                             f"{self.D.shape}, V {self.V.shape}, W {self.W.shape} and c "
                             f"{self.c.shape} do not fit together")
-        sc = scaling or {"u_offset": np.zeros(m), "u_scale": np.ones(m),
-                         "y_offset": np.zeros(l_), "y_scale": np.ones(l_)}
-        self.scaling = Scaling(sc["u_offset"], sc["u_scale"], sc["y_offset"], sc["y_scale"])
-        self.clamp = None
-        if clamp is not None:
-            lo, hi = (np.asarray(v, float).ravel() for v in clamp)
-            if lo.size != r or hi.size != r or np.any(lo > hi):
-                raise DataError(f"clamp needs {r} lower and upper bounds with lo <= hi")
-            self.clamp = (lo, hi)
+        self.scaling, self.input_names, self.output_names = channels(
+            scaling, m, l_, input_names, output_names)
+        self.clamp = None if clamp is None else clamp_box(clamp, r)
         self.dt = float(dt)
-        self.input_names = list(input_names) if input_names is not None else \
-            [f"u{j}" for j in range(m)]
-        self.output_names = list(output_names) if output_names is not None else \
-            [f"y{j}" for j in range(l_)]
         self.info = dict(info or {"method": "pnlss (decoupled)"})
 
     nstates = property(lambda self: self.A.shape[0])
@@ -128,12 +127,7 @@ class DecoupledPNLSSModel(LinearPart, ModelMixin):
                 "degrees": self.degrees, "range": rng}
 
     def _run(self, u: Any, x0: Any) -> tuple[np.ndarray, np.ndarray]:
-        a = np.asarray(u, dtype=float)
-        a = a.reshape(-1, 1) if a.ndim == 1 else a
-        if a.ndim != 2 or a.shape[1] != self.ninputs:
-            raise DataError(f"u must be (n_samples, {self.ninputs}), got {np.shape(u)}")
-        if not np.isfinite(a).all():
-            raise DataError("u has non-finite values (NaN or Inf)")
+        a = signal(u, self.ninputs, "u")
         x = None if x0 is None else [float(v) for v in np.ravel(x0)]
         y, xs = _sysid.pnlss_simulate(self._struct(), list(self.theta), self.scaling.u(a), x)
         return np.asarray(y).reshape(-1, self.noutputs), np.asarray(xs).reshape(-1, self.nstates)
@@ -146,10 +140,6 @@ class DecoupledPNLSSModel(LinearPart, ModelMixin):
     def states(self, u: Any, x0: Any = None) -> np.ndarray:
         """Simulated states ``(n_samples, nstates)`` (scaled coordinates)."""
         return self._run(u, x0)[1]
-
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
-        """An output-error model has no noise model: its prediction is its simulation."""
-        return self.simulate(u)
 
     def linear(self) -> StateSpaceModel:
         """The linear part ``(A, B, C, D)`` in engineering units."""
@@ -171,11 +161,7 @@ class DecoupledPNLSSModel(LinearPart, ModelMixin):
                    output_names=d["output_names"], info=d.get("info"))
 
     def summary(self) -> str:
-        fit = self.info.get("fit", {})
-        cost = fit.get("cost", [float("nan")])
-        return (f"{self!r}\n  parameters: {self.theta.size}\n  iterations: "
-                f"{fit.get('iterations', '-')}, stop: {fit.get('stop', '-')}\n  cost: "
-                f"{cost[0]:.6g} -> {cost[-1]:.6g}")
+        return fit_summary(self)
 
     def __repr__(self) -> str:
         return (f"DecoupledPNLSSModel(nstates={self.nstates}, ninputs={self.ninputs}, "
@@ -195,9 +181,10 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
     r = int(branches)
     if r < 1:
         raise DataError(f"branches must be a positive integer, got {branches!r}")
-    probe = StateSpaceModel(lin.A, lin.B, np.eye(n), np.zeros((n, m_)), dt=lin.dt)
-    Z = np.hstack([np.vstack([np.asarray(probe.simulate(u)) for u in us]), np.vstack(us)])
     nd = len(degrees)
+    check_parameters(n * n + n * m_ + l_ * n + l_ * m_ + r * (2 * n + m_ + nd) + n + l_, recs,
+                     "branches, the degrees or the order")
+    Z = np.hstack([np.vstack(linear_states(lin, us)), np.vstack(us)])
 
     def start(k: int) -> np.ndarray:
         V = np.random.default_rng([seed, k]).standard_normal((r, n + m_))

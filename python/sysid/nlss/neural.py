@@ -22,13 +22,23 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._progress import Bar, show
+from .._progress import iteration_callback
 from ..data.iodata import IOData
 from ..errors import DataError
 from ..models.protocol import ModelMixin
 from ..models.serialize import register_model
 from ..models.statespace import StateSpaceModel
-from .common import LinearPart, Scaling, balanced, check_order, linear_start, scaled_data
+from .common import (
+    LinearPart,
+    Scaling,
+    balanced,
+    channels,
+    check_order,
+    linear_start,
+    linear_states,
+    scaled_data,
+    signal,
+)
 
 __all__ = ["NeuralStateSpaceModel", "nlssest"]
 
@@ -71,15 +81,9 @@ class NeuralStateSpaceModel(LinearPart, ModelMixin):
         need = _sysid.neural_ss_n_params(self._struct())
         if self.params.size != need:
             raise DataError(f"params has {self.params.size} values; the structure needs {need}")
-        m, l_ = self.ninputs, self.noutputs
-        sc = scaling or {"u_offset": np.zeros(m), "u_scale": np.ones(m),
-                         "y_offset": np.zeros(l_), "y_scale": np.ones(l_)}
-        self.scaling = Scaling(sc["u_offset"], sc["u_scale"], sc["y_offset"], sc["y_scale"])
+        self.scaling, self.input_names, self.output_names = channels(
+            scaling, self.ninputs, self.noutputs, input_names, output_names)
         self.dt = float(dt)
-        self.input_names = list(input_names) if input_names is not None else \
-            [f"u{j}" for j in range(m)]
-        self.output_names = list(output_names) if output_names is not None else \
-            [f"y{j}" for j in range(l_)]
         self.info = dict(info or {"method": "nlssest"})
 
     @classmethod
@@ -116,14 +120,7 @@ class NeuralStateSpaceModel(LinearPart, ModelMixin):
             - (n * n + n * m + l_ * n + l_ * m + n * (n + m) + n)
         return int(self.params.size - enc)
 
-    def _arr(self, a: Any, width: int, name: str) -> np.ndarray:
-        x = np.asarray(a, dtype=float)
-        x = x.reshape(-1, 1) if x.ndim == 1 else x
-        if x.ndim != 2 or x.shape[1] != width:
-            raise DataError(f"{name} must be (n_samples, {width}), got {np.shape(a)}")
-        if not np.isfinite(x).all():
-            raise DataError(f"{name} has non-finite values (NaN or Inf)")
-        return x
+    _arr = staticmethod(signal)  # the shared check of a signal argument
 
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
         """Output ``(n_samples, noutputs)`` from ``x0`` (scaled-state coordinates; zero by
@@ -141,10 +138,6 @@ class NeuralStateSpaceModel(LinearPart, ModelMixin):
             raise DataError("u_past and y_past need the same number of samples")
         return np.asarray(_sysid.neural_ss_encode(self._struct(), self.params, up, yp,
                                                   up.shape[0]))
-
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
-        """An output-error model has no noise model: its prediction is its simulation."""
-        return self.simulate(u)
 
     def linear(self) -> StateSpaceModel:
         """The linear part ``(A, B, C, D)`` in engineering units."""
@@ -302,7 +295,7 @@ def nlssest(
     start = NeuralStateSpaceModel.from_linear(lin, hidden=hid, output_hidden=out,
                                               encoder_hidden=enc, lags=L, seed=seed,
                                               scaling=sc.to_dict(), encoder_linear=W)
-    cb, close = _epoch_callback(progress, epochs)
+    cb, close = iteration_callback(progress, "nlssest", epochs, unit="epoch", postfix=_errors)
     try:
         res = _sysid.neural_ss_train(start._struct(), start.params, train, val, epochs=epochs,
                                      batch=batch, horizon=H, learning_rate=learning_rate,
@@ -345,11 +338,8 @@ def _split(sd: IOData, sc: Scaling, validation: Any, L: int, H: int) -> tuple[li
 
 def _encoder_fit(lin: StateSpaceModel, train: list, L: int) -> np.ndarray:
     """Least-squares map from the past window to the linear model's simulated state."""
-    n = lin.nstates
-    probe = StateSpaceModel(lin.A, lin.B, np.eye(n), np.zeros((n, lin.ninputs)), dt=lin.dt)
     P, X = [], []
-    for u, y, at in train:
-        x = np.asarray(probe.simulate(u[:at]))
+    for (u, y, at), x in zip(train, linear_states(lin, [u[:at] for u, _, at in train])):
         P.append(_phi(u[:at], y[:at], L))
         X.append(x[L:at])
     Pm, Xm = np.vstack(P), np.vstack(X)
@@ -358,16 +348,6 @@ def _encoder_fit(lin: StateSpaceModel, train: list, L: int) -> np.ndarray:
     return np.ascontiguousarray(W.T)
 
 
-def _epoch_callback(progress: Any, epochs: int) -> tuple[Any, Callable[[], None]]:
-    if callable(progress):
-        return progress, lambda: None
-    if progress is not None and not isinstance(progress, bool):
-        raise DataError(f"progress must be True, False, None or a callable, got {progress!r}")
-    if not show(progress):
-        return None, lambda: None
-    bar = Bar(epochs, "nlssest", unit="epoch")
-
-    def cb(epoch: int, val: float, train: float) -> None:
-        bar.update(1, validation=f"{val:.4g}", train=f"{train:.4g}")
-
-    return cb, bar.close
+def _errors(epoch: int, val: float, train: float) -> dict[str, str]:
+    """What the progress bar shows after an epoch."""
+    return {"validation": f"{val:.4g}", "train": f"{train:.4g}"}

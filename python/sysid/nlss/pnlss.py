@@ -30,11 +30,17 @@ from .common import (
     LinearPart,
     Scaling,
     balanced,
+    channels,
     check_order,
+    check_parameters,
+    clamp_box,
     envelope,
+    fit_summary,
     linear_start,
+    linear_states,
     scaled_data,
     settle_samples,
+    signal,
 )
 
 __all__ = ["PNLSSModel", "pnlss"]
@@ -89,15 +95,10 @@ class PNLSSModel(LinearPart, ModelMixin):
                 or self.D.shape != (l_, m):
             raise DataError(f"A {self.A.shape}, B {self.B.shape}, C {self.C.shape} and D "
                             f"{self.D.shape} do not fit together")
-        sc = scaling or {"u_offset": np.zeros(m), "u_scale": np.ones(m),
-                         "y_offset": np.zeros(l_), "y_scale": np.ones(l_)}
-        self.scaling = Scaling(sc["u_offset"], sc["u_scale"], sc["y_offset"], sc["y_scale"])
-        self.clamp = None if clamp is None else _box(clamp, n + m)
+        self.scaling, self.input_names, self.output_names = channels(
+            scaling, m, l_, input_names, output_names)
+        self.clamp = None if clamp is None else clamp_box(clamp, n + m, " (states then inputs)")
         self.dt = float(dt)
-        self.input_names = list(input_names) if input_names is not None else \
-            [f"u{j}" for j in range(m)]
-        self.output_names = list(output_names) if output_names is not None else \
-            [f"y{j}" for j in range(l_)]
         self.info = dict(info or {"method": "pnlss"})
 
     nstates = property(lambda self: self.A.shape[0])
@@ -121,13 +122,7 @@ class PNLSSModel(LinearPart, ModelMixin):
                 "eta": self.eta, "range": rng}
 
     def _u(self, u: Any) -> np.ndarray:
-        a = np.asarray(u, dtype=float)
-        a = a.reshape(-1, 1) if a.ndim == 1 else a
-        if a.ndim != 2 or a.shape[1] != self.ninputs:
-            raise DataError(f"u must be (n_samples, {self.ninputs}), got {np.shape(u)}")
-        if not np.isfinite(a).all():
-            raise DataError("u has non-finite values (NaN or Inf)")
-        return self.scaling.u(a)
+        return self.scaling.u(signal(u, self.ninputs, "u"))
 
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
         """Output ``(n_samples, noutputs)`` from ``x0`` (scaled-state coordinates; zero by
@@ -142,10 +137,6 @@ class PNLSSModel(LinearPart, ModelMixin):
         x = None if x0 is None else [float(v) for v in np.ravel(x0)]
         _, xs = _sysid.pnlss_simulate(self._struct(), self.theta, self._u(u), x)
         return np.asarray(xs).reshape(-1, self.nstates)
-
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
-        """An output-error model has no noise model: its prediction is its simulation."""
-        return self.simulate(u)
 
     def linear(self) -> StateSpaceModel:
         """The linear part ``(A, B, C, D)`` in engineering units."""
@@ -166,28 +157,12 @@ class PNLSSModel(LinearPart, ModelMixin):
                    info=d.get("info"))
 
     def summary(self) -> str:
-        fit = self.info.get("fit", {})
-        return (f"{self!r}\n  parameters: {self.theta.size}\n  iterations: "
-                f"{fit.get('iterations', '-')}, stop: {fit.get('stop', '-')}\n  cost: "
-                f"{fit.get('cost', [float('nan')])[0]:.6g} -> "
-                f"{fit.get('cost', [float('nan')])[-1]:.6g}")
+        return fit_summary(self)
 
     def __repr__(self) -> str:
         return (f"PNLSSModel(nstates={self.nstates}, ninputs={self.ninputs}, "
                 f"noutputs={self.noutputs}, {len(self.zeta)} state monomial(s), "
                 f"{len(self.eta)} output monomial(s), dt={self.dt:g})")
-
-
-def _box(clamp: Any, nz: int) -> tuple[np.ndarray, np.ndarray]:
-    try:
-        lo, hi = (np.asarray(v, dtype=float).ravel() for v in clamp)
-    except (TypeError, ValueError):
-        raise DataError("clamp must be a pair (lo, hi) of arrays") from None
-    if lo.size != nz or hi.size != nz or np.isnan(lo).any() or np.isnan(hi).any() \
-            or np.any(lo > hi):
-        raise DataError(f"clamp needs {nz} lower and upper bounds (states then inputs) "
-                        "with lo <= hi")
-    return lo, hi
 
 
 def _degrees(degree: Any) -> list[int]:
@@ -217,6 +192,7 @@ def pnlss(
     transient: int | None = None,
     extrapolation: str = "clamp",
     branches: int | None = None,
+    weighting: str = "none",
     seed: int = 0,
     max_iter: int = 100,
     tol: float = 1e-8,
@@ -269,6 +245,16 @@ def pnlss(
         the chosen degrees of linear forms of the states and inputs (``terms`` and
         ``output_terms`` do not apply; the output equation is linear plus a constant).
         Far fewer parameters than all monomials when there are many states.
+    weighting : {"none", "bla"}
+        ``"none"`` (default): the time-domain simulation error of every sample after the
+        transient. ``"bla"``: with ``periods``, the classic frequency-domain PNLSS cost: the
+        simulation error of the steady state, averaged over the periods after the transient,
+        on the mean and the excited DFT lines, each weighted by the inverse noise variance of
+        the measured output's averaged spectrum (estimated over the periods; see
+        :mod:`sysid.nlss.freqweight`); needs at least two periods after a transient of whole
+        periods in every experiment, the coupled model and ``average=False``. It is not the
+        default: on the F-16 records it validated worse than the time-domain cost
+        (``benches/results/nonlinear.md``).
     seed : int
         Seeds the decoupled variant's initial branch directions.
     max_iter, tol : int, float
@@ -281,6 +267,12 @@ def pnlss(
     -------
     PNLSSModel or DecoupledPNLSSModel
         ``info["fit"]``: iterations, costs, stop reason, parameters, transient.
+
+    Raises
+    ------
+    DataError
+        Among others, when the model has at least as many parameters as the record gives
+        residuals after the transient (checked before the search is sized).
 
     Examples
     --------
@@ -320,6 +312,7 @@ def pnlss(
         skip = transient if transient is not None else (
             N // pers[k] if pers and pers[k] > 1 else settle_samples(lin, N))
         recs.append((u, y, int(skip)))
+    weights = _weights(weighting, sd, pers, recs, average or branches is not None)
     if average:
         recs = _averaged(sd, pers)
         us = [r[0] for r in recs]
@@ -328,6 +321,7 @@ def pnlss(
     common = {"scaling": sc.to_dict(), "dt": data.dt, "input_names": data.input_names,
               "output_names": data.output_names}
     info: dict[str, Any] = {"degree": degs, "extrapolation": extrapolation,
+                            "weighting": "none" if weights is None else "bla",
                             "start": lin.info.get("method") if lin.info else "linear"}
     try:
         if branches is not None:
@@ -340,7 +334,7 @@ def pnlss(
             _warn_short(res)
             return DecoupledPNLSSModel(**kw, **common, info=info)
         fit = _fit_coupled(lin, us, recs, terms, output_terms, degs, extrapolation, max_iter,
-                           tol, cb if cb is not None else _tick)
+                           tol, cb if cb is not None else _tick, weights)
     finally:
         close()
     kw, res = fit
@@ -352,11 +346,11 @@ def pnlss(
 
 def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], terms: str,
                  output_terms: str | None, degs: list[int], extrapolation: str, max_iter: int,
-                 tol: float, cb: Any) -> tuple[dict[str, Any], dict[str, Any]]:
+                 tol: float, cb: Any,
+                 weights: Any = None) -> tuple[dict[str, Any], dict[str, Any]]:
     n, m_, l_ = lin.nstates, lin.ninputs, lin.noutputs
-    probe = StateSpaceModel(lin.A, lin.B, np.eye(n), np.zeros((n, m_)), dt=lin.dt)
-    fit_box = None if extrapolation == "polynomial" else envelope(
-        [np.asarray(probe.simulate(u)) for u in us], us, 0.5)
+    fit_box = None if extrapolation == "polynomial" else envelope(linear_states(lin, us), us,
+                                                                  0.5)
     rng = None if fit_box is None else (list(fit_box[0]), list(fit_box[1]))
     # a constant term in each equation: the channel offsets removed by the scaling (and
     # the mean of the nonlinear terms) enter the scaled equations as constants
@@ -366,7 +360,13 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
     theta0 = np.concatenate([lin.A.ravel(), lin.B.ravel(), lin.C.ravel(), lin.D.ravel(),
                              np.zeros(n * len(zeta) + l_ * len(eta))])
     struct = {"nx": n, "nu": m_, "ny": l_, "zeta": zeta, "eta": eta, "range": rng}
-    res = _sysid.pnlss_estimate(struct, recs, theta0, max_iter=max_iter, tol=tol, progress=cb)
+    check_parameters(theta0.size, recs, "the degree, the terms or the order")
+    if weights is None:
+        res = _sysid.pnlss_estimate(struct, recs, theta0, max_iter=max_iter, tol=tol,
+                                    progress=cb)
+    else:
+        res = _sysid.pnlss_estimate_weighted(struct, recs, weights, theta0, max_iter=max_iter,
+                                             tol=tol, progress=cb)
     th = np.asarray(res["theta"])
     box = None
     if fit_box is not None:
@@ -379,6 +379,26 @@ def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], te
     return {"A": p[0].reshape(n, n), "B": p[1].reshape(n, m_), "C": p[2].reshape(l_, n),
             "D": p[3].reshape(l_, m_), "E": p[4], "F": p[5], "zeta": zeta, "eta": eta,
             "clamp": box, "output_terms": ot}, res
+
+
+def _weights(weighting: str, sd: IOData, pers: list[int] | None, recs: list[Any],
+             excluded: bool) -> Any:
+    """The lines and weights of the frequency-weighted cost, or ``None`` (time domain)."""
+    if weighting not in ("bla", "none"):
+        raise DataError(f"weighting must be 'none' or 'bla', got {weighting!r}")
+    if weighting == "none":
+        return None
+    if pers is None or excluded:
+        raise DataError("weighting='bla' needs periods= and applies to the coupled model "
+                        "without average=True (drop branches= / average=, or use 'none')")
+    from .freqweight import line_weights
+
+    w = line_weights(sd, pers, [r[2] for r in recs])
+    if w is None:
+        raise DataError("weighting='bla' needs at least two whole periods after a transient "
+                        "of whole periods in every experiment; give more periods, a "
+                        "transient= of whole periods, or weighting='none'")
+    return w
 
 
 def _periods(periods: Any, n_exp: int) -> list[int] | None:

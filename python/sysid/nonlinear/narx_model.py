@@ -163,6 +163,11 @@ def lag_names(na: list[int], nb: list[int], nk: list[int], ne: list[int],
     return out
 
 
+def channel_names(names: Any, prefix: str, count: int) -> list[str]:
+    """``names`` as strings, or ``prefix0, prefix1, ...`` when ``None``."""
+    return [f"{prefix}{j}" for j in range(count)] if names is None else [str(n) for n in names]
+
+
 def term_name(term: list[int], names: list[str], custom: list[str] | None = None) -> str:
     """``1``, ``y0(t-1)^2 u0(t-1)``, ``rbf3`` or the name of custom regressor ``c`` (term
     ``[-1, c]``)."""
@@ -182,7 +187,49 @@ def term_name(term: list[int], names: list[str], custom: list[str] | None = None
     return " ".join(parts)
 
 
-class NARXModel(ModelMixin):
+class LaggedIO:
+    """The argument checks of a NARX model's ``simulate`` and ``predict`` (the host has
+    ``ninputs``, ``noutputs`` and ``max_lag``)."""
+
+    ninputs: int
+    noutputs: int
+    max_lag: int
+
+    def _u(self, u: Any, n: int | None = None) -> np.ndarray:
+        """``u`` as a contiguous ``(n_samples, ninputs)`` array (of ``n`` samples if given)."""
+        u = np.asarray(u, dtype=float)
+        if u.ndim == 1 and self.ninputs == 1:
+            u = u[:, None]
+        if u.ndim == 1 and self.ninputs == 0:
+            u = np.zeros((u.size, 0))
+        if u.ndim != 2 or u.shape[1] != self.ninputs or (n is not None and u.shape[0] != n):
+            raise DataError(f"u has shape {u.shape} but should be (n_samples, {self.ninputs})")
+        return np.ascontiguousarray(u)
+
+    def _y0(self, x0: Any) -> np.ndarray:
+        """The first ``max_lag`` outputs a simulation starts from: ``x0`` (``None`` or
+        ``"zero"``: zeros)."""
+        lag, ny = self.max_lag, self.noutputs
+        if x0 is None or (isinstance(x0, str) and x0 == "zero"):
+            return np.zeros((lag, ny))
+        y0 = np.asarray(x0, float).reshape(-1, ny)[:lag]
+        if y0.shape[0] < lag:
+            raise DataError(f"x0 must hold the first {lag} outputs, shape ({lag}, {ny})")
+        return np.ascontiguousarray(y0)
+
+    def _measured(self, u: Any, y: Any, horizon: Any) -> tuple[np.ndarray, np.ndarray, int]:
+        """``predict``'s arguments checked: ``u``, ``y`` of one length and the horizon."""
+        y = np.asarray(y, float)
+        y = y[:, None] if y.ndim == 1 else y
+        if y.ndim != 2 or y.shape[1] != self.noutputs:
+            raise DataError(f"y has shape {y.shape} but should be (n, {self.noutputs})")
+        u = self._u(u, y.shape[0])
+        if int(horizon) != horizon or horizon < 1:
+            raise DataError(f"horizon must be a positive integer, got {horizon!r}")
+        return u, np.ascontiguousarray(y), int(horizon)
+
+
+class NARXModel(LaggedIO, ModelMixin):
     """A (MIMO) NARX / NARMAX model: one equation of selected terms per output.
 
     Parameters
@@ -245,10 +292,8 @@ class NARXModel(ModelMixin):
         self.dt = float(dt)
         self.noise_variance = (np.ones(ny) if noise_variance is None
                                else np.asarray(noise_variance, float).ravel())
-        self.input_names = ([f"u{j}" for j in range(nu)] if input_names is None
-                            else [str(n) for n in input_names])
-        self.output_names = ([f"y{i}" for i in range(ny)] if output_names is None
-                             else [str(n) for n in output_names])
+        self.input_names = channel_names(input_names, "u", nu)
+        self.output_names = channel_names(output_names, "y", ny)
         self.info: dict[str, Any] = dict(info or {})
         self.custom: list[CustomRegressor] = list(custom or [])
         if not all(isinstance(c, CustomRegressor) for c in self.custom):
@@ -296,16 +341,6 @@ class NARXModel(ModelMixin):
         fns = [c.scalar() for c in self.custom] if fns is None else fns
         return np.asarray(getattr(_sysid, f"narx_{fn}")(structure, eqs, *arrays, custom_fns=fns))
 
-    def _u(self, u: Any, n: int | None = None) -> np.ndarray:
-        u = np.asarray(u, dtype=float)
-        if u.ndim == 1 and self.ninputs == 1:
-            u = u[:, None]
-        if u.ndim == 1 and self.ninputs == 0:
-            u = np.zeros((u.size, 0))
-        if u.ndim != 2 or u.shape[1] != self.ninputs or (n is not None and u.shape[0] != n):
-            raise DataError(f"u has shape {u.shape} but should be (n_samples, {self.ninputs})")
-        return np.ascontiguousarray(u)
-
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
         """Free-run simulation (noise terms zero).
 
@@ -313,27 +348,12 @@ class NARXModel(ModelMixin):
         measured ones); ``None`` or ``"zero"`` starts from zero outputs. Raises a
         :class:`~sysid.NumericalError` naming the sample when the simulation diverges.
         """
-        u = self._u(u)
-        lag, ny = self.max_lag, self.noutputs
-        if x0 is None or (isinstance(x0, str) and x0 == "zero"):
-            y0 = np.zeros((lag, ny))
-        else:
-            y0 = np.asarray(x0, float).reshape(-1, ny)[:lag]
-            if y0.shape[0] < lag:
-                raise DataError(f"x0 must hold the first {lag} outputs, shape ({lag}, {ny})")
-        return self._rust("simulate", u, np.ascontiguousarray(y0))
+        return self._rust("simulate", self._u(u), self._y0(x0))
 
     def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
         """``horizon``-step prediction ``yhat(t | t - horizon)`` from measured ``u``, ``y``
         (NARMAX: residual terms from the one-step residuals up to ``t - horizon``)."""
-        y = np.asarray(y, float)
-        y = y[:, None] if y.ndim == 1 else y
-        if y.ndim != 2 or y.shape[1] != self.noutputs:
-            raise DataError(f"y has shape {y.shape} but should be (n, {self.noutputs})")
-        u = self._u(u, y.shape[0])
-        if int(horizon) != horizon or horizon < 1:
-            raise DataError(f"horizon must be a positive integer, got {horizon!r}")
-        return self._rust("predict", u, np.ascontiguousarray(y), int(horizon))
+        return self._rust("predict", *self._measured(u, y, horizon))
 
     def linearize(self) -> Any:
         """The linear ARX model of the first-order terms around zero (a

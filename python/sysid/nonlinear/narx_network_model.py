@@ -22,7 +22,7 @@ import numpy as np
 from .. import _sysid
 from ..errors import DataError
 from ..models.protocol import ModelMixin
-from .narx_model import lag_names
+from .narx_model import LaggedIO, channel_names, lag_names
 
 __all__ = ["NetworkNARXModel"]
 
@@ -53,7 +53,7 @@ def from_rust_nl(t: tuple[Any, ...], nz: int) -> dict[str, Any]:
             "linear": np.asarray(linear, float)}
 
 
-class NetworkNARXModel(ModelMixin):
+class NetworkNARXModel(LaggedIO, ModelMixin):
     """A (MIMO) NARX model whose outputs are sigmoid networks, wavelet networks or tree
     partitions of the lagged outputs and inputs (from :func:`sysid.nlarx`).
 
@@ -110,10 +110,8 @@ class NetworkNARXModel(ModelMixin):
         self.dt, self.name = float(dt), str(name)
         self.noise_variance = (np.ones(ny) if noise_variance is None
                                else np.asarray(noise_variance, float).ravel())
-        self.input_names = ([f"u{j}" for j in range(nu)] if input_names is None
-                            else [str(n) for n in input_names])
-        self.output_names = ([f"y{i}" for i in range(ny)] if output_names is None
-                             else [str(n) for n in output_names])
+        self.input_names = channel_names(input_names, "u", nu)
+        self.output_names = channel_names(output_names, "y", ny)
         self.info: dict[str, Any] = dict(info or {})
         self.evaluate(self.shift[None, :])  # checks the parts in Rust (a DataError if wrong)
 
@@ -150,37 +148,16 @@ class NetworkNARXModel(ModelMixin):
                 "scale": self.scale.tolist(),
                 "outputs": [_rust_nl(d) for d in self.nonlinearities]}
 
-    def _u(self, u: Any, n: int | None = None) -> np.ndarray:
-        u = np.asarray(u, dtype=float)
-        if u.ndim == 1 and self.ninputs == 1:
-            u = u[:, None]
-        if u.ndim != 2 or u.shape[1] != self.ninputs or (n is not None and u.shape[0] != n):
-            raise DataError(f"u has shape {u.shape} but should be (n_samples, {self.ninputs})")
-        return np.ascontiguousarray(u)
-
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
         """Free-run simulation; ``x0`` the first ``max_lag`` outputs ``(max_lag, noutputs)``
         (``None`` or ``"zero"``: zeros). Raises a :class:`~sysid.NumericalError` naming the
         sample when the simulation diverges."""
-        u = self._u(u)
-        lag, ny = self.max_lag, self.noutputs
-        if x0 is None or (isinstance(x0, str) and x0 == "zero"):
-            y0 = np.zeros((lag, ny))
-        else:
-            y0 = np.asarray(x0, float).reshape(-1, ny)[:lag]
-            if y0.shape[0] < lag:
-                raise DataError(f"x0 must hold the first {lag} outputs, shape ({lag}, {ny})")
+        u, y0 = self._u(u), self._y0(x0)
         return np.asarray(_sysid.narx_network_simulate(self._args(), u, np.ascontiguousarray(y0)))
 
     def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
         """``horizon``-step prediction ``yhat(t | t - horizon)`` from measured ``u``, ``y``."""
-        y = np.asarray(y, float)
-        y = y[:, None] if y.ndim == 1 else y
-        if y.ndim != 2 or y.shape[1] != self.noutputs:
-            raise DataError(f"y has shape {y.shape} but should be (n, {self.noutputs})")
-        u = self._u(u, y.shape[0])
-        if int(horizon) != horizon or horizon < 1:
-            raise DataError(f"horizon must be a positive integer, got {horizon!r}")
+        u, y, horizon = self._measured(u, y, horizon)
         return np.asarray(_sysid.narx_network_predict(self._args(), u, np.ascontiguousarray(y),
                                                       int(horizon)))
 

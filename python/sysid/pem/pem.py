@@ -25,6 +25,7 @@ from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
 from ..errors import DataError, IterationLimitWarning, StabilityWarning
+from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
 from ..subspace.feedthrough import FEEDTHROUGH_DEFAULT, check_feedthrough, choose_feedthrough
@@ -123,6 +124,8 @@ class _Setup:
     enforce_stability: bool | None
     stabilized: str | None
     dropped_d: bool = False
+    #: ``weighting="output"``: each output's scale; ``data``, ``C``, ``D``, ``K`` are scaled
+    scale: np.ndarray | None = None
 
     def kwargs(self) -> dict[str, Any]:
         return {"focus": self.focus, "estimate_d": self.feedthrough,
@@ -139,8 +142,8 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: 
         raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
     if weighting is None:
         weighting = "noise" if focus == "prediction" else "identity"
-    if weighting not in ("noise", "identity"):
-        raise DataError(f"weighting must be 'noise' or 'identity', got {weighting!r}")
+    if weighting not in ("noise", "identity", "output"):
+        raise DataError(f"weighting must be 'noise', 'identity' or 'output', got {weighting!r}")
     if noise not in _NOISE:
         raise DataError(f"noise must be 'estimate', 'none' or 'fixed', got {noise!r}")
     if enforce_stability is not None and not isinstance(enforce_stability, (bool, np.bool_)):
@@ -175,10 +178,40 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: 
         else:
             stabilized = "unstable predictor: started from K = 0"
         K = np.zeros((n, l))
+    scale = None
+    if weighting == "output":  # the plain sum of squares of each output relative to its scale
+        data, scale = _scaled_outputs(data)
+        C, D = C / scale[:, None], D / scale[:, None]
+        K = K * scale[None, :] if K is not None else None
     return _Setup(data, A, B, C, D, K, bool(feedthrough),
                   focus == "prediction" and noise == "estimate", weighting,
                   _x0_modes(x0, data.n_experiments, n), focus, enforce_stability, stabilized,
-                  dropped_d)
+                  dropped_d, scale)
+
+
+def _scaled_outputs(data: IOData) -> tuple[IOData, np.ndarray]:
+    """``data`` with each output divided by its root mean square over every experiment (1 for
+    a constant zero output), and those scales."""
+    y = np.vstack([e[1] for e in data.experiments])
+    scale = np.sqrt(np.mean(y ** 2, axis=0))
+    scale = np.where(scale > 0, scale, 1.0)
+    kw = {"dt": data.dt, "input_names": data.input_names, "output_names": data.output_names}
+    us = [e[0] for e in data.experiments]
+    ys = [e[1] / scale for e in data.experiments]
+    return (IOData(u=us[0], y=ys[0], **kw) if len(us) == 1 else IOData(u=us, y=ys, **kw)), scale
+
+
+def _unscaled(model: StateSpaceModel, scale: np.ndarray | None) -> StateSpaceModel:
+    """A model fitted to outputs divided by ``scale``, in the original output units."""
+    if scale is None:
+        return model
+    s = scale[:, None]
+    return StateSpaceModel(
+        model.A, model.B, s * model.C, s * model.D,
+        None if model.K is None else model.K / scale[None, :], dt=model.dt,
+        noise_cov=None if model.noise_cov is None else s * model.noise_cov * scale[None, :],
+        x0=model.x0, input_names=model.input_names, output_names=model.output_names,
+        info=model.info)
 
 
 def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None) -> None:
@@ -274,6 +307,8 @@ def pem(
     local_coordinates: bool = True,
     weighting: str | None = None,
     enforce_stability: bool | None = None,
+    periods: int | str | None = None,
+    transient: int | None = None,
 ) -> StateSpaceModel:
     """Refine a state-space model by minimising its prediction (or simulation) errors.
 
@@ -319,12 +354,16 @@ def pem(
         is held in its real block-diagonal (modal) form, the entries outside its 1x1 and 2x2
         blocks at zero, so each iteration costs a fraction of a full one; the refined model
         and its covariance are mapped back to the start's state basis.
-    weighting : {"noise", "identity"}, optional
+    weighting : {"noise", "identity", "output"}, optional
         ``"noise"``: weight the errors by the inverse of their covariance, re-estimated between
         iterations (the determinant criterion, maximum likelihood for Gaussian innovations);
         ``"identity"``: plain sum of squares. Default ``"noise"`` for prediction focus and
         ``"identity"`` for simulation focus (simulation errors are not white, and on the
         shipped records the plain sum gives the better validation fit; see docs/pem.md).
+        ``"output"``: the plain sum of squares of each output's errors divided by that
+        output's mean square (the fit % of every output counts alike, whatever its units;
+        ``info["pem"]["output_scale"]``, the criterion in those units); the same as
+        ``"identity"`` for one output.
     enforce_stability : bool, optional
         Keep ``A`` stable (MATLAB's ``EnforceStability``). ``focus="simulation"`` always
         does. ``None`` (default): with ``focus="prediction"`` the predictor ``A - K C`` is
@@ -332,6 +371,26 @@ def pem(
         better (likelihood-ratio test at the 1 % level); then a
         :class:`sysid.StabilityWarning` names the largest pole modulus. ``False``: only the
         predictor is kept stable (a warning still says when the model is unstable).
+    periods : int or "auto", optional
+        The data are periodic: every experiment holds this many whole periods (at least 2
+        after the ``transient`` ones). ``"auto"``: detected from the input
+        (:func:`sysid.detect_period`, exact repetition; a trailing partial period is
+        dropped); when the input is not periodic, or fewer than 2 periods remain after the
+        transient, the refinement runs in the time domain as without ``periods`` and
+        ``info["pem"]["periodicity"]`` says why. The model is then fitted in the
+        frequency domain on the excited lines only (:mod:`sysid.pem.periodic`): the response
+        averaged over the periods (:func:`sysid.bla`), each entry weighted by the inverse of
+        its noise variance from the periods, ``A`` held in its real modal form, no initial
+        state and no noise model (``K = 0``: ``focus``, ``x0`` and ``noise`` do not apply;
+        ``weighting`` may only be ``"noise"``). The model is stable and in the modal basis.
+        ``data`` may also be an :class:`sysid.FRD` with ``std`` (for example from
+        :func:`sysid.bla`), fitted the same way.
+    transient : int, optional
+        Leading periods dropped because the output's response to the start of the
+        excitation has not settled. Default: 1 with ``periods="auto"`` (the usual practice
+        with a multisine applied from rest), 0 with a declared ``periods`` (its periods are
+        in steady state, as before). ``info["pem"]["periodicity"]`` records the period, the
+        whole periods, the transient and (``"auto"``) the detection.
 
     Returns
     -------
@@ -368,6 +427,19 @@ def pem(
     >>> bool(np.allclose(np.sort_complex(m.poles()), np.sort_complex(true.poles()), atol=0.02))
     True
     """
+    periodicity = None
+    if isinstance(data, FRD):
+        return _pem_periodic(data, model, data, feedthrough, max_iter, tol, progress,
+                             weighting, regularization)
+    if periods is not None or transient is not None:
+        from .periodic import resolve_periods
+
+        frd, periodicity = resolve_periods(_experiments(data), periods, transient)
+        if frd is not None:
+            out = _pem_periodic(data, model, frd, feedthrough, max_iter, tol, progress,
+                                weighting, regularization)
+            out.info["pem"]["periodicity"] = periodicity
+            return out
     ft_selection = None
     if check_feedthrough(feedthrough) == "auto":
         from ..subspace.estimator import SubspaceEstimator
@@ -424,16 +496,18 @@ def pem(
         a, b, c = take(n, n), take(n, m_), take(l, n)
         d = take(l, m_) if feedthrough else res["d"]
         k = take(n, l) if estimate_k else Kres
-        return StateSpaceModel(a, b, c, d, k, dt=data.dt)
+        return _unscaled(StateSpaceModel(a, b, c, d, k, dt=data.dt), st.scale)
 
     info = dict(model.info) if model.info else {}
     info["method"] = "pem"
     info["start_method"] = model.info.get("method") if model.info else None
     info["pem"] = {
+        "domain": "time",
         "iterations": res["iterations"],
         "evaluations": res["evaluations"],
         "cost": list(res["history"]),
         "criterion": "det" if weighting == "noise" else "sum of squares",
+        "output_scale": None if st.scale is None else st.scale.tolist(),
         "weighted_cost": list(res["weighted_history"]),
         "loss_history": list(res["loss_history"]),
         "stop": res["stop"],
@@ -454,15 +528,79 @@ def pem(
         "x0_values": x0s,
         "estimated_x0": est_x0,
     }
+    if periodicity is not None:
+        info["pem"]["periodicity"] = periodicity
     if ft_selection is not None:
         info["feedthrough_selection"] = ft_selection
     out = StateSpaceModel(
         res["a"], res["b"], res["c"], res["d"], Kres, dt=data.dt,
         noise_cov=res["innovation_covariance"], x0=x0s[0] if len(x0s) == 1 else None,
         input_names=data.input_names, output_names=data.output_names, info=info)
+    out = _unscaled(out, st.scale)
     out.uncertainty = _uncertainty(
         res["theta"], res["covariance"], build, int(res["rank"]),
         _names(n, model.ninputs, l, bool(feedthrough), estimate_k and K is not None, len(est_x0)))
+    return out
+
+
+def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
+                  max_iter: int, tol: float, progress: Any, weighting: str | None,
+                  regularization: Any) -> StateSpaceModel:
+    """:func:`pem` on the excited lines of periodic data (or of an FRD with std)."""
+    from .periodic import CRITERION, pem_lines
+
+    if not isinstance(model, StateSpaceModel):
+        raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
+    if weighting not in (None, "noise") or regularization is not None:
+        raise DataError("the frequency-domain refinement of periodic data weights each line "
+                        "by its noise variance and takes no regularization: leave weighting "
+                        "and regularization out, or refine in the time domain (no periods=)")
+    ft = check_feedthrough(feedthrough)
+    if ft == "auto":
+        if isinstance(data, FRD):
+            raise DataError("feedthrough='auto' decides from a time record; pass True or False")
+        from ..subspace.estimator import SubspaceEstimator
+
+        ft, _ = choose_feedthrough(SubspaceEstimator(_experiments(data)), model.nstates)
+    if not ft and np.any(model.D != 0):
+        warnings.warn("the start model has a non-zero D and feedthrough=False (the default "
+                      "of every sysid estimator): it is refined with D = 0; pass "
+                      "feedthrough=True to refine D as well", UserWarning, stacklevel=3)
+    max_iter = as_int(max_iter, "max_iter", 0)
+    tol = float(tol)
+    if not (np.isfinite(tol) and tol >= 0):
+        raise DataError(f"tol must be finite and >= 0, got {tol}")
+    res, extra = pem_lines(frd, model, feedthrough=bool(ft), max_iter=max_iter, tol=tol,
+                           progress=progress, stabilize=_stabilize)
+    _warn(res, "frequency-domain", max_iter, True)
+    n, m_, l = model.nstates, model.ninputs, model.noutputs
+    d_fixed = res["d"]
+    dt = float(frd.dt) if frd.dt is not None else 1.0  # pem_lines refused an FRD without dt
+
+    def build(theta: np.ndarray) -> StateSpaceModel:
+        th = np.asarray(theta, dtype=float)
+        o = [0, n * n, n * n + n * m_, n * (n + m_ + l)]
+        d = th[o[3]:o[3] + l * m_].reshape(l, m_) if ft else d_fixed
+        return StateSpaceModel(th[:o[1]].reshape(n, n), th[o[1]:o[2]].reshape(n, m_),
+                               th[o[2]:o[3]].reshape(l, n), d, dt=dt)
+
+    info = dict(model.info) if model.info else {}
+    info["method"] = "pem"
+    info["start_method"] = model.info.get("method") if model.info else None
+    info["pem"] = {
+        "iterations": res["iterations"], "evaluations": res["evaluations"],
+        "cost": list(res["history"]), "criterion": CRITERION,
+        "weighted_cost": list(res["weighted_history"]), "stop": res["stop"],
+        "condition": res["condition"], "focus": "simulation", "weighting": "noise",
+        "feedthrough": bool(ft), "noise": "none", "x0": [],
+        "spectral_radius": float(res["spectral_radius"]), "enforce_stability": True,
+        "n_parameters": int(res["theta"].size), "rank": int(res["rank"]), **extra,
+    }
+    out = StateSpaceModel(res["a"], res["b"], res["c"], res["d"], None, dt=dt,
+                          input_names=frd.input_names, output_names=frd.output_names,
+                          info=info)
+    out.uncertainty = _uncertainty(res["theta"], res["covariance"], build, int(res["rank"]),
+                                   _names(n, m_, l, bool(ft), False, 0))
     return out
 
 

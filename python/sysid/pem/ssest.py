@@ -35,6 +35,8 @@ def ssest(
     regularization: dict[str, Any] | None = None,
     progress: bool | None | Callable[..., Any] = None,
     enforce_stability: bool | None = None,
+    periods: int | str | None = None,
+    transient: int | None = None,
 ) -> StateSpaceModel:
     """Estimate a state-space model: the best subspace start, refined by :func:`pem`.
 
@@ -69,6 +71,17 @@ def ssest(
         ``"ssarx"`` for closed-loop data (their start is consistent under feedback, and the
         start's ``B, D`` are then not re-fitted on the data with ``x0``, which would be an
         output-error fit).
+    periods : int or "auto", optional
+        Periodic data (at least 2 whole periods after the ``transient`` ones): the
+        candidates (the subspace weightings, and the frequency-domain subspace fit of the
+        averaged response, :func:`sysid.frd_subspace`) are scored on the excited lines and
+        the best is refined there (:func:`pem` with ``periods``; ``focus``, ``x0`` and
+        ``noise`` do not apply). ``"auto"``: the period detected from the input
+        (:func:`sysid.detect_period`); not periodic: the time-domain estimate, with the
+        reason in ``info["pem"]["periodicity"]``.
+    transient : int, optional
+        Leading periods dropped: default 1 with ``periods="auto"``, 0 with a declared
+        ``periods`` (as :func:`pem`).
 
     Returns
     -------
@@ -89,6 +102,20 @@ def ssest(
     True
     """
     data = _experiments(data)
+    if periods is not None or transient is not None:
+        from .periodic import resolve_periods
+
+        frd, periodicity = resolve_periods(data, periods, transient)
+        if frd is not None:
+            model = _ssest_periodic(data, order, frd, feedthrough, horizon, methods, method,
+                                    max_iter, tol, progress, regularization)
+        else:
+            model = ssest(data, order, focus=focus, feedthrough=feedthrough, x0=x0,
+                          noise=noise, horizon=horizon, methods=methods, method=method,
+                          max_iter=max_iter, tol=tol, regularization=regularization,
+                          progress=progress, enforce_stability=enforce_stability)
+        model.info.setdefault("pem", {})["periodicity"] = periodicity
+        return model
     if check_feedthrough(feedthrough) == "auto":
         # decided once from the data (the rule every estimator shares), then a fixed choice
         use, why = choose_feedthrough(SubspaceEstimator(data, horizon, method=method or "moesp"),
@@ -145,4 +172,52 @@ def ssest(
         "bd_x0": best[2],
         "losses": {f"{c[1]}{'+x0' if c[2] else ''}": c[0] for c in candidates},
     }
+    return model
+
+
+def _ssest_periodic(data: Any, order: Any, frd: Any, feedthrough: Any,
+                    horizon: int | None, methods: tuple[str, ...], method: str | None,
+                    max_iter: int, tol: float, progress: Any,
+                    regularization: Any) -> StateSpaceModel:
+    """:func:`ssest` on the excited lines of periodic data: the stable candidate with the
+    lowest weighted misfit on the lines, refined there."""
+    from ..subspace.frd_subspace import frd_subspace
+    from .periodic import line_weights, lines_cost
+
+    if regularization is not None:
+        raise DataError("regularization does not apply to the frequency-domain refinement of "
+                        "periodic data; leave it out, or call ssest without periods=")
+    if isinstance(order, str) or np.ndim(order):
+        raise DataError("with periods= give the order as an integer (the order search runs "
+                        "in the time domain: call ssest without periods= to choose it)")
+    order = as_int(order, "order", 1)
+    ft = check_feedthrough(feedthrough)
+    if ft == "auto":
+        ft, _ = choose_feedthrough(SubspaceEstimator(data, horizon), order)
+    est = SubspaceEstimator(data, horizon)
+    candidates = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for name in methods if method is None else (method,):
+            try:
+                candidates.append((name, est.fit(order, method=name, feedthrough=ft)))
+            except SysidError:
+                continue
+        try:
+            w = np.mean(line_weights(frd), axis=(1, 2))
+            candidates.append(("frd_subspace", frd_subspace(frd, order, weights=w / w.mean(),
+                                                            feedthrough=bool(ft))))
+        except SysidError:
+            pass
+    scored = [(lines_cost(frd, c) if np.max(np.abs(c.poles()), initial=0.0) < 1 else np.inf,
+               name, c) for name, c in candidates]
+    if not scored:
+        raise DataError("no subspace start could be computed for this order; lower the order")
+    scored.sort(key=lambda c: c[0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OffsetWarning)
+        model = pem(frd, scored[0][2], feedthrough=bool(ft), max_iter=max_iter, tol=tol,
+                    progress=progress)
+    model.info["start"] = {"method": scored[0][1], "bd_x0": False,
+                           "losses": {c[1]: c[0] for c in scored}}
     return model

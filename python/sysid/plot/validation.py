@@ -26,37 +26,20 @@ def _fig(fig: Any, nrows: int, ncols: int = 1, height: float = 2.4) -> tuple[Any
     return fig, axes
 
 
-def plot_compare(result: Any, experiment: int = 0, fig: Any = None) -> Any:
-    """Measured and model outputs of a :class:`~sysid.validation.CompareResult`."""
-    y, yh = result.y[experiment], result.yhat[experiment]
-    l = y.shape[1]
-    fig, axes = _fig(fig, l)
-    t = np.arange(y.shape[0]) * result.dt
-    for j in range(l):
-        ax = axes[j, 0]
-        ax.plot(t, y[:, j], color="0.3", lw=1.0, label="measured")
-        ax.plot(t, yh[:, j], color="C0", lw=1.0,
-                label=f"{result.kind} (fit {result.fit[experiment, j]:.1f} %)")
-        ax.set_ylabel(result.output_names[j])
-        ax.legend(loc="best", fontsize=8)
-        ax.grid(True, alpha=0.3)
-    axes[-1, 0].set_xlabel("time [s]")
-    fig.tight_layout()
-    return fig
-
-
-def plot_compare_set(cset: Any, experiment: int = 0, fig: Any = None) -> Any:
-    """Measured outputs and every model's of a :class:`~sysid.validation.comparison.CompareSet`
-    (a model that diverged is named in the legend, not drawn)."""
-    first = cset.results[0]
+def _plot_outputs(results: list[Any], names: list[str], experiment: int, fig: Any,
+                  skip_diverged: bool) -> Any:
+    """Measured outputs of ``experiment`` (from the first result) and each result's model
+    outputs, one axis per output, labelled ``name (fit ...)``; with ``skip_diverged`` a
+    result that diverged is named in the legend, not drawn."""
+    first = results[0]
     y = first.y[experiment]
     fig, axes = _fig(fig, y.shape[1])
     t = np.arange(y.shape[0]) * first.dt
     for j in range(y.shape[1]):
         ax = axes[j, 0]
         ax.plot(t, y[:, j], color="0.3", lw=1.0, label="measured")
-        for k, (name, r) in enumerate(zip(cset.names, cset.results)):
-            if r.diverged[experiment]:
+        for k, (name, r) in enumerate(zip(names, results)):
+            if skip_diverged and r.diverged[experiment]:
                 ax.plot([], [], color=f"C{k}", label=f"{name}: diverged")
                 continue
             ax.plot(t, r.yhat[experiment][:, j], color=f"C{k}", lw=1.0,
@@ -67,6 +50,18 @@ def plot_compare_set(cset: Any, experiment: int = 0, fig: Any = None) -> Any:
     axes[-1, 0].set_xlabel("time [s]")
     fig.tight_layout()
     return fig
+
+
+def plot_compare(result: Any, experiment: int = 0, fig: Any = None) -> Any:
+    """Measured and model outputs of a :class:`~sysid.validation.CompareResult`."""
+    return _plot_outputs([result], [result.kind], experiment, fig, skip_diverged=False)
+
+
+def plot_compare_set(cset: Any, experiment: int = 0, fig: Any = None) -> Any:
+    """Measured outputs and every model's of a :class:`~sysid.validation.comparison.CompareSet`
+    (a model that diverged is named in the legend, not drawn)."""
+    return _plot_outputs(list(cset.results), list(cset.names), experiment, fig,
+                         skip_diverged=True)
 
 
 def plot_residuals(res: Any, fig: Any = None) -> Any:

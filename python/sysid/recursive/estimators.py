@@ -114,22 +114,27 @@ class _Recursive:
         self._orders = (as_int(na, "na", 0), nb_v, as_int(nc, "nc", 0), as_int(nd, "nd", 0),
                         nf_v, nk_v)
         self.method, self.dt = method, float(dt)
-        p = sum(self._orders[0:1]) + sum(nb_v) + nc + nd + sum(nf_v)
-        q = None
+        P0 = np.asarray(initial_covariance, dtype=float)
+        theta0 = None if initial_parameters is None else np.ascontiguousarray(
+            np.asarray(initial_parameters, dtype=float).ravel())
+
+        def build(q: np.ndarray | None) -> Any:
+            return _sysid.RecursiveEstimator(
+                *self._orders, method=method, forgetting=float(forgetting), process_noise=q,
+                noise_variance=float(noise_variance), gain=float(gain), bias=float(bias),
+                theta0=theta0, p0=float(P0) if P0.ndim == 0 else 1.0)
+
+        # the core checks the structure (and its size) first: the process-noise matrix is
+        # sized from the parameter count it accepted, never from unchecked orders
+        self._core = build(None)
         if process_noise is not None:
+            p = self.n_parameters
             q = np.asarray(process_noise, dtype=float)
             q = q * np.eye(p) if q.ndim == 0 else q
             if q.shape != (p, p):
                 raise ShapeError(f"process_noise has shape {q.shape} but should be ({p}, {p}) "
                                  f"or a number (times the identity)")
-            q = np.ascontiguousarray(q)
-        P0 = np.asarray(initial_covariance, dtype=float)
-        theta0 = None if initial_parameters is None else np.ascontiguousarray(
-            np.asarray(initial_parameters, dtype=float).ravel())
-        self._core = _sysid.RecursiveEstimator(
-            *self._orders, method=method, forgetting=float(forgetting), process_noise=q,
-            noise_variance=float(noise_variance), gain=float(gain), bias=float(bias),
-            theta0=theta0, p0=float(P0) if P0.ndim == 0 else 1.0)
+            self._core = build(np.ascontiguousarray(q))
         if P0.ndim != 0:
             self.covariance = P0
 
@@ -281,10 +286,6 @@ _SETTINGS_DOC = """
     dt : float
         Sample time of the models :meth:`to_model` returns.
 """
-
-
-def _settings(kw: dict[str, Any]) -> dict[str, Any]:
-    return kw
 
 
 class RecursiveARX(_Recursive):

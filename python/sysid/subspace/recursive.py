@@ -13,13 +13,12 @@ from __future__ import annotations
 
 from typing import Any
 
-import numpy as np
-
 from .. import _sysid
 from .._checks import as_int
 from ..errors import DataError, InsufficientDataError
 from ..models.statespace import StateSpaceModel
 from .feedthrough import check_feedthrough
+from .streaming import as_chunk
 
 __all__ = ["RecursiveSubspace"]
 
@@ -78,15 +77,6 @@ class RecursiveSubspace:
         self.model: StateSpaceModel | None = None
         self.n_samples = 0
 
-    @staticmethod
-    def _as2d(x: Any, name: str) -> np.ndarray:
-        a = np.asarray(x, dtype=float)
-        if a.ndim == 1:
-            a = a[:, None]
-        if a.ndim != 2:
-            raise DataError(f"{name} must be 1-D or 2-D (samples x channels), got {a.ndim}-D")
-        return np.ascontiguousarray(a)
-
     def update(self, u: Any, y: Any) -> StateSpaceModel | None:
         """Fold a chunk in and return the current model (``None`` until the factor has more
         columns than rows, i.e. about ``2 horizon (m + l)`` samples).
@@ -98,9 +88,7 @@ class RecursiveSubspace:
         y : array_like
             ``(samples, l)`` or 1-D.
         """
-        yy = self._as2d(y, "y")
-        uu = (np.zeros((yy.shape[0], 0)) if u is None or np.size(u) == 0
-              else self._as2d(u, "u"))
+        uu, yy = as_chunk(u, y, allow_empty=True)  # whole, before the first sizes the factor
         if self._rec is None:
             self._rec = _sysid.RecursiveFactor(uu.shape[1], yy.shape[1], self.horizon,
                                                self.horizon, self.forgetting)

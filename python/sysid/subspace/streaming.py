@@ -22,7 +22,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_2d, as_int, as_option
 from .._progress import Bar, show
-from ..errors import DataError
+from ..errors import DataError, ShapeError
 
 __all__ = [
     "compress_stream",
@@ -124,6 +124,29 @@ def _release_pages(arr: np.ndarray, start: int, stop: int) -> None:
             mm.madvise(mmap.MADV_DONTNEED, lo, hi - lo)
     except (ValueError, OSError, TypeError, BufferError):
         return
+
+
+def as_chunk(u: Any, y: Any, allow_empty: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """A chunk ``(u, y)`` of a stream checked whole (numeric, finite, ``(samples, channels)``,
+    ``u`` and ``y`` equally long; ``u`` ``None`` or empty for output-only data), so that a
+    bad first chunk is refused before it sizes a compressor.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.subspace.streaming import as_chunk
+    >>> u, y = as_chunk(None, np.ones(4))
+    >>> u.shape, y.shape
+    ((4, 0), (4, 1))
+    """
+    y2 = as_2d(y, "y", allow_empty=allow_empty)
+    u2 = np.zeros((y2.shape[0], 0)) if u is None else as_2d(u, "u", allow_empty=True)
+    if u2.size == 0:
+        u2 = np.zeros((y2.shape[0], 0))
+    if u2.shape[0] != y2.shape[0]:
+        raise ShapeError(f"u has {u2.shape[0]} samples but y has {y2.shape[0]} in a chunk; "
+                         "each (u, y) chunk must be equally long")
+    return np.ascontiguousarray(u2), np.ascontiguousarray(y2)
 
 
 def _array_chunks(u: Any, y: Any, chunk_size: int) -> Iterator[tuple[np.ndarray, np.ndarray]]:
@@ -286,6 +309,9 @@ def compress_stream(
         raise DataError("source has no experiments")
     totals = [n for _, n in exps]
     total = None if any(n is None for n in totals) else sum(n for n in totals if n is not None)
+    # known lengths (arrays, memmaps, Parquet): the horizon is checked against the longest
+    # experiment before the compressor is sized; a generator's record is checked at finish
+    longest = None if total is None else max(n for n in totals if n is not None)
     bar = Bar(total, f"compress ({compressor})", unit="samples", enabled=show(progress),
               unit_scale=True)
     comp = None
@@ -297,16 +323,10 @@ def compress_stream(
                         "each chunk of the source must be a (u, y) pair (u may be None for "
                         f"output-only data), got {type(chunk).__name__}"
                     )
-                u, y = chunk
-                y2 = as_2d(y, "y")
-                if u is None:
-                    u = np.zeros((y2.shape[0], 0))
-                u2 = as_2d(u, "u", allow_empty=True)
-                if u2.shape[0] == 0 and y2.shape[0] > 0:
-                    u2 = np.zeros((y2.shape[0], 0))
+                u2, y2 = as_chunk(*chunk)
                 if comp is None:
                     comp = _sysid.StreamingCompressor(
-                        u2.shape[1], y2.shape[1], past, future, compressor
+                        u2.shape[1], y2.shape[1], past, future, compressor, longest=longest
                     )
                 comp.push(u2, y2)
                 bar.update(y2.shape[0])
@@ -342,11 +362,13 @@ def _rereadable(source: Any) -> bool:
 
 
 def _partial_sums(
-    block: np.ndarray, m: int, past: int, future: int, center: np.ndarray, scale: np.ndarray
+    block: np.ndarray, m: int, past: int, future: int, center: np.ndarray, scale: np.ndarray,
+    longest: int | None = None,
 ) -> Any:
     """Correlation sums of one Dask block (runs on a worker)."""
     block = np.asarray(block, dtype=np.float64)
-    s = _sysid.CorrelationSums(m, block.shape[1] - m, past, future, center, scale)
+    s = _sysid.CorrelationSums(m, block.shape[1] - m, past, future, center, scale,
+                               longest=longest)
     s.push(block[:, :m], block[:, m:])
     return s
 
@@ -402,8 +424,12 @@ def compress_dask(
     center, scale = _sysid.CorrelationSums.center_scale(
         np.ascontiguousarray(head[:, :m]), np.ascontiguousarray(head[:, m:])
     )
+    # the horizon against the record's length, before any worker sizes its sums (an exact
+    # compressor allocates nothing before its first window: a check that costs nothing)
+    n = int(z.shape[0])
+    _sysid.StreamingCompressor(m, int(z.shape[1]) - m, past, future, "qr", 1, longest=n)
     blocks = z.to_delayed().ravel()
-    tasks = [dask.delayed(_partial_sums)(b, m, past, future, center, scale) for b in blocks]
+    tasks = [dask.delayed(_partial_sums)(b, m, past, future, center, scale, n) for b in blocks]
     parts = list(dask.compute(*tasks))
     factor = _merge_tree(parts).to_factor(min_relative_pivot)
     warn_if_fallback(factor)

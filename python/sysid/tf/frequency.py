@@ -25,7 +25,7 @@ from ..errors import DataError
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 from .model import TransferFunction
-from .options import blockdiag, delays, orders, progress_callback
+from .options import blockdiag, delays, pole_zero_orders, progress_callback
 
 __all__ = ["tfest_frd", "sanathanan_koerner"]
 
@@ -118,11 +118,7 @@ def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
               max_iter: int, tol: float, progress: Any) -> TransferFunction:
     """The FRD branch of :func:`sysid.tfest` (see the module documentation)."""
     l, m = frd.n_outputs, frd.n_inputs
-    npo = orders(n_poles, l, m, "n_poles", 0)
-    nze = np.maximum(npo - 1, 0) if n_zeros is None else orders(n_zeros, l, m, "n_zeros", 0)
-    if np.any(nze > npo):
-        raise DataError("n_zeros must not exceed n_poles (the model would be improper); give "
-                        "n_zeros <= n_poles")
+    npo, nze = pole_zero_orders(n_poles, n_zeros, l, m)
     given, auto = delays(iodelay, l, m)
     dtv = 0.0 if dt is None else float(dt)
     if dtv and (frd.dt is None or abs(dtv - float(frd.dt)) > 1e-9 * dtv):

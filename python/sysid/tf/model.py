@@ -17,11 +17,12 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_2d
+from .._checks import as_2d, as_dt
 from ..errors import DataError, ShapeError
+from ..greybox.delays import shift_taps
 from ..models.protocol import ModelMixin, TimeResponse
 from ..models.statespace import StateSpaceModel
-from .sampling import canonical, sample_pair, shift_columns, split_delay
+from .sampling import canonical, sample_pair, split_delay
 
 __all__ = ["TransferFunction"]
 
@@ -296,17 +297,15 @@ class TransferFunction(ModelMixin):
         if dt is None:
             raise DataError("a continuous-time model needs the sample time of the data: pass "
                             "dt (or use sysid.compare with an IOData)")
-        dt = float(dt)
-        if not np.isfinite(dt) or dt <= 0:
-            raise DataError(f"dt must be a positive number of seconds, got {dt}")
+        dt = as_dt(dt)
         Ad, Bt, Cd, Dt, taps, G = self.sampled_taps(dt, hold)
         z0 = -G @ u[0] if u.shape[0] else np.zeros(Ad.shape[0])
         if x0 is not None:
             z0 = z0 + np.asarray(x0, dtype=float).reshape(-1)
         if Ad.shape[0] == 0:  # a pure gain
-            return shift_columns(u, taps) @ Dt.T
+            return shift_taps(u, taps) @ Dt.T
         ss = StateSpaceModel(Ad, Bt, Cd, Dt, dt=dt)
-        return ss.simulate(shift_columns(u, taps), z0 if np.any(z0) else None)
+        return ss.simulate(shift_taps(u, taps), z0 if np.any(z0) else None)
 
     def predict(self, u: Any, y: Any, horizon: int = 1, *, dt: float | None = None
                 ) -> np.ndarray:

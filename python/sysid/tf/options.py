@@ -9,8 +9,8 @@ import numpy as np
 
 from ..errors import DataError
 
-__all__ = ["orders", "delays", "search_limits", "progress_callback", "blockdiag",
-           "fit_percent"]
+__all__ = ["orders", "pole_zero_orders", "delays", "search_limits", "progress_callback",
+           "blockdiag", "fit_percent"]
 
 
 def orders(x: Any, l: int, m: int, name: str, lo: int) -> np.ndarray:
@@ -25,6 +25,25 @@ def orders(x: Any, l: int, m: int, name: str, lo: int) -> np.ndarray:
     if np.any(out < lo) or np.any(out > 30):
         raise DataError(f"{name} must lie in {lo}..30, got {out.ravel().tolist()}")
     return out
+
+
+def pole_zero_orders(n_poles: Any, n_zeros: Any, l: int, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """Poles and zeros per output/input pair (``n_zeros=None``: one fewer than the poles),
+    checked proper.
+
+    Examples
+    --------
+    >>> from sysid.tf.options import pole_zero_orders
+    >>> npo, nze = pole_zero_orders(2, None, 1, 2)
+    >>> npo.tolist(), nze.tolist()
+    ([[2, 2]], [[1, 1]])
+    """
+    npo = orders(n_poles, l, m, "n_poles", 0)
+    nze = np.maximum(npo - 1, 0) if n_zeros is None else orders(n_zeros, l, m, "n_zeros", 0)
+    if np.any(nze > npo):
+        raise DataError("n_zeros must not exceed n_poles (the model would be improper); give "
+                        "n_zeros <= n_poles")
+    return npo, nze
 
 
 def delays(iodelay: Any, l: int, m: int) -> tuple[np.ndarray, bool]:

@@ -24,8 +24,9 @@ import numpy as np
 
 from .. import _sysid
 from ..errors import DataError
+from ..greybox.delays import shift_taps
 from .model import assemble
-from .sampling import canonical, sample_pair, shift_columns
+from .sampling import canonical, sample_pair
 from .sensitivity import pair_derivatives
 
 __all__ = ["PairStructure", "refine", "ConvergenceWarning"]
@@ -180,7 +181,7 @@ def _run(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarray
     nz = z0.size
     z0 = np.concatenate([z0, np.zeros(mp.n_x0)])
     inf = np.full(mp.n_x0, np.inf)
-    data = [(np.ascontiguousarray(shift_columns(u, mp.taps)), np.ascontiguousarray(y[:, None]))
+    data = [(np.ascontiguousarray(shift_taps(u, mp.taps)), np.ascontiguousarray(y[:, None]))
             for u, y in exps]
     res = _sysid.greybox_linear(
         (mp.n, len(mp.taps), 1), data, mp, list(map(float, z0)), focus="simulation",

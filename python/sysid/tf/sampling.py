@@ -37,7 +37,7 @@ import numpy as np
 from .. import _sysid
 from ..errors import DataError
 
-__all__ = ["canonical", "sample_pair", "split_delay", "shift_columns"]
+__all__ = ["canonical", "sample_pair", "split_delay"]
 
 _SNAP = 1e-9
 
@@ -138,20 +138,3 @@ def sample_pair(A: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray, dt: 
     G = _foh_shift(A, b, dt, r) if whole == 0 else np.zeros(n)
     return Ad, [(int(s), np.asarray(bc), np.asarray(dc)) for s, bc, dc in cols], G
 
-
-def shift_columns(u: np.ndarray, shifts: list[tuple[int, int]]) -> np.ndarray:
-    """Columns ``u[:, j]`` delayed by ``s`` samples (zeros before), one per ``(j, s)``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from sysid.tf.sampling import shift_columns
-    >>> shift_columns(np.arange(1.0, 4.0)[:, None], [(0, 0), (0, 2)])[:, 1]
-    array([0., 0., 1.])
-    """
-    N = u.shape[0]
-    out = np.zeros((N, len(shifts)))
-    for k, (j, s) in enumerate(shifts):
-        if s < N:
-            out[s:, k] = u[:N - s, j]
-    return out

@@ -24,7 +24,8 @@ from __future__ import annotations
 import numpy as np
 
 from .. import _sysid
-from .sampling import sample_pair, shift_columns, split_delay
+from ..greybox.delays import shift_taps
+from .sampling import sample_pair, split_delay
 
 __all__ = ["srivc"]
 
@@ -96,7 +97,7 @@ def _step(u: np.ndarray, y: np.ndarray, dt: float, tau: float, hold: str, a: np.
     for c, (_, bc, dc) in enumerate(cu):
         Bd[ny:, len(ty) + c], Ds[ny + 1:, len(ty) + c] = bc, dc
     L = np.hstack([Ly, Lu])
-    V = np.hstack([shift_columns(y[:, None], ty), shift_columns(u[:, None], tu)])
+    V = np.hstack([shift_taps(y[:, None], ty), shift_taps(u[:, None], tu)])
     G = _sysid.tf_filtered_gram(Ad, Bd, np.ascontiguousarray(L @ Cs),
                                 np.ascontiguousarray(L @ Ds), V)
     p = n + m + 1

@@ -11,7 +11,14 @@ from ..errors import DataError
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 from .model import TransferFunction
-from .options import blockdiag, delays, fit_percent, orders, progress_callback, search_limits
+from .options import (
+    blockdiag,
+    delays,
+    fit_percent,
+    pole_zero_orders,
+    progress_callback,
+    search_limits,
+)
 from .refine import PairStructure, check_experiments, refine
 from .srivc import srivc
 
@@ -100,11 +107,7 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     l, m = data.n_outputs, data.n_inputs
     if m == 0:
         raise DataError("tfest needs at least one input; for a time series use sysid.ar")
-    npo = orders(n_poles, l, m, "n_poles", 0)
-    nze = np.maximum(npo - 1, 0) if n_zeros is None else orders(n_zeros, l, m, "n_zeros", 0)
-    if np.any(nze > npo):
-        raise DataError("n_zeros must not exceed n_poles (the model would be improper); give "
-                        "n_zeros <= n_poles")
+    npo, nze = pole_zero_orders(n_poles, n_zeros, l, m)
     fixed_delays, auto = delays(iodelay, l, m)
     if dt is not None:
         return _discrete(data, npo, nze, fixed_delays, auto, dt, max_iter, progress)

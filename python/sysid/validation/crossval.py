@@ -127,10 +127,12 @@ def _io(exps: list[tuple[np.ndarray, np.ndarray]], kw: dict[str, Any]) -> IOData
     return IOData(u=[e[0] for e in exps], y=[e[1] for e in exps], **kw)
 
 
-def simulation_errors(model: Any, data: IOData) -> list[tuple[np.ndarray, np.ndarray]]:
+def simulation_errors(model: Any, data: IOData, trend: bool = False
+                      ) -> list[tuple[np.ndarray, np.ndarray]]:
     """``(y, y - yhat)`` per experiment: the model's simulation with its initial state and a
-    constant offset per output fitted by least squares (see :func:`simulation_fit`).
-    Raises when the model cannot be simulated on the data."""
+    constant offset per output fitted by least squares (see :func:`simulation_fit`); with
+    ``trend``, a straight line per output instead of the offset. Raises when the model cannot
+    be simulated on the data."""
     out = []
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
@@ -138,8 +140,11 @@ def simulation_errors(model: Any, data: IOData) -> list[tuple[np.ndarray, np.nda
             ys = model.simulate(u)
             n, l = model.nstates, y.shape[1]
             cols = [np.kron(np.ones((u.shape[0], 1)), np.eye(l))]  # (N l, l) offsets
-            cols += [model.simulate(np.zeros_like(u), x0=np.eye(n)[i]).reshape(-1, 1)
-                     for i in range(n)]
+            if trend:
+                ramp = np.linspace(-1.0, 1.0, u.shape[0])[:, None]
+                cols.append(np.kron(ramp, np.eye(l)))  # (N l, l) slopes
+            if n:
+                cols.append(_free_responses(model, u.shape[0]))
             phi = np.hstack(cols)
             if not (np.all(np.isfinite(phi)) and np.all(np.isfinite(ys))):
                 raise FloatingPointError("the model diverges on these data")
@@ -155,7 +160,24 @@ def simulation_errors(model: Any, data: IOData) -> list[tuple[np.ndarray, np.nda
     return out
 
 
-def simulation_fit(model: Any, data: IOData) -> float:
+def _free_responses(model: Any, count: int) -> np.ndarray:
+    """The ``(count l, n)`` matrix of ``C A^t``, ``t < count`` (the free response of every
+    initial state), from ``l`` simulations of the dual ``z(t+1) = A^T z``, ``z(0) = C[j]``
+    (whose states are the ``j``-th rows), not ``n`` simulations of the model: the held-out
+    scoring of thousands of candidates of orders up to 20 spends its time here."""
+    from .. import _sysid
+
+    A, C = np.asarray(model.A, float), np.asarray(model.C, float)
+    n, l = A.shape[0], C.shape[0]
+    at, eye = np.ascontiguousarray(A.T), np.eye(n)
+    zb, zd, zu = np.zeros((n, 1)), np.zeros((n, 1)), np.zeros((count, 1))
+    out = np.empty((count, l, n))
+    for j in range(l):
+        out[:, j, :] = _sysid.simulate(at, zb, eye, zd, zu, np.ascontiguousarray(C[j]))
+    return out.reshape(count * l, n)
+
+
+def simulation_fit(model: Any, data: IOData, trend: bool = False) -> float:
     """Held-out simulation fit (NRMSE %, mean over outputs and experiments); ``-inf`` for a
     model that diverges (a model with a pole just outside the unit circle is scored on what
     it does over the block).
@@ -164,9 +186,11 @@ def simulation_fit(model: Any, data: IOData) -> float:
     :func:`sysid.compare` fits the initial state): every block keeps some offset after the
     record's means are removed, and without the free offset a slow mode of an over-fitted
     model (a pole near 1 excited by ``x0``) would absorb it and look better than it predicts.
+    ``trend=True`` fits a straight line per output instead of the offset (the same for a
+    drift: :meth:`sysid.identify.board.Board.insisting`).
     """
     try:
-        errs = simulation_errors(model, data)
+        errs = simulation_errors(model, data, trend)
     except Exception:  # noqa: BLE001 - a model that cannot be simulated scores -inf
         return -np.inf
     fits = []

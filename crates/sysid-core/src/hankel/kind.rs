@@ -103,7 +103,7 @@ impl CompressorKind {
             } => k.checked_add(*r),
             // "auto" may fall back to the exact pass with the default window count
             CompressorKind::Qr { chunk_rows: None } | CompressorKind::Auto(_) => {
-                Some(k + (4 * k).max(512))
+                k.checked_add(super::default_chunk_rows(k))
             }
             // a block never holds more samples than the chunk pushed: bounded by the data
             CompressorKind::Correlation(_) => return Ok(()),
@@ -112,6 +112,27 @@ impl CompressorKind {
             Some(r) => crate::error::check_matrix_size("chunk_rows", r, k),
             None => crate::error::check_matrix_size("chunk_rows", usize::MAX, k),
         }
+    }
+
+    /// Checks a compression before anything is sized: the window against the longest
+    /// experiment when the caller knows it ([`super::check_window`]: arrays, files and Dask
+    /// arrays know their lengths, a generator does not), then the work memory
+    /// ([`CompressorKind::check`]). Without `longest` the record is checked at `finish`;
+    /// until a first window is complete the exact compressor allocates no work matrix.
+    ///
+    /// ```
+    /// use sysid_core::hankel::{CompressorKind, HankelLayout};
+    /// let layout = HankelLayout::new(1, 1, 2000, 2000).unwrap();
+    /// let qr = CompressorKind::parse("qr", None).unwrap();
+    /// assert!(qr.check_stream(&layout, Some(500)).is_err());
+    /// assert!(qr.check_stream(&layout, Some(10_000)).is_ok());
+    /// assert!(qr.check_stream(&layout, None).is_ok());
+    /// ```
+    pub fn check_stream(&self, layout: &HankelLayout, longest: Option<usize>) -> Result<()> {
+        if let Some(n) = longest {
+            super::check_window(layout.past, layout.future, n)?;
+        }
+        self.check(layout)
     }
 
     /// A streaming compressor of this kind for `layout`.
@@ -182,8 +203,7 @@ pub fn compress_experiments(
         .map(|(_, y)| y.nrows())
         .max()
         .unwrap_or(0);
-    super::check_window(layout.past, layout.future, longest)?;
-    kind.check(&layout)?;
+    kind.check_stream(&layout, Some(longest))?;
     let run = |kind: CompressorKind| -> Result<HankelFactor> {
         let mut c = kind.build(layout);
         for (u, y) in experiments {

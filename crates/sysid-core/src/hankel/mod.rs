@@ -36,7 +36,7 @@ pub use correlation::{
 pub use factor::{Block, FactorSource, HankelFactor};
 pub use kind::{compress_experiments, AnyCompressor, CompressorKind, AUTO_MIN_RELATIVE_PIVOT};
 pub use lagsum::lag_sums;
-pub use qr::QrCompressor;
+pub use qr::{default_chunk_rows, QrCompressor};
 
 use crate::error::{Result, SysidError};
 use faer::MatRef;

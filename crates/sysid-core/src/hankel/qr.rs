@@ -104,12 +104,18 @@ fn fill_window(
     }
 }
 
+/// The default number of windows per QR update for `k` rows of the data matrix,
+/// `max(4 k, 512)`: the work matrix is `(k + chunk_rows) x k` (the recursive factor uses the
+/// same blocks).
+pub fn default_chunk_rows(k: usize) -> usize {
+    k.saturating_mul(4).max(512)
+}
+
 impl QrCompressor {
-    /// A compressor with the default chunk size, `max(4 k, 512)` windows per QR update,
-    /// and blocks of 8 chunks.
+    /// A compressor with the default chunk size ([`default_chunk_rows`], `max(4 k, 512)`
+    /// windows per QR update), and blocks of 8 chunks.
     pub fn new(layout: HankelLayout) -> Self {
-        let k = layout.k();
-        Self::with_chunk_rows(layout, (4 * k).max(512))
+        Self::with_chunk_rows(layout, default_chunk_rows(layout.k()))
     }
 
     /// A compressor that re-triangularises after every `chunk_rows` windows (at least 1),

@@ -163,3 +163,20 @@ fn factor_is_bit_identical_for_any_thread_count_and_chunking() {
     let scale = l_ref.norm_max();
     assert!(max_abs_diff(serial.l(), l_ref.as_ref()) < 1e-12 * scale);
 }
+
+#[test]
+fn a_known_record_length_is_checked_before_the_compressor_is_sized() {
+    // past = 2000 on 500 samples: compress_stream peaked at 4.9 GB with "qr" before
+    // finish() said the record was too short
+    let layout = HankelLayout::new(1, 1, 2000, 2000).unwrap();
+    for name in ["qr", "auto", "correlation"] {
+        let kind = CompressorKind::parse(name, None).unwrap();
+        let e = kind
+            .check_stream(&layout, Some(500))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("horizon <= 250"), "{name}: {e}");
+        assert!(kind.check_stream(&layout, Some(4000)).is_ok());
+        assert!(kind.check_stream(&layout, None).is_ok());
+    }
+}

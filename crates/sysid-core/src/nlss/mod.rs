@@ -21,9 +21,12 @@
 //! [`Decoupled`] replaces the state equation's multivariate polynomial by a few univariate
 //! polynomials of linear forms of `[x; u]` (far fewer parameters for many states). Both may
 //! clamp the polynomials' arguments to a box (bounded simulation outside the fitted range).
+//! For periodic records [`estimate_weighted`] fits the period-averaged simulation error
+//! weighted on chosen DFT lines (the classic frequency-domain PNLSS cost).
 //! [`neural`] holds the neural state-space model and its training.
 
 mod decoupled;
+mod freqweight;
 mod monomials;
 pub mod neural;
 mod pnlss;
@@ -32,5 +35,6 @@ mod simulation;
 mod tests;
 
 pub use decoupled::{estimate_decoupled, Decoupled};
+pub use freqweight::{estimate_weighted, estimate_weighted_decoupled, weighted_cost, LineWeights};
 pub use monomials::{Monomials, Terms};
 pub use pnlss::{estimate, Pnlss, PnlssData};

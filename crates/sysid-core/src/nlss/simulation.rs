@@ -215,7 +215,7 @@ pub(super) fn cost<M: NonlinearTerms>(
         ev.gauss_newton = Mat::zeros(p, p);
     }
     for d in data {
-        if !record(m, theta, d, &mut ev, jacobian) {
+        if !record(m, theta, d, &mut ev, jacobian, &mut flush) {
             return Evaluation::cost_only(f64::INFINITY);
         }
     }
@@ -230,13 +230,16 @@ pub(super) fn cost<M: NonlinearTerms>(
     ev
 }
 
-/// Adds one record to `ev`; `false` when the simulation diverged.
-fn record<M: NonlinearTerms>(
+/// Adds one record to `ev`; `false` when the simulation diverged. Blocks of Jacobian rows
+/// (`d yhat / d theta`, in time order after the transient) and residuals go to `sink`
+/// ([`flush`] for the time-domain cost), which must clear the block's rows.
+pub(super) fn record<M: NonlinearTerms>(
     m: &M,
     th: &[f64],
     d: &PnlssData<'_>,
     ev: &mut Evaluation,
     jac: bool,
+    sink: &mut Sink<'_>,
 ) -> bool {
     const BLK: usize = 32;
     let (nx, nu, ny) = m.dims();
@@ -285,7 +288,7 @@ fn record<M: NonlinearTerms>(
                 }
             }
             if jac && (rows == BLK * ny || t + 1 == n) {
-                flush(&mut jb, &rb, rows, ev);
+                sink(&mut jb, &rb, rows, ev);
                 rows = 0;
             }
         }
@@ -321,14 +324,17 @@ fn record<M: NonlinearTerms>(
         x.copy_from_slice(&xn);
     }
     if jac && rows > 0 {
-        flush(&mut jb, &rb, rows, ev);
+        sink(&mut jb, &rb, rows, ev);
     }
     ev.cost.is_finite()
 }
 
+/// Receives a block of Jacobian rows, residuals, the row count and the evaluation.
+pub(super) type Sink<'a> = dyn FnMut(&mut Mat<f64>, &Mat<f64>, usize, &mut Evaluation) + 'a;
+
 /// `H += Jb^T Jb` (lower triangle used later), `g -= Jb^T r` over the first `rows` rows,
 /// then clears the block.
-fn flush(jb: &mut Mat<f64>, rb: &Mat<f64>, rows: usize, ev: &mut Evaluation) {
+pub(super) fn flush(jb: &mut Mat<f64>, rb: &Mat<f64>, rows: usize, ev: &mut Evaluation) {
     let j = jb.as_ref().subrows(0, rows);
     let r = rb.as_ref().subrows(0, rows);
     matmul(
@@ -372,6 +378,18 @@ pub(super) fn estimate<M: NonlinearTerms>(
     options: &Options,
     observer: &mut dyn FnMut(&Iteration) -> Flow,
 ) -> Result<Solution> {
+    estimate_checks(model, data, theta0)?;
+    let mut prob = SimulationError { model, data };
+    minimize(&mut prob, theta0, options, observer)
+}
+
+/// The checks of [`estimate`] (records, shapes, finite values, a transient shorter than the
+/// record, a start whose simulation does not diverge); the start's time-domain cost.
+pub(super) fn estimate_checks<M: NonlinearTerms>(
+    model: &M,
+    data: &[PnlssData<'_>],
+    theta0: &[f64],
+) -> Result<f64> {
     if data.is_empty() {
         return Err(SysidError::invalid("data", "no records"));
     }
@@ -396,13 +414,13 @@ pub(super) fn estimate<M: NonlinearTerms>(
             }
         }
     }
-    if !cost(model, theta0, data, false).cost.is_finite() {
+    let start = cost(model, theta0, data, false).cost;
+    if !start.is_finite() {
         return Err(SysidError::numerical(
             M::NAME,
             "the initial model's simulation diverges on the data; start from a stable linear \
              model (the BLA or a subspace model)",
         ));
     }
-    let mut prob = SimulationError { model, data };
-    minimize(&mut prob, theta0, options, observer)
+    Ok(start)
 }

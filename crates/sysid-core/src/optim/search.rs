@@ -15,7 +15,31 @@ struct Point {
     h: Mat<f64>,
 }
 
+/// Copies of the `p x p` normal equations a search holds at once: the evaluated point's and a
+/// trial point's `J^T J`, the regularised and the reduced matrices, the eigenvectors and the
+/// Cholesky factor.
+const NORMAL_EQUATION_COPIES: usize = 6;
+
+/// Checks, before a provider sizes anything by the parameter count, that the search's
+/// normal equations fit in [`crate::error::MAX_MATRIX_BYTES`].
+fn check_normal_equations(p: usize) -> Result<()> {
+    let rows = p.saturating_mul(NORMAL_EQUATION_COPIES);
+    crate::error::check_matrix_size("parameters", rows, p).map_err(|_| {
+        SysidError::invalid(
+            "parameters",
+            format!(
+                "the model has {p} parameters: the search's normal equations ({p} x {p}) and \
+                 their working copies need {:.1} GiB, more than the {} GiB limit; use fewer \
+                 parameters (lower orders, degrees, widths or branches)",
+                rows as f64 * p as f64 * 8.0 / (1u64 << 30) as f64,
+                crate::error::MAX_MATRIX_BYTES >> 30
+            ),
+        )
+    })
+}
+
 fn check_options(p: usize, opt: &Options, theta0: &[f64]) -> Result<()> {
+    check_normal_equations(p)?;
     if theta0.len() != p {
         return Err(SysidError::invalid(
             "theta0",

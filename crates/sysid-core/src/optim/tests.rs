@@ -448,3 +448,38 @@ fn a_reported_criterion_replaces_the_cost_in_history_observer_and_result() {
         assert!((h - (2.0 * w).sqrt()).abs() <= 1e-12 * (1.0 + h));
     }
 }
+
+/// A problem that must never be evaluated: its parameter count alone is refused.
+struct Huge(usize);
+
+impl Problem for Huge {
+    fn n_params(&self) -> usize {
+        self.0
+    }
+    fn evaluate(&mut self, _t: &[f64], _j: bool) -> crate::Result<Evaluation> {
+        panic!("evaluated (and sized by the parameter count) before the count was checked")
+    }
+}
+
+#[test]
+fn parameter_counts_whose_normal_equations_cannot_fit_are_refused_first() {
+    // 25 000 parameters: a 5 GB J^T J, which panicked in the allocator (pnlss)
+    let p = 25_000;
+    let e = minimize(
+        &mut Huge(p),
+        &vec![0.0; p],
+        &Options::default(),
+        &mut |_| Flow::Continue,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("25000 parameters") && e.contains("GiB limit"),
+        "{e}"
+    );
+    let mut ok = ls(3, linear);
+    assert!(minimize(&mut ok, &[0.0; 3], &Options::default(), &mut |_| {
+        Flow::Continue
+    })
+    .is_ok());
+}

@@ -75,15 +75,7 @@ impl Predictor<'_> {
         let mask = self.chart_mask();
         let free: Vec<usize> = (0..self.p).filter(|&i| !mask[i]).collect();
         let tf = Mat::from_fn(free.len(), tan.ncols(), |i, j| tan[(free[i], j)]);
-        let svd = tf
-            .svd()
-            .map_err(|e| SysidError::numerical("local coordinates (SVD)", format!("{e:?}")))?;
-        let sv = svd.S().column_vector();
-        let smax = if sv.nrows() > 0 { sv[0] } else { 0.0 };
-        let rank = (0..sv.nrows())
-            .filter(|&i| sv[i] > 1e-10 * smax && sv[i] > 0.0)
-            .count();
-        let u = svd.U().subcols(rank, free.len() - rank);
+        let u = complement(&tf)?;
         let mut basis = Mat::<f64>::zeros(self.p, u.ncols());
         for (i, &fi) in free.iter().enumerate() {
             for j in 0..u.ncols() {
@@ -92,4 +84,19 @@ impl Predictor<'_> {
         }
         Ok(Some(basis))
     }
+}
+
+/// An orthonormal basis of the orthogonal complement of the column space of `tan` (its
+/// numerical rank: singular values above `1e-10` of the largest).
+pub(super) fn complement(tan: &Mat<f64>) -> Result<Mat<f64>> {
+    let svd = tan
+        .svd()
+        .map_err(|e| SysidError::numerical("local coordinates (SVD)", format!("{e:?}")))?;
+    let sv = svd.S().column_vector();
+    let smax = if sv.nrows() > 0 { sv[0] } else { 0.0 };
+    let rank = (0..sv.nrows())
+        .filter(|&i| sv[i] > 1e-10 * smax && sv[i] > 0.0)
+        .count();
+    let rows = tan.nrows();
+    Ok(svd.U().subcols(rank, rows - rank).to_owned())
 }

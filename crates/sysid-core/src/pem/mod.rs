@@ -33,10 +33,17 @@
 //! `n (n + m + l)`.
 //! Stability of the predictor (of `A - K C`, or of `A` when simulating) is the admissible
 //! set: the search never evaluates an unstable predictor.
+//!
+//! Periodic data in steady state are fitted on their excited lines instead
+//! ([`pem_frequency`], module `frequency`): `G(z) = C (zI - A)^-1 B + D` against the averaged
+//! frequency response, weighted by the inverse noise variance from the periods.
 
 mod chart;
 mod coordinates;
 mod driver;
+mod frequency;
+#[cfg(test)]
+mod frequency_tests;
 mod modal;
 mod normal;
 mod options;
@@ -47,5 +54,6 @@ mod sensitivities;
 mod tests;
 
 pub use driver::{criterion, pem};
+pub use frequency::{pem_frequency, FrequencyOptions, FrequencyResult, Lines};
 pub use options::{stable_enough, Focus, InitialState, PemOptions, PemResult};
 pub use predictor::Predictor;

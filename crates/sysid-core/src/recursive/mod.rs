@@ -51,8 +51,13 @@ pub use update::{Method, MethodSettings};
 /// estimators' [`crate::polynomial::pem::MisoOrders`].
 pub use crate::polynomial::pem::MisoOrders as Structure;
 
-/// Checks the lengths agree and the size is one an online estimator supports; returns the
-/// number of parameters.
+/// Longest delay line (input delay `nk` plus `nb` coefficients) an online estimator keeps
+/// per input, in samples.
+pub const MAX_DELAY_LINE: usize = 1 << 16;
+
+/// Checks the lengths agree and the size is one an online estimator supports (delay lines
+/// bounded by [`MAX_DELAY_LINE`], orders added with overflow checks); returns the number of
+/// parameters.
 ///
 /// ```
 /// use sysid_core::recursive::{check_structure, Structure};
@@ -72,7 +77,35 @@ pub fn check_structure(s: &Structure) -> Result<usize> {
             ),
         ));
     }
-    let p = s.n_params();
+    // orders as given can be anything: added with checks, the delays bounded (each input
+    // keeps a delay line of nk + nb samples)
+    for j in 0..m {
+        let line = s.nk[j].checked_add(s.nb[j]);
+        if line.is_none_or(|n| n > MAX_DELAY_LINE) {
+            return Err(SysidError::invalid(
+                "structure",
+                format!(
+                    "input {j}: delay nk={} with nb={} needs a delay line of more than \
+                     {MAX_DELAY_LINE} samples, more than an online estimator keeps; shift \
+                     the input by the delay before the estimator (u(t - nk)) or resample",
+                    s.nk[j], s.nb[j]
+                ),
+            ));
+        }
+    }
+    let p = [s.na, s.nc, s.nd]
+        .into_iter()
+        .chain(s.nb.iter().copied())
+        .chain(s.nf.iter().copied())
+        .try_fold(0usize, |acc, n| acc.checked_add(n));
+    let Some(p) = p else {
+        return Err(SysidError::invalid(
+            "structure",
+            "the orders add up to more parameters than can be counted; give orders of a \
+             few times the expected dynamics"
+                .to_string(),
+        ));
+    };
     if p == 0 {
         return Err(SysidError::invalid(
             "structure",

@@ -181,3 +181,28 @@ fn schur_cohn_matches_roots() {
     assert!(!stable(&[0.0, 0.0, 1.01], &mut w));
     assert!(stable(&[-0.9, 0.2, 0.05], &mut w));
 }
+
+#[test]
+fn delays_and_orders_are_bounded_before_sizing() {
+    let s = |nb: usize, nk: usize, na: usize| Structure {
+        na,
+        nb: vec![nb],
+        nc: 0,
+        nd: 0,
+        nf: vec![0],
+        nk: vec![nk],
+    };
+    // nk = 10^12 sized a delay line of 8 TB and aborted the process
+    let e = check_structure(&s(1, 1_000_000_000_000, 2))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("delay line") && e.contains("shift"), "{e}");
+    assert!(check_structure(&s(1, usize::MAX, 2)).is_err());
+    // orders whose sum overflows
+    let e = check_structure(&s(1, 1, usize::MAX))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("more parameters than can be counted"), "{e}");
+    // a long but bounded delay is fine
+    assert_eq!(check_structure(&s(1, MAX_DELAY_LINE - 1, 2)).unwrap(), 3);
+}

@@ -14,6 +14,36 @@ use crate::error::{Result, SysidError};
 use crate::hankel::{HankelFactor, HankelLayout};
 use faer::{Mat, MatRef};
 
+/// Checks, before anything is sized, that what an update holds at once fits in
+/// [`crate::error::MAX_MATRIX_BYTES`]: the k x k triangle, a copy of it (a caller that keeps
+/// the factor unchanged until an update completes, as the bindings do for Ctrl-C) and the
+/// `(k + block_rows) x k` stack re-triangularised per block.
+fn check_working_set(layout: &HankelLayout, block_rows: usize) -> Result<()> {
+    let k = layout.k();
+    let rows = k
+        .checked_mul(3)
+        .and_then(|r| r.checked_add(block_rows))
+        .unwrap_or(usize::MAX);
+    crate::error::check_matrix_size("horizon", rows, k).map_err(|_| {
+        SysidError::invalid(
+            "horizon",
+            format!(
+                "past={} and future={} with {} input(s) and {} output(s) give k = {k} rows; \
+                 a recursive update holds the k x k factor, a copy and a ({} x {k}) block \
+                 ({:.1} GiB), more than the {} GiB limit; use a horizon of a few times the \
+                 expected order",
+                layout.past,
+                layout.future,
+                layout.n_inputs,
+                layout.n_outputs,
+                k.saturating_add(block_rows),
+                rows as f64 * k as f64 * 8.0 / (1u64 << 30) as f64,
+                crate::error::MAX_MATRIX_BYTES >> 30
+            ),
+        )
+    })
+}
+
 /// A streaming, forgetting compressor of one experiment.
 #[derive(Debug, Clone)]
 pub struct RecursiveFactor {
@@ -37,15 +67,18 @@ impl RecursiveFactor {
             ));
         }
         let k = layout.k();
+        let block_rows = crate::hankel::default_chunk_rows(k);
+        check_working_set(&layout, block_rows)?;
         Ok(Self {
             layout,
             forgetting,
-            r: Mat::zeros(k, k),
+            // allocated with the first Hankel column: none before a window is complete
+            r: Mat::zeros(0, 0),
             tail_u: Mat::zeros(0, layout.n_inputs),
             tail_y: Mat::zeros(0, layout.n_outputs),
             n_columns: 0,
             weight: 0.0,
-            block_rows: (4 * k).max(512),
+            block_rows,
         })
     }
 
@@ -106,6 +139,9 @@ impl RecursiveFactor {
             let b = (n_new - start).min(self.block_rows);
             let mut stack = Mat::<f64>::zeros(k + b, k);
             let sr = half[b];
+            if self.r.nrows() == 0 {
+                self.r = Mat::zeros(k, k); // the first block: R = 0 so far
+            }
             for j in 0..k {
                 for i in 0..=j {
                     stack[(i, j)] = sr * self.r[(i, j)];
@@ -195,5 +231,22 @@ mod tests {
             assert!(d < 1e-10 * gb.norm_max(), "{at}: {d}");
         }
         assert!(RecursiveFactor::new(lay, 1.5).is_err());
+    }
+
+    #[test]
+    fn the_whole_working_set_is_checked_before_sizing() {
+        // k = 10 000: the triangle alone (0.8 GB) is allowed, an update's triangle, copy and
+        // (5 k x k) stack (5.6 GB) are not
+        let lay = HankelLayout::new(1, 1, 2500, 2500).unwrap();
+        let e = RecursiveFactor::new(lay, 1.0).unwrap_err().to_string();
+        assert!(e.contains("horizon") && e.contains("GiB limit"), "{e}");
+        // below the limit the triangle waits for the first complete window
+        let lay = HankelLayout::new(1, 1, 50, 50).unwrap();
+        let mut rec = RecursiveFactor::new(lay, 1.0).unwrap();
+        let (u, y) = (Mat::<f64>::zeros(60, 1), Mat::<f64>::zeros(60, 1));
+        rec.update(u.as_ref(), y.as_ref()).unwrap();
+        assert_eq!((rec.r.nrows(), rec.n_columns()), (0, 0));
+        rec.update(u.as_ref(), y.as_ref()).unwrap();
+        assert_eq!((rec.r.nrows(), rec.n_columns()), (lay.k(), 21));
     }
 }

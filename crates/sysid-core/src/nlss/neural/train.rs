@@ -279,6 +279,7 @@ pub fn train(
             fix: "shorten the horizon or the encoder lags, or give a longer record",
         });
     }
+    check_sizes(model, p0.len(), train_data, total, opts.batch)?;
     let np = p0.len();
     let mut p = p0.to_vec();
     let (mut m1, mut m2) = (vec![0.0; np], vec![0.0; np]);
@@ -321,6 +322,7 @@ pub fn train(
             grad.iter_mut().for_each(|g| *g = 0.0);
             let mut used = 0;
             for _ in 0..opts.batch {
+                crate::interrupt::check()?;
                 let mut k = rng.below(total);
                 let mut rec = 0;
                 while k >= starts[rec].1 {
@@ -385,4 +387,81 @@ pub fn train(
     res.params = best.1;
     res.best_epoch = best.2;
     Ok(res)
+}
+
+/// Refuses, before anything is sized by them, a network with at least as many parameters
+/// as the training records give residuals (as the other simulation-error fits do) and a
+/// batch of more sections than the records hold (`sections`, each start counted once).
+fn check_sizes(
+    model: &NeuralSs,
+    n_params: usize,
+    train_data: &[Segment<'_>],
+    sections: usize,
+    batch: usize,
+) -> Result<()> {
+    let residuals: usize = train_data
+        .iter()
+        .map(|s| s.at.saturating_sub(model.lags).saturating_mul(model.ny))
+        .fold(0, usize::saturating_add);
+    if n_params >= residuals {
+        return Err(SysidError::invalid(
+            "hidden",
+            format!(
+                "the networks have {n_params} parameters but the training record gives \
+                 {residuals} residuals; use smaller hidden widths, or give more data"
+            ),
+        ));
+    }
+    if batch == 0 || batch > sections {
+        return Err(SysidError::invalid(
+            "batch",
+            format!(
+                "{batch} sections per step, but the training record holds {sections} \
+                 sections of the horizon; use 1 <= batch <= {sections} (or a shorter horizon)"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(m: &NeuralSs, batch: usize, u: &[f64]) -> Result<TrainResult> {
+        let p = vec![0.0; m.n_params()];
+        let opts = TrainOptions {
+            epochs: 1,
+            horizon: 20,
+            batch,
+            ..TrainOptions::default()
+        };
+        let seg = [Segment {
+            u,
+            y: u,
+            at: u.len(),
+        }];
+        train(m, &p, &seg, &[], &opts, &mut |_| Flow::Continue)
+    }
+
+    #[test]
+    fn absurd_sizes_are_refused_before_training() {
+        let u: Vec<f64> = (0..300)
+            .map(|t| ((t * 37) % 11) as f64 / 11.0 - 0.5)
+            .collect();
+        let small = NeuralSs::new(1, 1, 1, &[4], None, &[], 1);
+        // 300 - 20 - 1 + 1 = 280 section starts
+        assert!(run(&small, 280, &u).is_ok());
+        // batch = 10^9 ran without end (10^10 sections an epoch)
+        let e = run(&small, 1_000_000_000, &u).unwrap_err().to_string();
+        assert!(e.contains("batch") && e.contains("280 sections"), "{e}");
+        assert!(run(&small, 281, &u).is_err());
+        // hidden = 10^4 on 300 samples: 3 10^4 parameters for 299 residuals
+        let wide = NeuralSs::new(1, 1, 1, &[10_000], None, &[], 1);
+        let e = run(&wide, 16, &u).unwrap_err().to_string();
+        assert!(
+            e.contains("parameters but the training record gives 299 residuals"),
+            "{e}"
+        );
+    }
 }
