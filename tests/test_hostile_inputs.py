@@ -270,6 +270,29 @@ def test_streams_of_unknown_length_allocate_nothing_before_a_window_is_complete(
     assert "refused:" in out and "needs at least 4000 but got 500" in out and "updated: None" in out
 
 
+def test_a_short_stream_is_refused_before_the_correlation_gram_matrix_is_sized():
+    """"auto" and "correlation" sized the k x k Gram matrix (0.5 GB for past = 2000) with
+    the first chunk; it is sized when an experiment with a complete window closes, so a
+    generator too short for one window is refused at finish within 0.3 GiB."""
+    out = _under_memory_limit("""
+        from sysid.errors import InsufficientDataError
+        from sysid.subspace.streaming import compress_stream
+        u, y = np.ones((300, 1)), np.ones((300, 1))
+        for compressor in ["auto", "correlation"]:
+            try:
+                compress_stream(iter([(u, y), (u[:200], y[:200])]), past=2000,
+                                compressor=compressor, progress=False)
+            except InsufficientDataError as e:
+                print("refused:", compressor, e)
+        try:
+            np.ones(2000 * 4 * 2000 * 4)
+        except MemoryError:
+            print("the limit holds a 0.5 GB matrix off")
+    """, extra_gib=0.3)
+    assert out.count("needs at least 4000 but got 500") == 2, out
+    assert "the limit holds a 0.5 GB matrix off" in out
+
+
 def test_recursive_subspace_checks_its_whole_working_set():
     """k = 10 000: the 0.8 GB triangle passed the check, the update's copy and (5 k x k)
     stack (5.6 GB in all) did not."""

@@ -376,3 +376,51 @@ fn output_only_records_match_the_explicit_gram_matrix() {
     let g = explicit_gram(&layout, &[(Mat::zeros(3000, 0), y.clone())]);
     assert!(rel_gram_err(f.l(), &g) < 1e-12);
 }
+
+#[test]
+fn the_gram_matrix_is_sized_only_when_an_experiment_with_a_window_closes() {
+    // past = f = 2000 (k = 8000, a 0.5 GB Gram matrix): a generator's record of 500 or 5000
+    // samples is refused at the end without sizing it
+    let layout = HankelLayout::new(1, 1, 2000, 2000).unwrap();
+    let (u, y) = record(5000, 1, 1, 7);
+    for n in [500, 5000] {
+        let (c, s) = CorrelationSums::center_scale(u.as_ref(), y.as_ref());
+        let mut sums = CorrelationSums::new(layout, c, s).unwrap();
+        sums.push(u.as_ref().subrows(0, n), y.as_ref().subrows(0, n))
+            .unwrap();
+        assert_eq!(sums.state().gram.nrows(), 0);
+        let e = sums.clone().into_factor(1e-10).unwrap_err().to_string();
+        assert!(e.contains(&format!("got {n}")), "{n}: {e}");
+        let mut c = CorrelationCompressor::new(layout);
+        c.push(u.as_ref().subrows(0, n), y.as_ref().subrows(0, n))
+            .unwrap();
+        assert_eq!(c.finish().unwrap_err().to_string(), e);
+    }
+    // a small layout: sized when the first experiment closes; an unsized snapshot, merge and
+    // factor agree with the sized path
+    let layout = HankelLayout::new(1, 1, 3, 2).unwrap();
+    let (u, y) = record(400, 1, 1, 8);
+    let (c, s) = CorrelationSums::center_scale(u.as_ref(), y.as_ref());
+    let mut a = CorrelationSums::new(layout, c.clone(), s.clone()).unwrap();
+    a.push(u.as_ref().subrows(0, 150), y.as_ref().subrows(0, 150))
+        .unwrap();
+    let open = CorrelationSums::from_state(a.state()).unwrap();
+    assert_eq!(open.state().gram.nrows(), 0);
+    let mut b = CorrelationSums::new(layout, c.clone(), s.clone()).unwrap();
+    b.push(u.as_ref().subrows(150, 250), y.as_ref().subrows(150, 250))
+        .unwrap();
+    let mut closed = open.merge(&b).unwrap();
+    closed.end_experiment().unwrap();
+    assert_eq!(closed.state().gram.nrows(), layout.k());
+    // sized + unsized in either order, and the sized snapshot, give the same factor
+    let empty = CorrelationSums::new(layout, c, s).unwrap();
+    let closed = CorrelationSums::from_state(closed.state()).unwrap();
+    let g = explicit_gram(&layout, &[(u, y)]);
+    for sums in [
+        a.merge(&b).unwrap(),
+        empty.merge(&closed).unwrap(),
+        closed.merge(&empty).unwrap(),
+    ] {
+        assert!(rel_gram_err(sums.into_factor(1e-10).unwrap().l(), &g) < 1e-12);
+    }
+}

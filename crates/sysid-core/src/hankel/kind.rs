@@ -118,7 +118,8 @@ impl CompressorKind {
     /// experiment when the caller knows it ([`super::check_window`]: arrays, files and Dask
     /// arrays know their lengths, a generator does not), then the work memory
     /// ([`CompressorKind::check`]). Without `longest` the record is checked at `finish`;
-    /// until a first window is complete the exact compressor allocates no work matrix.
+    /// until a first window is complete the exact compressor allocates no work matrix, and
+    /// until an experiment with one closes the correlation compressor no Gram matrix.
     ///
     /// ```
     /// use sysid_core::hankel::{CompressorKind, HankelLayout};

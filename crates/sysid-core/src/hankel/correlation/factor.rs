@@ -16,24 +16,32 @@ impl CorrelationSums {
     /// `min_relative_pivot`, or when Cholesky fails (then the factor comes from the
     /// eigendecomposition with negative eigenvalues set to zero).
     pub fn into_factor(mut self, min_relative_pivot: f64) -> Result<HankelFactor> {
-        self.end_experiment()?;
         let (m, l, p) = (
             self.layout.n_inputs,
             self.layout.n_outputs,
             self.layout.past,
         );
         let (d, w, k) = (m + l, self.layout.window(), self.layout.k());
-        if self.n_columns < k {
+        // too few columns in all: refused before the open experiment is closed (which sizes
+        // the k x k Gram matrix); an open experiment shorter than a window is refused by
+        // end_experiment
+        let open = self.open_samples;
+        let (cols, exps) = (
+            self.n_columns + (open + 1).saturating_sub(w),
+            self.n_experiments + usize::from(open > 0),
+        );
+        if (open == 0 || open >= w) && cols < k {
             return Err(SysidError::InsufficientData {
                 context: format!(
                     "a data matrix with {k} rows (horizons p={}, f={}, {m} input(s), {l} output(s))",
                     p, self.layout.future
                 ),
-                needed: k + (w - 1) * self.n_experiments.max(1),
-                got: self.n_columns + (w - 1) * self.n_experiments,
+                needed: k + (w - 1) * exps.max(1),
+                got: cols + (w - 1) * exps,
                 fix: "use a longer record or a smaller horizon",
             });
         }
+        self.end_experiment()?;
         // rows of the data matrix from natural order (sample offset a, channel c) to the
         // canonical order [U_f; U_p; Y_p; Y_f], with the shift and scale of each row
         let (uf, _) = self.layout.block(Block::UFuture);

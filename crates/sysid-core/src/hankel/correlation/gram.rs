@@ -28,7 +28,10 @@ impl CorrelationSums {
         }
         let t_cols = seg.n - w + 1;
         let (head, tail) = (&seg.head, &seg.tail);
-        let k = self.gram.nrows();
+        let k = self.layout.k();
+        if self.gram.nrows() != k {
+            self.gram = Mat::zeros(k, k);
+        }
         // G_ab = S_tau - H_a(tau) - T_a(tau) with H_a = sum_{t<a} z_t z_{t+tau}^T (head rows,
         // accumulated for increasing a) and T_a = sum_{a<=q<=w-2-tau} of the tail rows
         // (accumulated for decreasing a): O(w^2 d^2) work, every partial sum a plain sum

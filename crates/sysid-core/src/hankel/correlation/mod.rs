@@ -96,6 +96,8 @@ pub struct CorrelationSums {
     center: Vec<f64>,
     inv_scale: Vec<f64>,
     scale: Vec<f64>,
+    /// k x k once an experiment with a complete window has closed, 0 x 0 before: a stream
+    /// too short for the horizon is refused at the end without sizing it.
     gram: Mat<f64>,
     col_sum: Vec<f64>,
     n_columns: usize,
@@ -133,7 +135,7 @@ impl CorrelationSums {
             inv_scale: scale.iter().map(|s| 1.0 / s).collect(),
             center,
             scale,
-            gram: Mat::zeros(k, k),
+            gram: Mat::zeros(0, 0),
             col_sum: vec![0.0; k],
             n_columns: 0,
             n_experiments: 0,
@@ -351,7 +353,11 @@ impl CorrelationSums {
         let b = other.clone().collapse();
         out.stack = vec![(0, a.concat(&b, d, w))];
         out.open_samples = self.open_samples + other.open_samples;
-        out.gram = &self.gram + &other.gram;
+        out.gram = match (self.gram.nrows(), other.gram.nrows()) {
+            (0, _) => other.gram.clone(),
+            (_, 0) => self.gram.clone(),
+            _ => &self.gram + &other.gram,
+        };
         for (x, y) in out.col_sum.iter_mut().zip(&other.col_sum) {
             *x += y;
         }

@@ -14,7 +14,8 @@ pub struct CorrelationState {
     pub center: Vec<f64>,
     /// Per-channel scale `s` (powers of two).
     pub scale: Vec<f64>,
-    /// Gram matrix of closed experiments, natural order, centred and scaled: (w d) x (w d).
+    /// Gram matrix of closed experiments, natural order, centred and scaled: (w d) x (w d),
+    /// or 0 x 0 while no closed experiment has a Hankel column (it is sized only then).
     pub gram: Mat<f64>,
     /// Column sums `sum_t X_t` of closed experiments (w d).
     pub col_sum: Vec<f64>,
@@ -59,8 +60,9 @@ impl CorrelationSums {
         let mut out = Self::new(s.layout, s.center, s.scale)?;
         let (d, w, k) = (out.d(), s.layout.window(), s.layout.k());
         let b = s.open_samples.min(w - 1) * d;
-        let ok = s.gram.nrows() == k
-            && s.gram.ncols() == k
+        let gram_ok = (s.gram.nrows() == k && s.gram.ncols() == k)
+            || (s.gram.nrows() == 0 && s.gram.ncols() == 0 && s.n_columns == 0);
+        let ok = gram_ok
             && s.col_sum.len() == k
             && s.open_lag.nrows() == d
             && s.open_lag.ncols() == w * d
