@@ -3,6 +3,7 @@
 
 use super::{CorrelationSums, Segment};
 use crate::error::{Result, SysidError};
+use faer::Mat;
 
 impl CorrelationSums {
     /// Closes the open experiment: its Hankel columns join the Gram matrix.
