@@ -21,6 +21,9 @@ use crate::error::{Result, SysidError};
 use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
+use rustfft::num_complex::Complex;
+use rustfft::{Fft, FftPlanner};
+use std::sync::Arc;
 
 /// The frequency weighting of one record: its period, the DFT lines of one period in the
 /// cost (`0 <= k <= P / 2`) and their weights (`lines.len() x ny`, row-major, each `>= 0`).
@@ -34,59 +37,47 @@ pub struct LineWeights {
     pub weights: Vec<f64>,
 }
 
-/// The DFT of one record's period on its lines: a radix-2 FFT when the period is a power of
-/// two, else cosine and sine tables (`K x P`); and the square roots of its weights.
+/// The DFT of one record's period on its lines (a planned FFT of the period's length) and
+/// the square roots of its weights.
 struct Tables {
     period: usize,
     lines: Vec<usize>,
-    /// `cos(2 pi k tau / P)` and `-sin(..)`, `K x P` (empty with the FFT).
-    cos: Mat<f64>,
-    sin: Mat<f64>,
-    /// The FFT's twiddle factors `exp(-2 pi j m / P)`, `m < P / 2` (empty without).
-    twiddle: Vec<(f64, f64)>,
+    /// The forward FFT of length `P`, shared by the records of the same period.
+    fft: Arc<dyn Fft<f64>>,
     /// `sqrt(w_ik)`, `K x ny`.
     root: Mat<f64>,
 }
 
 impl Tables {
-    fn new(w: &LineWeights, ny: usize) -> Self {
-        let (p, k) = (w.period, w.lines.len());
-        let fft = p.is_power_of_two() && p >= 2;
-        // (k t mod P) keeps the angle small and exact for long periods
-        let ang = |a: usize, t: usize| 2.0 * std::f64::consts::PI * ((a * t) % p) as f64 / p as f64;
-        let (kt, pt) = if fft { (0, 0) } else { (k, p) };
-        Tables {
-            period: p,
-            lines: w.lines.clone(),
-            cos: Mat::from_fn(kt, pt, |a, t| ang(w.lines[a], t).cos()),
-            sin: Mat::from_fn(kt, pt, |a, t| -ang(w.lines[a], t).sin()),
-            twiddle: if fft {
-                (0..p / 2)
-                    .map(|m| (ang(m, 1).cos(), -ang(m, 1).sin()))
-                    .collect()
-            } else {
-                Vec::new()
-            },
-            root: Mat::from_fn(k, ny, |a, i| w.weights[a * ny + i].sqrt()),
-        }
+    /// The tables of each record, planning one FFT per distinct period.
+    fn all(weights: &[LineWeights], ny: usize) -> Vec<Self> {
+        let mut planner = FftPlanner::new();
+        weights
+            .iter()
+            .map(|w| Tables {
+                period: w.period,
+                lines: w.lines.clone(),
+                fft: planner.plan_fft_forward(w.period),
+                root: Mat::from_fn(w.lines.len(), ny, |a, i| w.weights[a * ny + i].sqrt()),
+            })
+            .collect()
     }
 
     /// Real and imaginary parts (`K x c`) of the DFT on the lines of the columns of `x`
     /// (`P x c`).
     fn dft(&self, x: &Mat<f64>) -> (Mat<f64>, Mat<f64>) {
-        if self.twiddle.is_empty() {
-            return (&self.cos * x, &self.sin * x);
-        }
         let (p, k) = (self.period, self.lines.len());
         let (mut re, mut im) = (Mat::zeros(k, x.ncols()), Mat::zeros(k, x.ncols()));
-        let (mut a, mut b) = (vec![0.0; p], vec![0.0; p]);
+        let mut buf = vec![Complex::new(0.0, 0.0); p];
+        let mut scratch = vec![Complex::new(0.0, 0.0); self.fft.get_inplace_scratch_len()];
         for c in 0..x.ncols() {
-            a.iter_mut().enumerate().for_each(|(t, v)| *v = x[(t, c)]);
-            b.fill(0.0);
-            fft(&mut a, &mut b, &self.twiddle);
+            buf.iter_mut()
+                .enumerate()
+                .for_each(|(t, v)| *v = Complex::new(x[(t, c)], 0.0));
+            self.fft.process_with_scratch(&mut buf, &mut scratch);
             for (row, &l) in self.lines.iter().enumerate() {
-                re[(row, c)] = a[l];
-                im[(row, c)] = b[l];
+                re[(row, c)] = buf[l].re;
+                im[(row, c)] = buf[l].im;
             }
         }
         (re, im)
@@ -126,36 +117,6 @@ impl Tables {
                 }
             }
         }
-    }
-}
-
-/// In-place radix-2 decimation-in-time FFT of `(re, im)` (length a power of two) with the
-/// twiddle factors `exp(-2 pi j m / n)`, `m < n / 2`.
-fn fft(re: &mut [f64], im: &mut [f64], tw: &[(f64, f64)]) {
-    let n = re.len();
-    let bits = n.trailing_zeros();
-    for i in 0..n {
-        let j = i.reverse_bits() >> (usize::BITS - bits);
-        if i < j {
-            re.swap(i, j);
-            im.swap(i, j);
-        }
-    }
-    let mut len = 2;
-    while len <= n {
-        let step = n / len;
-        for start in (0..n).step_by(len) {
-            for m in 0..len / 2 {
-                let (wr, wi) = tw[m * step];
-                let (a, b) = (start + m, start + m + len / 2);
-                let (xr, xi) = (re[b] * wr - im[b] * wi, re[b] * wi + im[b] * wr);
-                re[b] = re[a] - xr;
-                im[b] = im[a] - xi;
-                re[a] += xr;
-                im[a] += xi;
-            }
-        }
-        len *= 2;
     }
 }
 
@@ -291,7 +252,7 @@ pub fn weighted_cost(
 ) -> Result<Evaluation> {
     simulation::estimate_checks(model, data, theta)?;
     check(model.ny, data, weights)?;
-    let tables: Vec<Tables> = weights.iter().map(|w| Tables::new(w, model.ny)).collect();
+    let tables = Tables::all(weights, model.ny);
     Ok(weighted(model, theta, data, &tables, jacobian))
 }
 
@@ -352,7 +313,7 @@ fn fit<M: NonlinearTerms>(
     simulation::estimate_checks(model, data, theta0)?;
     let ny = model.dims().2;
     check(ny, data, weights)?;
-    let tables = weights.iter().map(|w| Tables::new(w, ny)).collect();
+    let tables = Tables::all(weights, ny);
     let mut prob = WeightedProblem {
         model,
         data,
@@ -447,33 +408,36 @@ mod tests {
 
     #[test]
     fn fft_equals_the_direct_dft() {
-        let n = 64;
-        let x: Vec<f64> = (0..n).map(|t| ((t * 29 % 17) as f64 - 8.0) / 8.0).collect();
-        let tw: Vec<(f64, f64)> = (0..n / 2)
-            .map(|m| {
-                let a = 2.0 * PI * m as f64 / n as f64;
-                (a.cos(), -a.sin())
-            })
-            .collect();
-        let (mut re, mut im) = (x.clone(), vec![0.0; n]);
-        fft(&mut re, &mut im, &tw);
-        for k in 0..n {
-            let (mut a, mut b) = (0.0, 0.0);
-            for (t, v) in x.iter().enumerate() {
-                let ang = 2.0 * PI * ((k * t) % n) as f64 / n as f64;
-                a += v * ang.cos();
-                b -= v * ang.sin();
+        // a power of two, a composite and a prime period
+        for n in [64, 24, 37] {
+            let x = Mat::from_fn(n, 2, |t, c| ((t * 29 % 17 + c * 5) as f64 - 8.0) / 8.0);
+            let w = [LineWeights {
+                period: n,
+                lines: (0..=n / 2).collect(),
+                weights: vec![1.0; n / 2 + 1],
+            }];
+            let tab = Tables::all(&w, 1).pop().unwrap();
+            let (re, im) = tab.dft(&x);
+            for c in 0..2 {
+                for k in 0..=n / 2 {
+                    let (mut a, mut b) = (0.0, 0.0);
+                    for t in 0..n {
+                        let ang = 2.0 * PI * ((k * t) % n) as f64 / n as f64;
+                        a += x[(t, c)] * ang.cos();
+                        b -= x[(t, c)] * ang.sin();
+                    }
+                    assert!(
+                        (re[(k, c)] - a).abs() < 1e-12 && (im[(k, c)] - b).abs() < 1e-12,
+                        "period {n}, column {c}, line {k}"
+                    );
+                }
             }
-            assert!(
-                (re[k] - a).abs() < 1e-12 && (im[k] - b).abs() < 1e-12,
-                "line {k}"
-            );
         }
     }
 
     #[test]
     fn gradient_matches_finite_differences() {
-        // a period of 24 takes the table DFT, one of 32 the FFT
+        // a composite and a power-of-two period (different FFT algorithms)
         for p in [24, 32] {
             gradient_check(p);
         }
