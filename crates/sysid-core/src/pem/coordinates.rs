@@ -14,6 +14,42 @@ use super::InitialState;
 use crate::error::{Result, SysidError};
 use faer::Mat;
 
+/// The matrix an entry of [`similarity_tangent`] belongs to.
+#[derive(Clone, Copy)]
+pub(super) enum Part {
+    A,
+    B,
+    C,
+}
+
+/// The tangent of the similarity orbit along `T = I + E_pq`, one column per pair `(p, q)`:
+/// `(A E - E A, -E B, C E)`, handed to `add(column, part, index, value)` with `index`
+/// row-major in that matrix (the time-domain predictor and the frequency-domain fit each
+/// place it in their own parameter layout).
+pub(super) fn similarity_tangent(
+    a: &Mat<f64>,
+    b: &Mat<f64>,
+    c: &Mat<f64>,
+    pairs: &[(usize, usize)],
+    mut add: impl FnMut(usize, Part, usize, f64),
+) {
+    let (n, m, l) = (a.nrows(), b.ncols(), c.nrows());
+    for (col, &(p, q)) in pairs.iter().enumerate() {
+        for i in 0..n {
+            add(col, Part::A, i * n + q, a[(i, p)]);
+        }
+        for j in 0..n {
+            add(col, Part::A, p * n + j, -a[(q, j)]);
+        }
+        for j in 0..m {
+            add(col, Part::B, p * m + j, -b[(q, j)]);
+        }
+        for i in 0..l {
+            add(col, Part::C, i * n + q, c[(i, p)]);
+        }
+    }
+}
+
 impl Predictor<'_> {
     /// Tangent vectors (p x n^2; fewer in the modal chart) of the similarity orbit at `theta`; `None` when there is no
     /// orbit in the parameters (a fixed non-zero `K` or a given non-zero `x0`).
@@ -22,7 +58,7 @@ impl Predictor<'_> {
             return None;
         }
         let pm = self.unpack(th);
-        let (n, m, l) = (self.n, self.m, self.l);
+        let (n, l) = (self.n, self.l);
         let k_ok = self.est_k || (0..n).all(|i| (0..l).all(|j| pm.k[(i, j)] == 0.0));
         let x0_ok = self
             .x0_mode
@@ -38,19 +74,15 @@ impl Predictor<'_> {
             .filter(|&(a, b)| !self.held(a, b))
             .collect();
         let mut tan = Mat::<f64>::zeros(self.p, pairs.len());
+        similarity_tangent(&pm.a, &pm.b, &pm.c, &pairs, |col, part, idx, v| {
+            let base = match part {
+                Part::A => off.a,
+                Part::B => off.b,
+                Part::C => off.c,
+            };
+            tan[(base + idx, col)] += v;
+        });
         for (col, &(a, b)) in pairs.iter().enumerate() {
-            for i in 0..n {
-                tan[(off.a + i * n + b, col)] += pm.a[(i, a)];
-            }
-            for j in 0..n {
-                tan[(off.a + a * n + j, col)] -= pm.a[(b, j)];
-            }
-            for j in 0..m {
-                tan[(off.b + a * m + j, col)] -= pm.b[(b, j)];
-            }
-            for i in 0..l {
-                tan[(off.c + i * n + b, col)] += pm.c[(i, a)];
-            }
             if let Some(ik) = off.k {
                 for j in 0..l {
                     tan[(ik + a * l + j, col)] -= pm.k[(b, j)];

@@ -30,7 +30,7 @@
 //! coordinates of [`super::coordinates`]). Without a well-conditioned modal form the whole of
 //! `A` is one block. The admissible set is a stable `A`.
 
-use super::coordinates::complement;
+use super::coordinates::{complement, similarity_tangent, Part};
 use super::modal::modal_form;
 use crate::error::{Result, SysidError};
 use crate::linalg::spectral_radius;
@@ -241,7 +241,6 @@ impl LineFit<'_> {
     /// that keep the blocks of `A`.
     fn orbit_tangent(&self, th: &[f64]) -> Mat<f64> {
         let (a, b, c, _) = self.matrices(th);
-        let (n, m, l) = (self.n, self.m, self.l);
         let (ob, oc, _) = self.layout();
         let pairs: Vec<(usize, usize)> = self
             .blocks
@@ -249,23 +248,16 @@ impl LineFit<'_> {
             .flat_map(|&(s, bs)| (s..s + bs).flat_map(move |p| (s..s + bs).map(move |q| (p, q))))
             .collect();
         let mut tan = Mat::<f64>::zeros(self.free.len(), pairs.len());
-        let mut add = |idx: usize, col: usize, v: f64| {
-            if let Some(f) = self.column[idx] {
+        similarity_tangent(&a, &b, &c, &pairs, |col, part, idx, v| {
+            let base = match part {
+                Part::A => 0,
+                Part::B => ob,
+                Part::C => oc,
+            };
+            if let Some(f) = self.column[base + idx] {
                 tan[(f, col)] += v;
             }
-        };
-        for (col, &(p, q)) in pairs.iter().enumerate() {
-            for i in 0..n {
-                add(i * n + q, col, a[(i, p)]);
-                add(p * n + i, col, -a[(q, i)]);
-            }
-            for j in 0..m {
-                add(ob + p * m + j, col, -b[(q, j)]);
-            }
-            for i in 0..l {
-                add(oc + i * n + q, col, c[(i, p)]);
-            }
-        }
+        });
         tan
     }
 
