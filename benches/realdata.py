@@ -4,6 +4,7 @@ reference, scored on held-out validation data.
     .venv/bin/python benches/realdata.py                 # every record (several minutes)
     .venv/bin/python benches/realdata.py --records dryer robot_arm
     .venv/bin/python benches/realdata.py --no-peers      # without SIPPY / nfoursid
+    .venv/bin/python benches/realdata.py --split reversed --no-peers --records dryer ...
 
 Records (``/work/shared/data``, see its README; the DaISy records and the F-16 ground
 vibration test). Splits: the README's where it gives one (dryer 1:500 / 501:1000, robot arm
@@ -13,6 +14,16 @@ file (16 384 samples, the first period holds the transient) and validated on per
 level-2 validation file. pH is nonlinear and included as such; the ball and beam is integrating
 and used as recorded (not differenced); the distillation column uses its noise-free channels
 (inputs 2-6, outputs 22-24: 60 / 30 samples).
+
+``--split`` changes the splits, a proxy for records the project never sees (does a choice
+hold up when estimation and validation data trade places?): ``default`` is the above;
+``reversed`` estimates on the *last* part of the same length as the default estimation part
+and validates on the first (dryer 501:1000 / 1:500, robot arm 225:1024 / 1:224, the 2/3
+records their last 2/3 / first 1/3); ``swap`` estimates on the default validation part and
+validates on the default estimation part (a short estimation record). The F-16 levels keep
+their split under every ``--split`` (a separate validation file; leave them out with
+``--records``). Another split writes ``results/realdata_<split>.md`` unless ``--out`` is given,
+and ``--reuse`` takes only rows of the same split.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -56,14 +67,32 @@ HORIZONS = (10, 20)
 
 
 # -- records ------------------------------------------------------------------------------
+SPLITS = ("default", "reversed", "swap")
+SPLIT = "default"  # set by --split
+
+
+def _split(u, y, n_est: int, split: str):
+    """The estimation and validation parts of one record under a split (docstring)."""
+    N = u.shape[0]
+    if split == "default":
+        e, v = slice(0, n_est), slice(n_est, N)
+    elif split == "reversed":  # estimate on the last n_est samples, validate on the first
+        e, v = slice(N - n_est, N), slice(0, N - n_est)
+    elif split == "swap":  # estimate on the default validation part, validate on the rest
+        e, v = slice(n_est, N), slice(0, n_est)
+    else:
+        raise ValueError(f"unknown split {split!r}; choose one of {SPLITS}")
+    return (u[e], y[e]), (u[v], y[v])
+
+
 def _daisy(name: str, ins: list[int], outs: list[int], n_est: int | None = None):
     d = np.loadtxt(SHARED / "daisy" / f"{name}.dat")
     n_est = n_est if n_est is not None else (2 * d.shape[0]) // 3
-    u, y = d[:, ins], d[:, outs]
-    return (u[:n_est], y[:n_est]), (u[n_est:], y[n_est:])
+    return _split(d[:, ins], d[:, outs], n_est, SPLIT)
 
 
 def _f16(level: str):
+    """The F-16 levels keep their split under every --split (separate validation file)."""
     def read(f: str) -> np.ndarray:
         return np.genfromtxt(SHARED / "f16" / f, delimiter=",", skip_header=1)[:, :5]
     est = read(f"F16Data_FullMSine_{level}.csv")[8192:3 * 8192]
@@ -361,10 +390,10 @@ def run_record(name: str, peers: bool, tmpdir: Path, tools: set[str] | None = No
             f, rho, n = score(mats, val, 1.0)
             f = extra.pop("fit_raw", f)
             row = {"record": name, "tool": tool, "fit": f, "max_pole": rho, "order": n,
-                   "seconds": secs, **extra}
+                   "seconds": secs, "split": SPLIT, **extra}
         except Exception as e:  # noqa: BLE001 - reported, not raised
             row = {"record": name, "tool": tool, "fit": -np.inf, "max_pole": np.nan,
-                   "order": None, "seconds": time.perf_counter() - t,
+                   "order": None, "seconds": time.perf_counter() - t, "split": SPLIT,
                    "error": f"{type(e).__name__}: {e}"[:160]}
         rows.append(row)
         print(json.dumps(row), flush=True)
@@ -476,7 +505,12 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--records", nargs="*", default=list(RECORDS))
     ap.add_argument("--no-peers", action="store_true")
-    ap.add_argument("--out", default=str(HERE / "results" / "realdata.md"))
+    ap.add_argument("--split", choices=SPLITS, default="default",
+                    help="estimation/validation split of the records (docstring); the F-16 "
+                         "levels keep theirs")
+    ap.add_argument("--out", default=None,
+                    help="table .md (and .json beside it); default results/realdata.md, "
+                         "results/realdata_<split>.md for another split")
     ap.add_argument("--tools", nargs="*", default=None, help="only these tools")
     ap.add_argument("--reuse", nargs="*", default=[],
                     help="results .json files whose reference and peer rows (not sysid's) "
@@ -484,6 +518,11 @@ def main() -> None:
     ap.add_argument("--table-from", default=None,
                     help="rewrite the table from a results .json (no fitting)")
     args = ap.parse_args()
+    global SPLIT
+    SPLIT = args.split
+    if args.out is None:
+        tail = "" if args.split == "default" else f"_{args.split}"
+        args.out = str(HERE / "results" / f"realdata{tail}.md")
     if args.table_from:
         rows = json.loads(Path(args.table_from).read_text())
         for r in rows:
@@ -498,7 +537,8 @@ def main() -> None:
     reuse = {}
     for f in args.reuse:
         for r in json.loads(Path(f).read_text()):
-            if not r.get("error"):
+            # rows of another split are never reused (rows without one are the default's)
+            if not r.get("error") and r.get("split", "default") == args.split:
                 r["fit"] = float(r["fit"])
                 r["max_pole"] = float(r["max_pole"])
                 reuse[(r["record"], r["tool"])] = r
