@@ -169,3 +169,49 @@ def test_refinement_stops_once_its_implied_fit_has_settled():
     flat = [cb(i, cost * (1 - 1e-9 * i)) for i in range(SETTLE_WINDOW + 2)]
     assert flat[:SETTLE_WINDOW] == [True] * SETTLE_WINDOW and flat[-1] is False
     assert SETTLE_POINTS > 0
+
+
+def test_held_out_blocks_where_the_output_stands_still_are_left_out_of_the_choice():
+    # the logger ran on after the test: the last fifth of the record is one held value. The
+    # fit there divides by no variation (every candidate scored -inf on that block, and the
+    # trimmed mean spent its one dropped block on it); that block is left out of the score
+    rng = np.random.default_rng(1)
+    plant = sysid.StateSpaceModel([[0.8, 0.3], [-0.3, 0.8]], [[1.0], [0.5]], [[1.0, 0.0]])
+    u = rng.standard_normal((600, 1))
+    y = plant.simulate(u) + 0.05 * rng.standard_normal((600, 1))
+    u = np.vstack([u, np.full((150, 1), u[-1, 0])])
+    y = np.vstack([y, np.full((150, 1), y[-1, 0])])
+    res = sysid.identify(sysid.IOData(u=u, y=y), refine=False, progress=False)
+    assert "held_out" in res.checks and "stands still" in res.checks["held_out"]
+    scored = [r for r in res.leaderboard if r["fold_fits"] and r["stable"]]
+    assert scored and all(len(r["fold_fits"]) == 4 for r in scored)
+    assert all(np.all(np.isfinite(r["fold_fits"])) for r in scored)
+    assert res.model.nstates >= 2 and res.model.is_stable()
+
+
+def test_the_data_insist_on_an_unstable_candidate_that_wins_every_block():
+    # an integrating plant: its model wins every held-out block against the best stable one.
+    # Another unstable candidate scores higher on the trimmed mean but diverges on one block
+    # (the trimmed mean forgives one block, the sign test must not): the data insist on the
+    # first, and the second is not eligible
+    rng = np.random.default_rng(0)
+    plant = sysid.StateSpaceModel([[1.001]], [[0.1]], [[1.0]])
+    u = rng.standard_normal((1000, 1))
+    y = plant.simulate(u) + 0.01 * rng.standard_normal((1000, 1))
+    d = sysid.IOData(u=u, y=y)
+    board = Board(sysid.validation.crossval.folds(d, 5), _Bar())
+    leaky = sysid.StateSpaceModel([[0.9]], [[0.1]], [[1.0]])
+    board.add("moesp", 1, False, None, "subspace", lambda k: leaky, lambda data: leaky,
+              budgeted=False)
+    plant_row = board.add("n4sid", 1, False, None, "subspace", lambda k: plant,
+                          lambda data: plant, budgeted=False)
+    assert not plant_row["stable"]
+    fits = [f + 1.0 for f in plant_row["fold_fits"]]
+    fits[2] = -1e6  # diverges on one block
+    wild = dict(plant_row, family="cva", order=7, fold_fits=fits, max_abs_pole=1.5,
+                held_out_fit=trimmed_mean(fits))
+    board.rows.append(wild)
+    assert wild["held_out_fit"] > plant_row["held_out_fit"]
+    assert board.insisting() is plant_row
+    assert not board.eligible(wild, False) and board.eligible(plant_row, False)
+    assert board.ranked(allow_unstable=True)[0] is plant_row

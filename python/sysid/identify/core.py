@@ -79,6 +79,36 @@ def _offsets(data: IOData) -> tuple[IOData, np.ndarray, np.ndarray]:
     return out, mu, my
 
 
+def _informative(parts: list[tuple[IOData, IOData]], data: IOData
+                 ) -> tuple[list[tuple[IOData, IOData]], int]:
+    """The folds whose held-out block has output variation to score against, and how many
+    were dropped. A block where every output stands still (a logger that ran on after the
+    test, a held or padded signal) has no fit: the fit divides by the block's variation, so
+    every candidate scored -inf there and the trimmed mean lost its one atypical block to it
+    (the next one, a quiet stretch, then ranked the candidates alone). Still blocks are
+    dropped, unless fewer than two would remain; they stay in the fitted parts.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.identify.core import _informative
+    >>> from sysid.validation.crossval import folds
+    >>> u = np.random.default_rng(0).standard_normal(500)
+    >>> y = np.r_[np.convolve(u, [0.5, 0.3])[:400], np.zeros(100)]
+    >>> d = sysid.IOData(u=u, y=y)
+    >>> len(_informative(folds(d, 5), d)[0])
+    4
+    """
+    y = np.vstack([e[1] for e in data.experiments])
+    scale = np.sqrt(np.mean((y - y.mean(0)) ** 2, axis=0))
+
+    def moves(held: IOData) -> bool:
+        return any(bool(np.any(np.ptp(e[1], axis=0) > 1e-9 * scale))
+                   for e in held.experiments if e[1].shape[0])
+    keep = [p for p in parts if moves(p[1])]
+    return (keep, len(parts) - len(keep)) if len(keep) >= 2 else (parts, 0)
+
+
 def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
     import sysid
 
@@ -322,7 +352,10 @@ def identify(
     checks, feedback = _checks(centred)
     checks["offsets"] = (f"input means {np.round(mu, 6).tolist()}, output means "
                          f"{np.round(my, 6).tolist()} removed (kept with the model)")
-    parts = folds(centred, fold_count(centred))
+    parts, still = _informative(folds(centred, fold_count(centred)), centred)
+    if still:
+        checks["held_out"] = (f"{still} held-out block(s) left out of the choice: every output "
+                              "stands still there (no variation to score a fit against)")
     shortest = min(min(h.lengths) for _, h in parts)
     if shortest < 20:
         raise InsufficientDataError(
