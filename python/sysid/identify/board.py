@@ -166,7 +166,7 @@ class Board:
 
     def eligible(self, r: dict[str, Any], stable_only: bool = True) -> bool:
         return (bool(np.isfinite(r["held_out_fit"])) and not r.get("worse_than_start")
-                and (r["stable"] or not stable_only))
+                and (r["stable"] or not (stable_only or r.get("not_insisted"))))
 
     def best_fit(self, stable_only: bool = True) -> float:
         best = self.best(stable_only)
@@ -190,19 +190,32 @@ class Board:
         on every held-out block (a sign test at ``2**-K``, K >= 4 blocks) and by more than
         the slack on the score (an integrating or open-loop unstable plant), also once the
         record's drift is taken out (:meth:`_trend_fits`; otherwise it follows a drift and
-        :attr:`drift` records it)."""
+        :attr:`drift` records it). The best scoring such candidate is returned, not the best
+        scoring unstable one: the trimmed mean forgives one block, and an unstable model
+        that diverges on one block (a fast unstable mode the other blocks do not excite) is
+        just what the sign test must not pass. Once the data insist, the unstable candidates
+        that do not win on every block are not eligible (``not_insisted``): the choice among
+        unstable models is made among those the data insist on."""
         stable = [r for r in self.rows if self.eligible(r)]
         unstable = [r for r in self.rows if self.eligible(r, False) and not r["stable"]]
         if not unstable or len(self.folds) < 4:
             return None
-        best_u = max(unstable, key=lambda r: r["held_out_fit"])
         if not stable:
+            best_u = max(unstable, key=lambda r: r["held_out_fit"])
             return best_u if all(np.isfinite(best_u["fold_fits"])) else None
         best_s = max(stable, key=lambda r: r["held_out_fit"])
-        if self._wins(best_u["fold_fits"], best_s["fold_fits"]):
-            if all(self._wins(*self._trend_fits([best_u, best_s], d)) for d in (False, True)):
-                return best_u
-            self.drift = {"unstable": best_u, "stable": best_s}
+        winners = [r for r in unstable if self._wins(r["fold_fits"], best_s["fold_fits"])]
+        if not winners:
+            return None
+        best_u = max(winners, key=lambda r: r["held_out_fit"])
+        if all(self._wins(*self._trend_fits([best_u, best_s], d)) for d in (False, True)):
+            for r in unstable:
+                if not any(r is w for w in winners):
+                    r["not_insisted"] = True
+                    r["note"] = r["note"] or ("unstable and not better than the best stable "
+                                              "candidate on every held-out block: not chosen")
+            return best_u
+        self.drift = {"unstable": best_u, "stable": best_s}
         return None
 
     def _wins(self, fu: list[float], fs: list[float]) -> bool:
