@@ -8,7 +8,8 @@
    record is cut into five contiguous blocks (fewer on short records; several experiments:
    one each), each held out once while the rest fits the candidate, which then simulates
    it (initial state fitted); the score is the mean of the five held-out fits without the
-   lowest and the highest (:mod:`.board`). Candidates: every subspace weighting (MOESP,
+   lowest and the highest (:mod:`.board`); a block where every output stands still is left
+   out (:func:`_informative`). Candidates: every subspace weighting (MOESP,
    N4SID, CVA) at every order the horizon allows (up to 20), with and without feedthrough;
    the best of each of the smallest orders near the best refined by prediction-error search
    on the simulation error
