@@ -230,7 +230,10 @@ def grid_choice(fit_fn, u, y, orders, horizons):
 
 
 def numpy_pomoesp(u, y):
-    n, i = grid_choice(po_moesp, u, y, ORDERS, HORIZONS)
+    choice = grid_choice(po_moesp, u, y, ORDERS, HORIZONS)
+    if choice is None:
+        raise RuntimeError("no order and horizon of the grid fits this record (too short)")
+    n, i = choice
     A, B, C, D = po_moesp(u, y, n, i)
     return (A, B, C, D), {"order": n, "horizon": i}
 
