@@ -206,7 +206,7 @@ def nlssest(
     order: int,
     *,
     hidden: Any = 16,
-    output_hidden: Any = None,
+    output_hidden: Any = "same",
     encoder_hidden: Any = (),
     lags: int | None = None,
     horizon: int | None = None,
@@ -229,8 +229,10 @@ def nlssest(
     order : int
         Number of states.
     hidden, output_hidden, encoder_hidden : int or tuple of int
-        Hidden widths of the state network ``f``, the output network ``g`` (``None``: the
-        output equation stays linear) and the encoder network (``()``: the encoder is linear).
+        Hidden widths of the state network ``f``, the output network ``g`` (default
+        ``"same"``: those of ``f``; ``None``: the output equation stays linear, which a
+        Wiener-type plant, a static nonlinearity after the dynamics, cannot be fitted
+        with) and the encoder network (``()``: the encoder is linear).
     lags : int, optional
         Past samples the encoder reads (default ``max(2 order, 4)``).
     horizon : int, optional
@@ -289,7 +291,8 @@ def nlssest(
     n = check_order(order)
     hid, enc = _widths(hidden, "hidden"), _widths(encoder_hidden, "encoder_hidden") \
         if encoder_hidden != () else ()
-    out = None if output_hidden is None else _widths(output_hidden, "output_hidden")
+    out = None if output_hidden is None else hid if isinstance(output_hidden, str) and \
+        output_hidden == "same" else _widths(output_hidden, "output_hidden")
     L = max(2 * n, 4) if lags is None else as_int(lags, "lags", 1)
     H = None if horizon is None else as_int(horizon, "horizon", 2)
     if data.n_inputs == 0:
