@@ -93,3 +93,23 @@ def test_never_returns_worse_than_its_linear_start():
         assert held_out(m) <= held_out(Around()) * (1 + 1e-12)
         assert t["validation"][t["best_epoch"]] == min(t["validation"])
     assert t["best_epoch"] < len(t["validation"]) - 1 or t["stop"] == "epochs"
+
+
+def test_a_slow_mode_does_not_turn_training_into_a_drift():
+    # a near-integrator (pole 0.9995) beside a fast nonlinear path: with the same step size
+    # for every parameter no epoch beat the linear start (a constant push on the slow mode
+    # is integrated 2000-fold); with per-mode steps min(1, |1 - lambda|) training does
+    rng = np.random.default_rng(1)
+    N = 4000
+    u = rng.standard_normal(N)
+    x, y = np.zeros(2), np.zeros(N)
+    for t in range(N):
+        y[t] = x[0] + x[1]
+        x = np.array([0.9995 * x[0] + 0.02 * u[t], 0.5 * x[1] + np.tanh(2 * u[t])])
+    d = sysid.IOData(u, y + 0.01 * rng.standard_normal(N), 1.0)
+    lin = sysid.StateSpaceModel([[0.9995, 0.0], [0.0, 0.5]], [[0.02], [1.0]], [[1.0, 1.0]],
+                                dt=1.0)
+    m = sysid.nlssest(d, 2, hidden=8, epochs=15, patience=15, progress=False, init=lin)
+    v = m.info["training"]["validation"]
+    assert min(v) < 0.7 * v[0]
+    assert m.info["horizon"] > 1000  # ln(10) / (1 - 0.9995) samples
