@@ -237,15 +237,16 @@ def nlssest(
         Past samples the encoder reads (default ``max(2 order, 4)``).
     horizon : int, optional
         Samples per training section. Default: 100, or longer for a slow linear start:
-        ``ln(10)`` times its slowest time constant ``1 / |1 - lambda|`` (modes with
-        ``|1 - lambda| < 1e-4``, drifts, left out), so that a section sees what its state
-        map's errors integrate to; at most half the shortest training part.
+        ``ln(10)`` times its slowest time constant ``1 / |1 - |lambda||`` (modes with
+        ``|1 - |lambda|| < 1e-4``, drifts, left out), so that a section sees what its state
+        map's errors accumulate to; at most half the shortest training part.
     epochs, batch, learning_rate : int, int, float
         Adam's passes over the data, sections per step and step size. The rows of the
         linear part and of the state network that move a mode ``lambda`` of the linear
-        start (in its real modal coordinates) step ``min(1, |1 - lambda|)`` times
-        ``learning_rate``: a constant push ``d`` on a mode moves its output by ``d / |1 -
-        lambda|``, so a slow mode would turn a step that suits a fast one into a drift.
+        start (in its real modal coordinates) step ``min(1, |1 - |lambda||)`` times
+        ``learning_rate``: a mode integrates a push over ``1 / |1 - |lambda||`` samples and
+        a change of its row moves its pole by about as much, so a step that suits a fast
+        mode makes a slow or lightly damped one drift or lose its stability.
     patience : int
         Stop after this many epochs without a lower validation error.
     validation : float or IOData
@@ -387,10 +388,16 @@ def _modal(m: StateSpaceModel) -> tuple[StateSpaceModel, np.ndarray, bool]:
             np.asarray(poles), True)
 
 
+def _margin(lam: np.ndarray) -> np.ndarray:
+    """Each pole's distance from the unit circle, ``|1 - |lambda||``: the share of a mode
+    that decays per sample (``1 / |1 - |lambda||`` samples its time constant)."""
+    return np.abs(1 - np.abs(lam))
+
+
 def _horizon(lam: np.ndarray, room: int) -> int:
     """Default section length: 100, or ``ln(10)`` slowest time constants ``1 / |1 -
-    lambda|`` (drift modes with ``|1 - lambda| < 1e-4`` left out), at most ``room / 2``."""
-    d = np.abs(1 - lam)
+    |lambda||`` (drifts, ``|1 - |lambda|| < 1e-4``, left out), at most ``room / 2``."""
+    d = _margin(lam)
     d = d[d >= 1e-4]
     slow = int(np.ceil(np.log(10) / d.min())) if d.size else 0
     return int(max(2, min(max(100, slow), room // 2)))
@@ -399,11 +406,14 @@ def _horizon(lam: np.ndarray, room: int) -> int:
 def _rates(start: NeuralStateSpaceModel, lam: np.ndarray, modal: bool) -> np.ndarray:
     """Each parameter's step size relative to the learning rate: the rows of ``A``, ``B``
     and of the state network's last layer that move state ``i`` (of pole ``lam_i``, modal
-    coordinates) ``min(1, |1 - lam_i|)``, the rest 1. Adam moves every parameter by about
-    the step size, and a constant push ``d`` on a mode moves it by ``d / |1 - lam|``.
-    Without modal coordinates (``modal`` false) every state gets the slowest mode's."""
+    coordinates) ``min(1, |1 - |lam_i||)``, the rest 1. Adam moves every parameter by about
+    the step size; a push ``d`` on a mode is integrated over ``1 / |1 - |lam||`` samples,
+    and a change ``d`` of its row moves the pole by about ``d``, across the unit circle
+    when ``d`` exceeds the margin. Without modal coordinates (``modal`` false) every state
+    gets the slowest mode's."""
     n, m = start.nstates, start.ninputs
-    r = np.minimum(1.0, np.abs(1 - lam)) if modal else np.full(n, min(1.0, np.abs(1 - lam).min()))
+    d = _margin(lam)
+    r = np.minimum(1.0, d) if modal else np.full(n, min(1.0, d.min()))
     rates = np.ones(start.params.size)
     rates[:n * n] = np.repeat(r, n)
     rates[n * n:n * (n + m)] = np.repeat(r, m)
