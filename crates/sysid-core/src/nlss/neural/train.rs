@@ -448,6 +448,13 @@ fn check_sizes(
 mod tests {
     use super::*;
 
+    /// 300 samples of a deterministic pseudo-random input in [-0.5, 0.5).
+    fn input() -> Vec<f64> {
+        (0..300)
+            .map(|t| ((t * 37) % 11) as f64 / 11.0 - 0.5)
+            .collect()
+    }
+
     fn run(m: &NeuralSs, batch: usize, u: &[f64]) -> Result<TrainResult> {
         let p = vec![0.0; m.n_params()];
         let opts = TrainOptions {
@@ -466,9 +473,7 @@ mod tests {
 
     #[test]
     fn zero_rates_keep_parameters_and_the_start_is_kept_when_nothing_beats_it() {
-        let u: Vec<f64> = (0..300)
-            .map(|t| ((t * 37) % 11) as f64 / 11.0 - 0.5)
-            .collect();
+        let u = input();
         let m = NeuralSs::new(1, 1, 1, &[4], None, &[], 1);
         let mut p = vec![0.0; m.n_params()];
         p[0] = 0.5;
@@ -507,9 +512,7 @@ mod tests {
 
     #[test]
     fn absurd_sizes_are_refused_before_training() {
-        let u: Vec<f64> = (0..300)
-            .map(|t| ((t * 37) % 11) as f64 / 11.0 - 0.5)
-            .collect();
+        let u = input();
         let small = NeuralSs::new(1, 1, 1, &[4], None, &[], 1);
         // 300 - 20 - 1 + 1 = 280 section starts
         assert!(run(&small, 280, &u).is_ok());
