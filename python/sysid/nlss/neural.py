@@ -4,14 +4,16 @@
 
     x(t+1) = A x + B u + f(x, u)       y = C x + D u + g(x, u)       x(t0) = h(past)
 
-in scaled channels; ``f`` (and optionally ``g``) are tanh multilayer perceptrons whose last
-layer starts at zero, so training starts at the linear model (the BLA's for periodic data);
+in scaled channels and the linear start's real modal coordinates; ``f`` and ``g`` (unless
+switched off) are tanh multilayer perceptrons whose last layer starts at zero, so training
+starts at the linear model (the BLA's for periodic data);
 ``h`` is an encoder of the past ``L`` inputs and outputs (a linear map fitted to the linear
 model's states, plus a network) that gives the initial state of every training section.
 Training (Rust core, no deep-learning framework): Adam on the mean squared simulation error
-of short sections (truncated simulation, back-propagation through each section), the epoch
-with the lowest simulation error on held-out data kept (Beintema, Schoukens & Tóth 2023
-describe this encoder/truncated-simulation scheme).
+of short sections (truncated simulation, back-propagation through each section; slow modes
+take proportionally smaller steps), the epoch whose free-run simulation from rest fits the
+held-out data best kept, the start included (Beintema, Schoukens & Tóth 2023 describe this
+encoder/truncated-simulation scheme).
 """
 
 from __future__ import annotations
