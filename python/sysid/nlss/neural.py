@@ -4,14 +4,16 @@
 
     x(t+1) = A x + B u + f(x, u)       y = C x + D u + g(x, u)       x(t0) = h(past)
 
-in scaled channels; ``f`` (and optionally ``g``) are tanh multilayer perceptrons whose last
-layer starts at zero, so training starts at the linear model (the BLA's for periodic data);
+in scaled channels and the linear start's real modal coordinates; ``f`` and ``g`` (unless
+switched off) are tanh multilayer perceptrons whose last layer starts at zero, so training
+starts at the linear model (the BLA's for periodic data);
 ``h`` is an encoder of the past ``L`` inputs and outputs (a linear map fitted to the linear
 model's states, plus a network) that gives the initial state of every training section.
 Training (Rust core, no deep-learning framework): Adam on the mean squared simulation error
-of short sections (truncated simulation, back-propagation through each section), the epoch
-with the lowest simulation error on held-out data kept (Beintema, Schoukens & Tóth 2023
-describe this encoder/truncated-simulation scheme).
+of short sections (truncated simulation, back-propagation through each section; slow modes
+take proportionally smaller steps), the epoch whose free-run simulation from rest fits the
+held-out data best kept, the start included (Beintema, Schoukens & Tóth 2023 describe this
+encoder/truncated-simulation scheme).
 """
 
 from __future__ import annotations
@@ -206,10 +208,10 @@ def nlssest(
     order: int,
     *,
     hidden: Any = 16,
-    output_hidden: Any = None,
+    output_hidden: Any = "same",
     encoder_hidden: Any = (),
     lags: int | None = None,
-    horizon: int = 100,
+    horizon: int | None = None,
     epochs: int = 200,
     batch: int = 16,
     learning_rate: float = 3e-3,
@@ -229,19 +231,32 @@ def nlssest(
     order : int
         Number of states.
     hidden, output_hidden, encoder_hidden : int or tuple of int
-        Hidden widths of the state network ``f``, the output network ``g`` (``None``: the
-        output equation stays linear) and the encoder network (``()``: the encoder is linear).
+        Hidden widths of the state network ``f``, the output network ``g`` (default
+        ``"same"``: those of ``f``; ``None``: the output equation stays linear, which a
+        Wiener-type plant, a static nonlinearity after the dynamics, cannot be fitted
+        with) and the encoder network (``()``: the encoder is linear).
     lags : int, optional
         Past samples the encoder reads (default ``max(2 order, 4)``).
-    horizon : int
-        Samples per training section.
+    horizon : int, optional
+        Samples per training section. Default: 100, or longer for a slow linear start:
+        ``ln(10)`` times its slowest time constant ``1 / |1 - |lambda||`` (modes with
+        ``|1 - |lambda|| < 1e-4``, drifts, left out), so that a section sees what its state
+        map's errors accumulate to; at most half the shortest training part.
     epochs, batch, learning_rate : int, int, float
-        Adam's passes over the data, sections per step and step size.
+        Adam's passes over the data, sections per step and step size. The rows of the
+        linear part and of the state network that move a mode ``lambda`` of the linear
+        start (in its real modal coordinates) step ``min(1, |1 - |lambda||)`` times
+        ``learning_rate``: a mode integrates a push over ``1 / |1 - |lambda||`` samples and
+        a change of its row moves its pole by about as much, so a step that suits a fast
+        mode makes a slow or lightly damped one drift or lose its stability.
     patience : int
         Stop after this many epochs without a lower validation error.
     validation : float or IOData
-        The fraction of each experiment's end held out (its simulation error, from the
-        encoder's state, decides which epoch is kept), or separate records.
+        The fraction of each experiment's end held out, or separate records. The criterion
+        is the error of the free-run simulation from rest (as the model is used and
+        compared: each experiment simulated whole, its held-out end scored); the start
+        (the linear model) is a candidate, so the model returned never validates worse
+        than it.
     periods : int, optional
         Periods per experiment: the linear start is then the BLA's model.
     init : StateSpaceModel, optional
@@ -279,18 +294,21 @@ def nlssest(
     n = check_order(order)
     hid, enc = _widths(hidden, "hidden"), _widths(encoder_hidden, "encoder_hidden") \
         if encoder_hidden != () else ()
-    out = None if output_hidden is None else _widths(output_hidden, "output_hidden")
+    out = None if output_hidden is None else hid if isinstance(output_hidden, str) and \
+        output_hidden == "same" else _widths(output_hidden, "output_hidden")
     L = max(2 * n, 4) if lags is None else as_int(lags, "lags", 1)
-    H = as_int(horizon, "horizon", 2)
+    H = None if horizon is None else as_int(horizon, "horizon", 2)
     if data.n_inputs == 0:
         raise DataError("nlssest needs inputs")
     sc = Scaling.of(data)
     sd = scaled_data(data, sc)
-    train, val = _split(sd, sc, validation, L, H)
+    train, val = _split(sd, sc, validation, L, 2 if H is None else H)
     lin_data = IOData([u[:at] for u, _, at in train], [y[:at] for _, y, at in train], data.dt)
     whole = isinstance(validation, IOData) or float(validation) == 0.0
-    lin = balanced(linear_start(data, lin_data, sc, n, init, periods if whole else None),
-                   [u for u, _, _ in train])
+    lin, lam, modal = _modal(linear_start(data, lin_data, sc, n, init, periods if whole else None))
+    lin = balanced(lin, [u for u, _, _ in train])
+    if H is None:
+        H = _horizon(lam, min(at for _, _, at in train) - L)
     W = _encoder_fit(lin, train, L)
     start = NeuralStateSpaceModel.from_linear(lin, hidden=hid, output_hidden=out,
                                               encoder_hidden=enc, lags=L, seed=seed,
@@ -299,7 +317,8 @@ def nlssest(
     try:
         res = _sysid.neural_ss_train(start._struct(), start.params, train, val, epochs=epochs,
                                      batch=batch, horizon=H, learning_rate=learning_rate,
-                                     patience=patience, seed=seed, progress=cb)
+                                     patience=patience, seed=seed, progress=cb,
+                                     rates=_rates(start, lam, modal))
     finally:
         close()
     info = {"method": "nlssest", "start": lin.info.get("method") if lin.info else "linear",
@@ -317,7 +336,7 @@ def _split(sd: IOData, sc: Scaling, validation: Any, L: int, H: int) -> tuple[li
     c = np.ascontiguousarray
     if isinstance(validation, IOData):
         train = [(c(u), c(y), u.shape[0]) for u, y in sd.experiments]
-        val = [(sc.u(u), sc.y(y), L) for u, y in validation.experiments]
+        val = [(sc.u(u), sc.y(y), 0) for u, y in validation.experiments]
         return train, val
     frac = float(validation)
     if not 0.0 <= frac < 0.9:
@@ -346,6 +365,67 @@ def _encoder_fit(lin: StateSpaceModel, train: list, L: int) -> np.ndarray:
     skip = max(0, Pm.shape[0] // 10)  # the transient from rest is not the map's business
     W, *_ = np.linalg.lstsq(Pm[skip:], Xm[skip:], rcond=1e-10)
     return np.ascontiguousarray(W.T)
+
+
+def _modal(m: StateSpaceModel) -> tuple[StateSpaceModel, np.ndarray, bool]:
+    """The linear model in real modal coordinates (a state per real pole, two per complex
+    pair: real and imaginary part of its eigenvector), each state's pole and ``True``; the
+    model as it is, its poles and ``False`` when its eigenvectors are (nearly) dependent."""
+    lam, V = np.linalg.eig(m.A)
+    cols, poles, k = [], [], 0
+    while k < lam.size:
+        if lam[k].imag != 0 and k + 1 < lam.size and np.isclose(lam[k + 1], np.conj(lam[k])):
+            cols += [V[:, k].real, V[:, k].imag]
+            poles += [lam[k], lam[k]]
+            k += 2
+        else:
+            cols.append(V[:, k].real)
+            poles.append(lam[k])
+            k += 1
+    T = np.column_stack(cols) if cols else np.zeros((0, 0))
+    if len(poles) != m.nstates or np.linalg.cond(T) > 1e10:
+        return m, lam, False
+    Ti = np.linalg.inv(T)
+    return (StateSpaceModel(Ti @ m.A @ T, Ti @ m.B, m.C @ T, m.D, dt=m.dt, info=m.info),
+            np.asarray(poles), True)
+
+
+def _margin(lam: np.ndarray) -> np.ndarray:
+    """Each pole's distance from the unit circle, ``|1 - |lambda||``: the share of a mode
+    that decays per sample (``1 / |1 - |lambda||`` samples its time constant)."""
+    return np.abs(1 - np.abs(lam))
+
+
+def _horizon(lam: np.ndarray, room: int) -> int:
+    """Default section length: 100, or ``ln(10)`` slowest time constants ``1 / |1 -
+    |lambda||`` (drifts, ``|1 - |lambda|| < 1e-4``, left out), at most ``room / 2``."""
+    d = _margin(lam)
+    d = d[d >= 1e-4]
+    slow = int(np.ceil(np.log(10) / d.min())) if d.size else 0
+    return int(max(2, min(max(100, slow), room // 2)))
+
+
+def _rates(start: NeuralStateSpaceModel, lam: np.ndarray, modal: bool) -> np.ndarray:
+    """Each parameter's step size relative to the learning rate: the rows of ``A``, ``B``
+    and of the state network's last layer that move state ``i`` (of pole ``lam_i``, modal
+    coordinates) ``min(1, |1 - |lam_i||)``, the rest 1. Adam moves every parameter by about
+    the step size; a push ``d`` on a mode is integrated over ``1 / |1 - |lam||`` samples,
+    and a change ``d`` of its row moves the pole by about ``d``, across the unit circle
+    when ``d`` exceeds the margin. Without modal coordinates (``modal`` false) every state
+    gets the slowest mode's."""
+    n, m = start.nstates, start.ninputs
+    d = _margin(lam)
+    r = np.minimum(1.0, d) if modal else np.full(n, min(1.0, d.min()))
+    rates = np.ones(start.params.size)
+    rates[:n * n] = np.repeat(r, n)
+    rates[n * n:n * (n + m)] = np.repeat(r, m)
+    sizes = [n + m, *start.hidden, n]
+    last = n * (n + m) + start.noutputs * (n + m) + sum(
+        sizes[k] * sizes[k + 1] + sizes[k + 1] for k in range(len(sizes) - 2))
+    h = sizes[-2]
+    rates[last:last + n * h] = np.repeat(r, h)
+    rates[last + n * h:last + n * h + n] = r
+    return rates
 
 
 def _errors(epoch: int, val: float, train: float) -> dict[str, str]:

@@ -23,6 +23,10 @@ pub struct TrainOptions {
     pub seed: u64,
     /// Gradients longer than this are scaled down to it.
     pub clip: f64,
+    /// Step size of each parameter as a fraction of `learning_rate` (empty: all 1; `0`
+    /// keeps a parameter at its start). Adam moves every parameter by about the step size
+    /// whatever its gradient, so this sets the scale each parameter moves on.
+    pub rates: Vec<f64>,
 }
 
 impl Default for TrainOptions {
@@ -35,6 +39,7 @@ impl Default for TrainOptions {
             patience: 20,
             seed: 0,
             clip: 10.0,
+            rates: Vec::new(),
         }
     }
 }
@@ -46,8 +51,8 @@ pub struct EpochReport {
     pub epoch: usize,
     /// Mean squared section error of the epoch's training sections.
     pub train: f64,
-    /// Mean squared simulation error on the validation segments (the training error
-    /// without them).
+    /// Mean squared error of the simulation from rest on the validation segments (of the
+    /// training records without them).
     pub validation: f64,
 }
 
@@ -69,14 +74,14 @@ pub struct TrainResult {
 }
 
 /// A record: inputs and outputs row-major; training sections start in `[lags, end -
-/// horizon]`, validation simulates from `start` (encoder at `start`) to the end.
+/// horizon]`; validation simulates the whole record from rest and scores it from `at` on.
 #[derive(Debug, Clone, Copy)]
 pub struct Segment<'a> {
     /// Inputs.
     pub u: &'a [f64],
     /// Outputs.
     pub y: &'a [f64],
-    /// First sample (validation) or end (training, exclusive).
+    /// First scored sample (validation) or end (training, exclusive).
     pub at: usize,
 }
 
@@ -208,21 +213,20 @@ impl NeuralSs {
         Some(loss)
     }
 
-    /// Mean squared simulation error over validation segments (infinite if one diverges).
+    /// Mean squared error of the free-run simulation from rest (`x0 = 0`, how the model is
+    /// used and compared) over each whole validation record, scored from its `at` on
+    /// (infinite if one diverges).
     fn validation(&self, p: &[f64], val: &[Segment<'_>]) -> f64 {
         let (mut s, mut n) = (0.0, 0usize);
+        let x0 = vec![0.0; self.nx];
         for v in val {
-            let x0 = match self.encode(p, v.u, v.y, v.at) {
-                Ok(x) => x,
-                Err(_) => return f64::INFINITY,
-            };
-            let (nu, ny) = (self.nu, self.ny);
-            match self.simulate(p, &v.u[v.at * nu..], &x0) {
+            let ny = self.ny;
+            match self.simulate(p, v.u, &x0) {
                 Ok(yh) => {
-                    for (a, b) in yh.iter().zip(&v.y[v.at * ny..]) {
+                    for (a, b) in yh[v.at * ny..].iter().zip(&v.y[v.at * ny..]) {
                         s += (a - b) * (a - b);
                     }
-                    n += yh.len();
+                    n += yh.len() - v.at * ny;
                 }
                 Err(_) => return f64::INFINITY,
             }
@@ -236,8 +240,11 @@ impl NeuralSs {
 }
 
 /// Trains from `p0` on sections of `train_data` (each `at` = end of its training part),
-/// keeping the parameters with the lowest error on `val` (simulated from the encoder's state
-/// at each `at`; without validation segments the training error decides).
+/// keeping the parameters with the lowest error on `val`: each record simulated from rest,
+/// as the model is used, and scored from its `at` on (a held-out end: the training part
+/// before it is the warm-up); without validation segments the training records' simulation
+/// from rest decides. The start `p0` is a candidate too, so the result never validates
+/// worse than it.
 ///
 /// ```
 /// use sysid_core::nlss::neural::{train, NeuralSs, Segment, TrainOptions};
@@ -280,6 +287,18 @@ pub fn train(
         });
     }
     check_sizes(model, p0.len(), train_data, total, opts.batch)?;
+    if !opts.rates.is_empty() && opts.rates.len() != p0.len()
+        || opts.rates.iter().any(|r| !(r.is_finite() && *r >= 0.0))
+    {
+        return Err(SysidError::invalid(
+            "rates",
+            format!(
+                "needs one finite, non-negative step-size factor per parameter ({}), got {}",
+                p0.len(),
+                opts.rates.len()
+            ),
+        ));
+    }
     let np = p0.len();
     let mut p = p0.to_vec();
     let (mut m1, mut m2) = (vec![0.0; np], vec![0.0; np]);
@@ -291,7 +310,7 @@ pub fn train(
                 .map(|s| Segment {
                     u: &s.u[..s.at * model.nu],
                     y: &s.y[..s.at * model.ny],
-                    at: model.lags,
+                    at: 0,
                 })
                 .collect();
             model.validation(p, &segs)
@@ -356,7 +375,8 @@ pub fn train(
                 let g = grad[i] * c;
                 m1[i] = b1 * m1[i] + (1.0 - b1) * g;
                 m2[i] = b2 * m2[i] + (1.0 - b2) * g * g;
-                p[i] -= opts.learning_rate * (m1[i] / c1) / ((m2[i] / c2).sqrt() + 1e-8);
+                let lr = opts.learning_rate * opts.rates.get(i).copied().unwrap_or(1.0);
+                p[i] -= lr * (m1[i] / c1) / ((m2[i] / c2).sqrt() + 1e-8);
             }
         }
         let v = score(&p);
@@ -428,6 +448,13 @@ fn check_sizes(
 mod tests {
     use super::*;
 
+    /// 300 samples of a deterministic pseudo-random input in [-0.5, 0.5).
+    fn input() -> Vec<f64> {
+        (0..300)
+            .map(|t| ((t * 37) % 11) as f64 / 11.0 - 0.5)
+            .collect()
+    }
+
     fn run(m: &NeuralSs, batch: usize, u: &[f64]) -> Result<TrainResult> {
         let p = vec![0.0; m.n_params()];
         let opts = TrainOptions {
@@ -445,10 +472,47 @@ mod tests {
     }
 
     #[test]
+    fn zero_rates_keep_parameters_and_the_start_is_kept_when_nothing_beats_it() {
+        let u = input();
+        let m = NeuralSs::new(1, 1, 1, &[4], None, &[], 1);
+        let mut p = vec![0.0; m.n_params()];
+        p[0] = 0.5;
+        p[1] = 1.0;
+        p[2] = 1.0;
+        let y = m.simulate(&p, &u, &[0.0]).unwrap();
+        let p0 = {
+            let mut q = p.clone();
+            q[0] = 0.3;
+            q
+        };
+        let mut opts = TrainOptions {
+            epochs: 5,
+            horizon: 20,
+            learning_rate: 1e-2,
+            ..TrainOptions::default()
+        };
+        opts.rates = vec![1.0; p.len()];
+        opts.rates[0] = 0.0; // A stays at 0.3
+        let seg = [Segment {
+            u: &u,
+            y: &y,
+            at: 300,
+        }];
+        let r = train(&m, &p0, &seg, &[], &opts, &mut |_| Flow::Continue).unwrap();
+        assert_eq!(r.params[0], 0.3);
+        // the true model as the start: no epoch beats it, it comes back unchanged
+        opts.rates.clear();
+        let r = train(&m, &p, &seg, &[], &opts, &mut |_| Flow::Continue).unwrap();
+        assert_eq!(r.best_epoch, 0);
+        assert_eq!(r.params, p);
+        assert_eq!(r.validation[0], 0.0);
+        opts.rates = vec![1.0; 3];
+        assert!(train(&m, &p, &seg, &[], &opts, &mut |_| Flow::Continue).is_err());
+    }
+
+    #[test]
     fn absurd_sizes_are_refused_before_training() {
-        let u: Vec<f64> = (0..300)
-            .map(|t| ((t * 37) % 11) as f64 / 11.0 - 0.5)
-            .collect();
+        let u = input();
         let small = NeuralSs::new(1, 1, 1, &[4], None, &[], 1);
         // 300 - 20 - 1 + 1 = 280 section starts
         assert!(run(&small, 280, &u).is_ok());
