@@ -34,10 +34,12 @@ pub(super) fn product(dst: MatMut<'_, f64>, a: MatRef<'_, f64>, b: MatRef<'_, f6
     faer::linalg::matmul::matmul(dst, Accum::Replace, a, b, alpha, Par::Seq);
 }
 
-/// The parallelism of the products whose cost grows with the square of `cols` columns:
-/// faer's global one from 64 columns (results agree to round-off for any thread count).
-pub(super) fn parallelism(cols: usize) -> Par {
-    if cols >= 64 {
+/// The parallelism of a block product `rows^T rows` over `rows` Jacobian rows of `cols`
+/// columns: faer's global one from `rows cols^2 = 2^22` (about 2 million multiply-adds in
+/// the triangle, a few hundred microseconds on one core), on the calling thread below that,
+/// where waking the pool for every block costs more than it saves (results agree to round-off for any thread count).
+pub(super) fn parallelism(rows: usize, cols: usize) -> Par {
+    if rows.saturating_mul(cols).saturating_mul(cols) >= 1 << 22 {
         faer::get_global_parallelism()
     } else {
         Par::Seq

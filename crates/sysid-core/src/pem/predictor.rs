@@ -101,11 +101,33 @@ pub(super) struct Filter {
     pub wz: Vec<f64>,
     /// `1/2 sum |R^-1 e|^2` so far.
     pub cost: f64,
+    /// Row-major copies of `[C D]` (`l x (n + m)`), `[Abar Bbar K]` (`n x (n + m + l)`) and
+    /// `R^-1` (`l x l`), and the current sample's `(x, u, y)`: the per-sample loops read
+    /// contiguous memory without index checks.
+    cd: Vec<f64>,
+    abk: Vec<f64>,
+    rinv_rows: Vec<f64>,
+    xuy: Vec<f64>,
+}
+
+/// `a` (`r x c`) beside `b` (`r x c2`) beside `k` (`r x c3`), row-major.
+fn rows_of(blocks: &[&Mat<f64>]) -> Vec<f64> {
+    let r = blocks.first().map_or(0, |b| b.nrows());
+    let mut out = Vec::with_capacity(r * blocks.iter().map(|b| b.ncols()).sum::<usize>());
+    for i in 0..r {
+        for b in blocks {
+            out.extend((0..b.ncols()).map(|j| b[(i, j)]));
+        }
+    }
+    out
 }
 
 impl Filter {
     pub fn new(pm: Unpacked, rinv: Mat<f64>) -> Self {
-        let (n, l) = (pm.a.nrows(), pm.c.nrows());
+        let (n, m, l) = (pm.a.nrows(), pm.b.ncols(), pm.c.nrows());
+        let cd = rows_of(&[&pm.c, &pm.d]);
+        let abk = rows_of(&[&pm.abar, &pm.bbar, &pm.k]);
+        let rinv_rows = rows_of(&[&rinv]);
         Filter {
             pm,
             rinv,
@@ -115,6 +137,10 @@ impl Filter {
             we: vec![0.0; l],
             wz: vec![0.0; l],
             cost: 0.0,
+            cd,
+            abk,
+            rinv_rows,
+            xuy: vec![0.0; n + m + l],
         }
     }
 
@@ -123,16 +149,28 @@ impl Filter {
         self.x.copy_from_slice(&self.pm.x0[ex]);
     }
 
+    /// `(x, u(t), y(t))` into `xuy`.
+    fn load(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>, t: usize) {
+        let n = self.x.len();
+        let m = u.ncols();
+        self.xuy[..n].copy_from_slice(&self.x);
+        for (j, v) in self.xuy[n..n + m].iter_mut().enumerate() {
+            *v = u[(t, j)];
+        }
+        for (j, v) in self.xuy[n + m..].iter_mut().enumerate() {
+            *v = y[(t, j)];
+        }
+    }
+
     /// `e = y - C x - D u` at sample `t`.
     pub fn errors(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>, t: usize) {
-        let pm = &self.pm;
-        for (i, ei) in self.e.iter_mut().enumerate() {
-            let mut a = y[(t, i)];
-            for (j, xj) in self.x.iter().enumerate() {
-                a -= pm.c[(i, j)] * xj;
-            }
-            for j in 0..u.ncols() {
-                a -= pm.d[(i, j)] * u[(t, j)];
+        self.load(u, y, t);
+        let w = self.x.len() + u.ncols();
+        let (xu, yt) = self.xuy.split_at(w);
+        for ((ei, row), &yi) in self.e.iter_mut().zip(self.cd.chunks_exact(w)).zip(yt) {
+            let mut a = yi;
+            for (c, v) in row.iter().zip(xu) {
+                a -= c * v;
             }
             *ei = a;
         }
@@ -157,10 +195,11 @@ impl Filter {
     /// `R^-1 e` (added to the cost) and `W e`.
     pub fn weigh(&mut self) {
         let l = self.e.len();
+        let r = &self.rinv_rows;
         for i in 0..l {
             let mut a = 0.0;
-            for j in 0..=i {
-                a += self.rinv[(i, j)] * self.e[j];
+            for (rv, ev) in r[i * l..i * l + i + 1].iter().zip(&self.e) {
+                a += rv * ev;
             }
             self.we[i] = a;
             self.cost += 0.5 * a * a;
@@ -168,25 +207,20 @@ impl Filter {
         for i in 0..l {
             let mut a = 0.0;
             for j in i..l {
-                a += self.rinv[(j, i)] * self.we[j];
+                a += r[j * l + i] * self.we[j];
             }
             self.wz[i] = a;
         }
     }
 
-    /// `x <- (A - K C) x + (B - K D) u + K y`.
+    /// `x <- (A - K C) x + (B - K D) u + K y` at sample `t`.
     pub fn advance(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>, t: usize) {
-        let pm = &self.pm;
-        for (i, xi) in self.xn.iter_mut().enumerate() {
+        self.load(u, y, t);
+        let w = self.xuy.len();
+        for (xi, row) in self.xn.iter_mut().zip(self.abk.chunks_exact(w)) {
             let mut a = 0.0;
-            for (j, xj) in self.x.iter().enumerate() {
-                a += pm.abar[(i, j)] * xj;
-            }
-            for j in 0..u.ncols() {
-                a += pm.bbar[(i, j)] * u[(t, j)];
-            }
-            for j in 0..y.ncols() {
-                a += pm.k[(i, j)] * y[(t, j)];
+            for (c, v) in row.iter().zip(&self.xuy) {
+                a += c * v;
             }
             *xi = a;
         }
