@@ -39,6 +39,7 @@
 
 mod covariance;
 mod normal;
+mod reduced;
 mod reparam;
 mod search;
 #[cfg(test)]
@@ -48,6 +49,7 @@ pub use covariance::{covariance, Covariance};
 pub use normal::NormalEquations;
 pub use reparam::{ParameterMap, Reparameterized};
 pub use search::minimize;
+pub(crate) use search::prof;
 
 use crate::error::Result;
 use faer::Mat;
