@@ -47,6 +47,7 @@ mod tests;
 
 pub use covariance::{covariance, Covariance};
 pub use normal::NormalEquations;
+pub(crate) use reduced::small_par;
 pub use reparam::{ParameterMap, Reparameterized};
 pub use search::minimize;
 pub(crate) use search::prof;

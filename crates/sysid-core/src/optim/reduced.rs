@@ -5,8 +5,44 @@
 use super::search::{prof, Point};
 use super::{Options, Problem};
 use crate::error::{Result, SysidError};
+use faer::linalg::matmul::matmul;
 use faer::prelude::Solve;
-use faer::{Mat, Side};
+use faer::{Accum, Mat, Par, Side};
+
+/// The parallelism of a dense decomposition or product of a `rows x cols` matrix, `O(rows
+/// cols^2)`: the calling thread below `2^22` multiply-adds (every iterate of a small problem;
+/// waking the pool costs more than the work), faer's global one above.
+pub(crate) fn small_par(rows: usize, cols: usize) -> Par {
+    if rows.saturating_mul(cols).saturating_mul(cols) >= 1 << 22 {
+        faer::get_global_parallelism()
+    } else {
+        Par::Seq
+    }
+}
+
+/// Eigenvectors (columns) and eigenvalues (ascending) of the symmetric `a` (its lower
+/// triangle), as faer's `self_adjoint_eigen` but with [`small_par`].
+fn symmetric_eigen(a: &Mat<f64>) -> Result<(Mat<f64>, Vec<f64>)> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::evd::{self, ComputeEigenvectors};
+    let n = a.nrows();
+    let par = small_par(n, n);
+    let mut u = Mat::<f64>::zeros(n, n);
+    let mut s = faer::diag::Diag::<f64>::zeros(n);
+    let scratch =
+        evd::self_adjoint_evd_scratch::<f64>(n, ComputeEigenvectors::Yes, par, Default::default());
+    evd::self_adjoint_evd(
+        a.as_ref(),
+        s.as_mut(),
+        Some(u.as_mut()),
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    )
+    .map_err(|e| SysidError::numerical("optimiser (eigenvalues of J^T J)", format!("{e:?}")))?;
+    let sv = s.column_vector();
+    Ok((u, (0..n).map(|i| sv[i]).collect()))
+}
 
 /// How the damped steps are solved at one point.
 pub(super) enum Solver {
@@ -86,8 +122,25 @@ pub(super) fn reduce(
         }
     }
     let q = t.ncols();
-    let ht = &pt.h * &t;
-    let hr = t.transpose() * &ht;
+    let par = small_par(p, q);
+    let mut ht = Mat::<f64>::zeros(p, q);
+    matmul(
+        ht.as_mut(),
+        Accum::Replace,
+        pt.h.as_ref(),
+        t.as_ref(),
+        1.0,
+        par,
+    );
+    let mut hr = Mat::<f64>::zeros(q, q);
+    matmul(
+        hr.as_mut(),
+        Accum::Replace,
+        t.transpose(),
+        ht.as_ref(),
+        1.0,
+        par,
+    );
     let d: Vec<f64> = (0..q)
         .map(|i| {
             let v = hr[(i, i)];
@@ -111,12 +164,9 @@ pub(super) fn reduce(
     let (v, lam) = if q == 0 {
         (Mat::zeros(0, 0), Vec::new())
     } else {
-        let e = hs.self_adjoint_eigen(Side::Lower).map_err(|e| {
-            SysidError::numerical("optimiser (eigenvalues of J^T J)", format!("{e:?}"))
-        })?;
-        let s = e.S().column_vector();
+        let (u, s) = symmetric_eigen(&hs)?;
         let lam: Vec<f64> = (0..q).map(|i| s[i].max(0.0)).collect();
-        (e.U().to_owned(), lam)
+        (u, lam)
     };
     prof("reduce-eigen", t0);
     let lmax = lam.iter().copied().fold(0.0, f64::max);

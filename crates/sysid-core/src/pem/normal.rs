@@ -35,15 +35,11 @@ pub(super) fn product(dst: MatMut<'_, f64>, a: MatRef<'_, f64>, b: MatRef<'_, f6
 }
 
 /// The parallelism of a block product `rows^T rows` over `rows` Jacobian rows of `cols`
-/// columns: faer's global one from `rows cols^2 = 2^22` (about 2 million multiply-adds in
-/// the triangle, a few hundred microseconds on one core), on the calling thread below that,
-/// where waking the pool for every block costs more than it saves (results agree to round-off for any thread count).
+/// columns ([`crate::optim::small_par`]: the calling thread below `rows cols^2 = 2^22`, where
+/// waking the pool for every block of samples costs more than it saves; results agree to
+/// round-off for any thread count).
 pub(super) fn parallelism(rows: usize, cols: usize) -> Par {
-    if rows.saturating_mul(cols).saturating_mul(cols) >= 1 << 22 {
-        faer::get_global_parallelism()
-    } else {
-        Par::Seq
-    }
+    crate::optim::small_par(rows, cols)
 }
 
 /// Running sums of the regressor `z = (x, u)` over the samples: `sum (W e) z^T` always, and
