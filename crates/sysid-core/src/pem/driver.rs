@@ -32,7 +32,7 @@ impl Problem for Predictor<'_> {
 
     fn evaluate(&mut self, th: &[f64], jacobian: bool) -> Result<Evaluation> {
         if !jacobian {
-            return Ok(Evaluation::cost_only(self.cost(th)));
+            return Ok(Evaluation::cost_only(self.cost_keeping_covariance(th)));
         }
         if !(self.structured && self.col_lo == 0 && self.n > 0) {
             return self.evaluate_rows(th);

@@ -63,6 +63,8 @@ pub struct Predictor<'a> {
     /// The modal chart (see [`super::chart`]): the entries of `A` outside its blocks are
     /// held at zero and their sensitivities never formed; `None`: every entry moves.
     pub(super) chart: Option<super::chart::Chart>,
+    /// `(theta, Lambda)` of the last trial's cost pass ([`Self::cost_keeping_covariance`]).
+    pub(super) last_covariance: Option<(Vec<f64>, Mat<f64>)>,
 }
 
 /// The model matrices at one parameter vector, with the predictor's `A - K C`, `B - K D`.
@@ -367,6 +369,7 @@ impl<'a> Predictor<'a> {
             gram_cache: None,
             a_bound_hits: 0,
             chart: None,
+            last_covariance: None,
         })
     }
 
@@ -487,37 +490,57 @@ impl<'a> Predictor<'a> {
 
     /// The weighted cost `1/2 sum |R^-1 e|^2` at `theta` (no Jacobian).
     pub(super) fn cost(&self, th: &[f64]) -> f64 {
+        self.pass(th, false).0
+    }
+
+    /// [`Self::cost`], keeping the errors' covariance of the same pass: when the search
+    /// accepts this trial, its loss (`det Lambda`) or new weighting needs no second pass.
+    pub(super) fn cost_keeping_covariance(&mut self, th: &[f64]) -> f64 {
+        let (cost, lam) = self.pass(th, true);
+        self.last_covariance = lam.map(|lam| (th.to_vec(), lam));
+        cost
+    }
+
+    /// One pass of the predictor at `theta`: the weighted cost and, with `covariance`, the
+    /// errors' sample covariance.
+    fn pass(&self, th: &[f64], covariance: bool) -> (f64, Option<Mat<f64>>) {
+        let l = self.l;
         let mut f = Filter::new(self.unpack(th), self.rinv.clone());
+        // lower triangle, row by row
+        let mut lam = vec![0.0; if covariance { l * (l + 1) / 2 } else { 0 }];
         for (ex, (u, y)) in self.exps.iter().enumerate() {
             f.restart(ex);
             for t in 0..y.nrows() {
                 f.errors(*u, *y, t);
                 f.weigh();
-                f.advance(*u, *y, t);
-            }
-        }
-        f.finite_cost()
-    }
-
-    /// Prediction errors' sample covariance at `theta`.
-    pub fn innovation_covariance(&self, th: &[f64]) -> Mat<f64> {
-        let l = self.l;
-        let mut lam = Mat::<f64>::zeros(l, l);
-        let mut f = Filter::new(self.unpack(th), Mat::identity(l, l));
-        for (ex, (u, y)) in self.exps.iter().enumerate() {
-            f.restart(ex);
-            for t in 0..y.nrows() {
-                f.errors(*u, *y, t);
-                for i in 0..l {
-                    for j in 0..=i {
-                        lam[(i, j)] += f.e[i] * f.e[j];
+                if covariance {
+                    let mut k = 0;
+                    for i in 0..l {
+                        for j in 0..=i {
+                            lam[k] += f.e[i] * f.e[j];
+                            k += 1;
+                        }
                     }
                 }
                 f.advance(*u, *y, t);
             }
         }
         let nf = self.n_samples as f64;
-        Mat::from_fn(l, l, |i, j| lam[(i.max(j), i.min(j))] / nf)
+        let lam = covariance.then(|| {
+            Mat::from_fn(l, l, |i, j| {
+                let (a, b) = (i.max(j), i.min(j));
+                lam[a * (a + 1) / 2 + b] / nf
+            })
+        });
+        (f.finite_cost(), lam)
+    }
+
+    /// Prediction errors' sample covariance at `theta`.
+    pub fn innovation_covariance(&self, th: &[f64]) -> Mat<f64> {
+        match &self.last_covariance {
+            Some((at, lam)) if at.as_slice() == th => lam.clone(),
+            _ => self.pass(th, true).1.unwrap_or_else(|| Mat::zeros(0, 0)),
+        }
     }
 
     /// `det(Lambda)` at `theta`: the maximum-likelihood loss.
