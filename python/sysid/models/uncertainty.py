@@ -96,6 +96,8 @@ class ParameterUncertainty(HTMLResult):
         One name per parameter (default ``theta0, theta1, ...``).
     dof : int, optional
         Number of identifiable directions (default: the numerical rank of ``covariance``).
+        When given, the eigendecomposition of ``covariance`` waits until sampling or
+        propagation needs it (a Cholesky factor checks it is positive semi-definite now).
     method : str
         How the covariance was obtained (``"gauss-newton"``, ``"least-squares"``,
         ``"bootstrap"``, ``"instrumental-variable"``, ...); informational.
