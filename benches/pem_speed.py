@@ -97,6 +97,9 @@ def start_model(u, y, n):
 def run_sysid(u, y, start, periods=None):
     """sysid.pem from ``start``: simulation errors in the time domain, or (``periods``) the
     frequency-domain fit on the excited lines of the periodic record; returns (row, model)."""
+    # the process CPU clock also counts threads an earlier NumPy/SciPy call left spinning
+    # (OpenBLAS's idle workers spin ~0.1 s after each threaded call): let them settle
+    time.sleep(0.3)
     c0, t0 = time.process_time(), time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", getattr(sysid, "IterationLimitWarning", UserWarning))
@@ -220,6 +223,7 @@ def other_cases() -> dict[str, tuple]:
 
 
 def _timed(fn):
+    time.sleep(0.3)  # as in run_sysid: idle BLAS threads of an earlier call settle first
     c0, t0 = time.process_time(), time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")

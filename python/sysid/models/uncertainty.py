@@ -96,6 +96,8 @@ class ParameterUncertainty(HTMLResult):
         One name per parameter (default ``theta0, theta1, ...``).
     dof : int, optional
         Number of identifiable directions (default: the numerical rank of ``covariance``).
+        When given, the eigendecomposition of ``covariance`` waits until sampling or
+        propagation needs it (a Cholesky factor checks it is positive semi-definite now).
     method : str
         How the covariance was obtained (``"gauss-newton"``, ``"least-squares"``,
         ``"bootstrap"``, ``"instrumental-variable"``, ...); informational.
@@ -140,11 +142,13 @@ class ParameterUncertainty(HTMLResult):
         if len(self.names) != p:
             raise DataError(f"names has {len(self.names)} entries but theta has {p}")
         self._eig: tuple[np.ndarray, np.ndarray] | None = None
-        if dof is None or p <= 200:
-            self._eigen()          # checks positive semi-definiteness now
+        if dof is None:
+            self._eigen()          # the rank, and positive semi-definiteness checked now
         else:
-            # large: the eigendecomposition (seconds for p ~ 1500) waits until sampling or
-            # first-order propagation needs it; a Cholesky factor checks definiteness now
+            # the estimator knows the rank: the eigendecomposition (seconds for p ~ 1500, and
+            # with a threaded BLAS ~0.1 s of CPU on the idle threads even for p ~ 50) waits
+            # until sampling or first-order propagation needs it; a Cholesky factor checks
+            # definiteness now
             top = float(np.max(np.diag(P), initial=0.0))
             try:
                 np.linalg.cholesky(P + 1e-8 * max(top, 1e-300) * np.eye(p))

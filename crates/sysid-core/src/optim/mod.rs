@@ -39,6 +39,7 @@
 
 mod covariance;
 mod normal;
+mod reduced;
 mod reparam;
 mod search;
 #[cfg(test)]
@@ -46,8 +47,10 @@ mod tests;
 
 pub use covariance::{covariance, Covariance};
 pub use normal::NormalEquations;
+pub(crate) use reduced::small_par;
 pub use reparam::{ParameterMap, Reparameterized};
 pub use search::minimize;
+pub(crate) use search::prof;
 
 use crate::error::Result;
 use faer::Mat;

@@ -119,16 +119,34 @@ impl Predictor<'_> {
 }
 
 /// An orthonormal basis of the orthogonal complement of the column space of `tan` (its
-/// numerical rank: singular values above `1e-10` of the largest).
+/// numerical rank: singular values above `1e-10` of the largest). A small SVD (every
+/// iterate of winding-sized problems) runs on the calling thread: waking the pool cost more
+/// than the decomposition.
 pub(super) fn complement(tan: &Mat<f64>) -> Result<Mat<f64>> {
-    let svd = tan
-        .svd()
-        .map_err(|e| SysidError::numerical("local coordinates (SVD)", format!("{e:?}")))?;
-    let sv = svd.S().column_vector();
-    let smax = if sv.nrows() > 0 { sv[0] } else { 0.0 };
-    let rank = (0..sv.nrows())
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::svd::{self, ComputeSvdVectors};
+    let (rows, cols) = tan.shape();
+    let size = rows.min(cols);
+    let par = super::normal::parallelism(rows, cols);
+    let mut u = Mat::<f64>::zeros(rows, rows);
+    let mut v = Mat::<f64>::zeros(cols, cols);
+    let mut s = faer::diag::Diag::<f64>::zeros(size);
+    let full = ComputeSvdVectors::Full;
+    let scratch = svd::svd_scratch::<f64>(rows, cols, full, full, par, Default::default());
+    svd::svd(
+        tan.as_ref(),
+        s.as_mut(),
+        Some(u.as_mut()),
+        Some(v.as_mut()),
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    )
+    .map_err(|e| SysidError::numerical("local coordinates (SVD)", format!("{e:?}")))?;
+    let sv = s.column_vector();
+    let smax = if size > 0 { sv[0] } else { 0.0 };
+    let rank = (0..size)
         .filter(|&i| sv[i] > 1e-10 * smax && sv[i] > 0.0)
         .count();
-    let rows = tan.nrows();
-    Ok(svd.U().subcols(rank, rows - rank).to_owned())
+    Ok(u.subcols(rank, rows - rank).to_owned())
 }

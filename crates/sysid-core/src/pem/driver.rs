@@ -32,7 +32,7 @@ impl Problem for Predictor<'_> {
 
     fn evaluate(&mut self, th: &[f64], jacobian: bool) -> Result<Evaluation> {
         if !jacobian {
-            return Ok(Evaluation::cost_only(self.cost(th)));
+            return Ok(Evaluation::cost_only(self.cost_keeping_covariance(th)));
         }
         if !(self.structured && self.col_lo == 0 && self.n > 0) {
             return self.evaluate_rows(th);
@@ -315,6 +315,7 @@ fn finish(
     mut solution: optim::Solution,
     loss_history: Vec<f64>,
 ) -> Result<PemResult> {
+    let t_finish = std::time::Instant::now();
     let theta = solution.theta.clone();
     let pm = prob.unpack(&theta);
     let lam = prob.innovation_covariance(&theta);
@@ -325,12 +326,15 @@ fn finish(
         prob.reweight_at(&theta)?;
         prob.evaluate(&theta, true)?.gauss_newton
     };
+    let t0 = std::time::Instant::now();
     let covariance = optim::covariance(h.as_ref(), 1.0, 1e-10)?;
+    crate::optim::prof("covariance", t0);
     if solution.condition.is_nan() {
         // a large search does not form the eigenvalues; those of the covariance say the same
         solution.condition = covariance.condition;
     }
     let radius = spectral_radius(pm.a.as_ref())?;
+    crate::optim::prof("finish", t_finish);
     Ok(PemResult {
         sys: StateSpace::new(pm.a, pm.b, pm.c, pm.d)?,
         k: pm.k,

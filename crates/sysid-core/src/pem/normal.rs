@@ -34,14 +34,12 @@ pub(super) fn product(dst: MatMut<'_, f64>, a: MatRef<'_, f64>, b: MatRef<'_, f6
     faer::linalg::matmul::matmul(dst, Accum::Replace, a, b, alpha, Par::Seq);
 }
 
-/// The parallelism of the products whose cost grows with the square of `cols` columns:
-/// faer's global one from 64 columns (results agree to round-off for any thread count).
-pub(super) fn parallelism(cols: usize) -> Par {
-    if cols >= 64 {
-        faer::get_global_parallelism()
-    } else {
-        Par::Seq
-    }
+/// The parallelism of a block product `rows^T rows` over `rows` Jacobian rows of `cols`
+/// columns ([`crate::optim::small_par`]: the calling thread below `rows cols^2 = 2^22`, where
+/// waking the pool for every block of samples costs more than it saves; results agree to
+/// round-off for any thread count).
+pub(super) fn parallelism(rows: usize, cols: usize) -> Par {
+    crate::optim::small_par(rows, cols)
 }
 
 /// Running sums of the regressor `z = (x, u)` over the samples: `sum (W e) z^T` always, and

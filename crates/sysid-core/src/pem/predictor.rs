@@ -63,6 +63,8 @@ pub struct Predictor<'a> {
     /// The modal chart (see [`super::chart`]): the entries of `A` outside its blocks are
     /// held at zero and their sensitivities never formed; `None`: every entry moves.
     pub(super) chart: Option<super::chart::Chart>,
+    /// `(theta, Lambda)` of the last trial's cost pass ([`Self::cost_keeping_covariance`]).
+    pub(super) last_covariance: Option<(Vec<f64>, Mat<f64>)>,
 }
 
 /// The model matrices at one parameter vector, with the predictor's `A - K C`, `B - K D`.
@@ -101,11 +103,33 @@ pub(super) struct Filter {
     pub wz: Vec<f64>,
     /// `1/2 sum |R^-1 e|^2` so far.
     pub cost: f64,
+    /// Row-major copies of `[C D]` (`l x (n + m)`), `[Abar Bbar K]` (`n x (n + m + l)`) and
+    /// `R^-1` (`l x l`), and the current sample's `(x, u, y)`: the per-sample loops read
+    /// contiguous memory without index checks.
+    cd: Vec<f64>,
+    abk: Vec<f64>,
+    rinv_rows: Vec<f64>,
+    xuy: Vec<f64>,
+}
+
+/// `a` (`r x c`) beside `b` (`r x c2`) beside `k` (`r x c3`), row-major.
+fn rows_of(blocks: &[&Mat<f64>]) -> Vec<f64> {
+    let r = blocks.first().map_or(0, |b| b.nrows());
+    let mut out = Vec::with_capacity(r * blocks.iter().map(|b| b.ncols()).sum::<usize>());
+    for i in 0..r {
+        for b in blocks {
+            out.extend((0..b.ncols()).map(|j| b[(i, j)]));
+        }
+    }
+    out
 }
 
 impl Filter {
     pub fn new(pm: Unpacked, rinv: Mat<f64>) -> Self {
-        let (n, l) = (pm.a.nrows(), pm.c.nrows());
+        let (n, m, l) = (pm.a.nrows(), pm.b.ncols(), pm.c.nrows());
+        let cd = rows_of(&[&pm.c, &pm.d]);
+        let abk = rows_of(&[&pm.abar, &pm.bbar, &pm.k]);
+        let rinv_rows = rows_of(&[&rinv]);
         Filter {
             pm,
             rinv,
@@ -115,6 +139,10 @@ impl Filter {
             we: vec![0.0; l],
             wz: vec![0.0; l],
             cost: 0.0,
+            cd,
+            abk,
+            rinv_rows,
+            xuy: vec![0.0; n + m + l],
         }
     }
 
@@ -123,16 +151,28 @@ impl Filter {
         self.x.copy_from_slice(&self.pm.x0[ex]);
     }
 
+    /// `(x, u(t), y(t))` into `xuy`.
+    fn load(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>, t: usize) {
+        let n = self.x.len();
+        let m = u.ncols();
+        self.xuy[..n].copy_from_slice(&self.x);
+        for (j, v) in self.xuy[n..n + m].iter_mut().enumerate() {
+            *v = u[(t, j)];
+        }
+        for (j, v) in self.xuy[n + m..].iter_mut().enumerate() {
+            *v = y[(t, j)];
+        }
+    }
+
     /// `e = y - C x - D u` at sample `t`.
     pub fn errors(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>, t: usize) {
-        let pm = &self.pm;
-        for (i, ei) in self.e.iter_mut().enumerate() {
-            let mut a = y[(t, i)];
-            for (j, xj) in self.x.iter().enumerate() {
-                a -= pm.c[(i, j)] * xj;
-            }
-            for j in 0..u.ncols() {
-                a -= pm.d[(i, j)] * u[(t, j)];
+        self.load(u, y, t);
+        let w = self.x.len() + u.ncols();
+        let (xu, yt) = self.xuy.split_at(w);
+        for ((ei, row), &yi) in self.e.iter_mut().zip(self.cd.chunks_exact(w)).zip(yt) {
+            let mut a = yi;
+            for (c, v) in row.iter().zip(xu) {
+                a -= c * v;
             }
             *ei = a;
         }
@@ -157,10 +197,11 @@ impl Filter {
     /// `R^-1 e` (added to the cost) and `W e`.
     pub fn weigh(&mut self) {
         let l = self.e.len();
+        let r = &self.rinv_rows;
         for i in 0..l {
             let mut a = 0.0;
-            for j in 0..=i {
-                a += self.rinv[(i, j)] * self.e[j];
+            for (rv, ev) in r[i * l..i * l + i + 1].iter().zip(&self.e) {
+                a += rv * ev;
             }
             self.we[i] = a;
             self.cost += 0.5 * a * a;
@@ -168,25 +209,20 @@ impl Filter {
         for i in 0..l {
             let mut a = 0.0;
             for j in i..l {
-                a += self.rinv[(j, i)] * self.we[j];
+                a += r[j * l + i] * self.we[j];
             }
             self.wz[i] = a;
         }
     }
 
-    /// `x <- (A - K C) x + (B - K D) u + K y`.
+    /// `x <- (A - K C) x + (B - K D) u + K y` at sample `t`.
     pub fn advance(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>, t: usize) {
-        let pm = &self.pm;
-        for (i, xi) in self.xn.iter_mut().enumerate() {
+        self.load(u, y, t);
+        let w = self.xuy.len();
+        for (xi, row) in self.xn.iter_mut().zip(self.abk.chunks_exact(w)) {
             let mut a = 0.0;
-            for (j, xj) in self.x.iter().enumerate() {
-                a += pm.abar[(i, j)] * xj;
-            }
-            for j in 0..u.ncols() {
-                a += pm.bbar[(i, j)] * u[(t, j)];
-            }
-            for j in 0..y.ncols() {
-                a += pm.k[(i, j)] * y[(t, j)];
+            for (c, v) in row.iter().zip(&self.xuy) {
+                a += c * v;
             }
             *xi = a;
         }
@@ -333,6 +369,7 @@ impl<'a> Predictor<'a> {
             gram_cache: None,
             a_bound_hits: 0,
             chart: None,
+            last_covariance: None,
         })
     }
 
@@ -453,37 +490,57 @@ impl<'a> Predictor<'a> {
 
     /// The weighted cost `1/2 sum |R^-1 e|^2` at `theta` (no Jacobian).
     pub(super) fn cost(&self, th: &[f64]) -> f64 {
+        self.pass(th, false).0
+    }
+
+    /// [`Self::cost`], keeping the errors' covariance of the same pass: when the search
+    /// accepts this trial, its loss (`det Lambda`) or new weighting needs no second pass.
+    pub(super) fn cost_keeping_covariance(&mut self, th: &[f64]) -> f64 {
+        let (cost, lam) = self.pass(th, true);
+        self.last_covariance = lam.map(|lam| (th.to_vec(), lam));
+        cost
+    }
+
+    /// One pass of the predictor at `theta`: the weighted cost and, with `covariance`, the
+    /// errors' sample covariance.
+    fn pass(&self, th: &[f64], covariance: bool) -> (f64, Option<Mat<f64>>) {
+        let l = self.l;
         let mut f = Filter::new(self.unpack(th), self.rinv.clone());
+        // lower triangle, row by row
+        let mut lam = vec![0.0; if covariance { l * (l + 1) / 2 } else { 0 }];
         for (ex, (u, y)) in self.exps.iter().enumerate() {
             f.restart(ex);
             for t in 0..y.nrows() {
                 f.errors(*u, *y, t);
                 f.weigh();
-                f.advance(*u, *y, t);
-            }
-        }
-        f.finite_cost()
-    }
-
-    /// Prediction errors' sample covariance at `theta`.
-    pub fn innovation_covariance(&self, th: &[f64]) -> Mat<f64> {
-        let l = self.l;
-        let mut lam = Mat::<f64>::zeros(l, l);
-        let mut f = Filter::new(self.unpack(th), Mat::identity(l, l));
-        for (ex, (u, y)) in self.exps.iter().enumerate() {
-            f.restart(ex);
-            for t in 0..y.nrows() {
-                f.errors(*u, *y, t);
-                for i in 0..l {
-                    for j in 0..=i {
-                        lam[(i, j)] += f.e[i] * f.e[j];
+                if covariance {
+                    let mut k = 0;
+                    for i in 0..l {
+                        for j in 0..=i {
+                            lam[k] += f.e[i] * f.e[j];
+                            k += 1;
+                        }
                     }
                 }
                 f.advance(*u, *y, t);
             }
         }
         let nf = self.n_samples as f64;
-        Mat::from_fn(l, l, |i, j| lam[(i.max(j), i.min(j))] / nf)
+        let lam = covariance.then(|| {
+            Mat::from_fn(l, l, |i, j| {
+                let (a, b) = (i.max(j), i.min(j));
+                lam[a * (a + 1) / 2 + b] / nf
+            })
+        });
+        (f.finite_cost(), lam)
+    }
+
+    /// Prediction errors' sample covariance at `theta`.
+    pub fn innovation_covariance(&self, th: &[f64]) -> Mat<f64> {
+        match &self.last_covariance {
+            Some((at, lam)) if at.as_slice() == th => lam.clone(),
+            _ => self.pass(th, true).1.unwrap_or_else(|| Mat::zeros(0, 0)),
+        }
     }
 
     /// `det(Lambda)` at `theta`: the maximum-likelihood loss.

@@ -86,7 +86,7 @@ impl Predictor<'_> {
         let mut s = Mat::<f64>::zeros(n, nc);
         let mut s2 = s.clone();
         let mut cs = Mat::<f64>::zeros(l, nc);
-        let par = parallelism(nc);
+        let par = parallelism(blk * l, nc);
         let mut ut = vec![0.0; m];
         for (ex, (u, y)) in self.exps.iter().enumerate() {
             f.restart(ex);

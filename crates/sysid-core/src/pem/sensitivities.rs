@@ -156,7 +156,7 @@ impl Predictor<'_> {
             _ => q.clone(),
         };
         let r = lt.nrows();
-        let par = parallelism(pd);
+        let par = parallelism(blk * r, pd);
         let acc = !grad_only;
         let hp = if acc { pd } else { 0 };
         let mut hd = Mat::<f64>::zeros(hp, hp);
@@ -301,6 +301,7 @@ impl Predictor<'_> {
             }
         }
         let pe = eoff[carried.len()];
+        let segs = segments(&carried, &cols, md, &eoff, n, m, l);
         let cached = match grad_only {
             true => None,
             false => self
@@ -314,15 +315,21 @@ impl Predictor<'_> {
         let w = f.rinv.transpose() * &f.rinv;
         let wc = &w * &cq;
         let mq = cq.transpose() * &wc;
-        let par = parallelism(pe);
+        let par = parallelism(blk, pe);
         let hp = if acc { pe } else { 0 };
         let mut gram = Mat::<f64>::zeros(hp, hp);
         let mut cross = Mat::<f64>::zeros(if acc { nz } else { 0 }, hp);
-        let mut vbuf = Mat::<f64>::zeros(if acc { blk } else { 0 }, hp);
+        // the block's sensitivity rows, one column per sample (written contiguously)
+        let mut vbuf = Mat::<f64>::zeros(hp, if acc { blk } else { 0 });
         let (mut v, mut z) = (vec![0.0; n], vec![0.0; nz]);
         let mut sums = StaticSums::new(l, nz, blk, acc);
         let mut gd = vec![0.0; pd];
         let (mut sc, mut sn) = (vec![0.0; pe], vec![0.0; pe]);
+        // per carried number: sum_t s v (its block's first row of v), or for the second
+        // number of a 2x2 block the twin's sum (or nothing without a twin)
+        let mut ge = vec![0.0; pe];
+        // forcing of a sample: (z, y, 0): the modal state and input, the output, no forcing
+        let mut fv = vec![0.0; nz + l + 1];
         for (ex, (u, y)) in self.exps.iter().enumerate() {
             f.restart(ex);
             sc.fill(0.0);
@@ -347,44 +354,72 @@ impl Predictor<'_> {
                 for (k, vk) in v.iter_mut().enumerate() {
                     *vk = (0..l).map(|i| cq[(i, k)] * f.wz[i]).sum();
                 }
-                for (k, &(c, twin)) in carried.iter().enumerate() {
-                    let (b0, bs) = md.block[cols[c].row];
-                    let o = eoff[k];
-                    gd[c] -= (0..bs).map(|q| sc[o + q] * v[b0 + q]).sum::<f64>();
-                    if let Some(tw) = twin {
-                        gd[tw] -= sc[o] * v[b0 + 1] - sc[o + 1] * v[b0];
+                fv[..nz].copy_from_slice(&z);
+                for j in 0..l {
+                    fv[nz + j] = y[(t, j)];
+                }
+                for sg in &segs {
+                    let (sc_s, ge_s) = (&sc[sg.o..sg.end], &mut ge[sg.o..sg.end]);
+                    if sg.bs == 1 {
+                        let v0 = v[sg.b0];
+                        for (gv, sv) in ge_s.iter_mut().zip(sc_s) {
+                            *gv -= sv * v0;
+                        }
+                    } else {
+                        let (v0, v1) = (v[sg.b0], v[sg.b0 + 1]);
+                        for (gv, sv) in ge_s.chunks_exact_mut(2).zip(sc_s.chunks_exact(2)) {
+                            gv[0] -= sv[0] * v0 + sv[1] * v1;
+                            if sg.twin {
+                                gv[1] -= sv[0] * v1 - sv[1] * v0;
+                            }
+                        }
                     }
                 }
                 if acc {
-                    vbuf.as_mut()
-                        .row_mut(row)
-                        .copy_from(faer::RowRef::from_slice(&sc));
+                    vbuf.col_as_slice_mut(row).copy_from_slice(&sc);
                     row += 1;
                 }
                 // S'(t+1) = Lambda S' + F, blockwise
-                for (k, &(c, _)) in carried.iter().enumerate() {
-                    let d = cols[c];
-                    let (b0, bs) = md.block[d.row];
-                    let o = eoff[k];
-                    for q in 0..bs {
-                        sn[o + q] = (0..bs).map(|r| md.lam[(b0 + q, b0 + r)] * sc[o + r]).sum();
+                for sg in &segs {
+                    let (sc_s, sn_s) = (&sc[sg.o..sg.end], &mut sn[sg.o..sg.end]);
+                    let src = &sg.forcing;
+                    if sg.bs == 1 {
+                        let l00 = sg.lam[0];
+                        for ((nv, sv), &fi) in sn_s.iter_mut().zip(sc_s).zip(src) {
+                            *nv = l00 * sv + fv[fi];
+                        }
+                    } else {
+                        let [l00, l01, l10, l11] = sg.lam;
+                        let pairs = sn_s.chunks_exact_mut(2).zip(sc_s.chunks_exact(2));
+                        // the forcing enters the block row `fq`
+                        for ((nv, sv), &fi) in pairs.zip(src) {
+                            let fk = fv[fi];
+                            let (a0, a1) = (l00 * sv[0] + l01 * sv[1], l10 * sv[0] + l11 * sv[1]);
+                            if sg.fq == 0 {
+                                nv[0] = a0 + fk;
+                                nv[1] = a1;
+                            } else {
+                                nv[0] = a0;
+                                nv[1] = a1 + fk;
+                            }
+                        }
                     }
-                    sn[o + (d.row - b0)] += match d.forcing {
-                        Forcing::State => z[d.j],
-                        Forcing::Input => u[(t, d.j)],
-                        Forcing::Output => y[(t, d.j)],
-                        Forcing::Start => 0.0,
-                    };
                 }
                 std::mem::swap(&mut sc, &mut sn);
                 if acc && (row == blk || t + 1 == len) {
-                    let vr = vbuf.as_ref().subrows(0, row);
+                    let vr = vbuf.as_ref().subcols(0, row).transpose();
                     gram_add(gram.as_mut(), vr, par);
                     let zr = sums.zbuf.as_ref().subrows(0, row);
                     matmul(cross.as_mut(), Accum::Add, zr.transpose(), vr, 1.0, par);
                     row = 0;
                 }
                 f.advance(*u, *y, t);
+            }
+        }
+        for (k, &(c, twin)) in carried.iter().enumerate() {
+            gd[c] = ge[eoff[k]];
+            if let Some(tw) = twin {
+                gd[tw] = ge[eoff[k] + 1];
             }
         }
         if let Some(c) = cached {
@@ -426,4 +461,72 @@ impl Predictor<'_> {
         }
         Ok(ev)
     }
+}
+
+/// A run of carried sensitivity numbers of one block row of one parameter block: `w`
+/// columns of `bs` numbers each, contiguous in `o..end`, sharing the block `lam` (row-major
+/// 2x2, or its first entry) and the row `fq` of the block their forcing enters; `forcing`
+/// holds per column its index in the sample's forcing vector `(z, y, 0)`.
+struct Segment {
+    o: usize,
+    end: usize,
+    bs: usize,
+    b0: usize,
+    fq: usize,
+    twin: bool,
+    lam: [f64; 4],
+    forcing: Vec<usize>,
+}
+
+/// The carried columns of [`Predictor::evaluate_modal`] grouped into [`Segment`]s.
+fn segments(
+    carried: &[(usize, Option<usize>)],
+    cols: &[Dynamic],
+    md: &Modal,
+    eoff: &[usize],
+    n: usize,
+    m: usize,
+    l: usize,
+) -> Vec<Segment> {
+    let mut segs: Vec<Segment> = Vec::new();
+    for (k, &(c, twin)) in carried.iter().enumerate() {
+        let d = cols[c];
+        let (b0, bs) = md.block[d.row];
+        let fi = match d.forcing {
+            Forcing::State => d.j,
+            Forcing::Input => n + d.j,
+            Forcing::Output => n + m + d.j,
+            Forcing::Start => n + m + l,
+        };
+        let lam = if bs == 1 {
+            [md.lam[(b0, b0)], 0.0, 0.0, 0.0]
+        } else {
+            [
+                md.lam[(b0, b0)],
+                md.lam[(b0, b0 + 1)],
+                md.lam[(b0 + 1, b0)],
+                md.lam[(b0 + 1, b0 + 1)],
+            ]
+        };
+        let fq = d.row - b0;
+        let joins = segs.last().is_some_and(|s: &Segment| {
+            s.end == eoff[k] && s.b0 == b0 && s.bs == bs && s.fq == fq && s.twin == twin.is_some()
+        });
+        if !joins {
+            segs.push(Segment {
+                o: eoff[k],
+                end: eoff[k],
+                bs,
+                b0,
+                fq,
+                twin: twin.is_some(),
+                lam,
+                forcing: Vec::new(),
+            });
+        }
+        let s = segs.last_mut().expect("a segment was just pushed");
+        s.end += bs;
+        s.forcing.push(fi);
+    }
+    segs
 }

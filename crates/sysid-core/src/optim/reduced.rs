@@ -1,0 +1,392 @@
+//! The step problem of one iterate of [`super::minimize`]: the Gauss-Newton matrix scaled and
+//! reduced to the free directions, solved by an eigendecomposition (small problems) or by
+//! Cholesky factorisations (large ones).
+
+use super::search::{prof, Point};
+use super::{Options, Problem};
+use crate::error::{Result, SysidError};
+use faer::linalg::matmul::matmul;
+use faer::prelude::Solve;
+use faer::{Accum, Mat, Par, Side};
+
+/// The parallelism of a dense decomposition or product of a `rows x cols` matrix, `O(rows
+/// cols^2)`: the calling thread below `2^22` multiply-adds (every iterate of a small problem;
+/// waking the pool costs more than the work), faer's global one above.
+pub(crate) fn small_par(rows: usize, cols: usize) -> Par {
+    if rows.saturating_mul(cols).saturating_mul(cols) >= 1 << 22 {
+        faer::get_global_parallelism()
+    } else {
+        Par::Seq
+    }
+}
+
+/// Eigenvectors (columns) and eigenvalues (ascending) of the symmetric `a` (its lower
+/// triangle), as faer's `self_adjoint_eigen` but with [`small_par`].
+fn symmetric_eigen(a: &Mat<f64>) -> Result<(Mat<f64>, Vec<f64>)> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::evd::{self, ComputeEigenvectors};
+    let n = a.nrows();
+    let par = small_par(n, n);
+    let mut u = Mat::<f64>::zeros(n, n);
+    let mut s = faer::diag::Diag::<f64>::zeros(n);
+    let scratch =
+        evd::self_adjoint_evd_scratch::<f64>(n, ComputeEigenvectors::Yes, par, Default::default());
+    evd::self_adjoint_evd(
+        a.as_ref(),
+        s.as_mut(),
+        Some(u.as_mut()),
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    )
+    .map_err(|e| SysidError::numerical("optimiser (eigenvalues of J^T J)", format!("{e:?}")))?;
+    let sv = s.column_vector();
+    Ok((u, (0..n).map(|i| sv[i]).collect()))
+}
+
+/// How the damped steps are solved at one point.
+pub(super) enum Solver {
+    /// Eigenpairs `(v, lam)` of the scaled reduced Gauss-Newton matrix `D^-1 T^T H T D^-1`,
+    /// with `T` (p x q) the search basis: theta = theta_k + T z.
+    Eigen {
+        t: Mat<f64>,
+        v: Mat<f64>,
+        lam: Vec<f64>,
+    },
+    /// Large problems: the scaled full-space matrix `D^-1 H D^-1` (rows and columns of blocked
+    /// parameters replaced by the identity) and an estimate of its largest eigenvalue; every
+    /// damped step is one Cholesky solve.
+    Cholesky { hs: Mat<f64>, lmax: f64 },
+}
+
+/// The reduced step problem at a point.
+pub(super) struct Reduced {
+    /// Marquardt scaling (of z for `Eigen`, of theta for `Cholesky`).
+    pub d: Vec<f64>,
+    /// Scaled reduced gradient.
+    pub gs: Vec<f64>,
+    pub condition: f64,
+    pub solver: Solver,
+    /// The blocked parameters it was formed with.
+    pub blocked: Vec<bool>,
+    /// The point it was formed at.
+    pub at: Vec<f64>,
+    /// The scaled orthonormal basis of the invariant directions at `at`, once a chord step
+    /// asked for it (every chord step from this matrix removes the same directions).
+    pub orbit: Option<Mat<f64>>,
+}
+
+/// Smallest damping (relative to the largest eigenvalue) of a Cholesky solve: the similarity
+/// directions of a state-space model are an exact null space of `J^T W J`, orthogonal to the
+/// gradient, so a tiny shift leaves the step in their complement.
+const CHOLESKY_FLOOR: f64 = 1e-10;
+
+pub(super) fn reduce(
+    problem: &mut dyn Problem,
+    opt: &Options,
+    pt: &Point,
+    blocked: &[bool],
+) -> Result<Reduced> {
+    let p = pt.theta.len();
+    let n_free = blocked.iter().filter(|&&b| !b).count();
+    if n_free > opt.eigen_limit {
+        return Ok(reduce_cholesky(pt, blocked));
+    }
+    let t0 = std::time::Instant::now();
+    let basis = problem.search_basis(&pt.theta)?;
+    prof("basis", t0);
+    let t0 = std::time::Instant::now();
+    let mut t = match basis {
+        Some(b) => {
+            if b.nrows() != p {
+                return Err(SysidError::numerical(
+                    "optimiser",
+                    format!("search basis has {} rows for {p} parameters", b.nrows()),
+                ));
+            }
+            b
+        }
+        None => {
+            let free: Vec<usize> = (0..p).filter(|&i| !blocked[i]).collect();
+            Mat::from_fn(p, free.len(), |i, j| f64::from(u8::from(free[j] == i)))
+        }
+    };
+    // Blocked parameters (fixed or at an active bound) never move, whatever the basis says.
+    if blocked.iter().any(|&b| b) {
+        for i in 0..p {
+            if blocked[i] {
+                for j in 0..t.ncols() {
+                    t[(i, j)] = 0.0;
+                }
+            }
+        }
+    }
+    let q = t.ncols();
+    let par = small_par(p, q);
+    let mut ht = Mat::<f64>::zeros(p, q);
+    matmul(
+        ht.as_mut(),
+        Accum::Replace,
+        pt.h.as_ref(),
+        t.as_ref(),
+        1.0,
+        par,
+    );
+    let mut hr = Mat::<f64>::zeros(q, q);
+    matmul(
+        hr.as_mut(),
+        Accum::Replace,
+        t.transpose(),
+        ht.as_ref(),
+        1.0,
+        par,
+    );
+    let d: Vec<f64> = (0..q)
+        .map(|i| {
+            let v = hr[(i, i)];
+            if v > 0.0 && v.is_finite() {
+                v.sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let mut hs = Mat::from_fn(q, q, |i, j| hr[(i, j)] / (d[i] * d[j]));
+    for i in 0..q {
+        for j in 0..i {
+            let m = 0.5 * (hs[(i, j)] + hs[(j, i)]);
+            hs[(i, j)] = m;
+            hs[(j, i)] = m;
+        }
+    }
+    prof("reduce-products", t0);
+    let t0 = std::time::Instant::now();
+    let (v, lam) = if q == 0 {
+        (Mat::zeros(0, 0), Vec::new())
+    } else {
+        let (u, s) = symmetric_eigen(&hs)?;
+        let lam: Vec<f64> = (0..q).map(|i| s[i].max(0.0)).collect();
+        (u, lam)
+    };
+    prof("reduce-eigen", t0);
+    let lmax = lam.iter().copied().fold(0.0, f64::max);
+    let lmin = lam.iter().copied().fold(f64::INFINITY, f64::min);
+    let condition = if q == 0 {
+        1.0
+    } else if lmin > opt.rank_tol * lmax && lmin > 0.0 {
+        lmax / lmin
+    } else {
+        f64::INFINITY
+    };
+    let mut red = Reduced {
+        d,
+        gs: Vec::new(),
+        condition,
+        solver: Solver::Eigen { t, v, lam },
+        blocked: blocked.to_vec(),
+        at: pt.theta.clone(),
+        orbit: None,
+    };
+    red.set_gradient(&pt.g);
+    Ok(red)
+}
+
+/// The large-problem form of [`reduce`]: no basis and no eigendecomposition.
+fn reduce_cholesky(pt: &Point, blocked: &[bool]) -> Reduced {
+    let t0 = std::time::Instant::now();
+    let p = pt.theta.len();
+    let d: Vec<f64> = (0..p)
+        .map(|i| {
+            let v = pt.h[(i, i)];
+            if v > 0.0 && v.is_finite() && !blocked[i] {
+                v.sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let hs = Mat::from_fn(p, p, |i, j| {
+        if blocked[i] || blocked[j] {
+            f64::from(u8::from(i == j))
+        } else {
+            0.5 * (pt.h[(i, j)] + pt.h[(j, i)]) / (d[i] * d[j])
+        }
+    });
+    // largest eigenvalue by power iteration (deterministic start; an estimate from below,
+    // enough to scale the damping)
+    let mut x = Mat::from_fn(p, 1, |_, _| 1.0 / (p.max(1) as f64).sqrt());
+    let mut lmax = 1.0;
+    for _ in 0..12 {
+        let y = &hs * &x;
+        let ny = y.norm_l2();
+        if !(ny > 0.0 && ny.is_finite()) {
+            break;
+        }
+        lmax = ny;
+        x = y * faer::Scale(1.0 / ny);
+    }
+    let mut red = Reduced {
+        d,
+        gs: Vec::new(),
+        condition: f64::NAN,
+        solver: Solver::Cholesky { hs, lmax },
+        blocked: blocked.to_vec(),
+        at: pt.theta.clone(),
+        orbit: None,
+    };
+    red.set_gradient(&pt.g);
+    prof("reduce-cholesky", t0);
+    red
+}
+
+impl Reduced {
+    /// For a chord step of the Cholesky solver: removes from the scaled gradient its part
+    /// along `orbit`, the directions in which the cost was invariant where the matrix was
+    /// formed. They are null directions of that matrix, which the damping floor would
+    /// otherwise amplify: the new gradient is not orthogonal to them.
+    pub(super) fn remove_orbit(&mut self) {
+        let Some(q) = &self.orbit else {
+            return;
+        };
+        let g = Mat::from_fn(self.gs.len(), 1, |i, _| self.gs[i]);
+        let c = q.transpose() * &g;
+        let r = &g - q * &c;
+        for (i, v) in self.gs.iter_mut().enumerate() {
+            *v = r[(i, 0)];
+        }
+    }
+
+    /// An orthonormal basis of `dirs` in the scaled coordinates (`None` when there is
+    /// nothing to remove).
+    pub(super) fn scaled_basis(&self, dirs: &Mat<f64>) -> Option<Mat<f64>> {
+        if !matches!(self.solver, Solver::Cholesky { .. }) || dirs.nrows() != self.gs.len() {
+            return None;
+        }
+        let ds = Mat::from_fn(dirs.nrows(), dirs.ncols(), |i, j| {
+            if self.blocked[i] {
+                0.0
+            } else {
+                self.d[i] * dirs[(i, j)]
+            }
+        });
+        if ds.ncols() == 0 || !ds.norm_max().is_finite() {
+            return None;
+        }
+        Some(ds.qr().compute_thin_Q())
+    }
+
+    /// Sets the scaled reduced gradient from the full gradient `g` (also used to reuse the
+    /// factorisation at a new point for a chord step).
+    pub(super) fn set_gradient(&mut self, g: &[f64]) {
+        self.gs = match &self.solver {
+            Solver::Eigen { t, .. } => {
+                let q = t.ncols();
+                (0..q)
+                    .map(|j| (0..t.nrows()).map(|i| t[(i, j)] * g[i]).sum::<f64>() / self.d[j])
+                    .collect()
+            }
+            Solver::Cholesky { .. } => (0..g.len())
+                .map(|i| {
+                    if self.blocked[i] {
+                        0.0
+                    } else {
+                        g[i] / self.d[i]
+                    }
+                })
+                .collect(),
+        };
+    }
+
+    /// `(hs + shift I)^-1 gs` by Cholesky, raising the shift until it factors.
+    pub(super) fn cholesky_solve(hs: &Mat<f64>, gs: &[f64], mut shift: f64) -> Vec<f64> {
+        let p = gs.len();
+        for _ in 0..12 {
+            let mut a = hs.clone();
+            for i in 0..p {
+                a[(i, i)] += shift;
+            }
+            if let Ok(f) = a.llt(Side::Lower) {
+                let b = Mat::from_fn(p, 1, |i, _| gs[i]);
+                let z = f.solve(&b);
+                let z: Vec<f64> = (0..p).map(|i| z[(i, 0)]).collect();
+                if z.iter().all(|v| v.is_finite()) {
+                    return z;
+                }
+            }
+            if std::env::var_os("SYSID_PROFILE").is_some() {
+                eprintln!("PROF chol-retry {shift:e}");
+            }
+            shift = (shift * 100.0).max(f64::MIN_POSITIVE);
+        }
+        vec![0.0; p]
+    }
+
+    /// Full-space step for damping `mu` (relative to the largest eigenvalue); `mu = 0` gives the
+    /// Gauss-Newton step through the pseudo-inverse.
+    pub(super) fn step(&self, mu: f64, rank_tol: f64) -> Vec<f64> {
+        let (t, v, lam) = match &self.solver {
+            Solver::Eigen { t, v, lam } => (t, v, lam),
+            Solver::Cholesky { hs, lmax } => {
+                let z = Self::cholesky_solve(hs, &self.gs, mu.max(CHOLESKY_FLOOR) * lmax);
+                return (0..z.len()).map(|i| -z[i] / self.d[i]).collect();
+            }
+        };
+        let q = lam.len();
+        let p = t.nrows();
+        let lmax = lam
+            .iter()
+            .copied()
+            .fold(0.0, f64::max)
+            .max(f64::MIN_POSITIVE);
+        let mut c = vec![0.0; q];
+        for k in 0..q {
+            let proj: f64 = (0..q).map(|i| v[(i, k)] * self.gs[i]).sum();
+            let den = lam[k] + mu * lmax;
+            if lam[k] > rank_tol * lmax || mu > 0.0 {
+                c[k] = -proj / den;
+            }
+        }
+        let mut z = vec![0.0; q];
+        for i in 0..q {
+            z[i] = (0..q).map(|k| v[(i, k)] * c[k]).sum::<f64>() / self.d[i];
+        }
+        (0..p)
+            .map(|i| (0..q).map(|j| t[(i, j)] * z[j]).sum())
+            .collect()
+    }
+
+    /// A lower bound of [`Self::gn_decrease`] that needs no solve, for the large problems
+    /// whose every solve is a Cholesky factorisation (`None` for the eigendecomposition,
+    /// where the decrease itself is cheap): the eigenvalues of the scaled matrix plus its
+    /// shift are at most its trace plus the shift, so `g^T (H + c I)^-1 g >= |g|^2 / (tr H + c)`.
+    pub(super) fn decrease_lower_bound(&self) -> Option<f64> {
+        let Solver::Cholesky { hs, lmax } = &self.solver else {
+            return None;
+        };
+        let trace: f64 = (0..hs.nrows()).map(|i| hs[(i, i)].max(0.0)).sum();
+        let g2: f64 = self.gs.iter().map(|v| v * v).sum();
+        let bound = 0.5 * g2 / (trace + CHOLESKY_FLOOR * lmax);
+        bound.is_finite().then_some(bound)
+    }
+
+    /// Predicted decrease of the Gauss-Newton step (`g^T H^+ g / 2`, scaled reduced problem).
+    pub(super) fn gn_decrease(&self, rank_tol: f64) -> f64 {
+        let (v, lam) = match &self.solver {
+            Solver::Eigen { v, lam, .. } => (v, lam),
+            Solver::Cholesky { hs, lmax } => {
+                let z = Self::cholesky_solve(hs, &self.gs, CHOLESKY_FLOOR * lmax);
+                return 0.5 * z.iter().zip(&self.gs).map(|(a, b)| a * b).sum::<f64>();
+            }
+        };
+        let q = lam.len();
+        let lmax = lam.iter().copied().fold(0.0, f64::max);
+        let mut s = 0.0;
+        for k in 0..q {
+            if lam[k] > rank_tol * lmax && lam[k] > 0.0 {
+                let proj: f64 = (0..q).map(|i| v[(i, k)] * self.gs[i]).sum();
+                s += proj * proj / lam[k];
+            }
+        }
+        0.5 * s
+    }
+}
