@@ -121,3 +121,26 @@ def test_period_averaging_fits_on_the_averaged_period():
     assert m2.info["fit"]["transient"] == [300, 300]
     with pytest.raises(DataError, match="one per experiment"):
         sysid.pnlss(two, 1, periods=[4], progress=False)
+
+
+def test_output_terms_use_the_output_aligned_states():
+    # three states, one output y = x0; the nonlinearity is the cube of the output's state
+    truth = sysid.PNLSSModel(
+        [[0.6, 0.3, 0.0], [-0.3, 0.6, 0.2], [0.0, -0.2, 0.5]], [[1.0], [0.3], [0.5]],
+        [[1.0, 0.0, 0.0]], [[0.0]], [[-0.05], [0.02], [0.03]], np.zeros((1, 0)),
+        zeta=[[0, 0, 0]], eta=[], dt=1.0)
+    u = sysid.multisine(400, band=(0, 0.5), phases="random", seed=3, periods=2, rms=0.6)
+    d = sysid.IOData(u, truth.simulate(u), 1.0)
+    kw = dict(degree=3, output_terms="none", periods=2, progress=False, max_iter=60)
+    m = sysid.pnlss(d, 3, terms="outputs", **kw)
+    # monomials of the first state (the output's direction) and the input (index 3) only:
+    # the constant, three of degree 2, four of degree 3
+    assert {v for t in m.zeta for v in t} == {0, 3}
+    assert len(m.zeta) == 1 + 3 + 4
+    # the input monomials alone cannot describe it
+    m_in = sysid.pnlss(d, 3, terms="inputs", **kw)
+    e_out = np.linalg.norm(m.simulate(u) - d.y)
+    e_in = np.linalg.norm(m_in.simulate(u) - d.y)
+    assert e_out < 0.1 * e_in
+    with pytest.raises(DataError, match="terms must be"):
+        sysid.pnlss(d, 3, terms="output", progress=False)

@@ -242,11 +242,18 @@ impl NonlinearTerms for Pnlss {
     /// `E dzeta/dx`.
     fn add_state_slope(&self, th: &[f64], w: &Work, aeff: &mut Mat<f64>) {
         let (nx, ne) = (self.nx, self.zeta.len());
+        let mut row = vec![0.0; nx];
         for i in 0..nx {
-            for j in 0..nx {
-                for k in 0..ne {
-                    aeff[(i, j)] += th[w.o.e + i * ne + k] * w.dze[k * nx + j];
+            row.fill(0.0);
+            for k in 0..ne {
+                let e = th[w.o.e + i * ne + k];
+                if e != 0.0 {
+                    let dk = &w.dze[k * nx..(k + 1) * nx];
+                    row.iter_mut().zip(dk).for_each(|(r, d)| *r += e * d);
                 }
+            }
+            for j in 0..nx {
+                aeff[(i, j)] += row[j];
             }
         }
     }

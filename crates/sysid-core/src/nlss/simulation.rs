@@ -14,6 +14,7 @@
 use super::PnlssData;
 use crate::error::{Result, SysidError};
 use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution};
+use crate::pem::{gram_add, mirror_lower};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 
@@ -220,12 +221,7 @@ pub(super) fn cost<M: NonlinearTerms>(
         }
     }
     if jacobian {
-        let h = &mut ev.gauss_newton;
-        for a in 0..p {
-            for b in 0..a {
-                h[(b, a)] = h[(a, b)];
-            }
-        }
+        mirror_lower(&mut ev.gauss_newton);
     }
     ev
 }
@@ -241,7 +237,7 @@ pub(super) fn record<M: NonlinearTerms>(
     jac: bool,
     sink: &mut Sink<'_>,
 ) -> bool {
-    const BLK: usize = 32;
+    const BLK: usize = 128;
     let (nx, nu, ny) = m.dims();
     let (ob, oc, od) = linear_offsets(nx, nu, ny);
     let p = m.n_params();
@@ -254,6 +250,7 @@ pub(super) fn record<M: NonlinearTerms>(
     let mut rb = Mat::<f64>::zeros(BLK * ny, 1);
     let mut aeff = Mat::<f64>::zeros(nx, nx);
     let mut ceff = vec![0.0; nx];
+    let mut cm = Mat::<f64>::zeros(ny, nx);
     let mut rows = 0;
     for t in 0..n {
         let u = &d.u[t * nu..(t + 1) * nu];
@@ -262,21 +259,29 @@ pub(super) fn record<M: NonlinearTerms>(
             m.prepare_jacobian(&mut w);
         }
         if t >= d.skip {
+            if jac {
+                // d yhat / d theta = (C + d g_nl/dx) S + direct terms, the ny rows at once
+                for i in 0..ny {
+                    ceff.copy_from_slice(&th[oc + i * nx..oc + (i + 1) * nx]);
+                    m.add_output_slope(th, i, &w, &mut ceff);
+                    for j in 0..nx {
+                        cm[(i, j)] = ceff[j];
+                    }
+                }
+                matmul(
+                    jb.as_mut().subrows_mut(rows, ny),
+                    Accum::Replace,
+                    cm.as_ref(),
+                    s.as_ref(),
+                    1.0,
+                    Par::Seq,
+                );
+            }
             for i in 0..ny {
                 let r = d.y[t * ny + i] - yh[i];
                 ev.cost += 0.5 * r * r;
                 if jac {
                     rb[(rows, 0)] = r;
-                    // d yhat_i / d theta = (C + d g_nl/dx)_i S + direct terms
-                    ceff.copy_from_slice(&th[oc + i * nx..oc + (i + 1) * nx]);
-                    m.add_output_slope(th, i, &w, &mut ceff);
-                    for a in 0..p {
-                        let mut v = 0.0;
-                        for j in 0..nx {
-                            v += ceff[j] * s[(j, a)];
-                        }
-                        jb[(rows, a)] = v;
-                    }
                     for j in 0..nx {
                         jb[(rows, oc + i * nx + j)] += x[j];
                     }
@@ -332,20 +337,13 @@ pub(super) fn record<M: NonlinearTerms>(
 /// Receives a block of Jacobian rows, residuals, the row count and the evaluation.
 pub(super) type Sink<'a> = dyn FnMut(&mut Mat<f64>, &Mat<f64>, usize, &mut Evaluation) + 'a;
 
-/// `H += Jb^T Jb` (lower triangle used later), `g -= Jb^T r` over the first `rows` rows,
-/// then clears the block.
+/// `H += Jb^T Jb` (its lower triangle only: [`cost`] mirrors it), `g -= Jb^T r` over the
+/// first `rows` rows, then clears the block.
 pub(super) fn flush(jb: &mut Mat<f64>, rb: &Mat<f64>, rows: usize, ev: &mut Evaluation) {
     let j = jb.as_ref().subrows(0, rows);
     let r = rb.as_ref().subrows(0, rows);
-    matmul(
-        ev.gauss_newton.as_mut(),
-        Accum::Add,
-        j.transpose(),
-        j,
-        1.0,
-        Par::Seq,
-    );
     let p = j.ncols();
+    gram_add(ev.gauss_newton.as_mut(), j, Par::Seq);
     let mut g = Mat::<f64>::zeros(p, 1);
     matmul(g.as_mut(), Accum::Replace, j.transpose(), r, 1.0, Par::Seq);
     for a in 0..p {

@@ -15,7 +15,7 @@ use faer::{Accum, Mat, MatMut, MatRef, Par};
 pub(super) type SparseCols = Vec<Vec<(usize, f64)>>;
 
 /// Adds `rows^T rows` to the lower triangle of `gram` (one block of Jacobian rows).
-pub(super) fn gram_add(gram: MatMut<'_, f64>, rows: MatRef<'_, f64>, par: Par) {
+pub(crate) fn gram_add(gram: MatMut<'_, f64>, rows: MatRef<'_, f64>, par: Par) {
     tri::matmul(
         gram,
         BlockStructure::TriangularLower,
@@ -209,7 +209,7 @@ pub(super) fn matrix_to_theta(tmap: &SparseCols, h: &Mat<f64>) -> Mat<f64> {
 }
 
 /// Mirrors the lower triangle of `h` into its upper one.
-pub(super) fn mirror_lower(h: &mut Mat<f64>) {
+pub(crate) fn mirror_lower(h: &mut Mat<f64>) {
     for j in 0..h.ncols() {
         for i in j + 1..h.nrows() {
             h[(j, i)] = h[(i, j)];
