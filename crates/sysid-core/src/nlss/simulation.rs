@@ -13,8 +13,9 @@
 
 use super::PnlssData;
 use crate::error::{Result, SysidError};
-use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution};
-use crate::pem::{gram_add, mirror_lower};
+use crate::optim::{
+    gram_add, minimize, mirror_lower, Evaluation, Flow, Iteration, Options, Problem, Solution,
+};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 

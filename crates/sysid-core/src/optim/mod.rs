@@ -38,6 +38,7 @@
 //! the data do not determine.
 
 mod covariance;
+mod dense;
 mod normal;
 mod reduced;
 mod reparam;
@@ -46,8 +47,8 @@ mod search;
 mod tests;
 
 pub use covariance::{covariance, Covariance};
+pub(crate) use dense::{gram_add, mirror_lower, small_par};
 pub use normal::NormalEquations;
-pub(crate) use reduced::small_par;
 pub use reparam::{ParameterMap, Reparameterized};
 pub use search::minimize;
 pub(crate) use search::prof;

@@ -55,12 +55,7 @@ impl NormalEquations {
     /// The evaluation, with the Gauss-Newton matrix made symmetric from its lower triangle
     /// and a non-finite cost reported as infinite (the search then rejects the point).
     pub fn finish(mut self) -> Evaluation {
-        let h = &mut self.gauss_newton;
-        for a in 0..h.nrows() {
-            for b in 0..a {
-                h[(b, a)] = h[(a, b)];
-            }
-        }
+        super::mirror_lower(&mut self.gauss_newton);
         Evaluation {
             cost: if self.cost.is_finite() {
                 self.cost

@@ -2,23 +2,13 @@
 //! reduced to the free directions, solved by an eigendecomposition (small problems) or by
 //! Cholesky factorisations (large ones).
 
+use super::dense::small_par;
 use super::search::{prof, Point};
 use super::{Options, Problem};
 use crate::error::{Result, SysidError};
 use faer::linalg::matmul::matmul;
 use faer::prelude::Solve;
-use faer::{Accum, Mat, Par, Side};
-
-/// The parallelism of a dense decomposition or product of a `rows x cols` matrix, `O(rows
-/// cols^2)`: the calling thread below `2^22` multiply-adds (every iterate of a small problem;
-/// waking the pool costs more than the work), faer's global one above.
-pub(crate) fn small_par(rows: usize, cols: usize) -> Par {
-    if rows.saturating_mul(cols).saturating_mul(cols) >= 1 << 22 {
-        faer::get_global_parallelism()
-    } else {
-        Par::Seq
-    }
-}
+use faer::{Accum, Mat, Side};
 
 /// Eigenvectors (columns) and eigenvalues (ascending) of the symmetric `a` (its lower
 /// triangle), as faer's `self_adjoint_eigen` but with [`small_par`].

@@ -127,7 +127,7 @@ pub(super) fn complement(tan: &Mat<f64>) -> Result<Mat<f64>> {
     use faer::linalg::svd::{self, ComputeSvdVectors};
     let (rows, cols) = tan.shape();
     let size = rows.min(cols);
-    let par = super::normal::parallelism(rows, cols);
+    let par = crate::optim::small_par(rows, cols);
     let mut u = Mat::<f64>::zeros(rows, rows);
     let mut v = Mat::<f64>::zeros(cols, cols);
     let mut s = faer::diag::Diag::<f64>::zeros(size);

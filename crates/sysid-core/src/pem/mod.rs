@@ -46,7 +46,6 @@ mod frequency;
 mod frequency_tests;
 mod modal;
 mod normal;
-pub(crate) use normal::{gram_add, mirror_lower};
 mod options;
 mod predictor;
 mod rows;

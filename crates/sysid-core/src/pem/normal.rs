@@ -8,38 +8,14 @@
 //! derivative `T = dphi/dtheta` ([`Predictor::predictor_map`]).
 
 use super::predictor::{Predictor, Unpacked};
-use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 /// Sparse columns of `T = dphi/dtheta`: `(row, value)` pairs per column.
 pub(super) type SparseCols = Vec<Vec<(usize, f64)>>;
 
-/// Adds `rows^T rows` to the lower triangle of `gram` (one block of Jacobian rows).
-pub(crate) fn gram_add(gram: MatMut<'_, f64>, rows: MatRef<'_, f64>, par: Par) {
-    tri::matmul(
-        gram,
-        BlockStructure::TriangularLower,
-        Accum::Add,
-        rows.transpose(),
-        BlockStructure::Rectangular,
-        rows,
-        BlockStructure::Rectangular,
-        1.0,
-        par,
-    );
-}
-
 /// `dst = alpha a b` on the calling thread (the small per-sample products).
 pub(super) fn product(dst: MatMut<'_, f64>, a: MatRef<'_, f64>, b: MatRef<'_, f64>, alpha: f64) {
     faer::linalg::matmul::matmul(dst, Accum::Replace, a, b, alpha, Par::Seq);
-}
-
-/// The parallelism of a block product `rows^T rows` over `rows` Jacobian rows of `cols`
-/// columns ([`crate::optim::small_par`]: the calling thread below `rows cols^2 = 2^22`, where
-/// waking the pool for every block of samples costs more than it saves; results agree to
-/// round-off for any thread count).
-pub(super) fn parallelism(rows: usize, cols: usize) -> Par {
-    crate::optim::small_par(rows, cols)
 }
 
 /// Running sums of the regressor `z = (x, u)` over the samples: `sum (W e) z^T` always, and
@@ -206,13 +182,4 @@ pub(super) fn matrix_to_theta(tmap: &SparseCols, h: &Mat<f64>) -> Mat<f64> {
         }
     }
     hth
-}
-
-/// Mirrors the lower triangle of `h` into its upper one.
-pub(crate) fn mirror_lower(h: &mut Mat<f64>) {
-    for j in 0..h.ncols() {
-        for i in j + 1..h.nrows() {
-            h[(j, i)] = h[(i, j)];
-        }
-    }
 }

@@ -4,10 +4,11 @@
 //! `J^T W r` block by block. `O(N l p^2)`: the reference the structured forms are tested
 //! against, and the initial-state pre-step (only the columns from `col_lo` on).
 
-use super::normal::{gram_add, mirror_lower, parallelism, product};
+use super::normal::product;
 use super::predictor::{Filter, Predictor};
 use crate::error::Result;
 use crate::optim::Evaluation;
+use crate::optim::{gram_add, mirror_lower, small_par};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 
@@ -86,7 +87,7 @@ impl Predictor<'_> {
         let mut s = Mat::<f64>::zeros(n, nc);
         let mut s2 = s.clone();
         let mut cs = Mat::<f64>::zeros(l, nc);
-        let par = parallelism(blk * l, nc);
+        let par = small_par(blk * l, nc);
         let mut ut = vec![0.0; m];
         for (ex, (u, y)) in self.exps.iter().enumerate() {
             f.restart(ex);

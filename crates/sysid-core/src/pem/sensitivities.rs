@@ -14,12 +14,10 @@
 //! or 2x2 block: `p_e <= 2 p_d` numbers per sample and `O(N p_e^2)` for their Gram matrix).
 
 use super::modal::Modal;
-use super::normal::{
-    gradient_to_theta, gram_add, matrix_to_theta, mirror_lower, parallelism, product, StaticSums,
-};
+use super::normal::{gradient_to_theta, matrix_to_theta, product, StaticSums};
 use super::predictor::{Filter, Predictor};
 use crate::error::Result;
-use crate::optim::Evaluation;
+use crate::optim::{gram_add, mirror_lower, small_par, Evaluation};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Side};
 
@@ -156,7 +154,7 @@ impl Predictor<'_> {
             _ => q.clone(),
         };
         let r = lt.nrows();
-        let par = parallelism(blk * r, pd);
+        let par = small_par(blk * r, pd);
         let acc = !grad_only;
         let hp = if acc { pd } else { 0 };
         let mut hd = Mat::<f64>::zeros(hp, hp);
@@ -315,7 +313,7 @@ impl Predictor<'_> {
         let w = f.rinv.transpose() * &f.rinv;
         let wc = &w * &cq;
         let mq = cq.transpose() * &wc;
-        let par = parallelism(blk, pe);
+        let par = small_par(blk, pe);
         let hp = if acc { pe } else { 0 };
         let mut gram = Mat::<f64>::zeros(hp, hp);
         let mut cross = Mat::<f64>::zeros(if acc { nz } else { 0 }, hp);

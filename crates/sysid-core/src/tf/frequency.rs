@@ -130,11 +130,7 @@ impl Problem for FitProblem<'_> {
             }
         }
         if jacobian {
-            for a in 0..p {
-                for b in 0..a {
-                    ev.gauss_newton[(b, a)] = ev.gauss_newton[(a, b)];
-                }
-            }
+            crate::optim::mirror_lower(&mut ev.gauss_newton);
         }
         if !ev.cost.is_finite() {
             return Err(SysidError::numerical(

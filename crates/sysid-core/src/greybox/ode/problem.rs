@@ -361,11 +361,7 @@ impl Problem for OdeProblem<'_> {
             return Ok(Evaluation::cost_only(f64::INFINITY));
         }
         self.last_cov = Some((th.to_vec(), lam * (1.0 / self.n_samples as f64)));
-        for i in 0..h.nrows() {
-            for j in 0..i {
-                h[(j, i)] = h[(i, j)];
-            }
-        }
+        crate::optim::mirror_lower(&mut h);
         Ok(Evaluation {
             cost,
             gradient: g,

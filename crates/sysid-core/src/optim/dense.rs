@@ -1,0 +1,43 @@
+//! Dense kernels the estimators' Gauss-Newton products share: when a dense product or
+//! decomposition is worth faer's thread pool, `J^T J` accumulated over blocks of Jacobian
+//! rows into a lower triangle, and that triangle mirrored once at the end.
+
+use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
+use faer::{Accum, Mat, MatMut, MatRef, Par};
+
+/// The parallelism of a dense decomposition or product of a `rows x cols` matrix, `O(rows
+/// cols^2)`: the calling thread below `2^22` multiply-adds (every iterate of a small problem;
+/// waking the pool costs more than the work), faer's global one above.
+pub(crate) fn small_par(rows: usize, cols: usize) -> Par {
+    if rows.saturating_mul(cols).saturating_mul(cols) >= 1 << 22 {
+        faer::get_global_parallelism()
+    } else {
+        Par::Seq
+    }
+}
+
+/// Adds `rows^T rows` to the lower triangle of `gram` (one block of Jacobian rows); the
+/// upper triangle is left alone until [`mirror_lower`].
+pub(crate) fn gram_add(gram: MatMut<'_, f64>, rows: MatRef<'_, f64>, par: Par) {
+    tri::matmul(
+        gram,
+        BlockStructure::TriangularLower,
+        Accum::Add,
+        rows.transpose(),
+        BlockStructure::Rectangular,
+        rows,
+        BlockStructure::Rectangular,
+        1.0,
+        par,
+    );
+}
+
+/// Mirrors the lower triangle of `h` into its upper one (a Gauss-Newton matrix summed in
+/// its lower triangle only).
+pub(crate) fn mirror_lower(h: &mut Mat<f64>) {
+    for j in 0..h.ncols() {
+        for i in j + 1..h.nrows() {
+            h[(j, i)] = h[(i, j)];
+        }
+    }
+}
