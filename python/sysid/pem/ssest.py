@@ -13,7 +13,7 @@ from .._checks import as_int
 from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
 from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator
-from ..subspace.feedthrough import FEEDTHROUGH_DEFAULT, check_feedthrough, choose_feedthrough
+from ..subspace.feedthrough import check_feedthrough, choose_feedthrough, default_feedthrough
 from .pem import _experiments, pem, pem_loss
 
 __all__ = ["ssest"]
@@ -24,7 +24,7 @@ def ssest(
     order: Any = "auto",
     *,
     focus: str = "prediction",
-    feedthrough: Any = FEEDTHROUGH_DEFAULT,
+    feedthrough: Any = None,
     x0: Any = "estimate",
     noise: str = "estimate",
     horizon: int | None = None,
@@ -54,12 +54,14 @@ def ssest(
         (``range(1, 11)``): each order refined on the first 2/3 of the record and scored by
         simulation fit on the last 1/3, the smallest within 0.5 points of the best wins and
         is refined on the whole record. Table and reason in ``info["order_selection"]``.
-    feedthrough : bool or "auto"
-        Estimate ``D``. Default ``False``: ``D = 0`` (MATLAB's ``ssest`` default, and the same
-        for every sysid state-space estimator). ``True`` estimates ``D``; ``"auto"`` decides
-        from the data: ``D`` only when it raises the held-out simulation fit of the subspace
-        models by more than 0.5 points (:func:`sysid.subspace.feedthrough.choose_feedthrough`,
-        recorded in ``info["feedthrough_selection"]``), then refined with that choice.
+    feedthrough : bool or "auto", optional
+        Estimate ``D``. Default: ``D = 0`` at a given order (MATLAB's ``ssest`` default, and
+        the same for every sysid state-space estimator), chosen with the order (as
+        ``"auto"``) when the order is ``"auto"`` or a sequence. ``True`` estimates ``D``;
+        ``False``: ``D = 0``; ``"auto"`` decides from the data: ``D`` only when it raises the
+        held-out simulation fit of the subspace models by more than 0.5 points
+        (:func:`sysid.subspace.feedthrough.choose_feedthrough`, recorded in
+        ``info["feedthrough_selection"]``), then refined with that choice.
     focus, x0, noise, max_iter, tol, regularization, progress, enforce_stability
         As for :func:`pem` (the candidates are scored by :func:`pem_loss`).
     horizon : int, optional
@@ -102,6 +104,7 @@ def ssest(
     True
     """
     data = _experiments(data)
+    feedthrough = default_feedthrough(feedthrough, order)
     if periods is not None or transient is not None:
         from .periodic import resolve_periods
 
