@@ -51,8 +51,12 @@ from ..errors import (
 from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
 from ..validation.feedback import feedback_pvalues
-from .feedthrough import (FEEDTHROUGH_DEFAULT, check_feedthrough, choose_feedthrough,
-                          default_feedthrough)
+from .feedthrough import (
+    FEEDTHROUGH_DEFAULT,
+    check_feedthrough,
+    choose_feedthrough,
+    default_feedthrough,
+)
 from .methods import CLOSED_LOOP, METHODS, _method
 from .streaming import compression_info, warn_if_fallback
 
