@@ -123,10 +123,12 @@ def ssest(
         # decided once from the data (the rule every estimator shares), then a fixed choice
         use, why = choose_feedthrough(SubspaceEstimator(data, horizon, method=method or "moesp"),
                                       order)
-        model = ssest(data, order, focus=focus, feedthrough=use, x0=x0, noise=noise,
-                      horizon=horizon, methods=methods, method=method, max_iter=max_iter,
-                      tol=tol, regularization=regularization, progress=progress,
-                      enforce_stability=enforce_stability)
+        kw = dict(focus=focus, x0=x0, noise=noise, horizon=horizon, methods=methods,
+                  method=method, max_iter=max_iter, tol=tol, regularization=regularization,
+                  progress=progress, enforce_stability=enforce_stability)
+        model = ssest(data, order, feedthrough=use, **kw)
+        if use:
+            model, why = _confirm_feedthrough(data, order, model, why, kw)
         model.info["feedthrough_selection"] = why
         return model
     if isinstance(order, str) or np.ndim(order):
@@ -176,6 +178,28 @@ def ssest(
         "losses": {f"{c[1]}{'+x0' if c[2] else ''}": c[0] for c in candidates},
     }
     return model
+
+
+def _confirm_feedthrough(data: Any, order: Any, model: StateSpaceModel, why: dict[str, Any],
+                         kw: dict[str, Any]) -> tuple[StateSpaceModel, dict[str, Any]]:
+    """The refined model with ``D`` (chosen by the subspace models' held-out fits) against
+    the refined model without it, by the BIC of their simulation errors on the record
+    (:func:`sysid.identify.board.bic`, ``D`` counted): ``D`` is kept only when the refined
+    models confirm it. The refinement can spend a direct term on what the subspace models
+    left (a prediction-focus fit has no reason to keep a simulation-friendly ``D``), and
+    then simulates new data worse than the model without it."""
+    from ..identify.board import bic
+
+    try:
+        without = ssest(data, order, feedthrough=False, **kw)
+        b_with, b_without = bic(model, data), bic(without, data)
+    except SysidError:
+        return model, why
+    keep = bool(b_with < b_without)
+    why = dict(why, feedthrough=keep, refined_bic={"with D": b_with, "without D": b_without},
+               reason=why["reason"] + f"; refined models: BIC {b_with:.4g} with D, "
+               f"{b_without:.4g} without: " + ("D kept" if keep else "D = 0"))
+    return (model if keep else without), why
 
 
 def _ssest_periodic(data: Any, order: Any, frd: Any, feedthrough: Any,
