@@ -51,9 +51,9 @@ def ssest(
     order : int, "auto" or sequence of int
         Model order. ``"auto"`` (default): the order whose subspace models best simulate
         parts of the record held out (:meth:`SubspaceEstimator.order_selection`); a sequence
-        (``range(1, 11)``): each order refined on the first 2/3 of the record and scored by
-        simulation fit on the last 1/3, the smallest within 0.5 points of the best wins and
-        is refined on the whole record. Table and reason in ``info["order_selection"]``.
+        (``range(1, 11)``): each order refined on the whole record, the one with the lowest
+        BIC of its simulation errors wins (:func:`sysid.identify.structure.refined_order`).
+        Table and reason in ``info["order_selection"]``.
     feedthrough : bool or "auto", optional
         Estimate ``D``. Default: ``D = 0`` at a given order (MATLAB's ``ssest`` default, and
         the same for every sysid state-space estimator), chosen with the order (as
