@@ -202,6 +202,12 @@ def simulation_fit(model: Any, data: IOData, trend: bool = False) -> float:
     return out if np.isfinite(out) else -np.inf
 
 
+def _slack(best: float, tol: float = TOL) -> float:
+    """Fit points the blocks cannot tell from ``best``: ``tol``, at most 5 % of the best's
+    error (noise-free data: round-off only)."""
+    return max(min(tol, 0.05 * (100.0 - best)), 1e-6)
+
+
 def choose(table: dict[int, float], tol: float = TOL) -> tuple[int, str]:
     """The smallest order within ``min(tol, 5 % of the best's error)`` fit points of the best
     held-out fit (a smaller model generalises better; on noise-free data only round-off
@@ -211,8 +217,7 @@ def choose(table: dict[int, float], tol: float = TOL) -> tuple[int, str]:
         raise ValueError("no order gave a model that simulates the held-out data")
     best_n = max(finite, key=lambda n: finite[n])
     best = finite[best_n]
-    # within 5 % of the best's error, at most tol points (noise-free data: round-off only)
-    slack = max(min(tol, 0.05 * (100.0 - best)), 1e-6)
+    slack = _slack(best, tol)
     n = min(o for o, f in finite.items() if f >= best - slack)
     why = (f"held-out simulation fit {finite[n]:.1f} % at order {n}"
            + (f" (best {best:.1f} % at order {best_n}; a smaller order within {slack:.2g} "
@@ -351,7 +356,7 @@ def stable_first(score: dict[int, float], folds: dict[int, list[float]], unstabl
     ref = folds[best_s]
     insisted = {n for n in unstable if np.isfinite(score[n])
                 and len(folds[n]) == len(ref) and all(a > b for a, b in zip(folds[n], ref))
-                and score[n] > stable[best_s] + max(min(TOL, 0.05 * (100.0 - score[n])), 1e-6)}
+                and score[n] > stable[best_s] + _slack(score[n])}
     allowed = set(score) - (unstable - insisted)
     shown = sorted(n for n in unstable - insisted if np.isfinite(score[n]))
     if not shown:
