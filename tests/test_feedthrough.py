@@ -138,7 +138,7 @@ def test_feedthrough_auto_in_okid_and_select_order():
     assert abs(sel.model(2).D[0, 0] - 0.8) < 0.05
 
 
-@pytest.mark.parametrize("bad", ["yes", 1, None])
+@pytest.mark.parametrize("bad", ["yes", 1, "none"])
 def test_feedthrough_rejects_anything_but_true_false_auto(bad):
     data = feedthrough_record(0.0)
     for call in (lambda: sysid.n4sid(data, 2, feedthrough=bad),

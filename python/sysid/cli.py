@@ -180,13 +180,13 @@ def identify(
     n_boot: int = 100,
     compressor: str = "auto",
     bars: bool | None = False,
-    feedthrough: bool | str = False,
+    feedthrough: bool | str | None = None,
 ) -> dict[str, Any]:
     """Identify, validate and (optionally) write a report; returns a summary dict.
 
-    ``feedthrough``: estimate ``D`` (default ``False``, as every sysid state-space
-    estimator; ``"auto"``: decided once from the estimation data,
-    :func:`sysid.subspace.feedthrough.choose_feedthrough`).
+    ``feedthrough``: estimate ``D``; ``"auto"``: decided once from the estimation data,
+    :func:`sysid.subspace.feedthrough.choose_feedthrough`; default as every sysid state-space
+    estimator: ``D = 0`` at a given order, ``"auto"`` with ``order="auto"``.
 
     ``compressor`` is passed to :class:`~sysid.SubspaceEstimator` (its decision is in
     ``model.info["compression"]``); ``bars`` draws progress bars in the order sweep (None:
@@ -212,9 +212,9 @@ def identify(
 def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, method: str,
               horizon: int | None, report: Any, preprocessing: Any, progress: Any, uncertainty:
               str | None, n_boot: int, compressor: str, bars: Any, caught: list[Any],
-              feedthrough: bool | str = False) -> Any:
+              feedthrough: bool | str | None = None) -> Any:
     from .subspace.estimator import SubspaceEstimator
-    from .subspace.feedthrough import check_feedthrough, choose_feedthrough
+    from .subspace.feedthrough import check_feedthrough, choose_feedthrough, default_feedthrough
     from .validation.criteria import select_order
 
     say = progress or (lambda _msg: None)
@@ -237,7 +237,7 @@ def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, me
                 f"order {order} is larger than the data and horizon support (at most "
                 f"{est.max_order} with horizon {est.past}); lower --order or raise --horizon"
             )
-    if check_feedthrough(feedthrough) == "auto":
+    if check_feedthrough(default_feedthrough(feedthrough, order)) == "auto":
         feedthrough, why = choose_feedthrough(est, "auto" if order == "auto" else int(order))
         say(f"feedthrough: {why['reason']}")
     top = min(est.max_order, max(10, 2 * est.auto_order, 0 if order == "auto" else int(order)))
@@ -560,7 +560,7 @@ def _identify(args: argparse.Namespace) -> int:
                    compressor=args.compressor, bars=_bars(args),
                    uncertainty=None if args.uncertainty == "none" else args.uncertainty,
                    n_boot=args.n_boot,
-                   feedthrough={"no": False, "yes": True}.get(args.feedthrough, "auto"))
+                   feedthrough={"no": False, "yes": True, "auto": "auto"}.get(args.feedthrough))
     _print_summary(out)
     return 0
 
@@ -584,10 +584,11 @@ def _parser() -> argparse.ArgumentParser:
                           "feedthrough on held-out parts of the estimation data, when --order "
                           "is auto), or one subspace method: moesp, ordinary-moesp, pi-moesp, "
                           "n4sid, cva; closed loop: pbsid or ssarx")
-    ide.add_argument("--feedthrough", choices=("no", "yes", "auto"), default="no",
-                     help="with a subspace --method: estimate D (yes), not (no, default, as "
-                          "every sysid estimator) or decide from held-out parts of the "
-                          "estimation data (auto); --method auto decides it itself")
+    ide.add_argument("--feedthrough", choices=("no", "yes", "auto"), default=None,
+                     help="with a subspace --method: estimate D (yes), not (no) or decide "
+                          "from held-out parts of the estimation data (auto); default, as "
+                          "every sysid estimator: no with a given --order, auto with --order "
+                          "auto; --method auto decides it itself")
     ide.add_argument("--horizon", type=int, default=None, help="past/future horizon")
     ide.add_argument("--split", default="0.5",
                      help="estimation part: fraction (0.5) or sample count (500); 1 = all")

@@ -9,9 +9,8 @@ import numpy as np
 
 from ..data.iodata import IOData
 from ..errors import DataError
-from ..validation.crossval import TOL, choose, simulation_fit
 
-__all__ = ["ssest_select", "split"]
+__all__ = ["refined_order", "ssest_select", "split"]
 
 
 def split(data: IOData, fraction: float = 2 / 3) -> tuple[IOData, IOData]:
@@ -32,7 +31,9 @@ def split(data: IOData, fraction: float = 2 / 3) -> tuple[IOData, IOData]:
 
 def ssest_select(data: IOData, order: Any, *, feedthrough: Any, **kw: Any) -> Any:
     """:func:`sysid.ssest` with the order chosen from the data (``feedthrough="auto"`` is
-    decided before, by :func:`sysid.subspace.feedthrough.choose_feedthrough`)."""
+    decided before, by :func:`sysid.subspace.feedthrough.choose_feedthrough`): ``"auto"``,
+    the subspace models' held-out simulation fit; a sequence of orders, the BIC of the
+    refined models (:func:`refined_order`)."""
     import sysid
 
     from ..subspace.estimator import SubspaceEstimator
@@ -46,36 +47,45 @@ def ssest_select(data: IOData, order: Any, *, feedthrough: Any, **kw: Any) -> An
         model = sysid.ssest(data, sel["order"], feedthrough=feedthrough, **kw)
         model.info["order_selection"] = sel
         return model
-    sel = _order(data, order, bool(feedthrough), kw)
-    model = sysid.ssest(data, sel["order"], feedthrough=feedthrough, **kw)
+    sel, model = refined_order(data, order, bool(feedthrough), kw)
     model.info["order_selection"] = sel
     return model
 
 
-def _order(data: IOData, order: Any, feedthrough: bool, kw: dict[str, Any]) -> dict[str, Any]:
-    """An order: given, "auto" (subspace cross-validation) or the best of a sequence."""
+def refined_order(data: IOData, order: Any, feedthrough: bool, kw: dict[str, Any]
+                  ) -> tuple[dict[str, Any], Any]:
+    """The order of a sequence whose model, refined on the whole record, has the lowest BIC
+    of its simulation errors (:func:`sysid.identify.board.bic`: ``N log det`` of the error
+    covariance, initial state and output offsets fitted, plus ``log N`` per parameter), and
+    that model.
+
+    Refined models scored on one held-out part (the last third) ranked the orders by how
+    that stretch differs from the rest, and each order's model was fitted on two thirds of
+    the record (the winding record: order 1, 50 % on validation data, against 74 % for the
+    lowest BIC's order 4); the BIC uses the whole record for every model and pays for each
+    parameter, as MATLAB's ``ssest`` order comparison does with its information criteria.
+    """
     import sysid
 
-    from ..subspace.estimator import SubspaceEstimator
+    from .board import bic
 
-    if isinstance(order, (int, np.integer)):
-        return {"order": int(order), "criterion": "given", "reason": "given", "table": {}}
-    if isinstance(order, str):
-        return SubspaceEstimator(data, kw.get("horizon")).order_selection(
-            feedthrough=feedthrough)
     orders = sorted({int(o) for o in np.ravel(order)})
     if not orders or orders[0] < 1:
         raise DataError(f"orders must be positive integers, got {order!r}")
-    fit_part, held = split(data)
     table: dict[int, float] = {}
-    quiet = dict(kw, progress=False)
+    best: tuple[float, int, Any] | None = None
     for n in orders:
         try:
-            m = sysid.ssest(fit_part, n, feedthrough=feedthrough, **quiet)
-            table[n] = simulation_fit(m, held)
-        except Exception:  # noqa: BLE001 - an order the part cannot support
-            table[n] = -np.inf
-    n, why = choose(table, TOL)
-    return {"order": n, "criterion": "held-out simulation fit of refined models",
-            "reason": why + " (refined on the first 2/3 of the record, scored on the last 1/3)",
-            "table": table}
+            m = sysid.ssest(data, n, feedthrough=feedthrough, **kw)
+            table[n] = bic(m, data)
+        except Exception:  # noqa: BLE001 - an order the record cannot support
+            table[n] = np.inf
+            continue
+        if np.isfinite(table[n]) and (best is None or table[n] < best[0]):
+            best = (table[n], n, m)
+    if best is None:
+        raise DataError(f"no order of {orders} gave a refined model that simulates the record")
+    b, n, model = best
+    return {"order": n, "criterion": "BIC of refined models",
+            "reason": f"lowest BIC {b:.4g} at order {n} (every order refined on the whole "
+                      "record; BIC of the simulation errors)", "table": table}, model

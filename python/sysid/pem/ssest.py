@@ -13,7 +13,7 @@ from .._checks import as_int
 from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
 from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator
-from ..subspace.feedthrough import FEEDTHROUGH_DEFAULT, check_feedthrough, choose_feedthrough
+from ..subspace.feedthrough import check_feedthrough, choose_feedthrough, default_feedthrough
 from .pem import _experiments, pem, pem_loss
 
 __all__ = ["ssest"]
@@ -24,7 +24,7 @@ def ssest(
     order: Any = "auto",
     *,
     focus: str = "prediction",
-    feedthrough: Any = FEEDTHROUGH_DEFAULT,
+    feedthrough: Any = None,
     x0: Any = "estimate",
     noise: str = "estimate",
     horizon: int | None = None,
@@ -51,15 +51,17 @@ def ssest(
     order : int, "auto" or sequence of int
         Model order. ``"auto"`` (default): the order whose subspace models best simulate
         parts of the record held out (:meth:`SubspaceEstimator.order_selection`); a sequence
-        (``range(1, 11)``): each order refined on the first 2/3 of the record and scored by
-        simulation fit on the last 1/3, the smallest within 0.5 points of the best wins and
-        is refined on the whole record. Table and reason in ``info["order_selection"]``.
-    feedthrough : bool or "auto"
-        Estimate ``D``. Default ``False``: ``D = 0`` (MATLAB's ``ssest`` default, and the same
-        for every sysid state-space estimator). ``True`` estimates ``D``; ``"auto"`` decides
-        from the data: ``D`` only when it raises the held-out simulation fit of the subspace
-        models by more than 0.5 points (:func:`sysid.subspace.feedthrough.choose_feedthrough`,
-        recorded in ``info["feedthrough_selection"]``), then refined with that choice.
+        (``range(1, 11)``): each order refined on the whole record, the one with the lowest
+        BIC of its simulation errors wins (:func:`sysid.identify.structure.refined_order`).
+        Table and reason in ``info["order_selection"]``.
+    feedthrough : bool or "auto", optional
+        Estimate ``D``. Default: ``D = 0`` at a given order (MATLAB's ``ssest`` default, and
+        the same for every sysid state-space estimator), chosen with the order (as
+        ``"auto"``) when the order is ``"auto"`` or a sequence. ``True`` estimates ``D``;
+        ``False``: ``D = 0``; ``"auto"`` decides from the data: ``D`` only when it raises the
+        held-out simulation fit of the subspace models by more than 0.5 points
+        (:func:`sysid.subspace.feedthrough.choose_feedthrough`, recorded in
+        ``info["feedthrough_selection"]``), then refined with that choice.
     focus, x0, noise, max_iter, tol, regularization, progress, enforce_stability
         As for :func:`pem` (the candidates are scored by :func:`pem_loss`).
     horizon : int, optional
@@ -102,6 +104,7 @@ def ssest(
     True
     """
     data = _experiments(data)
+    feedthrough = default_feedthrough(feedthrough, order)
     if periods is not None or transient is not None:
         from .periodic import resolve_periods
 
@@ -120,10 +123,12 @@ def ssest(
         # decided once from the data (the rule every estimator shares), then a fixed choice
         use, why = choose_feedthrough(SubspaceEstimator(data, horizon, method=method or "moesp"),
                                       order)
-        model = ssest(data, order, focus=focus, feedthrough=use, x0=x0, noise=noise,
-                      horizon=horizon, methods=methods, method=method, max_iter=max_iter,
-                      tol=tol, regularization=regularization, progress=progress,
-                      enforce_stability=enforce_stability)
+        kw = dict(focus=focus, x0=x0, noise=noise, horizon=horizon, methods=methods,
+                  method=method, max_iter=max_iter, tol=tol, regularization=regularization,
+                  progress=progress, enforce_stability=enforce_stability)
+        model = ssest(data, order, feedthrough=use, **kw)
+        if use:
+            model, why = _confirm_feedthrough(data, order, model, why, kw)
         model.info["feedthrough_selection"] = why
         return model
     if isinstance(order, str) or np.ndim(order):
@@ -173,6 +178,28 @@ def ssest(
         "losses": {f"{c[1]}{'+x0' if c[2] else ''}": c[0] for c in candidates},
     }
     return model
+
+
+def _confirm_feedthrough(data: Any, order: Any, model: StateSpaceModel, why: dict[str, Any],
+                         kw: dict[str, Any]) -> tuple[StateSpaceModel, dict[str, Any]]:
+    """The refined model with ``D`` (chosen by the subspace models' held-out fits) against
+    the refined model without it, by the BIC of their simulation errors on the record
+    (:func:`sysid.identify.board.bic`, ``D`` counted): ``D`` is kept only when the refined
+    models confirm it. The refinement can spend a direct term on what the subspace models
+    left (a prediction-focus fit has no reason to keep a simulation-friendly ``D``), and
+    then simulates new data worse than the model without it."""
+    from ..identify.board import bic
+
+    try:
+        without = ssest(data, order, feedthrough=False, **kw)
+        b_with, b_without = bic(model, data), bic(without, data)
+    except SysidError:
+        return model, why
+    keep = bool(b_with < b_without)
+    why = dict(why, feedthrough=keep, refined_bic={"with D": b_with, "without D": b_without},
+               reason=why["reason"] + f"; refined models: BIC {b_with:.4g} with D, "
+               f"{b_without:.4g} without: " + ("D kept" if keep else "D = 0"))
+    return (model if keep else without), why
 
 
 def _ssest_periodic(data: Any, order: Any, frd: Any, feedthrough: Any,

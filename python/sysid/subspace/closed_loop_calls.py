@@ -9,7 +9,7 @@ from typing import Any
 from ..data.iodata import IOData
 from ..models.statespace import StateSpaceModel
 from .estimator import Order, SubspaceEstimator
-from .feedthrough import FEEDTHROUGH_DEFAULT, check_feedthrough, choose_feedthrough
+from .feedthrough import check_feedthrough, choose_feedthrough, default_feedthrough
 
 __all__ = ["pbsid", "ssarx"]
 
@@ -22,14 +22,14 @@ def _one_call(method: str) -> Any:
         horizon: int | None = None,
         past: int | None = None,
         future: int | None = None,
-        feedthrough: bool | str = FEEDTHROUGH_DEFAULT,
+        feedthrough: bool | str | None = None,
         regularization: str = "none",
         ridge: float = 1e-3,
     ) -> StateSpaceModel:
         from .closed_loop import closed_loop_fit
 
         est = SubspaceEstimator(data, horizon, past=past, future=future, method=method)
-        ft, why = check_feedthrough(feedthrough), None
+        ft, why = check_feedthrough(default_feedthrough(feedthrough, order)), None
         if ft == "auto":
             ft, why = choose_feedthrough(est, order, method=method)
         model = closed_loop_fit(est, method, order, feedthrough=bool(ft),
@@ -56,10 +56,11 @@ pbsid.__doc__ = """Identify a state-space model from closed-loop data with PBSID
     order : int or "auto"
     horizon, past, future : int, optional
         VARX order (past) and observability horizon (future <= past + 1).
-    feedthrough : bool or "auto"
+    feedthrough : bool or "auto", optional
         Estimate ``D`` (only with a controller without direct feedthrough). Default
-        ``False`` (``D = 0``, as every sysid state-space estimator); ``"auto"`` keeps
-        ``D = 0`` under feedback, with the reason in ``info["feedthrough_selection"]``.
+        ``D = 0``, as every sysid state-space estimator (with ``order="auto"`` as
+        ``"auto"``, which keeps ``D = 0`` under feedback, with the reason in
+        ``info["feedthrough_selection"]``).
     regularization : {"none", "ridge", "tc"}
         Of the VARX.
     ridge : float

@@ -51,7 +51,12 @@ from ..errors import (
 from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
 from ..validation.feedback import feedback_pvalues
-from .feedthrough import FEEDTHROUGH_DEFAULT, check_feedthrough, choose_feedthrough
+from .feedthrough import (
+    FEEDTHROUGH_DEFAULT,
+    check_feedthrough,
+    choose_feedthrough,
+    default_feedthrough,
+)
 from .methods import CLOSED_LOOP, METHODS, _method
 from .streaming import compression_info, warn_if_fallback
 
@@ -339,9 +344,12 @@ class SubspaceEstimator:
         With inputs and the data at hand: the order whose models, fitted on part of the
         record, best simulate the part held out (five contiguous blocks, or the experiments;
         :func:`sysid.validation.crossval.cross_validated_order`), the smallest within 0.5 fit
-        points of the best. Otherwise (time series, an estimator built from a factor, a
-        record too short to split): the largest gap of the log singular values
-        (:attr:`auto_order`). The result is recorded in ``model.info["order_selection"]``.
+        points of the best, among the orders whose model on the whole record is stable unless
+        an unstable one beats the best stable order on every block
+        (:func:`sysid.validation.crossval.stable_first`). Otherwise (time series, an
+        estimator built from a factor, a record too short to split): the largest gap of the
+        log singular values (:attr:`auto_order`). The result is recorded in
+        ``model.info["order_selection"]``.
         """
         from .order_choice import order_selection
 
@@ -367,7 +375,7 @@ class SubspaceEstimator:
         order: Order = "auto",
         *,
         method: str | None = None,
-        feedthrough: bool | str = FEEDTHROUGH_DEFAULT,
+        feedthrough: bool | str | None = None,
         kalman: bool = True,
         stable: bool = False,
         x0: bool = False,
@@ -386,11 +394,12 @@ class SubspaceEstimator:
             ``info["order_selection"]``).
         method : str, optional
             Weighting for this fit (default: the estimator's).
-        feedthrough : bool or "auto"
-            Estimate ``D``. Default ``False``: ``D = 0``, MATLAB's default and the same for
-            every sysid state-space estimator (:mod:`sysid.subspace.feedthrough`).
-            ``True`` estimates ``D`` (with ``"pbsid"``/``"ssarx"`` consistent only when the
-            controller has no direct feedthrough); ``"auto"``: decided by held-out
+        feedthrough : bool or "auto", optional
+            Estimate ``D``. Default: ``D = 0`` at a given order (MATLAB's default, the same
+            for every sysid state-space estimator), and with ``order="auto"`` chosen with the
+            order, as ``"auto"`` (:mod:`sysid.subspace.feedthrough`). ``True`` estimates
+            ``D`` (with ``"pbsid"``/``"ssarx"`` consistent only when the controller has no
+            direct feedthrough); ``False``: ``D = 0``; ``"auto"``: decided by held-out
             simulation fit (:meth:`feedthrough_selection`, recorded in
             ``info["feedthrough_selection"]``).
         kalman : bool
@@ -417,6 +426,7 @@ class SubspaceEstimator:
         """
         key = self.method if method is None else _method(method)
         ft_selection = None
+        feedthrough = default_feedthrough(feedthrough, order)
         if check_feedthrough(feedthrough) == "auto":
             feedthrough, ft_selection = self.feedthrough_selection(key, order)
         if key in CLOSED_LOOP:
@@ -562,7 +572,7 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         order: Order = "auto",
         *,
         horizon: int | None = None,
-        feedthrough: bool | str = FEEDTHROUGH_DEFAULT,
+        feedthrough: bool | str | None = None,
         kalman: bool = True,
         stable: bool = False,
         x0: bool = False,
@@ -574,8 +584,10 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
     fit.__doc__ = f"""Identify a state-space model with {method.upper()} in one call.
 
     Equivalent to ``SubspaceEstimator(data, horizon, method="{method}").fit(order, ...)``;
-    no feedthrough (``D = 0``) unless ``feedthrough=True`` (or ``"auto"``: decided from the
-    data), as every sysid state-space estimator.
+    no feedthrough (``D = 0``) at a given order unless ``feedthrough=True`` (or ``"auto"``:
+    decided from the data), as every sysid state-space estimator; with ``order="auto"`` (the
+    default) the order and ``D`` are chosen together by held-out simulation fit
+    (``info["order_selection"]``, ``info["feedthrough_selection"]``).
 
     Examples
     --------

@@ -1,6 +1,9 @@
 """The automatic order of a subspace fit (``order="auto"``), chosen by simulation fit
-cross-validated inside the record (:mod:`sysid.validation.crossval`); the singular-value gap
-where the record cannot be split. (``feedthrough="auto"``: :mod:`sysid.subspace.feedthrough`.)"""
+cross-validated inside the record (:mod:`sysid.validation.crossval`), among the orders whose
+model on the whole record is stable unless the data insist on an unstable one
+(:func:`sysid.validation.crossval.stable_first`); the singular-value gap where the record
+cannot be split. (``feedthrough="auto"``, which ``order="auto"`` uses unless ``feedthrough``
+is given: :mod:`sysid.subspace.feedthrough`.)"""
 
 from __future__ import annotations
 
@@ -26,7 +29,8 @@ def order_selection(est: Any, key: str, feedthrough: bool) -> dict[str, Any]:
     if est.factor.n_inputs and not est._from_factor:
         try:
             out = cross_validated_order(est.data, type(est), method=key, past=est.past,
-                                        future=est.future, feedthrough=feedthrough).as_dict()
+                                        future=est.future, feedthrough=feedthrough,
+                                        whole=est).as_dict()
             out["order"] = min(out["order"], sub.max_order)
         except Exception as e:  # noqa: BLE001 - too short to split: the SVD rule
             out = _svd_rule(sub, f" (the record could not be cross-validated: {e})")
