@@ -334,7 +334,7 @@ def nlssest(
                             periods if whole else None)
         cands = [_linear_start(lin0, *args)]
         if isinstance(init, str) and init == "auto":
-            hw = _hw_fit(lin_data, n, hid, out)  # in the scaled channels
+            hw = _hw_fit(lin_data, lin0, hid, out)  # in the scaled channels
             if hw is not None:
                 cands.append(_hw_start(hw, sc, *args))
     scores = [_score(c, train, val) for c in cands]
@@ -462,11 +462,12 @@ def _hw_start(hw: HammersteinWienerSSModel, hsc: Scaling, hid: tuple[int, ...],
     return start, lam, modal, H, "hammerstein-wiener"
 
 
-def _hw_fit(lin_data: IOData, n: int, hid: tuple[int, ...],
+def _hw_fit(lin_data: IOData, lin: StateSpaceModel, hid: tuple[int, ...],
             out: tuple[int, ...] | None) -> HammersteinWienerSSModel | None:
     """The Hammerstein-Wiener start of ``init="auto"`` (scaled channels, training parts):
-    ``HW_UNITS`` sigmoid units per channel, ``HW_ITER`` iterations; ``None`` when the
-    networks have no room for its units or its search has no admissible start."""
+    ``HW_UNITS`` sigmoid units per channel, ``HW_ITER`` iterations from nlhw_ss's subspace
+    start, or from the linear start ``lin`` when that one is unstable; ``None`` when the
+    networks have no room for its units or neither start is admissible."""
     from ..nonlinear.hw_model import SigmoidNetwork
     from ..nonlinear.hw_ss import nlhw_ss
 
@@ -474,11 +475,14 @@ def _hw_fit(lin_data: IOData, n: int, hid: tuple[int, ...],
     if len(hid) != 1 or hid[0] < HW_UNITS * m or out is None or len(out) != 1 \
             or out[0] < HW_UNITS * l_:
         return None
-    try:
-        return nlhw_ss(lin_data, n, input_nl=SigmoidNetwork(HW_UNITS),
-                       output_nl=SigmoidNetwork(HW_UNITS), max_iter=HW_ITER, progress=False)
-    except (DataError, NumericalError):
-        return None
+    for start in (None, lin):  # nlhw_ss's own (subspace) start; if inadmissible, ``lin``
+        try:
+            return nlhw_ss(lin_data, lin.nstates, input_nl=SigmoidNetwork(HW_UNITS),
+                           output_nl=SigmoidNetwork(HW_UNITS), max_iter=HW_ITER,
+                           progress=False, linear=start)
+        except (DataError, NumericalError):
+            continue
+    return None
 
 
 def _score(cand: tuple[Any, ...], train: list, val: list) -> float:
