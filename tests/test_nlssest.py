@@ -36,8 +36,8 @@ def test_same_seed_same_model_and_progress_can_stop():
     a, b = _fit(), _fit()
     np.testing.assert_array_equal(a.params, b.params)
     seen = []
-    sysid.nlssest(_data(), 1, hidden=4, epochs=10, init="linear", progress=lambda e, v, t: seen.append(e)
-                  or e < 3)
+    sysid.nlssest(_data(), 1, hidden=4, epochs=10, init="linear",
+                  progress=lambda e, v, t: seen.append(e) or e < 3)
     assert seen == [1, 2, 3]
 
 
