@@ -433,10 +433,9 @@ def _linear_start(lin: StateSpaceModel, hid: tuple[int, ...], out: tuple[int, ..
                   H: int | None) -> tuple[Any, ...]:
     """The linear model (scaled channels) as a start: modal, then balanced coordinates."""
     lin, lam, modal = _modal(lin)
-    us = [u[:at] for u, _, at in train]
-    lin = balanced(lin, us)
-    return (*_cand(lin, lam, modal, linear_states(lin, us), hid, out, enc, L, seed, sc,
-                   train, H), "linear")
+    lin = balanced(lin, [u for u, _, _ in train])
+    states = linear_states(lin, [u[:at] for u, _, at in train])
+    return (*_cand(lin, lam, modal, states, hid, out, enc, L, seed, sc, train, H), "linear")
 
 
 def _hw_start(hw: HammersteinWienerSSModel, hsc: Scaling, hid: tuple[int, ...],
@@ -451,13 +450,12 @@ def _hw_start(hw: HammersteinWienerSSModel, hsc: Scaling, hid: tuple[int, ...],
     lin, lam, modal = _modal(StateSpaceModel(hw.A, hw.B, hw.C, hw.D, dt=hw.dt))
     hw = copy.copy(hw)
     hw.A, hw.B, hw.C = lin.A, lin.B, lin.C
-    us = [u[:at] for u, _, at in train]
     to_hw = Scaling(hsc.u(sc.u_offset), sc.u_scale / hsc.u_scale, hsc.y(sc.y_offset),
                     sc.y_scale / hsc.y_scale)  # scaled channels in hw's units
-    s = np.vstack(hw_states(hw, to_hw, us)).std(axis=0)
+    s = np.vstack(hw_states(hw, to_hw, [u for u, _, _ in train])).std(axis=0)  # as balanced
     s = np.where(s > 1e-12 * max(s.max(), 1e-300), s, 1.0)
     hw.A, hw.B, hw.C = hw.A * s / s[:, None], hw.B / s[:, None], hw.C * s
-    states = hw_states(hw, to_hw, us)
+    states = hw_states(hw, to_hw, [u[:at] for u, _, at in train])
     start, lam, modal, H = _cand(StateSpaceModel(hw.A, hw.B, hw.C, hw.D, dt=hw.dt), lam,
                                  modal, states, hid, out, enc, L, seed, sc, train, H)
     embed_hw(start, hw, to_hw)
