@@ -104,3 +104,20 @@ def test_progress_is_the_shared_observer():
     stopped = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 2, input_nl=sysid.Saturation(),
                             progress=lambda *a: False)
     assert stopped.info["stop"] == "cancelled" and stopped.info["iterations"] == 1
+
+
+def test_given_linear_start():
+    # the true linear block as the start: the saturation is recovered from it; a start of
+    # the wrong size or an unstable one is refused
+    u = _inputs(seed=6)
+    y = _simulate(u, lambda v: np.clip(v, -0.5, 0.6), lambda v: v)
+    d = sysid.IOData(u, y, 1.0)
+    true = sysid.StateSpaceModel(A, B, C, dt=1.0)
+    m = sysid.nlhw_ss(d, 2, input_nl=sysid.Saturation(), linear=true, progress=False)
+    np.testing.assert_allclose(m.simulate(u), y, atol=1e-6)
+    # theta0: two saturations' bounds, then the start's A (the given one, not n4sid's)
+    np.testing.assert_array_equal(m.info["theta0"][4:8], A.ravel())
+    with pytest.raises(sysid.DataError, match="linear must be"):
+        sysid.nlhw_ss(d, 3, linear=true)
+    with pytest.raises(sysid.DataError, match="unstable"):
+        sysid.nlhw_ss(d, 2, linear=sysid.StateSpaceModel(2 * A, B, C, dt=1.0))

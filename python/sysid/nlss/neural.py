@@ -4,11 +4,13 @@
 
     x(t+1) = A x + B u + f(x, u)       y = C x + D u + g(x, u)       x(t0) = h(past)
 
-in scaled channels and the linear start's real modal coordinates; ``f`` and ``g`` (unless
+in scaled channels and the start's real modal coordinates; ``f`` and ``g`` (unless
 switched off) are tanh multilayer perceptrons whose last layer starts at zero, so training
-starts at the linear model (the BLA's for periodic data);
-``h`` is an encoder of the past ``L`` inputs and outputs (a linear map fitted to the linear
-model's states, plus a network) that gives the initial state of every training section.
+starts at the linear model (the BLA's for periodic data), or at a Hammerstein-Wiener model
+embedded exactly (its sigmoid units the networks' first hidden units, see
+``neural_start``), whichever validates better; ``h`` is an encoder of the past ``L`` inputs
+and outputs (a linear map fitted to the start's states, plus a network) that gives the
+initial state of every training section.
 Training (Rust core, no deep-learning framework): Adam on the mean squared simulation error
 of short sections (truncated simulation, back-propagation through each section; slow modes
 take proportionally smaller steps), the epoch whose free-run simulation from rest fits the
@@ -26,10 +28,11 @@ import numpy as np
 from .. import _sysid
 from .._progress import iteration_callback
 from ..data.iodata import IOData
-from ..errors import DataError
+from ..errors import DataError, NumericalError
 from ..models.protocol import ModelMixin
 from ..models.serialize import register_model
 from ..models.statespace import StateSpaceModel
+from ..nonlinear.hw_ss_model import HammersteinWienerSSModel
 from .common import (
     LinearPart,
     Scaling,
@@ -41,6 +44,7 @@ from .common import (
     scaled_data,
     signal,
 )
+from .neural_start import check_hw, embed_hw, hw_states
 
 __all__ = ["NeuralStateSpaceModel", "nlssest"]
 
@@ -218,7 +222,7 @@ def nlssest(
     patience: int = 20,
     validation: Any = 0.2,
     periods: int | None = None,
-    init: Any = None,
+    init: Any = "auto",
     seed: int = 0,
     progress: bool | None | Callable[..., Any] = None,
 ) -> NeuralStateSpaceModel:
@@ -259,8 +263,20 @@ def nlssest(
         than it.
     periods : int, optional
         Periods per experiment: the linear start is then the BLA's model.
-    init : StateSpaceModel, optional
-        Linear start (engineering units).
+    init : "auto", "linear", None, StateSpaceModel or HammersteinWienerSSModel
+        The start. ``"linear"`` (or ``None``): the linear model (see ``periods``).
+        ``"auto"`` (default): that linear model or a Hammerstein-Wiener model
+        (:func:`sysid.nlhw_ss` on the training parts in scaled channels, ``HW_UNITS = 3``
+        sigmoid units per input and output, at most ``HW_ITER = 30`` iterations: the bound
+        on its cost), whichever has the lower validation error (the criterion below); the
+        Hammerstein-Wiener candidate is left out when the networks are not one hidden
+        layer wide enough for its units or its search finds no admissible start. A
+        :class:`~sysid.StateSpaceModel` (engineering units) is a given linear start; a
+        :class:`~sysid.HammersteinWienerSSModel` (engineering units, sigmoid-network or
+        identity channels, no direct term from a nonlinear input channel) is embedded
+        exactly: its linear block is the linear part and each sigmoid unit a first hidden
+        unit of the state or output network (the other units start with zero output), so
+        the start simulates as the Hammerstein-Wiener model does.
     seed : int
         Seeds the weights and the section sampling (same seed, same model).
     progress : bool or callable, optional
@@ -271,7 +287,8 @@ def nlssest(
     -------
     NeuralStateSpaceModel
         ``info["training"]``: the validation and training errors per epoch, the best
-        epoch, why it stopped.
+        epoch, why it stopped; ``info["start"]``: ``"linear"`` or ``"hammerstein-wiener"``,
+        ``info["start_validation"]``: each candidate start's validation error.
 
     Examples
     --------
@@ -283,8 +300,10 @@ def nlssest(
     ...     x[t + 1] = 0.8 * x[t] + 0.5 * np.tanh(2 * u[t])
     >>> d = sysid.IOData(u, x[:-1], 1.0)
     >>> m = sysid.nlssest(d, 1, hidden=8, epochs=20, learning_rate=1e-2, progress=False)
-    >>> lin = m.info["training"]["validation"][0]
-    >>> bool(min(m.info["training"]["validation"]) < 0.5 * lin)
+    >>> m.info["start"]  # a Hammerstein plant: that start validates better than the linear
+    'hammerstein-wiener'
+    >>> sv = m.info["start_validation"]
+    >>> bool(min(m.info["training"]["validation"]) < 0.05 * sv["linear"])
     True
     """
     if not isinstance(data, IOData):
@@ -300,19 +319,29 @@ def nlssest(
     H = None if horizon is None else as_int(horizon, "horizon", 2)
     if data.n_inputs == 0:
         raise DataError("nlssest needs inputs")
+    _check_init(init)
     sc = Scaling.of(data)
     sd = scaled_data(data, sc)
     train, val = _split(sd, sc, validation, L, 2 if H is None else H)
     lin_data = IOData([u[:at] for u, _, at in train], [y[:at] for _, y, at in train], data.dt)
     whole = isinstance(validation, IOData) or float(validation) == 0.0
-    lin, lam, modal = _modal(linear_start(data, lin_data, sc, n, init, periods if whole else None))
-    lin = balanced(lin, [u for u, _, _ in train])
-    if H is None:
-        H = _horizon(lam, min(at for _, _, at in train) - L)
-    W = _encoder_fit(lin, train, L)
-    start = NeuralStateSpaceModel.from_linear(lin, hidden=hid, output_hidden=out,
-                                              encoder_hidden=enc, lags=L, seed=seed,
-                                              scaling=sc.to_dict(), encoder_linear=W)
+    args = (hid, out, enc, L, seed, sc, train, H)
+    if isinstance(init, HammersteinWienerSSModel):  # in engineering units
+        check_hw(init, n, data.n_inputs, data.n_outputs, hid, out)
+        units = Scaling(np.zeros(data.n_inputs), np.ones(data.n_inputs),
+                        np.zeros(data.n_outputs), np.ones(data.n_outputs))
+        cands = [_hw_start(init, units, *args)]
+    else:
+        lin0 = linear_start(data, lin_data, sc, n, None if isinstance(init, str) else init,
+                            periods if whole else None)
+        cands = [_linear_start(lin0, *args)]
+        if isinstance(init, str) and init == "auto":
+            hw = _hw_fit(lin_data, lin0, hid, out)  # in the scaled channels
+            if hw is not None:
+                cands.append(_hw_start(hw, sc, *args))
+    scores = [_score(c, train, val) for c in cands]
+    best = int(np.argmin(scores))
+    start, lam, modal, H, kind = cands[best]
     cb, close = iteration_callback(progress, "nlssest", epochs, unit="epoch", postfix=_errors)
     try:
         res = _sysid.neural_ss_train(start._struct(), start.params, train, val, epochs=epochs,
@@ -321,7 +350,8 @@ def nlssest(
                                      rates=_rates(start, lam, modal))
     finally:
         close()
-    info = {"method": "nlssest", "start": lin.info.get("method") if lin.info else "linear",
+    info = {"method": "nlssest", "start": kind, "start_validation": dict(
+                zip([c[4] for c in cands], scores)),
             "training": {k: res[k] for k in ("validation", "train", "best_epoch", "stop",
                                               "diverged")}, "horizon": H, "seed": seed}
     return NeuralStateSpaceModel(res["params"], dims=(n, data.n_inputs, data.n_outputs),
@@ -355,16 +385,112 @@ def _split(sd: IOData, sc: Scaling, validation: Any, L: int, H: int) -> tuple[li
     return train, val
 
 
-def _encoder_fit(lin: StateSpaceModel, train: list, L: int) -> np.ndarray:
-    """Least-squares map from the past window to the linear model's simulated state."""
+def _encoder_fit(states: list[np.ndarray], train: list, L: int) -> np.ndarray:
+    """Least-squares map from the past window to a start's simulated states (one array per
+    training record, over its training part)."""
     P, X = [], []
-    for (u, y, at), x in zip(train, linear_states(lin, [u[:at] for u, _, at in train])):
+    for (u, y, at), x in zip(train, states):
         P.append(_phi(u[:at], y[:at], L))
         X.append(x[L:at])
     Pm, Xm = np.vstack(P), np.vstack(X)
     skip = max(0, Pm.shape[0] // 10)  # the transient from rest is not the map's business
     W, *_ = np.linalg.lstsq(Pm[skip:], Xm[skip:], rcond=1e-10)
     return np.ascontiguousarray(W.T)
+
+
+_INITS = ("auto", "linear")
+#: The Hammerstein-Wiener start of ``init="auto"``: sigmoid units per channel and its
+#: search's iterations (each a pass of sensitivities over the record: the bound on its cost).
+HW_UNITS, HW_ITER = 3, 30
+
+
+def _check_init(init: Any) -> None:
+    if init is None or isinstance(init, (StateSpaceModel, HammersteinWienerSSModel)) or (
+            isinstance(init, str) and init in _INITS) or (
+            not isinstance(init, str) and hasattr(init, "to_statespace")):
+        return
+    raise DataError(f"init must be None or 'linear' (the linear start), 'auto' (the linear "
+                    f"or a Hammerstein-Wiener start, whichever validates better), a "
+                    f"sysid.StateSpaceModel or a sysid.HammersteinWienerSSModel; got {init!r}")
+
+
+def _cand(lin: StateSpaceModel, lam: np.ndarray, modal: bool, states: list[np.ndarray],
+          hid: tuple[int, ...], out: tuple[int, ...] | None, enc: tuple[int, ...], L: int,
+          seed: int, sc: Scaling, train: list, H: int | None) -> tuple[Any, ...]:
+    """A start from its linear part (final basis) and simulated states: the model (networks
+    at zero output), its poles, whether in modal coordinates, and its section length."""
+    if H is None:
+        H = _horizon(lam, min(at for _, _, at in train) - L)
+    start = NeuralStateSpaceModel.from_linear(lin, hidden=hid, output_hidden=out,
+                                              encoder_hidden=enc, lags=L, seed=seed,
+                                              scaling=sc.to_dict(),
+                                              encoder_linear=_encoder_fit(states, train, L))
+    return start, lam, modal, H
+
+
+def _linear_start(lin: StateSpaceModel, hid: tuple[int, ...], out: tuple[int, ...] | None,
+                  enc: tuple[int, ...], L: int, seed: int, sc: Scaling, train: list,
+                  H: int | None) -> tuple[Any, ...]:
+    """The linear model (scaled channels) as a start: modal, then balanced coordinates."""
+    lin, lam, modal = _modal(lin)
+    lin = balanced(lin, [u for u, _, _ in train])
+    states = linear_states(lin, [u[:at] for u, _, at in train])
+    return (*_cand(lin, lam, modal, states, hid, out, enc, L, seed, sc, train, H), "linear")
+
+
+def _hw_start(hw: HammersteinWienerSSModel, hsc: Scaling, hid: tuple[int, ...],
+              out: tuple[int, ...] | None, enc: tuple[int, ...], L: int, seed: int,
+              sc: Scaling, train: list, H: int | None) -> tuple[Any, ...]:
+    """The Hammerstein-Wiener model ``hw`` (in the units ``hsc`` scales engineering units
+    to: no scaling, or ``sc`` for the scaled channels) embedded exactly: its linear block in
+    modal coordinates with unit-variance states, its sigmoid units the networks' first
+    hidden units."""
+    import copy
+
+    lin, lam, modal = _modal(StateSpaceModel(hw.A, hw.B, hw.C, hw.D, dt=hw.dt))
+    hw = copy.copy(hw)
+    hw.A, hw.B, hw.C = lin.A, lin.B, lin.C
+    to_hw = Scaling(hsc.u(sc.u_offset), sc.u_scale / hsc.u_scale, hsc.y(sc.y_offset),
+                    sc.y_scale / hsc.y_scale)  # scaled channels in hw's units
+    s = np.vstack(hw_states(hw, to_hw, [u for u, _, _ in train])).std(axis=0)  # as balanced
+    s = np.where(s > 1e-12 * max(s.max(), 1e-300), s, 1.0)
+    hw.A, hw.B, hw.C = hw.A * s / s[:, None], hw.B / s[:, None], hw.C * s
+    states = hw_states(hw, to_hw, [u[:at] for u, _, at in train])
+    start, lam, modal, H = _cand(StateSpaceModel(hw.A, hw.B, hw.C, hw.D, dt=hw.dt), lam,
+                                 modal, states, hid, out, enc, L, seed, sc, train, H)
+    embed_hw(start, hw, to_hw)
+    return start, lam, modal, H, "hammerstein-wiener"
+
+
+def _hw_fit(lin_data: IOData, lin: StateSpaceModel, hid: tuple[int, ...],
+            out: tuple[int, ...] | None) -> HammersteinWienerSSModel | None:
+    """The Hammerstein-Wiener start of ``init="auto"`` (scaled channels, training parts):
+    ``HW_UNITS`` sigmoid units per channel, ``HW_ITER`` iterations from nlhw_ss's subspace
+    start, or from the linear start ``lin`` when that one is unstable; ``None`` when the
+    networks have no room for its units or neither start is admissible."""
+    from ..nonlinear.hw_model import SigmoidNetwork
+    from ..nonlinear.hw_ss import nlhw_ss
+
+    m, l_ = lin_data.n_inputs, lin_data.n_outputs
+    if len(hid) != 1 or hid[0] < HW_UNITS * m or out is None or len(out) != 1 \
+            or out[0] < HW_UNITS * l_:
+        return None
+    for start in (None, lin):  # nlhw_ss's own (subspace) start; if inadmissible, ``lin``
+        try:
+            return nlhw_ss(lin_data, lin.nstates, input_nl=SigmoidNetwork(HW_UNITS),
+                           output_nl=SigmoidNetwork(HW_UNITS), max_iter=HW_ITER,
+                           progress=False, linear=start)
+        except (DataError, NumericalError):
+            continue
+    return None
+
+
+def _score(cand: tuple[Any, ...], train: list, val: list) -> float:
+    """A start's validation error, as training scores its epochs (epoch 0 of the core)."""
+    start, _, _, H = cand[:4]
+    r = _sysid.neural_ss_train(start._struct(), start.params, train, val, epochs=0,
+                               horizon=H)
+    return float(r["validation"][0])
 
 
 def _modal(m: StateSpaceModel) -> tuple[StateSpaceModel, np.ndarray, bool]:

@@ -52,6 +52,7 @@ def nlhw_ss(
     max_iter: int = 200,
     tol: float = 1e-10,
     progress: bool | None | Callable[..., Any] = None,
+    linear: Any = None,
 ) -> HammersteinWienerSSModel:
     """Hammerstein-Wiener model with per-channel static nonlinearities around a MIMO
     state-space linear block: ``w_j = f_j(u_j)``, ``x(t+1) = A x + B w``, ``v = C x + D w``,
@@ -74,6 +75,9 @@ def nlhw_ss(
     progress : bool or callable, optional
         As for :func:`sysid.nlhw` (a bar, silence, or a callable getting ``(iteration, cost,
         step_norm, gradient_norm, damping)``; ``False`` returned stops).
+    linear : StateSpaceModel, optional
+        The linear block's start (stable, ``order`` states; the record's units). Default: a
+        subspace fit (:func:`sysid.n4sid`) of the record.
 
     Returns
     -------
@@ -96,6 +100,7 @@ def nlhw_ss(
     [[-0.5, 0.5], [-0.5, 0.5]]
     """
     from ..data.iodata import IOData
+    from ..models.statespace import StateSpaceModel
     from ..subspace.estimator import n4sid
 
     exps = experiment_arrays(data)
@@ -117,14 +122,22 @@ def nlhw_ss(
     # linear start: subspace fit on the (transformed) inputs
     import warnings
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        lin = n4sid(IOData([r[0] for r in records], [r[1] for r in records], dt), int(order),
-                   feedthrough=bool(feedthrough))
+    if linear is None:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            lin = n4sid(IOData([r[0] for r in records], [r[1] for r in records], dt),
+                        int(order), feedthrough=bool(feedthrough))
+    else:
+        lin = linear.to_statespace() if hasattr(linear, "to_statespace") else linear
+        if not isinstance(lin, StateSpaceModel) or (lin.nstates, lin.ninputs, lin.noutputs) \
+                != (int(order), m, p):
+            raise DataError(f"linear must be a sysid.StateSpaceModel with {int(order)} states, "
+                            f"{m} inputs and {p} outputs, got {linear!r}")
     A, B, C = np.asarray(lin.A), np.asarray(lin.B).copy(), np.asarray(lin.C)
     D = np.asarray(lin.D).copy() if feedthrough else None
     if np.max(np.abs(np.linalg.eigvals(A))) >= 1:
-        raise DataError("the linear start (n4sid) is unstable; try another order")
+        raise DataError("the linear start (n4sid, or linear=) is unstable; try another order "
+                        "or give a stable linear start")
     u_all = np.vstack([r[0] for r in records])
     in_starts = [f.starts(u_all[:, j]) for j, f in enumerate(fin)]
     res, th0, v_all = None, None, np.zeros((0, p))
