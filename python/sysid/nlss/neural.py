@@ -336,7 +336,8 @@ def nlssest(
                             periods if whole else None)
         cands = [_linear_start(lin0, *args)]
         if isinstance(init, str) and init == "auto":
-            hw = _hw_fit(lin_data, lin0, hid, out)  # in the scaled channels
+            hw = _hw_fit(lin_data, lin0, hid, out,  # in the scaled channels
+                         progress if progress is None or isinstance(progress, bool) else False)
             if hw is not None:
                 cands.append(_hw_start(hw, sc, *args))
     scores = [_score(c, train, val) for c in cands]
@@ -463,11 +464,14 @@ def _hw_start(hw: HammersteinWienerSSModel, hsc: Scaling, hid: tuple[int, ...],
 
 
 def _hw_fit(lin_data: IOData, lin: StateSpaceModel, hid: tuple[int, ...],
-            out: tuple[int, ...] | None) -> HammersteinWienerSSModel | None:
+            out: tuple[int, ...] | None, progress: bool | None = False
+            ) -> HammersteinWienerSSModel | None:
     """The Hammerstein-Wiener start of ``init="auto"`` (scaled channels, training parts):
     ``HW_UNITS`` sigmoid units per channel, ``HW_ITER`` iterations from nlhw_ss's subspace
     start, or from the linear start ``lin`` when that one is unstable; ``None`` when the
-    networks have no room for its units or neither start is admissible."""
+    networks have no room for its units or neither start is admissible. ``progress``: its
+    own bar (a terminal by default), as nlhw_ss shows it (it can take minutes on long
+    records; a callable of nlssest's epochs does not fit its iterations, so none then)."""
     from ..nonlinear.hw_model import SigmoidNetwork
     from ..nonlinear.hw_ss import nlhw_ss
 
@@ -479,7 +483,7 @@ def _hw_fit(lin_data: IOData, lin: StateSpaceModel, hid: tuple[int, ...],
         try:
             return nlhw_ss(lin_data, lin.nstates, input_nl=SigmoidNetwork(HW_UNITS),
                            output_nl=SigmoidNetwork(HW_UNITS), max_iter=HW_ITER,
-                           progress=False, linear=start)
+                           progress=progress, linear=start)
         except (DataError, NumericalError):
             continue
     return None
