@@ -398,10 +398,13 @@ pub fn minimize(
                     mu = (mu * 2.0).max(1e-12);
                 }
                 if std::env::var_os("SYSID_PROFILE").is_some() {
-                    eprintln!("PROF step mu {used:e} rho {rho} pred {pred:e} actual {actual:e} try {try_}");
+                    eprintln!("PROF step mu {used:e} rho {rho} pred {pred:e} actual {actual:e} try {try_} halvings {halvings}");
                 }
                 accepted = Some((trial, cand_cost, used, rho, quad));
                 break;
+            }
+            if std::env::var_os("SYSID_PROFILE").is_some() {
+                eprintln!("PROF rejected mu {mu:e} actual {actual:e} halvings {halvings}");
             }
             if mu > 1e10 || stale {
                 break;
