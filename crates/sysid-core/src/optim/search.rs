@@ -344,7 +344,7 @@ pub fn minimize(
             stop = StopReason::Statistical;
             break;
         }
-        let mut accepted: Option<(Vec<f64>, f64, f64, f64)> = None;
+        let mut accepted: Option<(Vec<f64>, f64, f64, f64, f64)> = None;
         for try_ in 0..60 {
             if stale && try_ > 0 {
                 // a chord step gets one try at the current damping
@@ -398,17 +398,20 @@ pub fn minimize(
                     mu = (mu * 2.0).max(1e-12);
                 }
                 if std::env::var_os("SYSID_PROFILE").is_some() {
-                    eprintln!("PROF step mu {used:e} rho {rho} pred {pred:e} actual {actual:e} try {try_}");
+                    eprintln!("PROF step mu {used:e} rho {rho} pred {pred:e} actual {actual:e} try {try_} halvings {halvings}");
                 }
-                accepted = Some((trial, cand_cost, used, rho));
+                accepted = Some((trial, cand_cost, used, rho, quad));
                 break;
+            }
+            if std::env::var_os("SYSID_PROFILE").is_some() {
+                eprintln!("PROF rejected mu {mu:e} actual {actual:e} halvings {halvings}");
             }
             if mu > 1e10 || stale {
                 break;
             }
             mu = (mu * 4.0).max(1e-12);
         }
-        let Some((trial, cand_cost, used, rho)) = accepted else {
+        let Some((trial, cand_cost, used, rho, quad)) = accepted else {
             if stale {
                 // the reused matrix found no descent: form it at this point and try again
                 frozen = 0;
@@ -425,6 +428,8 @@ pub fn minimize(
         let t0 = std::time::Instant::now();
         problem.accepted(&trial)?;
         prof("accepted", t0);
+        // profile trace: the gradient before the step, for the curvature along it
+        let before = std::env::var_os("SYSID_PROFILE").map(|_| (pt.g.clone(), pt.theta.clone()));
         let mut chord = None;
         if frozen < options.reuse_gauss_newton && rho > 0.75 {
             let t0 = std::time::Instant::now();
@@ -454,6 +459,15 @@ pub fn minimize(
                 evaluate_point(problem, options, trial, &mut evals)?
             }
         };
+        if let Some((g0, t0)) = before {
+            // s^T (g_new - g_old) / s^T H s: 1 where the Gauss-Newton model has the curvature
+            // of the cost along the step, far from 1 where the neglected second-order term of
+            // the Hessian (large residuals) or the model's own curvature dominates
+            let sy: f64 = (0..p)
+                .map(|i| (pt.theta[i] - t0[i]) * (pt.g[i] - g0[i]))
+                .sum();
+            eprintln!("PROF curvature {} chord {frozen}", sy / quad);
+        }
         weighted_history.push(pt.cost);
         let reported = problem.criterion().unwrap_or(pt.cost);
         history.push(reported);
