@@ -70,6 +70,8 @@ class Board:
         self.rows: list[dict[str, Any]] = []
         self.folds, self.bar, self.deadline = folds, bar, deadline
         self.out_of_time = False
+        #: refinements left out to keep the work in proportion (:data:`.core.REFINE_WORK`)
+        self.skipped: list[str] = []
         #: set by :meth:`insisting` when an unstable candidate wins only by following a drift
         self.drift: dict[str, Any] | None = None
 
