@@ -166,6 +166,9 @@ def simulation_errors(model: Any, data: IOData, trend: bool = False
                 G[q:, :q] = G[:q, q:].T
                 G[q:, q:] = F2.T @ F2
                 rhs[q:] = F2.T @ r.ravel()
+            if not (np.all(np.isfinite(G)) and np.all(np.isfinite(rhs))):
+                # free responses so large their squares overflow: a model that diverges
+                raise FloatingPointError("the model diverges on these data")
             scale = np.sqrt(np.maximum(np.diag(G), 0.0))
             scale[scale == 0] = 1.0
             theta = np.linalg.lstsq(G / np.outer(scale, scale), rhs / scale,
