@@ -20,7 +20,11 @@
    stopped there. On the held-out blocks a refinement's search stops once it has settled
    (:func:`settled`: its last iterations raised the fit its criterion implies by less than a
    tenth of what the blocks resolve); re-fitted on the whole record it runs to convergence
-   (up to ``FINAL_ITER`` iterations: a search can crawl along a plateau and then drop).
+   (up to ``FINAL_ITER`` iterations: a search can crawl along a plateau and then drop) when
+   that is cheap. On long records the refinements' work is bounded (``FINAL_WORK``,
+   ``FOLD_WORK``, ``REFINE_WORK``; :func:`iteration_work`): the whole-record re-fit stops
+   once settled, the fold fits are capped, later refinements are not scored (the checks say
+   so).
 4. The held-out blocks rank the candidates but cannot tell apart those within half a fit
    point of the best (5 % of its error at most): those are re-fitted on the whole record and
    the one with the smallest BIC of its simulation errors is returned; unstable candidates
@@ -378,7 +382,9 @@ def identify(
         record), the refinements are scored most promising first until the budget is spent,
         and the choice is made among what was scored (``result.out_of_time`` and a warning
         say so). CPU time, not wall-clock time, so that other work on a busy machine does
-        not change the result; ``None``: the full search, whatever it takes.
+        not change the result; ``None``: the full search, whatever it takes. Apart from
+        it, on long records the refinements' work is bounded in iterations x samples x
+        parameters^2 (the same on any machine; ``result.checks`` says what it changed).
     progress : bool, optional
         A progress bar over the candidates (default: only when stderr is a terminal).
         Ctrl-C stops the search and returns the best candidate found so far.
