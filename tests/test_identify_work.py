@@ -52,6 +52,13 @@ def test_whole_record_refit_converges_when_cheap_and_stops_once_settled_when_not
     assert capped.info["pem"]["iterations"] <= 8
     assert "until settled" in capped.info["identify_refit"]
     assert capped.info["pem"]["iterations"] < cheap.info["pem"]["iterations"]
+    # capped, it starts from whichever of its start and the refinement's fold fits simulates
+    # the record best (a settled search ends where its start leads it)
+    assert "from its start" in capped.info["identify_refit"]
+    better = quiet(core._final_refit, est, start, 4, False, "simulation", "output",
+                   [start, cheap])
+    assert "from its fit on fold 2" in better.info["identify_refit"]
+    assert better.info["pem"]["cost"][-1] <= capped.info["pem"]["cost"][-1]
 
 
 def test_identify_bounds_the_work_of_refinements_and_says_what_it_left_out(monkeypatch,

@@ -45,7 +45,7 @@ import numpy as np
 from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
-from ..validation.crossval import MAX_ORDER, TOL, fold_count, fold_horizon, folds
+from ..validation.crossval import MAX_ORDER, TOL, fold_count, fold_horizon, folds, simulation_fit
 from .board import Board, bic
 from .result import IdentifiedModel, IdentifyResult
 
@@ -304,11 +304,18 @@ def _refined_candidates(board: Board) -> None:
                                  weighting=wt, max_iter=max(SETTLE_WINDOW + 1, min(50, cap)),
                                  progress=settled(part, wt, board.stopper()))
 
+            mine: dict[str, Any] = {}  # this refinement's row, once scored
+
             def refit(data: IOData, r: dict[str, Any] = r, ft: bool = ft,
-                      focus: str = focus, wt: str | None = wt) -> Any:
-                return _final_refit(data, r["refit"](data), r["order"], ft, focus, wt)
-            board.add("pem", r["order"], ft, focus, f"prediction error from {r['family']}",
-                      fit, refit, start=r)
+                      focus: str = focus, wt: str | None = wt,
+                      mine: dict[str, Any] = mine) -> Any:
+                # its fold fits are further starts on the whole record only (on a fitted
+                # part they would carry the held-out block)
+                more = mine.get("fold_models", []) if data is board.whole else []
+                return _final_refit(data, r["refit"](data), r["order"], ft, focus, wt, more)
+            row = board.add("pem", r["order"], ft, focus,
+                            f"prediction error from {r['family']}", fit, refit, start=r)
+            mine.update(row or {})
     first = board.folds[0][0]
     if first.n_inputs == 1 and first.n_outputs == 1:
         for r in starts[:2]:
@@ -324,10 +331,12 @@ def _refined_candidates(board: Board) -> None:
 
 
 def _final_refit(data: IOData, start: Any, order: int, ft: bool, focus: str,
-                 wt: str | None) -> Any:
+                 wt: str | None, more: list[Any] | tuple[Any, ...] = ()) -> Any:
     """A refinement re-fitted on the whole record: to convergence (``FINAL_ITER``) when that
-    costs at most ``FINAL_WORK``, else at most that much work and stopped once settled
-    (``info["identify_refit"]`` says so)."""
+    costs at most ``FINAL_WORK``; else at most that much work and stopped once settled, from
+    whichever of ``start`` and ``more`` (the refinement's fits on the folds) simulates the
+    record best (a search stopped once settled ends where its start leads it; a fold fit has
+    done most of the way). ``info["identify_refit"]`` says so."""
     import sysid
 
     w = iteration_work(data, order, ft, focus == "prediction")
@@ -335,12 +344,16 @@ def _final_refit(data: IOData, start: Any, order: int, ft: bool, focus: str,
         return sysid.pem(data, start, focus=focus, feedthrough=ft, weighting=wt,
                          max_iter=FINAL_ITER, progress=False)
     cap = max(SETTLE_WINDOW + 1, int(FINAL_WORK // w))
-    m = sysid.pem(data, start, focus=focus, feedthrough=ft, weighting=wt, max_iter=cap,
-                  progress=settled(data, wt))
+    names = ["its start"] + [f"its fit on fold {k + 1}" for k in range(len(more))]
+    fits = [simulation_fit(m, data) for m in [start, *more]]
+    best = int(np.argmax(fits)) if np.any(np.isfinite(fits)) else 0
+    m = sysid.pem(data, [start, *more][best], focus=focus, feedthrough=ft, weighting=wt,
+                  max_iter=cap, progress=settled(data, wt))
     m.info["identify_refit"] = (
-        f"re-fitted on the whole record until settled ({m.info['pem']['iterations']} "
-        f"iterations, at most {cap}), not to convergence: at up to {FINAL_ITER} iterations "
-        f"it would cost {FINAL_ITER * w / FINAL_WORK:.0f} times the work bound of a re-fit")
+        f"re-fitted on the whole record from {names[best]} (of {len(names)} starts, the one "
+        f"that simulates it best) until settled ({m.info['pem']['iterations']} iterations, at "
+        f"most {cap}), not to convergence: at up to {FINAL_ITER} iterations it would cost "
+        f"{FINAL_ITER * w / FINAL_WORK:.0f} times the work bound of a re-fit")
     return m
 
 
@@ -443,6 +456,7 @@ def identify(
     deadline = None if time_budget is None else time.process_time() + float(time_budget)
     with Bar(None, "identify", unit="candidates", enabled=show(progress)) as bar:
         board = Board(parts, bar, deadline)
+        board.whole = centred
         _subspace_candidates(board, centred, methods, max_order)
         if refine:
             _refined_candidates(board)
@@ -483,7 +497,8 @@ def identify(
                       StabilityWarning, stacklevel=2)
     for r in ranked:
         r["chosen"] = r is chosen
-    rows = [{k: v for k, v in r.items() if k not in ("refit", "fit_fn", "start", "stabilised")}
+    rows = [{k: v for k, v in r.items()
+             if k not in ("refit", "fit_fn", "start", "stabilised", "fold_models")}
             for r in ranked]
     desc = (f"{chosen['family']}"
             + (f" ({chosen['focus']} focus)" if chosen["focus"] else "")
