@@ -122,3 +122,15 @@ def test_a_model_whose_free_responses_overflow_when_squared_scores_minus_inf():
     data = sysid.IOData(u=u, y=np.sin(np.arange(1000) / 7.0))
     assert np.all(np.isfinite(_free_responses(model, 1000)))
     assert simulation_fit(model, data) == -np.inf
+
+
+def test_the_excitation_check_window_is_scipys_blackman_harris():
+    """identify checks the excitation on every call; its window is written out (importing
+    scipy.signal costs a second), so it must stay scipy's periodic Blackman-Harris."""
+    from scipy.signal import get_window
+
+    from sysid.data.excitation import _window
+
+    for n in (1, 2, 5, 64, 1001):
+        assert np.allclose(_window(n), get_window("blackmanharris", n, fftbins=True),
+                           rtol=0, atol=1e-14)
