@@ -70,6 +70,10 @@ class Board:
         self.rows: list[dict[str, Any]] = []
         self.folds, self.bar, self.deadline = folds, bar, deadline
         self.out_of_time = False
+        #: the whole record (its refinements' fold fits are further starts of their re-fit)
+        self.whole: IOData | None = None
+        #: refinements left out to keep the work in proportion (:data:`.core.REFINE_WORK`)
+        self.skipped: list[str] = []
         #: set by :meth:`insisting` when an unstable candidate wins only by following a drift
         self.drift: dict[str, Any] | None = None
 
@@ -105,6 +109,8 @@ class Board:
                     warnings.simplefilter("ignore")
                     model = fit_fn(k)
                 fits.append(simulation_fit(model, held))
+                if start is not None:  # a refinement's fold fits: starts for its re-fit
+                    row.setdefault("fold_models", []).append(model)
                 poles = model.poles()
                 rho = max(rho, float(np.max(np.abs(poles))) if len(poles) else 0.0)
                 if start is not None and self._below_start(fits, start):

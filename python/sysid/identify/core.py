@@ -20,7 +20,11 @@
    stopped there. On the held-out blocks a refinement's search stops once it has settled
    (:func:`settled`: its last iterations raised the fit its criterion implies by less than a
    tenth of what the blocks resolve); re-fitted on the whole record it runs to convergence
-   (up to ``FINAL_ITER`` iterations: a search can crawl along a plateau and then drop).
+   (up to ``FINAL_ITER`` iterations: a search can crawl along a plateau and then drop) when
+   that is cheap. On long records the refinements' work is bounded (``FINAL_WORK``,
+   ``FOLD_WORK``, ``REFINE_WORK``; :func:`iteration_work`): the whole-record re-fit stops
+   once settled, the fold fits are capped, later refinements are not scored (the checks say
+   so).
 4. The held-out blocks rank the candidates but cannot tell apart those within half a fit
    point of the best (5 % of its error at most): those are re-fitted on the whole record and
    the one with the smallest BIC of its simulation errors is returned; unstable candidates
@@ -41,7 +45,7 @@ import numpy as np
 from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
-from ..validation.crossval import MAX_ORDER, TOL, fold_count, fold_horizon, folds
+from ..validation.crossval import MAX_ORDER, TOL, fold_count, fold_horizon, folds, simulation_fit
 from .board import Board, bic
 from .result import IdentifiedModel, IdentifyResult
 
@@ -67,6 +71,24 @@ FINAL_ITER = 300
 #: the resolution of the score, not of the optimiser)
 SETTLE_WINDOW = 5
 SETTLE_POINTS = TOL / 10
+#: the cost of refinements is counted in the work of their iterations (:func:`iteration_work`:
+#: fitted samples x outputs x parameters squared, the normal equations' share; about 1e10 per
+#: CPU second on one core of the machine the benches ran on), not in seconds, so that the
+#: choice does not depend on the machine or its load. A whole-record re-fit runs to
+#: convergence (``FINAL_ITER`` iterations at most) when that costs at most ``FINAL_WORK``;
+#: beyond (long records of many outputs at high orders), at most ``FINAL_WORK`` worth of
+#: iterations and it stops once settled, as the fits scored on the held-out blocks did
+FINAL_WORK = 2e10
+#: a refinement fitted on a fold stops once settled, at pem's default cap of 50 iterations,
+#: or once it has spent ``FINAL_WORK / 5`` (the five fold fits of a refinement together cost
+#: at most what its whole-record re-fit may): on long records the held-out blocks score it a
+#: little before it has settled, which can only understate it against its start
+FOLD_WORK = FINAL_WORK / 5
+#: refinements after the first (more starts, the prediction focus) are scored only while the
+#: work they are expected to take (``NOMINAL_ITER`` iterations on every fold) keeps the
+#: refinements' total within ``REFINE_WORK``; the first is always scored
+REFINE_WORK = 5e10
+NOMINAL_ITER = 20
 
 
 def _offsets(data: IOData) -> tuple[IOData, np.ndarray, np.ndarray]:
@@ -220,6 +242,26 @@ def settled(data: IOData, weighting: str | None, then: Any = None) -> Any:
     return cb
 
 
+def iteration_work(data: IOData, order: int, feedthrough: bool, noise: bool) -> float:
+    """The work of one refinement iteration on ``data``: samples x outputs x parameters
+    squared (forming the normal equations dominates), the parameters those of ``A, B, C``
+    in the modal chart, ``D`` with ``feedthrough``, ``K`` with a ``noise`` model, and an
+    initial state per experiment.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.identify.core import iteration_work
+    >>> d = sysid.IOData(u=np.zeros(100), y=np.zeros(100))
+    >>> iteration_work(d, 2, False, False)  # 100 samples, 1 output, 2 (1 + 1 + 1) = 6 parameters
+    3600.0
+    """
+    m, l = data.n_inputs, data.n_outputs
+    p = (order * (m + l + data.n_experiments) + (m * l if feedthrough else 0)
+         + (order * l if noise else 0))
+    return float(sum(data.lengths) * l * p * p)
+
+
 def _starts(board: Board, count: int) -> list[dict[str, Any]]:
     """Starts for the refinement: the best stable subspace candidate of each order among
     those the held-out blocks cannot tell from the best, smallest orders first (``count``
@@ -239,25 +281,41 @@ def _refined_candidates(board: Board) -> None:
     import sysid
 
     starts = _starts(board, N_REFINE)
+    work = 0.0  # the refinements' expected work so far (REFINE_WORK)
     for focus in ("simulation", "prediction"):
         # simulation focus: every output's errors relative to its scale, as the held-out fit
         # (the mean of the outputs' fit %) counts them; prediction: the determinant criterion
         wt = "output" if focus == "simulation" else None
         for r in starts if focus == "simulation" else starts[:1]:
             ft = r["feedthrough"]
+            cost = NOMINAL_ITER * sum(iteration_work(part, r["order"], ft, focus == "prediction")
+                                      for part, _ in board.folds)
+            if work and work + cost > REFINE_WORK:
+                board.skipped.append(f"{focus}-focus refinement of order {r['order']} "
+                                     f"(from {r['family']})")
+                continue
+            work += cost
 
             def fit(k: int, r: dict[str, Any] = r, ft: bool = ft, focus: str = focus,
                     wt: str | None = wt) -> Any:
                 part = board.folds[k][0]
+                cap = int(FOLD_WORK // iteration_work(part, r["order"], ft, focus == "prediction"))
                 return sysid.pem(part, r["fit_fn"](k), focus=focus, feedthrough=ft,
-                                 weighting=wt, progress=settled(part, wt, board.stopper()))
+                                 weighting=wt, max_iter=max(SETTLE_WINDOW + 1, min(50, cap)),
+                                 progress=settled(part, wt, board.stopper()))
+
+            mine: dict[str, Any] = {}  # this refinement's row, once scored
 
             def refit(data: IOData, r: dict[str, Any] = r, ft: bool = ft,
-                      focus: str = focus, wt: str | None = wt) -> Any:
-                return sysid.pem(data, r["refit"](data), focus=focus, feedthrough=ft,
-                                 weighting=wt, max_iter=FINAL_ITER, progress=False)
-            board.add("pem", r["order"], ft, focus, f"prediction error from {r['family']}",
-                      fit, refit, start=r)
+                      focus: str = focus, wt: str | None = wt,
+                      mine: dict[str, Any] = mine) -> Any:
+                # its fold fits are further starts on the whole record only (on a fitted
+                # part they would carry the held-out block)
+                more = mine.get("fold_models", []) if data is board.whole else []
+                return _final_refit(data, r["refit"](data), r["order"], ft, focus, wt, more)
+            row = board.add("pem", r["order"], ft, focus,
+                            f"prediction error from {r['family']}", fit, refit, start=r)
+            mine.update(row or {})
     first = board.folds[0][0]
     if first.n_inputs == 1 and first.n_outputs == 1:
         for r in starts[:2]:
@@ -270,6 +328,33 @@ def _refined_candidates(board: Board) -> None:
                 return sysid.oe(data, nb, n, nk, progress=False).to_statespace()
             board.add("oe", n, ft, "simulation", "output error",
                       lambda k, f=fit_oe: f(board.folds[k][0]), fit_oe)
+
+
+def _final_refit(data: IOData, start: Any, order: int, ft: bool, focus: str,
+                 wt: str | None, more: list[Any] | tuple[Any, ...] = ()) -> Any:
+    """A refinement re-fitted on the whole record: to convergence (``FINAL_ITER``) when that
+    costs at most ``FINAL_WORK``; else at most that much work and stopped once settled, from
+    whichever of ``start`` and ``more`` (the refinement's fits on the folds) simulates the
+    record best (a search stopped once settled ends where its start leads it; a fold fit has
+    done most of the way). ``info["identify_refit"]`` says so."""
+    import sysid
+
+    w = iteration_work(data, order, ft, focus == "prediction")
+    if FINAL_ITER * w <= FINAL_WORK:
+        return sysid.pem(data, start, focus=focus, feedthrough=ft, weighting=wt,
+                         max_iter=FINAL_ITER, progress=False)
+    cap = max(SETTLE_WINDOW + 1, int(FINAL_WORK // w))
+    names = ["its start"] + [f"its fit on fold {k + 1}" for k in range(len(more))]
+    fits = [simulation_fit(m, data) for m in [start, *more]]
+    best = int(np.argmax(fits)) if np.any(np.isfinite(fits)) else 0
+    m = sysid.pem(data, [start, *more][best], focus=focus, feedthrough=ft, weighting=wt,
+                  max_iter=cap, progress=settled(data, wt))
+    m.info["identify_refit"] = (
+        f"re-fitted on the whole record from {names[best]} (of {len(names)} starts, the one "
+        f"that simulates it best) until settled ({m.info['pem']['iterations']} iterations, at "
+        f"most {cap}), not to convergence: at up to {FINAL_ITER} iterations it would cost "
+        f"{FINAL_ITER * w / FINAL_WORK:.0f} times the work bound of a re-fit")
+    return m
 
 
 def identify(
@@ -310,7 +395,9 @@ def identify(
         record), the refinements are scored most promising first until the budget is spent,
         and the choice is made among what was scored (``result.out_of_time`` and a warning
         say so). CPU time, not wall-clock time, so that other work on a busy machine does
-        not change the result; ``None``: the full search, whatever it takes.
+        not change the result; ``None``: the full search, whatever it takes. Apart from
+        it, on long records the refinements' work is bounded in iterations x samples x
+        parameters^2 (the same on any machine; ``result.checks`` says what it changed).
     progress : bool, optional
         A progress bar over the candidates (default: only when stderr is a terminal).
         Ctrl-C stops the search and returns the best candidate found so far.
@@ -369,9 +456,15 @@ def identify(
     deadline = None if time_budget is None else time.process_time() + float(time_budget)
     with Bar(None, "identify", unit="candidates", enabled=show(progress)) as bar:
         board = Board(parts, bar, deadline)
+        board.whole = centred
         _subspace_candidates(board, centred, methods, max_order)
         if refine:
             _refined_candidates(board)
+    if board.skipped:
+        checks["long_record"] = (
+            f"not scored, to keep the work in proportion on this record: "
+            f"{'; '.join(board.skipped)} (each would cost more than the refinements' work "
+            f"bound; time_budget does not change this)")
     if board.out_of_time:
         warnings.warn(f"identify stopped scoring candidates after time_budget={time_budget} s "
                       f"({len(board.rows)} scored): the best so far is returned; raise "
@@ -404,7 +497,8 @@ def identify(
                       StabilityWarning, stacklevel=2)
     for r in ranked:
         r["chosen"] = r is chosen
-    rows = [{k: v for k, v in r.items() if k not in ("refit", "fit_fn", "start", "stabilised")}
+    rows = [{k: v for k, v in r.items()
+             if k not in ("refit", "fit_fn", "start", "stabilised", "fold_models")}
             for r in ranked]
     desc = (f"{chosen['family']}"
             + (f" ({chosen['focus']} focus)" if chosen["focus"] else "")
@@ -412,6 +506,8 @@ def identify(
             f"feedthrough: held-out fit {chosen['held_out_fit']:.1f} %")
     model.info["identify"] = {k: chosen[k] for k in ("family", "order", "feedthrough", "focus",
                                                      "held_out_fit")}
+    if "identify_refit" in model.info:
+        checks["final_refit"] = model.info["identify_refit"]
     result_model = IdentifiedModel(model, mu, my)
     vfit = None
     if validation is not None:

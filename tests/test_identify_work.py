@@ -1,0 +1,136 @@
+"""Issue 26 (item 4, seconds per record): ``sysid.identify`` keeps its work in proportion on
+long records. Its costly steps (the refinements scored on the held-out blocks, their re-fit on
+the whole record) are bounded by the work of their iterations (samples x outputs x parameters
+squared), not by seconds, so the choice does not depend on the machine; the bounds are lowered
+here so that a short record meets them."""
+
+from __future__ import annotations
+
+import importlib
+
+import numpy as np
+import pytest
+
+import sysid
+from sysid.validation.crossval import _free_responses, simulation_errors
+
+from conftest import daisy_split, quiet
+
+core = importlib.import_module("sysid.identify.core")
+
+
+@pytest.fixture
+def pem_calls(monkeypatch):
+    """Every call of ``sysid.pem``: (samples fitted, max_iter, iterations run)."""
+    calls = []
+    real = sysid.pem
+
+    def spy(data, model, **kw):
+        out = real(data, model, **kw)
+        calls.append((sum(data.lengths), kw.get("max_iter", 50),
+                      out.info["pem"]["iterations"]))
+        return out
+    monkeypatch.setattr(sysid, "pem", spy)
+    return calls
+
+
+def test_iteration_work_counts_samples_outputs_and_parameters_squared():
+    d = sysid.IOData(u=np.zeros((200, 2)), y=np.zeros((200, 3)))
+    # order 4: 4 (2 + 3 + 1) = 24, D 6, K 12
+    assert core.iteration_work(d, 4, False, False) == 200 * 3 * 24 ** 2
+    assert core.iteration_work(d, 4, True, True) == 200 * 3 * (24 + 6 + 12) ** 2
+
+
+def test_whole_record_refit_converges_when_cheap_and_stops_once_settled_when_not(monkeypatch):
+    est, _ = daisy_split("dryer")
+    start = quiet(sysid.n4sid, est, 4, feedthrough=False)
+    w = core.iteration_work(est, 4, False, False)
+    cheap = quiet(core._final_refit, est, start, 4, False, "simulation", "output")
+    assert "identify_refit" not in cheap.info
+    monkeypatch.setattr(core, "FINAL_WORK", 8 * w)  # 8 iterations' worth
+    capped = quiet(core._final_refit, est, start, 4, False, "simulation", "output")
+    assert capped.info["pem"]["iterations"] <= 8
+    assert "until settled" in capped.info["identify_refit"]
+    assert capped.info["pem"]["iterations"] < cheap.info["pem"]["iterations"]
+    # capped, it starts from whichever of its start and the refinement's fold fits simulates
+    # the record best (a settled search ends where its start leads it)
+    assert "from its start" in capped.info["identify_refit"]
+    better = quiet(core._final_refit, est, start, 4, False, "simulation", "output",
+                   [start, cheap])
+    assert "from its fit on fold 2" in better.info["identify_refit"]
+    assert better.info["pem"]["cost"][-1] <= capped.info["pem"]["cost"][-1]
+
+
+def test_identify_bounds_the_work_of_refinements_and_says_what_it_left_out(monkeypatch,
+                                                                           pem_calls):
+    est, _ = daisy_split("dryer")
+    full = quiet(sysid.identify, est, progress=False)
+    assert any(r["focus"] == "prediction" for r in full.leaderboard)
+    assert "long_record" not in full.checks and "final_refit" not in full.checks
+    folds = [c for c in pem_calls if c[0] < sum(est.lengths)]
+    assert folds and all(c[1] == 50 for c in folds)  # pem's default cap on short records
+    pem_calls.clear()
+    # bounds a record of this size meets only at long lengths: one refinement, fold fits
+    # capped, the whole-record re-fit stopped once settled
+    monkeypatch.setattr(core, "REFINE_WORK", 1.0)
+    monkeypatch.setattr(core, "FOLD_WORK", 1.0)
+    monkeypatch.setattr(core, "FINAL_WORK", 1.0)
+    res = quiet(sysid.identify, est, progress=False)
+    assert not any(r["focus"] == "prediction" for r in res.leaderboard)
+    assert "prediction-focus refinement" in res.checks["long_record"]
+    assert "long_record: not scored" in res.summary()
+    folds = [c for c in pem_calls if c[0] < sum(est.lengths)]
+    assert folds and all(c[1] == core.SETTLE_WINDOW + 1 for c in folds)
+    assert sum(r["family"] == "pem" for r in res.leaderboard) == 1
+    chosen = next(r for r in res.leaderboard if r["chosen"])
+    if chosen["family"] == "pem":  # the chosen refinement, re-fitted until settled
+        assert "until settled" in res.checks["final_refit"]
+    assert res.model.is_stable()
+
+
+def test_simulation_errors_are_those_of_the_full_least_squares_problem():
+    """The held-out fit's initial state and offsets (and slopes) from the blockwise Gram
+    matrix are the least-squares ones of the full regressor matrix."""
+    rng = np.random.default_rng(5)
+    for n, m, l, trend in [(0, 1, 2, False), (3, 1, 1, True), (6, 2, 3, False), (7, 1, 3, True)]:
+        A = rng.standard_normal((n, n))
+        if n:
+            A *= 0.97 / np.max(np.abs(np.linalg.eigvals(A)))
+        model = sysid.StateSpaceModel(A, rng.standard_normal((n, m)),
+                                      rng.standard_normal((l, n)), rng.standard_normal((l, m)))
+        u = rng.standard_normal((150, m))
+        y = model.simulate(u, x0=rng.standard_normal(n)) + 0.3 * rng.standard_normal((150, l))
+        (_, e), = simulation_errors(model, sysid.IOData(u=u, y=y), trend=trend)
+        cols = [np.kron(np.ones((150, 1)), np.eye(l))]
+        if trend:
+            cols.append(np.kron(np.linspace(-1, 1, 150)[:, None], np.eye(l)))
+        cols.append(_free_responses(model, 150))
+        phi = np.hstack(cols)
+        r = (y - model.simulate(u)).ravel()
+        direct = r - phi @ np.linalg.lstsq(phi, r, rcond=None)[0]
+        assert np.allclose(e.ravel(), direct, atol=1e-9)
+
+
+def test_a_model_whose_free_responses_overflow_when_squared_scores_minus_inf():
+    """Free responses finite but beyond 1e154 (a pole of 1.5 over 1000 samples): their Gram
+    matrix overflows; the model diverges on the block and scores -inf (LAPACK is never given
+    a matrix with infinities)."""
+    from sysid.validation.crossval import simulation_fit
+
+    model = sysid.StateSpaceModel([[1.5, 0.0], [0.0, 0.5]], [[1.0], [1.0]], [[1.0, 1.0]])
+    u = np.random.default_rng(0).standard_normal(1000)
+    data = sysid.IOData(u=u, y=np.sin(np.arange(1000) / 7.0))
+    assert np.all(np.isfinite(_free_responses(model, 1000)))
+    assert simulation_fit(model, data) == -np.inf
+
+
+def test_the_excitation_check_window_is_scipys_blackman_harris():
+    """identify checks the excitation on every call; its window is written out (importing
+    scipy.signal costs a second), so it must stay scipy's periodic Blackman-Harris."""
+    from scipy.signal import get_window
+
+    from sysid.data.excitation import _window
+
+    for n in (1, 2, 5, 64, 1001):
+        assert np.allclose(_window(n), get_window("blackmanharris", n, fftbins=True),
+                           rtol=0, atol=1e-14)
