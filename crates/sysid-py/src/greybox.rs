@@ -13,7 +13,7 @@ use sysid_core::greybox::ode::{
 };
 use sysid_core::greybox::{self, LinearOptions};
 use sysid_core::optim::{self, ParameterMap};
-use sysid_core::pem::Focus;
+use sysid_core::pem::{Focus, Lines};
 use sysid_core::SysidError;
 
 use crate::search::{observer, solution_items, Slot};
@@ -363,6 +363,55 @@ pub fn greybox_linear<'py>(
     Ok(out)
 }
 
+/// Fits a linear grey-box structure to frequency-response lines (periodic data, or an FRD
+/// with its noise variance); `structure(p, jac) -> ((A, B, C, D) entries, dtheta/dp or None)`.
+#[pyfunction]
+#[pyo3(signature = (dims, omega, re, im, weight, structure, p0, *, search=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn greybox_frequency<'py>(
+    py: Python<'py>,
+    dims: (usize, usize, usize),
+    omega: PyReadonlyArray1<'py, f64>,
+    re: PyReadonlyArray2<'py, f64>,
+    im: PyReadonlyArray2<'py, f64>,
+    weight: PyReadonlyArray2<'py, f64>,
+    structure: Py<PyAny>,
+    p0: Vec<f64>,
+    search: Option<SearchArgs>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let o = SearchArgs::options(search);
+    let omega: Vec<f64> = omega.as_array().iter().copied().collect();
+    let lines = Lines {
+        omega: &omega,
+        re: view(&re),
+        im: view(&im),
+        weight: view(&weight),
+    };
+    let mut map_err: Slot = None;
+    let mut obs_err: Slot = None;
+    let result = crate::search::watch(py, || {
+        let mut map = PyMap {
+            f: structure,
+            err: &mut map_err,
+        };
+        let mut obs = observer(&progress, &mut obs_err);
+        greybox::frequency::linear_frequency(dims, &lines, &mut map, &p0, &o, &mut obs)
+    });
+    if let Some(e) = map_err.or(obs_err) {
+        return Err(e);
+    }
+    let r = result?.py()?;
+    let out = PyDict::new(py);
+    out.set_item("p", slice_to_numpy(py, &r.p))?;
+    out.set_item("theta", slice_to_numpy(py, &r.theta))?;
+    out.set_item("n_residuals", r.n_residuals)?;
+    out.set_item("residual_scale", r.residual_scale)?;
+    out.set_item("spectral_radius", r.spectral_radius)?;
+    solution_items(&out, py, &r.solution, &r.covariance)?;
+    Ok(out)
+}
+
 /// The error covariance, sample count, loss history, search report and covariance of a
 /// determinant-criterion fit, as items of `out`.
 fn fit_items(out: &Bound<'_, PyDict>, py: Python<'_>, fit: &greybox::CriterionFit) -> PyResult<()> {
@@ -546,6 +595,7 @@ pub fn expm_frechet<'py>(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(expm_frechet, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_linear, m)?)?;
+    m.add_function(wrap_pyfunction!(greybox_frequency, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_ode, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_ode_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_ode_jacobian, m)?)?;

@@ -105,7 +105,7 @@ pub struct FrequencyResult {
 }
 
 /// The fit of `G(z)` to the lines as an optimisation problem over the free parameters.
-struct LineFit<'a> {
+pub(crate) struct LineFit<'a> {
     lines: Lines<'a>,
     z: Vec<c64>,
     n: usize,
@@ -121,12 +121,42 @@ struct LineFit<'a> {
     full: Vec<f64>,
     d_fixed: Mat<f64>,
     estimate_d: bool,
+    /// Search in the complement of the similarities that keep the blocks (the state-space
+    /// parameterisation); `false` for a caller whose own parameters fix the basis.
+    orbit: bool,
 }
 
 /// Lines per block of the Jacobian accumulation.
 const BLOCK: usize = 128;
 
-impl LineFit<'_> {
+impl<'a> LineFit<'a> {
+    /// The fit over every entry of `A, B, C, D` (row-major, the layout of the grey-box
+    /// parameter map), `A` one block, no similarity orbit: for a caller that searches its
+    /// own parameters through [`crate::optim::Reparameterized`]. Checks the lines.
+    pub(crate) fn all_entries(lines: &Lines<'a>, n: usize, m: usize, l: usize) -> Result<Self> {
+        check_lines(lines, l, m)?;
+        let p = n * (n + m + l) + l * m;
+        Ok(LineFit {
+            lines: *lines,
+            z: unit_circle(lines.omega),
+            n,
+            m,
+            l,
+            blocks: if n > 0 { vec![(0, n)] } else { Vec::new() },
+            free: (0..p).collect(),
+            column: (0..p).map(Some).collect(),
+            full: vec![0.0; p],
+            d_fixed: Mat::zeros(l, m),
+            estimate_d: true,
+            orbit: false,
+        })
+    }
+
+    /// Real residuals in the cost: twice the weighted line entries.
+    pub(crate) fn n_residuals_weighted(&self) -> usize {
+        2 * self.n_weighted()
+    }
+
     fn layout(&self) -> (usize, usize, usize) {
         let (n, m) = (self.n, self.m);
         (n * n, n * n + n * m, n * n + n * m + self.l * n)
@@ -309,16 +339,27 @@ impl Problem for LineFit<'_> {
     }
 
     fn search_basis(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
+        if !self.orbit {
+            return Ok(None);
+        }
         complement(&self.orbit_tangent(th)).map(Some)
     }
 
     fn invariant_directions(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
+        if !self.orbit {
+            return Ok(None);
+        }
         Ok(Some(self.orbit_tangent(th)))
     }
 
     fn n_residuals(&self) -> Option<usize> {
         Some(2 * self.n_weighted())
     }
+}
+
+/// `z_k = e^{j omega_k}` of each line.
+fn unit_circle(omega: &[f64]) -> Vec<c64> {
+    omega.iter().map(|&w| c64::new(w.cos(), w.sin())).collect()
 }
 
 /// `(z I - A_bb)^-1` of the diagonal block `(s, bs)` of `a`.
@@ -473,11 +514,7 @@ pub fn pem_frequency(
     }
     let mut prob = LineFit {
         lines: *lines,
-        z: lines
-            .omega
-            .iter()
-            .map(|&w| c64::new(w.cos(), w.sin()))
-            .collect(),
+        z: unit_circle(lines.omega),
         n,
         m,
         l,
@@ -487,6 +524,7 @@ pub fn pem_frequency(
         full,
         d_fixed: start.d.clone(),
         estimate_d: opts.estimate_d,
+        orbit: true,
     };
     let identifiable = n * (m + l) + usize::from(opts.estimate_d) * l * m;
     let n_res = 2 * prob.n_weighted();
