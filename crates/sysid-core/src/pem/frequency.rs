@@ -36,7 +36,6 @@ use crate::error::{Result, SysidError};
 use crate::linalg::spectral_radius;
 use crate::model::StateSpace;
 use crate::optim::{self, Covariance, Evaluation, Flow, Iteration, Problem, Solution};
-use faer::linalg::solvers::DenseSolveCore;
 use faer::{c64, Mat, MatRef};
 
 /// Frequency-response data on the excited lines: `G_k` (`l x m`, entry `(i, j)` in column
@@ -321,14 +320,20 @@ impl Problem for LineFit<'_> {
             let r = self.residual_block(th, lo, hi, jb.as_mut());
             ev.cost += 0.5 * r.iter().map(|v| v * v).sum::<f64>();
             if let Some(jb) = jb {
-                ev.gauss_newton += jb.transpose() * &jb;
-                let rv = Mat::from_fn(rows, 1, |i, _| r[i]);
-                let g = jb.transpose() * rv;
-                for (gi, i) in ev.gradient.iter_mut().zip(0..q) {
-                    *gi += g[(i, 0)];
+                // the calling thread for the small products of every iterate
+                optim::gram_add(
+                    ev.gauss_newton.as_mut(),
+                    jb.as_ref(),
+                    optim::small_par(rows, q),
+                );
+                for (c, gi) in ev.gradient.iter_mut().enumerate() {
+                    *gi += (0..rows).map(|i| jb[(i, c)] * r[i]).sum::<f64>();
                 }
             }
             lo = hi;
+        }
+        if jacobian {
+            optim::mirror_lower(&mut ev.gauss_newton);
         }
         Ok(ev)
     }
@@ -378,9 +383,43 @@ fn block_resolvent(a: &Mat<f64>, s: usize, bs: usize, z: c64) -> Mat<c64> {
                 let d = if i == j { z } else { c64::new(0.0, 0.0) };
                 d - at(i, j)
             });
-            m.partial_piv_lu().inverse()
+            small_inverse(m)
         }
     }
+}
+
+/// The inverse of a small complex matrix by Gauss-Jordan elimination with partial pivoting
+/// on the calling thread (faer's LU dispatches to its thread pool, which costs more than the
+/// work at the sizes of a grey-box structure's `A`, once per line and evaluation).
+fn small_inverse(mut m: Mat<c64>) -> Mat<c64> {
+    let n = m.nrows();
+    let mut inv = Mat::from_fn(n, n, |i, j| c64::new(f64::from(u8::from(i == j)), 0.0));
+    for k in 0..n {
+        let piv = (k..n)
+            .max_by(|&a, &b| m[(a, k)].norm().total_cmp(&m[(b, k)].norm()))
+            .unwrap_or(k);
+        for j in 0..n {
+            let (a, b) = (m[(k, j)], inv[(k, j)]);
+            m[(k, j)] = m[(piv, j)];
+            inv[(k, j)] = inv[(piv, j)];
+            m[(piv, j)] = a;
+            inv[(piv, j)] = b;
+        }
+        let d = c64::new(1.0, 0.0) / m[(k, k)];
+        for j in 0..n {
+            m[(k, j)] *= d;
+            inv[(k, j)] *= d;
+        }
+        for i in (0..n).filter(|&i| i != k) {
+            let f = m[(i, k)];
+            for j in 0..n {
+                let (mk, ik) = (m[(k, j)], inv[(k, j)]);
+                m[(i, j)] -= f * mk;
+                inv[(i, j)] -= f * ik;
+            }
+        }
+    }
+    inv
 }
 
 /// `(A, B, C, D)` from the full parameter vector.
