@@ -318,7 +318,7 @@ def greyest_periodic() -> dict:
     out = {"case": "greyest periodic (two-mass, N = 20 000, 10 periods)"}
     for key, kw in (("time", {"focus": "simulation", "x0": "estimate"}),
                     ("frequency", {"periods": P})):
-        est, wall, cpu = _timed(lambda: sysid.greyest(data, s, max_iter=100, **kw))
+        est, wall, cpu = _timed(lambda kw=kw: sysid.greyest(data, s, max_iter=100, **kw))
         out[key] = {"wall_s": wall, "cpu_s": cpu, "iterations": est.info["iterations"],
                     "evaluations": est.info["evaluations"], "stop": est.info["stop"],
                     "parameters": [round(v, 6) for v in est.parameters.value],
