@@ -12,7 +12,7 @@ use sysid_core::greybox::ode::{
     self, Derivatives, Integrator, OdeJacobian, OdeModel, OdeOptions, OdeStructure,
 };
 use sysid_core::greybox::{self, LinearOptions};
-use sysid_core::optim::{self, ParameterMap};
+use sysid_core::optim::{self, Flow, Iteration, ParameterMap};
 use sysid_core::pem::{Focus, Lines};
 use sysid_core::SysidError;
 
@@ -313,6 +313,31 @@ fn ode_options(
     Ok((o, j.rhs_derivatives, j.output_derivatives))
 }
 
+/// Runs `fit` with the GIL released, `structure` as its parameter map and `progress` as its
+/// observer; a Python error raised in either callback is re-raised, a core error mapped.
+fn with_map<T: Send>(
+    py: Python<'_>,
+    structure: Py<PyAny>,
+    progress: &Option<Py<PyAny>>,
+    fit: impl FnOnce(&mut dyn ParameterMap, &mut dyn FnMut(&Iteration) -> Flow) -> sysid_core::Result<T>
+        + Send,
+) -> PyResult<T> {
+    let mut map_err: Slot = None;
+    let mut obs_err: Slot = None;
+    let result = crate::search::watch(py, || {
+        let mut map = PyMap {
+            f: structure,
+            err: &mut map_err,
+        };
+        let mut obs = observer(progress, &mut obs_err);
+        fit(&mut map, &mut obs)
+    });
+    if let Some(e) = map_err.or(obs_err) {
+        return Err(e);
+    }
+    result?.py()
+}
+
 /// Estimates a linear grey-box structure; `structure(p, jac) -> (theta, dtheta/dp or None)`.
 #[pyfunction]
 #[pyo3(signature = (dims, experiments, structure, p0, *, focus="prediction", with_k=false,
@@ -342,20 +367,9 @@ pub fn greybox_linear<'py>(
         .iter()
         .map(|(u, y)| (view(u), view(y)))
         .collect();
-    let mut map_err: Slot = None;
-    let mut obs_err: Slot = None;
-    let result = crate::search::watch(py, || {
-        let mut map = PyMap {
-            f: structure,
-            err: &mut map_err,
-        };
-        let mut obs = observer(&progress, &mut obs_err);
-        greybox::linear(dims, &views, &mut map, &p0, &o, &mut obs)
-    });
-    if let Some(e) = map_err.or(obs_err) {
-        return Err(e);
-    }
-    let r = result?.py()?;
+    let r = with_map(py, structure, &progress, |map, obs| {
+        greybox::linear(dims, &views, map, &p0, &o, obs)
+    })?;
     let out = PyDict::new(py);
     out.set_item("p", slice_to_numpy(py, &r.p))?;
     out.set_item("theta", slice_to_numpy(py, &r.theta))?;
@@ -388,20 +402,9 @@ pub fn greybox_frequency<'py>(
         im: view(&im),
         weight: view(&weight),
     };
-    let mut map_err: Slot = None;
-    let mut obs_err: Slot = None;
-    let result = crate::search::watch(py, || {
-        let mut map = PyMap {
-            f: structure,
-            err: &mut map_err,
-        };
-        let mut obs = observer(&progress, &mut obs_err);
-        greybox::frequency::linear_frequency(dims, &lines, &mut map, &p0, &o, &mut obs)
-    });
-    if let Some(e) = map_err.or(obs_err) {
-        return Err(e);
-    }
-    let r = result?.py()?;
+    let r = with_map(py, structure, &progress, |map, obs| {
+        greybox::frequency::linear_frequency(dims, &lines, map, &p0, &o, obs)
+    })?;
     let out = PyDict::new(py);
     out.set_item("p", slice_to_numpy(py, &r.p))?;
     out.set_item("theta", slice_to_numpy(py, &r.theta))?;

@@ -270,10 +270,26 @@ fn oscillator_lines(p: &[f64], omega: &[f64]) -> (Mat<f64>, Mat<f64>, Mat<f64>) 
     )
 }
 
+/// [`super::frequency::linear_frequency`] of the oscillator on `lines` from `(r0, 0.5, 1.0)`.
+fn fit_oscillator(
+    lines: &crate::pem::Lines<'_>,
+    r0: f64,
+    fixed: Option<Vec<bool>>,
+) -> crate::Result<super::frequency::FrequencyFit> {
+    let mut o = crate::optim::Options::default();
+    o.fixed = fixed;
+    super::frequency::linear_frequency(
+        (2, 1, 1),
+        lines,
+        &mut Oscillator,
+        &[r0, 0.5, 1.0],
+        &o,
+        &mut |_| crate::optim::Flow::Continue,
+    )
+}
+
 #[test]
 fn frequency_fit_recovers_the_parameters_from_exact_lines() {
-    use super::frequency::linear_frequency;
-    use crate::optim::{Flow, Options};
     use crate::pem::Lines;
     let truth = [0.9, 0.6, 1.5];
     let omega: Vec<f64> = (1..30).map(|k| 0.1 * k as f64).collect();
@@ -284,32 +300,14 @@ fn frequency_fit_recovers_the_parameters_from_exact_lines() {
         im: im.as_ref(),
         weight: w.as_ref(),
     };
-    let r = linear_frequency(
-        (2, 1, 1),
-        &lines,
-        &mut Oscillator,
-        &[0.8, 0.5, 1.0],
-        &Options::default(),
-        &mut |_| Flow::Continue,
-    )
-    .unwrap();
+    let r = fit_oscillator(&lines, 0.8, None).unwrap();
     for (a, b) in r.p.iter().zip(truth) {
         assert!((a - b).abs() < 1e-10, "{:?}", r.p);
     }
     assert_eq!(r.covariance.rank, 3);
     assert!(r.spectral_radius < 1.0 && (r.spectral_radius - 0.9).abs() < 1e-10);
     // a fixed parameter stays, has no variance, and the others absorb what they can
-    let mut o = Options::default();
-    o.fixed = Some(vec![false, false, true]);
-    let r = linear_frequency(
-        (2, 1, 1),
-        &lines,
-        &mut Oscillator,
-        &[0.8, 0.5, 1.0],
-        &o,
-        &mut |_| Flow::Continue,
-    )
-    .unwrap();
+    let r = fit_oscillator(&lines, 0.8, Some(vec![false, false, true])).unwrap();
     assert_eq!(r.p[2], 1.0);
     assert_eq!(r.covariance.covariance[(2, 2)], 0.0);
     // too few lines for the free parameters, an unstable start: clear errors
@@ -321,24 +319,8 @@ fn frequency_fit_recovers_the_parameters_from_exact_lines() {
         im: im1.as_ref(),
         weight: w1.as_ref(),
     };
-    let e = linear_frequency(
-        (2, 1, 1),
-        &few,
-        &mut Oscillator,
-        &[0.8, 0.5, 1.0],
-        &Options::default(),
-        &mut |_| Flow::Continue,
-    )
-    .unwrap_err();
+    let e = fit_oscillator(&few, 0.8, None).unwrap_err();
     assert!(e.to_string().contains("excite more lines"), "{e}");
-    let e = linear_frequency(
-        (2, 1, 1),
-        &lines,
-        &mut Oscillator,
-        &[1.2, 0.5, 1.0],
-        &Options::default(),
-        &mut |_| Flow::Continue,
-    )
-    .unwrap_err();
+    let e = fit_oscillator(&lines, 1.2, None).unwrap_err();
     assert!(e.to_string().contains("unit circle"), "{e}");
 }
