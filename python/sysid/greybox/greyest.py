@@ -144,6 +144,15 @@ def greyest(
     >>> fit = sysid.greyest(sysid.IOData(u=u, y=y, dt=0.05), s, x0="zero")
     >>> np.round(fit.parameters.value, 6)
     array([2. , 0.3])
+
+    Periodic data in steady state, fitted on the excited lines:
+
+    >>> up = sysid.multisine(128, band=(0, 0.5), periods=4, seed=0)
+    >>> g = sysid.GreyBox(motor, {"K": 2.0, "tau": 0.3}).model(dt=0.05)
+    >>> yp = g.simulate(np.vstack([np.tile(up[:128], (4, 1)), up]))[512:]
+    >>> fit = sysid.greyest(sysid.IOData(u=up, y=yp, dt=0.05), s, periods=4)
+    >>> np.round(fit.parameters.value, 6), fit.info["domain"]
+    (array([2. , 0.3]), 'frequency')
     """
     from .nlgreybox import NonlinearGreyBox
     from .nlgreyest import nlgreyest
@@ -221,16 +230,16 @@ def _periodic(data: Any, structure: Any, periods: Any, transient: Any, x0: Any, 
     if weighting != "noise":
         raise DataError("the frequency-domain path weights each line by its noise variance "
                         "from the periods: leave weighting out, or fit in the time domain")
-    if isinstance(data, FRD):
+    extra: dict[str, Any] = {"periodicity": None}
+    frd: FRD | None = data if isinstance(data, FRD) else None
+    if frd is not None:
         if periods is not None or transient is not None:
             raise DataError("periods= and transient= describe a time record; an FRD is "
                             "already on its lines: leave them out")
-        frd, extra = data, {"periodicity": None}
     else:
-        frd, found = resolve_periods(_experiments(data), periods, transient)
-        extra = {"periodicity": found}
+        frd, extra["periodicity"] = resolve_periods(_experiments(data), periods, transient)
         if frd is None:
-            return None, found
+            return None, extra["periodicity"]
     extra["periods"] = frd.info.get("periods")
     max_iter = as_int(max_iter, "max_iter", 0)
     cb = _progress(progress, CRITERION)
