@@ -276,8 +276,10 @@ fn fit_oscillator(
     r0: f64,
     fixed: Option<Vec<bool>>,
 ) -> crate::Result<super::frequency::FrequencyFit> {
-    let mut o = crate::optim::Options::default();
-    o.fixed = fixed;
+    let o = crate::optim::Options {
+        fixed,
+        ..Default::default()
+    };
     super::frequency::linear_frequency(
         (2, 1, 1),
         lines,
