@@ -152,3 +152,29 @@ def test_bad_input_raises_clearly():
         sysid.greyest(data, sysid.GreyBox(motor, {"K": 1.0, "tau": -1.0}), periods=4)
     with pytest.raises(DataError, match="must be an int or 'auto'"):
         sysid.greyest(data, s, periods="yes")
+
+
+def test_two_inputs_four_outputs_within_their_std():
+    """The gyroplane lateral structure (2 inputs, 4 outputs, 10 free derivatives) from two
+    experiments with independent random-phase multisines on each input (the MIMO response on
+    every line): each estimate within 4 predicted std of the truth, the residual scale near
+    (P - 1) / (P - 2) = 1.5, the value for variances estimated from P = 4 periods."""
+    from test_greybox import KNOWN, TRUE, lateral
+
+    n_per, P = 512, 4
+    truth = sysid.GreyBox(lateral, {**TRUE, **KNOWN}).model(dt=DT)
+    rng = np.random.default_rng(0)
+    us, ys = [], []
+    for e in range(2):
+        u = np.column_stack([sysid.multisine(n_per, band=(0, 0.5), periods=P,
+                                             phases="random", seed=2 * e + j)
+                             for j in range(2)])
+        y = truth.simulate(np.vstack([np.tile(u[:n_per], (40, 1)), u]))[40 * n_per:]
+        us.append(u)
+        ys.append(y + 1e-3 * y.std(axis=0) * rng.standard_normal(y.shape))
+    start = sysid.GreyBox(lateral, {**{k: 1.3 * v for k, v in TRUE.items()}, **KNOWN})
+    fit = sysid.greyest(sysid.IOData(us, ys, DT), start, periods=P)
+    z = [(fit.parameters[k]["value"] - v) / fit.parameters[k]["std"] for k, v in TRUE.items()]
+    assert np.all(np.abs(z) < 4), z
+    assert 0.8 < fit.info["residual_scale"] < 2.5
+    assert fit.parameters["U0"]["value"] == 55.0
