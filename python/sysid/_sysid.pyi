@@ -53,6 +53,7 @@ __all__ = [
     "modal_analysis",
     "pem_refine",
     "greybox_linear",
+    "greybox_frequency",
     "greybox_ode",
     "greybox_ode_simulate",
     "greybox_ode_jacobian",
@@ -358,6 +359,18 @@ def greybox_linear(
     with_k: bool = False,
     reweight: bool = True,
     x0_params: list[int] = ...,
+    search: dict[str, Any] | None = None,
+    progress: Any = None,
+) -> dict[str, Any]: ...
+def greybox_frequency(
+    dims: tuple[int, int, int],
+    omega: _Array,
+    re: _Array,
+    im: _Array,
+    weight: _Array,
+    structure: Any,
+    p0: list[float],
+    *,
     search: dict[str, Any] | None = None,
     progress: Any = None,
 ) -> dict[str, Any]: ...

@@ -12,8 +12,8 @@ use sysid_core::greybox::ode::{
     self, Derivatives, Integrator, OdeJacobian, OdeModel, OdeOptions, OdeStructure,
 };
 use sysid_core::greybox::{self, LinearOptions};
-use sysid_core::optim::{self, ParameterMap};
-use sysid_core::pem::Focus;
+use sysid_core::optim::{self, Flow, Iteration, ParameterMap};
+use sysid_core::pem::{Focus, Lines};
 use sysid_core::SysidError;
 
 use crate::search::{observer, solution_items, Slot};
@@ -313,6 +313,31 @@ fn ode_options(
     Ok((o, j.rhs_derivatives, j.output_derivatives))
 }
 
+/// Runs `fit` with the GIL released, `structure` as its parameter map and `progress` as its
+/// observer; a Python error raised in either callback is re-raised, a core error mapped.
+fn with_map<T: Send>(
+    py: Python<'_>,
+    structure: Py<PyAny>,
+    progress: &Option<Py<PyAny>>,
+    fit: impl FnOnce(&mut dyn ParameterMap, &mut dyn FnMut(&Iteration) -> Flow) -> sysid_core::Result<T>
+        + Send,
+) -> PyResult<T> {
+    let mut map_err: Slot = None;
+    let mut obs_err: Slot = None;
+    let result = crate::search::watch(py, || {
+        let mut map = PyMap {
+            f: structure,
+            err: &mut map_err,
+        };
+        let mut obs = observer(progress, &mut obs_err);
+        fit(&mut map, &mut obs)
+    });
+    if let Some(e) = map_err.or(obs_err) {
+        return Err(e);
+    }
+    result?.py()
+}
+
 /// Estimates a linear grey-box structure; `structure(p, jac) -> (theta, dtheta/dp or None)`.
 #[pyfunction]
 #[pyo3(signature = (dims, experiments, structure, p0, *, focus="prediction", with_k=false,
@@ -342,24 +367,51 @@ pub fn greybox_linear<'py>(
         .iter()
         .map(|(u, y)| (view(u), view(y)))
         .collect();
-    let mut map_err: Slot = None;
-    let mut obs_err: Slot = None;
-    let result = crate::search::watch(py, || {
-        let mut map = PyMap {
-            f: structure,
-            err: &mut map_err,
-        };
-        let mut obs = observer(&progress, &mut obs_err);
-        greybox::linear(dims, &views, &mut map, &p0, &o, &mut obs)
-    });
-    if let Some(e) = map_err.or(obs_err) {
-        return Err(e);
-    }
-    let r = result?.py()?;
+    let r = with_map(py, structure, &progress, |map, obs| {
+        greybox::linear(dims, &views, map, &p0, &o, obs)
+    })?;
     let out = PyDict::new(py);
     out.set_item("p", slice_to_numpy(py, &r.p))?;
     out.set_item("theta", slice_to_numpy(py, &r.theta))?;
     fit_items(&out, py, &r.fit)?;
+    Ok(out)
+}
+
+/// Fits a linear grey-box structure to frequency-response lines (periodic data, or an FRD
+/// with its noise variance); `structure(p, jac) -> ((A, B, C, D) entries, dtheta/dp or None)`.
+#[pyfunction]
+#[pyo3(signature = (dims, omega, re, im, weight, structure, p0, *, search=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn greybox_frequency<'py>(
+    py: Python<'py>,
+    dims: (usize, usize, usize),
+    omega: PyReadonlyArray1<'py, f64>,
+    re: PyReadonlyArray2<'py, f64>,
+    im: PyReadonlyArray2<'py, f64>,
+    weight: PyReadonlyArray2<'py, f64>,
+    structure: Py<PyAny>,
+    p0: Vec<f64>,
+    search: Option<SearchArgs>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let o = SearchArgs::options(search);
+    let omega: Vec<f64> = omega.as_array().iter().copied().collect();
+    let lines = Lines {
+        omega: &omega,
+        re: view(&re),
+        im: view(&im),
+        weight: view(&weight),
+    };
+    let r = with_map(py, structure, &progress, |map, obs| {
+        greybox::frequency::linear_frequency(dims, &lines, map, &p0, &o, obs)
+    })?;
+    let out = PyDict::new(py);
+    out.set_item("p", slice_to_numpy(py, &r.p))?;
+    out.set_item("theta", slice_to_numpy(py, &r.theta))?;
+    out.set_item("n_residuals", r.n_residuals)?;
+    out.set_item("residual_scale", r.residual_scale)?;
+    out.set_item("spectral_radius", r.spectral_radius)?;
+    solution_items(&out, py, &r.solution, &r.covariance)?;
     Ok(out)
 }
 
@@ -546,6 +598,7 @@ pub fn expm_frechet<'py>(
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(expm_frechet, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_linear, m)?)?;
+    m.add_function(wrap_pyfunction!(greybox_frequency, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_ode, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_ode_simulate, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_ode_jacobian, m)?)?;

@@ -24,12 +24,12 @@ from .._checks import as_int
 from .._progress import iteration_printer
 from ..data.iodata import IOData
 from ..errors import DataError, SysidError
-from ..models.paramtable import ParameterTable
-from ..models.uncertainty import ParameterUncertainty
+from ..models.frd import FRD
 from ..pem.pem import _experiments
-from .delays import shift_taps, tap_states
+from .delays import shift_taps
 from .greybox import GreyBox
-from .results import GreyEstimate, _costs, _criterion, _warn_unidentifiable
+from .outer import OuterParameters, model_of
+from .results import GreyEstimate, _costs, _criterion
 
 __all__ = ["greyest", "GreyEstimate"]
 
@@ -74,13 +74,17 @@ def greyest(
     max_iter: int = 100,
     tol: float = 1e-10,
     progress: bool | Callable[..., Any] = False,
+    periods: int | str | None = None,
+    transient: int | None = None,
 ) -> GreyEstimate:
     """Estimate the free parameters of a grey-box structure by prediction-error minimisation.
 
     Parameters
     ----------
-    data : IOData or (u, y)
-        Estimation data; every experiment is used (with its own initial state).
+    data : IOData, (u, y) or FRD
+        Estimation data; every experiment is used (with its own initial state). An
+        :class:`sysid.FRD` with ``std`` (for example from :func:`sysid.bla`) is fitted in
+        the frequency domain, as with ``periods``.
     structure : GreyBox or NonlinearGreyBox
         The model structure with initial values, fixed parameters and bounds.
     focus : {"prediction", "simulation"}
@@ -107,6 +111,20 @@ def greyest(
     progress : bool or callable
         ``True`` prints one line per iteration; a callable gets
         ``(iteration, cost, step_norm, gradient_norm, damping)`` and may return ``False``.
+    periods : int or "auto", optional
+        The data are periodic (linear structures): every experiment holds this many whole
+        periods in steady state, or ``"auto"`` detects the period of the input
+        (:func:`sysid.detect_period`; when there is none, or fewer than 2 periods remain
+        after the transient, the estimation runs in the time domain and
+        ``info["periodicity"]["reason"]`` says why). The structure's sampled response is
+        then fitted on the excited lines only (:mod:`sysid.greybox.greyest_lines`): the
+        response averaged over the periods (:func:`sysid.bla`), each entry weighted by the
+        inverse of its noise variance from the periods; no initial state, no noise model
+        (``x0``, ``noise``, ``focus`` do not apply: ``x0`` or ``noise="estimate"`` raise),
+        ``weighting="noise"`` only. The covariance is scaled by ``info["residual_scale"]``
+        (about 1 when the structure explains the lines).
+    transient : int, optional
+        Leading periods dropped (default 0 with a declared ``periods``, 1 with ``"auto"``).
 
     Returns
     -------
@@ -126,10 +144,25 @@ def greyest(
     >>> fit = sysid.greyest(sysid.IOData(u=u, y=y, dt=0.05), s, x0="zero")
     >>> np.round(fit.parameters.value, 6)
     array([2. , 0.3])
+
+    Periodic data in steady state, fitted on the excited lines:
+
+    >>> up = sysid.multisine(128, band=(0, 0.5), periods=4, seed=0)
+    >>> g = sysid.GreyBox(motor, {"K": 2.0, "tau": 0.3}).model(dt=0.05)
+    >>> yp = g.simulate(np.vstack([np.tile(up[:128], (4, 1)), up]))[512:]
+    >>> fit = sysid.greyest(sysid.IOData(u=up, y=yp, dt=0.05), s, periods=4)
+    >>> np.round(fit.parameters.value, 6), fit.info["domain"]
+    (array([2. , 0.3]), 'frequency')
     """
     from .nlgreybox import NonlinearGreyBox
     from .nlgreyest import nlgreyest
 
+    periodicity = None
+    if isinstance(data, FRD) or periods is not None or transient is not None:
+        out, periodicity = _periodic(data, structure, periods, transient, x0, noise, weighting,
+                                     multistart, rng, max_iter, tol, progress)
+        if out is not None:
+            return out
     data = _experiments(data)
     if focus not in _FOCUS:
         raise DataError(f"focus must be 'prediction' or 'simulation', got {focus!r}")
@@ -170,22 +203,63 @@ def greyest(
             starts.append(r["loss"])
             if r["loss"] < best["loss"]:
                 best = r
-    return fit.result(best, starts)
+    est = fit.result(best, starts)
+    if periodicity is not None:  # periods="auto" found none: why the time domain
+        est.info["periodicity"] = periodicity
+    return est
 
 
-class _LinearFit:
+def _periodic(data: Any, structure: Any, periods: Any, transient: Any, x0: Any, noise: str,
+              weighting: str, multistart: Any, rng: Any, max_iter: Any, tol: Any,
+              progress: Any) -> tuple[GreyEstimate | None, dict[str, Any] | None]:
+    """:func:`greyest` on the excited lines (an FRD, or periodic data) and what was found
+    of the periodicity; no estimate when ``periods="auto"`` finds no usable period (the
+    caller then fits in the time domain)."""
+    from ..pem.periodic import CRITERION, resolve_periods
+    from .greyest_lines import greyest_lines
+
+    if not isinstance(structure, GreyBox):
+        raise DataError("the frequency-domain path (periods= or an FRD) fits linear "
+                        "structures (sysid.GreyBox); a nonlinear structure is fitted in the "
+                        "time domain: leave periods out")
+    if x0 is not None or noise == "estimate":
+        raise DataError("the frequency-domain path fits the steady-state response on the "
+                        "excited lines: there is no initial state and no noise model to "
+                        "estimate; leave x0 and noise out, or fit in the time domain (no "
+                        "periods=)")
+    if weighting != "noise":
+        raise DataError("the frequency-domain path weights each line by its noise variance "
+                        "from the periods: leave weighting out, or fit in the time domain")
+    extra: dict[str, Any] = {"periodicity": None}
+    frd: FRD | None = data if isinstance(data, FRD) else None
+    if frd is not None:
+        if periods is not None or transient is not None:
+            raise DataError("periods= and transient= describe a time record; an FRD is "
+                            "already on its lines: leave them out")
+    else:
+        frd, extra["periodicity"] = resolve_periods(_experiments(data), periods, transient)
+        if frd is None:
+            return None, extra["periodicity"]
+    extra["periods"] = frd.info.get("periods")
+    max_iter = as_int(max_iter, "max_iter", 0)
+    cb = _progress(progress, CRITERION)
+    return greyest_lines(frd, structure, multistart=as_int(multistart, "multistart", 0),
+                         rng=rng, max_iter=max_iter, tol=float(tol), progress=cb,
+                         extra=extra), extra["periodicity"]
+
+
+class _LinearFit(OuterParameters):
     """The bookkeeping of one linear grey-box estimation (outer vector z, map to theta)."""
 
     def __init__(self, data: IOData, s: GreyBox, dt: float, focus: str, x0: Any, noise: str,
                  reweight: bool) -> None:
-        self.data, self.s, self.dt, self.focus, self.reweight = data, s, dt, focus, reweight
+        super().__init__(s)
+        self.data, self.dt, self.focus, self.reweight = data, dt, focus, reweight
         self.taps = s.input_taps(dt)
         base = s.sampled_taps(None, dt)[0]
         self.n, self.m = base["B"].shape  # m: one input column per tap (delayed input)
         self.l = base["C"].shape[0]
         n, l = self.n, self.l
-        self.free = s.free_names
-        self.scale = np.array([s.params[k].typical for k in self.free])
         self.exps = [(shift_taps(np.asarray(u, dtype=float), self.taps),
                       np.ascontiguousarray(y))
                      for u, y in data.experiments]
@@ -194,11 +268,7 @@ class _LinearFit:
         self.k_free = self.noise == "estimate"
         self.with_k = self.k_model or self.k_free
         self.modes = _x0_modes(x0, len(self.exps), n, base["x0"] is not None)
-        nf = len(self.free)
-        z0 = [s.params[k].value / sc for k, sc in zip(self.free, self.scale)]
-        lo = [s.params[k].bounds[0] / sc for k, sc in zip(self.free, self.scale)]
-        hi = [s.params[k].bounds[1] / sc for k, sc in zip(self.free, self.scale)]
-        self.names = list(self.free)
+        z0 = list(self.z0)
         if self.k_free:
             k0 = base["K"] if base["K"] is not None else np.zeros((n, l))
             z0 += list(k0.ravel())
@@ -209,17 +279,10 @@ class _LinearFit:
                 self.x0_params += list(range(len(z0), len(z0) + n))
                 self.names += [f"x0[{e}][{i}]" for i in range(n)]
                 z0 += [0.0] * n
-        extra = len(z0) - nf
-        self.lower = np.array(lo + [-np.inf] * extra)
-        self.upper = np.array(hi + [np.inf] * extra)
+        extra = len(z0) - self.nf
+        self.lower = np.concatenate([self.lower, np.full(extra, -np.inf)])
+        self.upper = np.concatenate([self.upper, np.full(extra, np.inf)])
         self.z0 = np.array(z0, dtype=float)
-        self.nf = nf
-
-    def values(self, z: np.ndarray) -> dict[str, float]:
-        vals = {k: v.value for k, v in self.s.params.items()}
-        for k, zi, sc in zip(self.free, z[:self.nf], self.scale):
-            vals[k] = float(zi * sc)
-        return vals
 
     def theta(self, z: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
         n, l, nf = self.n, self.l, self.nf
@@ -270,15 +333,6 @@ class _LinearFit:
             row += n
         return th, M
 
-    def random_start(self, gen: np.random.Generator) -> np.ndarray:
-        z = self.z0.copy()
-        for i in range(self.nf):
-            lo, hi = self.lower[i], self.upper[i]
-            a = lo if np.isfinite(lo) else z[i] - 2.0 * max(1.0, abs(z[i]))
-            b = hi if np.isfinite(hi) else z[i] + 2.0 * max(1.0, abs(z[i]))
-            z[i] = gen.uniform(max(a, lo), min(b, hi))
-        return z
-
     def run(self, z0: np.ndarray, max_iter: int, tol: float, cb: Any) -> dict[str, Any]:
         res = _sysid.greybox_linear(
             (self.n, self.m, self.l), self.exps, lambda z, jac: self.theta(z, jac),
@@ -291,28 +345,8 @@ class _LinearFit:
         return res
 
     def result(self, res: dict[str, Any], starts: list[float | None]) -> GreyEstimate:
-        s, nf, n = self.s, self.nf, self.n
+        n = self.n
         z = np.asarray(res["p"])
-        vals = self.values(z)
-        S = np.diag(self.scale)
-        cov_z = np.asarray(res["covariance"])
-        cov = S @ cov_z[:nf, :nf] @ S
-        std = dict(zip(self.free, np.sqrt(np.clip(np.diag(cov), 0, None))))
-        active = {int(i) for i in res["active_bounds"] if i < nf}
-        bound = []
-        for k in s.names:
-            i = self.free.index(k) if k in self.free else -1
-            if i in active:
-                bound.append("lower" if z[i] <= self.lower[i] else "upper")
-            else:
-                bound.append("")
-        table = ParameterTable(
-            s.names, [vals[k] for k in s.names], [std.get(k, 0.0) for k in s.names],
-            [s.params[k].fixed for k in s.names], bound,
-            [s.params[k].unit for k in s.names], [s.params[k].description for k in s.names])
-        _warn_unidentifiable(np.asarray(res["unidentifiable"]), self.names,
-                             np.concatenate([self.scale, np.ones(z.size - nf)]))
-        est = s.with_values(vals)
         th = np.asarray(res["theta"])
         off = n * n + n * self.m + self.l * n + self.l * self.m
         K = th[off:off + n * self.l].reshape(n, self.l) if self.with_k else None
@@ -320,43 +354,18 @@ class _LinearFit:
         x0s = [th[row + e * n: row + (e + 1) * n] for e in range(len(self.exps))]
         lam = np.asarray(res["innovation_covariance"])
         d = self.data
-        delayed = bool(np.any(s.input_delay > 0))
-
-        def build(theta_free: np.ndarray) -> Any:
-            v = dict(vals)
-            v.update(zip(self.free, np.asarray(theta_free, dtype=float)))
-            return _model(est, v, self.dt, K, delayed, d, lam, None)
-
+        names = {"input_names": d.input_names, "output_names": d.output_names}
         info = {
-            "method": "greyest", "iterations": res["iterations"],
+            "method": "greyest", "domain": "time", "iterations": res["iterations"],
             "evaluations": res["evaluations"], **_costs(res, self.reweight),
             "stop": res["stop"],
             "condition": res["condition"], "rank": int(res["rank"]), "n_free": int(z.size),
             "n_samples": int(res["n_samples"]), "focus": self.focus, "noise": self.noise,
             "x0_values": x0s, "multistart": starts, "loss": res["loss"],
-            "greybox": {"parameters": table.rows()},
         }
-        model = _model(est, vals, self.dt, K, delayed, d, lam, info)
+        table, cov, est, model = self.estimate(
+            res, lambda s, v, inf: model_of(s, v, self.dt, K, names, lam, inf), info)
+        delayed = bool(np.any(self.s.input_delay > 0))
         if len(x0s) == 1 and not delayed and hasattr(model, "K"):
             model.x0 = x0s[0]
-        model.uncertainty = ParameterUncertainty(
-            [vals[k] for k in self.free], cov, build, names=list(self.free),
-            dof=min(int(res["rank"]), nf), method="gauss-newton")
         return GreyEstimate(table, cov, list(self.free), model, est, x0s, info)
-
-
-def _model(s: GreyBox, vals: dict[str, float], dt: float, K: Any, delayed: bool,
-           data: IOData, lam: np.ndarray, info: dict[str, Any] | None) -> Any:
-    from ..models.continuous import ContinuousStateSpace
-    from ..models.statespace import StateSpaceModel
-
-    names = {"input_names": data.input_names, "output_names": data.output_names}
-    if s.continuous and K is None and not delayed:
-        m = s.matrices(vals, dt)
-        out: Any = ContinuousStateSpace(m["A"], m["B"], m["C"], m["D"], hold=s.hold,
-                                        info=info, **names)
-        return out
-    mats = dict(s.sampled_taps(vals, dt)[0])
-    mats["K"] = K
-    A, B, C, D, Ka = tap_states(mats, s.input_taps(dt), s.ninputs)
-    return StateSpaceModel(A, B, C, D, Ka, dt=dt, noise_cov=lam, info=info, **names)

@@ -8,11 +8,16 @@
 //! entries, accumulated blockwise over the samples, composed with the map's Jacobian
 //! `dtheta/dp` once per iteration. Bounds and fixed parameters are the optimiser's.
 //!
+//! [`frequency`] fits the same structures to frequency-response lines (periodic data, or an
+//! FRD with its noise variance), reusing the state-space fit's sensitivities to the matrix
+//! entries through the same chain rule.
+//!
 //! [`ode`] estimates the parameters and initial states of a nonlinear state equation
 //! `dx/dt = f(t, x, u, p)`, `y = h(t, x, u, p)` from its simulation errors, integrating all
 //! finite-difference perturbations of the parameters together.
 
 pub mod expm;
+pub mod frequency;
 pub mod ode;
 #[cfg(test)]
 mod tests;

@@ -216,3 +216,113 @@ fn sensitivity_jacobian_is_the_derivative_of_the_simulation() {
         }
     }
 }
+
+/// A discrete oscillator `A = r [[cos w, sin w], [-sin w, cos w]]`, `B = (0, g)`, `C = (1, 0)`,
+/// `D = 0` in `p = (r, w, g)`: 2 x (2 + 1 + 1) + 1 = 9 entries of `(A, B, C, D)`.
+struct Oscillator;
+
+impl Oscillator {
+    fn theta(p: &[f64]) -> Vec<f64> {
+        let (r, w, g) = (p[0], p[1], p[2]);
+        let (c, s) = (w.cos(), w.sin());
+        vec![r * c, r * s, -r * s, r * c, 0.0, g, 1.0, 0.0, 0.0]
+    }
+}
+
+impl ParameterMap for Oscillator {
+    fn map(&mut self, p: &[f64], jac: bool) -> crate::Result<(Vec<f64>, Option<Mat<f64>>)> {
+        let (r, w) = (p[0], p[1]);
+        let (c, s) = (w.cos(), w.sin());
+        let m = jac.then(|| {
+            let mut m = Mat::zeros(9, 3);
+            for (i, (dr, dw)) in [(c, -r * s), (s, r * c), (-s, -r * c), (c, -r * s)]
+                .into_iter()
+                .enumerate()
+            {
+                m[(i, 0)] = dr;
+                m[(i, 1)] = dw;
+            }
+            m[(5, 2)] = 1.0;
+            m
+        });
+        Ok((Self::theta(p), m))
+    }
+}
+
+/// Lines of the oscillator at `p`, unit weights.
+fn oscillator_lines(p: &[f64], omega: &[f64]) -> (Mat<f64>, Mat<f64>, Mat<f64>) {
+    let th = Oscillator::theta(p);
+    let g: Vec<faer::c64> = omega
+        .iter()
+        .map(|&w| {
+            // C (zI - A)^-1 B with C = e1, B = g e2: -a01 g / det(zI - A)
+            let z = faer::c64::new(w.cos(), w.sin());
+            let (a00, a01, a10, a11) = (th[0], th[1], th[2], th[3]);
+            let det = (z - a00) * (z - a11) - faer::c64::new(a01 * a10, 0.0);
+            faer::c64::new(a01 * th[5], 0.0) / det
+        })
+        .collect();
+    let k = omega.len();
+    (
+        Mat::from_fn(k, 1, |i, _| g[i].re),
+        Mat::from_fn(k, 1, |i, _| g[i].im),
+        Mat::from_fn(k, 1, |_, _| 1.0),
+    )
+}
+
+/// [`super::frequency::linear_frequency`] of the oscillator on `lines` from `(r0, 0.5, 1.0)`.
+fn fit_oscillator(
+    lines: &crate::pem::Lines<'_>,
+    r0: f64,
+    fixed: Option<Vec<bool>>,
+) -> crate::Result<super::frequency::FrequencyFit> {
+    let o = crate::optim::Options {
+        fixed,
+        ..Default::default()
+    };
+    super::frequency::linear_frequency(
+        (2, 1, 1),
+        lines,
+        &mut Oscillator,
+        &[r0, 0.5, 1.0],
+        &o,
+        &mut |_| crate::optim::Flow::Continue,
+    )
+}
+
+#[test]
+fn frequency_fit_recovers_the_parameters_from_exact_lines() {
+    use crate::pem::Lines;
+    let truth = [0.9, 0.6, 1.5];
+    let omega: Vec<f64> = (1..30).map(|k| 0.1 * k as f64).collect();
+    let (re, im, w) = oscillator_lines(&truth, &omega);
+    let lines = Lines {
+        omega: &omega,
+        re: re.as_ref(),
+        im: im.as_ref(),
+        weight: w.as_ref(),
+    };
+    let r = fit_oscillator(&lines, 0.8, None).unwrap();
+    for (a, b) in r.p.iter().zip(truth) {
+        assert!((a - b).abs() < 1e-10, "{:?}", r.p);
+    }
+    assert_eq!(r.covariance.rank, 3);
+    assert!(r.spectral_radius < 1.0 && (r.spectral_radius - 0.9).abs() < 1e-10);
+    // a fixed parameter stays, has no variance, and the others absorb what they can
+    let r = fit_oscillator(&lines, 0.8, Some(vec![false, false, true])).unwrap();
+    assert_eq!(r.p[2], 1.0);
+    assert_eq!(r.covariance.covariance[(2, 2)], 0.0);
+    // too few lines for the free parameters, an unstable start: clear errors
+    let one = [0.5];
+    let (re1, im1, w1) = oscillator_lines(&truth, &one);
+    let few = Lines {
+        omega: &one,
+        re: re1.as_ref(),
+        im: im1.as_ref(),
+        weight: w1.as_ref(),
+    };
+    let e = fit_oscillator(&few, 0.8, None).unwrap_err();
+    assert!(e.to_string().contains("excite more lines"), "{e}");
+    let e = fit_oscillator(&lines, 1.2, None).unwrap_err();
+    assert!(e.to_string().contains("unit circle"), "{e}");
+}

@@ -36,7 +36,6 @@ use crate::error::{Result, SysidError};
 use crate::linalg::spectral_radius;
 use crate::model::StateSpace;
 use crate::optim::{self, Covariance, Evaluation, Flow, Iteration, Problem, Solution};
-use faer::linalg::solvers::DenseSolveCore;
 use faer::{c64, Mat, MatRef};
 
 /// Frequency-response data on the excited lines: `G_k` (`l x m`, entry `(i, j)` in column
@@ -105,7 +104,7 @@ pub struct FrequencyResult {
 }
 
 /// The fit of `G(z)` to the lines as an optimisation problem over the free parameters.
-struct LineFit<'a> {
+pub(crate) struct LineFit<'a> {
     lines: Lines<'a>,
     z: Vec<c64>,
     n: usize,
@@ -121,12 +120,42 @@ struct LineFit<'a> {
     full: Vec<f64>,
     d_fixed: Mat<f64>,
     estimate_d: bool,
+    /// Search in the complement of the similarities that keep the blocks (the state-space
+    /// parameterisation); `false` for a caller whose own parameters fix the basis.
+    orbit: bool,
 }
 
 /// Lines per block of the Jacobian accumulation.
 const BLOCK: usize = 128;
 
-impl LineFit<'_> {
+impl<'a> LineFit<'a> {
+    /// The fit over every entry of `A, B, C, D` (row-major, the layout of the grey-box
+    /// parameter map), `A` one block, no similarity orbit: for a caller that searches its
+    /// own parameters through [`crate::optim::Reparameterized`]. Checks the lines.
+    pub(crate) fn all_entries(lines: &Lines<'a>, n: usize, m: usize, l: usize) -> Result<Self> {
+        check_lines(lines, l, m)?;
+        let p = n * (n + m + l) + l * m;
+        Ok(LineFit {
+            lines: *lines,
+            z: unit_circle(lines.omega),
+            n,
+            m,
+            l,
+            blocks: if n > 0 { vec![(0, n)] } else { Vec::new() },
+            free: (0..p).collect(),
+            column: (0..p).map(Some).collect(),
+            full: vec![0.0; p],
+            d_fixed: Mat::zeros(l, m),
+            estimate_d: true,
+            orbit: false,
+        })
+    }
+
+    /// Real residuals in the cost: twice the weighted line entries.
+    pub(crate) fn n_residuals_weighted(&self) -> usize {
+        2 * self.n_weighted()
+    }
+
     fn layout(&self) -> (usize, usize, usize) {
         let (n, m) = (self.n, self.m);
         (n * n, n * n + n * m, n * n + n * m + self.l * n)
@@ -291,14 +320,20 @@ impl Problem for LineFit<'_> {
             let r = self.residual_block(th, lo, hi, jb.as_mut());
             ev.cost += 0.5 * r.iter().map(|v| v * v).sum::<f64>();
             if let Some(jb) = jb {
-                ev.gauss_newton += jb.transpose() * &jb;
-                let rv = Mat::from_fn(rows, 1, |i, _| r[i]);
-                let g = jb.transpose() * rv;
-                for (gi, i) in ev.gradient.iter_mut().zip(0..q) {
-                    *gi += g[(i, 0)];
+                // the calling thread for the small products of every iterate
+                optim::gram_add(
+                    ev.gauss_newton.as_mut(),
+                    jb.as_ref(),
+                    optim::small_par(rows, q),
+                );
+                for (c, gi) in ev.gradient.iter_mut().enumerate() {
+                    *gi += (0..rows).map(|i| jb[(i, c)] * r[i]).sum::<f64>();
                 }
             }
             lo = hi;
+        }
+        if jacobian {
+            optim::mirror_lower(&mut ev.gauss_newton);
         }
         Ok(ev)
     }
@@ -309,16 +344,27 @@ impl Problem for LineFit<'_> {
     }
 
     fn search_basis(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
+        if !self.orbit {
+            return Ok(None);
+        }
         complement(&self.orbit_tangent(th)).map(Some)
     }
 
     fn invariant_directions(&mut self, th: &[f64]) -> Result<Option<Mat<f64>>> {
+        if !self.orbit {
+            return Ok(None);
+        }
         Ok(Some(self.orbit_tangent(th)))
     }
 
     fn n_residuals(&self) -> Option<usize> {
         Some(2 * self.n_weighted())
     }
+}
+
+/// `z_k = e^{j omega_k}` of each line.
+fn unit_circle(omega: &[f64]) -> Vec<c64> {
+    omega.iter().map(|&w| c64::new(w.cos(), w.sin())).collect()
 }
 
 /// `(z I - A_bb)^-1` of the diagonal block `(s, bs)` of `a`.
@@ -337,9 +383,43 @@ fn block_resolvent(a: &Mat<f64>, s: usize, bs: usize, z: c64) -> Mat<c64> {
                 let d = if i == j { z } else { c64::new(0.0, 0.0) };
                 d - at(i, j)
             });
-            m.partial_piv_lu().inverse()
+            small_inverse(m)
         }
     }
+}
+
+/// The inverse of a small complex matrix by Gauss-Jordan elimination with partial pivoting
+/// on the calling thread (faer's LU dispatches to its thread pool, which costs more than the
+/// work at the sizes of a grey-box structure's `A`, once per line and evaluation).
+fn small_inverse(mut m: Mat<c64>) -> Mat<c64> {
+    let n = m.nrows();
+    let mut inv = Mat::from_fn(n, n, |i, j| c64::new(f64::from(u8::from(i == j)), 0.0));
+    for k in 0..n {
+        let piv = (k..n)
+            .max_by(|&a, &b| m[(a, k)].norm().total_cmp(&m[(b, k)].norm()))
+            .unwrap_or(k);
+        for j in 0..n {
+            let (a, b) = (m[(k, j)], inv[(k, j)]);
+            m[(k, j)] = m[(piv, j)];
+            inv[(k, j)] = inv[(piv, j)];
+            m[(piv, j)] = a;
+            inv[(piv, j)] = b;
+        }
+        let d = c64::new(1.0, 0.0) / m[(k, k)];
+        for j in 0..n {
+            m[(k, j)] *= d;
+            inv[(k, j)] *= d;
+        }
+        for i in (0..n).filter(|&i| i != k) {
+            let f = m[(i, k)];
+            for j in 0..n {
+                let (mk, ik) = (m[(k, j)], inv[(k, j)]);
+                m[(i, j)] -= f * mk;
+                inv[(i, j)] -= f * ik;
+            }
+        }
+    }
+    inv
 }
 
 /// `(A, B, C, D)` from the full parameter vector.
@@ -473,11 +553,7 @@ pub fn pem_frequency(
     }
     let mut prob = LineFit {
         lines: *lines,
-        z: lines
-            .omega
-            .iter()
-            .map(|&w| c64::new(w.cos(), w.sin()))
-            .collect(),
+        z: unit_circle(lines.omega),
         n,
         m,
         l,
@@ -487,6 +563,7 @@ pub fn pem_frequency(
         full,
         d_fixed: start.d.clone(),
         estimate_d: opts.estimate_d,
+        orbit: true,
     };
     let identifiable = n * (m + l) + usize::from(opts.estimate_d) * l * m;
     let n_res = 2 * prob.n_weighted();

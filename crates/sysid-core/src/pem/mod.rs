@@ -41,7 +41,7 @@
 mod chart;
 mod coordinates;
 mod driver;
-mod frequency;
+pub(crate) mod frequency;
 #[cfg(test)]
 mod frequency_tests;
 mod modal;
