@@ -370,26 +370,21 @@ def _periodic(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
     """The discrete model fitted on the excited lines of periodic data (the FRD branch on
     :func:`sysid.bla` of the record), and what was found of the periodicity; no model when
     ``periods="auto"`` finds no usable period (the caller then fits in the time domain)."""
-    from ..models.frd import FRD
-    from ..pem.periodic import line_weights, resolve_periods
-    from .frequency import tfest_frd
+    from .frequency import record_lines, tfest_frd
 
     if dt is None:
         raise DataError("periods= fits a discrete-time model on the excited lines of the "
                         "sampled record: pass dt=data.dt, or leave periods out for a "
                         "continuous-time model")
-    frd, periodicity = resolve_periods(data, periods, transient)
-    if frd is None:
+    lines, periodicity = record_lines(data, periods, transient)
+    if lines is None:
         return None, periodicity
     nk = _whole_delays(data, delays, auto, dt)
-    # noise-free lines: the variances floored as pem's and greyest's frequency paths do
-    lines = FRD(frd.omega, frd.response, std=np.sqrt(2.0 / line_weights(frd)), dt=frd.dt,
-                input_names=frd.input_names, output_names=frd.output_names)
     G = tfest_frd(lines, npo, nze, iodelay=nk, dt=dt, max_iter=max_iter, tol=tol,
                   progress=progress)
     G.info.update(method="tfest (periodic data: weighted NLS on the excited lines)",
-                  domain="frequency", lines=int(frd.omega.size),
-                  periods=frd.info.get("periods"), periodicity=periodicity,
+                  domain="frequency", lines=int(lines.omega.size),
+                  periods=lines.info.get("periods"), periodicity=periodicity,
                   n_delays_estimated=int(nk.size) if auto else 0)
     return G, periodicity
 
