@@ -365,12 +365,44 @@ def oe(
     max_iter: int = 100,
     progress: bool | None | Callable[..., Any] = None,
     init: PolynomialModel | None = None,
+    periods: int | str | None = None,
+    transient: int | None = None,
 ) -> PolynomialModel:
     """Output error ``y = B/F u(t-nk) + e``.
 
     Starts from Steiglitz-McBride (one input) or from ``init`` (an ARX model's ``A`` becomes
-    ``F``), then Gauss-Newton on the simulation error; ``F`` is kept stable."""
-    return _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, init)
+    ``F``), then Gauss-Newton on the simulation error; ``F`` is kept stable.
+
+    With ``periods=P`` (whole periods of a periodic input in steady state in every
+    experiment) or ``"auto"`` (:func:`sysid.detect_period`), ``B/F`` is fitted on the
+    excited lines instead: the response averaged over the periods (:func:`sysid.bla`), each
+    entry weighted by ``1/std`` from their spread, by ``tfest``'s frequency-response fit
+    (``info["domain"] == "frequency"``). ``transient`` drops leading periods (default 0
+    declared, 1 with ``"auto"``). ``"auto"`` without a usable period fits in the time domain
+    with the reason in ``info["periodicity"]``.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> g = sysid.TransferFunction([0.5, 0.2], [1.0, -1.2, 0.5], dt=1.0)
+    >>> up = sysid.multisine(128, band=(0, 0.5), periods=4, seed=0)
+    >>> yp = g.simulate(np.vstack([np.tile(up, (5, 1)), up]))[-512:]
+    >>> m = sysid.oe(sysid.IOData(up, yp, dt=1.0), 2, 2, 1, periods=4)
+    >>> np.round(m.b[0][0], 8), np.round(m.f[0][0], 8), m.info["domain"]
+    (array([0.5, 0.2]), array([-1.2,  0.5]), 'frequency')
+    """
+    periodicity = None
+    if periods is not None or transient is not None:
+        from .oe_lines import oe_lines
+
+        m, periodicity = oe_lines(data, nb, nf, nk, periods=periods, transient=transient,
+                                  max_iter=max_iter, progress=progress, init=init)
+        if m is not None:
+            return m
+    m = _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, init)
+    if periodicity is not None:  # periods="auto" found none: why the time domain
+        m.info["periodicity"] = periodicity
+    return m
 
 
 def bj(

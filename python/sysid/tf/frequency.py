@@ -27,7 +27,7 @@ from ..models.uncertainty import ParameterUncertainty
 from .model import TransferFunction
 from .options import blockdiag, delays, pole_zero_orders, progress_callback
 
-__all__ = ["tfest_frd", "sanathanan_koerner"]
+__all__ = ["tfest_frd", "sanathanan_koerner", "fit_lines", "record_lines"]
 
 
 def sanathanan_koerner(x: np.ndarray, h: np.ndarray, w: np.ndarray, den_pow: list[int],
@@ -114,6 +114,21 @@ def _delay_grid(omega: np.ndarray, h: np.ndarray, dt: float) -> list[float]:
     return list(np.linspace(0.0, 2.0 * np.pi / wmax * 8, 17)) if wmax > 0 else [0.0]
 
 
+def record_lines(data: Any, periods: Any, transient: Any) -> tuple[Any, dict[str, Any]]:
+    """The excited lines of periodic data for :func:`fit_lines`, and what was found of the
+    periodicity (:func:`sysid.pem.periodic.resolve_periods`; no lines when ``"auto"`` finds
+    no usable period). The std of noise-free lines is floored as in ``pem``'s lines."""
+    from ..models.frd import FRD
+    from ..pem.periodic import line_weights, resolve_periods
+
+    frd, periodicity = resolve_periods(data, periods, transient)
+    if frd is None:
+        return None, periodicity
+    return FRD(frd.omega, frd.response, std=np.sqrt(2.0 / line_weights(frd)), dt=frd.dt,
+               input_names=frd.input_names, output_names=frd.output_names,
+               info=frd.info), periodicity
+
+
 def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
               max_iter: int, tol: float, progress: Any) -> TransferFunction:
     """The FRD branch of :func:`sysid.tfest` (see the module documentation)."""
@@ -124,6 +139,21 @@ def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
     if dtv and (frd.dt is None or abs(dtv - float(frd.dt)) > 1e-9 * dtv):
         raise DataError(f"a discrete model needs the FRD's sample time: the FRD has dt="
                         f"{frd.dt}, dt={dt} was given")
+    nums, dens, dl, names, thetas, covs = fit_lines(frd, npo, nze, given, auto, dtv, max_iter,
+                                                    tol, progress)
+    return _assemble(frd, nums, dens, dl, dtv, names, thetas, covs, auto)
+
+
+def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, auto: bool,
+              dtv: float, max_iter: int, tol: float, progress: Any
+              ) -> tuple[list[Any], list[Any], np.ndarray, list[str], list[np.ndarray],
+                         list[np.ndarray]]:
+    """The weighted fit of every pair of ``frd`` (``npo`` poles, ``nze + 1`` numerator
+    coefficients; a discrete pair lags ``1 + given`` samples): per output the numerators and
+    denominators, the delays, and per pair the parameter names, values
+    ``[a_1.., b_0.., delay]`` and covariance (internal: :func:`tfest_frd`, and
+    :func:`sysid.tfest`/:func:`sysid.oe` on periodic data)."""
+    l, m = frd.n_outputs, frd.n_inputs
     omega = frd.omega
     k_par = int(np.max(npo + nze + 2))
     if omega.size * 2 < k_par:
@@ -158,8 +188,7 @@ def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
             dens.append(rd)
     finally:
         close()
-    G = _assemble(frd, nums, dens, dl, dtv, names, thetas, covs, auto)
-    return G
+    return nums, dens, dl, names, thetas, covs
 
 
 def _assemble(frd: Any, nums: list[Any], dens: list[Any], dl: np.ndarray, dtv: float,

@@ -31,7 +31,9 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
           dt: float | None = None, hold: str = "zoh", initial_state: str = "zero",
           init: TransferFunction | None = None,
           max_delay: float | None = None, max_iter: int = 100, tol: float = 1e-10,
-          progress: bool | None | Callable[..., Any] = None) -> TransferFunction:
+          progress: bool | None | Callable[..., Any] = None,
+          periods: int | str | None = None, transient: int | None = None
+          ) -> TransferFunction:
     """Estimate a transfer-function model (MATLAB's ``tfest``).
 
     .. math::
@@ -73,6 +75,16 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         Search limits.
     progress : bool or callable, optional
         Progress display (see :mod:`sysid._progress`).
+    periods : int or "auto", optional
+        The data are periodic (discrete-time models, ``dt=data.dt``): every experiment holds
+        this many whole periods in steady state, or ``"auto"`` detects the period of the
+        input (:func:`sysid.detect_period`). The model is then fitted in the frequency
+        domain on the excited lines: the response averaged over the periods
+        (:func:`sysid.bla`), each entry weighted by ``1/std`` from the spread over the
+        periods, as for an FRD. When ``"auto"`` finds no period, or fewer than 2 after the
+        transient, the time-domain fit runs and ``info["periodicity"]["reason"]`` says why.
+    transient : int, optional
+        Leading periods dropped (default 0 with a declared ``periods``, 1 with ``"auto"``).
 
     Returns
     -------
@@ -90,6 +102,15 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     >>> G = sysid.tfest(data, 2, 1, iodelay="auto")
     >>> np.round(G.den[0][0], 6), np.round(G.num[0][0], 6), round(float(G.iodelay[0, 0]), 6)
     (array([1. , 0.8, 4. ]), array([0.5, 2. ]), 0.13)
+
+    Periodic data (4 periods of a multisine in steady state), a discrete model on the lines:
+
+    >>> g = sysid.TransferFunction([0.0, 0.5, 0.2], [1.0, -1.2, 0.5], dt=1.0)
+    >>> up = sysid.multisine(128, band=(0, 0.5), periods=4, seed=0)
+    >>> yp = g.simulate(np.vstack([np.tile(up, (5, 1)), up]))[-512:]
+    >>> Gp = sysid.tfest(sysid.IOData(up, yp, dt=1.0), 2, 1, dt=1.0, periods=4)
+    >>> np.round(Gp.den[0][0], 8), np.round(Gp.num[0][0], 8), Gp.info["domain"]
+    (array([ 1. , -1.2,  0.5]), array([0.5, 0.2]), 'frequency')
     """
     if hold not in _HOLDS:
         raise DataError(f"hold must be 'zoh' or 'foh', got {hold!r}")
@@ -99,6 +120,9 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     if hasattr(data, "omega") and hasattr(data, "response"):  # an FRD
         from .frequency import tfest_frd
 
+        if periods is not None or transient is not None:
+            raise DataError("periods= and transient= describe a time record; an FRD is "
+                            "already on its lines: leave them out")
         return tfest_frd(data, n_poles, n_zeros, iodelay=iodelay, dt=dt, max_iter=max_iter,
                          tol=tol, progress=progress)
     if not hasattr(data, "experiments") or not hasattr(data, "dt"):
@@ -109,8 +133,17 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         raise DataError("tfest needs at least one input; for a time series use sysid.ar")
     npo, nze = pole_zero_orders(n_poles, n_zeros, l, m)
     fixed_delays, auto = delays(iodelay, l, m)
+    periodicity = None
+    if periods is not None or transient is not None:
+        G, periodicity = _periodic(data, npo, nze, fixed_delays, auto, dt, periods, transient,
+                                   max_iter, tol, progress)
+        if G is not None:
+            return G
     if dt is not None:
-        return _discrete(data, npo, nze, fixed_delays, auto, dt, max_iter, progress)
+        G = _discrete(data, npo, nze, fixed_delays, auto, dt, max_iter, progress)
+        if periodicity is not None:  # periods="auto" found none: why the time domain
+            G.info["periodicity"] = periodicity
+        return G
     cb, close = progress_callback(progress, max_iter)
     try:
         return _continuous(data, npo, nze, fixed_delays, auto, hold, initial_state, max_delay,
@@ -331,21 +364,50 @@ def _attach(G: TransferFunction, tables: list[Any], covs: list[np.ndarray], auto
     G.uncertainty = ParameterUncertainty(theta, P, build, names=names)
 
 
+def _periodic(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
+              dt: float | None, periods: Any, transient: Any, max_iter: int, tol: float,
+              progress: Any) -> tuple[TransferFunction | None, dict[str, Any]]:
+    """The discrete model fitted on the excited lines of periodic data (the FRD branch on
+    :func:`sysid.bla` of the record), and what was found of the periodicity; no model when
+    ``periods="auto"`` finds no usable period (the caller then fits in the time domain)."""
+    from .frequency import record_lines, tfest_frd
+
+    if dt is None:
+        raise DataError("periods= fits a discrete-time model on the excited lines of the "
+                        "sampled record: pass dt=data.dt, or leave periods out for a "
+                        "continuous-time model")
+    lines, periodicity = record_lines(data, periods, transient)
+    if lines is None:
+        return None, periodicity
+    nk = _whole_delays(data, delays, auto, dt)
+    G = tfest_frd(lines, npo, nze, iodelay=nk, dt=dt, max_iter=max_iter, tol=tol,
+                  progress=progress)
+    G.info.update(method="tfest (periodic data: weighted NLS on the excited lines)",
+                  domain="frequency", lines=int(lines.omega.size),
+                  periods=lines.info.get("periods"), periodicity=periodicity,
+                  n_delays_estimated=int(nk.size) if auto else 0)
+    return G, periodicity
+
+
+def _whole_delays(data: Any, delays: np.ndarray, auto: bool, dt: float) -> np.ndarray:
+    """A discrete model's delays in whole samples: estimated (``auto``) or checked."""
+    if abs(float(dt) - data.dt) > 1e-9 * data.dt:
+        raise DataError(f"dt={dt} differs from the data's sample time {data.dt}: resample the "
+                        "data first (sysid.resample) or pass dt=data.dt")
+    if auto:  # delayest counts the model's one-sample lag too
+        return np.array([[max(_delayest_one(data, i, j) - 1, 0) for j in range(data.n_inputs)]
+                         for i in range(data.n_outputs)], dtype=float)
+    if np.any(np.abs(delays - np.round(delays)) > 1e-9):
+        raise DataError("a discrete model's iodelay counts whole samples; round it")
+    return np.round(delays)
+
+
 def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
               dt: float, max_iter: int, progress: Any) -> TransferFunction:
     """Discrete-time variant: output error ``B(q)/F(q) q^-nk`` per output (``sysid.oe``)."""
     import sysid
 
-    if abs(float(dt) - data.dt) > 1e-9 * data.dt:
-        raise DataError(f"dt={dt} differs from the data's sample time {data.dt}: resample the "
-                        "data first (sysid.resample) or pass dt=data.dt")
-    if auto:
-        nk = np.array([[_delayest_one(data, i, j) for j in range(data.n_inputs)]
-                       for i in range(data.n_outputs)])
-    else:
-        nk = delays
-        if np.any(np.abs(nk - np.round(nk)) > 1e-9):
-            raise DataError("a discrete model's iodelay counts whole samples; round it")
+    nk = _whole_delays(data, delays, auto, dt)
     # one-sample lag as MATLAB's discrete tfest (no feedthrough), plus the delay
     poly = sysid.oe(data, nze + 1, npo, 1 + np.round(nk).astype(int), max_iter=max_iter,
                     progress=progress)

@@ -1,0 +1,83 @@
+"""``sysid.oe`` on periodic data (``periods=``, issue 28): ``B/F`` fitted on the excited
+lines by the weighted frequency-response fit of ``tfest``
+(:func:`sysid.tf.frequency.fit_lines`: Sanathanan-Koerner start, then weighted NLS with the
+``1/std`` of :func:`sysid.bla`'s averaged response), returned as the
+:class:`~sysid.PolynomialModel` the time-domain ``oe`` gives."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .._checks import as_int, as_int_grid
+from ..errors import DataError
+from .model import PolynomialModel
+
+__all__: list[str] = []
+
+
+def oe_lines(data: Any, nb: Any, nf: Any, nk: Any, *, periods: Any, transient: Any,
+             max_iter: int, progress: Any, init: Any) -> tuple[PolynomialModel | None,
+                                                               dict[str, Any]]:
+    """The OE model on the lines of periodic ``data``, and what was found of the
+    periodicity; no model when ``periods="auto"`` finds no usable period (the caller then
+    fits in the time domain). Internal: called by :func:`sysid.oe`."""
+    from ..tf.frequency import fit_lines, record_lines
+    from ..tf.options import blockdiag
+
+    if init is not None:
+        raise DataError("periods= starts from Sanathanan-Koerner iterations on the lines: "
+                        "leave init out, or leave periods out for the time-domain fit")
+    ny, nu = data.n_outputs, data.n_inputs
+    nb_g, nf_g, nk_g = (np.array(as_int_grid(v, (ny, nu), name)) for v, name in
+                        ((nb, "nb"), (nf, "nf"), (nk, "nk")))
+    if np.any(nb_g < 1) or np.any(nf_g < 0) or np.any(nk_g < 0):
+        raise DataError("periods= fits every input-output pair: give nb >= 1, nf >= 0 and "
+                        "nk >= 0 for each")
+    lines, periodicity = record_lines(data, periods, transient)
+    if lines is None:
+        return None, periodicity
+    # tfest's discrete pair lags 1 + delay samples: the delay is nk - 1
+    _, _, _, _, thetas, covs = fit_lines(lines, nf_g, nb_g - 1, nk_g - 1.0, False,
+                                         float(data.dt), as_int(max_iter, "max_iter", 0),
+                                         1e-10, progress)
+    b = [[thetas[i * nu + j][nf_g[i, j]:-1] for j in range(nu)] for i in range(ny)]
+    f = [[thetas[i * nu + j][:nf_g[i, j]] for j in range(nu)] for i in range(ny)]
+    m = PolynomialModel([[np.zeros(0)] * ny for _ in range(ny)], b, nk_g, data.dt, f=f)
+    m.noise_variance = _noise_variance(m, lines)
+    m.info = {"method": "oe", "domain": "frequency", "lines": int(lines.omega.size),
+              "criterion": "weighted sum of squares on the excited lines",
+              "periods": lines.info.get("periods"), "periodicity": periodicity}
+    cov = []
+    for i in range(ny):  # oe's order per output: b_i1.., f_i1.. (the delays are fixed)
+        o, blocks = 0, []
+        for j in range(nu):
+            nf_, nb_ = int(nf_g[i, j]), int(nb_g[i, j])
+            blocks.append((o, nf_, nb_))
+            o += nf_ + nb_
+        idx = [o_ + nf_ + k for o_, nf_, nb_ in blocks for k in range(nb_)] + \
+            [o_ + k for o_, nf_, _ in blocks for k in range(nf_)]
+        P = blockdiag([np.asarray(covs[i * nu + j])[:-1, :-1] for j in range(nu)])
+        cov.append(P[np.ix_(idx, idx)])
+    m.covariance = cov  # type: ignore[attr-defined]
+    from .estimators import _attach_uncertainty
+
+    _attach_uncertainty(m, cov, "pem", "frequency lines")
+    return m, periodicity
+
+
+def _noise_variance(m: PolynomialModel, lines: Any) -> np.ndarray:
+    """Per output, the variance of the output noise: the period-averaged output less the
+    model's steady-state response to the averaged input (exact, on one period by the DFT),
+    times the number of periods averaged."""
+    avg_u, avg_y = lines.info["averaged"]
+    P = lines.info["periods"] - lines.info["transient"]
+    res = []
+    for u, y in zip(avg_u, avg_y):
+        n = u.shape[0]
+        w = 2 * np.pi * np.arange(n // 2 + 1) / (n * m.dt)
+        Y = np.einsum("kij,kj->ki", m.freqresp(w), np.fft.rfft(u, axis=0))
+        res.append(y - np.fft.irfft(Y, n=n, axis=0))
+    r = np.concatenate(res)
+    return P * np.mean(r ** 2, axis=0)
