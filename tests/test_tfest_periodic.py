@@ -121,3 +121,12 @@ def test_time_domain_auto_delay_counts_the_lag_once():
     G = sysid.tfest(sysid.IOData(u, g.simulate(u), dt=1.0), 2, 1, dt=1.0, iodelay="auto")
     w = np.linspace(0.1, 3.0, 9)
     np.testing.assert_allclose(G.freqresp(w), g.freqresp(w), rtol=1e-6, atol=1e-8)
+
+
+@pytest.mark.parametrize("kw", [{"init": "x"}, {"max_delay": 3.0},
+                                {"initial_state": "estimate"}])
+def test_time_domain_options_refused_with_periods(kw):
+    up = np.ravel(sysid.multisine(64, band=(0, 0.5), periods=3, seed=1))
+    d = sysid.IOData(up, np.convolve(up, [0.0, 1.0, 0.5])[:up.size], dt=1.0)
+    with pytest.raises(sysid.DataError, match=r"cannot be used with periods="):
+        sysid.tfest(d, 2, 1, dt=1.0, periods=3, **kw)

@@ -135,6 +135,13 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     fixed_delays, auto = delays(iodelay, l, m)
     periodicity = None
     if periods is not None or transient is not None:
+        unused = [k for k, v in (("init", init), ("max_delay", max_delay)) if v is not None]
+        unused += ["initial_state"] if initial_state != "zero" else []
+        if unused:
+            raise DataError(f"{' and '.join(unused)} cannot be used with periods=: the lines are "
+                            "the steady state (no initial state) and the fit starts from its "
+                            "own linear least squares; leave them out, or leave periods out "
+                            "for the time-domain fit")
         G, periodicity = _periodic(data, npo, nze, fixed_delays, auto, dt, periods, transient,
                                    max_iter, tol, progress)
         if G is not None:
