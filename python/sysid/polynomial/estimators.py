@@ -377,7 +377,9 @@ def oe(
     experiment) or ``"auto"`` (:func:`sysid.detect_period`), ``B/F`` is fitted on the
     excited lines instead: the response averaged over the periods (:func:`sysid.bla`), each
     entry weighted by ``1/std`` from their spread, by ``tfest``'s frequency-response fit
-    (``info["domain"] == "frequency"``). ``transient`` drops leading periods (default 0
+    (``info["domain"] == "frequency"``; the covariance scaled by the residual scale
+    ``info["residual_scale"]``, as in ``pem``/``greyest``, since the std from a few periods
+    is itself uncertain). ``transient`` drops leading periods (default 0
     declared, 1 with ``"auto"``). ``"auto"`` without a usable period fits in the time domain
     with the reason in ``info["periodicity"]``.
 

@@ -1,7 +1,8 @@
 """``sysid.oe`` on periodic data (``periods=``, issue 28): ``B/F`` fitted on the excited
 lines by the weighted frequency-response fit of ``tfest``
 (:func:`sysid.tf.frequency.fit_lines`: Sanathanan-Koerner start, then weighted NLS with the
-``1/std`` of :func:`sysid.bla`'s averaged response), returned as the
+``1/std`` of :func:`sysid.bla`'s averaged response; covariance scaled by the residual
+scale, ``info["residual_scale"]``), returned as the
 :class:`~sysid.PolynomialModel` the time-domain ``oe`` gives."""
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ def oe_lines(data: Any, nb: Any, nf: Any, nk: Any, *, periods: Any, transient: A
     if lines is None:
         return None, periodicity
     # tfest's discrete pair lags 1 + delay samples: the delay is nk - 1
-    _, _, _, _, thetas, covs = fit_lines(lines, nf_g, nb_g - 1, nk_g - 1.0, False,
+    _, _, _, _, thetas, covs, scales = fit_lines(lines, nf_g, nb_g - 1, nk_g - 1.0, False,
                                          float(data.dt), as_int(max_iter, "max_iter", 0),
                                          1e-10, progress)
     b = [[thetas[i * nu + j][nf_g[i, j]:-1] for j in range(nu)] for i in range(ny)]
@@ -48,7 +49,8 @@ def oe_lines(data: Any, nb: Any, nf: Any, nk: Any, *, periods: Any, transient: A
     m.noise_variance = _noise_variance(m, lines)
     m.info = {"method": "oe", "domain": "frequency", "lines": int(lines.omega.size),
               "criterion": "weighted sum of squares on the excited lines",
-              "periods": lines.info.get("periods"), "periodicity": periodicity}
+              "periods": lines.info.get("periods"), "periodicity": periodicity,
+              "residual_scale": scales}
     cov = []
     for i in range(ny):  # oe's order per output: b_i1.., f_i1.. (the delays are fixed)
         o, blocks = 0, []

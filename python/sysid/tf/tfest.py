@@ -81,7 +81,10 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         input (:func:`sysid.detect_period`). The model is then fitted in the frequency
         domain on the excited lines: the response averaged over the periods
         (:func:`sysid.bla`), each entry weighted by ``1/std`` from the spread over the
-        periods, as for an FRD. When ``"auto"`` finds no period, or fewer than 2 after the
+        periods, as for an FRD; the covariance is scaled by the residual scale
+        ``info["residual_scale"]`` (as in ``pem``/``greyest``: the std from a few periods is
+        itself uncertain, so taking it as exact would report too small a std; see
+        :mod:`sysid.tf.frequency`). When ``"auto"`` finds no period, or fewer than 2 after the
         transient, the time-domain fit runs and ``info["periodicity"]["reason"]`` says why.
     transient : int, optional
         Leading periods dropped (default 0 with a declared ``periods``, 1 with ``"auto"``).
@@ -91,7 +94,10 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     TransferFunction
         With ``parameters`` (a :class:`~sysid.models.paramtable.ParameterTable` with std),
         ``uncertainty`` (:class:`~sysid.models.uncertainty.ParameterUncertainty`) and
-        ``info`` (method, iterations, stop reason, cost, fit per output).
+        ``info`` (method, iterations, stop reason, cost, fit per output). From an FRD or on
+        periodic data the covariance is ``s (J^T W J)^-1`` with the residual scale
+        ``s = info["residual_scale"]`` per pair (about 1 when the FRD's std is right and
+        the model explains it; unweighted, the residual variance).
 
     Examples
     --------

@@ -124,8 +124,7 @@ pub fn linear_frequency(
     };
     let (theta, _) = map.map(&solution.theta, false)?;
     let unit = free_covariance(&solution.gauss_newton, &fixed)?;
-    let dof = n_res.saturating_sub(unit.rank).max(1);
-    let residual_scale = 2.0 * solution.cost / dof as f64;
+    let residual_scale = optim::residual_scale(solution.cost, n_res, unit.rank);
     let covariance = Covariance {
         covariance: &unit.covariance * faer::Scale(residual_scale),
         ..unit

@@ -111,3 +111,19 @@ pub fn covariance(gauss_newton: MatRef<'_, f64>, scale: f64, rtol: f64) -> Resul
         },
     })
 }
+
+/// The residual scale `s = 2 V / (n_residuals - rank)` that multiplies `(J^T W J)^+` when the
+/// weights are inverse noise variances that are themselves estimated (from a few periods) or
+/// the model does not explain the data exactly: about 1 when weights and model are right,
+/// larger with estimated weights or model errors (the degrees of freedom are floored at 1).
+/// The one rule for every weighted frequency-domain fit (`pem`, `greyest`, `tfest`, `oe`).
+///
+/// ```
+/// use sysid_core::optim::residual_scale;
+/// // cost 1/2 sum r^2 = 9 over 20 real residuals and 2 identifiable parameters: s = 1.
+/// assert!((residual_scale(9.0, 20, 2) - 1.0).abs() < 1e-15);
+/// assert_eq!(residual_scale(1.0, 2, 5), 2.0);
+/// ```
+pub fn residual_scale(cost: f64, n_residuals: usize, rank: usize) -> f64 {
+    2.0 * cost / n_residuals.saturating_sub(rank).max(1) as f64
+}

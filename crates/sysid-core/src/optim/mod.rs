@@ -46,7 +46,7 @@ mod search;
 #[cfg(test)]
 mod tests;
 
-pub use covariance::{covariance, Covariance};
+pub use covariance::{covariance, residual_scale, Covariance};
 pub(crate) use dense::{gram_add, mirror_lower, small_par};
 pub use normal::NormalEquations;
 pub use reparam::{ParameterMap, Reparameterized};

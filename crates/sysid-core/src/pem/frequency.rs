@@ -584,8 +584,7 @@ pub fn pem_frequency(
     }
     let mut sol = optim::minimize(&mut prob, &theta0, &opts.optim, observer)?;
     let cov = optim::covariance(sol.gauss_newton.as_ref(), 1.0, 1e-10)?;
-    let dof = n_res.saturating_sub(cov.rank).max(1);
-    let scale = 2.0 * sol.cost / dof as f64;
+    let scale = optim::residual_scale(sol.cost, n_res, cov.rank);
     let q = prob.free.len();
     let embed_vec = |v: &[f64]| -> Vec<f64> {
         let mut out = vec![0.0; p];

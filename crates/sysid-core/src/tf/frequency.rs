@@ -157,8 +157,9 @@ pub struct FrequencyFit {
 /// Fits `theta = [a, b, tau]` of `model` to the response `h` with weights `weight`.
 ///
 /// `noise_variance`: the variance of the real and of the imaginary part of one weighted
-/// residual when known (`1/2` when the weights are `1/std` of the complex response), else
-/// `None` (estimated from the residuals).
+/// residual when known (`1/2` when the weights are `1/std` of the complex response and that
+/// std is exact), else `None`: the residual scale [`optim::residual_scale`] over the `2 k`
+/// real residuals (what `tfest` and `oe` use, as `pem` and `greyest`).
 ///
 /// ```
 /// use faer::c64;
@@ -213,17 +214,6 @@ pub fn fit_frequency(
     }
     let mut prob = FitProblem { model, h, weight };
     let solution = optim::minimize(&mut prob, theta0, options, observer)?;
-    let free = match &options.fixed {
-        Some(f) => f.iter().filter(|x| !**x).count(),
-        None => model.n_params(),
-    };
-    let sigma2 = match noise_variance {
-        Some(v) => v,
-        None => {
-            let dof = (2 * k).saturating_sub(free).max(1);
-            2.0 * solution.cost / dof as f64
-        }
-    };
     let mut gn = solution.gauss_newton.clone();
     if let Some(f) = &options.fixed {
         for (i, &fx) in f.iter().enumerate() {
@@ -235,7 +225,13 @@ pub fn fit_frequency(
             }
         }
     }
-    let covariance = optim::covariance(gn.as_ref(), sigma2, 1e-12)?;
+    let unit = optim::covariance(gn.as_ref(), 1.0, 1e-12)?;
+    let sigma2 =
+        noise_variance.unwrap_or_else(|| optim::residual_scale(solution.cost, 2 * k, unit.rank));
+    let covariance = Covariance {
+        covariance: &unit.covariance * faer::Scale(sigma2),
+        ..unit
+    };
     Ok(FrequencyFit {
         solution,
         covariance,
