@@ -9,13 +9,17 @@
 //!
 //! Parameters `theta = [alpha_1..alpha_m, vec(A), vec(B), vec(C), (vec(D)), beta_1..beta_p]`
 //! (matrices row-major), estimated by prediction error with the one optimiser
-//! ([`crate::optim`]): the state sensitivities `S(t) = dx(t)/dtheta` (`n x P`) run
-//! sample by sample, `S(t+1) = A S(t) + dA x(t) + dB w(t) + B dw(t)/dalpha`, and
-//! `dy_i/dtheta = g_i'(v_i) (C S + dC x + D dw/dalpha + dD w)_i + dg_i/dbeta_i`. The full
-//! state-space parametrisation is not identifiable (similarity transforms): the optimiser's
-//! search basis takes the rank-deficient Gauss-Newton matrix, and the poles and the
-//! nonlinearities, which are identifiable, are what the tests check. The unit-gain
-//! normalisations of the nonlinearities ([`Nonlinearity`]) put the gains in `B` and `C`.
+//! ([`crate::optim`]): the state sensitivities `S(t) = dx(t)/dtheta` run sample by sample
+//! for the parameters that move the state only (`alpha`, `A`, `B`), once per sample for all
+//! outputs, `S(t+1) = A S(t) + dA x(t) + dB w(t) + B dw(t)/dalpha`, and
+//! `dy_i/dtheta = g_i'(v_i) (C S + dC x + D dw/dalpha + dD w)_i + dg_i/dbeta_i`; the rows are
+//! folded into `J^T J` in blocks by one matrix product ([`NormalEquations`]), no `N x p`
+//! array. The full state-space parametrisation is not identifiable (similarity transforms):
+//! the Gauss-Newton products are formed over the identifiable columns in the modal
+//! coordinates of `A` and mapped back exactly (module `modal`), so the search moves as over
+//! the full parameters at a fraction of the cost; the poles and the nonlinearities, which are
+//! identifiable, are what the tests check. The unit-gain normalisations of the
+//! nonlinearities ([`Nonlinearity`]) put the gains in `B` and `C`.
 //! The admissible set is `A` stable.
 
 use faer::{Mat, MatRef};

@@ -187,8 +187,9 @@ fn bad_starts_and_shapes_are_errors() {
 }
 
 /// An order-3 structure with sigmoid networks in and out and feedthrough, its parameters
-/// with `A` having a complex pair and a real pole (not in modal form), and a record.
-fn order3() -> (MimoHwStructure, Vec<f64>, Mat<f64>, Mat<f64>) {
+/// with `A` having a complex pair and a real pole (not in modal form), a record, and the
+/// evaluation through the modal coordinates there.
+fn order3() -> (MimoHwStructure, Vec<f64>, Mat<f64>, Mat<f64>, Evaluation) {
     let s = MimoHwStructure {
         inputs: vec![Nonlinearity::Sigmoid { units: 2 }, Nonlinearity::Identity],
         outputs: vec![
@@ -207,15 +208,6 @@ fn order3() -> (MimoHwStructure, Vec<f64>, Mat<f64>, Mat<f64>) {
     assert_eq!(th.len(), s.n_params());
     let u = inputs(400, 5);
     let y = Mat::from_fn(400, 2, |t, i| ((t * (i + 2)) as f64 * 0.29).cos());
-    (s, th, u, y)
-}
-
-/// The Gauss-Newton products formed in the modal coordinates over the identifiable columns
-/// equal `J^T J` and `-J^T r` of a finite-difference Jacobian of the simulation over all
-/// parameters (the similarity directions included).
-#[test]
-fn modal_gauss_newton_matches_finite_differences() {
-    let (s, th, u, y) = order3();
     let pr = MimoHwProblem {
         structure: s.clone(),
         records: vec![(u.as_ref(), y.as_ref())],
@@ -224,6 +216,15 @@ fn modal_gauss_newton_matches_finite_differences() {
         .evaluate_modal(&th)
         .unwrap()
         .expect("the modal path applies");
+    (s, th, u, y, ev)
+}
+
+/// The Gauss-Newton products formed in the modal coordinates over the identifiable columns
+/// equal `J^T J` and `-J^T r` of a finite-difference Jacobian of the simulation over all
+/// parameters (the similarity directions included).
+#[test]
+fn modal_gauss_newton_matches_finite_differences() {
+    let (s, th, u, y, ev) = order3();
     let sim = |th: &[f64]| s.simulate(th, u.as_ref());
     let y0 = sim(&th);
     let p = th.len();
@@ -264,15 +265,7 @@ fn modal_gauss_newton_matches_finite_differences() {
 /// The modal path and the plain one (every column formed) agree to rounding.
 #[test]
 fn modal_gauss_newton_matches_the_plain_products() {
-    let (s, th, u, y) = order3();
-    let pr = MimoHwProblem {
-        structure: s.clone(),
-        records: vec![(u.as_ref(), y.as_ref())],
-    };
-    let ev = pr
-        .evaluate_modal(&th)
-        .unwrap()
-        .expect("the modal path applies");
+    let (s, th, u, y, ev) = order3();
     let cols = s.columns(&[]);
     let mut sums = NormalEquations::new(cols.len(), true);
     s.run(&th, u.as_ref(), Some(&cols), |t, i, yhat, jr| {
