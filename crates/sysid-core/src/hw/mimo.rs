@@ -13,8 +13,8 @@
 //! for the parameters that move the state only (`alpha`, `A`, `B`), once per sample for all
 //! outputs, `S(t+1) = A S(t) + dA x(t) + dB w(t) + B dw(t)/dalpha`, and
 //! `dy_i/dtheta = g_i'(v_i) (C S + dC x + D dw/dalpha + dD w)_i + dg_i/dbeta_i`; the rows are
-//! folded into `J^T J` in blocks by one matrix product ([`NormalEquations`]), no `N x p`
-//! array. The full state-space parametrisation is not identifiable (similarity transforms):
+//! folded into `J^T J` in blocks by one matrix product ([`NormalEquations::blocked`]), no
+//! `N x p` array. The full state-space parametrisation is not identifiable (similarity transforms):
 //! the Gauss-Newton products are formed over the identifiable columns in the modal
 //! coordinates of `A` and mapped back exactly (module `modal`), so the search moves as over
 //! the full parameters at a fraction of the cost; the poles and the nonlinearities, which are
@@ -333,7 +333,7 @@ impl Problem for MimoHwProblem<'_> {
             }
         }
         let cols = self.structure.columns(&[]);
-        let mut sums = NormalEquations::new(cols.len(), jacobian);
+        let mut sums = NormalEquations::blocked(cols.len(), jacobian);
         for (u, y) in &self.records {
             let c = jacobian.then_some(cols.as_slice());
             self.structure.run(theta, *u, c, |t, i, yhat, jr| {

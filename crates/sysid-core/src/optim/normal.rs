@@ -1,8 +1,10 @@
 //! Running sums of a least-squares cost for problems that produce one scalar residual at a
 //! time (the Hammerstein-Wiener predictors, the simulation-focus network): the cost, the
-//! gradient and the lower triangle of the Gauss-Newton matrix. The Jacobian rows are
-//! buffered in blocks of [`BLOCK`] and folded in by one matrix product per block
-//! ([`gram_add`]), never as rank-one updates; the triangle is mirrored once at the end.
+//! gradient and the lower triangle of the Gauss-Newton matrix, mirrored once at the end.
+//! [`NormalEquations::blocked`] buffers the Jacobian rows in blocks of [`BLOCK`] and folds
+//! them in by one matrix product per block ([`gram_add`]) instead of rank-one updates: the
+//! same sums, in another order of rounding (a nonconvex network fit, whose path that order
+//! can move, keeps [`NormalEquations::new`]).
 
 use super::{gram_add, small_par, Evaluation};
 use faer::linalg::matmul::matmul;
@@ -33,22 +35,48 @@ pub struct NormalEquations {
     rb: Mat<f64>,
     rows: usize,
     par: Par,
+    blocked: bool,
 }
 
 impl NormalEquations {
-    /// Empty sums for `p` parameters; without `jacobian` only the cost is kept.
+    /// Empty sums for `p` parameters; without `jacobian` only the cost is kept. Every row
+    /// is added as a rank-one update.
     pub fn new(p: usize, jacobian: bool) -> Self {
+        Self::with(p, jacobian, false)
+    }
+
+    /// As [`Self::new`], the rows folded in blocks by one matrix product each: for long
+    /// records and more than a few parameters, several times faster.
+    ///
+    /// ```
+    /// use sysid_core::optim::NormalEquations;
+    /// let (mut a, mut b) = (NormalEquations::new(2, true), NormalEquations::blocked(2, true));
+    /// for t in 0..1000 {
+    ///     let row = [1.0, t as f64 / 1000.0];
+    ///     a.add(0.5 - row[1], Some(&row));
+    ///     b.add(0.5 - row[1], Some(&row));
+    /// }
+    /// let (ea, eb) = (a.finish(), b.finish());
+    /// assert!((ea.gauss_newton[(0, 1)] - eb.gauss_newton[(0, 1)]).abs() < 1e-9);
+    /// assert!((ea.gradient[1] - eb.gradient[1]).abs() < 1e-9);
+    /// ```
+    pub fn blocked(p: usize, jacobian: bool) -> Self {
+        Self::with(p, jacobian, true)
+    }
+
+    fn with(p: usize, jacobian: bool, blocked: bool) -> Self {
         let q = if jacobian { p } else { 0 };
-        let b = if jacobian { BLOCK } else { 0 };
+        let b = if jacobian && blocked { BLOCK } else { 0 };
         NormalEquations {
             cost: 0.0,
             gradient: Mat::zeros(q, 1),
             gauss_newton: Mat::zeros(q, q),
             jacobian,
-            jt: Mat::zeros(q, b),
+            jt: Mat::zeros(if b > 0 { q } else { 0 }, b),
             rb: Mat::zeros(b, 1),
             rows: 0,
             par: small_par(BLOCK, q),
+            blocked,
         }
     }
 
@@ -59,6 +87,17 @@ impl NormalEquations {
         let Some(jr) = jr.filter(|_| self.jacobian) else {
             return;
         };
+        if !self.blocked {
+            for (a, &ja) in jr.iter().enumerate() {
+                if ja != 0.0 {
+                    self.gradient[(a, 0)] -= ja * r;
+                    for b in 0..=a {
+                        self.gauss_newton[(a, b)] += ja * jr[b];
+                    }
+                }
+            }
+            return;
+        }
         self.jt.col_as_slice_mut(self.rows).copy_from_slice(jr);
         self.rb[(self.rows, 0)] = r;
         self.rows += 1;

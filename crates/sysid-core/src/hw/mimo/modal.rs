@@ -116,7 +116,7 @@ impl MimoHwProblem<'_> {
         }
         // J_F^T J_F and J_F^T r over the free columns, at the modal parameters
         let cols = s.columns(&held);
-        let mut sums = NormalEquations::new(cols.len(), true);
+        let mut sums = NormalEquations::blocked(cols.len(), true);
         for (u, y) in &self.records {
             s.run(&th, *u, Some(&cols), |t, i, yhat, jr| {
                 sums.add(y[(t, i)] - yhat, Some(jr))
