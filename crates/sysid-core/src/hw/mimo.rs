@@ -9,13 +9,17 @@
 //!
 //! Parameters `theta = [alpha_1..alpha_m, vec(A), vec(B), vec(C), (vec(D)), beta_1..beta_p]`
 //! (matrices row-major), estimated by prediction error with the one optimiser
-//! ([`crate::optim`]): the state sensitivities `S(t) = dx(t)/dtheta` (`n x P`) run
-//! sample by sample, `S(t+1) = A S(t) + dA x(t) + dB w(t) + B dw(t)/dalpha`, and
-//! `dy_i/dtheta = g_i'(v_i) (C S + dC x + D dw/dalpha + dD w)_i + dg_i/dbeta_i`. The full
-//! state-space parametrisation is not identifiable (similarity transforms): the optimiser's
-//! search basis takes the rank-deficient Gauss-Newton matrix, and the poles and the
-//! nonlinearities, which are identifiable, are what the tests check. The unit-gain
-//! normalisations of the nonlinearities ([`Nonlinearity`]) put the gains in `B` and `C`.
+//! ([`crate::optim`]): the state sensitivities `S(t) = dx(t)/dtheta` run sample by sample
+//! for the parameters that move the state only (`alpha`, `A`, `B`), once per sample for all
+//! outputs, `S(t+1) = A S(t) + dA x(t) + dB w(t) + B dw(t)/dalpha`, and
+//! `dy_i/dtheta = g_i'(v_i) (C S + dC x + D dw/dalpha + dD w)_i + dg_i/dbeta_i`; the rows are
+//! folded into `J^T J` in blocks by one matrix product ([`NormalEquations::blocked`]), no
+//! `N x p` array. The full state-space parametrisation is not identifiable (similarity transforms):
+//! the Gauss-Newton products are formed over the identifiable columns in the modal
+//! coordinates of `A` and mapped back exactly (module `modal`), so the search moves as over
+//! the full parameters at a fraction of the cost; the poles and the nonlinearities, which are
+//! identifiable, are what the tests check. The unit-gain normalisations of the
+//! nonlinearities ([`Nonlinearity`]) put the gains in `B` and `C`.
 //! The admissible set is `A` stable.
 
 use faer::{Mat, MatRef};
@@ -126,33 +130,87 @@ impl MimoHwStructure {
     /// Noise-free outputs `(N, p)` for inputs `u` `(N, m)` at `theta`.
     pub fn simulate(&self, theta: &[f64], u: MatRef<'_, f64>) -> Mat<f64> {
         let mut y = Mat::<f64>::zeros(u.nrows(), self.outputs.len());
-        self.run(theta, u, false, |t, i, yhat, _| y[(t, i)] = yhat);
+        self.run(theta, u, None, |t, i, yhat, _| y[(t, i)] = yhat);
         y
     }
 
-    /// Runs the model; `visit(t, output, yhat, d yhat / d theta)` per sample and output (the
-    /// row is empty unless `jacobian`).
+    /// The Jacobian columns of the parameters that move (all but those in `held`), in
+    /// layout order: those that move the state (`alpha`, `A`, `B`) first.
+    fn columns(&self, held: &[bool]) -> Vec<Column> {
+        let l = self.layout();
+        let (n, m, p) = (self.order, self.inputs.len(), self.outputs.len());
+        let mut cols = Vec::with_capacity(l.total);
+        for (j, f) in self.inputs.iter().enumerate() {
+            cols.extend((0..f.n_params()).map(|q| Column::Alpha(j, l.alpha[j] + q)));
+        }
+        cols.extend((0..n * n).map(|k| Column::A(k / n, k % n)));
+        cols.extend((0..n * m).map(|k| Column::B(k / m, k % m)));
+        cols.extend((0..p * n).map(|k| Column::C(k / n, k % n)));
+        if self.feedthrough {
+            cols.extend((0..p * m).map(|k| Column::D(k / m, k % m)));
+        }
+        for (i, g) in self.outputs.iter().enumerate() {
+            cols.extend((0..g.n_params()).map(|q| Column::Beta(i, l.beta[i] + q)));
+        }
+        debug_assert_eq!(cols.len(), l.total);
+        cols.into_iter()
+            .enumerate()
+            .filter(|(k, _)| !held.get(*k).copied().unwrap_or(false))
+            .map(|(_, c)| c)
+            .collect()
+    }
+
+    /// Runs the model; `visit(t, output, yhat, d yhat / d theta)` per sample and output, the
+    /// row over `cols` ([`Self::columns`]; empty when `cols` is `None`). The state
+    /// sensitivities `S` (`n x nd`, row-major) are carried for the `nd` columns that move the
+    /// state only, once per sample for all outputs; `A S` skips the zeros of `A` (the modal
+    /// chart holds all but its blocks at zero).
     fn run(
         &self,
         theta: &[f64],
         u: MatRef<'_, f64>,
-        jacobian: bool,
+        cols: Option<&[Column]>,
         mut visit: impl FnMut(usize, usize, f64, &[f64]),
     ) {
         let l = self.layout();
         let (n, m, p) = (self.order, self.inputs.len(), self.outputs.len());
-        let pp = l.total;
-        let th = |k: usize| theta[k];
+        let (a, b, c, d) = self.matrices(theta);
+        let cols = cols.unwrap_or(&[]);
+        let q = cols.len();
+        let nd = cols.iter().take_while(|c| c.moves_state()).count();
         let mut x = vec![0.0; n];
         let mut xn = vec![0.0; n];
         let mut w = vec![0.0; m];
-        // dw_j / dalpha_j, stored per input at its alpha offset
-        let mut dw = vec![0.0; pp];
-        let mut s = if jacobian { vec![0.0; n * pp] } else { vec![] };
-        let mut sn = if jacobian { vec![0.0; n * pp] } else { vec![] };
-        let mut dv = vec![0.0; if jacobian { pp } else { 0 }];
-        let mut row = vec![0.0; if jacobian { pp } else { 0 }];
-        let mut dg = vec![0.0; pp];
+        // dw_j / dalpha_j and dg_i / dbeta_i, stored at their theta offsets
+        let mut dw = vec![0.0; l.total];
+        let mut dg = vec![0.0; l.total];
+        let mut s = vec![0.0; n * nd];
+        let mut sn = vec![0.0; n * nd];
+        let mut row = vec![0.0; q];
+        // the input parameters' columns, and per output the static columns it moves
+        let alphas: Vec<(usize, usize, usize)> = cols[..nd]
+            .iter()
+            .enumerate()
+            .filter_map(|(cn, col)| match *col {
+                Column::Alpha(j, at) if self.feedthrough => Some((cn, j, at)),
+                _ => None,
+            })
+            .collect();
+        let mut own: Vec<Vec<(usize, Column)>> = vec![Vec::new(); p];
+        for (cn, col) in cols.iter().enumerate().skip(nd) {
+            if let Column::C(i, _) | Column::D(i, _) | Column::Beta(i, _) = *col {
+                own[i].push((cn, *col));
+            }
+        }
+        // per row of A, its non-zero entries
+        let nz: Vec<Vec<(usize, f64)>> = (0..n)
+            .map(|r| {
+                (0..n)
+                    .filter(|&k| a[(r, k)] != 0.0)
+                    .map(|k| (k, a[(r, k)]))
+                    .collect()
+            })
+            .collect();
         for t in 0..u.nrows() {
             for j in 0..m {
                 let np = self.inputs[j].n_params();
@@ -162,89 +220,94 @@ impl MimoHwStructure {
                     .0;
             }
             for i in 0..p {
-                let mut v = 0.0;
-                for k in 0..n {
-                    v += th(l.c + i * n + k) * x[k];
-                }
-                if self.feedthrough {
-                    for j in 0..m {
-                        v += th(l.d + i * m + j) * w[j];
-                    }
-                }
+                let v = (0..n).map(|k| c[(i, k)] * x[k]).sum::<f64>()
+                    + (0..m).map(|j| d[(i, j)] * w[j]).sum::<f64>();
                 let nb = self.outputs[i].n_params();
                 let b0 = l.beta[i];
                 let (yhat, gd) = self.outputs[i].eval(&theta[b0..b0 + nb], v, &mut dg[b0..b0 + nb]);
-                if jacobian {
-                    // dv_i = C_i S + dC_i x + D_i dw + dD_i w
-                    for k in 0..pp {
-                        let mut acc = 0.0;
-                        for r in 0..n {
-                            acc += th(l.c + i * n + r) * s[r * pp + k];
-                        }
-                        dv[k] = acc;
-                    }
-                    for r in 0..n {
-                        dv[l.c + i * n + r] += x[r];
-                    }
-                    if self.feedthrough {
-                        for j in 0..m {
-                            let dij = th(l.d + i * m + j);
-                            let a0 = l.alpha[j];
-                            for q in 0..self.inputs[j].n_params() {
-                                dv[a0 + q] += dij * dw[a0 + q];
+                if q > 0 {
+                    // dv_i = C_i S + dC_i x + D_i dw + dD_i w, times g_i'; + dg_i / dbeta_i
+                    let dyn_row = &mut row[..nd];
+                    dyn_row.fill(0.0);
+                    for k in 0..n {
+                        let cik = c[(i, k)];
+                        if cik != 0.0 {
+                            for (rv, sv) in dyn_row.iter_mut().zip(&s[k * nd..(k + 1) * nd]) {
+                                *rv += cik * sv;
                             }
-                            dv[l.d + i * m + j] += w[j];
                         }
                     }
-                    for k in 0..pp {
-                        row[k] = gd * dv[k];
+                    for &(cn, j, at) in &alphas {
+                        dyn_row[cn] += d[(i, j)] * dw[at];
                     }
-                    for q in 0..nb {
-                        row[b0 + q] += dg[b0 + q];
+                    dyn_row.iter_mut().for_each(|rv| *rv *= gd);
+                    row[nd..].fill(0.0);
+                    for &(cn, col) in &own[i] {
+                        row[cn] = match col {
+                            Column::C(_, k) => gd * x[k],
+                            Column::D(_, j) => gd * w[j],
+                            Column::Beta(_, at) => dg[at],
+                            _ => 0.0,
+                        };
                     }
                 }
                 visit(t, i, yhat, &row);
             }
-            // state update and sensitivities
+            // state update and sensitivities: S(t+1) = A S + dA x + dB w + B dw/dalpha
             for r in 0..n {
-                let mut acc = 0.0;
-                for k in 0..n {
-                    acc += th(l.a + r * n + k) * x[k];
-                }
-                for j in 0..m {
-                    acc += th(l.b + r * m + j) * w[j];
-                }
-                xn[r] = acc;
+                xn[r] = nz[r].iter().map(|&(k, akr)| akr * x[k]).sum::<f64>()
+                    + (0..m).map(|j| b[(r, j)] * w[j]).sum::<f64>();
             }
-            if jacobian {
+            if nd > 0 {
                 for r in 0..n {
-                    let out = &mut sn[r * pp..(r + 1) * pp];
-                    out.iter_mut().for_each(|v| *v = 0.0);
-                    for k in 0..n {
-                        let a = th(l.a + r * n + k);
-                        if a != 0.0 {
-                            let src = &s[k * pp..(k + 1) * pp];
-                            for q in 0..pp {
-                                out[q] += a * src[q];
-                            }
+                    let out = &mut sn[r * nd..(r + 1) * nd];
+                    out.fill(0.0);
+                    for &(k, ark) in &nz[r] {
+                        for (ov, sv) in out.iter_mut().zip(&s[k * nd..(k + 1) * nd]) {
+                            *ov += ark * sv;
                         }
                     }
-                    for k in 0..n {
-                        out[l.a + r * n + k] += x[k];
-                    }
-                    for j in 0..m {
-                        out[l.b + r * m + j] += w[j];
-                        let brj = th(l.b + r * m + j);
-                        let a0 = l.alpha[j];
-                        for q in 0..self.inputs[j].n_params() {
-                            out[a0 + q] += brj * dw[a0 + q];
+                    for (ov, col) in out.iter_mut().zip(cols) {
+                        match *col {
+                            Column::Alpha(j, at) => *ov += b[(r, j)] * dw[at],
+                            _ => break, // alpha first, then A and B
                         }
+                    }
+                }
+                for (cn, col) in cols[..nd].iter().enumerate() {
+                    match *col {
+                        Column::A(r, k) => sn[r * nd + cn] += x[k],
+                        Column::B(r, j) => sn[r * nd + cn] += w[j],
+                        _ => {}
                     }
                 }
                 std::mem::swap(&mut s, &mut sn);
             }
             std::mem::swap(&mut x, &mut xn);
         }
+    }
+}
+
+/// A Jacobian column: what its parameter is (with its `theta` offset for the nonlinearities).
+#[derive(Debug, Clone, Copy)]
+enum Column {
+    /// Parameter at `theta[at]` of input `j`'s nonlinearity.
+    Alpha(usize, usize),
+    /// `A[r, k]`.
+    A(usize, usize),
+    /// `B[r, j]`.
+    B(usize, usize),
+    /// `C[i, k]`.
+    C(usize, usize),
+    /// `D[i, j]`.
+    D(usize, usize),
+    /// Parameter at `theta[at]` of output `i`'s nonlinearity.
+    Beta(usize, usize),
+}
+
+impl Column {
+    fn moves_state(&self) -> bool {
+        matches!(self, Column::Alpha(..) | Column::A(..) | Column::B(..))
     }
 }
 
@@ -262,9 +325,18 @@ impl Problem for MimoHwProblem<'_> {
     }
 
     fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
-        let mut sums = NormalEquations::new(self.n_params(), jacobian);
+        if jacobian {
+            if let Some(mut ev) = self.evaluate_modal(theta)? {
+                // the cost at theta itself (the search compares it with its trial points)
+                ev.cost = self.evaluate(theta, false)?.cost;
+                return Ok(ev);
+            }
+        }
+        let cols = self.structure.columns(&[]);
+        let mut sums = NormalEquations::blocked(cols.len(), jacobian);
         for (u, y) in &self.records {
-            self.structure.run(theta, *u, jacobian, |t, i, yhat, jr| {
+            let c = jacobian.then_some(cols.as_slice());
+            self.structure.run(theta, *u, c, |t, i, yhat, jr| {
                 sums.add(y[(t, i)] - yhat, Some(jr))
             });
         }
@@ -313,5 +385,6 @@ pub fn estimate_mimo(
     minimize(&mut problem, theta0, options, observer)
 }
 
+mod modal;
 #[cfg(test)]
 mod tests;

@@ -357,7 +357,7 @@ impl Problem for HwProblem<'_> {
     }
 
     fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
-        let mut sums = NormalEquations::new(self.n_params(), jacobian);
+        let mut sums = NormalEquations::blocked(self.n_params(), jacobian);
         let mut row = Vec::with_capacity(self.n_params());
         for (u, y) in &self.records {
             let jac = if jacobian { Some(&mut row) } else { None };

@@ -16,7 +16,7 @@ use faer::Mat;
 
 /// The matrix an entry of [`similarity_tangent`] belongs to.
 #[derive(Clone, Copy)]
-pub(super) enum Part {
+pub(crate) enum Part {
     A,
     B,
     C,
@@ -26,7 +26,7 @@ pub(super) enum Part {
 /// `(A E - E A, -E B, C E)`, handed to `add(column, part, index, value)` with `index`
 /// row-major in that matrix (the time-domain predictor and the frequency-domain fit each
 /// place it in their own parameter layout).
-pub(super) fn similarity_tangent(
+pub(crate) fn similarity_tangent(
     a: &Mat<f64>,
     b: &Mat<f64>,
     c: &Mat<f64>,

@@ -11,7 +11,7 @@ use super::predictor::Predictor;
 use faer::{Mat, MatRef};
 
 /// A real block-diagonal (modal) form `Lambda = T^-1 Abar T` with 1x1 and 2x2 blocks.
-pub(super) struct Modal {
+pub(crate) struct Modal {
     pub t: Mat<f64>,
     pub ti: Mat<f64>,
     pub lam: Mat<f64>,
@@ -36,7 +36,7 @@ fn real_vector(t: &mut Mat<f64>, v: faer::ColRef<'_, faer::c64>, k: usize) {
 
 /// The modal form of `abar`, or `None` when its eigenvectors are ill-conditioned (then the
 /// plain structured evaluation is used).
-pub(super) fn modal_form(abar: MatRef<'_, f64>) -> Option<Modal> {
+pub(crate) fn modal_form(abar: MatRef<'_, f64>) -> Option<Modal> {
     use faer::linalg::solvers::DenseSolveCore;
     let n = abar.nrows();
     let eig = crate::realization::modal::eigen_decomposition(abar).ok()?;
@@ -124,45 +124,68 @@ fn right_block(tcol: &[Vec<f64>], src: &[f64], dst: &mut [f64], rows: usize) {
     }
 }
 
+/// Where a change of state basis acts in a parameter vector (row-major blocks): the `n x n`
+/// block at `a` (`A -> T^-T X T^T`), the `n x width` blocks in `left` (`B, K, x0 -> T^-T X`)
+/// and the `rows x n` block at `c` (`C -> X T^T`); everything else is unchanged.
+pub(crate) struct StateBlocks {
+    pub a: usize,
+    pub left: Vec<(usize, usize)>,
+    pub c: usize,
+    pub rows: usize,
+}
+
+/// `M^T X` for every column of `X`, for the modal change of basis `phi' = M phi` of the
+/// parameters laid out as `at` says. `O(n^2 (n + widths + rows))` per column, on contiguous
+/// slices.
+pub(crate) fn modal_mt_cols(md: &Modal, at: &StateBlocks, x: &Mat<f64>) -> Mat<f64> {
+    let n = md.t.nrows();
+    let l = at.rows;
+    let mut out = x.clone();
+    let tcol: Vec<Vec<f64>> = (0..n)
+        .map(|b| (0..n).map(|j| md.t[(j, b)]).collect())
+        .collect();
+    let ticol: Vec<Vec<f64>> = (0..n)
+        .map(|i| (0..n).map(|a| md.ti[(a, i)]).collect())
+        .collect();
+    let mut tmp = vec![0.0; n * n];
+    for c in 0..x.ncols() {
+        let xs = x.col_as_slice(c);
+        let os = out.col_as_slice_mut(c);
+        right_block(&tcol, &xs[at.a..at.a + n * n], &mut tmp, n);
+        left_block(&ticol, &tmp, &mut os[at.a..at.a + n * n], n);
+        for &(o, wd) in &at.left {
+            left_block(&ticol, &xs[o..o + n * wd], &mut os[o..o + n * wd], wd);
+        }
+        right_block(
+            &tcol,
+            &xs[at.c..at.c + l * n],
+            &mut os[at.c..at.c + l * n],
+            l,
+        );
+    }
+    out
+}
+
 impl Predictor<'_> {
     /// `M^T X` for every column of `X`, for the modal change of basis `phi' = M phi`
     /// (row-major blocks): `A -> T^-T X T^T`, `B, K, x0 -> T^-T X`, `C -> X T^T`, `D`
-    /// unchanged. `O(n^2 (n + m + l))` per column, on contiguous slices.
+    /// unchanged ([`modal_mt_cols`] in this predictor's layout).
     pub(super) fn modal_mt_cols(&self, md: &Modal, x: &Mat<f64>) -> Mat<f64> {
-        let (n, m, l) = (self.n, self.m, self.l);
         let off = self.offsets();
-        let mut out = x.clone();
-        let tcol: Vec<Vec<f64>> = (0..n)
-            .map(|b| (0..n).map(|j| md.t[(j, b)]).collect())
-            .collect();
-        let ticol: Vec<Vec<f64>> = (0..n)
-            .map(|i| (0..n).map(|a| md.ti[(a, i)]).collect())
-            .collect();
-        // blocks T^-T X (rows of the state): (offset, width)
-        let mut left = vec![(off.b, m)];
+        let mut left = vec![(off.b, self.m)];
         if let Some(k0) = off.k {
-            left.push((k0, l));
+            left.push((k0, self.l));
         }
         for o in self.x0_off.iter().flatten() {
             left.push((*o, 1));
         }
-        let mut tmp = vec![0.0; n * n];
-        for c in 0..x.ncols() {
-            let xs = x.col_as_slice(c);
-            let os = out.col_as_slice_mut(c);
-            right_block(&tcol, &xs[off.a..off.a + n * n], &mut tmp, n);
-            left_block(&ticol, &tmp, &mut os[off.a..off.a + n * n], n);
-            for &(o, wd) in &left {
-                left_block(&ticol, &xs[o..o + n * wd], &mut os[o..o + n * wd], wd);
-            }
-            right_block(
-                &tcol,
-                &xs[off.c..off.c + l * n],
-                &mut os[off.c..off.c + l * n],
-                l,
-            );
-        }
-        out
+        let at = StateBlocks {
+            a: off.a,
+            left,
+            c: off.c,
+            rows: self.l,
+        };
+        modal_mt_cols(md, &at, x)
     }
 
     /// `M^T x` for one vector (see [`Self::modal_mt_cols`]).

@@ -185,3 +185,98 @@ fn bad_starts_and_shapes_are_errors() {
     );
     assert!(r.is_err());
 }
+
+/// An order-3 structure with sigmoid networks in and out and feedthrough, its parameters
+/// with `A` having a complex pair and a real pole (not in modal form), a record, and the
+/// evaluation through the modal coordinates there.
+fn order3() -> (MimoHwStructure, Vec<f64>, Mat<f64>, Mat<f64>, Evaluation) {
+    let s = MimoHwStructure {
+        inputs: vec![Nonlinearity::Sigmoid { units: 2 }, Nonlinearity::Identity],
+        outputs: vec![
+            Nonlinearity::Sigmoid { units: 1 },
+            Nonlinearity::Polynomial { degree: 2 },
+        ],
+        order: 3,
+        feedthrough: true,
+    };
+    let mut th = vec![0.3, 1.1, 0.1, 0.5, 0.7, -0.2]; // input 0's network
+    th.extend([0.6, -0.3, 0.1, 0.3, 0.5, -0.2, 0.1, 0.2, -0.4]); // A
+    th.extend([1.0, 0.5, 0.2, -0.7, 0.4, 0.3]); // B
+    th.extend([0.6, 0.3, -0.4, 0.9, 0.1, 0.5]); // C
+    th.extend([0.1, -0.2, 0.05, 0.3]); // D
+    th.extend([0.8, 0.9, 0.1, 0.25]); // output networks
+    assert_eq!(th.len(), s.n_params());
+    let u = inputs(400, 5);
+    let y = Mat::from_fn(400, 2, |t, i| ((t * (i + 2)) as f64 * 0.29).cos());
+    let pr = MimoHwProblem {
+        structure: s.clone(),
+        records: vec![(u.as_ref(), y.as_ref())],
+    };
+    let ev = pr
+        .evaluate_modal(&th)
+        .unwrap()
+        .expect("the modal path applies");
+    (s, th, u, y, ev)
+}
+
+/// The Gauss-Newton products formed in the modal coordinates over the identifiable columns
+/// equal `J^T J` and `-J^T r` of a finite-difference Jacobian of the simulation over all
+/// parameters (the similarity directions included).
+#[test]
+fn modal_gauss_newton_matches_finite_differences() {
+    let (s, th, u, y, ev) = order3();
+    let sim = |th: &[f64]| s.simulate(th, u.as_ref());
+    let y0 = sim(&th);
+    let p = th.len();
+    let jac: Vec<Mat<f64>> = (0..p)
+        .map(|a| {
+            let h = 1e-6;
+            let (mut tp, mut tm) = (th.clone(), th.clone());
+            tp[a] += h;
+            tm[a] -= h;
+            (sim(&tp) - sim(&tm)) * faer::Scale(0.5 / h)
+        })
+        .collect();
+    let each = || (0..400).flat_map(|t| (0..2).map(move |i| (t, i)));
+    let cost: f64 = each()
+        .map(|(t, i)| 0.5 * (y[(t, i)] - y0[(t, i)]).powi(2))
+        .sum();
+    assert!((ev.cost - cost).abs() < 1e-9 * cost);
+    for a in 0..p {
+        let want: f64 = each()
+            .map(|(t, i)| -jac[a][(t, i)] * (y[(t, i)] - y0[(t, i)]))
+            .sum();
+        let got = ev.gradient[a];
+        assert!(
+            (got - want).abs() < 1e-5 * (1.0 + want.abs()),
+            "g {a}: {got} vs {want}"
+        );
+        for b in 0..p {
+            let want: f64 = each().map(|(t, i)| jac[a][(t, i)] * jac[b][(t, i)]).sum();
+            let got = ev.gauss_newton[(a, b)];
+            assert!(
+                (got - want).abs() < 1e-5 * (1.0 + want.abs()),
+                "H {a},{b}: {got} vs {want}"
+            );
+        }
+    }
+}
+
+/// The modal path and the plain one (every column formed) agree to rounding.
+#[test]
+fn modal_gauss_newton_matches_the_plain_products() {
+    let (s, th, u, y, ev) = order3();
+    let cols = s.columns(&[]);
+    let mut sums = NormalEquations::new(cols.len(), true);
+    s.run(&th, u.as_ref(), Some(&cols), |t, i, yhat, jr| {
+        sums.add(y[(t, i)] - yhat, Some(jr))
+    });
+    let plain = sums.finish();
+    let hmax = plain.gauss_newton.norm_max();
+    let dh = (&ev.gauss_newton - &plain.gauss_newton).norm_max();
+    assert!(dh < 1e-10 * hmax, "H differs by {dh} (max {hmax})");
+    let gmax = plain.gradient.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    for (a, b) in ev.gradient.iter().zip(&plain.gradient) {
+        assert!((a - b).abs() < 1e-10 * gmax, "g {a} vs {b}");
+    }
+}
