@@ -93,3 +93,44 @@ def test_bad_init():
                                          np.ones((2, 2)), dt=1.0)
     with pytest.raises(DataError, match="direct term"):
         sysid.nlssest(d, 3, init=fed, epochs=0, progress=False)
+
+
+def _hammerstein(n=1500):
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(n)
+    x = np.zeros(n + 1)
+    for t in range(n):
+        x[t + 1] = 0.8 * x[t] + 0.5 * np.tanh(2 * u[t])
+    return u, sysid.IOData(u, x[:-1], 1.0)
+
+
+def test_auto_trains_from_both_starts_and_keeps_where_training_ends_lower():
+    # the start's own validation need not rank where its training ends: both starts are
+    # trained (each as it would be alone) and the lower held-out error at the best epoch wins
+    u, d = _hammerstein()
+    kw = dict(hidden=8, epochs=4, progress=False)
+    m = sysid.nlssest(d, 1, **kw)
+    runs = m.info["starts"]
+    assert set(runs) == {"linear", "hammerstein-wiener"}
+    best = {k: r["validation"][r["best_epoch"]] for k, r in runs.items()}
+    assert min(best.values()) == best[m.info["start"]]
+    assert m.info["training"] == runs[m.info["start"]]
+    for k, r in runs.items():  # epoch 0 of each training is its start's validation error
+        assert r["validation"][0] == pytest.approx(m.info["start_validation"][k], rel=1e-12)
+    alone = sysid.nlssest(d, 1, init="linear", **kw)
+    assert alone.info["training"] == runs["linear"]
+    assert best[m.info["start"]] <= alone.info["training"]["validation"][
+        alone.info["training"]["best_epoch"]]
+
+
+def test_auto_stops_every_training_when_progress_says_so():
+    _, d = _hammerstein()
+    calls = []
+
+    def stop(epoch, val, train):
+        calls.append(epoch)
+        return False
+
+    m = sysid.nlssest(d, 1, hidden=8, epochs=4, progress=stop)
+    assert len(calls) == 1 and len(m.info["starts"]) == 1
+    assert m.info["training"]["stop"] == "cancelled"

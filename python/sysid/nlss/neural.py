@@ -265,12 +265,14 @@ def nlssest(
         Periods per experiment: the linear start is then the BLA's model.
     init : "auto", "linear", None, StateSpaceModel or HammersteinWienerSSModel
         The start. ``"linear"`` (or ``None``): the linear model (see ``periods``).
-        ``"auto"`` (default): that linear model or a Hammerstein-Wiener model
+        ``"auto"`` (default): that linear model and a Hammerstein-Wiener model
         (:func:`sysid.nlhw_ss` on the training parts in scaled channels, ``HW_UNITS = 3``
         sigmoid units per input and output, at most ``HW_ITER = 30`` iterations: the bound
-        on its cost), whichever has the lower validation error (the criterion below); the
-        Hammerstein-Wiener candidate is left out when the networks are not one hidden
-        layer wide enough for its units or its search finds no admissible start. A
+        on its cost), each trained (same seed and settings, the one with the lower
+        validation error first), the model with the lower validation error at its best
+        epoch returned (where a start's training ends is not ranked by the start's own
+        error); the Hammerstein-Wiener candidate is left out when the networks are not one
+        hidden layer wide enough for its units or its search finds no admissible start. A
         :class:`~sysid.StateSpaceModel` (engineering units) is a given linear start; a
         :class:`~sysid.HammersteinWienerSSModel` (engineering units, sigmoid-network or
         identity channels, no direct term from a nonlinear input channel) is embedded
@@ -280,15 +282,19 @@ def nlssest(
     seed : int
         Seeds the weights and the section sampling (same seed, same model).
     progress : bool or callable, optional
-        A bar over the epochs with the validation error (on a terminal by default); a
-        callable gets ``(epoch, validation_mse, train_mse)`` and may return ``False`` to stop.
+        A bar over the epochs with the validation error (on a terminal by default; one per
+        start trained); a callable gets ``(epoch, validation_mse, train_mse)`` (epochs
+        counted per start) and may return ``False`` to stop: no further start is then
+        trained.
 
     Returns
     -------
     NeuralStateSpaceModel
         ``info["training"]``: the validation and training errors per epoch, the best
         epoch, why it stopped; ``info["start"]``: ``"linear"`` or ``"hammerstein-wiener"``,
-        ``info["start_validation"]``: each candidate start's validation error.
+        ``info["start_validation"]``: each candidate start's validation error;
+        ``info["starts"]``: each trained start's ``training`` summary (``info["training"]``
+        is that of the start returned).
 
     Examples
     --------
@@ -341,20 +347,28 @@ def nlssest(
             if hw is not None:
                 cands.append(_hw_start(hw, sc, *args))
     scores = [_score(c, train, val) for c in cands]
-    best = int(np.argmin(scores))
-    start, lam, modal, H, kind = cands[best]
-    cb, close = iteration_callback(progress, "nlssest", epochs, unit="epoch", postfix=_errors)
-    try:
-        res = _sysid.neural_ss_train(start._struct(), start.params, train, val, epochs=epochs,
-                                     batch=batch, horizon=H, learning_rate=learning_rate,
-                                     patience=patience, seed=seed, progress=cb,
-                                     rates=_rates(start, lam, modal))
-    finally:
-        close()
+    done: dict[str, tuple[dict[str, Any], int]] = {}  # kind: (training, section length)
+    for i in sorted(range(len(cands)), key=lambda i: scores[i]):  # the better start first
+        start, lam, modal, H, kind = cands[i]
+        label = "nlssest" if len(cands) == 1 else f"nlssest ({kind} start)"
+        cb, close = iteration_callback(progress, label, epochs, unit="epoch", postfix=_errors)
+        try:
+            res = _sysid.neural_ss_train(start._struct(), start.params, train, val,
+                                         epochs=epochs, batch=batch, horizon=H,
+                                         learning_rate=learning_rate, patience=patience,
+                                         seed=seed, progress=cb, rates=_rates(start, lam, modal))
+        finally:
+            close()
+        done[kind] = res, H
+        if res["stop"] == "cancelled":  # the caller's progress said stop: no further start
+            break
+    kind = min(done, key=lambda k: _best(done[k][0]))  # a tie keeps the better start
+    res, H = done[kind]
+    runs = {k: {key: r[key] for key in ("validation", "train", "best_epoch", "stop",
+                                        "diverged")} for k, (r, _) in done.items()}
     info = {"method": "nlssest", "start": kind, "start_validation": dict(
                 zip([c[4] for c in cands], scores)),
-            "training": {k: res[k] for k in ("validation", "train", "best_epoch", "stop",
-                                              "diverged")}, "horizon": H, "seed": seed}
+            "training": runs[kind], "starts": runs, "horizon": H, "seed": seed}
     return NeuralStateSpaceModel(res["params"], dims=(n, data.n_inputs, data.n_outputs),
                                  hidden=hid, output_hidden=out, encoder_hidden=enc, lags=L,
                                  scaling=sc.to_dict(), dt=data.dt,
@@ -495,6 +509,13 @@ def _score(cand: tuple[Any, ...], train: list, val: list) -> float:
     r = _sysid.neural_ss_train(start._struct(), start.params, train, val, epochs=0,
                                horizon=H)
     return float(r["validation"][0])
+
+
+def _best(res: dict[str, Any]) -> float:
+    """A training's validation error at its best epoch (the one whose parameters it
+    returns; a non-finite one ranks last)."""
+    v = float(res["validation"][res["best_epoch"]])
+    return v if np.isfinite(v) else np.inf
 
 
 def _modal(m: StateSpaceModel) -> tuple[StateSpaceModel, np.ndarray, bool]:
