@@ -63,7 +63,7 @@ def oe_lines(data: Any, nb: Any, nf: Any, nk: Any, *, periods: Any, transient: A
         P = blockdiag([np.asarray(covs[i * nu + j])[:-1, :-1] for j in range(nu)])
         cov.append(P[np.ix_(idx, idx)])
     m.covariance = cov  # type: ignore[attr-defined]
-    from .estimators import _attach_uncertainty
+    from .uncertainty import attach_uncertainty as _attach_uncertainty
 
     _attach_uncertainty(m, cov, "pem", "frequency lines")
     return m, periodicity

@@ -153,8 +153,8 @@ def ar(data: Any, na: int, method: str = "fb", *, dt: float | None = None) -> An
     >>> bool(np.all(np.abs(m.a[0][0] - [-1.5, 0.7]) < 3 * m.std["a"][0][0]))
     True
     """
-    from ..polynomial.estimators import _attach_uncertainty
     from ..polynomial.model import PolynomialModel
+    from ..polynomial.uncertainty import attach_uncertainty as _attach_uncertainty
 
     if method not in _METHODS:
         raise DataError(f"method must be one of {', '.join(map(repr, _METHODS))}, got "
