@@ -23,7 +23,7 @@ from .. import _sysid
 from .._checks import as_int
 from .._progress import iteration_printer
 from ..data.iodata import IOData
-from ..errors import DataError, SysidError
+from ..errors import DataError
 from ..models.frd import FRD
 from ..pem.pem import _experiments
 from .delays import shift_taps
@@ -190,19 +190,7 @@ def greyest(
                         "resample the data or give the structure the data's sample time")
     fit = _LinearFit(data, structure, dt, focus, "estimate" if x0 is None else x0, noise,
                      weighting == "noise")
-    best = fit.run(fit.z0, max_iter, float(tol), cb)
-    starts: list[float | None] = []
-    if multistart:
-        gen = np.random.default_rng(rng)
-        for _ in range(multistart):
-            try:
-                r = fit.run(fit.random_start(gen), max_iter, float(tol), None)
-            except SysidError:
-                starts.append(None)
-                continue
-            starts.append(r["loss"])
-            if r["loss"] < best["loss"]:
-                best = r
+    best, starts = fit.best_of_starts(max_iter, float(tol), cb, multistart, rng, "loss")
     est = fit.result(best, starts)
     if periodicity is not None:  # periods="auto" found none: why the time domain
         est.info["periodicity"] = periodicity

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from ..errors import DataError, SysidError
+from ..errors import DataError
 from ..models.frd import FRD
 from ..pem.periodic import CRITERION, line_weights
 from .delays import tap_states
@@ -116,17 +116,5 @@ def greyest_lines(frd: FRD, structure: GreyBox, *, multistart: int, rng: Any, ma
     """:func:`sysid.greyest` on the lines of ``frd`` (internal: the caller checked the
     options; ``extra`` goes to ``info``: the periods, the transient, the detection)."""
     fit = _LineFit(structure, frd)
-    best = fit.run(fit.z0, max_iter, tol, progress)
-    starts: list[float | None] = []
-    if multistart:
-        gen = np.random.default_rng(rng)
-        for _ in range(multistart):
-            try:
-                r = fit.run(fit.random_start(gen), max_iter, tol, None)
-            except SysidError:
-                starts.append(None)
-                continue
-            starts.append(float(r["cost"]))
-            if r["cost"] < best["cost"]:
-                best = r
+    best, starts = fit.best_of_starts(max_iter, tol, progress, multistart, rng, "cost")
     return fit.result(best, starts, extra)

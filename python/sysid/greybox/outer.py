@@ -51,6 +51,31 @@ class OuterParameters:
             z[i] = gen.uniform(max(a, lo), min(b, hi))
         return z
 
+    def run(self, z0: np.ndarray, max_iter: int, tol: float, cb: Any) -> dict[str, Any]:
+        """One search from ``z0`` (each path's core call)."""
+        raise NotImplementedError
+
+    def best_of_starts(self, max_iter: int, tol: float, cb: Any, multistart: int, rng: Any,
+                       key: str) -> tuple[dict[str, Any], list[float | None]]:
+        """The search from the structure's values and from ``multistart`` random starts
+        (:meth:`random_start`, seeded by ``rng``; the bar ``cb`` only on the first): the one
+        with the lowest ``res[key]``, and each random start's ``key`` (``None``: it failed)."""
+        from ..errors import SysidError
+
+        best = self.run(self.z0, max_iter, tol, cb)
+        starts: list[float | None] = []
+        gen = np.random.default_rng(rng) if multistart else None
+        for _ in range(multistart):
+            try:
+                r = self.run(self.random_start(gen), max_iter, tol, None)  # type: ignore[arg-type]
+            except SysidError:
+                starts.append(None)
+                continue
+            starts.append(float(r[key]))
+            if r[key] < best[key]:
+                best = r
+        return best, starts
+
     def estimate(self, res: dict[str, Any], make: Callable[[GreyBox, dict[str, float],
                                                                  dict[str, Any] | None], Any],
                  info: dict[str, Any]) -> tuple[ParameterTable, np.ndarray, GreyBox, Any]:
