@@ -22,15 +22,9 @@ import numpy as np
 
 from .._progress import Bar
 from ..data.iodata import IOData
-from ..validation.crossval import TOL, simulation_errors, simulation_fit
+from ..validation.crossval import simulation_errors, simulation_fit, slack, wins_every_block
 
 __all__ = ["Board", "slack", "bic"]
-
-
-def slack(best: float) -> float:
-    """Fit points a simpler candidate may give up against the best and still be preferred:
-    ``TOL`` (0.5), at most 5 % of the best's error (noise-free data: round-off only)."""
-    return max(min(TOL, 0.05 * (100.0 - best)), 1e-6) if np.isfinite(best) else 0.0
 
 
 def trimmed_mean(fits: Any) -> float:
@@ -226,9 +220,8 @@ class Board:
 
     def _wins(self, fu: list[float], fs: list[float]) -> bool:
         """Better on every block, and by more than the slack on the score."""
-        return (len(fu) == len(fs) == len(self.folds)
-                and all(a > b for a, b in zip(fu, fs))
-                and trimmed_mean(fu) > trimmed_mean(fs) + slack(trimmed_mean(fu)))
+        return len(fu) == len(self.folds) and wins_every_block(fu, fs, trimmed_mean(fu),
+                                                               trimmed_mean(fs))
 
     def _trend_fits(self, rows: list[dict[str, Any]], detrended: bool
                     ) -> list[list[float]]:

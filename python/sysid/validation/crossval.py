@@ -36,7 +36,8 @@ import numpy as np
 from ..data.iodata import IOData
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
-           "simulation_errors", "simulation_fit", "stable_first"]
+           "simulation_errors", "simulation_fit", "slack", "stable_first",
+           "wins_every_block"]
 
 #: fit points a smaller order may give up and still win (held-out fits of half-record
 #: models scatter by about this much between neighbouring orders)
@@ -241,10 +242,20 @@ def simulation_fit(model: Any, data: IOData, trend: bool = False) -> float:
     return out if np.isfinite(out) else -np.inf
 
 
-def _slack(best: float, tol: float = TOL) -> float:
-    """Fit points the blocks cannot tell from ``best``: ``tol``, at most 5 % of the best's
-    error (noise-free data: round-off only)."""
-    return max(min(tol, 0.05 * (100.0 - best)), 1e-6)
+def slack(best: float, tol: float = TOL) -> float:
+    """Fit points the held-out blocks cannot tell from ``best``: ``tol``, at most 5 % of the
+    best's error (noise-free data: round-off only); 0 for a score that is not finite. A
+    simpler candidate may give up this much against the best and still be preferred."""
+    return max(min(tol, 0.05 * (100.0 - best)), 1e-6) if np.isfinite(best) else 0.0
+
+
+def wins_every_block(fits: Any, ref: Any, score: float, ref_score: float) -> bool:
+    """``fits`` (per held-out block) better than ``ref`` on every block, and its ``score``
+    above ``ref_score`` by more than :func:`slack`: the sign test (at ``2**-K``) by which
+    the data insist on an unstable model against the best stable one
+    (:func:`stable_first`, :meth:`sysid.identify.board.Board.insisting`)."""
+    return (len(fits) == len(ref) and all(a > b for a, b in zip(fits, ref))
+            and score > ref_score + slack(score))
 
 
 def choose(table: dict[int, float], tol: float = TOL) -> tuple[int, str]:
@@ -256,10 +267,10 @@ def choose(table: dict[int, float], tol: float = TOL) -> tuple[int, str]:
         raise ValueError("no order gave a model that simulates the held-out data")
     best_n = max(finite, key=lambda n: finite[n])
     best = finite[best_n]
-    slack = _slack(best, tol)
-    n = min(o for o, f in finite.items() if f >= best - slack)
+    margin = slack(best, tol)
+    n = min(o for o, f in finite.items() if f >= best - margin)
     why = (f"held-out simulation fit {finite[n]:.1f} % at order {n}"
-           + (f" (best {best:.1f} % at order {best_n}; a smaller order within {slack:.2g} "
+           + (f" (best {best:.1f} % at order {best_n}; a smaller order within {margin:.2g} "
               "points is preferred)" if n != best_n else " (the best)"))
     return n, why
 
@@ -394,8 +405,7 @@ def stable_first(score: dict[int, float], folds: dict[int, list[float]], unstabl
     best_s = max(stable, key=lambda n: stable[n])
     ref = folds[best_s]
     insisted = {n for n in unstable if np.isfinite(score[n])
-                and len(folds[n]) == len(ref) and all(a > b for a, b in zip(folds[n], ref))
-                and score[n] > stable[best_s] + _slack(score[n])}
+                and wins_every_block(folds[n], ref, score[n], stable[best_s])}
     allowed = set(score) - (unstable - insisted)
     shown = sorted(n for n in unstable - insisted if np.isfinite(score[n]))
     if not shown:
