@@ -7,8 +7,9 @@
 3. Candidates are scored on blocks of the estimation record held out from their fit: the
    record is cut into five contiguous blocks (fewer on short records; several experiments:
    one each), each held out once while the rest fits the candidate, which then simulates
-   it (initial state fitted); the score is the mean of the five held-out fits without the
-   lowest and the highest (:mod:`.board`); a block where every output stands still is left
+   it (initial state fitted); the score is the fit of the held-out blocks pooled (each
+   weighs its output variation), without the block where it fits worst and the one where it
+   fits best (:mod:`.board`); a block where every output stands still is left
    out (:func:`_informative`). Candidates: every subspace weighting (MOESP,
    N4SID, CVA) at every order the horizon allows (up to 20), with and without feedthrough;
    the best of each of the smallest orders near the best refined by prediction-error search
@@ -107,8 +108,8 @@ def _informative(parts: list[tuple[IOData, IOData]], data: IOData
     """The folds whose held-out block has output variation to score against, and how many
     were dropped. A block where every output stands still (a logger that ran on after the
     test, a held or padded signal) has no fit: the fit divides by the block's variation, so
-    every candidate scored -inf there and the trimmed mean lost its one atypical block to it
-    (the next one, a quiet stretch, then ranked the candidates alone). Still blocks are
+    every candidate scored -inf there and the trimmed score lost its one atypical block to
+    it. Still blocks are
     dropped, unless fewer than two would remain; they stay in the fitted parts.
 
     Examples
@@ -498,7 +499,8 @@ def identify(
     for r in ranked:
         r["chosen"] = r is chosen
     rows = [{k: v for k, v in r.items()
-             if k not in ("refit", "fit_fn", "start", "stabilised", "fold_models")}
+             if k not in ("refit", "fit_fn", "start", "stabilised", "fold_models",
+                          "fold_output_fits")}
             for r in ranked]
     desc = (f"{chosen['family']}"
             + (f" ({chosen['focus']} focus)" if chosen["focus"] else "")
