@@ -318,3 +318,13 @@ def test_a_refinement_better_where_the_output_moves_is_not_stopped_by_quiet_bloc
     below = [a < b for a, b in zip(row["fold_fits"], start["fold_fits"])]
     assert len(below) == 5 and sum(below) >= 3  # below its start on most blocks by count
     assert not row.get("worse_than_start") and board.best() is row
+
+
+def test_thin_held_out_evidence_is_reported():
+    # the output moves mostly in one of the five blocks: the choice rests on it, and the
+    # checks say so; an evenly excited record has no such note
+    est = _operating_points(4, 400, 80)
+    res = sysid.identify(est, refine=False, progress=False)
+    assert "one of the 5 held-out blocks" in res.checks["held_out_evidence"]
+    res = sysid.identify(_operating_points(4, 400, None), refine=False, progress=False)
+    assert "held_out_evidence" not in res.checks

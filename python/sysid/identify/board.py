@@ -133,6 +133,12 @@ class Board:
             self.out_of_time = True
         return not self.out_of_time
 
+    def effective_blocks(self) -> float:
+        """The effective number of held-out blocks, ``1 / sum(share^2)`` of their shares of
+        the output variation (Kish's effective sample size): the count when they vary alike,
+        about 1 when one block holds nearly all of it (the score then rests on it alone)."""
+        return float(1.0 / np.sum(self.shares ** 2)) if np.sum(self.shares) > 0 else 0.0
+
     def score(self, fits: Any) -> float:
         """:func:`held_out_score` of per-output fits on the first ``len(fits)`` blocks."""
         return held_out_score(fits, self.weights[:len(fits)])

@@ -10,10 +10,11 @@
    it (initial state fitted); the score is the fit of the held-out blocks pooled (each
    weighs its output variation), without the block where it fits worst and the one where it
    fits best (:mod:`.board`); a block where every output stands still is left
-   out (:func:`_informative`). Candidates: every subspace weighting (MOESP,
-   N4SID, CVA) at every order the horizon allows (up to 20), with and without feedthrough;
-   the best of each of the smallest orders near the best refined by prediction-error search
-   on the simulation error
+   out (:func:`_informative`); ``checks["held_out_evidence"]`` notes when one block holds
+   nearly all the output variation (fewer than two effective blocks). Candidates: every
+   subspace weighting (MOESP, N4SID, CVA) at every order the horizon allows (up to 20), with
+   and without feedthrough; the best of each of the smallest orders near the best refined by
+   prediction-error search on the simulation error
    (every output's errors relative to its scale, as the fit % counts them: ``pem``'s
    ``weighting="output"``) and the best one on the prediction error; output-error models for
    one input and output. A refinement scored clearly below its start on the held-out blocks
@@ -458,6 +459,14 @@ def identify(
     with Bar(None, "identify", unit="candidates", enabled=show(progress)) as bar:
         board = Board(parts, bar, deadline)
         board.whole = centred
+        blocks = board.effective_blocks()
+        if blocks < 2.0:
+            checks["held_out_evidence"] = (
+                f"thin: the output varies mostly in one of the {len(parts)} held-out blocks "
+                f"(their effective number, by each block's share of the output variation, is "
+                f"{blocks:.1f}), so the choice rests on that block alone; data that move the "
+                f"plant otherwise (other amplitudes or frequencies) may rank the candidates "
+                f"differently: a longer, evenly excited record makes it firmer")
         _subspace_candidates(board, centred, methods, max_order)
         if refine:
             _refined_candidates(board)
