@@ -2,14 +2,25 @@
 record held out from their fit, ranked, and the rules that pick one.
 
 Each candidate is fitted on every fold's fitted part and simulated on its held-out block
-(initial state and a constant offset per output fitted, :func:`simulation_fit`). Its score is
-the **trimmed mean** of the held-out fits over the folds, without the lowest and the highest
-(:func:`trimmed_mean`; the median for up to four blocks): a record often holds one block unlike
-the others (a saturation, a change of operating point, a stretch where some input is idle), and
-the mean of the fits would then rank the candidates by that block alone; the trimmed mean ranks
-them by what they do on the typical stretches of the record, which is what fresh data from the
-same plant will be, and with less noise than the median of five (which rests on one block).
-The mean and every fold's fit are kept in the leaderboard.
+(initial state and a constant offset per output fitted,
+:func:`sysid.validation.crossval.simulation_fit`). Its score (:func:`held_out_score`) is
+the fit of the held-out blocks **pooled**, per output ``100 (1 - sqrt(sum |e_k|^2 / sum
+|y_k - mean(y_k)|^2))`` over the blocks ``k``, **trimmed**: without the block where the
+candidate fits worst and the one where it fits best (from three blocks on). A record often
+holds one block unlike the others (a saturation, a change of operating point, a stretch
+where some input is idle), and the pooled fit would then rank the candidates by that block
+alone; without it they are ranked by what they do on the typical stretches of the record,
+which is what fresh data from the same plant will be.
+
+Pooled, not averaged: the fit on fresh data is one ratio of error to output variation over the
+whole record, and its estimate from the blocks is the ratio of their sums (the ratio
+estimator), not the mean of the blocks' ratios. The mean of ratios gives a quiet block (an
+operating point where the output barely moves, the tail of a decaying test) as much weight as
+a lively one, and there the fit divides by a tiny variation: it swings by tens of points
+between candidates for errors a lively block would not notice, and ranks them alone (on a
+record whose last blocks are quiet, every candidate scored far below zero there and the
+choice followed that noise). Pooled, each block weighs what its output variation weighs in
+the record. The mean and every fold's fit are kept in the leaderboard.
 """
 
 from __future__ import annotations
@@ -22,19 +33,59 @@ import numpy as np
 
 from .._progress import Bar
 from ..data.iodata import IOData
-from ..validation.crossval import simulation_errors, simulation_fit, slack, wins_every_block
+from ..validation.crossval import output_fits, simulation_errors, slack, wins_every_block
 
-__all__ = ["Board", "slack", "bic"]
+__all__ = ["Board", "slack", "bic", "held_out_score"]
 
 
-def trimmed_mean(fits: Any) -> float:
-    """The mean of the held-out fits without the lowest and the highest (the median for up
-    to four blocks)."""
-    f = np.sort(np.asarray(fits, float))
-    if f.size <= 4:
-        return float(np.median(f))
-    with np.errstate(invalid="ignore"):
-        return float(np.mean(f[1:-1]))
+def block_fit(fits: Any) -> float:
+    """A block's fit: the mean over its outputs (those that move), ``-inf`` when none does."""
+    f = np.asarray(fits, float)
+    f = f[~np.isnan(f)]
+    return float(np.mean(f)) if f.size else -np.inf
+
+
+def held_out_score(fits: Any, weights: Any = None) -> float:
+    """The held-out score of a candidate from its fits on the blocks: pooled over the blocks,
+    without the one where it fits worst and the one where it fits best (from three blocks on).
+
+    ``fits`` is ``(blocks, outputs)`` (or one value per block), the fit % of every output on
+    every block; ``weights`` the same shape (or per block), the output variation of each
+    block, ``|y_k - mean(y_k)|^2`` (default: equal). Per output, the kept blocks' squared
+    errors ``(1 - f / 100)^2 w`` and variations ``w`` are summed and their ratio is the
+    pooled fit (the fit of the blocks as one record); the score is the mean over outputs.
+
+    Examples
+    --------
+    >>> from sysid.identify.board import held_out_score
+    >>> round(held_out_score([10.0, 80.0, 90.0, 90.0, 99.0]), 2)  # the extremes left out
+    85.86
+    >>> fits = [90.0, 95.0, -100.0, -120.0, -150.0]  # two lively blocks, three quiet ones
+    >>> round(held_out_score(fits), 2), round(held_out_score(fits, [1, 1, 0.01, 0.01, 0.01]), 2)
+    (-71.76, 68.94)
+    """
+    F = np.asarray(fits, float)
+    F = F[:, None] if F.ndim == 1 else F
+    W = np.ones_like(F) if weights is None else np.asarray(weights, float)
+    W = np.broadcast_to(W[:, None] if W.ndim == 1 else W, F.shape)
+    keep = np.arange(F.shape[0])
+    if F.shape[0] >= 3:
+        keep = np.sort(np.argsort([block_fit(f) for f in F], kind="stable")[1:-1])
+    out = []
+    with np.errstate(all="ignore"):
+        for f, w in zip(F[keep].T, W[keep].T):
+            ok = (w > 0) & ~np.isnan(f)
+            if np.any(ok):
+                out.append(100.0 * (1.0 - np.sqrt(np.sum((1.0 - f[ok] / 100.0) ** 2 * w[ok])
+                                                  / np.sum(w[ok]))))
+    score = float(np.mean(out)) if out else -np.inf
+    return score if np.isfinite(score) else -np.inf
+
+
+def variation(data: IOData) -> np.ndarray:
+    """Per output, ``|y - mean(y)|^2`` summed over the experiments of ``data`` (each about
+    its own mean): the weight of a held-out block in :func:`held_out_score`."""
+    return np.asarray(sum(np.sum((y - y.mean(0)) ** 2, axis=0) for _, y in data.experiments))
 
 
 def bic(model: Any, data: IOData) -> float:
@@ -63,6 +114,11 @@ class Board:
                  deadline: float | None = None) -> None:
         self.rows: list[dict[str, Any]] = []
         self.folds, self.bar, self.deadline = folds, bar, deadline
+        #: (blocks, outputs): every held-out block's output variation (:func:`held_out_score`)
+        self.weights = np.array([variation(held) for _, held in folds])
+        #: every block's share of the output variation of all blocks (mean over outputs)
+        total = self.weights.sum(0)
+        self.shares = np.mean(self.weights / np.where(total > 0, total, 1.0), axis=1)
         self.out_of_time = False
         #: the whole record (its refinements' fold fits are further starts of their re-fit)
         self.whole: IOData | None = None
@@ -76,6 +132,16 @@ class Board:
         if self.deadline is not None and time.process_time() > self.deadline:
             self.out_of_time = True
         return not self.out_of_time
+
+    def effective_blocks(self) -> float:
+        """The effective number of held-out blocks, ``1 / sum(share^2)`` of their shares of
+        the output variation (Kish's effective sample size): the count when they vary alike,
+        about 1 when one block holds nearly all of it (the score then rests on it alone)."""
+        return float(1.0 / np.sum(self.shares ** 2)) if np.sum(self.shares) > 0 else 0.0
+
+    def score(self, fits: Any) -> float:
+        """:func:`held_out_score` of per-output fits on the first ``len(fits)`` blocks."""
+        return held_out_score(fits, self.weights[:len(fits)])
 
     def stopper(self) -> Any:
         """A progress callback for iterative fits: stops them once the budget is spent."""
@@ -97,29 +163,31 @@ class Board:
                                "fit_fn": fit_fn, "start": start, "note": ""}
         hopeless = False
         try:
-            fits, rho = [], 0.0
+            fits, outs, rho = [], [], 0.0
             for k, (_, held) in enumerate(self.folds):
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
                     model = fit_fn(k)
-                fits.append(simulation_fit(model, held))
+                outs.append(output_fits(model, held))
+                fits.append(block_fit(outs[-1]))
                 if start is not None:  # a refinement's fold fits: starts for its re-fit
                     row.setdefault("fold_models", []).append(model)
                 poles = model.poles()
                 rho = max(rho, float(np.max(np.abs(poles))) if len(poles) else 0.0)
-                if start is not None and self._below_start(fits, start):
+                if start is not None and self._below_start(fits, outs, start):
                     hopeless = True  # the remaining blocks cannot save it: not fitted
                     break
             f = np.asarray(fits)
-            row["held_out_fit"] = trimmed_mean(f)
+            row["held_out_fit"] = self.score(outs)
             row["mean_fit"] = float(np.mean(f)) if np.all(np.isfinite(f)) else -np.inf
             row["fold_fits"] = [float(x) for x in f]
+            row["fold_output_fits"] = outs
             row["max_abs_pole"] = rho
             row["stable"] = rho < 1.0
         except KeyboardInterrupt:
             raise
         except Exception as e:  # noqa: BLE001 - a failed candidate is listed, not raised
-            row.update(held_out_fit=-np.inf, mean_fit=-np.inf, fold_fits=[],
+            row.update(held_out_fit=-np.inf, mean_fit=-np.inf, fold_fits=[], fold_output_fits=[],
                        max_abs_pole=np.nan, stable=False,
                        note=f"{type(e).__name__}: {e}"[:120])
         if hopeless:
@@ -140,10 +208,13 @@ class Board:
         self.bar.update(1, best=f"{self.best_fit():.1f}%")
         return row
 
-    def _below_start(self, fits: list[float], start: dict[str, Any]) -> bool:
+    def _below_start(self, fits: list[float], outs: list[np.ndarray], start: dict[str, Any]
+                     ) -> bool:
         """A refinement below its start, or below the best stable candidate scored so far
-        (by more than :func:`slack`), on most of the held-out blocks, whatever it does on the
-        blocks not yet scored: no typical stretch of the record favours it; or one whose
+        (by more than :func:`slack`), on most of the held-out blocks (blocks holding more
+        than half of their output variation, as the score weighs them: most of them when
+        they vary alike), whatever it does on the blocks not yet scored: no typical stretch
+        of the record favours it; or one whose
         score would stay below theirs by more than the slack even if it did as well as they
         do, plus the slack, on every block not yet scored: it cannot catch up. It is not
         fitted on the remaining blocks and not chosen (the costly refinements of high orders
@@ -155,12 +226,14 @@ class Board:
             if len(ref) != len(self.folds):
                 continue
             s = slack(ref_row["held_out_fit"])
-            if sum(a < b - s for a, b in zip(fits, ref)) > len(self.folds) // 2:
+            below = sum(w for w, a, b in zip(self.shares, fits, ref) if a < b - s)
+            if below > 0.5 + 1e-9:
                 return True
             # even as good as the reference plus the slack on every block not yet scored, its
             # score would stay below the reference's by more than the slack
-            if len(fits) < len(ref) and trimmed_mean(
-                    list(fits) + [b + s for b in ref[len(fits):]]) < ref_row["held_out_fit"] - s:
+            more = ref_row["fold_output_fits"][len(fits):]
+            if len(fits) < len(ref) and self.score(
+                    list(outs) + [b + s for b in more]) < ref_row["held_out_fit"] - s:
                 return True
         return False
 
@@ -188,10 +261,14 @@ class Board:
     def insisting(self) -> dict[str, Any] | None:
         """An unstable candidate the data insist on: better than the best stable candidate
         on every held-out block (a sign test at ``2**-K``, K >= 4 blocks) and by more than
-        the slack on the score (an integrating or open-loop unstable plant), also once the
+        the slack on the score (an integrating or open-loop unstable plant), and so against
+        every stable candidate the blocks cannot tell from the best stable one
+        (:meth:`is_near`: any of them could be the best, the top score being the maximum of
+        noisy scores; a test against the top one alone passes by the luck of which it is
+        far more often than ``2**-K``), also once the
         record's drift is taken out (:meth:`_trend_fits`; otherwise it follows a drift and
         :attr:`drift` records it). The best scoring such candidate is returned, not the best
-        scoring unstable one: the trimmed mean forgives one block, and an unstable model
+        scoring unstable one: the trimmed score forgives one block, and an unstable model
         that diverges on one block (a fast unstable mode the other blocks do not excite) is
         just what the sign test must not pass. Once the data insist, the unstable candidates
         that do not win on every block are not eligible (``not_insisted``): the choice among
@@ -204,7 +281,11 @@ class Board:
             best_u = max(unstable, key=lambda r: r["held_out_fit"])
             return best_u if all(np.isfinite(best_u["fold_fits"])) else None
         best_s = max(stable, key=lambda r: r["held_out_fit"])
-        winners = [r for r in unstable if self._wins(r["fold_fits"], best_s["fold_fits"])]
+        # every stable candidate the blocks cannot tell from the best stable one could be
+        # it (the best score is the maximum of noisy scores): the test holds against each
+        refs = [r for r in stable if self.is_near(r, best_s)]
+        winners = [r for r in unstable if all(
+            self._wins(r["fold_output_fits"], s["fold_output_fits"]) for s in refs)]
         if not winners:
             return None
         best_u = max(winners, key=lambda r: r["held_out_fit"])
@@ -218,13 +299,15 @@ class Board:
         self.drift = {"unstable": best_u, "stable": best_s}
         return None
 
-    def _wins(self, fu: list[float], fs: list[float]) -> bool:
-        """Better on every block, and by more than the slack on the score."""
-        return len(fu) == len(self.folds) and wins_every_block(fu, fs, trimmed_mean(fu),
-                                                               trimmed_mean(fs))
+    def _wins(self, ou: list[Any], os: list[Any]) -> bool:
+        """Better on every block, and by more than the slack on the score (per-output fits
+        on every block)."""
+        return len(ou) == len(self.folds) == len(os) and wins_every_block(
+            [block_fit(f) for f in ou], [block_fit(f) for f in os], self.score(ou),
+            self.score(os))
 
     def _trend_fits(self, rows: list[dict[str, Any]], detrended: bool
-                    ) -> list[list[float]]:
+                    ) -> list[list[np.ndarray]]:
         """The held-out fits of ``rows`` with a straight line per output fitted on every
         held-out block (with the initial state), the models fitted on every fold's fitted
         part as scored (``detrended=False``) or re-fitted on it with a straight line removed
@@ -235,7 +318,7 @@ class Board:
         plant, and the data do not insist on it."""
         from ..data.preprocessing import detrend
 
-        fits: list[list[float]] = [[] for _ in rows]
+        fits: list[list[np.ndarray]] = [[] for _ in rows]
         for k, (fit_part, held) in enumerate(self.folds):
             part = detrend(fit_part, "linear") if detrended else None
             for i, r in enumerate(rows):
@@ -243,11 +326,11 @@ class Board:
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore")
                         model = r["refit"](part) if detrended else r["fit_fn"](k)
-                    fits[i].append(simulation_fit(model, held, trend=True))
+                    fits[i].append(output_fits(model, held, trend=True))
                 except KeyboardInterrupt:
                     raise
                 except Exception:  # noqa: BLE001 - a fit that fails now scores -inf
-                    fits[i].append(-np.inf)
+                    fits[i].append(np.full(held.n_outputs, -np.inf))
         return fits
 
     def near_best(self, stable_only: bool = True) -> list[dict[str, Any]]:

@@ -7,12 +7,14 @@
 3. Candidates are scored on blocks of the estimation record held out from their fit: the
    record is cut into five contiguous blocks (fewer on short records; several experiments:
    one each), each held out once while the rest fits the candidate, which then simulates
-   it (initial state fitted); the score is the mean of the five held-out fits without the
-   lowest and the highest (:mod:`.board`); a block where every output stands still is left
-   out (:func:`_informative`). Candidates: every subspace weighting (MOESP,
-   N4SID, CVA) at every order the horizon allows (up to 20), with and without feedthrough;
-   the best of each of the smallest orders near the best refined by prediction-error search
-   on the simulation error
+   it (initial state fitted); the score is the fit of the held-out blocks pooled (each
+   weighs its output variation), without the block where it fits worst and the one where it
+   fits best (:mod:`.board`); a block where every output stands still is left
+   out (:func:`_informative`); ``checks["held_out_evidence"]`` notes when one block holds
+   nearly all the output variation (fewer than two effective blocks). Candidates: every
+   subspace weighting (MOESP, N4SID, CVA) at every order the horizon allows (up to 20), with
+   and without feedthrough; the best of each of the smallest orders near the best refined by
+   prediction-error search on the simulation error
    (every output's errors relative to its scale, as the fit % counts them: ``pem``'s
    ``weighting="output"``) and the best one on the prediction error; output-error models for
    one input and output. A refinement scored clearly below its start on the held-out blocks
@@ -107,8 +109,8 @@ def _informative(parts: list[tuple[IOData, IOData]], data: IOData
     """The folds whose held-out block has output variation to score against, and how many
     were dropped. A block where every output stands still (a logger that ran on after the
     test, a held or padded signal) has no fit: the fit divides by the block's variation, so
-    every candidate scored -inf there and the trimmed mean lost its one atypical block to it
-    (the next one, a quiet stretch, then ranked the candidates alone). Still blocks are
+    every candidate scored -inf there and the trimmed score lost its one atypical block to
+    it. Still blocks are
     dropped, unless fewer than two would remain; they stay in the fitted parts.
 
     Examples
@@ -457,6 +459,14 @@ def identify(
     with Bar(None, "identify", unit="candidates", enabled=show(progress)) as bar:
         board = Board(parts, bar, deadline)
         board.whole = centred
+        blocks = board.effective_blocks()
+        if blocks < 2.0:
+            checks["held_out_evidence"] = (
+                f"thin: the output varies mostly in one of the {len(parts)} held-out blocks "
+                f"(their effective number, by each block's share of the output variation, is "
+                f"{blocks:.1f}), so the choice rests on that block alone; data that move the "
+                f"plant otherwise (other amplitudes or frequencies) may rank the candidates "
+                f"differently: a longer, evenly excited record makes it firmer")
         _subspace_candidates(board, centred, methods, max_order)
         if refine:
             _refined_candidates(board)
@@ -498,7 +508,8 @@ def identify(
     for r in ranked:
         r["chosen"] = r is chosen
     rows = [{k: v for k, v in r.items()
-             if k not in ("refit", "fit_fn", "start", "stabilised", "fold_models")}
+             if k not in ("refit", "fit_fn", "start", "stabilised", "fold_models",
+                          "fold_output_fits")}
             for r in ranked]
     desc = (f"{chosen['family']}"
             + (f" ({chosen['focus']} focus)" if chosen["focus"] else "")

@@ -104,9 +104,10 @@ class IdentifyResult:
         The chosen model, re-fitted on the whole estimation record (predicts raw data).
     leaderboard : list of dict
         Every candidate: family, order, feedthrough, focus, criterion, held-out fit (%, the
-        mean without the lowest and highest, over the blocks of the estimation record, of the
-        simulation fit of the model fitted on the rest), mean fit and ``fold_fits`` (every
-        block's), stability (every fold's model), seconds, a note, and ``chosen``.
+        simulation fit of the model fitted on the rest of the estimation record, on the
+        held-out blocks pooled, without the one where it fits worst and the one where it
+        fits best: :func:`sysid.identify.board.held_out_score`), mean fit and ``fold_fits``
+        (every block's), stability (every fold's model), seconds, a note, and ``chosen``.
     choice : str
         The chosen row, in words.
     checks : dict

@@ -36,7 +36,7 @@ import numpy as np
 from ..data.iodata import IOData
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
-           "simulation_errors", "simulation_fit", "slack", "stable_first",
+           "output_fits", "simulation_errors", "simulation_fit", "slack", "stable_first",
            "wins_every_block"]
 
 #: fit points a smaller order may give up and still win (held-out fits of half-record
@@ -240,6 +240,33 @@ def simulation_fit(model: Any, data: IOData, trend: bool = False) -> float:
             fits.append(np.nanmean(f))
     out = float(np.mean(fits))
     return out if np.isfinite(out) else -np.inf
+
+
+def output_fits(model: Any, data: IOData, trend: bool = False) -> np.ndarray:
+    """Per output, the simulation fit (NRMSE %) of ``model`` on ``data`` with its
+    experiments pooled (``100 (1 - |e| / |y - mean(y)|)``, sums of squares over the
+    experiments, each about its own mean; initial state and offset fitted as in
+    :func:`simulation_fit`); ``-inf`` for every output when the model diverges, NaN for an
+    output that stands still. For one experiment their mean is :func:`simulation_fit`.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.crossval import output_fits
+    >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0], [2.0]], dt=1.0)
+    >>> u = np.random.default_rng(0).standard_normal(200)
+    >>> output_fits(m, sysid.IOData(u=u, y=m.simulate(u))).round(6)
+    array([100., 100.])
+    """
+    try:
+        errs = simulation_errors(model, data, trend)
+    except Exception:  # noqa: BLE001 - a model that cannot be simulated scores -inf
+        return np.full(data.n_outputs, -np.inf)
+    err = sum(np.sum(e ** 2, axis=0) for _, e in errs)
+    dev = sum(np.sum((y - y.mean(0)) ** 2, axis=0) for y, _ in errs)
+    with np.errstate(all="ignore"):
+        f = 100.0 * (1.0 - np.sqrt(err / np.where(dev > 0, dev, np.nan)))
+    return np.where(np.isnan(f) & (dev > 0), -np.inf, f)
 
 
 def slack(best: float, tol: float = TOL) -> float:
