@@ -47,7 +47,7 @@ from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
 from ..validation.crossval import MAX_ORDER, TOL, fold_count, fold_horizon, folds, simulation_fit
 from .board import Board, bic
-from .result import IdentifiedModel, IdentifyResult
+from .result import IdentifiedModel, IdentifyResult, _family
 
 __all__ = ["identify"]
 
@@ -460,6 +460,11 @@ def identify(
         _subspace_candidates(board, centred, methods, max_order)
         if refine:
             _refined_candidates(board)
+            if all(r["criterion"].startswith("subspace") for r in board.rows):
+                checks["refinement"] = (
+                    "none scored: no stable subspace candidate to start a prediction-error "
+                    "search from (every one was unstable on some held-out block); the model "
+                    "is a subspace one")
     if board.skipped:
         checks["long_record"] = (
             f"not scored, to keep the work in proportion on this record: "
@@ -500,7 +505,7 @@ def identify(
     rows = [{k: v for k, v in r.items()
              if k not in ("refit", "fit_fn", "start", "stabilised", "fold_models")}
             for r in ranked]
-    desc = (f"{chosen['family']}"
+    desc = (f"{_family(chosen)}"
             + (f" ({chosen['focus']} focus)" if chosen["focus"] else "")
             + f", order {chosen['order']}, {'with' if chosen['feedthrough'] else 'no'} "
             f"feedthrough: held-out fit {chosen['held_out_fit']:.1f} %")

@@ -1,0 +1,52 @@
+"""What identify reports: the chosen row is marked in the summary and in the plot, stabilised
+subspace candidates are told apart from plain ones, and a search that refined nothing says
+why (issue 26: honest diagnostics)."""
+
+from __future__ import annotations
+
+import warnings
+
+import matplotlib
+import numpy as np
+
+import sysid
+from sysid.identify.result import IdentifiedModel, IdentifyResult
+
+matplotlib.use("Agg")
+
+
+def _row(family, order, fit, chosen, criterion="subspace"):
+    return {"family": family, "order": order, "feedthrough": False, "focus": None,
+            "criterion": criterion, "held_out_fit": fit, "mean_fit": fit, "stable": True,
+            "max_abs_pole": 0.5, "seconds": 0.0, "note": "", "chosen": chosen}
+
+
+def test_summary_and_plot_mark_the_chosen_row_not_the_first():
+    # the choice among near-best rows is by BIC on the whole record: it need not be the top
+    m = sysid.StateSpaceModel([[0.5, 0.1], [0.0, 0.3]], [[1.0], [1.0]], [[1.0, 0.0]])
+    rows = [_row("moesp", 3, 90.4, False), _row("n4sid", 2, 90.1, True),
+            _row("cva", 2, 80.0, False, "subspace, stable A")]
+    res = IdentifyResult(IdentifiedModel(m, [0.0], [0.0]), rows, "n4sid, order 2", {},
+                         None, 0.1)
+    lines = res.summary().splitlines()
+    marked = [ln for ln in lines if ln.startswith("* ")]
+    assert len(marked) == 2 and "n4sid" in marked[0] and "chosen" in marked[1]
+    assert any("cva (stable A)" in ln for ln in lines)
+    ax = res.plot()
+    star = [ln for ln in ax.get_lines() if ln.get_label() == "chosen"][0]
+    assert star.get_ydata()[0] == 90.1 and star.get_xdata()[0] == 2
+
+
+def test_a_search_that_refined_nothing_says_why():
+    # an integrating plant on a short record: every subspace candidate is unstable on some
+    # block, so no prediction-error search starts; the checks say so
+    rng = np.random.default_rng(0)
+    true = sysid.StateSpaceModel([[1.0, 0.1], [0.0, 0.7]], [[0.0], [1.0]], [[1.0, 0.0]])
+    u = rng.standard_normal(200)
+    y = true.simulate(u) + 0.05 * rng.standard_normal((200, 1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.StabilityWarning)
+        res = sysid.identify(sysid.IOData(u=u, y=y))
+    assert all(r["criterion"].startswith("subspace") for r in res.leaderboard)
+    assert "no stable subspace candidate" in res.checks["refinement"]
+    assert "refinement:" in res.summary()
