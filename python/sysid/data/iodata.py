@@ -412,8 +412,8 @@ class IOData:
 
     def _minus_trend(self, trend_of: Any) -> IOData:
         """This record minus a given trend: ``trend_of(n, t0) -> (u_trend, y_trend)`` per
-        experiment of ``n`` samples starting at time ``t0`` (original units), recorded like ``detrend``'s so that
-        :meth:`retrend` adds it back (used by :meth:`Trend.apply`)."""
+        experiment of ``n`` samples starting at time ``t0`` (original units), recorded like
+        ``detrend``'s so that :meth:`retrend` adds it back (used by :meth:`Trend.apply`)."""
         exps = []
         for e in self._exps:
             tu, ty = trend_of(e.y.shape[0], e.t0)
