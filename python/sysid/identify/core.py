@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import require_inputs_vary
 from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
@@ -436,6 +437,7 @@ def identify(
                         f"{enforce_stability!r}")
     if time_budget is not None and not (np.isfinite(time_budget) and time_budget > 0):
         raise DataError(f"time_budget must be a positive number of seconds, got {time_budget!r}")
+    require_inputs_vary(data.experiments, "identify", data.input_names)
     centred, mu, my = _offsets(data)
     checks, feedback = _checks(centred)
     checks["offsets"] = (f"input means {np.round(mu, 6).tolist()}, output means "
