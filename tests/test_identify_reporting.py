@@ -50,3 +50,34 @@ def test_a_search_that_refined_nothing_says_why():
     assert all(r["criterion"].startswith("subspace") for r in res.leaderboard)
     assert "no stable subspace candidate" in res.checks["refinement"]
     assert "refinement:" in res.summary()
+
+
+def _resonant(n, seed, u=None):
+    rng = np.random.default_rng(seed)
+    true = sysid.StateSpaceModel([[1.6, -0.9], [1.0, 0.0]], [[1.0], [0.0]], [[0.3, 0.2]])
+    u = rng.standard_normal(n) if u is None else u
+    return u, true.simulate(u)[:, 0] + 0.02 * rng.standard_normal(n)
+
+
+def test_isolated_spikes_in_the_output_are_reported_and_warned():
+    u, y = _resonant(600, 1)
+    y[[100, 333, 500]] += 20 * y.std()     # logger glitches
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        res = sysid.identify(sysid.IOData(u=u, y=y), refine=False)
+    assert "3 isolated spike(s) (first at sample 100)" in res.checks["outliers"]
+    assert "despike" in res.summary()
+    assert any("isolated spike" in str(w.message) for w in got)
+
+
+def test_no_spike_report_on_clean_records_of_several_kinds():
+    # white noise, a lightly damped response to steps, a saturating step response: no
+    # false alarm (steep but smooth changes are not spikes)
+    steps = np.repeat(np.random.default_rng(3).choice([-1.0, 1.0], 15), 40)
+    for u, y in (_resonant(600, 2), _resonant(600, 4, u=steps),
+                 (steps, np.tanh(3 * np.convolve(steps, [0.5, 0.3, 0.2])[:600]))):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", sysid.StabilityWarning)
+            warnings.filterwarnings("error", message=".*isolated spike")
+            res = sysid.identify(sysid.IOData(u=u, y=y), refine=False)
+        assert "outliers" not in res.checks
