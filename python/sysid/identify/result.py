@@ -95,6 +95,31 @@ class IdentifiedModel:
 
         return sysid.compare(self.statespace, self.remove_offsets(data), horizon, **kw)
 
+    def to_dict(self) -> dict[str, Any]:
+        """The state-space model of the deviations and the offsets (see
+        :func:`sysid.save_model`; :func:`sysid.load_model` gives the model back, still
+        predicting raw data).
+
+        Examples
+        --------
+        >>> import os, tempfile, numpy as np, sysid
+        >>> from sysid.identify.result import IdentifiedModel
+        >>> m = IdentifiedModel(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), [2.0], [7.0])
+        >>> path = os.path.join(tempfile.mkdtemp(), "m.json")
+        >>> sysid.save_model(m, path)
+        >>> sysid.load_model(path).simulate(np.full(3, 2.0)).ravel().tolist()
+        [7.0, 7.0, 7.0]
+        """
+        return {"statespace": self.statespace.to_dict(), "u_offset": self.u_offset,
+                "y_offset": self.y_offset}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> IdentifiedModel:
+        """Inverse of :meth:`to_dict`."""
+        from ..models.statespace import StateSpaceModel
+
+        return cls(StateSpaceModel.from_dict(d["statespace"]), d["u_offset"], d["y_offset"])
+
     def __repr__(self) -> str:
         s = self.statespace
         return (f"IdentifiedModel({s.info.get('identify', {}).get('family', 'model')}, "
@@ -185,3 +210,12 @@ class IdentifyResult:
     def __repr__(self) -> str:
         return (f"IdentifyResult({self.choice}; {len(self.leaderboard)} candidates, "
                 f"{self.seconds:.1f} s)")
+
+
+def _register() -> None:
+    from ..models.serialize import register_model
+
+    register_model(IdentifiedModel)
+
+
+_register()
