@@ -81,3 +81,19 @@ def test_no_spike_report_on_clean_records_of_several_kinds():
             warnings.filterwarnings("error", message=".*isolated spike")
             res = sysid.identify(sysid.IOData(u=u, y=y), refine=False)
         assert "outliers" not in res.checks
+
+
+def test_a_step_test_record_is_identified_not_refused_by_a_fold():
+    # one step, at a block edge of the held-out split: the rest of the record without the
+    # block next to it holds two constant pieces, which no subspace fit can use; identify
+    # raised that fold's rank error ("12 rows of future inputs have numerical rank 1")
+    # where n4sid(data, "auto") fits the record. The fold is left out, and said so
+    rng = np.random.default_rng(5)
+    u = np.r_[np.full(300, 4.0), np.full(200, 6.0)]
+    true = sysid.StateSpaceModel([[0.9]], [[0.1]], [[1.0]])
+    y = 3.0 + true.simulate(u - 4.0) + 0.01 * rng.standard_normal((500, 1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = sysid.identify(sysid.IOData(u=u, y=y), refine=False)
+    assert "held-out block(s) left out" in res.checks["held_out_excitation"]
+    assert res.model.is_stable()

@@ -45,7 +45,7 @@ import numpy as np
 from .._checks import require_inputs_vary
 from .._progress import Bar, show
 from ..data.iodata import IOData
-from ..errors import DataError, InsufficientDataError
+from ..errors import DataError, ExcitationError, InsufficientDataError
 from ..validation.crossval import MAX_ORDER, TOL, fold_count, fold_horizon, folds, simulation_fit
 from .board import Board, bic
 from .result import IdentifiedModel, IdentifyResult, _family
@@ -219,12 +219,26 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
                          max_order: int | None) -> None:
     from ..subspace.estimator import SubspaceEstimator, default_horizon
 
-    ests = []
+    ests, keep = [], []
     h_full = default_horizon(min(full.lengths), full.n_inputs, full.n_outputs)
-    for fit_part, _ in board.folds:
+    for fold in board.folds:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            ests.append(SubspaceEstimator(fit_part, fold_horizon(h_full, fit_part)))
+            try:
+                ests.append(SubspaceEstimator(fold[0], fold_horizon(h_full, fold[0])))
+            except ExcitationError:
+                continue  # the rest of the record without this block excites too little
+        keep.append(fold)
+    if len(keep) < len(board.folds):
+        if len(keep) < 2:
+            raise ExcitationError(
+                f"the input excites too little of the record to hold parts of it out: without "
+                f"one of its blocks, {len(board.folds) - len(keep)} of the "
+                f"{len(board.folds)} remaining parts are not persistently exciting (a step "
+                f"or a few steps); fit one model to the whole record instead (sysid.n4sid, "
+                f"sysid.ssest with an order, sysid.procest for a step test)")
+        board.unexcited = len(board.folds) - len(keep)
+        board.folds[:] = keep
     top = min(min(e.max_order for e in ests), max_order or MAX_ORDER)
     whole: dict[int, Any] = {}  # the whole record's compression, once per record
 
@@ -518,6 +532,11 @@ def identify(
         board = Board(parts, bar, deadline)
         board.whole = centred
         _subspace_candidates(board, centred, methods, max_order)
+        if board.unexcited:
+            checks["held_out_excitation"] = (
+                f"{board.unexcited} held-out block(s) left out of the choice: the rest of the "
+                f"record without them does not excite the input enough to fit a model (a "
+                f"step inside the block)")
         if refine:
             _refined_candidates(board)
             if all(r["criterion"].startswith("subspace") for r in board.rows):
