@@ -8,6 +8,7 @@ import warnings
 
 import matplotlib
 import numpy as np
+import pytest
 
 import sysid
 from sysid.identify.result import IdentifiedModel, IdentifyResult
@@ -97,3 +98,14 @@ def test_a_step_test_record_is_identified_not_refused_by_a_fold():
         res = sysid.identify(sysid.IOData(u=u, y=y), refine=False)
     assert "held-out block(s) left out" in res.checks["held_out_excitation"]
     assert res.model.is_stable()
+
+
+def test_offsets_of_data_in_small_units_are_reported_not_rounded_to_zero():
+    # a record in micro-units: the offsets line read "input means [-0.0], output means
+    # [0.0] removed" (rounded to six decimals)
+    u, y = _resonant(400, 6)
+    res = sysid.identify(sysid.IOData(u=1e-6 * (u + 3.0), y=1e-6 * (y + 7.0)), refine=False)
+    line = res.checks["offsets"]
+    assert "[0.0]" not in line and "[-0.0]" not in line
+    mu = float(line.split("input means [")[1].split("]")[0])
+    assert mu == pytest.approx(1e-6 * (u + 3.0).mean(), rel=1e-5)

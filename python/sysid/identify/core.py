@@ -512,8 +512,9 @@ def identify(
     require_inputs_vary(data.experiments, "identify", data.input_names)
     centred, mu, my = _offsets(data)
     checks, feedback = _checks(centred)
-    checks["offsets"] = (f"input means {np.round(mu, 6).tolist()}, output means "
-                         f"{np.round(my, 6).tolist()} removed (kept with the model)")
+    # six significant digits: rounding to decimals printed data in micro-units as [0.0]
+    checks["offsets"] = (f"input means [{', '.join(f'{v:.6g}' for v in mu)}], output means "
+                         f"[{', '.join(f'{v:.6g}' for v in my)}] removed (kept with the model)")
     parts, still = _informative(folds(centred, fold_count(centred)), centred)
     if still:
         checks["held_out"] = (f"{still} held-out block(s) left out of the choice: every output "
