@@ -140,7 +140,7 @@ def test_unstable_start_is_stabilised_and_recorded():
     y = _data(true, u, 0.1 * rng.standard_normal((400, 2)))
     bad = sysid.StateSpaceModel(true.A.copy(), true.B, true.C, true.D)
     bad.A[2, 2] = 1.3
-    m = sysid.pem((u, y), bad, focus="simulation")
+    m = sysid.pem((u, y), bad, focus="simulation", weighting="identity")
     assert "reflected" in m.info["pem"]["stabilized"]
     assert m.is_stable()
     # the search from the stabilised start converges (no divergence): the true poles back
@@ -371,3 +371,22 @@ def test_real_records_reach_the_published_fits(name, inputs, outputs, n_est, ord
         warnings.simplefilter("ignore", sysid.IterationLimitWarning)
         m = sysid.ssest(est, order, focus="simulation", feedthrough=feedthrough, max_iter=100)
     assert float(sysid.compare(m, val).fit.mean()) >= goal
+
+
+def test_simulation_focus_does_not_depend_on_the_outputs_units():
+    # two outputs, the second reported in units 1000 times larger (kPa for Pa): with the
+    # plain sum of squares as the default the search fitted the first output only and left
+    # the second far worse than in its original units (issue 26)
+    rng = np.random.default_rng(11)
+    true = sysid.StateSpaceModel([[0.9, 0.2, 0.0], [-0.2, 0.9, 0.0], [0.0, 0.0, 0.6]],
+                                 [[1.0], [0.0], [1.0]], [[1.0, 0.0, 0.0], [0.0, 0.5, 1.0]])
+    u = rng.standard_normal((1200, 1))
+    y = true.simulate(u) + 0.2 * rng.standard_normal((1200, 2))
+    fits = []
+    for scale in (1.0, 1e-3):
+        ys = y * [1.0, scale]
+        est = sysid.IOData(u=u[:800], y=ys[:800])
+        start = sysid.n4sid(est, 2)       # too low an order: the outputs compete for it
+        m = sysid.pem(est, start, focus="simulation")
+        fits.append(sysid.compare(m, sysid.IOData(u=u[800:], y=ys[800:])).fit.ravel())
+    np.testing.assert_allclose(fits[0], fits[1], atol=0.5)
