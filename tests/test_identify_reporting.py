@@ -109,3 +109,25 @@ def test_offsets_of_data_in_small_units_are_reported_not_rounded_to_zero():
     assert "[0.0]" not in line and "[-0.0]" not in line
     mu = float(line.split("input means [")[1].split("]")[0])
     assert mu == pytest.approx(1e-6 * (u + 3.0).mean(), rel=1e-5)
+
+
+def test_the_identified_model_gives_pole_and_damping_std_like_its_state_space_model():
+    # res.model.poles(std=True) raised TypeError and damp(res.model, std=True) said "this
+    # model carries no parameter uncertainty" while res.model.statespace carried it
+    u, y = _resonant(600, 8)
+    data = sysid.IOData(u=u, y=y)
+    inner = sysid.pem(data, sysid.n4sid(data, 2), focus="simulation")  # carries a covariance
+    model = IdentifiedModel(inner, [2.0], [5.0])   # as identify returns it
+    p, sd = model.poles(std=True)
+    p0, sd0 = inner.poles(std=True)
+    table = sysid.damp(model, std=True)
+    np.testing.assert_allclose(p, p0)
+    np.testing.assert_allclose(sd, sd0)
+    np.testing.assert_allclose(table.zeta, sysid.damp(inner, std=True).zeta)
+
+
+def test_to_control_names_what_to_pass_for_the_identified_model():
+    m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    wrapped = IdentifiedModel(m, [1.0], [2.0])
+    with pytest.raises(sysid.DataError, match="res.model.statespace"):
+        sysid.to_control(wrapped)

@@ -83,8 +83,16 @@ class IdentifiedModel:
     def freqresp(self, omega: Any) -> np.ndarray:
         return self.statespace.freqresp(omega)
 
-    def poles(self) -> np.ndarray:
-        return self.statespace.poles()
+    def poles(self, std: bool = False, method: str = "linear") -> Any:
+        """The poles (offsets do not move them); ``std=True``: with their standard deviations
+        from the model's parameter uncertainty, as :meth:`StateSpaceModel.poles`."""
+        return self.statespace.poles(std=std, method=method)
+
+    @property
+    def uncertainty(self) -> Any:
+        """The parameter uncertainty of :attr:`statespace` (None when it has none): pole,
+        damping and frequency-response standard deviations (``sysid.damp(model, std=True)``)."""
+        return getattr(self.statespace, "uncertainty", None)
 
     def is_stable(self) -> bool:
         return bool(self.statespace.is_stable())
