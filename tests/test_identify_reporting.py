@@ -131,3 +131,11 @@ def test_to_control_names_what_to_pass_for_the_identified_model():
     wrapped = IdentifiedModel(m, [1.0], [2.0])
     with pytest.raises(sysid.DataError, match="res.model.statespace"):
         sysid.to_control(wrapped)
+
+
+@pytest.mark.parametrize("bad", [0, -2, 2.5, True])
+def test_a_max_order_that_is_not_a_positive_integer_is_refused(bad):
+    # max_order=0 was read as "not given" and the search went up to order 20
+    u, y = _resonant(300, 9)
+    with pytest.raises(sysid.DataError, match="max_order must be a positive integer"):
+        sysid.identify(sysid.IOData(u=u, y=y), max_order=bad, refine=False)

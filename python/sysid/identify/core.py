@@ -507,6 +507,10 @@ def identify(
     if enforce_stability not in (None, True, False):
         raise DataError(f"enforce_stability must be True, False or None, got "
                         f"{enforce_stability!r}")
+    if max_order is not None and (isinstance(max_order, bool) or not isinstance(
+            max_order, (int, np.integer)) or max_order < 1):
+        raise DataError(f"max_order must be a positive integer (or None for what the horizon "
+                        f"allows), got {max_order!r}")
     if time_budget is not None and not (np.isfinite(time_budget) and time_budget > 0):
         raise DataError(f"time_budget must be a positive number of seconds, got {time_budget!r}")
     require_inputs_vary(data.experiments, "identify", data.input_names)
