@@ -139,3 +139,14 @@ def test_a_max_order_that_is_not_a_positive_integer_is_refused(bad):
     u, y = _resonant(300, 9)
     with pytest.raises(sysid.DataError, match="max_order must be a positive integer"):
         sysid.identify(sysid.IOData(u=u, y=y), max_order=bad, refine=False)
+
+
+def test_a_record_that_excites_too_little_anywhere_gets_the_records_own_error():
+    # two sinusoids: not the fold message ("hold parts of it out"), the subspace error of
+    # the whole record that n4sid gives
+    t = np.arange(500)
+    u = np.sin(0.05 * t) + 0.5 * np.sin(0.3 * t)
+    _, y = _resonant(500, 10, u=u)
+    with pytest.raises(sysid.ExcitationError, match="not persistently exciting") as e:
+        sysid.identify(sysid.IOData(u=u, y=y))
+    assert "hold parts" not in str(e.value)

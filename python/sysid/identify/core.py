@@ -231,12 +231,15 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
         keep.append(fold)
     if len(keep) < len(board.folds):
         if len(keep) < 2:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                SubspaceEstimator(full, h_full)  # the whole record's own error, if it has one
             raise ExcitationError(
-                f"the input excites too little of the record to hold parts of it out: without "
-                f"one of its blocks, {len(board.folds) - len(keep)} of the "
-                f"{len(board.folds)} remaining parts are not persistently exciting (a step "
-                f"or a few steps); fit one model to the whole record instead (sysid.n4sid, "
-                f"sysid.ssest with an order, sysid.procest for a step test)")
+                f"the input excites too little of the record to hold parts of it out: "
+                f"{len(board.folds) - len(keep)} of the {len(board.folds)} parts fitted "
+                f"without one block are not persistently exciting (a step or a few steps, "
+                f"inside some blocks only); fit one model to the whole record instead "
+                f"(sysid.n4sid, sysid.ssest with an order, sysid.procest for a step test)")
         board.unexcited = len(board.folds) - len(keep)
         board.folds[:] = keep
     top = min(min(e.max_order for e in ests), max_order or MAX_ORDER)
