@@ -283,3 +283,15 @@ def test_warnings_of_the_run_reach_the_page_and_one_line_on_stderr(tmp_path, cap
     summary = page.split('id="summary"')[1].split("</section>")[0]
     assert "Warnings (1)" in summary and "too few frequencies (test)" in summary
     assert "sysid.check_excitation" in summary  # what to do
+
+
+def test_identify_says_when_it_does_not_take_the_automatic_path(tmp_path, capsys):
+    # --uncertainty bootstrap (or --horizon, or no --inputs) silently replaced sysid.identify
+    # by the moesp order sweep (issue 26: the user cannot tell which model they got)
+    data = dryer_csv(tmp_path / "dryer.csv")
+    assert main(["identify", str(data), "--inputs", "heater", "--outputs", "temperature",
+                 "--split", "500", "--horizon", "10", "--report", str(tmp_path / "a")]) == 0
+    assert "not sysid.identify: --horizon is given" in capsys.readouterr().err
+    assert main(["identify", str(data), "--outputs", "temperature", "--split", "500",
+                 "--report", str(tmp_path / "b")]) == 0
+    assert "not sysid.identify: there are no --inputs" in capsys.readouterr().err

@@ -205,3 +205,12 @@ def test_bad_input_names_the_problem_and_the_fix(call, exc, problem, fix):
     assert isinstance(info.value, errors.SysidError)
     assert re.search(problem, msg), msg
     assert re.search(fix, msg), msg
+
+
+def test_matlab_names_point_at_sysids():
+    # `sysid.resid(model, data)` (MATLAB's name) said only "no attribute 'resid'. Did you
+    # mean: 'n4sid'?" (issue 26)
+    with pytest.raises(AttributeError, match=r"sysid\.residuals\(model, data\)"):
+        sysid.resid  # noqa: B018
+    with pytest.raises(AttributeError, match="no attribute 'nothing_like_it'$"):
+        sysid.nothing_like_it  # noqa: B018

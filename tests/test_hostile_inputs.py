@@ -92,6 +92,20 @@ def test_all_zero_input_is_refused(data, fit):
         fit(zero)
 
 
+@pytest.mark.parametrize("fit", [
+    lambda d: sysid.n4sid(d, 2),
+    lambda d: sysid.ssest(d, "auto"),
+    lambda d: sysid.identify(d, refine=False),
+], ids=["n4sid", "ssest", "identify"])
+def test_a_constant_input_channel_is_named_by_the_state_space_paths(data, fit):
+    # a second input held at a set-point (a logged but unused channel): the subspace paths
+    # refused it by the horizon's rank test, without saying which channel (issue 26)
+    u = np.column_stack([data.u[:, 0], np.full(data.n_samples, 20.0)])
+    held = sysid.IOData(u=u, y=data.y, input_names=["force", "setpoint"])
+    with pytest.raises(DataError, match="input setpoint is 20 in every sample"):
+        fit(held)
+
+
 def test_all_zero_record_is_refused_with_the_channel_named():
     zero = sysid.IOData(u=np.zeros((400, 1)), y=np.zeros((400, 1)))
     with pytest.raises(DataError, match="output y0 is constant"):

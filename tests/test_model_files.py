@@ -233,3 +233,25 @@ def test_saving_is_atomic(tmp_path, monkeypatch, fmt):
     assert path.read_bytes() == before
     assert [p.name for p in tmp_path.iterdir()] == [path.name]
     assert real_replace is not ser.os.replace
+
+
+@pytest.mark.parametrize("suffix", [".json", ".npz"])
+def test_identify_model_saves_and_loads_predicting_raw_data(tmp_path, suffix):
+    # the model of sysid.identify (offsets kept with it) could not be saved: "IdentifiedModel
+    # cannot be saved: it has no to_dict()" (issue 26)
+    import warnings
+
+    rng = np.random.default_rng(0)
+    u = 3.0 + rng.standard_normal(400)
+    true = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]])
+    y = 10.0 + true.simulate(u - 3.0) + 0.01 * rng.standard_normal((400, 1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = sysid.identify(sysid.IOData(u=u, y=y), refine=False)
+    path = tmp_path / f"identified{suffix}"
+    sysid.save_model(res.model, path)
+    back = sysid.load_model(path)
+    assert type(back).__name__ == "IdentifiedModel"
+    np.testing.assert_allclose(back.simulate(u), res.model.simulate(u), atol=1e-12)
+    np.testing.assert_allclose(back.y_offset, res.model.y_offset)
+    assert back.info["identify"]["order"] == res.model.nstates

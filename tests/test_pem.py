@@ -140,7 +140,7 @@ def test_unstable_start_is_stabilised_and_recorded():
     y = _data(true, u, 0.1 * rng.standard_normal((400, 2)))
     bad = sysid.StateSpaceModel(true.A.copy(), true.B, true.C, true.D)
     bad.A[2, 2] = 1.3
-    m = sysid.pem((u, y), bad, focus="simulation")
+    m = sysid.pem((u, y), bad, focus="simulation", weighting="identity")
     assert "reflected" in m.info["pem"]["stabilized"]
     assert m.is_stable()
     # the search from the stabilised start converges (no divergence): the true poles back
@@ -371,3 +371,45 @@ def test_real_records_reach_the_published_fits(name, inputs, outputs, n_est, ord
         warnings.simplefilter("ignore", sysid.IterationLimitWarning)
         m = sysid.ssest(est, order, focus="simulation", feedthrough=feedthrough, max_iter=100)
     assert float(sysid.compare(m, val).fit.mean()) >= goal
+
+
+def test_simulation_focus_does_not_depend_on_the_outputs_units():
+    # two outputs, the second reported in units 1000 times larger (kPa for Pa): with the
+    # plain sum of squares as the default the search fitted the first output only and left
+    # the second far worse than in its original units (issue 26)
+    rng = np.random.default_rng(11)
+    true = sysid.StateSpaceModel([[0.9, 0.2, 0.0], [-0.2, 0.9, 0.0], [0.0, 0.0, 0.6]],
+                                 [[1.0], [0.0], [1.0]], [[1.0, 0.0, 0.0], [0.0, 0.5, 1.0]])
+    u = rng.standard_normal((1200, 1))
+    y = true.simulate(u) + 0.2 * rng.standard_normal((1200, 2))
+    fits = []
+    for scale in (1.0, 1e-3):
+        ys = y * [1.0, scale]
+        est = sysid.IOData(u=u[:800], y=ys[:800])
+        start = sysid.n4sid(est, 2)       # too low an order: the outputs compete for it
+        m = sysid.pem(est, start, focus="simulation")
+        fits.append(sysid.compare(m, sysid.IOData(u=u[800:], y=ys[800:])).fit.ravel())
+    np.testing.assert_allclose(fits[0], fits[1], atol=0.5)
+
+
+@pytest.mark.parametrize("focus", ["prediction", "simulation"])
+def test_the_search_does_not_depend_on_the_signals_units(focus):
+    # inputs and outputs in units 1e6 times smaller (micro-units: volts and pascals read as
+    # MV and MPa, or the other way round): the subspace start's basis carries the units
+    # (|C| ~ 1e7, |B| ~ 1e-8) and the search stopped after one iteration by its step test,
+    # relative to the parameter vector's norm (issue 26); the refined poles did not match
+    true = _truth()
+    rng = np.random.default_rng(12)
+    u = rng.standard_normal((600, 2))
+    y = _data(true, u, 0.1 * rng.standard_normal((600, 2)))
+    poles, gain = [], []
+    for s in (1.0, 1e6):
+        data = sysid.IOData(u=u * s, y=y * s)
+        start = sysid.SubspaceEstimator(data, horizon=6).fit(3, method="cva")
+        m = sysid.pem(data, start, focus=focus, x0="zero")
+        assert m.info["pem"]["stop"] != "step tolerance"
+        poles.append(np.sort_complex(m.poles()))
+        gain.append(m.info["pem"]["cost"][-1] / m.info["pem"]["cost"][0])
+    # the same minimum (each search stops at statistical convergence, a little apart)
+    np.testing.assert_allclose(poles[1], poles[0], atol=2e-3)
+    assert gain[1] == pytest.approx(gain[0], rel=2e-3)

@@ -147,12 +147,16 @@ def test_pem_loss_matches_numpy_and_the_start_of_pem():
     ss = 0.5 * float(np.sum(e * e))
     kw = {"focus": "simulation", "x0": "zero"}
     assert sysid.pem_loss(data, model, weighting="noise", **kw) == pytest.approx(det, rel=1e-10)
-    assert sysid.pem_loss(data, model, **kw) == pytest.approx(ss, rel=1e-10)
+    assert sysid.pem_loss(data, model, weighting="identity", **kw) == pytest.approx(ss,
+                                                                                    rel=1e-10)
+    # several outputs: by default each relative to its scale (as pem's default search)
+    assert sysid.pem_loss(data, model, **kw) == pytest.approx(
+        sysid.pem_loss(data, model, weighting="output", **kw), rel=1e-12)
     # with x0 estimated: the value pem starts from
     m0 = sysid.pem(data, model, focus="simulation", max_iter=0)
     assert sysid.pem_loss(data, model, focus="simulation") == pytest.approx(
         m0.info["pem"]["cost"][0], rel=1e-10)
-    assert sysid.pem_loss(data, model, focus="simulation") <= ss
+    assert sysid.pem_loss(data, model, focus="simulation", weighting="identity") <= ss
     # an inadmissible model scores inf; a bad focus is the core's error
     unstable = sysid.StateSpaceModel([[1.2]], [[1.0]], [[1.0]])
     d1 = sysid.IOData(u=u[:, :1], y=y[:, :1])

@@ -85,3 +85,25 @@ def test_piecewise_and_per_sample_trends_do_not_apply_elsewhere():
     _, tr2 = sysid.detrend(est, "mean", return_trend=True)
     with pytest.raises(sysid.ShapeError):
         tr2.apply(sysid.IOData(u=np.ones((10, 2)), y=np.ones(10)))
+
+
+def test_linear_trend_continues_on_the_later_part_of_the_same_record():
+    # split/slice keep the start time: the validation part of a drifting record is on the
+    # estimation part's line, not on a line restarted at its own first sample
+    raw = _raw(1200, 2, slope_y=0.2)
+    parts = raw.split(0.5)
+    est, val = parts.estimation, parts.validation
+    d, tr = sysid.detrend(est, "linear", return_trend=True)
+    v = tr.apply(val)
+    t = val.time - est.time[0]
+    np.testing.assert_allclose(v.y[:, 0], val.y[:, 0] - tr.y_offset[0] - tr.y_slope[0] * t,
+                               atol=1e-9)
+    assert abs(v.y.mean()) < 0.5 * raw.y.std()
+    np.testing.assert_allclose(v.retrend().y, val.y, atol=1e-9)
+    # a model carrying the trend simulates the later part in raw units around its level
+    m = tr.attach(sysid.n4sid(d, 2))
+    raw_fit = sysid.compare(m, val)
+    inner = sysid.compare(m.model, v)
+    np.testing.assert_allclose(raw_fit.yhat[0], inner.yhat[0] + (val.y - v.y), atol=1e-9)
+    assert abs(raw_fit.yhat[0].mean() - val.y.mean()) < 0.5
+    assert raw_fit.fit[0, 0] > 90

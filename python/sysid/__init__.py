@@ -258,10 +258,20 @@ _LAZY = {
 }
 
 
+#: MATLAB System Identification Toolbox names a new user types first, and sysid's
+_MATLAB = {"resid": "sysid.residuals(model, data)", "iddata": "sysid.IOData(u, y, dt)",
+           "idss": "sysid.StateSpaceModel", "idpoly": "sysid.PolynomialModel",
+           "idtf": "sysid.TransferFunction", "impulseest": "sysid.impulse_response",
+           "getTrend": "sysid.detrend(data, kind, return_trend=True)",
+           "retrend": "data.retrend() or trend.restore(...)",
+           "sim": "model.simulate(u)"}
+
+
 def __getattr__(name: str) -> object:
     module = _LAZY.get(name)
     if module is None:
-        raise AttributeError(f"module 'sysid' has no attribute {name!r}")
+        hint = f" (MATLAB's {name}: use {_MATLAB[name]})" if name in _MATLAB else ""
+        raise AttributeError(f"module 'sysid' has no attribute {name!r}{hint}")
     value = getattr(_importlib.import_module(f".{module}", __name__), name)
     globals()[name] = value
     return value

@@ -241,9 +241,10 @@ def experiment_arrays(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
 
 
 def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
-                        names: Any = None, side: int = 0) -> None:
+                        names: Any = None, side: int = 0, error: type = DataError) -> None:
     """Refuse a record in which an input (``side=1``: an output) is zero or constant in
     every experiment: the dynamics ``who`` estimates would not be determined by the data.
+    ``error``: the exception raised (a :class:`DataError` subclass).
 
     Examples
     --------
@@ -265,7 +266,7 @@ def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
             name = names[j] if names is not None and j < len(names) else f"{'uy'[side]}{j}"
             fix = ("drop it (data.select), or fit an output-only model (sysid.ar, sysid.arma)"
                    if side == 0 else "drop it (data.select)")
-            raise DataError(f"{kind} {name} is {first:g} in every sample: {who} cannot estimate "
+            raise error(f"{kind} {name} is {first:g} in every sample: {who} cannot estimate "
                             f"{'how the output responds to it' if side == 0 else 'its dynamics'}"
                             f"; check the channel (the wrong column, a stuck "
                             f"{'actuator' if side == 0 else 'sensor'}?), {fix}")

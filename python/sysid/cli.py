@@ -554,6 +554,12 @@ def _identify(args: argparse.Namespace) -> int:
         print(p["result"].summary())
         _print_summary(out)
         return 0
+    if auto:  # the default path would be sysid.identify: say why it is not taken
+        why = ("there are no --inputs (a time-series model)" if not ui else
+               "--uncertainty bootstrap needs a subspace fit" if args.uncertainty != "none"
+               else "--horizon is given")
+        say(f"not sysid.identify: {why}; sweeping the orders of moesp instead (pass "
+            f"--method to choose another subspace method)")
     out = identify(est_data, val_data, order=args.order,
                    method="moesp" if args.method == "auto" else args.method,
                    horizon=args.horizon, report=args.report, preprocessing=pre, progress=say,
@@ -582,8 +588,10 @@ def _parser() -> argparse.ArgumentParser:
     ide.add_argument("--method", default="auto",
                      help="auto (default: sysid.identify chooses the family, order and "
                           "feedthrough on held-out parts of the estimation data, when --order "
-                          "is auto), or one subspace method: moesp, ordinary-moesp, pi-moesp, "
-                          "n4sid, cva; closed loop: pbsid or ssarx")
+                          "is auto and neither --horizon nor --uncertainty bootstrap is given "
+                          "and there are --inputs; else moesp, and the progress says so), or "
+                          "one subspace method: moesp, ordinary-moesp, pi-moesp, n4sid, cva; "
+                          "closed loop: pbsid or ssarx")
     ide.add_argument("--feedthrough", choices=("no", "yes", "auto"), default=None,
                      help="with a subspace --method: estimate D (yes), not (no) or decide "
                           "from held-out parts of the estimation data (auto); default, as "

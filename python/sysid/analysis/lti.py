@@ -181,6 +181,11 @@ def to_control(model: StateSpaceModel | ContinuousStateSpace, *, noise: bool = F
     >>> sysid.to_control(m, noise=True).ninputs  # doctest: +SKIP
     2
     """
+    if not isinstance(model, (StateSpaceModel, ContinuousStateSpace)):
+        hint = (" (for sysid.identify's model: res.model.statespace, the model of the "
+                "deviations from its offsets)" if hasattr(model, "statespace") else "")
+        raise DataError(f"to_control needs a sysid.StateSpaceModel or ContinuousStateSpace, "
+                        f"got {type(model).__name__}{hint}")
     ct = _control()
     dt = model.dt if isinstance(model, StateSpaceModel) else 0
     B, D, inputs = model.B, model.D, list(model.input_names)

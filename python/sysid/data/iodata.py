@@ -411,12 +411,12 @@ class IOData:
         )
 
     def _minus_trend(self, trend_of: Any) -> IOData:
-        """This record minus a given trend: ``trend_of(n) -> (u_trend, y_trend)`` per
-        experiment of ``n`` samples (original units), recorded like ``detrend``'s so that
-        :meth:`retrend` adds it back (used by :meth:`Trend.apply`)."""
+        """This record minus a given trend: ``trend_of(n, t0) -> (u_trend, y_trend)`` per
+        experiment of ``n`` samples starting at time ``t0`` (original units), recorded like
+        ``detrend``'s so that :meth:`retrend` adds it back (used by :meth:`Trend.apply`)."""
         exps = []
         for e in self._exps:
-            tu, ty = trend_of(e.y.shape[0])
+            tu, ty = trend_of(e.y.shape[0], e.t0)
             parts = []
             for x, old, sc, t in ((e.u, e.tu, self._u_scale, tu), (e.y, e.ty, self._y_scale, ty)):
                 prev = np.zeros_like(x) if old is None else old

@@ -283,7 +283,7 @@ def _trend_of(data: IOData, kind: str, coefs: list[tuple[int, dict[str, np.ndarr
     return Trend(u_tr, y_tr, *ones, kind="linear" if kind == "linear" else "mean",
                  offsets=(np.asarray(offs[0], float), np.asarray(offs[1], float)),
                  slopes=(np.asarray(slopes[0], float), np.asarray(slopes[1], float)),
-                 dt=data.dt)
+                 dt=data.dt, t0=exps[0].t0 if len(exps) == 1 else None)
 
 
 def scale(data: IOData, by: str | Any = "std") -> IOData:

@@ -43,6 +43,12 @@ class Trend:
         experiments give their sample-weighted average.
     dt : float or None
         Sample time of the record the trend was fitted on.
+    t0 : float or None
+        Start time (s) of the record the trend was fitted on (one experiment); ``None`` for
+        several experiments. :meth:`apply` evaluates the line at another record's own
+        instants on this clock, so the validation part of the same record (from
+        :meth:`IOData.split` or :meth:`IOData.slice`, which keep the start time) gets the
+        line where it is, not restarted at its first sample.
 
     Examples
     --------
@@ -64,6 +70,7 @@ class Trend:
         offsets: tuple[np.ndarray, np.ndarray] | None = None,
         slopes: tuple[np.ndarray, np.ndarray] | None = None,
         dt: float | None = None,
+        t0: float | None = None,
     ) -> None:
         self.u_trend = u_trend
         self.y_trend = y_trend
@@ -73,6 +80,7 @@ class Trend:
         self.u_offset, self.y_offset = offsets if offsets is not None else (None, None)
         self.u_slope, self.y_slope = slopes if slopes is not None else (None, None)
         self.dt = dt
+        self.t0 = t0
 
     def add_outputs(self, y: Any, experiment: int = 0, start: int = 0) -> np.ndarray:
         """Map model outputs (in processed units) of one experiment back to original units.
@@ -111,14 +119,16 @@ class Trend:
                 "to other data with d, trend = sysid.detrend(data, 'mean' or 'linear', "
                 "return_trend=True)")
 
-    def values(self, n: int, which: str = "y", dt: float | None = None) -> np.ndarray:
-        """The trend ``offset + slope * t`` over ``n`` samples from ``t = 0``, for the
-        outputs (``which="y"``) or inputs (``"u"``), shape ``(n, channels)``."""
+    def values(self, n: int, which: str = "y", dt: float | None = None,
+               start: float = 0.0) -> np.ndarray:
+        """The trend ``offset + slope * t`` over ``n`` samples from ``t = start`` (seconds
+        after the first sample of the record it was fitted on), for the outputs
+        (``which="y"``) or inputs (``"u"``), shape ``(n, channels)``."""
         self._parametric()
         off, slope = (self.y_offset, self.y_slope) if which == "y" else (self.u_offset,
                                                                           self.u_slope)
         step = float(dt if dt is not None else (self.dt or 1.0))
-        t = np.arange(n)[:, None] * step
+        t = float(start) + np.arange(n)[:, None] * step
         return np.asarray(off)[None, :] + t * np.asarray(slope)[None, :]
 
     def remove_inputs(self, u: Any, dt: float | None = None) -> np.ndarray:
@@ -132,17 +142,27 @@ class Trend:
         arr = as_2d(y, "y", ncols=len(self.y_scale))
         return arr - self.values(arr.shape[0], "y", dt)
 
-    def restore_outputs(self, y: Any, dt: float | None = None) -> np.ndarray:
-        """Detrended (model) outputs ``(n, n_outputs)`` plus the trend: raw units."""
+    def restore_outputs(self, y: Any, dt: float | None = None,
+                        start: float = 0.0) -> np.ndarray:
+        """Detrended (model) outputs ``(n, n_outputs)`` plus the trend (from ``t = start``,
+        as :meth:`values`): raw units."""
         arr = as_2d(y, "y", ncols=len(self.y_scale))
-        return arr + self.values(arr.shape[0], "y", dt)
+        return arr + self.values(arr.shape[0], "y", dt, start)
+
+    def start_of(self, t0: float) -> float:
+        """Where on this trend's line a record (experiment) that starts at time ``t0``
+        begins: ``t0 - self.t0`` on the estimation record's clock, 0 without one."""
+        return 0.0 if self.t0 is None else float(t0) - self.t0
 
     def apply(self, data: Any) -> Any:
         """Another record with *this* trend removed (MATLAB: ``detrend(z, T)``).
 
         Validation data must be processed like the estimation data: subtract the estimation
-        record's offsets (and slopes), not their own mean. The result remembers what was
-        removed, so ``tr.apply(v).retrend()`` is ``v``.
+        record's offsets (and slopes), not their own mean. A line is evaluated at the
+        record's own instants on the estimation record's clock (each experiment's start time,
+        :attr:`t0`): the validation part of the same record continues the line, where a
+        record with the estimation record's start time (the default 0 for both) starts it
+        again. The result remembers what was removed, so ``tr.apply(v).retrend()`` is ``v``.
 
         Examples
         --------
@@ -154,14 +174,20 @@ class Trend:
         ([0.0, 0.0], [0.0, 1.0])
         >>> np.round(v.retrend().y, 12).ravel().tolist()
         [12.0, 13.0]
+        >>> line = sysid.IOData(u=np.zeros(6), y=np.arange(6.0))   # one record, split
+        >>> _, tr = sysid.detrend(line.slice(0, 3), "linear", return_trend=True)
+        >>> bool(np.allclose(tr.apply(line.slice(3, 6)).y, 0.0))
+        True
         """
         self._parametric()
         if data.n_inputs != len(self.u_scale) or data.n_outputs != len(self.y_scale):
             raise ShapeError(
                 f"the trend has {len(self.u_scale)} input(s) and {len(self.y_scale)} output(s) "
                 f"but the data have {data.n_inputs} and {data.n_outputs}")
-        return data._minus_trend(lambda n: (self.values(n, "u", data.dt),
-                                            self.values(n, "y", data.dt)))
+        def trend_of(n: int, t0: float) -> tuple[np.ndarray, np.ndarray]:
+            start = self.start_of(t0)
+            return (self.values(n, "u", data.dt, start), self.values(n, "y", data.dt, start))
+        return data._minus_trend(trend_of)
 
     def restore(self, x: Any) -> Any:
         """Add this trend back: to a record (:class:`~sysid.IOData`, like ``retrend``) or to

@@ -124,6 +124,8 @@ class Board:
         self.whole: IOData | None = None
         #: refinements left out to keep the work in proportion (:data:`.core.REFINE_WORK`)
         self.skipped: list[str] = []
+        #: folds left out because their fitted part does not excite the input enough
+        self.unexcited = 0
         #: set by :meth:`insisting` when an unstable candidate wins only by following a drift
         self.drift: dict[str, Any] | None = None
 

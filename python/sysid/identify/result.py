@@ -16,6 +16,13 @@ COLUMNS = ("family", "order", "feedthrough", "focus", "criterion", "held_out_fit
            "stable", "max_abs_pole", "seconds", "note", "chosen")
 
 
+def _family(row: dict[str, Any]) -> str:
+    """The leaderboard's family column: a subspace candidate with a stable ``A`` enforced is
+    told apart from the same weighting's plain one."""
+    return row["family"] + (" (stable A)" if row.get("criterion") == "subspace, stable A"
+                            else "")
+
+
 class IdentifiedModel:
     """A linear model identified around operating-point offsets.
 
@@ -76,8 +83,16 @@ class IdentifiedModel:
     def freqresp(self, omega: Any) -> np.ndarray:
         return self.statespace.freqresp(omega)
 
-    def poles(self) -> np.ndarray:
-        return self.statespace.poles()
+    def poles(self, std: bool = False, method: str = "linear") -> Any:
+        """The poles (offsets do not move them); ``std=True``: with their standard deviations
+        from the model's parameter uncertainty, as :meth:`StateSpaceModel.poles`."""
+        return self.statespace.poles(std=std, method=method)
+
+    @property
+    def uncertainty(self) -> Any:
+        """The parameter uncertainty of :attr:`statespace` (None when it has none): pole,
+        damping and frequency-response standard deviations (``sysid.damp(model, std=True)``)."""
+        return getattr(self.statespace, "uncertainty", None)
 
     def is_stable(self) -> bool:
         return bool(self.statespace.is_stable())
@@ -87,6 +102,31 @@ class IdentifiedModel:
         import sysid
 
         return sysid.compare(self.statespace, self.remove_offsets(data), horizon, **kw)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The state-space model of the deviations and the offsets (see
+        :func:`sysid.save_model`; :func:`sysid.load_model` gives the model back, still
+        predicting raw data).
+
+        Examples
+        --------
+        >>> import os, tempfile, numpy as np, sysid
+        >>> from sysid.identify.result import IdentifiedModel
+        >>> m = IdentifiedModel(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), [2.0], [7.0])
+        >>> path = os.path.join(tempfile.mkdtemp(), "m.json")
+        >>> sysid.save_model(m, path)
+        >>> sysid.load_model(path).simulate(np.full(3, 2.0)).ravel().tolist()
+        [7.0, 7.0, 7.0]
+        """
+        return {"statespace": self.statespace.to_dict(), "u_offset": self.u_offset,
+                "y_offset": self.y_offset}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> IdentifiedModel:
+        """Inverse of :meth:`to_dict`."""
+        from ..models.statespace import StateSpaceModel
+
+        return cls(StateSpaceModel.from_dict(d["statespace"]), d["u_offset"], d["y_offset"])
 
     def __repr__(self) -> str:
         s = self.statespace
@@ -142,15 +182,18 @@ class IdentifyResult:
             lines.append(f"validation fit (reported only): {self.validation_fit:.1f} %")
         for k, v in self.checks.items():
             lines.append(f"{k}: {v}")
-        lines.append(f"{'family':<10} {'order':>5} {'D':>3} {'focus':<10} {'held-out fit %':>14} "
-                     f"{'stable':>6} {'s':>6}")
+        lines.append(f"  {'family':<18} {'order':>5} {'D':>3} {'focus':<10} "
+                     f"{'held-out fit %':>14} {'stable':>6} {'s':>6}  note")
         for r in self.leaderboard:
             f = r["held_out_fit"]
             fs = f"{f:14.2f}" if np.isfinite(f) and f > -1e4 else f"{'< -1e4':>14}"
             ft = "yes" if r["feedthrough"] else "no"
-            lines.append(f"{r['family']:<10} {r['order']:>5} {ft:>3} "
-                         f"{r['focus'] or '-':<10} {fs} {'yes' if r['stable'] else 'NO':>6} "
-                         f"{r['seconds']:6.2f}")
+            lines.append(f"{'*' if r.get('chosen') else ' '} {_family(r):<18} {r['order']:>5} "
+                         f"{ft:>3} {r['focus'] or '-':<10} {fs} "
+                         f"{'yes' if r['stable'] else 'NO':>6} {r['seconds']:6.2f}"
+                         f"  {r.get('note') or ''}".rstrip())
+        lines.append("* chosen (re-fitted on the whole record; among those the held-out blocks "
+                     "cannot tell apart, the smallest BIC)")
         return "\n".join(lines)
 
     def plot(self, ax: Any = None) -> Any:
@@ -166,8 +209,8 @@ class IdentifyResult:
             ax.plot([r["order"] for r in rows], [max(r["held_out_fit"], -100) for r in rows],
                     "o", label=fam, alpha=0.7)
         s = self.model.statespace
-        best = self.leaderboard[0]
-        ax.plot([s.nstates], [best["held_out_fit"]], "k*", ms=14, label="chosen")
+        chosen = next((r for r in self.leaderboard if r.get("chosen")), self.leaderboard[0])
+        ax.plot([s.nstates], [max(chosen["held_out_fit"], -100)], "k*", ms=14, label="chosen")
         ax.set_xlabel("order")
         ax.set_ylabel("held-out simulation fit (%)")
         ax.legend(fontsize="small")
@@ -176,3 +219,12 @@ class IdentifyResult:
     def __repr__(self) -> str:
         return (f"IdentifyResult({self.choice}; {len(self.leaderboard)} candidates, "
                 f"{self.seconds:.1f} s)")
+
+
+def _register() -> None:
+    from ..models.serialize import register_model
+
+    register_model(IdentifiedModel)
+
+
+_register()

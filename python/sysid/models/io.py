@@ -59,7 +59,8 @@ __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict", "regi
 _LAZY_FAMILIES = {"TransferFunction": "sysid.tf.model", "ProcessModel": "sysid.process.model",
                   "PNLSSModel": "sysid.nlss.pnlss",
                   "NeuralStateSpaceModel": "sysid.nlss.neural",
-                  "NetworkNARXModel": "sysid.nonlinear.narx_network_model"}
+                  "NetworkNARXModel": "sysid.nonlinear.narx_network_model",
+                  "IdentifiedModel": "sysid.identify.result"}
 
 for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel,
              HammersteinWienerModel, HammersteinWienerSSModel, NonlinearGreyBox):

@@ -8,10 +8,11 @@ trend (offsets, slopes) that was removed from it.
 
     \\hat y_{raw} = \\mathrm{model}(u_{raw} - u_0(t)) + y_0(t)
 
-with ``u_0(t), y_0(t)`` the trend from the first sample of the record (``offset + slope
-t``). :func:`sysid.compare` estimates the initial state on the detrended record, so the
-fit numbers equal those of ``model`` on ``tr.apply(raw)`` (for offsets; a linear trend
-changes the variance the fit is normalised by).
+with ``u_0(t), y_0(t)`` the trend from the first sample of the arrays (``offset + slope
+t``; :func:`sysid.compare` on a record evaluates it at the record's instants, as
+:meth:`Trend.apply`). :func:`sysid.compare` estimates the initial state on the detrended
+record, so the fit numbers equal those of ``model`` on ``tr.apply(raw)`` (for offsets; a linear
+trend changes the variance the fit is normalised by).
 """
 
 from __future__ import annotations

@@ -126,6 +126,8 @@ class _Setup:
     dropped_d: bool = False
     #: ``weighting="output"``: each output's scale; ``data``, ``C``, ``D``, ``K`` are scaled
     scale: np.ndarray | None = None
+    #: the state scaled by this factor (``B, K, x0`` times it, ``C`` divided; :func:`_balance`)
+    xscale: float = 1.0
 
     def kwargs(self) -> dict[str, Any]:
         return {"focus": self.focus, "estimate_d": self.feedthrough,
@@ -135,13 +137,16 @@ class _Setup:
 
 
 def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: Any,
-           noise: str, weighting: str | None, enforce_stability: bool | None) -> _Setup:
-    """Checks the arguments and prepares the start (``focus`` itself is parsed by the core)."""
+           noise: str, weighting: str | None, enforce_stability: bool | None,
+           balance: bool = True) -> _Setup:
+    """Checks the arguments and prepares the start (``focus`` itself is parsed by the core);
+    ``balance``: search in a state basis of balanced scale (:func:`_balance`)."""
     data = _experiments(data)
     if not isinstance(model, StateSpaceModel):
         raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
-    if weighting is None:
-        weighting = "noise" if focus == "prediction" else "identity"
+    if weighting is None:  # simulation: one output's plain sum; several: each to its scale
+        weighting = ("noise" if focus == "prediction" else
+                     "output" if data.n_outputs > 1 else "identity")
     if weighting not in ("noise", "identity", "output"):
         raise DataError(f"weighting must be 'noise', 'identity' or 'output', got {weighting!r}")
     if noise not in _NOISE:
@@ -183,10 +188,40 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: 
         data, scale = _scaled_outputs(data)
         C, D = C / scale[:, None], D / scale[:, None]
         K = K * scale[None, :] if K is not None else None
+    modes = _x0_modes(x0, data.n_experiments, n)
+    xs = _balance(B, C, K) if balance else 1.0
+    if xs != 1.0:
+        B, C = B * xs, C / xs
+        K = K * xs if K is not None else None
+        modes = [m if isinstance(m, str) else m * xs for m in modes]
     return _Setup(data, A, B, C, D, K, bool(feedthrough),
-                  focus == "prediction" and noise == "estimate", weighting,
-                  _x0_modes(x0, data.n_experiments, n), focus, enforce_stability, stabilized,
-                  dropped_d, scale)
+                  focus == "prediction" and noise == "estimate", weighting, modes, focus,
+                  enforce_stability, stabilized, dropped_d, scale, xs)
+
+
+def _balance(B: np.ndarray, C: np.ndarray, K: np.ndarray | None) -> float:
+    """The factor ``c`` that makes the state's scale match the signals': with ``x -> c x``
+    the entries of ``c [B K]`` and ``C / c`` are of one size. A subspace basis carries the
+    units of the data (``C`` in output units, ``B`` in their inverse: in megapascal-volt
+    units ``|C| ~ 1e7``, ``|B| ~ 1e-8``), and the search's step test, relative to the
+    parameter vector's norm, then stopped it after one iteration; balanced, the start is the
+    same whatever the units (joint unit changes scale ``c``, not the balanced matrices)."""
+    nb = float(np.linalg.norm(B)) + (float(np.linalg.norm(K)) if K is not None else 0.0)
+    nc = float(np.linalg.norm(C))
+    if not (nb > 0 and nc > 0 and np.isfinite(nb) and np.isfinite(nc)):
+        return 1.0
+    return float(np.sqrt(nc / nb))
+
+
+def _unbalanced(model: StateSpaceModel, xs: float) -> StateSpaceModel:
+    """A model found in the state basis scaled by ``xs`` (:func:`_balance`), in the start's."""
+    if xs == 1.0:
+        return model
+    return StateSpaceModel(
+        model.A, model.B / xs, model.C * xs, model.D,
+        None if model.K is None else model.K / xs, dt=model.dt, noise_cov=model.noise_cov,
+        x0=None if model.x0 is None else model.x0 / xs, input_names=model.input_names,
+        output_names=model.output_names, info=model.info)
 
 
 def _scaled_outputs(data: IOData) -> tuple[IOData, np.ndarray]:
@@ -251,7 +286,9 @@ def pem_loss(
     One pass over the data fits the estimated initial states by least squares, one more
     gives the criterion: ``det(E^T E / N)`` of the prediction (or simulation) errors for
     ``weighting="noise"`` (default for prediction), ``1/2 sum |e|^2`` for
-    ``weighting="identity"`` (default for simulation). Cheap enough to score many candidate
+    ``weighting="identity"`` (default for simulation with one output; with several the
+    default ``"output"`` sums each output's errors relative to its scale, as :func:`pem`).
+    Cheap enough to score many candidate
     models (orders, structures, starts) before refining the best.
 
     Parameters
@@ -357,13 +394,15 @@ def pem(
     weighting : {"noise", "identity", "output"}, optional
         ``"noise"``: weight the errors by the inverse of their covariance, re-estimated between
         iterations (the determinant criterion, maximum likelihood for Gaussian innovations);
-        ``"identity"``: plain sum of squares. Default ``"noise"`` for prediction focus and
-        ``"identity"`` for simulation focus (simulation errors are not white, and on the
-        shipped records the plain sum gives the better validation fit; see docs/pem.md).
-        ``"output"``: the plain sum of squares of each output's errors divided by that
-        output's mean square (the fit % of every output counts alike, whatever its units;
-        ``info["pem"]["output_scale"]``, the criterion in those units); the same as
-        ``"identity"`` for one output.
+        ``"identity"``: plain sum of squares. ``"output"``: the plain sum of squares of each
+        output's errors divided by that output's mean square (the fit % of every output
+        counts alike, whatever its units; ``info["pem"]["output_scale"]``, the criterion in
+        those units); the same as ``"identity"`` for one output. Default ``"noise"`` for
+        prediction focus; for simulation focus (simulation errors are not white, and on the
+        shipped records a plain sum gives the better validation fit; see docs/pem.md)
+        ``"identity"`` for one output and ``"output"`` for several, so that the result does
+        not depend on the outputs' units (with ``"identity"``, a second output in units 1000
+        times smaller was ignored: validation fit -1411 % instead of 77 %).
     enforce_stability : bool, optional
         Keep ``A`` stable (MATLAB's ``EnforceStability``). ``focus="simulation"`` always
         does. ``None`` (default): with ``focus="prediction"`` the predictor ``A - K C`` is
@@ -446,7 +485,9 @@ def pem(
 
         feedthrough, ft_selection = choose_feedthrough(SubspaceEstimator(_experiments(data)),
                                                        model.nstates)
-    st = _setup(data, model, focus, feedthrough, x0, noise, weighting, enforce_stability)
+    # a nominal parameter vector of the user's is in the start's basis: search in it
+    st = _setup(data, model, focus, feedthrough, x0, noise, weighting, enforce_stability,
+                balance=regularization is None)
     if st.dropped_d:
         warnings.warn("the start model has a non-zero D and feedthrough=False (the default "
                       "of every sysid estimator): it is refined with D = 0; pass "
@@ -481,7 +522,7 @@ def pem(
     _warn(res, focus, max_iter, enforce_stability)
     stabilized = st.stabilized
     Kres = res["k"] if K is not None else None
-    x0s = res["x0"]
+    x0s = [x / st.xscale for x in res["x0"]]
     est_x0 = [i for i, m in enumerate(modes) if isinstance(m, str) and m == "estimate"]
 
     def build(theta: np.ndarray) -> StateSpaceModel:
@@ -496,7 +537,8 @@ def pem(
         a, b, c = take(n, n), take(n, m_), take(l, n)
         d = take(l, m_) if feedthrough else res["d"]
         k = take(n, l) if estimate_k else Kres
-        return _unscaled(StateSpaceModel(a, b, c, d, k, dt=data.dt), st.scale)
+        return _unscaled(_unbalanced(StateSpaceModel(a, b, c, d, k, dt=data.dt), st.xscale),
+                         st.scale)
 
     info = dict(model.info) if model.info else {}
     info["method"] = "pem"
@@ -534,9 +576,10 @@ def pem(
         info["feedthrough_selection"] = ft_selection
     out = StateSpaceModel(
         res["a"], res["b"], res["c"], res["d"], Kres, dt=data.dt,
-        noise_cov=res["innovation_covariance"], x0=x0s[0] if len(x0s) == 1 else None,
+        noise_cov=res["innovation_covariance"],
+        x0=res["x0"][0] if len(x0s) == 1 else None,  # in the searched basis: unbalanced below
         input_names=data.input_names, output_names=data.output_names, info=info)
-    out = _unscaled(out, st.scale)
+    out = _unscaled(_unbalanced(out, st.xscale), st.scale)
     out.uncertainty = _uncertainty(
         res["theta"], res["covariance"], build, int(res["rank"]),
         _names(n, model.ninputs, l, bool(feedthrough), estimate_k and K is not None, len(est_x0)))

@@ -39,12 +39,13 @@ from typing import Any, Literal, Union
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int
+from .._checks import as_int, require_inputs_vary
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
 from ..errors import (
     DataError,
+    ExcitationError,
     FeedbackWarning,
     OrderError,
 )
@@ -86,8 +87,8 @@ def _preprocessing(data: IOData, from_factor: bool) -> dict[str, Any]:
 
 
 def _check_signals(data: IOData) -> None:
-    """Refuse constant outputs; warn (OffsetWarning) about offsets much larger than the
-    variation."""
+    """Refuse constant outputs and inputs (naming the channel, as the polynomial estimators
+    do); warn (OffsetWarning) about offsets much larger than the variation."""
     for kind, idx, names in (("output", 1, data.output_names), ("input", 0, data.input_names)):
         if not names:
             continue
@@ -106,6 +107,9 @@ def _check_signals(data: IOData) -> None:
                     f"output {n} is constant ({mean[j]:g}): there is nothing to identify; "
                     "check the channel (a stuck sensor, the wrong column?) or drop it"
                 )
+    if data.input_names:  # else the horizon's rank test would refuse it without a name
+        require_inputs_vary(data.experiments, "the subspace methods", data.input_names,
+                            error=ExcitationError)
     # the one offset check of every linear estimator (sysid.data.offsets)
     check_offsets(data)
 

@@ -421,7 +421,8 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
             data = IOData(u=data[0], y=data[1], dt=model.dt)
         inner = compare_one(model.model, model.trend.apply(data), horizon, x0)
         raw = data.experiments
-        yh = [model.trend.restore_outputs(b, model.dt) for b in inner.yhat]
+        yh = [model.trend.restore_outputs(b, model.dt, model.trend.start_of(t[0]))
+              for b, t in zip(inner.yhat, data.times)]
         return CompareResult(model, inner.horizon, [u for u, _ in raw], [y for _, y in raw],
                              yh, inner.x0)
     model, recs = _records(model, data)

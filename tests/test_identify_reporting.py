@@ -1,0 +1,152 @@
+"""What identify reports: the chosen row is marked in the summary and in the plot, stabilised
+subspace candidates are told apart from plain ones, and a search that refined nothing says
+why (issue 26: honest diagnostics)."""
+
+from __future__ import annotations
+
+import warnings
+
+import matplotlib
+import numpy as np
+import pytest
+
+import sysid
+from sysid.identify.result import IdentifiedModel, IdentifyResult
+
+matplotlib.use("Agg")
+
+
+def _row(family, order, fit, chosen, criterion="subspace"):
+    return {"family": family, "order": order, "feedthrough": False, "focus": None,
+            "criterion": criterion, "held_out_fit": fit, "mean_fit": fit, "stable": True,
+            "max_abs_pole": 0.5, "seconds": 0.0, "note": "", "chosen": chosen}
+
+
+def test_summary_and_plot_mark_the_chosen_row_not_the_first():
+    # the choice among near-best rows is by BIC on the whole record: it need not be the top
+    m = sysid.StateSpaceModel([[0.5, 0.1], [0.0, 0.3]], [[1.0], [1.0]], [[1.0, 0.0]])
+    rows = [_row("moesp", 3, 90.4, False), _row("n4sid", 2, 90.1, True),
+            _row("cva", 2, 80.0, False, "subspace, stable A")]
+    res = IdentifyResult(IdentifiedModel(m, [0.0], [0.0]), rows, "n4sid, order 2", {},
+                         None, 0.1)
+    lines = res.summary().splitlines()
+    marked = [ln for ln in lines if ln.startswith("* ")]
+    assert len(marked) == 2 and "n4sid" in marked[0] and "chosen" in marked[1]
+    assert any("cva (stable A)" in ln for ln in lines)
+    ax = res.plot()
+    star = [ln for ln in ax.get_lines() if ln.get_label() == "chosen"][0]
+    assert star.get_ydata()[0] == 90.1 and star.get_xdata()[0] == 2
+
+
+def test_a_search_that_refined_nothing_says_why():
+    # an integrating plant on a short record: every subspace candidate is unstable on some
+    # block, so no prediction-error search starts; the checks say so
+    rng = np.random.default_rng(0)
+    true = sysid.StateSpaceModel([[1.0, 0.1], [0.0, 0.7]], [[0.0], [1.0]], [[1.0, 0.0]])
+    u = rng.standard_normal(200)
+    y = true.simulate(u) + 0.05 * rng.standard_normal((200, 1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.StabilityWarning)
+        res = sysid.identify(sysid.IOData(u=u, y=y))
+    assert all(r["criterion"].startswith("subspace") for r in res.leaderboard)
+    assert "no stable subspace candidate" in res.checks["refinement"]
+    assert "refinement:" in res.summary()
+
+
+def _resonant(n, seed, u=None):
+    rng = np.random.default_rng(seed)
+    true = sysid.StateSpaceModel([[1.6, -0.9], [1.0, 0.0]], [[1.0], [0.0]], [[0.3, 0.2]])
+    u = rng.standard_normal(n) if u is None else u
+    return u, true.simulate(u)[:, 0] + 0.02 * rng.standard_normal(n)
+
+
+def test_isolated_spikes_in_the_output_are_reported_and_warned():
+    u, y = _resonant(600, 1)
+    y[[100, 333, 500]] += 20 * y.std()     # logger glitches
+    with warnings.catch_warnings(record=True) as got:
+        warnings.simplefilter("always")
+        res = sysid.identify(sysid.IOData(u=u, y=y), refine=False)
+    assert "3 isolated spike(s) (first at sample 100)" in res.checks["outliers"]
+    assert "despike" in res.summary()
+    assert any("isolated spike" in str(w.message) for w in got)
+
+
+def test_no_spike_report_on_clean_records_of_several_kinds():
+    # white noise, a lightly damped response to steps, a saturating step response: no
+    # false alarm (steep but smooth changes are not spikes)
+    steps = np.repeat(np.random.default_rng(3).choice([-1.0, 1.0], 15), 40)
+    for u, y in (_resonant(600, 2), _resonant(600, 4, u=steps),
+                 (steps, np.tanh(3 * np.convolve(steps, [0.5, 0.3, 0.2])[:600]))):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", sysid.StabilityWarning)
+            warnings.filterwarnings("error", message=".*isolated spike")
+            res = sysid.identify(sysid.IOData(u=u, y=y), refine=False)
+        assert "outliers" not in res.checks
+
+
+def test_a_step_test_record_is_identified_not_refused_by_a_fold():
+    # one step, at a block edge of the held-out split: the rest of the record without the
+    # block next to it holds two constant pieces, which no subspace fit can use; identify
+    # raised that fold's rank error ("12 rows of future inputs have numerical rank 1")
+    # where n4sid(data, "auto") fits the record. The fold is left out, and said so
+    rng = np.random.default_rng(5)
+    u = np.r_[np.full(300, 4.0), np.full(200, 6.0)]
+    true = sysid.StateSpaceModel([[0.9]], [[0.1]], [[1.0]])
+    y = 3.0 + true.simulate(u - 4.0) + 0.01 * rng.standard_normal((500, 1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = sysid.identify(sysid.IOData(u=u, y=y), refine=False)
+    assert "held-out block(s) left out" in res.checks["held_out_excitation"]
+    assert res.model.is_stable()
+
+
+def test_offsets_of_data_in_small_units_are_reported_not_rounded_to_zero():
+    # a record in micro-units: the offsets line read "input means [-0.0], output means
+    # [0.0] removed" (rounded to six decimals)
+    u, y = _resonant(400, 6)
+    res = sysid.identify(sysid.IOData(u=1e-6 * (u + 3.0), y=1e-6 * (y + 7.0)), refine=False)
+    line = res.checks["offsets"]
+    assert "[0.0]" not in line and "[-0.0]" not in line
+    mu = float(line.split("input means [")[1].split("]")[0])
+    assert mu == pytest.approx(1e-6 * (u + 3.0).mean(), rel=1e-5)
+
+
+def test_the_identified_model_gives_pole_and_damping_std_like_its_state_space_model():
+    # res.model.poles(std=True) raised TypeError and damp(res.model, std=True) said "this
+    # model carries no parameter uncertainty" while res.model.statespace carried it
+    u, y = _resonant(600, 8)
+    data = sysid.IOData(u=u, y=y)
+    inner = sysid.pem(data, sysid.n4sid(data, 2), focus="simulation")  # carries a covariance
+    model = IdentifiedModel(inner, [2.0], [5.0])   # as identify returns it
+    p, sd = model.poles(std=True)
+    p0, sd0 = inner.poles(std=True)
+    table = sysid.damp(model, std=True)
+    np.testing.assert_allclose(p, p0)
+    np.testing.assert_allclose(sd, sd0)
+    np.testing.assert_allclose(table.zeta, sysid.damp(inner, std=True).zeta)
+
+
+def test_to_control_names_what_to_pass_for_the_identified_model():
+    m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    wrapped = IdentifiedModel(m, [1.0], [2.0])
+    with pytest.raises(sysid.DataError, match="res.model.statespace"):
+        sysid.to_control(wrapped)
+
+
+@pytest.mark.parametrize("bad", [0, -2, 2.5, True])
+def test_a_max_order_that_is_not_a_positive_integer_is_refused(bad):
+    # max_order=0 was read as "not given" and the search went up to order 20
+    u, y = _resonant(300, 9)
+    with pytest.raises(sysid.DataError, match="max_order must be a positive integer"):
+        sysid.identify(sysid.IOData(u=u, y=y), max_order=bad, refine=False)
+
+
+def test_a_record_that_excites_too_little_anywhere_gets_the_records_own_error():
+    # two sinusoids: not the fold message ("hold parts of it out"), the subspace error of
+    # the whole record that n4sid gives
+    t = np.arange(500)
+    u = np.sin(0.05 * t) + 0.5 * np.sin(0.3 * t)
+    _, y = _resonant(500, 10, u=u)
+    with pytest.raises(sysid.ExcitationError, match="not persistently exciting") as e:
+        sysid.identify(sysid.IOData(u=u, y=y))
+    assert "hold parts" not in str(e.value)
