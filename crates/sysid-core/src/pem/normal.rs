@@ -8,6 +8,7 @@
 //! derivative `T = dphi/dtheta` ([`Predictor::predictor_map`]).
 
 use super::predictor::{Predictor, Unpacked};
+use crate::optim::gram_add;
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 /// Sparse columns of `T = dphi/dtheta`: `(row, value)` pairs per column.
@@ -19,8 +20,8 @@ pub(super) fn product(dst: MatMut<'_, f64>, a: MatRef<'_, f64>, b: MatRef<'_, f6
 }
 
 /// Running sums of the regressor `z = (x, u)` over the samples: `sum (W e) z^T` always, and
-/// with `acc` also `sum z z^T` (lower triangle) and the block of `z` rows of the current
-/// block of samples.
+/// with `acc` also `sum z z^T` (lower triangle, folded in per block by [`Self::fold`]) and the
+/// block of `z` rows of the current block of samples.
 pub(super) struct StaticSums {
     pub gz: Mat<f64>,
     pub zz: Mat<f64>,
@@ -46,12 +47,21 @@ impl StaticSums {
             }
         }
         if self.acc {
-            for a in 0..z.len() {
-                for b in 0..=a {
-                    self.zz[(a, b)] += z[a] * z[b];
-                }
-                self.zbuf[(row, a)] = z[a];
+            for (a, &za) in z.iter().enumerate() {
+                self.zbuf[(row, a)] = za;
             }
+        }
+    }
+
+    /// Adds the first `rows` regressors of the block to `sum z z^T` (one product per block,
+    /// not a rank-one update per sample).
+    pub fn fold(&mut self, rows: usize) {
+        if self.acc {
+            gram_add(
+                self.zz.as_mut(),
+                self.zbuf.as_ref().subrows(0, rows),
+                Par::Seq,
+            );
         }
     }
 }

@@ -220,6 +220,7 @@ impl Predictor<'_> {
                         let dst = cross.as_mut().subrows_mut(k * nz, nz);
                         matmul(dst, Accum::Add, zr.transpose(), sk, 1.0, par);
                     }
+                    sums.fold(row);
                     row = 0;
                 }
                 f.advance(*u, *y, t);
@@ -409,6 +410,7 @@ impl Predictor<'_> {
                     gram_add(gram.as_mut(), vr, par);
                     let zr = sums.zbuf.as_ref().subrows(0, row);
                     matmul(cross.as_mut(), Accum::Add, zr.transpose(), vr, 1.0, par);
+                    sums.fold(row);
                     row = 0;
                 }
                 f.advance(*u, *y, t);
