@@ -309,6 +309,7 @@ def pem(
     enforce_stability: bool | None = None,
     periods: int | str | None = None,
     transient: int | None = None,
+    geodesic: bool = False,
 ) -> StateSpaceModel:
     """Refine a state-space model by minimising its prediction (or simulation) errors.
 
@@ -475,7 +476,7 @@ def pem(
         res = _sysid.pem_refine(
             A, B, C, D, K, data.experiments, **st.kwargs(),
             local_coordinates=bool(local_coordinates), max_iter=max_iter, tol_cost=tol,
-            reg_lambda=lam, reg_r=R, reg_nominal=nom, progress=cb)
+            reg_lambda=lam, reg_r=R, reg_nominal=nom, progress=cb, geodesic=bool(geodesic))
     finally:
         close_bar()
     _warn(res, focus, max_iter, enforce_stability)
@@ -511,6 +512,7 @@ def pem(
         "weighted_cost": list(res["weighted_history"]),
         "loss_history": list(res["loss_history"]),
         "stop": res["stop"],
+        "geodesic": dict(res["geodesic"], on=bool(geodesic)),
         "condition": res["condition"],
         "focus": focus,
         "weighting": weighting,
