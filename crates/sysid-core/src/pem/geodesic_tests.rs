@@ -93,3 +93,55 @@ fn substituted_gradient_equals_the_dense_jacobian_product() {
         pr.structured = true;
     }
 }
+
+/// A search with geodesic acceleration: the accelerated steps are taken, the result is
+/// bit-for-bit the same for any thread count and not above the start's cost.
+#[test]
+fn accelerated_search_is_identical_for_any_thread_count() {
+    let (sys, k) = truth();
+    let u = noise(400, 2, 41);
+    let y = data(
+        &sys,
+        &k,
+        &u,
+        &(noise(400, 2, 42) * faer::Scale(0.3)),
+        &[0.0; 3],
+    );
+    let start = StateSpace::new(
+        &sys.a + noise(3, 3, 43) * faer::Scale(0.1),
+        &sys.b + noise(3, 2, 44) * faer::Scale(0.3),
+        sys.c.clone(),
+        sys.d.clone(),
+    )
+    .unwrap();
+    let views = [(u.as_ref(), y.as_ref())];
+    let mut o = options(
+        Focus::Simulation,
+        true,
+        false,
+        vec![InitialState::Estimate],
+        16,
+    );
+    o.reweight = false;
+    o.optim.geodesic = true;
+    let run = |par: faer::Par| {
+        faer::set_global_parallelism(par);
+        pem(&start, None, &views, &o, &mut |_| {
+            crate::optim::Flow::Continue
+        })
+        .unwrap()
+    };
+    let serial = run(faer::Par::Seq);
+    let parallel = run(faer::Par::rayon(2));
+    faer::set_global_parallelism(faer::Par::rayon(0));
+    assert_eq!(serial.theta, parallel.theta);
+    assert_eq!(serial.solution.geodesic, parallel.solution.geodesic);
+    let sol = &serial.solution;
+    assert!(sol.geodesic.accepted > 0, "{:?}", sol.geodesic);
+    assert!(
+        sol.cost <= sol.history[0],
+        "{} > {}",
+        sol.cost,
+        sol.history[0]
+    );
+}
