@@ -392,6 +392,14 @@ def pem(
         with a multisine applied from rest), 0 with a declared ``periods`` (its periods are
         in steady state, as before). ``info["pem"]["periodicity"]`` records the period, the
         whole periods, the transient and (``"auto"``) the detection.
+    geodesic : bool
+        Levenberg-Marquardt with geodesic acceleration (Transtrum & Sethna 2012) in the
+        time-domain search: each damped step gets a second-order correction from the
+        errors' second difference along it (two extra simulations and a gradient pass per
+        step); the step is refused when the correction exceeds 0.75 of its size.
+        ``info["pem"]["geodesic"]`` counts the corrections formed, carried by accepted steps
+        and refused. Default ``False``: it paid on no shipped record at equal CPU time (see
+        benches/results/pem_speed.md). Not used with ``periods``.
 
     Returns
     -------
