@@ -398,8 +398,9 @@ def pem(
         errors' second difference along it (two extra simulations and a gradient pass per
         step); the step is refused when the correction exceeds 0.75 of its size.
         ``info["pem"]["geodesic"]`` counts the corrections formed, carried by accepted steps
-        and refused. Default ``False``: it paid on no shipped record at equal CPU time (see
-        benches/results/pem_speed.md). Not used with ``periods``.
+        and refused. Default ``False``: at equal CPU time it did not pay on the F-16 at
+        ``max_iter=100`` nor on the smaller records; it does on long searches of lightly
+        damped large records (benches/results/pem_speed.md). Not used with ``periods``.
 
     Returns
     -------

@@ -26,6 +26,10 @@
 //! is admissible. Only points that decrease the cost are accepted, so the search never
 //! diverges.
 //!
+//! With [`Options::geodesic`] each damped step `v` gets the geodesic acceleration of
+//! Transtrum & Sethna (2012), `a = -(H + mu D)^-1 J^T W r_vv` with the same damped matrix and
+//! `J^T W r_vv` from [`Problem::geodesic_gradient`]; the trial is `theta + v + a/2`.
+//!
 //! Regularisation toward a nominal value (MATLAB's `Regularization.Lambda/R/Nominal`) adds
 //! `lambda/2 (theta - nominal)^T R (theta - nominal)` to the cost.
 //!
