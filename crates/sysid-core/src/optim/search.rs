@@ -380,7 +380,7 @@ pub fn minimize(
                 if std::env::var_os("SYSID_PROFILE").is_some() {
                     eprintln!("PROF geodesic mu {mu:e} ratio {ratio}");
                 }
-                if !(ratio <= GEODESIC_ALPHA) {
+                if ratio.is_nan() || ratio > GEODESIC_ALPHA {
                     geo.refused += 1;
                     if mu > 1e10 {
                         break;

@@ -81,7 +81,7 @@ impl Predictor<'_> {
         v: &[f64],
         h: f64,
     ) -> Result<Option<Vec<f64>>> {
-        if !self.has_gradient_pass() || v.len() != th.len() || !(h > 0.0) {
+        if !self.has_gradient_pass() || v.len() != th.len() || h.is_nan() || h <= 0.0 {
             return Ok(None);
         }
         let at = |s: f64| -> Vec<f64> { th.iter().zip(v).map(|(t, d)| t + s * h * d).collect() };

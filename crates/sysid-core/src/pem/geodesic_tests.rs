@@ -1,22 +1,14 @@
 //! The substituted-residual gradient pass (`J^T W x`) of the geodesic acceleration against
 //! the dense Jacobian by central differences of the errors.
 
-use super::tests::{data, noise, options, truth};
+use super::tests::{data, noise, options, truth, truth_with_feedthrough};
 use super::*;
 use crate::model::StateSpace;
 use crate::optim::Problem;
-use faer::mat;
 
 #[test]
 fn substituted_gradient_equals_the_dense_jacobian_product() {
-    let (sys, k) = truth();
-    let sys = StateSpace::new(
-        sys.a.clone(),
-        sys.b.clone(),
-        sys.c.clone(),
-        mat![[0.2, -0.1], [0.0, 0.3]],
-    )
-    .unwrap();
+    let (sys, k) = truth_with_feedthrough();
     let (u1, u2) = (noise(120, 2, 31), noise(70, 2, 32));
     let e1 = noise(120, 2, 33) * faer::Scale(0.3);
     let y1 = data(&sys, &k, &u1, &e1, &[0.3, 0.0, -0.2]);

@@ -23,6 +23,14 @@ pub(super) fn truth() -> (StateSpace, Mat<f64>) {
     (StateSpace::new(a, b, c, d).unwrap(), k)
 }
 
+/// [`truth`] with a non-zero `D`.
+pub(super) fn truth_with_feedthrough() -> (StateSpace, Mat<f64>) {
+    let (sys, k) = truth();
+    let d = mat![[0.2, -0.1], [0.0, 0.3]];
+    let sys = StateSpace::new(sys.a.clone(), sys.b.clone(), sys.c.clone(), d).unwrap();
+    (sys, k)
+}
+
 /// Innovation-form data: x+ = A x + B u + K e, y = C x + D u + e.
 pub(super) fn data(
     sys: &StateSpace,
@@ -363,14 +371,7 @@ fn local_coordinates_and_gradient_check() {
 /// the plain one that forms every Jacobian row, for every option that changes its layout.
 #[test]
 fn structured_gauss_newton_equals_the_plain_one() {
-    let (sys, k) = truth();
-    let sys = StateSpace::new(
-        sys.a.clone(),
-        sys.b.clone(),
-        sys.c.clone(),
-        mat![[0.2, -0.1], [0.0, 0.3]],
-    )
-    .unwrap();
+    let (sys, k) = truth_with_feedthrough();
     let u1 = noise(150, 2, 21);
     let u2 = noise(90, 2, 22);
     let y1 = data(
