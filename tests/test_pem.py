@@ -74,6 +74,27 @@ def test_perturbed_start_converges_on_noise_free_data():
     assert np.isfinite(m.info["pem"]["condition"])
 
 
+def test_geodesic_acceleration_is_an_option_reported_in_info():
+    true = _truth()
+    rng = np.random.default_rng(5)
+    u = rng.standard_normal((400, 2))
+    y = _data(true, u, 0.1 * rng.standard_normal((400, 2)))
+    start = _perturb(true, 0.05)
+    data = sysid.IOData(u=u, y=y)
+    plain = sysid.pem(data, start, focus="simulation", max_iter=100)
+    assert plain.info["pem"]["geodesic"] == {"formed": 0, "accepted": 0, "refused": 0,
+                                             "on": False}
+    for focus in ("prediction", "simulation"):
+        m = sysid.pem(data, start, focus=focus, max_iter=100, geodesic=True)
+        geo = m.info["pem"]["geodesic"]
+        assert geo["on"] and geo["formed"] >= geo["accepted"] + geo["refused"], focus
+        assert geo["accepted"] >= 1, focus
+        assert m.info["pem"]["cost"][-1] <= m.info["pem"]["cost"][0]
+    # both searches reach the same minimum
+    assert abs(m.info["pem"]["cost"][-1] - plain.info["pem"]["cost"][-1]) \
+        < 1e-6 * plain.info["pem"]["cost"][-1]
+
+
 def test_feedthrough_free_or_zero():
     true = _truth()
     true.D = np.array([[0.5, 0.0], [0.0, -0.3]])

@@ -331,6 +331,7 @@ def pem_refine(
     reg_r: _Array | None = None,
     reg_nominal: _Array | None = None,
     progress: Any = None,
+    geodesic: bool = False,
 ) -> dict[str, Any]: ...
 def pem_frequency_refine(
     a: _Array,

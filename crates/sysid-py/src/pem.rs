@@ -63,7 +63,7 @@ fn views<'a>(experiments: &'a Experiments<'_>) -> Vec<(MatRef<'a, f64>, MatRef<'
 #[pyo3(signature = (a, b, c, d, k, experiments, *, focus="prediction", estimate_d=false,
     estimate_k=true, x0=None, reweight=true, local_coordinates=true, enforce_stability=None,
     max_iter=50, tol_cost=1e-6, tol_step=1e-9, tol_gradient=1e-9, reg_lambda=0.0, reg_r=None,
-    reg_nominal=None, progress=None))]
+    reg_nominal=None, progress=None, geodesic=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn pem_refine<'py>(
     py: Python<'py>,
@@ -88,6 +88,7 @@ pub fn pem_refine<'py>(
     reg_r: Option<PyReadonlyArray2<'_, f64>>,
     reg_nominal: Option<PyReadonlyArray1<'_, f64>>,
     progress: Option<Py<PyAny>>,
+    geodesic: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let sys = model(&a, &b, &c, &d)?;
     let mut o = options(
@@ -103,6 +104,7 @@ pub fn pem_refine<'py>(
     o.optim.tol_cost = tol_cost;
     o.optim.tol_step = tol_step;
     o.optim.tol_gradient = tol_gradient;
+    o.optim.geodesic = geodesic;
     if reg_lambda != 0.0 {
         o.optim.regularization = Some(Regularization {
             lambda: reg_lambda,

@@ -205,5 +205,10 @@ pub fn search_items(
     out.set_item("condition", sol.condition)?;
     out.set_item("active_bounds", sol.active_bounds.clone())?;
     out.set_item("gradient", slice_to_numpy(py, &sol.gradient))?;
+    let geo = PyDict::new(py);
+    geo.set_item("formed", sol.geodesic.formed)?;
+    geo.set_item("accepted", sol.geodesic.accepted)?;
+    geo.set_item("refused", sol.geodesic.refused)?;
+    out.set_item("geodesic", geo)?;
     Ok(())
 }

@@ -346,6 +346,7 @@ def pem(
     enforce_stability: bool | None = None,
     periods: int | str | None = None,
     transient: int | None = None,
+    geodesic: bool = False,
 ) -> StateSpaceModel:
     """Refine a state-space model by minimising its prediction (or simulation) errors.
 
@@ -430,6 +431,15 @@ def pem(
         with a multisine applied from rest), 0 with a declared ``periods`` (its periods are
         in steady state, as before). ``info["pem"]["periodicity"]`` records the period, the
         whole periods, the transient and (``"auto"``) the detection.
+    geodesic : bool
+        Levenberg-Marquardt with geodesic acceleration (Transtrum & Sethna 2012) in the
+        time-domain search: each damped step gets a second-order correction from the
+        errors' second difference along it (two extra simulations and a gradient pass per
+        step); the step is refused when the correction exceeds 0.75 of its size.
+        ``info["pem"]["geodesic"]`` counts the corrections formed, carried by accepted steps
+        and refused. Default ``False``: at equal CPU time it did not pay on the F-16 at
+        ``max_iter=100`` nor on the smaller records; it does on long searches of lightly
+        damped large records (benches/results/pem_speed.md). Not used with ``periods``.
 
     Returns
     -------
@@ -516,7 +526,7 @@ def pem(
         res = _sysid.pem_refine(
             A, B, C, D, K, data.experiments, **st.kwargs(),
             local_coordinates=bool(local_coordinates), max_iter=max_iter, tol_cost=tol,
-            reg_lambda=lam, reg_r=R, reg_nominal=nom, progress=cb)
+            reg_lambda=lam, reg_r=R, reg_nominal=nom, progress=cb, geodesic=bool(geodesic))
     finally:
         close_bar()
     _warn(res, focus, max_iter, enforce_stability)
@@ -553,6 +563,7 @@ def pem(
         "weighted_cost": list(res["weighted_history"]),
         "loss_history": list(res["loss_history"]),
         "stop": res["stop"],
+        "geodesic": dict(res["geodesic"], on=bool(geodesic)),
         "condition": res["condition"],
         "focus": focus,
         "weighting": weighting,

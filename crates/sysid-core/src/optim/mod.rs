@@ -26,6 +26,10 @@
 //! is admissible. Only points that decrease the cost are accepted, so the search never
 //! diverges.
 //!
+//! With [`Options::geodesic`] each damped step `v` gets the geodesic acceleration of
+//! Transtrum & Sethna (2012), `a = -(H + mu D)^-1 J^T W r_vv` with the same damped matrix and
+//! `J^T W r_vv` from [`Problem::geodesic_gradient`]; the trial is `theta + v + a/2`.
+//!
 //! Regularisation toward a nominal value (MATLAB's `Regularization.Lambda/R/Nominal`) adds
 //! `lambda/2 (theta - nominal)^T R (theta - nominal)` to the cost.
 //!
@@ -159,6 +163,20 @@ pub trait Problem {
     fn n_residuals(&self) -> Option<usize> {
         None
     }
+    /// For [`Options::geodesic`]: `J(theta)^T W r_vv`, the Jacobian at `theta` times the
+    /// residuals' second directional derivative along `v`, `r_vv = d^2/dt^2 r(theta + t v)`
+    /// at `t = 0`, by finite differences with the step `h v` (`h` about 0.1: `v` is a whole
+    /// search step). The search turns it into the geodesic acceleration of the step.
+    /// `None` (the default): the provider cannot form it (or the difference points are
+    /// inadmissible); the search then takes the plain step.
+    fn geodesic_gradient(
+        &mut self,
+        _theta: &[f64],
+        _v: &[f64],
+        _h: f64,
+    ) -> Result<Option<Vec<f64>>> {
+        Ok(None)
+    }
 }
 
 /// Regularisation toward a nominal value: `lambda/2 (theta - nominal)^T R (theta - nominal)`.
@@ -219,6 +237,13 @@ pub struct Options {
     /// then stay out of the step by themselves (the complement is taken in the Marquardt
     /// metric); the condition number is not computed (NaN). Default 400.
     pub eigen_limit: usize,
+    /// Levenberg-Marquardt with geodesic acceleration (Transtrum & Sethna 2012): each damped
+    /// step `v` gets the second-order correction `a = -(H + mu D)^-1 J^T W r_vv` (the same
+    /// damped matrix, the right-hand side from [`Problem::geodesic_gradient`]) and the trial
+    /// is `theta + v + a / 2`, refused (the damping raised) when `2 |a| / |v| > 0.75` in the
+    /// scaled norm. Not on chord steps; a provider without the hook takes plain steps.
+    /// Default `false`.
+    pub geodesic: bool,
 }
 
 impl Default for Options {
@@ -237,6 +262,7 @@ impl Default for Options {
             rank_tol: 1e-13,
             reuse_gauss_newton: 0,
             eigen_limit: 400,
+            geodesic: false,
         }
     }
 }
@@ -331,4 +357,19 @@ pub struct Solution {
     pub condition: f64,
     /// Indices of parameters at a bound at the solution.
     pub active_bounds: Vec<usize>,
+    /// With [`Options::geodesic`]: accelerations formed ([`Problem::geodesic_gradient`]
+    /// calls that returned one), accepted steps that carried one, and trials refused by the
+    /// acceleration's size (`2 |a| / |v| > 0.75`).
+    pub geodesic: GeodesicCounts,
+}
+
+/// What geodesic acceleration did in one search ([`Solution::geodesic`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct GeodesicCounts {
+    /// Accelerations formed (each costs the provider its second-difference passes).
+    pub formed: usize,
+    /// Accepted steps that carried an acceleration.
+    pub accepted: usize,
+    /// Trials refused because the acceleration was too large against the step.
+    pub refused: usize,
 }

@@ -268,7 +268,12 @@ impl Reduced {
     /// Sets the scaled reduced gradient from the full gradient `g` (also used to reuse the
     /// factorisation at a new point for a chord step).
     pub(super) fn set_gradient(&mut self, g: &[f64]) {
-        self.gs = match &self.solver {
+        self.gs = self.scaled_gradient(g);
+    }
+
+    /// A full-space gradient-like vector `g` (p) in the scaled reduced coordinates.
+    fn scaled_gradient(&self, g: &[f64]) -> Vec<f64> {
+        match &self.solver {
             Solver::Eigen { t, .. } => {
                 let q = t.ncols();
                 (0..q)
@@ -284,7 +289,31 @@ impl Reduced {
                     }
                 })
                 .collect(),
+        }
+    }
+
+    /// The norm of a full-space step `s` in the scaled coordinates the damping measures
+    /// (`|D z|` with `s = T z`).
+    pub(super) fn scaled_norm(&self, s: &[f64]) -> f64 {
+        let sq: f64 = match &self.solver {
+            Solver::Eigen { t, .. } => (0..t.ncols())
+                .map(|j| {
+                    let z: f64 = (0..t.nrows()).map(|i| t[(i, j)] * s[i]).sum();
+                    (self.d[j] * z).powi(2)
+                })
+                .sum(),
+            Solver::Cholesky { .. } => (0..s.len())
+                .filter(|&i| !self.blocked[i])
+                .map(|i| (self.d[i] * s[i]).powi(2))
+                .sum(),
         };
+        sq.sqrt()
+    }
+
+    /// `-(H + mu D)^-1 g` for another right-hand side `g` (full space, p) with the damped
+    /// matrix of [`Self::step`]: the geodesic acceleration from `J^T W r_vv`.
+    pub(super) fn step_for(&self, g: &[f64], mu: f64, rank_tol: f64) -> Vec<f64> {
+        self.solve(&self.scaled_gradient(g), mu, rank_tol)
     }
 
     /// `(hs + shift I)^-1 gs` by Cholesky, raising the shift until it factors.
@@ -314,10 +343,15 @@ impl Reduced {
     /// Full-space step for damping `mu` (relative to the largest eigenvalue); `mu = 0` gives the
     /// Gauss-Newton step through the pseudo-inverse.
     pub(super) fn step(&self, mu: f64, rank_tol: f64) -> Vec<f64> {
+        self.solve(&self.gs, mu, rank_tol)
+    }
+
+    /// The damped step for the scaled reduced gradient `gs`.
+    fn solve(&self, gs: &[f64], mu: f64, rank_tol: f64) -> Vec<f64> {
         let (t, v, lam) = match &self.solver {
             Solver::Eigen { t, v, lam } => (t, v, lam),
             Solver::Cholesky { hs, lmax } => {
-                let z = Self::cholesky_solve(hs, &self.gs, mu.max(CHOLESKY_FLOOR) * lmax);
+                let z = Self::cholesky_solve(hs, gs, mu.max(CHOLESKY_FLOOR) * lmax);
                 return (0..z.len()).map(|i| -z[i] / self.d[i]).collect();
             }
         };
@@ -330,7 +364,7 @@ impl Reduced {
             .max(f64::MIN_POSITIVE);
         let mut c = vec![0.0; q];
         for k in 0..q {
-            let proj: f64 = (0..q).map(|i| v[(i, k)] * self.gs[i]).sum();
+            let proj: f64 = (0..q).map(|i| v[(i, k)] * gs[i]).sum();
             let den = lam[k] + mu * lmax;
             if lam[k] > rank_tol * lmax || mu > 0.0 {
                 c[k] = -proj / den;

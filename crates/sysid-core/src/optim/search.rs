@@ -1,7 +1,7 @@
 //! The damped Gauss-Newton iteration of [`minimize`].
 
 use super::reduced::{reduce, Reduced, Solver};
-use super::{Evaluation, Flow, Iteration, Options, Problem, Solution, StopReason};
+use super::{Evaluation, Flow, GeodesicCounts, Iteration, Options, Problem, Solution, StopReason};
 use crate::error::{Result, SysidError};
 use faer::Mat;
 
@@ -213,6 +213,15 @@ fn at_bounds(opt: &Options, theta: &[f64]) -> Vec<usize> {
         .collect()
 }
 
+/// The finite-difference step of the geodesic acceleration, as a fraction of the step
+/// (Transtrum & Sethna 2012).
+const GEODESIC_H: f64 = 0.1;
+
+/// The largest `2 |a| / |v|` (acceleration against velocity, scaled norm) a trial may have:
+/// above it the second-order term is too large for the expansion to hold, and the trial is
+/// refused as a failed step would be (Transtrum & Sethna 2012 use 0.75).
+const GEODESIC_ALPHA: f64 = 0.75;
+
 fn norm(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
 }
@@ -278,6 +287,7 @@ pub fn minimize(
     // consecutive iterations whose Gauss-Newton matrix is reused from an earlier point
     let mut frozen = 0usize;
     let mut last_red: Option<Reduced> = None;
+    let mut geo = GeodesicCounts::default();
     let stop;
     loop {
         if iterations >= options.max_iter {
@@ -344,15 +354,45 @@ pub fn minimize(
             stop = StopReason::Statistical;
             break;
         }
-        let mut accepted: Option<(Vec<f64>, f64, f64, f64, f64)> = None;
+        let mut accepted: Option<(Vec<f64>, f64, f64, f64, f64, bool)> = None;
         for try_ in 0..60 {
             if stale && try_ > 0 {
                 // a chord step gets one try at the current damping
                 break;
             }
             let t0 = std::time::Instant::now();
-            let s = red.step(mu, options.rank_tol);
+            let v = red.step(mu, options.rank_tol);
             prof("solve", t0);
+            // geodesic acceleration: the step v + a / 2, or v alone (no acceleration formed)
+            let accel = if options.geodesic && !stale {
+                let t0 = std::time::Instant::now();
+                crate::interrupt::check()?;
+                let gv = problem.geodesic_gradient(&pt.theta, &v, GEODESIC_H)?;
+                prof("geodesic", t0);
+                gv.filter(|g| g.len() == p && g.iter().all(|x| x.is_finite()))
+                    .map(|gv| red.step_for(&gv, mu, options.rank_tol))
+            } else {
+                None
+            };
+            if let Some(a) = &accel {
+                geo.formed += 1;
+                let ratio = 2.0 * red.scaled_norm(a) / red.scaled_norm(&v);
+                if std::env::var_os("SYSID_PROFILE").is_some() {
+                    eprintln!("PROF geodesic mu {mu:e} ratio {ratio}");
+                }
+                if ratio.is_nan() || ratio > GEODESIC_ALPHA {
+                    geo.refused += 1;
+                    if mu > 1e10 {
+                        break;
+                    }
+                    mu = (mu * 4.0).max(1e-12);
+                    continue;
+                }
+            }
+            let s: Vec<f64> = match &accel {
+                Some(a) => (0..p).map(|i| v[i] + 0.5 * a[i]).collect(),
+                None => v.clone(),
+            };
             let mut alpha = 1.0;
             let mut trial: Vec<f64> = (0..p).map(|i| pt.theta[i] + s[i]).collect();
             project(options, &mut trial);
@@ -380,8 +420,12 @@ pub fn minimize(
             let cand_cost = regularise(options, &trial, &raw).0;
             let actual = pt.cost - cand_cost;
             if cand_cost.is_finite() && actual > 0.0 {
-                // predicted decrease of the (projected) step taken
-                let st: Vec<f64> = (0..p).map(|i| trial[i] - pt.theta[i]).collect();
+                // predicted decrease of the (projected) step taken; with an acceleration,
+                // of its velocity (the Gauss-Newton model has no second-order term)
+                let st: Vec<f64> = match accel {
+                    Some(_) => v.iter().map(|x| alpha * x).collect(),
+                    None => (0..p).map(|i| trial[i] - pt.theta[i]).collect(),
+                };
                 let mut quad = 0.0;
                 for i in 0..p {
                     let hs: f64 = (0..p).map(|j| pt.h[(i, j)] * st[j]).sum();
@@ -400,7 +444,7 @@ pub fn minimize(
                 if std::env::var_os("SYSID_PROFILE").is_some() {
                     eprintln!("PROF step mu {used:e} rho {rho} pred {pred:e} actual {actual:e} try {try_} halvings {halvings}");
                 }
-                accepted = Some((trial, cand_cost, used, rho, quad));
+                accepted = Some((trial, cand_cost, used, rho, quad, accel.is_some()));
                 break;
             }
             if std::env::var_os("SYSID_PROFILE").is_some() {
@@ -411,7 +455,7 @@ pub fn minimize(
             }
             mu = (mu * 4.0).max(1e-12);
         }
-        let Some((trial, cand_cost, used, rho, quad)) = accepted else {
+        let Some((trial, cand_cost, used, rho, quad, accelerated)) = accepted else {
             if stale {
                 // the reused matrix found no descent: form it at this point and try again
                 frozen = 0;
@@ -421,6 +465,7 @@ pub fn minimize(
             stop = StopReason::NoDescent;
             break;
         };
+        geo.accepted += usize::from(accelerated);
         let step_norm = norm(&(0..p).map(|i| trial[i] - pt.theta[i]).collect::<Vec<_>>());
         // relative decrease under the same cost definition (before any re-weighting)
         let rel_decrease = (pt.cost - cand_cost) / pt.cost.abs().max(f64::MIN_POSITIVE);
@@ -517,5 +562,6 @@ pub fn minimize(
         condition,
         active_bounds,
         theta: pt.theta,
+        geodesic: geo,
     })
 }

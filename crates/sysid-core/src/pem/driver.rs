@@ -47,6 +47,10 @@ impl Problem for Predictor<'_> {
         Some(self.n_samples * self.l)
     }
 
+    fn geodesic_gradient(&mut self, th: &[f64], v: &[f64], h: f64) -> Result<Option<Vec<f64>>> {
+        self.second_difference_gradient(th, v, h)
+    }
+
     fn admissible(&mut self, th: &[f64]) -> bool {
         self.is_admissible(th)
     }

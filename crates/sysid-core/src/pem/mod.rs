@@ -44,6 +44,9 @@ mod driver;
 pub(crate) mod frequency;
 #[cfg(test)]
 mod frequency_tests;
+mod geodesic;
+#[cfg(test)]
+mod geodesic_tests;
 mod modal;
 mod normal;
 mod options;

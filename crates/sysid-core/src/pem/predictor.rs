@@ -65,6 +65,10 @@ pub struct Predictor<'a> {
     pub(super) chart: Option<super::chart::Chart>,
     /// `(theta, Lambda)` of the last trial's cost pass ([`Self::cost_keeping_covariance`]).
     pub(super) last_covariance: Option<(Vec<f64>, Mat<f64>)>,
+    /// `(c, x)`: a gradient pass (`evaluate_structured`, `evaluate_modal` with `grad_only`)
+    /// forms `J^T W (c e + x)` instead of `J^T W e`, `x` the substituted residuals of every
+    /// sample in experiment order (`l` per sample); see `pem::geodesic`.
+    pub(super) substitute: Option<(f64, Vec<f64>)>,
 }
 
 /// The model matrices at one parameter vector, with the predictor's `A - K C`, `B - K D`.
@@ -205,6 +209,27 @@ impl Filter {
             }
             self.we[i] = a;
             self.cost += 0.5 * a * a;
+        }
+        for i in 0..l {
+            let mut a = 0.0;
+            for j in i..l {
+                a += r[j * l + i] * self.we[j];
+            }
+            self.wz[i] = a;
+        }
+    }
+
+    /// Replaces the weighted errors of the gradient (`wz`) by `W (c e + x)` (the cost and
+    /// `e` are kept): a pass with substituted residuals.
+    pub fn substitute(&mut self, c: f64, x: &[f64]) {
+        let l = self.e.len();
+        let r = &self.rinv_rows;
+        for i in 0..l {
+            let mut a = 0.0;
+            for (j, rv) in r[i * l..i * l + i + 1].iter().enumerate() {
+                a += rv * (c * self.e[j] + x[j]);
+            }
+            self.we[i] = a;
         }
         for i in 0..l {
             let mut a = 0.0;
@@ -370,6 +395,7 @@ impl<'a> Predictor<'a> {
             a_bound_hits: 0,
             chart: None,
             last_covariance: None,
+            substitute: None,
         })
     }
 

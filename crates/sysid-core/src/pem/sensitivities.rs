@@ -168,6 +168,7 @@ impl Predictor<'_> {
         let mut s2 = s.clone();
         let mut v = vec![0.0; n];
         let mut z = vec![0.0; nz];
+        let mut sample = 0usize;
         for (ex, (u, y)) in self.exps.iter().enumerate() {
             f.restart(ex);
             s.fill(0.0);
@@ -180,6 +181,10 @@ impl Predictor<'_> {
             let mut row = 0usize;
             for t in 0..len {
                 f.weighed_errors(*u, *y, t)?;
+                if let Some((c, x)) = &self.substitute {
+                    f.substitute(*c, &x[sample * l..(sample + 1) * l]);
+                }
+                sample += 1;
                 z[..n].copy_from_slice(&f.x);
                 for j in 0..m {
                     z[n + j] = u[(t, j)];
@@ -329,6 +334,7 @@ impl Predictor<'_> {
         let mut ge = vec![0.0; pe];
         // forcing of a sample: (z, y, 0): the modal state and input, the output, no forcing
         let mut fv = vec![0.0; nz + l + 1];
+        let mut sample = 0usize;
         for (ex, (u, y)) in self.exps.iter().enumerate() {
             f.restart(ex);
             sc.fill(0.0);
@@ -342,6 +348,10 @@ impl Predictor<'_> {
             let mut row = 0usize;
             for t in 0..len {
                 f.weighed_errors(*u, *y, t)?;
+                if let Some((c, x)) = &self.substitute {
+                    f.substitute(*c, &x[sample * l..(sample + 1) * l]);
+                }
+                sample += 1;
                 // modal state x' = T^-1 x, regressor z = (x', u)
                 for (a, za) in z.iter_mut().take(n).enumerate() {
                     *za = (0..n).map(|b| md.ti[(a, b)] * f.x[b]).sum();

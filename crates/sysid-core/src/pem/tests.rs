@@ -4,7 +4,7 @@ use crate::model::StateSpace;
 use crate::optim::{Flow, Problem};
 use faer::{mat, Mat};
 
-fn noise(n: usize, c: usize, seed: u64) -> Mat<f64> {
+pub(super) fn noise(n: usize, c: usize, seed: u64) -> Mat<f64> {
     let mut s = seed;
     Mat::from_fn(n, c, |_, _| {
         s = s
@@ -14,7 +14,7 @@ fn noise(n: usize, c: usize, seed: u64) -> Mat<f64> {
     })
 }
 
-fn truth() -> (StateSpace, Mat<f64>) {
+pub(super) fn truth() -> (StateSpace, Mat<f64>) {
     let a = mat![[0.7, 0.2, 0.0], [-0.2, 0.7, 0.1], [0.0, 0.0, -0.5]];
     let b = mat![[1.0, 0.0], [0.3, 1.0], [0.5, -0.4]];
     let c = mat![[1.0, 0.0, 0.4], [0.0, 1.0, -0.3]];
@@ -23,8 +23,22 @@ fn truth() -> (StateSpace, Mat<f64>) {
     (StateSpace::new(a, b, c, d).unwrap(), k)
 }
 
+/// [`truth`] with a non-zero `D`.
+pub(super) fn truth_with_feedthrough() -> (StateSpace, Mat<f64>) {
+    let (sys, k) = truth();
+    let d = mat![[0.2, -0.1], [0.0, 0.3]];
+    let sys = StateSpace::new(sys.a.clone(), sys.b.clone(), sys.c.clone(), d).unwrap();
+    (sys, k)
+}
+
 /// Innovation-form data: x+ = A x + B u + K e, y = C x + D u + e.
-fn data(sys: &StateSpace, k: &Mat<f64>, u: &Mat<f64>, e: &Mat<f64>, x0: &[f64]) -> Mat<f64> {
+pub(super) fn data(
+    sys: &StateSpace,
+    k: &Mat<f64>,
+    u: &Mat<f64>,
+    e: &Mat<f64>,
+    x0: &[f64],
+) -> Mat<f64> {
     let (n, l) = (sys.n_states(), sys.n_outputs());
     let mut x = Mat::from_fn(n, 1, |i, _| x0[i]);
     let mut y = Mat::zeros(u.nrows(), l);
@@ -40,7 +54,13 @@ fn data(sys: &StateSpace, k: &Mat<f64>, u: &Mat<f64>, e: &Mat<f64>, x0: &[f64]) 
     y
 }
 
-fn options(focus: Focus, d: bool, k: bool, x0: Vec<InitialState>, block: usize) -> PemOptions {
+pub(super) fn options(
+    focus: Focus,
+    d: bool,
+    k: bool,
+    x0: Vec<InitialState>,
+    block: usize,
+) -> PemOptions {
     let mut o = PemOptions::default();
     o.focus = focus;
     o.estimate_d = d;
@@ -351,14 +371,7 @@ fn local_coordinates_and_gradient_check() {
 /// the plain one that forms every Jacobian row, for every option that changes its layout.
 #[test]
 fn structured_gauss_newton_equals_the_plain_one() {
-    let (sys, k) = truth();
-    let sys = StateSpace::new(
-        sys.a.clone(),
-        sys.b.clone(),
-        sys.c.clone(),
-        mat![[0.2, -0.1], [0.0, 0.3]],
-    )
-    .unwrap();
+    let (sys, k) = truth_with_feedthrough();
     let u1 = noise(150, 2, 21);
     let u2 = noise(90, 2, 22);
     let y1 = data(
