@@ -293,30 +293,8 @@ pub fn train(
         });
     }
     check_sizes(model, p0.len(), train_data, total, opts.batch)?;
-    if !opts.rates.is_empty() && opts.rates.len() != p0.len()
-        || opts.rates.iter().any(|r| !(r.is_finite() && *r >= 0.0))
-    {
-        return Err(SysidError::invalid(
-            "rates",
-            format!(
-                "needs one finite, non-negative step-size factor per parameter ({}), got {}",
-                p0.len(),
-                opts.rates.len()
-            ),
-        ));
-    }
-    if !opts.penalty.is_empty() && opts.penalty.len() != p0.len()
-        || opts.penalty.iter().any(|r| !(r.is_finite() && *r >= 0.0))
-    {
-        return Err(SysidError::invalid(
-            "penalty",
-            format!(
-                "needs one finite, non-negative weight per parameter ({}), got {}",
-                p0.len(),
-                opts.penalty.len()
-            ),
-        ));
-    }
+    per_parameter("rates", "step-size factor", &opts.rates, p0.len())?;
+    per_parameter("penalty", "weight", &opts.penalty, p0.len())?;
     let np = p0.len();
     let mut p = p0.to_vec();
     let (mut m1, mut m2) = (vec![0.0; np], vec![0.0; np]);
@@ -426,6 +404,21 @@ pub fn train(
     res.params = best.1;
     res.best_epoch = best.2;
     Ok(res)
+}
+
+/// Refuses a per-parameter option `v` (empty: unused) that is not one finite, non-negative
+/// `what` per parameter.
+fn per_parameter(name: &'static str, what: &str, v: &[f64], n: usize) -> Result<()> {
+    if !v.is_empty() && v.len() != n || v.iter().any(|r| !(r.is_finite() && *r >= 0.0)) {
+        return Err(SysidError::invalid(
+            name,
+            format!(
+                "needs one finite, non-negative {what} per parameter ({n}), got {}",
+                v.len()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The L2 penalty `sum_i w_i (p_i - p0_i)^2 / 2` toward the start `p0` (weights `w`, empty:
