@@ -18,8 +18,8 @@ def _data(seed=0, n=1500):
 
 def _fit(**kw):
     kw.setdefault("init", "linear")  # training from the linear start (auto: test_nlssest_hw)
-    return sysid.nlssest(_data(), 1, hidden=8, epochs=20, learning_rate=1e-2, progress=False,
-                         **kw)
+    kw.setdefault("epochs", 20)
+    return sysid.nlssest(_data(), 1, hidden=8, learning_rate=1e-2, progress=False, **kw)
 
 
 def test_training_beats_linear_start_on_fresh_data():
@@ -114,3 +114,25 @@ def test_a_slow_mode_does_not_turn_training_into_a_drift():
     v = m.info["training"]["validation"]
     assert min(v) < 0.7 * v[0]
     assert m.info["horizon"] > 1000  # ln(10) / (1 - 0.9995) samples
+
+
+def test_regularization_keeps_the_parameters_near_the_start():
+    start = _fit(epochs=0)  # the linear start itself (epoch 0 kept)
+    assert start.info["training"]["best_epoch"] == 0
+    k = start.n_parameters  # the encoder is not penalised
+
+    def moved(lam):
+        m = _fit(regularization=lam, patience=100)
+        return np.linalg.norm(m.params[:k] - start.params[:k]), m
+
+    free, m0 = moved(0.0)
+    weak, _ = moved(1e-3)
+    strong, m1 = moved(1.0)
+    assert m0.info["regularization"] == 0.0 and m1.info["regularization"] == 1.0
+    assert free > 0.5 and strong < 0.3 * free and strong < weak <= free * 1.05
+    # the penalty costs fit where the data ask for the departure from the start
+    assert min(m1.info["training"]["validation"]) > min(m0.info["training"]["validation"])
+    with pytest.raises(DataError, match="regularization"):
+        _fit(regularization=-1.0)
+    with pytest.raises(DataError, match="regularization"):
+        _fit(regularization=float("nan"))

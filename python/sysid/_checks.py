@@ -151,6 +151,16 @@ def as_int(x: Any, name: str, lo: int = 1, hi: int | None = None, *, alt: str = 
     raise DataError(f"{name} must be {alt + ' or ' if alt else ''}{want}, got {x!r}")
 
 
+def as_nonnegative(x: Any, name: str) -> float:
+    """Return a real argument (a Python or NumPy number, not a bool) that is finite and
+    ``>= 0``, as a float; the message names the argument."""
+    ok = isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(
+        x, (bool, np.bool_))
+    if ok and np.isfinite(x) and x >= 0:
+        return float(x)
+    raise DataError(f"{name} must be a finite number >= 0, got {x!r}")
+
+
 #: Largest array, in bytes, built for a length the caller chose (as in the Rust core).
 MAX_BYTES = 1 << 32
 

@@ -666,6 +666,7 @@ def neural_ss_train(
     seed: int = 0,
     progress: Callable[..., Any] | None = None,
     rates: _Array | None = None,
+    penalty: _Array | None = None,
 ) -> dict[str, Any]: ...
 def neural_ss_n_params(structure: _NeuralStructure) -> int: ...
 # issue 27 (branch tsonline): online estimators

@@ -293,9 +293,10 @@ pub fn neural_ss_encode<'py>(
 
 /// Trains from `params0`; `train` and `val` are `(u, y, at)` records. `progress(epoch,
 /// validation, train)` after every epoch (`False` stops); `rates`: each parameter's step
-/// size as a fraction of `learning_rate`. Returns a dict.
+/// size as a fraction of `learning_rate`; `penalty`: each parameter's weight in the L2
+/// penalty toward `params0`. Returns a dict.
 #[pyfunction]
-#[pyo3(signature = (structure, params0, train, val, epochs=200, batch=16, horizon=100, learning_rate=1e-3, patience=20, seed=0, progress=None, rates=None))]
+#[pyo3(signature = (structure, params0, train, val, epochs=200, batch=16, horizon=100, learning_rate=1e-3, patience=20, seed=0, progress=None, rates=None, penalty=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn neural_ss_train<'py>(
     py: Python<'py>,
@@ -311,6 +312,7 @@ pub fn neural_ss_train<'py>(
     seed: u64,
     progress: Option<Py<PyAny>>,
     rates: Option<PyReadonlyArray1<'_, f64>>,
+    penalty: Option<PyReadonlyArray1<'_, f64>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let m = structure.model();
     let seg = |v: &Records<'_>| -> PyResult<Owned> {
@@ -328,6 +330,9 @@ pub fn neural_ss_train<'py>(
     opts.patience = patience;
     opts.seed = seed;
     opts.rates = rates.map(|r| crate::convert::vec1(&r)).unwrap_or_default();
+    opts.penalty = penalty
+        .map(|r| crate::convert::vec1(&r))
+        .unwrap_or_default();
     let mut slot: Option<PyErr> = None;
     let res = crate::search::watch(py, || {
         let ts: Vec<Segment<'_>> = tr

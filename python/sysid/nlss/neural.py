@@ -15,7 +15,8 @@ Training (Rust core, no deep-learning framework): Adam on the mean squared simul
 of short sections (truncated simulation, back-propagation through each section; slow modes
 take proportionally smaller steps), the epoch whose free-run simulation from rest fits the
 held-out data best kept, the start included (Beintema, Schoukens & Tóth 2023 describe this
-encoder/truncated-simulation scheme).
+encoder/truncated-simulation scheme); optionally an L2 penalty toward the start
+(``regularization``).
 """
 
 from __future__ import annotations
@@ -220,6 +221,7 @@ def nlssest(
     batch: int = 16,
     learning_rate: float = 3e-3,
     patience: int = 20,
+    regularization: float = 0.0,
     validation: Any = 0.2,
     periods: int | None = None,
     init: Any = "auto",
@@ -255,6 +257,14 @@ def nlssest(
         mode makes a slow or lightly damped one drift or lose its stability.
     patience : int
         Stop after this many epochs without a lower validation error.
+    regularization : float
+        Weight ``lambda`` of an L2 penalty toward the start: each step's criterion (the
+        mean squared section error of the scaled outputs, unit variance) plus ``lambda / 2``
+        times the squared distance of the simulation model's parameters (linear part and
+        networks; not the encoder's) from the start's, which keeps the trained model near
+        the start where the data say little (regularisation toward a prior guess: Ljung,
+        *System Identification*, 2nd ed., 1999, sec. 7.1; MATLAB's ``nlssest`` has the
+        same term toward zero, ``Lambda``). Default 0: no penalty.
     validation : float or IOData
         The fraction of each experiment's end held out, or separate records. The criterion
         is the error of the free-run simulation from rest (as the model is used and
@@ -314,7 +324,7 @@ def nlssest(
     """
     if not isinstance(data, IOData):
         raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
-    from .._checks import as_int
+    from .._checks import as_int, as_nonnegative
 
     n = check_order(order)
     hid, enc = _widths(hidden, "hidden"), _widths(encoder_hidden, "encoder_hidden") \
@@ -326,6 +336,7 @@ def nlssest(
     if data.n_inputs == 0:
         raise DataError("nlssest needs inputs")
     _check_init(init)
+    lam_reg = as_nonnegative(regularization, "regularization")
     sc = Scaling.of(data)
     sd = scaled_data(data, sc)
     train, val = _split(sd, sc, validation, L, 2 if H is None else H)
@@ -356,7 +367,8 @@ def nlssest(
             res = _sysid.neural_ss_train(start._struct(), start.params, train, val,
                                          epochs=epochs, batch=batch, horizon=H,
                                          learning_rate=learning_rate, patience=patience,
-                                         seed=seed, progress=cb, rates=_rates(start, lam, modal))
+                                         seed=seed, progress=cb, rates=_rates(start, lam, modal),
+                                         penalty=_penalty(start, lam_reg))
         finally:
             close()
         done[kind] = res, H
@@ -368,7 +380,8 @@ def nlssest(
                                         "diverged")} for k, (r, _) in done.items()}
     info = {"method": "nlssest", "start": kind, "start_validation": dict(
                 zip([c[4] for c in cands], scores)),
-            "training": runs[kind], "starts": runs, "horizon": H, "seed": seed}
+            "training": runs[kind], "starts": runs, "horizon": H, "seed": seed,
+            "regularization": lam_reg}
     return NeuralStateSpaceModel(res["params"], dims=(n, data.n_inputs, data.n_outputs),
                                  hidden=hid, output_hidden=out, encoder_hidden=enc, lags=L,
                                  scaling=sc.to_dict(), dt=data.dt,
@@ -577,6 +590,17 @@ def _rates(start: NeuralStateSpaceModel, lam: np.ndarray, modal: bool) -> np.nda
     rates[last:last + n * h] = np.repeat(r, h)
     rates[last + n * h:last + n * h + n] = r
     return rates
+
+
+def _penalty(start: NeuralStateSpaceModel, weight: float) -> np.ndarray | None:
+    """Each parameter's weight in the L2 penalty toward the start: ``weight`` on the
+    simulation model's (linear part and networks), 0 on the encoder's (it only sets the
+    training sections' initial states); ``None`` without a penalty."""
+    if weight == 0:
+        return None
+    w = np.zeros(start.params.size)
+    w[:start.n_parameters] = weight
+    return w
 
 
 def _errors(epoch: int, val: float, train: float) -> dict[str, str]:

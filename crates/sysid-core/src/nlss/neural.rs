@@ -15,6 +15,8 @@ mod mlp;
 mod train;
 
 pub use mlp::Mlp;
+#[cfg(test)]
+pub(crate) use train::penalty;
 pub use train::{train, EpochReport, Segment, TrainOptions, TrainResult};
 
 use crate::error::{Result, SysidError};

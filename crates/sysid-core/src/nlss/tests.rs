@@ -255,6 +255,41 @@ fn neural_section_gradient_matches_finite_differences() {
     assert!(l0 > 0.0);
 }
 
+#[test]
+fn neural_penalised_gradient_matches_finite_differences() {
+    use super::neural::{penalty, NeuralSs};
+    let m = NeuralSs::new(2, 1, 1, &[4], Some(&[3]), &[], 3);
+    let np = m.n_params();
+    let p: Vec<f64> = signal(np, 1, 31).iter().map(|v| 0.5 * v).collect();
+    let p0: Vec<f64> = signal(np, 1, 32).iter().map(|v| 0.5 * v).collect();
+    let w: Vec<f64> = (0..np).map(|i| 0.05 * (i % 3) as f64).collect();
+    let (u, y) = (signal(60, 1, 7), signal(60, 1, 8));
+    let crit = |q: &[f64], g: &mut [f64]| {
+        m.section(q, &u, &y, 5, 30, 0.02, g).unwrap() + penalty(q, &p0, &w, g)
+    };
+    let mut g = vec![0.0; np];
+    crit(&p, &mut g);
+    let mut dummy = vec![0.0; np];
+    let mut moved = 0;
+    for a in 0..np {
+        let h = 1e-6;
+        let (mut pp, mut pm) = (p.clone(), p.clone());
+        pp[a] += h;
+        pm[a] -= h;
+        let fd = (crit(&pp, &mut dummy) - crit(&pm, &mut dummy)) / (2.0 * h);
+        assert!(
+            (fd - g[a]).abs() < 1e-6 * (1.0 + fd.abs()),
+            "param {a}: {fd} vs {}",
+            g[a]
+        );
+        moved += usize::from(w[a] > 0.0);
+    }
+    // the penalty alone: zero at the start, its gradient w (p - p0)
+    let mut g0 = vec![0.0; np];
+    assert_eq!(penalty(&p0, &p0, &w, &mut g0), 0.0);
+    assert!(g0.iter().all(|v| *v == 0.0) && moved > np / 2);
+}
+
 /// A 2-state, 1-input, 2-output decoupled model with 2 branches of degrees 2 and 3.
 fn decoupled() -> (Decoupled, Vec<f64>) {
     let m = Decoupled::new(2, 1, 2, 2, vec![2, 3]).unwrap();

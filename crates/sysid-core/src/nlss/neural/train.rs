@@ -27,6 +27,11 @@ pub struct TrainOptions {
     /// keeps a parameter at its start). Adam moves every parameter by about the step size
     /// whatever its gradient, so this sets the scale each parameter moves on.
     pub rates: Vec<f64>,
+    /// L2 penalty toward the start, one weight per parameter (empty: none): the criterion
+    /// of each step is the batch's mean squared section error plus `sum_i penalty_i (p_i -
+    /// p0_i)^2 / 2` (regularisation toward a prior guess, Ljung, *System Identification*,
+    /// 2nd ed., 1999, sec. 7.1; MATLAB's `nlssest` offers the same term toward zero).
+    pub penalty: Vec<f64>,
 }
 
 impl Default for TrainOptions {
@@ -40,6 +45,7 @@ impl Default for TrainOptions {
             seed: 0,
             clip: 10.0,
             rates: Vec::new(),
+            penalty: Vec::new(),
         }
     }
 }
@@ -287,18 +293,8 @@ pub fn train(
         });
     }
     check_sizes(model, p0.len(), train_data, total, opts.batch)?;
-    if !opts.rates.is_empty() && opts.rates.len() != p0.len()
-        || opts.rates.iter().any(|r| !(r.is_finite() && *r >= 0.0))
-    {
-        return Err(SysidError::invalid(
-            "rates",
-            format!(
-                "needs one finite, non-negative step-size factor per parameter ({}), got {}",
-                p0.len(),
-                opts.rates.len()
-            ),
-        ));
-    }
+    per_parameter("rates", "step-size factor", &opts.rates, p0.len())?;
+    per_parameter("penalty", "weight", &opts.penalty, p0.len())?;
     let np = p0.len();
     let mut p = p0.to_vec();
     let (mut m1, mut m2) = (vec![0.0; np], vec![0.0; np]);
@@ -363,6 +359,7 @@ pub fn train(
             if used == 0 {
                 continue;
             }
+            penalty(&p, p0, &opts.penalty, &mut grad);
             let norm = grad.iter().map(|g| g * g).sum::<f64>().sqrt();
             let c = if norm > opts.clip {
                 opts.clip / norm
@@ -407,6 +404,33 @@ pub fn train(
     res.params = best.1;
     res.best_epoch = best.2;
     Ok(res)
+}
+
+/// Refuses a per-parameter option `v` (empty: unused) that is not one finite, non-negative
+/// `what` per parameter.
+fn per_parameter(name: &'static str, what: &str, v: &[f64], n: usize) -> Result<()> {
+    if !v.is_empty() && v.len() != n || v.iter().any(|r| !(r.is_finite() && *r >= 0.0)) {
+        return Err(SysidError::invalid(
+            name,
+            format!(
+                "needs one finite, non-negative {what} per parameter ({n}), got {}",
+                v.len()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The L2 penalty `sum_i w_i (p_i - p0_i)^2 / 2` toward the start `p0` (weights `w`, empty:
+/// none); its gradient is added into `grad`.
+pub(crate) fn penalty(p: &[f64], p0: &[f64], w: &[f64], grad: &mut [f64]) -> f64 {
+    let mut v = 0.0;
+    for (((g, a), b), wi) in grad.iter_mut().zip(p).zip(p0).zip(w) {
+        let d = a - b;
+        v += 0.5 * wi * d * d;
+        *g += wi * d;
+    }
+    v
 }
 
 /// Refuses, before anything is sized by them, a network with at least as many parameters
@@ -508,6 +532,73 @@ mod tests {
         assert_eq!(r.validation[0], 0.0);
         opts.rates = vec![1.0; 3];
         assert!(train(&m, &p, &seg, &[], &opts, &mut |_| Flow::Continue).is_err());
+    }
+
+    #[test]
+    fn the_penalty_keeps_the_parameters_near_the_start() {
+        let u = input();
+        let m = NeuralSs::new(1, 1, 1, &[4], Some(&[3]), &[], 1);
+        let mut truth = vec![0.0; m.n_params()];
+        truth[..3].copy_from_slice(&[0.5, 1.0, 1.0]);
+        let y: Vec<f64> = m
+            .simulate(&truth, &u, &[0.0])
+            .unwrap()
+            .iter()
+            .map(|v| v + 0.3 * v * v)
+            .collect();
+        let mut p0 = truth.clone();
+        p0[0] = 0.3;
+        let off = m.offsets()[3];
+        for (i, v) in p0.iter_mut().enumerate().skip(off) {
+            *v = 0.1 * (((i * 7) % 5) as f64 - 2.0); // hidden units of both networks in use
+        }
+        let dist = |w: f64| {
+            let opts = TrainOptions {
+                epochs: 20,
+                horizon: 20,
+                learning_rate: 1e-2,
+                patience: 100,
+                penalty: if w > 0.0 { vec![w; p0.len()] } else { vec![] },
+                ..TrainOptions::default()
+            };
+            let seg = [Segment {
+                u: &u,
+                y: &y,
+                at: 300,
+            }];
+            let r = train(&m, &p0, &seg, &[], &opts, &mut |_| Flow::Continue).unwrap();
+            let d: f64 = r
+                .params
+                .iter()
+                .zip(&p0)
+                .map(|(a, b)| (a - b) * (a - b))
+                .sum();
+            (d.sqrt(), r.validation[r.best_epoch])
+        };
+        let (free, weak, strong) = (dist(0.0), dist(1e-3), dist(10.0));
+        assert!(free.0 > 0.05, "{free:?}");
+        assert!(
+            strong.0 < 0.2 * free.0 && weak.0 < free.0 && weak.0 > strong.0,
+            "{free:?} {weak:?} {strong:?}"
+        );
+        assert!(free.1 <= strong.1, "{free:?} {strong:?}");
+        let bad = TrainOptions {
+            penalty: vec![-1.0; p0.len()],
+            ..TrainOptions::default()
+        };
+        assert!(train(
+            &m,
+            &p0,
+            &[Segment {
+                u: &u,
+                y: &y,
+                at: 300
+            }],
+            &[],
+            &bad,
+            &mut |_| Flow::Continue
+        )
+        .is_err());
     }
 
     #[test]
