@@ -449,7 +449,8 @@ def pem(
         ``"criterion"``: ``"det"``, the determinant of the error covariance
         ``det(E^T E / N)`` (not its log; the maximum-likelihood loss, MATLAB's "loss
         function") for ``weighting="noise"``, ``"sum of squares"``, ``1/2 sum |e|^2``, for
-        ``weighting="identity"``; ``"loss_history"``: the determinant under either weighting;
+        ``weighting="identity"`` (and ``"output"``, of the scaled errors); ``"loss_history"``:
+        the determinant under either weighting;
         ``"weighted_cost"``: ``1/2 sum e^T W e`` with the weighting of each iterate (``N l / 2``
         throughout with the noise weighting); the stop reason (``"statistical convergence"``
         when the expected further decrease is below a hundredth of a residual variance, or a

@@ -210,6 +210,14 @@ impl Filter {
             self.we[i] = a;
             self.cost += 0.5 * a * a;
         }
+        self.weigh_back();
+    }
+
+    /// `wz = R^-T we`: the weighted errors of the gradient from `we = R^-1 e` (or of the
+    /// substituted residuals).
+    fn weigh_back(&mut self) {
+        let l = self.we.len();
+        let r = &self.rinv_rows;
         for i in 0..l {
             let mut a = 0.0;
             for j in i..l {
@@ -231,13 +239,7 @@ impl Filter {
             }
             self.we[i] = a;
         }
-        for i in 0..l {
-            let mut a = 0.0;
-            for j in i..l {
-                a += r[j * l + i] * self.we[j];
-            }
-            self.wz[i] = a;
-        }
+        self.weigh_back();
     }
 
     /// `x <- (A - K C) x + (B - K D) u + K y` at sample `t`.
