@@ -1,5 +1,7 @@
 """PNLSS: recovery of a known system, save/load, bad input, divergence."""
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -28,9 +30,15 @@ def test_noise_free_system_recovered():
     m = sysid.pnlss(d, 2, degree=[3], terms="states", periods=2, progress=False, tol=1e-12,
                     max_iter=200)
     # the state basis is free: compare the input-output map, on the estimation data and
-    # on a fresh realisation, to 1e-6 of the output's size
-    for data in (d, _data(truth, 5)):
-        y, yh = data.y, m.simulate(data.u)
+    # on a fresh realisation, to 1e-6 of the output's size. The returned model clamps its
+    # monomials to the box its states cover on the estimation data (extrapolation="clamp");
+    # the box is axis-aligned in the model's own state basis, so a fresh realisation may
+    # leave it by a little in one basis and not in another: the fresh record is compared
+    # with the recovered polynomials themselves (box removed)
+    free = copy.deepcopy(m)
+    free.clamp = None
+    for model, data in ((m, d), (free, _data(truth, 5))):
+        y, yh = data.y, model.simulate(data.u)
         assert np.max(np.abs(yh - y)) < 1e-6 * np.max(np.abs(y))
     assert m.info["fit"]["cost"][-1] < 1e-10 * m.info["fit"]["cost"][0]
 
