@@ -80,3 +80,13 @@ def test_one_experiment_keeps_its_folds_and_horizon():
         for m, l in ((1, 1), (2, 3)):
             dd = sysid.IOData(u=np.zeros((n, m)), y=np.ones((n, l)))
             assert _horizon(dd) == default_horizon(n, m, l)
+
+
+def test_order_auto_of_the_subspace_estimators_with_a_short_second_experiment():
+    (u1, y1), (u2, y2), (uv, yv) = _record(500, 1), _record(30, 2), _record(1000, 3)
+    both = sysid.IOData(u=[u1, u2], y=[y1, y2])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = sysid.n4sid(both)  # was order 1 (horizon 2 from the 30 samples), 17 %
+        fit = sysid.compare(m, sysid.IOData(u=uv, y=yv)).mean_fit
+    assert m.nstates >= 4 and fit > 80.0

@@ -49,6 +49,7 @@ from .._checks import require_inputs_vary
 from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..errors import DataError, ExcitationError, InsufficientDataError
+from ..subspace.estimator import available_horizon, long_enough
 from ..validation.crossval import MAX_ORDER, TOL, fold_horizon, record_folds, simulation_fit
 from .board import Board, bic
 from .result import IdentifiedModel, IdentifyResult, _family
@@ -219,40 +220,9 @@ def _outliers(data: IOData) -> str | None:
 
 
 def _horizon(data: IOData) -> int:
-    """The subspace horizon from the data available: the largest ``i`` (2 to 20) whose data
-    matrix, from the experiments of at least ``4 i`` samples, has ten times as many columns
-    as rows (``20 i (m + l)`` samples), as :func:`~sysid.subspace.estimator.default_horizon`
-    asks of one experiment (the same horizon for one). Not the shortest experiment's: a short
-    experiment next to a long one held every candidate to order 1.
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> from sysid.identify.core import _horizon
-    >>> _horizon(sysid.IOData(u=[np.ones(500), np.ones(30)], y=[np.ones(500), np.ones(30)]))
-    12
-    """
-    ch = data.n_inputs + data.n_outputs
-    for i in range(20, 1, -1):
-        if sum(n for n in data.lengths if n >= 4 * i) >= 20 * i * ch:
-            return i
-    return 2
-
-
-def _windowed(data: IOData, h: int) -> IOData | None:
-    """The experiments of ``data`` long enough for the subspace window of horizon ``h``
-    (``2 h`` samples; None when none is): the shorter ones are left out of the subspace fits
-    (the prediction-error refinements and the scores use them)."""
-    exps = [e for e in data.experiments if e[0].shape[0] >= 2 * h]
-    if len(exps) == len(data.experiments):
-        return data
-    if not exps:
-        return None
-    kw: dict[str, Any] = {"dt": data.dt, "input_names": data.input_names,
-                          "output_names": data.output_names}
-    if len(exps) == 1:
-        return IOData(u=exps[0][0], y=exps[0][1], **kw)
-    return IOData(u=[e[0] for e in exps], y=[e[1] for e in exps], **kw)
+    """The subspace horizon of ``data``: :func:`~sysid.subspace.estimator.available_horizon`,
+    from the experiments long enough for it, not the shortest one."""
+    return available_horizon(data.lengths, data.n_inputs, data.n_outputs)
 
 
 def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
@@ -263,7 +233,7 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
     h_full = _horizon(full)
     for fold in board.folds:
         h = fold_horizon(h_full, fold[0])
-        part = _windowed(fold[0], h)
+        part = long_enough(fold[0], 2 * h)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             try:
@@ -277,7 +247,7 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
         if len(keep) < 2:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                SubspaceEstimator(_windowed(full, h_full) or full, h_full)  # its own error
+                SubspaceEstimator(long_enough(full, 2 * h_full) or full, h_full)  # its own error
             raise ExcitationError(
                 f"the input excites too little of the record to hold parts of it out: "
                 f"{len(board.folds) - len(keep)} of the {len(board.folds)} parts fitted "
@@ -292,7 +262,7 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
     def refit(data: IOData, m: str, n: int, ft: bool, stable: bool = False) -> Any:
         if id(data) not in whole:
             whole.clear()
-            whole[id(data)] = SubspaceEstimator(_windowed(data, h_full) or data, h_full)
+            whole[id(data)] = SubspaceEstimator(long_enough(data, 2 * h_full) or data, h_full)
         return whole[id(data)].fit(n, method=m, feedthrough=ft, stable=stable)
 
     for meth in methods:
@@ -567,14 +537,13 @@ def identify(
     checks["offsets"] = (f"input means [{', '.join(f'{v:.6g}' for v in mu)}], output means "
                          f"[{', '.join(f'{v:.6g}' for v in my)}] removed (kept with the model)")
     parts, still = _informative(record_folds(centred), centred)
-    short = [f"{k} ({n} samples)" for k, n in enumerate(centred.lengths)
-             if n < 2 * _horizon(centred)]
+    h = _horizon(centred)
+    short = [f"{k} ({n} samples)" for k, n in enumerate(centred.lengths) if n < 2 * h]
     if short:
         checks["experiments"] = (
-            f"experiment(s) {', '.join(short)} shorter than the subspace window "
-            f"({2 * _horizon(centred)} samples, horizon {_horizon(centred)} from the longer "
-            f"experiments): left out of the subspace fits, used by the prediction-error "
-            f"refinements and in the held-out scores")
+            f"experiment(s) {', '.join(short)} shorter than the subspace window ({2 * h} "
+            f"samples, horizon {h} from the longer experiments): left out of the subspace "
+            f"fits, used by the prediction-error refinements and in the held-out scores")
     if still:
         checks["held_out"] = (f"{still} held-out block(s) left out of the choice: every output "
                               "stands still there (no variation to score a fit against)")

@@ -430,14 +430,19 @@ def cross_validated_order(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             h = estimator(data, method=method).past
-    for fit_part, held in folds(data, fold_count(data)):
+    from ..subspace.estimator import long_enough
+
+    for fit_part, held in record_folds(data):
         # the given horizons, clipped to a quarter of the fitted part; else the record's
         longest = max(fit_part.lengths)
         kw = {k: min(v, max(1, longest // 4)) for k, v in (("past", past), ("future", future))
               if v is not None} or {"horizon": fold_horizon(h, fit_part)}
+        # pieces too short for the window are left out of this fit (not allowed to fail it)
+        part = long_enough(fit_part, kw.get("past", 0) + kw.get("future", 0)
+                           or 2 * kw["horizon"]) or fit_part
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            est = estimator(fit_part, method=method, **kw)
+            est = estimator(part, method=method, **kw)
         top = min(est.max_order, MAX_ORDER)
         for n in orders or range(1, top + 1):
             if n > est.max_order:
