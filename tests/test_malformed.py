@@ -492,11 +492,14 @@ def test_statespace_x0_shape():
         sysid.StateSpaceModel(np.eye(2), [[1], [1]], [[1, 0]], x0=[1, 2, 3])
 
 
-def test_short_experiment_named_in_order_error():
+def test_short_experiment_left_out_and_named_not_setting_the_horizon():
+    # an 8-sample experiment used to set the default horizon (2, order 2 refused); now the
+    # horizon follows the longer experiments and the short one is left out, with a warning
     d = sysid.IOData(u=[U, U[:8]], y=[Y, Y[:8]])
-    with pytest.raises(sysid.OrderError) as e:
-        sysid.SubspaceEstimator(d).fit(2)
-    assert "experiment 1" in str(e.value) and "8 samples" in str(e.value)
+    with pytest.warns(UserWarning, match=r"experiment\(s\) 1 \(8 samples\).*left out"):
+        est = sysid.SubspaceEstimator(d)
+    assert est.past > 2 and est.data.n_experiments == 1
+    assert est.fit(2).nstates == 2
 
 
 def test_from_factor_wrong_type():

@@ -5,8 +5,9 @@
 2. Checks: the input's persistent-excitation order and a feedback test are recorded; under
    feedback the closed-loop subspace methods (PBSID, SSARX) join the candidates.
 3. Candidates are scored on blocks of the estimation record held out from their fit: the
-   record is cut into five contiguous blocks (fewer on short records; several experiments:
-   one each), each held out once while the rest fits the candidate, which then simulates
+   record is cut into five contiguous blocks (fewer on short records; several experiments
+   laid end to end, cut where one ends: :func:`~sysid.validation.crossval.record_folds`),
+   each held out once while the rest fits the candidate, which then simulates
    it (initial state fitted); the score is the fit of the held-out blocks pooled (each
    weighs its output variation), without the block where it fits worst and the one where it
    fits best (:mod:`.board`); a block where every output stands still is left
@@ -48,7 +49,8 @@ from .._checks import require_inputs_vary
 from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..errors import DataError, ExcitationError, InsufficientDataError
-from ..validation.crossval import MAX_ORDER, TOL, fold_count, fold_horizon, folds, simulation_fit
+from ..subspace.estimator import available_horizon, long_enough
+from ..validation.crossval import MAX_ORDER, TOL, fold_horizon, record_folds, simulation_fit
 from .board import Board, bic
 from .result import IdentifiedModel, IdentifyResult, _family
 
@@ -217,17 +219,27 @@ def _outliers(data: IOData) -> str | None:
     return "; ".join(found) or None
 
 
+def _horizon(data: IOData) -> int:
+    """The subspace horizon of ``data``: :func:`~sysid.subspace.estimator.available_horizon`,
+    from the experiments long enough for it, not the shortest one."""
+    return available_horizon(data.lengths, data.n_inputs, data.n_outputs)
+
+
 def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
                          max_order: int | None) -> None:
-    from ..subspace.estimator import SubspaceEstimator, default_horizon
+    from ..subspace.estimator import SubspaceEstimator
 
     ests, keep = [], []
-    h_full = default_horizon(min(full.lengths), full.n_inputs, full.n_outputs)
+    h_full = _horizon(full)
     for fold in board.folds:
+        h = fold_horizon(h_full, fold[0])
+        part = long_enough(fold[0], 2 * h)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             try:
-                ests.append(SubspaceEstimator(fold[0], fold_horizon(h_full, fold[0])))
+                if part is None:
+                    raise ExcitationError("no experiment long enough for the window")
+                ests.append(SubspaceEstimator(part, h))
             except ExcitationError:
                 continue  # the rest of the record without this block excites too little
         keep.append(fold)
@@ -235,7 +247,7 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
         if len(keep) < 2:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                SubspaceEstimator(full, h_full)  # the whole record's own error, if it has one
+                SubspaceEstimator(long_enough(full, 2 * h_full) or full, h_full)  # its own error
             raise ExcitationError(
                 f"the input excites too little of the record to hold parts of it out: "
                 f"{len(board.folds) - len(keep)} of the {len(board.folds)} parts fitted "
@@ -250,7 +262,7 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
     def refit(data: IOData, m: str, n: int, ft: bool, stable: bool = False) -> Any:
         if id(data) not in whole:
             whole.clear()
-            whole[id(data)] = SubspaceEstimator(data, h_full)
+            whole[id(data)] = SubspaceEstimator(long_enough(data, 2 * h_full) or data, h_full)
         return whole[id(data)].fit(n, method=m, feedthrough=ft, stable=stable)
 
     for meth in methods:
@@ -524,7 +536,14 @@ def identify(
     # six significant digits: rounding to decimals printed data in micro-units as [0.0]
     checks["offsets"] = (f"input means [{', '.join(f'{v:.6g}' for v in mu)}], output means "
                          f"[{', '.join(f'{v:.6g}' for v in my)}] removed (kept with the model)")
-    parts, still = _informative(folds(centred, fold_count(centred)), centred)
+    parts, still = _informative(record_folds(centred), centred)
+    h = _horizon(centred)
+    short = [f"{k} ({n} samples)" for k, n in enumerate(centred.lengths) if n < 2 * h]
+    if short:
+        checks["experiments"] = (
+            f"experiment(s) {', '.join(short)} shorter than the subspace window ({2 * h} "
+            f"samples, horizon {h} from the longer experiments): left out of the subspace "
+            f"fits, used by the prediction-error refinements and in the held-out scores")
     if still:
         checks["held_out"] = (f"{still} held-out block(s) left out of the choice: every output "
                               "stands still there (no variation to score a fit against)")

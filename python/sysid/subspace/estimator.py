@@ -34,6 +34,7 @@ Singular values follow SLICOT's convention: the data are not divided by ``sqrt(N
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 from typing import Any, Literal, Union
 
 import numpy as np
@@ -162,6 +163,41 @@ def default_horizon(n_samples: int, n_inputs: int, n_outputs: int) -> int:
     return int(min(20, max(2, n_samples // (20 * (n_inputs + n_outputs)))))
 
 
+def available_horizon(lengths: Sequence[int], n_inputs: int, n_outputs: int) -> int:
+    """The horizon from the data available: the largest ``i`` (2 to 20) whose data matrix,
+    from the experiments of at least ``4 i`` samples, has ten times as many columns as rows
+    (``20 i (m + l)`` samples), as :func:`default_horizon` asks of one experiment (the same
+    horizon for one). Not the shortest experiment's: a short experiment next to a long one
+    held every model to order 1 or 2.
+
+    Examples
+    --------
+    >>> from sysid.subspace.estimator import available_horizon
+    >>> available_horizon([500, 30], 1, 1), available_horizon([500], 1, 1)
+    (12, 12)
+    """
+    ch = n_inputs + n_outputs
+    for i in range(20, 1, -1):
+        if sum(n for n in lengths if n >= 4 * i) >= 20 * i * ch:
+            return i
+    return 2
+
+
+def long_enough(data: IOData, window: int) -> IOData | None:
+    """The experiments of ``data`` of at least ``window`` samples (``data`` itself when all
+    are; None when none is)."""
+    exps = [e for e in data.experiments if e[0].shape[0] >= window]
+    if len(exps) == len(data.experiments):
+        return data
+    if not exps:
+        return None
+    kw: dict[str, Any] = {"dt": data.dt, "input_names": data.input_names,
+                          "output_names": data.output_names}
+    if len(exps) == 1:
+        return IOData(u=exps[0][0], y=exps[0][1], **kw)
+    return IOData(u=[e[0] for e in exps], y=[e[1] for e in exps], **kw)
+
+
 class SubspaceEstimator:
     """Compress a record once, then fit state-space models of any order and weighting.
 
@@ -170,7 +206,9 @@ class SubspaceEstimator:
     data : IOData
         The record (several experiments allowed; no Hankel column spans two).
     horizon : int, optional
-        Past and future horizon ``i`` (block rows); default :func:`default_horizon`.
+        Past and future horizon ``i`` (block rows); default :func:`default_horizon`, with
+        several experiments :func:`available_horizon` (experiments shorter than its window
+        ``2 i`` are left out, with a warning; pass ``horizon`` to keep them).
     past, future : int, optional
         Separate past and future horizons (override ``horizon``).
     method : str
@@ -215,20 +253,25 @@ class SubspaceEstimator:
     ) -> None:
         if not isinstance(data, IOData):
             raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
-        self.data = data
         self._from_factor = False
         self.method = _method(method)
-        lengths = data.lengths
-        shortest, longest = min(lengths), max(lengths)
         self._horizon_note = ""
-        if horizon is None:
-            horizon = default_horizon(shortest, data.n_inputs, data.n_outputs)
-            if horizon < default_horizon(longest, data.n_inputs, data.n_outputs):
-                k = lengths.index(shortest)
+        if horizon is None and past is None and future is None:
+            # the horizon from the data available; experiments too short for its window are
+            # left out (and said), not allowed to set it
+            horizon = available_horizon(data.lengths, data.n_inputs, data.n_outputs)
+            short = [f"{k} ({n} samples)" for k, n in enumerate(data.lengths)
+                     if n < 2 * horizon]
+            if short and len(short) < data.n_experiments:
                 self._horizon_note = (
-                    f" (the default horizon {horizon} was set by experiment {k}, which has only "
-                    f"{shortest} samples; drop that experiment or pass horizon=...)"
-                )
+                    f" (experiment(s) {', '.join(short)} shorter than the window of the "
+                    f"default horizon {horizon} were left out; pass horizon=... to keep them)")
+                warnings.warn(f"SubspaceEstimator:{self._horizon_note[1:-1]}", UserWarning,
+                              stacklevel=2)
+                data = long_enough(data, 2 * horizon) or data
+        elif horizon is None:
+            horizon = default_horizon(min(data.lengths), data.n_inputs, data.n_outputs)
+        self.data = data
         horizon = as_int(horizon, "horizon", 1)
         self.past = as_int(past if past is not None else horizon, "past", 1)
         self.future = as_int(future if future is not None else horizon, "future", 1)

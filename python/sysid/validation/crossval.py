@@ -48,8 +48,8 @@ import numpy as np
 from ..data.iodata import IOData
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
-           "output_fits", "simulation_errors", "simulation_fit", "slack", "stable_first",
-           "wins_every_block"]
+           "output_fits", "record_folds", "simulation_errors", "simulation_fit", "slack",
+           "stable_first", "wins_every_block"]
 
 #: fit points a smaller order may give up and still win (held-out fits of half-record
 #: models scatter by about this much between neighbouring orders)
@@ -143,6 +143,65 @@ def folds(data: IOData, k: int = 2) -> list[tuple[IOData, IOData]]:
     for a, b in zip(edges[:-1], edges[1:]):
         rest = [(u[s:t], y[s:t]) for s, t in ((0, a), (b, u.shape[0])) if t > s]
         out.append((_io(rest, kw), _io([(u[a:b], y[a:b])], kw)))
+    return out
+
+
+def record_folds(data: IOData) -> list[tuple[IOData, IOData]]:
+    """(fit, held-out) pairs over the whole record, whatever its experiments' lengths: the
+    experiments laid end to end and cut into ``fold_count`` of their total length contiguous
+    blocks (as one experiment of that length would be), each held out once; a block is cut
+    where an experiment ends (its pieces are separate experiments, no window spans two),
+    and a block edge within a quarter of a block (at least ``MIN_BLOCK`` samples) of an
+    experiment's end moves onto it, so that no held-out piece is a sliver. Experiments
+    shorter than ``MIN_BLOCK`` are never held out (their initial state would take most of
+    their samples), and the fitted parts keep only pieces of at least ``MIN_BLOCK`` samples.
+    One experiment: :func:`folds` with :func:`fold_count`. Several: leaving one experiment
+    out fitted every candidate on the other ones alone, so a short experiment next to a
+    long one left a fold fitted on the short one, and every candidate was held to what it
+    could support (order 1 from 30 samples next to 500).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.crossval import record_folds
+    >>> d = sysid.IOData(u=[np.zeros(500), np.zeros(30)], y=[np.ones(500), np.ones(30)])
+    >>> [(f.lengths, h.lengths) for f, h in record_folds(d)][4]
+    ([424], [76, 30])
+    """
+    exps = data.experiments
+    if len(exps) == 1:
+        return folds(data, fold_count(data))
+    kw = {"dt": data.dt, "input_names": data.input_names, "output_names": data.output_names}
+    lengths = [u.shape[0] for u, _ in exps]
+    holdable = [i for i, n in enumerate(lengths) if n >= MIN_BLOCK]
+    # the holdable experiments end to end: where each starts on that axis
+    starts = np.cumsum([0] + [lengths[i] for i in holdable])
+    total = int(starts[-1])
+    one = IOData(u=np.zeros((total, data.n_inputs)), y=np.zeros((total, data.n_outputs)))
+    k = fold_count(one)
+    edges = np.linspace(0, total, k + 1).astype(int)
+    snap = max(MIN_BLOCK, total // (4 * k))
+    for j in range(1, k):
+        near = starts[np.argmin(np.abs(starts - edges[j]))]
+        if abs(near - edges[j]) <= snap:
+            edges[j] = near
+    out = []
+    for a, b in zip(edges[:-1], edges[1:]):
+        if b <= a:
+            continue
+        held, rest = [], []
+        for i, n in enumerate(lengths):
+            u, y = exps[i]
+            if i not in holdable:
+                rest.append((u, y))
+                continue
+            s = int(starts[holdable.index(i)])
+            lo, hi = min(max(a - s, 0), n), min(max(b - s, 0), n)
+            if hi > lo:
+                held.append((u[lo:hi], y[lo:hi]))
+            rest += [(u[p:q], y[p:q]) for p, q in ((0, lo), (hi, n)) if q - p >= MIN_BLOCK]
+        if held and rest:
+            out.append((_io(rest, kw), _io(held, kw)))
     return out
 
 
@@ -371,14 +430,19 @@ def cross_validated_order(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             h = estimator(data, method=method).past
-    for fit_part, held in folds(data, fold_count(data)):
+    from ..subspace.estimator import long_enough
+
+    for fit_part, held in record_folds(data):
         # the given horizons, clipped to a quarter of the fitted part; else the record's
         longest = max(fit_part.lengths)
         kw = {k: min(v, max(1, longest // 4)) for k, v in (("past", past), ("future", future))
               if v is not None} or {"horizon": fold_horizon(h, fit_part)}
+        # pieces too short for the window are left out of this fit (not allowed to fail it)
+        part = long_enough(fit_part, kw.get("past", 0) + kw.get("future", 0)
+                           or 2 * kw["horizon"]) or fit_part
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            est = estimator(fit_part, method=method, **kw)
+            est = estimator(part, method=method, **kw)
         top = min(est.max_order, MAX_ORDER)
         for n in orders or range(1, top + 1):
             if n > est.max_order:
