@@ -273,6 +273,21 @@ def merge(data: Any, *others: Any) -> Any:
     return data._derive(exps)
 
 
+
+def long_enough(data: Any, window: int) -> Any:
+    """The experiments of ``data`` of at least ``window`` samples (``data`` itself when all
+    are; None when none is): the part a subspace fit of that window can use."""
+    exps = [e for e in data.experiments if e[0].shape[0] >= window]
+    if len(exps) == len(data.experiments):
+        return data
+    if not exps:
+        return None
+    kw: dict[str, Any] = {"dt": data.dt, "input_names": data.input_names,
+                          "output_names": data.output_names}
+    if len(exps) == 1:
+        return type(data)(u=exps[0][0], y=exps[0][1], **kw)
+    return type(data)(u=[e[0] for e in exps], y=[e[1] for e in exps], **kw)
+
 def _with_zero_trend(e: _Exp) -> _Exp:
     return replace(
         e,

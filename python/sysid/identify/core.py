@@ -48,8 +48,9 @@ import numpy as np
 from .._checks import require_inputs_vary
 from .._progress import Bar, show
 from ..data.iodata import IOData
+from ..data.segments import long_enough
 from ..errors import DataError, ExcitationError, InsufficientDataError
-from ..subspace.estimator import available_horizon, long_enough
+from ..subspace.estimator import available_horizon
 from ..validation.crossval import MAX_ORDER, TOL, fold_horizon, record_folds, simulation_fit
 from .board import Board, bic
 from .result import IdentifiedModel, IdentifyResult, _family

@@ -44,6 +44,7 @@ from .._checks import as_int, require_inputs_vary
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
+from ..data.segments import long_enough
 from ..errors import (
     DataError,
     ExcitationError,
@@ -181,21 +182,6 @@ def available_horizon(lengths: Sequence[int], n_inputs: int, n_outputs: int) -> 
         if sum(n for n in lengths if n >= 4 * i) >= 20 * i * ch:
             return i
     return 2
-
-
-def long_enough(data: IOData, window: int) -> IOData | None:
-    """The experiments of ``data`` of at least ``window`` samples (``data`` itself when all
-    are; None when none is)."""
-    exps = [e for e in data.experiments if e[0].shape[0] >= window]
-    if len(exps) == len(data.experiments):
-        return data
-    if not exps:
-        return None
-    kw: dict[str, Any] = {"dt": data.dt, "input_names": data.input_names,
-                          "output_names": data.output_names}
-    if len(exps) == 1:
-        return IOData(u=exps[0][0], y=exps[0][1], **kw)
-    return IOData(u=[e[0] for e in exps], y=[e[1] for e in exps], **kw)
 
 
 class SubspaceEstimator:

@@ -430,7 +430,7 @@ def cross_validated_order(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             h = estimator(data, method=method).past
-    from ..subspace.estimator import long_enough
+    from ..data.segments import long_enough
 
     for fit_part, held in record_folds(data):
         # the given horizons, clipped to a quarter of the fitted part; else the record's
