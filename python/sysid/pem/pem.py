@@ -199,18 +199,28 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: 
                   enforce_stability, stabilized, dropped_d, scale, xs)
 
 
+#: state factors of a start left as they are (:func:`_balance`)
+BALANCE_RANGE = (1e-2, 1e2)
+
+
 def _balance(B: np.ndarray, C: np.ndarray, K: np.ndarray | None) -> float:
     """The factor ``c`` that makes the state's scale match the signals': with ``x -> c x``
     the entries of ``c [B K]`` and ``C / c`` are of one size. A subspace basis carries the
     units of the data (``C`` in output units, ``B`` in their inverse: in megapascal-volt
     units ``|C| ~ 1e7``, ``|B| ~ 1e-8``), and the search's step test, relative to the
-    parameter vector's norm, then stopped it after one iteration; balanced, the start is the
-    same whatever the units (joint unit changes scale ``c``, not the balanced matrices)."""
+    parameter vector's norm, then stopped it after one iteration. 1 (no change) when ``c``
+    is within :data:`BALANCE_RANGE`: only such badly scaled starts are balanced, and then
+    the start is the same whatever the units (joint unit changes scale ``c``, not the
+    balanced matrices)."""
     nb = float(np.linalg.norm(B)) + (float(np.linalg.norm(K)) if K is not None else 0.0)
     nc = float(np.linalg.norm(C))
     if not (nb > 0 and nc > 0 and np.isfinite(nb) and np.isfinite(nc)):
         return 1.0
-    return float(np.sqrt(nc / nb))
+    c = float(np.sqrt(nc / nb))
+    # as LAPACK's equilibration (xLAQGE), only a badly scaled start is rescaled: within
+    # BALANCE_RANGE the entries of [B K] and C differ by less than 1e4, the relative step
+    # test sees both, and the search keeps the start's own basis (and its path)
+    return c if not BALANCE_RANGE[0] <= c <= BALANCE_RANGE[1] else 1.0
 
 
 def _unbalanced(model: StateSpaceModel, xs: float) -> StateSpaceModel:
