@@ -33,7 +33,13 @@ import numpy as np
 
 from .._progress import Bar
 from ..data.iodata import IOData
-from ..validation.crossval import output_fits, simulation_errors, slack, wins_every_block
+from ..validation.crossval import (
+    output_fits,
+    simulation_errors,
+    slack,
+    variation,
+    wins_every_block,
+)
 
 __all__ = ["Board", "slack", "bic", "held_out_score"]
 
@@ -80,12 +86,6 @@ def held_out_score(fits: Any, weights: Any = None) -> float:
                                                   / np.sum(w[ok]))))
     score = float(np.mean(out)) if out else -np.inf
     return score if np.isfinite(score) else -np.inf
-
-
-def variation(data: IOData) -> np.ndarray:
-    """Per output, ``|y - mean(y)|^2`` summed over the experiments of ``data`` (each about
-    its own mean): the weight of a held-out block in :func:`held_out_score`."""
-    return np.asarray(sum(np.sum((y - y.mean(0)) ** 2, axis=0) for _, y in data.experiments))
 
 
 def bic(model: Any, data: IOData) -> float:

@@ -48,6 +48,7 @@ import numpy as np
 from .._checks import require_inputs_vary
 from .._progress import Bar, show
 from ..data.iodata import IOData
+from ..data.preprocessing import spike_report
 from ..data.segments import long_enough
 from ..errors import DataError, ExcitationError, InsufficientDataError
 from ..subspace.estimator import available_horizon
@@ -159,65 +160,12 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
                                   f"(p = {fb.p_value:.2g})")
         except Exception as e:  # noqa: BLE001
             checks["feedback"] = f"not checked ({e})"
-    spikes = _outliers(data)
+    spikes = spike_report(data)
     if spikes:
         checks["outliers"] = (f"{spikes}: every fit bends to them; repair them first "
                               f"(sysid.despike(data)) or cut them out")
         warnings.warn(f"identify: {checks['outliers']}", UserWarning, stacklevel=3)
     return checks, feedback
-
-
-#: an output sample is an isolated spike when its departure from the line through its two
-#: neighbours exceeds this many robust standard deviations (1.4826 MAD) both of such
-#: departures and of the output itself: far from its neighbours and far out in the record.
-#: Conservative: on the shipped real records the largest clean value is about 6 (steep pH
-#: titration jumps); a glitch of 20 standard deviations scores 10-40
-SPIKE_SIGMAS = 10.0
-
-
-def _spikes(x: np.ndarray) -> np.ndarray:
-    """Samples of ``x`` that depart from the line through their neighbours by more than
-    ``SPIKE_SIGMAS`` scales of such departures and of ``x`` itself, the largest of each run
-    (a spike's neighbours depart by half as much). Scales from the central 98 % (a normal's
-    2.33 sigma each side), so that neither a few spikes nor a signal that stands still most
-    of the time (saturated, quantised: a median absolute deviation of 0) sets them."""
-    dev = np.abs(x[1:-1] - (x[2:] + x[:-2]) / 2)
-    lo, hi = np.quantile(x, [0.01, 0.99])
-    s_x = (hi - lo) / 4.65
-    s_dev = np.quantile(dev, 0.98) / 2.33
-    bad = (dev > SPIKE_SIGMAS * s_dev) & (dev > SPIKE_SIGMAS * s_x)
-    left = np.r_[0.0, dev[:-1]]
-    right = np.r_[dev[1:], 0.0]
-    return 1 + np.flatnonzero(bad & (dev >= left) & (dev >= right))
-
-
-def _outliers(data: IOData) -> str | None:
-    """Isolated spikes in the outputs (a logger glitch, a dropped sample written as a huge
-    value), in words, or None. Least squares bends every candidate to them (a few spikes of
-    20 standard deviations take a 90 % record to 20 %), and nothing else in the search
-    says why.
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> from sysid.identify.core import _outliers
-    >>> y = np.sin(np.arange(400) / 9.0); y[[50, 300]] += 30.0
-    >>> print(_outliers(sysid.IOData(u=np.ones(400), y=y)))
-    output y0: 2 isolated spike(s) (first at sample 50)
-    """
-    found = []
-    for j, name in enumerate(data.output_names):
-        hits: list[int] = []
-        start = 0
-        for _, y in data.experiments:
-            x = y[:, j]
-            if x.size >= 5:
-                hits.extend((start + _spikes(x)).tolist())
-            start += x.size
-        if hits:
-            found.append(f"output {name}: {len(hits)} isolated spike(s) (first at sample "
-                         f"{hits[0]})")
-    return "; ".join(found) or None
 
 
 def _horizon(data: IOData) -> int:

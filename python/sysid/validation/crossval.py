@@ -49,7 +49,7 @@ from ..data.iodata import IOData
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
            "output_fits", "record_folds", "simulation_errors", "simulation_fit", "slack",
-           "stable_first", "wins_every_block"]
+           "stable_first", "variation", "wins_every_block"]
 
 #: fit points a smaller order may give up and still win (held-out fits of half-record
 #: models scatter by about this much between neighbouring orders)
@@ -313,6 +313,13 @@ def simulation_fit(model: Any, data: IOData, trend: bool = False) -> float:
     return out if np.isfinite(out) else -np.inf
 
 
+def variation(data: IOData) -> np.ndarray:
+    """Per output, ``|y - mean(y)|^2`` summed over the experiments of ``data`` (each about
+    its own mean): the denominator of :func:`output_fits`, and the weight of a held-out
+    block in identify's score (:func:`sysid.identify.board.held_out_score`)."""
+    return np.asarray(sum(np.sum((y - y.mean(0)) ** 2, axis=0) for _, y in data.experiments))
+
+
 def output_fits(model: Any, data: IOData, trend: bool = False) -> np.ndarray:
     """Per output, the simulation fit (NRMSE %) of ``model`` on ``data`` with its
     experiments pooled (``100 (1 - |e| / |y - mean(y)|)``, sums of squares over the
@@ -334,7 +341,7 @@ def output_fits(model: Any, data: IOData, trend: bool = False) -> np.ndarray:
     except Exception:  # noqa: BLE001 - a model that cannot be simulated scores -inf
         return np.full(data.n_outputs, -np.inf)
     err = sum(np.sum(e ** 2, axis=0) for _, e in errs)
-    dev = sum(np.sum((y - y.mean(0)) ** 2, axis=0) for y, _ in errs)
+    dev = variation(data)
     with np.errstate(all="ignore"):
         f = 100.0 * (1.0 - np.sqrt(err / np.where(dev > 0, dev, np.nan)))
     return np.where(np.isnan(f) & (dev > 0), -np.inf, f)
