@@ -147,11 +147,12 @@ def _refuse_white_noise(data: IOData, lags: int = 20, level: float = 0.05) -> No
 
 
 def default_horizon(n_samples: int, n_inputs: int, n_outputs: int) -> int:
-    """The horizon used when none is given.
+    """The horizon used when none is given, for one experiment of ``n_samples``.
 
-    ``i = min(20, max(2, N_min // (20 (m + l))))`` where ``N_min`` is the shortest
-    experiment: the data matrix ``2 i (m + l)`` rows then has at least ten times as many
-    columns as rows, and orders up to about ``i * l`` can be identified.
+    ``i = min(20, max(2, N // (20 (m + l))))``: the data matrix ``2 i (m + l)`` rows then has
+    at least ten times as many columns as rows, and orders up to about ``i * l`` can be
+    identified (:func:`available_horizon` with one experiment; several experiments: that
+    function, from the experiments long enough for the window).
 
     Examples
     --------
@@ -161,7 +162,7 @@ def default_horizon(n_samples: int, n_inputs: int, n_outputs: int) -> int:
     >>> default_horizon(200, 2, 2)
     2
     """
-    return int(min(20, max(2, n_samples // (20 * (n_inputs + n_outputs)))))
+    return available_horizon([int(n_samples)], n_inputs, n_outputs)
 
 
 def available_horizon(lengths: Sequence[int], n_inputs: int, n_outputs: int) -> int:
