@@ -101,6 +101,30 @@ def test_a_refinement_below_its_start_on_most_blocks_is_stopped_early():
     assert not board.eligible(row)
 
 
+def test_a_refinement_is_not_stopped_by_a_cut_that_moves():
+    """The score leaves out the block where a candidate fits best: a refinement just below
+    its start on its first block, and its start's best block (the one of most variation)
+    above its reach, could still score more than the start if the later blocks fall so that
+    the first block is the best and left out. Its first block alone must not stop it (it
+    did, with a bound that kept the start's cut: a heat exchanger's order-2 refinement)."""
+    board = Board.__new__(Board)
+    board.weights = np.array([[1472.0], [1937.0], [335.0], [1124.0], [554.0]])
+    board.shares = board.weights[:, 0] / board.weights.sum()
+    board.folds = [None] * 5
+    ref = [np.array([f]) for f in (81.68, 81.5, 58.79, 74.43, 62.22)]
+    start = {"family": "cva", "order": 2, "held_out_fit": board.score(ref),
+             "fold_fits": [f[0] for f in ref], "fold_output_fits": ref, "stable": True}
+    board.rows = [start]
+    assert not board._below_start([81.41], [np.array([81.41])], start)
+    # the bound is never below the score of fits that keep the cut, and equals it once
+    # every block is known
+    hyp = [[81.41], [82.0], [59.29], [74.93], [62.72]]
+    assert board.score_bound(hyp, 1) >= board.score(hyp)
+    assert board.score_bound(hyp, 5) == board.score(hyp)
+    # far below on its first block (of most variation), it is still stopped
+    assert board._below_start([60.0], [np.array([60.0])], start)
+
+
 def test_a_refinement_below_the_best_candidate_on_most_blocks_is_stopped_early():
     """Not below its own (poor) start, but below the best candidate scored so far on most
     blocks: it cannot catch up, so the remaining blocks are not fitted."""

@@ -51,9 +51,10 @@ def block_fit(fits: Any) -> float:
     return float(np.mean(f)) if f.size else -np.inf
 
 
-def held_out_score(fits: Any, weights: Any = None) -> float:
+def held_out_score(fits: Any, weights: Any = None, trim: bool = True) -> float:
     """The held-out score of a candidate from its fits on the blocks: pooled over the blocks,
-    without the one where it fits worst and the one where it fits best (from three blocks on).
+    without the one where it fits worst and the one where it fits best (from three blocks on;
+    ``trim=False``: all of them).
 
     ``fits`` is ``(blocks, outputs)`` (or one value per block), the fit % of every output on
     every block; ``weights`` the same shape (or per block), the output variation of each
@@ -75,7 +76,7 @@ def held_out_score(fits: Any, weights: Any = None) -> float:
     W = np.ones_like(F) if weights is None else np.asarray(weights, float)
     W = np.broadcast_to(W[:, None] if W.ndim == 1 else W, F.shape)
     keep = np.arange(F.shape[0])
-    if F.shape[0] >= 3:
+    if trim and F.shape[0] >= 3:
         keep = np.sort(np.argsort([block_fit(f) for f in F], kind="stable")[1:-1])
     out = []
     with np.errstate(all="ignore"):
@@ -234,10 +235,55 @@ class Board:
             # even as good as the reference plus the slack on every block not yet scored, its
             # score would stay below the reference's by more than the slack
             more = ref_row["fold_output_fits"][len(fits):]
-            if len(fits) < len(ref) and self.score(
-                    list(outs) + [b + s for b in more]) < ref_row["held_out_fit"] - s:
+            if len(fits) < len(ref) and self.score_bound(
+                    list(outs) + [b + s for b in more], len(fits)) < ref_row["held_out_fit"] - s:
                 return True
         return False
+
+    def score_bound(self, outs: list[Any], known: int) -> float:
+        """The highest score a candidate can reach whose per-output fits are ``outs`` on the
+        first ``known`` blocks and at most ``outs`` on the others. :func:`held_out_score`
+        leaves out the blocks where the candidate fits worst and best, so a fit that falls
+        can move the cut to a block of more variation and raise the score: the score of
+        ``outs`` bounds only fits that keep the same cut. The bound is the best pooled fit
+        over every cut the unknown fits can still make (the worst block cannot be a known one
+        above another block's reach, nor the best a known one below a known block; with a
+        known best block, the unknown ones reach at most its fit).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from sysid.identify.board import Board
+        >>> b = Board.__new__(Board)
+        >>> b.weights = np.array([[1472.0], [1937.0], [335.0], [1124.0], [554.0]])
+        >>> outs = [[81.4], [82.0], [59.3], [74.9], [62.7]]  # the first block known
+        >>> bool(b.score_bound(outs, 1) > b.score(outs))  # 82.0 falling keeps block 2
+        True
+        >>> bool(b.score_bound(outs, 5) == b.score(outs))  # all known: the score itself
+        True
+        """
+        F = np.asarray(outs, float)
+        F = F[:, None] if F.ndim == 1 else F
+        K = F.shape[0]
+        W = self.weights[:K]
+        if K < 3 or known >= K:
+            return held_out_score(F, W)
+        f = np.array([block_fit(x) for x in F])
+        top_known = float(np.max(f[:known])) if known else -np.inf
+        best = -np.inf
+        for i in range(K):  # the block left out as the worst
+            if i < known and (np.any(f[:known] < f[i]) or np.any(f[known:] < f[i])):
+                continue  # a known block above another's reach cannot be the worst
+            for j in range(K):  # the block left out as the best
+                if j == i or (j < known and np.any(f[:known] > f[j])) or (
+                        j >= known and f[j] < top_known):
+                    continue
+                G = F.copy()
+                if j < known:  # the unknown blocks reach at most the best one's fit
+                    G[known:] -= np.maximum(f[known:] - f[j], 0.0)[:, None]
+                best = max(best, held_out_score(np.delete(G, [i, j], 0),
+                                                np.delete(W, [i, j], 0), trim=False))
+        return best
 
     def eligible(self, r: dict[str, Any], stable_only: bool = True) -> bool:
         return (bool(np.isfinite(r["held_out_fit"])) and not r.get("worse_than_start")
