@@ -5,6 +5,7 @@ reference, scored on held-out validation data.
     .venv/bin/python benches/realdata.py --records dryer robot_arm
     .venv/bin/python benches/realdata.py --no-peers      # without SIPPY / nfoursid
     .venv/bin/python benches/realdata.py --split reversed --no-peers --records dryer ...
+    .venv/bin/python benches/realdata.py --unshipped DIR # DaISy records not shipped (below)
 
 Records (``/work/shared/data``, see its README; the DaISy records and the F-16 ground
 vibration test). Splits: the README's where it gives one (dryer 1:500 / 501:1000, robot arm
@@ -23,7 +24,11 @@ records their last 2/3 / first 1/3); ``swap`` estimates on the default validatio
 validates on the default estimation part (a short estimation record). The F-16 levels keep
 their split under every ``--split`` (a separate validation file; leave them out with
 ``--records``). Another split writes ``results/realdata_<split>.md`` unless ``--out`` is given,
-and ``--reuse`` takes only rows of the same split.
+and ``--reuse`` takes only rows of the same split. ``--unshipped DIR`` runs instead DaISy
+records that the project does not ship and no choice in sysid was made on (``UNSHIPPED``:
+heat exchanger, heating system, glass furnace, evaporator, CD player arm, industrial dryer,
+steam generator, power plant; first 2/3 / last 1/3), read from a directory holding the
+collection's ``.dat`` files, into ``results/realdata_unshipped[_<split>].md``.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -113,6 +118,27 @@ RECORDS = {
     "f16_level1": lambda: _f16("Level1"),
     "f16_level3": lambda: _f16("Level3"),
 }
+
+#: DaISy records the project does not ship, read from a directory holding the collection's
+#: files as distributed (``--unshipped DIR``): a check on records no choice was made on. The
+#: first 2/3 estimate, the last 1/3 validate (every ``--split`` applies); columns: (file,
+#: inputs, outputs) of the collection's descriptions (a leading time column is skipped)
+UNSHIPPED = {
+    "exchanger": ("exchanger", [1], [2]),  # steam heat exchanger: flow -> temperature
+    "heating_system": ("heating_system", [1], [2]),  # heating system: voltage -> temperature
+    "glassfurnace": ("glassfurnace", [1, 2, 3], [4, 5, 6, 7, 8, 9]),  # 3 heaters, 6 sensors
+    "evaporator": ("evaporator", [0, 1, 2], [3, 4, 5]),  # four-stage evaporator
+    "cd_player": ("CD_player_arm", [0, 1], [2, 3]),  # CD player arm (two forces, tracking)
+    "dryer2": ("dryer2", [1, 2, 3], [4, 5, 6]),  # industrial dryer
+    "steamgen": ("steamgen", [1, 2, 3, 4], [5, 6, 7, 8]),  # steam generator
+    "powerplant": ("powerplant", [1, 2, 3, 4, 5], [6, 7, 8]),  # power plant (references left out)
+}
+
+
+def _unshipped(folder: Path, name: str):
+    f, ins, outs = UNSHIPPED[name]
+    d = np.loadtxt(folder / f"{f}.dat")
+    return _split(d[:, ins], d[:, outs], (2 * d.shape[0]) // 3, SPLIT)
 
 
 # -- plain NumPy / SciPy reference (also run by the peers' worker: NumPy only) -------------
@@ -520,12 +546,22 @@ def main() -> None:
                          "are taken instead of re-running them (marked in the table)")
     ap.add_argument("--table-from", default=None,
                     help="rewrite the table from a results .json (no fitting)")
+    ap.add_argument("--unshipped", default=None, metavar="DIR",
+                    help="run the DaISy records the project does not ship (UNSHIPPED), read "
+                         "from DIR (the collection's .dat files), instead of the shipped ones")
     args = ap.parse_args()
     global SPLIT
     SPLIT = args.split
+    stem = "realdata"
+    if args.unshipped:
+        stem = "realdata_unshipped"
+        for name in UNSHIPPED:
+            RECORDS[name] = lambda name=name: _unshipped(Path(args.unshipped), name)
+        if "--records" not in sys.argv:
+            args.records = list(UNSHIPPED)
     if args.out is None:
         tail = "" if args.split == "default" else f"_{args.split}"
-        args.out = str(HERE / "results" / f"realdata{tail}.md")
+        args.out = str(HERE / "results" / f"{stem}{tail}.md")
     if args.table_from:
         rows = json.loads(Path(args.table_from).read_text())
         for r in rows:

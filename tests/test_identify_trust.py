@@ -353,3 +353,36 @@ def test_thin_held_out_evidence_is_reported():
     assert "one of the 5 held-out blocks" in res.checks["held_out_evidence"]
     res = sysid.identify(_operating_points(4, 400, None), refine=False, progress=False)
     assert "held_out_evidence" not in res.checks
+
+
+def test_the_final_choice_weighs_candidates_the_blocks_cannot_tell_apart():
+    """Two candidates 2.3 points apart on the held-out score, with block-by-block
+    differences of -6 to +15 points (a glass furnace's prediction- and simulation-focus
+    refinements on four blocks): beyond the fixed slack of half a point, but well within one
+    standard error of the difference, so the final choice (the whole-record BIC) sees both.
+    A candidate below the best on every block by more than its spread stays out, and so
+    does one within the spread with more parameters than the best."""
+    board = Board.__new__(Board)
+    board.shares = np.full(4, 0.25)
+    board.folds = [None] * 4
+
+    def row(fits, family="pem", criterion="refined", focus="simulation", order=8):
+        return {"family": family, "order": order, "criterion": criterion, "stable": True,
+                "held_out_fit": held_out_score(fits), "fold_fits": fits, "focus": focus,
+                "feedthrough": True}
+    best = row([75.7, 49.0, 73.7, 71.6], focus="prediction")  # with a Kalman gain
+    other = row([73.8, 64.0, 67.0, 74.8])
+    far = row([70.1, 44.7, 73.0, 57.7], "moesp", "subspace", None)
+    bigger = row([73.8, 64.0, 67.0, 74.8], order=12)  # as close, more parameters
+    board.rows = [best, other, far]
+    assert best["held_out_fit"] - other["held_out_fit"] > 0.5  # beyond the fixed slack
+    assert board.paired_se(other, best) > best["held_out_fit"] - other["held_out_fit"]
+    assert not board.is_near(other, best)
+    assert board.is_near(other, best, paired=True)
+    assert [r is other for r in board.near_best(paired=True)] == [False, True]
+    assert not board.is_near(far, best, paired=True)
+    # the spread may buy simplicity, never more parameters (they fit the record's noise)
+    assert board.parameters(bigger) > board.parameters(best) > board.parameters(other)
+    assert not board.is_near(bigger, best, paired=True)
+    # a fit that is not finite gives no spread: the fixed slack alone
+    assert board.paired_se(row([75.7, -np.inf, 73.7, 71.6]), best) == 0.0

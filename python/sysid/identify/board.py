@@ -299,12 +299,57 @@ class Board:
         return max(rows, key=lambda r: r["held_out_fit"]) if rows else None
 
     def is_near(self, r: dict[str, Any], best: dict[str, Any] | None,
-                stable_only: bool = True) -> bool:
+                stable_only: bool = True, paired: bool = False) -> bool:
         """``r`` is eligible and the held-out blocks cannot tell it from ``best``: its score
-        is within :func:`slack` of the best's."""
+        is within :func:`slack` of the best's (``paired``: or, with no more parameters than
+        the best, within one standard error of its block-by-block difference to the best,
+        :meth:`paired_se`: the blocks may trade score for simplicity within their spread,
+        never for more parameters, which would only fit the record's noise better)."""
         if best is None or not self.eligible(r, stable_only):
             return False
-        return bool(r["held_out_fit"] >= best["held_out_fit"] - slack(best["held_out_fit"]))
+        gap = slack(best["held_out_fit"])
+        if paired and self.parameters(r) <= self.parameters(best):
+            gap = max(gap, self.paired_se(r, best))
+        return bool(r["held_out_fit"] >= best["held_out_fit"] - gap)
+
+    def parameters(self, r: dict[str, Any]) -> int:
+        """The identifiable parameter count of candidate ``r`` (as :func:`bic` counts them):
+        ``A, B, C`` and the initial state, ``D`` with a feedthrough, ``K`` with the
+        prediction focus."""
+        first = self.folds[0][0] if self.folds and self.folds[0] is not None else None
+        m = first.n_inputs if first is not None else 1
+        l = first.n_outputs if first is not None else 1
+        n = int(r.get("order") or 0)
+        return (n * (m + l + 1) + (m * l if r.get("feedthrough") else 0)
+                + (n * l if r.get("focus") == "prediction" else 0))
+
+    def paired_se(self, r: dict[str, Any], best: dict[str, Any]) -> float:
+        """The standard error of the mean block-by-block difference of the fits of ``r`` and
+        ``best`` (each block weighing its share of the output variation): how far apart
+        the held-out blocks put two candidates by chance alone. 0 when a fit is not finite
+        or the blocks differ.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from sysid.identify.board import Board
+        >>> b = Board.__new__(Board)
+        >>> b.shares = np.full(4, 0.25)
+        >>> r, best = {"fold_fits": [70.0, 64.0, 67.0, 75.0]}, {"fold_fits": [76.0, 49.0, 74.0, 72.0]}
+        >>> round(b.paired_se(r, best), 2)  # differences -6, 15, -7, 3: mean 1.25
+        5.11
+        """
+        a, b = np.asarray(r.get("fold_fits") or [], float), np.asarray(
+            best.get("fold_fits") or [], float)
+        w = np.asarray(self.shares, float)
+        if a.shape != b.shape or a.shape != w.shape or not (
+                np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
+            return 0.0
+        w = w / np.sum(w)
+        d = a - b
+        keff = 1.0 / np.sum(w ** 2)
+        var = np.sum(w * (d - np.sum(w * d)) ** 2) / max(keff - 1.0, 1.0)
+        return float(np.sqrt(var))
 
     def insisting(self) -> dict[str, Any] | None:
         """An unstable candidate the data insist on: better than the best stable candidate
@@ -381,11 +426,12 @@ class Board:
                     fits[i].append(np.full(held.n_outputs, -np.inf))
         return fits
 
-    def near_best(self, stable_only: bool = True) -> list[dict[str, Any]]:
+    def near_best(self, stable_only: bool = True, paired: bool = False
+                  ) -> list[dict[str, Any]]:
         """Eligible candidates the held-out blocks cannot tell from the best
         (:meth:`is_near`): refined ones first, then by score."""
         best = self.best(stable_only)
-        near = [r for r in self.rows if self.is_near(r, best, stable_only)]
+        near = [r for r in self.rows if self.is_near(r, best, stable_only, paired)]
         # refined candidates first (few; each the refinement of a near-best start)
         return sorted(near, key=lambda r: (r["criterion"].startswith("subspace"),
                                            -r["held_out_fit"]))
