@@ -386,3 +386,21 @@ def test_the_final_choice_weighs_candidates_the_blocks_cannot_tell_apart():
     assert not board.is_near(bigger, best, paired=True)
     # a fit that is not finite gives no spread: the fixed slack alone
     assert board.paired_se(row([75.7, -np.inf, 73.7, 71.6]), best) == 0.0
+
+
+def test_a_subspace_choice_carries_parameter_uncertainty():
+    """identify's model has pole and damping standard deviations whatever family wins: a
+    subspace choice gets the simulation-error criterion's uncertainty at it (the model
+    unchanged), and the checks say what it is."""
+    rng = np.random.default_rng(3)
+    true = sysid.StateSpaceModel([[0.8, 0.3], [-0.3, 0.8]], [[1.0], [0.0]], [[1.0, 0.5]])
+    u = rng.standard_normal(800)
+    y = true.simulate(u) + 0.1 * rng.standard_normal((800, 1))
+    res = sysid.identify(sysid.IOData(u=u, y=y), refine=False)  # subspace candidates only
+    assert res.leaderboard[0]["criterion"].startswith("subspace")
+    poles, sd = res.model.poles(std=True)
+    assert np.all(np.isfinite(sd)) and np.all(np.abs(sd) > 0)
+    err = np.min(np.abs(poles[:, None] - true.poles()[None, :]), axis=1)
+    assert np.all(err < 6 * np.abs(sd))  # the true poles within a few standard deviations
+    assert "uncertainty" in res.checks
+    assert np.all(np.isfinite(res.model.damp(std=True).zeta_std))

@@ -582,6 +582,8 @@ def identify(
                                                      "held_out_fit")}
     if "identify_refit" in model.info:
         checks["final_refit"] = model.info["identify_refit"]
+    if getattr(model, "uncertainty", None) is None:
+        model = _with_uncertainty(model, centred, checks)
     result_model = IdentifiedModel(model, mu, my)
     vfit = None
     if validation is not None:
@@ -597,6 +599,39 @@ def identify(
                          interrupted)
     out.out_of_time = board.out_of_time
     return out
+
+
+def _with_uncertainty(model: Any, data: IOData, checks: dict[str, Any]) -> Any:
+    """A chosen model that carries no parameter uncertainty (a subspace one) with the
+    uncertainty of the simulation-error criterion at it (:func:`sysid.pem` with no iteration,
+    the criterion identify's refinements use): poles, damping and responses then have
+    standard deviations, as MATLAB reports them for ``n4sid`` models. First order, and the
+    spread a prediction-error fit would have: a subspace estimate spreads at least as much
+    (``checks["uncertainty"]`` says so). The model itself is unchanged; when the criterion
+    cannot be evaluated at it, it is returned as it is (and the checks say why)."""
+    import sysid
+
+    wt = "output" if data.n_outputs > 1 else None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            m = sysid.pem(data, model, focus="simulation", weighting=wt, max_iter=0,
+                          feedthrough=bool(np.any(np.asarray(model.D) != 0)), progress=False)
+        if m.uncertainty is None:
+            raise ValueError("no covariance")
+        step = np.ones((20, data.n_inputs))  # the same model, in whatever state basis
+        if not np.allclose(m.simulate(step), model.simulate(step), rtol=1e-8, atol=1e-12):
+            raise ValueError("the criterion moved the model")
+    except Exception as e:  # noqa: BLE001 - reported in the checks, never raised
+        checks["uncertainty"] = (f"none: the chosen subspace model's parameter uncertainty could "
+                                 f"not be evaluated ({type(e).__name__}: {e})"[:300])
+        return model
+    m.info = dict(model.info)  # the subspace fit's record, not a search that did not run
+    m.info["identify_uncertainty"] = checks["uncertainty"] = (
+        "the subspace model's parameter uncertainty is the simulation-error criterion's at it "
+        "(first order, as for a prediction-error fit; the subspace estimate itself spreads at "
+        "least as much: SubspaceEstimator(...).fit(..., uncertainty='bootstrap') for its own)")
+    return m
 
 
 def _choose(board: Board, ranked: list[dict[str, Any]], data: IOData, stable_only: bool

@@ -88,6 +88,11 @@ class IdentifiedModel:
         from the model's parameter uncertainty, as :meth:`StateSpaceModel.poles`."""
         return self.statespace.poles(std=std, method=method)
 
+    def damp(self, std: bool = False) -> Any:
+        """Pole frequencies and damping of :attr:`statespace` (offsets do not move them), as
+        :meth:`StateSpaceModel.damp`; ``std=True``: with first-order standard deviations."""
+        return self.statespace.damp(std=std)
+
     @property
     def uncertainty(self) -> Any:
         """The parameter uncertainty of :attr:`statespace` (None when it has none): pole,
