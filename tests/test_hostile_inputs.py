@@ -353,3 +353,14 @@ def test_nlssest_refuses_absurd_batches_and_widths(data):
     with pytest.raises(DataError, match=r"parameters but the training record gives \d+ "
                                         r"residuals"):
         sysid.nlssest(short, 1, hidden=10**6, progress=False)
+
+
+def test_ssest_order_beyond_the_horizon_names_the_largest_order():
+    """A short record of many channels (a power plant: 133 samples, 5 inputs, 3 outputs)
+    allows few states; ssest says how many, as n4sid does, not only "lower the order"."""
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((133, 5))
+    y = u @ rng.standard_normal((5, 3)) + 0.1 * rng.standard_normal((133, 3))
+    from sysid.errors import OrderError
+    with pytest.raises(OrderError, match=r"order <= \d"):
+        sysid.ssest(sysid.IOData(u=u, y=y), 4)

@@ -142,6 +142,7 @@ def ssest(
     order = as_int(order, "order", 1)
     est = SubspaceEstimator(data, horizon)
     candidates = []
+    why: list[Exception] = []  # why the weightings failed (the order error names the bound)
 
     names = methods if method is None else (method,)
     for name in names:
@@ -153,9 +154,10 @@ def ssest(
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
                     cand = est.fit(order, method=name, feedthrough=feedthrough, x0=use_x0)
-            except Exception:  # noqa: BLE001 - a failing weighting is just not a candidate
+            except Exception as e:  # noqa: BLE001 - a failing weighting is just not a candidate
                 if method is not None:
                     raise
+                why.append(e)
                 continue
             try:
                 loss = pem_loss(data, cand, focus=focus, feedthrough=feedthrough, x0=x0,
@@ -164,7 +166,7 @@ def ssest(
                 loss = float("inf")
             candidates.append((loss, name, use_x0, cand))
     if not candidates:
-        raise DataError("no subspace start could be computed for this order; lower the order")
+        _no_start(why)
     candidates.sort(key=lambda c: c[0])
     best = candidates[0]
     with warnings.catch_warnings():
@@ -178,6 +180,18 @@ def ssest(
         "losses": {f"{c[1]}{'+x0' if c[2] else ''}": c[0] for c in candidates},
     }
     return model
+
+
+def _no_start(why: list[Exception]) -> None:
+    """No subspace weighting gave a start: the order error when there is one (it names the
+    largest order the horizon allows), else a plain one."""
+    from ..errors import OrderError
+
+    for e in why:
+        if isinstance(e, OrderError):
+            raise OrderError(f"no subspace start for ssest: {e}") from e
+    raise DataError("no subspace start could be computed for this order; lower the order"
+                    + (f" ({type(why[0]).__name__}: {why[0]})" if why else ""))
 
 
 def _confirm_feedthrough(data: Any, order: Any, model: StateSpaceModel, why: dict[str, Any],
@@ -223,12 +237,14 @@ def _ssest_periodic(data: Any, order: Any, frd: Any, feedthrough: Any,
         ft, _ = choose_feedthrough(SubspaceEstimator(data, horizon), order)
     est = SubspaceEstimator(data, horizon)
     candidates = []
+    why: list[Exception] = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         for name in methods if method is None else (method,):
             try:
                 candidates.append((name, est.fit(order, method=name, feedthrough=ft)))
-            except SysidError:
+            except SysidError as e:
+                why.append(e)
                 continue
         try:
             w = np.mean(line_weights(frd), axis=(1, 2))
@@ -239,7 +255,7 @@ def _ssest_periodic(data: Any, order: Any, frd: Any, feedthrough: Any,
     scored = [(lines_cost(frd, c) if np.max(np.abs(c.poles()), initial=0.0) < 1 else np.inf,
                name, c) for name, c in candidates]
     if not scored:
-        raise DataError("no subspace start could be computed for this order; lower the order")
+        _no_start(why)
     scored.sort(key=lambda c: c[0])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", OffsetWarning)
