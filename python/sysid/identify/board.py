@@ -335,7 +335,8 @@ class Board:
         >>> from sysid.identify.board import Board
         >>> b = Board.__new__(Board)
         >>> b.shares = np.full(4, 0.25)
-        >>> r, best = {"fold_fits": [70.0, 64.0, 67.0, 75.0]}, {"fold_fits": [76.0, 49.0, 74.0, 72.0]}
+        >>> r = {"fold_fits": [70.0, 64.0, 67.0, 75.0]}
+        >>> best = {"fold_fits": [76.0, 49.0, 74.0, 72.0]}
         >>> round(b.paired_se(r, best), 2)  # differences -6, 15, -7, 3: mean 1.25
         5.11
         """

@@ -29,10 +29,10 @@
    once settled, the fold fits are capped, later refinements are not scored (the checks say
    so).
 4. The held-out blocks rank the candidates but cannot tell apart those within half a fit
-   point of the best (5 % of its error at most), nor, for the final choice, those within one
-   standard error of their block-by-block difference to the best (:meth:`.board.Board.
-   paired_se`: blocks that disagree by ten points leave a two-point gap to chance): those
-   are re-fitted on the whole record and
+   point of the best (5 % of its error at most), nor, for the final choice, those with no
+   more parameters within one standard error of their block-by-block difference to the
+   best (:meth:`.board.Board.paired_se`: blocks that disagree by ten points leave a gap of
+   a few points to chance): those are re-fitted on the whole record and
    the one with the smallest BIC of its simulation errors is returned; unstable candidates
    only when the data insist (:meth:`.board.Board.insisting`) or ``enforce_stability=False``.
    An unstable candidate that wins only while the record's drift is left in is not one
@@ -637,8 +637,9 @@ def _with_uncertainty(model: Any, data: IOData, checks: dict[str, Any]) -> Any:
 def _choose(board: Board, ranked: list[dict[str, Any]], data: IOData, stable_only: bool
             ) -> tuple[Any, dict[str, Any]]:
     """Among the candidates the held-out blocks cannot tell apart (within the slack of the
-    best score or one standard error of their difference to it, :meth:`.board.Board.
-    paired_se`; at most ``N_FINAL``), the one whose re-fit on the whole record has the
+    best score, or with no more parameters within one standard error of their difference
+    to it, :meth:`.board.Board.paired_se`; at most ``N_FINAL``), the one whose re-fit on
+    the whole record has the
     smallest BIC (its simulation errors there against its parameter count); when none
     re-fits well, the next candidates of the ranking."""
     fitted = []
