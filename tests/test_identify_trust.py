@@ -404,3 +404,18 @@ def test_a_subspace_choice_carries_parameter_uncertainty():
     assert np.all(err < 6 * np.abs(sd))  # the true poles within a few standard deviations
     assert "uncertainty" in res.checks
     assert np.all(np.isfinite(res.model.damp(std=True).zeta_std))
+
+
+def test_a_periodic_record_is_noted():
+    """On a record whose input repeats (one multisine realisation, several periods) every
+    held-out block repeats input the fitted part holds: the checks say so; a random input
+    is not flagged."""
+    rng = np.random.default_rng(5)
+    true = sysid.StateSpaceModel([[0.8, 0.3], [-0.3, 0.8]], [[1.0], [0.0]], [[1.0, 0.5]])
+    u = sysid.multisine(256, band=(0.0, 0.4), periods=6, seed=1)
+    y = true.simulate(u) + 0.05 * rng.standard_normal((u.shape[0], 1))
+    res = sysid.identify(sysid.IOData(u=u, y=y), refine=False)
+    assert "every 256 samples (6 periods)" in res.checks["periodic"]
+    u = rng.standard_normal(1536)
+    y = true.simulate(u) + 0.05 * rng.standard_normal((1536, 1))
+    assert "periodic" not in sysid.identify(sysid.IOData(u=u, y=y), refine=False).checks

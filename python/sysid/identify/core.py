@@ -3,7 +3,8 @@
 1. Offsets: the estimation record's input and output means are removed and kept with the
    model (:class:`IdentifiedModel` predicts raw data).
 2. Checks: the input's persistent-excitation order and a feedback test are recorded; under
-   feedback the closed-loop subspace methods (PBSID, SSARX) join the candidates.
+   feedback the closed-loop subspace methods (PBSID, SSARX) join the candidates. A periodic
+   input is noted (``checks["periodic"]``): its held-out blocks repeat the fitted input.
 3. Candidates are scored on blocks of the estimation record held out from their fit: the
    record is cut into five contiguous blocks (fewer on short records; several experiments
    laid end to end, cut where one ends: :func:`~sysid.validation.crossval.record_folds`),
@@ -163,6 +164,18 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
                                   f"(p = {fb.p_value:.2g})")
         except Exception as e:  # noqa: BLE001
             checks["feedback"] = f"not checked ({e})"
+    try:
+        per = sysid.detect_period(data)
+    except Exception:  # noqa: BLE001 - a record it cannot read has no period to report
+        per = None
+    if per is not None:
+        checks["periodic"] = (
+            f"the input repeats every {per.period} samples ({per.periods} periods): every "
+            f"held-out block repeats input the rest of the record holds, so the held-out fits "
+            f"say how a model reproduces this excitation (its nonlinear distortions included, "
+            f"which repeat with it), not how it does on another input; validate on a record "
+            f"of another excitation (another multisine realisation or amplitude), or fit "
+            f"the averaged periods (sysid.ssest(data, order, periods='auto'))")
     spikes = spike_report(data)
     if spikes:
         checks["outliers"] = (f"{spikes}: every fit bends to them; repair them first "
