@@ -364,3 +364,18 @@ def test_ssest_order_beyond_the_horizon_names_the_largest_order():
     from sysid.errors import OrderError
     with pytest.raises(OrderError, match=r"order <= \d"):
         sysid.ssest(sysid.IOData(u=u, y=y), 4)
+
+
+def test_spa_on_a_short_drifting_record_reports_no_false_coherence():
+    """A short record of drifting channels (a power plant: 133 samples, 5 inputs): the lag
+    window can put an auto-spectrum estimate at or below zero, where the coherence is
+    undefined. It is reported as 0, without an overflow (it was |Syu|^2 / tiny, clipped
+    to 1: full coherence where the estimate has no power)."""
+    rng = np.random.default_rng(0)
+    u = np.cumsum(rng.standard_normal((133, 5)), 0) * 100
+    y = u @ rng.standard_normal((5, 3)) + np.cumsum(rng.standard_normal((133, 3)), 0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no RuntimeWarning from NumPy
+        frd = sysid.spa(sysid.IOData(u=u, y=y))
+    assert np.all(np.isfinite(frd.response))
+    assert np.all((frd.coherence >= 0) & (frd.coherence <= 1))

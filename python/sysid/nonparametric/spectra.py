@@ -110,9 +110,14 @@ def _frf_from_S(
     du = np.einsum("fjj->fj", Suu).real
     dy = np.einsum("fii->fi", Syy).real
     tiny = np.finfo(float).tiny
-    coh = np.abs(Syu) ** 2 / np.maximum(dy[:, :, None] * du[:, None, :], tiny)
-    explained = np.einsum("fij,fji->fi", G, np.conj(np.swapaxes(Syu, 1, 2))).real
-    mcoh = explained / np.maximum(dy, tiny)
+    # a lag-windowed estimate (spa) can put an auto-spectrum at or below zero on a short
+    # record: the coherence is undefined there and reported 0 (no evidence of a relation),
+    # not |Syu|^2 / tiny (an overflow clipped to 1)
+    den = dy[:, :, None] * du[:, None, :]
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        coh = np.where(den > tiny, np.abs(Syu) ** 2 / np.where(den > tiny, den, 1.0), 0.0)
+        explained = np.einsum("fij,fji->fi", G, np.conj(np.swapaxes(Syu, 1, 2))).real
+        mcoh = np.where(dy > tiny, explained / np.where(dy > tiny, dy, 1.0), 0.0)
     Svv = np.maximum(dy - explained, 0.0)
     ratio = Svv[:, :, None] * np.einsum("fjj->fj", Suu_inv).real[:, None, :]
     return G, np.clip(coh, 0, 1), np.clip(mcoh, 0, 1), np.maximum(ratio, 0.0), keep, l

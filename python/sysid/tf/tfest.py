@@ -137,6 +137,9 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     l, m = data.n_outputs, data.n_inputs
     if m == 0:
         raise DataError("tfest needs at least one input; for a time series use sysid.ar")
+    from ..data.offsets import check_offsets
+
+    check_offsets(data)  # a transfer function has no constant term (as every estimator)
     npo, nze = pole_zero_orders(n_poles, n_zeros, l, m)
     fixed_delays, auto = delays(iodelay, l, m)
     periodicity = None
