@@ -434,3 +434,22 @@ def test_the_search_does_not_depend_on_the_signals_units(focus):
     # the same minimum (each search stops at statistical convergence, a little apart)
     np.testing.assert_allclose(poles[1], poles[0], atol=2e-3)
     assert gain[1] == pytest.approx(gain[0], rel=2e-3)
+
+
+def test_ssest_with_feedthrough_auto_warns_once_at_the_callers_line():
+    """feedthrough='auto' refines with and without D and keeps one: the warnings are those of
+    the model returned, once, at the caller's line (two "stopped at max_iter" warnings
+    pointing into ssest.py came from one call)."""
+    import warnings
+
+    rng = np.random.default_rng(0)
+    true = sysid.StateSpaceModel([[0.8, 0.3], [-0.3, 0.8]], [[1.0], [0.0]], [[1.0, 0.5]],
+                                 [[1.0]])
+    u = rng.standard_normal(800)
+    y = true.simulate(u) + 0.1 * rng.standard_normal((800, 1))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        m = sysid.ssest(sysid.IOData(u=u, y=y), 2, feedthrough="auto", max_iter=1)
+    capped = [w for w in caught if issubclass(w.category, sysid.IterationLimitWarning)]
+    assert len(capped) == 1 and capped[0].filename == __file__
+    assert m.info["feedthrough_selection"]["feedthrough"]  # both fits ran (D confirmed)

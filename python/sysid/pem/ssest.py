@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int
+from .._checks import as_int, user_stacklevel
 from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
 from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator
@@ -126,9 +126,15 @@ def ssest(
         kw = dict(focus=focus, x0=x0, noise=noise, horizon=horizon, methods=methods,
                   method=method, max_iter=max_iter, tol=tol, regularization=regularization,
                   progress=progress, enforce_stability=enforce_stability)
-        model = ssest(data, order, feedthrough=use, **kw)
+        model, said = _recorded(lambda: ssest(data, order, feedthrough=use, **kw))
         if use:
-            model, why = _confirm_feedthrough(data, order, model, why, kw)
+            kept, why, said_without = _confirm_feedthrough(data, order, model, why, kw)
+            said = said if kept is model else said_without
+            model = kept
+        # the warnings of the model returned, once, at the caller's line (not those of the
+        # fit the choice of D left out: two "stopped at max_iter" for one call)
+        for w in said:
+            warnings.warn(w.message, stacklevel=user_stacklevel())
         model.info["feedthrough_selection"] = why
         return model
     if isinstance(order, str) or np.ndim(order):
@@ -194,8 +200,25 @@ def _no_start(why: list[Exception]) -> None:
                     + (f" ({type(why[0]).__name__}: {why[0]})" if why else ""))
 
 
+def _recorded(fit: Callable[[], Any]) -> tuple[Any, list[warnings.WarningMessage]]:
+    """``fit()`` and the warnings it gave, recorded instead of shown (shown when it fails)."""
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        err: BaseException | None = None
+        try:
+            out = fit()
+        except BaseException as e:  # noqa: BLE001 - re-raised below, after its warnings
+            err = e
+    if err is not None:
+        for w in said:
+            warnings.warn(w.message, stacklevel=user_stacklevel())
+        raise err
+    return out, list(said)
+
+
 def _confirm_feedthrough(data: Any, order: Any, model: StateSpaceModel, why: dict[str, Any],
-                         kw: dict[str, Any]) -> tuple[StateSpaceModel, dict[str, Any]]:
+                         kw: dict[str, Any]
+                         ) -> tuple[StateSpaceModel, dict[str, Any], list[Any]]:
     """The refined model with ``D`` (chosen by the subspace models' held-out fits) against
     the refined model without it, by the BIC of their simulation errors on the record
     (:func:`sysid.identify.board.bic`, ``D`` counted): ``D`` is kept only when the refined
@@ -205,15 +228,15 @@ def _confirm_feedthrough(data: Any, order: Any, model: StateSpaceModel, why: dic
     from ..identify.board import bic
 
     try:
-        without = ssest(data, order, feedthrough=False, **kw)
+        without, said = _recorded(lambda: ssest(data, order, feedthrough=False, **kw))
         b_with, b_without = bic(model, data), bic(without, data)
     except SysidError:
-        return model, why
+        return model, why, []
     keep = bool(b_with < b_without)
     why = dict(why, feedthrough=keep, refined_bic={"with D": b_with, "without D": b_without},
                reason=why["reason"] + f"; refined models: BIC {b_with:.4g} with D, "
                f"{b_without:.4g} without: " + ("D kept" if keep else "D = 0"))
-    return (model if keep else without), why
+    return (model if keep else without), why, said
 
 
 def _ssest_periodic(data: Any, order: Any, frd: Any, feedthrough: Any,
