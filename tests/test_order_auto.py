@@ -130,3 +130,24 @@ def test_ssest_with_a_range_of_orders_holds_up_on_the_winding_record():
         range(1, 11))
     assert sel["table"][m.nstates] == min(sel["table"].values())
     assert validation_fit(m, val) > 70.0, sel
+
+
+@pytest.mark.parametrize("name", ["n4sid", "moesp", "cva"])
+def test_a_sequence_of_orders_is_chosen_among(name):
+    """MATLAB's ``n4sid(data, 1:10)``: the subspace estimators take a sequence of orders as
+    ``ssest`` does, and choose among them by the held-out fit of ``order="auto"`` (they
+    raised "order must be a positive integer, got range(1, 11)")."""
+    rng = np.random.default_rng(2)
+    true = sysid.StateSpaceModel([[0.9, 0.3, 0], [-0.3, 0.9, 0], [0, 0, 0.5]],
+                                 [[1.0], [0.0], [1.0]], [[1.0, 0.5, 1.0]])
+    u = rng.standard_normal(1500)
+    data = sysid.IOData(u=u, y=true.simulate(u) + 0.05 * rng.standard_normal((1500, 1)))
+    fit = getattr(sysid, name)
+    m = quiet(fit, data, range(1, 11))
+    assert m.nstates == 3 and sorted(m.info["order_selection"]["table"]) == list(range(1, 11))
+    m = quiet(fit, data, [1, 2, 5])  # only these: the best of them
+    assert m.nstates in (1, 2, 5) and sorted(m.info["order_selection"]["table"]) == [1, 2, 5]
+    with pytest.raises(sysid.DataError, match="empty"):
+        fit(data, [])
+    with pytest.raises(sysid.OrderError, match="too large"):
+        fit(data, [500, 600])

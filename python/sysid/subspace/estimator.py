@@ -71,7 +71,7 @@ __all__ = [
 #: must not fire by chance on open-loop data)
 FEEDBACK_WARNING_LEVEL = 1e-6
 
-Order = Union[int, Literal["auto"]]
+Order = Union[int, Literal["auto"], Sequence[int]]
 
 
 def _preprocessing(data: IOData, from_factor: bool) -> dict[str, Any]:
@@ -372,7 +372,8 @@ class SubspaceEstimator:
         return self._subspace(None).auto_order()
 
     def order_selection(self, method: str | None = None,
-                        feedthrough: bool = FEEDTHROUGH_DEFAULT) -> dict[str, Any]:
+                        feedthrough: bool = FEEDTHROUGH_DEFAULT,
+                        orders: Sequence[int] | None = None) -> dict[str, Any]:
         """The order ``fit(order="auto")`` takes, with the table and the reason.
 
         With inputs and the data at hand: the order whose models, fitted on part of the
@@ -383,12 +384,13 @@ class SubspaceEstimator:
         (:func:`sysid.validation.crossval.stable_first`). Otherwise (time series, an
         estimator built from a factor, a record too short to split): the largest gap of the
         log singular values (:attr:`auto_order`). The result is recorded in
-        ``model.info["order_selection"]``.
+        ``model.info["order_selection"]``. ``orders``: only these are tried (default: every
+        order up to :attr:`max_order`, at most 20).
         """
         from .order_choice import order_selection
 
         return order_selection(self, self.method if method is None else _method(method),
-                               bool(feedthrough))
+                               bool(feedthrough), _orders(orders, self.max_order))
 
     def feedthrough_selection(self, method: str | None = None, order: Order = "auto"
                               ) -> tuple[bool, dict[str, Any]]:
@@ -422,10 +424,11 @@ class SubspaceEstimator:
 
         Parameters
         ----------
-        order : int or "auto"
+        order : int, "auto" or sequence of int
             Model order; ``"auto"``: chosen by simulation error cross-validated inside the
             record (:meth:`order_selection`; table and reason in
-            ``info["order_selection"]``).
+            ``info["order_selection"]``); a sequence (``range(1, 11)``, MATLAB's
+            ``n4sid(data, 1:10)``): chosen the same way among those orders.
         method : str, optional
             Weighting for this fit (default: the estimator's).
         feedthrough : bool or "auto", optional
@@ -463,8 +466,13 @@ class SubspaceEstimator:
         feedthrough = default_feedthrough(feedthrough, order)
         if check_feedthrough(feedthrough) == "auto":
             feedthrough, ft_selection = self.feedthrough_selection(key, order)
+        orders = _orders(order)
         if key in CLOSED_LOOP:
             from .closed_loop import closed_loop_fit
+
+            if orders is not None:
+                raise DataError(f"a sequence of orders is for the open-loop methods; with "
+                                f"method={key!r} pass order='auto' or one order")
 
             if x0 or stable or uncertainty is not None:
                 raise DataError(f"x0, stable and uncertainty are not available with "
@@ -478,12 +486,14 @@ class SubspaceEstimator:
             return cl
         sub = self._subspace(method)
         self._warn_feedback(key)
-        if isinstance(order, str):
-            if order != "auto":
-                raise DataError(f"order must be an integer or 'auto', got {order!r}")
+        if isinstance(order, str) or orders is not None:
+            if isinstance(order, str) and order != "auto":
+                raise DataError(f"order must be an integer, a sequence of integers or 'auto', "
+                                f"got {order!r}")
             if self.factor.n_inputs == 0 and not self._from_factor:
                 _refuse_white_noise(self.data)
-            selection = self.order_selection(method=key, feedthrough=bool(feedthrough))
+            selection = self.order_selection(method=key, feedthrough=bool(feedthrough),
+                                             orders=orders)
             n = selection["order"]
         else:
             selection = None
@@ -598,6 +608,20 @@ class SubspaceEstimator:
             f"SubspaceEstimator(method={self.method!r}, past={self.past}, future={self.future}, "
             f"{self.factor.n_columns} Hankel columns, {self.data.n_experiments} experiment(s))"
         )
+
+
+def _orders(order: Any, top: int | None = None) -> list[int] | None:
+    """A sequence of orders as a sorted list of distinct positive integers (None for one
+    order or ``"auto"``), checked against the largest order ``top`` the horizon allows."""
+    if order is None or isinstance(order, str) or np.ndim(order) == 0:
+        return None
+    orders = sorted({as_int(o, "order", 1) for o in np.ravel(np.asarray(list(order)))})
+    if not orders:
+        raise DataError("order: the sequence of orders is empty; give at least one order")
+    if top is not None and orders[0] > top:
+        raise OrderError(f"every order in {orders} is too large: the horizon allows at most "
+                         f"{top} states; choose orders <= {top} or a longer horizon")
+    return [o for o in orders if top is None or o <= top]
 
 
 def _shortcut(method: str):  # type: ignore[no-untyped-def]

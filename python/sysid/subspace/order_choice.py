@@ -17,11 +17,13 @@ def _svd_rule(sub: Any, why: str) -> dict[str, Any]:
             "reason": "largest gap of the log singular values" + why, "table": {}}
 
 
-def order_selection(est: Any, key: str, feedthrough: bool) -> dict[str, Any]:
-    """See :meth:`sysid.SubspaceEstimator.order_selection` (cached on the estimator)."""
+def order_selection(est: Any, key: str, feedthrough: bool,
+                    orders: list[int] | None = None) -> dict[str, Any]:
+    """See :meth:`sysid.SubspaceEstimator.order_selection` (cached on the estimator);
+    ``orders``: only these (the singular-value rule then takes the one nearest its gap)."""
     from ..validation.crossval import cross_validated_order
 
-    cache_key = ("cv", key, feedthrough)
+    cache_key = ("cv", key, feedthrough, None if orders is None else tuple(orders))
     if cache_key in est._svd:
         return dict(est._svd[cache_key])
     sub = est._subspace(key)
@@ -30,11 +32,15 @@ def order_selection(est: Any, key: str, feedthrough: bool) -> dict[str, Any]:
         try:
             out = cross_validated_order(est.data, type(est), method=key, past=est.past,
                                         future=est.future, feedthrough=feedthrough,
-                                        whole=est).as_dict()
+                                        orders=orders, whole=est).as_dict()
             out["order"] = min(out["order"], sub.max_order)
         except Exception as e:  # noqa: BLE001 - too short to split: the SVD rule
             out = _svd_rule(sub, f" (the record could not be cross-validated: {e})")
     else:
         out = _svd_rule(sub, "")
+    if orders is not None and out["order"] not in orders:
+        gap = out["order"]
+        out["order"] = min(orders, key=lambda n: (abs(n - gap), n))
+        out["reason"] += f"; the nearest of the orders given ({gap} is not among them)"
     est._svd[cache_key] = out
     return dict(out)
