@@ -3,6 +3,7 @@ and against the compute floor, on real and synthetic records.
 
     .venv/bin/python benches/pem_speed.py                 # all cases, about 10 minutes
     .venv/bin/python benches/pem_speed.py winding cstr    # some cases
+    .venv/bin/python benches/pem_speed.py "synthetic 2x28" --scipy-budget=900  # SciPy longer
     SYSID_SHARED=/path/to/shared .venv/bin/python benches/pem_speed.py   # where ../shared is
 
 Every case refines the same subspace start (MOESP with D, the case's order) by simulation
@@ -369,4 +370,8 @@ def main(which: list[str]) -> None:
 
 
 if __name__ == "__main__":
-    main(sys.argv[1:])
+    args = [a for a in sys.argv[1:] if not a.startswith("--scipy-budget=")]
+    for a in sys.argv[1:]:
+        if a.startswith("--scipy-budget="):  # a longer budget for SciPy (seconds per case)
+            SCIPY_BUDGET = float(a.split("=", 1)[1])
+    main(args)
