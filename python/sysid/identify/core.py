@@ -624,6 +624,12 @@ def _with_uncertainty(model: Any, data: IOData, checks: dict[str, Any]) -> Any:
     cannot be evaluated at it, it is returned as it is (and the checks say why)."""
     import sysid
 
+    if not model.is_stable():  # the criterion simulates: it is not defined at an unstable A
+        checks["uncertainty"] = (
+            "none: the chosen model is unstable (the data insist) and the simulation-error "
+            "criterion diverges there; for its spread refit with SubspaceEstimator(data)"
+            ".fit(order, uncertainty='bootstrap') or refine with sysid.ssest")
+        return model
     wt = "output" if data.n_outputs > 1 else None
     try:
         with warnings.catch_warnings():
