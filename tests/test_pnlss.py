@@ -93,3 +93,23 @@ def test_divergence_and_bad_input():
         sysid.pnlss(sysid.IOData(np.ones(100), np.arange(100.0), 1.0), 1)
     with pytest.raises(DataError, match="init"):
         sysid.pnlss(d, 2, init=sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1))
+
+
+def test_pnlss_stopping_short_warns_as_every_iterative_estimator():
+    """At its cap pnlss says so with an IterationLimitWarning at the caller's line (it was a
+    RuntimeWarning), and its linear start's own cap (ssest, max_iter=30 inside pnlss) does
+    not leak a warning about a max_iter the user never set."""
+    import warnings
+
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((600, 1))
+    lin = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]])
+    y = lin.simulate(u)
+    y = y + 0.3 * y ** 2 + 0.01 * rng.standard_normal(y.shape)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sysid.pnlss(sysid.IOData(u=u, y=y), 2, degree=2, max_iter=2)
+    capped = [w for w in caught if issubclass(w.category, sysid.IterationLimitWarning)]
+    assert len(capped) == 1 and "pnlss stopped at max_iter" in str(capped[0].message)
+    assert capped[0].filename == __file__
+    assert not [w for w in caught if "max_iter=30" in str(w.message)]

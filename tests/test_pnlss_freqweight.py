@@ -51,7 +51,7 @@ def test_weighted_fit_recovers_a_known_system_from_noise_free_data():
     assert np.max(np.abs(m.simulate(u)[256:] - y[256:])) < 1e-6
 
 
-@pytest.mark.filterwarnings("ignore:pnlss stopped")
+@pytest.mark.filterwarnings("ignore:pnlss stopped at max_iter")
 def test_weighting_changes_the_noisy_fit():
     u, _, yn = _record(noise=0.02)
     d = sysid.IOData(u, yn, 1.0)

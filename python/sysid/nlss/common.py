@@ -4,12 +4,13 @@ cost."""
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
 
 from ..data.iodata import IOData
-from ..errors import DataError
+from ..errors import DataError, IterationLimitWarning
 from ..models.statespace import StateSpaceModel
 
 
@@ -153,7 +154,10 @@ def linear_start(data: IOData, sd: IOData, sc: Scaling, order: int, init: Any,
     if periods is not None and len(lens) == 1 and lens.pop() % periods == 0:
         f = sysid.bla(sd, periods=periods, transient=1 if periods > 2 else 0)
         return sysid.bla_model(f, order)
-    return sysid.ssest(sd, order, focus="simulation", progress=False, max_iter=30)
+    # a start: the nonlinear search goes on from it, so its own cap is not the user's concern
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", IterationLimitWarning)
+        return sysid.ssest(sd, order, focus="simulation", progress=False, max_iter=30)
 
 
 def linear_states(m: StateSpaceModel, us: list[np.ndarray]) -> list[np.ndarray]:

@@ -482,12 +482,23 @@ def _report(res: dict[str, Any], recs: list[Any]) -> dict[str, Any]:
 
 
 def _warn_short(res: dict[str, Any]) -> None:
-    if res["stop"] in ("maximum iterations", "cancelled"):
-        import warnings
+    """The search stopped short: at its cap (an :class:`IterationLimitWarning`, as every
+    iterative estimator's, with how much the last iteration still gained) or cancelled."""
+    import warnings
 
-        warnings.warn(f"pnlss stopped at {res['stop']} after {res['iterations']} iterations; "
-                      "the model may improve with more (max_iter=)", RuntimeWarning,
-                      stacklevel=3)
+    from .._checks import user_stacklevel
+    from ..errors import IterationLimitWarning
+
+    if res["stop"] == "maximum iterations":
+        hist = list(res["history"])
+        last = abs(hist[-2] - hist[-1]) / max(abs(hist[-2]), 1e-300) if len(hist) > 1 else 0.0
+        warnings.warn(f"pnlss stopped at max_iter after {res['iterations']} iterations before "
+                      f"converging (the last iteration still lowered the cost by "
+                      f"{100 * last:.2g} %); the model is the best iterate: raise max_iter",
+                      IterationLimitWarning, stacklevel=user_stacklevel())
+    elif res["stop"] == "cancelled":
+        warnings.warn(f"pnlss was cancelled after {res['iterations']} iterations; the model is "
+                      "the best iterate", UserWarning, stacklevel=user_stacklevel())
 
 
 def _tick(*_: Any) -> None:
