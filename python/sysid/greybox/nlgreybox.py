@@ -386,6 +386,9 @@ class NonlinearGreyBox(ModelMixin):
         dt = self.dt if dt is None else dt
         return cont.c2d(dt) if dt else cont
 
+    #: ``to_statespace()`` is a linearisation, not the model (:func:`sysid.compare`)
+    statespace_is_exact = False
+
     def to_statespace(self) -> Any:
         """The sampled linearisation (see :meth:`linearize`)."""
         return self.linearize()

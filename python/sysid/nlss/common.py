@@ -109,6 +109,10 @@ class LinearPart:
     linear part (the host defines ``linear()``); ``predict``: its simulation (the host
     defines ``simulate()``)."""
 
+    #: ``to_statespace()`` is the linear part, not the model: :func:`sysid.compare` simulates
+    #: the model itself
+    statespace_is_exact = False
+
     def linear(self) -> StateSpaceModel:  # pragma: no cover - defined by the host
         raise NotImplementedError
 

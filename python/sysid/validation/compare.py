@@ -21,7 +21,8 @@ initial state and its own row of fit numbers) or a pair ``(u, y)``.
 
 Any model satisfying :class:`sysid.Model` is accepted. The initial state is estimated for
 state-space models (those with ``A, B, C, D`` and ``nstates``), and for the simulation of a
-model with ``to_statespace()`` (its state-space form simulates the same map); other models,
+model with ``to_statespace()`` when its state-space form simulates the same map (not a
+nonlinear model's linear part or linearisation); other models,
 and predictions of polynomial models, start from rest, and ``x0`` may then only be
 ``"estimate"`` or ``"zero"``. A
 continuous-time model (``dt == 0``) meets the data at their sample time with its ``hold``
@@ -427,7 +428,7 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
                              yh, inner.x0)
     model, recs = _records(model, data)
     h = _horizon(horizon)
-    runner = _simulator(model, x0, h)
+    runner = _simulator(model, x0, h, recs[0][0] if recs else None)
     us, ys, yh, x0s = [], [], [], []
     for i, (u, y) in enumerate(recs):
         x = _x0_for(runner, x0, u, y, h, i, len(recs))
@@ -449,17 +450,34 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
     return CompareResult(model, h, us, ys, yh, x0s)
 
 
-def _simulator(model: Any, x0: Any, horizon: int | None) -> Any:
+def _simulator(model: Any, x0: Any, horizon: int | None, u: np.ndarray | None = None) -> Any:
     """For a simulation with ``x0="estimate"`` of a model without a state (polynomial, ...),
-    its ``to_statespace()``: the same input-output map, whose initial state can be fitted."""
+    its ``to_statespace()`` when that is the same input-output map, whose initial state can
+    be fitted. A nonlinear model's ``to_statespace()`` is its linear part or linearisation
+    (``statespace_is_exact = False`` on the class, or a simulation of the first samples of
+    ``u`` that differs): it is simulated itself, from rest; its linear part would be
+    compared in its place."""
     if (horizon is not None or _stateful(model) or not isinstance(x0, str)
-            or x0 != "estimate" or not hasattr(model, "to_statespace")):
+            or x0 != "estimate" or not hasattr(model, "to_statespace")
+            or not getattr(model, "statespace_is_exact", True)):
         return model
     try:
         ss = model.to_statespace()
     except DataError:  # e.g. a coupled MIMO ARX model: simulate from rest
         return model
-    return ss if _stateful(ss) else model
+    if not _stateful(ss):
+        return model
+    if u is not None and getattr(model, "dt", 0) and getattr(ss, "dt", 0):
+        k = min(len(u), 200)
+        try:
+            a = np.asarray(model.simulate(u[:k]), float).reshape(k, -1)
+            b = np.asarray(ss.simulate(u[:k]), float).reshape(k, -1)
+        except Exception:  # noqa: BLE001 - the check cannot run: the class's word stands
+            return ss
+        if not np.allclose(a, b, rtol=1e-6, atol=1e-9 * max(1.0, float(np.max(np.abs(a)))
+                                                            if a.size else 1.0)):
+            return model
+    return ss
 
 
 # -- spectrum of the simulation error ---------------------------------------------------
