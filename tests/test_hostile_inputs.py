@@ -379,3 +379,13 @@ def test_spa_on_a_short_drifting_record_reports_no_false_coherence():
         frd = sysid.spa(sysid.IOData(u=u, y=y))
     assert np.all(np.isfinite(frd.response))
     assert np.all((frd.coherence >= 0) & (frd.coherence <= 1))
+
+
+def test_find_spikes_of_a_record_says_what_to_pass():
+    """find_spikes takes an array; given a record it failed inside IOData's indexing with a
+    message about slicing samples."""
+    d = sysid.IOData(u=np.random.default_rng(0).standard_normal((100, 1)),
+                     y=np.random.default_rng(1).standard_normal((100, 1)))
+    with pytest.raises(DataError, match=r"data\.y"):
+        sysid.find_spikes(d)
+    assert sysid.find_spikes(d.y).shape == (100, 1)

@@ -72,6 +72,10 @@ def find_spikes(x: Any, window: int = 7, n_sigmas: float = 3.0) -> np.ndarray:
     >>> np.flatnonzero(find_spikes(x))
     array([20])
     """
+    if isinstance(x, IOData):
+        raise DataError("find_spikes takes one array (samples, channels), not a record: pass "
+                        "data.y (or data.u) of one experiment, or repair the record with "
+                        "sysid.despike(data)")
     arr = np.asarray(x, dtype=float)
     arr = arr[:, None] if arr.ndim == 1 else arr
     if arr.ndim != 2:
