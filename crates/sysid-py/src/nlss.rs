@@ -219,6 +219,8 @@ pub(crate) fn fit_options(max_iter: usize, tol: f64) -> Options {
     opts.tol_cost = tol;
     opts.tol_step = tol;
     opts.tol_gradient = tol * tol;
+    // statistical convergence, as pem's searches (problems that count their residuals)
+    opts.tol_statistical = 1e-2;
     opts
 }
 

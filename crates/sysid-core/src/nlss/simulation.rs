@@ -366,6 +366,18 @@ impl<M: NonlinearTerms> Problem for SimulationError<'_, M> {
     fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
         Ok(cost(self.model, theta, self.data, jacobian))
     }
+
+    /// The residuals the cost sums: every output of every sample after each record's
+    /// transient (so that [`Options::tol_statistical`] can stop at statistical convergence).
+    fn n_residuals(&self) -> Option<usize> {
+        let ny = self.model.dims().2.max(1);
+        Some(
+            self.data
+                .iter()
+                .map(|d| (d.y.len() / ny).saturating_sub(d.skip) * ny)
+                .sum(),
+        )
+    }
 }
 
 /// Checks the records and the start, then fits on the simulation error with the shared
