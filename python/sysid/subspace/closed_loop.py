@@ -71,6 +71,9 @@ def closed_loop_fit(
     est : SubspaceEstimator
     method : {"pbsid", "ssarx"}
     order : int or "auto"
+        ``"auto"``: chosen by simulation fit cross-validated inside the record, as for the
+        open-loop methods (:meth:`SubspaceEstimator.order_selection`); with a
+        ``regularization``, the largest gap of the singular values.
     feedthrough : bool
         Estimate ``D`` (consistent only if the controller has no direct feedthrough).
     kalman : bool
@@ -95,10 +98,19 @@ def closed_loop_fit(
         cache[key] = _sysid.ClosedLoopSubspace(est.factor, method, regularization, float(ridge),
                                                bool(feedthrough))
     sub = cache[key]
+    selection = None
     if isinstance(order, str):
         if order != "auto":
             raise DataError(f"order must be an integer or 'auto', got {order!r}")
-        n = sub.auto_order()
+        if regularization == "none":
+            # as the open-loop methods: simulation fit cross-validated inside the record (the
+            # plant model simulated on the recorded input, valid in closed loop too); the
+            # singular-value gap stopped at 1-2 states on real records (a steam generator:
+            # order 1, validation fit 19 % against 75 %)
+            selection = est.order_selection(method=method, feedthrough=bool(feedthrough))
+            n = int(selection["order"])
+        else:  # the held-out fits would ignore the regularisation: the singular-value gap
+            n = sub.auto_order()
     else:
         n = as_int(order, "order", 1)
     res = sub.fit(n)
@@ -114,6 +126,8 @@ def closed_loop_fit(
         "R": res["R"],
         "S": res["S"],
     }
+    if selection is not None:
+        info["order_selection"] = selection
     model = StateSpaceModel(
         res["A"], res["B"], res["C"], res["D"], res["K"] if kalman else None,
         dt=est.data.dt,
