@@ -120,8 +120,36 @@ def test_pnlss_stops_at_statistical_convergence_on_a_real_record():
     residual variance, further iterations move the estimate by a fraction of its standard
     deviation, and pnlss stops there ("statistical convergence"; the shipped robot arm:
     65 iterations, where it ran on to 81 and its cost tolerance)."""
+    import warnings
+
     d = np.loadtxt(sysid.datasets.path("robot_arm"))
     u, y = d[:800, :1] - d[:800, :1].mean(0), d[:800, 1:2] - d[:800, 1:2].mean(0)
-    m = sysid.pnlss(sysid.IOData(u=u, y=y), 2, degree=2, max_iter=200)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.StabilityWarning)  # its linear part: 1.002
+        m = sysid.pnlss(sysid.IOData(u=u, y=y), 2, degree=2, max_iter=200)
     assert m.info["fit"]["stop"] == "statistical convergence", m.info["fit"]["stop"]
     assert m.info["fit"]["iterations"] < 200
+
+
+def test_pnlss_warns_when_its_linear_part_is_unstable():
+    """A PNLSS fit whose linear part ends unstable simulates its training record but can run
+    away on other inputs (an evaporator record: pole modulus 1.08, divergence after 1046
+    validation samples): it warns, as every estimator returning an unstable model does."""
+    import warnings
+
+    from sysid.nlss.pnlss import _warn_unstable
+
+    d = np.loadtxt(sysid.datasets.path("robot_arm"))
+    u, y = d[:800, :1] - d[:800, :1].mean(0), d[:800, 1:2] - d[:800, 1:2].mean(0)
+    with pytest.warns(sysid.StabilityWarning, match=r"linear part is unstable \(largest pole "
+                      r"modulus 1\.00"):  # this flexible arm at order 2
+        m = sysid.pnlss(sysid.IOData(u=u, y=y), 2, degree=2, max_iter=200)
+    assert m.info["unstable_linear_part"] >= 1.0
+    lin = m.linear()
+    m.info.pop("unstable_linear_part")
+    m.linear = lambda: sysid.StateSpaceModel(lin.A * 0.9 / np.max(np.abs(lin.poles())),
+                                             lin.B, lin.C, lin.D)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sysid.StabilityWarning)
+        assert _warn_unstable(m) is m  # a stable linear part: silent
+    assert "unstable_linear_part" not in m.info

@@ -346,7 +346,7 @@ def pnlss(
             info.update(method="pnlss (decoupled)", branches=int(branches),
                         fit=_report(res, recs))
             _warn_short(res)
-            return DecoupledPNLSSModel(**kw, **common, info=info)
+            return _warn_unstable(DecoupledPNLSSModel(**kw, **common, info=info))
         fit = _fit_coupled(lin, us, recs, terms, output_terms, degs, extrapolation, max_iter,
                            tol, cb if cb is not None else _tick, weights)
     finally:
@@ -355,7 +355,7 @@ def pnlss(
     info.update(method="pnlss", terms=terms, output_terms=kw.pop("output_terms"),
                 fit=_report(res, recs))
     _warn_short(res)
-    return PNLSSModel(**kw, **common, info=info)
+    return _warn_unstable(PNLSSModel(**kw, **common, info=info))
 
 
 def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], terms: str,
@@ -479,6 +479,27 @@ def _report(res: dict[str, Any], recs: list[Any]) -> dict[str, Any]:
             "cost": list(res["history"]), "stop": res["stop"],
             "n_parameters": int(np.asarray(res["theta"]).size),
             "transient": [r[2] for r in recs]}
+
+
+def _warn_unstable(model: Any) -> Any:
+    """Warn (:class:`StabilityWarning`) when the fitted model's linear part is unstable: its
+    simulation stays bounded on the training record but can run away on other inputs (an
+    evaporator record: a pole of modulus 1.08, divergence after 1046 validation samples)."""
+    import warnings
+
+    from .._checks import user_stacklevel
+    from ..errors import StabilityWarning
+
+    poles = model.linear().poles()
+    rho = float(np.max(np.abs(poles))) if len(poles) else 0.0
+    if rho >= 1.0:
+        model.info["unstable_linear_part"] = rho
+        warnings.warn(f"pnlss returned a model whose linear part is unstable (largest pole "
+                      f"modulus {rho:.4g}): it simulates the training record, but other "
+                      f"inputs can make its state run away; try a lower order or degree, "
+                      f"terms='states', or check it on validation data (sysid.compare)",
+                      StabilityWarning, stacklevel=user_stacklevel())
+    return model
 
 
 def _warn_short(res: dict[str, Any]) -> None:
