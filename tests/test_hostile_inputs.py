@@ -379,6 +379,10 @@ def test_spa_on_a_short_drifting_record_reports_no_false_coherence():
         frd = sysid.spa(sysid.IOData(u=u, y=y))
     assert np.all(np.isfinite(frd.response))
     assert np.all((frd.coherence >= 0) & (frd.coherence <= 1))
+    # where the windowed estimate leaves no noise, the band is the smallest the estimate
+    # resolves, never zero (106 zero standard deviations here claimed an exact response,
+    # and tfest refused the FRD as data)
+    assert np.all(np.asarray(frd.std) > 0)
 
 
 def test_find_spikes_of_a_record_says_what_to_pass():

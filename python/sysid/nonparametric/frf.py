@@ -174,7 +174,7 @@ def welch_frf(
         )
     # segment means are removed: the zero-frequency bin carries no information
     S, f = S[1:], f[1:]
-    G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m)
+    G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, averages=k_eff)
     _need_excitation(keep, "welch_frf")
     std, dof = _band(ratio, k_eff, m, "lower nperseg")
     return FRD(
@@ -261,10 +261,10 @@ def spa(
     S -= R[0][None]  # tau = 0 counted twice
     S *= 2.0 * data.dt  # one-sided density, as the Welch estimate
     m = data.n_inputs
-    G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m)
+    k_eff = total / (lagw[0] ** 2 + 2.0 * (lagw[1:] ** 2).sum())
+    G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, averages=k_eff)
     _need_excitation(keep, "spa")
-    std, dof = _band(ratio, total / (lagw[0] ** 2 + 2.0 * (lagw[1:] ** 2).sum()), m,
-                     "lower lags")
+    std, dof = _band(ratio, k_eff, m, "lower lags")
     return FRD(
         w[keep], G, coherence=coh, std=std, dof=dof, confidence=confidence,
         dt=data.dt, input_names=data.input_names, output_names=data.output_names,
@@ -368,11 +368,12 @@ def etfe(
     S[:, :m, :m], S[:, m:, :m] = smooth(Puu), smooth(Pyu)
     S[:, :m, m:] = np.conj(np.swapaxes(S[:, m:, :m], 1, 2))
     S[:, m:, m:] = smooth(Pyy)
-    G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, min_power)
+    k_eff = data.n_experiments / float((W**2).sum())
+    G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, min_power, averages=k_eff)
     _need_excitation(keep, "etfe")
     w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
     info.update({"window": window, "multiple_coherence": mcoh, "dropped": w[~keep]})
-    std, dof = _band(ratio, data.n_experiments / float((W**2).sum()), m, "increase smoothing")
+    std, dof = _band(ratio, k_eff, m, "increase smoothing")
     return FRD(w[keep], G, coherence=coh, std=std, dof=dof, confidence=confidence,
                dt=data.dt, input_names=data.input_names, output_names=data.output_names,
                method="etfe", info=info)

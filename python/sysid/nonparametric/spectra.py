@@ -91,9 +91,15 @@ def _welch_matrix(
 
 
 def _frf_from_S(
-    S: np.ndarray, m: int, min_power: float = 1e-12
+    S: np.ndarray, m: int, min_power: float = 1e-12, averages: float | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """G, pairwise coherence, multiple coherence, noise-to-input ratio factor, kept mask."""
+    """G, pairwise coherence, multiple coherence, noise-to-input ratio factor, kept mask.
+
+    ``averages``: the equivalent number of averaged spectra ``K`` behind the estimate. Where
+    the estimate leaves no noise at all (its multiple coherence at or above 1, which a
+    lag-windowed estimate reaches on short records), the noise spectrum is taken as ``1 /
+    K`` of the output's, the smallest share a ``K``-average estimate resolves: a standard
+    deviation of zero would claim an exact response (tfest refuses it as a weight)."""
     Suu = S[:, :m, :m]
     Syu = S[:, m:, :m]
     Syy = S[:, m:, m:]
@@ -119,7 +125,11 @@ def _frf_from_S(
         explained = np.einsum("fij,fji->fi", G, np.conj(np.swapaxes(Syu, 1, 2))).real
         mcoh = np.where(dy > tiny, explained / np.where(dy > tiny, dy, 1.0), 0.0)
     Svv = np.maximum(dy - explained, 0.0)
-    ratio = Svv[:, :, None] * np.einsum("fjj->fj", Suu_inv).real[:, None, :]
+    if averages:  # only where the estimate left no noise at all (else calibrated as it is)
+        Svv = np.where(Svv > 0, Svv, np.abs(dy) / averages)
+    # |.|: a lag-windowed input spectrum can be indefinite (a negative diagonal of its
+    # inverse), which made the ratio, and the standard deviation, zero
+    ratio = Svv[:, :, None] * np.abs(np.einsum("fjj->fj", Suu_inv).real)[:, None, :]
     return G, np.clip(coh, 0, 1), np.clip(mcoh, 0, 1), np.maximum(ratio, 0.0), keep, l
 
 
