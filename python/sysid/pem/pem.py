@@ -55,8 +55,9 @@ def _experiments(data: Any) -> IOData:
     if isinstance(data, tuple) and len(data) == 2:
         return IOData(u=data[0], y=data[1])
     if hasattr(data, "omega") and hasattr(data, "response"):  # an FRD (MATLAB's idfrd)
-        raise DataError("pem and ssest fit time records; for a frequency response use "
-                        "sysid.frd_subspace(frd, order) (a state-space model) or "
+        raise DataError("this takes a time record; for a frequency response fit "
+                        "sysid.frd_subspace(frd, order) (a state-space model; refine it with "
+                        "sysid.pem(frd, model), weighted by the FRD's std) or "
                         "sysid.tfest(frd, n_poles), or pass the record itself (with periods= "
                         "for periodic data: the fit is then on its excited lines)")
     raise DataError(f"data must be a sysid.IOData or a (u, y) pair, got {type(data).__name__}")
