@@ -128,6 +128,51 @@ def as_matrix(x: Any, name: str, shape: tuple[int | None, int | None]) -> np.nda
 MAX_SIZE = 2**40
 
 
+def as_orders(order: Any, name: str = "order") -> list[int]:
+    """One model order or a sequence of them (``range(1, 11)``, a list, an array) as a
+    sorted list of distinct positive integers.
+
+    Examples
+    --------
+    >>> from sysid._checks import as_orders
+    >>> as_orders(range(3, 0, -1)), as_orders([4, 2, 4]), as_orders(5)
+    ([1, 2, 3], [2, 4], [5])
+    """
+    items = [order] if np.ndim(order) == 0 else np.ravel(np.asarray(list(order)))
+    orders = sorted({as_int(o, name, 1) for o in items})
+    if not orders:
+        raise DataError(f"{name}: the sequence of orders is empty; give at least one order")
+    return orders
+
+
+def warn_iteration_limit(what: str, max_iter: int, history: Any, fix: str = "raise max_iter",
+                         stacklevel: int | None = None) -> None:
+    """The :class:`~sysid.errors.IterationLimitWarning` of a search stopped at its cap: how
+    much its last iteration still lowered the cost, and what to do; at the caller's line
+    outside sysid unless ``stacklevel`` is given.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from sysid._checks import warn_iteration_limit
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     warn_iteration_limit("the search", 5, [4.0, 2.0])
+    >>> str(w[0].message)[:60]
+    'the search stopped at max_iter=5 before converging (the last'
+    """
+    import warnings
+
+    from .errors import IterationLimitWarning
+
+    h = [float(c) for c in history]
+    last = abs(h[-2] - h[-1]) / max(abs(h[-2]), 1e-300) if len(h) > 1 else 0.0
+    warnings.warn(f"{what} stopped at max_iter={max_iter} before converging (the last "
+                  f"iteration still lowered the cost by {100 * last:.2g} %); the model is the "
+                  f"best iterate: {fix}", IterationLimitWarning,
+                  stacklevel=user_stacklevel() if stacklevel is None else stacklevel)
+
+
 def as_int(x: Any, name: str, lo: int = 1, hi: int | None = None, *, alt: str = "") -> int:
     """Return an integer argument (a Python or NumPy integer, not a bool) in ``[lo, hi]``.
 

@@ -33,6 +33,7 @@ import numpy as np
 
 from .._progress import Bar
 from ..data.iodata import IOData
+from ..models.statespace import ss_parameter_count
 from ..validation.crossval import (
     output_fits,
     simulation_errors,
@@ -101,10 +102,11 @@ def bic(model: Any, data: IOData) -> float:
     sign, logdet = np.linalg.slogdet(E.T @ E / N)
     if sign <= 0 or not np.isfinite(logdet):
         return -np.inf if sign == 0 else np.inf
-    n, m, l = model.nstates, model.ninputs, model.noutputs
-    p = n * (m + l + 1) + (m * l if np.any(np.asarray(model.D) != 0) else 0)
-    if getattr(model, "K", None) is not None and np.any(np.asarray(model.K) != 0):
-        p += n * l  # a noise model estimated from the same data
+    K = getattr(model, "K", None)
+    p = ss_parameter_count(model.nstates, model.ninputs, model.noutputs,
+                           feedthrough=bool(np.any(np.asarray(model.D) != 0)),
+                           noise_model=K is not None and bool(np.any(np.asarray(K) != 0)),
+                           x0=True)
     return float(N * logdet + p * np.log(N))
 
 
@@ -317,11 +319,11 @@ class Board:
         ``A, B, C`` and the initial state, ``D`` with a feedthrough, ``K`` with the
         prediction focus."""
         first = self.folds[0][0] if self.folds and self.folds[0] is not None else None
-        m = first.n_inputs if first is not None else 1
-        l = first.n_outputs if first is not None else 1
-        n = int(r.get("order") or 0)
-        return (n * (m + l + 1) + (m * l if r.get("feedthrough") else 0)
-                + (n * l if r.get("focus") == "prediction" else 0))
+        return ss_parameter_count(int(r.get("order") or 0),
+                                  first.n_inputs if first is not None else 1,
+                                  first.n_outputs if first is not None else 1,
+                                  feedthrough=bool(r.get("feedthrough")),
+                                  noise_model=r.get("focus") == "prediction", x0=True)
 
     def paired_se(self, r: dict[str, Any], best: dict[str, Any]) -> float:
         """The standard error of the mean block-by-block difference of the fits of ``r`` and

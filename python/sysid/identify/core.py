@@ -55,6 +55,7 @@ from ..data.iodata import IOData
 from ..data.preprocessing import spike_report
 from ..data.segments import long_enough
 from ..errors import DataError, ExcitationError, InsufficientDataError
+from ..models.statespace import ss_parameter_count
 from ..subspace.estimator import available_horizon
 from ..validation.crossval import MAX_ORDER, TOL, fold_horizon, record_folds, simulation_fit
 from .board import Board, bic
@@ -311,10 +312,9 @@ def iteration_work(data: IOData, order: int, feedthrough: bool, noise: bool) -> 
     >>> iteration_work(d, 2, False, False)  # 100 samples, 1 output, 2 (1 + 1 + 1) = 6 parameters
     3600.0
     """
-    m, l = data.n_inputs, data.n_outputs
-    p = (order * (m + l + data.n_experiments) + (m * l if feedthrough else 0)
-         + (order * l if noise else 0))
-    return float(sum(data.lengths) * l * p * p)
+    p = ss_parameter_count(order, data.n_inputs, data.n_outputs, feedthrough=feedthrough,
+                           noise_model=noise, x0=True, n_experiments=data.n_experiments)
+    return float(sum(data.lengths) * data.n_outputs * p * p)
 
 
 def _starts(board: Board, count: int) -> list[dict[str, Any]]:

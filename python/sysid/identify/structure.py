@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import as_orders
 from ..data.iodata import IOData
 from ..errors import DataError
 
@@ -69,9 +70,7 @@ def refined_order(data: IOData, order: Any, feedthrough: bool, kw: dict[str, Any
 
     from .board import bic
 
-    orders = sorted({int(o) for o in np.ravel(order)})
-    if not orders or orders[0] < 1:
-        raise DataError(f"orders must be positive integers, got {order!r}")
+    orders = as_orders(order)
     table: dict[int, float] = {}
     best: tuple[float, int, Any] | None = None
     for n in orders:

@@ -507,16 +507,10 @@ def _warn_short(res: dict[str, Any]) -> None:
     iterative estimator's, with how much the last iteration still gained) or cancelled."""
     import warnings
 
-    from .._checks import user_stacklevel
-    from ..errors import IterationLimitWarning
+    from .._checks import user_stacklevel, warn_iteration_limit
 
     if res["stop"] == "maximum iterations":
-        hist = list(res["history"])
-        last = abs(hist[-2] - hist[-1]) / max(abs(hist[-2]), 1e-300) if len(hist) > 1 else 0.0
-        warnings.warn(f"pnlss stopped at max_iter after {res['iterations']} iterations before "
-                      f"converging (the last iteration still lowered the cost by "
-                      f"{100 * last:.2g} %); the model is the best iterate: raise max_iter",
-                      IterationLimitWarning, stacklevel=user_stacklevel())
+        warn_iteration_limit("pnlss", int(res["iterations"]), res["history"])
     elif res["stop"] == "cancelled":
         warnings.warn(f"pnlss was cancelled after {res['iterations']} iterations; the model is "
                       "the best iterate", UserWarning, stacklevel=user_stacklevel())

@@ -17,11 +17,11 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import warn_iteration_limit
 from .._progress import iteration_callback, iteration_printer
 from ..errors import (
     DataError,
     InsufficientDataError,
-    IterationLimitWarning,
     NumericalError,
     StabilityWarning,
 )
@@ -263,11 +263,7 @@ def _report(rep: dict[str, Any]) -> dict[str, Any]:
 
 def _warn(rep: dict[str, Any], what: str, max_iter: int) -> None:
     if rep["stop"] == "maximum iterations" and max_iter > 0:
-        h = list(rep["history"])
-        last = (h[-2] - h[-1]) / h[-2] if len(h) > 1 and h[-2] > 0 else 0.0
-        warnings.warn(f"{what} stopped at max_iter={max_iter} before converging (the last "
-                      f"iteration still lowered the cost by {100 * last:.2g} %); the model is "
-                      "the best iterate: raise max_iter", IterationLimitWarning, stacklevel=4)
+        warn_iteration_limit(what, max_iter, rep["history"], stacklevel=5)
 
 
 def _refine(model: NetworkNARXModel, recs: list[tuple[np.ndarray, np.ndarray]], max_iter: int,

@@ -20,11 +20,11 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int
+from .._checks import as_int, warn_iteration_limit
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
-from ..errors import DataError, IterationLimitWarning, StabilityWarning
+from ..errors import DataError, StabilityWarning
 from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
@@ -277,13 +277,9 @@ def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None) 
             f"enforce_stability=True (or focus='simulation') for a stable model",
             StabilityWarning, stacklevel=3)
     if res["stop"] == "maximum iterations" and max_iter > 0:
-        hist = list(res["history"])
-        last = abs(hist[-2] - hist[-1]) / max(abs(hist[-2]), 1e-300) if len(hist) > 1 else 0.0
-        warnings.warn(
-            f"the {focus} search stopped at max_iter={max_iter} before converging (the last "
-            f"iteration still lowered the criterion by {100 * last:.2g} %); the model is the "
-            f"best iterate: raise max_iter, or refine again with sysid.pem(data, model)",
-            IterationLimitWarning, stacklevel=3)
+        warn_iteration_limit(f"the {focus} search", max_iter, res["history"],
+                             "raise max_iter, or refine again with sysid.pem(data, model)",
+                             stacklevel=4)
 
 
 def pem_loss(

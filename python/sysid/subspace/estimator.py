@@ -40,7 +40,7 @@ from typing import Any, Literal, Union
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, require_inputs_vary
+from .._checks import as_int, as_orders, require_inputs_vary
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
@@ -615,9 +615,7 @@ def _orders(order: Any, top: int | None = None) -> list[int] | None:
     order or ``"auto"``), checked against the largest order ``top`` the horizon allows."""
     if order is None or isinstance(order, str) or np.ndim(order) == 0:
         return None
-    orders = sorted({as_int(o, "order", 1) for o in np.ravel(np.asarray(list(order)))})
-    if not orders:
-        raise DataError("order: the sequence of orders is empty; give at least one order")
+    orders = as_orders(order)
     if top is not None and orders[0] > top:
         raise OrderError(f"every order in {orders} is too large: the horizon allows at most "
                          f"{top} states; choose orders <= {top} or a longer horizon")

@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int
+from .._checks import as_orders
 from ..errors import DataError
 from .methods import CLOSED_LOOP, _method
 
@@ -126,7 +126,7 @@ def choose_feedthrough(est: Any, order: Any = "auto", *, method: str | None = No
                             f"got {order!r}")
         orders = None
     else:
-        orders = [as_int(o, "order", 1) for o in np.ravel(order)]
+        orders = as_orders(order)
     best: dict[bool, float] = {}
     try:
         for ft in (False, True):
