@@ -376,14 +376,15 @@ class SubspaceEstimator:
                         orders: Sequence[int] | None = None) -> dict[str, Any]:
         """The order ``fit(order="auto")`` takes, with the table and the reason.
 
-        With inputs and the data at hand: the order whose models, fitted on part of the
-        record, best simulate the part held out (five contiguous blocks, or the experiments;
-        :func:`sysid.validation.crossval.cross_validated_order`), the smallest within 0.5 fit
+        With the data at hand: the order whose models, fitted on part of the record, best
+        simulate the part held out (five contiguous blocks, or the experiments;
+        :func:`sysid.validation.crossval.cross_validated_order`; for a time series, best
+        predict it one step ahead with their Kalman predictor), the smallest within 0.5 fit
         points of the best, among the orders whose model on the whole record is stable unless
         an unstable one beats the best stable order on every block
-        (:func:`sysid.validation.crossval.stable_first`). Otherwise (time series, an
-        estimator built from a factor, a record too short to split): the largest gap of the
-        log singular values (:attr:`auto_order`). The result is recorded in
+        (:func:`sysid.validation.crossval.stable_first`). Otherwise (an estimator built from
+        a factor, a record too short to split): the largest gap of the log singular values
+        (:attr:`auto_order`). The result is recorded in
         ``model.info["order_selection"]``. ``orders``: only these are tried (default: every
         order up to :attr:`max_order`, at most 20).
         """

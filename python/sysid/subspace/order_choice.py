@@ -1,8 +1,9 @@
 """The automatic order of a subspace fit (``order="auto"``), chosen by simulation fit
-cross-validated inside the record (:mod:`sysid.validation.crossval`), among the orders whose
-model on the whole record is stable unless the data insist on an unstable one
+cross-validated inside the record (:mod:`sysid.validation.crossval`; for a time series, which
+has no simulation, one-step prediction fit), among the orders whose model on the whole record
+is stable unless the data insist on an unstable one
 (:func:`sysid.validation.crossval.stable_first`); the singular-value gap where the record
-cannot be split. (``feedthrough="auto"``, which ``order="auto"`` uses unless ``feedthrough``
+cannot be split or the estimator holds no data (built from a factor). (``feedthrough="auto"``, which ``order="auto"`` uses unless ``feedthrough``
 is given: :mod:`sysid.subspace.feedthrough`.)"""
 
 from __future__ import annotations
@@ -28,11 +29,12 @@ def order_selection(est: Any, key: str, feedthrough: bool,
         return dict(est._svd[cache_key])
     sub = est._subspace(key)
     out: dict[str, Any]
-    if est.factor.n_inputs and not est._from_factor:
+    if not est._from_factor:
+        focus = "simulation" if est.factor.n_inputs else "prediction"
         try:
             out = cross_validated_order(est.data, type(est), method=key, past=est.past,
                                         future=est.future, feedthrough=feedthrough,
-                                        orders=orders, whole=est).as_dict()
+                                        orders=orders, whole=est, focus=focus).as_dict()
             out["order"] = min(out["order"], sub.max_order)
         except Exception as e:  # noqa: BLE001 - too short to split: the SVD rule
             out = _svd_rule(sub, f" (the record could not be cross-validated: {e})")

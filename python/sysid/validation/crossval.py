@@ -48,7 +48,8 @@ import numpy as np
 from ..data.iodata import IOData
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
-           "output_fits", "record_folds", "simulation_errors", "simulation_fit", "slack",
+           "output_fits", "prediction_fit", "predictor", "record_folds", "simulation_errors",
+           "simulation_fit", "slack",
            "stable_first", "variation", "wins_every_block"]
 
 #: fit points a smaller order may give up and still win (held-out fits of half-record
@@ -313,6 +314,48 @@ def simulation_fit(model: Any, data: IOData, trend: bool = False) -> float:
     return out if np.isfinite(out) else -np.inf
 
 
+def predictor(model: Any) -> Any:
+    """The one-step-ahead predictor of ``model`` (with its Kalman gain ``K``) as a
+    state-space model whose inputs are ``[u, y]``: ``x+ = (A - K C) x + (B - K D) u + K y``,
+    ``yhat = C x + D u``. Simulating it on ``[u, y]`` gives the one-step predictions."""
+    from ..models.statespace import StateSpaceModel
+
+    A, B, C, D = (np.asarray(getattr(model, k), float) for k in ("A", "B", "C", "D"))
+    K = np.asarray(model.K, float)
+    l = C.shape[0]
+    return StateSpaceModel(A - K @ C, np.hstack([B - K @ D, K]), C,
+                           np.hstack([D, np.zeros((l, l))]), dt=model.dt)
+
+
+def prediction_fit(model: Any, data: IOData) -> float:
+    """Held-out one-step-ahead prediction fit (NRMSE %, mean over outputs and experiments)
+    of a model with a noise model (``K``): :func:`simulation_fit` of its :func:`predictor`
+    driven by the measured inputs and outputs (initial state and offsets fitted by least
+    squares as there); ``-inf`` for a model without ``K`` or whose predictor diverges. The
+    held-out score of a time-series model, whose simulation is zero.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.crossval import prediction_fit
+    >>> m = sysid.StateSpaceModel([[0.9]], np.zeros((1, 0)), [[1.0]], np.zeros((1, 0)),
+    ...                           [[0.5]], dt=1.0)
+    >>> e = np.random.default_rng(0).standard_normal((500, 1))
+    >>> y = sysid.StateSpaceModel([[0.9]], [[0.5]], [[1.0]], [[1.0]]).simulate(e)
+    >>> bool(prediction_fit(m, sysid.IOData(y=y)) > 0)
+    True
+    """
+    if getattr(model, "K", None) is None:
+        return -np.inf
+    try:
+        p = predictor(model)
+    except Exception:  # noqa: BLE001 - a model whose predictor cannot be formed
+        return -np.inf
+    kw = {"dt": data.dt}
+    exps = [(np.hstack([u, y]), y) for u, y in data.experiments]
+    return simulation_fit(p, _io(exps, kw))
+
+
 def variation(data: IOData) -> np.ndarray:
     """Per output, ``|y - mean(y)|^2`` summed over the experiments of ``data`` (each about
     its own mean): the denominator of :func:`output_fits`, and the weight of a held-out
@@ -363,18 +406,19 @@ def wins_every_block(fits: Any, ref: Any, score: float, ref_score: float) -> boo
             and score > ref_score + slack(score))
 
 
-def choose(table: dict[int, float], tol: float = TOL) -> tuple[int, str]:
+def choose(table: dict[int, float], tol: float = TOL, what: str = "simulation"
+           ) -> tuple[int, str]:
     """The smallest order within ``min(tol, 5 % of the best's error)`` fit points of the best
     held-out fit (a smaller model generalises better; on noise-free data only round-off
     separates the orders from the true one up, and the true one is taken)."""
     finite = {n: f for n, f in table.items() if np.isfinite(f)}
     if not finite:
-        raise ValueError("no order gave a model that simulates the held-out data")
+        raise ValueError(f"no order gave a model whose {what} scores on the held-out data")
     best_n = max(finite, key=lambda n: finite[n])
     best = finite[best_n]
     margin = slack(best, tol)
     n = min(o for o, f in finite.items() if f >= best - margin)
-    why = (f"held-out simulation fit {finite[n]:.1f} % at order {n}"
+    why = (f"held-out {what} fit {finite[n]:.1f} % at order {n}"
            + (f" (best {best:.1f} % at order {best_n}; a smaller order within {margin:.2g} "
               "points is preferred)" if n != best_n else " (the best)"))
     return n, why
@@ -391,8 +435,10 @@ def cross_validated_order(
     orders: list[int] | None = None,
     tol: float = TOL,
     whole: Any = None,
+    focus: str = "simulation",
 ) -> OrderChoice:
-    """Choose a subspace model's order by simulation fit on blocks of the record held out.
+    """Choose a subspace model's order by simulation fit on blocks of the record held out
+    (one-step-ahead prediction fit with ``focus="prediction"``, the choice for a time series).
 
     Parameters
     ----------
@@ -414,6 +460,9 @@ def cross_validated_order(
         The estimator on the whole record, whose model of the chosen order is the one
         returned: an order whose model there is unstable is chosen only when the data insist
         (:func:`stable_first`).
+    focus : {"simulation", "prediction"}
+        Score the held-out blocks by simulation (:func:`simulation_fit`) or by one-step
+        prediction with the fitted noise model (:func:`prediction_fit`).
 
     Returns
     -------
@@ -431,6 +480,9 @@ def cross_validated_order(
     >>> cross_validated_order(sysid.IOData(u=u, y=y), sysid.SubspaceEstimator).order
     3
     """
+    if focus not in ("simulation", "prediction"):
+        raise ValueError(f"focus must be 'simulation' or 'prediction', got {focus!r}")
+    predict = focus == "prediction"
     table: dict[int, list[float]] = {}
     h = 0
     if past is None and future is None:  # the whole record's default horizon
@@ -457,8 +509,9 @@ def cross_validated_order(
             try:
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
-                    m = est.fit(n, feedthrough=feedthrough, kalman=False)
-                table.setdefault(n, []).append(simulation_fit(m, held))
+                    m = est.fit(n, feedthrough=feedthrough, kalman=predict)
+                table.setdefault(n, []).append(prediction_fit(m, held) if predict
+                                               else simulation_fit(m, held))
             except Exception:  # noqa: BLE001 - an order the block cannot support
                 table.setdefault(n, []).append(-np.inf)
     k = max(map(len, table.values()))
@@ -466,8 +519,9 @@ def cross_validated_order(
     unstable = (_unstable_orders(whole, med, method, feedthrough) if whole is not None
                 else set())
     allowed, note = stable_first(med, table, unstable)
-    n, why = choose({o: f for o, f in med.items() if o in allowed}, tol)
-    return OrderChoice(n, med, why + note)
+    what = "one-step prediction" if predict else "simulation"
+    n, why = choose({o: f for o, f in med.items() if o in allowed}, tol, what)
+    return OrderChoice(n, med, why + note, f"cross-validated {what} fit")
 
 
 def _unstable_orders(whole: Any, table: dict[int, float], method: str, feedthrough: bool
