@@ -16,6 +16,7 @@ use crate::errors::IntoPy;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::cell::RefCell;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 use sysid_core::interrupt::{self, Flag};
 use sysid_core::optim::{self, Flow, Iteration};
@@ -56,19 +57,25 @@ fn run_watched<T: Send>(work: impl FnOnce() -> T + Send) -> T {
     let owner = std::thread::current();
     let job = Mutex::new(Some(work));
     let take = || job.lock().ok().and_then(|mut j| j.take());
+    // set by the helper when its work is done, before it wakes this thread: waiting on
+    // `is_finished` instead raced with the helper's exit (woken before the helper had ended,
+    // this thread parked again for a whole poll interval, 10 ms on every short call)
+    let done = AtomicBool::new(false);
     let spawned = std::thread::scope(|s| {
         let handle = std::thread::Builder::new()
             .name("sysid-compute".into())
             .stack_size(STACK)
             .spawn_scoped(s, || {
                 let out = take().map(|w| flag.enter(w));
+                done.store(true, Ordering::Release);
                 owner.unpark();
                 out
             })
             .ok()?;
-        while !handle.is_finished() {
+        // (`is_finished` too: a helper that panicked never sets `done`)
+        while !done.load(Ordering::Acquire) && !handle.is_finished() {
             std::thread::park_timeout(interrupt::POLL_INTERVAL);
-            if !flag.is_set() && !handle.is_finished() && poll_signals() {
+            if !flag.is_set() && !done.load(Ordering::Acquire) && poll_signals() {
                 flag.set();
             }
         }
