@@ -295,3 +295,24 @@ def test_identify_says_when_it_does_not_take_the_automatic_path(tmp_path, capsys
     assert main(["identify", str(data), "--outputs", "temperature", "--split", "500",
                  "--report", str(tmp_path / "b")]) == 0
     assert "not sysid.identify: there are no --inputs" in capsys.readouterr().err
+
+
+def test_time_series_means_are_removed_by_default(tmp_path, recwarn):
+    # A time series (no --inputs) around a level of 100: a stochastic model has no constant
+    # term, and fitted raw the level became a pole at 1 (validation fit near 0 %, every
+    # higher order unstable) with an OffsetWarning. By default its means are now removed.
+    rng = np.random.default_rng(3)
+    e = rng.standard_normal(3000)
+    y = 100.0 + sysid.StateSpaceModel([[1.6, -0.8], [1.0, 0.0]], [[1.0], [0.0]],
+                                      [[1.0, 0.3]], [[1.0]]).simulate(e)[:, 0]
+    path = tmp_path / "level.csv"
+    np.savetxt(path, y, delimiter=",", header="level", comments="")
+    rep = tmp_path / "out"
+    assert main(["identify", str(path), "--outputs", "level", "--report", str(rep),
+                 "--quiet"]) == 0
+    model = sysid.load_model(rep / "model.json")
+    pre = model.info["preprocessing"]
+    assert pre["detrend"] == "mean"
+    assert pre["removed_means"]["outputs"][0] == pytest.approx(y[:1500].mean())
+    assert np.max(np.abs(model.poles())) < 0.99
+    assert not [w for w in recwarn if w.category is sysid.OffsetWarning]

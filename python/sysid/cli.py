@@ -521,6 +521,8 @@ def _identify(args: argparse.Namespace) -> int:
     pre: dict[str, Any] = {"file": str(args.data), "inputs": [names[i] for i in ui],
                            "outputs": [names[i] for i in yi],
                            "estimation_samples": [0, k], "validation_samples": [k, N]}
+    if args.detrend == "auto":
+        args.detrend = "none" if ui else "mean"
     if args.detrend == "mean":
         mu, my = u[:k].mean(0), y[:k].mean(0)
         u, y = u - mu, y - my
@@ -602,9 +604,13 @@ def _parser() -> argparse.ArgumentParser:
                      help="estimation part: fraction (0.5) or sample count (500); 1 = all")
     ide.add_argument("--dt", type=float, default=None, help="sample time in seconds")
     ide.add_argument("--time", default=None, help="time column (sample time from its steps)")
-    ide.add_argument("--detrend", choices=("none", "mean", "linear"), default="none",
+    ide.add_argument("--detrend", choices=("auto", "none", "mean", "linear"), default="auto",
                      help="remove the estimation part's means (or lines) first; recorded in "
-                          "the model")
+                          "the model. auto (default): the means of a time series (no "
+                          "--inputs: a stochastic model has no constant term), else none "
+                          "(--method auto removes offsets itself and restores them; a "
+                          "subspace --method fits the raw data, as SLICOT, and warns when an "
+                          "offset dominates)")
     ide.add_argument("--delimiter", default=None, help="field separator (default: guessed)")
     ide.add_argument("--report", required=True, help="output directory")
     ide.add_argument("--uncertainty", choices=("none", "bootstrap"), default="none",
