@@ -290,3 +290,21 @@ def test_docs_nonlinear_examples_and_their_claims(capsys):
     np.testing.assert_allclose(np.sort(ns["ham2"].poles().real), [0.5, 0.8], atol=1e-6)
     np.testing.assert_allclose(ns["ham2"].input_nls[0].params, [-0.5, 0.6], atol=1e-6)
     np.testing.assert_allclose(ns["ham2"].input_nls[1].params, [0.3], atol=1e-6)
+
+
+def test_a_model_without_input_terms_warns():
+    # A lightly damped plant sampled fast under a slow input (as a motor position at 1 kHz):
+    # the output lags explain all but about 1e-11 of the output one step ahead, FROLS stops
+    # before any input term, and the model's simulation is a constant. It said nothing.
+    t = np.arange(3000)
+    u = np.sin(2 * np.pi * t / 1500) + 0.5 * np.sin(2 * np.pi * t / 700)
+    y = np.zeros(3000)
+    for k in range(2, 3000):
+        y[k] = 1.99 * y[k - 1] - 0.99 * y[k - 2] + 1e-5 * u[k - 1]
+    with pytest.warns(sysid.ExcitationWarning, match="no selected term involves an input"):
+        m = sysid.nlarx(sysid.IOData(u[:, None], y[:, None], 1.0), 2, 2)
+    assert m.info["uses_input"] is False
+    assert np.ptp(m.simulate(u[:, None])) == 0.0
+    # with a smaller err_tol the input term is selected, and nothing is said
+    m = sysid.nlarx(sysid.IOData(u[:, None], y[:, None], 1.0), 2, 2, err_tol=1e-16)
+    assert any("u0" in n for n in m.term_names()) and "uses_input" not in m.info

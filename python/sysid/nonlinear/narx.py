@@ -9,13 +9,14 @@ free-run validation error.
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
 
 from .. import _sysid
 from .._checks import experiment_arrays
-from ..errors import DataError, InsufficientDataError
+from ..errors import DataError, ExcitationWarning, InsufficientDataError
 from .customreg import CustomRegressor
 from .narx_model import NARXModel, PolynomialBasis, RBFBasis
 from .narx_network import is_network, nlarx_network
@@ -287,7 +288,32 @@ def nlarx(
         model = _narmax(model, exps, orders, degree, rbf, int(noise_terms), int(max_terms),
                         int(n_iterations), float(err_tol), names, info, criterion, cust)
     model.info.update(info)
+    if nu and not _uses_input(model):
+        left = ", ".join(f"{1.0 - float(np.sum(e)):.1e}" for e in model.err)
+        model.info["uses_input"] = False
+        warnings.warn(ExcitationWarning(
+            f"nlarx: no selected term involves an input, so the model's simulation does not "
+            f"depend on the input (a constant). The output lags alone left {left} of the "
+            f"output's variation unexplained one step ahead (the selection stops below "
+            f"err_tol={err_tol:g}; criterion={criterion!r} keeps a prefix of the terms chosen)"
+            ". A fast-sampled or integrating output does "
+            "this: decimate the record (sysid.decimate), lower err_tol, or fit for simulation "
+            "(nlarx with a SigmoidNetwork and focus='simulation', nlhw, pnlss)"), stacklevel=2)
     return model
+
+
+def _uses_input(model: NARXModel) -> bool:
+    """Whether any equation has a term in a lagged input (or a radial-basis or custom term,
+    which may): without one the free-run simulation ignores the input."""
+    lo = int(sum(model.na))
+    hi = lo + int(sum(model.nb))
+    for eq in model.terms:
+        for t in eq:
+            if (len(t) == 2 and t[0] == -1) or (len(t) == 1 and t[0] < 0):
+                return True
+            if any(lo <= k < hi for k in t):
+                return True
+    return False
 
 
 def _narmax(model: NARXModel, exps: list[tuple[np.ndarray, np.ndarray]], orders: Any,
