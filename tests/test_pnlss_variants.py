@@ -144,3 +144,16 @@ def test_output_terms_use_the_output_aligned_states():
     assert e_out < 0.1 * e_in
     with pytest.raises(DataError, match="terms must be"):
         sysid.pnlss(d, 3, terms="output", progress=False)
+
+
+def test_decoupled_iteration_cap_names_the_cap_given():
+    # The decoupled fit's random starts (3 x 8 iterations) were counted into the cap the
+    # warning named: "stopped at max_iter=26" for max_iter=10, and "raise max_iter" advice
+    # that did not match the argument.
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(2000)
+    y = np.convolve(u, [0, 0.1, 0.05])[:2000] ** 3
+    with pytest.warns(sysid.IterationLimitWarning, match=r"stopped at max_iter=10 "):
+        m = sysid.pnlss(sysid.IOData(u, y, 1.0), 2, degree=3, branches=2, max_iter=10,
+                        progress=False)
+    assert m.info["fit"]["iterations"] > 10  # the starts' iterations are still reported

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["table", "svg_lines", "model_html", "result_html", "iodata_html", "frd_html",
-           "HTMLResult", "fmt", "greybox_html"]
+           "HTMLResult", "fmt", "greybox_html", "modulus"]
 
 _STYLE = ("<style>.sysid-repr table{border-collapse:collapse;margin:4px 0}"
           ".sysid-repr td,.sysid-repr th{border:1px solid #ccc;padding:2px 6px;"
@@ -52,6 +52,23 @@ def fmt(x: Any, digits: int = 4) -> str:
     if x is None:
         return ""
     return str(x)
+
+
+def modulus(rho: float) -> str:
+    """A pole modulus for a stability message: 4 significant digits, more when those would
+    show a modulus other than 1 as ``1`` (an integrator just outside the unit circle).
+
+    Examples
+    --------
+    >>> from sysid._display import modulus
+    >>> modulus(1.2207031), modulus(1.0000075), modulus(1.0)
+    ('1.221', '1.0000075', '1')
+    """
+    for k in range(4, 18):
+        text = f"{rho:.{k}g}"
+        if rho == 1.0 or float(text) != 1.0:
+            return text
+    return f"{rho:.17g}"
 
 
 def table(header: Sequence[str], rows: Sequence[Sequence[Any]], *, tid: str | None = None,

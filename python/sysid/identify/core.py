@@ -50,6 +50,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import require_inputs_vary
+from .._display import modulus
 from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..data.preprocessing import spike_report
@@ -560,7 +561,7 @@ def identify(
         u = board.drift["unstable"]
         checks["drift"] = (
             f"the record drifts: an unstable {u['family']} model of order {u['order']} "
-            f"(largest pole modulus {u['max_abs_pole']:.4g}) simulates every held-out block "
+            f"(largest pole modulus {modulus(u['max_abs_pole'])}) simulates every held-out block "
             f"better than the best stable one, but not once the record's trend is taken out "
             f"(a line per channel): it follows a drift, not the plant; the stable model is "
             f"returned "
@@ -578,7 +579,7 @@ def identify(
         why = ("it simulates every held-out block better than the best stable candidate "
                "(an integrating or unstable plant)" if insist is not None else
                "enforce_stability=False")
-        warnings.warn(f"identify returns an unstable model (largest pole modulus {rho:.4g}): "
+        warnings.warn(f"identify returns an unstable model (largest pole modulus {modulus(rho)}): "
                       f"{why}; pass enforce_stability=True for the best stable model",
                       StabilityWarning, stacklevel=2)
     for r in ranked:

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._display import modulus
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
 from ..errors import DataError
@@ -345,7 +346,7 @@ def pnlss(
                                     max_iter, tol, cb if cb is not None else _tick, seed)
             info.update(method="pnlss (decoupled)", branches=int(branches),
                         fit=_report(res, recs))
-            _warn_short(res)
+            _warn_short(res, max_iter)
             return _warn_unstable(DecoupledPNLSSModel(**kw, **common, info=info))
         fit = _fit_coupled(lin, us, recs, terms, output_terms, degs, extrapolation, max_iter,
                            tol, cb if cb is not None else _tick, weights)
@@ -354,7 +355,7 @@ def pnlss(
     kw, res = fit
     info.update(method="pnlss", terms=terms, output_terms=kw.pop("output_terms"),
                 fit=_report(res, recs))
-    _warn_short(res)
+    _warn_short(res, max_iter)
     return _warn_unstable(PNLSSModel(**kw, **common, info=info))
 
 
@@ -495,22 +496,23 @@ def _warn_unstable(model: Any) -> Any:
     if rho >= 1.0:
         model.info["unstable_linear_part"] = rho
         warnings.warn(f"pnlss returned a model whose linear part is unstable (largest pole "
-                      f"modulus {rho:.4g}): it simulates the training record, but other "
+                      f"modulus {modulus(rho)}): it simulates the training record, but other "
                       f"inputs can make its state run away; try a lower order or degree, "
                       f"terms='states', or check it on validation data (sysid.compare)",
                       StabilityWarning, stacklevel=user_stacklevel())
     return model
 
 
-def _warn_short(res: dict[str, Any]) -> None:
-    """The search stopped short: at its cap (an :class:`IterationLimitWarning`, as every
-    iterative estimator's, with how much the last iteration still gained) or cancelled."""
+def _warn_short(res: dict[str, Any], max_iter: int) -> None:
+    """The search stopped short: at its cap ``max_iter`` (an :class:`IterationLimitWarning`,
+    as every iterative estimator's, with how much the last iteration still gained; the
+    decoupled fit's ``res["iterations"]`` also counts its starts' iterations) or cancelled."""
     import warnings
 
     from .._checks import user_stacklevel, warn_iteration_limit
 
     if res["stop"] == "maximum iterations":
-        warn_iteration_limit("pnlss", int(res["iterations"]), res["history"])
+        warn_iteration_limit("pnlss", int(max_iter), res["history"])
     elif res["stop"] == "cancelled":
         warnings.warn(f"pnlss was cancelled after {res['iterations']} iterations; the model is "
                       "the best iterate", UserWarning, stacklevel=user_stacklevel())

@@ -21,6 +21,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int, warn_iteration_limit
+from .._display import modulus
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
@@ -273,7 +274,7 @@ def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None) 
                "one (likelihood-ratio test at 1 %)" if enforce is None else
                "enforce_stability=False keeps only the predictor stable")
         warnings.warn(
-            f"the refined model is unstable (largest pole modulus {rho:.4g}): {why}; pass "
+            f"the refined model is unstable (largest pole modulus {modulus(rho)}): {why}; pass "
             f"enforce_stability=True (or focus='simulation') for a stable model",
             StabilityWarning, stacklevel=3)
     if res["stop"] == "maximum iterations" and max_iter > 0:
