@@ -122,8 +122,15 @@ def nlhw(
     res, theta0, x_all = None, None, np.zeros(0)
     cb, close_bar = iteration_callback(progress, "nlhw", int(max_iter),
                                        iteration_printer("nlhw", "sum of squares"))
+    # every start of the input nonlinearity with every start of the output one, and (when
+    # either's first start is not the identity) both near the identity: the linear model
+    lin_in = None if isinstance(fin, UserFunction) else fin.linear_start(u_all)
+    pairs: list[tuple[np.ndarray, Any]] = [(a, None) for a in fin.starts(u_all)]
+    linear_pair = lin_in is not None or type(fout).linear_start is not Nonlinearity.linear_start
+    if linear_pair:
+        pairs.append((fin.initial(u_all) if lin_in is None else lin_in, "linear"))
     try:
-        for start_in in fin.starts(u_all):
+        for start_in, kind in pairs:
             if res is not None and res["stop"] == "cancelled":
                 break
             fin.params = start_in
@@ -134,7 +141,9 @@ def nlhw(
                 b0 = lin_b * float(fu @ u_all) / float(fu @ fu)
             start = HammersteinWienerModel(fin, Nonlinearity(), b0, f0, int(nk), dt)
             xs = np.concatenate([start.signals(r[0])[2] for r in records])
-            for start_out in fout.starts(xs):
+            lin_out = fout.linear_start(xs) if kind else None
+            for start_out in ([fout.initial(xs) if lin_out is None else lin_out] if kind
+                              else fout.starts(xs)):
                 th0 = np.concatenate([start_in, b0, f0, start_out])
                 try:
                     r = _sysid.hw_estimate(records, fin.spec(), fout.spec(), int(nb), int(nf),
@@ -157,7 +166,7 @@ def nlhw(
     fout.params = th[na + int(nb) + int(nf):]
     info = {"method": "nlhw", "iterations": int(res["iterations"]), "stop": res["stop"],
             "cost": list(res["history"]), "criterion": "sum of squares", "theta0": theta0,
-            "n_starts": len(fin.starts(u_all)) * len(fout.starts(x_all)),
+            "n_starts": len(fin.starts(u_all)) * len(fout.starts(x_all)) + int(linear_pair),
             "covariance": np.asarray(res["covariance"]),
             "u_range": (float(u_all.min()), float(u_all.max())),
             "x_range": (float(x_all.min()), float(x_all.max())), "n_output_params": nbeta}

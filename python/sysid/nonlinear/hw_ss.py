@@ -144,13 +144,21 @@ def nlhw_ss(
     # start k: every channel's k-th starting point (the last one when it has fewer)
     cb, close_bar = iteration_callback(progress, "nlhw_ss", int(max_iter),
                                        iteration_printer("nlhw_ss", "sum of squares"))
+    # and (when a channel's first start is not the identity) every channel near the
+    # identity: the linear start itself, so that the search ends no worse than it
+    lin_in = [None if isinstance(f, UserFunction) else f.linear_start(u_all[:, j])
+              for j, f in enumerate(fin)]
+    linear_pass = any(v is not None for v in lin_in) or any(
+        type(g).linear_start is not Nonlinearity.linear_start for g in fout)
+    passes = list(range(max(len(s_) for s_ in in_starts))) + ([-1] if linear_pass else [])
     try:
-        for k in range(max(len(s_) for s_ in in_starts)):
+        for k in passes:
             if res is not None and res["stop"] == "cancelled":
                 break
             Bk, Dk = B.copy(), None if D is None else D.copy()
             for j, f in enumerate(fin):  # B's column absorbs the starting nonlinearity's gain
-                f.params = in_starts[j][min(k, len(in_starts[j]) - 1)]
+                f.params = (in_starts[j][min(k, len(in_starts[j]) - 1)] if k >= 0
+                            else in_starts[j][0] if lin_in[j] is None else lin_in[j])
                 fu = f(u_all[:, j])
                 if not isinstance(f, UserFunction) and float(fu @ fu) > 0 and float(
                         fu @ u_all[:, j]):
@@ -160,7 +168,9 @@ def nlhw_ss(
                         Dk[:, j] *= g
             start = HammersteinWienerSSModel(fin, [Nonlinearity()] * p, A, Bk, C, Dk, dt)
             vs = np.vstack([start.simulate(r[0]) for r in records])
-            out_starts = [g.starts(vs[:, i]) for i, g in enumerate(fout)]
+            out_starts = [g.starts(vs[:, i]) if k >= 0 else
+                          [g.initial(vs[:, i]) if g.linear_start(vs[:, i]) is None
+                           else g.linear_start(vs[:, i])] for i, g in enumerate(fout)]
             for q in range(max(len(s_) for s_ in out_starts)):
                 for i, g in enumerate(fout):
                     g.params = out_starts[i][min(q, len(out_starts[i]) - 1)]
@@ -194,7 +204,7 @@ def nlhw_ss(
     for g in fout:
         g.params, k = th[k:k + np.size(g.params)], k + np.size(g.params)
     info = {"method": "nlhw_ss", "iterations": int(res["iterations"]), "stop": res["stop"],
-            "n_starts": max(len(s_) for s_ in in_starts),
+            "n_starts": len(passes),
             "cost": list(res["history"]), "criterion": "sum of squares", "theta0": th0,
             "u_ranges": [(float(c.min()), float(c.max())) for c in u_all.T],
             "v_ranges": [(float(c.min()), float(c.max())) for c in v_all.T]}
