@@ -62,7 +62,7 @@ def modulus(rho: float) -> str:
     --------
     >>> from sysid._display import modulus
     >>> modulus(1.2207031), modulus(1.0000075), modulus(1.0)
-    ('1.221', '1.0000075', '1')
+    ('1.221', '1.00001', '1')
     """
     for k in range(4, 18):
         text = f"{rho:.{k}g}"

@@ -317,7 +317,17 @@ def simulation_fit(model: Any, data: IOData, trend: bool = False) -> float:
 def predictor(model: Any) -> Any:
     """The one-step-ahead predictor of ``model`` (with its Kalman gain ``K``) as a
     state-space model whose inputs are ``[u, y]``: ``x+ = (A - K C) x + (B - K D) u + K y``,
-    ``yhat = C x + D u``. Simulating it on ``[u, y]`` gives the one-step predictions."""
+    ``yhat = C x + D u``. Simulating it on ``[u, y]`` gives the one-step predictions.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.crossval import predictor
+    >>> m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]], [[0.0]], [[0.5]], dt=1.0)
+    >>> p = predictor(m)
+    >>> p.A.tolist(), p.B.tolist()
+    ([[0.4]], [[1.0, 0.5]])
+    """
     from ..models.statespace import StateSpaceModel
 
     A, B, C, D = (np.asarray(getattr(model, k), float) for k in ("A", "B", "C", "D"))
