@@ -6,6 +6,7 @@ reference, scored on held-out validation data.
     .venv/bin/python benches/realdata.py --no-peers      # without SIPPY / nfoursid
     .venv/bin/python benches/realdata.py --split reversed --no-peers --records dryer ...
     .venv/bin/python benches/realdata.py --unshipped DIR # DaISy records not shipped (below)
+    .venv/bin/python benches/realdata.py --nonlinear-records DIR --no-peers  # (below)
 
 Records (``/work/shared/data``, see its README; the DaISy records and the F-16 ground
 vibration test). Splits: the README's where it gives one (dryer 1:500 / 501:1000, robot arm
@@ -29,6 +30,11 @@ records that the project does not ship and no choice in sysid was made on (``UNS
 heat exchanger, heating system, glass furnace, evaporator, CD player arm, industrial dryer,
 steam generator, power plant; first 2/3 / last 1/3), read from a directory holding the
 collection's ``.dat`` files, into ``results/realdata_unshipped[_<split>].md``.
+``--nonlinear-records DIR`` runs the linear tools on four nonlinear benchmark records the
+project does not ship either (Silverbox, Wiener-Hammerstein 2009, cascaded tanks, EMPS: the
+splits and files of ``benches/nonlinear_unshipped.py``, training cut to 20 000 samples, each
+validated on its benchmark test record under every ``--split``), into
+``results/realdata_nonlinear_records.md``: the best linear approximation of each.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -549,10 +555,30 @@ def main() -> None:
     ap.add_argument("--unshipped", default=None, metavar="DIR",
                     help="run the DaISy records the project does not ship (UNSHIPPED), read "
                          "from DIR (the collection's .dat files), instead of the shipped ones")
+    ap.add_argument("--nonlinear-records", default=None, metavar="DIR",
+                    help="run the nonlinear benchmark records the project does not ship "
+                         "(Silverbox, WH2009, cascaded tanks, EMPS; read from DIR as "
+                         "benches/nonlinear_unshipped.py reads them, training cut to 20 000 "
+                         "samples; their test records validate under every --split)")
     args = ap.parse_args()
     global SPLIT
     SPLIT = args.split
     stem = "realdata"
+    if args.nonlinear_records:
+        import nonlinear_unshipped as nu
+
+        stem = "realdata_nonlinear_records"
+        nu.DIR, nu.MAX_TRAIN = args.nonlinear_records, 20000
+        tests = {"tanks": "validation", "emps": "pulses", "silverbox": "multisine test",
+                 "wh2009": "test"}
+
+        def record(name):
+            train, test, _, _ = nu.LOADERS[name]()
+            return train.experiments[0], test[tests[name]]
+        for name in tests:
+            RECORDS[name] = lambda name=name: record(name)
+        if "--records" not in sys.argv:
+            args.records = list(tests)
     if args.unshipped:
         stem = "realdata_unshipped"
         for name in UNSHIPPED:
