@@ -121,3 +121,24 @@ def test_given_linear_start():
         sysid.nlhw_ss(d, 3, linear=true)
     with pytest.raises(sysid.DataError, match="unstable"):
         sysid.nlhw_ss(d, 2, linear=sysid.StateSpaceModel(2 * A, B, C, dt=1.0))
+
+
+def test_nlhw_ss_fits_about_the_operating_point(tmp_path):
+    # The MIMO form keeps per-channel means the same way (nlhw's test has the reason).
+    rng = np.random.default_rng(5)
+    u = 5.0 + np.repeat(rng.uniform(-1, 1, (150, 1)), 8, axis=0)
+    x = np.zeros(u.shape[0])
+    for t in range(1, u.shape[0]):
+        x[t] = 0.9 * x[t - 1] + 0.1 * u[t - 1, 0]
+    y = np.column_stack([np.tanh(x - 5.0) + 3.0, 2.0 * x]) + 1e-3 * rng.standard_normal(
+        (u.shape[0], 2))
+    m = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 1, input_nl=sysid.SigmoidNetwork(2),
+                      output_nl=sysid.SigmoidNetwork(2), progress=False)
+    np.testing.assert_allclose(m.u_offset, u.mean(0))
+    np.testing.assert_allclose(m.y_offset, y.mean(0))
+    fit = 100 * (1 - np.linalg.norm(y - m.simulate(u), axis=0)
+                 / np.linalg.norm(y - y.mean(0), axis=0))
+    assert np.all(fit > 90), fit
+    sysid.save_model(m, tmp_path / "hwss.json")
+    np.testing.assert_allclose(sysid.load_model(tmp_path / "hwss.json").simulate(u),
+                               m.simulate(u), rtol=0, atol=1e-12)

@@ -19,6 +19,7 @@ from .._checks import experiment_arrays, require_inputs_vary
 from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError
 from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction
+from .operating_point import centred, record_means, use_offsets
 
 __all__ = ["nlhw"]
 
@@ -44,6 +45,7 @@ def nlhw(
     max_iter: int = 100,
     tol: float = 1e-10,
     progress: bool | None | Callable[..., Any] = None,
+    offsets: bool | str = "auto",
 ) -> HammersteinWienerModel:
     """Hammerstein-Wiener model ``y = g(B/F f(u(t - nk))) + e`` (one input, one output).
 
@@ -66,6 +68,11 @@ def nlhw(
         ``(iteration, cost, step_norm, gradient_norm, damping)`` after every accepted step of
         every start's search (``False`` returned stops the search and skips the remaining
         starts).
+    offsets : "auto", True or False
+        Fit about the record's means and keep them in the model (its operating point,
+        :mod:`sysid.nonlinear.operating_point`): ``"auto"`` when a channel's mean is farther
+        from zero than its standard deviation and both nonlinearities are sigmoid networks or
+        the identity (the others have levels in the data's units).
 
     Returns
     -------
@@ -97,6 +104,10 @@ def nlhw(
             raise DataError(f"{name} must be a{' positive' if name == 'nb' else ' non-negative'}"
                             f" integer, got {v!r}")
     fin, fout = _check_nl(input_nl, "input_nl"), _check_nl(output_nl, "output_nl")
+    shift = use_offsets(offsets, [fin, fout], exps)
+    u0, y0 = record_means(exps) if shift else (np.zeros(1), np.zeros(1))
+    if shift:
+        exps = centred(exps, u0, y0)
     n_par = int(nb) + int(nf) + sum(np.size(getattr(f, "params", ())) for f in (fin, fout)
                                      if not isinstance(f, UserFunction))
     n_samples = sum(len(y) for _, y in exps)
@@ -169,8 +180,10 @@ def nlhw(
             "n_starts": len(fin.starts(u_all)) * len(fout.starts(x_all)) + int(linear_pair),
             "covariance": np.asarray(res["covariance"]),
             "u_range": (float(u_all.min()), float(u_all.max())),
-            "x_range": (float(x_all.min()), float(x_all.max())), "n_output_params": nbeta}
+            "x_range": (float(x_all.min()), float(x_all.max())), "n_output_params": nbeta,
+            "offsets": {"removed": shift, "u": float(u0[0]), "y": float(y0[0])}}
     return HammersteinWienerModel(fin, fout, b, f, int(nk), dt,
+                                  u_offset=float(u0[0]), y_offset=float(y0[0]),
                                   noise_variance=float(res["noise_variance"]), info=info,
                                   input_names=getattr(data, "input_names", None),
                                   output_names=getattr(data, "output_names", None))

@@ -357,6 +357,9 @@ class HammersteinWienerModel(ModelMixin):
         Input delay.
     dt : float
         Sample time.
+    u_offset, y_offset : float
+        The operating point: the model is ``y = y_offset + g(B/F f(u - u_offset))``
+        (:mod:`sysid.nonlinear.operating_point`; zero by default).
 
     Examples
     --------
@@ -372,8 +375,12 @@ class HammersteinWienerModel(ModelMixin):
     def __init__(self, input_nl: Nonlinearity, output_nl: Nonlinearity, b: Any, f: Any,
                  nk: int, dt: float, *, noise_variance: float = 1.0,
                  info: dict[str, Any] | None = None, input_names: Any = None,
-                 output_names: Any = None) -> None:
+                 output_names: Any = None, u_offset: float = 0.0,
+                 y_offset: float = 0.0) -> None:
         self.input_nl, self.output_nl = input_nl, output_nl
+        self.u_offset, self.y_offset = float(u_offset), float(y_offset)
+        if not (np.isfinite(self.u_offset) and np.isfinite(self.y_offset)):
+            raise DataError("u_offset and y_offset must be finite")
         self.b = np.asarray(b, float).ravel()
         self.f = np.asarray(f, float).ravel()
         self.nk, self.dt = int(nk), float(dt)
@@ -403,15 +410,18 @@ class HammersteinWienerModel(ModelMixin):
             u = u[:, 0]
         if u.ndim != 1:
             raise DataError(f"u has shape {u.shape} but should be (n_samples, 1)")
+        if self.u_offset:
+            u = u - self.u_offset
         if isinstance(self.input_nl, UserFunction):
             u = self.input_nl(u)
         return np.ascontiguousarray(u)
 
     def signals(self, u: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(y, w, x)``: output, input-nonlinearity output and linear-block output."""
+        """``(y, w, x)``: output (with ``y_offset``), input-nonlinearity output and
+        linear-block output."""
         y, w, x = _sysid.hw_simulate(self.input_nl.spec(), self.output_nl.spec(), self.b.size,
                                      self.f.size, self.nk, self.theta.tolist(), self._u(u))
-        return np.asarray(y), np.asarray(w), np.asarray(x)
+        return np.asarray(y) + self.y_offset, np.asarray(w), np.asarray(x)
 
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
         """Noise-free output ``(n, 1)`` from rest."""
@@ -444,6 +454,8 @@ class HammersteinWienerModel(ModelMixin):
                           f"  B: {np.array2string(self.b, precision=5)}",
                           f"  F: 1 {np.array2string(self.f, precision=5)}",
                           f"  output: {self.output_nl!r}",
+                          f"  operating point: u0 = {self.u_offset:.6g}, "
+                          f"y0 = {self.y_offset:.6g}",
                           f"  residual variance {self.noise_variance:.4g}, "
                           f"{self.info.get('iterations', '-')} iterations "
                           f"({self.info.get('stop', '-')})"])
@@ -487,7 +499,8 @@ class HammersteinWienerModel(ModelMixin):
         return {"input_nl": self.input_nl.to_dict(), "output_nl": self.output_nl.to_dict(),
                 "b": self.b, "f": self.f, "nk": self.nk, "dt": self.dt,
                 "noise_variance": self.noise_variance, "info": self.info,
-                "input_names": self.input_names, "output_names": self.output_names}
+                "input_names": self.input_names, "output_names": self.output_names,
+                "u_offset": self.u_offset, "y_offset": self.y_offset}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> HammersteinWienerModel:
@@ -496,4 +509,5 @@ class HammersteinWienerModel(ModelMixin):
                    nonlinearity_from_dict(dict(d["output_nl"])), d["b"], d["f"], int(d["nk"]),
                    float(d["dt"]), noise_variance=float(d.get("noise_variance", 1.0)),
                    info=d.get("info"), input_names=d.get("input_names"),
-                   output_names=d.get("output_names"))
+                   output_names=d.get("output_names"), u_offset=float(d.get("u_offset", 0.0)),
+                   y_offset=float(d.get("y_offset", 0.0)))

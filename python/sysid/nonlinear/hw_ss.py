@@ -21,6 +21,7 @@ from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError
 from .hw_model import Nonlinearity, UserFunction
 from .hw_ss_model import HammersteinWienerSSModel
+from .operating_point import centred, record_means, use_offsets
 
 __all__ = ["nlhw_ss"]
 
@@ -53,6 +54,7 @@ def nlhw_ss(
     tol: float = 1e-10,
     progress: bool | None | Callable[..., Any] = None,
     linear: Any = None,
+    offsets: bool | str = "auto",
 ) -> HammersteinWienerSSModel:
     """Hammerstein-Wiener model with per-channel static nonlinearities around a MIMO
     state-space linear block: ``w_j = f_j(u_j)``, ``x(t+1) = A x + B w``, ``v = C x + D w``,
@@ -78,6 +80,10 @@ def nlhw_ss(
     linear : StateSpaceModel, optional
         The linear block's start (stable, ``order`` states; the record's units). Default: a
         subspace fit (:func:`sysid.n4sid`) of the record.
+    offsets : "auto", True or False
+        As for :func:`sysid.nlhw`: fit about the record's means and keep them in the model
+        (``"auto"``: a channel's mean farther from zero than its standard deviation, and
+        every nonlinearity a sigmoid network or the identity).
 
     Returns
     -------
@@ -111,6 +117,10 @@ def nlhw_ss(
     fout = _per_channel(output_nl, p, "output_nl")
     if any(isinstance(g, UserFunction) for g in fout):
         raise DataError("a UserFunction can only be an input nonlinearity")
+    shift = use_offsets(offsets, fin + fout, exps)
+    u0, y0 = record_means(exps) if shift else (np.zeros(m), np.zeros(p))
+    if shift:
+        exps = centred(exps, u0, y0)
     records = []
     for u, y in exps:
         uu = u.copy()
@@ -207,8 +217,9 @@ def nlhw_ss(
             "n_starts": len(passes),
             "cost": list(res["history"]), "criterion": "sum of squares", "theta0": th0,
             "u_ranges": [(float(c.min()), float(c.max())) for c in u_all.T],
-            "v_ranges": [(float(c.min()), float(c.max())) for c in v_all.T]}
-    return HammersteinWienerSSModel(fin, fout, A, B, C, D, dt,
+            "v_ranges": [(float(c.min()), float(c.max())) for c in v_all.T],
+            "offsets": {"removed": shift, "u": u0.tolist(), "y": y0.tolist()}}
+    return HammersteinWienerSSModel(fin, fout, A, B, C, D, dt, u_offset=u0, y_offset=y0,
                                     noise_variance=float(res["noise_variance"]), info=info,
                                     input_names=getattr(data, "input_names", None),
                                     output_names=getattr(data, "output_names", None))

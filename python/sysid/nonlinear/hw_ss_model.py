@@ -33,6 +33,10 @@ class HammersteinWienerSSModel(ModelMixin):
         Direct term ``p x m``; ``None``: no feedthrough (``D = 0``, not estimated).
     dt : float
         Sample time.
+    u_offset, y_offset : array_like, optional
+        The operating point (``m`` and ``p`` values): the model maps ``u - u_offset`` and
+        adds ``y_offset`` to its outputs (:mod:`sysid.nonlinear.operating_point`; zero by
+        default).
 
     Examples
     --------
@@ -49,9 +53,17 @@ class HammersteinWienerSSModel(ModelMixin):
     def __init__(self, input_nls: Any, output_nls: Any, A: Any, B: Any, C: Any, D: Any = None,
                  dt: float = 1.0, *, noise_variance: Any = None,
                  info: dict[str, Any] | None = None, input_names: Any = None,
-                 output_names: Any = None) -> None:
+                 output_names: Any = None, u_offset: Any = None,
+                 y_offset: Any = None) -> None:
         self.input_nls = list(input_nls)
         self.output_nls = list(output_nls)
+        m_, p_ = len(self.input_nls), len(self.output_nls)
+        self.u_offset = np.zeros(m_) if u_offset is None else np.broadcast_to(
+            np.asarray(u_offset, float), (m_,)).copy()
+        self.y_offset = np.zeros(p_) if y_offset is None else np.broadcast_to(
+            np.asarray(y_offset, float), (p_,)).copy()
+        if not (np.all(np.isfinite(self.u_offset)) and np.all(np.isfinite(self.y_offset))):
+            raise DataError("u_offset and y_offset must be finite")
         self.A = np.atleast_2d(np.asarray(A, float))
         self.B = np.atleast_2d(np.asarray(B, float))
         self.C = np.atleast_2d(np.asarray(C, float))
@@ -108,7 +120,7 @@ class HammersteinWienerSSModel(ModelMixin):
             u = u[:, None]
         if u.ndim != 2 or u.shape[1] != self.ninputs:
             raise DataError(f"u has shape {u.shape} but should be (n_samples, {self.ninputs})")
-        u = u.copy()
+        u = u - self.u_offset
         for j, f in enumerate(self.input_nls):
             if isinstance(f, UserFunction):
                 u[:, j] = f(u[:, j])
@@ -120,7 +132,8 @@ class HammersteinWienerSSModel(ModelMixin):
             raise DataError("Hammerstein-Wiener models start from rest: x0 must be None")
         fi, fo = self.specs()
         return np.asarray(_sysid.hw_mimo_simulate(fi, fo, self.order, self.feedthrough,
-                                                  self.theta.tolist(), self._u(u)))
+                                                  self.theta.tolist(), self._u(u))) \
+            + self.y_offset
 
     def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
         """The output-error predictor does not use measured outputs: equals ``simulate``."""
@@ -146,6 +159,8 @@ class HammersteinWienerSSModel(ModelMixin):
         lines += [f"  input {n}: {f!r}" for n, f in zip(self.input_names, self.input_nls)]
         lines += [f"  output {n}: {g!r}" for n, g in zip(self.output_names, self.output_nls)]
         lines.append(f"  poles: {np.array2string(np.sort_complex(self.poles()), precision=5)}")
+        lines.append(f"  operating point: u0 = {np.array2string(self.u_offset, precision=6)}, "
+                     f"y0 = {np.array2string(self.y_offset, precision=6)}")
         lines.append(f"  residual variance {np.array2string(self.noise_variance, precision=4)}"
                      f", {self.info.get('iterations', '-')} iterations "
                      f"({self.info.get('stop', '-')})")
@@ -200,7 +215,8 @@ class HammersteinWienerSSModel(ModelMixin):
                 "A": self.A, "B": self.B, "C": self.C,
                 "D": self.D if self.feedthrough else None, "dt": self.dt,
                 "noise_variance": self.noise_variance, "info": self.info,
-                "input_names": self.input_names, "output_names": self.output_names}
+                "input_names": self.input_names, "output_names": self.output_names,
+                "u_offset": self.u_offset, "y_offset": self.y_offset}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> HammersteinWienerSSModel:
@@ -209,4 +225,5 @@ class HammersteinWienerSSModel(ModelMixin):
                    [nonlinearity_from_dict(dict(g)) for g in d["output_nls"]],
                    d["A"], d["B"], d["C"], d.get("D"), float(d["dt"]),
                    noise_variance=d.get("noise_variance"), info=d.get("info"),
-                   input_names=d.get("input_names"), output_names=d.get("output_names"))
+                   input_names=d.get("input_names"), output_names=d.get("output_names"),
+                   u_offset=d.get("u_offset"), y_offset=d.get("y_offset"))
