@@ -342,14 +342,24 @@ def test_output_only_white_noise_auto_refused():
 
 
 def test_output_only_ar2_auto_works():
+    # order="auto" of a time series is the order that predicts held-out blocks best one step
+    # ahead: here 4 (the order-2 subspace estimate is a little biased, poles 0.857 for 0.837,
+    # and two more states make up for it: 65.5 % against 65.3 % on 10 000 fresh samples). The
+    # model is stable, keeps the true pole pair, and predicts as well as the true AR(2).
+    from sysid.validation.crossval import prediction_fit
+
     rng = np.random.default_rng(1)
-    e = rng.standard_normal(2000)
-    y = np.zeros(2000)
-    for t in range(2, 2000):
+    e = rng.standard_normal(12000)
+    y = np.zeros(12000)
+    for t in range(2, 12000):
         y[t] = 1.5 * y[t - 1] - 0.7 * y[t - 2] + e[t]
-    m = sysid.SubspaceEstimator(sysid.IOData(y=y)).fit("auto")
-    assert m.nstates == 2 and m.is_stable()
-    assert np.allclose(np.abs(m.poles()), np.sqrt(0.7), atol=0.03)
+    m = sysid.SubspaceEstimator(sysid.IOData(y=y[:2000])).fit("auto")
+    assert m.is_stable() and 2 <= m.nstates <= 4, m.info["order_selection"]
+    assert np.min(np.abs(np.abs(m.poles()) - np.sqrt(0.7))) < 0.03
+    true = sysid.StateSpaceModel([[1.5, -0.7], [1.0, 0.0]], np.zeros((2, 0)), [[1.5, -0.7]],
+                                 np.zeros((1, 0)), [[1.0], [0.0]], dt=1.0)
+    fresh = sysid.IOData(y=y[2000:])
+    assert prediction_fit(m, fresh) > prediction_fit(true, fresh) - 0.5
 
 
 def test_constant_output_refused():
