@@ -250,6 +250,15 @@ def test_identify_returns_an_unstable_model_only_when_the_data_insist():
         res = sysid.identify(data, refine=False, progress=False)
     assert not res.model.is_stable()
     assert np.max(np.abs(res.model.poles())) == pytest.approx(1.01, abs=2e-3)
+    # its uncertainty is the prediction-error criterion's (the simulation error diverges at
+    # an unstable model; poles(std=True) raised "no parameter uncertainty" here)
+    with warnings.catch_warnings():  # the extra poles of order 6 may overlap: Monte Carlo
+        warnings.simplefilter("ignore", sysid.models.uncertainty.UncertaintyWarning)
+        poles, std = res.model.poles(std=True)
+    assert np.all(np.isfinite(std)) and np.all(np.abs(std) > 0)
+    k = int(np.argmax(np.abs(poles)))
+    assert abs(abs(poles[k]) - 1.01) < 3 * abs(std[k]) + 2e-3
+    assert "prediction-error criterion" in res.checks["uncertainty"]
     # asked for a stable model, it gets the best stable one, without a warning
     with warnings.catch_warnings():
         warnings.simplefilter("error")

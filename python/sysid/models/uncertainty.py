@@ -354,9 +354,12 @@ def require(model: Any) -> ParameterUncertainty:
     """The model's :class:`ParameterUncertainty`, or a clear error when it has none."""
     unc = getattr(model, "uncertainty", None)
     if unc is None:
+        why = (getattr(model, "info", None) or {}).get("identify_uncertainty")
         raise DataError(
-            "this model carries no parameter uncertainty: estimate it with sysid.pem/ssest, a "
-            "polynomial estimator, or SubspaceEstimator.fit(..., uncertainty='bootstrap')")
+            "this model carries no parameter uncertainty"
+            + (f" (sysid.identify: {why})" if why else
+               ": estimate it with sysid.pem/ssest, a polynomial estimator, or "
+               "SubspaceEstimator.fit(..., uncertainty='bootstrap')"))
     return unc  # type: ignore[no-any-return]
 
 
