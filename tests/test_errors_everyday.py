@@ -129,6 +129,9 @@ CASES = [
      errors.DataError, "1 input", "give future_inputs"),
     ("forecast past shape", lambda: sysid.forecast(AR, np.ones((10, 2)), 3),
      errors.ShapeError, "past has shape", "should have 1 column"),
+    ("simulate transposed", lambda: sysid.StateSpaceModel(
+        0.5 * np.eye(2), np.ones((2, 3)), np.ones((1, 2))).simulate(np.zeros((3, 50))),
+     errors.ShapeError, "should have 3 column", r"looks transposed .*pass u\.T"),
     # ssi, mac
     ("ssi arrays", lambda: sysid.ssi(np.ones((100, 2)), [2]), errors.DataError,
      "IOData", r"sysid.IOData\(None, y, dt\)"),

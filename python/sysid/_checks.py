@@ -39,7 +39,10 @@ def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = Fa
     if arr.shape[0] == 0 and not allow_empty:
         raise ShapeError(f"{name} has no samples (shape {arr.shape})")
     if ncols is not None and arr.shape[1] != ncols:
-        raise ShapeError(f"{name} has shape {arr.shape} but should have {ncols} column(s)")
+        hint = (f"; it looks transposed (arrays are (samples, channels)): pass {name}.T"
+                if arr.shape[0] == ncols else "")
+        raise ShapeError(f"{name} has shape {arr.shape} but should have {ncols} column(s)"
+                         f"{hint}")
     # a NaN or Inf makes the sum non-finite; the sum is one vectorised pass with no
     # temporary (np.isfinite(arr).all() writes a boolean array as large as the record),
     # and only a non-finite (or overflowing) sum takes the elementwise check
