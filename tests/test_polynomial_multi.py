@@ -323,3 +323,22 @@ def test_iv4_mimo_closed_loop_two_experiments():
     sd = np.concatenate([np.sqrt(np.diag(c)) for c in cl.covariance])[[0, 1, 4, 5, 2, 3, 6, 7]]
     assert err.max() < 0.03 and np.all(err < 4 * sd + 1e-3), (err, sd)
     assert np.abs(coefs(sysid.arx(d, **orders)) - true).max() > 0.1
+
+
+def test_coupled_arx_poles_are_the_roots_of_det_a():
+    # poles() took the roots of the diagonal A_ii only: on the glass furnace (DaISy, not
+    # shipped) a coupled 6 x 6 ARX(2, 2, 1) reported |pole| 10.4 for a model whose simulation
+    # stays bounded (the block companion matrix's largest is 0.988)
+    a = [[np.array([-0.5]), np.array([0.4])], [np.array([0.3]), np.array([-0.2])]]
+    m = sysid.PolynomialModel(a=a, b=[[np.array([1.0])], [np.array([1.0])]], nk=[[1], [1]],
+                              dt=1.0)
+    A1 = np.array([[-0.5, 0.4], [0.3, -0.2]])
+    np.testing.assert_allclose(np.sort_complex(m.poles()),
+                               np.sort_complex(np.linalg.eigvals(-A1).astype(complex)))
+    # and they are what the free response decays with
+    y = np.zeros((60, 2))
+    y[0] = [1.0, -1.0]
+    for t in range(1, 60):
+        y[t] = -A1 @ y[t - 1]
+    rate = np.linalg.norm(y[59]) / np.linalg.norm(y[58])
+    assert rate == pytest.approx(np.max(np.abs(m.poles())), rel=1e-6)

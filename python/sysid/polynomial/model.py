@@ -312,19 +312,46 @@ class PolynomialModel(ModelMixin):
         return out
 
     def poles(self, std: bool = False, method: str = "linear") -> Any:
-        """Roots of ``A_i F_ij`` over all channels (uncoupled ``A``); with ``std=True`` (needs
-        :attr:`uncertainty`) the pair ``(poles, sd)`` as for
-        :meth:`sysid.StateSpaceModel.poles`."""
+        """Roots of ``A_i F_ij`` over all channels; with a coupled ``A`` (MIMO ARX) the roots
+        of ``det A`` (the eigenvalues of its block companion matrix) in place of the
+        ``A_i``'s. With ``std=True`` (needs :attr:`uncertainty`) the pair ``(poles, sd)`` as
+        for :meth:`sysid.StateSpaceModel.poles`.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> a = [[np.array([-0.5]), np.array([0.4])], [np.array([0.0]), np.array([-0.2])]]
+        >>> m = sysid.PolynomialModel(a=a, b=[[np.array([1.0])], [np.array([1.0])]],
+        ...                           nk=[[1], [1]], dt=1.0)
+        >>> np.sort(m.poles().real).round(6).tolist()
+        [0.2, 0.5]
+        """
         if std:
             from ..models.pole_uncertainty import pole_std
 
             return pole_std(self, method)
-        r = []
+        r = [self._coupled_poles()] if self.coupled else []
         for i in range(self.n_outputs):
-            r.append(np.roots(_monic(self.a[i][i])))
+            if not self.coupled:
+                r.append(np.roots(_monic(self.a[i][i])))
             for j in range(self.n_inputs):
                 r.append(np.roots(_monic(self.f[i][j])))
         return np.concatenate(r) if r else np.zeros(0)
+
+    def _coupled_poles(self) -> np.ndarray:
+        """Eigenvalues of the block companion matrix of ``A(q) = I + A_1 q^-1 + ...``."""
+        ny = self.n_outputs
+        n = max(x.size for row in self.a for x in row)
+        if n == 0:
+            return np.zeros(0, complex)
+        M = np.zeros((n * ny, n * ny))
+        for i in range(ny):
+            for k in range(ny):
+                c = self.a[i][k]
+                for lag in range(c.size):
+                    M[i, lag * ny + k] = -c[lag]
+        M[ny:, :-ny] = np.eye((n - 1) * ny)
+        return np.linalg.eigvals(M).astype(complex)
 
     def _channel_tf(self, i: int, j: int) -> tuple[np.ndarray, np.ndarray]:
         """``(num, den)`` of channel ``(i, j)`` in powers of ``z`` (equal lengths)."""
