@@ -491,3 +491,21 @@ def test_bootstrap_uses_every_experiment():
     s1, s3 = np.abs(one.poles(std=True)[1]), np.abs(three.poles(std=True)[1])
     # three times the data: about 1/sqrt(3) of the spread
     assert np.all(s3 < 0.8 * s1) and np.all(s3 > 0.35 * s1), (s1, s3)
+
+
+def test_frequency_response_std_of_a_continuous_model_is_taken_at_s_equal_j_omega():
+    # the analytic Jacobian evaluated every continuous model at z = exp(j w 0) = 1: the std of
+    # G(s) = 1 / (s - a) was 1/4 of the truth at DC and constant over frequency
+    from sysid.models.uncertainty import ParameterUncertainty, freqresp_std
+
+    def build(t):
+        return sysid.ContinuousStateSpace([[t[0]]], [[1.0]], [[1.0]])
+
+    m = build([-1.0])
+    m.uncertainty = ParameterUncertainty([-1.0], [[1e-4]], build)
+    w = np.array([0.0, 1.0, 10.0])
+    H, sd = freqresp_std(m, w)
+    d = 0.01 / (1j * w + 1) ** 2  # dG/da times the std of a
+    np.testing.assert_allclose(H.ravel(), 1 / (1j * w + 1), atol=1e-12)
+    np.testing.assert_allclose(sd.ravel().real, np.abs(d.real), rtol=1e-6, atol=1e-12)
+    np.testing.assert_allclose(sd.ravel().imag, np.abs(d.imag), rtol=1e-6, atol=1e-12)

@@ -123,15 +123,19 @@ class IdentifiedModel:
         >>> sysid.load_model(path).simulate(np.full(3, 2.0)).ravel().tolist()
         [7.0, 7.0, 7.0]
         """
-        return {"statespace": self.statespace.to_dict(), "u_offset": self.u_offset,
+        from ..models.uncertainty_io import body_with_uncertainty
+
+        return {"statespace": body_with_uncertainty(self.statespace), "u_offset": self.u_offset,
                 "y_offset": self.y_offset}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> IdentifiedModel:
         """Inverse of :meth:`to_dict`."""
         from ..models.statespace import StateSpaceModel
+        from ..models.uncertainty_io import model_from_body
 
-        return cls(StateSpaceModel.from_dict(d["statespace"]), d["u_offset"], d["y_offset"])
+        return cls(model_from_body(StateSpaceModel, d["statespace"]), d["u_offset"],
+                   d["y_offset"])
 
     def __repr__(self) -> str:
         s = self.statespace

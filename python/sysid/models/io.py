@@ -94,7 +94,9 @@ def model_from_dict(d: dict[str, Any]) -> Any:
                         "and register the class with sysid.register_model before loading")
     try:
         body = {k: _decode(v) for k, v in d.items()}
-        return cls.from_dict(body)  # type: ignore[attr-defined]
+        from .uncertainty_io import model_from_body
+
+        return model_from_body(cls, body)
     except KeyError as e:
         raise DataError(f"not a sysid model file: the {family} entry has no field "
                         f"{e.args[0]!r}") from None

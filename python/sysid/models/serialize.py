@@ -160,7 +160,9 @@ def model_to_dict(model: Any) -> dict[str, Any]:
         raise DataError(f"{type(model).__name__} cannot be saved: it has no to_dict() (save a "
                         "sysid.StateSpaceModel, ContinuousStateSpace, PolynomialModel, or give "
                         "your class to_dict()/from_dict() and sysid.register_model it)")
-    body = to_dict()
+    from .uncertainty_io import body_with_uncertainty
+
+    body = body_with_uncertainty(model)  # the parameter covariance travels with the model
     if not isinstance(body, dict):
         raise DataError(f"{type(model).__name__}.to_dict() must return a dict")
     head = {"format": FORMAT, "version": VERSION, "family": family_name(model),

@@ -424,7 +424,8 @@ def freq_jacobian(model: Any, omega: Any) -> tuple[np.ndarray, np.ndarray]:
     H = nominal.freqresp(w)
     G = np.empty((w.size, l, m, r), dtype=complex)
     eye = np.eye(n)
-    for i, z in enumerate(np.exp(1j * w * nominal.dt)):
+    zs = np.exp(1j * w * nominal.dt) if nominal.dt else 1j * w  # continuous time: s = j w
+    for i, z in enumerate(zs):
         if n:
             M = z * eye - A
             X = np.linalg.solve(M, B)
