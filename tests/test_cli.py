@@ -220,6 +220,8 @@ def test_other_bad_arguments(tmp_path, capsys):
             "--report", str(tmp_path / "r")]
     assert "--split must be" in run_error(capsys, base + ["--split", "half"])
     assert "leaves no estimation data" in run_error(capsys, base + ["--split", "0"])
+    # "2.0" was read as 2 samples: neither a fraction nor a whole count
+    assert "neither a fraction" in run_error(capsys, base + ["--split", "2.0"])
     assert "either --dt or --time" in run_error(capsys, base + ["--time", "time", "--dt", "1"])
     assert "no data file" in run_error(capsys, ["identify", str(tmp_path / "none.csv"),
                                                 "--outputs", "y", "--report", "r"])
@@ -316,3 +318,18 @@ def test_time_series_means_are_removed_by_default(tmp_path, recwarn):
     assert pre["removed_means"]["outputs"][0] == pytest.approx(y[:1500].mean())
     assert np.max(np.abs(model.poles())) < 0.99
     assert not [w for w in recwarn if w.category is sysid.OffsetWarning]
+
+
+def test_a_given_order_is_reported_as_given(tmp_path, capsys):
+    # with --order 3 the summary said "order 4 (n4sid) chosen by validation" beside a
+    # 3-state model: the sweep's reason, not what was done
+    data = dryer_csv(tmp_path / "d.csv")
+    code = main(["identify", str(data), "--inputs", "heater", "--outputs", "temperature",
+                 "--order", "3", "--method", "n4sid", "--detrend", "mean",
+                 "--report", str(tmp_path / "r")])
+    assert code == 0
+    out = capsys.readouterr().out
+    line = next(ln for ln in out.splitlines() if ln.startswith("order choice:"))
+    assert line.startswith("order choice: order 3 (n4sid) given, not chosen"), line
+    assert "The sweep's own choice would be: order" in line
+    assert sysid.load_model(tmp_path / "r" / "model.json").nstates == 3

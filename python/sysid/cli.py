@@ -159,6 +159,9 @@ def _split_index(split: str, n: int) -> int:
     except ValueError:
         raise DataError(f"--split must be a fraction (0.5) or a sample count (500), "
                         f"got {split!r}") from None
+    if val > 1 and not split.strip().isdigit():
+        raise DataError(f"--split {split} is neither a fraction in (0, 1] nor a whole "
+                        f"sample count; give e.g. 0.5 or {int(val)}")
     k = int(round(val * n)) if val <= 1 else int(val)
     if not 0 < k <= n:
         raise DataError(f"--split {split} leaves no estimation data (record has {n} samples)")
@@ -250,6 +253,8 @@ def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, me
         # the best order sits at the edge of the sweep: look further
         top = min(est.max_order, 2 * top)
     n = sel.order if order == "auto" else int(order)
+    if order != "auto":
+        sel = sel.given(n)  # the summary and report say the order was given, not chosen
     say(f"fitting order {n} ({est.method})")
     # B, D from the regression on the factor: on the DaISy records it loses less validation
     # fit than B, D, x0 by least squares (benches/results/subspace_defaults.md)

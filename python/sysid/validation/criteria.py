@@ -265,6 +265,31 @@ class OrderSelection(HTMLResult):
             out.append(f"not fitted: order(s) {orders(failed)} ({failed[0]['error']})")
         return "; ".join(out)
 
+    def given(self, order: int) -> OrderSelection:
+        """This sweep with ``order`` fixed by the user (``criterion == "given"``): its
+        ``order`` and ``reason`` say so, and the reason keeps the sweep's own choice.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> rng = np.random.default_rng(0)
+        >>> u = rng.standard_normal((400, 1))
+        >>> y = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]]).simulate(u)
+        >>> y = y + 0.1 * rng.standard_normal((400, 1))
+        >>> sel = sysid.select_order(sysid.SubspaceEstimator(sysid.IOData(u, y), 10), range(1, 4))
+        >>> sel.given(3).order, sel.given(3).reason.startswith("order 3 (moesp) given")
+        (3, True)
+        """
+        import copy
+
+        out = copy.copy(self)
+        row = self._row(self.method, int(order))
+        out.criterion, out.order = "given", int(order)
+        out.reason = (f"order {order} ({self.method}) given, not chosen; "
+                      f"{'stable' if row['stable'] else 'UNSTABLE'} model. The sweep's own "
+                      f"choice would be: {self.reason}")
+        return out
+
     def model(self, order: int | None = None, method: str | None = None) -> Any:
         """The fitted model of the sweep (default: the recommended one)."""
         key = (method or self.method, self.order if order is None else order)
