@@ -391,3 +391,15 @@ def test_era_poles_ignore_scaling_and_output_order(seed: int, scale: float) -> N
     np.testing.assert_allclose(perm.model.markov(30), h[:, ::-1, :], atol=1e-8 * np.abs(h).max())
     np.testing.assert_allclose(scaled.singular_values, scale * base.singular_values,
                                rtol=1e-8, atol=1e-12 * scale * base.singular_values[0])
+
+
+def test_markov_estimators_run_the_offset_check():
+    # impulse_response and okid fitted an FIR with no constant term to raw data silently
+    rng = np.random.default_rng(2)
+    u = rng.standard_normal((400, 1))
+    y = 50.0 + sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]]).simulate(u)
+    raw = sysid.IOData(u, y)
+    with pytest.warns(sysid.OffsetWarning, match="offset"):
+        sysid.impulse_response(raw, 20)
+    with pytest.warns(sysid.OffsetWarning, match="offset"):
+        sysid.okid(raw, 5)

@@ -31,6 +31,9 @@ def _experiments(data: Any) -> tuple[list[tuple[np.ndarray, np.ndarray]], float]
     exps = data.experiments
     if exps[0][0].shape[1] == 0:
         raise DataError("Markov parameters need inputs: this IOData has none")
+    from ..data.offsets import check_offsets
+
+    check_offsets(data)  # the FIR has no constant term, as every estimator
     return [(np.asarray(u, dtype=float), np.asarray(y, dtype=float)) for u, y in exps], data.dt
 
 
@@ -50,10 +53,10 @@ def impulse_response(data: IOData, length: int, *, regularization: str | None = 
     """Markov parameters by least-squares FIR, optionally TC-regularised.
 
     Fits ``y(t) = sum_{k<length} h_k u(t-k) + e(t)`` over all experiments of ``data`` (means
-    are not removed: detrend first if needed). The record is compressed once into a triangular
-    factor; tuning the TC kernel then costs about 30 eigendecompositions of size
-    ``length * ninputs``, so for very long responses (lightly damped systems sampled fast)
-    :func:`okid` is the cheaper route.
+    are not removed: detrend first if needed; an ``OffsetWarning`` says when). The record is
+    compressed once into a triangular factor; tuning the TC kernel then costs about 30
+    eigendecompositions of size ``length * ninputs``, so for very long responses (lightly
+    damped systems sampled fast) :func:`okid` is the cheaper route.
 
     Parameters
     ----------
