@@ -83,9 +83,11 @@ def discrete_statespace(model: Any, purpose: str) -> Any:
     return ss
 
 
-def warn_unstable(model: Any, method: str, closed_loop: bool = False) -> None:
-    """:class:`~sysid.errors.StabilityWarning` when a subspace fit returns an unstable model
-    (a pole on or outside the unit circle), naming the pole and what to do.
+def warn_unstable(model: Any, method: str, closed_loop: bool = False,
+                  advice: str | None = None) -> None:
+    """:class:`~sysid.errors.StabilityWarning` when a fit returns an unstable model (a pole
+    on or outside the unit circle; in the right half-plane for a continuous model), naming
+    the pole and what to do (``advice``; by default the subspace estimators' options).
 
     Examples
     --------
@@ -101,13 +103,31 @@ def warn_unstable(model: Any, method: str, closed_loop: bool = False) -> None:
     import numpy as np
 
     from .._checks import user_stacklevel
+    from .._display import modulus as display_modulus
     from ..errors import StabilityWarning
 
-    if model.nstates == 0:
+    if getattr(model, "nstates", None) == 0:
         return
-    poles = model.poles()
+    poles = np.asarray(model.poles(), dtype=complex).ravel()
+    if poles.size == 0 or not np.all(np.isfinite(poles)):
+        return
+    if not getattr(model, "dt", 1.0):  # continuous time: the right half-plane
+        k = int(np.argmax(poles.real))
+        if poles[k].real < 0:
+            return
+        warnings.warn(StabilityWarning(
+            f"{method} returned an unstable model: pole {poles[k]:.4g} has real part "
+            f"{poles[k].real:.4g} >= 0, so its simulation diverges. " + (advice or "")),
+            stacklevel=user_stacklevel())
+        return
     k = int(np.argmax(np.abs(poles)))
     if abs(poles[k]) < 1.0:
+        return
+    if advice is not None:
+        warnings.warn(StabilityWarning(
+            f"{method} returned an unstable model: pole {poles[k]:.4g} has modulus "
+            f"{display_modulus(abs(poles[k]))} >= 1, so its simulation diverges. {advice}"),
+            stacklevel=user_stacklevel())
         return
     others = " or ".join(f"method={w!r}" for w in ("moesp", "n4sid", "cva") if w != method)
     warnings.warn(StabilityWarning(

@@ -469,4 +469,10 @@ def iv4(data: Any, na: Any, nb: Any, nk: Any = 1, *, reference: Any = None) -> P
     m.covariance = cov  # type: ignore[attr-defined]
     m.parameters = [np.asarray(f["theta"]) for f in fits]  # type: ignore[attr-defined]
     _attach_uncertainty(m, cov, "arx", "instrumental-variable")
+    from ..models.checks import warn_unstable
+
+    warn_unstable(m, "iv4", advice=(
+        "Unless the process itself is unstable, the instruments did not pin A down: try "
+        "lower orders, sysid.oe (whose simulation is stable) or "
+        "sysid.ssest(data, order, focus='simulation')."))
     return m

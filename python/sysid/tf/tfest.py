@@ -129,8 +129,8 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         if periods is not None or transient is not None:
             raise DataError("periods= and transient= describe a time record; an FRD is "
                             "already on its lines: leave them out")
-        return tfest_frd(data, n_poles, n_zeros, iodelay=iodelay, dt=dt, max_iter=max_iter,
-                         tol=tol, progress=progress)
+        return _checked(tfest_frd(data, n_poles, n_zeros, iodelay=iodelay, dt=dt,
+                                  max_iter=max_iter, tol=tol, progress=progress))
     if not hasattr(data, "experiments") or not hasattr(data, "dt"):
         raise DataError(f"tfest needs a sysid.IOData or sysid.FRD, got {type(data).__name__}; "
                         "wrap arrays as sysid.IOData(u, y, dt=...)")
@@ -154,18 +154,29 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         G, periodicity = _periodic(data, npo, nze, fixed_delays, auto, dt, periods, transient,
                                    max_iter, tol, progress)
         if G is not None:
-            return G
+            return _checked(G)
     if dt is not None:
         G = _discrete(data, npo, nze, fixed_delays, auto, dt, max_iter, progress)
         if periodicity is not None:  # periods="auto" found none: why the time domain
             G.info["periodicity"] = periodicity
-        return G
+        return _checked(G)
     cb, close = progress_callback(progress, max_iter)
     try:
-        return _continuous(data, npo, nze, fixed_delays, auto, hold, initial_state, max_delay,
-                           max_iter, tol, cb, _init(init, npo, nze))
+        return _checked(_continuous(data, npo, nze, fixed_delays, auto, hold, initial_state,
+                                    max_delay, max_iter, tol, cb, _init(init, npo, nze)))
     finally:
         close()
+
+
+def _checked(G: TransferFunction) -> TransferFunction:
+    """``G``, with a :class:`sysid.StabilityWarning` when it is unstable."""
+    from ..models.checks import warn_unstable
+
+    warn_unstable(G, "tfest", advice=(
+        "Unless the process itself is unstable, try fewer poles, a start from a stable "
+        "model (init=), or sysid.ssest(data, order, focus='simulation') (which keeps the "
+        "simulation stable)."))
+    return G
 
 
 def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
