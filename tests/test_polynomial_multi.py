@@ -180,7 +180,8 @@ def test_iv4_closed_loop_with_reference_instruments():
         u[t] = r[t] - 0.4 * y[t]
     d = sysid.IOData(u[:, None], y[:, None], 1.0)
     cl = sysid.iv4(d, 1, 1, 1, reference=r)
-    ol = sysid.iv4(d, 1, 1, 1)
+    with pytest.warns(sysid.StabilityWarning, match=r"iv4 returned an unstable model"):
+        ol = sysid.iv4(d, 1, 1, 1)  # the input is no instrument in closed loop: A is wrong
     ls = sysid.arx(d, 1, 1, 1)
     err = [abs(m.a[0][0][0] + 0.8) + abs(m.b[0][0][0] - 0.5) for m in (cl, ol, ls)]
     sd = np.sqrt(np.diag(cl.covariance[0]))
@@ -342,3 +343,34 @@ def test_coupled_arx_poles_are_the_roots_of_det_a():
         y[t] = -A1 @ y[t - 1]
     rate = np.linalg.norm(y[59]) / np.linalg.norm(y[58])
     assert rate == pytest.approx(np.max(np.abs(m.poles())), rel=1e-6)
+
+
+def test_coupled_mimo_arx_has_frequency_response_zeros_and_a_state_space_form():
+    # frequency response, zeros and to_statespace of a coupled MIMO ARX model were "not
+    # implemented"; its observer form reproduces simulation and predictions exactly
+    rng = np.random.default_rng(13)
+    true = sysid.StateSpaceModel([[0.5, 0.2], [0.1, 0.7]], np.eye(2), np.eye(2))
+    u = rng.standard_normal((3000, 2))
+    d = sysid.IOData(u, true.simulate(u))
+    m = sysid.arx(d, [[1, 1], [1, 1]], [[1, 1], [1, 1]], [[1, 1], [1, 1]])
+    assert m.coupled
+    ss = m.to_statespace()
+    np.testing.assert_allclose(np.sort_complex(ss.poles()), np.sort_complex(m.poles()),
+                               atol=1e-10)
+    y = d.y
+    np.testing.assert_allclose(ss.simulate(u), m.simulate(u), atol=1e-9)
+    for h in (1, 3):
+        np.testing.assert_allclose(ss.predict(u, y, h), m.predict(u, y, h), atol=1e-9)
+    w = np.array([0.0, 0.5, 2.0])
+    np.testing.assert_allclose(m.freqresp(w), true.freqresp(w), atol=1e-8)
+    assert m.zeros().size == 0  # y = (zI - A)^-1 u has no finite transmission zeros
+    assert sysid.to_scipy(m).A.shape == (2, 2)
+    # a pure-delay two-lag model with a feedthrough term in one channel
+    m2 = sysid.PolynomialModel(
+        a=[[np.array([-0.5, 0.1]), np.array([0.2])], [np.array([0.0]), np.array([-0.3])]],
+        b=[[np.array([1.0, 0.5])], [np.array([0.4])]], nk=[[0], [2]], dt=1.0)
+    s2 = m2.to_statespace()
+    u1 = rng.standard_normal((50, 1))
+    np.testing.assert_allclose(s2.simulate(u1), m2.simulate(u1), atol=1e-12)
+    y2 = m2.simulate(u1) + rng.standard_normal((50, 2))
+    np.testing.assert_allclose(s2.predict(u1, y2, 1), m2.predict(u1, y2, 1), atol=1e-12)

@@ -250,3 +250,36 @@ def test_tfest_frd_std_calibrated_by_monte_carlo():
         est.append(G.parameters.value[:4])
         sd.append(G.parameters.std[:4])
     assert_std_calibrated(est, sd, [0.8, 4.0, 0.5, 2.0])
+
+
+def test_compare_fits_the_initial_state_of_a_continuous_transfer_function():
+    # compare simulated a continuous TransferFunction/ProcessModel from rest (its sampled form
+    # had no to_statespace): a record starting away from rest scored far below 100 %
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal((300, 1))
+    for G in (sysid.TransferFunction([2.0], [1.0, 0.5], iodelay=0.25),
+              sysid.ProcessModel("P1D", Kp=2.0, Tp1=2.0, Td=0.25)):
+        ss = G.to_statespace(0.1)
+        y = ss.simulate(u, x0=np.full(ss.nstates, 5.0))
+        data = sysid.IOData(u, y, dt=0.1)
+        assert sysid.compare(data, G).fit[0, 0] == pytest.approx(100.0, abs=1e-6)
+        assert sysid.compare(data, G, horizon=1).fit[0, 0] == pytest.approx(100.0, abs=1e-6)
+        assert sysid.compare(data, G, x0="zero").fit[0, 0] < 90.0
+
+
+def test_transfer_function_pole_and_frequency_std_and_an_unstable_warning():
+    rng = np.random.default_rng(4)
+    u = rng.standard_normal((800, 1))
+    y = sysid.TransferFunction([1.0], [1.0, 0.8]).simulate(u, dt=0.1)
+    G = sysid.tfest(sysid.IOData(u, y + 0.02 * rng.standard_normal(y.shape), dt=0.1), 1, 0)
+    p, sd = G.poles(std=True)  # raised TypeError: poles() took no std
+    np.testing.assert_allclose(sd, G.uncertainty.propagate(lambda m: m.poles().real).std,
+                               rtol=1e-4)
+    H, hsd = G.freqresp([0.1, 1.0], std=True)
+    assert H.shape == hsd.shape == (2, 1, 1) and np.all(np.abs(hsd) > 0)
+    # an unstable continuous estimate warns, naming the pole (tfest was silent)
+    w = np.linspace(0.1, 10.0, 50)
+    frd = sysid.FRD(w, sysid.TransferFunction([1.0], [1.0, -0.3]).freqresp(w))
+    with pytest.warns(sysid.StabilityWarning, match=r"tfest returned an unstable model.*"
+                                                    r"real part 0\.3"):
+        sysid.tfest(frd, 1, 0)

@@ -228,8 +228,10 @@ def from_control(sys: Any) -> StateSpaceModel | ContinuousStateSpace:
     return _from_matrices(sys.A, sys.B, sys.C, sys.D, sys.dt, names)
 
 
-def to_scipy(model: StateSpaceModel | ContinuousStateSpace) -> Any:
-    """A ``scipy.signal.StateSpace`` (with ``dt`` for a discrete model).
+def to_scipy(model: Any) -> Any:
+    """A ``scipy.signal.StateSpace`` (with ``dt`` for a discrete model); any other model
+    goes through its ``to_statespace()`` (a delayed continuous transfer function needs
+    ``model.to_statespace(dt)`` first).
 
     Examples
     --------
@@ -239,7 +241,11 @@ def to_scipy(model: StateSpaceModel | ContinuousStateSpace) -> Any:
     """
     import scipy.signal
 
-    if isinstance(model, StateSpaceModel):
+    from ..models.checks import as_statespace
+
+    if not isinstance(model, (StateSpaceModel, ContinuousStateSpace)):
+        model = as_statespace(model, "to_scipy")
+    if model.dt:
         return scipy.signal.StateSpace(model.A, model.B, model.C, model.D, dt=model.dt)
     return scipy.signal.StateSpace(model.A, model.B, model.C, model.D)
 

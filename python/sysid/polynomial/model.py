@@ -128,6 +128,15 @@ class PolynomialModel(ModelMixin):
             if i != k
         )
 
+    @property
+    def prediction_is_simulation(self) -> bool:
+        """``True`` for an output-error structure (no ``A``, ``C``, ``D``: the noise model is
+        1), whose predictions at every horizon are its simulation; :func:`sysid.compare`
+        then fits the initial state for predictions too."""
+        return (self.n_inputs > 0 and not self.coupled
+                and all(_monic(self.a[i][i]).size == 1 and _monic(self.c[i]).size == 1
+                        and _monic(self.d[i]).size == 1 for i in range(self.n_outputs)))
+
     # -- the model protocol (sysid.Model) ------------------------------------------------
     ninputs = property(lambda self: self.n_inputs, doc="Number of inputs (protocol name).")
     noutputs = property(lambda self: self.n_outputs, doc="Number of outputs (protocol name).")
@@ -256,11 +265,21 @@ class PolynomialModel(ModelMixin):
         array([0.  , 0.  , 0.25])
         """
         _rest(x0)
-        if isinstance(horizon, bool) or int(horizon) != horizon or horizon < 1:
-            raise DataError(f"horizon must be a positive integer, got {horizon!r}")
+        if isinstance(horizon, (float, np.floating)) and horizon == np.inf:
+            horizon = np.iinfo(np.int64).max  # MATLAB's predict(..., Inf): the simulation
+        if (isinstance(horizon, (bool, np.bool_)) or not isinstance(horizon, (int, np.integer,
+                                                                              float, np.floating))
+                or not np.isfinite(horizon) or int(horizon) != horizon or horizon < 1):
+            raise DataError(f"horizon must be a positive integer (or np.inf for the "
+                            f"simulation), got {horizon!r}")
         k = int(horizon)
         y2 = np.asarray(y, dtype=float)
         y2 = y2.reshape(len(y2), -1)
+        if k >= max(y2.shape[0], 1):  # every innovation is unseen: the simulation from rest
+            out = np.asarray(self.simulate(u), dtype=float).reshape(self._check_u(u).shape[0], -1)
+            if out.shape != y2.shape:
+                raise DataError(f"y has shape {y2.shape} but should be {out.shape}")
+            return out
         if self.coupled:
             return self._coupled_predict(self._check_u(u), y2, k)
         e = self.residuals(u, y2)
@@ -299,8 +318,8 @@ class PolynomialModel(ModelMixin):
             from ..models.uncertainty import freqresp_std
 
             return freqresp_std(self, w)
-        if self.coupled:
-            raise DataError("frequency response of a coupled MIMO ARX model is not implemented")
+        if self.coupled:  # A(q)^-1 B(q): through the exact state-space form
+            return self.to_statespace().freqresp(w)
         z1 = np.exp(-1j * np.asarray(w, float) * self.dt)
         out = np.zeros((z1.size, self.n_outputs, self.n_inputs), complex)
         for i in range(self.n_outputs):
@@ -363,7 +382,10 @@ class PolynomialModel(ModelMixin):
         return np.pad(num, (0, n - num.size)), np.pad(den, (0, n - den.size))
 
     def zeros(self) -> np.ndarray:
-        """Zeros of every ``B_ij`` (in ``z``), concatenated."""
+        """Zeros of every ``B_ij`` (in ``z``), concatenated; for a coupled MIMO ARX model the
+        transmission zeros of its state-space form."""
+        if self.coupled:
+            return np.asarray(self.to_statespace().zeros())
         out = [
             np.roots(self._channel_tf(i, j)[0])
             for i in range(self.n_outputs)
@@ -395,7 +417,9 @@ class PolynomialModel(ModelMixin):
     def to_statespace(self) -> Any:
         """Deterministic part as a :class:`~sysid.StateSpaceModel` (one block per channel);
         for a time series (no inputs) the noise model ``C / (A D)`` in innovations form
-        (``K``, ``B`` and ``D`` empty), whose free response :func:`sysid.compare` fits.
+        (``K``, ``B`` and ``D`` empty), whose free response :func:`sysid.compare` fits. A
+        coupled MIMO ARX model (matrix ``A``) is realised whole in observer form, with its
+        innovations gain ``K`` (its poles are those of :meth:`poles`).
 
         Examples
         --------
@@ -409,6 +433,8 @@ class PolynomialModel(ModelMixin):
         from ..models.statespace import StateSpaceModel
 
         ny, nu = self.n_outputs, self.n_inputs
+        if self.coupled:
+            return self._coupled_statespace()
         if nu == 0:
             return self._noise_statespace()
         blocks = []
@@ -427,6 +453,48 @@ class PolynomialModel(ModelMixin):
             D[i, j] = d[0, 0]
             k += r
         return StateSpaceModel(A, B, C, D, dt=self.dt, input_names=self.input_names,
+                               output_names=self.output_names)
+
+    def _coupled_statespace(self) -> Any:
+        """A coupled MIMO ARX model ``y(t) = sum_l (-A_l y(t - l) + B_l u(t - l)) + B_0 u(t)
+        + e(t)`` in observer form: block states ``x_l`` with ``x_l(t + 1) = -A_l y(t) +
+        x_{l+1}(t) + B_l u(t)`` and ``y = x_1 + B_0 u + e``, so ``K`` stacks ``-A_l`` (the
+        predictor ``A - K C`` is a nilpotent shift, as an ARX predictor is a FIR filter)."""
+        from ..models.statespace import StateSpaceModel
+
+        ny, nu = self.n_outputs, self.n_inputs
+        if any(x.size for row in self.f for x in row) or any(
+                x.size for x in (*self.c, *self.d)):
+            raise DataError("the state-space form of a coupled MIMO model with F, C or D "
+                            "polynomials is not available; coupled models come from arx")
+        na = max(x.size for row in self.a for x in row)
+        nb = max([int(self.nk[i, j]) + self.b[i][j].size - 1
+                  for i in range(ny) for j in range(nu) if self.b[i][j].size] or [0])
+        n = max(na, nb)
+        Al = np.zeros((n + 1, ny, ny))
+        Bl = np.zeros((n + 1, ny, nu))
+        for i in range(ny):
+            for k in range(ny):
+                Al[1:self.a[i][k].size + 1, i, k] = self.a[i][k]
+            for j in range(nu):
+                k0 = int(self.nk[i, j])
+                Bl[k0:k0 + self.b[i][j].size, i, j] = self.b[i][j]
+        A = np.zeros((n * ny, n * ny))
+        B = np.zeros((n * ny, nu))
+        K = np.zeros((n * ny, ny))
+        for lag in range(1, n + 1):
+            r = slice((lag - 1) * ny, lag * ny)
+            A[r, :ny] = -Al[lag]
+            if lag < n:
+                A[r, lag * ny:(lag + 1) * ny] = np.eye(ny)
+            B[r] = Bl[lag] - Al[lag] @ Bl[0]
+            K[r] = -Al[lag]
+        C = np.zeros((ny, n * ny))
+        C[:, :ny] = np.eye(ny)
+        nv = np.asarray(self.noise_variance, dtype=float)
+        return StateSpaceModel(A, B, C, Bl[0], K, dt=self.dt,
+                               noise_cov=nv if nv.ndim == 2 else np.diag(nv.ravel()),
+                               input_names=self.input_names if nu else None,
                                output_names=self.output_names)
 
     def _noise_statespace(self) -> Any:

@@ -86,6 +86,9 @@ class TransferFunction(ModelMixin):
     array([0.    , 0.    , 0.0929, 0.2416])
     """
 
+    #: no noise model: predictions at every horizon are the simulation (see compare)
+    prediction_is_simulation = True
+
     def __init__(self, num: Any, den: Any, *, dt: float = 0.0, iodelay: Any = None,
                  hold: str = "zoh", input_names: Sequence[str] | None = None,
                  output_names: Sequence[str] | None = None,
@@ -157,8 +160,14 @@ class TransferFunction(ModelMixin):
         return [(i, j) for i in range(self.noutputs) for j in range(self.ninputs)]
 
     # -- frequency domain ---------------------------------------------------------------
-    def freqresp(self, omega: Any) -> np.ndarray:
-        """``G(j omega)`` (or ``G(e^{j omega dt})``), shape ``(len(omega), l, m)``."""
+    def freqresp(self, omega: Any, std: bool = False) -> Any:
+        """``G(j omega)`` (or ``G(e^{j omega dt})``), shape ``(len(omega), l, m)``; with
+        ``std=True`` (needs :attr:`uncertainty`) the pair ``(G, sd)``, ``sd`` complex (std of
+        the real and imaginary parts, first order)."""
+        if std:
+            from ..models.uncertainty import freqresp_std
+
+            return freqresp_std(self, omega)
         w = np.atleast_1d(np.asarray(omega, dtype=float))
         if w.ndim != 1 or not np.isfinite(w).all():
             raise DataError("omega must be a finite 1-D array of angular frequencies (rad/s)")
@@ -171,8 +180,14 @@ class TransferFunction(ModelMixin):
             out[:, i, j] = g * (x ** -tau if self.dt > 0 else np.exp(-x * tau))
         return out
 
-    def poles(self) -> np.ndarray:
-        """Roots of every denominator (``s`` or ``z``)."""
+    def poles(self, std: bool = False, method: str = "linear") -> Any:
+        """Roots of every denominator (``s`` or ``z``); with ``std=True`` (needs
+        :attr:`uncertainty`, as ``tfest`` and ``procest`` attach) the pair ``(poles, sd)``
+        as for :meth:`sysid.StateSpaceModel.poles`."""
+        if std:
+            from ..models.pole_uncertainty import pole_std
+
+            return pole_std(self, method)
         p = [np.roots(d) for row in self.den for d in row]
         return np.concatenate(p).astype(complex) if p else np.zeros(0, complex)
 
@@ -482,6 +497,13 @@ class _Sampled:
 
     def freqresp(self, omega: Any) -> np.ndarray:
         return np.asarray(self.continuous.to_statespace(self.dt).freqresp(omega))
+
+    prediction_is_simulation = True  # no noise model: predictions are the simulation
+
+    def to_statespace(self) -> Any:
+        """The exact sampled state-space model (delays as extra states): what lets
+        :func:`sysid.compare` estimate the initial state."""
+        return self.continuous.to_statespace(self.dt)
 
 
 def _register() -> None:
