@@ -311,3 +311,14 @@ def test_f16_multisine_etfe_over_periods() -> None:
     # averaged over 8 periods, the response is coherent on every kept line
     assert np.percentile(frd.coherence, 5) > 0.99
     assert frd.info["dropped"].size > 3000
+
+
+def test_spa_refuses_frequencies_above_nyquist():
+    # omega in Hz (or past pi/dt) gave aliased values without a word
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((600, 1))
+    d = sysid.IOData(u, sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]).simulate(u), dt=0.1)
+    ok = sysid.spa(d, lags=20, omega=[1.0, np.pi / 0.1])
+    assert ok.omega.size == 2
+    with pytest.raises(sysid.DataError, match="above the Nyquist frequency"):
+        sysid.spa(d, lags=20, omega=[1.0, 40.0])

@@ -134,6 +134,10 @@ def test_resample_and_decimate_keep_low_frequencies() -> None:
     np.testing.assert_allclose(q.u[inner, 0], np.sin(2 * np.pi * 3 * q.time[inner]), atol=0.02)
     with pytest.raises(DataError, match="q must be"):
         sysid.decimate(d, 1)
+    # a level survives: the Chebyshev filter's DC gain was 0.9886 (300 became 296.6)
+    flat = sysid.decimate(sysid.IOData(u=np.full(400, 3.0), y=np.full(400, 300.0), dt=0.01), 4)
+    np.testing.assert_allclose(flat.y, 300.0, rtol=1e-10)
+    np.testing.assert_allclose(flat.u, 3.0, rtol=1e-10)
 
 
 def test_resample_carries_trend() -> None:

@@ -107,3 +107,22 @@ def test_procest_underdamped_std_calibrated_by_monte_carlo():
     est, std = monte_carlo(lambda d: sysid.procest(d, "P2DU", init=true.values), u, y0, 0.1,
                            noise=0.1, seed=12)
     assert_std_calibrated(est, std, [1.5, 0.8, 0.3, 0.23])
+
+
+def test_identifiability_warning_names_the_channel_pair_and_a_process_fix():
+    # procest's warning named bare "Kp, Tp1" (which pair of a MIMO model?) and told the user
+    # to "lower n_zeros", an option procest does not have
+    from sysid.process.procest import _pair
+    from sysid.process.structure import ProcessType
+    from sysid.tf.refine import _unidentifiable
+
+    t = ProcessType.parse("P1D")
+    names = [n for n in t.names if n != "Td"]
+    pair = _pair(t, names, {"Kp": 1.0, "Tp1": 2.0, "Td": 0.1}, {}, {}, 1.0, "level<-valve")
+    assert pair.names == ["level<-valve:Kp", "level<-valve:Tp1"]
+    with pytest.warns(sysid.IdentifiabilityWarning) as rec:
+        _unidentifiable(np.array([[1.0], [1.0]]), pair.names,
+                        "Fix one of them (fixed={...}), fit a simpler type than P1D or use "
+                        "more informative data")
+    text = str(rec[0].message)
+    assert "level<-valve:Kp, level<-valve:Tp1" in text and "n_zeros" not in text

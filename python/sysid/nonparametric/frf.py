@@ -212,7 +212,8 @@ def spa(
         ``min(N / 10, 30)`` truncates slowly decaying responses and makes the band
         dishonest.
     omega : array_like, optional
-        Angular frequencies (rad/s); default ``n_freq`` points up to Nyquist.
+        Angular frequencies (rad/s) up to the Nyquist frequency ``pi / dt`` (above it: an
+        error); default ``n_freq`` points up to Nyquist.
     remove_mean : bool
         Subtract each experiment's mean first.
     confidence : float
@@ -252,6 +253,13 @@ def spa(
         w = np.asarray(omega, dtype=float).ravel()
         if not (np.isfinite(w).all() and (w >= 0).all()):
             raise DataError("omega must hold finite non-negative frequencies in rad/s")
+        nyquist = np.pi / data.dt
+        if w.size and w.max() > nyquist * (1 + 1e-9):
+            raise DataError(
+                f"omega reaches {w.max():.4g} rad/s, above the Nyquist frequency pi/dt = "
+                f"{nyquist:.4g} rad/s: sampled data say nothing there (the estimate would be "
+                "an alias of a lower frequency). Give omega in rad/s up to pi/dt (in Hz? "
+                "multiply by 2 pi)")
     R, total = _lag_covariances(_z(data), M, remove_mean)
     tau = np.arange(M + 1)
     lagw = 0.5 * (1.0 + np.cos(np.pi * tau / M))

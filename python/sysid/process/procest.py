@@ -120,9 +120,12 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
             pairs = []
             for j in range(m):
                 start = _start(fit_t, exps, j, data.dt, fit_hold, dmax, init, fixed)
-                pairs.append(_pair(fit_t, names, start, fixed, bounds, dmax))
+                pairs.append(_pair(fit_t, names, start, fixed, bounds, dmax,
+                                   f"{data.output_names[i]}<-{data.input_names[j]}"))
             res = refine(pairs, exps, data.dt, fit_hold, x0_mode=initial_state,
-                         max_iter=max_iter, tol=tol, progress=cb)
+                         max_iter=max_iter, tol=tol, progress=cb,
+                         fix=f"Fix one of them (fixed={{...}}), fit a simpler type than "
+                             f"{t.code} or use more informative data")
             vals = []
             for j in range(m):
                 v = dict(zip(names, map(float, res["p"][j])))
@@ -235,7 +238,7 @@ def _from_tf(t: ProcessType, a: np.ndarray, b: np.ndarray) -> dict[str, float]:
 
 
 def _pair(t: ProcessType, names: list[str], start: dict[str, float], fixed: dict[str, float],
-          bounds: dict[str, tuple[float, float]], dmax: float) -> Any:
+          bounds: dict[str, tuple[float, float]], dmax: float, label: str = "") -> Any:
     from ..tf.refine import PairStructure
 
     def coef(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -248,7 +251,7 @@ def _pair(t: ProcessType, names: list[str], start: dict[str, float], fixed: dict
     dlo, dhi = bounds.get("Td", (0.0, dmax))
     td = float(np.clip(start.get("Td", 0.0), max(dlo, 0.0), min(dhi, dmax))) if t.delay else 0.0
     return PairStructure(coef, p0, fx, lo, hi, td, t.delay and "Td" not in fixed,
-                         min(dhi, dmax), list(names))
+                         min(dhi, dmax), [f"{label}:{k}" if label else k for k in names])
 
 
 def _full_cov(res: dict[str, Any], t: ProcessType, names: list[str], m: int) -> np.ndarray:

@@ -197,9 +197,12 @@ def _run(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarray
 
 def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarray]],
            dt: float, hold: str, *, x0_mode: str = "zero", max_iter: int = 100,
-           tol: float = 1e-10, progress: Any = None) -> dict[str, Any]:
+           tol: float = 1e-10, progress: Any = None,
+           fix: str = "Lower n_zeros, fix the delay or use more informative data"
+           ) -> dict[str, Any]:
     """Output-error fit of one output; returns ``p`` per pair, the delays, the covariance of
-    ``[p..., estimated delays...]`` (physical units), ``std``, the search report."""
+    ``[p..., estimated delays...]`` (physical units), ``std``, the search report. ``fix``:
+    what an :class:`~sysid.IdentifiabilityWarning` tells the user to do."""
     whole = [int(np.floor(p.delay / dt + 1e-9)) for p in pairs]
     res, mp = _run(pairs, exps, dt, hold, whole, x0_mode, max_iter, tol, progress)
     history: list[float] = list(res["history"])
@@ -246,7 +249,7 @@ def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarr
     names = [n for p in pairs for n in p.names] + [f"{pairs[j].names[0].split(':')[0]}:iodelay"
                                                    if pairs[j].names else f"iodelay{j}"
                                                    for j in mp.delay_idx]
-    weak = _unidentifiable(np.asarray(res["unidentifiable"])[:S.size], names)
+    weak = _unidentifiable(np.asarray(res["unidentifiable"])[:S.size], names, fix)
     lam = float(np.asarray(res["innovation_covariance"])[0, 0])
     return {"p": [p.p0 for p in pairs], "delays": [p.delay for p in pairs],
             "delay_index": mp.delay_idx, "covariance": cov, "noise_variance": lam,
@@ -256,7 +259,7 @@ def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarr
             "condition": float(res["condition"]), "unidentifiable": weak}
 
 
-def _unidentifiable(null: np.ndarray, names: list[str]) -> list[int]:
+def _unidentifiable(null: np.ndarray, names: list[str], fix: str) -> list[int]:
     """Indices of the parameters in directions the data do not determine, with an
     :class:`~sysid.IdentifiabilityWarning` naming them (their std is then reported as inf)."""
     import warnings
@@ -272,11 +275,12 @@ def _unidentifiable(null: np.ndarray, names: list[str]) -> list[int]:
         big = np.flatnonzero(np.abs(v) >= 1e-6 * np.max(np.abs(v)))
         idx |= set(int(i) for i in big)
         parts.append(", ".join(names[i] if i < len(names) else f"p{i}" for i in big))
+    delay = any(n.endswith(("iodelay", ":Td")) for n in names)
+    why = (" (a zero far beyond the bandwidth trades off against the delay, for example)"
+           if delay and "n_zeros" in fix else "")
     warnings.warn("the data cannot determine these parameters separately: " + "; ".join(parts)
-                  + " (a zero far beyond the bandwidth trades off against the delay, for "
-                  "example). Lower n_zeros, fix the delay or use more informative data; their "
-                  "standard deviations are reported as inf.", IdentifiabilityWarning,
-                  stacklevel=4)
+                  + f"{why}. {fix}; their standard deviations are reported as inf.",
+                  IdentifiabilityWarning, stacklevel=4)
     return sorted(idx)
 
 
