@@ -253,3 +253,19 @@ def test_output_error_predictions_fit_the_initial_state_and_infinite_horizon_sim
     for bad in (0, 1.5, "two", np.nan, -np.inf):
         with pytest.raises(DataError, match="horizon must be a positive integer"):
             m.predict(u, y, bad)
+
+
+def test_oe_starts_from_an_unstable_model_by_reflecting_its_roots():
+    # oe(init=arx) refused an ARX start with a root outside the unit circle ("C or F is not
+    # stable at the start"), common on integrating or drifting records
+    rng = np.random.default_rng(6)
+    u = rng.standard_normal((500, 1))
+    g = sysid.TransferFunction([0.5, 0.2], [1.0, -1.5, 0.7], dt=1.0)
+    y = g.simulate(u) + 0.01 * rng.standard_normal((500, 1))
+    init = sysid.PolynomialModel([[np.array([-2.1, 1.1])]], [[np.array([0.5, 0.2])]], [[1]], 1.0)
+    assert np.max(np.abs(init.poles())) > 1
+    m = sysid.oe(sysid.IOData(u, y), 2, 2, 1, init=init)
+    assert m.info["start_stabilized"] == [True]
+    np.testing.assert_allclose(m.f[0][0], [-1.5, 0.7], atol=5e-3)
+    stable = sysid.PolynomialModel([[np.array([-1.4, 0.6])]], [[np.array([0.5, 0.2])]], [[1]], 1.0)
+    assert sysid.oe(sysid.IOData(u, y), 2, 2, 1, init=stable).info["start_stabilized"] == [False]

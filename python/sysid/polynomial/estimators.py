@@ -180,20 +180,44 @@ def _fit(c: np.ndarray, n: int) -> list[float]:
     return out.tolist()
 
 
+def _stable(c: Any) -> np.ndarray:
+    """Coefficients (after the leading 1) of the monic polynomial with the roots of
+    ``1 + c_1 q^-1 + ...`` outside the unit circle reflected inside (``r -> 1 / conj(r)``,
+    at most 0.995 in modulus): the same magnitude response up to a gain, and a predictor
+    the search can start from."""
+    c = np.asarray(c, dtype=float).ravel()
+    if c.size == 0:
+        return c
+    r = np.roots(np.concatenate([[1.0], c]))
+    if np.all(np.abs(r) < 1.0):
+        return c
+    out = np.where(np.abs(r) >= 1.0, 1.0 / np.conj(r), r)
+    big = np.abs(out) > 0.995
+    out[big] *= 0.995 / np.abs(out[big])
+    return np.real(np.poly(out))[1:]
+
+
 def _start(
     init: PolynomialModel, i: int, na: int, nb: list[int], nc: int, nd: int, nf: list[int]
-) -> list[float]:
+) -> tuple[list[float], bool]:
     """Starting parameters of output ``i`` from another polynomial model (``F`` from its
-    ``F``, or from its ``A`` when it has none, as when refining an ARX model into OE)."""
+    ``F``, or from its ``A`` when it has none, as when refining an ARX model into OE), and
+    whether an unstable ``C``, ``D`` or ``F`` had its roots reflected into the unit circle
+    (MATLAB stabilises an initial model the same way; the search needs a stable
+    predictor)."""
     if init.n_inputs != len(nb) or init.n_outputs <= i:
         raise DataError("init has other input/output counts than the data")
     a = init.a[i][i]
     th = _fit(a, na)
     th += [v for j, n in enumerate(nb) for v in _fit(init.b[i][j], n)]
-    th += _fit(init.c[i], nc) + _fit(init.d[i], nd)
-    for j, n in enumerate(nf):
-        th += _fit(init.f[i][j] if init.f[i][j].size else a, n)
-    return th
+    moved = False
+    for c, n in ((init.c[i], nc), (init.d[i], nd)) + tuple(
+            (init.f[i][j] if init.f[i][j].size else a, n) for j, n in enumerate(nf)):
+        got = np.asarray(_fit(np.asarray(c, dtype=float), n))
+        st = _stable(got)
+        moved |= bool(got.size and not np.array_equal(st, got))
+        th += st.tolist()
+    return th, moved
 
 
 def _pem(
@@ -224,12 +248,14 @@ def _pem(
     cov, var = [], []
     cb, close_bar = iteration_callback(progress, method, int(max_iter) * ny,
                                        iteration_printer(method, "sum of squares"))
+    starts = [None if init is None else _start(init, i, na_v[i], nb_g[i], nc_v[i], nd_v[i],
+                                               nf_g[i]) for i in range(ny)]
+    if init is not None:
+        info["start_stabilized"] = [bool(s[1]) for s in starts]  # type: ignore[index]
     try:
         rs = [_sysid.polynomial_pem(
             [(np.ascontiguousarray(y[:, i]), u) for u, y in exps], na_v[i], nb_g[i], nc_v[i],
-            nd_v[i], nf_g[i], nk_g[i],
-            None if init is None else _start(init, i, na_v[i], nb_g[i], nc_v[i], nd_v[i],
-                                             nf_g[i]),
+            nd_v[i], nf_g[i], nk_g[i], None if starts[i] is None else starts[i][0],
             as_int(max_iter, "max_iter", 0), 1e-9, cb) for i in range(ny)]
     finally:
         close_bar()
@@ -311,7 +337,9 @@ def oe(
     """Output error ``y = B/F u(t-nk) + e``.
 
     Starts from Steiglitz-McBride (one input) or from ``init`` (an ARX model's ``A`` becomes
-    ``F``), then Gauss-Newton on the simulation error; ``F`` is kept stable.
+    ``F``; unstable roots of the start are reflected into the unit circle, and
+    ``info["start_stabilized"]`` says so), then Gauss-Newton on the simulation error; ``F``
+    is kept stable.
 
     With ``periods=P`` (whole periods of a periodic input in steady state in every
     experiment) or ``"auto"`` (:func:`sysid.detect_period`), ``B/F`` is fitted on the
