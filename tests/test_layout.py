@@ -345,3 +345,18 @@ def test_readme_where_things_are_points_at_existing_names_and_files():
             if not (root / "crates" / "sysid-core" / "src" / f).exists():
                 problems.append(f"no crates/sysid-core/src/{f}")
     assert not problems, problems
+
+
+def test_subpackages_load_on_first_attribute_access():
+    """``sysid.plot.bode`` after ``import sysid`` alone raised AttributeError (as SciPy's
+    submodules, they now load on first use); unknown names still raise."""
+    import subprocess
+    import sys
+
+    code = ("import sysid\n"
+            "assert sysid.plot.__name__ == 'sysid.plot'\n"
+            "assert callable(sysid.validation.crossval.record_folds)\n"
+            "try:\n    sysid.no_such_thing\nexcept AttributeError as e:\n"
+            "    assert 'no_such_thing' in str(e)\nelse:\n    raise SystemExit(1)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.returncode == 0, out.stderr

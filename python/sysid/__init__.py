@@ -269,6 +269,15 @@ _MATLAB = {"resid": "sysid.residuals(model, data)", "iddata": "sysid.IOData(u, y
 
 def __getattr__(name: str) -> object:
     module = _LAZY.get(name)
+    if module is None and not name.startswith("_"):
+        import importlib.util
+
+        # a subpackage or module (sysid.plot, sysid.validation, ...), loaded on first use as
+        # SciPy's submodules are
+        if importlib.util.find_spec(f"{__name__}.{name}") is not None:
+            sub = _importlib.import_module(f".{name}", __name__)
+            globals()[name] = sub
+            return sub
     if module is None:
         hint = f" (MATLAB's {name}: use {_MATLAB[name]})" if name in _MATLAB else ""
         raise AttributeError(f"module 'sysid' has no attribute {name!r}{hint}")
