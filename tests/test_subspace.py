@@ -206,3 +206,19 @@ def test_output_only_data_gives_a_stochastic_model():
     model = sysid.SubspaceEstimator(sysid.IOData(u=None, y=y), horizon=6).fit(2)
     assert model.ninputs == 0
     assert match_poles(model.poles(), np.linalg.eigvals(a)) < 0.05
+
+
+def test_a_given_order_gets_a_horizon_that_allows_it():
+    # 60 samples of 5 inputs and 3 outputs: the default horizon 2 allows 3 states, and
+    # n4sid(data, 4) / ssest(data, 4) raised OrderError although the data support order 4
+    rng = np.random.default_rng(8)
+    A = np.diag([0.9, 0.7, -0.5, 0.3])
+    true = sysid.StateSpaceModel(A, rng.standard_normal((4, 5)), rng.standard_normal((3, 4)))
+    u = rng.standard_normal((60, 5))
+    d = sysid.IOData(u, true.simulate(u))
+    assert sysid.SubspaceEstimator(d).max_order == 3
+    m = sysid.n4sid(d, 4)
+    np.testing.assert_allclose(np.sort(m.poles().real), np.sort(np.diag(A)), atol=1e-6)
+    assert sysid.ssest(d, 4).nstates == 4
+    with pytest.raises(sysid.OrderError, match="at most 3 states"):
+        sysid.n4sid(d, 4, horizon=2)  # a horizon given is kept

@@ -12,7 +12,7 @@ import numpy as np
 from .._checks import as_int, user_stacklevel
 from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
-from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator
+from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator, horizon_for_order
 from ..subspace.feedthrough import check_feedthrough, choose_feedthrough, default_feedthrough
 from .pem import _experiments, pem, pem_loss
 
@@ -65,7 +65,9 @@ def ssest(
     focus, x0, noise, max_iter, tol, regularization, progress, enforce_stability
         As for :func:`pem` (the candidates are scored by :func:`pem_loss`).
     horizon : int, optional
-        Subspace horizon (default :func:`sysid.default_horizon`).
+        Subspace horizon (default :func:`sysid.default_horizon`, raised to the smallest
+        that allows ``order`` when it does not and the data do:
+        :func:`~sysid.subspace.estimator.horizon_for_order`).
     methods : tuple of str
         Subspace weightings tried for the start.
     method : str, optional
@@ -121,8 +123,8 @@ def ssest(
         return model
     if check_feedthrough(feedthrough) == "auto":
         # decided once from the data (the rule every estimator shares), then a fixed choice
-        use, why = choose_feedthrough(SubspaceEstimator(data, horizon, method=method or "moesp"),
-                                      order)
+        use, why = choose_feedthrough(SubspaceEstimator(
+            data, horizon_for_order(data, order, horizon), method=method or "moesp"), order)
         kw = dict(focus=focus, x0=x0, noise=noise, horizon=horizon, methods=methods,
                   method=method, max_iter=max_iter, tol=tol, regularization=regularization,
                   progress=progress, enforce_stability=enforce_stability)
@@ -146,7 +148,7 @@ def ssest(
                             max_iter=max_iter, tol=tol, regularization=regularization,
                             progress=progress, enforce_stability=enforce_stability)
     order = as_int(order, "order", 1)
-    est = SubspaceEstimator(data, horizon)
+    est = SubspaceEstimator(data, horizon_for_order(data, order, horizon))
     candidates = []
     why: list[Exception] = []  # why the weightings failed (the order error names the bound)
 

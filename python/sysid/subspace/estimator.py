@@ -185,6 +185,35 @@ def available_horizon(lengths: Sequence[int], n_inputs: int, n_outputs: int) -> 
     return 2
 
 
+def horizon_for_order(data: IOData, order: Any, horizon: int | None) -> int | None:
+    """The horizon for fitting ``order`` states: ``horizon`` when given, else the default
+    (:func:`available_horizon`) or, when that allows fewer than ``order`` states (at most
+    ``(i - 1) l``), the smallest horizon that allows them, provided the data have as many
+    Hankel columns as its data matrix has rows (``2 i (m + l)``); otherwise the default
+    (whose order error then says how far it reaches). MATLAB's ``n4sid(data, n)`` likewise
+    fits any order the data support.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.subspace.estimator import horizon_for_order
+    >>> u = np.random.default_rng(0).standard_normal((60, 5))
+    >>> d = sysid.IOData(u, u[:, :3])                   # 60 samples, 5 in, 3 out
+    >>> horizon_for_order(d, 3, None), horizon_for_order(d, 4, None), horizon_for_order(d, 9, None)
+    (None, 3, None)
+    """
+    if horizon is not None or isinstance(order, str) or np.ndim(order) or order is None:
+        return horizon
+    m, l = data.n_inputs, data.n_outputs
+    lengths = list(data.lengths)
+    i0 = available_horizon(lengths, m, l)
+    if int(order) <= (i0 - 1) * l:
+        return None
+    need = -(-int(order) // l) + 1
+    columns = sum(max(0, n - 2 * need + 1) for n in lengths)
+    return need if need <= 50 and columns >= 2 * need * (m + l) else None
+
+
 class SubspaceEstimator:
     """Compress a record once, then fit state-space models of any order and weighting.
 
@@ -634,15 +663,20 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         stable: bool = False,
         x0: bool = False,
     ) -> StateSpaceModel:
+        if isinstance(data, IOData):  # a given order gets a horizon that allows it
+            horizon = horizon_for_order(data, order, horizon)
         est = SubspaceEstimator(data, horizon, method=method)
         return est.fit(order, feedthrough=feedthrough, kalman=kalman, stable=stable, x0=x0)
 
     fit.__name__ = method.replace("-", "_")
     fit.__doc__ = f"""Identify a state-space model with {method.upper()} in one call.
 
-    Equivalent to ``SubspaceEstimator(data, horizon, method="{method}").fit(order, ...)``;
-    no feedthrough (``D = 0``) at a given order unless ``feedthrough=True`` (or ``"auto"``:
-    decided from the data), as every sysid state-space estimator; with ``order="auto"`` (the
+    Equivalent to ``SubspaceEstimator(data, horizon, method="{method}").fit(order, ...)``
+    (at a given order without ``horizon``, the horizon of
+    :func:`~sysid.subspace.estimator.horizon_for_order`: the default, or the smallest that
+    allows the order when the default does not and the data do); no feedthrough (``D = 0``)
+    at a given order unless ``feedthrough=True`` (or ``"auto"``: decided from the data), as
+    every sysid state-space estimator; with ``order="auto"`` (the
     default) the order and ``D`` are chosen together by held-out simulation fit
     (``info["order_selection"]``, ``info["feedthrough_selection"]``).
 
