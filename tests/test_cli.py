@@ -333,3 +333,17 @@ def test_a_given_order_is_reported_as_given(tmp_path, capsys):
     assert line.startswith("order choice: order 3 (n4sid) given, not chosen"), line
     assert "The sweep's own choice would be: order" in line
     assert sysid.load_model(tmp_path / "r" / "model.json").nstates == 3
+
+
+def test_identify_path_saves_the_model_with_its_offsets(tmp_path, capsys):
+    # the default path (sysid.identify) wrote the model of the deviations to model.json, the
+    # offsets only in info: the loaded model simulated raw inputs off by the operating point
+    data = dryer_csv(tmp_path / "d.csv")
+    rep = tmp_path / "r"
+    assert main(["identify", str(data), "--inputs", "heater", "--outputs", "temperature",
+                 "--report", str(rep), "--quiet"]) == 0
+    m = sysid.load_model(rep / "model.json")
+    raw = np.loadtxt(sysid.datasets.path("dryer"))
+    assert type(m).__name__ == "IdentifiedModel"
+    sim = m.simulate(raw[:, :1])
+    assert abs(sim[200:].mean() - raw[200:, 1].mean()) < 0.1 * raw[:, 1].std()

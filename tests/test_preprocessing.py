@@ -140,6 +140,18 @@ def test_resample_and_decimate_keep_low_frequencies() -> None:
     np.testing.assert_allclose(flat.u, 3.0, rtol=1e-10)
 
 
+def test_resample_gives_the_sample_time_asked_or_says_why_not() -> None:
+    # 1 kHz to 0.15 s came back at 0.1 s and 2 s to 250 s at 200 s, silently (the rate ratio
+    # was rounded to a fraction with denominator <= 100 and never checked)
+    fast = sysid.IOData(u=np.zeros(3000), y=np.zeros(3000), dt=0.001)
+    assert sysid.resample(fast, 0.15).dt == 0.15
+    slow = sysid.IOData(u=np.zeros(801), y=np.zeros(801), dt=2.0)
+    r = sysid.resample(slow, 250.0)
+    assert r.dt == 250.0 and r.n_samples == 7
+    with pytest.raises(DataError, match=r"nearest is 3\.14159292 s"):
+        sysid.resample(slow, 3.14159)
+
+
 def test_resample_carries_trend() -> None:
     d = noisy(n=600)
     p = sysid.detrend(d, "linear")

@@ -557,6 +557,12 @@ def _identify(args: argparse.Namespace) -> int:
             p = prepare(est_data, val_data, pre, _bars(args), say)
             out = _validate(p["model"], p["selection"], p["est"], p["val"], args.report, say,
                             caught)
+            if "files" in out and "model" in out["files"]:
+                # the file holds the model with its offsets: it predicts the raw signals
+                # (the report is of the deviations, which the model of the deviations fits)
+                from .models.serialize import save_model
+
+                save_model(p["result"].model, out["files"]["model"])
         out["warnings"] = reissue(caught)
         print(p["result"].summary())
         _print_summary(out)

@@ -136,12 +136,14 @@ def _trend_on(tr: np.ndarray | None, n_new: int, factor: float) -> np.ndarray | 
     return np.column_stack([np.interp(k_new, k_old, c) for c in tr.T]).reshape(n_new, -1)
 
 
-def resample(data: IOData, dt: float, *, max_denominator: int = 100) -> IOData:
+def resample(data: IOData, dt: float, *, max_denominator: int = 1000) -> IOData:
     """Change the sample time with polyphase anti-alias filtering
     (``scipy.signal.resample_poly``, ends padded with a line).
 
-    The ratio ``data.dt / dt`` is approximated by a fraction with denominator at most
-    ``max_denominator``; the resulting sample time is exact for that fraction.
+    The ratio ``data.dt / dt`` must be a fraction ``up / down`` with ``down`` at most
+    ``max_denominator`` (to 1e-9): the result has exactly the sample time asked for, or a
+    :class:`~sysid.DataError` names the nearest one that can be had (resampling to another
+    rate than asked, silently, moved every frequency of a model fitted to the result).
 
     Examples
     --------
@@ -152,10 +154,16 @@ def resample(data: IOData, dt: float, *, max_denominator: int = 100) -> IOData:
     (0.025, 120)
     """
     new_dt = as_dt(dt)
-    ratio = Fraction(data.dt / new_dt).limit_denominator(max_denominator)  # up / down
+    target = data.dt / new_dt
+    ratio = Fraction(target).limit_denominator(int(max_denominator))  # up / down
     up, down = ratio.numerator, ratio.denominator
-    if up == 0:
-        raise DataError(f"dt = {new_dt:g} s is too long for a record sampled at {data.dt:g} s")
+    if up == 0 or abs(up / down - target) > 1e-9 * target:
+        near = (f"the nearest is {data.dt * down / up:.10g} s" if up else
+                f"the longest is {data.dt * max_denominator:.6g} s")
+        raise DataError(
+            f"dt = {new_dt:g} s is not the record's {data.dt:g} s times a fraction down/up "
+            f"with down <= max_denominator = {max_denominator} ({near}); ask for such a "
+            "sample time, or raise max_denominator (longer anti-alias filters)")
     exps = []
     for e in data._exps:
         n_new = int(np.ceil(e.y.shape[0] * up / down))
@@ -164,7 +172,7 @@ def resample(data: IOData, dt: float, *, max_denominator: int = 100) -> IOData:
         y = signal.resample_poly(e.y, up, down, axis=0, padtype="line")
         f = down / up
         exps.append(_Exp(u, y, e.t0, _trend_on(e.tu, n_new, f), _trend_on(e.ty, n_new, f)))
-    return data._derive(exps, dt=data.dt * down / up)
+    return data._derive(exps, dt=new_dt)
 
 
 def decimate(data: IOData, q: int, *, order: int = 8) -> IOData:

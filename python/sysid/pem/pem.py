@@ -567,6 +567,8 @@ def pem(
     info = dict(model.info) if model.info else {}
     info["method"] = "pem"
     info["start_method"] = model.info.get("method") if model.info else None
+    if "settings" in info:  # the start's estimator settings (its kalman=True, ...), not ours
+        info["start_settings"] = info.pop("settings")
     info["pem"] = {
         "domain": "time",
         "iterations": res["iterations"],
@@ -655,6 +657,8 @@ def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
     info = dict(model.info) if model.info else {}
     info["method"] = "pem"
     info["start_method"] = model.info.get("method") if model.info else None
+    if "settings" in info:  # the start's estimator settings (its kalman=True, ...), not ours
+        info["start_settings"] = info.pop("settings")
     info["pem"] = {
         "iterations": res["iterations"], "evaluations": res["evaluations"],
         "cost": list(res["history"]), "criterion": CRITERION,
