@@ -322,3 +322,19 @@ def test_spa_refuses_frequencies_above_nyquist():
     assert ok.omega.size == 2
     with pytest.raises(sysid.DataError, match="above the Nyquist frequency"):
         sysid.spa(d, lags=20, omega=[1.0, 40.0])
+
+
+def test_etfe_removes_the_operating_point_like_spa():
+    # smoothed etfe kept the means: near DC it returned the ratio of the means (10.0 for a
+    # gain of 7.5) with coherence 1 and a band that excluded the truth
+    rng = np.random.default_rng(1)
+    g = sysid.StateSpaceModel([[1.5, -0.7], [1, 0]], [[1.0], [0]], [[1.0, 0.5]], dt=0.1)
+    u = rng.standard_normal((4000, 1))
+    y = g.simulate(u) + 0.1 * rng.standard_normal((4000, 1))
+    d = sysid.IOData(u=u + 2.0, y=y + 20.0, dt=0.1)
+    e = sysid.etfe(d, smoothing=20)
+    k = np.searchsorted(e.omega, [0.016, 0.05])
+    assert e.within_band(g)[k].all()
+    np.testing.assert_allclose(np.abs(e.response[k, 0, 0]), 7.5, rtol=0.02)
+    raw = sysid.etfe(d, smoothing=20, remove_mean=False)  # the old behaviour, on request
+    assert abs(abs(raw.response[k[0], 0, 0]) - 7.5) > 1.0

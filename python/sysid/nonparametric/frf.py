@@ -289,6 +289,7 @@ def etfe(
     window: str = "hann",
     min_power: float = 1e-12,
     confidence: float = 0.99,
+    remove_mean: bool | None = None,
 ) -> FRD:
     """Empirical transfer-function estimate ``Y(omega_k) / U(omega_k)`` on the FFT grid.
 
@@ -310,6 +311,13 @@ def etfe(
         are left out: with a periodic multisine, ``1e-3`` keeps the excited lines only.
     confidence : float
         Level of the band (smoothed estimates only).
+    remove_mean : bool, optional
+        Subtract each experiment's mean first (the zero-frequency bin then has no input
+        power and is left out). Default: with ``smoothing``, as :func:`spa` and
+        :func:`welch_frf` do (an operating point leaks from the zero bin into its smoothed
+        neighbours: near DC the estimate was the ratio of the means, coherence 1, a band
+        that missed the truth); without, the raw ``Y / U`` on every bin (of a periodic
+        record in steady state, the zero bin is the static gain).
 
     Examples
     --------
@@ -335,7 +343,10 @@ def etfe(
             f"etfe needs at least 4 samples per experiment (got {n}): n samples give "
             f"n // 2 frequencies above zero; measure a longer record"
         )
-    Zs = [np.fft.rfft(z, axis=0) for z in _z(data)]  # (nf, m+l)
+    if remove_mean is None:
+        remove_mean = smoothing is not None
+    Zs = [np.fft.rfft(z - z.mean(axis=0) if remove_mean else z, axis=0)
+          for z in _z(data)]  # (nf, m+l)
     nf = Zs[0].shape[0]
     Puu = sum(np.einsum("fa,fb->fab", Z[:, :m], Z[:, :m].conj()) for Z in Zs) / n
     Pyu = sum(np.einsum("fa,fb->fab", Z[:, m:], Z[:, :m].conj()) for Z in Zs) / n
