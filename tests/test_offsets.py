@@ -66,3 +66,20 @@ def test_every_linear_estimator_warns_once_about_offsets(name):
 def test_offset_warning_is_a_user_warning_with_a_docstring():
     assert issubclass(OffsetWarning, UserWarning) and OffsetWarning.__doc__
     assert sysid.OffsetWarning is OffsetWarning
+
+
+def test_a_raw_record_merged_into_a_detrended_one_still_warns():
+    # merge labelled the whole result "detrended", and the raw part's offset went unseen
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal(600)
+    y = 96.0 + sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]).simulate(u)[:, 0]
+    y = y + 0.05 * rng.standard_normal(600)
+    d = sysid.IOData(u=u, y=y, dt=1.0)
+    est, val = d.split(0.5)
+    merged = sysid.detrend(est, "mean").merge(val)
+    with pytest.warns(sysid.OffsetWarning, match="offset"):
+        sysid.n4sid(merged, 1)
+    both = sysid.detrend(est, "mean").merge(sysid.detrend(val, "mean"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sysid.OffsetWarning)
+        sysid.n4sid(both, 1)

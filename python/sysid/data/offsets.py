@@ -33,15 +33,23 @@ OFFSET_RATIO = 10.0
 def offsets(data: Any) -> list[tuple[str, str, float, float]]:
     """``(kind, name, mean, std)`` of every channel with ``|mean| > OFFSET_RATIO std > 0``
     (empty for a detrended record)."""
+    exps = list(data.experiments)
     if getattr(data, "has_trend", False):
-        return []
+        # a detrended record: only experiments merged in raw (their trend all zero: nothing
+        # was removed from them) can still sit on an offset
+        kept = getattr(data, "_exps", None)
+        exps = [] if kept is None else [
+            (e.u, e.y) for e in kept
+            if not (np.any(e.tu) or np.any(e.ty))]
+        if not exps:
+            return []
     out = []
     for kind, idx, names in (("input", 0, data.input_names), ("output", 1, data.output_names)):
         if not names:
             continue
         # one pass in Rust (NumPy's column reductions of (samples, channels) arrays are slow)
         _, mean, std = _sysid.channel_stats(
-            [np.ascontiguousarray(e[idx], float) for e in data.experiments])
+            [np.ascontiguousarray(e[idx], float) for e in exps])
         for j, name in enumerate(names):
             if abs(mean[j]) > OFFSET_RATIO * std[j] > 0:
                 out.append((kind, str(name), float(mean[j]), float(std[j])))

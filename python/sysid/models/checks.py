@@ -132,8 +132,9 @@ def warn_unstable(model: Any, method: str, closed_loop: bool = False,
     others = " or ".join(f"method={w!r}" for w in ("moesp", "n4sid", "cva") if w != method)
     warnings.warn(StabilityWarning(
         f"{method} returned an unstable model: pole {poles[k]:.4g} has modulus "
-        f"{abs(poles[k]):.4f} >= 1, so its simulation diverges. Unless the process itself is "
-        "unstable, " + ("refine it with sysid.pem(data, model, focus='simulation') (which "
+        f"{display_modulus(abs(poles[k]))} >= 1, so its simulation diverges. Unless the "
+        "process itself is unstable, " + (
+                        "refine it with sysid.pem(data, model, focus='simulation') (which "
                         "keeps the simulation stable), or try a lower order or another horizon"
                         if closed_loop else
                         "use stable=True (reflects the unstable poles inside the unit circle), "
