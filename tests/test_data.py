@@ -349,3 +349,26 @@ def test_docs_data_examples_run_on_the_bundled_records() -> None:
     frd = ns["frd"]
     assert isinstance(frd, sysid.FRD) and frd.omega.size == 267  # "keeps the 267 excited lines"
     assert ns["found"][:3] == (8192, 9, (0,))  # the measured force repeats up to its noise
+
+
+def test_from_pandas_does_not_read_row_labels_as_seconds():
+    # df.iloc[::2] became dt = 2 s and dropna() failed on a "2 s gap": unnamed integer row
+    # labels were read as time in seconds
+    import pandas as pd
+
+    rng = np.random.default_rng(0)
+    df = pd.DataFrame({"u": rng.standard_normal(50), "y": rng.standard_normal(50)})
+    import warnings
+
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        d = sysid.IOData.from_pandas(df.iloc[::2], inputs=["u"], outputs=["y"])
+    said = [str(w.message) for w in rec]
+    assert d.dt == 1.0 and len(said) == 2, said
+    assert "row labels skip from 0 to 2" in said[0] and "no sample time" in said[1]
+    df.loc[5, "y"] = np.nan
+    with pytest.warns(UserWarning, match="skip from 4 to 6"):
+        assert sysid.IOData.from_pandas(df.dropna(), inputs=["u"], outputs=["y"],
+                                        dt=0.1).n_samples == 49
+    timed = df.dropna().set_index(pd.Index(np.arange(49) * 0.5, name="time"))
+    assert sysid.IOData.from_pandas(timed, inputs=["u"], outputs=["y"]).dt == 0.5

@@ -33,6 +33,34 @@ def _pandas() -> Any:
     return pd
 
 
+def _index_is_time(index: Any) -> bool:
+    """A numeric index that holds time: float values, or integers under a name (``time``,
+    ``t``, ``seconds``, ...). Unnamed integers are row labels (left by ``iloc[::2]`` or
+    ``dropna()``), not seconds."""
+    if index.dtype.kind == "f":
+        return True
+    return index.dtype.kind in "iu" and index.name is not None and not _default_index(index)
+
+
+def _warn_dropped_rows(index: Any, timed: bool) -> None:
+    """Rows missing from an unnamed integer index (``dropna()``, a filter) in a frame without
+    time: the record would close the gaps silently."""
+    if timed or index.dtype.kind not in "iu" or index.name is not None or len(index) < 2:
+        return
+    step = np.diff(index.to_numpy())
+    if np.all(step == 1):
+        return
+    k = int(np.flatnonzero(step != 1)[0])
+    warnings.warn(
+        f"the DataFrame's row labels skip from {index[k]} to {index[k + 1]}"
+        + (f" ({int(np.sum(step != 1))} places)" if np.sum(step != 1) > 1 else "")
+        + ": rows were dropped or reordered (dropna(), a filter, iloc[::2]), and without "
+        "a time column the record treats the rows left as consecutive samples; fill the "
+        "gaps instead (IOData.from_pandas(df, nan='interpolate') on the full frame), or "
+        "give the time (time='column' or a time index)",
+        UserWarning, stacklevel=3)
+
+
 def _default_index(index: Any) -> bool:
     """A 0, 1, 2, ... index that pandas made up (not a time axis)."""
     pd = _pandas()
@@ -163,10 +191,12 @@ def from_pandas(
             ts.append(g[time].to_numpy(dtype=float))
         elif dt is None and isinstance(g.index, pd.DatetimeIndex):
             ts.append((g.index - groups[0].index[0]).total_seconds().to_numpy())
-        elif dt is None and g.index.dtype.kind in "if" and not _default_index(g.index):
+        elif dt is None and _index_is_time(g.index):
             ts.append(g.index.to_numpy(dtype=float))
         elif dt is None and _time_column(g) is not None:
             ts.append(g[_time_column(g)].to_numpy(dtype=float))
+    for g in groups:
+        _warn_dropped_rows(g.index, time is not None or bool(ts))
     if dt is None and not ts:
         dt = df.attrs.get("dt")
         if dt is None:
