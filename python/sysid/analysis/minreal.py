@@ -27,6 +27,9 @@ def minreal(sys: Any, tol: float | None = None) -> Any:
         Cancellation (transfer function) or rank (state space) tolerance; default
         ``sqrt(eps)``.
 
+    An innovations-form model keeps the states its noise (``K``) reaches, and its ``K`` and
+    noise covariance: its predictions are unchanged.
+
     Examples
     --------
     >>> import sysid
@@ -99,14 +102,22 @@ def _reachable(A: np.ndarray, B: np.ndarray, tol: float) -> np.ndarray:
 
 def _ss(sys: Any, tol: float) -> Any:
     A, B, C, D = (np.asarray(x, float) for x in (sys.A, sys.B, sys.C, sys.D))
-    Vc = _reachable(A, B, tol)
-    A1, B1, C1 = Vc.T @ A @ Vc, Vc.T @ B, C @ Vc
+    K = getattr(sys, "K", None)
+    # an innovations-form model: the noise enters through K, so the states it reaches are
+    # kept too (the noise model and the predictor survive)
+    BK = B if K is None else np.hstack([B, np.asarray(K, float)])
+    Vc = _reachable(A, BK, tol)
+    A1, C1 = Vc.T @ A @ Vc, C @ Vc
     Vo = _reachable(A1.T, C1.T, tol)
-    A2, B2, C2 = Vo.T @ A1 @ Vo, Vo.T @ B1, C1 @ Vo
+    T = Vc @ Vo
+    A2, B2, C2 = T.T @ A @ T, T.T @ B, C @ T
     kw = {"input_names": sys.input_names, "output_names": sys.output_names}
     from ..models.continuous import ContinuousStateSpace
     from ..models.statespace import StateSpaceModel
 
     if isinstance(sys, ContinuousStateSpace):
         return ContinuousStateSpace(A2, B2, C2, D, hold=sys.hold, **kw)
-    return StateSpaceModel(A2, B2, C2, D, dt=sys.dt, **kw)
+    if K is None:
+        return StateSpaceModel(A2, B2, C2, D, dt=sys.dt, **kw)
+    return StateSpaceModel(A2, B2, C2, D, T.T @ np.asarray(K, float), dt=sys.dt,
+                           noise_cov=getattr(sys, "noise_cov", None), **kw)
