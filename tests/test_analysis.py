@@ -285,3 +285,26 @@ def test_minreal_keeps_the_noise_model():
     np.testing.assert_allclose(r.noise_cov, m.noise_cov)
     det = sysid.minreal(sysid.StateSpaceModel(A, [[1.0], [1.0], [0.0]], [[1.0, 1.0, 1.0]]))
     assert det.nstates == 2 and det.K is None
+
+
+def test_integrators_give_sysid_answers_not_numpy_errors():
+    # ContinuousStateSpace.dcgain and stepinfo of a discrete integrator raised numpy's
+    # LinAlgError; stepinfo reported a peak of 2 at 3.33 s for an unbounded ramp
+    ci = sysid.ContinuousStateSpace([[0.0, 1.0], [0.0, -3.0]], [[0.0], [2.0]], [[1.0, 0.0]])
+    with pytest.raises(sysid.NumericalError, match="pole\\(s\\) at s = 0"):
+        ci.dcgain()
+    for sys in (ci, sysid.c2d(ci, 0.1), sysid.TransferFunction([2.0], [1.0, 3.0, 0.0])):
+        info = sysid.stepinfo(sys)
+        assert np.isinf(info.steady_state) and np.isinf(info.peak) and np.isinf(info.peak_time)
+        assert np.isnan(info.rise_time)
+
+
+def test_margin_and_nyquist_of_a_frequency_response_use_its_lines():
+    # margin(frd) and nyquist(frd) built a grid from the poles an FRD does not have, then
+    # refused it as outside the measured range
+    g = sysid.StateSpaceModel([[1.5, -0.7], [1, 0]], [[1.0], [0]], [[1.0, 0.5]], dt=0.1)
+    fr = sysid.FRD.from_model(g, np.linspace(0.05, np.pi / 0.1, 400))
+    a, b = sysid.margin(g), sysid.margin(fr)
+    assert b.gain_margin == pytest.approx(a.gain_margin, rel=1e-3)
+    assert b.phase_margin == pytest.approx(a.phase_margin, abs=0.1)
+    assert sysid.nyquist(fr).encirclements == sysid.nyquist(g).encirclements

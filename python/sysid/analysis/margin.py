@@ -86,6 +86,10 @@ def _range(sys: Any, omega: Any) -> np.ndarray:
         if w.size < 2 or np.any(w <= 0) or not np.all(np.isfinite(w)):
             raise DataError("omega must hold at least two positive finite frequencies")
         return np.sort(w)
+    measured = getattr(sys, "omega", None)
+    if measured is not None and not hasattr(sys, "poles"):  # an FRD: its own frequencies
+        w = np.asarray(measured, dtype=float).ravel()
+        return np.sort(w[w > 0])
     dt = float(getattr(sys, "dt", 0.0) or 0.0)
     p = np.asarray(sys.poles()) if hasattr(sys, "poles") else np.zeros(0)
     if dt > 0:

@@ -93,7 +93,8 @@ def nyquist(sys: Any, *, omega: Any = None, n_points: int = 20000) -> NyquistRes
     P = int(np.sum(np.abs(p) > 1 + 1e-9)) if dt > 0 else int(np.sum(p.real > 1e-9))
     if omega is None:
         w = _range(sys, None)
-        w = np.geomspace(w[0], w[-1], max(int(n_points), 100))
+        if hasattr(sys, "poles"):  # a model: a dense grid; an FRD: its measured lines
+            w = np.geomspace(w[0], w[-1], max(int(n_points), 100))
     else:
         w = np.sort(np.asarray(omega, dtype=float).ravel())
         if w.size < 2 or np.any(w <= 0):

@@ -96,9 +96,12 @@ def _one(t: np.ndarray, y: np.ndarray, yinit: float, yfinal: float, thr: float,
     if not np.isfinite(yfinal) or dy == 0:
         nan = float("nan")
         k = int(np.argmax(np.abs(y - yinit)))
+        # an unbounded response (integrator, unstable): no peak, as MATLAB says (Inf)
+        peak, when = ((float(abs(y[k] - yinit)), float(t[k])) if np.isfinite(yfinal)
+                      else (float("inf"), float("inf")))
         return {"rise_time": nan, "transient_time": nan, "settling_time": nan,
                 "settling_min": nan, "settling_max": nan, "overshoot": nan,
-                "undershoot": nan, "peak": float(abs(y[k] - yinit)), "peak_time": float(t[k]),
+                "undershoot": nan, "peak": peak, "peak_time": when,
                 "steady_state": float(yfinal)}
     s = np.sign(dy)
     t_lo = _cross(t, y, yinit + lim[0] * dy, s)
@@ -212,7 +215,10 @@ def _model_step(sys: Any, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
         N = int(min(max(N, 20), 100000)) + int(delay)
         resp = sys.step(N)
         Y = np.asarray(resp.y)
-        gain = np.asarray(sys.freqresp([0.0])[0].real)
+        try:
+            gain = np.asarray(sys.freqresp([0.0])[0].real)
+        except np.linalg.LinAlgError:  # a pole at z = 1: the step response does not settle
+            gain = np.full((Y.shape[1], Y.shape[2]), np.inf)
         return np.asarray(resp.t, float), Y, gain, np.zeros_like(gain)
     re = -p.real
     slow = float(np.min(re[re > 1e-12])) if np.any(re > 1e-12) else 0.0

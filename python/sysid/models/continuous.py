@@ -130,8 +130,16 @@ class ContinuousStateSpace(ModelMixin):
         return out
 
     def dcgain(self) -> np.ndarray:
-        """``D - C A^{-1} B``, shape ``(noutputs, ninputs)``."""
-        return self.freqresp([0.0])[0].real
+        """``D - C A^{-1} B``, shape ``(noutputs, ninputs)``; a pole at ``s = 0`` (an
+        integrator) raises :class:`~sysid.NumericalError`, as for a discrete model."""
+        try:
+            return self.freqresp([0.0])[0].real
+        except np.linalg.LinAlgError:
+            zeros = [p for p in self.poles() if abs(p) < 1e-9]
+            raise NumericalError(
+                f"the DC gain is infinite: the model has {len(zeros)} pole(s) at s = 0 (an "
+                "integrator), so its step response grows without bound; look at step() or "
+                "freqresp() at low frequencies instead") from None
 
     def c2d(self, dt: float, method: str | None = None) -> StateSpaceModel:
         """Discretise (default: the model's ``hold``); see :func:`c2d`."""
