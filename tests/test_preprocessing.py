@@ -240,3 +240,24 @@ def test_channel_flags_and_thresholds_change_the_result() -> None:
     assert sysid.despike(sysid.IOData(u=None, y=y), n_sigmas=3).y[100, 0] < y[100] - 0.2
     x = sysid.IOData(u=None, y=rng.standard_normal(500))
     assert not np.allclose(sysid.decimate(x, 2, order=4).y, sysid.decimate(x, 2, order=8).y)
+
+
+def test_the_returned_trend_is_all_the_processing_from_raw_data() -> None:
+    # after scale() the trend's offsets were in scaled units with scale 1 (apply() to the
+    # estimation record itself gave 125.7 for -0.38), and of chained detrends only the last
+    # step was returned (its apply() left the mean in)
+    rng = np.random.default_rng(7)
+    t = np.arange(400) * 0.5
+    d = sysid.IOData(u=3.0 + rng.standard_normal(400), y=120.0 + 0.05 * t
+                     + rng.standard_normal(400), dt=0.5)
+    est, val = d.split(0.5)
+    proc, tr = sysid.detrend(sysid.scale(est), "mean", return_trend=True)
+    np.testing.assert_allclose(tr.apply(est).y, proc.y, atol=1e-12)
+    np.testing.assert_allclose(tr.apply(est).u, proc.u, atol=1e-12)
+    np.testing.assert_allclose(tr.apply(val).retrend().y, val.y, atol=1e-9)
+    np.testing.assert_allclose(tr.restore_outputs(proc.y), est.y, atol=1e-9)
+    once, tr1 = sysid.detrend(est, "linear", return_trend=True)
+    twice, tr2 = sysid.detrend(sysid.detrend(est, "mean"), "linear", return_trend=True)
+    np.testing.assert_allclose(twice.y, once.y, atol=1e-9)
+    np.testing.assert_allclose(tr2.apply(val).y, tr1.apply(val).y, atol=1e-9)
+    assert tr2.kind == "linear"

@@ -324,22 +324,34 @@ def _trend_of(data: IOData, kind: str, coefs: list[tuple[int, dict[str, np.ndarr
     exps = data._exps
     u_tr = [np.zeros_like(e.u) if e.tu is None else e.tu for e in exps]
     y_tr = [np.zeros_like(e.y) if e.ty is None else e.ty for e in exps]
-    ones = (np.ones(data.n_inputs), np.ones(data.n_outputs))
+    scales = (np.asarray(data._u_scale, float), np.asarray(data._y_scale, float))
     if kind == "piecewise":
-        return Trend(u_tr, y_tr, *ones, dt=data.dt)
+        return Trend(u_tr, y_tr, *scales, dt=data.dt)
+    # everything removed from the raw record so far (earlier detrends too, in raw units,
+    # and through any scaling): a line per experiment when every step was a mean or a line
     w = np.array([n for n, _ in coefs], float)
     w = w / w.sum()
-    offs, slopes = [], []
-    for name in ("u", "y"):
-        offs.append(sum(wk * c[name][0] for wk, (_, c) in zip(w, coefs)))
-        if kind == "linear":
-            # the basis is time scaled to [0, 1] over the experiment: per second, divide by
-            # its duration (n - 1) dt
-            slopes.append(sum(wk * c[name][1] / (max(n - 1, 1) * data.dt)
-                              for wk, (n, c) in zip(w, coefs)))
-        else:
-            slopes.append(np.zeros_like(offs[-1]))
-    return Trend(u_tr, y_tr, *ones, kind="linear" if kind == "linear" else "mean",
+    offs, slopes, affine = [], [], True
+    for trs in (u_tr, y_tr):
+        off, slope = 0.0, 0.0
+        for wk, tr in zip(w, trs):
+            n = tr.shape[0]
+            t = np.arange(n) * data.dt
+            basis = np.column_stack([np.ones(n), t])
+            c = np.linalg.lstsq(basis, tr, rcond=None)[0] if tr.size else np.zeros((2, 0))
+            affine &= bool(np.allclose(basis @ c, tr, rtol=1e-9,
+                                       atol=1e-9 * (1.0 + float(np.max(np.abs(tr), initial=0)))))
+            off, slope = off + wk * c[0], slope + wk * c[1]
+        offs.append(np.atleast_1d(np.asarray(off, float)))
+        slopes.append(np.atleast_1d(np.asarray(slope, float)))
+    if not affine:  # an earlier piecewise detrend: values of this record only
+        return Trend(u_tr, y_tr, *scales, dt=data.dt)
+    line = kind == "linear" or not all(
+        np.allclose(tr, tr[:1], rtol=1e-12, atol=1e-12 * (1.0 + float(np.max(np.abs(tr)))))
+        for trs in (u_tr, y_tr) for tr in trs if tr.size)
+    if not line:
+        slopes = [np.zeros_like(o) for o in offs]
+    return Trend(u_tr, y_tr, *scales, kind="linear" if line else "mean",
                  offsets=(np.asarray(offs[0], float), np.asarray(offs[1], float)),
                  slopes=(np.asarray(slopes[0], float), np.asarray(slopes[1], float)),
                  dt=data.dt, t0=exps[0].t0 if len(exps) == 1 else None)

@@ -135,19 +135,19 @@ class Trend:
         """Raw inputs ``(n, n_inputs)`` minus the trend (what a model fitted on the detrended
         record expects)."""
         arr = as_2d(u, "u", ncols=len(self.u_scale))
-        return arr - self.values(arr.shape[0], "u", dt)
+        return (arr - self.values(arr.shape[0], "u", dt)) / self.u_scale
 
     def remove_outputs(self, y: Any, dt: float | None = None) -> np.ndarray:
         """Raw outputs ``(n, n_outputs)`` minus the trend."""
         arr = as_2d(y, "y", ncols=len(self.y_scale))
-        return arr - self.values(arr.shape[0], "y", dt)
+        return (arr - self.values(arr.shape[0], "y", dt)) / self.y_scale
 
     def restore_outputs(self, y: Any, dt: float | None = None,
                         start: float = 0.0) -> np.ndarray:
         """Detrended (model) outputs ``(n, n_outputs)`` plus the trend (from ``t = start``,
         as :meth:`values`): raw units."""
         arr = as_2d(y, "y", ncols=len(self.y_scale))
-        return arr + self.values(arr.shape[0], "y", dt, start)
+        return arr * self.y_scale + self.values(arr.shape[0], "y", dt, start)
 
     def start_of(self, t0: float) -> float:
         """Where on this trend's line a record (experiment) that starts at time ``t0``
@@ -187,7 +187,17 @@ class Trend:
         def trend_of(n: int, t0: float) -> tuple[np.ndarray, np.ndarray]:
             start = self.start_of(t0)
             return (self.values(n, "u", data.dt, start), self.values(n, "y", data.dt, start))
-        return data._minus_trend(trend_of)
+        out = data._minus_trend(trend_of)
+        mine = (np.asarray(self.u_scale, float), np.asarray(self.y_scale, float))
+        theirs = (np.asarray(data._u_scale, float), np.asarray(data._y_scale, float))
+        if all(np.array_equal(a, b) for a, b in zip(mine, theirs)):
+            return out
+        if all(np.all(b == 1.0) for b in theirs):  # scaled like the estimation record
+            from .preprocessing import scale
+
+            return scale(out, mine)
+        raise DataError("this record is scaled differently from the one the trend was fitted "
+                        "on; apply the trend to the unscaled record")
 
     def restore(self, x: Any) -> Any:
         """Add this trend back: to a record (:class:`~sysid.IOData`, like ``retrend``) or to
