@@ -308,3 +308,37 @@ def test_margin_and_nyquist_of_a_frequency_response_use_its_lines():
     assert b.gain_margin == pytest.approx(a.gain_margin, rel=1e-3)
     assert b.phase_margin == pytest.approx(a.phase_margin, abs=0.1)
     assert sysid.nyquist(fr).encirclements == sysid.nyquist(g).encirclements
+
+
+def test_conversions_of_static_gains_and_transfer_functions():
+    # from_control of a static gain raised a raw ValueError; from_scipy called one UNSTABLE
+    # (SciPy's idle state at s = 0); to_control refused a TransferFunction
+    control = pytest.importorskip("control")
+    for sys in (control.ss(control.tf(2, 1)), control.ss(control.tf(2, 1, 0.1))):
+        m = sysid.from_control(sys)
+        assert m.nstates == 0 and m.is_stable()
+        np.testing.assert_allclose(m.D, [[2.0]])
+    s = sysid.from_scipy(scipy.signal.lti([2.0], [1.0]))
+    assert s.nstates == 0 and s.is_stable()
+    G = sysid.TransferFunction([1.0], [1.0, 1.0])
+    c = sysid.to_control(G)
+    np.testing.assert_allclose(np.asarray(control.dcgain(c)), 1.0)
+
+
+def test_frd_of_a_continuous_model_has_no_sample_time():
+    # FRD.from_model(continuous) stored dt = 0, and frd_subspace then asked "is it zero?"
+    w = np.geomspace(0.01, 100, 50)
+    fr = sysid.FRD.from_model(sysid.TransferFunction([1.0], [1.0, 1.0]), w)
+    assert fr.dt is None
+    with pytest.raises(sysid.DataError, match="needs frd.dt"):
+        sysid.frd_subspace(fr, 1)
+    np.testing.assert_allclose(sysid.frd_subspace(fr, 1, continuous=True).poles(), [-1.0],
+                               atol=1e-6)
+
+
+def test_band_limited_inputs_refuse_a_band_without_lines():
+    # random_binary returned a constant and random_gaussian NaN for a band narrower than one
+    # frequency line of the signal
+    for f in (sysid.random_binary, sysid.random_gaussian):
+        with pytest.raises(sysid.DataError, match="holds no frequency line"):
+            f(100, band=(0.0, 0.015), seed=0)

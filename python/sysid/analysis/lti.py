@@ -182,10 +182,14 @@ def to_control(model: StateSpaceModel | ContinuousStateSpace, *, noise: bool = F
     2
     """
     if not isinstance(model, (StateSpaceModel, ContinuousStateSpace)):
-        hint = (" (for sysid.identify's model: res.model.statespace, the model of the "
-                "deviations from its offsets)" if hasattr(model, "statespace") else "")
-        raise DataError(f"to_control needs a sysid.StateSpaceModel or ContinuousStateSpace, "
-                        f"got {type(model).__name__}{hint}")
+        if hasattr(model, "statespace") or not hasattr(model, "to_statespace"):
+            hint = (" (for sysid.identify's model: res.model.statespace, the model of the "
+                    "deviations from its offsets)" if hasattr(model, "statespace") else "")
+            raise DataError(f"to_control needs a sysid.StateSpaceModel or "
+                            f"ContinuousStateSpace, got {type(model).__name__}{hint}")
+        from ..models.checks import as_statespace
+
+        model = as_statespace(model, "to_control")  # transfer functions, polynomial models
     ct = _control()
     dt = model.dt if isinstance(model, StateSpaceModel) else 0
     B, D, inputs = model.B, model.D, list(model.input_names)
@@ -201,10 +205,15 @@ def to_control(model: StateSpaceModel | ContinuousStateSpace, *, noise: bool = F
 
 
 def _from_matrices(A: Any, B: Any, C: Any, D: Any, dt: Any, names: tuple[Any, Any]) -> Any:
-    A = as_matrix(A, "A", (None, None))
+    D = np.atleast_2d(np.asarray(D, dtype=float))
+    A = np.asarray(A, dtype=float)
+    A = as_matrix(A if A.size else np.zeros((0, 0)), "A", (None, None))
     n = A.shape[0]
-    B = np.asarray(B, dtype=float).reshape(n, -1)
-    C = np.asarray(C, dtype=float).reshape(-1, n)
+    B = np.asarray(B, dtype=float).reshape(n, D.shape[1])
+    C = np.asarray(C, dtype=float).reshape(D.shape[0], n)
+    if n and not np.any(B) and not np.any(C):
+        # a static gain as SciPy writes it: one state that neither input nor output touches
+        A, B, C = np.zeros((0, 0)), np.zeros((0, D.shape[1])), np.zeros((D.shape[0], 0))
     if dt is None or dt is True or dt == 0:
         if dt is True:
             raise DataError("the system is discrete with an unspecified sample time; set dt")

@@ -128,7 +128,13 @@ def _bandlimit(x: np.ndarray, band: tuple[float, float]) -> np.ndarray:
     n = x.shape[0]
     X = np.fft.rfft(x, axis=0)
     f = np.arange(X.shape[0]) / (n / 2.0)  # fraction of Nyquist
-    X[(f < lo) | (f > hi)] = 0.0
+    out = (f < lo) | (f > hi)
+    if not np.any(~out & (f > 0)):
+        raise DataError(
+            f"the band {lo:g}..{hi:g} (fractions of Nyquist) holds no frequency line of a "
+            f"{n}-sample signal (the lines are {2.0 / n:.3g} apart); widen the band or "
+            "lengthen the signal")
+    X[out] = 0.0
     return np.fft.irfft(X, n, axis=0)
 
 

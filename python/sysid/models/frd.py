@@ -96,7 +96,7 @@ class FRD:
         if dof is not None and not dof > 0:
             raise DataError(f"dof must be positive, got {dof}")
         self.dof = None if dof is None else float(dof)
-        self.dt = dt
+        self.dt = None if dt is None or float(dt) == 0.0 else float(dt)  # 0: continuous
         l, m = g.shape[1:]
         self.input_names = IOData._names(input_names, m, "u", "input")
         self.output_names = IOData._names(output_names, l, "y", "output")
@@ -227,8 +227,9 @@ class FRD:
         >>> sysid.FRD.from_model(m, np.linspace(0.1, 30.0, 10))
         FRD (model): 10 frequencies 0.1..30 rad/s, 1 output x 1 input
         """
-        return cls(
-            omega, model.freqresp(np.asarray(omega, dtype=float)), dt=getattr(model, "dt", None),
+        return cls(  # a continuous model (dt = 0) gives an FRD without a sample time
+            omega, model.freqresp(np.asarray(omega, dtype=float)),
+            dt=getattr(model, "dt", None) or None,
             input_names=getattr(model, "input_names", None),
             output_names=getattr(model, "output_names", None), method="model",
         )
