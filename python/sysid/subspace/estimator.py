@@ -189,9 +189,9 @@ def horizon_for_order(data: IOData, order: Any, horizon: int | None) -> int | No
     """The horizon for fitting ``order`` states: ``horizon`` when given, else the default
     (:func:`available_horizon`) or, when that allows fewer than ``order`` states (at most
     ``(i - 1) l``), the smallest horizon that allows them, provided the data have as many
-    Hankel columns as its data matrix has rows (``2 i (m + l)``); otherwise the default
-    (whose order error then says how far it reaches). MATLAB's ``n4sid(data, n)`` likewise
-    fits any order the data support.
+    Hankel columns as its data matrix has rows (``2 i (m + l)``); otherwise the largest
+    horizon the data support (whose order error then names the largest order they allow).
+    MATLAB's ``n4sid(data, n)`` likewise fits any order the data support.
 
     Examples
     --------
@@ -200,7 +200,7 @@ def horizon_for_order(data: IOData, order: Any, horizon: int | None) -> int | No
     >>> u = np.random.default_rng(0).standard_normal((60, 5))
     >>> d = sysid.IOData(u, u[:, :3])                   # 60 samples, 5 in, 3 out
     >>> horizon_for_order(d, 3, None), horizon_for_order(d, 4, None), horizon_for_order(d, 9, None)
-    (None, 3, None)
+    (None, 3, 3)
     """
     if horizon is not None or isinstance(order, str) or np.ndim(order) or order is None:
         return horizon
@@ -209,9 +209,16 @@ def horizon_for_order(data: IOData, order: Any, horizon: int | None) -> int | No
     i0 = available_horizon(lengths, m, l)
     if int(order) <= (i0 - 1) * l:
         return None
+    def fits(i: int) -> bool:
+        return sum(max(0, n - 2 * i + 1) for n in lengths) >= 2 * i * (m + l)
+
     need = -(-int(order) // l) + 1
-    columns = sum(max(0, n - 2 * need + 1) for n in lengths)
-    return need if need <= 50 and columns >= 2 * need * (m + l) else None
+    if need <= 50 and fits(need):
+        return need
+    # beyond the data: the largest horizon they support, whose order error then names the
+    # largest order they allow
+    top = max((i for i in range(i0, min(need, 51)) if fits(i)), default=i0)
+    return top if top > i0 else None
 
 
 class SubspaceEstimator:
