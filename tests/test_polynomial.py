@@ -269,3 +269,18 @@ def test_oe_starts_from_an_unstable_model_by_reflecting_its_roots():
     np.testing.assert_allclose(m.f[0][0], [-1.5, 0.7], atol=5e-3)
     stable = sysid.PolynomialModel([[np.array([-1.4, 0.6])]], [[np.array([0.5, 0.2])]], [[1]], 1.0)
     assert sysid.oe(sysid.IOData(u, y), 2, 2, 1, init=stable).info["start_stabilized"] == [False]
+
+
+def test_residuals_fit_the_initial_state_as_compare_does():
+    # residuals never estimated the initial state of OE models (norm 229 against 144 for
+    # compare's one-step errors on a heating record)
+    rng = np.random.default_rng(8)
+    u = rng.standard_normal((300, 1))
+    m = sysid.PolynomialModel([[[]]], [[[0.5, 0.2]]], [[1]], 1.0, f=[[[-0.9]]])
+    ss = m.to_statespace()
+    y = ss.simulate(u, x0=np.full(ss.nstates, 20.0)) + 0.01 * rng.standard_normal((300, 1))
+    r = sysid.residuals(m, (u, y))
+    c = sysid.compare((u, y), m, horizon=1)
+    np.testing.assert_allclose(np.asarray(r.e).reshape(-1), (y - c.yhat[0]).reshape(-1),
+                               atol=1e-9)
+    assert np.std(np.asarray(r.e)) < 0.02

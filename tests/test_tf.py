@@ -283,3 +283,15 @@ def test_transfer_function_pole_and_frequency_std_and_an_unstable_warning():
     with pytest.warns(sysid.StabilityWarning, match=r"tfest returned an unstable model.*"
                                                     r"real part 0\.3"):
         sysid.tfest(frd, 1, 0)
+
+
+def test_compare_fits_the_initial_state_under_a_first_order_hold_too():
+    # a FOH model's simulation starts from the first input, so the check that its sampled
+    # state-space form is the same map failed and compare fell back to a start from rest
+    rng = np.random.default_rng(5)
+    u = rng.standard_normal((300, 1))
+    G = sysid.TransferFunction([2.0], [1.0, 0.5], hold="foh")
+    y = G.simulate(u, dt=0.1, x0=[4.0])
+    data = sysid.IOData(u, y, dt=0.1)
+    assert sysid.compare(data, G).fit[0, 0] == pytest.approx(100.0, abs=1e-6)
+    assert sysid.compare(data, G, x0="zero").fit[0, 0] < 90.0

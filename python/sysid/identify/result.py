@@ -80,8 +80,23 @@ class IdentifiedModel:
         return (self.statespace.predict(u - self.u_offset, y - self.y_offset, horizon)
                 + self.y_offset)
 
-    def freqresp(self, omega: Any) -> np.ndarray:
-        return self.statespace.freqresp(omega)
+    def freqresp(self, omega: Any, std: bool = False) -> Any:
+        """Frequency response of :attr:`statespace` (offsets do not enter it); ``std=True``:
+        with its standard deviations, as :meth:`StateSpaceModel.freqresp`."""
+        return self.statespace.freqresp(omega, std=std)
+
+    def step(self, n_samples: int | None = None) -> Any:
+        """Step response of the dynamics (:attr:`statespace`, from the operating point, as
+        MATLAB's ``step``): the change of the outputs for a unit change of each input."""
+        return self.statespace.step(n_samples)
+
+    def impulse(self, n_samples: int | None = None) -> Any:
+        """Impulse response of the dynamics (:attr:`statespace`)."""
+        return self.statespace.impulse(n_samples)
+
+    def to_statespace(self) -> Any:
+        """The model of the deviations from the offsets (:attr:`statespace`)."""
+        return self.statespace
 
     def poles(self, std: bool = False, method: str = "linear") -> Any:
         """The poles (offsets do not move them); ``std=True``: with their standard deviations

@@ -499,6 +499,9 @@ class _Sampled:
         return np.asarray(self.continuous.to_statespace(self.dt).freqresp(omega))
 
     prediction_is_simulation = True  # no noise model: predictions are the simulation
+    #: the sampled form differs from the simulation only by the initial state (a first-order
+    #: hold starts from the first input): compare's fitted x0 takes it up
+    statespace_up_to_x0 = True
 
     def to_statespace(self) -> Any:
         """The exact sampled state-space model (delays as extra states): what lets

@@ -64,6 +64,8 @@ def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndar
     state), or ``c2d(dt)`` for another continuous class.
     """
     check_model(model)
+    if _operating_point(model):  # residuals are the same about the offsets: use its inside
+        data, model = model.remove_offsets(data), model.statespace
     if isinstance(data, IOData):
         recs = data.experiments
     elif isinstance(data, tuple) and len(data) == 2:
@@ -100,6 +102,12 @@ def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndar
             "resample the data or use a model of the same sample time"
         )
     return model, recs
+
+
+def _operating_point(model: Any) -> bool:
+    """A model of deviations about offsets (:class:`sysid.identify.IdentifiedModel`): its
+    ``statespace`` on ``remove_offsets(data)``."""
+    return hasattr(model, "statespace") and hasattr(model, "remove_offsets")
 
 
 def _stateful(model: Any) -> bool:
@@ -426,6 +434,12 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
               for b, t in zip(inner.yhat, data.times)]
         return CompareResult(model, inner.horizon, [u for u, _ in raw], [y for _, y in raw],
                              yh, inner.x0)
+    if _operating_point(model):  # the model of the deviations, its offsets added back
+        raw = data if isinstance(data, IOData) else IOData(u=data[0], y=data[1], dt=model.dt)
+        inner = compare_one(model.statespace, model.remove_offsets(raw), horizon, x0)
+        return CompareResult(model, inner.horizon, [u for u, _ in raw.experiments],
+                             [y for _, y in raw.experiments],
+                             [yh + model.y_offset for yh in inner.yhat], inner.x0)
     model, recs = _records(model, data)
     h = _horizon(horizon)
     runner = _simulator(model, x0, h, recs[0][0] if recs else None)
@@ -470,6 +484,10 @@ def _simulator(model: Any, x0: Any, horizon: int | None, u: np.ndarray | None = 
         return model
     if not _stateful(ss):
         return model
+    if getattr(model, "statespace_up_to_x0", False):
+        # the same map but for the initial state (a first-order hold's start from the first
+        # input), which the fitted x0 takes up
+        return ss
     if u is not None and getattr(model, "dt", 0) and getattr(ss, "dt", 0):
         k = min(len(u), 200)
         try:

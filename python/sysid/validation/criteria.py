@@ -50,7 +50,7 @@ from ..data.iodata import IOData
 from ..errors import DataError, NumericalError, SysidError
 from ..models.checks import _optional, check_model
 from ..models.statespace import StateSpaceModel, ss_parameter_count
-from .compare import _records, _run, _stateful, _x0_for, compare
+from .compare import _records, _run, _simulator, _stateful, _x0_for, compare
 
 __all__ = ["n_parameters", "Criteria", "criteria", "OrderSelection", "select_order"]
 
@@ -140,9 +140,10 @@ def criteria(model: Any, data: Any, *, x0: Any = "estimate",
     given = model
     model, recs = _records(model, data)
     es, ys = [], []
+    runner = _simulator(model, x0, 1, recs[0][0] if recs else None)  # x0 fitted as compare
     for i, (u, y) in enumerate(recs):
-        x = _x0_for(model, x0, u, y, 1, i, len(recs))
-        es.append(y - _run(model, u, y, 1, x))
+        x = _x0_for(runner, x0, u, y, 1, i, len(recs))
+        es.append(y - _run(runner, u, y, 1, x))
         ys.append(y)
     e, y = np.vstack(es), np.vstack(ys)
     N = e.shape[0]
@@ -150,8 +151,8 @@ def criteria(model: Any, data: Any, *, x0: Any = "estimate",
     _, logdet = np.linalg.slogdet(lam)  # lam is positive definite by construction
     if n_params is None:
         n_params = int(given.n_parameters)
-        if _stateful(model) and isinstance(x0, str) and x0 == "estimate":
-            n_params += model.nstates * len(recs)
+        if _stateful(runner) and isinstance(x0, str) and x0 == "estimate":
+            n_params += runner.nstates * len(recs)  # the fitted initial states
     return Criteria(logdet, n_params, N)
 
 

@@ -14,7 +14,7 @@ import numpy as np
 from .._checks import as_int
 from .._display import HTMLResult
 from ..errors import DataError
-from .compare import X0, _records, _run, _x0_for
+from .compare import X0, _records, _run, _simulator, _x0_for
 
 __all__ = ["ResidualAnalysis", "residuals"]
 
@@ -209,8 +209,9 @@ def residuals(model: Any, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
         raise DataError(f"max_lag={max_lag} needs more than {max_lag} samples per experiment; "
                         f"the shortest has {N}")
     es, us = [], []
+    runner = _simulator(model, x0, 1, recs[0][0] if recs else None)  # x0 fitted as compare
     for i, (u, y) in enumerate(recs):
-        x = _x0_for(model, x0, u, y, 1, i, len(recs))
-        es.append(y - _run(model, u, y, 1, x))
+        x = _x0_for(runner, x0, u, y, 1, i, len(recs))
+        es.append(y - _run(runner, u, y, 1, x))
         us.append(u)
     return ResidualAnalysis(model, es, us, int(max_lag), float(alpha))
