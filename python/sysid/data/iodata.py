@@ -424,6 +424,13 @@ class IOData:
             exps.append(_Exp(parts[0][0], parts[1][0], e.t0, parts[0][1], parts[1][1]))
         return self._derive(exps)
 
+    def _scaled(self, su: np.ndarray, sy: np.ndarray) -> IOData:
+        """Every channel divided by its factor, recorded (see :func:`sysid.scale`)."""
+        new = self._derive([_Exp(e.u / su, e.y / sy, e.t0, e.tu, e.ty) for e in self._exps])
+        new._u_scale = self._u_scale * su
+        new._y_scale = self._y_scale * sy
+        return new
+
     def retrend(self) -> IOData:
         """The record in original units: trend and scaling added back.
 

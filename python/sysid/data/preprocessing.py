@@ -396,11 +396,7 @@ def scale(data: IOData, by: str | Any = "std") -> IOData:
                 f"{kind} {names[int(np.flatnonzero(bad)[0])]} has scale "
                 f"{s[bad][0]:g} (a constant channel?); remove it or give explicit scales"
             )
-    exps = [_Exp(e.u / su, e.y / sy, e.t0, e.tu, e.ty) for e in data._exps]
-    new = data._derive(exps)
-    new._u_scale = data._u_scale * su
-    new._y_scale = data._y_scale * sy
-    return new
+    return data._scaled(su, sy)
 
 
 # --------------------------------------------------------------------------------------------

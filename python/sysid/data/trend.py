@@ -193,9 +193,7 @@ class Trend:
         if all(np.array_equal(a, b) for a, b in zip(mine, theirs)):
             return out
         if all(np.all(b == 1.0) for b in theirs):  # scaled like the estimation record
-            from .preprocessing import scale
-
-            return scale(out, mine)
+            return out._scaled(*mine)
         raise DataError("this record is scaled differently from the one the trend was fitted "
                         "on; apply the trend to the unscaled record")
 

@@ -391,7 +391,10 @@ fn steiglitz_mcbride_multi(
     iters: usize,
 ) -> Result<(Vec<f64>, Vec<f64>)> {
     let mut f = vec![0.0; nf];
-    let mut b = vec![0.0; nb];
+    // The iterations need not converge (on a dryer record they cycle with period 6, the
+    // last iterate just outside the unit circle): the start is the stable iterate whose
+    // simulation fits best, not the last one.
+    let mut best: Option<(f64, Vec<f64>, Vec<f64>)> = None;
     for _ in 0..iters.max(1) {
         let fp = monic(&f);
         let (yf, xf) = if is_stable(&fp) {
@@ -403,16 +406,36 @@ fn steiglitz_mcbride_multi(
         let fnew: Vec<f64> = th[..nf].iter().map(|v| -v).collect();
         let bnew = th[nf..].to_vec();
         let change: f64 = fnew.iter().zip(&f).map(|(a, c)| (a - c).abs()).sum();
+        let fm = monic(&fnew);
+        if is_stable(&fm) {
+            let sim = fmap(&bnew, &fm, x);
+            let cost: f64 = y
+                .iter()
+                .zip(&sim)
+                .map(|(ye, se)| {
+                    ye.iter()
+                        .zip(se)
+                        .map(|(a, c)| (a - c) * (a - c))
+                        .sum::<f64>()
+                })
+                .sum();
+            if cost.is_finite() && best.as_ref().is_none_or(|(c, _, _)| cost < *c) {
+                best = Some((cost, bnew.clone(), fnew.clone()));
+            }
+        }
         f = fnew;
-        b = bnew;
         if change < 1e-12 {
             break;
         }
     }
-    if !is_stable(&monic(&f)) {
-        f.iter_mut().for_each(|v| *v = 0.0);
+    match best {
+        Some((_, b, f)) => Ok((b, f)),
+        None => {
+            // no stable iterate: a finite impulse response (F = 1) by least squares
+            let th = lagged_ls(y, &[(x, 0, nb)])?;
+            Ok((th, vec![0.0; nf]))
+        }
     }
-    Ok((b, f))
 }
 
 fn stable_or_zero(c: Vec<f64>) -> Vec<f64> {
