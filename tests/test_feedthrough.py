@@ -76,11 +76,17 @@ def test_feedthrough_true_estimates_d(name):
 def test_pem_says_when_it_drops_the_start_d():
     data = feedthrough_record(0.8)
     start = quiet(sysid.n4sid, data, 2, feedthrough=True)
-    with pytest.warns(UserWarning, match="non-zero D"):
-        m = sysid.pem(data, start)
+    with pytest.warns(UserWarning, match="non-zero D but feedthrough=False"):
+        m = sysid.pem(data, start, feedthrough=False)
     assert np.all(m.D == 0) and m.info["pem"]["start_d_dropped"]
     kept = quiet(sysid.pem, data, start, feedthrough=True)
     assert abs(kept.D[0, 0] - 0.8) < 0.05 and not kept.info["pem"]["start_d_dropped"]
+    # by default pem refines the structure it is given: the start's D (it dropped it, with a
+    # warning that called D = 0 "the default of every sysid estimator"; on a heat exchanger
+    # record the validation fit fell from 57.5 to 16.0 %)
+    same = quiet(sysid.pem, data, start)
+    assert abs(same.D[0, 0] - 0.8) < 0.05 and not same.info["pem"]["start_d_dropped"]
+    assert sysid.pem_loss(data, start) < sysid.pem_loss(data, start, feedthrough=False)
 
 
 def test_frd_subspace_continuous_default_has_no_continuous_feedthrough():

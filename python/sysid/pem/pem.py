@@ -29,7 +29,7 @@ from ..errors import DataError, StabilityWarning
 from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
-from ..subspace.feedthrough import FEEDTHROUGH_DEFAULT, check_feedthrough, choose_feedthrough
+from ..subspace.feedthrough import check_feedthrough, choose_feedthrough
 
 __all__ = ["pem", "pem_loss", "PemUncertainty"]
 
@@ -266,6 +266,14 @@ def _unscaled(model: StateSpaceModel, scale: np.ndarray | None) -> StateSpaceMod
         info=model.info)
 
 
+def _as_start(feedthrough: Any, model: Any) -> Any:
+    """``feedthrough=None``: as the start model (its ``D`` estimated when non-zero)."""
+    if feedthrough is None:
+        D = getattr(model, "D", None)
+        return bool(D is not None and np.any(np.asarray(D) != 0))
+    return feedthrough
+
+
 def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None) -> None:
     """The warnings of a refinement: an unstable model, a search stopped at its cap."""
     rho = float(res["spectral_radius"])
@@ -288,7 +296,7 @@ def pem_loss(
     model: StateSpaceModel,
     *,
     focus: str = "prediction",
-    feedthrough: bool = FEEDTHROUGH_DEFAULT,
+    feedthrough: bool | None = None,
     x0: Any = "estimate",
     noise: str = "estimate",
     weighting: str | None = None,
@@ -308,8 +316,9 @@ def pem_loss(
     ----------
     data, model, focus, x0, noise, weighting, enforce_stability
         As for :func:`pem`.
-    feedthrough : bool
-        As for :func:`pem` (``"auto"`` is not taken: score each choice).
+    feedthrough : bool, optional
+        As for :func:`pem` (``"auto"`` is not taken: score each choice); default as the
+        start model (its ``D`` when non-zero).
 
     Returns
     -------
@@ -330,7 +339,8 @@ def pem_loss(
     ...                                                                  focus="simulation")
     True
     """
-    st = _setup(data, model, focus, feedthrough, x0, noise, weighting, enforce_stability)
+    st = _setup(data, model, focus, _as_start(feedthrough, model), x0, noise, weighting,
+                enforce_stability)
     if st.stabilized:
         return float("inf")
     try:
@@ -347,7 +357,7 @@ def pem(
     model: StateSpaceModel,
     *,
     focus: str = "prediction",
-    feedthrough: bool | str = FEEDTHROUGH_DEFAULT,
+    feedthrough: bool | str | None = None,
     x0: Any = "estimate",
     noise: str = "estimate",
     max_iter: int = 50,
@@ -371,12 +381,14 @@ def pem(
         The start (for example a subspace estimate).
     focus : {"prediction", "simulation"}
         One-step prediction errors of the innovation form, or simulation errors (``K = 0``).
-    feedthrough : bool or "auto"
-        Estimate ``D`` (``True``) or force ``D = 0`` (``False``, the default: MATLAB's, and
-        the same for every sysid state-space estimator; a start with a non-zero ``D`` then
-        warns that its ``D`` is dropped). ``"auto"``: decided from the data by the rule
-        every estimator shares (:func:`sysid.subspace.feedthrough.choose_feedthrough`, at the
-        start's order; recorded in ``info["feedthrough_selection"]``).
+    feedthrough : bool or "auto", optional
+        Estimate ``D`` (``True``) or force ``D = 0`` (``False``; a start with a non-zero
+        ``D`` then warns that its ``D`` is dropped). Default: as the start model, the
+        structure being refined (MATLAB's ``pem`` keeps its initial model's): ``D``
+        estimated when the start's is non-zero, else ``D = 0`` (the default of every sysid
+        state-space estimator at a given order). ``"auto"``: decided from the data by the
+        rule every estimator shares (:func:`sysid.subspace.feedthrough.choose_feedthrough`,
+        at the start's order; recorded in ``info["feedthrough_selection"]``).
     x0 : "estimate", "zero", array, or a list with one per experiment
         Initial states: estimated with the model (default), zero, or given.
     noise : {"estimate", "none", "fixed"}
@@ -491,6 +503,7 @@ def pem(
     True
     """
     periodicity = None
+    feedthrough = _as_start(feedthrough, model)
     if isinstance(data, FRD):
         return _pem_periodic(data, model, data, feedthrough, max_iter, tol, progress,
                              weighting, regularization)
@@ -513,10 +526,9 @@ def pem(
     st = _setup(data, model, focus, feedthrough, x0, noise, weighting, enforce_stability,
                 balance=regularization is None)
     if st.dropped_d:
-        warnings.warn("the start model has a non-zero D and feedthrough=False (the default "
-                      "of every sysid estimator): it is refined with D = 0; pass "
-                      "feedthrough=True to refine D as well",
-                      UserWarning, stacklevel=2)
+        warnings.warn("the start model has a non-zero D but feedthrough=False: it is "
+                      "refined with D = 0; leave feedthrough out (or pass True) to refine "
+                      "its D as well", UserWarning, stacklevel=2)
     check_offsets(st.data)  # issue 26: the one offset check (OffsetWarning)
     max_iter = as_int(max_iter, "max_iter", 0)
     tol = float(tol)
@@ -633,9 +645,9 @@ def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
 
         ft, _ = choose_feedthrough(SubspaceEstimator(_experiments(data)), model.nstates)
     if not ft and np.any(model.D != 0):
-        warnings.warn("the start model has a non-zero D and feedthrough=False (the default "
-                      "of every sysid estimator): it is refined with D = 0; pass "
-                      "feedthrough=True to refine D as well", UserWarning, stacklevel=3)
+        warnings.warn("the start model has a non-zero D but feedthrough=False: it is "
+                      "refined with D = 0; leave feedthrough out (or pass True) to refine "
+                      "its D as well", UserWarning, stacklevel=3)
     max_iter = as_int(max_iter, "max_iter", 0)
     tol = float(tol)
     if not (np.isfinite(tol) and tol >= 0):
