@@ -137,6 +137,16 @@ class PolynomialModel(ModelMixin):
                 and all(_monic(self.a[i][i]).size == 1 and _monic(self.c[i]).size == 1
                         and _monic(self.d[i]).size == 1 for i in range(self.n_outputs)))
 
+    @property
+    def statespace_predicts(self) -> bool:
+        """``True`` when :meth:`to_statespace` carries the noise model too (a time series'
+        innovations form; a coupled ARX model's observer form with ``K``): its predictions
+        are this model's, and :func:`sysid.compare` fits their initial state."""
+        if self.coupled:
+            return not any(x.size for row in self.f for x in row) and not any(
+                x.size for x in (*self.c, *self.d))
+        return self.n_inputs == 0
+
     # -- the model protocol (sysid.Model) ------------------------------------------------
     ninputs = property(lambda self: self.n_inputs, doc="Number of inputs (protocol name).")
     noutputs = property(lambda self: self.n_outputs, doc="Number of outputs (protocol name).")

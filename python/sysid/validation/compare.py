@@ -472,7 +472,8 @@ def _simulator(model: Any, x0: Any, horizon: int | None, u: np.ndarray | None = 
     (``statespace_is_exact = False`` on the class, or a simulation of the first samples of
     ``u`` that differs): it is simulated itself, from rest; its linear part would be
     compared in its place."""
-    if horizon is not None and not getattr(model, "prediction_is_simulation", False):
+    if horizon is not None and not (getattr(model, "prediction_is_simulation", False)
+                                    or getattr(model, "statespace_predicts", False)):
         return model
     if (_stateful(model) or not isinstance(x0, str)
             or x0 != "estimate" or not hasattr(model, "to_statespace")
@@ -484,7 +485,8 @@ def _simulator(model: Any, x0: Any, horizon: int | None, u: np.ndarray | None = 
         return model
     if not _stateful(ss):
         return model
-    if getattr(model, "statespace_up_to_x0", False):
+    if getattr(model, "statespace_up_to_x0", False) or (
+            horizon is not None and getattr(model, "statespace_predicts", False)):
         # the same map but for the initial state (a first-order hold's start from the first
         # input), which the fitted x0 takes up
         return ss
