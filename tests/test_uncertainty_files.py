@@ -29,6 +29,7 @@ def _fits() -> dict:
             "oe": sysid.oe(d, 2, 2, 1),
             "armax": sysid.armax(d, 2, 2, 1, 1),
             "tfest": sysid.tfest(d, 2, 1),
+            "tfest discrete": sysid.tfest(d, 2, 1, dt=0.1),  # build() makes PolynomialModels
             "procest": sysid.procest(d, "P2"),
             "ssest": sysid.ssest(d, 2),
             "identify": sysid.identify(d, refine=False).model,

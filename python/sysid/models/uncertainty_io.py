@@ -64,11 +64,20 @@ def uncertainty_to_dict(model: Any) -> dict[str, Any] | None:
     if not isinstance(unc, ParameterUncertainty):
         return None
     p = unc.n_parameters
-    if type(unc.build(unc.theta)) is not type(model):
+    if isinstance(getattr(type(model), "uncertainty", None), property):
         return None  # a wrapper (offsets, trend): its inner model carries the uncertainty
+    nominal = unc.build(unc.theta)
+    other = None  # the family build() makes, when not the model's own (a discrete TF's
+    if type(nominal) is not type(model):  # build makes PolynomialModels): saved whole
+        from .serialize import family_name
+
+        if not callable(getattr(nominal, "to_dict", None)):
+            return {"omitted": f"build() makes a {type(nominal).__name__}, which cannot be "
+                               "saved"}
+        other = {"family": family_name(nominal), "body": nominal.to_dict()}
     if p > MAX_PARAMETERS:
         return {"omitted": f"{p} parameters (more than {MAX_PARAMETERS})"}
-    base = _leaves(unc.build(unc.theta).to_dict())
+    base = _leaves(nominal.to_dict())
     scale = max(1.0, float(np.max(np.abs(unc.theta)))) if p else 1.0
     rows, cols, vals, linear = [], [], [], True
     keys = list(base)
@@ -93,6 +102,7 @@ def uncertainty_to_dict(model: Any) -> dict[str, Any] | None:
             vals.extend(d[nz])
     return {"theta": unc.theta, "covariance": unc.covariance, "names": list(unc.names),
             "dof": int(unc.dof), "method": unc.method, "linear": linear,
+            **({} if other is None else {"built": other}),
             "paths": [list(k) for k in keys],
             "map": {"rows": np.asarray(rows, dtype=float), "cols": np.asarray(cols, dtype=float),
                     "values": np.asarray(vals, dtype=float)}}
@@ -111,6 +121,18 @@ def uncertainty_from_dict(saved: dict[str, Any], body: dict[str, Any], cls: type
     ``to_dict()`` content; ``cls.from_dict`` makes the model)."""
     if "omitted" in saved:
         return None
+    built = saved.get("built")
+    if isinstance(built, dict):  # build() makes another family than the model's
+        import importlib
+
+        from .serialize import REGISTRY
+
+        lazy = {"TransferFunction": "sysid.tf.model", "ProcessModel": "sysid.process.model"}
+        if built["family"] not in REGISTRY and built["family"] in lazy:
+            importlib.import_module(lazy[built["family"]])
+        if built["family"] not in REGISTRY:
+            return None
+        cls, body = REGISTRY[built["family"]], built["body"]
     theta = np.asarray(saved["theta"], dtype=float).ravel()
     paths = [list(p) for p in saved["paths"]]
     leaves = _leaves(body)
