@@ -295,3 +295,14 @@ def test_compare_fits_the_initial_state_under_a_first_order_hold_too():
     data = sysid.IOData(u, y, dt=0.1)
     assert sysid.compare(data, G).fit[0, 0] == pytest.approx(100.0, abs=1e-6)
     assert sysid.compare(data, G, x0="zero").fit[0, 0] < 90.0
+
+
+def test_continuous_transfer_function_impulse_response():
+    # sysid.impulse(tf) asked for a dt that neither it nor tf.impulse accepted
+    G = sysid.TransferFunction([3.0], [1.0, 2.0], iodelay=0.3)
+    r = G.impulse(6, dt=0.2)
+    np.testing.assert_allclose(r.y[:, 0, 0], 3 * np.exp(-2 * (r.t - 0.3)) * (r.t >= 0.3),
+                               atol=1e-12)
+    G2 = sysid.TransferFunction([1.0, 0.5], [1.0, 3.0, 2.0])
+    np.testing.assert_allclose(sysid.impulse(G2).y, G2.to_statespace().impulse(
+        200, dt=sysid.impulse(G2).t[1]).y, atol=1e-12)

@@ -509,3 +509,27 @@ def test_frequency_response_std_of_a_continuous_model_is_taken_at_s_equal_j_omeg
     np.testing.assert_allclose(H.ravel(), 1 / (1j * w + 1), atol=1e-12)
     np.testing.assert_allclose(sd.ravel().real, np.abs(d.real), rtol=1e-6, atol=1e-12)
     np.testing.assert_allclose(sd.ravel().imag, np.abs(d.imag), rtol=1e-6, atol=1e-12)
+
+
+def test_continuous_models_carry_uncertainty_through_d2c_and_damp():
+    # d2c dropped the uncertainty (and ContinuousStateSpace had no poles(std=True)); damp
+    # refused std for continuous models although their poles(std=True) worked
+    rng = np.random.default_rng(12)
+    true = sysid.StateSpaceModel([[0.9, 0.2], [-0.2, 0.9]], [[1.0], [0.0]], [[1.0, 0.5]],
+                                 dt=0.1)
+    u = rng.standard_normal((800, 1))
+    d = sysid.IOData(u, true.simulate(u) + 0.05 * rng.standard_normal((800, 1)), dt=0.1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = sysid.ssest(d, 2, focus="simulation")
+    c = sysid.d2c(m)
+    z, zsd = m.poles(std=True)
+    s, ssd = c.poles(std=True)
+    # s = log(z) / dt: first order, |ds| = |dz| / (|z| dt) for each pole
+    order = [int(np.argmin(np.abs(np.exp(si * 0.1) - z))) for si in s]
+    np.testing.assert_allclose(np.abs(ssd), np.abs(zsd[order]) / (np.abs(z[order]) * 0.1),
+                               rtol=0.02)
+    table = sysid.damp(c, std=True)
+    assert np.all(np.isfinite(table.wn_std)) and np.all(np.isfinite(table.zeta_std))
+    H, sd = c.freqresp([0.5, 2.0], std=True)
+    assert sd.shape == H.shape and np.all(np.abs(sd) > 0)

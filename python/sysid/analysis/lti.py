@@ -95,12 +95,10 @@ def damp(model: Any, std: bool = False) -> DampingTable:
     """
     check_model(model)
     if std:
-        if not float(model.dt):
-            raise DataError("damp(std=True) needs a discrete-time model with uncertainty")
         from ..models.pole_uncertainty import damping_std
 
-        d = damping_std(model, model.dt)
-        return DampingTable(d["poles"], d["s"].astype(complex), model.dt, std=d)
+        d = damping_std(model, float(model.dt))  # dt = 0: a continuous model's own poles
+        return DampingTable(d["poles"], d["s"].astype(complex), float(model.dt) or None, std=d)
     return damping_table(np.asarray(_optional(model, "poles", "damp")), float(model.dt))
 
 

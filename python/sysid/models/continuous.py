@@ -94,6 +94,7 @@ class ContinuousStateSpace(ModelMixin):
         self.input_names, self.output_names = ref.input_names, ref.output_names
         self.hold = _method(hold, ("zoh", "foh"), "hold")
         self.info: dict[str, Any] = dict(info or {})
+        self.uncertainty: Any = None  # a ParameterUncertainty when estimated (or d2c'd)
 
     dt = 0.0  # continuous time (python-control's convention)
     nstates = property(lambda self: self.A.shape[0], doc="Number of states n.")
@@ -106,8 +107,14 @@ class ContinuousStateSpace(ModelMixin):
         return ss_parameter_count(self.nstates, self.ninputs, self.noutputs,
                                   feedthrough=bool(np.any(self.D != 0)), noise_model=False)
 
-    def poles(self) -> np.ndarray:
-        """Eigenvalues of A (continuous-time poles, rad/s)."""
+    def poles(self, std: bool = False, method: str = "linear") -> Any:
+        """Eigenvalues of A (continuous-time poles, rad/s); with ``std=True`` (needs
+        :attr:`uncertainty`) the pair ``(poles, sd)`` as for
+        :meth:`sysid.StateSpaceModel.poles`."""
+        if std:
+            from .pole_uncertainty import pole_std
+
+            return pole_std(self, method)
         return np.linalg.eigvals(self.A).astype(complex)
 
     def zeros(self) -> np.ndarray:
@@ -118,8 +125,13 @@ class ContinuousStateSpace(ModelMixin):
         """True when every pole has a strictly negative real part."""
         return bool(self.nstates == 0 or np.max(self.poles().real) < 0)
 
-    def freqresp(self, omega: Any) -> np.ndarray:
-        """``C (j omega I - A)^{-1} B + D``, shape ``(len(omega), noutputs, ninputs)``."""
+    def freqresp(self, omega: Any, std: bool = False) -> Any:
+        """``C (j omega I - A)^{-1} B + D``, shape ``(len(omega), noutputs, ninputs)``; with
+        ``std=True`` (needs :attr:`uncertainty`) the pair ``(H, sd)``, ``sd`` complex."""
+        if std:
+            from .uncertainty import freqresp_std
+
+            return freqresp_std(self, omega)
         w = np.atleast_1d(np.asarray(omega, dtype=float))
         if w.ndim != 1 or not np.isfinite(w).all():
             raise DataError("omega must be a finite 1-D array of angular frequencies (rad/s)")
@@ -429,7 +441,7 @@ def d2c(model: StateSpaceModel, method: str = "zoh") -> ContinuousStateSpace:
     ``A = log(Ad) / dt`` and solves the FOH relations for ``B`` and ``D``. Both fail with a
     :class:`NumericalError` when a pole lies on the negative real axis or at zero (no real
     logarithm). ``tustin`` fails when a pole is at ``z = -1``. The noise model (``K``) is not
-    converted.
+    converted; the parameter uncertainty is (the same parameters, through the conversion).
 
     Examples
     --------
@@ -463,7 +475,16 @@ def d2c(model: StateSpaceModel, method: str = "zoh") -> ContinuousStateSpace:
         Bc = 2.0 * inv @ B / dt
         Cc = 2.0 * C @ inv
         Dc = D - 0.5 * Cc @ B
-    return ContinuousStateSpace(
+    out = ContinuousStateSpace(
         Ac, Bc, Cc, Dc, input_names=model.input_names, output_names=model.output_names,
         hold="foh" if method == "foh" else "zoh",
     )
+    unc = getattr(model, "uncertainty", None)
+    if unc is not None:  # the same parameters, seen through the conversion
+        from .uncertainty import ParameterUncertainty
+
+        build = unc.build
+        out.uncertainty = ParameterUncertainty(
+            unc.theta, unc.covariance, lambda t: d2c(build(t), method), names=unc.names,
+            dof=unc.dof, method=unc.method)
+    return out

@@ -170,9 +170,10 @@ def pole_std(model: Any, method: str = "linear", *, n: int = 1000, rng: Any = No
 
 
 def _damping_parts(z: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """Natural frequency (rad/s) and damping of discrete poles ``z`` (any shape)."""
+    """Natural frequency (rad/s) and damping of discrete poles ``z`` (any shape); of
+    continuous poles when ``dt == 0``."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.log(np.where(z != 0, z, np.nan)) / dt
+        s = np.log(np.where(z != 0, z, np.nan)) / dt if dt else np.asarray(z, complex)
         wn = np.abs(s)
         return wn, -s.real / wn
 
@@ -180,11 +181,15 @@ def _damping_parts(z: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
 def damping_std(model: Any, dt: float) -> dict[str, np.ndarray]:
     """Poles, ``s = log(z)/dt``, natural frequency (rad/s, Hz), damping and their std (first
     order through the pole Jacobian; Monte Carlo for poles that coincide with another, as
-    :func:`pole_std`). A pole at ``z = 0`` (infinitely fast) has NaN std."""
+    :func:`pole_std`). A pole at ``z = 0`` (infinitely fast) has NaN std. ``dt == 0``: a
+    continuous model, whose poles are ``s`` themselves."""
     lam, G, bad = pole_jacobian(model)
     with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.where(lam != 0, np.log(np.where(lam != 0, lam, 1.0)) / dt, -np.inf)
-        Gs = G / (lam[:, None] * dt)
+        if dt:
+            s = np.where(lam != 0, np.log(np.where(lam != 0, lam, 1.0)) / dt, -np.inf)
+            Gs = G / (lam[:, None] * dt)
+        else:
+            s, Gs = lam.astype(complex), G
         wn = np.abs(s)
         dwn = (np.conj(s)[:, None] * Gs).real / wn[:, None]
         dzeta = -Gs.real / wn[:, None] + (s.real / wn**2)[:, None] * dwn
@@ -201,8 +206,9 @@ def damping_std(model: Any, dt: float) -> dict[str, np.ndarray]:
         zeta_sd = np.where(mc, _pooled_std(lam, z_d), zeta_sd)
         _warn_monte_carlo(mc, lam, "damping and frequency std")
     if at_zero.any():
-        warnings.warn(f"{int(at_zero.sum())} pole(s) at z = 0 (infinitely fast): their damping "
-                      "and frequency std are reported as NaN", UncertaintyWarning, stacklevel=3)
+        where = "z = 0 (infinitely fast)" if dt else "s = 0 (integrators)"
+        warnings.warn(f"{int(at_zero.sum())} pole(s) at {where}: their damping and frequency "
+                      "std are reported as NaN", UncertaintyWarning, stacklevel=3)
     nan = np.full(lam.size, np.nan)
     return {
         "poles": lam, "s": s, "pole_std": pole_sd,
