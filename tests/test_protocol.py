@@ -132,8 +132,10 @@ def test_criteria_count_the_model_parameters(case):
     assert c.n_params == model.n_parameters
     if name == "fir":
         assert c.n_params == 5
-    c_est = sysid.criteria(model, noisy)  # an estimated x0 counts for state-space models
-    extra = 2 if name in ("statespace", "continuous") else 0
+    # an estimated x0 counts: state-space models, and models compared through their
+    # state-space form (the OE polynomial model, whose initial state is now fitted too)
+    c_est = sysid.criteria(model, noisy)
+    extra = 2 if name in ("statespace", "continuous", "polynomial") else 0
     assert c_est.n_params == model.n_parameters + extra
     assert c.bic < sysid.criteria(_perturbed(name, model), noisy, x0="zero").bic
 

@@ -520,3 +520,20 @@ class DataSummary(HTMLResult):
         if len(self.lengths) > 1:
             lines.append(f"experiment lengths: {self.lengths}")
         return "\n".join(lines)
+
+
+def as_record(data: Any) -> Any:
+    """``data`` as an IOData record: a ``(u, y)`` pair of arrays is wrapped (``dt = 1``), as
+    :func:`sysid.ssest` and :func:`sysid.compare` accept it; anything else is returned as it
+    is (the caller's own checks name what is wrong).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.data.iodata import as_record
+    >>> as_record((np.ones(4), np.zeros(4))).n_samples
+    4
+    """
+    if isinstance(data, tuple) and len(data) == 2:
+        return IOData(u=data[0], y=data[1])
+    return data

@@ -96,7 +96,7 @@ def model_from_dict(d: dict[str, Any]) -> Any:
         body = {k: _decode(v) for k, v in d.items()}
         from .uncertainty_io import model_from_body
 
-        return model_from_body(cls, body)
+        return model_from_body(cls, body, REGISTRY)
     except KeyError as e:
         raise DataError(f"not a sysid model file: the {family} entry has no field "
                         f"{e.args[0]!r}") from None

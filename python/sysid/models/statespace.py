@@ -243,7 +243,9 @@ class StateSpaceModel(ModelMixin):
         u = self._u(u, y.shape[0])
         if u.shape[0] != y.shape[0]:
             raise ShapeError(f"u has {u.shape[0]} samples but y has {y.shape[0]}")
-        horizon = as_int(horizon, "horizon")
+        if isinstance(horizon, (float, np.floating)) and horizon == np.inf:
+            return self.simulate(u, x0)  # MATLAB's predict(..., Inf): the simulation
+        horizon = as_int(horizon, "horizon", alt="np.inf (the simulation)")
         K = self.K if self.K is not None else np.zeros((self.nstates, self.noutputs))
         return _sysid.predict(self.A, self.B, self.C, self.D, K, u, y, self._x0(x0), int(horizon))
 

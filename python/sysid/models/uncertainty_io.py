@@ -69,12 +69,10 @@ def uncertainty_to_dict(model: Any) -> dict[str, Any] | None:
     nominal = unc.build(unc.theta)
     other = None  # the family build() makes, when not the model's own (a discrete TF's
     if type(nominal) is not type(model):  # build makes PolynomialModels): saved whole
-        from .serialize import family_name
-
         if not callable(getattr(nominal, "to_dict", None)):
             return {"omitted": f"build() makes a {type(nominal).__name__}, which cannot be "
                                "saved"}
-        other = {"family": family_name(nominal), "body": nominal.to_dict()}
+        other = {"family": type(nominal).__name__, "body": nominal.to_dict()}
     if p > MAX_PARAMETERS:
         return {"omitted": f"{p} parameters (more than {MAX_PARAMETERS})"}
     base = _leaves(nominal.to_dict())
@@ -114,7 +112,8 @@ def _set(body: Any, path: list[Any], value: Any) -> None:
     body[path[-1]] = value
 
 
-def uncertainty_from_dict(saved: dict[str, Any], body: dict[str, Any], cls: type
+def uncertainty_from_dict(saved: dict[str, Any], body: dict[str, Any], cls: type,
+                          registry: dict[str, type] | None = None
                           ) -> ParameterUncertainty | None:
     """The :class:`ParameterUncertainty` written by :func:`uncertainty_to_dict`, its
     ``build`` the affine map on the model's stored numbers (``body``: the loaded
@@ -123,16 +122,10 @@ def uncertainty_from_dict(saved: dict[str, Any], body: dict[str, Any], cls: type
         return None
     built = saved.get("built")
     if isinstance(built, dict):  # build() makes another family than the model's
-        import importlib
-
-        from .serialize import REGISTRY
-
-        lazy = {"TransferFunction": "sysid.tf.model", "ProcessModel": "sysid.process.model"}
-        if built["family"] not in REGISTRY and built["family"] in lazy:
-            importlib.import_module(lazy[built["family"]])
-        if built["family"] not in REGISTRY:
+        found = (registry or {}).get(built["family"])  # the loader's registered families
+        if found is None:
             return None
-        cls, body = REGISTRY[built["family"]], built["body"]
+        cls, body = found, built["body"]
     theta = np.asarray(saved["theta"], dtype=float).ravel()
     paths = [list(p) for p in saved["paths"]]
     leaves = _leaves(body)
@@ -176,14 +169,17 @@ def body_with_uncertainty(model: Any) -> dict[str, Any]:
     return body if saved is None else {**body, "uncertainty": saved}
 
 
-def model_from_body(cls: type, body: dict[str, Any]) -> Any:
-    """Inverse of :func:`body_with_uncertainty`: ``cls.from_dict`` and the uncertainty."""
+def model_from_body(cls: type, body: dict[str, Any],
+                    registry: dict[str, type] | None = None) -> Any:
+    """Inverse of :func:`body_with_uncertainty`: ``cls.from_dict`` and the uncertainty
+    (``registry``: the model families by name, for an uncertainty whose ``build`` makes
+    another family than the model's)."""
     body = dict(body)
     own = body.get("uncertainty")  # a class may store its uncertainty itself: left to it
     ours = isinstance(own, dict) and ("map" in own or "omitted" in own)
     saved = body.pop("uncertainty") if ours else None
     model = cls.from_dict(body)  # type: ignore[attr-defined]
-    unc = uncertainty_from_dict(saved, body, cls) if saved is not None else None
+    unc = uncertainty_from_dict(saved, body, cls, registry) if saved is not None else None
     if unc is not None:
         model.uncertainty = unc
     return model

@@ -13,6 +13,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_int, as_int_grid, experiment_arrays, require_inputs_vary
 from .._progress import iteration_callback, iteration_printer
+from ..data.iodata import as_record
 from ..data.offsets import check_offsets
 from ..errors import DataError
 from .model import PolynomialModel
@@ -75,6 +76,7 @@ def arx(
     >>> np.round(m.a[0][0], 8).tolist(), np.round(m.b[0][0], 8).tolist()
     ([-0.5], [1.0])
     """
+    data = as_record(data)  # a (u, y) pair, as ssest and compare take
     exps = experiment_arrays(data)
     check_offsets(data)
     require_inputs_vary(exps, "arx", getattr(data, "input_names", None))
@@ -233,6 +235,7 @@ def _pem(
     progress: bool | None | Callable[..., Any],
     init: PolynomialModel | None = None,
 ) -> PolynomialModel:
+    data = as_record(data)  # a (u, y) pair, as ssest and compare take
     exps = experiment_arrays(data)
     check_offsets(data)
     require_inputs_vary(exps, method, getattr(data, "input_names", None))
@@ -240,6 +243,11 @@ def _pem(
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     nb_g, nf_g, nk_g = _grid(nb, ny, nu, "nb"), _grid(nf, ny, nu, "nf"), _grid(nk, ny, nu, "nk")
     na_v, nc_v, nd_v = _col(na, ny, "na"), _col(nc, ny, "nc"), _col(nd, ny, "nd")
+    for i, row in enumerate(nb_g):
+        if method in ("oe", "bj") and not any(row):
+            raise DataError(f"nb is 0 for every input of output {i}: the {method} model would "
+                            "have no input path (B = 0); give nb >= 1 (nb = 0 leaves one "
+                            "input out)")
     if min(na_v + nc_v + nd_v, default=0) < 0:
         raise DataError("na, nc and nd must be non-negative integers")
     parts: dict[str, list[Any]] = {k: [] for k in "abcdf"}
@@ -362,6 +370,7 @@ def oe(
     (array([0.5, 0.2]), array([-1.2,  0.5]), 'frequency')
     """
     periodicity = None
+    data = as_record(data)
     if periods is not None or transient is not None:
         from .oe_lines import oe_lines
 
@@ -409,18 +418,35 @@ def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
     >>> sysid.selstruc(table, "bic", 400)
     (1, 1, 1)
     """
+    data = as_record(data)  # a (u, y) pair, as ssest and compare take
     exps = experiment_arrays(data)
     check_offsets(data)
     rng = [list(map(int, np.atleast_1d(v))) for v in (na, nb, nk)]
-    return np.asarray(_sysid.arx_struc(exps, *rng))
+    out = np.asarray(_sysid.arx_struc(exps, *rng)).view(StructureTable)
+    out.n_samples = int(sum(y.shape[0] for _, y in exps))
+    return out
+
+
+class StructureTable(np.ndarray):
+    """The array :func:`arxstruc` returns, remembering the number of estimation samples
+    (``n_samples``) that :func:`selstruc` needs (MATLAB keeps it in the table too)."""
+
+    n_samples: int | None = None
+
+    def __array_finalize__(self, obj: Any) -> None:
+        self.n_samples = getattr(obj, "n_samples", None)
 
 
 def selstruc(
     table: np.ndarray, criterion: str = "aic", n_samples: int | None = None
 ) -> tuple[int, int, int]:
-    """Choose ``(na, nb, nk)`` from an :func:`arxstruc` table by ``aic``, ``bic``/``mdl``."""
+    """Choose ``(na, nb, nk)`` from an :func:`arxstruc` table by ``aic``, ``bic``/``mdl``
+    (``n_samples``: by default the number of estimation samples the table remembers)."""
     if n_samples is None:
-        raise DataError("selstruc needs n_samples (the number of estimation samples)")
+        n_samples = getattr(table, "n_samples", None)
+    if n_samples is None:
+        raise DataError("selstruc needs n_samples (the number of estimation samples): this "
+                        "table does not remember it (pass the one from sysid.arxstruc)")
     loss, p = table[:, 3], table[:, 4]
     if criterion == "aic":
         score = np.log(loss) + 2 * p / n_samples
@@ -476,6 +502,7 @@ def iv4(data: Any, na: Any, nb: Any, nk: Any = 1, *, reference: Any = None) -> P
     >>> bool(abs(m.a[0][0][0] + 0.5) < 0.05)
     True
     """
+    data = as_record(data)  # a (u, y) pair, as ssest and compare take
     exps = experiment_arrays(data)
     check_offsets(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]

@@ -139,13 +139,13 @@ class PolynomialModel(ModelMixin):
 
     @property
     def statespace_predicts(self) -> bool:
-        """``True`` when :meth:`to_statespace` carries the noise model too (a time series'
-        innovations form; a coupled ARX model's observer form with ``K``): its predictions
-        are this model's, and :func:`sysid.compare` fits their initial state."""
+        """``True`` when :meth:`to_statespace` exists with the noise model (every structure
+        but a coupled one with ``F``, ``C`` or ``D``): its predictions are this model's, and
+        :func:`sysid.compare` fits their initial state."""
         if self.coupled:
             return not any(x.size for row in self.f for x in row) and not any(
                 x.size for x in (*self.c, *self.d))
-        return self.n_inputs == 0
+        return True
 
     # -- the model protocol (sysid.Model) ------------------------------------------------
     ninputs = property(lambda self: self.n_inputs, doc="Number of inputs (protocol name).")
@@ -425,11 +425,13 @@ class PolynomialModel(ModelMixin):
         return control.tf(nums, dens, self.dt)
 
     def to_statespace(self) -> Any:
-        """Deterministic part as a :class:`~sysid.StateSpaceModel` (one block per channel);
-        for a time series (no inputs) the noise model ``C / (A D)`` in innovations form
-        (``K``, ``B`` and ``D`` empty), whose free response :func:`sysid.compare` fits. A
-        coupled MIMO ARX model (matrix ``A``) is realised whole in observer form, with its
-        innovations gain ``K`` (its poles are those of :meth:`poles`).
+        """The model as a :class:`~sysid.StateSpaceModel` in innovations form, noise model
+        included (MATLAB's ``idss(m)``): ARX and ARMAX structures in observer form per
+        output (``K`` from ``C`` and ``A``), others as one block per input channel and a
+        noise block per output; an output-error model has no ``K``. A time series is its
+        noise model (``B``, ``D`` empty); a coupled MIMO ARX model (matrix ``A``) is realised
+        whole. The simulation and the predictions are this model's
+        (:mod:`sysid.polynomial.statespace_form`).
 
         Examples
         --------
@@ -438,103 +440,9 @@ class PolynomialModel(ModelMixin):
         >>> ss.poles().real, ss.K.shape, ss.B.shape
         (array([0.5]), (1, 1), (1, 0))
         """
-        from scipy import signal
+        from .statespace_form import realize
 
-        from ..models.statespace import StateSpaceModel
-
-        ny, nu = self.n_outputs, self.n_inputs
-        if self.coupled:
-            return self._coupled_statespace()
-        if nu == 0:
-            return self._noise_statespace()
-        blocks = []
-        for i in range(ny):
-            for j in range(nu):
-                num, den = self._channel_tf(i, j)
-                blocks.append((i, j, *signal.tf2ss(_trim(num), den)))
-        n = sum(b[2].shape[0] for b in blocks)
-        A, B, C, D = np.zeros((n, n)), np.zeros((n, nu)), np.zeros((ny, n)), np.zeros((ny, nu))
-        k = 0
-        for i, j, a, b, c, d in blocks:
-            r = a.shape[0]
-            A[k : k + r, k : k + r] = a
-            B[k : k + r, j] = b[:, 0]
-            C[i, k : k + r] = c[0]
-            D[i, j] = d[0, 0]
-            k += r
-        return StateSpaceModel(A, B, C, D, dt=self.dt, input_names=self.input_names,
-                               output_names=self.output_names)
-
-    def _coupled_statespace(self) -> Any:
-        """A coupled MIMO ARX model ``y(t) = sum_l (-A_l y(t - l) + B_l u(t - l)) + B_0 u(t)
-        + e(t)`` in observer form: block states ``x_l`` with ``x_l(t + 1) = -A_l y(t) +
-        x_{l+1}(t) + B_l u(t)`` and ``y = x_1 + B_0 u + e``, so ``K`` stacks ``-A_l`` (the
-        predictor ``A - K C`` is a nilpotent shift, as an ARX predictor is a FIR filter)."""
-        from ..models.statespace import StateSpaceModel
-
-        ny, nu = self.n_outputs, self.n_inputs
-        if any(x.size for row in self.f for x in row) or any(
-                x.size for x in (*self.c, *self.d)):
-            raise DataError("the state-space form of a coupled MIMO model with F, C or D "
-                            "polynomials is not available; coupled models come from arx")
-        na = max(x.size for row in self.a for x in row)
-        nb = max([int(self.nk[i, j]) + self.b[i][j].size - 1
-                  for i in range(ny) for j in range(nu) if self.b[i][j].size] or [0])
-        n = max(na, nb)
-        Al = np.zeros((n + 1, ny, ny))
-        Bl = np.zeros((n + 1, ny, nu))
-        for i in range(ny):
-            for k in range(ny):
-                Al[1:self.a[i][k].size + 1, i, k] = self.a[i][k]
-            for j in range(nu):
-                k0 = int(self.nk[i, j])
-                Bl[k0:k0 + self.b[i][j].size, i, j] = self.b[i][j]
-        A = np.zeros((n * ny, n * ny))
-        B = np.zeros((n * ny, nu))
-        K = np.zeros((n * ny, ny))
-        for lag in range(1, n + 1):
-            r = slice((lag - 1) * ny, lag * ny)
-            A[r, :ny] = -Al[lag]
-            if lag < n:
-                A[r, lag * ny:(lag + 1) * ny] = np.eye(ny)
-            B[r] = Bl[lag] - Al[lag] @ Bl[0]
-            K[r] = -Al[lag]
-        C = np.zeros((ny, n * ny))
-        C[:, :ny] = np.eye(ny)
-        nv = np.asarray(self.noise_variance, dtype=float)
-        return StateSpaceModel(A, B, C, Bl[0], K, dt=self.dt,
-                               noise_cov=nv if nv.ndim == 2 else np.diag(nv.ravel()),
-                               input_names=self.input_names if nu else None,
-                               output_names=self.output_names)
-
-    def _noise_statespace(self) -> Any:
-        """The time series ``y_i = C_i / (A_i D_i) e_i`` as one innovations-form block per
-        output (monic polynomials: the direct term of each block is 1, the innovation)."""
-        from scipy import signal
-
-        from ..models.statespace import StateSpaceModel
-
-        if self.coupled:
-            raise DataError("the state-space form of a coupled MIMO AR model is not "
-                            "implemented")
-        ny = self.n_outputs
-        blocks = []
-        for i in range(ny):
-            num, den = _monic(self.c[i]), np.convolve(_monic(self.a[i][i]), _monic(self.d[i]))
-            k = max(num.size, den.size)
-            num, den = np.pad(num, (0, k - num.size)), np.pad(den, (0, k - den.size))
-            a, b, c, _ = signal.tf2ss(num, den) if k > 1 else (np.zeros((0, 0)),) * 4
-            blocks.append((np.atleast_2d(a), np.reshape(b, (-1, 1)), np.reshape(c, (1, -1))))
-        n = sum(b[0].shape[0] for b in blocks)
-        A, K, C = np.zeros((n, n)), np.zeros((n, ny)), np.zeros((ny, n))
-        o = 0
-        for i, (a, b, c) in enumerate(blocks):
-            r = a.shape[0]
-            A[o:o + r, o:o + r], K[o:o + r, i], C[i, o:o + r] = a, b[:, 0], c[0]
-            o += r
-        return StateSpaceModel(A, np.zeros((n, 0)), C, np.zeros((ny, 0)), K, dt=self.dt,
-                               noise_cov=np.diag(self.noise_variance),
-                               output_names=self.output_names)
+        return realize(self)
 
     def __repr__(self) -> str:
         lines = [

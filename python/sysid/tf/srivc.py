@@ -34,9 +34,11 @@ def _companion(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(A, e_n)``: states ``s^{i-1} / a(s)`` of the monic ``a`` (descending, a[0] = 1)."""
     n = a.size - 1
     A = np.zeros((n, n))
+    b = np.zeros(n)
+    if n == 0:  # a static gain: no states
+        return A, b
     A[:-1, 1:] = np.eye(n - 1)
     A[-1, :] = -a[::-1][:n]
-    b = np.zeros(n)
     b[-1] = 1.0
     return A, b
 

@@ -58,18 +58,28 @@ CRITERIA = ("aic", "aicc", "bic", "fpe")
 _NAMES = {"aic": "AIC", "aicc": "AICc", "bic": "BIC", "fpe": "FPE"}
 
 
-def n_parameters(n: int, m: int, l: int, *, feedthrough: bool = True, noise_model: bool = True,
-                 x0: bool = False, n_experiments: int = 1) -> int:
-    """Identifiable parameters of an innovation-form state-space model (see module docs).
+def n_parameters(n: Any, m: int | None = None, l: int | None = None, *,
+                 feedthrough: bool = True, noise_model: bool = True, x0: bool = False,
+                 n_experiments: int = 1) -> int:
+    """Identifiable parameters of an innovation-form state-space model (see module docs):
+    from its sizes ``n, m, l``, or of a model given alone (its ``n_parameters``).
 
     Examples
     --------
+    >>> import sysid
     >>> from sysid.validation.criteria import n_parameters
     >>> n_parameters(4, 1, 1)        # 4 (2 + 1) + 1
     13
     >>> n_parameters(4, 1, 1, feedthrough=False, noise_model=False)
     8
+    >>> n_parameters(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]))
+    2
     """
+    if m is None and l is None and hasattr(n, "n_parameters"):
+        return int(n.n_parameters)
+    if m is None or l is None:
+        raise DataError("n_parameters takes a model, or its order n with m inputs and l "
+                        "outputs: n_parameters(n, m, l)")
     return ss_parameter_count(n, m, l, feedthrough=feedthrough, noise_model=noise_model, x0=x0,
                               n_experiments=n_experiments)
 
