@@ -217,3 +217,11 @@ def test_matlab_names_point_at_sysids():
         sysid.resid  # noqa: B018
     with pytest.raises(AttributeError, match="no attribute 'nothing_like_it'$"):
         sysid.nothing_like_it  # noqa: B018
+
+
+def test_simulating_a_whole_record_says_to_pass_its_inputs():
+    # model.simulate(data) failed inside IOData indexing ("index IOData with a slice ...")
+    m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    d = sysid.IOData(np.ones((10, 1)), np.ones((10, 1)))
+    with pytest.raises(sysid.DataError, match=r"whole record \(IOData\).*data\.u"):
+        m.simulate(d)

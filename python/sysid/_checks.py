@@ -19,6 +19,11 @@ def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = Fa
     """
     if isinstance(x, (str, bytes)):
         raise ShapeError(f"{name} must be a numeric array, got a string")
+    if hasattr(x, "experiments") and hasattr(x, "input_names"):  # an IOData record
+        raise DataError(
+            f"{name} must be an array of samples, got a whole record (IOData): pass its "
+            f"signals (data.u for inputs, data.y for outputs), or hand the record to "
+            "sysid.compare(data, model), which simulates the model on it")
     x = unmask(x, name)
     arr = np.asarray(x)
     if arr.dtype.kind not in "biuf":
