@@ -29,5 +29,9 @@ def prepare(est_data: IOData, val_data: IOData | None, preprocessing: dict[str, 
                                                         "y": res.model.y_offset.tolist()}}
     est = res.model.remove_offsets(est_data)
     val = res.model.remove_offsets(val_data) if val_data is not None else None
-    return {"model": model, "selection": select_order(est, models=[model], validation=val),
-            "est": est, "val": val, "result": res}
+    sel = select_order(est, models=[model], validation=val)
+    # the one-model table's own reason ("order n (models) chosen by validation") is not why:
+    # identify chose it, on blocks held out of the estimation data
+    sel.reason = (f"{res.choice}, chosen by sysid.identify on blocks held out of the "
+                  "estimation data (the leaderboard above)")
+    return {"model": model, "selection": sel, "est": est, "val": val, "result": res}
