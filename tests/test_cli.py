@@ -342,6 +342,8 @@ def test_identify_path_saves_the_model_with_its_offsets(tmp_path, capsys):
     rep = tmp_path / "r"
     assert main(["identify", str(data), "--inputs", "heater", "--outputs", "temperature",
                  "--report", str(rep), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "chosen by sysid.identify" in out and "(models)" not in out
     m = sysid.load_model(rep / "model.json")
     raw = np.loadtxt(sysid.datasets.path("dryer"))
     assert type(m).__name__ == "IdentifiedModel"
