@@ -123,7 +123,7 @@ CASES = [
     ("forecast level", lambda: sysid.forecast(AR, U, 3, level=95), errors.DataError,
      "level", "0.95"),
     ("forecast model", lambda: sysid.forecast(object(), U, 3), errors.DataError,
-     "StateSpaceModel or a PolynomialModel", "to_statespace"),
+     "a StateSpaceModel, a polynomial model", "to_statespace"),
     ("forecast inputs", lambda: sysid.forecast(sysid.StateSpaceModel([[0.5]], [[1.0]],
                                                                      [[1.0]]), U, 3),
      errors.DataError, "1 input", "give future_inputs"),

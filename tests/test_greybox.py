@@ -212,7 +212,8 @@ def test_options_change_the_result():
     foh = sysid.greyest(data, sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0}, hold="foh"))
     assert abs(foh.parameters["tau"]["value"] - est.parameters["tau"]["value"]) > 1e-3
     # max_iter stops early
-    short = sysid.greyest(data, s, max_iter=1)
+    with pytest.warns(sysid.IterationLimitWarning, match="greyest search stopped at max_iter=1"):
+        short = sysid.greyest(data, s, max_iter=1)  # it stopped short silently
     assert short.info["iterations"] == 1 and short.info["stop"] == "maximum iterations"
     with pytest.raises(DataError):
         sysid.greyest(data, s, focus="bogus")

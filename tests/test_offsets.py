@@ -83,3 +83,21 @@ def test_a_raw_record_merged_into_a_detrended_one_still_warns():
     with warnings.catch_warnings():
         warnings.simplefilter("error", sysid.OffsetWarning)
         sysid.n4sid(both, 1)
+
+
+def test_ar_and_ssi_run_the_offset_check():
+    # ar fitted a series at +100 silently (a pole at 0.9996 for 0.837); ssi lost a mode to
+    # an offset of 22 standard deviations and returned a damping of -1, without a word
+    rng = np.random.default_rng(4)
+    y = 100.0 + np.convolve(rng.standard_normal(2000), [1.0, 0.6, 0.2])[:2000]
+    with pytest.warns(sysid.OffsetWarning, match="offset"):
+        m = sysid.ar(sysid.IOData(None, y[:, None], 1.0, output_names=["level"]), 2)
+    assert m.output_names == ["level"]  # the data's name (it came back as y0)
+    yy = np.column_stack([y, 0.5 * y + rng.standard_normal(2000)])
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        try:
+            sysid.ssi(sysid.IOData(None, yy, 0.1), range(2, 5, 2))
+        except sysid.SysidError:
+            pass
+    assert any(issubclass(w.category, sysid.OffsetWarning) for w in rec)

@@ -1,6 +1,7 @@
 """PNLSS: recovery of a known system, save/load, bad input, divergence."""
 
 import copy
+import warnings
 
 import numpy as np
 import pytest
@@ -153,3 +154,16 @@ def test_pnlss_warns_when_its_linear_part_is_unstable():
         warnings.simplefilter("error", sysid.StabilityWarning)
         assert _warn_unstable(m) is m  # a stable linear part: silent
     assert "unstable_linear_part" not in m.info
+
+
+def test_report_of_a_pnlss_model_runs():
+    # the report's one-step comparison passed x0 to the PNLSS model's predict, which took
+    # none: a raw TypeError
+    import tempfile
+
+    d = sysid.detrend(sysid.datasets.load_dryer(), "mean")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = sysid.pnlss(d[:500], 2, degree=2, max_iter=3)
+        files = sysid.report(m, d[500:], tempfile.mkdtemp())
+    assert files["html"].exists()

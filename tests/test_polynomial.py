@@ -123,7 +123,8 @@ def test_options_change_results(u1):
         sysid.arx(d, 2, 2, 1, regularization=50.0).b[0][0],
     )
     assert not np.allclose(sysid.arx(d, 2, 2, 2).b[0][0], base.b[0][0])
-    one = sysid.oe(d, 1, 1, 1, max_iter=1)
+    with pytest.warns(sysid.IterationLimitWarning, match="the oe search stopped at max_iter=1"):
+        one = sysid.oe(d, 1, 1, 1, max_iter=1)  # it stopped short silently
     full = sysid.oe(d, 1, 1, 1)
     assert one.info["iterations"][0] <= 1
     assert one.info["cost"][0][-1] >= full.info["cost"][0][-1]
@@ -225,7 +226,8 @@ def test_progress_is_the_shared_observer(u1, capsys):
         raise KeyError("from the callback")
     with pytest.raises(KeyError, match="from the callback"):
         sysid.bj(d, 1, 1, 1, 1, 1, progress=boom)
-    printed = sysid.armax(d, 1, 1, 1, 1, max_iter=2, progress=True)
+    with pytest.warns(sysid.IterationLimitWarning):
+        printed = sysid.armax(d, 1, 1, 1, 1, max_iter=2, progress=True)
     lines = capsys.readouterr().out.splitlines()
     assert len(lines) == printed.info["iterations"][0] > 0
     assert lines[0].startswith("armax iteration   1: cost ")

@@ -181,6 +181,19 @@ def warn_iteration_limit(what: str, max_iter: int, history: Any, fix: str = "rai
                   stacklevel=user_stacklevel() if stacklevel is None else stacklevel)
 
 
+def warn_if_capped(info: dict[str, Any], what: str, max_iter: int,
+                   fix: str = "raise max_iter") -> None:
+    """:func:`warn_iteration_limit` when a search's ``info["stop"]`` says it stopped at its
+    cap (``info["cost"]``: its criterion per iteration, when recorded)."""
+    stop = info.get("stop")
+    stops = stop if isinstance(stop, list) else [stop]
+    if max_iter > 0 and "maximum iterations" in stops:
+        cost = info.get("cost") or []
+        if cost and isinstance(cost[0], (list, tuple)):  # one history per output
+            cost = cost[stops.index("maximum iterations")]
+        warn_iteration_limit(what, max_iter, cost, fix)
+
+
 def as_int(x: Any, name: str, lo: int = 1, hi: int | None = None, *, alt: str = "") -> int:
     """Return an integer argument (a Python or NumPy integer, not a bool) in ``[lo, hi]``.
 

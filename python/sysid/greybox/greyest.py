@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int
+from .._checks import as_int, warn_if_capped
 from .._progress import iteration_printer
 from ..data.iodata import IOData
 from ..errors import DataError
@@ -172,8 +172,10 @@ def greyest(
     max_iter = as_int(max_iter, "max_iter", 0)
     cb = _progress(progress, _criterion(weighting))
     if isinstance(structure, NonlinearGreyBox):
-        return nlgreyest(data, structure, x0=x0, weighting=weighting, multistart=multistart,
-                         rng=rng, max_iter=max_iter, tol=float(tol), progress=cb)
+        out = nlgreyest(data, structure, x0=x0, weighting=weighting, multistart=multistart,
+                        rng=rng, max_iter=max_iter, tol=float(tol), progress=cb)
+        warn_if_capped(out.info, "the greyest search", max_iter)
+        return out
     if not isinstance(structure, GreyBox):
         raise DataError("structure must be a sysid.GreyBox or sysid.NonlinearGreyBox, got "
                         f"{type(structure).__name__}")
@@ -194,6 +196,7 @@ def greyest(
     est = fit.result(best, starts)
     if periodicity is not None:  # periods="auto" found none: why the time domain
         est.info["periodicity"] = periodicity
+    warn_if_capped(est.info, "the greyest search", max_iter)
     return est
 
 

@@ -127,9 +127,10 @@ class LinearPart:
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:  # pragma: no cover - the host's
         raise NotImplementedError
 
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
-        """An output-error model has no noise model: its prediction is its simulation."""
-        return self.simulate(u)
+    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
+        """An output-error model has no noise model: its prediction is its simulation
+        (from ``x0``, as :meth:`simulate`)."""
+        return self.simulate(u) if x0 is None else self.simulate(u, x0=x0)
 
 
 def scaled_data(data: IOData, sc: Scaling) -> IOData:

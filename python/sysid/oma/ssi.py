@@ -307,6 +307,9 @@ def ssi(data: Any, orders: Any, *, method: str = "cov", horizon: int | None = No
     if not isinstance(data, IOData):
         raise DataError("data must be an IOData record: sysid.IOData(None, y, dt) for "
                         "output-only response data")
+    from ..data.offsets import check_offsets
+
+    check_offsets(data)  # response data on an offset lose their modes to it (as any fit)
     if method not in _METHODS:
         raise DataError(f"method must be 'cov' (SSI-cov) or 'data' (SSI-data), got {method!r}")
     ords = [as_int(o, "orders", 1) for o in np.atleast_1d(np.asarray(orders, dtype=object))]

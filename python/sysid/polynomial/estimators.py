@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, as_int_grid, experiment_arrays, require_inputs_vary
+from .._checks import as_int, as_int_grid, experiment_arrays, require_inputs_vary, warn_if_capped
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import as_record
 from ..data.offsets import check_offsets
@@ -98,6 +98,14 @@ def arx(
     return _arx_model(data, fits, nk_g)
 
 
+def _names_of(model: PolynomialModel, data: Any) -> None:
+    """The data's channel names on the model (they were u0, y0 whatever the data said)."""
+    if getattr(data, "input_names", None) is not None and model.n_inputs:
+        model.input_names = data.input_names
+    if getattr(data, "output_names", None) is not None:
+        model.output_names = data.output_names
+
+
 def _arx_model(data: Any, fits: list[Any], nk_g: list[list[int]]) -> PolynomialModel:
     model = PolynomialModel(
         a=[[np.asarray(x) for x in f["a"]] for f in fits],
@@ -106,6 +114,7 @@ def _arx_model(data: Any, fits: list[Any], nk_g: list[list[int]]) -> PolynomialM
         dt=data.dt,
         noise_variance=[f["loss"] for f in fits],
     )
+    _names_of(model, data)
     model.info = {"method": "arx", "loss": [f["loss"] for f in fits]}
     model.covariance = [f["covariance"] if "covariance" in f else  # type: ignore[attr-defined]
                         f["loss"] * f["unscaled_cov"] for f in fits]
@@ -298,7 +307,9 @@ def _pem(
         f=parts["f"],
         noise_variance=var,
     )
+    _names_of(m, data)
     m.info = info
+    warn_if_capped(info, f"the {method} search", int(max_iter))
     m.covariance = cov  # type: ignore[attr-defined]
     _attach_uncertainty(m, cov, "pem", "gauss-newton")
     return m
@@ -518,6 +529,7 @@ def iv4(data: Any, na: Any, nb: Any, nk: Any = 1, *, reference: Any = None) -> P
         a.append([np.asarray(x) for x in pieces[:ny]])
         b.append([np.asarray(x) for x in pieces[ny:]])
     m = PolynomialModel(a, b, nk_g, data.dt)
+    _names_of(m, data)
     m.info = {"method": "iv4", "closed_loop": reference is not None}
     cov = [np.asarray(f["covariance"]) for f in fits]
     m.noise_variance = np.array([f["noise_variance"] for f in fits])

@@ -161,6 +161,12 @@ def ar(data: Any, na: int, method: str = "fb", *, dt: float | None = None) -> An
                         f"{method!r}")
     na = as_int(na, "na", 1)
     ys, dt0 = _series(data, na, "ar")
+    from ..data.iodata import IOData
+    from ..data.offsets import check_offsets
+
+    # the one offset check every estimator runs (an AR model has no constant term either)
+    check_offsets(IOData(None, [y[:, None] for y in ys] if len(ys) > 1 else ys[0][:, None],
+                         dt0, output_names=getattr(data, "output_names", None)))
     if dt is not None:
         from .._checks import as_dt
 
@@ -178,6 +184,7 @@ def ar(data: Any, na: int, method: str = "fb", *, dt: float | None = None) -> An
     lam = _dot(res, res) / max(res.size - na, 1)
     cov = lam * np.linalg.pinv(_gram(ys, na))
     m = PolynomialModel([[a]], [[]], np.zeros((1, 0), int), dt0, noise_variance=[lam])
+    m.output_names = getattr(data, "output_names", None)  # the data's channel name
     m.info = {"method": f"ar ({method})", "loss": [lam]}
     m.covariance = [cov]  # type: ignore[attr-defined]
     m.parameters = [a]  # type: ignore[attr-defined]

@@ -104,13 +104,21 @@ def _innovation_form(model: Any) -> tuple[np.ndarray, ...]:
                                                        np.asarray(lam, float))
     from ..polynomial.model import PolynomialModel
 
-    if not isinstance(model, PolynomialModel):
-        raise DataError(f"forecast takes a StateSpaceModel or a PolynomialModel, got "
-                        f"{type(model).__name__}; convert it with to_statespace() first")
-    if model.n_inputs != 0 or model.n_outputs != 1:
-        raise DataError("forecast of a polynomial model: only time-series models (no input, "
-                        "one output, from ar/arma); for input/output models use "
-                        "model.to_statespace() with a noise model (ssest/n4sid)")
+    if not isinstance(model, PolynomialModel) or model.n_inputs != 0 or model.n_outputs != 1:
+        conv = getattr(model, "to_statespace", None)
+        ss = None
+        if conv is not None and getattr(model, "statespace_is_exact", True):
+            try:
+                ss = conv()
+            except DataError:
+                ss = None
+        if not isinstance(ss, StateSpaceModel):
+            raise DataError(
+                f"forecast needs a linear model with an innovations form (a StateSpaceModel, "
+                f"a polynomial model, or a model whose to_statespace() gives one); "
+                f"{type(model).__name__} has none: fit a linear model (ssest, n4sid, armax) "
+                "to forecast")
+        return _innovation_form(ss)
     num = np.r_[1.0, model.c[0]]
     den = np.convolve(np.r_[1.0, model.a[0][0]], np.r_[1.0, model.d[0]])
     n = max(num.size, den.size)
