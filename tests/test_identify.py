@@ -305,3 +305,18 @@ def test_identified_model_is_validated_like_its_state_space_model():
     assert sysid.stepinfo(m).steady_state == pytest.approx(float(m.statespace.dcgain()[0, 0]))
     H, sd = m.freqresp([0.1, 1.0], std=True)
     assert sd.shape == H.shape
+
+
+def test_forecast_of_the_identified_model_is_in_raw_units():
+    # forecast would take identify's model through its state-space form (the deviations)
+    # and continue raw data as if they were deviations
+    rng = np.random.default_rng(22)
+    u = rng.standard_normal((600, 1))
+    y = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]]).simulate(u)
+    y = y + 0.05 * rng.standard_normal((600, 1))
+    d = sysid.IOData(u + 5.0, y + 50.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = sysid.identify(d.slice(0, 500), refine=False)
+    f = sysid.forecast(res.model, d.slice(0, 500), 5, future_inputs=u[500:505] + 5.0)
+    np.testing.assert_allclose(f.mean, y[500:505] + 50.0, atol=0.3)

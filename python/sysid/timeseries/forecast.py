@@ -189,6 +189,15 @@ def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
     """
     from ..data.iodata import IOData
 
+    if hasattr(model, "remove_offsets") and hasattr(model, "statespace"):
+        # sysid.identify's model: forecast its deviations, then put the offsets back
+        dev = model.remove_offsets(past) if isinstance(past, IOData) else (
+            as_2d(past, "past", ncols=model.noutputs) - model.y_offset)
+        fu = None if future_inputs is None else (
+            as_2d(future_inputs, "future_inputs", ncols=model.ninputs) - model.u_offset)
+        f = forecast(model.statespace, dev, horizon, future_inputs=fu, level=level)
+        return Forecast(f.t, f.mean + model.y_offset, f.covariance, f.level,
+                        f.output_names, f._past + model.y_offset, f._past_t)
     h = as_int(horizon, "horizon", 1)
     if not (isinstance(level, (int, float)) and 0 < level < 1):
         raise DataError(f"level must be a number in (0, 1), e.g. 0.95; got {level!r}")
