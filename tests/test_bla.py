@@ -80,3 +80,13 @@ def test_bad_input():
         sysid.bla(d, periods=3, transient=3)
     with pytest.raises(DataError, match="bla"):
         sysid.bla_model(sysid.FRD([0.1], [1.0]), 1)
+
+
+def test_bla_refuses_an_input_that_does_not_repeat():
+    # on white noise cut into "periods" it returned a response 16 % off (median), 121 % at
+    # worst, without a word
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal((1024, 1))
+    g = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]])
+    with pytest.raises(sysid.DataError, match="does not repeat every 256 samples"):
+        sysid.bla(sysid.IOData(u, g.simulate(u)), periods=4)

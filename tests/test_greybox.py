@@ -163,8 +163,9 @@ def test_product_only_parameters_are_named():
     y = sysid.GreyBox(prod, {"a": 1.0, "b": 2.0}).model(dt=0.05).simulate(u)
     y = y + 0.01 * np.random.default_rng(0).standard_normal(y.shape)
     s = sysid.GreyBox(prod, {"a": 1.5, "b": 1.5})
-    with pytest.warns(sysid.IdentifiabilityWarning, match=r"a, b"):
+    with pytest.warns(sysid.IdentifiabilityWarning, match=r"a, b") as rec:
         fit = sysid.greyest(sysid.IOData(u=u, y=y, dt=0.05), s, x0="zero")
+    assert rec[0].filename == __file__  # at the user's line, not inside sysid
     assert fit.info["rank"] == 1
     assert abs(np.prod(fit.parameters.value) - 2.0) < 0.02
     # fixing one of them removes the warning

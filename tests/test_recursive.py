@@ -1,6 +1,8 @@
 """Online estimators (sysid.RecursiveARX/ARMAX/OE/BJ): equivalence with batch least squares,
 tracking of jumps and drifts, step/run identity, settable state and bad input."""
 
+import warnings
+
 import numpy as np
 import pytest
 from scipy import signal
@@ -177,3 +179,18 @@ def test_bad_input_is_refused_with_a_clear_message():
     with pytest.raises(sysid.DataError, match="symmetric"):
         est.covariance = [[1.0, 2.0], [0.0, 1.0]]
     assert est.samples == 0  # nothing was consumed by the refused calls
+
+
+def test_diverging_updates_warn():
+    # a gradient estimator with too large a gain ran to 1e307, 913 of 1000 updates refused,
+    # and said nothing
+    rng = np.random.default_rng(5)
+    u = 20.0 * rng.standard_normal(500)
+    y = np.convolve(u, [0.0, 1.0])[:500] + rng.standard_normal(500)
+    est = sysid.RecursiveARX(1, 1, method="gradient", gain=1e3)
+    with pytest.warns(sysid.StabilityWarning, match="updates diverged"):
+        est.run(u, y)
+    calm = sysid.RecursiveARX(1, 1, method="forgetting")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sysid.StabilityWarning)
+        calm.run(u, y)

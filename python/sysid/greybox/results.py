@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import user_stacklevel
 from .._display import HTMLResult
 from ..models.paramtable import ParameterTable
 from .greybox import IdentifiabilityWarning
@@ -136,4 +137,4 @@ def _warn_unidentifiable(null: np.ndarray, names: list[str], scale: np.ndarray) 
     warnings.warn("the data cannot determine these parameters separately: "
                   + "; ".join(parts) + ". Fix one of them, reparameterise, or use more "
                   "informative data; their standard deviations are along the identifiable "
-                  "directions only.", IdentifiabilityWarning, stacklevel=3)
+                  "directions only.", IdentifiabilityWarning, stacklevel=user_stacklevel())

@@ -131,6 +131,17 @@ def bla(
     n_per = n_tot // P
     U = np.stack([_periods(u, n_per, P, T) for u, _ in exps])  # (E, P', N, m)
     Y = np.stack([_periods(y, n_per, P, T) for _, y in exps])  # (E, P', N, l)
+    if U.shape[1] > 1:  # the averages over periods assume the input repeats
+        mean = U.mean(axis=1, keepdims=True)
+        spread = float(np.sqrt(np.mean(np.abs(U - mean) ** 2)))  # the spectra of the periods
+        level = float(np.sqrt(np.mean(np.abs(mean) ** 2)))
+        if spread > 0.5 * level:
+            raise DataError(
+                f"the input does not repeat every {n_per} samples (its periods differ by "
+                f"{spread / max(level, 1e-300):.2g} of their own level): bla averages whole "
+                "periods of a periodic excitation; give the true number of periods "
+                "(sysid.detect_period finds it), or use sysid.spa / sysid.welch_frf for "
+                "non-periodic data")
     k = _excited(U, lines, n_per)
     R = len(exps) // m
     Pp = P - T

@@ -232,7 +232,20 @@ class _Recursive:
         if u2.shape[0] != y2.shape[0]:
             raise ShapeError(f"u has {u2.shape[0]} samples but y has {y2.shape[0]}")
         yv = np.ascontiguousarray(y2[:, 0])
+        before = self.rejected
         yhat, th = self._core.run(np.ascontiguousarray(u2), yv, bool(store_parameters))
+        refused = self.rejected - before
+        if refused > 0.1 * max(len(yv), 1) or not np.all(np.isfinite(self.parameters)):
+            import warnings
+
+            from .._checks import user_stacklevel
+            from ..errors import StabilityWarning
+
+            warnings.warn(StabilityWarning(
+                f"the {self.method} updates diverged: {refused} of {len(yv)} were refused "
+                f"(largest parameter {np.max(np.abs(self.parameters)):.3g}); the estimate "
+                "is not to be trusted: lower the gain (or use method='forgetting' or "
+                "'kalman'), or normalise the signals"), stacklevel=user_stacklevel())
         return RecursiveResult(np.asarray(yhat), yv - yhat, None if th is None
                                else np.asarray(th), self.names, self.dt)
 
