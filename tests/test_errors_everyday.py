@@ -225,3 +225,20 @@ def test_simulating_a_whole_record_says_to_pass_its_inputs():
     d = sysid.IOData(np.ones((10, 1)), np.ones((10, 1)))
     with pytest.raises(sysid.DataError, match=r"whole record \(IOData\).*data\.u"):
         m.simulate(d)
+
+
+def test_a_capped_search_warns_only_while_it_still_moves():
+    import warnings
+
+    from sysid._checks import warn_if_capped
+
+    with pytest.warns(sysid.IterationLimitWarning, match="stopped at max_iter=5"):
+        warn_if_capped({"stop": "maximum iterations", "cost": [4.0, 2.0, 1.5]}, "the search", 5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        warn_if_capped({"stop": "maximum iterations", "cost": [2.0, 1.0, 1.0 - 1e-9]},
+                       "the search", 5)  # settled: a warning would be noise
+        warn_if_capped({"stop": "cost tolerance", "cost": [4.0, 2.0]}, "the search", 5)
+    with pytest.warns(sysid.IterationLimitWarning):  # one history per output
+        warn_if_capped({"stop": ["cost tolerance", "maximum iterations"],
+                        "cost": [[1.0, 1.0], [3.0, 2.0]]}, "the oe search", 5)

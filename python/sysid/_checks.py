@@ -184,14 +184,23 @@ def warn_iteration_limit(what: str, max_iter: int, history: Any, fix: str = "rai
 def warn_if_capped(info: dict[str, Any], what: str, max_iter: int,
                    fix: str = "raise max_iter") -> None:
     """:func:`warn_iteration_limit` when a search's ``info["stop"]`` says it stopped at its
-    cap (``info["cost"]``: its criterion per iteration, when recorded)."""
+    cap (``info["cost"]``: its criterion per iteration, when recorded) while still moving:
+    a last iteration that lowered the cost by less than ``SETTLED`` (relative) had settled,
+    and a warning would be noise (a sigmoid network crawling by 1e-7 per iteration)."""
     stop = info.get("stop")
     stops = stop if isinstance(stop, list) else [stop]
     if max_iter > 0 and "maximum iterations" in stops:
         cost = info.get("cost") or []
         if cost and isinstance(cost[0], (list, tuple)):  # one history per output
             cost = cost[stops.index("maximum iterations")]
+        h = [float(c) for c in cost]
+        if len(h) > 1 and abs(h[-2] - h[-1]) <= SETTLED * max(abs(h[-2]), 1e-300):
+            return
         warn_iteration_limit(what, max_iter, cost, fix)
+
+
+#: relative decrease of a capped search's last iteration below which it had settled
+SETTLED = 1e-5
 
 
 def as_int(x: Any, name: str, lo: int = 1, hi: int | None = None, *, alt: str = "") -> int:
