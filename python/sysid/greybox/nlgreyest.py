@@ -112,6 +112,11 @@ def nlgreyest(data: IOData, s: NonlinearGreyBox, *, x0: Any, weighting: str, mul
     cov_all = np.asarray(best["covariance"])
     cov = cov_all[:nf, :nf]
     std = dict(zip(free, np.sqrt(np.clip(np.diag(cov), 0, None))))
+    qnames = free + [f"x0[{e}][{i}]" for e, i in free_x0]
+    for i in _warn_unidentifiable(np.asarray(best["unidentifiable"]), qnames,
+                                  np.ones(len(qnames))):
+        if i < nf:  # a direction the data do not determine: no finite std
+            std[free[i]] = float("inf")
     active = {int(i) for i in best["active_bounds"] if i < nf}
     bound = []
     for k in names:
@@ -121,8 +126,6 @@ def nlgreyest(data: IOData, s: NonlinearGreyBox, *, x0: Any, weighting: str, mul
                            [s.params[k].fixed for k in names], bound,
                            [s.params[k].unit for k in names],
                            [s.params[k].description for k in names])
-    qnames = free + [f"x0[{e}][{i}]" for e, i in free_x0]
-    _warn_unidentifiable(np.asarray(best["unidentifiable"]), qnames, np.ones(len(qnames)))
     est = s.with_values(vals, x0=X, dt=dt)
     info = {
         "method": "greyest (nonlinear)", "iterations": best["iterations"],

@@ -97,12 +97,15 @@ class OuterParameters:
                 bound.append("lower" if z[i] <= self.lower[i] else "upper")
             else:
                 bound.append("")
+        weak = _warn_unidentifiable(np.asarray(res["unidentifiable"]), self.names,
+                                    np.concatenate([self.scale, np.ones(z.size - nf)]))
+        for i in weak:  # a direction the data do not determine: no finite std
+            if i < nf:
+                std[self.free[i]] = float("inf")
         table = ParameterTable(
             s.names, [vals[k] for k in s.names], [std.get(k, 0.0) for k in s.names],
             [s.params[k].fixed for k in s.names], bound,
             [s.params[k].unit for k in s.names], [s.params[k].description for k in s.names])
-        _warn_unidentifiable(np.asarray(res["unidentifiable"]), self.names,
-                             np.concatenate([self.scale, np.ones(z.size - nf)]))
         est = s.with_values(vals)
 
         def build(theta_free: np.ndarray) -> Any:

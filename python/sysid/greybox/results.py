@@ -121,20 +121,24 @@ def _costs(res: dict[str, Any], reweight: bool) -> dict[str, Any]:
         "loss_history": list(res["loss_history"])}
 
 
-def _warn_unidentifiable(null: np.ndarray, names: list[str], scale: np.ndarray) -> None:
+def _warn_unidentifiable(null: np.ndarray, names: list[str], scale: np.ndarray) -> list[int]:
     """An :class:`IdentifiabilityWarning` naming the parameters in each direction the data
-    do not determine (null vectors of the Gauss-Newton matrix)."""
-    if null.size == 0 or null.shape[1] == 0:
-        return
-    parts = []
+    do not determine (null vectors of the Gauss-Newton matrix); returns their indices, whose
+    standard deviations the tables report as inf (as ``tfest`` does)."""
+    if null.size == 0 or null.ndim != 2 or null.shape[1] == 0:
+        return []
+    parts, weak = [], set()
     for v in null.T:
         v = v * scale
         v = v / np.linalg.norm(v)
         big = np.abs(v) >= 0.05 * np.max(np.abs(v))
+        weak |= {int(i) for i in np.nonzero(big)[0]}
         combo = " + ".join(f"{v[i]:.3g}*{names[i]}" for i in np.nonzero(big)[0])
         parts.append(f"{', '.join(names[i] for i in np.nonzero(big)[0])} (the combination "
                      f"{combo} does not change the fit)")
     warnings.warn("the data cannot determine these parameters separately: "
                   + "; ".join(parts) + ". Fix one of them, reparameterise, or use more "
-                  "informative data; their standard deviations are along the identifiable "
-                  "directions only.", IdentifiabilityWarning, stacklevel=user_stacklevel())
+                  "informative data; their standard deviations are reported as inf (poles, "
+                  "responses and other functions of the model keep theirs).",
+                  IdentifiabilityWarning, stacklevel=user_stacklevel())
+    return sorted(weak)
