@@ -274,6 +274,13 @@ def _as_start(feedthrough: Any, model: Any) -> Any:
     return feedthrough
 
 
+def _warn_dropped_d(stacklevel: int) -> None:
+    """A start with a non-zero ``D`` refined with ``feedthrough=False``: say its D goes."""
+    warnings.warn("the start model has a non-zero D but feedthrough=False: it is refined "
+                  "with D = 0; leave feedthrough out (or pass True) to refine its D as well",
+                  UserWarning, stacklevel=stacklevel + 1)
+
+
 def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None) -> None:
     """The warnings of a refinement: an unstable model, a search stopped at its cap."""
     rho = float(res["spectral_radius"])
@@ -526,9 +533,7 @@ def pem(
     st = _setup(data, model, focus, feedthrough, x0, noise, weighting, enforce_stability,
                 balance=regularization is None)
     if st.dropped_d:
-        warnings.warn("the start model has a non-zero D but feedthrough=False: it is "
-                      "refined with D = 0; leave feedthrough out (or pass True) to refine "
-                      "its D as well", UserWarning, stacklevel=2)
+        _warn_dropped_d(2)
     check_offsets(st.data)  # issue 26: the one offset check (OffsetWarning)
     max_iter = as_int(max_iter, "max_iter", 0)
     tol = float(tol)
@@ -645,9 +650,7 @@ def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
 
         ft, _ = choose_feedthrough(SubspaceEstimator(_experiments(data)), model.nstates)
     if not ft and np.any(model.D != 0):
-        warnings.warn("the start model has a non-zero D but feedthrough=False: it is "
-                      "refined with D = 0; leave feedthrough out (or pass True) to refine "
-                      "its D as well", UserWarning, stacklevel=3)
+        _warn_dropped_d(3)
     max_iter = as_int(max_iter, "max_iter", 0)
     tol = float(tol)
     if not (np.isfinite(tol) and tol >= 0):

@@ -131,8 +131,7 @@ class PolynomialModel(ModelMixin):
     @property
     def prediction_is_simulation(self) -> bool:
         """``True`` for an output-error structure (no ``A``, ``C``, ``D``: the noise model is
-        1), whose predictions at every horizon are its simulation; :func:`sysid.compare`
-        then fits the initial state for predictions too."""
+        1), whose predictions at every horizon are its simulation."""
         return (self.n_inputs > 0 and not self.coupled
                 and all(_monic(self.a[i][i]).size == 1 and _monic(self.c[i]).size == 1
                         and _monic(self.d[i]).size == 1 for i in range(self.n_outputs)))
@@ -140,11 +139,11 @@ class PolynomialModel(ModelMixin):
     @property
     def statespace_predicts(self) -> bool:
         """``True`` when :meth:`to_statespace` exists with the noise model (every structure
-        but a coupled one with ``F``, ``C`` or ``D``): its predictions are this model's, and
+        but a coupled one with ``F`` or ``D``): its predictions are this model's, and
         :func:`sysid.compare` fits their initial state."""
         if self.coupled:
             return not any(x.size for row in self.f for x in row) and not any(
-                x.size for x in (*self.c, *self.d))
+                x.size for x in self.d)
         return True
 
     # -- the model protocol (sysid.Model) ------------------------------------------------

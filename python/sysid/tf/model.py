@@ -86,8 +86,9 @@ class TransferFunction(ModelMixin):
     array([0.    , 0.    , 0.0929, 0.2416])
     """
 
-    #: no noise model: predictions at every horizon are the simulation (see compare)
-    prediction_is_simulation = True
+    #: no noise model: the predictions of its state-space form, the simulation, are its
+    #: own at every horizon (compare fits their initial state)
+    statespace_predicts = True
 
     def __init__(self, num: Any, den: Any, *, dt: float = 0.0, iodelay: Any = None,
                  hold: str = "zoh", input_names: Sequence[str] | None = None,
@@ -530,7 +531,7 @@ class _Sampled:
     def freqresp(self, omega: Any) -> np.ndarray:
         return np.asarray(self.continuous.to_statespace(self.dt).freqresp(omega))
 
-    prediction_is_simulation = True  # no noise model: predictions are the simulation
+    statespace_predicts = True  # no noise model: predictions are the simulation
     #: the sampled form differs from the simulation only by the initial state (a first-order
     #: hold starts from the first input): compare's fitted x0 takes it up
     statespace_up_to_x0 = True

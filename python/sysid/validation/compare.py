@@ -23,9 +23,9 @@ Any model satisfying :class:`sysid.Model` is accepted. The initial state is esti
 state-space models (those with ``A, B, C, D`` and ``nstates``), and for the simulation of a
 model with ``to_statespace()`` when its state-space form simulates the same map (not a
 nonlinear model's linear part or linearisation), and for every horizon of a model whose
-predictions are its simulation (``prediction_is_simulation``: output error, transfer
-functions); other models, and predictions of polynomial models with a noise model, start
-from rest, and ``x0`` may then only be ``"estimate"`` or ``"zero"``. A continuous-time
+state-space form also predicts as it does (``statespace_predicts``: polynomial models, their
+noise model included; transfer functions, whose predictions are their simulation); other
+models start from rest, and ``x0`` may then only be ``"estimate"`` or ``"zero"``. A continuous-time
 model (``dt == 0``) meets the data at their sample time with its ``hold`` (ZOH or FOH, exact;
 its initial state is the continuous state), so the data must be an :class:`~sysid.IOData`.
 """
@@ -466,14 +466,13 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
 
 def _simulator(model: Any, x0: Any, horizon: int | None, u: np.ndarray | None = None) -> Any:
     """For a simulation with ``x0="estimate"`` of a model without a state (polynomial, ...),
-    or a prediction of one whose predictions are its simulation (output error),
+    or a prediction of one whose state-space form predicts as it does (``statespace_predicts``),
     its ``to_statespace()`` when that is the same input-output map, whose initial state can
     be fitted. A nonlinear model's ``to_statespace()`` is its linear part or linearisation
     (``statespace_is_exact = False`` on the class, or a simulation of the first samples of
     ``u`` that differs): it is simulated itself, from rest; its linear part would be
     compared in its place."""
-    if horizon is not None and not (getattr(model, "prediction_is_simulation", False)
-                                    or getattr(model, "statespace_predicts", False)):
+    if horizon is not None and not getattr(model, "statespace_predicts", False):
         return model
     if (_stateful(model) or not isinstance(x0, str)
             or x0 != "estimate" or not hasattr(model, "to_statespace")
