@@ -133,7 +133,7 @@ def test_nlhw_ss_fits_about_the_operating_point(tmp_path):
     y = np.column_stack([np.tanh(x - 5.0) + 3.0, 2.0 * x]) + 1e-3 * rng.standard_normal(
         (u.shape[0], 2))
     m = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 1, input_nl=sysid.SigmoidNetwork(2),
-                      output_nl=sysid.SigmoidNetwork(2), progress=False)
+                      output_nl=sysid.SigmoidNetwork(2), progress=False, max_iter=400)
     np.testing.assert_allclose(m.u_offset, u.mean(0))
     np.testing.assert_allclose(m.y_offset, y.mean(0))
     fit = 100 * (1 - np.linalg.norm(y - m.simulate(u), axis=0)
@@ -142,3 +142,20 @@ def test_nlhw_ss_fits_about_the_operating_point(tmp_path):
     sysid.save_model(m, tmp_path / "hwss.json")
     np.testing.assert_allclose(sysid.load_model(tmp_path / "hwss.json").simulate(u),
                                m.simulate(u), rtol=0, atol=1e-12)
+
+
+def test_a_capped_nlhw_ss_search_warns():
+    # The MIMO search says when it stopped at its cap still lowering the cost, and stops at
+    # statistical convergence otherwise.
+    rng = np.random.default_rng(14)
+    u = rng.uniform(-1, 1, (2000, 1))
+    x = np.zeros(u.shape[0])
+    for t in range(1, u.shape[0]):
+        x[t] = 0.8 * x[t - 1] + 0.5 * np.clip(u[t - 1, 0], -0.4, 0.6)
+    y = x[:, None] + 0.02 * rng.standard_normal((u.shape[0], 1))
+    d = sysid.IOData(u, y, 1.0)
+    with pytest.warns(sysid.IterationLimitWarning, match="nlhw_ss search stopped at max_iter=2"):
+        sysid.nlhw_ss(d, 1, input_nl=sysid.Saturation(), max_iter=2, progress=False)
+    m = sysid.nlhw_ss(d, 1, input_nl=sysid.Saturation(), progress=False)
+    assert m.info["stop"] == "statistical convergence"
+    np.testing.assert_allclose(m.input_nls[0].params, [-0.4, 0.6], atol=0.02)

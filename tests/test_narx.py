@@ -285,7 +285,7 @@ def test_docs_nonlinear_examples_and_their_claims(capsys):
     assert sum(np.isinf(v[1]) for v in ns["ph_narx"].values()) == 3
     pw = ns["ph_wiener"][ns["ph_best_wiener"]]
     assert ns["ph_best_wiener"] == "nlhw_ss(2) pwl(6)"
-    np.testing.assert_allclose(pw, [0.427, 0.820], atol=5e-3)
+    np.testing.assert_allclose(pw, [0.428, 0.819], atol=5e-3)
     # the MIMO Hammerstein example: poles and nonlinearities
     np.testing.assert_allclose(np.sort(ns["ham2"].poles().real), [0.5, 0.8], atol=1e-6)
     np.testing.assert_allclose(ns["ham2"].input_nls[0].params, [-0.5, 0.6], atol=1e-6)

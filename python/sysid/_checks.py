@@ -182,11 +182,16 @@ def warn_iteration_limit(what: str, max_iter: int, history: Any, fix: str = "rai
 
 
 def warn_if_capped(info: dict[str, Any], what: str, max_iter: int,
-                   fix: str = "raise max_iter") -> None:
+                   fix: str = "raise max_iter", n_residuals: int | None = None) -> None:
     """:func:`warn_iteration_limit` when a search's ``info["stop"]`` says it stopped at its
     cap (``info["cost"]``: its criterion per iteration, when recorded) while still moving:
     a last iteration that lowered the cost by less than ``SETTLED`` (relative) had settled,
-    and a warning would be noise (a sigmoid network crawling by 1e-7 per iteration)."""
+    and a warning would be noise (a sigmoid network crawling by 1e-7 per iteration); so had
+    one that lowered it by less than ``FLOOR`` of the start's cost (a noise-free fit at the
+    rounding floor, its cost 1e-24 of the start's and still halving); and, given the number
+    of residuals the cost sums, one that lowered it by less than ``STATISTICAL`` residual
+    variances ``2 cost / n_residuals`` (a step that moves no test on the estimate: the
+    optimiser's statistical convergence, applied to the decrease achieved)."""
     stop = info.get("stop")
     stops = stop if isinstance(stop, list) else [stop]
     if max_iter > 0 and "maximum iterations" in stops:
@@ -194,13 +199,21 @@ def warn_if_capped(info: dict[str, Any], what: str, max_iter: int,
         if cost and isinstance(cost[0], (list, tuple)):  # one history per output
             cost = cost[stops.index("maximum iterations")]
         h = [float(c) for c in cost]
-        if len(h) > 1 and abs(h[-2] - h[-1]) <= SETTLED * max(abs(h[-2]), 1e-300):
+        stat = STATISTICAL * 2 * abs(h[-1]) / n_residuals if n_residuals else 0.0
+        if len(h) > 1 and abs(h[-2] - h[-1]) <= max(SETTLED * abs(h[-2]), FLOOR * abs(h[0]),
+                                                     stat, 1e-300):
             return
         warn_iteration_limit(what, max_iter, cost, fix)
 
 
 #: relative decrease of a capped search's last iteration below which it had settled
 SETTLED = 1e-5
+#: decrease of a capped search's last iteration, relative to its start's cost, below which
+#: it had reached the rounding floor of a noise-free fit
+FLOOR = 1e-12
+#: decrease of a capped search's last iteration, in residual variances, below which it had
+#: converged statistically (the optimiser's ``tol_statistical``)
+STATISTICAL = 1e-2
 
 
 def as_int(x: Any, name: str, lo: int = 1, hi: int | None = None, *, alt: str = "") -> int:

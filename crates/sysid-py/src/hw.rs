@@ -47,6 +47,8 @@ fn options(max_iter: usize, tol: f64) -> Options {
     opts.tol_gradient = tol;
     opts.tol_step = tol;
     opts.tol_cost = tol;
+    // statistical convergence, as pem's searches
+    opts.tol_statistical = 1e-2;
     opts
 }
 

@@ -499,6 +499,9 @@ def _hw_fit(lin_data: IOData, lin: StateSpaceModel, hid: tuple[int, ...],
     networks have no room for its units or neither start is admissible. ``progress``: its
     own bar (a terminal by default), as nlhw_ss shows it (it can take minutes on long
     records; a callable of nlssest's epochs does not fit its iterations, so none then)."""
+    import warnings
+
+    from ..errors import IterationLimitWarning
     from ..nonlinear.hw_model import SigmoidNetwork
     from ..nonlinear.hw_ss import nlhw_ss
 
@@ -508,9 +511,11 @@ def _hw_fit(lin_data: IOData, lin: StateSpaceModel, hid: tuple[int, ...],
         return None
     for start in (None, lin):  # nlhw_ss's own (subspace) start; if inadmissible, ``lin``
         try:
-            return nlhw_ss(lin_data, lin.nstates, input_nl=SigmoidNetwork(HW_UNITS),
-                           output_nl=SigmoidNetwork(HW_UNITS), max_iter=HW_ITER,
-                           progress=progress, linear=start)
+            with warnings.catch_warnings():  # a start: training goes on from its cap
+                warnings.simplefilter("ignore", IterationLimitWarning)
+                return nlhw_ss(lin_data, lin.nstates, input_nl=SigmoidNetwork(HW_UNITS),
+                               output_nl=SigmoidNetwork(HW_UNITS), max_iter=HW_ITER,
+                               progress=progress, linear=start)
         except (DataError, NumericalError):
             continue
     return None

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import experiment_arrays, require_inputs_vary
+from .._checks import experiment_arrays, require_inputs_vary, warn_if_capped
 from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError
 from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction
@@ -80,6 +80,14 @@ def nlhw(
         With ``info``: ``iterations``, ``cost`` (``1/2 sum e^2`` at the start and after each
         iteration of the chosen start's search), ``criterion``, ``stop`` (reason), the start,
         and the parameter covariance in ``info["covariance"]``.
+
+    Warns
+    -----
+    IterationLimitWarning
+        When the chosen start's search stopped at ``max_iter`` while its last
+        iteration still lowered the cost by more than 1e-5 of its value and by more
+        than 0.01 residual variances: raise ``max_iter``. (The search itself also
+        stops at statistical convergence, ``info["stop"]`` says which.)
 
     Examples
     --------
@@ -182,6 +190,7 @@ def nlhw(
             "u_range": (float(u_all.min()), float(u_all.max())),
             "x_range": (float(x_all.min()), float(x_all.max())), "n_output_params": nbeta,
             "offsets": {"removed": shift, "u": float(u0[0]), "y": float(y0[0])}}
+    warn_if_capped(info, "the nlhw search", int(max_iter), n_residuals=n_samples)
     return HammersteinWienerModel(fin, fout, b, f, int(nk), dt,
                                   u_offset=float(u0[0]), y_offset=float(y0[0]),
                                   noise_variance=float(res["noise_variance"]), info=info,

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import experiment_arrays
+from .._checks import experiment_arrays, warn_if_capped
 from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError
 from .hw_model import Nonlinearity, UserFunction
@@ -90,6 +90,14 @@ def nlhw_ss(
     HammersteinWienerSSModel
         With ``info``: ``iterations``, ``cost`` (``1/2 sum |e|^2`` at the start and after each
         iteration of the chosen start's search), ``criterion``, ``stop`` (reason), the start.
+
+    Warns
+    -----
+    IterationLimitWarning
+        When the chosen start's search stopped at ``max_iter`` while its last
+        iteration still lowered the cost by more than 1e-5 of its value and by more
+        than 0.01 residual variances: raise ``max_iter``. (The search itself also
+        stops at statistical convergence, ``info["stop"]`` says which.)
 
     Examples
     --------
@@ -219,6 +227,8 @@ def nlhw_ss(
             "u_ranges": [(float(c.min()), float(c.max())) for c in u_all.T],
             "v_ranges": [(float(c.min()), float(c.max())) for c in v_all.T],
             "offsets": {"removed": shift, "u": u0.tolist(), "y": y0.tolist()}}
+    n_res = sum(y.size for _, y in exps)
+    warn_if_capped(info, "the nlhw_ss search", int(max_iter), n_residuals=n_res)
     return HammersteinWienerSSModel(fin, fout, A, B, C, D, dt, u_offset=u0, y_offset=y0,
                                     noise_variance=float(res["noise_variance"]), info=info,
                                     input_names=getattr(data, "input_names", None),

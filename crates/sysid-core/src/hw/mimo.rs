@@ -350,6 +350,17 @@ impl Problem for MimoHwProblem<'_> {
         let (a, _, _, _) = self.structure.matrices(theta);
         matches!(spectral_radius(a.as_ref()), Ok(r) if r < 1.0)
     }
+
+    /// Every output of every sample is a residual of the cost (for
+    /// [`Options::tol_statistical`]).
+    fn n_residuals(&self) -> Option<usize> {
+        Some(
+            self.records
+                .iter()
+                .map(|(_, y)| y.nrows() * y.ncols())
+                .sum(),
+        )
+    }
 }
 
 /// Prediction-error estimate of a MIMO Hammerstein-Wiener model from `theta0` (for example

@@ -373,6 +373,12 @@ impl Problem for HwProblem<'_> {
         a.extend_from_slice(f);
         theta.iter().all(|v| v.is_finite()) && is_stable(&a)
     }
+
+    /// Every sample of every record is a residual of the cost (for
+    /// [`Options::tol_statistical`]).
+    fn n_residuals(&self) -> Option<usize> {
+        Some(self.records.iter().map(|(_, y)| y.len()).sum())
+    }
 }
 
 /// Prediction-error estimate of a Hammerstein-Wiener model from `theta0` (for example a
