@@ -258,3 +258,19 @@ def test_a_capped_search_warns_and_a_converged_one_stops_statistically():
     sigma2 = 2 * m.info["cost"][-1] / u.size
     assert m.info["cost"][-1] - tight.info["cost"][-1] < 0.1 * sigma2
     np.testing.assert_allclose(m.input_nl.params, [-0.4, 0.6], atol=0.02)
+
+
+def test_a_non_finite_input_is_refused_not_simulated_to_nan():
+    u = _u(400, 16)
+    y = linear(np.clip(u, -0.4, 0.6))
+    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl=sysid.Saturation(),
+                   progress=False)
+    ms = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 1, input_nl=sysid.Saturation(),
+                       progress=False)
+    bad = u.copy()
+    bad[7] = np.nan
+    for model in (m, ms):
+        with pytest.raises(sysid.DataError, match="non-finite value .* at sample 7"):
+            model.simulate(bad)
+        with pytest.raises(sysid.DataError, match="non-finite value .* at sample 7"):
+            model.predict(bad, y)

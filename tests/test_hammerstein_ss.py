@@ -159,3 +159,22 @@ def test_a_capped_nlhw_ss_search_warns():
     m = sysid.nlhw_ss(d, 1, input_nl=sysid.Saturation(), progress=False)
     assert m.info["stop"] == "statistical convergence"
     np.testing.assert_allclose(m.input_nls[0].params, [-0.4, 0.6], atol=0.02)
+
+
+def test_nlhw_ss_offset_and_constant_input_are_named():
+    # With nonlinearities whose levels are in the data's units the record is not centred;
+    # the offset check then speaks (it was silenced with the start's other warnings), and a
+    # constant input is named by its own value (it read 0 after centring, and blamed the
+    # subspace start).
+    rng = np.random.default_rng(15)
+    u = rng.uniform(-1, 1, (600, 1))
+    x = np.zeros(600)
+    for t in range(1, 600):
+        x[t] = 0.8 * x[t - 1] + 0.5 * np.clip(u[t - 1, 0], -0.4, 0.6)
+    y = 97.0 + x[:, None] + 0.01 * rng.standard_normal((600, 1))
+    with pytest.warns(sysid.OffsetWarning, match="offset"):
+        sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 1, input_nl=sysid.Saturation(),
+                      max_iter=400, progress=False)
+    with pytest.raises(sysid.DataError, match="u0 is 3 in every sample: nlhw_ss"):
+        sysid.nlhw_ss(sysid.IOData(np.full((600, 1), 3.0), y, 1.0), 1,
+                      input_nl=sysid.SigmoidNetwork(2), progress=False)

@@ -308,3 +308,47 @@ def test_a_model_without_input_terms_warns():
     # with a smaller err_tol the input term is selected, and nothing is said
     m = sysid.nlarx(sysid.IOData(u[:, None], y[:, None], 1.0), 2, 2, err_tol=1e-16)
     assert any("u0" in n for n in m.term_names()) and "uses_input" not in m.info
+
+
+def test_compare_runs_a_narx_model_from_the_measured_first_outputs():
+    # A NARX model's state is its past outputs. compare started it from zero outputs, so a
+    # record far from zero read as a long transient (heat exchanger: "diverged", -inf,
+    # where nlarx's own validation criterion, run from the measured outputs, gave 12.3 %),
+    # and it refused an array x0 that simulate accepts.
+    rng = np.random.default_rng(21)
+    u = rng.uniform(-1, 1, 600)
+    y = np.zeros(600)
+    y[0] = 20.0
+    for t in range(1, 600):
+        y[t] = 0.99 * y[t - 1] + 0.5 * u[t - 1] - 0.1 * u[t - 1] ** 2 + 0.2
+    d = sysid.IOData(u, y, 1.0)
+    m = sysid.nlarx(d, 1, 1, 1, basis=sysid.PolynomialBasis(2))
+    own = m.simulate(u, x0=y[:1])
+    want = 100 * (1 - np.linalg.norm(own[:, 0] - y) / np.linalg.norm(y - y.mean()))
+    assert sysid.compare(m, d).fit[0, 0] == pytest.approx(want, abs=1e-9)
+    assert want > 99.9
+    assert sysid.compare(m, d, x0=y[:1]).fit[0, 0] == pytest.approx(want, abs=1e-9)
+    assert sysid.compare(m, d, x0="zero").fit[0, 0] < want - 1
+
+
+def test_non_integer_lags_are_refused_not_truncated():
+    rng = np.random.default_rng(22)
+    u = rng.uniform(-1, 1, 300)
+    d = sysid.IOData(u, np.convolve(u, [0, 0.5, 0.2])[:300], 1.0)
+    for bad in ((2.5, 1, 1), (2, 1.7, 1), (2, 1, 0.5)):
+        with pytest.raises(sysid.DataError, match="must be a non-negative integer"):
+            sysid.nlarx(d, *bad)
+    sysid.nlarx(d, 2.0, 1, 1)  # an integral float is a lag
+
+
+def test_a_short_record_does_not_keep_a_term_per_row():
+    # 12 samples, 10 regression rows: AIC kept 10 terms (an exact interpolation of the
+    # noise, residual variance 1e-31); now at most half the rows, and a record without two
+    # rows is refused
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(12)
+    y = np.convolve(u, [0, 0.5, 0.3])[:12] + 0.2 * np.tanh(u) + 0.05 * rng.standard_normal(12)
+    m = sysid.nlarx(sysid.IOData(u, y, 1.0), 2, 2, 1)
+    assert len(m.terms[0]) <= m.info["n_rows"] // 2 and m.noise_variance[0] > 1e-6
+    with pytest.raises(sysid.DataError, match="too short"):
+        sysid.nlarx(sysid.IOData(u[:3], y[:3], 1.0), 2, 2, 1)

@@ -236,3 +236,21 @@ def test_ctrl_c_stops_the_training_loop():
     finally:
         timer.cancel()
     assert time.perf_counter() - t0 < 60
+
+
+def test_simulation_focus_reports_each_outputs_error_variance():
+    # two outputs with different noise: each output's variance is its own free-run mean
+    # squared error (it was their pool, the same number for both)
+    rng = np.random.default_rng(31)
+    u = rng.uniform(-1, 1, (600, 1))
+    x = np.zeros(600)
+    for t in range(1, 600):
+        x[t] = 0.7 * x[t - 1] + np.tanh(2 * u[t - 1, 0])
+    y = np.column_stack([x + 0.01 * rng.standard_normal(600),
+                         0.5 * x + 0.3 * rng.standard_normal(600)])
+    d = sysid.IOData(u, y, 1.0)
+    m = sysid.nlarx(d, 1, 1, 1, basis=sysid.SigmoidNetwork(2), focus="simulation",
+                    max_iter=50, progress=False)
+    e = (y - m.simulate(u, x0=y[:1]))[1:]
+    np.testing.assert_allclose(m.noise_variance, np.mean(e ** 2, axis=0), rtol=1e-9)
+    assert m.noise_variance[1] > 20 * m.noise_variance[0]

@@ -22,6 +22,7 @@ def _fit(**kw):
     return sysid.nlssest(_data(), 1, hidden=8, learning_rate=1e-2, progress=False, **kw)
 
 
+@pytest.mark.filterwarnings("ignore::sysid.IterationLimitWarning")  # few epochs, for speed
 def test_training_beats_linear_start_on_fresh_data():
     m = _fit()
     v = m.info["training"]["validation"]
@@ -32,6 +33,7 @@ def test_training_beats_linear_start_on_fresh_data():
     assert err < 0.05 * lin
 
 
+@pytest.mark.filterwarnings("ignore::sysid.IterationLimitWarning")  # few epochs, for speed
 def test_same_seed_same_model_and_progress_can_stop():
     a, b = _fit(), _fit()
     np.testing.assert_array_equal(a.params, b.params)
@@ -41,6 +43,7 @@ def test_same_seed_same_model_and_progress_can_stop():
     assert seen == [1, 2, 3]
 
 
+@pytest.mark.filterwarnings("ignore::sysid.IterationLimitWarning")  # few epochs, for speed
 def test_save_load_and_encoder(tmp_path):
     m = _fit()
     sysid.save_model(m, tmp_path / "m.npz")
@@ -116,6 +119,7 @@ def test_a_slow_mode_does_not_turn_training_into_a_drift():
     assert m.info["horizon"] > 1000  # ln(10) / (1 - 0.9995) samples
 
 
+@pytest.mark.filterwarnings("ignore::sysid.IterationLimitWarning")  # few epochs, for speed
 def test_regularization_keeps_the_parameters_near_the_start():
     start = _fit(epochs=0)  # the linear start itself (epoch 0 kept)
     assert start.info["training"]["best_epoch"] == 0
@@ -136,3 +140,27 @@ def test_regularization_keeps_the_parameters_near_the_start():
         _fit(regularization=-1.0)
     with pytest.raises(DataError, match="regularization"):
         _fit(regularization=float("nan"))
+
+
+def test_short_or_failed_training_says_so_and_bad_settings_are_refused():
+    # Training that ends at its epoch cap with the validation error still falling, or in
+    # which every step diverged (the model returned is the untrained start), warns; a
+    # negative step size or an empty batch is refused (both ran before, silently).
+    rng = np.random.default_rng(3)
+    u = rng.uniform(-1, 1, (800, 1))
+    x = np.zeros(800)
+    for t in range(1, 800):
+        x[t] = 0.8 * x[t - 1] + 0.5 * np.tanh(2 * u[t - 1, 0])
+    d = sysid.IOData(u, x[:, None], 1.0)
+    kw = dict(hidden=4, init="linear", progress=False)
+    with pytest.warns(sysid.IterationLimitWarning, match="epochs=3 with its validation"):
+        m = sysid.nlssest(d, 1, epochs=3, learning_rate=1e-3, **kw)
+    t = m.info["training"]
+    assert t["stop"] == "epochs" and t["best_epoch"] == 3
+    with pytest.warns(UserWarning, match="untrained start"):
+        m = sysid.nlssest(d, 1, epochs=3, learning_rate=1e3, **kw)
+    assert m.info["training"]["best_epoch"] == 0 and m.info["training"]["diverged"] > 0
+    for bad in (dict(learning_rate=-1.0), dict(learning_rate=0.0), dict(batch=0),
+                dict(epochs=-1), dict(patience=0)):
+        with pytest.raises(sysid.DataError, match=next(iter(bad))):
+            sysid.nlssest(d, 1, **kw, **bad)

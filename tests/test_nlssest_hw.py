@@ -63,6 +63,7 @@ def test_auto_picks_the_start_that_validates_better():
     assert set(m.info["start_validation"]) == {"linear"}
 
 
+@pytest.mark.filterwarnings("ignore::sysid.IterationLimitWarning")  # few epochs, for speed
 def test_save_load_round_trip(tmp_path):
     hw = _hw()
     u, d = _record(hw)
@@ -104,6 +105,7 @@ def _hammerstein(n=1500):
     return u, sysid.IOData(u, x[:-1], 1.0)
 
 
+@pytest.mark.filterwarnings("ignore::sysid.IterationLimitWarning")  # few epochs, for speed
 def test_auto_trains_from_both_starts_and_keeps_where_training_ends_lower():
     # the start's own validation need not rank where its training ends: both starts are
     # trained (each as it would be alone) and the lower held-out error at the best epoch wins

@@ -157,3 +157,20 @@ def test_decoupled_iteration_cap_names_the_cap_given():
         m = sysid.pnlss(sysid.IOData(u, y, 1.0), 2, degree=3, branches=2, max_iter=10,
                         progress=False)
     assert m.info["fit"]["iterations"] > 10  # the starts' iterations are still reported
+
+
+def test_a_cancelled_decoupled_fit_stops_at_once():
+    # progress returning False ends the fit: the remaining random starts ran one iteration
+    # each before (the callable was called again after it asked to stop)
+    rng = np.random.default_rng(5)
+    u = rng.uniform(-1, 1, 600)
+    d = sysid.IOData(u, _wiener_hammerstein(u), 1.0)
+    calls: list[int] = []
+
+    def stop_at_third(*args):
+        calls.append(args[0])
+        return len(calls) < 3
+
+    with pytest.warns(UserWarning, match="cancelled"):
+        m = sysid.pnlss(d, 2, degree=3, branches=2, max_iter=30, progress=stop_at_third)
+    assert len(calls) == 3 and m.info["fit"]["stop"] == "cancelled"

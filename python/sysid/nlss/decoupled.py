@@ -201,9 +201,16 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
     struct = {"dims": (n, m_, l_), "branches": r, "degrees": degrees}
     fit = lambda th0, it: _sysid.pnlss_estimate(  # noqa: E731
         struct, recs, th0, max_iter=it, tol=tol, progress=progress)
-    trials = [fit(start(k), min(STARTS_ITER, max_iter)) for k in range(STARTS)]
+    trials = []
+    for k in range(STARTS):  # a cancelled trial (progress returned False) ends the fit
+        trials.append(fit(start(k), min(STARTS_ITER, max_iter)))
+        if trials[-1]["stop"] == "cancelled":
+            break
     best = min(trials, key=lambda t: t["cost"])
-    res = best if best["stop"] == "cancelled" or max_iter <= STARTS_ITER else \
+    cancelled = trials[-1]["stop"] == "cancelled"
+    if cancelled:
+        best["stop"] = "cancelled"
+    res = best if cancelled or max_iter <= STARTS_ITER else \
         fit(np.asarray(best["theta"]), max_iter - STARTS_ITER)
     res["iterations"] += sum(t["iterations"] for t in trials) - (res is best) * best["iterations"]
     res["history"] = list(best["history"]) + list(res["history"])[1:] if res is not best \

@@ -337,6 +337,10 @@ def nlssest(
         raise DataError("nlssest needs inputs")
     _check_init(init)
     lam_reg = as_nonnegative(regularization, "regularization")
+    epochs, batch = as_int(epochs, "epochs", 0), as_int(batch, "batch", 1)
+    patience = as_int(patience, "patience", 1)
+    if not as_nonnegative(learning_rate, "learning_rate") > 0:
+        raise DataError(f"learning_rate must be a finite number > 0, got {learning_rate!r}")
     sc = Scaling.of(data)
     sd = scaled_data(data, sc)
     train, val = _split(sd, sc, validation, L, 2 if H is None else H)
@@ -382,11 +386,35 @@ def nlssest(
                 zip([c[4] for c in cands], scores)),
             "training": runs[kind], "starts": runs, "horizon": H, "seed": seed,
             "regularization": lam_reg}
+    _warn_short(res, epochs, learning_rate)
     return NeuralStateSpaceModel(res["params"], dims=(n, data.n_inputs, data.n_outputs),
                                  hidden=hid, output_hidden=out, encoder_hidden=enc, lags=L,
                                  scaling=sc.to_dict(), dt=data.dt,
                                  input_names=data.input_names, output_names=data.output_names,
                                  info=info)
+
+
+def _warn_short(res: dict[str, Any], epochs: int, learning_rate: float) -> None:
+    """Say when the training returned did not train: every epoch's step diverged (the
+    model is its start), or it stopped at ``epochs`` with its validation error still
+    falling (its best epoch the last)."""
+    import warnings
+
+    from .._checks import user_stacklevel
+    from ..errors import IterationLimitWarning
+
+    best = int(res["best_epoch"])
+    if epochs > 0 and best == 0 and int(res.get("diverged", 0)) > 0:
+        warnings.warn(f"nlssest: no training epoch improved on the start (the simulation "
+                      f"diverged {int(res['diverged'])} times); the model is the untrained "
+                      f"start: lower learning_rate (now {learning_rate:g}) or the horizon",
+                      UserWarning, stacklevel=user_stacklevel())
+    elif res["stop"] == "epochs" and epochs > 1 and best == epochs:
+        v = [float(x) for x in res["validation"]]
+        warnings.warn(f"nlssest stopped at epochs={epochs} with its validation error still "
+                      f"falling (best at the last epoch, {v[-1]:.4g} after {v[-2]:.4g}); "
+                      "the model is that epoch's: raise epochs", IterationLimitWarning,
+                      stacklevel=user_stacklevel())
 
 
 def _split(sd: IOData, sc: Scaling, validation: Any, L: int, H: int) -> tuple[list, list]:

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import as_2d
 from ..errors import DataError
 from ..models.protocol import ModelMixin
 
@@ -410,6 +411,7 @@ class HammersteinWienerModel(ModelMixin):
             u = u[:, 0]
         if u.ndim != 1:
             raise DataError(f"u has shape {u.shape} but should be (n_samples, 1)")
+        as_2d(u, "u")  # a NaN or Inf: an error naming the sample, not NaN outputs
         if self.u_offset:
             u = u - self.u_offset
         if isinstance(self.input_nl, UserFunction):

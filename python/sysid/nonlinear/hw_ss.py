@@ -16,8 +16,9 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import experiment_arrays, warn_if_capped
+from .._checks import experiment_arrays, require_inputs_vary, warn_if_capped
 from .._progress import iteration_callback, iteration_printer
+from ..data.offsets import check_offsets
 from ..errors import DataError
 from .hw_model import Nonlinearity, UserFunction
 from .hw_ss_model import HammersteinWienerSSModel
@@ -125,8 +126,12 @@ def nlhw_ss(
     fout = _per_channel(output_nl, p, "output_nl")
     if any(isinstance(g, UserFunction) for g in fout):
         raise DataError("a UserFunction can only be an input nonlinearity")
+    require_inputs_vary(exps, "nlhw_ss", getattr(data, "input_names", None))
     shift = use_offsets(offsets, fin + fout, exps)
     u0, y0 = record_means(exps) if shift else (np.zeros(m), np.zeros(p))
+    if not shift:  # the start's own check is silenced below with its other warnings
+        check_offsets(data if isinstance(data, IOData) else
+                      IOData([u for u, _ in exps], [y for _, y in exps], 1.0))
     if shift:
         exps = centred(exps, u0, y0)
     records = []

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import as_2d
 from ..errors import DataError
 from ..models.protocol import ModelMixin
 from .hw_model import Nonlinearity, UserFunction, nonlinearity_from_dict
@@ -120,6 +121,7 @@ class HammersteinWienerSSModel(ModelMixin):
             u = u[:, None]
         if u.ndim != 2 or u.shape[1] != self.ninputs:
             raise DataError(f"u has shape {u.shape} but should be (n_samples, {self.ninputs})")
+        as_2d(u, "u")  # a NaN or Inf: an error naming the sample, not NaN outputs
         u = u - self.u_offset
         for j, f in enumerate(self.input_nls):
             if isinstance(f, UserFunction):

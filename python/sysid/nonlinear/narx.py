@@ -30,8 +30,9 @@ CRITERIA = ("aic", "bic", "fpe", "validation", None)
 def _per(v: Any, n: int, name: str) -> list[int]:
     a = np.atleast_1d(np.asarray(v))
     if a.size == 1:
-        a = np.full(n, int(a[0]))
-    if a.shape != (n,) or np.any(a < 0) or not np.all(np.equal(np.mod(a, 1), 0)):
+        a = np.full(n, a[0])  # as given: 2.5 is refused below, not read as 2
+    if a.dtype.kind not in "iuf" or a.shape != (n,) or np.any(a < 0) \
+            or not np.all(np.equal(np.mod(a, 1), 0)):
         raise DataError(f"{name} must be a non-negative integer or {n} of them, got {v!r}")
     return [int(x) for x in a]
 
@@ -246,9 +247,14 @@ def nlarx(
                                      int(max_terms), [[] for _ in range(ny)], float(err_tol),
                                      **_values(cust))
     n_rows = int(sel[0]["n_rows"])
+    if n_rows < 2:
+        raise DataError(f"the record gives {n_rows} regression row(s) for these lags: too "
+                        "short to fit a NARX model; give a longer record or shorter lags")
     keep, scores = [], []
     for s in sel:
-        K = len(s["terms"])
+        # at least as many residual degrees of freedom as terms: on a short record FROLS
+        # would otherwise keep one term per row, an exact interpolation of the noise
+        K = min(len(s["terms"]), n_rows // 2)
         if criterion in ("aic", "bic", "fpe"):
             sc = [_score(_prefix(s["r"], k)[1], n_rows, k, criterion) for k in range(K + 1)]
             keep.append(int(np.argmin(sc)))

@@ -298,8 +298,26 @@ def _refine(model: NetworkNARXModel, recs: list[tuple[np.ndarray, np.ndarray]], 
     info["refine"] = _report(rep)
     _warn(rep, "the simulation-focus search", max_iter)
     n_rows = info["n_rows"]
-    return NetworkNARXModel(model.na, model.nb, model.nk, [from_rust_nl(t, nz) for t in nls],
-                            model.shift, model.scale, model.dt, name=model.name,
-                            noise_variance=np.full(model.noutputs,
-                                                   2 * rep["cost"] / (n_rows * model.noutputs)),
-                            input_names=model.input_names, output_names=model.output_names)
+    pooled = np.full(model.noutputs, 2 * rep["cost"] / (n_rows * model.noutputs))
+    out = NetworkNARXModel(model.na, model.nb, model.nk, [from_rust_nl(t, nz) for t in nls],
+                           model.shift, model.scale, model.dt, name=model.name,
+                           noise_variance=pooled, input_names=model.input_names,
+                           output_names=model.output_names)
+    out.noise_variance = _free_run_variances(out, recs, pooled)
+    return out
+
+
+def _free_run_variances(model: NetworkNARXModel, recs: list[tuple[np.ndarray, np.ndarray]],
+                        pooled: np.ndarray) -> np.ndarray:
+    """Each output's mean squared free-run error (from the measured first outputs, as the
+    refinement runs it), not their pool; ``pooled`` if the run fails."""
+    L = model.max_lag
+    sums, count = np.zeros(model.noutputs), 0
+    try:
+        for u, y in recs:
+            e = (y - np.asarray(model.simulate(u, x0=y[:L])).reshape(y.shape))[L:]
+            sums += np.sum(e ** 2, axis=0)
+            count += e.shape[0]
+    except NumericalError:
+        return pooled
+    return sums / count if count else pooled

@@ -175,6 +175,8 @@ def estimate_x0(model: Any, u: Any, y: Any, horizon: int | None = None) -> np.nd
     if n == 0:
         return np.zeros(0)
     h = _horizon(horizon)
+    if not getattr(model, "statespace_is_exact", True):
+        return _estimate_x0_nonlinear(model, u, y, h)
     W = _window(model, h, y.shape[0])
     base = _run(model, u[:W], y[:W], h, None)
     u0, y0 = np.zeros((W, u.shape[1])), np.zeros((W, y.shape[1]))
@@ -189,6 +191,55 @@ def estimate_x0(model: Any, u: Any, y: Any, horizon: int | None = None) -> np.nd
     with np.errstate(over="ignore", invalid="ignore"):
         x0, *_ = np.linalg.lstsq(phi, target, rcond=None)
     return x0 if np.all(np.isfinite(x0)) else np.zeros(n)
+
+
+def _estimate_x0_nonlinear(model: Any, u: np.ndarray, y: np.ndarray,
+                           horizon: int | None, iterations: int = 8) -> np.ndarray:
+    """Least-squares initial state of a nonlinear state-space model (PNLSS, neural: its
+    output is not affine in ``x0``, and its response to a unit state on a zero input holds
+    its offsets and nonlinear terms): Gauss-Newton from ``x0 = 0`` on the record's own input,
+    the columns by forward differences, each step halved until the error falls. Never worse
+    than ``x0 = 0`` over the record, which it returns when no step helps."""
+    n = model.nstates
+    W = min(y.shape[0], 2 * _window(model, horizon, y.shape[0]))
+    uw, yw = u[:W], y[:W]
+
+    def err(x: np.ndarray) -> np.ndarray:
+        return (yw - _run(model, uw, yw, horizon, x)).ravel()
+
+    x = np.zeros(n)
+    r = err(x)
+    cost = float(r @ r) if np.all(np.isfinite(r)) else np.inf
+    if not np.isfinite(cost):
+        return x
+    for _ in range(iterations):
+        J = np.empty((r.size, n))
+        for i in range(n):
+            d = 1e-6 * (1.0 + abs(x[i]))
+            xi = x.copy()
+            xi[i] += d
+            J[:, i] = (r - err(xi)) / d  # d yhat / d x_i
+        if not np.all(np.isfinite(J)):
+            break
+        step, *_ = np.linalg.lstsq(J, r, rcond=None)
+        for _half in range(20):
+            rt = err(x + step)
+            ct = float(rt @ rt) if np.all(np.isfinite(rt)) else np.inf
+            if ct < cost:
+                break
+            step = step / 2
+        else:
+            break
+        done = cost - ct <= 1e-10 * cost
+        x, r, cost = x + step, rt, ct
+        if done:
+            break
+    if W < y.shape[0]:  # the window's fit must not cost the rest of the record
+        full = [float(np.sum((y - _run(model, u, y, horizon, v)) ** 2))
+                for v in (np.zeros(n), x)]
+        if not full[1] < full[0]:
+            return np.zeros(n)
+    return x
 
 
 def _window(model: Any, horizon: int | None, N: int) -> int:
@@ -213,6 +264,17 @@ def _window(model: Any, horizon: int | None, N: int) -> int:
 def _x0_for(model: Any, x0: Any, u: np.ndarray, y: np.ndarray, horizon: int | None,
             index: int, count: int) -> np.ndarray | None:
     if not _stateful(model):
+        lag = getattr(model, "max_lag", None)
+        if horizon is None and isinstance(lag, (int, np.integer)) and lag > 0:
+            # a NARX model's "state" is its first max_lag outputs: the measured ones (as
+            # nlarx's own validation criterion runs it), or those given
+            if isinstance(x0, str) and x0 == "estimate":
+                return y[:lag].copy()
+            if x0 is not None and not isinstance(x0, str):
+                if (isinstance(x0, (list, tuple)) and count > 1 and len(x0) == count
+                        and np.ndim(x0[0]) >= 1):  # one start per experiment
+                    x0 = x0[index]
+                return np.asarray(x0, dtype=float)
         if x0 is None or (isinstance(x0, str) and x0 in ("estimate", "zero")):
             return None  # no state to estimate: the model starts from rest
         raise DataError(f"{type(model).__name__} has no state-space form here: x0 must be "
@@ -388,7 +450,10 @@ def compare(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
         looks at the measured outputs and prediction equals simulation).
     x0 : "estimate", "zero", "model" or array
         Initial state: least squares on each experiment (default), zero, the model's own, or
-        given (one array, or a list with one per experiment).
+        given (one array, or a list with one per experiment). A nonlinear state-space
+        model's is fitted by Gauss-Newton on the record (never worse than zero); a NARX
+        model's simulation starts from the measured first ``max_lag`` outputs
+        (``"estimate"``), from zero outputs, or from the outputs given.
 
     Returns
     -------
