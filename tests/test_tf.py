@@ -306,3 +306,23 @@ def test_continuous_transfer_function_impulse_response():
     G2 = sysid.TransferFunction([1.0, 0.5], [1.0, 3.0, 2.0])
     np.testing.assert_allclose(sysid.impulse(G2).y, G2.to_statespace().impulse(
         200, dt=sysid.impulse(G2).t[1]).y, atol=1e-12)
+
+def test_compare_x0_of_a_continuous_model_reproduces_its_fit_through_its_sampled_form():
+    # compare's initial state belongs to model.to_statespace(dt) (hold and delay states
+    # included); giving it to the continuous model's simulate was a bare numpy broadcast
+    # error, now a ShapeError that says where it belongs
+    rng = np.random.default_rng(41)
+    u = np.repeat(rng.standard_normal(150), 4)
+    truth = sysid.TransferFunction([[[2.0]]], [[[1.0, 3.0, 2.0]]])
+    y = truth.simulate(u, dt=0.1)
+    d = sysid.IOData(u, y + 0.01 * rng.standard_normal(y.shape), 0.1)
+    m = sysid.tfest(d[:400], 2, progress=False)
+    c = sysid.compare(d[400:], m)
+    uv = np.asarray(d[400:].u)
+    np.testing.assert_allclose(m.to_statespace(0.1).simulate(uv, c.x0[0]), c.yhat[0],
+                               atol=1e-12)
+    assert c.x0[0].size == 3  # one more state than the model's two
+    with pytest.raises(sysid.ShapeError, match="to_statespace"):
+        m.simulate(uv, c.x0[0], dt=0.1)
+    with pytest.raises(sysid.ShapeError, match="x0 has 5 entries"):
+        m.simulate(uv, np.zeros(5), dt=0.1)

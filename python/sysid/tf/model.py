@@ -317,7 +317,14 @@ class TransferFunction(ModelMixin):
         Ad, Bt, Cd, Dt, taps, G = self.sampled_taps(dt, hold)
         z0 = -G @ u[0] if u.shape[0] else np.zeros(Ad.shape[0])
         if x0 is not None:
-            z0 = z0 + np.asarray(x0, dtype=float).reshape(-1)
+            x0 = np.asarray(x0, dtype=float).reshape(-1)
+            if x0.size != z0.size:
+                raise ShapeError(
+                    f"x0 has {x0.size} entries but this model sampled every {dt:g} s has "
+                    f"{z0.size} states; an initial state from sysid.compare is that of the "
+                    "sampled form model.to_statespace(dt) (with its hold and delay states): "
+                    "simulate that model with it")
+            z0 = z0 + x0
         if Ad.shape[0] == 0:  # a pure gain
             return shift_taps(u, taps) @ Dt.T
         ss = StateSpaceModel(Ad, Bt, Cd, Dt, dt=dt)
