@@ -49,6 +49,19 @@ def test_fixed_values_and_bounds():
     b = sysid.procest(data, "P1D", bounds={"Tp1": (0.1, 1.0)})
     assert b.values["Tp1"] <= 1.0 + 1e-12
     assert b.values["Tp1"] == pytest.approx(1.0)   # held on its upper bound
+    # the table says so and cuts the 95 % interval there (it was symmetric across it, and
+    # a dead time on its lower bound 0 read -1.2 .. 1.2 s); the others are free
+    row = b.parameters["Tp1"]
+    assert row["bound"] == "upper" and row["ci95"][1] == pytest.approx(1.0)
+    assert row["ci95"][0] < 1.0
+    assert b.parameters["Kp"]["bound"] == "" and b.parameters["Td"]["bound"] == ""
+    fast = sysid.ProcessModel("P1", Kp=2.0, Tp1=1.5)
+    rng = np.random.default_rng(2)
+    d0 = sysid.IOData(U, fast.simulate(U, dt=0.1)[:, 0] + 0.01 * rng.standard_normal(U.size), 0.1)
+    z = sysid.procest(d0, "P1D")   # no dead time in the data: Td rests on 0
+    assert z.values["Td"] == 0.0
+    assert z.parameters["Td"]["bound"] == "lower" and z.parameters["Td"]["ci95"][0] == 0.0
+    assert z.summary().count("ProcessModel(") == 1
 
 
 def test_process_model_saves_and_converts(tmp_path):

@@ -148,7 +148,10 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
         "noise_variance": [r["noise_variance"] for r in infos],
         "n_samples": infos[0]["n_samples"], "initial_state": initial_state,
         "fixed": sorted(fixed)})
-    _attach(model, covs, fixed, weak)
+    _attach(model, covs, fixed, weak,
+            {k: bounds.get(k, (max(bounds.get("Td", (0.0, dmax))[0], 0.0),
+                               min(bounds.get("Td", (0.0, dmax))[1], dmax))
+                           if k == "Td" else t.default_bounds(k)) for k in t.names})
     if initial_state == "zero":  # the fit of a simulation from rest, as the model was fitted
         fit_percent(model, data)
     return model
@@ -283,17 +286,28 @@ def _weak(res: dict[str, Any], t: ProcessType, names: list[str], m: int) -> list
 
 
 def _attach(model: ProcessModel, covs: list[np.ndarray], fixed: dict[str, float],
-            weak: list[list[int]]) -> None:
+            weak: list[list[int]], limits: dict[str, tuple[float, float]]) -> None:
+    """The parameter table and uncertainty. A parameter the search left on one of its
+    ``limits`` is marked ``bound`` and its 95 % interval is cut at the bound (its std is
+    that of the unconstrained curvature: a dead time of 0 is not -1.2 .. 1.2 s)."""
     from ..tf.options import blockdiag
 
     names, theta = model.parameter_names(), model.parameter_vector()
     P = blockdiag(covs)
-    is_fixed = np.array([n.split(":")[-1] in fixed for n in names])
+    short = [n.split(":")[-1] for n in names]
+    is_fixed = np.array([k in fixed for k in short])
     sd = np.sqrt(np.clip(np.diag(P), 0, None))
     o = 0
     for c, w in zip(covs, weak):
         sd[[o + a for a in w]] = np.inf
         o += c.shape[0]
-    model.parameters = ParameterTable(names, theta, sd, is_fixed)
+    lo = np.array([limits.get(k, (-np.inf, np.inf))[0] for k in short], float)
+    hi = np.array([limits.get(k, (-np.inf, np.inf))[1] for k in short], float)
+    tol = 1e-9 * np.maximum(1.0, np.abs(theta))
+    on = np.where(~is_fixed & (np.abs(theta - lo) <= tol), "lower",
+                  np.where(~is_fixed & (np.abs(theta - hi) <= tol), "upper", ""))
+    model.parameters = ParameterTable(names, theta, sd, is_fixed, bound=[str(b) for b in on])
+    model.parameters.lower = np.maximum(model.parameters.lower, lo)
+    model.parameters.upper = np.minimum(model.parameters.upper, hi)
     model.uncertainty = ParameterUncertainty(theta, P, model.with_parameter_vector,
                                              names=names)

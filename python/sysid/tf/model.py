@@ -477,7 +477,8 @@ class TransferFunction(ModelMixin):
     def summary(self) -> str:
         """The transfer functions, the parameter table with standard deviations and how the
         model was obtained."""
-        out = [repr(self), str(self)]
+        text = str(self)  # a process model's already starts with its repr
+        out = [text] if text.startswith(repr(self)) else [repr(self), text]
         if self.parameters is not None:
             out.append(str(self.parameters))
         keys = ("method", "iterations", "stop", "fit_percent", "cost", "n_samples")
