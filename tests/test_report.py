@@ -96,3 +96,20 @@ def test_time_series_and_continuous_models(tmp_path):
     specs = [json.loads(s.split(">", 1)[1].split("</script>")[0]) for s in text.split(
         '<script type="application/json" id="fig')[1:]]
     assert any(s["title"] == "pole-zero map (s plane)" for s in specs)
+
+
+def test_residual_advice_fits_a_model_without_a_noise_model(tmp_path):
+    # An output-error model's one-step errors are its simulation errors: the report said
+    # "the noise model or some dynamics are missing; try a higher order" for them
+    rng = np.random.default_rng(61)
+    u = rng.standard_normal(800)
+    x = np.zeros(800)
+    for t in range(1, 800):
+        x[t] = 0.8 * x[t - 1] + 0.5 * u[t - 1]
+    e = np.convolve(rng.standard_normal(800), [1.0, 0.9, 0.8])[:800]  # coloured noise
+    d = sysid.IOData(u, x + 0.1 * e, 1.0)
+    oe_text = sysid.report(sysid.oe(d, 1, 1, 1), d, tmp_path / "oe")["html"].read_text()
+    assert "as expected: the model has no noise model" in oe_text
+    assert "try a higher order or a prediction-error" not in oe_text
+    arx_text = sysid.report(sysid.arx(d, 1, 1, 1), d, tmp_path / "arx")["html"].read_text()
+    assert "try a higher order or a prediction-error" in arx_text

@@ -233,7 +233,13 @@ def _summary(model: Any, facts: dict[str, Any], sel: Any,
                    + "</tr>" for r in rows)
     lines.append(f'<table id="summary-fit"><thead><tr>{th}</tr></thead><tbody>{body}'
                  "</tbody></table>")
-    if not all(res.whiteness):
+    if not all(res.whiteness) and _no_noise_model(model):
+        lines.append("<p>Residuals not white, as expected: the model has no noise model "
+                     "(output error, or a simulation-focus fit), so its one-step errors are "
+                     "its simulation errors. For a model of the noise too, fit with "
+                     "focus='prediction' (sysid.ssest) or a structure with one (armax, "
+                     "bj).</p>")
+    elif not all(res.whiteness):
         lines.append("<p>Residuals not white: the noise model or some dynamics are missing; "
                      "try a higher order or a prediction-error refinement (sysid.ssest).</p>")
     if not all(res.independence):
@@ -242,6 +248,15 @@ def _summary(model: Any, facts: dict[str, Any], sel: Any,
                      "(sysid.check_feedback).</p>")
     lines.append(f"<h3>Warnings ({len(found)})</h3>" + warning_items(found))
     return f'<section class="summary" id="summary"><h2>Summary</h2>{"".join(lines)}</section>'
+
+
+def _no_noise_model(model: Any) -> bool:
+    """The model predicts as it simulates: no Kalman gain (state space, or the state-space
+    model of an ``identify`` result) or an output-error structure."""
+    if getattr(model, "prediction_is_simulation", False):
+        return True
+    inner = getattr(model, "statespace", model)
+    return all(hasattr(inner, k) for k in ("A", "K")) and getattr(inner, "K", None) is None
 
 
 def _fit_body(page: Page, model: Any, sim: Any, pred: Any, res: Any, data: IOData) -> str:
@@ -265,13 +280,24 @@ def _residual_body(page: Page, res: Any) -> str:
                                    "p", "independent of inputs"], rows))
 
 
+def _sv(value: Any) -> str:
+    """A candidate's singular value, or a dash where it has none (a refinement's row)."""
+    v = float(value)
+    return f"{v:.4g}" if np.isfinite(v) else "-"
+
+
 def _order_body(page: Page, sel: Any, frd: Any) -> str:
-    rows = [[r.get("model", r["method"]), r["order"], f"{r['singular_value']:.4g}",
+    rows = [[r.get("model", r["method"]), r["order"], _sv(r["singular_value"]),
              f"{r['aic']:.2f}", f"{r['bic']:.2f}", _pct(r["fit_validation"]).strip(),
              "yes" if r["stable"] else "no"] for r in sel.rows if r["error"] is None]
     return (f"<p>{esc(sel.reason)}</p>" + page.table(
         "orders", ["method", "order", "singular value", "AIC", "BIC", "validation fit %",
                    "stable"], rows)
+        + ("<p>A dash for the singular value: that row's model was not chosen from a "
+           "subspace fit's singular values (a refinement, chosen as the line above "
+           "says).</p>"
+           if any(not np.isfinite(float(r["singular_value"])) for r in sel.rows
+                  if r["error"] is None) else "")
         + page.figure(rf.singular_value_figure(sel))
         + f"<p>Stabilisation diagram: a pole is stable in frequency when a pole of the next "
           f"lower order lies within {100 * rf.FREQ_TOL:g} % of its natural frequency, and in "
