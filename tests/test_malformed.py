@@ -32,14 +32,15 @@ except ImportError:  # pragma: no cover
 
 def _no_panic(f, *args, **kw):
     """Run ``f``: success or a sysid error are fine; a panic or another type fails (an
-    unstable fit's StabilityWarning and a capped search's IterationLimitWarning are results,
-    not failures)."""
+    unstable fit's StabilityWarning, a capped search's IterationLimitWarning and an
+    over-sized model's IdentifiabilityWarning are results, not failures)."""
     import warnings
 
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", sysid.StabilityWarning)
             warnings.simplefilter("ignore", sysid.IterationLimitWarning)
+            warnings.simplefilter("ignore", sysid.IdentifiabilityWarning)
             f(*args, **kw)
     except SysidError:
         pass

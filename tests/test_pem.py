@@ -453,3 +453,31 @@ def test_ssest_with_feedthrough_auto_warns_once_at_the_callers_line():
     capped = [w for w in caught if issubclass(w.category, sysid.IterationLimitWarning)]
     assert len(capped) == 1 and capped[0].filename == __file__
     assert m.info["feedthrough_selection"]["feedthrough"]  # both fits ran (D confirmed)
+
+
+def test_directions_the_data_do_not_determine_are_said():
+    # A non-minimal start (a mode with B = C = 0 beside the true first-order one): the
+    # simulation search cannot move it (zero gradient), the Gauss-Newton matrix has rank 2
+    # of the 4 identifiable directions, and the extra pole's std came out 0 without a word
+    # (the heating record's order-7 identify choice: rank 17 of 22, stds off by 0.13-4.8x
+    # against a bootstrap). The fit warns; the stds drawn from that covariance warn too.
+    rng = np.random.default_rng(5)
+    u = rng.standard_normal(1000)
+    x = np.zeros(1000)
+    for t in range(1, 1000):
+        x[t] = 0.9 * x[t - 1] + 0.5 * u[t - 1]
+    d = sysid.IOData(u, x + 0.1 * rng.standard_normal(1000), 1.0)
+    start = sysid.StateSpaceModel([[0.9, 0], [0, 0.5]], [[0.5], [0.0]], [[1.0, 0.0]],
+                                  [[0.0]], dt=1.0)
+    with pytest.warns(sysid.IdentifiabilityWarning, match="do not determine 2 of the 4"):
+        m = sysid.pem(d, start, focus="simulation", x0="zero")
+    assert m.info["pem"]["undetermined"] == 2
+    with pytest.warns(sysid.UncertaintyWarning, match="leaves out 2 direction"):
+        m.poles(std=True)
+    # a minimal model of the same data: nothing to say
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        one = sysid.pem(d, sysid.StateSpaceModel([[0.9]], [[0.5]], [[1.0]], dt=1.0),
+                        focus="simulation", x0="zero")
+        one.poles(std=True)
+    assert one.info["pem"]["undetermined"] == 0

@@ -67,7 +67,7 @@ _LAZY = {
     "FRD": "models.frd",
     "GreyBox": "greybox.greybox",
     "GreyEstimate": "greybox.results",
-    "IdentifiabilityWarning": "greybox.greybox",
+    "IdentifiabilityWarning": "errors",
     "NonlinearGreyBox": "greybox.nlgreybox",
     "ParameterTable": "models.paramtable",
     "FRDComparison": "models.frd",

@@ -31,6 +31,7 @@ __all__ = [
     "OffsetWarning",
     "StabilityWarning",
     "IterationLimitWarning",
+    "IdentifiabilityWarning",
 ]
 
 
@@ -96,3 +97,10 @@ class IterationLimitWarning(UserWarning):
     """An iterative search stopped at its iteration cap before a convergence test was met;
     the model is the best iterate found. The message says how far from converged it was and
     what to do (raise ``max_iter``, or refine again from the returned model)."""
+
+
+class IdentifiabilityWarning(UserWarning):
+    """The data cannot determine some parameters separately (named in the message): a grey-box
+    parameter pair, a pole and a zero that cancel, or directions of an over-parameterised
+    model; its fit may be good, but those parameters and what depends on them are not
+    determined."""

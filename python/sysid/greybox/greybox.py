@@ -39,17 +39,13 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, IdentifiabilityWarning
 from ..models.discretisation import expm, from_blocks, hold_blocks
 from .delays import check_fraction, delayed_blocks, input_taps, split_delays, tap_states
 
 __all__ = ["Param", "param", "fixed", "Parameters", "GreyBox", "IdentifiabilityWarning"]
 
 _HOLDS = ("zoh", "foh")
-
-
-class IdentifiabilityWarning(UserWarning):
-    """The data cannot determine some parameters separately (named in the message)."""
 
 
 @dataclass(frozen=True)

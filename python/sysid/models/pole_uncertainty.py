@@ -151,6 +151,19 @@ def _warn_monte_carlo(mask: np.ndarray, lam: np.ndarray, what: str) -> None:
         "the other poles)", UncertaintyWarning, stacklevel=4)
 
 
+def _warn_undetermined(model: Any) -> None:
+    """An :class:`UncertaintyWarning` when the refinement that gave the model's covariance
+    left directions beyond its similarity orbit undetermined (``info["pem"]
+    ["undetermined"]``): the covariance leaves them out, so the stds are not reliable."""
+    k = int(((getattr(model, "info", None) or {}).get("pem") or {}).get("undetermined", 0))
+    if k:
+        warnings.warn(
+            f"the model's parameter covariance leaves out {k} direction(s) the data do not "
+            "determine (an order above what they support): these standard deviations are "
+            "not reliable; refit at a lower order, or check them by bootstrap",
+            UncertaintyWarning, stacklevel=4)
+
+
 def pole_std(model: Any, method: str = "linear", *, n: int = 1000, rng: Any = None
              ) -> tuple[np.ndarray, np.ndarray]:
     """Poles and their std (complex: ``sd.real`` of the real parts, ``sd.imag`` of the
@@ -166,6 +179,7 @@ def pole_std(model: Any, method: str = "linear", *, n: int = 1000, rng: Any = No
         unc = require(model)
         lam = np.asarray(unc.build(unc.theta).poles(), complex)
         return lam, _draws_std(lam, _pole_draws(model, lam, n, rng))
+    _warn_undetermined(model)
     lam, G, bad = pole_jacobian(model)
     sd = _complex_std(G)
     if bad.any():
@@ -188,6 +202,7 @@ def damping_std(model: Any, dt: float) -> dict[str, np.ndarray]:
     order through the pole Jacobian; Monte Carlo for poles that coincide with another, as
     :func:`pole_std`). A pole at ``z = 0`` (infinitely fast) has NaN std. ``dt == 0``: a
     continuous model, whose poles are ``s`` themselves."""
+    _warn_undetermined(model)
     lam, G, bad = pole_jacobian(model)
     with np.errstate(divide="ignore", invalid="ignore"):
         if dt:

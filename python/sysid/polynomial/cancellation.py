@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import user_stacklevel
+from ..errors import IdentifiabilityWarning
 
 __all__ = ["root_std", "warn_cancellations"]
 
@@ -47,8 +48,6 @@ def warn_cancellations(method: str, b: np.ndarray, f: np.ndarray, cov_f: np.ndar
     """Warn (:class:`~sysid.IdentifiabilityWarning`) when a pole of ``F`` lies closer to a
     zero of ``B`` than the pole's standard deviation (or than 1e-6: an exact common
     factor); ``True`` if it warned."""
-    from ..greybox.greybox import IdentifiabilityWarning
-
     b = np.trim_zeros(np.asarray(b, float).ravel(), "f")
     f = np.asarray(f, float).ravel()
     if b.size < 2 or f.size < 1 or not np.all(np.isfinite(cov_f)):
