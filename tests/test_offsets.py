@@ -26,6 +26,8 @@ ESTIMATORS = {
     "n4sid": lambda d: sysid.n4sid(d, 2),
     "moesp": lambda d: sysid.moesp(d, 2),
     "ssest": lambda d: sysid.ssest(d, 2),
+    # its defaults (order and feedthrough chosen from the data) said it three times
+    "ssest defaults": lambda d: sysid.ssest(d),
     "pem": lambda d: sysid.pem(d, sysid.StateSpaceModel(
         [[0.5, 0.0], [0.0, 0.3]], [[1.0], [1.0]], [[1.0, 1.0]], dt=1.0)),
     "arx": lambda d: sysid.arx(d, 2, 2, 1),

@@ -123,8 +123,11 @@ def ssest(
         return model
     if check_feedthrough(feedthrough) == "auto":
         # decided once from the data (the rule every estimator shares), then a fixed choice
-        use, why = choose_feedthrough(SubspaceEstimator(
-            data, horizon_for_order(data, order, horizon), method=method or "moesp"), order)
+        with warnings.catch_warnings():  # the fit below says it (once, re-emitted)
+            warnings.simplefilter("ignore", OffsetWarning)
+            chooser = SubspaceEstimator(data, horizon_for_order(data, order, horizon),
+                                        method=method or "moesp")
+        use, why = choose_feedthrough(chooser, order)
         kw = dict(focus=focus, x0=x0, noise=noise, horizon=horizon, methods=methods,
                   method=method, max_iter=max_iter, tol=tol, regularization=regularization,
                   progress=progress, enforce_stability=enforce_stability)
@@ -135,8 +138,12 @@ def ssest(
             model = kept
         # the warnings of the model returned, once, at the caller's line (not those of the
         # fit the choice of D left out: two "stopped at max_iter" for one call)
+        seen = set()
         for w in said:
-            warnings.warn(w.message, stacklevel=user_stacklevel())
+            key = (type(w.message), str(w.message))
+            if key not in seen:
+                seen.add(key)
+                warnings.warn(w.message, stacklevel=user_stacklevel())
         model.info["feedthrough_selection"] = why
         return model
     if isinstance(order, str) or np.ndim(order):
@@ -212,8 +219,12 @@ def _recorded(fit: Callable[[], Any]) -> tuple[Any, list[warnings.WarningMessage
         except BaseException as e:  # noqa: BLE001 - re-raised below, after its warnings
             err = e
     if err is not None:
+        seen = set()
         for w in said:
-            warnings.warn(w.message, stacklevel=user_stacklevel())
+            key = (type(w.message), str(w.message))
+            if key not in seen:
+                seen.add(key)
+                warnings.warn(w.message, stacklevel=user_stacklevel())
         raise err
     return out, list(said)
 
