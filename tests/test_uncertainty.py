@@ -550,3 +550,14 @@ def test_continuous_models_carry_uncertainty_through_d2c_and_damp():
     assert np.all(np.isfinite(table.wn_std)) and np.all(np.isfinite(table.zeta_std))
     H, sd = c.freqresp([0.5, 2.0], std=True)
     assert sd.shape == H.shape and np.all(np.abs(sd) > 0)
+
+
+def test_a_real_poles_damping_std_is_zero_not_round_off():
+    # a distinct real pole keeps damping 1 under small changes: its std printed 1.97e-17
+    def build(t):
+        return sysid.StateSpaceModel([[t[0], 0.0], [0.0, t[1]]], [[1.0], [1.0]], [[1.0, 1.0]],
+                                     dt=0.1)
+    m = build([0.9, 0.5])
+    m.uncertainty = ParameterUncertainty([0.9, 0.5], 1e-4 * np.eye(2), build)
+    t = sysid.damp(m, std=True)
+    assert np.all(t.zeta_std == 0.0) and np.all(t.wn_hz_std > 0)

@@ -216,6 +216,10 @@ def damping_std(model: Any, dt: float) -> dict[str, np.ndarray]:
         wn_sd = np.sqrt(np.sum(dwn**2, axis=1))
         zeta_sd = np.sqrt(np.sum(dzeta**2, axis=1))
     pole_sd = _complex_std(G)
+    # a distinct real pole (positive in discrete time) stays real under a small change: its
+    # damping is 1 exactly, its std 0 (not the 1e-17 of round-off)
+    real = (lam.imag == 0) & ((lam.real > 0) if dt else np.ones(lam.size, bool))
+    zeta_sd = np.where(real, 0.0, zeta_sd)
     at_zero = ~np.isfinite(s) | (wn == 0)
     mc = bad & ~at_zero
     if mc.any():
