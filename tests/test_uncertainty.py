@@ -561,3 +561,24 @@ def test_a_real_poles_damping_std_is_zero_not_round_off():
     m.uncertainty = ParameterUncertainty([0.9, 0.5], 1e-4 * np.eye(2), build)
     t = sysid.damp(m, std=True)
     assert np.all(t.zeta_std == 0.0) and np.all(t.wn_hz_std > 0)
+
+
+def test_dcgain_and_step_with_std_for_polynomial_and_transfer_function_models():
+    # PolynomialModel had no dcgain; step(std=True) and TransferFunction.dcgain(std=True)
+    # raised TypeError. The static gain's std is the settled step response's and the
+    # frequency response's at 0.
+    rng = np.random.default_rng(71)
+    u = rng.standard_normal(800)
+    y = np.zeros(800)
+    for t in range(1, 800):
+        y[t] = 0.7 * y[t - 1] + 0.5 * u[t - 1]
+    d = sysid.IOData(u, y + 0.05 * rng.standard_normal(800), 1.0)
+    for m in (sysid.oe(d, 1, 1, 1), sysid.armax(d, 1, 1, 1, 1),
+              sysid.tfest(d, 1, progress=False)):
+        g, gs = m.dcgain(std=True)
+        assert g[0, 0] == pytest.approx(5 / 3, rel=0.05) and 0 < gs[0, 0] < 0.1
+        kw = {} if m.dt > 0 else {"dt": 1.0}
+        r = m.step(200, std=True, **kw)
+        assert r.std[-1, 0, 0] == pytest.approx(gs[0, 0], rel=1e-3)
+        _, hs = m.freqresp(np.array([0.0]), std=True)
+        assert abs(hs[0, 0, 0]) == pytest.approx(gs[0, 0], rel=1e-3)

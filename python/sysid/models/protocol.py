@@ -234,9 +234,25 @@ class ModelMixin:
         """Transmission zeros of ``to_statespace()``."""
         return np.asarray(self._delegate("zeros")())
 
-    def step(self, n_samples: int | None = None) -> TimeResponse:
-        """Response to a unit step on each input, from rest (by simulation)."""
-        return sampled_response(self, "step", n_samples)
+    def step(self, n_samples: int | None = None, std: bool = False) -> TimeResponse:
+        """Response to a unit step on each input, from rest (by simulation); ``std=True``
+        (needs ``uncertainty``): with its first-order std as a band."""
+        resp = sampled_response(self, "step", n_samples)
+        if std:
+            from .uncertainty import complex_std
+
+            N = len(resp.t)
+            _, resp.std = complex_std(self, lambda m: m.step(N).y)
+        return resp
+
+    def dcgain(self, std: bool = False) -> Any:
+        """Steady-state gain ``(noutputs, ninputs)``: the frequency response at 0; with
+        ``std=True`` (needs ``uncertainty``) the pair ``(gain, std)``, first order."""
+        if std:
+            from .uncertainty import complex_std
+
+            return complex_std(self, lambda m: m.dcgain())
+        return np.asarray(self.freqresp(np.array([0.0])))[0].real
 
     def impulse(self, n_samples: int | None = None) -> TimeResponse:
         """Response to a unit pulse ``u(0) = 1`` on each input, from rest (by simulation)."""

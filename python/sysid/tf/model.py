@@ -206,8 +206,13 @@ class TransferFunction(ModelMixin):
             return True
         return bool(np.max(np.abs(p)) < 1) if self.dt > 0 else bool(np.max(p.real) < 0)
 
-    def dcgain(self) -> np.ndarray:
-        """Steady-state gain ``(l, m)`` (``inf`` for an integrator)."""
+    def dcgain(self, std: bool = False) -> Any:
+        """Steady-state gain ``(l, m)`` (``inf`` for an integrator); with ``std=True`` (needs
+        :attr:`uncertainty`) the pair ``(gain, std)``, first order."""
+        if std:
+            from ..models.uncertainty import complex_std
+
+            return complex_std(self, lambda m: m.dcgain())
         x = 1.0 if self.dt > 0 else 0.0
         g = np.empty((self.noutputs, self.ninputs))
         for i, j in self.pairs():
@@ -343,9 +348,19 @@ class TransferFunction(ModelMixin):
             return self
         return _Sampled(self, float(dt))
 
-    def step(self, n_samples: int | None = None, *, dt: float | None = None) -> TimeResponse:
+    def step(self, n_samples: int | None = None, *, dt: float | None = None,
+             std: bool = False) -> TimeResponse:
         """Unit-step response (continuous: sampled every ``dt``, by default 200 points over
-        five time constants of the slowest pole plus the largest delay)."""
+        five time constants of the slowest pole plus the largest delay); ``std=True``
+        (needs :attr:`uncertainty`): with its first-order std as a band."""
+        if std:
+            from ..models.uncertainty import complex_std
+
+            resp = self.step(n_samples, dt=dt)
+            N, h = len(resp.t), (resp.t[1] - resp.t[0] if len(resp.t) > 1 else dt)
+            _, resp.std = complex_std(
+                self, lambda m: m.step(N).y if self.dt > 0 else m.step(N, dt=h).y)
+            return resp
         if self.dt > 0:
             return super().step(n_samples)
         N, h = self._time_grid(n_samples, dt)
