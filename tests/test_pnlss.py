@@ -186,3 +186,17 @@ def test_report_of_a_pnlss_model_runs():
         m = sysid.pnlss(d[:500], 2, degree=2, max_iter=3)
         files = sysid.report(m, d[500:], tempfile.mkdtemp())
     assert files["html"].exists()
+
+
+def test_predict_checks_y_and_piecewise_linear_says_it_wants_values():
+    # predict ignored y (a y with the wrong number of columns passed); PiecewiseLinear(3)
+    # said only "at least two strictly increasing values"
+    truth = _truth()
+    d = _data(truth, 3)
+    with pytest.raises(DataError, match="should have 1 column"):
+        truth.predict(d.u, np.hstack([d.y, d.y]))
+    with pytest.raises(DataError, match="samples"):
+        truth.predict(d.u, d.y[:-5])
+    np.testing.assert_array_equal(truth.predict(d.u, d.y), truth.simulate(d.u))
+    with pytest.raises(DataError, match=r"the number 3: give the values themselves"):
+        sysid.PiecewiseLinear(3)

@@ -129,8 +129,15 @@ class LinearPart:
 
     def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
         """An output-error model has no noise model: its prediction is its simulation
-        (from ``x0``, as :meth:`simulate`)."""
-        return self.simulate(u) if x0 is None else self.simulate(u, x0=x0)
+        (from ``x0``, as :meth:`simulate`). ``y`` is checked against the model's outputs
+        and ``u``'s samples, as every model's ``predict`` checks it."""
+        from .._checks import as_2d
+
+        out = self.simulate(u) if x0 is None else self.simulate(u, x0=x0)
+        yy = as_2d(y, "y", ncols=out.shape[1])
+        if yy.shape[0] != out.shape[0]:
+            raise DataError(f"y has {yy.shape[0]} samples but u has {out.shape[0]}")
+        return out
 
 
 def scaled_data(data: IOData, sc: Scaling) -> IOData:

@@ -210,7 +210,12 @@ class PiecewiseLinear(Nonlinearity):
     def __init__(self, breakpoints: Any) -> None:
         self.breakpoints = np.asarray(breakpoints, float).ravel()
         if self.breakpoints.size < 2 or np.any(np.diff(self.breakpoints) <= 0):
-            raise DataError("breakpoints must be at least two strictly increasing values")
+            hint = (f"; got the number {breakpoints!r}: give the values themselves, e.g. "
+                    f"np.linspace(lo, hi, {int(breakpoints)}) over the signal's range"
+                    if np.ndim(breakpoints) == 0 and float(breakpoints) >= 2 else
+                    f"; got {breakpoints!r}")
+            raise DataError("breakpoints must be an array of at least two strictly increasing "
+                            "values" + hint)
         self.params = self.breakpoints[:-1].copy()
 
     def spec(self) -> tuple[str, int, list[float]]:

@@ -128,8 +128,11 @@ def criteria(model: Any, data: Any, *, x0: Any = "estimate",
     data : IOData or (u, y)
         The data the model was estimated on.
     x0 : "estimate", "zero", "model" or array
-        Initial predictor state; an estimated one counts ``n`` parameters per experiment
-        (state-space models only: other models start from rest).
+        Initial predictor state; an estimated one counts ``n`` parameters per experiment,
+        ``n`` the states of the model whose state is fitted (as :func:`sysid.compare` does:
+        a state-space model's own, a polynomial or transfer-function model's through its
+        state-space form, hold and delay states included); models without one start from
+        rest and count none.
     n_params : int, optional
         Override the parameter count (default ``model.n_parameters``, for a state-space
         model :func:`n_parameters` from its shape, its ``D`` and ``K``).
