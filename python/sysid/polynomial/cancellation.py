@@ -13,7 +13,7 @@ import numpy as np
 from .._checks import user_stacklevel
 from ..errors import IdentifiabilityWarning
 
-__all__ = ["root_std", "warn_cancellations"]
+__all__ = ["cancellation", "root_std", "warn_cancellations"]
 
 
 def root_std(poly: np.ndarray, cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -43,30 +43,36 @@ def root_std(poly: np.ndarray, cov: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return roots, sd
 
 
-def warn_cancellations(method: str, b: np.ndarray, f: np.ndarray, cov_f: np.ndarray,
-                       channel: str) -> bool:
-    """Warn (:class:`~sysid.IdentifiabilityWarning`) when a pole of ``F`` lies closer to a
-    zero of ``B`` than the pole's standard deviation (or than 1e-6: an exact common
-    factor); ``True`` if it warned."""
+def cancellation(b: np.ndarray, f: np.ndarray, cov_f: np.ndarray) -> str | None:
+    """A description of the first pole of ``F`` that lies closer to a zero of ``B`` than the
+    pole's standard deviation (or than 1e-6: an exact common factor), else ``None``."""
     b = np.trim_zeros(np.asarray(b, float).ravel(), "f")
     f = np.asarray(f, float).ravel()
     if b.size < 2 or f.size < 1 or not np.all(np.isfinite(cov_f)):
-        return False
+        return None
     zeros = np.roots(b)
     poles, sd = root_std(f, cov_f)
     for p, s in zip(poles, sd):
         dist = np.abs(zeros - p)
         k = int(np.argmin(dist))
-        tol = max(s if np.isfinite(s) else 0.0, 1e-6 * max(1.0, abs(p)))
-        if dist[k] <= tol:
-            warnings.warn(IdentifiabilityWarning(
-                f"{method}: in channel {channel} the pole {_z(p)} of F and the zero "
-                f"{_z(zeros[k])} of B are {dist[k]:.2g} apart, within the pole's standard "
-                f"deviation {s:.2g}: they cancel, a common factor the data do not determine. "
-                "The fit can be good, but that pole, the static gain and the step response "
-                "are not determined: lower nb and nf by one"), stacklevel=user_stacklevel())
-            return True
-    return False
+        if dist[k] <= max(s if np.isfinite(s) else 0.0, 1e-6 * max(1.0, abs(p))):
+            return (f"the pole {_z(p)} of F and the zero {_z(zeros[k])} of B are "
+                    f"{dist[k]:.2g} apart, within the pole's standard deviation {s:.2g}")
+    return None
+
+
+def warn_cancellations(method: str, found: list[tuple[str, str]]) -> None:
+    """One :class:`~sysid.IdentifiabilityWarning` for the channels ``(name, description)``
+    of an estimate whose pole and zero cancel within the pole's uncertainty."""
+    if not found:
+        return
+    where = "; ".join(f"in channel {c} {d}" for c, d in found[:4]) + (
+        f" (and {len(found) - 4} more channels)" if len(found) > 4 else "")
+    warnings.warn(IdentifiabilityWarning(
+        f"{method}: {where}: they cancel, a common factor the data do not determine. The fit "
+        "can be good, but that pole, the static gain and the step response are not "
+        "determined: lower nb and nf by one" + (" in those channels" if len(found) > 1
+                                                 else "")), stacklevel=user_stacklevel())
 
 
 def _z(z: Any) -> str:

@@ -16,7 +16,7 @@ from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import as_record
 from ..data.offsets import check_offsets
 from ..errors import DataError
-from .cancellation import warn_cancellations
+from .cancellation import cancellation, warn_cancellations
 from .model import PolynomialModel
 from .uncertainty import attach_uncertainty as _attach_uncertainty
 
@@ -313,15 +313,17 @@ def _pem(
     warn_if_capped(info, f"the {method} search", int(max_iter))
     m.covariance = cov  # type: ignore[attr-defined]
     _attach_uncertainty(m, cov, "pem", "gauss-newton")
+    found = []
     for i in range(ny):
         at = na_v[i] + sum(nb_g[i]) + nc_v[i] + nd_v[i]
         for j, nf in enumerate(nf_g[i]):
             P = np.asarray(cov[i], float)
-            if nf and P.shape[0] >= at + nf:
-                warn_cancellations(method, parts["b"][i][j], parts["f"][i][j],
-                                   P[at:at + nf, at:at + nf],
-                                   f"{m.output_names[i]} <- {m.input_names[j]}")
+            said = cancellation(parts["b"][i][j], parts["f"][i][j], P[at:at + nf, at:at + nf]) \
+                if nf and P.shape[0] >= at + nf else None
+            if said:
+                found.append((f"{m.output_names[i]} <- {m.input_names[j]}", said))
             at += nf
+    warn_cancellations(method, found)
     return m
 
 
