@@ -200,3 +200,12 @@ def test_predict_checks_y_and_piecewise_linear_says_it_wants_values():
     np.testing.assert_array_equal(truth.predict(d.u, d.y), truth.simulate(d.u))
     with pytest.raises(DataError, match=r"the number 3: give the values themselves"):
         sysid.PiecewiseLinear(3)
+
+
+def test_a_record_too_short_for_the_linear_start_says_so():
+    # it raised ssest's own words about subspace starts and future horizons
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(12)
+    y = np.convolve(u, [0, 0.5, 0.3])[:12]
+    with pytest.raises(sysid.OrderError, match=r"record \(12 training samples\) is too short"):
+        sysid.pnlss(sysid.IOData(u, y, 1.0), 2, degree=2, progress=False)

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..data.iodata import IOData
-from ..errors import DataError, IterationLimitWarning
+from ..errors import DataError, IterationLimitWarning, OrderError
 from ..models.statespace import StateSpaceModel
 
 
@@ -169,7 +169,13 @@ def linear_start(data: IOData, sd: IOData, sc: Scaling, order: int, init: Any,
     # a start: the nonlinear search goes on from it, so its own cap is not the user's concern
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IterationLimitWarning)
-        return sysid.ssest(sd, order, focus="simulation", progress=False, max_iter=30)
+        try:
+            return sysid.ssest(sd, order, focus="simulation", progress=False, max_iter=30)
+        except OrderError as e:  # a record too short for the order (its own words after)
+            n = sum(u.shape[0] for u, _ in sd.experiments)
+            raise OrderError(f"the record ({n} training samples) is too short for a linear "
+                             f"start of order {order}: give a longer record or a lower "
+                             f"order, or a linear start (init=); {e}") from e
 
 
 def linear_states(m: StateSpaceModel, us: list[np.ndarray]) -> list[np.ndarray]:
