@@ -306,6 +306,15 @@ def nlssest(
         ``info["starts"]``: each trained start's ``training`` summary (``info["training"]``
         is that of the start returned).
 
+    Warns
+    -----
+    IterationLimitWarning
+        When the training returned stopped at ``epochs`` with its best epoch the last (the
+        validation error still falling): raise ``epochs``.
+    UserWarning
+        When no epoch improved on the start and steps diverged (the model is the untrained
+        start): lower ``learning_rate``.
+
     Examples
     --------
     >>> import numpy as np, sysid
