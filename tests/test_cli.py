@@ -349,3 +349,21 @@ def test_identify_path_saves_the_model_with_its_offsets(tmp_path, capsys):
     assert type(m).__name__ == "IdentifiedModel"
     sim = m.simulate(raw[:, :1])
     assert abs(sim[200:].mean() - raw[200:, 1].mean()) < 0.1 * raw[:, 1].std()
+
+
+def test_the_automatic_paths_model_with_detrend_mean_predicts_raw_signals(tmp_path):
+    # --detrend mean took the estimation means out before identify, whose model (saved with
+    # its own offsets, about zero then) predicted the deviations: -0.14 where the raw
+    # temperature is 4.8; the saved model now carries those means as offsets too
+    data = dryer_csv(tmp_path / "dryer.csv")
+    rep = tmp_path / "out"
+    assert main(["identify", str(data), "--inputs", "heater", "--outputs", "temperature",
+                 "--time", "time", "--split", "500", "--detrend", "mean", "--quiet",
+                 "--report", str(rep)]) == 0
+    model = sysid.load_model(rep / "model.json")
+    raw = np.loadtxt(sysid.datasets.path("dryer"))
+    val = sysid.IOData(raw[500:, :1], raw[500:, 1:], 0.08)
+    yhat = model.simulate(val.u)
+    assert abs(yhat.mean() - raw[500:, 1].mean()) < 0.2 * raw[500:, 1].std()
+    assert sysid.compare(model, val).fit[0, 0] > 80
+    assert model.y_offset[0] == pytest.approx(raw[:500, 1].mean(), abs=0.2)

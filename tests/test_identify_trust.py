@@ -419,3 +419,37 @@ def test_a_periodic_record_is_noted():
     u = rng.standard_normal(1536)
     y = true.simulate(u) + 0.05 * rng.standard_normal((1536, 1))
     assert "periodic" not in sysid.identify(sysid.IOData(u=u, y=y), refine=False).checks
+
+
+def test_bad_validation_data_are_refused_before_the_search_and_compare_is_in_raw_units():
+    # identify(validation=...) turned any error in the validation data into a fit of -inf
+    # after the whole search; its model's compare gave the deviations, not the data
+    d = sysid.datasets.load_dryer()
+    raw = sysid.IOData(d.u + 5.0, d.y + 40.0, d.dt)
+    est, val = raw[:500], raw[500:]
+    two = sysid.IOData(val.u, np.hstack([val.y, val.y]), val.dt)
+    slow = sysid.IOData(val.u, val.y, 2 * val.dt)
+    flat = sysid.IOData(val.u, np.ones_like(val.y), val.dt)
+    for bad, words in ((two, "output"), (slow, "sampled every"), (flat, "constant")):
+        with pytest.raises(sysid.DataError, match=words):
+            sysid.identify(est, validation=bad, progress=False)
+    r = sysid.identify(est, validation=val, progress=False)
+    c = r.model.compare(val)
+    np.testing.assert_allclose(c.y[0], val.y)
+    assert abs(c.yhat[0].mean() - val.y.mean()) < 0.2 * val.y.std()
+    assert c.fit.mean() == pytest.approx(r.validation_fit)
+
+
+def test_two_evenly_excited_blocks_are_not_called_thin_evidence():
+    # with two held-out blocks their effective number is 2.0 at most, and the note "the
+    # output varies mostly in one of the 2 held-out blocks (... is 2.0)" fired on every one
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        u = rng.standard_normal(40)
+        y = np.convolve(u, [0.0, 0.5, 0.3, 0.1])[:40] + 0.05 * rng.standard_normal(40)
+        if 0.85 < y[:20].var() / y[20:].var() < 1.15:
+            break
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a 40-sample record: the estimators have their say
+        res = sysid.identify(sysid.IOData(u=u, y=y), progress=False)
+    assert "held_out_evidence" not in res.checks

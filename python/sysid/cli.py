@@ -559,10 +559,17 @@ def _identify(args: argparse.Namespace) -> int:
                             caught)
             if "files" in out and "model" in out["files"]:
                 # the file holds the model with its offsets: it predicts the raw signals
-                # (the report is of the deviations, which the model of the deviations fits)
+                # (the report is of the deviations, which the model of the deviations fits);
+                # the means --detrend mean took out first are offsets of it too
+                from .identify.result import IdentifiedModel
                 from .models.serialize import save_model
 
-                save_model(p["result"].model, out["files"]["model"])
+                m = p["result"].model
+                if "removed_means" in pre:
+                    mu = np.asarray(pre["removed_means"]["inputs"], float)
+                    my = np.asarray(pre["removed_means"]["outputs"], float)
+                    m = IdentifiedModel(m.statespace, m.u_offset + mu, m.y_offset + my)
+                save_model(m, out["files"]["model"])
         out["warnings"] = reissue(caught)
         print(p["result"].summary())
         _print_summary(out)

@@ -55,7 +55,7 @@ from .._progress import Bar, show
 from ..data.iodata import IOData
 from ..data.preprocessing import spike_report
 from ..data.segments import long_enough
-from ..errors import DataError, ExcitationError, InsufficientDataError
+from ..errors import DataError, ExcitationError, InsufficientDataError, NumericalError
 from ..models.statespace import ss_parameter_count
 from ..subspace.estimator import available_horizon
 from ..validation.crossval import MAX_ORDER, TOL, fold_horizon, record_folds, simulation_fit
@@ -456,7 +456,8 @@ def identify(
         parameters^2 (the same on any machine; ``result.checks`` says what it changed).
     progress : bool, optional
         A progress bar over the candidates (default: only when stderr is a terminal).
-        Ctrl-C stops the search and returns the best candidate found so far.
+        Ctrl-C stops the search (``KeyboardInterrupt``, as every other computation: a script
+        or a batch must not carry on with a half-chosen model).
 
     Returns
     -------
@@ -497,6 +498,7 @@ def identify(
     if time_budget is not None and not (np.isfinite(time_budget) and time_budget > 0):
         raise DataError(f"time_budget must be a positive number of seconds, got {time_budget!r}")
     require_inputs_vary(data.experiments, "identify", data.input_names)
+    validation = _checked_validation(validation, data)  # before the search, not after it
     centred, mu, my = _offsets(data)
     checks, feedback = _checks(centred)
     # six significant digits: rounding to decimals printed data in micro-units as [0.0]
@@ -527,7 +529,7 @@ def identify(
         board = Board(parts, bar, deadline)
         board.whole = centred
         blocks = board.effective_blocks()
-        if blocks < 2.0:
+        if blocks < min(2.0, len(parts) - 0.5):  # two blocks count 2.0 at most
             checks["held_out_evidence"] = (
                 f"thin: the output varies mostly in one of the {len(parts)} held-out blocks "
                 f"(their effective number, by each block's share of the output variation, is "
@@ -601,18 +603,45 @@ def identify(
     result_model = IdentifiedModel(model, mu, my)
     vfit = None
     if validation is not None:
-        if isinstance(validation, tuple):
-            validation = IOData(u=validation[0], y=validation[1], dt=data.dt)
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 vfit = float(result_model.compare(validation).mean_fit)
-        except Exception:  # noqa: BLE001 - reported, never raised: a diverging model
+        except (NumericalError, FloatingPointError):  # a diverging model: reported, not raised
             vfit = -np.inf
     out = IdentifyResult(result_model, rows, desc, checks, vfit, time.perf_counter() - t0,
                          interrupted)
     out.out_of_time = board.out_of_time
     return out
+
+
+def _checked_validation(validation: Any, data: IOData) -> IOData | None:
+    """The validation record as an :class:`IOData`, refused (a :class:`DataError` naming
+    the mismatch) when its channels or sample time differ from the estimation data's or an
+    output stands still (a fit against it is undefined): said before the search, not as a
+    validation fit of -inf after it."""
+    if validation is None:
+        return None
+    if isinstance(validation, tuple) and len(validation) == 2:
+        validation = IOData(u=validation[0], y=validation[1], dt=data.dt)
+    if not isinstance(validation, IOData):
+        raise DataError(f"validation must be a sysid.IOData or a (u, y) pair, got "
+                        f"{type(validation).__name__}")
+    if (validation.n_inputs, validation.n_outputs) != (data.n_inputs, data.n_outputs):
+        raise DataError(f"validation has {validation.n_inputs} input(s) and "
+                        f"{validation.n_outputs} output(s), the estimation data "
+                        f"{data.n_inputs} and {data.n_outputs}: give the same channels")
+    if abs(float(validation.dt) - float(data.dt)) > 1e-9 * float(data.dt):
+        raise DataError(f"validation is sampled every {validation.dt:g} s, the estimation "
+                        f"data every {data.dt:g} s: resample one of them (sysid.resample)")
+    for k, (_, y) in enumerate(validation.experiments):
+        flat = np.flatnonzero(np.ptp(y, axis=0) == 0)
+        if flat.size:
+            where = f" in experiment {k}" if validation.n_experiments > 1 else ""
+            raise DataError(f"validation output {validation.output_names[flat[0]]} is "
+                            f"constant{where}: a fit against it is undefined; validate on a "
+                            "record where it varies")
+    return validation
 
 
 def _with_uncertainty(model: Any, data: IOData, checks: dict[str, Any]) -> Any:
@@ -653,14 +682,17 @@ def _with_uncertainty(model: Any, data: IOData, checks: dict[str, Any]) -> Any:
             raise ValueError("the criterion moved the model")
     except Exception as e:  # noqa: BLE001 - reported in the checks, never raised
         checks["uncertainty"] = model.info["identify_uncertainty"] = (
-            f"none: the chosen subspace model's parameter uncertainty could not be evaluated "
+            f"none: the chosen model's parameter uncertainty could not be evaluated "
             f"({type(e).__name__}: {e})"[:300])
         return model
     m.info = dict(model.info)  # the subspace fit's record, not a search that did not run
+    subspace = str((model.info or {}).get("method", "")) in SUBSPACE + CLOSED_LOOP
     m.info["identify_uncertainty"] = checks["uncertainty"] = (
-        f"the subspace model's parameter uncertainty is the {focus}-error criterion's at it "
-        "(first order, as for a prediction-error fit; the subspace estimate itself spreads at "
-        "least as much: SubspaceEstimator(...).fit(..., uncertainty='bootstrap') for its own)"
+        f"the chosen model's parameter uncertainty is the {focus}-error criterion's at it "
+        "(first order, as for a prediction-error fit"
+        + ("; the subspace estimate itself spreads at least as much: "
+           "SubspaceEstimator(...).fit(..., uncertainty='bootstrap') for its own)"
+           if subspace else ")")
         + ("; the prediction-error criterion because the model is unstable (the data insist)"
            if focus == "prediction" else ""))
     return m

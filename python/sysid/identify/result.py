@@ -118,10 +118,12 @@ class IdentifiedModel:
         return bool(self.statespace.is_stable())
 
     def compare(self, data: Any, horizon: int | None = None, **kw: Any) -> Any:
-        """:func:`sysid.compare` on raw data (offsets removed; the fit is unchanged by them)."""
+        """:func:`sysid.compare` on raw data: the measured and simulated outputs in the data's
+        units (the model of the deviations runs on the offset-free record, its offsets added
+        back)."""
         import sysid
 
-        return sysid.compare(self.statespace, self.remove_offsets(data), horizon, **kw)
+        return sysid.compare(self, data, horizon=horizon, **kw)
 
     def to_dict(self) -> dict[str, Any]:
         """The state-space model of the deviations and the offsets (see
@@ -192,7 +194,9 @@ class IdentifyResult:
         self.out_of_time = False
 
     def to_pandas(self) -> Any:
-        """The leaderboard as a DataFrame, best held-out fit first."""
+        """The leaderboard as a DataFrame, in the order of :meth:`summary`: the stable
+        candidates the held-out blocks cannot tell apart from the best first, smallest order
+        first; then the other stable ones by held-out fit; the unstable ones last."""
         import pandas as pd
 
         return pd.DataFrame(self.leaderboard, columns=list(COLUMNS))
