@@ -326,3 +326,24 @@ def test_compare_x0_of_a_continuous_model_reproduces_its_fit_through_its_sampled
         m.simulate(uv, c.x0[0], dt=0.1)
     with pytest.raises(sysid.ShapeError, match="x0 has 5 entries"):
         m.simulate(uv, np.zeros(5), dt=0.1)
+
+
+def test_default_step_grid_resolves_the_fastest_pole():
+    # a slow pole beside a 3 rad/s resonance: 200 samples over five slow time constants
+    # (h = 2.5 s, under one sample per 2.09 s period) drew the resonance as a slow
+    # oscillation; the grid now has 10 samples per fastest time constant
+    num = np.polyadd(0.01 * np.array([1, 0.2, 9.0]), 9.0 * np.array([1, 0.01]))
+    G = sysid.TransferFunction(num, np.polymul([1, 0.01], [1, 0.2, 9.0]))
+    r = G.step()
+    h = r.t[1] - r.t[0]
+    assert h <= 0.1 / 3.0 + 1e-12 and r.t[-1] == pytest.approx(5 / 0.01, rel=1e-9)
+    fine = G.step(dt=0.005 * 2 * np.pi / 3)  # 200 samples per period
+    k = int(round(r.t[-1] / (fine.t[1] - fine.t[0])))
+    np.testing.assert_allclose(np.interp(fine.t[:k], r.t, r.y[:, 0, 0]), fine.y[:k, 0, 0],
+                               atol=0.05 * np.ptp(fine.y))
+    cs = sysid.ContinuousStateSpace([[-0.01, 0, 0], [0, -0.1, 3.0], [0, -3.0, -0.1]],
+                                    [[1.0], [0.0], [1.0]], [[1.0, 1.0, 0.0]])
+    rc = cs.step()
+    assert rc.t[1] - rc.t[0] <= 0.1 / 3.0 + 1e-12
+    assert r.continuous and rc.continuous  # plotted as lines, not staircases
+    assert not sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]).step().continuous

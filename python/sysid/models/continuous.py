@@ -35,7 +35,7 @@ from .._checks import as_2d, as_dt
 from ..errors import DataError, NumericalError
 from .discretisation import expm, hold_blocks
 from .linear import transmission_zeros
-from .protocol import ModelMixin, TimeResponse
+from .protocol import ModelMixin, TimeResponse, continuous_grid
 from .statespace import StateSpaceModel, ss_parameter_count
 
 __all__ = ["ContinuousStateSpace", "SampledContinuous", "c2d", "d2c"]
@@ -221,12 +221,8 @@ class ContinuousStateSpace(ModelMixin):
         re = -self.poles().real
         slow = float(np.min(re[re > 0])) if np.any(re > 0) else 0.1
         t_final = 5.0 / slow  # e^-5 < 1 %
-        if dt is None:
-            N = 200 if n_samples is None else int(n_samples)
-            return N, t_final / max(N - 1, 1)
-        step = _sample_time(None, dt, 1)
-        N = int(min(np.ceil(t_final / step) + 1, 10000)) if n_samples is None else int(n_samples)
-        return N, step
+        step = None if dt is None else _sample_time(None, dt, 1)
+        return continuous_grid(self.poles(), t_final, n_samples, step, 100000)
 
     def step(self, n_samples: int | None = None, *, dt: float | None = None) -> TimeResponse:
         """Unit-step response sampled every ``dt`` (exact: a step is held by ZOH).

@@ -145,6 +145,8 @@ class TimeResponse:
         self.kind, self.t, self.y = kind, t, y
         self.std = std  # first-order std of y (step(..., std=True)); plotted as bands
         self.input_names, self.output_names = list(model.input_names), list(model.output_names)
+        #: the response of a continuous-time model (plotted as a line, not a staircase)
+        self.continuous = not float(getattr(model, "dt", 1.0) or 0.0) > 0
 
     def plot(self, fig: Any = None) -> Any:
         """One axis per (output, input) pair; returns the figure."""
@@ -172,6 +174,31 @@ def default_length(model: Any, n_samples: int | None) -> int:
     rho = float(np.max(np.abs(p))) if np.size(p) else 0.0
     n = 100 if rho >= 1 or rho == 0 else int(np.ceil(np.log(0.01) / np.log(rho))) + 10
     return int(min(max(n, 20), 10000))
+
+
+def continuous_grid(poles: Any, t_final: float, n_samples: int | None, dt: float | None,
+                    cap: int) -> tuple[int, float]:
+    """Samples and step of a continuous model's default response grid over ``t_final``:
+    ``n_samples`` (200 by default) evenly over it, or, by default, finer where the fastest
+    pole needs it (10 samples per its time constant ``1/|s|``, at most ``cap`` samples): 200
+    samples over a slow pole's five time constants aliased a 3 rad/s resonance beside it
+    into a slow oscillation. With ``dt``: that step, up to ``cap`` samples.
+
+    Examples
+    --------
+    >>> N, h = continuous_grid([-0.01, -0.1 + 3j, -0.1 - 3j], 500.0, None, None, 20000)
+    >>> N, round(h, 6)  # 21 samples per period of the 3 rad/s resonance
+    (15010, 0.033313)
+    """
+    if dt is not None:
+        N = int(min(np.ceil(t_final / dt) + 1, cap)) if n_samples is None else int(n_samples)
+        return N, float(dt)
+    if n_samples is not None:
+        N = int(n_samples)
+        return N, t_final / max(N - 1, 1)
+    fast = float(np.max(np.abs(poles), initial=0.0))
+    N = 200 if fast == 0 else int(min(max(200, np.ceil(t_final * fast * 10) + 1), cap))
+    return N, t_final / max(N - 1, 1)
 
 
 def sampled_response(model: Any, kind: str, n_samples: int | None) -> TimeResponse:

@@ -165,11 +165,16 @@ def plot_time_response(resp: Any, fig: Any = None) -> Any:
     for i in range(l):
         for j in range(m):
             ax = axes[i, j]
-            ax.step(resp.t, resp.y[:, i, j], where="post")
+            line = getattr(resp, "continuous", False)  # a continuous model's: a line
+            if line:
+                ax.plot(resp.t, resp.y[:, i, j])
+            else:
+                ax.step(resp.t, resp.y[:, i, j], where="post")
             if getattr(resp, "std", None) is not None:
                 d = 1.96 * resp.std[:, i, j]
-                ax.fill_between(resp.t, resp.y[:, i, j] - d, resp.y[:, i, j] + d, step="post",
-                                alpha=0.25, lw=0, label="95 %")
+                ax.fill_between(resp.t, resp.y[:, i, j] - d, resp.y[:, i, j] + d,
+                                step=None if line else "post", alpha=0.25, lw=0,
+                                label="95 %")
             ax.set_title(f"{resp.kind}: {resp.input_names[j]} -> {resp.output_names[i]}",
                          fontsize=8)
             ax.grid(True, alpha=0.3)

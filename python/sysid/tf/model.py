@@ -20,7 +20,7 @@ import numpy as np
 from .._checks import as_2d, as_dt
 from ..errors import DataError, ShapeError
 from ..greybox.delays import shift_taps
-from ..models.protocol import ModelMixin, TimeResponse
+from ..models.protocol import ModelMixin, TimeResponse, continuous_grid
 from ..models.statespace import StateSpaceModel
 from .sampling import canonical, sample_pair, split_delay
 
@@ -407,11 +407,7 @@ class TransferFunction(ModelMixin):
         re = -self.poles().real
         slow = float(np.min(re[re > 1e-12])) if np.any(re > 1e-12) else 0.1
         t_final = 5.0 / slow + float(np.max(self.iodelay, initial=0.0))
-        if dt is None:
-            N = 200 if n_samples is None else int(n_samples)
-            return N, t_final / max(N - 1, 1)
-        N = int(min(np.ceil(t_final / dt) + 1, 100000)) if n_samples is None else int(n_samples)
-        return N, float(dt)
+        return continuous_grid(self.poles(), t_final, n_samples, dt, 100000)
 
     # -- interop ------------------------------------------------------------------------
     def to_control(self) -> Any:
