@@ -150,3 +150,19 @@ def test_delayest_multi_input_and_errors():
         sysid.delayest(sysid.IOData(u[:20], y[:20, None], 1.0))
     with pytest.raises(DataError, match="time series"):
         sysid.delayest(sysid.IOData(None, y[:, None], 1.0))
+
+
+def test_stepinfo_of_a_nonlinear_model_uses_its_own_final_value():
+    # stepinfo took a nonlinear model's steady state from its linear part's freqresp(0):
+    # a PNLSS step ending at 0.978 reported 1.218 and a NaN settling time
+    rng = np.random.default_rng(81)
+    u = rng.uniform(-1, 1, 1200)
+    x = np.zeros(1200)
+    for t in range(1, 1200):
+        x[t] = 0.8 * x[t - 1] + 0.5 * np.tanh(2 * u[t - 1])
+    m = sysid.nlarx(sysid.IOData(u, x, 1.0), 1, 1, 1, basis=sysid.PolynomialBasis(3))
+    r = sysid.step(m, 400)
+    info = sysid.stepinfo(m)
+    assert info.steady_state == pytest.approx(float(r.y[-1, 0, 0]), rel=1e-6)
+    assert abs(info.steady_state - float(np.real(m.freqresp([0.0])[0, 0, 0]))) > 0.05
+    assert np.isfinite(info.settling_time)

@@ -205,6 +205,12 @@ def _response(sys: Any, t: Any, n: int
     return tt, Y, Y[-1], Y[0]
 
 
+def _nonlinear(sys: Any) -> bool:
+    """A nonlinear model (its ``freqresp`` is its linear part's or its linearisation's)."""
+    return (not getattr(sys, "statespace_is_exact", True)
+            or type(sys).__module__.startswith(("sysid.nonlinear.", "sysid.nlss.")))
+
+
 def _model_step(sys: Any, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     p = np.asarray(sys.poles()) if hasattr(sys, "poles") else np.zeros(0)
     delay = float(np.max(getattr(sys, "iodelay", 0.0), initial=0.0))
@@ -213,8 +219,14 @@ def _model_step(sys: Any, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
         rho = float(np.max(r)) if r.size else 0.0
         N = 200 if rho >= 1 or rho == 0 else int(np.ceil(np.log(1e-4) / np.log(rho))) + 10
         N = int(min(max(N, 20), 100000)) + int(delay)
+        if _nonlinear(sys):
+            N *= 2  # its step's end (its linear part's poles only estimate its settling)
         resp = sys.step(N)
         Y = np.asarray(resp.y)
+        if _nonlinear(sys):
+            # the response's own final value: the linear part's (or the linearisation's)
+            # static gain is not the nonlinear model's (0.909 for a step that ends at 0.934)
+            return np.asarray(resp.t, float), Y, Y[-1].copy(), np.zeros_like(Y[-1])
         try:
             gain = np.asarray(sys.freqresp([0.0])[0].real)
         except np.linalg.LinAlgError:  # a pole at z = 1: the step response does not settle
