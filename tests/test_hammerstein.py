@@ -274,3 +274,9 @@ def test_a_non_finite_input_is_refused_not_simulated_to_nan():
             model.simulate(bad)
         with pytest.raises(sysid.DataError, match="non-finite value .* at sample 7"):
             model.predict(bad, y)
+
+
+def test_a_model_with_no_nonlinearity_is_not_called_wiener():
+    u = _u(300, 17)
+    m = sysid.nlhw(sysid.IOData(u, linear(u), 1.0), 1, 1, 1, progress=False)
+    assert "linear: no nonlinearity" in repr(m)

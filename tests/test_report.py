@@ -113,3 +113,18 @@ def test_residual_advice_fits_a_model_without_a_noise_model(tmp_path):
     assert "try a higher order or a prediction-error" not in oe_text
     arx_text = sysid.report(sysid.arx(d, 1, 1, 1), d, tmp_path / "arx")["html"].read_text()
     assert "try a higher order or a prediction-error" in arx_text
+
+
+def test_text_tables_keep_long_channel_names_whole():
+    # two outputs "outlet temperature sensor A" / "... B" read as the same truncated row
+    rng = np.random.default_rng(62)
+    u = rng.standard_normal((400, 1))
+    y = np.hstack([np.convolve(u[:, 0], [0, 0.5, 0.2])[:400, None],
+                   np.convolve(u[:, 0], [0, 0.3, 0.4])[:400, None]])
+    y = y + 0.01 * rng.standard_normal(y.shape)
+    names = ["outlet temperature sensor A", "outlet temperature sensor B"]
+    d = sysid.IOData(u, y, 1.0, output_names=names)
+    m = sysid.arx(d, [[2, 0], [0, 2]], [[2], [2]], [[1], [1]])
+    for text in (repr(d.summary()), sysid.compare(m, d).summary(),
+                 sysid.residuals(m, d).summary()):
+        assert all(n in text for n in names), text

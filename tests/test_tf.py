@@ -347,3 +347,16 @@ def test_default_step_grid_resolves_the_fastest_pole():
     assert rc.t[1] - rc.t[0] <= 0.1 / 3.0 + 1e-12
     assert r.continuous and rc.continuous  # plotted as lines, not staircases
     assert not sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]).step().continuous
+
+
+def test_summaries_name_the_users_model_in_plain_numbers():
+    # compare's summary of a continuous model named "<sysid.tf.model._Sampled object at
+    # 0x...>", and the model's summary printed fit_percent=[np.float64(85.4175)]
+    rng = np.random.default_rng(42)
+    u = np.repeat(rng.standard_normal(100), 5)
+    truth = sysid.TransferFunction([[[2.0]]], [[[1.0, 3.0, 2.0]]])
+    d = sysid.IOData(u, truth.simulate(u, dt=0.1) + 0.01 * rng.standard_normal((500, 1)), 0.1)
+    m = sysid.tfest(d, 2, progress=False)
+    assert "np.float64" not in m.summary() and "fit_percent=[" in m.summary()
+    text = sysid.compare(m, d).summary()
+    assert "object at 0x" not in text and "TransferFunction(" in text

@@ -508,13 +508,14 @@ class DataSummary(HTMLResult):
         return _pandas().DataFrame(self.rows).set_index("channel")
 
     def __repr__(self) -> str:
-        head = f"{'channel':<14}{'kind':<8}{'unit':<8}" + "".join(
+        w = max([13] + [len(r["channel"]) for r in self.rows]) + 1  # names whole
+        head = f"{'channel':<{w}}{'kind':<8}{'unit':<8}" + "".join(
             f"{k:>12}" for k in ("mean", "std", "min", "max", "rms")
         )
         lines = [self.title, head]
         for r in self.rows:
             lines.append(
-                f"{r['channel'][:13]:<14}{r['kind']:<8}{r['unit'][:7]:<8}"
+                f"{r['channel']:<{w}}{r['kind']:<8}{r['unit'][:7]:<8}"
                 + "".join(f"{r[k]:>12.4g}" for k in ("mean", "std", "min", "max", "rms"))
             )
         if len(self.lengths) > 1:

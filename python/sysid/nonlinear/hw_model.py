@@ -468,9 +468,10 @@ class HammersteinWienerModel(ModelMixin):
                           f"({self.info.get('stop', '-')})"])
 
     def __repr__(self) -> str:
-        kind = ("Hammerstein-Wiener" if type(self.output_nl) is not Nonlinearity
-                and type(self.input_nl) is not Nonlinearity else
-                "Wiener" if type(self.input_nl) is Nonlinearity else "Hammerstein")
+        ident_in, ident_out = (type(f) is Nonlinearity for f in (self.input_nl, self.output_nl))
+        kind = ("linear: no nonlinearity" if ident_in and ident_out else
+                "Hammerstein-Wiener" if not (ident_in or ident_out) else
+                "Wiener" if ident_in else "Hammerstein")
         return (f"HammersteinWienerModel({kind}, nb={self.b.size}, nf={self.f.size}, "
                 f"nk={self.nk}, dt={self.dt:g})")
 

@@ -493,7 +493,7 @@ class TransferFunction(ModelMixin):
         if self.parameters is not None:
             out.append(str(self.parameters))
         keys = ("method", "iterations", "stop", "fit_percent", "cost", "n_samples")
-        info = ", ".join(f"{k}={self.info[k]}" for k in keys if k in self.info)
+        info = ", ".join(f"{k}={_plain(self.info[k])}" for k in keys if k in self.info)
         if info:
             out.append(info)
         return "\n".join(out)
@@ -531,6 +531,18 @@ def assemble(blocks: list[tuple[int, int, tuple[Any, ...]]], canon: list[tuple[A
     return Ad, Bt, Cd, Dt, taps, G
 
 
+def _plain(v: Any) -> str:
+    """A summary value as text: numbers to 6 digits, lists of them likewise (no
+    ``np.float64(...)``)."""
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_plain(x) for x in v) + "]"
+    if isinstance(v, (float, np.floating)):
+        return f"{float(v):.6g}"
+    if isinstance(v, (np.integer,)):
+        return str(int(v))
+    return str(v)
+
+
 class _Sampled:
     """A continuous :class:`TransferFunction` at sample time ``dt`` (for compare/residuals)."""
 
@@ -540,6 +552,9 @@ class _Sampled:
         self.info = tf.info
         self.ninputs, self.noutputs = tf.ninputs, tf.noutputs
         self.n_parameters = tf.n_parameters
+
+    def __repr__(self) -> str:
+        return f"{self.continuous!r} sampled every {self.dt:g} s"
 
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
         return self.continuous.simulate(u, x0, dt=self.dt)

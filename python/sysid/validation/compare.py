@@ -404,11 +404,12 @@ class CompareResult(HTMLResult):
 
     def summary(self) -> str:
         """A text table of the fit numbers."""
+        w = max([20] + [len(str(n)) for n in self.output_names])  # names whole
         lines = [f"{self.kind} of {self.model!r}",
-                 f"{'exp':>4} {'output':<20} {'fit %':>9} {'VAF %':>9} {'RMSE':>11}"]
+                 f"{'exp':>4} {'output':<{w}} {'fit %':>9} {'VAF %':>9} {'RMSE':>11}"]
         for e in range(self.fit.shape[0]):
             for j, name in enumerate(self.output_names):
-                lines.append(f"{e:>4} {name[:20]:<20} {self.fit[e, j]:9.2f} {self.vaf[e, j]:9.2f} "
+                lines.append(f"{e:>4} {name:<{w}} {self.fit[e, j]:9.2f} {self.vaf[e, j]:9.2f} "
                              f"{self.rmse[e, j]:11.4g}"
                              + ("  diverged (unstable on this record)" if self.diverged[e]
                                 else ""))

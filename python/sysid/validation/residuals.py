@@ -135,14 +135,15 @@ class ResidualAnalysis(HTMLResult):
     def summary(self) -> str:
         """A text table of the tests."""
         M = self.max_lag
+        w = max([20] + [len(str(n)) for n in self.output_names])  # names whole
         lines = [f"residual analysis of {self.model!r}",
                  f"{self.n_samples} samples, lags 1..{M}, alpha = {self.alpha:g}, "
                  f"bound +-{self.bound:.4f}",
-                 f"{'output':<20} {'Ljung-Box Q':>12} {'p':>8} {'white':>6} "
+                 f"{'output':<{w}} {'Ljung-Box Q':>12} {'p':>8} {'white':>6} "
                  f"{'indep. S':>10} {'p':>8} {'indep.':>7}"]
         for i, name in enumerate(self.output_names):
             lines.append(
-                f"{name[:20]:<20} {self.ljung_box[i]:12.2f} {self.ljung_box_pvalue[i]:8.3g} "
+                f"{name:<{w}} {self.ljung_box[i]:12.2f} {self.ljung_box_pvalue[i]:8.3g} "
                 f"{'yes' if self.whiteness[i] else 'NO':>6} {self.independence_stat[i]:10.2f} "
                 f"{self.independence_pvalue[i]:8.3g} {'yes' if self.independence[i] else 'NO':>7}"
             )
