@@ -139,3 +139,12 @@ def test_identifiability_warning_names_the_channel_pair_and_a_process_fix():
                         "more informative data")
     text = str(rec[0].message)
     assert "level<-valve:Kp, level<-valve:Tp1" in text and "n_zeros" not in text
+
+
+def test_a_diverged_search_is_a_numerical_error_not_bad_data():
+    # procest on the raw dryer record (levels of 5 and 4.8, no constant term in the model):
+    # the search ends where the sensitivities overflow, and the covariance step raised a
+    # NonFiniteError that blamed "sample 0" of the (finite) data
+    e = sysid.datasets.load_dryer()[:500]
+    with pytest.raises(sysid.NumericalError, match="sysid.detrend"):
+        sysid.procest(e, "P2D")

@@ -43,7 +43,16 @@ pub fn covariance(gauss_newton: MatRef<'_, f64>, scale: f64, rtol: f64) -> Resul
             got: format!("({}, {})", p, gauss_newton.ncols()),
         });
     }
-    crate::error::check_finite("gauss_newton", gauss_newton)?;
+    if (0..p).any(|i| (0..p).any(|j| !gauss_newton[(i, j)].is_finite())) {
+        // not the data's fault (they were checked on the way in): the search ended where
+        // the model's sensitivities overflow
+        return Err(SysidError::numerical(
+            "covariance",
+            "the Gauss-Newton matrix at the estimate is not finite: the model's sensitivities \
+             overflow there (a search driven far from the data's scale, often by an offset \
+             the model has no term for); remove the offsets (sysid.detrend) or give a start",
+        ));
+    }
     if !(scale.is_finite() && scale >= 0.0) {
         return Err(SysidError::invalid(
             "scale",
