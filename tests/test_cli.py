@@ -367,3 +367,22 @@ def test_the_automatic_paths_model_with_detrend_mean_predicts_raw_signals(tmp_pa
     assert abs(yhat.mean() - raw[500:, 1].mean()) < 0.2 * raw[500:, 1].std()
     assert sysid.compare(model, val).fit[0, 0] > 80
     assert model.y_offset[0] == pytest.approx(raw[:500, 1].mean(), abs=0.2)
+
+
+def test_a_nan_cell_and_a_wrong_delimiter_are_named(tmp_path, capsys):
+    # a "nan" cell was read as a number and failed later as "y has a non-finite value at
+    # sample 999" (relative to a part, no column); a wrong --delimiter read the header as
+    # one column named "time,u,y" and said only "column 'u' not found"
+    lines = [f"{k},{np.sin(k)},{np.cos(k)}" for k in range(200)]
+    lines[7] = f"7,{np.sin(7)},nan"
+    path = tmp_path / "d.csv"
+    path.write_text("time,u,y\n" + "\n".join(lines) + "\n")
+    args = ["identify", str(path), "--inputs", "u", "--outputs", "y", "--quiet",
+            "--report", str(tmp_path / "r")]
+    assert main(args) == 2
+    assert "d.csv line 9, column 'y': 'nan' is not a finite number" in capsys.readouterr().err
+    lines[7] = f"7,{np.sin(7)},{np.cos(7)}"
+    path.write_text("time,u,y\n" + "\n".join(lines) + "\n")
+    assert main(args + ["--delimiter", ";"]) == 2
+    err = capsys.readouterr().err
+    assert "header was read as one column" in err and "--delimiter" in err

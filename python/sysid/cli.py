@@ -105,8 +105,12 @@ def _numeric(path: str | Path, names: list[str], rows: list[list[str]], cols: li
             cell = cells[c]
             try:
                 values[r, k] = float(cell)
+                if not np.isfinite(values[r, k]):
+                    raise ValueError(cell)
             except ValueError:
-                what = "is empty" if cell == "" else f"{cell!r} is not a number"
+                what = ("is empty" if cell == "" else f"{cell!r} is not a finite number"
+                        if cell.strip().lower().lstrip("+-") in ("nan", "inf", "infinity")
+                        else f"{cell!r} is not a number")
                 raise DataError(
                     f"{Path(path).name} line {r + first_line}, column {names[c]!r}: {what}; fix or "
                     "remove that row (missing values must be repaired before identification)"
@@ -148,8 +152,11 @@ def _columns(spec: str, names: list[str], what: str) -> list[int]:
         if w in names:
             idx.append(names.index(w))
         else:
+            one = len(names) == 1 and any(d in names[0] for d in (",", ";", "|", "\t"))
             raise DataError(f"{what[:-1]} column {w!r} not found; the file has columns: "
-                            + ", ".join(names))
+                            + ", ".join(names)
+                            + ("; the header was read as one column: the file's delimiter is "
+                               "not the one used (give it with --delimiter)" if one else ""))
     return idx
 
 
