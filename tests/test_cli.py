@@ -367,6 +367,10 @@ def test_the_automatic_paths_model_with_detrend_mean_predicts_raw_signals(tmp_pa
     assert abs(yhat.mean() - raw[500:, 1].mean()) < 0.2 * raw[500:, 1].std()
     assert sysid.compare(model, val).fit[0, 0] > 80
     assert model.y_offset[0] == pytest.approx(raw[:500, 1].mean(), abs=0.2)
+    # the report's order line points at identify's leaderboard: it is written beside it
+    board = (rep / "leaderboard.csv").read_text().splitlines()
+    assert board[0].startswith("family,order,") and len(board) > 5
+    assert "leaderboard.csv" in (rep / "index.html").read_text()
 
 
 def test_a_nan_cell_and_a_wrong_delimiter_are_named(tmp_path, capsys):

@@ -577,6 +577,8 @@ def _identify(args: argparse.Namespace) -> int:
                     my = np.asarray(pre["removed_means"]["outputs"], float)
                     m = IdentifiedModel(m.statespace, m.u_offset + mu, m.y_offset + my)
                 save_model(m, out["files"]["model"])
+                out["files"]["leaderboard"] = _write_leaderboard(
+                    p["result"], Path(out["files"]["model"]).with_name("leaderboard.csv"))
         out["warnings"] = reissue(caught)
         print(p["result"].summary())
         _print_summary(out)
@@ -596,6 +598,19 @@ def _identify(args: argparse.Namespace) -> int:
                    feedthrough={"no": False, "yes": True, "auto": "auto"}.get(args.feedthrough))
     _print_summary(out)
     return 0
+
+
+def _write_leaderboard(result: Any, path: Path) -> Path:
+    """identify's leaderboard as a CSV beside the report (no pandas needed)."""
+    from ._atomic import atomic_path
+    from .identify.result import COLUMNS
+
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(COLUMNS)
+        for row in result.leaderboard:
+            w.writerow(["" if row.get(c) is None else row.get(c) for c in COLUMNS])
+    return path
 
 
 def _parser() -> argparse.ArgumentParser:

@@ -33,5 +33,5 @@ def prepare(est_data: IOData, val_data: IOData | None, preprocessing: dict[str, 
     # the one-model table's own reason ("order n (models) chosen by validation") is not why:
     # identify chose it, on blocks held out of the estimation data
     sel.reason = (f"{res.choice}, chosen by sysid.identify on blocks held out of the "
-                  "estimation data (the leaderboard above)")
+                  "estimation data (its leaderboard: leaderboard.csv beside the report)")
     return {"model": model, "selection": sel, "est": est, "val": val, "result": res}
