@@ -512,6 +512,17 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
     us, ys, yh, x0s = [], [], [], []
     for i, (u, y) in enumerate(recs):
         x = _x0_for(runner, x0, u, y, h, i, len(recs))
+        if isinstance(x0, str) and x0 == "estimate" and x is not None and y.size <= 2 * x.size:
+            import warnings
+
+            from .._checks import user_stacklevel
+
+            warnings.warn(f"the record{f' (experiment {i})' if len(recs) > 1 else ''} has "
+                          f"{y.shape[0]} samples of {y.shape[1]} output(s) for {x.size} "
+                          "fitted initial values: its fit says little about the model "
+                          "(the initial state takes up the record); compare on a longer "
+                          "record, or with x0='zero'", UserWarning,
+                          stacklevel=user_stacklevel())
         us.append(u)
         ys.append(y)
         yh.append(_run(runner, u, y, h, x))
