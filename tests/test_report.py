@@ -4,6 +4,7 @@ units on the axes, the stabilisation diagram's classes; reports of other model k
 from __future__ import annotations
 
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -128,3 +129,21 @@ def test_text_tables_keep_long_channel_names_whole():
     for text in (repr(d.summary()), sysid.compare(m, d).summary(),
                  sysid.residuals(m, d).summary()):
         assert all(n in text for n in names), text
+
+
+def test_bode_bands_asked_of_a_model_without_uncertainty_are_said_missing():
+    # plot_bode(m, confidence=0.95) drew no band for an n4sid model and said nothing
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from sysid.plot.model import plot_bode
+
+    rng = np.random.default_rng(63)
+    u = rng.standard_normal(400)
+    d = sysid.IOData(u, np.convolve(u, [0, 0.5, 0.3])[:400] + 0.01 * rng.standard_normal(400))
+    with pytest.warns(sysid.UncertaintyWarning, match=r"model\(s\) \[0\] carry no parameter"):
+        plot_bode(sysid.n4sid(d, 2), confidence=0.95)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        plot_bode(sysid.arx(d, 1, 2, 1), confidence=0.95)

@@ -67,6 +67,18 @@ def plot_bode(models: Any, omega: Any = None, *, hz: bool = True, fig: Any = Non
     plt = _pyplot()
     ms = _models(models)
     zc = None if confidence is None else _z(confidence)
+    bare = [k for k, mod in enumerate(ms) if getattr(mod, "uncertainty", None) is None
+            and not hasattr(mod, "omega")]  # an FRD draws its own band (FRD.plot)
+    if zc is not None and bare:
+        import warnings
+
+        from .._checks import user_stacklevel
+        from ..models.uncertainty import UncertaintyWarning
+
+        warnings.warn(f"confidence={confidence} but model(s) {bare} carry no parameter "
+                      "uncertainty: no band for them (fit with a prediction-error method, "
+                      "or SubspaceEstimator(...).fit(..., uncertainty='bootstrap'))",
+                      UncertaintyWarning, stacklevel=user_stacklevel())
     w = _omega(ms, omega)
     l, m = ms[0].noutputs, ms[0].ninputs
     if fig is None:
