@@ -166,3 +166,13 @@ def test_stepinfo_of_a_nonlinear_model_uses_its_own_final_value():
     assert info.steady_state == pytest.approx(float(r.y[-1, 0, 0]), rel=1e-6)
     assert abs(info.steady_state - float(np.real(m.freqresp([0.0])[0, 0, 0]))) > 0.05
     assert np.isfinite(info.settling_time)
+
+
+def test_stepinfo_rows_are_named_by_channel():
+    # to_pandas labelled a MIMO model's rows 0/1 instead of its channel names
+    m = sysid.StateSpaceModel(np.diag([0.5, 0.7]), np.eye(2), np.eye(2),
+                              output_names=["track", "focus"], input_names=["force", "radial"])
+    for src in (m, m.step()):
+        df = sysid.stepinfo(src).to_pandas()
+        assert df[["output", "input"]].values.tolist() == [
+            ["track", "force"], ["track", "radial"], ["focus", "force"], ["focus", "radial"]]

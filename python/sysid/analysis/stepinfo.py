@@ -36,8 +36,15 @@ class StepInfo:
     MATLAB's field names (``RiseTime``, ``SettlingTime``, ...).
     """
 
-    def __init__(self, values: dict[str, np.ndarray]) -> None:
+    def __init__(self, values: dict[str, np.ndarray], output_names: Any = None,
+                 input_names: Any = None) -> None:
         self._v = values
+        l, m = values["rise_time"].shape
+        #: the channels' names (the model's or the response's; ``y0..``/``u0..`` for arrays)
+        self.output_names = list(output_names) if output_names is not None else \
+            [f"y{i}" for i in range(l)]
+        self.input_names = list(input_names) if input_names is not None else \
+            [f"u{j}" for j in range(m)]
         single = values["rise_time"].size == 1
         for k, v in values.items():
             setattr(self, k, float(v.ravel()[0]) if single else v)
@@ -56,7 +63,8 @@ class StepInfo:
         import pandas as pd
 
         l, m = self._v["rise_time"].shape
-        rows = [{"output": i, "input": j, **{k: float(self._v[k][i, j]) for k in _KEYS}}
+        rows = [{"output": self.output_names[i], "input": self.input_names[j],
+                 **{k: float(self._v[k][i, j]) for k in _KEYS}}
                 for i in range(l) for j in range(m)]
         return pd.DataFrame(rows)
 
@@ -169,7 +177,9 @@ def stepinfo(sys: Any, t: Any = None, *, yfinal: Any = None, yinit: Any = None,
         for j in range(m):
             for k, v in _one(tt, Y[:, i, j], yi[i, j], yf[i, j], threshold, (lo, hi)).items():
                 out[k][i, j] = v
-    return StepInfo(out)
+    names = getattr(sys, "output_names", None), getattr(sys, "input_names", None)
+    ok = [n if n is not None and len(n) == size else None for n, size in zip(names, (l, m))]
+    return StepInfo(out, *ok)
 
 
 def _fill(x: Any, shape: tuple[int, int], name: str) -> np.ndarray:
