@@ -147,3 +147,16 @@ def test_bode_bands_asked_of_a_model_without_uncertainty_are_said_missing():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         plot_bode(sysid.arx(d, 1, 2, 1), confidence=0.95)
+
+
+def test_compare_plot_keeps_the_records_clock():
+    # the second half of a record (t = 40 .. 79.92 s) was plotted from t = 0
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    d = sysid.detrend(sysid.datasets.load_dryer())
+    val = d[500:]
+    fig = sysid.compare(sysid.arx(d[:500], 2, 2, 3), val).plot()
+    x = fig.axes[0].lines[0].get_xdata()
+    assert x[0] == pytest.approx(val.times[0][0]) and x[0] > 39

@@ -34,7 +34,8 @@ def _plot_outputs(results: list[Any], names: list[str], experiment: int, fig: An
     first = results[0]
     y = first.y[experiment]
     fig, axes = _fig(fig, y.shape[1])
-    t = np.arange(y.shape[0]) * first.dt
+    t0 = getattr(first, "t0", None)  # the record's start time (compare of an IOData)
+    t = (t0[experiment] if t0 else 0.0) + np.arange(y.shape[0]) * first.dt
     for j in range(y.shape[1]):
         ax = axes[j, 0]
         ax.plot(t, y[:, j], color="0.3", lw=1.0, label="measured")

@@ -369,6 +369,8 @@ class CompareResult(HTMLResult):
                  y: list[np.ndarray], yhat: list[np.ndarray], x0: list[Any]) -> None:
         self.model, self.horizon = model, horizon
         self.u, self.y, self.yhat, self.x0 = u, y, yhat, x0
+        #: start time of each experiment (the record's clock; ``None``: from 0)
+        self.t0: list[float] | None = None
         self.output_names = list(model.output_names)
         self.dt = model.dt
         metrics = [_metrics(a, b) for a, b in zip(y, yhat)]
@@ -480,11 +482,15 @@ def compare(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
     from .comparison import split_arguments
 
     data, models, horizon = split_arguments(args, horizon)
+    results = [compare_one(m, data, horizon, x0) for m in models]
+    if isinstance(data, IOData):  # the record's own clock, for plots
+        for r in results:
+            r.t0 = [float(t[0]) if t.size else 0.0 for t in data.times]
     if len(models) > 1:
         from .comparison import CompareSet
 
-        return CompareSet([compare_one(m, data, horizon, x0) for m in models])
-    return compare_one(models[0], data, horizon, x0)
+        return CompareSet(results)
+    return results[0]
 
 
 def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareResult:
