@@ -467,3 +467,19 @@ def test_a_record_the_initial_state_takes_up_is_said():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         sysid.compare(m, (u, y), x0="zero")
+
+
+def test_the_leaderboard_plot_tells_unstable_candidates_apart():
+    # unstable candidates were drawn like stable ones (six above the chosen star), fits
+    # below -100 % sat at -100 % unmarked, and the order axis had ticks at 2.5, 7.5
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    d = sysid.detrend(sysid.datasets.load_dryer())[:500]
+    res = sysid.identify(d, progress=False)
+    ax = res.plot()
+    hollow = [ln for ln in ax.lines if ln.get_markerfacecolor() == "none"]
+    unstable = [r for r in res.leaderboard if not r["stable"] and np.isfinite(r["held_out_fit"])]
+    assert bool(hollow) == bool(unstable)
+    assert all(float(t).is_integer() for t in ax.get_xticks())

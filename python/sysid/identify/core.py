@@ -464,7 +464,11 @@ def identify(
     IdentifyResult
         ``.model`` (an :class:`IdentifiedModel` that predicts raw data; its state-space
         model of the deviations is ``.model.statespace``), ``.leaderboard``,
-        ``.summary()``, ``.plot()``, ``.to_pandas()``.
+        ``.summary()``, ``.plot()``, ``.to_pandas()``. The held-out fit of each candidate
+        is its simulation fit on each held-out block with the block's initial state and a
+        constant offset per output fitted (every block keeps some offset after the record's
+        means are removed): on a record that drifts it reads higher than :func:`sysid.compare`
+        (which fits the initial state only) on the same block.
 
     Examples
     --------

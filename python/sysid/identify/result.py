@@ -225,17 +225,30 @@ class IdentifyResult:
         return "\n".join(lines)
 
     def plot(self, ax: Any = None) -> Any:
-        """Held-out fit against order, one marker per family; returns the axes."""
+        """Held-out fit against order, one colour per family (hollow markers: unstable
+        candidates, which are not chosen unless the data insist; fits below -100 % drawn at
+        -100 % as triangles); returns the axes."""
         import matplotlib.pyplot as plt
+        from matplotlib.ticker import MaxNLocator
 
         if ax is None:
             _, ax = plt.subplots()
         fams = sorted({r["family"] for r in self.leaderboard})
-        for fam in fams:
+        for k, fam in enumerate(fams):
             rows = [r for r in self.leaderboard if r["family"] == fam
                     and np.isfinite(r["held_out_fit"])]
-            ax.plot([r["order"] for r in rows], [max(r["held_out_fit"], -100) for r in rows],
-                    "o", label=fam, alpha=0.7)
+            label: str | None = fam  # on the family's first group drawn
+            for stable in (True, False):
+                for low in (False, True):
+                    sel = [r for r in rows if bool(r["stable"]) == stable
+                           and (r["held_out_fit"] < -100) == low]
+                    if sel:
+                        ax.plot([r["order"] for r in sel],
+                                [max(r["held_out_fit"], -100) for r in sel], "v" if low else "o",
+                                color=f"C{k}", mfc=f"C{k}" if stable else "none", alpha=0.7,
+                                label=label)
+                        label = None
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
         s = self.model.statespace
         chosen = next((r for r in self.leaderboard if r.get("chosen")), self.leaderboard[0])
         ax.plot([s.nstates], [max(chosen["held_out_fit"], -100)], "k*", ms=14, label="chosen")
