@@ -78,3 +78,26 @@ def test_a_model_without_uncertainty_saves_none():
     d = sysid.model_to_dict(m)
     assert "uncertainty" not in d
     assert sysid.model_from_dict(d).uncertainty is None
+
+
+def test_models_with_uncertainty_pickle():
+    # an estimator's build(theta) is a closure: pickle raised "Can't pickle local object
+    # 'attach_uncertainty.<locals>.build'" (multiprocessing, joblib); it now travels as the
+    # affine map save_model writes, with the same first-order standard deviations
+    import copy
+    import pickle
+
+    d = sysid.detrend(sysid.datasets.load_dryer())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        models = [sysid.arx(d, 2, 2, 3), sysid.ssest(d, 3, progress=False),
+                  sysid.procest(d, "P1D")]
+    for m in models:
+        back = pickle.loads(pickle.dumps(m))
+        kw = {"dt": d.dt} if m.dt == 0 else {}
+        np.testing.assert_allclose(back.simulate(d.u[:50], **kw), m.simulate(d.u[:50], **kw))
+        np.testing.assert_allclose(np.sort(np.abs(back.poles(std=True)[1])),
+                                   np.sort(np.abs(m.poles(std=True)[1])), rtol=1e-4)
+        twin = copy.deepcopy(m)  # a deep copy keeps the estimator's own build
+        assert type(twin.uncertainty.build) is type(m.uncertainty.build)
+        np.testing.assert_allclose(twin.poles(std=True)[1], m.poles(std=True)[1])

@@ -158,6 +158,60 @@ class ParameterUncertainty(HTMLResult):
         self.method = str(method)
         self._cache: tuple[list[float], list[Any], list[Any]] | None = None
 
+    def __reduce__(self) -> Any:
+        """Pickling: an estimator's ``build`` is often a closure, which cannot be pickled;
+        it is then replaced by the affine map :func:`sysid.save_model` writes (the same
+        first-order standard deviations; see :mod:`sysid.models.uncertainty_io`)."""
+        import inspect
+        import pickle
+
+        unc = self
+        try:  # a bound method (a model's own): pickled with its model, cycles and all
+            if not inspect.ismethod(self.build):
+                pickle.dumps(self.build)
+        except (pickle.PicklingError, AttributeError, TypeError, RecursionError):
+            unc = self._affine()
+        return (ParameterUncertainty, (unc.theta, unc.covariance, unc.build),
+                {"names": unc.names, "dof": unc.dof, "method": unc.method})
+
+    def _affine(self) -> ParameterUncertainty:
+        """This uncertainty with ``build`` replaced by its measured affine map (what
+        :func:`sysid.save_model` writes); itself when the model cannot be written."""
+        from .affine_map import affine_build, stored_map
+
+        nominal = self.build(self.theta)
+        if not callable(getattr(nominal, "to_dict", None)):
+            return self
+        saved = stored_map(self, type(nominal), 4000)
+        if "omitted" in saved:
+            return self
+        build = affine_build(saved, nominal.to_dict(), type(nominal), self.theta)
+        method = self.method + ("" if saved["linear"] else
+                                " (pickled: first-order map of a nonlinear parameterisation)")
+        return ParameterUncertainty(self.theta, self.covariance, build, names=self.names,
+                                    dof=self.dof, method=method)
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.names, self.dof, self.method = state["names"], state["dof"], state["method"]
+
+    def __copy__(self) -> ParameterUncertainty:
+        new = object.__new__(ParameterUncertainty)
+        new.__dict__.update(self.__dict__)
+        return new
+
+    def __deepcopy__(self, memo: dict[int, Any]) -> ParameterUncertainty:
+        """A copy as ``copy.deepcopy`` makes it by default (a function ``build`` shared, a
+        model's bound method bound to the copy), not the pickled form of :meth:`__reduce__`."""
+        import copy
+        import inspect
+
+        new = object.__new__(ParameterUncertainty)
+        memo[id(self)] = new
+        for k, v in self.__dict__.items():
+            keep = k == "build" and not inspect.ismethod(v)
+            setattr(new, k, v if keep else copy.deepcopy(v, memo))
+        return new
+
     def _eigen(self) -> tuple[np.ndarray, np.ndarray]:
         """Eigenpairs of the covariance on its range (computed once)."""
         if self._eig is None:
