@@ -176,3 +176,12 @@ def test_stepinfo_rows_are_named_by_channel():
         df = sysid.stepinfo(src).to_pandas()
         assert df[["output", "input"]].values.tolist() == [
             ["track", "force"], ["track", "radial"], ["focus", "force"], ["focus", "radial"]]
+
+
+def test_the_notebook_pole_table_agrees_with_damp_at_s_0():
+    # an integrator's damping: damp() says -1 (as MATLAB), the notebook table said "n/a"
+    from sysid._display import pole_rows
+
+    m = sysid.TransferFunction([1.0], [1.0, 1.0, 0.0])
+    rows = sorted(pole_rows(m.poles(), 0.0), key=lambda r: abs(r[0]))
+    np.testing.assert_allclose([r[3] for r in rows], sorted(sysid.damp(m).zeta))

@@ -193,7 +193,7 @@ def pole_rows(p: np.ndarray, dt: float) -> list[list[Any]]:
     with np.errstate(divide="ignore", invalid="ignore"):
         s = np.log(p.astype(complex)) / dt if dt > 0 else p
         wn = np.abs(s)
-        zeta = np.where(wn > 0, -s.real / wn, np.nan)
+        zeta = np.where(wn > 0, -s.real / np.where(wn > 0, wn, 1.0), -1.0)  # as damp()
     return [[complex(p[k]), float(abs(p[k])), float(wn[k] / (2 * np.pi)), float(zeta[k])]
             for k in range(p.size)]
 
