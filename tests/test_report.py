@@ -160,3 +160,23 @@ def test_compare_plot_keeps_the_records_clock():
     fig = sysid.compare(sysid.arx(d[:500], 2, 2, 3), val).plot()
     x = fig.axes[0].lines[0].get_xdata()
     assert x[0] == pytest.approx(val.times[0][0]) and x[0] > 39
+
+
+def test_several_models_in_one_plot_are_told_apart():
+    # pzmap of two models: legend "poles, zeros, poles, zeros"; bode of an FRD: "model 0"
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from sysid.plot.model import plot_bode, plot_pzmap
+
+    rng = np.random.default_rng(64)
+    u = rng.standard_normal(600)
+    d = sysid.IOData(u, np.convolve(u, [0, 0.5, 0.3])[:600] + 0.01 * rng.standard_normal(600))
+    a, b = sysid.arx(d, 2, 2, 1), sysid.n4sid(d, 2)
+    labels = [t.get_text() for t in plot_pzmap([a, b]).get_legend().get_texts()]
+    assert len(set(labels)) == 4
+    frd = sysid.spa(d)
+    fig = plot_bode([frd, a])
+    names = [ln.get_label() for ln in fig.axes[0].lines]
+    assert "model 0" not in names and str(frd.method) in names

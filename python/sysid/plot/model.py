@@ -88,7 +88,8 @@ def plot_bode(models: Any, omega: Any = None, *, hz: bool = True, fig: Any = Non
     for k, mod in enumerate(ms):
         H = mod.freqresp(w)
         info = getattr(mod, "info", {})
-        lab = labels[k] if labels is not None else str(info.get("method", f"model {k}"))
+        lab = labels[k] if labels is not None else str(
+            info.get("method", getattr(mod, "method", None) or f"model {k}"))
         band = None
         if zc is not None and getattr(mod, "uncertainty", None) is not None:
             from ..models.uncertainty import bode_std
@@ -154,8 +155,10 @@ def plot_pzmap(models: Any, ax: Any = None) -> Any:
     for k, mod in enumerate(ms):
         p = np.asarray(_optional(mod, "poles", "the pole-zero map"))
         z = np.asarray(_optional(mod, "zeros", "the pole-zero map"))
-        ax.plot(p.real, p.imag, "x", color=f"C{k}", ms=8, label="poles")
-        ax.plot(z.real, z.imag, "o", color=f"C{k}", mfc="none", ms=8, label="zeros")
+        name = "" if len(ms) == 1 else \
+            f"{(getattr(mod, 'info', None) or {}).get('method', f'model {k}')}: "
+        ax.plot(p.real, p.imag, "x", color=f"C{k}", ms=8, label=f"{name}poles")
+        ax.plot(z.real, z.imag, "o", color=f"C{k}", mfc="none", ms=8, label=f"{name}zeros")
     ax.axhline(0, color="0.8", lw=0.5)
     ax.axvline(0, color="0.8", lw=0.5)
     ax.set_aspect("equal", adjustable="datalim")
