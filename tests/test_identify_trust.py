@@ -483,3 +483,23 @@ def test_the_leaderboard_plot_tells_unstable_candidates_apart():
     unstable = [r for r in res.leaderboard if not r["stable"] and np.isfinite(r["held_out_fit"])]
     assert bool(hollow) == bool(unstable)
     assert all(float(t).is_integer() for t in ax.get_xticks())
+
+
+def test_identify_result_and_model_display_in_a_notebook():
+    # neither had _repr_html_, unlike every other model and result
+    d = sysid.detrend(sysid.datasets.load_dryer())[:500]
+    res = sysid.identify(d, progress=False)
+    page = res._repr_html_()
+    assert repr(res).split("(")[0] in page and "held_out_fit" in page
+    assert "pole" in res.model._repr_html_()
+
+
+def test_a_progress_bar_counting_words_spaces_them(capsys):
+    # "identify: 117candidates" (tqdm joins the count and the unit)
+    pytest.importorskip("tqdm")
+    from sysid._progress import Bar
+
+    bar = Bar(None, "identify", unit="candidates")
+    bar.update(117)
+    bar.close()
+    assert "117 candidates" in capsys.readouterr().err

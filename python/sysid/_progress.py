@@ -45,7 +45,9 @@ class Bar:
             except ImportError:
                 return
             live = bool(getattr(sys.stderr, "isatty", lambda: False)())
-            self._bar = tqdm(total=total, desc=desc, unit=unit, unit_scale=unit_scale,
+            # a word ("candidates") needs its space: tqdm writes "117candidates" otherwise
+            word = " " + unit if len(unit) > 2 and not unit.startswith(" ") else unit
+            self._bar = tqdm(total=total, desc=desc, unit=word, unit_scale=unit_scale,
                              file=sys.stderr, dynamic_ncols=live,
                              mininterval=0.1 if live else 1e9, maxinterval=0 if not live else 10)
 

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from .._display import HTMLResult, model_html
 from ..data.iodata import IOData
 from ..errors import DataError
 
@@ -49,6 +50,10 @@ class IdentifiedModel:
     @property
     def n_parameters(self) -> int:
         return int(self.statespace.n_parameters)
+
+    def _repr_html_(self) -> str:
+        """Notebook display: the facts and poles of its model, as every model shows them."""
+        return model_html(self)
 
     def remove_offsets(self, data: Any) -> IOData:
         """``data`` (raw, an IOData or a ``(u, y)`` pair) minus the offsets."""
@@ -161,7 +166,7 @@ class IdentifiedModel:
                 f"offsets removed)")
 
 
-class IdentifyResult:
+class IdentifyResult(HTMLResult):
     """The outcome of :func:`sysid.identify`.
 
     Attributes
