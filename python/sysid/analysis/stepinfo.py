@@ -229,11 +229,12 @@ def _model_step(sys: Any, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
         rho = float(np.max(r)) if r.size else 0.0
         N = 200 if rho >= 1 or rho == 0 else int(np.ceil(np.log(1e-4) / np.log(rho))) + 10
         N = int(min(max(N, 20), 100000)) + int(delay)
-        if _nonlinear(sys):
+        nonlinear = _nonlinear(sys)
+        if nonlinear:
             N *= 2  # its step's end (its linear part's poles only estimate its settling)
         resp = sys.step(N)
         Y = np.asarray(resp.y)
-        if _nonlinear(sys):
+        if nonlinear:
             # the response's own final value: the linear part's (or the linearisation's)
             # static gain is not the nonlinear model's (0.909 for a step that ends at 0.934)
             return np.asarray(resp.t, float), Y, Y[-1].copy(), np.zeros_like(Y[-1])

@@ -58,6 +58,7 @@ from ..data.segments import long_enough
 from ..errors import DataError, ExcitationError, InsufficientDataError, NumericalError
 from ..models.statespace import ss_parameter_count
 from ..subspace.estimator import available_horizon
+from ..validation.compare import require_outputs_vary
 from ..validation.crossval import MAX_ORDER, TOL, fold_horizon, record_folds, simulation_fit
 from .board import Board, bic
 from .result import IdentifiedModel, IdentifyResult, _family
@@ -638,13 +639,7 @@ def _checked_validation(validation: Any, data: IOData) -> IOData | None:
     if abs(float(validation.dt) - float(data.dt)) > 1e-9 * float(data.dt):
         raise DataError(f"validation is sampled every {validation.dt:g} s, the estimation "
                         f"data every {data.dt:g} s: resample one of them (sysid.resample)")
-    for k, (_, y) in enumerate(validation.experiments):
-        flat = np.flatnonzero(np.ptp(y, axis=0) == 0)
-        if flat.size:
-            where = f" in experiment {k}" if validation.n_experiments > 1 else ""
-            raise DataError(f"validation output {validation.output_names[flat[0]]} is "
-                            f"constant{where}: a fit against it is undefined; validate on a "
-                            "record where it varies")
+    require_outputs_vary([y for _, y in validation.experiments], validation.output_names)
     return validation
 
 

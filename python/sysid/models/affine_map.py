@@ -25,7 +25,10 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["AffineBuild", "affine_build", "stored_map"]
+__all__ = ["MAX_PARAMETERS", "AffineBuild", "affine_build", "stored_map"]
+
+#: parameters beyond which the map is not measured (2 p model builds)
+MAX_PARAMETERS = 4000
 
 
 def _leaves(body: Any, path: tuple[Any, ...] = ()) -> dict[tuple[Any, ...], np.ndarray]:
@@ -57,7 +60,7 @@ def _get(body: Any, path: list[Any]) -> Any:
     return body
 
 
-def stored_map(unc: Any, cls: type, max_parameters: int) -> dict[str, Any]:
+def stored_map(unc: Any, cls: type, max_parameters: int = MAX_PARAMETERS) -> dict[str, Any]:
     """``{"linear", "paths", "map"[, "built"]}``: the map of the stored numbers of the
     model ``unc.build`` makes (``"built"``: that model's family and body when it is not
     ``cls``), or ``{"omitted": reason}``."""

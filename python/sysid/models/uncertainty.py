@@ -182,7 +182,7 @@ class ParameterUncertainty(HTMLResult):
         nominal = self.build(self.theta)
         if not callable(getattr(nominal, "to_dict", None)):
             return self
-        saved = stored_map(self, type(nominal), 4000)
+        saved = stored_map(self, type(nominal))
         if "omitted" in saved:
             return self
         build = affine_build(saved, nominal.to_dict(), type(nominal), self.theta)

@@ -30,15 +30,11 @@ from typing import Any
 
 import numpy as np
 
-from .affine_map import affine_build, stored_map
+from .affine_map import MAX_PARAMETERS, affine_build, stored_map
 from .uncertainty import ParameterUncertainty
 
 __all__ = ["body_with_uncertainty", "model_from_body", "uncertainty_from_dict",
            "uncertainty_to_dict"]
-
-#: parameters beyond which the map is not written (2 p model builds on saving)
-MAX_PARAMETERS = 4000
-
 
 def uncertainty_to_dict(model: Any) -> dict[str, Any] | None:
     """The saved form of ``model.uncertainty`` (``None`` without one), or a dict

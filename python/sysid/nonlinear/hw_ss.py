@@ -129,11 +129,11 @@ def nlhw_ss(
     require_inputs_vary(exps, "nlhw_ss", getattr(data, "input_names", None))
     shift = use_offsets(offsets, fin + fout, exps)
     u0, y0 = record_means(exps) if shift else (np.zeros(m), np.zeros(p))
-    if not shift:  # the start's own check is silenced below with its other warnings
-        check_offsets(data if isinstance(data, IOData) else
-                      IOData([u for u, _ in exps], [y for _, y in exps], 1.0))
     if shift:
         exps = centred(exps, u0, y0)
+    else:  # the start's own check is silenced below with its other warnings
+        check_offsets(data if isinstance(data, IOData) else
+                      IOData([u for u, _ in exps], [y for _, y in exps], 1.0))
     records = []
     for u, y in exps:
         uu = u.copy()

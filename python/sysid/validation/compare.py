@@ -533,18 +533,25 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
         ys.append(y)
         yh.append(_run(runner, u, y, h, x))
         x0s.append(x)
-    for i, (_, y) in enumerate(recs):
+    require_outputs_vary([y for _, y in recs], getattr(model, "output_names", None))
+    return CompareResult(model, h, us, ys, yh, x0s)
+
+
+def require_outputs_vary(ys: list[np.ndarray], names: Any = None) -> None:
+    """Refuse records with an output that is constant in an experiment: a fit against it
+    (NRMSE against the mean) is undefined (:func:`compare`, and ``identify``'s validation
+    data before its search)."""
+    for i, y in enumerate(ys):
         flat = np.ptp(y, axis=0) == 0
         if flat.any():
-            names = getattr(model, "output_names", None) or [f"y{j}" for j in range(y.shape[1])]
+            names = names or [f"y{j}" for j in range(y.shape[1])]
             which = ", ".join(str(names[j]) for j in np.flatnonzero(flat))
             raise DataError(
                 f"output {which} is constant"
-                + (f" in experiment {i}" if len(recs) > 1 else "")
+                + (f" in experiment {i}" if len(ys) > 1 else "")
                 + ": the fit (NRMSE against the mean) is undefined for a constant signal; "
                 "compare on a record where the output varies, or look at the residuals"
             )
-    return CompareResult(model, h, us, ys, yh, x0s)
 
 
 def _simulator(model: Any, x0: Any, horizon: int | None, u: np.ndarray | None = None) -> Any:
