@@ -150,3 +150,18 @@ def test_a_record_that_excites_too_little_anywhere_gets_the_records_own_error():
     with pytest.raises(sysid.ExcitationError, match="not persistently exciting") as e:
         sysid.identify(sysid.IOData(u=u, y=y))
     assert "hold parts" not in str(e.value)
+
+
+def test_a_drift_the_input_does_not_explain_is_noted_and_a_clean_record_is_not():
+    # a stable second-order plant; the same record once with a slow sensor drift added to
+    # the output (a line the input does not explain, a sixth of the output's spread)
+    rng = np.random.default_rng(4)
+    plant = sysid.StateSpaceModel([[0.8, 0.3], [-0.3, 0.8]], [[1.0], [0.0]], [[1.0, 0.5]])
+    u = rng.standard_normal((800, 1))
+    y = plant.simulate(u) + 0.05 * rng.standard_normal((800, 1))
+    drift = np.linspace(0.0, 1.0, 800)[:, None] * y.std()
+    clean = sysid.identify(sysid.IOData(u=u, y=y), refine=False, progress=False)
+    drifting = sysid.identify(sysid.IOData(u=u, y=y + drift), refine=False, progress=False)
+    assert "trend" not in clean.checks
+    assert "detrend" in drifting.checks["trend"] and "y0" in drifting.checks["trend"]
+    assert "drifts in a way the input does not explain" in drifting.summary()

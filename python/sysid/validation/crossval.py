@@ -288,6 +288,40 @@ def _free_responses(model: Any, count: int) -> np.ndarray:
     return out
 
 
+def trend_share(model: Any, data: IOData) -> tuple[np.ndarray, np.ndarray]:
+    """Per output, what a straight line per output and experiment takes out of ``model``'s
+    simulation errors on ``data`` (initial state and an offset fitted,
+    :func:`simulation_errors`): as a share of those errors' sum of squares, and of the
+    output's own variation. Near 0 when the model explains the record's slow movements,
+    large when the output drifts in a way the input does not explain. Raises when the model
+    cannot be simulated on the data.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.crossval import trend_share
+    >>> rng = np.random.default_rng(0)
+    >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    >>> u = rng.standard_normal(400)
+    >>> y = m.simulate(u) + 0.1 * rng.standard_normal((400, 1))
+    >>> float(trend_share(m, sysid.IOData(u=u, y=y))[0][0]) < 0.05
+    True
+    >>> ramp = y + np.linspace(0.0, 2.0, 400)[:, None]  # a drift the input does not explain
+    >>> of_errors, of_output = trend_share(m, sysid.IOData(u=u, y=ramp))
+    >>> float(of_errors[0]) > 0.5, float(of_output[0]) > 0.1
+    (True, True)
+    """
+    flat = simulation_errors(model, data)
+    line = simulation_errors(model, data, trend=True)
+    ss0 = sum(np.sum(e ** 2, axis=0) for _, e in flat)
+    ss1 = sum(np.sum(e ** 2, axis=0) for _, e in line)
+    sy = sum(np.sum((y - y.mean(0)) ** 2, axis=0) for y, _ in flat)
+    with np.errstate(all="ignore"):
+        of_errors = np.where(ss0 > 0, 1.0 - ss1 / np.where(ss0 > 0, ss0, 1.0), 0.0)
+        of_output = np.where(sy > 0, (ss0 - ss1) / np.where(sy > 0, sy, 1.0), 0.0)
+    return np.clip(of_errors, 0.0, 1.0), np.clip(of_output, 0.0, 1.0)
+
+
 def simulation_fit(model: Any, data: IOData, trend: bool = False) -> float:
     """Held-out simulation fit (NRMSE %, mean over outputs and experiments); ``-inf`` for a
     model that diverges (a model with a pole just outside the unit circle is scored on what
