@@ -59,8 +59,14 @@ from ..errors import DataError, ExcitationError, InsufficientDataError, Numerica
 from ..models.statespace import ss_parameter_count
 from ..subspace.estimator import available_horizon
 from ..validation.compare import require_outputs_vary
-from ..validation.crossval import (MAX_ORDER, TOL, fold_horizon, record_folds, simulation_fit,
-                                   trend_share)
+from ..validation.crossval import (
+    MAX_ORDER,
+    TOL,
+    fold_horizon,
+    record_folds,
+    simulation_fit,
+    trend_share,
+)
 from .board import Board, bic
 from .result import IdentifiedModel, IdentifyResult, _family
 
