@@ -39,6 +39,8 @@
    An unstable candidate that wins only while the record's drift is left in is not one
    the data insist on (``checks["drift"]`` says so).
    ``validation`` data, when given, are only reported on.
+5. The chosen model's simulation errors on the record are checked for a drift the input does
+   not explain (:func:`_trend_check`, ``checks["trend"]``).
 """
 
 from __future__ import annotations
