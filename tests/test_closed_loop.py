@@ -276,3 +276,27 @@ def test_closed_loop_order_auto_is_cross_validated(method):
         warnings.simplefilter("ignore")
         r = getattr(sysid, method)(data, regularization="ridge")
     assert "order_selection" not in r.info
+
+
+@pytest.mark.parametrize("method", ["pbsid", "ssarx"])
+def test_a_noise_model_with_an_unstable_predictor_is_replaced_by_its_minimum_phase_factor(
+        method):
+    # on the robot arm (real record) the least-squares K of every low order leaves
+    # A - K C unstable: predictions and residuals diverged. The noise spectrum's minimum-phase
+    # factor reflects the predictor's poles outside the unit circle to 1 / |pole|
+    d = sysid.datasets.load_robot_arm()
+    data = sysid.IOData(u=d.u - d.u.mean(0), y=d.y - d.y.mean(0))
+    m = sysid.SubspaceEstimator(data, method=method).fit(2)
+    note = m.info["predictor_stabilized"]
+    assert note["before"] > 1.05
+    rho = np.max(np.abs(np.linalg.eigvals(m.A - m.K @ m.C)))
+    assert rho == pytest.approx(note["after"]) and rho < 1.0
+    # order 2: both predictor poles were outside (a pair) or one was; either way the
+    # reflected modulus is the reciprocal of the one it replaces
+    ls_k = m.info["S"] @ np.linalg.inv(m.info["R"])
+    before = np.abs(np.linalg.eigvals(m.A - ls_k @ m.C))
+    after = np.sort(np.abs(np.linalg.eigvals(m.A - m.K @ m.C)))
+    expected = np.sort(np.where(before > 1.0, 1.0 / before, before))
+    np.testing.assert_allclose(after, expected, rtol=1e-4)
+    fit = sysid.compare(m, data, horizon=1).fit
+    assert np.all(np.isfinite(fit)) and np.min(fit) > 50.0

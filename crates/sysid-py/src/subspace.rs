@@ -32,6 +32,7 @@ pub fn identified_dict<'py>(py: Python<'py>, id: &Identified) -> PyResult<Bound<
         d.set_item(key, mat_to_numpy(py, m))?;
     }
     d.set_item("stabilized", id.stabilized)?;
+    d.set_item("predictor_stabilized", id.predictor_stabilized)?;
     Ok(d)
 }
 

@@ -137,4 +137,22 @@ def closed_loop_fit(
         info=info,
     )
     warn_unstable(model, method, closed_loop=True)
+    if kalman and res.get("predictor_stabilized"):
+        _note_predictor(model, res)
     return model
+
+
+def _note_predictor(model: StateSpaceModel, res: dict[str, Any]) -> None:
+    """The least-squares ``K`` of a closed-loop fit left the one-step predictor ``A - K C``
+    unstable (a noise model with zeros outside the unit circle: every prediction and residual
+    would diverge); the core replaced it by the stabilising Kalman gain of the same noise
+    spectrum, the minimum-phase innovation model (Re grows by the reflected zeros' squared
+    moduli). ``info["predictor_stabilized"]`` records the predictor's largest pole modulus
+    before and after."""
+    A, C = np.asarray(res["A"]), np.asarray(res["C"])
+    K_ls = np.asarray(res["S"]) @ np.linalg.inv(np.asarray(res["R"]))  # S = K Re
+    model.info["predictor_stabilized"] = {
+        "before": float(np.max(np.abs(np.linalg.eigvals(A - K_ls @ C)))),
+        "after": float(np.max(np.abs(np.linalg.eigvals(A - np.asarray(model.K) @ C)))),
+        "why": "the least-squares K gave an unstable one-step predictor; K is the "
+               "stabilising Kalman gain of the same noise spectrum (its minimum-phase factor)"}

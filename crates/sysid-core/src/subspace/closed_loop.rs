@@ -29,7 +29,9 @@
 //!   e(t+i)`, then a canonical correlation analysis between `ỹ_f` and `z_p` gives the state.
 //!
 //! Finally `C, D` come from `y(t) = C x(t) + D u(t) + e(t)` and `A, B, K` from
-//! `x(t+1) = A x(t) + B u(t) + K e(t)` by least squares; `K` needs no Riccati equation.
+//! `x(t+1) = A x(t) + B u(t) + K e(t)` by least squares; `K` needs no Riccati equation
+//! unless it leaves the predictor `A - K C` unstable, when [`stable_predictor`] replaces it by
+//! the stabilising Kalman gain of the same noise spectrum.
 //!
 //! Everything works on the triangular factor `L` of the block-Hankel matrix ([`crate::hankel`])
 //! with the current time at the first future block: every regression above is between
@@ -538,6 +540,11 @@ impl ClosedLoop {
         crate::linalg::symmetrize(&mut re);
         let q = &k * &re * k.transpose();
         let s = &k * &re;
+        let (k, innovation_cov, predictor_stabilized) =
+            match stable_predictor(a.as_ref(), c.as_ref(), k.as_ref(), re.as_ref()) {
+                Some((k2, cov)) => (k2, cov, true),
+                None => (k, re.clone(), false),
+            };
         let sys = StateSpace::new(a, b, c, d).map_err(|_| {
             SysidError::numerical(
                 "system matrices",
@@ -547,13 +554,58 @@ impl ClosedLoop {
         Ok(Identified {
             sys,
             k: Some(k),
-            innovation_cov: Some(re.clone()),
+            innovation_cov: Some(innovation_cov),
             q,
             r: re,
             s,
             stabilized: false,
+            predictor_stabilized,
         })
     }
+}
+
+/// The stabilising gain when the least-squares `K` leaves the predictor `A - K C` unstable
+/// (a noise model `I + C (zI - A)^{-1} K` with zeros outside the unit circle): the Kalman
+/// gain and innovation covariance of the same noise spectrum, `Q = K Re K^T`, `S = K Re`,
+/// `R = Re`, whose stabilising Riccati solution reflects those zeros into the unit circle
+/// (the minimum-phase spectral factor; Re grows by the reflected zeros' squared moduli).
+/// `Q - S R^{-1} S^T` is zero for these covariances, where the doubling iteration stays at the
+/// non-stabilising solution `P = 0`: a nudge of `1e-10` of `Q`'s scale (at least `1e-12` of
+/// `Re`'s, mapped through `K`) makes the solution unique, an `O(1e-10)` change. `None` when the
+/// predictor is stable already (or not finite), or no stabilising gain is found.
+///
+/// ```
+/// use faer::mat;
+/// use sysid_core::subspace::closed_loop::stable_predictor;
+/// // H(z) = (z - 1.2) / (z - 0.5): its minimum-phase factor is (z - 1/1.2) / (z - 0.5),
+/// // with the innovation variance 1.2^2 times larger
+/// let (k, re) = stable_predictor(mat![[0.5]].as_ref(), mat![[1.0]].as_ref(),
+///                                mat![[-0.7]].as_ref(), mat![[1.0]].as_ref()).unwrap();
+/// assert!((k[(0, 0)] - (0.5 - 1.0 / 1.2)).abs() < 1e-6);
+/// assert!((re[(0, 0)] - 1.44).abs() < 1e-6);
+/// ```
+pub fn stable_predictor(
+    a: MatRef<'_, f64>,
+    c: MatRef<'_, f64>,
+    k: MatRef<'_, f64>,
+    re: MatRef<'_, f64>,
+) -> Option<(Mat<f64>, Mat<f64>)> {
+    let n = a.nrows();
+    let akc = a - k * c;
+    let rho = crate::linalg::spectral_radius(akc.as_ref()).ok()?;
+    if !rho.is_finite() || rho < 1.0 {
+        return None;
+    }
+    let mut q = k * re * k.transpose();
+    let scale = (0..n).map(|i| q[(i, i)]).sum::<f64>() / n.max(1) as f64;
+    let floor = 1e-12 * (0..re.nrows()).map(|i| re[(i, i)]).sum::<f64>();
+    let eps = 1e-10 * scale.max(floor).max(f64::MIN_POSITIVE);
+    for i in 0..n {
+        q[(i, i)] += eps;
+    }
+    let s = k * re;
+    let sol = crate::riccati::kalman_gain(a, c, q.as_ref(), re, s.as_ref()).ok()?;
+    Some((sol.k, sol.innovation_cov))
 }
 
 #[cfg(test)]

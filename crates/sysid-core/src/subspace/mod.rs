@@ -145,6 +145,10 @@ pub struct Identified {
     pub s: Mat<f64>,
     /// True when stability enforcement changed A.
     pub stabilized: bool,
+    /// True when the noise model's first estimate of K gave an unstable predictor
+    /// `A - K C` and K was replaced by the stabilising Kalman gain of the estimated noise
+    /// covariances (closed-loop methods, whose K comes from least squares).
+    pub predictor_stabilized: bool,
 }
 
 /// The weighted SVD of a compressed record, ready to fit models of any order.

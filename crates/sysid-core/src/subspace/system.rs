@@ -334,6 +334,7 @@ pub fn identify(
         r,
         s,
         stabilized,
+        predictor_stabilized: false,
     })
 }
 
