@@ -2,6 +2,8 @@
 (each from rest), MIMO / multi-experiment / closed-loop iv4, 2 x 2 ARMAX, OE and BJ, and
 Monte Carlo calibration of the predicted standard deviations."""
 
+import warnings
+
 import numpy as np
 import pytest
 from scipy import optimize, signal
@@ -374,3 +376,25 @@ def test_coupled_mimo_arx_has_frequency_response_zeros_and_a_state_space_form():
     np.testing.assert_allclose(s2.simulate(u1), m2.simulate(u1), atol=1e-12)
     y2 = m2.simulate(u1) + rng.standard_normal((50, 2))
     np.testing.assert_allclose(s2.predict(u1, y2, 1), m2.predict(u1, y2, 1), atol=1e-12)
+
+
+def test_a_several_input_output_error_fit_reaches_the_noise_floor_from_its_default_start():
+    # three inputs, coloured and correlated, each through its own second-order B/F: from the
+    # least-squares impulse responses with F = 1 alone the search settled at 4.6 times the
+    # cost of the true system; the Gauss-Seidel Steiglitz-McBride start (and the better of
+    # both searches) reaches the noise floor, as an output-error fit should
+    rng = np.random.default_rng(7)
+    n, m = 600, 3
+    u = rng.standard_normal((n, m))
+    u = signal.lfilter([1.0], [1.0, -0.8], u, axis=0) + 0.5 * u[:, [1, 2, 0]]
+    y = np.zeros(n)
+    for j in range(m):
+        r, th = rng.uniform(0.6, 0.97), rng.uniform(0.0, 0.8)
+        f = np.poly([r * np.exp(1j * th), r * np.exp(-1j * th)]).real
+        y += signal.lfilter([0.0, rng.normal(), rng.normal()], f, u[:, j])
+    e = 0.3 * y.std() * rng.standard_normal(n)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fit = sysid.oe(sysid.IOData(u=u, y=y + e), [2] * m, [2] * m, [1] * m)
+    floor = 0.5 * np.sum(e**2)  # the cost at the true parameters
+    assert fit.info["cost"][0][-1] <= 1.01 * floor

@@ -6,7 +6,7 @@ use faer::{Mat, MatRef};
 use super::filter::{conv, filter, is_stable, monic};
 use crate::error::{check_io, Result, SysidError};
 use crate::linalg::QrAccumulator;
-use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution};
+use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution, StopReason};
 
 /// Orders of `A y = sum B_j/F_j u_j(t-nk_j) + C/D e` for one output.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -446,6 +446,53 @@ fn stable_or_zero(c: Vec<f64>) -> Vec<f64> {
     }
 }
 
+/// Sweeps of Gauss-Seidel over the inputs of a several-input output-error part: each input's
+/// `B_j / F_j` by Steiglitz-McBride on what the other inputs' current parts leave of the
+/// target (whose `F` stays stable), `GS_SWEEPS` times. The least-squares impulse responses
+/// with `F = 1` (`b`, `f`) start it, and are returned instead when the sweeps do not lower the
+/// simulation error: from `F = 1` the search settled in poor local minima on real
+/// several-input records (four times the cost of an ARX-started search on a steam
+/// generator, a pole of `F` on the unit circle on an industrial dryer).
+fn gauss_seidel_start(
+    target: &Sig,
+    x: &[Sig],
+    o: &MisoOrders,
+    b: Vec<Vec<f64>>,
+    f: Vec<Vec<f64>>,
+) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
+    let cost = |b: &[Vec<f64>], f: &[Vec<f64>]| -> f64 {
+        minus_filtered(target, x, b, f)
+            .iter()
+            .map(|e| e.iter().map(|v| v * v).sum::<f64>())
+            .sum()
+    };
+    let start = cost(&b, &f);
+    let (mut b2, mut f2) = (b.clone(), f.clone());
+    for _ in 0..GS_SWEEPS {
+        for j in 0..x.len() {
+            let mut others = b2.clone();
+            others[j] = vec![0.0; o.nb[j]];
+            let rest = minus_filtered(target, x, &others, &f2);
+            match steiglitz_mcbride_multi(&rest, &x[j], o.nb[j], o.nf[j], 30) {
+                Ok((bj, fj)) => {
+                    b2[j] = bj;
+                    f2[j] = fj;
+                }
+                Err(_) => return (b, f),
+            }
+        }
+    }
+    let swept = cost(&b2, &f2);
+    if swept.is_finite() && swept < start && f2.iter().all(|fj| is_stable(&monic(fj))) {
+        (b2, f2)
+    } else {
+        (b, f)
+    }
+}
+
+/// Gauss-Seidel sweeps over the inputs of [`gauss_seidel_start`].
+const GS_SWEEPS: usize = 3;
+
 /// `target - sum_j B_j/F_j x_j` per experiment.
 fn minus_filtered(target: &Sig, x: &[Sig], b: &[Vec<f64>], f: &[Vec<f64>]) -> Sig {
     let mut v = target.clone();
@@ -470,6 +517,16 @@ pub fn initial_guess(y: &[f64], u: MatRef<'_, f64>, o: &MisoOrders) -> Result<Ve
 pub fn initial_guess_multi(
     experiments: &[(&[f64], MatRef<'_, f64>)],
     o: &MisoOrders,
+) -> Result<Vec<f64>> {
+    guess_multi(experiments, o, true)
+}
+
+/// [`initial_guess_multi`]; without `sweep`, the least-squares impulse responses with `F = 1`
+/// start the output-error part of several inputs (no [`gauss_seidel_start`]).
+fn guess_multi(
+    experiments: &[(&[f64], MatRef<'_, f64>)],
+    o: &MisoOrders,
+    sweep: bool,
 ) -> Result<Vec<f64>> {
     check_experiments(experiments, o)?;
     let m = experiments[0].1.ncols();
@@ -557,6 +614,9 @@ pub fn initial_guess_multi(
                 b[j] = th[i..i + o.nb[j]].to_vec();
                 i += o.nb[j];
             }
+            if sweep {
+                (b, f) = gauss_seidel_start(&ya, &x, o, b, f);
+            }
         }
         if o.nc > 0 || o.nd > 0 {
             let v = minus_filtered(&ya, &x, &b, &f);
@@ -641,7 +701,23 @@ pub fn estimate_multi(
         }
         th0 = vec![0.0; orders.n_params()];
     }
-    let solution = minimize(&mut prob, &th0, options, observer)?;
+    let mut solution = minimize(&mut prob, &th0, options, observer)?;
+    // several inputs with an output-error part: the search also runs from the least-squares
+    // impulse responses with F = 1, and the lower final cost is kept (neither start reaches
+    // the better minimum on every record: the sweeps' start lowered a steam generator's cost
+    // fourfold and raised a winding process's by a quarter)
+    let several =
+        experiments.first().is_some_and(|e| e.1.ncols() > 1) && orders.nf.iter().any(|&f| f > 0);
+    if theta0.is_none() && several && solution.stop != StopReason::Cancelled {
+        let alt = guess_multi(experiments, &orders, false)?;
+        if alt != th0 && prob.admissible(&alt) {
+            let other = minimize(&mut prob, &alt, options, observer)?;
+            if other.cost < solution.cost * (1.0 - 1e-9) {
+                solution = other;
+                th0 = alt;
+            }
+        }
+    }
     let n: usize = experiments.iter().map(|e| e.0.len()).sum();
     let noise_variance = 2.0 * solution.cost / n as f64;
     let cov = crate::optim::covariance(solution.gauss_newton.as_ref(), noise_variance, 1e-10)?;
