@@ -171,6 +171,17 @@ def test_product_only_parameters_are_named():
     # intervals that excluded the truth), as tfest reports them
     assert np.all(np.isinf(fit.parameters.std))
     assert abs(np.prod(fit.parameters.value) - 2.0) < 0.02
+    # the model's own uncertainty says the same (its table showed 0.00124 each), keeps it
+    # through saving and pickling, and still propagates to what the data determine: the pole
+    unc = fit.model.uncertainty
+    assert np.all(np.isinf(unc.std)) and np.all(np.isinf(unc.to_pandas()["std"]))
+    assert "inf" in unc.summary() and np.all(np.isnan(unc.correlation))
+    import pickle
+    assert np.all(np.isinf(pickle.loads(pickle.dumps(fit.model)).uncertainty.std))
+    assert np.all(np.isinf(sysid.model_from_dict(sysid.model_to_dict(fit.model))
+                           .uncertainty.std))
+    _, pole_sd = fit.model.poles(std=True)
+    assert np.all(np.isfinite(pole_sd)) and abs(pole_sd[0]) < 0.05
     # fixing one of them removes the warning
     s = sysid.GreyBox(prod, {"a": sysid.fixed(1.0), "b": 1.5})
     with warnings.catch_warnings():

@@ -117,7 +117,8 @@ class OuterParameters:
         model = make(est, vals, info)
         model.uncertainty = ParameterUncertainty(
             [vals[k] for k in self.free], cov, build, names=list(self.free),
-            dof=min(int(res["rank"]), nf), method="gauss-newton")
+            dof=min(int(res["rank"]), nf), method="gauss-newton",
+            undetermined=[i for i in weak if i < nf])
         return table, cov, est, model
 
 

@@ -482,5 +482,5 @@ def d2c(model: StateSpaceModel, method: str = "zoh") -> ContinuousStateSpace:
         build = unc.build
         out.uncertainty = ParameterUncertainty(
             unc.theta, unc.covariance, lambda t: d2c(build(t), method), names=unc.names,
-            dof=unc.dof, method=unc.method)
+            dof=unc.dof, method=unc.method, undetermined=unc.undetermined)
     return out

@@ -101,6 +101,12 @@ class ParameterUncertainty(HTMLResult):
     method : str
         How the covariance was obtained (``"gauss-newton"``, ``"least-squares"``,
         ``"bootstrap"``, ``"instrumental-variable"``, ...); informational.
+    undetermined : sequence of int, optional
+        Parameters the data do not determine (they lie along a direction that does not
+        change the fit: a grey-box or transfer-function parameterisation that is not
+        identifiable). Their :attr:`std` is inf; the covariance itself (the minimum-norm one
+        on the determined directions) still propagates to poles, responses and the other
+        functions of the model, which the data do determine.
 
     Examples
     --------
@@ -123,6 +129,7 @@ class ParameterUncertainty(HTMLResult):
         names: Sequence[str] | None = None,
         dof: int | None = None,
         method: str = "gauss-newton",
+        undetermined: Sequence[int] = (),
     ) -> None:
         th = np.asarray(theta, dtype=float).ravel()
         P = np.asarray(covariance, dtype=float)
@@ -156,6 +163,10 @@ class ParameterUncertainty(HTMLResult):
                 self._eigen()      # raises with the eigenvalues
         self.dof = int(self._w.size) if dof is None else int(dof)
         self.method = str(method)
+        self.undetermined = sorted({int(i) for i in undetermined})
+        if any(not 0 <= i < p for i in self.undetermined):
+            raise DataError(f"undetermined holds indices outside 0..{p - 1}: "
+                            f"{self.undetermined}")
         self._cache: tuple[list[float], list[Any], list[Any]] | None = None
 
     def __reduce__(self) -> Any:
@@ -172,7 +183,8 @@ class ParameterUncertainty(HTMLResult):
         except (pickle.PicklingError, AttributeError, TypeError, RecursionError):
             unc = self._affine()
         return (ParameterUncertainty, (unc.theta, unc.covariance, unc.build),
-                {"names": unc.names, "dof": unc.dof, "method": unc.method})
+                {"names": unc.names, "dof": unc.dof, "method": unc.method,
+                 "undetermined": unc.undetermined})
 
     def _affine(self) -> ParameterUncertainty:
         """This uncertainty with ``build`` replaced by its measured affine map (what
@@ -189,10 +201,12 @@ class ParameterUncertainty(HTMLResult):
         method = self.method + ("" if saved["linear"] else
                                 " (pickled: first-order map of a nonlinear parameterisation)")
         return ParameterUncertainty(self.theta, self.covariance, build, names=self.names,
-                                    dof=self.dof, method=method)
+                                    dof=self.dof, method=method,
+                                    undetermined=self.undetermined)
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.names, self.dof, self.method = state["names"], state["dof"], state["method"]
+        self.undetermined = list(state.get("undetermined", []))
 
     def __copy__(self) -> ParameterUncertainty:
         new = object.__new__(ParameterUncertainty)
@@ -242,16 +256,22 @@ class ParameterUncertainty(HTMLResult):
 
     @property
     def std(self) -> np.ndarray:
-        """Standard deviation of each free parameter, shape ``(p,)``."""
-        return np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+        """Standard deviation of each free parameter, shape ``(p,)``; inf for the parameters
+        the data do not determine (``undetermined``)."""
+        sd = np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
+        sd[getattr(self, "undetermined", [])] = np.inf
+        return sd
 
     @property
     def correlation(self) -> np.ndarray:
-        """Correlation matrix of the parameters (NaN rows/columns where a std is zero)."""
-        s = self.std
+        """Correlation matrix of the parameters (NaN rows/columns where a std is zero or the
+        parameter is undetermined)."""
+        s = np.sqrt(np.clip(np.diag(self.covariance), 0.0, None))
         with np.errstate(divide="ignore", invalid="ignore"):
             out = self.covariance / np.outer(s, s)
         out[np.outer(s, s) == 0] = np.nan
+        out[self.undetermined, :] = np.nan
+        out[:, self.undetermined] = np.nan
         return out
 
     @property

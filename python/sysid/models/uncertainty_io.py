@@ -48,7 +48,8 @@ def uncertainty_to_dict(model: Any) -> dict[str, Any] | None:
     if "omitted" in saved:
         return saved
     return {"theta": unc.theta, "covariance": unc.covariance, "names": list(unc.names),
-            "dof": int(unc.dof), "method": unc.method, **saved}
+            "dof": int(unc.dof), "method": unc.method,
+            "undetermined": list(getattr(unc, "undetermined", [])), **saved}
 
 
 def uncertainty_from_dict(saved: dict[str, Any], body: dict[str, Any], cls: type,
@@ -71,7 +72,8 @@ def uncertainty_from_dict(saved: dict[str, Any], body: dict[str, Any], cls: type
     if not saved.get("linear", True):
         method += " (restored: first-order map of a nonlinear parameterisation)"
     return ParameterUncertainty(theta, saved["covariance"], build, names=saved.get("names"),
-                                dof=saved.get("dof"), method=method)
+                                dof=saved.get("dof"), method=method,
+                                undetermined=saved.get("undetermined", ()))
 
 
 def body_with_uncertainty(model: Any) -> dict[str, Any]:

@@ -351,8 +351,9 @@ def _info(results: list[dict[str, Any]], auto: bool, hold: str, x0: str) -> dict
 
 
 def _attach(G: TransferFunction, tables: list[Any], covs: list[np.ndarray], auto: bool) -> None:
-    names, values, stds = [], [], []
+    names, values, stds, undetermined = [], [], [], []
     for (nm, res), cov in zip(tables, covs):
+        undetermined += [len(names) + int(i) for i in res.get("unidentifiable", [])]
         v = np.concatenate([np.concatenate(res["p"]),
                             [res["delays"][j] for j in res["delay_index"]]])
         names += nm
@@ -388,7 +389,8 @@ def _attach(G: TransferFunction, tables: list[Any], covs: list[np.ndarray], auto
                                 input_names=proto.input_names,
                                 output_names=proto.output_names)
 
-    G.uncertainty = ParameterUncertainty(theta, P, build, names=names)
+    G.uncertainty = ParameterUncertainty(theta, P, build, names=names,
+                                         undetermined=undetermined)
 
 
 def _periodic(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
