@@ -380,3 +380,31 @@ def test_a_pole_zero_cancellation_within_the_uncertainty_is_said():
         warnings.simplefilter("error")
         m = sysid.oe(d, 1, 1, 1)
     np.testing.assert_allclose(m.poles().real, [0.85], atol=0.01)
+
+
+def test_pem_refuses_a_delay_that_leaves_too_few_samples():
+    """arx's sample count (N - largest lag >= parameters + 1) for oe/armax/bj: on 100
+    samples armax(2, 2, 1, 98) returned b = [-7.19, -19.68] and nk = 99 a b exactly 0 with
+    std 0, without a word."""
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(100)
+    y = signal.lfilter([0, 1, 0.5], [1, -1.5, 0.7], u) + 0.1 * rng.standard_normal(100)
+    d = _data(y, u)
+    with pytest.raises(sysid.InsufficientDataError, match="smaller orders and delays"):
+        sysid.armax(d, 2, 2, 1, 98)
+    with pytest.raises(sysid.InsufficientDataError, match="4 parameters and lags up to 100"):
+        sysid.oe(d, 2, 2, 99)
+    # the boundary: oe(2, 2, nk) has 4 parameters and its largest lag is nk + 1, so it
+    # needs 100 - (nk + 1) >= 5: nk = 94 is the last delay it takes (arx's own limit)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = sysid.oe(d, 2, 2, 94)
+        sysid.arx(d, 0, 2, 96)  # arx: 100 - 97 >= 2 + 1
+    assert np.all(np.isfinite(m.b[0][0]))
+    with pytest.raises(sysid.InsufficientDataError, match="needs at least 5 samples past"):
+        sysid.oe(d, 2, 2, 95)
+    with pytest.raises(sysid.InsufficientDataError, match="at least 7 samples past its "
+                       "largest lag but got 4"):
+        sysid.bj(d, 2, 1, 1, 2, 95)
+    with pytest.raises(sysid.InsufficientDataError):
+        sysid.arx(d, 0, 2, 97)
