@@ -408,3 +408,31 @@ def test_pem_refuses_a_delay_that_leaves_too_few_samples():
         sysid.bj(d, 2, 1, 1, 2, 95)
     with pytest.raises(sysid.InsufficientDataError):
         sysid.arx(d, 0, 2, 97)
+
+
+def test_arxstruc_refuses_several_outputs_and_ranks_what_arx_builds():
+    """arxstruc on 3-output data summed the losses of a diagonal-A model (12 parameters
+    where arx(d, 1, 1, 1) builds a coupled A with 18): it takes one output, whose table
+    rows are arx's own loss and parameter count."""
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal((400, 2))
+    y = np.column_stack([signal.lfilter([0, 1.0], [1, -0.6], u[:, 0]),
+                         signal.lfilter([0, 0.3, 0.2], [1, -0.4], u[:, 1])])
+    y += 0.05 * rng.standard_normal(y.shape)
+    d = sysid.IOData(u, y, 1.0, output_names=["flow", "temp"])
+    with pytest.raises(DataError, match=r"2 outputs \(flow, temp\): rank one output at a "
+                       r"time, sysid.arxstruc\(data.select\(outputs='flow'\)"):
+        sysid.arxstruc(d, [1, 2], [1, 2], [1])
+    one = d.select(outputs="temp")
+    table = sysid.arxstruc(one, [1, 2], [1, 2], [1])
+    yt = y[:, 1]
+    for na, nb, nk, loss, p in table:
+        na, nb, nk = int(na), int(nb), int(nk)
+        assert p == sysid.arx(one, na, nb, nk).n_parameters
+        # least squares by numpy on the rows the one compression keeps (t >= 2)
+        t = np.arange(2, 400)
+        phi = np.column_stack([-yt[t - k] for k in range(1, na + 1)]
+                              + [u[t - nk - k, j] for j in range(2) for k in range(nb)])
+        r = yt[t] - phi @ np.linalg.lstsq(phi, yt[t], rcond=None)[0]
+        np.testing.assert_allclose(loss, r @ r / t.size, rtol=1e-9)
+    assert sysid.selstruc(table, "bic")[1] == 2  # temp's B has two coefficients

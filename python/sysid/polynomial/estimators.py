@@ -444,7 +444,10 @@ def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
     """Loss of every ARX structure in the ranges, from one compression.
 
     Returns rows ``[na, nb, nk, loss, n_parameters]`` (loss: mean squared residual);
-    structures whose regression is rank deficient are left out.
+    structures whose regression is rank deficient are left out. Single-output data only (as
+    MATLAB's ``arxstruc``): rank one output at a time (``data.select(outputs=k)``), or choose
+    a multi-output model's order with ``sysid.n4sid(data, order="auto")`` or
+    ``sysid.ssest(data, order="auto")``.
 
     Examples
     --------
@@ -461,6 +464,15 @@ def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
     """
     data = as_record(data)  # a (u, y) pair, as ssest and compare take
     exps = experiment_arrays(data)
+    ny = exps[0][1].shape[1]
+    if ny > 1:  # the Rust table sums per-output losses of a diagonal-A model arx does not build
+        names = getattr(data, "output_names", None) or [f"y{i}" for i in range(ny)]
+        raise DataError(
+            f"arxstruc ranks single-output ARX structures, and the data have {ny} outputs "
+            f"({', '.join(map(str, names))}): rank one output at a time, "
+            f"sysid.arxstruc(data.select(outputs={names[0]!r}), na, nb, nk), or choose a "
+            "multi-output model's order with sysid.n4sid(data, order='auto') or "
+            "sysid.ssest(data, order='auto')")
     check_offsets(data)
     rng = [list(map(int, np.atleast_1d(v))) for v in (na, nb, nk)]
     out = np.asarray(_sysid.arx_struc(exps, *rng)).view(StructureTable)
