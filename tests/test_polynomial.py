@@ -436,3 +436,23 @@ def test_arxstruc_refuses_several_outputs_and_ranks_what_arx_builds():
         r = yt[t] - phi @ np.linalg.lstsq(phi, yt[t], rcond=None)[0]
         np.testing.assert_allclose(loss, r @ r / t.size, rtol=1e-9)
     assert sysid.selstruc(table, "bic")[1] == 2  # temp's B has two coefficients
+
+
+def test_repr_of_a_coupled_model_shows_every_entry_of_a():
+    """The repr printed only A's diagonal: glassfurnace's arx(2, 2, 1) showed
+    A(q) = 1 - 12.67 q^-1 + 12.21 q^-2 for y2 (roots of modulus 11.6) for a model whose
+    largest pole is 0.9913, with 60 coupling coefficients hidden."""
+    # A(q) = I + A1 q^-1 with A22 = 1 - 1.2 q^-1 alone "unstable"; the poles are the
+    # eigenvalues of -A1 = [[-0.6, -1], [0.9, 1.2]]: 0.3 +- 0.3i, modulus 0.4243
+    m = sysid.PolynomialModel([[[0.6], [1.0]], [[-0.9], [-1.2]]], [[[1.0]], [[0.5]]],
+                              [[1], [1]], 1.0)
+    np.testing.assert_allclose(np.abs(m.poles()), np.hypot(0.3, 0.3), rtol=1e-9)
+    text = repr(m)
+    for line in ["y2: A21(q) y1(t) + A22(q) y2(t) = B1(q) u1(t-1) + e(t)",
+                 "A11(q) = 1 + 0.6 q^-1", "A12(q) = 1 q^-1", "A21(q) = -0.9 q^-1",
+                 "A22(q) = 1 - 1.2 q^-1", "row 2 of A, a 2x2 matrix polynomial"]:
+        assert line in text
+    assert "A(q) =" not in text
+    diag = sysid.PolynomialModel([[[0.6], []], [[], [-0.5]]], [[[1.0]], [[0.5]]],
+                                 [[1], [1]], 1.0)
+    assert "A(q) = 1 - 0.5 q^-1" in repr(diag) and "A22" not in repr(diag)
