@@ -4,6 +4,8 @@ variant, interop with python-control and SciPy, save/load, and clear errors."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -392,3 +394,19 @@ def test_discrete_tfest_has_the_parameter_table_cost_and_uncertainty_of_the_cont
     np.testing.assert_allclose(again.freqresp(w), G.freqresp(w), rtol=1e-12)
     np.testing.assert_allclose(G.freqresp(w, std=True)[1], ref.freqresp(w, std=True)[1],
                                rtol=1e-6)
+
+
+def test_tfest_and_procest_caps_are_iteration_limit_warnings():
+    """tfest/procest warned on their iteration cap with a plain UserWarning subclass, so
+    simplefilter("error", sysid.IterationLimitWarning) (oe/armax/bj's cap) let them pass."""
+    true = sysid.TransferFunction([0.5, 2.0], [1.0, 0.8, 4.0])
+    u = np.random.default_rng(0).standard_normal(300)
+    y = true.simulate(u, dt=0.05) + 0.05 * np.random.default_rng(1).standard_normal((300, 1))
+    d = sysid.IOData(u, y, dt=0.05)
+    start = sysid.TransferFunction([0.3, 1.0], [1.0, 2.0, 2.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sysid.IterationLimitWarning)
+        with pytest.raises(sysid.IterationLimitWarning, match="max_iter=1 "):
+            sysid.tfest(d, 2, 1, init=start, max_iter=1)
+        with pytest.raises(sysid.IterationLimitWarning, match="max_iter=1 "):
+            sysid.procest(d, "P1D", max_iter=1)
