@@ -456,3 +456,22 @@ def test_repr_of_a_coupled_model_shows_every_entry_of_a():
     diag = sysid.PolynomialModel([[[0.6], []], [[], [-0.5]]], [[[1.0]], [[0.5]]],
                                  [[1], [1]], 1.0)
     assert "A(q) = 1 - 0.5 q^-1" in repr(diag) and "A22" not in repr(diag)
+
+
+def test_per_output_orders_of_another_shape_are_reported_as_given():
+    """armax(glassfurnace, 2 * ones((6, 6)), ...) said "na has shape (36, 1) but should be
+    (6, 1)": the shape the user gave, and that armax has one A per output."""
+    rng = np.random.default_rng(5)
+    u = rng.standard_normal((200, 1))
+    y = np.column_stack([signal.lfilter([0, 1.0], [1, -0.5], u[:, 0]),
+                         signal.lfilter([0, 0.5], [1, -0.3], u[:, 0])])
+    y += 0.1 * rng.standard_normal(y.shape)
+    d = sysid.IOData(u, y, 1.0)
+    with pytest.raises(sysid.ShapeError, match=r"na has shape \(2, 2\) but should be \(2,\) "
+                       r"or \(2, 1\) or a scalar: armax, bj and arma use one A polynomial per "
+                       r"output; a \(2, 2\) na, an A coupling the outputs, is sysid.arx's"):
+        sysid.armax(d, 2 * np.ones((2, 2), int), 1, 1, 1)
+    with pytest.raises(sysid.ShapeError, match=r"nd has shape \(3,\) .* one D polynomial"):
+        sysid.bj(d, 1, 1, [1, 1, 1], 1, 1)
+    a = sysid.armax(d, [[1], [1]], 1, [0, 0], 1)  # (ny, 1) and (ny,) still work
+    np.testing.assert_allclose([a.a[0][0][0], a.a[1][1][0]], [-0.5, -0.3], atol=0.06)

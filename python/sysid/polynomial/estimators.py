@@ -15,7 +15,7 @@ from .._checks import as_int, as_int_grid, experiment_arrays, require_inputs_var
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import as_record
 from ..data.offsets import check_offsets
-from ..errors import DataError, InsufficientDataError
+from ..errors import DataError, InsufficientDataError, ShapeError
 from .cancellation import cancellation, warn_cancellations
 from .model import PolynomialModel
 from .uncertainty import attach_uncertainty as _attach_uncertainty
@@ -26,8 +26,22 @@ def _grid(v: Any, ny: int, ncol: int, name: str) -> list[list[int]]:
 
 
 def _col(v: Any, ny: int, name: str) -> list[int]:
-    a = np.array(v, dtype=object)
-    return [r[0] for r in as_int_grid(a.reshape(-1, 1) if a.ndim else a, (ny, 1), name)]
+    """One order per output (``na``, ``nc``, ``nd`` of armax/bj/arma): a scalar, ``(ny,)`` or
+    ``(ny, 1)``; another shape is refused as given (it was reshaped first: a (6, 6) ``na``
+    was reported as (36, 1))."""
+    try:
+        a = np.array(v, dtype=object)
+    except (TypeError, ValueError):
+        a = None  # as_int_grid says what is wrong with it
+    if a is not None and a.ndim and a.shape not in ((ny,), (ny, 1)):
+        poly = name[1].upper()
+        coupled = (f"; a ({ny}, {ny}) na, an A coupling the outputs, is sysid.arx's"
+                   if poly == "A" else "")
+        raise ShapeError(f"{name} has shape {a.shape} but should be ({ny},) or ({ny}, 1) or a "
+                         f"scalar: armax, bj and arma use one {poly} polynomial per output"
+                         f"{coupled}")
+    return [r[0] for r in as_int_grid(a.reshape(-1, 1) if a is not None and a.ndim else v,
+                                      (ny, 1), name)]
 
 
 def arx(
