@@ -67,6 +67,7 @@ from ..validation.crossval import (
     TOL,
     fold_horizon,
     record_folds,
+    require_held_out_length,
     simulation_fit,
     trend_share,
 )
@@ -518,7 +519,7 @@ def identify(
                         f"allows), got {max_order!r}")
     if time_budget is not None and not (np.isfinite(time_budget) and time_budget > 0):
         raise DataError(f"time_budget must be a positive number of seconds, got {time_budget!r}")
-    _require_length(data)  # before the constant-channel checks: 1 sample is "constant"
+    require_held_out_length(data)  # before the channel checks: 1 sample is "constant"
     require_inputs_vary(data.experiments, "identify", data.input_names)
     validation = _checked_validation(validation, data)  # before the search, not after it
     centred, mu, my = _offsets(data)
@@ -658,18 +659,6 @@ def _trend_check(model: Any, data: IOData, checks: dict[str, Any]) -> None:
         f"errors ({100 * of_output[k]:.1f} % of the output's variation); if the drift is not "
         f"the plant's response (a sensor drift, a slow disturbance), remove it first "
         f"(sysid.detrend(data, 'linear')) and identify again")
-
-
-def _require_length(data: IOData) -> None:
-    """Refuse a record shorter than two held-out blocks (``2 * MIN_BLOCK`` samples) with the
-    reason, before any check of its channels: on one sample every channel is "constant"
-    (``identify`` on 1 sample said "input u0 is 0 in every sample")."""
-    n = sum(data.lengths)
-    if n < 2 * MIN_BLOCK:
-        raise InsufficientDataError(
-            f"the record is too short to hold out a part for the choice ({n} sample"
-            f"{'s' if n != 1 else ''}; two held-out blocks of {MIN_BLOCK} need "
-            f"{2 * MIN_BLOCK}); pass a longer record or fit one model directly")
 
 
 def _checked_validation(validation: Any, data: IOData) -> IOData | None:
