@@ -392,7 +392,8 @@ def test_pem_refuses_a_delay_that_leaves_too_few_samples():
     d = _data(y, u)
     with pytest.raises(sysid.InsufficientDataError, match="smaller orders and delays"):
         sysid.armax(d, 2, 2, 1, 98)
-    with pytest.raises(sysid.InsufficientDataError, match="4 parameters and lags up to 100"):
+    with pytest.raises(sysid.InsufficientDataError,
+                       match=r"4 parameters and lags up to 100 \(nk \+ nb - 1 = 99 \+ 2 - 1\)"):
         sysid.oe(d, 2, 2, 99)
     # the boundary: oe(2, 2, nk) has 4 parameters and its largest lag is nk + 1, so it
     # needs 100 - (nk + 1) >= 5: nk = 94 is the last delay it takes (arx's own limit)

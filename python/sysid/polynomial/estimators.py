@@ -251,15 +251,17 @@ def _require_samples(exps: Any, method: str, i: int, na: int, nb: list[int], nc:
     """The sample count :func:`arx` requires (``N - max lag >= n_params + 1``) for output
     ``i``'s search: a delay that leaves a handful of samples gave numbers without a
     warning (``armax`` on 100 samples with ``nk = 98``: ``b = [-7.19, -19.68]``)."""
-    delays = [k + n - 1 for n, k in zip(nb, nk) if n > 0]
-    lag = max([na, nc, nd, *nf, *delays], default=0)
+    lags = [(na, f"na = {na}"), (nc, f"nc = {nc}"), (nd, f"nd = {nd}")]
+    lags += [(n, f"nf = {n}") for n in nf]
+    lags += [(k + n - 1, f"nk + nb - 1 = {k} + {n} - 1") for n, k in zip(nb, nk) if n > 0]
+    lag, which = max(lags, key=lambda t: t[0])
     p = na + sum(nb) + nc + nd + sum(nf)
     rows = sum(max(y.shape[0] - lag, 0) for _, y in exps)
     if rows < p + 1:
         raise InsufficientDataError(
             f"too few samples: the {method} fit of output {i} with {p} parameters and lags up "
-            f"to {lag} needs at least {p + 1} samples past its largest lag but got {rows}; "
-            "use a longer record or smaller orders and delays")
+            f"to {lag} ({which}) needs at least {p + 1} samples past its largest lag but got "
+            f"{rows}; use a longer record or smaller orders and delays")
 
 
 def _pem(
