@@ -390,3 +390,22 @@ def test_a_nan_cell_and_a_wrong_delimiter_are_named(tmp_path, capsys):
     assert main(args + ["--delimiter", ";"]) == 2
     err = capsys.readouterr().err
     assert "header was read as one column" in err and "--delimiter" in err
+
+
+def test_a_short_file_is_too_short_before_its_channels_are_checked(tmp_path, capsys):
+    """A 3-row file (y = 2, 4, 6) said "output y is constant": the default split left one
+    validation sample. The lengths of the parts come first, with the numbers."""
+    path = tmp_path / "short.csv"
+    path.write_text("u,y\n1,2\n3,4\n5,6\n")
+    err = run_error(capsys, ["identify", str(path), "--inputs", "u", "--outputs", "y",
+                             "--report", str(tmp_path / "r")])
+    assert "the record is too short: it has 3 samples" in err and "constant" not in err
+    err = run_error(capsys, ["identify", str(path), "--inputs", "u", "--outputs", "y",
+                             "--method", "moesp", "--report", str(tmp_path / "r")])
+    assert "--split 0.5 leaves 1 validation sample of its 3" in err
+    rows = "\n".join(f"{np.sin(k)},{np.cos(k)}" for k in range(60))
+    path.write_text("u,y\n" + rows + "\n")
+    err = run_error(capsys, ["identify", str(path), "--inputs", "u", "--outputs", "y",
+                             "--report", str(tmp_path / "r")])
+    assert "--split 0.5 leaves 30 of its 60 samples for estimation" in err
+    assert "(at least 40)" in err

@@ -103,3 +103,20 @@ def test_input_output_spectra_of_a_record():
     np.testing.assert_allclose(model.freqresp(w), TRUE.freqresp(w), atol=1e-8)
     with pytest.raises(sysid.DataError, match="method"):
         sysid.frd_subspace(data, 3, method="fft")
+
+
+def test_weights_of_another_length_are_a_shape_error():
+    """weights=np.ones(5) with 60 frequencies raised numpy's "operands could not be
+    broadcast together with remapped shapes"; a single number is still every line's."""
+    w = np.linspace(0.0, np.pi / 0.1, 60)
+    frd = sysid.FRD(w, TRUE.freqresp(w), dt=0.1)
+    with pytest.raises(sysid.ShapeError, match=r"weights has shape \(5,\) but should be "
+                       r"\(60,\): one weight per frequency of the FRD, or a single number"):
+        sysid.frd_subspace(frd, 3, weights=np.ones(5), feedthrough=True)
+    one = sysid.frd_subspace(frd, 3, weights=2.0, feedthrough=True)
+    np.testing.assert_allclose(_poles(one), _poles(TRUE), atol=1e-8)
+    u = np.random.default_rng(0).standard_normal((200, 2))
+    data = sysid.IOData(u, TRUE.simulate(u), dt=0.1)
+    with pytest.raises(sysid.ShapeError, match=r"should be \(101,\): one weight per DFT "
+                       r"frequency of the 200-sample record"):
+        sysid.frd_subspace(data, 3, method="dft", weights=np.ones(7))

@@ -545,3 +545,30 @@ def test_nonlinear_result_is_a_model_and_plots():
     ax = fit.plot()
     assert len(ax.get_xticklabels()) == 2
     plt.close("all")
+
+
+def test_an_estimate_on_a_bound_has_its_interval_cut_there():
+    """c = 1 on its upper bound 1.0 printed [0.958, 1.042]: the 95 % interval is cut at the
+    bound, as procest's; a parameter off its bounds keeps value -+ 1.96 std."""
+    z = 1.959963984540054
+    motor, data = _motor_data()
+    s = sysid.GreyBox(motor, {"K": 1.0, "tau": sysid.param(0.1, bounds=(0.01, 0.2))})
+    t = sysid.greyest(data, s, x0="zero").parameters
+    tau, k = t["tau"], t["K"]
+    assert tau["bound"] == "upper" and tau["std"] > 0
+    assert tau["ci95"] == (pytest.approx(0.2 - z * tau["std"], rel=1e-12), 0.2)
+    assert k["ci95"] == pytest.approx((k["value"] - z * k["std"], k["value"] + z * k["std"]),
+                                      rel=1e-12)
+    assert f"[{0.2 - z * tau['std']:9.4g}, {0.2:9.4g}]" in str(t)
+    f, h = _pendulum()
+    rng = np.random.default_rng(6)
+    u = np.repeat(rng.standard_normal(30), 15)[:, None]
+    y = sysid.NonlinearGreyBox(f, h, {"w2": 9.0, "c": 0.4, "b": 2.0}, nx=2, x0=[0.5, 0]
+                               ).simulate(u, dt=0.05)
+    y = y + 0.01 * rng.standard_normal(y.shape)
+    s = sysid.NonlinearGreyBox(f, h, {"w2": 8.5, "c": sysid.param(0.1, bounds=(0.0, 0.3)),
+                                      "b": sysid.fixed(2.0)}, nx=2, x0=[0.5, 0.0],
+                               vectorized=True)
+    c = sysid.greyest(sysid.IOData(u=u, y=y, dt=0.05), s).parameters["c"]
+    assert c["bound"] == "upper" and c["std"] > 0
+    assert c["ci95"] == (pytest.approx(0.3 - z * c["std"], rel=1e-12), 0.3)

@@ -320,3 +320,19 @@ def test_forecast_of_the_identified_model_is_in_raw_units():
         res = sysid.identify(d.slice(0, 500), refine=False)
     f = sysid.forecast(res.model, d.slice(0, 500), 5, future_inputs=u[500:505] + 5.0)
     np.testing.assert_allclose(f.mean, y[500:505] + 50.0, atol=0.3)
+
+
+def test_identify_says_a_record_is_too_short_before_checking_its_channels():
+    """On 1 sample identify said "input u0 is 0 in every sample", and a 1-sample validation
+    record "output y0 is constant": the length is checked first, with the numbers."""
+    with pytest.raises(sysid.InsufficientDataError, match=r"too short to hold out a part for "
+                       r"the choice \(1 sample; two held-out blocks of 20 need 40\)"):
+        sysid.identify(sysid.IOData(u=np.array([0.0]), y=np.array([2.0])))
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(200)
+    y = np.convolve(u, [0.0, 1.0, 0.5])[:200] + 0.01 * rng.standard_normal(200)
+    with pytest.raises(sysid.InsufficientDataError, match=r"\(39 samples; two held-out"):
+        sysid.identify(sysid.IOData(u=u[:39], y=y[:39]))
+    with pytest.raises(sysid.InsufficientDataError, match=r"validation record is too short "
+                       r"\(1 sample"):
+        sysid.identify(sysid.IOData(u=u, y=y), validation=sysid.IOData(u=u[:1], y=y[:1]))

@@ -380,3 +380,99 @@ def test_a_pole_zero_cancellation_within_the_uncertainty_is_said():
         warnings.simplefilter("error")
         m = sysid.oe(d, 1, 1, 1)
     np.testing.assert_allclose(m.poles().real, [0.85], atol=0.01)
+
+
+def test_pem_refuses_a_delay_that_leaves_too_few_samples():
+    """arx's sample count (N - largest lag >= parameters + 1) for oe/armax/bj: on 100
+    samples armax(2, 2, 1, 98) returned b = [-7.19, -19.68] and nk = 99 a b exactly 0 with
+    std 0, without a word."""
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(100)
+    y = signal.lfilter([0, 1, 0.5], [1, -1.5, 0.7], u) + 0.1 * rng.standard_normal(100)
+    d = _data(y, u)
+    with pytest.raises(sysid.InsufficientDataError, match="smaller orders and delays"):
+        sysid.armax(d, 2, 2, 1, 98)
+    with pytest.raises(sysid.InsufficientDataError,
+                       match=r"4 parameters and lags up to 100 \(nk \+ nb - 1 = 99 \+ 2 - 1\)"):
+        sysid.oe(d, 2, 2, 99)
+    # the boundary: oe(2, 2, nk) has 4 parameters and its largest lag is nk + 1, so it
+    # needs 100 - (nk + 1) >= 5: nk = 94 is the last delay it takes (arx's own limit)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = sysid.oe(d, 2, 2, 94)
+        sysid.arx(d, 0, 2, 96)  # arx: 100 - 97 >= 2 + 1
+    assert np.all(np.isfinite(m.b[0][0]))
+    with pytest.raises(sysid.InsufficientDataError, match="needs at least 5 samples past"):
+        sysid.oe(d, 2, 2, 95)
+    with pytest.raises(sysid.InsufficientDataError, match="at least 7 samples past its "
+                       "largest lag but got 4"):
+        sysid.bj(d, 2, 1, 1, 2, 95)
+    with pytest.raises(sysid.InsufficientDataError):
+        sysid.arx(d, 0, 2, 97)
+
+
+def test_arxstruc_refuses_several_outputs_and_ranks_what_arx_builds():
+    """arxstruc on 3-output data summed the losses of a diagonal-A model (12 parameters
+    where arx(d, 1, 1, 1) builds a coupled A with 18): it takes one output, whose table
+    rows are arx's own loss and parameter count."""
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal((400, 2))
+    y = np.column_stack([signal.lfilter([0, 1.0], [1, -0.6], u[:, 0]),
+                         signal.lfilter([0, 0.3, 0.2], [1, -0.4], u[:, 1])])
+    y += 0.05 * rng.standard_normal(y.shape)
+    d = sysid.IOData(u, y, 1.0, output_names=["flow", "temp"])
+    with pytest.raises(DataError, match=r"2 outputs \(flow, temp\): rank one output at a "
+                       r"time, sysid.arxstruc\(data.select\(outputs='flow'\)"):
+        sysid.arxstruc(d, [1, 2], [1, 2], [1])
+    one = d.select(outputs="temp")
+    table = sysid.arxstruc(one, [1, 2], [1, 2], [1])
+    yt = y[:, 1]
+    for na, nb, nk, loss, p in table:
+        na, nb, nk = int(na), int(nb), int(nk)
+        assert p == sysid.arx(one, na, nb, nk).n_parameters
+        # least squares by numpy on the rows the one compression keeps (t >= 2)
+        t = np.arange(2, 400)
+        phi = np.column_stack([-yt[t - k] for k in range(1, na + 1)]
+                              + [u[t - nk - k, j] for j in range(2) for k in range(nb)])
+        r = yt[t] - phi @ np.linalg.lstsq(phi, yt[t], rcond=None)[0]
+        np.testing.assert_allclose(loss, r @ r / t.size, rtol=1e-9)
+    assert sysid.selstruc(table, "bic")[1] == 2  # temp's B has two coefficients
+
+
+def test_repr_of_a_coupled_model_shows_every_entry_of_a():
+    """The repr printed only A's diagonal: glassfurnace's arx(2, 2, 1) showed
+    A(q) = 1 - 12.67 q^-1 + 12.21 q^-2 for y2 (roots of modulus 11.6) for a model whose
+    largest pole is 0.9913, with 60 coupling coefficients hidden."""
+    # A(q) = I + A1 q^-1 with A22 = 1 - 1.2 q^-1 alone "unstable"; the poles are the
+    # eigenvalues of -A1 = [[-0.6, -1], [0.9, 1.2]]: 0.3 +- 0.3i, modulus 0.4243
+    m = sysid.PolynomialModel([[[0.6], [1.0]], [[-0.9], [-1.2]]], [[[1.0]], [[0.5]]],
+                              [[1], [1]], 1.0)
+    np.testing.assert_allclose(np.abs(m.poles()), np.hypot(0.3, 0.3), rtol=1e-9)
+    text = repr(m)
+    for line in ["y2: A21(q) y1(t) + A22(q) y2(t) = B1(q) u1(t-1) + e(t)",
+                 "A11(q) = 1 + 0.6 q^-1", "A12(q) = 1 q^-1", "A21(q) = -0.9 q^-1",
+                 "A22(q) = 1 - 1.2 q^-1", "row 2 of A, a 2x2 matrix polynomial"]:
+        assert line in text
+    assert "A(q) =" not in text
+    diag = sysid.PolynomialModel([[[0.6], []], [[], [-0.5]]], [[[1.0]], [[0.5]]],
+                                 [[1], [1]], 1.0)
+    assert "A(q) = 1 - 0.5 q^-1" in repr(diag) and "A22" not in repr(diag)
+
+
+def test_per_output_orders_of_another_shape_are_reported_as_given():
+    """armax(glassfurnace, 2 * ones((6, 6)), ...) said "na has shape (36, 1) but should be
+    (6, 1)": the shape the user gave, and that armax has one A per output."""
+    rng = np.random.default_rng(5)
+    u = rng.standard_normal((200, 1))
+    y = np.column_stack([signal.lfilter([0, 1.0], [1, -0.5], u[:, 0]),
+                         signal.lfilter([0, 0.5], [1, -0.3], u[:, 0])])
+    y += 0.1 * rng.standard_normal(y.shape)
+    d = sysid.IOData(u, y, 1.0)
+    with pytest.raises(sysid.ShapeError, match=r"na has shape \(2, 2\) but should be \(2,\) "
+                       r"or \(2, 1\) or a scalar: armax, bj and arma use one A polynomial per "
+                       r"output; a \(2, 2\) na, an A coupling the outputs, is sysid.arx's"):
+        sysid.armax(d, 2 * np.ones((2, 2), int), 1, 1, 1)
+    with pytest.raises(sysid.ShapeError, match=r"nd has shape \(3,\) .* one D polynomial"):
+        sysid.bj(d, 1, 1, [1, 1, 1], 1, 1)
+    a = sysid.armax(d, [[1], [1]], 1, [0, 0], 1)  # (ny, 1) and (ny,) still work
+    np.testing.assert_allclose([a.a[0][0][0], a.a[1][1][0]], [-0.5, -0.3], atol=0.06)

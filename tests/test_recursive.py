@@ -194,3 +194,18 @@ def test_diverging_updates_warn():
     with warnings.catch_warnings():
         warnings.simplefilter("error", sysid.StabilityWarning)
         calm.run(u, y)
+
+
+def test_a_covariance_of_another_shape_is_a_shape_error():
+    """RecursiveARX(1, 1, initial_covariance=np.eye(3)) raised a plain ValueError from the
+    core ("covariance has shape [3, 3] ..."): a ShapeError naming the argument and (2, 2)."""
+    with pytest.raises(sysid.ShapeError, match=r"initial_covariance has shape \(3, 3\) but "
+                       r"should be \(2, 2\) \(the model has 2 parameters\)"):
+        sysid.RecursiveARX(1, 1, initial_covariance=np.eye(3))
+    r = sysid.RecursiveARX(2, 1, initial_covariance=np.diag([1.0, 2.0, 3.0]))
+    np.testing.assert_array_equal(r.covariance, np.diag([1.0, 2.0, 3.0]))
+    with pytest.raises(sysid.ShapeError, match=r"covariance has shape \(2,\) but should be "
+                       r"\(3, 3\)"):
+        r.covariance = [1.0, 2.0]
+    r.covariance = 4.0
+    np.testing.assert_array_equal(r.covariance, 4.0 * np.eye(3))

@@ -4,6 +4,8 @@ variant, interop with python-control and SciPy, save/load, and clear errors."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -360,3 +362,51 @@ def test_summaries_name_the_users_model_in_plain_numbers():
     assert "np.float64" not in m.summary() and "fit_percent=[" in m.summary()
     text = sysid.compare(m, d).summary()
     assert "object at 0x" not in text and "TransferFunction(" in text
+
+
+def test_discrete_tfest_has_the_parameter_table_cost_and_uncertainty_of_the_continuous():
+    """Discrete tfest had parameters None, info["cost"] the per-iteration history
+    ([[12.64, 12.64, 12.64]]) and an uncertainty building PolynomialModels: now per pair
+    [a.., b..] with oe's values and std, the final cost, and TransferFunctions."""
+    rng = np.random.default_rng(4)
+    u = rng.standard_normal((400, 2))
+    g1 = sysid.TransferFunction([0.0, 1.0, 0.5], [1.0, -1.5, 0.7], dt=1.0)
+    g2 = sysid.TransferFunction([0.0, 0.0, 0.4], [1.0, -0.6, 0.0], dt=1.0)
+    y = g1.simulate(u[:, 0])[:, 0] + g2.simulate(u[:, 1])[:, 0] + 0.2 * rng.standard_normal(400)
+    d = sysid.IOData(u, y, 1.0, input_names=["p", "q"], output_names=["y"])
+    G = sysid.tfest(d, [[2, 1]], [[1, 0]], dt=1.0, iodelay=[[0, 1]])
+    ref = sysid.oe(d, [[2, 1]], [[2, 1]], [[1, 2]])  # what tfest fits, independently
+    t = G.parameters
+    assert t.names == ["y<-p:a1", "y<-p:a2", "y<-p:b0", "y<-p:b1", "y<-q:a1", "y<-q:b0"]
+    np.testing.assert_allclose(t.value, np.r_[ref.f[0][0], ref.b[0][0], ref.f[0][1],
+                                              ref.b[0][1]], rtol=1e-9)
+    sd = ref.std
+    np.testing.assert_allclose(t.std, np.r_[sd["f"][0][0], sd["b"][0][0], sd["f"][0][1],
+                                            sd["b"][0][1]], rtol=1e-9)
+    assert "y<-q:b0" in G.summary()
+    # the final cost, 1/2 the sum of squared simulation errors, as the continuous fit's
+    e = y - G.simulate(u)[:, 0]
+    assert G.info["cost"] == [pytest.approx(0.5 * e @ e, rel=1e-9)]
+    assert G.info["cost_start"][0] >= G.info["cost"][0]
+    again = G.uncertainty.build(G.uncertainty.theta)
+    assert isinstance(again, sysid.TransferFunction)
+    w = np.array([0.1, 1.0, 2.5])
+    np.testing.assert_allclose(again.freqresp(w), G.freqresp(w), rtol=1e-12)
+    np.testing.assert_allclose(G.freqresp(w, std=True)[1], ref.freqresp(w, std=True)[1],
+                               rtol=1e-6)
+
+
+def test_tfest_and_procest_caps_are_iteration_limit_warnings():
+    """tfest/procest warned on their iteration cap with a plain UserWarning subclass, so
+    simplefilter("error", sysid.IterationLimitWarning) (oe/armax/bj's cap) let them pass."""
+    true = sysid.TransferFunction([0.5, 2.0], [1.0, 0.8, 4.0])
+    u = np.random.default_rng(0).standard_normal(300)
+    y = true.simulate(u, dt=0.05) + 0.05 * np.random.default_rng(1).standard_normal((300, 1))
+    d = sysid.IOData(u, y, dt=0.05)
+    start = sysid.TransferFunction([0.3, 1.0], [1.0, 2.0, 2.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sysid.IterationLimitWarning)
+        with pytest.raises(sysid.IterationLimitWarning, match="max_iter=1 "):
+            sysid.tfest(d, 2, 1, init=start, max_iter=1)
+        with pytest.raises(sysid.IterationLimitWarning, match="max_iter=1 "):
+            sysid.procest(d, "P1D", max_iter=1)

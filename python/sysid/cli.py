@@ -23,7 +23,8 @@ from typing import Any, Callable
 import numpy as np
 
 from .data.iodata import IOData
-from .errors import DataError, OrderError, SysidError
+from .errors import DataError, InsufficientDataError, OrderError, SysidError
+from .validation.crossval import MIN_BLOCK
 
 __all__ = ["main", "read_csv", "read_columns", "identify"]
 
@@ -173,6 +174,27 @@ def _split_index(split: str, n: int) -> int:
     if not 0 < k <= n:
         raise DataError(f"--split {split} leaves no estimation data (record has {n} samples)")
     return k
+
+
+def _check_parts(split: str, n: int, k: int, by_identify: bool) -> None:
+    """The parts ``--split`` leaves, long enough, before any check of their channels (a
+    3-row file left one validation sample, reported as "output y is constant")."""
+    need = 2 * MIN_BLOCK  # identify holds out two blocks of MIN_BLOCK samples at least
+    if by_identify and n < need:
+        raise InsufficientDataError(
+            f"the record is too short: it has {n} samples, and sysid.identify holds out two "
+            f"blocks of {MIN_BLOCK} from the estimation part (at least {need}); pass a longer "
+            "record")
+    if by_identify and k < need:
+        raise InsufficientDataError(
+            f"the record is too short: --split {split} leaves {k} of its {n} samples for "
+            f"estimation, and sysid.identify holds out two blocks of {MIN_BLOCK} from them "
+            f"(at least {need}); pass a longer record or a larger --split")
+    if 0 < n - k < 2:
+        raise InsufficientDataError(
+            f"the record is too short: --split {split} leaves {n - k} validation sample of "
+            f"its {n}, and a fit needs an output that can vary; pass a longer record or a "
+            "smaller --split")
 
 
 # -- the pipeline ---------------------------------------------------------------------
@@ -530,6 +552,8 @@ def _identify(args: argparse.Namespace) -> int:
         dt = 1.0 if args.dt is None else float(args.dt)
     N = y.shape[0]
     k = _split_index(args.split, N)
+    _check_parts(args.split, N, k, auto and bool(ui) and args.uncertainty == "none"
+                 and args.horizon is None)
     pre: dict[str, Any] = {"file": str(args.data), "inputs": [names[i] for i in ui],
                            "outputs": [names[i] for i in yi],
                            "estimation_samples": [0, k], "validation_samples": [k, N]}

@@ -125,7 +125,9 @@ def nlgreyest(data: IOData, s: NonlinearGreyBox, *, x0: Any, weighting: str, mul
     table = ParameterTable(names, [vals[k] for k in names], [std.get(k, 0.0) for k in names],
                            [s.params[k].fixed for k in names], bound,
                            [s.params[k].unit for k in names],
-                           [s.params[k].description for k in names])
+                           [s.params[k].description for k in names]
+                           ).cut_at_bounds(*np.array([s.params[k].bounds for k in names],
+                                                     float).T)
     est = s.with_values(vals, x0=X, dt=dt)
     info = {
         "method": "greyest (nonlinear)", "iterations": best["iterations"],

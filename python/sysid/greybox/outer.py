@@ -105,7 +105,8 @@ class OuterParameters:
         table = ParameterTable(
             s.names, [vals[k] for k in s.names], [std.get(k, 0.0) for k in s.names],
             [s.params[k].fixed for k in s.names], bound,
-            [s.params[k].unit for k in s.names], [s.params[k].description for k in s.names])
+            [s.params[k].unit for k in s.names], [s.params[k].description for k in s.names]
+        ).cut_at_bounds(*np.array([s.params[k].bounds for k in s.names], float).T)
         est = s.with_values(vals)
 
         def build(theta_free: np.ndarray) -> Any:

@@ -63,9 +63,11 @@ from ..subspace.estimator import available_horizon
 from ..validation.compare import require_outputs_vary
 from ..validation.crossval import (
     MAX_ORDER,
+    MIN_BLOCK,
     TOL,
     fold_horizon,
     record_folds,
+    require_held_out_length,
     simulation_fit,
     trend_share,
 )
@@ -517,6 +519,7 @@ def identify(
                         f"allows), got {max_order!r}")
     if time_budget is not None and not (np.isfinite(time_budget) and time_budget > 0):
         raise DataError(f"time_budget must be a positive number of seconds, got {time_budget!r}")
+    require_held_out_length(data)  # before the channel checks: 1 sample is "constant"
     require_inputs_vary(data.experiments, "identify", data.input_names)
     validation = _checked_validation(validation, data)  # before the search, not after it
     centred, mu, my = _offsets(data)
@@ -536,10 +539,11 @@ def identify(
         checks["held_out"] = (f"{still} held-out block(s) left out of the choice: every output "
                               "stands still there (no variation to score a fit against)")
     shortest = min(min(h.lengths) for _, h in parts)
-    if shortest < 20:
+    if shortest < MIN_BLOCK:
         raise InsufficientDataError(
             f"the record is too short to hold out a part for the choice (a held-out block has "
-            f"{shortest} samples, 20 needed); pass a longer record or fit one model directly")
+            f"{shortest} samples, {MIN_BLOCK} needed); pass a longer record or fit one model "
+            "directly")
     methods = SUBSPACE + (CLOSED_LOOP if feedback else ())
     # Ctrl-C stops identify (KeyboardInterrupt), as it stops every other computation: a
     # batch (identify_many) or a script must not carry on with a half-chosen model
@@ -676,6 +680,10 @@ def _checked_validation(validation: Any, data: IOData) -> IOData | None:
     if abs(float(validation.dt) - float(data.dt)) > 1e-9 * float(data.dt):
         raise DataError(f"validation is sampled every {validation.dt:g} s, the estimation "
                         f"data every {data.dt:g} s: resample one of them (sysid.resample)")
+    if min(validation.lengths) < 2:  # one sample is "constant": say what is wrong
+        raise InsufficientDataError(
+            f"the validation record is too short ({min(validation.lengths)} sample in an "
+            "experiment): a fit against it needs an output that can vary; pass a longer one")
     require_outputs_vary([y for _, y in validation.experiments], validation.output_names)
     return validation
 

@@ -53,6 +53,23 @@ class ParameterTable:
         self.lower = self.value - Z95 * self.std
         self.upper = self.value + Z95 * self.std
 
+    def cut_at_bounds(self, lower: Any, upper: Any) -> ParameterTable:
+        """Cut the 95 % intervals at the parameters' bounds ``lower``/``upper`` (one per
+        parameter, ``-inf``/``inf`` for none) and return the table: an estimate on a bound
+        has the std of the unconstrained curvature, and its interval must not reach past the
+        bound (a damping on its upper bound 1.0 is not ``[0.958, 1.042]``).
+
+        Examples
+        --------
+        >>> t = ParameterTable(["c"], [1.0], [0.0214], [False], ["upper"])
+        >>> lo, hi = t.cut_at_bounds([0.0], [1.0])["c"]["ci95"]
+        >>> round(lo, 4), hi
+        (0.9581, 1.0)
+        """
+        self.lower = np.maximum(self.lower, np.asarray(lower, dtype=float).reshape(len(self)))
+        self.upper = np.minimum(self.upper, np.asarray(upper, dtype=float).reshape(len(self)))
+        return self
+
     def __len__(self) -> int:
         return len(self.names)
 

@@ -15,7 +15,7 @@ from .._checks import as_int, as_int_grid, experiment_arrays, require_inputs_var
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import as_record
 from ..data.offsets import check_offsets
-from ..errors import DataError
+from ..errors import DataError, InsufficientDataError, ShapeError
 from .cancellation import cancellation, warn_cancellations
 from .model import PolynomialModel
 from .uncertainty import attach_uncertainty as _attach_uncertainty
@@ -26,8 +26,22 @@ def _grid(v: Any, ny: int, ncol: int, name: str) -> list[list[int]]:
 
 
 def _col(v: Any, ny: int, name: str) -> list[int]:
-    a = np.array(v, dtype=object)
-    return [r[0] for r in as_int_grid(a.reshape(-1, 1) if a.ndim else a, (ny, 1), name)]
+    """One order per output (``na``, ``nc``, ``nd`` of armax/bj/arma): a scalar, ``(ny,)`` or
+    ``(ny, 1)``; another shape is refused as given (it was reshaped first: a (6, 6) ``na``
+    was reported as (36, 1))."""
+    try:
+        a = np.array(v, dtype=object)
+    except (TypeError, ValueError):
+        a = None  # as_int_grid says what is wrong with it
+    if a is not None and a.ndim and a.shape not in ((ny,), (ny, 1)):
+        poly = name[1].upper()
+        coupled = (f"; a ({ny}, {ny}) na, an A coupling the outputs, is sysid.arx's"
+                   if poly == "A" else "")
+        raise ShapeError(f"{name} has shape {a.shape} but should be ({ny},) or ({ny}, 1) or a "
+                         f"scalar: armax, bj and arma use one {poly} polynomial per output"
+                         f"{coupled}")
+    return [r[0] for r in as_int_grid(a.reshape(-1, 1) if a is not None and a.ndim else v,
+                                      (ny, 1), name)]
 
 
 def arx(
@@ -232,6 +246,24 @@ def _start(
     return th, moved
 
 
+def _require_samples(exps: Any, method: str, i: int, na: int, nb: list[int], nc: int,
+                     nd: int, nf: list[int], nk: list[int]) -> None:
+    """The sample count :func:`arx` requires (``N - max lag >= n_params + 1``) for output
+    ``i``'s search: a delay that leaves a handful of samples gave numbers without a
+    warning (``armax`` on 100 samples with ``nk = 98``: ``b = [-7.19, -19.68]``)."""
+    lags = [(na, f"na = {na}"), (nc, f"nc = {nc}"), (nd, f"nd = {nd}")]
+    lags += [(n, f"nf = {n}") for n in nf]
+    lags += [(k + n - 1, f"nk + nb - 1 = {k} + {n} - 1") for n, k in zip(nb, nk) if n > 0]
+    lag, which = max(lags, key=lambda t: t[0])
+    p = na + sum(nb) + nc + nd + sum(nf)
+    rows = sum(max(y.shape[0] - lag, 0) for _, y in exps)
+    if rows < p + 1:
+        raise InsufficientDataError(
+            f"too few samples: the {method} fit of output {i} with {p} parameters and lags up "
+            f"to {lag} ({which}) needs at least {p + 1} samples past its largest lag but got "
+            f"{rows}; use a longer record or smaller orders and delays")
+
+
 def _pem(
     data: Any,
     na: Any,
@@ -260,6 +292,8 @@ def _pem(
                             "input out)")
     if min(na_v + nc_v + nd_v, default=0) < 0:
         raise DataError("na, nc and nd must be non-negative integers")
+    for i in range(ny):
+        _require_samples(exps, method, i, na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i], nk_g[i])
     parts: dict[str, list[Any]] = {k: [] for k in "abcdf"}
     info: dict[str, Any] = {"method": method, "iterations": [], "cost": [],
                             "criterion": "sum of squares", "stop": []}
@@ -426,7 +460,10 @@ def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
     """Loss of every ARX structure in the ranges, from one compression.
 
     Returns rows ``[na, nb, nk, loss, n_parameters]`` (loss: mean squared residual);
-    structures whose regression is rank deficient are left out.
+    structures whose regression is rank deficient are left out. Single-output data only (as
+    MATLAB's ``arxstruc``): rank one output at a time (``data.select(outputs=k)``), or choose
+    a multi-output model's order with ``sysid.n4sid(data, order="auto")`` or
+    ``sysid.ssest(data, order="auto")``.
 
     Examples
     --------
@@ -443,6 +480,15 @@ def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
     """
     data = as_record(data)  # a (u, y) pair, as ssest and compare take
     exps = experiment_arrays(data)
+    ny = exps[0][1].shape[1]
+    if ny > 1:  # the Rust table sums per-output losses of a diagonal-A model arx does not build
+        names = getattr(data, "output_names", None) or [f"y{i}" for i in range(ny)]
+        raise DataError(
+            f"arxstruc ranks single-output ARX structures, and the data have {ny} outputs "
+            f"({', '.join(map(str, names))}): rank one output at a time, "
+            f"sysid.arxstruc(data.select(outputs={names[0]!r}), na, nb, nk), or choose a "
+            "multi-output model's order with sysid.n4sid(data, order='auto') or "
+            "sysid.ssest(data, order='auto')")
     check_offsets(data)
     rng = [list(map(int, np.atleast_1d(v))) for v in (na, nb, nk)]
     out = np.asarray(_sysid.arx_struc(exps, *rng)).view(StructureTable)

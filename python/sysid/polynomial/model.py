@@ -21,11 +21,12 @@ def _monic(c: Any) -> np.ndarray:
     return np.concatenate([[1.0], np.asarray(c, dtype=float).ravel()])
 
 
-def _fmt(name: str, coef: np.ndarray, monic: bool) -> str:
+def _fmt(name: str, coef: np.ndarray, monic: bool, first: int = 0) -> str:
+    """``name(q) = ...`` with ``coef[k]`` the coefficient of ``q^-(first + k)``."""
     if coef.size == 0:
         return f"{name}(q) = 0"
     parts = []
-    for k, v in enumerate(coef):
+    for k, v in enumerate(coef, start=first):
         term = "1" if (k == 0 and monic) else f"{abs(v):.4g}" + (f" q^-{k}" if k else "")
         parts.append(("-" if v < 0 else "+", term))
     head = ("-" if parts[0][0] == "-" else "") + parts[0][1]
@@ -457,8 +458,22 @@ class PolynomialModel(ModelMixin):
             noise = (
                 "C(q)/D(q) e(t)" if self.d[i].size else ("C(q) e(t)" if self.c[i].size else "e(t)")
             )
-            lines.append(f"  y{i + 1}: A(q) y(t) = {rhs + ' + ' if rhs else ''}{noise}")
-            lines.append("    " + _fmt("A", _monic(self.a[i][i]), True))
+            if self.coupled:  # row i of a matrix polynomial: A_ii alone is not its poles
+                ny = self.n_outputs
+                sep = "" if ny < 10 else ","
+                ks = [k for k in range(ny) if k == i or self.a[i][k].size]
+                lhs = " + ".join(f"A{i + 1}{sep}{k + 1}(q) y{k + 1}(t)" for k in ks)
+                lines.append(f"  y{i + 1}: {lhs} = {rhs + ' + ' if rhs else ''}{noise}")
+                lines.append(f"    (row {i + 1} of A, a {ny}x{ny} matrix polynomial coupling "
+                             "the outputs: the poles are those of det A(q), model.poles())")
+                for k in ks:
+                    lines.append("    " + (_fmt(f"A{i + 1}{sep}{k + 1}", _monic(self.a[i][k]),
+                                                True) if k == i else
+                                           _fmt(f"A{i + 1}{sep}{k + 1}", self.a[i][k], False,
+                                                first=1)))
+            else:
+                lines.append(f"  y{i + 1}: A(q) y(t) = {rhs + ' + ' if rhs else ''}{noise}")
+                lines.append("    " + _fmt("A", _monic(self.a[i][i]), True))
             for j in range(self.n_inputs):
                 lines.append("    " + _fmt(f"B{j + 1}", self.b[i][j], False))
                 if self.f[i][j].size:

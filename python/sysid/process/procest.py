@@ -306,8 +306,7 @@ def _attach(model: ProcessModel, covs: list[np.ndarray], fixed: dict[str, float]
     tol = 1e-9 * np.maximum(1.0, np.abs(theta))
     on = np.where(~is_fixed & (np.abs(theta - lo) <= tol), "lower",
                   np.where(~is_fixed & (np.abs(theta - hi) <= tol), "upper", ""))
-    model.parameters = ParameterTable(names, theta, sd, is_fixed, bound=[str(b) for b in on])
-    model.parameters.lower = np.maximum(model.parameters.lower, lo)
-    model.parameters.upper = np.minimum(model.parameters.upper, hi)
+    model.parameters = ParameterTable(names, theta, sd, is_fixed,
+                                      bound=[str(b) for b in on]).cut_at_bounds(lo, hi)
     model.uncertainty = ParameterUncertainty(theta, P, model.with_parameter_vector,
                                              names=names)

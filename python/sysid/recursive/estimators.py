@@ -136,7 +136,7 @@ class _Recursive:
                                  f"or a number (times the identity)")
             self._core = build(np.ascontiguousarray(q))
         if P0.ndim != 0:
-            self.covariance = P0
+            self._set_covariance(P0, "initial_covariance")
 
     # -- state ---------------------------------------------------------------------------
     @property
@@ -166,8 +166,15 @@ class _Recursive:
 
     @covariance.setter
     def covariance(self, P: Any) -> None:
+        self._set_covariance(P, "covariance")
+
+    def _set_covariance(self, P: Any, name: str) -> None:
+        p = self.n_parameters
         P = np.asarray(P, dtype=float)
-        P = P * np.eye(self.n_parameters) if P.ndim == 0 else P
+        P = P * np.eye(p) if P.ndim == 0 else P
+        if P.shape != (p, p):
+            raise ShapeError(f"{name} has shape {P.shape} but should be ({p}, {p}) (the model "
+                             f"has {p} parameters) or a number (times the identity)")
         self._core.set_covariance(np.ascontiguousarray(P))
 
     @property

@@ -23,7 +23,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int
-from ..errors import DataError
+from ..errors import DataError, ShapeError
 from .feedthrough import check_feedthrough, choose_feedthrough
 
 __all__ = ["frd_subspace"]
@@ -173,9 +173,7 @@ def frd_subspace(
             raise DataError(f"order must be an integer or 'auto', got {order!r}")
     else:
         n = as_int(order, "order", 1)
-    w = None
-    if weights is not None:
-        w = np.ascontiguousarray(np.broadcast_to(np.asarray(weights, dtype=float), (nf,)))
+    w = None if weights is None else _weights(weights, nf, "frequency of the FRD")
     flat = g.reshape(nf, l * m)
     mode = "estimate" if ft else ("zero-at-nyquist" if continuous else "zero")
     res = _sysid.frd_subspace(np.ascontiguousarray(wd), np.ascontiguousarray(flat.real),
@@ -213,9 +211,8 @@ def _from_dft(data: Any, order: Order, horizon: int | None, weights: Any,
     nord = None if isinstance(order, str) else as_int(order, "order", 1)
     if isinstance(order, str) and order != "auto":
         raise DataError(f"order must be an integer or 'auto', got {order!r}")
-    w = None
-    if weights is not None:
-        w = np.ascontiguousarray(np.broadcast_to(np.asarray(weights, float), (wd.size,)))
+    w = None if weights is None else _weights(
+        weights, wd.size, f"DFT frequency of the {n}-sample record (N // 2 + 1)")
     c = np.ascontiguousarray
     res = _sysid.spectra_subspace(c(wd), c(U.real), c(U.imag), c(Y.real), c(Y.imag), q, nord,
                                   w, True, "estimate" if feedthrough else "zero")
@@ -224,3 +221,13 @@ def _from_dft(data: Any, order: Order, horizon: int | None, weights: Any,
     return StateSpaceModel(res["A"], res["B"], res["C"], res["D"], dt=data.dt,
                            input_names=data.input_names, output_names=data.output_names,
                            info=info)
+
+
+def _weights(weights: Any, n: int, what: str) -> np.ndarray:
+    """``weights`` as one number per frequency (a single number is repeated); another
+    length is a :class:`ShapeError` (it was numpy's broadcast error)."""
+    w = np.asarray(weights, dtype=float)
+    if w.ndim > 1 or (w.ndim == 1 and w.size != n):
+        raise ShapeError(f"weights has shape {w.shape} but should be ({n},): one weight per "
+                         f"{what}, or a single number")
+    return np.ascontiguousarray(np.broadcast_to(w, (n,)))

@@ -23,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from ..errors import DataError
+from ..errors import DataError, IterationLimitWarning
 from ..greybox.delays import shift_taps
 from .model import assemble
 from .sampling import canonical, sample_pair
@@ -32,7 +32,7 @@ from .sensitivity import pair_derivatives
 __all__ = ["PairStructure", "refine", "ConvergenceWarning"]
 
 
-class ConvergenceWarning(UserWarning):
+class ConvergenceWarning(IterationLimitWarning):
     """The search stopped on its iteration limit, before a convergence test was met."""
 
 Coef = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]

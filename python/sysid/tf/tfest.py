@@ -433,31 +433,71 @@ def _whole_delays(data: Any, delays: np.ndarray, auto: bool, dt: float) -> np.nd
 
 def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
               dt: float, max_iter: int, progress: Any) -> TransferFunction:
-    """Discrete-time variant: output error ``B(q)/F(q) q^-nk`` per output (``sysid.oe``)."""
+    """Discrete-time variant: output error ``B(q)/F(q) q^-nk`` per output (``sysid.oe``),
+    with the parameter table, uncertainty and ``info`` of the continuous fit (per pair
+    ``[a_1.., b_0..]``; ``info["cost"]`` the final cost per output)."""
     import sysid
 
     nk = _whole_delays(data, delays, auto, dt)
-    # one-sample lag as MATLAB's discrete tfest (no feedthrough), plus the delay
-    poly = sysid.oe(data, nze + 1, npo, 1 + np.round(nk).astype(int), max_iter=max_iter,
-                    progress=progress)
-    nums = [[np.concatenate([np.zeros(1 + int(round(nk[i, j]))), poly.b[i][j]])
-             for j in range(data.n_inputs)] for i in range(data.n_outputs)]
-    dens = [[np.concatenate([[1.0], poly.f[i][j]]) for j in range(data.n_inputs)]
-            for i in range(data.n_outputs)]
+    l, m = data.n_outputs, data.n_inputs
+    lag = 1 + np.round(nk).astype(int)  # one-sample lag as MATLAB's discrete tfest, + delay
+    poly = sysid.oe(data, nze + 1, npo, lag, max_iter=max_iter, progress=progress)
+    nb = [[poly.b[i][j].size for j in range(m)] for i in range(l)]
+    nf = [[poly.f[i][j].size for j in range(m)] for i in range(l)]
 
-    def z_form(b: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        k = max(b.size - 1, f.size - 1)
-        return np.pad(b, (0, k - b.size + 1)), np.pad(f, (0, k - f.size + 1))
+    def from_pairs(b: list[list[np.ndarray]], f: list[list[np.ndarray]]) -> TransferFunction:
+        pairs = [[_z_form(np.concatenate([np.zeros(lag[i, j]), b[i][j]]),
+                          np.concatenate([[1.0], f[i][j]])) for j in range(m)]
+                 for i in range(l)]
+        return TransferFunction([[p[0] for p in r] for r in pairs],
+                                [[p[1] for p in r] for r in pairs], dt=data.dt,
+                                input_names=data.input_names, output_names=data.output_names)
 
-    pairs = [[z_form(nums[i][j], dens[i][j]) for j in range(data.n_inputs)]
-             for i in range(data.n_outputs)]
-    G = TransferFunction([[p[0] for p in r] for r in pairs], [[p[1] for p in r] for r in pairs],
-                         dt=data.dt, input_names=data.input_names,
-                         output_names=data.output_names,
-                         info={**poly.info, "method": "tfest (discrete, output error)"})
-    G.uncertainty = getattr(poly, "uncertainty", None)
+    G = from_pairs(poly.b, poly.f)
+    hist = poly.info["cost"]
+    G.info = {**poly.info, "method": "tfest (discrete, output error)",
+              "cost": [float(h[-1]) for h in hist], "cost_start": [float(h[0]) for h in hist],
+              "noise_variance": [float(v) for v in np.ravel(poly.noise_variance)],
+              "n_samples": int(sum(u.shape[0] for u, _ in data.experiments)),
+              "delays": "estimated" if auto else "fixed"}
+    unc = getattr(poly, "uncertainty", None)
+    if unc is not None:
+        # oe's parameters per output are [b_i1.., f_i1..]; the table's per pair [a.., b..]
+        names, order, o = [], [], 0
+        for i in range(l):
+            b_at = o + np.cumsum([0, *nb[i]])[:-1]
+            f_at = o + sum(nb[i]) + np.cumsum([0, *nf[i]])[:-1]
+            for j in range(m):
+                pre = f"{data.output_names[i]}<-{data.input_names[j]}:"
+                names += [f"{pre}a{k + 1}" for k in range(nf[i][j])] + \
+                    [f"{pre}b{k}" for k in range(nb[i][j])]
+                order += list(range(f_at[j], f_at[j] + nf[i][j]))
+                order += list(range(b_at[j], b_at[j] + nb[i][j]))
+            o += sum(nb[i]) + sum(nf[i])
+        theta, P = unc.theta[order], unc.covariance[np.ix_(order, order)]
+        G.parameters = ParameterTable(names, theta, np.sqrt(np.clip(np.diag(P), 0, None)),
+                                      np.zeros(theta.size, bool))
+
+        def build(t: np.ndarray) -> TransferFunction:
+            t, at = np.asarray(t, dtype=float), 0
+            b: list[list[np.ndarray]] = [[] for _ in range(l)]
+            f: list[list[np.ndarray]] = [[] for _ in range(l)]
+            for i in range(l):
+                for j in range(m):
+                    f[i].append(t[at:at + nf[i][j]])
+                    b[i].append(t[at + nf[i][j]:at + nf[i][j] + nb[i][j]])
+                    at += nf[i][j] + nb[i][j]
+            return from_pairs(b, f)
+
+        G.uncertainty = ParameterUncertainty(theta, P, build, names=names, method=unc.method)
     fit_percent(G, data)
     return G
+
+
+def _z_form(b: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``B(q^-1)``, ``F(q^-1)`` as numerator and denominator in descending powers of z."""
+    k = max(b.size - 1, f.size - 1)
+    return np.pad(b, (0, k - b.size + 1)), np.pad(f, (0, k - f.size + 1))
 
 
 def _delayest_one(data: Any, i: int, j: int) -> int:

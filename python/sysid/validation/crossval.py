@@ -46,6 +46,7 @@ from typing import Any
 import numpy as np
 
 from ..data.iodata import IOData
+from ..errors import InsufficientDataError
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
            "output_fits", "prediction_fit", "predictor", "record_folds", "simulation_errors",
@@ -145,6 +146,28 @@ def folds(data: IOData, k: int = 2) -> list[tuple[IOData, IOData]]:
         rest = [(u[s:t], y[s:t]) for s, t in ((0, a), (b, u.shape[0])) if t > s]
         out.append((_io(rest, kw), _io([(u[a:b], y[a:b])], kw)))
     return out
+
+
+def require_held_out_length(data: IOData) -> None:
+    """Refuse a record shorter than two held-out blocks (``2 * MIN_BLOCK`` samples) with
+    the reason, before any check of its channels: on one sample every channel is
+    "constant" (``identify`` on 1 sample said "input u0 is 0 in every sample").
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.crossval import require_held_out_length
+    >>> require_held_out_length(sysid.IOData(u=np.arange(3.0), y=np.arange(3.0) ** 2))
+    Traceback (most recent call last):
+    ...
+    sysid.errors.InsufficientDataError: the record is too short to hold out a part ...
+    """
+    n = sum(data.lengths)
+    if n < 2 * MIN_BLOCK:
+        raise InsufficientDataError(
+            f"the record is too short to hold out a part for the choice ({n} sample"
+            f"{'s' if n != 1 else ''}; two held-out blocks of {MIN_BLOCK} need "
+            f"{2 * MIN_BLOCK}); pass a longer record or fit one model directly")
 
 
 def record_folds(data: IOData) -> list[tuple[IOData, IOData]]:
