@@ -195,6 +195,35 @@ def _run(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarray
     return res, mp
 
 
+def _interval_trials(pairs: Sequence[PairStructure], delay_idx: list[int], whole: list[int],
+                     taus: list[float], started: list[float], dt: float) -> list[list[int]]:
+    """The sample intervals of the delays to try next: the neighbouring one of every free
+    delay that ended near an edge of its interval (together, one trial), and both
+    neighbours of each free delay the search left where it started: the cost is flat in it
+    inside the interval (a zero as fast as the sampling absorbs a fractional delay under a
+    hold: on a heating system the search stopped at 3 samples where 5 fit 14 % better),
+    so only another interval can lower it."""
+    trial = list(whole)
+    trials = []
+    for j in delay_idx:
+        p, w, tau = pairs[j], whole[j], taus[j]
+        if not p.delay_free:
+            continue
+        if abs(tau - started[j]) <= 1e-6 * dt:
+            for k in (w - 1, w + 1):
+                if k >= 0 and k * dt < p.delay_max:
+                    side = list(whole)
+                    side[j] = k
+                    trials.append(side)
+        elif tau >= (w + 0.75) * dt and (w + 1) * dt < p.delay_max:
+            trial[j] = w + 1
+        elif tau <= (w + 0.25) * dt and w > 0:
+            trial[j] = w - 1
+    if trial != whole:
+        trials.insert(0, trial)
+    return trials
+
+
 def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarray]],
            dt: float, hold: str, *, x0_mode: str = "zero", max_iter: int = 100,
            tol: float = 1e-10, progress: Any = None,
@@ -208,30 +237,28 @@ def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarr
     history: list[float] = list(res["history"])
     moves = 0
     while moves < 20:
+        started = [p.delay for p in pairs]
         v = np.asarray(res["p"])[:mp.scale.size] * mp.scale
         ps, taus = mp.split(v)
         pairs = [PairStructure(p.coef, q, p.fixed, p.lower, p.upper, t, p.delay_free,
                                p.delay_max, p.names) for p, q, t in zip(pairs, ps, taus)]
-        trial = list(whole)
-        for j in mp.delay_idx:
-            if not pairs[j].delay_free:
-                continue
-            w, tau = whole[j], taus[j]
-            if tau >= (w + 0.75) * dt and (w + 1) * dt < pairs[j].delay_max:
-                trial[j] = w + 1
-            elif tau <= (w + 0.25) * dt and w > 0:
-                trial[j] = w - 1
-        if trial == whole:
+        trials = _interval_trials(pairs, mp.delay_idx, whole, taus, started, dt)
+        if not trials:
             break
-        # the neighbouring sample interval, from the edge: kept only if it fits better
-        moved = [PairStructure(p.coef, p.p0, p.fixed, p.lower, p.upper,
-                               float(np.clip(p.delay, t * dt, (t + 1) * dt)), p.delay_free,
-                               p.delay_max, p.names) for p, t in zip(pairs, trial)]
-        res2, mp2 = _run(moved, exps, dt, hold, trial, x0_mode, max_iter, tol, progress)
+        # the neighbouring sample intervals: the best kept only if it fits better
+        best = None
+        for trial in trials:
+            moved = [PairStructure(p.coef, p.p0, p.fixed, p.lower, p.upper,
+                                   float(np.clip(p.delay, t * dt, (t + 1) * dt)), p.delay_free,
+                                   p.delay_max, p.names) for p, t in zip(pairs, trial)]
+            res2, mp2 = _run(moved, exps, dt, hold, trial, x0_mode, max_iter, tol, progress)
+            if best is None or res2["cost"] < best[0]["cost"]:
+                best = (res2, mp2, trial, moved)
         moves += 1
-        if not res2["cost"] < res["cost"] * (1 - 1e-12):
+        assert best is not None
+        if not best[0]["cost"] < res["cost"] * (1 - 1e-12):
             break
-        res, mp, whole, pairs = res2, mp2, trial, moved
+        res, mp, whole, pairs = best
         history += list(res["history"])
     v = np.asarray(res["p"])[:mp.scale.size] * mp.scale
     ps, taus = mp.split(v)

@@ -281,7 +281,11 @@ def _siso_start(exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt: float, n:
 
 def _delay_grid(exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt: float, dmax: float
                 ) -> list[float]:
-    """Candidate delays (whole samples) around the ARX delay estimate of input ``j``."""
+    """Candidate delays (whole samples) of input ``j``: every one up to ``DELAY_SCAN`` samples
+    (within ``dmax`` and a quarter of the record) and those around the ARX delay estimate.
+    The ARX estimate alone (second-order ARX) misses the delay of slow, lagging processes
+    (a heating system: 1 sample where 6 fit best), and the output-error cost is not unimodal
+    in the delay, so the SRIVC starts scan them all (about 8 ms each)."""
     from ..data.iodata import IOData
     from ..polynomial.delayest import delayest
 
@@ -293,15 +297,21 @@ def _delay_grid(exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt: float, dm
     except Exception:  # the grid below still covers the start
         nk = 1
     # a strictly proper ZOH-sampled system without delay has nk = 1
-    return [k * dt for k in range(max(nk - 2, 0), min(nk + 1, kmax) + 1) if k * dt <= dmax]
+    near = set(range(max(nk - 2, 0), min(nk + 1, kmax) + 1))
+    return [k * dt for k in sorted(near | set(range(min(DELAY_SCAN, kmax) + 1)))
+            if k * dt <= dmax]
+
+
+#: whole-sample delays every SRIVC start scans (:func:`_delay_grid`)
+DELAY_SCAN = 40
 
 
 def _starts(exps: list[tuple[np.ndarray, np.ndarray]], dt: float, npo: np.ndarray,
             nze: np.ndarray, delays: np.ndarray, auto: bool, hold: str, dmax: float
             ) -> list[tuple[np.ndarray, np.ndarray, float]]:
     """Per input ``(a, b, delay)``: SRIVC, inputs fitted in turn on what the others leave
-    (three sweeps when there are several); ``auto`` delays from a few whole-sample candidates
-    around the ARX delay estimate."""
+    (three sweeps when there are several); ``auto`` delays from the whole-sample candidates
+    of :func:`_delay_grid` in the first sweep, then from the chosen one's neighbours."""
     m = npo.size
     cur = [(np.ones(1), np.zeros(1), float(delays[j])) for j in range(m)]
     grids = [_delay_grid(exps, j, dt, dmax) if auto else [float(delays[j])] for j in range(m)]
@@ -321,6 +331,9 @@ def _starts(exps: list[tuple[np.ndarray, np.ndarray]], dt: float, npo: np.ndarra
                     best = (a, b, tau, c)
             assert best is not None
             cur[j] = best[:3]
+            if auto:  # later sweeps: the chosen delay and its neighbours
+                grids[j] = [t for t in (best[2] - dt, best[2], best[2] + dt)
+                            if -1e-9 <= t <= dmax]
     return cur
 
 
