@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, NumericalError
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 from .model import ProcessModel
@@ -122,10 +122,13 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
                 start = _start(fit_t, exps, j, data.dt, fit_hold, dmax, init, fixed)
                 pairs.append(_pair(fit_t, names, start, fixed, bounds, dmax,
                                    f"{data.output_names[i]}<-{data.input_names[j]}"))
-            res = refine(pairs, exps, data.dt, fit_hold, x0_mode=initial_state,
-                         max_iter=max_iter, tol=tol, progress=cb,
-                         fix=f"Fix one of them (fixed={{...}}), fit a simpler type than "
-                             f"{t.code} or use more informative data")
+            try:
+                res = refine(pairs, exps, data.dt, fit_hold, x0_mode=initial_state,
+                             max_iter=max_iter, tol=tol, progress=cb,
+                             fix=f"Fix one of them (fixed={{...}}), fit a simpler type than "
+                                 f"{t.code} or use more informative data")
+            except NumericalError as e:
+                raise _diverged(e, t, data) from e
             vals = []
             for j in range(m):
                 v = dict(zip(names, map(float, res["p"][j])))
@@ -155,6 +158,28 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
     if initial_state == "zero":  # the fit of a simulation from rest, as the model was fitted
         fit_percent(model, data)
     return model
+
+
+def _diverged(e: NumericalError, t: ProcessType, data: Any) -> NumericalError:
+    """The error of a search that ran to where the model's sensitivities overflow: on data
+    with offsets the core's advice (remove them) stands; without any, the structure itself
+    does not fit the data (two real poles for an oscillating response: the time constants
+    run to 0 or infinity), which the core's message cannot know."""
+    u = np.vstack([np.asarray(e[0], float) for e in data.experiments])
+    y = np.vstack([np.asarray(e[1], float) for e in data.experiments])
+    # an offset beside the variation (not only one that dwarfs it, as the offset warning's):
+    # then it may be what drove the search, and the core's advice to remove it stands
+    level = np.abs(np.r_[u.mean(0), y.mean(0)]) > np.r_[u.std(0), y.std(0)]
+    if "sensitivities overflow" not in str(e) or level.any():
+        return e
+    hint = ("'P2U' (complex poles) if the response oscillates, " if t.poles == 2
+            and not t.underdamped else "")
+    return NumericalError(
+        f"procest({t.code!r}): the output-error search ran to parameters where the model's "
+        f"sensitivities overflow (a time constant driven towards 0 or infinity) on data "
+        f"without offsets: the {t.code} structure does not fit them. Try another type "
+        f"({hint}fewer or more poles, a zero 'Z', a delay 'D') or give a start "
+        f"(init={{...}}) near what a step or frequency response of the data suggests")
 
 
 def _options(t: ProcessType, init: Any, fixed: Any, bounds: Any
