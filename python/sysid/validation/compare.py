@@ -6,7 +6,7 @@
 :func:`residuals` (in :mod:`sysid.validation.residuals`)
     Auto-correlation of the one-step prediction errors and their cross-correlation with the
     inputs, with confidence bounds, a Ljung-Box portmanteau test of whiteness per output and
-    Ljung's chi-square test of independence from past inputs.
+    Ljung's test of independence from past inputs (an exact regression F test).
 :func:`error_spectrum`
     Power spectrum of the simulation error beside that of the output: the frequencies at
     which a model is wrong stand out.
