@@ -132,3 +132,23 @@ def test_residuals_and_criteria_of_a_trended_model_on_the_later_part_of_a_record
     r0 = sysid.residuals(m, (est.u, est.y))
     np.testing.assert_allclose(r0.e[0], sysid.residuals(inner, d).e[0], atol=1e-9)
 
+
+def test_forecast_of_a_trended_model_continues_the_line():
+    # forecast refused a TrendedModel ("fit a linear model"): it forecasts the inner model
+    # on the record less the trend and adds the trend back at the forecast's instants
+    raw = _raw(1500, 4, slope_y=0.2)
+    parts = raw.split(2 / 3)
+    est, val = parts.estimation, parts.validation
+    d, tr = sysid.detrend(est, "linear", return_trend=True)
+    inner = sysid.n4sid(d, 2)
+    m = tr.attach(inner)
+    past = val.slice(0, 300)
+    fu = val.u[300:305]
+    f = sysid.forecast(m, past, 5, future_inputs=fu)
+    np.testing.assert_allclose(f.t, past.time[-1] + 0.5 * np.arange(1, 6), atol=1e-12)
+    s = (f.t - est.time[0])[:, None]      # seconds on the estimation record's clock
+    ref = sysid.forecast(inner, tr.apply(past), 5,
+                         future_inputs=fu - tr.u_offset - tr.u_slope * s)
+    np.testing.assert_allclose(f.mean, ref.mean + tr.y_offset + tr.y_slope * s, atol=1e-9)
+    np.testing.assert_allclose(f.std, ref.std, atol=1e-12)
+    np.testing.assert_allclose(f.mean, val.y[300:305], atol=0.3)   # raw units, near 400
