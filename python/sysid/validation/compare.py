@@ -109,7 +109,7 @@ def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndar
                         "sampled(dt) or c2d(dt) method to meet sampled data")
     if isinstance(data, IOData) and not np.isclose(data.dt, model.dt, rtol=1e-9):
         raise DataError(
-            f"the data are sampled every {data.dt:g} s but the model every {model.dt:g} s; "
+            f"the data are sampled every {data.dt:.10g} s but the model every {model.dt:.10g} s; "
             "resample the data or use a model of the same sample time"
         )
     return model, recs
