@@ -44,6 +44,41 @@ def test_time_vector_gives_dt_and_start() -> None:
     np.testing.assert_allclose(d.time, t)
 
 
+def test_single_precision_time_and_dt_give_the_decimal_sample_time() -> None:
+    # float32 instants at 0.1 s: their median spacing is 0.10000038147 (the rounding of one
+    # spacing), and compare/merge then refused the record against dt = 0.1 with a message
+    # printing both as 0.1; the mean spacing (end points) is 0.1 within the rounding
+    pd = pytest.importorskip("pandas")
+    t32 = (np.arange(300) * 0.1).astype(np.float32)
+    assert float(np.median(np.diff(t32.astype(float)))) == pytest.approx(0.10000038147)
+    assert sysid.sample_time(t32) == 0.1
+    for start, dt in ((7.0, 0.05), (100.0, 0.02), (0.0, 0.001)):
+        t = (start + np.arange(2000) * dt).astype(np.float32)
+        assert sysid.sample_time(t) == dt
+    # double-precision instants with jitter: the mean spacing, not the median
+    t = np.cumsum(np.r_[0.0, np.tile([0.0995, 0.1, 0.1008], 40)])
+    assert sysid.sample_time(t) == pytest.approx((t[-1] - t[0]) / (t.size - 1), rel=1e-9)
+    assert sysid.sample_time(t) != pytest.approx(0.1, rel=1e-6)
+    rng = np.random.default_rng(1)
+    u = rng.standard_normal(300)
+    m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]], dt=0.1)
+    y = m.simulate(u)[:, 0]
+    d = sysid.IOData.from_pandas(pd.DataFrame({"t": t32, "u0": u, "y0": y}), ["u0"], ["y0"],
+                                 time="t")
+    assert d.dt == 0.1
+    assert sysid.compare(m, d).fit[0, 0] > 99.99
+    plain = sysid.IOData(u=u, y=y, dt=0.1)
+    assert plain.merge(d).dt == 0.1
+    # a float32 dt is the decimal the user wrote, not 0.10000000149
+    d32 = sysid.IOData(u=u, y=y, dt=np.float32(0.1))
+    assert d32.dt == 0.1 and plain.merge(d32).n_experiments == 2
+    # a real mismatch prints enough digits to show it
+    with pytest.raises(DataError, match=r"dt = 0\.1000001 s but the first has 0\.1 s"):
+        plain.merge(sysid.IOData(u=u, y=y, dt=0.1000001))
+    with pytest.raises(DataError, match=r"every 0\.1000001 s but the model every 0\.1 s"):
+        sysid.compare(m, sysid.IOData(u=u, y=y, dt=0.1000001))
+
+
 @pytest.mark.parametrize(
     "t, match",
     [

@@ -204,3 +204,45 @@ def test_arma_std_is_calibrated_by_monte_carlo():
     assert np.all((ratio > 0.8) & (ratio < 1.2)), ratio
     cover = (np.abs(est - [-0.7, 0.5]) < 1.96 * sd).mean(axis=0)
     assert np.all((cover > 0.90) & (cover < 0.99)), cover
+
+
+def test_forecast_continues_the_records_clock():
+    # the times started at t = 0 whatever the record's start: 3 steps after
+    # d.slice(200, 300) at dt = 0.5 were [50, 50.5, 51], and plot() drew the past from 0
+    matplotlib = pytest.importorskip("matplotlib")
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    d = sysid.IOData(None, _ar2(400, 31), 0.5)
+    m = sysid.ar(d, 2)
+    past = d.slice(200, 300)
+    f = sysid.forecast(m, past, 3)
+    np.testing.assert_allclose(f.t, [150.0, 150.5, 151.0], atol=1e-12)
+    assert f.to_pandas().index.tolist() == pytest.approx([150.0, 150.5, 151.0])
+    np.testing.assert_allclose(f.mean, sysid.forecast(m, past.y, 3).mean, rtol=1e-12)
+    fig = f.plot(n_past=50)
+    np.testing.assert_allclose(fig.axes[0].lines[0].get_xdata(), past.time[-50:])
+    plt.close(fig)
+
+
+def test_forecast_with_inputs_takes_a_u_y_pair_and_says_what_is_missing():
+    # the k-step forecast equals the model's own k-step predictor (which sees the inputs up
+    # to the predicted sample and the outputs k samples earlier)
+    rng = np.random.default_rng(32)
+    m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]], K=[[0.5]], dt=1.0)
+    N, k = 200, 4
+    u, e = rng.standard_normal((2, N + k, 1))
+    x, y = 0.0, np.empty((N + k, 1))
+    for t in range(N + k):
+        y[t] = x + e[t]
+        x = 0.9 * x + u[t, 0] + 0.5 * e[t, 0]
+    f = sysid.forecast(m, (u[:N], y[:N]), k, future_inputs=u[N:])
+    pred = np.vstack([m.predict(u[: N + j], y[: N + j], j)[-1] for j in range(1, k + 1)])
+    np.testing.assert_allclose(f.mean, pred, rtol=1e-10, atol=1e-12)
+    f_io = sysid.forecast(m, sysid.IOData(u[:N], y[:N], 1.0), k, future_inputs=u[N:])
+    np.testing.assert_allclose(f.mean, f_io.mean, rtol=1e-12)
+    # outputs alone: the core's "u has shape (100, 1) but should have shape (samples, 2)"
+    with pytest.raises(sysid.DataError, match=r"past inputs.*IOData or a pair \(u, y\)"):
+        sysid.forecast(m, y[:N], k, future_inputs=u[N:])
+    with pytest.raises(sysid.ShapeError, match="200 samples but the past outputs 199"):
+        sysid.forecast(m, (u[:N], y[:N - 1]), k, future_inputs=u[N:])

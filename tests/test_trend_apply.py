@@ -107,3 +107,48 @@ def test_linear_trend_continues_on_the_later_part_of_the_same_record():
     np.testing.assert_allclose(raw_fit.yhat[0], inner.yhat[0] + (val.y - v.y), atol=1e-9)
     assert abs(raw_fit.yhat[0].mean() - val.y.mean()) < 0.5
     assert raw_fit.fit[0, 0] > 90
+
+
+def test_residuals_and_criteria_of_a_trended_model_on_the_later_part_of_a_record():
+    # TrendedModel.predict evaluates the trend from t = 0 and starts from rest: on the
+    # validation part of a drifting record its errors were the slope times the elapsed
+    # time (residuals "NOT white p=1e-39", criteria loss 46 x too large); they are the inner
+    # model's on tr.apply(val), with its initial state estimated there
+    raw = _raw(1500, 3, slope_y=0.2)
+    parts = raw.split(2 / 3)
+    est, val = parts.estimation, parts.validation
+    d, tr = sysid.detrend(est, "linear", return_trend=True)
+    inner = sysid.n4sid(d, 2)
+    m, v = tr.attach(inner), tr.apply(val)
+    r, ref = sysid.residuals(m, val), sysid.residuals(inner, v)
+    np.testing.assert_allclose(r.e[0], ref.e[0], atol=1e-9)
+    np.testing.assert_allclose(r.ljung_box, ref.ljung_box, rtol=1e-9)
+    assert np.abs(r.e[0]).mean() < 0.1       # the noise is 0.05; the slope alone is ~0.2 t
+    c, cref = sysid.criteria(m, val), sysid.criteria(inner, v)
+    assert c.loss == pytest.approx(cref.loss, rel=1e-9) and c.n_params == cref.n_params
+    assert c.loss < 2 * 0.05**2
+    # a (u, y) pair is on the estimation record's clock from t = 0, as tr.apply of a record
+    # that starts at 0
+    r0 = sysid.residuals(m, (est.u, est.y))
+    np.testing.assert_allclose(r0.e[0], sysid.residuals(inner, d).e[0], atol=1e-9)
+
+
+def test_forecast_of_a_trended_model_continues_the_line():
+    # forecast refused a TrendedModel ("fit a linear model"): it forecasts the inner model
+    # on the record less the trend and adds the trend back at the forecast's instants
+    raw = _raw(1500, 4, slope_y=0.2)
+    parts = raw.split(2 / 3)
+    est, val = parts.estimation, parts.validation
+    d, tr = sysid.detrend(est, "linear", return_trend=True)
+    inner = sysid.n4sid(d, 2)
+    m = tr.attach(inner)
+    past = val.slice(0, 300)
+    fu = val.u[300:305]
+    f = sysid.forecast(m, past, 5, future_inputs=fu)
+    np.testing.assert_allclose(f.t, past.time[-1] + 0.5 * np.arange(1, 6), atol=1e-12)
+    s = (f.t - est.time[0])[:, None]      # seconds on the estimation record's clock
+    ref = sysid.forecast(inner, tr.apply(past), 5,
+                         future_inputs=fu - tr.u_offset - tr.u_slope * s)
+    np.testing.assert_allclose(f.mean, ref.mean + tr.y_offset + tr.y_slope * s, atol=1e-9)
+    np.testing.assert_allclose(f.std, ref.std, atol=1e-12)
+    np.testing.assert_allclose(f.mean, val.y[300:305], atol=0.3)   # raw units, near 400

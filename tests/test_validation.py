@@ -329,3 +329,79 @@ def test_residual_table():
     u, y = innovation_data(m, 400, seed=18)
     df = sysid.residuals(m, (u, y)).to_pandas()
     assert list(df["output"]) == ["y0"] and bool(df["white"][0])
+
+
+def test_independence_test_has_its_nominal_size_when_lags_are_many():
+    """With the correct model the residual is white and independent of the input: the test
+    rejects alpha of the time, also when the m (M + 1) regressors are not few next to the
+    samples (the chi2(m (M + 1)) law of S rejected 2.6 % at 5 % for N = 100, M = 20, and
+    0.0 % at 1 % for 5 inputs, N = 300, M = 25). 2000 seeded draws each: the binomial
+    standard deviation is 0.49 % at 5 % and 0.22 % at 1 %; the bounds are 2.7 of them."""
+    rng = np.random.default_rng(21)
+    for N, M, m, alpha, lo, hi in ((100, 20, 1, 0.05, 0.037, 0.063),
+                                   (300, 25, 5, 0.01, 0.004, 0.016)):
+        model = sysid.StateSpaceModel(np.zeros((1, 1)), np.zeros((1, m)), [[0.0]], dt=1.0)
+        rejected = 0
+        for _ in range(2000):
+            res = ResidualAnalysis(model, [rng.standard_normal((N, 1))],
+                                   [rng.standard_normal((N, m))], M, alpha)
+            rejected += int(not res.independence[0])
+        assert lo < rejected / 2000 < hi, (N, M, m, rejected / 2000)
+
+
+def test_independence_pvalue_is_the_regression_f_test():
+    """The p-value equals an ordinary least-squares F test of the residual on
+    [u(t), ..., u(t - M)] computed here with numpy and scipy."""
+    import scipy.stats
+
+    rng = np.random.default_rng(22)
+    N, M, m = 80, 6, 2
+    u = rng.standard_normal((N, m))
+    e = rng.standard_normal((N, 1)) + 0.3 * np.roll(u[:, :1], 2)
+    model = sysid.StateSpaceModel(np.zeros((1, 1)), np.zeros((1, m)), [[0.0]], dt=1.0)
+    res = ResidualAnalysis(model, [e], [u], M, 0.01)
+    ec, uc = e - e.mean(0), u - u.mean(0)
+    phi = np.hstack([uc[M - k: N - k] for k in range(M + 1)])
+    target = ec[M:, 0]
+    rss = np.sum((target - phi @ np.linalg.lstsq(phi, target, rcond=None)[0]) ** 2)
+    n, p = N - M, m * (M + 1)
+    F = ((target @ target - rss) / p) / (rss / (n - p))
+    assert res.independence_pvalue[0] == pytest.approx(scipy.stats.f.sf(F, p, n - p),
+                                                       rel=1e-8)
+    assert res.independence_dof == (p, n - p)
+    assert res.independence_stat[0] == pytest.approx(n * (1 - rss / (target @ target)))
+
+
+def test_independence_not_tested_on_a_record_too_short_for_the_lags():
+    """67 samples, 5 inputs, max_lag 25: 42 samples with a full past for 130 regressors fit
+    any residual exactly (S = 42, p = 1 before: a model ignoring the inputs passed). The
+    test is reported as not made, with the largest lag that can be tested; at that lag the
+    same model is rejected."""
+    rng = np.random.default_rng(23)
+    u = rng.standard_normal((67, 5))
+    y = u @ rng.standard_normal((5, 3)) + 0.1 * rng.standard_normal((67, 3))
+    zero = sysid.StateSpaceModel(np.zeros((1, 1)), np.zeros((1, 5)), np.zeros((3, 1)),
+                                 dt=1.0)
+    with pytest.warns(UserWarning, match=r"not tested.*max_lag <= 9"):
+        res = sysid.residuals(zero, (u, y))
+    assert np.all(np.isnan(res.independence_pvalue)) and list(res.independence) == [None] * 3
+    assert "n/a" in res.summary() and "NO" not in res.summary().split("indep.")[-1]
+    res9 = sysid.residuals(zero, (u, y), max_lag=9)  # 58 rows, 50 regressors
+    assert res9.independence_dof == (50, 8)
+    assert np.all(res9.independence_pvalue < 1e-3)
+    assert list(res9.independence) == [False] * 3
+
+
+def test_time_series_residuals_report_independence_as_not_applicable():
+    pytest.importorskip("pandas")
+    rng = np.random.default_rng(24)
+    y = np.zeros(500)
+    e = rng.standard_normal(500)
+    for t in range(1, 500):
+        y[t] = 0.8 * y[t - 1] + e[t]
+    res = sysid.residuals(sysid.ar(sysid.IOData(u=None, y=y), 1), sysid.IOData(u=None, y=y))
+    assert res.is_white and res.independence[0] is None
+    row = next(r for r in res.summary().splitlines() if r.startswith("y0 ")).split()
+    assert row[-1] == "n/a" and row[3] == "yes"
+    df = res.to_pandas()
+    assert df["independent"].isna().all() and not (df["independent"] == False).any()  # noqa: E712

@@ -95,10 +95,18 @@ def as_option(value: Any, option: str, name: str | None = None) -> str:
 
 
 def as_dt(dt: Any, name: str = "dt") -> float:
-    """A sample time in seconds: a finite positive number (not a bool, not None)."""
+    """A sample time in seconds: a finite positive number (not a bool, not None).
+
+    A single-precision value (``np.float32(0.1)``, which is 0.10000000149...) becomes the
+    double nearest its decimal form (0.1): the value the user wrote, so that it matches the
+    sample time of other records and models.
+    """
     if dt is None or isinstance(dt, (bool, np.bool_, str, bytes)):
         raise DataError(f"{name} must be a positive number of seconds, got {dt!r}")
     try:
+        arr = np.asarray(dt)
+        if arr.dtype.kind == "f" and arr.dtype.itemsize < 8 and arr.size == 1:
+            dt = np.format_float_scientific(arr.reshape(())[()], unique=True)
         val = float(dt)
     except (TypeError, ValueError):
         raise DataError(f"{name} must be a positive number of seconds, got {dt!r}") from None

@@ -225,6 +225,7 @@ def _summary(model: Any, facts: dict[str, Any], sel: Any,
                      f"{res.ljung_box_pvalue[j]:.3g}",
                      status(bool(res.whiteness[j]), "white", "not white"),
                      f"{res.independence_pvalue[j]:.3g}",
+                     "n/a" if res.independence[j] is None else
                      status(bool(res.independence[j]), "independent", "correlated")])
     head = ["output", f"{which} simulation fit %", "1-step fit %", "whiteness p",
             "residuals", "independence p", "residual vs input"]
@@ -242,7 +243,7 @@ def _summary(model: Any, facts: dict[str, Any], sel: Any,
     elif not all(res.whiteness):
         lines.append("<p>Residuals not white: the noise model or some dynamics are missing; "
                      "try a higher order or a prediction-error refinement (sysid.ssest).</p>")
-    if not all(res.independence):
+    if any(ok is not None and not ok for ok in res.independence):
         lines.append("<p>Residuals correlated with the input: dynamics are missing (or the "
                      "data are closed-loop); try a higher order or check feedback "
                      "(sysid.check_feedback).</p>")
@@ -272,7 +273,8 @@ def _fit_body(page: Page, model: Any, sim: Any, pred: Any, res: Any, data: IODat
 def _residual_body(page: Page, res: Any) -> str:
     rows = [[name, f"{res.ljung_box[j]:.4g}", f"{res.ljung_box_pvalue[j]:.3g}",
              "yes" if res.whiteness[j] else "no", f"{res.independence_stat[j]:.4g}",
-             f"{res.independence_pvalue[j]:.3g}", "yes" if res.independence[j] else "no"]
+             f"{res.independence_pvalue[j]:.3g}",
+             "n/a" if res.independence[j] is None else "yes" if res.independence[j] else "no"]
             for j, name in enumerate(res.output_names)]
     return (f"<p>One-step prediction errors, lags up to {res.max_lag}, level "
             f"{100 * res.alpha:g} %; bound {res.bound:.3g}.</p>" + page.table(

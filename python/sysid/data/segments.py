@@ -257,7 +257,7 @@ def merge(data: Any, *others: Any) -> Any:
                 )
         if abs(o.dt - data.dt) > 1e-9 * data.dt:
             raise DataError(
-                f"record {k + 1} has dt = {o.dt:g} s but the first has {data.dt:g} s; "
+                f"record {k + 1} has dt = {o.dt:.10g} s but the first has {data.dt:.10g} s; "
                 "resample first (sysid.resample)"
             )
         if not (

@@ -82,19 +82,22 @@ def check_unit(unit: Any, channel: str = "channel") -> str:
 
 
 def sample_time(time: Any, *, rtol: float = 0.01) -> float:
-    """The sample time of a time vector: its median spacing, after checking it is uniform.
+    """The sample time of a time vector: its mean spacing, after checking it is uniform.
 
     Parameters
     ----------
     time : array_like
         Sample instants in seconds, 1-D, at least two.
     rtol : float
-        Largest accepted relative deviation of any spacing from the median.
+        Largest accepted relative deviation of any spacing from the median spacing.
 
     Returns
     -------
     float
-        The median spacing.
+        The mean spacing ``(t[-1] - t[0]) / (n - 1)``, as the shortest decimal within the
+        rounding of the instants (single-precision instants included:
+        ``np.arange(300, dtype=np.float32) * 0.1`` gives 0.1, where their median spacing
+        is 0.10000038).
 
     Raises
     ------
@@ -108,6 +111,8 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
     >>> import numpy as np, sysid
     >>> sysid.sample_time(np.arange(100) * 0.02 + 5.0)
     0.02
+    >>> sysid.sample_time((np.arange(300) * 0.1).astype(np.float32))
+    0.1
     """
     t = np.asarray(time, dtype=float)
     if t.ndim != 1 or t.size < 2:
@@ -135,6 +140,18 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
             "resample onto a uniform grid with sysid.IOData.from_irregular(time, u, y, dt), "
             "or cut the record at the gap"
         )
-    # round-off of summed float steps: report a clean value when it is one
+    # the mean spacing, from the end points: the median of single-precision instants is off
+    # by their rounding (float32 seconds at 0.1 s: 0.10000038 s), the mean by it / (n - 1)
+    h = float(t[-1] - t[0]) / (t.size - 1)
+    # the shortest decimal the instants cannot tell from h (their rounding: float32 when
+    # every instant is a float32 value), else the 12-digit one within 1e-9 (summed steps)
+    with np.errstate(over="ignore"):
+        single = bool(np.all(t.astype(np.float32) == t))
+    eps = np.finfo(np.float32 if single else np.float64).eps
+    res = 2 * eps * max(abs(t[0]), abs(t[-1])) / (t.size - 1)
+    for digits in range(1, 16):
+        r = float(f"{h:.{digits}g}")
+        if abs(r - h) <= res:
+            return r
     r = float(f"{h:.12g}")
     return r if abs(r - h) <= 1e-9 * h else h

@@ -678,8 +678,8 @@ def _checked_validation(validation: Any, data: IOData) -> IOData | None:
                         f"{validation.n_outputs} output(s), the estimation data "
                         f"{data.n_inputs} and {data.n_outputs}: give the same channels")
     if abs(float(validation.dt) - float(data.dt)) > 1e-9 * float(data.dt):
-        raise DataError(f"validation is sampled every {validation.dt:g} s, the estimation "
-                        f"data every {data.dt:g} s: resample one of them (sysid.resample)")
+        raise DataError(f"validation is sampled every {validation.dt:.10g} s, the estimation "
+                        f"data every {data.dt:.10g} s: resample one of them (sysid.resample)")
     if min(validation.lengths) < 2:  # one sample is "constant": say what is wrong
         raise InsufficientDataError(
             f"the validation record is too short ({min(validation.lengths)} sample in an "

@@ -22,6 +22,7 @@ import numpy as np
 
 from .._checks import as_2d, as_int
 from ..errors import DataError, ShapeError
+from ..models.trended import TrendedModel
 
 
 class Forecast:
@@ -160,11 +161,17 @@ def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
 
     Parameters
     ----------
-    model : StateSpaceModel or PolynomialModel
+    model : StateSpaceModel, PolynomialModel, TrendedModel or identify's model
         A model with a noise model: ``ar``/``arma`` results, or a state-space model in
-        innovation form (``n4sid``/``ssest`` of time series or of input/output data).
-    past : IOData or array_like (n_samples, noutputs)
-        The record the forecast continues (its last sample is the last one known).
+        innovation form (``n4sid``/``ssest`` of time series or of input/output data). A
+        :class:`~sysid.models.trended.TrendedModel` (``trend.attach(model)``) or the model
+        of :func:`sysid.identify` forecasts raw data: the trend (offsets) is removed from
+        the record and added back to the forecast at its own instants.
+    past : IOData, (u, y) pair or array_like (n_samples, noutputs)
+        The record the forecast continues (its last sample is the last one known). A model
+        with inputs needs the past inputs too: an IOData or a pair ``(u, y)``. The forecast
+        continues an IOData's clock (its start time and sample time); an array or a pair
+        starts at ``t = 0`` with the model's sample time.
     horizon : int
         Number of samples to forecast.
     future_inputs : array_like (horizon, ninputs), optional
@@ -175,49 +182,44 @@ def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
     Returns
     -------
     Forecast
-        ``mean``, ``std``, ``covariance``, ``lower``/``upper``, ``plot()``, ``to_pandas()``.
+        ``t``, ``mean``, ``std``, ``covariance``, ``lower``/``upper``, ``plot()``,
+        ``to_pandas()``.
 
     Examples
     --------
     >>> import numpy as np, sysid
-    >>> m = sysid.polynomial.model.PolynomialModel([[[-0.8]]], [[]], np.zeros((1, 0)), 1.0)
+    >>> m = sysid.PolynomialModel([[[-0.8]]], [[]], np.zeros((1, 0)), 1.0)
     >>> f = sysid.forecast(m, [0.0, 0.0, 1.0], 3)     # y(t) = 0.8 y(t-1) + e(t), var e = 1
     >>> f.mean[:, 0]
     array([0.8  , 0.64 , 0.512])
     >>> np.round(f.std[:, 0] ** 2, 4)                 # 1, 1 + 0.8^2, 1 + 0.8^2 + 0.8^4
     array([1.    , 1.64  , 2.0496])
+    >>> f.t                                           # the samples after t = 0, 1, 2
+    array([3., 4., 5.])
     """
-    from ..data.iodata import IOData
-
-    if hasattr(model, "remove_offsets") and hasattr(model, "statespace"):
-        # sysid.identify's model: forecast its deviations, then put the offsets back
-        dev = model.remove_offsets(past) if isinstance(past, IOData) else (
-            as_2d(past, "past", ncols=model.noutputs) - model.y_offset)
-        fu = None if future_inputs is None else (
-            as_2d(future_inputs, "future_inputs", ncols=model.ninputs) - model.u_offset)
-        f = forecast(model.statespace, dev, horizon, future_inputs=fu, level=level)
-        return Forecast(f.t, f.mean + model.y_offset, f.covariance, f.level,
-                        f.output_names, f._past + model.y_offset, f._past_t)
     h = as_int(horizon, "horizon", 1)
     if not (isinstance(level, (int, float)) and 0 < level < 1):
         raise DataError(f"level must be a number in (0, 1), e.g. 0.95; got {level!r}")
-    A, B, C, D, K, lam = _innovation_form(model)
+    inner, trend, offsets = _unwrap(model)
+    A, B, C, D, K, lam = _innovation_form(inner)
     n, m, l = A.shape[0], B.shape[1], C.shape[0]
-    if isinstance(past, IOData):
-        u, y, dt = past.u, past.y, past.dt
-        if len(past.experiments) > 1:
-            raise DataError("forecast continues one record: pass one experiment "
-                            "(data.experiment(i)) as past")
-    else:
-        y, u, dt = as_2d(past, "past", ncols=l), None, float(getattr(model, "dt", 1.0) or 1.0)
-    y = as_2d(y, "past", ncols=l)
-    u = np.zeros((y.shape[0], 0)) if u is None else as_2d(u, "past inputs", ncols=m,
-                                                            allow_empty=True)
+    u, y, t, dt = _past(model, past, l, m, h, future_inputs)
     if m and future_inputs is None:
         raise DataError(f"the model has {m} input(s): give future_inputs of shape ({h}, {m})")
     uf = np.zeros((h, 0)) if not m else as_2d(future_inputs, "future_inputs", ncols=m)
     if uf.shape[0] != h:
         raise ShapeError(f"future_inputs has {uf.shape[0]} rows but horizon is {h}")
+    y_raw, tf = y, t[-1] + dt * np.arange(1, h + 1)
+    scale, add = np.ones(l), np.zeros((h, l))
+    if trend is not None:  # on the trend's clock: the record's and the forecast's instants
+        start, N = trend.start_of(t[0]), y.shape[0]
+        u = (u - trend.values(N, "u", dt, start)) / trend.u_scale
+        y = (y - trend.values(N, "y", dt, start)) / trend.y_scale
+        uf = (uf - trend.values(h, "u", dt, start + N * dt)) / trend.u_scale
+        scale, add = np.asarray(trend.y_scale, float), trend.values(h, "y", dt, start + N * dt)
+    if offsets is not None:  # identify's model: the deviations about its operating point
+        u, y, uf = u - offsets[0], y - offsets[1], uf - offsets[0]
+        add = add + scale * offsets[1]
     xs = _predictor_states(A, B, C, D, K, u, y)
     x = xs[-1]
     e = y - xs[:-1] @ C.T - u @ D.T
@@ -235,7 +237,54 @@ def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
         M = C @ Ak @ K
         Ak = A @ Ak
         S = S + M @ lam @ M.T
-    t0 = y.shape[0] * dt
     names = list(getattr(model, "output_names", [f"y{i}" for i in range(l)]))
-    return Forecast(t0 + dt * np.arange(h), mean, cov, float(level), names, y,
-                    dt * np.arange(y.shape[0]))
+    return Forecast(tf, mean * scale + add, cov * np.outer(scale, scale)[None], float(level),
+                    names, y_raw, t)
+
+
+def _unwrap(model: Any) -> tuple[Any, Any, tuple[np.ndarray, np.ndarray] | None]:
+    """The linear model inside ``model``, the trend a :class:`TrendedModel` removes and
+    the ``(u, y)`` offsets of identify's model (None where there are none)."""
+    trend = offsets = None
+    if isinstance(model, TrendedModel):
+        model, trend = model.model, model.trend
+    if hasattr(model, "remove_offsets") and hasattr(model, "statespace"):
+        offsets = (np.asarray(model.u_offset, float).ravel(),
+                   np.asarray(model.y_offset, float).ravel())
+        model = model.statespace
+    return model, trend, offsets
+
+
+def _past(model: Any, past: Any, l: int, m: int, h: int,
+          future_inputs: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """``(u, y, t, dt)`` of the past record: an IOData's own, or of an array or a ``(u, y)``
+    pair from ``t = 0`` at the model's sample time."""
+    from ..data.iodata import IOData
+
+    if isinstance(past, IOData):
+        if len(past.experiments) > 1:
+            raise DataError("forecast continues one record: pass one experiment "
+                            "(data.experiment(i)) as past")
+        u, y, t, dt = past.u, past.y, past.time, float(past.dt)
+    else:
+        dt = float(getattr(model, "dt", 1.0) or 1.0)
+        if (isinstance(past, tuple) and len(past) == 2
+                and all(a is None or np.ndim(a) >= 1 for a in past)):
+            u, y = past
+        elif m:
+            raise DataError(
+                f"the model has {m} input(s): forecast needs the past inputs as well as the "
+                "past outputs; pass past as a sysid.IOData or a pair (u, y)"
+                + ("" if future_inputs is not None else
+                   f", and give future_inputs of shape ({h}, {m})"))
+        else:
+            u, y = None, past
+        y = as_2d(y, "past", ncols=l)
+        t = dt * np.arange(y.shape[0])
+    y = as_2d(y, "past", ncols=l)
+    u = np.zeros((y.shape[0], 0)) if u is None else as_2d(u, "past inputs", ncols=m,
+                                                            allow_empty=True)
+    if u.shape[0] != y.shape[0]:
+        raise ShapeError(f"the past inputs have {u.shape[0]} samples but the past outputs "
+                         f"{y.shape[0]}")
+    return u, y, np.asarray(t, float), dt

@@ -6,7 +6,7 @@
 :func:`residuals` (in :mod:`sysid.validation.residuals`)
     Auto-correlation of the one-step prediction errors and their cross-correlation with the
     inputs, with confidence bounds, a Ljung-Box portmanteau test of whiteness per output and
-    Ljung's chi-square test of independence from past inputs.
+    Ljung's test of independence from past inputs (an exact regression F test).
 :func:`error_spectrum`
     Power spectrum of the simulation error beside that of the output: the frequencies at
     which a model is wrong stand out.
@@ -41,6 +41,7 @@ from .._display import HTMLResult
 from ..data.iodata import IOData
 from ..errors import DataError, NumericalError, ShapeError
 from ..models.checks import check_model
+from ..models.trended import TrendedModel
 
 __all__ = [
     "CompareResult",
@@ -59,11 +60,21 @@ def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndar
     """The model at the data's rate and the experiments of ``data`` as (u, y) pairs,
     checked against the model's channels.
 
+    A :class:`~sysid.models.trended.TrendedModel` is replaced by its inner model and the
+    data by ``trend.apply(data)`` (the trend at the record's own instants), so residuals and
+    criteria are those of the model on the detrended record, its initial state estimated
+    there.
+
     A continuous-time model (``dt == 0``) is replaced by the model at the data's sample
     time: :meth:`~sysid.ContinuousStateSpace.sampled` (exact hold, continuous initial
     state), or ``c2d(dt)`` for another continuous class.
     """
     check_model(model)
+    if isinstance(model, TrendedModel):  # the inner model on the record less the trend
+        if isinstance(data, tuple) and len(data) == 2:
+            data = IOData(u=data[0], y=data[1], dt=model.dt)
+        if isinstance(data, IOData):
+            data, model = model.trend.apply(data), model.model
     if _operating_point(model):  # residuals are the same about the offsets: use its inside
         data, model = model.remove_offsets(data), model.statespace
     if isinstance(data, IOData):
@@ -98,7 +109,7 @@ def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndar
                         "sampled(dt) or c2d(dt) method to meet sampled data")
     if isinstance(data, IOData) and not np.isclose(data.dt, model.dt, rtol=1e-9):
         raise DataError(
-            f"the data are sampled every {data.dt:g} s but the model every {model.dt:g} s; "
+            f"the data are sampled every {data.dt:.10g} s but the model every {model.dt:.10g} s; "
             "resample the data or use a model of the same sample time"
         )
     return model, recs
@@ -495,8 +506,6 @@ def compare(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
 
 def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareResult:
     """:func:`compare` for one model."""
-    from ..models.trended import TrendedModel
-
     if isinstance(model, TrendedModel):  # compare the inner model on the detrended record
         if not isinstance(data, IOData):
             data = IOData(u=data[0], y=data[1], dt=model.dt)

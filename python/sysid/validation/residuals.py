@@ -2,21 +2,26 @@
 
 :func:`residuals` correlates the innovations of any :class:`sysid.Model` with themselves and
 with the inputs, with confidence bounds, a Ljung-Box portmanteau test of whiteness per output
-and Ljung's chi-square test of independence from past inputs.
+and Ljung's test of independence from past inputs (as an exact regression F test).
 """
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
 
-from .._checks import as_int
+from .._checks import as_int, user_stacklevel
 from .._display import HTMLResult
 from ..errors import DataError
 from .compare import X0, _records, _run, _simulator, _x0_for
 
 __all__ = ["ResidualAnalysis", "residuals"]
+
+# fewest residual degrees of freedom (samples with a full past minus regressors) for which
+# the independence test is reported; below, the regression is (nearly) exact and says nothing
+_MIN_RESIDUAL_DOF = 5
 
 
 def _xcorr_sums(a: np.ndarray, b: np.ndarray, lags: np.ndarray) -> np.ndarray:
@@ -31,6 +36,15 @@ def _xcorr_sums(a: np.ndarray, b: np.ndarray, lags: np.ndarray) -> np.ndarray:
         else:
             out[k] = a[: N + tau].T @ b[-tau:]
     return out
+
+
+def _largest_testable_lag(lengths: list[int], m: int, below: int) -> int:
+    """The largest ``M < below`` for which experiments of ``lengths`` samples leave at least
+    ``_MIN_RESIDUAL_DOF`` rows beyond the ``m (M + 1)`` regressors; 0 if none."""
+    for M in range(below - 1, 0, -1):
+        if sum(max(n - M, 0) for n in lengths) - m * (M + 1) >= _MIN_RESIDUAL_DOF:
+            return M
+    return 0
 
 
 class ResidualAnalysis(HTMLResult):
@@ -59,10 +73,21 @@ class ResidualAnalysis(HTMLResult):
         ``p >= alpha`` per output: whiteness is not rejected.
     independence_stat, independence_pvalue : ndarray
         Ljung's (1999, eq. 16.62) test per output: ``S = N r^T R_phi^{-1} r / lambda`` with
-        ``r`` the covariances of the residual with ``phi(t) = [u(t); ...; u(t - M)]``,
-        ``R_phi`` the covariance of ``phi``; ``chi2(m (M + 1))`` under independence.
-    independence : ndarray of bool
-        ``p >= alpha`` per output.
+        ``r`` the covariances of the residual with ``phi(t) = [u(t); ...; u(t - M)]`` over
+        the ``n`` samples with a full past, ``R_phi`` the covariance of ``phi``. ``S / n`` is
+        the ``R^2`` of the least-squares regression of the residual on ``phi``; the p-value
+        is that of the exact regression F test, ``F = (R^2/p) / ((1 - R^2)/(n - p))``
+        against ``F(p, n - p)``, ``p = m (M + 1)`` (the rank of ``phi``). Its large-sample
+        limit ``chi2(p)`` for ``S`` holds its size only for ``p`` small next to ``n``.
+        NaN where the test is not made (no inputs, or fewer than ``p + 5`` samples with a
+        full past: the regression then fits any residual; see :attr:`independence_note`).
+    independence_dof : tuple of int
+        ``(p, n - p)`` of the F test, ``(0, 0)`` when not made.
+    independence : ndarray of object
+        Per output ``True`` (``p >= alpha``: independence not rejected), ``False``, or
+        ``None`` where the test is not made.
+    independence_note : str
+        Why the independence test is not made (empty when it is).
     """
 
     def __init__(self, model: Any, e: list[np.ndarray], u: list[np.ndarray],
@@ -96,25 +121,52 @@ class ResidualAnalysis(HTMLResult):
         self.whiteness = self.ljung_box_pvalue >= alpha
         self.independence_stat = np.full(len(se), np.nan)
         self.independence_pvalue = np.full(len(se), np.nan)
+        self.independence_dof = (0, 0)
+        self.independence_note = ("" if m else
+                                  "independence not tested: the model has no inputs")
         if m:
-            # phi(t) = [u(t); u(t-1); ...; u(t-M)], over samples with a full past
-            rows_phi, rows_e = [], []
-            for a, b in zip(ec, uc):
-                if b.shape[0] <= M:
-                    continue
-                rows_phi.append(np.hstack([b[M - k: b.shape[0] - k] for k in range(M + 1)]))
-                rows_e.append(a[M:])
-            if rows_phi:
-                phi, ee = np.vstack(rows_phi), np.vstack(rows_e)
-                n_eff = phi.shape[0]
-                Rphi = phi.T @ phi / n_eff
-                rr = ee.T @ phi / n_eff  # (l, m (M + 1))
-                lam = np.mean(ee**2, axis=0)
-                sol = np.linalg.lstsq(Rphi, rr.T, rcond=1e-12)[0]  # (m(M+1), l)
-                self.independence_stat = n_eff * np.einsum("ij,ji->i", rr, sol) / lam
-                self.independence_pvalue = scipy.stats.chi2.sf(self.independence_stat,
-                                                               m * (M + 1))
-        self.independence = self.independence_pvalue >= alpha
+            self._independence(ec, uc, M, m)
+        self.independence = np.array(
+            [None if np.isnan(p) else bool(p >= alpha) for p in self.independence_pvalue],
+            dtype=object)
+
+    def _independence(self, ec: list[np.ndarray], uc: list[np.ndarray], M: int,
+                      m: int) -> None:
+        """Ljung's test as the exact regression F test of the residual on ``phi``."""
+        import scipy.stats
+
+        # phi(t) = [u(t); u(t-1); ...; u(t-M)], over samples with a full past
+        rows_phi, rows_e = [], []
+        for a, b in zip(ec, uc):
+            if b.shape[0] <= M:
+                continue
+            rows_phi.append(np.hstack([b[M - k: b.shape[0] - k] for k in range(M + 1)]))
+            rows_e.append(a[M:])
+        n_eff = sum(x.shape[0] for x in rows_e)
+        p = m * (M + 1)
+        if rows_phi:
+            phi, ee = np.vstack(rows_phi), np.vstack(rows_e)
+            Rphi = phi.T @ phi / n_eff
+            rr = ee.T @ phi / n_eff  # (l, m (M + 1))
+            lam = np.maximum(np.mean(ee**2, axis=0), 1e-300)
+            sol, _, p, _ = np.linalg.lstsq(Rphi, rr.T, rcond=1e-12)  # p: rank of phi
+            S = n_eff * np.einsum("ij,ji->i", rr, sol) / lam
+        if not rows_phi or n_eff - p < _MIN_RESIDUAL_DOF or p == 0:
+            fit = _largest_testable_lag([x.shape[0] for x in ec], m, M)
+            self.independence_note = (
+                f"independence not tested: {n_eff} samples with a full past for "
+                f"{m * (M + 1)} regressors ({m} input(s) x {M + 1} lags); "
+                + ("the input does not vary" if rows_phi and p == 0 else
+                   f"use max_lag <= {fit}" if fit > 0 else "the record is too short"))
+            return
+        self.independence_stat = S
+        # S / n_eff is the R^2 of the regression of the residual on phi: under independence
+        # (Gaussian residuals) it is Beta(p/2, (n - p)/2), i.e. F = (R^2/p)/((1-R^2)/(n-p))
+        # follows F(p, n - p); chi2(p) is its large-sample limit and too lenient when p is
+        # not small next to n
+        self.independence_pvalue = scipy.stats.beta.sf(np.clip(S / n_eff, 0.0, 1.0),
+                                                       p / 2, (n_eff - p) / 2)
+        self.independence_dof = (int(p), int(n_eff - p))
 
     @property
     def is_white(self) -> bool:
@@ -122,14 +174,16 @@ class ResidualAnalysis(HTMLResult):
         return bool(np.all(self.whiteness))
 
     def to_pandas(self) -> Any:
-        """One row per output: Ljung-Box and independence statistics with their verdicts."""
+        """One row per output: Ljung-Box and independence statistics with their verdicts
+        (``independent`` is ``<NA>`` where independence is not tested)."""
         import pandas as pd
 
         return pd.DataFrame({
             "output": self.output_names, "ljung_box": self.ljung_box,
             "ljung_box_p": self.ljung_box_pvalue, "white": self.whiteness,
             "independence": self.independence_stat,
-            "independence_p": self.independence_pvalue, "independent": self.independence,
+            "independence_p": self.independence_pvalue,
+            "independent": pd.array(self.independence, dtype="boolean"),
         })
 
     def summary(self) -> str:
@@ -142,11 +196,15 @@ class ResidualAnalysis(HTMLResult):
                  f"{'output':<{w}} {'Ljung-Box Q':>12} {'p':>8} {'white':>6} "
                  f"{'indep. S':>10} {'p':>8} {'indep.':>7}"]
         for i, name in enumerate(self.output_names):
+            ind = self.independence[i]
             lines.append(
                 f"{name:<{w}} {self.ljung_box[i]:12.2f} {self.ljung_box_pvalue[i]:8.3g} "
                 f"{'yes' if self.whiteness[i] else 'NO':>6} {self.independence_stat[i]:10.2f} "
-                f"{self.independence_pvalue[i]:8.3g} {'yes' if self.independence[i] else 'NO':>7}"
+                f"{self.independence_pvalue[i]:8.3g} "
+                f"{'n/a' if ind is None else 'yes' if ind else 'NO':>7}"
             )
+        if self.independence_note:
+            lines.append(self.independence_note)
         return "\n".join(lines)
 
     def plot(self, fig: Any = None) -> Any:
@@ -215,4 +273,8 @@ def residuals(model: Any, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
         x = _x0_for(runner, x0, u, y, 1, i, len(recs))
         es.append(y - _run(runner, u, y, 1, x))
         us.append(u)
-    return ResidualAnalysis(model, es, us, int(max_lag), float(alpha))
+    res = ResidualAnalysis(model, es, us, int(max_lag), float(alpha))
+    if model.ninputs and res.independence_note:
+        warnings.warn(res.independence_note + " (the whiteness test stands)", UserWarning,
+                      stacklevel=user_stacklevel())
+    return res
