@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -405,3 +407,24 @@ def test_time_series_residuals_report_independence_as_not_applicable():
     assert row[-1] == "n/a" and row[3] == "yes"
     df = res.to_pandas()
     assert df["independent"].isna().all() and not (df["independent"] == False).any()  # noqa: E712
+
+
+def test_the_default_lag_of_the_report_and_command_line_keeps_the_independence_test():
+    # 67 samples of 5 inputs (the size of a power plant record's validation third): at
+    # min(25, N / 5) = 13 lags the 70 regressors leave no rows, the test is not made and a
+    # warning says so; the report's and command line's default lag is the largest testable
+    from sysid.validation.residuals import default_max_lag
+
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((67, 5))
+    plant = sysid.StateSpaceModel([[0.5]], np.ones((1, 5)), [[1.0]], dt=1.0)
+    y = plant.simulate(u) + 0.1 * rng.standard_normal((67, 1))
+    d = sysid.IOData(u=u, y=y)
+    lag = default_max_lag(d)
+    assert 1 <= lag < 13
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res = sysid.residuals(plant, d, max_lag=lag)
+    assert res.independence[0] is True
+    zero = sysid.StateSpaceModel([[0.0]], np.zeros((1, 5)), [[0.0]], dt=1.0)  # ignores u
+    assert sysid.residuals(zero, d, max_lag=lag).independence[0] is False

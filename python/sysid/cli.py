@@ -310,15 +310,14 @@ def _validate(model: Any, sel: Any, est_data: IOData, val_data: IOData | None,
     """Simulation and prediction fits, residuals and the report of one model (``caught``:
     the warnings of the run so far, for the report's summary)."""
     from .validation.compare import compare
-    from .validation.residuals import residuals
+    from .validation.residuals import default_max_lag, residuals
 
     check = val_data if val_data is not None else est_data
     which = "validation" if val_data is not None else "estimation"
     say(f"validating on the {which} data")
     sim = compare(model, check)
     pred = compare(model, check, horizon=1)
-    shortest = min(y.shape[0] for _, y in check.experiments)
-    res = residuals(model, check, max_lag=min(25, max(1, shortest // 5)))
+    res = residuals(model, check, max_lag=default_max_lag(check))
     out: dict[str, Any] = {"model": model, "selection": sel, "compare": sim,
                            "prediction": pred, "residuals": res, "which": which}
     if report is not None:

@@ -27,7 +27,7 @@ from ..errors import DataError, SysidError
 from ..models.checks import check_model
 from ..validation.compare import compare, error_spectrum
 from ..validation.criteria import _pct
-from ..validation.residuals import residuals
+from ..validation.residuals import default_max_lag, residuals
 from . import report_figures as rf
 from .report_page import Page, reissue, relevant, status, warning_items
 
@@ -58,7 +58,8 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
     which : str
         What the data are, for the captions (``"validation"`` or ``"estimation"``).
     max_lag : int, optional
-        Largest residual lag (default ``min(25, N / 5)``).
+        Largest residual lag (default :func:`~sysid.validation.residuals.default_max_lag`:
+        ``min(25, N / 5)``, lower when the inputs' lags would leave too few samples).
     warnings : iterable, optional
         Warnings of the run that produced the model, shown in the summary with what to do:
         :class:`warnings.WarningMessage` objects (``catch_warnings(record=True)``),
@@ -118,8 +119,7 @@ def _build(model: Any, data: IOData, root: Path, sel: Any, which: str,
            ) -> tuple[dict[str, Path], Page]:
     sim = compare(model, data)
     pred = compare(model, data, horizon=1)
-    shortest = min(y.shape[0] for y in sim.y)
-    res = residuals(model, data, max_lag=max_lag or min(25, max(1, shortest // 5)))
+    res = residuals(model, data, max_lag=max_lag or default_max_lag(data))
     units = _units(data)
     files: dict[str, Path] = {}
     page = Page(title)

@@ -17,7 +17,7 @@ from .._display import HTMLResult
 from ..errors import DataError
 from .compare import X0, _records, _run, _simulator, _x0_for
 
-__all__ = ["ResidualAnalysis", "residuals"]
+__all__ = ["ResidualAnalysis", "default_max_lag", "residuals"]
 
 # fewest residual degrees of freedom (samples with a full past minus regressors) for which
 # the independence test is reported; below, the regression is (nearly) exact and says nothing
@@ -45,6 +45,29 @@ def _largest_testable_lag(lengths: list[int], m: int, below: int) -> int:
         if sum(max(n - M, 0) for n in lengths) - m * (M + 1) >= _MIN_RESIDUAL_DOF:
             return M
     return 0
+
+
+def default_max_lag(data: Any) -> int:
+    """The largest residual lag the command line and the report use: ``min(25, N / 5)`` for
+    the shortest experiment, lowered to the largest for which the independence test can be
+    made with the record's inputs (their lags must leave rows to spare).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.residuals import default_max_lag
+    >>> default_max_lag(sysid.IOData(u=np.zeros((1000, 1)), y=np.zeros((1000, 1))))
+    25
+    >>> default_max_lag(sysid.IOData(u=np.zeros((67, 5)), y=np.zeros((67, 3))))  # 5 inputs
+    9
+    """
+    lengths = [y.shape[0] for _, y in data.experiments]
+    lag = min(25, max(1, min(lengths) // 5))
+    m = data.n_inputs
+    if m:
+        fit = _largest_testable_lag(lengths, m, lag + 1)
+        lag = max(1, min(lag, fit)) if fit > 0 else lag
+    return lag
 
 
 class ResidualAnalysis(HTMLResult):
