@@ -226,3 +226,35 @@ def test_guide_runs(tmp_path, monkeypatch, capsys):
         exec(compile(block, f"docs/batch.md[{i}]", "exec"), {})
     out = capsys.readouterr().out
     assert "loop3" in out and "record_id" in out and (tmp_path / "loops.parquet").is_dir()
+
+
+UNGUARDED = '''
+import sys
+import numpy as np
+import sysid
+
+def fit(data):
+    return sysid.n4sid(data, 1)
+
+m = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]])
+u = np.random.default_rng(0).standard_normal((300, 1))
+recs = [sysid.IOData(u=u, y=m.simulate(u)) for _ in range(3)]
+sysid.identify_many(recs, fit=fit, workers=2, out=sys.argv[1], progress=False)
+'''
+
+
+def test_a_top_level_call_without_the_main_guard_says_so(tmp_path):
+    """A script that calls identify_many(workers=...) at its top level: each spawned worker
+    imports it and calls again. Every record was written as 'WorkerDied' (a crash in native
+    code?); the call now fails at once, naming the `if __name__ == "__main__":` guard."""
+    import subprocess
+    import sys
+
+    script = tmp_path / "run.py"
+    script.write_text(UNGUARDED)
+    env = {**os.environ, "PYTHONPATH": str(Path(sysid.__file__).parents[1])}
+    done = subprocess.run([sys.executable, str(script), str(tmp_path / "out")], env=env,
+                          capture_output=True, text=True, timeout=120)
+    assert done.returncode != 0
+    last = done.stderr.strip().splitlines()[-1]
+    assert last.startswith("sysid.errors.SysidError") and '__name__ == "__main__"' in last

@@ -172,3 +172,19 @@ def test_sweep_settings_change_the_table():
                                                    noise_model=False)
     assert base.rows[3]["n_params"] == n_parameters(4, 1, 1, feedthrough=False, x0=True)
     assert lean.model().K is None and np.all(lean.model().D == 0)
+
+
+def test_select_order_ranks_time_series_models_by_their_one_step_predictions():
+    # an AR(4) series: simulated from its past alone every AR model "fits" about 0 %, so the
+    # ranking by validation recommended AR(1) against every criterion's vote for 4; a time
+    # series is validated on its one-step predictions, as the subspace sweep does
+    from scipy import signal
+
+    a = np.poly([0.95 * np.exp(0.5j), 0.95 * np.exp(-0.5j), 0.6 * np.exp(2j),
+                 0.6 * np.exp(-2j)]).real
+    y = signal.lfilter([1.0], a, np.random.default_rng(0).standard_normal(6000))
+    d, v = sysid.IOData(None, y[:4000], 1.0), sysid.IOData(None, y[4000:], 1.0)
+    sel = sysid.select_order(d, models=[sysid.ar(d, k) for k in range(1, 9)], validation=v)
+    assert sel.order == 4
+    rows = sel.to_pandas().set_index("order")
+    assert rows.loc[4, "fit_validation"] > rows.loc[1, "fit_validation"] + 10.0

@@ -129,3 +129,17 @@ def test_bad_input_names_the_fix():
         sysid.ssi(d, [2, 4]).modes_at(6)
     with pytest.raises(sysid.DataError, match="same channels"):
         sysid.mac([1, 2], [1, 2, 3])
+
+
+def test_the_default_horizon_allows_the_largest_order_for_both_methods():
+    # orders up to 40 on 3 channels: the shift equation needs (i - 1) * 3 >= 40 rows, i = 15;
+    # the default was 14 (i * 3 > 40), which SSI-data refused at its own default and with
+    # which SSI-cov's A at order 40 was rank deficient (a pole silently 0)
+    y = signal.lfilter([1.0], [1.0, -1.6, 0.9],
+                       np.random.default_rng(0).standard_normal((20000, 3)), axis=0)
+    d = sysid.IOData(None, y, 0.01)
+    for method in ("cov", "data"):
+        res = sysid.ssi(d, range(2, 41, 2), method=method)
+        assert res.horizon == 15
+    with pytest.raises(sysid.DataError, match="horizon >= 15"):
+        sysid.ssi(d, [40], horizon=14)

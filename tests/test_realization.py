@@ -403,3 +403,22 @@ def test_markov_estimators_run_the_offset_check():
         sysid.impulse_response(raw, 20)
     with pytest.warns(sysid.OffsetWarning, match="offset"):
         sysid.okid(raw, 5)
+
+
+@pytest.mark.parametrize("outputs", [1, 2])
+def test_the_automatic_order_of_okid_markov_parameters_is_the_systems_not_its_observers(
+        outputs: int) -> None:
+    # OKID's Markov parameters follow its observer of p = 10 past samples: their Hankel
+    # matrix has rank p l by construction, and on noisy data the largest gap of its singular
+    # values was the drop to round-off there (era and kung gave 10 or 20 states for a
+    # second-order system); the physical gap comes first
+    rng = np.random.default_rng(1)
+    C = [[1.0, 0.0], [0.3, 1.0]][:outputs]
+    true = sysid.StateSpaceModel([[0.95, 0.25], [-0.25, 0.95]], [[1.0], [0.0]], C)
+    u = rng.standard_normal(2000)
+    y = true.simulate(u) + 0.05 * rng.standard_normal((2000, outputs))
+    est = sysid.okid(sysid.IOData(u, y), observer_order=10, count=60)
+    assert est.era().order == 2
+    assert sysid.kung(est).nstates == 2
+    exact = sysid.okid(sysid.IOData(u, true.simulate(u)), observer_order=10, count=60)
+    assert exact.era().order == 2  # and noise-free data keep theirs

@@ -240,6 +240,7 @@ def realize(
     rows: int | None = None,
     cols: int | None = None,
     rank_tol: float = 1e-8,
+    max_order: int | None = None,
 ) -> dict[str, Any]: ...
 def fir(
     experiments: list[tuple[_Array, _Array]],

@@ -41,12 +41,14 @@ fn options(
     rows: Option<usize>,
     cols: Option<usize>,
     rank_tol: f64,
+    max_order: Option<usize>,
 ) -> RealizationOptions {
     let mut o = RealizationOptions::default();
     o.order = order;
     o.rows = rows;
     o.cols = cols;
     o.rank_tol = rank_tol;
+    o.max_order = max_order;
     o
 }
 
@@ -61,7 +63,7 @@ fn realization_dict<'py>(py: Python<'py>, r: &Realization) -> PyResult<Bound<'py
 
 /// Ho-Kalman (`method="ho_kalman"`), Kung (`"kung"`) or ERA (`"era"`) realisation.
 #[pyfunction]
-#[pyo3(signature = (method, markov, noutputs, order=None, rows=None, cols=None, rank_tol=1e-8))]
+#[pyo3(signature = (method, markov, noutputs, order=None, rows=None, cols=None, rank_tol=1e-8, max_order=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn realize<'py>(
     py: Python<'py>,
@@ -72,9 +74,10 @@ pub fn realize<'py>(
     rows: Option<usize>,
     cols: Option<usize>,
     rank_tol: f64,
+    max_order: Option<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let h = unstack(view(&markov), noutputs)?;
-    let opts = options(order, rows, cols, rank_tol);
+    let opts = options(order, rows, cols, rank_tol, max_order);
     match method.parse::<rz::RealizationMethod>().py()? {
         rz::RealizationMethod::HoKalman => {
             let r = py.detach(|| rz::ho_kalman(&h, &opts)).py()?;

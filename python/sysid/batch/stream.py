@@ -17,7 +17,7 @@ from typing import Any
 
 from .._atomic import atomic_path
 from .._progress import Bar
-from ..errors import DataError
+from ..errors import DataError, SysidError
 from .records import Columns
 from .worker import SCHEMA_FIELDS, error_row, one_thread, one_thread_env, run_one
 
@@ -138,6 +138,13 @@ def run_batch(work: Iterable[tuple[str, Any]], fit: Callable[[Any], Any], cols: 
     """Run every task and write its row (see :func:`sysid.identify_many`)."""
     import os
 
+    import multiprocessing
+
+    if getattr(multiprocessing.current_process(), "_inheriting", False):
+        # a spawned worker importing the user's script, which calls identify_many at its top
+        # level: said before the row writer touches ``out`` (multiprocessing's own error, in
+        # every worker, left the parent with nothing but dead workers)
+        raise SysidError(START_GUARD)
     total = len(work) if hasattr(work, "__len__") else None  # type: ignore[arg-type]
     client = _client()
     if client is not None:
@@ -193,8 +200,16 @@ def _local(work: Iterator[tuple[str, Any]], fit: Callable[[Any], Any], cols: Col
     suspects: deque[tuple[str, Any]] = deque()
     deaths: dict[str, int] = {}
     exhausted = False
+    first = True
     while True:
         pool = ProcessPoolExecutor(n, mp_context=ctx, initializer=one_thread)
+        if first:  # workers that cannot start fail every record alike: say why, once
+            first = False
+            try:
+                pool.submit(_started).result()
+            except BrokenProcessPool:
+                _stop(pool)
+                raise SysidError(START_FAILED) from None
         inflight: dict[Any, tuple[str, Any]] = {}
         broken = False
         try:
@@ -230,6 +245,25 @@ def _local(work: Iterator[tuple[str, Any]], fit: Callable[[Any], Any], cols: Col
             _stop(pool)
         if not broken and not inflight and exhausted and not suspects:
             return
+
+
+def _started() -> bool:
+    """A worker's first task: it started (imported the caller's script and sysid)."""
+    return True
+
+
+#: a spawned worker imports the caller's script: a top-level call starts workers of its own
+START_GUARD = (
+    "identify_many(workers=...) was called while a worker process was starting: the workers "
+    "are spawned and import your script, so a call at its top level runs again in each of "
+    "them. Put it under `if __name__ == \"__main__\":` (or pass workers=0 to fit in this "
+    "process)")
+START_FAILED = (
+    "the worker processes of identify_many exited before fitting any record. If you call it "
+    "at the top level of a script, put the call under `if __name__ == \"__main__\":` (the "
+    "workers are spawned and import your script); the fit function must be importable by "
+    "them (defined in a module, not in a notebook cell). Or pass workers=0 to fit in this "
+    "process")
 
 
 def _suspect(rid: str, src: Any, alone: bool, deaths: dict[str, int], retries: int,

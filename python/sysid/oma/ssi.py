@@ -277,8 +277,11 @@ def ssi(data: Any, orders: Any, *, method: str = "cov", horizon: int | None = No
     method : {"cov", "data"}
         Covariance-driven (SSI-cov, default) or data-driven (SSI-data, output-only N4SID).
     horizon : int, optional
-        Block rows ``i``; ``i * n_channels`` must exceed the largest order. Default: the
-        smallest ``i`` that allows it, at least 10. Longer horizons resolve closer modes.
+        Block rows ``i``; ``(i - 1) * n_channels`` must reach the largest order (the shift
+        equation of the observability matrix). Default: the smallest ``i`` that allows it, at
+        least 10. Longer horizons resolve closer and slower modes: the ``i`` lags should span
+        at least a period of the slowest mode of interest (on a record sampled far faster
+        than its modes, raise ``horizon`` or decimate first, :func:`sysid.decimate`).
     blocks : int
         Segments of the delete-a-block jackknife that gives the standard deviations of
         :meth:`SSIResult.modes_at` (>= 3 for a std).
@@ -318,10 +321,11 @@ def ssi(data: Any, orders: Any, *, method: str = "cov", horizon: int | None = No
     blocks = as_int(blocks, "blocks", 2)
     ys = [y for _, y in experiment_arrays(data)]
     l = ys[0].shape[1]
-    i = as_int(horizon, "horizon", 1) if horizon is not None else max(10, -(-(ords[-1] + 1) // l))
-    if i * l <= ords[-1]:
-        raise DataError(f"horizon {i} with {l} channel(s) allows orders up to {i * l - 1}, "
-                        f"got {ords[-1]}; choose horizon > {ords[-1] // l}")
+    # the shift equation O[:-l] A = O[l:] has (i - 1) l rows for n unknowns per column
+    i = as_int(horizon, "horizon", 1) if horizon is not None else max(10, -(-ords[-1] // l) + 1)
+    if (i - 1) * l < ords[-1]:
+        raise DataError(f"horizon {i} with {l} channel(s) allows orders up to {(i - 1) * l}, "
+                        f"got {ords[-1]}; choose horizon >= {-(-ords[-1] // l) + 1}")
     shortest = min(y.shape[0] for y in ys)
     if shortest < blocks * 4 * i:
         raise InsufficientDataError(

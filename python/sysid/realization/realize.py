@@ -101,6 +101,11 @@ def _realize(method: str, markov: Any, order: int | None, rows: int | None, cols
     h, dt_h = _markov(markov)
     dt = float(dt if dt is not None else (dt_h if dt_h is not None else 1.0))
     count, l, m = h.shape
+    # OKID's Markov parameters have a Hankel rank of p l by construction (its observer of p
+    # past samples): the automatic order stops below it (the core's RealizationOptions)
+    cap = None
+    if isinstance(markov, MarkovEstimate) and markov.method == "okid":
+        cap = max(1, int(markov.info["observer_order"]) * l - 1)
     big = float(np.max(np.abs(h))) if h.size else 0.0
     if big > _MAX_MARKOV:  # products in the Hankel SVD would overflow double precision
         raise DataError(f"Markov parameters up to {big:.3g} are too large to realise in double "
@@ -109,6 +114,7 @@ def _realize(method: str, markov: Any, order: int | None, rows: int | None, cols
     out = _sysid.realize(
         method, np.ascontiguousarray(h.reshape(count * l, m)), l,
         _count(order, "order"), _count(rows, "rows"), _count(cols, "cols"), float(rank_tol),
+        cap if method != "ho_kalman" else None,
     )
     return out, dt
 
@@ -160,7 +166,9 @@ def kung(markov: Any, order: int | None = None, *, rows: int | None = None,
     markov : array_like or MarkovEstimate
         ``(count, noutputs, ninputs)``.
     order : int, optional
-        Model order.
+        Model order; by default the largest gap of the log Hankel singular values (below
+        ``observer_order * noutputs`` for :func:`sysid.okid`'s Markov parameters, as
+        :func:`era`).
     rows, cols : int, optional
         Block rows (at least 2) and columns of the Hankel matrix.
     dt : float, optional
@@ -255,7 +263,10 @@ def era(markov: Any, order: int | None = None, *, rows: int | None = None,
     markov : array_like or MarkovEstimate
         ``(count, noutputs, ninputs)``: ``h_0 = D, h_1 = CB, ...``.
     order : int, optional
-        Model order; by default the largest gap of the log Hankel singular values.
+        Model order; by default the largest gap of the log Hankel singular values (below
+        ``observer_order * noutputs`` for :func:`sysid.okid`'s Markov parameters, whose Hankel
+        matrix has that rank by construction: on noisy data its drop to round-off there is
+        not the system's order).
     rows, cols : int, optional
         Block rows and columns of the Hankel matrix, ``rows + cols <= count - 1``.
         More block rows than the order (times the outputs) and columns spanning the slowest

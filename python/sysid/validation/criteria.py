@@ -630,8 +630,11 @@ def _rank_models(data: Any, models: list[Any], validation: Any, x0: str,
             row["stable"], row["max_abs_pole"] = _stability(mod)
             row["n_params"] = c.n_params
             row.update({k: getattr(c, k) for k in ("loss",) + CRITERIA})
-            row["fit_estimation"] = compare(mod, data, x0=x0).mean_fit
-            row["fit_validation"] = (compare(mod, validation, x0=x0).mean_fit
+            # a time series has nothing to simulate from: its fits are one-step predictions
+            # (as the sweep's; simulated, every AR order fitted about 0 %)
+            h = 1 if getattr(mod, "ninputs", 1) == 0 else None
+            row["fit_estimation"] = compare(mod, data, x0=x0, horizon=h).mean_fit
+            row["fit_validation"] = (compare(mod, validation, x0=x0, horizon=h).mean_fit
                                      if validation is not None else np.nan)
         except NumericalError as e:
             rows.append(_failed(row, e))

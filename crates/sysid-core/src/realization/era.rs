@@ -18,7 +18,7 @@
 
 use super::modal::eigen_decomposition;
 use super::{
-    a_from_shift, block_hankel, check_markov, check_order, factors, hankel_size, hankel_svd,
+    a_from_shift, block_hankel, cap, check_markov, check_order, factors, hankel_size, hankel_svd,
     largest_gap, Realization, RealizationOptions,
 };
 use crate::error::Result;
@@ -59,7 +59,7 @@ pub fn era(markov: &[Mat<f64>], opts: &RealizationOptions) -> Result<EraResult> 
     let svd = hankel_svd(h0.as_ref())?;
     let n = opts
         .order
-        .unwrap_or_else(|| largest_gap(&svd.s, svd.s.len() - 1));
+        .unwrap_or_else(|| largest_gap(&svd.s, cap(svd.s.len() - 1, opts.max_order)));
     check_order(n, &svd.s, r, s, l, m)?;
     let (o, ctr) = factors(&svd, n);
     let h1 = block_hankel(markov, r, s, 1);

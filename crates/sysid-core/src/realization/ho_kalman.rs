@@ -6,7 +6,7 @@
 //! squares, which uses every block row of `H_0` and no shifted matrix.
 
 use super::{
-    a_from_shift, block_hankel, check_markov, check_order, factors, hankel_size, hankel_svd,
+    a_from_shift, block_hankel, cap, check_markov, check_order, factors, hankel_size, hankel_svd,
     largest_gap, Realization, RealizationOptions,
 };
 use crate::error::Result;
@@ -107,7 +107,7 @@ pub fn kung(markov: &[Mat<f64>], opts: &RealizationOptions) -> Result<Realizatio
     let svd = hankel_svd(h0.as_ref())?;
     let n = opts
         .order
-        .unwrap_or_else(|| largest_gap(&svd.s, (r - 1) * l));
+        .unwrap_or_else(|| largest_gap(&svd.s, cap((r - 1) * l, opts.max_order)));
     check_order(n, &svd.s, r, s, l, m)?;
     let (o, ctr) = factors(&svd, n);
     let up = o.subrows(0, (r - 1) * l);

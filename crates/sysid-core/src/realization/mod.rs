@@ -71,6 +71,12 @@ pub struct RealizationOptions {
     pub cols: Option<usize>,
     /// Relative tolerance on the singular values of `H_0` for the rank (Ho-Kalman).
     pub rank_tol: f64,
+    /// Largest order the automatic choice (Kung, ERA) considers; `None`: every one the
+    /// Hankel matrix allows. OKID's Markov parameters follow its observer of `p` past samples,
+    /// so their Hankel matrix has rank `p l` by construction: on noisy data the largest gap
+    /// is the drop to round-off there (12 decades), not the system's order (a few decades
+    /// earlier), and the automatic order of OKID's Markov parameters stops below `p l`.
+    pub max_order: Option<usize>,
 }
 
 impl Default for RealizationOptions {
@@ -80,6 +86,7 @@ impl Default for RealizationOptions {
             rows: None,
             cols: None,
             rank_tol: 1e-8,
+            max_order: None,
         }
     }
 }
@@ -186,6 +193,11 @@ pub(crate) fn block_hankel(markov: &[Mat<f64>], r: usize, s: usize, shift: usize
 }
 
 /// Order with the largest drop of `log10(s_k / s_{k+1})`, among `1..=max`.
+/// `max` lowered to `max_order` when that is given (at least 1).
+pub(crate) fn cap(max: usize, max_order: Option<usize>) -> usize {
+    max_order.map_or(max, |c| max.min(c.max(1)))
+}
+
 pub(crate) fn largest_gap(sv: &[f64], max: usize) -> usize {
     let floor = sv.first().copied().unwrap_or(0.0) * 1e-15 + f64::MIN_POSITIVE;
     let mut best = (1, f64::NEG_INFINITY);
