@@ -136,9 +136,8 @@ def run_batch(work: Iterable[tuple[str, Any]], fit: Callable[[Any], Any], cols: 
               out: Path, workers: int | None, retries: int, bars: bool,
               flush_every: int) -> BatchResult:
     """Run every task and write its row (see :func:`sysid.identify_many`)."""
-    import os
-
     import multiprocessing
+    import os
 
     if getattr(multiprocessing.current_process(), "_inheriting", False):
         # a spawned worker importing the user's script, which calls identify_many at its top
