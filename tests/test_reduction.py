@@ -144,3 +144,8 @@ def test_hankel_singular_values_are_invariant_to_a_change_of_basis(seed: int, sc
                                   model.C @ t, model.D)
     np.testing.assert_allclose(sysid.hankel_singular_values(other),
                                sysid.hankel_singular_values(model), rtol=1e-6)
+
+
+def test_nothing_discarded_has_a_zero_error_bound_not_minus_zero():
+    m = sysid.StateSpaceModel([[0.5, 0.0], [0.0, 0.2]], [[1.0], [1.0]], [[1.0, 1.0]])
+    assert str(sysid.balanced_truncation(m, 2).info["error_bound"]) == "0.0"

@@ -108,7 +108,7 @@ def _reduce(model: StateSpaceModel, order: int | None, method: str) -> StateSpac
         method=method,
         reduced_from=m.nstates,
         hankel_singular_values=np.asarray(out["hankel_singular_values"]),
-        error_bound=float(out["error_bound"]),
+        error_bound=float(out["error_bound"]) + 0.0,  # never -0.0 (nothing discarded)
         T=np.asarray(out["t"]),
         T_inv=t_inv,
     )

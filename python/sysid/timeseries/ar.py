@@ -139,8 +139,9 @@ def ar(data: Any, na: int, method: str = "fb", *, dt: float | None = None) -> An
     Returns
     -------
     PolynomialModel
-        ``a`` with ``noise_variance`` (the mean squared one-step prediction error over the
-        samples with all lags measured), ``covariance`` and ``uncertainty`` (``model.std``).
+        ``a`` with ``noise_variance`` (the one-step prediction errors over the samples with
+        all lags measured, their sum of squares divided by their number less the ``na``
+        parameters: unbiased), ``covariance`` and ``uncertainty`` (``model.std``).
 
     Examples
     --------
