@@ -379,6 +379,15 @@ def pem_loss(
         raise
 
 
+
+def _start_noise(info: dict[str, Any]) -> None:
+    """The start's noise covariances (a subspace fit's ``Q``, ``R``, ``S``) under
+    ``info["start_noise"]``: at the top level they read as the refined model's (``R`` 0.09
+    beside its ``noise_cov`` of 0.19)."""
+    moved = {k: info.pop(k) for k in ("Q", "R", "S") if k in info}
+    if moved:
+        info["start_noise"] = moved
+
 def pem(
     data: Any,
     model: StateSpaceModel,
@@ -606,6 +615,7 @@ def pem(
     info["start_method"] = model.info.get("method") if model.info else None
     if "settings" in info:  # the start's estimator settings (its kalman=True, ...), not ours
         info["start_settings"] = info.pop("settings")
+    _start_noise(info)
     info["pem"] = {
         "domain": "time",
         "iterations": res["iterations"],
@@ -699,6 +709,7 @@ def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
     info["start_method"] = model.info.get("method") if model.info else None
     if "settings" in info:  # the start's estimator settings (its kalman=True, ...), not ours
         info["start_settings"] = info.pop("settings")
+    _start_noise(info)
     info["pem"] = {
         "iterations": res["iterations"], "evaluations": res["evaluations"],
         "cost": list(res["history"]), "criterion": CRITERION,

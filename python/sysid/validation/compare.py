@@ -162,9 +162,10 @@ def estimate_x0(model: Any, u: Any, y: Any, horizon: int | None = None) -> np.nd
 
     The output is ``yhat(x0) = yhat(0) + Phi x0`` where column ``i`` of ``Phi`` is the free
     response from the ``i``-th unit state (computed with the same simulator or predictor, so
-    the estimate is exact for whatever is being compared). ``x0`` minimises
-    ``||y - yhat(x0)||``. Needs a state-space model (``A, B, C, D``); use
-    ``model.to_statespace()`` for others.
+    the estimate is exact for whatever is being compared). ``x0`` minimises the errors of
+    every output relative to its spread, ``sum_k ||y_k - yhat_k(x0)||^2 / std(y_k)^2`` (as
+    the fit % counts them: the same model in other units gets the same fits). Needs a
+    state-space model (``A, B, C, D``); use ``model.to_statespace()`` for others.
 
     Examples
     --------
@@ -199,8 +200,9 @@ def estimate_x0(model: Any, u: Any, y: Any, horizon: int | None = None) -> np.nd
     target = (y[:W] - base).ravel()
     if not (np.all(np.isfinite(phi)) and np.all(np.isfinite(target))):
         return np.zeros(n)  # the model diverges on this record: no state fits it
+    w = np.tile(_output_weights(y), W)  # rows t l + k: output k's weight
     with np.errstate(over="ignore", invalid="ignore"):
-        x0, *_ = np.linalg.lstsq(phi, target, rcond=None)
+        x0, *_ = np.linalg.lstsq(phi * w[:, None], target * w, rcond=None)
     return x0 if np.all(np.isfinite(x0)) else np.zeros(n)
 
 
@@ -214,9 +216,10 @@ def _estimate_x0_nonlinear(model: Any, u: np.ndarray, y: np.ndarray,
     n = model.nstates
     W = min(y.shape[0], 2 * _window(model, horizon, y.shape[0]))
     uw, yw = u[:W], y[:W]
+    w = _output_weights(y)
 
     def err(x: np.ndarray) -> np.ndarray:
-        return (yw - _run(model, uw, yw, horizon, x)).ravel()
+        return ((yw - _run(model, uw, yw, horizon, x)) * w).ravel()
 
     x = np.zeros(n)
     r = err(x)
@@ -246,11 +249,19 @@ def _estimate_x0_nonlinear(model: Any, u: np.ndarray, y: np.ndarray,
         if done:
             break
     if W < y.shape[0]:  # the window's fit must not cost the rest of the record
-        full = [float(np.sum((y - _run(model, u, y, horizon, v)) ** 2))
+        full = [float(np.sum(((y - _run(model, u, y, horizon, v)) * w) ** 2))
                 for v in (np.zeros(n), x)]
         if not full[1] < full[0]:
             return np.zeros(n)
     return x
+
+
+def _output_weights(y: np.ndarray) -> np.ndarray:
+    """``1 / std`` of each output over the record (1 for one that stands still): the initial
+    state is fitted to the errors relative to each output's spread, as the fit % weighs them,
+    not to whichever output has the largest numbers in its units."""
+    sd = np.std(y, axis=0)
+    return 1.0 / np.where(sd > 0, sd, 1.0)
 
 
 def _window(model: Any, horizon: int | None, N: int) -> int:

@@ -261,16 +261,22 @@ def simulation_errors(model: Any, data: IOData, trend: bool = False
                 raise FloatingPointError("the model diverges on these data")
             r = y - ys
             q = T.shape[1] * l
+            # every output's rows weigh 1 / its spread (the fit % is relative to it): the
+            # initial state shared by the outputs does not follow whichever has the largest
+            # numbers in its units (the offsets and lines are per output, unaffected)
+            sd = np.std(y, axis=0)
+            w2 = 1.0 / np.where(sd > 0, sd, 1.0) ** 2
             G = np.zeros((q + n, q + n))
-            G[:q, :q] = np.kron(T.T @ T, np.eye(l))
+            G[:q, :q] = np.kron(T.T @ T, np.diag(w2))
             rhs = np.empty(q + n)
-            rhs[:q] = (T.T @ r).ravel()
+            rhs[:q] = (T.T @ (r * w2)).ravel()
             if F is not None:
                 F2 = F.reshape(count * l, n)
-                G[:q, q:] = np.einsum("ta,tji->aji", T, F).reshape(q, n)
+                Fw = F * w2[None, :, None]
+                G[:q, q:] = np.einsum("ta,tji->aji", T, Fw).reshape(q, n)
                 G[q:, :q] = G[:q, q:].T
-                G[q:, q:] = F2.T @ F2
-                rhs[q:] = F2.T @ r.ravel()
+                G[q:, q:] = F2.T @ Fw.reshape(count * l, n)
+                rhs[q:] = Fw.reshape(count * l, n).T @ r.ravel()
             if not (np.all(np.isfinite(G)) and np.all(np.isfinite(rhs))):
                 # free responses so large their squares overflow: a model that diverges
                 raise FloatingPointError("the model diverges on these data")
