@@ -90,7 +90,8 @@ def test_identify_bounds_the_work_of_refinements_and_says_what_it_left_out(monke
 
 def test_simulation_errors_are_those_of_the_full_least_squares_problem():
     """The held-out fit's initial state and offsets (and slopes) from the blockwise Gram
-    matrix are the least-squares ones of the full regressor matrix."""
+    matrix are the least-squares ones of the full regressor matrix, every output's rows
+    weighing 1 / its spread."""
     rng = np.random.default_rng(5)
     for n, m, l, trend in [(0, 1, 2, False), (3, 1, 1, True), (6, 2, 3, False), (7, 1, 3, True)]:
         A = rng.standard_normal((n, n))
@@ -107,7 +108,8 @@ def test_simulation_errors_are_those_of_the_full_least_squares_problem():
         cols.append(_free_responses(model, 150))
         phi = np.hstack(cols)
         r = (y - model.simulate(u)).ravel()
-        direct = r - phi @ np.linalg.lstsq(phi, r, rcond=None)[0]
+        w = np.tile(1.0 / y.std(axis=0), 150)
+        direct = r - phi @ np.linalg.lstsq(phi * w[:, None], r * w, rcond=None)[0]
         assert np.allclose(e.ravel(), direct, atol=1e-9)
 
 

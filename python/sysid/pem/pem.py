@@ -521,7 +521,10 @@ def pem(
         (:class:`sysid.IterationLimitWarning`).
         ``uncertainty`` holds the parameter covariance (:class:`sysid.ParameterUncertainty`), so
         that ``poles(std=True)``, ``freqresp(w, std=True)``, ``damp(std=True)`` and Bode bands
-        work.
+        work: the Gauss-Newton one, and with ``focus="simulation"`` (no noise model) on one
+        record the sandwich for the errors' own colour (:mod:`sysid.pem.sandwich`; the
+        Gauss-Newton one holds for white errors only); ``info["pem"]["covariance"]`` says
+        which.
 
     Examples
     --------
@@ -662,7 +665,29 @@ def pem(
     out.uncertainty = _uncertainty(
         res["theta"], res["covariance"], build, int(res["rank"]),
         _names(n, model.ninputs, l, bool(feedthrough), estimate_k and K is not None, len(est_x0)))
+    if focus == "simulation" and weighting in ("identity", "output") and out.K is None:
+        _coloured(out, data, st.scale)
     return out
+
+
+def _coloured(out: StateSpaceModel, data: Any, scale: np.ndarray | None) -> None:
+    """A simulation-error fit's uncertainty for coloured errors (:mod:`.sandwich`), on one
+    record; ``info["pem"]["covariance"]`` says which covariance the model carries."""
+    from .sandwich import coloured_error_covariance
+
+    exps = list(_experiments(data).experiments)
+    if len(exps) != 1:
+        out.info["pem"]["covariance"] = ("gauss-newton, as for white errors (the coloured-error "
+                                         "correction is formed on one record)")
+        return
+    u, y = (np.asarray(a, float) for a in exps[0])
+    w = np.ones(y.shape[1]) if scale is None else 1.0 / np.asarray(scale, float)
+    if scale is not None:
+        y = y * np.asarray(scale, float)  # the record in the model's units
+    unc, note = coloured_error_covariance(out, u, y, w)
+    if unc is not None:
+        out.uncertainty = unc
+    out.info["pem"]["covariance"] = note
 
 
 def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,

@@ -1,0 +1,158 @@
+"""The parameter covariance of a simulation-error fit whose errors are coloured.
+
+The Gauss-Newton covariance ``sigma^2 (J^T W J)^-1`` of :func:`sysid.pem` holds when the
+errors it minimises are white. With ``focus="simulation"`` they are the output disturbance
+itself, coloured on nearly every real record (and whenever the plant has a noise model):
+then the covariance of the estimate is the sandwich (Ljung, *System Identification*, 1999,
+eq. 9.42)
+
+    P = (J^T W J)^-1 (J^T W Sigma W J) (J^T W J)^-1,
+
+``Sigma`` the errors' covariance over time. It is estimated here from the fit's own errors:
+per output, the spectrum of an autoregressive model of them (order by AIC; white errors get
+order 0 and keep the Gauss-Newton covariance), applied to the Jacobian in the frequency
+domain (zero-padded FFTs: no ``N x N`` matrix). ``J`` comes from the
+model's own uncertainty object (central differences along its identifiable directions, the
+coordinates in which the Gauss-Newton covariance is the identity), so only the correction
+``Delta`` of ``P_z = I + Delta`` is formed: the directions ``J`` does not see (the initial
+state's, held fixed here) keep their Gauss-Newton value.
+
+On a second-order plant with a coloured disturbance (200 Monte Carlo runs) the Gauss-Newton
+standard deviation of the static gain was a third of the sample one; this covariance brings
+it within a few tens of per cent (``tests/test_pem_coloured.py``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ..models.uncertainty import ParameterUncertainty
+
+__all__ = ["coloured_error_covariance"]
+
+#: the Jacobian over the record holds samples x outputs x directions numbers: beyond this the
+#: correction is not formed (``info["pem"]["covariance"]`` says so)
+MAX_ENTRIES = 10_000_000
+
+
+def error_spectrum(e: np.ndarray, nfft: int, max_order: int = 30) -> tuple[np.ndarray, int]:
+    """The spectral density of a series ``e`` on the ``rfft`` grid of ``nfft`` points, from an
+    autoregressive model of it (Yule-Walker by Levinson-Durbin, the order by AIC up to
+    ``max_order`` and a tenth of the record): a slowly decaying autocorrelation (errors
+    through a pole near 1) is caught in full, as a lag window cut short would not. Returns
+    the density (its mean over the full grid is the AR model's variance) and the order.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy.signal import lfilter
+    >>> from sysid.pem.sandwich import error_spectrum
+    >>> e = np.random.default_rng(0).standard_normal(4000)
+    >>> S, p = error_spectrum(e, 8192)
+    >>> p, bool(np.allclose(S, 1.0, atol=0.1))      # white: flat at the variance
+    (0, True)
+    >>> S, p = error_spectrum(lfilter([1.0], [1.0, -0.9], e), 8192)
+    >>> p >= 1, bool(abs(S[0] / 100.0 - 1.0) < 0.3)  # 1 / (1 - 0.9)^2 at zero frequency
+    (True, True)
+    """
+    e = np.asarray(e, float) - np.mean(e)
+    N = e.size
+    E = np.fft.rfft(e, 1 << int(np.ceil(np.log2(2 * N))))
+    top = int(min(max_order, N // 10))
+    r = np.fft.irfft(E * np.conj(E))[:top + 1] / N
+    if r[0] <= 0:
+        return np.zeros(nfft // 2 + 1), 0
+    # Levinson-Durbin: the prediction-error variance of every order, AIC over them
+    a, v = np.zeros(0), float(r[0])
+    best = (N * np.log(v), 0, a.copy(), v)
+    for k in range(1, top + 1):
+        kap = (r[k] - (a @ r[k - 1:0:-1] if a.size else 0.0)) / v
+        a = np.r_[a - kap * a[::-1], kap]
+        v *= 1.0 - kap * kap
+        if v <= 0:
+            break
+        aic = N * np.log(v) + 2 * k
+        if aic < best[0]:
+            best = (aic, k, a.copy(), v)
+    _, p, a, v = best
+    A = np.fft.rfft(np.r_[1.0, -a], nfft)
+    return v / np.abs(A) ** 2, p
+
+
+def coloured_error_covariance(model: Any, u: np.ndarray, y: np.ndarray,
+                              weights: np.ndarray) -> tuple[ParameterUncertainty | None, str]:
+    """The sandwich covariance of a simulation-error fit of ``model`` (its Gauss-Newton
+    :class:`ParameterUncertainty`) on one record ``(u, y)`` whose outputs' errors weighed
+    ``weights`` (per output) in its criterion; and a sentence for ``info["pem"]``. ``None``
+    when the correction is not formed (the record too long, the errors not finite).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid, warnings
+    >>> from scipy.signal import lfilter
+    >>> rng = np.random.default_rng(0)
+    >>> plant = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]])
+    >>> u = rng.standard_normal(400)
+    >>> v = lfilter([1.0], [1.0, -0.9], 0.3 * rng.standard_normal(400))
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     m = sysid.ssest(sysid.IOData(u=u, y=plant.simulate(u)[:, 0] + v), 1,
+    ...                     focus="simulation")
+    >>> "coloured" in m.info["pem"]["covariance"]
+    True
+    """
+    unc = model.uncertainty
+    w, V = unc._eigen()
+    N, l = y.shape
+    r = w.size
+    if r == 0:
+        return None, "gauss-newton: no identifiable direction"
+    if N * l * r > MAX_ENTRIES:
+        return None, (f"gauss-newton, as for white errors: the coloured-error correction "
+                      f"would hold {N * l * r:.2g} numbers (at most {MAX_ENTRIES:.0e})")
+    x0 = getattr(model, "x0", None)
+    x0 = np.zeros(model.nstates) if x0 is None else np.asarray(x0, float)
+
+    def sim(m: Any) -> np.ndarray:
+        return np.asarray(m.simulate(u, x0=x0), float)
+
+    with np.errstate(all="ignore"):
+        e = y - sim(model)
+        _, G = unc.scaled_jacobian(sim)
+    if not (np.all(np.isfinite(e)) and np.all(np.isfinite(G))):
+        return None, "gauss-newton, as for white errors: the errors or their Jacobian overflow"
+    J = G.reshape(N, l, r) * np.asarray(weights, float)[None, :, None]
+    A = np.einsum("tkr,tks->rs", J, J)
+    sigma2 = float(np.median(np.diag(A)))
+    if not sigma2 > 0:
+        return None, "gauss-newton, as for white errors: the fit does not move its outputs"
+    delta = np.zeros((r, r))
+    orders = []
+    nfft = 1 << int(np.ceil(np.log2(2 * N)))
+    wts = np.full(nfft // 2 + 1, 2.0)  # the rfft grid's weights on the full one
+    wts[0] = 1.0
+    wts[-1] = 1.0
+    for k in range(l):
+        S, p = error_spectrum(e[:, k], nfft)
+        orders.append(p)
+        if p == 0:  # white: nothing to correct
+            continue
+        F = np.fft.rfft(J[:, k, :], nfft, axis=0)
+        dev = (S - np.sum(wts * S) / nfft) * wts * float(weights[k]) ** 2
+        M = ((np.conj(F) * dev[:, None]).T @ F).real / nfft
+        delta += 0.5 * (M + M.T) / sigma2 ** 2
+    Pz = np.eye(r) + delta
+    ev, Q = np.linalg.eigh(0.5 * (Pz + Pz.T))
+    Pz = (Q * np.clip(ev, 0.0, None)) @ Q.T
+    Gd = V * np.sqrt(w)  # parameters = theta + Gd z, z of unit Gauss-Newton covariance
+    P = Gd @ Pz @ Gd.T
+    ratio = float(np.trace(Pz) / r)
+    out = ParameterUncertainty(unc.theta, 0.5 * (P + P.T), unc.build, names=unc.names,
+                               dof=int(np.sum(ev > 1e-12 * max(float(ev.max()), 1e-300))),
+                               method="gauss-newton with coloured simulation errors (sandwich)",
+                               undetermined=unc.undetermined)
+    return out, (f"sandwich for coloured simulation errors (their autoregressive order "
+                 f"{', '.join(map(str, orders))}; the variances {ratio:.2g} times the "
+                 f"Gauss-Newton ones on average)")
