@@ -673,7 +673,7 @@ def pem(
 def _coloured(out: StateSpaceModel, data: Any, scale: np.ndarray | None) -> None:
     """A simulation-error fit's uncertainty for coloured errors (:mod:`.sandwich`), on one
     record; ``info["pem"]["covariance"]`` says which covariance the model carries."""
-    from .sandwich import coloured_error_covariance
+    from .sandwich import DeferredSandwich
 
     exps = list(_experiments(data).experiments)
     if len(exps) != 1:
@@ -684,10 +684,13 @@ def _coloured(out: StateSpaceModel, data: Any, scale: np.ndarray | None) -> None
     w = np.ones(y.shape[1]) if scale is None else 1.0 / np.asarray(scale, float)
     if scale is not None:
         y = y * np.asarray(scale, float)  # the record in the model's units
-    unc, note = coloured_error_covariance(out, u, y, w)
-    if unc is not None:
-        out.uncertainty = unc
-    out.info["pem"]["covariance"] = note
+    info = out.info["pem"]
+    info["covariance"] = ("gauss-newton until first used, then the sandwich for coloured "
+                          "simulation errors")
+
+    def then(note: str) -> None:
+        info["covariance"] = note
+    out.uncertainty = DeferredSandwich(out.uncertainty, out, u, y, w, then)
 
 
 def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..models.uncertainty import ParameterUncertainty
 
-__all__ = ["coloured_error_covariance"]
+__all__ = ["DeferredSandwich", "coloured_error_covariance"]
 
 #: the Jacobian over the record holds samples x outputs x directions numbers: beyond this the
 #: correction is not formed (``info["pem"]["covariance"]`` says so)
@@ -100,7 +100,8 @@ def coloured_error_covariance(model: Any, u: np.ndarray, y: np.ndarray,
     ...     warnings.simplefilter("ignore")
     ...     m = sysid.ssest(sysid.IOData(u=u, y=plant.simulate(u)[:, 0] + v), 1,
     ...                     focus="simulation")
-    >>> "coloured" in m.info["pem"]["covariance"]
+    >>> s = m.dcgain(std=True)[1]  # the first use forms it
+    >>> m.info["pem"]["covariance"].startswith("sandwich for coloured simulation errors")
     True
     """
     unc = model.uncertainty
@@ -156,3 +157,38 @@ def coloured_error_covariance(model: Any, u: np.ndarray, y: np.ndarray,
     return out, (f"sandwich for coloured simulation errors (their autoregressive order "
                  f"{', '.join(map(str, orders))}; the variances {ratio:.2g} times the "
                  f"Gauss-Newton ones on average)")
+
+
+class DeferredSandwich(ParameterUncertainty):
+    """A fit's Gauss-Newton uncertainty whose covariance becomes the sandwich of
+    :func:`coloured_error_covariance` when first used (a standard deviation, a band, a
+    sample, saving): the many fits that never report one (``identify``'s held-out fits)
+    do not pay for the Jacobian over the record. ``then(note)`` is called with the sentence
+    for ``info["pem"]["covariance"]`` once it is formed."""
+
+    def __init__(self, base: ParameterUncertainty, model: Any, u: np.ndarray, y: np.ndarray,
+                 weights: np.ndarray, then: Any) -> None:
+        self.__dict__.update(base.__dict__)
+        self._pending: tuple[Any, ...] | None = (base, model, u, y, weights, then)
+
+    def _form(self) -> None:
+        pending, self._pending = self._pending, None
+        if pending is None:
+            return
+        base, model, u, y, weights, then = pending
+        model.uncertainty = base  # the Jacobian is the Gauss-Newton uncertainty's
+        try:
+            unc, note = coloured_error_covariance(model, u, y, weights)
+        finally:
+            model.uncertainty = self
+        if unc is not None:
+            self.__dict__.update({k: v for k, v in unc.__dict__.items() if k != "_pending"})
+        then(note)
+
+    def __getattribute__(self, name: str) -> Any:
+        if name in ("covariance", "dof", "method", "_eig", "_eigen", "_cache", "__reduce__",
+                    "__deepcopy__", "std", "correlation", "summary", "to_pandas", "__repr__"):
+            pending = object.__getattribute__(self, "__dict__").get("_pending")
+            if pending is not None:
+                object.__getattribute__(self, "_form")()
+        return object.__getattribute__(self, name)
