@@ -323,7 +323,7 @@ def test_csv_with_blanks_and_trailing_comma(tmp_path: Path) -> None:
     rows = ["a,b,", "1,10,", "2,,", "3,30,", "4,40,"]
     p.write_text("\n".join(rows) + "\n")
     with pytest.raises(NonFiniteError):
-        sysid.IOData.from_csv(p, ["a"], ["b"])
+        sysid.IOData.from_csv(p, ["a"], ["b"], dt=0.5)
     d = sysid.IOData.from_csv(p, ["a"], ["b"], dt=0.5, nan="interpolate")
     np.testing.assert_allclose(d.y.ravel(), [10, 20, 30, 40])
 
@@ -407,3 +407,56 @@ def test_from_pandas_does_not_read_row_labels_as_seconds():
                                         dt=0.1).n_samples == 49
     timed = df.dropna().set_index(pd.Index(np.arange(49) * 0.5, name="time"))
     assert sysid.IOData.from_pandas(timed, inputs=["u"], outputs=["y"]).dt == 0.5
+
+
+# ------------------------------------------ issue 26: the data layer's sweep (from_csv, ...)
+def test_from_csv_reads_a_headerless_dat_whole() -> None:
+    # the first row of dryer.dat was taken for column names: 999 samples named '6.41...'
+    raw = np.loadtxt(sysid.datasets.path("dryer"))
+    d = sysid.IOData.from_csv(sysid.datasets.path("dryer"), inputs=[0], outputs=[1], dt=0.08)
+    assert d.n_samples == 1000 == len(raw) and d.input_names == ["u0"]
+    np.testing.assert_array_equal(d.u[:, 0], raw[:, 0])
+    np.testing.assert_array_equal(d.y[:, 0], raw[:, 1])
+    assert d == sysid.IOData(raw[:, 0], raw[:, 1], 0.08)
+
+
+def test_from_csv_bom_and_assumed_dt(tmp_path: Path) -> None:
+    # Excel's "CSV UTF-8" starts with a BOM: the header read "\ufefftime", dt became 1 s
+    p = tmp_path / "bom.csv"
+    p.write_text("time,u,y\n0,1,2\n0.1,3,4\n0.2,5,6\n", encoding="utf-8-sig")
+    d = sysid.IOData.from_csv(p, ["u"], ["y"])
+    assert d.dt == pytest.approx(0.1) and d.n_samples == 3
+    q = tmp_path / "plain.csv"
+    q.write_text("u,y\n1,2\n3,4\n5,6\n")
+    with pytest.warns(UserWarning, match="assuming dt = 1 s"):
+        assert sysid.IOData.from_csv(q, ["u"], ["y"]).dt == 1.0
+
+
+def test_from_csv_names_a_bad_cell(tmp_path: Path) -> None:
+    p = tmp_path / "txt.csv"
+    p.write_text("time,u,y\n0,1,2\n\n0.1,abc,4\n0.2,5,6\n0.3,7,8\n")
+    for nan in ("error", "interpolate"):  # interpolated over silently before
+        with pytest.raises(DataError, match=r"txt.csv line 4, column 'u': 'abc' is not a "):
+            sysid.IOData.from_csv(p, ["u"], ["y"], nan=nan)
+    p.write_text("time,u,y\n0,1,2\n0.1,3\n")
+    with pytest.raises(DataError, match="line 3: 2 fields but the header has 3"):
+        sysid.IOData.from_csv(p, ["u"], ["y"])
+    p.write_text("time,u,y\n")
+    with pytest.raises(DataError, match="header but no data rows"):
+        sysid.IOData.from_csv(p, ["u"], ["y"])
+    # quoted numbers are numbers; an empty cell is still a missing value
+    p.write_text('"time","u","y"\n"0","1","2"\n"0.1","","4"\n"0.2","5","6"\n')
+    d = sysid.IOData.from_csv(p, ["u"], ["y"], nan="interpolate")
+    np.testing.assert_allclose(d.u[:, 0], [1, 3, 5])
+    np.testing.assert_allclose(d.y[:, 0], [2, 4, 6])
+
+
+def test_from_csv_decimal_comma(tmp_path: Path) -> None:
+    p = tmp_path / "dc.csv"
+    p.write_text("time;u;y\n0;1,5;2,5\n0,1;3,5;4,5\n0,2;5,5;6,5\n")
+    with pytest.raises(DataError, match=r"line 2, column 'u': '1,5' .*decimal=','"):
+        sysid.IOData.from_csv(p, ["u"], ["y"])
+    d = sysid.IOData.from_csv(p, ["u"], ["y"], decimal=",")
+    assert d.dt == pytest.approx(0.1)
+    np.testing.assert_allclose(d.u[:, 0], [1.5, 3.5, 5.5])
+    np.testing.assert_allclose(d.y[:, 0], [2.5, 4.5, 6.5])

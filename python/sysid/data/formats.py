@@ -21,6 +21,7 @@ import numpy as np
 
 from .._atomic import atomic_path
 from ..errors import DataError
+from .table import numeric, read_table
 
 __all__: list[str] = []
 
@@ -73,25 +74,6 @@ _TIME_NAMES = ("time", "t", "Time", "TIME", "time_s", "t_s", "seconds")
 def _time_column(df: Any) -> str | None:
     """The name of a time column when the frame has one under a usual name."""
     return next((c for c in _TIME_NAMES if c in df.columns), None)
-
-
-def _open_text(p: Path) -> Any:
-    """A text stream of a file, decompressed by its suffix (``.gz``, ``.bz2``, ``.xz``) as
-    ``numpy.genfromtxt`` does."""
-    suffix = p.suffix.lower()
-    if suffix == ".gz":
-        import gzip
-
-        return gzip.open(p, "rt", encoding="utf-8")
-    if suffix == ".bz2":
-        import bz2
-
-        return bz2.open(p, "rt", encoding="utf-8")
-    if suffix in (".xz", ".lzma"):
-        import lzma
-
-        return lzma.open(p, "rt", encoding="utf-8")
-    return open(p, encoding="utf-8")
 
 
 def to_pandas(data: Any) -> Any:
@@ -261,18 +243,28 @@ def from_csv(
     dt: float | None = None,
     experiment: str | int | None = None,
     delimiter: str | None = None,
+    decimal: str = ".",
     nan: str = "error",
     max_gap: int = 5,
 ) -> Any:
-    """Read a CSV file with a header row (the format of :meth:`to_csv`, or any other).
+    """Read a CSV file (the format of :meth:`to_csv`, or any other) or a white-space
+    separated ``.dat`` file.
 
-    Columns are chosen by header name or 0-based index; ``name [unit]`` headers give
-    units. Without ``inputs``/``outputs``, a file written by :meth:`to_csv` is read back
-    whole. Empty fields become NaN and are handled as ``nan`` says (see
-    :meth:`from_raw`; only for single-experiment files). Trailing delimiters are ignored.
-    The delimiter is guessed from the header (comma, semicolon, tab, else white space,
-    as in ``.dat`` files) unless given. Files ending in ``.gz``, ``.bz2`` or ``.xz`` are
-    decompressed while reading.
+    The first line is a header of names unless every field in it is a number: then it is
+    the first sample, the columns are chosen by 0-based index (or ``"0"``, ``"1"``, ...)
+    and the channels get the default names (``u0``, ``y0``, ...). Columns are chosen by
+    header name or 0-based index; ``name [unit]`` headers give units. Without
+    ``inputs``/``outputs``, a file written by :meth:`to_csv` is read back whole. Empty
+    fields become NaN and are handled as ``nan`` says (see :meth:`from_raw`; only for
+    single-experiment files); a field that is not a number raises a
+    :class:`~sysid.DataError` naming its line and column. Quoted fields, a trailing
+    delimiter, empty lines, ``#`` comment lines and a UTF-8 byte-order mark are allowed.
+    The delimiter is guessed from the first line (semicolon, comma, tab, else white space,
+    as in ``.dat`` files) unless given; ``decimal=","`` reads decimal commas (then the
+    delimiter is a semicolon, tab or white space). Files ending in ``.gz``, ``.bz2`` or
+    ``.xz`` are decompressed while reading. The same reader serves the command line
+    (``sysid.data.table``). Without a time column or ``dt``, dt = 1 s is assumed with a
+    warning.
 
     Examples
     --------
@@ -285,33 +277,23 @@ def from_csv(
     (True, ['m'])
     """
     p = Path(path)
-    if not p.exists():
-        raise DataError(f"no such file: {p}")
-    try:
-        with _open_text(p) as fh:
-            header = fh.readline().strip()
-    except UnicodeDecodeError:
-        raise DataError(f"{p.name} is not a text file (binary content); give a CSV or "
-                        "whitespace-separated text file") from None
-    if delimiter is None:
-        delimiter = next((d for d in (",", ";", "\t") if d in header), None)
-    raw_names = [h.strip().strip('"') for h in header.split(delimiter)]
-    while raw_names and raw_names[-1] == "":
-        raw_names.pop()
+    if decimal not in (".", ","):
+        raise DataError(f"decimal must be '.' or ',', got {decimal!r}")
+    table = read_table(p, delimiter, decimal=decimal)
     names, unit_of = [], {}
-    for h in raw_names:
+    for h in table.names:
         m = re.fullmatch(r"(.*?)\s*\[(.*)\]", h)
         n = m.group(1) if m else h
         names.append(n)
         unit_of[n] = m.group(2) if m else ""
-    data = np.genfromtxt(p, delimiter=delimiter, skip_header=1, dtype=float)
-    data = np.atleast_2d(data)[:, : len(names)]
 
     def col(c: str | int) -> int:
         if isinstance(c, (int, np.integer)):
             if not 0 <= c < len(names):
                 hint = "" if len(names) > 1 else (
-                    f"; the header was read as one column with delimiter={delimiter!r}: "
+                    "; the header was read as one column with "
+                    + (f"delimiter={delimiter!r}" if delimiter else "the guessed delimiter")
+                    + ": "
                     "pass delimiter=... (e.g. ' ' or '\\t')"
                 )
                 raise DataError(
@@ -339,11 +321,20 @@ def from_csv(
     tcol = None if time is None else col(time)
     ecol = None if experiment is None else col(experiment)
     kw: dict[str, Any] = {
-        "input_names": [names[i] for i in iu],
-        "output_names": [names[i] for i in iy],
+        # a headerless file (a .dat) names no channels: the record's defaults u0, y0, ...
+        "input_names": None if table.headerless else [names[i] for i in iu],
+        "output_names": None if table.headerless else [names[i] for i in iy],
         "input_units": [unit_of[names[i]] for i in iu],
         "output_units": [unit_of[names[i]] for i in iy],
     }
+    used = sorted(set(iu + iy + [c for c in (tcol, ecol) if c is not None]))
+    data = np.full((len(table.rows), len(names)), np.nan)
+    data[:, used] = numeric(table, used, missing=True, decimal=decimal,
+                            hint="pass decimal=','")
+    if tcol is None and dt is None:
+        warnings.warn(
+            f"{p.name} has no time column and no dt= was given: assuming dt = 1 s; pass "
+            "dt=... or time='column'", UserWarning, stacklevel=2)
     if ecol is not None:
         ks = data[:, ecol]
         parts = [data[ks == k] for k in np.unique(ks)]
