@@ -460,3 +460,21 @@ def test_from_csv_decimal_comma(tmp_path: Path) -> None:
     assert d.dt == pytest.approx(0.1)
     np.testing.assert_allclose(d.u[:, 0], [1.5, 3.5, 5.5])
     np.testing.assert_allclose(d.y[:, 0], [2.5, 4.5, 6.5])
+
+
+def test_from_pandas_datetime_and_timedelta_time() -> None:
+    # a datetime64 time column read as nanosecond counts: dt 10000.0 for 10 ms; a
+    # TimedeltaIndex was ignored (dt 1 with a warning that there was no sample time)
+    import pandas as pd
+
+    n = 20
+    stamps = pd.date_range("2024-01-01", periods=n, freq="10ms")
+    df = pd.DataFrame({"u": np.ones(n), "y": np.arange(n, dtype=float), "time": stamps})
+    deltas = pd.to_timedelta(np.arange(n) * 10, unit="ms")
+    for frame in (df, df.assign(time=deltas), df.assign(time=deltas).set_index("time"),
+                  df.assign(t=deltas + pd.Timedelta(seconds=3)).drop(columns="time")):
+        d = sysid.IOData.from_pandas(frame, ["u"], ["y"])
+        assert d.dt == pytest.approx(0.01, rel=1e-12) and d.time[0] == 0.0
+        np.testing.assert_allclose(d.time, np.arange(n) * 0.01, atol=1e-12)
+    d = sysid.IOData.from_pandas(df, ["u"], ["y"], time="time")
+    assert d.dt == pytest.approx(0.01, rel=1e-12)

@@ -62,6 +62,17 @@ def _warn_dropped_rows(index: Any, timed: bool) -> None:
         UserWarning, stacklevel=3)
 
 
+def _seconds(x: Any, first: Any) -> np.ndarray:
+    """Time values in seconds: numbers as they are; datetime64 and timedelta64 stamps (a
+    column or a ``DatetimeIndex``/``TimedeltaIndex``) as seconds since the first stamp of
+    ``first`` (the first experiment's), not as their raw nanosecond counts."""
+    pd = _pandas()
+    idx = pd.Index(x)
+    if idx.dtype.kind not in "mM":
+        return idx.to_numpy(dtype=float)
+    return np.asarray((idx - pd.Index(first)[0]).total_seconds(), dtype=float)
+
+
 def _default_index(index: Any) -> bool:
     """A 0, 1, 2, ... index that pandas made up (not a time axis)."""
     pd = _pandas()
@@ -130,7 +141,9 @@ def from_pandas(
         Column names. Default: those stored by :meth:`to_pandas` in ``df.attrs``.
     time : str, optional
         Column holding the time in seconds; default the index when it is numeric and
-        ``dt`` is not given (a ``DatetimeIndex`` is converted to seconds).
+        ``dt`` is not given. Date-times and time deltas (``datetime64``/``timedelta64``
+        columns, a ``DatetimeIndex`` or ``TimedeltaIndex``) are converted to seconds from
+        the first stamp.
     dt : float, optional
         Sample time (when there is no time information).
     experiment : str, optional
@@ -170,13 +183,13 @@ def from_pandas(
         us.append(g[inputs].to_numpy(dtype=float) if inputs else None)
         ys.append(g[outputs].to_numpy(dtype=float))
         if time is not None:
-            ts.append(g[time].to_numpy(dtype=float))
-        elif dt is None and isinstance(g.index, pd.DatetimeIndex):
-            ts.append((g.index - groups[0].index[0]).total_seconds().to_numpy())
+            ts.append(_seconds(g[time], groups[0][time]))
+        elif dt is None and g.index.dtype.kind in "mM":
+            ts.append(_seconds(g.index, groups[0].index))
         elif dt is None and _index_is_time(g.index):
             ts.append(g.index.to_numpy(dtype=float))
         elif dt is None and _time_column(g) is not None:
-            ts.append(g[_time_column(g)].to_numpy(dtype=float))
+            ts.append(_seconds(g[_time_column(g)], groups[0][_time_column(g)]))
     for g in groups:
         _warn_dropped_rows(g.index, time is not None or bool(ts))
     if dt is None and not ts:
