@@ -478,3 +478,19 @@ def test_from_pandas_datetime_and_timedelta_time() -> None:
         np.testing.assert_allclose(d.time, np.arange(n) * 0.01, atol=1e-12)
     d = sysid.IOData.from_pandas(df, ["u"], ["y"], time="time")
     assert d.dt == pytest.approx(0.01, rel=1e-12)
+
+
+def test_from_mat_missing_input_variable(tmp_path: Path) -> None:
+    # u="input" not in the file gave a time series (0 inputs) without a word
+    from scipy.io import savemat
+
+    y = np.arange(50.0).reshape(-1, 1)
+    savemat(tmp_path / "p.mat", {"in1": np.ones((50, 1)), "y": y})
+    with pytest.raises(DataError, match=r"no input variable 'input'.*\['in1', 'y'\].*u=None"):
+        sysid.IOData.from_mat(tmp_path / "p.mat", u="input")
+    with pytest.raises(DataError, match="no input variable 'u'"):
+        sysid.IOData.from_mat(tmp_path / "p.mat")
+    d = sysid.IOData.from_mat(tmp_path / "p.mat", u="in1", dt=0.5)
+    assert (d.n_inputs, d.n_outputs, d.n_samples) == (1, 1, 50)
+    ts = sysid.IOData.from_mat(tmp_path / "p.mat", u=None, dt=0.5)
+    assert ts.n_inputs == 0 and np.array_equal(ts.y, y)

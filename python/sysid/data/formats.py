@@ -467,7 +467,7 @@ def from_mat(
     cls: Any,
     path: str | Path,
     *,
-    u: str = "u",
+    u: str | None = "u",
     y: str = "y",
     dt: float | str | None = None,
     input_names: Sequence[str] | None = None,
@@ -476,7 +476,9 @@ def from_mat(
     """Load a MATLAB ``.mat`` file: one written by :meth:`to_mat`, or any file with
     input/output matrices under the variable names ``u`` and ``y`` (samples in rows).
 
-    ``dt`` may be a number or the name of a variable holding it.
+    ``dt`` may be a number or the name of a variable holding it. A variable ``u`` or ``y``
+    that is not in the file raises a :class:`~sysid.DataError` listing the file's
+    variables; output-only data (a time series) is read with ``u=None``.
     """
     from scipy.io import loadmat
 
@@ -490,7 +492,11 @@ def from_mat(
         if dt not in m:
             raise DataError(f"no variable {dt!r} (sample time) in {path}")
         dt = float(np.asarray(m[dt]).ravel()[0])
-    uu = m.get(u)
+    if u is not None and u not in m:
+        have = sorted(k for k in m if not k.startswith("__"))
+        raise DataError(f"no input variable {u!r} in {path}; it holds {have}: name it with "
+                        "u='...', or pass u=None for output-only (time-series) data")
+    uu = None if u is None else m[u]
     yy = np.asarray(m[y], dtype=float)
     if yy.ndim == 2 and yy.shape[0] < yy.shape[1] and yy.shape[0] <= 16:
         raise DataError(
