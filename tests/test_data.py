@@ -494,3 +494,14 @@ def test_from_mat_missing_input_variable(tmp_path: Path) -> None:
     assert (d.n_inputs, d.n_outputs, d.n_samples) == (1, 1, 50)
     ts = sysid.IOData.from_mat(tmp_path / "p.mat", u=None, dt=0.5)
     assert ts.n_inputs == 0 and np.array_equal(ts.y, y)
+
+
+def test_a_list_of_numpy_scalars_is_one_signal() -> None:
+    # list(np.arange(5.)) was read as 5 experiments of one scalar each
+    d = sysid.IOData(u=list(np.arange(5.0)), y=list(np.arange(5.0) ** 2), dt=0.1)
+    assert (d.n_experiments, d.n_samples) == (1, 5)
+    np.testing.assert_array_equal(d.y[:, 0], np.arange(5.0) ** 2)
+    e = sysid.IOData(None, np.arange(5.0), time=list(np.arange(5) * 0.1))
+    assert e.dt == pytest.approx(0.1) and e.n_experiments == 1
+    two = sysid.IOData(None, [np.arange(5.0), np.arange(4.0)], 0.1)  # arrays: experiments
+    assert two.n_experiments == 2
