@@ -505,3 +505,17 @@ def test_a_list_of_numpy_scalars_is_one_signal() -> None:
     assert e.dt == pytest.approx(0.1) and e.n_experiments == 1
     two = sysid.IOData(None, [np.arange(5.0), np.arange(4.0)], 0.1)  # arrays: experiments
     assert two.n_experiments == 2
+
+
+@pytest.mark.parametrize("dt", [1 / 60, 1 / 3, 0.1, 1 / 400])
+def test_pandas_and_csv_round_trips_keep_dt(tmp_path: Path, dt: float) -> None:
+    # dt = 1/60 came back from to_pandas/from_pandas and to_csv/from_csv as 0.0166666666667
+    d = sysid.IOData(np.ones(500), np.arange(500.0), dt=dt)
+    b = sysid.IOData.from_pandas(d.to_pandas())
+    d.to_csv(tmp_path / "r.csv")
+    c = sysid.IOData.from_csv(tmp_path / "r.csv", ["u0"], ["y0"])
+    assert b.dt == dt and c.dt == dt and b == d and c == d
+    # a frame whose time no longer matches the stored dt is read by its time
+    df = d.to_pandas()
+    df.index = df.index * 2
+    assert sysid.IOData.from_pandas(df).dt == pytest.approx(2 * dt, rel=1e-9)

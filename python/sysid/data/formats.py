@@ -73,6 +73,28 @@ def _seconds(x: Any, first: Any) -> np.ndarray:
     return np.asarray((idx - pd.Index(first)[0]).total_seconds(), dtype=float)
 
 
+def _grid_dt(ts: list[np.ndarray], candidates: list[Any], rtol: float = 0.0) -> float | None:
+    """The first candidate sample time whose grid ``t0 + k dt`` gives every time vector
+    back within its rounding (a few units in the last place, or ``rtol`` of the largest
+    instant): a stored dt such as 1/60, which the time vector alone would read as the
+    shortest decimal that fits its spacing (0.0166666666667). None when none fits."""
+    ts = [np.asarray(t, dtype=float) for t in ts]
+    if not ts or any(t.size < 2 for t in ts):
+        return None
+    for c in candidates:
+        try:
+            c = float(c)
+        except (TypeError, ValueError):
+            continue
+        if not (np.isfinite(c) and c > 0):
+            continue
+        if all(np.max(np.abs(t - (t[0] + np.arange(t.size) * c)))
+               <= max(4 * np.spacing(np.max(np.abs(t)) + c), rtol * np.max(np.abs(t)))
+               for t in ts):
+            return c
+    return None
+
+
 def _default_index(index: Any) -> bool:
     """A 0, 1, 2, ... index that pandas made up (not a time axis)."""
     pd = _pandas()
@@ -192,6 +214,9 @@ def from_pandas(
             ts.append(_seconds(g[_time_column(g)], groups[0][_time_column(g)]))
     for g in groups:
         _warn_dropped_rows(g.index, time is not None or bool(ts))
+    if dt is None and ts and "dt" in df.attrs:
+        # the stored dt (to_pandas) when the time agrees with it: 1/60, not 0.0166666666667
+        dt = _grid_dt(ts, [df.attrs["dt"]], rtol=1e-9)
     if dt is None and not ts:
         dt = df.attrs.get("dt")
         if dt is None:
@@ -348,6 +373,14 @@ def from_csv(
         warnings.warn(
             f"{p.name} has no time column and no dt= was given: assuming dt = 1 s; pass "
             "dt=... or time='column'", UserWarning, stacklevel=2)
+    if tcol is not None and dt is None and np.isfinite(data[:, tcol]).all():
+        # the dt the time column was written with (to_csv): its shortest decimal (0.1) or,
+        # for a rate such as 1/60, its mean spacing, when that grid gives the column back
+        ks = [data[:, tcol]] if ecol is None else [
+            data[data[:, ecol] == k, tcol] for k in np.unique(data[:, ecol])]
+        if all(t.size >= 2 and np.all(np.diff(t) > 0) for t in ks):
+            spans = [(t[-1] - t[0]) / (t.size - 1) for t in ks]
+            dt = _grid_dt(ks, [float(f"{spans[0]:.12g}"), *spans])
     if ecol is not None:
         ks = data[:, ecol]
         parts = [data[ks == k] for k in np.unique(ks)]
