@@ -519,3 +519,17 @@ def test_pandas_and_csv_round_trips_keep_dt(tmp_path: Path, dt: float) -> None:
     df = d.to_pandas()
     df.index = df.index * 2
     assert sysid.IOData.from_pandas(df).dt == pytest.approx(2 * dt, rel=1e-9)
+
+
+def test_from_pandas_named_integer_index_is_time_only_under_a_time_name() -> None:
+    # an index named "sample" (read_csv(index_col=0)) was taken for seconds, dt = 1 silently
+    import pandas as pd
+
+    n = 20
+    df = pd.DataFrame({"u": np.ones(n), "y": np.arange(n, dtype=float)})
+    df.index.name = "sample"
+    with pytest.warns(UserWarning, match="integer index named 'sample', read as row numbers"):
+        assert sysid.IOData.from_pandas(df, ["u"], ["y"]).dt == 1.0
+    assert sysid.IOData.from_pandas(df, ["u"], ["y"], dt=0.25).dt == 0.25
+    df.index = pd.Index(np.arange(n) * 2, name="Seconds")  # a time name: seconds
+    assert sysid.IOData.from_pandas(df, ["u"], ["y"]).dt == 2.0

@@ -35,12 +35,14 @@ def _pandas() -> Any:
 
 
 def _index_is_time(index: Any) -> bool:
-    """A numeric index that holds time: float values, or integers under a name (``time``,
-    ``t``, ``seconds``, ...). Unnamed integers are row labels (left by ``iloc[::2]`` or
-    ``dropna()``), not seconds."""
+    """A numeric index that holds time: float values, or integers under a time-like name
+    (``time``, ``t``, ``seconds``, ...: :data:`_TIME_NAMES`, any case). Other integers are
+    row labels (left by ``iloc[::2]``, ``dropna()`` or ``read_csv(index_col=0)`` of a
+    ``sample`` column), not seconds."""
     if index.dtype.kind == "f":
         return True
-    return index.dtype.kind in "iu" and index.name is not None and not _default_index(index)
+    return (index.dtype.kind in "iu" and index.name is not None
+            and str(index.name).lower() in {n.lower() for n in _TIME_NAMES})
 
 
 def _warn_dropped_rows(index: Any, timed: bool) -> None:
@@ -93,12 +95,6 @@ def _grid_dt(ts: list[np.ndarray], candidates: list[Any], rtol: float = 0.0) -> 
                for t in ts):
             return c
     return None
-
-
-def _default_index(index: Any) -> bool:
-    """A 0, 1, 2, ... index that pandas made up (not a time axis)."""
-    pd = _pandas()
-    return isinstance(index, pd.RangeIndex) and index.step == 1 and index.name is None
 
 
 _TIME_NAMES = ("time", "t", "Time", "TIME", "time_s", "t_s", "seconds")
@@ -220,9 +216,12 @@ def from_pandas(
     if dt is None and not ts:
         dt = df.attrs.get("dt")
         if dt is None:
+            named = df.index.name is not None and df.index.dtype.kind in "iu"
             warnings.warn(
-                "the DataFrame carries no sample time (no dt=, no time column, a default "
-                "0, 1, 2, ... index): assuming dt = 1 s; pass dt=... or time='column'",
+                "the DataFrame carries no sample time (no dt=, no time column, "
+                + (f"an integer index named {df.index.name!r}, read as row numbers"
+                   if named else "a default 0, 1, 2, ... index")
+                + "): assuming dt = 1 s; pass dt=... or time='column'",
                 UserWarning, stacklevel=2,
             )
     kw: dict[str, Any] = {
