@@ -515,6 +515,12 @@ def test_pandas_and_csv_round_trips_keep_dt(tmp_path: Path, dt: float) -> None:
     d.to_csv(tmp_path / "r.csv")
     c = sysid.IOData.from_csv(tmp_path / "r.csv", ["u0"], ["y0"])
     assert b.dt == dt and c.dt == dt and b == d and c == d
+    # a file with a time column and no experiment column goes through from_raw
+    t = np.arange(500) * dt
+    np.savetxt(tmp_path / "t.csv", np.column_stack([t, np.ones(500), t]), delimiter=",",
+               header="time,u,y", comments="", fmt="%.17g")
+    assert sysid.IOData.from_csv(tmp_path / "t.csv", ["u"], ["y"]).dt == dt
+    assert sysid.IOData.from_raw(np.ones(500), t, dt, time=t).dt == dt
     # a frame whose time no longer matches the stored dt is read by its time
     df = d.to_pandas()
     df.index = df.index * 2
@@ -533,3 +539,10 @@ def test_from_pandas_named_integer_index_is_time_only_under_a_time_name() -> Non
     assert sysid.IOData.from_pandas(df, ["u"], ["y"], dt=0.25).dt == 0.25
     df.index = pd.Index(np.arange(n) * 2, name="Seconds")  # a time name: seconds
     assert sysid.IOData.from_pandas(df, ["u"], ["y"]).dt == 2.0
+
+
+def test_from_raw_checks_dt_first() -> None:
+    # dt=0 said "time repeats at sample 1"
+    for bad in (0, -0.1, np.nan):
+        with pytest.raises(DataError, match="dt must be a positive number of seconds"):
+            sysid.IOData.from_raw(np.ones(5), np.ones(5), dt=bad)
