@@ -323,7 +323,7 @@ def test_csv_with_blanks_and_trailing_comma(tmp_path: Path) -> None:
     rows = ["a,b,", "1,10,", "2,,", "3,30,", "4,40,"]
     p.write_text("\n".join(rows) + "\n")
     with pytest.raises(NonFiniteError):
-        sysid.IOData.from_csv(p, ["a"], ["b"])
+        sysid.IOData.from_csv(p, ["a"], ["b"], dt=0.5)
     d = sysid.IOData.from_csv(p, ["a"], ["b"], dt=0.5, nan="interpolate")
     np.testing.assert_allclose(d.y.ravel(), [10, 20, 30, 40])
 
@@ -407,3 +407,142 @@ def test_from_pandas_does_not_read_row_labels_as_seconds():
                                         dt=0.1).n_samples == 49
     timed = df.dropna().set_index(pd.Index(np.arange(49) * 0.5, name="time"))
     assert sysid.IOData.from_pandas(timed, inputs=["u"], outputs=["y"]).dt == 0.5
+
+
+# ------------------------------------------ issue 26: the data layer's sweep (from_csv, ...)
+def test_from_csv_reads_a_headerless_dat_whole() -> None:
+    # the first row of dryer.dat was taken for column names: 999 samples named '6.41...'
+    raw = np.loadtxt(sysid.datasets.path("dryer"))
+    d = sysid.IOData.from_csv(sysid.datasets.path("dryer"), inputs=[0], outputs=[1], dt=0.08)
+    assert d.n_samples == 1000 == len(raw) and d.input_names == ["u0"]
+    np.testing.assert_array_equal(d.u[:, 0], raw[:, 0])
+    np.testing.assert_array_equal(d.y[:, 0], raw[:, 1])
+    assert d == sysid.IOData(raw[:, 0], raw[:, 1], 0.08)
+
+
+def test_from_csv_bom_and_assumed_dt(tmp_path: Path) -> None:
+    # Excel's "CSV UTF-8" starts with a BOM: the header read "\ufefftime", dt became 1 s
+    p = tmp_path / "bom.csv"
+    p.write_text("time,u,y\n0,1,2\n0.1,3,4\n0.2,5,6\n", encoding="utf-8-sig")
+    d = sysid.IOData.from_csv(p, ["u"], ["y"])
+    assert d.dt == pytest.approx(0.1) and d.n_samples == 3
+    q = tmp_path / "plain.csv"
+    q.write_text("u,y\n1,2\n3,4\n5,6\n")
+    with pytest.warns(UserWarning, match="assuming dt = 1 s"):
+        assert sysid.IOData.from_csv(q, ["u"], ["y"]).dt == 1.0
+
+
+def test_from_csv_names_a_bad_cell(tmp_path: Path) -> None:
+    p = tmp_path / "txt.csv"
+    p.write_text("time,u,y\n0,1,2\n\n0.1,abc,4\n0.2,5,6\n0.3,7,8\n")
+    for nan in ("error", "interpolate"):  # interpolated over silently before
+        with pytest.raises(DataError, match=r"txt.csv line 4, column 'u': 'abc' is not a "):
+            sysid.IOData.from_csv(p, ["u"], ["y"], nan=nan)
+    p.write_text("time,u,y\n0,1,2\n0.1,3\n")
+    with pytest.raises(DataError, match="line 3: 2 fields but the header has 3"):
+        sysid.IOData.from_csv(p, ["u"], ["y"])
+    p.write_text("time,u,y\n")
+    with pytest.raises(DataError, match="header but no data rows"):
+        sysid.IOData.from_csv(p, ["u"], ["y"])
+    # quoted numbers are numbers; an empty cell is still a missing value
+    p.write_text('"time","u","y"\n"0","1","2"\n"0.1","","4"\n"0.2","5","6"\n')
+    d = sysid.IOData.from_csv(p, ["u"], ["y"], nan="interpolate")
+    np.testing.assert_allclose(d.u[:, 0], [1, 3, 5])
+    np.testing.assert_allclose(d.y[:, 0], [2, 4, 6])
+
+
+def test_from_csv_decimal_comma(tmp_path: Path) -> None:
+    p = tmp_path / "dc.csv"
+    p.write_text("time;u;y\n0;1,5;2,5\n0,1;3,5;4,5\n0,2;5,5;6,5\n")
+    with pytest.raises(DataError, match=r"line 2, column 'u': '1,5' .*decimal=','"):
+        sysid.IOData.from_csv(p, ["u"], ["y"])
+    d = sysid.IOData.from_csv(p, ["u"], ["y"], decimal=",")
+    assert d.dt == pytest.approx(0.1)
+    np.testing.assert_allclose(d.u[:, 0], [1.5, 3.5, 5.5])
+    np.testing.assert_allclose(d.y[:, 0], [2.5, 4.5, 6.5])
+
+
+def test_from_pandas_datetime_and_timedelta_time() -> None:
+    # a datetime64 time column read as nanosecond counts: dt 10000.0 for 10 ms; a
+    # TimedeltaIndex was ignored (dt 1 with a warning that there was no sample time)
+    import pandas as pd
+
+    n = 20
+    stamps = pd.date_range("2024-01-01", periods=n, freq="10ms")
+    df = pd.DataFrame({"u": np.ones(n), "y": np.arange(n, dtype=float), "time": stamps})
+    deltas = pd.to_timedelta(np.arange(n) * 10, unit="ms")
+    for frame in (df, df.assign(time=deltas), df.assign(time=deltas).set_index("time"),
+                  df.assign(t=deltas + pd.Timedelta(seconds=3)).drop(columns="time")):
+        d = sysid.IOData.from_pandas(frame, ["u"], ["y"])
+        assert d.dt == pytest.approx(0.01, rel=1e-12) and d.time[0] == 0.0
+        np.testing.assert_allclose(d.time, np.arange(n) * 0.01, atol=1e-12)
+    d = sysid.IOData.from_pandas(df, ["u"], ["y"], time="time")
+    assert d.dt == pytest.approx(0.01, rel=1e-12)
+
+
+def test_from_mat_missing_input_variable(tmp_path: Path) -> None:
+    # u="input" not in the file gave a time series (0 inputs) without a word
+    from scipy.io import savemat
+
+    y = np.arange(50.0).reshape(-1, 1)
+    savemat(tmp_path / "p.mat", {"in1": np.ones((50, 1)), "y": y})
+    with pytest.raises(DataError, match=r"no input variable 'input'.*\['in1', 'y'\].*u=None"):
+        sysid.IOData.from_mat(tmp_path / "p.mat", u="input")
+    with pytest.raises(DataError, match="no input variable 'u'"):
+        sysid.IOData.from_mat(tmp_path / "p.mat")
+    d = sysid.IOData.from_mat(tmp_path / "p.mat", u="in1", dt=0.5)
+    assert (d.n_inputs, d.n_outputs, d.n_samples) == (1, 1, 50)
+    ts = sysid.IOData.from_mat(tmp_path / "p.mat", u=None, dt=0.5)
+    assert ts.n_inputs == 0 and np.array_equal(ts.y, y)
+
+
+def test_a_list_of_numpy_scalars_is_one_signal() -> None:
+    # list(np.arange(5.)) was read as 5 experiments of one scalar each
+    d = sysid.IOData(u=list(np.arange(5.0)), y=list(np.arange(5.0) ** 2), dt=0.1)
+    assert (d.n_experiments, d.n_samples) == (1, 5)
+    np.testing.assert_array_equal(d.y[:, 0], np.arange(5.0) ** 2)
+    e = sysid.IOData(None, np.arange(5.0), time=list(np.arange(5) * 0.1))
+    assert e.dt == pytest.approx(0.1) and e.n_experiments == 1
+    two = sysid.IOData(None, [np.arange(5.0), np.arange(4.0)], 0.1)  # arrays: experiments
+    assert two.n_experiments == 2
+
+
+@pytest.mark.parametrize("dt", [1 / 60, 1 / 3, 0.1, 1 / 400])
+def test_pandas_and_csv_round_trips_keep_dt(tmp_path: Path, dt: float) -> None:
+    # dt = 1/60 came back from to_pandas/from_pandas and to_csv/from_csv as 0.0166666666667
+    d = sysid.IOData(np.ones(500), np.arange(500.0), dt=dt)
+    b = sysid.IOData.from_pandas(d.to_pandas())
+    d.to_csv(tmp_path / "r.csv")
+    c = sysid.IOData.from_csv(tmp_path / "r.csv", ["u0"], ["y0"])
+    assert b.dt == dt and c.dt == dt and b == d and c == d
+    # a file with a time column and no experiment column goes through from_raw
+    t = np.arange(500) * dt
+    np.savetxt(tmp_path / "t.csv", np.column_stack([t, np.ones(500), t]), delimiter=",",
+               header="time,u,y", comments="", fmt="%.17g")
+    assert sysid.IOData.from_csv(tmp_path / "t.csv", ["u"], ["y"]).dt == dt
+    assert sysid.IOData.from_raw(np.ones(500), t, dt, time=t).dt == dt
+    # a frame whose time no longer matches the stored dt is read by its time
+    df = d.to_pandas()
+    df.index = df.index * 2
+    assert sysid.IOData.from_pandas(df).dt == pytest.approx(2 * dt, rel=1e-9)
+
+
+def test_from_pandas_named_integer_index_is_time_only_under_a_time_name() -> None:
+    # an index named "sample" (read_csv(index_col=0)) was taken for seconds, dt = 1 silently
+    import pandas as pd
+
+    n = 20
+    df = pd.DataFrame({"u": np.ones(n), "y": np.arange(n, dtype=float)})
+    df.index.name = "sample"
+    with pytest.warns(UserWarning, match="integer index named 'sample', read as row numbers"):
+        assert sysid.IOData.from_pandas(df, ["u"], ["y"]).dt == 1.0
+    assert sysid.IOData.from_pandas(df, ["u"], ["y"], dt=0.25).dt == 0.25
+    df.index = pd.Index(np.arange(n) * 2, name="Seconds")  # a time name: seconds
+    assert sysid.IOData.from_pandas(df, ["u"], ["y"]).dt == 2.0
+
+
+def test_from_raw_checks_dt_first() -> None:
+    # dt=0 said "time repeats at sample 1"
+    for bad in (0, -0.1, np.nan):
+        with pytest.raises(DataError, match="dt must be a positive number of seconds"):
+            sysid.IOData.from_raw(np.ones(5), np.ones(5), dt=bad)

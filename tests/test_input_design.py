@@ -164,3 +164,24 @@ def test_lagged_gram_equals_hankel_product() -> None:
     G, c = _lag_gram(us, mo)
     assert c == cols
     np.testing.assert_allclose(G, ref, rtol=1e-12, atol=1e-12)
+
+
+# ------------------------------------------ issue 26: the data layer's sweep (input design)
+def test_multisine_refuses_non_integer_lines() -> None:
+    # lines=[3.7, 5.2] excited bins 3 and 5 without a word
+    with pytest.raises(DataError, match=r"integers.*\[3.7, 5.2\]"):
+        sysid.multisine(64, lines=[3.7, 5.2])
+    u = sysid.multisine(64, lines=[3.0, 5])  # integer-valued floats are bins
+    k = np.flatnonzero(np.abs(np.fft.rfft(u[:, 0])) > 1e-8)
+    np.testing.assert_array_equal(k, [3, 5])
+
+
+def test_crest_factor_and_chirp_refuse_degenerate_input() -> None:
+    with pytest.raises(DataError, match=r"channel\(s\) \[1\] are all zero"):
+        sysid.crest_factor(np.column_stack([np.ones(4), np.zeros(4)]))
+    np.testing.assert_allclose(sysid.crest_factor(np.array([1.0, -1, 1, -3])),
+                               3 / np.sqrt(3.0))
+    with pytest.raises(DataError, match="at least 2 samples"):
+        sysid.chirp(1, 0.01, 0.1, 10)
+    with pytest.raises(DataError, match="dt must be a positive number"):
+        sysid.chirp(100, -0.01, 0.1, 10)

@@ -608,7 +608,7 @@ def test_from_csv_wrong_delimiter_hint(tmp_path):
 def test_from_csv_binary(tmp_path):
     p = tmp_path / "rec.csv"
     p.write_bytes(bytes(range(128, 256)) * 8)
-    with pytest.raises(DataError, match="not a text file"):
+    with pytest.raises(DataError, match="not a text table"):
         sysid.IOData.from_csv(p, outputs=[0])
 
 

@@ -23,6 +23,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .data.iodata import IOData
+from .data.table import numeric, read_table
 from .errors import DataError, InsufficientDataError, OrderError, SysidError
 from .validation.crossval import MIN_BLOCK
 
@@ -43,90 +44,16 @@ class _Progress:
 
 
 # -- CSV input ------------------------------------------------------------------------
-def _is_number(s: str) -> bool:
-    try:
-        float(s)
-    except ValueError:
-        return False
-    return True
-
-
-def _read_table(path: str | Path, delimiter: str | None) -> tuple[list[str], list[list[str]]]:
-    """Column names and the rows as strings (see :func:`read_csv`)."""
-    path = Path(path)
-    if not path.is_file():
-        raise DataError(f"no data file at {str(path)!r}")
-    raw = path.read_bytes()
-    try:
-        if b"\0" in raw[:65536]:
-            raise UnicodeDecodeError("utf-8", raw[:1], 0, 1, "NUL byte")
-        text = raw.decode("utf-8-sig")
-    except UnicodeDecodeError:
-        raise DataError(
-            f"{str(path)!r} is not a text table (binary content); give a CSV or whitespace-"
-            "separated text file with one column per channel"
-        ) from None
-    lines = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
-    if not lines:
-        raise DataError(f"{str(path)!r} is empty")
-    if delimiter is None:
-        delimiter = next((d for d in (",", ";") if d in lines[0]), " ")
-
-    def split(line: str) -> list[str]:
-        if delimiter in (" ", "\t"):
-            return line.split()
-        return [c.strip() for c in next(csv.reader([line], delimiter=delimiter))]
-
-    head = split(lines[0])
-    while head and head[-1] == "":  # a trailing delimiter ends every line
-        head.pop()
-    if all(_is_number(c) for c in head):
-        names, body, first = [str(i) for i in range(len(head))], lines, 1
-    else:
-        names, body, first = head, lines[1:], 2
-    if not body:
-        raise DataError(f"{str(path)!r} has a header but no data rows")
-    rows = []
-    for r, line in enumerate(body):
-        cells = split(line)
-        while len(cells) > len(names) and cells[-1] == "":
-            cells.pop()
-        if len(cells) != len(names):
-            raise DataError(f"{path.name} line {r + first}: {len(cells)} fields but the header "
-                            f"has {len(names)} columns")
-        rows.append(cells)
-    return names, rows
-
-
-def _numeric(path: str | Path, names: list[str], rows: list[list[str]], cols: list[int],
-             first_line: int) -> np.ndarray:
-    values = np.empty((len(rows), len(cols)))
-    for r, cells in enumerate(rows):
-        for k, c in enumerate(cols):
-            cell = cells[c]
-            try:
-                values[r, k] = float(cell)
-                if not np.isfinite(values[r, k]):
-                    raise ValueError(cell)
-            except ValueError:
-                what = ("is empty" if cell == "" else f"{cell!r} is not a finite number"
-                        if cell.strip().lower().lstrip("+-") in ("nan", "inf", "infinity")
-                        else f"{cell!r} is not a number")
-                raise DataError(
-                    f"{Path(path).name} line {r + first_line}, column {names[c]!r}: {what}; fix or "
-                    "remove that row (missing values must be repaired before identification)"
-                ) from None
-    return values
-
-
 def read_csv(path: str | Path, delimiter: str | None = None) -> tuple[list[str], np.ndarray]:
     r"""Read a numeric table: ``(column names, values (rows, columns))``.
 
     The first line is a header of names unless every field in it is a number (then the
-    columns are named ``"0", "1", ...``). The delimiter is guessed (comma, semicolon, else
-    white space) unless given; a trailing delimiter at the end of every line is allowed.
-    Empty lines and lines starting with ``#`` are skipped. A field that is not a number
-    raises a :class:`~sysid.DataError` naming its column and line.
+    columns are named ``"0", "1", ...``). The delimiter is guessed (semicolon, comma, tab,
+    else white space) unless given; a trailing delimiter at the end of every line is
+    allowed, and fields may be quoted. Empty lines and lines starting with ``#`` are
+    skipped. A field that is not a number raises a :class:`~sysid.DataError` naming its
+    column and line. The same reader serves :meth:`sysid.IOData.from_csv`
+    (``sysid.data.table``).
 
     Examples
     --------
@@ -139,9 +66,8 @@ def read_csv(path: str | Path, delimiter: str | None = None) -> tuple[list[str],
     (['u', 'y'], array([[1., 2.],
            [3., 4.]]))
     """
-    names, rows = _read_table(path, delimiter)
-    first = 1 if names == [str(i) for i in range(len(names))] else 2
-    return names, _numeric(path, names, rows, list(range(len(names))), first)
+    table = read_table(path, delimiter)
+    return table.names, numeric(table, list(range(len(table.names))))
 
 
 def _columns(spec: str, names: list[str], what: str) -> list[int]:
@@ -499,17 +425,18 @@ def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         u, y = z[:, :len(ui)], z[:, len(ui):len(ui) + len(yi)]
         return names, ui, yi, u, y, (z[:, -1] if ti else None)
     say(f"reading {args.data}")
-    names, rows = _read_table(args.data, args.delimiter)
-    first = 1 if names == [str(i) for i in range(len(names))] else 2
+    table = read_table(args.data, args.delimiter)
+    names = table.names
     ui = _columns(args.inputs, names, "inputs") if args.inputs else []
     yi = _columns(args.outputs, names, "outputs")
-    say(f"{len(rows)} samples; converting {len(ui)} input and {len(yi)} output column(s)")
-    u = _numeric(args.data, names, rows, ui, first)
-    y = _numeric(args.data, names, rows, yi, first)
+    say(f"{len(table.rows)} samples; converting {len(ui)} input and {len(yi)} output "
+        "column(s)")
+    u = numeric(table, ui)
+    y = numeric(table, yi)
     t = None
     if args.time is not None:
         ti = _columns(args.time, names, "times")[0]
-        t = _numeric(args.data, names, rows, [ti], first)[:, 0]
+        t = numeric(table, [ti])[:, 0]
     return names, ui, yi, u, y, t
 
 

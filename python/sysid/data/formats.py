@@ -21,6 +21,7 @@ import numpy as np
 
 from .._atomic import atomic_path
 from ..errors import DataError
+from .table import numeric, read_table
 
 __all__: list[str] = []
 
@@ -34,12 +35,14 @@ def _pandas() -> Any:
 
 
 def _index_is_time(index: Any) -> bool:
-    """A numeric index that holds time: float values, or integers under a name (``time``,
-    ``t``, ``seconds``, ...). Unnamed integers are row labels (left by ``iloc[::2]`` or
-    ``dropna()``), not seconds."""
+    """A numeric index that holds time: float values, or integers under a time-like name
+    (``time``, ``t``, ``seconds``, ...: :data:`_TIME_NAMES`, any case). Other integers are
+    row labels (left by ``iloc[::2]``, ``dropna()`` or ``read_csv(index_col=0)`` of a
+    ``sample`` column), not seconds."""
     if index.dtype.kind == "f":
         return True
-    return index.dtype.kind in "iu" and index.name is not None and not _default_index(index)
+    return (index.dtype.kind in "iu" and index.name is not None
+            and str(index.name).lower() in {n.lower() for n in _TIME_NAMES})
 
 
 def _warn_dropped_rows(index: Any, timed: bool) -> None:
@@ -61,10 +64,37 @@ def _warn_dropped_rows(index: Any, timed: bool) -> None:
         UserWarning, stacklevel=3)
 
 
-def _default_index(index: Any) -> bool:
-    """A 0, 1, 2, ... index that pandas made up (not a time axis)."""
+def _seconds(x: Any, first: Any) -> np.ndarray:
+    """Time values in seconds: numbers as they are; datetime64 and timedelta64 stamps (a
+    column or a ``DatetimeIndex``/``TimedeltaIndex``) as seconds since the first stamp of
+    ``first`` (the first experiment's), not as their raw nanosecond counts."""
     pd = _pandas()
-    return isinstance(index, pd.RangeIndex) and index.step == 1 and index.name is None
+    idx = pd.Index(x)
+    if idx.dtype.kind not in "mM":
+        return idx.to_numpy(dtype=float)
+    return np.asarray((idx - pd.Index(first)[0]).total_seconds(), dtype=float)
+
+
+def _grid_dt(ts: list[np.ndarray], candidates: list[Any], rtol: float = 0.0) -> float | None:
+    """The first candidate sample time whose grid ``t0 + k dt`` gives every time vector
+    back within its rounding (a few units in the last place, or ``rtol`` of the largest
+    instant): a stored dt such as 1/60, which the time vector alone would read as the
+    shortest decimal that fits its spacing (0.0166666666667). None when none fits."""
+    ts = [np.asarray(t, dtype=float) for t in ts]
+    if not ts or any(t.size < 2 for t in ts):
+        return None
+    for c in candidates:
+        try:
+            c = float(c)
+        except (TypeError, ValueError):
+            continue
+        if not (np.isfinite(c) and c > 0):
+            continue
+        if all(np.max(np.abs(t - (t[0] + np.arange(t.size) * c)))
+               <= max(4 * np.spacing(np.max(np.abs(t)) + c), rtol * np.max(np.abs(t)))
+               for t in ts):
+            return c
+    return None
 
 
 _TIME_NAMES = ("time", "t", "Time", "TIME", "time_s", "t_s", "seconds")
@@ -73,25 +103,6 @@ _TIME_NAMES = ("time", "t", "Time", "TIME", "time_s", "t_s", "seconds")
 def _time_column(df: Any) -> str | None:
     """The name of a time column when the frame has one under a usual name."""
     return next((c for c in _TIME_NAMES if c in df.columns), None)
-
-
-def _open_text(p: Path) -> Any:
-    """A text stream of a file, decompressed by its suffix (``.gz``, ``.bz2``, ``.xz``) as
-    ``numpy.genfromtxt`` does."""
-    suffix = p.suffix.lower()
-    if suffix == ".gz":
-        import gzip
-
-        return gzip.open(p, "rt", encoding="utf-8")
-    if suffix == ".bz2":
-        import bz2
-
-        return bz2.open(p, "rt", encoding="utf-8")
-    if suffix in (".xz", ".lzma"):
-        import lzma
-
-        return lzma.open(p, "rt", encoding="utf-8")
-    return open(p, encoding="utf-8")
 
 
 def to_pandas(data: Any) -> Any:
@@ -148,7 +159,9 @@ def from_pandas(
         Column names. Default: those stored by :meth:`to_pandas` in ``df.attrs``.
     time : str, optional
         Column holding the time in seconds; default the index when it is numeric and
-        ``dt`` is not given (a ``DatetimeIndex`` is converted to seconds).
+        ``dt`` is not given. Date-times and time deltas (``datetime64``/``timedelta64``
+        columns, a ``DatetimeIndex`` or ``TimedeltaIndex``) are converted to seconds from
+        the first stamp.
     dt : float, optional
         Sample time (when there is no time information).
     experiment : str, optional
@@ -188,21 +201,27 @@ def from_pandas(
         us.append(g[inputs].to_numpy(dtype=float) if inputs else None)
         ys.append(g[outputs].to_numpy(dtype=float))
         if time is not None:
-            ts.append(g[time].to_numpy(dtype=float))
-        elif dt is None and isinstance(g.index, pd.DatetimeIndex):
-            ts.append((g.index - groups[0].index[0]).total_seconds().to_numpy())
+            ts.append(_seconds(g[time], groups[0][time]))
+        elif dt is None and g.index.dtype.kind in "mM":
+            ts.append(_seconds(g.index, groups[0].index))
         elif dt is None and _index_is_time(g.index):
             ts.append(g.index.to_numpy(dtype=float))
         elif dt is None and _time_column(g) is not None:
-            ts.append(g[_time_column(g)].to_numpy(dtype=float))
+            ts.append(_seconds(g[_time_column(g)], groups[0][_time_column(g)]))
     for g in groups:
         _warn_dropped_rows(g.index, time is not None or bool(ts))
+    if dt is None and ts and "dt" in df.attrs:
+        # the stored dt (to_pandas) when the time agrees with it: 1/60, not 0.0166666666667
+        dt = _grid_dt(ts, [df.attrs["dt"]], rtol=1e-9)
     if dt is None and not ts:
         dt = df.attrs.get("dt")
         if dt is None:
+            named = df.index.name is not None and df.index.dtype.kind in "iu"
             warnings.warn(
-                "the DataFrame carries no sample time (no dt=, no time column, a default "
-                "0, 1, 2, ... index): assuming dt = 1 s; pass dt=... or time='column'",
+                "the DataFrame carries no sample time (no dt=, no time column, "
+                + (f"an integer index named {df.index.name!r}, read as row numbers"
+                   if named else "a default 0, 1, 2, ... index")
+                + "): assuming dt = 1 s; pass dt=... or time='column'",
                 UserWarning, stacklevel=2,
             )
     kw: dict[str, Any] = {
@@ -261,18 +280,28 @@ def from_csv(
     dt: float | None = None,
     experiment: str | int | None = None,
     delimiter: str | None = None,
+    decimal: str = ".",
     nan: str = "error",
     max_gap: int = 5,
 ) -> Any:
-    """Read a CSV file with a header row (the format of :meth:`to_csv`, or any other).
+    """Read a CSV file (the format of :meth:`to_csv`, or any other) or a white-space
+    separated ``.dat`` file.
 
-    Columns are chosen by header name or 0-based index; ``name [unit]`` headers give
-    units. Without ``inputs``/``outputs``, a file written by :meth:`to_csv` is read back
-    whole. Empty fields become NaN and are handled as ``nan`` says (see
-    :meth:`from_raw`; only for single-experiment files). Trailing delimiters are ignored.
-    The delimiter is guessed from the header (comma, semicolon, tab, else white space,
-    as in ``.dat`` files) unless given. Files ending in ``.gz``, ``.bz2`` or ``.xz`` are
-    decompressed while reading.
+    The first line is a header of names unless every field in it is a number: then it is
+    the first sample, the columns are chosen by 0-based index (or ``"0"``, ``"1"``, ...)
+    and the channels get the default names (``u0``, ``y0``, ...). Columns are chosen by
+    header name or 0-based index; ``name [unit]`` headers give units. Without
+    ``inputs``/``outputs``, a file written by :meth:`to_csv` is read back whole. Empty
+    fields become NaN and are handled as ``nan`` says (see :meth:`from_raw`; only for
+    single-experiment files); a field that is not a number raises a
+    :class:`~sysid.DataError` naming its line and column. Quoted fields, a trailing
+    delimiter, empty lines, ``#`` comment lines and a UTF-8 byte-order mark are allowed.
+    The delimiter is guessed from the first line (semicolon, comma, tab, else white space,
+    as in ``.dat`` files) unless given; ``decimal=","`` reads decimal commas (then the
+    delimiter is a semicolon, tab or white space). Files ending in ``.gz``, ``.bz2`` or
+    ``.xz`` are decompressed while reading. The same reader serves the command line
+    (``sysid.data.table``). Without a time column or ``dt``, dt = 1 s is assumed with a
+    warning.
 
     Examples
     --------
@@ -285,33 +314,23 @@ def from_csv(
     (True, ['m'])
     """
     p = Path(path)
-    if not p.exists():
-        raise DataError(f"no such file: {p}")
-    try:
-        with _open_text(p) as fh:
-            header = fh.readline().strip()
-    except UnicodeDecodeError:
-        raise DataError(f"{p.name} is not a text file (binary content); give a CSV or "
-                        "whitespace-separated text file") from None
-    if delimiter is None:
-        delimiter = next((d for d in (",", ";", "\t") if d in header), None)
-    raw_names = [h.strip().strip('"') for h in header.split(delimiter)]
-    while raw_names and raw_names[-1] == "":
-        raw_names.pop()
+    if decimal not in (".", ","):
+        raise DataError(f"decimal must be '.' or ',', got {decimal!r}")
+    table = read_table(p, delimiter, decimal=decimal)
     names, unit_of = [], {}
-    for h in raw_names:
+    for h in table.names:
         m = re.fullmatch(r"(.*?)\s*\[(.*)\]", h)
         n = m.group(1) if m else h
         names.append(n)
         unit_of[n] = m.group(2) if m else ""
-    data = np.genfromtxt(p, delimiter=delimiter, skip_header=1, dtype=float)
-    data = np.atleast_2d(data)[:, : len(names)]
 
     def col(c: str | int) -> int:
         if isinstance(c, (int, np.integer)):
             if not 0 <= c < len(names):
                 hint = "" if len(names) > 1 else (
-                    f"; the header was read as one column with delimiter={delimiter!r}: "
+                    "; the header was read as one column with "
+                    + (f"delimiter={delimiter!r}" if delimiter else "the guessed delimiter")
+                    + ": "
                     "pass delimiter=... (e.g. ' ' or '\\t')"
                 )
                 raise DataError(
@@ -339,11 +358,28 @@ def from_csv(
     tcol = None if time is None else col(time)
     ecol = None if experiment is None else col(experiment)
     kw: dict[str, Any] = {
-        "input_names": [names[i] for i in iu],
-        "output_names": [names[i] for i in iy],
+        # a headerless file (a .dat) names no channels: the record's defaults u0, y0, ...
+        "input_names": None if table.headerless else [names[i] for i in iu],
+        "output_names": None if table.headerless else [names[i] for i in iy],
         "input_units": [unit_of[names[i]] for i in iu],
         "output_units": [unit_of[names[i]] for i in iy],
     }
+    used = sorted(set(iu + iy + [c for c in (tcol, ecol) if c is not None]))
+    data = np.full((len(table.rows), len(names)), np.nan)
+    data[:, used] = numeric(table, used, missing=True, decimal=decimal,
+                            hint="pass decimal=','")
+    if tcol is None and dt is None:
+        warnings.warn(
+            f"{p.name} has no time column and no dt= was given: assuming dt = 1 s; pass "
+            "dt=... or time='column'", UserWarning, stacklevel=2)
+    if tcol is not None and dt is None and np.isfinite(data[:, tcol]).all():
+        # the dt the time column was written with (to_csv): its shortest decimal (0.1) or,
+        # for a rate such as 1/60, its mean spacing, when that grid gives the column back
+        ks = [data[:, tcol]] if ecol is None else [
+            data[data[:, ecol] == k, tcol] for k in np.unique(data[:, ecol])]
+        if all(t.size >= 2 and np.all(np.diff(t) > 0) for t in ks):
+            spans = [(t[-1] - t[0]) / (t.size - 1) for t in ks]
+            dt = _grid_dt(ks, [float(f"{spans[0]:.12g}"), *spans])
     if ecol is not None:
         ks = data[:, ecol]
         parts = [data[ks == k] for k in np.unique(ks)]
@@ -463,7 +499,7 @@ def from_mat(
     cls: Any,
     path: str | Path,
     *,
-    u: str = "u",
+    u: str | None = "u",
     y: str = "y",
     dt: float | str | None = None,
     input_names: Sequence[str] | None = None,
@@ -472,7 +508,9 @@ def from_mat(
     """Load a MATLAB ``.mat`` file: one written by :meth:`to_mat`, or any file with
     input/output matrices under the variable names ``u`` and ``y`` (samples in rows).
 
-    ``dt`` may be a number or the name of a variable holding it.
+    ``dt`` may be a number or the name of a variable holding it. A variable ``u`` or ``y``
+    that is not in the file raises a :class:`~sysid.DataError` listing the file's
+    variables; output-only data (a time series) is read with ``u=None``.
     """
     from scipy.io import loadmat
 
@@ -486,7 +524,11 @@ def from_mat(
         if dt not in m:
             raise DataError(f"no variable {dt!r} (sample time) in {path}")
         dt = float(np.asarray(m[dt]).ravel()[0])
-    uu = m.get(u)
+    if u is not None and u not in m:
+        have = sorted(k for k in m if not k.startswith("__"))
+        raise DataError(f"no input variable {u!r} in {path}; it holds {have}: name it with "
+                        "u='...', or pass u=None for output-only (time-series) data")
+    uu = None if u is None else m[u]
     yy = np.asarray(m[y], dtype=float)
     if yy.ndim == 2 and yy.shape[0] < yy.shape[1] and yy.shape[0] <= 16:
         raise DataError(

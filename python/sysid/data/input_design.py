@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_2d, as_int
+from .._checks import as_2d, as_dt, as_int
 from ..errors import DataError, ExcitationWarning
 
 __all__ = [
@@ -214,7 +214,8 @@ def multisine(
     band : (low, high)
         Excited band as fractions of Nyquist (used when ``lines`` is None).
     lines : array_like of int, optional
-        FFT bins to excite (``1 .. n_samples // 2 - 1``), instead of ``band``.
+        FFT bins to excite (``1 .. n_samples // 2 - 1``), instead of ``band``; a
+        non-integer bin raises a :class:`~sysid.DataError`.
     n_channels : int
         Channels get interleaved lines (channel ``j`` the ``j``-th of every ``n_channels``),
         so every frequency is excited by one input only and the MIMO frequency response is
@@ -227,7 +228,7 @@ def multisine(
     periods : int
         Number of repeated periods (steady state: drop the first when identifying).
     seed : int or numpy.random.Generator, optional
-        Random phases and the random-odd grid.
+        Random phases (``phases="random"``); the random-odd grid comes from ``grid_seed``.
     grid : {"full", "odd", "random-odd"}
         Which lines of the band are excited: all, the odd ones only (even nonlinear
         distortions then fall on unexcited lines), or the odd ones with one line chosen at
@@ -264,7 +265,16 @@ def multisine(
         frac = k_all / (n / 2.0)
         k_all = k_all[(frac >= lo) & (frac <= hi) & (k_all < n / 2.0)]
     else:
-        k_all = np.unique(np.asarray(lines, dtype=int).ravel())
+        raw = np.asarray(lines).ravel()
+        if raw.dtype.kind not in "iuf" or raw.dtype.kind == "f" and not (
+                np.all(np.isfinite(raw)) and np.all(raw == np.round(raw))):
+            bad = raw if raw.dtype.kind not in "iuf" else raw[
+                ~np.isfinite(raw) | (raw != np.round(raw))]
+            raise DataError(
+                f"lines are FFT bin numbers (integers), got {bad.tolist()[:5]}; for "
+                f"frequencies f in Hz use round(f * n_samples * dt)"
+            )
+        k_all = np.unique(raw.astype(int))
         if k_all.size and (k_all.min() < 1 or k_all.max() >= n / 2.0):
             raise DataError(f"lines must lie in 1..{int(np.ceil(n / 2.0)) - 1} for period {n}")
     rng = _rng(seed)
@@ -319,6 +329,9 @@ def chirp(
 ) -> np.ndarray:
     """Frequency sweep from ``f0`` to ``f1`` Hz over the record (``scipy.signal.chirp``).
 
+    A one-sample record has no sweep and raises a :class:`~sysid.DataError`, as does a
+    sample time that is not a positive number.
+
     Examples
     --------
     >>> import sysid
@@ -326,12 +339,15 @@ def chirp(
     (500, 1)
     """
     n = _n(n_samples)
-    nyq = 0.5 / float(dt)
+    dt = as_dt(dt)
+    if n < 2:
+        raise DataError(f"a chirp sweeps over its record: it needs at least 2 samples, got {n}")
+    nyq = 0.5 / dt
     if not (0 < f0 < nyq and 0 < f1 <= nyq):
         raise DataError(f"f0, f1 must lie in (0, {nyq:g}] Hz (the Nyquist frequency)")
     if method not in ("linear", "logarithmic", "quadratic", "hyperbolic"):
         raise DataError(f"unknown chirp method {method!r}")
-    t = np.arange(n) * float(dt)
+    t = np.arange(n) * dt
     from scipy import signal
 
     return amplitude * signal.chirp(t, f0, t[-1], f1, method=method)[:, None]
@@ -340,6 +356,8 @@ def chirp(
 def crest_factor(u: Any) -> np.ndarray:
     """Peak over RMS of each channel (``sqrt(2)`` for one sinusoid).
 
+    An all-zero channel has no crest factor and raises a :class:`~sysid.DataError`.
+
     Examples
     --------
     >>> import numpy as np, sysid
@@ -347,7 +365,11 @@ def crest_factor(u: Any) -> np.ndarray:
     array([1.4142])
     """
     x = as_2d(u, "u")
-    return np.max(np.abs(x), axis=0) / np.sqrt(np.mean(x * x, axis=0))
+    rms = np.sqrt(np.mean(x * x, axis=0))
+    if np.any(rms == 0):
+        raise DataError(f"channel(s) {np.flatnonzero(rms == 0).tolist()} are all zero: an "
+                        "all-zero signal has no crest factor (peak over RMS)")
+    return np.max(np.abs(x), axis=0) / rms
 
 
 def _lag_gram(us: list[np.ndarray], mo: int) -> tuple[np.ndarray, int]:

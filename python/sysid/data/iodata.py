@@ -42,7 +42,9 @@ __all__ = ["IOData", "Trend", "SplitData", "DataSummary", "sample_time", "check_
 
 
 def _is_array(v: Any) -> bool:
-    return hasattr(v, "shape") and hasattr(v, "dtype")
+    """An array of one dimension or more: a NumPy scalar (``np.float64(1.0)``, shape ``()``)
+    is a number, so ``list(np.arange(5.0))`` is one signal, not five experiments."""
+    return hasattr(v, "shape") and hasattr(v, "dtype") and len(v.shape) >= 1
 
 
 def _as_list(x: Any, name: str = "data") -> list[Any] | None:

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_2d
+from .._checks import as_2d, as_dt
 from ..errors import DataError, InsufficientDataError, NonFiniteError, ShapeError
 from .units import sample_time
 
@@ -174,15 +174,18 @@ def from_raw(
     ya = _raw2d(y, "y")
     if ua is not None and ua.shape[0] != ya.shape[0]:
         raise ShapeError(f"u has {ua.shape[0]} samples but y has {ya.shape[0]}")
+    if dt is not None:  # dt = 0 said "time repeats at sample 1"
+        dt = as_dt(dt)
     t0 = 0.0
     if time is not None:
         t = np.asarray(time, dtype=float).ravel()
         if t.size != ya.shape[0]:
             raise ShapeError(f"time has {t.size} instants but y has {ya.shape[0]} samples")
         h = sample_time(t)
-        if dt is not None and abs(float(dt) - h) > 0.01 * h:
+        if dt is not None and abs(dt - h) > 0.01 * h:
             raise DataError(f"dt = {dt} disagrees with the time vector (median {h:g} s)")
-        dt, t0 = h, float(t[0])
+        # a dt that agrees is kept (1/60, where the time vector reads 0.0166666666667)
+        dt, t0 = h if dt is None else dt, float(t[0])
     runs = repair_nan(ua, ya, nan=nan, max_gap=max_gap, min_length=min_length)
     h = 1.0 if dt is None else float(dt)
     return cls(
