@@ -18,8 +18,8 @@ coordinates in which the Gauss-Newton covariance is the identity), so only the c
 state's, held fixed here) keep their Gauss-Newton value.
 
 On a second-order plant with a coloured disturbance (200 Monte Carlo runs) the Gauss-Newton
-standard deviation of the static gain was a third of the sample one; this covariance brings
-it within a few tens of per cent (``tests/test_pem_coloured.py``).
+standard deviation of the static gain was a third of the sample one (0.073 against 0.215);
+this covariance gives 0.188, its 95 % intervals covering 89.5 % (``tests/test_pem_coloured.py``).
 """
 
 from __future__ import annotations
