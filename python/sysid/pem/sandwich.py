@@ -182,7 +182,9 @@ class DeferredSandwich(ParameterUncertainty):
         finally:
             model.uncertainty = self
         if unc is not None:
-            self.__dict__.update({k: v for k, v in unc.__dict__.items() if k != "_pending"})
+            self.__dict__.update(unc.__dict__)
+        self.__dict__.pop("_pending", None)
+        self.__class__ = ParameterUncertainty  # formed: a plain uncertainty from here on
         then(note)
 
     def __getattribute__(self, name: str) -> Any:

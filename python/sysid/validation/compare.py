@@ -200,7 +200,7 @@ def estimate_x0(model: Any, u: Any, y: Any, horizon: int | None = None) -> np.nd
     target = (y[:W] - base).ravel()
     if not (np.all(np.isfinite(phi)) and np.all(np.isfinite(target))):
         return np.zeros(n)  # the model diverges on this record: no state fits it
-    w = np.tile(_output_weights(y), W)  # rows t l + k: output k's weight
+    w = np.tile(output_weights(y), W)  # rows t l + k: output k's weight
     with np.errstate(over="ignore", invalid="ignore"):
         x0, *_ = np.linalg.lstsq(phi * w[:, None], target * w, rcond=None)
     return x0 if np.all(np.isfinite(x0)) else np.zeros(n)
@@ -216,7 +216,7 @@ def _estimate_x0_nonlinear(model: Any, u: np.ndarray, y: np.ndarray,
     n = model.nstates
     W = min(y.shape[0], 2 * _window(model, horizon, y.shape[0]))
     uw, yw = u[:W], y[:W]
-    w = _output_weights(y)
+    w = output_weights(y)
 
     def err(x: np.ndarray) -> np.ndarray:
         return ((yw - _run(model, uw, yw, horizon, x)) * w).ravel()
@@ -256,7 +256,7 @@ def _estimate_x0_nonlinear(model: Any, u: np.ndarray, y: np.ndarray,
     return x
 
 
-def _output_weights(y: np.ndarray) -> np.ndarray:
+def output_weights(y: np.ndarray) -> np.ndarray:
     """``1 / std`` of each output over the record (1 for one that stands still): the initial
     state is fitted to the errors relative to each output's spread, as the fit % weighs them,
     not to whichever output has the largest numbers in its units."""

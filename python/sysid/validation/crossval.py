@@ -47,6 +47,7 @@ import numpy as np
 
 from ..data.iodata import IOData
 from ..errors import InsufficientDataError
+from .compare import output_weights
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
            "output_fits", "prediction_fit", "predictor", "record_folds", "simulation_errors",
@@ -264,8 +265,7 @@ def simulation_errors(model: Any, data: IOData, trend: bool = False
             # every output's rows weigh 1 / its spread (the fit % is relative to it): the
             # initial state shared by the outputs does not follow whichever has the largest
             # numbers in its units (the offsets and lines are per output, unaffected)
-            sd = np.std(y, axis=0)
-            w2 = 1.0 / np.where(sd > 0, sd, 1.0) ** 2
+            w2 = output_weights(y) ** 2
             G = np.zeros((q + n, q + n))
             G[:q, :q] = np.kron(T.T @ T, np.diag(w2))
             rhs = np.empty(q + n)
