@@ -63,6 +63,18 @@ impl PyHankelFactor {
         self.inner.relative_pivot()
     }
 
+    /// Root mean square of each input and output over the samples summarised.
+    fn channel_rms(&self) -> (Vec<f64>, Vec<f64>) {
+        self.inner.channel_rms()
+    }
+
+    /// The factor with every input divided by `input_scale` and output by `output_scale`.
+    fn scaled(&self, input_scale: Vec<f64>, output_scale: Vec<f64>) -> PyResult<PyHankelFactor> {
+        Ok(PyHankelFactor {
+            inner: self.inner.scaled(&input_scale, &output_scale).py()?,
+        })
+    }
+
     fn merge(&self, other: &PyHankelFactor) -> PyResult<PyHankelFactor> {
         Ok(PyHankelFactor {
             inner: self.inner.merge(&other.inner).py()?,

@@ -35,6 +35,7 @@ from .._checks import as_int, as_option
 from ..errors import DataError
 from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
+from .scaling import in_record_units
 
 
 class _Factorised(Protocol):
@@ -44,6 +45,9 @@ class _Factorised(Protocol):
     past: int
     future: int
     factor: Any
+    scaled_factor: Any
+    _su: Any
+    _sy: Any
     data: Any
     _svd: dict[Any, Any]
 
@@ -95,7 +99,8 @@ def closed_loop_fit(
     key = (method, bool(feedthrough), regularization, float(ridge))
     cache = est._svd
     if key not in cache:
-        cache[key] = _sysid.ClosedLoopSubspace(est.factor, method, regularization, float(ridge),
+        cache[key] = _sysid.ClosedLoopSubspace(est.scaled_factor, method, regularization,
+                                               float(ridge),
                                                bool(feedthrough))
     sub = cache[key]
     selection = None
@@ -136,6 +141,7 @@ def closed_loop_fit(
         output_names=est.data.output_names,
         info=info,
     )
+    model = in_record_units(model, est._su, est._sy)  # fitted on the scaled factor
     warn_unstable(model, method, closed_loop=True)
     if kalman and res.get("predictor_stabilized"):
         _note_predictor(model, res)
@@ -153,6 +159,6 @@ def _note_predictor(model: StateSpaceModel, res: dict[str, Any]) -> None:
     K_ls = np.asarray(res["S"]) @ np.linalg.inv(np.asarray(res["R"]))  # S = K Re
     model.info["predictor_stabilized"] = {
         "before": float(np.max(np.abs(np.linalg.eigvals(A - K_ls @ C)))),
-        "after": float(np.max(np.abs(np.linalg.eigvals(A - np.asarray(model.K) @ C)))),
+        "after": float(np.max(np.abs(np.linalg.eigvals(A - np.asarray(model.K) @ model.C)))),
         "why": "the least-squares K gave an unstable one-step predictor; K is the "
                "stabilising Kalman gain of the same noise spectrum (its minimum-phase factor)"}

@@ -61,6 +61,7 @@ from .feedthrough import (
     default_feedthrough,
 )
 from .methods import CLOSED_LOOP, METHODS, _method
+from .scaling import SCALE_DEFAULT, in_record_units, scaled_experiments
 from .streaming import compression_info, warn_if_fallback
 
 __all__ = [
@@ -248,6 +249,11 @@ class SubspaceEstimator:
         made from are in ``model.info["compression"]``. ``"qr"``: always exact;
         ``"correlation"``: fast, with the exact pass and a ``CompressionFallbackWarning``
         only when its Gram matrix is numerically singular. See docs/performance.md.
+    scale : bool, optional
+        Divide every input and output by its root mean square before the compression and
+        return the model in the record's units (:mod:`sysid.subspace.scaling`): the estimate
+        is then the same whatever the channels' units. Default True; ``False`` computes in
+        the record's units, as SLICOT's ``IB01AD`` and MATLAB's ``n4sid`` do.
 
     Examples
     --------
@@ -273,6 +279,7 @@ class SubspaceEstimator:
         method: str = "moesp",
         chunk_rows: int | None = None,
         compressor: str = "auto",
+        scale: bool | None = None,
     ) -> None:
         if not isinstance(data, IOData):
             raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
@@ -307,6 +314,7 @@ class SubspaceEstimator:
         )
         self.compressor = compressor
         warn_if_fallback(self.factor, requested=compressor)
+        self._set_scaling(scale)
         self._svd: dict[Any, Any] = {}
         self._pe_cache: dict[int | str, int] = {}
         self._feedback_p: float | None = None
@@ -322,11 +330,14 @@ class SubspaceEstimator:
         method: str = "moesp",
         input_names: list[str] | None = None,
         output_names: list[str] | None = None,
+        scale: bool | None = None,
     ) -> SubspaceEstimator:
         """An estimator on an already computed :class:`~sysid._sysid.HankelFactor`.
 
         For factors computed out of core, merged across experiments or machines, or loaded
-        from disk. Fits with ``x0=True`` need the data and are not available.
+        from disk. Fits with ``x0=True`` need the data and are not available. ``scale``: as
+        the constructor's (the channels' root mean squares are read from the factor, so an
+        estimator rebuilt from ``est.factor`` fits what ``est`` fits).
         """
         if not isinstance(factor, _sysid.HankelFactor):
             raise DataError(
@@ -350,19 +361,37 @@ class SubspaceEstimator:
         self.past, self.future = factor.past, factor.future
         self.factor = factor
         self.compressor = "given"
+        self._set_scaling(scale)
         self._svd = {}
         self._pe_cache = {}
         self._feedback_p = None
         self._feedback_warned = False
         return self
 
+    def _set_scaling(self, scale: bool | None) -> None:
+        """The channel scaling of the fits (:mod:`sysid.subspace.scaling`): the record's
+        factor with every channel at unit root mean square, :attr:`scaled_factor`."""
+        self.scale = SCALE_DEFAULT if scale is None else scale
+        if not isinstance(self.scale, (bool, np.bool_)):
+            raise DataError(f"scale must be True or False, got {scale!r}")
+        self.scale = bool(self.scale)
+        if self.scale:
+            su, sy = self.factor.channel_rms()
+            self._su, self._sy = np.asarray(su, float), np.asarray(sy, float)
+            #: the factor the fits use: :attr:`factor` with the channel scaling applied
+            self.scaled_factor = self.factor.scaled(su, sy)
+        else:
+            self._su = np.ones(self.factor.n_inputs)
+            self._sy = np.ones(self.factor.n_outputs)
+            self.scaled_factor = self.factor
+
     def _subspace(self, method: str | None) -> Any:
         key = self.method if method is None else _method(method)
         if key not in self._svd:
             if key in CLOSED_LOOP:
-                self._svd[key] = _sysid.ClosedLoopSubspace(self.factor, key)
+                self._svd[key] = _sysid.ClosedLoopSubspace(self.scaled_factor, key)
             else:
-                self._svd[key] = _sysid.Subspace(self.factor, key)
+                self._svd[key] = _sysid.Subspace(self.scaled_factor, key)
         return self._svd[key]
 
     def feedback_pvalue(self) -> float:
@@ -371,7 +400,7 @@ class SubspaceEstimator:
         if self._feedback_p is None:
             p = 1.0
             if self.factor.n_inputs:
-                pv = feedback_pvalues(self.factor)[1]
+                pv = feedback_pvalues(self.scaled_factor)[1]
                 p = float(min(1.0, len(pv) * float(np.min(pv))))
             self._feedback_p = p
         return self._feedback_p
@@ -559,7 +588,7 @@ class SubspaceEstimator:
                 raise DataError("x0=True needs the data; this estimator was built from a factor")
             if self.data.n_experiments != 1:
                 raise DataError("x0=True needs a single-experiment record")
-            u, y = self.data.experiments[0]
+            u, y = scaled_experiments(self.data, self._su, self._sy)[0]
             B, D, x0_est = _sysid.estimate_bd_x0(res["A"], res["C"], u, y, bool(feedthrough))
         info = {
             "method": method and _method(method) or self.method,
@@ -577,7 +606,7 @@ class SubspaceEstimator:
                          "order_rule": "auto" if isinstance(order, str) else "given",
                          "past": self.past, "future": self.future,
                          "feedthrough": bool(feedthrough), "kalman": bool(kalman),
-                         "stable": bool(stable), "x0": bool(x0)},
+                         "stable": bool(stable), "x0": bool(x0), "scale": bool(self.scale)},
             "preprocessing": _preprocessing(self.data, self._from_factor),
         }
         if selection is not None:
@@ -597,6 +626,7 @@ class SubspaceEstimator:
             output_names=self.data.output_names,
             info=info,
         )
+        model = in_record_units(model, self._su, self._sy)
         if uncertainty is not None:
             if uncertainty != "bootstrap":
                 raise DataError(f"uncertainty must be None or 'bootstrap', got {uncertainty!r}")
@@ -606,7 +636,8 @@ class SubspaceEstimator:
                 # the fast compressor: exact up to rounding (it falls back to QR itself when
                 # its Gram matrix is ill-conditioned), 2-3x faster on short records
                 est = SubspaceEstimator(rec, past=self.past, future=self.future,
-                                        method=self.method, compressor="correlation")
+                                        method=self.method, compressor="correlation",
+                                        scale=self.scale)
                 return est.fit(n, method=method, feedthrough=feedthrough, stable=stable, x0=x0)
 
             model.uncertainty = bootstrap_uncertainty(self, model, refit, n_boot, rng)
@@ -629,7 +660,7 @@ class SubspaceEstimator:
         if needed not in self._pe_cache:
             # in the Rust core on the calling thread: one Cholesky of G - tol top I answers
             # every d (the first non-positive pivot), no threaded LAPACK call
-            got = int(_sysid.excitation_order(self.factor, needed, tol))
+            got = int(_sysid.excitation_order(self.scaled_factor, needed, tol))
             if got < needed and not self._from_factor:
                 if "spectrum" not in self._pe_cache:
                     from ..data.excitation import spectral_excitation_order

@@ -25,6 +25,7 @@ decided this way and take ``D = 0``; the decision and its reason are recorded in
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -135,7 +136,8 @@ def choose_feedthrough(est: Any, order: Any = "auto", *, method: str | None = No
                 if c["criterion"] != "cross-validated simulation fit":
                     return _undecided("the record could not be cross-validated")
             else:
-                c = cross_validated_order(est.data, type(est), method=key, past=est.past,
+                c = cross_validated_order(est.data, partial(type(est), scale=est.scale),
+                                          method=key, past=est.past,
                                           future=est.future, feedthrough=ft, orders=orders,
                                           whole=est).as_dict()
             best[ft] = c["table"].get(c["order"], -np.inf)

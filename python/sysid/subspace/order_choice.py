@@ -9,6 +9,7 @@ is given: :mod:`sysid.subspace.feedthrough`.)"""
 
 from __future__ import annotations
 
+from functools import partial
 from typing import Any
 
 __all__ = ["order_selection"]
@@ -33,7 +34,8 @@ def order_selection(est: Any, key: str, feedthrough: bool,
     if not est._from_factor:
         focus = "simulation" if est.factor.n_inputs else "prediction"
         try:
-            out = cross_validated_order(est.data, type(est), method=key, past=est.past,
+            out = cross_validated_order(est.data, partial(type(est), scale=est.scale),
+                                        method=key, past=est.past,
                                         future=est.future, feedthrough=feedthrough,
                                         orders=orders, whole=est, focus=focus).as_dict()
             out["order"] = min(out["order"], sub.max_order)

@@ -200,6 +200,124 @@ impl HankelFactor {
         self.l.as_ref().subrows(s, n)
     }
 
+    /// Root mean square of each input and each output over the samples the factor
+    /// summarises, read from it: row `r` of `L` has the norm of row `r` of the data matrix,
+    /// so a channel's mean square is its rows' squared norms averaged over the window's
+    /// lags and divided by the number of columns. A channel that is zero throughout gets 1.
+    ///
+    /// ```
+    /// use faer::Mat;
+    /// use sysid_core::hankel::{compress_experiments, CompressorKind, HankelLayout};
+    /// let u = Mat::<f64>::from_fn(200, 1, |t, _| if t % 2 == 0 { 2.0 } else { -2.0 });
+    /// let y = Mat::<f64>::from_fn(200, 1, |t, _| 3.0 * (t as f64).sin());
+    /// let lay = HankelLayout::new(1, 1, 3, 3).unwrap();
+    /// let f = compress_experiments(lay, &[(u.as_ref(), y.as_ref())], CompressorKind::Qr { chunk_rows: None })
+    ///     .unwrap();
+    /// let (su, _) = f.channel_rms();
+    /// assert!((su[0] - 2.0).abs() < 1e-12);
+    /// ```
+    pub fn channel_rms(&self) -> (Vec<f64>, Vec<f64>) {
+        let lay = self.layout;
+        let (m, l) = (lay.n_inputs, lay.n_outputs);
+        let cols = self.n_columns.max(1) as f64;
+        let row_sq = |r: usize| -> f64 {
+            let row = self.l.as_ref().row(r);
+            row.iter().map(|v| v * v).sum::<f64>()
+        };
+        let rms = |blocks: [(Block, usize); 2], width: usize| -> Vec<f64> {
+            (0..width)
+                .map(|c| {
+                    let (mut sq, mut lags) = (0.0, 0usize);
+                    for (b, n_lags) in blocks {
+                        let (start, _) = lay.block(b);
+                        for j in 0..n_lags {
+                            sq += row_sq(start + j * width + c);
+                            lags += 1;
+                        }
+                    }
+                    let v = (sq / (lags.max(1) as f64 * cols)).sqrt();
+                    if v.is_finite() && v > 0.0 {
+                        v
+                    } else {
+                        1.0
+                    }
+                })
+                .collect()
+        };
+        let (p, f) = (lay.past, lay.future);
+        (
+            rms([(Block::UPast, p), (Block::UFuture, f)], m),
+            rms([(Block::YPast, p), (Block::YFuture, f)], l),
+        )
+    }
+
+    /// The factor of the same record with input channel `c` divided by `input_scale[c]` and
+    /// output channel `c` by `output_scale[c]`: the rows of `L` scaled and triangularised
+    /// again (one LQ of a `k x k` matrix, no pass over the data).
+    ///
+    /// ```
+    /// use faer::Mat;
+    /// use sysid_core::hankel::{compress_experiments, CompressorKind, HankelLayout};
+    /// let u = Mat::<f64>::from_fn(100, 1, |t, _| ((t * 7) % 5) as f64 - 2.0);
+    /// let y = Mat::<f64>::from_fn(100, 1, |t, _| 1e3 * ((t * 3) % 7) as f64);
+    /// let y2 = Mat::<f64>::from_fn(100, 1, |t, _| y[(t, 0)] / 1e3);
+    /// let lay = HankelLayout::new(1, 1, 2, 2).unwrap();
+    /// let kind = CompressorKind::Qr { chunk_rows: None };
+    /// let big = compress_experiments(lay, &[(u.as_ref(), y.as_ref())], kind).unwrap();
+    /// let small = compress_experiments(lay, &[(u.as_ref(), y2.as_ref())], kind).unwrap();
+    /// let scaled = big.scaled(&[1.0], &[1e3]).unwrap();
+    /// let gap = (scaled.l() * scaled.l().transpose() - small.l() * small.l().transpose()).norm_max();
+    /// assert!(gap < 1e-9);
+    /// ```
+    pub fn scaled(&self, input_scale: &[f64], output_scale: &[f64]) -> Result<HankelFactor> {
+        let lay = self.layout;
+        for (what, s, n) in [
+            ("input_scale", input_scale, lay.n_inputs),
+            ("output_scale", output_scale, lay.n_outputs),
+        ] {
+            if s.len() != n {
+                return Err(SysidError::ShapeMismatch {
+                    what: what.into(),
+                    expected: format!("{n} entries"),
+                    got: format!("{} entries", s.len()),
+                });
+            }
+            if s.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+                return Err(SysidError::invalid(
+                    what,
+                    "every scale must be finite and positive",
+                ));
+            }
+        }
+        let (p, f) = (lay.past, lay.future);
+        let mut l = self.l.clone();
+        for (b, n_lags, scale) in [
+            (Block::UFuture, f, input_scale),
+            (Block::UPast, p, input_scale),
+            (Block::YPast, p, output_scale),
+            (Block::YFuture, f, output_scale),
+        ] {
+            let (start, _) = lay.block(b);
+            let w = scale.len();
+            for j in 0..n_lags {
+                for (c, s) in scale.iter().enumerate() {
+                    let r = start + j * w + c;
+                    for v in l.as_mut().row_mut(r).iter_mut() {
+                        *v /= s;
+                    }
+                }
+            }
+        }
+        Ok(HankelFactor {
+            layout: lay,
+            l: lq_lower(l.as_ref()),
+            n_columns: self.n_columns,
+            n_experiments: self.n_experiments,
+            source: self.source,
+            relative_pivot: self.relative_pivot,
+        })
+    }
+
     /// The factor of the concatenated experiments of `self` and `other`.
     pub fn merge(&self, other: &HankelFactor) -> Result<HankelFactor> {
         if self.layout != other.layout {
