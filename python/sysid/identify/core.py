@@ -69,9 +69,9 @@ from ..validation.crossval import (
     record_folds,
     require_held_out_length,
     simulation_fit,
-    trend_share,
 )
 from .board import Board, bic
+from .notes import persistent_mode_check, trend_check
 from .result import IdentifiedModel, IdentifyResult, _family
 
 __all__ = ["identify"]
@@ -114,12 +114,6 @@ FOLD_WORK = FINAL_WORK / 5
 #: refinements' total within ``REFINE_WORK``; the first is always scored
 REFINE_WORK = 5e10
 NOMINAL_ITER = 20
-#: a straight line that takes out this share of the chosen model's simulation errors on some
-#: output is noted (``checks["trend"]``): a fifth of the error is a drift the model misses
-TREND_SHARE = 0.2
-#: ... and at least this share of the output's own variation (a drift that small next to
-#: what the output does is not worth a note, however much of a tiny error it is)
-TREND_OUTPUT = 0.01
 
 
 def _offsets(data: IOData) -> tuple[IOData, np.ndarray, np.ndarray]:
@@ -622,7 +616,8 @@ def identify(
                                                      "held_out_fit")}
     if "identify_refit" in model.info:
         checks["final_refit"] = model.info["identify_refit"]
-    _trend_check(model, centred, checks)
+    trend_check(model, centred, checks)
+    persistent_mode_check(model, centred, checks)
     if getattr(model, "uncertainty", None) is None:
         model = _with_uncertainty(model, centred, checks)
     result_model = IdentifiedModel(model, mu, my)
@@ -638,27 +633,6 @@ def identify(
                          interrupted)
     out.out_of_time = board.out_of_time
     return out
-
-
-def _trend_check(model: Any, data: IOData, checks: dict[str, Any]) -> None:
-    """``checks["trend"]`` when, for some output, a straight line takes out at least
-    ``TREND_SHARE`` of the chosen model's simulation errors on the record and at least
-    ``TREND_OUTPUT`` of the output's variation: the output drifts in a way the input does not
-    explain, the model cannot follow it, and that matters next to the output's movements."""
-    try:
-        of_errors, of_output = trend_share(model, data)
-    except Exception:  # noqa: BLE001 - a model that cannot be simulated has no share to note
-        return
-    hit = (of_errors >= TREND_SHARE) & (of_output >= TREND_OUTPUT)
-    if not hit.any():
-        return
-    k = int(np.argmax(np.where(hit, of_output, -1.0)))
-    checks["trend"] = (
-        f"the record drifts in a way the input does not explain: on {data.output_names[k]} a "
-        f"straight line takes out {100 * of_errors[k]:.0f} % of the chosen model's simulation "
-        f"errors ({100 * of_output[k]:.1f} % of the output's variation); if the drift is not "
-        f"the plant's response (a sensor drift, a slow disturbance), remove it first "
-        f"(sysid.detrend(data, 'linear')) and identify again")
 
 
 def _checked_validation(validation: Any, data: IOData) -> IOData | None:

@@ -1,0 +1,93 @@
+"""Notes :func:`sysid.identify` adds to its checks about the model it chose: a drift the input
+does not explain (``checks["trend"]``), and a mode that does not decay over the record
+(``checks["persistent_mode"]``)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .._display import modulus
+from ..data.iodata import IOData
+from ..models.continuous import ContinuousStateSpace
+from ..validation.crossval import trend_share
+
+__all__ = ["trend_check", "persistent_mode_check", "TREND_SHARE", "TREND_OUTPUT",
+           "PERSISTENT_DECAY"]
+
+#: a straight line that takes out this share of the chosen model's simulation errors on some
+#: output is noted (``checks["trend"]``): a fifth of the error is a drift the model misses
+TREND_SHARE = 0.2
+#: ... and at least this share of the output's own variation (a drift that small next to
+#: what the output does is not worth a note, however much of a tiny error it is)
+TREND_OUTPUT = 0.01
+#: a stable pole whose mode keeps more than this share of its size over the longest
+#: experiment is noted (``checks["persistent_mode"]``): the record cannot tell it from an
+#: integrator
+PERSISTENT_DECAY = 0.99
+
+
+def trend_check(model: Any, data: IOData, checks: dict[str, Any]) -> None:
+    """``checks["trend"]`` when, for some output, a straight line takes out at least
+    ``TREND_SHARE`` of the chosen model's simulation errors on the record and at least
+    ``TREND_OUTPUT`` of the output's variation: the output drifts in a way the input does not
+    explain, the model cannot follow it, and that matters next to the output's movements."""
+    try:
+        of_errors, of_output = trend_share(model, data)
+    except Exception:  # noqa: BLE001 - a model that cannot be simulated has no share to note
+        return
+    hit = (of_errors >= TREND_SHARE) & (of_output >= TREND_OUTPUT)
+    if not hit.any():
+        return
+    k = int(np.argmax(np.where(hit, of_output, -1.0)))
+    checks["trend"] = (
+        f"the record drifts in a way the input does not explain: on {data.output_names[k]} a "
+        f"straight line takes out {100 * of_errors[k]:.0f} % of the chosen model's simulation "
+        f"errors ({100 * of_output[k]:.1f} % of the output's variation); if the drift is not "
+        f"the plant's response (a sensor drift, a slow disturbance), remove it first "
+        f"(sysid.detrend(data, 'linear')) and identify again")
+
+
+def persistent_mode_check(model: Any, data: IOData, checks: dict[str, Any]) -> None:
+    """``checks["persistent_mode"]`` when a pole of the chosen (stable) discrete-time model
+    decays by less than ``1 - PERSISTENT_DECAY`` over the longest experiment: within the
+    record the mode is an integrator, and how far inside the unit circle it sits (often just
+    where the stability bound of the search held it) is not determined by the data, nor are
+    the static gain and the step response's final value, which grow as ``1 / (1 - |p|)``.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.identify.notes import persistent_mode_check
+    >>> m = sysid.StateSpaceModel([[1 - 1e-8]], [[1.0]], [[1.0]])
+    >>> d = sysid.IOData(u=np.ones(1000), y=np.arange(1000.0))
+    >>> checks = {}
+    >>> persistent_mode_check(m, d, checks)
+    >>> checks["persistent_mode"][:40]
+    'a pole of modulus 1 - 1e-08 keeps 100 % '
+    """
+    if isinstance(model, ContinuousStateSpace) or not hasattr(model, "poles"):
+        return
+    try:
+        poles = np.asarray(model.poles())
+    except Exception:  # noqa: BLE001 - a model without poles has no mode to note
+        return
+    if poles.size == 0:
+        return
+    rho = float(np.max(np.abs(poles)))
+    n = max(data.lengths)
+    if not 0.0 < rho < 1.0:
+        return  # an unstable model is warned about where it is chosen
+    kept = float(np.exp(n * np.log(rho)))
+    if kept <= PERSISTENT_DECAY:
+        return
+    shown = f"1 - {1.0 - rho:.2g}" if rho > 0.999 else modulus(rho)
+    checks["persistent_mode"] = (
+        f"a pole of modulus {shown} keeps {100 * kept:.0f} % of its mode over the "
+        f"record ({n} samples): within the record it acts as an integrator, and the data do "
+        f"not say how far inside the unit circle it is (nor the static gain and the step "
+        f"response's final value, which grow as 1 / (1 - |p|)); read the model's response "
+        f"within the record's time span only. If the plant integrates, say so in the "
+        f"structure (identify the differenced output, or enforce_stability=False); if it "
+        f"does not, look for a drift in the output (sysid.detrend(data, 'linear'))")
