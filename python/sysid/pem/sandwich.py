@@ -20,6 +20,14 @@ state's, held fixed here) keep their Gauss-Newton value.
 On a second-order plant with a coloured disturbance (200 Monte Carlo runs) the Gauss-Newton
 standard deviation of the static gain was a third of the sample one (0.073 against 0.215);
 this covariance gives 0.188, its 95 % intervals covering 89.5 % (``tests/test_pem_coloured.py``).
+
+The same holds for every output-error fit: :func:`sysid.oe` and the discrete
+:func:`sysid.tfest` (which is ``oe``) carry it too (:func:`sandwich_covariance`, one block
+per output, as they search one output at a time; ``info["covariance"]`` says which). On a
+first-order OE plant with an AR(1) disturbance (400 runs) the Gauss-Newton std of the static
+gain was 0.044 against a sample 0.140 (intervals covering 43 %); the sandwich gives 0.133,
+covering 93.5 % (``tests/test_oe_coloured.py``). ``bj`` and ``armax`` model the disturbance:
+their errors are the whitened innovations, and their Gauss-Newton covariance stands.
 """
 
 from __future__ import annotations
@@ -142,10 +150,12 @@ def sandwich_covariance(unc: ParameterUncertainty, sim: Callable[[Any], np.ndarr
     >>> v = lfilter([1.0], [1.0, -0.9], 0.1 * rng.standard_normal(1000))
     >>> data = sysid.IOData(u, lfilter([0.0, 0.5], [1.0, -0.8], u) + v, 1.0)
     >>> m = sysid.oe(data, 1, 1, 1)
-    >>> gn = gauss_newton(m.uncertainty)           # its Gauss-Newton uncertainty
+    >>> gn = gauss_newton(m.uncertainty)           # before oe's own sandwich is formed
     >>> unc, note = sandwich_covariance(gn, lambda g: g.simulate(u), data.y)
     >>> note.startswith("sandwich"), bool(np.all(unc.std > 1.2 * gn.std))
     (True, True)
+    >>> bool(np.allclose(unc.covariance, m.uncertainty.covariance))   # what oe carries
+    True
     """
     y = np.asarray(y, float)
     l = y.shape[1]
