@@ -216,20 +216,6 @@ def sampled_response(model: Any, kind: str, n_samples: int | None) -> TimeRespon
     return TimeResponse(kind, np.arange(N) * model.dt, y, model)
 
 
-def form_deferred(model: Any) -> None:
-    """Form ``model``'s deferred covariance now, if it has one (see
-    :class:`sysid.pem.sandwich.DeferredSandwich`): before its ``info`` is written.
-
-    Examples
-    --------
-    >>> import sysid
-    >>> form_deferred(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]))   # none: nothing
-    """
-    unc = getattr(model, "__dict__", {}).get("uncertainty")
-    if unc is not None and unc.__dict__.get("_pending") is not None:
-        _ = unc.covariance  # the first use forms it
-
-
 class ModelMixin:
     """Default implementations of the protocol's derived members, written once.
 
@@ -260,6 +246,8 @@ class ModelMixin:
         """Pickling (and copying): a covariance still deferred (the sandwich of
         :mod:`sysid.pem.sandwich`, formed when first used) is formed first, so that the
         ``info`` naming it is written as it ends, not before."""
+        from .uncertainty import form_deferred
+
         form_deferred(self)
         return self.__dict__
 
