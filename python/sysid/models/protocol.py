@@ -242,6 +242,15 @@ class ModelMixin:
     array([0., 1., 2.])
     """
 
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickling (and copying): a covariance still deferred (the sandwich of
+        :mod:`sysid.pem.sandwich`, formed when first used) is formed first, so that the
+        ``info`` naming it is written as it ends, not before."""
+        from .uncertainty import form_deferred
+
+        form_deferred(self)
+        return self.__dict__
+
     def _delegate(self, name: str) -> Any:
         ss = as_statespace(self, f"{name}()" if name != "predict" else name)
         if ss is self:  # its own to_statespace(): the mixin's default would call itself

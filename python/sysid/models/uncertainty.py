@@ -424,6 +424,21 @@ class ParameterUncertainty(HTMLResult):
 
 
 # -- model-level quantities (shared by every model family) ------------------------------
+def form_deferred(model: Any) -> None:
+    """Form ``model``'s deferred covariance now, if it has one (see
+    :class:`sysid.pem.sandwich.DeferredSandwich`): before its ``info`` is written.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> from sysid.models.uncertainty import form_deferred
+    >>> form_deferred(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]))   # none: nothing
+    """
+    unc = getattr(model, "__dict__", {}).get("uncertainty")
+    if unc is not None and unc.__dict__.get("_pending") is not None:
+        _ = unc.covariance  # the first use forms it
+
+
 def require(model: Any) -> ParameterUncertainty:
     """The model's :class:`ParameterUncertainty`, or a clear error when it has none."""
     unc = getattr(model, "uncertainty", None)

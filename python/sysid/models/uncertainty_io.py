@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from .affine_map import MAX_PARAMETERS, affine_build, stored_map
-from .uncertainty import ParameterUncertainty
+from .uncertainty import ParameterUncertainty, form_deferred
 
 __all__ = ["body_with_uncertainty", "model_from_body", "uncertainty_from_dict",
            "uncertainty_to_dict"]
@@ -79,6 +79,7 @@ def uncertainty_from_dict(saved: dict[str, Any], body: dict[str, Any], cls: type
 def body_with_uncertainty(model: Any) -> dict[str, Any]:
     """``model.to_dict()`` with its saved uncertainty under ``"uncertainty"`` (for a model
     class that stores another model inside its own ``to_dict``)."""
+    form_deferred(model)  # a deferred covariance formed before the info naming it is written
     body = model.to_dict()
     saved = None if "uncertainty" in body else uncertainty_to_dict(model)
     return body if saved is None else {**body, "uncertainty": saved}

@@ -673,7 +673,7 @@ def pem(
 def _coloured(out: StateSpaceModel, data: Any, scale: np.ndarray | None) -> None:
     """A simulation-error fit's uncertainty for coloured errors (:mod:`.sandwich`), on one
     record; ``info["pem"]["covariance"]`` says which covariance the model carries."""
-    from .sandwich import DeferredSandwich
+    from .sandwich import DeferredSandwich, coloured_error_covariance
 
     exps = list(_experiments(data).experiments)
     if len(exps) != 1:
@@ -688,9 +688,18 @@ def _coloured(out: StateSpaceModel, data: Any, scale: np.ndarray | None) -> None
     info["covariance"] = ("gauss-newton until first used, then the sandwich for coloured "
                           "simulation errors")
 
+    def form() -> tuple[ParameterUncertainty | None, str]:
+        out.uncertainty = base  # the Jacobian is the Gauss-Newton uncertainty's
+        try:
+            return coloured_error_covariance(out, u, y, w)
+        finally:
+            out.uncertainty = deferred
+
     def then(note: str) -> None:
         info["covariance"] = note
-    out.uncertainty = DeferredSandwich(out.uncertainty, out, u, y, w, then)
+    base = out.uncertainty
+    deferred = DeferredSandwich(base, form, then)
+    out.uncertainty = deferred
 
 
 def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,

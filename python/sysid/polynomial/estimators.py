@@ -19,6 +19,7 @@ from ..errors import DataError, InsufficientDataError, ShapeError
 from .cancellation import cancellation, warn_cancellations
 from .model import PolynomialModel
 from .uncertainty import attach_uncertainty as _attach_uncertainty
+from .uncertainty import defer_coloured
 
 
 def _grid(v: Any, ny: int, ncol: int, name: str) -> list[list[int]]:
@@ -347,6 +348,8 @@ def _pem(
     warn_if_capped(info, f"the {method} search", int(max_iter))
     m.covariance = cov  # type: ignore[attr-defined]
     _attach_uncertainty(m, cov, "pem", "gauss-newton")
+    if method == "oe":  # its errors are the output disturbance: coloured as it is
+        defer_coloured(m, exps)
     found = []
     for i in range(ny):
         at = na_v[i] + sum(nb_g[i]) + nc_v[i] + nd_v[i]
@@ -415,6 +418,14 @@ def oe(
     is itself uncertain). ``transient`` drops leading periods (default 0
     declared, 1 with ``"auto"``). ``"auto"`` without a usable period fits in the time domain
     with the reason in ``info["periodicity"]``.
+
+    The errors of the time-domain fit are the output disturbance itself, coloured on nearly
+    every real record, where the Gauss-Newton covariance ``sigma^2 (J^T J)^-1`` (kept as
+    ``covariance``, per output) is too small. On one record ``uncertainty`` is therefore the
+    sandwich for the errors' own colour (:mod:`sysid.pem.sandwich`; per output, the
+    Gauss-Newton one when the errors are white), formed when first used;
+    ``info["covariance"]`` says which covariance the model carries. With several
+    experiments it stays the Gauss-Newton one, and ``info["covariance"]`` says so.
 
     Examples
     --------

@@ -67,3 +67,62 @@ def attach_uncertainty(model: PolynomialModel, covs: list[np.ndarray], kind: str
         return m
 
     model.uncertainty = ParameterUncertainty(theta, P, build, names=names, method=method)
+
+
+def output_blocks(model: PolynomialModel, kind: str = "pem") -> list[tuple[list[int], list[int]]]:
+    """Per output, the indices of its parameters in :func:`attach_uncertainty`'s vector and
+    the output itself: the blocks of a fit searched one output at a time."""
+    refs = _refs(model, kind)
+    blocks: list[tuple[list[int], list[int]]] = [([], [i]) for i in range(model.n_outputs)]
+    o = 0
+    for ref in refs:
+        n = _get(model, ref).size
+        blocks[ref[1]][0].extend(range(o, o + n))
+        o += n
+    return blocks
+
+
+def defer_coloured(model: PolynomialModel, experiments: list[tuple[np.ndarray, np.ndarray]]
+                   ) -> None:
+    """An output-error fit's uncertainty for coloured errors: its Gauss-Newton covariance
+    becomes the sandwich of :mod:`sysid.pem.sandwich` when first used (per output, on the
+    errors of the simulation from rest that the search minimised), on one record;
+    ``info["covariance"]`` says which covariance the model carries (as ``pem``'s
+    ``info["pem"]["covariance"]``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy.signal import lfilter
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(800)
+    >>> v = lfilter([1.0], [1.0, -0.9], 0.1 * rng.standard_normal(800))
+    >>> y = lfilter([0.0, 0.5], [1.0, -0.8], u) + v
+    >>> m = sysid.oe(sysid.IOData(u, y, 1.0), 1, 1, 1)     # calls defer_coloured
+    >>> m.info["covariance"].startswith("gauss-newton until first used")
+    True
+    >>> sd = m.std                                         # the first use forms it
+    >>> m.info["covariance"].startswith("sandwich for coloured simulation errors")
+    True
+    """
+    from ..pem.sandwich import DeferredSandwich, sandwich_covariance
+
+    base = getattr(model, "uncertainty", None)
+    if not isinstance(base, ParameterUncertainty):
+        return
+    if len(experiments) != 1:
+        model.info["covariance"] = ("gauss-newton, as for white errors (the coloured-error "
+                                    "correction is formed on one record)")
+        return
+    u, y = (np.asarray(a, float) for a in experiments[0])
+    info = model.info
+    info["covariance"] = ("gauss-newton until first used, then the sandwich for coloured "
+                          "simulation errors")
+    blocks = output_blocks(model)
+
+    def form() -> tuple[ParameterUncertainty | None, str]:
+        return sandwich_covariance(base, lambda m: m.simulate(u), y, blocks=blocks)
+
+    def then(note: str) -> None:
+        info["covariance"] = note
+    model.uncertainty = DeferredSandwich(base, form, then)

@@ -97,7 +97,10 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         ``info`` (method, iterations, stop reason, cost, fit per output). From an FRD or on
         periodic data the covariance is ``s (J^T W J)^-1`` with the residual scale
         ``s = info["residual_scale"]`` per pair (about 1 when the FRD's std is right and
-        the model explains it; unweighted, the residual variance).
+        the model explains it; unweighted, the residual variance). A discrete model from a
+        time record (``dt`` given) carries :func:`sysid.oe`'s covariance: on one record
+        the sandwich for the errors' colour, formed when first used (by ``uncertainty`` or
+        the table's std), with ``info["covariance"]`` saying which.
 
     Examples
     --------
@@ -473,7 +476,10 @@ def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
               "noise_variance": [float(v) for v in np.ravel(poly.noise_variance)],
               "n_samples": int(sum(u.shape[0] for u, _ in data.experiments)),
               "delays": "estimated" if auto else "fixed"}
-    unc = getattr(poly, "uncertainty", None)
+    from ..pem.sandwich import gauss_newton
+
+    deferred = getattr(poly, "uncertainty", None)
+    unc = gauss_newton(deferred)  # oe's sandwich, if it has one, waits for its first use
     if unc is not None:
         # oe's parameters per output are [b_i1.., f_i1..]; the table's per pair [a.., b..]
         names, order, o = [], [], 0
@@ -503,8 +509,32 @@ def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
             return from_pairs(b, f)
 
         G.uncertainty = ParameterUncertainty(theta, P, build, names=names, method=unc.method)
+        if deferred is not unc:
+            _defer(G, poly, order)
     fit_percent(G, data)
     return G
+
+
+def _defer(G: TransferFunction, poly: Any, order: list[int]) -> None:
+    """``G``'s uncertainty and parameter table wait, as ``oe``'s (``poly``), for their first
+    use to become the sandwich for coloured errors (:mod:`sysid.pem.sandwich`), in the
+    table's order; ``info["covariance"]`` follows ``oe``'s."""
+    from ..pem.sandwich import DeferredSandwich, DeferredTable
+
+    base = G.uncertainty
+    ix = np.ix_(order, order)
+
+    def form() -> tuple[ParameterUncertainty | None, str]:
+        pu = poly.uncertainty
+        P = pu.covariance  # forms oe's, which says which it is
+        return (ParameterUncertainty(base.theta, P[ix], base.build, names=base.names,
+                                     dof=pu.dof, method=pu.method),
+                poly.info["covariance"])
+
+    def then(note: str) -> None:
+        G.info["covariance"] = note
+    G.uncertainty = DeferredSandwich(base, form, then)
+    G.parameters = DeferredTable(G.parameters, G.uncertainty)
 
 
 def _z_form(b: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
