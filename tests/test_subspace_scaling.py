@@ -154,3 +154,15 @@ def test_bad_scales_are_refused_by_name(scales, match):
         f.scaled(*scales)
     with pytest.raises(sysid.DataError, match="scale must be True or False"):
         sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), 3, scale="yes")
+
+
+@pytest.mark.parametrize("fn", [sysid.n4sid, sysid.moesp, sysid.cva, sysid.pbsid, sysid.ssarx])
+def test_the_one_call_functions_take_scale(fn):
+    u, y = record(1500)
+    d = sysid.IOData(u=u, y=y * np.array([1.0, 1e3]))
+    raw = quiet(fn, d, 4, horizon=8, scale=False)
+    est = sysid.SubspaceEstimator(d, 8, method=fn.__name__, scale=False)
+    same = quiet(est.fit, 4)
+    np.testing.assert_allclose(raw.markov(10), same.markov(10), rtol=1e-9, atol=1e-12)
+    scaled = quiet(fn, d, 4, horizon=8)
+    assert "channel_scaling" in scaled.info and "channel_scaling" not in raw.info

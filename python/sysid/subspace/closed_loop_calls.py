@@ -25,10 +25,12 @@ def _one_call(method: str) -> Any:
         feedthrough: bool | str | None = None,
         regularization: str = "none",
         ridge: float = 1e-3,
+        scale: bool | None = None,
     ) -> StateSpaceModel:
         from .closed_loop import closed_loop_fit
 
-        est = SubspaceEstimator(data, horizon, past=past, future=future, method=method)
+        est = SubspaceEstimator(data, horizon, past=past, future=future, method=method,
+                                scale=scale)
         ft, why = check_feedthrough(default_feedthrough(feedthrough, order)), None
         if ft == "auto":
             ft, why = choose_feedthrough(est, order, method=method)
@@ -65,6 +67,9 @@ pbsid.__doc__ = """Identify a state-space model from closed-loop data with PBSID
         Of the VARX.
     ridge : float
         Ridge weight (``regularization="ridge"``).
+    scale : bool, optional
+        Fit on channels of unit root mean square (default; :mod:`sysid.subspace.scaling`),
+        or in the record's units (``False``).
 
     Returns
     -------

@@ -700,10 +700,11 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         kalman: bool = True,
         stable: bool = False,
         x0: bool = False,
+        scale: bool | None = None,
     ) -> StateSpaceModel:
         if isinstance(data, IOData):  # a given order gets a horizon that allows it
             horizon = horizon_for_order(data, order, horizon)
-        est = SubspaceEstimator(data, horizon, method=method)
+        est = SubspaceEstimator(data, horizon, method=method, scale=scale)
         return est.fit(order, feedthrough=feedthrough, kalman=kalman, stable=stable, x0=x0)
 
     fit.__name__ = method.replace("-", "_")
@@ -716,7 +717,9 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
     at a given order unless ``feedthrough=True`` (or ``"auto"``: decided from the data), as
     every sysid state-space estimator; with ``order="auto"`` (the
     default) the order and ``D`` are chosen together by held-out simulation fit
-    (``info["order_selection"]``, ``info["feedthrough_selection"]``).
+    (``info["order_selection"]``, ``info["feedthrough_selection"]``). ``scale=False``
+    computes in the record's units instead of on channels of unit root mean square
+    (:mod:`sysid.subspace.scaling`), as SLICOT and MATLAB do.
 
     Examples
     --------
