@@ -110,3 +110,14 @@ def test_read_columns_skips_comments_and_blank_lines_as_read_table(tmp_path):
     with pytest.raises(DataError, match="d.csv line 3: 2 fields but the header has 3"):
         cli.read_columns(path, ["u", "y"], progress=False)
 
+
+
+def test_a_large_white_space_separated_file_is_read_as_a_small_one(tmp_path, monkeypatch,
+                                                                   capsys):
+    z = _record()
+    path = tmp_path / "big.txt"
+    np.savetxt(path, z, delimiter=" ", header="t u1 u2 y", comments="", fmt="%.17g")
+    monkeypatch.setattr(cli, "STREAM_BYTES", 0)  # large: pyarrow cannot split on runs of spaces
+    code = cli.main(["identify", str(path), "--inputs", "u1,u2", "--outputs", "y", "--order",
+                     "1", "--report", str(tmp_path / "rep"), "--quiet"])
+    assert code == 0, capsys.readouterr().err

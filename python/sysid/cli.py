@@ -456,9 +456,10 @@ def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         list[str], list[int], list[int], np.ndarray, np.ndarray, np.ndarray | None]:
     """Names, input and output column indices, u, y and the time column if asked."""
     path = Path(args.data)
+    # white-space separated files go to read_table (pyarrow splits on one character)
     big = path.is_file() and (path.suffix.lower() in (".parquet", ".pq")
                               or (path.stat().st_size > STREAM_BYTES
-                                  and args.delimiter not in (" ", "\t")))
+                                  and (args.delimiter or _delimiter(path)) not in (" ", "\t")))
     if big:
         say(f"reading {args.data} in blocks")
         names = _header(path)
