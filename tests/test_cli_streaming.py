@@ -55,3 +55,69 @@ def test_identify_streams_a_large_file_with_the_chosen_compressor(tmp_path, caps
     err = capsys.readouterr().err
     assert "in blocks" in err
     assert f"compressed with {'correlation' if compressor == 'auto' else 'qr'}" in err
+
+
+def _bad_file(path, cell: str, row: int, preamble: bool = True) -> int:
+    """``_record`` as CSV (after a comment, and with a blank line after the header, with
+    ``preamble``) with ``cell`` in column u2 of data row ``row``; returns the file line of
+    that cell."""
+    z = _record()
+    head = ["# logger 7", "t,u1,u2,y", ""] if preamble else ["t,u1,u2,y"]
+    lines = head + [",".join(f"{v:.17g}" for v in r) for r in z]
+    k = len(head) + row  # index of the row's line in `lines`
+    fields = lines[k].split(",")
+    fields[2] = cell
+    lines[k] = ",".join(fields)
+    path.write_text("\n".join(lines) + "\n")
+    return k + 1
+
+
+@pytest.mark.parametrize("cell", ["abc", "", "nan", "inf", "-Infinity", "NA"])
+def test_a_streamed_bad_cell_is_named_by_line_and_column_as_in_memory(tmp_path, capsys,
+                                                                      monkeypatch, cell):
+    path = tmp_path / "big.csv"
+    line = _bad_file(path, cell, 2900, preamble=False)
+    argv = ["identify", str(path), "--inputs", "u1,u2", "--outputs", "y", "--order", "1",
+            "--report", str(tmp_path / "rep"), "--quiet"]
+    assert cli.main(argv) == 2  # in memory (a small file)
+    in_memory = capsys.readouterr().err
+    assert f"big.csv line {line}, column 'u2'" in in_memory
+    monkeypatch.setattr(cli, "STREAM_BYTES", 0)  # streamed
+    monkeypatch.setattr(cli, "STREAM_BLOCK", 4096)  # in about 40 blocks: the cell in a late one
+    assert cli.main(argv) == 2
+    assert capsys.readouterr().err == in_memory
+
+
+def test_read_columns_names_the_bad_cell_of_any_block(tmp_path):
+    path = tmp_path / "d.csv"
+    for row in (0, 1500, 2999):
+        line = _bad_file(path, {0: "x", 1500: "1.2.3", 2999: ""}[row], row)
+        with pytest.raises(DataError, match=rf"d\.csv line {line}, column 'u2'"):
+            cli.read_columns(path, ["y", "u2"], progress=False, block_size=2048)
+    # the column that holds it is not asked for: no error, and the others read whole
+    got = cli.read_columns(path, ["y", "u1"], progress=False, block_size=2048)
+    np.testing.assert_array_equal(got, _record()[:, [3, 1]])
+
+
+def test_read_columns_skips_comments_and_blank_lines_as_read_table(tmp_path):
+    path = tmp_path / "d.csv"
+    path.write_text("# sensor log\n\n# units: V\nt,u,y\n0,1,2\n\n   \n# note\n1,3,4\n2,5,6\n")
+    for block in (64, None):
+        np.testing.assert_array_equal(
+            cli.read_columns(path, ["u", "y"], progress=False, block_size=block),
+            [[1, 2], [3, 4], [5, 6]])
+    path.write_text("t,u,y\n0,1,2\n1,3\n")  # a short row
+    with pytest.raises(DataError, match="d.csv line 3: 2 fields but the header has 3"):
+        cli.read_columns(path, ["u", "y"], progress=False)
+
+
+
+def test_a_large_white_space_separated_file_is_read_as_a_small_one(tmp_path, monkeypatch,
+                                                                   capsys):
+    z = _record()
+    path = tmp_path / "big.txt"
+    np.savetxt(path, z, delimiter=" ", header="t u1 u2 y", comments="", fmt="%.17g")
+    monkeypatch.setattr(cli, "STREAM_BYTES", 0)  # large: pyarrow cannot split on runs of spaces
+    code = cli.main(["identify", str(path), "--inputs", "u1,u2", "--outputs", "y", "--order",
+                     "1", "--report", str(tmp_path / "rep"), "--quiet"])
+    assert code == 0, capsys.readouterr().err

@@ -23,7 +23,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .data.iodata import IOData
-from .data.table import numeric, read_table
+from .data.table import first_bad_cell, first_line, guess_delimiter, numeric, read_table, splitter
 from .errors import DataError, InsufficientDataError, OrderError, SysidError
 from .validation.crossval import MIN_BLOCK
 
@@ -305,6 +305,8 @@ def _check_report_dir(report: str | Path) -> None:
 
 #: CSV files larger than this are read by pyarrow's streaming reader, in blocks.
 STREAM_BYTES = 8 << 20
+#: Bytes per block of that reader (at least one line).
+STREAM_BLOCK = 16 << 20
 
 
 class _CountingFile:
@@ -333,13 +335,20 @@ class _CountingFile:
 
 
 def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None = None,
-                 progress: bool | None = None) -> np.ndarray:
+                 progress: bool | None = None, block_size: int | None = None) -> np.ndarray:
     """Read the named numeric columns of a large CSV or Parquet file in blocks.
 
-    CSV goes through pyarrow's streaming reader (``pyarrow.csv.open_csv``, blocks of 16 MB,
-    only the named columns converted, to float64) with a progress bar over the bytes (rate
-    and time left); Parquet through ``ParquetFile.iter_batches`` with a bar over the rows.
-    Only the requested columns are held in memory, as float64.
+    CSV goes through pyarrow's streaming reader (``pyarrow.csv.open_csv``, blocks of
+    ``block_size`` bytes, default :data:`STREAM_BLOCK` = 16 MB, only the named columns
+    converted, to float64) with a progress bar over the bytes (rate and time left); Parquet
+    through ``ParquetFile.iter_batches`` with a bar over the rows. Only the requested
+    columns are held in memory, as float64.
+
+    Every value must be a finite number. A CSV cell that is not (text, empty, ``nan``,
+    ``inf``) raises the :class:`~sysid.DataError` of :func:`read_csv`, naming its file line
+    (the header counted) and column: the file is read again from the block that held it,
+    line by line, by the in-memory reader's rules (``sysid.data.table``). A Parquet value
+    that is not finite is named by its row and column.
 
     Examples
     --------
@@ -362,11 +371,13 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
             from exc
     parts: list[np.ndarray] = []
 
-    def take(batch: Any) -> None:
+    def take(batch: Any) -> bool:
+        """Keep a block's columns as float64; whether they are all finite."""
         names = batch.schema.names
         parts.append(np.column_stack([
             batch.column(names.index(c)).to_numpy(zero_copy_only=False).astype(float)
             for c in columns]) if columns else np.zeros((batch.num_rows, 0)))
+        return bool(np.isfinite(parts[-1]).all())
 
     if path.suffix.lower() in (".parquet", ".pq"):
         import pyarrow.parquet as pq
@@ -378,42 +389,77 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
                             f"{pf.schema_arrow.names}")
         with Bar(pf.metadata.num_rows, f"reading {path.name}", unit="rows", unit_scale=True,
                  enabled=show(progress)) as bar:
+            done = 0
             for batch in pf.iter_batches(batch_size=1 << 20, columns=columns):
-                take(batch)
+                if not take(batch):
+                    r, c = np.argwhere(~np.isfinite(parts[-1]))[0]
+                    raise DataError(
+                        f"{path.name} row {done + r + 1}, column {columns[c]!r}: "
+                        f"{parts[-1][r, c]} is not a finite number; fix or remove that row "
+                        "(missing values must be repaired before identification)")
+                done += batch.num_rows
                 bar.update(batch.num_rows)
     else:
         import pyarrow.csv as pacsv
 
-        with open(path, encoding="utf-8-sig") as f:
-            first = f.readline()
-        delim = delimiter or next((d for d in (",", ";", "\t") if d in first), ",")
+        skip, first = first_line(path)
+        delim = delimiter or guess_delimiter(first)
+        rows = 0  # data rows read whole: the bad cell is in the block after them
         with Bar(path.stat().st_size, f"reading {path.name}", unit="B", unit_scale=True,
                  enabled=show(progress)) as bar:
             src = _CountingFile(path, bar)
             try:
                 reader = pacsv.open_csv(
-                    src, read_options=pacsv.ReadOptions(block_size=16 << 20),
-                    parse_options=pacsv.ParseOptions(delimiter=delim),
+                    src,
+                    read_options=pacsv.ReadOptions(
+                        block_size=block_size or STREAM_BLOCK, skip_rows=max(skip - 1, 0)),
+                    parse_options=pacsv.ParseOptions(delimiter=delim,
+                                                     invalid_row_handler=_skip_comment),
                     convert_options=pacsv.ConvertOptions(
                         include_columns=columns,
                         column_types={c: pa.float64() for c in columns}))
                 for batch in reader:
-                    take(batch)
+                    if not take(batch):
+                        raise _bad_cell(path, columns, delim, rows,
+                                        "a value that is not a finite number")
+                    rows += batch.num_rows
             except (pa.ArrowInvalid, KeyError) as e:
-                raise DataError(f"{path.name}: {e}; check the column names and that every "
-                                "field is a number") from None
+                raise _bad_cell(path, columns, delim, rows, f"{e}; check the column names "
+                                "and that every field is a number") from None
             finally:
                 src.close()
     return np.concatenate(parts) if parts else np.zeros((0, len(columns)))
+
+
+def _bad_cell(path: Path, columns: list[str], delimiter: str, rows: int,
+              what: str) -> DataError:
+    """The error for a block of a streamed CSV file that did not convert: its bad cell by
+    line and column (read again from data row ``rows`` by the in-memory reader's rules),
+    else ``what`` (pyarrow's message)."""
+    return (first_bad_cell(path, columns, delimiter=delimiter, start=rows)
+            or DataError(f"{path.name}: {what} (after data row {rows})"))
+
+
+def _delimiter(path: Path) -> str:
+    """The delimiter of a CSV file, guessed from its first line as ``read_table`` does."""
+    return guess_delimiter(first_line(path)[1])
+
+
+def _skip_comment(row: Any) -> str:
+    """pyarrow's handler of a row with the wrong number of fields: a ``#`` comment or a
+    blank line is skipped, as ``read_table`` skips them; anything else is an error."""
+    text = row.text or ""
+    return "skip" if not text.strip() or text.lstrip().startswith("#") else "error"
 
 
 def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         list[str], list[int], list[int], np.ndarray, np.ndarray, np.ndarray | None]:
     """Names, input and output column indices, u, y and the time column if asked."""
     path = Path(args.data)
+    # white-space separated files go to read_table (pyarrow splits on one character)
     big = path.is_file() and (path.suffix.lower() in (".parquet", ".pq")
                               or (path.stat().st_size > STREAM_BYTES
-                                  and args.delimiter not in (" ", "\t")))
+                                  and (args.delimiter or _delimiter(path)) not in (" ", "\t")))
     if big:
         say(f"reading {args.data} in blocks")
         names = _header(path)
@@ -450,10 +496,8 @@ def _header(path: Path) -> list[str]:
         import pyarrow.parquet as pq
 
         return list(pq.ParquetFile(path).schema_arrow.names)
-    with open(path, encoding="utf-8-sig") as f:
-        first = f.readline().strip()
-    delim = next((d for d in (",", ";", "\t") if d in first), ",")
-    return [c.strip() for c in first.split(delim)]
+    first = first_line(path)[1]
+    return splitter(guess_delimiter(first))(first)
 
 
 def _identify(args: argparse.Namespace) -> int:

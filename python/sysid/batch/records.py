@@ -4,10 +4,16 @@ A task is ``(record id, source)``; the source is an :class:`~sysid.IOData`, a fi
 (CSV or Parquet, read by the worker), or a pandas frame of one record (from a Dask
 dataframe partitioned by record id). :func:`load` turns a source into an ``IOData`` on the
 worker, so a corrupt file fails there, as an error row, not in the caller.
+
+A fit takes its record whole, in memory (``fit(IOData)``, and the row's fit % simulates
+the model over it), so a file is read whole too; of a Parquet file only the columns named
+by ``inputs``, ``outputs`` and the time column are read, after their size is checked
+against :data:`MAX_RECORD_BYTES` and the memory available (:func:`check_record_size`).
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,12 +21,20 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import MAX_BYTES
 from ..data.iodata import IOData
 from ..errors import DataError
 
-__all__ = ["Columns", "tasks", "load", "SUFFIXES"]
+__all__ = ["Columns", "tasks", "load", "SUFFIXES", "MAX_RECORD_BYTES", "check_record_size"]
 
 SUFFIXES = (".csv", ".parquet", ".pq", ".txt")
+
+#: Largest record a worker reads from a file, in bytes of its float64 values (the package's
+#: 4 GiB per matrix); a smaller bound is taken from the memory available when it is known.
+MAX_RECORD_BYTES = MAX_BYTES
+#: The share of the available memory one record's values may take: the fit holds copies of
+#: it (the record, its parts, simulations), and other workers hold theirs.
+MEMORY_SHARE = 0.25
 
 
 @dataclass(frozen=True)
@@ -32,14 +46,21 @@ class Columns:
     dt: float | None = None
     time: str | None = None
 
-    def record(self, names: list[str], values: np.ndarray, what: str) -> IOData:
+    def wanted(self) -> tuple[str, ...]:
+        """The columns a record is made of: inputs, outputs and the time column."""
+        return (self.inputs or ()) + (self.outputs or ()) + ((self.time,) if self.time else ())
+
+    def check(self, names: list[str], what: str) -> None:
+        """Refuse a table without outputs named, or without a named column."""
         if self.outputs is None:
             raise DataError(f"{what}: give outputs=[column names] (and inputs=[...]) to read "
                             "records from tables")
-        missing = [c for c in (self.inputs or ()) + self.outputs + (
-            (self.time,) if self.time else ()) if c not in names]
+        missing = [c for c in self.wanted() if c not in names]
         if missing:
             raise DataError(f"{what}: no column(s) {missing}; it has {names}")
+
+    def record(self, names: list[str], values: np.ndarray, what: str) -> IOData:
+        self.check(names, what)
         col = {c: values[:, names.index(c)] for c in names}
         u = np.column_stack([col[c] for c in self.inputs]) if self.inputs else None
         y = np.column_stack([col[c] for c in self.outputs])
@@ -50,8 +71,7 @@ class Columns:
 
 def _frame_record(frame: Any, cols: Columns, what: str) -> IOData:
     names = [str(c) for c in frame.columns]
-    use = [c for c in names if c in set((cols.inputs or ()) + (cols.outputs or ()) + (
-        (cols.time,) if cols.time else ()))]
+    use = [c for c in names if c in set(cols.wanted())]
     try:
         values = frame[use].to_numpy(dtype=float)
     except (TypeError, ValueError) as e:
@@ -66,13 +86,7 @@ def load(source: Any, cols: Columns, rid: str) -> IOData:
     if isinstance(source, (str, Path)):
         path = Path(source)
         if path.suffix.lower() in (".parquet", ".pq"):
-            import pyarrow.parquet as pq
-
-            try:
-                frame = pq.read_table(path).to_pandas()
-            except Exception as e:  # noqa: BLE001 - any reader failure is a bad record
-                raise DataError(f"{path.name}: not a readable Parquet file ({e})") from None
-            return _frame_record(frame, cols, path.name)
+            return _parquet_record(path, cols)
         from ..cli import read_csv
 
         names, values = read_csv(path)
@@ -83,6 +97,79 @@ def load(source: Any, cols: Columns, rid: str) -> IOData:
         return IOData(*source, dt=cols.dt)
     raise DataError(f"record {rid}: cannot make a record of a {type(source).__name__}; give "
                     "IOData, (u, y), a CSV/Parquet path or a dataframe")
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation (Linux ``MemAvailable``, else the free
+    physical pages); ``None`` where neither is known."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (AttributeError, ValueError, OSError):
+        return None
+
+
+def check_record_size(what: str, rows: int, columns: int) -> None:
+    """Refuse a record of ``rows`` by ``columns`` float64 values larger than
+    :data:`MAX_RECORD_BYTES` or :data:`MEMORY_SHARE` of the available memory, before it is
+    read: the error names the record, its size and the fix.
+
+    Examples
+    --------
+    >>> from sysid.batch.records import check_record_size
+    >>> check_record_size("small.parquet", 1000, 3)
+    >>> check_record_size("huge.parquet", 10**12, 3)  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: huge.parquet: 1000000000000 rows x 3 columns need 22351.7 GiB ...
+    """
+    need = rows * columns * 8
+    avail = available_memory()
+    limit, why = MAX_RECORD_BYTES, f"the {MAX_RECORD_BYTES / 2**30:.3g} GiB limit per record"
+    if avail is not None and MEMORY_SHARE * avail < limit:
+        limit = int(MEMORY_SHARE * avail)
+        why = (f"{MEMORY_SHARE:.0%} of the {avail / 2**30:.3g} GiB of memory available (the "
+               "fit holds copies of the record)")
+    if need > limit:
+        raise DataError(
+            f"{what}: {rows} rows x {columns} columns need {need / 2**30:.1f} GiB as float64, "
+            f"more than {why}; identify_many fits each record in memory: cut the record "
+            "into shorter ones, or compress it in blocks with sysid.compress_stream(path, "
+            "past, input_columns=..., output_columns=...) and fit "
+            "SubspaceEstimator.from_factor")
+
+
+def _parquet_record(path: Path, cols: Columns) -> IOData:
+    """A Parquet file's record: only the columns it is made of, read after their size is
+    checked (its metadata holds the row count)."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    try:
+        pf = pq.ParquetFile(path)
+        names, rows = list(pf.schema_arrow.names), int(pf.metadata.num_rows)
+    except Exception as e:  # noqa: BLE001 - any reader failure is a bad record
+        raise DataError(f"{path.name}: not a readable Parquet file ({e})") from None
+    cols.check(names, path.name)
+    use = list(dict.fromkeys(cols.wanted()))
+    check_record_size(path.name, rows, len(use))
+    try:
+        table = pf.read(columns=use)
+    except Exception as e:  # noqa: BLE001 - any reader failure is a bad record
+        raise DataError(f"{path.name}: not a readable Parquet file ({e})") from None
+    try:
+        values = np.column_stack([
+            table.column(c).to_numpy(zero_copy_only=False).astype(np.float64, copy=False)
+            for c in use]) if use else np.zeros((rows, 0))
+    except (TypeError, ValueError, pa.ArrowException) as e:
+        raise DataError(f"{path.name}: a column is not numeric ({e})") from None
+    return cols.record(use, values, path.name)
 
 
 def tasks(records: Any, record_id: str) -> Iterator[tuple[str, Any]]:

@@ -11,9 +11,12 @@ from __future__ import annotations
 import bz2
 import csv
 import gzip
+import itertools
 import lzma
+import math
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
-from typing import NamedTuple
+from typing import IO, NamedTuple
 
 import numpy as np
 
@@ -23,6 +26,7 @@ __all__: list[str] = []
 
 _OPEN = {".gz": gzip.decompress, ".bz2": bz2.decompress, ".xz": lzma.decompress,
          ".lzma": lzma.decompress}
+_STREAM = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open, ".lzma": lzma.open}
 
 
 class Table(NamedTuple):
@@ -42,6 +46,69 @@ def is_number(s: str, decimal: str = ".") -> bool:
     except ValueError:
         return False
     return True
+
+
+def is_finite(s: str, decimal: str = ".") -> bool:
+    """Whether ``s`` reads as a finite float (with ``decimal`` as the decimal mark)."""
+    try:
+        return math.isfinite(float(s.replace(decimal, ".") if decimal != "." else s))
+    except ValueError:
+        return False
+
+
+def guess_delimiter(first_line: str, decimal: str = ".") -> str:
+    """The delimiter of a table whose first kept line is ``first_line``: a semicolon when it
+    holds one, else a comma (not with ``decimal=","``), else a tab, else white space
+    (``" "``)."""
+    guesses = (";", ",", "\t") if decimal == "." else (";", "\t")
+    return next((d for d in guesses if d in first_line), " ")
+
+
+def splitter(delimiter: str) -> Callable[[str], list[str]]:
+    """The function that splits one line into its fields (stripped; quotes allowed)."""
+    if delimiter == " ":
+        return lambda line: [c.strip('"') for c in line.split()]
+    return lambda line: [c.strip() for c in next(csv.reader([line], delimiter=delimiter))]
+
+
+def _kept(lines: Iterable[str]) -> Iterator[tuple[int, str]]:
+    """``(file line, line)`` of the lines that are neither empty nor ``#`` comments."""
+    for k, ln in enumerate(lines, 1):
+        if ln.strip() and not ln.lstrip().startswith("#"):
+            yield k, ln
+
+
+def _header(head: list[str], decimal: str) -> tuple[list[str], bool]:
+    """Column names from the first line's fields, and whether that line is data."""
+    while head and head[-1] == "":  # a trailing delimiter ends every line
+        head.pop()
+    if all(is_number(c, decimal) for c in head):
+        return [str(i) for i in range(len(head))], True
+    return head, False
+
+
+def _fields(path: Path, k: int, cells: list[str], n: int) -> list[str]:
+    """The fields of data line ``k``, checked against the header's ``n`` columns."""
+    while len(cells) > n and cells[-1] == "":
+        cells.pop()
+    if len(cells) != n:
+        raise DataError(f"{path.name} line {k}: {len(cells)} fields but the header "
+                        f"has {n} columns")
+    return cells
+
+
+def cell_error(path: Path, line: int, column: str, cell: str, *, missing: bool = False,
+               decimal: str = ".", hint: str = "") -> DataError:
+    """The error for a field that is not a (finite) number: its file, line and column, what
+    is wrong with it and the fix. One message for every reader of text tables."""
+    what = ("is empty" if cell == "" else f"{cell!r} is not a finite number"
+            if cell.strip().lower().lstrip("+-") in ("nan", "inf", "infinity")
+            else f"{cell!r} is not a number")
+    if hint and decimal == "." and "," in cell and is_number(cell, ","):
+        what += f" (a decimal comma? {hint})"
+    fix = ("fix or remove that row" if missing else "fix or remove that row "
+           "(missing values must be repaired before identification)")
+    return DataError(f"{path.name} line {line}, column {column!r}: {what}; {fix}")
 
 
 def read_table(path: str | Path, delimiter: str | None = None, *,
@@ -82,39 +149,20 @@ def read_table(path: str | Path, delimiter: str | None = None, *,
             f"{str(path)!r} is not a text table (binary content); give a CSV or whitespace-"
             "separated text file with one column per channel"
         ) from None
-    numbered = [(k + 1, ln) for k, ln in enumerate(text.splitlines())
-                if ln.strip() and not ln.lstrip().startswith("#")]
+    numbered = list(_kept(text.splitlines()))
     if not numbered:
         raise DataError(f"{str(path)!r} is empty")
     first_line = numbered[0][1]
     if delimiter is None:
-        guesses = (";", ",", "\t") if decimal == "." else (";", "\t")
-        delimiter = next((d for d in guesses if d in first_line), " ")
-
-    def split(line: str) -> list[str]:
-        if delimiter == " ":
-            return [c.strip('"') for c in line.split()]
-        return [c.strip() for c in next(csv.reader([line], delimiter=delimiter))]
-
-    head = split(first_line)
-    while head and head[-1] == "":  # a trailing delimiter ends every line
-        head.pop()
-    headerless = all(is_number(c, decimal) for c in head)
-    if headerless:
-        names, body = [str(i) for i in range(len(head))], numbered
-    else:
-        names, body = head, numbered[1:]
+        delimiter = guess_delimiter(first_line, decimal)
+    split = splitter(delimiter)
+    names, headerless = _header(split(first_line), decimal)
+    body = numbered if headerless else numbered[1:]
     if not body:
         raise DataError(f"{str(path)!r} has a header but no data rows")
     rows, lines = [], []
     for k, line in body:
-        cells = split(line)
-        while len(cells) > len(names) and cells[-1] == "":
-            cells.pop()
-        if len(cells) != len(names):
-            raise DataError(f"{path.name} line {k}: {len(cells)} fields but the header "
-                            f"has {len(names)} columns")
-        rows.append(cells)
+        rows.append(_fields(path, k, split(line), len(names)))
         lines.append(k)
     return Table(path, names, rows, lines, headerless)
 
@@ -164,15 +212,77 @@ def numeric(table: Table, cols: list[int], *, missing: bool = False,
                 if not (np.isfinite(values[r, k]) or missing and np.isnan(values[r, k])):
                     raise ValueError(cell)
             except ValueError:
-                what = ("is empty" if cell == "" else f"{cell!r} is not a finite number"
-                        if cell.strip().lower().lstrip("+-") in ("nan", "inf", "infinity")
-                        else f"{cell!r} is not a number")
-                if hint and decimal == "." and "," in cell and is_number(cell, ","):
-                    what += f" (a decimal comma? {hint})"
-                fix = ("fix or remove that row" if missing else "fix or remove that row "
-                       "(missing values must be repaired before identification)")
-                raise DataError(
-                    f"{table.path.name} line {table.lines[r]}, column {table.names[c]!r}: "
-                    f"{what}; {fix}"
-                ) from None
+                raise cell_error(table.path, table.lines[r], table.names[c], cell,
+                                 missing=missing, decimal=decimal, hint=hint) from None
     return values
+
+
+def first_bad_cell(path: str | Path, columns: list[str], *, delimiter: str | None = None,
+                   start: int = 0, decimal: str = ".") -> DataError | None:
+    """The error :func:`numeric` gives for the named ``columns`` of a text table, found by
+    reading the file line by line (bounded memory, for files too large to hold as strings).
+
+    The rules are :func:`read_table`'s (empty and ``#`` lines skipped, the header, the
+    delimiter guessed from the first kept line unless given, quotes, trailing delimiters,
+    compressed files). Returns the :class:`~sysid.DataError` of the first data row from
+    the ``start``-th (counting from 0, the header excluded) that has the wrong number of
+    fields or a cell in ``columns`` that is not a finite number (empty, ``nan`` and
+    ``inf`` included), naming its file line and column; ``None`` when there is none or a
+    column is not in the header.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from sysid.data.table import first_bad_cell
+    >>> path = os.path.join(tempfile.mkdtemp(), "d.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("u,y\\n1,2\\n\\n# a comment\\n3,nan\\n")
+    >>> str(first_bad_cell(path, ["u", "y"])).split(";")[0]
+    "d.csv line 5, column 'y': 'nan' is not a finite number"
+    >>> first_bad_cell(path, ["u"]) is None
+    True
+    """
+    path = Path(path)
+    try:
+        with _open_text(path) as f:
+            return _scan(path, f, columns, delimiter, start, decimal)
+    except (OSError, EOFError, lzma.LZMAError):
+        return None
+
+
+def first_line(path: str | Path) -> tuple[int, str]:
+    """The file line number and text of a table's first line that is neither empty nor a
+    ``#`` comment (its header, or its first row), read without reading the rest; ``(0,
+    "")`` for a file without one."""
+    with _open_text(Path(path)) as f:
+        return next(_kept(line.rstrip("\r\n") for line in f), (0, ""))
+
+
+def _open_text(path: Path) -> IO[str]:
+    opener = _STREAM.get(path.suffix.lower())
+    if opener is not None:
+        return opener(path, "rt", encoding="utf-8-sig", errors="replace")  # type: ignore
+    return open(path, encoding="utf-8-sig", errors="replace")  # noqa: SIM115 (the caller's with)
+
+
+def _scan(path: Path, f: IO[str], columns: list[str], delimiter: str | None, start: int,
+          decimal: str) -> DataError | None:
+    kept = _kept(line.rstrip("\r\n") for line in f)
+    first = next(kept, None)
+    if first is None:
+        return None
+    split = splitter(delimiter or guess_delimiter(first[1], decimal))
+    names, headerless = _header(split(first[1]), decimal)
+    if any(c not in names for c in columns):
+        return None
+    cols = [names.index(c) for c in columns]
+    body = itertools.chain([first], kept) if headerless else kept
+    for k, line in itertools.islice(body, start, None):
+        try:
+            cells = _fields(path, k, split(line), len(names))
+        except DataError as e:
+            return e
+        for c in cols:
+            if not is_finite(cells[c], decimal):
+                return cell_error(path, k, names[c], cells[c], decimal=decimal)
+    return None
