@@ -37,6 +37,50 @@ def test_existing_interface_kept() -> None:
     assert sysid.IOData(u, y).dt == 1.0
 
 
+def test_single_precision_stamps_far_from_zero_are_rounding_not_jitter(tmp_path) -> None:
+    # float32 seconds near 1e4 are 0.98 ms apart: at dt = 10 ms their spacings read 9.77 and
+    # 10.74 ms, and the record was refused as "irregular sampling: a gap" (from_raw,
+    # from_pandas, from_csv alike); two units of the stamps' own resolution are rounding
+    pd = pytest.importorskip("pandas")
+    n = 500
+    y = np.random.default_rng(0).standard_normal(n)
+    t = (1e4 + np.arange(n) * 0.01).astype(np.float32)
+    assert sysid.IOData.from_raw(None, y, time=t).dt == 0.01
+    assert sysid.IOData(y=y, time=t).dt == 0.01
+    t5 = (1e5 + np.arange(n) * 0.1).astype(np.float32)      # 7.8 ms resolution, dt 0.1 s
+    d = sysid.IOData.from_pandas(pd.DataFrame({"t": t5, "y": y}), outputs=["y"], time="t")
+    assert d.dt == 0.1 and d.time[0] == pytest.approx(1e5, abs=0.01)
+    path = tmp_path / "log.csv"                  # float32 stamps written in full (float64)
+    path.write_text("time,y\n" + "".join(f"{float(a)!r},{float(b)!r}\n" for a, b in zip(t, y)))
+    assert sysid.IOData.from_csv(path, outputs=["y"]).dt == 0.01
+    # real jitter beyond the rounding is still refused: 3 ms on 10 ms, 1 ms resolution
+    bad = t.copy()
+    bad[200:] += np.float32(0.003)
+    with pytest.raises(DataError, match="irregular sampling: (jitter|a gap) at sample 200"):
+        sysid.IOData.from_raw(None, y, time=bad)
+    # and double-precision stamps far from zero keep their fine resolution
+    t64 = 1.7e9 + np.arange(n) * 0.01
+    assert sysid.sample_time(t64) == 0.01
+    with pytest.raises(DataError, match="jitter at sample 200"):
+        sysid.sample_time(np.r_[t64[:200], t64[200:] - 0.002])
+
+
+@pytest.mark.parametrize("start, dt", [(1e5, 1e-3), (1.7e9, 0.01), (3e3, 1e-3)])
+def test_stamps_too_coarse_for_the_sample_time_name_the_resolution(start, dt) -> None:
+    # float32 seconds near 1e5 are 7.8 ms apart, Unix seconds 128 s: a 1 ms (10 ms) record
+    # was "time repeats at sample 1", which said to remove duplicates; near 3000 s (0.24 ms)
+    # "irregular sampling"
+    n = 500
+    t = (np.float64(start) + np.arange(n) * dt).astype(np.float32)
+    y = np.zeros(n)
+    with pytest.raises(DataError, match=r"stored as float32 .* apart at best.*float64.*"
+                                        r"relative to the first stamp"):
+        sysid.IOData.from_raw(None, y, time=t)
+    # the same stamps relative to the first (computed in float64), then float32, are fine
+    rel = (np.float64(start) + np.arange(n) * dt - start).astype(np.float32)
+    assert sysid.IOData.from_raw(None, y, time=rel).dt == dt
+
+
 def test_time_vector_gives_dt_and_start() -> None:
     t = 3.0 + 0.02 * np.arange(100)
     d = sysid.IOData(u=np.ones(100), y=np.ones(100), time=t)

@@ -181,7 +181,7 @@ def from_raw(
         t = np.asarray(time, dtype=float).ravel()
         if t.size != ya.shape[0]:
             raise ShapeError(f"time has {t.size} instants but y has {ya.shape[0]} samples")
-        h = sample_time(t)
+        h = sample_time(np.asarray(time).ravel())  # in its own type: its resolution
         if dt is not None and abs(dt - h) > 0.01 * h:
             raise DataError(f"dt = {dt} disagrees with the time vector (median {h:g} s)")
         # a dt that agrees is kept (1/60, where the time vector reads 0.0166666666667)

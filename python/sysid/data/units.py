@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import DataError, NonFiniteError, ShapeError
 
-__all__ = ["check_unit", "sample_time"]
+__all__ = ["check_unit", "sample_time", "stamp_resolution"]
 
 
 # --------------------------------------------------------------------------------------------
@@ -81,6 +81,49 @@ def check_unit(unit: Any, channel: str = "channel") -> str:
 # --------------------------------------------------------------------------------------------
 
 
+_COARSEST = 0.1  # the coarsest stamp resolution accepted, as a fraction of the spacing
+
+
+def stamp_resolution(raw: np.ndarray, t: np.ndarray) -> tuple[str, float]:
+    """The floating-point type time stamps were stored in and its resolution at their
+    largest magnitude (``np.spacing`` in that type).
+
+    The type is the array's own when it is a floating type narrower than float64, float32
+    when every stamp is a float32 value (float32 stamps read back through float64: a CSV
+    column, a DataFrame), else float64.
+
+    Parameters
+    ----------
+    raw : numpy.ndarray
+        The time stamps as given.
+    t : numpy.ndarray
+        The same as float64, finite.
+
+    Returns
+    -------
+    tuple of (str, float)
+        The type's name and the spacing of its representable numbers at ``max |t|``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.data.units import stamp_resolution
+    >>> t = np.float32(1e4) + np.arange(5, dtype=np.float32) * np.float32(0.01)
+    >>> stamp_resolution(t, t.astype(float))
+    ('float32', 0.0009765625)
+    >>> stamp_resolution(t.astype(float), t.astype(float))[0]
+    'float32'
+    """
+    if raw.dtype.kind == "f" and raw.dtype.itemsize < 8:
+        dtype = raw.dtype.type
+    else:
+        with np.errstate(over="ignore"):
+            single = bool(np.all(t.astype(np.float32) == t))
+        dtype = np.float32 if single else np.float64
+    top = float(np.max(np.abs(t)))
+    return np.dtype(dtype).name, float(np.spacing(dtype(top)))
+
+
 def sample_time(time: Any, *, rtol: float = 0.01) -> float:
     """The sample time of a time vector: its mean spacing, after checking it is uniform.
 
@@ -89,7 +132,10 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
     time : array_like
         Sample instants in seconds, 1-D, at least two.
     rtol : float
-        Largest accepted relative deviation of any spacing from the median spacing.
+        Largest accepted relative deviation of any spacing from the median spacing, beyond
+        the rounding of the stamps: two units of their floating-point resolution at their
+        magnitude (``np.spacing`` in their type, see :func:`stamp_resolution`) are rounding,
+        not jitter (float32 seconds near 1e4 are 0.98 ms apart).
 
     Returns
     -------
@@ -104,7 +150,10 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
     DataError
         If the vector repeats or goes back in time, or has gaps or jitter beyond ``rtol``
         (the message names the first offending sample and suggests
-        :meth:`IOData.from_irregular` to resample onto a uniform grid).
+        :meth:`IOData.from_irregular` to resample onto a uniform grid); or if the stamps'
+        resolution is coarser than a tenth of their spacing (float32 stamps far from zero,
+        such as Unix seconds: the message says to store them as float64 or relative to the
+        first stamp).
 
     Examples
     --------
@@ -114,23 +163,49 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
     >>> sysid.sample_time((np.arange(300) * 0.1).astype(np.float32))
     0.1
     """
-    t = np.asarray(time, dtype=float)
+    raw = np.asarray(time)
+    t = np.asarray(raw, dtype=float)
     if t.ndim != 1 or t.size < 2:
         raise ShapeError(f"time must be a 1-D vector of at least 2 instants, got shape {t.shape}")
     if not np.isfinite(t).all():
         i = int(np.flatnonzero(~np.isfinite(t))[0])
         raise NonFiniteError(f"time has a non-finite value at sample {i}")
+    kind, ulp = stamp_resolution(raw, t)
+    span = float(t[-1] - t[0]) / (t.size - 1)
     d = np.diff(t)
+    pos = d[d > 0]
+    # stamps too coarse to resolve the spacing: their mean spacing within a few units of
+    # their resolution, or (all rounded together) repeats between steps of whole units
+    fix = ("Store the time as float64, or relative to the first stamp (t - t[0], computed in "
+           "float64 before any conversion to float32), or pass dt=... and leave the time out")
+    coarse = (ulp > _COARSEST * span if span > 0 else raw.dtype.kind == "f"
+              and raw.dtype.itemsize < 8) or (
+        bool(np.any(d == 0)) and pos.size > 0 and ulp > _COARSEST * float(np.min(pos)))
+    if coarse:
+        raise DataError(
+            f"time stamps near {np.max(np.abs(t)):g} s stored as {kind} are {ulp:g} s apart at "
+            f"best (the resolution of {kind} there), more than a tenth of the sample spacing "
+            f"({span:g} s on average): rounding at that resolution cannot be told from jitter, "
+            f"repeats or gaps, and the sample time cannot be read off them. {fix}"
+        )
     bad = np.flatnonzero(d <= 0)
     if bad.size:
         i = int(bad[0])
         what = "repeats" if d[i] == 0 else "goes back"
+        # every stamp equal and every one a float32 value: perhaps float32 stamps all
+        # rounded to one value (Unix seconds: 128 s apart)
+        hint = (f"; if the stamps were stored as {kind}, they are {ulp:g} s apart at best "
+                f"there, which may have merged them: {fix[0].lower()}{fix[1:]}"
+                if span == 0 and kind != "float64" else "")
         raise DataError(
             f"time {what} at sample {i + 1} (t[{i}] = {t[i]:g}, t[{i + 1}] = {t[i + 1]:g}; "
             f"{bad.size} such place(s)); remove duplicate samples or sort the record first"
+            f"{hint}"
         )
     h = float(np.median(d))
-    dev = np.abs(d - h) > rtol * h
+    # each spacing is a difference of two rounded stamps (off by up to one unit of their
+    # resolution), and so is the median: that much is rounding, not jitter
+    dev = np.abs(d - h) > rtol * h + 2 * ulp
     if dev.any():
         i = int(np.flatnonzero(dev)[0])
         kind = "a gap" if d[i] > h else "jitter"
@@ -145,9 +220,8 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
     h = float(t[-1] - t[0]) / (t.size - 1)
     # the shortest decimal the instants cannot tell from h (their rounding: float32 when
     # every instant is a float32 value), else the 12-digit one within 1e-9 (summed steps)
-    with np.errstate(over="ignore"):
-        single = bool(np.all(t.astype(np.float32) == t))
-    eps = np.finfo(np.float32 if single else np.float64).eps
+    eps = np.finfo(np.float32 if kind == "float32" else
+                   raw.dtype if kind == "float16" else np.float64).eps
     res = 2 * eps * max(abs(t[0]), abs(t[-1])) / (t.size - 1)
     for digits in range(1, 16):
         r = float(f"{h:.{digits}g}")

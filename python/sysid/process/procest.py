@@ -258,11 +258,47 @@ def _from_tf(t: ProcessType, a: np.ndarray, b: np.ndarray) -> dict[str, float]:
         if t.poles == 3:
             out["Tp3"] = 1.0 / max(abs(p[rest[0]]), 1e-9) if rest else 1.0
     else:
+        tps = _distinct([1.0 / max(abs(p[k]), 1e-9) for k in range(t.poles)])
         for k in range(t.poles):
-            out[f"Tp{k + 1}"] = 1.0 / max(abs(p[k]), 1e-9)
+            out[f"Tp{k + 1}"] = tps[k]
     if t.zero:
         out["Tz"] = float(b[0] / b[1]) if b.size > 1 and b[1] != 0 else 0.0
     return out
+
+
+_SPLIT = 1.25
+
+
+def _distinct(tps: list[float]) -> list[float]:
+    """Real time constants to start from (slowest first), no two of them equal.
+
+    A complex pair read as two real poles (``1 / |p|`` each: SRIVC found an oscillating
+    response for a structure without ``U``) gives ``Tp1 == Tp2``. The output-error cost is
+    symmetric in the two, so its gradient never separates them: every step keeps them
+    equal, and the sampled model there is a double pole, a defective ``A`` on which the
+    search's sensitivities lose all accuracy (the Gauss-Newton matrix overflows and the fit
+    raised, whatever ``max_iter``). Equal time constants (to 1e-6) are spread geometrically
+    about their value (ratio ``_SPLIT``, the product kept), so the search starts off the
+    symmetric set; distinct ones are kept.
+
+    Examples
+    --------
+    >>> from sysid.process.procest import _distinct
+    >>> [round(x, 4) for x in _distinct([0.5, 0.5, 3.0])]
+    [3.0, 0.559, 0.4472]
+    """
+    out = sorted(float(x) for x in tps)
+    k = 0
+    while k < len(out):
+        j = k + 1
+        while j < len(out) and out[j] <= out[j - 1] * (1 + 1e-6):
+            j += 1
+        if j - k > 1:  # equal ones: spread evenly in log about their geometric mean
+            g = float(np.exp(np.mean(np.log(out[k:j]))))
+            mid = (j - k - 1) / 2
+            out[k:j] = [g * _SPLIT ** (i - mid) for i in range(j - k)]
+        k = j
+    return out[::-1]
 
 
 def _pair(t: ProcessType, names: list[str], start: dict[str, float], fixed: dict[str, float],
