@@ -76,6 +76,11 @@ pub(crate) fn modal_form(abar: MatRef<'_, f64>) -> Option<Modal> {
         return None;
     }
     let ti = t.partial_piv_lu().inverse();
+    // a defective A (a double pole: parallel eigenvectors) gives a singular T: its inverse
+    // holds inf or NaN, which the norms below (f64::max skips NaN) would not show
+    if ti.has_nan() || !ti.is_all_finite() {
+        return None;
+    }
     let norm1 = |m: &Mat<f64>| {
         (0..n)
             .map(|j| (0..n).map(|i| m[(i, j)].abs()).sum::<f64>())
@@ -88,7 +93,7 @@ pub(crate) fn modal_form(abar: MatRef<'_, f64>) -> Option<Modal> {
     let check = &ti * abar * &t - &lam;
     let anorm = abar.norm_max().max(1e-300);
     // NaN in the check counts as a failure
-    let accurate = check.norm_max() <= 1e-11 * anorm * cond;
+    let accurate = !check.has_nan() && check.norm_max() <= 1e-11 * anorm * cond;
     if !accurate {
         return None;
     }

@@ -742,3 +742,38 @@ fn perturbed_any(sys: &StateSpace, eps: f64, seed: u64) -> StateSpace {
     )
     .unwrap()
 }
+
+/// A defective `A` (a double pole, as procest's two real time constants reach on an
+/// oscillating response) has no modal form: before, its singular eigenvector matrix was
+/// inverted to inf/NaN, the norms that guard the condition skipped the NaN, and every
+/// sensitivity of the fit came out NaN ("the Gauss-Newton matrix at the estimate is not
+/// finite").
+#[test]
+fn a_defective_a_has_no_modal_form_and_finite_sensitivities() {
+    // the sampled P2 model where procest's search ended: eigenvalues 0.832 twice
+    let a = mat![
+        [0.9850187721705859, 0.041598632923975684],
+        [-0.5630741029097744, 0.6789265447884414]
+    ];
+    let jordan = mat![[0.8, 1.0], [0.0, 0.8]];
+    for m in [&a, &jordan] {
+        assert!(super::modal::modal_form(m.as_ref()).is_none());
+    }
+    let sys = StateSpace::new(
+        jordan.clone(),
+        mat![[0.0], [1.0]],
+        mat![[1.0, 0.0]],
+        Mat::zeros(1, 1),
+    )
+    .unwrap();
+    let n = 400;
+    let u = Mat::<f64>::from_fn(n, 1, |t, _| if (t / 7) % 2 == 0 { 1.0 } else { -1.0 });
+    let y = Mat::<f64>::from_fn(n, 1, |t, _| ((t as f64) * 0.3).sin());
+    let views = vec![(u.as_ref(), y.as_ref())];
+    let o = options(Focus::Simulation, false, false, vec![InitialState::Zero], 7);
+    let k = Mat::<f64>::zeros(2, 1);
+    let mut pr = Predictor::new(&sys, Some(k.as_ref()), &views, &o).unwrap();
+    let th = pr.pack(&sys, k.as_ref(), &[vec![0.0, 0.0]]);
+    let ev = pr.evaluate(&th, true).unwrap();
+    assert!(ev.gauss_newton.as_ref().is_all_finite() && ev.cost.is_finite());
+}
