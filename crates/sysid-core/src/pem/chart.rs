@@ -201,13 +201,13 @@ pub(super) fn chart_modal(abar: MatRef<'_, f64>, chart: &Chart) -> Option<Modal>
     }
     let ti = t.partial_piv_lu().inverse();
     let cond = t.norm_max() * ti.norm_max() * 2.0;
-    if !cond.is_finite() || cond > 1e6 {
+    if ti.has_nan() || !ti.is_all_finite() || !cond.is_finite() || cond > 1e6 {
         return None;
     }
     let check = &ti * abar * &t - &lam;
     let anorm = abar.norm_max().max(1e-300);
     // NaN in the check counts as a failure
-    let accurate = check.norm_max() <= 1e-11 * anorm * cond;
+    let accurate = !check.has_nan() && check.norm_max() <= 1e-11 * anorm * cond;
     accurate.then_some(Modal { t, ti, lam, block })
 }
 

@@ -758,6 +758,8 @@ fn a_defective_a_has_no_modal_form_and_finite_sensitivities() {
     let jordan = mat![[0.8, 1.0], [0.0, 0.8]];
     for m in [&a, &jordan] {
         assert!(super::modal::modal_form(m.as_ref()).is_none());
+        // nor an eigendecomposition (modal analysis says it is defective)
+        assert!(crate::realization::modal::eigen_decomposition(m.as_ref()).is_err());
     }
     let sys = StateSpace::new(
         jordan.clone(),

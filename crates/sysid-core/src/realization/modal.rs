@@ -46,7 +46,12 @@ pub(crate) fn eigen_decomposition(a: MatRef<'_, f64>) -> Result<EigenDecompositi
             .fold(0.0, f64::max)
     };
     let cond = norm(&vectors) * norm(&inverse);
-    if !err.is_finite() || err > 1e-6 || cond.is_nan() || cond >= 1e12 {
+    // f64::max skips NaN: a singular eigenvector matrix (a defective A) inverts to NaN,
+    // which neither the residual nor the norms above would show
+    let nan = (0..n).any(|j| {
+        (0..n).any(|i| !inverse[(i, j)].re.is_finite() || !inverse[(i, j)].im.is_finite())
+    });
+    if nan || !err.is_finite() || err > 1e-6 || cond.is_nan() || cond >= 1e12 {
         return Err(SysidError::numerical(
             "eigendecomposition of A",
             "A is defective or nearly so (repeated poles without a full set of eigenvectors); \

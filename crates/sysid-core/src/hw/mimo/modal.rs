@@ -104,7 +104,7 @@ impl MimoHwProblem<'_> {
         if nh > 0 {
             let gi = g.partial_piv_lu().inverse();
             let cond = g.norm_max() * gi.norm_max();
-            if !cond.is_finite() || cond > MAX_CONDITION {
+            if !gi.is_all_finite() || !cond.is_finite() || cond > MAX_CONDITION {
                 return Ok(None);
             }
             let x = &rr * &gi; // free x held
