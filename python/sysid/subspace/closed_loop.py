@@ -46,8 +46,7 @@ class _Factorised(Protocol):
     future: int
     factor: Any
     scaled_factor: Any
-    _su: Any
-    _sy: Any
+    channel_scales: tuple[Any, Any]
     data: Any
     _svd: dict[Any, Any]
 
@@ -100,8 +99,7 @@ def closed_loop_fit(
     cache = est._svd
     if key not in cache:
         cache[key] = _sysid.ClosedLoopSubspace(est.scaled_factor, method, regularization,
-                                               float(ridge),
-                                               bool(feedthrough))
+                                               float(ridge), bool(feedthrough))
     sub = cache[key]
     selection = None
     if isinstance(order, str):
@@ -141,7 +139,7 @@ def closed_loop_fit(
         output_names=est.data.output_names,
         info=info,
     )
-    model = in_record_units(model, est._su, est._sy)  # fitted on the scaled factor
+    model = in_record_units(model, *est.channel_scales)  # fitted on the scaled factor
     warn_unstable(model, method, closed_loop=True)
     if kalman and res.get("predictor_stabilized"):
         _note_predictor(model, res)

@@ -250,10 +250,10 @@ class SubspaceEstimator:
         ``"correlation"``: fast, with the exact pass and a ``CompressionFallbackWarning``
         only when its Gram matrix is numerically singular. See docs/performance.md.
     scale : bool, optional
-        Divide every input and output by its root mean square before the compression and
-        return the model in the record's units (:mod:`sysid.subspace.scaling`): the estimate
-        is then the same whatever the channels' units. Default True; ``False`` computes in
-        the record's units, as SLICOT's ``IB01AD`` and MATLAB's ``n4sid`` do.
+        Fit with every input and output at unit root mean square (the record's factor scaled,
+        :mod:`sysid.subspace.scaling`) and return the model in the record's units: the
+        estimate is then the same whatever the channels' units. Default True; ``False``
+        computes in the record's units, as SLICOT's ``IB01AD`` does.
 
     Examples
     --------
@@ -384,6 +384,12 @@ class SubspaceEstimator:
             self._su = np.ones(self.factor.n_inputs)
             self._sy = np.ones(self.factor.n_outputs)
             self.scaled_factor = self.factor
+
+    @property
+    def channel_scales(self) -> tuple[np.ndarray, np.ndarray]:
+        """The inputs' and outputs' scales of the fits (their root mean squares with
+        ``scale=True``, ones without)."""
+        return self._su, self._sy
 
     def _subspace(self, method: str | None) -> Any:
         key = self.method if method is None else _method(method)
@@ -719,7 +725,7 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
     default) the order and ``D`` are chosen together by held-out simulation fit
     (``info["order_selection"]``, ``info["feedthrough_selection"]``). ``scale=False``
     computes in the record's units instead of on channels of unit root mean square
-    (:mod:`sysid.subspace.scaling`), as SLICOT and MATLAB do.
+    (:mod:`sysid.subspace.scaling`), as SLICOT's IB01AD does.
 
     Examples
     --------

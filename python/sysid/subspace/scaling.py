@@ -8,8 +8,8 @@ weigh every output's errors in its own units, so the estimate changes with them:
 displacement recorded in millimetres rather than metres takes over the fit. Computing on
 channels of unit root mean square makes the model the same whatever the units (up to
 rounding): an output recorded 1000 times larger gives an output matrix 1000 times larger and
-nothing else changes. SLICOT's ``IB01AD`` and MATLAB's ``n4sid`` compute in the record's
-units; ``SubspaceEstimator(data, scale=False)`` reproduces them.
+nothing else changes. SLICOT's ``IB01AD`` computes in the record's
+units; ``SubspaceEstimator(data, scale=False)`` reproduces it.
 """
 
 from __future__ import annotations
