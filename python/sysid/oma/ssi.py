@@ -110,8 +110,13 @@ def _systems(ys: list[np.ndarray], dt: float, orders: list[int], i: int,
     """``(A, C)`` per order and the singular values."""
     l = ys[0].shape[1]
     if method == "cov":
-        U, s = _cov_svd(ys, i)
-        return [_ac_from_observability(U, s, n, l) for n in orders], s
+        # on channels of unit root mean square, C back in the record's units: the modes do
+        # not depend on the channels' units (as SubspaceEstimator's scale=True for "data")
+        sy = np.sqrt(np.mean(np.vstack(ys) ** 2, axis=0))
+        sy = np.where((sy > 0) & np.isfinite(sy), sy, 1.0)
+        U, s = _cov_svd([y / sy for y in ys], i)
+        return [(A, C * sy[:, None]) for A, C in
+                (_ac_from_observability(U, s, n, l) for n in orders)], s
     from ..data.iodata import IOData
     from ..subspace.estimator import SubspaceEstimator
 
