@@ -121,3 +121,85 @@ def test_a_large_white_space_separated_file_is_read_as_a_small_one(tmp_path, mon
     code = cli.main(["identify", str(path), "--inputs", "u1,u2", "--outputs", "y", "--order",
                      "1", "--report", str(tmp_path / "rep"), "--quiet"])
     assert code == 0, capsys.readouterr().err
+
+
+def _identify(path, io: list[str], tmp_path) -> list[str]:
+    return ["identify", str(path), *io, "--order", "1", "--report", str(tmp_path / "rep")]
+
+
+@pytest.mark.parametrize("suffix", [".gz", ".bz2", ".xz"])
+def test_a_compressed_file_is_read_decompressed_whatever_its_size(tmp_path, monkeypatch,
+                                                                  capsys, suffix):
+    import bz2
+    import gzip
+    import lzma
+
+    z = _record()
+    plain = tmp_path / "d.csv"
+    np.savetxt(plain, z, delimiter=",", header="t,u1,u2,y", comments="", fmt="%.17g")
+    pack = {".gz": gzip.compress, ".bz2": bz2.compress, ".xz": lzma.compress}[suffix]
+    path = tmp_path / f"big.csv{suffix}"
+    path.write_bytes(pack(plain.read_bytes()))
+    np.testing.assert_array_equal(
+        cli.read_columns(path, ["y", "u1"], progress=False, block_size=4096), z[:, [3, 1]])
+    argv = _identify(path, ["--inputs", "u1,u2", "--outputs", "y"], tmp_path)
+    assert cli.main(argv) == 0  # small: in memory
+    memory = capsys.readouterr()
+    assert "in blocks" not in memory.err
+    # the size that counts is the text's: a file of less than STREAM_BYTES that holds more
+    monkeypatch.setattr(cli, "STREAM_BYTES", path.stat().st_size + 1)
+    assert path.stat().st_size < cli.STREAM_BYTES < plain.stat().st_size
+    assert cli.main(argv) == 0
+    streamed = capsys.readouterr()
+    assert "in blocks" in streamed.err
+    assert streamed.out == memory.out  # the same record, the same model
+
+
+@pytest.mark.parametrize("stream", [False, True])
+def test_a_zip_archive_is_refused_the_same_way_whatever_its_size(tmp_path, monkeypatch,
+                                                                 capsys, stream):
+    import zipfile
+
+    path = tmp_path / "big.zip"
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as f:
+        f.writestr("d.csv", "u,y\n" + "1,2\n" * 5000)
+    if stream:
+        monkeypatch.setattr(cli, "STREAM_BYTES", 0)
+    assert cli.main(_identify(path, ["--inputs", "u", "--outputs", "y"], tmp_path)) == 2
+    err = capsys.readouterr().err
+    assert "big.zip' is not a text table (binary content); a zip archive is not read: " \
+        "unzip it" in err
+
+
+def test_a_headerless_file_has_the_same_columns_whatever_its_size(tmp_path, monkeypatch,
+                                                                 capsys):
+    z = _record()
+    path = tmp_path / "big.csv"
+    np.savetxt(path, z, delimiter=",", fmt="%.17g", header="logger 7")  # "# logger 7" first
+    argv = _identify(path, ["--inputs", "1,2", "--outputs", "3", "--time", "0"], tmp_path)
+    assert cli.main(argv) == 0
+    memory = capsys.readouterr()
+    monkeypatch.setattr(cli, "STREAM_BYTES", 0)
+    assert cli.main(argv) == 0
+    streamed = capsys.readouterr()
+    assert "in blocks" in streamed.err and streamed.out == memory.out
+    # every row is data (the first one too), with a trailing delimiter, in any block
+    path.write_text("".join(",".join(f"{v:.17g}" for v in r) + ",\n" for r in z))
+    np.testing.assert_array_equal(
+        cli.read_columns(path, ["3", "0"], progress=False, block_size=2048), z[:, [3, 0]])
+    with pytest.raises(DataError, match=r"big\.csv: Column '4' .* does not exist"):
+        cli.read_columns(path, ["4"], progress=False)  # the empty field after the delimiter
+
+
+def test_a_headerless_file_names_a_bad_cell_as_in_memory(tmp_path, monkeypatch, capsys):
+    path = tmp_path / "big.csv"
+    line = _bad_file(path, "abc", 2500, preamble=False)
+    path.write_text(path.read_text().split("\n", 1)[1])  # no header: the lines move up one
+    argv = _identify(path, ["--inputs", "1,2", "--outputs", "3", "--quiet"], tmp_path)
+    assert cli.main(argv) == 2
+    in_memory = capsys.readouterr().err
+    assert f"big.csv line {line - 1}, column '2'" in in_memory
+    monkeypatch.setattr(cli, "STREAM_BYTES", 0)
+    monkeypatch.setattr(cli, "STREAM_BLOCK", 4096)
+    assert cli.main(argv) == 2
+    assert capsys.readouterr().err == in_memory

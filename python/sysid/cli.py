@@ -23,7 +23,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .data.iodata import IOData
-from .data.table import first_bad_cell, first_line, guess_delimiter, numeric, read_table, splitter
+from .data.table import decompressing, first_bad_cell, header, numeric, read_table, text_bytes
 from .errors import DataError, InsufficientDataError, OrderError, SysidError
 from .validation.crossval import MIN_BLOCK
 
@@ -303,7 +303,8 @@ def _check_report_dir(report: str | Path) -> None:
                         "directory name (it is created if missing)")
 
 
-#: CSV files larger than this are read by pyarrow's streaming reader, in blocks.
+#: CSV files holding more text than this (decompressed) are read by pyarrow's streaming
+#: reader, in blocks.
 STREAM_BYTES = 8 << 20
 #: Bytes per block of that reader (at least one line).
 STREAM_BLOCK = 16 << 20
@@ -340,7 +341,10 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
 
     CSV goes through pyarrow's streaming reader (``pyarrow.csv.open_csv``, blocks of
     ``block_size`` bytes, default :data:`STREAM_BLOCK` = 16 MB, only the named columns
-    converted, to float64) with a progress bar over the bytes (rate and time left); Parquet
+    converted, to float64) with a progress bar over the file's bytes (rate and time left);
+    a file ending in ``.gz``, ``.bz2``, ``.xz`` or ``.lzma`` is decompressed as it is read.
+    The columns are named as by :func:`read_csv` (``sysid.data.table.header``): a file whose
+    first line is all numbers has no header, and its columns are ``"0", "1", ...``. Parquet
     through ``ParquetFile.iter_batches`` with a bar over the rows. Only the requested
     columns are held in memory, as float64.
 
@@ -402,17 +406,23 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
     else:
         import pyarrow.csv as pacsv
 
-        skip, first = first_line(path)
-        delim = delimiter or guess_delimiter(first)
+        head = header(path, delimiter)
+        delim = head.delimiter
+        # a headerless file's first line is data: its names are read_table's "0", "1", ...
+        # (the trailing empty fields of a trailing delimiter named so as to be asked by none)
+        names = (head.names + [f"\0{i}" for i in range(len(head.names), head.width)]
+                 if head.headerless else None)
         rows = 0  # data rows read whole: the bad cell is in the block after them
         with Bar(path.stat().st_size, f"reading {path.name}", unit="B", unit_scale=True,
                  enabled=show(progress)) as bar:
-            src = _CountingFile(path, bar)
+            raw = _CountingFile(path, bar)
+            src = decompressing(path, raw)
             try:
                 reader = pacsv.open_csv(
                     src,
                     read_options=pacsv.ReadOptions(
-                        block_size=block_size or STREAM_BLOCK, skip_rows=max(skip - 1, 0)),
+                        block_size=block_size or STREAM_BLOCK, skip_rows=head.line - 1,
+                        column_names=names),
                     parse_options=pacsv.ParseOptions(delimiter=delim,
                                                      invalid_row_handler=_skip_comment),
                     convert_options=pacsv.ConvertOptions(
@@ -428,6 +438,7 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
                                 "and that every field is a number") from None
             finally:
                 src.close()
+                raw.close()
     return np.concatenate(parts) if parts else np.zeros((0, len(columns)))
 
 
@@ -438,11 +449,6 @@ def _bad_cell(path: Path, columns: list[str], delimiter: str, rows: int,
     else ``what`` (pyarrow's message)."""
     return (first_bad_cell(path, columns, delimiter=delimiter, start=rows)
             or DataError(f"{path.name}: {what} (after data row {rows})"))
-
-
-def _delimiter(path: Path) -> str:
-    """The delimiter of a CSV file, guessed from its first line as ``read_table`` does."""
-    return guess_delimiter(first_line(path)[1])
 
 
 def _skip_comment(row: Any) -> str:
@@ -456,13 +462,14 @@ def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         list[str], list[int], list[int], np.ndarray, np.ndarray, np.ndarray | None]:
     """Names, input and output column indices, u, y and the time column if asked."""
     path = Path(args.data)
-    # white-space separated files go to read_table (pyarrow splits on one character)
+    # the size that counts is the text's, decompressed; white-space separated files go to
+    # read_table (pyarrow splits on one character)
     big = path.is_file() and (path.suffix.lower() in (".parquet", ".pq")
-                              or (path.stat().st_size > STREAM_BYTES
-                                  and (args.delimiter or _delimiter(path)) not in (" ", "\t")))
+                              or (text_bytes(path, STREAM_BYTES) > STREAM_BYTES
+                                  and header(path, args.delimiter).delimiter not in (" ", "\t")))
     if big:
         say(f"reading {args.data} in blocks")
-        names = _header(path)
+        names = _header(path, args.delimiter)
         ui = _columns(args.inputs, names, "inputs") if args.inputs else []
         yi = _columns(args.outputs, names, "outputs")
         ti = [_columns(args.time, names, "times")[0]] if args.time is not None else []
@@ -491,13 +498,14 @@ def _bars(args: argparse.Namespace) -> bool | None:
     return True if args.progress else False if args.quiet else None
 
 
-def _header(path: Path) -> list[str]:
+def _header(path: Path, delimiter: str | None) -> list[str]:
+    """The column names of a file read in blocks (a text table's as ``read_table`` names
+    them: ``"0", "1", ...`` without a header)."""
     if path.suffix.lower() in (".parquet", ".pq"):
         import pyarrow.parquet as pq
 
         return list(pq.ParquetFile(path).schema_arrow.names)
-    first = first_line(path)[1]
-    return splitter(guess_delimiter(first))(first)
+    return header(path, delimiter).names
 
 
 def _identify(args: argparse.Namespace) -> int:

@@ -6,9 +6,10 @@ dataframe partitioned by record id). :func:`load` turns a source into an ``IODat
 worker, so a corrupt file fails there, as an error row, not in the caller.
 
 A fit takes its record whole, in memory (``fit(IOData)``, and the row's fit % simulates
-the model over it), so a file is read whole too; of a Parquet file only the columns named
-by ``inputs``, ``outputs`` and the time column are read, after their size is checked
-against :data:`MAX_RECORD_BYTES` and the memory available (:func:`check_record_size`).
+the model over it), so a file is read whole too; but only the columns named by ``inputs``,
+``outputs`` and the time column are read, after their size is checked against
+:data:`MAX_RECORD_BYTES` and the memory available (:func:`check_record_size`): a Parquet
+file's rows from its metadata, a text table's bounded by its lines, counted first.
 """
 
 from __future__ import annotations
@@ -87,10 +88,7 @@ def load(source: Any, cols: Columns, rid: str) -> IOData:
         path = Path(source)
         if path.suffix.lower() in (".parquet", ".pq"):
             return _parquet_record(path, cols)
-        from ..cli import read_csv
-
-        names, values = read_csv(path)
-        return cols.record(names, values, path.name)
+        return _text_record(path, cols)
     if hasattr(source, "columns"):  # one record of a dataframe
         return _frame_record(source, cols, f"record {rid}")
     if isinstance(source, tuple) and len(source) == 2:
@@ -115,10 +113,11 @@ def available_memory() -> int | None:
         return None
 
 
-def check_record_size(what: str, rows: int, columns: int) -> None:
+def check_record_size(what: str, rows: int, columns: int, *, at_most: bool = False) -> None:
     """Refuse a record of ``rows`` by ``columns`` float64 values larger than
     :data:`MAX_RECORD_BYTES` or :data:`MEMORY_SHARE` of the available memory, before it is
-    read: the error names the record, its size and the fix.
+    read: the error names the record, its size and the fix. ``at_most``: ``rows`` is a bound
+    (a text file's lines), and the error says so.
 
     Examples
     --------
@@ -138,11 +137,30 @@ def check_record_size(what: str, rows: int, columns: int) -> None:
                "fit holds copies of the record)")
     if need > limit:
         raise DataError(
-            f"{what}: {rows} rows x {columns} columns need {need / 2**30:.1f} GiB as float64, "
-            f"more than {why}; identify_many fits each record in memory: cut the record "
-            "into shorter ones, or compress it in blocks with sysid.compress_stream(path, "
-            "past, input_columns=..., output_columns=...) and fit "
+            f"{what}: {'at most ' if at_most else ''}{rows} rows x {columns} columns need "
+            f"{need / 2**30:.1f} GiB as float64, more than {why}; identify_many fits each "
+            "record in memory: cut the record into shorter ones, or compress it in blocks "
+            "with sysid.compress_stream(path, past, input_columns=..., output_columns=...) "
+            "and fit "
             "SubspaceEstimator.from_factor")
+
+
+def _text_record(path: Path, cols: Columns) -> IOData:
+    """A text table's record (CSV, semicolon, tab or white-space separated, compressed or
+    not; the rules of :func:`sysid.cli.read_csv`): only the columns it is made of, read line
+    by line into an array of as many rows as the file has lines, after that size is checked
+    (the lines are counted first, in blocks; no row is held before)."""
+    from ..data.table import count_lines, header, read_named, text_bytes
+
+    if not path.is_file():
+        raise DataError(f"no data file at {str(path)!r}")
+    text_bytes(path, 0)  # refuses a file that is not text, as read_csv does
+    head = header(path)
+    cols.check(head.names, path.name)
+    use = list(dict.fromkeys(cols.wanted()))
+    rows = max(count_lines(path) - (head.line - head.headerless), 0)
+    check_record_size(path.name, rows, len(use), at_most=True)
+    return cols.record(use, read_named(path, use, rows, delimiter=head.delimiter), path.name)
 
 
 def _parquet_record(path: Path, cols: Columns) -> IOData:

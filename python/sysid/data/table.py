@@ -14,6 +14,7 @@ import gzip
 import itertools
 import lzma
 import math
+import zlib
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import IO, NamedTuple
@@ -27,6 +28,21 @@ __all__: list[str] = []
 _OPEN = {".gz": gzip.decompress, ".bz2": bz2.decompress, ".xz": lzma.decompress,
          ".lzma": lzma.decompress}
 _STREAM = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open, ".lzma": lzma.open}
+#: What a damaged or foreign compressed file raises while it is decompressed.
+_UNREADABLE = (OSError, EOFError, lzma.LZMAError, zlib.error)
+#: Bytes at the start of a file looked at for NUL bytes (binary content).
+_SNIFF = 65536
+
+
+class Header(NamedTuple):
+    """A table's first kept line: column names, whether it is data, its file line, the
+    delimiter and its number of fields (trailing empty ones included)."""
+
+    names: list[str]
+    headerless: bool
+    line: int
+    delimiter: str
+    width: int
 
 
 class Table(NamedTuple):
@@ -141,14 +157,11 @@ def read_table(path: str | Path, delimiter: str | None = None, *,
     try:
         if unpack is not None:
             raw = unpack(raw)
-        if b"\0" in raw[:65536]:
+        if b"\0" in raw[:_SNIFF]:
             raise UnicodeDecodeError("utf-8", raw[:1], 0, 1, "NUL byte")
         text = raw.decode("utf-8-sig")
-    except (UnicodeDecodeError, OSError, EOFError, lzma.LZMAError):
-        raise DataError(
-            f"{str(path)!r} is not a text table (binary content); give a CSV or whitespace-"
-            "separated text file with one column per channel"
-        ) from None
+    except (UnicodeDecodeError, *_UNREADABLE):
+        raise _binary(path) from None
     numbered = list(_kept(text.splitlines()))
     if not numbered:
         raise DataError(f"{str(path)!r} is empty")
@@ -256,6 +269,169 @@ def first_line(path: str | Path) -> tuple[int, str]:
     "")`` for a file without one."""
     with _open_text(Path(path)) as f:
         return next(_kept(line.rstrip("\r\n") for line in f), (0, ""))
+
+
+def _binary(path: Path) -> DataError:
+    """The error for a file that is not a text table (or not one compressed as its suffix
+    says)."""
+    fix = ("give a CSV or whitespace-separated text file with one column per channel"
+           if path.suffix.lower() != ".zip" else "a zip archive is not read: unzip it, or "
+           "compress the table alone with gzip (.gz), bzip2 (.bz2) or xz (.xz)")
+    return DataError(f"{str(path)!r} is not a text table (binary content); {fix}")
+
+
+def open_bytes(path: str | Path) -> IO[bytes]:
+    """A table file's bytes, decompressed when its name ends in ``.gz``, ``.bz2``, ``.xz``
+    or ``.lzma`` (as :func:`read_table` reads it), as a binary stream for the caller's
+    ``with``."""
+    path = Path(path)
+    opener = _STREAM.get(path.suffix.lower())
+    if opener is None:
+        return open(path, "rb")  # noqa: SIM115 (the caller's with)
+    return opener(path, "rb")  # type: ignore[no-any-return]
+
+
+def decompressing(path: str | Path, raw: IO[bytes]) -> IO[bytes]:
+    """``raw`` (the bytes of the file ``path``, read through another stream: a progress
+    counter) decompressed as :func:`open_bytes` does; ``raw`` itself for a plain file.
+    Closing the result leaves ``raw`` open."""
+    opener = _STREAM.get(Path(path).suffix.lower())
+    return raw if opener is None else opener(raw, "rb")  # type: ignore[no-any-return]
+
+
+def text_bytes(path: str | Path, limit: int) -> int:
+    """The bytes of text a table file holds once decompressed (what the readers read, not
+    the file's size), counted up to ``limit + 1`` and no further.
+
+    Raises the :class:`~sysid.DataError` of :func:`read_table` for a file that is not text
+    (a NUL byte among its first 64 KiB, a damaged or foreign compressed stream, a zip
+    archive), so that every reader refuses it the same way.
+
+    Examples
+    --------
+    >>> import gzip, os, tempfile
+    >>> from sysid.data.table import text_bytes
+    >>> path = os.path.join(tempfile.mkdtemp(), "d.csv.gz")
+    >>> with gzip.open(path, "wt") as f:
+    ...     _ = f.write("u,y\\n" + "1,2\\n" * 1000)
+    >>> os.path.getsize(path) < 100, text_bytes(path, 10**6), text_bytes(path, 100)
+    (True, 4004, 101)
+    """
+    path = Path(path)
+    try:
+        with open_bytes(path) as f:
+            head = f.read(_SNIFF)
+            if b"\0" in head:
+                raise _binary(path)
+            n = len(head)
+            while n <= limit:
+                block = f.read(min(1 << 20, limit + 1 - n))
+                if not block:
+                    break
+                n += len(block)
+    except _UNREADABLE:
+        raise _binary(path) from None
+    return min(n, limit + 1)
+
+
+def count_lines(path: str | Path) -> int:
+    """The lines of a table file once decompressed (a last line without a newline counted),
+    read in blocks of 1 MiB: a bound on its rows known before any row is held.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from sysid.data.table import count_lines
+    >>> path = os.path.join(tempfile.mkdtemp(), "d.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("u,y\\n1,2\\n3,4")
+    >>> count_lines(path)
+    3
+    """
+    path = Path(path)
+    n, last = 0, b"\n"
+    try:
+        with open_bytes(path) as f:
+            while block := f.read(1 << 20):
+                n, last = n + block.count(b"\n"), block[-1:]
+    except _UNREADABLE:
+        raise _binary(path) from None
+    return n + (last != b"\n")
+
+
+def header(path: str | Path, delimiter: str | None = None, *,
+           decimal: str = ".") -> Header:
+    """A table's column names, read from its first kept line by :func:`read_table`'s rules
+    without reading the rest: a header of names, or, when every field of that line is a
+    number, a first data row (the columns then named ``"0", "1", ...``). One rule for every
+    reader, so that a column has the same name whatever the file's size.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from sysid.data.table import header
+    >>> path = os.path.join(tempfile.mkdtemp(), "d.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("# no header\\n1.5,2,\\n3,4,\\n")
+    >>> header(path)
+    Header(names=['0', '1'], headerless=True, line=2, delimiter=',', width=3)
+    """
+    path = Path(path)
+    line, text = first_line(path)
+    if not line:
+        raise DataError(f"{str(path)!r} is empty")
+    delim = delimiter or guess_delimiter(text, decimal)
+    fields = splitter(delim)(text)
+    names, headerless = _header(list(fields), decimal)
+    return Header(names, headerless, line, delim, len(fields))
+
+
+def read_named(path: str | Path, columns: list[str], rows: int, *,
+               delimiter: str | None = None) -> np.ndarray:
+    """The named columns of a text table as float64, shape ``(data rows, len(columns))``,
+    read line by line into an array of ``rows`` rows at most (a bound the caller has
+    checked, e.g. :func:`count_lines`): the other columns are never converted or held.
+
+    The rules and errors are :func:`read_table` and :func:`numeric`'s: a cell that is not
+    a finite number is named by file line and column, a missing column by the header.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from sysid.data.table import read_named
+    >>> path = os.path.join(tempfile.mkdtemp(), "d.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("t,note,y\\n0,start,2\\n1,,4\\n")
+    >>> read_named(path, ["y", "t"], 3)
+    array([[2., 0.],
+           [4., 1.]])
+    """
+    path = Path(path)
+    head = header(path, delimiter)
+    missing = [c for c in columns if c not in head.names]
+    if missing:
+        raise DataError(f"{path.name}: no column(s) {missing}; it has {head.names}")
+    cols = [head.names.index(c) for c in columns]
+    split, n = splitter(head.delimiter), len(head.names)
+    out = np.empty((rows, len(cols)))
+    r = 0
+    with _open_text(path) as f:
+        kept = _kept(line.rstrip("\r\n") for line in f)
+        if not head.headerless:
+            next(kept)
+        for k, line in kept:
+            cells = _fields(path, k, split(line), n)
+            if r == rows:
+                raise DataError(f"{path.name}: more than the {rows} rows counted; the file "
+                                "changed while it was read")
+            for j, c in enumerate(cols):
+                if not is_finite(cells[c]):
+                    raise cell_error(path, k, head.names[c], cells[c])
+                out[r, j] = float(cells[c])
+            r += 1
+    if r == 0:
+        raise DataError(f"{str(path)!r} has a header but no data rows")
+    return out[:r]
 
 
 def _open_text(path: Path) -> IO[str]:
