@@ -44,7 +44,9 @@ def test_only_the_records_columns_are_read(tmp_path):
             "print(pa.default_memory_pool().max_memory())")
     out = subprocess.run([sys.executable, "-c", code, str(path)], capture_output=True,
                          text=True, check=True, env={"PYTHONPATH": PYTHON, "PATH": ""})
-    assert int(out.stdout) < 4 * z.nbytes
+    # (a bound far from both: pyarrow's pool peaks at 1.2-1.4 MB between runs for the two
+    # columns; the file's 202 columns are 32 MB)
+    assert int(out.stdout) < 202 * z.shape[0] * 8 / 4
 
 
 def test_a_record_too_large_is_an_error_row_before_it_is_read(tmp_path, monkeypatch):
