@@ -1,0 +1,41 @@
+"""``identify`` gives the same model whatever the outputs' units: the subspace candidates
+compute on channels of unit root mean square, the refinements weigh each output by its
+scale, and the held-out scorer and ``compare`` fit the initial state with each output
+weighed by its spread. Before the subspace scaling, one output in units 1000 times smaller
+changed the candidates and so, on records like DaISy's CD player arm, the choice. (The
+inputs' units still move the refinements' search path a little: an input 100 times
+smaller changed a held-out fit from 72.9 % to 73.0 % here; the pem search is not scaled
+by them.)"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from scipy.signal import lfilter
+
+import sysid
+
+A = np.array([[0.9, 0.25, 0, 0], [-0.25, 0.9, 0, 0], [0, 0, 0.6, 0], [0, 0, 0, -0.4]])
+B = np.array([[1.0, 0.0], [0.0, 0.5], [0.7, -0.3], [0.2, 1.0]])
+C = np.array([[1.0, 0.0, 0.5, 0.0], [0.0, 0.8, 0.0, 1.0]])
+
+
+def test_identify_does_not_depend_on_the_outputs_units():
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((1500, 2))
+    v = lfilter([1.0], [1.0, -0.9], rng.standard_normal((1500, 2)), axis=0)
+    y = sysid.StateSpaceModel(A, B, C).simulate(u) + 0.3 * v
+    out = []
+    for ky in (np.ones(2), np.array([1.0, 1e3]), np.array([1e-2, 1.0])):
+        d = sysid.IOData(u=u, y=y * ky)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            r = sysid.identify(d, progress=False)
+            fit = sysid.compare(r.model, d).fit.ravel()
+        out.append((r.choice, fit, r.model.poles()))
+    for other in out[1:]:
+        assert other[0] == out[0][0]
+        np.testing.assert_allclose(other[1], out[0][1], atol=1e-6)
+        np.testing.assert_allclose(np.sort_complex(other[2]), np.sort_complex(out[0][2]),
+                                   atol=1e-7)
