@@ -36,7 +36,7 @@ from ..errors import DataError, NumericalError
 from .discretisation import expm, hold_blocks
 from .linear import transmission_zeros
 from .protocol import ModelMixin, TimeResponse, continuous_grid
-from .statespace import StateSpaceModel, ss_parameter_count
+from .statespace import StateSpaceModel, minimal_dcgain, ss_parameter_count
 
 __all__ = ["ContinuousStateSpace", "SampledContinuous", "c2d", "d2c"]
 
@@ -147,6 +147,9 @@ class ContinuousStateSpace(ModelMixin):
         try:
             return self.freqresp([0.0])[0].real
         except np.linalg.LinAlgError:
+            gain = minimal_dcgain(self)
+            if gain is not None:
+                return gain
             zeros = [p for p in self.poles() if abs(p) < 1e-9]
             raise NumericalError(
                 f"the DC gain is infinite: the model has {len(zeros)} pole(s) at s = 0 (an "

@@ -1,0 +1,33 @@
+"""A sweep of the LTI analysis and continuous-time tools (issue 26): each test failed before
+its fix (the numbers in the comments are the old answers)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import sysid
+
+
+@pytest.mark.parametrize(("num", "den", "dt", "gain"), [
+    ([1.0, 0.0], [1.0, 1.0, 0.0], 0.0, 1.0),          # s / (s (s + 1)): was inf
+    ([1.0, 0.0], [1.0, 0.0], 0.0, 1.0),               # s / s: was inf
+    ([-1.0], [1.0, 0.0], 0.0, -np.inf),               # -1 / s: was +inf
+    ([1.0, -1.0], [1.0, -1.5, 0.5], 1.0, 2.0),        # (z - 1) / ((z - 1)(z - 0.5)): was inf
+    ([2.0], [1.0, -1.0], 1.0, np.inf),
+    ([-3.0], [1.0, 0.0, 0.0], 0.0, -np.inf),          # a double integrator
+])
+def test_transfer_function_dcgain_cancels_and_signs_integrators(num, den, dt, gain):
+    G = sysid.TransferFunction(num, den, dt=dt)
+    assert G.dcgain()[0, 0] == pytest.approx(gain)
+
+
+def test_statespace_dcgain_of_a_cancelled_integrator_is_finite():
+    # the realisation of s / (s^2 + s) has an unobservable pole at s = 0; its DC gain is 1,
+    # and dcgain() raised "the DC gain is infinite"
+    cont = sysid.TransferFunction([1.0, 0.0], [1.0, 1.0, 0.0]).to_statespace()
+    np.testing.assert_allclose(cont.dcgain(), [[1.0]])
+    disc = sysid.TransferFunction([1.0, -1.0], [1.0, -1.5, 0.5], dt=0.1).to_statespace()
+    np.testing.assert_allclose(disc.dcgain(), [[2.0]])
+    with pytest.raises(sysid.NumericalError, match="at s = 0"):
+        sysid.TransferFunction([1.0], [1.0, 0.0]).to_statespace().dcgain()
