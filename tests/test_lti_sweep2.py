@@ -31,3 +31,18 @@ def test_statespace_dcgain_of_a_cancelled_integrator_is_finite():
     np.testing.assert_allclose(disc.dcgain(), [[2.0]])
     with pytest.raises(sysid.NumericalError, match="at s = 0"):
         sysid.TransferFunction([1.0], [1.0, 0.0]).to_statespace().dcgain()
+
+
+def test_continuous_dcgain_std_after_d2c():
+    # ContinuousStateSpace.dcgain had no std argument (TypeError), though d2c carries the
+    # uncertainty over; the gain b / (1 - a) = 2 has the same std as the discrete model's
+    def build(t: np.ndarray) -> sysid.StateSpaceModel:
+        return sysid.StateSpaceModel([[t[0]]], [[t[1]]], [[1.0]], dt=0.1)
+
+    m = build(np.array([0.5, 1.0]))
+    m.uncertainty = sysid.ParameterUncertainty([0.5, 1.0], np.diag([1e-4, 4e-4]), build)
+    g, sd = sysid.d2c(m).dcgain(std=True)
+    np.testing.assert_allclose(g, [[2.0]])
+    theory = np.hypot(1 / 0.5 * 0.02, 1 / 0.5**2 * 0.01)
+    np.testing.assert_allclose(sd, [[theory]], rtol=1e-6)
+    np.testing.assert_allclose(sd, m.dcgain(std=True)[1], rtol=1e-6)

@@ -141,9 +141,15 @@ class ContinuousStateSpace(ModelMixin):
             out[i] = self.C @ np.linalg.solve(1j * wi * eye - self.A, self.B) + self.D
         return out
 
-    def dcgain(self) -> np.ndarray:
+    def dcgain(self, std: bool = False) -> Any:
         """``D - C A^{-1} B``, shape ``(noutputs, ninputs)``; a pole at ``s = 0`` (an
-        integrator) raises :class:`~sysid.NumericalError`, as for a discrete model."""
+        integrator) raises :class:`~sysid.NumericalError`, as for a discrete model. With
+        ``std=True`` (needs :attr:`uncertainty`, as :func:`d2c` carries over) the pair
+        ``(gain, std)``, first order."""
+        if std:
+            from .uncertainty import complex_std
+
+            return complex_std(self, lambda m: m.dcgain())
         try:
             return self.freqresp([0.0])[0].real
         except np.linalg.LinAlgError:
