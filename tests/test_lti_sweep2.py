@@ -46,3 +46,13 @@ def test_continuous_dcgain_std_after_d2c():
     theory = np.hypot(1 / 0.5 * 0.02, 1 / 0.5**2 * 0.01)
     np.testing.assert_allclose(sd, [[theory]], rtol=1e-6)
     np.testing.assert_allclose(sd, m.dcgain(std=True)[1], rtol=1e-6)
+
+
+@pytest.mark.parametrize("method", ["zoh", "foh"])
+def test_c2d_overflow_names_the_sample_time(method):
+    # was NonFiniteError("A has non-finite entries"), about the user's finite A
+    c = sysid.ContinuousStateSpace([[1000.0]], [[1.0]], [[1.0]])
+    with pytest.raises(sysid.NumericalError, match="dt = 10 s overflows.*smaller dt"):
+        sysid.c2d(c, 10.0, method)
+    with pytest.raises(sysid.NumericalError, match="overflows"):
+        c.simulate(np.ones(3), dt=10.0)

@@ -401,6 +401,32 @@ def _discretise(sys: ContinuousStateSpace, dt: float, method: str
     return Ad, Bd, Cd, D + 0.5 * C @ Bd, np.zeros((n, m))
 
 
+def _convertible(sys: Any, kind: type, purpose: str) -> Any:
+    """``sys`` as a ``kind`` (a transfer function through its ``to_statespace()``), or a
+    :class:`DataError` saying which conversion applies instead."""
+    if isinstance(sys, kind):
+        return sys
+    want = "continuous" if kind is ContinuousStateSpace else "discrete"
+    dt = getattr(sys, "dt", None)
+    if isinstance(sys, (ContinuousStateSpace, StateSpaceModel)) or (
+            dt is not None and bool(dt) != (want == "discrete")):
+        other = "d2c" if purpose == "c2d" else "c2d"
+        raise DataError(f"{purpose} needs a {want}-time model (a sysid.{kind.__name__} or a "
+                        f"TransferFunction), but this "
+                        f"{type(sys).__name__} has dt = {dt:g}; use {other} for the other "
+                        "direction")
+    if np.any(np.asarray(getattr(sys, "iodelay", 0.0)) > 0) and want == "continuous":
+        raise DataError(f"{purpose}: this {type(sys).__name__} has input-output delays, which "
+                        "a continuous state-space model cannot hold; sample it exactly, delays "
+                        "included, with model.to_statespace(dt) (its hold: model.hold)")
+    conv = getattr(sys, "to_statespace", None)
+    ss = conv() if conv is not None else None
+    if not isinstance(ss, kind):
+        raise DataError(f"{purpose} needs a sysid.{kind.__name__} (or a transfer function), "
+                        f"got {type(sys).__name__}")
+    return ss
+
+
 def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh") -> StateSpaceModel:
     """Discretise a continuous model: zero-order hold, first-order hold or Tustin.
 
