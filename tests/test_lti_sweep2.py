@@ -56,3 +56,15 @@ def test_c2d_overflow_names_the_sample_time(method):
         sysid.c2d(c, 10.0, method)
     with pytest.raises(sysid.NumericalError, match="overflows"):
         c.simulate(np.ones(3), dt=10.0)
+
+
+@pytest.mark.parametrize("n", [0, -3, 2.5])
+def test_continuous_responses_check_n_samples(n):
+    # -3 raised NumPy's "negative dimensions are not allowed", 0 "u has no samples",
+    # 2.5 was truncated to 2 samples
+    c = sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]])
+    G = sysid.TransferFunction([1.0], [1.0, 1.0], iodelay=0.2)
+    for call in (lambda: c.step(n, dt=0.1), lambda: c.impulse(n), lambda: G.step(n, dt=0.1),
+                 lambda: sysid.step(c, n)):
+        with pytest.raises(sysid.DataError, match="n_samples must be a positive integer"):
+            call()
