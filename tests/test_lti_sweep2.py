@@ -68,3 +68,14 @@ def test_continuous_responses_check_n_samples(n):
                  lambda: sysid.step(c, n)):
         with pytest.raises(sysid.DataError, match="n_samples must be a positive integer"):
             call()
+
+
+def test_controllability_of_a_transfer_function():
+    # was AttributeError: 'TransferFunction' object has no attribute 'A'
+    G = sysid.TransferFunction([1.0, 1.0], [1.0, 3.0, 2.0])  # (s + 1) / ((s + 1)(s + 2))
+    ss = G.to_statespace()
+    np.testing.assert_array_equal(sysid.ctrb(G), sysid.ctrb(ss))
+    np.testing.assert_array_equal(sysid.obsv(G), sysid.obsv(ss))
+    assert sysid.is_controllable(G) and not sysid.is_observable(G)
+    with pytest.raises(sysid.DataError, match="ctrb needs a state-space form"):
+        sysid.ctrb([[1.0]])
