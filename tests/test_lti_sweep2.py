@@ -79,3 +79,19 @@ def test_controllability_of_a_transfer_function():
     assert sysid.is_controllable(G) and not sysid.is_observable(G)
     with pytest.raises(sysid.DataError, match="ctrb needs a state-space form"):
         sysid.ctrb([[1.0]])
+
+
+def test_c2d_and_d2c_take_transfer_functions_and_say_which_way():
+    G = sysid.TransferFunction([2.0, 1.0], [1.0, 3.0, 2.0])
+    for method in ("zoh", "foh", "tustin"):
+        d = sysid.c2d(G, 0.1, method)
+        ref = sysid.c2d(G.to_statespace(), 0.1, method)
+        np.testing.assert_allclose(d.freqresp([0.3, 3.0]), ref.freqresp([0.3, 3.0]))
+    Gd = sysid.TransferFunction([1.0], [1.0, -0.5], dt=0.1)
+    np.testing.assert_allclose(sysid.d2c(Gd).A, [[np.log(0.5) / 0.1]])
+    with pytest.raises(sysid.DataError, match="delays.*to_statespace\\(dt\\)"):
+        sysid.c2d(sysid.TransferFunction([1.0], [1.0, 1.0], iodelay=0.2), 0.1)
+    with pytest.raises(sysid.DataError, match="dt = 0.1; use d2c"):
+        sysid.c2d(sysid.c2d(G, 0.1), 0.1)
+    with pytest.raises(sysid.DataError, match="dt = 0; use c2d"):
+        sysid.d2c(G)

@@ -386,6 +386,18 @@ def _hold_integrals(A: np.ndarray, B: np.ndarray, dt: float
 def _discretise(sys: ContinuousStateSpace, dt: float, method: str
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(Ad, Bd, Cd, Dd, G2)`` with ``G2`` the FOH state shift (zero otherwise)."""
+    out = _discretise_raw(sys, dt, method)
+    if not all(np.isfinite(x).all() for x in out):
+        grow = float(np.max(np.linalg.eigvals(sys.A).real * dt, initial=0.0))
+        raise NumericalError(
+            f"sampling the model every dt = {dt:g} s overflows ({method}): its fastest growing "
+            f"pole multiplies the state by e^{grow:.4g} per sample, beyond floating point; "
+            "use a smaller dt, or stabilise the model (feedback) before sampling it")
+    return out
+
+
+def _discretise_raw(sys: ContinuousStateSpace, dt: float, method: str
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     A, B, C, D = sys.A, sys.B, sys.C, sys.D
     n, m = B.shape
     if method == "zoh":
@@ -432,6 +444,21 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh") -> StateSpace
 
     See the module documentation for the formulas (``"bilinear"`` is accepted for Tustin).
 
+    Parameters
+    ----------
+    sys : ContinuousStateSpace or TransferFunction
+        A continuous model; a transfer function goes through its realisation (one with
+        delays needs ``sys.to_statespace(dt)``, which samples them exactly).
+    dt : float
+        Sample time in seconds.
+    method : {"zoh", "foh", "tustin", "bilinear"}
+        Hold of the input between samples, or the bilinear transform.
+
+    Returns
+    -------
+    StateSpaceModel
+        The discrete model (no noise model).
+
     Examples
     --------
     >>> import numpy as np, sysid
@@ -441,8 +468,7 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh") -> StateSpace
     >>> float(sysid.c2d(sysid.ContinuousStateSpace([[0.0]], [[1.0]], [[1.0]]), 1.0, "foh").D[0, 0])
     0.5
     """
-    if not isinstance(sys, ContinuousStateSpace):
-        raise DataError(f"c2d needs a sysid.ContinuousStateSpace, got {type(sys).__name__}")
+    sys = _convertible(sys, ContinuousStateSpace, "c2d")
     dt = _sample_time(None, dt, 1)
     method = _method(method)
     Ad, Bd, Cd, Dd, _ = _discretise(sys, dt, method)
@@ -474,6 +500,18 @@ def d2c(model: StateSpaceModel, method: str = "zoh") -> ContinuousStateSpace:
     logarithm). ``tustin`` fails when a pole is at ``z = -1``. The noise model (``K``) is not
     converted; the parameter uncertainty is (the same parameters, through the conversion).
 
+    Parameters
+    ----------
+    model : StateSpaceModel or TransferFunction
+        A discrete model; a transfer function goes through its realisation.
+    method : {"zoh", "foh", "tustin", "bilinear"}
+        The discretisation to invert.
+
+    Returns
+    -------
+    ContinuousStateSpace
+        With ``hold="foh"`` after ``method="foh"``, ``"zoh"`` otherwise.
+
     Examples
     --------
     >>> import numpy as np, sysid
@@ -481,8 +519,7 @@ def d2c(model: StateSpaceModel, method: str = "zoh") -> ContinuousStateSpace:
     >>> bool(np.isclose(c.A[0, 0], -1.0))
     True
     """
-    if not isinstance(model, StateSpaceModel):
-        raise DataError(f"d2c needs a sysid.StateSpaceModel, got {type(model).__name__}")
+    model = _convertible(model, StateSpaceModel, "d2c")
     method = _method(method)
     A, B, C, D, dt = model.A, model.B, model.C, model.D, model.dt
     n, m = B.shape
