@@ -95,3 +95,23 @@ def test_c2d_and_d2c_take_transfer_functions_and_say_which_way():
         sysid.c2d(sysid.c2d(G, 0.1), 0.1)
     with pytest.raises(sysid.DataError, match="dt = 0; use c2d"):
         sysid.d2c(G)
+
+
+@pytest.mark.parametrize("G", [
+    sysid.TransferFunction([1.0, 0.0], [1.0, 1.0, 0.0]),             # = 1 / (s + 1)
+    sysid.TransferFunction([1.0, 0.0], [1.0, 1.0, 0.0]).to_statespace(),
+])
+def test_stepinfo_of_a_cancelled_integrator_settles(G):
+    # was steady_state inf and every time nan: any pole at s = 0 was taken as an integrator
+    info = sysid.stepinfo(G)
+    assert info.steady_state == pytest.approx(1.0)
+    assert info.rise_time == pytest.approx(np.log(9), rel=1e-3)
+    assert info.settling_time == pytest.approx(np.log(50), rel=1e-3)
+
+
+def test_stepinfo_of_a_cancelled_discrete_integrator_settles():
+    # (z - 1) / ((z - 1)(z - 0.5)): the gain at z = 1 was 0 / 0 = nan, and so was every entry
+    info = sysid.stepinfo(sysid.TransferFunction([1.0, -1.0], [1.0, -1.5, 0.5], dt=0.1))
+    assert info.steady_state == pytest.approx(2.0)
+    assert np.isfinite(info.rise_time) and np.isfinite(info.settling_time)
+    assert sysid.stepinfo(sysid.TransferFunction([-1.0], [1.0, 0.0])).steady_state == -np.inf
