@@ -12,8 +12,30 @@ import numpy as np
 __all__ = ["ctrb", "obsv", "is_controllable", "is_observable"]
 
 
+def _statespace(model: Any, purpose: str) -> Any:
+    """``model`` when it has ``A, B, C``, else its ``to_statespace()`` (a transfer function's
+    realisation), else a :class:`~sysid.DataError` naming ``purpose``."""
+    if all(hasattr(model, k) for k in ("A", "B", "C")):
+        return model
+    from ..models.checks import as_statespace
+
+    return as_statespace(model, purpose)
+
+
 def ctrb(model: Any) -> np.ndarray:
-    """Controllability matrix ``[B, AB, ..., A^{n-1} B]``, shape ``(n, n m)``."""
+    """Controllability matrix ``[B, AB, ..., A^{n-1} B]``, shape ``(n, n m)``.
+
+    Parameters
+    ----------
+    model : state-space model or TransferFunction
+        Anything with ``A`` and ``B``, or a ``to_statespace()`` (its realisation).
+
+    Returns
+    -------
+    ndarray
+        ``(n, n m)``; ``(0, 0)`` for a static gain.
+    """
+    model = _statespace(model, "ctrb")
     A, B = model.A, model.B
     blocks, ab = [], B
     for _ in range(A.shape[0]):
@@ -23,13 +45,24 @@ def ctrb(model: Any) -> np.ndarray:
 
 
 def obsv(model: Any) -> np.ndarray:
-    """Observability matrix ``[C; CA; ...; C A^{n-1}]``, shape ``(n l, n)``."""
-    return ctrb(_Transposed(model)).T
+    """Observability matrix ``[C; CA; ...; C A^{n-1}]``, shape ``(n l, n)``.
+
+    Parameters
+    ----------
+    model : state-space model or TransferFunction
+        Anything with ``A`` and ``C``, or a ``to_statespace()`` (its realisation).
+
+    Returns
+    -------
+    ndarray
+        ``(n l, n)``; ``(0, 0)`` for a static gain.
+    """
+    return ctrb(_Transposed(_statespace(model, "obsv"))).T
 
 
 class _Transposed:
     def __init__(self, model: Any) -> None:
-        self.A, self.B = model.A.T, model.C.T
+        self.A, self.B, self.C = model.A.T, model.C.T, model.B.T
 
 
 def _pbh_rank_ok(A: np.ndarray, B: np.ndarray, tol: float | None) -> bool:
@@ -59,6 +92,7 @@ def is_controllable(model: Any, tol: float | None = None) -> bool:
     >>> sysid.is_controllable(sysid.StateSpaceModel([[0.5, 0], [0, 0.2]], [[1], [0]], [[1, 1]]))
     False
     """
+    model = _statespace(model, "is_controllable")
     return _pbh_rank_ok(model.A, model.B, tol)
 
 
@@ -71,4 +105,5 @@ def is_observable(model: Any, tol: float | None = None) -> bool:
     >>> sysid.is_observable(sysid.StateSpaceModel([[0.5, 0], [0, 0.2]], [[1], [0]], [[1, 1]]))
     True
     """
+    model = _statespace(model, "is_observable")
     return _pbh_rank_ok(model.A.T, model.C.T, tol)

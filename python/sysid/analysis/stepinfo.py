@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DataError
+from ..errors import DataError, NumericalError
 
 __all__ = ["stepinfo", "StepInfo"]
 
@@ -221,6 +221,17 @@ def _nonlinear(sys: Any) -> bool:
             or type(sys).__module__.startswith(("sysid.nonlinear.", "sysid.nlss.")))
 
 
+def _final_value(sys: Any, shape: tuple[int, ...]) -> np.ndarray:
+    """The step's final value: the model's DC gain (a pole at ``s = 0`` or ``z = 1`` that a
+    zero cancels leaves it finite), ``inf`` when an integrator makes the step unbounded."""
+    try:
+        gain = sys.dcgain() if hasattr(sys, "dcgain") else sys.freqresp([0.0])[0].real
+        gain = np.asarray(gain, dtype=float).reshape(shape)
+    except (np.linalg.LinAlgError, NumericalError):
+        return np.full(shape, np.inf)
+    return np.where(np.isnan(gain), np.inf, gain)
+
+
 def _model_step(sys: Any, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     p = np.asarray(sys.poles()) if hasattr(sys, "poles") else np.zeros(0)
     delay = float(np.max(getattr(sys, "iodelay", 0.0), initial=0.0))
@@ -238,10 +249,7 @@ def _model_step(sys: Any, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
             # the response's own final value: the linear part's (or the linearisation's)
             # static gain is not the nonlinear model's (0.909 for a step that ends at 0.934)
             return np.asarray(resp.t, float), Y, Y[-1].copy(), np.zeros_like(Y[-1])
-        try:
-            gain = np.asarray(sys.freqresp([0.0])[0].real)
-        except np.linalg.LinAlgError:  # a pole at z = 1: the step response does not settle
-            gain = np.full((Y.shape[1], Y.shape[2]), np.inf)
+        gain = _final_value(sys, Y.shape[1:])
         return np.asarray(resp.t, float), Y, gain, np.zeros_like(gain)
     re = -p.real
     slow = float(np.min(re[re > 1e-12])) if np.any(re > 1e-12) else 0.0
@@ -250,6 +258,5 @@ def _model_step(sys: Any, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
     else:
         t_final = 10.0 / slow + 1.2 * delay
     resp = sys.step(n, dt=t_final / (n - 1))
-    gain = np.asarray(sys.freqresp([0.0])[0].real) if np.all(np.abs(p) > 1e-12) else \
-        np.full((resp.y.shape[1], resp.y.shape[2]), np.inf)
+    gain = _final_value(sys, resp.y.shape[1:])
     return np.asarray(resp.t, float), np.asarray(resp.y), gain, np.zeros_like(gain)

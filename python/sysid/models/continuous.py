@@ -36,7 +36,7 @@ from ..errors import DataError, NumericalError
 from .discretisation import expm, hold_blocks
 from .linear import transmission_zeros
 from .protocol import ModelMixin, TimeResponse, continuous_grid
-from .statespace import StateSpaceModel, ss_parameter_count
+from .statespace import StateSpaceModel, minimal_dcgain, ss_parameter_count
 
 __all__ = ["ContinuousStateSpace", "SampledContinuous", "c2d", "d2c"]
 
@@ -141,12 +141,21 @@ class ContinuousStateSpace(ModelMixin):
             out[i] = self.C @ np.linalg.solve(1j * wi * eye - self.A, self.B) + self.D
         return out
 
-    def dcgain(self) -> np.ndarray:
+    def dcgain(self, std: bool = False) -> Any:
         """``D - C A^{-1} B``, shape ``(noutputs, ninputs)``; a pole at ``s = 0`` (an
-        integrator) raises :class:`~sysid.NumericalError`, as for a discrete model."""
+        integrator) raises :class:`~sysid.NumericalError`, as for a discrete model. With
+        ``std=True`` (needs :attr:`uncertainty`, as :func:`d2c` carries over) the pair
+        ``(gain, std)``, first order."""
+        if std:
+            from .uncertainty import complex_std
+
+            return complex_std(self, lambda m: m.dcgain())
         try:
             return self.freqresp([0.0])[0].real
         except np.linalg.LinAlgError:
+            gain = minimal_dcgain(self)
+            if gain is not None:
+                return gain
             zeros = [p for p in self.poles() if abs(p) < 1e-9]
             raise NumericalError(
                 f"the DC gain is infinite: the model has {len(zeros)} pole(s) at s = 0 (an "
@@ -377,6 +386,18 @@ def _hold_integrals(A: np.ndarray, B: np.ndarray, dt: float
 def _discretise(sys: ContinuousStateSpace, dt: float, method: str
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(Ad, Bd, Cd, Dd, G2)`` with ``G2`` the FOH state shift (zero otherwise)."""
+    out = _discretise_raw(sys, dt, method)
+    if not all(np.isfinite(x).all() for x in out):
+        grow = float(np.max(np.linalg.eigvals(sys.A).real * dt, initial=0.0))
+        raise NumericalError(
+            f"sampling the model every dt = {dt:g} s overflows ({method}): its fastest growing "
+            f"pole multiplies the state by e^{grow:.4g} per sample, beyond floating point; "
+            "use a smaller dt, or stabilise the model (feedback) before sampling it")
+    return out
+
+
+def _discretise_raw(sys: ContinuousStateSpace, dt: float, method: str
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     A, B, C, D = sys.A, sys.B, sys.C, sys.D
     n, m = B.shape
     if method == "zoh":
@@ -392,10 +413,51 @@ def _discretise(sys: ContinuousStateSpace, dt: float, method: str
     return Ad, Bd, Cd, D + 0.5 * C @ Bd, np.zeros((n, m))
 
 
+def _convertible(sys: Any, kind: type, purpose: str) -> Any:
+    """``sys`` as a ``kind`` (a transfer function through its ``to_statespace()``), or a
+    :class:`DataError` saying which conversion applies instead."""
+    if isinstance(sys, kind):
+        return sys
+    want = "continuous" if kind is ContinuousStateSpace else "discrete"
+    dt = getattr(sys, "dt", None)
+    if isinstance(sys, (ContinuousStateSpace, StateSpaceModel)) or (
+            dt is not None and bool(dt) != (want == "discrete")):
+        other = "d2c" if purpose == "c2d" else "c2d"
+        raise DataError(f"{purpose} needs a {want}-time model (a sysid.{kind.__name__} or a "
+                        f"TransferFunction), but this "
+                        f"{type(sys).__name__} has dt = {dt:g}; use {other} for the other "
+                        "direction")
+    if np.any(np.asarray(getattr(sys, "iodelay", 0.0)) > 0) and want == "continuous":
+        raise DataError(f"{purpose}: this {type(sys).__name__} has input-output delays, which "
+                        "a continuous state-space model cannot hold; sample it exactly, delays "
+                        "included, with model.to_statespace(dt) (its hold: model.hold)")
+    conv = getattr(sys, "to_statespace", None)
+    ss = conv() if conv is not None else None
+    if not isinstance(ss, kind):
+        raise DataError(f"{purpose} needs a sysid.{kind.__name__} (or a transfer function), "
+                        f"got {type(sys).__name__}")
+    return ss
+
+
 def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh") -> StateSpaceModel:
     """Discretise a continuous model: zero-order hold, first-order hold or Tustin.
 
     See the module documentation for the formulas (``"bilinear"`` is accepted for Tustin).
+
+    Parameters
+    ----------
+    sys : ContinuousStateSpace or TransferFunction
+        A continuous model; a transfer function goes through its realisation (one with
+        delays needs ``sys.to_statespace(dt)``, which samples them exactly).
+    dt : float
+        Sample time in seconds.
+    method : {"zoh", "foh", "tustin", "bilinear"}
+        Hold of the input between samples, or the bilinear transform.
+
+    Returns
+    -------
+    StateSpaceModel
+        The discrete model (no noise model).
 
     Examples
     --------
@@ -406,8 +468,7 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh") -> StateSpace
     >>> float(sysid.c2d(sysid.ContinuousStateSpace([[0.0]], [[1.0]], [[1.0]]), 1.0, "foh").D[0, 0])
     0.5
     """
-    if not isinstance(sys, ContinuousStateSpace):
-        raise DataError(f"c2d needs a sysid.ContinuousStateSpace, got {type(sys).__name__}")
+    sys = _convertible(sys, ContinuousStateSpace, "c2d")
     dt = _sample_time(None, dt, 1)
     method = _method(method)
     Ad, Bd, Cd, Dd, _ = _discretise(sys, dt, method)
@@ -439,6 +500,18 @@ def d2c(model: StateSpaceModel, method: str = "zoh") -> ContinuousStateSpace:
     logarithm). ``tustin`` fails when a pole is at ``z = -1``. The noise model (``K``) is not
     converted; the parameter uncertainty is (the same parameters, through the conversion).
 
+    Parameters
+    ----------
+    model : StateSpaceModel or TransferFunction
+        A discrete model; a transfer function goes through its realisation.
+    method : {"zoh", "foh", "tustin", "bilinear"}
+        The discretisation to invert.
+
+    Returns
+    -------
+    ContinuousStateSpace
+        With ``hold="foh"`` after ``method="foh"``, ``"zoh"`` otherwise.
+
     Examples
     --------
     >>> import numpy as np, sysid
@@ -446,8 +519,7 @@ def d2c(model: StateSpaceModel, method: str = "zoh") -> ContinuousStateSpace:
     >>> bool(np.isclose(c.A[0, 0], -1.0))
     True
     """
-    if not isinstance(model, StateSpaceModel):
-        raise DataError(f"d2c needs a sysid.StateSpaceModel, got {type(model).__name__}")
+    model = _convertible(model, StateSpaceModel, "d2c")
     method = _method(method)
     A, B, C, D, dt = model.A, model.B, model.C, model.D, model.dt
     n, m = B.shape

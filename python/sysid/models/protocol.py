@@ -190,12 +190,15 @@ def continuous_grid(poles: Any, t_final: float, n_samples: int | None, dt: float
     >>> N, round(h, 6)  # 21 samples per period of the 3 rad/s resonance
     (15010, 0.033313)
     """
+    if n_samples is not None:
+        from .._checks import as_count
+
+        n_samples = as_count(n_samples, "n_samples", 8 * 64)
     if dt is not None:
-        N = int(min(np.ceil(t_final / dt) + 1, cap)) if n_samples is None else int(n_samples)
+        N = int(min(np.ceil(t_final / dt) + 1, cap)) if n_samples is None else n_samples
         return N, float(dt)
     if n_samples is not None:
-        N = int(n_samples)
-        return N, t_final / max(N - 1, 1)
+        return n_samples, t_final / max(n_samples - 1, 1)
     fast = float(np.max(np.abs(poles), initial=0.0))
     N = 200 if fast == 0 else int(min(max(200, np.ceil(t_final * fast * 10) + 1), cap))
     return N, t_final / max(N - 1, 1)

@@ -25,6 +25,23 @@ from .protocol import ModelMixin, TimeResponse, default_length
 __all__ = ["StateSpaceModel", "ss_parameter_count"]
 
 
+def minimal_dcgain(model: Any) -> np.ndarray | None:
+    """The DC gain of ``model``'s controllable and observable part, when removing the rest
+    removes the singularity (an integrator the input does not reach or the output does not
+    see, as in the realisation of ``s / (s^2 + s)``); ``None`` when an integrator is left."""
+    from ..analysis.minreal import minreal
+
+    plain = type(model)(model.A, model.B, model.C, model.D, **(
+        {"dt": model.dt} if isinstance(model, StateSpaceModel) else {}))
+    reduced = minreal(plain)
+    if reduced.nstates == model.nstates:
+        return None
+    try:
+        return np.asarray(reduced.freqresp([0.0])[0].real)
+    except np.linalg.LinAlgError:
+        return None
+
+
 def ss_parameter_count(n: int, m: int, l: int, *, feedthrough: bool = True,
                        noise_model: bool = True, x0: bool = False,
                        n_experiments: int = 1) -> int:
@@ -361,6 +378,9 @@ class StateSpaceModel(ModelMixin):
         try:
             return self.freqresp([0.0])[0].real
         except np.linalg.LinAlgError:
+            gain = minimal_dcgain(self)
+            if gain is not None:
+                return gain
             ones = [p for p in self.poles() if abs(p - 1.0) < 1e-9]
             raise NumericalError(
                 f"the DC gain is infinite: the model has {len(ones)} pole(s) at z = 1 (an "

@@ -47,6 +47,26 @@ def _grid(x: Any, name: str) -> list[list[np.ndarray]]:
     return out
 
 
+def _gain_at(num: np.ndarray, den: np.ndarray, x: float) -> float:
+    """``num(x) / den(x)`` at ``x = 0`` (``s``) or ``x = 1`` (``z``), roots of both at ``x``
+    cancelled first; an uncancelled root of ``den`` gives the signed infinity of the limit
+    from above (``den(x + e) ~ c e^k``, so the sign of ``num(x) / c``)."""
+    def vanishes(c: np.ndarray) -> bool:  # c(x) = 0 up to rounding of its terms
+        return bool(abs(np.polyval(c, x)) <= 1e-12 * np.polyval(np.abs(c), abs(x)))
+
+    num, den = _trim(num), _trim(den)
+    while den.size > 1 and num.size > 1 and vanishes(den) and vanishes(num):
+        num, den = np.polydiv(num, [1.0, -x])[0], np.polydiv(den, [1.0, -x])[0]
+    if not vanishes(den):
+        return float(np.polyval(num, x) / np.polyval(den, x))
+    top = float(np.polyval(num, x))
+    if top == 0.0:
+        return 0.0  # a zero numerator: no response at all
+    while den.size > 1 and vanishes(den):
+        den = np.polydiv(den, [1.0, -x])[0]
+    return float(np.copysign(np.inf, top * float(np.polyval(den, x))))
+
+
 def _trim(c: np.ndarray) -> np.ndarray:
     nz = np.flatnonzero(c)
     return c[nz[0]:] if nz.size else np.zeros(1)
@@ -207,8 +227,12 @@ class TransferFunction(ModelMixin):
         return bool(np.max(np.abs(p)) < 1) if self.dt > 0 else bool(np.max(p.real) < 0)
 
     def dcgain(self, std: bool = False) -> Any:
-        """Steady-state gain ``(l, m)`` (``inf`` for an integrator); with ``std=True`` (needs
-        :attr:`uncertainty`) the pair ``(gain, std)``, first order."""
+        """Steady-state gain ``(l, m)``; with ``std=True`` (needs :attr:`uncertainty`) the pair
+        ``(gain, std)``, first order.
+
+        A pole at ``s = 0`` (``z = 1``) that a zero there cancels leaves a finite gain (``s /
+        (s^2 + s)`` has gain 1); an integrator left over gives ``+inf`` or ``-inf``, the sign
+        of the response to a positive step as it grows."""
         if std:
             from ..models.uncertainty import complex_std
 
@@ -216,8 +240,7 @@ class TransferFunction(ModelMixin):
         x = 1.0 if self.dt > 0 else 0.0
         g = np.empty((self.noutputs, self.ninputs))
         for i, j in self.pairs():
-            d = np.polyval(self.den[i][j], x)
-            g[i, j] = np.polyval(self.num[i][j], x) / d if d != 0 else np.inf
+            g[i, j] = _gain_at(self.num[i][j], self.den[i][j], x)
         return g
 
     # -- state space and simulation --------------------------------------------------------
