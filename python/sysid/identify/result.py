@@ -55,6 +55,18 @@ class IdentifiedModel:
         """Notebook display: the facts and poles of its model, as every model shows them."""
         return model_html(self)
 
+    def summary(self) -> str:
+        """The model of the deviations (:meth:`sysid.ModelMixin.summary`: facts, the search,
+        poles, parameters) and the operating point it is identified around."""
+        u = ", ".join(f"{v:.6g}" for v in self.u_offset)
+        y = ", ".join(f"{v:.6g}" for v in self.y_offset)
+        lines = self.statespace.summary().splitlines()
+        return "\n".join([f"IdentifiedModel around u = [{u}], y = [{y}]"] + lines)
+
+    def to_pandas(self) -> Any:
+        """The poles of :attr:`statespace` as a :class:`pandas.DataFrame` (:func:`sysid.damp`)."""
+        return self.statespace.to_pandas()
+
     def remove_offsets(self, data: Any) -> IOData:
         """``data`` (raw, an IOData or a ``(u, y)`` pair) minus the offsets."""
         if isinstance(data, tuple):

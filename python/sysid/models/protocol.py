@@ -219,6 +219,22 @@ def sampled_response(model: Any, kind: str, n_samples: int | None) -> TimeRespon
     return TimeResponse(kind, np.arange(N) * model.dt, y, model)
 
 
+def _plain(v: Any) -> str:
+    """A fact of a fit's ``info`` for a line of text: one value bare, several joined."""
+    if isinstance(v, (list, tuple)):
+        return ", ".join(map(_plain, v)) if len(v) != 1 else _plain(v[0])
+    return f"{v:.6g}" if isinstance(v, float) else str(v)
+
+
+def _last(cost: Any) -> str:
+    """The final cost of a search's history (one per output for per-output searches)."""
+    if isinstance(cost, (list, tuple)) and cost and isinstance(cost[0], (list, tuple)):
+        return ", ".join(_last(c) for c in cost)
+    if isinstance(cost, (list, tuple)):
+        return _plain(float(cost[-1])) if cost else "-"
+    return _plain(cost)
+
+
 class ModelMixin:
     """Default implementations of the protocol's derived members, written once.
 
@@ -296,6 +312,64 @@ class ModelMixin:
     def impulse(self, n_samples: int | None = None) -> TimeResponse:
         """Response to a unit pulse ``u(0) = 1`` on each input, from rest (by simulation)."""
         return sampled_response(self, "impulse", n_samples)
+
+    def summary(self) -> str:
+        """What the model is and how it was obtained, as text: family, sampling, channels,
+        order, free parameters, method and stability; the search's iterations, stop and
+        cost when it was refined; its poles with natural frequency and damping; and the
+        parameter table with standard deviations when it carries an uncertainty.
+
+        Examples
+        --------
+        >>> import sysid
+        >>> print(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1).summary())
+        StateSpaceModel(nstates=1, ninputs=1, noutputs=1, dt=0.1, stable, no noise model)
+          family: StateSpaceModel
+          time: discrete, dt = 0.1 s
+          inputs: u0
+          outputs: y0
+          states: 1
+          free parameters: 2
+          stable: yes (largest |pole| 0.5)
+        poles:
+                            pole   |pole|    wn [Hz]   damping
+                          0.5+0j   0.5000      1.103    1.0000
+        """
+        from .._display import _poles, model_facts, pole_rows
+
+        lines = [repr(self)] + [f"  {k}: {v}" for k, v in model_facts(self)]
+        info = getattr(self, "info", None) or {}
+        run = info.get("pem") if isinstance(info.get("pem"), dict) else info
+        done = [f"{k} {_last(run[k]) if k == 'cost' else _plain(run[k])}"
+                for k in ("iterations", "stop", "cost") if run.get(k) not in (None, [])]
+        if done:
+            lines.append("  search: " + ", ".join(map(str, done)))
+        p = _poles(self)
+        if p is not None and p.size:
+            dt = float(getattr(self, "dt", 0.0) or 0.0)
+            lines += ["poles:", f"{'pole':>24} {'|pole|':>8} {'wn [Hz]':>10} {'damping':>9}"]
+            lines += [f"{format(pl, '.4g'):>24} {r:8.4f} {f:10.4g} {z:9.4f}"
+                      for pl, r, f, z in pole_rows(p, dt)]
+        unc = getattr(self, "uncertainty", None)
+        if unc is not None and hasattr(unc, "summary"):
+            lines += ["parameters:", unc.summary(max_rows=20)]
+        return "\n".join(lines)
+
+    def to_pandas(self) -> Any:
+        """The model's poles as a :class:`pandas.DataFrame` (:func:`sysid.damp`: natural
+        frequency, damping and time constant, with standard deviations when the model
+        carries an uncertainty).
+
+        Examples
+        --------
+        >>> import sysid
+        >>> df = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1).to_pandas()
+        >>> list(df.columns)[:3]
+        ['pole', 'magnitude', 'wn [rad/s]']
+        """
+        from ..analysis.lti import damp
+
+        return damp(self, std=getattr(self, "uncertainty", None) is not None).to_pandas()
 
     def _repr_html_(self) -> str:
         """Notebook display: facts, poles (see :mod:`sysid._display`)."""
