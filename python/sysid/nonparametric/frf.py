@@ -33,7 +33,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy import ndimage, signal
+from scipy import ndimage
 
 from .._checks import as_int
 from ..data.iodata import IOData
@@ -46,6 +46,7 @@ from .spectra import (
     _frf_from_S,
     _need_data,
     _welch_matrix,
+    _window,
     _z,
 )
 
@@ -250,7 +251,11 @@ def spa(
         n_freq = as_int(n_freq, "n_freq", 2)
         w = np.arange(1, n_freq + 1) * np.pi / (n_freq * data.dt)
     else:
-        w = np.asarray(omega, dtype=float).ravel()
+        w = np.asarray(omega, dtype=float)
+        if np.squeeze(w).ndim > 1 or w.size == 0:  # a column vector is one grid too
+            raise DataError(f"omega must be a non-empty 1-D array of frequencies in rad/s, got "
+                            f"shape {w.shape}")
+        w = w.ravel()
         if not (np.isfinite(w).all() and (w >= 0).all()):
             raise DataError("omega must hold finite non-negative frequencies in rad/s")
         nyquist = np.pi / data.dt
@@ -373,7 +378,15 @@ def etfe(
     width = as_int(smoothing, "smoothing", 2)
     if width <= m:
         raise DataError(f"smoothing must exceed the number of inputs ({m}), got {width}")
-    W = signal.get_window(window, width + 2)[1:-1] if window != "boxcar" else np.ones(width)
+    if width > n:
+        # a window wider than the n bins of the (two-sided, circular) spectrum wraps onto
+        # bins it already holds: 1 / sum(W^2) then counts them twice, and the band shrank
+        raise DataError(
+            f"smoothing = {width} bins is wider than the spectrum of a {n}-sample experiment "
+            f"({n} bins around the circle): give smoothing <= {n} (a few per cent of it keeps "
+            "the resolution), or use spa / welch_frf"
+        )
+    W = _window(window, width + 2)[1:-1] if window != "boxcar" else np.ones(width)
     W = W / W.sum()
     # smooth over the two-sided spectrum (periodic in frequency): mirror the one-sided one
     def smooth(P: np.ndarray) -> np.ndarray:

@@ -51,10 +51,16 @@ def _welch_matrix(
     dt: float, detrend: bool,
 ) -> tuple[np.ndarray, np.ndarray, float, int]:
     """One-sided density cross-spectral matrix ``(n_freq, nc, nc)``, freqs (Hz), K_eff, K."""
-    win = signal.get_window(window, nperseg) if not isinstance(window, np.ndarray) else window
+    win = _window(window, nperseg) if not isinstance(window, np.ndarray) else window
     if win.size != nperseg:
         raise DataError(f"window has {win.size} samples, nperseg is {nperseg}")
-    nfft = nperseg if nfft is None else int(nfft)
+    nfft = nperseg if nfft is None else as_int(nfft, "nfft", 2)
+    if nfft < nperseg:  # np.fft.rfft(n=nfft) would cut every segment to its first nfft samples
+        raise DataError(
+            f"nfft ({nfft}) must be at least nperseg ({nperseg}): a shorter FFT drops the end "
+            "of every segment; nfft pads with zeros (finer grid), it cannot shorten a segment "
+            "(lower nperseg for a coarser grid)"
+        )
     step = nperseg - noverlap
     nc = zs[0].shape[1]
     nf = nfft // 2 + 1
@@ -88,6 +94,18 @@ def _welch_matrix(
         j += 1
     k_eff = count / (1.0 + 2.0 * rho)
     return S, f, k_eff, count
+
+
+def _window(window: Any, n: int) -> np.ndarray:
+    """``scipy.signal.get_window(window, n)``; an unknown name is a :class:`DataError`."""
+    try:
+        return np.asarray(signal.get_window(window, n), dtype=float)
+    except (ValueError, TypeError) as exc:
+        raise DataError(
+            f"window {window!r} is not a window scipy.signal.get_window knows ({exc}); use a "
+            "name such as 'hann', 'hamming', 'blackman' or 'boxcar', or a tuple such as "
+            "('tukey', 0.25)"
+        ) from None
 
 
 def _frf_from_S(

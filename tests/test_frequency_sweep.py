@@ -1,0 +1,70 @@
+"""Defects found by a sweep of the non-parametric and frequency-domain tools (issue 26)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import signal
+
+import sysid
+from sysid.errors import DataError
+
+
+def _white(n: int = 4096, seed: int = 0) -> sysid.IOData:
+    return sysid.IOData(u=None, y=np.random.default_rng(seed).standard_normal(n))
+
+
+def test_nfft_shorter_than_nperseg_is_refused() -> None:
+    # np.fft.rfft(n=64) cut every 128-sample segment to its first 64 samples: the density
+    # of unit white noise came out 0.96 instead of 2 (scipy refuses nfft < nperseg)
+    d = _white()
+    with pytest.raises(DataError, match=r"nfft \(64\) must be at least nperseg \(128\)"):
+        sysid.spectra(d, nperseg=128, nfft=64)
+    u = np.random.default_rng(1).standard_normal(4096)
+    with pytest.raises(DataError, match="nfft"):
+        sysid.welch_frf(sysid.IOData(u, np.convolve(u, [1.0, 0.5])[:4096]), nperseg=128, nfft=64)
+    with pytest.raises(DataError, match="nfft"):
+        sysid.spectra(d, nperseg=128, nfft=200.5)
+    # zero padding is as scipy's
+    s = sysid.spectra(d, nperseg=128, nfft=256)
+    f, p = signal.welch(d.y[:, 0], nperseg=128, nfft=256)
+    np.testing.assert_allclose(s.hz, f)
+    np.testing.assert_allclose(s.psd("y0"), p, rtol=1e-10)
+
+
+def test_etfe_smoothing_wider_than_the_spectrum_is_refused() -> None:
+    # a frequency window wider than the n bins of the circular spectrum wrapped onto bins it
+    # already held; 1 / sum(W^2) counted them again: for n = 256 and smoothing = 1000 the
+    # sample spread of the estimate was 1.56 times its std (the band far too narrow)
+    rng = np.random.default_rng(2)
+    u = rng.standard_normal(256)
+    d = sysid.IOData(u, u + rng.standard_normal(256))
+    with pytest.raises(DataError, match="smoothing = 1000 bins is wider than the spectrum"):
+        sysid.etfe(d, smoothing=1000)
+    assert sysid.etfe(d, smoothing=256).std is not None
+
+
+@pytest.mark.parametrize("call", [
+    lambda d: sysid.welch_frf(d, window="nonsense"),
+    lambda d: sysid.spectra(d, window="nonsense"),
+    lambda d: sysid.coherence(d, window="nonsense"),
+    lambda d: sysid.periodogram(d, window="nonsense"),
+    lambda d: sysid.etfe(d, smoothing=9, window="nonsense"),
+])
+def test_an_unknown_window_is_a_data_error(call) -> None:
+    # scipy's raw ValueError ('Invalid window name') came through
+    u = np.random.default_rng(3).standard_normal(512)
+    with pytest.raises(DataError, match="'nonsense' is not a window"):
+        call(sysid.IOData(u, u))
+
+
+def test_spa_refuses_an_empty_or_matrix_grid() -> None:
+    # an empty omega was numpy's 'zero-size array to reduction operation maximum'; a 2-D one
+    # was flattened without a word
+    u = np.random.default_rng(4).standard_normal(600)
+    d = sysid.IOData(u, u, dt=0.1)
+    with pytest.raises(DataError, match="non-empty 1-D array"):
+        sysid.spa(d, lags=20, omega=[])
+    with pytest.raises(DataError, match=r"shape \(2, 2\)"):
+        sysid.spa(d, lags=20, omega=[[1.0, 2.0], [3.0, 4.0]])
+    assert sysid.spa(d, lags=20, omega=np.array([[1.0], [2.0]])).omega.size == 2
