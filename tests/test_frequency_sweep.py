@@ -7,7 +7,7 @@ import pytest
 from scipy import signal
 
 import sysid
-from sysid.errors import DataError
+from sysid.errors import DataError, ShapeError
 
 
 def _white(n: int = 4096, seed: int = 0) -> sysid.IOData:
@@ -68,3 +68,37 @@ def test_spa_refuses_an_empty_or_matrix_grid() -> None:
     with pytest.raises(DataError, match=r"shape \(2, 2\)"):
         sysid.spa(d, lags=20, omega=[[1.0, 2.0], [3.0, 4.0]])
     assert sysid.spa(d, lags=20, omega=np.array([[1.0], [2.0]])).omega.size == 2
+
+
+def test_frd_compare_refuses_another_grid() -> None:
+    # FRD.compare(other FRD) interpolated the other one linearly onto this grid (the branch
+    # that refused different grids was never reached: an FRD has freqresp too); across a
+    # resonance the interpolated 'measurement' is made up
+    g = sysid.StateSpaceModel([[1.8, -0.95], [1.0, 0.0]], [[1.0], [0.0]], [[0.0, 0.1]], dt=1.0)
+    fine = sysid.FRD.from_model(g, np.linspace(0.05, 3.0, 400))
+    coarse = sysid.FRD.from_model(g, np.linspace(0.05, 3.0, 9))
+    with pytest.raises(DataError, match="different frequency grids"):
+        fine.compare(coarse)
+    banded = sysid.FRD(fine.omega, fine.response, std=np.full(fine.response.shape, 0.1))
+    with pytest.raises(DataError, match="different frequency grids"):
+        banded.within_band(coarse)
+    assert fine.compare(fine).max_error == 0.0
+    assert fine.compare(g).max_error < 1e-12
+
+
+def test_frd_checks_std_coherence_and_dt() -> None:
+    w = np.array([1.0, 2.0])
+    # one pair: std and coherence as (n_freq,), as the response itself
+    f = sysid.FRD(w, [1.0, 2.0], std=[0.1, 0.2], coherence=[0.5, 1.0])
+    assert f.std.shape == (2, 1, 1) and f.coherence.shape == (2, 1, 1)
+    assert f.within_band(np.array([1.05, 2.0])).all()
+    with pytest.raises(DataError, match="std must be finite and >= 0"):
+        sysid.FRD(w, [1.0, 2.0], std=[-0.1, 0.2])
+    with pytest.raises(DataError, match="std must be finite"):
+        sysid.FRD(w, [1.0, 2.0], std=[np.nan, 0.2])
+    with pytest.raises(DataError, match=r"coherence must be in \[0, 1\]"):
+        sysid.FRD(w, [1.0, 2.0], coherence=[0.5, 2.0])
+    with pytest.raises(DataError, match="dt must be a positive sample time"):
+        sysid.FRD(w, [1.0, 2.0], dt=-0.1)
+    with pytest.raises(ShapeError):
+        sysid.FRD(w, np.ones((2, 2, 1)), std=[0.1, 0.2])
