@@ -102,3 +102,50 @@ def test_frd_checks_std_coherence_and_dt() -> None:
         sysid.FRD(w, [1.0, 2.0], dt=-0.1)
     with pytest.raises(ShapeError):
         sysid.FRD(w, np.ones((2, 2, 1)), std=[0.1, 0.2])
+
+
+def test_bla_leaves_out_lines_a_measured_input_does_not_excite() -> None:
+    # a measured input carries periodic power between the multisine's lines (its own
+    # distortion, 1e-4 and less of the excited lines'): bla returned Y / U there too, the
+    # ratio of two distortions (on the F-16 record 1088 lines for 267 excited, up to 270
+    # times the response)
+    G = sysid.StateSpaceModel([[0.7]], [[1.0]], [[0.3]], dt=1.0)
+    n, P = 512, 4
+    lines = np.arange(10, 80, 2)
+    rng = np.random.default_rng(5)
+    us, ys = [], []
+    for r in range(3):
+        ref = sysid.multisine(n, lines=lines, phases="random", seed=r, periods=P + 1)
+        force = ref + 0.01 * ref**2 - 0.01 * np.mean(ref**2)  # the actuator's distortion
+        y = G.simulate(force) + 1e-3 * rng.standard_normal(force.shape)
+        us.append(force[n:])
+        ys.append(y[n:])
+    f = sysid.bla(sysid.IOData(us, ys, 1.0), periods=P)
+    np.testing.assert_array_equal(f.info["lines"], lines)
+    assert f.info["unexcited_lines"].size > 30
+    rel = np.abs(f.response - G.freqresp(f.omega)) / np.abs(G.freqresp(f.omega))
+    assert rel.max() < 0.02
+    # given lines are taken as they are
+    assert sysid.bla(sysid.IOData(us, ys, 1.0), periods=P, lines=lines[:5]).omega.size == 5
+
+
+def test_bla_keeps_a_shaped_multisine_whole() -> None:
+    # amplitudes falling over two decades (power over four) leave no gap between lines
+    n = 1024
+    lines = np.arange(1, 200)
+    amp = np.logspace(0, -2, lines.size)
+    rng = np.random.default_rng(6)
+    k = np.zeros(n // 2 + 1, dtype=complex)
+    k[lines] = amp * np.exp(2j * np.pi * rng.random(lines.size))
+    u = np.tile(np.fft.irfft(k, n), 3)
+    f = sysid.bla(sysid.IOData(u, 0.5 * u, 1.0), periods=3)
+    np.testing.assert_array_equal(f.info["lines"], lines)
+    assert f.info["unexcited_lines"].size == 0
+
+
+def test_bla_f16_keeps_the_excited_band() -> None:
+    d = sysid.datasets.load_f16()
+    f = sysid.bla(d, periods=9, transient=1)
+    assert 2.0 - 1e-9 <= f.hz.min() and f.hz.max() <= 15.0 + 1e-9  # the 2-15 Hz multisine
+    assert 250 < f.omega.size < 300
+    assert np.median(f.info["noise_std"] / np.abs(f.response)) < 0.01
