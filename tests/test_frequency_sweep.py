@@ -149,3 +149,26 @@ def test_bla_f16_keeps_the_excited_band() -> None:
     assert 2.0 - 1e-9 <= f.hz.min() and f.hz.max() <= 15.0 + 1e-9  # the 2-15 Hz multisine
     assert 250 < f.omega.size < 300
     assert np.median(f.info["noise_std"] / np.abs(f.response)) < 0.01
+
+
+def test_spectra_coherence_correlation_have_to_pandas() -> None:
+    # FRD had to_pandas; the other non-parametric results had none
+    rng = np.random.default_rng(7)
+    u = rng.standard_normal((2048, 2))
+    y = u @ np.array([[1.0], [0.5]]) + 0.1 * rng.standard_normal((2048, 1))
+    d = sysid.IOData(u, y, dt=0.5)
+    s = sysid.spectra(d, nperseg=128)
+    df = s.to_pandas()
+    row = df[(df.a == "y0") & (df.b == "u1")]
+    np.testing.assert_allclose(row.real + 1j * row.imag, s.csd("y0", "u1"))
+    np.testing.assert_allclose(row.hz, s.hz)
+    c = sysid.coherence(d, nperseg=128)
+    df = c.to_pandas()
+    np.testing.assert_allclose(df[df.input == "u1"].coherence, c.pair("y0", "u1"))
+    np.testing.assert_allclose(df[df.input == "u0"].multiple, c.multiple[:, 0])
+    r = sysid.correlation(d, 5)
+    df = r.to_pandas()
+    sel = df[(df.a == "y0") & (df.b == "u0")]
+    np.testing.assert_allclose(sel.r, r.pair("y0", "u0"))
+    np.testing.assert_allclose(sel.time, r.lags * 0.5)
+    assert set(sel.lag[sel.significant]) == set(r.significant("y0", "u0"))
