@@ -172,3 +172,21 @@ def test_spectra_coherence_correlation_have_to_pandas() -> None:
     np.testing.assert_allclose(sel.r, r.pair("y0", "u0"))
     np.testing.assert_allclose(sel.time, r.lags * 0.5)
     assert set(sel.lag[sel.significant]) == set(r.significant("y0", "u0"))
+
+
+@pytest.mark.parametrize("estimate", [
+    lambda d: sysid.welch_frf(d),
+    lambda d: sysid.spa(d, lags=30),
+    lambda d: sysid.etfe(d, smoothing=20),
+])
+def test_dependent_or_constant_inputs_are_named(estimate) -> None:
+    # two inputs with power but a singular spectral matrix (u1 = 2 u0) were told "the input
+    # has no power at any frequency (an all-zero or constant input?)"
+    u = np.random.default_rng(8).standard_normal(2000)
+    y = u + 0.1 * np.random.default_rng(9).standard_normal(2000)
+    with pytest.raises(sysid.ExcitationError, match="linearly dependent at every frequency"):
+        estimate(sysid.IOData(np.c_[u, 2 * u], y))
+    with pytest.raises(sysid.ExcitationError, match=r"input\(s\) \['u1'\] are constant"):
+        estimate(sysid.IOData(np.c_[u, np.full(2000, 3.0)], y))
+    with pytest.raises(sysid.ExcitationError, match="no power at any frequency"):
+        estimate(sysid.IOData(np.zeros((2000, 2)), y))

@@ -115,13 +115,34 @@ def default_lags(data: IOData, remove_mean: bool = True) -> tuple[int, dict[str,
 # --------------------------------------------------------------------------------------------
 
 
-def _need_excitation(keep: np.ndarray, what: str) -> None:
-    if not np.any(keep):
-        raise ExcitationError(
-            f"{what}: the input has no power at any frequency (an all-zero or constant "
-            "input?), so there is no frequency response to estimate; check the input "
-            "channels, or use output-only analysis (sysid.spectra) for time series"
-        )
+def _need_excitation(keep: np.ndarray, what: str, data: IOData | None = None) -> None:
+    """Raise when no frequency is left: no input power, constant inputs, or inputs that are
+    linearly dependent at every frequency (a singular input spectral matrix)."""
+    if np.any(keep):
+        return
+    if data is not None and data.n_inputs > 1:
+        varying = np.zeros(data.n_inputs, dtype=bool)
+        for u, _ in data.experiments:
+            varying |= np.std(u, axis=0) > 1e-12 * np.max(np.abs(u), axis=0)
+        names = list(data.input_names)
+        if varying.any() and not varying.all():
+            flat = [n for n, v in zip(names, varying) if not v]
+            raise ExcitationError(
+                f"{what}: input(s) {flat} are constant, so their responses cannot be "
+                "estimated and the input spectral matrix is singular; leave them out "
+                "(data.select(inputs=...)) or excite them")
+        if varying.all():
+            raise ExcitationError(
+                f"{what}: the {len(names)} inputs {names} are linearly dependent at every "
+                "frequency (their spectral matrix is singular: one input a copy, a multiple "
+                "or a filtered version of another, or a sum of others), so their separate "
+                "responses cannot be told apart; excite the inputs independently, or "
+                "estimate the response to one input at a time (data.select(inputs=...))")
+    raise ExcitationError(
+        f"{what}: the input has no power at any frequency (an all-zero or constant "
+        "input?), so there is no frequency response to estimate; check the input "
+        "channels, or use output-only analysis (sysid.spectra) for time series"
+    )
 
 
 def welch_frf(
@@ -176,7 +197,7 @@ def welch_frf(
     # segment means are removed: the zero-frequency bin carries no information
     S, f = S[1:], f[1:]
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, averages=k_eff)
-    _need_excitation(keep, "welch_frf")
+    _need_excitation(keep, "welch_frf", data)
     std, dof = _band(ratio, k_eff, m, "lower nperseg")
     return FRD(
         2 * np.pi * f[keep], G, coherence=coh, std=std, dof=dof,
@@ -276,7 +297,7 @@ def spa(
     m = data.n_inputs
     k_eff = total / (lagw[0] ** 2 + 2.0 * (lagw[1:] ** 2).sum())
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, averages=k_eff)
-    _need_excitation(keep, "spa")
+    _need_excitation(keep, "spa", data)
     std, dof = _band(ratio, k_eff, m, "lower lags")
     return FRD(
         w[keep], G, coherence=coh, std=std, dof=dof, confidence=confidence,
@@ -368,7 +389,7 @@ def etfe(
         S[:, :m, m:] = np.conj(np.swapaxes(Pyu, 1, 2))
         S[:, m:, m:] = Pyy
         G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, min_power)
-        _need_excitation(keep, "etfe")
+        _need_excitation(keep, "etfe", data)
         w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
         info["dropped"] = w[~keep]
         coh_out = coh if data.n_experiments > m else None
@@ -402,7 +423,7 @@ def etfe(
     S[:, m:, m:] = smooth(Pyy)
     k_eff = data.n_experiments / float((W**2).sum())
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, min_power, averages=k_eff)
-    _need_excitation(keep, "etfe")
+    _need_excitation(keep, "etfe", data)
     w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
     info.update({"window": window, "multiple_coherence": mcoh, "dropped": w[~keep]})
     std, dof = _band(ratio, k_eff, m, "increase smoothing")
