@@ -190,3 +190,19 @@ def test_dependent_or_constant_inputs_are_named(estimate) -> None:
         estimate(sysid.IOData(np.c_[u, np.full(2000, 3.0)], y))
     with pytest.raises(sysid.ExcitationError, match="no power at any frequency"):
         estimate(sysid.IOData(np.zeros((2000, 2)), y))
+
+
+def test_frd_plot_phase_band_is_whole_where_the_circle_holds_the_origin() -> None:
+    # a confidence circle around a response smaller than its radius allows any phase; the
+    # band was drawn +-90 degrees there (arcsin clipped at 1)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    w = np.array([0.1, 0.2, 0.3])
+    f = sysid.FRD(w, [1.0, 0.01, 1.0], std=[0.01, 0.1, 0.01], dt=1.0)
+    fig = f.plot()
+    band = fig.axes[1].collections[0].get_paths()[0].vertices[:, 1]
+    assert band.max() - band.min() >= 360.0 - 1e-9
+    plt.close(fig)
