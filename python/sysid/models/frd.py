@@ -96,6 +96,9 @@ class FRD:
         if dof is not None and not dof > 0:
             raise DataError(f"dof must be positive, got {dof}")
         self.dof = None if dof is None else float(dof)
+        if dt is not None and not (np.isfinite(float(dt)) and float(dt) >= 0.0):
+            raise DataError(f"dt must be a positive sample time in seconds (or 0 / None for a "
+                            f"continuous-time response), got {dt}")
         self.dt = None if dt is None or float(dt) == 0.0 else float(dt)  # 0: continuous
         l, m = g.shape[1:]
         self.input_names = IOData._names(input_names, m, "u", "input")
@@ -105,8 +108,16 @@ class FRD:
 
     def _same(self, x: Any, name: str, dtype: type) -> np.ndarray:
         a: np.ndarray = np.asarray(x, dtype=dtype)
+        if a.ndim == 1 and self.response.shape[1:] == (1, 1):
+            a = a[:, None, None]  # one pair: (n_freq,) as the response itself is accepted
         if a.shape != self.response.shape:
             raise ShapeError(f"{name} has shape {a.shape} but the response {self.response.shape}")
+        hi = 1.0 if name == "coherence" else np.inf
+        if not (np.isfinite(a).all() and (a >= 0).all() and (a <= hi).all()):
+            rng = "in [0, 1]" if name == "coherence" else "finite and >= 0"
+            raise DataError(f"{name} must be {rng} at every frequency and pair (got min "
+                            f"{np.nanmin(a):.3g}, max {np.nanmax(a):.3g}, "
+                            f"{int(np.sum(~np.isfinite(a)))} non-finite)")
         return a
 
     @property
@@ -173,14 +184,23 @@ class FRD:
         return self.std * np.sqrt(stats.f.ppf(self.confidence, 2, self.dof))
 
     def _other(self, other: Any) -> np.ndarray:
-        if hasattr(other, "freqresp"):
-            g = np.asarray(other.freqresp(self.omega))
-        elif isinstance(other, FRD):
+        # an FRD first: it has freqresp too, which interpolated it linearly onto this grid
+        # (between coarse lines across a resonance: a made-up response, compared as measured)
+        if isinstance(other, FRD):
             if other.omega.shape != self.omega.shape or not np.allclose(other.omega, self.omega):
-                raise DataError("the two FRDs are on different frequency grids")
+                raise DataError(
+                    f"the two FRDs are on different frequency grids ({other.omega.size} "
+                    f"frequencies {other.omega.min():.4g}..{other.omega.max():.4g} rad/s, this "
+                    f"one {self.omega.size} in {self.omega.min():.4g}..{self.omega.max():.4g}); "
+                    "estimate both on one grid (spa's omega=, the same nperseg / lines), or "
+                    "compare with other.freqresp(frd.omega) to interpolate on purpose")
             g = other.response
+        elif hasattr(other, "freqresp"):
+            g = np.asarray(other.freqresp(self.omega))
         else:
             g = np.asarray(other, dtype=complex)
+            if g.ndim == 1 and self.response.shape[1:] == (1, 1):
+                g = g[:, None, None]  # one pair, as the constructor takes it
         if g.shape != self.response.shape:
             raise ShapeError(f"the other response has shape {g.shape}, this one "
                              f"{self.response.shape}")

@@ -37,21 +37,40 @@ def _periods(x: np.ndarray, n_per: int, periods: int, transient: int) -> np.ndar
     return np.fft.fft(x, axis=1)
 
 
-def _excited(U: np.ndarray, lines: Any, n_per: int) -> np.ndarray:
-    """Excited DFT lines (1 .. n_per // 2 - 1): given, or where the input power of every
-    experiment is not negligible (above 1e-8 of the largest; a random-odd grid leaves out
-    different lines in each realisation, and those are dropped)."""
+#: A drop in input power between consecutive lines (sorted by power) of more than this
+#: factor separates the excited lines from those a measured input carries without being
+#: excited there (its own distortion, feedback of the structure, noise).
+LINE_GAP = 100.0
+
+
+def _excited(U: np.ndarray, lines: Any, n_per: int) -> tuple[np.ndarray, np.ndarray]:
+    """Excited DFT lines (1 .. n_per // 2 - 1) and the lines left out as not excited.
+
+    Given, or found from the input power of every experiment: above 1e-8 of the largest (a
+    random-odd grid leaves out different lines in each realisation, and those are dropped),
+    and above the first drop of more than :data:`LINE_GAP` when the lines are sorted by
+    power. A measured input (a shaker's force) holds periodic power at lines the multisine
+    does not excite, 1e-4 and less of the excited lines' (the F-16 record: 821 such lines
+    next to 267 excited ones); ``Y / U`` there is the ratio of two distortions, up to 100
+    times the response, and was returned as part of the BLA."""
     if lines is not None:
         k = np.unique(np.asarray(lines, dtype=int).ravel())
         if k.size == 0 or k.min() < 1 or k.max() >= n_per / 2.0:
             raise DataError(f"lines must lie in 1..{int(np.ceil(n_per / 2.0)) - 1}")
-        return k
+        return k, np.zeros(0, dtype=int)
     power = np.sum(np.abs(U) ** 2, axis=(1, 3))[:, : (n_per + 1) // 2]
     power[:, 0] = 0.0
+    rel = np.min(power / np.maximum(power.max(axis=1, keepdims=True), 1e-300), axis=0)
     k = np.flatnonzero(np.all(power > 1e-8 * power.max(), axis=0))
     if k.size == 0:
         raise DataError("the input excites no frequency line; is the input zero?")
-    return k
+    level = np.sort(np.log10(np.maximum(rel[k], 1e-300)))[::-1]
+    drops = np.flatnonzero(level[:-1] - level[1:] > np.log10(LINE_GAP))
+    if drops.size == 0:
+        return k, np.zeros(0, dtype=int)
+    floor = level[drops[0]]
+    keep = np.log10(np.maximum(rel[k], 1e-300)) >= floor
+    return k[keep], k[~keep]
 
 
 def bla(
@@ -78,7 +97,11 @@ def bla(
         Leading periods to drop (transients); ``periods - transient >= 2`` gives the noise
         variance, and two realisation blocks or more the nonlinear-distortion variance.
     lines : array_like of int, optional
-        Excited DFT lines of one period; default: the lines the input excites.
+        Excited DFT lines of one period; default: the lines the input excites, found from
+        its power (above 1e-8 of the largest in every experiment, and above the first drop
+        by more than a factor 100 between lines sorted by power: the periodic power that a
+        measured input holds between its excited lines is left out; the lines so left out
+        are ``info["unexcited_lines"]``).
     confidence : float
         Level of the band of the returned FRD.
 
@@ -142,7 +165,7 @@ def bla(
                 "periods of a periodic excitation; give the true number of periods "
                 "(sysid.detect_period finds it), or use sysid.spa / sysid.welch_frf for "
                 "non-periodic data")
-    k = _excited(U, lines, n_per)
+    k, unexcited = _excited(U, lines, n_per)
     R = len(exps) // m
     Pp = P - T
     # (R, P', K, l, m) and (R, P', K, m, m): experiments of one block side by side
@@ -170,7 +193,8 @@ def bla(
     avg_y = [np.real(np.fft.ifft(Y[e].mean(axis=0), axis=0)) for e in range(len(exps))]
     dof = 2.0 * (R - 1) if R > 1 else (2.0 * (Pp - 1) if Pp > 1 else None)
     info = {"noise_std": np.sqrt(s2n), "distortion_std": np.sqrt(s2s), "lines": k,
-            "n_per": n_per, "periods": P, "transient": T, "realizations": R,
+            "unexcited_lines": unexcited, "n_per": n_per, "periods": P, "transient": T,
+            "realizations": R,
             "averaged": (avg_u, avg_y)}
     return FRD(2 * np.pi * k / (n_per * dt), Gbla,
                std=None if not np.all(np.isfinite(std)) else std, confidence=confidence,

@@ -72,6 +72,29 @@ class Correlation:
             out &= self.lags != 0
         return self.lags[out]
 
+    def to_pandas(self) -> Any:
+        """A long-format DataFrame: one row per lag and channel pair with ``lag``, ``time``
+        (``lag * dt``, seconds), ``a``, ``b``, ``r`` (``r_ab(lag)``) and ``significant``
+        (``|r| > bound``).
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> u = np.random.default_rng(0).standard_normal(500)
+        >>> sysid.correlation(sysid.IOData(u, u), 3).to_pandas().shape
+        (28, 6)
+        """
+        from ..data.formats import _pandas
+
+        nl, nc, _ = self.values.shape
+        idx = np.indices((nl, nc, nc)).reshape(3, -1)
+        names = np.array(self.names, dtype=object)
+        r = self.values.reshape(-1)
+        return _pandas().DataFrame({
+            "lag": self.lags[idx[0]], "time": self.lags[idx[0]] * self.dt,
+            "a": names[idx[1]], "b": names[idx[2]], "r": r,
+            "significant": np.abs(r) > self.bound})
+
     def plot(self, a: str, b: str, *, ax: Any = None) -> Any:
         """Stem plot of ``r_ab`` with the confidence bounds."""
         from ..plot.data import plot_correlation

@@ -33,7 +33,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy import ndimage, signal
+from scipy import ndimage
 
 from .._checks import as_int
 from ..data.iodata import IOData
@@ -46,6 +46,7 @@ from .spectra import (
     _frf_from_S,
     _need_data,
     _welch_matrix,
+    _window,
     _z,
 )
 
@@ -114,13 +115,34 @@ def default_lags(data: IOData, remove_mean: bool = True) -> tuple[int, dict[str,
 # --------------------------------------------------------------------------------------------
 
 
-def _need_excitation(keep: np.ndarray, what: str) -> None:
-    if not np.any(keep):
-        raise ExcitationError(
-            f"{what}: the input has no power at any frequency (an all-zero or constant "
-            "input?), so there is no frequency response to estimate; check the input "
-            "channels, or use output-only analysis (sysid.spectra) for time series"
-        )
+def _need_excitation(keep: np.ndarray, what: str, data: IOData | None = None) -> None:
+    """Raise when no frequency is left: no input power, constant inputs, or inputs that are
+    linearly dependent at every frequency (a singular input spectral matrix)."""
+    if np.any(keep):
+        return
+    if data is not None and data.n_inputs > 1:
+        varying = np.zeros(data.n_inputs, dtype=bool)
+        for u, _ in data.experiments:
+            varying |= np.std(u, axis=0) > 1e-12 * np.max(np.abs(u), axis=0)
+        names = list(data.input_names)
+        if varying.any() and not varying.all():
+            flat = [n for n, v in zip(names, varying) if not v]
+            raise ExcitationError(
+                f"{what}: input(s) {flat} are constant, so their responses cannot be "
+                "estimated and the input spectral matrix is singular; leave them out "
+                "(data.select(inputs=...)) or excite them")
+        if varying.all():
+            raise ExcitationError(
+                f"{what}: the {len(names)} inputs {names} are linearly dependent at every "
+                "frequency (their spectral matrix is singular: one input a copy, a multiple "
+                "or a filtered version of another, or a sum of others), so their separate "
+                "responses cannot be told apart; excite the inputs independently, or "
+                "estimate the response to one input at a time (data.select(inputs=...))")
+    raise ExcitationError(
+        f"{what}: the input has no power at any frequency (an all-zero or constant "
+        "input?), so there is no frequency response to estimate; check the input "
+        "channels, or use output-only analysis (sysid.spectra) for time series"
+    )
 
 
 def welch_frf(
@@ -175,7 +197,7 @@ def welch_frf(
     # segment means are removed: the zero-frequency bin carries no information
     S, f = S[1:], f[1:]
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, averages=k_eff)
-    _need_excitation(keep, "welch_frf")
+    _need_excitation(keep, "welch_frf", data)
     std, dof = _band(ratio, k_eff, m, "lower nperseg")
     return FRD(
         2 * np.pi * f[keep], G, coherence=coh, std=std, dof=dof,
@@ -250,7 +272,11 @@ def spa(
         n_freq = as_int(n_freq, "n_freq", 2)
         w = np.arange(1, n_freq + 1) * np.pi / (n_freq * data.dt)
     else:
-        w = np.asarray(omega, dtype=float).ravel()
+        w = np.asarray(omega, dtype=float)
+        if np.squeeze(w).ndim > 1 or w.size == 0:  # a column vector is one grid too
+            raise DataError(f"omega must be a non-empty 1-D array of frequencies in rad/s, got "
+                            f"shape {w.shape}")
+        w = w.ravel()
         if not (np.isfinite(w).all() and (w >= 0).all()):
             raise DataError("omega must hold finite non-negative frequencies in rad/s")
         nyquist = np.pi / data.dt
@@ -271,7 +297,7 @@ def spa(
     m = data.n_inputs
     k_eff = total / (lagw[0] ** 2 + 2.0 * (lagw[1:] ** 2).sum())
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, averages=k_eff)
-    _need_excitation(keep, "spa")
+    _need_excitation(keep, "spa", data)
     std, dof = _band(ratio, k_eff, m, "lower lags")
     return FRD(
         w[keep], G, coherence=coh, std=std, dof=dof, confidence=confidence,
@@ -363,7 +389,7 @@ def etfe(
         S[:, :m, m:] = np.conj(np.swapaxes(Pyu, 1, 2))
         S[:, m:, m:] = Pyy
         G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, min_power)
-        _need_excitation(keep, "etfe")
+        _need_excitation(keep, "etfe", data)
         w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
         info["dropped"] = w[~keep]
         coh_out = coh if data.n_experiments > m else None
@@ -373,7 +399,15 @@ def etfe(
     width = as_int(smoothing, "smoothing", 2)
     if width <= m:
         raise DataError(f"smoothing must exceed the number of inputs ({m}), got {width}")
-    W = signal.get_window(window, width + 2)[1:-1] if window != "boxcar" else np.ones(width)
+    if width > n:
+        # a window wider than the n bins of the (two-sided, circular) spectrum wraps onto
+        # bins it already holds: 1 / sum(W^2) then counts them twice, and the band shrank
+        raise DataError(
+            f"smoothing = {width} bins is wider than the spectrum of a {n}-sample experiment "
+            f"({n} bins around the circle): give smoothing <= {n} (a few per cent of it keeps "
+            "the resolution), or use spa / welch_frf"
+        )
+    W = _window(window, width + 2)[1:-1] if window != "boxcar" else np.ones(width)
     W = W / W.sum()
     # smooth over the two-sided spectrum (periodic in frequency): mirror the one-sided one
     def smooth(P: np.ndarray) -> np.ndarray:
@@ -389,7 +423,7 @@ def etfe(
     S[:, m:, m:] = smooth(Pyy)
     k_eff = data.n_experiments / float((W**2).sum())
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, min_power, averages=k_eff)
-    _need_excitation(keep, "etfe")
+    _need_excitation(keep, "etfe", data)
     w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
     info.update({"window": window, "multiple_coherence": mcoh, "dropped": w[~keep]})
     std, dof = _band(ratio, k_eff, m, "increase smoothing")

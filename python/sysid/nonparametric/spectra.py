@@ -51,10 +51,16 @@ def _welch_matrix(
     dt: float, detrend: bool,
 ) -> tuple[np.ndarray, np.ndarray, float, int]:
     """One-sided density cross-spectral matrix ``(n_freq, nc, nc)``, freqs (Hz), K_eff, K."""
-    win = signal.get_window(window, nperseg) if not isinstance(window, np.ndarray) else window
+    win = _window(window, nperseg) if not isinstance(window, np.ndarray) else window
     if win.size != nperseg:
         raise DataError(f"window has {win.size} samples, nperseg is {nperseg}")
-    nfft = nperseg if nfft is None else int(nfft)
+    nfft = nperseg if nfft is None else as_int(nfft, "nfft", 2)
+    if nfft < nperseg:  # np.fft.rfft(n=nfft) would cut every segment to its first nfft samples
+        raise DataError(
+            f"nfft ({nfft}) must be at least nperseg ({nperseg}): a shorter FFT drops the end "
+            "of every segment; nfft pads with zeros (finer grid), it cannot shorten a segment "
+            "(lower nperseg for a coarser grid)"
+        )
     step = nperseg - noverlap
     nc = zs[0].shape[1]
     nf = nfft // 2 + 1
@@ -88,6 +94,18 @@ def _welch_matrix(
         j += 1
     k_eff = count / (1.0 + 2.0 * rho)
     return S, f, k_eff, count
+
+
+def _window(window: Any, n: int) -> np.ndarray:
+    """``scipy.signal.get_window(window, n)``; an unknown name is a :class:`DataError`."""
+    try:
+        return np.asarray(signal.get_window(window, n), dtype=float)
+    except (ValueError, TypeError) as exc:
+        raise DataError(
+            f"window {window!r} is not a window scipy.signal.get_window knows ({exc}); use a "
+            "name such as 'hann', 'hamming', 'blackman' or 'boxcar', or a tuple such as "
+            "('tukey', 0.25)"
+        ) from None
 
 
 def _frf_from_S(
@@ -202,6 +220,27 @@ class Spectra:
         """Cross spectral density ``S_ab = E[Z_a Z_b^*]`` (equals ``scipy.signal.csd(b, a)``)."""
         return self.matrix[:, self._i(a), self._i(b)].copy()
 
+    def to_pandas(self) -> Any:
+        """A long-format DataFrame: one row per frequency and channel pair ``(a, b)`` with
+        ``omega``, ``hz``, ``a``, ``b``, ``real``, ``imag`` and ``magnitude`` of ``S_ab``.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> d = sysid.IOData(u=np.random.default_rng(0).standard_normal(512), y=np.ones(512))
+        >>> sysid.spectra(d, nperseg=64).to_pandas().shape
+        (132, 7)
+        """
+        from ..data.formats import _pandas
+
+        nf, nc, _ = self.matrix.shape
+        idx = np.indices((nf, nc, nc)).reshape(3, -1)
+        s = self.matrix.reshape(-1)
+        names = np.array(self.names, dtype=object)
+        return _pandas().DataFrame({
+            "omega": self.omega[idx[0]], "hz": self.hz[idx[0]], "a": names[idx[1]],
+            "b": names[idx[2]], "real": s.real, "imag": s.imag, "magnitude": np.abs(s)})
+
     def plot(self, channels: Sequence[str] | None = None, *, ax: Any = None) -> Any:
         """Log-log plot of the auto spectra."""
         from ..plot.data import plot_spectra
@@ -304,6 +343,28 @@ class Coherence:
         """Boolean ``(n_freq, l, m)``: where the coherence exceeds ``threshold`` (flight-test
         practice trusts frequency responses only there)."""
         return self.values > threshold
+
+    def to_pandas(self) -> Any:
+        """A long-format DataFrame: one row per frequency and output/input pair with
+        ``omega``, ``hz``, ``output``, ``input``, ``coherence`` and the output's
+        ``multiple`` coherence.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> u = np.random.default_rng(0).standard_normal(1024)
+        >>> sysid.coherence(sysid.IOData(u, u), nperseg=64).to_pandas().shape
+        (33, 6)
+        """
+        from ..data.formats import _pandas
+
+        nf, l, m = self.values.shape
+        idx = np.indices((nf, l, m)).reshape(3, -1)
+        return _pandas().DataFrame({
+            "omega": self.omega[idx[0]], "hz": self.hz[idx[0]],
+            "output": np.array(self.output_names, dtype=object)[idx[1]],
+            "input": np.array(self.input_names, dtype=object)[idx[2]],
+            "coherence": self.values.reshape(-1), "multiple": self.multiple[idx[0], idx[1]]})
 
     def plot(self, *, fig: Any = None, threshold: float | None = 0.6) -> Any:
         """One panel per input, every output's coherence against frequency."""

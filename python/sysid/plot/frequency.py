@@ -58,6 +58,7 @@ def plot_frd(frd: Any, *, models: Any = None, fig: Any = None) -> Any:
                 hi = 20 * np.log10(g + r)
                 am.fill_between(f, lo, hi, color="C0", alpha=0.2, lw=0)
                 dph = np.degrees(np.arcsin(np.clip(r / np.maximum(g, 1e-300), 0, 1)))
+                dph[r >= g] = 180.0  # the circle holds the origin: any phase is possible
                 ap.fill_between(f, phase[:, i, j] - dph, phase[:, i, j] + dph, color="C0",
                                 alpha=0.2, lw=0)
             for k, (name, g) in enumerate(model_g.items()):
