@@ -38,4 +38,4 @@ def test_polynomial_and_identified_models_have_them_too():
     assert r.model.summary().startswith("IdentifiedModel around u = [")
     assert len(r.model.to_pandas()) == r.model.nstates
     plain = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1)
-    assert "search" not in plain.summary() and "parameters:" not in plain.summary()
+    assert "search:" not in plain.summary() and "\nparameters:" not in plain.summary()
