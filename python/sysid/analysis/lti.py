@@ -23,7 +23,7 @@ from .._checks import as_matrix
 from ..errors import DataError, ShapeError
 from ..models.checks import _optional, check_model
 from ..models.continuous import ContinuousStateSpace, c2d, d2c
-from ..models.linear import DampingTable, damping_table, transmission_zeros
+from ..models.linear import DampingTable, damping, transmission_zeros
 from ..models.protocol import TimeResponse
 from ..models.statespace import StateSpaceModel
 from .controllability import ctrb, is_controllable, is_observable, obsv  # noqa: F401 (moved)
@@ -94,12 +94,7 @@ def damp(model: Any, std: bool = False) -> DampingTable:
     array([0.0995, 0.0995])
     """
     check_model(model)
-    if std:
-        from ..models.pole_uncertainty import damping_std
-
-        d = damping_std(model, float(model.dt))  # dt = 0: a continuous model's own poles
-        return DampingTable(d["poles"], d["s"].astype(complex), float(model.dt) or None, std=d)
-    return damping_table(np.asarray(_optional(model, "poles", "damp")), float(model.dt))
+    return damping(model, std)
 
 
 # -- time responses ---------------------------------------------------------------------

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DataError
+from ..models.linear import minimal_basis
 
 __all__ = ["minreal"]
 
@@ -77,39 +78,13 @@ def _tf(G: Any, tol: float) -> Any:
                             info={**G.info, "minreal": True})
 
 
-def _reachable(A: np.ndarray, B: np.ndarray, tol: float) -> np.ndarray:
-    """Orthonormal basis of the controllable subspace (staircase with SVD rank decisions)."""
-    n = A.shape[0]
-    scale = max(np.linalg.norm(A), np.linalg.norm(B), 1.0)
-    basis = np.zeros((n, 0))
-    block = B
-    for _ in range(n):
-        if basis.shape[1]:
-            block = block - basis @ (basis.T @ block)
-        if block.size == 0:
-            break
-        U, s, _ = np.linalg.svd(block, full_matrices=False)
-        r = int(np.sum(s > tol * scale))
-        if r == 0:
-            break
-        basis = np.hstack([basis, U[:, :r]])
-        if basis.shape[1] >= n:
-            break
-        block = A @ U[:, :r]
-    q, _ = np.linalg.qr(basis) if basis.shape[1] else (basis, None)
-    return q
-
-
 def _ss(sys: Any, tol: float) -> Any:
     A, B, C, D = (np.asarray(x, float) for x in (sys.A, sys.B, sys.C, sys.D))
     K = getattr(sys, "K", None)
     # an innovations-form model: the noise enters through K, so the states it reaches are
     # kept too (the noise model and the predictor survive)
     BK = B if K is None else np.hstack([B, np.asarray(K, float)])
-    Vc = _reachable(A, BK, tol)
-    A1, C1 = Vc.T @ A @ Vc, C @ Vc
-    Vo = _reachable(A1.T, C1.T, tol)
-    T = Vc @ Vo
+    T = minimal_basis(A, BK, C, tol)
     A2, B2, C2 = T.T @ A @ T, T.T @ B, C @ T
     kw = {"input_names": sys.input_names, "output_names": sys.output_names}
     from ..models.continuous import ContinuousStateSpace

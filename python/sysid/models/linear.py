@@ -166,6 +166,27 @@ class DampingTable(HTMLResult):
         return f"DampingTable ({where})\n" + "\n".join(rows)
 
 
+def damping(model: Any, std: bool = False) -> DampingTable:
+    """The :class:`DampingTable` of a model's poles (:func:`sysid.damp`, which checks the
+    model first), with their standard deviations (``std=True``: from its uncertainty).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> from sysid.models.linear import damping
+    >>> round(float(damping(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])).zeta[0]), 3)
+    1.0
+    """
+    if std:
+        from .pole_uncertainty import damping_std
+
+        d = damping_std(model, float(model.dt))  # dt = 0: a continuous model's own poles
+        return DampingTable(d["poles"], d["s"].astype(complex), float(model.dt) or None, std=d)
+    from .checks import _optional
+
+    return damping_table(np.asarray(_optional(model, "poles", "damp")), float(model.dt))
+
+
 def damping_table(poles: np.ndarray, dt: float) -> DampingTable:
     """The :class:`DampingTable` of ``poles``: discrete (``dt > 0``, mapped through
     ``s = log(z) / dt``; ``z = 0`` gives ``s = -inf``) or continuous (``dt == 0``).
@@ -183,3 +204,44 @@ def damping_table(poles: np.ndarray, dt: float) -> DampingTable:
     with np.errstate(divide="ignore"):
         s = np.where(np.abs(p) > 0, np.log(np.where(np.abs(p) > 0, p, 1)) / dt, -np.inf)
     return DampingTable(p, s.astype(complex), dt)
+
+
+def reachable_basis(A: np.ndarray, B: np.ndarray, tol: float) -> np.ndarray:
+    """Orthonormal basis of the subspace ``B`` reaches through ``A`` (staircase with SVD rank
+    decisions, relative to ``tol`` times the larger of the norms)."""
+    n = A.shape[0]
+    scale = max(np.linalg.norm(A), np.linalg.norm(B), 1.0)
+    basis = np.zeros((n, 0))
+    block = B
+    for _ in range(n):
+        if basis.shape[1]:
+            block = block - basis @ (basis.T @ block)
+        if block.size == 0:
+            break
+        U, s, _ = np.linalg.svd(block, full_matrices=False)
+        r = int(np.sum(s > tol * scale))
+        if r == 0:
+            break
+        basis = np.hstack([basis, U[:, :r]])
+        if basis.shape[1] >= n:
+            break
+        block = A @ U[:, :r]
+    q, _ = np.linalg.qr(basis) if basis.shape[1] else (basis, None)
+    return q
+
+
+def minimal_basis(A: np.ndarray, B: np.ndarray, C: np.ndarray, tol: float) -> np.ndarray:
+    """Orthonormal basis ``T`` of the part of the state ``B`` reaches and ``C`` sees: ``(T^T A
+    T, T^T B, C T)`` is the minimal realisation (:func:`sysid.minreal`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.models.linear import minimal_basis
+    >>> A = np.diag([0.5, 0.9]); B = np.array([[1.0], [0.0]]); C = np.array([[1.0, 1.0]])
+    >>> minimal_basis(A, B, C, 1e-8).shape                   # the 0.9 mode is not reached
+    (2, 1)
+    """
+    Vc = reachable_basis(A, B, tol)
+    A1, C1 = Vc.T @ A @ Vc, C @ Vc
+    return Vc @ reachable_basis(A1.T, C1.T, tol)

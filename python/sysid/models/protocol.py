@@ -367,9 +367,9 @@ class ModelMixin:
         >>> list(df.columns)[:3]
         ['pole', 'magnitude', 'wn [rad/s]']
         """
-        from ..analysis.lti import damp
+        from .linear import damping
 
-        return damp(self, std=getattr(self, "uncertainty", None) is not None).to_pandas()
+        return damping(self, std=getattr(self, "uncertainty", None) is not None).to_pandas()
 
     def _repr_html_(self) -> str:
         """Notebook display: facts, poles (see :mod:`sysid._display`)."""

@@ -19,7 +19,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_2d, as_count, as_dt, as_int, as_matrix, check_covariance, unmask
 from ..errors import DataError, NumericalError, ShapeError
-from .linear import DampingTable, damping_table, transmission_zeros
+from .linear import DampingTable, damping_table, minimal_basis, transmission_zeros
 from .protocol import ModelMixin, TimeResponse, default_length
 
 __all__ = ["StateSpaceModel", "ss_parameter_count"]
@@ -29,13 +29,12 @@ def minimal_dcgain(model: Any) -> np.ndarray | None:
     """The DC gain of ``model``'s controllable and observable part, when removing the rest
     removes the singularity (an integrator the input does not reach or the output does not
     see, as in the realisation of ``s / (s^2 + s)``); ``None`` when an integrator is left."""
-    from ..analysis.minreal import minreal
-
-    plain = type(model)(model.A, model.B, model.C, model.D, **(
-        {"dt": model.dt} if isinstance(model, StateSpaceModel) else {}))
-    reduced = minreal(plain)
-    if reduced.nstates == model.nstates:
+    A, B, C = (np.asarray(x, float) for x in (model.A, model.B, model.C))
+    T = minimal_basis(A, B, C, float(np.sqrt(np.finfo(float).eps)))
+    if T.shape[1] == A.shape[0]:
         return None
+    reduced = type(model)(T.T @ A @ T, T.T @ B, C @ T, model.D, **(
+        {"dt": model.dt} if isinstance(model, StateSpaceModel) else {}))
     try:
         return np.asarray(reduced.freqresp([0.0])[0].real)
     except np.linalg.LinAlgError:
