@@ -206,3 +206,21 @@ def test_frd_plot_phase_band_is_whole_where_the_circle_holds_the_origin() -> Non
     band = fig.axes[1].collections[0].get_paths()[0].vertices[:, 1]
     assert band.max() - band.min() >= 360.0 - 1e-9
     plt.close(fig)
+
+
+def test_an_frd_keeps_its_frequencies_in_order_and_once():
+    """Unsorted frequencies were kept as given, and the phase unwrapped along them (a jump of
+    2 pi where the order went back); a repeated frequency was kept twice."""
+    g = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]], dt=1.0)
+    w = np.linspace(0.01, 3.0, 50)
+    resp = g.freqresp(w)
+    perm = np.random.default_rng(0).permutation(50)
+    std = np.abs(resp) * 0.1
+    f = sysid.FRD(w[perm], resp[perm], std=std[perm], dt=1.0)
+    ordered = sysid.FRD(w, resp, std=std, dt=1.0)
+    np.testing.assert_array_equal(f.omega, w)
+    np.testing.assert_allclose(f.response, resp)
+    np.testing.assert_allclose(f.std, std)
+    np.testing.assert_allclose(f.phase, ordered.phase)
+    with pytest.raises(sysid.DataError, match="more than once"):
+        sysid.FRD(np.r_[w, w[3]], np.r_[resp, resp[3:4]], dt=1.0)

@@ -88,10 +88,17 @@ class FRD:
             raise DataError("omega and response must be finite")
         if not 0.0 < confidence < 1.0:
             raise DataError(f"confidence must lie in (0, 1), got {confidence}")
-        self.omega = w
-        self.response = g
-        self.coherence = None if coherence is None else self._same(coherence, "coherence", float)
-        self.std = None if std is None else self._same(std, "std", float)
+        # one response per frequency, in increasing order (the phase is unwrapped along it)
+        order = np.argsort(w, kind="stable")
+        same = np.flatnonzero(np.diff(w[order]) == 0)
+        if same.size:
+            raise DataError(f"omega holds {w[order][same[0]]:g} rad/s more than once: give each "
+                            f"frequency once (average repeated measurements of it first)")
+        self.omega = w[order]
+        self.response = g[order]
+        self.coherence = (None if coherence is None
+                          else self._same(coherence, "coherence", float)[order])
+        self.std = None if std is None else self._same(std, "std", float)[order]
         self.confidence = float(confidence)
         if dof is not None and not dof > 0:
             raise DataError(f"dof must be positive, got {dof}")
