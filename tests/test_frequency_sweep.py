@@ -224,3 +224,11 @@ def test_an_frd_keeps_its_frequencies_in_order_and_once():
     np.testing.assert_allclose(f.phase, ordered.phase)
     with pytest.raises(sysid.DataError, match="more than once"):
         sysid.FRD(np.r_[w, w[3]], np.r_[resp, resp[3:4]], dt=1.0)
+
+
+def test_an_experiment_shorter_than_a_segment_is_said_not_dropped_silently():
+    rng = np.random.default_rng(0)
+    u = [rng.standard_normal(2000), rng.standard_normal(100)]
+    y = [signal.lfilter([0.0, 1.0], [1.0, -0.5], x) for x in u]
+    with pytest.warns(UserWarning, match=r"experiment\(s\) 1 \(100 samples\) shorter"):
+        sysid.welch_frf(sysid.IOData(u=u, y=y), nperseg=256)

@@ -10,6 +10,7 @@ segment spans two).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
@@ -66,6 +67,11 @@ def _welch_matrix(
     nf = nfft // 2 + 1
     S = np.zeros((nf, nc, nc), dtype=complex)
     count = 0
+    short = [f"{k} ({z.shape[0]} samples)" for k, z in enumerate(zs) if z.shape[0] < nperseg]
+    if short and len(short) < len(zs):
+        warnings.warn(f"experiment(s) {', '.join(short)} shorter than nperseg = {nperseg} were "
+                      f"left out of the spectra; lower nperseg to use them", UserWarning,
+                      stacklevel=3)
     for z in zs:
         if z.shape[0] < nperseg:
             continue
