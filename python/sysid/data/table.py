@@ -25,8 +25,6 @@ from ..errors import DataError
 
 __all__: list[str] = []
 
-_OPEN = {".gz": gzip.decompress, ".bz2": bz2.decompress, ".xz": lzma.decompress,
-         ".lzma": lzma.decompress}
 _STREAM = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open, ".lzma": lzma.open}
 #: What a damaged or foreign compressed file raises while it is decompressed.
 _UNREADABLE = (OSError, EOFError, lzma.LZMAError, zlib.error)
@@ -152,11 +150,9 @@ def read_table(path: str | Path, delimiter: str | None = None, *,
     path = Path(path)
     if not path.is_file():
         raise DataError(f"no data file at {str(path)!r}")
-    raw = path.read_bytes()
-    unpack = _OPEN.get(path.suffix.lower())
     try:
-        if unpack is not None:
-            raw = unpack(raw)
+        with open_bytes(path) as f:
+            raw = f.read()
         if b"\0" in raw[:_SNIFF]:
             raise UnicodeDecodeError("utf-8", raw[:1], 0, 1, "NUL byte")
         text = raw.decode("utf-8-sig")
@@ -257,10 +253,20 @@ def first_bad_cell(path: str | Path, columns: list[str], *, delimiter: str | Non
     """
     path = Path(path)
     try:
-        with _open_text(path) as f:
-            return _scan(path, f, columns, delimiter, start, decimal)
-    except (OSError, EOFError, lzma.LZMAError):
+        head = header(path, delimiter, decimal=decimal)
+    except (DataError, *_UNREADABLE):  # an empty or unreadable file has no bad cell to name
         return None
+    if any(c not in head.names for c in columns):
+        return None
+    try:
+        for _ in _data_rows(path, head, [head.names.index(c) for c in columns],
+                            start=start, decimal=decimal):
+            pass
+    except DataError as e:
+        return e
+    except _UNREADABLE:
+        return None
+    return None
 
 
 def first_line(path: str | Path) -> tuple[int, str]:
@@ -411,24 +417,14 @@ def read_named(path: str | Path, columns: list[str], rows: int, *,
     missing = [c for c in columns if c not in head.names]
     if missing:
         raise DataError(f"{path.name}: no column(s) {missing}; it has {head.names}")
-    cols = [head.names.index(c) for c in columns]
-    split, n = splitter(head.delimiter), len(head.names)
-    out = np.empty((rows, len(cols)))
+    out = np.empty((rows, len(columns)))
     r = 0
-    with _open_text(path) as f:
-        kept = _kept(line.rstrip("\r\n") for line in f)
-        if not head.headerless:
-            next(kept)
-        for k, line in kept:
-            cells = _fields(path, k, split(line), n)
-            if r == rows:
-                raise DataError(f"{path.name}: more than the {rows} rows counted; the file "
-                                "changed while it was read")
-            for j, c in enumerate(cols):
-                if not is_finite(cells[c]):
-                    raise cell_error(path, k, head.names[c], cells[c])
-                out[r, j] = float(cells[c])
-            r += 1
+    for _, values in _data_rows(path, head, [head.names.index(c) for c in columns]):
+        if r == rows:
+            raise DataError(f"{path.name}: more than the {rows} rows counted; the file "
+                            "changed while it was read")
+        out[r] = values
+        r += 1
     if r == 0:
         raise DataError(f"{str(path)!r} has a header but no data rows")
     return out[:r]
@@ -441,24 +437,19 @@ def _open_text(path: Path) -> IO[str]:
     return open(path, encoding="utf-8-sig", errors="replace")  # noqa: SIM115 (the caller's with)
 
 
-def _scan(path: Path, f: IO[str], columns: list[str], delimiter: str | None, start: int,
-          decimal: str) -> DataError | None:
-    kept = _kept(line.rstrip("\r\n") for line in f)
-    first = next(kept, None)
-    if first is None:
-        return None
-    split = splitter(delimiter or guess_delimiter(first[1], decimal))
-    names, headerless = _header(split(first[1]), decimal)
-    if any(c not in names for c in columns):
-        return None
-    cols = [names.index(c) for c in columns]
-    body = itertools.chain([first], kept) if headerless else kept
-    for k, line in itertools.islice(body, start, None):
-        try:
-            cells = _fields(path, k, split(line), len(names))
-        except DataError as e:
-            return e
-        for c in cols:
-            if not is_finite(cells[c], decimal):
-                return cell_error(path, k, names[c], cells[c], decimal=decimal)
-    return None
+def _data_rows(path: Path, head: Header, cols: list[int], *, start: int = 0,
+               decimal: str = ".") -> Iterator[tuple[int, list[float]]]:
+    """``(file line, values of cols)`` of each data row from the ``start``-th, read line by
+    line by :func:`read_table`'s rules; a row with the wrong number of fields or a cell that
+    is not a finite number raises its :class:`~sysid.DataError` (file line and column)."""
+    split, n = splitter(head.delimiter), len(head.names)
+    with _open_text(path) as f:
+        kept = _kept(line.rstrip("\r\n") for line in f)
+        if not head.headerless:
+            next(kept, None)
+        for k, line in itertools.islice(kept, start, None):
+            cells = _fields(path, k, split(line), n)
+            for c in cols:
+                if not is_finite(cells[c], decimal):
+                    raise cell_error(path, k, head.names[c], cells[c], decimal=decimal)
+            yield k, [float(cells[c].replace(decimal, ".")) for c in cols]
