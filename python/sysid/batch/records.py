@@ -141,8 +141,7 @@ def check_record_size(what: str, rows: int, columns: int, *, at_most: bool = Fal
             f"{need / 2**30:.1f} GiB as float64, more than {why}; identify_many fits each "
             "record in memory: cut the record into shorter ones, or compress it in blocks "
             "with sysid.compress_stream(path, past, input_columns=..., output_columns=...) "
-            "and fit "
-            "SubspaceEstimator.from_factor")
+            "and fit SubspaceEstimator.from_factor")
 
 
 def _text_record(path: Path, cols: Columns) -> IOData:

@@ -30,6 +30,7 @@ from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
 from ..subspace.feedthrough import check_feedthrough, choose_feedthrough
+from ..subspace.scaling import rescaled
 
 __all__ = ["pem", "pem_loss", "PemUncertainty"]
 
@@ -257,13 +258,7 @@ def _unscaled(model: StateSpaceModel, scale: np.ndarray | None) -> StateSpaceMod
     """A model fitted to outputs divided by ``scale``, in the original output units."""
     if scale is None:
         return model
-    s = scale[:, None]
-    return StateSpaceModel(
-        model.A, model.B, s * model.C, s * model.D,
-        None if model.K is None else model.K / scale[None, :], dt=model.dt,
-        noise_cov=None if model.noise_cov is None else s * model.noise_cov * scale[None, :],
-        x0=model.x0, input_names=model.input_names, output_names=model.output_names,
-        info=model.info)
+    return rescaled(model, np.ones(model.ninputs), scale)
 
 
 def _as_start(feedthrough: Any, model: Any) -> Any:

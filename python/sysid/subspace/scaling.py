@@ -21,24 +21,25 @@ import numpy as np
 from ..data.iodata import IOData
 from ..models.statespace import StateSpaceModel
 
-__all__ = ["SCALE_DEFAULT", "in_record_units", "scaled_experiments"]
+__all__ = ["SCALE_DEFAULT", "in_record_units", "rescaled", "scaled_experiments"]
 
 #: scale the channels to unit root mean square by default (unit-invariant estimates)
 SCALE_DEFAULT = True
 
 
-def in_record_units(model: StateSpaceModel, su: np.ndarray, sy: np.ndarray) -> StateSpaceModel:
-    """A model fitted to inputs divided by ``su`` and outputs by ``sy``, in the record's units:
-    ``B / su``, ``sy C``, ``sy D / su``, ``K / sy``, the innovation covariance and the
-    subspace noise covariances ``R``, ``S`` with the output scales (``A``, ``Q`` and the
-    initial state are unchanged).
+def rescaled(model: StateSpaceModel, su: np.ndarray, sy: np.ndarray) -> StateSpaceModel:
+    """A model fitted to inputs divided by ``su`` and outputs by ``sy``, in the record's
+    units: ``B / su``, ``sy C``, ``sy D / su``, ``K / sy``, the innovation covariance and a
+    subspace fit's noise covariances ``R``, ``S`` in ``info`` with the output scales (``A``,
+    ``Q`` and the initial state are unchanged). Shared with :func:`sysid.pem`'s output
+    scaling.
 
     Examples
     --------
     >>> import numpy as np, sysid
-    >>> from sysid.subspace.scaling import in_record_units
-    >>> m = in_record_units(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), np.array([2.0]),
-    ...                     np.array([10.0]))
+    >>> from sysid.subspace.scaling import rescaled
+    >>> m = rescaled(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), np.array([2.0]),
+    ...              np.array([10.0]))
     >>> float(m.B[0, 0]), float(m.C[0, 0])
     (0.5, 10.0)
     """
@@ -50,13 +51,22 @@ def in_record_units(model: StateSpaceModel, su: np.ndarray, sy: np.ndarray) -> S
         info["R"] = s * np.asarray(info["R"]) * sy[None, :]
     if info.get("S") is not None:
         info["S"] = np.asarray(info["S"]) * sy[None, :]
-    info["channel_scaling"] = {"input_rms": su.tolist(), "output_rms": sy.tolist()}
     return StateSpaceModel(
         model.A, model.B / su[None, :], s * model.C, s * model.D / su[None, :],
         None if model.K is None else model.K / sy[None, :], dt=model.dt,
         noise_cov=None if model.noise_cov is None else s * model.noise_cov * sy[None, :],
         x0=model.x0, input_names=model.input_names, output_names=model.output_names,
         info=info)
+
+
+def in_record_units(model: StateSpaceModel, su: np.ndarray, sy: np.ndarray) -> StateSpaceModel:
+    """A subspace model fitted on the scaled factor, :func:`rescaled` to the record's units,
+    the scales recorded in ``info["channel_scaling"]``."""
+    if np.all(su == 1.0) and np.all(sy == 1.0):
+        return model
+    out = rescaled(model, su, sy)
+    out.info["channel_scaling"] = {"input_rms": su.tolist(), "output_rms": sy.tolist()}
+    return out
 
 
 def scaled_experiments(data: IOData, su: np.ndarray, sy: np.ndarray
