@@ -61,7 +61,7 @@ from .feedthrough import (
     default_feedthrough,
 )
 from .methods import CLOSED_LOOP, METHODS, _method
-from .scaling import SCALE_DEFAULT, in_record_units, scaled_experiments
+from .scaling import check_scale, in_record_units, scaled_experiments
 from .streaming import compression_info, warn_if_fallback
 
 __all__ = [
@@ -371,10 +371,7 @@ class SubspaceEstimator:
     def _set_scaling(self, scale: bool | None) -> None:
         """The channel scaling of the fits (:mod:`sysid.subspace.scaling`): the record's
         factor with every channel at unit root mean square, :attr:`scaled_factor`."""
-        self.scale = SCALE_DEFAULT if scale is None else scale
-        if not isinstance(self.scale, (bool, np.bool_)):
-            raise DataError(f"scale must be True or False, got {scale!r}")
-        self.scale = bool(self.scale)
+        self.scale = check_scale(scale)
         if self.scale:
             su, sy = self.factor.channel_rms()
             self._su, self._sy = np.asarray(su, float), np.asarray(sy, float)

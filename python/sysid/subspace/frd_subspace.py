@@ -13,6 +13,18 @@ warped, ``ω_d = 2 atan(ω T / 2)``, a discrete model with sample time ``T`` is 
 mapped back with Tustin's rule (:func:`sysid.d2c`), which is exact for this map: the result
 is a :class:`sysid.ContinuousStateSpace` whose response equals the discrete one at the
 warped frequencies.
+
+The SVD and the least squares for B and D weigh every entry of the response in its own units,
+so with several channels the model changes with them (an output recorded in units 1000 times
+smaller and an input in units 1000 times larger moved the poles of a noisy 2 x 2 fit by
+0.017). With ``scale=True`` (the default) an FRD is balanced as Markov parameters are
+(:func:`sysid.era`): each output row divided and each input column multiplied by the scales
+that give every row and column of the response a unit root mean square over the frequencies
+and the other channels (:func:`sysid.subspace.scaling.balanced_scales`); a time record
+(``IOData``) has every channel divided by its root mean square, as
+:class:`sysid.SubspaceEstimator` does. The model is fitted in those units and returned in the
+record's, the scales in ``info["channel_scaling"]``: it is then the same whatever the units.
+``scale=False`` fits the response as given.
 """
 
 from __future__ import annotations
@@ -25,6 +37,7 @@ from .. import _sysid
 from .._checks import as_int
 from ..errors import DataError, ShapeError
 from .feedthrough import check_feedthrough, choose_feedthrough
+from .scaling import balanced_scales, check_scale, in_record_units, record_rms
 
 __all__ = ["frd_subspace"]
 
@@ -42,6 +55,7 @@ def frd_subspace(
     lags: int | None = None,
     method: str = "spa",
     feedthrough: bool | str = False,
+    scale: bool | None = None,
 ) -> Any:
     """State-space model from frequency-response data (McKelvey, Akçay & Ljung 1996).
 
@@ -78,11 +92,19 @@ def frd_subspace(
         fit is constrained to ``G(-1) = 0``, which Tustin's map sends to infinite frequency).
         ``"auto"`` (``IOData`` input only): decided from the record by held-out simulation
         fit (:func:`sysid.subspace.feedthrough.choose_feedthrough`).
+    scale : bool, optional
+        Fit with the channels scaled and return the model in the record's units: the same
+        model whatever the channels' units. An FRD has every output row and input column of
+        its response at unit root mean square over the frequencies and the other channels
+        (:mod:`sysid.subspace.frd_subspace`), an ``IOData`` every channel at unit root mean
+        square. Default True (:data:`sysid.subspace.scaling.SCALE_DEFAULT`); ``False`` fits the
+        response as given. Nothing changes with one input and one output.
 
     Returns
     -------
     StateSpaceModel or ContinuousStateSpace
-        With ``info["singular_values"]``.
+        With ``info["singular_values"]`` (of the scaled response) and
+        ``info["channel_scaling"]`` (the scales).
 
     Examples
     --------
@@ -105,6 +127,7 @@ def frd_subspace(
     from ..models.statespace import StateSpaceModel
 
     ft = check_feedthrough(feedthrough)
+    scale = check_scale(scale)
     if isinstance(frd, IOData):
         from ..models.continuous import d2c
         from ..nonparametric.frf import spa
@@ -114,14 +137,17 @@ def frd_subspace(
             from .estimator import SubspaceEstimator
 
             ft, why = choose_feedthrough(SubspaceEstimator(frd), order)
-        if method == "dft":
-            dmodel = _from_dft(frd, order, horizon, weights, bool(ft))
-        elif method == "spa":
-            est = spa(frd) if lags is None else spa(frd, lags=lags)
-            dmodel = frd_subspace(est, order, horizon=horizon, weights=weights,
-                                  feedthrough=bool(ft))
-        else:
+        if method not in ("spa", "dft"):
             raise DataError(f"method must be 'spa' or 'dft', got {method!r}")
+        su, sy = record_rms(frd) if scale else (np.ones(frd.n_inputs), np.ones(frd.n_outputs))
+        data = frd if np.all(su == 1.0) and np.all(sy == 1.0) else frd._scaled(su, sy)
+        if method == "dft":
+            dmodel = _from_dft(data, order, horizon, weights, bool(ft))
+        else:
+            est = spa(data) if lags is None else spa(data, lags=lags)
+            dmodel = frd_subspace(est, order, horizon=horizon, weights=weights,
+                                  feedthrough=bool(ft), scale=False)
+        dmodel = in_record_units(dmodel, su, sy)
         if why is not None:
             dmodel.info["feedthrough_selection"] = why
         if not continuous:
@@ -174,6 +200,10 @@ def frd_subspace(
     else:
         n = as_int(order, "order", 1)
     w = None if weights is None else _weights(weights, nf, "frequency of the FRD")
+    su, sy = (balanced_scales(g, "frequency responses", frd.input_names, frd.output_names)
+              if scale else (np.ones(m), np.ones(l)))
+    if not (np.all(su == 1.0) and np.all(sy == 1.0)):
+        g = g * su[None, None, :] / sy[None, :, None]
     flat = g.reshape(nf, l * m)
     mode = "estimate" if ft else ("zero-at-nyquist" if continuous else "zero")
     res = _sysid.frd_subspace(np.ascontiguousarray(wd), np.ascontiguousarray(flat.real),
@@ -183,6 +213,8 @@ def frd_subspace(
     model = StateSpaceModel(res["A"], res["B"], res["C"], res["D"], dt=dt,
                             input_names=frd.input_names, output_names=frd.output_names,
                             info=info)
+    model = in_record_units(model, su, sy, basis="frequency response")
+    info = model.info
     if not continuous:
         return model
     from ..models.continuous import d2c
