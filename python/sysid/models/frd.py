@@ -4,7 +4,8 @@
 :func:`sysid.spa`, :func:`sysid.etfe`), with a confidence band when the estimator gives one;
 :meth:`FRD.from_model` samples any model with ``freqresp(omega)`` onto a grid, and
 :meth:`FRD.compare` measures a model against the data (:class:`FRDComparison`).
-``G[i, j]`` picks outputs and inputs.
+``G[i, j]`` picks outputs and inputs; ``+``, ``-``, ``*`` (series), ``/``, :meth:`FRD.inv` and
+:meth:`FRD.feedback` combine responses on one grid (:mod:`sysid.models.frd_algebra`).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from ..data.formats import _pandas
 from ..data.iodata import IOData
 from ..data.segments import channel_index
 from ..errors import DataError, ShapeError
+from .frd_algebra import FRDAlgebra, check_grid
 
 __all__ = ["FRD", "FRDComparison"]
 
@@ -35,7 +37,7 @@ def _unit(units: str | None) -> str | None:
     raise DataError(f"units must be one of {list(UNITS)} (or None for rad/s), got {units!r}")
 
 
-class FRD:
+class FRD(FRDAlgebra):
     """Frequency-response data: a measured or estimated ``G(e^{j omega dt})``.
 
     Parameters
@@ -68,7 +70,11 @@ class FRD:
 
     Notes
     -----
-    ``G[i, j]`` selects outputs and inputs (indices, slices, names, lists).
+    ``G[i, j]`` selects outputs and inputs (indices, slices, names, lists); ``+``, ``-``,
+    ``*`` (series: ``G1 * G2`` is G1 after G2), ``/``, unary ``-``, :meth:`inv` and
+    :meth:`feedback` combine it with another FRD on the same grid, a model (evaluated on this
+    grid) or a gain, carrying the std to first order for independent operands
+    (:mod:`sysid.models.frd_algebra`).
 
     Examples
     --------
@@ -271,13 +277,9 @@ class FRD:
         # an FRD first: it has freqresp too, which interpolated it linearly onto this grid
         # (between coarse lines across a resonance: a made-up response, compared as measured)
         if isinstance(other, FRD):
-            if other.omega.shape != self.omega.shape or not np.allclose(other.omega, self.omega):
-                raise DataError(
-                    f"the two FRDs are on different frequency grids ({other.omega.size} "
-                    f"frequencies {other.omega.min():.4g}..{other.omega.max():.4g} rad/s, this "
-                    f"one {self.omega.size} in {self.omega.min():.4g}..{self.omega.max():.4g}); "
-                    "estimate both on one grid (spa's omega=, the same nperseg / lines), or "
-                    "compare with other.freqresp(frd.omega) to interpolate on purpose")
+            check_grid(self, other, "estimate both on one grid (spa's omega=, the same nperseg "
+                       "/ lines), or compare with other.freqresp(frd.omega) to interpolate on "
+                       "purpose")
             g = other.response
         elif hasattr(other, "freqresp"):
             g = np.asarray(other.freqresp(self.omega))
