@@ -289,9 +289,9 @@ def iodata_html(data: Any) -> str:
 
 def frd_html(frd: Any) -> str:
     """A frequency response: its range and a magnitude plot per channel pair (dB, log f)."""
-    w = np.asarray(frd.omega, dtype=float)
+    w = np.asarray(frd.frequencies, dtype=float)
     G = np.asarray(frd.response)
-    facts = [["frequencies", f"{w.size} from {w[0]:.4g} to {w[-1]:.4g} rad/s"],
+    facts = [["frequencies", f"{w.size} from {w[0]:.4g} to {w[-1]:.4g} {frd.units or 'rad/s'}"],
              ["outputs", ", ".join(frd.output_names)], ["inputs", ", ".join(frd.input_names)],
              ["method", frd.method or ""]]
     plots = ""

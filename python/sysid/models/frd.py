@@ -4,6 +4,8 @@
 :func:`sysid.spa`, :func:`sysid.etfe`), with a confidence band when the estimator gives one;
 :meth:`FRD.from_model` samples any model with ``freqresp(omega)`` onto a grid, and
 :meth:`FRD.compare` measures a model against the data (:class:`FRDComparison`).
+``G[i, j]`` picks outputs and inputs; ``+``, ``-``, ``*`` (series), ``/``, :meth:`FRD.inv` and
+:meth:`FRD.feedback` combine responses on one grid (:mod:`sysid.models.frd_algebra`).
 """
 
 from __future__ import annotations
@@ -18,17 +20,30 @@ from ..data.formats import _pandas
 from ..data.iodata import IOData
 from ..data.segments import channel_index
 from ..errors import DataError, ShapeError
+from .frd_algebra import FRDAlgebra, check_grid
 
 __all__ = ["FRD", "FRDComparison"]
 
+#: Frequency units an FRD takes and shows, with their size in rad/s.
+UNITS = {"rad/s": 1.0, "Hz": 2 * np.pi}
 
-class FRD:
+
+def _unit(units: str | None) -> str | None:
+    if units is None:
+        return None
+    for name in UNITS:
+        if isinstance(units, str) and units.strip().lower() == name.lower():
+            return name
+    raise DataError(f"units must be one of {list(UNITS)} (or None for rad/s), got {units!r}")
+
+
+class FRD(FRDAlgebra):
     """Frequency-response data: a measured or estimated ``G(e^{j omega dt})``.
 
     Parameters
     ----------
     omega : array_like
-        Angular frequencies in rad/s, shape ``(n_freq,)``.
+        Frequencies, shape ``(n_freq,)``: angular frequencies in rad/s, or in ``units``.
     response : array_like
         Complex response, ``(n_freq, n_outputs, n_inputs)``.
     coherence : array_like, optional
@@ -47,6 +62,19 @@ class FRD:
         How it was estimated.
     info : dict, optional
         Settings (window, lags, averages, dropped frequencies).
+    units : {None, "rad/s", "Hz"}
+        Unit of ``omega`` as given, shown by ``repr`` and on the plots' frequency axis
+        (MATLAB's ``FrequencyUnit``). :attr:`omega` is always kept in rad/s (``freqresp`` and
+        models take rad/s); :attr:`frequencies` is in ``units``. ``None`` (the default) is
+        rad/s as before units existed: shown in rad/s, plotted in Hz.
+
+    Notes
+    -----
+    ``G[i, j]`` selects outputs and inputs (indices, slices, names, lists); ``+``, ``-``,
+    ``*`` (series: ``G1 * G2`` is G1 after G2), ``/``, unary ``-``, :meth:`inv` and
+    :meth:`feedback` combine it with another FRD on the same grid, a model (evaluated on this
+    grid) or a gain, carrying the std to first order for independent operands
+    (:mod:`sysid.models.frd_algebra`).
 
     Examples
     --------
@@ -74,8 +102,10 @@ class FRD:
         output_names: Sequence[str] | None = None,
         method: str = "",
         info: dict[str, Any] | None = None,
+        units: str | None = None,
     ) -> None:
-        w = np.asarray(omega, dtype=float).ravel()
+        self.units = _unit(units)
+        w = np.asarray(omega, dtype=float).ravel() * UNITS[self.units or "rad/s"]
         g = np.asarray(response, dtype=complex)
         if g.ndim == 1:
             g = g[:, None, None]
@@ -92,8 +122,10 @@ class FRD:
         order = np.argsort(w, kind="stable")
         same = np.flatnonzero(np.diff(w[order]) == 0)
         if same.size:
-            raise DataError(f"omega holds {w[order][same[0]]:g} rad/s more than once: give each "
-                            f"frequency once (average repeated measurements of it first)")
+            unit = self.units or "rad/s"
+            raise DataError(f"omega holds {w[order][same[0]] / UNITS[unit]:g} {unit} more than "
+                            "once: give each frequency once (average repeated measurements of "
+                            "it first)")
         self.omega = w[order]
         self.response = g[order]
         self.coherence = (None if coherence is None
@@ -131,6 +163,57 @@ class FRD:
     def hz(self) -> np.ndarray:
         """Frequencies in Hz."""
         return self.omega / (2 * np.pi)
+
+    @property
+    def frequencies(self) -> np.ndarray:
+        """Frequencies in :attr:`units` (rad/s when ``units`` is ``None``)."""
+        return self.frequencies_in(self.units or "rad/s")
+
+    def frequencies_in(self, units: str) -> np.ndarray:
+        """The frequencies in ``units`` (``"rad/s"`` or ``"Hz"``).
+
+        Examples
+        --------
+        >>> import sysid
+        >>> f = sysid.FRD([1.0, 2.0], [1.0, 1.0], units="Hz")
+        >>> f.frequencies_in("rad/s") / 3.141592653589793
+        array([2., 4.])
+        >>> f.frequencies_in("Hz")
+        array([1., 2.])
+        """
+        unit = _unit(units)
+        if unit is None:
+            raise DataError(f"units must be one of {list(UNITS)}, got None")
+        return self.omega / UNITS[unit]
+
+    def __getitem__(self, key: Any) -> FRD:
+        """``G[outputs, inputs]``: the sub-response of some outputs and inputs (MATLAB's
+        ``G(i, j)``), with its std and coherence.
+
+        Each of the two may be an index, a slice, a channel name or a list of indices or
+        names; the result is always an FRD ``(n_freq, n_out, n_in)``. See :meth:`select`.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> g = sysid.FRD([1.0, 2.0], np.ones((2, 3, 2)), output_names=["a", "b", "c"])
+        >>> g[0, :].response.shape, g["c", 1].response.shape, g[1:, [1, 0]].input_names
+        ((2, 1, 2), (2, 1, 1), ['u1', 'u0'])
+        """
+        if not (isinstance(key, tuple) and len(key) == 2):
+            raise DataError(f"index an FRD with two selections, G[outputs, inputs] (use : for "
+                            f"all), got {key!r}")
+        sel = []
+        for k, names, kind in zip(key, (self.output_names, self.input_names),
+                                  ("output", "input")):
+            if isinstance(k, slice):
+                k = list(range(len(names)))[k]
+            elif isinstance(k, np.ndarray):
+                k = k.tolist()
+            if isinstance(k, list) and not k:
+                raise DataError(f"the {kind} selection {key!r} is empty")
+            sel.append(k)
+        return self.select(outputs=sel[0], inputs=sel[1])
 
     @property
     def n_inputs(self) -> int:
@@ -194,13 +277,9 @@ class FRD:
         # an FRD first: it has freqresp too, which interpolated it linearly onto this grid
         # (between coarse lines across a resonance: a made-up response, compared as measured)
         if isinstance(other, FRD):
-            if other.omega.shape != self.omega.shape or not np.allclose(other.omega, self.omega):
-                raise DataError(
-                    f"the two FRDs are on different frequency grids ({other.omega.size} "
-                    f"frequencies {other.omega.min():.4g}..{other.omega.max():.4g} rad/s, this "
-                    f"one {self.omega.size} in {self.omega.min():.4g}..{self.omega.max():.4g}); "
-                    "estimate both on one grid (spa's omega=, the same nperseg / lines), or "
-                    "compare with other.freqresp(frd.omega) to interpolate on purpose")
+            check_grid(self, other, "estimate both on one grid (spa's omega=, the same nperseg "
+                       "/ lines), or compare with other.freqresp(frd.omega) to interpolate on "
+                       "purpose")
             g = other.response
         elif hasattr(other, "freqresp"):
             g = np.asarray(other.freqresp(self.omega))
@@ -236,16 +315,24 @@ class FRD:
         def sub(a: np.ndarray | None) -> np.ndarray | None:
             return None if a is None else a[:, iy][:, :, iu]
 
-        return FRD(
-            self.omega, sub(self.response), coherence=sub(self.coherence), std=sub(self.std),
+        return self._new(
+            sub(self.response), coherence=sub(self.coherence), std=sub(self.std),
             confidence=self.confidence, dof=self.dof, dt=self.dt,
             input_names=[self.input_names[i] for i in iu],
             output_names=[self.output_names[i] for i in iy], method=self.method, info=self.info,
+            units=self.units,
         )
 
+    def _new(self, response: Any, *, units: str | None, **kw: Any) -> FRD:
+        """An FRD on this grid (:attr:`omega` bit for bit) shown in ``units``."""
+        out = type(self)(self.omega, response, **kw)
+        out.units = units
+        return out
+
     @classmethod
-    def from_model(cls, model: Any, omega: Any) -> FRD:
-        """The frequency response of a model (anything with ``freqresp(omega)``) as an FRD.
+    def from_model(cls, model: Any, omega: Any, *, units: str | None = None) -> FRD:
+        """The frequency response of a model (anything with ``freqresp(omega)``) as an FRD,
+        ``omega`` in rad/s or in ``units``.
 
         Examples
         --------
@@ -254,8 +341,9 @@ class FRD:
         >>> sysid.FRD.from_model(m, np.linspace(0.1, 30.0, 10))
         FRD (model): 10 frequencies 0.1..30 rad/s, 1 output x 1 input
         """
+        w = np.asarray(omega, dtype=float) * UNITS[_unit(units) or "rad/s"]
         return cls(  # a continuous model (dt = 0) gives an FRD without a sample time
-            omega, model.freqresp(np.asarray(omega, dtype=float)),
+            omega, model.freqresp(w), units=units,
             dt=getattr(model, "dt", None) or None,
             input_names=getattr(model, "input_names", None),
             output_names=getattr(model, "output_names", None), method="model",
@@ -300,9 +388,10 @@ class FRD:
     def __repr__(self) -> str:
         l, m = self.n_outputs, self.n_inputs
         meth = f" ({self.method})" if self.method else ""
+        f = self.frequencies
         return (
-            f"FRD{meth}: {self.omega.size} frequencies {self.omega[0]:.3g}.."
-            f"{self.omega[-1]:.3g} rad/s, {l} output{'s' * (l != 1)} x "
+            f"FRD{meth}: {f.size} frequencies {f[0]:.3g}..{f[-1]:.3g} "
+            f"{self.units or 'rad/s'}, {l} output{'s' * (l != 1)} x "
             f"{m} input{'s' * (m != 1)}"
         )
 

@@ -14,7 +14,8 @@ __all__ = ["plot_frd"]
 def plot_frd(frd: Any, *, models: Any = None, fig: Any = None) -> Any:
     """Magnitude (dB) and phase (deg) of every output/input pair, with the confidence band
     (shaded) and, when known, the coherence (a third row per input); ``models`` (objects with
-    ``freqresp(omega)``, or a dict name -> model) are drawn on top.
+    ``freqresp(omega)``, or a dict name -> model) are drawn on top. The frequency axis is in
+    the FRD's ``units`` (Hz when they are not given).
 
     Returns
     -------
@@ -41,7 +42,8 @@ def plot_frd(frd: Any, *, models: Any = None, fig: Any = None) -> Any:
     elif not isinstance(models, dict):
         seq = list(models) if isinstance(models, (list, tuple)) else [models]
         models = {("model" if len(seq) == 1 else f"model {k}"): mod for k, mod in enumerate(seq)}
-    f = frd.hz
+    unit = "rad/s" if frd.units == "rad/s" else "Hz"
+    f = frd.frequencies_in(unit)
     mag_db = 20 * np.log10(np.maximum(frd.magnitude, 1e-300))
     phase = np.degrees(frd.phase)
     rad = frd.radius
@@ -82,6 +84,6 @@ def plot_frd(frd: Any, *, models: Any = None, fig: Any = None) -> Any:
             if i == 0 and j == 0 and model_g:
                 am.legend(fontsize="small")
     for j in range(m):
-        axes[-1, j].set_xlabel("frequency [Hz]")
+        axes[-1, j].set_xlabel(f"frequency [{unit}]")
     fig.tight_layout()
     return fig
