@@ -55,12 +55,11 @@ def test_matched_maps_poles_and_zeros_by_exp_and_keeps_the_dc_gain(
     assert d.dt == dt and d.nstates == n and d.info["method"] == "c2d (matched)"
     assert _root_dev(d.poles(), np.exp(c.poles() * dt)) < 1e-9
     zc = c.zeros()
-    if zc.size and np.max(np.abs(zc)) < 1e3:
-        assert _root_dev(d.zeros(), np.exp(zc * dt)) < 1e-6
     np.testing.assert_allclose(d.dcgain(), c.dcgain(), rtol=1e-8,
                                atol=1e-10 * max(1.0, float(np.abs(c.dcgain()).max())))
     if zc.size and np.max(np.abs(zc * dt)) > 3:
-        return  # e^{z dt} near 0: its logarithm (the inverse) loses the zero's digits
+        return  # e^{z dt} near 0 or huge: computed zeros and their logarithm lose digits
+    assert _root_dev(d.zeros(), np.exp(zc * dt)) < 1e-6
     back = sysid.d2c(d, "matched")  # the inverse gives the continuous model back
     w = np.linspace(0.0, 0.9 * np.pi / dt, 25)
     scale = max(1.0, float(np.abs(c.freqresp(w)).max()))
