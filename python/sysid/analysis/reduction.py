@@ -3,7 +3,9 @@
 The gramians solve ``Wc = A Wc A' + B B'`` and ``Wo = A' Wo A + C' C`` (Smith doubling in the
 Rust core); the Hankel singular values are ``sqrt(eig(Wc Wo))``. Balancing uses the square-root
 method, and truncation to r states keeps the r largest Hankel singular values with the
-H-infinity error bound ``2 * sum(discarded)``. Unstable models raise :class:`sysid.DataError`.
+H-infinity error bound ``2 * sum(discarded)``. Unstable models raise :class:`sysid.DataError`,
+except in :func:`balanced_truncation`, which keeps the unstable part (as MATLAB's ``balred``)
+and also takes continuous models.
 
 Examples
 --------
@@ -21,12 +23,14 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import scipy.linalg
 
 from .. import _sysid
 from .._checks import as_int
 from ..errors import DataError
 from ..models.checks import discrete_statespace
 from ..models.statespace import StateSpaceModel
+from .stable_split import is_stable_pole, split_stable
 
 __all__ = [
     "Gramians",
@@ -137,22 +141,130 @@ def balanced_realization(model: StateSpaceModel) -> StateSpaceModel:
     return _reduce(model, None, "balanced")
 
 
-def balanced_truncation(model: StateSpaceModel, order: int) -> StateSpaceModel:
-    """Balanced truncation to ``order`` states.
+def balanced_truncation(model: Any, order: int) -> Any:
+    """Balanced truncation to ``order`` states; an unstable part is kept unchanged.
 
-    ``info`` of the result holds ``hankel_singular_values`` (of the full model),
-    ``error_bound`` (``2 * sum`` of the discarded ones, a bound on the H-infinity error) and
-    the projections ``T`` and ``T_inv``. A Kalman gain and initial state are projected with
-    the states.
+    As MATLAB's ``balred``, the model is split into stable and unstable parts
+    (:mod:`sysid.analysis.stable_split`: ordered Schur form and a Sylvester equation); the
+    stable part is balanced and truncated, the unstable part (poles on or outside the unit
+    circle, or in the closed right half-plane) added back unchanged. ``order`` counts all the
+    states and must be at least the number of unstable poles. A stable model is truncated as
+    a whole, as before.
+
+    ``info`` of the result holds ``hankel_singular_values`` (of the stable part),
+    ``error_bound`` (``2 * sum`` of the discarded ones, a bound on the H-infinity error, which
+    comes from the stable part only), ``unstable_states`` and the projections ``T`` and
+    ``T_inv`` (``x_reduced = T_inv x``). A Kalman gain and initial state are projected with
+    the states. A continuous model (:class:`sysid.ContinuousStateSpace`) is balanced with its
+    continuous gramians (``A W + W A' + B B' = 0``; square-root method) and stays continuous.
+
+    Parameters
+    ----------
+    model : StateSpaceModel or ContinuousStateSpace
+        The model (any discrete :class:`sysid.Model` with a state-space form).
+    order : int
+        States to keep, ``unstable poles <= order <= nstates``.
+
+    Returns
+    -------
+    StateSpaceModel or ContinuousStateSpace
+        The reduced model, of the same kind.
 
     Examples
     --------
-    >>> import sysid
+    >>> import numpy as np, sysid
     >>> m = sysid.StateSpaceModel([[0.9, 0.0], [0.0, 0.2]], [[1.0], [0.05]], [[1.0, 0.05]])
     >>> r = sysid.balanced_truncation(m, 1)
     >>> r.nstates, r.info["error_bound"] < 0.01
     (1, True)
+    >>> u = sysid.StateSpaceModel(np.diag([1.2, 0.9, 0.1]), np.ones((3, 1)), np.ones((1, 3)))
+    >>> ru = sysid.balanced_truncation(u, 2)    # keeps the unstable pole 1.2
+    >>> round(float(ru.poles().real.max()), 12), ru.info["unstable_states"]
+    (1.2, 1)
     """
     if order is None:
         raise DataError("order is required; use balanced_realization to keep every state")
-    return _reduce(model, order, "balanced_truncation")
+    if getattr(model, "dt", None) == 0 and all(hasattr(model, k) for k in "ABCD"):
+        return _truncate_split(model, as_int(order, "order"), continuous=True)
+    m = _check(model)
+    order = as_int(order, "order")
+    if m.nstates == 0 or bool(np.all(is_stable_pole(m.poles(), m.dt))):
+        out = _reduce(m, order, "balanced_truncation")
+        out.info["unstable_states"] = 0
+        return out
+    return _truncate_split(m, order, continuous=False)
+
+
+def _truncate_split(m: Any, order: int, continuous: bool) -> Any:
+    """Balanced truncation of the stable part of ``m``, the unstable part added back."""
+    n = m.nstates
+    if not 1 <= order <= n:
+        raise DataError(f"invalid order: {order}; the model has {n} states, so order must "
+                        f"be between 1 and {n}")
+    split = split_stable(m.A, m.B, m.C, 0.0 if continuous else m.dt)
+    ns = split.n_stable
+    nu = n - ns
+    if order < nu:
+        raise DataError(
+            f"invalid order: {order} is fewer than the {nu} unstable poles of the model, which "
+            f"balanced truncation keeps unchanged (only the stable part is reduced); ask for "
+            f"order >= {nu}, or stabilise the model (feedback) first")
+    As, Bs, Cs = split.stable
+    Au, Bu, Cu = split.unstable
+    r = order - nu
+    if ns == 0:
+        hsv, a, b, c, d = np.zeros(0), As, Bs, Cs, m.D
+        t, t_inv = np.eye(0), np.eye(0)
+    elif continuous:
+        hsv, a, b, c, d, t, t_inv = _continuous_truncation(As, Bs, Cs, m.D, r)
+    elif r == 0:
+        hsv = np.asarray(_sysid.hankel_singular_values(As, Bs, Cs, m.D))
+        a, b, c, d = np.zeros((0, 0)), np.zeros((0, m.ninputs)), np.zeros((m.noutputs, 0)), m.D
+        t, t_inv = np.zeros((ns, 0)), np.zeros((0, ns))
+    else:
+        out = _sysid.balanced_truncation(As, Bs, Cs, m.D, r)
+        hsv = np.asarray(out["hankel_singular_values"])
+        a, b, c, d = (np.asarray(out[k]) for k in ("a", "b", "c", "d"))
+        t, t_inv = np.asarray(out["t"]), np.asarray(out["t_inv"])
+    A = np.block([[a, np.zeros((r, nu))], [np.zeros((nu, r)), Au]])
+    T = split.T @ np.block([[t, np.zeros((ns, nu))], [np.zeros((nu, r)), np.eye(nu)]])
+    T_inv = np.block([[t_inv, np.zeros((r, nu))], [np.zeros((nu, ns)), np.eye(nu)]]) @ split.T_inv
+    info = dict(m.info)
+    info.update(method="balanced_truncation", reduced_from=n, hankel_singular_values=hsv,
+                error_bound=float(2.0 * hsv[r:].sum()) + 0.0, unstable_states=nu, T=T,
+                T_inv=T_inv)
+    if continuous:
+        return type(m)(A, np.vstack([b, Bu]), np.hstack([c, Cu]), d,
+                       input_names=m.input_names, output_names=m.output_names,
+                       hold=getattr(m, "hold", "zoh"), info=info)
+    return StateSpaceModel(
+        A, np.vstack([b, Bu]), np.hstack([c, Cu]), d, None if m.K is None else T_inv @ m.K,
+        dt=m.dt, noise_cov=m.noise_cov, x0=None if m.x0 is None else T_inv @ m.x0,
+        input_names=m.input_names, output_names=m.output_names, info=info)
+
+
+def _continuous_truncation(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray, r: int
+                           ) -> tuple[np.ndarray, ...]:
+    """Square-root balanced truncation of a stable continuous ``(A, B, C, D)`` to ``r``
+    states: ``(hsv, Ar, Br, Cr, D, T, T_inv)``."""
+    wc = scipy.linalg.solve_continuous_lyapunov(A, -B @ B.T)
+    wo = scipy.linalg.solve_continuous_lyapunov(A.T, -C.T @ C)
+
+    def factor(w: np.ndarray) -> np.ndarray:  # L with L L' = w (w is semi-definite)
+        lam, V = np.linalg.eigh(0.5 * (w + w.T))
+        return V * np.sqrt(np.clip(lam, 0.0, None))
+
+    lc, lo = factor(wc), factor(wo)
+    U, hsv, Vt = np.linalg.svd(lo.T @ lc)
+    if r and hsv[r - 1] <= 1e-12 * hsv[0]:
+        keep = int(np.sum(hsv > 1e-12 * hsv[0]))
+        raise DataError(
+            f"invalid order: the stable part has only {keep} non-zero Hankel singular values "
+            "(the rest of it is uncontrollable or unobservable), so "
+            f"{r} of its states cannot be balanced; truncate to fewer states")
+    s = 1.0 / np.sqrt(hsv[:r])
+    T = lc @ Vt[:r].T * s
+    T_inv = (U[:, :r] * s).T @ lo.T
+    return hsv, T_inv @ A @ T, T_inv @ B, C @ T, D.copy(), T, T_inv
+
+

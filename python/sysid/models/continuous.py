@@ -18,7 +18,18 @@ exact discretisations, computed once from the exponential of an augmented matrix
   which :meth:`ContinuousStateSpace.simulate` applies (and :func:`sysid.compare`, through
   :meth:`ContinuousStateSpace.sampled`); the discrete model alone starts from ``xi(0) = 0``.
 - Tustin (bilinear): with ``M = (I - A dt / 2)^{-1}``, ``Ad = M (I + A dt / 2)``,
-  ``Bd = M B dt``, ``Cd = C M``, ``Dd = D + C M B dt / 2``.
+  ``Bd = M B dt``, ``Cd = C M``, ``Dd = D + C M B dt / 2``. With a prewarp frequency ``w``
+  (MATLAB's ``c2dOptions('PrewarpFrequency', w)``) ``dt`` in these formulas becomes
+  ``h = 2 tan(w dt / 2) / w``, i.e. ``s = (w / tan(w dt / 2)) (z - 1) / (z + 1)``: the
+  discrete frequency response equals the continuous one exactly at ``w``.
+- Impulse invariant (MATLAB's ``'impulse'``): ``Ad = e^{A dt}``, ``Bd = Ad B dt``,
+  ``Cd = C``, ``Dd = D + C B dt``, so the discrete impulse response is ``dt`` times the
+  continuous one sampled, ``h_d[k] = dt C e^{A k dt} B`` (``k = 0`` included, no half weight;
+  the convention of MATLAB and ``scipy.signal.cont2discrete``, which refuses ``D != 0``; a
+  feedthrough ``D`` is kept as the discrete ``D`` on top). The DC gain is matched only as
+  ``dt -> 0``.
+- Matched pole-zero (single input and output): poles and zeros ``e^{s dt}``, the DC gain
+  kept; see :mod:`sysid.models.matched`.
 
 The discrete model is then simulated by the Rust simulator.
 """
@@ -35,12 +46,14 @@ from .._checks import as_2d, as_dt
 from ..errors import DataError, NumericalError
 from .discretisation import expm, hold_blocks
 from .linear import transmission_zeros
+from .matched import matched_c2d, matched_d2c
 from .protocol import ModelMixin, TimeResponse, continuous_grid
 from .statespace import StateSpaceModel, minimal_dcgain, ss_parameter_count
 
 __all__ = ["ContinuousStateSpace", "SampledContinuous", "c2d", "d2c"]
 
-_METHODS = ("zoh", "foh", "tustin")
+_METHODS = ("zoh", "foh", "tustin", "matched", "impulse")
+_D2C_METHODS = ("zoh", "foh", "tustin", "matched")
 
 
 class ContinuousStateSpace(ModelMixin):
@@ -162,9 +175,10 @@ class ContinuousStateSpace(ModelMixin):
                 "integrator), so its step response grows without bound; look at step() or "
                 "freqresp() at low frequencies instead") from None
 
-    def c2d(self, dt: float, method: str | None = None) -> StateSpaceModel:
+    def c2d(self, dt: float, method: str | None = None, *,
+            prewarp: float | None = None) -> StateSpaceModel:
         """Discretise (default: the model's ``hold``); see :func:`c2d`."""
-        return c2d(self, dt, method or self.hold)
+        return c2d(self, dt, method or self.hold, prewarp=prewarp)
 
     def sampled(self, dt: float) -> SampledContinuous:
         """The model as it meets data sampled every ``dt`` with its ``hold``; see
@@ -383,10 +397,11 @@ def _hold_integrals(A: np.ndarray, B: np.ndarray, dt: float
     return E[:n, :n], E[:n, n:n + m], E[:n, n + m:]
 
 
-def _discretise(sys: ContinuousStateSpace, dt: float, method: str
+def _discretise(sys: ContinuousStateSpace, dt: float, method: str, warp: float | None = None
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(Ad, Bd, Cd, Dd, G2)`` with ``G2`` the FOH state shift (zero otherwise)."""
-    out = _discretise_raw(sys, dt, method)
+    """``(Ad, Bd, Cd, Dd, G2)`` with ``G2`` the FOH state shift (zero otherwise); ``warp``
+    is Tustin's ``h`` (``dt`` when not prewarped)."""
+    out = _discretise_raw(sys, dt, method, dt if warp is None else warp)
     if not all(np.isfinite(x).all() for x in out):
         grow = float(np.max(np.linalg.eigvals(sys.A).real * dt, initial=0.0))
         raise NumericalError(
@@ -396,21 +411,51 @@ def _discretise(sys: ContinuousStateSpace, dt: float, method: str
     return out
 
 
-def _discretise_raw(sys: ContinuousStateSpace, dt: float, method: str
+def _discretise_raw(sys: ContinuousStateSpace, dt: float, method: str, h: float
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     A, B, C, D = sys.A, sys.B, sys.C, sys.D
     n, m = B.shape
-    if method == "zoh":
+    if method in ("zoh", "impulse"):
         E = expm(hold_blocks(A, B, dt, "zoh"))[0]
+        if method == "impulse":
+            Ad = E[:n, :n]
+            return Ad, Ad @ B * dt, C.copy(), D + C @ B * dt, np.zeros((n, m))
         return E[:n, :n], E[:n, n:], C.copy(), D.copy(), np.zeros((n, m))
     if method == "foh":
         Ad, G1, G2 = _hold_integrals(A, B, dt)
         return Ad, G1 + (Ad - np.eye(n)) @ G2, C.copy(), D + C @ G2, G2
-    ima = np.eye(n) - 0.5 * dt * A
-    Ad = np.linalg.solve(ima, np.eye(n) + 0.5 * dt * A)
-    Bd = np.linalg.solve(ima, dt * B)
+    if method == "matched":
+        return (*matched_c2d(A, B, C, D, dt), np.zeros((n, m)))
+    ima = np.eye(n) - 0.5 * h * A
+    Ad = np.linalg.solve(ima, np.eye(n) + 0.5 * h * A)
+    Bd = np.linalg.solve(ima, h * B)
     Cd = np.linalg.solve(ima.T, C.T).T
     return Ad, Bd, Cd, D + 0.5 * C @ Bd, np.zeros((n, m))
+
+
+def _warp(prewarp: Any, dt: float, method: str, direction: str) -> float:
+    """Tustin's ``h = 2 tan(w dt / 2) / w`` for a prewarp frequency ``w`` (rad/s); ``dt``
+    when ``prewarp`` is None or 0 (MATLAB's default: no prewarping)."""
+    if prewarp is None:
+        return dt
+    try:
+        w = float(prewarp)
+    except (TypeError, ValueError):
+        raise DataError(f"prewarp must be a frequency in rad/s, got {prewarp!r}") from None
+    if isinstance(prewarp, (bool, np.bool_)) or not np.isfinite(w) or w < 0:
+        raise DataError(f"prewarp must be a non-negative frequency in rad/s, got {prewarp!r}")
+    if w == 0.0:
+        return dt
+    if method != "tustin":
+        raise DataError(f"{direction}: prewarp applies to method='tustin' only (got "
+                        f"method={method!r}); drop prewarp or use method='tustin'")
+    nyquist = np.pi / dt
+    if w >= nyquist:
+        raise DataError(
+            f"{direction}: prewarp = {w:g} rad/s is at or beyond the Nyquist frequency "
+            f"pi/dt = {nyquist:g} rad/s of dt = {dt:g} s, where tan(w dt / 2) has no finite "
+            f"value; choose a prewarp frequency below {nyquist:g} rad/s or a smaller dt")
+    return 2.0 * np.tan(0.5 * w * dt) / w
 
 
 def _convertible(sys: Any, kind: type, purpose: str) -> Any:
@@ -439,8 +484,10 @@ def _convertible(sys: Any, kind: type, purpose: str) -> Any:
     return ss
 
 
-def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh") -> StateSpaceModel:
-    """Discretise a continuous model: zero-order hold, first-order hold or Tustin.
+def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh", *,
+        prewarp: float | None = None) -> StateSpaceModel:
+    """Discretise a continuous model: zero- or first-order hold, Tustin (optionally
+    prewarped), impulse invariant or matched pole-zero.
 
     See the module documentation for the formulas (``"bilinear"`` is accepted for Tustin).
 
@@ -451,8 +498,15 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh") -> StateSpace
         delays needs ``sys.to_statespace(dt)``, which samples them exactly).
     dt : float
         Sample time in seconds.
-    method : {"zoh", "foh", "tustin", "bilinear"}
-        Hold of the input between samples, or the bilinear transform.
+    method : {"zoh", "foh", "tustin", "bilinear", "impulse", "matched"}
+        Hold of the input between samples, the bilinear transform, the impulse-invariant
+        map (discrete impulse response ``dt`` times the continuous one sampled, MATLAB's
+        scaling) or matched pole-zero (``z = e^{s dt}`` for poles and zeros, DC gain kept;
+        one input and one output only).
+    prewarp : float, optional
+        Tustin only: the frequency (rad/s, below the Nyquist frequency ``pi / dt``) at which
+        the discrete frequency response equals the continuous one exactly (MATLAB's
+        ``PrewarpFrequency``); None or 0 for none.
 
     Returns
     -------
@@ -467,14 +521,20 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh") -> StateSpace
     True
     >>> float(sysid.c2d(sysid.ContinuousStateSpace([[0.0]], [[1.0]], [[1.0]]), 1.0, "foh").D[0, 0])
     0.5
+    >>> lag = sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]])
+    >>> t = sysid.c2d(lag, 0.5, "tustin", prewarp=2.0)
+    >>> bool(np.isclose(t.freqresp([2.0])[0, 0, 0], lag.freqresp([2.0])[0, 0, 0]))
+    True
     """
     sys = _convertible(sys, ContinuousStateSpace, "c2d")
     dt = _sample_time(None, dt, 1)
     method = _method(method)
-    Ad, Bd, Cd, Dd, _ = _discretise(sys, dt, method)
+    warp = _warp(prewarp, dt, method, "c2d")
+    Ad, Bd, Cd, Dd, _ = _discretise(sys, dt, method, warp)
     return StateSpaceModel(
         Ad, Bd, Cd, Dd, dt=dt, input_names=sys.input_names, output_names=sys.output_names,
-        info={"method": f"c2d ({method})"},
+        info={"method": f"c2d ({method})" if warp == dt
+              else f"c2d ({method}, prewarp {float(prewarp):g} rad/s)"},
     )
 
 
@@ -491,21 +551,26 @@ def _real_log(M: np.ndarray, p: np.ndarray, method: str) -> np.ndarray:
     return np.asarray(L)
 
 
-def d2c(model: StateSpaceModel, method: str = "zoh") -> ContinuousStateSpace:
+def d2c(model: StateSpaceModel, method: str = "zoh", *,
+        prewarp: float | None = None) -> ContinuousStateSpace:
     """Continuous-time equivalent of a discrete model (inverse of :func:`c2d`).
 
     ``zoh`` takes the principal matrix logarithm of ``[[A, B], [0, I]]``; ``foh`` takes
     ``A = log(Ad) / dt`` and solves the FOH relations for ``B`` and ``D``. Both fail with a
     :class:`NumericalError` when a pole lies on the negative real axis or at zero (no real
-    logarithm). ``tustin`` fails when a pole is at ``z = -1``. The noise model (``K``) is not
-    converted; the parameter uncertainty is (the same parameters, through the conversion).
+    logarithm). ``tustin`` fails when a pole is at ``z = -1``; with ``prewarp`` it inverts the
+    prewarped transform. ``matched`` (one input and one output) maps poles and zeros by
+    ``log(z) / dt`` and keeps the DC gain. The noise model (``K``) is not converted; the
+    parameter uncertainty is (the same parameters, through the conversion).
 
     Parameters
     ----------
     model : StateSpaceModel or TransferFunction
         A discrete model; a transfer function goes through its realisation.
-    method : {"zoh", "foh", "tustin", "bilinear"}
+    method : {"zoh", "foh", "tustin", "bilinear", "matched"}
         The discretisation to invert.
+    prewarp : float, optional
+        Tustin only: the prewarp frequency (rad/s) the model was discretised with.
 
     Returns
     -------
@@ -520,8 +585,9 @@ def d2c(model: StateSpaceModel, method: str = "zoh") -> ContinuousStateSpace:
     True
     """
     model = _convertible(model, StateSpaceModel, "d2c")
-    method = _method(method)
+    method = _method(method, _D2C_METHODS)
     A, B, C, D, dt = model.A, model.B, model.C, model.D, model.dt
+    h = _warp(prewarp, dt, method, "d2c")
     n, m = B.shape
     p = model.poles()
     if method == "zoh":
@@ -534,13 +600,15 @@ def d2c(model: StateSpaceModel, method: str = "zoh") -> ContinuousStateSpace:
         Ad, F1, F2 = _hold_integrals(Ac, np.eye(n), dt)
         Bc = np.linalg.solve(F1 + (Ad - np.eye(n)) @ F2, B) if n else np.zeros((0, m))
         Cc, Dc = C.copy(), D - C @ F2 @ Bc
+    elif method == "matched":
+        Ac, Bc, Cc, Dc = matched_d2c(A, B, C, D, dt)
     else:
         api = A + np.eye(n)
         if n and np.linalg.cond(api) > 1e12:
             raise NumericalError("the model has a pole at z = -1: no Tustin continuous equivalent")
         inv = np.linalg.inv(api) if n else api
-        Ac = (2.0 / dt) * (np.eye(n) - 2.0 * inv)
-        Bc = 2.0 * inv @ B / dt
+        Ac = (2.0 / h) * (np.eye(n) - 2.0 * inv)
+        Bc = 2.0 * inv @ B / h
         Cc = 2.0 * C @ inv
         Dc = D - 0.5 * Cc @ B
     out = ContinuousStateSpace(
@@ -553,6 +621,6 @@ def d2c(model: StateSpaceModel, method: str = "zoh") -> ContinuousStateSpace:
 
         build = unc.build
         out.uncertainty = ParameterUncertainty(
-            unc.theta, unc.covariance, lambda t: d2c(build(t), method), names=unc.names,
-            dof=unc.dof, method=unc.method, undetermined=unc.undetermined)
+            unc.theta, unc.covariance, lambda t: d2c(build(t), method, prewarp=prewarp),
+            names=unc.names, dof=unc.dof, method=unc.method, undetermined=unc.undetermined)
     return out
