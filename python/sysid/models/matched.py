@@ -24,7 +24,6 @@ True
 from __future__ import annotations
 
 import numpy as np
-import scipy.signal
 
 from ..errors import DataError, NumericalError
 from .linear import transmission_zeros
@@ -66,6 +65,8 @@ def _realise(zeros: np.ndarray, poles: np.ndarray, k: float, n: int) -> Matrices
     # the roots come in conjugate pairs up to rounding: the polynomials are real
     den = np.poly(poles).real
     num = k * np.poly(zeros).real if zeros.size else np.array([k])
+    import scipy.signal  # lazily: importing sysid loads no scipy.signal
+
     A, B, C, D = scipy.signal.tf2ss(num, den)
     return (np.asarray(A, float), np.asarray(B, float).reshape(n, 1),
             np.asarray(C, float).reshape(1, n), np.asarray(D, float).reshape(1, 1))
