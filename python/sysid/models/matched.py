@@ -65,9 +65,19 @@ def _realise(zeros: np.ndarray, poles: np.ndarray, k: float, n: int) -> Matrices
     # the roots come in conjugate pairs up to rounding: the polynomials are real
     den = np.poly(poles).real
     num = k * np.poly(zeros).real if zeros.size else np.array([k])
-    import scipy.signal  # lazily: importing sysid loads no scipy.signal
-
-    A, B, C, D = scipy.signal.tf2ss(num, den)
+    # the controllable companion form of num / den (no polynomial normalisation: SciPy's
+    # tf2ss trims tiny leading numerator terms and warns about them)
+    den = den / den[0]
+    num = np.r_[np.zeros(n + 1 - num.size), num] / 1.0
+    d = num[0]
+    rest = num[1:] - d * den[1:]
+    A = np.zeros((n, n))
+    A[0] = -den[1:]
+    A[1:, :-1] = np.eye(n - 1)
+    B = np.zeros((n, 1))
+    B[0, 0] = 1.0
+    C = rest[None, :]
+    D = np.array([[d]])
     return (np.asarray(A, float), np.asarray(B, float).reshape(n, 1),
             np.asarray(C, float).reshape(1, n), np.asarray(D, float).reshape(1, 1))
 
