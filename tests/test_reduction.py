@@ -108,16 +108,20 @@ def test_kalman_gain_and_state_follow_the_projection() -> None:
     np.testing.assert_allclose(bal.simulate(u, "model"), model.simulate(u, "model"), atol=1e-9)
 
 
-def test_unstable_model_is_rejected_with_a_clear_message() -> None:
+def test_unstable_model_has_no_gramians_but_hsv_and_balancing_keep_the_unstable_part() -> None:
     unstable = sysid.StateSpaceModel([[1.05, 0.0], [0.0, 0.5]], [[1.0], [1.0]], [[1.0, 1.0]])
-    for fn in (sysid.gramians, sysid.hankel_singular_values, sysid.balanced_realization):
-        with pytest.raises(sysid.DataError, match="not stable"):
-            fn(unstable)
+    with pytest.raises(sysid.DataError, match=r"not stable.*1\.05.*hankel_singular_values.*"
+                                              r"balanced_truncation"):
+        sysid.gramians(unstable)
+    # hsv and balanced realisation work on the stable part (tests/test_hsv_unstable.py)
+    np.testing.assert_allclose(sysid.hankel_singular_values(unstable), [np.inf, 1 / 0.75])
+    assert sysid.balanced_realization(unstable).A[0, 0] == pytest.approx(1.05)
     # balanced truncation keeps the unstable part (tests/test_reduction_unstable.py)
     assert sysid.balanced_truncation(unstable, 1).poles()[0] == pytest.approx(1.05)
     marginal = sysid.StateSpaceModel([[1.0]], [[1.0]], [[1.0]])
-    with pytest.raises(sysid.DataError, match="not stable"):
-        sysid.hankel_singular_values(marginal)
+    with pytest.raises(sysid.DataError, match="not stable.*modulus 1 "):
+        sysid.gramians(marginal)
+    np.testing.assert_array_equal(sysid.hankel_singular_values(marginal), [np.inf])
 
 
 def test_bad_orders_and_non_minimal_models_are_rejected() -> None:

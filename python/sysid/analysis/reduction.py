@@ -1,11 +1,19 @@
-"""Gramians, Hankel singular values and balanced truncation of stable discrete-time models.
+"""Gramians, Hankel singular values, balanced realisation and truncation, for discrete and
+continuous models, stable or not (as MATLAB's ``gram``, ``hsvd``, ``balreal`` and ``balred``).
 
-The gramians solve ``Wc = A Wc A' + B B'`` and ``Wo = A' Wo A + C' C`` (Smith doubling in the
-Rust core); the Hankel singular values are ``sqrt(eig(Wc Wo))``. Balancing uses the square-root
-method, and truncation to r states keeps the r largest Hankel singular values with the
-H-infinity error bound ``2 * sum(discarded)``. Unstable models raise :class:`sysid.DataError`,
-except in :func:`balanced_truncation`, which keeps the unstable part (as MATLAB's ``balred``)
-and also takes continuous models.
+A stable discrete model's gramians solve ``Wc = A Wc A' + B B'`` and ``Wo = A' Wo A + C' C``
+(Smith doubling in the Rust core), a continuous one's ``A Wc + Wc A' + B B' = 0`` and
+``A' Wo + Wo A + C' C = 0``; the Hankel singular values are ``sqrt(eig(Wc Wo))``. Balancing
+uses the square-root method, and truncation to r states keeps the r largest Hankel singular
+values with the H-infinity error bound ``2 * sum(discarded)``.
+
+An unstable model (a pole on or outside the unit circle, or in the closed right half-plane,
+within a relative margin of ``1e-8``) has no gramians, so :func:`gramians` refuses it; the
+other functions split it into stable and unstable parts
+(:mod:`sysid.analysis.stable_split`) and work on the stable part: the Hankel singular values
+start with one ``inf`` per unstable pole, :func:`balanced_realization` keeps the unstable
+states (first) and balances the rest, :func:`balanced_truncation` keeps the unstable part and
+reduces the stable one.
 
 Examples
 --------
@@ -15,6 +23,9 @@ Examples
 array([5.263, 0.   ])
 >>> sysid.balanced_truncation(m, 1).nstates
 1
+>>> u = sysid.StateSpaceModel(np.diag([1.5, 0.5]), [[1.0], [1.0]], [[1.0, 1.0]])
+>>> sysid.hankel_singular_values(u)    # one unstable pole: inf, then the stable part
+array([       inf, 1.33333333])
 """
 
 from __future__ import annotations
@@ -28,7 +39,7 @@ import scipy.linalg
 from .. import _sysid
 from .._checks import as_int
 from ..errors import DataError
-from ..models.checks import discrete_statespace
+from ..models.checks import as_statespace, check_model, discrete_statespace
 from ..models.statespace import StateSpaceModel
 from .stable_split import is_stable_pole, split_stable
 
@@ -39,6 +50,8 @@ __all__ = [
     "balanced_realization",
     "balanced_truncation",
 ]
+
+_ABCD = ("A", "B", "C", "D")
 
 
 def _check(model: Any) -> StateSpaceModel:
@@ -52,6 +65,75 @@ def _check(model: Any) -> StateSpaceModel:
     return ss
 
 
+def _state_space(model: Any, purpose: str) -> Any:
+    """A continuous model (``dt = 0``) in state-space form (e.g. a
+    :class:`sysid.ContinuousStateSpace`, also from a continuous transfer function), or
+    :func:`_check`'s discrete form."""
+    if getattr(model, "dt", None) != 0:
+        return _check(model)
+    check_model(model)
+    ss = model if all(hasattr(model, k) for k in _ABCD) else as_statespace(model, purpose)
+    if not all(hasattr(ss, k) for k in _ABCD) or ss.dt != 0:
+        raise DataError(f"{type(model).__name__}.to_statespace() returned a "
+                        f"{type(ss).__name__}, not a continuous state-space model")
+    return ss
+
+
+def _unstable_poles(m: Any) -> np.ndarray:
+    """The poles of ``m`` that :mod:`~sysid.analysis.stable_split` counts as unstable."""
+    p = np.linalg.eigvals(m.A) if m.nstates else np.zeros(0, complex)
+    return p[~is_stable_pole(p, m.dt)]
+
+
+def _require_stable(m: Any) -> None:
+    """A :class:`DataError` naming the first unstable pole of ``m``, if it has one."""
+    bad = _unstable_poles(m)
+    if not bad.size:
+        return
+    p = complex(bad[np.argmax(np.abs(bad) if m.dt else bad.real)])
+    shown = f"{p.real:.6g}" if p.imag == 0 else f"{p:.6g}"
+    where = (f"has modulus {abs(p):.10g} (stable poles need |z| < 1 - 1e-8)" if m.dt else
+             f"has real part {p.real:.6g} (stable poles need Re s < -1e-8 max(1, |s|))")
+    raise DataError(
+        f"the model is not stable: {bad.size} pole(s) on or beyond the stability boundary, "
+        f"e.g. {shown}, which {where}, so its gramians do not exist. For an unstable model "
+        "use sysid.hankel_singular_values (inf for each unstable pole, then the stable "
+        "part's), sysid.balanced_realization or sysid.balanced_truncation (which keep the "
+        "unstable part and balance or reduce the stable one)")
+
+
+def _continuous_gramians(A: np.ndarray, B: np.ndarray, C: np.ndarray
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """``A Wc + Wc A' + B B' = 0`` and ``A' Wo + Wo A + C' C = 0`` (A stable), symmetrised."""
+    wc = scipy.linalg.solve_continuous_lyapunov(A, -B @ B.T)
+    wo = scipy.linalg.solve_continuous_lyapunov(A.T, -C.T @ C)
+    return 0.5 * (wc + wc.T), 0.5 * (wo + wo.T)
+
+
+def _continuous_square_root(A: np.ndarray, B: np.ndarray, C: np.ndarray
+                            ) -> tuple[np.ndarray, ...]:
+    """``(Lc, Lo, U, hsv, Vt)``: gramian factors ``L L' = W`` and the SVD of ``Lo' Lc``."""
+    wc, wo = _continuous_gramians(A, B, C)
+
+    def factor(w: np.ndarray) -> np.ndarray:  # L with L L' = w (w is semi-definite)
+        lam, V = np.linalg.eigh(w)
+        return V * np.sqrt(np.clip(lam, 0.0, None))
+
+    lc, lo = factor(wc), factor(wo)
+    U, hsv, Vt = np.linalg.svd(lo.T @ lc)
+    return lc, lo, U, hsv, Vt
+
+
+def _stable_hsv(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray, dt: float
+                ) -> np.ndarray:
+    """Hankel singular values of a stable ``(A, B, C, D)`` (``dt = 0``: continuous)."""
+    if A.shape[0] == 0:
+        return np.zeros(0)
+    if dt:
+        return np.asarray(_sysid.hankel_singular_values(A, B, C, D))
+    return _continuous_square_root(A, B, C)[3]
+
+
 @dataclass(frozen=True)
 class Gramians:
     """Controllability and observability gramians of a stable model.
@@ -59,9 +141,9 @@ class Gramians:
     Attributes
     ----------
     controllability : ndarray
-        ``Wc = A Wc A' + B B'``, ``(n, n)``.
+        ``Wc = A Wc A' + B B'`` (continuous: ``A Wc + Wc A' + B B' = 0``), ``(n, n)``.
     observability : ndarray
-        ``Wo = A' Wo A + C' C``, ``(n, n)``.
+        ``Wo = A' Wo A + C' C`` (continuous: ``A' Wo + Wo A + C' C = 0``), ``(n, n)``.
     """
 
     controllability: np.ndarray
@@ -73,8 +155,30 @@ class Gramians:
                 f"trace Wo={np.trace(self.observability):.4g})")
 
 
-def gramians(model: StateSpaceModel) -> Gramians:
-    """Controllability and observability gramians.
+def gramians(model: Any) -> Gramians:
+    """Controllability and observability gramians of a stable model (as MATLAB's ``gram``).
+
+    A discrete model's solve the discrete Lyapunov equations, a continuous model's
+    (:class:`sysid.ContinuousStateSpace`, ``dt = 0``) the continuous ones
+    ``A Wc + Wc A' + B B' = 0`` and ``A' Wo + Wo A + C' C = 0``.
+
+    Parameters
+    ----------
+    model : StateSpaceModel or ContinuousStateSpace
+        A stable model (any :class:`sysid.Model` with a state-space form).
+
+    Returns
+    -------
+    Gramians
+        ``controllability`` and ``observability``, ``(n, n)`` each.
+
+    Raises
+    ------
+    DataError
+        For an unstable model (a pole on or beyond the stability boundary, within a relative
+        margin of ``1e-8``), whose gramians do not exist; the message names the pole and
+        points to :func:`hankel_singular_values` and :func:`balanced_truncation`, which
+        handle unstable models.
 
     Examples
     --------
@@ -82,23 +186,53 @@ def gramians(model: StateSpaceModel) -> Gramians:
     >>> g = sysid.gramians(sysid.StateSpaceModel([[0.5]], [[1.0]], [[2.0]]))
     >>> round(float(g.controllability[0, 0]), 12), round(float(g.observability[0, 0]), 12)
     (1.333333333333, 5.333333333333)
+    >>> gc = sysid.gramians(sysid.ContinuousStateSpace([[-2.0]], [[1.0]], [[2.0]]))
+    >>> float(gc.controllability[0, 0]), float(gc.observability[0, 0])
+    (0.25, 1.0)
     """
-    m = _check(model)
-    wc, wo = _sysid.gramians(m.A, m.B, m.C, m.D)
+    m = _state_space(model, "gramians")
+    _require_stable(m)
+    if m.dt:
+        wc, wo = _sysid.gramians(m.A, m.B, m.C, m.D)
+    else:
+        wc, wo = _continuous_gramians(m.A, m.B, m.C)
     return Gramians(wc, wo)
 
 
-def hankel_singular_values(model: StateSpaceModel) -> np.ndarray:
-    """Hankel singular values, decreasing.
+def hankel_singular_values(model: Any) -> np.ndarray:
+    """Hankel singular values, decreasing; ``inf`` first for each unstable pole.
+
+    As MATLAB's ``hsvd``: an unstable model (poles on or outside the unit circle, or in the
+    closed right half-plane, within a relative margin of ``1e-8``) is split into stable and
+    unstable parts (:mod:`sysid.analysis.stable_split`); the result is one ``inf`` per
+    unstable pole followed by the Hankel singular values of the stable part. A continuous
+    model (:class:`sysid.ContinuousStateSpace`) uses its continuous gramians.
+
+    Parameters
+    ----------
+    model : StateSpaceModel or ContinuousStateSpace
+        The model (any :class:`sysid.Model` with a state-space form).
+
+    Returns
+    -------
+    ndarray
+        ``(nstates,)``: ``inf`` for the unstable poles, then decreasing.
 
     Examples
     --------
     >>> import sysid
     >>> sysid.hankel_singular_values(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.5]]))
     array([2.])
+    >>> sysid.hankel_singular_values(sysid.ContinuousStateSpace([[1.0, 0.0], [0.0, -2.0]],
+    ...                                                           [[1.0], [1.0]], [[1.0, 2.0]]))
+    array([inf, 0.5])
     """
-    m = _check(model)
-    return np.asarray(_sysid.hankel_singular_values(m.A, m.B, m.C, m.D))
+    m = _state_space(model, "hankel_singular_values")
+    if not _unstable_poles(m).size:
+        return _stable_hsv(m.A, m.B, m.C, m.D, m.dt)
+    split = split_stable(m.A, m.B, m.C, m.dt)
+    nu = m.nstates - split.n_stable
+    return np.r_[np.full(nu, np.inf), _stable_hsv(*split.stable, m.D, m.dt)]
 
 
 def _reduce(model: StateSpaceModel, order: int | None, method: str) -> StateSpaceModel:
@@ -124,11 +258,29 @@ def _reduce(model: StateSpaceModel, order: int | None, method: str) -> StateSpac
     )
 
 
-def balanced_realization(model: StateSpaceModel) -> StateSpaceModel:
+def balanced_realization(model: Any) -> Any:
     """Balanced realisation: both gramians equal ``diag(hankel_singular_values)``.
 
-    The model must be stable and minimal (use :func:`balanced_truncation` otherwise). A
-    Kalman gain and initial state are transformed with the states.
+    As MATLAB's ``balreal``, an unstable model keeps its unstable part unchanged and only
+    the stable part is balanced: the model is split (:mod:`sysid.analysis.stable_split`) and
+    the result has the unstable states first, decoupled from the balanced stable ones, in the
+    order of :func:`hankel_singular_values` (``inf`` first). A continuous model
+    (:class:`sysid.ContinuousStateSpace`) is balanced with its continuous gramians and stays
+    continuous. The stable part must be minimal (use :func:`balanced_truncation` otherwise).
+    A Kalman gain and initial state are transformed with the states.
+
+    ``info`` of the result holds ``hankel_singular_values`` (with the ``inf``),
+    ``unstable_states`` and the transformation ``T``, ``T_inv`` (``x_balanced = T_inv x``).
+
+    Parameters
+    ----------
+    model : StateSpaceModel or ContinuousStateSpace
+        The model (any :class:`sysid.Model` with a state-space form).
+
+    Returns
+    -------
+    StateSpaceModel or ContinuousStateSpace
+        The balanced model, of the same kind and order.
 
     Examples
     --------
@@ -137,8 +289,17 @@ def balanced_realization(model: StateSpaceModel) -> StateSpaceModel:
     >>> g = sysid.gramians(sysid.balanced_realization(m))
     >>> bool(np.allclose(g.controllability, g.observability))
     True
+    >>> u = sysid.StateSpaceModel([[1.5, 0.3], [0.0, 0.5]], [[1.0], [1.0]], [[1.0, 1.0]])
+    >>> b = sysid.balanced_realization(u)     # the unstable state first, then balanced
+    >>> round(float(b.A[0, 0]), 12), b.info["unstable_states"]
+    (1.5, 1)
     """
-    return _reduce(model, None, "balanced")
+    m = _state_space(model, "balanced_realization")
+    if m.dt and not _unstable_poles(m).size:
+        out = _reduce(m, None, "balanced")
+        out.info["unstable_states"] = 0
+        return out
+    return _truncate_split(m, m.nstates, continuous=not m.dt, realization=True)
 
 
 def balanced_truncation(model: Any, order: int) -> Any:
@@ -161,7 +322,7 @@ def balanced_truncation(model: Any, order: int) -> Any:
     Parameters
     ----------
     model : StateSpaceModel or ContinuousStateSpace
-        The model (any discrete :class:`sysid.Model` with a state-space form).
+        The model (any :class:`sysid.Model` with a state-space form).
     order : int
         States to keep, ``unstable poles <= order <= nstates``.
 
@@ -184,9 +345,9 @@ def balanced_truncation(model: Any, order: int) -> Any:
     """
     if order is None:
         raise DataError("order is required; use balanced_realization to keep every state")
-    if getattr(model, "dt", None) == 0 and all(hasattr(model, k) for k in "ABCD"):
-        return _truncate_split(model, as_int(order, "order"), continuous=True)
-    m = _check(model)
+    m = _state_space(model, "balanced_truncation")
+    if not m.dt:
+        return _truncate_split(m, as_int(order, "order"), continuous=True)
     order = as_int(order, "order")
     if m.nstates == 0 or bool(np.all(is_stable_pole(m.poles(), m.dt))):
         out = _reduce(m, order, "balanced_truncation")
@@ -195,8 +356,9 @@ def balanced_truncation(model: Any, order: int) -> Any:
     return _truncate_split(m, order, continuous=False)
 
 
-def _truncate_split(m: Any, order: int, continuous: bool) -> Any:
-    """Balanced truncation of the stable part of ``m``, the unstable part added back."""
+def _truncate_split(m: Any, order: int, continuous: bool, realization: bool = False) -> Any:
+    """Balanced truncation of the stable part of ``m``, the unstable part added back (after
+    the stable states; first for a balanced ``realization``, which keeps every state)."""
     n = m.nstates
     if not 1 <= order <= n:
         raise DataError(f"invalid order: {order}; the model has {n} states, so order must "
@@ -229,16 +391,22 @@ def _truncate_split(m: Any, order: int, continuous: bool) -> Any:
     A = np.block([[a, np.zeros((r, nu))], [np.zeros((nu, r)), Au]])
     T = split.T @ np.block([[t, np.zeros((ns, nu))], [np.zeros((nu, r)), np.eye(nu)]])
     T_inv = np.block([[t_inv, np.zeros((r, nu))], [np.zeros((nu, ns)), np.eye(nu)]]) @ split.T_inv
+    B, C = np.vstack([b, Bu]), np.hstack([c, Cu])
     info = dict(m.info)
     info.update(method="balanced_truncation", reduced_from=n, hankel_singular_values=hsv,
                 error_bound=float(2.0 * hsv[r:].sum()) + 0.0, unstable_states=nu, T=T,
                 T_inv=T_inv)
+    if realization:  # the unstable states first, as MATLAB's balreal
+        p = np.r_[np.arange(r, order), np.arange(r)]
+        A, B, C, T, T_inv = A[np.ix_(p, p)], B[p], C[:, p], T[:, p], T_inv[p]
+        info.update(method="balanced", hankel_singular_values=np.r_[np.full(nu, np.inf), hsv],
+                    T=T, T_inv=T_inv)
     if continuous:
-        return type(m)(A, np.vstack([b, Bu]), np.hstack([c, Cu]), d,
+        return type(m)(A, B, C, d,
                        input_names=m.input_names, output_names=m.output_names,
                        hold=getattr(m, "hold", "zoh"), info=info)
     return StateSpaceModel(
-        A, np.vstack([b, Bu]), np.hstack([c, Cu]), d, None if m.K is None else T_inv @ m.K,
+        A, B, C, d, None if m.K is None else T_inv @ m.K,
         dt=m.dt, noise_cov=m.noise_cov, x0=None if m.x0 is None else T_inv @ m.x0,
         input_names=m.input_names, output_names=m.output_names, info=info)
 
@@ -247,15 +415,7 @@ def _continuous_truncation(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.nd
                            ) -> tuple[np.ndarray, ...]:
     """Square-root balanced truncation of a stable continuous ``(A, B, C, D)`` to ``r``
     states: ``(hsv, Ar, Br, Cr, D, T, T_inv)``."""
-    wc = scipy.linalg.solve_continuous_lyapunov(A, -B @ B.T)
-    wo = scipy.linalg.solve_continuous_lyapunov(A.T, -C.T @ C)
-
-    def factor(w: np.ndarray) -> np.ndarray:  # L with L L' = w (w is semi-definite)
-        lam, V = np.linalg.eigh(0.5 * (w + w.T))
-        return V * np.sqrt(np.clip(lam, 0.0, None))
-
-    lc, lo = factor(wc), factor(wo)
-    U, hsv, Vt = np.linalg.svd(lo.T @ lc)
+    lc, lo, U, hsv, Vt = _continuous_square_root(A, B, C)
     if r and hsv[r - 1] <= 1e-12 * hsv[0]:
         keep = int(np.sum(hsv > 1e-12 * hsv[0]))
         raise DataError(

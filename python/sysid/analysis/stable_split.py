@@ -1,5 +1,6 @@
 """Stable/unstable additive decomposition ``G = G_stable + G_unstable`` (MATLAB's ``stabsep``),
-which :func:`sysid.balanced_truncation` uses to keep the unstable part of a model unchanged.
+which :func:`sysid.balanced_truncation`, :func:`sysid.balanced_realization` and
+:func:`sysid.hankel_singular_values` use to keep the unstable part of a model unchanged.
 
 An ordered real Schur form ``Q' A Q = [[A11, A12], [0, A22]]`` puts the stable poles in
 ``A11`` (``|z| < 1``, or ``Re s < 0``); the Sylvester equation ``A11 X - X A22 = -A12``
