@@ -308,9 +308,9 @@ def balanced_truncation(model: Any, order: int) -> Any:
     As MATLAB's ``balred``, the model is split into stable and unstable parts
     (:mod:`sysid.analysis.stable_split`: ordered Schur form and a Sylvester equation); the
     stable part is balanced and truncated, the unstable part (poles on or outside the unit
-    circle, or in the closed right half-plane) added back unchanged. ``order`` counts all the
-    states and must be at least the number of unstable poles. A stable model is truncated as
-    a whole, as before.
+    circle, or in the closed right half-plane) added back unchanged, its states first (as
+    :func:`balanced_realization` orders them). ``order`` counts all the states and must be at
+    least the number of unstable poles. A stable model is truncated as a whole, as before.
 
     ``info`` of the result holds ``hankel_singular_values`` (of the stable part),
     ``error_bound`` (``2 * sum`` of the discarded ones, a bound on the H-infinity error, which
@@ -357,8 +357,8 @@ def balanced_truncation(model: Any, order: int) -> Any:
 
 
 def _truncate_split(m: Any, order: int, continuous: bool, realization: bool = False) -> Any:
-    """Balanced truncation of the stable part of ``m``, the unstable part added back (after
-    the stable states; first for a balanced ``realization``, which keeps every state)."""
+    """Balanced truncation of the stable part of ``m``, the unstable part added back (its
+    states first, as in a balanced ``realization``, which keeps every state)."""
     n = m.nstates
     if not 1 <= order <= n:
         raise DataError(f"invalid order: {order}; the model has {n} states, so order must "
@@ -396,11 +396,12 @@ def _truncate_split(m: Any, order: int, continuous: bool, realization: bool = Fa
     info.update(method="balanced_truncation", reduced_from=n, hankel_singular_values=hsv,
                 error_bound=float(2.0 * hsv[r:].sum()) + 0.0, unstable_states=nu, T=T,
                 T_inv=T_inv)
-    if realization:  # the unstable states first, as MATLAB's balreal
-        p = np.r_[np.arange(r, order), np.arange(r)]
-        A, B, C, T, T_inv = A[np.ix_(p, p)], B[p], C[:, p], T[:, p], T_inv[p]
-        info.update(method="balanced", hankel_singular_values=np.r_[np.full(nu, np.inf), hsv],
-                    T=T, T_inv=T_inv)
+    # the unstable states first, as MATLAB's balreal and hsvd order them
+    p = np.r_[np.arange(r, order), np.arange(r)]
+    A, B, C, T, T_inv = A[np.ix_(p, p)], B[p], C[:, p], T[:, p], T_inv[p]
+    info.update(T=T, T_inv=T_inv)
+    if realization:
+        info.update(method="balanced", hankel_singular_values=np.r_[np.full(nu, np.inf), hsv])
     if continuous:
         return type(m)(A, B, C, d,
                        input_names=m.input_names, output_names=m.output_names,
