@@ -9,6 +9,7 @@ import pytest
 
 import sysid
 from sysid.errors import DataError
+from sysid.models.uncertainty import UncertaintyWarning
 
 NUM, DEN = [0.5, 0.2], [1.0, -1.2, 0.5]   # (0.5 z + 0.2) / (z^2 - 1.2 z + 0.5), one lag
 
@@ -46,10 +47,13 @@ def test_noise_free_recovered_exactly():
 
 
 def test_noise_free_with_transient_and_estimated_delay():
-    """Record from rest: the first period dropped; the delay (2 samples) from the data."""
+    """Record from rest: the first period dropped; the delay (2 samples) from the data. With 3
+    steady-state periods the std cannot be calibrated: a warning says so."""
     g = sysid.TransferFunction(NUM, DEN + [0.0, 0.0], dt=1.0)   # z^-2 more
-    G = sysid.tfest(record(g, periods=3, transient=1), 2, 1, dt=1.0, periods=4, transient=1,
-                    iodelay="auto")
+    with pytest.warns(UncertaintyWarning, match=r"3 steady-state periods \(periods=4, "
+                      r"transient=1\): measure 4 or more"):
+        G = sysid.tfest(record(g, periods=3, transient=1), 2, 1, dt=1.0, periods=4,
+                        transient=1, iodelay="auto")
     assert G.info["n_delays_estimated"] == 1
     np.testing.assert_allclose(G.freqresp(np.linspace(0.1, 3.0, 9)),
                                g.freqresp(np.linspace(0.1, 3.0, 9)), rtol=1e-8, atol=1e-10)

@@ -122,7 +122,9 @@ def greyest(
         inverse of its noise variance from the periods; no initial state, no noise model
         (``x0``, ``noise``, ``focus`` do not apply: ``x0`` or ``noise="estimate"`` raise),
         ``weighting="noise"`` only. The covariance is scaled by ``info["residual_scale"]``
-        (about 1 when the structure explains the lines).
+        (about 1 when the structure explains the lines) and by ``(P-2)/(P-3)`` for the
+        variances estimated from ``P`` periods (``info["sample_variance_factor"]``; with 3
+        or fewer an ``UncertaintyWarning`` says the std is too small).
     transient : int, optional
         Leading periods dropped (default 0 with a declared ``periods``, 1 with ``"auto"``).
 

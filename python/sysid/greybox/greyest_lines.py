@@ -15,7 +15,10 @@ The Rust core (``sysid_core::greybox::frequency``) forms the residuals and their
 sensitivities to the entries of ``A, B, C, D`` (those of ``sysid.pem``'s frequency path) and
 the shared optimiser searches ``p`` through the chain rule with ``d(A, B, C, D)/dp`` from the
 structure (analytic, central differences, Fréchet derivative of the matrix exponential). The
-covariance of ``p`` is ``s (J^T W J)^-1`` with ``s = 2 V / (residuals - rank)``.
+covariance of ``p`` is ``c s (J^T W J)^-1`` with ``s = 2 V / (residuals - rank)`` and ``c``
+the factor for variances estimated from the periods
+(:func:`sysid.pem.periodic.sample_variance_factor`: ``(M - 2) / (M - 3)`` with ``M``
+periods, ``info["sample_variance_factor"]``).
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ import numpy as np
 from .. import _sysid
 from ..errors import DataError
 from ..models.frd import FRD
-from ..pem.periodic import CRITERION, line_weights
+from ..pem.periodic import CRITERION, line_weights, sample_variance_factor
 from .delays import tap_states
 from .greybox import GreyBox
 from .outer import OuterParameters, model_of
@@ -67,6 +70,7 @@ class _LineFit(OuterParameters):
         g = frd.response.reshape(nk, -1)
         self.re, self.im = np.ascontiguousarray(g.real), np.ascontiguousarray(g.imag)
         self.weight = np.ascontiguousarray(line_weights(frd).reshape(nk, -1))
+        self.factor = sample_variance_factor(frd, "greyest")
         self.names_io = {"input_names": frd.input_names, "output_names": frd.output_names}
 
     def theta(self, z: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
@@ -102,9 +106,11 @@ class _LineFit(OuterParameters):
             "n_free": self.nf, "lines": int(self.omega.size),
             "n_residuals": int(res["n_residuals"]),
             "residual_scale": float(res["residual_scale"]),
+            "sample_variance_factor": self.factor,
             "spectral_radius": float(res["spectral_radius"]), "focus": "simulation",
             "noise": "none", "x0_values": [], "multistart": starts, **extra,
         }
+        res = {**res, "covariance": np.asarray(res["covariance"]) * self.factor}
         table, cov, est, model = self.estimate(
             res, lambda s, v, inf: model_of(s, v, self.dt, None, self.names_io, None, inf),
             info)

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int
+from .._checks import as_int, user_stacklevel
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
 from ..errors import DataError
@@ -33,7 +33,7 @@ from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
 from ..nonparametric.bla import bla
 
-__all__ = ["periodic_lines", "lines_cost", "resolve_periods"]
+__all__ = ["periodic_lines", "lines_cost", "resolve_periods", "sample_variance_factor"]
 
 CRITERION = "weighted sum of squares on the excited lines"
 
@@ -157,6 +157,60 @@ def line_weights(frd: FRD) -> np.ndarray:
     return 2.0 / np.maximum(s2, max(floor, 1e-300))
 
 
+def sample_variance_factor(frd: FRD, who: str) -> float:
+    """Factor on the covariance ``s (J^T W J)^-1`` of a fit weighted by the variances of a
+    :func:`sysid.bla` (``1/std**2``, estimated from the spread over the periods or the
+    realisations, ``frd.dof`` real degrees of freedom ``nu``): ``(nu - 2) / (nu - 4)``.
+
+    The weights and the noise on the averaged response are independent, but ``1/std**2``
+    fits the lines whose noise happened to look small too closely: the estimate is noisier
+    than with the true variances by ``(nu - 2) / (nu - 4)`` in variance, asymptotically in
+    the number of lines (the sample maximum-likelihood estimator: Schoukens, Pintelon,
+    Vandersteen and Guillaume, "Frequency-domain system identification using non-parametric
+    noise models estimated from a small number of data sets", Automatica, 1997), i.e.
+    ``(M - 2) / (M - 3)`` with ``M`` steady-state periods: 2 at 4 periods, 1.2 at 8, 1.08 at
+    16. The residual scale ``s`` cannot see this (it is the variance of the weighted
+    residuals, about ``nu / (nu - 2)`` whatever the spread of the estimate). With
+    ``nu <= 4`` (3 periods or fewer, or 3 realisations or fewer) the variance has no finite
+    bound: :class:`~sysid.models.uncertainty.UncertaintyWarning` says so, naming ``who``,
+    and the factor is 1 (the std is then that of exactly known variances, a lower bound, too
+    small by a factor that grows with the number of lines: about 1.5 with 3 periods, 2 to 3
+    with 2). Other FRDs (a user's std, spectral estimates) are taken as exact: 1.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.pem.periodic import sample_variance_factor
+    >>> u = sysid.multisine(64, band=(0, 0.5), periods=4, seed=0)
+    >>> y = u + 0.01 * np.random.default_rng(0).standard_normal(u.shape)
+    >>> sample_variance_factor(sysid.bla(sysid.IOData(u, y, 1.0), 4), "tfest")
+    2.0
+    """
+    if frd.method != "bla" or frd.dof is None or frd.std is None:
+        return 1.0
+    nu = float(frd.dof)
+    if nu > 4.0:
+        return (nu - 2.0) / (nu - 4.0)
+    import warnings
+
+    from ..models.uncertainty import UncertaintyWarning
+
+    info = frd.info or {}
+    r, p = int(info.get("realizations", 1)), info.get("periods", "?")
+    t = int(info.get("transient", 0))
+    src = (f"the spread over {r} realisations: use 4 or more (8 or more for a std within "
+           "10 %)" if r > 1 else
+           f"the spread over {int(nu / 2) + 1} steady-state periods (periods={p}, "
+           f"transient={t}): measure 4 or more (8 or more for a std within 10 %)"
+           + (" or drop fewer transient periods" if t else ""))
+    warnings.warn(f"{who}: the noise variances that weight the lines come from {src}. With "
+                  "3 or fewer the estimate's variance has no finite bound (sample maximum "
+                  "likelihood), so the std reported is the one for exactly known variances "
+                  "and too small (by about 1.5 with 3 periods, 2 to 3 with 2, more with "
+                  "more lines)", UncertaintyWarning, stacklevel=user_stacklevel())
+    return 1.0
+
+
 def lines_cost(frd: FRD, model: Any) -> float:
     """``sum |G_model - G_k|^2 / s2`` on the lines of ``frd``: the criterion that
     ``sysid.pem(..., periods=)`` minimises, for scoring candidate models.
@@ -205,8 +259,11 @@ def pem_lines(frd: FRD, model: StateSpaceModel, *, feedthrough: bool, max_iter: 
             estimate_d=bool(feedthrough), max_iter=max_iter, tol_cost=tol, progress=cb)
     finally:
         close_bar()
+    factor = sample_variance_factor(frd, "pem")
+    res["covariance"] = np.asarray(res["covariance"]) * factor
     extra = {"domain": "frequency", "lines": int(nk), "periods": frd.info.get("periods"),
              "n_residuals": int(res["n_residuals"]),
-             "residual_scale": float(res["residual_scale"]), "modal": bool(res["modal"]),
+             "residual_scale": float(res["residual_scale"]), "sample_variance_factor": factor,
+             "modal": bool(res["modal"]),
              "stabilized": stabilized}
     return res, extra

@@ -414,10 +414,11 @@ def oe(
     excited lines instead: the response averaged over the periods (:func:`sysid.bla`), each
     entry weighted by ``1/std`` from their spread, by ``tfest``'s frequency-response fit
     (``info["domain"] == "frequency"``; the covariance scaled by the residual scale
-    ``info["residual_scale"]``, as in ``pem``/``greyest``, since the std from a few periods
-    is itself uncertain). ``transient`` drops leading periods (default 0
-    declared, 1 with ``"auto"``). ``"auto"`` without a usable period fits in the time domain
-    with the reason in ``info["periodicity"]``.
+    ``info["residual_scale"]`` and by ``(P-2)/(P-3)`` for the variances estimated from the
+    ``P`` periods, ``info["sample_variance_factor"]``, as in ``pem``/``greyest``; with 3
+    periods or fewer an ``UncertaintyWarning`` says the std is too small). ``transient``
+    drops leading periods (default 0 declared, 1 with ``"auto"``). ``"auto"`` without a
+    usable period fits in the time domain with the reason in ``info["periodicity"]``.
 
     The errors of the time-domain fit are the output disturbance itself, coloured on nearly
     every real record, where the Gauss-Newton covariance ``sigma^2 (J^T J)^-1`` (kept as

@@ -2,7 +2,8 @@
 lines by the weighted frequency-response fit of ``tfest``
 (:func:`sysid.tf.frequency.fit_lines`: Sanathanan-Koerner start, then weighted NLS with the
 ``1/std`` of :func:`sysid.bla`'s averaged response; covariance scaled by the residual
-scale, ``info["residual_scale"]``), returned as the
+scale, ``info["residual_scale"]``, and the sample-variance factor,
+``info["sample_variance_factor"]``), returned as the
 :class:`~sysid.PolynomialModel` the time-domain ``oe`` gives."""
 
 from __future__ import annotations
@@ -40,9 +41,9 @@ def oe_lines(data: Any, nb: Any, nf: Any, nk: Any, *, periods: Any, transient: A
     if lines is None:
         return None, periodicity
     # tfest's discrete pair lags 1 + delay samples: the delay is nk - 1
-    _, _, _, _, thetas, covs, scales = fit_lines(lines, nf_g, nb_g - 1, nk_g - 1.0, False,
-                                         float(data.dt), as_int(max_iter, "max_iter", 0),
-                                         1e-10, progress)
+    _, _, _, _, thetas, covs, scales, factor = fit_lines(
+        lines, nf_g, nb_g - 1, nk_g - 1.0, False, float(data.dt),
+        as_int(max_iter, "max_iter", 0), 1e-10, progress, "oe")
     b = [[thetas[i * nu + j][nf_g[i, j]:-1] for j in range(nu)] for i in range(ny)]
     f = [[thetas[i * nu + j][:nf_g[i, j]] for j in range(nu)] for i in range(ny)]
     m = PolynomialModel([[np.zeros(0)] * ny for _ in range(ny)], b, nk_g, data.dt, f=f)
@@ -50,7 +51,7 @@ def oe_lines(data: Any, nb: Any, nf: Any, nk: Any, *, periods: Any, transient: A
     m.info = {"method": "oe", "domain": "frequency", "lines": int(lines.omega.size),
               "criterion": "weighted sum of squares on the excited lines",
               "periods": lines.info.get("periods"), "periodicity": periodicity,
-              "residual_scale": scales}
+              "residual_scale": scales, "sample_variance_factor": factor}
     cov = []
     for i in range(ny):  # oe's order per output: b_i1.., f_i1.. (the delays are fixed)
         o, blocks = 0, []

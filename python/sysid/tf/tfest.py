@@ -82,8 +82,10 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         domain on the excited lines: the response averaged over the periods
         (:func:`sysid.bla`), each entry weighted by ``1/std`` from the spread over the
         periods, as for an FRD; the covariance is scaled by the residual scale
-        ``info["residual_scale"]`` (as in ``pem``/``greyest``: the std from a few periods is
-        itself uncertain, so taking it as exact would report too small a std; see
+        ``info["residual_scale"]`` and by ``(P-2)/(P-3)`` for the variances estimated from
+        the ``P`` periods (``info["sample_variance_factor"]``; as in ``pem``/``greyest``:
+        taking them as exact would report too small a std; with 3 periods or fewer no
+        calibrated std exists and an ``UncertaintyWarning`` says so; see
         :mod:`sysid.tf.frequency`). When ``"auto"`` finds no period, or fewer than 2 after the
         transient, the time-domain fit runs and ``info["periodicity"]["reason"]`` says why.
     transient : int, optional
@@ -95,9 +97,11 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         With ``parameters`` (a :class:`~sysid.models.paramtable.ParameterTable` with std),
         ``uncertainty`` (:class:`~sysid.models.uncertainty.ParameterUncertainty`) and
         ``info`` (method, iterations, stop reason, cost, fit per output). From an FRD or on
-        periodic data the covariance is ``s (J^T W J)^-1`` with the residual scale
+        periodic data the covariance is ``c s (J^T W J)^-1`` with the residual scale
         ``s = info["residual_scale"]`` per pair (about 1 when the FRD's std is right and
-        the model explains it; unweighted, the residual variance). A discrete model from a
+        the model explains it; unweighted, the residual variance) and ``c =
+        info["sample_variance_factor"]`` (``(P-2)/(P-3)`` on periodic data or a
+        :func:`sysid.bla`, else 1). A discrete model from a
         time record (``dt`` given) carries :func:`sysid.oe`'s covariance: on one record
         the sandwich for the errors' colour, formed when first used (by ``uncertainty`` or
         the table's std), with ``info["covariance"]`` saying which.
