@@ -203,3 +203,61 @@ def test_a_headerless_file_names_a_bad_cell_as_in_memory(tmp_path, monkeypatch, 
     monkeypatch.setattr(cli, "STREAM_BLOCK", 4096)
     assert cli.main(argv) == 2
     assert capsys.readouterr().err == in_memory
+
+
+def test_a_comment_with_as_many_fields_as_the_header_is_skipped_when_streamed(tmp_path):
+    """pyarrow took '#a,b,c' for a row: it stopped the read (a column asked for held '#a')
+    or, worse, was read as data (the columns asked for held numbers)."""
+    path = tmp_path / "d.csv"
+    path.write_text("t,u,y\n0,1,2\n#a,b,c\n1,3,4\n# 7,8,9\n   # x,9,9\n2,5,6\n")
+    want = [[1, 2], [3, 4], [5, 6]]
+    np.testing.assert_array_equal(cli.read_csv(path)[1][:, 1:], want)
+    for block in (16, None):
+        np.testing.assert_array_equal(
+            cli.read_columns(path, ["u", "y"], progress=False, block_size=block), want)
+    path.write_text("\ufeff# log\r\n\r\n  \r\nt,u,y\r\n0,1,2\r\n# 7,8,9\r\n1,3,4\r\n")
+    np.testing.assert_array_equal(cli.read_columns(path, ["u", "y"], progress=False),
+                                  [[1, 2], [3, 4]])
+
+
+@pytest.mark.parametrize("cell", ["1_000", "1_0.5", "１２"])
+def test_python_only_number_syntax_is_refused_by_both_readers(tmp_path, cell):
+    """float() reads 1_000 and full-width digits; pandas, numpy.loadtxt and pyarrow do not.
+    The in-memory reader accepted them and the streamed one refused them with a message
+    that named no cell: both now refuse them, by line and column."""
+    path = tmp_path / "d.csv"
+    path.write_text(f"t,u,y\n0,1,2\n1,{cell},4\n", encoding="utf-8")
+    want = rf"d\.csv line 3, column 'u': '{cell}' is not a number"
+    with pytest.raises(DataError, match=want):
+        cli.read_csv(path)
+    with pytest.raises(DataError, match=want):
+        cli.read_columns(path, ["u", "y"], progress=False)
+    if cell == "1_000":
+        with pytest.raises(DataError, match="digits grouped with '_' are not read.*write 1000"):
+            cli.read_csv(path)
+
+
+@pytest.mark.parametrize("suffix", [".gz", ".bz2", ".xz"])
+@pytest.mark.parametrize("damage", ["truncated", "corrupted"])
+def test_a_damaged_compressed_file_is_named_as_damaged(tmp_path, suffix, damage):
+    import bz2
+    import gzip
+    import lzma
+
+    text = ("t,u,y\n" + "".join(f"{i},{i % 7},{i % 5}\n" for i in range(400000))).encode()
+    pack = {".gz": gzip.compress, ".bz2": bz2.compress, ".xz": lzma.compress}[suffix]
+    packed = bytearray(pack(text))
+    half = len(packed) // 2
+    if damage == "truncated":
+        del packed[half:]
+    else:
+        packed[half:half + 64] = b"\xff" * 64
+    path = tmp_path / f"d.csv{suffix}"
+    path.write_bytes(bytes(packed))
+    kind = {".gz": "gzip", ".bz2": "bzip2", ".xz": "xz"}[suffix]
+    want = rf"d\.csv{suffix}: the {kind}-compressed file is damaged or truncated: its text " \
+        r"ends after line [1-9]\d+ "
+    for read in (lambda: cli.read_columns(path, ["u", "y"], progress=False),
+                 lambda: cli.read_csv(path)):
+        with pytest.raises(DataError, match=want):
+            read()

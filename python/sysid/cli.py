@@ -23,7 +23,15 @@ from typing import Any, Callable
 import numpy as np
 
 from .data.iodata import IOData
-from .data.table import decompressing, first_bad_cell, header, numeric, read_table, text_bytes
+from .data.table import (
+    Uncommented,
+    decompressing,
+    first_bad_cell,
+    header,
+    numeric,
+    read_table,
+    text_bytes,
+)
 from .errors import DataError, InsufficientDataError, OrderError, SysidError
 from .validation.crossval import MIN_BLOCK
 
@@ -416,13 +424,12 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
         with Bar(path.stat().st_size, f"reading {path.name}", unit="B", unit_scale=True,
                  enabled=show(progress)) as bar:
             raw = _CountingFile(path, bar)
-            src = decompressing(path, raw)
+            src = Uncommented(decompressing(path, raw), path)  # comments go, wherever
             try:
                 reader = pacsv.open_csv(
                     src,
                     read_options=pacsv.ReadOptions(
-                        block_size=block_size or STREAM_BLOCK, skip_rows=head.line - 1,
-                        column_names=names),
+                        block_size=block_size or STREAM_BLOCK, column_names=names),
                     parse_options=pacsv.ParseOptions(delimiter=delim,
                                                      invalid_row_handler=_skip_comment),
                     convert_options=pacsv.ConvertOptions(
@@ -434,6 +441,8 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
                                         "a value that is not a finite number")
                     rows += batch.num_rows
             except (pa.ArrowInvalid, KeyError) as e:
+                if src.error is not None:  # pyarrow's error for the damaged stream
+                    raise src.error from None
                 raise _bad_cell(path, columns, delim, rows, f"{e}; check the column names "
                                 "and that every field is a number") from None
             finally:
@@ -452,8 +461,9 @@ def _bad_cell(path: Path, columns: list[str], delimiter: str, rows: int,
 
 
 def _skip_comment(row: Any) -> str:
-    """pyarrow's handler of a row with the wrong number of fields: a ``#`` comment or a
-    blank line is skipped, as ``read_table`` skips them; anything else is an error."""
+    """pyarrow's handler of a row with the wrong number of fields: a blank line (white
+    space) is skipped, as ``read_table`` skips it (the ``#`` comments, whatever their
+    fields, are gone before: ``sysid.data.table.Uncommented``); anything else is an error."""
     text = row.text or ""
     return "skip" if not text.strip() or text.lstrip().startswith("#") else "error"
 

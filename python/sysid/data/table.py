@@ -14,6 +14,7 @@ import gzip
 import itertools
 import lzma
 import math
+import re
 import zlib
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
@@ -30,6 +31,10 @@ _STREAM = {".gz": gzip.open, ".bz2": bz2.open, ".xz": lzma.open, ".lzma": lzma.o
 _UNREADABLE = (OSError, EOFError, lzma.LZMAError, zlib.error)
 #: Bytes at the start of a file looked at for NUL bytes (binary content).
 _SNIFF = 65536
+#: The compression of a table file, by its suffix, as an error names it.
+_KIND = {".gz": "gzip", ".bz2": "bzip2", ".xz": "xz", ".lzma": "lzma"}
+#: Bytes of a file read at a time by the block readers (line counts, the comment filter).
+_BLOCK = 1 << 20
 
 
 class Header(NamedTuple):
@@ -54,7 +59,9 @@ class Table(NamedTuple):
 
 
 def is_number(s: str, decimal: str = ".") -> bool:
-    """Whether ``s`` reads as a float (with ``decimal`` as the decimal mark)."""
+    """Whether ``s`` reads as a float to Python (with ``decimal`` as the decimal mark): the
+    header test, lenient so that a first row written ``1_000`` is read as data, and refused
+    by name (:func:`is_finite`), not taken for column names."""
     try:
         float(s.replace(decimal, ".") if decimal != "." else s)
     except ValueError:
@@ -62,8 +69,25 @@ def is_number(s: str, decimal: str = ".") -> bool:
     return True
 
 
+def python_only(s: str) -> bool:
+    """Whether ``s`` uses a number syntax only Python's ``float`` reads: ``_`` between
+    digits (``1_000``) or non-ASCII digits and spaces (``１２``). pandas, ``numpy.loadtxt``
+    and pyarrow (the streamed reader) refuse them, so every reader here refuses them too."""
+    return "_" in s or not s.isascii()
+
+
 def is_finite(s: str, decimal: str = ".") -> bool:
-    """Whether ``s`` reads as a finite float (with ``decimal`` as the decimal mark)."""
+    """Whether ``s`` reads as a finite float (with ``decimal`` as the decimal mark) in the
+    syntax every reader accepts (not :func:`python_only`).
+
+    Examples
+    --------
+    >>> from sysid.data.table import is_finite
+    >>> is_finite("1e3"), is_finite("1_000"), is_finite("nan")
+    (True, False, False)
+    """
+    if python_only(s):
+        return False
     try:
         return math.isfinite(float(s.replace(decimal, ".") if decimal != "." else s))
     except ValueError:
@@ -118,6 +142,10 @@ def cell_error(path: Path, line: int, column: str, cell: str, *, missing: bool =
     what = ("is empty" if cell == "" else f"{cell!r} is not a finite number"
             if cell.strip().lower().lstrip("+-") in ("nan", "inf", "infinity")
             else f"{cell!r} is not a number")
+    if cell and python_only(cell) and is_number(cell, decimal):
+        what += (" (digits grouped with '_' are not read, as by pandas and numpy: write "
+                 f"{cell.replace('_', '')})" if "_" in cell and cell.replace("_", "").isascii()
+                 else " (only ASCII digits, signs, '.' and exponents are read)")
     if hint and decimal == "." and "," in cell and is_number(cell, ","):
         what += f" (a decimal comma? {hint})"
     fix = ("fix or remove that row" if missing else "fix or remove that row "
@@ -150,13 +178,20 @@ def read_table(path: str | Path, delimiter: str | None = None, *,
     path = Path(path)
     if not path.is_file():
         raise DataError(f"no data file at {str(path)!r}")
+    blocks: list[bytes] = []
     try:
         with open_bytes(path) as f:
-            raw = f.read()
+            while block := f.read1(_BLOCK):  # read1: the text before a damage is counted
+                blocks.append(block)
+    except _UNREADABLE as e:
+        raise damaged(path, e, sum(b.count(b"\n") for b in blocks), bool(blocks)) from None
+    raw = b"".join(blocks)
+    del blocks
+    try:
         if b"\0" in raw[:_SNIFF]:
             raise UnicodeDecodeError("utf-8", raw[:1], 0, 1, "NUL byte")
         text = raw.decode("utf-8-sig")
-    except (UnicodeDecodeError, *_UNREADABLE):
+    except UnicodeDecodeError:
         raise _binary(path) from None
     numbered = list(_kept(text.splitlines()))
     if not numbered:
@@ -205,7 +240,7 @@ def numeric(table: Table, cols: list[int], *, missing: bool = False,
         bad = ~np.isfinite(values)
         if missing:
             bad &= ~np.isnan(values)
-        if not bad.any():
+        if not bad.any() and not _python_only_any(cells):
             return values
     except ValueError:
         pass
@@ -217,6 +252,8 @@ def numeric(table: Table, cols: list[int], *, missing: bool = False,
                 values[r, k] = np.nan
                 continue
             try:
+                if python_only(cell):
+                    raise ValueError(cell)
                 values[r, k] = float(cells[r, k])
                 if not (np.isfinite(values[r, k]) or missing and np.isnan(values[r, k])):
                     raise ValueError(cell)
@@ -224,6 +261,15 @@ def numeric(table: Table, cols: list[int], *, missing: bool = False,
                 raise cell_error(table.path, table.lines[r], table.names[c], cell,
                                  missing=missing, decimal=decimal, hint=hint) from None
     return values
+
+
+def _python_only_any(cells: np.ndarray) -> bool:
+    """Whether a cell of a string array is :func:`python_only` (vectorised: its characters
+    as code points)."""
+    if cells.size == 0:
+        return False
+    codes = np.ascontiguousarray(cells).view(np.uint32)
+    return bool(((codes > 127) | (codes == ord("_"))).any())
 
 
 def first_bad_cell(path: str | Path, columns: list[str], *, delimiter: str | None = None,
@@ -273,8 +319,45 @@ def first_line(path: str | Path) -> tuple[int, str]:
     """The file line number and text of a table's first line that is neither empty nor a
     ``#`` comment (its header, or its first row), read without reading the rest; ``(0,
     "")`` for a file without one."""
-    with _open_text(Path(path)) as f:
-        return next(_kept(line.rstrip("\r\n") for line in f), (0, ""))
+    path = Path(path)
+    seen = [0]  # lines read, for the error of a damaged compressed file
+    try:
+        with _open_text(path) as f:
+            return next(_kept(_counted(f, seen)), (0, ""))
+    except _UNREADABLE as e:
+        raise damaged(path, e, seen[0], seen[0] > 0) from None
+
+
+def _counted(f: Iterable[str], seen: list[int]) -> Iterator[str]:
+    """The lines of ``f`` without their line break, their number kept in ``seen[0]``."""
+    for seen[0], line in enumerate(f, 1):  # noqa: B007 (seen[0] is read by the caller)
+        yield line.rstrip("\r\n")
+
+
+def damaged(path: str | Path, error: BaseException, lines: int, started: bool = True
+            ) -> DataError:
+    """The error for a table file whose decompression failed: a compressed file damaged or
+    truncated (after ``lines`` whole lines of text when ``started``), or one that is not
+    compressed as its suffix says; a plain file's read error is :func:`_binary`'s.
+
+    Examples
+    --------
+    >>> from sysid.data.table import damaged
+    >>> print(damaged("log.csv.gz", EOFError("end of stream"), 1200))  # doctest: +ELLIPSIS
+    log.csv.gz: the gzip-compressed file is damaged or truncated: its text ends after line 1200 ...
+    """
+    path = Path(path)
+    kind = _KIND.get(path.suffix.lower())
+    if kind is None:
+        return _binary(path)
+    why = " ".join(str(error).split()) or type(error).__name__
+    if not started:
+        return DataError(f"{path.name}: not a readable {kind}-compressed file ({why}): it is "
+                         f"damaged at its start, or not {kind}-compressed (then rename it "
+                         f"without {path.suffix})")
+    return DataError(f"{path.name}: the {kind}-compressed file is damaged or truncated: its "
+                     f"text ends after line {lines} ({why}); nothing of it was used: copy or "
+                     "export the file again")
 
 
 def _binary(path: Path) -> DataError:
@@ -324,25 +407,27 @@ def text_bytes(path: str | Path, limit: int) -> int:
     (True, 4004, 101)
     """
     path = Path(path)
+    n = lines = 0
     try:
         with open_bytes(path) as f:
-            head = f.read(_SNIFF)
+            head = f.read1(_SNIFF)
             if b"\0" in head:
                 raise _binary(path)
-            n = len(head)
+            n, lines = len(head), head.count(b"\n")
             while n <= limit:
-                block = f.read(min(1 << 20, limit + 1 - n))
+                block = f.read1(min(_BLOCK, limit + 1 - n))
                 if not block:
                     break
-                n += len(block)
-    except _UNREADABLE:
-        raise _binary(path) from None
+                n, lines = n + len(block), lines + block.count(b"\n")
+    except _UNREADABLE as e:
+        raise damaged(path, e, lines, n > 0) from None
     return min(n, limit + 1)
 
 
 def count_lines(path: str | Path) -> int:
     """The lines of a table file once decompressed (a last line without a newline counted),
-    read in blocks of 1 MiB: a bound on its rows known before any row is held.
+    read in binary blocks of 1 MiB into one buffer (no text decoded, no block allocated): a
+    bound on its rows known before any row is held, for the reader that allocates them.
 
     Examples
     --------
@@ -355,14 +440,14 @@ def count_lines(path: str | Path) -> int:
     3
     """
     path = Path(path)
-    n, last = 0, b"\n"
+    n, last, buf = 0, ord("\n"), bytearray(_BLOCK)
     try:
         with open_bytes(path) as f:
-            while block := f.read(1 << 20):
-                n, last = n + block.count(b"\n"), block[-1:]
-    except _UNREADABLE:
-        raise _binary(path) from None
-    return n + (last != b"\n")
+            while k := f.readinto1(buf):
+                n, last = n + buf.count(b"\n", 0, k), buf[k - 1]
+    except _UNREADABLE as e:
+        raise damaged(path, e, n, n > 0) from None
+    return n + (last != ord("\n"))
 
 
 def header(path: str | Path, delimiter: str | None = None, *,
@@ -443,13 +528,101 @@ def _data_rows(path: Path, head: Header, cols: list[int], *, start: int = 0,
     line by :func:`read_table`'s rules; a row with the wrong number of fields or a cell that
     is not a finite number raises its :class:`~sysid.DataError` (file line and column)."""
     split, n = splitter(head.delimiter), len(head.names)
-    with _open_text(path) as f:
-        kept = _kept(line.rstrip("\r\n") for line in f)
-        if not head.headerless:
-            next(kept, None)
-        for k, line in itertools.islice(kept, start, None):
-            cells = _fields(path, k, split(line), n)
-            for c in cols:
-                if not is_finite(cells[c], decimal):
-                    raise cell_error(path, k, head.names[c], cells[c], decimal=decimal)
-            yield k, [float(cells[c].replace(decimal, ".")) for c in cols]
+    seen = [0]  # lines read, for the error of a damaged compressed file
+    try:
+        with _open_text(path) as f:
+            kept = _kept(_counted(f, seen))
+            if not head.headerless:
+                next(kept, None)
+            for k, line in itertools.islice(kept, start, None):
+                cells = _fields(path, k, split(line), n)
+                for c in cols:
+                    if not is_finite(cells[c], decimal):
+                        raise cell_error(path, k, head.names[c], cells[c], decimal=decimal)
+                yield k, [float(cells[c].replace(decimal, ".")) for c in cols]
+    except _UNREADABLE as e:
+        raise damaged(path, e, seen[0], seen[0] > 0) from None
+
+
+#: A ``#`` comment line, and a comment or blank line, with its line break (any of them).
+_COMMENT = re.compile(rb"(?:(?<=[\r\n])|\A)[ \t\f\v]*#[^\r\n]*(?:\r\n|\r|\n|\Z)")
+_SKIPPED = re.compile(rb"(?:(?<=[\r\n])|\A)[ \t\f\v]*(?:#[^\r\n]*)?(?:\r\n|\r|\n|\Z)")
+
+
+class Uncommented:
+    """The bytes of a table file (``src``, decompressed) without its ``#`` comment lines,
+    for a reader that knows no comments (pyarrow's): the lines :func:`read_table` skips are
+    skipped wherever they are, even with as many fields as the header. Its first block (1
+    MiB at least) also loses its blank lines, so that the text starts at the header (or
+    the first row); the UTF-8 byte-order mark is dropped.
+
+    A damaged compressed stream raises :func:`damaged`'s error (the lines read before it);
+    it is also kept in :attr:`error`, for a caller whose reader wraps it. Closing closes
+    ``src``.
+
+    Examples
+    --------
+    >>> import io
+    >>> from sysid.data.table import Uncommented
+    >>> f = Uncommented(io.BytesIO(b"# log\\n\\nu,y\\n1,2\\n# u,y\\n3,4"), "d.csv")
+    >>> f.read()
+    b'u,y\\n1,2\\n3,4'
+    """
+
+    def __init__(self, src: IO[bytes], path: str | Path) -> None:
+        self._src, self._path = src, Path(path)
+        # read1: a decompressor's text is counted up to its damage, not lost in a block
+        self._read = getattr(src, "read1", src.read)
+        self._carry, self._out = bytearray(), bytearray()
+        self._first, self._eof, self.lines = True, False, 0
+        self.error: DataError | None = None
+
+    def readable(self) -> bool:
+        return True
+
+    def seekable(self) -> bool:
+        return False
+
+    @property
+    def closed(self) -> bool:
+        return bool(self._src.closed)
+
+    def close(self) -> None:
+        self._src.close()
+
+    def read(self, n: int | None = -1) -> bytes:
+        """At most ``n`` bytes (all that is left when ``n`` is negative or ``None``)."""
+        while not self._eof and (n is None or n < 0 or len(self._out) < n):
+            self._fill()
+        k = len(self._out) if n is None or n < 0 else min(n, len(self._out))
+        out = bytes(self._out[:k])
+        del self._out[:k]
+        return out
+
+    def _fill(self) -> None:
+        try:
+            block = self._read(_BLOCK)
+        except _UNREADABLE as e:
+            self.error = damaged(self._path, e, self.lines, self.lines > 0 or self._seen)
+            raise self.error from None
+        self.lines += block.count(b"\n")
+        self._carry += block
+        self._eof = not block
+        if self._eof:
+            cut = len(self._carry)
+        elif self._first and len(self._carry) < _BLOCK:
+            return  # the first block whole: its blank lines before the header go
+        else:  # whole lines only: a comment is not cut in two
+            cut = max(self._carry.rfind(b"\n"), self._carry.rfind(b"\r")) + 1
+        chunk = bytes(self._carry[:cut])
+        del self._carry[:cut]
+        if self._first:
+            self._first = False
+            chunk = _SKIPPED.sub(b"", chunk.removeprefix(b"\xef\xbb\xbf"))
+        elif b"#" in chunk:
+            chunk = _COMMENT.sub(b"", chunk)
+        self._out += chunk
+
+    @property
+    def _seen(self) -> bool:
+        return bool(self._carry or self._out) or not self._first

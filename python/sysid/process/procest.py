@@ -43,7 +43,10 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
         ``I`` (integrator), ``U`` (underdamped), e.g. ``"P1D"``, ``"P2DU"``, ``"P1DI"``.
     init : dict, optional
         Starting values by name (``Kp``, ``Tp1``, ``Tp2``, ``Tp3``, ``Tw``, ``Zeta``,
-        ``Tz``, ``Td``) instead of the automatic start.
+        ``Tz``, ``Td``) instead of the automatic start. Equal time constants to estimate
+        (``Tp1 == Tp2``, to 1e-6) start spread apart as the automatic start's are (ratio
+        1.25, their product kept, the first named the slower): the fit is symmetric in
+        them, so a search started equal could not separate them.
     fixed : dict, optional
         Parameters held at the given values.
     bounds : dict, optional
@@ -217,7 +220,7 @@ def _start(t: ProcessType, exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt
 
     given = {**init, **fixed}
     if set(t.names) <= set(given):
-        return dict(given)
+        return _apart(t, dict(given), fixed)
     tau = given.get("Td", 0.0)
     auto = t.delay and "Td" not in given
     use, h = exps, hold
@@ -232,7 +235,25 @@ def _start(t: ProcessType, exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt
         out = _from_tf(t, a, b)
         out["Td"] = d
     out.update(given)
-    return {k: out[k] for k in t.names}
+    return _apart(t, {k: out[k] for k in t.names}, fixed)
+
+
+def _apart(t: ProcessType, start: dict[str, float], fixed: dict[str, float]
+           ) -> dict[str, float]:
+    """``start`` with its equal free time constants (a user's ``init``) spread as
+    :func:`_distinct` spreads the automatic start's, the first named the slower; distinct
+    ones and fixed ones are kept."""
+    if t.underdamped:
+        return start
+    free = [k for k in (f"Tp{i + 1}" for i in range(t.poles)) if k not in fixed and k in start]
+    vals = [start[k] for k in free]
+    spread = _distinct(vals)  # slowest first
+    if sorted(spread) == sorted(vals):
+        return start
+    order = sorted(range(len(free)), key=lambda i: -vals[i])  # stable: equal ones by name
+    for rank, i in enumerate(order):
+        start[free[i]] = spread[rank]
+    return start
 
 
 def _gain_only(exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt: float) -> float:
