@@ -224,6 +224,23 @@ FLOOR = 1e-12
 STATISTICAL = 1e-2
 
 
+#: a stable pole whose mode keeps more than this share of its size over the longest
+#: experiment cannot be told from an integrator by the record (:func:`mode_kept`)
+PERSISTENT_DECAY = 0.99
+
+
+def mode_kept(rho: float, n: int) -> float:
+    """The share of a mode of pole modulus ``rho`` (below 1) left after ``n`` samples.
+
+    Examples
+    --------
+    >>> from sysid._checks import mode_kept
+    >>> round(mode_kept(0.5, 2), 2), mode_kept(1 - 1e-9, 1000) > 0.99
+    (0.25, True)
+    """
+    return float(np.exp(n * np.log(rho))) if 0.0 < rho < 1.0 else float(rho >= 1.0)
+
+
 def as_int(x: Any, name: str, lo: int = 1, hi: int | None = None, *, alt: str = "") -> int:
     """Return an integer argument (a Python or NumPy integer, not a bool) in ``[lo, hi]``.
 

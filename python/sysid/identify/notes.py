@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import PERSISTENT_DECAY, mode_kept
 from .._display import modulus
 from ..data.iodata import IOData
 from ..models.continuous import ContinuousStateSpace
@@ -22,10 +23,6 @@ TREND_SHARE = 0.2
 #: ... and at least this share of the output's own variation (a drift that small next to
 #: what the output does is not worth a note, however much of a tiny error it is)
 TREND_OUTPUT = 0.01
-#: a stable pole whose mode keeps more than this share of its size over the longest
-#: experiment is noted (``checks["persistent_mode"]``): the record cannot tell it from an
-#: integrator
-PERSISTENT_DECAY = 0.99
 
 
 def trend_check(model: Any, data: IOData, checks: dict[str, Any]) -> None:
@@ -79,7 +76,7 @@ def persistent_mode_check(model: Any, data: IOData, checks: dict[str, Any]) -> N
     n = max(data.lengths)
     if not 0.0 < rho < 1.0:
         return  # an unstable model is warned about where it is chosen
-    kept = float(np.exp(n * np.log(rho)))
+    kept = mode_kept(rho, n)
     if kept <= PERSISTENT_DECAY:
         return
     shown = f"1 - {1.0 - rho:.2g}" if rho > 0.999 else modulus(rho)

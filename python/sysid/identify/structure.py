@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -72,19 +73,24 @@ def refined_order(data: IOData, order: Any, feedthrough: bool, kw: dict[str, Any
 
     orders = as_orders(order)
     table: dict[int, float] = {}
-    best: tuple[float, int, Any] | None = None
+    best: tuple[float, int, Any, list[Any]] | None = None
     for n in orders:
-        try:
-            m = sysid.ssest(data, n, feedthrough=feedthrough, **kw)
-            table[n] = bic(m, data)
-        except Exception:  # noqa: BLE001 - an order the record cannot support
-            table[n] = np.inf
-            continue
+        # each order's warnings are kept, and only the chosen model's are shown
+        with warnings.catch_warnings(record=True) as said:
+            warnings.simplefilter("always")
+            try:
+                m = sysid.ssest(data, n, feedthrough=feedthrough, **kw)
+                table[n] = bic(m, data)
+            except Exception:  # noqa: BLE001 - an order the record cannot support
+                table[n] = np.inf
+                continue
         if np.isfinite(table[n]) and (best is None or table[n] < best[0]):
-            best = (table[n], n, m)
+            best = (table[n], n, m, list(said))
     if best is None:
         raise DataError(f"no order of {orders} gave a refined model that simulates the record")
-    b, n, model = best
+    b, n, model, said = best
+    for w in said:
+        warnings.warn(w.message, stacklevel=3)
     return {"order": n, "criterion": "BIC of refined models",
             "reason": f"lowest BIC {b:.4g} at order {n} (every order refined on the whole "
                       "record; BIC of the simulation errors)", "table": table}, model

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..data.iodata import IOData
-from ..errors import DataError, IterationLimitWarning, OrderError
+from ..errors import DataError, IterationLimitWarning, OrderError, StabilityWarning
 from ..models.statespace import StateSpaceModel
 
 
@@ -169,6 +169,8 @@ def linear_start(data: IOData, sd: IOData, sc: Scaling, order: int, init: Any,
     # a start: the nonlinear search goes on from it, so its own cap is not the user's concern
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", IterationLimitWarning)
+        # a pole the bound holds at the unit circle: the nonlinear search goes on from it
+        warnings.simplefilter("ignore", StabilityWarning)
         try:
             return sysid.ssest(sd, order, focus="simulation", progress=False, max_iter=30)
         except OrderError as e:  # a record too short for the order (its own words after)

@@ -31,6 +31,7 @@ from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
 from ..subspace.feedthrough import check_feedthrough, choose_feedthrough
 from ..subspace.scaling import rescaled
+from .boundary import warn_boundary
 
 __all__ = ["pem", "pem_loss", "PemUncertainty"]
 
@@ -276,9 +277,14 @@ def _warn_dropped_d(stacklevel: int) -> None:
                   UserWarning, stacklevel=stacklevel + 1)
 
 
-def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None) -> None:
-    """The warnings of a refinement: an unstable model, a search stopped at its cap."""
+def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None,
+          n: int = 0) -> None:
+    """The warnings of a refinement: an unstable model, a pole the stability bound holds at
+    the unit circle (:func:`.boundary.warn_boundary`; ``n``: samples of the longest
+    experiment), a search stopped at its cap."""
     rho = float(res["spectral_radius"])
+    if focus == "simulation" or enforce:
+        warn_boundary(res["a"], n, stacklevel=4)
     if rho >= 1.0:
         why = ("an unstable model fits the data significantly better than the best stable "
                "one (likelihood-ratio test at 1 %)" if enforce is None else
@@ -466,7 +472,10 @@ def pem(
         always stable and ``A`` is kept stable unless an unstable model fits significantly
         better (likelihood-ratio test at the 1 % level); then a
         :class:`sysid.StabilityWarning` names the largest pole modulus. ``False``: only the
-        predictor is kept stable (a warning still says when the model is unstable).
+        predictor is kept stable (a warning still says when the model is unstable). Where A
+        is kept stable, a pole whose mode keeps over 99 % over the record (where the bound
+        held it: an integrating plant, or an undamped pair fitted to noise) is named in a
+        ``StabilityWarning`` too.
     periods : int or "auto", optional
         The data are periodic: every experiment holds this many whole periods (at least 2
         after the ``transient`` ones). ``"auto"``: detected from the input
@@ -587,7 +596,7 @@ def pem(
             reg_lambda=lam, reg_r=R, reg_nominal=nom, progress=cb, geodesic=bool(geodesic))
     finally:
         close_bar()
-    _warn(res, focus, max_iter, enforce_stability)
+    _warn(res, focus, max_iter, enforce_stability, max(data.lengths))
     stabilized = st.stabilized
     Kres = res["k"] if K is not None else None
     x0s = [x / st.xscale for x in res["x0"]]

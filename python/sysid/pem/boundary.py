@@ -1,0 +1,65 @@
+"""Poles the stability bound of a search holds at the unit circle.
+
+A search that keeps ``A`` stable (simulation focus, ``enforce_stability=True``) refuses every
+step across the unit circle, so where the data pull a pole outwards the result has it just
+inside: at ``1 - 1e-8`` on the ball and beam record (an integrating plant), or as an undamped
+pair fitted to noise by an order higher than the data support. Within the record such a mode
+does not decay, and the model is not what the engineer would read it as (a static gain, a
+damping): :func:`warn_boundary` says so, and what to do.
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from .._checks import PERSISTENT_DECAY, mode_kept
+from ..errors import StabilityWarning
+
+__all__ = ["warn_boundary"]
+
+
+def warn_boundary(A: np.ndarray, n: int, stacklevel: int = 3) -> bool:
+    """A :class:`~sysid.StabilityWarning` when a pole of the stable ``A`` keeps more than
+    ``PERSISTENT_DECAY`` of its mode over ``n`` samples (the longest experiment); True if it
+    warned. A real pole (or one turning less than once over the record) acts as an
+    integrator there; an oscillating one as an undamped oscillation.
+
+    Examples
+    --------
+    >>> import numpy as np, warnings
+    >>> from sysid.pem.boundary import warn_boundary
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     warn_boundary(np.array([[1 - 1e-9]]), 500), warn_boundary(np.array([[0.9]]), 500)
+    (True, False)
+    >>> w[0].category.__name__
+    'StabilityWarning'
+    """
+    p = np.linalg.eigvals(np.asarray(A, float)) if n and np.size(A) else np.zeros(0)
+    kept = np.array([mode_kept(abs(z), n) for z in p])
+    if not p.size or kept.max() <= PERSISTENT_DECAY or np.abs(p).max() >= 1.0:
+        return False
+    i = int(np.argmax(kept))
+    z, share = p[i], 100 * kept[i]
+    what = f"a pole of modulus 1 - {1.0 - abs(z):.2g}, which keeps {share:.0f} % of its mode " \
+           f"over the record ({n} samples)"
+    turns = abs(float(np.angle(z))) * n / (2 * np.pi)
+    if turns < 1.0:
+        msg = (f"the refined model has {what}: the search keeps A stable, and such a pole "
+               f"usually sits where that bound held it (an integrating plant, or a drift); the "
+               f"record cannot tell it from an integrator, so the static gain and the step "
+               f"response's final value (which grow as 1 / (1 - |p|)) are not determined. If "
+               f"the plant integrates, identify the differenced output or use "
+               f"focus='prediction' with enforce_stability=False; if not, remove the drift "
+               f"first (sysid.detrend(data, 'linear'))")
+    else:
+        msg = (f"the refined model has {what}, an undamped oscillation of period "
+               f"{2 * np.pi / abs(float(np.angle(z))):.3g} samples: the search keeps A stable, "
+               f"and such a pair usually sits where that bound held it (an order higher than "
+               f"the data support, fitting noise, or a periodic disturbance in the output); "
+               f"try a lower order (order='auto') or look for the disturbance "
+               f"(sysid.spectra(data))")
+    warnings.warn(msg, StabilityWarning, stacklevel=stacklevel + 1)
+    return True
