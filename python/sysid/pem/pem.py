@@ -209,21 +209,30 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: 
                   enforce_stability, stabilized, dropped_d, units, record, xs)
 
 
+#: state factors of a start left as they are (:func:`_balance`)
+BALANCE_RANGE = (1e-2, 1e2)
+
+
 def _balance(B: np.ndarray, C: np.ndarray, K: np.ndarray | None) -> float:
     """The factor ``c`` that makes the state's scale match the signals': with ``x -> c x``
     the entries of ``c [B K]`` and ``C / c`` are of one size. A subspace basis carries the
     units of the data (``C`` in output units, ``B`` in their inverse: in megapascal-volt
     units ``|C| ~ 1e7``, ``|B| ~ 1e-8``), and the search's step test, relative to the
-    parameter vector's norm, then stopped it after one iteration. :func:`pem` balances every
-    start on channels of unit root mean square (:mod:`.units`), where ``c`` does not depend
-    on the record's units (the data-driven local coordinates, orthogonal to the similarity
-    orbit in the parameters' Euclidean metric, then do not either). 1 when ``B``, ``K`` or
-    ``C`` is zero."""
+    parameter vector's norm, then stopped it after one iteration. 1 (no change) when ``c``
+    is within :data:`BALANCE_RANGE`: only such badly scaled starts are balanced. :func:`pem`
+    takes ``B``, ``C``, ``K`` on channels of unit root mean square (:mod:`.units`), where
+    ``c``, and so the decision, do not depend on the record's units."""
     nb = float(np.linalg.norm(B)) + (float(np.linalg.norm(K)) if K is not None else 0.0)
     nc = float(np.linalg.norm(C))
     if not (nb > 0 and nc > 0 and np.isfinite(nb) and np.isfinite(nc)):
         return 1.0
-    return float(np.sqrt(nc / nb))
+    c = float(np.sqrt(nc / nb))
+    # as LAPACK's equilibration (xLAQGE), only a badly scaled start is rescaled: within
+    # BALANCE_RANGE the entries of [B K] and C differ by less than 1e4, the relative step
+    # test sees both, and the search keeps the start's own basis (a subspace start's, on
+    # unit-free channels, is well scaled: balancing it anyway ended 2 of 72 synthetic
+    # searches in a worse local minimum, 8 % and 214 % above the best found)
+    return c if not BALANCE_RANGE[0] <= c <= BALANCE_RANGE[1] else 1.0
 
 
 def _unbalanced(model: StateSpaceModel, xs: float) -> StateSpaceModel:
@@ -643,6 +652,8 @@ def pem(
         x0=res["x0"][0] if len(x0s) == 1 else None,  # in the searched basis: unbalanced below
         input_names=data.input_names, output_names=data.output_names, info=info)
     out = units.record_units(_unbalanced(out, st.xscale))
+    if K is not None and not estimate_k and model.K is not None:
+        out.K = model.K.copy()  # noise="fixed": the start's own, not its round trip
     out.uncertainty = _uncertainty(
         res["theta"], res["covariance"], build, int(res["rank"]),
         _names(n, model.ninputs, l, bool(feedthrough), estimate_k and K is not None, len(est_x0)))
