@@ -1,11 +1,10 @@
-"""``identify`` gives the same model whatever the outputs' units: the subspace candidates
-compute on channels of unit root mean square, the refinements weigh each output by its
-scale, and the held-out scorer and ``compare`` fit the initial state with each output
-weighed by its spread. Before the subspace scaling, one output in units 1000 times smaller
-changed the candidates and so, on records like DaISy's CD player arm, the choice. (The
-inputs' units still move the refinements' search path a little: an input 100 times
-smaller changed a held-out fit from 72.9 % to 73.0 % here; the pem search is not scaled
-by them.)"""
+"""``identify`` gives the same model whatever the units of the inputs and outputs: the
+subspace candidates compute on channels of unit root mean square, the refinements search on
+channels of unit root mean square (:mod:`sysid.pem.units`), and the held-out scorer and
+``compare`` fit the initial state with each output weighed by its spread. Before the
+subspace scaling, one output in units 1000 times smaller changed the candidates and so, on
+records like DaISy's CD player arm, the choice; before the search went unit-free, an input
+100 times smaller changed a held-out fit from 72.9 % to 73.0 % here."""
 
 from __future__ import annotations
 
@@ -21,14 +20,16 @@ B = np.array([[1.0, 0.0], [0.0, 0.5], [0.7, -0.3], [0.2, 1.0]])
 C = np.array([[1.0, 0.0, 0.5, 0.0], [0.0, 0.8, 0.0, 1.0]])
 
 
-def test_identify_does_not_depend_on_the_outputs_units():
+def test_identify_does_not_depend_on_the_channels_units():
     rng = np.random.default_rng(0)
     u = rng.standard_normal((1500, 2))
     v = lfilter([1.0], [1.0, -0.9], rng.standard_normal((1500, 2)), axis=0)
     y = sysid.StateSpaceModel(A, B, C).simulate(u) + 0.3 * v
     out = []
-    for ky in (np.ones(2), np.array([1.0, 1e3]), np.array([1e-2, 1.0])):
-        d = sysid.IOData(u=u, y=y * ky)
+    one = np.ones(2)
+    for ku, ky in ((one, one), (one, np.array([1.0, 1e3])), (one, np.array([1e-2, 1.0])),
+                   (np.array([1e-2, 1.0]), one), (np.array([1e3, 1e-4]), np.array([1e4, 1.0]))):
+        d = sysid.IOData(u=u * ku, y=y * ky)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             r = sysid.identify(d, progress=False)

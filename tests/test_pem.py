@@ -124,8 +124,10 @@ def test_fixed_k_and_no_noise_model():
     # the estimated noise model predicts no worse on the estimation data. (Not strictly
     # better: with A and C free, a fixed K of full column rank still leaves the predictor
     # free through the state basis, so both searches reach the same optimum up to the
-    # tolerance.)
-    assert np.linalg.det(est.noise_cov) <= np.linalg.det(fixed.noise_cov) * (1 + 1e-6)
+    # tolerance: each stops at statistical convergence, a predicted further decrease below a
+    # hundredth of a residual variance, a determinant within about 2 * 0.01 / N = 1.3e-5
+    # of the optimum's; the K-free search stopped 6.5e-6 above the fixed one's.)
+    assert np.linalg.det(est.noise_cov) <= np.linalg.det(fixed.noise_cov) * (1 + 2e-5)
     assert np.linalg.det(est.noise_cov) < np.linalg.det(none.noise_cov)
 
 
@@ -161,7 +163,10 @@ def test_unstable_start_is_stabilised_and_recorded():
     y = _data(true, u, 0.1 * rng.standard_normal((400, 2)))
     bad = sysid.StateSpaceModel(true.A.copy(), true.B, true.C, true.D)
     bad.A[2, 2] = 1.3
-    m = sysid.pem((u, y), bad, focus="simulation", weighting="identity")
+    # the reflected pole (0.77) walks back to 0.6 along a narrow valley: 45 iterations in
+    # the record's units, 13 to 166 in other units before the search went unit-free, 119
+    # on unit-free channels
+    m = sysid.pem((u, y), bad, focus="simulation", weighting="identity", max_iter=200)
     assert "reflected" in m.info["pem"]["stabilized"]
     assert m.is_stable()
     # the search from the stabilised start converges (no divergence): the true poles back
@@ -349,9 +354,11 @@ def test_tol_weighting_and_local_coordinates_change_the_result():
     assert det.noise_cov[0, 0] < ide.noise_cov[0, 0]
     assert det.noise_cov[1, 1] > ide.noise_cov[1, 1]
     # without local coordinates the search also works but moves along the similarity orbit:
-    # same poles, different matrices
+    # same poles (both stop at statistical convergence, within sqrt(2 * 0.01) = 0.14
+    # standard deviations of the minimum; the poles' are 4e-3 to 1e-2 here: 6.6e-5 apart in
+    # the record's units, 1.5e-4 on unit-free channels), different matrices
     free = sysid.pem((u, y), start, local_coordinates=False, tol=1e-10, max_iter=200)
-    assert _pole_err(free, tight) < 1e-4
+    assert _pole_err(free, tight) < 5e-4
     assert not np.allclose(free.A, tight.A, atol=1e-6)
     with pytest.raises(DataError, match="weighting"):
         sysid.pem((u, y), start, weighting="fit")
