@@ -38,7 +38,7 @@ import numpy as np
 
 from ..data.iodata import IOData
 from ..models.statespace import StateSpaceModel
-from ..subspace.scaling import rescaled
+from ..subspace.scaling import rescaled, safe_rms
 
 __all__ = ["SearchUnits", "channel_rms", "search_units"]
 
@@ -54,9 +54,7 @@ def channel_rms(x: np.ndarray) -> np.ndarray:
     >>> channel_rms(np.array([[3.0, 0.0], [-3.0, 0.0]])).tolist()
     [3.0, 1.0]
     """
-    big = np.max(np.abs(x), axis=0) if x.shape[0] else np.zeros(x.shape[1])
-    safe = np.where((big > 0) & np.isfinite(big), big, 1.0)
-    rms = safe * np.sqrt(np.mean((x / safe) ** 2, axis=0)) if x.shape[0] else safe
+    rms = safe_rms(x, 0) if x.shape[0] else np.ones(x.shape[1])
     return np.where((rms > 0) & np.isfinite(rms), rms, 1.0)
 
 

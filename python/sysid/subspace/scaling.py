@@ -31,7 +31,7 @@ from ..errors import DataError
 from ..models.statespace import StateSpaceModel
 
 __all__ = ["SCALE_DEFAULT", "balanced_scales", "check_scale", "in_record_units", "record_rms",
-           "rescaled", "scaled_experiments"]
+           "rescaled", "safe_rms", "scaled_experiments"]
 
 #: scale the channels to unit root mean square by default (unit-invariant estimates)
 SCALE_DEFAULT = True
@@ -105,7 +105,7 @@ def record_rms(data: IOData) -> tuple[np.ndarray, np.ndarray]:
         return np.ones(1), np.ones(1)
     out = []
     for kind, k, names in (("input", 0, data.input_names), ("output", 1, data.output_names)):
-        rms = _rms(np.concatenate([e[k] for e in data.experiments]), 0)
+        rms = safe_rms(np.concatenate([e[k] for e in data.experiments]), 0)
         dead = np.flatnonzero(~(rms > 0) | ~np.isfinite(rms))
         if dead.size:
             raise DataError(f"{_channel(kind, int(dead[0]), names)} has root mean square "
@@ -115,8 +115,16 @@ def record_rms(data: IOData) -> tuple[np.ndarray, np.ndarray]:
     return out[0], out[1]
 
 
-def _rms(x: np.ndarray, axis: Any) -> np.ndarray:
-    """Root mean square over ``axis``, without overflow for entries beyond 1e154."""
+def safe_rms(x: np.ndarray, axis: Any) -> np.ndarray:
+    """Root mean square over ``axis``, without overflow for entries beyond 1e154.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.subspace.scaling import safe_rms
+    >>> safe_rms(np.array([[3e200, 0.0], [-3e200, 0.0]]), 0).tolist()
+    [3e+200, 0.0]
+    """
     big = np.max(np.abs(x), axis=axis, keepdims=True)
     safe = np.where(big > 0, big, 1.0)
     return np.squeeze(big, axis=axis) * np.sqrt(np.mean(np.abs(x / safe) ** 2, axis=axis))
@@ -151,7 +159,7 @@ def balanced_scales(response: np.ndarray, what: str, input_names: Any = None,
     _, l, m = response.shape
     if l * m == 1:
         return np.ones(1), np.ones(1)
-    ms = _rms(response, 0) ** 2  # (l, m) mean squares over lags / frequencies
+    ms = safe_rms(response, 0) ** 2  # (l, m) mean squares over lags / frequencies
     for kind, axis, names in (("output", 1, output_names), ("input", 0, input_names)):
         dead = np.flatnonzero(np.all(ms == 0, axis=axis))
         if dead.size:
