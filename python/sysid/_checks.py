@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import sys
+import warnings
 from typing import Any
 
 import numpy as np
@@ -414,3 +415,30 @@ def user_stacklevel() -> int:
     while frame is not None and frame.f_code.co_filename.startswith(pkg):
         frame, level = frame.f_back, level + 1
     return level
+
+
+def reissue(said: Any) -> None:
+    """Show recorded warnings (``warnings.catch_warnings(record=True)``) again, each distinct
+    one once, at the user's line (:func:`user_stacklevel`): the warnings of the fit a
+    function returns, not of those it tried and left out.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from sysid._checks import reissue
+    >>> with warnings.catch_warnings(record=True) as said:
+    ...     warnings.simplefilter("always")
+    ...     for _ in range(2):
+    ...         warnings.warn("stopped at max_iter")
+    >>> with warnings.catch_warnings(record=True) as shown:
+    ...     warnings.simplefilter("always")
+    ...     reissue(said)
+    >>> [str(w.message) for w in shown]
+    ['stopped at max_iter']
+    """
+    seen = set()
+    for w in said:
+        key = (type(w.message), str(w.message))
+        if key not in seen:
+            seen.add(key)
+            warnings.warn(w.message, stacklevel=user_stacklevel())

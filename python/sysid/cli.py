@@ -465,7 +465,7 @@ def _skip_comment(row: Any) -> str:
     space) is skipped, as ``read_table`` skips it (the ``#`` comments, whatever their
     fields, are gone before: ``sysid.data.table.Uncommented``); anything else is an error."""
     text = row.text or ""
-    return "skip" if not text.strip() or text.lstrip().startswith("#") else "error"
+    return "skip" if not text.strip() else "error"
 
 
 def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_orders
+from .._checks import as_orders, reissue
 from ..data.iodata import IOData
 from ..errors import DataError
 
@@ -89,8 +89,7 @@ def refined_order(data: IOData, order: Any, feedthrough: bool, kw: dict[str, Any
     if best is None:
         raise DataError(f"no order of {orders} gave a refined model that simulates the record")
     b, n, model, said = best
-    for w in said:
-        warnings.warn(w.message, stacklevel=3)
+    reissue(said)
     return {"order": n, "criterion": "BIC of refined models",
             "reason": f"lowest BIC {b:.4g} at order {n} (every order refined on the whole "
                       "record; BIC of the simulation errors)", "table": table}, model

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int, user_stacklevel
+from .._checks import as_int, reissue
 from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
 from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator, horizon_for_order
@@ -138,12 +138,7 @@ def ssest(
             model = kept
         # the warnings of the model returned, once, at the caller's line (not those of the
         # fit the choice of D left out: two "stopped at max_iter" for one call)
-        seen = set()
-        for w in said:
-            key = (type(w.message), str(w.message))
-            if key not in seen:
-                seen.add(key)
-                warnings.warn(w.message, stacklevel=user_stacklevel())
+        reissue(said)
         model.info["feedthrough_selection"] = why
         return model
     if isinstance(order, str) or np.ndim(order):
@@ -219,12 +214,7 @@ def _recorded(fit: Callable[[], Any]) -> tuple[Any, list[warnings.WarningMessage
         except BaseException as e:  # noqa: BLE001 - re-raised below, after its warnings
             err = e
     if err is not None:
-        seen = set()
-        for w in said:
-            key = (type(w.message), str(w.message))
-            if key not in seen:
-                seen.add(key)
-                warnings.warn(w.message, stacklevel=user_stacklevel())
+        reissue(said)
         raise err
     return out, list(said)
 
