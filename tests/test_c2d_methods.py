@@ -59,7 +59,9 @@ def test_matched_maps_poles_and_zeros_by_exp_and_keeps_the_dc_gain(
                                atol=1e-10 * max(1.0, float(np.abs(c.dcgain()).max())))
     if zc.size and np.max(np.abs(zc * dt)) > 3:
         return  # e^{z dt} near 0 or huge: computed zeros and their logarithm lose digits
-    assert _root_dev(d.zeros(), np.exp(zc * dt)) < 1e-6
+    # r - 1 of the r zeros at infinity go to the Nyquist frequency, as MATLAB's
+    nyquist = -np.ones(max(n - zc.size - 1, 0))
+    assert _root_dev(d.zeros(), np.r_[np.exp(zc * dt), nyquist]) < 1e-4
     back = sysid.d2c(d, "matched")  # the inverse gives the continuous model back
     w = np.linspace(0.0, 0.9 * np.pi / dt, 25)
     scale = max(1.0, float(np.abs(c.freqresp(w)).max()))
@@ -74,8 +76,27 @@ def test_matched_agrees_with_python_control(seed: int, n: int, dt: float) -> Non
                                 method="matched")
     w = _grid(dt)
     mine = sysid.c2d(c, dt, "matched").freqresp(w)[:, 0, 0]
+    # python-control leaves every zero at infinity there; MATLAB (and sysid) put all but one
+    # at z = -1: the factor ((z + 1) / 2)^(r - 1), 1 at DC
+    r = n - c.zeros().size
     theirs = control.frequency_response(ref, w).complex.ravel()
+    theirs = theirs * ((np.exp(1j * w * dt) + 1) / 2) ** max(r - 1, 0)
     assert _max_dev(mine, theirs) < 1e-9 * max(1.0, float(np.abs(theirs).max()))
+
+
+def test_matched_reproduces_matlabs_zero_at_the_nyquist_frequency() -> None:
+    # MATLAB: c2d(tf(11, [1 1 0]), 0.1, 'matched') -> 0.052339 (z + 1) / ((z - 1)(z - 0.9048))
+    # (MATLAB Answers 2175248, the zpk form of MATLAB's result)
+    c = sysid.ContinuousStateSpace([[0.0, 1.0], [0.0, -1.0]], [[0.0], [11.0]], [[1.0, 0.0]])
+    d = sysid.c2d(c, 0.1, "matched")
+    np.testing.assert_allclose(d.zeros(), [-1.0], atol=1e-9)
+    np.testing.assert_allclose(np.sort(d.poles().real), [np.exp(-0.1), 1.0], atol=1e-12)
+    z = np.exp(0.7j)  # the gain: G(z) (z - 1)(z - e^-0.1) / (z + 1)
+    g = d.freqresp([7.0])[0, 0, 0] * (z - 1) * (z - np.exp(-0.1)) / (z + 1)
+    assert g.real == pytest.approx(0.052339, abs=5e-7) and abs(g.imag) < 1e-12
+    back = sysid.d2c(d, "matched")  # the zero at z = -1 goes back to infinity
+    assert back.zeros().size == 0
+    assert _max_dev(back.freqresp([0.3, 3.0]), c.freqresp([0.3, 3.0])) < 1e-9
 
 
 def test_matched_first_order_lag_and_the_integrator_asymptote() -> None:
@@ -101,10 +122,10 @@ def test_matched_rejects_mimo_and_zeros_with_no_continuous_equivalent() -> None:
         sysid.c2d(mimo, 0.1, "matched")
     with pytest.raises(sysid.DataError, match="one input-output channel"):
         sysid.d2c(sysid.c2d(mimo, 0.1), "matched")
-    # Tustin puts the zero at infinity of 1/(s+1) at z = -1: log(-1) is not real
-    tus = sysid.c2d(sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]]), 0.1, "tustin")
-    with pytest.raises(sysid.NumericalError, match="zero at z = -1.*method='tustin'"):
-        sysid.d2c(tus, "matched")
+    # a zero on the negative real axis (not at z = -1, a zero at infinity): log is not real
+    neg = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], [[1.0]], dt=0.1)  # zero at -0.5
+    with pytest.raises(sysid.NumericalError, match="zero at z = -0.5.*method='tustin'"):
+        sysid.d2c(neg, "matched")
 
 
 # -- impulse invariant ---------------------------------------------------------------------

@@ -28,8 +28,9 @@ exact discretisations, computed once from the exponential of an augmented matrix
   the convention of MATLAB and ``scipy.signal.cont2discrete``, which refuses ``D != 0``; a
   feedthrough ``D`` is kept as the discrete ``D`` on top). The DC gain is matched only as
   ``dt -> 0``.
-- Matched pole-zero (single input and output): poles and zeros ``e^{s dt}``, the DC gain
-  kept; see :mod:`sysid.models.matched`.
+- Matched pole-zero (single input and output): poles and zeros ``e^{s dt}``, all but one
+  zero at infinity put at ``z = -1`` (as MATLAB), the DC gain kept; see
+  :mod:`sysid.models.matched`.
 
 The discrete model is then simulated by the Rust simulator.
 """
@@ -501,8 +502,8 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh", *,
     method : {"zoh", "foh", "tustin", "bilinear", "impulse", "matched"}
         Hold of the input between samples, the bilinear transform, the impulse-invariant
         map (discrete impulse response ``dt`` times the continuous one sampled, MATLAB's
-        scaling) or matched pole-zero (``z = e^{s dt}`` for poles and zeros, DC gain kept;
-        one input and one output only).
+        scaling) or matched pole-zero (``z = e^{s dt}`` for poles and zeros, all but one
+        zero at infinity at ``z = -1`` as MATLAB, DC gain kept; one input and one output).
     prewarp : float, optional
         Tustin only: the frequency (rad/s, below the Nyquist frequency ``pi / dt``) at which
         the discrete frequency response equals the continuous one exactly (MATLAB's

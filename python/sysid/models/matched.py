@@ -1,11 +1,16 @@
 """Matched pole-zero sampling (MATLAB's ``c2d(sys, Ts, 'matched')`` and its ``d2c`` inverse).
 
 Every finite pole and zero of a single-input single-output model is mapped by ``z = e^{s dt}``
-(and back by ``s = log(z) / dt``); zeros at infinity stay at infinity, so the relative degree
-is kept (no zeros are added at ``z = -1``; as MATLAB and python-control's
-``sample_system(method='matched')``). The gain matches the DC gain; with poles or zeros at
-``s = 0`` (``z = 1``) it matches the low-frequency asymptote instead: ``s`` corresponds to
-``(z - 1) / dt``, so an integrator ``1/s`` becomes ``dt / (z - 1)``.
+(and back by ``s = log(z) / dt``). Of the ``r`` zeros at infinity (``r`` the relative degree),
+``r - 1`` are put at ``z = -1``, the Nyquist frequency, and one stays at infinity, so the
+discrete model keeps one sample of delay and rolls off towards the Nyquist frequency as the
+continuous one does at high frequency; this is what MATLAB's ``c2d(sys, Ts, 'matched')``
+returns (``11 / (s^2 + s)`` at ``Ts = 0.1``: ``0.052339 (z + 1) / ((z - 1)(z - 0.9048))``).
+python-control's ``sample_system(method='matched')`` adds no zeros at ``z = -1``; the two agree
+up to the factor ``((z + 1) / 2)^(r - 1)``. ``d2c`` maps zeros at ``z = -1`` back to infinity.
+The gain matches the DC gain; with poles or zeros at ``s = 0`` (``z = 1``) it matches the
+low-frequency asymptote instead: ``s`` corresponds to ``(z - 1) / dt``, so an integrator
+``1/s`` becomes ``dt / (z - 1)``.
 
 Called by :func:`sysid.c2d` and :func:`sysid.d2c` with ``method="matched"``.
 
@@ -31,6 +36,9 @@ from .linear import transmission_zeros
 __all__ = ["matched_c2d", "matched_d2c"]
 
 Matrices = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+#: How close to ``z = -1`` a discrete zero is taken as a zero at infinity by ``d2c``.
+_NYQUIST_TOL = 1e-4
 
 
 def _siso(B: np.ndarray, C: np.ndarray, direction: str) -> None:
@@ -97,7 +105,10 @@ def matched_c2d(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
     # low-frequency asymptote: (s - q) <-> (1 - e^{q dt}) / (-q) (z - e^{q dt}), s <-> (z - 1) / dt
     k = K * np.prod(-zeros[~z0]) / np.prod(-poles[~p0])
     k *= np.prod(1.0 - zp[~p0]) / np.prod(1.0 - zz[~z0]) * dt ** (int(p0.sum()) - int(z0.sum()))
-    return _realise(zz, zp, float(np.real(k)), n)
+    # all but one of the zeros at infinity to the Nyquist frequency (each is 2 at z = 1)
+    nyquist = max(n - zeros.size - 1, 0)
+    zz = np.r_[zz, -np.ones(nyquist)]
+    return _realise(zz, zp, float(np.real(k)) / 2.0 ** nyquist, n)
 
 
 def _log(roots: np.ndarray, what: str, dt: float) -> np.ndarray:
@@ -106,7 +117,7 @@ def _log(roots: np.ndarray, what: str, dt: float) -> np.ndarray:
         raise NumericalError(
             f"d2c with method='matched': the model has a {what} at z = {roots[bad][0].real:g} "
             "(on the negative real axis or at zero), which e^{s dt} reaches from no real s; "
-            "use method='tustin' (a Tustin model's zeros at z = -1 map to s = infinity)")
+            "use method='tustin'")
     out = np.log(roots) / dt
     real = np.abs(roots.imag) <= 1e-12 * np.abs(roots)
     out[real] = out[real].real
@@ -115,12 +126,17 @@ def _log(roots: np.ndarray, what: str, dt: float) -> np.ndarray:
 
 def matched_d2c(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
                 dt: float) -> Matrices:
-    """Inverse of :func:`matched_c2d`: poles and zeros ``log(z) / dt``, the same DC gain."""
+    """Inverse of :func:`matched_c2d`: poles and zeros ``log(z) / dt`` (zeros at ``z = -1`` to
+    infinity), the same DC gain."""
     _siso(B, C, "d2c")
     n = A.shape[0]
     zp = np.linalg.eigvals(A).astype(complex) if n else np.zeros(0, complex)
     zz = transmission_zeros(A, B, C, D).astype(complex) if n else np.zeros(0, complex)
     k = _gain(A, B, C, D, zp, zz)
+    # zeros at the Nyquist frequency are zeros at infinity (each is 2 at z = 1); a multiple
+    # one is computed to about eps^(1/multiplicity), hence the tolerance
+    nyquist = np.abs(zz + 1.0) <= _NYQUIST_TOL
+    k, zz = k * 2.0 ** int(nyquist.sum()), zz[~nyquist]
     p0, z0 = _at_origin(zp, 1.0, dt), _at_origin(zz, 1.0, dt)
     poles, zeros = np.zeros(n, complex), np.zeros(zz.size, complex)
     poles[~p0], zeros[~z0] = _log(zp[~p0], "pole", dt), _log(zz[~z0], "zero", dt)
