@@ -7,6 +7,8 @@ runs of independent noisy FRDs.
 
 from __future__ import annotations
 
+import copy
+
 import matplotlib
 import numpy as np
 import pytest
@@ -308,3 +310,63 @@ def test_algebra_invariances(x, y, z, sa, sb):
     K = B * (0.01 / (1 + np.abs(B.response).max()))  # |D K| < 1: a well-posed loop
     np.testing.assert_allclose(D.feedback(K).response,
                                (D * (np.eye(2) + K * D).inv()).response, **close)
+
+
+# -- one response used twice (fully correlated operands) -------------------------------------
+
+
+def _monte_carlo_same(op, runs=400, seed=3, siso=False):
+    """Sample std over ``runs`` of ``op(G)`` (G entering twice, one error), the mean propagated
+    std and the relative tolerance of their ratio: the sample std of ``runs`` circular draws
+    has relative std ``1 / (2 sqrt(runs))``; five of those, plus 0.03 for the second-order
+    terms the first-order std leaves out (errors of 1-2 % of |G|)."""
+    rng = np.random.default_rng(seed)
+    w = W[::8]
+    t = sysid.FRD.from_model(_ss(3, 2, 2, 12), w).response
+    t = t[:, :1, :1] if siso else t
+    s = 0.01 * np.abs(t).mean() * (1 + rng.random(t.shape))
+    vals, stds = [], []
+    for _ in range(runs):
+        r = op(sysid.FRD(w, _noisy(t, s, rng), std=s))
+        vals.append(r.response)
+        stds.append(r.std)
+    vals = np.array(vals)
+    sample = np.sqrt(np.mean(np.abs(vals - vals.mean(0)) ** 2, axis=0))
+    return sample / np.mean(stds, axis=0), 5 / (2 * np.sqrt(runs)) + 0.03
+
+
+@pytest.mark.parametrize("name, op, siso", [
+    ("G + G", lambda g: g + g, False), ("G * G siso", lambda g: g * g, True),
+    ("G @ G", lambda g: g @ g, False), ("G * G", lambda g: g * g, False),
+    ("feedback(G, G)", lambda g: g.feedback(g), False),
+    ("positive feedback(G, G)", lambda g: g.feedback(g, sign=1), False),
+    ("shallow copy", lambda g: g * copy.copy(g), False)])
+def test_same_operand_std_matches_monte_carlo(name, op, siso):
+    ratio, tol = _monte_carlo_same(op, siso=siso)
+    assert np.all(np.abs(ratio - 1) < tol), (name, ratio.min(), ratio.max(), tol)
+
+
+def test_same_operand_exact_cases():
+    g = sysid.FRD([1.0, 2.0], [3.0, 4j], std=[0.3, 0.4], dof=20)
+    np.testing.assert_array_equal((g - g).std, 0.0)
+    np.testing.assert_array_equal((g / g).std, 0.0)
+    np.testing.assert_allclose((g + g).std[:, 0, 0], [0.6, 0.8])
+    np.testing.assert_allclose((g * g).std[:, 0, 0], [2 * 3 * 0.3, 2 * 4 * 0.4])
+    np.testing.assert_allclose((g @ g).std, (g * g).std)
+    # T = G / (1 + G^2): dT/dG = (1 - G^2) / (1 + G^2)^2
+    G = g.response[:, 0, 0]
+    np.testing.assert_allclose(g.feedback(g).std[:, 0, 0],
+                               np.abs((1 - G**2) / (1 + G**2) ** 2) * [0.3, 0.4])
+    assert (g + g).dof == 20 and (g * g).dof == 20  # one uncertain response: its dof stays
+    m = _mimo()  # 3x2: G - G and G + G on a non-square response
+    np.testing.assert_array_equal((m - m).std, 0.0)
+    np.testing.assert_allclose((m + m).std, 2 * m.std)
+    sq = sysid.FRD(W, _ss(3, 2, 2, 5).freqresp(W), std=np.full((W.size, 2, 2), 0.01))
+    assert np.abs((sq / sq).std).max() < 1e-12 and np.abs((sq - copy.copy(sq)).std).max() == 0
+
+
+def test_equal_but_separate_frds_are_independent():
+    g = sysid.FRD([1.0, 2.0], [3.0, 4j], std=[0.3, 0.4])
+    h = sysid.FRD(g.omega, g.response, std=g.std)  # copies: a second, independent estimate
+    np.testing.assert_allclose((g - h).std[:, 0, 0], np.sqrt(2) * np.array([0.3, 0.4]))
+    np.testing.assert_allclose((g - g[0, 0]).std[:, 0, 0], np.sqrt(2) * np.array([0.3, 0.4]))

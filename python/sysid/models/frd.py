@@ -73,7 +73,8 @@ class FRD(FRDAlgebra):
     ``G[i, j]`` selects outputs and inputs (indices, slices, names, lists); ``+``, ``-``,
     ``*`` (series: ``G1 * G2`` is G1 after G2), ``/``, unary ``-``, :meth:`inv` and
     :meth:`feedback` combine it with another FRD on the same grid, a model (evaluated on this
-    grid) or a gain, carrying the std to first order for independent operands
+    grid) or a gain, carrying the std to first order for independent operands, or for one
+    response used twice (``G - G``, ``G * G``: the same FRD object) with its full derivative
     (:mod:`sysid.models.frd_algebra`).
 
     Examples

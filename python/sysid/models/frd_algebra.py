@@ -9,18 +9,27 @@ series connection *G1 after G2* (MATLAB's ``G1*G2``): the matrix product
 other FRD's), with the sample time the operands agree on (none when two FRDs differ; a
 model's is not checked: it is evaluated at the grid's frequencies in rad/s as it stands).
 
-Uncertainty is carried to first order: the complex errors of all entries of all operands are
-taken as **independent** and circular (``E|dG|^2 = std^2``, as :class:`sysid.FRD` defines its
-std). Each operation (including ``/``, :meth:`FRDAlgebra.inv` and
+Uncertainty is carried to first order: the complex errors of the entries of an operand are
+taken as independent and circular (``E|dG|^2 = std^2``, ``E dG^2 = 0``, as :class:`sysid.FRD`
+defines its std). Each operation (including ``/``, :meth:`FRDAlgebra.inv` and
 :meth:`FRDAlgebra.feedback`) is linearised as one step, which holds while the std is small
 against the responses (for an inverse: against the smallest singular value).
 
-Only a std per entry is kept, so what the independence assumption cannot see is lost: a
-response combined with itself (``G * G``, ``G - G``, ``G / G``) gets a wrong std, and so does
-feedback around a loop that shares a measurement. After one operation on a MIMO response the
-errors of its entries are correlated; a further operation takes them as independent again,
-so the std of a chain of MIMO operations is an approximation (for one output and one input it
-is first-order exact as long as no operand is used twice).
+Two operands are taken as **independent** of each other, except when they are the same
+response: the same FRD object, or two FRDs on the very same ``response`` and ``std`` arrays
+(a shallow copy). Then the two errors are one and the same (fully correlated) and the std
+comes from the full derivative of the operation in that response: ``G - G`` and ``G / G``
+have std 0, ``G + G`` twice G's, ``G * G`` (one output and one input) ``2 |G| std``,
+``G @ G`` ``dG G + G dG`` and ``G.feedback(G)`` ``S dG Si + sign T dG T``. Any other pair is
+independent, also two separately built FRDs holding equal numbers (``sysid.FRD(G.omega,
+G.response, std=G.std)`` copies them) and a response with a part or a result of itself
+(``G[0, 0] * G``, ``(G + H) - H``): for those the std is wrong, as it is for feedback around
+a loop that shares a measurement.
+
+Only a std per entry is kept. After one operation on a MIMO response the errors of its
+entries are correlated; a further operation takes them as independent again, so the std of
+a chain of MIMO operations is an approximation (for one output and one input it is
+first-order exact as long as no operand enters it twice other than as the same object).
 """
 
 from __future__ import annotations
@@ -57,6 +66,39 @@ def _sandwich(left: np.ndarray | None, var: np.ndarray, right: np.ndarray | None
     if right is not None:
         out = out @ np.abs(right) ** 2
     return out
+
+
+def _sandwiches(terms: list[tuple[np.ndarray | None, np.ndarray | None]],
+                var: np.ndarray) -> np.ndarray:
+    """First-order variance of ``sum_t L_t @ dX @ R_t`` per frequency (one error ``dX`` entering
+    several times, its entries independent and circular with variances ``var``): the
+    coefficient of ``dX[p, q]`` in entry ``(i, j)`` is ``sum_t L_t[i, p] R_t[q, j]``."""
+    nf, n_p, n_q = var.shape
+    coef: Any = 0.0
+    for left, right in terms:
+        lt = np.broadcast_to(np.eye(n_p), (nf, n_p, n_p)) if left is None else left
+        rt = np.broadcast_to(np.eye(n_q), (nf, n_q, n_q)) if right is None else right
+        coef = coef + np.einsum("fip,fqj->fijpq", lt, rt)
+    return np.einsum("fijpq,fpq->fij", np.abs(coef) ** 2, var)
+
+
+def _same_array(a: np.ndarray | None, b: np.ndarray | None) -> bool:
+    """``a`` and ``b`` are the same array, or the same view of one buffer."""
+    if a is None or b is None:
+        return a is b
+    return a is b or (a.shape == b.shape and a.strides == b.strides and a.dtype == b.dtype
+                      and a.__array_interface__["data"][0] == b.__array_interface__["data"][0])
+
+
+def _shared_var(x: Any, y: Any) -> np.ndarray | None:
+    """The variance of the one error of two operands carrying the same uncertain response
+    (fully correlated: the same FRD, or FRDs on the same response and std arrays), or
+    ``None`` when they are not that (independent, or exact)."""
+    if x is None or y is None or x.std is None:
+        return None
+    same = x is y or (_same_array(x.response, y.response) and _same_array(x.std, y.std)
+                      and _same_array(x.omega, y.omega))
+    return x.std ** 2 if same else None
 
 
 class _Operand:
@@ -158,6 +200,9 @@ class FRDAlgebra:
             raise ShapeError(f"adding responses of shapes {self.response.shape[1:]} and "
                              f"{b.shape[1:]} (outputs x inputs): they must be the same")
         g = (b - self.response) if reflected and sign < 0 else self.response + sign * b
+        if (v := _shared_var(self, o.frd)) is not None:  # G + G, G - G: one error, 1 + sign times
+            return self._derive(g, (1.0 + sign) ** 2 * v, o, inputs=self.input_names,
+                                outputs=self.output_names)
         variances = [v for v in (None if self.std is None else self.std ** 2, o.var)
                      if v is not None]
         var = sum(variances) if variances else None
@@ -169,7 +214,9 @@ class FRDAlgebra:
 
         ``other`` is an FRD on the same grid, a model (evaluated on this grid), a scalar
         (added to every entry) or a constant matrix of the same shape. The std of independent
-        operands adds in variance, ``sqrt(std_a^2 + std_b^2)``.
+        operands adds in variance, ``sqrt(std_a^2 + std_b^2)``; other FRDs are taken as
+        independent of G, except G itself (the same object or arrays): ``G + G`` has twice
+        G's std and ``G - G`` std 0.
 
         Examples
         --------
@@ -185,7 +232,8 @@ class FRDAlgebra:
         return self._sum(other, 1.0, True)
 
     def __sub__(self, other: Any) -> Any:
-        """``G - other`` (see :meth:`__add__`; the variances add here too).
+        """``G - other`` (see :meth:`__add__`; the variances of independent operands add here
+        too, ``G - G`` has std 0).
 
         Examples
         --------
@@ -232,6 +280,9 @@ class FRDAlgebra:
                 f"(outputs x inputs): the left one's {a.shape[2]} input(s) must match the right "
                 f"one's {b.shape[1]} output(s) (G1 * G2 is G1 after G2)")
         g = a @ b
+        if (v := _shared_var(left.frd, right.frd)) is not None:  # G @ G: dG G + G dG
+            return self._derive(g, _sandwiches([(None, b), (a, None)], v), other,
+                                inputs=right.inputs, outputs=left.outputs)
         terms = [t for t in (None if va is None else _sandwich(None, va, b),
                              None if vb is None else _sandwich(a, vb, None)) if t is not None]
         return self._derive(g, sum(terms) if terms else None, other, inputs=right.inputs,
@@ -249,8 +300,10 @@ class FRDAlgebra:
         ``other`` is an FRD on the same grid, a model (evaluated on this grid), a scalar or a
         constant gain matrix. The result has G's outputs and other's inputs. For independent
         operands the std is first order: ``var = |G|^2 @ std_o^2 + std_G^2 @ |o|^2`` (for one
-        pair, ``|G|^2 std_o^2 + |o|^2 std_G^2``); a scalar gain scales the std exactly. ``@``
-        is the same operation.
+        pair, ``|G|^2 std_o^2 + |o|^2 std_G^2``); a scalar gain scales the std exactly. Other
+        FRDs are taken as independent of G, except G itself (the same object or arrays):
+        ``G * G`` is carried with ``d(G G) = dG G + G dG`` (one pair: std ``2 |G| std_G``).
+        ``@`` is the same operation.
 
         Examples
         --------
@@ -285,6 +338,10 @@ class FRDAlgebra:
                              f"{gi.shape[2]} (outputs x inputs): the left one needs as many "
                              "inputs as the right one has outputs")
         q = left.g * gi if left.scalar else left.g @ gi
+        if (v := _shared_var(left.frd, right.frd)) is not None:  # G / G: dG G^-1 - Q dG G^-1
+            return self._derive(q, _sandwiches([(None, gi), (-q, gi)], v),
+                                right if me_left else left, inputs=right.outputs,
+                                outputs=left.outputs)
         terms = []
         if left.var is not None:
             terms.append(_sandwich(None, left.var, gi))
@@ -297,7 +354,9 @@ class FRDAlgebra:
 
     def __truediv__(self, other: Any) -> Any:
         """``G / other`` is ``G * inv(other)`` (MATLAB's ``G/other``); by a scalar it divides.
-        The std is first order in one step, ``d(G o^-1) = dG o^-1 - G o^-1 do o^-1``.
+        The std is first order in one step, ``d(G o^-1) = dG o^-1 - G o^-1 do o^-1``, with
+        ``dG`` and ``do`` independent unless ``other`` is G itself (the same object or arrays):
+        ``G / G`` has std 0.
 
         Examples
         --------
@@ -350,7 +409,9 @@ class FRDAlgebra:
         constant matrix, with as many outputs as G has inputs and as many inputs as G has
         outputs. The std is carried to first order for independent G and K: with
         ``S = (I - sign G K)^{-1}`` and ``Si = (I - sign K G)^{-1}``, the error is
-        ``S dG Si + sign T dK T`` (``T`` the closed loop). The coherence is dropped.
+        ``S dG Si + sign T dK T`` (``T`` the closed loop). An FRD K is taken as independent
+        of G unless it is G itself (the same object or arrays), when ``dK = dG`` and the two
+        terms add before the variance is taken. The coherence is dropped.
 
         Examples
         --------
@@ -378,6 +439,9 @@ class FRDAlgebra:
         S = _solve_inv(np.eye(l) - sign * G @ k, "I - sign G K")
         Si = _solve_inv(np.eye(m) - sign * k @ G, "I - sign K G")
         T = S @ G
+        if (v := _shared_var(self, o.frd)) is not None:  # feedback(G, G): dK = dG
+            return self._derive(T, _sandwiches([(S, Si), (sign * T, T)], v), o,
+                                inputs=self.input_names, outputs=self.output_names)
         terms = []
         if self.std is not None:
             terms.append(_sandwich(S, self.std ** 2, Si))
