@@ -5,6 +5,7 @@ a record too large is an error row naming the file, its size and the fix, as for
 from __future__ import annotations
 
 import gzip
+import re
 import tracemalloc
 from pathlib import Path
 
@@ -107,3 +108,59 @@ def test_bad_cells_missing_columns_and_files_are_named(tmp_path):
     path.write_bytes(b"u,y\n\0\1\2")
     with pytest.raises(sysid.DataError, match="not a text table"):
         load(path, Columns(("u",), ("y",), 0.1), "r")
+
+
+def _damaged_folder(tmp_path: Path) -> Path:
+    """good.csv and ok.csv.gz, and two damaged: trunc.csv.gz cut in half, flip.csv.xz with 64
+    bytes overwritten in its middle."""
+    import lzma
+
+    folder = tmp_path / "records"
+    folder.mkdir()
+    _wide(folder / "good.csv", n=3000, extra=0, note=False)
+    text = (folder / "good.csv").read_bytes()
+    (folder / "ok.csv.gz").write_bytes(gzip.compress(text))
+    packed = gzip.compress(text)
+    (folder / "trunc.csv.gz").write_bytes(packed[:len(packed) // 2])
+    flipped = bytearray(lzma.compress(text))
+    half = len(flipped) // 2
+    flipped[half:half + 64] = b"\xff" * 64
+    (folder / "flip.csv.xz").write_bytes(bytes(flipped))
+    (folder / "notes.json.gz").write_bytes(gzip.compress(b"{}"))  # no record
+    return folder
+
+
+@pytest.mark.parametrize("as_paths", [False, True])
+def test_a_damaged_compressed_record_is_an_error_row_naming_the_file(tmp_path, as_paths):
+    """A damaged .gz/.xz record is an error row naming the file and the damage, as any
+    unreadable record is; the others are fitted. A folder listed no compressed record at
+    all before (ok.csv.gz, trunc.csv.gz and flip.csv.xz were silently left out)."""
+    folder = _damaged_folder(tmp_path)
+    source = sorted(str(p) for p in folder.glob("*.csv*")) if as_paths else folder
+    res = sysid.identify_many(source, fit=lambda d: sysid.n4sid(d, 1), workers=0,
+                              inputs=["u"], outputs=["y"], dt=0.1,
+                              out=tmp_path / "t.parquet", progress=False)
+    df = res.to_pandas()
+    if as_paths:  # ids of a list: its positions
+        df["record_id"] = [Path(source[int(i)]).name.split(".")[0] for i in df["record_id"]]
+    df = df.set_index("record_id").sort_index()
+    assert list(df.index) == ["flip", "good", "ok", "trunc"] and res.n_ok == 2
+    assert df["error"].isna()["good"] and df["error"].isna()["ok"]
+    assert df.loc["ok", "order"] == 1
+    damaged = r"the {}-compressed file is damaged or truncated: its text ends after line \d+ "
+    assert re.match(r"DataError: trunc\.csv\.gz: " + damaged.format("gzip"),
+                    df.loc["trunc", "error"]), df.loc["trunc", "error"]
+    assert re.match(r"DataError: flip\.csv\.xz: " + damaged.format("xz"),
+                    df.loc["flip", "error"]), df.loc["flip", "error"]
+    for err in df.loc[["trunc", "flip"], "error"]:
+        assert "Traceback" not in err and "zlib" not in err and "LZMAError" not in err
+
+
+def test_a_folder_refuses_two_files_of_one_record(tmp_path):
+    folder = tmp_path / "records"
+    folder.mkdir()
+    _wide(folder / "a.csv", n=50, extra=0, note=False)
+    (folder / "a.csv.gz").write_bytes(gzip.compress((folder / "a.csv").read_bytes()))
+    with pytest.raises(sysid.DataError, match=r"a\.csv and a\.csv\.gz in .* are both record "
+                       "'a': keep one of them"):
+        sysid.identify_many(folder, workers=0, out=tmp_path / "t.parquet", progress=False)

@@ -38,7 +38,8 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
         A list (or a lazy iterator: records made as workers take them) of
         :class:`~sysid.IOData` (ids ``"0", "1", ...``) or of ``(id, IOData)``; a
         dict ``{id: IOData}``; a folder of CSV/Parquet files (one record per file, id = file
-        name without suffix; columns by ``inputs``/``outputs``); a Dask bag of such items; a
+        name without suffix; text tables compressed as ``.gz``, ``.bz2``, ``.xz`` too, id
+        ``r`` for ``r.csv.gz``; columns by ``inputs``/``outputs``); a Dask bag of such items; a
         Dask dataframe partitioned by record id (column ``record_id``; a record must not span
         partitions).
     fit : callable, optional
@@ -52,7 +53,9 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
         (simulation fit % on the record), ``stable, max_abs_pole, n_parameters,
         parameters`` (the model as JSON), ``n_samples, seconds, cpu_seconds`` (wall and CPU
         time of read + fit + describe in the worker),
-        ``error`` (null when fitted), ``attempts``.
+        ``error`` (null when fitted: a file that cannot be read, such as a damaged or
+        truncated compressed one, is an error row naming the file and the damage, as a
+        failed fit is), ``attempts``.
     workers : int, optional
         Local processes (default: the machine's cores); ignored with a Dask client.
     inputs, outputs, dt, time_column : optional

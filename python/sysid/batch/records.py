@@ -30,6 +30,22 @@ __all__ = ["Columns", "tasks", "load", "SUFFIXES", "MAX_RECORD_BYTES", "check_re
 
 SUFFIXES = (".csv", ".parquet", ".pq", ".txt")
 
+#: Compressions a text record of a folder may have (``r.csv.gz``), as the readers take them.
+COMPRESSED = (".gz", ".bz2", ".xz", ".lzma")
+
+
+def _record_file(p: Path) -> str | None:
+    """The record id of a folder's file (its name without the table and compression
+    suffixes), or ``None`` for a file that is no record."""
+    name = p.name
+    if p.suffix.lower() in COMPRESSED:  # a compressed text table: r.csv.gz
+        name = p.stem
+        if Path(name).suffix.lower() not in (".csv", ".txt"):
+            return None
+    elif p.suffix.lower() not in SUFFIXES:
+        return None
+    return Path(name).stem
+
 #: Largest record a worker reads from a file, in bytes of its float64 values (the package's
 #: 4 GiB per matrix); a smaller bound is taken from the memory available when it is known.
 MAX_RECORD_BYTES = MAX_BYTES
@@ -197,11 +213,19 @@ def tasks(records: Any, record_id: str) -> Iterator[tuple[str, Any]]:
         root = Path(records)
         if not root.is_dir():
             raise DataError(f"{str(root)!r} is not a folder of record files")
-        files = sorted(p for p in root.iterdir() if p.suffix.lower() in SUFFIXES)
+        files: dict[str, Path] = {}
+        for p in sorted(root.iterdir()):
+            rid = _record_file(p)
+            if rid is None or not p.is_file():
+                continue
+            if rid in files:
+                raise DataError(f"{files[rid].name} and {p.name} in {str(root)!r} are both "
+                                f"record {rid!r}: keep one of them (or rename one)")
+            files[rid] = p
         if not files:
             raise DataError(f"no CSV or Parquet files in {str(root)!r}")
-        for p in files:
-            yield p.stem, str(p)
+        for rid, p in files.items():
+            yield rid, str(p)
         return
     if isinstance(records, Mapping):
         for k, v in records.items():
