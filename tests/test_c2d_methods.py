@@ -157,44 +157,13 @@ def test_impulse_invariant_response_is_dt_times_the_sampled_continuous_one(
     np.testing.assert_allclose(hd, dt * hc, rtol=0, atol=1e-11 * max(1.0, np.abs(hc).max()))
 
 
-def test_impulse_invariant_drops_a_feedthrough() -> None:
-    """D delta(t) has no sample: MATLAB's impulse response leaves it out (the lower value
-    C B at t = 0) and its impulse-invariant map matches that response; SciPy refuses D."""
+def test_impulse_invariant_keeps_a_feedthrough_on_top() -> None:
     c = sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[2.0]], [[3.0]])
     d = c.c2d(0.5, "impulse")
-    assert d.D[0, 0] == pytest.approx(2.0 * 0.5)  # dt C B, D = 3 dropped
+    assert d.D[0, 0] == pytest.approx(3.0 + 2.0 * 0.5)  # D + dt C B
     assert d.B[0, 0] == pytest.approx(0.5 * np.exp(-0.5))
-    assert d.info["dropped_feedthrough"] == [[3.0]]
-    assert "dropped_feedthrough" not in c.c2d(0.5, "zoh").info
-    assert "dropped_feedthrough" not in sysid.c2d(
-        sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[2.0]]), 0.5, "impulse").info
-    with pytest.raises(ValueError, match="strictly proper"):
-        scipy.signal.cont2discrete((c.A, c.B, c.C, c.D), 0.5, method="impulse")
     with pytest.raises(sysid.DataError, match="method must be one of"):
         sysid.d2c(d, "impulse")  # MATLAB's d2c has no impulse inverse either
-
-
-@pytest.mark.parametrize("seed, n, m, l", [(3, 1, 1, 1), (4, 3, 2, 2), (5, 4, 2, 3)])
-def test_impulse_invariant_with_feedthrough_matches_scipy_and_the_sampled_response(
-        seed: int, n: int, m: int, l: int) -> None:
-    """Random stable systems with D != 0: SciPy's map of the strictly proper part (it refuses
-    D itself) to machine precision, and the Markov parameters dt times the continuous
-    impulse response without its Dirac part (MATLAB's impulse), k = 0 included."""
-    rng = np.random.default_rng(seed)
-    A = rng.standard_normal((n, n))
-    A -= (np.max(np.linalg.eigvals(A).real) + 0.5) * np.eye(n)
-    B, C = rng.standard_normal((n, m)), rng.standard_normal((l, n))
-    D = rng.standard_normal((l, m)) + 1.0
-    dt = 0.2
-    c = sysid.ContinuousStateSpace(A, B, C, D)
-    d = sysid.c2d(c, dt, "impulse")
-    ref = scipy.signal.cont2discrete((A, B, C, np.zeros((l, m))), dt, method="impulse")
-    for mine, theirs in zip((d.A, d.B, d.C, d.D), ref[:4]):
-        np.testing.assert_allclose(mine, theirs, rtol=1e-13, atol=1e-14)
-    hc = c.impulse(30, dt=dt).y
-    np.testing.assert_allclose(d.markov(30), dt * hc, rtol=0,
-                               atol=1e-12 * max(1.0, np.abs(hc).max()))
-    np.testing.assert_array_equal(d.info["dropped_feedthrough"], D)
 
 
 # -- Tustin with prewarping ----------------------------------------------------------------

@@ -23,16 +23,11 @@ exact discretisations, computed once from the exponential of an augmented matrix
   ``h = 2 tan(w dt / 2) / w``, i.e. ``s = (w / tan(w dt / 2)) (z - 1) / (z + 1)``: the
   discrete frequency response equals the continuous one exactly at ``w``.
 - Impulse invariant (MATLAB's ``'impulse'``): ``Ad = e^{A dt}``, ``Bd = Ad B dt``,
-  ``Cd = C``, ``Dd = C B dt``, so the discrete impulse response is ``dt`` times the
+  ``Cd = C``, ``Dd = D + C B dt``, so the discrete impulse response is ``dt`` times the
   continuous one sampled, ``h_d[k] = dt C e^{A k dt} B`` (``k = 0`` included, no half weight;
-  the convention of MATLAB and ``scipy.signal.cont2discrete``). A feedthrough ``D`` is
-  **dropped**: its part of the continuous impulse response is the Dirac impulse ``D
-  delta(t)``, which has no value at the sample ``t = 0``; MATLAB's impulse response leaves it
-  out ("returns the lower continuity value CB at t = 0") and its impulse-invariant
-  discretisation matches that response, so ours does too (``scipy.signal.cont2discrete``
-  refuses ``D != 0`` instead). The dropped ``D`` is kept in the model's
-  ``info["dropped_feedthrough"]``; ``zoh``, ``foh``, ``tustin`` and ``matched`` keep it. The
-  DC gain is matched only as ``dt -> 0``.
+  the convention of MATLAB and ``scipy.signal.cont2discrete``, which refuses ``D != 0``; a
+  feedthrough ``D`` is kept as the discrete ``D`` on top). The DC gain is matched only as
+  ``dt -> 0``.
 - Matched pole-zero (single input and output): poles and zeros ``e^{s dt}``, all but one
   zero at infinity put at ``z = -1`` (as MATLAB), the DC gain kept; see
   :mod:`sysid.models.matched`.
@@ -425,8 +420,7 @@ def _discretise_raw(sys: ContinuousStateSpace, dt: float, method: str, h: float
         E = expm(hold_blocks(A, B, dt, "zoh"))[0]
         if method == "impulse":
             Ad = E[:n, :n]
-            # D delta(t) has no sample: dropped, as MATLAB's impulse response drops it
-            return Ad, Ad @ B * dt, C.copy(), C @ B * dt, np.zeros((n, m))
+            return Ad, Ad @ B * dt, C.copy(), D + C @ B * dt, np.zeros((n, m))
         return E[:n, :n], E[:n, n:], C.copy(), D.copy(), np.zeros((n, m))
     if method == "foh":
         Ad, G1, G2 = _hold_integrals(A, B, dt)
@@ -508,10 +502,8 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh", *,
     method : {"zoh", "foh", "tustin", "bilinear", "impulse", "matched"}
         Hold of the input between samples, the bilinear transform, the impulse-invariant
         map (discrete impulse response ``dt`` times the continuous one sampled, MATLAB's
-        scaling; a feedthrough ``D``, a Dirac impulse in the continuous impulse response, is
-        dropped as MATLAB drops it, see the module documentation) or matched pole-zero
-        (``z = e^{s dt}`` for poles and zeros, all but one zero at infinity at ``z = -1`` as
-        MATLAB, DC gain kept; one input and one output).
+        scaling) or matched pole-zero (``z = e^{s dt}`` for poles and zeros, all but one
+        zero at infinity at ``z = -1`` as MATLAB, DC gain kept; one input and one output).
     prewarp : float, optional
         Tustin only: the frequency (rad/s, below the Nyquist frequency ``pi / dt``) at which
         the discrete frequency response equals the continuous one exactly (MATLAB's
@@ -534,23 +526,16 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh", *,
     >>> t = sysid.c2d(lag, 0.5, "tustin", prewarp=2.0)
     >>> bool(np.isclose(t.freqresp([2.0])[0, 0, 0], lag.freqresp([2.0])[0, 0, 0]))
     True
-    >>> biproper = sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[2.0]], [[3.0]])
-    >>> i = sysid.c2d(biproper, 0.5, "impulse")  # D = 3 is a Dirac impulse: dropped
-    >>> float(i.D[0, 0]), i.info["dropped_feedthrough"]  # dt C B
-    (1.0, [[3.0]])
     """
     sys = _convertible(sys, ContinuousStateSpace, "c2d")
     dt = _sample_time(None, dt, 1)
     method = _method(method)
     warp = _warp(prewarp, dt, method, "c2d")
     Ad, Bd, Cd, Dd, _ = _discretise(sys, dt, method, warp)
-    info: dict[str, Any] = {"method": f"c2d ({method})" if warp == dt
-                            else f"c2d ({method}, prewarp {float(prewarp):g} rad/s)"}
-    if method == "impulse" and np.any(sys.D != 0):
-        info["dropped_feedthrough"] = sys.D.tolist()
     return StateSpaceModel(
         Ad, Bd, Cd, Dd, dt=dt, input_names=sys.input_names, output_names=sys.output_names,
-        info=info,
+        info={"method": f"c2d ({method})" if warp == dt
+              else f"c2d ({method}, prewarp {float(prewarp):g} rad/s)"},
     )
 
 
