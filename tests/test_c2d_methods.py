@@ -166,6 +166,25 @@ def test_impulse_invariant_keeps_a_feedthrough_on_top() -> None:
         sysid.d2c(d, "impulse")  # MATLAB's d2c has no impulse inverse either
 
 
+@pytest.mark.parametrize("seed, n, m, l", [(3, 1, 1, 1), (4, 3, 2, 2), (5, 4, 2, 3)])
+def test_impulse_invariant_with_feedthrough_matches_scipy_plus_d(
+        seed: int, n: int, m: int, l: int) -> None:
+    """Random stable systems with D != 0: SciPy's map of the strictly proper part (it refuses
+    D itself) to machine precision, with D added to the first sample."""
+    rng = np.random.default_rng(seed)
+    A = rng.standard_normal((n, n))
+    A -= (np.max(np.linalg.eigvals(A).real) + 0.5) * np.eye(n)
+    B, C = rng.standard_normal((n, m)), rng.standard_normal((l, n))
+    D = rng.standard_normal((l, m)) + 1.0
+    dt = 0.2
+    d = sysid.c2d(sysid.ContinuousStateSpace(A, B, C, D), dt, "impulse")
+    ref = scipy.signal.cont2discrete((A, B, C, np.zeros((l, m))), dt, method="impulse")
+    for mine, theirs in zip((d.A, d.B, d.C, d.D - D), ref[:4]):
+        np.testing.assert_allclose(mine, theirs, rtol=1e-13, atol=1e-14)
+    with pytest.raises(ValueError, match="strictly proper"):
+        scipy.signal.cont2discrete((A, B, C, D), dt, method="impulse")
+
+
 # -- Tustin with prewarping ----------------------------------------------------------------
 
 

@@ -26,8 +26,10 @@ exact discretisations, computed once from the exponential of an augmented matrix
   ``Cd = C``, ``Dd = D + C B dt``, so the discrete impulse response is ``dt`` times the
   continuous one sampled, ``h_d[k] = dt C e^{A k dt} B`` (``k = 0`` included, no half weight;
   the convention of MATLAB and ``scipy.signal.cont2discrete``, which refuses ``D != 0``; a
-  feedthrough ``D`` is kept as the discrete ``D`` on top). The DC gain is matched only as
-  ``dt -> 0``.
+  feedthrough ``D`` is kept as the discrete ``D`` on top: the response to MATLAB's discrete
+  impulse, ``1/dt`` high for one sample, is then the sampled continuous impulse response, its
+  Dirac part ``D delta(t)`` a pulse of the same area in the first sample). The DC gain is
+  matched only as ``dt -> 0``.
 - Matched pole-zero (single input and output): poles and zeros ``e^{s dt}``, all but one
   zero at infinity put at ``z = -1`` (as MATLAB), the DC gain kept; see
   :mod:`sysid.models.matched`.
