@@ -147,10 +147,12 @@ def scaled_data(data: IOData, sc: Scaling) -> IOData:
 
 
 def linear_start(data: IOData, sd: IOData, sc: Scaling, order: int, init: Any,
-                 periods: int | None) -> StateSpaceModel:
+                 periods: int | None, max_iter: int | None = None) -> StateSpaceModel:
     """The linear model the nonlinear fit starts from, in scaled channels: ``init`` (in
     engineering units), the BLA's parametric model for periodic data with equal-length
-    experiments, else an output-error refinement (``ssest``) of a subspace model."""
+    experiments, else an output-error refinement (``ssest``) of a subspace model, with
+    ``ssest``'s own iteration cap unless ``max_iter`` is given (the model a user gets from
+    ``sysid.ssest(data, order, focus="simulation")``)."""
     import sysid
 
     if init is not None:
@@ -172,7 +174,8 @@ def linear_start(data: IOData, sd: IOData, sc: Scaling, order: int, init: Any,
         # a pole the bound holds at the unit circle: the nonlinear search goes on from it
         warnings.simplefilter("ignore", StabilityWarning)
         try:
-            return sysid.ssest(sd, order, focus="simulation", progress=False, max_iter=30)
+            kw = {} if max_iter is None else {"max_iter": max_iter}
+            return sysid.ssest(sd, order, focus="simulation", progress=False, **kw)
         except OrderError as e:  # a record too short for the order (its own words after)
             n = sum(u.shape[0] for u, _ in sd.experiments)
             raise OrderError(f"the record ({n} training samples) is too short for a linear "

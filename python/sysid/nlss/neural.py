@@ -362,8 +362,9 @@ def nlssest(
                         np.zeros(data.n_outputs), np.ones(data.n_outputs))
         cands = [_hw_start(init, units, *args)]
     else:
+        # (its linear start is capped at 30 iterations, as when it was measured)
         lin0 = linear_start(data, lin_data, sc, n, None if isinstance(init, str) else init,
-                            periods if whole else None)
+                            periods if whole else None, max_iter=30)
         cands = [_linear_start(lin0, *args)]
         if isinstance(init, str) and init == "auto":
             hw = _hw_fit(lin_data, lin0, hid, out,  # in the scaled channels

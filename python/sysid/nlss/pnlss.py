@@ -234,7 +234,11 @@ def pnlss(
         simulated over two averaged periods with the first as the transient (the steady
         state of a periodic input).
     init : StateSpaceModel, optional
-        Linear start of ``order`` states (engineering units) instead.
+        Linear start of ``order`` states (engineering units). Default: the BLA's model for
+        ``periods`` (above), else the model ``sysid.ssest(data, order, focus="simulation")``
+        gives on the scaled channels, at its own iteration cap (a start capped at 30
+        iterations validated at 0.1095 on the F-16 level 2 against 0.1015 from the
+        converged one, ``benches/results/nonlinear.md``).
     transient : int, optional
         Leading samples of each experiment left out of the cost (default: one period for
         periodic data, else the settling time of the linear start, at most a quarter).
