@@ -45,6 +45,7 @@ from .common import (
     scaled_data,
     signal,
 )
+from .memory import check_memory
 from .neural_start import check_hw, embed_hw, hw_states
 
 __all__ = ["NeuralStateSpaceModel", "nlssest"]
@@ -308,6 +309,10 @@ def nlssest(
 
     Warns
     -----
+    StabilityWarning
+        When the model, simulated from rest at the middle of a training experiment, does not
+        return to its simulation of the whole experiment (``info["memory"]``, see
+        :mod:`sysid.nlss.memory`).
     IterationLimitWarning
         When the training returned stopped at ``epochs`` with its best epoch the last (the
         validation error still falling): raise ``epochs``.
@@ -397,11 +402,12 @@ def nlssest(
             "training": runs[kind], "starts": runs, "horizon": H, "seed": seed,
             "regularization": lam_reg}
     _warn_short(res, epochs, learning_rate)
-    return NeuralStateSpaceModel(res["params"], dims=(n, data.n_inputs, data.n_outputs),
-                                 hidden=hid, output_hidden=out, encoder_hidden=enc, lags=L,
-                                 scaling=sc.to_dict(), dt=data.dt,
-                                 input_names=data.input_names, output_names=data.output_names,
-                                 info=info)
+    model = NeuralStateSpaceModel(res["params"], dims=(n, data.n_inputs, data.n_outputs),
+                                  hidden=hid, output_hidden=out, encoder_hidden=enc, lags=L,
+                                  scaling=sc.to_dict(), dt=data.dt,
+                                  input_names=data.input_names, output_names=data.output_names,
+                                  info=info)
+    return check_memory(model, data, "nlssest")
 
 
 def _warn_short(res: dict[str, Any], epochs: int, learning_rate: float) -> None:

@@ -43,6 +43,7 @@ from .common import (
     settle_samples,
     signal,
 )
+from .memory import check_memory
 
 __all__ = ["PNLSSModel", "pnlss"]
 
@@ -278,7 +279,19 @@ def pnlss(
     Returns
     -------
     PNLSSModel or DecoupledPNLSSModel
-        ``info["fit"]``: iterations, costs, stop reason, parameters, transient.
+        ``info["fit"]``: iterations, costs, stop reason, parameters, transient;
+        ``info["memory"]``: the check that the model forgets its initial state
+        (:mod:`sysid.nlss.memory`).
+
+    Warns
+    -----
+    StabilityWarning
+        When the linear part is unstable, or when the model, simulated from rest at the
+        middle of a training experiment, does not return to its simulation of the whole
+        experiment (a second stable equilibrium or orbit: its simulation of other data
+        depends on where it starts).
+    IterationLimitWarning
+        When the search stopped at ``max_iter``.
 
     Raises
     ------
@@ -351,7 +364,8 @@ def pnlss(
             info.update(method="pnlss (decoupled)", branches=int(branches),
                         fit=_report(res, recs))
             _warn_short(res, max_iter)
-            return _warn_unstable(DecoupledPNLSSModel(**kw, **common, info=info))
+            return check_memory(_warn_unstable(DecoupledPNLSSModel(**kw, **common, info=info)),
+                                data, "pnlss")
         fit = _fit_coupled(lin, us, recs, terms, output_terms, degs, extrapolation, max_iter,
                            tol, cb if cb is not None else _tick, weights)
     finally:
@@ -360,7 +374,7 @@ def pnlss(
     info.update(method="pnlss", terms=terms, output_terms=kw.pop("output_terms"),
                 fit=_report(res, recs))
     _warn_short(res, max_iter)
-    return _warn_unstable(PNLSSModel(**kw, **common, info=info))
+    return check_memory(_warn_unstable(PNLSSModel(**kw, **common, info=info)), data, "pnlss")
 
 
 def _fit_coupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[Any], terms: str,
