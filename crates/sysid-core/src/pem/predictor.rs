@@ -111,13 +111,13 @@ pub(super) struct Filter {
     /// `R^-1` (`l x l`), and the current sample's `(x, u, y)`: the per-sample loops read
     /// contiguous memory without index checks.
     cd: Vec<f64>,
-    abk: Vec<f64>,
+    abk: RowProduct,
     rinv_rows: Vec<f64>,
     xuy: Vec<f64>,
 }
 
 /// `a` (`r x c`) beside `b` (`r x c2`) beside `k` (`r x c3`), row-major.
-fn rows_of(blocks: &[&Mat<f64>]) -> Vec<f64> {
+pub(super) fn rows_of(blocks: &[&Mat<f64>]) -> Vec<f64> {
     let r = blocks.first().map_or(0, |b| b.nrows());
     let mut out = Vec::with_capacity(r * blocks.iter().map(|b| b.ncols()).sum::<usize>());
     for i in 0..r {
@@ -128,11 +128,71 @@ fn rows_of(blocks: &[&Mat<f64>]) -> Vec<f64> {
     out
 }
 
+/// A row-major matrix kept for products with vectors, `out = M x`: dense, or, when at most
+/// half of its entries are non-zero (the modal chart's block-diagonal `A`: 2-3 entries of
+/// each row of `[A B]`), only the non-zero entries of each row, in column order. Every sum
+/// adds the same non-zero terms in the same order as the dense loop; the skipped terms are
+/// zero times a finite number, which change no sum (a non-finite state makes the cost
+/// non-finite either way).
+pub(super) enum RowProduct {
+    /// `cols` and the row-major entries.
+    Dense(usize, Vec<f64>),
+    /// Per row the range `start[i]..start[i + 1]` of `(column, entry)` pairs.
+    Sparse(Vec<usize>, Vec<(usize, f64)>),
+}
+
+impl RowProduct {
+    /// From the row-major entries of a matrix with `cols` columns.
+    pub fn new(rows: &[f64], cols: usize) -> Self {
+        let nnz = rows.iter().filter(|v| **v != 0.0).count();
+        if cols == 0 || 2 * nnz > rows.len() {
+            return RowProduct::Dense(cols, rows.to_vec());
+        }
+        let mut start = Vec::with_capacity(rows.len() / cols + 1);
+        let mut entries = Vec::with_capacity(nnz);
+        start.push(0);
+        for row in rows.chunks_exact(cols) {
+            entries.extend(
+                row.iter()
+                    .enumerate()
+                    .filter(|e| *e.1 != 0.0)
+                    .map(|(j, &v)| (j, v)),
+            );
+            start.push(entries.len());
+        }
+        RowProduct::Sparse(start, entries)
+    }
+
+    /// `out = M x` (`x` as long as a row, `out` one entry per row).
+    pub fn apply(&self, x: &[f64], out: &mut [f64]) {
+        match self {
+            RowProduct::Dense(cols, vals) => {
+                for (o, row) in out.iter_mut().zip(vals.chunks_exact((*cols).max(1))) {
+                    let mut a = 0.0;
+                    for (c, v) in row.iter().zip(x) {
+                        a += c * v;
+                    }
+                    *o = a;
+                }
+            }
+            RowProduct::Sparse(start, entries) => {
+                for (o, w) in out.iter_mut().zip(start.windows(2)) {
+                    let mut a = 0.0;
+                    for &(j, c) in &entries[w[0]..w[1]] {
+                        a += c * x[j];
+                    }
+                    *o = a;
+                }
+            }
+        }
+    }
+}
+
 impl Filter {
     pub fn new(pm: Unpacked, rinv: Mat<f64>) -> Self {
         let (n, m, l) = (pm.a.nrows(), pm.b.ncols(), pm.c.nrows());
         let cd = rows_of(&[&pm.c, &pm.d]);
-        let abk = rows_of(&[&pm.abar, &pm.bbar, &pm.k]);
+        let abk = RowProduct::new(&rows_of(&[&pm.abar, &pm.bbar, &pm.k]), n + m + l);
         let rinv_rows = rows_of(&[&rinv]);
         Filter {
             pm,
@@ -245,14 +305,7 @@ impl Filter {
     /// `x <- (A - K C) x + (B - K D) u + K y` at sample `t`.
     pub fn advance(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>, t: usize) {
         self.load(u, y, t);
-        let w = self.xuy.len();
-        for (xi, row) in self.xn.iter_mut().zip(self.abk.chunks_exact(w)) {
-            let mut a = 0.0;
-            for (c, v) in row.iter().zip(&self.xuy) {
-                a += c * v;
-            }
-            *xi = a;
-        }
+        self.abk.apply(&self.xuy, &mut self.xn);
         std::mem::swap(&mut self.x, &mut self.xn);
     }
 

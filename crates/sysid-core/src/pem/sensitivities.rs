@@ -15,7 +15,7 @@
 
 use super::modal::Modal;
 use super::normal::{gradient_to_theta, matrix_to_theta, product, StaticSums};
-use super::predictor::{Filter, Predictor};
+use super::predictor::{rows_of, Filter, Predictor, RowProduct};
 use crate::error::Result;
 use crate::optim::{gram_add, mirror_lower, small_par, Evaluation};
 use faer::linalg::matmul::matmul;
@@ -334,6 +334,8 @@ impl Predictor<'_> {
         let mut ge = vec![0.0; pe];
         // forcing of a sample: (z, y, 0): the modal state and input, the output, no forcing
         let mut fv = vec![0.0; nz + l + 1];
+        // `T^-1` by rows (block diagonal in the modal chart: its non-zero entries only)
+        let ti = RowProduct::new(&rows_of(&[&md.ti]), n);
         let mut sample = 0usize;
         for (ex, (u, y)) in self.exps.iter().enumerate() {
             f.restart(ex);
@@ -353,9 +355,7 @@ impl Predictor<'_> {
                 }
                 sample += 1;
                 // modal state x' = T^-1 x, regressor z = (x', u)
-                for (a, za) in z.iter_mut().take(n).enumerate() {
-                    *za = (0..n).map(|b| md.ti[(a, b)] * f.x[b]).sum();
-                }
+                ti.apply(&f.x, &mut z[..n]);
                 for j in 0..m {
                     z[n + j] = u[(t, j)];
                 }
