@@ -210,8 +210,11 @@ impl Filter {
         }
     }
 
-    /// Starts experiment `ex` from its initial state.
+    /// Starts experiment `ex` from its initial state (and clears the vector registers' upper
+    /// halves that dense products before the per-sample loop left dirty: see
+    /// [`clear_upper`](crate::optim::clear_upper)).
     pub fn restart(&mut self, ex: usize) {
+        crate::optim::clear_upper();
         self.x.copy_from_slice(&self.pm.x0[ex]);
     }
 

@@ -17,7 +17,7 @@ use super::modal::Modal;
 use super::normal::{gradient_to_theta, matrix_to_theta, product, StaticSums};
 use super::predictor::{rows_of, Filter, Predictor, RowProduct};
 use crate::error::Result;
-use crate::optim::{gram_add, mirror_lower, small_par, Evaluation};
+use crate::optim::{clear_upper, gram_add, mirror_lower, small_par, Evaluation};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Side};
 
@@ -226,6 +226,7 @@ impl Predictor<'_> {
                         matmul(dst, Accum::Add, zr.transpose(), sk, 1.0, par);
                     }
                     sums.fold(row);
+                    clear_upper();
                     row = 0;
                 }
                 f.advance(*u, *y, t);
@@ -421,6 +422,7 @@ impl Predictor<'_> {
                     let zr = sums.zbuf.as_ref().subrows(0, row);
                     matmul(cross.as_mut(), Accum::Add, zr.transpose(), vr, 1.0, par);
                     sums.fold(row);
+                    clear_upper();
                     row = 0;
                 }
                 f.advance(*u, *y, t);
