@@ -130,15 +130,16 @@ pub(super) fn rows_of(blocks: &[&Mat<f64>]) -> Vec<f64> {
 
 /// A row-major matrix kept for products with vectors, `out = M x`: dense, or, when at most
 /// half of its entries are non-zero (the modal chart's block-diagonal `A`: 2-3 entries of
-/// each row of `[A B]`), only the non-zero entries of each row, in column order. Every sum
-/// adds the same non-zero terms in the same order as the dense loop; the skipped terms are
-/// zero times a finite number, which change no sum (a non-finite state makes the cost
-/// non-finite either way).
+/// each row of `[A B]`), only the non-zero entries of each row, in column order, every row
+/// padded to the same width with zero entries (a fixed trip count). Every sum adds the same
+/// non-zero terms in the same order as the dense loop; the skipped and padded terms are zero
+/// times a finite number, which change no sum (a non-finite state makes the cost non-finite
+/// either way).
 pub(super) enum RowProduct {
     /// `cols` and the row-major entries.
     Dense(usize, Vec<f64>),
-    /// Per row the range `start[i]..start[i + 1]` of `(column, entry)` pairs.
-    Sparse(Vec<usize>, Vec<(usize, f64)>),
+    /// `width` and per row `width` pairs `(column, entry)`.
+    Sparse(usize, Vec<(usize, f64)>),
 }
 
 impl RowProduct {
@@ -148,19 +149,23 @@ impl RowProduct {
         if cols == 0 || 2 * nnz > rows.len() {
             return RowProduct::Dense(cols, rows.to_vec());
         }
-        let mut start = Vec::with_capacity(rows.len() / cols + 1);
-        let mut entries = Vec::with_capacity(nnz);
-        start.push(0);
+        let width = rows
+            .chunks_exact(cols)
+            .map(|r| r.iter().filter(|v| **v != 0.0).count())
+            .max()
+            .unwrap_or(0);
+        let mut entries = Vec::with_capacity(width * (rows.len() / cols));
         for row in rows.chunks_exact(cols) {
+            let before = entries.len();
             entries.extend(
                 row.iter()
                     .enumerate()
                     .filter(|e| *e.1 != 0.0)
                     .map(|(j, &v)| (j, v)),
             );
-            start.push(entries.len());
+            entries.resize(before + width, (0, 0.0));
         }
-        RowProduct::Sparse(start, entries)
+        RowProduct::Sparse(width, entries)
     }
 
     /// `out = M x` (`x` as long as a row, `out` one entry per row).
@@ -175,16 +180,33 @@ impl RowProduct {
                     *o = a;
                 }
             }
-            RowProduct::Sparse(start, entries) => {
-                for (o, w) in out.iter_mut().zip(start.windows(2)) {
-                    let mut a = 0.0;
-                    for &(j, c) in &entries[w[0]..w[1]] {
-                        a += c * x[j];
+            RowProduct::Sparse(width, entries) => match *width {
+                1 => sparse_rows::<1>(entries, x, out),
+                2 => sparse_rows::<2>(entries, x, out),
+                3 => sparse_rows::<3>(entries, x, out),
+                4 => sparse_rows::<4>(entries, x, out),
+                w => {
+                    for (o, row) in out.iter_mut().zip(entries.chunks_exact(w.max(1))) {
+                        let mut a = 0.0;
+                        for &(j, c) in row {
+                            a += c * x[j];
+                        }
+                        *o = a;
                     }
-                    *o = a;
                 }
-            }
+            },
         }
+    }
+}
+
+/// [`RowProduct::apply`] for rows of `W` entries (the loop over a row unrolled).
+fn sparse_rows<const W: usize>(entries: &[(usize, f64)], x: &[f64], out: &mut [f64]) {
+    for (o, row) in out.iter_mut().zip(entries.chunks_exact(W)) {
+        let mut a = 0.0;
+        for &(j, c) in row {
+            a += c * x[j];
+        }
+        *o = a;
     }
 }
 
