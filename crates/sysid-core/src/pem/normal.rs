@@ -43,9 +43,9 @@ impl StaticSums {
 
     /// Adds one sample: regressor `z`, weighted error `wz = W e`, row `row` of the block.
     pub fn add(&mut self, z: &[f64], wz: &[f64], row: usize) {
-        for (i, &w) in wz.iter().enumerate() {
-            for (j, &zj) in z.iter().enumerate() {
-                self.gz[(i, j)] += w * zj;
+        for (j, &zj) in z.iter().enumerate() {
+            for (g, &w) in self.gz.col_as_slice_mut(j).iter_mut().zip(wz) {
+                *g += w * zj;
             }
         }
         if self.acc {

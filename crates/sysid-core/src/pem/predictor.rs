@@ -114,6 +114,9 @@ pub(super) struct Filter {
     abk: RowProduct,
     rinv_rows: Vec<f64>,
     xuy: Vec<f64>,
+    /// The sample whose `(x, u, y)` `xuy` holds (`x` moves only in [`Self::advance`] and
+    /// [`Self::restart`]).
+    loaded: Option<usize>,
 }
 
 /// `a` (`r x c`) beside `b` (`r x c2`) beside `k` (`r x c3`), row-major.
@@ -229,6 +232,7 @@ impl Filter {
             abk,
             rinv_rows,
             xuy: vec![0.0; n + m + l],
+            loaded: None,
         }
     }
 
@@ -238,10 +242,15 @@ impl Filter {
     pub fn restart(&mut self, ex: usize) {
         crate::optim::clear_upper();
         self.x.copy_from_slice(&self.pm.x0[ex]);
+        self.loaded = None;
     }
 
     /// `(x, u(t), y(t))` into `xuy`.
     fn load(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>, t: usize) {
+        if self.loaded == Some(t) {
+            return;
+        }
+        self.loaded = Some(t);
         let n = self.x.len();
         let m = u.ncols();
         self.xuy[..n].copy_from_slice(&self.x);
@@ -332,6 +341,7 @@ impl Filter {
         self.load(u, y, t);
         self.abk.apply(&self.xuy, &mut self.xn);
         std::mem::swap(&mut self.x, &mut self.xn);
+        self.loaded = None;
     }
 
     /// The cost, infinite when it is not finite (the search then rejects the point).
