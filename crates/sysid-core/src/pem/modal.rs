@@ -107,6 +107,9 @@ fn left_block(ticol: &[Vec<f64>], src: &[f64], dst: &mut [f64], w: usize) {
         let d = &mut dst[i * w..i * w + w];
         d.fill(0.0);
         for (a, &s) in ti.iter().enumerate() {
+            if s == 0.0 {
+                continue;
+            }
             for (dv, v) in d.iter_mut().zip(&src[a * w..a * w + w]) {
                 *dv += s * v;
             }
@@ -122,6 +125,9 @@ fn right_block(tcol: &[Vec<f64>], src: &[f64], dst: &mut [f64], rows: usize) {
         d.fill(0.0);
         for (b, tb) in tcol.iter().enumerate() {
             let s = src[r * n + b];
+            if s == 0.0 {
+                continue;
+            }
             for (dv, tv) in d.iter_mut().zip(tb) {
                 *dv += s * tv;
             }
@@ -141,7 +147,8 @@ pub(crate) struct StateBlocks {
 
 /// `M^T X` for every column of `X`, for the modal change of basis `phi' = M phi` of the
 /// parameters laid out as `at` says. `O(n^2 (n + widths + rows))` per column, on contiguous
-/// slices.
+/// slices; zero columns, and the zero entries of `X`, `T` and `T^-1` (block diagonal in the
+/// modal chart) are skipped, which leaves every sum with finite terms unchanged.
 pub(crate) fn modal_mt_cols(md: &Modal, at: &StateBlocks, x: &Mat<f64>) -> Mat<f64> {
     let n = md.t.nrows();
     let l = at.rows;
@@ -155,6 +162,10 @@ pub(crate) fn modal_mt_cols(md: &Modal, at: &StateBlocks, x: &Mat<f64>) -> Mat<f
     let mut tmp = vec![0.0; n * n];
     for c in 0..x.ncols() {
         let xs = x.col_as_slice(c);
+        if xs.iter().all(|v| *v == 0.0) {
+            // M^T 0 = 0 (the Gauss-Newton matrix's columns of parameters the chart holds)
+            continue;
+        }
         let os = out.col_as_slice_mut(c);
         right_block(&tcol, &xs[at.a..at.a + n * n], &mut tmp, n);
         left_block(&ticol, &tmp, &mut os[at.a..at.a + n * n], n);

@@ -8,15 +8,17 @@
 //! derivative `T = dphi/dtheta` ([`Predictor::predictor_map`]).
 
 use super::predictor::{Predictor, Unpacked};
-use crate::optim::gram_add;
+use crate::optim::{clear_upper, gram_add};
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 
 /// Sparse columns of `T = dphi/dtheta`: `(row, value)` pairs per column.
 pub(super) type SparseCols = Vec<Vec<(usize, f64)>>;
 
-/// `dst = alpha a b` on the calling thread (the small per-sample products).
+/// `dst = alpha a b` on the calling thread (the small per-sample products), leaving the
+/// vector registers' upper halves clear for the scalar code around it ([`clear_upper`]).
 pub(super) fn product(dst: MatMut<'_, f64>, a: MatRef<'_, f64>, b: MatRef<'_, f64>, alpha: f64) {
     faer::linalg::matmul::matmul(dst, Accum::Replace, a, b, alpha, Par::Seq);
+    clear_upper();
 }
 
 /// Running sums of the regressor `z = (x, u)` over the samples: `sum (W e) z^T` always, and
@@ -41,9 +43,9 @@ impl StaticSums {
 
     /// Adds one sample: regressor `z`, weighted error `wz = W e`, row `row` of the block.
     pub fn add(&mut self, z: &[f64], wz: &[f64], row: usize) {
-        for (i, &w) in wz.iter().enumerate() {
-            for (j, &zj) in z.iter().enumerate() {
-                self.gz[(i, j)] += w * zj;
+        for (j, &zj) in z.iter().enumerate() {
+            for (g, &w) in self.gz.col_as_slice_mut(j).iter_mut().zip(wz) {
+                *g += w * zj;
             }
         }
         if self.acc {

@@ -111,13 +111,16 @@ pub(super) struct Filter {
     /// `R^-1` (`l x l`), and the current sample's `(x, u, y)`: the per-sample loops read
     /// contiguous memory without index checks.
     cd: Vec<f64>,
-    abk: Vec<f64>,
+    abk: RowProduct,
     rinv_rows: Vec<f64>,
     xuy: Vec<f64>,
+    /// The sample whose `(x, u, y)` `xuy` holds (`x` moves only in [`Self::advance`] and
+    /// [`Self::restart`]).
+    loaded: Option<usize>,
 }
 
 /// `a` (`r x c`) beside `b` (`r x c2`) beside `k` (`r x c3`), row-major.
-fn rows_of(blocks: &[&Mat<f64>]) -> Vec<f64> {
+pub(super) fn rows_of(blocks: &[&Mat<f64>]) -> Vec<f64> {
     let r = blocks.first().map_or(0, |b| b.nrows());
     let mut out = Vec::with_capacity(r * blocks.iter().map(|b| b.ncols()).sum::<usize>());
     for i in 0..r {
@@ -128,11 +131,93 @@ fn rows_of(blocks: &[&Mat<f64>]) -> Vec<f64> {
     out
 }
 
+/// A row-major matrix kept for products with vectors, `out = M x`: dense, or, when at most
+/// half of its entries are non-zero (the modal chart's block-diagonal `A`: 2-3 entries of
+/// each row of `[A B]`), only the non-zero entries of each row, in column order, every row
+/// padded to the same width with zero entries (a fixed trip count). Every sum adds the same
+/// non-zero terms in the same order as the dense loop; the skipped and padded terms are zero
+/// times a finite number, which change no sum (a non-finite state makes the cost non-finite
+/// either way).
+pub(super) enum RowProduct {
+    /// `cols` and the row-major entries.
+    Dense(usize, Vec<f64>),
+    /// `width` and per row `width` pairs `(column, entry)`.
+    Sparse(usize, Vec<(usize, f64)>),
+}
+
+impl RowProduct {
+    /// From the row-major entries of a matrix with `cols` columns.
+    pub fn new(rows: &[f64], cols: usize) -> Self {
+        let nnz = rows.iter().filter(|v| **v != 0.0).count();
+        if cols == 0 || 2 * nnz > rows.len() {
+            return RowProduct::Dense(cols, rows.to_vec());
+        }
+        let width = rows
+            .chunks_exact(cols)
+            .map(|r| r.iter().filter(|v| **v != 0.0).count())
+            .max()
+            .unwrap_or(0);
+        let mut entries = Vec::with_capacity(width * (rows.len() / cols));
+        for row in rows.chunks_exact(cols) {
+            let before = entries.len();
+            entries.extend(
+                row.iter()
+                    .enumerate()
+                    .filter(|e| *e.1 != 0.0)
+                    .map(|(j, &v)| (j, v)),
+            );
+            entries.resize(before + width, (0, 0.0));
+        }
+        RowProduct::Sparse(width, entries)
+    }
+
+    /// `out = M x` (`x` as long as a row, `out` one entry per row).
+    pub fn apply(&self, x: &[f64], out: &mut [f64]) {
+        match self {
+            RowProduct::Dense(cols, vals) => {
+                for (o, row) in out.iter_mut().zip(vals.chunks_exact((*cols).max(1))) {
+                    let mut a = 0.0;
+                    for (c, v) in row.iter().zip(x) {
+                        a += c * v;
+                    }
+                    *o = a;
+                }
+            }
+            RowProduct::Sparse(width, entries) => match *width {
+                1 => sparse_rows::<1>(entries, x, out),
+                2 => sparse_rows::<2>(entries, x, out),
+                3 => sparse_rows::<3>(entries, x, out),
+                4 => sparse_rows::<4>(entries, x, out),
+                w => {
+                    for (o, row) in out.iter_mut().zip(entries.chunks_exact(w.max(1))) {
+                        let mut a = 0.0;
+                        for &(j, c) in row {
+                            a += c * x[j];
+                        }
+                        *o = a;
+                    }
+                }
+            },
+        }
+    }
+}
+
+/// [`RowProduct::apply`] for rows of `W` entries (the loop over a row unrolled).
+fn sparse_rows<const W: usize>(entries: &[(usize, f64)], x: &[f64], out: &mut [f64]) {
+    for (o, row) in out.iter_mut().zip(entries.chunks_exact(W)) {
+        let mut a = 0.0;
+        for &(j, c) in row {
+            a += c * x[j];
+        }
+        *o = a;
+    }
+}
+
 impl Filter {
     pub fn new(pm: Unpacked, rinv: Mat<f64>) -> Self {
         let (n, m, l) = (pm.a.nrows(), pm.b.ncols(), pm.c.nrows());
         let cd = rows_of(&[&pm.c, &pm.d]);
-        let abk = rows_of(&[&pm.abar, &pm.bbar, &pm.k]);
+        let abk = RowProduct::new(&rows_of(&[&pm.abar, &pm.bbar, &pm.k]), n + m + l);
         let rinv_rows = rows_of(&[&rinv]);
         Filter {
             pm,
@@ -147,16 +232,25 @@ impl Filter {
             abk,
             rinv_rows,
             xuy: vec![0.0; n + m + l],
+            loaded: None,
         }
     }
 
-    /// Starts experiment `ex` from its initial state.
+    /// Starts experiment `ex` from its initial state (and clears the vector registers' upper
+    /// halves that dense products before the per-sample loop left dirty: see
+    /// [`clear_upper`](crate::optim::clear_upper)).
     pub fn restart(&mut self, ex: usize) {
+        crate::optim::clear_upper();
         self.x.copy_from_slice(&self.pm.x0[ex]);
+        self.loaded = None;
     }
 
     /// `(x, u(t), y(t))` into `xuy`.
     fn load(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>, t: usize) {
+        if self.loaded == Some(t) {
+            return;
+        }
+        self.loaded = Some(t);
         let n = self.x.len();
         let m = u.ncols();
         self.xuy[..n].copy_from_slice(&self.x);
@@ -245,15 +339,9 @@ impl Filter {
     /// `x <- (A - K C) x + (B - K D) u + K y` at sample `t`.
     pub fn advance(&mut self, u: MatRef<'_, f64>, y: MatRef<'_, f64>, t: usize) {
         self.load(u, y, t);
-        let w = self.xuy.len();
-        for (xi, row) in self.xn.iter_mut().zip(self.abk.chunks_exact(w)) {
-            let mut a = 0.0;
-            for (c, v) in row.iter().zip(&self.xuy) {
-                a += c * v;
-            }
-            *xi = a;
-        }
+        self.abk.apply(&self.xuy, &mut self.xn);
         std::mem::swap(&mut self.x, &mut self.xn);
+        self.loaded = None;
     }
 
     /// The cost, infinite when it is not finite (the search then rejects the point).

@@ -8,7 +8,7 @@ use super::normal::product;
 use super::predictor::{Filter, Predictor};
 use crate::error::Result;
 use crate::optim::Evaluation;
-use crate::optim::{gram_add, mirror_lower, small_par};
+use crate::optim::{clear_upper, gram_add, mirror_lower, small_par};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 
@@ -123,6 +123,7 @@ impl Predictor<'_> {
                     let gr = g.as_mut().subrows_mut(lo, nc);
                     let rr = rb.as_ref().subrows(0, row * l);
                     matmul(gr, Accum::Add, jr.transpose(), rr, 1.0, Par::Seq);
+                    clear_upper();
                     row = 0;
                 }
                 f.advance(*u, *y, t);

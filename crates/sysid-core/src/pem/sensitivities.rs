@@ -15,9 +15,9 @@
 
 use super::modal::Modal;
 use super::normal::{gradient_to_theta, matrix_to_theta, product, StaticSums};
-use super::predictor::{Filter, Predictor};
+use super::predictor::{rows_of, Filter, Predictor, RowProduct};
 use crate::error::Result;
-use crate::optim::{gram_add, mirror_lower, small_par, Evaluation};
+use crate::optim::{clear_upper, gram_add, mirror_lower, small_par, Evaluation};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Side};
 
@@ -226,6 +226,7 @@ impl Predictor<'_> {
                         matmul(dst, Accum::Add, zr.transpose(), sk, 1.0, par);
                     }
                     sums.fold(row);
+                    clear_upper();
                     row = 0;
                 }
                 f.advance(*u, *y, t);
@@ -334,6 +335,8 @@ impl Predictor<'_> {
         let mut ge = vec![0.0; pe];
         // forcing of a sample: (z, y, 0): the modal state and input, the output, no forcing
         let mut fv = vec![0.0; nz + l + 1];
+        // `T^-1` by rows (block diagonal in the modal chart: its non-zero entries only)
+        let ti = RowProduct::new(&rows_of(&[&md.ti]), n);
         let mut sample = 0usize;
         for (ex, (u, y)) in self.exps.iter().enumerate() {
             f.restart(ex);
@@ -353,9 +356,7 @@ impl Predictor<'_> {
                 }
                 sample += 1;
                 // modal state x' = T^-1 x, regressor z = (x', u)
-                for (a, za) in z.iter_mut().take(n).enumerate() {
-                    *za = (0..n).map(|b| md.ti[(a, b)] * f.x[b]).sum();
-                }
+                ti.apply(&f.x, &mut z[..n]);
                 for j in 0..m {
                     z[n + j] = u[(t, j)];
                 }
@@ -367,43 +368,36 @@ impl Predictor<'_> {
                 for j in 0..l {
                     fv[nz + j] = y[(t, j)];
                 }
-                for sg in &segs {
-                    let (sc_s, ge_s) = (&sc[sg.o..sg.end], &mut ge[sg.o..sg.end]);
-                    if sg.bs == 1 {
-                        let v0 = v[sg.b0];
-                        for (gv, sv) in ge_s.iter_mut().zip(sc_s) {
-                            *gv -= sv * v0;
-                        }
-                    } else {
-                        let (v0, v1) = (v[sg.b0], v[sg.b0 + 1]);
-                        for (gv, sv) in ge_s.chunks_exact_mut(2).zip(sc_s.chunks_exact(2)) {
-                            gv[0] -= sv[0] * v0 + sv[1] * v1;
-                            if sg.twin {
-                                gv[1] -= sv[0] * v1 - sv[1] * v0;
-                            }
-                        }
-                    }
-                }
                 if acc {
                     vbuf.col_as_slice_mut(row).copy_from_slice(&sc);
                     row += 1;
                 }
-                // S'(t+1) = Lambda S' + F, blockwise
+                // the gradient sums `ge -= s v` and `S'(t+1) = Lambda S' + F`, blockwise, in
+                // one pass over the segments
                 for sg in &segs {
-                    let (sc_s, sn_s) = (&sc[sg.o..sg.end], &mut sn[sg.o..sg.end]);
+                    let (sc_s, ge_s) = (&sc[sg.o..sg.end], &mut ge[sg.o..sg.end]);
+                    let sn_s = &mut sn[sg.o..sg.end];
                     let src = &sg.forcing;
                     if sg.bs == 1 {
-                        let l00 = sg.lam[0];
-                        for ((nv, sv), &fi) in sn_s.iter_mut().zip(sc_s).zip(src) {
+                        let (v0, l00) = (v[sg.b0], sg.lam[0]);
+                        let cols = ge_s.iter_mut().zip(sn_s.iter_mut()).zip(sc_s).zip(src);
+                        for (((gv, nv), sv), &fi) in cols {
+                            *gv -= sv * v0;
                             *nv = l00 * sv + fv[fi];
                         }
                     } else {
+                        let (v0, v1) = (v[sg.b0], v[sg.b0 + 1]);
                         let [l00, l01, l10, l11] = sg.lam;
-                        let pairs = sn_s.chunks_exact_mut(2).zip(sc_s.chunks_exact(2));
-                        // the forcing enters the block row `fq`
-                        for ((nv, sv), &fi) in pairs.zip(src) {
+                        let pairs = ge_s.chunks_exact_mut(2).zip(sn_s.chunks_exact_mut(2));
+                        for ((gv, nv), (sv, &fi)) in pairs.zip(sc_s.chunks_exact(2).zip(src)) {
+                            let (s0, s1) = (sv[0], sv[1]);
+                            gv[0] -= s0 * v0 + s1 * v1;
+                            if sg.twin {
+                                gv[1] -= s0 * v1 - s1 * v0;
+                            }
+                            // the forcing enters the block row `fq`
                             let fk = fv[fi];
-                            let (a0, a1) = (l00 * sv[0] + l01 * sv[1], l10 * sv[0] + l11 * sv[1]);
+                            let (a0, a1) = (l00 * s0 + l01 * s1, l10 * s0 + l11 * s1);
                             if sg.fq == 0 {
                                 nv[0] = a0 + fk;
                                 nv[1] = a1;
@@ -421,6 +415,7 @@ impl Predictor<'_> {
                     let zr = sums.zbuf.as_ref().subrows(0, row);
                     matmul(cross.as_mut(), Accum::Add, zr.transpose(), vr, 1.0, par);
                     sums.fold(row);
+                    clear_upper();
                     row = 0;
                 }
                 f.advance(*u, *y, t);
