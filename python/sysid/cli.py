@@ -24,6 +24,7 @@ import numpy as np
 
 from .data.iodata import IOData
 from .data.table import (
+    ForwardReader,
     Uncommented,
     decompressing,
     first_bad_cell,
@@ -318,29 +319,16 @@ STREAM_BYTES = 8 << 20
 STREAM_BLOCK = 16 << 20
 
 
-class _CountingFile:
+class _CountingFile(ForwardReader):
     """A binary file that advances a progress bar by the bytes read through it."""
 
     def __init__(self, path: Path, bar: Any) -> None:
-        self._f, self._bar = open(path, "rb"), bar  # noqa: SIM115 (closed by close())
+        self._src, self._bar = open(path, "rb"), bar  # noqa: SIM115 (closed by close())
 
     def read(self, n: int = -1) -> bytes:
-        b = self._f.read(n)
+        b = self._src.read(n)
         self._bar.update(len(b))
         return b
-
-    def readable(self) -> bool:
-        return True
-
-    def seekable(self) -> bool:
-        return False
-
-    @property
-    def closed(self) -> bool:
-        return self._f.closed
-
-    def close(self) -> None:
-        self._f.close()
 
 
 def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None = None,

@@ -549,7 +549,28 @@ _COMMENT = re.compile(rb"(?:(?<=[\r\n])|\A)[ \t\f\v]*#[^\r\n]*(?:\r\n|\r|\n|\Z)"
 _SKIPPED = re.compile(rb"(?:(?<=[\r\n])|\A)[ \t\f\v]*(?:#[^\r\n]*)?(?:\r\n|\r|\n|\Z)")
 
 
-class Uncommented:
+class ForwardReader:
+    """A forward-only binary stream over ``self._src`` (what pyarrow's streaming readers
+    ask of a file besides ``read``): readable, not seekable, closed with its source. A
+    subclass sets ``_src`` and defines ``read``."""
+
+    _src: IO[bytes]
+
+    def readable(self) -> bool:
+        return True
+
+    def seekable(self) -> bool:
+        return False
+
+    @property
+    def closed(self) -> bool:
+        return bool(self._src.closed)
+
+    def close(self) -> None:
+        self._src.close()
+
+
+class Uncommented(ForwardReader):
     """The bytes of a table file (``src``, decompressed) without its ``#`` comment lines,
     for a reader that knows no comments (pyarrow's): the lines :func:`read_table` skips are
     skipped wherever they are, even with as many fields as the header. Its first block (1
@@ -576,19 +597,6 @@ class Uncommented:
         self._carry, self._out = bytearray(), bytearray()
         self._first, self._eof, self.lines = True, False, 0
         self.error: DataError | None = None
-
-    def readable(self) -> bool:
-        return True
-
-    def seekable(self) -> bool:
-        return False
-
-    @property
-    def closed(self) -> bool:
-        return bool(self._src.closed)
-
-    def close(self) -> None:
-        self._src.close()
 
     def read(self, n: int | None = -1) -> bytes:
         """At most ``n`` bytes (all that is left when ``n`` is negative or ``None``)."""
