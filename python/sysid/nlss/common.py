@@ -210,11 +210,19 @@ def envelope(xs: list[np.ndarray], us: list[np.ndarray],
     return lo - widen * span, hi + widen * span
 
 
+def decay_samples(m: Any, level: float) -> float:
+    """Samples for the slowest pole of ``m``'s linear part (``m.poles()``) to decay to
+    ``level`` of its mode; ``inf`` for a pole on or outside the unit circle."""
+    poles = m.poles()
+    rho = float(np.max(np.abs(poles))) if len(poles) else 0.0
+    if rho >= 1:
+        return float("inf")
+    return 0.0 if rho == 0 else float(np.ceil(np.log(level) / np.log(rho)))
+
+
 def settle_samples(m: StateSpaceModel, n: int) -> int:
     """Samples for the slowest pole to decay to 0.1 %, at most a quarter of the record."""
-    rho = float(np.max(np.abs(m.poles()))) if m.nstates else 0.0
-    k = 0 if rho == 0 else (n // 4 if rho >= 1 else int(np.ceil(np.log(1e-3) / np.log(rho))))
-    return int(min(max(k, 0), n // 4))
+    return int(min(max(decay_samples(m, 1e-3), 0.0), n // 4))
 
 
 def check_parameters(n_par: int, recs: list[Any], fix: str) -> None:

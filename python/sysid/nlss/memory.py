@@ -30,6 +30,7 @@ import numpy as np
 from .._checks import user_stacklevel
 from ..data.iodata import IOData
 from ..errors import NumericalError, StabilityWarning
+from .common import decay_samples
 
 __all__ = ["MEMORY_TOLERANCE", "check_memory"]
 
@@ -71,12 +72,10 @@ def check_memory(model: Any, data: IOData, name: str) -> Any:
     >>> bool(d["difference"][0] < d["tolerance"])   # it forgets: no warning
     True
     """
-    poles = model.linear().poles()
-    rho = float(np.max(np.abs(poles))) if len(poles) else 0.0
     # samples for the slowest pole to decay to 1 % (what is left of the two runs' initial
     # difference, a few output standard deviations, is then well under the tolerance; an
     # unstable linear part never settles: it is warned about on its own)
-    settle = np.inf if rho >= 1 else 0 if rho == 0 else int(np.ceil(np.log(1e-2) / np.log(rho)))
+    settle = decay_samples(model.linear(), 1e-2)
     diffs: list[float | None] = []
     for u, _ in data.experiments:
         n = u.shape[0]
