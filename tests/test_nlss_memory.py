@@ -32,6 +32,7 @@ def test_a_model_with_two_stable_equilibria_is_named() -> None:
                       r"middle of the record.*another stable behaviour.*sysid.compare"):
         check_memory(m, sysid.IOData(u, y), "pnlss")
     assert m.info["memory"]["difference"][0] > 10 * MEMORY_TOLERANCE
+    assert m.info["memory"]["repeats"] == [1]
 
 
 def test_the_same_model_on_an_input_that_keeps_one_equilibrium_is_silent() -> None:
@@ -42,13 +43,33 @@ def test_the_same_model_on_an_input_that_keeps_one_equilibrium_is_silent() -> No
     assert m.info["memory"]["difference"][0] < 1e-3  # the 0.1 % the settling time allows
 
 
-def test_too_short_or_unstable_linear_parts_are_not_judged() -> None:
+def test_a_short_record_is_judged_on_its_input_repeated() -> None:
+    # 25 samples: the second half (13) leaves 6 after the linear part's 7-sample settling
+    # time, too few to compare on; the check repeats the input. Its kick (sample 10) sends the
+    # state from 0 to the equilibrium 2 and from 2 (through 3.5) back near 0, so the run from
+    # rest and the run from the middle toggle in opposite phase on every copy: never agree
     m = _bistable()
-    u = _input(kick=True)[:25]  # the linear part settles in 10 samples: 25 leave 2 to compare
+    u = _input(kick=True)[:25]
+    with pytest.warns(sysid.StabilityWarning, match=r"middle of the record, its input "
+                      r"repeated 2 times end to end"):
+        check_memory(m, sysid.IOData(u, m.simulate(u)), "pnlss")
+    assert m.info["memory"]["repeats"] == [2]
+    assert m.info["memory"]["difference"][0] > 10 * MEMORY_TOLERANCE
+    u = _input(kick=False)[:25]  # no kick: both runs stay at 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_memory(m, sysid.IOData(u, m.simulate(u)), "pnlss")
+    assert m.info["memory"]["repeats"] == [2]
+    assert m.info["memory"]["difference"][0] < MEMORY_TOLERANCE
+
+
+def test_too_slow_or_unstable_linear_parts_are_not_judged() -> None:
+    m, u = _bistable(), _input(kick=False)
+    m.A = np.array([[1.0 - 1e-6]])  # 4.6 million samples to settle: beyond MAX_SAMPLES
     check_memory(m, sysid.IOData(u, m.simulate(u)), "pnlss")
     assert m.info["memory"]["difference"] == [None]
+    assert m.info["memory"]["repeats"] == [0]
     m.A = np.array([[1.01]])  # warned on its own as an unstable linear part
-    u = _input(kick=False)
     check_memory(m, sysid.IOData(u, m.simulate(u)), "pnlss")
     assert m.info["memory"]["difference"] == [None]
 

@@ -15,9 +15,13 @@ output standard deviations away, and validates at -2000 %.
 :func:`check_memory` tests this on the training data themselves: each experiment is
 simulated from rest twice, whole and from its middle; once the linear part's slowest mode has
 decayed to 1 %, the two must agree (to :data:`MEMORY_TOLERANCE` of the output's standard
-deviation; an experiment shorter than twice that time, or a linear part with a pole on or
-outside the unit circle, is not judged). When they do not, or the second simulation diverges, a
-:class:`~sysid.StabilityWarning` says so; ``info["memory"]`` records the differences.
+deviation). An experiment whose second half is shorter than that settling time (a short
+record, a slow mode) is simulated repeated end to end, as long as both runs need to settle
+and be compared over a half record (at most :data:`MAX_SAMPLES` samples): the question is
+the same (do two starts on one input meet?), only the input is longer. A settling time
+beyond that, or a linear part with a pole on or outside the unit circle, is not judged. When
+the two runs do not agree, or the second diverges, a :class:`~sysid.StabilityWarning` says
+so; ``info["memory"]`` records the differences and how often each experiment was repeated.
 """
 
 from __future__ import annotations
@@ -39,6 +43,10 @@ __all__ = ["MEMORY_TOLERANCE", "check_memory"]
 #: Fading-memory fits measured at 1e-9 .. 0.01 (Bouc-Wen, F-16, pH's nlssest, a heat
 #: exchanger); a DaISy CD-player PNLSS fit that followed another orbit at 25.
 MEMORY_TOLERANCE = 0.1
+#: The longest input (samples) the check simulates when it repeats a short experiment: two
+#: simulations of this length cost milliseconds for a PNLSS model, a fraction of a second for
+#: a neural one; a slower mode (a pole within about 2e-5 of the unit circle) is not judged.
+MAX_SAMPLES = 200_000
 
 
 def check_memory(model: Any, data: IOData, name: str) -> Any:
@@ -57,9 +65,11 @@ def check_memory(model: Any, data: IOData, name: str) -> Any:
     Returns
     -------
     model
-        The same model, ``info["memory"]`` set: per experiment the largest difference over
-        the outputs (a fraction of the output's standard deviation; ``inf`` when the second
-        simulation diverged, ``None`` when the experiment is too short to tell).
+        The same model, ``info["memory"]`` set: ``"difference"``, per experiment the largest
+        difference over the outputs (a fraction of the output's standard deviation; ``inf``
+        when the second simulation diverged, ``None`` when the settling time is too long to
+        tell), and ``"repeats"``, how many copies of each experiment's input were simulated
+        (1: the record itself).
 
     Examples
     --------
@@ -77,12 +87,22 @@ def check_memory(model: Any, data: IOData, name: str) -> Any:
     # unstable linear part never settles: it is warned about on its own)
     settle = decay_samples(model.linear(), 1e-2)
     diffs: list[float | None] = []
+    repeats: list[int] = []
     for u, _ in data.experiments:
         n = u.shape[0]
         half = n // 2
-        if n - half - settle < 10:  # too short (or too slow a pole) to tell
+        # the runs settle, then are compared over the second half's length (10 samples at
+        # least): the record itself when long enough, else the record repeated end to end
+        need = half + settle + max(n - half, 10)
+        long_enough = n - half - settle >= 10
+        if not long_enough and need > MAX_SAMPLES:  # too slow a pole (or an unstable one)
             diffs.append(None)
+            repeats.append(0)
             continue
+        copies = 1 if long_enough else int(np.ceil(need / n))
+        repeats.append(copies)
+        if copies > 1:
+            u = np.tile(u, (copies, 1))[:int(need)]
         s = int(settle)
         with np.errstate(all="ignore"):
             whole = np.asarray(model.simulate(u))
@@ -95,17 +115,21 @@ def check_memory(model: Any, data: IOData, name: str) -> Any:
         ref = np.std(whole[s:], axis=0)
         d = np.sqrt(np.mean((a - b) ** 2, axis=0)) / np.where(ref > 0, ref, 1.0)
         diffs.append(float(np.max(d)) if np.all(np.isfinite(d)) else float("inf"))
-    model.info["memory"] = {"difference": diffs, "tolerance": MEMORY_TOLERANCE}
+    model.info["memory"] = {"difference": diffs, "tolerance": MEMORY_TOLERANCE,
+                            "repeats": repeats}
     bad = [(k, d) for k, d in enumerate(diffs) if d is not None and d > MEMORY_TOLERANCE]
     if bad:
         k, d = max(bad, key=lambda kd: kd[1])
         where = f"experiment {k}" if len(diffs) > 1 else "the record"
+        if repeats[k] > 1:  # too short for the runs to settle within it
+            where += f", its input repeated {repeats[k]} times end to end,"
         what = ("diverges" if not np.isfinite(d) else
                 f"stays {d:.3g} output standard deviations away from its simulation of the "
                 "whole record")
         warnings.warn(
             f"{name} returned a model that does not forget its initial state: simulated from "
-            f"rest at the middle of {where} (after its linear part's settling time) it {what}."
+            f"rest at the middle of {where} and past its linear part's settling time, it "
+            f"{what}."
             f" The model has another stable behaviour for the same input (a second "
             f"equilibrium or orbit), so its simulation of other data depends on where it "
             f"starts; check it with sysid.compare on validation data, and try a lower degree "
