@@ -41,6 +41,24 @@ def test_hammerstein_wiener_start_simulates_as_the_model():
     assert np.max(np.abs(m.simulate(u) - lin_in.simulate(u))) < 1e-9
 
 
+@pytest.mark.filterwarnings("ignore::sysid.IterationLimitWarning")  # a short nlhw_ss fit
+def test_start_with_an_operating_point_simulates_as_the_model():
+    # nlhw_ss keeps the record's means as its operating point (u_offset, y_offset) when they
+    # lie off zero: the embedded start must map u - u_offset and add y_offset as it does
+    hw = _hw()
+    u, d = _record(hw)
+    hw.u_offset, hw.y_offset = np.array([1.5, 4.0]), np.array([10.0, -3.0])
+    m = sysid.nlssest(d, 3, init=hw, epochs=0, progress=False)
+    ref = hw.simulate(u)
+    assert np.max(np.abs(m.simulate(u) - ref)) < 1e-9 * np.max(np.abs(ref))
+    # as fitted: nlhw_ss centres a record whose means lie off zero
+    fit = sysid.nlhw_ss(d, 3, input_nl=sysid.SigmoidNetwork(3),
+                        output_nl=sysid.SigmoidNetwork(3), max_iter=3, progress=False)
+    assert np.any(fit.u_offset != 0) and np.any(fit.y_offset != 0)
+    m = sysid.nlssest(d, 3, init=fit, epochs=0, progress=False)
+    assert np.max(np.abs(m.simulate(u) - fit.simulate(u))) < 1e-9 * np.max(np.abs(ref))
+
+
 def test_auto_picks_the_start_that_validates_better():
     # a Hammerstein plant (tanh input): the sigmoid Hammerstein-Wiener start beats the linear
     # one on the held-out end, and training never returns worse than the chosen start

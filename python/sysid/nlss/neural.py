@@ -523,8 +523,10 @@ def _hw_start(hw: HammersteinWienerSSModel, hsc: Scaling, hid: tuple[int, ...],
     lin, lam, modal = _modal(StateSpaceModel(hw.A, hw.B, hw.C, hw.D, dt=hw.dt))
     hw = copy.copy(hw)
     hw.A, hw.B, hw.C = lin.A, lin.B, lin.C
-    to_hw = Scaling(hsc.u(sc.u_offset), sc.u_scale / hsc.u_scale, hsc.y(sc.y_offset),
-                    sc.y_scale / hsc.y_scale)  # scaled channels in hw's units
+    # scaled channels in hw's units, about its operating point (it maps u - u_offset and
+    # adds y_offset: nlhw_ss keeps the record's means when they lie off zero)
+    to_hw = Scaling(hsc.u(sc.u_offset) - hw.u_offset, sc.u_scale / hsc.u_scale,
+                    hsc.y(sc.y_offset) - hw.y_offset, sc.y_scale / hsc.y_scale)
     s = np.vstack(hw_states(hw, to_hw, [u for u, _, _ in train])).std(axis=0)  # as balanced
     s = np.where(s > 1e-12 * max(s.max(), 1e-300), s, 1.0)
     hw.A, hw.B, hw.C = hw.A * s / s[:, None], hw.B / s[:, None], hw.C * s
