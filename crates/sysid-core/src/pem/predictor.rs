@@ -110,9 +110,9 @@ pub(super) struct Filter {
     /// Row-major copies of `[C D]` (`l x (n + m)`), `[Abar Bbar K]` (`n x (n + m + l)`) and
     /// `R^-1` (`l x l`), and the current sample's `(x, u, y)`: the per-sample loops read
     /// contiguous memory without index checks.
-    cd: Vec<f64>,
-    abk: RowProduct,
-    rinv_rows: Vec<f64>,
+    pub(super) cd: Vec<f64>,
+    pub(super) abk: RowProduct,
+    pub(super) rinv_rows: Vec<f64>,
     xuy: Vec<f64>,
     /// The sample whose `(x, u, y)` `xuy` holds (`x` moves only in [`Self::advance`] and
     /// [`Self::restart`]).
@@ -141,6 +141,10 @@ pub(super) fn rows_of(blocks: &[&Mat<f64>]) -> Vec<f64> {
 pub(super) enum RowProduct {
     /// `cols` and the row-major entries.
     Dense(usize, Vec<f64>),
+    /// At most [`COLUMN_ROWS`] rows, dense: `cols` and the column-major entries. The product
+    /// runs column by column into an array of the rows' sums (registers, not memory): every
+    /// row's sum still adds its columns in order, as [`Self::Dense`] does.
+    Columns(usize, Vec<f64>),
     /// `width` and per row `width` pairs `(column, entry)`.
     Sparse(usize, Vec<(usize, f64)>),
 }
@@ -150,6 +154,10 @@ impl RowProduct {
     pub fn new(rows: &[f64], cols: usize) -> Self {
         let nnz = rows.iter().filter(|v| **v != 0.0).count();
         if cols == 0 || 2 * nnz > rows.len() {
+            let r = rows.len() / cols.max(1);
+            if (1..=COLUMN_ROWS).contains(&r) {
+                return RowProduct::Columns(cols, column_major(rows, r, cols));
+            }
             return RowProduct::Dense(cols, rows.to_vec());
         }
         let width = rows
@@ -183,6 +191,16 @@ impl RowProduct {
                     *o = a;
                 }
             }
+            RowProduct::Columns(cols, vals) => match vals.len() / cols {
+                1 => by_columns::<1>(vals, x, out),
+                2 => by_columns::<2>(vals, x, out),
+                3 => by_columns::<3>(vals, x, out),
+                4 => by_columns::<4>(vals, x, out),
+                5 => by_columns::<5>(vals, x, out),
+                6 => by_columns::<6>(vals, x, out),
+                7 => by_columns::<7>(vals, x, out),
+                _ => by_columns::<8>(vals, x, out),
+            },
             RowProduct::Sparse(width, entries) => match *width {
                 1 => sparse_rows::<1>(entries, x, out),
                 2 => sparse_rows::<2>(entries, x, out),
@@ -200,6 +218,31 @@ impl RowProduct {
             },
         }
     }
+}
+
+/// The most rows of a [`RowProduct::Columns`].
+const COLUMN_ROWS: usize = 8;
+
+/// The column-major copy of `r x c` row-major entries.
+fn column_major(rows: &[f64], r: usize, c: usize) -> Vec<f64> {
+    let mut out = vec![0.0; r * c];
+    for (i, row) in rows.chunks_exact(c.max(1)).enumerate() {
+        for (j, &v) in row.iter().enumerate() {
+            out[j * r + i] = v;
+        }
+    }
+    out
+}
+
+/// `out = M x` for the `R x cols` column-major `M` (`out` has `R` entries).
+fn by_columns<const R: usize>(vals: &[f64], x: &[f64], out: &mut [f64]) {
+    let mut acc = [0.0; R];
+    for (col, &v) in vals.chunks_exact(R).zip(x) {
+        for (a, c) in acc.iter_mut().zip(col) {
+            *a += c * v;
+        }
+    }
+    out[..R].copy_from_slice(&acc);
 }
 
 /// [`RowProduct::apply`] for rows of `W` entries (the loop over a row unrolled).
@@ -624,7 +667,8 @@ impl<'a> Predictor<'a> {
         let mut f = Filter::new(self.unpack(th), self.rinv.clone());
         // lower triangle, row by row
         let mut lam = vec![0.0; if covariance { l * (l + 1) / 2 } else { 0 }];
-        for (ex, (u, y)) in self.exps.iter().enumerate() {
+        let done = super::pass::dense_pass(&mut f, &self.exps, &mut lam);
+        for (ex, (u, y)) in self.exps.iter().enumerate().filter(|_| !done) {
             f.restart(ex);
             for t in 0..y.nrows() {
                 f.errors(*u, *y, t);
