@@ -111,6 +111,8 @@ pub(super) struct Filter {
     /// `R^-1` (`l x l`), and the current sample's `(x, u, y)`: the per-sample loops read
     /// contiguous memory without index checks.
     pub(super) cd: Vec<f64>,
+    /// `[C D]` column-major.
+    cd_cols: Vec<f64>,
     pub(super) abk: RowProduct,
     pub(super) rinv_rows: Vec<f64>,
     xuy: Vec<f64>,
@@ -245,6 +247,19 @@ fn by_columns<const R: usize>(vals: &[f64], x: &[f64], out: &mut [f64]) {
     out[..R].copy_from_slice(&acc);
 }
 
+/// `e = y - M xu` for the `R x cols` column-major `M`, column by column (each error's sum
+/// subtracts its columns in order, as [`Filter::errors`] does row by row).
+fn less_columns<const R: usize>(vals: &[f64], xu: &[f64], y: &[f64], e: &mut [f64]) {
+    let mut acc = [0.0; R];
+    acc.copy_from_slice(&y[..R]);
+    for (col, &v) in vals.chunks_exact(R).zip(xu) {
+        for (a, c) in acc.iter_mut().zip(col) {
+            *a -= c * v;
+        }
+    }
+    e[..R].copy_from_slice(&acc);
+}
+
 /// [`RowProduct::apply`] for rows of `W` entries (the loop over a row unrolled).
 fn sparse_rows<const W: usize>(entries: &[(usize, f64)], x: &[f64], out: &mut [f64]) {
     for (o, row) in out.iter_mut().zip(entries.chunks_exact(W)) {
@@ -260,6 +275,7 @@ impl Filter {
     pub fn new(pm: Unpacked, rinv: Mat<f64>) -> Self {
         let (n, m, l) = (pm.a.nrows(), pm.b.ncols(), pm.c.nrows());
         let cd = rows_of(&[&pm.c, &pm.d]);
+        let cd_cols = column_major(&cd, l, n + m);
         let abk = RowProduct::new(&rows_of(&[&pm.abar, &pm.bbar, &pm.k]), n + m + l);
         let rinv_rows = rows_of(&[&rinv]);
         Filter {
@@ -272,6 +288,7 @@ impl Filter {
             wz: vec![0.0; l],
             cost: 0.0,
             cd,
+            cd_cols,
             abk,
             rinv_rows,
             xuy: vec![0.0; n + m + l],
@@ -310,6 +327,13 @@ impl Filter {
         self.load(u, y, t);
         let w = self.x.len() + u.ncols();
         let (xu, yt) = self.xuy.split_at(w);
+        match self.e.len() {
+            1 => return less_columns::<1>(&self.cd_cols, xu, yt, &mut self.e),
+            2 => return less_columns::<2>(&self.cd_cols, xu, yt, &mut self.e),
+            3 => return less_columns::<3>(&self.cd_cols, xu, yt, &mut self.e),
+            4 => return less_columns::<4>(&self.cd_cols, xu, yt, &mut self.e),
+            _ => {}
+        }
         for ((ei, row), &yi) in self.e.iter_mut().zip(self.cd.chunks_exact(w)).zip(yt) {
             let mut a = yi;
             for (c, v) in row.iter().zip(xu) {
