@@ -129,15 +129,15 @@ pub(super) fn complement(tan: &Mat<f64>) -> Result<Mat<f64>> {
     let size = rows.min(cols);
     let par = crate::optim::small_par(rows, cols);
     let mut u = Mat::<f64>::zeros(rows, rows);
-    let mut v = Mat::<f64>::zeros(cols, cols);
     let mut s = faer::diag::Diag::<f64>::zeros(size);
-    let full = ComputeSvdVectors::Full;
-    let scratch = svd::svd_scratch::<f64>(rows, cols, full, full, par, Default::default());
+    // the right singular vectors are not needed
+    let (full, none) = (ComputeSvdVectors::Full, ComputeSvdVectors::No);
+    let scratch = svd::svd_scratch::<f64>(rows, cols, full, none, par, Default::default());
     svd::svd(
         tan.as_ref(),
         s.as_mut(),
         Some(u.as_mut()),
-        Some(v.as_mut()),
+        None,
         par,
         MemStack::new(&mut MemBuffer::new(scratch)),
         Default::default(),

@@ -50,6 +50,7 @@ mod geodesic_tests;
 mod modal;
 mod normal;
 mod options;
+mod pass;
 mod predictor;
 mod rows;
 mod sensitivities;

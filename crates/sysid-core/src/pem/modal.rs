@@ -105,14 +105,27 @@ pub(crate) fn modal_form(abar: MatRef<'_, f64>) -> Option<Modal> {
 fn left_block(ticol: &[Vec<f64>], src: &[f64], dst: &mut [f64], w: usize) {
     for (i, ti) in ticol.iter().enumerate() {
         let d = &mut dst[i * w..i * w + w];
+        // the sums in an array of at most 8 (registers, not memory), in the same order
+        let mut acc = [0.0; 8];
+        let short = w <= acc.len();
         d.fill(0.0);
         for (a, &s) in ti.iter().enumerate() {
             if s == 0.0 {
                 continue;
             }
-            for (dv, v) in d.iter_mut().zip(&src[a * w..a * w + w]) {
-                *dv += s * v;
+            let row = &src[a * w..a * w + w];
+            if short {
+                for (dv, v) in acc.iter_mut().zip(row) {
+                    *dv += s * v;
+                }
+            } else {
+                for (dv, v) in d.iter_mut().zip(row) {
+                    *dv += s * v;
+                }
             }
+        }
+        if short {
+            d.copy_from_slice(&acc[..w]);
         }
     }
 }
@@ -122,15 +135,27 @@ fn right_block(tcol: &[Vec<f64>], src: &[f64], dst: &mut [f64], rows: usize) {
     let n = tcol.len();
     for r in 0..rows {
         let d = &mut dst[r * n..r * n + n];
+        // as in `left_block`
+        let mut acc = [0.0; 8];
+        let short = n <= acc.len();
         d.fill(0.0);
         for (b, tb) in tcol.iter().enumerate() {
             let s = src[r * n + b];
             if s == 0.0 {
                 continue;
             }
-            for (dv, tv) in d.iter_mut().zip(tb) {
-                *dv += s * tv;
+            if short {
+                for (dv, tv) in acc.iter_mut().zip(tb) {
+                    *dv += s * tv;
+                }
+            } else {
+                for (dv, tv) in d.iter_mut().zip(tb) {
+                    *dv += s * tv;
+                }
             }
+        }
+        if short {
+            d.copy_from_slice(&acc[..n]);
         }
     }
 }

@@ -110,9 +110,11 @@ pub(super) struct Filter {
     /// Row-major copies of `[C D]` (`l x (n + m)`), `[Abar Bbar K]` (`n x (n + m + l)`) and
     /// `R^-1` (`l x l`), and the current sample's `(x, u, y)`: the per-sample loops read
     /// contiguous memory without index checks.
-    cd: Vec<f64>,
-    abk: RowProduct,
-    rinv_rows: Vec<f64>,
+    pub(super) cd: Vec<f64>,
+    /// `[C D]` column-major.
+    cd_cols: Vec<f64>,
+    pub(super) abk: RowProduct,
+    pub(super) rinv_rows: Vec<f64>,
     xuy: Vec<f64>,
     /// The sample whose `(x, u, y)` `xuy` holds (`x` moves only in [`Self::advance`] and
     /// [`Self::restart`]).
@@ -141,6 +143,10 @@ pub(super) fn rows_of(blocks: &[&Mat<f64>]) -> Vec<f64> {
 pub(super) enum RowProduct {
     /// `cols` and the row-major entries.
     Dense(usize, Vec<f64>),
+    /// At most [`COLUMN_ROWS`] rows, dense: `cols` and the column-major entries. The product
+    /// runs column by column into an array of the rows' sums (registers, not memory): every
+    /// row's sum still adds its columns in order, as [`Self::Dense`] does.
+    Columns(usize, Vec<f64>),
     /// `width` and per row `width` pairs `(column, entry)`.
     Sparse(usize, Vec<(usize, f64)>),
 }
@@ -150,6 +156,10 @@ impl RowProduct {
     pub fn new(rows: &[f64], cols: usize) -> Self {
         let nnz = rows.iter().filter(|v| **v != 0.0).count();
         if cols == 0 || 2 * nnz > rows.len() {
+            let r = rows.len() / cols.max(1);
+            if (1..=COLUMN_ROWS).contains(&r) {
+                return RowProduct::Columns(cols, column_major(rows, r, cols));
+            }
             return RowProduct::Dense(cols, rows.to_vec());
         }
         let width = rows
@@ -183,6 +193,16 @@ impl RowProduct {
                     *o = a;
                 }
             }
+            RowProduct::Columns(cols, vals) => match vals.len() / cols {
+                1 => by_columns::<1>(vals, x, out),
+                2 => by_columns::<2>(vals, x, out),
+                3 => by_columns::<3>(vals, x, out),
+                4 => by_columns::<4>(vals, x, out),
+                5 => by_columns::<5>(vals, x, out),
+                6 => by_columns::<6>(vals, x, out),
+                7 => by_columns::<7>(vals, x, out),
+                _ => by_columns::<8>(vals, x, out),
+            },
             RowProduct::Sparse(width, entries) => match *width {
                 1 => sparse_rows::<1>(entries, x, out),
                 2 => sparse_rows::<2>(entries, x, out),
@@ -202,6 +222,44 @@ impl RowProduct {
     }
 }
 
+/// The most rows of a [`RowProduct::Columns`].
+const COLUMN_ROWS: usize = 8;
+
+/// The column-major copy of `r x c` row-major entries.
+fn column_major(rows: &[f64], r: usize, c: usize) -> Vec<f64> {
+    let mut out = vec![0.0; r * c];
+    for (i, row) in rows.chunks_exact(c.max(1)).enumerate() {
+        for (j, &v) in row.iter().enumerate() {
+            out[j * r + i] = v;
+        }
+    }
+    out
+}
+
+/// `out = M x` for the `R x cols` column-major `M` (`out` has `R` entries).
+fn by_columns<const R: usize>(vals: &[f64], x: &[f64], out: &mut [f64]) {
+    let mut acc = [0.0; R];
+    for (col, &v) in vals.chunks_exact(R).zip(x) {
+        for (a, c) in acc.iter_mut().zip(col) {
+            *a += c * v;
+        }
+    }
+    out[..R].copy_from_slice(&acc);
+}
+
+/// `e = y - M xu` for the `R x cols` column-major `M`, column by column (each error's sum
+/// subtracts its columns in order, as [`Filter::errors`] does row by row).
+fn less_columns<const R: usize>(vals: &[f64], xu: &[f64], y: &[f64], e: &mut [f64]) {
+    let mut acc = [0.0; R];
+    acc.copy_from_slice(&y[..R]);
+    for (col, &v) in vals.chunks_exact(R).zip(xu) {
+        for (a, c) in acc.iter_mut().zip(col) {
+            *a -= c * v;
+        }
+    }
+    e[..R].copy_from_slice(&acc);
+}
+
 /// [`RowProduct::apply`] for rows of `W` entries (the loop over a row unrolled).
 fn sparse_rows<const W: usize>(entries: &[(usize, f64)], x: &[f64], out: &mut [f64]) {
     for (o, row) in out.iter_mut().zip(entries.chunks_exact(W)) {
@@ -217,6 +275,7 @@ impl Filter {
     pub fn new(pm: Unpacked, rinv: Mat<f64>) -> Self {
         let (n, m, l) = (pm.a.nrows(), pm.b.ncols(), pm.c.nrows());
         let cd = rows_of(&[&pm.c, &pm.d]);
+        let cd_cols = column_major(&cd, l, n + m);
         let abk = RowProduct::new(&rows_of(&[&pm.abar, &pm.bbar, &pm.k]), n + m + l);
         let rinv_rows = rows_of(&[&rinv]);
         Filter {
@@ -229,6 +288,7 @@ impl Filter {
             wz: vec![0.0; l],
             cost: 0.0,
             cd,
+            cd_cols,
             abk,
             rinv_rows,
             xuy: vec![0.0; n + m + l],
@@ -267,6 +327,13 @@ impl Filter {
         self.load(u, y, t);
         let w = self.x.len() + u.ncols();
         let (xu, yt) = self.xuy.split_at(w);
+        match self.e.len() {
+            1 => return less_columns::<1>(&self.cd_cols, xu, yt, &mut self.e),
+            2 => return less_columns::<2>(&self.cd_cols, xu, yt, &mut self.e),
+            3 => return less_columns::<3>(&self.cd_cols, xu, yt, &mut self.e),
+            4 => return less_columns::<4>(&self.cd_cols, xu, yt, &mut self.e),
+            _ => {}
+        }
         for ((ei, row), &yi) in self.e.iter_mut().zip(self.cd.chunks_exact(w)).zip(yt) {
             let mut a = yi;
             for (c, v) in row.iter().zip(xu) {
@@ -624,7 +691,8 @@ impl<'a> Predictor<'a> {
         let mut f = Filter::new(self.unpack(th), self.rinv.clone());
         // lower triangle, row by row
         let mut lam = vec![0.0; if covariance { l * (l + 1) / 2 } else { 0 }];
-        for (ex, (u, y)) in self.exps.iter().enumerate() {
+        let done = super::pass::dense_pass(&mut f, &self.exps, &mut lam);
+        for (ex, (u, y)) in self.exps.iter().enumerate().filter(|_| !done) {
             f.restart(ex);
             for t in 0..y.nrows() {
                 f.errors(*u, *y, t);
