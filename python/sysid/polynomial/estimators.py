@@ -407,7 +407,10 @@ def oe(
     Starts from Steiglitz-McBride (one input) or from ``init`` (an ARX model's ``A`` becomes
     ``F``; unstable roots of the start are reflected into the unit circle, and
     ``info["start_stabilized"]`` says so), then Gauss-Newton on the simulation error; ``F``
-    is kept stable.
+    is kept stable. Without ``init``, a record of one input and output is also fitted from a
+    subspace start (:func:`sysid.n4sid` of order ``nf`` as ``B/F``) and the fit with the
+    lower criterion is returned, ``info["start"]`` naming its start: the Steiglitz-McBride
+    iterates can stay far from the minimum on a slow, nearly integrating plant.
 
     With ``periods=P`` (whole periods of a periodic input in steady state in every
     experiment) or ``"auto"`` (:func:`sysid.detect_period`), ``B/F`` is fitted on the
@@ -447,10 +450,84 @@ def oe(
                                   max_iter=max_iter, progress=progress, init=init)
         if m is not None:
             return m
-    m = _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, init)
+    if init is not None:
+        m = _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, init)
+    else:
+        m = _two_starts(data, nb, nf, nk, max_iter, progress)
     if periodicity is not None:  # periods="auto" found none: why the time domain
         m.info["periodicity"] = periodicity
     return m
+
+
+#: the subspace start's search replaces the Steiglitz-McBride one's only when it ends lower
+#: by more than this fraction of the criterion (both reach the same minimum on most records)
+RESTART_GAIN = 1e-8
+
+
+def _two_starts(data: Any, nb: Any, nf: Any, nk: Any, max_iter: int,
+                progress: bool | None | Callable[..., Any]) -> PolynomialModel:
+    """``oe`` from its Steiglitz-McBride start and, for one input and output, also from a
+    subspace fit of order ``nf`` (:func:`sysid.n4sid`, as ``B/F``): the fit with the lower
+    criterion is returned (``info["start"]`` names its start), with its own warnings only.
+    The Steiglitz-McBride iterates need not come near the simulation-error minimum: on a
+    motor-position record (EMPS, an integrating plant) every stable iterate is far from it
+    and ``oe(2, 2, 1)`` ended at a 1.9 % fit, against 83.7 % from the subspace start."""
+    import warnings
+
+    from ..errors import NumericalError
+
+    with warnings.catch_warnings(record=True) as w_sm:
+        warnings.simplefilter("always")
+        m = _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, None)
+    m.info["start"] = "Steiglitz-McBride"
+    kept, noted = m, w_sm
+    start = _subspace_start(data, nb, nf, nk) if m.info["stop"][0] != "cancelled" else None
+    if start is not None:
+        try:
+            with warnings.catch_warnings(record=True) as w_ss:
+                warnings.simplefilter("always")
+                m2 = _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, False, start)
+        except (DataError, NumericalError):
+            m2 = None
+        if m2 is not None and m2.info["cost"][0][-1] < m.info["cost"][0][-1] * (
+                1 - RESTART_GAIN):
+            m2.info["start"] = "subspace (n4sid)"
+            m2.info.pop("start_stabilized", None)
+            kept, noted = m2, w_ss
+    for w in noted:
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return kept
+
+
+def _subspace_start(data: Any, nb: Any, nf: Any, nk: Any) -> PolynomialModel | None:
+    """``B/F`` of ``n4sid(data, nf)`` for one input and output (``None`` otherwise, or when
+    the subspace fit fails): ``F`` its characteristic polynomial, ``B`` its numerator's
+    coefficients from lag ``nk`` on (``C (zI - A)^-1 B = (det(zI - A + BC) - det(zI - A))
+    / det(zI - A)``)."""
+    from ..subspace.estimator import n4sid
+
+    try:
+        nb_, nf_, nk_ = (int(np.ravel(v)[0]) for v in (nb, nf, nk))
+    except (TypeError, ValueError):
+        return None
+    if data.n_inputs != 1 or data.n_outputs != 1 or nf_ < 1 or nb_ < 1:
+        return None
+    import warnings
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            s = n4sid(data, nf_, feedthrough=nk_ == 0)
+    except Exception:  # noqa: BLE001 - no subspace start on this record: Steiglitz-McBride's
+        return None
+    A, B, C, D = (np.asarray(x, dtype=float) for x in (s.A, s.B, s.C, s.D))
+    den = np.real(np.poly(A))
+    num = np.real(np.poly(A - B @ C)) - den + float(D[0, 0]) * den
+    if not (np.all(np.isfinite(num)) and np.all(np.isfinite(den))):
+        return None
+    b = [num[nk_ + j] if nk_ + j < num.size else 0.0 for j in range(nb_)]
+    return PolynomialModel([[np.ones(1)]], [[np.asarray(b)]], [[nk_]], data.dt,
+                           f=[[den[1:]]])
 
 
 def bj(
