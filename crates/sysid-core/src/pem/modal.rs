@@ -100,33 +100,36 @@ pub(crate) fn modal_form(abar: MatRef<'_, f64>) -> Option<Modal> {
     Some(Modal { t, ti, lam, block })
 }
 
+/// `dst = sum_k s_k v_k` over the terms whose `s_k` is not zero, in their order; for up to 8
+/// entries the sums run in a fixed-size array (registers, not memory), the same sums.
+fn weighted_sum<'a>(dst: &mut [f64], terms: impl Iterator<Item = (f64, &'a [f64])>) {
+    let mut acc = [0.0; 8];
+    let short = dst.len() <= acc.len();
+    dst.fill(0.0);
+    for (s, v) in terms {
+        if s == 0.0 {
+            continue;
+        }
+        let sums: &mut [f64] = if short { &mut acc } else { &mut *dst };
+        for (dv, x) in sums.iter_mut().zip(v) {
+            *dv += s * x;
+        }
+    }
+    if short {
+        let w = dst.len();
+        dst.copy_from_slice(&acc[..w]);
+    }
+}
+
 /// `dst[i, :] = sum_a ti[a][i] src(a)` for the rows of an `n x w` block: `T^-1`-transposed
 /// applied from the left.
 fn left_block(ticol: &[Vec<f64>], src: &[f64], dst: &mut [f64], w: usize) {
     for (i, ti) in ticol.iter().enumerate() {
-        let d = &mut dst[i * w..i * w + w];
-        // the sums in an array of at most 8 (registers, not memory), in the same order
-        let mut acc = [0.0; 8];
-        let short = w <= acc.len();
-        d.fill(0.0);
-        for (a, &s) in ti.iter().enumerate() {
-            if s == 0.0 {
-                continue;
-            }
-            let row = &src[a * w..a * w + w];
-            if short {
-                for (dv, v) in acc.iter_mut().zip(row) {
-                    *dv += s * v;
-                }
-            } else {
-                for (dv, v) in d.iter_mut().zip(row) {
-                    *dv += s * v;
-                }
-            }
-        }
-        if short {
-            d.copy_from_slice(&acc[..w]);
-        }
+        let terms = ti
+            .iter()
+            .enumerate()
+            .map(|(a, &s)| (s, &src[a * w..a * w + w]));
+        weighted_sum(&mut dst[i * w..i * w + w], terms);
     }
 }
 
@@ -134,29 +137,11 @@ fn left_block(ticol: &[Vec<f64>], src: &[f64], dst: &mut [f64], w: usize) {
 fn right_block(tcol: &[Vec<f64>], src: &[f64], dst: &mut [f64], rows: usize) {
     let n = tcol.len();
     for r in 0..rows {
-        let d = &mut dst[r * n..r * n + n];
-        // as in `left_block`
-        let mut acc = [0.0; 8];
-        let short = n <= acc.len();
-        d.fill(0.0);
-        for (b, tb) in tcol.iter().enumerate() {
-            let s = src[r * n + b];
-            if s == 0.0 {
-                continue;
-            }
-            if short {
-                for (dv, tv) in acc.iter_mut().zip(tb) {
-                    *dv += s * tv;
-                }
-            } else {
-                for (dv, tv) in d.iter_mut().zip(tb) {
-                    *dv += s * tv;
-                }
-            }
-        }
-        if short {
-            d.copy_from_slice(&acc[..n]);
-        }
+        let terms = tcol
+            .iter()
+            .enumerate()
+            .map(|(b, tb)| (src[r * n + b], tb.as_slice()));
+        weighted_sum(&mut dst[r * n..r * n + n], terms);
     }
 }
 
