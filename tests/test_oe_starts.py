@@ -1,4 +1,4 @@
-"""oe searches from Steiglitz-McBride's start and from a subspace fit, and keeps the lower
+"""oe and bj search from Steiglitz-McBride's start and from a subspace fit, and keep the lower
 criterion: on a slow, nearly integrating plant every stable Steiglitz-McBride iterate lies
 far from the simulation-error minimum (a motor-position record, EMPS, ended at a 1.9 % fit)."""
 
@@ -42,6 +42,25 @@ def test_a_nearly_integrating_plant_is_fitted_from_the_subspace_start() -> None:
             better += 1
     # measured: 6 of the 10 records (Steiglitz-McBride's search ends at 0.4-31 % fit)
     assert better >= 4
+
+
+def test_box_jenkins_on_a_nearly_integrating_plant_uses_the_subspace_start_too() -> None:
+    from sysid.polynomial.estimators import _pem
+
+    better = 0
+    for seed in range(10):
+        d = _slow_plant(seed)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            sm_only = _pem(d, 0, 2, 1, 1, 2, 1, "bj", 100, False, None)
+            m = sysid.bj(d, 2, 1, 1, 2, 1, progress=False)
+        assert m.info["cost"][0][-1] <= sm_only.info["cost"][0][-1]  # prediction errors
+        fit_sm, fit = (np.mean(sysid.compare(x, d).fit) for x in (sm_only, m))
+        if fit > fit_sm + 30:
+            assert m.info["start"] == "subspace (n4sid)"
+            better += 1
+    # measured: 9 of the 10 (Steiglitz-McBride's B/F simulates at 0-45 %, the other at 82-99 %)
+    assert better >= 6
 
 
 def test_the_steiglitz_mcbride_fit_is_kept_when_both_starts_agree() -> None:
