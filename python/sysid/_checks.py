@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import sys
 import warnings
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -442,3 +443,29 @@ def reissue(said: Any) -> None:
         if key not in seen:
             seen.add(key)
             warnings.warn(w.message, stacklevel=user_stacklevel())
+
+
+def recorded(fit: Callable[[], Any]) -> tuple[Any, list[warnings.WarningMessage]]:
+    """``fit()`` and the warnings it gave, recorded instead of shown (shown, by
+    :func:`reissue`, when it fails): for a function that tries several fits and returns one,
+    then shows only that one's warnings.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from sysid._checks import recorded
+    >>> out, said = recorded(lambda: warnings.warn("stopped at max_iter") or 3)
+    >>> out, [str(w.message) for w in said]
+    (3, ['stopped at max_iter'])
+    """
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        err: BaseException | None = None
+        try:
+            out = fit()
+        except BaseException as e:  # noqa: BLE001 - re-raised below, after its warnings
+            err = e
+    if err is not None:
+        reissue(said)
+        raise err
+    return out, list(said)

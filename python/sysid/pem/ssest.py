@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int, reissue
+from .._checks import as_int, recorded, reissue
 from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
 from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator, horizon_for_order
@@ -131,7 +131,7 @@ def ssest(
         kw = dict(focus=focus, x0=x0, noise=noise, horizon=horizon, methods=methods,
                   method=method, max_iter=max_iter, tol=tol, regularization=regularization,
                   progress=progress, enforce_stability=enforce_stability)
-        model, said = _recorded(lambda: ssest(data, order, feedthrough=use, **kw))
+        model, said = recorded(lambda: ssest(data, order, feedthrough=use, **kw))
         if use:
             kept, why, said_without = _confirm_feedthrough(data, order, model, why, kw)
             said = said if kept is model else said_without
@@ -204,21 +204,6 @@ def _no_start(why: list[Exception]) -> None:
                     + (f" ({type(why[0]).__name__}: {why[0]})" if why else ""))
 
 
-def _recorded(fit: Callable[[], Any]) -> tuple[Any, list[warnings.WarningMessage]]:
-    """``fit()`` and the warnings it gave, recorded instead of shown (shown when it fails)."""
-    with warnings.catch_warnings(record=True) as said:
-        warnings.simplefilter("always")
-        err: BaseException | None = None
-        try:
-            out = fit()
-        except BaseException as e:  # noqa: BLE001 - re-raised below, after its warnings
-            err = e
-    if err is not None:
-        reissue(said)
-        raise err
-    return out, list(said)
-
-
 def _confirm_feedthrough(data: Any, order: Any, model: StateSpaceModel, why: dict[str, Any],
                          kw: dict[str, Any]
                          ) -> tuple[StateSpaceModel, dict[str, Any], list[Any]]:
@@ -231,7 +216,7 @@ def _confirm_feedthrough(data: Any, order: Any, model: StateSpaceModel, why: dic
     from ..identify.board import bic
 
     try:
-        without, said = _recorded(lambda: ssest(data, order, feedthrough=False, **kw))
+        without, said = recorded(lambda: ssest(data, order, feedthrough=False, **kw))
         b_with, b_without = bic(model, data), bic(without, data)
     except SysidError:
         return model, why, []

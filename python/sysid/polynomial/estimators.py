@@ -5,17 +5,26 @@ shared Gauss-Newton optimiser of ``sysid-core``); ``delayest`` is in
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, as_int_grid, experiment_arrays, require_inputs_vary, warn_if_capped
+from .._checks import (
+    as_int,
+    as_int_grid,
+    experiment_arrays,
+    recorded,
+    reissue,
+    require_inputs_vary,
+    warn_if_capped,
+)
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import as_record
 from ..data.offsets import check_offsets
-from ..errors import DataError, InsufficientDataError, ShapeError
+from ..errors import DataError, InsufficientDataError, NumericalError, ShapeError
 from .cancellation import cancellation, warn_cancellations
 from .model import PolynomialModel
 from .uncertainty import attach_uncertainty as _attach_uncertainty
@@ -474,31 +483,25 @@ def _two_starts(data: Any, na: Any, nb: Any, nc: Any, nd: Any, nf: Any, nk: Any,
     integrating plant) every stable iterate is far from it; ``oe(2, 2, 1)`` ended at a 1.9 %
     fit (83.7 % from the subspace start) and ``bj(2, 1, 1, 2, 1)`` simulated at 0.05 %
     (94.7 %, at a lower prediction-error criterion)."""
-    import warnings
-
-    from ..errors import NumericalError
-
-    with warnings.catch_warnings(record=True) as w_sm:
-        warnings.simplefilter("always")
-        m = _pem(data, na, nb, nc, nd, nf, nk, method, max_iter, progress, None)
+    m, said = recorded(lambda: _pem(data, na, nb, nc, nd, nf, nk, method, max_iter, progress,
+                                    None))
     m.info["start"] = "Steiglitz-McBride"
-    kept, noted = m, w_sm
     start = _subspace_start(data, nb, nf, nk) if m.info["stop"][0] != "cancelled" else None
     if start is not None:
         try:
-            with warnings.catch_warnings(record=True) as w_ss:
-                warnings.simplefilter("always")
-                m2 = _pem(data, na, nb, nc, nd, nf, nk, method, max_iter, False, start)
+            with warnings.catch_warnings():  # a failed second fit says nothing
+                warnings.simplefilter("ignore")
+                m2, said2 = recorded(lambda: _pem(data, na, nb, nc, nd, nf, nk, method,
+                                                  max_iter, False, start))
         except (DataError, NumericalError):
-            m2 = None
+            m2 = None  # the first fit stands
         if m2 is not None and m2.info["cost"][0][-1] < m.info["cost"][0][-1] * (
                 1 - RESTART_GAIN):
             m2.info["start"] = "subspace (n4sid)"
             m2.info.pop("start_stabilized", None)
-            kept, noted = m2, w_ss
-    for w in noted:
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    return kept
+            m, said = m2, said2
+    reissue(said)
+    return m
 
 
 def _subspace_start(data: Any, nb: Any, nf: Any, nk: Any) -> PolynomialModel | None:
@@ -514,8 +517,6 @@ def _subspace_start(data: Any, nb: Any, nf: Any, nk: Any) -> PolynomialModel | N
         return None
     if data.n_inputs != 1 or data.n_outputs != 1 or nf_ < 1 or nb_ < 1:
         return None
-    import warnings
-
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
