@@ -115,5 +115,9 @@ class TrendedModel(ModelMixin):
     def poles(self) -> np.ndarray:
         return np.asarray(self.model.poles())
 
+    def is_stable(self) -> bool:
+        """The inner model's stability (a trend does not change it)."""
+        return bool(self.model.is_stable())
+
     def __repr__(self) -> str:
         return f"TrendedModel({self.model!r}, {self.trend!r})"

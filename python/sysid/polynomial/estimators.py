@@ -382,8 +382,15 @@ def armax(
     *,
     max_iter: int = 100,
     progress: bool | None | Callable[..., Any] = None,
+    init: PolynomialModel | None = None,
 ) -> PolynomialModel:
     """ARMAX ``A y = B u(t-nk) + C e`` by prediction-error minimisation (per output).
+
+    The search starts from an ARX fit, or from ``init`` (a polynomial model with the data's
+    channel counts, e.g. an earlier ``armax`` or an ``arx`` fit: its ``A``, ``B`` and ``C``
+    cut or padded with zeros to ``na``, ``nb``, ``nc``; an unstable ``C`` has its roots
+    reflected into the unit circle and ``info["start_stabilized"]`` says so), as MATLAB's
+    ``armax(data, init_sys)``.
 
     Examples
     --------
@@ -395,8 +402,14 @@ def armax(
     >>> m = sysid.polynomial.estimators.armax(sysid.IOData(u, y, 1.0), 1, 1, 1)
     >>> bool(abs(m.c[0][0] - 0.5) < 0.1)
     True
+    >>> again = sysid.polynomial.estimators.armax(sysid.IOData(u, y, 1.0), 1, 1, 1, init=m)
+    >>> again.info["start"], bool(abs(again.c[0][0] - m.c[0][0]) < 1e-6)
+    ('init', True)
     """
-    return _pem(data, na, nb, nc, 0, 0, nk, "armax", max_iter, progress)
+    m = _pem(data, na, nb, nc, 0, 0, nk, "armax", max_iter, progress, init)
+    if init is not None:
+        m.info["start"] = "init"
+    return m
 
 
 def oe(
@@ -461,6 +474,7 @@ def oe(
             return m
     if init is not None:
         m = _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, init)
+        m.info["start"] = "init"
     else:
         m = _two_starts(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress)
     if periodicity is not None:  # periods="auto" found none: why the time domain
@@ -543,13 +557,38 @@ def bj(
     *,
     max_iter: int = 100,
     progress: bool | None | Callable[..., Any] = None,
+    init: PolynomialModel | None = None,
 ) -> PolynomialModel:
     """Box-Jenkins ``y = B/F u(t-nk) + C/D e``.
 
     ``B/F`` starts from Steiglitz-McBride; for one input and output also from a subspace fit
     (as :func:`oe`), and the fit with the lower prediction-error criterion is returned
-    (``info["start"]``)."""
-    return _two_starts(as_record(data), 0, nb, nc, nd, nf, nk, "bj", max_iter, progress)
+    (``info["start"]``). With ``init`` (a polynomial model with the data's channel counts:
+    an earlier ``bj``, an ``oe`` fit, or an ``arx`` one whose ``A`` becomes ``F``; cut or
+    padded with zeros to the orders given) the search starts there alone, as MATLAB's
+    ``bj(data, init_sys)``; unstable ``C``, ``D`` or ``F`` roots are reflected into the unit
+    circle and ``info["start_stabilized"]`` says so.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(3000); e = 0.1 * rng.standard_normal(3000)
+    >>> g = sysid.TransferFunction([0.0, 1.0], [1.0, -0.8], dt=1.0)
+    >>> h = sysid.TransferFunction([1.0, 0.0], [1.0, -0.9], dt=1.0)
+    >>> y = g.simulate(u)[:, 0] + h.simulate(e)[:, 0]
+    >>> m = sysid.bj(sysid.IOData(u, y, 1.0), 1, 0, 1, 1, 1)
+    >>> np.round([m.f[0][0][0], m.d[0][0]], 1).tolist()
+    [-0.8, -0.9]
+    >>> sysid.bj(sysid.IOData(u, y, 1.0), 1, 0, 1, 1, 1, init=m).info["start"]
+    'init'
+    """
+    data = as_record(data)
+    if init is not None:
+        m = _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress, init)
+        m.info["start"] = "init"
+        return m
+    return _two_starts(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress)
 
 
 def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:

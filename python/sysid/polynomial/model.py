@@ -367,6 +367,21 @@ class PolynomialModel(ModelMixin):
                 r.append(np.roots(_monic(self.f[i][j])))
         return np.concatenate(r) if r else np.zeros(0)
 
+    def is_stable(self) -> bool:
+        """True when every pole (:meth:`poles`: the roots of ``A F``, the measured part's, as
+        MATLAB's ``isstable``) lies strictly inside the unit circle.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> m = sysid.PolynomialModel(a=[[np.array([-0.5])]], b=[[np.array([1.0])]],
+        ...                           nk=[[1]], dt=1.0)
+        >>> m.is_stable()
+        True
+        """
+        p = self.poles()
+        return bool(p.size == 0 or np.max(np.abs(p)) < 1.0)
+
     def _coupled_poles(self) -> np.ndarray:
         """Eigenvalues of the block companion matrix of ``A(q) = I + A_1 q^-1 + ...``."""
         ny = self.n_outputs
