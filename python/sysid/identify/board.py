@@ -127,10 +127,14 @@ class Board:
         self.whole: IOData | None = None
         #: refinements left out to keep the work in proportion (:data:`.core.REFINE_WORK`)
         self.skipped: list[str] = []
+        #: the expected work of the refinements scored so far (:data:`.core.REFINE_WORK`)
+        self.refine_work = 0.0
         #: folds left out because their fitted part does not excite the input enough
         self.unexcited = 0
         #: set by :meth:`insisting` when an unstable candidate wins only by following a drift
         self.drift: dict[str, Any] | None = None
+        #: :meth:`_trend_fits` of a row, by ``(id(row), detrended)``: the test runs twice
+        self._trend_memo: dict[tuple[int, bool], list[np.ndarray]] = {}
 
     def time_left(self) -> bool:
         """False once the time budget (CPU seconds of this process) is spent."""
@@ -369,13 +373,39 @@ class Board:
         just what the sign test must not pass. Once the data insist, the unstable candidates
         that do not win on every block are not eligible (``not_insisted``): the choice among
         unstable models is made among those the data insist on."""
+        outcome, best_u, best_s, winners = self._insist_test()
+        if outcome == "insist":
+            for r in self.rows:
+                if (self.eligible(r, False) and not r["stable"]
+                        and not any(r is w for w in winners)):
+                    r["not_insisted"] = True
+                    r["note"] = r["note"] or ("unstable and not better than the best stable "
+                                              "candidate on every held-out block: not chosen")
+            return best_u
+        if outcome == "drift":
+            self.drift = {"unstable": best_u, "stable": best_s}
+        return None
+
+    def unstable_verdict(self) -> str:
+        """What the unstable candidates show so far, by the test of :meth:`insisting`
+        (the board is not marked): ``"insist"`` (the data insist on one: an integrating or
+        unstable plant, or no stable candidate at all), ``"drift"`` (one beats the stable
+        ones on every held-out block only while the record's drift is left in) or
+        ``"none"``."""
+        return self._insist_test()[0]
+
+    def _insist_test(self) -> tuple[str, Any, Any, list[dict[str, Any]]]:
+        """:meth:`insisting`'s test: ``("insist" | "drift" | "none", best unstable winner,
+        best stable candidate, the winners)``; the board is left as it is."""
         stable = [r for r in self.rows if self.eligible(r)]
         unstable = [r for r in self.rows if self.eligible(r, False) and not r["stable"]]
         if not unstable or len(self.folds) < 4:
-            return None
+            return "none", None, None, []
         if not stable:
             best_u = max(unstable, key=lambda r: r["held_out_fit"])
-            return best_u if all(np.isfinite(best_u["fold_fits"])) else None
+            if all(np.isfinite(best_u["fold_fits"])):  # no stable one: none is marked
+                return "insist", best_u, None, unstable
+            return "none", None, None, []
         best_s = max(stable, key=lambda r: r["held_out_fit"])
         # every stable candidate the blocks cannot tell from the best stable one could be
         # it (the best score is the maximum of noisy scores): the test holds against each
@@ -383,17 +413,11 @@ class Board:
         winners = [r for r in unstable if all(
             self._wins(r["fold_output_fits"], s["fold_output_fits"]) for s in refs)]
         if not winners:
-            return None
+            return "none", None, best_s, []
         best_u = max(winners, key=lambda r: r["held_out_fit"])
         if all(self._wins(*self._trend_fits([best_u, best_s], d)) for d in (False, True)):
-            for r in unstable:
-                if not any(r is w for w in winners):
-                    r["not_insisted"] = True
-                    r["note"] = r["note"] or ("unstable and not better than the best stable "
-                                              "candidate on every held-out block: not chosen")
-            return best_u
-        self.drift = {"unstable": best_u, "stable": best_s}
-        return None
+            return "insist", best_u, best_s, winners
+        return "drift", best_u, best_s, winners
 
     def _wins(self, ou: list[Any], os: list[Any]) -> bool:
         """Better on every block, and by more than the slack on the score (per-output fits
@@ -414,10 +438,11 @@ class Board:
         plant, and the data do not insist on it."""
         from ..data.preprocessing import detrend
 
-        fits: list[list[np.ndarray]] = [[] for _ in rows]
+        todo = [r for r in rows if (id(r), detrended) not in self._trend_memo]
+        fits: list[list[np.ndarray]] = [[] for _ in todo]
         for k, (fit_part, held) in enumerate(self.folds):
-            part = detrend(fit_part, "linear") if detrended else None
-            for i, r in enumerate(rows):
+            part = detrend(fit_part, "linear") if detrended and todo else None
+            for i, r in enumerate(todo):
                 try:
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore")
@@ -427,7 +452,9 @@ class Board:
                     raise
                 except Exception:  # noqa: BLE001 - a fit that fails now scores -inf
                     fits[i].append(np.full(held.n_outputs, -np.inf))
-        return fits
+        for r, f in zip(todo, fits):
+            self._trend_memo[(id(r), detrended)] = f
+        return [self._trend_memo[(id(r), detrended)] for r in rows]
 
     def near_best(self, stable_only: bool = True, paired: bool = False
                   ) -> list[dict[str, Any]]:
