@@ -1,7 +1,7 @@
 //! Parameter covariance from the Gauss-Newton matrix, restricted to identifiable directions.
 
 use crate::error::{Result, SysidError};
-use faer::{Mat, MatRef, Side};
+use faer::{Mat, MatRef};
 
 /// The covariance of the parameters and what the data do not determine.
 #[derive(Debug, Clone)]
@@ -80,11 +80,8 @@ pub fn covariance(gauss_newton: MatRef<'_, f64>, scale: f64, rtol: f64) -> Resul
     let hs = Mat::from_fn(p, p, |i, j| {
         0.5 * (gauss_newton[(i, j)] + gauss_newton[(j, i)]) / (d[i] * d[j])
     });
-    let e = hs
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| SysidError::numerical("covariance (eigenvalues)", format!("{e:?}")))?;
-    let s = e.S().column_vector();
-    let u = e.U();
+    // on the calling thread for the small matrices of most models (see `small_par`)
+    let (u, s) = super::dense::symmetric_eigen(&hs, "covariance (eigenvalues)")?;
     let lmax = (0..p).map(|i| s[i]).fold(0.0, f64::max);
     let keep: Vec<usize> = (0..p)
         .filter(|&i| s[i] > rtol * lmax && s[i] > 0.0)
@@ -95,7 +92,7 @@ pub fn covariance(gauss_newton: MatRef<'_, f64>, scale: f64, rtol: f64) -> Resul
     let f = Mat::from_fn(p, keep.len(), |i, j| {
         u[(i, keep[j])] / d[i] * (scale / s[keep[j]]).sqrt()
     });
-    let mut cov = &f * f.transpose();
+    let mut cov = crate::linalg::mul(f.as_ref(), f.transpose());
     for i in 0..p {
         for j in 0..i {
             let m = 0.5 * (cov[(i, j)] + cov[(j, i)]);
