@@ -165,15 +165,143 @@ pub fn sym_eigenvalues_seq(a: MatRef<'_, f64>) -> Result<Vec<f64>> {
     Ok(ev)
 }
 
-/// Eigenvalues of a square matrix as `(re, im)` pairs.
+/// The real eigendecomposition of faer's `eigen`/`eigenvalues` (Schur form, then the
+/// eigenvectors when asked): the eigenvalues' real and imaginary parts and the real basis
+/// (a complex pair `j, j + 1` as the columns `re, im`), with [`crate::optim::small_par`]: on
+/// the calling thread for the small matrices of every iterate (faer's own call wakes the
+/// thread pool, which cost more than the decomposition; the result is the same).
+#[allow(clippy::type_complexity)]
+fn evd_real(
+    a: MatRef<'_, f64>,
+    vectors: bool,
+) -> std::result::Result<(Vec<f64>, Vec<f64>, Option<Mat<f64>>), faer::linalg::evd::EvdError> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::evd::{self, ComputeEigenvectors};
+    let n = a.nrows();
+    let par = crate::optim::small_par(n, n);
+    let (mut re, mut im) = (faer::diag::Diag::zeros(n), faer::diag::Diag::zeros(n));
+    let mut u = vectors.then(|| Mat::<f64>::zeros(n, n));
+    let right = if vectors {
+        ComputeEigenvectors::Yes
+    } else {
+        ComputeEigenvectors::No
+    };
+    let scratch =
+        evd::evd_scratch::<f64>(n, ComputeEigenvectors::No, right, par, Default::default());
+    evd::evd_real(
+        a,
+        re.as_mut(),
+        im.as_mut(),
+        None,
+        u.as_mut().map(|u| u.as_mut()),
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    )?;
+    let col = |d: &faer::diag::Diag<f64>| d.column_vector().iter().copied().collect();
+    Ok((col(&re), col(&im), u))
+}
+
+/// Eigenvalues and eigenvectors (columns) of a square matrix, as faer's `eigen` (a complex
+/// pair's vectors conjugate), on the calling thread for small matrices ([`evd_real`]).
+#[allow(clippy::type_complexity)]
+pub(crate) fn eigen(
+    a: MatRef<'_, f64>,
+) -> std::result::Result<(Vec<faer::c64>, Mat<faer::c64>), faer::linalg::evd::EvdError> {
+    use faer::c64;
+    let n = a.nrows();
+    let (re, im, u) = evd_real(a, true)?;
+    let u = u.unwrap_or_else(|| Mat::zeros(n, n));
+    let (mut s, mut v) = (vec![c64::new(0.0, 0.0); n], Mat::<c64>::zeros(n, n));
+    let mut j = 0;
+    while j < n {
+        if im[j] == 0.0 {
+            s[j] = c64::new(re[j], 0.0);
+            (0..n).for_each(|i| v[(i, j)] = c64::new(u[(i, j)], 0.0));
+            j += 1;
+        } else {
+            s[j] = c64::new(re[j], im[j]);
+            s[j + 1] = c64::new(re[j], -im[j]);
+            for i in 0..n {
+                v[(i, j)] = c64::new(u[(i, j)], u[(i, j + 1)]);
+                v[(i, j + 1)] = c64::new(u[(i, j)], -u[(i, j + 1)]);
+            }
+            j += 2;
+        }
+    }
+    Ok((s, v))
+}
+
+/// The inverse of a square matrix by LU with partial pivoting, as faer's
+/// `partial_piv_lu().inverse()`, with [`crate::optim::small_par`] (see [`evd_real`]).
+pub(crate) fn inverse<T: faer::traits::ComplexField>(a: MatRef<'_, T>) -> Mat<T> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::lu::partial_pivoting::{factor, inverse as inv};
+    let n = a.nrows();
+    let par = crate::optim::small_par(n, n);
+    let mut lu = a.to_owned();
+    let (mut fwd, mut bwd) = (vec![0usize; n], vec![0usize; n]);
+    let scratch = factor::lu_in_place_scratch::<usize, T>(n, n, par, Default::default());
+    let (_, perm) = factor::lu_in_place(
+        lu.as_mut(),
+        &mut fwd,
+        &mut bwd,
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    );
+    // L unit lower and U upper, as faer's split of the packed factors
+    let l = Mat::from_fn(n, n, |i, j| match i.cmp(&j) {
+        std::cmp::Ordering::Greater => lu[(i, j)].clone(),
+        std::cmp::Ordering::Equal => T::one_impl(),
+        std::cmp::Ordering::Less => T::zero_impl(),
+    });
+    let u = Mat::from_fn(n, n, |i, j| {
+        if i <= j {
+            lu[(i, j)].clone()
+        } else {
+            T::zero_impl()
+        }
+    });
+    let mut out = Mat::<T>::zeros(n, n);
+    let scratch = inv::inverse_scratch::<usize, T>(n, par);
+    let stack = &mut MemBuffer::new(scratch);
+    inv::inverse(
+        out.as_mut(),
+        l.as_ref(),
+        u.as_ref(),
+        perm,
+        par,
+        MemStack::new(stack),
+    );
+    out
+}
+
+/// The product `a b` with [`crate::optim::small_par`] (see [`mul_seq`]).
+pub(crate) fn mul<T: faer::traits::ComplexField>(a: MatRef<'_, T>, b: MatRef<'_, T>) -> Mat<T> {
+    let mut out = Mat::<T>::zeros(a.nrows(), b.ncols());
+    let work = a
+        .nrows()
+        .saturating_mul(a.ncols())
+        .saturating_mul(b.ncols());
+    let par = if work >= 1 << 22 {
+        faer::get_global_parallelism()
+    } else {
+        Par::Seq
+    };
+    faer::linalg::matmul::matmul(out.as_mut(), faer::Accum::Replace, a, b, T::one_impl(), par);
+    out
+}
+
+/// Eigenvalues of a square matrix as `(re, im)` pairs (on the calling thread for small
+/// matrices, [`evd_real`]).
 pub fn eigenvalues(a: MatRef<'_, f64>) -> Result<Vec<(f64, f64)>> {
     if a.nrows() == 0 {
         return Ok(Vec::new());
     }
-    let ev = a
-        .eigenvalues()
-        .map_err(|e| SysidError::numerical("eigenvalues", format!("{e:?}")))?;
-    Ok(ev.iter().map(|z| (z.re, z.im)).collect())
+    let (re, im, _) =
+        evd_real(a, false).map_err(|e| SysidError::numerical("eigenvalues", format!("{e:?}")))?;
+    Ok(re.into_iter().zip(im).collect())
 }
 
 /// Largest eigenvalue modulus of a square matrix.

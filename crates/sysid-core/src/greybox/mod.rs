@@ -219,6 +219,7 @@ pub fn linear(
             max_iter: 1,
             initial_damping: 0.0,
             tol_gradient: 0.0,
+            final_gauss_newton: false,
             fixed: Some(fixed),
             ..Default::default()
         };

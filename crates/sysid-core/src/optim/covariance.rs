@@ -1,7 +1,7 @@
 //! Parameter covariance from the Gauss-Newton matrix, restricted to identifiable directions.
 
 use crate::error::{Result, SysidError};
-use faer::{Mat, MatRef, Side};
+use faer::{Mat, MatRef};
 
 /// The covariance of the parameters and what the data do not determine.
 #[derive(Debug, Clone)]
@@ -80,11 +80,8 @@ pub fn covariance(gauss_newton: MatRef<'_, f64>, scale: f64, rtol: f64) -> Resul
     let hs = Mat::from_fn(p, p, |i, j| {
         0.5 * (gauss_newton[(i, j)] + gauss_newton[(j, i)]) / (d[i] * d[j])
     });
-    let e = hs
-        .self_adjoint_eigen(Side::Lower)
-        .map_err(|e| SysidError::numerical("covariance (eigenvalues)", format!("{e:?}")))?;
-    let s = e.S().column_vector();
-    let u = e.U();
+    // on the calling thread for the small matrices of most models (see `small_par`)
+    let (u, s) = super::dense::symmetric_eigen(&hs, "covariance (eigenvalues)")?;
     let lmax = (0..p).map(|i| s[i]).fold(0.0, f64::max);
     let keep: Vec<usize> = (0..p)
         .filter(|&i| s[i] > rtol * lmax && s[i] > 0.0)
@@ -95,7 +92,7 @@ pub fn covariance(gauss_newton: MatRef<'_, f64>, scale: f64, rtol: f64) -> Resul
     let f = Mat::from_fn(p, keep.len(), |i, j| {
         u[(i, keep[j])] / d[i] * (scale / s[keep[j]]).sqrt()
     });
-    let mut cov = &f * f.transpose();
+    let mut cov = crate::linalg::mul(f.as_ref(), f.transpose());
     for i in 0..p {
         for j in 0..i {
             let m = 0.5 * (cov[(i, j)] + cov[(j, i)]);
@@ -106,8 +103,7 @@ pub fn covariance(gauss_newton: MatRef<'_, f64>, scale: f64, rtol: f64) -> Resul
     // Unidentifiable directions in parameter space: H D^-1 v = 0, orthonormalised.
     let mut null = Mat::from_fn(p, drop.len(), |i, j| u[(i, drop[j])] / d[i]);
     if null.ncols() > 0 {
-        let qr = null.qr();
-        null = qr.compute_thin_Q();
+        null = thin_q(&null);
     }
     Ok(Covariance {
         covariance: cov,
@@ -119,6 +115,46 @@ pub fn covariance(gauss_newton: MatRef<'_, f64>, scale: f64, rtol: f64) -> Resul
             lmax / lmin
         },
     })
+}
+
+/// The thin Q of the Householder QR of `a` (at least as many rows as columns), as faer's
+/// `qr().compute_thin_Q()` but with [`super::small_par`]: on the calling thread for the small
+/// matrices of most models (waking the thread pool cost more than the factorisation).
+fn thin_q(a: &Mat<f64>) -> Mat<f64> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::{householder as hh, qr::no_pivoting::factor};
+    let (m, n) = a.shape();
+    let par = super::small_par(m, n);
+    let bs = factor::recommended_block_size::<f64>(m, n);
+    let mut qr = a.clone();
+    let mut coeff = Mat::<f64>::zeros(bs, n);
+    let scratch = factor::qr_in_place_scratch::<f64>(m, n, bs, par, Default::default());
+    let stack = &mut MemBuffer::new(scratch);
+    factor::qr_in_place(
+        qr.as_mut(),
+        coeff.as_mut(),
+        par,
+        MemStack::new(stack),
+        Default::default(),
+    );
+    // the Householder basis, unit lower trapezoidal (faer's split of the packed factors)
+    let basis = Mat::from_fn(m, n, |i, j| match i.cmp(&j) {
+        std::cmp::Ordering::Greater => qr[(i, j)],
+        std::cmp::Ordering::Equal => 1.0,
+        std::cmp::Ordering::Less => 0.0,
+    });
+    let mut q = Mat::<f64>::identity(m, n);
+    let scratch =
+        hh::apply_block_householder_sequence_on_the_left_in_place_scratch::<f64>(m, bs, n);
+    hh::apply_block_householder_sequence_on_the_left_in_place_with_conj(
+        basis.as_ref(),
+        coeff.as_ref(),
+        faer::Conj::No,
+        q.as_mut(),
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+    );
+    q
 }
 
 /// The residual scale `s = 2 V / (n_residuals - rank)` that multiplies `(J^T W J)^+` when the

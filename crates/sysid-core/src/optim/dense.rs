@@ -2,6 +2,7 @@
 //! decomposition is worth faer's thread pool, `J^T J` accumulated over blocks of Jacobian
 //! rows into a lower triangle, and that triangle mirrored once at the end.
 
+use crate::error::{Result, SysidError};
 use faer::linalg::matmul::triangular::{self as tri, BlockStructure};
 use faer::{Accum, Mat, MatMut, MatRef, Par};
 
@@ -14,6 +15,31 @@ pub(crate) fn small_par(rows: usize, cols: usize) -> Par {
     } else {
         Par::Seq
     }
+}
+
+/// Eigenvectors (columns) and eigenvalues (ascending) of the symmetric `a` (its lower
+/// triangle), as faer's `self_adjoint_eigen` but with [`small_par`]; `step` names the caller
+/// in the error.
+pub(crate) fn symmetric_eigen(a: &Mat<f64>, step: &'static str) -> Result<(Mat<f64>, Vec<f64>)> {
+    use faer::dyn_stack::{MemBuffer, MemStack};
+    use faer::linalg::evd::{self, ComputeEigenvectors};
+    let n = a.nrows();
+    let par = small_par(n, n);
+    let mut u = Mat::<f64>::zeros(n, n);
+    let mut s = faer::diag::Diag::<f64>::zeros(n);
+    let scratch =
+        evd::self_adjoint_evd_scratch::<f64>(n, ComputeEigenvectors::Yes, par, Default::default());
+    evd::self_adjoint_evd(
+        a.as_ref(),
+        s.as_mut(),
+        Some(u.as_mut()),
+        par,
+        MemStack::new(&mut MemBuffer::new(scratch)),
+        Default::default(),
+    )
+    .map_err(|e| SysidError::numerical(step, format!("{e:?}")))?;
+    let sv = s.column_vector();
+    Ok((u, (0..n).map(|i| sv[i]).collect()))
 }
 
 /// Zeroes the upper halves of the vector registers (`vzeroupper`) where the CPU has AVX; a

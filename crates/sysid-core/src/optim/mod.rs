@@ -244,6 +244,12 @@ pub struct Options {
     /// scaled norm. Not on chord steps; a provider without the hook takes plain steps.
     /// Default `false`.
     pub geodesic: bool,
+    /// Form the gradient and Gauss-Newton matrix at the point a search stopped on by
+    /// `max_iter` ([`Solution::gauss_newton`], [`Solution::gradient`]; no stopping test
+    /// needs them there). Default `true`; `false` when only the parameters are wanted (a
+    /// one-step fit of the initial states: they stay empty and the step costs one
+    /// evaluation less).
+    pub final_gauss_newton: bool,
 }
 
 impl Default for Options {
@@ -263,6 +269,7 @@ impl Default for Options {
             reuse_gauss_newton: 0,
             eigen_limit: 400,
             geodesic: false,
+            final_gauss_newton: true,
         }
     }
 }

@@ -2,37 +2,13 @@
 //! reduced to the free directions, solved by an eigendecomposition (small problems) or by
 //! Cholesky factorisations (large ones).
 
-use super::dense::small_par;
+use super::dense::{small_par, symmetric_eigen};
 use super::search::{prof, Point};
 use super::{Options, Problem};
 use crate::error::{Result, SysidError};
 use faer::linalg::matmul::matmul;
 use faer::prelude::Solve;
 use faer::{Accum, Mat, Side};
-
-/// Eigenvectors (columns) and eigenvalues (ascending) of the symmetric `a` (its lower
-/// triangle), as faer's `self_adjoint_eigen` but with [`small_par`].
-fn symmetric_eigen(a: &Mat<f64>) -> Result<(Mat<f64>, Vec<f64>)> {
-    use faer::dyn_stack::{MemBuffer, MemStack};
-    use faer::linalg::evd::{self, ComputeEigenvectors};
-    let n = a.nrows();
-    let par = small_par(n, n);
-    let mut u = Mat::<f64>::zeros(n, n);
-    let mut s = faer::diag::Diag::<f64>::zeros(n);
-    let scratch =
-        evd::self_adjoint_evd_scratch::<f64>(n, ComputeEigenvectors::Yes, par, Default::default());
-    evd::self_adjoint_evd(
-        a.as_ref(),
-        s.as_mut(),
-        Some(u.as_mut()),
-        par,
-        MemStack::new(&mut MemBuffer::new(scratch)),
-        Default::default(),
-    )
-    .map_err(|e| SysidError::numerical("optimiser (eigenvalues of J^T J)", format!("{e:?}")))?;
-    let sv = s.column_vector();
-    Ok((u, (0..n).map(|i| sv[i]).collect()))
-}
 
 /// How the damped steps are solved at one point.
 pub(super) enum Solver {
@@ -154,7 +130,7 @@ pub(super) fn reduce(
     let (v, lam) = if q == 0 {
         (Mat::zeros(0, 0), Vec::new())
     } else {
-        let (u, s) = symmetric_eigen(&hs)?;
+        let (u, s) = symmetric_eigen(&hs, "optimiser (eigenvalues of J^T J)")?;
         let lam: Vec<f64> = (0..q).map(|i| s[i].max(0.0)).collect();
         (u, lam)
     };

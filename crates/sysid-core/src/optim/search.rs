@@ -473,6 +473,35 @@ pub fn minimize(
         let t0 = std::time::Instant::now();
         problem.accepted(&trial)?;
         prof("accepted", t0);
+        if !options.final_gauss_newton && iterations >= options.max_iter {
+            // the search ends here and only the point is wanted: not evaluated again
+            frozen = 0;
+            let raw = Evaluation::cost_only(cand_cost);
+            let (g, h) = (Vec::new(), Mat::zeros(0, 0));
+            pt = Point {
+                theta: trial,
+                cost: cand_cost,
+                raw,
+                g,
+                h,
+            };
+            weighted_history.push(cand_cost);
+            let reported = problem.criterion().unwrap_or(cand_cost);
+            history.push(reported);
+            let info = Iteration {
+                iteration: iterations,
+                cost: reported,
+                weighted_cost: cand_cost,
+                step_norm,
+                gradient_norm: gnorm,
+                damping: used,
+            };
+            stop = match observer(&info) {
+                Flow::Stop => StopReason::Cancelled,
+                Flow::Continue => StopReason::MaxIterations,
+            };
+            break;
+        }
         // profile trace: the gradient before the step, for the curvature along it
         let before = std::env::var_os("SYSID_PROFILE").map(|_| (pt.g.clone(), pt.theta.clone()));
         let mut chord = None;

@@ -22,7 +22,6 @@ use super::modal::{modal_form, Modal};
 use super::options::{Focus, InitialState, PemOptions, PemResult};
 use super::predictor::Predictor;
 use crate::model::StateSpace;
-use faer::linalg::solvers::DenseSolveCore;
 use faer::{Mat, MatRef};
 
 /// Per state, the first state of its chart block.
@@ -199,12 +198,13 @@ pub(super) fn chart_modal(abar: MatRef<'_, f64>, chart: &Chart) -> Option<Modal>
             k += 1;
         }
     }
-    let ti = t.partial_piv_lu().inverse();
+    let ti = crate::linalg::inverse(t.as_ref());
     let cond = t.norm_max() * ti.norm_max() * 2.0;
     if ti.has_nan() || !ti.is_all_finite() || !cond.is_finite() || cond > 1e6 {
         return None;
     }
-    let check = &ti * abar * &t - &lam;
+    let mul = crate::linalg::mul;
+    let check = mul(mul(ti.as_ref(), abar).as_ref(), t.as_ref()) - &lam;
     let anorm = abar.norm_max().max(1e-300);
     // NaN in the check counts as a failure
     let accurate = !check.has_nan() && check.norm_max() <= 1e-11 * anorm * cond;

@@ -165,6 +165,7 @@ impl Predictor<'_> {
             max_iter: 1,
             initial_damping: 0.0,
             tol_gradient: 0.0,
+            final_gauss_newton: false,
             fixed: Some(fixed),
             ..Default::default()
         };

@@ -37,7 +37,7 @@ fn real_vector(t: &mut Mat<f64>, v: faer::ColRef<'_, faer::c64>, k: usize) {
 /// The modal form of `abar`, or `None` when its eigenvectors are ill-conditioned (then the
 /// plain structured evaluation is used).
 pub(crate) fn modal_form(abar: MatRef<'_, f64>) -> Option<Modal> {
-    use faer::linalg::solvers::DenseSolveCore;
+    use crate::linalg::mul;
     let n = abar.nrows();
     let eig = crate::realization::modal::eigen_decomposition(abar).ok()?;
     let mut t = Mat::<f64>::zeros(n, n);
@@ -75,7 +75,7 @@ pub(crate) fn modal_form(abar: MatRef<'_, f64>) -> Option<Modal> {
     if k != n {
         return None;
     }
-    let ti = t.partial_piv_lu().inverse();
+    let ti = crate::linalg::inverse(t.as_ref());
     // a defective A (a double pole: parallel eigenvectors) gives a singular T: its inverse
     // holds inf or NaN, which the norms below (f64::max skips NaN) would not show
     if ti.has_nan() || !ti.is_all_finite() {
@@ -90,7 +90,7 @@ pub(crate) fn modal_form(abar: MatRef<'_, f64>) -> Option<Modal> {
     if !cond.is_finite() || cond > 1e6 {
         return None;
     }
-    let check = &ti * abar * &t - &lam;
+    let check = mul(mul(ti.as_ref(), abar).as_ref(), t.as_ref()) - &lam;
     let anorm = abar.norm_max().max(1e-300);
     // NaN in the check counts as a failure
     let accurate = !check.has_nan() && check.norm_max() <= 1e-11 * anorm * cond;

@@ -161,7 +161,7 @@ pub fn stable_enough(
     enforce_stability: bool,
 ) -> bool {
     let inside = |m: MatRef<'_, f64>| matches!(spectral_radius(m), Ok(r) if r < 1.0);
-    let abar = a - k * c;
+    let abar = a - crate::linalg::mul(k, c);
     inside(abar.as_ref()) && (!enforce_stability || inside(a))
 }
 

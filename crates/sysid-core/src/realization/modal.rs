@@ -7,7 +7,6 @@
 //! scaled so that its entry of largest modulus is 1 (a real, positive reference).
 
 use crate::error::{Result, SysidError};
-use faer::linalg::solvers::DenseSolveCore;
 use faer::{c64, Mat, MatRef};
 
 /// Eigenvalues, eigenvectors and the inverse of the eigenvector matrix of a real matrix.
@@ -26,13 +25,10 @@ pub(crate) fn eigen_decomposition(a: MatRef<'_, f64>) -> Result<EigenDecompositi
             inverse: Mat::zeros(0, 0),
         });
     }
-    let e = a
-        .eigen()
+    let (values, vectors) = crate::linalg::eigen(a)
         .map_err(|e| SysidError::numerical("eigendecomposition of A", format!("{e:?}")))?;
-    let values: Vec<c64> = e.S().column_vector().iter().copied().collect();
-    let vectors = e.U().to_owned();
-    let inverse = vectors.partial_piv_lu().inverse();
-    let check = &inverse * &vectors;
+    let inverse = crate::linalg::inverse(vectors.as_ref());
+    let check = crate::linalg::mul(inverse.as_ref(), vectors.as_ref());
     let mut err = 0.0f64;
     for j in 0..n {
         for i in 0..n {
