@@ -292,7 +292,11 @@ class Board:
         return best
 
     def eligible(self, r: dict[str, Any], stable_only: bool = True) -> bool:
+        """Whether ``r`` can be chosen: scored, not below its start, not only a start (a
+        subspace fit with a stable ``A`` enforced, refined from), and stable unless
+        ``stable_only`` is off (and the data insisted on it, when they were asked)."""
         return (bool(np.isfinite(r["held_out_fit"])) and not r.get("worse_than_start")
+                and not r.get("start_only")
                 and (r["stable"] or not (stable_only or r.get("not_insisted"))))
 
     def best_fit(self, stable_only: bool = True) -> float:
