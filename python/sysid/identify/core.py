@@ -414,7 +414,7 @@ def _stabilised_refinements(board: Board) -> None:
         if start is None:
             continue
         # a start, not a candidate: a zero-padded shift can distort the fit it stabilises
-        # (chosen by BIC on a flutter record: validation -85 % against 60 % for the best)
+        # (one chosen by BIC on a flutter record, its OE candidate missing, validated -85 %)
         start["start_only"] = True
         start["note"] = start["note"] or "the start of the refinement below: not chosen"
         if start["stable"]:
