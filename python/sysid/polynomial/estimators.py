@@ -16,8 +16,6 @@ from .._checks import (
     as_int,
     as_int_grid,
     experiment_arrays,
-    recorded,
-    reissue,
     require_inputs_vary,
     warn_if_capped,
 )
@@ -27,6 +25,7 @@ from ..data.offsets import check_offsets
 from ..errors import DataError, InsufficientDataError, NumericalError, ShapeError
 from .cancellation import cancellation, warn_cancellations
 from .model import PolynomialModel
+from .starts import RESTART_GAIN, init_parameters, subspace_starts
 from .uncertainty import attach_uncertainty as _attach_uncertainty
 from .uncertainty import defer_coloured
 
@@ -210,52 +209,6 @@ def _arx_posterior(data: Any, na_g: Any, nb_g: Any, nk_g: Any, reg: Any,
     return model
 
 
-def _fit(c: np.ndarray, n: int) -> list[float]:
-    out = np.zeros(n)
-    out[: min(n, c.size)] = c[:n]
-    return out.tolist()
-
-
-def _stable(c: Any) -> np.ndarray:
-    """Coefficients (after the leading 1) of the monic polynomial with the roots of
-    ``1 + c_1 q^-1 + ...`` outside the unit circle reflected inside (``r -> 1 / conj(r)``,
-    at most 0.995 in modulus): the same magnitude response up to a gain, and a predictor
-    the search can start from."""
-    c = np.asarray(c, dtype=float).ravel()
-    if c.size == 0:
-        return c
-    r = np.roots(np.concatenate([[1.0], c]))
-    if np.all(np.abs(r) < 1.0):
-        return c
-    out = np.where(np.abs(r) >= 1.0, 1.0 / np.conj(r), r)
-    big = np.abs(out) > 0.995
-    out[big] *= 0.995 / np.abs(out[big])
-    return np.real(np.poly(out))[1:]
-
-
-def _start(
-    init: PolynomialModel, i: int, na: int, nb: list[int], nc: int, nd: int, nf: list[int]
-) -> tuple[list[float], bool]:
-    """Starting parameters of output ``i`` from another polynomial model (``F`` from its
-    ``F``, or from its ``A`` when it has none, as when refining an ARX model into OE), and
-    whether an unstable ``C``, ``D`` or ``F`` had its roots reflected into the unit circle
-    (MATLAB stabilises an initial model the same way; the search needs a stable
-    predictor)."""
-    if init.n_inputs != len(nb) or init.n_outputs <= i:
-        raise DataError("init has other input/output counts than the data")
-    a = init.a[i][i]
-    th = _fit(a, na)
-    th += [v for j, n in enumerate(nb) for v in _fit(init.b[i][j], n)]
-    moved = False
-    for c, n in ((init.c[i], nc), (init.d[i], nd)) + tuple(
-            (init.f[i][j] if init.f[i][j].size else a, n) for j, n in enumerate(nf)):
-        got = np.asarray(_fit(np.asarray(c, dtype=float), n))
-        st = _stable(got)
-        moved |= bool(got.size and not np.array_equal(st, got))
-        th += st.tolist()
-    return th, moved
-
-
 def _require_samples(exps: Any, method: str, i: int, na: int, nb: list[int], nc: int,
                      nd: int, nf: list[int], nk: list[int]) -> None:
     """The sample count :func:`arx` requires (``N - max lag >= n_params + 1``) for output
@@ -286,7 +239,12 @@ def _pem(
     max_iter: int,
     progress: bool | None | Callable[..., Any],
     init: PolynomialModel | None = None,
+    second: bool = False,
 ) -> PolynomialModel:
+    """The prediction-error search of ``armax``/``oe``/``bj``, per output, from the default
+    start (ARX; Steiglitz-McBride for ``B/F``) or ``init``; with ``second``, each output
+    also from a subspace fit (:func:`.starts.subspace_starts`), the lower criterion kept
+    (``info["start"]``)."""
     data = as_record(data)  # a (u, y) pair, as ssest and compare take
     exps = experiment_arrays(data)
     check_offsets(data)
@@ -310,17 +268,22 @@ def _pem(
     cov, var = [], []
     cb, close_bar = iteration_callback(progress, method, int(max_iter) * ny,
                                        iteration_printer(method, "sum of squares"))
-    starts = [None if init is None else _start(init, i, na_v[i], nb_g[i], nc_v[i], nd_v[i],
-                                               nf_g[i]) for i in range(ny)]
+    starts = [None if init is None else init_parameters(init, i, na_v[i], nb_g[i], nc_v[i],
+                                                        nd_v[i], nf_g[i]) for i in range(ny)]
     if init is not None:
         info["start_stabilized"] = [bool(s[1]) for s in starts]  # type: ignore[index]
-    try:
-        rs = [_sysid.polynomial_pem(
+    iters = as_int(max_iter, "max_iter", 0)
+
+    def search(i: int, theta0: Any, callback: Any) -> dict[str, Any]:
+        return _sysid.polynomial_pem(
             [(np.ascontiguousarray(y[:, i]), u) for u, y in exps], na_v[i], nb_g[i], nc_v[i],
-            nd_v[i], nf_g[i], nk_g[i], None if starts[i] is None else starts[i][0],
-            as_int(max_iter, "max_iter", 0), 1e-9, cb) for i in range(ny)]
+            nd_v[i], nf_g[i], nk_g[i], theta0, iters, 1e-9, callback)
+    try:
+        rs = [search(i, None if starts[i] is None else starts[i][0], cb) for i in range(ny)]
     finally:
         close_bar()
+    if second:
+        _second_start(data, rs, search, nb_g, nf_g, nk_g, na_v, nc_v, nd_v, progress, info)
     for i in range(ny):
         r = rs[i]
         th = np.asarray(r["theta"])
@@ -371,6 +334,40 @@ def _pem(
             at += nf
     warn_cancellations(method, found)
     return m
+
+
+def _second_start(data: Any, rs: list[dict[str, Any]], search: Callable[..., Any],
+                  nb: Any, nf: Any, nk: Any, na: Any, nc: Any, nd: Any,
+                  progress: bool | None | Callable[..., Any], info: dict[str, Any]) -> None:
+    """Each output's search also from its subspace start (``C = D = 1``): its result
+    replaces the default one's in ``rs`` when its criterion is lower by more than
+    ``RESTART_GAIN``; ``info["start"]`` names the start kept (one name for one output, a
+    list per output otherwise). The Steiglitz-McBride iterates need not come near the
+    minimum: on a motor-position record (EMPS, an integrating plant) every stable iterate is
+    far from it; ``oe(2, 2, 1)`` ended at a 1.9 % fit (83.7 % from the subspace start) and
+    ``bj(2, 1, 1, 2, 1)`` simulated at 0.05 % (94.7 %, at a lower prediction-error
+    criterion). A search stopped by the user's callback is not followed by another."""
+    names = ["Steiglitz-McBride"] * len(rs)
+    if any(r["stop"] == "cancelled" for r in rs):
+        info["start"] = names[0] if len(rs) == 1 else names
+        return
+    # the bar counted the first searches; a callable of the user's sees every step
+    cb = progress if callable(progress) else None
+    for i, s in enumerate(subspace_starts(data, nb, nf, nk)):
+        if s is None:
+            continue
+        theta0 = init_parameters(s, 0, na[i], nb[i], nc[i], nd[i], nf[i])[0]
+        try:
+            with warnings.catch_warnings():  # a failed second search says nothing
+                warnings.simplefilter("ignore")
+                r = search(i, theta0, cb)
+        except (DataError, NumericalError):
+            continue  # the first search stands
+        if r["history"][-1] < rs[i]["history"][-1] * (1 - RESTART_GAIN):
+            rs[i], names[i] = r, "subspace (n4sid)"
+        if r["stop"] == "cancelled":
+            break
+    info["start"] = names[0] if len(rs) == 1 else names
 
 
 def armax(
@@ -429,10 +426,11 @@ def oe(
     Starts from Steiglitz-McBride (one input) or from ``init`` (an ARX model's ``A`` becomes
     ``F``; unstable roots of the start are reflected into the unit circle, and
     ``info["start_stabilized"]`` says so), then Gauss-Newton on the simulation error; ``F``
-    is kept stable. Without ``init``, a record of one input and output is also fitted from a
-    subspace start (:func:`sysid.n4sid` of order ``nf`` as ``B/F``) and the fit with the
-    lower criterion is returned, ``info["start"]`` naming its start: the Steiglitz-McBride
-    iterates can stay far from the minimum on a slow, nearly integrating plant.
+    is kept stable. Without ``init``, every output is also fitted from a subspace start
+    (:func:`sysid.n4sid` of order ``max(nf)`` on that output, as ``B/F``) and, per output,
+    the fit with the lower criterion is returned, ``info["start"]`` naming its start (a list
+    per output for several): the Steiglitz-McBride iterates can stay far from the minimum
+    on a slow, nearly integrating plant.
 
     With ``periods=P`` (whole periods of a periodic input in steady state in every
     experiment) or ``"auto"`` (:func:`sysid.detect_period`), ``B/F`` is fitted on the
@@ -476,75 +474,10 @@ def oe(
         m = _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, init)
         m.info["start"] = "init"
     else:
-        m = _two_starts(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress)
+        m = _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, second=True)
     if periodicity is not None:  # periods="auto" found none: why the time domain
         m.info["periodicity"] = periodicity
     return m
-
-
-#: the subspace start's search replaces the default one's only when it ends lower
-#: by more than this fraction of the criterion (both reach the same minimum on most records)
-RESTART_GAIN = 1e-8
-
-
-def _two_starts(data: Any, na: Any, nb: Any, nc: Any, nd: Any, nf: Any, nk: Any, method: str,
-                max_iter: int, progress: bool | None | Callable[..., Any]) -> PolynomialModel:
-    """``oe``/``bj`` from their default start (Steiglitz-McBride for ``B/F``) and, for one
-    input and output, also with ``B/F`` from a subspace fit of order ``nf``
-    (:func:`sysid.n4sid`) and ``C = D = 1``: the fit with the lower criterion is returned
-    (``info["start"]`` names its start), with its own warnings only. The Steiglitz-McBride
-    iterates need not come near the minimum: on a motor-position record (EMPS, an
-    integrating plant) every stable iterate is far from it; ``oe(2, 2, 1)`` ended at a 1.9 %
-    fit (83.7 % from the subspace start) and ``bj(2, 1, 1, 2, 1)`` simulated at 0.05 %
-    (94.7 %, at a lower prediction-error criterion)."""
-    m, said = recorded(lambda: _pem(data, na, nb, nc, nd, nf, nk, method, max_iter, progress,
-                                    None))
-    m.info["start"] = "Steiglitz-McBride"
-    start = _subspace_start(data, nb, nf, nk) if m.info["stop"][0] != "cancelled" else None
-    if start is not None:
-        try:
-            with warnings.catch_warnings():  # a failed second fit says nothing
-                warnings.simplefilter("ignore")
-                m2, said2 = recorded(lambda: _pem(data, na, nb, nc, nd, nf, nk, method,
-                                                  max_iter, False, start))
-        except (DataError, NumericalError):
-            m2 = None  # the first fit stands
-        if m2 is not None and m2.info["cost"][0][-1] < m.info["cost"][0][-1] * (
-                1 - RESTART_GAIN):
-            m2.info["start"] = "subspace (n4sid)"
-            m2.info.pop("start_stabilized", None)
-            m, said = m2, said2
-    reissue(said)
-    return m
-
-
-def _subspace_start(data: Any, nb: Any, nf: Any, nk: Any) -> PolynomialModel | None:
-    """``B/F`` of ``n4sid(data, nf)`` for one input and output (``None`` otherwise, or when
-    the subspace fit fails): ``F`` its characteristic polynomial, ``B`` its numerator's
-    coefficients from lag ``nk`` on (``C (zI - A)^-1 B = (det(zI - A + BC) - det(zI - A))
-    / det(zI - A)``)."""
-    from ..subspace.estimator import n4sid
-
-    try:
-        nb_, nf_, nk_ = (int(np.ravel(v)[0]) for v in (nb, nf, nk))
-    except (TypeError, ValueError):
-        return None
-    if data.n_inputs != 1 or data.n_outputs != 1 or nf_ < 1 or nb_ < 1:
-        return None
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            s = n4sid(data, nf_, feedthrough=nk_ == 0)
-    except Exception:  # noqa: BLE001 - no subspace start on this record: Steiglitz-McBride's
-        return None
-    A, B, C, D = (np.asarray(x, dtype=float) for x in (s.A, s.B, s.C, s.D))
-    den = np.real(np.poly(A))
-    num = np.real(np.poly(A - B @ C)) - den + float(D[0, 0]) * den
-    if not (np.all(np.isfinite(num)) and np.all(np.isfinite(den))):
-        return None
-    b = [num[nk_ + j] if nk_ + j < num.size else 0.0 for j in range(nb_)]
-    return PolynomialModel([[np.ones(1)]], [[np.asarray(b)]], [[nk_]], data.dt,
-                           c=[np.zeros(0)], d=[np.zeros(0)], f=[[den[1:]]])
 
 
 def bj(
@@ -561,9 +494,9 @@ def bj(
 ) -> PolynomialModel:
     """Box-Jenkins ``y = B/F u(t-nk) + C/D e``.
 
-    ``B/F`` starts from Steiglitz-McBride; for one input and output also from a subspace fit
-    (as :func:`oe`), and the fit with the lower prediction-error criterion is returned
-    (``info["start"]``). With ``init`` (a polynomial model with the data's channel counts:
+    ``B/F`` starts from Steiglitz-McBride and also, per output, from a subspace fit (as
+    :func:`oe`; ``C = D = 1``), and the fit with the lower prediction-error criterion is
+    returned (``info["start"]``). With ``init`` (a polynomial model with the data's channel counts:
     an earlier ``bj``, an ``oe`` fit, or an ``arx`` one whose ``A`` becomes ``F``; cut or
     padded with zeros to the orders given) the search starts there alone, as MATLAB's
     ``bj(data, init_sys)``; unstable ``C``, ``D`` or ``F`` roots are reflected into the unit
@@ -588,7 +521,7 @@ def bj(
         m = _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress, init)
         m.info["start"] = "init"
         return m
-    return _two_starts(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress)
+    return _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress, second=True)
 
 
 def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
