@@ -33,6 +33,7 @@ import numpy as np
 
 from .._progress import Bar
 from ..data.iodata import IOData
+from ..errors import SysidError
 from ..models.statespace import ss_parameter_count
 from ..validation.crossval import (
     output_fits,
@@ -197,7 +198,7 @@ class Board:
             raise
         except Exception as e:  # noqa: BLE001 - a failed candidate is listed, not raised
             row.update(held_out_fit=-np.inf, mean_fit=-np.inf, fold_fits=[], fold_output_fits=[],
-                       max_abs_pole=np.nan, stable=False,
+                       max_abs_pole=np.nan, stable=False, error=type(e),
                        note=f"{type(e).__name__}: {e}"[:120])
         if hopeless:
             row["note"] = (f"below its start or the best candidate on most of the "
@@ -389,6 +390,13 @@ class Board:
         if outcome == "drift":
             self.drift = {"unstable": best_u, "stable": best_s}
         return None
+
+    def broken(self) -> list[dict[str, Any]]:
+        """Candidates that failed with an error that says nothing of the data (not a
+        :class:`~sysid.SysidError`, an arithmetic or a linear-algebra failure, nor a
+        ``ValueError``): an import that failed, a bug. The choice was made without them."""
+        return [r for r in self.rows if isinstance(r.get("error"), type)
+                and not issubclass(r["error"], (SysidError, ArithmeticError, ValueError))]
 
     def unstable_verdict(self) -> str:
         """What the unstable candidates show so far, by the test of :meth:`insisting`

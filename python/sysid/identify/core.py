@@ -617,6 +617,14 @@ def identify(
                     "none scored: no stable subspace candidate to start a prediction-error "
                     "search from (every one was unstable on some held-out block); the model "
                     "is a subspace one")
+    broken = board.broken()
+    if broken:
+        r = broken[0]
+        checks["candidate_errors"] = (
+            f"{len(broken)} candidate(s) failed with an error that says nothing of the data "
+            f"(first: {r['family']} of order {r['order']}, {r['note']}); the choice was made "
+            f"without them: check the installation (a failed import) or report it")
+        warnings.warn(f"identify: {checks['candidate_errors']}", UserWarning, stacklevel=2)
     if board.skipped:
         checks["long_record"] = (
             f"not scored, to keep the work in proportion on this record: "
