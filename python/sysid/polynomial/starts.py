@@ -81,7 +81,8 @@ def subspace_starts(data: IOData, nb: list[list[int]], nf: list[list[int]],
     """Per output ``i``, ``B_ij / F_ij`` of :func:`sysid.n4sid` of order ``max_j nf_ij`` on
     that output alone: every ``F_ij`` its characteristic polynomial (cut to ``nf_ij`` when
     lower), ``B_ij`` its numerator from lag ``nk_ij`` on (``C (zI - A)^-1 b_j + d_j =
-    (det(zI - A + b_j C) - det(zI - A)) / det(zI - A) + d_j``), as a one-output model;
+    (det(zI - A + b_j C) - det(zI - A)) / det(zI - A) + d_j``, ``d_j`` only where
+    ``nk_ij = 0``), as a one-output model;
     ``None`` for an output whose subspace fit fails or has no ``F`` to start.
 
     Examples
@@ -116,7 +117,9 @@ def subspace_starts(data: IOData, nb: list[list[int]], nf: list[list[int]],
         den = np.real(np.poly(A))
         b, f = [], []
         for j in range(data.n_inputs):
-            num = np.real(np.poly(A - B[:, [j]] @ C)) - den + float(D[0, j]) * den
+            # D only where this input acts at lag 0 (another input's nk = 0 made n4sid fit it)
+            d = float(D[0, j]) if nk[i][j] == 0 else 0.0
+            num = np.real(np.poly(A - B[:, [j]] @ C)) - den + d * den
             b.append(np.array([num[nk[i][j] + k] if nk[i][j] + k < num.size else 0.0
                                for k in range(nb[i][j])]))
             f.append(den[1:nf[i][j] + 1])
