@@ -134,8 +134,6 @@ class Board:
         self.unexcited = 0
         #: set by :meth:`insisting` when an unstable candidate wins only by following a drift
         self.drift: dict[str, Any] | None = None
-        #: :meth:`_trend_fits` of a row, by ``(id(row), detrended)``: the test runs twice
-        self._trend_memo: dict[tuple[int, bool], list[np.ndarray]] = {}
 
     def time_left(self) -> bool:
         """False once the time budget (CPU seconds of this process) is spent."""
@@ -450,7 +448,9 @@ class Board:
         plant, and the data do not insist on it."""
         from ..data.preprocessing import detrend
 
-        todo = [r for r in rows if (id(r), detrended) not in self._trend_memo]
+        # kept on each row (``r["trend_fits"]``): the test runs before the stable-A
+        # refinements (:meth:`unstable_verdict`) and again for the choice
+        todo = [r for r in rows if detrended not in r.setdefault("trend_fits", {})]
         fits: list[list[np.ndarray]] = [[] for _ in todo]
         for k, (fit_part, held) in enumerate(self.folds):
             part = detrend(fit_part, "linear") if detrended and todo else None
@@ -465,8 +465,8 @@ class Board:
                 except Exception:  # noqa: BLE001 - a fit that fails now scores -inf
                     fits[i].append(np.full(held.n_outputs, -np.inf))
         for r, f in zip(todo, fits):
-            self._trend_memo[(id(r), detrended)] = f
-        return [self._trend_memo[(id(r), detrended)] for r in rows]
+            r["trend_fits"][detrended] = f
+        return [r["trend_fits"][detrended] for r in rows]
 
     def near_best(self, stable_only: bool = True, paired: bool = False
                   ) -> list[dict[str, Any]]:
