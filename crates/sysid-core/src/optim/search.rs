@@ -290,7 +290,21 @@ pub fn minimize(
     let mut geo = GeodesicCounts::default();
     let stop;
     loop {
-        if iterations >= options.max_iter {
+        let capped = iterations >= options.max_iter;
+        if capped && frozen > 0 && options.final_gauss_newton && options.max_iter > 0 {
+            // the evaluation the end of the search makes anyway, made before the tests
+            frozen = 0;
+            pt = evaluate_point(problem, options, pt.theta, &mut evals)?;
+        }
+        // at the cap, the point's own Gauss-Newton matrix (formed when `final_gauss_newton`)
+        // still answers the convergence tests below: a search that converged on its last
+        // allowed iteration says so, not that it stopped short
+        if capped
+            && (options.max_iter == 0
+                || !options.final_gauss_newton
+                || frozen > 0
+                || pt.g.len() != p)
+        {
             stop = StopReason::MaxIterations;
             break;
         }
@@ -321,7 +335,15 @@ pub fn minimize(
                 }
                 r
             }
-            _ => reduce(problem, options, &pt, &blocked)?,
+            _ => match reduce(problem, options, &pt, &blocked) {
+                Ok(r) => r,
+                // the tests at the cap are a courtesy: a failure there ends as before
+                Err(_) if capped => {
+                    stop = StopReason::MaxIterations;
+                    break;
+                }
+                Err(e) => return Err(e),
+            },
         };
         let red = &*last_red.insert(red);
         condition = red.condition;
@@ -352,6 +374,10 @@ pub fn minimize(
         }
         if !stale && sigma2.is_some_and(|s2| dec <= options.tol_statistical * s2) {
             stop = StopReason::Statistical;
+            break;
+        }
+        if capped {
+            stop = StopReason::MaxIterations;
             break;
         }
         let mut accepted: Option<(Vec<f64>, f64, f64, f64, f64, bool)> = None;

@@ -284,6 +284,65 @@ fn max_iter_and_bad_options() {
 }
 
 #[test]
+fn a_search_that_converges_on_its_last_allowed_iteration_says_so() {
+    // Rosenbrock ends on the gradient test, the chord problem (its last step a chord step,
+    // whose matrix is formed at the cap) on the statistical one; capped at exactly the
+    // iterations they need, both report that test, not the cap, at the same point
+    let mut o = Options::default();
+    o.tol_cost = 0.0;
+    o.tol_step = 0.0;
+    let free = go(&mut ls(2, rosen), &[-1.2, 1.0], &o);
+    assert_eq!(free.stop, StopReason::GradientTolerance);
+    o.max_iter = free.iterations;
+    let capped = go(&mut ls(2, rosen), &[-1.2, 1.0], &o);
+    assert_eq!(capped.stop, StopReason::GradientTolerance);
+    assert_eq!(capped.theta, free.theta);
+    o.max_iter = free.iterations - 1;
+    assert_eq!(go(&mut ls(2, rosen), &[-1.2, 1.0], &o).stop, StopReason::MaxIterations);
+
+    struct Noisy(Chord);
+    impl Problem for Noisy {
+        fn n_params(&self) -> usize {
+            2
+        }
+        fn evaluate(&mut self, th: &[f64], jac: bool) -> crate::Result<Evaluation> {
+            let mut ev = self.0.evaluate(th, jac)?;
+            ev.cost += 1.0; // a residual floor: the statistical test can end the search
+            Ok(ev)
+        }
+        fn gradient_only(&mut self, th: &[f64]) -> crate::Result<Option<Evaluation>> {
+            let mut ev = self.0.gradient_only(th)?;
+            if let Some(e) = ev.as_mut() {
+                e.cost += 1.0;
+            }
+            Ok(ev)
+        }
+        fn n_residuals(&self) -> Option<usize> {
+            Some(20)
+        }
+    }
+    let mut o = Options::default();
+    o.tol_cost = 0.0;
+    o.tol_step = 0.0;
+    o.tol_gradient = 0.0;
+    o.tol_statistical = 1e-2;
+    o.reuse_gauss_newton = 3;
+    let run = |o: &Options| {
+        let mut pr = Noisy(Chord { full: 0, grads: 0 });
+        let s = go(&mut pr, &[1.0, 0.3], o);
+        (s, pr.0.grads)
+    };
+    let (free, grads) = run(&o);
+    assert_eq!(free.stop, StopReason::Statistical);
+    assert!(grads > 0, "no chord step taken");
+    o.max_iter = free.iterations;
+    let (capped, _) = run(&o);
+    assert_eq!(capped.stop, StopReason::Statistical);
+    assert_eq!(capped.theta, free.theta);
+    assert_eq!(capped.evaluations, free.evaluations);
+}
+
+#[test]
 fn search_basis_restricts_the_step() {
     // Only move along (1, 1)/sqrt2: the solution is the best point on that line.
     struct Along(Ls<fn(&[f64]) -> (Vec<f64>, Vec<Vec<f64>>)>);
