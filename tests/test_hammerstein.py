@@ -240,9 +240,10 @@ def test_an_operating_point_is_fitted_about_and_kept(tmp_path):
 
 def test_a_capped_search_warns_and_a_converged_one_stops_statistically():
     # A noisy saturation record: capped at 2 iterations the search is still lowering the
-    # cost and says so (at 3 its statistical test already holds); left alone it stops once a step can no longer move the estimate
-    # by a fraction of its standard deviation (as pem's searches), without a warning, and
-    # further iterations would not change the cost by a residual variance.
+    # cost and says so (at 3 its statistical test already holds); left alone it stops once
+    # a step can no longer move the estimate by a fraction of its standard deviation (as
+    # pem's searches), without a warning, and further iterations would not change the cost
+    # by a residual variance.
     rng = np.random.default_rng(12)
     u = _u(3000, 13)
     y = second_order(np.clip(u, -0.4, 0.6)) + 0.05 * rng.standard_normal(u.size)
