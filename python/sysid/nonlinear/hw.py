@@ -9,6 +9,7 @@ Levenberg-Marquardt search of ``sysid-core`` (``optim/``), the admissible set be
 from __future__ import annotations
 
 import copy
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -17,7 +18,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import experiment_arrays, require_inputs_vary, warn_if_capped
 from .._progress import iteration_callback, iteration_printer
-from ..errors import DataError
+from ..errors import DataError, StabilityWarning
 from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction
 from .operating_point import centred, record_means, use_offsets
 
@@ -133,8 +134,10 @@ def nlhw(
     # linear start: output error on the (transformed) input
     from ..data.iodata import IOData
 
-    lin = oe(IOData([r[0][:, None] for r in records], [r[1][:, None] for r in records], dt),
-             int(nb), int(nf), int(nk))
+    with warnings.catch_warnings():  # a start: where its F sits is the search's to move
+        warnings.simplefilter("ignore", StabilityWarning)
+        lin = oe(IOData([r[0][:, None] for r in records], [r[1][:, None] for r in records],
+                        dt), int(nb), int(nf), int(nk))
     b0, f0 = np.asarray(lin.b[0][0], float), np.asarray(lin.f[0][0], float)
     u_all = np.concatenate([r[0] for r in records])
     lin_b = b0

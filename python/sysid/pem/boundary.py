@@ -17,7 +17,7 @@ import numpy as np
 from .._checks import PERSISTENT_DECAY, mode_kept
 from ..errors import StabilityWarning
 
-__all__ = ["warn_boundary"]
+__all__ = ["warn_boundary", "warn_poles_at_bound"]
 
 
 def warn_boundary(A: np.ndarray, n: int, stacklevel: int = 3) -> bool:
@@ -38,6 +38,35 @@ def warn_boundary(A: np.ndarray, n: int, stacklevel: int = 3) -> bool:
     'StabilityWarning'
     """
     p = np.linalg.eigvals(np.asarray(A, float)) if n and np.size(A) else np.zeros(0)
+    return warn_poles_at_bound(
+        p, n, "the refined model", "the search keeps A stable",
+        integrating=("identify the differenced output or use focus='prediction' with "
+                     "enforce_stability=False"),
+        lower="order='auto'", stacklevel=stacklevel + 1)
+
+
+def warn_poles_at_bound(poles: np.ndarray, n: int, model: str, bound: str, *,
+                        integrating: str, lower: str, stacklevel: int = 3) -> bool:
+    """:func:`warn_boundary` for the ``poles`` of any search that keeps them inside the
+    unit circle (``bound`` says which, e.g. "the search keeps F stable"; ``model`` names
+    the model; ``integrating`` is the advice for an integrating plant, ``lower`` how to ask
+    for a lower order). True if it warned.
+
+    Examples
+    --------
+    >>> import numpy as np, warnings
+    >>> from sysid.pem.boundary import warn_poles_at_bound
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     warn_poles_at_bound(np.array([1 - 1e-9, 0.5]), 500, "oe's model",
+    ...                         "the search keeps F stable", integrating="use arx",
+    ...                         lower="a smaller nf")
+    True
+    >>> "keeps 100 % of its mode" in str(w[0].message)
+    True
+    """
+    p = np.asarray(poles, complex).ravel() if n else np.zeros(0)
+    p = p[np.isfinite(p)]
     kept = np.array([mode_kept(abs(z), n) for z in p])
     if not p.size or kept.max() <= PERSISTENT_DECAY or np.abs(p).max() >= 1.0:
         return False
@@ -47,19 +76,18 @@ def warn_boundary(A: np.ndarray, n: int, stacklevel: int = 3) -> bool:
            f"over the record ({n} samples)"
     turns = abs(float(np.angle(z))) * n / (2 * np.pi)
     if turns < 1.0:
-        msg = (f"the refined model has {what}: the search keeps A stable, and such a pole "
+        msg = (f"{model} has {what}: {bound}, and such a pole "
                f"usually sits where that bound held it (an integrating plant, or a drift); the "
                f"record cannot tell it from an integrator, so the static gain and the step "
                f"response's final value (which grow as 1 / (1 - |p|)) are not determined. If "
-               f"the plant integrates, identify the differenced output or use "
-               f"focus='prediction' with enforce_stability=False; if not, remove the drift "
+               f"the plant integrates, {integrating}; if not, remove the drift "
                f"first (sysid.detrend(data, 'linear'))")
     else:
-        msg = (f"the refined model has {what}, an undamped oscillation of period "
-               f"{2 * np.pi / abs(float(np.angle(z))):.3g} samples: the search keeps A stable, "
+        msg = (f"{model} has {what}, an undamped oscillation of period "
+               f"{2 * np.pi / abs(float(np.angle(z))):.3g} samples: {bound}, "
                f"and such a pair usually sits where that bound held it (an order higher than "
                f"the data support, fitting noise, or a periodic disturbance in the output); "
-               f"try a lower order (order='auto') or look for the disturbance "
+               f"try a lower order ({lower}) or look for the disturbance "
                f"(sysid.spectra(data))")
     warnings.warn(msg, StabilityWarning, stacklevel=stacklevel + 1)
     return True

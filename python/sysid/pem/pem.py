@@ -268,7 +268,7 @@ def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None,
     the unit circle (:func:`.boundary.warn_boundary`; ``n``: samples of the longest
     experiment), a search stopped at its cap."""
     rho = float(res["spectral_radius"])
-    if focus == "simulation" or enforce:
+    if focus == "simulation" or enforce is not False:
         warn_boundary(res["a"], n, stacklevel=4)
     if rho >= 1.0:
         why = ("an unstable model fits the data significantly better than the best stable "

@@ -17,6 +17,7 @@ from .._checks import (
     as_int_grid,
     experiment_arrays,
     require_inputs_vary,
+    user_stacklevel,
     warn_if_capped,
 )
 from .._progress import iteration_callback, iteration_printer
@@ -333,7 +334,33 @@ def _pem(
                 found.append((f"{m.output_names[i]} <- {m.input_names[j]}", said))
             at += nf
     warn_cancellations(method, found)
+    _warn_held_f(m, parts["f"], method, max(u.shape[0] for u, _ in exps))
     return m
+
+
+def _warn_held_f(m: PolynomialModel, f: list[list[np.ndarray]], method: str, n: int) -> None:
+    """The search keeps every ``F`` stable: a :class:`~sysid.StabilityWarning` when that
+    bound holds a pole at the unit circle (:func:`sysid.pem.boundary.warn_poles_at_bound`),
+    naming the channel whose pole keeps most of its mode over the record (``n`` samples).
+    On unshipped DaISy records ``oe(data, 2, 2, 1)`` ended at 1 - 1.5e-11 (dryer),
+    1 - 5e-9 (power plant) and 1 - 9e-11 (EMPS) without a word."""
+    from ..pem.boundary import warn_poles_at_bound
+
+    best: tuple[float, str, np.ndarray] | None = None
+    for i, row in enumerate(f):
+        for j, fj in enumerate(row):
+            if len(fj) == 0:
+                continue
+            r = np.roots(np.concatenate([[1.0], np.asarray(fj, float)]))
+            if r.size and np.all(np.isfinite(r)) and np.abs(r).max() < 1.0:
+                kept = float(np.abs(r).max()) ** n
+                if best is None or kept > best[0]:
+                    best = (kept, f"{m.output_names[i]} <- {m.input_names[j]}", r)
+    if best is not None:
+        warn_poles_at_bound(
+            best[2], n, f"the {method} model's F of {best[1]}", "the search keeps F stable",
+            integrating="fit the differenced output, or arx/armax (whose A is not held "
+            "stable)", lower="a smaller nf", stacklevel=user_stacklevel())
 
 
 def _second_start(data: Any, rs: list[dict[str, Any]], search: Callable[..., Any],
