@@ -298,7 +298,10 @@ fn a_search_that_converges_on_its_last_allowed_iteration_says_so() {
     assert_eq!(capped.stop, StopReason::GradientTolerance);
     assert_eq!(capped.theta, free.theta);
     o.max_iter = free.iterations - 1;
-    assert_eq!(go(&mut ls(2, rosen), &[-1.2, 1.0], &o).stop, StopReason::MaxIterations);
+    assert_eq!(
+        go(&mut ls(2, rosen), &[-1.2, 1.0], &o).stop,
+        StopReason::MaxIterations
+    );
 
     struct Noisy(Chord);
     impl Problem for Noisy {
