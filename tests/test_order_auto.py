@@ -178,23 +178,3 @@ def test_time_series_auto_order_is_cross_validated_on_prediction(method):
     assert sel["criterion"] == "cross-validated one-step prediction fit", sel
     assert m.nstates == 4, sel
     assert prediction_fit(m, fresh) > prediction_fit(true, fresh) - 0.5
-
-
-def test_ssest_auto_order_steps_down_from_an_order_the_data_do_not_determine():
-    """The shipped pH record, simulation focus with a direct term: the held-out blocks chose
-    order 9, and the model refined there left a parameter direction undetermined (its
-    IdentifiabilityWarning: "an order higher than the data support"). Now the stable orders
-    the blocks allowed below it are refined too and compared by BIC, as for a sequence of
-    orders, and the choice says so."""
-    import warnings
-
-    ph = sysid.datasets.load_ph()
-    with warnings.catch_warnings(record=True) as said:
-        warnings.simplefilter("always")
-        m = sysid.ssest(ph, focus="simulation", feedthrough=True)
-    assert not [w for w in said if issubclass(w.category, sysid.IdentifiabilityWarning)]
-    sel = m.info["order_selection"]
-    assert m.info["pem"]["undetermined"] == 0
-    assert set(sel["bic"]) == {n for n in sel["allowed"] if n <= 9}
-    assert m.nstates == sel["order"] == min(sel["bic"], key=sel["bic"].get) < 9
-    assert "compared by BIC" in sel["reason"]

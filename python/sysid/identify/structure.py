@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_orders, recorded, reissue
+from .._checks import as_orders, reissue
 from ..data.iodata import IOData
 from ..errors import DataError
 
@@ -34,10 +34,8 @@ def split(data: IOData, fraction: float = 2 / 3) -> tuple[IOData, IOData]:
 def ssest_select(data: IOData, order: Any, *, feedthrough: Any, **kw: Any) -> Any:
     """:func:`sysid.ssest` with the order chosen from the data (``feedthrough="auto"`` is
     decided before, by :func:`sysid.subspace.feedthrough.choose_feedthrough`): ``"auto"``,
-    the subspace models' held-out simulation fit (when the model refined at that order
-    leaves directions undetermined, the BIC of the refined models among it and the orders
-    below it the blocks allowed); a sequence of orders, the BIC of the refined models
-    (:func:`refined_order`)."""
+    the subspace models' held-out simulation fit; a sequence of orders, the BIC of the
+    refined models (:func:`refined_order`)."""
     import sysid
 
     from ..subspace.estimator import SubspaceEstimator
@@ -48,22 +46,7 @@ def ssest_select(data: IOData, order: Any, *, feedthrough: Any, **kw: Any) -> An
                             f"got {order!r}")
         est = SubspaceEstimator(data, kw.get("horizon"))
         sel = est.order_selection(feedthrough=bool(feedthrough))
-        model, said = recorded(
-            lambda: sysid.ssest(data, sel["order"], feedthrough=feedthrough, **kw))
-        lower = [n for n in sel.get("allowed", []) if n < sel["order"]]
-        if lower and model.info["pem"].get("undetermined", 0) > 0:
-            # the order the blocks chose is higher than the data support, as its refined
-            # model's IdentifiabilityWarning says: the stable orders below it the blocks
-            # allowed are refined too, and the lowest BIC is taken (as for a sequence)
-            by_bic, model = refined_order(data, [*lower, sel["order"]], bool(feedthrough),
-                                          kw)
-            sel = dict(sel, order=by_bic["order"], criterion=by_bic["criterion"],
-                       reason=f"{sel['reason']}; the model refined at order {sel['order']} "
-                       f"left parameter directions undetermined, so the allowed orders up "
-                       f"to it were refined and compared by BIC: {by_bic['reason']}",
-                       table=dict(sel["table"]), bic=by_bic["table"])
-        else:
-            reissue(said)
+        model = sysid.ssest(data, sel["order"], feedthrough=feedthrough, **kw)
         model.info["order_selection"] = sel
         return model
     sel, model = refined_order(data, order, bool(feedthrough), kw)

@@ -50,14 +50,10 @@ def ssest(
     data : IOData or (u, y)
     order : int, "auto" or sequence of int
         Model order. ``"auto"`` (default): the order whose subspace models best simulate
-        parts of the record held out (:meth:`SubspaceEstimator.order_selection`), unless
-        the model refined there leaves parameter directions undetermined (an order higher
-        than the data support): then the lowest BIC among it and the orders below it the
-        blocks allowed; a sequence (``range(1, 11)``): each order refined on the whole
-        record, the one with the lowest BIC of its simulation errors wins
-        (:func:`sysid.identify.structure.refined_order`). Table and reason in
-        ``info["order_selection"]`` (``"allowed"``: the orders the blocks chose among;
-        ``"bic"``: the refined orders' BIC when they were compared).
+        parts of the record held out (:meth:`SubspaceEstimator.order_selection`); a sequence
+        (``range(1, 11)``): each order refined on the whole record, the one with the lowest
+        BIC of its simulation errors wins (:func:`sysid.identify.structure.refined_order`).
+        Table and reason in ``info["order_selection"]``.
     feedthrough : bool or "auto", optional
         Estimate ``D``. Default: ``D = 0`` at a given order (MATLAB's ``ssest`` default, and
         the same for every sysid state-space estimator), chosen with the order (as

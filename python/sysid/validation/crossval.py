@@ -79,21 +79,16 @@ class OrderChoice:
         ``{order: held-out simulation fit %}`` (mean over outputs, median over blocks).
     reason : str
     criterion : str
-    allowed : list of int
-        The orders the choice was made among (stable ones unless the data insist,
-        :func:`stable_first`), with a finite score.
     """
 
     order: int
     table: dict[int, float] = field(default_factory=dict)
     reason: str = ""
     criterion: str = "cross-validated simulation fit"
-    allowed: list[int] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
         return {"order": self.order, "criterion": self.criterion, "reason": self.reason,
-                "table": {int(k): float(v) for k, v in self.table.items()},
-                "allowed": [int(n) for n in self.allowed]}
+                "table": {int(k): float(v) for k, v in self.table.items()}}
 
 
 def fold_count(data: IOData) -> int:
@@ -599,8 +594,7 @@ def cross_validated_order(
     allowed, note = stable_first(med, table, unstable)
     what = "one-step prediction" if predict else "simulation"
     n, why = choose({o: f for o, f in med.items() if o in allowed}, tol, what)
-    return OrderChoice(n, med, why + note, f"cross-validated {what} fit",
-                       sorted(o for o in allowed if np.isfinite(med[o])))
+    return OrderChoice(n, med, why + note, f"cross-validated {what} fit")
 
 
 def _unstable_orders(whole: Any, table: dict[int, float], method: str, feedthrough: bool
