@@ -34,12 +34,14 @@ def test_a_decaying_model_gets_no_such_warning(recwarn):
 
 
 def test_prediction_focus_at_the_bound_is_named_too(recwarn):
-    # the default prediction focus keeps A stable unless the likelihood-ratio test finds an
-    # unstable model significantly better: on an integrating plant it either returns the
-    # unstable model (that test's warning) or one held at the bound, which is now named as
-    # the simulation focus's is. Before, that was silent: ssest(data) on an unshipped heat
-    # exchanger returned a pole at 1 - 2.1e-6 (keeping 99.4 % of its mode over the record)
-    # and on the cascaded tanks one at 1 - 3.1e-9, without a word
+    # the default prediction focus keeps A stable from a stable start unless the
+    # likelihood-ratio test finds an unstable model significantly better: on an integrating
+    # plant it returns either the unstable model (that test's warning) or a stable one whose
+    # pole the record cannot tell from 1 (held there by the bound, or, here, reached freely
+    # from an unstable start), which is now named as the simulation focus's is. Before,
+    # that was silent: ssest(data) on an unshipped heat exchanger returned a pole at
+    # 1 - 2.1e-6 (keeping 99.4 % of its mode over the record) and on the cascaded tanks one
+    # at 1 - 3.1e-9, without a word
     m = sysid.ssest(_record(integrating=True), 2)
     rho = float(np.max(np.abs(m.poles())))
     said = [str(w.message) for w in recwarn if issubclass(w.category, StabilityWarning)]

@@ -20,11 +20,12 @@ from ..errors import StabilityWarning
 __all__ = ["warn_boundary", "warn_poles_at_bound"]
 
 
-def warn_boundary(A: np.ndarray, n: int, stacklevel: int = 3) -> bool:
+def warn_boundary(A: np.ndarray, n: int, stacklevel: int = 3, held: bool = True) -> bool:
     """A :class:`~sysid.StabilityWarning` when a pole of the stable ``A`` keeps more than
     ``PERSISTENT_DECAY`` of its mode over ``n`` samples (the longest experiment); True if it
     warned. A real pole (or one turning less than once over the record) acts as an
-    integrator there; an oscillating one as an undamped oscillation.
+    integrator there; an oscillating one as an undamped oscillation. ``held``: the search
+    kept ``A`` stable (else it ended there freely, from an unstable start).
 
     Examples
     --------
@@ -39,18 +40,19 @@ def warn_boundary(A: np.ndarray, n: int, stacklevel: int = 3) -> bool:
     """
     p = np.linalg.eigvals(np.asarray(A, float)) if n and np.size(A) else np.zeros(0)
     return warn_poles_at_bound(
-        p, n, "the refined model", "the search keeps A stable",
+        p, n, "the refined model", "the search keeps A stable" if held else None,
         integrating=("identify the differenced output or use focus='prediction' with "
                      "enforce_stability=False"),
         lower="order='auto'", stacklevel=stacklevel + 1)
 
 
-def warn_poles_at_bound(poles: np.ndarray, n: int, model: str, bound: str, *,
+def warn_poles_at_bound(poles: np.ndarray, n: int, model: str, bound: str | None, *,
                         integrating: str, lower: str, stacklevel: int = 3) -> bool:
     """:func:`warn_boundary` for the ``poles`` of any search that keeps them inside the
-    unit circle (``bound`` says which, e.g. "the search keeps F stable"; ``model`` names
-    the model; ``integrating`` is the advice for an integrating plant, ``lower`` how to ask
-    for a lower order). True if it warned.
+    unit circle (``bound`` says which, e.g. "the search keeps F stable"; ``None`` for a
+    search that ended there freely; ``model`` names the model; ``integrating`` is the
+    advice for an integrating plant, ``lower`` how to ask for a lower order). True if it
+    warned.
 
     Examples
     --------
@@ -75,18 +77,21 @@ def warn_poles_at_bound(poles: np.ndarray, n: int, model: str, bound: str, *,
            f"over the record ({n} samples)"
     turns = abs(float(np.angle(z))) * n / (2 * np.pi)
     if turns < 1.0:
-        msg = (f"{model} has {what}: {bound}, and such a pole "
-               f"usually sits where that bound held it (an integrating plant, or a drift); the "
-               f"record cannot tell it from an integrator, so the static gain and the step "
-               f"response's final value (which grow as 1 / (1 - |p|)) are not determined. If "
-               f"the plant integrates, {integrating}; if not, remove the drift "
-               f"first (sysid.detrend(data, 'linear'))")
+        why = (f"{bound}, and such a pole usually sits where that bound held it (an "
+               f"integrating plant, or a drift); the record cannot tell it from an integrator"
+               if bound else "the record cannot tell it from an integrator (an integrating "
+               "plant, or a drift)")
+        msg = (f"{model} has {what}: {why}, so the static gain and the step response's final "
+               f"value (which grow as 1 / (1 - |p|)) are not determined. If the plant "
+               f"integrates, {integrating}; if not, remove the drift first "
+               f"(sysid.detrend(data, 'linear'))")
     else:
+        where = (f"{bound}, and such a pair usually sits where that bound held it" if bound
+                 else "such a pair usually comes from")
         msg = (f"{model} has {what}, an undamped oscillation of period "
-               f"{2 * np.pi / abs(float(np.angle(z))):.3g} samples: {bound}, "
-               f"and such a pair usually sits where that bound held it (an order higher than "
-               f"the data support, fitting noise, or a periodic disturbance in the output); "
-               f"try a lower order ({lower}) or look for the disturbance "
+               f"{2 * np.pi / abs(float(np.angle(z))):.3g} samples: {where} (an order higher "
+               f"than the data support, fitting noise, or a periodic disturbance in the "
+               f"output); try a lower order ({lower}) or look for the disturbance "
                f"(sysid.spectra(data))")
     warnings.warn(msg, StabilityWarning, stacklevel=stacklevel + 1)
     return True
