@@ -56,6 +56,18 @@ def test_prediction_focus_at_the_bound_is_named_too(recwarn):
     assert not [w for w in recwarn if "keeps" in str(w.message)], free.poles()
 
 
+def test_prediction_focus_held_by_the_bound_says_so():
+    # from a stable start the default prediction search keeps A stable: on the integrating
+    # plant the bound holds the slow pole at 1 and the likelihood-ratio test finds no
+    # unstable model significantly better, so the warning names the bound
+    d = _record(integrating=True)
+    start = sysid.n4sid(d, 2, stable=True)
+    assert np.max(np.abs(start.poles())) < 0.99
+    with pytest.warns(StabilityWarning, match="the search keeps A stable, and such a pole"):
+        m = sysid.pem(d, start)
+    assert 0.99 < np.max(np.abs(m.poles())) ** 1500 <= 1.0
+
+
 def test_an_undamped_pair_fitted_to_noise_is_named():
     # order 6 of a 2nd-order plant: the spare states become an undamped pair at the bound
     with pytest.warns(StabilityWarning, match="an undamped oscillation of period"):
