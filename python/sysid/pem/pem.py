@@ -263,15 +263,14 @@ def _warn_dropped_d(stacklevel: int) -> None:
 
 
 def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None,
-          n: int = 0, held: bool | None = None) -> None:
-    """The warnings of a refinement: an unstable model, a pole the stability bound holds at
-    the unit circle (:func:`.boundary.warn_boundary`, whenever a bound held ``A``: the
-    simulation focus, ``enforce_stability=True``, or (``held``) the default from a stable
-    start; ``n``: samples of the longest experiment), a search stopped at its cap."""
+          n: int = 0, held: bool = True) -> None:
+    """The warnings of a refinement: an unstable model, a pole at the unit circle
+    (:func:`.boundary.warn_boundary`; ``held``: a bound kept ``A`` stable, else the search
+    ended there freely; ``n``: samples of the longest experiment), a search stopped at its
+    cap."""
     rho = float(res["spectral_radius"])
     if focus == "simulation" or enforce is not False:
-        warn_boundary(res["a"], n, stacklevel=4,
-                      held=focus == "simulation" or bool(enforce if held is None else held))
+        warn_boundary(res["a"], n, stacklevel=4, held=held)
     if rho >= 1.0:
         why = ("an unstable model fits the data significantly better than the best stable "
                "one (likelihood-ratio test at 1 %)" if enforce is None else
@@ -591,8 +590,10 @@ def pem(
     finally:
         close_bar()
     units.report(res)  # the criterion in the record's units
-    # the default keeps A stable from a stable start (the core's rule), so held it
-    held = enforce_stability if enforce_stability is not None else _radius(A) < 1.0
+    # a bound held A: the simulation focus, enforce_stability=True, or the default from a
+    # stable start (the core's rule)
+    held = (focus == "simulation" or bool(enforce_stability)
+            or (enforce_stability is None and _radius(A) < 1.0))
     _warn(res, focus, max_iter, enforce_stability, max(data.lengths), held)
     stabilized = st.stabilized
     Kres = res["k"] if K is not None else None

@@ -16,6 +16,7 @@ from .._checks import (
     as_int,
     as_int_grid,
     experiment_arrays,
+    mode_kept,
     require_inputs_vary,
     user_stacklevel,
     warn_if_capped,
@@ -353,7 +354,7 @@ def _warn_held_f(m: PolynomialModel, f: list[list[np.ndarray]], method: str, n: 
                 continue
             r = np.roots(np.concatenate([[1.0], np.asarray(fj, float)]))
             if r.size and np.all(np.isfinite(r)) and np.abs(r).max() < 1.0:
-                kept = float(np.abs(r).max()) ** n
+                kept = mode_kept(float(np.abs(r).max()), n)
                 if best is None or kept > best[0]:
                     best = (kept, f"{m.output_names[i]} <- {m.input_names[j]}", r)
     if best is not None:

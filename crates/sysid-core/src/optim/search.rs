@@ -299,12 +299,7 @@ pub fn minimize(
         // at the cap, the point's own Gauss-Newton matrix (formed when `final_gauss_newton`)
         // still answers the convergence tests below: a search that converged on its last
         // allowed iteration says so, not that it stopped short
-        if capped
-            && (options.max_iter == 0
-                || !options.final_gauss_newton
-                || frozen > 0
-                || pt.g.len() != p)
-        {
+        if capped && (options.max_iter == 0 || !options.final_gauss_newton || frozen > 0) {
             stop = StopReason::MaxIterations;
             break;
         }
