@@ -217,5 +217,6 @@ pub fn search_items(
     geo.set_item("accepted", sol.geodesic.accepted)?;
     geo.set_item("refused", sol.geodesic.refused)?;
     out.set_item("geodesic", geo)?;
+    out.set_item("shortened", sol.shortened)?;
     Ok(())
 }

@@ -30,7 +30,7 @@ from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
 from ..subspace.feedthrough import check_feedthrough, choose_feedthrough
-from .boundary import warn_boundary
+from .boundary import cap_advice, warn_boundary
 from .units import SearchUnits, search_units
 
 __all__ = ["pem", "pem_loss", "PemUncertainty"]
@@ -281,8 +281,8 @@ def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None,
             StabilityWarning, stacklevel=3)
     if res["stop"] == "maximum iterations" and max_iter > 0:
         warn_iteration_limit(f"the {focus} search", max_iter, res["history"],
-                             "raise max_iter, or refine again with sysid.pem(data, model)",
-                             stacklevel=4)
+                             cap_advice(res), stacklevel=4)
+
 
 
 def _warn_undetermined(res: dict[str, Any], n: int) -> int:
@@ -512,7 +512,9 @@ def pem(
         square (:mod:`sysid.pem.units`; ``"channel_scaling"``, the input and output scales,
         and ``"state_scale"``, the state basis factor), so that its path and the model do not
         depend on the channels' units; the criterion is reported in the record's units.
-        Stopping at ``max_iter`` warns (:class:`sysid.IterationLimitWarning`).
+        Stopping at ``max_iter`` warns (:class:`sysid.IterationLimitWarning`); ``"shortened"``
+        counts the accepted steps the stability bound shortened, and when it is most of them
+        the warning says that more iterations creep along that bound.
         ``uncertainty`` holds the parameter covariance (:class:`sysid.ParameterUncertainty`), so
         that ``poles(std=True)``, ``freqresp(w, std=True)``, ``damp(std=True)`` and Bode bands
         work: the Gauss-Newton one, and with ``focus="simulation"`` (no noise model) on one
@@ -634,6 +636,7 @@ def pem(
         "loss_history": list(res["loss_history"]),
         "stop": res["stop"],
         "geodesic": dict(res["geodesic"], on=bool(geodesic)),
+        "shortened": int(res["shortened"]),
         "condition": res["condition"],
         "focus": focus,
         "weighting": weighting,

@@ -368,6 +368,9 @@ pub struct Solution {
     /// calls that returned one), accepted steps that carried one, and trials refused by the
     /// acceleration's size (`2 |a| / |v| > 0.75`).
     pub geodesic: GeodesicCounts,
+    /// Accepted steps that the admissible set shortened ([`Problem::admissible`]): a search
+    /// that keeps meeting its boundary (a pole held at the unit circle) moves slowly.
+    pub shortened: usize,
 }
 
 /// What geodesic acceleration did in one search ([`Solution::geodesic`]).

@@ -288,6 +288,7 @@ pub fn minimize(
     let mut frozen = 0usize;
     let mut last_red: Option<Reduced> = None;
     let mut geo = GeodesicCounts::default();
+    let mut shortened = 0usize;
     let stop;
     loop {
         let capped = iterations >= options.max_iter;
@@ -376,6 +377,8 @@ pub fn minimize(
             break;
         }
         let mut accepted: Option<(Vec<f64>, f64, f64, f64, f64, bool)> = None;
+        // whether the admissible set shortened the accepted step
+        let mut cut = false;
         for try_ in 0..60 {
             if stale && try_ > 0 {
                 // a chord step gets one try at the current damping
@@ -466,6 +469,7 @@ pub fn minimize(
                     eprintln!("PROF step mu {used:e} rho {rho} pred {pred:e} actual {actual:e} try {try_} halvings {halvings}");
                 }
                 accepted = Some((trial, cand_cost, used, rho, quad, accel.is_some()));
+                cut = halvings > 0;
                 break;
             }
             if std::env::var_os("SYSID_PROFILE").is_some() {
@@ -487,6 +491,7 @@ pub fn minimize(
             break;
         };
         geo.accepted += usize::from(accelerated);
+        shortened += usize::from(cut);
         let step_norm = norm(&(0..p).map(|i| trial[i] - pt.theta[i]).collect::<Vec<_>>());
         // relative decrease under the same cost definition (before any re-weighting)
         let rel_decrease = (pt.cost - cand_cost) / pt.cost.abs().max(f64::MIN_POSITIVE);
@@ -613,5 +618,6 @@ pub fn minimize(
         active_bounds,
         theta: pt.theta,
         geodesic: geo,
+        shortened,
     })
 }

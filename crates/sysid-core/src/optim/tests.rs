@@ -222,6 +222,8 @@ fn inadmissible_region_never_entered() {
     pr.admissible = Box::new(|t| t[0] < 0.4);
     let sol = go(&mut pr, &[0.0; 3], &Options::default());
     assert!(pr.visited.iter().all(|t| t[0] < 0.4));
+    // the steps the boundary shortened are counted; the free search has none
+    assert!(sol.shortened > 0 && sol.shortened <= sol.iterations && unb.shortened == 0);
     assert!(
         sol.theta[0] < 0.4
             && sol.cost

@@ -311,6 +311,7 @@ fn merge(first: optim::Solution, mut second: optim::Solution) -> optim::Solution
     second.weighted_history = weighted;
     second.iterations += first.iterations;
     second.evaluations += first.evaluations;
+    second.shortened += first.shortened;
     second
 }
 
