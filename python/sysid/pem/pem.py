@@ -284,7 +284,6 @@ def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None,
                              cap_advice(res), stacklevel=4)
 
 
-
 def _warn_undetermined(res: dict[str, Any], n: int) -> int:
     """The number of directions of the refined model, beyond its similarity orbit (``n^2``
     of the full parametrisation), that its Gauss-Newton matrix leaves undetermined; an
