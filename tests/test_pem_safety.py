@@ -134,6 +134,37 @@ def test_simulated_near_integrator_prediction_focus():
     assert fails == 0
 
 
+def test_the_unstable_alternative_is_tried_only_from_a_converged_stable_search():
+    """The default prediction focus prefers an unstable model only when it fits
+    significantly better than the stable optimum (likelihood-ratio test). A stable search
+    stopped at ``max_iter`` has not reached that optimum: a free search from there lowers the
+    cost by going on, whatever the plant (an order-4 fit of an aircraft structure passed the
+    test that way with a pole at 1.007, validation fit -inf), so the model stays stable and
+    the cap is said; before, the free search ran another ``max_iter`` iterations and returned
+    the unstable model."""
+    true = sysid.StateSpaceModel([[1.01, 0.0], [0.0, 0.6]], [[0.2], [1.0]], [[1.0, 1.0]],
+                                 K=[[0.9], [0.2]])
+    rng = np.random.default_rng(0)
+    u, e = rng.standard_normal((400, 1)), 0.3 * rng.standard_normal((400, 1))
+    y = _sysid.simulate(true.A, np.hstack([true.B, true.K]), true.C,
+                        np.hstack([true.D, np.eye(1)]), np.hstack([u, e]), None)
+    data = sysid.IOData(u=u, y=y)
+    start = sysid.n4sid(data, 2, stable=True)
+    assert _radius(start) < 1.0
+    # converged: the data insist on the unstable plant, and the warning says so
+    with pytest.warns(StabilityWarning, match="significantly better"):
+        free = sysid.pem(data, start, max_iter=100)
+    assert free.info["pem"]["stop"] != "maximum iterations" and _radius(free) > 1.0
+    # stopped at the cap: stable, the cap said, no claim about the data, max_iter honoured
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        capped = sysid.pem(data, start, max_iter=2)
+    assert _radius(capped) < 1.0
+    assert capped.info["pem"]["iterations"] == 2
+    assert any(issubclass(w.category, IterationLimitWarning) for w in rec)
+    assert not [w for w in rec if "significantly better" in str(w.message)]
+
+
 def test_pem_loss_matches_numpy_and_the_start_of_pem():
     rng = np.random.default_rng(1)
     true = sysid.StateSpaceModel([[0.7, 0.2], [-0.2, 0.7]], [[1.0, 0.0], [0.3, 1.0]],

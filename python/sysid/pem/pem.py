@@ -456,7 +456,8 @@ def pem(
         Keep ``A`` stable (MATLAB's ``EnforceStability``). ``focus="simulation"`` always
         does. ``None`` (default): with ``focus="prediction"`` the predictor ``A - K C`` is
         always stable and ``A`` is kept stable unless an unstable model fits significantly
-        better (likelihood-ratio test at the 1 % level); then a
+        better (likelihood-ratio test at the 1 % level, made only once the stable search has
+        converged: one stopped at ``max_iter`` keeps ``A`` stable); then a
         :class:`sysid.StabilityWarning` names the largest pole modulus. ``False``: only the
         predictor is kept stable (a warning still says when the model is unstable). Where A
         is kept stable, a pole whose mode keeps over 99 % over the record (where the bound

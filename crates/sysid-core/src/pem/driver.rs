@@ -284,7 +284,15 @@ fn pem_from(
         spectral_radius(prob.unpack(th).a.as_ref()).unwrap_or(f64::INFINITY)
     };
     let active = prob.a_bound_hits > 0 || rho(&prob, &solution.theta) >= NEAR_BOUNDARY;
-    if auto && a_stable && active {
+    // the test compares two minima: a stable search stopped at its cap (or by the observer)
+    // has not reached its own, and the free search from there lowers the cost by going on,
+    // not by leaving the unit circle (an order-4 model of an aircraft structure passed it
+    // that way with a pole at 1.007); the model is then kept stable
+    let converged = !matches!(
+        solution.stop,
+        StopReason::MaxIterations | StopReason::Cancelled
+    );
+    if auto && a_stable && active && converged {
         // the bound was active: does an unstable model fit significantly better?
         prob.enforce_stability = false;
         let kept = solution.theta.clone();

@@ -105,7 +105,8 @@ pub struct PemOptions {
     /// so for simulation focus, where the predictor is `A`). `None` (default): for prediction
     /// focus from a stable start, `A` is kept stable unless an unstable model fits
     /// significantly better (a likelihood-ratio test at the 1 % level, see
-    /// [`pem`](super::pem)); `Some(false)`: only the predictor is kept stable.
+    /// [`pem`](super::pem), made only when the stable search converged, not when it stopped
+    /// at `max_iter` or was cancelled); `Some(false)`: only the predictor is kept stable.
     pub enforce_stability: Option<bool>,
     /// Search in the modal chart where it applies (default `true`; see `pem::chart`: no
     /// Kalman gain, a well-conditioned modal form; the result returns in the start's basis).
