@@ -7,6 +7,7 @@ reference, scored on held-out validation data.
     .venv/bin/python benches/realdata.py --split reversed --no-peers --records dryer ...
     .venv/bin/python benches/realdata.py --unshipped DIR # DaISy records not shipped (below)
     .venv/bin/python benches/realdata.py --nonlinear-records DIR --no-peers  # (below)
+    .venv/bin/python benches/realdata.py --more-records DIR  # five more records (below)
 
 Records (``/work/shared/data``, see its README; the DaISy records and the F-16 ground
 vibration test). Splits: the README's where it gives one (dryer 1:500 / 501:1000, robot arm
@@ -35,6 +36,19 @@ project does not ship either (Silverbox, Wiener-Hammerstein 2009, cascaded tanks
 splits and files of ``benches/nonlinear_unshipped.py``, training cut to 20 000 samples, each
 validated on its benchmark test record under every ``--split``), into
 ``results/realdata_nonlinear_records.md``: the best linear approximation of each.
+``--more-records DIR`` runs five more records from outside the DaISy collection that the
+project does not ship (``MORE``), each read from ``DIR/<name>.npz`` (arrays ``u``, ``y``), into
+``results/realdata_more[_<split>].md``: the Box-Jenkins gas furnace (series J, 296 samples;
+a copy at GitHub WizardKingZ/time_series_outlier_detection ``gas-furnace.csv``), a DC-DC buck
+converter and a DC motor driving a generator (GitHub wilsonrljr/sysidentpy-data,
+``datasets/buck/buck_id.csv`` validated on ``buck_valid.csv``, and ``datasets/generator/
+x_cc.csv``, ``y_cc.csv`` every 500th sample, as SysIdentPy's examples thin them), and the
+magneto-rheological damper and industrial robot arm of MATLAB's System Identification
+Toolbox examples (copies in GitHub gsmfnc/LPV_SysId, ``noise_simulations/autoencoders/
+Magneto.mat``, its estimation and validation parts joined back into one record, and
+``RobotArm.mat``: ``U, Y`` validated on ``U_val, Y_val``). The records of one file take the
+first 2/3 / last 1/3 split (every ``--split`` applies); the two with a separate validation
+record keep it under every ``--split``, as the F-16 levels do.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -139,6 +153,31 @@ UNSHIPPED = {
     "steamgen": ("steamgen", [1, 2, 3, 4], [5, 6, 7, 8]),  # steam generator
     "powerplant": ("powerplant", [1, 2, 3, 4, 5], [6, 7, 8]),  # power plant (references left out)
 }
+
+
+#: records from outside DaISy the project does not ship (``--more-records DIR``): the files
+#: ``DIR/<name>.npz`` hold ``u`` and ``y`` (samples x channels); a second name is a separate
+#: validation record (kept under every split)
+MORE = {
+    "gas_furnace": ("gas_furnace_bj", None),  # gas rate -> CO2 (Box and Jenkins, series J)
+    "buck": ("buck_converter_id", "buck_converter_valid"),  # duty cycle -> output voltage
+    "dc_motor": ("dc_motor_generator_d500", None),  # motor voltage -> generator voltage
+    "mr_damper": ("mr_damper_matlab", None),  # velocity -> force
+    "ind_robot": ("industrial_robot_arm_matlab_est",  # motor torque -> motor speed
+                  "industrial_robot_arm_matlab_val"),
+}
+
+
+def _more(folder: Path, name: str):
+    est, val = MORE[name]
+
+    def read(f: str):
+        z = np.load(folder / f"{f}.npz")
+        return np.asarray(z["u"], float), np.asarray(z["y"], float)
+    u, y = read(est)
+    if val is not None:
+        return (u, y), read(val)
+    return _split(u, y, (2 * u.shape[0]) // 3, SPLIT)
 
 
 def _unshipped(folder: Path, name: str):
@@ -560,6 +599,9 @@ def main() -> None:
                          "(Silverbox, WH2009, cascaded tanks, EMPS; read from DIR as "
                          "benches/nonlinear_unshipped.py reads them, training cut to 20 000 "
                          "samples; their test records validate under every --split)")
+    ap.add_argument("--more-records", default=None, metavar="DIR",
+                    help="run five more records the project does not ship (MORE), read from "
+                         "DIR/<name>.npz, instead of the shipped ones")
     args = ap.parse_args()
     global SPLIT
     SPLIT = args.split
@@ -585,6 +627,12 @@ def main() -> None:
             RECORDS[name] = lambda name=name: _unshipped(Path(args.unshipped), name)
         if "--records" not in sys.argv:
             args.records = list(UNSHIPPED)
+    if args.more_records:
+        stem = "realdata_more"
+        for name in MORE:
+            RECORDS[name] = lambda name=name: _more(Path(args.more_records), name)
+        if "--records" not in sys.argv:
+            args.records = list(MORE)
     if args.out is None:
         tail = "" if args.split == "default" else f"_{args.split}"
         args.out = str(HERE / "results" / f"{stem}{tail}.md")
