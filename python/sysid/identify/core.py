@@ -564,6 +564,8 @@ def identify(
         raise DataError(f"time_budget must be a positive number of seconds, got {time_budget!r}")
     require_held_out_length(data)  # before the channel checks: 1 sample is "constant"
     require_inputs_vary(data.experiments, "identify", data.input_names)
+    # before the means are removed (a constant output is then 0)
+    require_inputs_vary(data.experiments, "identify", data.output_names, side=1)
     validation = _checked_validation(validation, data)  # before the search, not after it
     centred, mu, my = _offsets(data)
     checks, feedback = _checks(centred)

@@ -338,7 +338,7 @@ def nlssest(
     """
     if not isinstance(data, IOData):
         raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
-    from .._checks import as_int, as_nonnegative
+    from .._checks import as_int, as_nonnegative, as_seed
 
     n = check_order(order)
     hid, enc = _widths(hidden, "hidden"), _widths(encoder_hidden, "encoder_hidden") \
@@ -352,7 +352,7 @@ def nlssest(
     _check_init(init)
     lam_reg = as_nonnegative(regularization, "regularization")
     epochs, batch = as_int(epochs, "epochs", 0), as_int(batch, "batch", 1)
-    patience = as_int(patience, "patience", 1)
+    patience, seed = as_int(patience, "patience", 1), as_seed(seed)
     if not as_nonnegative(learning_rate, "learning_rate") > 0:
         raise DataError(f"learning_rate must be a finite number > 0, got {learning_rate!r}")
     sc = Scaling.of(data)

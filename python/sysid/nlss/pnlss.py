@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import as_int, as_nonnegative, as_seed
 from .._display import modulus
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
@@ -171,11 +172,13 @@ class PNLSSModel(LinearPart, ModelMixin):
 
 def _degrees(degree: Any) -> list[int]:
     ds = [degree] if np.ndim(degree) == 0 else list(degree)
-    try:
+    try:  # int(2.5) == 2 would silently drop the fraction: a fraction is refused
         out = sorted({int(d) for d in ds})
-    except (TypeError, ValueError):
-        raise DataError(f"degree must be an integer or a list of integers, got {degree!r}") \
-            from None
+        exact = all(int(d) == d for d in ds)
+    except (TypeError, ValueError, OverflowError):
+        exact = False
+    if not exact:
+        raise DataError(f"degree must be an integer or a list of integers, got {degree!r}")
     if not out:
         raise DataError("degree needs at least one value")
     if max(out) < 2:
@@ -318,6 +321,11 @@ def pnlss(
         raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
     n = check_order(order)
     degs = _degrees(degree)
+    # before the Rust core, which takes them unsigned (OverflowError on a negative)
+    max_iter, tol, seed = as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol"), \
+        as_seed(seed)
+    if transient is not None:
+        transient = as_int(transient, "transient", 0)
     if data.n_inputs == 0:
         raise DataError("pnlss needs inputs; for output-only records use sysid.ar/arma")
     sc = Scaling.of(data)

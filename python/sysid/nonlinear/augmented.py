@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import as_2d
 from ..errors import DataError
 from ..models.protocol import ModelMixin
 
@@ -120,11 +121,8 @@ class AugmentedInputModel(ModelMixin):
         return int(self.linear.n_parameters)
 
     def _u(self, u: Any) -> np.ndarray:
-        u = np.asarray(u, float)
-        u = u[:, None] if u.ndim == 1 else u
-        if u.ndim != 2 or u.shape[1] != self.ninputs:
-            raise DataError(f"u has shape {u.shape} but should be (n_samples, {self.ninputs})")
-        return _augment(u, self._fns)
+        # complex, NaN or Inf, a wrong shape: an error naming u
+        return _augment(as_2d(u, "u", ncols=self.ninputs), self._fns)
 
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
         """Output of the linear model for the augmented inputs."""

@@ -16,7 +16,14 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import experiment_arrays, require_inputs_vary, warn_if_capped
+from .._checks import (
+    as_int,
+    as_int_grid,
+    as_nonnegative,
+    experiment_arrays,
+    require_inputs_vary,
+    warn_if_capped,
+)
 from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError, StabilityWarning
 from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction
@@ -108,10 +115,14 @@ def nlhw(
         raise DataError("nlhw handles one input and one output; select channels with "
                         "data.select(...)")
     require_inputs_vary(exps, "nlhw", getattr(data, "input_names", None))
-    for v, name in ((nb, "nb"), (nf, "nf"), (nk, "nk")):
-        if int(v) != v or v < (1 if name == "nb" else 0):
-            raise DataError(f"{name} must be a{' positive' if name == 'nb' else ' non-negative'}"
-                            f" integer, got {v!r}")
+    # before centring (a constant output is then 0) and the linear start (named oe)
+    require_inputs_vary(exps, "nlhw", getattr(data, "output_names", None), side=1)
+    # the orders as arx and oe take them: a scalar or a (1, 1) array of integers
+    nb, nf, nk = (as_int_grid(v, (1, 1), name)[0][0] for v, name in
+                  ((nb, "nb"), (nf, "nf"), (nk, "nk")))
+    if nb < 1:
+        raise DataError(f"nb must be a positive integer, got {nb!r}")
+    max_iter, tol = as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")
     fin, fout = _check_nl(input_nl, "input_nl"), _check_nl(output_nl, "output_nl")
     shift = use_offsets(offsets, [fin, fout], exps)
     u0, y0 = record_means(exps) if shift else (np.zeros(1), np.zeros(1))

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d
+from .._checks import as_2d, as_horizon, as_measured
 from ..errors import DataError
 from ..models.protocol import ModelMixin
 
@@ -411,12 +411,8 @@ class HammersteinWienerModel(ModelMixin):
         return int(self.theta.size)
 
     def _u(self, u: Any) -> np.ndarray:
-        u = np.asarray(u, float)
-        if u.ndim == 2 and u.shape[1] == 1:
-            u = u[:, 0]
-        if u.ndim != 1:
-            raise DataError(f"u has shape {u.shape} but should be (n_samples, 1)")
-        as_2d(u, "u")  # a NaN or Inf: an error naming the sample, not NaN outputs
+        # complex, NaN or Inf, a wrong shape: an error naming u, not NaN outputs
+        u = as_2d(u, "u", ncols=1)[:, 0]
         if self.u_offset:
             u = u - self.u_offset
         if isinstance(self.input_nl, UserFunction):
@@ -437,7 +433,10 @@ class HammersteinWienerModel(ModelMixin):
         return self.signals(u)[0][:, None]
 
     def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
-        """The output-error predictor does not use measured outputs: equals ``simulate``."""
+        """The output-error predictor does not use measured outputs: equals ``simulate``
+        (``u``, ``y`` and ``horizon`` are checked all the same, as every model's are)."""
+        as_horizon(horizon)
+        u, _ = as_measured(u, y, 1, 1)
         return self.simulate(u)
 
     def linear(self) -> Any:

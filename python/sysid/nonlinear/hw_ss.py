@@ -16,7 +16,13 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import experiment_arrays, require_inputs_vary, warn_if_capped
+from .._checks import (
+    as_int,
+    as_nonnegative,
+    experiment_arrays,
+    require_inputs_vary,
+    warn_if_capped,
+)
 from .._progress import iteration_callback, iteration_printer
 from ..data.offsets import check_offsets
 from ..errors import DataError
@@ -127,6 +133,10 @@ def nlhw_ss(
     if any(isinstance(g, UserFunction) for g in fout):
         raise DataError("a UserFunction can only be an input nonlinearity")
     require_inputs_vary(exps, "nlhw_ss", getattr(data, "input_names", None))
+    # before centring (a constant output is then 0) and the linear start (named otherwise)
+    require_inputs_vary(exps, "nlhw_ss", getattr(data, "output_names", None), side=1)
+    # before the Rust core, which takes max_iter unsigned (OverflowError on a negative)
+    max_iter, tol = as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")
     shift = use_offsets(offsets, fin + fout, exps)
     u0, y0 = record_means(exps) if shift else (np.zeros(m), np.zeros(p))
     if shift:

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d
+from .._checks import as_2d, as_horizon, as_measured
 from ..errors import DataError
 from ..models.protocol import ModelMixin
 from .hw_model import Nonlinearity, UserFunction, nonlinearity_from_dict
@@ -116,13 +116,8 @@ class HammersteinWienerSSModel(ModelMixin):
         return [f.spec() for f in self.input_nls], [g.spec() for g in self.output_nls]
 
     def _u(self, u: Any) -> np.ndarray:
-        u = np.asarray(u, float)
-        if u.ndim == 1 and self.ninputs == 1:
-            u = u[:, None]
-        if u.ndim != 2 or u.shape[1] != self.ninputs:
-            raise DataError(f"u has shape {u.shape} but should be (n_samples, {self.ninputs})")
-        as_2d(u, "u")  # a NaN or Inf: an error naming the sample, not NaN outputs
-        u = u - self.u_offset
+        # complex, NaN or Inf, a wrong shape: an error naming u, not NaN outputs
+        u = as_2d(u, "u", ncols=self.ninputs) - self.u_offset
         for j, f in enumerate(self.input_nls):
             if isinstance(f, UserFunction):
                 u[:, j] = f(u[:, j])
@@ -138,7 +133,10 @@ class HammersteinWienerSSModel(ModelMixin):
             + self.y_offset
 
     def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
-        """The output-error predictor does not use measured outputs: equals ``simulate``."""
+        """The output-error predictor does not use measured outputs: equals ``simulate``
+        (``u``, ``y`` and ``horizon`` are checked all the same, as every model's are)."""
+        as_horizon(horizon)
+        u, _ = as_measured(u, y, self.ninputs, self.noutputs)
         return self.simulate(u)
 
     def linear(self) -> Any:

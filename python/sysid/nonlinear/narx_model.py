@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from ..errors import DataError
+from .._checks import as_2d, as_horizon, as_measured
+from ..errors import DataError, ShapeError
 from ..models.protocol import ModelMixin
 from .customreg import CustomRegressor
 
@@ -195,16 +196,12 @@ class LaggedIO:
     noutputs: int
     max_lag: int
 
-    def _u(self, u: Any, n: int | None = None) -> np.ndarray:
-        """``u`` as a contiguous ``(n_samples, ninputs)`` array (of ``n`` samples if given)."""
-        u = np.asarray(u, dtype=float)
-        if u.ndim == 1 and self.ninputs == 1:
-            u = u[:, None]
-        if u.ndim == 1 and self.ninputs == 0:
-            u = np.zeros((u.size, 0))
-        if u.ndim != 2 or u.shape[1] != self.ninputs or (n is not None and u.shape[0] != n):
-            raise DataError(f"u has shape {u.shape} but should be (n_samples, {self.ninputs})")
-        return np.ascontiguousarray(u)
+    def _u(self, u: Any) -> np.ndarray:
+        """``u`` as a contiguous real, finite ``(n_samples, ninputs)`` array."""
+        if self.ninputs == 0 and np.ndim(u) == 1:
+            return np.zeros((np.size(u), 0))
+        return np.ascontiguousarray(as_2d(u, "u", ncols=self.ninputs,
+                                          allow_empty=self.ninputs == 0))
 
     def _y0(self, x0: Any) -> np.ndarray:
         """The first ``max_lag`` outputs a simulation starts from: ``x0`` (``None`` or
@@ -212,21 +209,27 @@ class LaggedIO:
         lag, ny = self.max_lag, self.noutputs
         if x0 is None or (isinstance(x0, str) and x0 == "zero"):
             return np.zeros((lag, ny))
-        y0 = np.asarray(x0, float).reshape(-1, ny)[:lag]
+        want = f"the first {lag} outputs, shape ({lag}, {ny})"
+        if isinstance(x0, (str, bytes)):
+            raise DataError(f"x0 must be None, 'zero' or {want}; got {x0!r}")
+        y0 = as_2d(x0, "x0")  # complex, NaN, not numeric: an error naming x0
+        if y0.size % ny:
+            raise ShapeError(f"x0 has shape {y0.shape} but should hold {want}")
+        y0 = y0.reshape(-1, ny)[:lag]
         if y0.shape[0] < lag:
-            raise DataError(f"x0 must hold the first {lag} outputs, shape ({lag}, {ny})")
+            raise ShapeError(f"x0 must hold {want}")
         return np.ascontiguousarray(y0)
 
     def _measured(self, u: Any, y: Any, horizon: Any) -> tuple[np.ndarray, np.ndarray, int]:
         """``predict``'s arguments checked: ``u``, ``y`` of one length and the horizon."""
-        y = np.asarray(y, float)
-        y = y[:, None] if y.ndim == 1 else y
-        if y.ndim != 2 or y.shape[1] != self.noutputs:
-            raise DataError(f"y has shape {y.shape} but should be (n, {self.noutputs})")
-        u = self._u(u, y.shape[0])
-        if int(horizon) != horizon or horizon < 1:
-            raise DataError(f"horizon must be a positive integer, got {horizon!r}")
-        return u, np.ascontiguousarray(y), int(horizon)
+        if self.ninputs == 0 and np.ndim(u) == 1:
+            u = np.zeros((np.size(u), 0))
+        u, y = as_measured(u, y, self.ninputs, self.noutputs)
+        h = as_horizon(horizon)
+        if h is None:
+            raise DataError("horizon must be a positive integer; for the free-run prediction "
+                            "(np.inf) call model.simulate(u)")
+        return np.ascontiguousarray(u), np.ascontiguousarray(y), h
 
 
 class NARXModel(LaggedIO, ModelMixin):

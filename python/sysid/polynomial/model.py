@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import as_2d, as_horizon, as_measured
 from ..errors import DataError
 from ..models.protocol import ModelMixin
 
@@ -203,14 +204,9 @@ class PolynomialModel(ModelMixin):
         return m
 
     def _check_u(self, u: Any) -> np.ndarray:
-        u = np.ascontiguousarray(u, dtype=float)
-        if u.ndim == 1:
-            u = u[:, None]
-        if u.ndim != 2 or u.shape[1] != self.n_inputs:
-            raise DataError(f"u has shape {u.shape} but should be (n_samples, {self.n_inputs})")
-        if not np.all(np.isfinite(u)):
-            raise DataError("u has non-finite values; clean the input first")
-        return u
+        """``u`` real, finite and ``(n_samples, n_inputs)`` (complex or NaN input refused)."""
+        return np.ascontiguousarray(as_2d(u, "u", ncols=self.n_inputs,
+                                          allow_empty=self.n_inputs == 0))
 
     def _deterministic(self, u: np.ndarray, i: int) -> np.ndarray:
         """``sum_j B_ij/F_ij u_j(t - nk_ij)`` (Rust filter)."""
@@ -246,8 +242,7 @@ class PolynomialModel(ModelMixin):
     def residuals(self, u: Any, y: Any) -> np.ndarray:
         """One-step prediction errors ``e = D/C (A y - sum B/F u)`` (matrix ``A`` for a
         coupled MIMO ARX model)."""
-        u = self._check_u(u)
-        y = np.asarray(y, dtype=float).reshape(u.shape[0], -1)
+        u, y = as_measured(u, y, self.n_inputs, self.n_outputs)
         if self.coupled:
             return y - self._coupled_predict(u, y, 1)
         out = []
@@ -275,23 +270,13 @@ class PolynomialModel(ModelMixin):
         array([0.  , 0.  , 0.25])
         """
         _rest(x0)
-        if isinstance(horizon, (float, np.floating)) and horizon == np.inf:
-            horizon = np.iinfo(np.int64).max  # MATLAB's predict(..., Inf): the simulation
-        if (isinstance(horizon, (bool, np.bool_)) or not isinstance(horizon, (int, np.integer,
-                                                                              float, np.floating))
-                or not np.isfinite(horizon) or int(horizon) != horizon or horizon < 1):
-            raise DataError(f"horizon must be a positive integer (or np.inf for the "
-                            f"simulation), got {horizon!r}")
-        k = int(horizon)
-        y2 = np.asarray(y, dtype=float)
-        y2 = y2.reshape(len(y2), -1)
+        h = as_horizon(horizon)  # np.inf: MATLAB's predict(..., Inf), the simulation
+        u, y2 = as_measured(u, y, self.n_inputs, self.n_outputs)
+        k = np.iinfo(np.int64).max if h is None else h
         if k >= max(y2.shape[0], 1):  # every innovation is unseen: the simulation from rest
-            out = np.asarray(self.simulate(u), dtype=float).reshape(self._check_u(u).shape[0], -1)
-            if out.shape != y2.shape:
-                raise DataError(f"y has shape {y2.shape} but should be {out.shape}")
-            return out
+            return np.asarray(self.simulate(u), dtype=float).reshape(u.shape[0], -1)
         if self.coupled:
-            return self._coupled_predict(self._check_u(u), y2, k)
+            return self._coupled_predict(u, y2, k)
         e = self.residuals(u, y2)
         out = y2 - e
         if k > 1:
