@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import experiment_arrays, require_inputs_vary, warn_if_capped
+from .._checks import check_magnitudes, experiment_arrays, require_inputs_vary, warn_if_capped
 from .._progress import iteration_callback, iteration_printer
 from ..errors import DataError, StabilityWarning
 from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction
@@ -104,6 +104,7 @@ def nlhw(
     from ..polynomial.estimators import oe
 
     exps = experiment_arrays(data)
+    check_magnitudes(data, "nlhw")
     if exps[0][0].shape[1] != 1 or exps[0][1].shape[1] != 1:
         raise DataError("nlhw handles one input and one output; select channels with "
                         "data.select(...)")

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import experiment_arrays, require_inputs_vary, warn_if_capped
+from .._checks import check_magnitudes, experiment_arrays, require_inputs_vary, warn_if_capped
 from .._progress import iteration_callback, iteration_printer
 from ..data.offsets import check_offsets
 from ..errors import DataError
@@ -119,6 +119,7 @@ def nlhw_ss(
     from ..subspace.estimator import n4sid
 
     exps = experiment_arrays(data)
+    check_magnitudes(data, "nlhw_ss")
     m, p = exps[0][0].shape[1], exps[0][1].shape[1]
     if int(order) != order or order < 1:
         raise DataError(f"order must be a positive integer, got {order!r}")
