@@ -456,6 +456,58 @@ def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
                             f"{'actuator' if side == 0 else 'sensor'}?), {fix}")
 
 
+#: Largest ``|value|`` of a channel an estimator accepts: every sum of products of samples
+#: (covariances, Gram matrices, costs) stays far from double-precision overflow (1.8e308).
+MAX_MAGNITUDE = 1e150
+#: Smallest largest-``|value|`` of a varying channel an estimator accepts: the squares of its
+#: samples stay far above double-precision underflow (2.2e-308).
+MIN_MAGNITUDE = 1e-150
+
+
+def check_magnitudes(data: Any, who: str = "identification") -> None:
+    """Refuse a record with a channel whose magnitude makes products of its samples overflow
+    or underflow double precision: largest ``|value|`` above :data:`MAX_MAGNITUDE`, or a
+    varying channel whose largest ``|value|`` is below :data:`MIN_MAGNITUDE` (a zero or
+    constant channel is left to the estimators' own, more specific checks). The one range
+    check of records entering an estimator (called by :func:`sysid.data.offsets.check_offsets`);
+    the :class:`DataError` names the channel, its magnitude and the fix (rescale it).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid._checks import check_magnitudes
+    >>> check_magnitudes(sysid.IOData(u=np.arange(5.0) * 1e12, y=np.arange(5.0) * 1e-12))
+    >>> check_magnitudes(sysid.IOData(u=np.arange(5.0), y=np.arange(5.0) * 1e200))
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: output y0 has values of order 4e+200, outside the range ...
+    """
+    exps = data.experiments
+    for kind, idx in (("output", 1), ("input", 0)):
+        parts = [np.ascontiguousarray(e[idx], float) for e in exps if len(e[idx])]
+        if not parts or not parts[0].shape[1]:
+            continue
+        names = getattr(data, f"{kind}_names", None) or [
+            f"{'uy'[idx]}{j}" for j in range(parts[0].shape[1])]
+        # one pass in Rust (NumPy's column reductions of (samples, channels) arrays are slow)
+        big = _sysid.channel_stats(parts)[0]
+        for j, name in enumerate(names):
+            b = float(big[j])
+            if b > MAX_MAGNITUDE:
+                side = "overflow"
+            elif 0 < b < MIN_MAGNITUDE and not all(np.all(p[:, j] == p[0, j]) for p in parts):
+                side = "underflow"
+            else:
+                continue
+            raise DataError(
+                f"{kind} {name} has values of order {b:.0e}, outside the range sysid "
+                f"computes with (|values| between {MIN_MAGNITUDE:g} and {MAX_MAGNITUDE:g}: "
+                f"products of its samples {side} double precision); {who} cannot use it: "
+                "rescale the channel to order 1 first: sysid.scale(data, 'max') (its "
+                "standard deviation overflows too), or the data in other units"
+            )
+
+
 def user_stacklevel() -> int:
     """``stacklevel`` for ``warnings.warn`` called by the caller of this function that points
     at the first frame outside the sysid package (the user's line, however deep inside sysid

@@ -166,6 +166,12 @@ class IOData:
         ys = [_time_first(as_2d(v, "y" if i == 0 else f"y[{i}]"), "y" if i == 0 else f"y[{i}]")
               for i, v in enumerate(ylist)]
         n_out = ys[0].shape[1]
+        if n_out == 0:
+            raise ShapeError(
+                f"y has shape {ys[0].shape}: no output channel; a record needs at least one "
+                "output (the measured signal to model): give y as (n_samples, n_outputs) with "
+                "n_outputs >= 1 (an input-only signal has nothing to identify)"
+            )
         for i, v in enumerate(ys):
             if v.shape[1] != n_out:
                 raise ShapeError(f"y[{i}] has {v.shape[1]} outputs but y[0] has {n_out}")

@@ -4,7 +4,8 @@ A linear model ``y = G(q) u + H(q) e`` has no constant term, so a record whose c
 on offsets (a temperature in kelvin, a flow around its operating point) makes the estimator
 spend its parameters on the offset instead of the dynamics: a pole near 1, a wrong static
 gain, validation fits far below zero. Every linear estimator (subspace, ``ssest``/``pem``,
-ARX, ARMAX, OE, BJ, IV) asks :func:`check_offsets` first, and one
+ARX, ARMAX, OE, BJ, IV) asks :func:`check_offsets` first (which also refuses channels of
+magnitudes out of double precision's range), and one
 :class:`~sysid.errors.OffsetWarning` says what to do: ``sysid.detrend(data,
 return_trend=True)`` (then ``trend.apply(validation)`` for the validation data), or
 :func:`sysid.identify`, which removes the offsets and restores them in its predictions.
@@ -21,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import user_stacklevel
+from .._checks import check_magnitudes, user_stacklevel
 from ..errors import OffsetWarning
 
 __all__ = ["check_offsets", "OFFSET_RATIO"]
@@ -61,6 +62,10 @@ def check_offsets(data: Any, *, stacklevel: int | None = None) -> bool:
     much larger than its variation and the record was not detrended; True if it warned. The
     warning points at the first caller outside sysid (or ``stacklevel`` frames up).
 
+    First the range check of every estimator (:func:`sysid._checks.check_magnitudes`): a
+    channel whose values overflow or underflow products of samples raises a
+    :class:`~sysid.errors.DataError` that says to rescale it.
+
     Examples
     --------
     >>> import numpy as np, sysid, warnings
@@ -75,6 +80,7 @@ def check_offsets(data: Any, *, stacklevel: int | None = None) -> bool:
     >>> check_offsets(sysid.detrend(raw, "mean"))
     False
     """
+    check_magnitudes(data)
     found = offsets(data)
     if not found:
         return False

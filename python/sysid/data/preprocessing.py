@@ -35,6 +35,15 @@ __all__ = [
 ]
 
 
+def _require_record(data: Any, func: str) -> None:
+    """Refuse anything but an IOData record, naming the function and the fix."""
+    if not isinstance(data, IOData):
+        raise DataError(
+            f"{func} takes an IOData record, got {type(data).__name__}: wrap the arrays first, "
+            f"sysid.{func}(sysid.IOData(u=u, y=y, dt=dt)) (u=None for output-only data)"
+        )
+
+
 # --------------------------------------------------------------------------------------------
 # spikes
 # --------------------------------------------------------------------------------------------
@@ -269,6 +278,7 @@ def detrend(
     >>> np.round(tr.y_offset, 9).tolist(), np.round(tr.y_slope, 9).tolist()   # per second
     ([5.0], [4.0])
     """
+    _require_record(data, "detrend")
     if kind not in ("mean", "constant", "linear", "piecewise"):
         raise DataError(f"kind must be 'mean', 'linear' or 'piecewise', got {kind!r}")
     n_exp = data.n_experiments
@@ -373,6 +383,7 @@ def scale(data: IOData, by: str | Any = "std") -> IOData:
     >>> d.u.ravel(), d.trend.u_scale
     (array([0. , 0.5, 1. ]), array([4.]))
     """
+    _require_record(data, "scale")
     if isinstance(by, str):
         if by not in ("std", "max"):
             raise DataError(f"by must be 'std', 'max' or (u_scale, y_scale), got {by!r}")

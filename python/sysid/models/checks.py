@@ -8,11 +8,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..errors import DataError
+from ..errors import DataError, NonFiniteError
 
 __all__ = [
     "REQUIRED", "FREQUENCY", "check_model", "as_statespace", "discrete_statespace",
-    "warn_unstable",
+    "check_start", "warn_unstable",
 ]
 
 #: Names a model must have to satisfy :class:`sysid.Model` (checked by :func:`check_model`).
@@ -81,6 +81,44 @@ def discrete_statespace(model: Any, purpose: str) -> Any:
         raise DataError(f"{type(model).__name__}.to_statespace() returned a "
                         f"{type(ss).__name__}, not a state-space model")
     return ss
+
+
+def check_start(model: Any, data: Any, who: str) -> None:
+    """Refuse a start model that ``who`` could only misuse: a matrix with a NaN or Inf (set
+    after construction) raises a :class:`~sysid.errors.NonFiniteError` naming it; a sample
+    time other than the record's (an :class:`~sysid.IOData`) a :class:`DataError`, worded as
+    :func:`sysid.compare` words it (the refined model would be relabelled with the data's).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.models.checks import check_start
+    >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=1.0)
+    >>> check_start(m, sysid.IOData(u=np.ones(5), y=np.arange(5.0), dt=0.1), "pem")
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: the data are sampled every 0.1 s but the start model every 1 s; ...
+    """
+    import numpy as np
+
+    for name in ("A", "B", "C", "D", "K", "noise_cov"):
+        mat = getattr(model, name, None)
+        if mat is None:
+            continue
+        arr = np.asarray(mat)
+        if arr.dtype.kind in "biufc" and not np.all(np.isfinite(arr)):
+            raise NonFiniteError(
+                f"the start model's {name} has non-finite entries (NaN or Inf): {who} cannot "
+                f"start from it; give a start whose matrices are finite (e.g. from "
+                "sysid.n4sid(data, order))")
+    dt, data_dt = getattr(model, "dt", None), getattr(data, "dt", None)
+    if (dt and data_dt and hasattr(data, "experiments")
+            and not np.isclose(data_dt, dt, rtol=1e-9)):
+        raise DataError(
+            f"the data are sampled every {data_dt:.10g} s but the start model every "
+            f"{dt:.10g} s; {who} would relabel the model: resample the data or use a start "
+            "model of the same sample time (sysid.c2d(sysid.d2c(model), data.dt) resamples "
+            "one)")
 
 
 def warn_unstable(model: Any, method: str, closed_loop: bool = False,

@@ -20,6 +20,7 @@ from .._checks import (
     as_int,
     as_int_grid,
     as_nonnegative,
+    check_magnitudes,
     experiment_arrays,
     require_inputs_vary,
     warn_if_capped,
@@ -111,6 +112,7 @@ def nlhw(
     from ..polynomial.estimators import oe
 
     exps = experiment_arrays(data)
+    check_magnitudes(data, "nlhw")
     if exps[0][0].shape[1] != 1 or exps[0][1].shape[1] != 1:
         raise DataError("nlhw handles one input and one output; select channels with "
                         "data.select(...)")

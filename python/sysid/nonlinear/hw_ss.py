@@ -19,6 +19,7 @@ from .. import _sysid
 from .._checks import (
     as_int,
     as_nonnegative,
+    check_magnitudes,
     experiment_arrays,
     require_inputs_vary,
     warn_if_capped,
@@ -125,6 +126,7 @@ def nlhw_ss(
     from ..subspace.estimator import n4sid
 
     exps = experiment_arrays(data)
+    check_magnitudes(data, "nlhw_ss")
     m, p = exps[0][0].shape[1], exps[0][1].shape[1]
     if int(order) != order or order < 1:
         raise DataError(f"order must be a positive integer, got {order!r}")

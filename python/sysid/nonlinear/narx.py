@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import experiment_arrays
+from .._checks import check_magnitudes, experiment_arrays
 from ..errors import DataError, ExcitationWarning, InsufficientDataError
 from .customreg import CustomRegressor
 from .narx_model import NARXModel, PolynomialBasis, RBFBasis
@@ -200,6 +200,7 @@ def nlarx(
     y0 = -0.605 y0(t-1) + 0.588 u0(t-1) - 0.24 u0(t-2) - 0.163 y0(t-2)^2
     """
     exps = experiment_arrays(data)
+    check_magnitudes(data, "nlarx")
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     na_, nb_, nk_ = _per(na, ny, "na"), _per(nb, nu, "nb"), _per(nk, nu, "nk")
     shortest = min(len(y) for _, y in exps)

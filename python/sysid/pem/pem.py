@@ -20,12 +20,13 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, user_stacklevel, warn_iteration_limit
+from .._checks import as_int, check_magnitudes, user_stacklevel, warn_iteration_limit
 from .._display import modulus
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
 from ..errors import DataError, IdentifiabilityWarning, StabilityWarning
+from ..models.checks import check_start
 from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
@@ -155,6 +156,7 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: 
     units, only the outputs scaled for ``weighting="output"``) in a state basis of balanced
     scale (:func:`_balance`)."""
     data = _experiments(data)
+    check_magnitudes(data, "pem")  # before the start is balanced on the record's scale
     if not isinstance(model, StateSpaceModel):
         raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
     if weighting is None:  # simulation: one output's plain sum; several: each to its scale
@@ -537,6 +539,7 @@ def pem(
     >>> bool(np.allclose(np.sort_complex(m.poles()), np.sort_complex(true.poles()), atol=0.02))
     True
     """
+    check_start(model, data, "pem")  # NaN matrices, another sample time: before any work
     periodicity = None
     feedthrough = _as_start(feedthrough, model)
     if isinstance(data, FRD):

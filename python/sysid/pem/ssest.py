@@ -106,6 +106,11 @@ def ssest(
     True
     """
     data = _experiments(data)
+    if hasattr(order, "nstates"):  # a start model: pem refines one (its repr may not print)
+        raise DataError(f"ssest takes an order, got a {type(order).__name__}; refine a start "
+                        "model with sysid.pem(data, model)")
+    if not isinstance(order, str) and np.ndim(order) == 0:
+        order = as_int(order, "order", 1)  # inf, nan, 2.5: before any data are compressed
     feedthrough = default_feedthrough(feedthrough, order)
     if periods is not None or transient is not None:
         from .periodic import resolve_periods

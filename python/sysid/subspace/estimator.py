@@ -40,7 +40,7 @@ from typing import Any, Literal, Union
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, as_orders, require_inputs_vary
+from .._checks import as_int, as_orders, check_magnitudes, require_inputs_vary
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
@@ -91,21 +91,14 @@ def _preprocessing(data: IOData, from_factor: bool) -> dict[str, Any]:
 
 def _check_signals(data: IOData) -> None:
     """Refuse constant outputs and inputs (naming the channel, as the polynomial estimators
-    do); warn (OffsetWarning) about offsets much larger than the variation."""
-    for kind, idx, names in (("output", 1, data.output_names), ("input", 0, data.input_names)):
-        if not names:
-            continue
+    do); warn (OffsetWarning) about offsets much larger than the variation. Channels out of
+    double precision's range are refused first (their variance underflows to 0)."""
+    check_magnitudes(data, "the subspace methods")
+    if data.output_names:
         # one pass in Rust (NumPy's column reductions of (samples, channels) arrays are slow)
-        big, mean, std = _sysid.channel_stats([e[idx] for e in data.experiments])
-        for j, n in enumerate(names):
-            if big[j] > 1e150 or 0 < big[j] < 1e-150:
-                raise DataError(
-                    f"{kind} {n} has values of order {big[j]:.0e}, outside the range sysid "
-                    "computes with (products of samples overflow or underflow); rescale the "
-                    "channel to order 1 first, e.g. sysid.scale(data) or data in other units"
-                )
-        for j, n in enumerate(names):
-            if std[j] == 0 and kind == "output":
+        _, mean, std = _sysid.channel_stats([e[1] for e in data.experiments])
+        for j, n in enumerate(data.output_names):
+            if std[j] == 0:
                 raise DataError(
                     f"output {n} is constant ({mean[j]:g}): there is nothing to identify; "
                     "check the channel (a stuck sensor, the wrong column?) or drop it"
@@ -705,6 +698,8 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         x0: bool = False,
         scale: bool | None = None,
     ) -> StateSpaceModel:
+        if not isinstance(order, str) and np.ndim(order) == 0:
+            order = as_int(order, "order", 1)  # inf, nan, 2.5: before the data are compressed
         if isinstance(data, IOData):  # a given order gets a horizon that allows it
             horizon = horizon_for_order(data, order, horizon)
         est = SubspaceEstimator(data, horizon, method=method, scale=scale)

@@ -15,7 +15,8 @@ __all__ = ["orders", "pole_zero_orders", "delays", "search_limits", "progress_ca
 
 def orders(x: Any, l: int, m: int, name: str, lo: int) -> np.ndarray:
     a = np.asarray(x)
-    if a.dtype.kind not in "iuf" or not np.all(a == np.round(a)):
+    # inf equals its rounding: refused here, before the cast to int wraps it
+    if a.dtype.kind not in "iuf" or not np.all(np.isfinite(a)) or not np.all(a == np.round(a)):
         raise DataError(f"{name} must be a whole number (or one per output/input pair), got {x!r}")
     try:
         out = np.broadcast_to(a.astype(int), (l, m)).copy()

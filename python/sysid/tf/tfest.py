@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import require_inputs_vary
 from ..errors import DataError
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
@@ -149,6 +150,13 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     check_offsets(data)  # a transfer function has no constant term (as every estimator)
     npo, nze = pole_zero_orders(n_poles, n_zeros, l, m)
     fixed_delays, auto = delays(iodelay, l, m)
+    span = max(len(y) for _, y in data.experiments) * data.dt  # the longest experiment, s
+    if np.any(fixed_delays >= span):
+        raise DataError(
+            f"iodelay = {float(np.max(fixed_delays)):g} s exceeds what the record allows: its "
+            f"longest experiment lasts {span:g} s, so the input would never reach the output; "
+            "give a delay shorter than the record (in seconds, not samples), or "
+            "iodelay='auto' to estimate it")
     periodicity = None
     if periods is not None or transient is not None:
         unused = [k for k, v in (("init", init), ("max_delay", max_delay)) if v is not None]
@@ -198,6 +206,10 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
     for i in range(l):
         exps = [(u, y[:, i]) for u, y in exps_all]
         check_experiments(exps, int(np.sum(npo[i] + nze[i] + 1)))
+        # a constant output has no dynamics to fit (its fit is undefined): refused as by arx
+        # (the discrete-time fit is oe's, which refuses it itself)
+        require_inputs_vary([(u, y[:, None]) for u, y in exps], "tfest",
+                            [data.output_names[i]], side=1)
         starts = _starts(exps, data.dt, npo[i], nze[i], delays[i], auto, hold, dmax) \
             if init is None else [(init.den[i][j], init.num[i][j],
                                    float(init.iodelay[i, j]) if auto else float(delays[i, j]))
