@@ -285,7 +285,7 @@ def test_markov_estimators_reject_bad_input() -> None:
         sysid.okid(np.zeros((100, 2)), observer_order=3)  # type: ignore[arg-type]
     with pytest.raises(sysid.DataError, match="inputs"):
         sysid.okid(sysid.IOData(None, data.y), observer_order=3)
-    with pytest.raises(sysid.DataError, match="identically zero"):
+    with pytest.raises(sysid.ExcitationError, match="u0 is 0 in every sample: okid"):
         sysid.okid(sysid.IOData(np.zeros((100, 1)), data.y), observer_order=3)
     with pytest.raises(sysid.DataError, match="TC hyperparameters"):
         sysid.impulse_response(data, 10, hyper=(1.0, 1.5))

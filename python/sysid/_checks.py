@@ -350,6 +350,33 @@ def as_count(x: Any, name: str, bytes_per_item: int, lo: int = 1) -> int:
     return n
 
 
+#: Most float64 values (a complex value counts two) one call builds for a size the caller
+#: chose: 2**28, 2 GiB, far beyond any sensible frequency grid, horizon or resampled record.
+MAX_ELEMENTS = 2**28
+
+
+def check_elements(n_elements: int, what: str, fix: str) -> None:
+    """Refuse, before allocating, a request whose arrays would hold ``n_elements`` float64
+    values (count a complex value as two) when that exceeds :data:`MAX_ELEMENTS` (2**28
+    values, 2 GiB): a :class:`DataError` naming the request (``what``), the memory it would
+    take, and what to pass instead (``fix``).
+
+    Examples
+    --------
+    >>> from sysid._checks import check_elements
+    >>> check_elements(10**6, "n_freq = 1000000", "pass a smaller n_freq")
+    >>> check_elements(10**9, "n_freq = 1000000000", "pass a smaller n_freq")
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: n_freq = 1000000000 would allocate 1e+09 values (7.45 GiB), ...
+    """
+    n = int(n_elements)
+    if n > MAX_ELEMENTS:
+        raise DataError(
+            f"{what} would allocate {n:.3g} values ({8 * n / 2**30:.3g} GiB), beyond the "
+            f"limit of {MAX_ELEMENTS:.3g} ({8 * MAX_ELEMENTS >> 30} GiB) for one call; {fix}")
+
+
 def as_int_grid(v: Any, shape: tuple[int, int], name: str) -> list[list[int]]:
     """Non-negative integer orders/delays as a ``shape`` grid (a scalar fills it).
 

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
-from .._checks import as_dt
+from .._checks import as_dt, check_elements
 from ..errors import DataError, InsufficientDataError
 from .iodata import IOData
 from .segments import _Exp
@@ -164,6 +164,14 @@ def resample(data: IOData, dt: float, *, max_denominator: int = 1000) -> IOData:
             f"dt = {new_dt:g} s is not the record's {data.dt:g} s times a fraction down/up "
             f"with down <= max_denominator = {max_denominator} ({near}); ask for such a "
             "sample time, or raise max_denominator (longer anti-alias filters)")
+    # the resampled channels (and trends) of every experiment, and the polyphase filter of
+    # 20 max(up, down) taps
+    nc = data.n_inputs + data.n_outputs
+    check_elements(sum(2 * nc * -(-e.y.shape[0] * up // down) for e in data._exps)
+                   + 20 * max(up, down) + 1,
+                   f"resampling dt = {data.dt:g} s to dt = {new_dt:g} s ({up}/{down} as many "
+                   "samples)", "choose a longer dt (or cut the record to the part you need "
+                   "first)")
     exps = []
     for e in data._exps:
         n_new = int(np.ceil(e.y.shape[0] * up / down))

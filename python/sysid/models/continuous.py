@@ -430,9 +430,20 @@ def _discretise_raw(sys: ContinuousStateSpace, dt: float, method: str, h: float
     if method == "matched":
         return (*matched_c2d(A, B, C, D, dt), np.zeros((n, m)))
     ima = np.eye(n) - 0.5 * h * A
-    Ad = np.linalg.solve(ima, np.eye(n) + 0.5 * h * A)
-    Bd = np.linalg.solve(ima, h * B)
-    Cd = np.linalg.solve(ima.T, C.T).T
+    half = 0.5 * h * np.linalg.eigvals(A) if n else np.zeros(0)
+    try:
+        if np.any(np.abs(1.0 - half) <= 8 * np.finfo(float).eps * np.maximum(1, np.abs(half))):
+            raise np.linalg.LinAlgError
+        Ad = np.linalg.solve(ima, np.eye(n) + 0.5 * h * A)
+        Bd = np.linalg.solve(ima, h * B)
+        Cd = np.linalg.solve(ima.T, C.T).T
+    except np.linalg.LinAlgError:  # the bilinear map sends s = 2/h to z = infinity
+        pole = 2.0 * half[np.argmin(np.abs(1.0 - half))] / h
+        at = "2/dt" if h == dt else "2/h (h of the prewarped transform)"
+        raise DataError(
+            f"the model has a pole at s = {pole:.6g} rad/s, at {at} = {2.0 / h:.6g} rad/s, "
+            "which the Tustin transform maps to z = infinity; use another method "
+            f"(method='zoh' or 'foh') or another sample time than dt = {dt:g} s") from None
     return Ad, Bd, Cd, D + 0.5 * C @ Bd, np.zeros((n, m))
 
 

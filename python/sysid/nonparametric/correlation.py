@@ -16,7 +16,7 @@ from .. import _sysid
 from .._checks import as_int
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
-from .spectra import _names, _need_data, _z
+from .spectra import _names, _need_data, _z_scaled
 
 __all__ = ["Correlation", "correlation"]
 
@@ -126,7 +126,8 @@ def correlation(
         raise InsufficientDataError(f"max_lag = {L} needs experiments longer than {L} samples")
     if not 0.0 < confidence < 1.0:
         raise DataError(f"confidence must lie in (0, 1), got {confidence}")
-    R, total = _lag_covariances(_z(data), L, remove_mean)
+    # coefficients are unitless: channels near 1e300 (whose squares overflow) are scaled
+    R, total = _lag_covariances(_z_scaled(data, per_channel=True)[0], L, remove_mean)
     d = np.sqrt(np.maximum(np.einsum("aa->a", R[0]), np.finfo(float).tiny))
     Rn = R / np.outer(d, d)[None]
     # negative lags: r_ab(-tau) = r_ba(tau)

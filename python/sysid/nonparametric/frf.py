@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from .._checks import as_int
+from .._checks import as_int, check_elements
 from ..data.iodata import IOData
 from ..errors import DataError, ExcitationError, InsufficientDataError
 from ..models.frd import FRD
@@ -47,7 +47,7 @@ from .spectra import (
     _need_data,
     _welch_matrix,
     _window,
-    _z,
+    _z_scaled,
 )
 
 __all__ = ["welch_frf", "spa", "etfe", "default_lags"]
@@ -91,7 +91,7 @@ def default_lags(data: IOData, remove_mean: bool = True) -> tuple[int, dict[str,
     data = _need_data(data)
     shortest = min(data.lengths)
     limit = int(max(1, min(data.n_samples // 10, shortest - 1, 2000)))
-    R, total = _lag_covariances(_z(data), limit, remove_mean)
+    R, total = _lag_covariances(_z_scaled(data, per_channel=True)[0], limit, remove_mean)
     sd = np.sqrt(np.clip(np.diag(R[0]), np.finfo(float).tiny, None))
     rho = R / np.outer(sd, sd)
     auto = np.einsum("kaa->ka", rho)
@@ -145,6 +145,24 @@ def _need_excitation(keep: np.ndarray, what: str, data: IOData | None = None) ->
     )
 
 
+def _units(G: np.ndarray, std: np.ndarray | None, s: np.ndarray, m: int
+           ) -> tuple[np.ndarray, np.ndarray | None]:
+    """A frequency response and its standard deviation estimated from :func:`_z_scaled`
+    channels (units ``s``), in the data's units (``s_y / s_u``); a :class:`DataError` when
+    they overflow double precision."""
+    if np.all(s == 1.0):
+        return G, std
+    with np.errstate(over="ignore", invalid="ignore"):
+        k = s[m:][:, None] / s[:m][None, :]
+        G, std = G * k, None if std is None else std * k
+    if not (np.all(np.isfinite(G)) and (std is None or np.all(np.isfinite(std)))):
+        raise DataError(
+            f"the outputs (magnitudes of order {s[m:].max():.1e}) over the inputs (of order "
+            f"{s[:m].max():.1e}) give a frequency response beyond double precision; rescale "
+            "the channels (other units) so that their magnitudes are comparable")
+    return G, std
+
+
 def welch_frf(
     data: IOData,
     *,
@@ -187,7 +205,8 @@ def welch_frf(
     noverlap = nperseg // 2 if noverlap is None else as_int(noverlap, "noverlap", 0)
     if noverlap >= nperseg:
         raise DataError(f"noverlap ({noverlap}) must be smaller than nperseg ({nperseg})")
-    S, f, k_eff, count = _welch_matrix(_z(data), nperseg, noverlap, window, nfft, data.dt, True)
+    zs, s = _z_scaled(data)
+    S, f, k_eff, count = _welch_matrix(zs, nperseg, noverlap, window, nfft, data.dt, True)
     m = data.n_inputs
     if count <= m:
         raise InsufficientDataError(
@@ -199,6 +218,7 @@ def welch_frf(
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, averages=k_eff)
     _need_excitation(keep, "welch_frf", data)
     std, dof = _band(ratio, k_eff, m, "lower nperseg")
+    G, std = _units(G, std, s, m)
     return FRD(
         2 * np.pi * f[keep], G, coherence=coh, std=std, dof=dof,
         confidence=confidence, dt=data.dt, input_names=data.input_names,
@@ -270,6 +290,12 @@ def spa(
         )
     if omega is None:
         n_freq = as_int(n_freq, "n_freq", 2)
+        # E (n_freq, M + 1) complex and a few (n_freq, nc, nc) complex spectral matrices
+        nc = data.n_inputs + data.n_outputs
+        check_elements(n_freq * (2 * (M + 2) + 8 * nc * nc), f"spa with n_freq = {n_freq}",
+                       f"pass a smaller n_freq (the lag window of {M} lags resolves about "
+                       f"{M} frequencies; a few times that is plenty), or omega=... with "
+                       "the frequencies you need")
         w = np.arange(1, n_freq + 1) * np.pi / (n_freq * data.dt)
     else:
         w = np.asarray(omega, dtype=float)
@@ -286,7 +312,8 @@ def spa(
                 f"{nyquist:.4g} rad/s: sampled data say nothing there (the estimate would be "
                 "an alias of a lower frequency). Give omega in rad/s up to pi/dt (in Hz? "
                 "multiply by 2 pi)")
-    R, total = _lag_covariances(_z(data), M, remove_mean)
+    zs, s = _z_scaled(data)
+    R, total = _lag_covariances(zs, M, remove_mean)
     tau = np.arange(M + 1)
     lagw = 0.5 * (1.0 + np.cos(np.pi * tau / M))
     # Phi(w) = sum_{tau=-M}^{M} w(tau) R(tau) e^{-i w tau dt}, R(-tau) = R(tau)^T
@@ -299,6 +326,7 @@ def spa(
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, averages=k_eff)
     _need_excitation(keep, "spa", data)
     std, dof = _band(ratio, k_eff, m, "lower lags")
+    G, std = _units(G, std, s, m)
     return FRD(
         w[keep], G, coherence=coh, std=std, dof=dof, confidence=confidence,
         dt=data.dt, input_names=data.input_names, output_names=data.output_names,
@@ -371,8 +399,9 @@ def etfe(
         )
     if remove_mean is None:
         remove_mean = smoothing is not None
+    zs, s = _z_scaled(data)
     Zs = [np.fft.rfft(z - z.mean(axis=0) if remove_mean else z, axis=0)
-          for z in _z(data)]  # (nf, m+l)
+          for z in zs]  # (nf, m+l)
     nf = Zs[0].shape[0]
     Puu = sum(np.einsum("fa,fb->fab", Z[:, :m], Z[:, :m].conj()) for Z in Zs) / n
     Pyu = sum(np.einsum("fa,fb->fab", Z[:, m:], Z[:, :m].conj()) for Z in Zs) / n
@@ -393,6 +422,7 @@ def etfe(
         w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
         info["dropped"] = w[~keep]
         coh_out = coh if data.n_experiments > m else None
+        G, _ = _units(G, None, s, m)
         return FRD(w[keep], G, coherence=coh_out, dt=data.dt, confidence=confidence,
                    input_names=data.input_names, output_names=data.output_names,
                    method="etfe", info=info)
@@ -427,6 +457,7 @@ def etfe(
     w = 2 * np.pi * np.fft.rfftfreq(n, data.dt)
     info.update({"window": window, "multiple_coherence": mcoh, "dropped": w[~keep]})
     std, dof = _band(ratio, k_eff, m, "increase smoothing")
+    G, std = _units(G, std, s, m)
     return FRD(w[keep], G, coherence=coh, std=std, dof=dof, confidence=confidence,
                dt=data.dt, input_names=data.input_names, output_names=data.output_names,
                method="etfe", info=info)

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
-from .._checks import as_int
+from .._checks import as_int, check_elements
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
 
@@ -38,6 +38,49 @@ def _z(data: IOData) -> list[np.ndarray]:
     return [np.hstack([u, y]) for u, y in data.experiments]
 
 
+#: channels whose largest magnitude lies outside ``[2**-100, 2**100]`` are divided by a power
+#: of two before their products are summed (:func:`_z_scaled`)
+_ORDINARY = 2.0**100
+
+
+def _z_scaled(data: IOData, per_channel: bool = False) -> tuple[list[np.ndarray], np.ndarray]:
+    """:func:`_z` in units in which the squares neither overflow nor underflow, and the
+    units ``s`` (one per channel: ``z_true = z * s``).
+
+    A magnitude outside ``[2**-100, 2**100]`` (data near 1e300 made every spectrum NaN, near
+    1e-200 zero) is divided by the power of two that brings it into ``[0.5, 1)``; ordinary
+    data are used as they are (``s = 1``). Dividing by a power of two is exact. Unless
+    ``per_channel``, all inputs share one unit and all outputs another, so that the input
+    spectral matrix's trace and conditioning tests keep their meaning and a frequency
+    response is the scaled one times ``s_y / s_u``.
+    """
+    zs = _z(data)
+    mag = np.max([np.max(np.abs(z), axis=0, initial=0.0) for z in zs], axis=0)
+    if not per_channel:
+        m = data.n_inputs
+        mag = np.concatenate([np.full(m, mag[:m].max(initial=0.0)),
+                              np.full(mag.size - m, mag[m:].max(initial=0.0))])
+    odd = (mag > 0) & ((mag > _ORDINARY) | (mag < 1.0 / _ORDINARY))
+    s = np.where(odd, np.ldexp(1.0, np.frexp(np.where(odd, mag, 1.0))[1]), 1.0)
+    return (zs, s) if not odd.any() else ([z / s for z in zs], s)
+
+
+def _unscaled(S: np.ndarray, s: np.ndarray, names: list[str]) -> np.ndarray:
+    """A spectral matrix of :func:`_z_scaled` data in the data's own units; a
+    :class:`DataError` when those overflow double precision."""
+    if np.all(s == 1.0):
+        return S
+    with np.errstate(over="ignore", invalid="ignore"):
+        S = S * np.outer(s, s)[None]
+    bad = [k for k in range(len(names)) if not np.all(np.isfinite(S[:, k, k]))]
+    if bad:
+        raise DataError(
+            f"the spectra of channel(s) {[names[k] for k in bad]} (magnitudes of order "
+            f"{s[bad].max():.1e}) overflow double precision in their units squared; rescale "
+            "those channels (other units, e.g. divide by 1e100) before computing spectra")
+    return S
+
+
 def _names(data: IOData) -> list[str]:
     return list(data.input_names) + list(data.output_names)
 
@@ -52,9 +95,10 @@ def _welch_matrix(
     dt: float, detrend: bool,
 ) -> tuple[np.ndarray, np.ndarray, float, int]:
     """One-sided density cross-spectral matrix ``(n_freq, nc, nc)``, freqs (Hz), K_eff, K."""
-    win = _window(window, nperseg) if not isinstance(window, np.ndarray) else window
-    if win.size != nperseg:
-        raise DataError(f"window has {win.size} samples, nperseg is {nperseg}")
+    if all(z.shape[0] < nperseg for z in zs):  # before a window of nperseg samples is built
+        raise InsufficientDataError(
+            f"every experiment is shorter than nperseg = {nperseg}; lower nperseg"
+        )
     nfft = nperseg if nfft is None else as_int(nfft, "nfft", 2)
     if nfft < nperseg:  # np.fft.rfft(n=nfft) would cut every segment to its first nfft samples
         raise DataError(
@@ -64,6 +108,14 @@ def _welch_matrix(
         )
     step = nperseg - noverlap
     nc = zs[0].shape[1]
+    # the zero-padded segments of the longest experiment, their FFTs and the spectral matrix
+    segments = max((z.shape[0] - nperseg) // step + 1 for z in zs if z.shape[0] >= nperseg)
+    check_elements(nfft * nc * (2 * segments + nc), f"nfft = {nfft}",
+                   f"nfft pads each segment of nperseg = {nperseg} samples with zeros for a "
+                   f"finer frequency grid; a few times nperseg is plenty: pass a smaller nfft")
+    win = _window(window, nperseg) if not isinstance(window, np.ndarray) else window
+    if win.size != nperseg:
+        raise DataError(f"window has {win.size} samples, nperseg is {nperseg}")
     nf = nfft // 2 + 1
     S = np.zeros((nf, nc, nc), dtype=complex)
     count = 0
@@ -278,14 +330,22 @@ def spectra(
     True
     """
     data = _need_data(data, inputs=False)
+    S, f, s, info = _welch_scaled(data, nperseg, noverlap, window, nfft, detrend)
+    return Spectra(2 * np.pi * f, _unscaled(S, s, _names(data)), _names(data), "welch", info)
+
+
+def _welch_scaled(data: IOData, nperseg: int | None, noverlap: int | None, window: Any,
+                  nfft: int | None, detrend: bool
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+    """:func:`spectra`'s Welch matrix of the :func:`_z_scaled` channels, frequencies (Hz),
+    the channels' units and the record of the estimate."""
     nperseg = _default_nperseg(data) if nperseg is None else as_int(nperseg, "nperseg", 2)
     noverlap = nperseg // 2 if noverlap is None else as_int(noverlap, "noverlap", 0)
     if noverlap >= nperseg:
         raise DataError(f"noverlap ({noverlap}) must be smaller than nperseg ({nperseg})")
-    S, f, k_eff, count = _welch_matrix(_z(data), nperseg, noverlap, window, nfft, data.dt,
-                                       detrend)
-    return Spectra(2 * np.pi * f, S, _names(data), "welch",
-                   {"nperseg": nperseg, "segments": count, "effective_averages": k_eff})
+    zs, s = _z_scaled(data)
+    S, f, k_eff, count = _welch_matrix(zs, nperseg, noverlap, window, nfft, data.dt, detrend)
+    return S, f, s, {"nperseg": nperseg, "segments": count, "effective_averages": k_eff}
 
 
 def periodogram(data: IOData, *, window: str = "boxcar", detrend: bool = True) -> Spectra:
@@ -304,11 +364,13 @@ def periodogram(data: IOData, *, window: str = "boxcar", detrend: bool = True) -
     data = _need_data(data, inputs=False)
     nfft = max(data.lengths)
     S = None
-    for z in _z(data):
+    zs, scale = _z_scaled(data)
+    for z in zs:
         s, f, _, _ = _welch_matrix([z], z.shape[0], 0, window, nfft, data.dt, detrend)
         S = s * z.shape[0] if S is None else S + s * z.shape[0]
     assert S is not None
-    return Spectra(2 * np.pi * f, S / data.n_samples, _names(data), "periodogram",
+    return Spectra(2 * np.pi * f, _unscaled(S / data.n_samples, scale, _names(data)),
+                   _names(data), "periodogram",
                    {"window": window})
 
 
@@ -406,9 +468,9 @@ def coherence(
     True
     """
     data = _need_data(data)
-    s = spectra(data, nperseg=nperseg, noverlap=noverlap, window=window)
+    # coherence is unitless: taken of the scaled channels, it never overflows
+    S, f, _, _ = _welch_scaled(data, nperseg, noverlap, window, None, True)
     m = data.n_inputs
-    S = s.matrix
     du = np.einsum("fjj->fj", S[:, :m, :m]).real
     dy = np.einsum("fii->fi", S[:, m:, m:]).real
     tiny = np.finfo(float).tiny
@@ -420,5 +482,5 @@ def coherence(
             Syu = S[k, m:, :m]
             mult[k] = np.einsum("ij,ji->i", Syu @ np.linalg.inv(Suu), Syu.conj().T).real
     mult = mult / np.maximum(dy, tiny)
-    return Coherence(s.omega, np.clip(vals, 0, 1), np.clip(mult, 0, 1), list(data.input_names),
-                     list(data.output_names))
+    return Coherence(2 * np.pi * f, np.clip(vals, 0, 1), np.clip(mult, 0, 1),
+                     list(data.input_names), list(data.output_names))

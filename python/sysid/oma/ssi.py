@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int, experiment_arrays
+from .._checks import as_int, experiment_arrays, require_inputs_vary
 from ..errors import DataError, InsufficientDataError
 
 _METHODS = ("cov", "data")
@@ -337,6 +337,9 @@ def ssi(data: Any, orders: Any, *, method: str = "cov", horizon: int | None = No
             f"ssi with horizon {i} and {blocks} blocks needs at least {blocks * 4 * i} samples "
             f"per experiment, got {shortest}; use a longer record, fewer blocks or a shorter "
             "horizon")
+    # a constant channel has no modes: on all-constant outputs the covariances are
+    # round-off, and their "stable modes" an artefact
+    require_inputs_vary(experiment_arrays(data), "ssi", data.output_names, side=1)
     systems, s = _systems(ys, float(data.dt), ords, i, method)
     names = list(data.output_names)
     modes, status, prev = [], [], None

@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, experiment_arrays
-from ..errors import DataError
+from .._checks import as_int, experiment_arrays, require_inputs_vary
+from ..errors import DataError, ExcitationError
 
 __all__ = ["delayest", "DelayWarning"]
 
@@ -73,6 +73,8 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int =
     m, l = exps[0][0].shape[1], exps[0][1].shape[1]
     if m == 0:
         raise DataError("delayest needs inputs: a time series has no input delay")
+    require_inputs_vary(exps, "delayest", getattr(data, "input_names", None),
+                        error=ExcitationError)  # a constant input shows no delay
     shortest = min(u.shape[0] for u, _ in exps)
     need = 2 * (nk_max + max(na, nb) + na + m * nb) + 2
     if shortest < need:

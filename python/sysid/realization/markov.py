@@ -17,20 +17,24 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import require_inputs_vary
 from ..data.iodata import IOData
-from ..errors import DataError, NonFiniteError, ShapeError
+from ..errors import DataError, ExcitationError, NonFiniteError, ShapeError
 from .realize import MarkovEstimate, _count
 
 __all__ = ["impulse_response", "okid", "impulse_from_frf"]
 
 
-def _experiments(data: Any) -> tuple[list[tuple[np.ndarray, np.ndarray]], float]:
+def _experiments(data: Any, who: str) -> tuple[list[tuple[np.ndarray, np.ndarray]], float]:
     if not isinstance(data, IOData):
         raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}; "
                         "wrap arrays with sysid.IOData(u, y, dt)")
     exps = data.experiments
     if exps[0][0].shape[1] == 0:
         raise DataError("Markov parameters need inputs: this IOData has none")
+    # a constant input cannot be told from the FIR's missing constant term: its Markov
+    # parameters would be meaningless
+    require_inputs_vary(exps, who, data.input_names, error=ExcitationError)
     from ..data.offsets import check_offsets
 
     check_offsets(data)  # the FIR has no constant term, as every estimator
@@ -90,7 +94,7 @@ def impulse_response(data: IOData, length: int, *, regularization: str | None = 
     >>> bool(np.allclose(est.markov[:5, 0, 0], true.markov(5)[:, 0, 0], atol=0.01))
     True
     """
-    exps, dt = _experiments(data)
+    exps, dt = _experiments(data, "impulse_response")
     n = _count(length, "length")
     if n is None:
         raise DataError("length is required: the number of Markov parameters to estimate")
@@ -142,7 +146,7 @@ def okid(data: IOData, observer_order: int, count: int | None = None, *,
     >>> bool(np.allclose(np.sort(np.abs(r.model.poles())), np.abs(true.poles()), atol=0.01))
     True
     """
-    exps, dt = _experiments(data)
+    exps, dt = _experiments(data, "okid")
     p = _count(observer_order, "observer_order")
     if p is None:
         raise DataError("observer_order is required: the number of past samples in the observer")

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_2d, as_int
+from .._checks import as_2d, as_int, check_elements
 from ..errors import DataError, ShapeError
 from ..models.trended import TrendedModel
 
@@ -203,6 +203,10 @@ def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
     inner, trend, offsets = _unwrap(model)
     A, B, C, D, K, lam = _innovation_form(inner)
     n, m, l = A.shape[0], B.shape[1], C.shape[0]
+    # per step: the time, mean, std, covariance and future inputs
+    check_elements(h * (1 + 4 * l + l * l + m), f"forecast with horizon = {h}",
+                   "forecast fewer steps (the forecast settles to the mean, and its band "
+                   "to the output's spread, within a few time constants of the model)")
     u, y, t, dt = _past(model, past, l, m, h, future_inputs)
     if m and future_inputs is None:
         raise DataError(f"the model has {m} input(s): give future_inputs of shape ({h}, {m})")

@@ -260,8 +260,21 @@ def output_weights(y: np.ndarray) -> np.ndarray:
     """``1 / std`` of each output over the record (1 for one that stands still): the initial
     state is fitted to the errors relative to each output's spread, as the fit % weighs them,
     not to whichever output has the largest numbers in its units."""
-    sd = np.std(y, axis=0)
+    s = _unit(y)
+    sd = np.std(y / s, axis=0) * s
     return 1.0 / np.where(sd > 0, sd, 1.0)
+
+
+def _unit(y: np.ndarray) -> np.ndarray:
+    """Per output, the power of two nearest its largest deviation from its mean (1 for one
+    that stands still): norms and variances are taken of ``y / unit`` and scaled back, since
+    the squares of outputs near 1e-200 underflow (a fit of nan) and near 1e200 overflow
+    (-inf). Dividing by a power of two is exact: outputs of ordinary size give the same
+    numbers to the last bit."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        spread = np.max(np.abs(y - y.mean(0)), axis=0, initial=0.0)
+    ok = (spread > 0) & np.isfinite(spread)
+    return np.where(ok, np.ldexp(1.0, np.frexp(np.where(ok, spread, 1.0))[1]), 1.0)
 
 
 def _window(model: Any, horizon: int | None, N: int) -> int:
@@ -345,13 +358,14 @@ def fit_metrics(y: Any, yhat: Any) -> dict[str, np.ndarray]:
 
 
 def _metrics(y: np.ndarray, yhat: np.ndarray) -> dict[str, np.ndarray]:
-    err = y - yhat
+    s = _unit(y)
     # an unstable model's simulation may overflow: its fit is then -inf, not a warning
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        y, err = y / s, (y - yhat) / s
         dev = np.linalg.norm(y - y.mean(0), axis=0)
         fit = 100.0 * (1.0 - np.linalg.norm(err, axis=0) / dev)
         vaf = 100.0 * (1.0 - err.var(0) / y.var(0))
-        rmse = np.sqrt(np.mean(err**2, axis=0))
+        rmse = np.sqrt(np.mean(err**2, axis=0)) * s
     fit = np.where(np.isnan(fit) & ~np.isfinite(rmse), -np.inf, fit)
     fit = np.where(dev == 0, np.nan, fit)  # undefined for a constant channel (documented)
     return {"fit": fit, "vaf": vaf, "rmse": rmse}
