@@ -153,3 +153,14 @@ def test_pem_start_with_nan_matrix(record):
         sysid.pem(record[2], start)
     with pytest.raises(DataError, match="ssest takes an order, got a StateSpaceModel"):
         sysid.ssest(record[2], start)
+
+
+def test_channel_statistics_of_no_channel_or_no_sample_do_not_panic():
+    # the compiled kernel split each row into lanes of width 8 x channels: with no channel
+    # that width was zero and Rust panicked across the boundary (PanicException)
+    from sysid import _sysid
+
+    abs_max, mean, std = _sysid.channel_stats([np.zeros((10, 0))])
+    assert abs_max.size == mean.size == std.size == 0
+    with pytest.raises(DataError, match="no samples"):
+        _sysid.channel_stats([np.zeros((0, 3))])

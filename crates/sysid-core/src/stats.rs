@@ -34,6 +34,14 @@ pub struct ChannelStats {
 /// ```
 pub fn channel_stats(parts: &[MatRef<'_, f64>]) -> ChannelStats {
     let c = parts.first().map_or(0, |p| p.ncols());
+    if c == 0 {
+        // no channel: nothing to sum (and no lane of width zero to split the rows into)
+        return ChannelStats {
+            abs_max: Vec::new(),
+            mean: Vec::new(),
+            std: Vec::new(),
+        };
+    }
     let n: usize = parts.iter().map(|p| p.nrows()).sum();
     let nf = n as f64;
     let (mut abs_max, mut sum, mut finite) = (vec![0.0f64; c], vec![0.0f64; c], true);
@@ -288,6 +296,14 @@ mod tests {
             assert!((s.std[j] - var.sqrt()).abs() <= 1e-14 * var.sqrt());
             assert_eq!(s.abs_max[j], big);
         }
+    }
+
+    #[test]
+    fn no_channel_gives_empty_statistics() {
+        let x = Mat::<f64>::zeros(10, 0);
+        let s = channel_stats(&[x.as_ref()]);
+        assert!(s.abs_max.is_empty() && s.mean.is_empty() && s.std.is_empty());
+        assert!(channel_stats(&[]).mean.is_empty());
     }
 
     #[test]

@@ -28,6 +28,12 @@ pub fn channel_stats<'py>(
             }));
         }
     }
+    if !views.is_empty() && views.iter().all(|v| v.nrows() == 0) {
+        return Err(crate::errors::to_py(SysidError::InvalidArgument {
+            name: "parts",
+            reason: "no samples: statistics need at least one row".into(),
+        }));
+    }
     let s = py.detach(|| core_channel_stats(&views));
     Ok((
         slice_to_numpy(py, &s.abs_max),
