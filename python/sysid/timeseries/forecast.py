@@ -154,6 +154,34 @@ def _predictor_states(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray
     return np.vstack([np.zeros((1, n)), np.asarray(nxt)])
 
 
+def _propagate(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray, K: np.ndarray,
+               lam: np.ndarray, x: np.ndarray, uf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The forecast's mean ``C x(j) + D u(j)`` from the state ``x`` after the record and its
+    covariance ``Sigma_j = Lambda + sum_{k<j} M_k Lambda M_k^T``, ``M_k = C A^k K`` (the
+    innovations' Markov parameters), for ``j = 0..h-1``: both recursions over the horizon run
+    in the Rust core (:func:`sysid._sysid.simulate`; ``M_k`` column by column, the response
+    to an initial state ``K e_i``), the sums accumulated in order."""
+    from .. import _sysid
+
+    h, n, l = uf.shape[0], A.shape[0], C.shape[0]
+    c = np.ascontiguousarray
+    if n == 0:
+        mean = uf @ D.T
+        markov = np.zeros((max(h - 1, 0), l, l))
+    else:
+        mean = np.asarray(_sysid.simulate(c(A), c(B), c(C), c(D), c(uf), c(x)))
+        quiet = np.zeros((max(h - 1, 0), 0))
+        cols = [np.asarray(_sysid.simulate(c(A), np.zeros((n, 0)), c(C), np.zeros((l, 0)),
+                                           quiet, c(K[:, i]))) for i in range(l)]
+        markov = np.stack(cols, axis=2) if h > 1 else np.zeros((0, l, l))
+    steps = np.einsum("kab,bc,kdc->kad", markov, lam, markov)
+    cov = np.empty((h, l, l))
+    cov[0] = lam
+    if h > 1:
+        cov[1:] = lam + np.cumsum(steps, axis=0)
+    return mean.reshape(h, l), cov
+
+
 def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
              level: float = 0.95) -> Forecast:
     """Forecast ``horizon`` samples beyond a record, with confidence bands
@@ -202,7 +230,7 @@ def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
         raise DataError(f"level must be a number in (0, 1), e.g. 0.95; got {level!r}")
     inner, trend, offsets = _unwrap(model)
     A, B, C, D, K, lam = _innovation_form(inner)
-    n, m, l = A.shape[0], B.shape[1], C.shape[0]
+    m, l = B.shape[1], C.shape[0]
     # per step: the time, mean, std, covariance and future inputs
     check_elements(h * (1 + 4 * l + l * l + m), f"forecast with horizon = {h}",
                    "forecast fewer steps (the forecast settles to the mean, and its band "
@@ -229,18 +257,7 @@ def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
     e = y - xs[:-1] @ C.T - u @ D.T
     if lam is None:  # no stored innovation covariance: the sample one of the past
         lam = np.atleast_2d(e.T @ e / max(y.shape[0], 1))
-    mean = np.empty((h, l))
-    cov = np.empty((h, l, l))
-    S = lam.copy()
-    M = np.eye(l)
-    Ak = np.eye(n)
-    for j in range(h):
-        mean[j] = C @ x + D @ uf[j]
-        x = A @ x + B @ uf[j]
-        cov[j] = S
-        M = C @ Ak @ K
-        Ak = A @ Ak
-        S = S + M @ lam @ M.T
+    mean, cov = _propagate(A, B, C, D, K, lam, x, uf)
     names = list(getattr(model, "output_names", [f"y{i}" for i in range(l)]))
     return Forecast(tf, mean * scale + add, cov * np.outer(scale, scale)[None], float(level),
                     names, y_raw, t)
