@@ -121,3 +121,13 @@ def test_nlhw_ss_and_augmented_models_check_their_arguments_too(record):
             m.simulate(u + 1j)
         with pytest.raises(sysid.ShapeError, match="u has 400 samples but y has 395"):
             m.predict(u, y[:-5])
+
+
+def test_nlhw_says_its_linear_start_s_warnings_as_its_own(record):
+    # orders above the first-order plant: the output-error start's pole and zero cancel;
+    # the warning named oe, a function the user did not call
+    with pytest.warns(sysid.IdentifiabilityWarning) as rec:
+        sysid.nlhw(record[2], 2, 2, 1, progress=False, max_iter=5)
+    said = [str(w.message) for w in rec if issubclass(w.category, sysid.IdentifiabilityWarning)]
+    assert said and all(s.startswith("nlhw (its linear start") for s in said)
+    assert not any(s.startswith("oe:") for s in said)

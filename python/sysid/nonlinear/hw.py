@@ -147,10 +147,16 @@ def nlhw(
     # linear start: output error on the (transformed) input
     from ..data.iodata import IOData
 
-    with warnings.catch_warnings():  # a start: where its F sits is the search's to move
-        warnings.simplefilter("ignore", StabilityWarning)
+    with warnings.catch_warnings(record=True) as said:  # a start: where its F sits is the
+        warnings.simplefilter("always")  # search's to move; the rest is said as nlhw's
         lin = oe(IOData([r[0][:, None] for r in records], [r[1][:, None] for r in records],
                         dt), int(nb), int(nf), int(nk))
+    for w in said:
+        if not issubclass(w.category, StabilityWarning):
+            text = str(w.message)
+            text = text[4:] if text.startswith("oe: ") else text
+            warnings.warn(w.category(f"nlhw (its linear start, an output-error fit of the same "
+                                     f"orders): {text}"), stacklevel=2)
     b0, f0 = np.asarray(lin.b[0][0], float), np.asarray(lin.f[0][0], float)
     u_all = np.concatenate([r[0] for r in records])
     lin_b = b0
