@@ -572,6 +572,15 @@ def write_md(rows: list[dict], path: Path, argv: list[str]) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
+def _use(args, names, load) -> None:
+    """Run the records ``names`` (read by ``load(name)``) instead of the shipped ones, all of
+    them unless ``--records`` picks some."""
+    for name in names:
+        RECORDS[name] = lambda name=name: load(name)
+    if "--records" not in sys.argv:
+        args.records = list(names)
+
+
 def main() -> None:
     if len(sys.argv) > 1 and sys.argv[1] == "--worker":
         worker(sys.argv[2], sys.argv[3])
@@ -617,22 +626,13 @@ def main() -> None:
         def record(name):
             train, test, _, _ = nu.LOADERS[name]()
             return train.experiments[0], test[tests[name]]
-        for name in tests:
-            RECORDS[name] = lambda name=name: record(name)
-        if "--records" not in sys.argv:
-            args.records = list(tests)
+        _use(args, tests, record)
     if args.unshipped:
         stem = "realdata_unshipped"
-        for name in UNSHIPPED:
-            RECORDS[name] = lambda name=name: _unshipped(Path(args.unshipped), name)
-        if "--records" not in sys.argv:
-            args.records = list(UNSHIPPED)
+        _use(args, UNSHIPPED, lambda name: _unshipped(Path(args.unshipped), name))
     if args.more_records:
         stem = "realdata_more"
-        for name in MORE:
-            RECORDS[name] = lambda name=name: _more(Path(args.more_records), name)
-        if "--records" not in sys.argv:
-            args.records = list(MORE)
+        _use(args, MORE, lambda name: _more(Path(args.more_records), name))
     if args.out is None:
         tail = "" if args.split == "default" else f"_{args.split}"
         args.out = str(HERE / "results" / f"{stem}{tail}.md")

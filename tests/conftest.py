@@ -53,6 +53,18 @@ def feedthrough_record(d, n=800, noise=0.05, seed=1):
     return sysid.IOData(u=u, y=true.simulate(u) + noise * rng.standard_normal((n, 1)))
 
 
+def first_order_record():
+    """``(model, u, y, IOData)``: 400 samples of ``y(t+1) = 0.8 y(t) + u(t)`` (dt 0.1) with
+    noise 0.05, the record the bad-input tests perturb."""
+    import sysid
+
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((400, 1))
+    m = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]], dt=0.1)
+    y = m.simulate(u) + 0.05 * rng.standard_normal((400, 1))
+    return m, u, y, sysid.IOData(u=u, y=y, dt=0.1)
+
+
 def quiet(fn, *a, **k):
     """``fn(*a, **k)`` with every warning silenced."""
     with warnings.catch_warnings():

@@ -11,14 +11,13 @@ import pytest
 import sysid
 from sysid.errors import DataError, NonFiniteError, ShapeError
 
+from conftest import first_order_record
+
 
 @pytest.fixture(scope="module")
 def record():
-    rng = np.random.default_rng(0)
-    u = rng.standard_normal((400, 1))
-    m = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]], dt=0.1)
-    y = m.simulate(u) + 0.05 * rng.standard_normal((400, 1))
-    return u, y, sysid.IOData(u=u, y=y, dt=0.1)
+    _, u, y, d = first_order_record()
+    return u, y, d
 
 
 # ---------------------------------------------------------------- 1. no output channel

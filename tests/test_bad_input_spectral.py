@@ -8,13 +8,12 @@ import pytest
 import sysid
 from sysid._checks import MAX_ELEMENTS, check_elements
 
+from conftest import first_order_record
+
 
 @pytest.fixture(scope="module")
 def rec():
-    rng = np.random.default_rng(0)
-    u = rng.standard_normal((400, 1))
-    m = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]], dt=0.1)
-    y = m.simulate(u) + 0.05 * rng.standard_normal((400, 1))
+    m, u, y, _ = first_order_record()
     return m, u, y
 
 
