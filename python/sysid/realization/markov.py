@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import require_inputs_vary
+from .._checks import check_elements, require_inputs_vary
 from ..data.iodata import IOData
 from ..errors import DataError, ExcitationError, NonFiniteError, ShapeError
 from .realize import MarkovEstimate, _count
@@ -123,7 +123,8 @@ def okid(data: IOData, observer_order: int, count: int | None = None, *,
     observer_order : int
         Lags p of the regression; ``p * noutputs`` should exceed the expected order.
     count : int, optional
-        Markov parameters returned (default ``4 * observer_order + 1``).
+        Markov parameters returned (default ``4 * observer_order + 1``); a count whose
+        arrays would exceed the size limit of one call raises a DataError.
     feedthrough : bool or "auto"
         Estimate ``h_0 = D``; if False (the default, as every sysid state-space estimator)
         it is zero. ``"auto"``: decided from the data
@@ -151,8 +152,11 @@ def okid(data: IOData, observer_order: int, count: int | None = None, *,
     if p is None:
         raise DataError("observer_order is required: the number of past samples in the observer")
     c = _count(count, "count") or 4 * p + 1
-    out = _sysid.okid(exps, p, c, _feedthrough(data, feedthrough))
     l, m = exps[0][1].shape[1], exps[0][0].shape[1]
+    # the recursion keeps about 3 (l, m + l) and one (l, m) blocks per Markov parameter
+    check_elements(c * (3 * l * (m + l) + l * m), f"count = {c}",
+                   "pass a count of the order of the response's length in samples")
+    out = _sysid.okid(exps, p, c, _feedthrough(data, feedthrough))
     h = np.asarray(out["markov"]).reshape(-1, l, m)
     info = {
         "observer_markov": np.asarray(out["observer_markov"]).reshape(-1, l, m + l),
@@ -180,7 +184,8 @@ def impulse_from_frf(frf: Any, n_fft: int | None = None, *, dt: float | None = N
         ``(n_fft // 2 + 1, noutputs, ninputs)`` on the full grid from 0 to the Nyquist
         frequency.
     n_fft : int, optional
-        Length of the period; taken from the FRD (``info["n_fft"]``) if omitted.
+        Length of the period; taken from the FRD (``info["n_fft"]``) if omitted. A length
+        whose arrays would exceed the size limit of one call raises a DataError.
     dt : float, optional
         Sample time; taken from the FRD if omitted, else 1.
     fill_missing : bool
@@ -227,6 +232,9 @@ def impulse_from_frf(frf: Any, n_fft: int | None = None, *, dt: float | None = N
         n_fft = 2 * (g.shape[0] - 1)
     n_fft = _count(n_fft, "n_fft")
     assert n_fft is not None
+    # the one-sided response (complex, 2 values a bin) and the n_fft impulse response
+    check_elements(2 * n_fft * g.shape[1] * g.shape[2], f"n_fft = {n_fft}",
+                   "pass the length of one period of the record (the FRD's n_fft)")
     nf = n_fft // 2 + 1
     full = np.zeros((nf,) + g.shape[1:], dtype=complex)
     if omega is None:
