@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import check_elements
 from ..errors import DataError
 from ..models.discretisation import expm
 
@@ -270,6 +271,9 @@ def tap_states(mats: Mapping[str, Any], taps: list[tuple[int, int]], m: int
     if len(taps) == m and all(s == 0 for _, s in taps):
         return A, B, C, D, K
     N = n + sum(depth)
+    check_elements(N * (N + m + l), f"input delays of {sum(depth)} samples in all (each "
+                   "delayed sample is a state)",
+                   "check input_delay (it is in seconds, not samples) and the sample time")
     Aa, Ba, Ca, Da = np.zeros((N, N)), np.zeros((N, m)), np.zeros((l, N)), np.zeros((l, m))
     Aa[:n, :n], Ca[:, :n] = A, C
     start, off = [], n

@@ -34,6 +34,9 @@ from .results import GreyEstimate, _costs, _criterion
 __all__ = ["greyest", "GreyEstimate"]
 
 _FOCUS = ("prediction", "simulation")
+#: Most random starts ``multistart`` may ask for: each is a whole search, and 10000 is far
+#: beyond what tells a global minimum from local ones.
+MAX_STARTS = 10_000
 
 
 def _progress(progress: Any, criterion: str) -> Any:
@@ -103,7 +106,8 @@ def greyest(
         (maximum likelihood, default), or the plain sum of squares.
     multistart : int
         Extra searches from random initial values within the bounds (a fixed seed ``rng``);
-        the lowest loss wins. Against local minima.
+        the lowest loss wins. Against local minima. At most ``MAX_STARTS`` (10000); more
+        raises a DataError.
     rng : seed or numpy Generator, optional
     max_iter : int
     tol : float
@@ -159,6 +163,11 @@ def greyest(
     from .nlgreybox import NonlinearGreyBox
     from .nlgreyest import nlgreyest
 
+    multistart = as_int(multistart, "multistart", 0)
+    if multistart > MAX_STARTS:
+        raise DataError(f"multistart = {multistart} random starts is too many (each is a whole "
+                        f"search; at most {MAX_STARTS}): pass a few (10 to 100) and tighten "
+                        "the parameters' bounds instead")
     periodicity = None
     if isinstance(data, FRD) or periods is not None or transient is not None:
         out, periodicity = _periodic(data, structure, periods, transient, x0, noise, weighting,
@@ -170,7 +179,6 @@ def greyest(
         raise DataError(f"focus must be 'prediction' or 'simulation', got {focus!r}")
     if weighting not in ("noise", "identity"):
         raise DataError(f"weighting must be 'noise' or 'identity', got {weighting!r}")
-    multistart = as_int(multistart, "multistart", 0)
     max_iter = as_int(max_iter, "max_iter", 0)
     cb = _progress(progress, _criterion(weighting))
     if isinstance(structure, NonlinearGreyBox):
@@ -192,6 +200,13 @@ def greyest(
             abs(structure.dt - dt) > 1e-9 * dt:
         raise DataError(f"the structure's dt={structure.dt} differs from the data's dt={dt}: "
                         "resample the data or give the structure the data's sample time")
+    longest = max(e[0].shape[0] for e in data.experiments)
+    shift = max((t[1] for t in structure.input_taps(dt)), default=0)
+    if shift >= longest:
+        raise DataError(f"the structure's input_delay {structure.input_delay.tolist()} s is "
+                        f"{shift} samples of dt={dt:g}, longer than the record ({longest} "
+                        "samples): the output would not see the input; input_delay is in "
+                        "seconds: check its value and the data's dt")
     fit = _LinearFit(data, structure, dt, focus, "estimate" if x0 is None else x0, noise,
                      weighting == "noise")
     best, starts = fit.best_of_starts(max_iter, float(tol), cb, multistart, rng, "loss")
