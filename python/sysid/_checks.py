@@ -335,6 +335,28 @@ def as_nonnegative(x: Any, name: str) -> float:
     raise DataError(f"{name} must be a finite number >= 0, got {x!r}")
 
 
+def as_real(x: Any, name: str, *, positive: bool = False) -> float:
+    """Return a real argument (a Python or NumPy number, not a bool) that is finite (and
+    ``> 0`` if ``positive``), as a float; the :class:`DataError` names the argument.
+
+    Examples
+    --------
+    >>> from sysid._checks import as_real
+    >>> as_real(2, "mean")
+    2.0
+    >>> as_real(float("inf"), "mean")
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: mean must be a finite number, got inf
+    """
+    ok = isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(
+        x, (bool, np.bool_))
+    if ok and np.isfinite(x) and (x > 0 or not positive):
+        return float(x)
+    raise DataError(f"{name} must be a finite{' positive' if positive else ''} number, "
+                    f"got {x!r}")
+
+
 #: Largest array, in bytes, built for a length the caller chose (as in the Rust core).
 MAX_BYTES = 1 << 32
 

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_2d, as_dt, as_int
+from .._checks import as_2d, as_dt, as_int, as_real, check_elements
 from ..errors import DataError, ExcitationWarning
 
 __all__ = [
@@ -42,9 +42,21 @@ def _levels(levels: Any) -> tuple[float, float]:
         lo, hi = (float(v) for v in levels)
     except (TypeError, ValueError):
         raise DataError(f"levels must be a pair (low, high), got {levels!r}") from None
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        raise DataError(f"levels must be finite numbers, got {levels!r}")
     if not lo < hi:
         raise DataError(f"levels must satisfy low < high, got {levels!r}")
     return lo, hi
+
+
+def _finite(x: Any, name: str) -> Any:
+    """A finite real number (:func:`as_real`), or an array of them (one per channel)."""
+    if np.ndim(x) == 0:
+        return as_real(x, name)
+    a = np.asarray(x)
+    if a.dtype.kind not in "iuf" or not np.all(np.isfinite(a)):
+        raise DataError(f"{name} must hold finite numbers, got {x!r}")
+    return a
 
 
 def _band(band: Any) -> tuple[float, float]:
@@ -97,6 +109,7 @@ def prbs(
     hold = _n(hold, "hold")
     m = _n(n_channels, "n_channels")
     lo, hi = _levels(levels)
+    check_elements(n * m, f"n_samples = {n} with {m} channel(s)", "pass a shorter n_samples")
     n_sym = -(-n // hold)
     if n_bits is None:
         n_bits = max(2, min(20, int(np.ceil(np.log2(n_sym + 1)))))
@@ -110,8 +123,8 @@ def prbs(
     cols = []
     for j in range(m):
         s = np.roll(seq, -j * shift)
-        s = np.tile(s, -(-n_sym // period))[:n_sym]
-        cols.append(np.repeat(s, hold)[:n])
+        # sample i holds bit i // hold (only the n samples returned are built)
+        cols.append(s[(np.arange(n) // hold) % period])
     bits = np.column_stack(cols)
     return lo + (hi - lo) * bits
 
@@ -160,6 +173,7 @@ def random_binary(
     """
     n, m = _n(n_samples), _n(n_channels, "n_channels")
     lo, hi = _levels(levels)
+    check_elements(n * m, f"n_samples = {n} with {m} channel(s)", "pass a shorter n_samples")
     e = _bandlimit(_rng(seed).standard_normal((n, m)), _band(band))
     return np.where(e >= 0.0, hi, lo)
 
@@ -184,8 +198,9 @@ def random_gaussian(
     2.0
     """
     n, m = _n(n_samples), _n(n_channels, "n_channels")
-    if not std > 0:
-        raise DataError(f"std must be positive, got {std}")
+    std = as_real(std, "std", positive=True)
+    mean = _finite(mean, "mean")
+    check_elements(n * m, f"n_samples = {n} with {m} channel(s)", "pass a shorter n_samples")
     e = _bandlimit(_rng(seed).standard_normal((n, m)), _band(band))
     e = e - e.mean(axis=0)
     return mean + std * e / e.std(axis=0)
@@ -257,8 +272,9 @@ def multisine(
     n = _n(n_samples)
     m = _n(n_channels, "n_channels")
     p = _n(periods, "periods")
-    if not rms > 0:
-        raise DataError(f"rms must be positive, got {rms}")
+    rms = as_real(rms, "rms", positive=True)
+    check_elements(p * n * m, f"periods = {p} of n_samples = {n} with {m} channel(s)",
+                   "pass fewer periods (or a shorter period)")
     if lines is None:
         lo, hi = _band(band)
         k_all = np.arange(1, n // 2 + (n % 2))
@@ -340,6 +356,8 @@ def chirp(
     """
     n = _n(n_samples)
     dt = as_dt(dt)
+    amplitude = _finite(amplitude, "amplitude")
+    check_elements(n, f"n_samples = {n}", "pass a shorter n_samples")
     if n < 2:
         raise DataError(f"a chirp sweeps over its record: it needs at least 2 samples, got {n}")
     nyq = 0.5 / dt
