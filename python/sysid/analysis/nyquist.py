@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import as_int, check_elements
 from ..errors import DataError
 
 __all__ = ["nyquist", "NyquistResponse"]
@@ -75,7 +76,7 @@ def nyquist(sys: Any, *, omega: Any = None, n_points: int = 20000) -> NyquistRes
     omega : array_like, optional
         Positive frequencies; default a logarithmic grid spanning the poles and zeros.
     n_points : int
-        Size of the default grid.
+        Size of the default grid (at least 2; below 100 the grid has 100 points).
 
     Examples
     --------
@@ -86,6 +87,10 @@ def nyquist(sys: Any, *, omega: Any = None, n_points: int = 20000) -> NyquistRes
     """
     from .margin import _range, _siso
 
+    n_points = as_int(n_points, "n_points", 2)
+    # the curve and its mirror image: 2 complex values (4 floats) and 1 frequency a point
+    check_elements(5 * n_points, f"n_points = {n_points}",
+                   "pass fewer n_points (the default 20000 resolves the curve)")
     sys = _siso(sys, "nyquist")
     dt = float(getattr(sys, "dt", 0.0) or 0.0)
     p = np.asarray(sys.poles()) if hasattr(sys, "poles") else np.zeros(0)

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_2d, as_dt
+from .._checks import as_2d, as_dt, check_elements
 from ..errors import DataError, InsufficientDataError, NonFiniteError, ShapeError
 from .units import sample_time
 
@@ -252,7 +252,13 @@ def from_irregular(
     h = float(np.median(d)) if dt is None else float(dt)
     if not np.isfinite(h) or h <= 0:
         raise DataError(f"dt must be positive, got {dt}")
-    grid = t[0] + np.arange(int(np.floor((t[-1] - t[0]) / h + 1e-9)) + 1) * h
+    with np.errstate(over="ignore"):
+        n_float = min(float(np.floor((t[-1] - t[0]) / h + 1e-9)) + 1, 1e300)
+    nch = ya.shape[1] + (0 if ua is None else ua.shape[1])
+    check_elements(n_float * (nch + 1), f"dt = {h:g} over a span of {t[-1] - t[0]:g} "
+                   f"({n_float:.3g} samples)", "pass a dt near the typical spacing of time")
+    n_new = int(n_float)
+    grid = t[0] + np.arange(n_new) * h
     if method == "linear":
         def interp(x: np.ndarray) -> np.ndarray:
             return np.column_stack([np.interp(grid, t, c) for c in x.T]).reshape(
