@@ -365,7 +365,15 @@ class StateSpaceModel(ModelMixin):
     def impulse(self, n_samples: int | None = None) -> TimeResponse:
         """Impulse responses: the Markov parameters; see :func:`sysid.impulse`."""
         N = default_length(self, n_samples)
-        return TimeResponse("impulse", np.arange(N) * self.dt, self.markov(N), self)
+        with np.errstate(over="ignore", invalid="ignore"):
+            h = self.markov(N)
+        if not np.isfinite(h).all():  # as step(), whose simulation raises on overflow
+            k = int(np.argwhere(~np.isfinite(h))[0][0])
+            raise NumericalError(
+                f"numerical failure in impulse: the impulse response overflowed at sample {k} "
+                f"of {N}; the model is unstable over this record length (largest |pole| "
+                f"{float(np.max(np.abs(self.poles()))):.6g}): pass fewer n_samples")
+        return TimeResponse("impulse", np.arange(N) * self.dt, h, self)
 
     def dcgain(self, std: bool = False) -> Any:
         """Steady-state gain ``C (I - A)^{-1} B + D``, shape ``(noutputs, ninputs)``; with
