@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
-from .._checks import as_dt, check_elements
+from .._checks import as_dt, as_int, check_elements
 from ..errors import DataError, InsufficientDataError
 from .iodata import IOData
 from .segments import _Exp
@@ -183,11 +183,21 @@ def resample(data: IOData, dt: float, *, max_denominator: int = 1000) -> IOData:
     return data._derive(exps, dt=new_dt)
 
 
+#: Fewest samples an experiment may keep after :func:`decimate`.
+MIN_DECIMATED = 10
+#: Highest anti-alias filter order of :func:`decimate` (beyond, the Chebyshev filter's
+#: coefficients are meaningless in double precision).
+MAX_DECIMATE_ORDER = 30
+
+
 def decimate(data: IOData, q: int, *, order: int = 8) -> IOData:
     """Keep every ``q``-th sample after a zero-phase Chebyshev anti-alias filter
     (``scipy.signal.decimate`` with ``zero_phase=True``; the filter is MATLAB's and SciPy's
     order-``order`` type I with 0.05 dB ripple and cut-off ``0.8 / q``, scaled to unit
     gain at DC so that levels and offsets are kept).
+
+    ``q`` must leave every experiment at least ``MIN_DECIMATED`` (10) samples and ``order``
+    lie in 1..30; otherwise a :class:`~sysid.DataError` is raised.
 
     Examples
     --------
@@ -195,8 +205,19 @@ def decimate(data: IOData, q: int, *, order: int = 8) -> IOData:
     >>> sysid.decimate(sysid.IOData(u=np.ones(100), y=np.ones(100), dt=0.01), 4).dt
     0.04
     """
-    if not isinstance(q, (int, np.integer)) or q < 2:
+    if not isinstance(q, (int, np.integer)) or isinstance(q, (bool, np.bool_)) or q < 2:
         raise DataError(f"q must be an integer >= 2, got {q!r}")
+    order = as_int(order, "order", 1, MAX_DECIMATE_ORDER)
+    for k, e in enumerate(data._exps):
+        n = e.y.shape[0]
+        kept = -(-n // int(q))
+        if kept < MIN_DECIMATED:
+            top = (n - 1) // (MIN_DECIMATED - 1)  # the largest q that keeps enough
+            fix = f"pass q <= {top}" if top >= 2 else "the experiment is too short to decimate"
+            raise InsufficientDataError(
+                f"decimating experiment {k} ({n} samples) by q = {q} would leave {kept} "
+                f"sample(s), fewer than {MIN_DECIMATED}: nothing could be identified from "
+                f"them; {fix}")
     # SciPy's default Chebyshev filter has a DC gain of 10^(-0.05/20) (the passband ripple's
     # trough), 0.9886 forward and back: a 300 degree level became 296.6. Scaled to unit DC
     # gain, levels and offsets survive decimation.
