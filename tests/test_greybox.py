@@ -373,7 +373,7 @@ def test_bad_structures_raise():
     with pytest.raises(DataError):
         sysid.GreyBox(lambda p: ([[p.a]], [[1.0]]), {"a": 1.0})
     s = sysid.GreyBox(lambda p: ([[p.a]], [[1.0]], [[1.0]], [[0.0]]), {"a": 1.0})
-    u = np.ones(50)
+    u = np.sin(0.3 * np.arange(50.0))  # a varying input (a constant one is refused first)
     with pytest.raises(DataError, match="unstable"):
         sysid.greyest(sysid.IOData(u=u, y=u, dt=0.1), s)
     with pytest.raises(ZeroDivisionError):

@@ -377,8 +377,9 @@ def test_compare_constant_output_refused():
     assert "constant" in str(e.value) and "undefined" in str(e.value)
 
 
-def test_fit_metrics_constant_is_nan():
-    assert np.isnan(sysid.fit_metrics(np.ones(10), np.zeros(10))["fit"][0])
+def test_fit_metrics_constant_is_refused():
+    with pytest.raises(DataError, match="output y0 is constant"):
+        sysid.fit_metrics(np.ones(10), np.zeros(10))
 
 
 @pytest.mark.parametrize(

@@ -58,11 +58,13 @@ def test_matches_numpy_eigenvalues_and_counts_real_poles_once() -> None:
     assert neg.s.imag[0] == pytest.approx(np.pi / 0.1)
 
 
-def test_dt_override_scales_frequencies() -> None:
+def test_dt_contradicting_the_model_is_refused() -> None:
     model = structure([2.0], [0.1], 0.01, np.array([[1.0]]))
-    slow = sysid.modal_analysis(model, dt=0.02)
-    assert slow.frequencies_hz[0] == pytest.approx(1.0)
-    assert slow.damping[0] == pytest.approx(0.1)
+    with pytest.raises(sysid.DataError, match="contradicts the model's sample time"):
+        sysid.modal_analysis(model, dt=0.02)
+    same = sysid.modal_analysis(model, dt=0.01)
+    assert same.frequencies_hz[0] == pytest.approx(2.0)
+    assert same.damping[0] == pytest.approx(0.1)
 
 
 def test_to_pandas_and_select() -> None:

@@ -19,9 +19,9 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_matrix
+from .._checks import as_matrix, as_nonnegative
 from ..errors import DataError, ShapeError
-from ..models.checks import _optional, check_model
+from ..models.checks import _optional, check_model, check_start
 from ..models.continuous import ContinuousStateSpace, c2d, d2c
 from ..models.linear import DampingTable, damping, transmission_zeros
 from ..models.protocol import TimeResponse
@@ -69,6 +69,7 @@ def zeros(model: Any, tol: float = 1e-6) -> np.ndarray:
     >>> sysid.zeros(m)
     array([0.35+0.j])
     """
+    tol = as_nonnegative(tol, "tol")
     if all(hasattr(model, k) for k in ("A", "B", "C", "D")):
         return transmission_zeros(model.A, model.B, model.C, model.D, tol)
     return np.asarray(_optional(model, "zeros", "zeros"))
@@ -94,6 +95,7 @@ def damp(model: Any, std: bool = False) -> DampingTable:
     array([0.0995, 0.0995])
     """
     check_model(model)
+    check_start(model, None, "damp", role="model")
     return damping(model, std)
 
 

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DataError
+from ..models.checks import check_start
 from ..models.linear import minimal_basis
 
 __all__ = ["minreal"]
@@ -46,6 +47,7 @@ def minreal(sys: Any, tol: float | None = None) -> Any:
     if isinstance(sys, TransferFunction):
         return _tf(sys, tol)
     if hasattr(sys, "A") and hasattr(sys, "B") and hasattr(sys, "C"):
+        check_start(sys, None, "minreal", role="model")
         return _ss(sys, tol)
     raise DataError(f"minreal needs a TransferFunction or a state-space model, got "
                     f"{type(sys).__name__}")

@@ -28,6 +28,7 @@ from .. import _sysid
 from .._checks import as_dt
 from .._display import HTMLResult
 from ..data.formats import _pandas
+from ..errors import DataError
 from ..models.checks import discrete_statespace
 from ..models.statespace import StateSpaceModel
 
@@ -126,9 +127,10 @@ def modal_analysis(model: StateSpaceModel, dt: float | None = None, std: bool = 
     Parameters
     ----------
     model : StateSpaceModel
-        The model; its ``dt`` is the sample time unless ``dt`` is given.
+        The model; its ``dt`` is the sample time.
     dt : float, optional
-        Sample time in seconds, overriding ``model.dt``.
+        Sample time in seconds: must agree with ``model.dt`` (a different one raises a
+        :class:`~sysid.errors.DataError`: the frequencies would be wrong by their ratio).
     std : bool
         Add the first-order standard deviations of each mode's frequency and damping
         (``extra["sd_hz"]``, ``extra["sd_damping"]``) from the model's ``uncertainty``.
@@ -147,6 +149,12 @@ def modal_analysis(model: StateSpaceModel, dt: float | None = None, std: bool = 
     if not isinstance(model, StateSpaceModel):
         model = discrete_statespace(model, "modal analysis")
     dt = as_dt(model.dt if dt is None else dt)
+    if model.dt and not np.isclose(dt, model.dt, rtol=1e-9, atol=0.0):
+        raise DataError(
+            f"dt={dt:.10g} contradicts the model's sample time dt={model.dt:.10g}: its "
+            "frequencies would be wrong by their ratio; drop dt, or if the model really is "
+            "sampled every dt, rebuild it with that sample time (sysid.StateSpaceModel(A, B, "
+            "C, D, dt=dt))")
     d = _sysid.modal_analysis(model.A, model.C, dt)
     out = ModalAnalysis(d, dt, list(model.output_names))
     if std:

@@ -21,7 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DataError, NumericalError
+from .._checks import as_int
+from ..errors import DataError, NonFiniteError, NumericalError
 
 __all__ = ["stepinfo", "StepInfo"]
 
@@ -168,7 +169,7 @@ def stepinfo(sys: Any, t: Any = None, *, yfinal: Any = None, yinit: Any = None,
     lo, hi = float(rise_limits[0]), float(rise_limits[1])
     if not 0 <= lo < hi <= 1:
         raise DataError(f"rise_limits must satisfy 0 <= low < high <= 1, got {rise_limits}")
-    tt, Y, yf, yi = _response(sys, t, n_samples)
+    tt, Y, yf, yi = _response(sys, t, as_int(n_samples, "n_samples", 2))
     l, m = Y.shape[1], Y.shape[2]
     yf = _fill(yfinal, (l, m), "yfinal") if yfinal is not None else yf
     yi = _fill(yinit, (l, m), "yinit") if yinit is not None else yi
@@ -184,9 +185,13 @@ def stepinfo(sys: Any, t: Any = None, *, yfinal: Any = None, yinit: Any = None,
 
 def _fill(x: Any, shape: tuple[int, int], name: str) -> np.ndarray:
     try:
-        return np.broadcast_to(np.asarray(x, dtype=float), shape).copy()
-    except ValueError:
+        out = np.broadcast_to(np.asarray(x, dtype=float), shape).copy()
+    except (TypeError, ValueError):
         raise DataError(f"{name} must be one number or an array {shape}") from None
+    if not np.isfinite(out).all():
+        raise NonFiniteError(f"{name} must be finite, got {x!r}; leave it out for the "
+                             "default")
+    return out
 
 
 def _response(sys: Any, t: Any, n: int

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_2d, as_dt, as_int, as_real, check_elements
+from .._checks import as_2d, as_dt, as_int, as_nonnegative, as_real, check_elements
 from ..errors import DataError, ExcitationWarning
 
 __all__ = [
@@ -442,7 +442,7 @@ def persistent_excitation_order(u: Any, max_order: int = 20, *, method: str = "s
         Largest order reported (the answer ``max_order`` means "at least").
     method : {"spectrum", "covariance"}
     tol : float, optional
-        Relative threshold (see above).
+        Relative threshold (see above), finite and ``>= 0``.
 
     Examples
     --------
@@ -466,6 +466,8 @@ def persistent_excitation_order(u: Any, max_order: int = 20, *, method: str = "s
         raise DataError("the record has no inputs; persistent excitation concerns inputs")
     if any(x.shape[1] != m for x in us):
         raise DataError("all experiments must have the same number of inputs")
+    if tol is not None:
+        tol = as_nonnegative(tol, "tol")
     if method == "spectrum":
         from .excitation import TOL, spectral_excitation_order
 

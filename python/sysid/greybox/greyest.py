@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, warn_if_capped
+from .._checks import as_int, experiment_arrays, require_inputs_vary, warn_if_capped
 from .._progress import iteration_printer
 from ..data.iodata import IOData
 from ..errors import DataError
@@ -111,7 +111,7 @@ def greyest(
     rng : seed or numpy Generator, optional
     max_iter : int
     tol : float
-        Relative cost decrease below which the search stops.
+        Relative cost decrease below which the search stops (positive, finite).
     progress : bool or callable
         ``True`` prints one line per iteration; a callable gets
         ``(iteration, cost, step_norm, gradient_norm, damping)`` and may return ``False``.
@@ -160,6 +160,7 @@ def greyest(
     >>> np.round(fit.parameters.value, 6), fit.info["domain"]
     (array([2. , 0.3]), 'frequency')
     """
+    from ..tf.options import search_limits
     from .nlgreybox import NonlinearGreyBox
     from .nlgreyest import nlgreyest
 
@@ -168,6 +169,7 @@ def greyest(
         raise DataError(f"multistart = {multistart} random starts is too many (each is a whole "
                         f"search; at most {MAX_STARTS}): pass a few (10 to 100) and tighten "
                         "the parameters' bounds instead")
+    max_iter, tol = search_limits(max_iter, tol, None)  # the checks of procest and tfest
     periodicity = None
     if isinstance(data, FRD) or periods is not None or transient is not None:
         out, periodicity = _periodic(data, structure, periods, transient, x0, noise, weighting,
@@ -195,6 +197,7 @@ def greyest(
         raise DataError(f"the structure has {structure.ninputs} input(s) and "
                         f"{structure.noutputs} output(s), the data {data.n_inputs} and "
                         f"{data.n_outputs}")
+    require_inputs_vary(experiment_arrays(data), "greyest", data.input_names)
     dt = float(data.dt)
     if structure.dt is not None and not structure.continuous and \
             abs(structure.dt - dt) > 1e-9 * dt:

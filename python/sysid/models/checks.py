@@ -83,11 +83,13 @@ def discrete_statespace(model: Any, purpose: str) -> Any:
     return ss
 
 
-def check_start(model: Any, data: Any, who: str) -> None:
+def check_start(model: Any, data: Any, who: str, role: str = "start model") -> None:
     """Refuse a start model that ``who`` could only misuse: a matrix with a NaN or Inf (set
     after construction) raises a :class:`~sysid.errors.NonFiniteError` naming it; a sample
     time other than the record's (an :class:`~sysid.IOData`) a :class:`DataError`, worded as
     :func:`sysid.compare` words it (the refined model would be relabelled with the data's).
+    ``role``: what the model is to ``who`` in the messages (``"model"`` for a function that
+    analyses or scores it rather than starting from it; ``data=None``: no record).
 
     Examples
     --------
@@ -108,17 +110,19 @@ def check_start(model: Any, data: Any, who: str) -> None:
         arr = np.asarray(mat)
         if arr.dtype.kind in "biufc" and not np.all(np.isfinite(arr)):
             raise NonFiniteError(
-                f"the start model's {name} has non-finite entries (NaN or Inf): {who} cannot "
-                f"start from it; give a start whose matrices are finite (e.g. from "
-                "sysid.n4sid(data, order))")
+                f"the {role}'s {name} has non-finite entries (NaN or Inf): {who} cannot "
+                + ("start from it; give a start whose matrices are finite (e.g. from "
+                   "sysid.n4sid(data, order))" if role == "start model" else
+                   f"use it; set {name} back to finite values (or rebuild the model)"))
     dt, data_dt = getattr(model, "dt", None), getattr(data, "dt", None)
     if (dt and data_dt and hasattr(data, "experiments")
             and not np.isclose(data_dt, dt, rtol=1e-9)):
         raise DataError(
-            f"the data are sampled every {data_dt:.10g} s but the start model every "
-            f"{dt:.10g} s; {who} would relabel the model: resample the data or use a start "
-            "model of the same sample time (sysid.c2d(sysid.d2c(model), data.dt) resamples "
-            "one)")
+            f"the data are sampled every {data_dt:.10g} s but the {role} every "
+            f"{dt:.10g} s; {who} would "
+            + ("relabel the model" if role == "start model" else "use the wrong time base")
+            + f": resample the data or use a {role} of the same sample time "
+            "(sysid.c2d(sysid.d2c(model), data.dt) resamples one)")
 
 
 def warn_unstable(model: Any, method: str, closed_loop: bool = False,

@@ -143,7 +143,8 @@ class ContinuousStateSpace(ModelMixin):
 
     def freqresp(self, omega: Any, std: bool = False) -> Any:
         """``C (j omega I - A)^{-1} B + D``, shape ``(len(omega), noutputs, ninputs)``; with
-        ``std=True`` (needs :attr:`uncertainty`) the pair ``(H, sd)``, ``sd`` complex."""
+        ``std=True`` (needs :attr:`uncertainty`) the pair ``(H, sd)``, ``sd`` complex; ``inf``
+        at a frequency on a pole (``j omega`` an eigenvalue of ``A``)."""
         if std:
             from .uncertainty import freqresp_std
 
@@ -154,7 +155,10 @@ class ContinuousStateSpace(ModelMixin):
         eye = np.eye(self.nstates)
         out = np.empty((w.size, self.noutputs, self.ninputs), dtype=complex)
         for i, wi in enumerate(w):
-            out[i] = self.C @ np.linalg.solve(1j * wi * eye - self.A, self.B) + self.D
+            try:
+                out[i] = self.C @ np.linalg.solve(1j * wi * eye - self.A, self.B) + self.D
+            except np.linalg.LinAlgError:  # omega at a pole: infinite gain, as MATLAB's
+                out[i] = np.inf
         return out
 
     def dcgain(self, std: bool = False) -> Any:
@@ -166,17 +170,17 @@ class ContinuousStateSpace(ModelMixin):
             from .uncertainty import complex_std
 
             return complex_std(self, lambda m: m.dcgain())
-        try:
-            return self.freqresp([0.0])[0].real
-        except np.linalg.LinAlgError:
-            gain = minimal_dcgain(self)
-            if gain is not None:
-                return gain
-            zeros = [p for p in self.poles() if abs(p) < 1e-9]
-            raise NumericalError(
-                f"the DC gain is infinite: the model has {len(zeros)} pole(s) at s = 0 (an "
-                "integrator), so its step response grows without bound; look at step() or "
-                "freqresp() at low frequencies instead") from None
+        gain = self.freqresp([0.0])[0].real  # inf at a pole at DC
+        if np.isfinite(gain).all():
+            return gain
+        gain = minimal_dcgain(self)
+        if gain is not None:
+            return gain
+        zeros = [p for p in self.poles() if abs(p) < 1e-9]
+        raise NumericalError(
+            f"the DC gain is infinite: the model has {len(zeros)} pole(s) at s = 0 (an "
+            "integrator), so its step response grows without bound; look at step() or "
+            "freqresp() at low frequencies instead") from None
 
     def c2d(self, dt: float, method: str | None = None, *,
             prewarp: float | None = None) -> StateSpaceModel:

@@ -35,10 +35,8 @@ def minimal_dcgain(model: Any) -> np.ndarray | None:
         return None
     reduced = type(model)(T.T @ A @ T, T.T @ B, C @ T, model.D, **(
         {"dt": model.dt} if isinstance(model, StateSpaceModel) else {}))
-    try:
-        return np.asarray(reduced.freqresp([0.0])[0].real)
-    except np.linalg.LinAlgError:
-        return None
+    gain = np.asarray(reduced.freqresp([0.0])[0].real)  # inf at a pole at DC
+    return gain if np.isfinite(gain).all() else None
 
 
 def ss_parameter_count(n: int, m: int, l: int, *, feedthrough: bool = True,
@@ -337,7 +335,8 @@ class StateSpaceModel(ModelMixin):
         -------
         ndarray
             Complex response, shape ``(len(omega), noutputs, ninputs)``; with ``std=True`` the
-            pair ``(H, sd)``.
+            pair ``(H, sd)``. A frequency at a pole (``exp(j omega dt)`` an eigenvalue of
+            ``A``) gives ``inf``.
 
         Examples
         --------
@@ -359,7 +358,11 @@ class StateSpaceModel(ModelMixin):
         eye = np.eye(n)
         out = np.empty((w.size, self.noutputs, self.ninputs), dtype=complex)
         for i, zi in enumerate(z):
-            out[i] = self.C @ np.linalg.solve(zi * eye - self.A, self.B) + self.D if n else self.D
+            try:
+                out[i] = (self.C @ np.linalg.solve(zi * eye - self.A, self.B) + self.D
+                          if n else self.D)
+            except np.linalg.LinAlgError:  # omega at a pole: infinite gain, as MATLAB's
+                out[i] = np.inf
         return out
 
     def impulse(self, n_samples: int | None = None) -> TimeResponse:
@@ -382,18 +385,18 @@ class StateSpaceModel(ModelMixin):
             from .uncertainty import complex_std
 
             return complex_std(self, lambda m: m.dcgain())
-        try:
-            return self.freqresp([0.0])[0].real
-        except np.linalg.LinAlgError:
-            gain = minimal_dcgain(self)
-            if gain is not None:
-                return gain
-            ones = [p for p in self.poles() if abs(p - 1.0) < 1e-9]
-            raise NumericalError(
-                f"the DC gain is infinite: the model has {len(ones)} pole(s) at z = 1 (an "
-                "integrator), so its step response grows without bound; look at step() or "
-                "freqresp() at low frequencies instead"
-            ) from None
+        gain = self.freqresp([0.0])[0].real  # inf at a pole at DC
+        if np.isfinite(gain).all():
+            return gain
+        gain = minimal_dcgain(self)
+        if gain is not None:
+            return gain
+        ones = [p for p in self.poles() if abs(p - 1.0) < 1e-9]
+        raise NumericalError(
+            f"the DC gain is infinite: the model has {len(ones)} pole(s) at z = 1 (an "
+            "integrator), so its step response grows without bound; look at step() or "
+            "freqresp() at low frequencies instead"
+        ) from None
 
     def __repr__(self) -> str:
         stab = "stable" if self.is_stable() else "UNSTABLE"

@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_int, experiment_arrays, require_inputs_vary
-from ..errors import DataError, InsufficientDataError
+from ..errors import DataError, InsufficientDataError, NonFiniteError
 
 _METHODS = ("cov", "data")
 
@@ -68,6 +68,10 @@ def mac(phi1: Any, phi2: Any) -> np.ndarray:
     if a.shape[1] != b.shape[1]:
         raise DataError(f"mode shapes have {a.shape[1]} and {b.shape[1]} channels; compare "
                         "shapes over the same channels")
+    for arr, name in ((a, "phi1"), (b, "phi2")):
+        if not np.isfinite(arr).all():
+            raise NonFiniteError(f"{name} has non-finite entries (NaN or Inf): the MAC of "
+                                 "such a mode shape is undefined; drop or recompute that mode")
     num = np.abs(a.conj() @ b.T) ** 2
     den = np.outer(np.sum(np.abs(a) ** 2, 1), np.sum(np.abs(b) ** 2, 1))
     with np.errstate(invalid="ignore", divide="ignore"):

@@ -354,6 +354,7 @@ def pem_loss(
     ...                                                                  focus="simulation")
     True
     """
+    check_start(model, data, "pem_loss", role="model")
     st = _setup(data, model, focus, _as_start(feedthrough, model), x0, noise, weighting,
                 enforce_stability)
     if st.stabilized:

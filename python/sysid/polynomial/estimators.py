@@ -13,6 +13,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import (
+    as_2d,
     as_int,
     as_int_grid,
     experiment_arrays,
@@ -602,8 +603,15 @@ def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
             "multi-output model's order with sysid.n4sid(data, order='auto') or "
             "sysid.ssest(data, order='auto')")
     check_offsets(data)
-    rng = [list(map(int, np.atleast_1d(v))) for v in (na, nb, nk)]
+    rng = [[as_int(int(o) if isinstance(o, (float, np.floating)) and float(o).is_integer()
+                   else o, f"every entry of {name}", 0) for o in np.atleast_1d(v).tolist()]
+           for v, name in ((na, "na"), (nb, "nb"), (nk, "nk"))]
+    require_inputs_vary(exps, "arxstruc", getattr(data, "input_names", None))
     out = np.asarray(_sysid.arx_struc(exps, *rng)).view(StructureTable)
+    if not len(out):
+        raise DataError("every ARX structure in the ranges has a rank-deficient regression "
+                        "(the data do not determine any of them): check that the input "
+                        "and the output vary, or try smaller orders")
     out.n_samples = int(sum(y.shape[0] for _, y in exps))
     return out
 
@@ -628,6 +636,7 @@ def selstruc(
     if n_samples is None:
         raise DataError("selstruc needs n_samples (the number of estimation samples): this "
                         "table does not remember it (pass the one from sysid.arxstruc)")
+    n_samples = as_int(n_samples, "n_samples")
     loss, p = table[:, 3], table[:, 4]
     if criterion == "aic":
         score = np.log(loss) + 2 * p / n_samples
@@ -651,8 +660,11 @@ def _references(reference: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> li
                         f"{len(refs)}")
     out = []
     for r, (u, _) in zip(refs, exps):
-        a = np.asarray(r, dtype=float)
-        a = a.reshape(-1, 1) if a.ndim == 1 else a
+        if isinstance(r, (str, bytes)) or np.asarray(r).dtype.kind not in "biuf":
+            raise DataError(f"reference must be the reference signal: a real array "
+                            f"(n_samples, n_ref), or a list with one per experiment; got "
+                            f"{type(r).__name__} {r!r:.40}")
+        a = as_2d(r, "reference")
         if a.ndim != 2 or a.shape[0] != u.shape[0] or a.shape[1] == 0:
             raise DataError(f"reference must have the input's {u.shape[0]} rows (one column "
                             f"per reference channel), got shape {a.shape}")

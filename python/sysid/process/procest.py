@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import require_inputs_vary
 from ..errors import DataError, NumericalError
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
@@ -99,6 +100,7 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
                         "(a small Tp1) instead")
     init, fixed, bounds = _options(t, init, fixed, bounds)
     exps_all = [(np.asarray(u, float), np.asarray(y, float)) for u, y in data.experiments]
+    require_inputs_vary(exps_all, "procest", data.input_names)
     N = sum(u.shape[0] for u, _ in exps_all)
     dmax = max_delay if max_delay is not None else 0.1 * N * data.dt / len(exps_all)
     names = [n for n in t.names if n != "Td"]

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_int, as_option
+from .._checks import as_2d, as_dt, as_int, as_option
 from ..errors import DataError, ShapeError
 
 
@@ -113,7 +113,7 @@ class _Recursive:
         nf_v, nk_v = _per_input(nf, m, "nf"), _per_input(nk, m, "nk")
         self._orders = (as_int(na, "na", 0), nb_v, as_int(nc, "nc", 0), as_int(nd, "nd", 0),
                         nf_v, nk_v)
-        self.method, self.dt = method, float(dt)
+        self.method, self.dt = method, as_dt(dt)
         P0 = np.asarray(initial_covariance, dtype=float)
         theta0 = None if initial_parameters is None else np.ascontiguousarray(
             np.asarray(initial_parameters, dtype=float).ravel())

@@ -77,15 +77,16 @@ def frd_subspace(
     T : float, optional
         Sample time of the bilinear map (continuous time); default ``2 / sqrt(w_min w_max)``
         over the positive frequencies, which maps their geometric centre to ``pi / 2``.
+        Only for an FRD with ``continuous=True`` (elsewhere it raises: it has no use).
     weights : array_like, optional
         Non-negative weight per frequency (for example ``1 / std``).
     lags : int, optional
         Lag window of :func:`sysid.spa` for ``IOData`` input (default: its own).
     method : {"spa", "dft"}
-        For ``IOData`` input: through the smoothed FRD (``"spa"``) or directly from the
-        input and output DFTs of the (single-experiment) record (``"dft"``, McKelvey, Akçay &
-        Ljung's spectra form, with the transient term estimated: exact for noise-free
-        records, periodic or not).
+        For ``IOData`` input (an FRD takes only the default): through the smoothed FRD
+        (``"spa"``) or directly from the input and output DFTs of the (single-experiment)
+        record (``"dft"``, McKelvey, Akçay & Ljung's spectra form, with the transient term
+        estimated: exact for noise-free records, periodic or not).
     feedthrough : bool or "auto"
         Estimate ``D``. Default ``False``: no direct term, as every sysid state-space
         estimator (with ``continuous=True`` the continuous-time ``D`` is zero: the discrete
@@ -128,6 +129,14 @@ def frd_subspace(
 
     ft = check_feedthrough(feedthrough)
     scale = check_scale(scale)
+    if not isinstance(order, str):
+        as_int(order, "order", 1)
+    if method not in ("spa", "dft"):
+        raise DataError(f"method must be 'spa' or 'dft', got {method!r}")
+    if T is not None and (not continuous or isinstance(frd, IOData)):
+        raise DataError(f"T (got {T!r}) is the sample time of the bilinear map of an FRD "
+                        "fitted with continuous=True; it has no use here: drop it (a discrete "
+                        "fit uses frd.dt, a record its own dt)")
     if isinstance(frd, IOData):
         from ..models.continuous import d2c
         from ..nonparametric.frf import spa
@@ -137,8 +146,6 @@ def frd_subspace(
             from .estimator import SubspaceEstimator
 
             ft, why = choose_feedthrough(SubspaceEstimator(frd), order)
-        if method not in ("spa", "dft"):
-            raise DataError(f"method must be 'spa' or 'dft', got {method!r}")
         su, sy = record_rms(frd) if scale else (np.ones(frd.n_inputs), np.ones(frd.n_outputs))
         data = frd if np.all(su == 1.0) and np.all(sy == 1.0) else frd._scaled(su, sy)
         if method == "dft":
@@ -160,6 +167,9 @@ def frd_subspace(
                         "fit); for an FRD pass True or False, or give the IOData")
     if not isinstance(frd, FRD):
         raise DataError(f"frd must be a sysid.FRD, got {type(frd).__name__}")
+    if method != "spa":
+        raise DataError(f"method={method!r} applies to a time record (IOData); an FRD is "
+                        "fitted as it is: drop method")
     omega = np.asarray(frd.omega, dtype=float)
     g = np.asarray(frd.response, dtype=complex)
     nf, l, m = g.shape

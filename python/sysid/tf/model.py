@@ -318,7 +318,10 @@ class TransferFunction(ModelMixin):
         """The exact sampled model over input taps: ``(Ad, B_taps, C, D_taps, taps, G)``,
         ``taps`` the ``(input, shift)`` of each column and ``G`` ``(n, m)`` the state at rest
         per unit ``u(0)`` (first-order hold only)."""
+        dt = as_dt(dt)
         hold = hold or self.hold
+        if hold not in ("zoh", "foh"):
+            raise DataError(f"hold must be 'zoh' or 'foh', got {hold!r}")
         blocks, canon = [], []
         for i, j, (a, b, c, d) in self._blocks():
             whole, r = split_delay(float(self.iodelay[i, j]), dt)
@@ -367,9 +370,10 @@ class TransferFunction(ModelMixin):
 
     def sampled(self, dt: float) -> Any:
         """The model seen at sample time ``dt`` (what :func:`sysid.compare` uses)."""
+        dt = as_dt(dt)
         if self.dt > 0:
             return self
-        return _Sampled(self, float(dt))
+        return _Sampled(self, dt)
 
     def step(self, n_samples: int | None = None, *, dt: float | None = None,
              std: bool = False) -> TimeResponse:

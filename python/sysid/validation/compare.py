@@ -340,8 +340,9 @@ def fit_metrics(y: Any, yhat: Any) -> dict[str, np.ndarray]:
 
     ``fit = 100 (1 - ||y - yhat|| / ||y - mean(y)||)`` (MATLAB's ``compare``; 100 is
     perfect, 0 is no better than the mean, negative is worse), ``vaf = 100 (1 - var(y - yhat)
-    / var(y))`` and ``rmse = sqrt(mean((y - yhat)^2))``. Fit and VAF are undefined (NaN)
-    for a constant output channel.
+    / var(y))`` and ``rmse = sqrt(mean((y - yhat)^2))``. Fit and VAF are undefined for a
+    constant output channel: it raises a :class:`~sysid.errors.DataError` (as
+    :func:`compare` does).
 
     Examples
     --------
@@ -354,6 +355,7 @@ def fit_metrics(y: Any, yhat: Any) -> dict[str, np.ndarray]:
     yhat = as_2d(yhat, "yhat", ncols=y.shape[1])
     if yhat.shape != y.shape:
         raise ShapeError(f"yhat has shape {yhat.shape} but y has {y.shape}")
+    require_outputs_vary([y])
     return _metrics(y, yhat)
 
 

@@ -43,11 +43,11 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int
+from .._checks import as_int, as_nonnegative
 from .._display import HTMLResult
 from .._progress import Bar, show
 from ..data.iodata import IOData
-from ..errors import DataError, NumericalError, SysidError
+from ..errors import DataError, InsufficientDataError, NumericalError, SysidError
 from ..models.checks import _optional, check_model
 from ..models.statespace import StateSpaceModel, ss_parameter_count
 from .compare import _records, _run, _simulator, _stateful, _x0_for, compare
@@ -80,6 +80,8 @@ def n_parameters(n: Any, m: int | None = None, l: int | None = None, *,
     if m is None or l is None:
         raise DataError("n_parameters takes a model, or its order n with m inputs and l "
                         "outputs: n_parameters(n, m, l)")
+    n, m, l = as_int(n, "n", 0), as_int(m, "m", 0), as_int(l, "l", 0)
+    n_experiments = as_int(n_experiments, "n_experiments")
     return ss_parameter_count(n, m, l, feedthrough=feedthrough, noise_model=noise_model, x0=x0,
                               n_experiments=n_experiments)
 
@@ -135,9 +137,12 @@ def criteria(model: Any, data: Any, *, x0: Any = "estimate",
         rest and count none.
     n_params : int, optional
         Override the parameter count (default ``model.n_parameters``, for a state-space
-        model :func:`n_parameters` from its shape, its ``D`` and ``K``).
+        model :func:`n_parameters` from its shape, its ``D`` and ``K``); a count of at
+        least the number of samples minus 1 raises :class:`~sysid.errors.InsufficientDataError`
+        (AICc and FPE would be infinite).
     resolution : float
-        Relative floor of the prediction-error covariance (see module docs).
+        Relative floor of the prediction-error covariance (see module docs), finite and
+        ``>= 0``.
 
     Examples
     --------
@@ -150,6 +155,22 @@ def criteria(model: Any, data: Any, *, x0: Any = "estimate",
     >>> c.n_params   # n (2 l + m) + n for x0; D = 0 counts as no feed-through
     4
     """
+    if n_params is not None:
+        n_params = as_int(n_params, "n_params", 0)
+    resolution = as_nonnegative(resolution, "resolution")
+    c = _criteria(model, data, x0, n_params, resolution)
+    if c.n_params >= c.n_samples - 1:
+        raise InsufficientDataError(
+            f"the model counts {c.n_params} parameters but the data have only "
+            f"{c.n_samples} samples: AICc and FPE need fewer parameters than samples minus 1 "
+            "(they would be infinite); use a longer record or a smaller model")
+    return c
+
+
+def _criteria(model: Any, data: Any, x0: Any, n_params: int | None,
+              resolution: float) -> Criteria:
+    """:func:`criteria` without its argument checks (infinite AICc/FPE for ``d >= N - 1``,
+    which the order sweeps rank last)."""
     given = model
     model, recs = _records(model, data)
     es, ys = [], []
@@ -482,6 +503,9 @@ def select_order(
     """
     if models is not None:
         return _rank_models(data, list(models), validation, x0, criterion, float(fit_tol))
+    if orders is not None and (np.ndim(orders) == 0 or isinstance(orders, (str, bytes))):
+        raise DataError(f"orders must be a sequence of model orders (e.g. range(1, 6) or "
+                        f"[{orders!r}]), got {orders!r}")
     from ..subspace.estimator import SubspaceEstimator
 
     est = data if isinstance(data, SubspaceEstimator) else None
@@ -572,7 +596,7 @@ def _sweep(est: Any, est_data: Any, meths: list[str], orders_: list[int], valida
             h = 1 if mod.ninputs == 0 and getattr(mod, "K", None) is not None else None
             try:
                 if est_data is not None:
-                    c = criteria(mod, est_data, x0=x0, n_params=d)
+                    c = _criteria(mod, est_data, x0, d, 1e-8)
                     row.update({k: getattr(c, k) for k in ("loss",) + CRITERIA})
                     row["fit_estimation"] = compare(mod, est_data, h, x0=x0).mean_fit
                 else:
@@ -626,7 +650,7 @@ def _rank_models(data: Any, models: list[Any], validation: Any, x0: str,
         row: dict[str, Any] = {"method": "models", "order": order, "model": label,
                                "singular_value": np.nan, "error": None}
         try:
-            c = criteria(mod, data, x0=x0)
+            c = _criteria(mod, data, x0, None, 1e-8)
             row["stable"], row["max_abs_pole"] = _stability(mod)
             row["n_params"] = c.n_params
             row.update({k: getattr(c, k) for k in ("loss",) + CRITERIA})
