@@ -239,6 +239,10 @@ def merge(data: Any, *others: Any) -> Any:
     >>> a.merge(a, a)
     IOData: 15 samples in 3 experiments, 1 input, 1 output, dt = 1 s
     """
+    if not hasattr(data, "_exps"):
+        raise DataError(
+            f"merge is called on a record, got {type(data).__name__}: first.merge(second, "
+            "third, ...); for a list of records, records[0].merge(*records[1:])")
     exps = list(data._exps)
     for k, o in enumerate(others):
         if not isinstance(o, type(data)):
