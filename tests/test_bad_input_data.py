@@ -64,3 +64,67 @@ def test_report_refuses_a_selection_that_is_not_an_order_sweep(record, tmp_path)
     with pytest.raises(sysid.DataError, match="which must be"):
         sysid.report(m, d, tmp_path / "r", which="foo")
     assert not (tmp_path / "r").exists()
+
+
+# ---- 2. other raw exceptions ------------------------------------------------------------
+
+def test_from_pandas_names_a_missing_experiment_or_time_column(record):
+    pd = pytest.importorskip("pandas")
+    _, u, y, _ = record
+    df = pd.DataFrame({"u": u[:, 0], "y": y[:, 0]})
+    with pytest.raises(sysid.DataError, match="experiment column 'zz' is not in"):
+        sysid.IOData.from_pandas(df, ["u"], ["y"], dt=0.1, experiment="zz")
+    with pytest.raises(sysid.DataError, match="time column 't' is not in"):
+        sysid.IOData.from_pandas(df, ["u"], ["y"], time="t")
+
+
+def test_from_mat_of_a_garbage_file_names_the_file(tmp_path):
+    f = tmp_path / "g.mat"
+    f.write_bytes(b"garbage")
+    with pytest.raises(sysid.DataError, match="g.mat is not a readable MATLAB"):
+        sysid.IOData.from_mat(f)
+
+
+def test_from_npz_of_other_files_never_suggests_pickle(record, tmp_path):
+    _, u, _, d = record
+    (tmp_path / "g.npz").write_bytes(b"garbage")
+    np.save(tmp_path / "a.npy", u)
+    np.savez(tmp_path / "b.npz", u=u)
+    for name in ("g.npz", "a.npy", "b.npz"):
+        with pytest.raises(sysid.DataError, match="is not a sysid .npz record") as e:
+            sysid.IOData.from_npz(tmp_path / name)
+        assert "pickle" not in str(e.value)
+    d.to_npz(tmp_path / "ok.npz")
+    assert sysid.IOData.from_npz(tmp_path / "ok.npz") == d
+
+
+def test_nlgreybox_simulate_checks_the_input_array():
+    g = sysid.NonlinearGreyBox(lambda t, x, u, p: [-x[0] + u[0]], lambda t, x, u, p: [x[0]],
+                               {"K": 1.0}, nx=1)
+    with pytest.raises(sysid.ShapeError, match="u must be 1-D or 2-D"):
+        g.simulate(np.zeros((2, 3, 4)), dt=0.1)
+    with pytest.raises(sysid.DataError, match="dt must be a positive number"):
+        g.simulate(np.zeros(5), dt="x")
+
+
+def test_frd_refuses_non_numeric_responses(record):
+    m = record[0]
+    w = np.linspace(0.1, 30, 100)
+    with pytest.raises(sysid.DataError, match="response must be a numeric"):
+        sysid.FRD(w, ["a"] * 100)
+    with pytest.raises(sysid.DataError, match="other must be a model with freqresp"):
+        sysid.FRD.from_model(m, w).compare("x")
+
+
+def test_experiment_by_a_non_integer_says_how_experiments_are_indexed(record):
+    d = record[3]
+    for k in ("a", 1.5, ["a"]):
+        with pytest.raises(sysid.DataError, match="indexed by their position"):
+            d.experiment(k)
+    assert d.experiment(0) == d
+
+
+def test_recursive_run_of_a_record_says_what_run_takes(record):
+    d = record[3]
+    with pytest.raises(sysid.DataError, match=r"run\(data.u, data.y\)"):
+        sysid.RecursiveARX(2, 2, 1).run(d, None)

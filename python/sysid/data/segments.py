@@ -64,8 +64,11 @@ def experiment(data: Any, k: int | Sequence[int]) -> Any:
     >>> d.experiment(1).n_samples
     7
     """
-    ks = [k] if isinstance(k, (int, np.integer)) else list(k)
+    ks = list(k) if isinstance(k, (list, tuple, range, np.ndarray)) else [k]
     for j in ks:
+        if not isinstance(j, (int, np.integer)) or isinstance(j, (bool, np.bool_)):
+            raise DataError(f"experiments are indexed by their position, an integer from 0 to "
+                            f"{data.n_experiments - 1} (or a list of them), got {j!r}")
         if not -data.n_experiments <= j < data.n_experiments:
             raise DataError(f"experiment {j} does not exist (record has {data.n_experiments})")
     return data._derive([data._exps[j] for j in ks])

@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_option
+from .._checks import as_2d, as_dt, as_option
 from ..errors import DataError
 from ..models.protocol import ModelMixin
 from .greybox import Param, Parameters, as_params
@@ -345,11 +345,10 @@ class NonlinearGreyBox(ModelMixin):
     def simulate(self, u: Any, x0: Any = None, *, dt: float | None = None) -> np.ndarray:
         """Outputs ``(n_samples, noutputs)`` for inputs held between samples (``x0``: the
         initial state, default the structure's first)."""
-        dt = self.dt if dt is None else float(dt)
+        dt = self.dt if dt is None else as_dt(dt)
         if not dt > 0:
             raise DataError("simulate needs the sample time: dt=...")
-        u = np.asarray(u, dtype=float)
-        u = u.reshape(-1, 1) if u.ndim == 1 else u
+        u = as_2d(u, "u", ncols=self._ninputs)
         x = self.x0[0] if x0 is None else np.asarray(x0, dtype=float).reshape(self.nx)
         return np.asarray(_sysid.greybox_ode_simulate(
             self.rhs(), self.out(), np.ascontiguousarray(u), self.nx, list(self.values),
