@@ -128,3 +128,33 @@ def test_recursive_run_of_a_record_says_what_run_takes(record):
     d = record[3]
     with pytest.raises(sysid.DataError, match=r"run\(data.u, data.y\)"):
         sysid.RecursiveARX(2, 2, 1).run(d, None)
+
+
+# ---- 3. wrong or misleading messages ----------------------------------------------------
+
+def test_model_from_dict_of_a_models_own_to_dict_points_to_the_right_pair(record):
+    m = record[0]
+    with pytest.raises(sysid.DataError, match=r"StateSpaceModel\.from_dict") as e:
+        sysid.model_from_dict(m.to_dict())
+    assert "found None" not in str(e.value)
+    back = sysid.model_from_dict(sysid.model_to_dict(m))
+    assert np.array_equal(back.A, m.A) and back.dt == m.dt
+    assert np.array_equal(type(m).from_dict(m.to_dict()).A, m.A)
+
+
+def test_writing_into_a_missing_folder_names_the_users_path(record, tmp_path):
+    m, _, _, d = record
+    target = tmp_path / "missing" / "m.json"
+    with pytest.raises(FileNotFoundError, match="folder .* does not exist") as e:
+        sysid.save_model(m, target)
+    assert str(target) in str(e.value) and ".tmp" not in str(e.value)
+    with pytest.raises(FileNotFoundError, match="does not exist") as e:
+        d.to_csv(tmp_path / "missing" / "x.csv")
+    assert "x.csv" in str(e.value) and ".tmp" not in str(e.value)
+
+
+def test_arxregul_refuses_a_constant_record_first():
+    n = 400
+    const = sysid.IOData(u=np.ones((n, 1)), y=np.ones((n, 1)), dt=0.1)
+    with pytest.raises(sysid.DataError, match="input u0 is 1 in every sample: arxregul"):
+        sysid.arxregul(const, 2, 5, 1)
