@@ -158,3 +158,72 @@ def test_arxregul_refuses_a_constant_record_first():
     const = sysid.IOData(u=np.ones((n, 1)), y=np.ones((n, 1)), dt=0.1)
     with pytest.raises(sysid.DataError, match="input u0 is 1 in every sample: arxregul"):
         sysid.arxregul(const, 2, 5, 1)
+
+
+# ---- 4. silently ignored or unchecked arguments -----------------------------------------
+
+def _tank(**kw):
+    return sysid.NonlinearGreyBox(lambda t, x, u, p: [-x[0] / p.tau + p.K * u[0] / p.tau],
+                                  lambda t, x, u, p: [x[0]], {"K": 1.0, "tau": 0.5}, **kw)
+
+
+@pytest.mark.parametrize("kw, phrase", [
+    ({"dt": 1.0}, "differs from the data's dt"),
+    ({"ninputs": 3}, "the structure has 3 input"),
+    ({"noutputs": 3}, "the structure has 3 output"),
+])
+def test_nlgreybox_refuses_sizes_that_contradict_the_data(record, kw, phrase):
+    d = record[3]
+    with pytest.raises(sysid.DataError, match=phrase):
+        sysid.greyest(d, _tank(nx=1, **kw), max_iter=3)
+
+
+@pytest.mark.parametrize("kw, phrase", [
+    ({"nx": 1.5}, "nx must be a positive integer"),
+    ({"nx": 1, "x0_free": "yes"}, "x0_free must be True, False"),
+    ({"nx": 1, "dt": -1.0}, "dt must be a positive number"),
+    ({"nx": 1, "ninputs": 1.5}, "ninputs must be"),
+])
+def test_nlgreybox_refuses_bad_constructor_arguments(kw, phrase):
+    with pytest.raises(sysid.DataError, match=phrase):
+        _tank(**kw)
+
+
+@pytest.mark.parametrize("call, phrase", [
+    (lambda d: sysid.despike(d, dropout=float("nan")), "dropout must be the finite"),
+    (lambda d: sysid.drop_quiet(d, threshold=float("nan")), "threshold must be a finite"),
+    (lambda d: sysid.drop_quiet(d, threshold=-1), "threshold must be a finite"),
+    (lambda d: sysid.decimate(d, 2, order=0), "order must be a positive integer"),
+])
+def test_preprocessing_refuses_bad_settings(record, call, phrase):
+    with pytest.raises(sysid.DataError, match=phrase):
+        call(record[3])
+
+
+@pytest.mark.parametrize("kw, phrase", [
+    ({"dt": -1}, "dt must be a positive number"),
+    ({"retries": -1}, "retries must be an integer >= 0"),
+    ({"flush_every": 0}, "flush_every must be a positive integer"),
+    ({"progress": "x"}, "progress must be True, False or None"),
+    ({"record_id": 5}, "record_id must be the name"),
+    ({"inputs": ["nope"]}, "inputs say how a table becomes a record"),
+])
+def test_identify_many_refuses_bad_or_ignored_arguments(record, tmp_path, kw, phrase):
+    d = record[3]
+    with pytest.raises(sysid.DataError, match=phrase):
+        sysid.identify_many([d], out=tmp_path / "t.parquet", workers=0, **kw)
+    assert not (tmp_path / "t.parquet").exists()
+
+
+def test_recursive_subspace_checks_dt_and_chunk_shapes(record):
+    _, u, y, _ = record
+    with pytest.raises(sysid.DataError, match="dt must be a positive number"):
+        sysid.RecursiveSubspace(1, 5, dt=0)
+    uu, yy = np.c_[u, u], np.c_[y, y]
+    with pytest.raises(sysid.ShapeError, match="looks transposed"):
+        sysid.RecursiveSubspace(1, 5).update(uu.T, yy.T)
+    rs = sysid.RecursiveSubspace(1, 5)
+    rs.update(u[:200], y[:200])
+    with pytest.raises(sysid.ShapeError, match="looks transposed"):
+        rs.update(u[200:].T, y[200:].T)
+    assert rs.update(u[200:], y[200:]) is not None

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
-from .._checks import as_dt, check_elements
+from .._checks import as_dt, as_int, check_elements
 from ..errors import DataError, InsufficientDataError
 from .iodata import IOData
 from .segments import _Exp
@@ -197,6 +197,7 @@ def decimate(data: IOData, q: int, *, order: int = 8) -> IOData:
     """
     if not isinstance(q, (int, np.integer)) or q < 2:
         raise DataError(f"q must be an integer >= 2, got {q!r}")
+    order = as_int(order, "order")  # the anti-alias filter's order (0 is no filter at all)
     # SciPy's default Chebyshev filter has a DC gain of 10^(-0.05/20) (the passband ripple's
     # trough), 0.9886 forward and back: a 300 degree level became 296.6. Scaled to unit DC
     # gain, levels and offsets survive decimation.
