@@ -20,6 +20,7 @@ from ..data.formats import _pandas
 from ..data.iodata import IOData
 from ..data.segments import channel_index
 from ..errors import DataError, ShapeError
+from .checks import require_freqresp
 from .frd_algebra import FRDAlgebra, check_grid
 
 __all__ = ["FRD", "FRDComparison"]
@@ -409,13 +410,6 @@ def _as_complex(x: Any, name: str, what: str = "") -> np.ndarray:
             pass
     raise DataError(f"{name} must be {what}a numeric (complex) array of responses, got "
                     f"{type(x).__name__}" + (f" {x!r}" if isinstance(x, (str, bytes)) else ""))
-
-
-def require_freqresp(model: Any, name: str) -> None:
-    """Refuse a ``model`` without ``freqresp(omega)``, naming the argument."""
-    if not callable(getattr(model, "freqresp", None)):
-        raise DataError(f"{name} must be a model with freqresp(omega) (a StateSpaceModel, "
-                        f"TransferFunction, ...), got {type(model).__name__}")
 
 
 class FRDComparison:

@@ -42,7 +42,7 @@ def plot_frd(frd: Any, *, models: Any = None, fig: Any = None) -> Any:
     elif not isinstance(models, dict):
         seq = list(models) if isinstance(models, (list, tuple)) else [models]
         models = {("model" if len(seq) == 1 else f"model {k}"): mod for k, mod in enumerate(seq)}
-    from ..models.frd import require_freqresp
+    from ..models.checks import require_freqresp
 
     for name, mod in models.items():
         require_freqresp(mod, "models" if len(models) == 1 else f"models[{name!r}]")
