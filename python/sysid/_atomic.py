@@ -21,7 +21,8 @@ __all__ = ["atomic_path", "write_text"]
 @contextmanager
 def atomic_path(path: str | Path) -> Iterator[Path]:
     """A temporary path beside ``path`` to write to; renamed over ``path`` when the block ends
-    normally, removed when it raises (``KeyboardInterrupt`` included).
+    normally, removed when it raises (``KeyboardInterrupt`` included). A ``path`` whose folder
+does not exist raises :class:`FileNotFoundError` naming ``path``.
 
     Examples
     --------
@@ -43,6 +44,10 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     ('complete', ['out.txt'])
     """
     path = Path(path)
+    if not path.parent.is_dir():  # else the error names the hidden temporary file
+        raise FileNotFoundError(
+            f"cannot write {str(path)!r}: the folder {str(path.parent)!r} does not exist; "
+            "create it first (os.makedirs) or choose another path")
     # hidden, and unique per process and thread: concurrent writers never share one
     tmp = path.with_name(f".{path.name}.{os.getpid()}-{threading.get_ident()}.tmp")
     try:

@@ -83,6 +83,10 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
     ['fit', 'html', 'model']
     """
     check_model(model)
+    _check_selection(selection)
+    if which not in ("validation", "estimation"):
+        raise DataError(f"which must be 'validation' or 'estimation' (what the data are, for "
+                        f"the captions), got {which!r}")
     root = Path(path)
     root.mkdir(parents=True, exist_ok=True)
     data = data if isinstance(data, IOData) else IOData(*data, dt=model.dt or 1.0,
@@ -99,6 +103,18 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
     write_text(files["html"], page.html())
     reissue(caught)  # the caller still sees them
     return files
+
+
+def _check_selection(selection: Any) -> None:
+    """Refuse a ``selection`` that is not an order sweep, saying what to pass."""
+    from ..validation.criteria import OrderSelection
+
+    if selection is None or isinstance(selection, OrderSelection):
+        return
+    hint = (": the report of an identify result is sysid.report(result.model, data, path)"
+            if hasattr(selection, "leaderboard") else "")
+    raise DataError(f"selection must be an order sweep (the OrderSelection of "
+                    f"sysid.select_order) or None, got {type(selection).__name__}{hint}")
 
 
 def _as_pair(w: Any) -> tuple[str, str]:

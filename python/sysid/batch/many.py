@@ -12,11 +12,16 @@ stops the workers and closes the file.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from .._checks import as_dt, as_int
 from .._progress import show
+from ..data.iodata import IOData
+from ..errors import DataError
 from .records import Columns, tasks
 from .stream import BatchResult, run_batch
 from .worker import default_fit
@@ -87,6 +92,19 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
     >>> res.n_ok, res.to_pandas()["order"].tolist()
     (2, [1, 1])
     """
+    dt = None if dt is None else as_dt(dt)
+    retries = as_int(retries, "retries", 0)
+    flush_every = as_int(flush_every, "flush_every")
+    if workers is not None:
+        workers = as_int(workers, "workers", 0, alt="None (the machine's cores)")
+    if progress is not None and not isinstance(progress, (bool, np.bool_)):
+        raise DataError(f"progress must be True, False or None (on a terminal), got "
+                        f"{progress!r}")
+    if not isinstance(record_id, str):
+        raise DataError(f"record_id must be the name of the record id column (a string), "
+                        f"got {record_id!r}")
+    _refuse_table_options(records, inputs=inputs, outputs=outputs, dt=dt,
+                          time_column=time_column)
     cols = Columns(tuple(inputs) if inputs else None, tuple(outputs) if outputs else None,
                    dt, time_column)
     work = tasks(records, record_id)
@@ -94,3 +112,18 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
         work = list(work)  # type: ignore[assignment]
     return run_batch(work, fit or default_fit, cols, Path(out), workers, retries,
                      show(progress), flush_every)
+
+
+def _refuse_table_options(records: Any, **given: Any) -> None:
+    """Refuse the table options (how a table becomes a record) for records that are IOData
+    already: they would be ignored."""
+    items = records.values() if isinstance(records, Mapping) else \
+        records if isinstance(records, (list, tuple)) else ()
+    if not any(isinstance(x, IOData) or (isinstance(x, tuple) and len(x) == 2
+                                         and isinstance(x[1], IOData)) for x in items):
+        return
+    named = [k for k, v in given.items() if v is not None]
+    if named:
+        raise DataError(f"{', '.join(named)} say how a table becomes a record, but these "
+                        "records are IOData already and would ignore them: select channels "
+                        "(data.select) or resample before, or leave them out")

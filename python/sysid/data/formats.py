@@ -192,6 +192,10 @@ def from_pandas(
         raise DataError(
             f"column(s) {missing} not in the DataFrame (columns: {list(df.columns)})"
         )
+    for arg, col in (("experiment", experiment), ("time", time)):
+        if col is not None and col not in df.columns:
+            raise DataError(f"{arg} column {col!r} is not in the DataFrame (columns: "
+                            f"{list(df.columns)}); name one of them, or leave {arg}=None")
     units = dict(df.attrs.get("units", {})) if units is None else dict(units)
     if experiment is None and "experiment" in df.columns:
         experiment = "experiment"
@@ -476,7 +480,18 @@ def from_npz(cls: Any, path: str | Path) -> Any:
     >>> sysid.IOData.from_npz(f) == d
     True
     """
-    with np.load(path, allow_pickle=False) as z:
+    not_ours = DataError(f"{path} is not a sysid .npz record (an archive written by "
+                         "IOData.to_npz); for other NumPy files, load the arrays with np.load "
+                         "and pass them to sysid.IOData(u, y, dt)")
+    try:
+        z = np.load(path, allow_pickle=False)
+    except ValueError:  # not an archive of plain arrays (NumPy suggests pickle: never)
+        raise not_ours from None
+    if not isinstance(z, np.lib.npyio.NpzFile):
+        raise not_ours
+    with z:
+        if "n_experiments" not in z.files:
+            raise not_ours
         return _from_arrays(cls, lambda k: z[k], str(path))
 
 
@@ -513,8 +528,14 @@ def from_mat(
     variables; output-only data (a time series) is read with ``u=None``.
     """
     from scipy.io import loadmat
+    from scipy.io.matlab import MatReadError
 
-    m = loadmat(path)
+    try:
+        m = loadmat(path)
+    except (MatReadError, ValueError, TypeError, NotImplementedError) as e:
+        raise DataError(f"{path} is not a readable MATLAB .mat file ({e}); save it from "
+                        "MATLAB with save(file, 'u', 'y') (format -v7 or older: -v7.3 files "
+                        "are HDF5, read them with h5py)") from None
     if "n_experiments" in m and dt is None and u == "u" and y == "y":
         return _from_arrays(cls, lambda k: m[k], str(path))
     if y not in m:

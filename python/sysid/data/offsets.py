@@ -80,6 +80,9 @@ def check_offsets(data: Any, *, stacklevel: int | None = None) -> bool:
     >>> check_offsets(sysid.detrend(raw, "mean"))
     False
     """
+    from .preprocessing import _require_record
+
+    _require_record(data, "check_offsets")
     check_magnitudes(data)
     found = offsets(data)
     if not found:

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
+from .._checks import as_nonnegative
 from ..errors import DataError, InsufficientDataError
 from .iodata import IOData
 from .raw import _fill, _runs
@@ -188,6 +189,12 @@ def despike(
     >>> bool(abs(d.y[20, 0] - np.sin(4.0)) < 0.02)
     True
     """
+    _require_record(data, "despike")
+    if dropout is not None and not (
+            isinstance(dropout, (int, float, np.integer, np.floating))
+            and not isinstance(dropout, (bool, np.bool_)) and np.isfinite(dropout)):
+        raise DataError(f"dropout must be the finite sentinel value the logger writes for a "
+                        f"lost sample (e.g. 0.0 or -9999), or None, got {dropout!r}")
     names = data.output_names if channels is None else list(channels)
     iu = channel_index([n for n in names if n in data.input_names], data.input_names, "input")
     unknown = [n for n in names if n not in data.input_names and n not in data.output_names]
@@ -431,6 +438,7 @@ def select_mask(data: IOData, mask: Any, *, min_length: int = 2) -> IOData:
     >>> sysid.select_mask(d, [1, 1, 1, 0, 0, 1, 1, 0]).lengths
     [3, 2]
     """
+    _require_record(data, "select_mask")
     masks = mask if isinstance(mask, list) and data.n_experiments > 1 else [mask]
     if len(masks) != data.n_experiments:
         raise DataError(
@@ -479,6 +487,7 @@ def select_mode(
     >>> sysid.select_mode(d, [3, 1, 1, 2, 3, 3, 1, 2, 2], keep={1, 2}).lengths
     [3, 3]
     """
+    _require_record(data, "select_mode")
     ks = np.atleast_1d(np.asarray(list(keep) if isinstance(keep, (set, frozenset)) else keep))
     modes = mode if isinstance(mode, list) and data.n_experiments > 1 else [mode]
     masks = [np.isin(np.asarray(m).ravel(), ks) for m in modes]
@@ -518,8 +527,10 @@ def drop_quiet(
     >>> sysid.drop_quiet(sysid.IOData(u=u, y=u), window=20).n_experiments
     2
     """
+    _require_record(data, "drop_quiet")
     if not isinstance(window, (int, np.integer)) or window < 2:
         raise DataError(f"window must be an integer >= 2, got {window!r}")
+    threshold = as_nonnegative(threshold, "threshold")
     if channels is None:
         names = data.input_names if data.n_inputs else data.output_names
     else:

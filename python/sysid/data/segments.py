@@ -64,8 +64,11 @@ def experiment(data: Any, k: int | Sequence[int]) -> Any:
     >>> d.experiment(1).n_samples
     7
     """
-    ks = [k] if isinstance(k, (int, np.integer)) else list(k)
+    ks = list(k) if isinstance(k, (list, tuple, range, np.ndarray)) else [k]
     for j in ks:
+        if not isinstance(j, (int, np.integer)) or isinstance(j, (bool, np.bool_)):
+            raise DataError(f"experiments are indexed by their position, an integer from 0 to "
+                            f"{data.n_experiments - 1} (or a list of them), got {j!r}")
         if not -data.n_experiments <= j < data.n_experiments:
             raise DataError(f"experiment {j} does not exist (record has {data.n_experiments})")
     return data._derive([data._exps[j] for j in ks])
@@ -239,6 +242,10 @@ def merge(data: Any, *others: Any) -> Any:
     >>> a.merge(a, a)
     IOData: 15 samples in 3 experiments, 1 input, 1 output, dt = 1 s
     """
+    if not hasattr(data, "_exps"):
+        raise DataError(
+            f"merge is called on a record, got {type(data).__name__}: first.merge(second, "
+            "third, ...); for a list of records, records[0].merge(*records[1:])")
     exps = list(data._exps)
     for k, o in enumerate(others):
         if not isinstance(o, type(data)):

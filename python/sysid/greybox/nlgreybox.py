@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_option
+from .._checks import as_2d, as_dt, as_int, as_option
 from ..errors import DataError
 from ..models.protocol import ModelMixin
 from .greybox import Param, Parameters, as_params
@@ -151,13 +151,16 @@ class NonlinearGreyBox(ModelMixin):
         integrator = as_option(integrator, "integrator")
         self.f, self.h = f, h
         self.params: dict[str, Param] = as_params(params)
-        self.nx = int(nx)
-        if self.nx < 1:
-            raise DataError(f"nx must be >= 1, got {nx}")
+        self.nx = as_int(nx, "nx")
         self.x0 = np.zeros((1, self.nx)) if x0 is None else \
             np.atleast_2d(np.asarray(x0, dtype=float))
         if self.x0.shape[1] != self.nx:
             raise DataError(f"x0 has {self.x0.shape[1]} entries per experiment, nx is {nx}")
+        free = np.asarray(x0_free)
+        if not (free.dtype.kind == "b"
+                or (free.dtype.kind in "iu" and np.isin(free, (0, 1)).all())):
+            raise DataError(f"x0_free must be True, False or a boolean array (per state, or "
+                            f"experiments x states), got {x0_free!r}")
         self.x0_free = np.broadcast_to(np.asarray(x0_free, dtype=bool),
                                        (self.x0.shape[0], self.nx)).copy() \
             if np.ndim(x0_free) < 2 else np.asarray(x0_free, dtype=bool)
@@ -169,8 +172,9 @@ class NonlinearGreyBox(ModelMixin):
         self.integrator, self.substeps = integrator, int(substeps)
         self.rtol, self.atol = float(rtol), float(atol)
         self.vectorized = bool(vectorized)
-        self.dt = 0.0 if dt is None else float(dt)
-        self._ninputs, self._noutputs = ninputs, noutputs
+        self.dt = 0.0 if dt is None else as_dt(dt)
+        self._ninputs = None if ninputs is None else as_int(ninputs, "ninputs", 0)
+        self._noutputs = None if noutputs is None else as_int(noutputs, "noutputs")
         self._input_names, self._output_names = input_names, output_names
         self.info: dict[str, Any] = {"method": "nonlinear grey-box structure"}
 
@@ -345,11 +349,10 @@ class NonlinearGreyBox(ModelMixin):
     def simulate(self, u: Any, x0: Any = None, *, dt: float | None = None) -> np.ndarray:
         """Outputs ``(n_samples, noutputs)`` for inputs held between samples (``x0``: the
         initial state, default the structure's first)."""
-        dt = self.dt if dt is None else float(dt)
+        dt = self.dt if dt is None else as_dt(dt)
         if not dt > 0:
             raise DataError("simulate needs the sample time: dt=...")
-        u = np.asarray(u, dtype=float)
-        u = u.reshape(-1, 1) if u.ndim == 1 else u
+        u = as_2d(u, "u", ncols=self._ninputs)
         x = self.x0[0] if x0 is None else np.asarray(x0, dtype=float).reshape(self.nx)
         return np.asarray(_sysid.greybox_ode_simulate(
             self.rhs(), self.out(), np.ascontiguousarray(u), self.nx, list(self.values),
@@ -446,7 +449,8 @@ class NonlinearGreyBox(ModelMixin):
                   integrator=d.get("integrator", "rk4"), substeps=int(d.get("substeps", 1)),
                   rtol=float(d.get("rtol", 1e-8)), atol=float(d.get("atol", 1e-10)),
                   vectorized=bool(d.get("vectorized", False)), dt=dt or None,
-                  ninputs=d.get("ninputs"), noutputs=d.get("noutputs"),
+                  ninputs=None if d.get("ninputs") is None else int(d["ninputs"]),
+                  noutputs=None if d.get("noutputs") is None else int(d["noutputs"]),
                   input_names=d.get("input_names"), output_names=d.get("output_names"),
                   dfdx=fns["dfdx"], dfdp=fns["dfdp"], dhdx=fns["dhdx"], dhdp=fns["dhdp"],
                   jacobian=d.get("jacobian", "auto"))

@@ -57,6 +57,14 @@ def nlgreyest(data: IOData, s: NonlinearGreyBox, *, x0: Any, weighting: str, mul
     """See :func:`sysid.greyest` (the nonlinear branch)."""
     exps = [(np.ascontiguousarray(u), np.ascontiguousarray(y)) for u, y in data.experiments]
     dt = float(data.dt)
+    if s.dt and abs(s.dt - dt) > 1e-9 * dt:
+        raise DataError(f"the structure's dt={s.dt} differs from the data's dt={dt}: "
+                        "resample the data or give the structure the data's sample time")
+    for what, given, have in (("input", s._ninputs, data.n_inputs),
+                              ("output", s._noutputs, data.n_outputs)):
+        if given is not None and given != have:
+            raise DataError(f"the structure has {given} {what}(s) (n{what}s={given}), the "
+                            f"data {have}: select the data's channels or fix n{what}s")
     s = s.with_values({}, dt=dt)
     s._ninputs, s._noutputs = data.n_inputs, data.n_outputs
     s._input_names, s._output_names = data.input_names, data.output_names

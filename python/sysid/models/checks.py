@@ -44,6 +44,13 @@ def check_model(model: Any, what: str = "model", members: tuple[str, ...] = REQU
     return model
 
 
+def require_freqresp(model: Any, name: str) -> None:
+    """Refuse a ``model`` without ``freqresp(omega)``, naming the argument."""
+    if not callable(getattr(model, "freqresp", None)):
+        raise DataError(f"{name} must be a model with freqresp(omega) (a StateSpaceModel, "
+                        f"TransferFunction, ...), got {type(model).__name__}")
+
+
 def as_statespace(model: Any, purpose: str) -> Any:
     """``model.to_statespace()``, or a :class:`DataError` naming ``purpose`` and the
     missing method."""

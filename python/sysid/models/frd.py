@@ -20,6 +20,7 @@ from ..data.formats import _pandas
 from ..data.iodata import IOData
 from ..data.segments import channel_index
 from ..errors import DataError, ShapeError
+from .checks import require_freqresp
 from .frd_algebra import FRDAlgebra, check_grid
 
 __all__ = ["FRD", "FRDComparison"]
@@ -107,7 +108,7 @@ class FRD(FRDAlgebra):
     ) -> None:
         self.units = _unit(units)
         w = np.asarray(omega, dtype=float).ravel() * UNITS[self.units or "rad/s"]
-        g = np.asarray(response, dtype=complex)
+        g = _as_complex(response, "response")
         if g.ndim == 1:
             g = g[:, None, None]
         if g.ndim != 3 or g.shape[0] != w.size:
@@ -285,7 +286,7 @@ class FRD(FRDAlgebra):
         elif hasattr(other, "freqresp"):
             g = np.asarray(other.freqresp(self.omega))
         else:
-            g = np.asarray(other, dtype=complex)
+            g = _as_complex(other, "other", "a model with freqresp, an FRD or ")
             if g.ndim == 1 and self.response.shape[1:] == (1, 1):
                 g = g[:, None, None]  # one pair, as the constructor takes it
         if g.shape != self.response.shape:
@@ -342,6 +343,7 @@ class FRD(FRDAlgebra):
         >>> sysid.FRD.from_model(m, np.linspace(0.1, 30.0, 10))
         FRD (model): 10 frequencies 0.1..30 rad/s, 1 output x 1 input
         """
+        require_freqresp(model, "model")
         w = np.asarray(omega, dtype=float) * UNITS[_unit(units) or "rad/s"]
         return cls(  # a continuous model (dt = 0) gives an FRD without a sample time
             omega, model.freqresp(w), units=units,
@@ -395,6 +397,19 @@ class FRD(FRDAlgebra):
             f"{self.units or 'rad/s'}, {l} output{'s' * (l != 1)} x "
             f"{m} input{'s' * (m != 1)}"
         )
+
+
+def _as_complex(x: Any, name: str, what: str = "") -> np.ndarray:
+    """``x`` as a complex array; a :class:`DataError` naming ``name`` when it is not numeric."""
+    if not isinstance(x, (str, bytes)):
+        try:
+            arr = np.asarray(x)
+            if arr.dtype.kind in "biufc":
+                return arr.astype(complex, copy=False)
+        except (TypeError, ValueError):
+            pass
+    raise DataError(f"{name} must be {what}a numeric (complex) array of responses, got "
+                    f"{type(x).__name__}" + (f" {x!r}" if isinstance(x, (str, bytes)) else ""))
 
 
 class FRDComparison:

@@ -82,6 +82,12 @@ def model_from_dict(d: dict[str, Any]) -> Any:
     >>> sysid.model_from_dict(sysid.model_to_dict(m)).simulate([1.0, 1.0, 1.0])[:, 0]
     array([0. , 1. , 1.5])
     """
+    if isinstance(d, dict) and d and "format" not in d and "family" not in d:
+        raise DataError(
+            "this dict has no 'format' or 'family' field: it is a model's own to_dict() (the "
+            "body of a file, without the header naming its family); rebuild it with that "
+            "class's from_dict (e.g. sysid.StateSpaceModel.from_dict(d)), or pair "
+            "sysid.model_to_dict(model) with sysid.model_from_dict(d)")
     family = check_file(d, VERSION)
     cls = REGISTRY.get(family)
     if cls is None and family in _LAZY_FAMILIES:  # families registered when first imported

@@ -79,6 +79,12 @@ def register_model(cls: T | None = None, *, name: str | None = None) -> Any:
     """
 
     def add(c: T) -> T:
+        if not isinstance(c, type):
+            raise DataError(f"register_model takes a model class, got {type(c).__name__} "
+                            f"{c!r}: decorate the class (@sysid.register_model) or call "
+                            "sysid.register_model(MyModel, name=...)")
+        if name is not None and (not isinstance(name, str) or not name):
+            raise DataError(f"name must be a non-empty string, got {name!r}")
         for attr in ("to_dict", "from_dict"):
             if not callable(getattr(c, attr, None)):
                 raise DataError(f"{c.__name__} has no {attr}(); a saved model class needs "

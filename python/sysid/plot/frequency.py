@@ -42,6 +42,10 @@ def plot_frd(frd: Any, *, models: Any = None, fig: Any = None) -> Any:
     elif not isinstance(models, dict):
         seq = list(models) if isinstance(models, (list, tuple)) else [models]
         models = {("model" if len(seq) == 1 else f"model {k}"): mod for k, mod in enumerate(seq)}
+    from ..models.checks import require_freqresp
+
+    for name, mod in models.items():
+        require_freqresp(mod, "models" if len(models) == 1 else f"models[{name!r}]")
     unit = "rad/s" if frd.units == "rad/s" else "Hz"
     f = frd.frequencies_in(unit)
     mag_db = 20 * np.log10(np.maximum(frd.magnitude, 1e-300))

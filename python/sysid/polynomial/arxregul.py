@@ -44,7 +44,7 @@ import numpy as np
 from scipy import optimize
 
 from .. import _sysid
-from .._checks import as_int_grid, experiment_arrays
+from .._checks import as_int_grid, experiment_arrays, require_inputs_vary
 from .._display import HTMLResult
 from ..errors import DataError, NumericalError
 
@@ -381,6 +381,9 @@ def arxregul(data: Any, na: Any, nb: Any, nk: Any = 1, kernel: str = "tc", *,
     name = _check_kernel(kernel)
     if noise_variance not in ("ls", "ml"):
         raise DataError(f"noise_variance must be 'ls' or 'ml', got {noise_variance!r}")
+    exps = experiment_arrays(data)  # a constant channel first, as arx (else a NaN scale)
+    require_inputs_vary(exps, "arxregul", getattr(data, "input_names", None))
+    require_inputs_vary(exps, "arxregul", getattr(data, "output_names", None), side=1)
     sums, g = summaries(data, na, nb, nk)
     lam, priors, hyps, nll, infos = [], [], [], [], []
     for i, (s, n) in enumerate(sums):

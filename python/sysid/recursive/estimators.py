@@ -231,6 +231,11 @@ class _Recursive:
         """Process a record ``u (n_samples, ninputs)``, ``y (n_samples,)`` in the Rust core
         (GIL released, Ctrl-C honoured); the estimator's state carries over, so records
         can be fed in pieces."""
+        if y is None or (hasattr(u, "experiments") and hasattr(u, "input_names")):
+            got = "a record (IOData)" if y is not None or hasattr(u, "experiments") else \
+                "y=None"
+            raise DataError(f"run takes the arrays u (n_samples, ninputs) and y (n_samples,), "
+                            f"got {got}: for a record, run(data.u, data.y)")
         y2 = as_2d(y, "y")
         if y2.shape[1] != 1:
             raise ShapeError(f"y has shape {y2.shape}: online estimators model one output; "

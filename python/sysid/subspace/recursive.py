@@ -13,9 +13,11 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from .. import _sysid
-from .._checks import as_int
-from ..errors import DataError, InsufficientDataError
+from .._checks import as_dt, as_int
+from ..errors import DataError, InsufficientDataError, ShapeError
 from ..models.statespace import StateSpaceModel
 from .feedthrough import check_feedthrough
 from .streaming import as_chunk
@@ -72,7 +74,7 @@ class RecursiveSubspace:
         self.method = _method(method)
         self.feedthrough = check_feedthrough(feedthrough, auto=False)
         self.kalman = bool(kalman)
-        self.dt = float(dt)
+        self.dt = as_dt(dt)
         self._rec: Any = None
         self.model: StateSpaceModel | None = None
         self.n_samples = 0
@@ -90,11 +92,17 @@ class RecursiveSubspace:
         """
         uu, yy = as_chunk(u, y, allow_empty=True)  # whole, before the first sizes the factor
         if self._rec is None:
+            _refuse_transposed(uu, yy)
             self._rec = _sysid.RecursiveFactor(uu.shape[1], yy.shape[1], self.horizon,
                                                self.horizon, self.forgetting)
             self._m, self._l = uu.shape[1], yy.shape[1]
         elif uu.shape[1] != self._m or yy.shape[1] != self._l:
-            raise DataError(f"chunks must keep {self._m} input(s) and {self._l} output(s)")
+            flipped = (uu.shape[0] == self._m or self._m == 0) and yy.shape[0] == self._l
+            raise ShapeError(
+                f"this chunk has {uu.shape[1]} input(s) and {yy.shape[1]} output(s), the "
+                f"estimator {self._m} and {self._l}: chunks must keep the channels of the "
+                "first" + ("; it looks transposed (chunks are (samples, channels)): pass "
+                           "u.T, y.T" if flipped else ""))
         self._rec.update(uu, yy)
         self.n_samples += yy.shape[0]
         k = 2 * self.horizon * (self._m + self._l)
@@ -124,3 +132,18 @@ class RecursiveSubspace:
         return (f"RecursiveSubspace(order={self.order}, horizon={self.horizon}, "
                 f"forgetting={self.forgetting}, method={self.method!r}, "
                 f"{self.n_samples} samples)")
+
+
+#: a first chunk with more channels than this and than samples is taken as transposed
+_MAX_WIDE_CHANNELS = 16
+
+
+def _refuse_transposed(u: np.ndarray, y: np.ndarray) -> None:
+    """Refuse a first chunk that looks ``(channels, samples)``: more channels than samples
+    and than :data:`_MAX_WIDE_CHANNELS` (it would size the estimator for them, and return
+    ``None`` for want of samples)."""
+    n, channels = y.shape[0], u.shape[1] + y.shape[1]
+    if channels > max(n, _MAX_WIDE_CHANNELS):
+        raise ShapeError(f"the first chunk has {u.shape[1]} input(s) and {y.shape[1]} "
+                         f"output(s) but only {n} sample(s): it looks transposed (chunks are "
+                         "(samples, channels)): pass u.T, y.T")
