@@ -51,7 +51,7 @@ from .discretisation import expm, hold_blocks
 from .linear import transmission_zeros
 from .matched import matched_c2d, matched_d2c
 from .protocol import ModelMixin, TimeResponse, continuous_grid
-from .statespace import StateSpaceModel, minimal_dcgain, ss_parameter_count
+from .statespace import StateSpaceModel, finite_dcgain, ss_parameter_count
 
 __all__ = ["ContinuousStateSpace", "SampledContinuous", "c2d", "d2c"]
 
@@ -170,17 +170,7 @@ class ContinuousStateSpace(ModelMixin):
             from .uncertainty import complex_std
 
             return complex_std(self, lambda m: m.dcgain())
-        gain = self.freqresp([0.0])[0].real  # inf at a pole at DC
-        if np.isfinite(gain).all():
-            return gain
-        gain = minimal_dcgain(self)
-        if gain is not None:
-            return gain
-        zeros = [p for p in self.poles() if abs(p) < 1e-9]
-        raise NumericalError(
-            f"the DC gain is infinite: the model has {len(zeros)} pole(s) at s = 0 (an "
-            "integrator), so its step response grows without bound; look at step() or "
-            "freqresp() at low frequencies instead") from None
+        return finite_dcgain(self, "s = 0")
 
     def c2d(self, dt: float, method: str | None = None, *,
             prewarp: float | None = None) -> StateSpaceModel:

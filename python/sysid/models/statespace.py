@@ -39,6 +39,24 @@ def minimal_dcgain(model: Any) -> np.ndarray | None:
     return gain if np.isfinite(gain).all() else None
 
 
+def finite_dcgain(model: Any, at: str) -> np.ndarray:
+    """``model``'s DC gain (its response at frequency 0, of its minimal part when the rest
+    holds the integrator, :func:`minimal_dcgain`); a :class:`~sysid.NumericalError` when an
+    integrator is left, its poles at DC counted where ``at`` (``"z = 1"`` or ``"s = 0"``)."""
+    gain = model.freqresp([0.0])[0].real  # inf at a pole at DC
+    if np.isfinite(gain).all():
+        return gain
+    gain = minimal_dcgain(model)
+    if gain is not None:
+        return gain
+    dc = 1.0 if at == "z = 1" else 0.0
+    count = sum(abs(p - dc) < 1e-9 for p in model.poles())
+    raise NumericalError(
+        f"the DC gain is infinite: the model has {count} pole(s) at {at} (an integrator), so "
+        "its step response grows without bound; look at step() or freqresp() at low "
+        "frequencies instead")
+
+
 def ss_parameter_count(n: int, m: int, l: int, *, feedthrough: bool = True,
                        noise_model: bool = True, x0: bool = False,
                        n_experiments: int = 1) -> int:
@@ -385,18 +403,7 @@ class StateSpaceModel(ModelMixin):
             from .uncertainty import complex_std
 
             return complex_std(self, lambda m: m.dcgain())
-        gain = self.freqresp([0.0])[0].real  # inf at a pole at DC
-        if np.isfinite(gain).all():
-            return gain
-        gain = minimal_dcgain(self)
-        if gain is not None:
-            return gain
-        ones = [p for p in self.poles() if abs(p - 1.0) < 1e-9]
-        raise NumericalError(
-            f"the DC gain is infinite: the model has {len(ones)} pole(s) at z = 1 (an "
-            "integrator), so its step response grows without bound; look at step() or "
-            "freqresp() at low frequencies instead"
-        ) from None
+        return finite_dcgain(self, "z = 1")
 
     def __repr__(self) -> str:
         stab = "stable" if self.is_stable() else "UNSTABLE"
