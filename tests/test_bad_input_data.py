@@ -193,7 +193,7 @@ def test_nlgreybox_refuses_bad_constructor_arguments(kw, phrase):
     (lambda d: sysid.despike(d, dropout=float("nan")), "dropout must be the finite"),
     (lambda d: sysid.drop_quiet(d, threshold=float("nan")), "threshold must be a finite"),
     (lambda d: sysid.drop_quiet(d, threshold=-1), "threshold must be a finite"),
-    (lambda d: sysid.decimate(d, 2, order=0), "order must be a positive integer"),
+    (lambda d: sysid.decimate(d, 2, order=0), "order must be an integer between 1 and 30"),
 ])
 def test_preprocessing_refuses_bad_settings(record, call, phrase):
     with pytest.raises(sysid.DataError, match=phrase):
