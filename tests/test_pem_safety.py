@@ -138,10 +138,10 @@ def test_the_unstable_alternative_is_tried_only_from_a_converged_stable_search()
     """The default prediction focus prefers an unstable model only when it fits
     significantly better than the stable optimum (likelihood-ratio test). A stable search
     stopped at ``max_iter`` has not reached that optimum: a free search from there lowers the
-    cost by going on, whatever the plant (an order-4 fit of an aircraft structure passed the
-    test that way with a pole at 1.007, validation fit -inf), so the model stays stable and
-    the cap is said; before, the free search ran another ``max_iter`` iterations and returned
-    the unstable model."""
+    cost by going on, whatever the plant (the default order-12 ``ssest`` of the F-16
+    ground-vibration record passed the test that way with a pole at 1.0015), so the model
+    stays stable and the cap is said; before, the free search ran another ``max_iter``
+    iterations and returned the unstable model."""
     true = sysid.StateSpaceModel([[1.01, 0.0], [0.0, 0.6]], [[0.2], [1.0]], [[1.0, 1.0]],
                                  K=[[0.9], [0.2]])
     rng = np.random.default_rng(0)
