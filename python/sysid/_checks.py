@@ -513,7 +513,31 @@ MAX_MAGNITUDE = 1e150
 MIN_MAGNITUDE = 1e-150
 
 
-def check_magnitudes(data: Any, who: str = "identification") -> None:
+def record_stats(data: Any) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """``(abs_max, mean, std)`` per channel of the inputs (key 0) and the outputs (key 1) of
+    every experiment of ``data`` with samples, one pass of the Rust core each; a side without
+    channels or samples is left out. Shared by the checks records meet on entering an
+    estimator (:func:`check_magnitudes`, the offset and constant-channel checks), so that
+    they read the record once.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid._checks import record_stats
+    >>> s = record_stats(sysid.IOData(u=np.array([1.0, -3.0]), y=np.array([2.0, 4.0])))
+    >>> s[0][0].tolist(), s[1][1].tolist(), s[1][2].tolist()
+    ([3.0], [3.0], [1.0])
+    """
+    out = {}
+    for idx in (0, 1):
+        parts = [np.ascontiguousarray(e[idx], float) for e in data.experiments if len(e[idx])]
+        if parts and parts[0].shape[1]:
+            out[idx] = tuple(np.asarray(x) for x in _sysid.channel_stats(parts))
+    return out
+
+
+def check_magnitudes(data: Any, who: str = "identification",
+                     stats: dict[int, Any] | None = None) -> None:
     """Refuse a record with a channel whose magnitude makes products of its samples overflow
     or underflow double precision: largest ``|value|`` above :data:`MAX_MAGNITUDE`, or a
     varying channel whose largest ``|value|`` is below :data:`MIN_MAGNITUDE` (a zero or
@@ -531,20 +555,18 @@ def check_magnitudes(data: Any, who: str = "identification") -> None:
     ...
     sysid.errors.DataError: output y0 has values of order 4e+200, outside the range ...
     """
-    exps = data.experiments
+    stats = record_stats(data) if stats is None else stats
     for kind, idx in (("output", 1), ("input", 0)):
-        parts = [np.ascontiguousarray(e[idx], float) for e in exps if len(e[idx])]
-        if not parts or not parts[0].shape[1]:
+        if idx not in stats:
             continue
+        big, _, sd = stats[idx]
         names = getattr(data, f"{kind}_names", None) or [
-            f"{'uy'[idx]}{j}" for j in range(parts[0].shape[1])]
-        # one pass in Rust (NumPy's column reductions of (samples, channels) arrays are slow)
-        big = _sysid.channel_stats(parts)[0]
+            f"{'uy'[idx]}{j}" for j in range(len(big))]
         for j, name in enumerate(names):
             b = float(big[j])
             if b > MAX_MAGNITUDE:
                 side = "overflow"
-            elif 0 < b < MIN_MAGNITUDE and not all(np.all(p[:, j] == p[0, j]) for p in parts):
+            elif 0 < b < MIN_MAGNITUDE and not _constant(data, idx, j, float(sd[j])):
                 side = "underflow"
             else:
                 continue
@@ -555,6 +577,13 @@ def check_magnitudes(data: Any, who: str = "identification") -> None:
                 "rescale the channel to order 1 first: sysid.scale(data, 'max') (its "
                 "standard deviation overflows too), or the data in other units"
             )
+
+
+def _constant(data: Any, idx: int, j: int, sd: float) -> bool:
+    """Whether channel ``j`` of side ``idx`` holds one value in every sample (its standard
+    deviation of tiny values can underflow to 0 while it varies: compared sample by sample)."""
+    parts = [e[idx] for e in data.experiments if len(e[idx])]
+    return sd == 0.0 and all(np.all(p[:, j] == parts[0][0, j]) for p in parts)
 
 
 def user_stacklevel() -> int:

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import check_magnitudes, user_stacklevel
+from .._checks import check_magnitudes, record_stats, user_stacklevel
 from ..errors import OffsetWarning
 
 __all__ = ["check_offsets", "OFFSET_RATIO"]
@@ -31,11 +31,13 @@ __all__ = ["check_offsets", "OFFSET_RATIO"]
 OFFSET_RATIO = 10.0
 
 
-def offsets(data: Any) -> list[tuple[str, str, float, float]]:
+def offsets(data: Any, stats: dict[int, Any] | None = None) -> list[tuple[str, str, float, float]]:
     """``(kind, name, mean, std)`` of every channel with ``|mean| > OFFSET_RATIO std > 0``
-    (empty for a detrended record)."""
+    (empty for a detrended record); ``stats``: the record's :func:`~sysid._checks.record_stats`
+    when the caller has them."""
     exps = list(data.experiments)
     if getattr(data, "has_trend", False):
+        stats = None  # only some experiments count: their own statistics below
         # a detrended record: only experiments merged in raw (their trend all zero: nothing
         # was removed from them) can still sit on an offset
         kept = getattr(data, "_exps", None)
@@ -48,23 +50,29 @@ def offsets(data: Any) -> list[tuple[str, str, float, float]]:
     for kind, idx, names in (("input", 0, data.input_names), ("output", 1, data.output_names)):
         if not names:
             continue
-        # one pass in Rust (NumPy's column reductions of (samples, channels) arrays are slow)
-        _, mean, std = _sysid.channel_stats(
-            [np.ascontiguousarray(e[idx], float) for e in exps])
+        if stats is not None:
+            if idx not in stats:
+                continue
+            _, mean, std = stats[idx]
+        else:  # one pass in Rust (NumPy's column reductions of (samples, channels) are slow)
+            _, mean, std = _sysid.channel_stats(
+                [np.ascontiguousarray(e[idx], float) for e in exps])
         for j, name in enumerate(names):
             if abs(mean[j]) > OFFSET_RATIO * std[j] > 0:
                 out.append((kind, str(name), float(mean[j]), float(std[j])))
     return out
 
 
-def check_offsets(data: Any, *, stacklevel: int | None = None) -> bool:
+def check_offsets(data: Any, *, stacklevel: int | None = None, who: str = "identification",
+                  stats: dict[int, Any] | None = None) -> bool:
     """Warn (:class:`~sysid.errors.OffsetWarning`) when a channel of ``data`` sits on an offset
     much larger than its variation and the record was not detrended; True if it warned. The
     warning points at the first caller outside sysid (or ``stacklevel`` frames up).
 
-    First the range check of every estimator (:func:`sysid._checks.check_magnitudes`): a
-    channel whose values overflow or underflow products of samples raises a
-    :class:`~sysid.errors.DataError` that says to rescale it.
+    First the range check of every estimator (:func:`sysid._checks.check_magnitudes`, its
+    message naming ``who``): a channel whose values overflow or underflow products of
+    samples raises a :class:`~sysid.errors.DataError` that says to rescale it. Both read the
+    record's :func:`~sysid._checks.record_stats` (``stats``, when the caller has them).
 
     Examples
     --------
@@ -83,8 +91,9 @@ def check_offsets(data: Any, *, stacklevel: int | None = None) -> bool:
     from .preprocessing import _require_record
 
     _require_record(data, "check_offsets")
-    check_magnitudes(data)
-    found = offsets(data)
+    stats = record_stats(data) if stats is None else stats
+    check_magnitudes(data, who, stats)
+    found = offsets(data, stats)
     if not found:
         return False
     what = "; ".join(f"{kind} {name} has an offset ({mean:.4g}) much larger than its variation "

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, check_magnitudes, user_stacklevel, warn_iteration_limit
+from .._checks import as_int, check_magnitudes, record_stats, user_stacklevel, warn_iteration_limit
 from .._display import modulus
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
@@ -140,6 +140,7 @@ class _Setup:
     record: IOData | None = None
     #: the state scaled by this factor (``B, K, x0`` times it, ``C`` divided; :func:`_balance`)
     xscale: float = 1.0
+    stats: dict[int, Any] | None = None  #: the record's :func:`~sysid._checks.record_stats`
 
     def kwargs(self) -> dict[str, Any]:
         return {"focus": self.focus, "estimate_d": self.feedthrough,
@@ -156,7 +157,8 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: 
     units, only the outputs scaled for ``weighting="output"``) in a state basis of balanced
     scale (:func:`_balance`)."""
     data = _experiments(data)
-    check_magnitudes(data, "pem")  # before the start is balanced on the record's scale
+    stats = record_stats(data)
+    check_magnitudes(data, "pem", stats)  # before the start is balanced on the record's scale
     if not isinstance(model, StateSpaceModel):
         raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
     if weighting is None:  # simulation: one output's plain sum; several: each to its scale
@@ -209,7 +211,7 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: 
         modes = [m if isinstance(m, str) else m * xs for m in modes]
     return _Setup(data, A, B, C, D, K, bool(feedthrough),
                   focus == "prediction" and noise == "estimate", weighting, modes, focus,
-                  enforce_stability, stabilized, dropped_d, units, record, xs)
+                  enforce_stability, stabilized, dropped_d, units, record, xs, stats)
 
 
 #: state factors of a start left as they are (:func:`_balance`)
@@ -567,7 +569,7 @@ def pem(
                 balance=regularization is None)
     if st.dropped_d:
         _warn_dropped_d(2)
-    check_offsets(st.record)  # issue 26: the one offset check (OffsetWarning)
+    check_offsets(st.record, who="pem", stats=st.stats)  # issue 26: the one offset check
     max_iter = as_int(max_iter, "max_iter", 0)
     tol = float(tol)
     if not (np.isfinite(tol) and tol >= 0):

@@ -40,7 +40,7 @@ from typing import Any, Literal, Union
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, as_orders, check_magnitudes, require_inputs_vary
+from .._checks import as_int, as_orders, check_magnitudes, record_stats, require_inputs_vary
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
@@ -93,10 +93,10 @@ def _check_signals(data: IOData) -> None:
     """Refuse constant outputs and inputs (naming the channel, as the polynomial estimators
     do); warn (OffsetWarning) about offsets much larger than the variation. Channels out of
     double precision's range are refused first (their variance underflows to 0)."""
-    check_magnitudes(data, "the subspace methods")
-    if data.output_names:
-        # one pass in Rust (NumPy's column reductions of (samples, channels) arrays are slow)
-        _, mean, std = _sysid.channel_stats([e[1] for e in data.experiments])
+    stats = record_stats(data)  # one pass over the record for the three checks
+    check_magnitudes(data, "the subspace methods", stats)
+    if 1 in stats:
+        _, mean, std = stats[1]
         for j, n in enumerate(data.output_names):
             if std[j] == 0:
                 raise DataError(
@@ -107,7 +107,7 @@ def _check_signals(data: IOData) -> None:
         require_inputs_vary(data.experiments, "the subspace methods", data.input_names,
                             error=ExcitationError)
     # the one offset check of every linear estimator (sysid.data.offsets)
-    check_offsets(data)
+    check_offsets(data, who="the subspace methods", stats=stats)
 
 
 def _refuse_white_noise(data: IOData, lags: int = 20, level: float = 0.05) -> None:
