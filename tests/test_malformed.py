@@ -663,7 +663,7 @@ def test_cli_saves_the_validated_model(capsys, tmp_path, csv_file):
     assert float(row["fit_validation"]) == pytest.approx(sysid.compare(m, val).mean_fit,
                                                          abs=1e-9)
     assert m.info["settings"]["order"] == m.nstates
-    assert m.info["preprocessing"]["detrend"] == "none"
+    assert m.info["preprocessing"]["detrend"] == "mean"  # the default off identify's path
 
 
 def test_cli_detrend_linear(capsys, tmp_path):

@@ -528,13 +528,18 @@ def _identify(args: argparse.Namespace) -> int:
         dt = 1.0 if args.dt is None else float(args.dt)
     N = y.shape[0]
     k = _split_index(args.split, N)
-    _check_parts(args.split, N, k, auto and bool(ui) and args.uncertainty == "none"
-                 and args.horizon is None)
+    # the default path is sysid.identify, unless the options ask for a subspace fit
+    via_identify = auto and bool(ui) and args.uncertainty == "none" and args.horizon is None
+    _check_parts(args.split, N, k, via_identify)
     pre: dict[str, Any] = {"file": str(args.data), "inputs": [names[i] for i in ui],
                            "outputs": [names[i] for i in yi],
                            "estimation_samples": [0, k], "validation_samples": [k, N]}
     if args.detrend == "auto":
-        args.detrend = "none" if ui else "mean"
+        # sysid.identify removes the offsets itself (and restores them in the saved model);
+        # every other path fits a linear model, which has no constant term: a record on an
+        # offset gives it a pole near 1 and a wrong gain (fits far below zero on the DaISy
+        # and other real records), so the estimation part's means are taken out first
+        args.detrend = "none" if via_identify else "mean"
     if args.detrend == "mean":
         mu, my = u[:k].mean(0), y[:k].mean(0)
         u, y = u - mu, y - my
@@ -555,7 +560,7 @@ def _identify(args: argparse.Namespace) -> int:
     kw = {"dt": dt, "input_names": pre["inputs"], "output_names": pre["outputs"]}
     est_data = IOData(u=u[:k] if ui else None, y=y[:k], **kw)
     val_data = IOData(u=u[k:] if ui else None, y=y[k:], **kw) if k < N else None
-    if auto and ui and args.uncertainty == "none" and args.horizon is None:
+    if via_identify:
         from .analysis.report_page import reissue
         from .identify.command import prepare
 
@@ -596,6 +601,14 @@ def _identify(args: argparse.Namespace) -> int:
                    uncertainty=None if args.uncertainty == "none" else args.uncertainty,
                    n_boot=args.n_boot,
                    feedthrough={"no": False, "yes": True, "auto": "auto"}.get(args.feedthrough))
+    if "removed_means" in pre and ui and "model" in out.get("files", {}):
+        # as on the identify path: the file holds the model with the means taken out first
+        # as its offsets, so that it predicts the raw signals (the report is of the deviations)
+        from .identify.result import IdentifiedModel
+        from .models.serialize import save_model
+
+        save_model(IdentifiedModel(out["model"], pre["removed_means"]["inputs"],
+                                   pre["removed_means"]["outputs"]), out["files"]["model"])
     _print_summary(out)
     return 0
 
@@ -646,11 +659,11 @@ def _parser() -> argparse.ArgumentParser:
     ide.add_argument("--time", default=None, help="time column (sample time from its steps)")
     ide.add_argument("--detrend", choices=("auto", "none", "mean", "linear"), default="auto",
                      help="remove the estimation part's means (or lines) first; recorded in "
-                          "the model. auto (default): the means of a time series (no "
-                          "--inputs: a stochastic model has no constant term), else none "
-                          "(--method auto removes offsets itself and restores them; a "
-                          "subspace --method fits the raw data, as SLICOT, and warns when an "
-                          "offset dominates)")
+                          "the model. auto (default): none when sysid.identify runs (it "
+                          "removes the offsets itself and restores them in the saved "
+                          "model), else the means (a linear model has no constant term; "
+                          "none fits the raw data, as SLICOT, and warns when an offset "
+                          "dominates)")
     ide.add_argument("--delimiter", default=None, help="field separator (default: guessed)")
     ide.add_argument("--report", required=True, help="output directory")
     ide.add_argument("--uncertainty", choices=("none", "bootstrap"), default="none",
