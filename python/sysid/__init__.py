@@ -225,6 +225,7 @@ _LAZY = {
     # issue 26 (branch pem): the cheap criterion of a model, the iterative estimators' warnings
     "pem_loss": "pem.pem",
     "IterationLimitWarning": "errors",
+    "FeedthroughWarning": "errors",
     # issue 29 (branch nlss): BLA, PNLSS, neural state space
     "bla": "nonparametric.bla",
     "bla_model": "nonparametric.bla",
@@ -480,6 +481,7 @@ __all__ = [
     # issue 26 (branch pem): the cheap criterion of a model, the iterative estimators' warnings
     "pem_loss",
     "IterationLimitWarning",
+    "FeedthroughWarning",
     # issue 29 (branch nlss): BLA, PNLSS, neural state space
     "bla",
     "bla_model",

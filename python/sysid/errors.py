@@ -32,6 +32,7 @@ __all__ = [
     "StabilityWarning",
     "IterationLimitWarning",
     "IdentifiabilityWarning",
+    "FeedthroughWarning",
 ]
 
 
@@ -97,6 +98,14 @@ class IterationLimitWarning(UserWarning):
     """An iterative search stopped at its iteration cap before a convergence test was met;
     the model is the best iterate found. The message says how far from converged it was and
     what to do (raise ``max_iter``, or refine again from the returned model)."""
+
+
+class FeedthroughWarning(UserWarning):
+    """A state-space model was fitted without a direct term (``D = 0``, the default at a given
+    order) on a record that shows one: with ``D`` estimated, the one-step prediction errors of
+    the subspace fit at that order are at least halved. Pass ``feedthrough=True``, or
+    ``feedthrough="auto"`` to decide from held-out data
+    (:mod:`sysid.subspace.feedthrough`)."""
 
 
 class IdentifiabilityWarning(UserWarning):

@@ -13,7 +13,12 @@ from .._checks import as_int, recorded, reissue
 from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
 from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator, horizon_for_order
-from ..subspace.feedthrough import check_feedthrough, choose_feedthrough, default_feedthrough
+from ..subspace.feedthrough import (
+    check_feedthrough,
+    choose_feedthrough,
+    default_feedthrough,
+    warn_if_left_out,
+)
 from .pem import _experiments, pem, pem_loss
 
 __all__ = ["ssest"]
@@ -111,6 +116,7 @@ def ssest(
                         "model with sysid.pem(data, model)")
     if not isinstance(order, str) and np.ndim(order) == 0:
         order = as_int(order, "order", 1)  # inf, nan, 2.5: before any data are compressed
+    ft_default = feedthrough is None  # D left out by default at a given order: checked below
     feedthrough = default_feedthrough(feedthrough, order)
     if periods is not None or transient is not None:
         from .periodic import resolve_periods
@@ -184,6 +190,8 @@ def ssest(
         _no_start(why)
     candidates.sort(key=lambda c: c[0])
     best = candidates[0]
+    check = (warn_if_left_out(est, order, best[1], best[3], "ssest", x0=best[2])
+             if ft_default else None)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", OffsetWarning)  # said once, by the subspace start
         model = pem(data, best[3], focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
@@ -194,6 +202,8 @@ def ssest(
         "bd_x0": best[2],
         "losses": {f"{c[1]}{'+x0' if c[2] else ''}": c[0] for c in candidates},
     }
+    if check is not None:
+        model.info["feedthrough_check"] = check
     return model
 
 

@@ -59,6 +59,7 @@ from .feedthrough import (
     check_feedthrough,
     choose_feedthrough,
     default_feedthrough,
+    warn_if_left_out,
 )
 from .methods import CLOSED_LOOP, METHODS, _method
 from .scaling import check_scale, in_record_units, scaled_experiments
@@ -703,7 +704,12 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         if isinstance(data, IOData):  # a given order gets a horizon that allows it
             horizon = horizon_for_order(data, order, horizon)
         est = SubspaceEstimator(data, horizon, method=method, scale=scale)
-        return est.fit(order, feedthrough=feedthrough, kalman=kalman, stable=stable, x0=x0)
+        model = est.fit(order, feedthrough=feedthrough, kalman=kalman, stable=stable, x0=x0)
+        if feedthrough is None and not isinstance(order, str) and np.ndim(order) == 0:
+            # D left out by default: say so when the record shows a direct term
+            warn_if_left_out(est, order, method, model, fit.__name__, kalman=kalman, x0=x0,
+                             stable=stable)
+        return model
 
     fit.__name__ = method.replace("-", "_")
     fit.__doc__ = f"""Identify a state-space model with {method.upper()} in one call.
