@@ -101,3 +101,21 @@ def test_a_held_input_and_too_low_an_order_do_not_warn(seed):
     data = sysid.IOData(u=u, y=plant.simulate(u) + 0.05 * rng.standard_normal((1200, 1)))
     model, said = _caught(sysid.n4sid, data, 1)
     assert not said and 1.2 < model.info["feedthrough_check"]["ratio"] < LEFT_OUT_RATIO
+
+
+def test_feedback_within_the_sample_is_named_as_the_other_cause():
+    # an input computed from the same sample's output (an analogue loop sampled) depends on
+    # it at lag 0 as a direct term would: the check cannot tell the two apart, and a plant in
+    # such a loop has no D (the loop would be algebraic), so the warning names that case
+    rng = np.random.default_rng(0)
+    N, x = 2000, 0.0
+    y, u = np.zeros(N), np.zeros(N)
+    r, e = 0.1 * rng.standard_normal(N), rng.standard_normal(N)
+    for t in range(N):
+        y[t] = x + e[t]
+        u[t] = r[t] - y[t]
+        x = 0.9 * x + u[t]
+    _, said = _caught(sysid.n4sid, sysid.IOData(u=u, y=y), 1)
+    assert len(said) == 1
+    msg = str(said[0].message)
+    assert "same sample's output" in msg and "pbsid" in msg

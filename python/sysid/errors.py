@@ -104,8 +104,9 @@ class FeedthroughWarning(UserWarning):
     """A state-space model was fitted without a direct term (``D = 0``, the default at a given
     order) on a record that shows one: with ``D`` estimated, the one-step prediction errors of
     the subspace fit at that order are at least halved. Pass ``feedthrough=True``, or
-    ``feedthrough="auto"`` to decide from held-out data
-    (:mod:`sysid.subspace.feedthrough`)."""
+    ``feedthrough="auto"`` to decide from held-out data (:mod:`sysid.subspace.feedthrough`);
+    unless the input is a controller's answer to the same sample's output, where the lag-0
+    dependence is the controller's and ``D = 0`` is right."""
 
 
 class IdentifiabilityWarning(UserWarning):

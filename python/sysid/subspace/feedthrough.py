@@ -30,7 +30,11 @@ one without, by their one-step prediction errors on the record. When ``D`` at le
 one asked for). Over 25 real records (8 shipped, 17 not) at orders 2, 4 and 8, all 23
 fits where ``D`` halved the errors simulated the validation data better with it (by 0.4
 to 860 fit points); below that ratio 32 of 48 did and 16 did worse
-(``benches/feedthrough_check.py``, ``benches/results/feedthrough_check.md``).
+(``benches/feedthrough_check.py``, ``benches/results/feedthrough_check.md``). The one case
+it cannot tell apart is feedback within the sample (an input computed from the same
+sample's output, as an analogue loop sampled): the lag-0 dependence is then the
+controller's, and a plant in such a loop has no ``D`` (the loop would be algebraic); the
+warning says so.
 """
 
 from __future__ import annotations
@@ -231,7 +235,10 @@ def warn_if_left_out(est: Any, order: int, method: str, model: Any, who: str,
         warnings.warn(
             f"{who} fitted no direct term (D = 0, the default at a given order), but the record "
             f"shows one: with D estimated, the one-step prediction errors of the subspace fit "
-            f"at order {order} are {ratio:.3g} times smaller. Pass feedthrough=True, or "
-            f"feedthrough='auto' to decide from held-out data", FeedthroughWarning,
+            f"at order {order} are {ratio:.3g} times smaller (the output answers the input "
+            f"within the sample). Pass feedthrough=True, or feedthrough='auto' to decide from "
+            f"held-out data; unless the input is a controller's answer to the same sample's "
+            f"output (feedback within the sample), where D = 0 is right and the closed-loop "
+            f"methods (method='pbsid' or 'ssarx') apply", FeedthroughWarning,
             stacklevel=user_stacklevel())
     return check
