@@ -175,7 +175,8 @@ def linear_start(data: IOData, sd: IOData, sc: Scaling, order: int, init: Any,
         warnings.simplefilter("ignore", StabilityWarning)
         try:
             kw = {} if max_iter is None else {"max_iter": max_iter}
-            return sysid.ssest(sd, order, focus="simulation", progress=False, **kw)
+            return sysid.ssest(sd, order, focus="simulation", feedthrough=False,
+                               progress=False, **kw)
         except OrderError as e:  # a record too short for the order (its own words after)
             n = sum(u.shape[0] for u, _ in sd.experiments)
             raise OrderError(f"the record ({n} training samples) is too short for a linear "
