@@ -93,7 +93,11 @@ def test_an_unstable_order_is_kept_when_the_data_insist():
 def test_stable_first_keeps_every_order_without_a_stable_one():
     folds = {1: [10.0, 12.0, 11.0], 2: [20.0, 25.0, 22.0]}
     score = {n: float(np.median(v)) for n, v in folds.items()}
-    assert stable_first(score, folds, {1, 2}) == ({1, 2}, "")
+    # no stable order: every one stays, and the reason says the choice is among unstable ones
+    # (n4sid on an industrial robot record chose order 16, unstable, with nothing said of the
+    # other orders, all unstable on the whole record as well)
+    allowed, why = stable_first(score, folds, {1, 2})
+    assert allowed == {1, 2} and "no order gave a model stable" in why
     allowed, why = stable_first(score, folds, {2})
     assert allowed == {1, 2} and why == ""  # order 2 wins on every block: insisted on
     folds[2][1] = 5.0

@@ -626,7 +626,7 @@ def stable_first(score: dict[int, float], folds: dict[int, list[float]], unstabl
     stable order on *every* held-out block and by more than the slack on the score (a sign
     test at ``2**-K``: an integrating or open-loop unstable plant), the rule
     :meth:`sysid.identify.board.Board.insisting` applies to its candidates; with no stable
-    order at all, every order is.
+    order at all, every order is, and the note says so.
 
     Examples
     --------
@@ -637,8 +637,11 @@ def stable_first(score: dict[int, float], folds: dict[int, list[float]], unstabl
     ([1, 3], [1, 2, 3])
     """
     stable = {n: f for n, f in score.items() if n not in unstable and np.isfinite(f)}
-    if not unstable or not stable:
+    if not unstable:
         return set(score), ""
+    if not stable:
+        return set(score), ("; no order gave a model stable on the whole record and scored on "
+                            "the held-out blocks: the choice is among unstable ones")
     best_s = max(stable, key=lambda n: stable[n])
     ref = folds[best_s]
     insisted = {n for n in unstable if np.isfinite(score[n])
