@@ -66,7 +66,9 @@ def ssest(
         ``False``: ``D = 0``; ``"auto"`` decides from the data: ``D`` only when it raises the
         held-out simulation fit of the subspace models by more than 0.5 points
         (:func:`sysid.subspace.feedthrough.choose_feedthrough`, recorded in
-        ``info["feedthrough_selection"]``), then refined with that choice.
+        ``info["feedthrough_selection"]``), then refined with that choice. Left out at a
+        given order, ``D`` is checked for: a :class:`~sysid.errors.FeedthroughWarning` when
+        the record shows a direct term (:func:`sysid.subspace.feedthrough.warn_if_left_out`).
     focus, x0, noise, max_iter, tol, regularization, progress, enforce_stability
         As for :func:`pem` (the candidates are scored by :func:`pem_loss`).
     horizon : int, optional

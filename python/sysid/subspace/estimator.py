@@ -719,7 +719,8 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
     :func:`~sysid.subspace.estimator.horizon_for_order`: the default, or the smallest that
     allows the order when the default does not and the data do); no feedthrough (``D = 0``)
     at a given order unless ``feedthrough=True`` (or ``"auto"``: decided from the data), as
-    every sysid state-space estimator; with ``order="auto"`` (the
+    every sysid state-space estimator (left out by default, a ``FeedthroughWarning`` says when
+    the record shows a direct term); with ``order="auto"`` (the
     default) the order and ``D`` are chosen together by held-out simulation fit
     (``info["order_selection"]``, ``info["feedthrough_selection"]``). ``scale=False``
     computes in the record's units instead of on channels of unit root mean square
