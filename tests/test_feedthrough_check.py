@@ -1,6 +1,6 @@
 """A model of a given order fitted without ``D`` by default says so when the record shows a
-direct term (issue 26: ``ssest(data, 4)`` on a robot-arm record had a prediction cost 40-50
-times that of the same fit with ``D``, and nothing said so)."""
+direct term (issue 26: ``ssest(data, 4)`` on MATLAB's industrial robot-arm record had a
+prediction cost 50 times that of the same fit with ``D``, and nothing said so)."""
 
 import warnings
 
