@@ -199,9 +199,9 @@ def warn_if_left_out(est: Any, order: int, method: str, model: Any, who: str,
     ``model`` (fitted by ``est`` at ``order`` with ``method``, without ``D`` by default) leaves
     out: the subspace fit with ``D`` has one-step prediction errors at least
     ``LEFT_OUT_RATIO`` times smaller (``kalman``, ``x0``, ``stable``: as ``model`` was
-    fitted). The check is kept
-    in ``model.info["feedthrough_check"]`` and returned; records without inputs or data (an
-    estimator built from a factor) and closed-loop methods are not checked (None).
+    fitted). The check is kept in ``model.info["feedthrough_check"]`` and returned; records
+    without inputs or data (an estimator built from a factor) and closed-loop methods are not
+    checked (None).
 
     Examples
     --------
@@ -239,7 +239,8 @@ def warn_if_left_out(est: Any, order: int, method: str, model: Any, who: str,
     check = model.info["feedthrough_check"] = {
         "ratio": float(ratio), "threshold": LEFT_OUT_RATIO,
         "what": "one-step prediction errors of the subspace fit at this order without D over "
-                "those with D (sum over outputs, each relative to its variation)"}
+                "those with D (sum over outputs, each relative to its variation; predictors "
+                f"from a zero state over at most {CHECK_SAMPLES} samples per experiment)"}
     if ratio >= LEFT_OUT_RATIO:
         warnings.warn(
             f"{who} fitted no direct term (D = 0, the default at a given order), but the record "
