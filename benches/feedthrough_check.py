@@ -40,16 +40,8 @@ def records(args: argparse.Namespace) -> dict[str, object]:
     if args.more_records:
         out |= {n: (lambda n=n: rd._more(Path(args.more_records), n)) for n in rd.MORE}
     if args.nonlinear_records:
-        import nonlinear_unshipped as nu
-
-        nu.DIR, nu.MAX_TRAIN = args.nonlinear_records, 20000
-        tests = {"tanks": "validation", "emps": "pulses", "silverbox": "multisine test",
-                 "wh2009": "test"}
-
-        def nl(name: str):
-            train, test, _, _ = nu.LOADERS[name]()
-            return train.experiments[0], test[tests[name]]
-        out |= {n: (lambda n=n: nl(n)) for n in tests}
+        out |= {n: (lambda n=n: rd._nonlinear(args.nonlinear_records, n))
+                for n in rd.NONLINEAR_TESTS}
     return out
 
 

@@ -180,6 +180,21 @@ def _more(folder: Path, name: str):
     return _split(u, y, (2 * u.shape[0]) // 3, SPLIT)
 
 
+#: the nonlinear benchmark records of ``--nonlinear-records`` and the test record each is
+#: validated on (the files and splits of ``benches/nonlinear_unshipped.py``)
+NONLINEAR_TESTS = {"tanks": "validation", "emps": "pulses", "silverbox": "multisine test",
+                   "wh2009": "test"}
+
+
+def _nonlinear(folder: str, name: str):
+    """(estimation, validation) of a nonlinear benchmark record, training cut to 20 000."""
+    import nonlinear_unshipped as nu
+
+    nu.DIR, nu.MAX_TRAIN = folder, 20000
+    train, test, _, _ = nu.LOADERS[name]()
+    return train.experiments[0], test[NONLINEAR_TESTS[name]]
+
+
 def _unshipped(folder: Path, name: str):
     f, ins, outs = UNSHIPPED[name]
     d = np.loadtxt(folder / f"{f}.dat")
@@ -616,17 +631,9 @@ def main() -> None:
     SPLIT = args.split
     stem = "realdata"
     if args.nonlinear_records:
-        import nonlinear_unshipped as nu
-
         stem = "realdata_nonlinear_records"
-        nu.DIR, nu.MAX_TRAIN = args.nonlinear_records, 20000
-        tests = {"tanks": "validation", "emps": "pulses", "silverbox": "multisine test",
-                 "wh2009": "test"}
-
-        def record(name):
-            train, test, _, _ = nu.LOADERS[name]()
-            return train.experiments[0], test[tests[name]]
-        _use(args, tests, record)
+        _use(args, NONLINEAR_TESTS,
+             lambda name: _nonlinear(args.nonlinear_records, name))
     if args.unshipped:
         stem = "realdata_unshipped"
         _use(args, UNSHIPPED, lambda name: _unshipped(Path(args.unshipped), name))
