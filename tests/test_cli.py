@@ -166,7 +166,8 @@ def test_demo_runs_as_a_module_and_writes_a_report(tmp_path):
     assert proc.returncode == 0, proc.stderr
     out = proc.stdout
     assert "validation fit (simulation): air temperature:" in out
-    assert "order choice: order 4" in out
+    # chosen on the estimation part (the validation part's own pick, 4, reported 86.3 %)
+    assert "order choice: order 5 (moesp) chosen by cv" in out
     page = check_report(tmp_path / "r", ["air temperature"])
     # issue 26: the bootstrap's pole table has a std for every pole (was all "n/a")
     poles = page.tables["poles"]
@@ -246,14 +247,38 @@ def test_console_script_points_at_main():
     assert module == "sysid.cli" and getattr(sys.modules[module], func) is main
 
 
-def test_identify_without_validation_data_uses_bic():
+def test_identify_without_validation_data_cross_validates():
     from sysid.cli import identify
 
     d = sysid.datasets.load_dryer()
     out = identify(d, None, horizon=15)
-    assert out["which"] == "estimation" and out["selection"].criterion == "bic"
-    assert out["model"].nstates == out["selection"].picks["bic"]
+    assert out["which"] == "estimation" and out["selection"].criterion == "cv"
+    assert out["model"].nstates == out["selection"].picks["cv"]
     assert "files" not in out
+
+
+def test_the_order_is_chosen_without_the_validation_part():
+    # the sweep chose the order with the best fit on the validation part and then reported
+    # that fit as the model's: an optimistic figure. The order is now the one order="auto"
+    # takes on the estimation part, and the validation data cannot move it
+    from sysid.cli import identify
+
+    d = sysid.datasets.load_dryer()
+    mu, my = d.u[:500].mean(0), d.y[:500].mean(0)
+    est = sysid.IOData(u=d.u[:500] - mu, y=d.y[:500] - my, dt=d.dt)
+    val = sysid.IOData(u=d.u[500:] - mu, y=d.y[500:] - my, dt=d.dt)
+    out = identify(est, val, horizon=15)
+    sel = out["selection"]
+    auto = sysid.SubspaceEstimator(est, 15).order_selection(
+        feedthrough=bool(np.any(out["model"].D)),
+        orders=range(1, max(r["order"] for r in sel.rows) + 1))
+    assert sel.criterion == "cv" and out["model"].nstates == auto["order"]
+    assert "validation data were only reported on" in sel.reason
+    # the validation part's own pick differs here: it was the rule before
+    assert sel.picks["validation"] != sel.order
+    noisy = sysid.IOData(u=val.u, y=val.y + np.random.default_rng(0).standard_normal(val.y.shape),
+                         dt=d.dt)
+    assert identify(est, noisy, horizon=15)["model"].nstates == out["model"].nstates
 
 
 def test_warnings_of_the_run_reach_the_page_and_one_line_on_stderr(tmp_path, capsys,

@@ -79,8 +79,23 @@ def test_noise_free_order_6_is_picked_by_every_rule():
     assert orders[0] == 1 and orders[-1] >= 6
     np.testing.assert_allclose(np.sort_complex(sel.model().poles()),
                                np.sort_complex(true.poles()), atol=1e-8)
-    # without validation data, BIC decides
-    assert sysid.select_order(est).criterion == "bic"
+    # without validation data, the rule of order="auto" decides (held-out blocks of the
+    # estimation record), and it too finds 6; BIC stays one call away
+    alone = sysid.select_order(est)
+    assert alone.criterion == "cv" and alone.order == 6 and alone.picks["cv"] == 6
+    assert all(np.isfinite(r["fit_held_out"]) for r in alone.rows if r["order"] <= 6)
+    assert sysid.select_order(est, criterion="bic").order == 6
+
+
+@needs_engine
+def test_cv_falls_back_and_says_so_where_the_record_cannot_be_split():
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal(20)
+    y = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]).simulate(u)[:, 0] + 0.01 * u
+    sel = sysid.select_order(sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), 2), [1],
+                             criterion="cv")
+    assert sel.criterion == "bic" and "could not be cross-validated" in sel.reason
+    assert "cv" not in sel.picks
 
 
 @needs_engine

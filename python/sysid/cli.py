@@ -210,8 +210,11 @@ def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, me
     top = min(est.max_order, max(10, 2 * est.auto_order, 0 if order == "auto" else int(order)))
     while True:
         say(f"sweeping orders 1..{top} on one compression")
+        # chosen on the estimation part alone (the rule of order="auto"), so that the fit
+        # reported on the validation part is an honest one; the sweep's table shows both
         sel = select_order(est, range(1, top + 1), validation=val_data, progress=bars,
-                           feedthrough=bool(feedthrough))
+                           feedthrough=bool(feedthrough),
+                           criterion="cv" if order == "auto" else None)
         if order != "auto" or sel.order < top or top >= est.max_order:
             break
         # the best order sits at the edge of the sweep: look further

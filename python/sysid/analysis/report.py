@@ -305,12 +305,16 @@ def _sv(value: Any) -> str:
 
 
 def _order_body(page: Page, sel: Any, frd: Any) -> str:
+    # the held-out fits (estimation record's blocks) when the order was cross-validated
+    held = any("fit_held_out" in r for r in sel.rows)
     rows = [[r.get("model", r["method"]), r["order"], _sv(r["singular_value"]),
-             f"{r['aic']:.2f}", f"{r['bic']:.2f}", _pct(r["fit_validation"]).strip(),
-             "yes" if r["stable"] else "no"] for r in sel.rows if r["error"] is None]
+             f"{r['aic']:.2f}", f"{r['bic']:.2f}"]
+            + ([_pct(r.get("fit_held_out", np.nan)).strip()] if held else [])
+            + [_pct(r["fit_validation"]).strip(), "yes" if r["stable"] else "no"]
+            for r in sel.rows if r["error"] is None]
     return (f"<p>{esc(sel.reason)}</p>" + page.table(
-        "orders", ["method", "order", "singular value", "AIC", "BIC", "validation fit %",
-                   "stable"], rows)
+        "orders", ["method", "order", "singular value", "AIC", "BIC"]
+        + (["held-out fit %"] if held else []) + ["validation fit %", "stable"], rows)
         + ("<p>A dash for the singular value: that row's model was not chosen from a "
            "subspace fit's singular values (a refinement, chosen as the line above "
            "says).</p>"

@@ -157,6 +157,10 @@ def plot_order_selection(table: Any, fig: Any = None) -> Any:
         fits = np.array([x[key] for x in r], dtype=float)
         # diverging fits of unstable models would flatten everything else: clip them
         ax.plot([x["order"] for x in r], np.where(fits < -100, np.nan, fits), "o-", label=meth)
+        held = np.array([x.get("fit_held_out", np.nan) for x in r], dtype=float)
+        if np.isfinite(held).any():  # the cross-validated fits the "cv" rule read
+            ax.plot([x["order"] for x in r], np.where(held < -100, np.nan, held), "s--",
+                    label=f"{meth} (held out)")
     ax.set_title(("validation fit %" if table.has_validation else "estimation fit %")
                  + " (below -100 not shown)")
     ax.set_xlabel("order")

@@ -204,19 +204,23 @@ class OrderSelection(HTMLResult):
     picks : dict
         Order chosen by each rule: ``"svd"`` (largest log-gap), ``"aic"``, ``"aicc"``,
         ``"bic"``, ``"fpe"`` (minimum), ``"validation"`` (smallest order within
-        ``fit_tol`` of the best validation fit, stable models only).
+        ``fit_tol`` of the best validation fit, stable models only), ``"cv"`` (when it was
+        computed: the order ``order="auto"`` takes, by simulation fit on blocks of the
+        estimation record held out; each swept row of its method has it as ``fit_held_out``).
     order, method : int, str
         The recommendation: the validation pick when validation data were given, else the
-        BIC pick (the singular-value gap for an estimator without data), or the rule named
-        by ``criterion``.
+        cross-validated pick (BIC for given models, the singular-value gap for an estimator
+        without data), or the rule named by ``criterion``.
     reason : str
         Why, in one paragraph.
     """
 
     def __init__(self, rows: list[dict[str, Any]], singular_values: dict[str, np.ndarray],
                  models: dict[tuple[str, int], Any], svd_picks: dict[str, int],
-                 has_validation: bool, criterion: str | None, fit_tol: float) -> None:
+                 has_validation: bool, criterion: str | None, fit_tol: float,
+                 cv: dict[str, Any] | None = None) -> None:
         self.rows, self.singular_values, self._models = rows, singular_values, models
+        self._cv = cv
         self.has_validation, self.fit_tol = has_validation, fit_tol
         ok = [r for r in rows if r["error"] is None]
         if not ok:
@@ -243,8 +247,13 @@ class OrderSelection(HTMLResult):
                 best = min(good, key=lambda r: (r["order"], -r["fit_validation"]))
                 self.picks["validation"], self.pick_methods["validation"] = (
                     best["order"], best["method"])
-        rule = criterion or next((r for r in ("validation", "bic", "svd") if r in self.picks),
-                                 "")
+        if cv is not None and cv.get("method"):
+            self.picks["cv"], self.pick_methods["cv"] = int(cv["order"]), cv["method"]
+        rule = criterion or next((r for r in ("validation", "cv", "bic", "svd")
+                                  if r in self.picks), "")
+        if rule == "cv" and "cv" not in self.picks and cv is not None:
+            # the record could not be cross-validated: the rule that applies otherwise
+            rule = next((r for r in ("validation", "bic", "svd") if r in self.picks), "")
         if rule not in self.picks:
             raise DataError(f"criterion {rule!r} is not available; choose one of "
                             f"{', '.join(self.picks)}")
@@ -271,10 +280,17 @@ class OrderSelection(HTMLResult):
             excluded = self._excluded()
             if excluded:
                 parts.append(f" ({excluded})")
+        elif self.criterion == "cv":
+            parts.append(f" (cross-validated simulation fit on the estimation record): "
+                         f"{self._cv['reason']}")
+            if self.has_validation:
+                parts.append("; the validation data were only reported on")
         elif self.criterion in CRITERIA:
             parts.append(f": smallest {_NAMES[self.criterion]} = {r[self.criterion]:.4g}")
         else:
             parts.append(": largest gap of the log singular values")
+        if self._cv is not None and not self._cv.get("method") and self.criterion != "given":
+            parts.append(f" ({self._cv['reason']})")
         sv = self.singular_values.get(self.method, np.zeros(0))
         if 0 < self.order < sv.size:
             parts.append(f"; singular values {sv[self.order - 1]:.4g} -> {sv[self.order]:.4g} "
@@ -370,6 +386,9 @@ class OrderSelection(HTMLResult):
     def __repr__(self) -> str:
         head = (f"{'method':<15} {'n':>3} {'sv':>10} {'d':>4} {'AIC':>11} {'AICc':>11} "
                 f"{'BIC':>11} {'FPE':>10} {'fit est':>8} {'fit val':>8} {'stable':>6}")
+        held = any("fit_held_out" in r for r in self.rows)
+        if held:  # the cross-validated fits the "cv" rule reads
+            head = head.replace(" fit val", " held out  fit val")
         lines = ["OrderSelection", head]
         for r in self.rows:
             if r["error"] is not None:
@@ -380,8 +399,9 @@ class OrderSelection(HTMLResult):
                 f"{r.get('model', r['method'])[:15]:<15} {r['order']:>3} "
                 f"{r['singular_value']:10.4g} "
                 f"{r['n_params']:>4} {r['aic']:11.2f} {r['aicc']:11.2f} {r['bic']:11.2f} "
-                f"{r['fpe']:10.4g} {_pct(r['fit_estimation'])} {_pct(r['fit_validation'])} "
-                f"{'yes' if r['stable'] else 'NO':>6}{star}"
+                f"{r['fpe']:10.4g} {_pct(r['fit_estimation'])} "
+                + (f"{_pct(r.get('fit_held_out', np.nan))} " if held else "")
+                + f"{_pct(r['fit_validation'])} {'yes' if r['stable'] else 'NO':>6}{star}"
             )
         lines.append(self.reason)
         return "\n".join(lines)
@@ -470,8 +490,14 @@ def select_order(
     x0 : "estimate" or "zero"
         Initial states in the criteria and fits.
     criterion : str, optional
-        Rule for the recommended order: ``"validation"``, ``"aic"``, ``"aicc"``, ``"bic"``,
-        ``"fpe"`` or ``"svd"`` (default: validation if given, else BIC).
+        Rule for the recommended order: ``"validation"``, ``"cv"``, ``"aic"``, ``"aicc"``,
+        ``"bic"``, ``"fpe"`` or ``"svd"``. Default: validation if given; else ``"cv"``, the
+        rule of ``order="auto"`` (:meth:`SubspaceEstimator.order_selection`: simulation fit
+        on blocks of the estimation record held out, for the first of ``methods``; its
+        held-out fits are the rows' ``fit_held_out``), which keeps the validation data
+        for an honest report when both are wanted (the command line's choice). On a record
+        too short to split, ``"cv"`` falls back to the rule that applies otherwise and the
+        reason says so. Given models: BIC (they cannot be re-fitted on blocks).
     fit_tol : float
         Percentage points of validation fit a smaller order may give up and still win.
     feedthrough, kalman : bool
@@ -539,8 +565,30 @@ def select_order(
             _sweep(est, est_data, meths, orders_, validation, x0, feedthrough, kalman, rows,
                    fitted, svs, svd_picks, bar)
     _warn_once(caught)
+    cv = None
+    if criterion == "cv" or (criterion is None and validation is None):
+        cv = _cross_validated(est, est_data, meths[0], bool(feedthrough), orders_, rows)
     return OrderSelection(rows, svs, fitted, svd_picks, validation is not None, criterion,
-                          float(fit_tol))
+                          float(fit_tol), cv)
+
+
+def _cross_validated(est: Any, est_data: Any, method: str, feedthrough: bool,
+                     orders: list[int], rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """The order ``order="auto"`` takes among ``orders`` (``{"order", "method", "reason"}``;
+    without ``"method"`` when the record could not be cross-validated, and then why), its
+    held-out fits written into ``rows`` as ``fit_held_out``."""
+    if est_data is None:
+        return {"reason": "not cross-validated: the estimator holds no data (built from a "
+                          "factor)"}
+    choice = est.order_selection(method, feedthrough, orders)
+    if not choice["table"]:  # too short to split: the singular-value rule's reason says why
+        why = choice["reason"]
+        return {"reason": why[why.find("the record could not"):].removesuffix(")")
+                if "the record could not" in why else "not cross-validated: " + why}
+    for r in rows:
+        if r["method"] == method:
+            r["fit_held_out"] = float(choice["table"].get(r["order"], np.nan))
+    return {"order": choice["order"], "method": method, "reason": choice["reason"]}
 
 
 def _warn_once(caught: list[Any]) -> None:
