@@ -283,6 +283,9 @@ def test_docs_nonlinear_examples_and_their_claims(capsys):
     assert ns["ph_best_lin"] == "arx(1,3,0)" and ns["ph_best_narx"].startswith("nlarx(1,1,1)")
     np.testing.assert_allclose([pl[1], pn[1]], [1.849, 1.364], atol=5e-3)
     assert sum(np.isinf(v[1]) for v in ns["ph_narx"].values()) == 3
+    # the three that diverge on validation already did on their fitting data, and said so
+    assert sorted(ns["ph_warned"]) == sorted(k for k, v in ns["ph_narx"].items()
+                                             if np.isinf(v[1]))
     pw = ns["ph_wiener"][ns["ph_best_wiener"]]
     assert ns["ph_best_wiener"] == "nlhw_ss(2) pwl(6)"
     np.testing.assert_allclose(pw, [0.428, 0.819], atol=5e-3)
@@ -352,3 +355,22 @@ def test_a_short_record_does_not_keep_a_term_per_row():
     assert len(m.terms[0]) <= m.info["n_rows"] // 2 and m.noise_variance[0] > 1e-6
     with pytest.raises(sysid.DataError, match="too short"):
         sysid.nlarx(sysid.IOData(u[:3], y[:3], 1.0), 2, 2, 1)
+
+
+def test_a_free_run_that_diverges_on_the_estimation_data_is_said():
+    # issue 26 (no silent unstable model): a degree-3 NARX of the pH record (the nonlinear
+    # bench's setting) is a fine one-step predictor whose free run blows up at sample 24 of
+    # the very data it was fitted to; nlarx returned it without a word and compare said -inf
+    d = sysid.datasets.load_ph()
+    cut = int(0.6 * d.u.shape[0])
+    train = sysid.IOData(d.u[:cut], d.y[:cut], d.dt)
+    with pytest.warns(sysid.StabilityWarning, match="free-run simulation diverges"):
+        m = sysid.nlarx(train, 3, 3, basis=sysid.PolynomialBasis(3), max_terms=20)
+    assert m.info["free_run"]["diverged"] and np.isinf(sysid.compare(train, m).fit[0, 0])
+    # a model that simulates is silent, and its free-run fit on the record is recorded
+    u, y = billings(400, 1)
+    ok = sysid.nlarx(sysid.IOData(u, y, 1.0), 2, 2, basis=sysid.PolynomialBasis(2))
+    ys = ok.simulate(u, x0=y[:ok.max_lag])
+    ref = 100 * (1 - np.linalg.norm((ys - y)[2:]) / np.linalg.norm(y[2:] - y[2:].mean()))
+    assert ok.info["free_run"] == {"diverged": False, "fit": [pytest.approx(ref)]}
+    assert ref > 99.9

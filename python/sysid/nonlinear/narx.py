@@ -16,7 +16,13 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import check_magnitudes, experiment_arrays
-from ..errors import DataError, ExcitationWarning, InsufficientDataError
+from ..errors import (
+    DataError,
+    ExcitationWarning,
+    InsufficientDataError,
+    NumericalError,
+    StabilityWarning,
+)
 from .customreg import CustomRegressor
 from .narx_model import NARXModel, PolynomialBasis, RBFBasis
 from .narx_network import is_network, nlarx_network
@@ -114,6 +120,36 @@ def _free_run_rmse(model: NARXModel, exps: list[tuple[np.ndarray, np.ndarray]]) 
         err += float(np.sum((ys - y)[model.max_lag:] ** 2))
         count += y[model.max_lag:].size
     return float(np.sqrt(err / max(count, 1)))
+
+
+def free_run_check(model: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> None:
+    """Simulate the fitted model on its estimation record (free run from the measured first
+    ``max_lag`` outputs of each experiment) and record it in ``model.info["free_run"]``;
+    warn (:class:`~sysid.StabilityWarning`) when the simulation diverges. A NARX model is
+    fitted one step ahead, where the measured outputs hold it; run on its own outputs it can
+    blow up even on the data it was fitted to (a degree-3 polynomial model on the pH record
+    did, and said nothing until ``compare`` reported ``-inf``)."""
+    sse, var = 0.0, 0.0
+    for i, (u, y) in enumerate(exps):
+        k = model.max_lag
+        try:
+            ys = np.asarray(model.simulate(u, x0=y[:k]))
+            if not np.all(np.isfinite(ys)):
+                raise NumericalError("the simulated output is not finite")
+        except NumericalError as e:
+            model.info["free_run"] = {"diverged": True, "experiment": i, "reason": str(e)}
+            warnings.warn(StabilityWarning(
+                f"nlarx: the model's free-run simulation diverges on its own estimation data "
+                f"(experiment {i}: {e}). It is fitted for one-step prediction, which it "
+                "still does; to simulate, keep fewer terms (criterion='bic'), a lower degree "
+                "or shorter lags, or fit for simulation (nlarx with a SigmoidNetwork and "
+                "focus='simulation', nlhw, pnlss)"), stacklevel=3)
+            return
+        e_ = (ys - y)[k:]
+        sse += np.sum(e_**2, axis=0)
+        var += np.sum((y[k:] - y[k:].mean(axis=0)) ** 2, axis=0)
+    fit = 100.0 * (1.0 - np.sqrt(sse / np.maximum(var, 1e-300)))
+    model.info["free_run"] = {"diverged": False, "fit": np.atleast_1d(fit).tolist()}
 
 
 def nlarx(
@@ -221,12 +257,15 @@ def nlarx(
         if noise_terms or custom:
             raise DataError("noise_terms and custom regressors need a PolynomialBasis or "
                             "RBFBasis; a network nonlinearity takes the lagged inputs and outputs")
-        return nlarx_network(exps, na_, nb_, nk_,
-                             np.vstack([_lag_matrix(u, y, na_, nb_, nk_) for u, y in exps]),
-                             basis, dt=float(getattr(data, "dt", 1.0) or 1.0),
-                             names=dict(input_names=getattr(data, "input_names", None),
-                                        output_names=getattr(data, "output_names", None)),
-                             focus=focus, max_iter=max_iter, tol=1e-4, progress=progress)
+        net = nlarx_network(exps, na_, nb_, nk_,
+                            np.vstack([_lag_matrix(u, y, na_, nb_, nk_) for u, y in exps]),
+                            basis, dt=float(getattr(data, "dt", 1.0) or 1.0),
+                            names=dict(input_names=getattr(data, "input_names", None),
+                                       output_names=getattr(data, "output_names", None)),
+                            focus=focus, max_iter=max_iter, tol=1e-4, progress=progress)
+        if net.info.get("refine", {}).get("stop") != "failed to start":  # that one warned
+            free_run_check(net, exps)
+        return net
     if focus != "prediction":
         raise DataError("focus='simulation' needs a network nonlinearity (SigmoidNetwork, "
                         "WaveletNetwork, TreePartition); FROLS selects for prediction")
@@ -295,6 +334,7 @@ def nlarx(
         model = _narmax(model, exps, orders, degree, rbf, int(noise_terms), int(max_terms),
                         int(n_iterations), float(err_tol), names, info, criterion, cust)
     model.info.update(info)
+    free_run_check(model, exps)
     if nu and not _uses_input(model):
         left = ", ".join(f"{1.0 - float(np.sum(e)):.1e}" for e in model.err)
         model.info["uses_input"] = False
