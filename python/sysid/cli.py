@@ -151,6 +151,10 @@ def identify(
 ) -> dict[str, Any]:
     """Identify, validate and (optionally) write a report; returns a summary dict.
 
+    ``order="auto"``: the order ``n4sid(order="auto")`` takes, chosen on ``est_data`` alone
+    (held-out blocks of it: ``select_order(criterion="cv")``); ``val_data`` are only reported
+    on, so the fit reported there is not flattered by the choice.
+
     ``feedthrough``: estimate ``D``; ``"auto"``: decided once from the estimation data,
     :func:`sysid.subspace.feedthrough.choose_feedthrough`; default as every sysid state-space
     estimator: ``D = 0`` at a given order, ``"auto"`` with ``order="auto"``.
