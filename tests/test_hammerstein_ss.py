@@ -178,3 +178,16 @@ def test_nlhw_ss_offset_and_constant_input_are_named():
     with pytest.raises(sysid.DataError, match="u0 is 3 in every sample: nlhw_ss"):
         sysid.nlhw_ss(sysid.IOData(np.full((600, 1), 3.0), y, 1.0), 1,
                       input_nl=sysid.SigmoidNetwork(2), progress=False)
+
+
+def test_an_unstable_subspace_start_is_stabilised_not_refused():
+    # issue 26 (a default path that returns a model): nlhw_ss(pH, 2) raised "the linear
+    # start (n4sid, or linear=) is unstable" (n4sid's order-2 model has a pole at 1.005 on
+    # the centred record); it now starts from the same subspace fit with a stable A
+    d = sysid.datasets.load_ph()
+    train = sysid.IOData(d.u[:1200], d.y[:1200], d.dt)
+    m = sysid.nlhw_ss(train, 2, output_nl=sysid.SigmoidNetwork(3))
+    assert "stable A enforced" in m.info["linear_start"]
+    assert np.max(np.abs(np.linalg.eigvals(m.A))) < 1
+    start = m.info["cost"][0]
+    assert m.info["cost"][-1] <= start and np.isfinite(sysid.compare(train, m).fit).all()

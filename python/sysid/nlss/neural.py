@@ -556,15 +556,18 @@ def _hw_fit(lin_data: IOData, lin: StateSpaceModel, hid: tuple[int, ...],
     if len(hid) != 1 or hid[0] < HW_UNITS * m or out is None or len(out) != 1 \
             or out[0] < HW_UNITS * l_:
         return None
-    for start in (None, lin):  # nlhw_ss's own (subspace) start; if inadmissible, ``lin``
+    for start in (None, lin):  # nlhw_ss's own (subspace) start; if unstable, ``lin``
         try:
             with warnings.catch_warnings():  # a start: training goes on from its cap
                 warnings.simplefilter("ignore", IterationLimitWarning)
-                return nlhw_ss(lin_data, lin.nstates, input_nl=SigmoidNetwork(HW_UNITS),
-                               output_nl=SigmoidNetwork(HW_UNITS), max_iter=HW_ITER,
-                               progress=progress, linear=start)
+                hw = nlhw_ss(lin_data, lin.nstates, input_nl=SigmoidNetwork(HW_UNITS),
+                             output_nl=SigmoidNetwork(HW_UNITS), max_iter=HW_ITER,
+                             progress=progress, linear=start)
         except (DataError, NumericalError):
             continue
+        if start is None and "linear_start" in hw.info:
+            continue  # nlhw_ss stabilised an unstable subspace start: ``lin`` instead
+        return hw
     return None
 
 

@@ -87,7 +87,8 @@ def nlhw_ss(
         step_norm, gradient_norm, damping)``; ``False`` returned stops).
     linear : StateSpaceModel, optional
         The linear block's start (stable, ``order`` states; the record's units). Default: a
-        subspace fit (:func:`sysid.n4sid`) of the record.
+        subspace fit (:func:`sysid.n4sid`) of the record, with a stable ``A`` enforced when
+        it is unstable (``info["linear_start"]`` then says so).
     offsets : "auto", True or False
         As for :func:`sysid.nlhw`: fit about the record's means and keep them in the model
         (``"auto"``: a channel's mean farther from zero than its standard deviation, and
@@ -157,11 +158,19 @@ def nlhw_ss(
     # linear start: subspace fit on the (transformed) inputs
     import warnings
 
+    start_note = None
     if linear is None:
+        lin_data = IOData([r[0] for r in records], [r[1] for r in records], dt)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            lin = n4sid(IOData([r[0] for r in records], [r[1] for r in records], dt),
-                        int(order), feedthrough=bool(feedthrough))
+            lin = n4sid(lin_data, int(order), feedthrough=bool(feedthrough))
+            if np.max(np.abs(lin.poles())) >= 1:
+                # the simulation errors of an unstable block grow without bound: start from
+                # the subspace fit with a stable A enforced (Maciejowski's shift) instead
+                rho = float(np.max(np.abs(lin.poles())))
+                lin = n4sid(lin_data, int(order), feedthrough=bool(feedthrough), stable=True)
+                start_note = (f"n4sid's model of order {int(order)} was unstable (largest "
+                              f"|pole| {rho:.4g}); started from it with a stable A enforced")
     else:
         lin = linear.to_statespace() if hasattr(linear, "to_statespace") else linear
         if not isinstance(lin, StateSpaceModel) or (lin.nstates, lin.ninputs, lin.noutputs) \
@@ -244,6 +253,8 @@ def nlhw_ss(
             "u_ranges": [(float(c.min()), float(c.max())) for c in u_all.T],
             "v_ranges": [(float(c.min()), float(c.max())) for c in v_all.T],
             "offsets": {"removed": shift, "u": u0.tolist(), "y": y0.tolist()}}
+    if start_note:
+        info["linear_start"] = start_note
     n_res = sum(y.size for _, y in exps)
     warn_if_capped(info, "the nlhw_ss search", int(max_iter), n_residuals=n_res)
     return HammersteinWienerSSModel(fin, fout, A, B, C, D, dt, u_offset=u0, y_offset=y0,
