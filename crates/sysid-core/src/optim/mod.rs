@@ -51,7 +51,7 @@ mod search;
 mod tests;
 
 pub use covariance::{covariance, residual_scale, Covariance};
-pub(crate) use dense::{clear_upper, gram_add, mirror_lower, small_par};
+pub(crate) use dense::{clear_upper, gram_add, mirror_lower, small_par, symmetric_eigen};
 pub use normal::NormalEquations;
 pub use reparam::{ParameterMap, Reparameterized};
 pub use search::minimize;

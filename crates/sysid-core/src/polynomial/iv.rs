@@ -539,9 +539,17 @@ pub fn iv4_multi(records: &[IvRecord<'_>], orders: &ArxOrders) -> Result<Iv4Fit>
             }
         }
         let lam = ss / cnt.max(1) as f64;
-        let p = r.nrows();
-        let ri = r.partial_piv_lu().solve(Mat::<f64>::identity(p, p));
-        let cov = &ri * s * ri.transpose() * faer::Scale(lam);
+        // R^-1 S R^-T in Gram form, (R^-1 V L^1/2)(R^-1 V L^1/2)^T with S = V L V^T: positive
+        // semi-definite by construction (the product formed directly lost that on real
+        // records whose R is ill-conditioned: an eigenvalue of -5e-4 times the largest)
+        let (v, l) = crate::optim::symmetric_eigen(s, "iv4 covariance")?;
+        let mut half = v;
+        for (j, lj) in l.iter().enumerate() {
+            let f = lj.max(0.0).sqrt();
+            half.col_mut(j).iter_mut().for_each(|x| *x *= f);
+        }
+        let m = r.partial_piv_lu().solve(&half);
+        let cov = &m * m.transpose() * faer::Scale(lam);
         debug_assert_eq!(*rows, cnt);
         covariance.push(cov);
         noise_variance.push(lam);
