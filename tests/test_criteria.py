@@ -203,3 +203,21 @@ def test_select_order_ranks_time_series_models_by_their_one_step_predictions():
     assert sel.order == 4
     rows = sel.to_pandas().set_index("order")
     assert rows.loc[4, "fit_validation"] > rows.loc[1, "fit_validation"] + 10.0
+
+
+@needs_engine
+def test_docs_cv_block_chooses_without_the_validation_data():
+    """docs/validation.md's select_order(criterion="cv") block: the printed orders hold."""
+    import re
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "validation.md").read_text()
+    block = next(b for b in re.findall(r"```python\n(.*?)```", text, flags=re.S)
+                 if 'criterion="cv"' in b)
+    d = sysid.datasets.load_dryer()
+    ns = {"sysid": sysid, "val_data": sysid.IOData(u=d.u[500:], y=d.y[500:], dt=d.dt),
+          "est": sysid.SubspaceEstimator(sysid.IOData(u=d.u[:500], y=d.y[:500], dt=d.dt),
+                                         horizon=15)}
+    exec(compile(block, "docs/validation.md[cv]", "exec"), ns)
+    assert (ns["sel"].order, ns["sel"].picks["validation"]) == (5, 4)
+    assert "only reported on" in ns["sel"].reason
