@@ -151,7 +151,7 @@ def identify(
 ) -> dict[str, Any]:
     """Identify, validate and (optionally) write a report; returns a summary dict.
 
-    ``order="auto"``: the order ``n4sid(order="auto")`` takes, chosen on ``est_data`` alone
+    ``order="auto"``: the rule of the subspace methods' ``order="auto"``, on ``est_data`` alone
     (held-out blocks of it: ``select_order(criterion="cv")``); ``val_data`` are only reported
     on, so the fit reported there is not flattered by the choice.
 

@@ -281,7 +281,7 @@ class OrderSelection(HTMLResult):
             if excluded:
                 parts.append(f" ({excluded})")
         elif self.criterion == "cv":
-            parts.append(f" (cross-validated simulation fit on the estimation record): "
+            parts.append(f" ({self._cv['criterion']} on the estimation record): "
                          f"{self._cv['reason']}")
             if self.has_validation:
                 parts.append("; the validation data were only reported on")
@@ -588,7 +588,8 @@ def _cross_validated(est: Any, est_data: Any, method: str, feedthrough: bool,
     for r in rows:
         if r["method"] == method:
             r["fit_held_out"] = float(choice["table"].get(r["order"], np.nan))
-    return {"order": choice["order"], "method": method, "reason": choice["reason"]}
+    return {"order": choice["order"], "method": method, "reason": choice["reason"],
+            "criterion": choice["criterion"]}
 
 
 def _warn_once(caught: list[Any]) -> None:
