@@ -108,18 +108,29 @@ def _score(rss: float, n: int, k: int, criterion: str) -> float:
     return n * np.log(v) + n * np.log((n + k) / max(n - k, 1))  # fpe
 
 
-def _free_run_rmse(model: NARXModel, exps: list[tuple[np.ndarray, np.ndarray]]) -> float:
-    from ..errors import NumericalError
-
-    err, count = 0.0, 0
-    for u, y in exps:
+def _free_run(model: Any, exps: list[tuple[np.ndarray, np.ndarray]]
+              ) -> tuple[np.ndarray, np.ndarray, int] | tuple[None, str, int]:
+    """The model run free on each experiment from its measured first ``max_lag`` outputs:
+    ``(sum of squared errors, sum of squared deviations from the mean, count)`` per output
+    after those samples, or ``(None, why, experiment)`` when a run diverges."""
+    sse, var, count = 0.0, 0.0, 0
+    k = model.max_lag
+    for i, (u, y) in enumerate(exps):
         try:
-            ys = model.simulate(u, x0=y[:model.max_lag])
-        except NumericalError:
-            return np.inf
-        err += float(np.sum((ys - y)[model.max_lag:] ** 2))
-        count += y[model.max_lag:].size
-    return float(np.sqrt(err / max(count, 1)))
+            ys = np.asarray(model.simulate(u, x0=y[:k])).reshape(y.shape)
+            if not np.all(np.isfinite(ys)):
+                raise NumericalError("the simulated output is not finite")
+        except NumericalError as e:
+            return None, str(e), i
+        sse = sse + np.sum((ys - y)[k:] ** 2, axis=0)
+        var = var + np.sum((y[k:] - y[k:].mean(axis=0)) ** 2, axis=0)
+        count += y[k:].size
+    return np.atleast_1d(sse), np.atleast_1d(var), count
+
+
+def _free_run_rmse(model: NARXModel, exps: list[tuple[np.ndarray, np.ndarray]]) -> float:
+    sse, _, count = _free_run(model, exps)
+    return np.inf if sse is None else float(np.sqrt(np.sum(sse) / max(count, 1)))
 
 
 def free_run_check(model: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> None:
@@ -129,27 +140,18 @@ def free_run_check(model: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> Non
     fitted one step ahead, where the measured outputs hold it; run on its own outputs it can
     blow up even on the data it was fitted to (a degree-3 polynomial model on the pH record
     did, and said nothing until ``compare`` reported ``-inf``)."""
-    sse, var = 0.0, 0.0
-    for i, (u, y) in enumerate(exps):
-        k = model.max_lag
-        try:
-            ys = np.asarray(model.simulate(u, x0=y[:k]))
-            if not np.all(np.isfinite(ys)):
-                raise NumericalError("the simulated output is not finite")
-        except NumericalError as e:
-            model.info["free_run"] = {"diverged": True, "experiment": i, "reason": str(e)}
-            warnings.warn(StabilityWarning(
-                f"nlarx: the model's free-run simulation diverges on its own estimation data "
-                f"(experiment {i}: {e}). It is fitted for one-step prediction, which it "
-                "still does; to simulate, keep fewer terms (criterion='bic'), a lower degree "
-                "or shorter lags, or fit for simulation (nlarx with a SigmoidNetwork and "
-                "focus='simulation', nlhw, pnlss)"), stacklevel=3)
-            return
-        e_ = (ys - y)[k:]
-        sse += np.sum(e_**2, axis=0)
-        var += np.sum((y[k:] - y[k:].mean(axis=0)) ** 2, axis=0)
+    sse, var, i = _free_run(model, exps)
+    if sse is None:
+        model.info["free_run"] = {"diverged": True, "experiment": i, "reason": var}
+        warnings.warn(StabilityWarning(
+            f"nlarx: the model's free-run simulation diverges on its own estimation data "
+            f"(experiment {i}: {var}). It is fitted for one-step prediction, which it still "
+            "does; to simulate, keep fewer terms (criterion='bic'), a lower degree or shorter "
+            "lags, or fit for simulation (nlarx with a SigmoidNetwork and focus='simulation', "
+            "nlhw, pnlss)"), stacklevel=3)
+        return
     fit = 100.0 * (1.0 - np.sqrt(sse / np.maximum(var, 1e-300)))
-    model.info["free_run"] = {"diverged": False, "fit": np.atleast_1d(fit).tolist()}
+    model.info["free_run"] = {"diverged": False, "fit": fit.tolist()}
 
 
 def nlarx(
