@@ -164,10 +164,10 @@ def nlhw_ss(
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             lin = n4sid(lin_data, int(order), feedthrough=bool(feedthrough))
-            if np.max(np.abs(lin.poles())) >= 1:
+            rho = float(np.max(np.abs(lin.poles())))
+            if rho >= 1:
                 # the simulation errors of an unstable block grow without bound: start from
                 # the subspace fit with a stable A enforced (Maciejowski's shift) instead
-                rho = float(np.max(np.abs(lin.poles())))
                 lin = n4sid(lin_data, int(order), feedthrough=bool(feedthrough), stable=True)
                 start_note = (f"n4sid's model of order {int(order)} was unstable (largest "
                               f"|pole| {rho:.4g}); started from it with a stable A enforced")

@@ -15,9 +15,12 @@ from typing import Any
 __all__ = ["order_selection"]
 
 
-def _svd_rule(sub: Any, why: str) -> dict[str, Any]:
+def _svd_rule(sub: Any, why: str, failure: str = "") -> dict[str, Any]:
+    """The singular-value rule's choice; ``failure``: why the record could not be
+    cross-validated (also in the reason)."""
     return {"order": int(sub.auto_order()), "criterion": "singular-value gap",
-            "reason": "largest gap of the log singular values" + why, "table": {}}
+            "reason": "largest gap of the log singular values" + why, "table": {},
+            "failure": failure}
 
 
 def order_selection(est: Any, key: str, feedthrough: bool,
@@ -40,7 +43,7 @@ def order_selection(est: Any, key: str, feedthrough: bool,
                                         orders=orders, whole=est, focus=focus).as_dict()
             out["order"] = min(out["order"], sub.max_order)
         except Exception as e:  # noqa: BLE001 - too short to split: the SVD rule
-            out = _svd_rule(sub, f" (the record could not be cross-validated: {e})")
+            out = _svd_rule(sub, f" (the record could not be cross-validated: {e})", str(e))
     else:
         out = _svd_rule(sub, "")
     if orders is not None and out["order"] not in orders:

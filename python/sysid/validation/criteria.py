@@ -581,10 +581,9 @@ def _cross_validated(est: Any, est_data: Any, method: str, feedthrough: bool,
         return {"reason": "not cross-validated: the estimator holds no data (built from a "
                           "factor)"}
     choice = est.order_selection(method, feedthrough, orders)
-    if not choice["table"]:  # too short to split: the singular-value rule's reason says why
-        why = choice["reason"]
-        return {"reason": why[why.find("the record could not"):].removesuffix(")")
-                if "the record could not" in why else "not cross-validated: " + why}
+    if not choice["table"]:  # the singular-value rule: the record could not be split
+        return {"reason": f"the record could not be cross-validated: {choice['failure']}"
+                if choice.get("failure") else f"not cross-validated: {choice['reason']}"}
     for r in rows:
         if r["method"] == method:
             r["fit_held_out"] = float(choice["table"].get(r["order"], np.nan))
