@@ -542,7 +542,8 @@ def _hw_fit(lin_data: IOData, lin: StateSpaceModel, hid: tuple[int, ...],
             ) -> HammersteinWienerSSModel | None:
     """The Hammerstein-Wiener start of ``init="auto"`` (scaled channels, training parts):
     ``HW_UNITS`` sigmoid units per channel, ``HW_ITER`` iterations from nlhw_ss's subspace
-    start, or from the linear start ``lin`` when that one is unstable; ``None`` when the
+    start (a stable ``A`` enforced when it is unstable), or from the linear start ``lin``
+    when that fit fails; ``None`` when the
     networks have no room for its units or neither start is admissible. ``progress``: its
     own bar (a terminal by default), as nlhw_ss shows it (it can take minutes on long
     records; a callable of nlssest's epochs does not fit its iterations, so none then)."""
@@ -556,18 +557,15 @@ def _hw_fit(lin_data: IOData, lin: StateSpaceModel, hid: tuple[int, ...],
     if len(hid) != 1 or hid[0] < HW_UNITS * m or out is None or len(out) != 1 \
             or out[0] < HW_UNITS * l_:
         return None
-    for start in (None, lin):  # nlhw_ss's own (subspace) start; if unstable, ``lin``
+    for start in (None, lin):  # nlhw_ss's own (subspace) start; if inadmissible, ``lin``
         try:
             with warnings.catch_warnings():  # a start: training goes on from its cap
                 warnings.simplefilter("ignore", IterationLimitWarning)
-                hw = nlhw_ss(lin_data, lin.nstates, input_nl=SigmoidNetwork(HW_UNITS),
-                             output_nl=SigmoidNetwork(HW_UNITS), max_iter=HW_ITER,
-                             progress=progress, linear=start)
+                return nlhw_ss(lin_data, lin.nstates, input_nl=SigmoidNetwork(HW_UNITS),
+                               output_nl=SigmoidNetwork(HW_UNITS), max_iter=HW_ITER,
+                               progress=progress, linear=start)
         except (DataError, NumericalError):
             continue
-        if start is None and "linear_start" in hw.info:
-            continue  # nlhw_ss stabilised an unstable subspace start: ``lin`` instead
-        return hw
     return None
 
 
