@@ -152,9 +152,13 @@ def fits(train, s):
                   progress=Budget())))
     # all monomials for small models; else those of the output-aligned states and inputs
     terms = "full" if n + m <= 5 else "outputs"
-    timed(f"pnlss (degree 2-3, {terms}, states out)",
+    timed(f"pnlss (degree 2-3, {terms}, linear out)",
           lambda: sysid.pnlss(train, n, degree=3, terms=terms, output_terms="none",
                               max_iter=50, progress=Budget()))
+    if terms == "full":  # the automatic degree costs about ten fits: small models only
+        timed("pnlss (degree auto, full, linear out)",
+              lambda: sysid.pnlss(train, n, terms=terms, output_terms="none", max_iter=50,
+                                  progress=Budget()))
     if s["periods"] is not None:
         timed(f"pnlss weighted (degree 2-3, {terms}, weighting='bla')",
               lambda: sysid.pnlss(train, n, degree=3, terms=terms, output_terms="none",

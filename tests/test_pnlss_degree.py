@@ -12,6 +12,19 @@ import sysid
 from sysid.errors import DataError
 
 
+def _cubic_record(seed, n):
+    """The known cubic system of test_pnlss under a random input, noise-free."""
+    truth = _truth()
+    u = 0.5 * np.random.default_rng(seed).standard_normal((n, 1))
+    return sysid.IOData(u, truth.simulate(u), truth.dt)
+
+
+def _quiet_fit(d, **kw):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.IterationLimitWarning)
+        return sysid.pnlss(d, 2, terms="states", progress=False, **kw)
+
+
 def _fit(model, data):
     return float(np.mean(sysid.compare(data, model).fit))
 
@@ -44,12 +57,7 @@ def test_the_default_degree_does_not_run_away_on_the_winding_record():
 
 
 def test_the_cubic_terms_a_cubic_system_needs_are_taken():
-    truth = _truth()
-    u = 0.5 * np.random.default_rng(3).standard_normal((600, 1))
-    d = sysid.IOData(u, truth.simulate(u), truth.dt)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", sysid.IterationLimitWarning)
-        m = sysid.pnlss(d, 2, terms="states", progress=False)
+    m = _quiet_fit(_cubic_record(3, 600))
     t = m.info["degree_choice"]["table"]
     assert m.info["degree_choice"]["degree"] == 3 and m.info["degree"] == [2, 3]
     assert t[3] > 99.9 and t[3] > t[2] + 1 and t[3] > t["linear"] + 1
@@ -80,12 +88,8 @@ def test_nonlinear_terms_that_do_not_generalise_are_said():
 
 
 def test_a_given_degree_fits_once_and_a_wrong_word_is_refused():
-    truth = _truth()
-    u = 0.5 * np.random.default_rng(4).standard_normal((300, 1))
-    d = sysid.IOData(u, truth.simulate(u), truth.dt)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", sysid.IterationLimitWarning)
-        m = sysid.pnlss(d, 2, degree=3, terms="states", progress=False, max_iter=3)
+    d = _cubic_record(4, 300)
+    m = _quiet_fit(d, degree=3, max_iter=3)
     assert "degree_choice" not in m.info
     with pytest.raises(DataError, match="degree must be 'auto', an integer"):
         sysid.pnlss(d, 2, degree="cubic", progress=False)
