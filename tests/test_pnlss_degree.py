@@ -9,7 +9,7 @@ import pytest
 from test_pnlss import _truth
 
 import sysid
-from sysid.errors import DataError
+from sysid.errors import DataError, InsufficientDataError
 
 
 def _cubic_record(seed, n):
@@ -93,3 +93,5 @@ def test_a_given_degree_fits_once_and_a_wrong_word_is_refused():
     assert "degree_choice" not in m.info
     with pytest.raises(DataError, match="degree must be 'auto', an integer"):
         sysid.pnlss(d, 2, degree="cubic", progress=False)
+    with pytest.raises(InsufficientDataError, match="30 samples.*give degree= to fit one"):
+        sysid.pnlss(d.slice(0, 30), 2, progress=False)

@@ -112,13 +112,14 @@ def choose_degree(data: IOData, fit: Callable[[IOData, int], Any],
     >>> c.degree
     2
     """
-    from ..validation.crossval import record_folds, require_held_out_length, slack
+    from ..validation.crossval import MIN_BLOCK, record_folds, slack
 
-    require_held_out_length(data)
-    pairs = record_folds(data)
+    n = sum(data.lengths)
+    pairs = record_folds(data) if n >= 2 * MIN_BLOCK else []
     if len(pairs) < 2:
-        raise InsufficientDataError("the record is too short to hold out blocks for the "
-                                    "degree; give degree= explicitly")
+        raise InsufficientDataError(
+            f"the record is too short to choose the degree on held-out blocks ({n} samples; "
+            f"two blocks of {MIN_BLOCK} need {2 * MIN_BLOCK}): give degree= to fit one model")
     folds: dict[Any, list[float]] = {}
     failed: list[SysidError] = []
     cands: list[Any] = list(CANDIDATES) + (["linear"] if linear is not None else [])
