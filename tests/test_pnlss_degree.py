@@ -95,3 +95,7 @@ def test_a_given_degree_fits_once_and_a_wrong_word_is_refused():
         sysid.pnlss(d, 2, degree="cubic", progress=False)
     with pytest.raises(InsufficientDataError, match="30 samples.*give degree= to fit one"):
         sysid.pnlss(d.slice(0, 30), 2, progress=False)
+    # a setting no block can fit with is the user's error, not a low held-out score
+    wrong = sysid.StateSpaceModel(0.5 * np.eye(3), np.ones((3, 1)), np.ones((1, 3)), [[0.0]])
+    with pytest.raises(DataError, match="init has 3 states"):
+        sysid.pnlss(d, 2, init=wrong, progress=False)

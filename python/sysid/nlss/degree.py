@@ -133,12 +133,13 @@ def choose_degree(data: IOData, fit: Callable[[IOData, int], Any],
                     m = linear(part) if k == "linear" else fit(part, int(k))
                     folds[k].append(_held_out(m, block))
                 except SysidError as e:
-                    failed.append(e)
+                    if k != "linear":
+                        failed.append(e)
                     folds[k].append(FLOOR)
                 if tick is not None:
                     tick(sum(map(len, folds.values())), folds[k][-1])
-    if len(failed) == len(pairs) * len(cands):
-        raise failed[0]  # no fit on any part: the settings, not the blocks, are wrong
+    if len(failed) == len(pairs) * len(CANDIDATES):
+        raise failed[0]  # no degree fits any part: the settings, not the blocks, are wrong
     table = {k: float(np.median(v)) for k, v in folds.items()}
     best = max(CANDIDATES, key=lambda k: table[k])
     margin = slack(table[best])
