@@ -215,11 +215,12 @@ def pnlss(
         Number of states.
     degree : "auto", int or list of int
         Monomial degrees: an integer ``d`` means all degrees ``2..d``, a list exactly those
-        (``[3]``: cubic terms only). ``"auto"`` (default) chooses 2 or 2-3 by the simulation
-        fit on blocks of the estimation record held out of the fit (:mod:`sysid.nlss.degree`:
-        cubic terms that fit the record can run away on data in other ranges); it costs two
-        fits per block (five blocks on most records) and ``info["degree_choice"]`` holds the
-        table and the reason. Give the degree to fit once.
+        (``[3]``: cubic terms only). ``"auto"`` (default): degrees 2, or 2-3 where blocks of
+        the estimation record held out of the fit insist on the cubic terms by their
+        simulation fit (:mod:`sysid.nlss.degree`: cubic terms that fit the record can run away
+        on data in other ranges); it costs two fits per block (five blocks on most records)
+        and ``info["degree_choice"]`` holds the table and the reason. Give the degree to fit
+        once.
     terms : {"full", "states", "inputs", "outputs"}
         Variables of the state-equation monomials ``zeta``: states and inputs, states only,
         inputs only, or ``"outputs"``: the inputs and the ``noutputs`` states that the
@@ -407,15 +408,12 @@ def pnlss(
 def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any:
     """:func:`sysid.nlss.degree.choose_degree` with ``pnlss``'s settings ``kw`` on each
     fold (time-domain cost, no periods: the blocks cut them), the folds' linear starts scored
-    beside them; warns when those simulate the held-out blocks better than the chosen degree
-    by more than twice the standard error of the paired block differences (on the 16
-    records of :mod:`sysid.nlss.degree`: the heating system only, where the validation fit
-    is 10 % against the linear model's 67 %; a median margin alone also warned on the gas
-    furnace and the robot arm, where the model validates above its linear start)."""
+    beside them; warns when those insist over the chosen degree on the held-out blocks
+    (:func:`~sysid.nlss.degree.insists`; how often that was right: :mod:`sysid.nlss.degree`)."""
     import warnings
 
     from .._checks import user_stacklevel
-    from .degree import CANDIDATES, choose_degree
+    from .degree import CANDIDATES, choose_degree, insists
 
     def linear(part: IOData) -> PNLSSModel:
         sc = Scaling.of(part)
@@ -438,12 +436,11 @@ def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any
     finally:
         close()
     t = choice.table
-    gain = np.subtract(choice.folds["linear"], choice.folds[choice.degree])
-    if gain.mean() > 2 * gain.std(ddof=1) / np.sqrt(gain.size) and t["linear"] > t[choice.degree]:
-        warnings.warn(f"pnlss: the nonlinear terms do not generalise on this record: on blocks "
-                      f"of it held out of the fit the linear start simulates better (median "
-                      f"{t['linear']:.1f} %, the chosen degree {t[choice.degree]:.1f} %; "
-                      f"info['degree_choice']); check the model on validation data, or use "
+    if insists(choice.folds["linear"], choice.folds[choice.degree]):
+        warnings.warn(f"pnlss: on blocks of this record held out of the fit its linear start "
+                      f"simulates better than the nonlinear model (median {t['linear']:.1f} % "
+                      f"against {t[choice.degree]:.1f} %; info['degree_choice']): check the "
+                      f"model on validation data before trusting its nonlinear terms, or use "
                       f"the linear model, fewer terms or a lower order",
                       UserWarning, stacklevel=user_stacklevel())
     return choice
