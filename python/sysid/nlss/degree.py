@@ -95,7 +95,7 @@ def _held_out(model: Any, block: IOData) -> float:
     return max(FLOOR, fit) if np.isfinite(fit) else FLOOR
 
 
-def choose_degree(data: IOData, fit: Callable[[IOData, int], Any],
+def choose_degree(data: IOData, fit: Callable[[IOData, int, Any], Any],
                   linear: Callable[[IOData], Any] | None = None,
                   tick: Callable[[int, float], Any] | None = None) -> DegreeChoice:
     """Choose among :data:`CANDIDATES` by held-out simulation fit.
@@ -105,7 +105,9 @@ def choose_degree(data: IOData, fit: Callable[[IOData, int], Any],
     data : IOData
         The estimation record.
     fit : callable
-        ``fit(part, degree)`` returns the model of that degree fitted on ``part``.
+        ``fit(part, degree, start)`` returns the model of that degree fitted on ``part``
+        from ``start``, the linear start ``linear`` fitted on that part (``None`` without
+        ``linear`` or when it failed): each part's start is fitted once.
     linear : callable, optional
         ``linear(part)`` returns the linear start fitted on ``part`` (scored, not chosen).
     tick : callable, optional
@@ -122,8 +124,8 @@ def choose_degree(data: IOData, fit: Callable[[IOData, int], Any],
     >>> u = np.random.default_rng(0).standard_normal((400, 1))
     >>> y = np.convolve(u[:, 0], [0, 1.0, 0.5])[:400, None]
     >>> d = sysid.IOData(u, y)
-    >>> c = choose_degree(d, lambda part, k: sysid.pnlss(part, 2, degree=k, progress=False,
-    ...                                                  max_iter=5))
+    >>> c = choose_degree(d, lambda part, k, start: sysid.pnlss(part, 2, degree=k,
+    ...                                                         progress=False, max_iter=5))
     >>> c.degree
     2
     """
@@ -135,17 +137,19 @@ def choose_degree(data: IOData, fit: Callable[[IOData, int], Any],
         raise InsufficientDataError(
             f"the record is too short to choose the degree on held-out blocks ({n} samples; "
             f"two blocks of {MIN_BLOCK} need {2 * MIN_BLOCK}): give degree= to fit one model")
-    folds: dict[Any, list[float]] = {}
-    failed: list[SysidError] = []
     cands: list[Any] = list(CANDIDATES) + (["linear"] if linear is not None else [])
+    folds: dict[Any, list[float]] = {k: [] for k in cands}
+    failed: list[SysidError] = []
     with warnings.catch_warnings():
         # the fold fits are scored, not returned: their own warnings are not the user's
         warnings.simplefilter("ignore")
-        for k in cands:
-            folds[k] = []
-            for part, block in pairs:
+        for part, block in pairs:
+            start = None
+            for k in cands[::-1]:  # the linear start first: every degree starts from it
                 try:
-                    m = linear(part) if k == "linear" else fit(part, int(k))
+                    if k == "linear":
+                        start = linear(part)
+                    m = start if k == "linear" else fit(part, int(k), start)
                     folds[k].append(_held_out(m, block))
                 except SysidError as e:
                     if k != "linear":

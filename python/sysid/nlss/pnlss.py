@@ -413,16 +413,21 @@ def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any
     import warnings
 
     from .._checks import user_stacklevel
+    from ..validation.crossval import fold_count
     from .degree import CANDIDATES, choose_degree, insists
 
     def linear(part: IOData) -> PNLSSModel:
+        """The part's linear start (as ``pnlss`` fits it), a model without monomials."""
         sc = Scaling.of(part)
         lin = linear_start(part, scaled_data(part, sc), sc, n, kw["init"], None)
         return PNLSSModel(lin.A, lin.B, lin.C, lin.D, np.zeros((n, 0)),
                           np.zeros((lin.noutputs, 0)), zeta=[], eta=[], scaling=sc.to_dict(),
                           dt=part.dt)
 
-    from ..validation.crossval import fold_count
+    def fit(part: IOData, k: int, start: PNLSSModel | None) -> Any:
+        # from the part's linear start, fitted once for both degrees
+        init = kw["init"] if start is None else start.linear()
+        return pnlss(part, n, degree=k, progress=False, **{**kw, "init": init})
 
     # a bar over the fold fits (a progress callable follows the final fit's iterations)
     total = (len(CANDIDATES) + 1) * fold_count(data)
@@ -430,8 +435,7 @@ def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any
                                    "pnlss degree choice", total, _fold_line, unit="fit",
                                    postfix=lambda i, f, *a: {"held-out fit": f"{f:.1f} %"})
     try:
-        choice = choose_degree(data, lambda part, k: pnlss(part, n, degree=k, progress=False,
-                                                           **kw), linear,
+        choice = choose_degree(data, fit, linear,
                                None if cb is None else (lambda i, f: cb(i, f, 0.0, 0.0, 0.0)))
     finally:
         close()
