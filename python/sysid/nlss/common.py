@@ -112,6 +112,9 @@ class LinearPart:
     #: ``to_statespace()`` is the linear part, not the model: :func:`sysid.compare` simulates
     #: the model itself
     statespace_is_exact = False
+    #: ``simulate`` takes any initial state of ``nstates`` entries: :func:`sysid.compare`
+    #: fits it (``x0="estimate"``) as it does a linear model's
+    initial_state_fits = True
 
     def linear(self) -> StateSpaceModel:  # pragma: no cover - defined by the host
         raise NotImplementedError

@@ -20,7 +20,9 @@ Data may be an :class:`~sysid.IOData` (several experiments allowed: each gets it
 initial state and its own row of fit numbers) or a pair ``(u, y)``.
 
 Any model satisfying :class:`sysid.Model` is accepted. The initial state is estimated for
-state-space models (those with ``A, B, C, D`` and ``nstates``), and for the simulation of a
+state-space models (those with ``A, B, C, D`` and ``nstates``, and nonlinear ones whose
+simulation takes any initial state, ``initial_state_fits``: PNLSS and neural state space, by
+Gauss-Newton), and for the simulation of a
 model with ``to_statespace()`` when its state-space form simulates the same map (not a
 nonlinear model's linear part or linearisation), and for every horizon of a model whose
 state-space form also predicts as it does (``statespace_predicts``: polynomial models, their
@@ -126,6 +128,13 @@ def _stateful(model: Any) -> bool:
     return all(hasattr(model, k) for k in ("A", "B", "C", "D", "nstates"))
 
 
+def _has_state(model: Any) -> bool:
+    """A model whose simulation takes any initial state of ``nstates`` entries: a linear
+    state-space model, or a nonlinear one that says so (``initial_state_fits``: neural state
+    space) without exposing ``A, B, C, D``; :func:`compare` fits its initial state."""
+    return _stateful(model) or bool(getattr(model, "initial_state_fits", False))
+
+
 def _horizon(horizon: Any) -> int | None:
     if horizon is None or (isinstance(horizon, float) and np.isinf(horizon)):
         return None
@@ -176,7 +185,7 @@ def estimate_x0(model: Any, u: Any, y: Any, horizon: int | None = None) -> np.nd
     >>> np.round(sysid.estimate_x0(m, u, y), 10)
     array([3.])
     """
-    if not _stateful(model):
+    if not _has_state(model):
         raise DataError(f"estimate_x0 needs a state-space model; {type(model).__name__} has no "
                         "A, B, C, D (pass model.to_statespace())")
     u = as_2d(u, "u", ncols=model.ninputs, allow_empty=model.ninputs == 0)
@@ -284,7 +293,7 @@ def _window(model: Any, horizon: int | None, N: int) -> int:
     window its influence is below round-off, so the regression ignores those samples (this
     keeps the estimate O(n^2 W) instead of O(n^2 N) on long records).
     """
-    F = model.A
+    F = model.A if hasattr(model, "A") else model.linear().A  # a nonlinear model's linear part
     if horizon is not None and getattr(model, "K", None) is not None:
         F = model.A - model.K @ model.C
     rho = float(np.max(np.abs(np.linalg.eigvals(F)))) if F.size else 0.0
@@ -298,7 +307,7 @@ def _window(model: Any, horizon: int | None, N: int) -> int:
 
 def _x0_for(model: Any, x0: Any, u: np.ndarray, y: np.ndarray, horizon: int | None,
             index: int, count: int) -> np.ndarray | None:
-    if not _stateful(model):
+    if not _has_state(model):
         lag = getattr(model, "max_lag", None)
         if horizon is None and isinstance(lag, (int, np.integer)) and lag > 0:
             # a NARX model's "state" is its first max_lag outputs: the measured ones (as
@@ -596,8 +605,8 @@ def _simulator(model: Any, x0: Any, horizon: int | None, u: np.ndarray | None = 
     its ``to_statespace()`` when that is the same input-output map, whose initial state can
     be fitted. A nonlinear model's ``to_statespace()`` is its linear part or linearisation
     (``statespace_is_exact = False`` on the class, or a simulation of the first samples of
-    ``u`` that differs): it is simulated itself, from rest; its linear part would be
-    compared in its place."""
+    ``u`` that differs): it is simulated itself (from rest unless its initial state fits,
+    :func:`_has_state`); its linear part would be compared in its place."""
     if horizon is not None and not getattr(model, "statespace_predicts", False):
         return model
     if (_stateful(model) or not isinstance(x0, str)

@@ -50,7 +50,7 @@ from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError, NumericalError, SysidError
 from ..models.checks import _optional, check_model
 from ..models.statespace import StateSpaceModel, ss_parameter_count
-from .compare import _records, _run, _simulator, _stateful, _x0_for, compare
+from .compare import _has_state, _records, _run, _simulator, _x0_for, compare
 
 __all__ = ["n_parameters", "Criteria", "criteria", "OrderSelection", "select_order"]
 
@@ -185,7 +185,7 @@ def _criteria(model: Any, data: Any, x0: Any, n_params: int | None,
     _, logdet = np.linalg.slogdet(lam)  # lam is positive definite by construction
     if n_params is None:
         n_params = int(given.n_parameters)
-        if _stateful(runner) and isinstance(x0, str) and x0 == "estimate":
+        if _has_state(runner) and isinstance(x0, str) and x0 == "estimate":
             n_params += runner.nstates * len(recs)  # the fitted initial states
     return Criteria(logdet, n_params, N)
 
