@@ -281,3 +281,22 @@ def test_a_model_with_no_nonlinearity_is_not_called_wiener():
     u = _u(300, 17)
     m = sysid.nlhw(sysid.IOData(u, linear(u), 1.0), 1, 1, 1, progress=False)
     assert "linear: no nonlinearity" in repr(m)
+
+
+def test_compare_fits_the_linear_blocks_state_as_of_a_linear_model():
+    # compare ran Hammerstein-Wiener models from rest while it fitted a linear model's
+    # initial state: on a record that starts away from rest the same dynamics scored lower
+    sig = sysid.Saturation()
+    sig.params = np.array([-1.5, 1.5])
+    m = sysid.HammersteinWienerModel(sysid.Nonlinearity(), sig, [1.0, 0.3], [-1.6, 0.8], 1,
+                                     1.0, y_offset=0.3)
+    u = np.random.default_rng(0).standard_normal((300, 1))
+    np.testing.assert_allclose(m.simulate(u, x0=[0.0, 0.0]), m.simulate(u), atol=1e-12)
+    y = m.simulate(u, x0=[1.0, -0.5])
+    assert not np.allclose(y, m.simulate(u))
+    data = sysid.IOData(u, y, 1.0)
+    np.testing.assert_allclose(sysid.estimate_x0(m, u, y), [1.0, -0.5], atol=1e-6)
+    assert float(np.ravel(sysid.compare(data, m).fit)[0]) > 99.999
+    assert float(np.ravel(sysid.compare(data, m, x0="zero").fit)[0]) < 95
+    with pytest.raises(sysid.ShapeError, match="x0 has 1 entries but the linear block has 2"):
+        m.simulate(u, x0=[1.0])

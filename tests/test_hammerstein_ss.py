@@ -191,3 +191,25 @@ def test_an_unstable_subspace_start_is_stabilised_not_refused():
     assert np.max(np.abs(np.linalg.eigvals(m.A))) < 1
     start = m.info["cost"][0]
     assert m.info["cost"][-1] <= start and np.isfinite(sysid.compare(train, m).fit).all()
+
+
+def test_compare_fits_the_linear_blocks_state_as_of_a_linear_model():
+    # compare ran Hammerstein-Wiener models from rest while it fitted a linear model's
+    # initial state (the same for both: the Rust simulation from a given state)
+    sat = sysid.Saturation()
+    sat.params = np.array([-0.8, 0.8])
+    m = sysid.HammersteinWienerSSModel([sat], [sysid.Nonlinearity(), sysid.Nonlinearity()],
+                                       [[0.9, 0.2], [-0.2, 0.9]], [[0.0], [1.0]],
+                                       [[1.0, 0.0], [0.5, 1.0]], dt=1.0)
+    u = np.random.default_rng(2).standard_normal((300, 1))
+    np.testing.assert_allclose(m.simulate(u, x0=[0.0, 0.0]), m.simulate(u), atol=0)
+    y = m.simulate(u, x0=[4.0, -3.0])
+    lin = m.linear()  # the outputs are the linear block's: its free response adds
+    np.testing.assert_allclose(y - m.simulate(u), lin.simulate(np.zeros_like(u), x0=[4.0, -3.0]),
+                               atol=1e-12)
+    data = sysid.IOData(u, y, 1.0)
+    np.testing.assert_allclose(sysid.estimate_x0(m, u, y), [4.0, -3.0], atol=1e-6)
+    assert float(np.min(sysid.compare(data, m).fit)) > 99.999
+    assert float(np.min(sysid.compare(data, m, x0="zero").fit)) < 90
+    with pytest.raises(sysid.ShapeError, match="x0 has 3 entries but the linear block has 2"):
+        m.simulate(u, x0=[1.0, 2.0, 3.0])

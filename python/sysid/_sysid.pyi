@@ -554,6 +554,7 @@ def hw_mimo_simulate(
     feedthrough: bool,
     theta: list[float],
     u: _Array,
+    x0: list[float] | None = None,
 ) -> _Array: ...
 
 # issue 27 (branch tfproc): transfer functions

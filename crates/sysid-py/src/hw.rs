@@ -165,8 +165,11 @@ pub fn hw_mimo_estimate<'py>(
     Ok(d)
 }
 
-/// Simulated outputs `(N, p)` of a MIMO Hammerstein-Wiener model from rest.
+/// Simulated outputs `(N, p)` of a MIMO Hammerstein-Wiener model from rest, or from the
+/// linear block's state `x0`.
 #[pyfunction]
+#[pyo3(signature = (inputs, outputs, order, feedthrough, theta, u, x0=None))]
+#[allow(clippy::too_many_arguments)]
 pub fn hw_mimo_simulate<'py>(
     py: Python<'py>,
     inputs: Vec<Nl>,
@@ -175,6 +178,7 @@ pub fn hw_mimo_simulate<'py>(
     feedthrough: bool,
     theta: Vec<f64>,
     u: PyReadonlyArray2<'_, f64>,
+    x0: Option<Vec<f64>>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let s = mimo_structure(&inputs, &outputs, order, feedthrough)?;
     if theta.len() != s.n_params() {
@@ -191,7 +195,12 @@ pub fn hw_mimo_simulate<'py>(
             got: format!("({}, {})", uv.nrows(), uv.ncols()),
         }));
     }
-    let y = py.detach(|| s.simulate(&theta, uv));
+    let y = match x0 {
+        None => py.detach(|| s.simulate(&theta, uv)),
+        Some(x0) => py
+            .detach(|| s.simulate_from(&theta, uv, &x0))
+            .map_err(crate::errors::to_py)?,
+    };
     Ok(mat_to_numpy(py, &y))
 }
 

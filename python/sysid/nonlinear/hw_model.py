@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_horizon, as_measured
-from ..errors import DataError
+from .._checks import as_2d, as_horizon, as_matrix, as_measured
+from ..errors import DataError, ShapeError
 from ..models.protocol import ModelMixin
 
 __all__ = ["Nonlinearity", "Saturation", "DeadZone", "PolynomialNonlinearity",
@@ -399,6 +399,12 @@ class HammersteinWienerModel(ModelMixin):
 
     ninputs = property(lambda self: 1, doc="Number of inputs (1).")
     noutputs = property(lambda self: 1, doc="Number of outputs (1).")
+    nstates = property(lambda self: int(self.f.size),
+                       doc="The linear block's state: its last ``nf`` outputs before the record.")
+    #: ``simulate`` takes the linear block's state: :func:`sysid.compare` fits it
+    #: (``x0="estimate"``), by Gauss-Newton since the output is not affine in it
+    initial_state_fits = True
+    statespace_is_exact = False
 
     @property
     def theta(self) -> np.ndarray:
@@ -427,17 +433,31 @@ class HammersteinWienerModel(ModelMixin):
         return np.asarray(y) + self.y_offset, np.asarray(w), np.asarray(x)
 
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
-        """Noise-free output ``(n, 1)`` from rest."""
-        if x0 is not None and not (isinstance(x0, str) and x0 == "zero"):
-            raise DataError("Hammerstein-Wiener models start from rest: x0 must be None")
-        return self.signals(u)[0][:, None]
+        """Noise-free output ``(n, 1)`` from rest, or from the linear block's state ``x0``:
+        its outputs ``x(-1), ..., x(-nf)`` before the record (their free response through
+        ``1/F`` is added to the block's output before the output nonlinearity)."""
+        y, _, x = self.signals(u)
+        if x0 is None or (isinstance(x0, str) and x0 == "zero"):
+            return y[:, None]
+        past = as_matrix(np.ravel(x0) if not isinstance(x0, str) else x0, "x0", (1, None))[0]
+        if past.size != self.nstates:
+            raise ShapeError(f"x0 has {past.size} entries but the linear block has "
+                             f"{self.nstates} states (the F coefficients)")
+        if not past.any():
+            return y[:, None]
+        from scipy.signal import lfilter, lfiltic
 
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+        a = np.concatenate([[1.0], self.f])
+        free = lfilter([1.0], a, np.zeros(x.size), zi=lfiltic([1.0], a, past))[0]
+        return (np.asarray(self.output_nl(x + free), float) + self.y_offset)[:, None]
+
+    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
         """The output-error predictor does not use measured outputs: equals ``simulate``
-        (``u``, ``y`` and ``horizon`` are checked all the same, as every model's are)."""
+        (from ``x0``; ``u``, ``y`` and ``horizon`` are checked all the same, as every
+        model's are)."""
         as_horizon(horizon)
         u, _ = as_measured(u, y, 1, 1)
-        return self.simulate(u)
+        return self.simulate(u, x0)
 
     def linear(self) -> Any:
         """The linear block ``B/F`` as a :class:`~sysid.PolynomialModel`."""

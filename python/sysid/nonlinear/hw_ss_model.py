@@ -12,8 +12,8 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_horizon, as_measured
-from ..errors import DataError
+from .._checks import as_2d, as_horizon, as_matrix, as_measured
+from ..errors import DataError, ShapeError
 from ..models.protocol import ModelMixin
 from .hw_model import Nonlinearity, UserFunction, nonlinearity_from_dict
 
@@ -93,6 +93,12 @@ class HammersteinWienerSSModel(ModelMixin):
     ninputs = property(lambda self: len(self.input_nls), doc="Number of inputs.")
     noutputs = property(lambda self: len(self.output_nls), doc="Number of outputs.")
     order = property(lambda self: int(self.A.shape[0]), doc="State dimension.")
+    nstates = property(lambda self: int(self.A.shape[0]),
+                       doc="State dimension (the linear block's).")
+    #: ``simulate`` takes the linear block's initial state: :func:`sysid.compare` fits it
+    #: (``x0="estimate"``), by Gauss-Newton since the output is not affine in it
+    initial_state_fits = True
+    statespace_is_exact = False
 
     @property
     def theta(self) -> np.ndarray:
@@ -124,20 +130,29 @@ class HammersteinWienerSSModel(ModelMixin):
         return np.ascontiguousarray(u)
 
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
-        """Noise-free outputs ``(n, noutputs)`` from rest."""
-        if x0 is not None and not (isinstance(x0, str) and x0 == "zero"):
-            raise DataError("Hammerstein-Wiener models start from rest: x0 must be None")
+        """Noise-free outputs ``(n, noutputs)`` from rest, or from the linear block's state
+        ``x0`` (``nstates`` values)."""
         fi, fo = self.specs()
+        start = None if x0 is None or (isinstance(x0, str) and x0 == "zero") else \
+            self._x0(x0)
         return np.asarray(_sysid.hw_mimo_simulate(fi, fo, self.order, self.feedthrough,
-                                                  self.theta.tolist(), self._u(u))) \
+                                                  self.theta.tolist(), self._u(u), start)) \
             + self.y_offset
 
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+    def _x0(self, x0: Any) -> list[float]:
+        x = as_matrix(np.ravel(x0) if not isinstance(x0, str) else x0, "x0", (1, None))[0]
+        if x.size != self.nstates:
+            raise ShapeError(f"x0 has {x.size} entries but the linear block has "
+                             f"{self.nstates} states")
+        return x.tolist()
+
+    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
         """The output-error predictor does not use measured outputs: equals ``simulate``
-        (``u``, ``y`` and ``horizon`` are checked all the same, as every model's are)."""
+        (from ``x0``; ``u``, ``y`` and ``horizon`` are checked all the same, as every
+        model's are)."""
         as_horizon(horizon)
         u, _ = as_measured(u, y, self.ninputs, self.noutputs)
-        return self.simulate(u)
+        return self.simulate(u, x0)
 
     def linear(self) -> Any:
         """The linear block as a :class:`~sysid.StateSpaceModel`."""

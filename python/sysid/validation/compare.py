@@ -21,8 +21,8 @@ initial state and its own row of fit numbers) or a pair ``(u, y)``.
 
 Any model satisfying :class:`sysid.Model` is accepted. The initial state is estimated for
 state-space models (those with ``A, B, C, D`` and ``nstates``, and nonlinear ones whose
-simulation takes any initial state, ``initial_state_fits``: PNLSS and neural state space, by
-Gauss-Newton), and for the simulation of a
+simulation takes any initial state, ``initial_state_fits``: PNLSS, neural state space and
+Hammerstein-Wiener, by Gauss-Newton), and for the simulation of a
 model with ``to_statespace()`` when its state-space form simulates the same map (not a
 nonlinear model's linear part or linearisation), and for every horizon of a model whose
 state-space form also predicts as it does (``statespace_predicts``: polynomial models, their
@@ -131,7 +131,7 @@ def _stateful(model: Any) -> bool:
 def _has_state(model: Any) -> bool:
     """A model whose simulation takes any initial state of ``nstates`` entries: a linear
     state-space model, or a nonlinear one that says so (``initial_state_fits``: neural state
-    space) without exposing ``A, B, C, D``; :func:`compare` fits its initial state."""
+    space, Hammerstein-Wiener); :func:`compare` fits its initial state."""
     return _stateful(model) or bool(getattr(model, "initial_state_fits", False))
 
 
@@ -293,7 +293,7 @@ def _window(model: Any, horizon: int | None, N: int) -> int:
     window its influence is below round-off, so the regression ignores those samples (this
     keeps the estimate O(n^2 W) instead of O(n^2 N) on long records).
     """
-    F = model.A if hasattr(model, "A") else model.linear().A  # a nonlinear model's linear part
+    F = model.A if hasattr(model, "A") else _linear_part(model).A
     if horizon is not None and getattr(model, "K", None) is not None:
         F = model.A - model.K @ model.C
     rho = float(np.max(np.abs(np.linalg.eigvals(F)))) if F.size else 0.0
@@ -303,6 +303,12 @@ def _window(model: Any, horizon: int | None, N: int) -> int:
     # transient growth of non-normal matrices: leave generous room
     W = 4 * decay + 10 * model.nstates + (horizon or 0)
     return int(min(N, max(W, 50)))
+
+
+def _linear_part(model: Any) -> Any:
+    """A nonlinear model's linear part in state-space form (its dynamics)."""
+    lin = model.linear()
+    return lin if hasattr(lin, "A") else lin.to_statespace()
 
 
 def _x0_for(model: Any, x0: Any, u: np.ndarray, y: np.ndarray, horizon: int | None,

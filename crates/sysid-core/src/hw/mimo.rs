@@ -127,11 +127,41 @@ impl MimoHwStructure {
         (a, b, c, d)
     }
 
-    /// Noise-free outputs `(N, p)` for inputs `u` `(N, m)` at `theta`.
+    /// Noise-free outputs `(N, p)` for inputs `u` `(N, m)` at `theta`, from rest.
     pub fn simulate(&self, theta: &[f64], u: MatRef<'_, f64>) -> Mat<f64> {
         let mut y = Mat::<f64>::zeros(u.nrows(), self.outputs.len());
-        self.run(theta, u, None, |t, i, yhat, _| y[(t, i)] = yhat);
+        self.run(theta, u, None, None, |t, i, yhat, _| y[(t, i)] = yhat);
         y
+    }
+
+    /// Noise-free outputs `(N, p)` from the linear block's initial state `x0` (`order`
+    /// entries; what [`Self::simulate`] takes as zero).
+    ///
+    /// # Errors
+    /// [`SysidError::ShapeMismatch`] when `x0` has not `order` entries.
+    ///
+    /// # Example
+    /// ```
+    /// use faer::Mat;
+    /// use sysid_core::hw::{mimo::MimoHwStructure, Nonlinearity};
+    /// let s = MimoHwStructure { inputs: vec![Nonlinearity::Identity],
+    ///     outputs: vec![Nonlinearity::Identity], order: 1, feedthrough: false };
+    /// // x(t+1) = 0.5 x + w, v = x: from x0 = 2 with no input, 2, 1, 0.5
+    /// let y = s.simulate_from(&[0.5, 1.0, 1.0], Mat::<f64>::zeros(3, 1).as_ref(), &[2.0])
+    ///     .unwrap();
+    /// assert_eq!((y[(0, 0)], y[(1, 0)], y[(2, 0)]), (2.0, 1.0, 0.5));
+    /// ```
+    pub fn simulate_from(&self, theta: &[f64], u: MatRef<'_, f64>, x0: &[f64]) -> Result<Mat<f64>> {
+        if x0.len() != self.order {
+            return Err(SysidError::ShapeMismatch {
+                what: "x0".into(),
+                expected: format!("{} entries (the linear block's order)", self.order),
+                got: format!("{} entries", x0.len()),
+            });
+        }
+        let mut y = Mat::<f64>::zeros(u.nrows(), self.outputs.len());
+        self.run(theta, u, None, Some(x0), |t, i, yhat, _| y[(t, i)] = yhat);
+        Ok(y)
     }
 
     /// The Jacobian columns of the parameters that move (all but those in `held`), in
@@ -170,6 +200,7 @@ impl MimoHwStructure {
         theta: &[f64],
         u: MatRef<'_, f64>,
         cols: Option<&[Column]>,
+        x0: Option<&[f64]>,
         mut visit: impl FnMut(usize, usize, f64, &[f64]),
     ) {
         let l = self.layout();
@@ -178,7 +209,7 @@ impl MimoHwStructure {
         let cols = cols.unwrap_or(&[]);
         let q = cols.len();
         let nd = cols.iter().take_while(|c| c.moves_state()).count();
-        let mut x = vec![0.0; n];
+        let mut x = x0.map_or_else(|| vec![0.0; n], <[f64]>::to_vec);
         let mut xn = vec![0.0; n];
         let mut w = vec![0.0; m];
         // dw_j / dalpha_j and dg_i / dbeta_i, stored at their theta offsets
@@ -336,7 +367,7 @@ impl Problem for MimoHwProblem<'_> {
         let mut sums = NormalEquations::blocked(cols.len(), jacobian);
         for (u, y) in &self.records {
             let c = jacobian.then_some(cols.as_slice());
-            self.structure.run(theta, *u, c, |t, i, yhat, jr| {
+            self.structure.run(theta, *u, c, None, |t, i, yhat, jr| {
                 sums.add(y[(t, i)] - yhat, Some(jr))
             });
         }

@@ -118,7 +118,7 @@ impl MimoHwProblem<'_> {
         let cols = s.columns(&held);
         let mut sums = NormalEquations::blocked(cols.len(), true);
         for (u, y) in &self.records {
-            s.run(&th, *u, Some(&cols), |t, i, yhat, jr| {
+            s.run(&th, *u, Some(&cols), None, |t, i, yhat, jr| {
                 sums.add(y[(t, i)] - yhat, Some(jr))
             });
         }

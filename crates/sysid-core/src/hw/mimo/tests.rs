@@ -268,7 +268,7 @@ fn modal_gauss_newton_matches_the_plain_products() {
     let (s, th, u, y, ev) = order3();
     let cols = s.columns(&[]);
     let mut sums = NormalEquations::new(cols.len(), true);
-    s.run(&th, u.as_ref(), Some(&cols), |t, i, yhat, jr| {
+    s.run(&th, u.as_ref(), Some(&cols), None, |t, i, yhat, jr| {
         sums.add(y[(t, i)] - yhat, Some(jr))
     });
     let plain = sums.finish();
