@@ -287,7 +287,7 @@ def run_other(name, u, y, dt):
         cost, it = info["cost"][0][-1], info["iterations"][0]
     else:
         m, wall, cpu = _timed(lambda: sysid.nlhw(data, 2, 2, 1, input_nl=sysid.Saturation(),
-                                                 max_iter=100))
+                                                 output_nl=None, max_iter=100))
         info = m.info
 
         def resid(th):

@@ -108,7 +108,8 @@ def test_nonlinear_models():
     yh = np.zeros(400)
     for t in range(1, 400):
         yh[t] = 0.8 * yh[t - 1] + 0.5 * w[t - 1]
-    h = sysid.nlhw(sysid.IOData(u[:, 0], yh, 1.0), 1, 1, 1, input_nl=sysid.Saturation())
+    h = sysid.nlhw(sysid.IOData(u[:, 0], yh, 1.0), 1, 1, 1, input_nl=sysid.Saturation(),
+                   output_nl=None)
     root = parse(h._repr_html_())
     assert "HammersteinWienerModel" in cells(root) and close_to(numbers(root), 0.8, 1e-3)
 

@@ -34,7 +34,7 @@ def _u(n, seed, scale=1.0):
 def test_hammerstein_saturation_noise_free_exact():
     u = _u(800, 1)
     y = second_order(np.clip(u, -0.4, 0.6))
-    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 2, 2, 1, input_nl=sysid.Saturation())
+    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 2, 2, 1, input_nl=sysid.Saturation(), output_nl=None)
     np.testing.assert_allclose(m.input_nl.params, [-0.4, 0.6], atol=1e-7)
     np.testing.assert_allclose(np.sort_complex(m.poles()), np.sort_complex(
         np.roots([1, -1.4, 0.58]).astype(complex)), atol=1e-7)
@@ -47,7 +47,7 @@ def test_hammerstein_deadzone_with_noise():
     rng = np.random.default_rng(3)
     dz = np.where(u > 0.5, u - 0.5, np.where(u < -0.3, u + 0.3, 0.0))
     y = linear(dz) + 0.02 * rng.standard_normal(u.size)
-    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl=sysid.DeadZone())
+    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl=sysid.DeadZone(), output_nl=None)
     # stated tolerances: breakpoints within 0.03, pole within 0.01
     np.testing.assert_allclose(m.input_nl.params, [-0.3, 0.5], atol=0.03)
     assert abs(m.poles()[0].real - 0.8) < 0.01 and abs(m.b[0] - 0.5) < 0.02
@@ -57,7 +57,7 @@ def test_hammerstein_polynomial_noise_free():
     u = _u(600, 4)
     y = linear(u + 0.5 * u ** 2 - 0.3 * u ** 3)
     m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1,
-                   input_nl=sysid.PolynomialNonlinearity(3))
+                   input_nl=sysid.PolynomialNonlinearity(3), output_nl=None)
     np.testing.assert_allclose(m.input_nl.params, [0.5, -0.3], atol=1e-7)
     assert abs(m.poles()[0].real - 0.8) < 1e-7
 
@@ -66,14 +66,14 @@ def test_wiener_saturation_and_polynomial():
     u = _u(1500, 5)
     x = second_order(u)
     y = np.clip(x, -0.3, 0.25)
-    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 2, 2, 1, output_nl=sysid.Saturation())
+    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 2, 2, 1, output_nl=sysid.Saturation(), input_nl=None)
     assert "Wiener" in repr(m)
     np.testing.assert_allclose(m.output_nl.params, [-0.3, 0.25], atol=1e-6)
     np.testing.assert_allclose(np.sort_complex(m.poles()), np.sort_complex(
         np.roots([1, -1.4, 0.58]).astype(complex)), atol=1e-6)
     y2 = linear(u) + 0.4 * linear(u) ** 2
     m2 = sysid.nlhw(sysid.IOData(u, y2, 1.0), 1, 1, 1,
-                    output_nl=sysid.PolynomialNonlinearity(2))
+                    output_nl=sysid.PolynomialNonlinearity(2), input_nl=None)
     np.testing.assert_allclose(m2.output_nl.params, [0.4], atol=1e-6)
     assert abs(m2.poles()[0].real - 0.8) < 1e-6
 
@@ -94,8 +94,9 @@ def test_piecewise_linear_and_sigmoid_fit_better_than_linear():
     d = sysid.IOData(u, y, 1.0)
     lin = sysid.oe(d, 1, 1, 1)
     err_lin = np.mean((lin.simulate(u[:, None])[:, 0] - y) ** 2)
-    pwl = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.PiecewiseLinear([-2, -1, -0.3, 0.3, 1, 2]))
-    sig = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.SigmoidNetwork(2))
+    pwl = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.PiecewiseLinear([-2, -1, -0.3, 0.3, 1, 2]),
+                     output_nl=None)
+    sig = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.SigmoidNetwork(2), output_nl=None)
     for m in (pwl, sig):
         err = np.mean((m.simulate(u)[:, 0] - y) ** 2)
         assert err < 0.05 * err_lin
@@ -106,7 +107,7 @@ def test_user_function_input():
     u = _u(500, 8)
     y = linear(np.sign(u) * u ** 2)
     m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1,
-                   input_nl=sysid.UserFunction(lambda v: np.sign(v) * v ** 2))
+                   input_nl=sysid.UserFunction(lambda v: np.sign(v) * v ** 2), output_nl=None)
     assert abs(m.poles()[0].real - 0.8) < 1e-6 and abs(m.b[0] - 0.5) < 1e-6
     np.testing.assert_allclose(m.simulate(u)[:, 0], y, atol=1e-8)
     with pytest.raises(sysid.DataError, match="UserFunction"):
@@ -116,7 +117,7 @@ def test_user_function_input():
 def test_protocol_saving_and_errors(tmp_path):
     u = _u(600, 9)
     y = linear(np.clip(u, -0.5, 0.5))
-    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl=sysid.Saturation())
+    m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl=sysid.Saturation(), output_nl=None)
     assert isinstance(m, sysid.Model)
     assert m.freqresp(np.array([0.1, 1.0])).shape == (2, 1, 1)
     assert sysid.compare(m, sysid.IOData(u, y, 1.0)).fit[0] > 99.9
@@ -129,7 +130,7 @@ def test_protocol_saving_and_errors(tmp_path):
     with pytest.raises(sysid.DataError, match="one input"):
         sysid.nlhw(sysid.IOData(np.c_[u, u], y, 1.0), 1, 1, 1)
     with pytest.raises(sysid.DataError, match="nonlinearity"):
-        sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl="saturation")
+        sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl="saturation", output_nl=None)
     with pytest.raises(sysid.DataError, match="breakpoints"):
         sysid.PiecewiseLinear([1.0, 0.0])
 
@@ -152,7 +153,8 @@ def test_progress_is_the_shared_observer():
     dz = np.where(u > 0.5, u - 0.5, np.where(u < -0.3, u + 0.3, 0.0))
     d = sysid.IOData(u, linear(dz) + 0.02 * rng.standard_normal(u.size), 1.0)
     calls = []
-    m = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.DeadZone(), progress=lambda *a: calls.append(a))
+    m = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.DeadZone(), progress=lambda *a: calls.append(a),
+                   output_nl=None)
     runs = _runs(calls)
     assert all(len(c) == 5 for c in calls) and 1 <= len(runs) <= m.info["n_starts"]
     for r in runs:
@@ -160,7 +162,8 @@ def test_progress_is_the_shared_observer():
     cost = m.info["cost"]
     assert len(cost) == m.info["iterations"] + 1 and np.all(np.diff(cost) < 0)
     assert [[c[1] for c in r] for r in runs].count(cost[1:]) >= 1
-    stopped = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.DeadZone(), progress=lambda *a: False)
+    stopped = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.DeadZone(), progress=lambda *a: False,
+                         output_nl=None)
     assert stopped.info["stop"] == "cancelled" and stopped.info["iterations"] == 1
 
 
@@ -232,7 +235,7 @@ def test_an_operating_point_is_fitted_about_and_kept(tmp_path):
     # levels given in the data's units are not shifted
     with pytest.warns(sysid.OffsetWarning):
         sat = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, input_nl=sysid.Saturation(),
-                         progress=False)
+                         output_nl=None, progress=False)
     assert sat.u_offset == 0.0 and sat.info["offsets"]["removed"] is False
     with pytest.raises(sysid.DataError, match="offsets must be"):
         sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, offsets="mean", **kw)
@@ -250,12 +253,12 @@ def test_a_capped_search_warns_and_a_converged_one_stops_statistically():
     d = sysid.IOData(u, y, 1.0)
     with pytest.warns(sysid.IterationLimitWarning, match="max_iter=2"):
         capped = sysid.nlhw(d, 2, 2, 1, input_nl=sysid.Saturation(), max_iter=2,
-                            progress=False)
+                            progress=False, output_nl=None)
     assert capped.info["stop"] == "maximum iterations"
-    m = sysid.nlhw(d, 2, 2, 1, input_nl=sysid.Saturation(), progress=False)
+    m = sysid.nlhw(d, 2, 2, 1, input_nl=sysid.Saturation(), progress=False, output_nl=None)
     assert m.info["stop"] == "statistical convergence"
     tight = sysid.nlhw(d, 2, 2, 1, input_nl=sysid.Saturation(), progress=False, tol=1e-14,
-                       max_iter=500)
+                       max_iter=500, output_nl=None)
     sigma2 = 2 * m.info["cost"][-1] / u.size
     assert m.info["cost"][-1] - tight.info["cost"][-1] < 0.1 * sigma2
     np.testing.assert_allclose(m.input_nl.params, [-0.4, 0.6], atol=0.02)
@@ -265,9 +268,9 @@ def test_a_non_finite_input_is_refused_not_simulated_to_nan():
     u = _u(400, 16)
     y = linear(np.clip(u, -0.4, 0.6))
     m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl=sysid.Saturation(),
-                   progress=False)
+                   progress=False, output_nl=None)
     ms = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 1, input_nl=sysid.Saturation(),
-                       progress=False)
+                       progress=False, output_nl=None)
     bad = u.copy()
     bad[7] = np.nan
     for model in (m, ms):

@@ -39,7 +39,8 @@ def test_hammerstein_2x2_saturation_and_cubic_recovered():
 
     y = _simulate(u, f, lambda v: v)
     m = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 2,
-                      input_nl=[sysid.Saturation(), sysid.PolynomialNonlinearity(3)])
+                      input_nl=[sysid.Saturation(), sysid.PolynomialNonlinearity(3)],
+                      output_nl=None)
     np.testing.assert_allclose(_poles(m), [0.5, 0.8], atol=1e-6)
     np.testing.assert_allclose(m.input_nls[0].params, [-0.5, 0.6], atol=1e-6)
     np.testing.assert_allclose(m.input_nls[1].params, [0.3, -0.2], atol=1e-6)
@@ -55,7 +56,8 @@ def test_wiener_2x2_polynomial_and_saturation_recovered():
 
     y = _simulate(u, lambda v: v, g)
     m = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 2,
-                      output_nl=[sysid.PolynomialNonlinearity(2), sysid.Saturation()])
+                      output_nl=[sysid.PolynomialNonlinearity(2), sysid.Saturation()],
+                      input_nl=None)
     np.testing.assert_allclose(_poles(m), [0.5, 0.8], atol=1e-6)
     np.testing.assert_allclose(m.output_nls[0].params, [0.4], atol=1e-6)
     np.testing.assert_allclose(m.output_nls[1].params, [-0.5, 0.45], atol=1e-6)
@@ -66,7 +68,7 @@ def test_protocol_saving_and_errors(tmp_path):
     u = _inputs(300, 5)
     y = _simulate(u, lambda v: np.clip(v, -0.5, 0.5), lambda v: v)
     d = sysid.IOData(u, y, 0.1)
-    m = sysid.nlhw_ss(d, 2, input_nl=sysid.Saturation(), max_iter=50)
+    m = sysid.nlhw_ss(d, 2, input_nl=sysid.Saturation(), max_iter=50, output_nl=None)
     assert (m.ninputs, m.noutputs, m.order) == (2, 2, 2)
     assert m.freqresp([0.1]).shape[:2] == (2, 2) or m.freqresp([0.1]).size == 4
     assert sysid.compare(m, d).fit.min() > 99
@@ -77,11 +79,11 @@ def test_protocol_saving_and_errors(tmp_path):
     m2 = sysid.load_model(path)
     np.testing.assert_allclose(m2.simulate(u), m.simulate(u), atol=1e-12)
     with pytest.raises(sysid.DataError, match="one nonlinearity per channel"):
-        sysid.nlhw_ss(d, 2, input_nl=[sysid.Saturation()])
+        sysid.nlhw_ss(d, 2, input_nl=[sysid.Saturation()], output_nl=None)
     with pytest.raises(sysid.DataError, match="order"):
         sysid.nlhw_ss(d, 0)
     with pytest.raises(sysid.DataError, match="UserFunction"):
-        sysid.nlhw_ss(d, 2, output_nl=sysid.UserFunction(np.tanh))
+        sysid.nlhw_ss(d, 2, output_nl=sysid.UserFunction(np.tanh), input_nl=None)
     with pytest.raises(sysid.DataError, match="shape"):
         m.simulate(np.zeros((10, 3)))
 
@@ -91,7 +93,7 @@ def test_progress_is_the_shared_observer():
     y = _simulate(u, lambda v: np.clip(v, -0.5, 0.6), lambda v: v)
     calls = []
     m = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 2, input_nl=sysid.Saturation(),
-                      progress=lambda *a: calls.append(a))
+                      progress=lambda *a: calls.append(a), output_nl=None)
     cost = m.info["cost"]
     assert len(cost) == m.info["iterations"] + 1 and cost[-1] < cost[0]
     # the chosen search's calls: the last run of iterations 1..k with the costs of info
@@ -102,7 +104,7 @@ def test_progress_is_the_shared_observer():
         tail = next(r for r in runs if [c[1] for c in r] == cost[1:])
     assert [c[0] for c in tail] == list(range(1, m.info["iterations"] + 1))
     stopped = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 2, input_nl=sysid.Saturation(),
-                            progress=lambda *a: False)
+                            progress=lambda *a: False, output_nl=None)
     assert stopped.info["stop"] == "cancelled" and stopped.info["iterations"] == 1
 
 
@@ -113,7 +115,8 @@ def test_given_linear_start():
     y = _simulate(u, lambda v: np.clip(v, -0.5, 0.6), lambda v: v)
     d = sysid.IOData(u, y, 1.0)
     true = sysid.StateSpaceModel(A, B, C, dt=1.0)
-    m = sysid.nlhw_ss(d, 2, input_nl=sysid.Saturation(), linear=true, progress=False)
+    m = sysid.nlhw_ss(d, 2, input_nl=sysid.Saturation(), linear=true, progress=False,
+                      output_nl=None)
     np.testing.assert_allclose(m.simulate(u), y, atol=1e-6)
     # theta0: two saturations' bounds, then the start's A (the given one, not n4sid's)
     np.testing.assert_array_equal(m.info["theta0"][4:8], A.ravel())
@@ -155,8 +158,8 @@ def test_a_capped_nlhw_ss_search_warns():
     y = x[:, None] + 0.02 * rng.standard_normal((u.shape[0], 1))
     d = sysid.IOData(u, y, 1.0)
     with pytest.warns(sysid.IterationLimitWarning, match="nlhw_ss search stopped at max_iter=2"):
-        sysid.nlhw_ss(d, 1, input_nl=sysid.Saturation(), max_iter=2, progress=False)
-    m = sysid.nlhw_ss(d, 1, input_nl=sysid.Saturation(), progress=False)
+        sysid.nlhw_ss(d, 1, input_nl=sysid.Saturation(), max_iter=2, progress=False, output_nl=None)
+    m = sysid.nlhw_ss(d, 1, input_nl=sysid.Saturation(), progress=False, output_nl=None)
     assert m.info["stop"] == "statistical convergence"
     np.testing.assert_allclose(m.input_nls[0].params, [-0.4, 0.6], atol=0.02)
 
@@ -174,10 +177,10 @@ def test_nlhw_ss_offset_and_constant_input_are_named():
     y = 97.0 + x[:, None] + 0.01 * rng.standard_normal((600, 1))
     with pytest.warns(sysid.OffsetWarning, match="offset"):
         sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 1, input_nl=sysid.Saturation(),
-                      max_iter=400, progress=False)
+                      max_iter=400, progress=False, output_nl=None)
     with pytest.raises(sysid.DataError, match="u0 is 3 in every sample: nlhw_ss"):
         sysid.nlhw_ss(sysid.IOData(np.full((600, 1), 3.0), y, 1.0), 1,
-                      input_nl=sysid.SigmoidNetwork(2), progress=False)
+                      input_nl=sysid.SigmoidNetwork(2), progress=False, output_nl=None)
 
 
 def test_an_unstable_subspace_start_is_stabilised_not_refused():
@@ -186,7 +189,7 @@ def test_an_unstable_subspace_start_is_stabilised_not_refused():
     # the centred record); it now starts from the same subspace fit with a stable A
     d = sysid.datasets.load_ph()
     train = sysid.IOData(d.u[:1200], d.y[:1200], d.dt)
-    m = sysid.nlhw_ss(train, 2, output_nl=sysid.SigmoidNetwork(3))
+    m = sysid.nlhw_ss(train, 2, output_nl=sysid.SigmoidNetwork(3), input_nl=None)
     assert "stable A enforced" in m.info["linear_start"]
     assert np.max(np.abs(np.linalg.eigvals(m.A))) < 1
     start = m.info["cost"][0]

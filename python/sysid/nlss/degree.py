@@ -17,8 +17,9 @@ So ``degree="auto"`` fits each candidate (degrees 2, then 2-3) on the estimation
 one of its contiguous blocks (:func:`sysid.validation.crossval.record_folds`) and simulates
 it on the block left out (:func:`sysid.compare`, initial state estimated; a block's fit
 clipped at -100 %: one runaway block must not decide alone). The larger degree is taken only
-where the blocks insist on it (:func:`insists`: its paired gain over the smaller exceeds
-twice its standard error, and its median is higher). Weighed on 29 record/split pairs (the 16
+where the blocks insist on it (``insists``: its paired gain over the smaller exceeds
+twice its standard error, and its median is higher;
+:func:`sysid.validation.crossval.insists`). Weighed on 29 record/split pairs (the 16
 records, the reversed splits of ``benches/realdata.py`` where they have one, the ball and
 beam and DaISy dryer2), validation fits clipped at -100 % and summed:
 
@@ -52,6 +53,7 @@ import numpy as np
 
 from ..data.iodata import IOData
 from ..errors import InsufficientDataError, SysidError
+from ..validation.crossval import held_out_fit, insists
 
 __all__ = ["CANDIDATES", "DegreeChoice", "choose_degree", "insists"]
 
@@ -86,13 +88,6 @@ class DegreeChoice:
         """A plain-dict copy, for a model's ``info``."""
         return {"degree": self.degree, "table": dict(self.table),
                 "folds": {k: list(v) for k, v in self.folds.items()}, "reason": self.reason}
-
-
-def _held_out(model: Any, block: IOData) -> float:
-    from ..validation.compare import compare
-
-    fit = float(np.mean(compare(block, model).fit))
-    return max(FLOOR, fit) if np.isfinite(fit) else FLOOR
 
 
 def choose_degree(data: IOData, fit: Callable[[IOData, int, Any], Any],
@@ -150,7 +145,7 @@ def choose_degree(data: IOData, fit: Callable[[IOData, int, Any], Any],
                     if k == "linear":
                         start = linear(part)
                     m = start if k == "linear" else fit(part, int(k), start)
-                    folds[k].append(_held_out(m, block))
+                    folds[k].append(held_out_fit(m, block, FLOOR))
                 except SysidError as e:
                     if k != "linear":
                         failed.append(e)
@@ -174,21 +169,3 @@ def choose_degree(data: IOData, fit: Callable[[IOData, int, Any], Any],
         reason += ("; the larger degree's gain is within twice the standard error of the "
                    "blocks' differences")
     return DegreeChoice(degree, table, folds, reason)
-
-
-def insists(better: Any, worse: Any) -> bool:
-    """Whether per-block fits ``better`` beat the paired ``worse`` by more than twice the
-    standard error of their differences (mean), and in the median: the held-out blocks
-    insist on the change rather than allow it.
-
-    Examples
-    --------
-    >>> from sysid.nlss.degree import insists
-    >>> insists([90, 91, 92, 90, 93], [80, 82, 81, 80, 84]), insists([90, 60, 92], [80, 82, 81])
-    (True, False)
-    """
-    d = np.subtract(better, worse, dtype=float)
-    if d.size < 2:
-        return False
-    se = d.std(ddof=1) / np.sqrt(d.size)
-    return bool(d.mean() > 2 * se and np.median(better) > np.median(worse))

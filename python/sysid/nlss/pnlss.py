@@ -409,7 +409,8 @@ def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any
     """:func:`sysid.nlss.degree.choose_degree` with ``pnlss``'s settings ``kw`` on each
     fold (time-domain cost, no periods: the blocks cut them), the folds' linear starts scored
     beside them; warns when those insist over the chosen degree on the held-out blocks
-    (:func:`~sysid.nlss.degree.insists`; how often that was right: :mod:`sysid.nlss.degree`)."""
+    (:func:`~sysid.validation.crossval.insists`; how often that was right:
+    :mod:`sysid.nlss.degree`)."""
     import warnings
 
     from .._checks import user_stacklevel

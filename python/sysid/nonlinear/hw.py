@@ -39,7 +39,7 @@ def _check_nl(nl: Any, name: str) -> Nonlinearity:
     if not isinstance(nl, Nonlinearity):
         raise DataError(f"{name} must be a sysid nonlinearity (Saturation, DeadZone, "
                         f"PolynomialNonlinearity, PiecewiseLinear, SigmoidNetwork, "
-                        f"UserFunction) or None, got {nl!r}")
+                        f"UserFunction), \"auto\" or None, got {nl!r}")
     return copy.deepcopy(nl)
 
 
@@ -49,8 +49,8 @@ def nlhw(
     nf: int,
     nk: int = 1,
     *,
-    input_nl: Nonlinearity | None = None,
-    output_nl: Nonlinearity | None = None,
+    input_nl: Nonlinearity | str | None = "auto",
+    output_nl: Nonlinearity | str | None = "auto",
     max_iter: int = 100,
     tol: float = 1e-10,
     progress: bool | None | Callable[..., Any] = None,
@@ -64,11 +64,17 @@ def nlhw(
         Estimation record (one input, one output; several experiments are used together).
     nb, nf, nk : int
         Orders of ``B`` and ``F`` and the input delay of the linear block.
-    input_nl, output_nl : Nonlinearity or None
+    input_nl, output_nl : Nonlinearity, "auto" or None
         :class:`~sysid.Saturation`, :class:`~sysid.DeadZone`,
         :class:`~sysid.PolynomialNonlinearity`, :class:`~sysid.PiecewiseLinear`,
         :class:`~sysid.SigmoidNetwork`, or (input only) a fixed :class:`~sysid.UserFunction`;
         ``None`` is the identity (``output_nl=None``: Hammerstein, ``input_nl=None``: Wiener).
+        ``"auto"`` (default): the identity or a 3-unit sigmoid network, whichever the
+        record's held-out blocks insist on (:mod:`sysid.nonlinear.choice`: the networks
+        only where they simulate the blocks better beyond their scatter; every candidate is
+        fitted on the record less each block, so this costs about ten fits: give the
+        nonlinearities to fit once); ``info["nonlinearity_choice"]`` holds the table and the
+        reason.
     max_iter, tol : int, float
         Optimiser iterations and step/gradient tolerance.
     progress : bool or callable, optional
@@ -105,12 +111,18 @@ def nlhw(
     >>> u = rng.uniform(-1, 1, 600)
     >>> w = np.clip(u, -0.4, 0.4); y = np.zeros(600)
     >>> for t in range(1, 600): y[t] = 0.8 * y[t - 1] + 0.5 * w[t - 1]
-    >>> m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl=sysid.Saturation())
+    >>> m = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, 1, input_nl=sysid.Saturation(),
+    ...                output_nl=None)  # None: the identity (a Hammerstein model)
     >>> np.round(m.input_nl.params, 6).tolist(), np.round(m.poles().real, 6).tolist()
     ([-0.4, 0.4], [0.8])
     """
     from ..polynomial.estimators import oe
+    from .choice import auto_fit, is_auto
 
+    if is_auto(input_nl) or is_auto(output_nl):
+        return auto_fit(data, lambda d, fi, fo, prog: nlhw(
+            d, nb, nf, nk, input_nl=fi, output_nl=fo, max_iter=max_iter, tol=tol,
+            progress=prog, offsets=offsets), input_nl, output_nl, (0, 0), progress, "nlhw")
     exps = experiment_arrays(data)
     check_magnitudes(data, "nlhw")
     if exps[0][0].shape[1] != 1 or exps[0][1].shape[1] != 1:

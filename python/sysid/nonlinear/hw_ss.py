@@ -47,7 +47,8 @@ def _per_channel(nl: Any, n: int, name: str) -> list[Nonlinearity]:
         else:
             raise DataError(f"{name} entries must be sysid nonlinearities (Saturation, "
                             f"DeadZone, PolynomialNonlinearity, PiecewiseLinear, "
-                            f"SigmoidNetwork, UserFunction) or None, got {f!r}")
+                            f"SigmoidNetwork, UserFunction) or None (the whole side may "
+                            f"be \"auto\"), got {f!r}")
     return out
 
 
@@ -55,8 +56,8 @@ def nlhw_ss(
     data: Any,
     order: int,
     *,
-    input_nl: Any = None,
-    output_nl: Any = None,
+    input_nl: Any = "auto",
+    output_nl: Any = "auto",
     feedthrough: bool = False,
     max_iter: int = 200,
     tol: float = 1e-10,
@@ -75,9 +76,12 @@ def nlhw_ss(
         together).
     order : int
         State dimension of the linear block.
-    input_nl, output_nl : Nonlinearity, list or None
+    input_nl, output_nl : Nonlinearity, list, "auto" or None
         One nonlinearity for every channel, or a list with one per input / output (``None``
         entries: identity). ``output_nl=None``: Hammerstein; ``input_nl=None``: Wiener.
+        ``"auto"`` (default): the identity or a 3-unit sigmoid network on every channel of
+        that side, as the record's held-out blocks insist (as for :func:`sysid.nlhw`;
+        ``info["nonlinearity_choice"]``).
     feedthrough : bool
         Estimate a direct term ``D`` (default ``D = 0``).
     max_iter, tol : int, float
@@ -116,7 +120,8 @@ def nlhw_ss(
     >>> y = np.zeros((600, 2))
     >>> for t in range(600):
     ...     y[t] = x; x = np.array([[0.8, 0.0], [0.1, 0.5]]) @ x + w[t]
-    >>> m = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 2, input_nl=sysid.Saturation())
+    >>> m = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 2, input_nl=sysid.Saturation(),
+    ...                   output_nl=None)  # None: the identity (a Hammerstein model)
     >>> np.round(np.sort(m.poles().real), 6).tolist()
     [0.5, 0.8]
     >>> [np.round(f.params, 6).tolist() for f in m.input_nls]
@@ -125,7 +130,14 @@ def nlhw_ss(
     from ..data.iodata import IOData
     from ..models.statespace import StateSpaceModel
     from ..subspace.estimator import n4sid
+    from .choice import auto_fit, is_auto
 
+    if is_auto(input_nl) or is_auto(output_nl):
+        u0, y0 = experiment_arrays(data)[0]
+        return auto_fit(data, lambda d, fi, fo, prog: nlhw_ss(
+            d, order, input_nl=fi, output_nl=fo, feedthrough=feedthrough, max_iter=max_iter,
+            tol=tol, progress=prog, linear=linear, offsets=offsets), input_nl, output_nl,
+            (u0.shape[1], y0.shape[1]), progress, "nlhw_ss")
     exps = experiment_arrays(data)
     check_magnitudes(data, "nlhw_ss")
     m, p = exps[0][0].shape[1], exps[0][1].shape[1]

@@ -50,9 +50,9 @@ from ..errors import InsufficientDataError
 from .compare import output_weights
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
-           "output_fits", "prediction_fit", "predictor", "record_folds", "simulation_errors",
-           "simulation_fit", "slack",
-           "stable_first", "variation", "wins_every_block"]
+           "held_out_fit", "insists", "output_fits", "prediction_fit", "predictor",
+           "record_folds", "simulation_errors", "simulation_fit", "slack", "stable_first",
+           "variation", "wins_every_block"]
 
 #: fit points a smaller order may give up and still win (held-out fits of half-record
 #: models scatter by about this much between neighbouring orders)
@@ -477,6 +477,35 @@ def wins_every_block(fits: Any, ref: Any, score: float, ref_score: float) -> boo
     (:func:`stable_first`, :meth:`sysid.identify.board.Board.insisting`)."""
     return (len(fits) == len(ref) and all(a > b for a, b in zip(fits, ref))
             and score > ref_score + slack(score))
+
+
+def insists(better: Any, worse: Any) -> bool:
+    """Whether per-block fits ``better`` beat the paired ``worse`` by more than twice the
+    standard error of their differences (mean), and in the median: the held-out blocks
+    insist on the change rather than allow it (the richer model structures of ``pnlss``'s
+    degree and ``nlhw``'s nonlinearities are taken only then).
+
+    Examples
+    --------
+    >>> from sysid.validation.crossval import insists
+    >>> insists([90, 91, 92, 90, 93], [80, 82, 81, 80, 84]), insists([90, 60, 92], [80, 82, 81])
+    (True, False)
+    """
+    d = np.subtract(better, worse, dtype=float)
+    if d.size < 2:
+        return False
+    se = d.std(ddof=1) / np.sqrt(d.size)
+    return bool(d.mean() > 2 * se and np.median(better) > np.median(worse))
+
+
+def held_out_fit(model: Any, block: IOData, floor: float = -100.0) -> float:
+    """``model``'s simulation fit on a held-out ``block`` (:func:`sysid.compare`, its
+    initial state fitted; % mean over outputs), at least ``floor``: one runaway block is one
+    bad block, not the whole score."""
+    from .compare import compare
+
+    fit = float(np.mean(compare(block, model).fit))
+    return max(floor, fit) if np.isfinite(fit) else floor
 
 
 def choose(table: dict[int, float], tol: float = TOL, what: str = "simulation"
