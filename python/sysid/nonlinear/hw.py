@@ -119,15 +119,17 @@ def nlhw(
     from ..polynomial.estimators import oe
     from .choice import auto_fit, is_auto
 
+    exps = experiment_arrays(data)
+    if exps[0][0].shape[1] != 1 or exps[0][1].shape[1] != 1:
+        raise DataError(f"nlhw handles one input and one output (the record has "
+                        f"{exps[0][0].shape[1]} and {exps[0][1].shape[1]}); for several use "
+                        "sysid.nlhw_ss (a state-space linear block), or select channels with "
+                        "data.select(...)")
     if is_auto(input_nl) or is_auto(output_nl):
         return auto_fit(data, lambda d, fi, fo, prog: nlhw(
             d, nb, nf, nk, input_nl=fi, output_nl=fo, max_iter=max_iter, tol=tol,
             progress=prog, offsets=offsets), input_nl, output_nl, (0, 0), progress, "nlhw")
-    exps = experiment_arrays(data)
     check_magnitudes(data, "nlhw")
-    if exps[0][0].shape[1] != 1 or exps[0][1].shape[1] != 1:
-        raise DataError("nlhw handles one input and one output; select channels with "
-                        "data.select(...)")
     require_inputs_vary(exps, "nlhw", getattr(data, "input_names", None))
     # before centring (a constant output is then 0) and the linear start (named oe)
     require_inputs_vary(exps, "nlhw", getattr(data, "output_names", None), side=1)
