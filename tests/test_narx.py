@@ -145,17 +145,18 @@ def test_mimo_monte_carlo_true_terms_selected():
 def test_criterion_and_budget_change_the_model():
     u, y = billings(600, 9, noise=0.05)
     d = sysid.IOData(u, y, 1.0)
-    full = sysid.nlarx(d, 2, 2, max_terms=10, criterion=None)
-    aic = sysid.nlarx(d, 2, 2, max_terms=10, criterion="aic")
-    bic = sysid.nlarx(d, 2, 2, max_terms=10, criterion="bic")
-    small = sysid.nlarx(d, 2, 2, max_terms=2, criterion=None)
+    poly = sysid.PolynomialBasis(2)  # the selection itself (basis="auto" may take the ARX)
+    full = sysid.nlarx(d, 2, 2, max_terms=10, criterion=None, basis=poly)
+    aic = sysid.nlarx(d, 2, 2, max_terms=10, criterion="aic", basis=poly)
+    bic = sysid.nlarx(d, 2, 2, max_terms=10, criterion="bic", basis=poly)
+    small = sysid.nlarx(d, 2, 2, max_terms=2, criterion=None, basis=poly)
     assert full.n_parameters == 10 and small.n_parameters == 2
     assert bic.n_parameters <= aic.n_parameters <= full.n_parameters
     uv, yv = billings(400, 10, noise=0.05)
-    val = sysid.nlarx(d, 2, 2, max_terms=10, criterion="validation",
+    val = sysid.nlarx(d, 2, 2, max_terms=10, criterion="validation", basis=poly,
                       validation=sysid.IOData(uv, yv, 1.0))
     assert set(BILLINGS) <= set(_term_set(val))
-    fpe = sysid.nlarx(d, 2, 2, max_terms=10, criterion="fpe")
+    fpe = sysid.nlarx(d, 2, 2, max_terms=10, criterion="fpe", basis=poly)
     assert fpe.n_parameters >= 4
 
 
@@ -304,13 +305,20 @@ def test_a_model_without_input_terms_warns():
     y = np.zeros(3000)
     for k in range(2, 3000):
         y[k] = 1.99 * y[k - 1] - 0.99 * y[k - 2] + 1e-5 * u[k - 1]
+    d = sysid.IOData(u[:, None], y[:, None], 1.0)
+    poly = sysid.PolynomialBasis(2)
     with pytest.warns(sysid.ExcitationWarning, match="no selected term involves an input"):
-        m = sysid.nlarx(sysid.IOData(u[:, None], y[:, None], 1.0), 2, 2)
+        m = sysid.nlarx(d, 2, 2, basis=poly)
     assert m.info["uses_input"] is False
     assert np.ptp(m.simulate(u[:, None])) == 0.0
     # with a smaller err_tol the input term is selected, and nothing is said
-    m = sysid.nlarx(sysid.IOData(u[:, None], y[:, None], 1.0), 2, 2, err_tol=1e-16)
+    m = sysid.nlarx(d, 2, 2, err_tol=1e-16, basis=poly)
     assert any("u0" in n for n in m.term_names()) and "uses_input" not in m.info
+    # by default (basis="auto") the linear ARX model of these lags, every lag kept, is
+    # taken: the held-out blocks insist on it over the input-free polynomial model
+    m = sysid.nlarx(d, 2, 2)
+    assert m.info["basis_choice"]["kind"] == "linear" and "uses_input" not in m.info
+    assert any("u0" in n for n in m.term_names())
 
 
 def test_compare_runs_a_narx_model_from_the_measured_first_outputs():

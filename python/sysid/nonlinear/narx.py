@@ -160,7 +160,7 @@ def nlarx(
     nb: Any,
     nk: Any = 1,
     *,
-    basis: Any = None,
+    basis: Any = "auto",
     max_terms: int = 10,
     criterion: str | None = "aic",
     validation: Any = None,
@@ -183,8 +183,14 @@ def nlarx(
         Output lags ``1..na`` of each output (shared by every output's equation).
     nb, nk : int or list (n_inputs)
         Input lags ``nk..nk + nb - 1``.
-    basis : PolynomialBasis, RBFBasis, SigmoidNetwork, WaveletNetwork or TreePartition
-        Candidate terms (default ``PolynomialBasis(2)``), or a network nonlinearity of all
+    basis : "auto", PolynomialBasis, RBFBasis, SigmoidNetwork, WaveletNetwork or TreePartition
+        Candidate terms (``None``: ``PolynomialBasis(2)``). ``"auto"`` (default): the
+        degree-2 polynomial terms (selected as the other arguments say) where the record's
+        held-out blocks insist on them, else the linear ARX model of the same lags (degree
+        1: every lag and custom regressor, least squares): FROLS picks terms by their
+        one-step error, and run free they can simulate far worse than that linear model
+        (:mod:`sysid.nonlinear.choice`; about ten FROLS fits: give the basis to fit once);
+        ``info["basis_choice"]`` holds the table and the reason. Or a network nonlinearity of all
         lagged variables (MATLAB's ``idSigmoidNetwork``, ``idWaveletNetwork``,
         ``idTreePartition``): then the result is a :class:`~sysid.NetworkNARXModel`, trained
         by separable least squares (the term-selection arguments do not apply). A
@@ -254,6 +260,18 @@ def nlarx(
         raise DataError(f"max_terms must be a positive integer, got {max_terms!r}")
     if int(noise_terms) != noise_terms or noise_terms < 0:
         raise DataError(f"noise_terms must be a non-negative integer, got {noise_terms!r}")
+    from .choice import is_auto
+
+    if is_auto(basis):
+        if focus != "prediction":
+            raise DataError("focus='simulation' needs a network nonlinearity "
+                            "(basis=SigmoidNetwork(...), WaveletNetwork, TreePartition); the "
+                            "polynomial terms are selected for prediction")
+        return _auto_basis(data, dict(
+            na=na, nb=nb, nk=nk, max_terms=max_terms, criterion=criterion,
+            validation=validation, noise_terms=noise_terms, n_iterations=n_iterations,
+            err_tol=err_tol, custom=custom, focus=focus, max_iter=max_iter, progress=progress),
+            int(sum(na_)) + int(sum(nb_)) + len(custom or []) + 1)
     basis = PolynomialBasis(2) if basis is None else basis
     if is_network(basis):
         if noise_terms or custom:
@@ -348,6 +366,29 @@ def nlarx(
             ". A fast-sampled or integrating output does "
             "this: decimate the record (sysid.decimate), lower err_tol, or fit for simulation "
             "(nlarx with a SigmoidNetwork and focus='simulation', nlhw, pnlss)"), stacklevel=2)
+    return model
+
+
+def _auto_basis(data: Any, kw: dict[str, Any], n_linear: int) -> NARXModel:
+    """``nlarx`` with ``basis="auto"``: the degree-2 polynomial (``kw`` as given) where the
+    record's held-out blocks insist on it over the linear ARX model of the same lags (all
+    ``n_linear`` candidate terms by least squares: a selection that stops at ``err_tol``
+    or ``max_terms`` can leave out every input, as on a smooth servo record), chosen by
+    :func:`sysid.nonlinear.choice.choose_structure`; the choice in ``info["basis_choice"]``."""
+    from .choice import choose_structure
+
+    def fit(part: Any, kind: str) -> NARXModel:
+        if kind == "polynomial":
+            return nlarx(part, basis=PolynomialBasis(2), **kw)
+        return nlarx(part, basis=PolynomialBasis(1), **{
+            **kw, "criterion": None, "max_terms": max(n_linear, int(kw["max_terms"])),
+            "err_tol": 0.0})
+
+    choice = choose_structure(data, fit, ("linear", "polynomial"),
+                              {"linear": "the linear ARX model of the same lags",
+                               "polynomial": "degree-2 polynomial terms"}, "")
+    model = fit(data, choice.kind)
+    model.info["basis_choice"] = choice.as_dict()
     return model
 
 
