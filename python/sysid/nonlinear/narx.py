@@ -23,6 +23,7 @@ from ..errors import (
     NumericalError,
     StabilityWarning,
 )
+from .choice import is_auto
 from .customreg import CustomRegressor
 from .narx_model import NARXModel, PolynomialBasis, RBFBasis
 from .narx_network import is_network, nlarx_network
@@ -260,8 +261,6 @@ def nlarx(
         raise DataError(f"max_terms must be a positive integer, got {max_terms!r}")
     if int(noise_terms) != noise_terms or noise_terms < 0:
         raise DataError(f"noise_terms must be a non-negative integer, got {noise_terms!r}")
-    from .choice import is_auto
-
     if is_auto(basis):
         if focus != "prediction":
             raise DataError("focus='simulation' needs a network nonlinearity "
