@@ -44,7 +44,6 @@ degree?".
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -52,8 +51,8 @@ from typing import Any
 import numpy as np
 
 from ..data.iodata import IOData
-from ..errors import InsufficientDataError, SysidError
-from ..validation.crossval import held_out_fit, insists
+from ..errors import InsufficientDataError
+from ..validation.crossval import held_out_folds, insists
 
 __all__ = ["CANDIDATES", "DegreeChoice", "choose_degree", "insists"]
 
@@ -133,27 +132,18 @@ def choose_degree(data: IOData, fit: Callable[[IOData, int, Any], Any],
             f"the record is too short to choose the degree on held-out blocks ({n} samples; "
             f"two blocks of {MIN_BLOCK} need {2 * MIN_BLOCK}): give degree= to fit one model")
     cands: list[Any] = list(CANDIDATES) + (["linear"] if linear is not None else [])
-    folds: dict[Any, list[float]] = {k: [] for k in cands}
-    failed: list[SysidError] = []
-    with warnings.catch_warnings():
-        # the fold fits are scored, not returned: their own warnings are not the user's
-        warnings.simplefilter("ignore")
-        for part, block in pairs:
-            start = None
-            for k in cands[::-1]:  # the linear start first: every degree starts from it
-                try:
-                    if k == "linear":
-                        start = linear(part)
-                    m = start if k == "linear" else fit(part, int(k), start)
-                    folds[k].append(held_out_fit(m, block, FLOOR))
-                except SysidError as e:
-                    if k != "linear":
-                        failed.append(e)
-                    folds[k].append(FLOOR)
-                if tick is not None:
-                    tick(sum(map(len, folds.values())), folds[k][-1])
-    if len(failed) == len(pairs) * len(CANDIDATES):
-        raise failed[0]  # no degree fits any part: the settings, not the blocks, are wrong
+
+    def one(part: IOData, k: Any, fitted: dict[Any, Any]) -> Any:
+        if k == "linear":
+            return None if linear is None else linear(part)
+        return fit(part, int(k), fitted.get("linear"))
+
+    # the linear start first: every degree starts from it
+    scored, failed = held_out_folds(pairs, cands[::-1], one, tick, FLOOR)
+    folds = {k: scored[k] for k in cands}
+    if all(len(failed[k]) == len(pairs) for k in CANDIDATES):
+        # no degree fits any part: the settings, not the blocks, are wrong
+        raise failed[CANDIDATES[-1]][0]
     table = {k: float(np.median(v)) for k, v in folds.items()}
     degree = CANDIDATES[0]
     for k in CANDIDATES[1:]:  # a larger degree only where the blocks insist on it

@@ -38,7 +38,6 @@ reversed heating system (-17).
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -46,7 +45,6 @@ from typing import Any
 import numpy as np
 
 from ..data.iodata import IOData
-from ..errors import SysidError
 from .hw_model import SigmoidNetwork
 
 __all__ = ["AUTO", "UNITS", "StructureChoice", "choose_nonlinearities", "choose_structure",
@@ -148,7 +146,7 @@ def choose_structure(data: IOData, fit: Callable[[IOData, str], Any],
     >>> c.kind
     'identity'
     """
-    from ..validation.crossval import MIN_BLOCK, held_out_fit, insists, record_folds
+    from ..validation.crossval import MIN_BLOCK, held_out_folds, insists, record_folds
 
     simple, rich = kinds
     n = sum(data.lengths)
@@ -158,20 +156,7 @@ def choose_structure(data: IOData, fit: Callable[[IOData, str], Any],
             f"{names[simple]}{where}: the record ({n} samples) is too short to choose on "
             f"held-out blocks (two of {MIN_BLOCK} samples); give the model structure to fit "
             "it"))
-    folds: dict[str, list[float]] = {k: [] for k in kinds}
-    failed: dict[str, list[SysidError]] = {k: [] for k in kinds}
-    with warnings.catch_warnings():
-        # the fold fits are scored, not returned: their own warnings are not the user's
-        warnings.simplefilter("ignore")
-        for part, block in pairs:
-            for k in kinds:
-                try:
-                    folds[k].append(held_out_fit(fit(part, k), block, FLOOR))
-                except SysidError as e:
-                    failed[k].append(e)
-                    folds[k].append(FLOOR)
-                if tick is not None:
-                    tick(sum(map(len, folds.values())), folds[k][-1])
+    folds, failed = held_out_folds(pairs, kinds, lambda part, k, _: fit(part, k), tick, FLOOR)
     if all(len(failed[k]) == len(pairs) for k in kinds):
         # no candidate fits any part (the settings, or parts too short for them): the fit
         # on the whole record says which
@@ -206,15 +191,14 @@ def choose_nonlinearities(data: IOData, fit: Callable[[IOData, str], Any],
 
 def auto_fit(data: Any, estimate: Callable[[IOData, Any, Any, Any], Any], input_nl: Any,
              output_nl: Any, channels: tuple[int, int], progress: Any, label: str) -> Any:
-    """``estimate(data, input_nl, output_nl, progress)`` with the ``"auto"`` sides chosen
+    """``estimate(data, input_nl, output_nl, progress)`` (``data`` checked to be a record by
+    the caller) with the ``"auto"`` sides chosen
     by :func:`choose_nonlinearities` (a bar over the fold fits; a progress callable follows
     the final fit only), the choice in ``info["nonlinearity_choice"]``. ``channels``: the
     inputs and outputs a side's list needs (0: a single nonlinearity)."""
-    from .._checks import experiment_arrays
     from .._progress import iteration_callback
     from ..validation.crossval import fold_count
 
-    experiment_arrays(data)  # not a record: that error first
     sides = tuple(s for s, nl in (("input", input_nl), ("output", output_nl)) if is_auto(nl))
 
     def pick(kind: str) -> tuple[Any, Any]:

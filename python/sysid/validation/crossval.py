@@ -40,19 +40,20 @@ moesp 24 %, cva 14 % with the median). The median is kept.
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from ..data.iodata import IOData
-from ..errors import InsufficientDataError
+from ..errors import InsufficientDataError, SysidError
 from .compare import output_weights
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
-           "held_out_fit", "insists", "output_fits", "prediction_fit", "predictor",
-           "record_folds", "simulation_errors", "simulation_fit", "slack", "stable_first",
-           "variation", "wins_every_block"]
+           "held_out_fit", "held_out_folds", "insists", "output_fits", "prediction_fit",
+           "predictor", "record_folds", "simulation_errors", "simulation_fit", "slack",
+           "stable_first", "variation", "wins_every_block"]
 
 #: fit points a smaller order may give up and still win (held-out fits of half-record
 #: models scatter by about this much between neighbouring orders)
@@ -506,6 +507,48 @@ def held_out_fit(model: Any, block: IOData, floor: float = -100.0) -> float:
 
     fit = float(np.mean(compare(block, model).fit))
     return max(floor, fit) if np.isfinite(fit) else floor
+
+
+def held_out_folds(pairs: list[tuple[IOData, IOData]], kinds: Sequence[Any],
+                   fit: Callable[[IOData, Any, dict[Any, Any]], Any],
+                   tick: Callable[[int, float], Any] | None = None, floor: float = -100.0
+                   ) -> tuple[dict[Any, list[float]], dict[Any, list[SysidError]]]:
+    """Each of ``kinds`` fitted on every (part, block) pair of :func:`record_folds`, in
+    order, and scored on the block by :func:`held_out_fit`: the loop of the automatic
+    structures (``pnlss``'s degree, ``nlhw``'s nonlinearities, ``nlarx``'s terms).
+    ``fit(part, kind, fitted)`` gets the models of the kinds fitted before it on that part
+    (``None`` where that fit failed: a shared start is fitted once); ``tick(count, fit)``
+    after each. Returns per kind its block fits (a failed fit or score counts ``floor``) and
+    its errors. The fits' own warnings are not the caller's: they are silenced.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.crossval import held_out_folds, record_folds
+    >>> u = np.random.default_rng(0).standard_normal((200, 1))
+    >>> d = sysid.IOData(u, np.convolve(u[:, 0], [0, 1.0, 0.5])[:200, None])
+    >>> folds, failed = held_out_folds(record_folds(d), [1],
+    ...                                lambda part, k, fitted: sysid.n4sid(part, 2))
+    >>> len(folds[1]), min(folds[1]) > 99, failed[1]
+    (5, True, [])
+    """
+    folds: dict[Any, list[float]] = {k: [] for k in kinds}
+    failed: dict[Any, list[SysidError]] = {k: [] for k in kinds}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for part, block in pairs:
+            fitted: dict[Any, Any] = {}
+            for k in kinds:
+                fitted[k] = None
+                try:
+                    fitted[k] = fit(part, k, fitted)
+                    folds[k].append(held_out_fit(fitted[k], block, floor))
+                except SysidError as e:
+                    failed[k].append(e)
+                    folds[k].append(floor)
+                if tick is not None:
+                    tick(sum(map(len, folds.values())), folds[k][-1])
+    return folds, failed
 
 
 def choose(table: dict[int, float], tol: float = TOL, what: str = "simulation"
