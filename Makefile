@@ -11,7 +11,7 @@ $(STAMP): pyproject.toml Makefile
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q "maturin>=1.7,<2" "numpy>=1.24" "scipy>=1.10" \
 		"pytest>=7" "hypothesis>=6" "matplotlib>=3.6" "pandas>=1.5" "ruff>=0.5" \
-		"control>=0.10" "dask[array]>=2023.1" "distributed>=2023.1" "pyarrow>=12" "mypy>=1.10" "tqdm>=4.60" \
+		"control>=0.10" "dask[array]>=2023.1" "distributed>=2023.1" "pyarrow>=12" "mypy>=1.10" "tqdm>=4.60" "threadpoolctl>=3.1" \
 		"selenium>=4.10" "mkdocs>=1.5" "mkdocstrings[python]>=0.24"
 	touch $(STAMP)
 

@@ -22,6 +22,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_int, experiment_arrays, require_inputs_vary, warn_if_capped
 from .._progress import iteration_printer
+from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..errors import DataError
 from ..models.frd import FRD
@@ -64,6 +65,7 @@ def _x0_modes(x0: Any, count: int, n: int, has_model_x0: bool) -> list[Any]:
     return [arr] * count
 
 
+@one_blas_thread
 def greyest(
     data: Any,
     structure: Any,

@@ -57,6 +57,7 @@ import numpy as np
 from .._checks import require_inputs_vary
 from .._display import modulus
 from .._progress import Bar, show
+from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..data.preprocessing import spike_report
 from ..data.segments import long_enough
@@ -474,6 +475,7 @@ def _final_refit(data: IOData, start: Any, order: int, ft: bool, focus: str,
     return m
 
 
+@one_blas_thread
 def identify(
     data: IOData,
     validation: IOData | None = None,

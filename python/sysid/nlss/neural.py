@@ -28,6 +28,7 @@ import numpy as np
 
 from .. import _sysid
 from .._progress import iteration_callback
+from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..errors import DataError, NumericalError
 from ..models.protocol import ModelMixin
@@ -209,6 +210,7 @@ def _widths(h: Any, name: str) -> tuple[int, ...]:
     return tuple(int(v) for v in t)
 
 
+@one_blas_thread
 def nlssest(
     data: IOData,
     order: int,

@@ -23,6 +23,7 @@ from .. import _sysid
 from .._checks import as_int, as_nonnegative, as_seed
 from .._display import modulus
 from .._progress import iteration_callback, iteration_printer
+from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..errors import DataError
 from ..models.protocol import ModelMixin
@@ -186,6 +187,7 @@ def _degrees(degree: Any) -> list[int]:
     return list(range(2, out[0] + 1)) if np.ndim(degree) == 0 else [d for d in out if d >= 2]
 
 
+@one_blas_thread
 def pnlss(
     data: IOData,
     order: int,

@@ -26,6 +26,7 @@ from .._checks import (
     warn_if_capped,
 )
 from .._progress import iteration_callback, iteration_printer
+from .._threads import one_blas_thread
 from ..errors import DataError, StabilityWarning
 from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction
 from .operating_point import centred, record_means, use_offsets
@@ -43,6 +44,7 @@ def _check_nl(nl: Any, name: str) -> Nonlinearity:
     return copy.deepcopy(nl)
 
 
+@one_blas_thread
 def nlhw(
     data: Any,
     nb: int,

@@ -25,6 +25,7 @@ from .._checks import (
     warn_if_capped,
 )
 from .._progress import iteration_callback, iteration_printer
+from .._threads import one_blas_thread
 from ..data.offsets import check_offsets
 from ..errors import DataError
 from .hw_model import Nonlinearity, UserFunction
@@ -52,6 +53,7 @@ def _per_channel(nl: Any, n: int, name: str) -> list[Nonlinearity]:
     return out
 
 
+@one_blas_thread
 def nlhw_ss(
     data: Any,
     order: int,

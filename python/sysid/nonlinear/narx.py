@@ -16,6 +16,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import check_magnitudes, experiment_arrays
+from .._threads import one_blas_thread
 from ..errors import (
     DataError,
     ExcitationWarning,
@@ -155,6 +156,7 @@ def free_run_check(model: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> Non
     model.info["free_run"] = {"diverged": False, "fit": fit.tolist()}
 
 
+@one_blas_thread
 def nlarx(
     data: Any,
     na: Any,

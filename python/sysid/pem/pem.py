@@ -23,6 +23,7 @@ from .. import _sysid
 from .._checks import as_int, check_magnitudes, record_stats, user_stacklevel, warn_iteration_limit
 from .._display import modulus
 from .._progress import iteration_callback, iteration_printer
+from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
 from ..errors import DataError, IdentifiabilityWarning, StabilityWarning
@@ -380,6 +381,7 @@ def _start_noise(info: dict[str, Any]) -> None:
     if moved:
         info["start_noise"] = moved
 
+@one_blas_thread
 def pem(
     data: Any,
     model: StateSpaceModel,

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_int, recorded, reissue
+from .._threads import one_blas_thread
 from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
 from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator, horizon_for_order
@@ -24,6 +25,7 @@ from .pem import _experiments, pem, pem_loss
 __all__ = ["ssest"]
 
 
+@one_blas_thread
 def ssest(
     data: Any,
     order: Any = "auto",

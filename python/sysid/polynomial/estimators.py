@@ -23,6 +23,7 @@ from .._checks import (
     warn_if_capped,
 )
 from .._progress import iteration_callback, iteration_printer
+from .._threads import one_blas_thread
 from ..data.iodata import as_record
 from ..data.offsets import check_offsets
 from ..errors import DataError, InsufficientDataError, NumericalError, ShapeError
@@ -56,6 +57,7 @@ def _col(v: Any, ny: int, name: str) -> list[int]:
                                       (ny, 1), name)]
 
 
+@one_blas_thread
 def arx(
     data: Any,
     na: Any,
@@ -415,6 +417,7 @@ def _second_start(data: Any, rs: list[dict[str, Any]], search: Callable[..., Any
     info["start"] = names[0] if len(rs) == 1 else names
 
 
+@one_blas_thread
 def armax(
     data: Any,
     na: Any,
@@ -454,6 +457,7 @@ def armax(
     return _warn_diverging(m, "armax")
 
 
+@one_blas_thread
 def oe(
     data: Any,
     nb: Any,
@@ -525,6 +529,7 @@ def oe(
     return m
 
 
+@one_blas_thread
 def bj(
     data: Any,
     nb: Any,

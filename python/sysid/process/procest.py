@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import require_inputs_vary
+from .._threads import one_blas_thread
 from ..errors import DataError, NumericalError
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
@@ -17,6 +18,7 @@ from .structure import ProcessType
 __all__ = ["procest"]
 
 
+@one_blas_thread
 def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = None,
             fixed: Mapping[str, float] | None = None,
             bounds: Mapping[str, tuple[float, float]] | None = None, hold: str = "zoh",

@@ -41,6 +41,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int, as_orders, check_magnitudes, record_stats, require_inputs_vary
+from .._threads import one_blas_thread
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
@@ -688,6 +689,7 @@ def _orders(order: Any, top: int | None = None) -> list[int] | None:
 
 
 def _shortcut(method: str):  # type: ignore[no-untyped-def]
+    @one_blas_thread
     def fit(
         data: IOData,
         order: Order = "auto",

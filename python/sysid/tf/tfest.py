@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import require_inputs_vary
+from .._threads import one_blas_thread
 from ..errors import DataError
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
@@ -28,6 +29,7 @@ __all__ = ["tfest"]
 _HOLDS = ("zoh", "foh")
 
 
+@one_blas_thread
 def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
           dt: float | None = None, hold: str = "zoh", initial_state: str = "zero",
           init: TransferFunction | None = None,

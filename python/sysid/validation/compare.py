@@ -40,6 +40,7 @@ import numpy as np
 
 from .._checks import as_2d, as_int
 from .._display import HTMLResult
+from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..errors import DataError, NumericalError, ShapeError
 from ..models.checks import check_model
@@ -484,6 +485,7 @@ class CompareResult(HTMLResult):
                 f"[{fits}]{div})")
 
 
+@one_blas_thread
 def compare(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
     """Compare models' simulations or ``horizon``-step predictions with measured outputs.
 
