@@ -110,6 +110,10 @@ CASES: dict[str, tuple[str, str]] = {
     "pnlss": (
         "d = record(50_000, m=1, l=1, n=3)",
         "sysid.pnlss(d, 4, degree=3, max_iter=100_000, tol=1e-300, progress=False)"),
+    # the automatic nonlinearities: fold fits on worker threads (RAYON_NUM_THREADS=2)
+    "nlhw_ss_auto": (
+        "d = record(200_000, m=1, l=1, n=3)",
+        "sysid.nlhw_ss(d, 3, max_iter=100_000, tol=1e-300, progress=False)"),
     "nlssest": (
         "d = record(50_000, m=1, l=1, n=3)",
         "sysid.nlssest(d, 3, hidden=64, epochs=100_000, patience=100_000, progress=False)"),

@@ -10,9 +10,58 @@ plain counter line is written instead.
 from __future__ import annotations
 
 import sys
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any, Callable
 
-__all__ = ["Bar", "show", "iteration_callback", "iteration_printer"]
+__all__ = ["Bar", "show", "iteration_callback", "iteration_printer", "stop_requested",
+           "stopped_by"]
+
+#: per thread: the event that stops the iterative estimators running in it (see stopped_by)
+_local = threading.local()
+
+
+def stop_requested() -> bool:
+    """Whether this thread's work is to stop (:func:`stopped_by`'s event is set): asked by
+    the Rust core's long computations every few milliseconds, as the main thread asks for
+    Ctrl-C.
+
+    Examples
+    --------
+    >>> from sysid._progress import stop_requested
+    >>> stop_requested()
+    False
+    """
+    stop = getattr(_local, "stop", None)
+    return stop is not None and stop.is_set()
+
+
+@contextmanager
+def stopped_by(event: threading.Event) -> Iterator[None]:
+    """Inside the block, every iterative estimator started in this thread stops at its next
+    iteration once ``event`` is set (as when its progress callable returns False): how a
+    worker thread's fits are stopped on Ctrl-C, which only the main thread receives.
+
+    Examples
+    --------
+    >>> import threading
+    >>> from sysid._progress import iteration_callback, stopped_by
+    >>> stop = threading.Event()
+    >>> with stopped_by(stop):
+    ...     cb, close = iteration_callback(False, "fit", 10)
+    >>> cb(1, 2.0) is not False
+    True
+    >>> stop.set()
+    >>> cb(2, 1.0)
+    False
+    """
+    saved = getattr(_local, "stop", None)
+    _local.stop = event
+    try:
+        yield
+    finally:
+        _local.stop = saved
 
 
 def show(progress: bool | None) -> bool:
@@ -124,6 +173,21 @@ def iteration_callback(
     >>> iteration_callback(mine, "fit", 10)[0] is mine
     True
     """
+    cb, close = _callback(progress, desc, max_iter, log_line, unit, postfix)
+    stop = getattr(_local, "stop", None)
+    if stop is None:
+        return cb, close
+
+    def stoppable(*args: Any) -> Any:
+        if stop.is_set():
+            return False
+        return None if cb is None else cb(*args)
+    return stoppable, close
+
+
+def _callback(progress: Any, desc: str, max_iter: int, log_line: Callable[..., None] | None,
+              unit: str, postfix: Callable[..., dict[str, str]] | None
+              ) -> tuple[Callable[..., Any] | None, Callable[[], None]]:
     if callable(progress):
         return progress, lambda: None
     if progress is not None and not isinstance(progress, bool):

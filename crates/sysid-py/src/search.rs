@@ -28,17 +28,40 @@ thread_local! {
 }
 
 /// Runs pending signal handlers (on the main thread; elsewhere Python reports none) and
-/// keeps the first exception they raise.
+/// keeps the first exception they raise; on another thread, the stop its Python caller set
+/// for it (`sysid._progress.stopped_by`: Ctrl-C seen by the main thread) raises
+/// `KeyboardInterrupt` the same way.
 fn poll_signals() -> bool {
-    Python::attach(|py| match py.check_signals() {
-        Ok(()) => false,
-        Err(e) => {
-            PENDING.with(|p| {
-                p.borrow_mut().get_or_insert(e);
-            });
-            true
-        }
-    })
+    Python::attach(
+        |py| match py.check_signals().and_then(|()| stop_requested(py)) {
+            Ok(()) => false,
+            Err(e) => {
+                PENDING.with(|p| {
+                    p.borrow_mut().get_or_insert(e);
+                });
+                true
+            }
+        },
+    )
+}
+
+/// `Err(KeyboardInterrupt)` once `sysid._progress.stop_requested()` says this thread's work
+/// is to stop; `Ok` otherwise, and when that function cannot be had or fails (the bindings
+/// used without the package).
+fn stop_requested(py: Python<'_>) -> PyResult<()> {
+    let asked = py
+        .import("sysid._progress")
+        .and_then(|m| m.getattr("stop_requested"))
+        .and_then(|f| f.call0())
+        .and_then(|r| r.is_truthy())
+        .unwrap_or(false);
+    if asked {
+        Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(
+            "stopped: Ctrl-C reached the main thread while this fit ran on another",
+        ))
+    } else {
+        Ok(())
+    }
 }
 
 /// The exception that interrupted the computation, if any (taken: asked once).
