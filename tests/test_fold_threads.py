@@ -17,15 +17,11 @@ from sysid._progress import stop_requested, stopped_by
 from sysid.validation import crossval
 
 
-def _wiener(n: int = 3000, seed: int = 0) -> sysid.IOData:
-    rng = np.random.default_rng(seed)
-    u = rng.uniform(-1, 1, (n, 1))
-    w = np.tanh(2 * u[:, 0])
-    x, y = np.zeros(2), np.zeros((n, 1))
-    for t in range(n):
-        y[t] = x[0]
-        x = np.array([[0.8, 0.2], [-0.2, 0.7]]) @ x + np.array([0.0, 1.0]) * w[t]
-    return sysid.IOData(u, y + 0.01 * rng.standard_normal(y.shape), 1.0)
+def _wiener(n: int = 3000) -> sysid.IOData:
+    """test_hammerstein_choice's saturating Wiener record (its networks are chosen)."""
+    from test_hammerstein_choice import _wiener as record
+
+    return record(n=n)
 
 
 def test_parallel_folds_give_the_sequential_choice(monkeypatch) -> None:
