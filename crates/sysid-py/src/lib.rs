@@ -37,6 +37,7 @@ mod names;
 
 #[pymodule]
 fn _sysid(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    search::note_main_thread();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     hankel::register(m)?;
     simulate::register(m)?;

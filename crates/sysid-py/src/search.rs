@@ -45,17 +45,36 @@ fn poll_signals() -> bool {
     )
 }
 
+/// The thread that imported the module: Python's main thread, where signals arrive.
+static MAIN_THREAD: std::sync::OnceLock<std::thread::ThreadId> = std::sync::OnceLock::new();
+
+/// Remembers the importing thread as the main one (called once, by the module's init).
+pub fn note_main_thread() {
+    let _ = MAIN_THREAD.set(std::thread::current().id());
+}
+
 /// `Err(KeyboardInterrupt)` once `sysid._progress.stop_requested()` says this thread's work
-/// is to stop; `Ok` otherwise, and when that function cannot be had or fails (the bindings
-/// used without the package).
+/// is to stop; `Ok` otherwise, on the main thread (which its signals stop), and when the
+/// bindings are used without the package (the module or function not found). Any other
+/// exception is returned, not dropped.
 fn stop_requested(py: Python<'_>) -> PyResult<()> {
-    let asked = py
+    if MAIN_THREAD.get() == Some(&std::thread::current().id()) {
+        return Ok(()); // the main thread is stopped by its signals alone
+    }
+    let found = py
         .import("sysid._progress")
-        .and_then(|m| m.getattr("stop_requested"))
-        .and_then(|f| f.call0())
-        .and_then(|r| r.is_truthy())
-        .unwrap_or(false);
-    if asked {
+        .and_then(|m| m.getattr("stop_requested"));
+    let f = match found {
+        Ok(f) => f,
+        Err(e)
+            if e.is_instance_of::<pyo3::exceptions::PyImportError>(py)
+                || e.is_instance_of::<pyo3::exceptions::PyAttributeError>(py) =>
+        {
+            return Ok(())
+        }
+        Err(e) => return Err(e),
+    };
+    if f.call0()?.is_truthy()? {
         Err(pyo3::exceptions::PyKeyboardInterrupt::new_err(
             "stopped: Ctrl-C reached the main thread while this fit ran on another",
         ))
