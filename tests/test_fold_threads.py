@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import sysid
+from sysid import _parallel
 from sysid._progress import stop_requested, stopped_by
 from sysid.validation import crossval
 
@@ -29,7 +30,7 @@ def test_parallel_folds_give_the_sequential_choice(monkeypatch) -> None:
     seen: dict[str, object] = {}
     for threads in ("1", "2"):
         monkeypatch.setenv("RAYON_NUM_THREADS", threads)
-        assert crossval.fold_workers(5) == int(threads)
+        assert _parallel.fold_workers(5) == int(threads)
         m = sysid.nlhw_ss(d, 2, progress=False)
         seen[threads] = (m.info["nonlinearity_choice"], m.simulate(d.u))
     (c1, y1), (c2, y2) = seen["1"], seen["2"]
@@ -40,11 +41,11 @@ def test_parallel_folds_give_the_sequential_choice(monkeypatch) -> None:
 
 def test_fold_workers_follow_the_environment_and_the_thread(monkeypatch) -> None:
     monkeypatch.setenv("RAYON_NUM_THREADS", "3")
-    assert crossval.fold_workers(5) == 3 and crossval.fold_workers(2) == 2
+    assert _parallel.fold_workers(5) == 3 and _parallel.fold_workers(2) == 2
     monkeypatch.delenv("RAYON_NUM_THREADS")
-    assert 1 <= crossval.fold_workers(5) <= 5
+    assert 1 <= _parallel.fold_workers(5) <= 5
     got: list[int] = []
-    t = threading.Thread(target=lambda: got.append(crossval.fold_workers(5)))
+    t = threading.Thread(target=lambda: got.append(_parallel.fold_workers(5)))
     t.start()
     t.join()
     assert got == [1]  # a fold fit's own folds run in its thread
@@ -93,3 +94,22 @@ def test_a_fit_error_on_a_part_is_scored_at_the_floor(monkeypatch, threads) -> N
     folds, failed = crossval.held_out_folds(pairs, [2], fit, floor=-100.0)
     assert folds[2][1] == -100.0 and len(failed[2]) == 1
     assert all(f > 50 for i, f in enumerate(folds[2]) if i != 1)
+
+
+def test_identify_refines_on_threads_with_the_same_board(monkeypatch) -> None:
+    """identify's refinements are fitted on the blocks in parallel: the same leaderboard and
+    model as one block after another."""
+    rng = np.random.default_rng(4)
+    true = sysid.StateSpaceModel([[0.85, 0.3], [-0.3, 0.85]], [[1.0], [0.4]], [[1.0, 0.0]])
+    u = rng.standard_normal((1500, 1))
+    d = sysid.IOData(u=u, y=true.simulate(u) + 0.2 * rng.standard_normal((1500, 1)))
+    seen = {}
+    for threads in ("1", "2"):
+        monkeypatch.setenv("RAYON_NUM_THREADS", threads)
+        r = sysid.identify(d, progress=False)
+        board = [(x["family"], x["order"], x["feedthrough"], x.get("focus"),
+                  x["held_out_fit"], x.get("note", "")) for x in r.leaderboard]
+        seen[threads] = (board, r.model.to_statespace().markov(20))
+    assert any(b[0] == "pem" for b in seen["1"][0])  # refinements were scored
+    assert seen["1"][0] == seen["2"][0]
+    np.testing.assert_array_equal(seen["1"][1], seen["2"][1])

@@ -27,10 +27,12 @@ from __future__ import annotations
 
 import time
 import warnings
+from contextlib import closing
 from typing import Any
 
 import numpy as np
 
+from .._parallel import ordered
 from .._progress import Bar
 from ..data.iodata import IOData
 from ..errors import SysidError
@@ -170,21 +172,27 @@ class Board:
                                "focus": focus, "criterion": criterion, "refit": refit,
                                "fit_fn": fit_fn, "start": start, "note": ""}
         hopeless = False
+        # the budgeted candidates (refinements, output-error models) are fitted on the
+        # blocks in parallel, in order (the same fits as one after another; the blocks
+        # fitted ahead of a hopeless one's stop are stopped); the subspace sweep's fits are
+        # too short to gain from threads. The warnings filter is the process's: the fits'
+        # own warnings are silenced around the threads, not inside them.
+        tasks = [lambda k=k: fit_fn(k) for k in range(len(self.folds))]
         try:
             fits, outs, rho = [], [], 0.0
-            for k, (_, held) in enumerate(self.folds):
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore")
-                    model = fit_fn(k)
-                outs.append(output_fits(model, held))
-                fits.append(block_fit(outs[-1]))
-                if start is not None:  # a refinement's fold fits: starts for its re-fit
-                    row.setdefault("fold_models", []).append(model)
-                poles = model.poles()
-                rho = max(rho, float(np.max(np.abs(poles))) if len(poles) else 0.0)
-                if start is not None and self._below_start(fits, outs, start):
-                    hopeless = True  # the remaining blocks cannot save it: not fitted
-                    break
+            with warnings.catch_warnings(), closing(ordered(tasks, None if budgeted else 1)
+                                                    ) as models:
+                warnings.simplefilter("ignore")
+                for (_, held), model in zip(self.folds, models):
+                    outs.append(output_fits(model, held))
+                    fits.append(block_fit(outs[-1]))
+                    if start is not None:  # a refinement's fold fits: starts for its re-fit
+                        row.setdefault("fold_models", []).append(model)
+                    poles = model.poles()
+                    rho = max(rho, float(np.max(np.abs(poles))) if len(poles) else 0.0)
+                    if start is not None and self._below_start(fits, outs, start):
+                        hopeless = True  # the remaining blocks cannot save it: not fitted
+                        break
             f = np.asarray(fits)
             row["held_out_fit"] = self.score(outs)
             row["mean_fit"] = float(np.mean(f)) if np.all(np.isfinite(f)) else -np.inf

@@ -39,8 +39,6 @@ moesp 24 %, cva 14 % with the median). The median is kept.
 
 from __future__ import annotations
 
-import os
-import threading
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -511,30 +509,6 @@ def held_out_fit(model: Any, block: IOData, floor: float = -100.0) -> float:
     return max(floor, fit) if np.isfinite(fit) else floor
 
 
-def fold_workers(tasks: int) -> int:
-    """Threads for ``tasks`` independent fold fits: the cores this process may use
-    (``RAYON_NUM_THREADS`` when set, as the Rust core reads it: one compute thread in
-    :func:`sysid.identify_many`'s workers), at most ``tasks``; one when called from a
-    thread other than the main one (a fold fit's own folds run in its thread).
-
-    Examples
-    --------
-    >>> from sysid.validation.crossval import fold_workers
-    >>> 1 <= fold_workers(5) <= 5, fold_workers(1)
-    (True, 1)
-    """
-    if threading.current_thread() is not threading.main_thread():
-        return 1
-    try:
-        n = int(os.environ.get("RAYON_NUM_THREADS", "0"))
-    except ValueError:
-        n = 0
-    if n <= 0:
-        n = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (
-            os.cpu_count() or 1)
-    return max(1, min(n, tasks))
-
-
 def held_out_folds(pairs: list[tuple[IOData, IOData]], kinds: Sequence[Any],
                    fit: Callable[[IOData, Any, dict[Any, Any]], Any],
                    tick: Callable[[int, float], Any] | None = None, floor: float = -100.0
@@ -547,10 +521,8 @@ def held_out_folds(pairs: list[tuple[IOData, IOData]], kinds: Sequence[Any],
     order. Returns per kind its block fits (a failed fit or score counts ``floor``) and its
     errors. The fits' own warnings are not the caller's: they are silenced.
 
-    The parts are fitted on :func:`fold_workers` threads at once (the Rust core releases
-    the GIL; the same results as one after another, each part's fits being independent).
-    Ctrl-C, which only the main thread receives, stops the fits running in the others at
-    their next iteration (:func:`sysid._progress.stopped_by`) and is then raised.
+    The parts are fitted on the cores at hand (:func:`sysid._parallel.ordered`: the same
+    results as one after another; Ctrl-C stops the fits on the other threads too).
 
     Examples
     --------
@@ -563,53 +535,38 @@ def held_out_folds(pairs: list[tuple[IOData, IOData]], kinds: Sequence[Any],
     >>> len(folds[1]), min(folds[1]) > 99, failed[1]
     (5, True, [])
     """
-    from .._progress import stopped_by
+    from contextlib import closing
 
-    stop = threading.Event()
+    from .._parallel import ordered
+    from .._progress import stop_requested
 
     def one(pair: tuple[IOData, IOData]) -> list[tuple[float, SysidError | None]]:
         part, block = pair
         fitted: dict[Any, Any] = {}
         out: list[tuple[float, SysidError | None]] = []
-        with stopped_by(stop):
-            for k in kinds:
-                fitted[k] = None
-                if stop.is_set():  # stopped: the part's other fits are not started
-                    break
-                try:
-                    fitted[k] = fit(part, k, fitted)
-                    out.append((held_out_fit(fitted[k], block, floor), None))
-                except SysidError as e:
-                    out.append((floor, e))
+        for k in kinds:
+            fitted[k] = None
+            if stop_requested():  # stopped (Ctrl-C): the part's other fits are not started
+                break
+            try:
+                fitted[k] = fit(part, k, fitted)
+                out.append((held_out_fit(fitted[k], block, floor), None))
+            except SysidError as e:
+                out.append((floor, e))
         return out
 
     folds: dict[Any, list[float]] = {k: [] for k in kinds}
     failed: dict[Any, list[SysidError]] = {k: [] for k in kinds}
-    with warnings.catch_warnings():
+    with warnings.catch_warnings():  # around the threads: the filters are the process's
         warnings.simplefilter("ignore")
-        workers = fold_workers(len(pairs))
-        if workers == 1:
-            results = map(one, pairs)
-            pool = None
-        else:
-            from concurrent.futures import ThreadPoolExecutor
-
-            pool = ThreadPoolExecutor(workers, thread_name_prefix="sysid-fold")
-            results = iter([pool.submit(one, pair) for pair in pairs])
-        try:
+        with closing(ordered([lambda pair=pair: one(pair) for pair in pairs])) as results:
             for res in results:
-                for k, (f, err) in zip(kinds, res if pool is None else res.result()):
+                for k, (f, err) in zip(kinds, res):
                     folds[k].append(f)
                     if err is not None:
                         failed[k].append(err)
                     if tick is not None:
                         tick(sum(map(len, folds.values())), f)
-        except BaseException:
-            stop.set()  # Ctrl-C (or a tick's error): the other threads' fits stop too
-            raise
-        finally:
-            if pool is not None:
-                pool.shutdown(wait=True, cancel_futures=True)
     return folds, failed
 
 
