@@ -164,10 +164,15 @@ def as_orders(order: Any, name: str = "order") -> list[int]:
 
 
 def warn_iteration_limit(what: str, max_iter: int, history: Any, fix: str = "raise max_iter",
-                         stacklevel: int | None = None) -> None:
+                         stacklevel: int | None = None, remaining: float | None = None
+                         ) -> None:
     """The :class:`~sysid.errors.IterationLimitWarning` of a search stopped at its cap: how
-    much its last iteration still lowered the cost, and what to do; at the caller's line
-    outside sysid unless ``stacklevel`` is given.
+    much its last iteration still lowered the cost, how far the estimate stands from the
+    minimum of the search's Gauss-Newton model (``remaining``: the optimiser's
+    ``remaining_decrease``, in residual variances), and what to do; at the caller's line
+    outside sysid unless ``stacklevel`` is given. No warning when ``remaining`` is below
+    ``NEGLIGIBLE_REMAINING``: the rest of the way would move the estimate by less than half
+    of its standard deviation.
 
     Examples
     --------
@@ -176,18 +181,25 @@ def warn_iteration_limit(what: str, max_iter: int, history: Any, fix: str = "rai
     >>> with warnings.catch_warnings(record=True) as w:
     ...     warnings.simplefilter("always")
     ...     warn_iteration_limit("the search", 5, [4.0, 2.0])
-    >>> str(w[0].message)[:60]
-    'the search stopped at max_iter=5 before converging (the last'
+    ...     warn_iteration_limit("the search", 5, [4.0, 2.0], remaining=0.02)  # silent
+    >>> len(w), str(w[0].message)[:60]
+    (1, 'the search stopped at max_iter=5 before converging (the last')
     """
     import warnings
 
     from .errors import IterationLimitWarning
 
+    far = ""
+    if remaining is not None and np.isfinite(remaining):
+        if remaining < NEGLIGIBLE_REMAINING:
+            return
+        far = (f"; its Gauss-Newton model puts the minimum about "
+               f"{np.sqrt(2.0 * remaining):.2g} standard deviations of the estimate away")
     h = [float(c) for c in history]
     last = abs(h[-2] - h[-1]) / max(abs(h[-2]), 1e-300) if len(h) > 1 else 0.0
     warnings.warn(f"{what} stopped at max_iter={max_iter} before converging (the last "
-                  f"iteration still lowered the cost by {100 * last:.2g} %); the model is the "
-                  f"best iterate: {fix}", IterationLimitWarning,
+                  f"iteration still lowered the cost by {100 * last:.2g} %{far}); the model "
+                  f"is the best iterate: {fix}", IterationLimitWarning,
                   stacklevel=user_stacklevel() if stacklevel is None else stacklevel)
 
 
@@ -206,14 +218,17 @@ def warn_if_capped(info: dict[str, Any], what: str, max_iter: int,
     stops = stop if isinstance(stop, list) else [stop]
     if max_iter > 0 and "maximum iterations" in stops:
         cost = info.get("cost") or []
+        remaining = info.get("remaining_decrease")
         if cost and isinstance(cost[0], (list, tuple)):  # one history per output
             cost = cost[stops.index("maximum iterations")]
+            if isinstance(remaining, (list, tuple)):
+                remaining = remaining[stops.index("maximum iterations")]
         h = [float(c) for c in cost]
         stat = STATISTICAL * 2 * abs(h[-1]) / n_residuals if n_residuals else 0.0
         if len(h) > 1 and abs(h[-2] - h[-1]) <= max(SETTLED * abs(h[-2]), FLOOR * abs(h[0]),
                                                      stat, 1e-300):
             return
-        warn_iteration_limit(what, max_iter, cost, fix)
+        warn_iteration_limit(what, max_iter, cost, fix, remaining=remaining)
 
 
 #: relative decrease of a capped search's last iteration below which it had settled
@@ -224,6 +239,10 @@ FLOOR = 1e-12
 #: decrease of a capped search's last iteration, in residual variances, below which it had
 #: converged statistically (the optimiser's ``tol_statistical``)
 STATISTICAL = 1e-2
+#: a capped search's remaining predicted decrease (the optimiser's ``remaining_decrease``,
+#: in residual variances) below which its stop is not warned about: the rest of the way
+#: would move the estimate by less than half of its standard deviation (``sqrt(2 x 1/8)``)
+NEGLIGIBLE_REMAINING = 0.125
 
 
 #: a stable pole whose mode keeps more than this share of its size over the longest

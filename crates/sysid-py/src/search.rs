@@ -260,5 +260,6 @@ pub fn search_items(
     geo.set_item("refused", sol.geodesic.refused)?;
     out.set_item("geodesic", geo)?;
     out.set_item("shortened", sol.shortened)?;
+    out.set_item("remaining_decrease", sol.remaining_decrease)?;
     Ok(())
 }

@@ -371,7 +371,7 @@ class _LinearFit(OuterParameters):
         info = {
             "method": "greyest", "domain": "time", "iterations": res["iterations"],
             "evaluations": res["evaluations"], **_costs(res, self.reweight),
-            "stop": res["stop"],
+            "stop": res["stop"], "remaining_decrease": float(res["remaining_decrease"]),
             "condition": res["condition"], "rank": int(res["rank"]), "n_free": int(z.size),
             "n_samples": int(res["n_samples"]), "focus": self.focus, "noise": self.noise,
             "x0_values": x0s, "multistart": starts, "loss": res["loss"],

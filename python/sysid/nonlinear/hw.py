@@ -222,6 +222,7 @@ def nlhw(
     b, f = th[na:na + int(nb)], th[na + int(nb):na + int(nb) + int(nf)]
     fout.params = th[na + int(nb) + int(nf):]
     info = {"method": "nlhw", "iterations": int(res["iterations"]), "stop": res["stop"],
+            "remaining_decrease": float(res["remaining_decrease"]),
             "cost": list(res["history"]), "criterion": "sum of squares", "theta0": theta0,
             "n_starts": len(fin.starts(u_all)) * len(fout.starts(x_all)) + int(linear_pair),
             "covariance": np.asarray(res["covariance"]),

@@ -262,6 +262,7 @@ def nlhw_ss(
     for g in fout:
         g.params, k = th[k:k + np.size(g.params)], k + np.size(g.params)
     info = {"method": "nlhw_ss", "iterations": int(res["iterations"]), "stop": res["stop"],
+            "remaining_decrease": float(res["remaining_decrease"]),
             "n_starts": len(passes),
             "cost": list(res["history"]), "criterion": "sum of squares", "theta0": th0,
             "u_ranges": [(float(c.min()), float(c.max())) for c in u_all.T],

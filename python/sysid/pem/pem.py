@@ -271,8 +271,7 @@ def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None,
           n: int = 0, held: bool = True) -> None:
     """The warnings of a refinement: an unstable model, a pole at the unit circle
     (:func:`.boundary.warn_boundary`; ``held``: a bound kept ``A`` stable, else the search
-    ended there freely; ``n``: samples of the longest experiment), a search stopped at its
-    cap."""
+    ended there freely; ``n``: samples of the longest experiment), a capped search."""
     rho = float(res["spectral_radius"])
     if focus == "simulation" or enforce is not False:
         warn_boundary(res["a"], n, stacklevel=4, held=held)
@@ -285,8 +284,8 @@ def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None,
             f"enforce_stability=True (or focus='simulation') for a stable model",
             StabilityWarning, stacklevel=3)
     if res["stop"] == "maximum iterations" and max_iter > 0:
-        warn_iteration_limit(f"the {focus} search", max_iter, res["history"],
-                             cap_advice(res), stacklevel=4)
+        warn_iteration_limit(f"the {focus} search", max_iter, res["history"], cap_advice(res),
+                             stacklevel=4, remaining=res.get("remaining_decrease"))
 
 
 def _warn_undetermined(res: dict[str, Any], n: int) -> int:
@@ -519,9 +518,11 @@ def pem(
         square (:mod:`sysid.pem.units`; ``"channel_scaling"``, the input and output scales,
         and ``"state_scale"``, the state basis factor), so that its path and the model do not
         depend on the channels' units; the criterion is reported in the record's units.
-        Stopping at ``max_iter`` warns (:class:`sysid.IterationLimitWarning`); ``"shortened"``
-        counts the accepted steps the stability bound shortened, and when it is most of them
-        the warning says that more iterations creep along that bound.
+        Stopping at ``max_iter`` warns (:class:`sysid.IterationLimitWarning`) unless
+        ``"remaining_decrease"`` (the Gauss-Newton predicted decrease at the result in
+        residual variances; NaN for other stops) is below 1/8, half a standard deviation of
+        the estimate; ``"shortened"`` counts the accepted steps the stability bound
+        shortened, and when it is most of them the warning says more iterations creep there.
         ``uncertainty`` holds the parameter covariance (:class:`sysid.ParameterUncertainty`), so
         that ``poles(std=True)``, ``freqresp(w, std=True)``, ``damp(std=True)`` and Bode bands
         work: the Gauss-Newton one, and with ``focus="simulation"`` (no noise model) on one
@@ -644,7 +645,7 @@ def pem(
         "loss_history": list(res["loss_history"]),
         "stop": res["stop"],
         "geodesic": dict(res["geodesic"], on=bool(geodesic)),
-        "shortened": int(res["shortened"]),
+        "shortened": int(res["shortened"]), "remaining_decrease": float(res["remaining_decrease"]),
         "condition": res["condition"],
         "focus": focus,
         "weighting": weighting,

@@ -285,7 +285,8 @@ def _pem(
         _require_samples(exps, method, i, na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i], nk_g[i])
     parts: dict[str, list[Any]] = {k: [] for k in "abcdf"}
     info: dict[str, Any] = {"method": method, "iterations": [], "cost": [],
-                            "criterion": "sum of squares", "stop": []}
+                            "criterion": "sum of squares", "stop": [],
+                            "remaining_decrease": []}
     cov, var = [], []
     cb, close_bar = iteration_callback(progress, method, int(max_iter) * ny,
                                        iteration_printer(method, "sum of squares"))
@@ -324,6 +325,7 @@ def _pem(
         info["iterations"].append(r["iterations"])
         info["cost"].append(list(r["history"]))
         info["stop"].append(r["stop"])
+        info["remaining_decrease"].append(float(r["remaining_decrease"]))
         cov.append(r["covariance"])
         var.append(r["noise_variance"])
     m = PolynomialModel(

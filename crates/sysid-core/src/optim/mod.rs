@@ -371,6 +371,14 @@ pub struct Solution {
     /// Accepted steps that the admissible set shortened ([`Problem::admissible`]): a search
     /// that keeps meeting its boundary (a pole held at the unit circle) moves slowly.
     pub shortened: usize,
+    /// A search stopped at [`Options::max_iter`]: how far it stood from the minimum of its
+    /// Gauss-Newton model, the predicted decrease `g^T H^+ g / 2` at the solution in
+    /// residual variances (`2 cost / n`, [`Problem::n_residuals`]). Twice it is the squared
+    /// distance to that minimum in standard deviations of the estimate (the Mahalanobis
+    /// distance under `H / sigma^2`): below 1/8 the estimate would move by less than half a
+    /// standard deviation. NaN for any other stop, or when the provider does not count its
+    /// residuals or the point was not evaluated with its Jacobian.
+    pub remaining_decrease: f64,
 }
 
 /// What geodesic acceleration did in one search ([`Solution::geodesic`]).

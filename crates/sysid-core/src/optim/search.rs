@@ -289,6 +289,7 @@ pub fn minimize(
     let mut last_red: Option<Reduced> = None;
     let mut geo = GeodesicCounts::default();
     let mut shortened = 0usize;
+    let mut remaining = f64::NAN;
     let stop;
     loop {
         let capped = iterations >= options.max_iter;
@@ -373,6 +374,9 @@ pub fn minimize(
             break;
         }
         if capped {
+            // how far short of the minimum it stops (the exact decrease, not the bound that
+            // may have skipped the solve above)
+            remaining = sigma2.map_or(f64::NAN, |s2| red.gn_decrease(options.rank_tol) / s2);
             stop = StopReason::MaxIterations;
             break;
         }
@@ -619,5 +623,6 @@ pub fn minimize(
         theta: pt.theta,
         geodesic: geo,
         shortened,
+        remaining_decrease: remaining,
     })
 }

@@ -637,3 +637,41 @@ fn geodesic_acceleration_takes_fewer_iterations() {
         );
     }
 }
+
+#[test]
+fn a_capped_search_reports_how_far_it_stands_from_its_minimum() {
+    // Rosenbrock's Jacobian is square and invertible: the Gauss-Newton step zeroes the
+    // linearised residuals, so the predicted decrease is the whole cost, one residual
+    // variance (2 cost / 2 residuals) exactly; any other stop reports NaN
+    struct Counted<P: Problem>(P);
+    impl<P: Problem> Problem for Counted<P> {
+        fn n_params(&self) -> usize {
+            self.0.n_params()
+        }
+        fn evaluate(&mut self, th: &[f64], jac: bool) -> crate::Result<Evaluation> {
+            self.0.evaluate(th, jac)
+        }
+        fn n_residuals(&self) -> Option<usize> {
+            Some(2)
+        }
+    }
+    let mut o = Options::default();
+    o.max_iter = 3;
+    let capped = go(&mut Counted(ls(2, rosen)), &[-1.2, 1.0], &o);
+    assert_eq!(capped.stop, StopReason::MaxIterations);
+    assert!(
+        (capped.remaining_decrease - 1.0).abs() < 1e-9,
+        "{}",
+        capped.remaining_decrease
+    );
+    let free = go(
+        &mut Counted(ls(2, rosen)),
+        &[-1.2, 1.0],
+        &Options::default(),
+    );
+    assert_ne!(free.stop, StopReason::MaxIterations);
+    assert!(free.remaining_decrease.is_nan());
+    // a provider that does not count its residuals: unknown
+    let uncounted = go(&mut ls(2, rosen), &[-1.2, 1.0], &o);
+    assert!(uncounted.remaining_decrease.is_nan());
+}

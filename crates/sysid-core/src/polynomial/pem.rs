@@ -291,6 +291,12 @@ impl Problem for MisoProblem {
         self.orders.n_params()
     }
 
+    /// Every sample of every experiment is one residual of the cost `0.5 sum e^2` (the
+    /// search's statistical tests and its distance from the minimum at a cap use it).
+    fn n_residuals(&self) -> Option<usize> {
+        Some(self.segs.iter().map(|s| s.y.len()).sum())
+    }
+
     fn admissible(&mut self, theta: &[f64]) -> bool {
         let p = self.orders.polys(theta);
         is_stable(&p.c) && p.f.iter().all(|f| is_stable(f))
