@@ -291,8 +291,8 @@ impl Problem for MisoProblem {
         self.orders.n_params()
     }
 
-    /// Every sample of every experiment is one residual of the cost `0.5 sum e^2` (the
-    /// search's statistical tests and its distance from the minimum at a cap use it).
+    /// Every sample of every experiment is one residual of the cost `0.5 sum e^2` (for the
+    /// distance from the minimum at a cap; this search has no statistical stop).
     fn n_residuals(&self) -> Option<usize> {
         Some(self.segs.iter().map(|s| s.y.len()).sum())
     }
