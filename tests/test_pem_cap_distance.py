@@ -107,3 +107,22 @@ def test_a_polynomial_search_capped_at_its_minimum_is_not_warned_about():
     assert m.info["stop"] == ["maximum iterations"]
     assert m.info["remaining_decrease"][0] < NEGLIGIBLE_REMAINING
     assert not [w for w in caught if w.category is sysid.IterationLimitWarning]
+
+
+def test_a_capped_grey_box_search_says_how_far_it_stands():
+    # the grey-box search runs through a change of parameters that now passes on the
+    # residual count: it reports the distance, as pem does (it was NaN)
+    def motor(p, dt=None):
+        return [[-1.0 / p.tau]], [[p.K / p.tau]], [[1.0]], [[0.0]]
+    u = np.sign(np.sin(np.arange(400) * 0.05))
+    y = sysid.GreyBox(motor, {"K": 2.0, "tau": 0.3}).model(dt=0.05).simulate(u)
+    y = y + 0.02 * np.random.default_rng(0).standard_normal(y.shape)
+    data = sysid.IOData(u=u, y=y, dt=0.05)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        short = sysid.greyest(data, sysid.GreyBox(motor, {"K": 1.0, "tau": 1.0}), max_iter=1)
+    r = short.info["remaining_decrease"]
+    assert short.info["stop"] == "maximum iterations" and r >= NEGLIGIBLE_REMAINING
+    capped = [str(w.message) for w in caught if w.category is sysid.IterationLimitWarning]
+    assert len(capped) == 1
+    assert f"about {np.sqrt(2 * r):.2g} standard deviations of the estimate away" in capped[0]

@@ -160,6 +160,10 @@ impl Problem for Reparameterized<'_> {
         self.inner.criterion()
     }
 
+    fn n_residuals(&self) -> Option<usize> {
+        self.inner.n_residuals()
+    }
+
     fn gradient_only(&mut self, p: &[f64]) -> Result<Option<Evaluation>> {
         let (th, m) = self.with_jacobian(p)?;
         match self.inner.gradient_only(&th)? {

@@ -303,6 +303,12 @@ impl Problem for OdeProblem<'_> {
         self.st.free_p.len() + self.st.free_x0.len()
     }
 
+    /// Every output of every sample is one residual of the cost `0.5 sum |R^-1 e|^2` (for
+    /// the distance from the minimum at a cap; the grey-box searches set no statistical stop).
+    fn n_residuals(&self) -> Option<usize> {
+        Some(self.n_samples * self.l)
+    }
+
     fn evaluate(&mut self, th: &[f64], jacobian: bool) -> Result<Evaluation> {
         let q = th.len();
         let l = self.l;
