@@ -126,3 +126,38 @@ def test_a_capped_grey_box_search_says_how_far_it_stands():
     capped = [str(w.message) for w in caught if w.category is sysid.IterationLimitWarning]
     assert len(capped) == 1
     assert f"about {np.sqrt(2 * r):.2g} standard deviations of the estimate away" in capped[0]
+
+
+def test_each_output_s_own_distance_decides_and_a_flat_history_is_read_as_one():
+    # per-output searches (oe on two outputs): the capped output's distance is the one read,
+    # whether or not the costs come one history per output
+    capped = {"stop": ["converged", "maximum iterations"], "remaining_decrease": [5.0, 0.01]}
+    for cost in ([[3.0, 2.0], [10.0, 5.0, 4.5]], [10.0, 5.0, 4.5], []):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            warn_if_capped({**capped, "cost": cost}, "the search", 2, n_residuals=100)
+        assert not caught, cost
+
+
+def test_a_settled_network_search_is_not_warned_about_whatever_its_distance():
+    # a sigmoid network's search is flat and ill-conditioned: the default nlhw, capped at 100
+    # iterations, stood about 2 residual variances from its Gauss-Newton model's minimum,
+    # yet the rest of the way to its own convergence lowered the cost by far less (0.009);
+    # its last steps had settled, and that decides
+    rng = np.random.default_rng(0)
+    u = rng.uniform(-1, 1, (600, 1))
+    x, y = np.zeros(2), np.zeros((600, 1))
+    for t, w in enumerate(np.tanh(2 * u[:, 0])):
+        y[t] = x[0]
+        x = np.array([[0.8, 0.2], [-0.2, 0.7]]) @ x + np.array([0.0, 1.0]) * w
+    data = sysid.IOData(u, y + 0.01 * rng.standard_normal(y.shape), 1.0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        capped = sysid.nlhw(data, 2, 2, 1, progress=False)
+        done = sysid.nlhw(data, 2, 2, 1, progress=False, max_iter=2000)
+    assert capped.info["stop"] == "maximum iterations"
+    assert capped.info["remaining_decrease"] >= NEGLIGIBLE_REMAINING
+    assert done.info["stop"] != "maximum iterations"
+    variance = 2 * capped.info["cost"][-1] / 600
+    assert (capped.info["cost"][-1] - done.info["cost"][-1]) / variance < NEGLIGIBLE_REMAINING
+    assert not [w for w in caught if w.category is sysid.IterationLimitWarning]

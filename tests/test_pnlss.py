@@ -128,9 +128,11 @@ def test_pnlss_stopping_short_warns_as_every_iterative_estimator():
     y = y + 0.3 * y ** 2 + 0.01 * rng.standard_normal(y.shape)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        sysid.pnlss(sysid.IOData(u=u, y=y), 2, degree=2, max_iter=2)
+        m = sysid.pnlss(sysid.IOData(u=u, y=y), 2, degree=2, max_iter=2)
     capped = [w for w in caught if issubclass(w.category, sysid.IterationLimitWarning)]
     assert len(capped) == 1 and "pnlss stopped at max_iter" in str(capped[0].message)
+    far = np.sqrt(2 * m.info["fit"]["remaining_decrease"])
+    assert f"about {far:.2g} standard deviations" in str(capped[0].message)
     assert capped[0].filename == __file__
     assert not [w for w in caught if "max_iter=30" in str(w.message)]
 

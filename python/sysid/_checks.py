@@ -206,8 +206,13 @@ def warn_iteration_limit(what: str, max_iter: int, history: Any, fix: str = "rai
 def warn_if_capped(info: dict[str, Any], what: str, max_iter: int,
                    fix: str = "raise max_iter", n_residuals: int | None = None) -> None:
     """:func:`warn_iteration_limit` when a search's ``info["stop"]`` says it stopped at its
-    cap (``info["cost"]``: its criterion per iteration, when recorded) while still moving:
-    a last iteration that lowered the cost by less than ``SETTLED`` (relative) had settled,
+    cap (``info["cost"]``: its criterion per iteration, when recorded) short of its minimum:
+    both its last step and its distance from the minimum of its Gauss-Newton model
+    (``info["remaining_decrease"]``, when measured) must say so. The distance alone misleads
+    in the flat, ill-conditioned searches of networks: a default ``nlhw`` capped at 100
+    iterations stood 2.1 residual variances from its model's minimum, yet the 336 further
+    iterations to its convergence lowered the cost by 0.009. A last step that lowered the
+    cost by less than ``SETTLED`` (relative) had settled,
     and a warning would be noise (a sigmoid network crawling by 1e-7 per iteration); so had
     one that lowered it by less than ``FLOOR`` of the start's cost (a noise-free fit at the
     rounding floor, its cost 1e-24 of the start's and still halving); and, given the number
@@ -221,10 +226,10 @@ def warn_if_capped(info: dict[str, Any], what: str, max_iter: int,
         remaining = info.get("remaining_decrease")
         if cost and isinstance(cost[0], (list, tuple)):  # one history per output
             cost = cost[stops.index("maximum iterations")]
-            if isinstance(remaining, (list, tuple)):
-                remaining = remaining[stops.index("maximum iterations")]
+        if isinstance(remaining, (list, tuple)):
+            remaining = remaining[stops.index("maximum iterations")] if remaining else None
         h = [float(c) for c in cost]
-        stat = STATISTICAL * 2 * abs(h[-1]) / n_residuals if n_residuals else 0.0
+        stat = STATISTICAL * 2 * abs(h[-1]) / n_residuals if n_residuals and h else 0.0
         if len(h) > 1 and abs(h[-2] - h[-1]) <= max(SETTLED * abs(h[-2]), FLOOR * abs(h[0]),
                                                      stat, 1e-300):
             return
