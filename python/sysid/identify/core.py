@@ -43,7 +43,8 @@
    the data insist on (``checks["drift"]`` says so).
    ``validation`` data, when given, are only reported on.
 5. The chosen model's simulation errors on the record are checked for a drift the input does
-   not explain (:func:`_trend_check`, ``checks["trend"]``).
+   not explain (:func:`_trend_check`, ``checks["trend"]``), and its held-out fit for a model
+   that explains less than half of the outputs' variation (``checks["weak"]``).
 """
 
 from __future__ import annotations
@@ -75,7 +76,7 @@ from ..validation.crossval import (
     simulation_fit,
 )
 from .board import Board, bic
-from .notes import persistent_mode_check, trend_check
+from .notes import persistent_mode_check, trend_check, weak_check
 from .result import IdentifiedModel, IdentifyResult, _family
 from .uncertainty import with_uncertainty
 
@@ -680,6 +681,7 @@ def identify(
         checks["final_refit"] = model.info["identify_refit"]
     trend_check(model, centred, checks)
     persistent_mode_check(model, centred, checks)
+    weak_check(float(chosen["held_out_fit"]), checks)
     if getattr(model, "uncertainty", None) is None:
         model = with_uncertainty(model, centred, checks, SUBSPACE + CLOSED_LOOP)
     result_model = IdentifiedModel(model, mu, my)

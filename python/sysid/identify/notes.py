@@ -1,6 +1,7 @@
 """Notes :func:`sysid.identify` adds to its checks about the model it chose: a drift the input
-does not explain (``checks["trend"]``), and a mode that does not decay over the record
-(``checks["persistent_mode"]``)."""
+does not explain (``checks["trend"]``), a mode that does not decay over the record
+(``checks["persistent_mode"]``), and a model that explains less than half of what the
+outputs do on the held-out blocks (``checks["weak"]``)."""
 
 from __future__ import annotations
 
@@ -14,8 +15,12 @@ from ..data.iodata import IOData
 from ..models.continuous import ContinuousStateSpace
 from ..validation.crossval import trend_share
 
-__all__ = ["trend_check", "persistent_mode_check", "TREND_SHARE", "TREND_OUTPUT",
-           "PERSISTENT_DECAY"]
+__all__ = ["trend_check", "persistent_mode_check", "weak_check", "TREND_SHARE", "TREND_OUTPUT",
+           "PERSISTENT_DECAY", "WEAK_FIT"]
+
+#: a held-out fit below this (in %) explains less than half of the outputs' variation
+#: (``fit = 100 (1 - sqrt(1 - explained))``): ``checks["weak"]`` says so
+WEAK_FIT = 100.0 * (1.0 - np.sqrt(0.5))
 
 #: a straight line that takes out this share of the chosen model's simulation errors on some
 #: output is noted (``checks["trend"]``): a fifth of the error is a drift the model misses
@@ -88,3 +93,31 @@ def persistent_mode_check(model: Any, data: IOData, checks: dict[str, Any]) -> N
         f"within the record's time span only. If the plant integrates, say so in the "
         f"structure (identify the differenced output, or enforce_stability=False); if it "
         f"does not, look for a drift in the output (sysid.detrend(data, 'linear'))")
+
+
+def weak_check(held_out_fit: float, checks: dict[str, Any]) -> None:
+    """``checks["weak"]`` when the chosen model's held-out fit is below ``WEAK_FIT``: on data it
+    was not fitted to, it explains less than half of the outputs' variation (``1 - (1 -
+    fit / 100)^2``). Most of what the outputs do is then not the input's doing (disturbances,
+    a drift, an input not recorded, a nonlinearity), and a simulation of other data will be
+    no better: the note says so instead of letting the best of poor models pass as a model.
+
+    Examples
+    --------
+    >>> from sysid.identify.notes import weak_check
+    >>> checks = {}
+    >>> weak_check(15.4, checks)
+    >>> checks["weak"][:60]
+    'the chosen model simulates the held-out blocks at 15.4 % fit'
+    >>> weak_check(60.0, {})  # explains 84 %: no note
+    """
+    if not np.isfinite(held_out_fit) or held_out_fit >= WEAK_FIT:
+        return
+    explained = max(0.0, 1.0 - (1.0 - held_out_fit / 100.0) ** 2)
+    checks["weak"] = (
+        f"the chosen model simulates the held-out blocks at {held_out_fit:.1f} % fit: it "
+        f"explains {100 * explained:.0f} % of the outputs' variation there, so most of what "
+        f"they do is not driven by the input as recorded (disturbances, a drift, an input "
+        f"not in the record, a nonlinearity); expect no better on other data: check the "
+        f"record and its channels, add the missing inputs, or model the disturbance "
+        f"(sysid.ssest(data, focus='prediction')) if prediction is what you need")
