@@ -359,10 +359,10 @@ pub fn minimize(
             threshold = threshold.max(options.tol_statistical * s2);
         }
         let t0 = std::time::Instant::now();
-        let dec = match red.decrease_lower_bound() {
+        let (dec, exact) = match red.decrease_lower_bound() {
             // neither test can stop: the solve is skipped (same iterates)
-            Some(lb) if lb > threshold => lb,
-            _ => red.gn_decrease(options.rank_tol),
+            Some(lb) if lb > threshold => (lb, false),
+            _ => (red.gn_decrease(options.rank_tol), true),
         };
         prof("gn-decrease", t0);
         if pt.cost <= f64::MIN_POSITIVE || dec <= options.tol_gradient * pt.cost {
@@ -374,9 +374,16 @@ pub fn minimize(
             break;
         }
         if capped {
-            // how far short of the minimum it stops (the exact decrease, not the bound that
-            // may have skipped the solve above)
-            remaining = sigma2.map_or(f64::NAN, |s2| red.gn_decrease(options.rank_tol) / s2);
+            // how far short of the minimum it stops: the exact decrease (solved here when
+            // the bound skipped the solve above)
+            remaining = sigma2.map_or(f64::NAN, |s2| {
+                let exact_dec = if exact {
+                    dec
+                } else {
+                    red.gn_decrease(options.rank_tol)
+                };
+                exact_dec / s2
+            });
             stop = StopReason::MaxIterations;
             break;
         }
