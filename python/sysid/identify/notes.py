@@ -116,7 +116,7 @@ def weak_check(held_out_fit: float, checks: dict[str, Any]) -> None:
     explained = max(0.0, 1.0 - (1.0 - held_out_fit / 100.0) ** 2)
     checks["weak"] = (
         f"the chosen model simulates the held-out blocks at {held_out_fit:.1f} % fit: it "
-        f"explains {100 * explained:.0f} % of the outputs' variation there, so most of what "
+        f"explains about {100 * explained:.0f} % of the outputs' variation there, so most of what "
         f"they do is not driven by the input as recorded (disturbances, a drift, an input "
         f"not in the record, a nonlinearity); expect no better on other data: check the "
         f"record and its channels, add the missing inputs, or model the disturbance "
