@@ -574,7 +574,7 @@ def _averaged(sd: IOData, pers: list[int] | None) -> list[Any]:
 def _report(res: dict[str, Any], recs: list[Any]) -> dict[str, Any]:
     return {"iterations": res["iterations"], "evaluations": res["evaluations"],
             "cost": list(res["history"]), "stop": res["stop"],
-            "remaining_decrease": float(res.get("remaining_decrease", np.nan)),
+            "remaining_decrease": float(res["remaining_decrease"]),
             "n_parameters": int(np.asarray(res["theta"]).size),
             "transient": [r[2] for r in recs]}
 
@@ -610,7 +610,7 @@ def _warn_short(res: dict[str, Any], max_iter: int) -> None:
 
     if res["stop"] == "maximum iterations":
         warn_iteration_limit("pnlss", int(max_iter), res["history"],
-                             remaining=res.get("remaining_decrease"))
+                             remaining=res["remaining_decrease"])
     elif res["stop"] == "cancelled":
         warnings.warn(f"pnlss was cancelled after {res['iterations']} iterations; the model is "
                       "the best iterate", UserWarning, stacklevel=user_stacklevel())

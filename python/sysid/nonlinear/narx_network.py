@@ -259,13 +259,13 @@ def _report(rep: dict[str, Any]) -> dict[str, Any]:
     return {"iterations": int(rep["iterations"]), "evaluations": int(rep["evaluations"]),
             "cost": float(rep["cost"]), "history": [float(c) for c in rep["history"]],
             "stop": str(rep["stop"]),
-            "remaining_decrease": float(rep.get("remaining_decrease", float("nan")))}
+            "remaining_decrease": float(rep["remaining_decrease"])}
 
 
 def _warn(rep: dict[str, Any], what: str, max_iter: int) -> None:
     if rep["stop"] == "maximum iterations" and max_iter > 0:
         warn_iteration_limit(what, max_iter, rep["history"], stacklevel=5,
-                             remaining=rep.get("remaining_decrease"))
+                             remaining=rep["remaining_decrease"])
 
 
 def _refine(model: NetworkNARXModel, recs: list[tuple[np.ndarray, np.ndarray]], max_iter: int,

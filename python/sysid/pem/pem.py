@@ -285,7 +285,7 @@ def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None,
             StabilityWarning, stacklevel=3)
     if res["stop"] == "maximum iterations" and max_iter > 0:
         warn_iteration_limit(f"the {focus} search", max_iter, res["history"], cap_advice(res),
-                             stacklevel=4, remaining=res.get("remaining_decrease"))
+                             stacklevel=4, remaining=res["remaining_decrease"])
 
 
 def _warn_undetermined(res: dict[str, Any], n: int) -> int:
