@@ -38,6 +38,25 @@ def test_summary_and_plot_mark_the_chosen_row_not_the_first():
     assert star.get_ydata()[0] == 90.1 and star.get_xdata()[0] == 2
 
 
+def test_summary_shows_the_top_rows_every_refinement_and_the_choice_and_counts_the_rest():
+    # a long record's search scores a few hundred candidates: the text shows the top of the
+    # leaderboard, every refined candidate and the chosen one wherever they rank
+    m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    rows = [_row("moesp", k % 20 + 1, 90.0 - k, False) for k in range(40)]
+    rows[25]["chosen"] = True
+    rows[33] = _row("pem", 7, 40.0, False, "prediction error from moesp")
+    res = IdentifyResult(IdentifiedModel(m, [0.0], [0.0]), rows, "moesp, order 6", {}, None,
+                         0.1)
+    table = [ln for ln in res.summary(rows=10).splitlines() if "moesp " in ln or "pem " in ln]
+    assert len(table) == 12 and table[10].startswith("* ") and "pem" in table[11]
+    assert "28 more candidates" in res.summary(rows=10)
+    every = res.summary(rows=None)
+    assert "more candidates" not in every and sum("moesp " in ln for ln in every.splitlines()) == 39
+    assert "more candidates" not in res.summary(rows=40)
+    with pytest.raises(sysid.DataError, match="rows"):
+        res.summary(rows=-1)
+
+
 def test_a_search_that_refined_nothing_says_why():
     # an integrating plant on a short record: every subspace candidate is unstable on some
     # block, so no prediction-error search starts; the checks say so

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import as_int
 from .._display import HTMLResult, model_html
 from ..data.iodata import IOData
 from ..errors import DataError
@@ -15,6 +16,9 @@ __all__ = ["IdentifiedModel", "IdentifyResult"]
 
 COLUMNS = ("family", "order", "feedthrough", "focus", "criterion", "held_out_fit", "mean_fit",
            "stable", "max_abs_pole", "seconds", "note", "chosen")
+#: leaderboard rows :meth:`IdentifyResult.summary` shows by default (a search scores a few
+#: hundred candidates on a long record; the refined ones and the choice are always shown)
+SUMMARY_ROWS = 30
 
 
 def _family(row: dict[str, Any]) -> str:
@@ -218,8 +222,32 @@ class IdentifyResult(HTMLResult):
 
         return pd.DataFrame(self.leaderboard, columns=list(COLUMNS))
 
-    def summary(self) -> str:
-        """The choice, the checks and the leaderboard as text."""
+    def summary(self, rows: int | None = SUMMARY_ROWS) -> str:
+        """The choice, the checks and the leaderboard as text.
+
+        Parameters
+        ----------
+        rows : int or None
+            Leaderboard rows shown, in the leaderboard's order (a search scores a few hundred
+            candidates on a long record); every refined candidate and the chosen one are shown
+            as well, and a last line counts the rest. ``None`` shows every row
+            (:meth:`to_pandas` has them all too).
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> rng = np.random.default_rng(0)
+        >>> u = rng.standard_normal(600)
+        >>> y = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]]).simulate(u)
+        >>> res = sysid.identify(sysid.IOData(u=u, y=y + 0.1 * rng.standard_normal(y.shape)),
+        ...                      progress=False)
+        >>> text = res.summary(rows=5)
+        >>> "more candidates" in text, len(res.summary(rows=None).splitlines()) > len(
+        ...     text.splitlines())
+        (True, True)
+        """
+        if rows is not None:
+            rows = as_int(rows, "rows", lo=0)
         lines = [f"sysid.identify: {self.choice} ({self.seconds:.1f} s"
                  + (", interrupted" if self.interrupted else "")
                  + (", time budget spent" if self.out_of_time else "") + ")"]
@@ -229,7 +257,10 @@ class IdentifyResult(HTMLResult):
             lines.append(f"{k}: {v}")
         lines.append(f"  {'family':<18} {'order':>5} {'D':>3} {'focus':<10} "
                      f"{'held-out fit %':>14} {'stable':>6} {'s':>6}  note")
-        for r in self.leaderboard:
+        shown = [r for i, r in enumerate(self.leaderboard)
+                 if rows is None or i < rows or r.get("chosen")
+                 or not str(r.get("criterion", "subspace")).startswith("subspace")]
+        for r in shown:
             f = r["held_out_fit"]
             fs = f"{f:14.2f}" if np.isfinite(f) and f > -1e4 else f"{'< -1e4':>14}"
             ft = "yes" if r["feedthrough"] else "no"
@@ -237,6 +268,10 @@ class IdentifyResult(HTMLResult):
                          f"{ft:>3} {r['focus'] or '-':<10} {fs} "
                          f"{'yes' if r['stable'] else 'NO':>6} {r['seconds']:6.2f}"
                          f"  {r.get('note') or ''}".rstrip())
+        if len(shown) < len(self.leaderboard):
+            lines.append(f"  ... {len(self.leaderboard) - len(shown)} more candidates, all "
+                         "subspace ones ranked below these (every row: summary(rows=None) or "
+                         "to_pandas())")
         lines.append("* chosen (re-fitted on the whole record; among those the held-out blocks "
                      "cannot tell apart, the smallest BIC)")
         return "\n".join(lines)
