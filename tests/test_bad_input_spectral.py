@@ -108,6 +108,13 @@ def test_delayest_constant_input(rec):
         sysid.delayest(sysid.IOData(u=np.ones((400, 1)), y=y, dt=0.1))
 
 
+def test_delayest_constant_output(rec):
+    # its ARX losses are all zero: it raised numpy's "argmin of an empty sequence"
+    _, u, _ = rec
+    with pytest.raises(sysid.DataError, match="output y0 is 0 in every sample: delayest"):
+        sysid.delayest(sysid.IOData(u=u, y=np.zeros((u.shape[0], 1)), dt=0.1))
+
+
 def test_impulse_response_constant_input(rec):
     _, _, y = rec
     with pytest.raises(sysid.ExcitationError, match="u0 is 1 in every sample: impulse_resp"):

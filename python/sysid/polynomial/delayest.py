@@ -75,6 +75,8 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int =
         raise DataError("delayest needs inputs: a time series has no input delay")
     require_inputs_vary(exps, "delayest", getattr(data, "input_names", None),
                         error=ExcitationError)  # a constant input shows no delay
+    # nor does a constant output (its ARX losses are all zero)
+    require_inputs_vary(exps, "delayest", getattr(data, "output_names", None), side=1)
     shortest = min(u.shape[0] for u, _ in exps)
     need = 2 * (nk_max + max(na, nb) + na + m * nb) + 2
     if shortest < need:
