@@ -298,6 +298,25 @@ class Board:
                                                 np.delete(W, [i, j], 0), trim=False))
         return best
 
+    def starts_only(self, families: tuple[str, ...], note: str) -> int:
+        """Make the plain subspace candidates of ``families`` starts only (refined from, not
+        chosen; ``note`` says why), unless no other candidate could then be chosen; returns
+        how many. Under feedback the open-loop subspace fits are biased (the future inputs
+        the data matrix projects on are correlated with the past noise): on a buck
+        converter in closed loop the choice was ``n4sid`` order 3, validated at 46.6 %,
+        where the refinement of order 18 the blocks scored best validates at 59.8 %."""
+        rows = [r for r in self.rows if r["criterion"] == "subspace"
+                and r["family"] in families and not r.get("start_only")]
+        for r in rows:
+            r["start_only"] = True
+        if self.best(stable_only=False) is None:
+            for r in rows:
+                r["start_only"] = False
+            return 0
+        for r in rows:
+            r["note"] = r["note"] or note
+        return len(rows)
+
     def eligible(self, r: dict[str, Any], stable_only: bool = True) -> bool:
         """Whether ``r`` can be chosen: scored, not below its start, not only a start (a
         subspace fit with a stable ``A`` enforced, refined from), and stable unless

@@ -3,7 +3,9 @@
 1. Offsets: the estimation record's input and output means are removed and kept with the
    model (:class:`IdentifiedModel` predicts raw data).
 2. Checks: the input's persistent-excitation order and a feedback test are recorded; under
-   feedback the closed-loop subspace methods (PBSID, SSARX) join the candidates. A periodic
+   feedback the closed-loop subspace methods (PBSID, SSARX) join the candidates, and the
+   open-loop ones (biased there) are refined from but not returned
+   (:meth:`.board.Board.starts_only`; with ``refine=False`` they are candidates). A periodic
    input is noted (``checks["periodic"]``): its held-out blocks repeat the fitted input.
 3. Candidates are scored on blocks of the estimation record held out from their fit: the
    record is cut into five contiguous blocks (fewer on short records; several experiments
@@ -622,6 +624,10 @@ def identify(
                     "none scored: no stable subspace candidate to start a prediction-error "
                     "search from (every one was unstable on some held-out block); the model "
                     "is a subspace one")
+    if feedback and refine and board.starts_only(
+            SUBSPACE, "open-loop subspace fit under feedback (biased): a start, not chosen"):
+        checks["feedback"] += ("; the open-loop subspace fits (n4sid, moesp, cva), biased "
+                               "by it, are refined from but not chosen")
     broken = board.broken()
     if broken:
         r = broken[0]
