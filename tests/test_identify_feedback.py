@@ -49,7 +49,7 @@ def test_under_feedback_an_open_loop_subspace_fit_is_a_start_not_the_choice():
                for f in OPEN_LOOP)
 
 
-def test_starts_only_keeps_the_families_when_nothing_else_could_be_chosen():
+def test_starts_only_keeps_the_families_when_the_rest_is_clearly_worse_or_absent():
     b = Board.__new__(Board)
 
     def row(family, fit):
@@ -58,6 +58,8 @@ def test_starts_only_keeps_the_families_when_nothing_else_could_be_chosen():
     b.rows = [row("n4sid", 80.0), row("moesp", 70.0)]
     assert b.starts_only(OPEN_LOOP, "biased") == 0  # no other candidate: left as they were
     assert not any(r.get("start_only") for r in b.rows) and b.best()["family"] == "n4sid"
-    b.rows.append(row("ssarx", 60.0))
+    b.rows.append(row("ssarx", 60.0))  # the blocks prefer the biased fit by 20 points
+    assert b.starts_only(OPEN_LOOP, "biased") == 0 and b.best()["family"] == "n4sid"
+    b.rows.append(row("pbsid", 79.8))  # within the blocks' resolution of it
     assert b.starts_only(OPEN_LOOP, "biased") == 2
-    assert b.best()["family"] == "ssarx" and b.rows[0]["note"] == "biased"
+    assert b.best()["family"] == "pbsid" and b.rows[0]["note"] == "biased"

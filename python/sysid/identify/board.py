@@ -300,16 +300,21 @@ class Board:
 
     def starts_only(self, families: tuple[str, ...], note: str) -> int:
         """Make the plain subspace candidates of ``families`` starts only (refined from, not
-        chosen; ``note`` says why), unless no other candidate could then be chosen; returns
-        how many. Under feedback the open-loop subspace fits are biased (the future inputs
-        the data matrix projects on are correlated with the past noise): on a buck
-        converter in closed loop the choice was ``n4sid`` order 3, validated at 46.6 %,
-        where the refinement of order 18 the blocks scored best validates at 59.8 %."""
+        chosen; ``note`` says why), unless the best stable candidate left scores clearly
+        below the best one (by more than :func:`~sysid.validation.crossval.slack`: the
+        blocks then prefer the biased fit to every other) or none is left; returns how many.
+        Under feedback the open-loop subspace fits are biased (the future inputs the data
+        matrix projects on are correlated with the past noise): on a buck converter in
+        closed loop the choice was ``n4sid`` order 3, validated at 46.6 %, where the
+        refinement of order 18 the blocks scored best validates at 59.8 %."""
         rows = [r for r in self.rows if r["criterion"] == "subspace"
                 and r["family"] in families and not r.get("start_only")]
+        before = self.best()
         for r in rows:
             r["start_only"] = True
-        if self.best(stable_only=False) is None:
+        after = self.best()
+        if after is None or (before is not None and after["held_out_fit"]
+                             < before["held_out_fit"] - slack(before["held_out_fit"])):
             for r in rows:
                 r["start_only"] = False
             return 0

@@ -5,7 +5,8 @@
 2. Checks: the input's persistent-excitation order and a feedback test are recorded; under
    feedback the closed-loop subspace methods (PBSID, SSARX) join the candidates, and the
    open-loop ones (biased there) are refined from but not returned
-   (:meth:`.board.Board.starts_only`; with ``refine=False`` they are candidates). A periodic
+   (:meth:`.board.Board.starts_only`: unless every other candidate scores clearly below
+   them; with ``refine=False`` they are candidates). A periodic
    input is noted (``checks["periodic"]``): its held-out blocks repeat the fitted input.
 3. Candidates are scored on blocks of the estimation record held out from their fit: the
    record is cut into five contiguous blocks (fewer on short records; several experiments
