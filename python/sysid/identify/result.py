@@ -259,7 +259,7 @@ class IdentifyResult(HTMLResult):
                      f"{'held-out fit %':>14} {'stable':>6} {'s':>6}  note")
         shown = [r for i, r in enumerate(self.leaderboard)
                  if rows is None or i < rows or r.get("chosen")
-                 or not str(r.get("criterion", "subspace")).startswith("subspace")]
+                 or not r["criterion"].startswith("subspace")]
         for r in shown:
             f = r["held_out_fit"]
             fs = f"{f:14.2f}" if np.isfinite(f) and f > -1e4 else f"{'< -1e4':>14}"
