@@ -7,7 +7,7 @@ reference, scored on held-out validation data.
     .venv/bin/python benches/realdata.py --split reversed --no-peers --records dryer ...
     .venv/bin/python benches/realdata.py --unshipped DIR # DaISy records not shipped (below)
     .venv/bin/python benches/realdata.py --nonlinear-records DIR --no-peers  # (below)
-    .venv/bin/python benches/realdata.py --more-records DIR  # five more records (below)
+    .venv/bin/python benches/realdata.py --more-records DIR  # six more records (below)
 
 Records (``/work/shared/data``, see its README; the DaISy records and the F-16 ground
 vibration test). Splits: the README's where it gives one (dryer 1:500 / 501:1000, robot arm
@@ -36,7 +36,7 @@ project does not ship either (Silverbox, Wiener-Hammerstein 2009, cascaded tanks
 splits and files of ``benches/nonlinear_unshipped.py``, training cut to 20 000 samples, each
 validated on its benchmark test record under every ``--split``), into
 ``results/realdata_nonlinear_records.md``: the best linear approximation of each.
-``--more-records DIR`` runs five more records from outside the DaISy collection that the
+``--more-records DIR`` runs six more records (five from outside the DaISy collection) that the
 project does not ship (``MORE``), each read from ``DIR/<name>.npz`` (arrays ``u``, ``y``), into
 ``results/realdata_more[_<split>].md``: the Box-Jenkins gas furnace (series J, 296 samples;
 a copy at GitHub WizardKingZ/time_series_outlier_detection ``gas-furnace.csv``), a DC-DC buck
@@ -46,7 +46,9 @@ x_cc.csv``, ``y_cc.csv`` every 500th sample, as SysIdentPy's examples thin them)
 magneto-rheological damper and industrial robot arm of MATLAB's System Identification
 Toolbox examples (copies in GitHub gsmfnc/LPV_SysId, ``noise_simulations/autoencoders/
 Magneto.mat``, its estimation and validation parts joined back into one record, and
-``RobotArm.mat``: ``U, Y`` validated on ``U_val, Y_val``). The records of one file take the
+``RobotArm.mat``: ``U, Y`` validated on ``U_val, Y_val``), and DaISy's flexible structure (2
+inputs, 28 outputs, 8 523 samples; a copy at GitHub robotsorcerer/FARNN,
+``data/flexibleStructure.mat``: inputs columns 1-2, outputs 3-30). The records of one file take the
 first 2/3 / last 1/3 split (every ``--split`` applies); the two with a separate validation
 record keep it under every ``--split``, as the F-16 levels do.
 
@@ -165,6 +167,7 @@ MORE = {
     "mr_damper": ("mr_damper_matlab", None),  # velocity -> force
     "ind_robot": ("industrial_robot_arm_matlab_est",  # motor torque -> motor speed
                   "industrial_robot_arm_matlab_val"),
+    "flexible_structure": ("flexible_structure", None),  # 2 forces -> 28 accelerations
 }
 
 
@@ -624,7 +627,7 @@ def main() -> None:
                          "benches/nonlinear_unshipped.py reads them, training cut to 20 000 "
                          "samples; their test records validate under every --split)")
     ap.add_argument("--more-records", default=None, metavar="DIR",
-                    help="run five more records the project does not ship (MORE), read from "
+                    help="run more records the project does not ship (MORE), read from "
                          "DIR/<name>.npz, instead of the shipped ones")
     args = ap.parse_args()
     global SPLIT
