@@ -98,6 +98,17 @@ def test_from_npz_of_other_files_never_suggests_pickle(record, tmp_path):
     assert sysid.IOData.from_npz(tmp_path / "ok.npz") == d
 
 
+def test_from_npz_of_an_empty_or_cut_off_file_says_so(record, tmp_path):
+    _, _, _, d = record
+    d.to_npz(tmp_path / "ok.npz")
+    whole = (tmp_path / "ok.npz").read_bytes()
+    (tmp_path / "empty.npz").write_bytes(b"")
+    (tmp_path / "cut.npz").write_bytes(whole[: len(whole) // 2])
+    for name in ("empty.npz", "cut.npz"):
+        with pytest.raises(sysid.DataError, match=f"{name} is empty or cut off"):
+            sysid.IOData.from_npz(tmp_path / name)
+
+
 def test_nlgreybox_simulate_checks_the_input_array():
     g = sysid.NonlinearGreyBox(lambda t, x, u, p: [-x[0] + u[0]], lambda t, x, u, p: [x[0]],
                                {"K": 1.0}, nx=1)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import gzip
 import re
 import warnings
+import zipfile
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -483,16 +484,22 @@ def from_npz(cls: Any, path: str | Path) -> Any:
     not_ours = DataError(f"{path} is not a sysid .npz record (an archive written by "
                          "IOData.to_npz); for other NumPy files, load the arrays with np.load "
                          "and pass them to sysid.IOData(u, y, dt)")
-    try:
-        z = np.load(path, allow_pickle=False)
-    except ValueError:  # not an archive of plain arrays (NumPy suggests pickle: never)
-        raise not_ours from None
-    if not isinstance(z, np.lib.npyio.NpzFile):
-        raise not_ours
-    with z:
-        if "n_experiments" not in z.files:
+    # the file is opened here so that it is closed whatever np.load makes of it
+    with open(path, "rb") as fh:
+        try:
+            z = np.load(fh, allow_pickle=False)
+        except ValueError:  # not an archive of plain arrays (NumPy suggests pickle: never)
+            raise not_ours from None
+        except (EOFError, zipfile.BadZipFile) as e:  # an empty or cut-off file
+            raise DataError(f"{path} is empty or cut off ({type(e).__name__}: {e}): not a "
+                            "whole .npz archive; write it again (IOData.to_npz writes whole "
+                            "files or nothing)") from None
+        if not isinstance(z, np.lib.npyio.NpzFile):
             raise not_ours
-        return _from_arrays(cls, lambda k: z[k], str(path))
+        with z:
+            if "n_experiments" not in z.files:
+                raise not_ours
+            return _from_arrays(cls, lambda k: z[k], str(path))
 
 
 def to_mat(data: Any, path: str | Path) -> None:
