@@ -78,6 +78,17 @@ def test_greybox_delay_longer_than_the_record(rec):
         sysid.greyest(rec[3], g)
 
 
+def test_greybox_parameter_that_is_not_a_number_is_named():
+    # float("x") raised a bare ValueError that named neither the parameter nor the fix
+    with pytest.raises(sysid.DataError, match=r"parameter 'tau': .*real number, got 'x'"):
+        sysid.GreyBox(_motor, params={"K": 1.0, "tau": "x"})
+    with pytest.raises(sysid.DataError, match=r"parameter 'K': .*finite, got nan"):
+        sysid.GreyBox(_motor, params={"K": np.nan, "tau": 0.5})
+    with pytest.raises(sysid.DataError, match=r"real number, got \[1, 2\]"):
+        sysid.param([1, 2])
+    assert sysid.GreyBox(_motor, params={"K": np.float32(1.0), "tau": 0.5}) is not None
+
+
 def test_tap_states_refuse_a_huge_delay_chain():
     from sysid.greybox.delays import tap_states
 

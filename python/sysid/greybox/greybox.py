@@ -92,7 +92,10 @@ def param(value: float, bounds: tuple[float, float] | None = None, fixed: bool =
     >>> sysid.param(0.5, bounds=(0, 1), unit="1/s")
     Param(value=0.5, bounds=(0.0, 1.0), fixed=False, scale=None, unit='1/s', description='')
     """
-    v = float(value)
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise DataError(f"a parameter value must be a real number, got {value!r}") from None
     if not np.isfinite(v):
         raise DataError(f"a parameter value must be finite, got {value!r}")
     lo, hi = (-np.inf, np.inf) if bounds is None else (float(bounds[0]), float(bounds[1]))
@@ -161,7 +164,10 @@ def as_params(params: Mapping[str, Any]) -> dict[str, Param]:
     for k, v in params.items():
         if not isinstance(k, str) or not k.isidentifier():
             raise DataError(f"parameter names must be identifiers, got {k!r}")
-        out[k] = v if isinstance(v, Param) else param(float(v))
+        try:
+            out[k] = v if isinstance(v, Param) else param(v)
+        except DataError as e:
+            raise DataError(f"parameter {k!r}: {e}") from None
     return out
 
 
