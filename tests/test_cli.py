@@ -14,6 +14,7 @@ import pytest
 
 import sysid
 from sysid import _sysid
+from sysid.cli import identify as run_identify
 from sysid.cli import main, read_csv
 
 pytestmark = pytest.mark.skipif(not hasattr(_sysid, "Subspace"),
@@ -213,6 +214,15 @@ def test_order_larger_than_the_data_support(tmp_path, capsys):
     err = run_error(capsys, ["identify", str(data), "--inputs", "heater", "--outputs",
                              "temperature", "--order", "four", "--report", str(tmp_path / "r")])
     assert "--order must be 'auto' or a positive integer" in err
+
+
+def test_the_order_s_form_is_checked_before_the_record_is_compressed():
+    said = []
+    d = sysid.IOData(u=np.ones((50, 1)), y=np.arange(50.0))
+    for bad, phrase in (("-3", "'auto' or a positive integer"), (0, ">= 1")):
+        with pytest.raises(sysid.DataError, match=phrase):
+            run_identify(d, None, order=bad, progress=said.append)
+    assert not any("compress" in m for m in said), said
 
 
 def test_other_bad_arguments(tmp_path, capsys):

@@ -189,6 +189,13 @@ def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, me
     from .validation.criteria import select_order
 
     say = progress or (lambda _msg: None)
+    if order != "auto":  # its form is checked before the record is compressed
+        if isinstance(order, str):
+            if not order.isdigit():
+                raise DataError(f"--order must be 'auto' or a positive integer, got {order!r}")
+            order = int(order)
+        if order < 1:
+            raise DataError(f"--order must be >= 1, got {order}")
     say(f"compressing {est_data.n_samples} samples "
         f"({est_data.n_inputs} in, {est_data.n_outputs} out, horizon {horizon or 'default'})")
     t0 = time.perf_counter()
@@ -197,12 +204,6 @@ def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, me
     say(f"compressed with {est.factor.source} in {dt_c:.2f} s "
         f"({est_data.n_samples / max(dt_c, 1e-9) / 1e6:.1f} M samples/s)")
     if order != "auto":
-        if isinstance(order, str):
-            if not order.isdigit():
-                raise DataError(f"--order must be 'auto' or a positive integer, got {order!r}")
-            order = int(order)
-        if order < 1:
-            raise DataError(f"--order must be >= 1, got {order}")
         if order > est.max_order:
             raise OrderError(
                 f"order {order} is larger than the data and horizon support (at most "
