@@ -98,19 +98,23 @@ def warn_poles_at_bound(poles: np.ndarray, n: int, model: str, bound: str | None
     return True
 
 
-def cap_advice(res: dict[str, Any]) -> str:
+def cap_advice(res: dict[str, Any], focus: str = "prediction") -> str:
     """What to do about a search stopped at its cap (``res``: its ``iterations`` and
-    ``shortened``, the accepted steps the stability bound shortened). When the bound
-    shortened most of them, more iterations creep along it: on the unshipped DaISy heat
-    exchanger (its offset not removed), ``ssest(data, 4)`` held a pole at 1 - 2e-10,
-    shortened all 50 steps (by 2^10 to 2^21) and needed 838 iterations to converge.
+    ``shortened``, the accepted steps the stability bound shortened; ``focus``: the
+    criterion, which the advice to refine again repeats, since ``pem`` defaults to
+    prediction). When the bound shortened most of them, more iterations creep along it: on
+    the unshipped DaISy heat exchanger (its offset not removed), ``ssest(data, 4)`` held a
+    pole at 1 - 2e-10, shortened all 50 steps (by 2^10 to 2^21) and needed 838 iterations
+    to converge.
 
     Examples
     --------
     >>> cap_advice({"iterations": 50, "shortened": 50})[:40]
     'the stability bound shortened 50 of its '
-    >>> cap_advice({"iterations": 50, "shortened": 3})[:15]
-    'raise max_iter,'
+    >>> cap_advice({"iterations": 50, "shortened": 3})
+    'raise max_iter, or refine again with sysid.pem(data, model)'
+    >>> print(cap_advice({"iterations": 50, "shortened": 3}, "simulation"))
+    raise max_iter, or refine again with sysid.pem(data, model, focus='simulation')
     """
     it, cut = int(res["iterations"]), int(res.get("shortened", 0))
     if it and 2 * cut > it:
@@ -118,4 +122,5 @@ def cap_advice(res: dict[str, Any]) -> str:
                 "unit circle), so more iterations creep along that bound; see the "
                 "StabilityWarning for that pole, try another order, or raise max_iter "
                 "(it may take hundreds)")
-    return "raise max_iter, or refine again with sysid.pem(data, model)"
+    again = "" if focus == "prediction" else f", focus={focus!r}"
+    return f"raise max_iter, or refine again with sysid.pem(data, model{again})"

@@ -284,8 +284,9 @@ def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None,
             f"enforce_stability=True (or focus='simulation') for a stable model",
             StabilityWarning, stacklevel=3)
     if res["stop"] == "maximum iterations" and max_iter > 0:
-        warn_iteration_limit(f"the {focus} search", max_iter, res["history"], cap_advice(res),
-                             stacklevel=4, remaining=res["remaining_decrease"])
+        warn_iteration_limit(f"the {focus} search", max_iter, res["history"],
+                             cap_advice(res, focus), stacklevel=4,
+                             remaining=res["remaining_decrease"])
 
 
 def _warn_undetermined(res: dict[str, Any], n: int) -> int:

@@ -373,7 +373,8 @@ def simulation_fit(model: Any, data: IOData, trend: bool = False) -> float:
         for y, e in errs:
             dev = np.linalg.norm(y - y.mean(0), axis=0)
             f = 100.0 * (1.0 - np.linalg.norm(e, axis=0) / np.where(dev > 0, dev, np.nan))
-            fits.append(np.nanmean(f))
+            f = f[~np.isnan(f)]  # outputs that stand still in the block have no fit
+            fits.append(float(np.mean(f)) if f.size else np.nan)
     out = float(np.mean(fits))
     return out if np.isfinite(out) else -np.inf
 
