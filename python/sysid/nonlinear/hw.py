@@ -28,6 +28,7 @@ from .._checks import (
 from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..errors import DataError, StabilityWarning
+from ..polynomial.orders import matlab_orders
 from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction
 from .operating_point import centred, record_means, use_offsets
 
@@ -47,9 +48,9 @@ def _check_nl(nl: Any, name: str) -> Nonlinearity:
 @one_blas_thread
 def nlhw(
     data: Any,
-    nb: int,
-    nf: int,
-    nk: int = 1,
+    nb: Any,
+    nf: int | None = None,
+    nk: int | None = None,
     *,
     input_nl: Nonlinearity | str | None = "auto",
     output_nl: Nonlinearity | str | None = "auto",
@@ -65,7 +66,8 @@ def nlhw(
     data : IOData
         Estimation record (one input, one output; several experiments are used together).
     nb, nf, nk : int
-        Orders of ``B`` and ``F`` and the input delay of the linear block.
+        Orders of ``B`` and ``F`` and the input delay of the linear block (``nk`` default 1);
+        or MATLAB's one vector ``[nb, nf, nk]`` as ``nb``.
     input_nl, output_nl : Nonlinearity, "auto" or None
         :class:`~sysid.Saturation`, :class:`~sysid.DeadZone`,
         :class:`~sysid.PolynomialNonlinearity`, :class:`~sysid.PiecewiseLinear`,
@@ -127,6 +129,7 @@ def nlhw(
                         f"{exps[0][0].shape[1]} and {exps[0][1].shape[1]}); for several use "
                         "sysid.nlhw_ss (a state-space linear block), or select channels with "
                         "data.select(...)")
+    nb, nf, nk = matlab_orders("nlhw", data, nb, nf=nf, nk=nk)
     if is_auto(input_nl) or is_auto(output_nl):
         return auto_fit(data, lambda d, fi, fo, prog: nlhw(
             d, nb, nf, nk, input_nl=fi, output_nl=fo, max_iter=max_iter, tol=tol,

@@ -24,6 +24,7 @@ from ..errors import (
     NumericalError,
     StabilityWarning,
 )
+from ..polynomial.orders import matlab_orders
 from .choice import is_auto
 from .customreg import CustomRegressor
 from .narx_model import NARXModel, PolynomialBasis, RBFBasis
@@ -160,8 +161,8 @@ def free_run_check(model: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> Non
 def nlarx(
     data: Any,
     na: Any,
-    nb: Any,
-    nk: Any = 1,
+    nb: Any = None,
+    nk: Any = None,
     *,
     basis: Any = "auto",
     max_terms: int = 10,
@@ -183,9 +184,11 @@ def nlarx(
     data : IOData
         Estimation record; several experiments are used together.
     na : int or list (n_outputs)
-        Output lags ``1..na`` of each output (shared by every output's equation).
+        Output lags ``1..na`` of each output (shared by every output's equation); or all the
+        lags as MATLAB's one vector ``[na, nb, nk]`` (``na`` one per output, ``nb`` and
+        ``nk`` one per input) with ``nb`` and ``nk`` left out.
     nb, nk : int or list (n_inputs)
-        Input lags ``nk..nk + nb - 1``.
+        Input lags ``nk..nk + nb - 1`` (``nk`` default 1).
     basis : "auto", PolynomialBasis, RBFBasis, SigmoidNetwork, WaveletNetwork or TreePartition
         Candidate terms (``None``: ``PolynomialBasis(2)``). ``"auto"`` (default): the
         degree-2 polynomial terms (selected as the other arguments say) where the record's
@@ -249,6 +252,7 @@ def nlarx(
     exps = experiment_arrays(data)
     check_magnitudes(data, "nlarx")
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
+    na, nb, nk = matlab_orders("nlarx", data, na, nb=nb, nk=nk)
     na_, nb_, nk_ = _per(na, ny, "na"), _per(nb, nu, "nb"), _per(nk, nu, "nk")
     shortest = min(len(y) for _, y in exps)
     lag = max([*na_, *(k + b - 1 for b, k in zip(nb_, nk_) if b > 0), 0])

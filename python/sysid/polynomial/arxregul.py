@@ -47,6 +47,7 @@ from .. import _sysid
 from .._checks import as_int_grid, experiment_arrays, require_inputs_vary
 from .._display import HTMLResult
 from ..errors import DataError, NumericalError
+from .orders import matlab_orders
 
 KERNELS = ("tc", "ss", "dc", "ridge")
 _NHYP = {"tc": 2, "ss": 2, "dc": 3, "ridge": 1}
@@ -344,7 +345,7 @@ def summaries(data: Any, na: Any, nb: Any, nk: Any
     return [(np.asarray(s), int(n)) for s, n in _sysid.arx_summary(exps, *g)], g
 
 
-def arxregul(data: Any, na: Any, nb: Any, nk: Any = 1, kernel: str = "tc", *,
+def arxregul(data: Any, na: Any, nb: Any = None, nk: Any = None, kernel: str = "tc", *,
              noise_variance: str = "ls") -> ArxRegularization:
     """Regularisation constants of an ARX structure by empirical Bayes (MATLAB's
     ``arxRegul``).
@@ -354,7 +355,9 @@ def arxregul(data: Any, na: Any, nb: Any, nk: Any = 1, kernel: str = "tc", *,
     data : IOData
         Estimation record (several experiments are used together).
     na, nb, nk : int or array_like
-        The ARX orders, as for :func:`sysid.arx`.
+        The ARX orders, as for :func:`sysid.arx` (``nk`` default 1); or MATLAB's one vector
+        ``[na, nb, nk]`` as ``na``, then the kernel may follow it as MATLAB's
+        ``arxRegul(data, orders, kernel)``.
     kernel : {"tc", "ss", "dc", "ridge"}
         Prior covariance of each polynomial block (see the module docstring).
     noise_variance : {"ls", "ml"}
@@ -377,13 +380,19 @@ def arxregul(data: Any, na: Any, nb: Any, nk: Any = 1, kernel: str = "tc", *,
     >>> reg = sysid.arxregul(d, 0, 40, 1, "tc")          # a 40-tap FIR model
     >>> bool(0.8 < reg.hyperparameters[0][0]["lambda"] < 1)
     True
+    >>> same = sysid.arxregul(d, [0, 40, 1], "tc")     # MATLAB's arxRegul(data, orders, kernel)
+    >>> same.hyperparameters == reg.hyperparameters
+    True
     """
+    if isinstance(nb, str) and nk is None and kernel == "tc":  # arxregul(data, orders, kernel)
+        kernel, nb = nb, None
     name = _check_kernel(kernel)
     if noise_variance not in ("ls", "ml"):
         raise DataError(f"noise_variance must be 'ls' or 'ml', got {noise_variance!r}")
     exps = experiment_arrays(data)  # a constant channel first, as arx (else a NaN scale)
     require_inputs_vary(exps, "arxregul", getattr(data, "input_names", None))
     require_inputs_vary(exps, "arxregul", getattr(data, "output_names", None), side=1)
+    na, nb, nk = matlab_orders("arxregul", data, na, nb=nb, nk=nk)
     sums, g = summaries(data, na, nb, nk)
     lam, priors, hyps, nll, infos = [], [], [], [], []
     for i, (s, n) in enumerate(sums):

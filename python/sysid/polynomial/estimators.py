@@ -29,6 +29,7 @@ from ..data.offsets import check_offsets
 from ..errors import DataError, InsufficientDataError, NumericalError, ShapeError
 from .cancellation import cancellation, warn_cancellations
 from .model import PolynomialModel
+from .orders import matlab_orders
 from .starts import RESTART_GAIN, init_parameters, subspace_starts
 from .uncertainty import attach_uncertainty as _attach_uncertainty
 from .uncertainty import defer_coloured
@@ -61,8 +62,8 @@ def _col(v: Any, ny: int, name: str) -> list[int]:
 def arx(
     data: Any,
     na: Any,
-    nb: Any,
-    nk: Any = 1,
+    nb: Any = None,
+    nk: Any = None,
     *,
     regularization: Any = 0.0,
     kernel: np.ndarray | None = None,
@@ -74,9 +75,12 @@ def arx(
     data : IOData
         Estimation record (several experiments are used together).
     na : int or array_like (n_outputs, n_outputs)
-        Orders of ``A`` (off-diagonal entries couple outputs).
+        Orders of ``A`` (off-diagonal entries couple outputs); or all the orders as MATLAB's
+        one vector ``[na, nb, nk]`` (``nb`` and ``nk`` one per input; one row per output,
+        ``na`` then one per output), with ``nb`` and ``nk`` left out
+        (:func:`~sysid.polynomial.orders.matlab_orders`).
     nb, nk : int or array_like (n_outputs, n_inputs)
-        Number of ``B`` coefficients and input delays.
+        Number of ``B`` coefficients and input delays (``nk`` default 1).
     regularization : float, str, (lam, R) or ArxRegularization
         * a number ``lambda``: the penalty ``lambda |M theta|^2`` (ridge when ``kernel`` is
           None); 0 is plain least squares;
@@ -104,9 +108,12 @@ def arx(
     >>> m = sysid.polynomial.estimators.arx(sysid.IOData(u, y, 1.0), 1, 1, 1)
     >>> np.round(m.a[0][0], 8).tolist(), np.round(m.b[0][0], 8).tolist()
     ([-0.5], [1.0])
+    >>> sysid.arx(sysid.IOData(u, y, 1.0), [1, 1, 1]).a == m.a  # MATLAB's [na nb nk]
+    True
     """
     data = as_record(data)  # a (u, y) pair, as ssest and compare take
     exps = experiment_arrays(data)
+    na, nb, nk = matlab_orders("arx", data, na, nb=nb, nk=nk)
     check_offsets(data)
     require_inputs_vary(exps, "arx", getattr(data, "input_names", None))
     require_inputs_vary(exps, "arx", getattr(data, "output_names", None), side=1)
@@ -423,15 +430,17 @@ def _second_start(data: Any, rs: list[dict[str, Any]], search: Callable[..., Any
 def armax(
     data: Any,
     na: Any,
-    nb: Any,
-    nc: Any,
-    nk: Any = 1,
+    nb: Any = None,
+    nc: Any = None,
+    nk: Any = None,
     *,
     max_iter: int = 100,
     progress: bool | None | Callable[..., Any] = None,
     init: PolynomialModel | None = None,
 ) -> PolynomialModel:
-    """ARMAX ``A y = B u(t-nk) + C e`` by prediction-error minimisation (per output).
+    """ARMAX ``A y = B u(t-nk) + C e`` by prediction-error minimisation (per output). The
+    orders may be given as MATLAB's one vector, ``armax(data, [na, nb, nc, nk])``
+    (:func:`~sysid.polynomial.orders.matlab_orders`); ``nk`` defaults to 1.
 
     The search starts from an ARX fit, or from ``init`` (a polynomial model with the data's
     channel counts, e.g. an earlier ``armax`` or an ``arx`` fit: its ``A``, ``B`` and ``C``
@@ -453,6 +462,8 @@ def armax(
     >>> again.info["start"], bool(abs(again.c[0][0] - m.c[0][0]) < 1e-6)
     ('init', True)
     """
+    data = as_record(data)
+    na, nb, nc, nk = matlab_orders("armax", data, na, nb=nb, nc=nc, nk=nk)
     m = _pem(data, na, nb, nc, 0, 0, nk, "armax", max_iter, progress, init)
     if init is not None:
         m.info["start"] = "init"
@@ -463,8 +474,8 @@ def armax(
 def oe(
     data: Any,
     nb: Any,
-    nf: Any,
-    nk: Any = 1,
+    nf: Any = None,
+    nk: Any = None,
     *,
     max_iter: int = 100,
     progress: bool | None | Callable[..., Any] = None,
@@ -472,7 +483,9 @@ def oe(
     periods: int | str | None = None,
     transient: int | None = None,
 ) -> PolynomialModel:
-    """Output error ``y = B/F u(t-nk) + e``.
+    """Output error ``y = B/F u(t-nk) + e``. The orders may be given as MATLAB's one vector,
+    ``oe(data, [nb, nf, nk])`` (:func:`~sysid.polynomial.orders.matlab_orders`); ``nk``
+    defaults to 1.
 
     Starts from Steiglitz-McBride (one input) or from ``init`` (an ARX model's ``A`` becomes
     ``F``; unstable roots of the start are reflected into the unit circle, and
@@ -514,6 +527,7 @@ def oe(
     """
     periodicity = None
     data = as_record(data)
+    nb, nf, nk = matlab_orders("oe", data, nb, nf=nf, nk=nk)
     if periods is not None or transient is not None:
         from .oe_lines import oe_lines
 
@@ -535,16 +549,18 @@ def oe(
 def bj(
     data: Any,
     nb: Any,
-    nc: Any,
-    nd: Any,
-    nf: Any,
-    nk: Any = 1,
+    nc: Any = None,
+    nd: Any = None,
+    nf: Any = None,
+    nk: Any = None,
     *,
     max_iter: int = 100,
     progress: bool | None | Callable[..., Any] = None,
     init: PolynomialModel | None = None,
 ) -> PolynomialModel:
-    """Box-Jenkins ``y = B/F u(t-nk) + C/D e``.
+    """Box-Jenkins ``y = B/F u(t-nk) + C/D e``. The orders may be given as MATLAB's one
+    vector, ``bj(data, [nb, nc, nd, nf, nk])`` (:func:`~sysid.polynomial.orders.matlab_orders`);
+    ``nk`` defaults to 1.
 
     ``B/F`` starts from Steiglitz-McBride and also, per output, from a subspace fit (as
     :func:`oe`; ``C = D = 1``), and the fit with the lower prediction-error criterion is
@@ -569,6 +585,7 @@ def bj(
     'init'
     """
     data = as_record(data)
+    nb, nc, nd, nf, nk = matlab_orders("bj", data, nb, nc=nc, nd=nd, nf=nf, nk=nk)
     if init is not None:
         m = _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress, init)
         m.info["start"] = "init"
@@ -679,12 +696,14 @@ def _references(reference: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> li
     return out
 
 
-def iv4(data: Any, na: Any, nb: Any, nk: Any = 1, *, reference: Any = None) -> PolynomialModel:
+def iv4(data: Any, na: Any, nb: Any = None, nk: Any = None, *, reference: Any = None
+        ) -> PolynomialModel:
     """Four-stage instrumental-variable estimate of ``A(q) y = B(q) u(t-nk) + v``.
 
     Consistent for coloured noise ``v`` where least squares (:func:`arx`) is biased. MIMO
     with the orders of :func:`arx` (``na`` outputs x outputs, ``nb``/``nk`` outputs x
-    inputs); several experiments are used together (each filtered from rest). For
+    inputs; or MATLAB's one vector ``[na, nb, nk]``, ``nk`` default 1); several experiments
+    are used together (each filtered from rest). For
     closed-loop data pass the reference signal (``(N, n_ref)``, a list with one array per
     experiment) as ``reference``: the instruments are then the parts of ``y`` and ``u``
     explained by the reference (a least-squares FIR projection on its lags), which the
@@ -704,6 +723,7 @@ def iv4(data: Any, na: Any, nb: Any, nk: Any = 1, *, reference: Any = None) -> P
     """
     data = as_record(data)  # a (u, y) pair, as ssest and compare take
     exps = experiment_arrays(data)
+    na, nb, nk = matlab_orders("iv4", data, na, nb=nb, nk=nk)
     check_offsets(data)
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     if nu == 0:

@@ -1,0 +1,114 @@
+"""MATLAB's order vectors (``arx(data, [na nb nk])`` and the like): a MATLAB user's first
+call. Before, every one of them failed with Python's bare ``TypeError: arx() missing 1
+required positional argument: 'nb'``. The vector form gives the same model as the orders
+given one by one; a vector of the wrong length or with a fraction says what it should hold.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+import sysid
+
+from conftest import quiet
+
+
+def _coefficients(m):
+    """Every polynomial coefficient of a model, flattened (empty polynomials included)."""
+    out = []
+    for name in ("a", "b", "c", "d", "f"):
+        for row in getattr(m, name, None) or []:
+            for p in (row if isinstance(row, list) else [row]):
+                out.append(np.ravel(np.asarray(p, float)))
+    return np.concatenate(out) if out else np.zeros(0)
+
+
+@pytest.fixture(scope="module")
+def dryer():
+    d = sysid.datasets.load_dryer()
+    return sysid.detrend(d, "mean")
+
+
+@pytest.mark.parametrize("fn, orders", [
+    ("arx", (2, 2, 1)), ("iv4", (2, 2, 1)), ("armax", (2, 2, 2, 1)), ("oe", (2, 2, 3)),
+    ("bj", (2, 1, 1, 2, 1)),
+])
+def test_the_vector_form_is_the_same_model_as_the_orders_one_by_one(dryer, fn, orders):
+    f = getattr(sysid, fn)
+    one_by_one = quiet(f, dryer, *orders)
+    vector = quiet(f, dryer, list(orders))
+    assert np.array_equal(_coefficients(vector), _coefficients(one_by_one))
+    assert np.array_equal(vector.nk, one_by_one.nk)
+
+
+def test_nk_defaults_to_one_when_the_orders_are_given_one_by_one(dryer):
+    assert np.array_equal(quiet(sysid.oe, dryer, 2, 2).nk, [[1]])
+    assert np.array_equal(quiet(sysid.oe, dryer, [2, 2, 1]).nk, [[1]])
+
+
+def test_nonlinear_estimators_and_arxregul_take_the_vector_too(dryer):
+    basis = sysid.PolynomialBasis(2)
+    a = quiet(sysid.nlarx, dryer, [2, 2, 1], basis=basis)
+    b = quiet(sysid.nlarx, dryer, 2, 2, 1, basis=basis)
+    assert np.allclose(a.simulate(dryer.u), b.simulate(dryer.u), rtol=0, atol=0)
+    hw = quiet(sysid.nlhw, dryer, [2, 2, 1], input_nl=sysid.SigmoidNetwork(2), output_nl=None,
+               max_iter=5)
+    hw2 = quiet(sysid.nlhw, dryer, 2, 2, 1, input_nl=sysid.SigmoidNetwork(2), output_nl=None,
+                max_iter=5)
+    assert np.array_equal(hw.simulate(dryer.u), hw2.simulate(dryer.u))
+    # MATLAB's arxRegul(data, orders, kernel): the kernel follows the vector
+    r1 = sysid.arxregul(dryer, [0, 20, 1], "ss")
+    r2 = sysid.arxregul(dryer, 0, 20, 1, "ss")
+    assert r1.kernel == "ss" and r1.hyperparameters == r2.hyperparameters
+
+
+def test_several_inputs_and_outputs_take_one_row_per_output():
+    # MATLAB's [NA NB NK] for the shipped winding record (5 inputs, 2 outputs): NA 2 x 2,
+    # NB and NK 2 x 5 side by side; armax and oe one row [na nb nc nk] / [nb nf nk] each
+    w = np.loadtxt(sysid.datasets.path("winding"))[:800]
+    d = sysid.IOData(u=w[:, :5] - w[:, :5].mean(0), y=w[:, 5:7] - w[:, 5:7].mean(0))
+    NA, NB, NK = [[2, 1], [0, 2]], [[2] * 5, [1] * 5], [[1] * 5, [1, 1, 2, 1, 1]]
+    m = quiet(sysid.arx, d, np.hstack([NA, NB, NK]))
+    assert np.array_equal(_coefficients(m), _coefficients(quiet(sysid.arx, d, NA, NB, NK)))
+    assert np.array_equal(m.nk, NK)
+    rows = np.hstack([[[1], [2]], np.full((2, 5), 1), [[1], [0]], np.ones((2, 5), int)])
+    m = quiet(sysid.armax, d, rows, max_iter=3)
+    same = quiet(sysid.armax, d, [1, 2], 1, [1, 0], 1, max_iter=3)
+    assert np.array_equal(_coefficients(m), _coefficients(same))
+
+
+def test_a_vector_that_does_not_fit_the_channels_says_what_it_should_hold(dryer):
+    with pytest.raises(sysid.ShapeError, match=r"\[nb \(one per input\), nf \(one per input"
+                       r"\), nk \(one per input\)\]: for 1 input\(s\) and 1 output\(s\) a "
+                       r"vector of 3 numbers, got shape \(2,\)"):
+        sysid.oe(dryer, [2, 2])
+    with pytest.raises(sysid.DataError, match="whole numbers"):
+        sysid.arx(dryer, [2, 1.5, 1])
+    with pytest.raises(sysid.DataError, match=r"arx needs nb: .*arx\(data, \[na, nb, nk\]\)"):
+        sysid.arx(dryer, 2)
+    with pytest.raises(sysid.DataError, match=r"bj needs nd, nf"):
+        sysid.bj(dryer, 2, 1)
+    with pytest.raises(sysid.DataError, match="the vector comes alone"):
+        sysid.arx(dryer, [2, 2, 1], nk=1)
+    w = np.loadtxt(sysid.datasets.path("winding"))[:300]
+    mimo = sysid.IOData(u=w[:, :5], y=w[:, 5:7])
+    with pytest.raises(sysid.ShapeError, match=r"2 rows \(one per output\) of 12 numbers"):
+        sysid.arx(mimo, [2, 2, 1])
+
+
+@given(na=st.integers(0, 3), nb=st.lists(st.integers(0, 3), min_size=2, max_size=2),
+       nk=st.lists(st.integers(0, 2), min_size=2, max_size=2))
+def test_arx_vector_and_separate_orders_agree_for_any_orders(na, nb, nk):
+    # two inputs: MATLAB's [na nb1 nb2 nk1 nk2]
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((200, 2))
+    y = np.convolve(u[:, 0], [0, 1, 0.5])[:200] + 0.3 * u[:, 1] + 0.1 * rng.standard_normal(200)
+    d = sysid.IOData(u=u, y=y[:, None])
+    if na == 0 and sum(nb) == 0:
+        return
+    a = quiet(sysid.arx, d, [na, *nb, *nk])
+    b = quiet(sysid.arx, d, na, [nb], [nk])
+    assert np.array_equal(_coefficients(a), _coefficients(b))
