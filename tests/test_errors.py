@@ -170,3 +170,33 @@ def test_x0_needs_data_and_a_single_experiment(record):
 def test_kalman_gain_with_mismatched_shapes_is_a_shape_error_not_a_panic():
     with pytest.raises(sysid.ShapeError, match="C has shape"):
         _sysid.kalman_gain(np.eye(2), np.zeros((1, 3)), np.eye(2), np.eye(1), np.zeros((2, 1)))
+
+
+def test_every_sysid_warning_derives_from_one_base_class():
+    # sysid's own plain warnings (identify's skipped candidates and time budget, the
+    # residuals' untested independence, a horizon note, the file readers' guesses) were
+    # bare UserWarnings, and DelayWarning and CompressionFallbackWarning were not exported:
+    # a user could not silence or catch sysid's warnings alone
+    import warnings
+
+    exported = [getattr(sysid, n) for n in dir(sysid) if n.endswith("Warning")]
+    assert {"SysidWarning", "DelayWarning", "CompressionFallbackWarning"} <= {
+        w.__name__ for w in exported}
+    assert all(issubclass(w, sysid.SysidWarning) for w in exported)
+    assert issubclass(sysid.SysidWarning, UserWarning)
+    # the residual tests of a record too short for the independence test: a SysidWarning
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((60, 5))
+    y = u @ rng.standard_normal((5, 1)) + 0.1 * rng.standard_normal((60, 1))
+    d = sysid.IOData(u=u, y=y)
+    m = sysid.StateSpaceModel(np.zeros((1, 1)), np.zeros((1, 5)), np.zeros((1, 1)),
+                              np.linalg.lstsq(u, y, rcond=None)[0].T, dt=1.0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sysid.residuals(m, d)
+    said = [w for w in caught if "independence not tested" in str(w.message)]
+    assert said and all(issubclass(w.category, sysid.SysidWarning) for w in said)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        warnings.simplefilter("ignore", sysid.SysidWarning)
+        sysid.residuals(m, d)  # silenced by the one filter

@@ -37,6 +37,7 @@ from .errors import (
     RiccatiError,
     ShapeError,
     SysidError,
+    SysidWarning,
 )
 from .models.statespace import StateSpaceModel
 from .subspace.estimator import (
@@ -77,6 +78,8 @@ _LAZY = {
     "PolynomialModel": "polynomial.model",
     "ParameterUncertainty": "models.uncertainty",
     "UncertaintyWarning": "models.uncertainty",
+    "DelayWarning": "polynomial.delayest",
+    "CompressionFallbackWarning": "subspace.streaming",
     "Spectra": "nonparametric.spectra",
     "StabilizationDiagram": "realization.realize",
     "fixed": "greybox.greybox",
@@ -334,6 +337,9 @@ __all__ = [
     "compress_stream",
     "compress_dask",
     "SysidError",
+    "SysidWarning",
+    "DelayWarning",
+    "CompressionFallbackWarning",
     "DataError",
     "NonFiniteError",
     "ShapeError",

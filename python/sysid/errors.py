@@ -2,7 +2,9 @@
 
 Every error of the Rust core arrives as one of these classes (the mapping lives in the
 binding crate). Bad input raises a subclass of :class:`ValueError`, numerical failure a
-subclass of :class:`ArithmeticError`; all derive from :class:`SysidError`.
+subclass of :class:`ArithmeticError`; all derive from :class:`SysidError`. Every warning
+sysid gives derives from :class:`SysidWarning` (a :class:`UserWarning`), so that
+``warnings.simplefilter("ignore", sysid.SysidWarning)`` silences sysid alone.
 
 Examples
 --------
@@ -26,6 +28,7 @@ __all__ = [
     "OrderError",
     "NumericalError",
     "RiccatiError",
+    "SysidWarning",
     "ExcitationWarning",
     "FeedbackWarning",
     "OffsetWarning",
@@ -72,35 +75,40 @@ class RiccatiError(NumericalError):
     """The Riccati equation of the Kalman gain has no stabilising solution."""
 
 
-class ExcitationWarning(UserWarning):
+class SysidWarning(UserWarning):
+    """Base class of every sysid warning; the plain ones (a step left out, a budget spent,
+    a test that could not run) are of this class itself."""
+
+
+class ExcitationWarning(SysidWarning):
     """The input may not excite the system enough for the requested model order."""
 
 
-class FeedbackWarning(UserWarning):
+class FeedbackWarning(SysidWarning):
     """The input depends on past outputs (feedback): open-loop subspace methods are biased;
     use ``method="pbsid"`` or ``"ssarx"`` (see :func:`sysid.check_feedback`)."""
 
 
-class OffsetWarning(UserWarning):
+class OffsetWarning(SysidWarning):
     """A channel sits on an offset much larger than its variation and the data were not
     detrended: linear models (no constant term) fit the offset instead of the dynamics.
     Remove it with :func:`sysid.detrend` (``return_trend=True`` gives the trend to apply to
     validation data) or use :func:`sysid.identify`, which removes and restores it."""
 
 
-class StabilityWarning(UserWarning):
+class StabilityWarning(SysidWarning):
     """An estimator returned an unstable model (a pole on or outside the unit circle): its
     simulation diverges. The message names the largest pole modulus and what to do (for
     example ``ssest(..., focus="simulation")`` or ``stable=True`` / ``enforce_stability``)."""
 
 
-class IterationLimitWarning(UserWarning):
+class IterationLimitWarning(SysidWarning):
     """An iterative search stopped at its iteration cap before a convergence test was met;
     the model is the best iterate found. The message says how far from converged it was and
     what to do (raise ``max_iter``, or refine again from the returned model)."""
 
 
-class FeedthroughWarning(UserWarning):
+class FeedthroughWarning(SysidWarning):
     """A state-space model was fitted without a direct term (``D = 0``, the default at a given
     order) on a record that shows one: with ``D`` estimated, the one-step prediction errors of
     the subspace fit at that order are at least halved. Pass ``feedthrough=True``, or
@@ -109,7 +117,7 @@ class FeedthroughWarning(UserWarning):
     dependence is the controller's and ``D = 0`` is right."""
 
 
-class IdentifiabilityWarning(UserWarning):
+class IdentifiabilityWarning(SysidWarning):
     """The data cannot determine some parameters separately (named in the message): a grey-box
     parameter pair, a pole and a zero that cancel, or directions of an over-parameterised
     model; its fit may be good, but those parameters and what depends on them are not

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from .._atomic import atomic_path
-from ..errors import DataError
+from ..errors import DataError, SysidWarning
 from .table import numeric, read_table
 
 __all__: list[str] = []
@@ -62,7 +62,7 @@ def _warn_dropped_rows(index: Any, timed: bool) -> None:
         "a time column the record treats the rows left as consecutive samples; fill the "
         "gaps instead (IOData.from_pandas(df, nan='interpolate') on the full frame), or "
         "give the time (time='column' or a time index)",
-        UserWarning, stacklevel=3)
+        SysidWarning, stacklevel=3)
 
 
 def _seconds(x: Any, first: Any) -> np.ndarray:
@@ -227,7 +227,7 @@ def from_pandas(
                 + (f"an integer index named {df.index.name!r}, read as row numbers"
                    if named else "a default 0, 1, 2, ... index")
                 + "): assuming dt = 1 s; pass dt=... or time='column'",
-                UserWarning, stacklevel=2,
+                SysidWarning, stacklevel=2,
             )
     kw: dict[str, Any] = {
         "input_names": inputs,
@@ -376,7 +376,7 @@ def from_csv(
     if tcol is None and dt is None:
         warnings.warn(
             f"{p.name} has no time column and no dt= was given: assuming dt = 1 s; pass "
-            "dt=... or time='column'", UserWarning, stacklevel=2)
+            "dt=... or time='column'", SysidWarning, stacklevel=2)
     if tcol is not None and dt is None and np.isfinite(data[:, tcol]).all():
         # the dt the time column was written with (to_csv): its shortest decimal (0.1) or,
         # for a rate such as 1/60, its mean spacing, when that grid gives the column back

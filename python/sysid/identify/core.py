@@ -65,7 +65,7 @@ from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..data.preprocessing import spike_report
 from ..data.segments import long_enough
-from ..errors import DataError, ExcitationError, InsufficientDataError, NumericalError
+from ..errors import DataError, ExcitationError, InsufficientDataError, NumericalError, SysidWarning
 from ..models.statespace import ss_parameter_count
 from ..subspace.estimator import available_horizon
 from ..validation.compare import require_outputs_vary
@@ -203,7 +203,7 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
     if spikes:
         checks["outliers"] = (f"{spikes}: every fit bends to them; repair them first "
                               f"(sysid.despike(data)) or cut them out")
-        warnings.warn(f"identify: {checks['outliers']}", UserWarning, stacklevel=3)
+        warnings.warn(f"identify: {checks['outliers']}", SysidWarning, stacklevel=3)
     return checks, feedback
 
 
@@ -636,7 +636,7 @@ def identify(
             f"{len(broken)} candidate(s) failed with an error that says nothing of the data "
             f"(first: {r['family']} of order {r['order']}, {r['note']}); the choice was made "
             f"without them: check the installation (a failed import) or report it")
-        warnings.warn(f"identify: {checks['candidate_errors']}", UserWarning, stacklevel=2)
+        warnings.warn(f"identify: {checks['candidate_errors']}", SysidWarning, stacklevel=2)
     if board.skipped:
         checks["long_record"] = (
             f"not scored, to keep the work in proportion on this record: "
@@ -645,7 +645,7 @@ def identify(
     if board.out_of_time:
         warnings.warn(f"identify stopped scoring candidates after time_budget={time_budget} s "
                       f"({len(board.rows)} scored): the best so far is returned; raise "
-                      "time_budget for the full search", UserWarning, stacklevel=2)
+                      "time_budget for the full search", SysidWarning, stacklevel=2)
     insist = board.insisting() if enforce_stability is None else None
     if board.drift is not None:
         u = board.drift["unstable"]

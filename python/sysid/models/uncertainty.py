@@ -39,14 +39,14 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from .._display import HTMLResult
-from ..errors import DataError
+from ..errors import DataError, SysidWarning
 
 __all__ = ["ParameterUncertainty", "Propagation", "UncertaintyWarning"]
 
 _METHODS = ("linear", "monte-carlo")
 
 
-class UncertaintyWarning(UserWarning):
+class UncertaintyWarning(SysidWarning):
     """A standard deviation could not be computed reliably (reported as NaN)."""
 
 

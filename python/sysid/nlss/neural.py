@@ -30,7 +30,7 @@ from .. import _sysid
 from .._progress import iteration_callback
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
-from ..errors import DataError, NumericalError
+from ..errors import DataError, NumericalError, SysidWarning
 from ..models.protocol import ModelMixin
 from ..models.serialize import register_model
 from ..models.statespace import StateSpaceModel
@@ -318,7 +318,7 @@ def nlssest(
     IterationLimitWarning
         When the training returned stopped at ``epochs`` with its best epoch the last (the
         validation error still falling): raise ``epochs``.
-    UserWarning
+    SysidWarning
         When no epoch improved on the start and steps diverged (the model is the untrained
         start): lower ``learning_rate``.
 
@@ -427,7 +427,7 @@ def _warn_short(res: dict[str, Any], epochs: int, learning_rate: float) -> None:
         warnings.warn(f"nlssest: no training epoch improved on the start (the simulation "
                       f"diverged {int(res['diverged'])} times); the model is the untrained "
                       f"start: lower learning_rate (now {learning_rate:g}) or the horizon",
-                      UserWarning, stacklevel=user_stacklevel())
+                      SysidWarning, stacklevel=user_stacklevel())
     elif res["stop"] == "epochs" and epochs > 1 and best == epochs:
         v = [float(x) for x in res["validation"]]
         warnings.warn(f"nlssest stopped at epochs={epochs} with its validation error still "

@@ -25,7 +25,7 @@ from .._display import modulus
 from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
-from ..errors import DataError
+from ..errors import DataError, SysidWarning
 from ..models.protocol import ModelMixin
 from ..models.serialize import register_model
 from ..models.statespace import StateSpaceModel
@@ -449,7 +449,7 @@ def _auto_degree(data: IOData, n: int, kw: dict[str, Any], progress: Any) -> Any
                       f"against {t[choice.degree]:.1f} %; info['degree_choice']): check the "
                       f"model on validation data before trusting its nonlinear terms, or use "
                       f"the linear model, fewer terms or a lower order",
-                      UserWarning, stacklevel=user_stacklevel())
+                      SysidWarning, stacklevel=user_stacklevel())
     return choice
 
 
@@ -613,7 +613,7 @@ def _warn_short(res: dict[str, Any], max_iter: int) -> None:
                              remaining=res["remaining_decrease"])
     elif res["stop"] == "cancelled":
         warnings.warn(f"pnlss was cancelled after {res['iterations']} iterations; the model is "
-                      "the best iterate", UserWarning, stacklevel=user_stacklevel())
+                      "the best iterate", SysidWarning, stacklevel=user_stacklevel())
 
 
 def _tick(*_: Any) -> None:

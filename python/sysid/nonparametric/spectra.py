@@ -19,7 +19,7 @@ from scipy import signal
 
 from .._checks import as_int, check_elements
 from ..data.iodata import IOData
-from ..errors import DataError, InsufficientDataError
+from ..errors import DataError, InsufficientDataError, SysidWarning
 
 __all__ = ["Spectra", "Coherence", "spectra", "periodogram", "coherence"]
 
@@ -122,7 +122,7 @@ def _welch_matrix(
     short = [f"{k} ({z.shape[0]} samples)" for k, z in enumerate(zs) if z.shape[0] < nperseg]
     if short and len(short) < len(zs):
         warnings.warn(f"experiment(s) {', '.join(short)} shorter than nperseg = {nperseg} were "
-                      f"left out of the spectra; lower nperseg to use them", UserWarning,
+                      f"left out of the spectra; lower nperseg to use them", SysidWarning,
                       stacklevel=3)
     for z in zs:
         if z.shape[0] < nperseg:

@@ -26,7 +26,7 @@ from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
-from ..errors import DataError, IdentifiabilityWarning, StabilityWarning
+from ..errors import DataError, IdentifiabilityWarning, StabilityWarning, SysidWarning
 from ..models.checks import check_start
 from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
@@ -264,7 +264,7 @@ def _warn_dropped_d(stacklevel: int) -> None:
     """A start with a non-zero ``D`` refined with ``feedthrough=False``: say its D goes."""
     warnings.warn("the start model has a non-zero D but feedthrough=False: it is refined "
                   "with D = 0; leave feedthrough out (or pass True) to refine its D as well",
-                  UserWarning, stacklevel=stacklevel + 1)
+                  SysidWarning, stacklevel=stacklevel + 1)
 
 
 def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None,
@@ -284,9 +284,8 @@ def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None,
             f"enforce_stability=True (or focus='simulation') for a stable model",
             StabilityWarning, stacklevel=3)
     if res["stop"] == "maximum iterations" and max_iter > 0:
-        warn_iteration_limit(f"the {focus} search", max_iter, res["history"],
-                             cap_advice(res, focus), stacklevel=4,
-                             remaining=res["remaining_decrease"])
+        warn_iteration_limit(f"the {focus} search", max_iter, res["history"], cap_advice(
+            res, focus), stacklevel=4, remaining=res["remaining_decrease"])
 
 
 def _warn_undetermined(res: dict[str, Any], n: int) -> int:

@@ -25,12 +25,12 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int, experiment_arrays, require_inputs_vary
-from ..errors import DataError, ExcitationError
+from ..errors import DataError, ExcitationError, SysidWarning
 
 __all__ = ["delayest", "DelayWarning"]
 
 
-class DelayWarning(UserWarning):
+class DelayWarning(SysidWarning):
     """The estimated delay sits on the edge of the searched range."""
 
 

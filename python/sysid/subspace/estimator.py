@@ -51,6 +51,7 @@ from ..errors import (
     ExcitationError,
     FeedbackWarning,
     OrderError,
+    SysidWarning,
 )
 from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
@@ -291,7 +292,7 @@ class SubspaceEstimator:
                 self._horizon_note = (
                     f" (experiment(s) {', '.join(short)} shorter than the window of the "
                     f"default horizon {horizon} were left out; pass horizon=... to keep them)")
-                warnings.warn(f"SubspaceEstimator:{self._horizon_note[1:-1]}", UserWarning,
+                warnings.warn(f"SubspaceEstimator:{self._horizon_note[1:-1]}", SysidWarning,
                               stacklevel=2)
                 data = long_enough(data, 2 * horizon) or data
         elif horizon is None:

@@ -22,7 +22,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_2d, as_int, as_option
 from .._progress import Bar, show
-from ..errors import DataError, ShapeError
+from ..errors import DataError, ShapeError, SysidWarning
 
 __all__ = [
     "compress_stream",
@@ -38,7 +38,7 @@ COMPRESSORS = ("auto", "qr", "correlation")
 Source = Union[tuple[Any, Any], Iterable[tuple[Any, Any]], str, os.PathLike]
 
 
-class CompressionFallbackWarning(RuntimeWarning):
+class CompressionFallbackWarning(SysidWarning, RuntimeWarning):
     """The correlation compressor met an ill-conditioned Gram matrix; the message says which
     fallback was used (the exact QR pass, or an eigenvalue-clipped factor)."""
 

@@ -42,7 +42,7 @@ from .._checks import as_2d, as_int
 from .._display import HTMLResult
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
-from ..errors import DataError, NumericalError, ShapeError
+from ..errors import DataError, NumericalError, ShapeError, SysidWarning
 from ..models.checks import check_model
 from ..models.trended import TrendedModel
 
@@ -580,7 +580,7 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
                           f"{y.shape[0]} samples of {y.shape[1]} output(s) for {x.size} "
                           "fitted initial values: its fit says little about the model "
                           "(the initial state takes up the record); compare on a longer "
-                          "record, or with x0='zero'", UserWarning,
+                          "record, or with x0='zero'", SysidWarning,
                           stacklevel=user_stacklevel())
         us.append(u)
         ys.append(y)

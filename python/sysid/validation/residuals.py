@@ -14,7 +14,7 @@ import numpy as np
 
 from .._checks import as_int, user_stacklevel
 from .._display import HTMLResult
-from ..errors import DataError
+from ..errors import DataError, SysidWarning
 from .compare import X0, _records, _run, _simulator, _x0_for
 
 __all__ = ["ResidualAnalysis", "default_max_lag", "residuals"]
@@ -298,6 +298,6 @@ def residuals(model: Any, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
         us.append(u)
     res = ResidualAnalysis(model, es, us, int(max_lag), float(alpha))
     if model.ninputs and res.independence_note:
-        warnings.warn(res.independence_note + " (the whiteness test stands)", UserWarning,
+        warnings.warn(res.independence_note + " (the whiteness test stands)", SysidWarning,
                       stacklevel=user_stacklevel())
     return res
