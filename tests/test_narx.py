@@ -272,12 +272,18 @@ def test_docs_nonlinear_examples_and_their_claims(capsys):
     # custom regressors: the true terms, exact
     assert set(ns["cm"].term_names(0)) == {"y0(t-1)", "u0(t-1)", "y0(t-1)*|u0(t-1)|",
                                            "sin(2 u0(t-2))"}
-    # F-16 level 3 -> level 2 (table in the doc): chosen by level 3, NARX wins on level 2
+    # F-16 level 3 -> level 2 (table in the doc): chosen by level 3, NARX wins on level 2.
+    # The high-order OE fits end in one of several minima with the processor's rounding
+    # (the doc's two columns): the linear choice is one of them, either way behind NARX
     lin, nx = ns["f16_linear"], ns["f16_narx"]
-    assert ns["f16_best_lin"] == "oe(17,16,0)" and ns["f16_best_narx"].startswith(
-        "nlarx(20,21,0)")
-    np.testing.assert_allclose(lin["oe(17,16,0)"], [0.1085, 0.2921], atol=5e-4)
+    best = ns["f16_best_lin"]
+    assert ns["f16_best_narx"].startswith("nlarx(20,21,0)")
+    seen = {"oe(17,16,0)": [0.1085, 0.2921], "oe(15,14,0)": [0.1302, 0.2967]}
+    assert best in seen, lin
+    np.testing.assert_allclose(lin[best], seen[best], atol=5e-4)
+    np.testing.assert_allclose(lin["arx(18,19,0)"], [0.1769, 0.2984], atol=5e-4)
     np.testing.assert_allclose(nx[ns["f16_best_narx"]], [0.1328, 0.2232], atol=5e-4)
+    assert lin[best][1] > 1.3 * nx[ns["f16_best_narx"]][1]
     assert nx[ns["f16_best_narx"]][1] < min(v[1] for v in lin.values())
     # pH: NARX chosen on samples 701-1000 beats the chosen linear model on 1001-2001
     pl, pn = ns["ph_linear"][ns["ph_best_lin"]], ns["ph_narx"][ns["ph_best_narx"]]
