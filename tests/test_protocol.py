@@ -452,3 +452,29 @@ def test_state_space_tools_go_through_to_statespace():
         sysid.gramians(FIR(H_TRUE, DT))
     with pytest.raises(sysid.DataError, match="c2d"):
         sysid.modal_analysis(_families()["continuous"])
+
+
+def test_matlab_s_bode_and_pzmap_and_the_plot_package_s_own_names():
+    # docs/pem.md said `sysid.plot.plot_bode(model, confidence=0.95)`, which raised
+    # AttributeError (the function was only in sysid.plot.model), and MATLAB's bode(sys1,
+    # sys2) and pzmap(sys) had no sysid name
+    import subprocess
+    import sys
+
+    a = sysid.StateSpaceModel([[0.9]], [[1.0]], [[0.1]], dt=0.1)
+    b = sysid.StateSpaceModel([[0.5, 0.2], [0.0, 0.3]], [[1.0], [0.5]], [[0.5, 1.0]], dt=0.1)
+    assert sysid.plot.plot_bode is sysid.plot.model.plot_bode
+    fig = sysid.bode(a, b, labels=["a", "b"])
+    assert len(fig.axes) == 2 and len(fig.axes[0].lines) == 2
+    ax = sysid.pzmap(a, b)
+    poles = np.concatenate([ln.get_xdata() for ln in ax.lines if ln.get_marker() == "x"])
+    assert sorted(np.round(poles, 6)) == [0.3, 0.5, 0.9]
+    plt.close("all")
+    with pytest.raises(sysid.DataError, match="at least one model"):
+        sysid.bode()
+    with pytest.raises(AttributeError, match="plot_nothing"):
+        sysid.plot.plot_nothing  # noqa: B018
+    # importing sysid (and reaching these names) does not load matplotlib
+    code = "import sys, sysid; sysid.bode; sysid.plot; print('matplotlib' in sys.modules)"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert out.stdout.strip() == "False", out.stderr

@@ -7,6 +7,7 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import DataError
 from ..models.checks import FREQUENCY, _optional, check_model
 from . import _pyplot
 
@@ -197,3 +198,40 @@ def plot_time_response(resp: Any, fig: Any = None) -> Any:
         ax.set_xlabel("time [s]")
     fig.tight_layout()
     return fig
+
+
+def bode(*models: Any, omega: Any = None, hz: bool = True, confidence: float | None = None,
+         labels: Sequence[str] | None = None, fig: Any = None) -> Any:
+    """MATLAB's ``bode(sys1, sys2, ...)``: magnitude and phase of one or more models in one
+    figure (:func:`plot_bode`), with confidence bands for models that carry an
+    ``uncertainty`` when ``confidence`` is given. Returns the figure; the values themselves
+    are ``model.freqresp(omega)`` or :meth:`sysid.FRD.from_model`.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[0.1]], dt=0.1)
+    >>> fig = sysid.bode(m, sysid.StateSpaceModel([[0.5]], [[1.0]], [[0.5]], dt=0.1))
+    >>> len(fig.axes)
+    2
+    """
+    if not models:
+        raise DataError("bode needs at least one model: sysid.bode(model, ...)")
+    return plot_bode(list(models), omega, hz=hz, fig=fig, labels=labels, confidence=confidence)
+
+
+def pzmap(*models: Any, ax: Any = None) -> Any:
+    """MATLAB's ``pzmap(sys1, sys2, ...)``: poles (x) and zeros (o) of one or more models
+    (:func:`plot_pzmap`); returns the axis. The values are ``model.poles()`` and
+    ``model.zeros()``.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> ax = sysid.pzmap(sysid.StateSpaceModel([[0.9]], [[1.0]], [[0.1]], [[1.0]], dt=1.0))
+    >>> ax.get_title()
+    'pole-zero map'
+    """
+    if not models:
+        raise DataError("pzmap needs at least one model: sysid.pzmap(model, ...)")
+    return plot_pzmap(list(models), ax=ax)
