@@ -164,7 +164,7 @@ def identify(
     on a terminal). ``uncertainty="bootstrap"`` attaches the residual-bootstrap parameter
     uncertainty (``n_boot`` records) so the report's pole table has standard deviations.
 
-    The summary holds ``model``, ``selection`` (:class:`~sysid.criteria.OrderSelection`),
+    The summary holds ``model``, ``selection`` (:class:`~sysid.validation.criteria.OrderSelection`),
     ``compare``, ``prediction`` (validation 1-step), ``residuals``, ``warnings`` (of the run:
     in the report's summary, and re-issued) and, with ``report``, the written ``files``.
     """

@@ -54,7 +54,7 @@ def _plot_outputs(results: list[Any], names: list[str], experiment: int, fig: An
 
 
 def plot_compare(result: Any, experiment: int = 0, fig: Any = None) -> Any:
-    """Measured and model outputs of a :class:`~sysid.validation.CompareResult`."""
+    """Measured and model outputs of a :class:`~sysid.validation.compare.CompareResult`."""
     return _plot_outputs([result], [result.kind], experiment, fig, skip_diverged=False)
 
 

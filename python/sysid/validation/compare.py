@@ -119,7 +119,7 @@ def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndar
 
 
 def _operating_point(model: Any) -> bool:
-    """A model of deviations about offsets (:class:`sysid.identify.IdentifiedModel`): its
+    """A model of deviations about offsets (:class:`sysid.IdentifiedModel`): its
     ``statespace`` on ``remove_offsets(data)``."""
     return hasattr(model, "statespace") and hasattr(model, "remove_offsets")
 
