@@ -217,6 +217,17 @@ def test_matlab_names_point_at_sysids():
         sysid.resid  # noqa: B018
     with pytest.raises(AttributeError, match="no attribute 'nothing_like_it'$"):
         sysid.nothing_like_it  # noqa: B018
+    # every MATLAB name with a hint: the hint names sysid functions that exist
+    import re
+
+    from sysid import _MATLAB
+
+    assert {"predict", "goodnessOfFit", "idinput", "lsim", "isstable", "pe"} <= set(_MATLAB)
+    for name, hint in _MATLAB.items():
+        with pytest.raises(AttributeError, match=re.escape(hint)):
+            getattr(sysid, name)
+        for ref in re.findall(r"sysid\.([A-Za-z_]\w*)", hint):
+            assert hasattr(sysid, ref), (name, ref)
 
 
 def test_simulating_a_whole_record_says_to_pass_its_inputs():

@@ -270,7 +270,19 @@ _MATLAB = {"resid": "sysid.residuals(model, data)", "iddata": "sysid.IOData(u, y
            "idtf": "sysid.TransferFunction", "impulseest": "sysid.impulse_response",
            "getTrend": "sysid.detrend(data, kind, return_trend=True)",
            "retrend": "data.retrend() or trend.restore(...)",
-           "sim": "model.simulate(u)"}
+           "sim": "model.simulate(u)", "lsim": "model.simulate(u)",
+           "predict": "model.predict(u, y, horizon) or sysid.compare(data, model, horizon=k)",
+           "pe": "sysid.residuals(model, data)", "goodnessOfFit": "sysid.fit_metrics(y, yhat)",
+           "aic": "sysid.criteria(model, data).aic", "fpe": "sysid.criteria(model, data).fpe",
+           "idinput": "sysid.prbs, sysid.random_binary or sysid.multisine",
+           "misdata": "sysid.repair_nan(u, y)", "present": "model.summary()",
+           "isstable": "model.is_stable()", "getpvec": "model.parameters",
+           "idgrey": "sysid.GreyBox",
+           "nlgreyest": "sysid.greyest(data, sysid.NonlinearGreyBox(...))",
+           "idproc": "sysid.procest(data, type_code)",
+           "merge": "sysid.IOData(u=[u1, u2], y=[y1, y2]) (one experiment per array)",
+           "stepplot": "sysid.step(model).plot()", "bodemag": "sysid.bode(model)",
+           "nyquistplot": "sysid.nyquist(model).plot()"}
 
 
 def __getattr__(name: str) -> object:
