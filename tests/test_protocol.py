@@ -464,6 +464,7 @@ def test_matlab_s_bode_and_pzmap_and_the_plot_package_s_own_names():
     a = sysid.StateSpaceModel([[0.9]], [[1.0]], [[0.1]], dt=0.1)
     b = sysid.StateSpaceModel([[0.5, 0.2], [0.0, 0.3]], [[1.0], [0.5]], [[0.5, 1.0]], dt=0.1)
     assert sysid.plot.plot_bode is sysid.plot.model.plot_bode
+    assert sysid.plot.realization.plot_stabilization  # a submodule, reached on first use
     fig = sysid.bode(a, b, labels=["a", "b"])
     assert len(fig.axes) == 2 and len(fig.axes[0].lines) == 2
     ax = sysid.pzmap(a, b)

@@ -41,9 +41,9 @@ def matlab_orders(fn: str, data: Any, first: Any, **rest: Any) -> tuple[Any, ...
 
     One output: a vector with the numbers of :data:`LAYOUTS` (``[na, nb_1 .. nb_nu, nk_1 ..
     nk_nu]`` for ``arx``); several outputs: one such row per output (``na`` then has one
-    number per output in ``arx``, ``iv4`` and ``arxregul``: MATLAB's ``[NA NB NK]``). ``nlarx``
-takes one vector, ``[na_1 .. na_ny, nb_1 .. nb_nu, nk_1 .. nk_nu]`` (its lags are shared by
-every output's equation).
+    number per output in ``arx``, ``iv4`` and ``arxregul``: MATLAB's ``[NA NB NK]``).
+    ``nlarx`` takes one vector, ``[na_1 .. na_ny, nb_1 .. nb_nu, nk_1 .. nk_nu]`` (its lags
+    are shared by every output's equation).
 
     Examples
     --------
