@@ -112,3 +112,26 @@ def test_arx_vector_and_separate_orders_agree_for_any_orders(na, nb, nk):
     a = quiet(sysid.arx, d, [na, *nb, *nk])
     b = quiet(sysid.arx, d, na, [nb], [nk])
     assert np.array_equal(_coefficients(a), _coefficients(b))
+
+
+def test_arxstruc_with_validation_data_as_matlab_s(dryer):
+    # MATLAB's V = arxstruc(ze, zv, struc(1:5, 1:5, 1:4)); selstruc(V, 0): every row fitted
+    # on ze, scored by its one-step prediction errors on zv. Before: TypeError (arxstruc
+    # took the ranges only, and sysid.struc did not exist)
+    ze, zv = dryer[:500], dryer[500:]
+    nn = sysid.struc(range(1, 6), range(1, 6), range(1, 5))
+    assert nn.shape == (100, 3) and nn[0].tolist() == [1, 1, 1]
+    v = sysid.arxstruc(ze, zv, nn)
+    assert v.shape == (100, 5)
+    for a, b, k, loss, p in v[[0, 37, 99]]:
+        m = sysid.arx(ze, int(a), int(b), int(k))
+        e = zv.y - m.predict(zv.u, zv.y, 1)
+        assert loss == pytest.approx(float(np.mean(e ** 2)), rel=1e-12) and p == a + b
+    best = sysid.selstruc(v, 0)
+    assert list(best) == v[int(np.argmin(v[:, 3])), :3].astype(int).tolist()
+    with pytest.raises(sysid.DataError, match=r"rows \[na, nb, nk\]"):
+        sysid.arxstruc(ze, zv, [[1, 2]])
+    with pytest.raises(sysid.DataError, match="nothing after it"):
+        sysid.arxstruc(ze, zv, nn, [1])
+    with pytest.raises(sysid.DataError, match="needs the ranges"):
+        sysid.arxstruc(ze, [1, 2])

@@ -1,7 +1,7 @@
-"""Polynomial estimators: ``arx``, ``armax``, ``oe``, ``bj``, ``arxstruc`` and
-``selstruc`` (least squares by streaming QR in Rust; the iterative structures through the
-shared Gauss-Newton optimiser of ``sysid-core``); ``delayest`` is in
-:mod:`sysid.polynomial.delayest`."""
+"""Polynomial estimators: ``arx``, ``armax``, ``oe``, ``bj`` and ``iv4`` (least squares by
+streaming QR in Rust; the iterative structures through the shared Gauss-Newton optimiser of
+``sysid-core``); ``arxstruc``, ``selstruc`` and ``struc`` are in
+:mod:`sysid.polynomial.structure`, ``delayest`` in :mod:`sysid.polynomial.delayest`."""
 
 from __future__ import annotations
 
@@ -591,87 +591,6 @@ def bj(
         m.info["start"] = "init"
         return m
     return _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress, second=True)
-
-
-def arxstruc(data: Any, na: Any, nb: Any, nk: Any) -> np.ndarray:
-    """Loss of every ARX structure in the ranges, from one compression.
-
-    Returns rows ``[na, nb, nk, loss, n_parameters]`` (loss: mean squared residual);
-    structures whose regression is rank deficient are left out. Single-output data only (as
-    MATLAB's ``arxstruc``): rank one output at a time (``data.select(outputs=k)``), or choose
-    a multi-output model's order with ``sysid.n4sid(data, order="auto")`` or
-    ``sysid.ssest(data, order="auto")``.
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> from scipy import signal
-    >>> rng = np.random.default_rng(0)
-    >>> u = rng.standard_normal(400)
-    >>> e = 0.1 * rng.standard_normal(400)  # equation error: the ARX(1, 1, 1) structure
-    >>> y = signal.lfilter([0, 1.0], [1, -0.5], u) + signal.lfilter([1], [1, -0.5], e)
-    >>> d = sysid.IOData(u[:, None], y[:, None], 1.0)
-    >>> table = sysid.arxstruc(d, [1, 2], [1, 2], [1])
-    >>> sysid.selstruc(table, "bic", 400)
-    (1, 1, 1)
-    """
-    data = as_record(data)  # a (u, y) pair, as ssest and compare take
-    exps = experiment_arrays(data)
-    ny = exps[0][1].shape[1]
-    if ny > 1:  # the Rust table sums per-output losses of a diagonal-A model arx does not build
-        names = getattr(data, "output_names", None) or [f"y{i}" for i in range(ny)]
-        raise DataError(
-            f"arxstruc ranks single-output ARX structures, and the data have {ny} outputs "
-            f"({', '.join(map(str, names))}): rank one output at a time, "
-            f"sysid.arxstruc(data.select(outputs={names[0]!r}), na, nb, nk), or choose a "
-            "multi-output model's order with sysid.n4sid(data, order='auto') or "
-            "sysid.ssest(data, order='auto')")
-    check_offsets(data)
-    rng = [[as_int(int(o) if isinstance(o, (float, np.floating)) and float(o).is_integer()
-                   else o, f"every entry of {name}", 0) for o in np.atleast_1d(v).tolist()]
-           for v, name in ((na, "na"), (nb, "nb"), (nk, "nk"))]
-    require_inputs_vary(exps, "arxstruc", getattr(data, "input_names", None))
-    out = np.asarray(_sysid.arx_struc(exps, *rng)).view(StructureTable)
-    if not len(out):
-        raise DataError("every ARX structure in the ranges has a rank-deficient regression "
-                        "(the data do not determine any of them): check that the input "
-                        "and the output vary, or try smaller orders")
-    out.n_samples = int(sum(y.shape[0] for _, y in exps))
-    return out
-
-
-class StructureTable(np.ndarray):
-    """The array :func:`arxstruc` returns, remembering the number of estimation samples
-    (``n_samples``) that :func:`selstruc` needs (MATLAB keeps it in the table too)."""
-
-    n_samples: int | None = None
-
-    def __array_finalize__(self, obj: Any) -> None:
-        self.n_samples = getattr(obj, "n_samples", None)
-
-
-def selstruc(
-    table: np.ndarray, criterion: str = "aic", n_samples: int | None = None
-) -> tuple[int, int, int]:
-    """Choose ``(na, nb, nk)`` from an :func:`arxstruc` table by ``aic``, ``bic``/``mdl``
-    (``n_samples``: by default the number of estimation samples the table remembers)."""
-    if n_samples is None:
-        n_samples = getattr(table, "n_samples", None)
-    if n_samples is None:
-        raise DataError("selstruc needs n_samples (the number of estimation samples): this "
-                        "table does not remember it (pass the one from sysid.arxstruc)")
-    n_samples = as_int(n_samples, "n_samples")
-    loss, p = table[:, 3], table[:, 4]
-    if criterion == "aic":
-        score = np.log(loss) + 2 * p / n_samples
-    elif criterion in ("bic", "mdl"):
-        score = np.log(loss) + p * np.log(n_samples) / n_samples
-    else:
-        raise DataError(f"unknown criterion {criterion!r}; use 'aic', 'bic' or 'mdl'")
-    best = table[int(np.argmin(score))]
-    return int(best[0]), int(best[1]), int(best[2])
-
-
 
 
 def _references(reference: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> list[Any]:

@@ -1,0 +1,194 @@
+"""Choosing an ARX structure: ``arxstruc``, ``selstruc`` and ``struc``, as MATLAB's.
+
+``arxstruc(data, na, nb, nk)`` ranks every structure of the ranges by its loss on the
+estimation data, from one compression (Rust); MATLAB's own form, ``arxstruc(ze, zv, NN)``
+with ``NN = struc(1:10, 1:10, 1:5)``, fits each row of ``NN`` on ``ze`` and scores its
+one-step prediction errors on the validation data ``zv``. ``selstruc`` picks one by AIC,
+BIC/MDL or a number ``c`` (``loss (1 + c p / N)``; ``0``: the lowest loss, the choice for
+losses on validation data).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import as_int, experiment_arrays, require_inputs_vary
+from ..data.iodata import as_record
+from ..data.offsets import check_offsets
+from ..errors import DataError
+
+__all__ = ["StructureTable", "arxstruc", "selstruc", "struc"]
+
+
+class StructureTable(np.ndarray):
+    """The array :func:`arxstruc` returns, remembering the number of estimation samples
+    (``n_samples``) that :func:`selstruc` needs (MATLAB keeps it in the table too)."""
+
+    n_samples: int | None = None
+
+    def __array_finalize__(self, obj: Any) -> None:
+        self.n_samples = getattr(obj, "n_samples", None)
+
+
+def struc(na: Any, nb: Any, nk: Any) -> np.ndarray:
+    """Every ``[na, nb, nk]`` of the ranges, one per row (MATLAB's ``struc``), for
+    ``arxstruc(ze, zv, NN)``.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> sysid.struc([1, 2], [1], [0, 1]).tolist()
+    [[1, 1, 0], [1, 1, 1], [2, 1, 0], [2, 1, 1]]
+    """
+    ra, rb, rk = (_range(v, name) for v, name in ((na, "na"), (nb, "nb"), (nk, "nk")))
+    return np.array([[a, b, k] for a in ra for b in rb for k in rk], dtype=int)
+
+
+def _range(v: Any, name: str) -> list[int]:
+    """The whole numbers >= 0 of an order range (a number or a sequence)."""
+    return [as_int(int(o) if isinstance(o, (float, np.floating)) and float(o).is_integer()
+                   else o, f"every entry of {name}", 0) for o in np.atleast_1d(v).tolist()]
+
+
+def _single_output(exps: list[Any], data: Any) -> None:
+    ny = exps[0][1].shape[1]
+    if ny > 1:  # the Rust table sums per-output losses of a diagonal-A model arx does not build
+        names = getattr(data, "output_names", None) or [f"y{i}" for i in range(ny)]
+        raise DataError(
+            f"arxstruc ranks single-output ARX structures, and the data have {ny} outputs "
+            f"({', '.join(map(str, names))}): rank one output at a time, "
+            f"sysid.arxstruc(data.select(outputs={names[0]!r}), na, nb, nk), or choose a "
+            "multi-output model's order with sysid.n4sid(data, order='auto') or "
+            "sysid.ssest(data, order='auto')")
+
+
+def arxstruc(data: Any, na: Any, nb: Any = None, nk: Any = None) -> np.ndarray:
+    """Loss of every ARX structure in the ranges, from one compression; or, as MATLAB's
+    ``arxstruc(ze, zv, NN)``, of every row ``[na, nb, nk]`` of ``NN`` (:func:`struc`) fitted on
+    ``ze`` and scored on the validation data ``zv``.
+
+    Returns rows ``[na, nb, nk, loss, n_parameters]`` (loss: mean squared residual on the
+    estimation data, or mean squared one-step prediction error on ``zv``); structures whose
+    regression is rank deficient are left out. Single-output data only (as MATLAB's
+    ``arxstruc``): rank one output at a time (``data.select(outputs=k)``), or choose a
+    multi-output model's order with ``sysid.n4sid(data, order="auto")`` or
+    ``sysid.ssest(data, order="auto")``; MATLAB's form takes one input.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(400)
+    >>> e = 0.1 * rng.standard_normal(400)  # equation error: the ARX(1, 1, 1) structure
+    >>> y = signal.lfilter([0, 1.0], [1, -0.5], u) + signal.lfilter([1], [1, -0.5], e)
+    >>> d = sysid.IOData(u[:, None], y[:, None], 1.0)
+    >>> table = sysid.arxstruc(d, [1, 2], [1, 2], [1])
+    >>> sysid.selstruc(table, "bic", 400)
+    (1, 1, 1)
+    >>> v = sysid.arxstruc(d[:200], d[200:], sysid.struc([1, 2], [1, 2], [1]))  # MATLAB's
+    >>> sysid.selstruc(v, 0)
+    (1, 1, 1)
+    """
+    data = as_record(data)  # a (u, y) pair, as ssest and compare take
+    exps = experiment_arrays(data)
+    _single_output(exps, data)
+    if hasattr(na, "n_inputs") or (isinstance(na, tuple) and len(na) == 2):
+        return _on_validation(data, exps, as_record(na), nb, nk)
+    if nb is None or nk is None:
+        raise DataError("arxstruc needs the ranges na, nb and nk: arxstruc(data, na, nb, nk), "
+                        "or MATLAB's arxstruc(ze, zv, NN) with NN = sysid.struc(na, nb, nk)")
+    check_offsets(data)
+    rng = [_range(v, name) for v, name in ((na, "na"), (nb, "nb"), (nk, "nk"))]
+    require_inputs_vary(exps, "arxstruc", getattr(data, "input_names", None))
+    out = np.asarray(_sysid.arx_struc(exps, *rng)).view(StructureTable)
+    if not len(out):
+        raise DataError("every ARX structure in the ranges has a rank-deficient regression "
+                        "(the data do not determine any of them): check that the input "
+                        "and the output vary, or try smaller orders")
+    out.n_samples = int(sum(y.shape[0] for _, y in exps))
+    return out
+
+
+def _on_validation(data: Any, exps: list[Any], val: Any, nn: Any, extra: Any) -> np.ndarray:
+    """MATLAB's ``arxstruc(ze, zv, NN)``: each row fitted on ``data``, scored on ``val``."""
+    from .estimators import arx
+
+    if extra is not None:
+        raise DataError("arxstruc(ze, zv, NN) takes the structures as one array NN (rows "
+                        "[na, nb, nk], sysid.struc(na, nb, nk)), nothing after it")
+    vexps = experiment_arrays(val)
+    _single_output(vexps, val)
+    if exps[0][0].shape[1] != 1 or vexps[0][0].shape[1] != 1:
+        raise DataError("arxstruc(ze, zv, NN) takes one input, as MATLAB's; with several, "
+                        "rank structures on the estimation data: arxstruc(data, na, nb, nk)")
+    rows = np.asarray(nn if nn is not None else [], dtype=float)
+    if rows.ndim == 1 and rows.size == 3:
+        rows = rows[None, :]
+    if (rows.ndim != 2 or rows.shape[1] != 3 or not len(rows) or not np.all(np.isfinite(rows))
+            or np.any(rows != np.round(rows)) or np.any(rows < 0)):
+        raise DataError(f"NN must hold rows [na, nb, nk] of whole numbers >= 0 "
+                        f"(sysid.struc(na, nb, nk)), got {np.asarray(nn)!r:.80}")
+    out = []
+    n_val = sum(y.shape[0] for _, y in vexps)
+    for a, b, k in rows.astype(int).tolist():
+        if a + b == 0:
+            continue
+        try:
+            m = arx(data, a, b, k)
+        except DataError:
+            continue  # a structure the estimation data do not determine
+        e = [y - m.predict(u, y, 1) for u, y in vexps]
+        loss = float(sum(np.sum(r ** 2) for r in e) / n_val)
+        if np.isfinite(loss):
+            out.append([a, b, k, loss, a + b])
+    if not out:
+        raise DataError("no structure of NN could be fitted and scored: check that the input "
+                        "and the output vary, or try smaller orders")
+    table = np.asarray(out).view(StructureTable)
+    table.n_samples = int(sum(y.shape[0] for _, y in exps))
+    return table
+
+
+def selstruc(
+    table: np.ndarray, criterion: Any = "aic", n_samples: int | None = None
+) -> tuple[int, int, int]:
+    """Choose ``(na, nb, nk)`` from an :func:`arxstruc` table by ``aic``, ``bic``/``mdl``, or a
+    number ``c`` as MATLAB's ``selstruc(V, c)``: the least ``loss (1 + c p / N)``, ``0`` the
+    lowest loss (the choice on a table of losses on validation data). ``n_samples``: by
+    default the number of estimation samples the table remembers.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> t = np.array([[1, 1, 1, 0.50, 2], [2, 2, 1, 0.49, 4]])
+    >>> sysid.selstruc(t, 0), sysid.selstruc(t, "aic", 100)
+    ((2, 2, 1), (1, 1, 1))
+    """
+    loss, p = table[:, 3], table[:, 4]
+    if isinstance(criterion, (int, float, np.number)) and not isinstance(criterion, bool):
+        c = float(criterion)
+        if not (np.isfinite(c) and c >= 0):
+            raise DataError(f"a numeric criterion must be a finite number >= 0, got {c}")
+        n = getattr(table, "n_samples", None) if n_samples is None else n_samples
+        score = loss if c == 0 else loss * (1 + c * p / as_int(n, "n_samples"))
+        best = table[int(np.argmin(score))]
+        return int(best[0]), int(best[1]), int(best[2])
+    if n_samples is None:
+        n_samples = getattr(table, "n_samples", None)
+    if n_samples is None:
+        raise DataError("selstruc needs n_samples (the number of estimation samples): this "
+                        "table does not remember it (pass the one from sysid.arxstruc)")
+    n_samples = as_int(n_samples, "n_samples")
+    if criterion == "aic":
+        score = np.log(loss) + 2 * p / n_samples
+    elif criterion in ("bic", "mdl"):
+        score = np.log(loss) + p * np.log(n_samples) / n_samples
+    else:
+        raise DataError(f"unknown criterion {criterion!r}; use 'aic', 'bic', 'mdl' or a "
+                        "number (0: the lowest loss)")
+    best = table[int(np.argmin(score))]
+    return int(best[0]), int(best[1]), int(best[2])
