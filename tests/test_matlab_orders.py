@@ -135,3 +135,34 @@ def test_arxstruc_with_validation_data_as_matlab_s(dryer):
         sysid.arxstruc(ze, zv, nn, [1])
     with pytest.raises(sysid.DataError, match="needs the ranges"):
         sysid.arxstruc(ze, [1, 2])
+
+
+def test_arxstruc_validation_form_with_several_inputs():
+    # MATLAB's NN rows for m inputs are [na, nb1..nbm, nk1..nkm]; before, arxstruc(ze, zv, NN)
+    # took one input, and selstruc read columns 3 and 4 as loss and parameter count
+    from scipy import signal
+
+    rng = np.random.default_rng(1)
+    n = 2000
+    u = rng.standard_normal((n, 2))
+    e = 0.05 * rng.standard_normal(n)
+    y = (signal.lfilter([0, 1.0, 0.5], [1, -0.6], u[:, 0])
+         + signal.lfilter([0, 0, 0.8], [1, -0.6], u[:, 1]) + signal.lfilter([1], [1, -0.6], e))
+    d = sysid.IOData(u, y[:, None], 1.0)
+    ze, zv = d[:1000], d[1000:]
+    nn = [[1, 2, 1, 1, 2], [1, 1, 1, 1, 2], [1, 2, 1, 1, 1], [1, 2, 1, 2, 2], [1, 2, 0, 1, 0]]
+    v = sysid.arxstruc(ze, zv, nn)
+    assert v.shape == (5, 7)
+    for row in v:
+        a, b, k = int(row[0]), row[1:3].astype(int).tolist(), row[3:5].astype(int).tolist()
+        m = sysid.arx(ze, a, [b], [k])
+        r = zv.y - m.predict(zv.u, zv.y, 1)
+        assert row[5] == pytest.approx(float(np.mean(r ** 2)), rel=1e-12)
+        assert row[6] == a + sum(b)
+    # the true structure: lowest validation loss, and AIC/BIC agree on the table
+    assert sysid.selstruc(v, 0) == (1, 2, 1, 1, 2)
+    assert sysid.selstruc(v, "aic") == sysid.selstruc(v, "bic") == (1, 2, 1, 1, 2)
+    with pytest.raises(sysid.DataError, match=r"\[na, nb1..nb2, nk1..nk2\]"):
+        sysid.arxstruc(ze, zv, [[1, 2, 1]])
+    with pytest.raises(sysid.DataError, match="same channels"):
+        sysid.arxstruc(ze, zv.select(inputs=0), nn)

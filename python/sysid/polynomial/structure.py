@@ -75,7 +75,8 @@ def arxstruc(data: Any, na: Any, nb: Any = None, nk: Any = None) -> np.ndarray:
     regression is rank deficient are left out. Single-output data only (as MATLAB's
     ``arxstruc``): rank one output at a time (``data.select(outputs=k)``), or choose a
     multi-output model's order with ``sysid.n4sid(data, order="auto")`` or
-    ``sysid.ssest(data, order="auto")``; MATLAB's form takes one input.
+    ``sysid.ssest(data, order="auto")``. With ``m`` inputs MATLAB's rows are ``[na, nb1..nbm,
+    nk1..nkm]`` and so are the table's (then loss and parameter count).
 
     Examples
     --------
@@ -122,29 +123,36 @@ def _on_validation(data: Any, exps: list[Any], val: Any, nn: Any, extra: Any) ->
                         "[na, nb, nk], sysid.struc(na, nb, nk)), nothing after it")
     vexps = experiment_arrays(val)
     _single_output(vexps, val)
-    if exps[0][0].shape[1] != 1 or vexps[0][0].shape[1] != 1:
-        raise DataError("arxstruc(ze, zv, NN) takes one input, as MATLAB's; with several, "
-                        "rank structures on the estimation data: arxstruc(data, na, nb, nk)")
+    m = exps[0][0].shape[1]
+    if vexps[0][0].shape[1] != m:
+        raise DataError(f"the validation data have {vexps[0][0].shape[1]} input(s) and the "
+                        f"estimation data {m}: pass records of the same channels")
+    width = 1 + 2 * m
+    form = "[na, nb, nk]" if m == 1 else (
+        f"[na, nb1..nb{m}, nk1..nk{m}] ({width} numbers for {m} inputs)")
     rows = np.asarray(nn if nn is not None else [], dtype=float)
-    if rows.ndim == 1 and rows.size == 3:
+    if rows.ndim == 1 and rows.size == width:
         rows = rows[None, :]
-    if (rows.ndim != 2 or rows.shape[1] != 3 or not len(rows) or not np.all(np.isfinite(rows))
-            or np.any(rows != np.round(rows)) or np.any(rows < 0)):
-        raise DataError(f"NN must hold rows [na, nb, nk] of whole numbers >= 0 "
-                        f"(sysid.struc(na, nb, nk)), got {np.asarray(nn)!r:.80}")
+    if (rows.ndim != 2 or rows.shape[1] != width or not len(rows)
+            or not np.all(np.isfinite(rows)) or np.any(rows != np.round(rows))
+            or np.any(rows < 0)):
+        hint = "sysid.struc(na, nb, nk)" if m == 1 else "one row per structure"
+        raise DataError(f"NN must hold rows {form} of whole numbers >= 0 ({hint}), got "
+                        f"{np.asarray(nn)!r:.80}")
     out = []
     n_val = sum(y.shape[0] for _, y in vexps)
-    for a, b, k in rows.astype(int).tolist():
-        if a + b == 0:
+    for row in rows.astype(int).tolist():
+        a, b, k = row[0], row[1:1 + m], row[1 + m:]
+        if a + sum(b) == 0:
             continue
         try:
-            m = arx(data, a, b, k)
+            model = arx(data, a, [b], [k])
         except DataError:
             continue  # a structure the estimation data do not determine
-        e = [y - m.predict(u, y, 1) for u, y in vexps]
+        e = [y - model.predict(u, y, 1) for u, y in vexps]
         loss = float(sum(np.sum(r ** 2) for r in e) / n_val)
         if np.isfinite(loss):
-            out.append([a, b, k, loss, a + b])
+            out.append([*row, loss, a + sum(b)])
     if not out:
         raise DataError("no structure of NN could be fitted and scored: check that the input "
                         "and the output vary, or try smaller orders")
@@ -155,11 +163,12 @@ def _on_validation(data: Any, exps: list[Any], val: Any, nn: Any, extra: Any) ->
 
 def selstruc(
     table: np.ndarray, criterion: Any = "aic", n_samples: int | None = None
-) -> tuple[int, int, int]:
+) -> tuple[int, ...]:
     """Choose ``(na, nb, nk)`` from an :func:`arxstruc` table by ``aic``, ``bic``/``mdl``, or a
     number ``c`` as MATLAB's ``selstruc(V, c)``: the least ``loss (1 + c p / N)``, ``0`` the
     lowest loss (the choice on a table of losses on validation data). ``n_samples``: by
-    default the number of estimation samples the table remembers.
+    default the number of estimation samples the table remembers. A table of ``m``-input
+    rows gives ``(na, nb1, .., nbm, nk1, .., nkm)``.
 
     Examples
     --------
@@ -168,15 +177,14 @@ def selstruc(
     >>> sysid.selstruc(t, 0), sysid.selstruc(t, "aic", 100)
     ((2, 2, 1), (1, 1, 1))
     """
-    loss, p = table[:, 3], table[:, 4]
+    loss, p = table[:, -2], table[:, -1]
     if isinstance(criterion, (int, float, np.number)) and not isinstance(criterion, bool):
         c = float(criterion)
         if not (np.isfinite(c) and c >= 0):
             raise DataError(f"a numeric criterion must be a finite number >= 0, got {c}")
         n = getattr(table, "n_samples", None) if n_samples is None else n_samples
         score = loss if c == 0 else loss * (1 + c * p / as_int(n, "n_samples"))
-        best = table[int(np.argmin(score))]
-        return int(best[0]), int(best[1]), int(best[2])
+        return _structure(table[int(np.argmin(score))])
     if n_samples is None:
         n_samples = getattr(table, "n_samples", None)
     if n_samples is None:
@@ -190,5 +198,9 @@ def selstruc(
     else:
         raise DataError(f"unknown criterion {criterion!r}; use 'aic', 'bic', 'mdl' or a "
                         "number (0: the lowest loss)")
-    best = table[int(np.argmin(score))]
-    return int(best[0]), int(best[1]), int(best[2])
+    return _structure(table[int(np.argmin(score))])
+
+
+def _structure(row: np.ndarray) -> tuple[int, ...]:
+    """The structure of a table row: everything before its loss and parameter count."""
+    return tuple(int(v) for v in row[:-2])
