@@ -333,6 +333,7 @@ def test_docs_examples_run() -> None:
     assert len(python_blocks(guide_text("realization.md"))) >= 3
     namespace = run_guide("realization.md")
     assert namespace["small"].nstates == 2
+    assert namespace["rm"].is_stable() and namespace["rm"].K is not None
 
 
 def test_era_on_the_inverse_fft_of_a_periodic_etfe() -> None:

@@ -135,7 +135,9 @@ pub fn marginal_likelihood(
 /// Computed as `P = L L^T` (eigen-factor), `R1 L = U diag(s) V^T`:
 /// `theta = L V diag(s / (s^2 + lam)) U^T r`, covariance `L V diag(lam / (s^2 + lam)) V^T L^T`:
 /// positive semi-definite by construction, and `lam -> 0` tends to least squares on the
-/// range of `P` without cancellation.
+/// range of `P` without cancellation. With `lam = 0` a direction the data do not determine
+/// (a singular value at round-off of the largest) is left at the prior's 0 with the prior's
+/// variance: the minimum-norm least-squares solution, finite on rank-deficient data.
 ///
 /// ```
 /// use faer::Mat;
@@ -180,10 +182,29 @@ pub fn regularized_solve(
     let lv = mul(l.as_ref(), svd.V());
     let ur = svd.U().transpose() * r;
     let k = s.nrows();
-    let coef = Mat::from_fn(k, 1, |i, _| s[i] / (s[i] * s[i] + lam) * ur[(i, 0)]);
+    // a direction the data do not determine (a zero singular value, or one at round-off of
+    // the largest: noise-free data, or more parameters than the data support) keeps the
+    // prior's value 0 and its whole variance when there is no penalty to decide it
+    let s_max = (0..k).map(|i| s[i]).fold(0.0, f64::max);
+    let tol = s_max * (p.max(1) as f64) * f64::EPSILON;
+    let lost = |i: usize| s[i] <= tol && lam == 0.0;
+    let coef = Mat::from_fn(k, 1, |i, _| {
+        if lost(i) {
+            0.0
+        } else {
+            s[i] / (s[i] * s[i] + lam) * ur[(i, 0)]
+        }
+    });
     let th = &lv * &coef;
     let theta: Vec<f64> = (0..p).map(|i| th[(i, 0)]).collect();
-    let scaled = Mat::from_fn(p, k, |i, j| lv[(i, j)] * lam / (s[j] * s[j] + lam));
+    let scaled = Mat::from_fn(p, k, |i, j| {
+        lv[(i, j)]
+            * if lost(j) {
+                1.0
+            } else {
+                lam / (s[j] * s[j] + lam)
+            }
+    });
     let cov0 = mul(scaled.as_ref(), lv.transpose());
     let cov = Mat::from_fn(p, p, |i, j| 0.5 * (cov0[(i, j)] + cov0[(j, i)]));
     let fitted = r1 * &th;

@@ -566,3 +566,32 @@ fn regularized_solve_tends_to_least_squares_and_matches_the_normal_equations() {
     }
     assert!(regularized_solve(s.as_ref(), prior.as_ref(), -1.0).is_err());
 }
+
+#[test]
+fn regularized_solve_without_penalty_is_finite_on_a_rank_deficient_regression() {
+    // noise-free data from a first-order system fitted with two a and two b coefficients:
+    // a column of the regression is a combination of the others (a zero singular value);
+    // lam = 0 returned NaN (0 / 0) there, which arxregul's start then carried
+    use super::regul::regularized_solve;
+    let n = 60;
+    let u = noise(n, 7);
+    let mut y = vec![0.0; n];
+    for t in 1..n {
+        y[t] = 0.5 * y[t - 1] + u[t - 1];
+    }
+    // columns -y(t-1), -y(t-2), u(t-1), u(t-2), then y(t)
+    let z = Mat::from_fn(n - 2, 5, |r, j| {
+        let t = r + 2;
+        [-y[t - 1], -y[t - 2], u[t - 1], u[t - 2], y[t]][j]
+    });
+    let s = z.qr().thin_R().to_owned();
+    let prior = Mat::<f64>::identity(4, 4);
+    let (th, cov, rss) = regularized_solve(s.as_ref(), prior.as_ref(), 0.0).unwrap();
+    assert!(th.iter().chain(cov.col_as_slice(0)).all(|v| v.is_finite()) && rss.is_finite());
+    // the fit is exact: the residual is round-off, and theta reproduces y(t)
+    assert!(rss < 1e-18 * y.iter().map(|v| v * v).sum::<f64>());
+    for t in 2..n {
+        let yh = -th[0] * y[t - 1] - th[1] * y[t - 2] + th[2] * u[t - 1] + th[3] * u[t - 2];
+        assert!((yh - y[t]).abs() < 1e-9);
+    }
+}

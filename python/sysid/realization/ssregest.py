@@ -1,0 +1,228 @@
+"""A state-space model from a reduced regularised ARX model (MATLAB's ``ssregest``).
+
+A high-order ARX model ``A(q) y = B(q) u + e`` is estimated with a kernel prior tuned by
+empirical Bayes (:func:`sysid.arxregul`: stable impulse responses without the variance of a
+plain high-order fit), realised in innovations form (:meth:`PolynomialModel.to_statespace`)
+and reduced by balanced truncation (:func:`sysid.balanced_truncation`) of the system from
+``[u, e]`` to ``y``, the inputs scaled by their standard deviations and ``e`` by the
+innovations' so that both paths are weighed by the output they cause. The reduced model
+keeps the noise path (``K``). On noise-free data of a system of order ``n`` the ARX model
+holds the system exactly (its extra roots cancel) and the reduction returns it to round-off.
+
+``order="auto"`` (or a sequence of orders) chooses as the other automatic orders do
+(:mod:`sysid.validation.crossval`): the whole procedure fitted on parts of the record, scored
+by the simulation fit on the blocks held out, among orders whose model on the whole record
+is stable unless the data insist.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+
+from .._checks import as_int, experiment_arrays, require_inputs_vary
+from ..data.iodata import as_record
+from ..data.offsets import check_offsets
+from ..errors import DataError, NumericalError
+from ..models.checks import warn_unstable
+from ..models.statespace import StateSpaceModel
+
+__all__ = ["ssregest"]
+
+
+def _orders(order: Any) -> list[int] | None:
+    """The candidate orders: ``None`` for ``"auto"``, else a sorted list."""
+    if isinstance(order, str):
+        if order != "auto":
+            raise DataError(f"order must be a whole number, a sequence of them or 'auto', "
+                            f"got {order!r}")
+        return None
+    if isinstance(order, (int, np.integer)) and not isinstance(order, (bool, np.bool_)):
+        return [as_int(order, "order")]
+    try:
+        vals = list(order)
+    except TypeError:
+        raise DataError(f"order must be a whole number, a sequence of them or 'auto', "
+                        f"got {order!r}") from None
+    if not vals:
+        raise DataError("order is an empty sequence: pass at least one order, or 'auto'")
+    return sorted({as_int(v, "every order") for v in vals})
+
+
+def _arx_order(n_samples: int, nu: int, ny: int, arx_orders: Any) -> int:
+    if arx_orders is not None:
+        return as_int(arx_orders, "arx_orders")
+    # about a tenth of the record per equation's parameters, within 5..30 lags
+    return int(np.clip(n_samples // (10 * (nu + ny)), 5, 30))
+
+
+def _big_model(data: Any, na: int, kernel: str, nk: int) -> tuple[Any, Any]:
+    """The regularised ARX model and its innovations form."""
+    from ..polynomial.arxregul import arxregul
+    from ..polynomial.estimators import arx
+
+    ny, nu = data.n_outputs, data.n_inputs
+    grid_a = np.full((ny, ny), na) if ny > 1 else na
+    grid_b, grid_k = np.full((ny, nu), na), np.full((ny, nu), nk)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the offset check was made once, on the whole record
+        reg = arxregul(data, grid_a, grid_b, grid_k, kernel)
+        poly = arx(data, grid_a, grid_b, grid_k, regularization=reg)
+    return poly, poly.to_statespace()
+
+
+def _reduce(big: StateSpaceModel, su: np.ndarray, ysd: np.ndarray, orders: list[int]
+            ) -> dict[int, StateSpaceModel]:
+    """Balanced truncation of ``[u, e] -> y`` (scaled) to each order; ``K`` from ``e``'s
+    columns."""
+    from ..analysis.reduction import balanced_truncation
+
+    nu, ny = big.B.shape[1], big.C.shape[0]
+    sv = np.sqrt(np.clip(np.diag(big.noise_cov), 0.0, None)) if big.noise_cov is not None \
+        else np.zeros(ny)
+    se = np.maximum(sv, 1e-6 * ysd)  # noise-free data: the deterministic part decides
+    K = big.K if big.K is not None else np.zeros((big.nstates, ny))
+    g = StateSpaceModel(big.A, np.hstack([big.B * su, K * se]), big.C,
+                        np.hstack([big.D * su, np.diag(se)]), dt=big.dt)
+    out = {}
+    for n in orders:
+        if n > big.nstates:
+            continue
+        r = balanced_truncation(g, n)
+        out[n] = StateSpaceModel(r.A, r.B[:, :nu] / su, r.C, big.D, K=r.B[:, nu:] / se,
+                                 dt=big.dt, input_names=big.input_names,
+                                 output_names=big.output_names)
+    return out
+
+
+def _fits(data: Any, orders: list[int], na: int, kernel: str, nk: int
+          ) -> tuple[dict[int, StateSpaceModel], Any]:
+    exps = experiment_arrays(data)
+    su = np.concatenate([u for u, _ in exps]).std(axis=0)
+    ysd = np.concatenate([y for _, y in exps]).std(axis=0)
+    poly, big = _big_model(data, na, kernel, nk)
+    return _reduce(big, su, np.maximum(ysd, np.finfo(float).tiny), orders), (poly, big)
+
+
+def _choose(data: Any, whole: dict[int, StateSpaceModel], na: int, kernel: str, nk: int
+            ) -> tuple[int, dict[str, Any]]:
+    from ..validation.crossval import choose, record_folds, simulation_fit, stable_first
+
+    orders = sorted(whole)
+    table: dict[int, list[float]] = {n: [] for n in orders}
+    for part, held in record_folds(data):
+        try:
+            models, _ = _fits(part, orders, na, kernel, nk)
+        except (DataError, NumericalError):
+            models = {}
+        for n in orders:
+            try:
+                table[n].append(simulation_fit(models[n], held) if n in models else -np.inf)
+            except (DataError, NumericalError):
+                table[n].append(-np.inf)
+    med = {n: float(np.median(v)) if v else -np.inf for n, v in table.items()}
+    unstable = {n for n, m in whole.items() if not m.is_stable()}
+    allowed, note = stable_first(med, table, unstable)
+    n, why = choose({o: f for o, f in med.items() if o in allowed})
+    return n, {"order": n, "criterion": "cross-validated simulation fit",
+               "reason": why + note, "table": med}
+
+
+def ssregest(
+    data: Any,
+    order: Any = "auto",
+    *,
+    arx_orders: int | None = None,
+    kernel: str = "tc",
+    feedthrough: bool = False,
+) -> StateSpaceModel:
+    """A state-space model by reducing a regularised ARX model (MATLAB's ``ssregest``).
+
+    Parameters
+    ----------
+    data : IOData or (u, y)
+        Estimation record with inputs (several experiments are used together). Remove
+        offsets first (a large mean warns, as in every estimator).
+    order : int, sequence of int or "auto"
+        States of the model; a sequence or ``"auto"`` (orders ``1 .. 20`` the ARX model
+        can hold) chooses by simulation fit on blocks of the record held out
+        (``info["ssregest"]["order_selection"]``).
+    arx_orders : int, optional
+        Lags of every ``A`` and ``B`` polynomial of the ARX model (MATLAB's ``ARXOrders``);
+        default about a tenth of the samples per equation parameter, within 5 .. 30.
+    kernel : {"tc", "ss", "dc", "ridge"}
+        The prior of :func:`sysid.arxregul` (MATLAB's ``RegularizationKernel``, default TC).
+    feedthrough : bool
+        Estimate ``D`` (the ARX model then has no input delay); by default ``D = 0``, as
+        every estimator of the package and MATLAB's default.
+
+    Returns
+    -------
+    StateSpaceModel
+        In innovations form (``K``, ``noise_cov`` from the one-step prediction errors on the
+        data); ``info["ssregest"]``: the ARX orders, the kernel, the Hankel singular values
+        of the realised ARX model and, for an automatic order, the choice. No parameter
+        covariance: refine with ``sysid.pem(data, model)`` for one.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> true = sysid.StateSpaceModel([[0.9, 0.3], [-0.3, 0.9]], [[1.0], [0.5]], [[1.0, 0.0]])
+    >>> u = rng.standard_normal((1000, 1))
+    >>> y = true.simulate(u) + 0.05 * rng.standard_normal((1000, 1))
+    >>> m = sysid.ssregest(sysid.IOData(u, y, 1.0), 2)
+    >>> np.round(np.sort(np.abs(m.poles())), 2).tolist()
+    [0.95, 0.95]
+    >>> m.info["ssregest"]["hankel_singular_values"][:3].round(2).tolist()  # of the ARX model
+    [6.31, 4.82, 0.01]
+    """
+    data = as_record(data)
+    if data.n_inputs == 0:
+        raise DataError("ssregest estimates an input-output model and the data have no "
+                        "inputs: for a time series use sysid.n4sid(data, order) or "
+                        "sysid.ssest(data, order)")
+    exps = experiment_arrays(data)
+    require_inputs_vary(exps, "ssregest", getattr(data, "input_names", None))
+    require_inputs_vary(exps, "ssregest", getattr(data, "output_names", None), side=1)
+    check_offsets(data)
+    candidates = _orders(order)
+    n_samples = int(sum(y.shape[0] for _, y in exps))
+    na = _arx_order(n_samples, data.n_inputs, data.n_outputs, arx_orders)
+    nk = 0 if feedthrough else 1
+    top = na * data.n_outputs
+    pool = candidates if candidates is not None else list(range(1, min(20, top) + 1))
+    if pool[0] > top:
+        raise DataError(f"order {pool[0]} exceeds the {top} states of the ARX model "
+                        f"({na} lags x {data.n_outputs} output(s)): pass a larger "
+                        "arx_orders or a smaller order")
+    models, (_, big) = _fits(data, pool, na, kernel, nk)
+    if not models:
+        raise DataError(f"no order of {pool} fits the {big.nstates} states of the ARX model: "
+                        "pass a larger arx_orders or a smaller order")
+    choice = None
+    if len(models) > 1:
+        n, choice = _choose(data, models, na, kernel, nk)
+    else:
+        n = next(iter(models))
+    model = models[n]
+    e = np.concatenate([y - model.predict(u, y, 1) for u, y in exps])
+    model.noise_cov = e.T @ e / e.shape[0]
+    from ..analysis.reduction import hankel_singular_values
+
+    info: dict[str, Any] = {"arx_orders": (na, na, nk), "kernel": kernel,
+                            "arx_states": big.nstates}
+    try:
+        info["hankel_singular_values"] = hankel_singular_values(big)
+    except (DataError, NumericalError):  # an unstable ARX model: its stable part's only
+        info["hankel_singular_values"] = None
+    if choice is not None:
+        info["order_selection"] = choice
+    model.info = {"method": "ssregest", "ssregest": info}
+    warn_unstable(model, "ssregest", advice=(
+        "Unless the process itself is unstable, try another order, a larger arx_orders, or "
+        "refine with sysid.pem(data, model, focus='simulation'), which keeps the "
+        "simulation stable."))
+    return model

@@ -1,0 +1,127 @@
+"""MATLAB's ssregest: a state-space model from a reduced regularised ARX model."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import sysid
+
+
+def _two_by_two():
+    A = [[0.8, 0.2, 0.0], [-0.2, 0.8, 0.0], [0.0, 0.0, 0.4]]
+    B = [[1.0, 0.0], [0.0, 0.5], [0.5, 1.0]]
+    C = [[1.0, 0.0, 1.0], [0.0, 1.0, -0.5]]
+    return sysid.StateSpaceModel(A, B, C)
+
+
+def _poles_error(m, true):
+    a, b = np.sort_complex(m.poles()), np.sort_complex(true.poles())
+    return float(np.max(np.abs(a - b)))
+
+
+def test_noise_free_data_give_the_system_to_round_off():
+    rng = np.random.default_rng(0)
+    true = sysid.StateSpaceModel([[0.9, 0.3, 0], [-0.3, 0.9, 0], [0, 0, 0.5]],
+                                 [[1.0], [0.0], [1.0]], [[1.0, 0.5, 1.0]])
+    u = rng.standard_normal((1500, 1))
+    m = sysid.ssregest(sysid.IOData(u, true.simulate(u), 1.0), 3, arx_orders=10)
+    assert _poles_error(m, true) < 1e-7
+    u_new = rng.standard_normal((300, 1))
+    assert np.abs(m.simulate(u_new) - true.simulate(u_new)).max() < 1e-7
+    # two inputs, two outputs (a coupled ARX model), and a feedthrough
+    t2 = _two_by_two()
+    t2.D = np.array([[0.3, 0.0], [0.0, -0.2]])
+    u2 = rng.standard_normal((3000, 2))
+    m2 = sysid.ssregest(sysid.IOData(u2, t2.simulate(u2), 1.0), 3, arx_orders=6,
+                        feedthrough=True)
+    assert _poles_error(m2, t2) < 1e-7
+    np.testing.assert_allclose(m2.D, t2.D, atol=1e-8)
+    assert np.abs(m2.simulate(u2) - t2.simulate(u2)).max() < 1e-6
+
+
+def test_consistent_as_the_record_grows():
+    # an ARX-structured innovations model: the ARX model class holds it
+    true = sysid.StateSpaceModel([[0.9, 0.3], [-0.3, 0.9]], [[1.0], [0.5]], [[1.0, 0.0]],
+                                 K=[[0.5], [-0.2]])
+    err = {}
+    for n in (400, 6400):
+        e = []
+        for seed in range(4):
+            rng = np.random.default_rng(seed)
+            u = rng.standard_normal((n, 1))
+            v = 0.3 * rng.standard_normal((n, 1))
+            y = _innovations(true, u, v)
+            e.append(_poles_error(sysid.ssregest(sysid.IOData(u, y, 1.0), 2), true))
+        err[n] = float(np.mean(e))
+    assert err[6400] < err[400] / 2.5, err
+
+
+def _innovations(m, u, e):
+    x = np.zeros(m.nstates)
+    y = np.empty((u.shape[0], m.C.shape[0]))
+    for t in range(u.shape[0]):
+        y[t] = m.C @ x + m.D @ u[t] + e[t]
+        x = m.A @ x + m.B @ u[t] + m.K @ e[t]
+    return y
+
+
+def test_automatic_order_reports_its_choice():
+    rng = np.random.default_rng(3)
+    true = _two_by_two()
+    u = rng.standard_normal((2000, 2))
+    y = true.simulate(u) + 0.3 * rng.standard_normal((2000, 2))
+    m = sysid.ssregest(sysid.IOData(u, y, 1.0))
+    sel = m.info["ssregest"]["order_selection"]
+    assert sel["order"] == m.nstates and 3 <= m.nstates <= 8
+    assert sel["table"][m.nstates] >= sel["table"][2] and "held-out" in sel["reason"]
+    assert m.info["ssregest"]["arx_orders"][2] == 1 and np.allclose(m.D, 0)
+    assert m.K.shape == (m.nstates, 2) and np.all(np.linalg.eigvalsh(m.noise_cov) > 0)
+    few = sysid.ssregest(sysid.IOData(u, y, 1.0), [2, 3])
+    assert few.nstates in (2, 3) and sorted(few.info["ssregest"]["order_selection"]["table"]) \
+        == [2, 3]
+
+
+def test_a_real_record():
+    # the shipped robot arm, split as benches/realdata.py splits it (estimate on 1..224)
+    d = sysid.datasets.load_robot_arm()
+    u, y = d.u - d.u[:224].mean(0), d.y - d.y[:224].mean(0)
+    est, val = sysid.IOData(u[:224], y[:224], d.dt), sysid.IOData(u[224:], y[224:], d.dt)
+    m = sysid.ssregest(est)
+    assert m.is_stable() and float(np.mean(sysid.compare(m, val).fit)) > 90.0
+
+
+def test_an_unstable_result_warns():
+    rng = np.random.default_rng(1)
+    true = sysid.StateSpaceModel([[1.03]], [[1.0]], [[1.0]])
+    u = rng.standard_normal((150, 1))
+    with pytest.warns(sysid.StabilityWarning, match="ssregest returned an unstable model"):
+        m = sysid.ssregest(sysid.IOData(u, true.simulate(u), 1.0), 1, arx_orders=3)
+    assert abs(m.poles()[0] - 1.03) < 1e-6
+
+
+def test_bad_requests_name_the_fix():
+    rng = np.random.default_rng(0)
+    d = sysid.IOData(rng.standard_normal((300, 1)), rng.standard_normal((300, 1)), 1.0)
+    with pytest.raises(sysid.DataError, match="no inputs"):
+        sysid.ssregest(sysid.IOData(np.zeros((300, 0)), d.y, 1.0), 2)
+    with pytest.raises(sysid.DataError, match="larger arx_orders"):
+        sysid.ssregest(d, 40, arx_orders=5)
+    with pytest.raises(sysid.DataError, match="'auto'"):
+        sysid.ssregest(d, "best")
+    with pytest.raises(sysid.DataError, match="empty"):
+        sysid.ssregest(d, [])
+
+
+def test_arxregul_on_noise_free_data():
+    # the least-squares start of the tuning divided 0 by 0 on a rank-deficient regression
+    # (more lags than the system has) and arxregul raised "kernel scale c ... got nan"
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((500, 1))
+    y = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]).simulate(u)
+    d = sysid.IOData(u, y, 1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        reg = sysid.arxregul(d, 4, 4, 1)
+        m = sysid.arx(d, 4, 4, 1, regularization=reg)
+    assert np.abs(m.simulate(u) - y).max() < 1e-6
