@@ -284,7 +284,24 @@ _MATLAB = {"resid": "sysid.residuals(model, data)", "iddata": "sysid.IOData(u, y
            "idproc": "sysid.procest(data, type_code)",
            "merge": "sysid.IOData(u=[u1, u2], y=[y1, y2]) (one experiment per array)",
            "stepplot": "sysid.step(model).plot()", "bodemag": "sysid.bode(model)",
-           "nyquistplot": "sysid.nyquist(model).plot()"}
+           "nyquistplot": "sysid.nyquist(model).plot()",
+           "spafdr": "sysid.spa(data, omega=w) (any frequency grid)",
+           "feedback": "sysid.check_feedback(data)",
+           "pexcit": "sysid.persistent_excitation_order(u)",
+           "idfrd": "sysid.FRD(omega, response)", "freqresp": "model.freqresp(omega)",
+           "balred": "sysid.balanced_truncation(model, order)",
+           "hsvd": "sysid.hankel_singular_values(model)",
+           "balreal": "sysid.balanced_realization(model)",
+           "covf": "sysid.correlation(data, max_lag)",
+           "cra": "sysid.correlation(data) or sysid.impulse_response(data, length)",
+           "findstates": "sysid.estimate_x0(model, u, y)",
+           "getexp": "data.experiment(k)", "idresamp": "sysid.resample(data, dt)",
+           "idfilt": "sysid.lowpass, sysid.highpass, sysid.bandpass or sysid.filtfilt",
+           "rarx": "sysid.RecursiveARX(na, nb, nk)", "rarmax": "sysid.RecursiveARMAX",
+           "roe": "sysid.RecursiveOE", "rbj": "sysid.RecursiveBJ",
+           "ssdata": "model.A, model.B, model.C, model.D (and model.K)",
+           "advice": "sysid.identify(data) (offsets, excitation and feedback checked) or "
+                     "sysid.check_feedback(data)"}
 
 
 def __getattr__(name: str) -> object:
