@@ -62,8 +62,8 @@ other tool gets the records with the estimation means removed (the same means fr
 validation part), as a user would after sysid's offset warning.
 
 - ``identify``: ``sysid.identify(est)`` with no settings.
-- ``ssest``: ``sysid.ssest(est, order="auto")``; ``n4sid``, ``moesp``, ``cva``: at their
-  defaults (``order="auto"``, default horizon).
+- ``ssest``: ``sysid.ssest(est, order="auto")``; ``n4sid``, ``moesp``, ``cva``,
+  ``ssregest``: at their defaults (``order="auto"``, default horizon).
 - ``sippy``, ``nfoursid``: the peers (benches/.venv-peers, see benches/run.py), each at its
   best settings from a grid of orders (1-10, 12, 16, 20) and horizons (10, 20) chosen on the
   estimation data only: fitted on its first 2/3, scored by simulation fit on its last 1/3,
@@ -432,6 +432,8 @@ def _sysid_tools():
             return sysid.ssest(est, order=sysid.SubspaceEstimator(est).auto_order)
 
     tools = {"ssest": ssest, "n4sid": sub("n4sid"), "moesp": sub("moesp"), "cva": sub("cva")}
+    if hasattr(sysid, "ssregest"):
+        tools["ssregest"] = sub("ssregest")
     return tools
 
 
@@ -450,7 +452,7 @@ def score(mats, val, dt):
     return (f if np.isfinite(f) else -np.inf), rho, A.shape[0]
 
 
-SYSID_TOOLS = ("identify", "ssest", "n4sid", "moesp", "cva")
+SYSID_TOOLS = ("identify", "ssest", "n4sid", "moesp", "cva", "ssregest")
 
 
 def run_record(name: str, peers: bool, tmpdir: Path, tools: set[str] | None = None,

@@ -125,3 +125,43 @@ def test_arxregul_on_noise_free_data():
         reg = sysid.arxregul(d, 4, 4, 1)
         m = sysid.arx(d, 4, 4, 1, regularization=reg)
     assert np.abs(m.simulate(u) - y).max() < 1e-6
+
+
+def test_an_unstable_predictor_becomes_the_minimum_phase_factor():
+    # H(z) = 1 + 2 / (z - 0.5) = (z + 1.5) / (z - 0.5): the predictor A - K C = -1.5 diverges.
+    # The same spectrum's minimum-phase factor has its zero reflected to -1/1.5 and the
+    # innovation variance 1.5**2 times larger: K = 0.5 + 1/1.5, Re = 2.25 lam
+    from sysid.realization.ssregest import _stable_predictor
+
+    m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], K=[[2.0]])
+    lam = np.array([[0.3]])
+    note = _stable_predictor(m, lam)
+    assert note["before"] == pytest.approx(1.5) and note["after"] < 1
+    assert m.K[0, 0] == pytest.approx(0.5 + 1 / 1.5, rel=1e-6)
+    assert m.noise_cov[0, 0] == pytest.approx(2.25 * 0.3, rel=1e-6)
+    # the spectrum H lam H* is unchanged at every frequency
+    z = np.exp(1j * np.linspace(0.1, 3.0, 7))
+    assert np.allclose(np.abs(1 + 2.0 / (z - 0.5)) ** 2 * 0.3,
+                       np.abs(1 + m.K[0, 0] / (z - 0.5)) ** 2 * m.noise_cov[0, 0])
+    ok = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], K=[[0.2]])
+    assert _stable_predictor(ok, lam) is None and ok.K[0, 0] == 0.2
+
+
+def test_short_and_nonlinear_records_give_a_model():
+    # a record too short for 5 lags per channel (60 samples, 5 inputs, 3 outputs: the
+    # distillation column's shape) fitted ARX orders of at least 5 and raised
+    rng = np.random.default_rng(2)
+    sys3 = sysid.StateSpaceModel(np.diag([0.8, 0.5]), rng.standard_normal((2, 5)),
+                                 rng.standard_normal((3, 2)))
+    u = rng.standard_normal((60, 5))
+    y = sys3.simulate(u) + 0.1 * rng.standard_normal((60, 3))
+    m = sysid.ssregest(sysid.IOData(u, y, 1.0))
+    assert m.info["ssregest"]["arx_orders"][0] == 1 and np.all(np.isfinite(m.A))
+    # the shipped pH record (nonlinear): some orders cannot be balanced (fewer non-zero
+    # Hankel singular values than states): they are left out, not raised
+    d = sysid.datasets.load_ph()
+    est = sysid.IOData(d.u[:1200] - d.u[:1200].mean(0), d.y[:1200] - d.y[:1200].mean(0), d.dt)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.SysidWarning)
+        m = sysid.ssregest(est)
+    assert m.nstates >= 1 and np.all(np.isfinite(m.predict(est.u, est.y, 1)))

@@ -6,8 +6,13 @@ plain high-order fit), realised in innovations form (:meth:`PolynomialModel.to_s
 and reduced by balanced truncation (:func:`sysid.balanced_truncation`) of the system from
 ``[u, e]`` to ``y``, the inputs scaled by their standard deviations and ``e`` by the
 innovations' so that both paths are weighed by the output they cause. The reduced model
-keeps the noise path (``K``). On noise-free data of a system of order ``n`` the ARX model
-holds the system exactly (its extra roots cancel) and the reduction returns it to round-off.
+keeps the noise path (``K``); where truncation leaves its one-step predictor ``A - K C``
+unstable, ``K`` becomes the stabilising Kalman gain of the same noise spectrum (its
+minimum-phase factor, ``info["ssregest"]["predictor_stabilized"]``). Orders that cannot
+be balanced (fewer states than the ARX model's unstable poles, or more than its non-zero
+Hankel singular values) are left out of the candidates. On noise-free data of a system of
+order ``n`` the ARX model holds the system exactly (its extra roots cancel) and the
+reduction returns it to round-off.
 
 ``order="auto"`` (or a sequence of orders) chooses as the other automatic orders do
 (:mod:`sysid.validation.crossval`): the whole procedure fitted on parts of the record, scored
@@ -54,8 +59,8 @@ def _orders(order: Any) -> list[int] | None:
 def _arx_order(n_samples: int, nu: int, ny: int, arx_orders: Any) -> int:
     if arx_orders is not None:
         return as_int(arx_orders, "arx_orders")
-    # about a tenth of the record per equation's parameters, within 5..30 lags
-    return int(np.clip(n_samples // (10 * (nu + ny)), 5, 30))
+    # about a tenth of the record per equation's parameters, at most 30 lags
+    return int(np.clip(n_samples // (10 * (nu + ny)), 1, 30))
 
 
 def _big_model(data: Any, na: int, kernel: str, nk: int) -> tuple[Any, Any]:
@@ -90,11 +95,44 @@ def _reduce(big: StateSpaceModel, su: np.ndarray, ysd: np.ndarray, orders: list[
     for n in orders:
         if n > big.nstates:
             continue
-        r = balanced_truncation(g, n)
+        try:
+            r = balanced_truncation(g, n)
+        except DataError:  # fewer states than unstable poles, or more than the minimal ones
+            continue
         out[n] = StateSpaceModel(r.A, r.B[:, :nu] / su, r.C, big.D, K=r.B[:, nu:] / se,
                                  dt=big.dt, input_names=big.input_names,
                                  output_names=big.output_names)
     return out
+
+
+def _stable_predictor(model: StateSpaceModel, lam: np.ndarray) -> dict[str, Any] | None:
+    """Make the one-step predictor ``A - K C`` stable where truncation left it unstable (a
+    noise model with zeros outside the unit circle): ``K`` becomes the stabilising Kalman
+    gain of the same noise spectrum (``Q = K L K^T``, ``S = K L``, ``R = L``, its
+    minimum-phase factor), as the closed-loop subspace fits do; what changed is returned."""
+    from .. import _sysid
+
+    A, C, K = model.A, model.C, model.K
+    before = float(np.max(np.abs(np.linalg.eigvals(A - K @ C)))) if A.size else 0.0
+    model.noise_cov = lam
+    if before < 1.0:
+        return None
+    q = K @ lam @ K.T
+    # Q - S R^-1 S^T is 0 here (one noise source): a round-off floor lets the Riccati
+    # iteration reach the stabilising solution
+    q = q + 1e-10 * max(float(np.trace(q)) / len(q), np.finfo(float).tiny) * np.eye(len(q))
+    try:
+        k_new, _, re = _sysid.kalman_gain(A, C, q, lam, K @ lam)
+    except Exception:  # noqa: BLE001 - no stabilising solution: a model without noise path
+        model.K = None
+        return {"before": before, "after": None,
+                "why": "the reduced noise model has an unstable predictor and no stabilising "
+                       "Kalman gain: the model is returned without K (output error)"}
+    model.K, model.noise_cov = np.asarray(k_new), np.asarray(re)
+    after = float(np.max(np.abs(np.linalg.eigvals(A - model.K @ C))))
+    return {"before": before, "after": after,
+            "why": "truncation left the one-step predictor unstable; K is the stabilising "
+                   "Kalman gain of the same noise spectrum (its minimum-phase factor)"}
 
 
 def _fits(data: Any, orders: list[int], na: int, kernel: str, nk: int
@@ -151,7 +189,7 @@ def ssregest(
         (``info["ssregest"]["order_selection"]``).
     arx_orders : int, optional
         Lags of every ``A`` and ``B`` polynomial of the ARX model (MATLAB's ``ARXOrders``);
-        default about a tenth of the samples per equation parameter, within 5 .. 30.
+        default about a tenth of the samples per equation parameter, at most 30.
     kernel : {"tc", "ss", "dc", "ridge"}
         The prior of :func:`sysid.arxregul` (MATLAB's ``RegularizationKernel``, default TC).
     feedthrough : bool
@@ -163,7 +201,8 @@ def ssregest(
     StateSpaceModel
         In innovations form (``K``, ``noise_cov`` from the one-step prediction errors on the
         data); ``info["ssregest"]``: the ARX orders, the kernel, the Hankel singular values
-        of the realised ARX model and, for an automatic order, the choice. No parameter
+        of the realised ARX model, for an automatic order the choice, and
+        ``predictor_stabilized`` when ``K`` was replaced (module docstring). No parameter
         covariance: refine with ``sysid.pem(data, model)`` for one.
 
     Examples
@@ -208,8 +247,13 @@ def ssregest(
     else:
         n = next(iter(models))
     model = models[n]
-    e = np.concatenate([y - model.predict(u, y, 1) for u, y in exps])
-    model.noise_cov = e.T @ e / e.shape[0]
+    lam = big.noise_cov if big.noise_cov is not None else np.eye(data.n_outputs)
+    stabilized = _stable_predictor(model, lam)
+    try:
+        e = np.concatenate([y - model.predict(u, y, 1) for u, y in exps])
+        model.noise_cov = e.T @ e / e.shape[0]
+    except NumericalError:  # a predictor on the stability boundary: the Riccati covariance
+        pass
     from ..analysis.reduction import hankel_singular_values
 
     info: dict[str, Any] = {"arx_orders": (na, na, nk), "kernel": kernel,
@@ -220,6 +264,8 @@ def ssregest(
         info["hankel_singular_values"] = None
     if choice is not None:
         info["order_selection"] = choice
+    if stabilized is not None:
+        info["predictor_stabilized"] = stabilized
     model.info = {"method": "ssregest", "ssregest": info}
     warn_unstable(model, "ssregest", advice=(
         "Unless the process itself is unstable, try another order, a larger arx_orders, or "
