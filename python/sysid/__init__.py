@@ -158,6 +158,8 @@ _LAZY = {
     "resample": "data.filtering",
     "residuals": "validation.residuals",
     "save_model": "models.io",
+    "simsd": "analysis.simsd",
+    "SimulationSpread": "analysis.simsd",
     "ssregest": "realization.ssregest",
     "scale": "data.preprocessing",
     "select_mask": "data.preprocessing",
@@ -300,6 +302,7 @@ _MATLAB = {"resid": "sysid.residuals(model, data)", "iddata": "sysid.IOData(u, y
            "rarx": "sysid.RecursiveARX(na, nb, nk)", "rarmax": "sysid.RecursiveARMAX",
            "roe": "sysid.RecursiveOE", "rbj": "sysid.RecursiveBJ",
            "ssdata": "model.A, model.B, model.C, model.D (and model.K)",
+           "rsample": "model.uncertainty.sample(n)",
            "advice": "sysid.identify(data) (offsets, excitation and feedback checked) or "
                      "sysid.check_feedback(data)"}
 
@@ -456,6 +459,8 @@ __all__ = [
     "drop_quiet",
     "idinput",
     "ssregest",
+    "simsd",
+    "SimulationSpread",
     "prbs",
     "random_binary",
     "random_gaussian",
