@@ -11,6 +11,10 @@ import sysid
 def test_shapes_follow_matlab_n():
     assert sysid.idinput(50, seed=0).shape == (50, 1)
     assert sysid.idinput((50, 3), seed=0).shape == (50, 3)
+    assert sysid.idinput(np.array([50.0, 2.0]), seed=0).shape == (50, 2)  # MATLAB's doubles
+    assert sysid.idinput(np.int64(7), "prbs").shape == (7, 1)
+    with pytest.raises(sysid.DataError, match=r"n\[1\] \(inputs\)"):
+        sysid.idinput((50, 1.5))
     u = sysid.idinput((40, 2, 5), "rgs", seed=0)
     assert u.shape == (200, 2)
     assert np.array_equal(u[:40], u[160:])  # a periodic request repeats one period

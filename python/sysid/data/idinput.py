@@ -35,7 +35,9 @@ def _shape(n: Any) -> tuple[int, int, int]:
     if not 1 <= len(v) <= 3:
         raise DataError(f"n must be N, (N, nu) or (period, nu, n_periods), got {n!r}")
     names = ("n[0] (samples or period)", "n[1] (inputs)", "n[2] (periods)")
-    vals = [as_int(x, names[i]) for i, x in enumerate(v)]
+    # MATLAB's [N nu] is a row of doubles: whole floats count as the integers they are
+    vals = [as_int(int(x) if isinstance(x, (float, np.floating)) and float(x).is_integer()
+                   else x, names[i]) for i, x in enumerate(v)]
     return (vals + [1, 1])[0], (vals + [1, 1])[1], (vals + [1, 1, 1])[2]
 
 
