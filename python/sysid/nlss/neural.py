@@ -587,26 +587,19 @@ def _best(res: dict[str, Any]) -> float:
 
 
 def _modal(m: StateSpaceModel) -> tuple[StateSpaceModel, np.ndarray, bool]:
-    """The linear model in real modal coordinates (a state per real pole, two per complex
-    pair: real and imaginary part of its eigenvector), each state's pole and ``True``; the
-    model as it is, its poles and ``False`` when its eigenvectors are (nearly) dependent."""
-    lam, V = np.linalg.eig(m.A)
-    cols, poles, k = [], [], 0
-    while k < lam.size:
-        if lam[k].imag != 0 and k + 1 < lam.size and np.isclose(lam[k + 1], np.conj(lam[k])):
-            cols += [V[:, k].real, V[:, k].imag]
-            poles += [lam[k], lam[k]]
-            k += 2
-        else:
-            cols.append(V[:, k].real)
-            poles.append(lam[k])
-            k += 1
-    T = np.column_stack(cols) if cols else np.zeros((0, 0))
-    if len(poles) != m.nstates or np.linalg.cond(T) > 1e10:
-        return m, lam, False
+    """The linear model in real modal coordinates (:func:`sysid.analysis.canon.
+    real_modal_basis`: a state per real pole, two per complex pair), each state's pole and
+    ``True``; the model as it is, its poles and ``False`` when its eigenvectors are (nearly)
+    dependent."""
+    from ..analysis.canon import real_modal_basis
+
+    basis = real_modal_basis(m.A)
+    if basis is None:
+        return m, np.linalg.eigvals(m.A), False
+    T, poles = basis
     Ti = np.linalg.inv(T)
     return (StateSpaceModel(Ti @ m.A @ T, Ti @ m.B, m.C @ T, m.D, dt=m.dt, info=m.info),
-            np.asarray(poles), True)
+            poles, True)
 
 
 def _margin(lam: np.ndarray) -> np.ndarray:
