@@ -93,6 +93,8 @@ _LAZY = {
     "struc": "polynomial.structure",
     "arxregul": "polynomial.arxregul",
     "ArxRegularization": "polynomial.arxregul",
+    "advice": "validation.advice",
+    "Advice": "validation.advice",
     "balanced_realization": "analysis.reduction",
     "balanced_truncation": "analysis.reduction",
     "bandpass": "data.filtering",
@@ -303,9 +305,7 @@ _MATLAB = {"resid": "sysid.residuals(model, data)", "iddata": "sysid.IOData(u, y
            "rarx": "sysid.RecursiveARX(na, nb, nk)", "rarmax": "sysid.RecursiveARMAX",
            "roe": "sysid.RecursiveOE", "rbj": "sysid.RecursiveBJ",
            "ssdata": "model.A, model.B, model.C, model.D (and model.K)",
-           "rsample": "model.uncertainty.sample(n)",
-           "advice": "sysid.identify(data) (offsets, excitation and feedback checked) or "
-                     "sysid.check_feedback(data)"}
+           "rsample": "model.uncertainty.sample(n)"}
 
 
 def __getattr__(name: str) -> object:
@@ -459,6 +459,8 @@ __all__ = [
     "select_mask",
     "drop_quiet",
     "idinput",
+    "advice",
+    "Advice",
     "canon",
     "ssregest",
     "simsd",

@@ -1,0 +1,340 @@
+"""What to do with a record before fitting it (MATLAB's ``advice(data)``).
+
+``advice(data)`` runs the package's data checks and says, per topic, what was found and what
+to do: offsets (the rule every estimator applies, :mod:`sysid.data.offsets`), drifts,
+excitation (:func:`sysid.persistent_excitation_order`), feedback
+(:func:`sysid.check_feedback`), periodic excitation (:func:`sysid.detect_period`),
+isolated spikes (:func:`sysid.data.preprocessing.spike_report`), input delays
+(:func:`sysid.delayest`) and nonlinearity.
+
+The nonlinearity check fits a linear ARX model (``na = nb = 2`` at the estimated delays) and
+asks whether second-degree products of its regressors explain its residuals: an F-test of
+the residuals on those products, flagged when significant at 0.1 % *and* explaining at least
+2 % of the residual variance (on long records any small curvature is significant; what
+matters is whether a nonlinear model could fit noticeably better). A linear system with
+coloured noise explains no share of an ARX model's residuals with products of its own
+regressors, so the noise alone does not trigger it.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .._display import HTMLResult
+from ..data.iodata import as_record
+from ..errors import DataError
+
+__all__ = ["Advice", "Finding", "advice"]
+
+#: a drift is noted when a straight line in time explains this share of an output's variance
+TREND_SHARE = 0.5
+#: the nonlinearity check's significance level and the residual share it must explain
+NONLINEAR_ALPHA, NONLINEAR_SHARE = 1e-3, 0.02
+
+
+@dataclass
+class Finding:
+    """One topic's check: ``verdict`` is ``"ok"``, ``"note"`` (worth knowing) or ``"act"``
+    (fix it before fitting)."""
+
+    topic: str
+    verdict: str
+    finding: str
+    action: str = ""
+
+
+class Advice(HTMLResult):
+    """The findings of :func:`advice`, one per topic; ``advice["feedback"]`` gets one.
+
+    Attributes
+    ----------
+    findings : list of Finding
+    """
+
+    def __init__(self, findings: list[Finding]) -> None:
+        self.findings = findings
+
+    def __getitem__(self, topic: str) -> Finding:
+        for f in self.findings:
+            if f.topic == topic:
+                return f
+        raise KeyError(f"no finding on {topic!r}; topics: "
+                       f"{', '.join(f.topic for f in self.findings)}")
+
+    @property
+    def to_act_on(self) -> list[str]:
+        """The topics to fix before fitting."""
+        return [f.topic for f in self.findings if f.verdict == "act"]
+
+    def summary(self) -> str:
+        """One line per topic, and what to do."""
+        lines = [repr(self)]
+        for f in self.findings:
+            lines.append(f"  [{f.verdict:>4}] {f.topic}: {f.finding}")
+            if f.action:
+                lines.append(f"         -> {f.action}")
+        return "\n".join(lines)
+
+    def to_pandas(self) -> Any:
+        """One row per topic: topic, verdict, finding, action."""
+        import pandas as pd
+
+        return pd.DataFrame([vars(f) for f in self.findings])
+
+    def __repr__(self) -> str:
+        act = self.to_act_on
+        notes = [f.topic for f in self.findings if f.verdict == "note"]
+        return (f"Advice({len(self.findings)} checks; to act on: "
+                f"{', '.join(act) if act else 'none'}; notes: "
+                f"{', '.join(notes) if notes else 'none'})")
+
+
+def _stack(data: Any, idx: int) -> np.ndarray:
+    return np.vstack([e[idx] for e in data.experiments])
+
+
+def _offsets(data: Any) -> Finding:
+    from ..data.offsets import OFFSET_RATIO, offsets
+
+    big = offsets(data)
+    if big:
+        names = ", ".join(f"{k} {n} (mean {m:.4g}, std {s:.3g})" for k, n, m, s in big[:4])
+        return Finding("offsets", "act", f"offsets much larger than the variation: {names}",
+                       "sysid.detrend(data, 'constant', return_trend=True), then "
+                       "trend.apply(validation); or sysid.identify(data), which removes "
+                       "and restores them")
+    chans = [("input", j, n) for j, n in enumerate(data.input_names)] + \
+        [("output", j, n) for j, n in enumerate(data.output_names)]
+    small = []
+    for kind, j, name in chans:
+        x = _stack(data, 0 if kind == "input" else 1)[:, j]
+        if x.std() > 0 and abs(x.mean()) > 0.1 * x.std():
+            small.append(f"{kind} {name}")
+    if small and not getattr(data, "has_trend", False):
+        return Finding("offsets", "note",
+                       f"non-zero means ({', '.join(small[:4])}; below the {OFFSET_RATIO:g} "
+                       "standard deviations every estimator warns at)",
+                       "linear models have no constant term: remove the means "
+                       "(sysid.detrend(data, 'constant', return_trend=True))")
+    return Finding("offsets", "ok", "means removed or negligible")
+
+
+def _trends(data: Any) -> Finding:
+    shares = []
+    for j, name in enumerate(data.output_names):
+        r2 = []
+        for e in data.experiments:
+            y = e[1][:, j]
+            if y.size < 3 or y.std() == 0:
+                continue
+            t = np.arange(y.size, dtype=float)
+            c = np.polyfit(t, y, 1)
+            r2.append(1 - np.var(y - np.polyval(c, t)) / np.var(y))
+        if r2 and max(r2) > TREND_SHARE:
+            shares.append(f"{name} ({100 * max(r2):.0f} %)")
+    if shares:
+        return Finding("trends", "note",
+                       f"a straight line in time explains most of the variance of "
+                       f"{', '.join(shares)}",
+                       "if the drift is not the input's doing (an integrating process is), "
+                       "remove it: sysid.detrend(data, 'linear', return_trend=True)")
+    return Finding("trends", "ok", "no drift dominates an output")
+
+
+def _excitation(data: Any) -> Finding:
+    from ..data.input_design import persistent_excitation_order
+
+    if data.n_inputs == 0:
+        return Finding("excitation", "ok", "no inputs: a time series (sysid.ar, sysid.n4sid)")
+    u = _stack(data, 0)
+    flat = [n for j, n in enumerate(data.input_names) if np.ptp(u[:, j]) == 0]
+    if flat:
+        return Finding("excitation", "act", f"input(s) {', '.join(flat)} never change",
+                       "drop them (data.select(inputs=...)) or record with them excited")
+    pe = persistent_excitation_order(
+        [e[0] for e in data.experiments] if data.n_experiments > 1 else u, 40)
+    if pe < 4:
+        return Finding("excitation", "act",
+                       f"the input is persistently exciting of order {pe} only: models of "
+                       f"order above {pe // 2} are not determined by the data",
+                       "excite more frequencies (sysid.idinput, sysid.multisine) or keep "
+                       f"the order at most {max(pe // 2, 1)}")
+    return Finding("excitation", "ok",
+                   f"input persistently exciting of order >= {pe} (models up to order "
+                   f"{pe // 2} determined)")
+
+
+def _feedback(data: Any) -> Finding:
+    from .feedback import check_feedback
+
+    if data.n_inputs == 0:
+        return Finding("feedback", "ok", "no inputs")
+    fb = check_feedback(data)
+    if fb.detected:
+        return Finding("feedback", "act",
+                       f"the input depends on past outputs (p = {fb.p_value:.2g}): the record "
+                       "was taken in closed loop",
+                       "open-loop subspace fits are biased there: use "
+                       "sysid.n4sid(data, order, method='pbsid') or 'ssarx', or "
+                       "sysid.ssest(data, order) (prediction error)")
+    return Finding("feedback", "ok", f"no feedback found (p = {fb.p_value:.2g})")
+
+
+def _periodic(data: Any) -> Finding:
+    from ..data.periodicity import detect_period
+
+    try:
+        per = detect_period(data)
+    except Exception:  # noqa: BLE001 - a record it cannot read has no period to report
+        per = None
+    if per is None:
+        return Finding("periodic", "ok", "the input does not repeat")
+    return Finding("periodic", "note",
+                   f"the input repeats every {per.period} samples ({per.periods} periods)",
+                   "average the periods and fit the excited lines (sysid.ssest(data, order, "
+                   "periods='auto')); the best linear approximation and its nonlinear "
+                   "distortions: sysid.bla(data, periods=...)")
+
+
+def _outliers(data: Any) -> Finding:
+    from ..data.preprocessing import spike_report
+
+    rep = spike_report(data)
+    if rep:
+        return Finding("outliers", "act", rep, "sysid.despike(data), or cut them out")
+    return Finding("outliers", "ok", "no isolated spikes in the outputs")
+
+
+def _delays(data: Any) -> tuple[Finding, np.ndarray | None]:
+    from ..polynomial.delayest import delayest
+
+    if data.n_inputs == 0:
+        return Finding("delays", "ok", "no inputs"), None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            nk = np.atleast_2d(np.asarray(delayest(data), dtype=int))
+    except Exception as e:  # noqa: BLE001 - reported, not raised
+        return Finding("delays", "note", f"not estimated ({e})"), None
+    pairs = [f"{data.input_names[j]} -> {data.output_names[i]}: {nk[i, j]}"
+             for i in range(nk.shape[0]) for j in range(nk.shape[1])]
+    if np.all(nk <= 1):
+        return Finding("delays", "ok", "no dead time beyond one sample (" + "; ".join(
+            pairs[:6]) + ")"), nk
+    return Finding("delays", "note", "input delays in samples: " + "; ".join(pairs[:6]),
+                   "give them to the polynomial estimators (nk) or as input delays; "
+                   "state-space fits need extra states for them otherwise"), nk
+
+
+def _monomials(x: np.ndarray) -> np.ndarray:
+    k = x.shape[1]
+    cols = [x[:, i] * x[:, j] for i in range(k) for j in range(i, k)]
+    return np.column_stack(cols)
+
+
+def _nonlinearity(data: Any, nk: np.ndarray | None) -> Finding:
+    from scipy import stats
+
+    from ..polynomial.estimators import arx
+
+    if data.n_inputs == 0:
+        return Finding("nonlinearity", "ok", "not checked: no inputs")
+    ny, nu = data.n_outputs, data.n_inputs
+    k = np.ones((ny, nu), int) if nk is None else np.maximum(nk, 0)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            m = arx(data, 2, np.full((ny, nu), 2), k)
+    except Exception as e:  # noqa: BLE001 - reported, not raised
+        return Finding("nonlinearity", "note", f"not checked ({e})")
+    flagged = []
+    lag = int(max(2, k.max() + 1))
+    for i, name in enumerate(data.output_names):
+        rows, res = [], []
+        for u, y in data.experiments:
+            if y.shape[0] <= lag + 2:
+                continue
+            e = (y - m.predict(u, y, 1))[lag:, i]
+            reg = [y[lag - 1:-1, i], y[lag - 2:-2, i]]
+            for j in range(nu):
+                reg += [u[lag - k[i, j]:u.shape[0] - k[i, j], j],
+                        u[lag - k[i, j] - 1:u.shape[0] - k[i, j] - 1, j]]
+            rows.append(np.column_stack(reg))
+            res.append(e)
+        if not rows:
+            continue
+        X, e = np.vstack(rows), np.concatenate(res)
+        X = (X - X.mean(0)) / np.where(X.std(0) > 0, X.std(0), 1.0)
+        Z = np.column_stack([np.ones(len(e)), X, _monomials(X)])
+        p0, q = 1 + X.shape[1], Z.shape[1] - 1 - X.shape[1]
+        if len(e) <= Z.shape[1] + 10:
+            continue
+        rss0 = float(np.sum((e - e.mean()) ** 2))
+        coef = np.linalg.lstsq(Z, e, rcond=None)[0]
+        rss1 = float(np.sum((e - Z @ coef) ** 2))
+        if rss0 <= 0:
+            continue
+        f = ((rss0 - rss1) / q) / (rss1 / (len(e) - p0 - q)) if rss1 > 0 else np.inf
+        p = float(stats.f.sf(f, q, len(e) - p0 - q))
+        share = 1 - rss1 / rss0
+        if p < NONLINEAR_ALPHA and share >= NONLINEAR_SHARE:
+            flagged.append(f"{name} ({100 * share:.0f} % of its residual variance, "
+                           f"p = {p:.1g})")
+    if flagged:
+        return Finding("nonlinearity", "note",
+                       "products of past inputs and outputs explain a linear model's "
+                       "residuals: " + ", ".join(flagged),
+                       "a nonlinear model may fit better: sysid.nlarx, sysid.nlhw, or "
+                       "sysid.pnlss on periodic data")
+    return Finding("nonlinearity", "ok", "no sign that a nonlinear model would fit better")
+
+
+def advice(data: Any) -> Advice:
+    """Check a record before fitting it and say what to do (MATLAB's ``advice(data)``).
+
+    Parameters
+    ----------
+    data : IOData or (u, y)
+
+    Returns
+    -------
+    Advice
+        A :class:`Finding` per topic (``offsets``, ``trends``, ``excitation``,
+        ``feedback``, ``periodic``, ``outliers``, ``delays``, ``nonlinearity``): verdict
+        ``"ok"``, ``"note"`` or ``"act"``, what was found and what to do;
+        ``.summary()``, ``.to_pandas()``, ``advice["feedback"]``.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal((1000, 1))
+    >>> y = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]]).simulate(u)
+    >>> a = sysid.advice(sysid.IOData(u, y + 20.0 + 0.1 * rng.standard_normal((1000, 1))))
+    >>> a.to_act_on
+    ['offsets']
+    >>> a["nonlinearity"].verdict, a["delays"].verdict
+    ('ok', 'ok')
+    """
+    data = as_record(data)
+    if not data.output_names:
+        raise DataError("advice needs a record with outputs")
+    centred = _centred(data)  # the model-based checks see the record as a fit would
+    delays, nk = _delays(centred)
+    return Advice([_offsets(data), _trends(data), _excitation(data), _feedback(centred),
+                   _periodic(data), _outliers(data), delays, _nonlinearity(centred, nk)])
+
+
+def _centred(data: Any) -> Any:
+    from ..data.iodata import IOData
+
+    mu = _stack(data, 0).mean(0) if data.n_inputs else None
+    my = _stack(data, 1).mean(0)
+    us = [e[0] - mu if mu is not None else e[0] for e in data.experiments]
+    ys = [e[1] - my for e in data.experiments]
+    kw = {"dt": data.dt, "input_names": data.input_names, "output_names": data.output_names}
+    return IOData(u=us[0], y=ys[0], **kw) if len(us) == 1 else IOData(u=us, y=ys, **kw)

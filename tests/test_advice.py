@@ -1,0 +1,82 @@
+"""MATLAB's advice(data): each check finds what it should, and stays quiet otherwise."""
+
+import numpy as np
+import pytest
+
+import sysid
+
+G = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]])
+
+
+def _open_loop(seed=0, n=2000, delay=0):
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal((n, 1))
+    x = G.simulate(u)
+    y = np.r_[np.zeros((delay, 1)), x[:n - delay]] if delay else x
+    return u, y + 0.1 * rng.standard_normal((n, 1))
+
+
+def test_a_clean_open_loop_record_needs_nothing():
+    u, y = _open_loop()
+    a = sysid.advice(sysid.IOData(u, y, 1.0))
+    assert a.to_act_on == [] and [f.verdict for f in a.findings] == ["ok"] * 8, a.summary()
+    assert [f.topic for f in a.findings] == ["offsets", "trends", "excitation", "feedback",
+                                             "periodic", "outliers", "delays", "nonlinearity"]
+    df = a.to_pandas()
+    assert list(df.columns) == ["topic", "verdict", "finding", "action"] and len(df) == 8
+    assert "to act on: none" in repr(a)
+
+
+def test_offsets_drift_spikes_and_delay_are_found():
+    u, y = _open_loop(1, delay=4)
+    t = np.arange(len(y))[:, None]
+    a = sysid.advice(sysid.IOData(u + 3.0, y + 500.0, 1.0))
+    assert a["offsets"].verdict == "act" and "detrend" in a["offsets"].action
+    assert a["delays"].verdict == "note" and ": 5" in a["delays"].finding  # 4 + G's one
+    assert a["nonlinearity"].verdict == "ok"  # the offsets are not mistaken for curvature
+    b = sysid.advice(sysid.IOData(u, y + 0.05 * t, 1.0))
+    assert b["trends"].verdict == "note" and "linear" in b["trends"].action
+    spiky = y.copy()
+    spiky[[300, 1200]] += 40.0
+    assert sysid.advice(sysid.IOData(u, spiky, 1.0))["outliers"].verdict == "act"
+
+
+def test_feedback_and_poor_excitation_are_to_act_on():
+    rng = np.random.default_rng(2)
+    n = 3000
+    r, e = rng.standard_normal(n), 0.3 * rng.standard_normal(n)
+    u, y = np.zeros(n), np.zeros(n)
+    x = np.zeros(2)
+    for t in range(n):
+        y[t] = G.C[0] @ x + e[t]
+        u[t] = r[t] - 0.6 * (y[t - 1] if t else 0.0)  # a sampled P controller closes the loop
+        x = G.A @ x + G.B[:, 0] * u[t]
+    a = sysid.advice(sysid.IOData(u, y, 1.0))
+    assert "feedback" in a.to_act_on and "pbsid" in a["feedback"].action
+    one_sine = np.sin(0.3 * np.arange(1000))[:, None]
+    b = sysid.advice(sysid.IOData(one_sine, G.simulate(one_sine), 1.0))
+    assert b["excitation"].verdict == "act" and "order 2" in b["excitation"].finding
+    c = sysid.advice(sysid.IOData(np.c_[one_sine, np.ones(1000)], G.simulate(one_sine), 1.0))
+    assert "never change" in c["excitation"].finding
+
+
+def test_nonlinearity_and_periodic_excitation_are_noted():
+    u, _ = _open_loop(3)
+    x = G.simulate(u)
+    y = x + 0.4 * x ** 2 + 0.05 * np.random.default_rng(4).standard_normal(x.shape)  # Wiener
+    a = sysid.advice(sysid.IOData(u, y, 1.0))
+    assert a["nonlinearity"].verdict == "note" and "nlarx" in a["nonlinearity"].action
+    um = sysid.multisine(256, band=(0, 0.5), periods=4)
+    b = sysid.advice(sysid.IOData(um, G.simulate(um), 1.0))
+    assert b["periodic"].verdict == "note" and "256" in b["periodic"].finding
+    with pytest.raises(KeyError, match="topics: offsets"):
+        b["noise"]
+
+
+def test_shipped_records():
+    # the dryer's dead time (MATLAB's examples fit it with nk = 3), and the pH process's
+    # nonlinearity (a titration curve)
+    d = sysid.advice(sysid.datasets.load_dryer())
+    assert d["delays"].verdict == "note" and ": 3" in d["delays"].finding
+    assert d["nonlinearity"].verdict == "ok" and d.to_act_on == []
+    assert sysid.advice(sysid.datasets.load_ph())["nonlinearity"].verdict == "note"
