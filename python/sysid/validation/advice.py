@@ -325,8 +325,16 @@ def advice(data: Any) -> Advice:
         raise DataError("advice needs a record with outputs")
     centred = _centred(data)  # the model-based checks see the record as a fit would
     delays, nk = _delays(centred)
-    return Advice([_offsets(data), _trends(data), _excitation(data), _feedback(centred),
-                   _periodic(data), _outliers(data), delays, _nonlinearity(centred, nk)])
+    feedback, nonlinear = _feedback(centred), _nonlinearity(centred, nk)
+    if feedback.verdict == "act" and nonlinear.verdict == "note":
+        # check_feedback's documented limit: a nonlinear system's distortions, functions of
+        # the input's past that a linear model leaves in its residuals, look like feedback
+        feedback = Finding("feedback", "note", feedback.finding.replace(
+            "the record was taken in closed loop", "closed loop, or the nonlinearity below "
+            "(distortions a linear model leaves in its residuals look like feedback)"),
+            "if the record was taken in closed loop: " + feedback.action)
+    return Advice([_offsets(data), _trends(data), _excitation(data), feedback,
+                   _periodic(data), _outliers(data), delays, nonlinear])
 
 
 def _centred(data: Any) -> Any:
