@@ -8,6 +8,7 @@ fix (what to pass instead)."""
 from __future__ import annotations
 
 import re
+import warnings
 
 import numpy as np
 import pytest
@@ -229,6 +230,24 @@ def test_matlab_names_point_at_sysids():
             getattr(sysid, name)
         for ref in re.findall(r"sysid\.([A-Za-z_]\w*)", hint):
             assert hasattr(sysid, ref), (name, ref)
+    # and every model.<attribute> / data.<attribute> a hint names exists on an estimated
+    # model and a record (getpvec's hint named a model.parameters that no model has)
+    rng = np.random.default_rng(0)
+    d = sysid.IOData(rng.standard_normal((200, 1)), rng.standard_normal((200, 1)), 1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        models = [sysid.oe(d, 1, 1, 1), sysid.ssest(d, 1)]  # polynomial, state space
+
+    def has(target: object, path: str) -> bool:
+        for attr in path.strip(".").split("."):
+            if not hasattr(target, attr):
+                return False
+            target = getattr(target, attr)
+        return True
+    for name, hint in _MATLAB.items():
+        for obj, path in re.findall(r"\b(model|data)((?:\.[A-Za-z_]\w*)+)", hint):
+            assert any(has(t, path) for t in (models if obj == "model" else [d])), \
+                (name, obj + path)
 
 
 def test_simulating_a_whole_record_says_to_pass_its_inputs():

@@ -283,7 +283,8 @@ _MATLAB = {"resid": "sysid.residuals(model, data)", "iddata": "sysid.IOData(u, y
            "pe": "sysid.residuals(model, data)", "goodnessOfFit": "sysid.fit_metrics(y, yhat)",
            "aic": "sysid.criteria(model, data).aic", "fpe": "sysid.criteria(model, data).fpe",
            "misdata": "sysid.repair_nan(u, y)", "present": "model.summary()",
-           "isstable": "model.is_stable()", "getpvec": "model.parameters",
+           "isstable": "model.is_stable()",
+           "getpvec": "model.uncertainty.theta (model.uncertainty.names)",
            "idgrey": "sysid.GreyBox",
            "nlgreyest": "sysid.greyest(data, sysid.NonlinearGreyBox(...))",
            "idproc": "sysid.procest(data, type_code)",
@@ -305,7 +306,8 @@ _MATLAB = {"resid": "sysid.residuals(model, data)", "iddata": "sysid.IOData(u, y
            "rarx": "sysid.RecursiveARX(na, nb, nk)", "rarmax": "sysid.RecursiveARMAX",
            "roe": "sysid.RecursiveOE", "rbj": "sysid.RecursiveBJ",
            "ssdata": "model.A, model.B, model.C, model.D (and model.K)",
-           "rsample": "model.uncertainty.sample(n)"}
+           "rsample": "model.uncertainty.sample(n)", "arxRegul": "sysid.arxregul",
+           "recursiveARX": "sysid.RecursiveARX(na, nb, nk)"}
 
 
 def __getattr__(name: str) -> object:
