@@ -127,11 +127,10 @@ def _noise_cov(model: Any) -> np.ndarray:
     return np.atleast_2d(np.asarray(cov, dtype=float))
 
 
-def _noise_std(model: Any, cov: np.ndarray, n_samples: int) -> np.ndarray:
+def _noise_std(model: Any, L: np.ndarray, n_samples: int) -> np.ndarray:
     """Standard deviation of the noise path's stationary output (from its impulse response
-    over the record's length)."""
-    ny = cov.shape[0]
-    L = np.linalg.cholesky(cov + 1e-300 * np.eye(ny))
+    over the record's length), for innovations of covariance ``L L^T``."""
+    ny = L.shape[0]
     var = np.zeros(ny)
     for j in range(ny):
         e = np.zeros((n_samples, ny))
@@ -227,11 +226,10 @@ def simsd(
                             "stable estimate)")
         var = samples.var(axis=0, ddof=1)
     if noise:
-        cov = _noise_cov(model)
-        L = np.linalg.cholesky(cov + 1e-300 * np.eye(ny))
+        L = np.linalg.cholesky(_noise_cov(model) + 1e-300 * np.eye(ny))
         for k, m in enumerate(draws):
             samples[k] += _noise_path(m, rng.standard_normal((N, ny)) @ L.T)
-        var = var + _noise_std(model, cov, N) ** 2
+        var = var + _noise_std(model, L, N) ** 2
     t = np.arange(N) * float(getattr(model, "dt", 1.0) or 1.0)
     return SimulationSpread(t, y, np.sqrt(var), samples, method, bool(noise),
                             list(model.output_names))

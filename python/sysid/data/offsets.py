@@ -25,7 +25,7 @@ from .. import _sysid
 from .._checks import check_magnitudes, record_stats, user_stacklevel
 from ..errors import OffsetWarning
 
-__all__ = ["check_offsets", "OFFSET_RATIO"]
+__all__ = ["check_offsets", "remove_means", "OFFSET_RATIO"]
 
 #: A channel whose mean exceeds this many standard deviations is flagged.
 OFFSET_RATIO = 10.0
@@ -107,3 +107,27 @@ def check_offsets(data: Any, *, stacklevel: int | None = None, who: str = "ident
         "line: --detrend mean); or use sysid.identify(data), which removes it and restores it "
         "in its predictions"), stacklevel=user_stacklevel() if stacklevel is None else stacklevel)
     return True
+
+
+def remove_means(data: Any) -> tuple[Any, np.ndarray, np.ndarray]:
+    """The record with every channel's mean over all experiments removed, and those means
+    (inputs, outputs): the centring :func:`sysid.identify` records and
+    :func:`sysid.advice`'s model-based checks use.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> d, mu, my = remove_means(sysid.IOData(u=np.arange(4.0), y=np.ones(4) * 3))
+    >>> mu.tolist(), my.tolist(), d.y.ravel().tolist()
+    ([1.5], [3.0], [0.0, 0.0, 0.0, 0.0])
+    """
+    from .iodata import IOData
+
+    u = np.vstack([e[0] for e in data.experiments])
+    y = np.vstack([e[1] for e in data.experiments])
+    mu, my = u.mean(0), y.mean(0)
+    kw = {"dt": data.dt, "input_names": data.input_names, "output_names": data.output_names}
+    us = [e[0] - mu for e in data.experiments]
+    ys = [e[1] - my for e in data.experiments]
+    out = IOData(u=us[0], y=ys[0], **kw) if len(us) == 1 else IOData(u=us, y=ys, **kw)
+    return out, mu, my

@@ -126,14 +126,9 @@ NOMINAL_ITER = 20
 
 
 def _offsets(data: IOData) -> tuple[IOData, np.ndarray, np.ndarray]:
-    u = np.vstack([e[0] for e in data.experiments])
-    y = np.vstack([e[1] for e in data.experiments])
-    mu, my = u.mean(0), y.mean(0)
-    kw = {"dt": data.dt, "input_names": data.input_names, "output_names": data.output_names}
-    us = [e[0] - mu for e in data.experiments]
-    ys = [e[1] - my for e in data.experiments]
-    out = IOData(u=us[0], y=ys[0], **kw) if len(us) == 1 else IOData(u=us, y=ys, **kw)
-    return out, mu, my
+    from ..data.offsets import remove_means
+
+    return remove_means(data)
 
 
 def _informative(parts: list[tuple[IOData, IOData]], data: IOData

@@ -115,6 +115,28 @@ def default_lags(data: IOData, remove_mean: bool = True) -> tuple[int, dict[str,
 # --------------------------------------------------------------------------------------------
 
 
+def check_omega(omega: Any, dt: float, positive: bool = False) -> np.ndarray:
+    """A requested frequency grid (rad/s) as a 1-D array: non-empty, finite, non-negative
+    (``positive``: above zero), at most the Nyquist frequency ``pi / dt``; else a
+    :class:`DataError` that says which."""
+    w = np.asarray(omega, dtype=float)
+    if np.squeeze(w).ndim > 1 or w.size == 0:  # a column vector is one grid too
+        raise DataError(f"omega must be a non-empty 1-D array of frequencies in rad/s, got "
+                        f"shape {w.shape}")
+    w = w.ravel()
+    if not (np.isfinite(w).all() and ((w > 0) if positive else (w >= 0)).all()):
+        raise DataError(f"omega must hold finite {'positive' if positive else 'non-negative'} "
+                        "frequencies in rad/s")
+    nyquist = np.pi / dt
+    if w.max() > nyquist * (1 + 1e-9):
+        raise DataError(
+            f"omega reaches {w.max():.4g} rad/s, above the Nyquist frequency pi/dt = "
+            f"{nyquist:.4g} rad/s: sampled data say nothing there (the estimate would be "
+            "an alias of a lower frequency). Give omega in rad/s up to pi/dt (in Hz? "
+            "multiply by 2 pi)")
+    return w
+
+
 def _need_excitation(keep: np.ndarray, what: str, data: IOData | None = None) -> None:
     """Raise when no frequency is left: no input power, constant inputs, or inputs that are
     linearly dependent at every frequency (a singular input spectral matrix)."""
@@ -298,20 +320,7 @@ def spa(
                        "the frequencies you need")
         w = np.arange(1, n_freq + 1) * np.pi / (n_freq * data.dt)
     else:
-        w = np.asarray(omega, dtype=float)
-        if np.squeeze(w).ndim > 1 or w.size == 0:  # a column vector is one grid too
-            raise DataError(f"omega must be a non-empty 1-D array of frequencies in rad/s, got "
-                            f"shape {w.shape}")
-        w = w.ravel()
-        if not (np.isfinite(w).all() and (w >= 0).all()):
-            raise DataError("omega must hold finite non-negative frequencies in rad/s")
-        nyquist = np.pi / data.dt
-        if w.size and w.max() > nyquist * (1 + 1e-9):
-            raise DataError(
-                f"omega reaches {w.max():.4g} rad/s, above the Nyquist frequency pi/dt = "
-                f"{nyquist:.4g} rad/s: sampled data say nothing there (the estimate would be "
-                "an alias of a lower frequency). Give omega in rad/s up to pi/dt (in Hz? "
-                "multiply by 2 pi)")
+        w = check_omega(omega, data.dt)
     zs, s = _z_scaled(data)
     R, total = _lag_covariances(zs, M, remove_mean)
     tau = np.arange(M + 1)

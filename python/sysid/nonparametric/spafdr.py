@@ -25,7 +25,7 @@ from .._checks import as_int, check_elements
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
 from ..models.frd import FRD
-from .frf import _units
+from .frf import _units, check_omega
 from .spectra import _frf_from_S, _need_data, _z_scaled
 
 __all__ = ["spafdr"]
@@ -37,17 +37,7 @@ def _grid(data: IOData, omega: Any, n_freq: int) -> np.ndarray:
         n_freq = as_int(n_freq, "n_freq", 2)
         lowest = 2 * np.pi / (min(data.lengths) * data.dt)  # the first line of the record
         return np.logspace(np.log10(2 * lowest), np.log10(nyquist), n_freq)
-    w = np.asarray(omega, dtype=float)
-    if np.squeeze(w).ndim > 1 or w.size == 0:
-        raise DataError(f"omega must be a non-empty 1-D array of frequencies in rad/s, got "
-                        f"shape {w.shape}")
-    w = w.ravel()
-    if not (np.all(np.isfinite(w)) and np.all(w > 0)):
-        raise DataError("omega must hold finite positive frequencies in rad/s")
-    if w.max() > nyquist * (1 + 1e-9):
-        raise DataError(f"omega reaches {w.max():.4g} rad/s, above the Nyquist frequency "
-                        f"pi/dt = {nyquist:.4g} rad/s: give omega in rad/s up to pi/dt")
-    return w
+    return check_omega(omega, data.dt, positive=True)
 
 
 def _resolution(w: np.ndarray, resolution: Any) -> np.ndarray:

@@ -63,8 +63,8 @@ def _arx_order(n_samples: int, nu: int, ny: int, arx_orders: Any) -> int:
     return int(np.clip(n_samples // (10 * (nu + ny)), 1, 30))
 
 
-def _big_model(data: Any, na: int, kernel: str, nk: int) -> tuple[Any, Any]:
-    """The regularised ARX model and its innovations form."""
+def _big_model(data: Any, na: int, kernel: str, nk: int) -> StateSpaceModel:
+    """The regularised ARX model's innovations form."""
     from ..polynomial.arxregul import arxregul
     from ..polynomial.estimators import arx
 
@@ -75,7 +75,7 @@ def _big_model(data: Any, na: int, kernel: str, nk: int) -> tuple[Any, Any]:
         warnings.simplefilter("ignore")  # the offset check was made once, on the whole record
         reg = arxregul(data, grid_a, grid_b, grid_k, kernel)
         poly = arx(data, grid_a, grid_b, grid_k, regularization=reg)
-    return poly, poly.to_statespace()
+    return poly.to_statespace()
 
 
 def _reduce(big: StateSpaceModel, su: np.ndarray, ysd: np.ndarray, orders: list[int]
@@ -136,12 +136,13 @@ def _stable_predictor(model: StateSpaceModel, lam: np.ndarray) -> dict[str, Any]
 
 
 def _fits(data: Any, orders: list[int], na: int, kernel: str, nk: int
-          ) -> tuple[dict[int, StateSpaceModel], Any]:
+          ) -> tuple[dict[int, StateSpaceModel], StateSpaceModel]:
+    """The reduced models of each order and the realised ARX model they come from."""
     exps = experiment_arrays(data)
     su = np.concatenate([u for u, _ in exps]).std(axis=0)
     ysd = np.concatenate([y for _, y in exps]).std(axis=0)
-    poly, big = _big_model(data, na, kernel, nk)
-    return _reduce(big, su, np.maximum(ysd, np.finfo(float).tiny), orders), (poly, big)
+    big = _big_model(data, na, kernel, nk)
+    return _reduce(big, su, np.maximum(ysd, np.finfo(float).tiny), orders), big
 
 
 def _choose(data: Any, whole: dict[int, StateSpaceModel], na: int, kernel: str, nk: int
@@ -237,7 +238,7 @@ def ssregest(
         raise DataError(f"order {pool[0]} exceeds the {top} states of the ARX model "
                         f"({na} lags x {data.n_outputs} output(s)): pass a larger "
                         "arx_orders or a smaller order")
-    models, (_, big) = _fits(data, pool, na, kernel, nk)
+    models, big = _fits(data, pool, na, kernel, nk)
     if not models:
         raise DataError(f"no order of {pool} fits the {big.nstates} states of the ARX model: "
                         "pass a larger arx_orders or a smaller order")

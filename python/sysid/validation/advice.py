@@ -323,7 +323,9 @@ def advice(data: Any) -> Advice:
     data = as_record(data)
     if not data.output_names:
         raise DataError("advice needs a record with outputs")
-    centred = _centred(data)  # the model-based checks see the record as a fit would
+    from ..data.offsets import remove_means
+
+    centred = remove_means(data)[0]  # the model-based checks see the record as a fit would
     delays, nk = _delays(centred)
     feedback, nonlinear = _feedback(centred), _nonlinearity(centred, nk)
     if feedback.verdict == "act" and nonlinear.verdict == "note":
@@ -335,14 +337,3 @@ def advice(data: Any) -> Advice:
             "if the record was taken in closed loop: " + feedback.action)
     return Advice([_offsets(data), _trends(data), _excitation(data), feedback,
                    _periodic(data), _outliers(data), delays, nonlinear])
-
-
-def _centred(data: Any) -> Any:
-    from ..data.iodata import IOData
-
-    mu = _stack(data, 0).mean(0) if data.n_inputs else None
-    my = _stack(data, 1).mean(0)
-    us = [e[0] - mu if mu is not None else e[0] for e in data.experiments]
-    ys = [e[1] - my for e in data.experiments]
-    kw = {"dt": data.dt, "input_names": data.input_names, "output_names": data.output_names}
-    return IOData(u=us[0], y=ys[0], **kw) if len(us) == 1 else IOData(u=us, y=ys, **kw)
