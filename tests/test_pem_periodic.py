@@ -248,3 +248,38 @@ def test_auto_periods_with_two_realisations_keep_their_common_whole_periods():
     # a second realisation with another period: no common period
     c = _raw_periodic(true, 100, 6, seed=3)
     assert sysid.detect_period(sysid.IOData([a.u, c.u], [a.y, c.y], 1.0)) is None
+
+
+def test_lines_fit_says_when_the_order_is_above_what_the_lines_determine():
+    # the frequency-domain fit warned about neither (issue 26, honest diagnostics): on the
+    # F-16 record at order 20 it returned 33 undetermined directions and a pole at
+    # 1 - 7e-11 without a word, where the time-domain search warns about both
+    true = sysid.StateSpaceModel([[1.2, -0.5], [1.0, 0.0]], [[1.0], [0.0]], [[0.3, 0.2]],
+                                 [[0.0]])
+    data = _periodic(true, 256, 4, noise=0.01, band=(0.0, 0.3))
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # at the true order: nothing to say
+        m = sysid.pem(data, true, periods=4)
+    assert m.info["pem"]["undetermined"] == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        high = sysid.n4sid(data, 6, stable=True, horizon=7)
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        m = sysid.pem(data, high, periods=4)
+    ident = [w for w in said if issubclass(w.category, sysid.IdentifiabilityWarning)]
+    assert m.info["pem"]["undetermined"] >= 1 and len(ident) == 1
+    assert "do not determine" in str(ident[0].message)
+    assert ident[0].filename == __file__  # at the user's line
+    # a lightly damped pair far above the excited band, which the lines cannot see: the
+    # stability bound holds it at the unit circle, and the result says so
+    r, th = 1 - 1e-9, 2.6
+    A = np.zeros((4, 4))
+    A[:2, :2] = true.A
+    A[2:, 2:] = r * np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    start = sysid.StateSpaceModel(A, [[1.0], [0.0], [1e-3], [0.0]],
+                                  [[0.3, 0.2, 1e-3, 0.0]], [[0.0]])
+    with pytest.warns(sysid.StabilityWarning, match=r"over the record \(1024 samples\)"):
+        sysid.pem(data, start, periods=4)

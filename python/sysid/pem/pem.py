@@ -20,19 +20,18 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, check_magnitudes, record_stats, user_stacklevel, warn_iteration_limit
-from .._display import modulus
+from .._checks import as_int, check_magnitudes, record_stats
 from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
-from ..errors import DataError, IdentifiabilityWarning, StabilityWarning, SysidWarning
+from ..errors import DataError, SysidWarning
 from ..models.checks import check_start
 from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
 from ..subspace.feedthrough import check_feedthrough, choose_feedthrough
-from .boundary import cap_advice, warn_boundary
+from .diagnostics import lines_record_length, warn_refinement, warn_undetermined
 from .units import SearchUnits, search_units
 
 __all__ = ["pem", "pem_loss", "PemUncertainty"]
@@ -265,47 +264,6 @@ def _warn_dropped_d(stacklevel: int) -> None:
     warnings.warn("the start model has a non-zero D but feedthrough=False: it is refined "
                   "with D = 0; leave feedthrough out (or pass True) to refine its D as well",
                   SysidWarning, stacklevel=stacklevel + 1)
-
-
-def _warn(res: dict[str, Any], focus: str, max_iter: int, enforce: bool | None,
-          n: int = 0, held: bool = True) -> None:
-    """The warnings of a refinement: an unstable model, a pole at the unit circle
-    (:func:`.boundary.warn_boundary`; ``held``: a bound kept ``A`` stable, else the search
-    ended there freely; ``n``: samples of the longest experiment), a capped search."""
-    rho = float(res["spectral_radius"])
-    if focus == "simulation" or enforce is not False:
-        warn_boundary(res["a"], n, stacklevel=4, held=held)
-    if rho >= 1.0:
-        why = ("an unstable model fits the data significantly better than the best stable "
-               "one (likelihood-ratio test at 1 %)" if enforce is None else
-               "enforce_stability=False keeps only the predictor stable")
-        warnings.warn(
-            f"the refined model is unstable (largest pole modulus {modulus(rho)}): {why}; pass "
-            f"enforce_stability=True (or focus='simulation') for a stable model",
-            StabilityWarning, stacklevel=3)
-    if res["stop"] == "maximum iterations" and max_iter > 0:
-        warn_iteration_limit(f"the {focus} search", max_iter, res["history"], cap_advice(
-            res, focus), stacklevel=4, remaining=res["remaining_decrease"])
-
-
-def _warn_undetermined(res: dict[str, Any], n: int) -> int:
-    """The number of directions of the refined model, beyond its similarity orbit (``n^2``
-    of the full parametrisation), that its Gauss-Newton matrix leaves undetermined; an
-    :class:`~sysid.IdentifiabilityWarning` when there are any (an order above what the data
-    support: the heating record's order-7 choice had rank 17 of 22, three poles near 0.98
-    beside zeros at 0.982 +- 0.021j and 0.991)."""
-    p, rank = int(np.asarray(res["theta"]).size), int(res["rank"])
-    lost = max(0, p - n * n - rank) if n else 0
-    if lost:
-        warnings.warn(IdentifiabilityWarning(
-            f"the data do not determine {lost} of the {p - n * n} identifiable parameter "
-            f"directions of the refined order-{n} model (its Gauss-Newton matrix has rank "
-            f"{rank}; the similarity orbit takes {n * n} of its {p} parameters): the order is "
-            "higher than the data support "
-            "(poles that nearly cancel zeros, for example). The fit stands, but standard "
-            "deviations leave those directions out and are not reliable: a lower order will "
-            "likely fit as well"), stacklevel=user_stacklevel())
-    return lost
 
 
 def pem_loss(
@@ -605,7 +563,7 @@ def pem(
     # stable start (the core's rule)
     held = (focus == "simulation" or bool(enforce_stability)
             or (enforce_stability is None and _radius(A) < 1.0))
-    _warn(res, focus, max_iter, enforce_stability, max(data.lengths), held)
+    warn_refinement(res, focus, max_iter, enforce_stability, max(data.lengths), held)
     stabilized = st.stabilized
     Kres = res["k"] if K is not None else None
     x0s = [x / st.xscale for x in res["x0"]]
@@ -667,7 +625,7 @@ def pem(
     quiet = float(np.trace(np.atleast_2d(res["innovation_covariance"]))) <= 1e-20 * max(
         float(sum(np.sum(np.var(y, axis=0)) for y in ys)) / len(ys), 1e-300)
     # noise-free data leave the noise model (K) undetermined, not the order: no warning
-    info["pem"]["undetermined"] = 0 if quiet else _warn_undetermined(res, n)
+    info["pem"]["undetermined"] = 0 if quiet else warn_undetermined(res, n)
     if periodicity is not None:
         info["pem"]["periodicity"] = periodicity
     if ft_selection is not None:
@@ -746,7 +704,7 @@ def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
         raise DataError(f"tol must be finite and >= 0, got {tol}")
     res, extra = pem_lines(frd, model, feedthrough=bool(ft), max_iter=max_iter, tol=tol,
                            progress=progress, stabilize=_stabilize)
-    _warn(res, "frequency-domain", max_iter, True)
+    warn_refinement(res, "frequency-domain", max_iter, True, lines_record_length(frd))
     n, m_, l = model.nstates, model.ninputs, model.noutputs
     d_fixed = res["d"]
     dt = float(frd.dt) if frd.dt is not None else 1.0  # pem_lines refused an FRD without dt
@@ -772,6 +730,7 @@ def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
         "feedthrough": bool(ft), "noise": "none", "x0": [],
         "spectral_radius": float(res["spectral_radius"]), "enforce_stability": True,
         "n_parameters": int(res["theta"].size), "rank": int(res["rank"]), **extra,
+        "undetermined": warn_undetermined(res, n),
     }
     out = StateSpaceModel(res["a"], res["b"], res["c"], res["d"], None, dt=dt,
                           input_names=frd.input_names, output_names=frd.output_names,
