@@ -16,7 +16,7 @@ from scipy import signal
 
 from .._checks import as_dt, as_int, check_elements
 from ..errors import DataError, InsufficientDataError
-from .iodata import IOData
+from .iodata import IOData, require_record
 from .segments import _Exp
 
 __all__ = ["butter_sos", "filtfilt", "lowpass", "highpass", "bandpass", "resample", "decimate"]
@@ -65,6 +65,7 @@ def filtfilt(
 ) -> IOData:
     """Zero-phase filtering (forward and backward, ``scipy.signal.sosfiltfilt``) of every
     experiment. Experiments too short for the filter's padding raise an error."""
+    require_record(data, "filtfilt", pairs=False)
     sos = np.asarray(sos, dtype=float)
     if sos.ndim != 2 or sos.shape[1] != 6:
         raise DataError(f"sos must have shape (n_sections, 6), got {sos.shape}")
@@ -97,6 +98,7 @@ def lowpass(
     >>> bool(np.abs(f.y[100:-100, 0] - np.sin(2 * np.pi * 0.5 * t[100:-100])).max() < 1e-2)
     True
     """
+    require_record(data, "lowpass", pairs=False)
     return filtfilt(data, butter_sos("lowpass", cutoff, data.dt, order),
                     inputs=inputs, outputs=outputs)
 
@@ -105,6 +107,7 @@ def highpass(
     data: IOData, cutoff: float, order: int = 4, *, inputs: bool = True, outputs: bool = True
 ) -> IOData:
     """Zero-phase Butterworth high-pass filter (cutoff in Hz); see :func:`lowpass`."""
+    require_record(data, "highpass", pairs=False)
     return filtfilt(data, butter_sos("highpass", cutoff, data.dt, order),
                     inputs=inputs, outputs=outputs)
 
@@ -119,6 +122,7 @@ def bandpass(
     outputs: bool = True,
 ) -> IOData:
     """Zero-phase Butterworth band-pass filter between ``low`` and ``high`` Hz."""
+    require_record(data, "bandpass", pairs=False)
     return filtfilt(data, butter_sos("bandpass", (low, high), data.dt, order),
                     inputs=inputs, outputs=outputs)
 
@@ -153,6 +157,7 @@ def resample(data: IOData, dt: float, *, max_denominator: int = 1000) -> IOData:
     >>> r.dt, r.n_samples
     (0.025, 120)
     """
+    require_record(data, "resample", pairs=False)
     new_dt = as_dt(dt)
     target = data.dt / new_dt
     ratio = Fraction(target).limit_denominator(int(max_denominator))  # up / down
@@ -205,6 +210,7 @@ def decimate(data: IOData, q: int, *, order: int = 8) -> IOData:
     >>> sysid.decimate(sysid.IOData(u=np.ones(100), y=np.ones(100), dt=0.01), 4).dt
     0.04
     """
+    require_record(data, "decimate", pairs=False)
     if not isinstance(q, (int, np.integer)) or isinstance(q, (bool, np.bool_)) or q < 2:
         raise DataError(f"q must be an integer >= 2, got {q!r}")
     order = as_int(order, "order", 1, MAX_DECIMATE_ORDER)

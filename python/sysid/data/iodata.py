@@ -546,3 +546,26 @@ def as_record(data: Any) -> Any:
     if isinstance(data, tuple) and len(data) == 2:
         return IOData(u=data[0], y=data[1])
     return data
+
+
+def require_record(data: Any, who: str, pairs: bool = True) -> IOData:
+    """``data`` as a record, or a :class:`~sysid.errors.DataError` naming ``who`` and the
+    fix (a bare array does not say which columns are inputs, nor its sample time).
+    ``pairs``: a ``(u, y)`` pair is wrapped (:func:`as_record`, ``dt = 1``); ``False`` for
+    functions whose result depends on the sample time (filters, resampling).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.data.iodata import require_record
+    >>> require_record((np.ones(4), np.zeros(4)), "advice").n_samples
+    4
+    """
+    if pairs:
+        data = as_record(data)
+    if not isinstance(data, IOData):
+        pair = " or a (u, y) pair of arrays" if pairs else ""
+        raise DataError(
+            f"{who} takes an IOData record{pair}, got {type(data).__name__}: wrap the arrays "
+            f"first, sysid.{who}(sysid.IOData(u=u, y=y, dt=dt)) (u=None for output-only data)")
+    return data

@@ -88,9 +88,9 @@ def check_offsets(data: Any, *, stacklevel: int | None = None, who: str = "ident
     >>> check_offsets(sysid.detrend(raw, "mean"))
     False
     """
-    from .preprocessing import _require_record
+    from .iodata import require_record
 
-    _require_record(data, "check_offsets")
+    require_record(data, "check_offsets", pairs=False)
     stats = record_stats(data) if stats is None else stats
     check_magnitudes(data, who, stats)
     found = offsets(data, stats)

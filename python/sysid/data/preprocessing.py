@@ -21,7 +21,7 @@ from scipy import ndimage
 
 from .._checks import as_nonnegative
 from ..errors import DataError, InsufficientDataError
-from .iodata import IOData
+from .iodata import IOData, require_record
 from .raw import _fill, _runs
 from .segments import _Exp, channel_index, unknown_names
 
@@ -34,15 +34,6 @@ __all__ = [
     "select_mask",
     "drop_quiet",
 ]
-
-
-def _require_record(data: Any, func: str) -> None:
-    """Refuse anything but an IOData record, naming the function and the fix."""
-    if not isinstance(data, IOData):
-        raise DataError(
-            f"{func} takes an IOData record, got {type(data).__name__}: wrap the arrays first, "
-            f"sysid.{func}(sysid.IOData(u=u, y=y, dt=dt)) (u=None for output-only data)"
-        )
 
 
 # --------------------------------------------------------------------------------------------
@@ -189,7 +180,7 @@ def despike(
     >>> bool(abs(d.y[20, 0] - np.sin(4.0)) < 0.02)
     True
     """
-    _require_record(data, "despike")
+    require_record(data, "despike", pairs=False)
     if dropout is not None and not (
             isinstance(dropout, (int, float, np.integer, np.floating))
             and not isinstance(dropout, (bool, np.bool_)) and np.isfinite(dropout)):
@@ -285,7 +276,7 @@ def detrend(
     >>> np.round(tr.y_offset, 9).tolist(), np.round(tr.y_slope, 9).tolist()   # per second
     ([5.0], [4.0])
     """
-    _require_record(data, "detrend")
+    require_record(data, "detrend", pairs=False)
     if kind not in ("mean", "constant", "linear", "piecewise"):
         raise DataError(f"kind must be 'mean', 'linear' or 'piecewise', got {kind!r}")
     n_exp = data.n_experiments
@@ -390,7 +381,7 @@ def scale(data: IOData, by: str | Any = "std") -> IOData:
     >>> d.u.ravel(), d.trend.u_scale
     (array([0. , 0.5, 1. ]), array([4.]))
     """
-    _require_record(data, "scale")
+    require_record(data, "scale", pairs=False)
     if isinstance(by, str):
         if by not in ("std", "max"):
             raise DataError(f"by must be 'std', 'max' or (u_scale, y_scale), got {by!r}")
@@ -438,7 +429,7 @@ def select_mask(data: IOData, mask: Any, *, min_length: int = 2) -> IOData:
     >>> sysid.select_mask(d, [1, 1, 1, 0, 0, 1, 1, 0]).lengths
     [3, 2]
     """
-    _require_record(data, "select_mask")
+    require_record(data, "select_mask", pairs=False)
     masks = mask if isinstance(mask, list) and data.n_experiments > 1 else [mask]
     if len(masks) != data.n_experiments:
         raise DataError(
@@ -487,7 +478,7 @@ def select_mode(
     >>> sysid.select_mode(d, [3, 1, 1, 2, 3, 3, 1, 2, 2], keep={1, 2}).lengths
     [3, 3]
     """
-    _require_record(data, "select_mode")
+    require_record(data, "select_mode", pairs=False)
     ks = np.atleast_1d(np.asarray(list(keep) if isinstance(keep, (set, frozenset)) else keep))
     modes = mode if isinstance(mode, list) and data.n_experiments > 1 else [mode]
     masks = [np.isin(np.asarray(m).ravel(), ks) for m in modes]
@@ -527,7 +518,7 @@ def drop_quiet(
     >>> sysid.drop_quiet(sysid.IOData(u=u, y=u), window=20).n_experiments
     2
     """
-    _require_record(data, "drop_quiet")
+    require_record(data, "drop_quiet", pairs=False)
     if not isinstance(window, (int, np.integer)) or window < 2:
         raise DataError(f"window must be an integer >= 2, got {window!r}")
     threshold = as_nonnegative(threshold, "threshold")

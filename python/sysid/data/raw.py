@@ -89,6 +89,13 @@ def repair_nan(
         raise DataError(f"max_gap must be a non-negative integer, got {max_gap!r}")
     if not isinstance(min_length, (int, np.integer)) or min_length < 1:
         raise DataError(f"min_length must be a positive integer, got {min_length!r}")
+    y = np.asarray(y, dtype=float)
+    u = None if u is None else np.asarray(u, dtype=float)
+    for name, a in (("u", u), ("y", y)):
+        if a is not None and (a.ndim != 2 or y.ndim != 2 or a.shape[0] != y.shape[0]):
+            raise ShapeError(f"{name} must be a (samples, channels) array with y's samples, "
+                             f"got shape {a.shape} (y {y.shape}); reshape 1-D signals with "
+                             "x[:, None]")
     ua = np.zeros((y.shape[0], 0)) if u is None else u
     bad = np.concatenate([~np.isfinite(ua), ~np.isfinite(y)], axis=1)
     if not bad.any():

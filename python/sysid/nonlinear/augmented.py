@@ -29,6 +29,11 @@ NAMED: dict[str, Callable[[np.ndarray], np.ndarray]] = {
 
 
 def _functions(functions: Sequence[Any]) -> list[tuple[str, Callable[[np.ndarray], Any]]]:
+    if isinstance(functions, str) or callable(functions):
+        functions = [functions]  # one function named or given alone
+    if not isinstance(functions, (list, tuple)):
+        raise DataError(f"functions must be a list of names or callables (e.g. ['square', "
+                        f"'cube']), got {type(functions).__name__} {functions!r}")
     out = []
     for f in functions:
         if isinstance(f, str):

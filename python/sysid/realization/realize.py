@@ -458,6 +458,9 @@ def era_stabilization(markov: Any, orders: Any, *, rows: int | None = None,
     >>> bool(np.allclose(d.stable_frequencies(), f, rtol=1e-3))
     True
     """
+    if not hasattr(orders, "__iter__") or isinstance(orders, str) or np.ndim(orders) > 1:
+        raise DataError(f"orders must be an increasing sequence of model orders (e.g. "
+                        f"range(2, 21, 2)), got {orders!r}")
     orders = [int(o) for o in orders]
     if not orders or any(b <= a for a, b in zip(orders, orders[1:])):
         raise DataError(f"orders must be a non-empty increasing sequence, got {orders}")

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_int, experiment_arrays, require_inputs_vary
-from ..data.iodata import as_record
+from ..data.iodata import require_record
 from ..data.offsets import check_offsets
 from ..errors import DataError, NumericalError
 from ..models.checks import warn_unstable
@@ -219,7 +219,7 @@ def ssregest(
     >>> m.info["ssregest"]["hankel_singular_values"][:3].round(2).tolist()  # of the ARX model
     [6.31, 4.82, 0.01]
     """
-    data = as_record(data)
+    data = require_record(data, "ssregest")
     if data.n_inputs == 0:
         raise DataError("ssregest estimates an input-output model and the data have no "
                         "inputs: for a time series use sysid.n4sid(data, order) or "

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from .._display import HTMLResult
-from ..data.iodata import as_record
+from ..data.iodata import require_record
 from ..errors import DataError
 
 __all__ = ["Advice", "Finding", "advice"]
@@ -320,7 +320,7 @@ def advice(data: Any) -> Advice:
     >>> a["nonlinearity"].verdict, a["delays"].verdict
     ('ok', 'ok')
     """
-    data = as_record(data)
+    data = require_record(data, "advice")
     if not data.output_names:
         raise DataError("advice needs a record with outputs")
     from ..data.offsets import remove_means

@@ -1,0 +1,52 @@
+"""A bare array where a record (or a list) belongs gets a DataError naming the function and
+the fix, never an AttributeError or TypeError from inside the package (found by calling
+every public function with a (50, 2) array: ssregest, advice, the filters, resample,
+decimate, repair_nan, augment_inputs, augmented_fit, era_stabilization)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import sysid
+from sysid.errors import DataError, ShapeError
+
+ARR = np.ones((50, 2))
+REC = sysid.IOData(u=np.arange(60.0) % 7, y=np.sin(np.arange(60.0)), dt=1.0)
+
+
+@pytest.mark.parametrize("call, who", [
+    (lambda: sysid.ssregest(ARR, 2), "ssregest"),
+    (lambda: sysid.advice(ARR), "advice"),
+    (lambda: sysid.lowpass(ARR, 0.1), "lowpass"),
+    (lambda: sysid.highpass(ARR, 0.1), "highpass"),
+    (lambda: sysid.bandpass(ARR, 0.1, 0.2), "bandpass"),
+    (lambda: sysid.resample(ARR, 2.0), "resample"),
+    (lambda: sysid.decimate(ARR, 2), "decimate"),
+])
+def test_a_bare_array_is_not_a_record(call, who):
+    with pytest.raises(DataError, match=rf"{who} takes an IOData record.*got ndarray.*"
+                                        rf"sysid\.{who}\(sysid\.IOData"):
+        call()
+
+
+def test_filters_do_not_guess_a_sample_time_from_a_pair():
+    # cut-offs are in Hz: a (u, y) pair has no dt, so it is refused, not taken as dt = 1
+    with pytest.raises(DataError, match="lowpass takes an IOData record, got tuple"):
+        sysid.lowpass((ARR[:, :1], ARR[:, 1:]), 0.1)
+    # the estimators take the pair (as ssest does)
+    assert sysid.advice((REC.u, REC.y)).findings
+
+
+def test_lists_and_shapes_are_named():
+    with pytest.raises(DataError, match="functions must be a list"):
+        sysid.augment_inputs(REC, 2)
+    with pytest.raises(DataError, match="functions must be a list"):
+        sysid.augmented_fit(REC, 2)
+    assert sysid.augment_inputs(REC, "square").n_inputs == 2  # one name alone is a list
+    with pytest.raises(DataError, match="orders must be an increasing sequence"):
+        sysid.era_stabilization(np.ones((40, 1, 1)), 4)
+    with pytest.raises(ShapeError, match="samples, channels"):
+        sysid.repair_nan(ARR, 2)
+    with pytest.raises(ShapeError, match="samples, channels"):
+        sysid.repair_nan(np.ones(10), np.ones((10, 1)))
