@@ -84,3 +84,15 @@ def test_shipped_records():
     # its feedback test fires (p = 0.003) on an open-loop record: with the nonlinearity found
     # too, it is a note that names both causes, not a finding to act on
     assert ph["feedback"].verdict == "note" and "nonlinearity" in ph["feedback"].finding
+
+
+def test_a_constant_input_is_named_as_such_not_as_zero():
+    # the model-based checks see the centred record, where a constant input of 1 read as
+    # "input u0 is 0 in every sample" (delays, nonlinearity)
+    rng = np.random.default_rng(0)
+    y = rng.standard_normal((300, 1))
+    a = sysid.advice(sysid.IOData(np.ones((300, 1)), y, 1.0))
+    assert a["excitation"].verdict == "act" and "never change" in a["excitation"].finding
+    for topic in ("delays", "nonlinearity"):
+        assert a[topic].verdict == "note"
+        assert "never change" in a[topic].finding and "is 0 in every" not in a[topic].finding

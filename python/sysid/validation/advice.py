@@ -326,8 +326,16 @@ def advice(data: Any) -> Advice:
     from ..data.offsets import remove_means
 
     centred = remove_means(data)[0]  # the model-based checks see the record as a fit would
-    delays, nk = _delays(centred)
-    feedback, nonlinear = _feedback(centred), _nonlinearity(centred, nk)
+    excitation = _excitation(data)
+    if excitation.finding.endswith("never change"):
+        # centred, a constant input reads as "0 in every sample" to the model-based checks
+        why = f"not checked: {excitation.finding} (see excitation)"
+        delays, nk = Finding("delays", "note", why), None
+        nonlinear = Finding("nonlinearity", "note", why)
+    else:
+        delays, nk = _delays(centred)
+        nonlinear = _nonlinearity(centred, nk)
+    feedback = _feedback(centred)
     if feedback.verdict == "act" and nonlinear.verdict == "note":
         # check_feedback's documented limit: a nonlinear system's distortions, functions of
         # the input's past that a linear model leaves in its residuals, look like feedback
@@ -335,5 +343,5 @@ def advice(data: Any) -> Advice:
             "the record was taken in closed loop", "closed loop, or the nonlinearity below "
             "(distortions a linear model leaves in its residuals look like feedback)"),
             "if the record was taken in closed loop: " + feedback.action)
-    return Advice([_offsets(data), _trends(data), _excitation(data), feedback,
+    return Advice([_offsets(data), _trends(data), excitation, feedback,
                    _periodic(data), _outliers(data), delays, nonlinear])
