@@ -27,6 +27,10 @@ __all__ = ["butter_sos", "filtfilt", "lowpass", "highpass", "bandpass", "resampl
 # --------------------------------------------------------------------------------------------
 
 
+#: the steepest Butterworth filter :func:`butter_sos` designs
+MAX_FILTER_ORDER = 50
+
+
 def butter_sos(kind: str, cutoff: float | Sequence[float], dt: float, order: int = 4) -> np.ndarray:
     """Second-order sections of a digital Butterworth filter (``scipy.signal.butter``).
 
@@ -42,8 +46,12 @@ def butter_sos(kind: str, cutoff: float | Sequence[float], dt: float, order: int
     """
     if kind not in ("lowpass", "highpass", "bandpass", "bandstop"):
         raise DataError(f"unknown filter kind {kind!r}")
-    if not isinstance(order, (int, np.integer)) or order < 1:
+    if not isinstance(order, (int, np.integer)) or isinstance(order, bool) or order < 1:
         raise DataError(f"order must be a positive integer, got {order!r}")
+    if order > MAX_FILTER_ORDER:
+        raise DataError(f"order {order} is beyond {MAX_FILTER_ORDER}: a Butterworth filter "
+                        "that steep has no numerical meaning (its sections' poles crowd the "
+                        "unit circle); use order 2-10, or a band edge further away")
     fc = np.atleast_1d(np.asarray(cutoff, dtype=float))
     need = 2 if kind in ("bandpass", "bandstop") else 1
     if fc.size != need:
@@ -158,6 +166,11 @@ def resample(data: IOData, dt: float, *, max_denominator: int = 1000) -> IOData:
     (0.025, 120)
     """
     require_record(data, "resample", pairs=False)
+    short = [k for k, n in enumerate(data.lengths) if n < 2]
+    if short:
+        raise InsufficientDataError(f"experiment(s) {short} have one sample: resampling "
+                                    "interpolates between samples and needs at least 2; drop "
+                                    "them first")
     new_dt = as_dt(dt)
     target = data.dt / new_dt
     ratio = Fraction(target).limit_denominator(int(max_denominator))  # up / down

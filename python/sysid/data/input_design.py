@@ -525,7 +525,8 @@ def check_excitation(u: Any, order: int, *, stacklevel: int = 2) -> int:
     >>> sysid.check_excitation(u, order=3)
     6
     """
-    need = 2 * int(order)
+    order = as_int(order, "order", 1)
+    need = 2 * order
     got = persistent_excitation_order(u, need)
     warn_excitation(got, int(order), stacklevel=stacklevel + 1)
     return got

@@ -521,6 +521,10 @@ def drop_quiet(
     require_record(data, "drop_quiet", pairs=False)
     if not isinstance(window, (int, np.integer)) or window < 2:
         raise DataError(f"window must be an integer >= 2, got {window!r}")
+    if window > max(data.lengths):
+        raise DataError(f"window = {window} is longer than the longest experiment "
+                        f"({max(data.lengths)} samples): choose a window of a few dozen "
+                        "samples, far shorter than the record")
     threshold = as_nonnegative(threshold, "threshold")
     if channels is None:
         names = data.input_names if data.n_inputs else data.output_names

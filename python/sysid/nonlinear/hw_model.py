@@ -383,7 +383,19 @@ class HammersteinWienerModel(ModelMixin):
                  info: dict[str, Any] | None = None, input_names: Any = None,
                  output_names: Any = None, u_offset: float = 0.0,
                  y_offset: float = 0.0) -> None:
-        self.input_nl, self.output_nl = input_nl, output_nl
+        for name, g in (("input_nl", input_nl), ("output_nl", output_nl)):
+            if g is not None and not isinstance(g, Nonlinearity):
+                raise DataError(f"{name} must be a sysid nonlinearity (Saturation, DeadZone, "
+                                f"PolynomialNonlinearity, PiecewiseLinear, SigmoidNetwork, "
+                                f"UserFunction) or None (none on that side), got {g!r}")
+        # None: no nonlinearity on that side (as nlhw takes it)
+        self.input_nl = Nonlinearity() if input_nl is None else input_nl
+        self.output_nl = Nonlinearity() if output_nl is None else output_nl
+        for name, g in (("input_nl", self.input_nl), ("output_nl", self.output_nl)):
+            if not np.all(np.isfinite(np.asarray(g.params, float))):
+                raise DataError(f"{name} ({g!r}) has parameters not set (NaN): give them, "
+                                f"e.g. nl.params = nl.initial(x) for the signal x it sees, or "
+                                f"fit the model with sysid.nlhw")
         self.u_offset, self.y_offset = float(u_offset), float(y_offset)
         if not (np.isfinite(self.u_offset) and np.isfinite(self.y_offset)):
             raise DataError("u_offset and y_offset must be finite")

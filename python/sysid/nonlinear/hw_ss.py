@@ -143,6 +143,9 @@ def nlhw_ss(
     exps = experiment_arrays(data)
     check_magnitudes(data, "nlhw_ss")
     m, p = exps[0][0].shape[1], exps[0][1].shape[1]
+    if m == 0:
+        raise DataError("nlhw_ss needs at least one input (a Hammerstein-Wiener model maps "
+                        "inputs to outputs); for a time series use sysid.ar or sysid.n4sid")
     if int(order) != order or order < 1:
         raise DataError(f"order must be a positive integer, got {order!r}")
     fin = _per_channel(input_nl, m, "input_nl")

@@ -261,6 +261,8 @@ def nlarx(
                                     f"shortest experiment ({shortest}); lower na, nb or nk")
     if criterion not in CRITERIA:
         raise DataError(f"criterion must be one of {CRITERIA}, got {criterion!r}")
+    if focus not in ("prediction", "simulation"):
+        raise DataError(f"focus must be 'prediction' or 'simulation', got {focus!r}")
     if criterion == "validation" and validation is None:
         raise DataError("criterion='validation' needs validation data (validation=IOData)")
     if int(max_terms) != max_terms or max_terms < 1:

@@ -35,6 +35,9 @@ def _grid(data: IOData, omega: Any, n_freq: int) -> np.ndarray:
     nyquist = np.pi / data.dt
     if omega is None:
         n_freq = as_int(n_freq, "n_freq", 2)
+        check_elements(n_freq * (data.n_inputs + data.n_outputs) ** 2 * 4,
+                       f"n_freq = {n_freq}", "pass a smaller n_freq (a few hundred "
+                       "frequencies resolve any response) or omega")
         lowest = 2 * np.pi / (min(data.lengths) * data.dt)  # the first line of the record
         return np.logspace(np.log10(2 * lowest), np.log10(nyquist), n_freq)
     return check_omega(omega, data.dt, positive=True)

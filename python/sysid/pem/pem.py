@@ -161,6 +161,8 @@ def _setup(data: Any, model: StateSpaceModel, focus: str, feedthrough: Any, x0: 
     check_magnitudes(data, "pem", stats)  # before the start is balanced on the record's scale
     if not isinstance(model, StateSpaceModel):
         raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
+    if not isinstance(focus, str) or focus not in ("prediction", "simulation"):
+        raise DataError(f"focus must be 'prediction' or 'simulation', got {focus!r}")
     if weighting is None:  # simulation: one output's plain sum; several: each to its scale
         weighting = ("noise" if focus == "prediction" else
                      "output" if data.n_outputs > 1 else "identity")

@@ -120,6 +120,14 @@ def ssest(
                         "model with sysid.pem(data, model)")
     if not isinstance(order, str) and np.ndim(order) == 0:
         order = as_int(order, "order", 1)  # inf, nan, 2.5: before any data are compressed
+    from ..subspace.methods import METHODS
+
+    if isinstance(methods, str):
+        methods = (methods,)  # one method named alone
+    unknown = [m for m in ((method,) if method is not None else tuple(methods))
+               if m not in METHODS]
+    if unknown:
+        raise DataError(f"unknown subspace method(s) {unknown}: choose from {list(METHODS)}")
     ft_default = feedthrough is None  # D left out by default at a given order: checked below
     feedthrough = default_feedthrough(feedthrough, order)
     if periods is not None or transient is not None:

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, experiment_arrays, require_inputs_vary
+from .._checks import as_int, check_magnitudes, experiment_arrays, require_inputs_vary
 from ..errors import DataError, ExcitationError, SysidWarning
 
 __all__ = ["delayest", "DelayWarning"]
@@ -77,6 +77,11 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int =
                         error=ExcitationError)  # a constant input shows no delay
     # nor does a constant output (its ARX losses are all zero)
     require_inputs_vary(exps, "delayest", getattr(data, "output_names", None), side=1)
+    from ..data.iodata import IOData
+
+    # ARX losses of outputs near 1e200 overflow
+    check_magnitudes(data if isinstance(data, IOData) else
+                     IOData([u for u, _ in exps], [y for _, y in exps], 1.0), "delayest")
     shortest = min(u.shape[0] for u, _ in exps)
     need = 2 * (nk_max + max(na, nb) + na + m * nb) + 2
     if shortest < need:

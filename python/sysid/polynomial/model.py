@@ -109,6 +109,21 @@ class PolynomialModel(ModelMixin):
         self.info: dict[str, Any] = {}
         if len(self.b) != ny or any(len(r) != ny for r in self.a):
             raise DataError(f"a must be {ny} x {ny} and b must have {ny} rows")
+        for name, rows in (("a", self.a), ("b", self.b), ("f", self.f), ("c", [self.c]),
+                           ("d", [self.d])):
+            for i, row in enumerate(rows):
+                for j, x in enumerate(row):
+                    if not np.all(np.isfinite(x)):
+                        at = f"[{j}]" if name in ("c", "d") else f"[{i}][{j}]"
+                        raise DataError(f"{name}{at} has a non-finite coefficient (NaN or "
+                                        f"Inf): {x}; every coefficient must be finite")
+        if np.any(self.nk < 0):
+            raise DataError(f"nk must hold delays >= 0 (samples), got {self.nk.tolist()}")
+        if not (np.all(np.isfinite(self.noise_variance)) and np.all(self.noise_variance >= 0)):
+            raise DataError(f"noise_variance must be finite and >= 0, got "
+                            f"{self.noise_variance.tolist()}")
+        if not (np.isfinite(self.dt) and self.dt > 0):
+            raise DataError(f"dt must be a positive sample time, got {dt!r}")
 
     @property
     def n_outputs(self) -> int:

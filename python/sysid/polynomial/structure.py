@@ -177,6 +177,10 @@ def selstruc(
     >>> sysid.selstruc(t, 0), sysid.selstruc(t, "aic", 100)
     ((2, 2, 1), (1, 1, 1))
     """
+    if np.ndim(table) != 2 or np.shape(table)[1] < 5:
+        raise DataError(f"table must be the 2-D table of sysid.arxstruc (rows [na, nb.., "
+                        f"nk.., loss, parameters]), got {type(table).__name__} of shape "
+                        f"{np.shape(table)}")
     loss, p = table[:, -2], table[:, -1]
     if isinstance(criterion, (int, float, np.number)) and not isinstance(criterion, bool):
         c = float(criterion)

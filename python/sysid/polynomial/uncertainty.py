@@ -42,7 +42,8 @@ def attach_uncertainty(model: PolynomialModel, covs: list[np.ndarray], kind: str
     refs = _refs(model, kind)
     sizes = [_get(model, r).size for r in refs]
     theta = np.concatenate([_get(model, r) for r in refs]) if refs else np.zeros(0)
-    P = block_diag(*[np.atleast_2d(np.asarray(c, float)) for c in covs if np.size(c)])
+    blocks = [np.atleast_2d(np.asarray(c, float)) for c in covs if np.size(c)]
+    P = block_diag(*blocks)
     if P.shape != (theta.size, theta.size):
         return  # a covariance that does not match the coefficients is not attached
     names = [f"{r[0]}[{r[1]}]" + (f"[{r[2]}]" if r[2] is not None else "") + f"[{k}]"
@@ -66,7 +67,8 @@ def attach_uncertainty(model: PolynomialModel, covs: list[np.ndarray], kind: str
                 getattr(m, name)[i][j] = piece
         return m
 
-    model.uncertainty = ParameterUncertainty(theta, P, build, names=names, method=method)
+    model.uncertainty = ParameterUncertainty(theta, P, build, names=names, method=method,
+                                             blocks=[b.shape[0] for b in blocks])
 
 
 def output_blocks(model: PolynomialModel, kind: str = "pem") -> list[tuple[list[int], list[int]]]:

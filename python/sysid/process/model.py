@@ -67,6 +67,10 @@ class ProcessModel(TransferFunction):
                 if missing or extra:
                     raise DataError(f"{t.code} has the parameters {t.names}; missing "
                                     f"{missing}, unknown {extra}")
+                bad = [k for k, v in d.items() if not np.isfinite(v)]
+                if bad:
+                    raise DataError(f"{t.code}: parameter(s) {bad} must be finite numbers, "
+                                    f"got {[d[k] for k in bad]}")
         self.type = t
         self._values = grid
         nums = [[t.coefficients(d)[0] for d in row] for row in grid]

@@ -216,8 +216,9 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
             if init is None else [(init.den[i][j], init.num[i][j],
                                    float(init.iodelay[i, j]) if auto else float(delays[i, j]))
                                   for j in range(m)]
-        pairs = [_pair(a, b, t, auto, dmax, data.output_names[i], data.input_names[j])
-                 for j, (a, b, t) in enumerate(starts)]
+        # a fixed delay longer than the default bound on estimated ones is the user's
+        pairs = [_pair(a, b, t, auto, dmax if auto else max(dmax, t), data.output_names[i],
+                       data.input_names[j]) for j, (a, b, t) in enumerate(starts)]
         res = refine(pairs, exps, data.dt, hold, x0_mode=initial_state, max_iter=max_iter,
                      tol=tol, progress=cb)
         nums, dens = [], []

@@ -47,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from ..data.iodata import IOData
-from ..errors import InsufficientDataError, SysidError
+from ..errors import DataError, InsufficientDataError, SysidError
 from .compare import output_weights
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
@@ -646,7 +646,7 @@ def cross_validated_order(
     3
     """
     if focus not in ("simulation", "prediction"):
-        raise ValueError(f"focus must be 'simulation' or 'prediction', got {focus!r}")
+        raise DataError(f"focus must be 'simulation' or 'prediction', got {focus!r}")
     predict = focus == "prediction"
     table: dict[int, list[float]] = {}
     h = 0
