@@ -36,6 +36,27 @@ D = sysid.IOData(U, Y, 0.1)
      "parameters not set"),
     (lambda: sysid.HammersteinWienerModel(5, None, [1.0], [0.5], 1, 0.1),
      "input_nl must be a sysid nonlinearity"),
+    # numpy's or SciPy's own words (LinAlgError, empty-axis ValueErrors) before
+    (lambda: sysid.highpass(D, 1e-12), "below 1e-8 of the Nyquist frequency"),
+    (lambda: sysid.filtfilt(D, [[1.0, 0.0, 0.0, 1.0, -2.0, 1.0]]), "cannot filter"),
+    (lambda: sysid.persistent_excitation_order(U * 1e300, method="covariance"),
+     "values of order"),
+    (lambda: sysid.find_spikes(np.zeros((0, 1))), "with samples"),
+    (lambda: sysid.detect_period(np.zeros((0, 1))), "with samples"),
+    (lambda: sysid.nlarx(D, 2, 2, 1, criterion="validation",
+                         validation=sysid.IOData(RNG.standard_normal((300, 2)),
+                                                 RNG.standard_normal((300, 2)), 0.1)),
+     "validation has 2 input"),
+    # NaN results before: a NaN window, a Ljung-Box statistic of outputs near 1e200
+    (lambda: sysid.spectra(D, window=np.nan), "non-finite or all-zero weights"),
+    (lambda: sysid.periodogram(D, window=np.nan), "non-finite or all-zero weights"),
+    (lambda: sysid.residuals(sysid.n4sid(D, 2), sysid.IOData(U, Y * 1e200, 0.1)),
+     "residuals cannot use it"),
+    (lambda: sysid.criteria(sysid.n4sid(D, 2), sysid.IOData(U, Y * 1e200, 0.1)),
+     "criteria cannot use it"),
+    # models of inputs or outputs that never change (0 / (s^2 + ...), a gain of 1.5e7)
+    (lambda: sysid.tfest(sysid.IOData(np.zeros((300, 1)), Y, 0.1), 2), "every sample"),
+    (lambda: sysid.procest(sysid.IOData(U, np.ones((300, 1)), 0.1), "P1"), "every sample"),
     # a model with NaN coefficients simulated to NaN without a word
     (lambda: sysid.PolynomialModel([[np.array([np.nan])]], [[np.array([1.0])]], [[1]], 0.1),
      r"a\[0\]\[0\] has a non-finite coefficient"),

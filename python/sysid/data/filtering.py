@@ -64,6 +64,11 @@ def butter_sos(kind: str, cutoff: float | Sequence[float], dt: float, order: int
         )
     if need == 2 and not fc[0] < fc[1]:
         raise DataError(f"band edges must be increasing, got {cutoff}")
+    if fc.min() < 1e-8 * nyq:
+        raise DataError(f"cutoff {fc.min():g} Hz is below 1e-8 of the Nyquist frequency "
+                        f"{nyq:g} Hz: the filter's poles lie within round-off of 1 and its "
+                        "initial conditions cannot be solved; remove a mean or drift instead "
+                        "(sysid.detrend), or decimate first (sysid.decimate)")
     return signal.butter(int(order), fc if need == 2 else fc[0], btype=kind, output="sos",
                          fs=1.0 / dt)
 
@@ -85,8 +90,14 @@ def filtfilt(
                 f"experiment {k} has {e.y.shape[0]} samples; the zero-phase filter needs more "
                 f"than {padlen} (lower the order or drop short segments)"
             )
-        u = signal.sosfiltfilt(sos, e.u, axis=0) if inputs and e.u.shape[1] else e.u
-        y = signal.sosfiltfilt(sos, e.y, axis=0) if outputs else e.y
+        try:
+            u = signal.sosfiltfilt(sos, e.u, axis=0) if inputs and e.u.shape[1] else e.u
+            y = signal.sosfiltfilt(sos, e.y, axis=0) if outputs else e.y
+        except (ValueError, np.linalg.LinAlgError) as err:  # SciPy's words about the sections
+            raise DataError(f"the filter sections cannot filter this record ({err}): give "
+                            "sections of a stable filter, each [b0, b1, b2, 1, a1, a2], with "
+                            "poles not at 1 (sysid.data.filtering.butter_sos designs them)"
+                            ) from None
         exps.append(_Exp(u, y, e.t0, e.tu, e.ty))
     return data._derive(exps)
 

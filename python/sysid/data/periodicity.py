@@ -162,9 +162,9 @@ def detect(data: Any, tol: float = TOL, min_periods: int = 2) -> tuple[Periodici
         inputs = [u for u, _ in data.experiments]
     else:
         u = np.asarray(data, dtype=float)
-        if u.ndim not in (1, 2) or not np.all(np.isfinite(u)):
-            raise DataError(f"give an IOData or a finite input (N,) or (N, m); got shape "
-                            f"{u.shape}")
+        if u.ndim not in (1, 2) or not np.all(np.isfinite(u)) or u.shape[0] == 0:
+            raise DataError(f"give an IOData or a finite input (N,) or (N, m) with samples; "
+                            f"got shape {u.shape}")
         inputs = [u.reshape(u.shape[0], -1)]
     lags, worst = set(), 0.0
     for i, u in enumerate(inputs):

@@ -79,8 +79,8 @@ def find_spikes(x: Any, window: int = 7, n_sigmas: float = 3.0) -> np.ndarray:
                         "sysid.despike(data)")
     arr = np.asarray(x, dtype=float)
     arr = arr[:, None] if arr.ndim == 1 else arr
-    if arr.ndim != 2:
-        raise DataError(f"x must be 1-D or 2-D, got shape {arr.shape}")
+    if arr.ndim != 2 or arr.shape[0] == 0:
+        raise DataError(f"x must be 1-D or 2-D with samples, got shape {arr.shape}")
     if not isinstance(window, (int, np.integer)) or window < 3 or window % 2 == 0:
         raise DataError(f"window must be an odd integer >= 3, got {window!r}")
     if not n_sigmas > 0:

@@ -265,6 +265,12 @@ def nlarx(
         raise DataError(f"focus must be 'prediction' or 'simulation', got {focus!r}")
     if criterion == "validation" and validation is None:
         raise DataError("criterion='validation' needs validation data (validation=IOData)")
+    if validation is not None:
+        vu, vy = experiment_arrays(validation)[0]
+        if (vu.shape[1], vy.shape[1]) != (nu, ny):
+            raise DataError(f"validation has {vu.shape[1]} input(s) and {vy.shape[1]} "
+                            f"output(s), the estimation data {nu} and {ny}: give a record of "
+                            "the same channels")
     if int(max_terms) != max_terms or max_terms < 1:
         raise DataError(f"max_terms must be a positive integer, got {max_terms!r}")
     if int(noise_terms) != noise_terms or noise_terms < 0:

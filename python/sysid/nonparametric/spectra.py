@@ -116,6 +116,10 @@ def _welch_matrix(
     win = _window(window, nperseg) if not isinstance(window, np.ndarray) else window
     if win.size != nperseg:
         raise DataError(f"window has {win.size} samples, nperseg is {nperseg}")
+    if not (np.all(np.isfinite(win)) and np.any(win != 0)):
+        raise DataError(f"window {window if not isinstance(window, np.ndarray) else 'array'!r} "
+                        "gives non-finite or all-zero weights (a number is read as a Kaiser "
+                        "window's beta); use a name such as 'hann' or finite weights")
     nf = nfft // 2 + 1
     S = np.zeros((nf, nc, nc), dtype=complex)
     count = 0

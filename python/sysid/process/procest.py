@@ -103,6 +103,8 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
     init, fixed, bounds = _options(t, init, fixed, bounds)
     exps_all = [(np.asarray(u, float), np.asarray(y, float)) for u, y in data.experiments]
     require_inputs_vary(exps_all, "procest", data.input_names)
+    # a constant output has no response to fit (its gain came out 1.5e7)
+    require_inputs_vary(exps_all, "procest", data.output_names, side=1)
     N = sum(u.shape[0] for u, _ in exps_all)
     dmax = max_delay if max_delay is not None else 0.1 * N * data.dt / len(exps_all)
     names = [n for n in t.names if n != "Td"]

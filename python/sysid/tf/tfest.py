@@ -208,6 +208,8 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
     for i in range(l):
         exps = [(u, y[:, i]) for u, y in exps_all]
         check_experiments(exps, int(np.sum(npo[i] + nze[i] + 1)))
+        if i == 0:  # an input that never changes shows no response (0 / (s^2 + ...) before)
+            require_inputs_vary(exps_all, "tfest", data.input_names)
         # a constant output has no dynamics to fit (its fit is undefined): refused as by arx
         # (the discrete-time fit is oe's, which refuses it itself)
         require_inputs_vary([(u, y[:, None]) for u, y in exps], "tfest",

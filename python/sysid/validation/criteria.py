@@ -39,11 +39,12 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Iterable, Iterator, Sequence
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
 
-from .._checks import as_int, as_nonnegative
+from .._checks import as_int, as_nonnegative, check_magnitudes
 from .._display import HTMLResult
 from .._progress import Bar, show
 from ..data.iodata import IOData
@@ -173,6 +174,8 @@ def _criteria(model: Any, data: Any, x0: Any, n_params: int | None,
     which the order sweeps rank last)."""
     given = model
     model, recs = _records(model, data)
+    # the range check the estimators apply: |y| near 1e200 gave a NaN Ljung-Box statistic
+    check_magnitudes(SimpleNamespace(experiments=recs), "criteria")
     es, ys = [], []
     runner = _simulator(model, x0, 1, recs[0][0] if recs else None)  # x0 fitted as compare
     for i, (u, y) in enumerate(recs):
