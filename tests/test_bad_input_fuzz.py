@@ -100,3 +100,22 @@ def test_multi_output_polynomial_covariance_is_decomposed_by_blocks():
     assert unc.dof == np.linalg.matrix_rank(P) == w.size
     np.testing.assert_allclose(np.sort(w), np.sort(np.linalg.eigvalsh(P))[-w.size:],
                                rtol=1e-10)
+
+
+@pytest.mark.parametrize("fit", [
+    lambda d: sysid.arx(d, 2, [2, 2], [1, 1]),
+    lambda d: sysid.oe(d, [[2, 2]], [[2, 2]], [[1, 1]]),
+    lambda d: sysid.armax(d, 2, [[2, 2]], 1, [[1, 1]]),
+    lambda d: sysid.n4sid(d, 2),
+    lambda d: sysid.pbsid(d, 2),
+    lambda d: sysid.ssregest(d, 2),
+    lambda d: sysid.tfest(d, 2),
+    lambda d: sysid.nlarx(d, 2, 2, 1),
+])
+def test_an_input_recorded_twice_is_refused_by_every_estimator(fit):
+    # oe, armax, pbsid, ssregest and nlarx returned a model (arx and n4sid refused by rank)
+    x = RNG.standard_normal(300)
+    y = np.convolve(x, [0.0, 0.5, 0.3])[:300, None] + 0.01 * RNG.standard_normal((300, 1))
+    twice = sysid.IOData(np.column_stack([x, -2.0 * x]), y, 1.0, input_names=["f", "g"])
+    with pytest.raises(sysid.ExcitationError, match="inputs f, g are linearly dependent"):
+        fit(twice)

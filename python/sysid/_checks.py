@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from . import _sysid
-from .errors import DataError, NonFiniteError, ShapeError
+from .errors import DataError, ExcitationError, NonFiniteError, ShapeError
 
 
 def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = False) -> np.ndarray:
@@ -527,6 +527,36 @@ def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
                             f"{'how the output responds to it' if side == 0 else 'its dynamics'}"
                             f"; check the channel (the wrong column, a stuck "
                             f"{'actuator' if side == 0 else 'sensor'}?), {fix}")
+    if side == 0 and nu > 1:
+        _require_independent(exps, who, names, error)
+
+
+def _require_independent(exps: list[tuple[np.ndarray, np.ndarray]], who: str, names: Any,
+                         error: type) -> None:
+    """Refuse inputs that are linearly dependent in every sample (a channel recorded twice,
+    one a multiple or a sum of others): no estimator can tell their effects apart (``arx``
+    and the subspace methods refused them by rank, ``oe``, ``armax``, ``pbsid``, ``nlarx``
+    and others returned a model). Names the channels of the dependence."""
+    m = exps[0][0].shape[1]
+    G = np.zeros((m, m))
+    for u, _ in exps:
+        if len(u):
+            G += u.T @ u
+    d = np.sqrt(np.diag(G))
+    if not np.all(np.isfinite(G)) or np.any(d == 0):
+        return  # overflow and all-zero channels have their own checks
+    w, V = np.linalg.eigh(G / np.outer(d, d))
+    if w[0] > 1e-12 * w[-1]:
+        return
+    v = V[:, 0]
+    involved = [j for j in range(m) if abs(v[j]) > 1e-3 * np.abs(v).max()]
+    label = [names[j] if names is not None and j < len(names) else f"u{j}" for j in involved]
+    # an ExcitationError (a DataError) whichever the caller raises for a constant channel
+    raise (error if issubclass(error, ExcitationError) else ExcitationError)(
+        f"inputs {', '.join(label)} are linearly dependent in every sample (the {m} inputs "
+        f"have rank {int(np.sum(w > 1e-12 * w[-1]))}: one is a combination of the others, a "
+        f"channel recorded twice?): {who} cannot tell their "
+        "effects apart; drop one of them (data.select) or record them excited independently")
 
 
 #: Largest ``|value|`` of a channel an estimator accepts: every sum of products of samples
