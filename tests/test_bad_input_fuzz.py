@@ -57,6 +57,14 @@ D = sysid.IOData(U, Y, 0.1)
     # models of inputs or outputs that never change (0 / (s^2 + ...), a gain of 1.5e7)
     (lambda: sysid.tfest(sysid.IOData(np.zeros((300, 1)), Y, 0.1), 2), "every sample"),
     (lambda: sysid.procest(sysid.IOData(U, np.ones((300, 1)), 0.1), "P1"), "every sample"),
+    # sample times that overflow pi / dt or N dt later (NaN coherence, "x has a non-finite
+    # value" from procest's internals)
+    (lambda: sysid.IOData(U, Y, 1e300), r"lies outside 1e-100 \.\. 1e\+100 s"),
+    (lambda: sysid.IOData(U, Y, 1e-300), "other units"),
+    # messages that named the wrong cause
+    (lambda: sysid.augment_inputs(D, [lambda u: u * np.nan]), "returned a non-finite value"),
+    (lambda: sysid.ar(sysid.IOData(None, np.tile([1.0, -1.0], 50)), 4, method="burg"),
+     "predicted exactly by an AR model of order 1"),
     # a model with NaN coefficients simulated to NaN without a word
     (lambda: sysid.PolynomialModel([[np.array([np.nan])]], [[np.array([1.0])]], [[1]], 0.1),
      r"a\[0\]\[0\] has a non-finite coefficient"),

@@ -114,7 +114,17 @@ def as_dt(dt: Any, name: str = "dt") -> float:
         raise DataError(f"{name} must be a positive number of seconds, got {dt!r}") from None
     if not np.isfinite(val) or val <= 0:
         raise DataError(f"{name} must be a positive number of seconds, got {val}")
+    if not MIN_DT <= val <= MAX_DT:
+        raise DataError(f"{name} = {val:g} s lies outside {MIN_DT:g} .. {MAX_DT:g} s: its "
+                        "frequencies (pi / dt) and durations (N dt) would overflow or underflow "
+                        "double precision; give the sample time in other units (ms, hours)")
     return val
+
+
+#: the sample times :func:`as_dt` accepts: any unit a record is kept in, far from the
+#: overflow of ``pi / dt`` and ``N dt`` (a dt of 1e-300 or 1e300 was accepted and broke
+#: every spectral and continuous-time tool later)
+MIN_DT, MAX_DT = 1e-100, 1e100
 
 
 def as_matrix(x: Any, name: str, shape: tuple[int | None, int | None]) -> np.ndarray:

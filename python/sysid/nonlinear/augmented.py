@@ -54,9 +54,14 @@ def _augment(u: np.ndarray, fns: list[tuple[str, Callable[[np.ndarray], Any]]]) 
     cols = [u]
     for name, f in fns:
         v = np.asarray(f(u), float)
-        if v.shape != u.shape or not np.all(np.isfinite(v)):
-            raise DataError(f"basis function {name} must return finite values of the input's "
+        if v.shape != u.shape:
+            raise DataError(f"basis function {name} must return an array of the input's "
                             f"shape {u.shape}, got {v.shape}")
+        if not np.all(np.isfinite(v)):
+            bad = np.argwhere(~np.isfinite(v))[0]
+            raise DataError(f"basis function {name} returned a non-finite value (at sample "
+                            f"{bad[0]}, channel {bad[1]}, input {u[tuple(bad)]:g}): it must be "
+                            "finite over the input's range")
         cols.append(v)
     return np.hstack(cols)
 

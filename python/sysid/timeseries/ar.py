@@ -100,7 +100,11 @@ def _burg(ys: list[np.ndarray], n: int) -> np.ndarray:
         num = sum(_dot(fi[m:], bi[m - 1:-1]) for fi, bi in zip(f, b))
         den = sum(_dot(fi[m:], fi[m:]) + _dot(bi[m - 1:-1], bi[m - 1:-1]) for fi, bi in zip(f, b))
         if den <= 0:
-            raise DataError("the signal is identically zero; nothing to model")
+            if m == 1:
+                raise DataError("the signal is identically zero; nothing to model")
+            raise DataError(f"the signal is predicted exactly by an AR model of order {m - 1} "
+                            "(a deterministic sequence: its prediction errors vanish), so "
+                            f"higher orders are not determined; use order {m - 1}")
         k = -2.0 * num / den
         a = np.r_[a, 0.0] + k * np.r_[a, 0.0][::-1]
         for fi, bi in zip(f, b):
