@@ -65,6 +65,13 @@ D = sysid.IOData(U, Y, 0.1)
     (lambda: sysid.augment_inputs(D, [lambda u: u * np.nan]), "returned a non-finite value"),
     (lambda: sysid.ar(sysid.IOData(None, np.tile([1.0, -1.0], 50)), 4, method="burg"),
      "predicted exactly by an AR model of order 1"),
+    (lambda: sysid.pnlss(sysid.IOData(U, Y * 1e200, 0.1), 2, max_iter=2),
+     "values of order"),  # was "output y0 is constant (0)"
+    (lambda: sysid.spafdr(sysid.IOData(np.column_stack([U, U]), Y, 0.1)),
+     "linearly dependent"),  # was "0.0 spectra ... widen the resolution"
+    (lambda: sysid.spafdr(sysid.IOData(U[:1], Y[:1], 0.1)), "at least 2 samples"),
+    (lambda: sysid.periodogram(sysid.IOData(U[:1], Y[:1], 0.1)), "at least 2 samples"),
+    (lambda: sysid.ho_kalman(np.ones((30, 1, 1)), rank_tol=np.nan), "rank_tol must lie"),
     # a model with NaN coefficients simulated to NaN without a word
     (lambda: sysid.PolynomialModel([[np.array([np.nan])]], [[np.array([1.0])]], [[1]], 0.1),
      r"a\[0\]\[0\] has a non-finite coefficient"),

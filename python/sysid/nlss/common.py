@@ -23,6 +23,10 @@ class Scaling:
 
     @classmethod
     def of(cls, data: IOData) -> Scaling:
+        from .._checks import check_magnitudes
+
+        # outputs near 1e200 overflowed the std and were called "constant (0)"
+        check_magnitudes(data, "the nonlinear state-space fits")
         u = np.vstack([e[0] for e in data.experiments])
         y = np.vstack([e[1] for e in data.experiments])
         su, sy = u.std(axis=0), y.std(axis=0)

@@ -21,9 +21,9 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int, check_elements
+from .._checks import as_int, check_elements, require_inputs_vary
 from ..data.iodata import IOData
-from ..errors import DataError, InsufficientDataError
+from ..errors import DataError, ExcitationError, InsufficientDataError
 from ..models.frd import FRD
 from .frf import _units, check_omega
 from .spectra import _frf_from_S, _need_data, _z_scaled
@@ -103,6 +103,11 @@ def spafdr(
     (128, True, True)
     """
     data = _need_data(data)
+    if min(data.lengths) < 2:
+        raise InsufficientDataError(f"spafdr needs experiments of at least 2 samples, got "
+                                    f"{min(data.lengths)}")
+    # inputs constant or recorded twice: named, not "0.0 spectra ... widen the resolution"
+    require_inputs_vary(data.experiments, "spafdr", data.input_names, error=ExcitationError)
     w = _grid(data, omega, n_freq)
     m = data.n_inputs
     zs, s = _z_scaled(data)

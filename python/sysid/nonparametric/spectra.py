@@ -366,6 +366,9 @@ def periodogram(data: IOData, *, window: str = "boxcar", detrend: bool = True) -
     True
     """
     data = _need_data(data, inputs=False)
+    if max(data.lengths) < 2:
+        raise InsufficientDataError(f"a periodogram needs an experiment of at least 2 "
+                                    f"samples, got {max(data.lengths)}")
     nfft = max(data.lengths)
     S = None
     zs, scale = _z_scaled(data)

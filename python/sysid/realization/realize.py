@@ -116,6 +116,9 @@ def _realize(method: str, markov: Any, order: int | None, rows: int | None, cols
              dt: float | None, rank_tol: float = 1e-8, scale: bool | None = None
              ) -> tuple[dict[str, Any], float]:
     scale = check_scale(scale)
+    if not (isinstance(rank_tol, (int, float, np.number)) and 0 < float(rank_tol) < 1):
+        raise DataError(f"rank_tol must lie strictly between 0 and 1 (a fraction of the "
+                        f"largest singular value), got {rank_tol!r}")
     h, dt_h = _markov(markov)
     dt = float(dt if dt is not None else (dt_h if dt_h is not None else 1.0))
     count, l, m = h.shape
