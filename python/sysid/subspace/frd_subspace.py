@@ -257,17 +257,16 @@ WARP_BELOW = 0.9
 WARP_GAIN = 1.5
 
 
-def _warp_scale(wd: np.ndarray) -> float | None:
-    """The sample time ``T`` of the warp (:func:`_warped`) of the lines ``wd``
-    (rad/sample), or None where it does not pay (``warp="auto"``)."""
-    pos = wd[wd > 0]
-    if pos.size < 2 or wd.max() >= WARP_BELOW * np.pi:
-        return None
+def _warp_pays(wd: np.ndarray) -> bool:
+    """Whether warping the lines ``wd`` (rad/sample) spreads them (``warp="auto"``): all
+    below ``WARP_BELOW`` Nyquist, and the arc they span at least ``WARP_GAIN`` times wider
+    after the map of :func:`_warped` (which centres their geometric mean)."""
+    if np.count_nonzero(wd > 0) < 2 or wd.max() >= WARP_BELOW * np.pi:
+        return False
     wc = 2.0 * np.tan(wd / 2.0)  # the continuous frequencies of the lines (dt = 1)
     T = 2.0 / float(np.sqrt(wc[wc > 0].min() * wc.max()))
     spread = 2.0 * np.arctan(wc * T / 2.0)
-    gain = np.ptp(spread) / max(np.ptp(wd), 1e-300)
-    return T if gain >= WARP_GAIN else None
+    return bool(np.ptp(spread) >= WARP_GAIN * np.ptp(wd))
 
 
 def _warped(frd: Any, order: Order, horizon: int | None, weights: Any, ft: bool,
@@ -292,7 +291,7 @@ def _warped(frd: Any, order: Order, horizon: int | None, weights: Any, ft: bool,
             return None
         raise DataError("warp=True needs every line below the Nyquist frequency (the warp "
                         "sends it to infinity): drop that line or pass warp=False")
-    if warp == "auto" and _warp_scale(wd) is None:
+    if warp == "auto" and not _warp_pays(wd):
         return None
     ct_frd = FRD(2.0 * np.tan(wd / 2.0) / dt, frd.response, input_names=frd.input_names,
                  output_names=frd.output_names)
