@@ -537,17 +537,31 @@ def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
                             f"{'how the output responds to it' if side == 0 else 'its dynamics'}"
                             f"; check the channel (the wrong column, a stuck "
                             f"{'actuator' if side == 0 else 'sensor'}?), {fix}")
-    if side == 0 and nu > 1:
-        _require_independent(exps, who, names, error)
+    if side == 0:
+        require_independent_inputs(exps, who, names, error)
 
 
-def _require_independent(exps: list[tuple[np.ndarray, np.ndarray]], who: str, names: Any,
-                         error: type) -> None:
+def require_independent_inputs(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
+                               names: Any = None, error: type = ExcitationError) -> None:
     """Refuse inputs that are linearly dependent in every sample (a channel recorded twice,
     one a multiple or a sum of others): no estimator can tell their effects apart (``arx``
     and the subspace methods refused them by rank, ``oe``, ``armax``, ``pbsid``, ``nlarx``
-    and others returned a model). Names the channels of the dependence."""
-    m = exps[0][0].shape[1]
+    and others returned a model). Names the channels of the dependence; part of
+    :func:`require_inputs_vary`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid._checks import require_independent_inputs
+    >>> x = np.arange(6.0)[:, None]
+    >>> require_independent_inputs([(np.hstack([x, 2 * x]), x)], "oe")
+    Traceback (most recent call last):
+    ...
+    sysid.errors.ExcitationError: inputs u0, u1 are linearly dependent in every sample ...
+    """
+    m = exps[0][0].shape[1] if exps else 0
+    if m < 2:
+        return
     G = np.zeros((m, m))
     for u, _ in exps:
         if len(u):
@@ -579,7 +593,8 @@ MIN_MAGNITUDE = 1e-150
 
 def record_stats(data: Any) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """``(abs_max, mean, std)`` per channel of the inputs (key 0) and the outputs (key 1) of
-    every experiment of ``data`` with samples, one pass of the Rust core each; a side without
+    every experiment of ``data`` (a record, or a list of ``(u, y)`` arrays) with samples, one
+    pass of the Rust core each; a side without
     channels or samples is left out. Shared by the checks records meet on entering an
     estimator (:func:`check_magnitudes`, the offset and constant-channel checks), so that
     they read the record once.
@@ -594,10 +609,15 @@ def record_stats(data: Any) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarra
     """
     out = {}
     for idx in (0, 1):
-        parts = [np.ascontiguousarray(e[idx], float) for e in data.experiments if len(e[idx])]
+        parts = [np.ascontiguousarray(e[idx], float) for e in _pairs(data) if len(e[idx])]
         if parts and parts[0].shape[1]:
             out[idx] = tuple(np.asarray(x) for x in _sysid.channel_stats(parts))
     return out
+
+
+def _pairs(data: Any) -> list[Any]:
+    """The ``(u, y)`` experiments of a record, or ``data`` itself when it is a list of them."""
+    return data if isinstance(data, list) else data.experiments
 
 
 def check_magnitudes(data: Any, who: str = "identification",
@@ -607,7 +627,8 @@ def check_magnitudes(data: Any, who: str = "identification",
     varying channel whose largest ``|value|`` is below :data:`MIN_MAGNITUDE` (a zero or
     constant channel is left to the estimators' own, more specific checks). The one range
     check of records entering an estimator (called by :func:`sysid.data.offsets.check_offsets`);
-    the :class:`DataError` names the channel, its magnitude and the fix (rescale it).
+    ``data`` is a record or a list of ``(u, y)`` arrays. The :class:`DataError` names the
+    channel, its magnitude and the fix (rescale it).
 
     Examples
     --------
@@ -646,7 +667,7 @@ def check_magnitudes(data: Any, who: str = "identification",
 def _constant(data: Any, idx: int, j: int, sd: float) -> bool:
     """Whether channel ``j`` of side ``idx`` holds one value in every sample (its standard
     deviation of tiny values can underflow to 0 while it varies: compared sample by sample)."""
-    parts = [e[idx] for e in data.experiments if len(e[idx])]
+    parts = [e[idx] for e in _pairs(data) if len(e[idx])]
     return sd == 0.0 and all(np.all(p[:, j] == parts[0][0, j]) for p in parts)
 
 

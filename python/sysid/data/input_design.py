@@ -19,13 +19,13 @@ from typing import Any
 import numpy as np
 
 from .._checks import (
-    MAX_MAGNITUDE,
     as_2d,
     as_dt,
     as_int,
     as_nonnegative,
     as_real,
     check_elements,
+    check_magnitudes,
 )
 from ..errors import DataError, ExcitationWarning
 
@@ -474,11 +474,8 @@ def persistent_excitation_order(u: Any, max_order: int = 20, *, method: str = "s
         raise DataError("the record has no inputs; persistent excitation concerns inputs")
     if any(x.shape[1] != m for x in us):
         raise DataError("all experiments must have the same number of inputs")
-    big = max(float(np.max(np.abs(x), initial=0.0)) for x in us)
-    if not big < MAX_MAGNITUDE:  # products of its samples overflow (NaN, Inf included)
-        raise DataError(f"the input has values of order {big:.3g}, outside the range sysid "
-                        f"computes with (|values| below {MAX_MAGNITUDE:g}, finite): rescale it "
-                        "(persistent excitation does not depend on the scale)")
+    # the estimators' range check (inputs near 1e300 failed inside LAPACK)
+    check_magnitudes([(x, x[:, :0]) for x in us], "persistent_excitation_order")
     if tol is not None:
         tol = as_nonnegative(tol, "tol")
     if method == "spectrum":

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import check_magnitudes, experiment_arrays, require_inputs_vary
+from .._checks import check_magnitudes, experiment_arrays, require_independent_inputs
 from .._threads import one_blas_thread
 from ..errors import (
     DataError,
@@ -252,8 +252,8 @@ def nlarx(
     exps = experiment_arrays(data)
     check_magnitudes(data, "nlarx")
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
-    if nu > 1:  # inputs recorded twice: no model can tell them apart (one was returned)
-        require_inputs_vary(exps, "nlarx", getattr(data, "input_names", None))
+    # inputs recorded twice: no model can tell them apart (constant ones are checked below)
+    require_independent_inputs(exps, "nlarx", getattr(data, "input_names", None))
     na, nb, nk = matlab_orders("nlarx", data, na, nb=nb, nk=nk)
     na_, nb_, nk_ = _per(na, ny, "na"), _per(nb, nu, "nb"), _per(nk, nu, "nk")
     shortest = min(len(y) for _, y in exps)

@@ -13,7 +13,7 @@ from .._checks import as_int, recorded, reissue
 from .._threads import one_blas_thread
 from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
-from ..subspace.estimator import CLOSED_LOOP, SubspaceEstimator, horizon_for_order
+from ..subspace.estimator import CLOSED_LOOP, METHODS, SubspaceEstimator, horizon_for_order
 from ..subspace.feedthrough import (
     check_feedthrough,
     choose_feedthrough,
@@ -120,8 +120,6 @@ def ssest(
                         "model with sysid.pem(data, model)")
     if not isinstance(order, str) and np.ndim(order) == 0:
         order = as_int(order, "order", 1)  # inf, nan, 2.5: before any data are compressed
-    from ..subspace.methods import METHODS
-
     if isinstance(methods, str):
         methods = (methods,)  # one method named alone
     unknown = [m for m in ((method,) if method is not None else tuple(methods))

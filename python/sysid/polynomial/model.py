@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_horizon, as_measured
+from .._checks import as_2d, as_dt, as_horizon, as_measured
 from ..errors import DataError
 from ..models.protocol import ModelMixin
 
@@ -101,7 +101,7 @@ class PolynomialModel(ModelMixin):
             [np.asarray(x, dtype=float).ravel() for x in row]
             for row in (f or [[[]] * nu for _ in range(ny)])
         ]
-        self.dt = float(dt)
+        self.dt = as_dt(dt)
         self.noise_variance = (
             np.ones(ny) if noise_variance is None else np.asarray(noise_variance, float)
         )
@@ -122,8 +122,6 @@ class PolynomialModel(ModelMixin):
         if not (np.all(np.isfinite(self.noise_variance)) and np.all(self.noise_variance >= 0)):
             raise DataError(f"noise_variance must be finite and >= 0, got "
                             f"{self.noise_variance.tolist()}")
-        if not (np.isfinite(self.dt) and self.dt > 0):
-            raise DataError(f"dt must be a positive sample time, got {dt!r}")
 
     @property
     def n_outputs(self) -> int:

@@ -145,13 +145,20 @@ def _trends(data: Any) -> Finding:
     return Finding("trends", "ok", "no drift dominates an output")
 
 
-def _excitation(data: Any) -> Finding:
+def _flat_inputs(data: Any) -> list[str]:
+    """The inputs that hold one value in every sample."""
+    if data.n_inputs == 0:
+        return []
+    u = _stack(data, 0)
+    return [n for j, n in enumerate(data.input_names) if np.ptp(u[:, j]) == 0]
+
+
+def _excitation(data: Any, flat: list[str]) -> Finding:
     from ..data.input_design import persistent_excitation_order
 
     if data.n_inputs == 0:
         return Finding("excitation", "ok", "no inputs: a time series (sysid.ar, sysid.n4sid)")
     u = _stack(data, 0)
-    flat = [n for j, n in enumerate(data.input_names) if np.ptp(u[:, j]) == 0]
     if flat:
         return Finding("excitation", "act", f"input(s) {', '.join(flat)} never change",
                        "drop them (data.select(inputs=...)) or record with them excited")
@@ -326,8 +333,9 @@ def advice(data: Any) -> Advice:
     from ..data.offsets import remove_means
 
     centred = remove_means(data)[0]  # the model-based checks see the record as a fit would
-    excitation = _excitation(data)
-    if excitation.finding.endswith("never change"):
+    flat = _flat_inputs(data)
+    excitation = _excitation(data, flat)
+    if flat:
         # centred, a constant input reads as "0 in every sample" to the model-based checks
         why = f"not checked: {excitation.finding} (see excitation)"
         delays, nk = Finding("delays", "note", why), None

@@ -39,7 +39,6 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Iterable, Iterator, Sequence
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -175,7 +174,7 @@ def _criteria(model: Any, data: Any, x0: Any, n_params: int | None,
     given = model
     model, recs = _records(model, data)
     # the range check the estimators apply: |y| near 1e200 gave a NaN Ljung-Box statistic
-    check_magnitudes(SimpleNamespace(experiments=recs), "criteria")
+    check_magnitudes(recs, "criteria")
     es, ys = [], []
     runner = _simulator(model, x0, 1, recs[0][0] if recs else None)  # x0 fitted as compare
     for i, (u, y) in enumerate(recs):

@@ -8,7 +8,6 @@ and Ljung's test of independence from past inputs (as an exact regression F test
 from __future__ import annotations
 
 import warnings
-from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -286,7 +285,7 @@ def residuals(model: Any, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
     model, recs = _records(model, data)
     max_lag = as_int(max_lag, "max_lag")
     # the range check the estimators apply: |y| near 1e200 gave a NaN Ljung-Box statistic
-    check_magnitudes(SimpleNamespace(experiments=recs), "residuals")
+    check_magnitudes(recs, "residuals")
     if not 0 < float(alpha) < 1:
         raise DataError(f"alpha must lie strictly between 0 and 1, got {alpha!r}")
     N = min(y.shape[0] for _, y in recs)
