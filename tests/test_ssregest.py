@@ -113,6 +113,16 @@ def test_bad_requests_name_the_fix():
         sysid.ssregest(d, [])
 
 
+def test_an_order_balanced_truncation_refuses_names_its_reason():
+    # the dryer's channels swapped: the realised ARX model has 3 non-zero Hankel singular
+    # values, so order 4 cannot be balanced; the error said only "no order of [4] fits the 25
+    # states" (4 < 25), not why
+    d = sysid.datasets.load_dryer()[:500]
+    swapped = sysid.IOData(d.y - d.y.mean(), d.u - d.u.mean(), d.dt)
+    with pytest.raises(sysid.DataError, match=r"order 4: invalid order: .*Hankel singular"):
+        sysid.ssregest(swapped, 4)
+
+
 def test_arxregul_on_noise_free_data():
     # the least-squares start of the tuning divided 0 by 0 on a rank-deficient regression
     # (more lags than the system has) and arxregul raised "kernel scale c ... got nan"

@@ -78,10 +78,10 @@ def _big_model(data: Any, na: int, kernel: str, nk: int) -> StateSpaceModel:
     return poly.to_statespace()
 
 
-def _reduce(big: StateSpaceModel, su: np.ndarray, ysd: np.ndarray, orders: list[int]
-            ) -> dict[int, StateSpaceModel]:
+def _reduce(big: StateSpaceModel, su: np.ndarray, ysd: np.ndarray, orders: list[int],
+            why: list[str] | None = None) -> dict[int, StateSpaceModel]:
     """Balanced truncation of ``[u, e] -> y`` (scaled) to each order; ``K`` from ``e``'s
-    columns."""
+    columns. ``why`` collects, per order left out, balanced truncation's reason."""
     from ..analysis.reduction import balanced_truncation
 
     nu, ny = big.B.shape[1], big.C.shape[0]
@@ -97,7 +97,9 @@ def _reduce(big: StateSpaceModel, su: np.ndarray, ysd: np.ndarray, orders: list[
             continue
         try:
             r = balanced_truncation(g, n)
-        except DataError:  # fewer states than unstable poles, or more than the minimal ones
+        except DataError as e:  # fewer states than unstable poles, or more than the minimal ones
+            if why is not None:
+                why.append(f"order {n}: {e}")
             continue
         out[n] = StateSpaceModel(r.A, r.B[:, :nu] / su, r.C, big.D, K=r.B[:, nu:] / se,
                                  dt=big.dt, input_names=big.input_names,
@@ -135,14 +137,15 @@ def _stable_predictor(model: StateSpaceModel, lam: np.ndarray) -> dict[str, Any]
                    "Kalman gain of the same noise spectrum (its minimum-phase factor)"}
 
 
-def _fits(data: Any, orders: list[int], na: int, kernel: str, nk: int
-          ) -> tuple[dict[int, StateSpaceModel], StateSpaceModel]:
-    """The reduced models of each order and the realised ARX model they come from."""
+def _fits(data: Any, orders: list[int], na: int, kernel: str, nk: int,
+          why: list[str] | None = None) -> tuple[dict[int, StateSpaceModel], StateSpaceModel]:
+    """The reduced models of each order and the realised ARX model they come from (``why``:
+    see :func:`_reduce`)."""
     exps = experiment_arrays(data)
     su = np.concatenate([u for u, _ in exps]).std(axis=0)
     ysd = np.concatenate([y for _, y in exps]).std(axis=0)
     big = _big_model(data, na, kernel, nk)
-    return _reduce(big, su, np.maximum(ysd, np.finfo(float).tiny), orders), big
+    return _reduce(big, su, np.maximum(ysd, np.finfo(float).tiny), orders, why), big
 
 
 def _choose(data: Any, whole: dict[int, StateSpaceModel], na: int, kernel: str, nk: int
@@ -238,10 +241,12 @@ def ssregest(
         raise DataError(f"order {pool[0]} exceeds the {top} states of the ARX model "
                         f"({na} lags x {data.n_outputs} output(s)): pass a larger "
                         "arx_orders or a smaller order")
-    models, big = _fits(data, pool, na, kernel, nk)
+    why: list[str] = []
+    models, big = _fits(data, pool, na, kernel, nk, why)
     if not models:
-        raise DataError(f"no order of {pool} fits the {big.nstates} states of the ARX model: "
-                        "pass a larger arx_orders or a smaller order")
+        raise DataError(f"no order of {pool} could be reduced from the {big.nstates}-state "
+                        f"ARX model ({'; '.join(why[:2])}): pass another order or "
+                        "arx_orders")
     choice = None
     if len(models) > 1:
         n, choice = _choose(data, models, na, kernel, nk)
