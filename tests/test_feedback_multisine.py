@@ -63,3 +63,22 @@ def test_the_winding_record_under_tension_control_shows_feedback():
         warnings.simplefilter("always")
         sysid.moesp(est, 4)
     assert sysid.FeedbackWarning in [c.category for c in caught]
+
+
+def test_the_automatic_order_warns_of_feedback_as_a_given_order_does():
+    # the order choice's own fits (warnings ignored) used to consume the estimator's
+    # once-only feedback warning: n4sid(data) never warned, n4sid(data, 4) did
+    w = np.loadtxt(sysid.datasets.path("winding"))
+    est = sysid.IOData(u=w[:1666, :5], y=w[:1666, 5:], dt=0.1)
+    est = sysid.IOData(u=est.u - est.u.mean(0), y=est.y - est.y.mean(0), dt=0.1)
+    for fit in (sysid.n4sid, sysid.moesp, sysid.cva):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fit(est)
+        assert [c.category for c in caught].count(sysid.FeedbackWarning) == 1, fit
+    se = sysid.SubspaceEstimator(est)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        se.fit("auto")
+        se.fit(3)  # once per estimator
+    assert [c.category for c in caught].count(sysid.FeedbackWarning) == 1

@@ -404,6 +404,18 @@ class SubspaceEstimator:
             self._feedback_p = p
         return self._feedback_p
 
+    def _quiet_fit(self, *args: Any, **kwargs: Any) -> StateSpaceModel:
+        """:meth:`fit` with every warning suppressed, for the package's own checks (order
+        choice, feedthrough test): the once-per-estimator feedback warning is left for the
+        user's own fit (an internal fit used to consume it, so ``n4sid(data)`` never warned)."""
+        said = self._feedback_warned
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                return self.fit(*args, **kwargs)
+        finally:
+            self._feedback_warned = said
+
     def _warn_feedback(self, key: str) -> None:
         if key in CLOSED_LOOP or self._feedback_warned:
             return

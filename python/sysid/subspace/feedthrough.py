@@ -230,8 +230,8 @@ def warn_if_left_out(est: Any, order: int, method: str, model: Any, who: str,
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            with_d = est.fit(order, method=method, feedthrough=True, kalman=kalman, x0=x0,
-                             stable=stable)
+            with_d = est._quiet_fit(order, method=method, feedthrough=True, kalman=kalman,
+                                    x0=x0, stable=stable)
             without, with_ = (_prediction_error(m, est.data) for m in (model, with_d))
     except Exception:  # noqa: BLE001 - a check that cannot be made says nothing
         return None

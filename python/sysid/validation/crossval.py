@@ -696,10 +696,11 @@ def _unstable_orders(whole: Any, table: dict[int, float], method: str, feedthrou
     out = set()
     for n in table:
         try:
+            fit = getattr(whole, "_quiet_fit", None)  # keeps the user's feedback warning
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                poles = whole.fit(n, method=method, feedthrough=feedthrough,
-                                  kalman=False).poles()
+                poles = (fit or whole.fit)(n, method=method, feedthrough=feedthrough,
+                                           kalman=False).poles()
             if len(poles) and float(np.max(np.abs(poles))) >= 1.0:
                 out.add(n)
         except Exception:  # noqa: BLE001 - an order the record cannot support
