@@ -32,8 +32,10 @@ fn mul(a: MatRef<'_, f64>, b: MatRef<'_, f64>) -> Mat<f64> {
 
 /// Value, gradient with respect to the parameters of `dprior`, and derivative with respect to
 /// `sigma2`, of `L` above (`gradient = false`: the value only, about half the work; the
-/// gradient is then empty and the derivative NaN). A prior that makes `S` numerically not
-/// positive definite gives `(inf, zeros, 0)`, so a line search backs off.
+/// gradient is then empty and the derivative NaN). Where round-off makes the formed `S`
+/// indefinite, `S` is factored without being formed (eigen-factor of the prior, SVD of
+/// `R1 L`); a factorisation that fails, or a value that is not finite, gives
+/// `(inf, zeros, 0)`, so a line search backs off.
 ///
 /// ```
 /// use faer::Mat;
@@ -80,35 +82,22 @@ pub fn marginal_likelihood(
     let r1 = summary.submatrix(0, 0, p, p);
     let r = summary.submatrix(0, p, p, 1);
     let rho = summary[(p, p)];
-    let mut s = mul(mul(r1, prior).as_ref(), r1.transpose());
-    for i in 0..p {
-        s[(i, i)] += sigma2;
-    }
     let inf = Ok((f64::INFINITY, vec![0.0; dprior.len()], 0.0));
-    let Ok(llt) = s.llt(Side::Lower) else {
+    let Some(sv) = solve_s(r1, prior, r, sigma2, gradient) else {
         return inf;
     };
-    let l = llt.L();
-    let mut logdet = 0.0;
-    for i in 0..p {
-        logdet += 2.0 * l[(i, i)].ln();
-    }
-    let a = llt.solve(r);
+    let a = &sv.a;
     let quad: f64 = (0..p).map(|i| r[(i, 0)] * a[(i, 0)]).sum();
-    let value = rho * rho / sigma2 + (n_rows - p) as f64 * sigma2.ln() + quad + logdet;
+    let value = rho * rho / sigma2 + (n_rows - p) as f64 * sigma2.ln() + quad + sv.logdet;
     if !value.is_finite() {
         return inf;
     }
     if !gradient {
         return Ok((value, Vec::new(), f64::NAN));
     }
-    let mut w = llt.solve(Mat::<f64>::identity(p, p));
-    for i in 0..p {
-        for j in 0..p {
-            w[(i, j)] -= a[(i, 0)] * a[(j, 0)];
-        }
-    }
-    let g = mul(mul(r1.transpose(), w.as_ref()).as_ref(), r1);
+    let Some((g, trace)) = sv.gradient else {
+        return inf;
+    };
     let grad = dprior
         .iter()
         .map(|d| {
@@ -121,9 +110,98 @@ pub fn marginal_likelihood(
             acc
         })
         .collect();
-    let trace: f64 = (0..p).map(|i| w[(i, i)]).sum();
     let dsig = -rho * rho / (sigma2 * sigma2) + (n_rows - p) as f64 / sigma2 + trace;
     Ok((value, grad, dsig))
+}
+
+/// `log det S` and `a = S^-1 r` for `S = sigma2 I + R1 P R1^T`, and (`gradient`)
+/// `G = R1^T (S^-1 - a a^T) R1` with `tr(S^-1 - a a^T)`.
+pub(crate) struct SolvedS {
+    pub(crate) logdet: f64,
+    pub(crate) a: Mat<f64>,
+    pub(crate) gradient: Option<(Mat<f64>, f64)>,
+}
+
+/// [`SolvedS`] by Cholesky of the formed `S`; where round-off makes it indefinite (a prior
+/// far larger than the noise variance on nearly collinear regressors: a band-limited input
+/// and many lags, where `R1 P R1^T` reaches 1e12 against `sigma2` = 1e-10), from the
+/// eigen-factor `P = L L^T` and the SVD `R1 L = U diag(s) V^T`: `S = U diag(s^2 + sigma2)
+/// U^T`, positive definite by construction. `None` only when a factorisation fails.
+pub(crate) fn solve_s(
+    r1: MatRef<'_, f64>,
+    prior: MatRef<'_, f64>,
+    r: MatRef<'_, f64>,
+    sigma2: f64,
+    gradient: bool,
+) -> Option<SolvedS> {
+    let p = r1.nrows();
+    let mut s = mul(mul(r1, prior).as_ref(), r1.transpose());
+    for i in 0..p {
+        s[(i, i)] += sigma2;
+    }
+    if let Ok(llt) = s.llt(Side::Lower) {
+        let l = llt.L();
+        let logdet = (0..p).map(|i| 2.0 * l[(i, i)].ln()).sum();
+        let a = llt.solve(r);
+        let gradient = gradient.then(|| {
+            let mut w = llt.solve(Mat::<f64>::identity(p, p));
+            for i in 0..p {
+                for j in 0..p {
+                    w[(i, j)] -= a[(i, 0)] * a[(j, 0)];
+                }
+            }
+            let trace = (0..p).map(|i| w[(i, i)]).sum();
+            (mul(mul(r1.transpose(), w.as_ref()).as_ref(), r1), trace)
+        });
+        return Some(SolvedS {
+            logdet,
+            a,
+            gradient,
+        });
+    }
+    spectral_s(r1, prior, r, sigma2, gradient)
+}
+
+/// [`solve_s`] without forming `S`: from the eigen-factor of `P` and the SVD of `R1 L`.
+pub(crate) fn spectral_s(
+    r1: MatRef<'_, f64>,
+    prior: MatRef<'_, f64>,
+    r: MatRef<'_, f64>,
+    sigma2: f64,
+    gradient: bool,
+) -> Option<SolvedS> {
+    let p = r1.nrows();
+    let sym = Mat::from_fn(p, p, |i, j| 0.5 * (prior[(i, j)] + prior[(j, i)]));
+    let eig = sym.self_adjoint_eigen(Side::Lower).ok()?;
+    let w = eig.S().column_vector();
+    let l = Mat::from_fn(p, p, |i, j| eig.U()[(i, j)] * w[j].max(0.0).sqrt());
+    let svd = mul(r1, l.as_ref()).svd().ok()?;
+    let (u, sv) = (svd.U(), svd.S().column_vector());
+    let d: Vec<f64> = (0..p).map(|i| sv[i] * sv[i] + sigma2).collect();
+    let logdet = d.iter().map(|x| x.ln()).sum();
+    let ur = u.transpose() * r;
+    let a = u * Mat::from_fn(p, 1, |i, _| ur[(i, 0)] / d[i]);
+    // G from T = U^T R1 (rows along the near-null directions stay at round-off of R1, not
+    // of R1^T S^-1 R1, whose entries reach 1 / sigma2 and cancel)
+    let gradient = gradient.then(|| {
+        let t = u.transpose() * r1;
+        let b = t.transpose() * Mat::from_fn(p, 1, |i, _| ur[(i, 0)] / d[i]);
+        let scaled = Mat::from_fn(p, p, |i, j| t[(i, j)] / d[i]);
+        let mut g = mul(t.transpose(), scaled.as_ref());
+        for i in 0..p {
+            for j in 0..p {
+                g[(i, j)] -= b[(i, 0)] * b[(j, 0)];
+            }
+        }
+        let trace = d.iter().map(|x| 1.0 / x).sum::<f64>()
+            - (0..p).map(|i| a[(i, 0)] * a[(i, 0)]).sum::<f64>();
+        (g, trace)
+    });
+    Some(SolvedS {
+        logdet,
+        a,
+        gradient,
+    })
 }
 
 /// The regularised solution of the regression summarised by `summary` with the penalty
