@@ -33,6 +33,7 @@ from ..data.offsets import check_offsets
 from ..errors import DataError, NumericalError
 from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
+from ..subspace.feedthrough import check_feedthrough, default_feedthrough
 
 __all__ = ["ssregest"]
 
@@ -63,8 +64,10 @@ def _arx_order(n_samples: int, nu: int, ny: int, arx_orders: Any) -> int:
     return int(np.clip(n_samples // (10 * (nu + ny)), 1, 30))
 
 
-def _big_model(data: Any, na: int, kernel: str, nk: int) -> StateSpaceModel:
-    """The regularised ARX model's innovations form."""
+def _big_model(data: Any, na: int, kernel: str, nk: int, reg: Any = None
+               ) -> tuple[StateSpaceModel, Any]:
+    """The regularised ARX model's innovations form and its regularisation (tuned on
+    ``data`` by empirical Bayes unless ``reg`` is given)."""
     from ..polynomial.arxregul import arxregul
     from ..polynomial.estimators import arx
 
@@ -73,9 +76,10 @@ def _big_model(data: Any, na: int, kernel: str, nk: int) -> StateSpaceModel:
     grid_b, grid_k = np.full((ny, nu), na), np.full((ny, nu), nk)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the offset check was made once, on the whole record
-        reg = arxregul(data, grid_a, grid_b, grid_k, kernel)
+        if reg is None:
+            reg = arxregul(data, grid_a, grid_b, grid_k, kernel)
         poly = arx(data, grid_a, grid_b, grid_k, regularization=reg)
-    return poly.to_statespace()
+    return poly.to_statespace(), reg
 
 
 def _reduce(big: StateSpaceModel, su: np.ndarray, ysd: np.ndarray, orders: list[int],
@@ -138,25 +142,28 @@ def _stable_predictor(model: StateSpaceModel, lam: np.ndarray) -> dict[str, Any]
 
 
 def _fits(data: Any, orders: list[int], na: int, kernel: str, nk: int,
-          why: list[str] | None = None) -> tuple[dict[int, StateSpaceModel], StateSpaceModel]:
-    """The reduced models of each order and the realised ARX model they come from (``why``:
-    see :func:`_reduce`)."""
+          why: list[str] | None = None, reg: Any = None
+          ) -> tuple[dict[int, StateSpaceModel], StateSpaceModel, Any]:
+    """The reduced models of each order, the realised ARX model they come from and its
+    regularisation (``why``: see :func:`_reduce`; ``reg``: see :func:`_big_model`)."""
     exps = experiment_arrays(data)
     su = np.concatenate([u for u, _ in exps]).std(axis=0)
     ysd = np.concatenate([y for _, y in exps]).std(axis=0)
-    big = _big_model(data, na, kernel, nk)
-    return _reduce(big, su, np.maximum(ysd, np.finfo(float).tiny), orders, why), big
+    big, reg = _big_model(data, na, kernel, nk, reg)
+    return _reduce(big, su, np.maximum(ysd, np.finfo(float).tiny), orders, why), big, reg
 
 
-def _choose(data: Any, whole: dict[int, StateSpaceModel], na: int, kernel: str, nk: int
-            ) -> tuple[int, dict[str, Any]]:
-    from ..validation.crossval import choose, record_folds, simulation_fit, stable_first
+def _held_out(data: Any, orders: list[int], na: int, kernel: str, nk: int, reg: Any
+              ) -> dict[int, list[float]]:
+    """Simulation fits on the record's held-out blocks, per order, of the procedure fitted on
+    the rest with the whole record's regularisation ``reg`` (its few hyper-parameters are
+    not tuned again per block: the empirical-Bayes search is most of the cost)."""
+    from ..validation.crossval import record_folds, simulation_fit
 
-    orders = sorted(whole)
     table: dict[int, list[float]] = {n: [] for n in orders}
     for part, held in record_folds(data):
         try:
-            models, _ = _fits(part, orders, na, kernel, nk)
+            models, _, _ = _fits(part, orders, na, kernel, nk, reg=reg)
         except (DataError, NumericalError):
             models = {}
         for n in orders:
@@ -164,12 +171,65 @@ def _choose(data: Any, whole: dict[int, StateSpaceModel], na: int, kernel: str, 
                 table[n].append(simulation_fit(models[n], held) if n in models else -np.inf)
             except (DataError, NumericalError):
                 table[n].append(-np.inf)
-    med = {n: float(np.median(v)) if v else -np.inf for n, v in table.items()}
+    return table
+
+
+def _median(table: dict[int, list[float]]) -> dict[int, float]:
+    return {n: float(np.median(v)) if v else -np.inf for n, v in table.items()}
+
+
+def _choose(whole: dict[int, StateSpaceModel], table: dict[int, list[float]]
+            ) -> tuple[int, dict[str, Any]]:
+    from ..validation.crossval import choose, stable_first
+
+    med = _median(table)
     unstable = {n for n, m in whole.items() if not m.is_stable()}
     allowed, note = stable_first(med, table, unstable)
     n, why = choose({o: f for o, f in med.items() if o in allowed})
     return n, {"order": n, "criterion": "cross-validated simulation fit",
                "reason": why + note, "table": med}
+
+
+def _decide_feedthrough(data: Any, pool: list[int], na: int, kernel: str
+                        ) -> tuple[bool, dict[str, Any], dict[int, list[float]], Any]:
+    """``feedthrough="auto"``: ``D`` estimated when it raises the best held-out simulation fit
+    over ``pool`` by more than ``TOL`` points (the rule of every estimator,
+    :mod:`sysid.subspace.feedthrough`); also the winning side's held-out table and
+    regularisation."""
+    from ..validation.crossval import TOL
+
+    regs = {ft: _big_model(data, na, kernel, 0 if ft else 1)[1] for ft in (False, True)}
+    tables = {ft: _held_out(data, pool, na, kernel, 0 if ft else 1, regs[ft])
+              for ft in (False, True)}
+    best = {ft: max(_median(t).values(), default=-np.inf) for ft, t in tables.items()}
+    use = bool(best[True] > best[False] + TOL)
+    return use, {"feedthrough": use, "criterion": "held-out simulation fit",
+                 "held_out_fit": {"with D": best[True], "without D": best[False]},
+                 "reason": f"held-out simulation fit {best[True]:.1f} % with D, "
+                           f"{best[False]:.1f} % without: "
+                           + ("D estimated" if use else f"D = 0 (gain not above {TOL:g})")
+                 }, tables[use], regs[use]
+
+
+def _left_out(data: Any, model: StateSpaceModel, na: int, kernel: str, order: int
+              ) -> dict[str, Any] | None:
+    """The default ``D = 0`` at a given order: warn when the same procedure with a direct
+    term predicts the record one step ahead at least ``LEFT_OUT_RATIO`` times better at this
+    order (:func:`sysid.subspace.feedthrough.record_left_out`; the subspace estimators
+    compare their fits at the order the same way)."""
+    from ..subspace.feedthrough import _prediction_error, record_left_out
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            with_d = _fits(data, [order], na, kernel, 0)[0].get(order)
+            if with_d is None:
+                return None
+            without, with_ = (_prediction_error(m, data) for m in (model, with_d))
+    except (DataError, NumericalError):  # a check that cannot be made says nothing
+        return None
+    ratio = without / with_ if with_ > 0 else np.inf
+    return record_left_out(ratio, "reduced regularised ARX model", order, "ssregest")
 
 
 def ssregest(
@@ -178,7 +238,7 @@ def ssregest(
     *,
     arx_orders: int | None = None,
     kernel: str = "tc",
-    feedthrough: bool = False,
+    feedthrough: bool | str | None = None,
 ) -> StateSpaceModel:
     """A state-space model by reducing a regularised ARX model (MATLAB's ``ssregest``).
 
@@ -196,9 +256,13 @@ def ssregest(
         default about a tenth of the samples per equation parameter, at most 30.
     kernel : {"tc", "ss", "dc", "ridge"}
         The prior of :func:`sysid.arxregul` (MATLAB's ``RegularizationKernel``, default TC).
-    feedthrough : bool
-        Estimate ``D`` (the ARX model then has no input delay); by default ``D = 0``, as
-        every estimator of the package and MATLAB's default.
+    feedthrough : bool or "auto", optional
+        Estimate ``D`` (the ARX model then has no input delay). Default, as every estimator
+        of the package (:mod:`sysid.subspace.feedthrough`): ``"auto"`` when the order is
+        chosen too (``D`` when it raises the held-out simulation fit by more than half a
+        point, ``info["feedthrough_selection"]``), else ``D = 0`` (MATLAB's default), with a
+        :class:`~sysid.FeedthroughWarning` when the record shows a direct term
+        (``info["feedthrough_check"]``; not with ``feedthrough=False`` given).
 
     Returns
     -------
@@ -234,22 +298,29 @@ def ssregest(
     candidates = _orders(order)
     n_samples = int(sum(y.shape[0] for _, y in exps))
     na = _arx_order(n_samples, data.n_inputs, data.n_outputs, arx_orders)
-    nk = 0 if feedthrough else 1
     top = na * data.n_outputs
     pool = candidates if candidates is not None else list(range(1, min(20, top) + 1))
     if pool[0] > top:
         raise DataError(f"order {pool[0]} exceeds the {top} states of the ARX model "
                         f"({na} lags x {data.n_outputs} output(s)): pass a larger "
                         "arx_orders or a smaller order")
+    given = feedthrough is not None
+    feedthrough = check_feedthrough(default_feedthrough(feedthrough, order))
+    selection = table = reg = None
+    if feedthrough == "auto":
+        feedthrough, selection, table, reg = _decide_feedthrough(data, pool, na, kernel)
+    nk = 0 if feedthrough else 1
     why: list[str] = []
-    models, big = _fits(data, pool, na, kernel, nk, why)
+    models, big, reg = _fits(data, pool, na, kernel, nk, why, reg)
     if not models:
         raise DataError(f"no order of {pool} could be reduced from the {big.nstates}-state "
                         f"ARX model ({'; '.join(why[:2])}): pass another order or "
                         "arx_orders")
     choice = None
     if len(models) > 1:
-        n, choice = _choose(data, models, na, kernel, nk)
+        if table is None:
+            table = _held_out(data, sorted(models), na, kernel, nk, reg)
+        n, choice = _choose(models, {o: table[o] for o in models})
     else:
         n = next(iter(models))
     model = models[n]
@@ -273,6 +344,12 @@ def ssregest(
     if stabilized is not None:
         info["predictor_stabilized"] = stabilized
     model.info = {"method": "ssregest", "ssregest": info}
+    if selection is not None:
+        model.info["feedthrough_selection"] = selection
+    elif not given:  # D left out by default: say so when the record shows a direct term
+        check = _left_out(data, model, na, kernel, n)
+        if check is not None:
+            model.info["feedthrough_check"] = check
     warn_unstable(model, "ssregest", advice=(
         "Unless the process itself is unstable, try another order, a larger arx_orders, or "
         "refine with sysid.pem(data, model, focus='simulation'), which keeps the "

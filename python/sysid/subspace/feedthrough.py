@@ -49,7 +49,7 @@ from ..errors import DataError
 from .methods import CLOSED_LOOP, _method
 
 __all__ = ["FEEDTHROUGH_DEFAULT", "LEFT_OUT_RATIO", "check_feedthrough", "choose_feedthrough",
-           "default_feedthrough", "warn_if_left_out"]
+           "default_feedthrough", "record_left_out", "warn_if_left_out"]
 
 #: the default of every sysid state-space estimator at a given order: no ``D`` (MATLAB's)
 FEEDTHROUGH_DEFAULT = False
@@ -192,6 +192,45 @@ def _prediction_error(model: Any, data: Any) -> float:
     return float(np.sum(err / np.where(var > 0, var, 1.0)))
 
 
+def record_left_out(ratio: float, fit: str, order: Any, who: str) -> dict[str, Any]:
+    """The left-out check's record for ``model.info["feedthrough_check"]``, and the
+    :class:`~sysid.errors.FeedthroughWarning` when ``ratio`` (one-step prediction errors of
+    the ``fit`` without ``D`` over those with it) reaches ``LEFT_OUT_RATIO``; shared by the
+    subspace estimators and ``ssregest``.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from sysid.subspace.feedthrough import record_left_out
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     check = record_left_out(5.0, "ARX model", 4, "ssregest")
+    >>> [type(x.message).__name__ for x in w], check["threshold"]
+    (['FeedthroughWarning'], 2.0)
+    """
+    import warnings
+
+    from .._checks import user_stacklevel
+    from ..errors import FeedthroughWarning
+
+    check = {
+        "ratio": float(ratio), "threshold": LEFT_OUT_RATIO,
+        "what": f"one-step prediction errors of the {fit} at this order without D over "
+                "those with D (sum over outputs, each relative to its variation; predictors "
+                f"from a zero state over at most {CHECK_SAMPLES} samples per experiment)"}
+    if ratio >= LEFT_OUT_RATIO:
+        warnings.warn(
+            f"{who} fitted no direct term (D = 0, the default at a given order), but the record "
+            f"shows one: with D estimated, the one-step prediction errors of the {fit} "
+            f"at order {order} are {ratio:.3g} times smaller (the output answers the input "
+            f"within the sample). Pass feedthrough=True, or feedthrough='auto' to decide from "
+            f"held-out data; unless the input is a controller's answer to the same sample's "
+            f"output (feedback within the sample), where D = 0 is right and the closed-loop "
+            f"methods (method='pbsid' or 'ssarx') apply", FeedthroughWarning,
+            stacklevel=user_stacklevel())
+    return check
+
+
 def warn_if_left_out(est: Any, order: int, method: str, model: Any, who: str,
                      kalman: bool = True, x0: bool = False, stable: bool = False
                      ) -> dict[str, Any] | None:
@@ -221,9 +260,6 @@ def warn_if_left_out(est: Any, order: int, method: str, model: Any, who: str,
     """
     import warnings
 
-    from .._checks import user_stacklevel
-    from ..errors import FeedthroughWarning
-
     if (est._from_factor or not est.factor.n_inputs or _method(method) in CLOSED_LOOP
             or np.any(np.asarray(model.D) != 0)):
         return None
@@ -236,19 +272,5 @@ def warn_if_left_out(est: Any, order: int, method: str, model: Any, who: str,
     except Exception:  # noqa: BLE001 - a check that cannot be made says nothing
         return None
     ratio = without / with_ if with_ > 0 else np.inf
-    check = model.info["feedthrough_check"] = {
-        "ratio": float(ratio), "threshold": LEFT_OUT_RATIO,
-        "what": "one-step prediction errors of the subspace fit at this order without D over "
-                "those with D (sum over outputs, each relative to its variation; predictors "
-                f"from a zero state over at most {CHECK_SAMPLES} samples per experiment)"}
-    if ratio >= LEFT_OUT_RATIO:
-        warnings.warn(
-            f"{who} fitted no direct term (D = 0, the default at a given order), but the record "
-            f"shows one: with D estimated, the one-step prediction errors of the subspace fit "
-            f"at order {order} are {ratio:.3g} times smaller (the output answers the input "
-            f"within the sample). Pass feedthrough=True, or feedthrough='auto' to decide from "
-            f"held-out data; unless the input is a controller's answer to the same sample's "
-            f"output (feedback within the sample), where D = 0 is right and the closed-loop "
-            f"methods (method='pbsid' or 'ssarx') apply", FeedthroughWarning,
-            stacklevel=user_stacklevel())
+    check = model.info["feedthrough_check"] = record_left_out(ratio, "subspace fit", order, who)
     return check
