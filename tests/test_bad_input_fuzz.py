@@ -134,3 +134,43 @@ def test_an_input_recorded_twice_is_refused_by_every_estimator(fit):
     twice = sysid.IOData(np.column_stack([x, -2.0 * x]), y, 1.0, input_names=["f", "g"])
     with pytest.raises(sysid.ExcitationError, match="inputs f, g are linearly dependent"):
         fit(twice)
+
+
+H = np.ones((30, 1, 1)) * 0.5 ** np.arange(30)[:, None, None]
+
+
+@pytest.mark.parametrize("call, match", [
+    # a string or None where a number belongs: NumPy's TypeError/ValueError before
+    (lambda: sysid.ssest(D, 2, tol="x"), "tol must be a finite number >= 0, got 'x'"),
+    (lambda: sysid.pem(D, sysid.n4sid(D, 2), tol=None), "tol must be a finite number >= 0"),
+    (lambda: sysid.oe(D, 2, 2, 1, max_iter="x"), "max_iter must be an integer >= 0"),
+    (lambda: sysid.armax(D, 2, 2, 2, 1, max_iter=None), "max_iter must be an integer >= 0"),
+    (lambda: sysid.bj(D, 2, 2, 2, 2, 1, max_iter=np.nan), "max_iter must be an integer >= 0"),
+    (lambda: sysid.nlarx(D, 2, 2, 1, max_terms="x"), "max_terms must be a positive integer"),
+    (lambda: sysid.nlarx(D, 2, 2, 1, noise_terms=None), "noise_terms must be an integer >= 0"),
+    (lambda: sysid.nlarx(D, 2, 2, 1, n_iterations="5"), "n_iterations must be a positive"),
+    (lambda: sysid.nlarx(D, 2, 2, 1, max_iter=None), "max_iter must be an integer >= 0"),
+    (lambda: sysid.nlssest(D, 2, validation="x"), r"validation \(a fraction"),
+    (lambda: sysid.etfe(D, confidence="x"), r"confidence must be a number in \(0, 1\)"),
+    (lambda: sysid.spa(D, confidence=None), r"confidence must be a number in \(0, 1\)"),
+    (lambda: sysid.spafdr(D, confidence=1.5), r"confidence must be a number in \(0, 1\)"),
+    (lambda: sysid.residuals(sysid.n4sid(D, 2), D, alpha="x"), r"alpha must be a number in"),
+    (lambda: sysid.identify(D, time_budget="x"), "time_budget .* must be a finite positive"),
+    (lambda: sysid.minreal(sysid.n4sid(D, 2), tol="x"), "tol .* must be a finite positive"),
+    # NaN (or out-of-range) tolerances accepted silently
+    (lambda: sysid.nlarx(D, 2, 2, 1, err_tol=np.nan), r"err_tol must be a number in \[0, 1\)"),
+    (lambda: sysid.nlarx(D, 2, 2, 1, err_tol=-1.0), r"err_tol must be a number in \[0, 1\)"),
+    (lambda: sysid.etfe(D, min_power=np.nan), "min_power must be a finite number >= 0"),
+    (lambda: sysid.era_stabilization(H, [2, 4], freq_tol=np.nan), "freq_tol must be a finite"),
+    (lambda: sysid.era_stabilization(H, [2, 4], damping_tol=None), "damping_tol must be"),
+    (lambda: sysid.era_stabilization(H, [2, 4], min_mac=np.nan), r"min_mac must be a number in"),
+    (lambda: sysid.ssi(sysid.IOData(None, RNG.standard_normal((500, 1)), 0.1), [2, 4],
+                       min_mac=np.nan), r"min_mac must be a number in \[0, 1\]"),
+    (lambda: sysid.ssi(sysid.IOData(None, RNG.standard_normal((500, 1)), 0.1), [2, 4],
+                       freq_tol="x"), "freq_tol must be a finite number"),
+    (lambda: sysid.sample_time(np.arange(10.0), rtol=np.nan), "rtol must be a finite number"),
+    (lambda: sysid.select_order(D, [1, 2], fit_tol=np.nan), "fit_tol must be a finite number"),
+])
+def test_numbers_are_checked_by_the_shared_validators(call, match):
+    with pytest.raises(DataError, match=match):
+        call()

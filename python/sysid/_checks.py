@@ -391,6 +391,41 @@ def as_real(x: Any, name: str, *, positive: bool = False) -> float:
                     f"got {x!r}")
 
 
+def as_between(x: Any, name: str, lo: float, hi: float, *, closed: str = "neither") -> float:
+    """Return a real argument (a Python or NumPy number, not a bool, not NaN) in the interval
+    from ``lo`` to ``hi``, as a float; ``closed`` says which ends belong to it (``"neither"``,
+    ``"left"``, ``"right"`` or ``"both"``). The :class:`DataError` names the argument and the
+    interval, for tolerances, fractions and confidence levels.
+
+    Examples
+    --------
+    >>> from sysid._checks import as_between
+    >>> as_between(0.9, "min_mac", 0.0, 1.0, closed="both")
+    0.9
+    >>> as_between(float("nan"), "confidence", 0.0, 1.0)
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: confidence must be a number in (0, 1), got nan
+    """
+    left, right = closed in ("left", "both"), closed in ("right", "both")
+    ok = isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(
+        x, (bool, np.bool_))
+    if ok and not np.isnan(x) and (lo <= x if left else lo < x) and (
+            x <= hi if right else x < hi):
+        return float(x)
+    interval = f"{'[' if left else '('}{lo:g}, {hi:g}{']' if right else ')'}"
+    raise DataError(f"{name} must be a number in {interval}, got {x!r}")
+
+
+def stability_criteria(freq_tol: Any, damping_tol: Any, min_mac: Any
+                       ) -> tuple[float, float, float]:
+    """The criteria of a stabilisation diagram (``sysid.ssi``, ``sysid.era_stabilization``):
+    relative frequency and damping tolerances (finite, ``>= 0``) and a MAC threshold in
+    ``[0, 1]``; a NaN compared false and flagged no mode stable, without a word."""
+    return (as_nonnegative(freq_tol, "freq_tol"), as_nonnegative(damping_tol, "damping_tol"),
+            as_between(min_mac, "min_mac", 0.0, 1.0, closed="both"))
+
+
 #: Largest array, in bytes, built for a length the caller chose (as in the Rust core).
 MAX_BYTES = 1 << 32
 

@@ -15,7 +15,13 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import check_magnitudes, experiment_arrays, require_independent_inputs
+from .._checks import (
+    as_between,
+    as_int,
+    check_magnitudes,
+    experiment_arrays,
+    require_independent_inputs,
+)
 from .._threads import one_blas_thread
 from ..errors import (
     DataError,
@@ -273,10 +279,11 @@ def nlarx(
             raise DataError(f"validation has {vu.shape[1]} input(s) and {vy.shape[1]} "
                             f"output(s), the estimation data {nu} and {ny}: give a record of "
                             "the same channels")
-    if int(max_terms) != max_terms or max_terms < 1:
-        raise DataError(f"max_terms must be a positive integer, got {max_terms!r}")
-    if int(noise_terms) != noise_terms or noise_terms < 0:
-        raise DataError(f"noise_terms must be a non-negative integer, got {noise_terms!r}")
+    max_terms, noise_terms = as_int(max_terms, "max_terms"), as_int(noise_terms, "noise_terms", 0)
+    n_iterations, max_iter = as_int(n_iterations, "n_iterations"), as_int(max_iter, "max_iter", 0)
+    # the unexplained fraction at which the selection stops: NaN stopped it never, a value
+    # of 1 or more before the first term
+    err_tol = as_between(err_tol, "err_tol", 0.0, 1.0, closed="left")
     if is_auto(basis):
         if focus != "prediction":
             raise DataError("focus='simulation' needs a network nonlinearity "
