@@ -174,3 +174,18 @@ H = np.ones((30, 1, 1)) * 0.5 ** np.arange(30)[:, None, None]
 def test_numbers_are_checked_by_the_shared_validators(call, match):
     with pytest.raises(DataError, match=match):
         call()
+
+
+@pytest.mark.parametrize("call", [
+    lambda: sysid.nlhw_ss(D, 2, input_nl=sysid.SigmoidNetwork(10**6)),
+    lambda: sysid.nlhw(D, 2, 2, 1, output_nl=sysid.SigmoidNetwork(10**6)),
+    lambda: sysid.nlarx(D, 2, 2, 1, basis=sysid.SigmoidNetwork(10**6)),
+])
+def test_a_million_sigmoid_units_are_refused_before_allocating(call):
+    # nlhw_ss ran for minutes towards a Jacobian of 300 x 3e6 values
+    with pytest.raises(DataError, match="SigmoidNetwork of 1000000 units.*would allocate"):
+        call()
+    with pytest.raises(DataError, match="units must be a positive integer, got 'x'"):
+        sysid.SigmoidNetwork("x")
+    with pytest.raises(DataError, match="units = 1000000000000 would need"):
+        sysid.SigmoidNetwork(10**12)

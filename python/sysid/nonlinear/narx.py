@@ -33,6 +33,7 @@ from ..errors import (
 from ..polynomial.orders import matlab_orders
 from .choice import is_auto
 from .customreg import CustomRegressor
+from .hw_model import check_search_size
 from .narx_model import NARXModel, PolynomialBasis, RBFBasis
 from .narx_network import is_network, nlarx_network
 from .narx_network_model import NetworkNARXModel
@@ -299,6 +300,8 @@ def nlarx(
         if noise_terms or custom:
             raise DataError("noise_terms and custom regressors need a PolynomialBasis or "
                             "RBFBasis; a network nonlinearity takes the lagged inputs and outputs")
+        check_search_size([basis] * ny, sum(y.size for _, y in exps), "nlarx",
+                          int(sum(na_)) + int(sum(nb_)))
         net = nlarx_network(exps, na_, nb_, nk_,
                             np.vstack([_lag_matrix(u, y, na_, nb_, nk_) for u, y in exps]),
                             basis, dt=float(getattr(data, "dt", 1.0) or 1.0),
