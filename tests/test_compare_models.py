@@ -99,6 +99,7 @@ def test_docs_validation_several_models_block_runs():
         exec(compile(block, "docs/validation.md[several models]", "exec"), ns)
     cs = ns["cs"]
     assert cs.diverged.tolist() == [False, False, True] and cs.best == 1
+    assert [w.category for w in ns["said"]] == [sysid.StabilityWarning]
     assert set(ns["table"].std_method) == {"linear"}
     assert np.all(np.isfinite(ns["table"].wn_hz_std))
 
