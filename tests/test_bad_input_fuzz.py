@@ -189,3 +189,45 @@ def test_a_million_sigmoid_units_are_refused_before_allocating(call):
         sysid.SigmoidNetwork("x")
     with pytest.raises(DataError, match="units = 1000000000000 would need"):
         sysid.SigmoidNetwork(10**12)
+
+
+@pytest.mark.parametrize("model, x0, diverged", [
+    (sysid.StateSpaceModel([[1.5]], [[1.0]], [[1.0]], dt=0.1), "estimate", True),
+    (sysid.StateSpaceModel([[1.01]], [[1.0]], [[1.0]], dt=0.1), "zero", False),
+    (sysid.ProcessModel("P1", Kp=1.0, Tp1=-1.0), "estimate", False),  # x0 holds it back
+    (sysid.ProcessModel("P1", Kp=1.0, Tp1=-1.0), "zero", True),
+    (sysid.PolynomialModel([[np.array([1.0, -1.5])]], [[np.array([1.0])]], [[1]], 0.1),
+     "estimate", True),
+    (sysid.TransferFunction([[[1.0]]], [[[1.0, -2.0]]]), "zero", True),
+])
+def test_compare_warns_of_every_unstable_model(model, x0, diverged):
+    # compare flagged some with fit -inf and said nothing; the ProcessModel with a negative
+    # time constant got a finite fit from a fitted initial state, without a word
+    with pytest.warns(sysid.StabilityWarning, match="diverged" if diverged else "unstable"):
+        r = sysid.compare(D, model, x0=x0)
+    assert bool(r.diverged.any()) == diverged and (np.isneginf(r.fit).all() == diverged)
+
+
+def test_compare_of_a_stable_model_says_nothing():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sysid.compare(D, sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1))
+        sysid.compare(D, sysid.ProcessModel("P1", Kp=1.0, Tp1=1.0))
+
+
+def test_nlarx_auto_basis_honours_the_validation_criterion():
+    # basis="auto" chose on the estimation record's held-out blocks and ignored the
+    # validation record the user gave with criterion="validation"
+    def record(seed):
+        u = np.random.default_rng(seed).uniform(-1, 1, (400, 1))
+        y = np.zeros((400, 1))
+        for t in range(1, 400):
+            y[t] = 0.5 * y[t - 1] + u[t - 1] + 0.8 * u[t - 1] ** 2
+        return sysid.IOData(u, y, 1.0)
+
+    m = sysid.nlarx(record(1), 1, 1, 1, criterion="validation", validation=record(2))
+    choice = m.info["basis_choice"]
+    assert choice["criterion"] == "validation" and "validation record" in choice["reason"]
+    assert choice["kind"] == "polynomial" == min(choice["table"], key=choice["table"].get)

@@ -214,7 +214,10 @@ def nlarx(
     criterion : "aic", "bic", "fpe", "validation" or None
         How many of the selected terms to keep: the prefix minimising the criterion on the
         estimation residuals, the smallest free-run RMSE on ``validation`` data, or all
-        (``None``; selection still stops when the residual is below ``err_tol``).
+        (``None``; selection still stops when the residual is below ``err_tol``). With
+        ``basis="auto"`` and ``"validation"``, the validation record also chooses between
+        the polynomial and the linear model (the lower free-run RMSE on it), in place of
+        the estimation record's held-out blocks.
     validation : IOData, optional
         Validation record for ``criterion="validation"``.
     noise_terms : int
@@ -409,11 +412,30 @@ def _auto_basis(data: Any, kw: dict[str, Any], n_linear: int) -> NARXModel:
             **kw, "criterion": None, "max_terms": max(n_linear, int(kw["max_terms"])),
             "err_tol": 0.0})
 
+    if kw["criterion"] == "validation":  # the record the user gave decides, as it decides
+        return _basis_by_validation(data, fit, kw["validation"])  # the terms
     choice = choose_structure(data, fit, ("linear", "polynomial"),
                               {"linear": "the linear ARX model of the same lags",
                                "polynomial": "degree-2 polynomial terms"}, "")
     model = fit(data, choice.kind)
     model.info["basis_choice"] = choice.as_dict()
+    return model
+
+
+def _basis_by_validation(data: Any, fit: Any, validation: Any) -> NARXModel:
+    """``basis="auto"`` with ``criterion="validation"``: both candidates fitted on the whole
+    record (the polynomial's terms kept by their free-run RMSE on ``validation``), and the
+    one of lower free-run RMSE on ``validation`` kept (the linear one on a tie)."""
+    vexps = experiment_arrays(validation)
+    models = {kind: fit(data, kind) for kind in ("linear", "polynomial")}
+    rmse = {kind: _free_run_rmse(m, vexps) for kind, m in models.items()}
+    kind = "polynomial" if rmse["polynomial"] < rmse["linear"] else "linear"
+    model = models[kind]
+    model.info["basis_choice"] = {
+        "kind": kind, "table": rmse, "criterion": "validation",
+        "reason": (f"criterion='validation': the {kind} candidate has the lower free-run RMSE "
+                   f"on the validation record ({rmse[kind]:.4g} against "
+                   f"{rmse['linear' if kind == 'polynomial' else 'polynomial']:.4g})")}
     return model
 
 
