@@ -534,11 +534,12 @@ def compare(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
     >>> bad = sysid.StateSpaceModel([[1.5]], [[1.0]], [[1.0]])     # diverges
     >>> import warnings
     >>> with warnings.catch_warnings(record=True) as said:
+    ...     warnings.simplefilter("always")
     ...     both = sysid.compare((u, y), m, bad)
     >>> both.fit[:, 0, 0].round(1).tolist(), both.diverged.tolist()
     ([95.5, -inf], [False, True])
     >>> print(said[0].message)          # doctest: +ELLIPSIS
-    model 2: StateSpaceModel diverged: its output grew without bound (fit -inf, ...
+    model 2: StateSpaceModel (order 1) diverged: its output grew without bound (fit -inf, ...
     """
     from .comparison import warn_diverging
 
