@@ -231,3 +231,30 @@ def test_nlarx_auto_basis_honours_the_validation_criterion():
     choice = m.info["basis_choice"]
     assert choice["criterion"] == "validation" and "validation record" in choice["reason"]
     assert choice["kind"] == "polynomial" == min(choice["table"], key=choice["table"].get)
+
+
+def test_model_matrices_are_read_only_and_checked_when_replaced():
+    # m.A[0, 0] = np.nan was accepted, and simulate/compare gave NaN without a word
+    m = sysid.n4sid(D, 2)
+    for name in ("A", "B", "C", "D", "K", "noise_cov"):
+        with pytest.raises(ValueError, match="read-only"):
+            getattr(m, name)[0, 0] = np.nan
+    with pytest.raises(sysid.NonFiniteError, match="A has non-finite entries"):
+        m.A = np.full((2, 2), np.nan)
+    with pytest.raises(sysid.ShapeError, match="another model: build it"):
+        m.B = np.ones((3, 1))
+    mine = np.array([[0.5]])
+    h = sysid.StateSpaceModel(mine, [[1.0]], [[1.0]], dt=0.1)
+    mine[0, 0] = np.nan  # the caller's array is not the model's
+    assert np.isfinite(h.simulate(U)).all()
+    # a whole matrix of the same shape is taken (MATLAB's sys.A = ...), a copy edited too
+    h.A = [[0.8]]
+    A = h.A.copy()
+    A[0, 0] = 0.7
+    assert h.poles()[0] == 0.8 and sysid.StateSpaceModel(A, h.B, h.C, dt=0.1).poles()[0] == 0.7
+    import copy
+    import pickle
+
+    for twin in (copy.deepcopy(m), pickle.loads(pickle.dumps(m))):
+        with pytest.raises(ValueError, match="read-only"):
+            twin.A[0, 0] = 1.0
