@@ -129,11 +129,17 @@ def _label(model: Any, k: int) -> str:
     return base + (f" (order {order})" if isinstance(order, (int, np.integer)) else "")
 
 
-def unstable_pole(model: Any) -> str | None:
-    """A phrase naming ``model``'s most unstable pole (modulus above 1 in discrete time, real
-    part above 0 in continuous time), or ``None`` when it has none or no poles to read (a
-    NARX model: its divergence, if any, shows in the simulation). An integrator (a pole on
-    the boundary) is not counted."""
+#: a pole counts as unstable in :func:`compare` when its mode grows by more than this factor
+#: over the record compared (an integrator, or an estimate a hair outside the unit circle,
+#: does not)
+GROWTH = 10.0
+
+
+def unstable_pole(model: Any, samples: int = 1, dt: float = 1.0) -> str | None:
+    """A phrase naming ``model``'s most unstable pole, when its mode grows more than
+    :data:`GROWTH` times over ``samples`` samples of ``dt`` seconds (modulus above 1 in
+    discrete time, real part above 0 in continuous time), or ``None`` when it has none or
+    no poles to read (a NARX model: its divergence, if any, shows in the simulation)."""
     try:
         p = np.asarray(model.poles(), dtype=complex).ravel()
     except Exception:  # noqa: BLE001 - no poles to read (a nonlinear model): divergence says
@@ -143,18 +149,19 @@ def unstable_pole(model: Any) -> str | None:
         return None
     if getattr(model, "dt", None):  # discrete time
         worst = p[np.argmax(np.abs(p))]
-        if abs(worst) > 1.0 + 1e-8:
+        if abs(worst) > 1.0 and samples * np.log(abs(worst)) > np.log(GROWTH):
             return f"a pole of modulus {abs(worst):.4g}"
         return None
     worst = p[np.argmax(p.real)]
-    if worst.real > 1e-8 * max(1.0, abs(worst)):
+    if worst.real > 0 and worst.real * samples * dt > np.log(GROWTH):
         return f"a pole at s = {worst.real:.4g}{worst.imag:+.4g}j (in the right half-plane)"
     return None
 
 
 def warn_diverging(results: list[Any]) -> None:
     """One :class:`~sysid.StabilityWarning` per model of a :func:`~sysid.compare` that
-    diverged on the record (fit ``-inf``, ``diverged`` set) or, simulated, is unstable: its
+    diverged on the record (fit ``-inf``, ``diverged`` set) or, simulated, is unstable (a
+    mode that grows more than :data:`GROWTH` times over the record): its
     fit may hold only because the fitted initial state holds the unstable mode back on this
     record. Every model kind alike (a continuous model is read as given, not as sampled); a
     prediction (whose predictor may be stable) is warned about only when it diverged."""
@@ -167,7 +174,8 @@ def warn_diverging(results: list[Any]) -> None:
     for k, r in enumerate(results):
         model = getattr(r.model, "continuous", r.model)  # a continuous model, as sampled
         name = f"model {_label(model, k)}" if many else f"the {type(model).__name__}"
-        pole = unstable_pole(model) if r.horizon is None else None
+        samples = max((len(y) for y in r.y), default=1)
+        pole = unstable_pole(model, samples, float(r.dt or 1.0)) if r.horizon is None else None
         if r.diverged.any():
             where = (f" on experiment(s) {np.flatnonzero(r.diverged).tolist()}"
                      if r.diverged.size > 1 else "")
