@@ -134,3 +134,127 @@ def test_an_input_recorded_twice_is_refused_by_every_estimator(fit):
     twice = sysid.IOData(np.column_stack([x, -2.0 * x]), y, 1.0, input_names=["f", "g"])
     with pytest.raises(sysid.ExcitationError, match="inputs f, g are linearly dependent"):
         fit(twice)
+
+
+H = np.ones((30, 1, 1)) * 0.5 ** np.arange(30)[:, None, None]
+
+
+@pytest.mark.parametrize("call, match", [
+    # a string or None where a number belongs: NumPy's TypeError/ValueError before
+    (lambda: sysid.ssest(D, 2, tol="x"), "tol must be a finite number >= 0, got 'x'"),
+    (lambda: sysid.pem(D, sysid.n4sid(D, 2), tol=None), "tol must be a finite number >= 0"),
+    (lambda: sysid.oe(D, 2, 2, 1, max_iter="x"), "max_iter must be an integer >= 0"),
+    (lambda: sysid.armax(D, 2, 2, 2, 1, max_iter=None), "max_iter must be an integer >= 0"),
+    (lambda: sysid.bj(D, 2, 2, 2, 2, 1, max_iter=np.nan), "max_iter must be an integer >= 0"),
+    (lambda: sysid.nlarx(D, 2, 2, 1, max_terms="x"), "max_terms must be a positive integer"),
+    (lambda: sysid.nlarx(D, 2, 2, 1, noise_terms=None), "noise_terms must be an integer >= 0"),
+    (lambda: sysid.nlarx(D, 2, 2, 1, n_iterations="5"), "n_iterations must be a positive"),
+    (lambda: sysid.nlarx(D, 2, 2, 1, max_iter=None), "max_iter must be an integer >= 0"),
+    (lambda: sysid.nlssest(D, 2, validation="x"), r"validation \(a fraction"),
+    (lambda: sysid.etfe(D, confidence="x"), r"confidence must be a number in \(0, 1\)"),
+    (lambda: sysid.spa(D, confidence=None), r"confidence must be a number in \(0, 1\)"),
+    (lambda: sysid.spafdr(D, confidence=1.5), r"confidence must be a number in \(0, 1\)"),
+    (lambda: sysid.residuals(sysid.n4sid(D, 2), D, alpha="x"), r"alpha must be a number in"),
+    (lambda: sysid.identify(D, time_budget="x"), "time_budget .* must be a finite positive"),
+    (lambda: sysid.minreal(sysid.n4sid(D, 2), tol="x"), "tol .* must be a finite positive"),
+    # NaN (or out-of-range) tolerances accepted silently
+    (lambda: sysid.nlarx(D, 2, 2, 1, err_tol=np.nan), r"err_tol must be a number in \[0, 1\)"),
+    (lambda: sysid.nlarx(D, 2, 2, 1, err_tol=-1.0), r"err_tol must be a number in \[0, 1\)"),
+    (lambda: sysid.etfe(D, min_power=np.nan), "min_power must be a finite number >= 0"),
+    (lambda: sysid.era_stabilization(H, [2, 4], freq_tol=np.nan), "freq_tol must be a finite"),
+    (lambda: sysid.era_stabilization(H, [2, 4], damping_tol=None), "damping_tol must be"),
+    (lambda: sysid.era_stabilization(H, [2, 4], min_mac=np.nan), r"min_mac must be a number in"),
+    (lambda: sysid.ssi(sysid.IOData(None, RNG.standard_normal((500, 1)), 0.1), [2, 4],
+                       min_mac=np.nan), r"min_mac must be a number in \[0, 1\]"),
+    (lambda: sysid.ssi(sysid.IOData(None, RNG.standard_normal((500, 1)), 0.1), [2, 4],
+                       freq_tol="x"), "freq_tol must be a finite number"),
+    (lambda: sysid.sample_time(np.arange(10.0), rtol=np.nan), "rtol must be a finite number"),
+    (lambda: sysid.select_order(D, [1, 2], fit_tol=np.nan), "fit_tol must be a finite number"),
+])
+def test_numbers_are_checked_by_the_shared_validators(call, match):
+    with pytest.raises(DataError, match=match):
+        call()
+
+
+@pytest.mark.parametrize("call", [
+    lambda: sysid.nlhw_ss(D, 2, input_nl=sysid.SigmoidNetwork(10**6)),
+    lambda: sysid.nlhw(D, 2, 2, 1, output_nl=sysid.SigmoidNetwork(10**6)),
+    lambda: sysid.nlarx(D, 2, 2, 1, basis=sysid.SigmoidNetwork(10**6)),
+])
+def test_a_million_sigmoid_units_are_refused_before_allocating(call):
+    # nlhw_ss ran for minutes towards a Jacobian of 300 x 3e6 values
+    with pytest.raises(DataError, match="SigmoidNetwork of 1000000 units.*would allocate"):
+        call()
+    with pytest.raises(DataError, match="units must be a positive integer, got 'x'"):
+        sysid.SigmoidNetwork("x")
+    with pytest.raises(DataError, match="units = 1000000000000 would need"):
+        sysid.SigmoidNetwork(10**12)
+
+
+@pytest.mark.parametrize("model, x0, diverged", [
+    (sysid.StateSpaceModel([[1.5]], [[1.0]], [[1.0]], dt=0.1), "estimate", True),
+    (sysid.StateSpaceModel([[1.01]], [[1.0]], [[1.0]], dt=0.1), "zero", False),
+    (sysid.ProcessModel("P1", Kp=1.0, Tp1=-1.0), "estimate", False),  # x0 holds it back
+    (sysid.ProcessModel("P1", Kp=1.0, Tp1=-1.0), "zero", True),
+    (sysid.PolynomialModel([[np.array([1.0, -1.5])]], [[np.array([1.0])]], [[1]], 0.1),
+     "estimate", True),
+    (sysid.TransferFunction([[[1.0]]], [[[1.0, -2.0]]]), "zero", True),
+])
+def test_compare_warns_of_every_unstable_model(model, x0, diverged):
+    # compare flagged some with fit -inf and said nothing; the ProcessModel with a negative
+    # time constant got a finite fit from a fitted initial state, without a word
+    with pytest.warns(sysid.StabilityWarning, match="diverged" if diverged else "unstable"):
+        r = sysid.compare(D, model, x0=x0)
+    assert bool(r.diverged.any()) == diverged and (np.isneginf(r.fit).all() == diverged)
+
+
+def test_compare_of_a_stable_model_says_nothing():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sysid.compare(D, sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.1))
+        sysid.compare(D, sysid.ProcessModel("P1", Kp=1.0, Tp1=1.0))
+
+
+def test_nlarx_auto_basis_honours_the_validation_criterion():
+    # basis="auto" chose on the estimation record's held-out blocks and ignored the
+    # validation record the user gave with criterion="validation"
+    def record(seed):
+        u = np.random.default_rng(seed).uniform(-1, 1, (400, 1))
+        y = np.zeros((400, 1))
+        for t in range(1, 400):
+            y[t] = 0.5 * y[t - 1] + u[t - 1] + 0.8 * u[t - 1] ** 2
+        return sysid.IOData(u, y, 1.0)
+
+    m = sysid.nlarx(record(1), 1, 1, 1, criterion="validation", validation=record(2))
+    choice = m.info["basis_choice"]
+    assert choice["criterion"] == "validation" and "validation record" in choice["reason"]
+    assert choice["kind"] == "polynomial" == min(choice["table"], key=choice["table"].get)
+
+
+def test_model_matrices_are_read_only_and_checked_when_replaced():
+    # m.A[0, 0] = np.nan was accepted, and simulate/compare gave NaN without a word
+    m = sysid.n4sid(D, 2)
+    for name in ("A", "B", "C", "D", "K", "noise_cov"):
+        with pytest.raises(ValueError, match="read-only"):
+            getattr(m, name)[0, 0] = np.nan
+    with pytest.raises(sysid.NonFiniteError, match="A has non-finite entries"):
+        m.A = np.full((2, 2), np.nan)
+    with pytest.raises(sysid.ShapeError, match="another model: build it"):
+        m.B = np.ones((3, 1))
+    mine = np.array([[0.5]])
+    h = sysid.StateSpaceModel(mine, [[1.0]], [[1.0]], dt=0.1)
+    mine[0, 0] = np.nan  # the caller's array is not the model's
+    assert np.isfinite(h.simulate(U)).all()
+    # a whole matrix of the same shape is taken (MATLAB's sys.A = ...), a copy edited too
+    h.A = [[0.8]]
+    A = h.A.copy()
+    A[0, 0] = 0.7
+    assert h.poles()[0] == 0.8 and sysid.StateSpaceModel(A, h.B, h.C, dt=0.1).poles()[0] == 0.7
+    import copy
+    import pickle
+
+    for twin in (copy.deepcopy(m), pickle.loads(pickle.dumps(m))):
+        with pytest.raises(ValueError, match="read-only"):
+            twin.A[0, 0] = 1.0

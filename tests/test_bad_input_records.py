@@ -50,3 +50,25 @@ def test_lists_and_shapes_are_named():
         sysid.repair_nan(ARR, 2)
     with pytest.raises(ShapeError, match="samples, channels"):
         sysid.repair_nan(np.ones(10), np.ones((10, 1)))
+
+
+@pytest.mark.parametrize("call, match", [
+    (lambda: sysid.augment_inputs(REC, [lambda u: u * 1j]),
+     r"basis function <lambda> returned complex values.*np\.real"),
+    (lambda: sysid.simsd(sysid.arx(REC, 1, 1, 1), REC.u + 1j, 2),
+     r"u must be a real.*np\.real\(u\)"),
+    (lambda: sysid.repair_nan(None, np.ones((10, 1)) * (1 + 1j)), r"pass np\.real\(y\)"),
+    (lambda: sysid.repair_nan(np.ones((10, 1)) * 1j, np.ones((10, 1))), r"pass np\.real\(u\)"),
+    (lambda: sysid.IOData(REC.u + 1j, REC.y, 1.0), r"complex values.*pass np\.real\(u\)"),
+    (lambda: sysid.IOData.from_raw(REC.u, REC.y + 1j, 1.0), r"pass np\.real\(y\)"),
+    (lambda: sysid.StateSpaceModel([[0.5j]], [[1.0]], [[1.0]]), r"pass np\.real\(A\)"),
+])
+def test_complex_arrays_are_refused_not_cast(call, match):
+    # NumPy's cast drops the imaginary part with a ComplexWarning at most
+    with pytest.raises(DataError, match=match):
+        call()
+
+
+def test_frequency_responses_stay_complex():
+    frd = sysid.FRD([1.0, 2.0], np.array([1 + 1j, 0.5 - 0.2j]), dt=0.1)
+    assert np.iscomplexobj(frd.response) and frd.response[1, 0, 0] == 0.5 - 0.2j

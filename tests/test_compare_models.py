@@ -21,14 +21,17 @@ def _data(n=3000, seed=0):
 def test_a_diverging_model_is_reported_not_raised():
     true, data = _data()
     unstable = sysid.StateSpaceModel([[1.3]], [[1.0]], [[1.0]], dt=0.1)  # overflows on 3000
-    r = sysid.compare(unstable, data)           # was: NumericalError
+    with pytest.warns(sysid.StabilityWarning, match="diverged"):  # and said so
+        r = sysid.compare(unstable, data)           # was: NumericalError
     assert r.diverged.tolist() == [True] and r.fit[0, 0] == -np.inf
     assert "diverged" in repr(r) and "diverged" in r.summary()
     assert bool(r.to_pandas()["diverged"].iloc[0])
     # prediction too, and a mildly unstable model that does not overflow but explodes
     mild = sysid.StateSpaceModel([[1.02]], [[1.0]], [[1.0]], dt=0.1)
-    assert sysid.compare(mild, data).diverged[0]
-    assert sysid.compare(unstable, data, horizon=5).fit[0, 0] == -np.inf
+    with pytest.warns(sysid.StabilityWarning, match="diverged"):
+        assert sysid.compare(mild, data).diverged[0]
+    with pytest.warns(sysid.StabilityWarning, match="diverged"):
+        assert sysid.compare(unstable, data, horizon=5).fit[0, 0] == -np.inf
 
 
 def test_several_models_matlab_order():
@@ -36,7 +39,8 @@ def test_several_models_matlab_order():
     good = sysid.n4sid(data, 2)
     worse = sysid.n4sid(data, 1)
     unstable = sysid.StateSpaceModel([[1.3]], [[1.0]], [[1.0]], dt=0.1)
-    cs = sysid.compare(data, good, worse, unstable)
+    with pytest.warns(sysid.StabilityWarning, match="model 3: .* diverged"):
+        cs = sysid.compare(data, good, worse, unstable)
     assert isinstance(cs, sysid.CompareSet) and len(cs) == 3
     assert cs.fit.shape == (3, 1, 1)
     np.testing.assert_allclose(cs.fit[0], sysid.compare(good, data).fit)
@@ -60,8 +64,9 @@ def test_compare_set_plot():
 
     matplotlib.use("Agg")
     true, data = _data(500)
-    cs = sysid.compare(data, sysid.n4sid(data, 2),
-                       sysid.StateSpaceModel([[1.3]], [[1.0]], [[1.0]], dt=0.1))
+    with pytest.warns(sysid.StabilityWarning, match="diverged"):
+        cs = sysid.compare(data, sysid.n4sid(data, 2),
+                           sysid.StateSpaceModel([[1.3]], [[1.0]], [[1.0]], dt=0.1))
     fig = cs.plot()
     labels = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert labels[0] == "measured" and any("diverged" in t for t in labels)
@@ -94,6 +99,7 @@ def test_docs_validation_several_models_block_runs():
         exec(compile(block, "docs/validation.md[several models]", "exec"), ns)
     cs = ns["cs"]
     assert cs.diverged.tolist() == [False, False, True] and cs.best == 1
+    assert [w.category for w in ns["said"]] == [sysid.StabilityWarning]
     assert set(ns["table"].std_method) == {"linear"}
     assert np.all(np.isfinite(ns["table"].wn_hz_std))
 

@@ -188,7 +188,7 @@ CASES = [
     ("stepinfo rise limits", lambda: sysid.stepinfo(G1, rise_limits=(0.9, 0.1)),
      errors.DataError, "rise_limits", "0 <= low < high <= 1"),
     ("minreal tol", lambda: sysid.minreal(G1, tol=-1), errors.DataError, "got -1",
-     "tol must be positive"),
+     "must be a finite positive number"),
     ("minreal type", lambda: sysid.minreal(3), errors.DataError,
      "got int", "TransferFunction or a state-space model"),
     ("delayest range", lambda: sysid.delayest(D, nk_min=5, nk_max=2), errors.DataError,

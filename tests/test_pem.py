@@ -161,8 +161,9 @@ def test_unstable_start_is_stabilised_and_recorded():
     rng = np.random.default_rng(6)
     u = rng.standard_normal((400, 2))
     y = _data(true, u, 0.1 * rng.standard_normal((400, 2)))
-    bad = sysid.StateSpaceModel(true.A.copy(), true.B, true.C, true.D)
-    bad.A[2, 2] = 1.3
+    A = true.A.copy()
+    A[2, 2] = 1.3
+    bad = sysid.StateSpaceModel(A, true.B, true.C, true.D)
     # the reflected pole (0.77) walks back to 0.6 along a narrow valley: 45 iterations in
     # the record's units, 13 to 166 in other units before the search went unit-free, 119
     # on unit-free channels

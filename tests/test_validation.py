@@ -308,11 +308,14 @@ def test_initial_state_on_long_records_matches_the_full_regression():
 def test_unstable_model_fit_is_minus_infinity_or_a_clear_error():
     m = sysid.StateSpaceModel([[1.5]], [[1.0]], [[1.0]])
     y = np.random.default_rng(16).standard_normal((3000, 1))
-    # outputs near 1e176: finite, but their squares overflow; no warning, fit -inf
-    r = sysid.compare(m, (np.ones((1000, 1)), y[:1000]), x0="zero")
+    # outputs near 1e176: finite, but their squares overflow; no NumPy warning, fit -inf
+    # and a StabilityWarning
+    with pytest.warns(sysid.StabilityWarning, match="diverged"):
+        r = sysid.compare(m, (np.ones((1000, 1)), y[:1000]), x0="zero")
     assert r.fit[0, 0] == -np.inf
     # overflow: reported as diverged with fit -inf, not raised (issue 26)
-    r = sysid.compare(m, (np.ones((3000, 1)), y), x0="zero")
+    with pytest.warns(sysid.StabilityWarning, match="diverged"):
+        r = sysid.compare(m, (np.ones((3000, 1)), y), x0="zero")
     assert r.fit[0, 0] == -np.inf and r.diverged[0]
 
 

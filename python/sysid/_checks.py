@@ -26,14 +26,7 @@ def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = Fa
             f"{name} must be an array of samples, got a whole record (IOData): pass its "
             f"signals (data.u for inputs, data.y for outputs), or hand the record to "
             "sysid.compare(data, model), which simulates the model on it")
-    x = unmask(x, name)
-    arr = np.asarray(x)
-    if arr.dtype.kind not in "biuf":
-        raise DataError(
-            f"{name} must be a real numeric array, got dtype {arr.dtype}; convert it with "
-            f"np.asarray({name}, dtype=float)"
-        )
-    arr = arr.astype(np.float64, copy=False)
+    arr = real_array(x, name)
     if arr.ndim == 1:
         arr = arr[:, None]
     elif arr.ndim == 0:
@@ -62,6 +55,40 @@ def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = Fa
             "interpolate or cut it out before identification"
         )
     return arr
+
+
+def real_array(x: Any, name: str) -> np.ndarray:
+    """``x`` as a float64 array (no copy if it is one), any shape, NaN allowed; strings,
+    objects and complex numbers raise a :class:`DataError` naming ``name`` (complex ones are
+    not cast: NumPy would drop the imaginary parts with only a ComplexWarning).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid._checks import real_array
+    >>> real_array([1, 2], "y")
+    array([1., 2.])
+    >>> real_array(np.array([1 + 2j]), "y")
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: y must be a real numeric array, got complex values (dtype ...
+    """
+    x = unmask(x, name)
+    try:
+        arr = np.asarray(x)
+    except ValueError:
+        raise ShapeError(f"{name} must be a rectangular numeric array (rows of equal "
+                         "length)") from None
+    if arr.dtype.kind == "c":
+        raise DataError(f"{name} must be a real numeric array, got complex values (dtype "
+                        f"{arr.dtype}): sysid does not drop imaginary parts; pass "
+                        f"np.real({name}) if the real part is what you mean")
+    if arr.dtype.kind not in "biuf":
+        raise DataError(
+            f"{name} must be a real numeric array, got dtype {arr.dtype}; convert it with "
+            f"np.asarray({name}, dtype=float)"
+        )
+    return arr.astype(np.float64, copy=False)
 
 
 def unmask(x: Any, name: str) -> Any:
@@ -131,15 +158,7 @@ def as_matrix(x: Any, name: str, shape: tuple[int | None, int | None]) -> np.nda
     """Return a finite float64 matrix, checking its shape (``None`` matches any size)."""
     if isinstance(x, (str, bytes)):
         raise ShapeError(f"{name} must be a numeric matrix, got a string")
-    x = unmask(x, name)
-    try:
-        arr = np.asarray(x)
-    except ValueError:
-        raise ShapeError(f"{name} must be a rectangular numeric matrix (rows of equal "
-                         "length)") from None
-    if arr.dtype.kind not in "biuf":
-        raise DataError(f"{name} must be real and numeric, got dtype {arr.dtype}")
-    arr = np.atleast_2d(arr.astype(np.float64, copy=False))
+    arr = np.atleast_2d(real_array(x, name))
     if arr.ndim != 2:
         raise ShapeError(f"{name}: expected 2-D, got {arr.ndim}-D")
     for got, want in zip(arr.shape, shape):
@@ -389,6 +408,41 @@ def as_real(x: Any, name: str, *, positive: bool = False) -> float:
         return float(x)
     raise DataError(f"{name} must be a finite{' positive' if positive else ''} number, "
                     f"got {x!r}")
+
+
+def as_between(x: Any, name: str, lo: float, hi: float, *, closed: str = "neither") -> float:
+    """Return a real argument (a Python or NumPy number, not a bool, not NaN) in the interval
+    from ``lo`` to ``hi``, as a float; ``closed`` says which ends belong to it (``"neither"``,
+    ``"left"``, ``"right"`` or ``"both"``). The :class:`DataError` names the argument and the
+    interval, for tolerances, fractions and confidence levels.
+
+    Examples
+    --------
+    >>> from sysid._checks import as_between
+    >>> as_between(0.9, "min_mac", 0.0, 1.0, closed="both")
+    0.9
+    >>> as_between(float("nan"), "confidence", 0.0, 1.0)
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: confidence must be a number in (0, 1), got nan
+    """
+    left, right = closed in ("left", "both"), closed in ("right", "both")
+    ok = isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(
+        x, (bool, np.bool_))
+    if ok and not np.isnan(x) and (lo <= x if left else lo < x) and (
+            x <= hi if right else x < hi):
+        return float(x)
+    interval = f"{'[' if left else '('}{lo:g}, {hi:g}{']' if right else ')'}"
+    raise DataError(f"{name} must be a number in {interval}, got {x!r}")
+
+
+def stability_criteria(freq_tol: Any, damping_tol: Any, min_mac: Any
+                       ) -> tuple[float, float, float]:
+    """The criteria of a stabilisation diagram (``sysid.ssi``, ``sysid.era_stabilization``):
+    relative frequency and damping tolerances (finite, ``>= 0``) and a MAC threshold in
+    ``[0, 1]``; a NaN compared false and flagged no mode stable, without a word."""
+    return (as_nonnegative(freq_tol, "freq_tol"), as_nonnegative(damping_tol, "damping_tol"),
+            as_between(min_mac, "min_mac", 0.0, 1.0, closed="both"))
 
 
 #: Largest array, in bytes, built for a length the caller chose (as in the Rust core).

@@ -252,7 +252,7 @@ def _validate(model: Any, sel: Any, est_data: IOData, val_data: IOData | None,
               caught: list[Any] | None = None) -> dict[str, Any]:
     """Simulation and prediction fits, residuals and the report of one model (``caught``:
     the warnings of the run so far, for the report's summary)."""
-    from .validation.compare import compare
+    from .validation.compare import compare_quiet as compare  # the summary shows -inf
     from .validation.residuals import default_max_lag, residuals
 
     check = val_data if val_data is not None else est_data

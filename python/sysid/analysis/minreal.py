@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import as_real
 from ..errors import DataError
 from ..models.checks import check_start
 from ..models.linear import minimal_basis
@@ -39,9 +40,8 @@ def minreal(sys: Any, tol: float | None = None) -> Any:
     >>> print(sysid.minreal(G))
     y0 <- u0:  1 / (s + 2)
     """
-    tol = float(np.sqrt(np.finfo(float).eps)) if tol is None else float(tol)
-    if not tol > 0:
-        raise DataError(f"tol must be positive, got {tol}")
+    tol = (float(np.sqrt(np.finfo(float).eps)) if tol is None
+           else as_real(tol, "tol (or None for the default)", positive=True))
     from ..tf.model import TransferFunction
 
     if isinstance(sys, TransferFunction):

@@ -25,7 +25,8 @@ from .._atomic import atomic_path, write_text
 from ..data.iodata import IOData
 from ..errors import DataError, SysidError
 from ..models.checks import check_model
-from ..validation.compare import compare, error_spectrum
+from ..validation.compare import compare_quiet as compare
+from ..validation.compare import error_spectrum
 from ..validation.criteria import _pct
 from ..validation.residuals import default_max_lag, residuals
 from . import report_figures as rf

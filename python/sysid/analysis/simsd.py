@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int, check_elements
+from .._checks import as_int, check_elements, real_array
 from .._display import HTMLResult
 from ..errors import DataError
 from ..models.uncertainty import require
@@ -195,7 +195,7 @@ def simsd(
     if method not in _METHODS:
         raise DataError(f"method must be 'linear' or 'monte-carlo', got {method!r}")
     unc = require(model)
-    uu = np.asarray(u.u if hasattr(u, "u") and hasattr(u, "y") else u, dtype=float)
+    uu = real_array(u.u if hasattr(u, "u") and hasattr(u, "y") else u, "u")
     if uu.ndim == 1:
         uu = uu[:, None]
     if uu.ndim != 2 or uu.shape[1] != model.ninputs:

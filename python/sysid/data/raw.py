@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_2d, as_dt, check_elements
+from .._checks import as_2d, as_dt, check_elements, real_array
 from ..errors import DataError, InsufficientDataError, NonFiniteError, ShapeError
 from .units import sample_time
 
@@ -89,8 +89,8 @@ def repair_nan(
         raise DataError(f"max_gap must be a non-negative integer, got {max_gap!r}")
     if not isinstance(min_length, (int, np.integer)) or min_length < 1:
         raise DataError(f"min_length must be a positive integer, got {min_length!r}")
-    y = np.asarray(y, dtype=float)
-    u = None if u is None else np.asarray(u, dtype=float)
+    y = real_array(y, "y")
+    u = None if u is None else real_array(u, "u")
     for name, a in (("u", u), ("y", y)):
         if a is not None and (a.ndim != 2 or y.ndim != 2 or a.shape[0] != y.shape[0]):
             raise ShapeError(f"{name} must be a (samples, channels) array with y's samples, "
@@ -291,10 +291,7 @@ def from_irregular(
 
 
 def _raw2d(x: Any, name: str) -> np.ndarray:
-    arr = np.asarray(x)
-    if arr.dtype.kind not in "biuf":
-        raise DataError(f"{name} must be a real numeric array, got dtype {arr.dtype}")
-    arr = arr.astype(np.float64)
+    arr = real_array(x, name).copy()
     if arr.ndim == 1:
         arr = arr[:, None]
     if arr.ndim != 2 or arr.shape[0] == 0:

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import as_nonnegative
 from ..errors import DataError, NonFiniteError, ShapeError
 
 __all__ = ["check_unit", "sample_time", "stamp_resolution"]
@@ -163,6 +164,7 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
     >>> sysid.sample_time((np.arange(300) * 0.1).astype(np.float32))
     0.1
     """
+    rtol = as_nonnegative(rtol, "rtol")  # a NaN accepted any jitter
     raw = np.asarray(time)
     t = np.asarray(raw, dtype=float)
     if t.ndim != 1 or t.size < 2:

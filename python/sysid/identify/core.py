@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import require_inputs_vary
+from .._checks import as_real, require_inputs_vary
 from .._display import modulus
 from .._progress import Bar, show
 from .._threads import one_blas_thread
@@ -561,8 +561,9 @@ def identify(
             max_order, (int, np.integer)) or max_order < 1):
         raise DataError(f"max_order must be a positive integer (or None for what the horizon "
                         f"allows), got {max_order!r}")
-    if time_budget is not None and not (np.isfinite(time_budget) and time_budget > 0):
-        raise DataError(f"time_budget must be a positive number of seconds, got {time_budget!r}")
+    if time_budget is not None:
+        time_budget = as_real(time_budget, "time_budget (seconds, or None for no limit)",
+                              positive=True)
     require_held_out_length(data)  # before the channel checks: 1 sample is "constant"
     require_inputs_vary(data.experiments, "identify", data.input_names)
     # before the means are removed (a constant output is then 0)

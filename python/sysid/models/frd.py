@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
+from .._checks import as_between
 from ..data.formats import _pandas
 from ..data.iodata import IOData
 from ..data.segments import channel_index
@@ -118,8 +119,7 @@ class FRD(FRDAlgebra):
             )
         if not (np.isfinite(w).all() and np.isfinite(g).all()):
             raise DataError("omega and response must be finite")
-        if not 0.0 < confidence < 1.0:
-            raise DataError(f"confidence must lie in (0, 1), got {confidence}")
+        confidence = as_between(confidence, "confidence", 0.0, 1.0)
         # one response per frequency, in increasing order (the phase is unwrapped along it)
         order = np.argsort(w, kind="stable")
         same = np.flatnonzero(np.diff(w[order]) == 0)

@@ -77,6 +77,59 @@ def ss_parameter_count(n: int, m: int, l: int, *, feedthrough: bool = True,
     return int(d)
 
 
+def frozen(arr: np.ndarray | None) -> np.ndarray | None:
+    """A read-only copy of ``arr`` (``None`` stays ``None``): the model's own, which neither
+    an in-place edit (NumPy's "assignment destination is read-only") nor a change to the
+    caller's array reaches."""
+    if arr is None:
+        return None
+    out = np.array(arr, dtype=float, copy=True)
+    out.flags.writeable = False
+    return out
+
+
+class _Matrix:
+    """A :class:`StateSpaceModel` matrix attribute: read-only, replaced only whole and then
+    checked as the constructor checks it (real, finite, the model's shape), so that neither
+    ``m.A[0, 0] = np.nan`` nor ``m.A = np.full((2, 2), np.nan)`` makes a model that
+    simulates to NaN without a word."""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name, self.slot = name, "_matrix_" + name
+
+    def __get__(self, obj: Any, owner: type | None = None) -> Any:
+        if obj is None:
+            return self
+        try:
+            arr = obj.__dict__[self.slot]
+        except KeyError:
+            raise AttributeError(self.name) from None
+        if arr is not None and arr.flags.writeable:  # a copy's (deepcopy, pickle)
+            arr.flags.writeable = False
+        return arr
+
+    def __set__(self, obj: Any, value: Any) -> None:
+        if self.slot not in obj.__dict__:  # the constructor's own, already checked
+            obj.__dict__[self.slot] = frozen(value)
+            return
+        n, m, l = obj.nstates, obj.ninputs, obj.noutputs
+        shape = {"A": (n, n), "B": (n, m), "C": (l, n), "D": (l, m), "K": (n, l),
+                 "noise_cov": (l, l), "x0": (n, 1)}[self.name]
+        if value is None and self.name in ("K", "noise_cov", "x0"):
+            obj.__dict__[self.slot] = None
+            return
+        if self.name == "x0" and np.size(value) == n:
+            value = np.reshape(value, (n, 1))
+        try:
+            arr = as_matrix(value, self.name, shape)
+        except ShapeError as e:
+            raise ShapeError(f"{e}; a matrix of another size is another model: build it "
+                             "with sysid.StateSpaceModel(A, B, C, D, ...)") from None
+        if self.name == "noise_cov":
+            arr = check_covariance(arr, "noise_cov")
+        obj.__dict__[self.slot] = frozen(arr[:, 0] if self.name == "x0" else arr)
+
+
 class StateSpaceModel(ModelMixin):
     """Discrete-time state-space model ``x(t+1) = A x + B u + K e``, ``y = C x + D u + e``.
 
@@ -109,7 +162,24 @@ class StateSpaceModel(ModelMixin):
     array([0. , 1. , 0.5])
     >>> m.markov(3)[:, 0, 0]
     array([0. , 1. , 0.5])
+
+    The matrices are read-only: a model with other values is another model, made from
+    copies (or by assigning a whole matrix of the same shape, checked as here)
+
+    >>> m.A[0, 0] = 0.9
+    Traceback (most recent call last):
+    ...
+    ValueError: assignment destination is read-only
+    >>> A = m.A.copy(); A[0, 0] = 0.9
+    >>> sysid.StateSpaceModel(A, m.B, m.C, dt=m.dt).poles()
+    array([0.9+0.j])
+    >>> m.A = [[np.nan]]
+    Traceback (most recent call last):
+    ...
+    sysid.errors.NonFiniteError: A has non-finite entries (NaN or Inf)
     """
+
+    A, B, C, D, K, noise_cov, x0 = (_Matrix() for _ in range(7))
 
     #: Parameter uncertainty (:class:`~sysid.ParameterUncertainty`) attached by the estimator
     #: (``sysid.pem``, ``fit(uncertainty="bootstrap")``, ...); ``None`` when unknown.

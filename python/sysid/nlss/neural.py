@@ -443,10 +443,10 @@ def _split(sd: IOData, sc: Scaling, validation: Any, L: int, H: int) -> tuple[li
         train = [(c(u), c(y), u.shape[0]) for u, y in sd.experiments]
         val = [(sc.u(u), sc.y(y), 0) for u, y in validation.experiments]
         return train, val
-    frac = float(validation)
-    if not 0.0 <= frac < 0.9:
-        raise DataError(f"validation must be a fraction in [0, 0.9) or an IOData, got "
-                        f"{validation!r}")
+    from .._checks import as_between
+
+    frac = as_between(validation, "validation (a fraction of each record, or an IOData)",
+                      0.0, 0.9, closed="left")
     train, val = [], []
     for u, y in sd.experiments:
         N = u.shape[0]

@@ -53,7 +53,12 @@ def _functions(functions: Sequence[Any]) -> list[tuple[str, Callable[[np.ndarray
 def _augment(u: np.ndarray, fns: list[tuple[str, Callable[[np.ndarray], Any]]]) -> np.ndarray:
     cols = [u]
     for name, f in fns:
-        v = np.asarray(f(u), float)
+        v = np.asarray(f(u))
+        if np.iscomplexobj(v):
+            raise DataError(f"basis function {name} returned complex values: sysid does not "
+                            "drop imaginary parts; return np.real(...) of them if the real part "
+                            "is what you mean")
+        v = v.astype(float, copy=False)
         if v.shape != u.shape:
             raise DataError(f"basis function {name} must return an array of the input's "
                             f"shape {u.shape}, got {v.shape}")

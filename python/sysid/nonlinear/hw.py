@@ -29,7 +29,7 @@ from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..errors import DataError, StabilityWarning
 from ..polynomial.orders import matlab_orders
-from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction
+from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction, check_search_size
 from .operating_point import centred, record_means, use_offsets
 
 __all__ = ["nlhw"]
@@ -145,6 +145,7 @@ def nlhw(
         raise DataError(f"nb must be a positive integer, got {nb!r}")
     max_iter, tol = as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")
     fin, fout = _check_nl(input_nl, "input_nl"), _check_nl(output_nl, "output_nl")
+    check_search_size([fin, fout], sum(y.size for _, y in exps), "nlhw")
     shift = use_offsets(offsets, [fin, fout], exps)
     u0, y0 = record_means(exps) if shift else (np.zeros(1), np.zeros(1))
     if shift:

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_horizon, as_matrix, as_measured
+from .._checks import as_2d, as_count, as_horizon, as_matrix, as_measured, check_elements
 from ..errors import DataError, ShapeError
 from ..models.protocol import ModelMixin
 
@@ -251,9 +251,8 @@ class SigmoidNetwork(Nonlinearity):
     kind = "sigmoid"
 
     def __init__(self, units: int = 3) -> None:
-        if int(units) != units or units < 1:
-            raise DataError(f"units must be a positive integer, got {units!r}")
-        self.units = int(units)
+        # three parameters a unit: a count beyond memory is refused before they are made
+        self.units = as_count(units, "units", 3 * 8)
         self.params = np.zeros(3 * self.units)
 
     def spec(self) -> tuple[str, int, list[float]]:
@@ -348,6 +347,24 @@ def nonlinearity_from_dict(d: dict[str, Any]) -> Nonlinearity:
         nl = _KINDS[kind]()
     nl.params = np.asarray(d["params"], float).ravel()
     return nl
+
+
+def check_search_size(nls: list[Any], residuals: int, who: str, regressors: int = 1) -> None:
+    """Refuse, before the search allocates its Jacobian (one row per residual, one column
+    per parameter), nonlinearities whose parameters make it too large: a
+    ``SigmoidNetwork(10**6)`` took minutes and gigabytes before failing. A network's unit
+    has ``regressors + 2`` parameters (a slope per regressor, a centre, an amplitude)."""
+    def units(f: Any) -> int:
+        return int(getattr(f, "units", 0)) + int(getattr(f, "scaling_units", 0))
+
+    n_par = sum(units(f) * (regressors + 2) if units(f) else
+                int(np.size(getattr(f, "params", ()))) for f in nls)
+    most = max((f for f in nls), key=units, default=None)
+    what = (f"{who} with a {type(most).__name__} of {units(most)} units ({n_par} "
+            f"nonlinearity parameters) on {residuals} residuals" if most and units(most) else
+            f"{who} with {n_par} nonlinearity parameters on {residuals} residuals")
+    check_elements(residuals * n_par, what, "use far fewer units (3 to 30 are usual) or a "
+                   "shorter record")
 
 
 class HammersteinWienerModel(ModelMixin):

@@ -28,7 +28,7 @@ from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..data.offsets import check_offsets
 from ..errors import DataError
-from .hw_model import Nonlinearity, UserFunction
+from .hw_model import Nonlinearity, UserFunction, check_search_size
 from .hw_ss_model import HammersteinWienerSSModel
 from .operating_point import centred, record_means, use_offsets
 
@@ -152,6 +152,7 @@ def nlhw_ss(
     fout = _per_channel(output_nl, p, "output_nl")
     if any(isinstance(g, UserFunction) for g in fout):
         raise DataError("a UserFunction can only be an input nonlinearity")
+    check_search_size(fin + fout, sum(y.size for _, y in exps), "nlhw_ss")
     require_inputs_vary(exps, "nlhw_ss", getattr(data, "input_names", None))
     # before centring (a constant output is then 0) and the linear start (named otherwise)
     require_inputs_vary(exps, "nlhw_ss", getattr(data, "output_names", None), side=1)

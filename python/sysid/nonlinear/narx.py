@@ -15,7 +15,13 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import check_magnitudes, experiment_arrays, require_independent_inputs
+from .._checks import (
+    as_between,
+    as_int,
+    check_magnitudes,
+    experiment_arrays,
+    require_independent_inputs,
+)
 from .._threads import one_blas_thread
 from ..errors import (
     DataError,
@@ -27,6 +33,7 @@ from ..errors import (
 from ..polynomial.orders import matlab_orders
 from .choice import is_auto
 from .customreg import CustomRegressor
+from .hw_model import check_search_size
 from .narx_model import NARXModel, PolynomialBasis, RBFBasis
 from .narx_network import is_network, nlarx_network
 from .narx_network_model import NetworkNARXModel
@@ -207,7 +214,10 @@ def nlarx(
     criterion : "aic", "bic", "fpe", "validation" or None
         How many of the selected terms to keep: the prefix minimising the criterion on the
         estimation residuals, the smallest free-run RMSE on ``validation`` data, or all
-        (``None``; selection still stops when the residual is below ``err_tol``).
+        (``None``; selection still stops when the residual is below ``err_tol``). With
+        ``basis="auto"`` and ``"validation"``, the validation record also chooses between
+        the polynomial and the linear model (the lower free-run RMSE on it), in place of
+        the estimation record's held-out blocks.
     validation : IOData, optional
         Validation record for ``criterion="validation"``.
     noise_terms : int
@@ -273,10 +283,11 @@ def nlarx(
             raise DataError(f"validation has {vu.shape[1]} input(s) and {vy.shape[1]} "
                             f"output(s), the estimation data {nu} and {ny}: give a record of "
                             "the same channels")
-    if int(max_terms) != max_terms or max_terms < 1:
-        raise DataError(f"max_terms must be a positive integer, got {max_terms!r}")
-    if int(noise_terms) != noise_terms or noise_terms < 0:
-        raise DataError(f"noise_terms must be a non-negative integer, got {noise_terms!r}")
+    max_terms, noise_terms = as_int(max_terms, "max_terms"), as_int(noise_terms, "noise_terms", 0)
+    n_iterations, max_iter = as_int(n_iterations, "n_iterations"), as_int(max_iter, "max_iter", 0)
+    # the unexplained fraction at which the selection stops: NaN stopped it never, a value
+    # of 1 or more before the first term
+    err_tol = as_between(err_tol, "err_tol", 0.0, 1.0, closed="left")
     if is_auto(basis):
         if focus != "prediction":
             raise DataError("focus='simulation' needs a network nonlinearity "
@@ -292,6 +303,8 @@ def nlarx(
         if noise_terms or custom:
             raise DataError("noise_terms and custom regressors need a PolynomialBasis or "
                             "RBFBasis; a network nonlinearity takes the lagged inputs and outputs")
+        check_search_size([basis] * ny, sum(y.size for _, y in exps), "nlarx",
+                          int(sum(na_)) + int(sum(nb_)))
         net = nlarx_network(exps, na_, nb_, nk_,
                             np.vstack([_lag_matrix(u, y, na_, nb_, nk_) for u, y in exps]),
                             basis, dt=float(getattr(data, "dt", 1.0) or 1.0),
@@ -399,11 +412,30 @@ def _auto_basis(data: Any, kw: dict[str, Any], n_linear: int) -> NARXModel:
             **kw, "criterion": None, "max_terms": max(n_linear, int(kw["max_terms"])),
             "err_tol": 0.0})
 
+    if kw["criterion"] == "validation":  # the record the user gave decides, as it decides
+        return _basis_by_validation(data, fit, kw["validation"])  # the terms
     choice = choose_structure(data, fit, ("linear", "polynomial"),
                               {"linear": "the linear ARX model of the same lags",
                                "polynomial": "degree-2 polynomial terms"}, "")
     model = fit(data, choice.kind)
     model.info["basis_choice"] = choice.as_dict()
+    return model
+
+
+def _basis_by_validation(data: Any, fit: Any, validation: Any) -> NARXModel:
+    """``basis="auto"`` with ``criterion="validation"``: both candidates fitted on the whole
+    record (the polynomial's terms kept by their free-run RMSE on ``validation``), and the
+    one of lower free-run RMSE on ``validation`` kept (the linear one on a tie)."""
+    vexps = experiment_arrays(validation)
+    models = {kind: fit(data, kind) for kind in ("linear", "polynomial")}
+    rmse = {kind: _free_run_rmse(m, vexps) for kind, m in models.items()}
+    kind = "polynomial" if rmse["polynomial"] < rmse["linear"] else "linear"
+    model = models[kind]
+    model.info["basis_choice"] = {
+        "kind": kind, "table": rmse, "criterion": "validation",
+        "reason": (f"criterion='validation': the {kind} candidate has the lower free-run RMSE "
+                   f"on the validation record ({rmse[kind]:.4g} against "
+                   f"{rmse['linear' if kind == 'polynomial' else 'polynomial']:.4g})")}
     return model
 
 

@@ -13,7 +13,7 @@ import numpy as np
 from scipy import stats
 
 from .. import _sysid
-from .._checks import as_int
+from .._checks import as_between, as_int
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
 from .spectra import _names, _need_data, _z_scaled
@@ -124,8 +124,7 @@ def correlation(
     L = as_int(max_lag, "max_lag", 0)
     if L >= min(data.lengths):
         raise InsufficientDataError(f"max_lag = {L} needs experiments longer than {L} samples")
-    if not 0.0 < confidence < 1.0:
-        raise DataError(f"confidence must lie in (0, 1), got {confidence}")
+    confidence = as_between(confidence, "confidence", 0.0, 1.0)
     # coefficients are unitless: channels near 1e300 (whose squares overflow) are scaled
     R, total = _lag_covariances(_z_scaled(data, per_channel=True)[0], L, remove_mean)
     d = np.sqrt(np.maximum(np.einsum("aa->a", R[0]), np.finfo(float).tiny))

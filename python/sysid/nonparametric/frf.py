@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from .._checks import as_int, check_elements
+from .._checks import as_between, as_int, as_nonnegative, check_elements
 from ..data.iodata import IOData
 from ..errors import DataError, ExcitationError, InsufficientDataError
 from ..models.frd import FRD
@@ -223,6 +223,7 @@ def welch_frf(
     True
     """
     data = _need_data(data)
+    confidence = as_between(confidence, "confidence", 0.0, 1.0)  # before the spectra
     nperseg = _default_nperseg(data) if nperseg is None else as_int(nperseg, "nperseg", 2)
     noverlap = nperseg // 2 if noverlap is None else as_int(noverlap, "noverlap", 0)
     if noverlap >= nperseg:
@@ -294,6 +295,7 @@ def spa(
     True
     """
     data = _need_data(data)
+    confidence = as_between(confidence, "confidence", 0.0, 1.0)  # before the spectra
     N = data.n_samples
     lag_info: dict[str, Any] = {"lags_rule": "given"}
     if lags is None:
@@ -393,6 +395,8 @@ def etfe(
     True
     """
     data = _need_data(data)
+    confidence = as_between(confidence, "confidence", 0.0, 1.0)  # before the spectra
+    min_power = as_nonnegative(min_power, "min_power")
     m, l = data.n_inputs, data.n_outputs
     lens = set(data.lengths)
     if len(lens) != 1:

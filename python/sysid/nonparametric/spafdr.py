@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int, check_elements, require_inputs_vary
+from .._checks import as_between, as_int, check_elements, require_inputs_vary
 from ..data.iodata import IOData
 from ..errors import DataError, ExcitationError, InsufficientDataError
 from ..models.frd import FRD
@@ -103,6 +103,7 @@ def spafdr(
     (128, True, True)
     """
     data = _need_data(data)
+    confidence = as_between(confidence, "confidence", 0.0, 1.0)  # before the spectra
     if min(data.lengths) < 2:
         raise InsufficientDataError(f"spafdr needs experiments of at least 2 samples, got "
                                     f"{min(data.lengths)}")

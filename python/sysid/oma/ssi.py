@@ -36,7 +36,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int, experiment_arrays, require_inputs_vary
+from .._checks import as_int, experiment_arrays, require_inputs_vary, stability_criteria
 from ..errors import DataError, InsufficientDataError, NonFiniteError
 
 _METHODS = ("cov", "data")
@@ -325,6 +325,7 @@ def ssi(data: Any, orders: Any, *, method: str = "cov", horizon: int | None = No
     if method not in _METHODS:
         raise DataError(f"method must be 'cov' (SSI-cov) or 'data' (SSI-data), got {method!r}")
     ords = [as_int(o, "orders", 1) for o in np.atleast_1d(np.asarray(orders, dtype=object))]
+    freq_tol, damping_tol, min_mac = stability_criteria(freq_tol, damping_tol, min_mac)
     if not ords or any(b <= a for a, b in zip(ords, ords[1:])):
         raise DataError(f"orders must be a non-empty increasing sequence, got {ords}")
     blocks = as_int(blocks, "blocks", 2)

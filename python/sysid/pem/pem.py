@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, check_magnitudes, record_stats
+from .._checks import as_int, as_nonnegative, check_magnitudes, record_stats
 from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
@@ -506,6 +506,7 @@ def pem(
     True
     """
     check_start(model, data, "pem")  # NaN matrices, another sample time: before any work
+    max_iter, tol = as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")
     periodicity = None
     feedthrough = _as_start(feedthrough, model)
     if isinstance(data, FRD):
@@ -533,10 +534,6 @@ def pem(
     if st.dropped_d:
         _warn_dropped_d(2)
     check_offsets(st.record, who="pem", stats=st.stats)  # issue 26: the one offset check
-    max_iter = as_int(max_iter, "max_iter", 0)
-    tol = float(tol)
-    if not (np.isfinite(tol) and tol >= 0):
-        raise DataError(f"tol must be finite and >= 0, got {tol}")
     data, A, B, C, D, K = st.data, st.A, st.B, st.C, st.D, st.K
     n, l = model.nstates, model.noutputs
     feedthrough, estimate_k, weighting, modes = (st.feedthrough, st.estimate_k, st.weighting,
@@ -687,6 +684,7 @@ def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
 
     if not isinstance(model, StateSpaceModel):
         raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
+    max_iter, tol = as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")
     if weighting not in (None, "noise") or regularization is not None:
         raise DataError("the frequency-domain refinement of periodic data weights each line "
                         "by its noise variance and takes no regularization: leave weighting "
@@ -700,10 +698,6 @@ def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
         ft, _ = choose_feedthrough(SubspaceEstimator(_experiments(data)), model.nstates)
     if not ft and np.any(model.D != 0):
         _warn_dropped_d(3)
-    max_iter = as_int(max_iter, "max_iter", 0)
-    tol = float(tol)
-    if not (np.isfinite(tol) and tol >= 0):
-        raise DataError(f"tol must be finite and >= 0, got {tol}")
     res, extra = pem_lines(frd, model, feedthrough=bool(ft), max_iter=max_iter, tol=tol,
                            progress=progress, stabilize=_stabilize)
     warn_refinement(res, "frequency-domain", max_iter, True, lines_record_length(frd))

@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int, recorded, reissue
+from .._checks import as_int, as_nonnegative, recorded, reissue
 from .._threads import one_blas_thread
 from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
@@ -115,6 +115,7 @@ def ssest(
     True
     """
     data = _experiments(data)
+    as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")  # before any fit
     if hasattr(order, "nstates"):  # a start model: pem refines one (its repr may not print)
         raise DataError(f"ssest takes an order, got a {type(order).__name__}; refine a start "
                         "model with sysid.pem(data, model)")

@@ -274,6 +274,7 @@ def _pem(
     also from a subspace fit (:func:`.starts.subspace_starts`), the lower criterion kept
     (``info["start"]``)."""
     data = as_record(data)  # a (u, y) pair, as ssest and compare take
+    iters = as_int(max_iter, "max_iter", 0)
     exps = experiment_arrays(data)
     check_offsets(data)
     require_inputs_vary(exps, method, getattr(data, "input_names", None))
@@ -295,13 +296,12 @@ def _pem(
                             "criterion": "sum of squares", "stop": [],
                             "remaining_decrease": []}
     cov, var = [], []
-    cb, close_bar = iteration_callback(progress, method, int(max_iter) * ny,
+    cb, close_bar = iteration_callback(progress, method, iters * ny,
                                        iteration_printer(method, "sum of squares"))
     starts = [None if init is None else init_parameters(init, i, na_v[i], nb_g[i], nc_v[i],
                                                         nd_v[i], nf_g[i]) for i in range(ny)]
     if init is not None:
         info["start_stabilized"] = [bool(s[1]) for s in starts]  # type: ignore[index]
-    iters = as_int(max_iter, "max_iter", 0)
 
     def search(i: int, theta0: Any, callback: Any) -> dict[str, Any]:
         return _sysid.polynomial_pem(
@@ -347,7 +347,7 @@ def _pem(
     )
     _names_of(m, data)
     m.info = info
-    warn_if_capped(info, f"the {method} search", int(max_iter))
+    warn_if_capped(info, f"the {method} search", iters)
     m.covariance = cov  # type: ignore[attr-defined]
     _attach_uncertainty(m, cov, "pem", "gauss-newton")
     if method == "oe":  # its errors are the output disturbance: coloured as it is

@@ -45,7 +45,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int
+from .._checks import as_int, stability_criteria
 from ..analysis.modal import ModalAnalysis, modal_analysis
 from ..errors import DataError, NonFiniteError, ShapeError
 from ..models.statespace import StateSpaceModel
@@ -464,7 +464,8 @@ def era_stabilization(markov: Any, orders: Any, *, rows: int | None = None,
     if not hasattr(orders, "__iter__") or isinstance(orders, str) or np.ndim(orders) > 1:
         raise DataError(f"orders must be an increasing sequence of model orders (e.g. "
                         f"range(2, 21, 2)), got {orders!r}")
-    orders = [int(o) for o in orders]
+    orders = [as_int(o, "orders") for o in orders]
+    freq_tol, damping_tol, min_mac = stability_criteria(freq_tol, damping_tol, min_mac)
     if not orders or any(b <= a for a, b in zip(orders, orders[1:])):
         raise DataError(f"orders must be a non-empty increasing sequence, got {orders}")
     modes_list: list[ModalAnalysis] = []

@@ -493,7 +493,9 @@ def compare(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
     record and returns a :class:`~sysid.validation.comparison.CompareSet`; ``compare(model,
     data)`` (or ``compare(data, model)``) one model, a :class:`CompareResult`. A model that
     diverges on the data (an unstable model on a long record) is reported with a fit of
-    ``-inf`` and ``diverged`` set, never raised.
+    ``-inf`` and ``diverged`` set, never raised, and a :class:`~sysid.StabilityWarning`
+    (so is a simulated model with an unstable pole whose fitted initial state kept it
+    bounded on the record).
 
     Parameters
     ----------
@@ -530,10 +532,25 @@ def compare(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
     >>> bool(sysid.compare(m, (u, y), x0="zero").fit[0, 0] < r.fit[0, 0])
     True
     >>> bad = sysid.StateSpaceModel([[1.5]], [[1.0]], [[1.0]])     # diverges
-    >>> both = sysid.compare((u, y), m, bad)
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as said:
+    ...     warnings.simplefilter("always")
+    ...     both = sysid.compare((u, y), m, bad)
     >>> both.fit[:, 0, 0].round(1).tolist(), both.diverged.tolist()
     ([95.5, -inf], [False, True])
+    >>> print(said[0].message)          # doctest: +ELLIPSIS
+    model 2: StateSpaceModel (order 1) diverged: its output grew without bound (fit -inf, ...
     """
+    from .comparison import warn_diverging
+
+    out = compare_quiet(*args, horizon=horizon, x0=x0)
+    warn_diverging(getattr(out, "results", [out]))
+    return out
+
+
+def compare_quiet(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
+    """:func:`compare` without its :class:`~sysid.StabilityWarning`: for the estimators and
+    reports that compare candidate models and show the divergence in their own tables."""
     from .comparison import split_arguments
 
     data, models, horizon = split_arguments(args, horizon)
@@ -706,7 +723,7 @@ def error_spectrum(model: Any, data: Any, *, x0: X0 = "estimate",
     >>> bool(abs(s.worst_frequency()[0] - 0.5 / (2 * np.pi)) < 0.01)
     True
     """
-    cmp = compare(model, data, None, x0=x0)
+    cmp = compare_quiet(model, data, None, x0=x0)
     shortest = min(y.shape[0] for y in cmp.y)
     if nperseg is None:
         nperseg = min(256, shortest)

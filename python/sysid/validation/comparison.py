@@ -127,3 +127,67 @@ def _label(model: Any, k: int) -> str:
     order = getattr(model, "nstates", None)
     base = f"{k + 1}: {method or type(model).__name__}"
     return base + (f" (order {order})" if isinstance(order, (int, np.integer)) else "")
+
+
+#: a pole counts as unstable in :func:`compare` when its mode grows by more than this factor
+#: over the record compared (an integrator, or an estimate a hair outside the unit circle,
+#: does not)
+GROWTH = 10.0
+
+
+def unstable_pole(model: Any, samples: int = 1, dt: float = 1.0) -> str | None:
+    """A phrase naming ``model``'s most unstable pole, when its mode grows more than
+    :data:`GROWTH` times over ``samples`` samples of ``dt`` seconds (modulus above 1 in
+    discrete time, real part above 0 in continuous time), or ``None`` when it has none or
+    no poles to read (a NARX model: its divergence, if any, shows in the simulation)."""
+    try:
+        p = np.asarray(model.poles(), dtype=complex).ravel()
+    except Exception:  # noqa: BLE001 - no poles to read (a nonlinear model): divergence says
+        return None
+    p = p[np.isfinite(p)]
+    if not p.size:
+        return None
+    if getattr(model, "dt", None):  # discrete time
+        worst = p[np.argmax(np.abs(p))]
+        if abs(worst) > 1.0 and samples * np.log(abs(worst)) > np.log(GROWTH):
+            return f"a pole of modulus {abs(worst):.4g}"
+        return None
+    worst = p[np.argmax(p.real)]
+    if worst.real > 0 and worst.real * samples * dt > np.log(GROWTH):
+        return f"a pole at s = {worst.real:.4g}{worst.imag:+.4g}j (in the right half-plane)"
+    return None
+
+
+def warn_diverging(results: list[Any]) -> None:
+    """One :class:`~sysid.StabilityWarning` per model of a :func:`~sysid.compare` that
+    diverged on the record (fit ``-inf``, ``diverged`` set) or, simulated, is unstable (a
+    mode that grows more than :data:`GROWTH` times over the record): its
+    fit may hold only because the fitted initial state holds the unstable mode back on this
+    record. Every model kind alike (a continuous model is read as given, not as sampled); a
+    prediction (whose predictor may be stable) is warned about only when it diverged."""
+    import warnings
+
+    from .._checks import user_stacklevel
+    from ..errors import StabilityWarning
+
+    many = len(results) > 1
+    for k, r in enumerate(results):
+        model = getattr(r.model, "continuous", r.model)  # a continuous model, as sampled
+        name = f"model {_label(model, k)}" if many else f"the {type(model).__name__}"
+        samples = max((len(y) for y in r.y), default=1)
+        pole = unstable_pole(model, samples, float(r.dt or 1.0)) if r.horizon is None else None
+        if r.diverged.any():
+            where = (f" on experiment(s) {np.flatnonzero(r.diverged).tolist()}"
+                     if r.diverged.size > 1 else "")
+            msg = (f"{name} diverged{where}: its output grew without bound (fit -inf, "
+                   f"diverged flagged)" + (f"; it is unstable, {pole}" if pole else ""))
+        elif pole:
+            msg = (f"{name} is unstable ({pole}): its simulation grows without bound, on a "
+                   "longer record or from another initial state if not on this one (a "
+                   "fitted initial state can hold the unstable mode back), so its fit here "
+                   "says little")
+        else:
+            continue
+        warnings.warn(msg + "; re-estimate it with stability enforced (e.g. sysid.ssest(..., "
+                      "enforce_stability=True)), or check the signs of its coefficients and "
+                      "time constants", StabilityWarning, stacklevel=user_stacklevel())

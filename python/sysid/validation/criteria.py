@@ -50,7 +50,8 @@ from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError, NumericalError, SysidError
 from ..models.checks import _optional, check_model
 from ..models.statespace import StateSpaceModel, ss_parameter_count
-from .compare import _has_state, _records, _run, _simulator, _x0_for, compare
+from .compare import _has_state, _records, _run, _simulator, _x0_for
+from .compare import compare_quiet as compare
 
 __all__ = ["n_parameters", "Criteria", "criteria", "OrderSelection", "select_order"]
 
@@ -529,8 +530,9 @@ def select_order(
     >>> sysid.select_order((u, y), models=[low, true], criterion="bic").order
     2
     """
+    fit_tol = as_nonnegative(fit_tol, "fit_tol")
     if models is not None:
-        return _rank_models(data, list(models), validation, x0, criterion, float(fit_tol))
+        return _rank_models(data, list(models), validation, x0, criterion, fit_tol)
     if orders is not None and (np.ndim(orders) == 0 or isinstance(orders, (str, bytes))):
         raise DataError(f"orders must be a sequence of model orders (e.g. range(1, 6) or "
                         f"[{orders!r}]), got {orders!r}")
@@ -542,8 +544,6 @@ def select_order(
             raise DataError(f"data must be a sysid.IOData or SubspaceEstimator, got "
                             f"{type(data).__name__}")
         est = SubspaceEstimator(data, horizon)
-    if not float(fit_tol) >= 0:
-        raise DataError(f"fit_tol must be >= 0, got {fit_tol!r}")
     if x0 not in ("estimate", "zero"):
         raise DataError(f"x0 must be 'estimate' or 'zero', got {x0!r}")
     meths = [est.method] if methods is None else list(methods)
@@ -682,8 +682,6 @@ def _rank_models(data: Any, models: list[Any], validation: Any, x0: str,
     """:func:`select_order` over given candidate models (any :class:`sysid.Model`)."""
     if not models:
         raise DataError("models is empty; pass at least one candidate model")
-    if not fit_tol >= 0:
-        raise DataError(f"fit_tol must be >= 0, got {fit_tol!r}")
     if x0 not in ("estimate", "zero"):
         raise DataError(f"x0 must be 'estimate' or 'zero', got {x0!r}")
     seen: dict[int, Any] = {}

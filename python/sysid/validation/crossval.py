@@ -504,9 +504,9 @@ def held_out_fit(model: Any, block: IOData, floor: float = -100.0) -> float:
     """``model``'s simulation fit on a held-out ``block`` (:func:`sysid.compare`, its
     initial state fitted; % mean over outputs), at least ``floor``: one runaway block is one
     bad block, not the whole score."""
-    from .compare import compare
+    from .compare import compare_quiet
 
-    fit = float(np.mean(compare(block, model).fit))
+    fit = float(np.mean(compare_quiet(block, model).fit))
     return max(floor, fit) if np.isfinite(fit) else floor
 
 

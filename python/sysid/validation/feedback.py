@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int
+from .._checks import as_between, as_int
 from .._display import HTMLResult
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
@@ -238,8 +238,7 @@ def check_feedback(data: IOData, lags: int | None = None, *, alpha: float = 0.01
         raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
     if data.n_inputs == 0:
         raise DataError("check_feedback needs at least one input channel")
-    if not 0.0 < alpha < 1.0:
-        raise DataError(f"alpha must lie in (0, 1), got {alpha}")
+    alpha = as_between(alpha, "alpha", 0.0, 1.0)
     shortest = min(y.shape[0] for _, y in data.experiments)
     if lags is None:
         lags = int(min(20, max(2, shortest // (20 * (data.n_inputs + data.n_outputs)))))

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int, check_magnitudes, user_stacklevel
+from .._checks import as_between, as_int, check_magnitudes, user_stacklevel
 from .._display import HTMLResult
 from ..errors import DataError, SysidWarning
 from .compare import X0, _records, _run, _simulator, _x0_for
@@ -286,8 +286,7 @@ def residuals(model: Any, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
     max_lag = as_int(max_lag, "max_lag")
     # the range check the estimators apply: |y| near 1e200 gave a NaN Ljung-Box statistic
     check_magnitudes(recs, "residuals")
-    if not 0 < float(alpha) < 1:
-        raise DataError(f"alpha must lie strictly between 0 and 1, got {alpha!r}")
+    alpha = as_between(alpha, "alpha", 0.0, 1.0)
     N = min(y.shape[0] for _, y in recs)
     if max_lag >= N:
         raise DataError(f"max_lag={max_lag} needs more than {max_lag} samples per experiment; "
