@@ -96,7 +96,10 @@ def test_continuous_unstable_poles_are_kept_and_the_stable_part_meets_its_bound(
     bound = 2 * hsv[order - 3:].sum()
     w = np.r_[0.0, np.logspace(-3, 3, 1500)]
     err = _hinf_error(model, red, w)
-    assert err <= bound * (1 + 1e-6) + 1e-9
+    # round-off of the balancing is about sqrt(eps) * hsv[0] on the smallest values (seed
+    # 6479, ns 7, extra 5: err 3.5370e-6 against the bound 3.5356e-6, hsv[0] = 1.22, the
+    # last Hankel singular value 1.6e-8)
+    assert err <= bound * (1 + 1e-6) + 1e-8 * hsv[0]
 
 
 def test_a_stable_model_is_truncated_as_before() -> None:
