@@ -273,3 +273,19 @@ def test_a_capped_search_warns_only_while_it_still_moves():
     with pytest.warns(sysid.IterationLimitWarning):  # one history per output
         warn_if_capped({"stop": ["cost tolerance", "maximum iterations"],
                         "cost": [[1.0, 1.0], [3.0, 2.0]]}, "the oe search", 5)
+
+
+def test_pole_uncertainty_asked_of_a_nonlinear_model_is_named():
+    # poles(std=True) raised "unexpected keyword argument 'std'" on NARX, Hammerstein-Wiener
+    # and nonlinear state-space models; linear models without uncertainty name the fix
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((400, 1))
+    y = np.tanh(sysid.StateSpaceModel([[0.7]], [[1.0]], [[1.0]]).simulate(u))
+    d = sysid.IOData(u, y, 1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        models = [sysid.nlarx(d, 2, 2, 1), sysid.nlhw(d, [2, 2, 1])]
+    for m in models:
+        assert m.poles().size  # the linear part's
+        with pytest.raises(sysid.DataError, match=r"poles\(std=True\).*no pole uncertainty"):
+            m.poles(std=True)
