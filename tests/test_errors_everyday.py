@@ -273,3 +273,40 @@ def test_a_capped_search_warns_only_while_it_still_moves():
     with pytest.warns(sysid.IterationLimitWarning):  # one history per output
         warn_if_capped({"stop": ["cost tolerance", "maximum iterations"],
                         "cost": [[1.0, 1.0], [3.0, 2.0]]}, "the oe search", 5)
+
+
+def test_pole_uncertainty_asked_of_a_nonlinear_model_is_named():
+    # poles(std=True) raised "unexpected keyword argument 'std'" on NARX, Hammerstein-Wiener
+    # and nonlinear state-space models; linear models without uncertainty name the fix
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((400, 1))
+    y = np.tanh(sysid.StateSpaceModel([[0.7]], [[1.0]], [[1.0]]).simulate(u))
+    d = sysid.IOData(u, y, 1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        models = [sysid.nlarx(d, 2, 2, 1), sysid.nlhw(d, [2, 2, 1])]
+    for m in models:
+        assert m.poles().size  # the linear part's
+        with pytest.raises(sysid.DataError, match=r"poles\(std=True\).*no pole uncertainty"):
+            m.poles(std=True)
+
+
+def test_matlab_structure_choice_chain_on_several_inputs():
+    # arx(data, selstruc(arxstruc(data, ...))) on a 2-input record: arxstruc's rows had one
+    # shared nb and nk, selstruc returned 3 numbers and arx refused them; struc's rows were
+    # refused by arxstruc(ze, zv, NN); a ragged order list was a raw NumPy ValueError
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((400, 2))
+    y = np.zeros(400)
+    for t in range(1, 400):
+        y[t] = 0.5 * y[t - 1] + u[t - 1] @ [1.0, -0.4] + 0.05 * rng.standard_normal()
+    d = sysid.IOData(u, y[:, None], 1.0)
+    table = sysid.arxstruc(d, [1, 2], [1, 2], [1])
+    assert table.shape[1] == 1 + 2 + 2 + 2
+    nn = sysid.selstruc(table, "aic")
+    assert nn == (1, 1, 1, 1, 1)
+    assert np.allclose(sysid.arx(d, nn).a[0][0], [-0.5], atol=0.05)
+    v = sysid.arxstruc(d[:200], d[200:], sysid.struc([1, 2], [1, 2], [1]))
+    assert sysid.selstruc(v, 0)[:1] == (1,) and len(sysid.selstruc(v, 0)) == 5
+    with pytest.raises(sysid.DataError, match="flat numbers"):
+        sysid.arx(d, [1, [1, 1], [1, 1]])

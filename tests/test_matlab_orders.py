@@ -162,7 +162,10 @@ def test_arxstruc_validation_form_with_several_inputs():
     # the true structure: lowest validation loss, and AIC/BIC agree on the table
     assert sysid.selstruc(v, 0) == (1, 2, 1, 1, 2)
     assert sysid.selstruc(v, "aic") == sysid.selstruc(v, "bic") == (1, 2, 1, 1, 2)
+    # struc's rows [na, nb, nk] give every input the same nb and nk (as the ranges do)
+    shared = sysid.arxstruc(ze, zv, [[1, 2, 1]])
+    assert shared[0, :5].tolist() == [1, 2, 2, 1, 1]
     with pytest.raises(sysid.DataError, match=r"\[na, nb1..nb2, nk1..nk2\]"):
-        sysid.arxstruc(ze, zv, [[1, 2, 1]])
+        sysid.arxstruc(ze, zv, [[1, 2, 1, 1]])
     with pytest.raises(sysid.DataError, match="same channels"):
         sysid.arxstruc(ze, zv.select(inputs=0), nn)

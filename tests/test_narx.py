@@ -389,3 +389,14 @@ def test_a_free_run_that_diverges_on_the_estimation_data_is_said():
     ref = 100 * (1 - np.linalg.norm((ys - y)[2:]) / np.linalg.norm(y[2:] - y[2:].mean()))
     assert ok.info["free_run"] == {"diverged": False, "fit": [pytest.approx(ref)]}
     assert ref > 99.9
+
+
+def test_a_free_run_that_grows_without_overflowing_is_a_divergence():
+    # the F-16 record, nlarx(est, 2, 2, 1): the linear NARX model's pole at 1.0106 grew its
+    # free run to 2e36 times the output, finite, so no warning was given; compare then
+    # reported fit -inf
+    d = sysid.datasets.load_f16()[8192:16384]
+    est = sysid.IOData(d.u - d.u.mean(0), d.y - d.y.mean(0), d.dt)
+    with pytest.warns(sysid.StabilityWarning, match="grows to .* times the measured one"):
+        m = sysid.nlarx(est, 2, 2, 1)
+    assert m.info["free_run"]["diverged"]

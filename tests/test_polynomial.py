@@ -427,7 +427,7 @@ def test_arxstruc_refuses_several_outputs_and_ranks_what_arx_builds():
     one = d.select(outputs="temp")
     table = sysid.arxstruc(one, [1, 2], [1, 2], [1])
     yt = y[:, 1]
-    for na, nb, nk, loss, p in table:
+    for na, nb, _, nk, _, loss, p in table:  # MATLAB's rows: [na, nb1, nb2, nk1, nk2, ...]
         na, nb, nk = int(na), int(nb), int(nk)
         assert p == sysid.arx(one, na, nb, nk).n_parameters
         # least squares by numpy on the rows the one compression keeps (t >= 2)
@@ -436,7 +436,7 @@ def test_arxstruc_refuses_several_outputs_and_ranks_what_arx_builds():
                               + [u[t - nk - k, j] for j in range(2) for k in range(nb)])
         r = yt[t] - phi @ np.linalg.lstsq(phi, yt[t], rcond=None)[0]
         np.testing.assert_allclose(loss, r @ r / t.size, rtol=1e-9)
-    assert sysid.selstruc(table, "bic")[1] == 2  # temp's B has two coefficients
+    assert sysid.selstruc(table, "bic")[1:3] == (2, 2)  # temp's B has two coefficients
 
 
 def test_repr_of_a_coupled_model_shows_every_entry_of_a():

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import importlib.util
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -429,3 +430,17 @@ def test_the_automatic_order_of_okid_markov_parameters_is_the_systems_not_its_ob
     assert sysid.kung(est).nstates == 2
     exact = sysid.okid(sysid.IOData(u, true.simulate(u)), observer_order=10, count=60)
     assert exact.era().order == 2  # and noise-free data keep theirs
+
+
+def test_an_unstable_realisation_warns() -> None:
+    # the ball-and-beam record's ERA model came back with |p| = 1.05 and no warning
+    unstable = sysid.StateSpaceModel([[1.05, 0.0], [0.0, 0.5]], [[1.0], [1.0]], [[1.0, 1.0]])
+    h = unstable.markov(30)
+    for realise in (sysid.era, sysid.kung, sysid.ho_kalman):
+        with pytest.warns(sysid.StabilityWarning, match="1.05"):
+            realise(h, 2)
+    stable = sysid.StateSpaceModel([[0.9, 0.0], [0.0, 0.5]], [[1.0], [1.0]], [[1.0, 1.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sysid.era(stable.markov(30), 2)
+        sysid.era_stabilization(h, [1, 2])  # the diagram shows every order, quietly

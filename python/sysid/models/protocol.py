@@ -73,7 +73,25 @@ import numpy as np
 from ..errors import DataError
 from .checks import REQUIRED, _optional, as_statespace, check_model
 
-__all__ = ["Model", "ModelMixin", "REQUIRED", "check_model", "as_statespace", "TimeResponse"]
+__all__ = ["Model", "ModelMixin", "REQUIRED", "check_model", "as_statespace", "TimeResponse",
+           "no_pole_std"]
+
+
+def no_pole_std(model: Any, std: Any) -> None:
+    """Refuse ``poles(std=True)`` on a model that carries no pole uncertainty (nonlinear
+    models: their poles are the linear part's or the linearisation's) with a named error,
+    not a TypeError for an unknown keyword.
+
+    Examples
+    --------
+    >>> from sysid.models.protocol import no_pole_std
+    >>> no_pole_std(object(), False)  # nothing asked, nothing to refuse
+    """
+    if std:
+        raise DataError(
+            f"{type(model).__name__}.poles(std=True): this model carries no pole "
+            "uncertainty (its poles are those of its linear part or linearisation); fit a "
+            "linear model (sysid.ssest, sysid.pem) for poles with standard deviations")
 
 
 @runtime_checkable
@@ -281,8 +299,9 @@ class ModelMixin:
         """``horizon``-step prediction with the Kalman predictor of ``to_statespace()``."""
         return np.asarray(self._delegate("predict")(u, y, horizon))
 
-    def poles(self) -> np.ndarray:
-        """Poles of ``to_statespace()``."""
+    def poles(self, std: bool = False) -> np.ndarray:
+        """Poles of ``to_statespace()`` (``std=True`` is refused: see :func:`no_pole_std`)."""
+        no_pole_std(self, std)
         return np.asarray(self._delegate("poles")())
 
     def zeros(self) -> np.ndarray:

@@ -112,8 +112,11 @@ class TrendedModel(ModelMixin):
         """The inner model's frequency response (a trend does not change it)."""
         return np.asarray(self.model.freqresp(omega))
 
-    def poles(self) -> np.ndarray:
-        return np.asarray(self.model.poles())
+    def poles(self, std: bool = False, method: str = "linear") -> Any:
+        """The inner model's poles (a trend does not change them); ``std``, ``method``: as
+        the inner model's ``poles``."""
+        return self.model.poles(std=True, method=method) if std else np.asarray(
+            self.model.poles())
 
     def is_stable(self) -> bool:
         """The inner model's stability (a trend does not change it)."""

@@ -15,7 +15,7 @@ import numpy as np
 
 from .._checks import as_2d
 from ..errors import DataError
-from ..models.protocol import ModelMixin
+from ..models.protocol import ModelMixin, no_pole_std
 
 __all__ = ["augment_inputs", "AugmentedInputModel"]
 
@@ -153,8 +153,9 @@ class AugmentedInputModel(ModelMixin):
         """Response of the linear model from the original (un-augmented) inputs."""
         return np.asarray(self.linear.freqresp(omega))[:, :, : self.ninputs]
 
-    def poles(self) -> np.ndarray:
+    def poles(self, std: bool = False) -> np.ndarray:
         """Poles of the linear model."""
+        no_pole_std(self, std)
         return np.asarray(self.linear.poles())
 
     def __repr__(self) -> str:

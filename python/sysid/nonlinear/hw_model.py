@@ -16,7 +16,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_2d, as_count, as_horizon, as_matrix, as_measured, check_elements
 from ..errors import DataError, ShapeError
-from ..models.protocol import ModelMixin
+from ..models.protocol import ModelMixin, no_pole_std
 
 __all__ = ["Nonlinearity", "Saturation", "DeadZone", "PolynomialNonlinearity",
            "PiecewiseLinear", "SigmoidNetwork", "UserFunction", "HammersteinWienerModel"]
@@ -498,8 +498,9 @@ class HammersteinWienerModel(ModelMixin):
         """Frequency response of the linear block (between the nonlinearities)."""
         return np.asarray(self.linear().freqresp(omega))
 
-    def poles(self) -> np.ndarray:
+    def poles(self, std: bool = False) -> np.ndarray:
         """Poles of the linear block (roots of ``F``)."""
+        no_pole_std(self, std)
         return np.roots(np.concatenate([[1.0], self.f])).astype(complex) if self.f.size \
             else np.zeros(0, complex)
 

@@ -14,7 +14,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_2d, as_horizon, as_matrix, as_measured
 from ..errors import DataError, ShapeError
-from ..models.protocol import ModelMixin
+from ..models.protocol import ModelMixin, no_pole_std
 from .hw_model import Nonlinearity, UserFunction, nonlinearity_from_dict
 
 __all__ = ["HammersteinWienerSSModel"]
@@ -164,8 +164,9 @@ class HammersteinWienerSSModel(ModelMixin):
         """Frequency response of the linear block (between the nonlinearities)."""
         return np.asarray(self.linear().freqresp(omega))
 
-    def poles(self) -> np.ndarray:
+    def poles(self, std: bool = False) -> np.ndarray:
         """Poles of the linear block (eigenvalues of ``A``)."""
+        no_pole_std(self, std)
         return np.linalg.eigvals(self.A).astype(complex)
 
     def summary(self) -> str:

@@ -31,6 +31,7 @@ from ..errors import (
     StabilityWarning,
 )
 from ..polynomial.orders import matlab_orders
+from ..validation.compare import diverged
 from .choice import is_auto
 from .customreg import CustomRegressor
 from .hw_model import check_search_size
@@ -130,6 +131,10 @@ def _free_run(model: Any, exps: list[tuple[np.ndarray, np.ndarray]]
             ys = np.asarray(model.simulate(u, x0=y[:k])).reshape(y.shape)
             if not np.all(np.isfinite(ys)):
                 raise NumericalError("the simulated output is not finite")
+            if diverged(y, ys):  # finite, but grown far beyond the record (F-16: 1e37 x)
+                big = float(np.max(np.abs(ys)) / max(float(np.max(np.abs(y))), 1e-300))
+                raise NumericalError(f"the simulated output grows to {big:.2g} times the "
+                                     "measured one")
         except NumericalError as e:
             return None, str(e), i
         sse = sse + np.sum((ys - y)[k:] ** 2, axis=0)

@@ -17,7 +17,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_2d, as_horizon, as_measured
 from ..errors import DataError, ShapeError
-from ..models.protocol import ModelMixin
+from ..models.protocol import ModelMixin, no_pole_std
 from .customreg import CustomRegressor
 
 __all__ = ["NARXModel", "PolynomialBasis", "RBFBasis", "CustomRegressor"]
@@ -391,8 +391,9 @@ class NARXModel(LaggedIO, ModelMixin):
         """Frequency response of :meth:`linearize` (the small-signal response at zero)."""
         return np.asarray(self.linearize().freqresp(omega))
 
-    def poles(self) -> np.ndarray:
+    def poles(self, std: bool = False) -> np.ndarray:
         """Poles of :meth:`linearize`."""
+        no_pole_std(self, std)
         return np.asarray(self.linearize().poles())
 
     # -- presentation ------------------------------------------------------------------

@@ -21,7 +21,7 @@ import numpy as np
 
 from .. import _sysid
 from ..errors import DataError
-from ..models.protocol import ModelMixin
+from ..models.protocol import ModelMixin, no_pole_std
 from .narx_model import LaggedIO, channel_names, lag_names
 
 __all__ = ["NetworkNARXModel"]
@@ -190,8 +190,9 @@ class NetworkNARXModel(LaggedIO, ModelMixin):
         point)."""
         return np.asarray(self.linearize().freqresp(omega))
 
-    def poles(self) -> np.ndarray:
+    def poles(self, std: bool = False) -> np.ndarray:
         """Poles of :meth:`linearize`."""
+        no_pole_std(self, std)
         return np.asarray(self.linearize().poles())
 
     # -- presentation ------------------------------------------------------------------

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DataError
-from ..models.protocol import ModelMixin
+from ..models.protocol import ModelMixin, no_pole_std
 
 __all__ = ["NARXStateSpace"]
 
@@ -113,8 +113,9 @@ class NARXStateSpace(ModelMixin):
         """Frequency response of the NARX model's linearisation at zero."""
         return self.narx.freqresp(omega)
 
-    def poles(self) -> np.ndarray:
+    def poles(self, std: bool = False) -> np.ndarray:
         """Poles of the linearisation at zero."""
+        no_pole_std(self, std)
         return self.narx.poles()
 
     def __repr__(self) -> str:

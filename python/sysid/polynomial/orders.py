@@ -57,7 +57,12 @@ def matlab_orders(fn: str, data: Any, first: Any, **rest: Any) -> tuple[Any, ...
     names = [k for k, _ in LAYOUTS[fn]]
     given = [first, *(rest[k] for k in names[1:])]
     missing = [k for k, v in zip(names[1:], given[1:]) if v is None and k != "nk"]
-    vector = np.ndim(first) > 0 and not isinstance(first, str)
+    try:
+        vector = np.ndim(first) > 0 and not isinstance(first, str)
+    except ValueError:  # a ragged sequence, [1, [1, 1], [1, 1]]: MATLAB's vector is flat
+        raise DataError(f"{fn}'s orders as one vector are flat numbers "
+                        f"({', '.join(names)} in turn, one per channel), got {first!r:.60}; "
+                        f"or give them separately, {fn}(data, {', '.join(names)})") from None
     if not vector or any(v is not None for v in given[1:]):
         if missing:
             alone = " (the vector comes alone)" if vector else ""

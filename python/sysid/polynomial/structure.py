@@ -76,7 +76,9 @@ def arxstruc(data: Any, na: Any, nb: Any = None, nk: Any = None) -> np.ndarray:
     ``arxstruc``): rank one output at a time (``data.select(outputs=k)``), or choose a
     multi-output model's order with ``sysid.n4sid(data, order="auto")`` or
     ``sysid.ssest(data, order="auto")``. With ``m`` inputs MATLAB's rows are ``[na, nb1..nbm,
-    nk1..nkm]`` and so are the table's (then loss and parameter count).
+    nk1..nkm]`` and so are the table's (then loss and parameter count): the ranges give every
+    input the same ``nb`` and ``nk``, as do rows ``[na, nb, nk]`` of :func:`struc` in
+    ``NN``, so ``arx(data, selstruc(table))`` takes the choice as it is.
 
     Examples
     --------
@@ -105,13 +107,25 @@ def arxstruc(data: Any, na: Any, nb: Any = None, nk: Any = None) -> np.ndarray:
     check_offsets(data)
     rng = [_range(v, name) for v, name in ((na, "na"), (nb, "nb"), (nk, "nk"))]
     require_inputs_vary(exps, "arxstruc", getattr(data, "input_names", None))
-    out = np.asarray(_sysid.arx_struc(exps, *rng)).view(StructureTable)
+    out = _per_input(np.asarray(_sysid.arx_struc(exps, *rng)),
+                     exps[0][0].shape[1]).view(StructureTable)
     if not len(out):
         raise DataError("every ARX structure in the ranges has a rank-deficient regression "
                         "(the data do not determine any of them): check that the input "
                         "and the output vary, or try smaller orders")
     out.n_samples = int(sum(y.shape[0] for _, y in exps))
     return out
+
+
+def _per_input(rows: np.ndarray, m: int) -> np.ndarray:
+    """Rows ``[na, nb, nk, ...]`` with one ``nb`` and ``nk`` shared by the ``m`` inputs as
+    MATLAB's multi-input rows ``[na, nb1..nbm, nk1..nkm, ...]``, so that :func:`selstruc`'s
+    choice goes straight into ``arx`` (it returned three numbers, which ``arx`` refuses for
+    several inputs)."""
+    if m == 1 or not len(rows):
+        return rows
+    return np.column_stack([rows[:, :1], np.repeat(rows[:, 1:2], m, axis=1),
+                            np.repeat(rows[:, 2:3], m, axis=1), rows[:, 3:]])
 
 
 def _on_validation(data: Any, exps: list[Any], val: Any, nn: Any, extra: Any) -> np.ndarray:
@@ -130,9 +144,14 @@ def _on_validation(data: Any, exps: list[Any], val: Any, nn: Any, extra: Any) ->
     width = 1 + 2 * m
     form = "[na, nb, nk]" if m == 1 else (
         f"[na, nb1..nb{m}, nk1..nk{m}] ({width} numbers for {m} inputs)")
-    rows = np.asarray(nn if nn is not None else [], dtype=float)
-    if rows.ndim == 1 and rows.size == width:
+    try:
+        rows = np.asarray(nn if nn is not None else [], dtype=float)
+    except (TypeError, ValueError):
+        rows = np.zeros((0, 0))  # ragged or not numbers: refused below
+    if rows.ndim == 1 and rows.size in (width, 3):
         rows = rows[None, :]
+    if m > 1 and rows.ndim == 2 and rows.shape[1] == 3:  # struc's rows: nb, nk shared
+        rows = _per_input(rows, m)
     if (rows.ndim != 2 or rows.shape[1] != width or not len(rows)
             or not np.all(np.isfinite(rows)) or np.any(rows != np.round(rows))
             or np.any(rows < 0)):

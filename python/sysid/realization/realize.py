@@ -40,6 +40,7 @@ True
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -47,7 +48,8 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_int, stability_criteria
 from ..analysis.modal import ModalAnalysis, modal_analysis
-from ..errors import DataError, NonFiniteError, ShapeError
+from ..errors import DataError, NonFiniteError, ShapeError, StabilityWarning
+from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
 from ..subspace.scaling import balanced_scales, check_scale, in_record_units
 
@@ -110,6 +112,16 @@ def _model(d: dict[str, Any], dt: float, method: str, **info: Any) -> StateSpace
 
 
 _MAX_MARKOV = 1e150
+
+
+def _warned(model: StateSpaceModel, method: str) -> StateSpaceModel:
+    """``model``, with a :class:`~sysid.StabilityWarning` when a pole is on or outside the
+    unit circle (the ball-and-beam record's ERA model returned |p| = 1.05 silently)."""
+    warn_unstable(model, method, advice=(
+        "Unless the system itself is unstable, try another order (the singular values), "
+        "more Hankel rows and columns, or Markov parameters from a longer record; "
+        "sysid.pem(data, model, focus='simulation') refines it to a stable model."))
+    return model
 
 
 def _realize(method: str, markov: Any, order: int | None, rows: int | None, cols: int | None,
@@ -184,7 +196,7 @@ def ho_kalman(markov: Any, order: int | None = None, *, rows: int | None = None,
     2
     """
     out, dt = _realize("ho_kalman", markov, order, rows, cols, dt, rank_tol, scale)
-    return _model(out, dt, "ho_kalman")
+    return _warned(_model(out, dt, "ho_kalman"), "ho_kalman")
 
 
 def kung(markov: Any, order: int | None = None, *, rows: int | None = None,
@@ -228,7 +240,7 @@ def kung(markov: Any, order: int | None = None, *, rows: int | None = None,
     0.8
     """
     out, dt = _realize("kung", markov, order, rows, cols, dt, scale=scale)
-    return _model(out, dt, "kung")
+    return _warned(_model(out, dt, "kung"), "kung")
 
 
 class EraResult:
@@ -339,7 +351,9 @@ def era(markov: Any, order: int | None = None, *, rows: int | None = None,
     True
     """
     out, dt = _realize("era", markov, order, rows, cols, dt, scale=scale)
-    return EraResult(out, dt)
+    res = EraResult(out, dt)
+    _warned(res.model, "era")
+    return res
 
 
 class MarkovEstimate:
@@ -472,7 +486,9 @@ def era_stabilization(markov: Any, orders: Any, *, rows: int | None = None,
     status: list[np.ndarray] = []
     prev: ModalAnalysis | None = None
     for order in orders:
-        modes = era(markov, order, rows=rows, cols=cols, dt=dt, scale=scale).modes()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", StabilityWarning)  # the diagram shows every order
+            modes = era(markov, order, rows=rows, cols=cols, dt=dt, scale=scale).modes()
         st = np.zeros(len(modes), dtype=int)
         if prev is not None and len(prev):
             for k in range(len(modes)):

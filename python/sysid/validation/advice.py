@@ -183,8 +183,10 @@ def _feedback(data: Any) -> Finding:
     fb = check_feedback(data)
     if fb.detected:
         return Finding("feedback", "act",
-                       f"the input depends on past outputs (p = {fb.p_value:.2g}): the record "
-                       "was taken in closed loop",
+                       f"the input depends on past outputs (p = {fb.p_value:.2g}): a closed "
+                       "loop, unless the plant is nonlinear (its distortions, which a linear "
+                       "model leaves in its residuals, look like feedback: a periodic input "
+                       "to a nonlinear structure does this)",
                        "open-loop subspace fits are biased there: use "
                        "sysid.n4sid(data, order, method='pbsid') or 'ssarx', or "
                        "sysid.ssest(data, order) (prediction error)")
@@ -347,9 +349,9 @@ def advice(data: Any) -> Advice:
     if feedback.verdict == "act" and nonlinear.verdict == "note":
         # check_feedback's documented limit: a nonlinear system's distortions, functions of
         # the input's past that a linear model leaves in its residuals, look like feedback
-        feedback = Finding("feedback", "note", feedback.finding.replace(
-            "the record was taken in closed loop", "closed loop, or the nonlinearity below "
-            "(distortions a linear model leaves in its residuals look like feedback)"),
-            "if the record was taken in closed loop: " + feedback.action)
+        feedback = Finding("feedback", "note", feedback.finding.split(": ")[0]
+                           + ": closed loop, or the nonlinearity below (distortions a linear "
+                           "model leaves in its residuals look like feedback)",
+                           "if the record was taken in closed loop: " + feedback.action)
     return Advice([_offsets(data), _trends(data), excitation, feedback,
                    _periodic(data), _outliers(data), delays, nonlinear])

@@ -390,8 +390,17 @@ def _metrics(y: np.ndarray, yhat: np.ndarray) -> dict[str, np.ndarray]:
 
 
 # -- compare ----------------------------------------------------------------------------
-def _diverged(y: np.ndarray, yhat: np.ndarray) -> bool:
-    """A model output that overflowed or grew beyond ``1e8`` times the measured range."""
+def diverged(y: np.ndarray, yhat: np.ndarray) -> bool:
+    """A model output that overflowed or grew beyond ``1e8`` times the measured range (the
+    rule of :func:`compare`'s ``diverged``, shared by the fits' own free-run checks).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.validation.compare import diverged
+    >>> diverged(np.ones(3), np.array([1.0, 2.0, 3e9])), diverged(np.ones(3), np.ones(3))
+    (True, False)
+    """
     if not np.all(np.isfinite(yhat)):
         return True
     scale = float(np.max(np.abs(y))) if y.size else 0.0
@@ -433,7 +442,7 @@ class CompareResult(HTMLResult):
         self.rmse = np.array([d["rmse"] for d in metrics])
         #: per experiment: the model's output diverged (not finite, or grew beyond 1e8 times
         #: the measured range); its fit is -inf
-        self.diverged = np.array([_diverged(a, b) for a, b in zip(y, yhat)])
+        self.diverged = np.array([diverged(a, b) for a, b in zip(y, yhat)])
         self.fit[self.diverged] = -np.inf
 
     @property
