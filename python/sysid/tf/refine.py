@@ -107,9 +107,13 @@ class _Map:
 
     def __call__(self, z: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
         z = np.asarray(z, dtype=float)
-        if not jac:
-            return self.theta(z), None
-        return self.theta_and_jacobian(z)
+        # a trial step far out (a time constant at its bound, poles near -1e9 on the winding
+        # record) overflows the sampling's matrix exponentials: the search rejects the
+        # non-finite result, and NumPy's RuntimeWarning reached the user
+        with np.errstate(over="ignore", invalid="ignore"):
+            if not jac:
+                return self.theta(z), None
+            return self.theta_and_jacobian(z)
 
     def theta_and_jacobian(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``theta(z)`` and ``d theta / d z``, exact (:mod:`sysid.tf.sensitivity`)."""
