@@ -162,6 +162,24 @@ pub(crate) fn solve_s(
     spectral_s(r1, prior, r, sigma2, gradient)
 }
 
+/// `L` with `P = L L^T` from the eigendecomposition of the symmetric part of `prior`
+/// (eigenvalues below zero, round-off of a PSD kernel, taken as zero): no inverse of `P`,
+/// which TC and stable-spline kernels make badly conditioned.
+fn eigen_factor(prior: MatRef<'_, f64>) -> Result<Mat<f64>> {
+    let p = prior.nrows();
+    let sym = Mat::from_fn(p, p, |i, j| 0.5 * (prior[(i, j)] + prior[(j, i)]));
+    let eig = sym.self_adjoint_eigen(Side::Lower).map_err(|e| {
+        SysidError::numerical(
+            "regularised ARX (prior eigendecomposition)",
+            format!("{e:?}"),
+        )
+    })?;
+    let w = eig.S().column_vector();
+    Ok(Mat::from_fn(p, p, |i, j| {
+        eig.U()[(i, j)] * w[j].max(0.0).sqrt()
+    }))
+}
+
 /// [`solve_s`] without forming `S`: from the eigen-factor of `P` and the SVD of `R1 L`.
 pub(crate) fn spectral_s(
     r1: MatRef<'_, f64>,
@@ -171,10 +189,7 @@ pub(crate) fn spectral_s(
     gradient: bool,
 ) -> Option<SolvedS> {
     let p = r1.nrows();
-    let sym = Mat::from_fn(p, p, |i, j| 0.5 * (prior[(i, j)] + prior[(j, i)]));
-    let eig = sym.self_adjoint_eigen(Side::Lower).ok()?;
-    let w = eig.S().column_vector();
-    let l = Mat::from_fn(p, p, |i, j| eig.U()[(i, j)] * w[j].max(0.0).sqrt());
+    let l = eigen_factor(prior).ok()?;
     let svd = mul(r1, l.as_ref()).svd().ok()?;
     let (u, sv) = (svd.U(), svd.S().column_vector());
     let d: Vec<f64> = (0..p).map(|i| sv[i] * sv[i] + sigma2).collect();
@@ -243,15 +258,7 @@ pub fn regularized_solve(
     let r1 = summary.submatrix(0, 0, p, p);
     let r = summary.submatrix(0, p, p, 1);
     let rho = summary[(p, p)];
-    let sym = Mat::from_fn(p, p, |i, j| 0.5 * (prior[(i, j)] + prior[(j, i)]));
-    let eig = sym.self_adjoint_eigen(Side::Lower).map_err(|e| {
-        SysidError::numerical(
-            "regularised ARX (prior eigendecomposition)",
-            format!("{e:?}"),
-        )
-    })?;
-    let w = eig.S().column_vector();
-    let l = Mat::from_fn(p, p, |i, j| eig.U()[(i, j)] * w[j].max(0.0).sqrt());
+    let l = eigen_factor(prior)?;
     let m = mul(r1, l.as_ref());
     let svd = m
         .thin_svd()
