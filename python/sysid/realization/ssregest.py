@@ -33,7 +33,7 @@ from ..data.offsets import check_offsets
 from ..errors import DataError, NumericalError
 from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
-from ..subspace.feedthrough import check_feedthrough, default_feedthrough
+from ..subspace.feedthrough import check_feedthrough, default_feedthrough, held_out_decision
 
 __all__ = ["ssregest"]
 
@@ -192,23 +192,15 @@ def _choose(whole: dict[int, StateSpaceModel], table: dict[int, list[float]]
 
 def _decide_feedthrough(data: Any, pool: list[int], na: int, kernel: str
                         ) -> tuple[bool, dict[str, Any], dict[int, list[float]], Any]:
-    """``feedthrough="auto"``: ``D`` estimated when it raises the best held-out simulation fit
-    over ``pool`` by more than ``TOL`` points (the rule of every estimator,
-    :mod:`sysid.subspace.feedthrough`); also the winning side's held-out table and
-    regularisation."""
-    from ..validation.crossval import TOL
-
+    """``feedthrough="auto"``: the rule of every estimator
+    (:func:`sysid.subspace.feedthrough.held_out_decision`) on the best held-out simulation
+    fits over ``pool``; also the winning side's held-out table and regularisation."""
     regs = {ft: _big_model(data, na, kernel, 0 if ft else 1)[1] for ft in (False, True)}
     tables = {ft: _held_out(data, pool, na, kernel, 0 if ft else 1, regs[ft])
               for ft in (False, True)}
     best = {ft: max(_median(t).values(), default=-np.inf) for ft, t in tables.items()}
-    use = bool(best[True] > best[False] + TOL)
-    return use, {"feedthrough": use, "criterion": "held-out simulation fit",
-                 "held_out_fit": {"with D": best[True], "without D": best[False]},
-                 "reason": f"held-out simulation fit {best[True]:.1f} % with D, "
-                           f"{best[False]:.1f} % without: "
-                           + ("D estimated" if use else f"D = 0 (gain not above {TOL:g})")
-                 }, tables[use], regs[use]
+    use, record = held_out_decision(best[True], best[False])
+    return use, record, tables[use], regs[use]
 
 
 def _left_out(data: Any, model: StateSpaceModel, na: int, kernel: str, order: int

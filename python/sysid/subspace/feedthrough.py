@@ -49,7 +49,7 @@ from ..errors import DataError
 from .methods import CLOSED_LOOP, _method
 
 __all__ = ["FEEDTHROUGH_DEFAULT", "LEFT_OUT_RATIO", "check_feedthrough", "choose_feedthrough",
-           "default_feedthrough", "record_left_out", "warn_if_left_out"]
+           "default_feedthrough", "held_out_decision", "record_left_out", "warn_if_left_out"]
 
 #: the default of every sysid state-space estimator at a given order: no ``D`` (MATLAB's)
 FEEDTHROUGH_DEFAULT = False
@@ -133,7 +133,7 @@ def choose_feedthrough(est: Any, order: Any = "auto", *, method: str | None = No
     >>> choose_feedthrough(sysid.SubspaceEstimator(sysid.IOData(u=u, y=y)), 1)[0]
     True
     """
-    from ..validation.crossval import TOL, cross_validated_order
+    from ..validation.crossval import cross_validated_order
 
     key = est.method if method is None else _method(method)
     if key in CLOSED_LOOP:
@@ -164,11 +164,27 @@ def choose_feedthrough(est: Any, order: Any = "auto", *, method: str | None = No
             best[ft] = c["table"].get(c["order"], -np.inf)
     except Exception as e:  # noqa: BLE001 - a record too short to split
         return _undecided(f"the record could not be cross-validated: {e}")
-    use = bool(best[True] > best[False] + TOL)
+    return held_out_decision(best[True], best[False])
+
+
+def held_out_decision(with_d: float, without: float) -> tuple[bool, dict[str, Any]]:
+    """The ``feedthrough="auto"`` rule on the best held-out simulation fits with and without
+    ``D``: ``D`` when it gains more than ``TOL`` points; the decision and its record
+    (``info["feedthrough_selection"]``), shared by every estimator that decides ``D``.
+
+    Examples
+    --------
+    >>> from sysid.subspace.feedthrough import held_out_decision
+    >>> held_out_decision(81.5, 47.6)[0], held_out_decision(92.4, 92.2)[0]
+    (True, False)
+    """
+    from ..validation.crossval import TOL
+
+    use = bool(with_d > without + TOL)
     return use, {"feedthrough": use, "criterion": "held-out simulation fit",
-                 "held_out_fit": {"with D": best[True], "without D": best[False]},
-                 "reason": f"held-out simulation fit {best[True]:.1f} % with D, "
-                           f"{best[False]:.1f} % without: "
+                 "held_out_fit": {"with D": with_d, "without D": without},
+                 "reason": f"held-out simulation fit {with_d:.1f} % with D, "
+                           f"{without:.1f} % without: "
                            + ("D estimated" if use else f"D = 0 (gain not above {TOL:g})")}
 
 
