@@ -12,13 +12,24 @@
 //!
 //! The cross term is removed first (`Ā = A - S R^{-1} C`, `Q̄ = Q - S R^{-1} S^T`), then the
 //! structure-preserving doubling algorithm (Chu, Fan and Lin 2005) converges quadratically to
-//! the stabilising solution when one exists. The solution is checked: if `A - K C` is not
-//! stable, or the iteration does not converge, [`SysidError::NoStabilizingSolution`] is
-//! returned rather than a wrong gain.
+//! the stabilising solution when one exists. The solution is checked. Covariances estimated
+//! from nearly noise-free outputs, or at orders above the system's, can defeat the doubling in
+//! floating point: `R` many orders below `Q` (the cross-term removal then loses to round-off
+//! the positive semi-definiteness the doubling needs), states in badly scaled coordinates
+//! (columns of `C` of size 100 next to 1), modes that no noise drives. So when `A - K C` is
+//! not stable or the iteration does not converge, the equation is solved again in the state
+//! coordinates where every column of `C` has unit norm (the solution is mapped back: the
+//! Riccati equation is invariant under a change of state basis), and if that fails too, there
+//! with `Q` and `R` raised by a tiny multiple of the identity (`1e-12`, then `1e-10`, `1e-8`,
+//! `1e-6` of the scaled covariances' trace; the relative shift is recorded in
+//! [`KalmanSolution::regularization`]), which drives every mode and makes `R` definite; the
+//! gain is continuous in the covariances where `C P C^T + R` stays positive definite, so it
+//! moves by about the relative size of the shift. If nothing gives a stable `A - K C`,
+//! [`SysidError::NoStabilizingSolution`] is returned rather than a wrong gain.
 
 use crate::error::{Result, SysidError};
 use crate::linalg::{spectral_radius, symmetrize};
-use faer::linalg::solvers::{DenseSolveCore, Solve};
+use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef};
 
 /// Solution of the predictor Riccati equation.
@@ -32,7 +43,23 @@ pub struct KalmanSolution {
     pub innovation_cov: Mat<f64>,
     /// Doubling iterations used.
     pub iterations: usize,
+    /// The relative shift of `Q` and `R` that gave a stabilising solution (times the trace
+    /// of the covariances in scaled coordinates; 0 when none was needed).
+    pub regularization: f64,
 }
+
+/// Largest relative residual of the Riccati equation accepted (`|P - A P A^T - Q + K G^T|`
+/// over the larger of `|P|` and `|Q|`, entrywise maxima).
+const RESIDUAL_TOL: f64 = 1e-9;
+
+/// Relative shifts of `Q` and `R` (times the trace of the scaled covariances) tried, in
+/// scaled coordinates, after a failure in the given ones: each gives a start for Newton's
+/// iteration on the equation as given; a solution of a shifted equation is itself accepted
+/// only for shifts up to [`MAX_KEPT_SHIFT`].
+const SHIFTS: [f64; 7] = [0.0, 1e-12, 1e-10, 1e-8, 1e-6, 1e-3, 1.0];
+
+/// The largest relative shift whose solution is returned when Newton's iteration fails.
+const MAX_KEPT_SHIFT: f64 = 1e-6;
 
 /// Solves the predictor DARE for (A, C, Q, R, S).
 ///
@@ -46,6 +73,141 @@ pub struct KalmanSolution {
 /// assert!((s.p[(0, 0)] - p).abs() < 1e-12);
 /// ```
 pub fn kalman_gain(
+    a: MatRef<'_, f64>,
+    c: MatRef<'_, f64>,
+    q: MatRef<'_, f64>,
+    r: MatRef<'_, f64>,
+    s: MatRef<'_, f64>,
+) -> Result<KalmanSolution> {
+    let first = match doubling(a, c, q, r, s) {
+        Ok(sol) if residual(a, c, q, r, s, &sol) <= RESIDUAL_TOL => return Ok(sol),
+        Ok(sol) => format!(
+            "the doubling lost its accuracy (relative residual {:.1e})",
+            residual(a, c, q, r, s, &sol)
+        ),
+        Err(SysidError::NoStabilizingSolution { reason }) => reason,
+        Err(e) => return Err(e),
+    };
+    // the state basis where every column of C has unit norm: x = T^{-1} x', T = diag(d)
+    let (n, l) = (a.nrows(), c.nrows());
+    let cmax = (0..n).map(|j| c.col(j).norm_l2()).fold(0.0f64, f64::max);
+    let d: Vec<f64> = (0..n)
+        .map(|j| {
+            let norm = c.col(j).norm_l2();
+            if norm > 1e-12 * cmax && norm.is_finite() {
+                norm
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let a2 = Mat::from_fn(n, n, |i, j| d[i] * a[(i, j)] / d[j]);
+    let c2 = Mat::from_fn(l, n, |i, j| c[(i, j)] / d[j]);
+    let q2 = Mat::from_fn(n, n, |i, j| d[i] * q[(i, j)] * d[j]);
+    let s2 = Mat::from_fn(n, l, |i, j| d[i] * s[(i, j)]);
+    let (a2, c2, s2) = (a2.as_ref(), c2.as_ref(), s2.as_ref());
+    let back = |sol: KalmanSolution, rel: f64| KalmanSolution {
+        // P = T^{-1} P' T^{-1}, K = T^{-1} K'
+        p: Mat::from_fn(n, n, |i, j| sol.p[(i, j)] / (d[i] * d[j])),
+        k: Mat::from_fn(n, l, |i, j| sol.k[(i, j)] / d[i]),
+        innovation_cov: sol.innovation_cov,
+        iterations: sol.iterations,
+        regularization: rel,
+    };
+    let trace: f64 =
+        (0..n).map(|i| q2[(i, i)]).sum::<f64>() + (0..l).map(|i| r[(i, i)]).sum::<f64>();
+    for rel in SHIFTS {
+        if rel > 0.0 && (!trace.is_finite() || trace <= 0.0) {
+            break;
+        }
+        let eps = rel * trace;
+        let (mut q_shift, mut r_shift) = (q2.clone(), r.to_owned());
+        for i in 0..n {
+            q_shift[(i, i)] += eps;
+        }
+        for i in 0..l {
+            r_shift[(i, i)] += eps;
+        }
+        let Ok(start) = doubling(a2, c2, q_shift.as_ref(), r_shift.as_ref(), s2) else {
+            continue;
+        };
+        // Newton's iteration on the equation as given, from this stabilising gain
+        if let Some(sol) = newton(a2, c2, q2.as_ref(), r, s2, &start) {
+            return Ok(back(sol, 0.0));
+        }
+        if rel <= MAX_KEPT_SHIFT
+            && residual(a2, c2, q_shift.as_ref(), r_shift.as_ref(), s2, &start) <= RESIDUAL_TOL
+        {
+            return Ok(back(start, rel));
+        }
+    }
+    Err(SysidError::NoStabilizingSolution { reason: first })
+}
+
+/// Relative residual of the Riccati equation at a solution: `|P - A P A^T - Q + K (A P C^T +
+/// S)^T|` over the larger of `|P|` and `|Q|` (entrywise maxima); NaN counts as failed.
+fn residual(
+    a: MatRef<'_, f64>,
+    c: MatRef<'_, f64>,
+    q: MatRef<'_, f64>,
+    _r: MatRef<'_, f64>,
+    s: MatRef<'_, f64>,
+    sol: &KalmanSolution,
+) -> f64 {
+    let p = &sol.p;
+    let apct_s = a * p * c.transpose() + s;
+    let resid = a * p * a.transpose() + q - &sol.k * apct_s.transpose() - p;
+    let rel = resid.norm_max() / p.norm_max().max(q.norm_max());
+    if rel.is_nan() {
+        f64::INFINITY
+    } else {
+        rel
+    }
+}
+
+/// Hewer's (Newton's) iteration from a stabilising gain: `P` from the Stein equation of the
+/// predictor `A - K C` driven by `[I, -K] [[Q, S], [S^T, R]] [I, -K]^T`, then the gain of that
+/// `P`; every iterate is stabilising and the convergence is quadratic near the solution. `None`
+/// when it does not reach [`RESIDUAL_TOL`] in 50 steps.
+fn newton(
+    a: MatRef<'_, f64>,
+    c: MatRef<'_, f64>,
+    q: MatRef<'_, f64>,
+    r: MatRef<'_, f64>,
+    s: MatRef<'_, f64>,
+    start: &KalmanSolution,
+) -> Option<KalmanSolution> {
+    let mut k = start.k.clone();
+    for it in 0..50 {
+        let f = a - &k * c;
+        let ks = &k * s.transpose();
+        let mut w = q - &ks - ks.transpose() + &k * r * k.transpose();
+        symmetrize(&mut w);
+        let mut p = crate::lyapunov::solve_discrete_lyapunov(f.as_ref(), w.as_ref()).ok()?;
+        symmetrize(&mut p);
+        let mut innov = c * &p * c.transpose() + r;
+        symmetrize(&mut innov);
+        let llt = innov.llt(faer::Side::Lower).ok()?;
+        let apct_s = a * &p * c.transpose() + s;
+        k = llt.solve(apct_s.transpose()).transpose().to_owned();
+        let sol = KalmanSolution {
+            p,
+            k: k.clone(),
+            innovation_cov: innov,
+            iterations: start.iterations + it + 1,
+            regularization: 0.0,
+        };
+        if residual(a, c, q, r, s, &sol) <= 0.1 * RESIDUAL_TOL {
+            let rho = spectral_radius((a - &sol.k * c).as_ref()).ok()?;
+            return (rho < 1.0).then_some(sol);
+        }
+    }
+    None
+}
+
+/// The doubling solve of [`kalman_gain`] for the covariances as given (checked for a stable
+/// `A - K C`, not for accuracy: see [`residual`]).
+fn doubling(
     a: MatRef<'_, f64>,
     c: MatRef<'_, f64>,
     q: MatRef<'_, f64>,
@@ -131,12 +293,12 @@ pub fn kalman_gain(
             "the predictor A - K C has spectral radius {rho:.6} >= 1"
         )));
     }
-    let _ = innov_llt.inverse();
     Ok(KalmanSolution {
         p,
         k,
         innovation_cov: innov,
         iterations,
+        regularization: 0.0,
     })
 }
 
@@ -203,5 +365,114 @@ mod tests {
             kalman_gain(a.as_ref(), c.as_ref(), q.as_ref(), r.as_ref(), s.as_ref()),
             Err(SysidError::NoStabilizingSolution { .. })
         ));
+    }
+    #[test]
+    fn nearly_noise_free_outputs_get_the_stabilising_gain() {
+        // CVA, order 4, on the Bouc-Wen benchmark's training record: R is 1e-10 of Q and the
+        // joint covariance is indefinite at round-off (-1.6e-18), so the doubling fails
+        let a = mat![
+            [
+                0.9306465979640784,
+                -0.3819413696552773,
+                -0.5542205222496118,
+                0.4403342241573909
+            ],
+            [
+                -0.1670236869251183,
+                0.6116857306290382,
+                -0.3438039179044026,
+                0.06905865408421202
+            ],
+            [
+                0.14382615621721798,
+                -0.009052044135347867,
+                0.7874432682660265,
+                0.2656801550934242
+            ],
+            [
+                -0.04207278694963504,
+                0.828038812602137,
+                0.4173718069110444,
+                0.44300734833526734
+            ]
+        ];
+        let c = mat![[
+            0.03395344402986988,
+            -0.04757180495104043,
+            0.07781916888418859,
+            0.020522972842843993
+        ]];
+        let q = mat![
+            [
+                0.0054294285887168375,
+                0.0031282198825696387,
+                0.0013761188469624732,
+                -0.006848774965179783
+            ],
+            [
+                0.0031282198825696387,
+                0.0018044965299045424,
+                0.0007942891305034826,
+                -0.0039471412153836
+            ],
+            [
+                0.0013761188469624732,
+                0.0007942891305034826,
+                0.00034973255890816097,
+                -0.0017366255363409696
+            ],
+            [
+                -0.006848774965179783,
+                -0.0039471412153836,
+                -0.0017366255363409696,
+                0.008639781331375851
+            ]
+        ];
+        let r = mat![[2.1682512811591514e-13]];
+        let s = mat![
+            [-3.226226922976675e-08],
+            [-1.8356315528642772e-08],
+            [-8.022770371772911e-09],
+            [4.057155525727533e-08]
+        ];
+        // the doubling alone fails (or is inaccurate) in the given basis
+        let plain = doubling(a.as_ref(), c.as_ref(), q.as_ref(), r.as_ref(), s.as_ref());
+        assert!(plain.map_or(true, |p| {
+            residual(
+                a.as_ref(),
+                c.as_ref(),
+                q.as_ref(),
+                r.as_ref(),
+                s.as_ref(),
+                &p,
+            ) > 1e-9
+        }));
+        let sol = kalman_gain(a.as_ref(), c.as_ref(), q.as_ref(), r.as_ref(), s.as_ref()).unwrap();
+        assert!(spectral_radius((&a - &sol.k * &c).as_ref()).unwrap() < 1.0);
+        assert!(
+            residual(
+                a.as_ref(),
+                c.as_ref(),
+                q.as_ref(),
+                r.as_ref(),
+                s.as_ref(),
+                &sol
+            ) < 1e-9
+        );
+        // SciPy's solve_discrete_are (generalised Schur vectors) on the same matrices
+        let scipy = [
+            -13.560457743887687,
+            2.869462845898852,
+            12.267614999304362,
+            18.382485923023673,
+        ];
+        for (i, want) in scipy.iter().enumerate() {
+            assert!(
+                (sol.k[(i, 0)] - want).abs() < 1e-6 * 20.0,
+                "{} {}",
+                sol.k[(i, 0)],
+                want
+            );
+        }
     }
 }

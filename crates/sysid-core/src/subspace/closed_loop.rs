@@ -560,6 +560,7 @@ impl ClosedLoop {
             s,
             stabilized: false,
             predictor_stabilized,
+            kalman_regularization: 0.0,
         })
     }
 }

@@ -149,6 +149,9 @@ pub struct Identified {
     /// `A - K C` and K was replaced by the stabilising Kalman gain of the estimated noise
     /// covariances (closed-loop methods, whose K comes from least squares).
     pub predictor_stabilized: bool,
+    /// What the Kalman gain's Riccati solve added to the diagonal of R for a stabilising
+    /// solution (0 when nothing was; see [`crate::riccati::kalman_gain`]).
+    pub kalman_regularization: f64,
 }
 
 /// The weighted SVD of a compressed record, ready to fit models of any order.
