@@ -517,7 +517,10 @@ class SubspaceEstimator:
             simulation fit (:meth:`feedthrough_selection`, recorded in
             ``info["feedthrough_selection"]``).
         kalman : bool
-            Estimate the noise model (``K`` from the Riccati equation, innovation covariance).
+            Estimate the noise model (``K`` from the Riccati equation of the residuals'
+            covariances, innovation covariance; solved again in a scaled basis with Newton's
+            refinement where the doubling fails, a shift of the covariances that had to be
+            kept in ``info["kalman_regularization"]``).
         stable : bool
             Enforce a stable ``A`` (Maciejowski's zero-padded shift); recorded in ``info``.
         x0 : bool
