@@ -185,11 +185,8 @@ fn newton(
         symmetrize(&mut w);
         let mut p = crate::lyapunov::solve_discrete_lyapunov(f.as_ref(), w.as_ref()).ok()?;
         symmetrize(&mut p);
-        let mut innov = c * &p * c.transpose() + r;
-        symmetrize(&mut innov);
-        let llt = innov.llt(faer::Side::Lower).ok()?;
-        let apct_s = a * &p * c.transpose() + s;
-        k = llt.solve(apct_s.transpose()).transpose().to_owned();
+        let innov;
+        (k, innov) = gain_of(a, c, r, s, &p)?;
         let sol = KalmanSolution {
             p,
             k: k.clone(),
@@ -203,6 +200,24 @@ fn newton(
         }
     }
     None
+}
+
+/// The gain `K = (A P C^T + S)(C P C^T + R)^{-1}` and innovation covariance `C P C^T + R` of a
+/// state error covariance `P`; `None` when the innovation covariance is not positive definite.
+fn gain_of(
+    a: MatRef<'_, f64>,
+    c: MatRef<'_, f64>,
+    r: MatRef<'_, f64>,
+    s: MatRef<'_, f64>,
+    p: &Mat<f64>,
+) -> Option<(Mat<f64>, Mat<f64>)> {
+    let cp = c * p;
+    let mut innov = &cp * c.transpose() + r;
+    symmetrize(&mut innov);
+    let apct_s = a * cp.transpose() + s; // A P C^T + S
+    let llt = innov.llt(faer::Side::Lower).ok()?;
+    let k = llt.solve(apct_s.transpose()).transpose().to_owned();
+    Some((k, innov))
 }
 
 /// The doubling solve of [`kalman_gain`] for the covariances as given (checked for a stable
@@ -279,14 +294,9 @@ fn doubling(
         )));
     }
     let p = h;
-    let cp = c * &p;
-    let mut innov = &cp * c.transpose() + r;
-    symmetrize(&mut innov);
-    let apct_s = a * cp.transpose() + s; // A P C^T + S
-    let innov_llt = innov.llt(faer::Side::Lower).map_err(|_| {
+    let (k, innov) = gain_of(a, c, r, s, &p).ok_or_else(|| {
         fail("the innovation covariance C P C^T + R is not positive definite".into())
     })?;
-    let k = innov_llt.solve(apct_s.transpose()).transpose().to_owned();
     let rho = spectral_radius((a - &k * c).as_ref())?;
     if rho.is_nan() || rho >= 1.0 {
         return Err(fail(format!(
