@@ -61,21 +61,6 @@ def test_whole_record_refit_converges_when_cheap_and_stops_once_settled_when_not
     assert better.info["pem"]["cost"][-1] <= capped.info["pem"]["cost"][-1]
 
 
-def test_whole_record_refit_counts_the_evaluations_of_its_iterations(monkeypatch):
-    # a search evaluates 2 to 3 times per iteration: a re-fit whose FINAL_ITER iterations fit
-    # the work bound once, not EVALS_PER_ITER times, stops once settled (CSTR: an order-19
-    # re-fit "to convergence" crawled 300 iterations, 940 evaluations, 30 s, and was not chosen)
-    est, _ = daisy_split("dryer")
-    start = quiet(sysid.n4sid, est, 4, feedthrough=False)
-    w = core.iteration_work(est, 4, False, False)
-    monkeypatch.setattr(core, "FINAL_WORK", 2 * core.FINAL_ITER * w)
-    m = quiet(core._final_refit, est, start, 4, False, "simulation", "output")
-    assert "until settled" in m.info["identify_refit"]
-    monkeypatch.setattr(core, "FINAL_WORK", core.EVALS_PER_ITER * core.FINAL_ITER * w)
-    m = quiet(core._final_refit, est, start, 4, False, "simulation", "output")
-    assert "identify_refit" not in m.info
-
-
 def test_identify_bounds_the_work_of_refinements_and_says_what_it_left_out(monkeypatch,
                                                                            pem_calls):
     est, _ = daisy_split("dryer")

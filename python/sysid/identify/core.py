@@ -107,18 +107,12 @@ SETTLE_WINDOW = 5
 SETTLE_POINTS = TOL / 10
 #: the cost of refinements is counted in the work of their iterations (:func:`iteration_work`:
 #: fitted samples x outputs x parameters squared, the normal equations' share; about 1e10 per
-#: CPU second on one core of the machine the benches first ran on, 2e9 per evaluation on the
-#: CSTR record's re-fits on a 2-core Xeon of 2026-12-01), not in seconds, so that the
+#: CPU second on one core of the machine the benches ran on), not in seconds, so that the
 #: choice does not depend on the machine or its load. A whole-record re-fit runs to
 #: convergence (``FINAL_ITER`` iterations at most) when that costs at most ``FINAL_WORK``;
 #: beyond (long records of many outputs at high orders), at most ``FINAL_WORK`` worth of
 #: iterations and it stops once settled, as the fits scored on the held-out blocks did
 FINAL_WORK = 2e10
-#: a search evaluates its criterion and Jacobian about this many times per iteration (step
-#: trials, chord steps: 2.1 to 3.1 in the whole-record re-fits on the CSTR record), so a re-fit
-#: runs to convergence only when ``EVALS_PER_ITER * FINAL_ITER`` iterations' work fits in
-#: ``FINAL_WORK`` (an order-19 re-fit there crawled 300 iterations, 940 evaluations, 30 s)
-EVALS_PER_ITER = 3
 #: a refinement fitted on a fold stops once settled, at pem's default cap of 50 iterations,
 #: or once it has spent ``FINAL_WORK / 5`` (the five fold fits of a refinement together cost
 #: at most what its whole-record re-fit may): on long records the held-out blocks score it a
@@ -463,7 +457,7 @@ def _final_refit(data: IOData, start: Any, order: int, ft: bool, focus: str,
     import sysid
 
     w = iteration_work(data, order, ft, focus == "prediction")
-    if EVALS_PER_ITER * FINAL_ITER * w <= FINAL_WORK:
+    if FINAL_ITER * w <= FINAL_WORK:
         return sysid.pem(data, start, focus=focus, feedthrough=ft, weighting=wt,
                          max_iter=FINAL_ITER, progress=False)
     cap = max(SETTLE_WINDOW + 1, int(FINAL_WORK // w))
