@@ -613,8 +613,8 @@ class SubspaceEstimator:
             "n_columns": self.factor.n_columns,
             "compression": compression_info(self.factor, self.compressor),
             "stable_enforced": bool(stable),
-            # added to R's diagonal for a stabilising Kalman gain (0: nothing was), see
-            # sysid._sysid.kalman_gain: nearly noise-free outputs leave R far below Q
+            # the relative shift of Q and R whose Riccati equation K solves (0: the
+            # covariances as estimated; the core's riccati::kalman_gain)
             "kalman_regularization": float(res.get("kalman_regularization", 0.0)),
             "Q": res["Q"],
             "R": res["R"],

@@ -12,19 +12,21 @@
 //!
 //! The cross term is removed first (`Ā = A - S R^{-1} C`, `Q̄ = Q - S R^{-1} S^T`), then the
 //! structure-preserving doubling algorithm (Chu, Fan and Lin 2005) converges quadratically to
-//! the stabilising solution when one exists. The solution is checked. Covariances estimated
-//! from nearly noise-free outputs, or at orders above the system's, can defeat the doubling in
-//! floating point: `R` many orders below `Q` (the cross-term removal then loses to round-off
-//! the positive semi-definiteness the doubling needs), states in badly scaled coordinates
-//! (columns of `C` of size 100 next to 1), modes that no noise drives. So when `A - K C` is
-//! not stable or the iteration does not converge, the equation is solved again in the state
-//! coordinates where every column of `C` has unit norm (the solution is mapped back: the
-//! Riccati equation is invariant under a change of state basis), and if that fails too, there
-//! with `Q` and `R` raised by a tiny multiple of the identity (`1e-12`, then `1e-10`, `1e-8`,
-//! `1e-6` of the scaled covariances' trace; the relative shift is recorded in
-//! [`KalmanSolution::regularization`]), which drives every mode and makes `R` definite; the
-//! gain is continuous in the covariances where `C P C^T + R` stays positive definite, so it
-//! moves by about the relative size of the shift. If nothing gives a stable `A - K C`,
+//! the stabilising solution when one exists. The result is checked: `A - K C` stable and the
+//! equation itself satisfied (relative residual `1e-9`). Covariances estimated from nearly
+//! noise-free outputs, or at orders above the system's, can defeat the doubling in floating
+//! point: `R` many orders below `Q` (the cross-term removal then loses to round-off the
+//! positive semi-definiteness the doubling needs), states in badly scaled coordinates
+//! (columns of `C` of size 100 next to 1), modes that no noise drives; it then returns no
+//! stabilising gain, or a stabilising but wrong one. On such a failure the equation is solved
+//! again in the state coordinates where every column of `C` has unit norm (the solution is
+//! mapped back: the equation is invariant under a change of state basis): the doubling with
+//! `Q` and `R` raised by `0`, `1e-12`, ... `1` times the scaled covariances' trace gives a
+//! stabilising start, from which Newton's (Hewer's) iteration solves the equation as given.
+//! Where Newton's iteration fails, a doubling solution with a shift of at most `1e-6` that
+//! satisfies its shifted equation is returned, the shift recorded in
+//! [`KalmanSolution::regularization`] (the gain is continuous in the covariances where
+//! `C P C^T + R` stays positive definite). If nothing gives a stable `A - K C`,
 //! [`SysidError::NoStabilizingSolution`] is returned rather than a wrong gain.
 
 use crate::error::{Result, SysidError};
@@ -41,10 +43,11 @@ pub struct KalmanSolution {
     pub k: Mat<f64>,
     /// Innovation covariance `C P C^T + R` (l x l).
     pub innovation_cov: Mat<f64>,
-    /// Doubling iterations used.
+    /// Doubling iterations used (plus Newton's, when they refined the solution).
     pub iterations: usize,
-    /// The relative shift of `Q` and `R` that gave a stabilising solution (times the trace
-    /// of the covariances in scaled coordinates; 0 when none was needed).
+    /// The relative shift of `Q` and `R` (times the trace of the covariances in scaled
+    /// coordinates) whose equation the returned solution satisfies; 0 for the equation as
+    /// given.
     pub regularization: f64,
 }
 

@@ -149,8 +149,8 @@ pub struct Identified {
     /// `A - K C` and K was replaced by the stabilising Kalman gain of the estimated noise
     /// covariances (closed-loop methods, whose K comes from least squares).
     pub predictor_stabilized: bool,
-    /// What the Kalman gain's Riccati solve added to the diagonal of R for a stabilising
-    /// solution (0 when nothing was; see [`crate::riccati::kalman_gain`]).
+    /// The relative shift of the noise covariances whose Riccati equation the Kalman gain
+    /// solves (0: the covariances as estimated; see [`crate::riccati::kalman_gain`]).
     pub kalman_regularization: f64,
 }
 
