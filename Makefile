@@ -12,7 +12,7 @@ $(STAMP): pyproject.toml Makefile
 	$(BIN)/python -m pip install -q "maturin>=1.7,<2" "numpy>=1.24" "scipy>=1.10" \
 		"pytest>=7" "hypothesis>=6" "matplotlib>=3.6" "pandas>=1.5" "ruff>=0.5" \
 		"control>=0.10" "dask[array]>=2023.1" "distributed>=2023.1" "pyarrow>=12" "mypy>=1.10" "tqdm>=4.60" "threadpoolctl>=3.1" \
-		"selenium>=4.10" "mkdocs>=1.5" "mkdocstrings[python]>=0.24"
+		"selenium>=4.10" "mkdocs>=1.5" "mkdocstrings[python]>=0.24" "pytest-xdist>=3.5"
 	touch $(STAMP)
 
 build: $(STAMP)
@@ -24,8 +24,11 @@ demo: build
 test-rust:
 	cargo test --release -p sysid-core
 
+# the tests on every core (pytest-xdist), then alone the few that time a latency (marked
+# `serial`: Ctrl-C within a second), so that the others' load does not decide them
 test-python: build
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto -m "not serial"
+	$(BIN)/python -m pytest -q -m serial
 
 test: test-rust test-python
 

@@ -51,6 +51,7 @@ def test_fold_workers_follow_the_environment_and_the_thread(monkeypatch) -> None
     assert got == [1]  # a fold fit's own folds run in its thread
 
 
+@pytest.mark.serial
 def test_a_worker_threads_rust_fit_stops_when_its_event_is_set() -> None:
     rng = np.random.default_rng(1)
     true = sysid.StateSpaceModel(np.diag([0.9, 0.5, -0.3]), np.ones((3, 1)), np.ones((1, 3)))

@@ -25,7 +25,8 @@ import pytest
 
 import sysid
 
-pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
+pytestmark = [pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals"),
+              pytest.mark.serial]
 
 # Shared by every case: a stable MIMO system and records of it.
 PRELUDE = """
