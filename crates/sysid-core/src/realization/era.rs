@@ -18,8 +18,8 @@
 
 use super::modal::eigen_decomposition;
 use super::{
-    a_from_shift, block_hankel, cap, check_markov, check_order, factors, hankel_size, hankel_svd,
-    largest_gap, Realization, RealizationOptions,
+    a_from_shift, auto_order, block_hankel, check_markov, check_order, factors, hankel_size,
+    hankel_svd, Realization, RealizationOptions,
 };
 use crate::error::Result;
 use crate::model::StateSpace;
@@ -40,7 +40,9 @@ pub struct EraResult {
 
 /// ERA on the Markov parameters `h_0 = D, h_1, ...` (each `l x m`).
 ///
-/// The order is `opts.order` or the largest log-gap of the Hankel singular values.
+/// The order is `opts.order` or chosen from the Hankel singular values: the numerical rank
+/// on noise-free Markov parameters, the count above the noise floor on noisy ones
+/// ([`RealizationOptions::order`]).
 ///
 /// ```
 /// use faer::mat;
@@ -59,7 +61,7 @@ pub fn era(markov: &[Mat<f64>], opts: &RealizationOptions) -> Result<EraResult> 
     let svd = hankel_svd(h0.as_ref())?;
     let n = opts
         .order
-        .unwrap_or_else(|| largest_gap(&svd.s, cap(svd.s.len() - 1, opts.max_order)));
+        .unwrap_or_else(|| auto_order(&svd.s, (r * l, s * m), opts, svd.s.len() - 1));
     check_order(n, &svd.s, r, s, l, m)?;
     let (o, ctr) = factors(&svd, n);
     let h1 = block_hankel(markov, r, s, 1);

@@ -6,8 +6,8 @@
 //! squares, which uses every block row of `H_0` and no shifted matrix.
 
 use super::{
-    a_from_shift, block_hankel, cap, check_markov, check_order, factors, hankel_size, hankel_svd,
-    largest_gap, Realization, RealizationOptions,
+    a_from_shift, auto_order, block_hankel, check_markov, check_order, factors, hankel_size,
+    hankel_svd, Realization, RealizationOptions,
 };
 use crate::error::Result;
 use crate::linalg::pinv;
@@ -83,7 +83,8 @@ pub fn ho_kalman(markov: &[Mat<f64>], opts: &RealizationOptions) -> Result<Reali
     })
 }
 
-/// Kung's realisation: SVD truncation at `opts.order` (largest log-gap if `None`), A from the
+/// Kung's realisation: SVD truncation at `opts.order` (chosen from the singular values if
+/// `None`: [`RealizationOptions::order`]), A from the
 /// shift invariance of the observability factor. Needs at least two block rows.
 ///
 /// ```
@@ -107,7 +108,7 @@ pub fn kung(markov: &[Mat<f64>], opts: &RealizationOptions) -> Result<Realizatio
     let svd = hankel_svd(h0.as_ref())?;
     let n = opts
         .order
-        .unwrap_or_else(|| largest_gap(&svd.s, cap((r - 1) * l, opts.max_order)));
+        .unwrap_or_else(|| auto_order(&svd.s, (r * l, s * m), opts, (r - 1) * l));
     check_order(n, &svd.s, r, s, l, m)?;
     let (o, ctr) = factors(&svd, n);
     let up = o.subrows(0, (r - 1) * l);

@@ -62,14 +62,15 @@ crate::names::option_names! { RealizationMethod, "method", false, [
 #[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub struct RealizationOptions {
-    /// Model order; `None` chooses it: the numerical rank of `H_0` (Ho-Kalman) or the
-    /// largest gap of the logarithms of its singular values (Kung, ERA).
+    /// Model order; `None` chooses it: the numerical rank of `H_0` (Ho-Kalman) or, Kung
+    /// and ERA, its numerical rank on noise-free Markov parameters and the count of its
+    /// singular values above the noise floor on noisy ones (`auto_order`).
     pub order: Option<usize>,
     /// Block rows r of the Hankel matrix; `None` splits the available parameters evenly.
     pub rows: Option<usize>,
     /// Block columns s of the Hankel matrix; `None` splits the available parameters evenly.
     pub cols: Option<usize>,
-    /// Relative tolerance on the singular values of `H_0` for the rank (Ho-Kalman).
+    /// Relative tolerance on the singular values of `H_0` for the numerical rank.
     pub rank_tol: f64,
     /// Largest order the automatic choice (Kung, ERA) considers; `None`: every one the
     /// Hankel matrix allows. OKID's Markov parameters follow its observer of `p` past samples,
@@ -192,12 +193,67 @@ pub(crate) fn block_hankel(markov: &[Mat<f64>], r: usize, s: usize, shift: usize
     })
 }
 
-/// Order with the largest drop of `log10(s_k / s_{k+1})`, among `1..=max`.
 /// `max` lowered to `max_order` when that is given (at least 1).
 pub(crate) fn cap(max: usize, max_order: Option<usize>) -> usize {
     max_order.map_or(max, |c| max.min(c.max(1)))
 }
 
+/// The automatic order (Kung, ERA) among `1..=max` from the singular values `sv` of a Hankel
+/// matrix of `shape` (rows, columns):
+/// - when a candidate singular value is below `rank_tol` times the largest (noise-free
+///   Markov parameters), the numerical rank;
+/// - else (noisy ones) the count above the noise floor: Gavish and Donoho's (2014) optimal
+///   hard threshold for a noise level estimated from the median singular value,
+///   `omega(beta) median(s)` with `beta` the Hankel matrix's aspect ratio. It assumes most
+///   of the candidates are noise; when half of them or more stand above the floor, or none
+///   (a Hankel matrix too small to show the floor), the largest gap of `log10(s_k / s_{k+1})`
+///   decides;
+/// - with `max_order` (OKID's Markov parameters, whose errors follow its observer and are not
+///   independent), the largest gap below it.
+///
+/// The largest gap alone, the rule before, picked the drop between two strong modes (1-2
+/// states) or the drop to round-off at the end of a noisy Hankel matrix (50+ states).
+pub(crate) fn auto_order(
+    sv: &[f64],
+    shape: (usize, usize),
+    opts: &RealizationOptions,
+    max: usize,
+) -> usize {
+    let max = cap(max, opts.max_order);
+    if opts.max_order.is_some() || sv.is_empty() {
+        return largest_gap(sv, max);
+    }
+    let candidates = &sv[..(max + 1).min(sv.len())];
+    let floor = opts.rank_tol * sv[0];
+    let rank = candidates.iter().filter(|&&s| s > floor).count();
+    if rank < candidates.len() {
+        return rank.clamp(1, max.max(1));
+    }
+    let (rows, cols) = shape;
+    let beta = rows.min(cols) as f64 / rows.max(cols).max(1) as f64;
+    let omega = 0.56 * beta.powi(3) - 0.95 * beta.powi(2) + 1.82 * beta + 1.43;
+    let threshold = omega * median(candidates);
+    let above = candidates.iter().filter(|&&s| s > threshold).count();
+    if above == 0 || 2 * above >= candidates.len() {
+        largest_gap(sv, max)
+    } else {
+        above.clamp(1, max.max(1))
+    }
+}
+
+/// Median of a non-empty slice.
+fn median(x: &[f64]) -> f64 {
+    let mut v = x.to_vec();
+    v.sort_by(|a, b| a.total_cmp(b));
+    let k = v.len() / 2;
+    if v.len() % 2 == 1 {
+        v[k]
+    } else {
+        0.5 * (v[k - 1] + v[k])
+    }
+}
+
+/// Order with the largest drop of `log10(s_k / s_{k+1})`, among `1..=max`.
 pub(crate) fn largest_gap(sv: &[f64], max: usize) -> usize {
     let floor = sv.first().copied().unwrap_or(0.0) * 1e-15 + f64::MIN_POSITIVE;
     let mut best = (1, f64::NEG_INFINITY);
@@ -354,5 +410,34 @@ pub(crate) mod testing {
             .map(|(x, y)| (x - y).norm_max())
             .fold(0.0, f64::max)
             / scale
+    }
+}
+
+#[cfg(test)]
+mod auto_order_tests {
+    use super::*;
+
+    fn order(sv: &[f64], shape: (usize, usize), max_order: Option<usize>) -> usize {
+        let opts = RealizationOptions {
+            max_order,
+            ..RealizationOptions::default()
+        };
+        auto_order(sv, shape, &opts, sv.len() - 1)
+    }
+
+    #[test]
+    fn rank_noise_floor_and_gap() {
+        // noise-free: the numerical rank, whatever the spread of the strong values
+        let exact = [1e3, 1.0, 0.5, 1e-12, 1e-13, 1e-14, 1e-15];
+        assert_eq!(order(&exact, (7, 7), None), 3);
+        // noisy: three values above a floor of forty near 1 (the largest gap is 1e3 -> 50)
+        let mut noisy = vec![1e3, 50.0, 20.0];
+        noisy.extend((0..40).map(|k| 1.2 - 0.01 * k as f64));
+        assert_eq!(order(&noisy, (43, 43), None), 3);
+        // too small to show a floor: the largest gap
+        let short = [10.0, 9.0, 8.0, 7.0, 1.0, 0.9];
+        assert_eq!(order(&short, (6, 6), None), 4);
+        // OKID's cap: the largest gap below it
+        assert_eq!(order(&noisy, (43, 43), Some(2)), 1);
     }
 }
