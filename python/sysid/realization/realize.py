@@ -204,20 +204,17 @@ def kung(markov: Any, order: int | None = None, *, rows: int | None = None,
          ) -> StateSpaceModel:
     """Kung's SVD realisation from (noisy) Markov parameters.
 
-    The order is ``order`` or chosen from the Hankel singular values (``order`` below); A
-    comes from the shift invariance of the observability matrix (least squares over all block rows).
+    The order is ``order`` or chosen from the Hankel singular values as :func:`era` does; A
+    comes from the shift invariance of the observability matrix (least squares over all
+    block rows).
 
     Parameters
     ----------
     markov : array_like or MarkovEstimate
         ``(count, noutputs, ninputs)``.
     order : int, optional
-        Model order; by default the numerical rank of the Hankel matrix on
-        noise-free Markov parameters; on noisy ones the count of its singular values above
-        the noise floor, Gavish and Donoho's optimal hard threshold for a noise level from
-        their median (the largest gap of their logarithms where the matrix is too small to
-        show the floor; the gap alone picked 1-2 states where two modes dominate, or 50+ at
-        the drop to round-off) (as :func:`era`).
+        Model order; by default chosen from the Hankel singular values as :func:`era`
+        chooses it.
     rows, cols : int, optional
         Block rows (at least 2) and columns of the Hankel matrix.
     dt : float, optional
@@ -319,14 +316,13 @@ def era(markov: Any, order: int | None = None, *, rows: int | None = None,
     markov : array_like or MarkovEstimate
         ``(count, noutputs, ninputs)``: ``h_0 = D, h_1 = CB, ...``.
     order : int, optional
-        Model order; by default the numerical rank of the Hankel matrix on
-        noise-free Markov parameters; on noisy ones the count of its singular values above
-        the noise floor, Gavish and Donoho's optimal hard threshold for a noise level from
-        their median (the largest gap of their logarithms where the matrix is too small to
-        show the floor; the gap alone picked 1-2 states where two modes dominate, or 50+ at
-        the drop to round-off). For :func:`sysid.okid`'s
-        Markov parameters, whose errors follow its observer (their Hankel matrix has rank
-        ``observer_order * noutputs`` by construction), the largest gap below that rank.
+        Model order; by default the numerical rank of the Hankel matrix on noise-free
+        Markov parameters, and on noisy ones the count of its singular values above the
+        noise floor (Gavish and Donoho's optimal hard threshold for a noise level from their
+        median; the largest gap of their logarithms where the matrix is too small to show
+        the floor). For :func:`sysid.okid`'s Markov parameters, whose errors follow its
+        observer (their Hankel matrix has rank ``observer_order * noutputs`` by
+        construction), the largest gap below that rank.
     rows, cols : int, optional
         Block rows and columns of the Hankel matrix, ``rows + cols <= count - 1``.
         More block rows than the order (times the outputs) and columns spanning the slowest

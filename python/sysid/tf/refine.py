@@ -151,8 +151,7 @@ class _Map:
         """Per pair, the matrix that takes its part ``(Ad, cols, G, c)`` flattened
         (:func:`_flat`) to ``theta`` with every other pair's part zero: :meth:`_assembled` is
         linear, so it is found once per map (the pairs' shapes and taps are fixed) by
-        assembling each unit part, and a Jacobian column is then one product (assembling
-        every pair's zero part for every column took half of a Jacobian's time)."""
+        assembling each unit part, and a Jacobian column is then one product."""
         if self._layouts is None:
             zero = [_unflat(np.zeros(_flat(p).size), p)
                     for p in ((d.Ad, d.cols, d.G, d.c) for d in derivs)]

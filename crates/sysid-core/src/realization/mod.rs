@@ -210,9 +210,6 @@ pub(crate) fn cap(max: usize, max_order: Option<usize>) -> usize {
 ///   decides;
 /// - with `max_order` (OKID's Markov parameters, whose errors follow its observer and are not
 ///   independent), the largest gap below it.
-///
-/// The largest gap alone, the rule before, picked the drop between two strong modes (1-2
-/// states) or the drop to round-off at the end of a noisy Hankel matrix (50+ states).
 pub(crate) fn auto_order(
     sv: &[f64],
     shape: (usize, usize),
