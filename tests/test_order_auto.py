@@ -186,8 +186,8 @@ def test_time_series_auto_order_is_cross_validated_on_prediction(method):
 
 def test_a_held_out_block_whose_outputs_stand_still_scores_without_a_numpy_warning():
     # DaISy's flutter record (not shipped; benches/realdata.py reads it) ends in 225
-    # samples of one held value (the logger ran on), and its reversed split estimates on them: `ssest(data,
-    # focus="simulation")` showed
+    # samples of one held value (the logger ran on), and its reversed split estimates on
+    # them: `ssest(data, focus="simulation")` showed
     # NumPy's "Mean of empty slice" 33 times, from the held-out score of a block where the
     # output stands still (no fit: it divides by the block's variation). Such a block still
     # scores -inf for every candidate (the order choice is unchanged), now without a warning
