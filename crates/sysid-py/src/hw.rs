@@ -110,6 +110,7 @@ pub fn hw_simulate<'py>(
     }
     let u = vec1(&u);
     let (y, (w, x)) = py.detach(|| (s.simulate(&theta, &u), s.intermediate(&theta, &u)));
+    let y = y.map_err(crate::errors::to_py)?;
     Ok((
         slice_to_numpy(py, &y),
         slice_to_numpy(py, &w),
@@ -197,10 +198,9 @@ pub fn hw_mimo_simulate<'py>(
     }
     let y = match x0 {
         None => py.detach(|| s.simulate(&theta, uv)),
-        Some(x0) => py
-            .detach(|| s.simulate_from(&theta, uv, &x0))
-            .map_err(crate::errors::to_py)?,
-    };
+        Some(x0) => py.detach(|| s.simulate_from(&theta, uv, &x0)),
+    }
+    .map_err(crate::errors::to_py)?;
     Ok(mat_to_numpy(py, &y))
 }
 

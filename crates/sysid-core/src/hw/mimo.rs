@@ -128,10 +128,13 @@ impl MimoHwStructure {
     }
 
     /// Noise-free outputs `(N, p)` for inputs `u` `(N, m)` at `theta`, from rest.
-    pub fn simulate(&self, theta: &[f64], u: MatRef<'_, f64>) -> Mat<f64> {
+    ///
+    /// # Errors
+    /// [`SysidError::Interrupted`] when stopped inside an [`crate::interrupt`] scope.
+    pub fn simulate(&self, theta: &[f64], u: MatRef<'_, f64>) -> Result<Mat<f64>> {
         let mut y = Mat::<f64>::zeros(u.nrows(), self.outputs.len());
-        self.run(theta, u, None, None, |t, i, yhat, _| y[(t, i)] = yhat);
-        y
+        self.run(theta, u, None, None, |t, i, yhat, _| y[(t, i)] = yhat)?;
+        Ok(y)
     }
 
     /// Noise-free outputs `(N, p)` from the linear block's initial state `x0` (`order`
@@ -160,7 +163,7 @@ impl MimoHwStructure {
             });
         }
         let mut y = Mat::<f64>::zeros(u.nrows(), self.outputs.len());
-        self.run(theta, u, None, Some(x0), |t, i, yhat, _| y[(t, i)] = yhat);
+        self.run(theta, u, None, Some(x0), |t, i, yhat, _| y[(t, i)] = yhat)?;
         Ok(y)
     }
 
@@ -202,7 +205,7 @@ impl MimoHwStructure {
         cols: Option<&[Column]>,
         x0: Option<&[f64]>,
         mut visit: impl FnMut(usize, usize, f64, &[f64]),
-    ) {
+    ) -> Result<()> {
         let l = self.layout();
         let (n, m, p) = (self.order, self.inputs.len(), self.outputs.len());
         let (a, b, c, d) = self.matrices(theta);
@@ -243,6 +246,9 @@ impl MimoHwStructure {
             })
             .collect();
         for t in 0..u.nrows() {
+            if t % 4096 == 4095 {
+                crate::interrupt::check()?; // Ctrl-C within a pass over a long record
+            }
             for j in 0..m {
                 let np = self.inputs[j].n_params();
                 let a0 = l.alpha[j];
@@ -316,6 +322,7 @@ impl MimoHwStructure {
             }
             std::mem::swap(&mut x, &mut xn);
         }
+        Ok(())
     }
 }
 
@@ -369,7 +376,7 @@ impl Problem for MimoHwProblem<'_> {
             let c = jacobian.then_some(cols.as_slice());
             self.structure.run(theta, *u, c, None, |t, i, yhat, jr| {
                 sums.add(y[(t, i)] - yhat, Some(jr))
-            });
+            })?;
         }
         Ok(sums.finish())
     }

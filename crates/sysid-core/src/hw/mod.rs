@@ -232,10 +232,13 @@ impl HwStructure {
     }
 
     /// Noise-free output for input `u` at parameters `theta` (from rest).
-    pub fn simulate(&self, theta: &[f64], u: &[f64]) -> Vec<f64> {
+    ///
+    /// # Errors
+    /// [`SysidError::Interrupted`] when stopped inside an [`crate::interrupt`] scope.
+    pub fn simulate(&self, theta: &[f64], u: &[f64]) -> Result<Vec<f64>> {
         let mut out = vec![0.0; u.len()];
-        self.run(theta, u, None, |t, yhat, _, _| out[t] = yhat);
-        out
+        self.run(theta, u, None, |t, yhat, _, _| out[t] = yhat)?;
+        Ok(out)
     }
 
     /// The linear block's intermediate signals `(w, x)` for input `u`.
@@ -271,7 +274,7 @@ impl HwStructure {
         u: &[f64],
         mut jac: Option<&mut Vec<f64>>,
         mut visit: impl FnMut(usize, f64, Option<&[f64]>, ()),
-    ) {
+    ) -> Result<()> {
         let (alpha, b, f, beta) = self.split(theta);
         let (na, nbeta) = (alpha.len(), beta.len());
         let n = u.len();
@@ -291,6 +294,9 @@ impl HwStructure {
         let mut s_hist = vec![0.0; ring * plin]; // s(t-1-i) at slot (t-1-i) % ring
         let mut s = vec![0.0; plin];
         for t in 0..n {
+            if t % 4096 == 4095 {
+                crate::interrupt::check()?; // Ctrl-C within a pass over a long record
+            }
             let mut xt = 0.0;
             for (k, bk) in b.iter().enumerate() {
                 if t >= self.nk + k {
@@ -340,6 +346,7 @@ impl HwStructure {
                 visit(t, yhat, None, ());
             }
         }
+        Ok(())
     }
 }
 
@@ -362,7 +369,7 @@ impl Problem for HwProblem<'_> {
         for (u, y) in &self.records {
             let jac = if jacobian { Some(&mut row) } else { None };
             self.structure
-                .run(theta, u, jac, |t, yhat, jr, _| sums.add(y[t] - yhat, jr));
+                .run(theta, u, jac, |t, yhat, jr, _| sums.add(y[t] - yhat, jr))?;
         }
         Ok(sums.finish())
     }
@@ -391,7 +398,7 @@ impl Problem for HwProblem<'_> {
 /// let s = HwStructure { input: Nonlinearity::Saturation, output: Nonlinearity::Identity,
 ///                       nb: 1, nf: 1, nk: 1 };
 /// let u: Vec<f64> = (0..400).map(|t| ((t * 7919 % 101) as f64 / 50.0) - 1.0).collect();
-/// let y = s.simulate(&[-0.5, 0.5, 0.5, -0.8], &u);
+/// let y = s.simulate(&[-0.5, 0.5, 0.5, -0.8], &u).unwrap();
 /// let sol = estimate(&s, &[(&u, &y)], &[-0.9, 0.9, 0.4, -0.7], &Options::default(),
 ///                    &mut |_| sysid_core::optim::Flow::Continue).unwrap();
 /// assert!((sol.theta[3] + 0.8).abs() < 1e-6 && (sol.theta[1] - 0.5).abs() < 1e-6);
@@ -489,5 +496,43 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// A pass over a long record asks whether to stop every few thousand samples (see the
+    /// MIMO structure's test of the same name).
+    #[test]
+    fn a_pass_stops_inside_the_record_when_asked() {
+        let u: Vec<f64> = (0..20_000)
+            .map(|t| (((t * 7919) % 211) as f64 / 105.0) - 1.0)
+            .collect();
+        let s = HwStructure {
+            input: Nonlinearity::Saturation,
+            output: Nonlinearity::Identity,
+            nb: 1,
+            nf: 1,
+            nk: 1,
+        };
+        let th = [-0.5, 0.5, 0.5, -0.8];
+        let y = s.simulate(&th, &u).unwrap();
+        let mut pr = HwProblem {
+            structure: s.clone(),
+            records: vec![(&u, &y)],
+        };
+        let late = || std::thread::sleep(crate::interrupt::POLL_INTERVAL * 2);
+        for jacobian in [false, true] {
+            let r = crate::interrupt::scope(
+                || true,
+                || {
+                    late();
+                    pr.evaluate(&th, jacobian)
+                },
+            );
+            assert_eq!(
+                r.err(),
+                Some(SysidError::Interrupted),
+                "jacobian {jacobian}"
+            );
+        }
+        assert!(pr.evaluate(&th, true).is_ok());
     }
 }

@@ -120,7 +120,7 @@ impl MimoHwProblem<'_> {
         for (u, y) in &self.records {
             s.run(&th, *u, Some(&cols), None, |t, i, yhat, jr| {
                 sums.add(y[(t, i)] - yhat, Some(jr))
-            });
+            })?;
         }
         let ev = sums.finish();
         // Z^T = M^T K^T

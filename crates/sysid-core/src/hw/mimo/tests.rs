@@ -34,7 +34,7 @@ fn sorted_poles(s: &MimoHwStructure, th: &[f64]) -> Vec<f64> {
 
 fn fit(s: &MimoHwStructure, truth: &[f64], start: &[f64]) -> Solution {
     let u = inputs(800, 3);
-    let y = s.simulate(truth, u.as_ref());
+    let y = s.simulate(truth, u.as_ref()).unwrap();
     let opts = Options {
         max_iter: 200,
         ..Options::default()
@@ -225,7 +225,7 @@ fn order3() -> (MimoHwStructure, Vec<f64>, Mat<f64>, Mat<f64>, Evaluation) {
 #[test]
 fn modal_gauss_newton_matches_finite_differences() {
     let (s, th, u, y, ev) = order3();
-    let sim = |th: &[f64]| s.simulate(th, u.as_ref());
+    let sim = |th: &[f64]| s.simulate(th, u.as_ref()).unwrap();
     let y0 = sim(&th);
     let p = th.len();
     let jac: Vec<Mat<f64>> = (0..p)
@@ -270,7 +270,8 @@ fn modal_gauss_newton_matches_the_plain_products() {
     let mut sums = NormalEquations::new(cols.len(), true);
     s.run(&th, u.as_ref(), Some(&cols), None, |t, i, yhat, jr| {
         sums.add(y[(t, i)] - yhat, Some(jr))
-    });
+    })
+    .unwrap();
     let plain = sums.finish();
     let hmax = plain.gauss_newton.norm_max();
     let dh = (&ev.gauss_newton - &plain.gauss_newton).norm_max();
@@ -279,4 +280,51 @@ fn modal_gauss_newton_matches_the_plain_products() {
     for (a, b) in ev.gradient.iter().zip(&plain.gradient) {
         assert!((a - b).abs() < 1e-10 * gmax, "g {a} vs {b}");
     }
+}
+
+/// A pass over a long record asks whether to stop every few thousand samples: inside a scope
+/// whose poll says "stop", an evaluation (and a simulation) ends with `Interrupted` instead of
+/// finishing the pass (Ctrl-C took a whole pass, up to half a second, on 200 000 samples).
+#[test]
+fn a_pass_stops_inside_the_record_when_asked() {
+    let s = MimoHwStructure {
+        inputs: vec![Nonlinearity::Saturation, Nonlinearity::Identity],
+        outputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
+        order: 2,
+        feedthrough: false,
+    };
+    let mut th = vec![-0.5, 0.5];
+    th.extend(linear_block());
+    let u = inputs(20_000, 5);
+    let y = s.simulate(&th, u.as_ref()).unwrap();
+    let mut pr = MimoHwProblem {
+        structure: s.clone(),
+        records: vec![(u.as_ref(), y.as_ref())],
+    };
+    // past the scope's first poll interval before the pass starts: its first check polls
+    let late = || std::thread::sleep(crate::interrupt::POLL_INTERVAL * 2);
+    for jacobian in [false, true] {
+        let r = crate::interrupt::scope(
+            || true,
+            || {
+                late();
+                pr.evaluate(&th, jacobian)
+            },
+        );
+        assert_eq!(
+            r.err(),
+            Some(SysidError::Interrupted),
+            "jacobian {jacobian}"
+        );
+    }
+    let r = crate::interrupt::scope(
+        || true,
+        || {
+            late();
+            s.simulate(&th, u.as_ref())
+        },
+    );
+    assert_eq!(r.err(), Some(SysidError::Interrupted));
+    // outside a scope nothing stops it
+    assert!(pr.evaluate(&th, true).is_ok());
 }
