@@ -42,6 +42,41 @@ pub(crate) fn symmetric_eigen(a: &Mat<f64>, step: &'static str) -> Result<(Mat<f
     Ok((u, (0..n).map(|i| sv[i]).collect()))
 }
 
+/// Magnitude below which [`flush_tiny`] sets a carried number to zero: 2^52 times the
+/// smallest normal double, so a value is zeroed before its decay reaches the subnormal range.
+pub(crate) const TINY: f64 = f64::MIN_POSITIVE * 4_503_599_627_370_496.0;
+
+/// Samples between two [`flush_tiny`] calls in a per-sample loop: a mode decaying faster
+/// than by 1e-28 over this many samples (|pole| < 0.02) passes through the subnormal range
+/// within a few samples anyway.
+pub(crate) const FLUSH_EVERY: usize = 16;
+
+/// Sets the entries of `v` smaller in magnitude than [`TINY`] (about 1e-292) to zero.
+///
+/// A sensitivity (or state) that is no longer forced decays geometrically: the initial
+/// state's sensitivities always, every one of them over a stretch of zero input. On the way
+/// to zero it passes through the subnormal numbers, and on Intel processors every
+/// multiplication or product kernel that touches one takes a microcode assist (about a
+/// hundred cycles): on a 2-core Xeon `pem` on the CSTR record spent 21 of its 28 ms per
+/// Gauss-Newton evaluation in block products of such rows (AMD processors barely slow
+/// down). Zeroing them changes each sum by less than 1e-292 of its terms' scale.
+#[inline]
+pub(crate) fn flush_tiny(v: &mut [f64]) {
+    for x in v.iter_mut() {
+        if x.abs() < TINY {
+            *x = 0.0;
+        }
+    }
+}
+
+/// [`flush_tiny`] on every column of `m`.
+#[inline]
+pub(crate) fn flush_tiny_mat(m: &mut faer::Mat<f64>) {
+    for j in 0..m.ncols() {
+        flush_tiny(m.col_as_slice_mut(j));
+    }
+}
+
 /// Zeroes the upper halves of the vector registers (`vzeroupper`) where the CPU has AVX; a
 /// no-op elsewhere.
 ///
@@ -89,5 +124,36 @@ pub(crate) fn mirror_lower(h: &mut Mat<f64>) {
         for i in j + 1..h.nrows() {
             h[(j, i)] = h[(i, j)];
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Subnormal numbers and normal ones below `TINY` become zero; `TINY` itself, larger
+    /// values of either sign and NaN (which must still reach the caller's checks) stay.
+    #[test]
+    fn flush_tiny_zeroes_only_what_would_turn_subnormal() {
+        let sub = f64::MIN_POSITIVE / 8.0;
+        assert!(sub > 0.0 && !sub.is_normal());
+        let mut v = [sub, -sub, TINY / 2.0, TINY, -TINY, 1e-200, -3.0, f64::NAN, 0.0];
+        flush_tiny(&mut v);
+        assert_eq!(&v[..7], &[0.0, 0.0, 0.0, TINY, -TINY, 1e-200, -3.0]);
+        assert!(v[7].is_nan() && v[8] == 0.0);
+        // a decay by 0.5 per sample, flushed every FLUSH_EVERY samples, never holds a
+        // subnormal number at a flush
+        let mut x = [1.0_f64];
+        for t in 1..5000 {
+            x[0] *= 0.5;
+            if t % FLUSH_EVERY == 0 {
+                flush_tiny(&mut x);
+                assert!(x[0] == 0.0 || x[0].is_normal());
+            }
+        }
+        assert_eq!(x[0], 0.0);
+        let mut m = faer::Mat::from_fn(3, 2, |i, j| if i == j { sub } else { 1.0 });
+        flush_tiny_mat(&mut m);
+        assert_eq!((m[(0, 0)], m[(1, 1)], m[(2, 1)]), (0.0, 0.0, 1.0));
     }
 }

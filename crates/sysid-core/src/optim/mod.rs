@@ -51,7 +51,10 @@ mod search;
 mod tests;
 
 pub use covariance::{covariance, residual_scale, Covariance};
-pub(crate) use dense::{clear_upper, gram_add, mirror_lower, small_par, symmetric_eigen};
+pub(crate) use dense::{
+    clear_upper, flush_tiny, flush_tiny_mat, gram_add, mirror_lower, small_par, symmetric_eigen,
+    FLUSH_EVERY,
+};
 pub use normal::NormalEquations;
 pub use reparam::{ParameterMap, Reparameterized};
 pub use search::minimize;

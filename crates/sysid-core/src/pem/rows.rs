@@ -8,7 +8,7 @@ use super::normal::product;
 use super::predictor::{Filter, Predictor};
 use crate::error::Result;
 use crate::optim::Evaluation;
-use crate::optim::{clear_upper, gram_add, mirror_lower, small_par};
+use crate::optim::{clear_upper, flush_tiny_mat, gram_add, mirror_lower, small_par, FLUSH_EVERY};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Par};
 
@@ -117,6 +117,9 @@ impl Predictor<'_> {
                 product(s2.as_mut(), pm.abar.as_ref(), s.as_ref(), 1.0);
                 self.add_forcing(&f, &mut s2, &ut, lo);
                 std::mem::swap(&mut s, &mut s2);
+                if t % FLUSH_EVERY == 0 {
+                    flush_tiny_mat(&mut s);
+                }
                 if row == blk || t + 1 == len {
                     let jr = jb.as_ref().subrows(0, row * l);
                     gram_add(h.as_mut().submatrix_mut(lo, lo, nc, nc), jr, par);

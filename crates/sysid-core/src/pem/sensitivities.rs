@@ -17,7 +17,10 @@ use super::modal::Modal;
 use super::normal::{gradient_to_theta, matrix_to_theta, product, StaticSums};
 use super::predictor::{rows_of, Filter, Predictor, RowProduct};
 use crate::error::Result;
-use crate::optim::{clear_upper, gram_add, mirror_lower, small_par, Evaluation};
+use crate::optim::{
+    clear_upper, flush_tiny, flush_tiny_mat, gram_add, mirror_lower, small_par, Evaluation,
+    FLUSH_EVERY,
+};
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, Side};
 
@@ -217,6 +220,9 @@ impl Predictor<'_> {
                     };
                 }
                 std::mem::swap(&mut s, &mut s2);
+                if t % FLUSH_EVERY == 0 {
+                    flush_tiny_mat(&mut s);
+                }
                 if acc && (row == blk || t + 1 == len) {
                     gram_add(hd.as_mut(), jb.as_ref().subrows(0, row * r), par);
                     let zr = sums.zbuf.as_ref().subrows(0, row);
@@ -409,6 +415,9 @@ impl Predictor<'_> {
                     }
                 }
                 std::mem::swap(&mut sc, &mut sn);
+                if t % FLUSH_EVERY == 0 {
+                    flush_tiny(&mut sc);
+                }
                 if acc && (row == blk || t + 1 == len) {
                     let vr = vbuf.as_ref().subcols(0, row).transpose();
                     gram_add(gram.as_mut(), vr, par);
