@@ -108,3 +108,21 @@ def test_import_is_light():
     assert out.stdout.strip() == "[]"
     assert callable(sysid.compare) and callable(sysid.criteria)
     assert "spa" in dir(sysid)
+
+
+def test_a_first_fit_does_not_import_scipy_stats():
+    # importing scipy.stats takes about a second: it made the first `pem` call of a
+    # process 30 times slower than the second (through the FRD model's module)
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, warnings, numpy as np, sysid; warnings.simplefilter('ignore'); "
+        "u = np.random.default_rng(0).standard_normal((300, 1)); "
+        "y = np.convolve(u[:, 0], [0.0, 1.0, 0.5])[:300, None]; "
+        "d = sysid.IOData(u=u, y=y, dt=1.0); m = sysid.n4sid(d, 2); "
+        "sysid.pem(d, m, focus='simulation'); sysid.ssest(d, 2); sysid.oe(d, 2, 2, 1); "
+        "print('scipy.stats' in sys.modules)"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "False"

@@ -14,7 +14,6 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from .._checks import as_between
 from ..data.formats import _pandas
@@ -273,6 +272,8 @@ class FRD(FRDAlgebra):
             return None
         if self.dof is None:
             return self.std * np.sqrt(-np.log1p(-self.confidence))
+        from scipy import stats  # here: importing it costs about a second, most fits never ask
+
         return self.std * np.sqrt(stats.f.ppf(self.confidence, 2, self.dof))
 
     def _other(self, other: Any) -> np.ndarray:

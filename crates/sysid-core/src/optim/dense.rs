@@ -137,7 +137,17 @@ mod tests {
     fn flush_tiny_zeroes_only_what_would_turn_subnormal() {
         let sub = f64::MIN_POSITIVE / 8.0;
         assert!(sub > 0.0 && !sub.is_normal());
-        let mut v = [sub, -sub, TINY / 2.0, TINY, -TINY, 1e-200, -3.0, f64::NAN, 0.0];
+        let mut v = [
+            sub,
+            -sub,
+            TINY / 2.0,
+            TINY,
+            -TINY,
+            1e-200,
+            -3.0,
+            f64::NAN,
+            0.0,
+        ];
         flush_tiny(&mut v);
         assert_eq!(&v[..7], &[0.0, 0.0, 0.0, TINY, -TINY, 1e-200, -3.0]);
         assert!(v[7].is_nan() && v[8] == 0.0);

@@ -109,6 +109,9 @@ fn run<const N: usize>(
                 }
             }
             x = xn;
+            if t % crate::optim::FLUSH_EVERY == 0 {
+                crate::optim::flush_tiny(&mut x); // as [`Filter::advance`]
+            }
         }
         f.x.copy_from_slice(&x);
     }

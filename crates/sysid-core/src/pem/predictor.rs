@@ -408,6 +408,11 @@ impl Filter {
         self.load(u, y, t);
         self.abk.apply(&self.xuy, &mut self.xn);
         std::mem::swap(&mut self.x, &mut self.xn);
+        if t % crate::optim::FLUSH_EVERY == 0 {
+            // a state no longer forced (zero input, simulation) decays through the subnormal
+            // numbers: zeroed first, as the sensitivities it forces are
+            crate::optim::flush_tiny(&mut self.x);
+        }
         self.loaded = None;
     }
 
