@@ -28,7 +28,8 @@ use super::Nonlinearity;
 use crate::error::{Result, SysidError};
 use crate::linalg::spectral_radius;
 use crate::optim::{
-    minimize, Evaluation, Flow, Iteration, NormalEquations, Options, Problem, Solution,
+    flush_tiny, minimize, Evaluation, Flow, Iteration, NormalEquations, Options, Problem, Solution,
+    FLUSH_EVERY,
 };
 
 /// The structure of a MIMO Hammerstein-Wiener model with a state-space linear block.
@@ -321,6 +322,12 @@ impl MimoHwStructure {
                 std::mem::swap(&mut s, &mut sn);
             }
             std::mem::swap(&mut x, &mut xn);
+            if t % FLUSH_EVERY == 0 {
+                // a state (and sensitivities) no longer forced decays through the subnormal
+                // numbers, slow on Intel processors (`optim::flush_tiny`)
+                flush_tiny(&mut x);
+                flush_tiny(&mut s);
+            }
         }
         Ok(())
     }
