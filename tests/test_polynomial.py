@@ -4,6 +4,8 @@ import warnings
 
 import numpy as np
 import pytest
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
 from scipy import signal
 
 import sysid
@@ -494,3 +496,23 @@ def test_iv4_covariance_is_positive_semidefinite_where_r_is_ill_conditioned():
     w = np.linalg.eigvalsh(m.covariance[0])
     assert w.min() >= -1e-12 * w.max() and np.all(np.isfinite(m.uncertainty.std))
     np.testing.assert_allclose(m.covariance[0], m.covariance[0].T, rtol=0, atol=1e-12 * w.max())
+
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(-3, 3), min_size=1, max_size=6),
+       st.lists(st.floats(-3, 3), min_size=1, max_size=6), st.integers(0, 2))
+def test_the_canonical_realisation_is_scipys_tf2ss(num, den, zeros):
+    """`statespace_form._tf2ss` (written to spare `identify` the import of scipy.signal) is
+    `scipy.signal.tf2ss` for one input and output, to the bit: leading zeros of either
+    polynomial, a constant denominator."""
+    from sysid.polynomial.statespace_form import _tf2ss
+
+    trimmed = np.trim_zeros(np.asarray(den), "f")
+    assume(trimmed.size > 0 and abs(trimmed[0]) > 1e-3)
+    den, num = [0.0] * zeros + den, num[-trimmed.size:]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # scipy warns where it drops near-zero leading terms
+        ref = signal.tf2ss(num, den)
+    for r, g in zip(ref, _tf2ss(num, den)):
+        np.testing.assert_array_equal(np.atleast_2d(g), np.atleast_2d(r))

@@ -27,6 +27,33 @@ from ..errors import DataError
 __all__ = ["realize"]
 
 
+def _tf2ss(num: Any, den: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Controller canonical form of ``num(z) / den(z)`` (coefficients in descending powers),
+    the realisation and conventions of ``scipy.signal.tf2ss`` for one input and output:
+    ``den`` made monic, the numerator's leading columns within 1e-14 of zero dropped, a
+    constant ``den`` as one zero state. Written here because importing ``scipy.signal``
+    costs about a second (``identify``'s first call spent it on this alone)."""
+    den = np.trim_zeros(np.atleast_1d(np.asarray(den, float)), "f")
+    num = np.atleast_1d(np.asarray(num, float)) / den[0]
+    den = den / den[0]
+    lead = 0
+    while lead < num.size - 1 and np.allclose(num[lead], 0.0, atol=1e-14):
+        lead += 1
+    num = num[lead:]
+    k = den.size
+    if num.size > k:
+        raise DataError("improper transfer function: the numerator is longer than the "
+                        "denominator")
+    num = np.concatenate([np.zeros(k - num.size), num])
+    d = np.array([[num[0]]])
+    if k == 1:
+        return np.zeros((1, 1)), np.zeros((1, 1)), np.zeros((1, 1)), d
+    a = np.vstack([-den[1:][None, :], np.eye(k - 2, k - 1)])
+    b = np.eye(k - 1, 1)
+    c = (num[1:] - num[0] * den[1:])[None, :]
+    return a, b, c, d
+
+
 def _monic(c: Any) -> np.ndarray:
     return np.concatenate([[1.0], np.asarray(c, dtype=float).ravel()])
 
@@ -102,14 +129,12 @@ def _observer(m: Any) -> Any:
 def _noise_blocks(m: Any) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Per output, ``(A, k, c)`` of the strictly proper part of ``C_i / (A_i D_i)`` (an empty
     block for a noise model of 1)."""
-    from scipy import signal
-
     out = []
     for i in range(m.n_outputs):
         num, den = _monic(m.c[i]), np.convolve(_monic(m.a[i][i]), _monic(m.d[i]))
         k = max(num.size, den.size)
         num, den = np.pad(num, (0, k - num.size)), np.pad(den, (0, k - den.size))
-        a, b, c, _ = signal.tf2ss(num, den) if k > 1 else (np.zeros((0, 0)),) * 4
+        a, b, c, _ = _tf2ss(num, den) if k > 1 else (np.zeros((0, 0)),) * 4
         out.append((np.atleast_2d(a).reshape(k - 1, k - 1), np.reshape(b, (-1,)),
                     np.reshape(c, (-1,))))
     return out
@@ -117,8 +142,6 @@ def _noise_blocks(m: Any) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
 
 def _blocks(m: Any) -> Any:
     """Deterministic blocks per channel and noise blocks per output."""
-    from scipy import signal
-
     from ..models.statespace import StateSpaceModel
 
     ny, nu = m.n_outputs, m.n_inputs
@@ -127,7 +150,7 @@ def _blocks(m: Any) -> Any:
         for j in range(nu):
             num, den = m._channel_tf(i, j)
             num = np.trim_zeros(num, "f")
-            det.append((i, j, *signal.tf2ss(num if num.size else np.zeros(1), den)))
+            det.append((i, j, *_tf2ss(num if num.size else np.zeros(1), den)))
     noise = _noise_blocks(m)
     nd = sum(b[2].shape[0] for b in det)
     nn = sum(b[0].shape[0] for b in noise)
