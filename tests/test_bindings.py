@@ -101,8 +101,8 @@ def test_import_is_light():
 
     code = (
         "import sys, sysid; "
-        "print(sorted(m for m in ('scipy.signal', 'scipy.stats', 'pandas', 'matplotlib', "
-        "'dask') if m in sys.modules))"
+        "print(sorted(m for m in ('scipy.signal', 'scipy.stats', 'scipy.ndimage', 'pandas', "
+        "'matplotlib', 'dask') if m in sys.modules))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"

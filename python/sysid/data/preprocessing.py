@@ -17,7 +17,6 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from scipy import ndimage
 
 from .._checks import as_nonnegative
 from ..errors import DataError, InsufficientDataError
@@ -541,6 +540,8 @@ def drop_quiet(
         for e in data._exps
     ]
     ref = np.vstack(allx).std(axis=0)
+    from scipy import ndimage  # here: `import sysid` would spend 0.3 s importing it
+
     masks = []
     for x in allx:
         mean = ndimage.uniform_filter1d(x, window, axis=0, mode="nearest")
