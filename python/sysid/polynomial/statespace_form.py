@@ -30,7 +30,7 @@ __all__ = ["realize"]
 def _tf2ss(num: Any, den: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Controller canonical form of ``num(z) / den(z)`` (coefficients in descending powers),
     the realisation and conventions of ``scipy.signal.tf2ss`` for one input and output:
-    ``den`` made monic, the numerator's leading columns within 1e-14 of zero dropped, a
+    ``den`` made monic, the numerator's leading coefficients within 1e-14 of zero dropped, a
     constant ``den`` as one zero state. Written here because importing ``scipy.signal``
     costs about a second (``identify``'s first call spent it on this alone)."""
     den = np.trim_zeros(np.atleast_1d(np.asarray(den, float)), "f")

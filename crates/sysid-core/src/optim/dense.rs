@@ -59,7 +59,8 @@ pub(crate) const FLUSH_EVERY: usize = 16;
 /// multiplication or product kernel that touches one takes a microcode assist (about a
 /// hundred cycles): on a 2-core Xeon `pem` on the CSTR record spent 21 of its 28 ms per
 /// Gauss-Newton evaluation in block products of such rows (AMD processors barely slow
-/// down). Zeroing them changes each sum by less than 1e-292 of its terms' scale.
+/// down). The threshold is absolute: zeroing changes a sum by less than 1e-292, nothing for
+/// records in any units a measurement has.
 #[inline]
 pub(crate) fn flush_tiny(v: &mut [f64]) {
     for x in v.iter_mut() {
