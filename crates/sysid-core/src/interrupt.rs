@@ -131,6 +131,20 @@ pub fn scope<R>(poll: fn() -> bool, f: impl FnOnce() -> R) -> R {
     f()
 }
 
+/// The error of `f` run in a scope whose poll says "stop", entered a little after the
+/// scope's first poll interval (so the first [`check`] inside `f` polls): what a
+/// computation that checks returns, `None` from one that never does (test helper).
+#[cfg(test)]
+pub(crate) fn error_when_asked_to_stop<T>(f: impl FnOnce() -> Result<T>) -> Option<SysidError> {
+    scope(
+        || true,
+        || {
+            std::thread::sleep(POLL_INTERVAL * 2);
+            f().err()
+        },
+    )
+}
+
 /// Whether the current computation should stop (polls the scope when due).
 pub fn requested() -> bool {
     match FLAG.with(|f| f.borrow().as_ref().map(|a| a.load(Ordering::Relaxed))) {

@@ -518,20 +518,9 @@ mod tests {
             structure: s.clone(),
             records: vec![(&u, &y)],
         };
-        let late = || std::thread::sleep(crate::interrupt::POLL_INTERVAL * 2);
         for jacobian in [false, true] {
-            let r = crate::interrupt::scope(
-                || true,
-                || {
-                    late();
-                    pr.evaluate(&th, jacobian)
-                },
-            );
-            assert_eq!(
-                r.err(),
-                Some(SysidError::Interrupted),
-                "jacobian {jacobian}"
-            );
+            let r = crate::interrupt::error_when_asked_to_stop(|| pr.evaluate(&th, jacobian));
+            assert_eq!(r, Some(SysidError::Interrupted), "jacobian {jacobian}");
         }
         assert!(pr.evaluate(&th, true).is_ok());
     }
