@@ -103,9 +103,8 @@ pub fn estimate_bd_x0<'py>(
     Bound<'py, PyArray1<f64>>,
 )> {
     let (av, cv, uv, yv) = (view(&a), view(&c), view(&u), view(&y));
-    let (b, d, x0) = py
-        .detach(|| bd_x0::estimate_bd_x0(av, cv, uv, yv, feedthrough))
-        .py()?;
+    let (b, d, x0) =
+        crate::search::detach(py, || bd_x0::estimate_bd_x0(av, cv, uv, yv, feedthrough))?;
     Ok((
         mat_to_numpy(py, &b),
         mat_to_numpy(py, &d),

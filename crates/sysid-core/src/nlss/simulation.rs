@@ -227,7 +227,8 @@ pub(super) fn cost<M: NonlinearTerms>(
     ev
 }
 
-/// Adds one record to `ev`; `false` when the simulation diverged. Blocks of Jacobian rows
+/// Adds one record to `ev`; `false` when the simulation diverged (or the computation is to
+/// stop: [`crate::interrupt::requested`], checked every 256 samples). Blocks of Jacobian rows
 /// (`d yhat / d theta`, in time order after the transient) and residuals go to `sink`
 /// ([`flush`] for the time-domain cost), which must clear the block's rows.
 pub(super) fn record<M: NonlinearTerms>(
@@ -254,6 +255,12 @@ pub(super) fn record<M: NonlinearTerms>(
     let mut cm = Mat::<f64>::zeros(ny, nx);
     let mut rows = 0;
     for t in 0..n {
+        if t % 256 == 255 && crate::interrupt::requested() {
+            // Ctrl-C within a pass (seconds on a long record with a Jacobian of hundreds of
+            // columns, 4 096 samples a quarter second): the pass ends as a diverged one
+            // would, and the search's own check raises the interruption
+            return false;
+        }
         let u = &d.u[t * nu..(t + 1) * nu];
         let ok = step(m, th, &x, u, &mut yh, &mut xn, &mut w);
         if jac {
