@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -283,3 +285,74 @@ def test_lines_fit_says_when_the_order_is_above_what_the_lines_determine():
                                   [[0.3, 0.2, 1e-3, 0.0]], [[0.0]])
     with pytest.warns(sysid.StabilityWarning, match=r"over the record \(1024 samples\)"):
         sysid.pem(data, start, periods=4)
+
+
+# ssest's time-domain search on periodic data: one more start from the averaged lines
+
+
+def _slow_modes():
+    """Three lightly damped modes with periods of 60-110 samples (damping 1.5-2 %): longer
+    than the default subspace horizon (20), as an aircraft's structural modes are at its
+    sampling rate."""
+    A = np.zeros((6, 6))
+    for k, (f, z) in enumerate(((0.009, 0.02), (0.011, 0.015), (0.016, 0.02))):
+        r, th = np.exp(-z * 2 * np.pi * f), 2 * np.pi * f
+        A[2 * k:2 * k + 2, 2 * k:2 * k + 2] = r * np.array([[np.cos(th), np.sin(th)],
+                                                            [-np.sin(th), np.cos(th)]])
+    B = [[1.0], [0.0], [0.7], [0.2], [0.5], [-0.3]]
+    C = [[0.3, 0.1, -0.2, 0.4, 0.2, 0.1], [0.1, -0.3, 0.2, 0.1, -0.2, 0.3]]
+    return sysid.StateSpaceModel(A, B, C)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 3])
+def test_ssest_on_a_periodic_record_starts_from_the_lines_when_they_fit_better(seed):
+    true = _slow_modes()
+    u = sysid.multisine(1024, band=(0.0, 0.6), periods=6, seed=seed, phases="random")
+    y = true.simulate(u)[1024:]
+    y = y + 0.3 * np.std(y) * np.random.default_rng(seed).standard_normal(y.shape)
+    data = sysid.IOData(u=u[1024:], y=y)
+    w = np.linspace(0.01, 1.0, 400)
+    g = true.freqresp(w)
+
+    def error(m):
+        return np.max(np.abs(m.freqresp(w) - g)) / np.max(np.abs(g))
+
+    m = sysid.ssest(data, 6, focus="simulation")
+    start = m.info["start"]
+    assert start["method"] == "frd_subspace"
+    assert start["losses"]["frd_subspace"] == min(start["losses"].values())
+    # the time-domain weightings alone (one named: no periodic start) end far away
+    with warnings.catch_warnings():  # it stops at its cap, far from the other minimum
+        warnings.simplefilter("ignore", sysid.IterationLimitWarning)
+        alone = sysid.ssest(data, 6, focus="simulation", method="moesp")
+    assert "frd_subspace" not in alone.info["start"]["losses"]
+    assert error(m) < 0.05 < 0.5 < error(alone)
+    assert m.info["pem"]["cost"][-1] < 0.3 * alone.info["pem"]["cost"][-1]
+
+
+def test_ssest_on_a_random_input_has_no_periodic_start():
+    true = _slow_modes()
+    u = np.random.default_rng(0).standard_normal(3000)
+    data = sysid.IOData(u=u, y=true.simulate(u) + 0.01 * np.random.default_rng(1)
+                        .standard_normal((3000, 2)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.IterationLimitWarning)
+        m = sysid.ssest(data, 6, focus="simulation", max_iter=5)
+    assert "frd_subspace" not in m.info["start"]["losses"]
+
+
+@pytest.mark.parametrize("periods, weighted", [(3, False), (4, False), (6, True)])
+def test_the_periodic_start_weights_lines_by_noise_only_from_enough_periods(periods, weighted):
+    from sysid.pem.periodic import line_weights, periodic_lines
+    from sysid.pem.ssest import periodic_start
+
+    true = _slow_modes()
+    u = sysid.multisine(512, band=(0.0, 0.6), periods=periods, seed=4, phases="random")
+    y = true.simulate(u) + 0.01 * np.random.default_rng(4).standard_normal((u.shape[0], 2))
+    data = sysid.IOData(u=u, y=y)
+    frd = periodic_lines(data, periods, 1)  # the first period dropped as the transient
+    assert frd.dof == 2 * (periods - 2)  # the variance's real degrees of freedom
+    w = np.mean(line_weights(frd), axis=(1, 2))
+    expected = sysid.frd_subspace(frd, 6, weights=w / w.mean() if weighted else None)
+    got = periodic_start(data, 6, False)
+    assert np.array_equal(got.A, expected.A) and np.array_equal(got.C, expected.C)
