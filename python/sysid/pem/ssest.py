@@ -236,8 +236,8 @@ def ssest(
 
 def periodic_start(data: Any, order: int, feedthrough: Any) -> StateSpaceModel | None:
     """The frequency-domain subspace fit of the averaged response on the excited lines
-    (:func:`sysid.frd_subspace`, lines weighted by their noise variance) when the input
-    repeats (:func:`sysid.detect_period`: 2 or more whole periods), else ``None``.
+    (:func:`sysid.frd_subspace`) when the input repeats (:func:`sysid.detect_period`: 2 or
+    more whole periods), else ``None``.
 
     One more start candidate for :func:`ssest`'s time-domain search, scored by the same loss
     as the subspace weightings: with a periodic input the averaged lines hold the response
@@ -247,7 +247,8 @@ def periodic_start(data: Any, order: int, feedthrough: Any) -> StateSpaceModel |
     first period is dropped as a transient when 3 or more are whole. The lines are weighted
     by their inverse noise variance when it has more than 4 real degrees of freedom (4 or
     more periods): from fewer, its inverse has no finite variance (no finite mean from 2)
-    and a few lines would take all the weight; uniform weights then.
+    and a few lines would take all the weight; uniform weights then. The detection costs
+    about 0.1 s per 10^5 samples of three inputs, once per order ``ssest`` fits.
 
     Examples
     --------
