@@ -122,14 +122,21 @@ def resolve_periods(data: IOData, periods: Any,
         info["reason"] = (f"time domain: {why}, {found.periods - T} after the {T} transient "
                           "one(s); the noise variance needs 2 or more")
         return None, info
-    cut = found.period * found.periods
     if any(found.unused):
         info["reason"] = (f"{why} (the samples after them dropped: {list(found.unused)}; a "
                           "partial period)")
-        data = IOData([u[:cut] for u, _ in data.experiments],
-                      [y[:cut] for _, y in data.experiments], data.dt,
-                      input_names=data.input_names, output_names=data.output_names)
-    return periodic_lines(data, found.periods, T), info
+    return periodic_lines(whole_periods(data, found), found.periods, T), info
+
+
+def whole_periods(data: IOData, found: Any) -> IOData:
+    """``data`` cut to the whole periods :func:`sysid.detect_period` found in every
+    experiment (``found``: its result); ``data`` itself when no sample is left over."""
+    if not any(found.unused):
+        return data
+    cut = found.period * found.periods
+    return IOData([u[:cut] for u, _ in data.experiments],
+                  [y[:cut] for _, y in data.experiments], data.dt,
+                  input_names=data.input_names, output_names=data.output_names)
 
 
 def line_weights(frd: FRD) -> np.ndarray:

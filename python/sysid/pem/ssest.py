@@ -11,7 +11,6 @@ import numpy as np
 
 from .._checks import as_int, as_nonnegative, recorded, reissue
 from .._threads import one_blas_thread
-from ..data.iodata import IOData
 from ..errors import DataError, OffsetWarning, SysidError
 from ..models.statespace import StateSpaceModel
 from ..subspace.estimator import CLOSED_LOOP, METHODS, SubspaceEstimator, horizon_for_order
@@ -265,7 +264,7 @@ def periodic_start(data: Any, order: int, feedthrough: Any) -> StateSpaceModel |
     """
     from ..data.periodicity import detect
     from ..subspace.frd_subspace import frd_subspace
-    from .periodic import line_weights, periodic_lines
+    from .periodic import line_weights, periodic_lines, whole_periods
 
     try:
         with warnings.catch_warnings():
@@ -273,10 +272,8 @@ def periodic_start(data: Any, order: int, feedthrough: Any) -> StateSpaceModel |
             found, _ = detect(data)
             if found is None or found.periods < 2:
                 return None
-            cut = found.period * found.periods
-            whole = IOData([u[:cut] for u, _ in data.experiments],
-                           [y[:cut] for _, y in data.experiments], data.dt)
-            frd = periodic_lines(whole, found.periods, 1 if found.periods >= 3 else 0)
+            frd = periodic_lines(whole_periods(data, found), found.periods,
+                                 1 if found.periods >= 3 else 0)
             weights = None
             if frd.dof is not None and frd.dof > 4:
                 w = np.mean(line_weights(frd), axis=(1, 2))
