@@ -43,6 +43,7 @@
 // Index loops mirror the formulas in numerical kernels; iterator chains would hide them.
 #![allow(clippy::needless_range_loop)]
 
+pub mod denormals;
 pub mod error;
 pub mod greybox;
 pub mod hankel;

@@ -244,6 +244,8 @@ pub(super) fn record<M: NonlinearTerms>(
     let (ob, oc, od) = linear_offsets(nx, nu, ny);
     let p = m.n_params();
     let n = d.u.len().checked_div(nu).unwrap_or(d.y.len() / ny);
+    // per-sample products of a few state rows: see `crate::denormals`
+    let _daz = crate::denormals::DenormalsAreZero::new();
     let mut w = m.work();
     let (mut x, mut xn, mut yh) = (vec![0.0; nx], vec![0.0; nx], vec![0.0; ny]);
     let q = if jac { p } else { 0 };
