@@ -16,9 +16,9 @@
 //!
 //! Use it only around kernels made of products and sums (a simulation pass with its
 //! sensitivities), never around a whole algorithm: decompositions scale by the smallest
-//! normal number and rely on gradual underflow. Set around the whole optimiser, it changed
-//! an eigenvector test of `pem` on a synthetic 2 x 28 record, which then took its slower
-//! structured path (6 times the time; final cost equal to 12 digits).
+//! normal number and rely on gradual underflow. Set around the whole optimiser, it moved
+//! `pem` on a synthetic 2 x 28 record from its modal to its slower structured
+//! parameterisation (6 times the time; final cost equal to 12 digits).
 //!
 //! ```
 //! use sysid_core::denormals::DenormalsAreZero;
