@@ -89,3 +89,102 @@ def test_the_estimators_record_the_check() -> None:
                   sysid.nlssest(d, 1, hidden=4, epochs=3, progress=False)):
             diff = m.info["memory"]["difference"]
             assert len(diff) == 1 and diff[0] is not None and diff[0] < MEMORY_TOLERANCE
+
+
+def _quintic(s: float) -> sysid.PNLSSModel:
+    # x+ = 0.5 x + s (0.75 x^3 - 0.25 x^5) + u: for s = 1 a second stable equilibrium at
+    # sqrt(2) (slope 0) beside 0; for s <= 0.8 the only one is 0
+    return sysid.PNLSSModel([[0.5]], [[1.0]], [[1.0]], [[0.0]], [[0.75 * s, -0.25 * s]],
+                            np.zeros((1, 0)), zeta=[[0, 0, 0], [0, 0, 0, 0, 0]], eta=[])
+
+
+def _pulse() -> np.ndarray:
+    u = np.zeros((400, 1))
+    u[:5] = 0.6  # takes the s = 1 model's whole-record run to sqrt(2), where it stays
+    return u
+
+
+def test_latest_forgetting_finds_the_last_iterate_that_forgets() -> None:
+    from sysid.nlss.memory import differences, forgets, latest_forgetting
+
+    u = _pulse()
+    data = sysid.IOData(u, _quintic(0.0).simulate(u))
+    ladder = np.linspace(0.0, 1.0, 41)[:, None]  # iterates s = 0, 0.025, ..., 1
+    verdict = [forgets(differences(_quintic(s), data)[0]) for s in ladder[:, 0]]
+    assert verdict[0] and not verdict[-1]
+    k, m, d = latest_forgetting(lambda th: _quintic(th[0]), ladder, data)
+    # the grid (stride 5) and the bisection after it find the exact last one that forgets
+    last = max(i for i, v in enumerate(verdict) if v)
+    assert all(not v for v in verdict[last + 1:])  # a clean switch on this ladder
+    assert k == last and forgets(d[0]) and m.E[0, 0] == pytest.approx(0.75 * ladder[k, 0])
+    # none forgets: None; one iterate: itself when it forgets
+    assert latest_forgetting(lambda th: _quintic(th[0]), ladder[-3:], data) is None
+    assert latest_forgetting(lambda th: _quintic(th[0]), ladder[:1], data)[0] == 0
+
+
+def test_pnlss_returns_the_latest_iterate_that_forgets_with_a_warning() -> None:
+    from sysid.nlss.pnlss import _forgetting
+
+    u = _pulse()
+    data = sysid.IOData(u, _quintic(0.0).simulate(u))
+    ladder = np.linspace(0.0, 1.0, 11)[:, None]
+    history = list(np.linspace(10.0, 1.0, 11))
+    res = {"theta": ladder[-1], "iterates": ladder, "history": history}
+
+    def build(th: np.ndarray) -> sysid.PNLSSModel:
+        m = _quintic(th[0])
+        m.info = {"fit": {"cost": history}}
+        return m
+
+    with pytest.warns(sysid.StabilityWarning, match=r"last model \(iteration 10, cost 1\) does "
+                      r"not forget.*returned the model of iteration 9 \(cost 1\.9\)"):
+        m = _forgetting(build, res, data)
+    assert m.E[0, 0] == pytest.approx(0.75 * 0.9)
+    ret = m.info["fit"]["returned"]
+    assert ret["iteration"] == 9 and ret["cost"] == pytest.approx(1.9)
+    assert ret["last_cost"] == 1.0 and ret["last_difference"] > 10 * MEMORY_TOLERANCE
+    assert m.info["memory"]["difference"][0] < MEMORY_TOLERANCE
+    # a last iterate that forgets is returned as it is, silently
+    res = {"theta": ladder[5], "iterates": ladder[:6], "history": history[:6]}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        m = _forgetting(build, res, data)
+    assert m.E[0, 0] == pytest.approx(0.75 * 0.5) and "returned" not in m.info["fit"]
+
+
+@pytest.mark.parametrize("branches", [None, 2])
+def test_the_fits_iterates_follow_their_cost_history(branches: int | None,
+                                                      monkeypatch: pytest.MonkeyPatch) -> None:
+    # row k of the report's iterates is the model whose training cost is history[k]: the
+    # simulation error in engineering units over the cost's samples is one fixed multiple of
+    # the (scaled) cost for every row, the start's row and, for the decoupled fit, the rows of
+    # its best start's path and of that path's continuation alike
+    from sysid.nlss import decoupled
+    from sysid.nlss import pnlss as pn
+
+    rng = np.random.default_rng(1)
+    u = rng.uniform(-1, 1, (800, 1))
+    x, y = 0.0, np.zeros((800, 1))
+    for t in range(800):
+        y[t, 0] = x + 0.3 * x ** 2
+        x = 0.6 * x + u[t, 0]
+    data = sysid.IOData(u, y + 0.02 * rng.standard_normal((800, 1)), 1.0)
+    seen = {}
+
+    def spy(build, res, d):  # the glue's inputs, kept
+        seen.update(build=build, res=res)
+        return build(np.asarray(res["theta"]))
+
+    monkeypatch.setattr(pn, "_forgetting", spy)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.IterationLimitWarning)
+        sysid.pnlss(data, 1, degree=[2], branches=branches, max_iter=decoupled.STARTS_ITER + 4,
+                    progress=False)
+    res, build = seen["res"], seen["build"]
+    its, hist = res["iterates"], res["history"]
+    assert its.shape[0] == len(hist) and np.array_equal(its[-1], res["theta"])
+    transient = build(its[-1]).info["fit"]["transient"][0]
+    sse = np.array([np.sum((build(th).simulate(u)[transient:] - data.y[transient:]) ** 2)
+                    for th in its])
+    ratio = sse / np.asarray(hist)
+    assert np.allclose(ratio, ratio[0], rtol=1e-6), ratio

@@ -631,6 +631,7 @@ def pnlss_estimate(
     tol: float = 1e-8,
     fixed: list[bool] | None = None,
     progress: Callable[..., Any] | None = None,
+    iterates: bool = False,
 ) -> dict[str, Any]: ...
 def pnlss_estimate_weighted(
     structure: _PolyStructure,
@@ -640,6 +641,7 @@ def pnlss_estimate_weighted(
     max_iter: int = 100,
     tol: float = 1e-8,
     progress: Callable[..., Any] | None = None,
+    iterates: bool = False,
 ) -> dict[str, Any]: ...
 
 class _NeuralStructure(TypedDict, total=False):

@@ -4,9 +4,10 @@
 //! A structure crosses the boundary as a dict ([`PnlssStructure`], [`DecoupledStructure`],
 //! [`NeuralStructure`]); PNLSS monomials as lists of variable indices into `z = [x; u]`.
 
-use crate::convert::slice_to_numpy;
+use crate::convert::{mat_to_numpy, slice_to_numpy};
 use crate::errors::IntoPy;
 use crate::search::{run, search_items};
+use faer::Mat;
 use numpy::{PyArray1, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -172,9 +173,10 @@ pub fn pnlss_simulate<'py>(
 }
 
 /// Simulation-error fit of a PNLSS or decoupled PNLSS structure from `theta0`; records are
-/// `(u, y, skip)`. Returns a dict with the optimiser's report and `theta`.
+/// `(u, y, skip)`. Returns a dict with the optimiser's report and `theta`; with
+/// `iterates=True` also `iterates`, the point of every iteration (one row each, in order).
 #[pyfunction]
-#[pyo3(signature = (structure, records, theta0, max_iter=100, tol=1e-8, fixed=None, progress=None))]
+#[pyo3(signature = (structure, records, theta0, max_iter=100, tol=1e-8, fixed=None, progress=None, iterates=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn pnlss_estimate<'py>(
     py: Python<'py>,
@@ -185,16 +187,52 @@ pub fn pnlss_estimate<'py>(
     tol: f64,
     fixed: Option<Vec<bool>>,
     progress: Option<Py<PyAny>>,
+    iterates: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let m = structure.model()?;
     let data = records_data(&records)?;
     let th0 = crate::convert::vec1(&theta0);
     let mut opts = fit_options(max_iter, tol);
     opts.fixed = fixed;
-    let sol = run(py, &progress, |obs| m.estimate(&data, &th0, &opts, obs))?;
+    let mut kept = Vec::new();
+    let sol = run(py, &progress, |obs| {
+        m.estimate(&data, &th0, &opts, &mut keeping(obs, iterates, &mut kept))
+    })?;
+    fit_dict(py, &sol, iterates.then_some(kept))
+}
+
+/// `obs`, also appending the point of every iteration to `kept` when `keep`.
+pub(crate) fn keeping<'a>(
+    obs: &'a mut dyn FnMut(&Iteration) -> Flow,
+    keep: bool,
+    kept: &'a mut Vec<f64>,
+) -> impl FnMut(&Iteration) -> Flow + 'a {
+    move |it: &Iteration| {
+        if keep {
+            kept.extend_from_slice(&it.theta);
+        }
+        obs(it)
+    }
+}
+
+/// The dict a simulation-error fit returns: the optimiser's report, `theta`, and the kept
+/// iterates (`iterations x p`) when given.
+pub(crate) fn fit_dict<'py>(
+    py: Python<'py>,
+    sol: &Solution,
+    kept: Option<Vec<f64>>,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    search_items(&d, py, &sol)?;
+    search_items(&d, py, sol)?;
     d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
+    if let Some(k) = kept {
+        let p = sol.theta.len();
+        let rows = k.len().checked_div(p).unwrap_or(0);
+        d.set_item(
+            "iterates",
+            mat_to_numpy(py, &Mat::from_fn(rows, p, |i, j| k[i * p + j])),
+        )?;
+    }
     Ok(d)
 }
 

@@ -1,9 +1,8 @@
 //! Binding of `sysid_core::nlss::estimate_weighted`: the PNLSS (or decoupled PNLSS) fit on
 //! the frequency-weighted simulation error of periodic records.
 
-use crate::convert::slice_to_numpy;
-use crate::nlss::{fit_options, records_data, Model, Structure};
-use crate::search::{run, search_items};
+use crate::nlss::{fit_dict, fit_options, keeping, records_data, Model, Structure};
+use crate::search::run;
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -12,9 +11,9 @@ use sysid_core::nlss::{self, LineWeights};
 /// Frequency-weighted simulation-error fit of a PNLSS or decoupled PNLSS structure (the dict
 /// `pnlss_estimate` takes) from `theta0`; records are `(u, y, skip)`, one
 /// `(period, lines, weights)` per record (`weights`: `len(lines) x ny`, row-major). Returns
-/// the optimiser's report and `theta`, as `pnlss_estimate`.
+/// the optimiser's report and `theta` (and `iterates` when asked), as `pnlss_estimate`.
 #[pyfunction]
-#[pyo3(signature = (structure, records, weights, theta0, max_iter=100, tol=1e-8, progress=None))]
+#[pyo3(signature = (structure, records, weights, theta0, max_iter=100, tol=1e-8, progress=None, iterates=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn pnlss_estimate_weighted<'py>(
     py: Python<'py>,
@@ -25,6 +24,7 @@ pub fn pnlss_estimate_weighted<'py>(
     max_iter: usize,
     tol: f64,
     progress: Option<Py<PyAny>>,
+    iterates: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let m = structure.model()?;
     let data = records_data(&records)?;
@@ -38,14 +38,17 @@ pub fn pnlss_estimate_weighted<'py>(
         .collect();
     let th0 = crate::convert::vec1(&theta0);
     let opts = fit_options(max_iter, tol);
-    let sol = run(py, &progress, |obs| match &m {
-        Model::Pnlss(m) => nlss::estimate_weighted(m, &data, &w, &th0, &opts, obs),
-        Model::Decoupled(m) => nlss::estimate_weighted_decoupled(m, &data, &w, &th0, &opts, obs),
+    let mut kept = Vec::new();
+    let sol = run(py, &progress, |obs| {
+        let obs = &mut keeping(obs, iterates, &mut kept);
+        match &m {
+            Model::Pnlss(m) => nlss::estimate_weighted(m, &data, &w, &th0, &opts, obs),
+            Model::Decoupled(m) => {
+                nlss::estimate_weighted_decoupled(m, &data, &w, &th0, &opts, obs)
+            }
+        }
     })?;
-    let d = PyDict::new(py);
-    search_items(&d, py, &sol)?;
-    d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
-    Ok(d)
+    fit_dict(py, &sol, iterates.then_some(kept))
 }
 
 /// Registers the function.

@@ -15,6 +15,7 @@ simulation error (:func:`sysid.pnlss` with ``branches=``).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -171,12 +172,14 @@ class DecoupledPNLSSModel(LinearPart, ModelMixin):
 
 def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[Any, ...]],
                   degrees: list[int], branches: int, clamp: bool, max_iter: int, tol: float,
-                  progress: Any, seed: int = 0) -> tuple[dict[str, Any], dict[str, Any]]:
+                  progress: Any, seed: int = 0) -> tuple[Callable[[np.ndarray], dict[str, Any]],
+                                                        dict[str, Any]]:
     """The decoupled fit from the linear start ``lin`` (scaled channels): branch directions
     drawn at random (seeded) and scaled to unit variance on the linear start's ``[x; u]``,
     ``W = 0`` (each start is the linear model); ``STARTS`` short fits, the best continued.
-    Returns the model's keyword arguments (without scaling and names) and the optimiser's
-    report."""
+    Returns the model's keyword arguments (without scaling and names) as a function of the
+    parameters (the result's or any of the report's ``iterates``: the best start's path, then
+    its continuation's, one row per entry of ``history``) and the optimiser's report."""
     n, m_, l_ = lin.nstates, lin.ninputs, lin.noutputs
     r = int(branches)
     if r < 1:
@@ -200,10 +203,12 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
     # cover on the estimation data.
     struct = {"dims": (n, m_, l_), "branches": r, "degrees": degrees}
     fit = lambda th0, it: _sysid.pnlss_estimate(  # noqa: E731
-        struct, recs, th0, max_iter=it, tol=tol, progress=progress)
+        struct, recs, th0, max_iter=it, tol=tol, progress=progress, iterates=True)
     trials = []
     for k in range(STARTS):  # a cancelled trial (progress returned False) ends the fit
-        trials.append(fit(start(k), min(STARTS_ITER, max_iter)))
+        th0 = start(k)
+        trials.append(fit(th0, min(STARTS_ITER, max_iter)))
+        trials[-1]["iterates"] = np.vstack([th0[None, :], trials[-1]["iterates"]])
         if trials[-1]["stop"] == "cancelled":
             break
     best = min(trials, key=lambda t: t["cost"])
@@ -213,19 +218,23 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
     res = best if cancelled or max_iter <= STARTS_ITER else \
         fit(np.asarray(best["theta"]), max_iter - STARTS_ITER)
     res["iterations"] += sum(t["iterations"] for t in trials) - (res is best) * best["iterations"]
-    res["history"] = list(best["history"]) + list(res["history"])[1:] if res is not best \
-        else list(best["history"])
-    th = np.asarray(res["theta"])
-    o = np.cumsum([0, n * n, n * m_, l_ * n, l_ * m_, r * (n + m_), n * r, r * nd, n, l_])
-    p = [th[o[i]:o[i + 1]] for i in range(9)]
-    kw: dict[str, Any] = {"A": p[0].reshape(n, n), "B": p[1].reshape(n, m_),
-                          "C": p[2].reshape(l_, n), "D": p[3].reshape(l_, m_),
-                          "V": p[4].reshape(r, n + m_), "W": p[5].reshape(n, r),
-                          "c": p[6].reshape(r, nd), "e0": p[7], "f0": p[8], "degrees": degrees,
-                          "clamp": None}
-    if clamp:
-        xs = [np.asarray(_sysid.pnlss_simulate(struct, list(th), u)[1]).reshape(-1, n)
-              for u in us]
-        S = np.hstack([np.vstack(xs), np.vstack(us)]) @ kw["V"].T
-        kw["clamp"] = envelope([S[:, :0]], [S], 0.1)
-    return kw, res
+    if res is not best:  # the best start's path, then its continuation's
+        res["history"] = list(best["history"]) + list(res["history"])[1:]
+        res["iterates"] = np.vstack([best["iterates"], res["iterates"]])
+
+    def kw_of(th: np.ndarray) -> dict[str, Any]:
+        o = np.cumsum([0, n * n, n * m_, l_ * n, l_ * m_, r * (n + m_), n * r, r * nd, n, l_])
+        p = [th[o[i]:o[i + 1]] for i in range(9)]
+        kw: dict[str, Any] = {"A": p[0].reshape(n, n), "B": p[1].reshape(n, m_),
+                              "C": p[2].reshape(l_, n), "D": p[3].reshape(l_, m_),
+                              "V": p[4].reshape(r, n + m_), "W": p[5].reshape(n, r),
+                              "c": p[6].reshape(r, nd), "e0": p[7], "f0": p[8],
+                              "degrees": degrees, "clamp": None}
+        if clamp:
+            xs = [np.asarray(_sysid.pnlss_simulate(struct, list(th), u)[1]).reshape(-1, n)
+                  for u in us]
+            S = np.hstack([np.vstack(xs), np.vstack(us)]) @ kw["V"].T
+            kw["clamp"] = envelope([S[:, :0]], [S], 0.1)
+        return kw
+
+    return kw_of, res

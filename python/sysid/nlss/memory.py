@@ -27,6 +27,7 @@ so; ``info["memory"]`` records the differences and how often each experiment was
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -36,7 +37,7 @@ from ..data.iodata import IOData
 from ..errors import NumericalError, StabilityWarning
 from .common import decay_samples
 
-__all__ = ["MEMORY_TOLERANCE", "check_memory"]
+__all__ = ["MEMORY_TOLERANCE", "check_memory", "differences", "forgets", "latest_forgetting"]
 
 #: The largest difference (a fraction of each output's standard deviation) between the two
 #: simulations of an experiment after the settling time that still counts as forgotten.
@@ -49,38 +50,23 @@ MEMORY_TOLERANCE = 0.1
 MAX_SAMPLES = 200_000
 
 
-def check_memory(model: Any, data: IOData, name: str) -> Any:
-    """Warn when ``model``, started from rest at the middle of a training experiment, does not
-    return to its own simulation of the whole experiment (see the module documentation).
-
-    Parameters
-    ----------
-    model : model with ``simulate(u)`` (from rest) and ``linear()``
-        A fitted nonlinear state-space model.
-    data : IOData
-        Its training data (engineering units).
-    name : str
-        The estimator, named in the warning.
-
-    Returns
-    -------
-    model
-        The same model, ``info["memory"]`` set: ``"difference"``, per experiment the largest
-        difference over the outputs (a fraction of the output's standard deviation; ``inf``
-        when the second simulation diverged, ``None`` when the settling time is too long to
-        tell), and ``"repeats"``, how many copies of each experiment's input were simulated
-        (1: the record itself).
+def differences(model: Any, data: IOData) -> tuple[list[float | None], list[int]]:
+    """Per experiment of ``data``, the largest difference (a fraction of the output's
+    standard deviation) between ``model``'s simulation of the whole experiment and its
+    simulation from rest at the middle, after the settling time (``inf``: the second run
+    diverged; ``None``: too slow a pole to tell), and how many copies of the experiment's
+    input were simulated; see :func:`check_memory`.
 
     Examples
     --------
     >>> import numpy as np, sysid
-    >>> from sysid.nlss.memory import check_memory
+    >>> from sysid.nlss.memory import differences
     >>> m = sysid.PNLSSModel([[0.5]], [[1.0]], [[1.0]], [[0.0]], [[-0.1]], np.zeros((1, 0)),
     ...                      zeta=[[0, 0]], eta=[])
     >>> u = np.random.default_rng(0).uniform(-1, 1, (400, 1))
-    >>> d = check_memory(m, sysid.IOData(u, m.simulate(u)), "pnlss").info["memory"]
-    >>> bool(d["difference"][0] < d["tolerance"])   # it forgets: no warning
-    True
+    >>> d, repeats = differences(m, sysid.IOData(u, m.simulate(u)))
+    >>> bool(d[0] < 1e-2), repeats   # the two runs meet (what is left after settling)
+    (True, [1])
     """
     # samples for the slowest pole to decay to 1 % (what is left of the two runs' initial
     # difference, a few output standard deviations, is then well under the tolerance; an
@@ -115,6 +101,46 @@ def check_memory(model: Any, data: IOData, name: str) -> Any:
         ref = np.std(whole[s:], axis=0)
         d = np.sqrt(np.mean((a - b) ** 2, axis=0)) / np.where(ref > 0, ref, 1.0)
         diffs.append(float(np.max(d)) if np.all(np.isfinite(d)) else float("inf"))
+    return diffs, repeats
+
+
+def check_memory(model: Any, data: IOData, name: str,
+                 measured: tuple[list[float | None], list[int]] | None = None) -> Any:
+    """Warn when ``model``, started from rest at the middle of a training experiment, does not
+    return to its own simulation of the whole experiment (see the module documentation).
+
+    Parameters
+    ----------
+    model : model with ``simulate(u)`` (from rest) and ``linear()``
+        A fitted nonlinear state-space model.
+    data : IOData
+        Its training data (engineering units).
+    name : str
+        The estimator, named in the warning.
+    measured : tuple, optional
+        :func:`differences` of ``model`` on ``data``, when already measured.
+
+    Returns
+    -------
+    model
+        The same model, ``info["memory"]`` set: ``"difference"``, per experiment the largest
+        difference over the outputs (a fraction of the output's standard deviation; ``inf``
+        when the second simulation diverged, ``None`` when the settling time is too long to
+        tell), and ``"repeats"``, how many copies of each experiment's input were simulated
+        (1: the record itself).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.nlss.memory import check_memory
+    >>> m = sysid.PNLSSModel([[0.5]], [[1.0]], [[1.0]], [[0.0]], [[-0.1]], np.zeros((1, 0)),
+    ...                      zeta=[[0, 0]], eta=[])
+    >>> u = np.random.default_rng(0).uniform(-1, 1, (400, 1))
+    >>> d = check_memory(m, sysid.IOData(u, m.simulate(u)), "pnlss").info["memory"]
+    >>> bool(d["difference"][0] < d["tolerance"])   # it forgets: no warning
+    True
+    """
+    diffs, repeats = differences(model, data) if measured is None else measured
     model.info["memory"] = {"difference": diffs, "tolerance": MEMORY_TOLERANCE,
                             "repeats": repeats}
     bad = [(k, d) for k, d in enumerate(diffs) if d is not None and d > MEMORY_TOLERANCE]
@@ -135,3 +161,84 @@ def check_memory(model: Any, data: IOData, name: str) -> Any:
             f"starts; check it with sysid.compare on validation data, and try a lower degree "
             f"or order, or fewer monomials", StabilityWarning, stacklevel=user_stacklevel())
     return model
+
+
+def forgets(diffs: list[float | None]) -> bool:
+    """Whether :func:`differences` ``diffs`` say the model forgets its initial state (an
+    experiment that cannot be judged counts as forgotten, as :func:`check_memory` does)."""
+    return all(d is None or d <= MEMORY_TOLERANCE for d in diffs)
+
+
+def latest_forgetting(build: Callable[[np.ndarray], Any], iterates: np.ndarray,
+                      data: IOData) -> tuple[int, Any, tuple[list[float | None], list[int]]] | None:
+    """The latest of a search's iterates whose model forgets its initial state.
+
+    Used when the search's last iterate does not: the iterates (rows of ``iterates``, in
+    search order, the last one excluded by the caller) are checked from the end on a grid of
+    about ten, then between the latest on the grid that forgets and the next one (which does
+    not) by bisection, about fourteen checks of two simulations each in all. Whether an
+    iterate forgets need not be monotone along the search; the one returned forgets, and no
+    later grid point does.
+
+    Parameters
+    ----------
+    build : callable
+        The model of one row of ``iterates``.
+    iterates : ndarray, shape (k, p)
+        The iterates, earliest first.
+    data : IOData
+        The training data (engineering units), as for :func:`check_memory`.
+
+    Returns
+    -------
+    (index, model, differences) or None
+        The row found, its model and its :func:`differences`; ``None`` when no grid point
+        forgets.
+
+    Examples
+    --------
+    A first-order model ``x(t+1) = 0.5 x + u + s (0.75 x^3 - 0.25 x^5)`` whose nonlinear
+    terms grow along a made-up "search" ``s = 0, 0.1, ..., 1``: at ``s = 1`` it has a second
+    stable equilibrium (``x = sqrt(2)``), where a short input pulse leaves the whole
+    record's simulation while the simulation from its middle rests at zero.
+
+    >>> import numpy as np, sysid
+    >>> from sysid.nlss.memory import latest_forgetting
+    >>> u = np.zeros((400, 1)); u[:5] = 0.6
+    >>> def build(th):
+    ...     return sysid.PNLSSModel([[0.5]], [[1.0]], [[1.0]], [[0.0]],
+    ...                             [[0.75 * th[0], -0.25 * th[0]]], np.zeros((1, 0)),
+    ...                             zeta=[[0, 0, 0], [0, 0, 0, 0, 0]], eta=[])
+    >>> its = np.linspace(0.0, 1.0, 11)[:, None]
+    >>> k, m, d = latest_forgetting(build, its, sysid.IOData(u, build(its[0]).simulate(u)))
+    >>> float(its[k, 0])
+    0.9
+    """
+    k = len(iterates)
+    if k == 0:
+        return None
+    stride = max(1, int(np.ceil(k / 10)))
+    grid = list(range(k - 1, -1, -stride))
+    if grid[-1] != 0:
+        grid.append(0)
+    found = None
+    failed = None
+    for i in grid:
+        m = build(iterates[i])
+        d = differences(m, data)
+        if forgets(d[0]):
+            found = (i, m, d)
+            break
+        failed = i
+    if found is None:
+        return None
+    lo, hi = found[0], failed  # lo forgets, hi does not (None: lo is the last row)
+    while hi is not None and hi - lo > 1:
+        mid = (lo + hi) // 2
+        m = build(iterates[mid])
+        d = differences(m, data)
+        if forgets(d[0]):
+            lo, found = mid, (mid, m, d)
+        else:
+            hi = mid
+    return found

@@ -328,6 +328,10 @@ pub struct Iteration {
     pub gradient_norm: f64,
     /// Damping used for the accepted step.
     pub damping: f64,
+    /// The parameters after the step (the point `cost` was evaluated at): an observer that
+    /// keeps some can return one of them when the last iterate fails a check the search
+    /// cannot make (as `pnlss` does with its fading-memory check).
+    pub theta: Vec<f64>,
 }
 
 /// What the observer tells the search.

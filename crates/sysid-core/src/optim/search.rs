@@ -532,6 +532,7 @@ pub fn minimize(
                 step_norm,
                 gradient_norm: gnorm,
                 damping: used,
+                theta: pt.theta.clone(),
             };
             stop = match observer(&info) {
                 Flow::Stop => StopReason::Cancelled,
@@ -589,6 +590,7 @@ pub fn minimize(
             step_norm,
             gradient_norm: gnorm,
             damping: used,
+            theta: pt.theta.clone(),
         };
         if observer(&info) == Flow::Stop {
             stop = StopReason::Cancelled;

@@ -268,6 +268,32 @@ fn observer_sees_every_iteration_and_can_cancel() {
 }
 
 #[test]
+fn observer_sees_the_point_of_each_iterate() {
+    // each reported point has the reported cost; the last is the solution's point
+    let mut seen: Vec<(Vec<f64>, f64)> = Vec::new();
+    let sol = minimize(
+        &mut ls(2, rosen),
+        &[-1.2, 1.0],
+        &Options::default(),
+        &mut |it| {
+            seen.push((it.theta.clone(), it.cost));
+            Flow::Continue
+        },
+    )
+    .unwrap();
+    assert!(seen.len() > 3);
+    for (theta, cost) in &seen {
+        let (r, _) = rosen(theta);
+        let c = 0.5 * r.iter().map(|v| v * v).sum::<f64>();
+        assert!(
+            (c - cost).abs() <= 1e-12 * cost.abs().max(1e-300),
+            "{c} vs {cost}"
+        );
+    }
+    assert_eq!(seen.last().unwrap().0, sol.theta);
+}
+
+#[test]
 fn max_iter_and_bad_options() {
     let mut o = Options::default();
     o.max_iter = 2;
