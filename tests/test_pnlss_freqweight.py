@@ -70,5 +70,25 @@ def test_bad_weighting_is_rejected():
         sysid.pnlss(d, 2, degree=[2], periods=4, weighting="freq", progress=False)
     with pytest.raises(DataError, match="needs periods="):
         sysid.pnlss(d, 2, degree=[2], weighting="bla", progress=False)
-    with pytest.raises(DataError, match="needs periods="):
-        sysid.pnlss(d, 2, degree=[2], periods=4, branches=2, weighting="bla", progress=False)
+    with pytest.raises(DataError, match="not average=True"):
+        sysid.pnlss(d, 2, degree=[2], periods=4, average=True, weighting="bla",
+                    progress=False)
+
+
+@pytest.mark.filterwarnings("ignore:pnlss stopped at max_iter")
+def test_the_decoupled_model_fits_on_the_weighted_cost_too():
+    # the truth's two monomials x1^2, x1 x2 are sums of squares of three linear forms: the
+    # decoupled model with three quadratic branches holds it; both costs approach it (the
+    # branch directions converge slowly), by different paths
+    u, y, _ = _record()
+    d = sysid.IOData(u, y, 1.0)
+    kw = dict(degree=[2], branches=3, periods=4, max_iter=60, progress=False)
+    bla = sysid.pnlss(d, 2, weighting="bla", **kw)
+    none = sysid.pnlss(d, 2, **kw)
+    assert bla.info["weighting"] == "bla" and none.info["weighting"] == "none"
+    assert bla.info["method"] == "pnlss (decoupled)"
+    assert not np.allclose(bla.theta, none.theta)
+    start = sysid.pnlss(d, 2, weighting="bla", **{**kw, "max_iter": 0})
+    for m in (bla, none):
+        err = np.max(np.abs(m.simulate(u)[256:] - y[256:]))
+        assert err < 1e-2 * np.max(np.abs(start.simulate(u)[256:] - y[256:])), err

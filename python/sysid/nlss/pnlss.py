@@ -275,8 +275,9 @@ def pnlss(
         on the mean and the excited DFT lines, each weighted by the inverse noise variance of
         the measured output's averaged spectrum (estimated over the periods; see
         :mod:`sysid.nlss.freqweight`); needs at least two periods after a transient of whole
-        periods in every experiment, the coupled model and ``average=False``. It is not the
-        default: on the F-16 records it validated worse than the time-domain cost
+        periods in every experiment and ``average=False``; applies to the coupled and the
+        decoupled (``branches=``) model alike. It is not the default: on the F-16 records the
+        coupled fit validated worse with it than with the time-domain cost
         (``benches/results/nonlinear.md``).
     seed : int
         Seeds the decoupled variant's initial branch directions.
@@ -375,7 +376,7 @@ def pnlss(
         skip = transient if transient is not None else (
             N // pers[k] if pers and pers[k] > 1 else settle_samples(lin, N))
         recs.append((u, y, int(skip)))
-    weights = _weights(weighting, sd, pers, recs, average or branches is not None)
+    weights = _weights(weighting, sd, pers, recs, average)
     if average:
         recs = _averaged(sd, pers)
         us = [r[0] for r in recs]
@@ -393,7 +394,8 @@ def pnlss(
             from .decoupled import DecoupledPNLSSModel, fit_decoupled
 
             kw_of, res = fit_decoupled(lin, us, recs, degs, branches, extrapolation == "clamp",
-                                       max_iter, tol, cb if cb is not None else _tick, seed)
+                                       max_iter, tol, cb if cb is not None else _tick, seed,
+                                       weights)
             info.update(method="pnlss (decoupled)", branches=int(branches))
             cls: Any = DecoupledPNLSSModel
         else:
@@ -577,13 +579,13 @@ def _output_basis(m: StateSpaceModel) -> StateSpaceModel:
 
 
 def _weights(weighting: str, sd: IOData, pers: list[int] | None, recs: list[Any],
-             excluded: bool) -> Any:
+             averaged: bool) -> Any:
     """The lines and weights of the frequency-weighted cost, or ``None`` (time domain)."""
     if weighting == "none":
         return None
-    if pers is None or excluded:
-        raise DataError("weighting='bla' needs periods= and applies to the coupled model "
-                        "without average=True (drop branches= / average=, or use 'none')")
+    if pers is None or averaged:
+        raise DataError("weighting='bla' needs periods= and the whole records, not "
+                        "average=True (give periods=, drop average=, or use 'none')")
     from .freqweight import line_weights
 
     w = line_weights(sd, pers, [r[2] for r in recs])
