@@ -122,7 +122,7 @@ def test_latest_forgetting_finds_the_last_iterate_that_forgets() -> None:
     assert latest_forgetting(lambda th: _quintic(th[0]), ladder[:1], data)[0] == 0
 
 
-def test_pnlss_returns_the_latest_iterate_that_forgets_with_a_warning() -> None:
+def test_pnlss_returns_the_latest_iterate_that_forgets_with_a_warning(tmp_path) -> None:
     from sysid.nlss.pnlss import _forgetting
 
     u = _pulse()
@@ -144,6 +144,10 @@ def test_pnlss_returns_the_latest_iterate_that_forgets_with_a_warning() -> None:
     assert ret["iteration"] == 9 and ret["cost"] == pytest.approx(1.9)
     assert ret["last_cost"] == 1.0 and ret["last_difference"] > 10 * MEMORY_TOLERANCE
     assert m.info["memory"]["difference"][0] < MEMORY_TOLERANCE
+    sysid.save_model(m, tmp_path / "m.json")  # what it returned is kept with the model
+    back = sysid.load_model(tmp_path / "m.json")
+    assert back.info["fit"]["returned"] == ret
+    np.testing.assert_array_equal(back.simulate(u), m.simulate(u))
     # a last iterate that forgets is returned as it is, silently
     res = {"theta": ladder[5], "iterates": ladder[:6], "history": history[:6]}
     with warnings.catch_warnings():
