@@ -192,3 +192,17 @@ def test_the_fits_iterates_follow_their_cost_history(branches: int | None,
                     for th in its])
     ratio = sse / np.asarray(hist)
     assert np.allclose(ratio, ratio[0], rtol=1e-6), ratio
+
+
+def test_a_quick_verdict_stops_at_the_first_experiment_that_fails() -> None:
+    from sysid.nlss.memory import differences
+
+    m = _bistable()
+    quiet, kicked = _input(kick=False), _input(kick=True)
+    data = sysid.IOData([quiet, kicked], [m.simulate(quiet), m.simulate(kicked)], 1.0)
+    full = differences(m, data)
+    assert full[0][0] < MEMORY_TOLERANCE < full[0][1] and full[1] == [1, 1]
+    # the failing experiment first: the other is not simulated
+    assert differences(m, data, order=[1, 0], quick=True) == ([None, full[0][1]], [0, 1])
+    # in the data's order every experiment up to the failing one is, and the result agrees
+    assert differences(m, data, quick=True) == full

@@ -50,12 +50,15 @@ MEMORY_TOLERANCE = 0.1
 MAX_SAMPLES = 200_000
 
 
-def differences(model: Any, data: IOData) -> tuple[list[float | None], list[int]]:
+def differences(model: Any, data: IOData, order: list[int] | None = None,
+                quick: bool = False) -> tuple[list[float | None], list[int]]:
     """Per experiment of ``data``, the largest difference (a fraction of the output's
     standard deviation) between ``model``'s simulation of the whole experiment and its
-    simulation from rest at the middle, after the settling time (``inf``: the second run
-    diverged; ``None``: too slow a pole to tell), and how many copies of the experiment's
-    input were simulated; see :func:`check_memory`.
+    simulation from rest at the middle, after the settling time (``inf``: a run diverged;
+    ``None``: too slow a pole to tell), and how many copies of the experiment's input were
+    simulated; see :func:`check_memory`. ``order``: the experiments' indices in the order to
+    check them; ``quick``: stop at the first that fails (the rest stay ``None``, 0), for a
+    verdict alone.
 
     Examples
     --------
@@ -72,36 +75,41 @@ def differences(model: Any, data: IOData) -> tuple[list[float | None], list[int]
     # difference, a few output standard deviations, is then well under the tolerance; an
     # unstable linear part never settles: it is warned about on its own)
     settle = decay_samples(model.linear(), 1e-2)
-    diffs: list[float | None] = []
-    repeats: list[int] = []
-    for u, _ in data.experiments:
-        n = u.shape[0]
-        half = n // 2
-        # the runs settle, then are compared over the second half's length (10 samples at
-        # least): the record itself when long enough, else the record repeated end to end
-        need = half + settle + max(n - half, 10)
-        long_enough = n - half - settle >= 10
-        if not long_enough and need > MAX_SAMPLES:  # too slow a pole (or an unstable one)
-            diffs.append(None)
-            repeats.append(0)
-            continue
-        copies = 1 if long_enough else int(np.ceil(need / n))
-        repeats.append(copies)
-        if copies > 1:
-            u = np.tile(u, (copies, 1))[:int(need)]
-        s = int(settle)
-        with np.errstate(all="ignore"):
-            whole = np.asarray(model.simulate(u))
-            try:
-                second = np.asarray(model.simulate(u[half:]))
-            except NumericalError:
-                diffs.append(float("inf"))
-                continue
-        a, b = whole[half + s:], second[s:]
-        ref = np.std(whole[s:], axis=0)
-        d = np.sqrt(np.mean((a - b) ** 2, axis=0)) / np.where(ref > 0, ref, 1.0)
-        diffs.append(float(np.max(d)) if np.all(np.isfinite(d)) else float("inf"))
+    exps = data.experiments
+    diffs: list[float | None] = [None] * len(exps)
+    repeats = [0] * len(exps)
+    for k in range(len(exps)) if order is None else order:
+        diffs[k], repeats[k] = _difference(model, exps[k][0], settle)
+        if quick and diffs[k] is not None and diffs[k] > MEMORY_TOLERANCE:
+            break  # the verdict is known: the experiments after stay unchecked (None, 0)
     return diffs, repeats
+
+
+def _difference(model: Any, u: np.ndarray, settle: float) -> tuple[float | None, int]:
+    """One experiment's entry of :func:`differences`: the difference and the copies of ``u``
+    simulated (``None, 0``: too slow a pole to tell)."""
+    n = u.shape[0]
+    half = n // 2
+    # the runs settle, then are compared over the second half's length (10 samples at
+    # least): the record itself when long enough, else the record repeated end to end
+    need = half + settle + max(n - half, 10)
+    long_enough = n - half - settle >= 10
+    if not long_enough and need > MAX_SAMPLES:  # too slow a pole (or an unstable one)
+        return None, 0
+    copies = 1 if long_enough else int(np.ceil(need / n))
+    if copies > 1:
+        u = np.tile(u, (copies, 1))[:int(need)]
+    s = int(settle)
+    with np.errstate(all="ignore"):
+        try:  # (the whole run of a repeated input is longer than the record: it may diverge)
+            whole = np.asarray(model.simulate(u))
+            second = np.asarray(model.simulate(u[half:]))
+        except NumericalError:
+            return float("inf"), copies
+    a, b = whole[half + s:], second[s:]
+    ref = np.std(whole[s:], axis=0)
+    d = np.sqrt(np.mean((a - b) ** 2, axis=0)) / np.where(ref > 0, ref, 1.0)
+    return (float(np.max(d)) if np.all(np.isfinite(d)) else float("inf")), copies
 
 
 def check_memory(model: Any, data: IOData, name: str,
@@ -170,7 +178,8 @@ def forgets(diffs: list[float | None]) -> bool:
 
 
 def latest_forgetting(build: Callable[[np.ndarray], Any], iterates: np.ndarray,
-                      data: IOData) -> tuple[int, Any, tuple[list[float | None], list[int]]] | None:
+                      data: IOData, first: list[int] | None = None
+                      ) -> tuple[int, Any, tuple[list[float | None], list[int]]] | None:
     """The latest of a search's iterates whose model forgets its initial state.
 
     Used when the search's last iterate does not: the iterates (rows of ``iterates``, in
@@ -188,6 +197,9 @@ def latest_forgetting(build: Callable[[np.ndarray], Any], iterates: np.ndarray,
         The iterates, earliest first.
     data : IOData
         The training data (engineering units), as for :func:`check_memory`.
+    first : list of int, optional
+        Experiments to check first (those the last iterate failed on): an iterate that fails
+        there is judged without simulating the others.
 
     Returns
     -------
@@ -221,11 +233,13 @@ def latest_forgetting(build: Callable[[np.ndarray], Any], iterates: np.ndarray,
     grid = list(range(k - 1, -1, -stride))
     if grid[-1] != 0:
         grid.append(0)
+    first = list(first or [])
+    order = first + [k for k in range(len(data.experiments)) if k not in first]
     found = None
     failed = None
     for i in grid:
         m = build(iterates[i])
-        d = differences(m, data)
+        d = differences(m, data, order, quick=True)
         if forgets(d[0]):
             found = (i, m, d)
             break
@@ -236,7 +250,7 @@ def latest_forgetting(build: Callable[[np.ndarray], Any], iterates: np.ndarray,
     while hi is not None and hi - lo > 1:
         mid = (lo + hi) // 2
         m = build(iterates[mid])
-        d = differences(m, data)
+        d = differences(m, data, order, quick=True)
         if forgets(d[0]):
             lo, found = mid, (mid, m, d)
         else:

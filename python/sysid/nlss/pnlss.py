@@ -426,13 +426,14 @@ def _forgetting(build: Callable[[np.ndarray], Any], res: dict[str, Any], data: I
 
     from .._checks import user_stacklevel
     from ..errors import StabilityWarning
-    from .memory import differences, forgets, latest_forgetting
+    from .memory import MEMORY_TOLERANCE, differences, latest_forgetting
 
     model = build(np.asarray(res["theta"]))
     measured = differences(model, data)
     its = res["iterates"]
-    found = None if forgets(measured[0]) or len(its) < 2 else \
-        latest_forgetting(build, its[:-1], data)
+    failed = [k for k, d in enumerate(measured[0]) if d is not None and d > MEMORY_TOLERANCE]
+    found = None if not failed or len(its) < 2 else \
+        latest_forgetting(build, its[:-1], data, failed)
     if found is None:
         return check_memory(_warn_unstable(model), data, "pnlss", measured)
     k, earlier, kept = found
