@@ -2,6 +2,7 @@ use faer::Mat;
 use rand::{rngs::StdRng, Rng, SeedableRng};
 
 use super::*;
+use crate::interrupt::error_when_asked_to_stop as stop;
 use crate::linalg::eigenvalues;
 
 fn inputs(n: usize, seed: u64) -> Mat<f64> {
@@ -301,7 +302,6 @@ fn a_pass_stops_inside_the_record_when_asked() {
         structure: s.clone(),
         records: vec![(u.as_ref(), y.as_ref())],
     };
-    use crate::interrupt::error_when_asked_to_stop as stop;
     for jacobian in [false, true] {
         let r = stop(|| pr.evaluate(&th, jacobian));
         assert_eq!(r, Some(SysidError::Interrupted), "jacobian {jacobian}");
