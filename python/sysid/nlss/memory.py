@@ -22,6 +22,8 @@ the same (do two starts on one input meet?), only the input is longer. A settlin
 beyond that, or a linear part with a pole on or outside the unit circle, is not judged. When
 the two runs do not agree, or the second diverges, a :class:`~sysid.StabilityWarning` says
 so; ``info["memory"]`` records the differences and how often each experiment was repeated.
+A search can walk into such a model late: :func:`latest_forgetting` finds the latest of its
+iterates that passes, which ``pnlss`` returns (with a warning) when its last one does not.
 """
 
 from __future__ import annotations
