@@ -209,7 +209,7 @@ pub(crate) fn keeping<'a>(
 ) -> impl FnMut(&Iteration) -> Flow + 'a {
     move |it: &Iteration| {
         if keep {
-            kept.extend_from_slice(&it.theta);
+            kept.extend_from_slice(it.theta);
         }
         obs(it)
     }

@@ -39,7 +39,8 @@ from ..data.iodata import IOData
 from ..errors import NumericalError, StabilityWarning
 from .common import decay_samples
 
-__all__ = ["MEMORY_TOLERANCE", "check_memory", "differences", "forgets", "latest_forgetting"]
+__all__ = ["MEMORY_TOLERANCE", "check_memory", "differences", "failing", "forgets",
+           "latest_forgetting"]
 
 #: The largest difference (a fraction of each output's standard deviation) between the two
 #: simulations of an experiment after the settling time that still counts as forgotten.
@@ -153,7 +154,7 @@ def check_memory(model: Any, data: IOData, name: str,
     diffs, repeats = differences(model, data) if measured is None else measured
     model.info["memory"] = {"difference": diffs, "tolerance": MEMORY_TOLERANCE,
                             "repeats": repeats}
-    bad = [(k, d) for k, d in enumerate(diffs) if d is not None and d > MEMORY_TOLERANCE]
+    bad = [(k, diffs[k]) for k in failing(diffs)]
     if bad:
         k, d = max(bad, key=lambda kd: kd[1])
         where = f"experiment {k}" if len(diffs) > 1 else "the record"
@@ -173,10 +174,15 @@ def check_memory(model: Any, data: IOData, name: str,
     return model
 
 
+def failing(diffs: list[float | None]) -> list[int]:
+    """The experiments whose :func:`differences` ``diffs`` exceed the tolerance (one that
+    cannot be judged counts as forgotten, as :func:`check_memory` does)."""
+    return [k for k, d in enumerate(diffs) if d is not None and d > MEMORY_TOLERANCE]
+
+
 def forgets(diffs: list[float | None]) -> bool:
-    """Whether :func:`differences` ``diffs`` say the model forgets its initial state (an
-    experiment that cannot be judged counts as forgotten, as :func:`check_memory` does)."""
-    return all(d is None or d <= MEMORY_TOLERANCE for d in diffs)
+    """Whether :func:`differences` ``diffs`` say the model forgets its initial state."""
+    return not failing(diffs)
 
 
 def latest_forgetting(build: Callable[[np.ndarray], Any], iterates: np.ndarray,
@@ -228,15 +234,15 @@ def latest_forgetting(build: Callable[[np.ndarray], Any], iterates: np.ndarray,
     >>> float(its[k, 0])
     0.9
     """
-    k = len(iterates)
-    if k == 0:
+    rows = len(iterates)
+    if rows == 0:
         return None
-    stride = max(1, int(np.ceil(k / 10)))
-    grid = list(range(k - 1, -1, -stride))
+    stride = max(1, int(np.ceil(rows / 10)))
+    grid = list(range(rows - 1, -1, -stride))
     if grid[-1] != 0:
         grid.append(0)
     first = list(first or [])
-    order = first + [k for k in range(len(data.experiments)) if k not in first]
+    order = first + [e for e in range(len(data.experiments)) if e not in first]
     found = None
     failed = None
     for i in grid:

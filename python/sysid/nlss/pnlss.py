@@ -426,12 +426,12 @@ def _forgetting(build: Callable[[np.ndarray], Any], res: dict[str, Any], data: I
 
     from .._checks import user_stacklevel
     from ..errors import StabilityWarning
-    from .memory import MEMORY_TOLERANCE, differences, latest_forgetting
+    from .memory import differences, failing, latest_forgetting
 
     model = build(np.asarray(res["theta"]))
     measured = differences(model, data)
     its = res["iterates"]
-    failed = [k for k, d in enumerate(measured[0]) if d is not None and d > MEMORY_TOLERANCE]
+    failed = failing(measured[0])
     found = None if not failed or len(its) < 2 else \
         latest_forgetting(build, its[:-1], data, failed)
     if found is None:

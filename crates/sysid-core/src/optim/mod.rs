@@ -313,7 +313,7 @@ impl StopReason {
 
 /// Reported to the observer after every accepted step.
 #[derive(Debug, Clone)]
-pub struct Iteration {
+pub struct Iteration<'a> {
     /// Iteration number, from 1.
     pub iteration: usize,
     /// The reported criterion after the step ([`Problem::criterion`]; by default the cost
@@ -328,10 +328,10 @@ pub struct Iteration {
     pub gradient_norm: f64,
     /// Damping used for the accepted step.
     pub damping: f64,
-    /// The parameters after the step (the point `cost` was evaluated at): an observer that
-    /// keeps some can return one of them when the last iterate fails a check the search
-    /// cannot make (as `pnlss` does with its fading-memory check).
-    pub theta: Vec<f64>,
+    /// The parameters after the step (the point `cost` was evaluated at), borrowed from the
+    /// search: an observer that copies some can return one of them when the last iterate
+    /// fails a check the search cannot make (as `pnlss` does with its fading-memory check).
+    pub theta: &'a [f64],
 }
 
 /// What the observer tells the search.

@@ -532,7 +532,7 @@ pub fn minimize(
                 step_norm,
                 gradient_norm: gnorm,
                 damping: used,
-                theta: pt.theta.clone(),
+                theta: &pt.theta,
             };
             stop = match observer(&info) {
                 Flow::Stop => StopReason::Cancelled,
@@ -590,7 +590,7 @@ pub fn minimize(
             step_norm,
             gradient_norm: gnorm,
             damping: used,
-            theta: pt.theta.clone(),
+            theta: &pt.theta,
         };
         if observer(&info) == Flow::Stop {
             stop = StopReason::Cancelled;

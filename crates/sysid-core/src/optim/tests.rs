@@ -276,7 +276,7 @@ fn observer_sees_the_point_of_each_iterate() {
         &[-1.2, 1.0],
         &Options::default(),
         &mut |it| {
-            seen.push((it.theta.clone(), it.cost));
+            seen.push((it.theta.to_vec(), it.cost));
             Flow::Continue
         },
     )
