@@ -29,7 +29,7 @@ import numpy as np
 from .. import _sysid
 from .._progress import iteration_callback
 from .._threads import one_blas_thread
-from ..data.iodata import IOData
+from ..data.iodata import IOData, require_record
 from ..errors import DataError, NumericalError, SysidWarning
 from ..models.protocol import ModelMixin
 from ..models.serialize import register_model
@@ -212,7 +212,7 @@ def _widths(h: Any, name: str) -> tuple[int, ...]:
 
 @one_blas_thread
 def nlssest(
-    data: IOData,
+    data: IOData | tuple[Any, Any],
     order: int,
     *,
     hidden: Any = 16,
@@ -235,7 +235,7 @@ def nlssest(
 
     Parameters
     ----------
-    data : IOData
+    data : IOData or (u, y)
         Estimation record(s).
     order : int
         Number of states.
@@ -338,8 +338,7 @@ def nlssest(
     >>> bool(min(m.info["training"]["validation"]) < 0.05 * sv["linear"])
     True
     """
-    if not isinstance(data, IOData):
-        raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
+    data = require_record(data, "nlssest")
     from .._checks import as_int, as_nonnegative, as_seed
 
     n = check_order(order)

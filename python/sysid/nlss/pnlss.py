@@ -24,7 +24,7 @@ from .._checks import as_int, as_nonnegative, as_seed
 from .._display import modulus
 from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
-from ..data.iodata import IOData
+from ..data.iodata import IOData, require_record
 from ..errors import DataError, SysidWarning
 from ..models.protocol import ModelMixin
 from ..models.serialize import register_model
@@ -189,7 +189,7 @@ def _degrees(degree: Any) -> list[int]:
 
 @one_blas_thread
 def pnlss(
-    data: IOData,
+    data: IOData | tuple[Any, Any],
     order: int,
     *,
     degree: Any = "auto",
@@ -211,7 +211,7 @@ def pnlss(
 
     Parameters
     ----------
-    data : IOData
+    data : IOData or (u, y)
         Estimation record(s).
     order : int
         Number of states.
@@ -328,8 +328,7 @@ def pnlss(
     >>> bool(sysid.compare(m, d, x0="zero").fit[0, 0] > 99.9)
     True
     """
-    if not isinstance(data, IOData):
-        raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
+    data = require_record(data, "pnlss")
     n = check_order(order)
     if isinstance(degree, str) and degree != "auto":
         raise DataError(f"degree must be 'auto', an integer or a list of integers, got "

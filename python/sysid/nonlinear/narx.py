@@ -23,6 +23,7 @@ from .._checks import (
     require_independent_inputs,
 )
 from .._threads import one_blas_thread
+from ..data.iodata import as_record
 from ..errors import (
     DataError,
     ExcitationWarning,
@@ -193,7 +194,7 @@ def nlarx(
 
     Parameters
     ----------
-    data : IOData
+    data : IOData or (u, y)
         Estimation record; several experiments are used together.
     na : int or list (n_outputs)
         Output lags ``1..na`` of each output (shared by every output's equation); or all the
@@ -264,6 +265,7 @@ def nlarx(
     >>> print(m.terms_table())
     y0 = -0.605 y0(t-1) + 0.588 u0(t-1) - 0.24 u0(t-2) - 0.163 y0(t-2)^2
     """
+    data = as_record(data)  # a (u, y) pair, as ssest and compare take
     exps = experiment_arrays(data)
     check_magnitudes(data, "nlarx")
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]

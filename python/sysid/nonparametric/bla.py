@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from ..data.iodata import IOData
+from ..data.iodata import IOData, require_record
 from ..errors import DataError
 from ..models.frd import FRD
 
@@ -132,8 +132,7 @@ def bla(
     >>> bool(np.all(f.info["distortion_std"] > 0))
     True
     """
-    if not isinstance(data, IOData):
-        raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
+    data = require_record(data, "bla", pairs=False)
     from .._checks import as_int
 
     P = as_int(periods, "periods", 1)

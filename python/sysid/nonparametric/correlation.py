@@ -120,7 +120,7 @@ def correlation(
     >>> c.significant("y0", "u0").tolist()
     [3]
     """
-    data = _need_data(data, inputs=False)
+    data = _need_data(data, inputs=False, who="correlation")
     L = as_int(max_lag, "max_lag", 0)
     if L >= min(data.lengths):
         raise InsufficientDataError(f"max_lag = {L} needs experiments longer than {L} samples")

@@ -222,7 +222,7 @@ def welch_frf(
     >>> bool(frd.compare(g).relative_error.max() < 0.05)
     True
     """
-    data = _need_data(data)
+    data = _need_data(data, who="welch_frf")
     confidence = as_between(confidence, "confidence", 0.0, 1.0)  # before the spectra
     nperseg = _default_nperseg(data) if nperseg is None else as_int(nperseg, "nperseg", 2)
     noverlap = nperseg // 2 if noverlap is None else as_int(noverlap, "noverlap", 0)
@@ -294,7 +294,7 @@ def spa(
     >>> bool(frd.compare(g).relative_error.max() < 0.05)
     True
     """
-    data = _need_data(data)
+    data = _need_data(data, who="spa")
     confidence = as_between(confidence, "confidence", 0.0, 1.0)  # before the spectra
     N = data.n_samples
     lag_info: dict[str, Any] = {"lags_rule": "given"}
@@ -394,7 +394,7 @@ def etfe(
     >>> bool(np.allclose(frd.response[:, 0, 0], Y / U))
     True
     """
-    data = _need_data(data)
+    data = _need_data(data, who="etfe")
     confidence = as_between(confidence, "confidence", 0.0, 1.0)  # before the spectra
     min_power = as_nonnegative(min_power, "min_power")
     m, l = data.n_inputs, data.n_outputs

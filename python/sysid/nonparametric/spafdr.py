@@ -102,7 +102,7 @@ def spafdr(
     >>> frd.omega.size, bool(np.median(err) < 0.01), bool(err.max() < 0.1)
     (128, True, True)
     """
-    data = _need_data(data)
+    data = _need_data(data, who="spafdr")
     confidence = as_between(confidence, "confidence", 0.0, 1.0)  # before the spectra
     if min(data.lengths) < 2:
         raise InsufficientDataError(f"spafdr needs experiments of at least 2 samples, got "

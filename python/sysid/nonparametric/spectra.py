@@ -18,7 +18,7 @@ import numpy as np
 from scipy import signal
 
 from .._checks import as_int, check_elements
-from ..data.iodata import IOData
+from ..data.iodata import IOData, require_record
 from ..errors import DataError, InsufficientDataError, SysidWarning
 
 __all__ = ["Spectra", "Coherence", "spectra", "periodogram", "coherence"]
@@ -26,9 +26,9 @@ __all__ = ["Spectra", "Coherence", "spectra", "periodogram", "coherence"]
 _COND_LIMIT = 1e10
 
 
-def _need_data(data: Any, inputs: bool = True) -> IOData:
-    if not isinstance(data, IOData):
-        raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
+def _need_data(data: Any, inputs: bool = True, who: str = "spectra") -> IOData:
+    # the frequency axis follows the sample time: a bare (u, y) pair is refused
+    data = require_record(data, who, pairs=False)
     if inputs and data.n_inputs == 0:
         raise DataError("a frequency response needs inputs; this record is a time series")
     return data
@@ -333,7 +333,7 @@ def spectra(
     >>> bool(abs(s.psd("y0")[1:-1].mean() - 2 * 0.5) < 0.1)   # white: 2 sigma^2 dt
     True
     """
-    data = _need_data(data, inputs=False)
+    data = _need_data(data, inputs=False, who="spectra")
     S, f, s, info = _welch_scaled(data, nperseg, noverlap, window, nfft, detrend)
     return Spectra(2 * np.pi * f, _unscaled(S, s, _names(data)), _names(data), "welch", info)
 
@@ -365,7 +365,7 @@ def periodogram(data: IOData, *, window: str = "boxcar", detrend: bool = True) -
     >>> bool(np.allclose(p.psd("y0"), signal.periodogram(x)[1]))
     True
     """
-    data = _need_data(data, inputs=False)
+    data = _need_data(data, inputs=False, who="periodogram")
     if max(data.lengths) < 2:
         raise InsufficientDataError(f"a periodogram needs an experiment of at least 2 "
                                     f"samples, got {max(data.lengths)}")
@@ -474,7 +474,7 @@ def coherence(
     >>> bool(c.values.min() > 0.99)
     True
     """
-    data = _need_data(data)
+    data = _need_data(data, who="coherence")
     # coherence is unitless: taken of the scaled channels, it never overflows
     S, f, _, _ = _welch_scaled(data, nperseg, noverlap, window, None, True)
     m = data.n_inputs

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ..data.iodata import IOData
+from ..data.iodata import IOData, require_record
 from ..models.statespace import StateSpaceModel
 from .estimator import Order, SubspaceEstimator
 from .feedthrough import check_feedthrough, choose_feedthrough, default_feedthrough
@@ -16,7 +16,7 @@ __all__ = ["pbsid", "ssarx"]
 
 def _one_call(method: str) -> Any:
     def fit(
-        data: IOData,
+        data: IOData | tuple[Any, Any],
         order: Order = "auto",
         *,
         horizon: int | None = None,
@@ -29,6 +29,7 @@ def _one_call(method: str) -> Any:
     ) -> StateSpaceModel:
         from .closed_loop import closed_loop_fit
 
+        data = require_record(data, method)
         est = SubspaceEstimator(data, horizon, past=past, future=future, method=method,
                                 scale=scale)
         ft, why = check_feedthrough(default_feedthrough(feedthrough, order)), None
@@ -54,7 +55,7 @@ pbsid.__doc__ = """Identify a state-space model from closed-loop data with PBSID
 
     Parameters
     ----------
-    data : IOData
+    data : IOData or (u, y)
     order : int or "auto"
     horizon, past, future : int, optional
         VARX order (past) and observability horizon (future <= past + 1).

@@ -43,7 +43,7 @@ from .. import _sysid
 from .._checks import as_int, as_orders, check_magnitudes, record_stats, require_inputs_vary
 from .._threads import one_blas_thread
 from ..data.input_design import warn_excitation
-from ..data.iodata import IOData
+from ..data.iodata import IOData, require_record
 from ..data.offsets import check_offsets
 from ..data.segments import long_enough
 from ..errors import (
@@ -223,7 +223,7 @@ class SubspaceEstimator:
 
     Parameters
     ----------
-    data : IOData
+    data : IOData or (u, y)
         The record (several experiments allowed; no Hankel column spans two).
     horizon : int, optional
         Past and future horizon ``i`` (block rows); default :func:`default_horizon`, with
@@ -267,7 +267,7 @@ class SubspaceEstimator:
 
     def __init__(
         self,
-        data: IOData,
+        data: IOData | tuple[Any, Any],
         horizon: int | None = None,
         *,
         past: int | None = None,
@@ -277,8 +277,7 @@ class SubspaceEstimator:
         compressor: str = "auto",
         scale: bool | None = None,
     ) -> None:
-        if not isinstance(data, IOData):
-            raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
+        data = require_record(data, "SubspaceEstimator")
         self._from_factor = False
         self.method = _method(method)
         self._horizon_note = ""
@@ -710,7 +709,7 @@ def _orders(order: Any, top: int | None = None) -> list[int] | None:
 def _shortcut(method: str):  # type: ignore[no-untyped-def]
     @one_blas_thread
     def fit(
-        data: IOData,
+        data: IOData | tuple[Any, Any],
         order: Order = "auto",
         *,
         horizon: int | None = None,
@@ -720,6 +719,7 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         x0: bool = False,
         scale: bool | None = None,
     ) -> StateSpaceModel:
+        data = require_record(data, method.replace("-", "_"))
         if not isinstance(order, str) and np.ndim(order) == 0:
             order = as_int(order, "order", 1)  # inf, nan, 2.5: before the data are compressed
         if isinstance(data, IOData):  # a given order gets a horizon that allows it

@@ -33,7 +33,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_int
 from .._display import HTMLResult
-from ..data.iodata import IOData
+from ..data.iodata import IOData, require_record
 from ..errors import DataError
 from ..models.statespace import StateSpaceModel
 from .feedthrough import check_feedthrough
@@ -175,7 +175,7 @@ def svc_order(canonical: np.ndarray, max_order: int, n_samples: int, n_outputs: 
 
 
 def orthogonal_decomposition(
-    data: IOData,
+    data: IOData | tuple[Any, Any],
     order_det: Order = "auto",
     order_stoch: Order = "auto",
     *,
@@ -191,7 +191,7 @@ def orthogonal_decomposition(
 
     Parameters
     ----------
-    data : IOData
+    data : IOData or (u, y)
         With at least one input.
     order_det, order_stoch : int or "auto"
         Orders of the deterministic and stochastic submodels. ``"auto"``: the largest gap of
@@ -229,8 +229,7 @@ def orthogonal_decomposition(
     """
     from .estimator import SubspaceEstimator
 
-    if not isinstance(data, IOData):
-        raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
+    data = require_record(data, "orthogonal_decomposition")
     if data.n_inputs == 0:
         raise DataError("the orthogonal decomposition needs at least one input; for "
                         "output-only data use SubspaceEstimator on the outputs alone")

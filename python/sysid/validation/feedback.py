@@ -34,7 +34,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_between, as_int
 from .._display import HTMLResult
-from ..data.iodata import IOData
+from ..data.iodata import IOData, require_record
 from ..errors import DataError, InsufficientDataError
 
 __all__ = ["FeedbackTest", "check_feedback", "feedback_pvalues"]
@@ -198,7 +198,7 @@ class FeedbackTest(HTMLResult):
         return ax
 
 
-def check_feedback(data: IOData, lags: int | None = None, *, alpha: float = 0.01
+def check_feedback(data: IOData | tuple[Any, Any], lags: int | None = None, *, alpha: float = 0.01
                    ) -> FeedbackTest:
     """Test whether the input depends on past outputs (a feedback loop).
 
@@ -209,7 +209,7 @@ def check_feedback(data: IOData, lags: int | None = None, *, alpha: float = 0.01
 
     Parameters
     ----------
-    data : IOData
+    data : IOData or (u, y)
         With at least one input.
     lags : int, optional
         Past samples used (default ``min(20, max(2, N // (20 (m + l))))``).
@@ -234,8 +234,7 @@ def check_feedback(data: IOData, lags: int | None = None, *, alpha: float = 0.01
     >>> sysid.check_feedback(sysid.IOData(u=r, y=y)).detected
     False
     """
-    if not isinstance(data, IOData):
-        raise DataError(f"data must be a sysid.IOData, got {type(data).__name__}")
+    data = require_record(data, "check_feedback")
     if data.n_inputs == 0:
         raise DataError("check_feedback needs at least one input channel")
     alpha = as_between(alpha, "alpha", 0.0, 1.0)
