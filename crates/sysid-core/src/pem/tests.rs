@@ -822,3 +822,48 @@ fn a_record_whose_input_stops_gives_the_same_cost_on_every_path() {
         assert!((&ev.gauss_newton - &plain.gauss_newton).norm_max() < 1e-9 * scale);
     }
 }
+
+#[test]
+fn a_search_stopped_on_a_tolerance_ends_with_its_initial_states_solved_exactly() {
+    // a slow mode carrying a large initial state: a loose cost tolerance stops the joint
+    // search while the states are still short of their optimum for its last parameters
+    let (truth_sys, k) = truth();
+    let mut a = truth_sys.a.clone();
+    a[(2, 2)] = 0.995;
+    let sys = StateSpace::new(
+        a,
+        truth_sys.b.clone(),
+        truth_sys.c.clone(),
+        truth_sys.d.clone(),
+    )
+    .unwrap();
+    let u = noise(400, 2, 21);
+    let e = noise(400, 2, 22) * faer::Scale(0.2);
+    let y = data(&sys, &k, &u, &e, &[2.0, -1.0, 15.0]);
+    let mut o = PemOptions::default();
+    o.focus = Focus::Simulation;
+    o.reweight = false;
+    o.optim.tol_cost = 1e-3;
+    let mut seen = Vec::new();
+    let views = [(u.as_ref(), y.as_ref())];
+    let mut a0 = sys.a.clone();
+    a0[(2, 2)] = 0.98;
+    let start = StateSpace::new(a0, sys.b.clone(), sys.c.clone(), sys.d.clone()).unwrap();
+    let r = pem(&perturbed(&start, 0.01), None, &views, &o, &mut |it| {
+        seen.push((it.iteration, it.cost));
+        Flow::Continue
+    })
+    .unwrap();
+    // the criterion of the result with its states fitted by least squares is its own cost
+    let exact = criterion(&views, &r.sys, None, &o).unwrap();
+    let last = *r.solution.history.last().unwrap();
+    assert!(
+        (last - exact).abs() <= 1e-9 * exact,
+        "{last} against {exact}"
+    );
+    // every iteration, the states' own included, was reported and is in the history
+    assert_eq!(seen.len(), r.solution.iterations);
+    assert_eq!(r.solution.history.len(), r.solution.iterations + 1);
+    assert!(seen.iter().enumerate().all(|(i, s)| s.0 == i + 1));
+    assert!(r.solution.history.windows(2).all(|w| w[1] <= w[0]));
+}
