@@ -722,8 +722,7 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         data = require_record(data, method.replace("-", "_"))
         if not isinstance(order, str) and np.ndim(order) == 0:
             order = as_int(order, "order", 1)  # inf, nan, 2.5: before the data are compressed
-        if isinstance(data, IOData):  # a given order gets a horizon that allows it
-            horizon = horizon_for_order(data, order, horizon)
+        horizon = horizon_for_order(data, order, horizon)  # one that allows a given order
         est = SubspaceEstimator(data, horizon, method=method, scale=scale)
         model = est.fit(order, feedthrough=feedthrough, kalman=kalman, stable=stable, x0=x0)
         if feedthrough is None and not isinstance(order, str) and np.ndim(order) == 0:

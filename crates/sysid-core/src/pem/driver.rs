@@ -245,7 +245,7 @@ fn polish_x0(
     sol.history.push(after);
     sol.weighted_history.push(weighted);
     sol.iterations += 1;
-    sol.evaluations += 2;
+    sol.evaluations += 2; // the states' Jacobian and their step's trial
     sol.gauss_newton = Mat::zeros(0, 0);
     let flow = observer(&Iteration {
         iteration: sol.iterations,
