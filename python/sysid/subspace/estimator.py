@@ -424,7 +424,9 @@ class SubspaceEstimator:
             warnings.warn(
                 f"the record shows feedback (past outputs predict the input, p = {p:.2g}): "
                 f"the open-loop method {key!r} is biased under feedback; use method='pbsid' "
-                "or 'ssarx' (see sysid.check_feedback)",
+                "or 'ssarx' (see sysid.check_feedback). A nonlinear plant in open loop can "
+                "show the same (its distortions, functions of past inputs, stay in a linear "
+                "model's outputs): sysid.advice(data) weighs both",
                 FeedbackWarning,
                 stacklevel=3,
             )
