@@ -27,7 +27,7 @@ from .._checks import (
 )
 from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
-from ..data.iodata import as_record
+from ..data.iodata import require_record
 from ..errors import DataError, StabilityWarning
 from ..polynomial.orders import matlab_orders
 from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction, check_search_size
@@ -124,7 +124,7 @@ def nlhw(
     from ..polynomial.estimators import oe
     from .choice import auto_fit, is_auto
 
-    data = as_record(data)  # a (u, y) pair, as ssest and compare take
+    data = require_record(data, "nlhw")
     exps = experiment_arrays(data)
     if exps[0][0].shape[1] != 1 or exps[0][1].shape[1] != 1:
         raise DataError(f"nlhw handles one input and one output (the record has "

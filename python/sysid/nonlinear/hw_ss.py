@@ -26,7 +26,7 @@ from .._checks import (
 )
 from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
-from ..data.iodata import as_record
+from ..data.iodata import require_record
 from ..data.offsets import check_offsets
 from ..errors import DataError
 from .hw_model import Nonlinearity, UserFunction, check_search_size
@@ -135,7 +135,7 @@ def nlhw_ss(
     from ..subspace.estimator import n4sid
     from .choice import auto_fit, is_auto
 
-    data = as_record(data)  # a (u, y) pair, as ssest and compare take
+    data = require_record(data, "nlhw_ss")
     if is_auto(input_nl) or is_auto(output_nl):
         u0, y0 = experiment_arrays(data)[0]
         return auto_fit(data, lambda d, fi, fo, prog: nlhw_ss(

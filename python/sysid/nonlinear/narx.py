@@ -23,7 +23,7 @@ from .._checks import (
     require_independent_inputs,
 )
 from .._threads import one_blas_thread
-from ..data.iodata import as_record
+from ..data.iodata import require_record
 from ..errors import (
     DataError,
     ExcitationWarning,
@@ -265,7 +265,7 @@ def nlarx(
     >>> print(m.terms_table())
     y0 = -0.605 y0(t-1) + 0.588 u0(t-1) - 0.24 u0(t-2) - 0.163 y0(t-2)^2
     """
-    data = as_record(data)  # a (u, y) pair, as ssest and compare take
+    data = require_record(data, "nlarx")
     exps = experiment_arrays(data)
     check_magnitudes(data, "nlarx")
     ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]

@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int, check_magnitudes, experiment_arrays, require_inputs_vary
-from ..data.iodata import as_record
+from ..data.iodata import require_record
 from ..errors import DataError, ExcitationError, SysidWarning
 
 __all__ = ["delayest", "DelayWarning"]
@@ -64,7 +64,7 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int =
     >>> sysid.delayest(sysid.IOData(u, y[:, None], 1.0))
     array([[3, 1]])
     """
-    data = as_record(data)  # a (u, y) pair, as ssest and compare take
+    data = require_record(data, "delayest")
     na = as_int(na, "na", 0, 50)
     nb = as_int(nb, "nb", 1, 50)
     nk_min = as_int(nk_min, "nk_min", 0)
