@@ -1,5 +1,7 @@
 """MATLAB's advice(data): each check finds what it should, and stays quiet otherwise."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -99,3 +101,16 @@ def test_a_constant_input_is_named_as_such_not_as_zero():
     for topic in ("delays", "nonlinearity"):
         assert a[topic].verdict == "note"
         assert "never change" in a[topic].finding and "is 0 in every" not in a[topic].finding
+
+
+def test_a_record_too_short_for_the_feedback_test_is_still_advised_on():
+    """12 samples of 5 inputs and 2 outputs: advice raised check_feedback's "lags = 2 leaves
+    no degrees of freedom" (a lag the user never chose) instead of advising; the feedback
+    finding now says it was not tested and why, as the delays' finding does."""
+    rng = np.random.default_rng(0)
+    d = sysid.IOData(u=rng.standard_normal((12, 5)), y=rng.standard_normal((12, 2)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a = sysid.advice(d)
+    assert a["feedback"].verdict == "note"
+    assert a["feedback"].finding.startswith("not tested (lags = 2 leaves no degrees")

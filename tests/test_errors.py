@@ -51,6 +51,19 @@ def test_too_few_samples_for_the_horizon(record):
         sysid.SubspaceEstimator(sysid.IOData(u=u[:30], y=y[:30]), horizon=10)
 
 
+def test_too_few_samples_at_the_smallest_horizon_asks_only_for_more_data():
+    """25 samples of 5 inputs and 2 outputs: n4sid's default horizon is already 2, the
+    smallest, and the error told the user to use a smaller one (also pbsid's VARX)."""
+    rng = np.random.default_rng(0)
+    d = sysid.IOData(u=rng.standard_normal((25, 5)), y=rng.standard_normal((25, 2)))
+    for fit in (sysid.n4sid, sysid.pbsid):
+        with pytest.raises(sysid.InsufficientDataError) as e:
+            fit(d)
+        assert "needs at least" in str(e.value)
+        assert "horizons are already at their smallest" in str(e.value)
+        assert "smaller horizon" not in str(e.value)
+
+
 def test_experiment_shorter_than_the_window(record):
     u, y = record
     data = sysid.IOData(u=[u, u[:5]], y=[y, y[:5]])

@@ -261,6 +261,25 @@ def test_fir_options_change_the_estimate() -> None:
     assert "MarkovEstimate(fir: 20 Markov parameters" in repr(free)
 
 
+def test_fir_length_defaults_to_the_inputs_excitation_as_impulseest_does() -> None:
+    """``impulse_response(data)`` (MATLAB's ``impulseest(data)``) raised a TypeError: the
+    length was required. It now follows the input's order of persistent excitation, at most
+    70 and a quarter of the samples per input, and says so; the response it estimates is the
+    one an explicit length of that size gives."""
+    true = random_system(2, 1, 1, 5, rmax=0.8)
+    data = innovation_data(true, np.zeros((2, 1)), 1000, 0.05, 2)
+    est = sysid.impulse_response(data)
+    assert est.markov.shape == (70, 1, 1)
+    assert "persistently exciting of order >= 70" in est.info["length"]
+    np.testing.assert_array_equal(est.markov, sysid.impulse_response(data, 70).markov)
+    short = sysid.IOData(data.u[:100], data.y[:100], dt=1.0)
+    assert sysid.impulse_response(short).markov.shape == (25, 1, 1)
+    t = np.arange(400.0)
+    sine = sysid.IOData(np.sin(0.3 * t), np.sin(0.3 * t - 0.5), dt=1.0)
+    tone = sysid.impulse_response(sine, regularization=None)
+    assert tone.markov.shape == (2, 1, 1) and "order 2 " in tone.info["length"]
+
+
 def test_okid_mimo_noise_free_is_exact_and_pools_experiments() -> None:
     true = random_system(4, 2, 3, 21, rmax=0.8)
     d1 = innovation_data(true, np.zeros((4, 3)), 300, 0.0, 1)

@@ -206,3 +206,14 @@ def test_feedthrough_follows_the_package_default():
         assert np.all(m.D != 0) and "feedthrough_check" not in m.info
         m = sysid.ssregest(with_d, 2, feedthrough=False)  # asked for: no check, no warning
     assert np.all(m.D == 0) and "feedthrough_check" not in m.info
+
+
+def test_an_order_no_held_out_block_can_score_is_a_named_error():
+    """12 samples of 5 inputs and 2 outputs: no order fits on part of the record, and the
+    automatic order raised a bare ValueError ("no order gave a model ..."), not one of the
+    package's errors, and said nothing of what to do."""
+    rng = np.random.default_rng(0)
+    d = sysid.IOData(u=rng.standard_normal((12, 5)), y=rng.standard_normal((12, 2)))
+    with pytest.raises(sysid.InsufficientDataError, match=r"no order gave a model .* pass an "
+                       r"order, or use a longer record"):
+        sysid.ssregest(d)

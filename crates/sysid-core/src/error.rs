@@ -113,6 +113,23 @@ pub enum SysidError {
 /// Result with [`SysidError`].
 pub type Result<T> = std::result::Result<T, SysidError>;
 
+/// The fix for a data matrix with too few columns: a longer record or a smaller horizon,
+/// and only a longer record once both horizons are at their smallest (2): a record of 57
+/// samples with 7 channels was told to shrink a horizon that could not shrink.
+///
+/// ```
+/// use sysid_core::error::horizon_fix;
+/// assert!(horizon_fix(2, 2).contains("smallest"));
+/// assert!(horizon_fix(10, 10).contains("smaller horizon"));
+/// ```
+pub fn horizon_fix(past: usize, future: usize) -> &'static str {
+    if past <= 2 && future <= 2 {
+        "use a longer record (the horizons are already at their smallest)"
+    } else {
+        "use a longer record or a smaller horizon"
+    }
+}
+
 impl SysidError {
     pub(crate) fn invalid(name: &'static str, reason: impl Into<String>) -> Self {
         SysidError::InvalidArgument {

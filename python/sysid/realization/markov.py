@@ -51,7 +51,40 @@ def _feedthrough(data: IOData, value: Any) -> bool:
     return bool(value)
 
 
-def impulse_response(data: IOData, length: int, *, regularization: str | None = "tc",
+#: the longest default FIR of :func:`impulse_response` (as MATLAB's ``impulseest`` default)
+DEFAULT_LENGTH = 70
+
+
+def default_length(exps: list[tuple[np.ndarray, np.ndarray]]) -> tuple[int, str]:
+    """The FIR length :func:`impulse_response` takes when none is given, and why: the
+    input's order of persistent excitation (:func:`sysid.persistent_excitation_order`, up to
+    ``DEFAULT_LENGTH``), at most a quarter of the samples per input (the regression keeps
+    four samples per coefficient), at least 1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.realization.markov import default_length
+    >>> u = np.random.default_rng(0).standard_normal((1000, 1))
+    >>> default_length([(u, u)])[0], default_length([(u[:100], u[:100])])[0]
+    (70, 25)
+    """
+    from ..data.input_design import persistent_excitation_order
+
+    m = exps[0][0].shape[1]
+    total = sum(u.shape[0] for u, _ in exps)
+    pe = persistent_excitation_order([u for u, _ in exps], DEFAULT_LENGTH)
+    cap = max(1, total // (4 * m))
+    n = max(1, min(pe, cap))
+    why = (f"{n} Markov parameters: the input is persistently exciting of order "
+           f"{'>= ' if pe >= DEFAULT_LENGTH else ''}{pe}"
+           + (f", and {total} samples of {m} input(s) support {cap}" if cap < pe else "")
+           + f" (at most {DEFAULT_LENGTH}; pass length= for another)")
+    return n, why
+
+
+def impulse_response(data: IOData, length: int | None = None, *,
+                     regularization: str | None = "tc",
                      hyper: tuple[float, float] | None = None,
                      feedthrough: bool | str = False) -> MarkovEstimate:
     """Markov parameters by least-squares FIR, optionally TC-regularised.
@@ -66,8 +99,11 @@ def impulse_response(data: IOData, length: int, *, regularization: str | None = 
     ----------
     data : IOData
         Input/output record(s).
-    length : int
-        Number of Markov parameters ``h_0 .. h_{length-1}``.
+    length : int, optional
+        Number of Markov parameters ``h_0 .. h_{length-1}``. Default (MATLAB's
+        ``impulseest(data)``): from the input's order of persistent excitation, at most 70
+        and a quarter of the samples per input (:func:`default_length`; the reason in
+        ``info["length"]``).
     regularization : {"tc", None}
         ``"tc"``: prior ``E[h_k h_j] = c lambda^max(k, j)`` (per output, inputs scaled to unit
         variance), hyperparameters by marginal likelihood unless ``hyper`` fixes them;
@@ -96,14 +132,17 @@ def impulse_response(data: IOData, length: int, *, regularization: str | None = 
     """
     exps, dt = _experiments(data, "impulse_response")
     n = _count(length, "length")
+    why = None
     if n is None:
-        raise DataError("length is required: the number of Markov parameters to estimate")
+        n, why = default_length(exps)
     if regularization not in ("tc", None):
         raise DataError(f"regularization must be 'tc' or None, got {regularization!r}")
     out = _sysid.fir(exps, n, _feedthrough(data, feedthrough), regularization or "none", hyper)
     l, m = exps[0][1].shape[1], exps[0][0].shape[1]
     h = np.asarray(out["markov"]).reshape(-1, l, m)
     info = {k: out[k] for k in ("scale", "decay", "noise_variance", "samples")}
+    if why is not None:
+        info["length"] = why
     return MarkovEstimate(h, dt, "fir-tc" if regularization else "fir", info)
 
 

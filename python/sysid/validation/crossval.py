@@ -578,7 +578,11 @@ def choose(table: dict[int, float], tol: float = TOL, what: str = "simulation"
     separates the orders from the true one up, and the true one is taken)."""
     finite = {n: f for n, f in table.items() if np.isfinite(f)}
     if not finite:
-        raise ValueError(f"no order gave a model whose {what} scores on the held-out data")
+        raise InsufficientDataError(
+            f"no order gave a model whose {what} scores on the held-out data (every order "
+            f"failed to fit on the rest of the record or to simulate a held-out block): the "
+            f"record is too short or too little excited to choose the order from held-out "
+            f"blocks; pass an order, or use a longer record")
     best_n = max(finite, key=lambda n: finite[n])
     best = finite[best_n]
     margin = slack(best, tol)

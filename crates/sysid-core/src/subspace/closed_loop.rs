@@ -371,7 +371,7 @@ impl ClosedLoop {
                 context: format!("a VARX with {d_reg} regressors (past={p})"),
                 needed: 2 * d_reg + 2 + lay.window() - 1,
                 got: factor.n_columns() + lay.window() - 1,
-                fix: "use a longer record or a smaller horizon",
+                fix: crate::error::horizon_fix(p, f),
             });
         }
         let rows = Rows { m, l, p, f };

@@ -192,7 +192,7 @@ impl Subspace {
                 ),
                 needed: k + (w - 1) * factor.n_experiments().max(1),
                 got: factor.n_columns() + (w - 1) * factor.n_experiments(),
-                fix: "use a longer record or a smaller horizon",
+                fix: crate::error::horizon_fix(lay.past, lay.future),
             });
         }
         weighting::check_excitation(&factor, opts.input_rank_tol)?;

@@ -38,7 +38,7 @@ impl CorrelationSums {
                 ),
                 needed: k + (w - 1) * exps.max(1),
                 got: cols + (w - 1) * exps,
-                fix: "use a longer record or a smaller horizon",
+                fix: crate::error::horizon_fix(p, self.layout.future),
             });
         }
         self.end_experiment()?;
