@@ -62,6 +62,12 @@ def test_too_few_samples_at_the_smallest_horizon_asks_only_for_more_data():
         assert "needs at least" in str(e.value)
         assert "horizons are already at their smallest" in str(e.value)
         assert "smaller horizon" not in str(e.value)
+    # shorter than the smallest window itself (3 samples, window 4): "allows horizon <= 1"
+    # was offered, a horizon no subspace fit takes
+    tiny = sysid.IOData(u=rng.standard_normal(3), y=rng.standard_normal(3))
+    with pytest.raises(sysid.InsufficientDataError, match=r"smallest subspace window .* "
+                       r"needs at least 4 but got 3; give a longer record$"):
+        sysid.n4sid(tiny)
 
 
 def test_experiment_shorter_than_the_window(record):

@@ -64,6 +64,8 @@ pub struct HankelLayout {
 /// assert!(check_window(5, 5, 100).is_ok());
 /// let e = check_window(1 << 40, 1, 100).unwrap_err().to_string();
 /// assert!(e.contains("horizon <= 50"), "{e}");
+/// let e = check_window(2, 2, 3).unwrap_err().to_string();
+/// assert!(e.contains("smallest subspace window") && e.ends_with("give a longer record"), "{e}");
 /// ```
 pub fn check_window(past: usize, future: usize, longest: usize) -> Result<()> {
     if past == 0 || future == 0 {
@@ -72,6 +74,18 @@ pub fn check_window(past: usize, future: usize, longest: usize) -> Result<()> {
     let w = past.saturating_add(future);
     if w <= longest {
         return Ok(());
+    }
+    if past <= 2 && future <= 2 {
+        // the smallest horizons: nothing to shrink, only the record to lengthen
+        return Err(SysidError::InsufficientData {
+            context: format!(
+                "the smallest subspace window (horizons past={past} + future={future}, {w} \
+                 samples in one experiment)"
+            ),
+            needed: w,
+            got: longest,
+            fix: "give a longer record",
+        });
     }
     Err(SysidError::InsufficientData {
         context: format!(
