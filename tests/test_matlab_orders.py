@@ -169,3 +169,21 @@ def test_arxstruc_validation_form_with_several_inputs():
         sysid.arxstruc(ze, zv, [[1, 2, 1, 1]])
     with pytest.raises(sysid.DataError, match="same channels"):
         sysid.arxstruc(ze, zv.select(inputs=0), nn)
+
+
+def test_order_auto_of_a_polynomial_estimator_points_to_the_structure_choice(dryer):
+    """``arx(data, "auto")`` (a state-space habit) said "arx needs nb", as if "auto" were a
+    number of A coefficients; it now says the polynomial estimators take whole numbers and
+    where the automatic choices are, and the structure choice it names runs."""
+    for fit in (sysid.arx, sysid.oe, sysid.bj, sysid.nlarx):
+        with pytest.raises(sysid.DataError, match=r"takes its orders as whole numbers, got "
+                           r"'auto' .*sysid.selstruc\(sysid.arxstruc\(est, val, .*sysid."
+                           r"identify\(data\)"):
+            fit(dryer, "auto")
+    with pytest.raises(sysid.DataError, match=r"oe takes its orders as whole numbers"):
+        sysid.oe(dryer, 2, "auto", 1)
+    est, val = dryer.slice(0, 500), dryer.slice(500, 1000)
+    nk = 1
+    na, nb, k = sysid.selstruc(sysid.arxstruc(est, val, sysid.struc(range(1, 11),
+                                                                     range(1, 11), nk)))
+    assert 1 <= na <= 10 and 1 <= nb <= 10 and k == nk

@@ -56,6 +56,15 @@ def matlab_orders(fn: str, data: Any, first: Any, **rest: Any) -> tuple[Any, ...
     """
     names = [k for k, _ in LAYOUTS[fn]]
     given = [first, *(rest[k] for k in names[1:])]
+    if any(isinstance(v, str) for v in given):
+        # order="auto" is the state-space estimators'; a polynomial model's orders are
+        # chosen by comparing structures (MATLAB's arxstruc / selstruc), as here
+        word = next(v for v in given if isinstance(v, str))
+        raise DataError(
+            f"{fn} takes its orders as whole numbers, got {word!r} (as MATLAB's {fn}, it has no "
+            f"automatic order): compare structures with sysid.selstruc(sysid.arxstruc(est, "
+            f"val, sysid.struc(range(1, 11), range(1, 11), nk))), or let a state-space fit "
+            f"choose its order: sysid.ssest(data, 'auto') or sysid.identify(data)")
     missing = [k for k, v in zip(names[1:], given[1:]) if v is None and k != "nk"]
     try:
         vector = np.ndim(first) > 0 and not isinstance(first, str)
