@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import sysid
-from sysid.validation.crossval import _free_responses, simulation_errors
+from sysid.validation.crossval import simulation_errors
 
 from conftest import daisy_split, quiet
 
@@ -111,6 +111,13 @@ def test_simulation_errors_are_those_of_the_full_least_squares_problem():
         w = np.tile(1.0 / y.std(axis=0), 150)
         direct = r - phi @ np.linalg.lstsq(phi * w[:, None], r * w, rcond=None)[0]
         assert np.allclose(e.ravel(), direct, atol=1e-9)
+
+
+def _free_responses(model, count):
+    """``(count l, n)``: the free response of every unit initial state, by simulation."""
+    m = model.B.shape[1]
+    return np.column_stack([np.zeros((count * model.noutputs, 0))] + [
+        model.simulate(np.zeros((count, m)), x0=x0).ravel() for x0 in np.eye(model.nstates)])
 
 
 def test_a_model_whose_free_responses_overflow_when_squared_scores_minus_inf():

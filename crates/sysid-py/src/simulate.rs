@@ -4,6 +4,7 @@ use crate::convert::{mat_to_numpy, state_space as model, vec1, view};
 use crate::errors::IntoPy;
 use numpy::{PyArray2, PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
+use sysid_core::model::initial_state;
 use sysid_core::{riccati, simulate as sim};
 
 /// Simulates `x(t+1) = A x + B u, y = C x + D u`; returns `(N, l)`.
@@ -51,6 +52,25 @@ pub fn predict<'py>(
     Ok(mat_to_numpy(py, &out))
 }
 
+/// Simulation errors `y - ys` with the initial state and per-output offsets (or lines)
+/// fitted by least squares; `None` when the model diverges on these data.
+#[pyfunction]
+#[pyo3(signature = (a, c, y, ys, trend=false))]
+pub fn fitted_errors<'py>(
+    py: Python<'py>,
+    a: PyReadonlyArray2<'_, f64>,
+    c: PyReadonlyArray2<'_, f64>,
+    y: PyReadonlyArray2<'_, f64>,
+    ys: PyReadonlyArray2<'_, f64>,
+    trend: bool,
+) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
+    let (av, cv, yv, sv) = (view(&a), view(&c), view(&y), view(&ys));
+    let e = py
+        .detach(|| initial_state::fitted_errors(av, cv, yv, sv, trend))
+        .py()?;
+    Ok(e.map(|e| mat_to_numpy(py, &e)))
+}
+
 /// Stabilising solution of the predictor Riccati equation: `(K, P, innovation_cov)`.
 #[pyfunction]
 #[allow(clippy::type_complexity)]
@@ -78,5 +98,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(predict, m)?)?;
     m.add_function(wrap_pyfunction!(kalman_gain, m)?)?;
+    m.add_function(wrap_pyfunction!(fitted_errors, m)?)?;
     Ok(())
 }

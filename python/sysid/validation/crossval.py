@@ -46,9 +46,9 @@ from typing import Any
 
 import numpy as np
 
+from .. import _sysid
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError, SysidError
-from .compare import output_weights
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
            "held_out_fit", "held_out_folds", "insists", "output_fits", "prediction_fit",
@@ -64,9 +64,6 @@ MAX_ORDER = 20
 FOLDS = 5
 #: samples per channel a held-out block keeps at least (fewer blocks on short records)
 MIN_BLOCK = 20
-#: rows x columns x inner size of one matrix product in :func:`_free_responses` at most
-#: (OpenBLAS multi-threads products above about 2.6e5)
-PRODUCT_ENTRIES = 60000
 
 
 @dataclass
@@ -243,78 +240,22 @@ def simulation_errors(model: Any, data: IOData, trend: bool = False
     constant offset per output fitted by least squares (see :func:`simulation_fit`); with
     ``trend``, a straight line per output instead of the offset. Raises when the model cannot
     be simulated on the data."""
+    A = np.ascontiguousarray(model.A, dtype=float)
+    C = np.ascontiguousarray(model.C, dtype=float)
     out = []
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         for u, y in data.experiments:
-            ys = model.simulate(u)
-            count, n, l = u.shape[0], model.nstates, y.shape[1]
-            # per output an offset column (and a slope), then the n free responses: the Gram
-            # matrix and right-hand side formed block by block (the (N l, l + n) regressor
-            # matrix is never built: thousands of candidates are scored), columns scaled to
-            # unit norm (free responses of slow and fast modes differ by orders of
-            # magnitude), and the small system solved (not a least-squares call on a tall
-            # matrix, which multi-threaded BLAS makes 100 times slower on a busy machine)
-            T = np.ones((count, 1))
-            if trend:
-                T = np.column_stack([T, np.linspace(-1.0, 1.0, count)])
-            F = _free_responses(model, count).reshape(count, l, n) if n else None
-            if not (np.all(np.isfinite(ys)) and (F is None or np.all(np.isfinite(F)))):
+            ys = np.asarray(model.simulate(u), dtype=float)
+            # the normal equations of the offsets and the initial state formed block by
+            # block in the core (no (N l, n) array of free responses: thousands of candidates
+            # are scored on blocks of long records), rows weighed by 1 / each output's
+            # spread (the fit % is relative to it: the shared initial state does not follow
+            # whichever output has the largest numbers in its units)
+            e = _sysid.fitted_errors(A, C, np.asarray(y, dtype=float), ys, trend)
+            if e is None:
                 raise FloatingPointError("the model diverges on these data")
-            r = y - ys
-            q = T.shape[1] * l
-            # every output's rows weigh 1 / its spread (the fit % is relative to it): the
-            # initial state shared by the outputs does not follow whichever has the largest
-            # numbers in its units (the offsets and lines are per output, unaffected)
-            w2 = output_weights(y) ** 2
-            G = np.zeros((q + n, q + n))
-            G[:q, :q] = np.kron(T.T @ T, np.diag(w2))
-            rhs = np.empty(q + n)
-            rhs[:q] = (T.T @ (r * w2)).ravel()
-            if F is not None:
-                F2 = F.reshape(count * l, n)
-                Fw = F * w2[None, :, None]
-                G[:q, q:] = np.einsum("ta,tji->aji", T, Fw).reshape(q, n)
-                G[q:, :q] = G[:q, q:].T
-                G[q:, q:] = F2.T @ Fw.reshape(count * l, n)
-                rhs[q:] = Fw.reshape(count * l, n).T @ r.ravel()
-            if not (np.all(np.isfinite(G)) and np.all(np.isfinite(rhs))):
-                # free responses so large their squares overflow: a model that diverges
-                raise FloatingPointError("the model diverges on these data")
-            scale = np.sqrt(np.maximum(np.diag(G), 0.0))
-            scale[scale == 0] = 1.0
-            theta = np.linalg.lstsq(G / np.outer(scale, scale), rhs / scale,
-                                    rcond=1e-12)[0] / scale
-            e = r - (T @ theta[:q].reshape(T.shape[1], l))
-            if F is not None:
-                e = e - (F2 @ theta[q:]).reshape(count, l)
             out.append((y, e))
-    return out
-
-
-def _free_responses(model: Any, count: int) -> np.ndarray:
-    """The ``(count l, n)`` matrix of ``C A^t``, ``t < count`` (the free response of every
-    initial state): the rows of ``t < k`` times ``A^k`` give those of ``k <= t < 2k``, ``A^k``
-    by repeated squaring, so ``log2(count)`` products of ``n x n`` matrices and one pass of
-    ``l n^2`` per sample in matrix products (the held-out scoring of thousands of candidates
-    of orders up to 20 spends its time here: 10 times faster than ``l`` simulations of the
-    dual). The products are cut into pieces small enough that the BLAS keeps them on the
-    calling thread (threads cost far more than they gain on a busy machine)."""
-    A, C = np.asarray(model.A, float), np.asarray(model.C, float)
-    n, l = A.shape[0], C.shape[0]
-    out = np.empty((count * l, n))
-    out[:l] = C
-    step = max(l, PRODUCT_ENTRIES // max(n * n, 1))
-    k, power = 1, A
-    with np.errstate(all="ignore"):
-        while k < count:
-            j = min(k, count - k)
-            for a in range(0, j * l, step):
-                b = min(a + step, j * l)
-                np.matmul(out[a:b], power, out=out[k * l + a:k * l + b])
-            k += j
-            if k < count:
-                power = power @ power
     return out
 
 

@@ -11,6 +11,8 @@
 //!
 //! - [`simulate`]: `y = C x + D u` run forward (simulation), and the predictor
 //!   `x̂(t+1) = A x̂ + B u + K (y - C x̂ - D u)` with its k-step-ahead form;
+//! - [`initial_state`]: simulation errors with the initial state and output offsets fitted
+//!   by least squares (a model scored on a record it did not see);
 //! - [`lyapunov`]: the gramian equation `X = A X A^T + Q` (stable A), for covariances and
 //!   balanced realisation;
 //! - [`riccati`]: the filter Riccati equation
@@ -20,6 +22,7 @@
 //! They are also reachable at the crate root (`sysid_core::simulate`, `sysid_core::lyapunov`,
 //! `sysid_core::riccati`), their paths before they were grouped here.
 
+pub mod initial_state;
 pub mod lyapunov;
 pub mod riccati;
 pub mod simulate;
