@@ -143,3 +143,26 @@ def test_the_excitation_check_window_is_scipys_blackman_harris():
     for n in (1, 2, 5, 64, 1001):
         assert np.allclose(_window(n), get_window("blackmanharris", n, fftbins=True),
                            rtol=0, atol=1e-14)
+
+
+def test_a_fold_left_out_takes_its_block_weight_with_it():
+    """A fold left out of the middle (its fitted part does not excite the input) kept the
+    held-out variations of all five blocks, so the later blocks' fits were weighed by the
+    earlier blocks' variations; the board now keeps the kept blocks' own."""
+    from sysid._progress import Bar
+    from sysid.identify.board import Board, held_out_score
+    from sysid.validation.crossval import record_folds, variation
+
+    rng = np.random.default_rng(0)
+    y = rng.standard_normal(1000) * np.repeat([1.0, 2.0, 3.0, 4.0, 5.0], 200)
+    data = sysid.IOData(u=rng.standard_normal(1000), y=y)
+    folds = record_folds(data)
+    with Bar(None, "test", enabled=False) as bar:
+        board = Board(list(folds), bar)
+        board.keep_folds([0, 1, 3, 4])
+    assert board.unexcited == 1 and len(board.folds) == 4
+    want = np.array([variation(folds[k][1]) for k in (0, 1, 3, 4)])
+    np.testing.assert_array_equal(board.weights, want)
+    assert np.isclose(board.shares.sum(), 1.0)
+    fits = np.array([[90.0], [80.0], [70.0], [60.0]])
+    assert board.score(fits) == held_out_score(fits, want)

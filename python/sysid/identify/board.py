@@ -137,6 +137,16 @@ class Board:
         #: set by :meth:`insisting` when an unstable candidate wins only by following a drift
         self.drift: dict[str, Any] | None = None
 
+    def keep_folds(self, keep: list[int]) -> None:
+        """Only the folds ``keep`` (indices, in order) stay: their blocks, output variations
+        and shares (a fold left out of the middle had the scores of the later blocks weighed
+        by the variations of the earlier ones)."""
+        self.unexcited += len(self.folds) - len(keep)
+        self.folds[:] = [self.folds[k] for k in keep]
+        self.weights = self.weights[keep]
+        total = self.weights.sum(0)
+        self.shares = np.mean(self.weights / np.where(total > 0, total, 1.0), axis=1)
+
     def time_left(self) -> bool:
         """False once the time budget (CPU seconds of this process) is spent."""
         if self.deadline is not None and time.process_time() > self.deadline:
@@ -183,8 +193,8 @@ class Board:
             with warnings.catch_warnings(), closing(ordered(tasks, None if budgeted else 1)
                                                     ) as models:
                 warnings.simplefilter("ignore")
-                for (_, held), model in zip(self.folds, models):
-                    outs.append(output_fits(model, held))
+                for k, ((_, held), model) in enumerate(zip(self.folds, models)):
+                    outs.append(output_fits(model, held, dev=self.weights[k]))
                     fits.append(block_fit(outs[-1]))
                     if start is not None:  # a refinement's fold fits: starts for its re-fit
                         row.setdefault("fold_models", []).append(model)

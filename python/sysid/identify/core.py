@@ -215,7 +215,7 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
     ests, keep = [], []
     h_full = _horizon(full)
     short = 0  # fitted parts too short for the smallest subspace window
-    for fold in board.folds:
+    for k, fold in enumerate(board.folds):
         h = fold_horizon(h_full, fold[0])
         part = long_enough(fold[0], 2 * h)
         with warnings.catch_warnings():
@@ -229,7 +229,7 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
                 continue
             except ExcitationError:
                 continue  # the rest of the record without this block excites too little
-        keep.append(fold)
+        keep.append(k)
     if len(keep) < len(board.folds):
         if len(keep) < 2 and short:
             raise _too_short(full, board.folds)
@@ -243,8 +243,7 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
                 f"without one block are not persistently exciting (a step or a few steps, "
                 f"inside some blocks only); fit one model to the whole record instead "
                 f"(sysid.n4sid, sysid.ssest with an order, sysid.procest for a step test)")
-        board.unexcited = len(board.folds) - len(keep)
-        board.folds[:] = keep
+        board.keep_folds(keep)
     top = min(min(e.max_order for e in ests), max_order or MAX_ORDER)
     # the last record re-fitted on and its compression, once per record; the record itself
     # is held, not its id(): the detrended fold parts of the drift test are made and freed

@@ -379,12 +379,15 @@ def variation(data: IOData) -> np.ndarray:
     return np.asarray(sum(np.sum((y - y.mean(0)) ** 2, axis=0) for _, y in data.experiments))
 
 
-def output_fits(model: Any, data: IOData, trend: bool = False) -> np.ndarray:
+def output_fits(model: Any, data: IOData, trend: bool = False,
+                dev: np.ndarray | None = None) -> np.ndarray:
     """Per output, the simulation fit (NRMSE %) of ``model`` on ``data`` with its
     experiments pooled (``100 (1 - |e| / |y - mean(y)|)``, sums of squares over the
     experiments, each about its own mean; initial state and offset fitted as in
     :func:`simulation_fit`); ``-inf`` for every output when the model diverges, NaN for an
     output that stands still. For one experiment their mean is :func:`simulation_fit`.
+    ``dev``: the data's :func:`variation`, when the caller holds it (thousands of
+    candidates are scored on the same blocks).
 
     Examples
     --------
@@ -400,7 +403,7 @@ def output_fits(model: Any, data: IOData, trend: bool = False) -> np.ndarray:
     except Exception:  # noqa: BLE001 - a model that cannot be simulated scores -inf
         return np.full(data.n_outputs, -np.inf)
     err = sum(np.sum(e ** 2, axis=0) for _, e in errs)
-    dev = variation(data)
+    dev = variation(data) if dev is None else dev
     with np.errstate(all="ignore"):
         f = 100.0 * (1.0 - np.sqrt(err / np.where(dev > 0, dev, np.nan)))
     return np.where(np.isnan(f) & (dev > 0), -np.inf, f)
