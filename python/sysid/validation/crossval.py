@@ -247,9 +247,10 @@ def simulation_errors(model: Any, data: IOData, trend: bool = False
         warnings.simplefilter("ignore")
         for u, y in data.experiments:
             ys = np.asarray(model.simulate(u), dtype=float)
-            # the normal equations of the offsets and the initial state formed block by
-            # block in the core (no (N l, n) array of free responses: thousands of candidates
-            # are scored on blocks of long records), rows weighed by 1 / each output's
+            # the offsets and the initial state fitted in the core (sysid_core::model::
+            # initial_state: block by block, no (N l, n) array of free responses, as thousands
+            # of candidates are scored on blocks of long records; normal equations, or QR where
+            # a growing mode makes them ill-conditioned), rows weighed by 1 / each output's
             # spread (the fit % is relative to it: the shared initial state does not follow
             # whichever output has the largest numbers in its units)
             e = _sysid.fitted_errors(A, C, np.asarray(y, dtype=float), ys, trend)
