@@ -74,6 +74,7 @@ from ..validation.crossval import (
     MIN_BLOCK,
     TOL,
     fold_horizon,
+    parts_too_short,
     record_folds,
     require_held_out_length,
     simulation_fit,
@@ -232,7 +233,7 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
         keep.append(k)
     if len(keep) < len(board.folds):
         if len(keep) < 2 and short:
-            raise _too_short(full, board.folds)
+            raise parts_too_short(full, board.folds)
         if len(keep) < 2:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
@@ -268,23 +269,6 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
                         lambda k, m=meth, n=n, ft=ft: ests[k].fit(
                             n, method=m, feedthrough=ft, kalman=False, stable=True),
                         lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft, True))
-
-
-def _too_short(full: IOData, folds: list[tuple[IOData, IOData]]) -> InsufficientDataError:
-    """The error of a record whose parts fitted without one held-out block are too short for
-    the smallest subspace window (horizon 2): the samples one such part needs, the record's,
-    and the fix (many channels on a short record: 57 samples of 5 inputs and 2 outputs)."""
-    m, l = full.n_inputs, full.n_outputs
-    # a data matrix of horizon 2 has 4 (m + l) rows and needs as many columns (window 4)
-    need = 4 * (m + l) + 3
-    longest = max(max(f.lengths) for f, _ in folds)
-    return InsufficientDataError(
-        f"the record is too short for identify with {m} input(s) and {l} output(s): each part "
-        f"fitted without one held-out block needs an experiment of at least {need} samples "
-        f"for the smallest subspace window (horizon 2), and the longest such part here has "
-        f"{longest} (the record: {sum(full.lengths)} samples); pass a longer record (about "
-        f"{2 * need} samples or more) or more experiments, or fit one model to the whole "
-        f"record directly (sysid.ssest(data, order), sysid.n4sid(data, order), sysid.arx)")
 
 
 def _stabilised_candidates(board: Board) -> None:

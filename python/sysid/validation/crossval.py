@@ -169,6 +169,34 @@ def require_held_out_length(data: IOData) -> None:
             f"{2 * MIN_BLOCK}); pass a longer record or fit one model directly")
 
 
+def parts_too_short(full: IOData, folds: list[tuple[IOData, IOData]]
+                    ) -> InsufficientDataError:
+    """The error of a record whose parts fitted without one held-out block (``folds``) are
+    too short for the smallest subspace window (horizon 2): the samples one such part needs,
+    the record's, and the fix (many channels on a short record: 57 samples of 5 inputs and 2
+    outputs).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.validation.crossval import parts_too_short, record_folds
+    >>> d = sysid.IOData(u=np.zeros((57, 5)), y=np.zeros((57, 2)))
+    >>> str(parts_too_short(d, record_folds(d)))[:60]
+    'the record is too short for identify with 5 input(s) and 2 o'
+    """
+    m, l = full.n_inputs, full.n_outputs
+    # a data matrix of horizon 2 has 4 (m + l) rows and needs as many columns (window 4)
+    need = 4 * (m + l) + 3
+    longest = max(max(f.lengths) for f, _ in folds)
+    return InsufficientDataError(
+        f"the record is too short for identify with {m} input(s) and {l} output(s): each part "
+        f"fitted without one held-out block needs an experiment of at least {need} samples "
+        f"for the smallest subspace window (horizon 2), and the longest such part here has "
+        f"{longest} (the record: {sum(full.lengths)} samples); pass a longer record (about "
+        f"{2 * need} samples or more) or more experiments, or fit one model to the whole "
+        f"record directly (sysid.ssest(data, order), sysid.n4sid(data, order), sysid.arx)")
+
+
 def record_folds(data: IOData) -> list[tuple[IOData, IOData]]:
     """(fit, held-out) pairs over the whole record, whatever its experiments' lengths: the
     experiments laid end to end and cut into ``fold_count`` of their total length contiguous
