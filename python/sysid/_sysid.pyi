@@ -32,6 +32,7 @@ __all__ = [
     "simulate",
     "predict",
     "kalman_gain",
+    "fitted_errors",
     "StreamingCompressor",
     "CorrelationSums",
     "feedback_regressions",
