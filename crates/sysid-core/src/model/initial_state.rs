@@ -128,9 +128,13 @@ pub fn fitted_errors(
         count,
     };
     let w = weights(y);
-    let daz = DenormalsAreZero::new();
     let free = FreeResponses::new(a, c);
-    let Some(g) = normal_equations(&free, &r, &w, &lines) else {
+    // subnormal operands read as zero in the block products only (crate::denormals), not
+    // in the decompositions below
+    let daz = DenormalsAreZero::new();
+    let g = normal_equations(&free, &r, &w, &lines);
+    drop(daz);
+    let Some(g) = g else {
         return Ok(None);
     };
     if g.col_iter().any(|col| col.iter().any(|v| !v.is_finite())) {
@@ -146,7 +150,6 @@ pub fn fitted_errors(
             solve(&tri)?
         }
     };
-    drop(daz);
     let q = lines.tcols * l;
     let mut e = r;
     for t in 0..count {
