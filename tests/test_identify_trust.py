@@ -171,66 +171,6 @@ def test_a_drifting_record_gives_a_stable_model_and_says_it_drifts(seed):
     assert "drift" in res.summary()
 
 
-def _direct_fit(model, u, y, trend):
-    """The reference: the (N l, q + n) regressor of offsets (and lines) and free responses,
-    rows weighed by 1 / each output's standard deviation, solved by least squares."""
-    count, l = y.shape
-    n, m = model.nstates, u.shape[1]
-    T = np.ones((count, 1))
-    if trend:
-        T = np.column_stack([T, np.linspace(-1.0, 1.0, count)])
-    cols = [np.kron(T[:, [a]], np.eye(l)[:, [j]]).reshape(count, l)
-            for a in range(T.shape[1]) for j in range(l)]
-    cols += [model.simulate(np.zeros((count, m)), x0=np.eye(n)[i]) for i in range(n)]
-    w = 1.0 / np.std(y, axis=0)
-    X = np.column_stack([(c * w).ravel() for c in cols])
-    r = y - model.simulate(u)
-    theta = np.linalg.lstsq(X, (r * w).ravel(), rcond=None)[0]
-    return r - sum(t * c for t, c in zip(theta, cols))
-
-
-def test_fitted_simulation_errors_are_the_least_squares_fit_of_offsets_and_initial_state():
-    """The held-out scores' errors (``simulation_errors``: initial state and offsets fitted,
-    formed block by block in the core without the ``N l x n`` free responses) equal the
-    least-squares fit over the explicit regressor, with lines (``trend``), several outputs
-    weighed by their spread, records shorter and longer than a block and a model whose free
-    response falls below round-off long before the record ends; a model that diverges on
-    the data is refused."""
-    from sysid.validation.crossval import simulation_errors
-
-    rng = np.random.default_rng(3)
-    for n, m, l, count, radius in [(1, 1, 1, 40, 0.95), (4, 2, 1, 300, 0.95),
-                                   (9, 1, 3, 2000, 0.5), (3, 1, 2, 70, 0.999), (0, 2, 2, 50, 0)]:
-        A = rng.standard_normal((n, n))
-        if n:
-            A *= radius / np.max(np.abs(np.linalg.eigvals(A)))
-        model = sysid.StateSpaceModel(A, rng.standard_normal((n, m)),
-                                      rng.standard_normal((l, n)), rng.standard_normal((l, m)))
-        u = rng.standard_normal((count, m))
-        x0 = rng.standard_normal(n)
-        y = model.simulate(u, x0=x0) + rng.standard_normal(l) * 10 + 0.3 * rng.standard_normal(
-            (count, l)) * np.array([1.0, 1e3, 1e-3][:l])
-        for trend in (False, True):
-            got = simulation_errors(model, sysid.IOData(u=u, y=y), trend)[0][1]
-            np.testing.assert_allclose(got, _direct_fit(model, u, y, trend), rtol=1e-9,
-                                       atol=1e-9 * np.max(np.abs(y - y.mean(0))))
-    # a mode just outside the unit circle: free responses that grow 2e8-fold over the
-    # record, a regressor of condition ~1e8 whose normal equations (~1e16) lost the fit
-    # (78.4 % on a CSTR held-out block where least squares gives 85.3 %)
-    A = np.array([[1.019, 0.1, 0.0], [0.0, 0.9, 0.2], [0.0, 0.0, -0.5]])
-    model = sysid.StateSpaceModel(A, rng.standard_normal((3, 1)), rng.standard_normal((2, 3)))
-    u = rng.standard_normal((1000, 1))
-    y = model.simulate(u) + rng.standard_normal((1000, 2))
-    got = simulation_errors(model, sysid.IOData(u=u, y=y))[0][1]
-    want = _direct_fit(model, u, y, False)
-    np.testing.assert_allclose(np.linalg.norm(got, axis=0), np.linalg.norm(want, axis=0),
-                               rtol=1e-6)
-    # at rest its simulation is finite; its free response overflows within the record
-    grows = sysid.StateSpaceModel([[1.5]], [[1.0]], [[1.0]])
-    with pytest.raises(FloatingPointError, match="diverges"):
-        simulation_errors(grows, sysid.IOData(u=np.zeros(5000), y=rng.standard_normal(5000)))
-
-
 def test_refinement_stops_once_its_implied_fit_has_settled():
     """identify's refinements stop when the last iterations raised the fit their criterion
     implies by less than a tenth of what the held-out blocks resolve; the implied fit is the

@@ -88,36 +88,64 @@ def test_identify_bounds_the_work_of_refinements_and_says_what_it_left_out(monke
     assert res.model.is_stable()
 
 
-def test_simulation_errors_are_those_of_the_full_least_squares_problem():
-    """The held-out fit's initial state and offsets (and slopes) from the blockwise Gram
-    matrix are the least-squares ones of the full regressor matrix, every output's rows
-    weighing 1 / its spread."""
-    rng = np.random.default_rng(5)
-    for n, m, l, trend in [(0, 1, 2, False), (3, 1, 1, True), (6, 2, 3, False), (7, 1, 3, True)]:
-        A = rng.standard_normal((n, n))
-        if n:
-            A *= 0.97 / np.max(np.abs(np.linalg.eigvals(A)))
-        model = sysid.StateSpaceModel(A, rng.standard_normal((n, m)),
-                                      rng.standard_normal((l, n)), rng.standard_normal((l, m)))
-        u = rng.standard_normal((150, m))
-        y = model.simulate(u, x0=rng.standard_normal(n)) + 0.3 * rng.standard_normal((150, l))
-        (_, e), = simulation_errors(model, sysid.IOData(u=u, y=y), trend=trend)
-        cols = [np.kron(np.ones((150, 1)), np.eye(l))]
-        if trend:
-            cols.append(np.kron(np.linspace(-1, 1, 150)[:, None], np.eye(l)))
-        cols.append(_free_responses(model, 150))
-        phi = np.hstack(cols)
-        r = (y - model.simulate(u)).ravel()
-        w = np.tile(1.0 / y.std(axis=0), 150)
-        direct = r - phi @ np.linalg.lstsq(phi * w[:, None], r * w, rcond=None)[0]
-        assert np.allclose(e.ravel(), direct, atol=1e-9)
-
-
 def _free_responses(model, count):
     """``(count l, n)``: the free response of every unit initial state, by simulation."""
     m = model.B.shape[1]
     return np.column_stack([np.zeros((count * model.noutputs, 0))] + [
         model.simulate(np.zeros((count, m)), x0=x0).ravel() for x0 in np.eye(model.nstates)])
+
+
+def _direct_fit(model, u, y, trend):
+    """The reference: least squares over the full ``(N l, q + n)`` regressor of offsets (and
+    lines) and free responses, every output's rows weighing 1 / its spread."""
+    count, l = y.shape
+    cols = [np.kron(np.ones((count, 1)), np.eye(l))]
+    if trend:
+        cols.append(np.kron(np.linspace(-1, 1, count)[:, None], np.eye(l)))
+    cols.append(_free_responses(model, count))
+    phi = np.hstack(cols)
+    r = (y - model.simulate(u)).ravel()
+    w = np.tile(1.0 / y.std(axis=0), count)
+    return (r - phi @ np.linalg.lstsq(phi * w[:, None], r * w, rcond=None)[0]).reshape(count, l)
+
+
+def test_simulation_errors_are_those_of_the_full_least_squares_problem():
+    """The held-out fit's initial state and offsets (and slopes), formed block by block in
+    the core without the ``N l x n`` free responses, are the least-squares ones of the full
+    regressor matrix, every output's rows weighing 1 / its spread: outputs in units 1e6
+    apart, records shorter and longer than a block, free responses that fall below round-off
+    long before the record ends, and a mode outside the unit circle."""
+    rng = np.random.default_rng(5)
+    for n, m, l, trend, count, radius in [
+            (0, 1, 2, False, 150, 0), (3, 1, 1, True, 150, 0.97), (6, 2, 3, False, 150, 0.97),
+            (7, 1, 3, True, 150, 0.97), (1, 1, 1, False, 40, 0.95), (4, 2, 1, True, 300, 0.95),
+            (9, 1, 3, False, 2000, 0.5), (3, 1, 2, True, 70, 0.999)]:
+        A = rng.standard_normal((n, n))
+        if n:
+            A *= radius / np.max(np.abs(np.linalg.eigvals(A)))
+        model = sysid.StateSpaceModel(A, rng.standard_normal((n, m)),
+                                      rng.standard_normal((l, n)), rng.standard_normal((l, m)))
+        u = rng.standard_normal((count, m))
+        y = model.simulate(u, x0=rng.standard_normal(n)) + 0.3 * rng.standard_normal(
+            (count, l)) * np.array([1.0, 1e3, 1e-3][:l])
+        (_, e), = simulation_errors(model, sysid.IOData(u=u, y=y), trend=trend)
+        np.testing.assert_allclose(e, _direct_fit(model, u, y, trend), rtol=1e-9,
+                                   atol=1e-9 * np.max(np.abs(y - y.mean(0))))
+    # a mode just outside the unit circle: free responses that grow 2e8-fold over the
+    # record, a regressor of condition ~1e8 whose normal equations (~1e16) lost the fit
+    # (78.4 % on a CSTR held-out block where least squares gives 85.3 %)
+    A = np.array([[1.019, 0.1, 0.0], [0.0, 0.9, 0.2], [0.0, 0.0, -0.5]])
+    model = sysid.StateSpaceModel(A, rng.standard_normal((3, 1)), rng.standard_normal((2, 3)))
+    u = rng.standard_normal((1000, 1))
+    y = model.simulate(u) + rng.standard_normal((1000, 2))
+    (_, e), = simulation_errors(model, sysid.IOData(u=u, y=y))
+    np.testing.assert_allclose(np.linalg.norm(e, axis=0),
+                               np.linalg.norm(_direct_fit(model, u, y, False), axis=0),
+                               rtol=1e-6)
+    # at rest its simulation is finite; its free response overflows within the record
+    grows = sysid.StateSpaceModel([[1.5]], [[1.0]], [[1.0]])
+    with pytest.raises(FloatingPointError, match="diverges"):
+        simulation_errors(grows, sysid.IOData(u=np.zeros(5000), y=rng.standard_normal(5000)))
 
 
 def test_a_model_whose_free_responses_overflow_when_squared_scores_minus_inf():

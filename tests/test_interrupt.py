@@ -53,6 +53,11 @@ def record(N, m=2, l=3, n=6, noise=0.1):
 
 # name -> (setup, the long computation); each computation runs for well over 10 s.
 CASES: dict[str, tuple[str, str]] = {
+    "held_out_fit": (  # a held-out block's initial state and offsets fitted (identify's score)
+        "r = np.random.default_rng(2); A = r.standard_normal((40, 40)); "
+        "A *= 0.99999 / np.max(np.abs(np.linalg.eigvals(A))); C = r.standard_normal((2, 40)); "
+        "y = r.standard_normal((3_000_000, 2)); ys = np.zeros_like(y)",
+        "sysid._sysid.fitted_errors(A, C, y, ys, False)"),
     "compress_qr": (
         "u, y = arrays(500_000)",
         "sysid.compress_stream((u, y), past=50, compressor='qr', progress=False)"),

@@ -65,9 +65,8 @@ pub fn fitted_errors<'py>(
     trend: bool,
 ) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
     let (av, cv, yv, sv) = (view(&a), view(&c), view(&y), view(&ys));
-    let e = py
-        .detach(|| initial_state::fitted_errors(av, cv, yv, sv, trend))
-        .py()?;
+    // GIL released, Ctrl-C seen within milliseconds (the core checks between blocks)
+    let e = crate::search::detach(py, || initial_state::fitted_errors(av, cv, yv, sv, trend))?;
     Ok(e.map(|e| mat_to_numpy(py, &e)))
 }
 

@@ -14,19 +14,21 @@
 //! each other), nearly every candidate. A model with a mode just outside the unit circle has
 //! free responses that grow over the record, a regressor of condition 1e8 whose normal
 //! equations (1e16) lose the fit (a held-out block scored 78.4 % where the least-squares fit
-//! is 85.3 %): those are triangularised instead, block by block (Householder QR of the
-//! running triangle stacked on the block's rows). Either is solved by the pseudo-inverse of
-//! its column-scaled matrix (`rtol = 1e-12`, the minimum-norm solution), and the errors are
-//! formed in a second pass from the free response of the fitted state.
+//! is 85.3 %): those rows are triangularised instead, streamed through the shared
+//! [`QrAccumulator`] as `subspace::bd_x0` streams its regression. Either is solved by the
+//! pseudo-inverse of its column-scaled matrix (`rtol = 1e-12`, the minimum-norm solution),
+//! and the errors are formed in a second pass from the free response of the fitted state.
 
 use crate::denormals::DenormalsAreZero;
 use crate::error::{Result, SysidError};
-use crate::linalg::{mul_seq, pinv, qr_r_in_place, svd_seq};
+use crate::linalg::{mul_seq, pinv, svd_seq, QrAccumulator};
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatMut, MatRef, Par};
+use faer::{Accum, Mat, MatRef, Par};
 
 /// Samples per block of rows.
 const BLOCK: usize = 64;
+/// Blocks between two checks for Ctrl-C (16 384 samples).
+const CHECK_EVERY: usize = 256;
 /// `A^t` below this (entrywise, `A^0 = I`) ends the free responses: their squares are below
 /// round-off of the sums they would add to.
 const NEGLIGIBLE: f64 = 1e-17;
@@ -61,15 +63,6 @@ fn weights(y: MatRef<'_, f64>) -> Vec<f64> {
             }
         })
         .collect()
-}
-
-/// Zeroes the strict lower triangle of the top `p x p` block (the reflectors a QR left).
-fn clear_below(mut a: MatMut<'_, f64>, p: usize) {
-    for j in 0..p {
-        for i in j + 1..p {
-            a[(i, j)] = 0.0;
-        }
-    }
 }
 
 /// The simulation errors `y - ys` with the initial state (`x0` of `x(t+1) = A x`, seen
@@ -132,7 +125,7 @@ pub fn fitted_errors(
     // subnormal operands read as zero in the block products only (crate::denormals), not
     // in the decompositions below
     let daz = DenormalsAreZero::new();
-    let g = normal_equations(&free, &r, &w, &lines);
+    let g = normal_equations(&free, &r, &w, &lines)?;
     drop(daz);
     let Some(g) = g else {
         return Ok(None);
@@ -144,7 +137,7 @@ pub fn fitted_errors(
     let theta = match solve_normal(&g)? {
         Some(theta) => theta,
         None => {
-            let Some(tri) = triangle(&free, &r, &w, &lines) else {
+            let Some(tri) = triangle(&free, &r, &w, &lines)? else {
                 return Ok(None);
             };
             solve(&tri)?
@@ -227,11 +220,15 @@ impl<'a> FreeResponses<'a> {
     /// Calls `visit(t0, phi)` for each block from the start (`phi`: rows `(t, j)` of the
     /// block's `len` samples) until the record ends or `A^t0` is below round-off; the sample
     /// where they stopped, `None` when a free response is not finite.
-    fn each(&self, count: usize, mut visit: impl FnMut(usize, MatRef<'_, f64>)) -> Option<usize> {
+    fn each(
+        &self,
+        count: usize,
+        mut visit: impl FnMut(usize, MatRef<'_, f64>),
+    ) -> Result<Option<usize>> {
         let n = self.a.nrows();
         let l = self.m.nrows() / BLOCK;
         if n == 0 {
-            return Some(0);
+            return Ok(Some(0));
         }
         let mut power = Mat::<f64>::identity(n, n);
         let mut phi = Mat::<f64>::zeros(BLOCK * l, n);
@@ -251,9 +248,12 @@ impl<'a> FreeResponses<'a> {
                 .col_iter()
                 .any(|col| col.iter().any(|v| !v.is_finite()))
             {
-                return None;
+                return Ok(None);
             }
             visit(t0, block);
+            if (t0 / BLOCK) % CHECK_EVERY == CHECK_EVERY - 1 {
+                crate::interrupt::check()?; // Ctrl-C within a long record
+            }
             t0 += rows / l;
             if t0 >= count {
                 break;
@@ -263,13 +263,13 @@ impl<'a> FreeResponses<'a> {
                 col.iter().fold(mx, |m, v| m.max(v.abs()))
             });
             if !big.is_finite() {
-                return None;
+                return Ok(None);
             }
             if big < NEGLIGIBLE {
                 break;
             }
         }
-        Some(t0)
+        Ok(Some(t0))
     }
 }
 
@@ -281,7 +281,7 @@ fn normal_equations(
     r: &Mat<f64>,
     w: &[f64],
     lines: &Lines,
-) -> Option<Mat<f64>> {
+) -> Result<Option<Mat<f64>>> {
     let (count, l, n) = (r.nrows(), r.ncols(), free.a.nrows());
     let q = lines.tcols * l;
     let p = n + q + 1;
@@ -304,7 +304,7 @@ fn normal_equations(
     // the initial state's rows and columns over the blocks where the free responses live
     let mut scaled = Mat::<f64>::zeros(BLOCK * l, n);
     let mut gxx = Mat::<f64>::zeros(n, n);
-    free.each(count, |t0, phi| {
+    let alive = free.each(count, |t0, phi| {
         let rows = phi.nrows();
         for row in 0..rows {
             let (t, j) = (t0 + row / l, row % l);
@@ -320,13 +320,16 @@ fn normal_equations(
         let sb = scaled.as_ref().subrows(0, rows);
         matmul(gxx.as_mut(), Accum::Add, sb.transpose(), sb, 1.0, Par::Seq);
     })?;
+    if alive.is_none() {
+        return Ok(None);
+    }
     g.as_mut().submatrix_mut(0, 0, n, n).copy_from(gxx.as_ref());
     for i in 0..p {
         for k in 0..i {
             g[(i, k)] = g[(k, i)];
         }
     }
-    Some(g)
+    Ok(Some(g))
 }
 
 /// The minimum-norm solution of the normal equations' leading block against their last
@@ -359,62 +362,49 @@ fn solve_normal(g: &Mat<f64>) -> Result<Option<Vec<f64>>> {
 }
 
 /// The triangle `R` (`p x p`, `p = n + q + 1`) of the weighted rows `[Phi(t) | T(t) | r(t)]`
-/// (the rows of [`normal_equations`]), by blocks of samples; `None` when a free response is
-/// not finite.
-fn triangle(free: &FreeResponses<'_>, r: &Mat<f64>, w: &[f64], lines: &Lines) -> Option<Mat<f64>> {
+/// (the rows of [`normal_equations`]) through the shared [`QrAccumulator`]; `None` when a
+/// free response is not finite. Past the free responses' end their columns are zero.
+fn triangle(
+    free: &FreeResponses<'_>,
+    r: &Mat<f64>,
+    w: &[f64],
+    lines: &Lines,
+) -> Result<Option<Mat<f64>>> {
     let (count, l, n) = (r.nrows(), r.ncols(), free.a.nrows());
     let q = lines.tcols * l;
     let p = n + q + 1;
-    // a block's weighted rows (t, j) of the trailing columns (offsets, lines, residual)
-    let tail_row = |dst: &mut MatMut<'_, f64>, row: usize, col0: usize, t: usize, j: usize| {
+    let mut acc = QrAccumulator::new(p, (8 * p).max(256));
+    let mut row = vec![0.0; p];
+    let push = |acc: &mut QrAccumulator, row: &mut [f64], t: usize, j: usize| {
         for k in 0..lines.tcols {
-            dst[(row, col0 + k * l + j)] = w[j] * lines.at(t, k);
+            row[n + k * l + j] = w[j] * lines.at(t, k);
         }
-        dst[(row, col0 + q)] = w[j] * r[(t, j)];
+        row[p - 1] = w[j] * r[(t, j)];
+        acc.push_row(row);
     };
-    let mut work = Mat::<f64>::zeros(p + BLOCK * l, p);
     let alive = free.each(count, |t0, phi| {
-        let rows = phi.nrows();
-        let mut blk = work.as_mut().subrows_mut(p, rows);
-        blk.fill(0.0);
-        for row in 0..rows {
-            let (t, j) = (t0 + row / l, row % l);
+        for k in 0..phi.nrows() {
+            let (t, j) = (t0 + k / l, k % l);
+            row.iter_mut().for_each(|v| *v = 0.0);
             for i in 0..n {
-                blk[(row, i)] = w[j] * phi[(row, i)];
+                row[i] = w[j] * phi[(k, i)];
             }
-            tail_row(&mut blk, row, n, t, j);
+            push(&mut acc, &mut row, t, j);
         }
-        qr_r_in_place(work.as_mut().subrows_mut(0, p + rows));
-        clear_below(work.as_mut(), p);
     })?;
-    let mut t0 = alive;
-    if t0 < count {
-        // the rest: the initial state's columns are zero there, so its reflections leave
-        // these rows alone and only the trailing (offsets, residual) triangle takes them
-        let pt = q + 1;
-        let mut tail = Mat::<f64>::zeros(pt + BLOCK * l, pt);
-        tail.as_mut()
-            .submatrix_mut(0, 0, pt, pt)
-            .copy_from(work.as_ref().submatrix(n, n, pt, pt));
-        while t0 < count {
-            let len = BLOCK.min(count - t0);
-            let rows = len * l;
-            let mut blk = tail.as_mut().subrows_mut(pt, rows);
-            blk.fill(0.0);
-            for t in 0..len {
-                for j in 0..l {
-                    tail_row(&mut blk, t * l + j, 0, t0 + t, j);
-                }
-            }
-            qr_r_in_place(tail.as_mut().subrows_mut(0, pt + rows));
-            clear_below(tail.as_mut(), pt);
-            t0 += len;
+    let Some(alive) = alive else {
+        return Ok(None);
+    };
+    for t in alive..count {
+        if t % (CHECK_EVERY * BLOCK) == 0 {
+            crate::interrupt::check()?;
         }
-        work.as_mut()
-            .submatrix_mut(n, n, pt, pt)
-            .copy_from(tail.as_ref().submatrix(0, 0, pt, pt));
+        for j in 0..l {
+            row.iter_mut().for_each(|v| *v = 0.0);
+            push(&mut acc, &mut row, t, j);
+        }
     }
-    Some(work.as_ref().subrows(0, p).to_owned())
+    Ok(Some(acc.finish()))
 }
 
 /// The minimum-norm least-squares solution of the triangle's leading block against its
