@@ -696,6 +696,8 @@ impl<'a> Predictor<'a> {
         let mut f = Filter::new(self.unpack(th), self.rinv.clone());
         // lower triangle, row by row
         let mut lam = vec![0.0; if covariance { l * (l + 1) / 2 } else { 0 }];
+        // products and sums only (crate::denormals), as the sensitivity passes
+        let daz = crate::denormals::DenormalsAreZero::new();
         let done = super::pass::dense_pass(&mut f, &self.exps, &mut lam);
         for (ex, (u, y)) in self.exps.iter().enumerate().filter(|_| !done) {
             f.restart(ex);
@@ -714,6 +716,7 @@ impl<'a> Predictor<'a> {
                 f.advance(*u, *y, t);
             }
         }
+        drop(daz);
         let nf = self.n_samples as f64;
         let lam = covariance.then(|| {
             Mat::from_fn(l, l, |i, j| {

@@ -89,6 +89,8 @@ impl Predictor<'_> {
         let mut cs = Mat::<f64>::zeros(l, nc);
         let par = small_par(blk * l, nc);
         let mut ut = vec![0.0; m];
+        // per-sample products of a few state rows (crate::denormals), in this loop only
+        let daz = crate::denormals::DenormalsAreZero::new();
         for (ex, (u, y)) in self.exps.iter().enumerate() {
             f.restart(ex);
             s.fill(0.0);
@@ -132,6 +134,7 @@ impl Predictor<'_> {
                 f.advance(*u, *y, t);
             }
         }
+        drop(daz);
         mirror_lower(&mut h);
         Ok(Evaluation {
             cost: f.finite_cost(),

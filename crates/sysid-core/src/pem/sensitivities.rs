@@ -16,6 +16,7 @@
 use super::modal::Modal;
 use super::normal::{gradient_to_theta, matrix_to_theta, product, StaticSums};
 use super::predictor::{rows_of, Filter, Predictor, RowProduct};
+use crate::denormals::DenormalsAreZero;
 use crate::error::Result;
 use crate::optim::{
     clear_upper, flush_tiny, flush_tiny_mat, gram_add, mirror_lower, small_par, Evaluation,
@@ -162,16 +163,21 @@ impl Predictor<'_> {
         let hp = if acc { pd } else { 0 };
         let mut hd = Mat::<f64>::zeros(hp, hp);
         let mut gd = vec![0.0; pd];
-        // rows k * nz + j: sum_t z_j(t) S_k(t)
-        let mut cross = Mat::<f64>::zeros(if acc { n * nz } else { 0 }, hp);
+        // row c * n + k, column j: sum_t S_kc(t) z_j(t)
+        let mut cross = Mat::<f64>::zeros(if acc { n * pd } else { 0 }, nz);
         let mut sums = StaticSums::new(l, nz, blk, acc);
         let mut jb = Mat::<f64>::zeros(if acc { blk * r } else { 0 }, hp);
-        let mut sbuf = Mat::<f64>::zeros(if acc { n * blk } else { 0 }, hp);
+        // column `row`: the sample's S by columns (`vec S`, written contiguously)
+        let mut sbuf = Mat::<f64>::zeros(if acc { n * pd } else { 0 }, blk);
         let mut s = Mat::<f64>::zeros(n, pd);
         let mut s2 = s.clone();
         let mut v = vec![0.0; n];
+        let mut sv = vec![0.0; pd];
         let mut z = vec![0.0; nz];
         let mut sample = 0usize;
+        // per-sample products of a few state rows: subnormal operands read as zero
+        // (crate::denormals), in this loop only
+        let daz = DenormalsAreZero::new();
         for (ex, (u, y)) in self.exps.iter().enumerate() {
             f.restart(ex);
             s.fill(0.0);
@@ -197,14 +203,25 @@ impl Predictor<'_> {
                 for (k, vk) in v.iter_mut().enumerate() {
                     *vk = (0..l).map(|i| f.pm.c[(i, k)] * f.wz[i]).sum();
                 }
-                for (c, gc) in gd.iter_mut().enumerate() {
-                    *gc -= (0..n).map(|k| s[(k, c)] * v[k]).sum::<f64>();
+                // S^T v, each column's sum over k in order, the columns side by side
+                sv.fill(0.0);
+                for (k, &vk) in v.iter().enumerate() {
+                    for (c, acc_c) in sv.iter_mut().enumerate() {
+                        *acc_c += s[(k, c)] * vk;
+                    }
+                }
+                for (gc, &a) in gd.iter_mut().zip(&sv) {
+                    *gc -= a;
                 }
                 if acc {
-                    for c in 0..pd {
-                        for k in 0..n {
-                            sbuf[(k * blk + row, c)] = s[(k, c)];
-                        }
+                    let col = sbuf
+                        .col_mut(row)
+                        .try_as_col_major_mut()
+                        .expect("contiguous");
+                    for (c, dst) in col.as_slice_mut().chunks_exact_mut(n).enumerate() {
+                        dst.copy_from_slice(
+                            s.col(c).try_as_col_major().expect("contiguous").as_slice(),
+                        );
                     }
                     let rows = jb.as_mut().subrows_mut(row * r, r);
                     product(rows, lt.as_ref(), s.as_ref(), 1.0);
@@ -226,11 +243,8 @@ impl Predictor<'_> {
                 if acc && (row == blk || t + 1 == len) {
                     gram_add(hd.as_mut(), jb.as_ref().subrows(0, row * r), par);
                     let zr = sums.zbuf.as_ref().subrows(0, row);
-                    for k in 0..n {
-                        let sk = sbuf.as_ref().subrows(k * blk, row);
-                        let dst = cross.as_mut().subrows_mut(k * nz, nz);
-                        matmul(dst, Accum::Add, zr.transpose(), sk, 1.0, par);
-                    }
+                    let sb = sbuf.as_ref().subcols(0, row);
+                    matmul(cross.as_mut(), Accum::Add, sb, zr, 1.0, par);
                     sums.fold(row);
                     clear_upper();
                     row = 0;
@@ -238,6 +252,7 @@ impl Predictor<'_> {
                 f.advance(*u, *y, t);
             }
         }
+        drop(daz);
         let h = acc.then(|| {
             let mut h = Mat::<f64>::zeros(self.p, self.p);
             mirror_lower(&mut hd);
@@ -249,7 +264,7 @@ impl Predictor<'_> {
             h
         });
         let cross_at = |i: usize, j: usize, c: usize| -> f64 {
-            (0..n).map(|k| wc[(i, k)] * cross[(k * nz + j, c)]).sum()
+            (0..n).map(|k| wc[(i, k)] * cross[(c * n + k, j)]).sum()
         };
         Ok(self.finish(&f, &sums, &cols, &gd, h, &w, &cross_at, None))
     }
@@ -344,6 +359,7 @@ impl Predictor<'_> {
         // `T^-1` by rows (block diagonal in the modal chart: its non-zero entries only)
         let ti = RowProduct::new(&rows_of(&[&md.ti]), n);
         let mut sample = 0usize;
+        let daz = DenormalsAreZero::new(); // as in evaluate_structured
         for (ex, (u, y)) in self.exps.iter().enumerate() {
             f.restart(ex);
             sc.fill(0.0);
@@ -430,6 +446,7 @@ impl Predictor<'_> {
                 f.advance(*u, *y, t);
             }
         }
+        drop(daz);
         for (k, &(c, twin)) in carried.iter().enumerate() {
             gd[c] = ge[eoff[k]];
             if let Some(tw) = twin {
