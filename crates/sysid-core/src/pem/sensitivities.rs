@@ -172,7 +172,6 @@ impl Predictor<'_> {
         let mut s = Mat::<f64>::zeros(n, pd);
         let mut s2 = s.clone();
         let mut v = vec![0.0; n];
-        let mut sv = vec![0.0; pd];
         let mut z = vec![0.0; nz];
         let mut sample = 0usize;
         // per-sample products of a few state rows: subnormal operands read as zero
@@ -203,25 +202,13 @@ impl Predictor<'_> {
                 for (k, vk) in v.iter_mut().enumerate() {
                     *vk = (0..l).map(|i| f.pm.c[(i, k)] * f.wz[i]).sum();
                 }
-                // S^T v, each column's sum over k in order, the columns side by side
-                sv.fill(0.0);
-                for (k, &vk) in v.iter().enumerate() {
-                    for (c, acc_c) in sv.iter_mut().enumerate() {
-                        *acc_c += s[(k, c)] * vk;
-                    }
-                }
-                for (gc, &a) in gd.iter_mut().zip(&sv) {
-                    *gc -= a;
+                for (c, gc) in gd.iter_mut().enumerate() {
+                    *gc -= (0..n).map(|k| s[(k, c)] * v[k]).sum::<f64>();
                 }
                 if acc {
-                    let col = sbuf
-                        .col_mut(row)
-                        .try_as_col_major_mut()
-                        .expect("contiguous");
-                    for (c, dst) in col.as_slice_mut().chunks_exact_mut(n).enumerate() {
-                        dst.copy_from_slice(
-                            s.col(c).try_as_col_major().expect("contiguous").as_slice(),
-                        );
+                    let col = sbuf.col_as_slice_mut(row);
+                    for (c, dst) in col.chunks_exact_mut(n).enumerate() {
+                        dst.copy_from_slice(s.col_as_slice(c));
                     }
                     let rows = jb.as_mut().subrows_mut(row * r, r);
                     product(rows, lt.as_ref(), s.as_ref(), 1.0);
