@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import sysid
+from sysid.identify.notes import refit_cap_check
 from sysid.validation.crossval import simulation_errors
 
 from conftest import daisy_split, quiet
@@ -194,3 +195,24 @@ def test_a_fold_left_out_takes_its_block_weight_with_it():
     assert np.isclose(board.shares.sum(), 1.0)
     fits = np.array([[90.0], [80.0], [70.0], [60.0]])
     assert board.score(fits) == held_out_score(fits, want)
+
+
+def test_a_final_refit_stopped_at_its_cap_is_noted_with_the_call_that_searches_on(monkeypatch):
+    """Before: ``identify`` on DaISy's heating system returned a re-fit that had stopped at its
+    300-iteration cap and said nothing (3 of 38 splits of the real records); the note names the
+    cap and the call, which runs as printed and searches on from the model."""
+    est, _ = daisy_split("robot_arm")
+    monkeypatch.setattr(core, "FINAL_ITER", 3)
+    res = quiet(sysid.identify, est, progress=False)
+    assert res.model.statespace.info["pem"]["stop"] == "maximum iterations"
+    note = res.checks["final_refit"]
+    assert "cap of 3 iterations" in note
+    call = note.split("To search on: ")[1].split(" (a lower cost")[0]
+    more = quiet(eval, call, {"sysid": sysid, "res": res, "data": est})
+    assert more.info["pem"]["iterations"] > 3
+    assert more.info["pem"]["cost"][-1] <= more.info["pem"]["cost"][0]
+    # a re-fit that converged is not noted
+    assert more.info["pem"]["stop"] != "maximum iterations"
+    checks = {}
+    refit_cap_check(more, checks)
+    assert checks == {}

@@ -46,8 +46,9 @@
    the data insist on (``checks["drift"]`` says so).
    ``validation`` data, when given, are only reported on.
 5. The chosen model's simulation errors on the record are checked for a drift the input does
-   not explain (:func:`_trend_check`, ``checks["trend"]``), and its held-out fit for a model
-   that explains less than half of the outputs' variation (``checks["weak"]``).
+   not explain (:mod:`.notes`, ``checks["trend"]``), its held-out fit for a model
+   that explains less than half of the outputs' variation (``checks["weak"]``), and its
+   re-fit for a stop at the iteration cap (``checks["final_refit"]``).
 """
 
 from __future__ import annotations
@@ -80,7 +81,7 @@ from ..validation.crossval import (
     simulation_fit,
 )
 from .board import Board, bic
-from .notes import persistent_mode_check, trend_check, weak_check
+from .notes import persistent_mode_check, refit_cap_check, trend_check, weak_check
 from .result import IdentifiedModel, IdentifyResult, _family
 from .uncertainty import with_uncertainty
 
@@ -688,6 +689,7 @@ def identify(
                                                      "held_out_fit")}
     if "identify_refit" in model.info:
         checks["final_refit"] = model.info["identify_refit"]
+    refit_cap_check(model, checks)
     trend_check(model, centred, checks)
     persistent_mode_check(model, centred, checks)
     weak_check(float(chosen["held_out_fit"]), checks)

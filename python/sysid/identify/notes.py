@@ -1,7 +1,8 @@
 """Notes :func:`sysid.identify` adds to its checks about the model it chose: a drift the input
 does not explain (``checks["trend"]``), a mode that does not decay over the record
-(``checks["persistent_mode"]``), and a model that explains less than half of what the
-outputs do on the held-out blocks (``checks["weak"]``)."""
+(``checks["persistent_mode"]``), a model that explains less than half of what the
+outputs do on the held-out blocks (``checks["weak"]``), and a final re-fit stopped at its
+iteration cap (``checks["final_refit"]``)."""
 
 from __future__ import annotations
 
@@ -15,8 +16,8 @@ from ..data.iodata import IOData
 from ..models.continuous import ContinuousStateSpace
 from ..validation.crossval import trend_share
 
-__all__ = ["trend_check", "persistent_mode_check", "weak_check", "TREND_SHARE", "TREND_OUTPUT",
-           "PERSISTENT_DECAY", "WEAK_FIT"]
+__all__ = ["trend_check", "persistent_mode_check", "weak_check", "refit_cap_check",
+           "TREND_SHARE", "TREND_OUTPUT", "PERSISTENT_DECAY", "WEAK_FIT"]
 
 #: a held-out fit below this (in %) explains less than half of the outputs' variation
 #: (``fit = 100 (1 - sqrt(1 - explained))``): ``checks["weak"]`` says so
@@ -121,3 +122,43 @@ def weak_check(held_out_fit: float, checks: dict[str, Any]) -> None:
         f"not in the record, a nonlinearity); expect no better on other data: check the "
         f"record and its channels, add the missing inputs, or model the disturbance "
         f"(sysid.ssest(data, focus='prediction')) if prediction is what you need")
+
+
+def refit_cap_check(model: Any, checks: dict[str, Any]) -> None:
+    """``checks["final_refit"]`` when the chosen refinement's re-fit on the whole record
+    stopped at its iteration cap (``info["pem"]["stop"]``) with its criterion still falling:
+    the held-out blocks chose the family, order and feedthrough, not how far to refine, and
+    the user is told how to search on (a lower cost on the estimation record, which need not
+    simulate other data better). A re-fit already bounded by work has its own note.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> from sysid.identify.notes import refit_cap_check
+    >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    >>> m.info["pem"] = {"stop": "maximum iterations", "iterations": 300,
+    ...                  "cost": [2.0, 1.0002, 1.0]}
+    >>> checks = {}
+    >>> refit_cap_check(m, checks)
+    >>> checks["final_refit"][:60]
+    "the chosen model's re-fit on the whole record stopped at its"
+    """
+    info = getattr(model, "info", None) or {}
+    pem = info.get("pem") or {}
+    if "final_refit" in checks or pem.get("stop") != "maximum iterations":
+        return
+    cost = [float(c) for c in pem.get("cost") or []]
+    drop = (cost[-2] - cost[-1]) / abs(cost[-2]) if len(cost) >= 2 and cost[-2] else 0.0
+    still = (f", its criterion still falling by {100 * drop:.2g} % in the last iteration"
+             if drop > 0 else "")
+    chosen = info.get("identify") or {}
+    focus = chosen.get("focus") or "simulation"
+    weighting = ", weighting='output'" if focus == "simulation" else ""
+    checks["final_refit"] = (
+        f"the chosen model's re-fit on the whole record stopped at its cap of "
+        f"{pem.get('iterations')} iterations{still}: the held-out blocks chose its family, "
+        f"order and feedthrough, not how far to refine it. To search on: "
+        f"sysid.pem(res.model.remove_offsets(data), res.model.to_statespace(), "
+        f"focus='{focus}', feedthrough={bool(chosen.get('feedthrough'))}{weighting}, "
+        f"max_iter=1000) (a lower cost on this record, which need not simulate other data "
+        f"better)")
