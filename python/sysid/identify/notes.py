@@ -126,10 +126,11 @@ def weak_check(held_out_fit: float, checks: dict[str, Any]) -> None:
 
 def refit_cap_check(model: Any, checks: dict[str, Any]) -> None:
     """``checks["final_refit"]`` when the chosen refinement's re-fit on the whole record
-    stopped at its iteration cap (``info["pem"]["stop"]``) with its criterion still falling:
-    the held-out blocks chose the family, order and feedthrough, not how far to refine, and
-    the user is told how to search on (a lower cost on the estimation record, which need not
-    simulate other data better). A re-fit already bounded by work has its own note.
+    stopped at its iteration cap (``info["pem"]["stop"]``), with how much its criterion fell
+    in the last iteration: the held-out blocks chose the family, order and feedthrough, not
+    how far to refine, and the user is told how to search on (a lower cost on the estimation
+    record, which need not simulate other data better). A re-fit already bounded by work has
+    its own note.
 
     Examples
     --------
