@@ -33,7 +33,7 @@ def test_every_bundled_file_is_listed_with_its_checksum():
     sums = _published_sums()
     files = {p.name for p in DATA_DIR.iterdir() if p.name != "README.md"}
     assert {f.removesuffix(".gz") for f in files} == set(sums)
-    assert len(sums) == len(sysid.datasets.NAMES) == 7
+    assert len(sums) == len(sysid.datasets.NAMES) == 8
 
 
 @pytest.mark.parametrize("name", sysid.datasets.NAMES)
@@ -49,6 +49,7 @@ def test_bundled_copy_is_the_published_file_byte_for_byte(name):
         ("dryer", (1000, 2), 0.08, 1),
         ("robot_arm", (1024, 2), 1.0, 1),
         ("winding", (2500, 7), 0.1, 5),
+        ("ballbeam", (1000, 2), 0.1, 1),
     ],
 )
 def test_loaders_split_the_columns_as_documented(name, shape, dt, n_inputs):

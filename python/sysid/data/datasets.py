@@ -18,6 +18,8 @@ name           record                              file
                validation                          periods 2-3 (16384 samples; rows cut)
 ``ph``         pH neutralisation (DaISy,           ``pHdata.dat.gz``; 2001 samples, dt = 10 s
                simulated): acid, base flow -> pH
+``ballbeam``   ball and beam (DaISy): beam angle   ``ballbeam.dat.gz``; 1000 samples, dt = 0.1
+               -> ball position                    s; an unstable (integrating) plant
 =============  ==================================  ===========================================
 
 :func:`path` gives the file (``numpy.loadtxt`` and :meth:`sysid.IOData.from_csv` read the
@@ -41,6 +43,7 @@ __all__ = [
     "load_f16_level3",
     "load_f16_level2",
     "load_ph",
+    "load_ballbeam",
     "NAMES",
 ]
 
@@ -53,6 +56,7 @@ _FILES = {
     "f16_level3": "F16Data_FullMSine_Level3_periods2-4.csv.gz",
     "f16_level2": "F16Data_FullMSine_Level2_Validation_periods2-3.csv.gz",
     "ph": "pHdata.dat.gz",
+    "ballbeam": "ballbeam.dat.gz",
 }
 NAMES = tuple(_FILES)
 
@@ -66,7 +70,7 @@ def path(name: str) -> str:
     >>> sysid.datasets.path("dryer").endswith("dryer.dat")
     True
     >>> sysid.datasets.NAMES
-    ('dryer', 'robot_arm', 'winding', 'f16', 'f16_level3', 'f16_level2', 'ph')
+    ('dryer', 'robot_arm', 'winding', 'f16', 'f16_level3', 'f16_level2', 'ph', 'ballbeam')
     """
     if name not in _FILES:
         raise ValueError(f"unknown data set {name!r}; bundled: {', '.join(NAMES)}")
@@ -195,3 +199,19 @@ def load_ph() -> IOData:
     d = _columns("ph")
     return IOData(u=d[:, 1:3], y=d[:, 3:], dt=10.0, input_names=["acid flow", "base flow"],
                   output_names=["pH"])
+
+
+def load_ballbeam() -> IOData:
+    """The ball and beam (DaISy, real): beam angle in, ball position out; dt = 0.1 s. The
+    plant integrates (the ball rolls while the beam is tilted), so models of it have poles on
+    or just outside the unit circle.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> sysid.datasets.load_ballbeam()
+    IOData: 1000 samples, 1 input, 1 output, dt = 0.1 s
+    """
+    d = _columns("ballbeam")
+    return IOData(u=d[:, :1], y=d[:, 1:], dt=0.1, input_names=["beam angle"],
+                  output_names=["ball position"])
