@@ -178,13 +178,14 @@ def _median(table: dict[int, list[float]]) -> dict[int, float]:
     return {n: float(np.median(v)) if v else -np.inf for n, v in table.items()}
 
 
-def _choose(whole: dict[int, StateSpaceModel], table: dict[int, list[float]]
+def _choose(whole: dict[int, StateSpaceModel], table: dict[int, list[float]], data: Any
             ) -> tuple[int, dict[str, Any]]:
-    from ..validation.crossval import choose, stable_first
+    from ..validation.crossval import choose, simulation_fit, stable_first
 
     med = _median(table)
     unstable = {n for n, m in whole.items() if not m.is_stable()}
-    allowed, note = stable_first(med, table, unstable)
+    allowed, note = stable_first(med, table, unstable,
+                                 lambda n: simulation_fit(whole[n], data))
     n, why = choose({o: f for o, f in med.items() if o in allowed})
     return n, {"order": n, "criterion": "cross-validated simulation fit",
                "reason": why + note, "table": med}
@@ -312,7 +313,7 @@ def ssregest(
     if len(models) > 1:
         if table is None:
             table = _held_out(data, sorted(models), na, kernel, nk, reg)
-        n, choice = _choose(models, {o: table[o] for o in models})
+        n, choice = _choose(models, {o: table[o] for o in models}, data)
     else:
         n = next(iter(models))
     model = models[n]
