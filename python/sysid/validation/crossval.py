@@ -719,7 +719,9 @@ def stable_first(score: dict[int, float], folds: dict[int, list[float]], unstabl
     modulus 1.067 over 1 000 samples: a factor 1e28) cannot, and neither can it on the
     user's validation data (DC-DC converter record: order 16, insisted on by every block,
     validated -inf; order 5 validated 47 %). :func:`sysid.identify` makes the same check
-    through the BIC of its candidates' whole-record fits.
+    through the BIC of its candidates' whole-record fits. With no stable order, the choice
+    is among the unstable orders whose model simulates the whole record better than its mean
+    (fit above 0 %), when any does.
 
     Examples
     --------
@@ -733,8 +735,18 @@ def stable_first(score: dict[int, float], folds: dict[int, list[float]], unstabl
     if not unstable:
         return set(score), ""
     if not stable:
-        return set(score), ("; no order gave a model stable on the whole record and scored on "
-                            "the held-out blocks: the choice is among unstable ones")
+        note = ("; no order gave a model stable on the whole record and scored on the held-out "
+                "blocks: the choice is among unstable ones")
+        if whole_fit is None:
+            return set(score), note
+        scored = sorted(n for n in score if np.isfinite(score[n]))
+        follow = {n for n in scored if whole_fit(n) >= 0.0}
+        if not follow or len(follow) == len(scored):
+            return set(score), note
+        out = ", ".join(str(n) for n in scored if n not in follow)
+        return follow, note + (f" that simulate the whole record better than its mean (order(s) "
+                               f"{out} do not: an unstable mode that grows too fast to follow "
+                               f"over the record)")
     best_s = max(stable, key=lambda n: stable[n])
     ref = folds[best_s]
     insisted = {n for n in unstable if np.isfinite(score[n])
