@@ -83,6 +83,13 @@ def _columns(name: str):  # type: ignore[no-untyped-def]
     return np.loadtxt(path(name))
 
 
+def _one_in_one_out(name: str, dt: float, input_name: str, output_name: str) -> IOData:
+    """A bundled two-column record (input, output) as :class:`IOData`."""
+    d = _columns(name)
+    return IOData(u=d[:, :1], y=d[:, 1:], dt=dt, input_names=[input_name],
+                  output_names=[output_name])
+
+
 def load_dryer() -> IOData:
     """The hair-dryer record as :class:`sysid.IOData` (u: heater voltage, y: temperature).
 
@@ -92,14 +99,7 @@ def load_dryer() -> IOData:
     >>> sysid.datasets.load_dryer()
     IOData: 1000 samples, 1 input, 1 output, dt = 0.08 s
     """
-    d = _columns("dryer")
-    return IOData(
-        u=d[:, :1],
-        y=d[:, 1:],
-        dt=0.08,
-        input_names=["heater voltage"],
-        output_names=["air temperature"],
-    )
+    return _one_in_one_out("dryer", 0.08, "heater voltage", "air temperature")
 
 
 def load_robot_arm() -> IOData:
@@ -114,9 +114,7 @@ def load_robot_arm() -> IOData:
     >>> sysid.datasets.load_robot_arm()
     IOData: 1024 samples, 1 input, 1 output, dt = 1 s
     """
-    d = _columns("robot_arm")
-    return IOData(u=d[:, :1], y=d[:, 1:], dt=1.0, input_names=["torque"],
-                  output_names=["acceleration"])
+    return _one_in_one_out("robot_arm", 1.0, "torque", "acceleration")
 
 
 def load_winding() -> IOData:
@@ -212,6 +210,4 @@ def load_ballbeam() -> IOData:
     >>> sysid.datasets.load_ballbeam()
     IOData: 1000 samples, 1 input, 1 output, dt = 0.1 s
     """
-    d = _columns("ballbeam")
-    return IOData(u=d[:, :1], y=d[:, 1:], dt=0.1, input_names=["beam angle"],
-                  output_names=["ball position"])
+    return _one_in_one_out("ballbeam", 0.1, "beam angle", "ball position")
