@@ -658,19 +658,13 @@ def cross_validated_order(
                 table.setdefault(n, []).append(-np.inf)
     k = max(map(len, table.values()))
     med = {n: float(np.median(v)) if len(v) == k else -np.inf for n, v in table.items()}
-    unstable = (_unstable_orders(whole, med, method, feedthrough) if whole is not None
+    models: dict[int, Any] = {}
+    unstable = (_unstable_orders(whole, med, method, feedthrough, models) if whole is not None
                 else set())
 
     def whole_fit(n: int) -> float:
-        # the order's model on the whole record, simulating it (stable_first's last check)
-        fit = getattr(whole, "_quiet_fit", None) or whole.fit
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                m = fit(n, method=method, feedthrough=feedthrough, kalman=False)
-        except Exception:  # noqa: BLE001 - an order the record cannot support
-            return -np.inf
-        return simulation_fit(m, data)
+        # the order's model on the whole record simulating it (stable_first's last check)
+        return simulation_fit(models[n], data) if n in models else -np.inf
 
     allowed, note = stable_first(med, table, unstable, whole_fit if whole is not None else None)
     what = "one-step prediction" if predict else "simulation"
@@ -678,18 +672,19 @@ def cross_validated_order(
     return OrderChoice(n, med, why + note, f"cross-validated {what} fit")
 
 
-def _unstable_orders(whole: Any, table: dict[int, float], method: str, feedthrough: bool
-                     ) -> set[int]:
+def _unstable_orders(whole: Any, table: dict[int, float], method: str, feedthrough: bool,
+                     models: dict[int, Any]) -> set[int]:
     """The orders of ``table`` whose model fitted on the whole record (``whole.fit``) has a
-    pole of modulus >= 1 (or cannot be fitted)."""
+    pole of modulus >= 1 (or cannot be fitted); the models fitted go into ``models``."""
     out = set()
     for n in table:
         try:
             fit = getattr(whole, "_quiet_fit", None)  # keeps the user's feedback warning
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                poles = (fit or whole.fit)(n, method=method, feedthrough=feedthrough,
-                                           kalman=False).poles()
+                models[n] = (fit or whole.fit)(n, method=method, feedthrough=feedthrough,
+                                               kalman=False)
+            poles = models[n].poles()
             if len(poles) and float(np.max(np.abs(poles))) >= 1.0:
                 out.add(n)
         except Exception:  # noqa: BLE001 - an order the record cannot support
