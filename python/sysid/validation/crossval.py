@@ -666,7 +666,9 @@ def cross_validated_order(
         # the order's model on the whole record simulating it (stable_first's last check)
         return simulation_fit(models[n], data) if n in models else -np.inf
 
-    allowed, note = stable_first(med, table, unstable, whole_fit if whole is not None else None)
+    # a time series has no simulation to check (its models are scored by prediction)
+    check = whole_fit if whole is not None and not predict else None
+    allowed, note = stable_first(med, table, unstable, check)
     what = "one-step prediction" if predict else "simulation"
     n, why = choose({o: f for o, f in med.items() if o in allowed}, tol, what)
     return OrderChoice(n, med, why + note, f"cross-validated {what} fit")
