@@ -55,3 +55,26 @@ def test_overordered_cva_on_a_nearly_noise_free_record_gets_the_stabilising_gain
         assert np.linalg.norm(K - K_ref) <= 1e-5 * np.linalg.norm(K_ref)
     else:  # the oracle lost accuracy (seed 15: 9e-7); ours is the better solution
         assert residual(P, K) < residual(P_ref, K_ref)
+
+
+@pytest.mark.parametrize("order", [19, 20])
+def test_a_riccati_equation_whose_newton_iteration_stalls_still_gets_its_gain(order):
+    # MOESP of 19 and 20 states on the robot arm's last 800 samples (a real record): modes at
+    # 1.003-1.06 and a nearly noise-free output; the doubling reached a relative residual of
+    # 3e-7 and Newton's iteration stalled at 3e-10 to 5e-9 (its Stein solves' floor), so
+    # `sysid.moesp(data, 19)` raised RiccatiError. Oracle: SciPy's Schur solver (6e-12 here).
+    d = sysid.datasets.load_robot_arm()
+    data = sysid.IOData(u=d.u[-800:], y=d.y[-800:])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # unstable modes: StabilityWarning
+        m = sysid.moesp(data, order=order)
+        bare = sysid.moesp(data, order=order, kalman=False)
+    A, C = bare.A, bare.C
+    Q, R, S = (bare.info[k] for k in "QRS")
+    assert 0.0 <= m.info["kalman_residual"] <= 1e-6
+    K, P, _ = sysid._sysid.kalman_gain(A, C, Q, R, S)
+    assert np.max(np.abs(np.linalg.eigvals(A - K @ C))) < 1
+    P_ref = linalg.solve_discrete_are(A.T, C.T, Q, R, s=S)
+    K_ref = (A @ P_ref @ C.T + S) @ np.linalg.inv(C @ P_ref @ C.T + R)
+    assert np.linalg.norm(K - K_ref) <= 1e-4 * np.linalg.norm(K_ref)
+    assert np.linalg.norm(m.K - K) <= 1e-6 * np.linalg.norm(K)  # the model carries that gain

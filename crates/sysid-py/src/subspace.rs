@@ -34,6 +34,7 @@ pub fn identified_dict<'py>(py: Python<'py>, id: &Identified) -> PyResult<Bound<
     d.set_item("stabilized", id.stabilized)?;
     d.set_item("predictor_stabilized", id.predictor_stabilized)?;
     d.set_item("kalman_regularization", id.kalman_regularization)?;
+    d.set_item("kalman_residual", id.kalman_residual)?;
     Ok(d)
 }
 

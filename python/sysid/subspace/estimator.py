@@ -617,6 +617,9 @@ class SubspaceEstimator:
             # the relative shift of Q and R whose Riccati equation K solves (0: the
             # covariances as estimated; the core's riccati::kalman_gain)
             "kalman_regularization": float(res.get("kalman_regularization", 0.0)),
+            # its relative residual at K: at most 1e-9, up to 1e-6 where the solvers stall
+            # on modes near the unit circle
+            "kalman_residual": float(res.get("kalman_residual", 0.0)),
             "Q": res["Q"],
             "R": res["R"],
             "S": res["S"],

@@ -561,6 +561,7 @@ impl ClosedLoop {
             stabilized: false,
             predictor_stabilized,
             kalman_regularization: 0.0,
+            kalman_residual: 0.0,
         })
     }
 }

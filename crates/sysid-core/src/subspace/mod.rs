@@ -152,6 +152,10 @@ pub struct Identified {
     /// The relative shift of the noise covariances whose Riccati equation the Kalman gain
     /// solves (0: the covariances as estimated; see [`crate::riccati::kalman_gain`]).
     pub kalman_regularization: f64,
+    /// Relative residual of that Riccati equation at the returned gain (at most `1e-9` unless
+    /// the solvers stalled; see [`crate::riccati::KalmanSolution::residual`]); 0 without a
+    /// Riccati solve.
+    pub kalman_residual: f64,
 }
 
 /// The weighted SVD of a compressed record, ready to fit models of any order.

@@ -314,7 +314,7 @@ pub fn identify(
             "non-finite estimates; the data may be degenerate for this order and horizon",
         )
     })?;
-    let (k, innovation_cov, kalman_regularization) = if opts.kalman {
+    let (k, innovation_cov, kalman_regularization, kalman_residual) = if opts.kalman {
         let sol = kalman_gain(
             sys.a.as_ref(),
             sys.c.as_ref(),
@@ -322,9 +322,15 @@ pub fn identify(
             r.as_ref(),
             s.as_ref(),
         )?;
-        (Some(sol.k), Some(sol.innovation_cov), sol.regularization)
+        let (regularization, residual) = (sol.regularization, sol.residual);
+        (
+            Some(sol.k),
+            Some(sol.innovation_cov),
+            regularization,
+            residual,
+        )
     } else {
-        (None, None, 0.0)
+        (None, None, 0.0, 0.0)
     };
     Ok(Identified {
         sys,
@@ -336,6 +342,7 @@ pub fn identify(
         stabilized,
         predictor_stabilized: false,
         kalman_regularization,
+        kalman_residual,
     })
 }
 
