@@ -51,6 +51,7 @@ from ..errors import (
     ExcitationError,
     FeedbackWarning,
     OrderError,
+    RiccatiError,
     SysidWarning,
 )
 from ..models.checks import warn_unstable
@@ -63,6 +64,7 @@ from .feedthrough import (
     default_feedthrough,
     warn_if_left_out,
 )
+from .kalman import schur_gain
 from .methods import CLOSED_LOOP, METHODS, _method
 from .scaling import check_scale, in_record_units, scaled_experiments
 from .streaming import compression_info, warn_if_fallback
@@ -593,6 +595,10 @@ class SubspaceEstimator:
             if not self._horizon_note:
                 raise
             raise OrderError(f"{e}{self._horizon_note}") from None
+        except RiccatiError:  # SciPy's Schur solver may still find the stabilising gain
+            res = schur_gain(sub.fit(n, bool(feedthrough), False, bool(stable)))
+            if res is None:
+                raise
         if self.factor.n_inputs:
             # warn (ExcitationWarning) when the input cannot support order n
             warn_excitation(self._excitation_order(2 * n), n, stacklevel=2)
@@ -620,6 +626,8 @@ class SubspaceEstimator:
             # its relative residual at K: at most 1e-9, up to 1e-6 where the solvers stall
             # on modes near the unit circle
             "kalman_residual": float(res.get("kalman_residual", 0.0)),
+            "kalman_solver": res.get("kalman_solver", "doubling and Newton (sysid core)")
+            if kalman else None,
             "Q": res["Q"],
             "R": res["R"],
             "S": res["S"],
