@@ -59,6 +59,25 @@ pub enum SysidError {
         /// Relative tolerance used to decide the rank.
         tol: f64,
     },
+    /// The regressors (or instruments) of a linear-regression estimator are rank deficient:
+    /// the data do not determine the parameters.
+    #[error(
+        "{estimator}: the {columns} regressor columns of each equation have numerical rank \
+         {rank} (relative tolerance {tol:.1e}), so the data do not determine the parameters; \
+         {fix}"
+    )]
+    RegressorRank {
+        /// The estimator (`"arx"`, `"iv4"`).
+        estimator: &'static str,
+        /// Numerical rank found.
+        rank: usize,
+        /// Number of regressor columns (parameters of one equation).
+        columns: usize,
+        /// Relative tolerance used to decide the rank.
+        tol: f64,
+        /// What may help.
+        fix: &'static str,
+    },
     /// The model order is larger than the data matrix supports.
     #[error(
         "order {order} is too large: with a future horizon of {future} and {outputs} output(s) \

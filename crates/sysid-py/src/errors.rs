@@ -13,6 +13,7 @@ fn class_name(e: &SysidError) -> &'static str {
         SysidError::InsufficientData { .. } => "InsufficientDataError",
         SysidError::ShapeMismatch { .. } => "ShapeError",
         SysidError::NotPersistentlyExciting { .. } => "ExcitationError",
+        SysidError::RegressorRank { .. } => "ExcitationError",
         SysidError::OrderTooLarge { .. } => "OrderError",
         SysidError::InvalidArgument { .. } | SysidError::IncompatibleFactors { .. } => "DataError",
         SysidError::NoStabilizingSolution { .. } => "RiccatiError",

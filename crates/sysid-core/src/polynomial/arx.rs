@@ -316,10 +316,13 @@ impl ArxCompressor {
         let dmax = (0..p).map(|d| rs[(d, d)].abs()).fold(0.0, f64::max);
         for d in 0..p {
             if rs[(d, d)].abs().is_nan() || rs[(d, d)].abs() <= 1e-12 * dmax || dmax == 0.0 {
-                return Err(SysidError::NotPersistentlyExciting {
+                return Err(SysidError::RegressorRank {
+                    estimator: "arx",
                     rank: d,
-                    rows: p,
+                    columns: p,
                     tol: 1e-12,
+                    fix: "use lower orders (na, nb), drop constant or duplicated input \
+                          channels, or a richer input (white noise, PRBS, multisine)",
                 });
             }
         }
@@ -429,7 +432,7 @@ impl ArxCompressor {
                     for i in 0..ny {
                         match self.solve_with_factor(r.as_ref(), i, &orders, 0.0, None) {
                             Ok(f) => loss += f.loss,
-                            Err(SysidError::NotPersistentlyExciting { .. }) => deficient = true,
+                            Err(SysidError::RegressorRank { .. }) => deficient = true,
                             Err(e) => return Err(e),
                         }
                     }

@@ -138,20 +138,42 @@ fn check_rank(r: &Mat<f64>) -> Result<()> {
     let full = s.last().is_some_and(|&l| l > 1e-12 * s[0]);
     if !full {
         let rank = s.iter().filter(|&&v| v > 1e-12 * s[0]).count();
-        return Err(SysidError::NotPersistentlyExciting {
+        return Err(SysidError::RegressorRank {
+            estimator: "iv4",
             rank,
-            rows: p,
+            columns: p,
             tol: 1e-12,
+            fix: "the instruments (simulated or projected outputs and the inputs) do not span \
+                  them: use lower orders (na, nb; with several outputs and fewer inputs the \
+                  output lags' instruments are dependent: fit one output at a time), or \
+                  sysid.arx / sysid.oe",
         });
     }
     Ok(())
 }
 
+/// Solves `R theta = v` with `R`'s rows and columns first scaled to unit norm: the rank
+/// check and the solve then see the instruments' and regressors' shapes, not their units (on
+/// a real ball-and-beam record the instruments simulated by the first-stage model are 10^5
+/// times the inputs, and unscaled `R` looked rank-deficient at `1e-12` where the scaled one
+/// is well conditioned). The solution is the same where `R` is regular.
 fn solve(r: &Mat<f64>, v: &[f64]) -> Result<Vec<f64>> {
-    check_rank(r)?;
-    let rhs = Mat::from_fn(v.len(), 1, |a, _| v[a]);
-    let sol = r.partial_piv_lu().solve(&rhs);
-    Ok((0..v.len()).map(|a| sol[(a, 0)]).collect())
+    let p = r.nrows();
+    let inv_norm = |x: f64| {
+        if x > 0.0 && x.is_finite() {
+            1.0 / x
+        } else {
+            1.0
+        }
+    };
+    let dr: Vec<f64> = (0..p).map(|i| inv_norm(r.row(i).norm_l2())).collect();
+    let rows = Mat::from_fn(p, p, |i, j| dr[i] * r[(i, j)]);
+    let dc: Vec<f64> = (0..p).map(|j| inv_norm(rows.col(j).norm_l2())).collect();
+    let scaled = Mat::from_fn(p, p, |i, j| rows[(i, j)] * dc[j]);
+    check_rank(&scaled)?;
+    let rhs = Mat::from_fn(p, 1, |a, _| dr[a] * v[a]);
+    let sol = scaled.partial_piv_lu().solve(&rhs);
+    Ok((0..p).map(|a| dc[a] * sol[(a, 0)]).collect())
 }
 
 /// Splits equation `i`'s parameters into `(a[k], b[j])`.
@@ -511,19 +533,35 @@ pub fn iv4_multi(records: &[IvRecord<'_>], orders: &ArxOrders) -> Result<Iv4Fit>
             },
         }
     };
+    // A stage's IV solve with the instruments of `theta`; where those leave the instrument
+    // matrix singular (a bounded but unstable model's simulation: every lag follows its
+    // growing mode, as on a real ball-and-beam record), with the projection instruments.
+    let iv_stage = |theta: &[Vec<f64>], l: Option<&[Vec<f64>]>| -> Result<(Vec<Vec<f64>>, bool)> {
+        let z = instruments(theta)?;
+        match solve_all(&stage(orders, &recs, Some(&z), l)) {
+            Err(SysidError::RegressorRank { .. }) if fixed.is_none() => {
+                let z = projected(&recs)?;
+                Ok((solve_all(&stage(orders, &recs, Some(&z), l))?, true))
+            }
+            other => Ok((other?, false)),
+        }
+    };
     // Stage 1: least squares (open loop) or IV with the reference instruments.
     let th1 = solve_all(&stage(orders, &recs, fixed.as_deref(), None))?;
     // Stage 2: instruments from the stage-1 model.
-    let z1 = instruments(&th1)?;
-    let th2 = solve_all(&stage(orders, &recs, Some(&z1), None))?;
+    let (th2, _) = iv_stage(&th1, None)?;
     // Stage 3: AR prefilters of the stage-2 equation errors.
     let l = prefilters(orders, &th2, &recs);
     // Stage 4: prefiltered IV with instruments from the stage-2 model.
-    let z2 = instruments(&th2)?;
-    let th4 = solve_all(&stage(orders, &recs, Some(&z2), Some(&l)))?;
-    // Covariance at the estimate: prefilter and instruments rebuilt from it.
+    let (th4, projection) = iv_stage(&th2, Some(&l))?;
+    // Covariance at the estimate: prefilter and instruments rebuilt from it (the projection
+    // where stage 4 needed it).
     let l4 = prefilters(orders, &th4, &recs);
-    let z4 = instruments(&th4)?;
+    let z4 = if projection {
+        projected(&recs)?
+    } else {
+        instruments(&th4)?
+    };
     let sums = stage(orders, &recs, Some(&z4), Some(&l4));
     let mut covariance = Vec::with_capacity(ny);
     let mut noise_variance = Vec::with_capacity(ny);

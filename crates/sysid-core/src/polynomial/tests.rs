@@ -669,3 +669,21 @@ fn marginal_likelihood_holds_where_the_formed_covariance_is_indefinite() {
         }
     }
 }
+
+#[test]
+fn iv4_rank_loss_is_a_regressor_rank_error_that_names_iv4() {
+    // a constant input cannot determine b_0..b_3: the error names the estimator and the fix,
+    // not a subspace horizon (the message it gave before)
+    let n = 500;
+    let u = vec![1.0; n];
+    let mut y = vec![0.0; n];
+    for t in 1..n {
+        y[t] = 0.5 * y[t - 1] + u[t - 1] + 0.1 * ((t * 7919 % 13) as f64 - 6.0);
+    }
+    match super::iv::iv4(&y, &u, 2, 4, 1, None) {
+        Err(crate::error::SysidError::RegressorRank {
+            estimator, columns, ..
+        }) => assert!(estimator == "iv4" && columns == 6),
+        other => panic!("expected a regressor rank error, got {other:?}"),
+    }
+}
