@@ -30,7 +30,7 @@ import numpy as np
 from .._checks import as_int, experiment_arrays, require_inputs_vary
 from ..data.iodata import require_record
 from ..data.offsets import check_offsets
-from ..errors import DataError, NumericalError
+from ..errors import DataError, InsufficientDataError, NumericalError
 from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
 from ..subspace.feedthrough import check_feedthrough, default_feedthrough, held_out_decision
@@ -109,6 +109,24 @@ def _reduce(big: StateSpaceModel, su: np.ndarray, ysd: np.ndarray, orders: list[
                                  dt=big.dt, input_names=big.input_names,
                                  output_names=big.output_names)
     return out
+
+
+def _unstable_arx(big: StateSpaceModel) -> DataError | None:
+    """The error to raise when no order could be chosen because the ARX model itself is
+    unstable (every reduced model keeps its unstable poles, so none simulates a held-out
+    block), or None when that is not the cause."""
+    rho = np.abs(big.poles())
+    unstable = int(np.sum(rho >= 1.0))
+    if not unstable:
+        return None
+    return DataError(
+        f"no order could be chosen: the regularised ARX model ({big.nstates} states) has "
+        f"{unstable} poles outside the unit circle (largest modulus {rho.max():.4g}), which "
+        f"balanced truncation keeps in every reduced model, so none simulates the held-out "
+        f"blocks. Unless the process itself is unstable, the ARX structure does not "
+        f"suit this record (under feedback or with an integrator an ARX fit can be "
+        f"unstable where the plant is not): use sysid.ssest(data, focus='simulation') or "
+        f"sysid.oe, or pass an order >= {unstable} for the unstable model")
 
 
 def _stable_predictor(model: StateSpaceModel, lam: np.ndarray) -> dict[str, Any] | None:
@@ -311,9 +329,12 @@ def ssregest(
                         "arx_orders")
     choice = None
     if len(models) > 1:
-        if table is None:
-            table = _held_out(data, sorted(models), na, kernel, nk, reg)
-        n, choice = _choose(models, {o: table[o] for o in models}, data)
+        try:
+            if table is None:
+                table = _held_out(data, sorted(models), na, kernel, nk, reg)
+            n, choice = _choose(models, {o: table[o] for o in models}, data)
+        except InsufficientDataError as e:
+            raise _unstable_arx(big) or e from None
     else:
         n = next(iter(models))
     model = models[n]
