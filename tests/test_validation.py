@@ -431,3 +431,18 @@ def test_the_default_lag_of_the_report_and_command_line_keeps_the_independence_t
     assert res.independence[0] is True
     zero = sysid.StateSpaceModel([[0.0]], np.zeros((1, 5)), [[0.0]], dt=1.0)  # ignores u
     assert sysid.residuals(zero, d, max_lag=lag).independence[0] is False
+
+
+def test_residuals_and_error_spectrum_take_matlabs_argument_order_too():
+    # MATLAB writes resid(data, sys); sysid.residuals(data, model) raised "model must satisfy
+    # sysid.Model ... IOData lacks simulate" on a first try with the dryer record
+    d = sysid.datasets.load_dryer()
+    data = sysid.IOData(u=d.u - d.u.mean(0), y=d.y - d.y.mean(0), dt=d.dt)
+    m = sysid.n4sid(data, 3)
+    a, b = sysid.residuals(m, data), sysid.residuals(data, m)
+    np.testing.assert_array_equal(np.concatenate(a.e), np.concatenate(b.e))
+    assert a.is_white == b.is_white
+    s1, s2 = sysid.error_spectrum(m, data), sysid.error_spectrum(data, m)
+    np.testing.assert_array_equal(s1.worst_frequency(), s2.worst_frequency())
+    with pytest.raises(sysid.DataError, match="model must satisfy"):
+        sysid.residuals(data, data)  # two records: still the clear error

@@ -59,6 +59,15 @@ X0 = Union[str, np.ndarray, None]
 
 
 # -- argument handling ------------------------------------------------------------------
+def _model_first(model: Any, data: Any) -> tuple[Any, Any]:
+    """``(model, data)``, also when given in MATLAB's order (``resid(data, sys)``): a
+    record (an :class:`IOData` or a ``(u, y)`` pair) followed by a model."""
+    is_record = isinstance(model, IOData) or (isinstance(model, tuple) and len(model) == 2)
+    if is_record and callable(getattr(data, "simulate", None)):
+        return data, model
+    return model, data
+
+
 def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndarray]]]:
     """The model at the data's rate and the experiments of ``data`` as (u, y) pairs,
     checked against the model's channels.
@@ -71,7 +80,11 @@ def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndar
     A continuous-time model (``dt == 0``) is replaced by the model at the data's sample
     time: :meth:`~sysid.ContinuousStateSpace.sampled` (exact hold, continuous initial
     state), or ``c2d(dt)`` for another continuous class.
+
+    The arguments in MATLAB's order (``resid(data, sys)``: the record first, then a model)
+    are taken as such: a record and a model cannot be mistaken for each other.
     """
+    model, data = _model_first(model, data)
     check_model(model)
     if isinstance(model, TrendedModel):  # the inner model on the record less the trend
         if isinstance(data, tuple) and len(data) == 2:
@@ -732,6 +745,7 @@ def error_spectrum(model: Any, data: Any, *, x0: X0 = "estimate",
     >>> bool(abs(s.worst_frequency()[0] - 0.5 / (2 * np.pi)) < 0.01)
     True
     """
+    model, data = _model_first(model, data)  # MATLAB's order accepted too
     cmp = compare_quiet(model, data, None, x0=x0)
     shortest = min(y.shape[0] for y in cmp.y)
     if nperseg is None:

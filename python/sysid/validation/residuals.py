@@ -256,6 +256,7 @@ def residuals(model: Any, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
         model (without it the errors are simulation errors, coloured whenever there is
         process noise).
     data : IOData or (u, y)
+        The record (MATLAB's order, ``residuals(data, model)``, is accepted too).
     max_lag : int
         Largest lag ``M`` tested.
     x0 : "estimate", "zero", "model" or array
