@@ -523,7 +523,9 @@ class SubspaceEstimator:
             Estimate the noise model (``K`` from the Riccati equation of the residuals'
             covariances, innovation covariance; solved again in a scaled basis with Newton's
             refinement where the doubling fails, a shift of the covariances that had to be
-            kept in ``info["kalman_regularization"]``).
+            kept in ``info["kalman_regularization"]``, the equation's residual at ``K`` in
+            ``info["kalman_residual"]``; where the core's solvers refuse, SciPy's Schur
+            solver, ``info["kalman_solver"]``, :mod:`sysid.subspace.kalman`).
         stable : bool
             Enforce a stable ``A`` (Maciejowski's zero-padded shift); recorded in ``info``.
         x0 : bool
