@@ -44,7 +44,9 @@ def warn_boundary(A: np.ndarray, n: int, stacklevel: int = 3, held: bool = True)
         p, n, "the refined model", "the search keeps A stable" if held else None,
         integrating=("identify the differenced output or use focus='prediction' with "
                      "enforce_stability=False"),
-        lower="order='auto'", stacklevel=stacklevel + 1)
+        lower="order='auto' chooses one on data held out of the fit; a model of an "
+              "automatic order holds every order's score in info['order_selection']",
+        stacklevel=stacklevel + 1)
 
 
 def warn_poles_at_bound(poles: np.ndarray, n: int, model: str, bound: str | None, *,
