@@ -4,6 +4,8 @@ through the model protocol."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from _guides import run_guide
@@ -400,3 +402,24 @@ def test_a_free_run_that_grows_without_overflowing_is_a_divergence():
     with pytest.warns(sysid.StabilityWarning, match="grows to .* times the measured one"):
         m = sysid.nlarx(est, 2, 2, 1)
     assert m.info["free_run"]["diverged"]
+
+
+def test_compare_does_not_call_a_bounded_narx_simulation_unstable_by_its_linearisation():
+    # y(t) = 1.2 y(t-1) - 0.2 y(t-1)^3 + u(t-1): the linearisation at zero has a pole at 1.2,
+    # the simulation stays near the equilibria +-1. compare warned "the NARXModel is unstable
+    # (a pole of modulus 1.2): its simulation grows without bound" on a 100 % fit (on the
+    # DaISy CSTR record: "a pole of modulus 26.23" beside a 98.1 % validation fit)
+    def record(seed):
+        rng = np.random.default_rng(seed)
+        u, y = 0.1 * rng.standard_normal(1500), np.zeros(1500)
+        y[0] = 1.0
+        for t in range(1, 1500):
+            y[t] = 1.2 * y[t - 1] - 0.2 * y[t - 1] ** 3 + u[t - 1]
+        return sysid.IOData(u=u, y=y)
+
+    m = sysid.nlarx(record(0), 1, 1, 1, basis=sysid.PolynomialBasis(degree=3))
+    assert np.max(np.abs(m.poles())) == pytest.approx(1.2, abs=1e-6)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sysid.StabilityWarning)
+        r = sysid.compare(record(1), m)
+    assert r.mean_fit > 99.9

@@ -139,7 +139,12 @@ def unstable_pole(model: Any, samples: int = 1, dt: float = 1.0) -> str | None:
     """A phrase naming ``model``'s most unstable pole, when its mode grows more than
     :data:`GROWTH` times over ``samples`` samples of ``dt`` seconds (modulus above 1 in
     discrete time, real part above 0 in continuous time), or ``None`` when it has none or
-    no poles to read (a NARX model: its divergence, if any, shows in the simulation)."""
+    no poles to read. A nonlinear model's poles are those of a linearisation (a NARX model's
+    at zero, a nonlinear grey-box model's at a point): they say nothing of its simulation's
+    growth (a NARX model ``y(t) = 1.2 y(t-1) - 0.2 y(t-1)^3 + u(t-1)`` has a pole at 1.2 and
+    a bounded simulation), whose divergence, if any, shows in the simulation itself: None."""
+    if callable(getattr(model, "linearize", None)) or hasattr(model, "narx"):
+        return None
     try:
         p = np.asarray(model.poles(), dtype=complex).ravel()
     except Exception:  # noqa: BLE001 - no poles to read (a nonlinear model): divergence says
