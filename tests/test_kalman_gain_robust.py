@@ -128,3 +128,23 @@ def test_a_core_riccati_failure_falls_back_to_the_schur_solver(monkeypatch):
     assert np.allclose(m.K, ref.K, rtol=1e-6, atol=1e-9)
     assert np.max(np.abs(np.linalg.eigvals(m.A - m.K @ m.C))) < 1
     assert ref.info["kalman_solver"].startswith("doubling")
+
+
+def test_the_python_kalman_gain_falls_back_to_the_schur_solver(monkeypatch):
+    # one helper for Python code that needs a stabilising gain (ssregest's noise model too):
+    # the core's solvers first, SciPy's Schur solver where they refuse, the core's error
+    # where neither solves the equation accurately
+    from sysid.subspace import kalman
+
+    A, C = np.array([[0.9, 0.2], [0.0, 0.5]]), np.array([[1.0, 0.0]])
+    Q, R, S = np.eye(2), np.eye(1), np.zeros((2, 1))
+    K_core, innov_core = kalman.kalman_gain(A, C, Q, R, S)
+
+    def refuses(*a):
+        raise sysid.RiccatiError("no stabilising solution (emulated)")
+
+    monkeypatch.setattr(sysid._sysid, "kalman_gain", refuses)
+    K, innov = kalman.kalman_gain(A, C, Q, R, S)
+    assert np.allclose(K, K_core, rtol=1e-8) and np.allclose(innov, innov_core, rtol=1e-8)
+    with pytest.raises(sysid.RiccatiError, match="emulated"):  # unstable, unobservable mode
+        kalman.kalman_gain(np.diag([1.5, 0.5]), np.array([[0.0, 1.0]]), Q, R, S)

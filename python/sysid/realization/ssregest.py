@@ -134,7 +134,7 @@ def _stable_predictor(model: StateSpaceModel, lam: np.ndarray) -> dict[str, Any]
     noise model with zeros outside the unit circle): ``K`` becomes the stabilising Kalman
     gain of the same noise spectrum (``Q = K L K^T``, ``S = K L``, ``R = L``, its
     minimum-phase factor), as the closed-loop subspace fits do; what changed is returned."""
-    from .. import _sysid
+    from ..subspace.kalman import kalman_gain
 
     A, C, K = model.A, model.C, model.K
     before = float(np.max(np.abs(np.linalg.eigvals(A - K @ C)))) if A.size else 0.0
@@ -146,7 +146,7 @@ def _stable_predictor(model: StateSpaceModel, lam: np.ndarray) -> dict[str, Any]
     # iteration reach the stabilising solution
     q = q + 1e-10 * max(float(np.trace(q)) / len(q), np.finfo(float).tiny) * np.eye(len(q))
     try:
-        k_new, _, re = _sysid.kalman_gain(A, C, q, lam, K @ lam)
+        k_new, re = kalman_gain(A, C, q, lam, K @ lam)
     except Exception:  # noqa: BLE001 - no stabilising solution: a model without noise path
         model.K = None
         return {"before": before, "after": None,

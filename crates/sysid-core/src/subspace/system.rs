@@ -322,12 +322,11 @@ pub fn identify(
             r.as_ref(),
             s.as_ref(),
         )?;
-        let (regularization, residual) = (sol.regularization, sol.residual);
         (
             Some(sol.k),
             Some(sol.innovation_cov),
-            regularization,
-            residual,
+            sol.regularization,
+            sol.residual,
         )
     } else {
         (None, None, 0.0, 0.0)
