@@ -32,7 +32,7 @@ import numpy as np
 from ..errors import DataError
 from .uncertainty import _METHODS, UncertaintyWarning, _complex_std, _match, require
 
-__all__ = ["coincident_poles", "damping_std", "pole_jacobian", "pole_std"]
+__all__ = ["coincident_poles", "damping_std", "pole_groups", "pole_jacobian", "pole_std"]
 
 
 def pole_jacobian(model: Any, *, step: float = 1e-3) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -41,7 +41,8 @@ def pole_jacobian(model: Any, *, step: float = 1e-3) -> tuple[np.ndarray, np.nda
 
     State-space models use ``d lambda_i = w_i^H dA v_i / (w_i^H v_i)`` with the derivative of
     ``A`` along each identifiable direction; other models difference their ``poles()`` and
-    match them to the nominal ones. See :func:`coincident_poles` for the mask.
+    match them to the nominal ones, root by root of each polynomial (:func:`pole_groups`).
+    See :func:`coincident_poles` for the mask, taken within each polynomial's roots.
     """
     unc = require(model)
     nominal = unc.build(unc.theta)
@@ -56,12 +57,46 @@ def pole_jacobian(model: Any, *, step: float = 1e-3) -> tuple[np.ndarray, np.nda
         denom = np.einsum("ij,ij->j", W.conj(), V)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             G = np.einsum("ai,abk,bi->ik", W.conj(), dA, V) / denom[:, None]
+        groups = _whole(lam.size)
     else:
         lam = np.asarray(nominal.poles(), dtype=complex)
-        _, G = unc.scaled_jacobian(lambda m: _match(lam, np.asarray(m.poles(), complex)),
-                                   step=step)
+        groups = pole_groups(nominal, lam.size)
+        _, G = unc.scaled_jacobian(
+            lambda m: _match_groups(lam, np.asarray(m.poles(), complex), groups), step=step)
         G = G.astype(complex)
-    return lam.astype(complex), G, coincident_poles(lam, np.abs(_complex_std(G)))
+    sd = np.abs(_complex_std(G))
+    bad = np.zeros(lam.size, bool)
+    for g in groups:
+        bad[g] = coincident_poles(lam[g], sd[g])
+    return lam.astype(complex), G, bad
+
+
+def _whole(n: int) -> list[slice]:
+    return [slice(0, n)]
+
+
+def pole_groups(model: Any, n: int) -> list[slice]:
+    """The slices of ``model.poles()`` (``n`` poles) whose members are roots of one
+    polynomial: the model's ``pole_groups()`` (a polynomial or transfer-function model's
+    denominators, whose roots are independent of each other's), else one group. Poles only
+    coincide, and draws are only matched, within a group."""
+    sizes = getattr(model, "pole_groups", None)
+    if not callable(sizes):
+        return _whole(n)
+    edges = np.cumsum([0, *(int(k) for k in sizes())])
+    if edges[-1] != n:
+        return _whole(n)
+    return [slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]) if b > a]
+
+
+def _match_groups(lam: np.ndarray, p: np.ndarray, groups: list[slice]) -> np.ndarray:
+    """``p`` reordered to match ``lam``, each group among its own roots."""
+    if p.size != lam.size:
+        return _match(lam, p)     # raises: the number of poles changed
+    out = np.empty_like(p)
+    for g in groups:
+        out[g] = _match(lam[g], p[g])
+    return out
 
 
 def coincident_poles(lam: Any, sd: Any) -> np.ndarray:
@@ -108,7 +143,9 @@ def _pole_draws(model: Any, lam: np.ndarray, n: int = _MC_DRAWS, rng: Any = 0) -
     """Poles of ``n`` models drawn from the parameter covariance, matched to ``lam``
     (``(n, len(lam))``); the seed is fixed so that reports are reproducible."""
     unc = require(model)
-    return np.array([_match(lam, np.asarray(m.poles(), complex)) for m in unc.sample(n, rng)])
+    groups = pole_groups(unc.build(unc.theta), lam.size)
+    return np.array([_match_groups(lam, np.asarray(m.poles(), complex), groups)
+                     for m in unc.sample(n, rng)])
 
 
 def _partners(lam: np.ndarray) -> np.ndarray:

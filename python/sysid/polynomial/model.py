@@ -357,13 +357,35 @@ class PolynomialModel(ModelMixin):
             from ..models.pole_uncertainty import pole_std
 
             return pole_std(self, method)
+        r = self._pole_sets()
+        return np.concatenate(r) if r else np.zeros(0)
+
+    def _pole_sets(self) -> list[np.ndarray]:
+        """The roots of each polynomial in :meth:`poles`' order: ``det A`` (coupled) or each
+        ``A_i``, then each ``F_ij``."""
         r = [self._coupled_poles()] if self.coupled else []
         for i in range(self.n_outputs):
             if not self.coupled:
                 r.append(np.roots(_monic(self.a[i][i])))
             for j in range(self.n_inputs):
                 r.append(np.roots(_monic(self.f[i][j])))
-        return np.concatenate(r) if r else np.zeros(0)
+        return r
+
+    def pole_groups(self) -> list[int]:
+        """How many of :meth:`poles` each polynomial contributes, in their order: the roots of
+        different polynomials (``A_i``, ``F_ij``) are independent, so a pole only coincides
+        with a root of its own polynomial (:func:`sysid.models.pole_uncertainty.pole_std`).
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> m = sysid.PolynomialModel(a=[[np.zeros(0)]], b=[[np.ones(1), np.ones(1)]],
+        ...                           f=[[np.array([-0.5]), np.array([-0.5, 0.1])]],
+        ...                           nk=[[1, 1]], dt=1.0)
+        >>> m.pole_groups()
+        [0, 1, 2]
+        """
+        return [int(r.size) for r in self._pole_sets()]
 
     def is_stable(self) -> bool:
         """True when every pole (:meth:`poles`: the roots of ``A F``, the measured part's, as
