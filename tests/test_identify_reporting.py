@@ -145,6 +145,29 @@ def test_the_identified_model_gives_pole_and_damping_std_like_its_state_space_mo
     np.testing.assert_allclose(table.zeta, sysid.damp(inner, std=True).zeta)
 
 
+def test_the_identified_model_gives_step_gain_and_zeros_with_std_like_its_state_space_model():
+    # res.model.step(std=True) raised TypeError, res.model.dcgain and .zeros did not exist,
+    # and a detrended model's freqresp(std=True) raised TypeError
+    u, y = _resonant(600, 8)
+    data = sysid.IOData(u=u, y=y)
+    inner = sysid.pem(data, sysid.n4sid(data, 2), focus="simulation")
+    model = IdentifiedModel(inner, [2.0], [5.0])
+    r, r0 = model.step(40, std=True), inner.step(40, std=True)
+    np.testing.assert_allclose(r.y, r0.y)
+    np.testing.assert_allclose(r.std, r0.std)
+    g, gs = model.dcgain(std=True)
+    g0, gs0 = inner.dcgain(std=True)
+    np.testing.assert_allclose(g, g0)
+    np.testing.assert_allclose(gs, gs0)
+    assert np.all(gs > 0)
+    np.testing.assert_allclose(model.zeros(), inner.zeros())
+    _, tr = sysid.detrend(data, "mean", return_trend=True)
+    H, Hs = tr.attach(inner).freqresp([0.1, 0.5], std=True)
+    H0, Hs0 = inner.freqresp([0.1, 0.5], std=True)
+    np.testing.assert_allclose(H, H0)
+    np.testing.assert_allclose(Hs, Hs0)
+
+
 def test_to_control_names_what_to_pass_for_the_identified_model():
     m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
     wrapped = IdentifiedModel(m, [1.0], [2.0])

@@ -106,10 +106,21 @@ class IdentifiedModel:
         with its standard deviations, as :meth:`StateSpaceModel.freqresp`."""
         return self.statespace.freqresp(omega, std=std)
 
-    def step(self, n_samples: int | None = None) -> Any:
+    def step(self, n_samples: int | None = None, std: bool = False) -> Any:
         """Step response of the dynamics (:attr:`statespace`, from the operating point, as
-        MATLAB's ``step``): the change of the outputs for a unit change of each input."""
-        return self.statespace.step(n_samples)
+        MATLAB's ``step``): the change of the outputs for a unit change of each input;
+        ``std=True``: with its standard deviations, as :meth:`StateSpaceModel.step`."""
+        return self.statespace.step(n_samples, std=std)
+
+    def dcgain(self, std: bool = False) -> Any:
+        """Steady-state gain of the dynamics (:attr:`statespace`: output change per unit input
+        change, offsets do not enter it); ``std=True``: ``(gain, std)``, as
+        :meth:`StateSpaceModel.dcgain`."""
+        return self.statespace.dcgain(std=std)
+
+    def zeros(self) -> np.ndarray:
+        """Transmission zeros of :attr:`statespace` (offsets do not move them)."""
+        return np.asarray(self.statespace.zeros())
 
     def impulse(self, n_samples: int | None = None) -> Any:
         """Impulse response of the dynamics (:attr:`statespace`)."""

@@ -108,8 +108,11 @@ class TrendedModel(ModelMixin):
         out = self.model.predict(du, dy, horizon, **kw)
         return self.trend.restore_outputs(out, self.dt)
 
-    def freqresp(self, omega: Any) -> np.ndarray:
-        """The inner model's frequency response (a trend does not change it)."""
+    def freqresp(self, omega: Any, std: bool = False) -> Any:
+        """The inner model's frequency response (a trend does not change it); ``std=True``:
+        with its standard deviations, as the inner model's ``freqresp``."""
+        if std:
+            return self.model.freqresp(omega, std=True)
         return np.asarray(self.model.freqresp(omega))
 
     def poles(self, std: bool = False, method: str = "linear") -> Any:
