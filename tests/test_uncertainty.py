@@ -255,6 +255,98 @@ def test_distinct_poles_with_large_uncertainty_keep_their_first_order_std():
     np.testing.assert_allclose(np.sort(t.wn_std), np.sort(0.07 / (p.real * 0.1)), rtol=1e-4)
 
 
+def test_poles_of_different_polynomials_never_coincide():
+    """A multi-input OE model on the winding record (5 inputs, 2 outputs) warned that 11 poles
+    "coincide with another pole" and reported Monte Carlo values: poles of different ``F_ij``
+    that are close in value. Roots of different polynomials are independent: each pole's std
+    is its own polynomial's first-order value, as if that polynomial were fitted alone; only
+    roots of one polynomial can coincide."""
+    def build(t):
+        return sysid.PolynomialModel(
+            a=[[np.zeros(0)]], b=[[np.array([1.0]), np.array([0.5])]],
+            f=[[np.array([t[0]]), np.array([t[1], t[2]])]], nk=[[1, 1]], dt=1.0)
+    f2 = np.convolve([1.0, -0.6005], [1.0, 0.3])[1:]       # roots 0.6005 and -0.3
+    theta = np.r_[-0.6, f2]                                 # F1's root 0.6
+    P = np.diag([1e-4, 4e-4, 4e-4])
+    m = build(theta)
+    m.uncertainty = ParameterUncertainty(theta, P, build)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        p, sd = m.poles(std=True)
+        t = sysid.damp(m, std=True)
+    assert list(t.std_method) == ["linear"] * 3
+    np.testing.assert_allclose(p[0], 0.6)
+    np.testing.assert_allclose(sd[0].real, 0.01)
+    # F2 alone: the same std for its two roots
+    def alone(t):
+        return sysid.PolynomialModel(a=[[np.zeros(0)]], b=[[np.array([0.5])]],
+                                     f=[[np.array(t)]], nk=[[1]], dt=1.0)
+    m2 = alone(f2)
+    m2.uncertainty = ParameterUncertainty(f2, P[1:, 1:], alone)
+    p2, sd2 = m2.poles(std=True)
+    np.testing.assert_allclose(p[1:], p2, atol=1e-12)
+    np.testing.assert_allclose(sd[1:], sd2, rtol=1e-6)
+    # roots of one polynomial still coincide: F2 with a double root at 0.6
+    near = np.r_[-0.6, np.convolve([1.0, -0.6], [1.0, -0.6001])[1:]]
+    m3 = build(near)
+    m3.uncertainty = ParameterUncertainty(near, P, build)
+    with pytest.warns(UncertaintyWarning, match="2 pole"):
+        m3.poles(std=True)
+    # the same for a transfer function's denominators, channel by channel
+    def tf(t):
+        return sysid.TransferFunction([[[1.0], [1.0]]], [[[1.0, t[0]], [1.0, t[1]]]], dt=1.0)
+    g = tf([-0.6, -0.6005])
+    g.uncertainty = ParameterUncertainty([-0.6, -0.6005], 1e-4 * np.eye(2), tf)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        np.testing.assert_allclose(g.poles(std=True)[1].real, [0.01, 0.01], rtol=1e-6)
+
+
+def test_a_quantity_undefined_on_one_side_of_the_estimate_gets_a_one_sided_derivative():
+    """procest on a real record (a pole at -2.7e8, its time constant's std far larger than
+    itself) raised "A has non-finite entries" from step(std=True): a model 0.001 std away
+    was unstable. The derivative is taken on the side where the quantity exists; with
+    neither side, the std is inf and an UncertaintyWarning says why."""
+    from sysid.errors import NumericalError
+
+    unc = ParameterUncertainty([0.5], [[1e-4]],
+                               lambda t: sysid.StateSpaceModel([[t[0]]], [[1.0]], [[1.0]]))
+
+    def square_within(lo, hi):
+        def fn(m):
+            if not lo <= m.A[0, 0] <= hi:
+                raise NumericalError("simulate", "the simulated output overflowed")
+            return m.A[0, 0] ** 2
+        return fn
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        _, G = unc.scaled_jacobian(square_within(0.0, 0.5))   # only the lower side exists
+    np.testing.assert_allclose(abs(G[0, 0]), 2 * 0.5 * 0.01, rtol=1e-3)
+    with pytest.warns(UncertaintyWarning, match="both sides"):
+        _, G = unc.scaled_jacobian(square_within(0.5, 0.5))   # neither side
+    assert np.isinf(G[0, 0])
+
+
+def test_a_near_integrator_does_not_stretch_the_step_horizon_to_years():
+    """tfest on a real record fitted a pole at -5.5e-12 beside dynamics at 1e-3 rad/s: the
+    default step horizon (five time constants of the slowest pole) was 1e12 s, and
+    step(std=True) overflowed on a model within the uncertainty. Such a pole acts as an
+    integrator: the horizon follows the other poles."""
+    den = np.convolve([1.0, 5e-12], [1.0, 0.01])
+    g = sysid.TransferFunction([[[0.01]]], [[den]])
+    r = g.step()
+    assert 400.0 < r.t[-1] < 600.0                   # five time constants of the 0.01 pole
+    assert r.y[-1, 0, 0] > r.y[len(r.t) // 2, 0, 0]  # still rising: the integrator shows
+
+    def build(t):
+        return sysid.TransferFunction([[[0.01]]], [[np.convolve([1.0, t[0]], [1.0, 0.01])]])
+    g.uncertainty = ParameterUncertainty([5e-12], [[1e-8]], build)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rs = g.step(std=True)
+    assert np.all(np.isfinite(rs.std)) and rs.std[-1, 0, 0] > 0
+
+
 @settings(max_examples=20, deadline=None)
 @given(st.integers(0, 10_000))
 def test_std_invariant_under_similarity_and_reparameterisation(seed):

@@ -50,7 +50,7 @@ from ..errors import DataError, NumericalError
 from .discretisation import expm, hold_blocks
 from .linear import transmission_zeros
 from .matched import matched_c2d, matched_d2c
-from .protocol import ModelMixin, TimeResponse, continuous_grid
+from .protocol import ModelMixin, TimeResponse, continuous_grid, slowest_decay
 from .statespace import StateSpaceModel, finite_dcgain, ss_parameter_count
 
 __all__ = ["ContinuousStateSpace", "SampledContinuous", "c2d", "d2c"]
@@ -238,8 +238,7 @@ class ContinuousStateSpace(ModelMixin):
         return self.simulate(u, t, dt=dt, method=method, x0=x0)
 
     def _grid(self, n_samples: int | None, dt: float | None) -> tuple[int, float]:
-        re = -self.poles().real
-        slow = float(np.min(re[re > 0])) if np.any(re > 0) else 0.1
+        slow = slowest_decay(self.poles()) or 0.1
         t_final = 5.0 / slow  # e^-5 < 1 %
         step = None if dt is None else _sample_time(None, dt, 1)
         return continuous_grid(self.poles(), t_final, n_samples, step, 100000)

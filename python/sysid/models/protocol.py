@@ -194,6 +194,28 @@ def default_length(model: Any, n_samples: int | None) -> int:
     return int(min(max(n, 20), 10000))
 
 
+def slowest_decay(poles: Any) -> float:
+    """The slowest decay rate (1/s) among a continuous model's poles, integrators left out:
+    the horizon of its default responses is five of its time constants. A pole whose rate is
+    below ``1e-6`` of the median rate acts as an integrator over any horizon the others
+    need (a fitted pole at ``-5e-12`` beside dynamics at ``1e-3`` rad/s set a horizon of
+    ``1e12`` s, over which a model within the estimate's uncertainty overflowed); 0 when no
+    pole decays.
+
+    Examples
+    --------
+    >>> slowest_decay([-5e-12, -2e-3, -0.03 + 0.1j, -0.03 - 0.1j])
+    0.002
+    >>> slowest_decay([0.0, 1e-3])
+    0.0
+    """
+    rate = -np.real(np.asarray(poles, complex).ravel())
+    rate = rate[rate > 0]
+    if rate.size == 0:
+        return 0.0
+    return float(np.min(rate[rate >= 1e-6 * np.median(rate)]))
+
+
 def continuous_grid(poles: Any, t_final: float, n_samples: int | None, dt: float | None,
                     cap: int) -> tuple[int, float]:
     """Samples and step of a continuous model's default response grid over ``t_final``:

@@ -33,6 +33,7 @@ array([0.01, 0.02])
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Sequence
 from typing import Any, NamedTuple
 
@@ -324,13 +325,45 @@ class ParameterUncertainty(HTMLResult):
         of the covariance (central differences with steps ``step * sqrt(lambda_k)``). ``fn``
         may return complex values (then ``G`` is complex).
         """
+        from ..errors import NonFiniteError, NumericalError
+
         value = np.asarray(fn(self.build(self.theta)))
         flat = value.ravel()
         hs, plus, minus = self._perturbed(step)
         G = np.zeros((flat.size, len(hs)), dtype=complex if np.iscomplexobj(flat) else float)
+        failed: list[str] = []
         for k, (h, mp, mm) in enumerate(zip(hs, plus, minus)):
-            d = (np.asarray(fn(mp)).ravel() - np.asarray(fn(mm)).ravel()) / (2 * h)
+            # a model this close to the estimate may have no such quantity (its simulation
+            # overflows, its matrices are not finite): a one-sided difference on the other
+            # side, and no finite std when neither side has one
+            ends: list[np.ndarray | None] = []
+            err = ""
+            for m in (mp, mm):
+                try:
+                    ends.append(np.asarray(fn(m)).ravel())
+                except (NumericalError, NonFiniteError) as e:
+                    ends.append(None)
+                    err = str(e)
+            if ends[0] is not None and ends[1] is not None:
+                d = (ends[0] - ends[1]) / (2 * h)
+            elif ends[0] is not None:
+                d = (ends[0] - flat) / h
+            elif ends[1] is not None:
+                d = (flat - ends[1]) / h
+            else:
+                failed.append(err)
+                G[:, k] = np.inf
+                continue
             G[:, k] = d * np.sqrt(self._w[k])
+        if failed:
+            warnings.warn(
+                f"models {step:g} standard deviations from the estimate on both sides along "
+                f"{len(failed)} of the covariance's {len(hs)} directions cannot be evaluated "
+                f"({failed[0]}): "
+                "the estimate is that close to an unstable or degenerate model, so the "
+                "standard deviations that depend on them are reported as inf; refit with "
+                "fewer parameters, or check with method='monte-carlo'",
+                UncertaintyWarning, stacklevel=3)
         return value, G
 
     def jacobian(self, fn: Callable[[Any], Any], *, step: float = 1e-3) -> np.ndarray:

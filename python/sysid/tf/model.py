@@ -20,7 +20,7 @@ import numpy as np
 from .._checks import as_2d, as_dt
 from ..errors import DataError, ShapeError
 from ..greybox.delays import shift_taps
-from ..models.protocol import ModelMixin, TimeResponse, continuous_grid
+from ..models.protocol import ModelMixin, TimeResponse, continuous_grid, slowest_decay
 from ..models.statespace import StateSpaceModel
 from .sampling import canonical, sample_pair, split_delay
 
@@ -211,6 +211,19 @@ class TransferFunction(ModelMixin):
             return pole_std(self, method)
         p = [np.roots(d) for row in self.den for d in row]
         return np.concatenate(p).astype(complex) if p else np.zeros(0, complex)
+
+    def pole_groups(self) -> list[int]:
+        """How many of :meth:`poles` each denominator contributes, channel by channel (row
+        by row): the roots of different denominators are independent, so a pole only
+        coincides with a root of its own (:func:`sysid.models.pole_uncertainty.pole_std`).
+
+        Examples
+        --------
+        >>> import sysid
+        >>> sysid.TransferFunction([[[1.0], [2.0]]], [[[1.0, 1.0], [1.0, 3.0, 2.0]]]).pole_groups()
+        [1, 2]
+        """
+        return [int(np.roots(d).size) for row in self.den for d in row]
 
     def zeros(self) -> np.ndarray:
         """Roots of the numerator (single-input single-output); transmission zeros of the
@@ -431,8 +444,7 @@ class TransferFunction(ModelMixin):
         return TimeResponse("impulse", np.arange(N) * h, y, self)
 
     def _time_grid(self, n_samples: int | None, dt: float | None) -> tuple[int, float]:
-        re = -self.poles().real
-        slow = float(np.min(re[re > 1e-12])) if np.any(re > 1e-12) else 0.1
+        slow = slowest_decay(self.poles()) or 0.1
         t_final = 5.0 / slow + float(np.max(self.iodelay, initial=0.0))
         return continuous_grid(self.poles(), t_final, n_samples, dt, 100000)
 
