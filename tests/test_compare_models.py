@@ -34,6 +34,21 @@ def test_a_diverging_model_is_reported_not_raised():
         assert sysid.compare(unstable, data, horizon=5).fit[0, 0] == -np.inf
 
 
+def test_a_continuous_model_unstable_within_one_sample_is_reported_not_raised():
+    # tfest(spa(data), 2) on the winding record gave a pole at s = +2.7e7 rad/s; compare
+    # raised "A has non-finite entries" from sampling it (exp(A dt) overflows) instead of
+    # reporting the divergence
+    _, data = _data()
+    tf = sysid.TransferFunction([[[1.0]]], [[[1.0, -1e4]]])            # pole at s = +1e4
+    ss = sysid.ContinuousStateSpace([[1e4]], [[1.0]], [[1.0]])
+    for model in (tf, ss):
+        with pytest.warns(sysid.StabilityWarning, match="diverged"):
+            r = sysid.compare(data, model)
+        assert r.diverged.tolist() == [True] and r.fit[0, 0] == -np.inf
+        with pytest.raises(sysid.NumericalError, match="pole at s = 1e"):
+            model.simulate(np.ones(5), dt=0.1)
+
+
 def test_several_models_matlab_order():
     true, data = _data()
     good = sysid.n4sid(data, 2)

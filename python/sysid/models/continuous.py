@@ -47,7 +47,7 @@ import scipy.linalg
 
 from .._checks import as_2d, as_dt
 from ..errors import DataError, NumericalError
-from .discretisation import expm, hold_blocks
+from .discretisation import expm, hold_blocks, require_finite_sampling
 from .linear import transmission_zeros
 from .matched import matched_c2d, matched_d2c
 from .protocol import ModelMixin, TimeResponse, continuous_grid, slowest_decay
@@ -397,13 +397,9 @@ def _discretise(sys: ContinuousStateSpace, dt: float, method: str, warp: float |
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(Ad, Bd, Cd, Dd, G2)`` with ``G2`` the FOH state shift (zero otherwise); ``warp``
     is Tustin's ``h`` (``dt`` when not prewarped)."""
-    out = _discretise_raw(sys, dt, method, dt if warp is None else warp)
-    if not all(np.isfinite(x).all() for x in out):
-        grow = float(np.max(np.linalg.eigvals(sys.A).real * dt, initial=0.0))
-        raise NumericalError(
-            f"sampling the model every dt = {dt:g} s overflows ({method}): its fastest growing "
-            f"pole multiplies the state by e^{grow:.4g} per sample, beyond floating point; "
-            "use a smaller dt, or stabilise the model (feedback) before sampling it")
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = _discretise_raw(sys, dt, method, dt if warp is None else warp)
+    require_finite_sampling(out, np.linalg.eigvals(sys.A) if sys.A.size else [], dt)
     return out
 
 

@@ -23,12 +23,13 @@ True
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
 from .. import _sysid
 
-__all__ = ["expm", "hold_blocks", "from_blocks"]
+__all__ = ["expm", "from_blocks", "hold_blocks", "require_finite_sampling"]
 
 
 def expm(M: np.ndarray, dirs: Sequence[np.ndarray] = ()) -> tuple[np.ndarray, list[np.ndarray]]:
@@ -59,3 +60,33 @@ def from_blocks(E: np.ndarray, C: np.ndarray, D: np.ndarray, n: int, m: int, hol
         return Ad, E[:n, n:n + m], np.zeros_like(D)
     G1, G2 = E[:n, n:n + m], E[:n, n + m:]
     return Ad, G1 + (Ad - np.eye(n)) @ G2, C @ G2
+
+
+def require_finite_sampling(mats: Sequence[np.ndarray], poles: Any, dt: float) -> None:
+    """Raises :class:`~sysid.NumericalError` (what a diverging simulation raises, so that
+    :func:`sysid.compare` reports the model as diverged, fit ``-inf``) when the sampled
+    matrices of a continuous model are not finite: ``exp(A dt)`` overflows for a pole with
+    ``Re(s) dt`` above ~700, a model unstable within one sample.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.errors import NumericalError
+    >>> try:
+    ...     require_finite_sampling([np.array([[np.inf]])], np.array([2.7e7]), 1.0)
+    ... except NumericalError as e:
+    ...     print(str(e)[:64])
+    sampling every 1 s overflows: the continuous model has a pole at
+    """
+    if all(np.all(np.isfinite(m)) for m in mats):
+        return
+    from ..errors import NumericalError
+
+    p = np.asarray(poles, complex).ravel()
+    worst = p[np.argmax(p.real)] if p.size else complex("nan")
+    raise NumericalError(
+        f"sampling every {dt:g} s overflows: the continuous model has a pole at s = "
+        f"{worst:.3g} (Re(s) dt = {worst.real * dt:.3g}): it is unstable and its simulation "
+        "diverges within one sample; use a smaller dt, or stabilise the model (feedback) "
+        "before sampling it")
+

@@ -20,6 +20,7 @@ import numpy as np
 from .._checks import as_2d, as_dt
 from ..errors import DataError, ShapeError
 from ..greybox.delays import shift_taps
+from ..models.discretisation import require_finite_sampling
 from ..models.protocol import ModelMixin, TimeResponse, continuous_grid, slowest_decay
 from ..models.statespace import StateSpaceModel
 from .sampling import canonical, sample_pair, split_delay
@@ -336,11 +337,15 @@ class TransferFunction(ModelMixin):
         if hold not in ("zoh", "foh"):
             raise DataError(f"hold must be 'zoh' or 'foh', got {hold!r}")
         blocks, canon = [], []
-        for i, j, (a, b, c, d) in self._blocks():
-            whole, r = split_delay(float(self.iodelay[i, j]), dt)
-            blocks.append((i, j, sample_pair(a, b, c, d, dt, whole, r, hold)))
-            canon.append((a, b, c, d))
-        return assemble(blocks, canon, self.noutputs, self.ninputs)
+        # a pole with Re(s) dt beyond ~700 overflows exp(A dt): said below, not by NumPy
+        with np.errstate(over="ignore", invalid="ignore"):
+            for i, j, (a, b, c, d) in self._blocks():
+                whole, r = split_delay(float(self.iodelay[i, j]), dt)
+                blocks.append((i, j, sample_pair(a, b, c, d, dt, whole, r, hold)))
+                canon.append((a, b, c, d))
+            out = assemble(blocks, canon, self.noutputs, self.ninputs)
+        require_finite_sampling([out[0], out[1], out[3], out[5]], self.poles(), dt)
+        return out
 
     def simulate(self, u: Any, x0: Any = None, *, dt: float | None = None,
                  hold: str | None = None) -> np.ndarray:

@@ -120,7 +120,10 @@ def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndar
                             "data as a sysid.IOData (with dt), or discretise with model.c2d(dt)")
         for name in ("sampled", "c2d"):
             if hasattr(model, name):
-                return getattr(model, name)(data.dt), recs
+                try:
+                    return getattr(model, name)(data.dt), recs
+                except NumericalError as e:  # unstable within one sample: reported diverged
+                    return _Unsampled(model, data.dt, e), recs
         raise DataError(f"{type(model).__name__} is continuous-time (dt == 0) but has no "
                         "sampled(dt) or c2d(dt) method to meet sampled data")
     if isinstance(data, IOData) and not np.isclose(data.dt, model.dt, rtol=1e-9):
@@ -147,6 +150,22 @@ def _has_state(model: Any) -> bool:
     state-space model, or a nonlinear one that says so (``initial_state_fits``: neural state
     space, Hammerstein-Wiener); :func:`compare` fits its initial state."""
     return _stateful(model) or bool(getattr(model, "initial_state_fits", False))
+
+
+class _Unsampled:
+    """A continuous model that cannot be sampled at the data's ``dt`` (a pole so unstable
+    that ``exp(A dt)`` overflows): every run raises the sampling's error, so that the model
+    is reported as diverged (fit ``-inf``) like any other that overflows."""
+
+    def __init__(self, model: Any, dt: float, error: NumericalError) -> None:
+        self.continuous, self.dt, self.error = model, dt, error
+        self.ninputs, self.noutputs = model.ninputs, model.noutputs
+        self.input_names, self.output_names = model.input_names, model.output_names
+
+    def simulate(self, *args: Any, **kw: Any) -> np.ndarray:
+        raise self.error
+
+    predict = simulate
 
 
 def _horizon(horizon: Any) -> int | None:
@@ -663,6 +682,8 @@ def _simulator(model: Any, x0: Any, horizon: int | None, u: np.ndarray | None = 
     try:
         ss = model.to_statespace()
     except DataError:  # e.g. a coupled MIMO ARX model: simulate from rest
+        return model
+    except NumericalError:  # unstable within one sample: its simulation says it diverged
         return model
     if not _stateful(ss):
         return model
