@@ -447,3 +447,38 @@ def test_a_trial_step_that_overflows_stays_quiet():
         warnings.simplefilter("ignore", sysid.SysidWarning)  # the fit's own diagnostics
         m = sysid.tfest(est, 2)
     assert m.is_stable()
+
+
+def test_enforce_stability_keeps_frequency_data_fits_stable():
+    """tfest(spa(data), 2) returned right-half-plane poles on 5 of 8 real records (winding:
+    s = +2.7e7); MATLAB's EnforceStability keeps the search stable. On the response of an
+    unstable plant the free fit recovers it (and warns); enforced, the fit is the best
+    stable one: stable, no warning, a larger misfit, and its poles in the left half-plane
+    (continuous) or inside the unit circle (discrete, lines of periodic data alike)."""
+    w = np.logspace(-1, 1.2, 80)
+    G0 = sysid.TransferFunction([1.0], [1.0, -0.2, 4.0])         # poles 0.1 +- 2j
+    frd = sysid.FRD(w, G0.freqresp(w))
+    with pytest.warns(sysid.StabilityWarning, match="enforce_stability=True"):
+        free = sysid.tfest(frd, 2, 0)
+    np.testing.assert_allclose(free.den[0][0], G0.den[0][0], atol=1e-8)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        held = sysid.tfest(frd, 2, 0, enforce_stability=True)
+    assert np.all(held.poles().real < 0) and held.is_stable()
+
+    def misfit(g):
+        return float(np.sum(np.abs(g.freqresp(w) - frd.response) ** 2))
+    assert misfit(held) > misfit(free) + 1e-3
+    # a stable plant's response: the constraint does not bind, the same model either way
+    G1 = sysid.TransferFunction([0.5, 2.0], [1.0, 0.8, 4.0])
+    f1 = sysid.FRD(w, G1.freqresp(w))
+    np.testing.assert_allclose(sysid.tfest(f1, 2, 1, enforce_stability=True).den[0][0],
+                               G1.den[0][0], atol=1e-8)
+    # discrete: poles 1.05 and 0.5 in z; enforced, every pole inside the unit circle
+    Gd = sysid.TransferFunction([0.0, 1.0], np.poly([1.05, 0.5]), dt=1.0)
+    wd = np.linspace(0.05, 3.1, 60)
+    fd = sysid.FRD(wd, Gd.freqresp(wd), dt=1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Hd = sysid.tfest(fd, 2, 1, dt=1.0, enforce_stability=True)
+    assert np.max(np.abs(Hd.poles())) < 1.0

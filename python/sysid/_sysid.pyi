@@ -582,6 +582,7 @@ def tf_fit_frequency(
     max_iter: int = 100,
     tol: float = 1e-10,
     progress: Callable[..., Any] | None = None,
+    stable: bool = False,
 ) -> dict[str, Any]: ...
 # issue 26 (branch pem): the cheap criterion of a model
 def pem_criterion(

@@ -37,9 +37,10 @@ fn complex(re: &PyReadonlyArray1<'_, f64>, im: &PyReadonlyArray1<'_, f64>) -> Ve
 
 /// Weighted nonlinear least-squares fit of `N(x)/D(x) exp(-w tau)` to `h` (complex arrays as
 /// `(re, im)` pairs); returns the search report, `theta`, `covariance`, `noise_variance`.
+/// `stable`: keep the denominator's roots stable (the start must be).
 #[pyfunction]
 #[pyo3(signature = (x, w, h, weight, lead, den, num, theta0, *, fixed=None, lower=None,
-    upper=None, noise_variance=None, max_iter=100, tol=1e-10, progress=None))]
+    upper=None, noise_variance=None, max_iter=100, tol=1e-10, progress=None, stable=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn tf_fit_frequency<'py>(
     py: Python<'py>,
@@ -58,6 +59,7 @@ pub fn tf_fit_frequency<'py>(
     max_iter: usize,
     tol: f64,
     progress: Option<Py<PyAny>>,
+    stable: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let model = Rational {
         x: complex(&x.0, &x.1),
@@ -65,6 +67,7 @@ pub fn tf_fit_frequency<'py>(
         lead,
         den,
         num,
+        stable,
     };
     let h = complex(&h.0, &h.1);
     let mut o = Options::default();

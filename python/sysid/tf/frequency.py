@@ -84,8 +84,23 @@ def sanathanan_koerner(x: np.ndarray, h: np.ndarray, w: np.ndarray, den_pow: lis
     return a, b
 
 
+def _reflect(a: np.ndarray, cont: bool) -> np.ndarray:
+    """Denominator coefficients ``a`` (after the leading 1: descending powers of ``s``, or
+    ascending powers of ``z^-1``) with every unstable root reflected into the stable region
+    (``s -> -conj(s)``, ``z -> 1 / conj(z)``; roots on the boundary moved 1 % inside)."""
+    r = np.roots(np.concatenate([[1.0], a]))
+    if cont:
+        r = np.where(r.real >= 0, -np.maximum(np.abs(r.real), 1e-2 * np.abs(r)) + 1j * r.imag,
+                     r)
+    else:
+        big = np.abs(r) >= 1
+        r = np.where(big, 0.99 / np.conj(np.where(big, r, 1.0)), r)
+    return np.real(np.poly(r))[1:]
+
+
 def _fit_pair(omega: np.ndarray, h: np.ndarray, wgt: np.ndarray, n: int, m: int, dt: float,
-              tau0: float, free: bool, max_iter: int, tol: float, cb: Any) -> dict[str, Any]:
+              tau0: float, free: bool, max_iter: int, tol: float, cb: Any,
+              stable: bool = False) -> dict[str, Any]:
     cont = not dt
     if cont:
         w0 = float(np.exp(np.mean(np.log(omega[omega > 0])))) if np.any(omega > 0) else 1.0
@@ -101,13 +116,15 @@ def _fit_pair(omega: np.ndarray, h: np.ndarray, wgt: np.ndarray, n: int, m: int,
     for tau in (_delay_grid(omega, h, dt) if free else [0.0 if dt else tau0]):
         hd = h * np.exp(wvar * tau)
         a, b = sanathanan_koerner(x, hd, wgt, den_pow, lead, num_pow)
+        if stable and n:
+            a = _reflect(np.asarray(a, float), cont)
         th0 = list(a) + list(b) + [tau * w0]
         res = _sysid.tf_fit_frequency(
             (x.real.copy(), x.imag.copy()), ((wvar / w0).real.copy(), (wvar / w0).imag.copy()),
             (h.real.copy(), h.imag.copy()), list(map(float, wgt)), lead, den_pow, num_pow,
             list(map(float, th0)), fixed=[False] * (n + m + 1) + [not (free and cont)],
             lower=[-np.inf] * (n + m + 1) + [0.0], noise_variance=None, max_iter=max_iter,
-            tol=tol, progress=cb)
+            tol=tol, progress=cb, stable=stable)
         if best is None or res["cost"] < best["cost"]:
             best = res
     assert best is not None
@@ -146,7 +163,8 @@ def record_lines(data: Any, periods: Any, transient: Any) -> tuple[Any, dict[str
 
 
 def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
-              max_iter: int, tol: float, progress: Any) -> TransferFunction:
+              max_iter: int, tol: float, progress: Any, stable: bool = False
+              ) -> TransferFunction:
     """The FRD branch of :func:`sysid.tfest` (see the module documentation)."""
     l, m = frd.n_outputs, frd.n_inputs
     npo, nze = pole_zero_orders(n_poles, n_zeros, l, m)
@@ -156,7 +174,7 @@ def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
         raise DataError(f"a discrete model needs the FRD's sample time: the FRD has dt="
                         f"{frd.dt}, dt={dt} was given")
     nums, dens, dl, names, thetas, covs, scales, factor = fit_lines(
-        frd, npo, nze, given, auto, dtv, max_iter, tol, progress)
+        frd, npo, nze, given, auto, dtv, max_iter, tol, progress, stable=stable)
     G = _assemble(frd, nums, dens, dl, dtv, names, thetas, covs, auto)
     G.info["residual_scale"] = scales
     G.info["sample_variance_factor"] = factor
@@ -164,7 +182,8 @@ def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
 
 
 def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, auto: bool,
-              dtv: float, max_iter: int, tol: float, progress: Any, who: str = "tfest"
+              dtv: float, max_iter: int, tol: float, progress: Any, who: str = "tfest",
+              stable: bool = False
               ) -> tuple[list[Any], list[Any], np.ndarray, list[str], list[np.ndarray],
                          list[np.ndarray], np.ndarray, float]:
     """The weighted fit of every pair of ``frd`` (``npo`` poles, ``nze + 1`` numerator
@@ -174,7 +193,7 @@ def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, aut
     :func:`sysid.bla`, the sample-variance factor, see the module notes), and the residual
     scales ``(l, m)``, and the factor (internal: :func:`tfest_frd`, and
     :func:`sysid.tfest`/:func:`sysid.oe` on periodic data; ``who`` names the caller in
-    warnings)."""
+    warnings; ``stable``: every denominator kept stable, from a reflected start)."""
     from ..pem.periodic import line_weights, sample_variance_factor
 
     l, m = frd.n_outputs, frd.n_inputs
@@ -199,7 +218,7 @@ def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, aut
             for j in range(m):
                 n, z = int(npo[i, j]), int(nze[i, j])
                 r = _fit_pair(omega, frd.response[:, i, j], weights[:, i, j], n, z, dtv,
-                              float(given[i, j]), auto, max_iter, tol, cb)
+                              float(given[i, j]), auto, max_iter, tol, cb, stable)
                 th = r["theta"]
                 rd.append(np.concatenate([[1.0], th[:n]]))
                 rn.append(th[n:n + z + 1])

@@ -35,8 +35,8 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
           init: TransferFunction | None = None,
           max_delay: float | None = None, max_iter: int = 100, tol: float = 1e-10,
           progress: bool | None | Callable[..., Any] = None,
-          periods: int | str | None = None, transient: int | None = None
-          ) -> TransferFunction:
+          periods: int | str | None = None, transient: int | None = None,
+          enforce_stability: bool = False) -> TransferFunction:
     """Estimate a transfer-function model (MATLAB's ``tfest``).
 
     .. math::
@@ -94,6 +94,13 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     transient : int, optional
         Leading periods dropped (default 0 with a declared ``periods``, 1 with ``"auto"``).
 
+    enforce_stability : bool
+        Keep the poles stable during the search (MATLAB's ``EnforceStability``), for the fits
+        on frequency-response data and on the excited lines of periodic data, where the free
+        fit can place poles in the right half-plane (outside the unit circle) to match the
+        data: the start's unstable poles are reflected and every step stays stable. Fits of
+        time records keep the simulation stable always.
+
     Returns
     -------
     TransferFunction
@@ -140,7 +147,8 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
             raise DataError("periods= and transient= describe a time record; an FRD is "
                             "already on its lines: leave them out")
         return _checked(tfest_frd(data, n_poles, n_zeros, iodelay=iodelay, dt=dt,
-                                  max_iter=max_iter, tol=tol, progress=progress))
+                                  max_iter=max_iter, tol=tol, progress=progress,
+                                  stable=bool(enforce_stability)))
     if not hasattr(data, "experiments") or not hasattr(data, "dt"):
         raise DataError(f"tfest needs a sysid.IOData or sysid.FRD, got {type(data).__name__}; "
                         "wrap arrays as sysid.IOData(u, y, dt=...)")
@@ -169,7 +177,7 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
                             "own linear least squares; leave them out, or leave periods out "
                             "for the time-domain fit")
         G, periodicity = _periodic(data, npo, nze, fixed_delays, auto, dt, periods, transient,
-                                   max_iter, tol, progress)
+                                   max_iter, tol, progress, bool(enforce_stability))
         if G is not None:
             return _checked(G)
     if dt is not None:
@@ -190,9 +198,9 @@ def _checked(G: TransferFunction) -> TransferFunction:
     from ..models.checks import warn_unstable
 
     warn_unstable(G, "tfest", advice=(
-        "Unless the process itself is unstable, try fewer poles, a start from a stable "
-        "model (init=), or sysid.ssest(data, order, focus='simulation') (which keeps the "
-        "simulation stable)."))
+        "Unless the process itself is unstable, try enforce_stability=True (frequency "
+        "data or periodic records), fewer poles, a start from a stable model (init=), or "
+        "sysid.ssest(data, order, focus='simulation') (which keeps the simulation stable)."))
     return G
 
 
@@ -432,7 +440,8 @@ def _attach(G: TransferFunction, tables: list[Any], covs: list[np.ndarray], auto
 
 def _periodic(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
               dt: float | None, periods: Any, transient: Any, max_iter: int, tol: float,
-              progress: Any) -> tuple[TransferFunction | None, dict[str, Any]]:
+              progress: Any, stable: bool = False
+              ) -> tuple[TransferFunction | None, dict[str, Any]]:
     """The discrete model fitted on the excited lines of periodic data (the FRD branch on
     :func:`sysid.bla` of the record), and what was found of the periodicity; no model when
     ``periods="auto"`` finds no usable period (the caller then fits in the time domain)."""
@@ -447,7 +456,7 @@ def _periodic(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
         return None, periodicity
     nk = _whole_delays(data, delays, auto, dt)
     G = tfest_frd(lines, npo, nze, iodelay=nk, dt=dt, max_iter=max_iter, tol=tol,
-                  progress=progress)
+                  progress=progress, stable=stable)
     G.info.update(method="tfest (periodic data: weighted NLS on the excited lines)",
                   domain="frequency", lines=int(lines.omega.size),
                   periods=lines.info.get("periods"), periodicity=periodicity,

@@ -77,6 +77,49 @@ pub fn is_stable(a: &[f64]) -> bool {
     true
 }
 
+/// `true` when the polynomial `c_0 + c_1 s + ... + c_n s^n` (ascending powers, `c_n != 0`)
+/// has all roots strictly in the left half-plane (Hurwitz). The bilinear map `s = (z - 1) /
+/// (z + 1)` takes the left half-plane onto the unit disc: the polynomial
+/// `sum_k c_k (z - 1)^k (z + 1)^(n - k)` is tested by [`is_stable`]; a vanishing leading
+/// coefficient there is a root at `s = 1`.
+///
+/// ```
+/// use sysid_core::polynomial::filter::is_hurwitz;
+/// assert!(is_hurwitz(&[2.0, 3.0, 1.0]));      // (s + 1)(s + 2)
+/// assert!(!is_hurwitz(&[-2.0, 1.0, 1.0]));    // (s - 1)(s + 2)
+/// assert!(!is_hurwitz(&[1.0, 0.0, 1.0]));     // s = +-j: on the axis
+/// ```
+pub fn is_hurwitz(c: &[f64]) -> bool {
+    let mut c: Vec<f64> = c.to_vec();
+    while c.len() > 1 && c[c.len() - 1] == 0.0 {
+        c.pop();
+    }
+    if c.iter().any(|v| !v.is_finite()) {
+        return false;
+    }
+    let n = c.len() - 1;
+    // descending powers of z: sum_k c_k (z - 1)^k (z + 1)^(n - k)
+    let mut p = vec![0.0; n + 1];
+    for (k, &ck) in c.iter().enumerate() {
+        let mut term = vec![ck];
+        for _ in 0..k {
+            term = conv(&term, &[1.0, -1.0]);
+        }
+        for _ in k..n {
+            term = conv(&term, &[1.0, 1.0]);
+        }
+        for (pi, ti) in p.iter_mut().zip(&term) {
+            *pi += ti;
+        }
+    }
+    let scale = p.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    if p[0].abs() <= 1e-14 * scale {
+        return false;
+    }
+    let lead = p[0];
+    is_stable(&p.iter().map(|v| v / lead).collect::<Vec<_>>())
+}
+
 /// Monic polynomial `[1, c...]` from its free coefficients.
 pub fn monic(c: &[f64]) -> Vec<f64> {
     let mut v = Vec::with_capacity(c.len() + 1);

@@ -37,6 +37,11 @@ pub struct Rational {
     pub den: Vec<usize>,
     /// Powers `q_i` of the numerator coefficients `b_i`.
     pub num: Vec<usize>,
+    /// Keep the denominator's roots stable during the search (MATLAB's `EnforceStability`):
+    /// in the left half-plane of `x` when `lead > 0` (continuous time, `x = s`), inside the
+    /// unit circle in `z` when `lead == 0` (discrete time, `x = z^-1`). The start must be
+    /// stable then.
+    pub stable: bool,
 }
 
 impl Rational {
@@ -53,6 +58,20 @@ impl Rational {
             .chain([self.lead])
             .max()
             .unwrap_or(0)
+    }
+
+    /// Whether the denominator at `theta` has its roots where [`Rational::stable`] asks.
+    pub fn is_stable(&self, theta: &[f64]) -> bool {
+        let mut c = vec![0.0; self.max_power() + 1];
+        c[self.lead] += 1.0;
+        for (i, &p) in self.den.iter().enumerate() {
+            c[p] += theta[i];
+        }
+        if self.lead > 0 {
+            crate::polynomial::filter::is_hurwitz(&c)
+        } else {
+            crate::polynomial::filter::is_stable(&c)
+        }
     }
 
     /// The model's response at every point, for the parameters `theta`.
@@ -93,6 +112,10 @@ struct FitProblem<'a> {
 impl Problem for FitProblem<'_> {
     fn n_params(&self) -> usize {
         self.model.n_params()
+    }
+
+    fn admissible(&mut self, theta: &[f64]) -> bool {
+        !self.model.stable || self.model.is_stable(theta)
     }
 
     fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
@@ -169,7 +192,7 @@ pub struct FrequencyFit {
 /// let omega = [0.1, 0.5, 1.0, 3.0, 10.0];
 /// let x: Vec<c64> = omega.iter().map(|&w| c64::new(0.0, w)).collect();
 /// let h: Vec<c64> = x.iter().map(|&s| c64::new(2.0, 0.0) / (s + 3.0)).collect();
-/// let model = Rational { x: x.clone(), w: x, lead: 1, den: vec![0], num: vec![0] };
+/// let model = Rational { x: x.clone(), w: x, lead: 1, den: vec![0], num: vec![0], stable: false };
 /// let mut opts = Options::default();
 /// opts.fixed = Some(vec![false, false, true]);
 /// let fit = fit_frequency(&model, &h, &[1.0; 5], &[1.0, 1.0, 0.0], &opts, None,
@@ -210,6 +233,13 @@ pub fn fit_frequency(
         return Err(SysidError::invalid(
             "weight",
             "weights must be finite and >= 0",
+        ));
+    }
+    if model.stable && !model.is_stable(theta0) {
+        return Err(SysidError::invalid(
+            "theta0",
+            "the starting denominator is unstable while stability is enforced: start from a \
+             stable model (reflect its unstable roots)",
         ));
     }
     let mut prob = FitProblem { model, h, weight };

@@ -85,6 +85,7 @@ fn frequency_fit_recovers_second_order_with_delay() {
         lead: 2,
         den: vec![1, 0],
         num: vec![1, 0],
+        stable: false,
     };
     let theta0 = [0.6, 3.5, 0.4, 1.8, 0.25];
     let fit = fit_frequency(
@@ -108,4 +109,92 @@ fn frequency_fit_recovers_second_order_with_delay() {
         .map(|(a, b)| (a - b).norm())
         .fold(0.0, f64::max);
     assert!(err < 1e-9);
+}
+
+#[test]
+fn hurwitz_test_agrees_with_the_roots() {
+    use crate::polynomial::filter::{conv, is_hurwitz};
+    // products of first- and second-order factors with known root locations
+    let cases: [(&[f64], bool); 7] = [
+        (&[1.0, 1.0], true),        // s + 1
+        (&[-1.0, 1.0], false),      // s - 1
+        (&[4.0, 0.1, 1.0], true),   // lightly damped pair in the left half-plane
+        (&[4.0, -0.1, 1.0], false), // the pair mirrored
+        (&[0.0, 1.0], false),       // s = 0
+        (&[1e-9, 1.0], true),       // a slow stable pole
+        (&[5.0, 0.0, 1.0], false),  // s = +-j sqrt 5
+    ];
+    for (c, want) in cases {
+        assert_eq!(is_hurwitz(c), want, "{c:?}");
+    }
+    // higher degree: (s + 1)(s^2 + 0.2 s + 9)(s + 30) stable; one factor flipped, not
+    let stable = conv(&conv(&[1.0, 1.0], &[9.0, 0.2, 1.0]), &[30.0, 1.0]);
+    let flipped = conv(&conv(&[1.0, 1.0], &[9.0, -0.2, 1.0]), &[30.0, 1.0]);
+    assert!(is_hurwitz(&stable) && !is_hurwitz(&flipped));
+}
+
+#[test]
+fn enforced_stability_keeps_the_frequency_fit_stable() {
+    // a lightly damped pair fitted from a start on the stable side: the free search crosses
+    // into the right half-plane to fit a response with an unstable-looking phase; held
+    let omega: Vec<f64> = (0..80).map(|k| 0.1 * 1.06f64.powi(k)).collect();
+    let x: Vec<c64> = omega.iter().map(|&w| c64::new(0.0, w)).collect();
+    // G(s) = 1 / (s^2 - 0.2 s + 4): unstable pair at 0.1 +- 2j (its response is still finite)
+    let h: Vec<c64> = x
+        .iter()
+        .map(|&s| c64::new(1.0, 0.0) / (s * s - s * 0.2 + 4.0))
+        .collect();
+    let mut model = Rational {
+        x: x.clone(),
+        w: x,
+        lead: 2,
+        den: vec![1, 0],
+        num: vec![0],
+        stable: false,
+    };
+    let mut opts = Options::default();
+    opts.fixed = Some(vec![false, false, false, true]);
+    let theta0 = [0.5, 3.0, 1.0, 0.0];
+    let free = fit_frequency(
+        &model,
+        &h,
+        &vec![1.0; 80],
+        &theta0,
+        &opts,
+        None,
+        &mut |_| Flow::Continue,
+    )
+    .unwrap();
+    assert!(
+        free.solution.theta[0] < 0.0,
+        "the free fit finds the unstable pair"
+    );
+    model.stable = true;
+    let held = fit_frequency(
+        &model,
+        &h,
+        &vec![1.0; 80],
+        &theta0,
+        &opts,
+        None,
+        &mut |_| Flow::Continue,
+    )
+    .unwrap();
+    assert!(model.is_stable(&held.solution.theta));
+    assert!(held.solution.cost > free.solution.cost);
+    assert!(
+        held.solution.cost < free.solution.history[0],
+        "never worse than its start"
+    );
+    // an unstable start is refused, not searched from
+    let bad = fit_frequency(
+        &model,
+        &h,
+        &vec![1.0; 80],
+        &[-0.5, 3.0, 1.0, 0.0],
+        &opts,
+        None,
+        &mut |_| Flow::Continue,
+    );
+    assert!(bad.unwrap_err().to_string().contains("unstable"));
 }
