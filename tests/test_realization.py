@@ -498,3 +498,22 @@ def test_the_automatic_order_counts_the_singular_values_above_the_noise_floor() 
     assert orders[1e-3].count(6) >= 24 and max(orders[1e-3]) <= 8, orders[1e-3]
     assert orders[1e-2].count(6) >= 16 and 4 <= min(orders[1e-2]), orders[1e-2]
     assert max(orders[1e-2]) <= 12, orders[1e-2]
+
+
+def test_era_of_a_defective_realisation_returns_the_model_and_says_why_no_modes():
+    """era(impulse_response(data)) on the DaISy steam generator raised "A is defective ...
+    modal quantities are not defined" at its automatic order: the model was realised, only
+    its modal indicators need eigenvectors. Now the model is returned, MAC and MPC are NaN
+    and a warning says why (a pole of multiplicity 5 with one eigenvector)."""
+    n = 5
+    A = np.diag(np.full(n, 0.5)) + np.diag(np.ones(n - 1), 1)
+    B = np.zeros((n, 1))
+    B[-1] = 1.0
+    C = np.zeros((1, n))
+    C[0, 0] = 1.0
+    true = sysid.StateSpaceModel(A, B, C)
+    with pytest.warns(sysid.SysidWarning, match="defective"):
+        r = sysid.era(true.markov(40), n)
+    assert r.order == n and np.all(np.isnan(r.mac)) and np.all(np.isnan(r.mpc))
+    np.testing.assert_allclose(r.model.markov(20), true.markov(20), atol=1e-9)
+    assert "defective" in repr(r)

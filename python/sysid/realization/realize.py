@@ -299,11 +299,11 @@ class EraResult:
         return plot_hankel_singular_values(self.singular_values, self.order, ax=ax)
 
     def __repr__(self) -> str:
-        return (
-            f"EraResult(order={self.order}, hankel {self.rows}x{self.cols} blocks, "
-            f"min MAC={self.mac.min():.3f}, min MPC={self.mpc.min():.3f})\n"
-            + self.modes().table()
-        )
+        head = (f"EraResult(order={self.order}, hankel {self.rows}x{self.cols} blocks, "
+                f"min MAC={self.mac.min():.3f}, min MPC={self.mpc.min():.3f})")
+        if np.isnan(self.mac).any():  # a defective A: no modes to tabulate
+            return head + "\n(A is defective: no modal table)"
+        return head + "\n" + self.modes().table()
 
 
 def era(markov: Any, order: int | None = None, *, rows: int | None = None,
@@ -356,6 +356,14 @@ def era(markov: Any, order: int | None = None, *, rows: int | None = None,
     out, dt = _realize("era", markov, order, rows, cols, dt, scale=scale)
     res = EraResult(out, dt)
     _warned(res.model, "era")
+    if np.isnan(res.mac).any():
+        from ..errors import SysidWarning
+
+        warnings.warn(
+            f"the realised A of order {res.order} is defective (repeated poles without a full "
+            "set of eigenvectors): its modal indicators (MAC, MPC) and modes are not defined "
+            "(NaN); the model stands. Choose another order (the singular values: "
+            "result.plot()) for a modal reading", SysidWarning, stacklevel=2)
     return res
 
 

@@ -32,9 +32,10 @@ pub struct EraResult {
     pub realization: Realization,
     /// Eigenvalues of A (discrete-time poles), in the order of the indicators.
     pub eigenvalues: Vec<c64>,
-    /// Modal amplitude coherence of each eigenvalue, in [0, 1].
+    /// Modal amplitude coherence of each eigenvalue, in [0, 1]; NaN when A is defective
+    /// (repeated poles without a full set of eigenvectors: no modes to judge).
     pub mac: Vec<f64>,
-    /// Modal phase collinearity of each eigenvalue's mode shape, in [0, 1].
+    /// Modal phase collinearity of each eigenvalue's mode shape, in [0, 1]; NaN as `mac`.
     pub mpc: Vec<f64>,
 }
 
@@ -69,8 +70,27 @@ pub fn era(markov: &[Mat<f64>], opts: &RealizationOptions) -> Result<EraResult> 
     let b = ctr.subcols(0, m).to_owned();
     let c = o.subrows(0, l).to_owned();
     let model = StateSpace::new(a, b, c, markov[0].clone())?;
-
-    let eig = eigen_decomposition(model.a.as_ref())?;
+    let realization = Realization {
+        model,
+        singular_values: svd.s,
+        rows: r,
+        cols: s,
+    };
+    let Ok(eig) = eigen_decomposition(realization.model.a.as_ref()) else {
+        // a defective A (repeated poles without a full set of eigenvectors): the model stands,
+        // its modal indicators are not defined (NaN; the caller says so)
+        let eigenvalues = crate::linalg::eigenvalues(realization.model.a.as_ref())?
+            .into_iter()
+            .map(|(re, im)| c64::new(re, im))
+            .collect();
+        return Ok(EraResult {
+            realization,
+            eigenvalues,
+            mac: vec![f64::NAN; n],
+            mpc: vec![f64::NAN; n],
+        });
+    };
+    let model = &realization.model;
     let ctr_c = Mat::from_fn(n, s * m, |i, j| c64::new(ctr[(i, j)], 0.0));
     let qbar = &eig.inverse * &ctr_c; // data-implied modal input histories
     let c_c = Mat::from_fn(l, n, |i, j| c64::new(model.c[(i, j)], 0.0));
@@ -100,12 +120,7 @@ pub fn era(markov: &[Mat<f64>], opts: &RealizationOptions) -> Result<EraResult> 
         mpc.push(phase_collinearity((0..l).map(|k| shapes[(k, i)])));
     }
     Ok(EraResult {
-        realization: Realization {
-            model,
-            singular_values: svd.s,
-            rows: r,
-            cols: s,
-        },
+        realization,
         eigenvalues: eig.values,
         mac,
         mpc,
@@ -197,5 +212,36 @@ mod tests {
         assert!((phase_collinearity(real.into_iter()) - 1.0).abs() < 1e-12);
         let circ = [c64::new(1.0, 0.0), c64::new(0.0, 1.0)];
         assert!(phase_collinearity(circ.into_iter()) < 1e-12);
+    }
+
+    #[test]
+    fn era_of_a_defective_system_returns_the_model_without_modal_indicators() {
+        // a pole of multiplicity 5 with one eigenvector (a Jordan block): ERA realises it
+        // (its Markov parameters to 1e-9), but the eigenvectors of the realised A are
+        // parallel to working precision: MAC and MPC, which need them, are NaN (the
+        // realisation raised before)
+        let n = 5;
+        let a = Mat::from_fn(n, n, |i, j| match j as i64 - i as i64 {
+            0 => 0.5,
+            1 => 1.0,
+            _ => 0.0,
+        });
+        let b = Mat::from_fn(n, 1, |i, _| if i + 1 == n { 1.0 } else { 0.0 });
+        let c = Mat::from_fn(1, n, |_, j| if j == 0 { 1.0 } else { 0.0 });
+        let sys = crate::StateSpace::new(a, b, c, Mat::zeros(1, 1)).unwrap();
+        let mut opts = RealizationOptions::default();
+        opts.order = Some(n);
+        let e = era(&sys.markov(40), &opts).unwrap();
+        assert_eq!(e.realization.model.n_states(), n);
+        assert!(
+            e.mac.iter().chain(&e.mpc).all(|x| x.is_nan()),
+            "{:?}",
+            e.mac
+        );
+        assert_eq!(e.eigenvalues.len(), n);
+        let (h, h0) = (e.realization.model.markov(20), sys.markov(20));
+        for k in 0..20 {
+            assert!((h[k][(0, 0)] - h0[k][(0, 0)]).abs() < 1e-9 * (1.0 + h0[k][(0, 0)].abs()));
+        }
     }
 }
