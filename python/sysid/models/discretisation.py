@@ -75,8 +75,8 @@ def require_finite_sampling(mats: Sequence[np.ndarray], poles: Any, dt: float) -
     >>> try:
     ...     require_finite_sampling([np.array([[np.inf]])], np.array([2.7e7]), 1.0)
     ... except NumericalError as e:
-    ...     print(str(e)[:64])
-    sampling every 1 s overflows: the continuous model has a pole at
+    ...     print(str(e)[:59])
+    sampling every dt = 1 s overflows: the continuous model has
     """
     if all(np.all(np.isfinite(m)) for m in mats):
         return
@@ -85,7 +85,7 @@ def require_finite_sampling(mats: Sequence[np.ndarray], poles: Any, dt: float) -
     p = np.asarray(poles, complex).ravel()
     worst = p[np.argmax(p.real)] if p.size else complex("nan")
     raise NumericalError(
-        f"sampling every {dt:g} s overflows: the continuous model has a pole at s = "
+        f"sampling every dt = {dt:g} s overflows: the continuous model has a pole at s = "
         f"{worst:.3g} (Re(s) dt = {worst.real * dt:.3g}): it is unstable and its simulation "
         "diverges within one sample; use a smaller dt, or stabilise the model (feedback) "
         "before sampling it")
