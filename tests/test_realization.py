@@ -517,3 +517,28 @@ def test_era_of_a_defective_realisation_returns_the_model_and_says_why_no_modes(
     assert r.order == n and np.all(np.isnan(r.mac)) and np.all(np.isnan(r.mpc))
     np.testing.assert_allclose(r.model.markov(20), true.markov(20), atol=1e-9)
     assert "defective" in repr(r)
+
+
+def test_fir_markov_parameters_carry_calibrated_standard_deviations() -> None:
+    """impulse_response's info["std"]: the least-squares std of each Markov parameter
+    matches its spread over 300 noise realisations; the TC posterior's is
+    smaller (the prior adds information) and positive."""
+    rng = np.random.default_rng(3)
+    true = sysid.StateSpaceModel([[0.8, 0.2], [-0.2, 0.8]], [[1.0], [0.5]], [[1.0, 0.0]])
+    u = rng.standard_normal((400, 1))
+    y0 = true.simulate(u)
+    est = []
+    for _ in range(300):
+        d = sysid.IOData(u=u, y=y0 + 0.3 * rng.standard_normal(y0.shape))
+        est.append(sysid.impulse_response(d, 40, regularization=None))  # no truncation
+    spread = np.std([e.markov for e in est], axis=0, ddof=1)[1:, 0, 0]
+    predicted = np.mean([e.info["std"] for e in est], axis=0)[1:, 0, 0]
+    # each sample std has a relative standard error of 1/sqrt(2 * 299) = 4 %: every lag
+    # within five of them, their mean within two
+    np.testing.assert_allclose(predicted, spread, rtol=0.2)
+    assert abs(np.mean(spread) / np.mean(predicted) - 1) < 0.03
+    assert est[0].info["std"].shape == est[0].markov.shape and est[0].info["std"][0, 0, 0] == 0
+    d = sysid.IOData(u=u, y=y0 + 0.3 * rng.standard_normal(y0.shape))
+    tc, ls = sysid.impulse_response(d, 40), sysid.impulse_response(d, 40, regularization=None)
+    assert np.all(tc.info["std"][1:] > 0)
+    assert np.all(tc.info["std"][1:] <= ls.info["std"][1:] * (1 + 1e-9))

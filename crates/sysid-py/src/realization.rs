@@ -133,6 +133,7 @@ pub fn fir<'py>(
     d.set_item("decay", slice_to_numpy(py, &est.decay))?;
     d.set_item("noise_variance", slice_to_numpy(py, &est.noise_variance))?;
     d.set_item("samples", est.samples)?;
+    d.set_item("std", mat_to_numpy(py, &stack(&est.std)))?;
     Ok(d)
 }
 

@@ -141,6 +141,7 @@ def impulse_response(data: IOData, length: int | None = None, *,
     l, m = exps[0][1].shape[1], exps[0][0].shape[1]
     h = np.asarray(out["markov"]).reshape(-1, l, m)
     info = {k: out[k] for k in ("scale", "decay", "noise_variance", "samples")}
+    info["std"] = np.asarray(out["std"]).reshape(-1, l, m)
     if why is not None:
         info["length"] = why
     return MarkovEstimate(h, dt, "fir-tc" if regularization else "fir", info)

@@ -380,7 +380,9 @@ class MarkovEstimate:
         ``"fir"`` (least squares), ``"fir-tc"`` (TC-regularised) or ``"okid"``.
     info : dict
         Method details: TC hyperparameters and noise variances, or OKID's observer Markov
-        parameters ``(p, l, m + l)`` and residual covariance.
+        parameters ``(p, l, m + l)`` and residual covariance. A FIR estimate's ``"std"``
+        (the shape of ``markov``): each parameter's standard deviation, the least-squares
+        one (``"fir"``) or the TC posterior's (``"fir-tc"``, the prior included).
     """
 
     def __init__(self, markov: np.ndarray, dt: float, method: str, info: dict[str, Any]) -> None:

@@ -97,6 +97,9 @@ pub struct FirEstimate {
     pub noise_variance: Vec<f64>,
     /// Number of regression equations (samples used).
     pub samples: usize,
+    /// Standard deviation of each Markov parameter (same shapes as `markov`; zero for a
+    /// `h_0` not estimated): least squares', or the TC posterior's with regularisation.
+    pub std: Vec<Mat<f64>>,
 }
 
 /// Options of [`okid`].
@@ -305,18 +308,25 @@ pub fn fir(exps: Experiments<'_, '_>, opts: &FirOptions) -> Result<FirEstimate> 
     let noise: Vec<f64> = (0..l)
         .map(|j| (0..l).map(|i| r22[(i, j)].powi(2)).sum::<f64>() / (rows - d) as f64)
         .collect();
-    let (theta, scale, decay) = match opts.regularization {
+    let (theta, scale, decay, var) = match opts.regularization {
         Regularization::None => {
-            let th = pinv(r11, 1e-12)? * r12;
-            (th, vec![f64::NAN; l], vec![f64::NAN; l])
+            let inv = pinv(r11, 1e-12)?;
+            let th = &inv * r12;
+            // diag of sigma^2 (R11^T R11)^-1: the squared row norms of R11^-1
+            let var = Mat::from_fn(d, l, |i, j| {
+                noise[j] * (0..d).map(|k| inv[(i, k)].powi(2)).sum::<f64>()
+            });
+            (th, vec![f64::NAN; l], vec![f64::NAN; l], var)
         }
         Regularization::Tc { hyper } => tc_estimate(r.as_ref(), d, l, m, nk, rows, &noise, hyper)?,
     };
     let mut markov = vec![Mat::<f64>::zeros(l, m); n];
+    let mut std = vec![Mat::<f64>::zeros(l, m); n];
     for kk in 0..nk {
         for j in 0..l {
             for i in 0..m {
                 markov[kk + k0][(j, i)] = theta[(kk * m + i, j)] * sy[j] / su[i];
+                std[kk + k0][(j, i)] = var[(kk * m + i, j)].max(0.0).sqrt() * sy[j] / su[i];
             }
         }
     }
@@ -327,6 +337,7 @@ pub fn fir(exps: Experiments<'_, '_>, opts: &FirOptions) -> Result<FirEstimate> 
         decay,
         noise_variance,
         samples: rows,
+        std,
     })
 }
 
@@ -392,6 +403,10 @@ fn tc_nll(sp: &TcSpectrum, j: usize, c: f64, sigma2: f64, yy: f64, rows: usize) 
     (rows - d) as f64 * sigma2.ln() + logdet + (yy - c * quad) / sigma2
 }
 
+/// A TC fit: the coefficients `d x l`, per output the scale c and decay lambda, and the
+/// posterior variance of each coefficient `d x l`.
+type TcFit = (Mat<f64>, Vec<f64>, Vec<f64>, Mat<f64>);
+
 #[allow(clippy::too_many_arguments)]
 fn tc_estimate(
     r: MatRef<'_, f64>,
@@ -402,7 +417,7 @@ fn tc_estimate(
     rows: usize,
     noise: &[f64],
     hyper: Option<(f64, f64)>,
-) -> Result<(Mat<f64>, Vec<f64>, Vec<f64>)> {
+) -> Result<TcFit> {
     let r11 = r.submatrix(0, 0, d, d);
     let r12 = r.submatrix(0, d, d, l);
     let yy: Vec<f64> = (0..l)
@@ -474,6 +489,7 @@ fn tc_estimate(
         }
     }
     let mut theta = Mat::<f64>::zeros(d, l);
+    let mut var = Mat::<f64>::zeros(d, l);
     let mut cache: Option<(f64, TcSpectrum)> = None;
     for j in 0..l {
         let (c, lambda) = choice[j];
@@ -487,14 +503,19 @@ fn tc_estimate(
         let sp = &cache.as_ref().unwrap().1;
         // theta_j = c Lf Q (sigma^2 + c S)^{-1} z_j
         let w = Mat::from_fn(d, 1, |i, _| c * sp.z[(i, j)] / (sigma2[j] + c * sp.s[i]));
-        let th = &sp.lf * (&sp.q * w);
+        let lq = &sp.lf * &sp.q;
+        let th = &lq * w;
         for i in 0..d {
             theta[(i, j)] = th[(i, 0)];
+            // posterior variance: diag of Lf Q diag(c sigma^2 / (sigma^2 + c S)) Q^T Lf^T
+            var[(i, j)] = (0..d)
+                .map(|k| lq[(i, k)].powi(2) * c * sigma2[j] / (sigma2[j] + c * sp.s[k]))
+                .sum();
         }
     }
     let scale = choice.iter().map(|x| x.0).collect();
     let decay = choice.iter().map(|x| x.1).collect();
-    Ok((theta, scale, decay))
+    Ok((theta, scale, decay, var))
 }
 
 /// OKID: observer and system Markov parameters from input/output data.
