@@ -68,8 +68,8 @@ def test_detrend_bad_arguments() -> None:
         sysid.detrend(d, "piecewise")
     with pytest.raises(DataError, match="not a sample index"):
         sysid.detrend(d, "piecewise", breakpoints=[1000])
-    with pytest.raises(DataError, match="only used"):
-        sysid.detrend(d, "linear", breakpoints=[10])
+    with pytest.raises(DataError, match="a mean has none"):
+        sysid.detrend(d, "mean", breakpoints=[10])
 
 
 def test_scale_and_constant_channel() -> None:
@@ -261,3 +261,17 @@ def test_the_returned_trend_is_all_the_processing_from_raw_data() -> None:
     np.testing.assert_allclose(twice.y, once.y, atol=1e-9)
     np.testing.assert_allclose(tr2.apply(val).y, tr1.apply(val).y, atol=1e-9)
     assert tr2.kind == "linear"
+
+
+def test_linear_detrend_with_breakpoints_is_matlabs_piecewise_line():
+    # MATLAB's detrend(data, 1, breakpoints) removes a continuous piecewise line; the same
+    # call here raised "breakpoints are only used with kind='piecewise'"
+    t = np.arange(200.0)
+    y = np.where(t < 120, 0.5 * t, 60.0 - 0.2 * (t - 120)) + np.sin(t)
+    d = sysid.IOData(u=np.cos(t), y=y, dt=1.0)
+    a = sysid.detrend(d, "linear", breakpoints=[120])
+    b = sysid.detrend(d, "piecewise", breakpoints=[120])
+    np.testing.assert_allclose(a.y, b.y)
+    assert np.abs(a.y[:, 0] - np.sin(t)).max() < 0.1
+    with pytest.raises(sysid.DataError, match="a mean has none"):
+        sysid.detrend(d, "mean", breakpoints=[120])

@@ -246,8 +246,9 @@ def detrend(
         Offset only; offset and slope; or a continuous piecewise-linear trend with knots at
         ``breakpoints``. Fitted per experiment and channel by least squares.
     breakpoints : sequence of int, optional
-        Sample indices of the knots (``"piecewise"`` only); a list of such sequences gives
-        one per experiment.
+        Sample indices of the knots of a piecewise-linear trend (``"piecewise"``, or
+        ``"linear"`` with breakpoints, as MATLAB's ``detrend(data, 1, breakpoints)``); a list
+        of such sequences gives one per experiment.
     inputs, outputs : bool
         Which channels to detrend.
     return_trend : bool
@@ -278,6 +279,8 @@ def detrend(
     require_record(data, "detrend", pairs=False)
     if kind not in ("mean", "constant", "linear", "piecewise"):
         raise DataError(f"kind must be 'mean', 'linear' or 'piecewise', got {kind!r}")
+    if kind == "linear" and breakpoints is not None:
+        kind = "piecewise"  # MATLAB's detrend(data, 1, breakpoints)
     n_exp = data.n_experiments
     if kind == "piecewise":
         if breakpoints is None:
@@ -288,7 +291,9 @@ def detrend(
         if len(bps) != n_exp:
             raise DataError(f"{len(bps)} breakpoint lists for {n_exp} experiments")
     elif breakpoints is not None:
-        raise DataError("breakpoints are only used with kind='piecewise'")
+        raise DataError("breakpoints make a piecewise-linear trend (kind='linear' or "
+                        "'piecewise'); a mean has none: leave breakpoints out, or detrend the "
+                        "segments one by one")
     else:
         bps = [[]] * n_exp
     exps, coefs = [], []
