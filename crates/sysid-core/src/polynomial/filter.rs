@@ -48,6 +48,16 @@ pub fn conv(a: &[f64], b: &[f64]) -> Vec<f64> {
     c
 }
 
+/// `c` without its trailing zero coefficients (at least one kept); `None` when an entry is
+/// not finite.
+fn trimmed(c: &[f64]) -> Option<Vec<f64>> {
+    let mut p = c.to_vec();
+    while p.len() > 1 && p[p.len() - 1] == 0.0 {
+        p.pop();
+    }
+    p.iter().all(|v| v.is_finite()).then_some(p)
+}
+
 /// `true` when the monic polynomial `1 + a_1 z^-1 + ... + a_n z^-n` has all roots strictly
 /// inside the unit circle (Schur-Cohn step-down: every reflection coefficient below one).
 ///
@@ -57,13 +67,9 @@ pub fn conv(a: &[f64], b: &[f64]) -> Vec<f64> {
 /// assert!(!is_stable(&[1.0, -1.1]));
 /// ```
 pub fn is_stable(a: &[f64]) -> bool {
-    let mut p: Vec<f64> = a.to_vec();
-    while p.len() > 1 && p[p.len() - 1] == 0.0 {
-        p.pop();
-    }
-    if p.iter().any(|v| !v.is_finite()) {
+    let Some(mut p) = trimmed(a) else {
         return false;
-    }
+    };
     while p.len() > 1 {
         let n = p.len() - 1;
         let k = p[n] / p[0];
@@ -90,13 +96,9 @@ pub fn is_stable(a: &[f64]) -> bool {
 /// assert!(!is_hurwitz(&[1.0, 0.0, 1.0]));     // s = +-j: on the axis
 /// ```
 pub fn is_hurwitz(c: &[f64]) -> bool {
-    let mut c: Vec<f64> = c.to_vec();
-    while c.len() > 1 && c[c.len() - 1] == 0.0 {
-        c.pop();
-    }
-    if c.iter().any(|v| !v.is_finite()) {
+    let Some(c) = trimmed(c) else {
         return false;
-    }
+    };
     let n = c.len() - 1;
     // descending powers of z: sum_k c_k (z - 1)^k (z + 1)^(n - k)
     let mut p = vec![0.0; n + 1];

@@ -229,9 +229,7 @@ mod tests {
         let b = Mat::from_fn(n, 1, |i, _| if i + 1 == n { 1.0 } else { 0.0 });
         let c = Mat::from_fn(1, n, |_, j| if j == 0 { 1.0 } else { 0.0 });
         let sys = crate::StateSpace::new(a, b, c, Mat::zeros(1, 1)).unwrap();
-        let mut opts = RealizationOptions::default();
-        opts.order = Some(n);
-        let e = era(&sys.markov(40), &opts).unwrap();
+        let e = era(&sys.markov(40), &RealizationOptions::with_order(n)).unwrap();
         assert_eq!(e.realization.model.n_states(), n);
         assert!(
             e.mac.iter().chain(&e.mpc).all(|x| x.is_nan()),

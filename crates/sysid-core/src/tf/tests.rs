@@ -152,34 +152,24 @@ fn enforced_stability_keeps_the_frequency_fit_stable() {
         num: vec![0],
         stable: false,
     };
-    let mut opts = Options::default();
-    opts.fixed = Some(vec![false, false, false, true]);
+    let opts = Options {
+        fixed: Some(vec![false, false, false, true]),
+        ..Options::default()
+    };
+    let weight = vec![1.0; 80];
+    let fit = |model: &Rational, theta0: &[f64]| {
+        fit_frequency(model, &h, &weight, theta0, &opts, None, &mut |_| {
+            Flow::Continue
+        })
+    };
     let theta0 = [0.5, 3.0, 1.0, 0.0];
-    let free = fit_frequency(
-        &model,
-        &h,
-        &vec![1.0; 80],
-        &theta0,
-        &opts,
-        None,
-        &mut |_| Flow::Continue,
-    )
-    .unwrap();
+    let free = fit(&model, &theta0).unwrap();
     assert!(
         free.solution.theta[0] < 0.0,
         "the free fit finds the unstable pair"
     );
     model.stable = true;
-    let held = fit_frequency(
-        &model,
-        &h,
-        &vec![1.0; 80],
-        &theta0,
-        &opts,
-        None,
-        &mut |_| Flow::Continue,
-    )
-    .unwrap();
+    let held = fit(&model, &theta0).unwrap();
     assert!(model.is_stable(&held.solution.theta));
     assert!(held.solution.cost > free.solution.cost);
     assert!(
@@ -187,14 +177,6 @@ fn enforced_stability_keeps_the_frequency_fit_stable() {
         "never worse than its start"
     );
     // an unstable start is refused, not searched from
-    let bad = fit_frequency(
-        &model,
-        &h,
-        &vec![1.0; 80],
-        &[-0.5, 3.0, 1.0, 0.0],
-        &opts,
-        None,
-        &mut |_| Flow::Continue,
-    );
+    let bad = fit(&model, &[-0.5, 3.0, 1.0, 0.0]);
     assert!(bad.unwrap_err().to_string().contains("unstable"));
 }
