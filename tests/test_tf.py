@@ -482,3 +482,19 @@ def test_enforce_stability_keeps_frequency_data_fits_stable():
         warnings.simplefilter("error")
         Hd = sysid.tfest(fd, 2, 1, dt=1.0, enforce_stability=True)
     assert np.max(np.abs(Hd.poles())) < 1.0
+
+
+def test_enforce_stability_starts_from_an_integrator_too():
+    # a Sanathanan-Koerner start with a root at s = 0 (an integrating response) is moved
+    # inside, not left on the boundary where the stable search would refuse it
+    from sysid.tf.frequency import _reflect
+
+    for a, cont in (([1.0, 0.0], True), ([-1.0, 2.0], True), ([-2.5, 1.0], False)):
+        r = np.roots(np.concatenate([[1.0], _reflect(np.asarray(a), cont)]))
+        assert (np.all(r.real < 0) if cont else np.all(np.abs(r) < 1)), (a, r)
+    w = np.logspace(-2, 1, 60)
+    g = sysid.TransferFunction([1.0], [1.0, 1.0, 0.0])             # 1 / (s (s + 1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        held = sysid.tfest(sysid.FRD(w, g.freqresp(w)), 2, 0, enforce_stability=True)
+    assert np.all(held.poles().real < 0)

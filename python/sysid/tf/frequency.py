@@ -87,11 +87,12 @@ def sanathanan_koerner(x: np.ndarray, h: np.ndarray, w: np.ndarray, den_pow: lis
 def _reflect(a: np.ndarray, cont: bool) -> np.ndarray:
     """Denominator coefficients ``a`` (after the leading 1: descending powers of ``s``, or
     ascending powers of ``z^-1``) with every unstable root reflected into the stable region
-    (``s -> -conj(s)``, ``z -> 1 / conj(z)``; roots on the boundary moved 1 % inside)."""
+    (``s -> -conj(s)``, ``z -> 1 / conj(z)``; roots on the boundary moved 1 % of their
+    modulus inside, a root at ``s = 0`` to ``-1e-6`` of the scaled frequency)."""
     r = np.roots(np.concatenate([[1.0], a]))
     if cont:
-        r = np.where(r.real >= 0, -np.maximum(np.abs(r.real), 1e-2 * np.abs(r)) + 1j * r.imag,
-                     r)
+        inside = np.maximum(np.maximum(np.abs(r.real), 1e-2 * np.abs(r)), 1e-6)
+        r = np.where(r.real >= 0, -inside + 1j * r.imag, r)
     else:
         big = np.abs(r) >= 1
         r = np.where(big, 0.99 / np.conj(np.where(big, r, 1.0)), r)
