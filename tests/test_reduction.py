@@ -153,3 +153,31 @@ def test_hankel_singular_values_are_invariant_to_a_change_of_basis(seed: int, sc
 def test_nothing_discarded_has_a_zero_error_bound_not_minus_zero():
     m = sysid.StateSpaceModel([[0.5, 0.0], [0.0, 0.2]], [[1.0], [1.0]], [[1.0, 1.0]])
     assert str(sysid.balanced_truncation(m, 2).info["error_bound"]) == "0.0"
+
+
+@pytest.mark.parametrize("rho", [0.9, 1.1])
+def test_a_sequence_of_orders_equals_one_truncation_per_order(rho: float) -> None:
+    # MATLAB's balred(sys, orders): one balancing serves every order; each model equals the
+    # truncation to that order alone (stable, and with unstable poles kept)
+    rng = np.random.default_rng(3)
+    A = rng.standard_normal((7, 7))
+    A *= rho / np.abs(np.linalg.eigvals(A)).max()
+    model = sysid.StateSpaceModel(A, rng.standard_normal((7, 2)), rng.standard_normal((2, 7)),
+                                  K=rng.standard_normal((7, 2)))
+    nu = int(np.sum(np.abs(np.linalg.eigvals(A)) >= 1))
+    orders = [6, max(nu, 1), 3, 7]
+    many = sysid.balanced_truncation(model, orders)
+    assert [r.nstates for r in many] == orders
+    for o, r in zip(orders, many):
+        one = sysid.balanced_truncation(model, o)
+        for k in ("A", "B", "C", "D", "K"):
+            np.testing.assert_allclose(getattr(r, k), getattr(one, k), atol=1e-10)
+        assert r.info["unstable_states"] == one.info["unstable_states"] == nu
+        assert r.info["error_bound"] == pytest.approx(one.info["error_bound"], abs=1e-12)
+    with pytest.raises(sysid.DataError, match="between 1 and 7"):
+        sysid.balanced_truncation(model, [2, 8])
+    with pytest.raises(sysid.DataError, match="empty"):
+        sysid.balanced_truncation(model, [])
+    nonmin = sysid.StateSpaceModel(np.diag([0.5, 0.3]), [[1.0], [0.0]], [[1.0, 1.0]])
+    with pytest.raises(sysid.DataError, match="order <= 1"):
+        sysid.balanced_truncation(nonmin, [1, 2])

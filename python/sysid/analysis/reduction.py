@@ -302,7 +302,7 @@ def balanced_realization(model: Any) -> Any:
     return _truncate_split(m, m.nstates, continuous=not m.dt, realization=True)
 
 
-def balanced_truncation(model: Any, order: int) -> Any:
+def balanced_truncation(model: Any, order: Any) -> Any:
     """Balanced truncation to ``order`` states; an unstable part is kept unchanged.
 
     As MATLAB's ``balred``, the model is split into stable and unstable parts
@@ -323,13 +323,14 @@ def balanced_truncation(model: Any, order: int) -> Any:
     ----------
     model : StateSpaceModel or ContinuousStateSpace
         The model (any :class:`sysid.Model` with a state-space form).
-    order : int
-        States to keep, ``unstable poles <= order <= nstates``.
+    order : int or sequence of int
+        States to keep, ``unstable poles <= order <= nstates``. A sequence (MATLAB's
+        ``balred(sys, orders)``) returns one model per order, all from one balancing.
 
     Returns
     -------
-    StateSpaceModel or ContinuousStateSpace
-        The reduced model, of the same kind.
+    StateSpaceModel or ContinuousStateSpace, or list of them
+        The reduced model, of the same kind (a list for a sequence of orders).
 
     Examples
     --------
@@ -342,9 +343,20 @@ def balanced_truncation(model: Any, order: int) -> Any:
     >>> ru = sysid.balanced_truncation(u, 2)    # keeps the unstable pole 1.2
     >>> round(float(ru.poles().real.max()), 12), ru.info["unstable_states"]
     (1.2, 1)
+    >>> [r.nstates for r in sysid.balanced_truncation(u, [1, 3])]
+    [1, 3]
     """
     if order is None:
         raise DataError("order is required; use balanced_realization to keep every state")
+    if not isinstance(order, (str, bytes)) and np.ndim(order) == 1:
+        orders = [as_int(o, "every order") for o in order]
+        if not orders:
+            raise DataError("order is an empty sequence: pass at least one order")
+        res = _truncations(model, sorted(set(orders)))
+        bad = [res[o] for o in orders if isinstance(res[o], DataError)]
+        if bad:
+            raise bad[0]
+        return [res[o] for o in orders]
     m = _state_space(model, "balanced_truncation")
     if not m.dt:
         return _truncate_split(m, as_int(order, "order"), continuous=True)
@@ -388,14 +400,33 @@ def _truncate_split(m: Any, order: int, continuous: bool, realization: bool = Fa
         hsv = np.asarray(out["hankel_singular_values"])
         a, b, c, d = (np.asarray(out[k]) for k in ("a", "b", "c", "d"))
         t, t_inv = np.asarray(out["t"]), np.asarray(out["t_inv"])
+    return _assemble(m, split, order, hsv, (a, b, c, d), (t, t_inv), continuous, realization)
+
+
+def _assemble(m: Any, split: Any, order: int, hsv: np.ndarray, abcd: tuple[np.ndarray, ...],
+              proj: tuple[np.ndarray, np.ndarray], continuous: bool = False,
+              realization: bool = False) -> Any:
+    """The model of ``order`` states from the stable part's truncation ``abcd`` (projections
+    ``proj``) and ``split``'s unstable part, its states first (``split=None``: a stable
+    model, ``proj`` of the whole state)."""
+    a, b, c, d = abcd
+    t, t_inv = proj
+    n = m.nstates
+    r = a.shape[0]
+    nu = order - r
+    if split is None:
+        Au, Bu, Cu = np.zeros((0, 0)), np.zeros((0, m.ninputs)), np.zeros((m.noutputs, 0))
+        sT, sT_inv = np.eye(n), np.eye(n)
+    else:
+        (Au, Bu, Cu), sT, sT_inv = split.unstable, split.T, split.T_inv
+    ns = n - nu
     A = np.block([[a, np.zeros((r, nu))], [np.zeros((nu, r)), Au]])
-    T = split.T @ np.block([[t, np.zeros((ns, nu))], [np.zeros((nu, r)), np.eye(nu)]])
-    T_inv = np.block([[t_inv, np.zeros((r, nu))], [np.zeros((nu, ns)), np.eye(nu)]]) @ split.T_inv
+    T = sT @ np.block([[t, np.zeros((ns, nu))], [np.zeros((nu, r)), np.eye(nu)]])
+    T_inv = np.block([[t_inv, np.zeros((r, nu))], [np.zeros((nu, ns)), np.eye(nu)]]) @ sT_inv
     B, C = np.vstack([b, Bu]), np.hstack([c, Cu])
     info = dict(m.info)
     info.update(method="balanced_truncation", reduced_from=n, hankel_singular_values=hsv,
-                error_bound=float(2.0 * hsv[r:].sum()) + 0.0, unstable_states=nu, T=T,
-                T_inv=T_inv)
+                error_bound=float(2.0 * hsv[r:].sum()) + 0.0, unstable_states=nu)
     # the unstable states first, as MATLAB's balreal and hsvd order them
     p = np.r_[np.arange(r, order), np.arange(r)]
     A, B, C, T, T_inv = A[np.ix_(p, p)], B[p], C[:, p], T[:, p], T_inv[p]
@@ -410,6 +441,56 @@ def _truncate_split(m: Any, order: int, continuous: bool, realization: bool = Fa
         A, B, C, d, None if m.K is None else T_inv @ m.K,
         dt=m.dt, noise_cov=m.noise_cov, x0=None if m.x0 is None else T_inv @ m.x0,
         input_names=m.input_names, output_names=m.output_names, info=info)
+
+
+def _truncations(model: Any, orders: list[int]) -> dict[int, Any]:
+    """Balanced truncation to each of ``orders`` from one balancing: ``{order: model}``, or
+    the :class:`DataError` that order raises (fewer states than unstable poles, more than
+    the non-zero Hankel singular values). The square-root projections of order ``r`` are the
+    first ``r`` columns (rows) of any larger order's, so one balancing serves all."""
+    m = _state_space(model, "balanced_truncation")
+    n = m.nstates
+    out: dict[int, Any] = {}
+    if not m.dt:  # continuous: one truncation per order
+        for o in orders:
+            try:
+                out[o] = _truncate_split(m, o, continuous=True)
+            except DataError as e:
+                out[o] = e
+        return out
+    split = split_stable(m.A, m.B, m.C, m.dt) if n and _unstable_poles(m).size else None
+    As, Bs, Cs = (m.A, m.B, m.C) if split is None else split.stable
+    nu = n - As.shape[0]
+    hsv = _stable_hsv(As, Bs, Cs, m.D, m.dt)
+    keep = int(np.sum(hsv > 1e-13 * hsv[0])) if hsv.size else 0
+    for o in orders:
+        if not 1 <= o <= n:
+            out[o] = DataError(f"invalid order: {o}; the model has {n} states, so order must "
+                               f"be between 1 and {n}")
+        elif o < nu:
+            out[o] = DataError(
+                f"invalid order: {o} is fewer than the {nu} unstable poles of the model, "
+                "which balanced truncation keeps unchanged (only the stable part is "
+                f"reduced); ask for order >= {nu}, or stabilise the model (feedback) first")
+        elif o - nu > keep:
+            out[o] = DataError(
+                f"invalid order: the stable part has only {keep} non-zero Hankel singular "
+                "values (the rest of it is uncontrollable or unobservable), so "
+                f"{o - nu} of its states cannot be balanced; truncate to order <= {keep + nu}")
+    valid = [o for o in orders if o not in out]
+    rmax = max((o - nu for o in valid), default=0)
+    if rmax:
+        core = _sysid.balanced_truncation(As, Bs, Cs, m.D, rmax)
+        t_all, ti_all = np.asarray(core["t"]), np.asarray(core["t_inv"])
+        at = As @ t_all
+    else:
+        t_all, ti_all, at = np.zeros((n - nu, 0)), np.zeros((0, n - nu)), np.zeros((n - nu, 0))
+    for o in valid:
+        r = o - nu
+        t, ti = t_all[:, :r], ti_all[:r]
+        abcd = (ti @ at[:, :r], ti @ Bs, Cs @ t, m.D.copy())
+        out[o] = _assemble(m, split, o, hsv, abcd, (t, ti))
+    return out
 
 
 def _continuous_truncation(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray, r: int

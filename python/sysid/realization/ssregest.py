@@ -86,7 +86,7 @@ def _reduce(big: StateSpaceModel, su: np.ndarray, ysd: np.ndarray, orders: list[
             why: list[str] | None = None) -> dict[int, StateSpaceModel]:
     """Balanced truncation of ``[u, e] -> y`` (scaled) to each order; ``K`` from ``e``'s
     columns. ``why`` collects, per order left out, balanced truncation's reason."""
-    from ..analysis.reduction import balanced_truncation
+    from ..analysis.reduction import _truncations
 
     nu, ny = big.B.shape[1], big.C.shape[0]
     sv = np.sqrt(np.clip(np.diag(big.noise_cov), 0.0, None)) if big.noise_cov is not None \
@@ -96,14 +96,11 @@ def _reduce(big: StateSpaceModel, su: np.ndarray, ysd: np.ndarray, orders: list[
     g = StateSpaceModel(big.A, np.hstack([big.B * su, K * se]), big.C,
                         np.hstack([big.D * su, np.diag(se)]), dt=big.dt)
     out = {}
-    for n in orders:
-        if n > big.nstates:
-            continue
-        try:
-            r = balanced_truncation(g, n)
-        except DataError as e:  # fewer states than unstable poles, or more than the minimal ones
+    # one balancing for every order
+    for n, r in _truncations(g, [n for n in orders if n <= big.nstates]).items():
+        if isinstance(r, DataError):  # fewer states than unstable poles, or more than minimal
             if why is not None:
-                why.append(f"order {n}: {e}")
+                why.append(f"order {n}: {r}")
             continue
         out[n] = StateSpaceModel(r.A, r.B[:, :nu] / su, r.C, big.D, K=r.B[:, nu:] / se,
                                  dt=big.dt, input_names=big.input_names,
