@@ -396,14 +396,17 @@ def test_find_spikes_of_a_record_says_what_to_pass():
 
 
 def test_ssest_of_a_frequency_response_points_to_the_frequency_tools():
-    """MATLAB's ssest takes frequency-response data; sysid's takes time records and said only
-    "data must be a sysid.IOData or a (u, y) pair, got FRD"."""
+    """MATLAB's ssest takes frequency-response data; sysid's took time records only and said
+    "data must be a sysid.IOData or a (u, y) pair, got FRD". It now fits the FRD (the
+    frequency-domain subspace start refined on its lines); time-only estimators name the
+    tools that take one."""
     rng = np.random.default_rng(0)
     u = rng.standard_normal(600)
     y = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]]).simulate(u)
     frd = sysid.spa(sysid.IOData(u=u, y=y))
-    with pytest.raises(DataError, match=r"frd_subspace\(frd, order\).*sysid\.pem\(frd"):
-        sysid.ssest(frd, 2)
-    # the way it points to works: a subspace fit of the FRD refined on its lines
-    m = sysid.pem(frd, sysid.frd_subspace(frd, 1))
+    with pytest.raises(DataError, match=r"sysid\.ssest\(frd, order\)"):
+        sysid.cva(frd, 1)
+    with pytest.raises(DataError, match=r"sysid\.ssest\(frd, order\)"):
+        sysid.arx(frd, 1, 1, 1)
+    m = sysid.ssest(frd, 1)
     assert abs(m.poles()[0] - 0.8) < 0.05  # spa's lag window biases it a little

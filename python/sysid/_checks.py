@@ -542,6 +542,25 @@ def check_covariance(P: np.ndarray, name: str) -> np.ndarray:
     return P
 
 
+def refuse_frd(data: Any, who: str) -> None:
+    """A :class:`DataError` naming the estimators that take frequency-response data when
+    ``data`` is one (an :class:`sysid.FRD`, MATLAB's ``idfrd``) and ``who`` takes time
+    records only.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid._checks import refuse_frd
+    >>> refuse_frd(sysid.IOData(np.ones(4), np.ones(4)), "arx")  # a record: nothing to say
+    """
+    if hasattr(data, "omega") and hasattr(data, "response"):
+        raise DataError(
+            f"{who} takes a time record (IOData), got frequency-response data "
+            f"({type(data).__name__}): fit it with sysid.ssest(frd, order), "
+            "sysid.n4sid(frd, order), sysid.frd_subspace(frd, order) or "
+            "sysid.tfest(frd, n_poles)")
+
+
 def experiment_arrays(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
     """The experiments of an IOData record as C-contiguous float64 ``(u, y)`` pairs (views when
     they already are); a clear DataError for anything that is not an IOData record.
@@ -554,6 +573,7 @@ def experiment_arrays(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
     >>> [(u.shape, y.shape) for u, y in experiment_arrays(data)]
     [((5, 1), (5, 1))]
     """
+    refuse_frd(data, "this estimator")
     try:
         exps = data.experiments
     except AttributeError:

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_2d, as_dt
+from .._checks import as_2d, as_dt, refuse_frd
 from .._display import HTMLResult
 from ..errors import DataError, InsufficientDataError, ShapeError
 from . import formats as _formats
@@ -563,6 +563,7 @@ def require_record(data: Any, who: str, pairs: bool = True) -> IOData:
     """
     if pairs:
         data = as_record(data)
+    refuse_frd(data, who)
     if not isinstance(data, IOData):
         pair = " or a (u, y) pair of arrays" if pairs else ""
         raise DataError(

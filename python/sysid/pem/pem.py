@@ -60,8 +60,8 @@ def _experiments(data: Any) -> IOData:
         return IOData(u=data[0], y=data[1])
     if hasattr(data, "omega") and hasattr(data, "response"):  # an FRD (MATLAB's idfrd)
         raise DataError("this takes a time record; for a frequency response fit "
-                        "sysid.frd_subspace(frd, order) (a state-space model; refine it with "
-                        "sysid.pem(frd, model), weighted by the FRD's std) or "
+                        "sysid.ssest(frd, order) or sysid.frd_subspace(frd, order) (a "
+                        "state-space model; refine it with sysid.pem(frd, model)) or "
                         "sysid.tfest(frd, n_poles), or pass the record itself (with periods= "
                         "for periodic data: the fit is then on its excited lines)")
     raise DataError(f"data must be a sysid.IOData or a (u, y) pair, got {type(data).__name__}")
@@ -441,8 +441,11 @@ def pem(
         its noise variance from the periods, ``A`` held in its real modal form, no initial
         state and no noise model (``K = 0``: ``focus``, ``x0`` and ``noise`` do not apply;
         ``weighting`` may only be ``"noise"``). The model is stable and in the modal basis.
-        ``data`` may also be an :class:`sysid.FRD` with ``std`` (for example from
-        :func:`sysid.bla`), fitted the same way.
+        ``data`` may also be an :class:`sysid.FRD` (for example from :func:`sysid.bla`,
+        :func:`sysid.spa` or :func:`sysid.etfe`), fitted the same way: weighted by its
+        ``std``, or without one uniformly (MATLAB's default for frequency-response data;
+        ``info["pem"]["weighting"] == "uniform"``, the covariance then assumes one noise
+        level for every line, scaled by the residuals).
     transient : int, optional
         Leading periods dropped because the output's response to the start of the
         excitation has not settled. Default: 1 with ``periods="auto"`` (the usual practice
@@ -679,8 +682,9 @@ def _coloured(out: StateSpaceModel, data: Any, scale: np.ndarray | None) -> None
 def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
                   max_iter: int, tol: float, progress: Any, weighting: str | None,
                   regularization: Any) -> StateSpaceModel:
-    """:func:`pem` on the excited lines of periodic data (or of an FRD with std)."""
-    from .periodic import CRITERION, pem_lines
+    """:func:`pem` on the excited lines of periodic data, or on an FRD (weighted by its std,
+    uniformly without one)."""
+    from .periodic import CRITERION, pem_lines, with_line_weights
 
     if not isinstance(model, StateSpaceModel):
         raise DataError(f"model must be a sysid.StateSpaceModel, got {type(model).__name__}")
@@ -698,6 +702,9 @@ def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
         ft, _ = choose_feedthrough(SubspaceEstimator(_experiments(data)), model.nstates)
     if not ft and np.any(model.D != 0):
         _warn_dropped_d(3)
+    how = "noise"
+    if isinstance(data, FRD):
+        frd, how = with_line_weights(frd)
     res, extra = pem_lines(frd, model, feedthrough=bool(ft), max_iter=max_iter, tol=tol,
                            progress=progress, stabilize=_stabilize)
     warn_refinement(res, "frequency-domain", max_iter, True, lines_record_length(frd))
@@ -722,7 +729,7 @@ def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
         "iterations": res["iterations"], "evaluations": res["evaluations"],
         "cost": list(res["history"]), "criterion": CRITERION,
         "weighted_cost": list(res["weighted_history"]), "stop": res["stop"],
-        "condition": res["condition"], "focus": "simulation", "weighting": "noise",
+        "condition": res["condition"], "focus": "simulation", "weighting": how,
         "feedthrough": bool(ft), "noise": "none", "x0": [],
         "spectral_radius": float(res["spectral_radius"]), "enforce_stability": True,
         "n_parameters": int(res["theta"].size), "rank": int(res["rank"]), **extra,

@@ -164,6 +164,30 @@ def line_weights(frd: FRD) -> np.ndarray:
     return 2.0 / np.maximum(s2, max(floor, 1e-300))
 
 
+def with_line_weights(frd: FRD) -> tuple[FRD, str]:
+    """``frd`` and ``"noise"`` when it carries its lines' noise level (``std`` or
+    ``info["noise_std"]``); otherwise a copy with the same unit standard deviation on every
+    line and ``"uniform"``, MATLAB's default for frequency-response data (no weighting
+    filter): the refinement then fits the complex response by least squares, and its
+    covariance is scaled by the residual variance (one noise level for every line).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.pem.periodic import with_line_weights
+    >>> f, how = with_line_weights(sysid.FRD([1.0, 2.0], np.ones(2), dt=1.0))
+    >>> how, f.std.ravel().tolist()
+    ('uniform', [1.0, 1.0])
+    """
+    std = frd.std if frd.std is not None else frd.info.get("noise_std")
+    if std is not None and np.all(np.isfinite(std)):
+        return frd, "noise"
+    out = FRD(frd.omega, frd.response, std=np.ones(frd.response.shape), dt=frd.dt,
+              input_names=frd.input_names, output_names=frd.output_names,
+              method=frd.method, info=dict(frd.info or {}))
+    return out, "uniform"
+
+
 def sample_variance_factor(frd: FRD, who: str) -> float:
     """Factor on the covariance ``s (J^T W J)^-1`` of a fit weighted by the variances of a
     :func:`sysid.bla` (``1/std**2``, estimated from the spread over the periods or the

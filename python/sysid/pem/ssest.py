@@ -12,6 +12,7 @@ import numpy as np
 from .._checks import as_int, as_nonnegative, recorded, reissue
 from .._threads import one_blas_thread
 from ..errors import DataError, OffsetWarning, SysidError
+from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
 from ..subspace.estimator import CLOSED_LOOP, METHODS, SubspaceEstimator, horizon_for_order
 from ..subspace.feedthrough import (
@@ -100,6 +101,14 @@ def ssest(
         Leading periods dropped: default 1 with ``periods="auto"``, 0 with a declared
         ``periods`` (as :func:`pem`).
 
+    Frequency-response data (an :class:`sysid.FRD`, MATLAB's ``ssest(idfrd, n)``): the
+    frequency-domain subspace fits (:func:`sysid.frd_subspace`, weighted by the lines' std
+    and unweighted) are scored on the lines and the best stable one is refined there
+    (:func:`pem` on the FRD: by its ``std``, or uniformly without one); ``order`` an integer
+    or ``"auto"`` (:func:`sysid.frd_subspace`'s), ``feedthrough`` ``True`` or ``False``
+    (default), and ``focus``, ``x0``, ``noise`` do not apply (an output-error fit of the
+    response).
+
     Returns
     -------
     StateSpaceModel
@@ -118,8 +127,11 @@ def ssest(
     >>> bool(abs(m.poles()[0] - 0.8) < 0.05)
     True
     """
-    data = _experiments(data)
     as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")  # before any fit
+    if isinstance(data, FRD):
+        return _ssest_frd(data, order, feedthrough, horizon, max_iter, tol, progress,
+                          regularization, periods, transient)
+    data = _experiments(data)
     if hasattr(order, "nstates"):  # a start model: pem refines one (its repr may not print)
         raise DataError(f"ssest takes an order, got a {type(order).__name__}; refine a start "
                         "model with sysid.pem(data, model)")
@@ -281,6 +293,61 @@ def periodic_start(data: Any, order: int, feedthrough: Any) -> StateSpaceModel |
             return frd_subspace(frd, order, weights=weights, feedthrough=bool(feedthrough))
     except SysidError:
         return None
+
+
+def _ssest_frd(frd: FRD, order: Any, feedthrough: Any, horizon: int | None, max_iter: int,
+               tol: float, progress: Any, regularization: Any, periods: Any,
+               transient: Any) -> StateSpaceModel:
+    """:func:`ssest` on frequency-response data: the frequency-domain subspace fits (weighted
+    by the lines' std, and unweighted) scored on the lines, the best stable one refined
+    there by :func:`pem`."""
+    from ..subspace.frd_subspace import frd_subspace
+    from .periodic import line_weights, lines_cost, with_line_weights
+
+    if regularization is not None or periods is not None or transient is not None:
+        raise DataError("an FRD is fitted on its lines: regularization, periods= and "
+                        "transient= do not apply; leave them out")
+    if not (isinstance(order, str) and order == "auto") and np.ndim(order) != 0:
+        raise DataError("with frequency-response data give the order as an integer or "
+                        "'auto' (frd_subspace's gap of the singular values); for an order "
+                        "search estimate from the time record")
+    ft = False if feedthrough is None else feedthrough
+    if check_feedthrough(ft) == "auto":
+        raise DataError("feedthrough='auto' decides from a time record; with an FRD pass "
+                        "True or False")
+    ft = bool(ft)
+    if frd.dt is None:
+        raise DataError("ssest fits a discrete model and needs the FRD's sample time: "
+                        "pass dt= to sysid.FRD (for a continuous model use sysid.tfest or "
+                        "sysid.frd_subspace(frd, order, continuous=True))")
+    scored_on, how = with_line_weights(frd)
+    weights = None
+    if how == "noise":
+        w = np.mean(line_weights(scored_on), axis=(1, 2))
+        weights = w / w.mean()
+    why: list[Exception] = []
+    candidates = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for name, wts in (("frd_subspace weighted", weights), ("frd_subspace", None)):
+            if name.endswith("weighted") and wts is None:
+                continue
+            try:
+                cand = frd_subspace(frd, order, horizon=horizon, weights=wts, feedthrough=ft)
+            except SysidError as e:
+                why.append(e)
+                continue
+            order = cand.nstates  # "auto" decided once, by the first fit
+            stable = np.max(np.abs(cand.poles()), initial=0.0) < 1
+            candidates.append((lines_cost(scored_on, cand) if stable else np.inf, name, cand))
+    if not candidates:
+        _no_start(why)
+    candidates.sort(key=lambda c: c[0])
+    model = pem(frd, candidates[0][2], feedthrough=ft, max_iter=max_iter, tol=tol,
+                progress=progress)
+    model.info["start"] = {"method": candidates[0][1], "bd_x0": False,
+                           "losses": {c[1]: c[0] for c in candidates}}
+    return model
 
 
 def _no_start(why: list[Exception]) -> None:

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import refuse_frd
 from ..errors import DataError, ShapeError
 
 __all__ = ["matlab_orders"]
@@ -80,6 +81,7 @@ def matlab_orders(fn: str, data: Any, first: Any, **rest: Any) -> tuple[Any, ...
                 f"orders as one vector, {fn}(data, [{', '.join(names)}]) as in MATLAB{alone}")
         return tuple(1 if (k == "nk" and v is None) else v for k, v in zip(names, given))
     if not hasattr(data, "n_inputs"):
+        refuse_frd(data, fn)
         raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))")
     nu, ny = data.n_inputs, data.n_outputs
     widths = [{"1": 1, "nu": nu, "ny": ny}[w] for _, w in LAYOUTS[fn]]

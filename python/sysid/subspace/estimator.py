@@ -721,6 +721,33 @@ def _orders(order: Any, top: int | None = None) -> list[int] | None:
     return [o for o in orders if top is None or o <= top]
 
 
+_FRD_NOTE = """
+
+    Frequency-response data (an :class:`sysid.FRD`, MATLAB's ``n4sid(idfrd, n)``): the
+    frequency-domain subspace fit :func:`sysid.frd_subspace` (``order`` an integer or
+    ``"auto"``, ``feedthrough`` ``True`` or ``False``; ``stable`` and ``x0`` do not apply)."""
+
+
+def _frd_note(method: str) -> str:
+    return _FRD_NOTE if method == "n4sid" else ""
+
+
+def _n4sid_frd(frd: Any, order: Any, horizon: int | None, feedthrough: Any, stable: bool,
+               x0: bool, scale: bool | None) -> StateSpaceModel:
+    """``n4sid`` on frequency-response data: :func:`sysid.frd_subspace`."""
+    from .frd_subspace import frd_subspace
+
+    if stable or x0:
+        raise DataError("n4sid on frequency-response data fits the response on its lines: "
+                        "stable= and x0= apply to time records; leave them out (refine with "
+                        "sysid.ssest(frd, order), which keeps the model stable)")
+    if feedthrough is not None and not isinstance(feedthrough, (bool, np.bool_)):
+        raise DataError("feedthrough='auto' decides from a time record; with an FRD pass "
+                        "True or False")
+    return frd_subspace(frd, order, horizon=horizon, feedthrough=bool(feedthrough),
+                        scale=scale)
+
+
 def _shortcut(method: str):  # type: ignore[no-untyped-def]
     @one_blas_thread
     def fit(
@@ -734,6 +761,8 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         x0: bool = False,
         scale: bool | None = None,
     ) -> StateSpaceModel:
+        if method == "n4sid" and hasattr(data, "omega") and hasattr(data, "response"):
+            return _n4sid_frd(data, order, horizon, feedthrough, stable, x0, scale)
         data = require_record(data, method.replace("-", "_"))
         if not isinstance(order, str) and np.ndim(order) == 0:
             order = as_int(order, "order", 1)  # inf, nan, 2.5: before the data are compressed
@@ -759,7 +788,7 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
     default) the order and ``D`` are chosen together by held-out simulation fit
     (``info["order_selection"]``, ``info["feedthrough_selection"]``). ``scale=False``
     computes in the record's units instead of on channels of unit root mean square
-    (:mod:`sysid.subspace.scaling`), as SLICOT's IB01AD does.
+    (:mod:`sysid.subspace.scaling`), as SLICOT's IB01AD does.{_frd_note(method)}
 
     Examples
     --------
