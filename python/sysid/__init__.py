@@ -40,13 +40,8 @@ from .errors import (
     SysidWarning,
 )
 from .models.statespace import StateSpaceModel
-from .subspace.estimator import (
-    SubspaceEstimator,
-    cva,
-    default_horizon,
-    moesp,
-    n4sid,
-)
+from .subspace.estimator import SubspaceEstimator, default_horizon
+from .subspace.shortcuts import cva, moesp, n4sid
 from .validation.criteria import criteria  # a function named like its module: bind it eagerly
 
 # Subpackages named like a public function (`sysid/pem/` holds `pem()`): load the (empty)

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from . import _sysid
-from .errors import DataError, ExcitationError, NonFiniteError, ShapeError
+from .errors import DataError, ExcitationError, NonFiniteError, ShapeError, refuse_frd
 
 
 def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = False) -> np.ndarray:
@@ -540,25 +540,6 @@ def check_covariance(P: np.ndarray, name: str) -> np.ndarray:
             f"eigenvalue {low:.3g}"
         )
     return P
-
-
-def refuse_frd(data: Any, who: str) -> None:
-    """A :class:`DataError` naming the estimators that take frequency-response data when
-    ``data`` is one (an :class:`sysid.FRD`, MATLAB's ``idfrd``) and ``who`` takes time
-    records only.
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> from sysid._checks import refuse_frd
-    >>> refuse_frd(sysid.IOData(np.ones(4), np.ones(4)), "arx")  # a record: nothing to say
-    """
-    if hasattr(data, "omega") and hasattr(data, "response"):
-        raise DataError(
-            f"{who} takes a time record (IOData), got frequency-response data "
-            f"({type(data).__name__}): fit it with sysid.ssest(frd, order), "
-            "sysid.n4sid(frd, order), sysid.frd_subspace(frd, order) or "
-            "sysid.tfest(frd, n_poles)")
 
 
 def experiment_arrays(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -122,3 +122,22 @@ class IdentifiabilityWarning(SysidWarning):
     parameter pair, a pole and a zero that cancel, or directions of an over-parameterised
     model; its fit may be good, but those parameters and what depends on them are not
     determined."""
+
+
+def refuse_frd(data: object, who: str) -> None:
+    """A :class:`DataError` naming the estimators that take frequency-response data when
+    ``data`` is one (an :class:`sysid.FRD`, MATLAB's ``idfrd``) and ``who`` takes time
+    records only.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.errors import refuse_frd
+    >>> refuse_frd(sysid.IOData(np.ones(4), np.ones(4)), "arx")  # a record: nothing to say
+    """
+    if hasattr(data, "omega") and hasattr(data, "response"):
+        raise DataError(
+            f"{who} takes a time record (IOData), got frequency-response data "
+            f"({type(data).__name__}): fit it with sysid.ssest(frd, order), "
+            "sysid.n4sid(frd, order), sysid.frd_subspace(frd, order) or "
+            "sysid.tfest(frd, n_poles)")

@@ -22,9 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_2d, as_dt, refuse_frd
+from .._checks import as_2d, as_dt
 from .._display import HTMLResult
-from ..errors import DataError, InsufficientDataError, ShapeError
+from ..errors import DataError, InsufficientDataError, ShapeError, refuse_frd
 from . import formats as _formats
 from . import raw as _raw
 from . import segments as _segments

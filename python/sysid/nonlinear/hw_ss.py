@@ -132,7 +132,7 @@ def nlhw_ss(
     """
     from ..data.iodata import IOData
     from ..models.statespace import StateSpaceModel
-    from ..subspace.estimator import n4sid
+    from ..subspace.shortcuts import n4sid
     from .choice import auto_fit, is_auto
 
     data = require_record(data, "nlhw_ss")

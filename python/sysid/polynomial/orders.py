@@ -14,8 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import refuse_frd
-from ..errors import DataError, ShapeError
+from ..errors import DataError, ShapeError, refuse_frd
 
 __all__ = ["matlab_orders"]
 

@@ -95,7 +95,7 @@ def subspace_starts(data: IOData, nb: list[list[int]], nf: list[list[int]],
     >>> np.round([s.b[0][0][0], s.f[0][0][0]], 6).tolist()
     [0.5, -0.8]
     """
-    from ..subspace.estimator import n4sid
+    from ..subspace.shortcuts import n4sid
 
     out: list[PolynomialModel | None] = []
     exps = data.experiments

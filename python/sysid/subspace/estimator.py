@@ -41,7 +41,6 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_int, as_orders, check_magnitudes, record_stats, require_inputs_vary
-from .._threads import one_blas_thread
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData, require_record
 from ..data.offsets import check_offsets
@@ -62,16 +61,13 @@ from .feedthrough import (
     check_feedthrough,
     choose_feedthrough,
     default_feedthrough,
-    warn_if_left_out,
 )
 from .kalman import schur_gain
 from .methods import CLOSED_LOOP, METHODS, _method
 from .scaling import check_scale, in_record_units, scaled_experiments
 from .streaming import compression_info, warn_if_fallback
 
-__all__ = [
-    "SubspaceEstimator", "default_horizon", "moesp", "n4sid", "cva", "METHODS",
-]
+__all__ = ["SubspaceEstimator", "default_horizon", "METHODS"]
 
 #: combined p-value below which the open-loop methods warn of feedback (strict: the warning
 #: must not fire by chance on open-loop data)
@@ -719,90 +715,3 @@ def _orders(order: Any, top: int | None = None) -> list[int] | None:
         raise OrderError(f"every order in {orders} is too large: the horizon allows at most "
                          f"{top} states; choose orders <= {top} or a longer horizon")
     return [o for o in orders if top is None or o <= top]
-
-
-_FRD_NOTE = """
-
-    Frequency-response data (an :class:`sysid.FRD`, MATLAB's ``n4sid(idfrd, n)``): the
-    frequency-domain subspace fit :func:`sysid.frd_subspace` (``order`` an integer or
-    ``"auto"``, ``feedthrough`` ``True`` or ``False``; ``stable`` and ``x0`` do not apply)."""
-
-
-def _frd_note(method: str) -> str:
-    return _FRD_NOTE if method == "n4sid" else ""
-
-
-def _n4sid_frd(frd: Any, order: Any, horizon: int | None, feedthrough: Any, stable: bool,
-               x0: bool, scale: bool | None) -> StateSpaceModel:
-    """``n4sid`` on frequency-response data: :func:`sysid.frd_subspace`."""
-    from .frd_subspace import frd_subspace
-
-    if stable or x0:
-        raise DataError("n4sid on frequency-response data fits the response on its lines: "
-                        "stable= and x0= apply to time records; leave them out (refine with "
-                        "sysid.ssest(frd, order), which keeps the model stable)")
-    if feedthrough is not None and not isinstance(feedthrough, (bool, np.bool_)):
-        raise DataError("feedthrough='auto' decides from a time record; with an FRD pass "
-                        "True or False")
-    return frd_subspace(frd, order, horizon=horizon, feedthrough=bool(feedthrough),
-                        scale=scale)
-
-
-def _shortcut(method: str):  # type: ignore[no-untyped-def]
-    @one_blas_thread
-    def fit(
-        data: IOData | tuple[Any, Any],
-        order: Order = "auto",
-        *,
-        horizon: int | None = None,
-        feedthrough: bool | str | None = None,
-        kalman: bool = True,
-        stable: bool = False,
-        x0: bool = False,
-        scale: bool | None = None,
-    ) -> StateSpaceModel:
-        if method == "n4sid" and hasattr(data, "omega") and hasattr(data, "response"):
-            return _n4sid_frd(data, order, horizon, feedthrough, stable, x0, scale)
-        data = require_record(data, method.replace("-", "_"))
-        if not isinstance(order, str) and np.ndim(order) == 0:
-            order = as_int(order, "order", 1)  # inf, nan, 2.5: before the data are compressed
-        horizon = horizon_for_order(data, order, horizon)  # one that allows a given order
-        est = SubspaceEstimator(data, horizon, method=method, scale=scale)
-        model = est.fit(order, feedthrough=feedthrough, kalman=kalman, stable=stable, x0=x0)
-        if feedthrough is None and not isinstance(order, str) and np.ndim(order) == 0:
-            # D left out by default: say so when the record shows a direct term
-            warn_if_left_out(est, order, method, model, fit.__name__, kalman=kalman, x0=x0,
-                             stable=stable)
-        return model
-
-    fit.__name__ = method.replace("-", "_")
-    fit.__doc__ = f"""Identify a state-space model with {method.upper()} in one call.
-
-    Equivalent to ``SubspaceEstimator(data, horizon, method="{method}").fit(order, ...)``
-    (at a given order without ``horizon``, the horizon of
-    :func:`~sysid.subspace.estimator.horizon_for_order`: the default, or the smallest that
-    allows the order when the default does not and the data do); no feedthrough (``D = 0``)
-    at a given order unless ``feedthrough=True`` (or ``"auto"``: decided from the data), as
-    every sysid state-space estimator (left out by default, a ``FeedthroughWarning`` says when
-    the record shows a direct term); with ``order="auto"`` (the
-    default) the order and ``D`` are chosen together by held-out simulation fit
-    (``info["order_selection"]``, ``info["feedthrough_selection"]``). ``scale=False``
-    computes in the record's units instead of on channels of unit root mean square
-    (:mod:`sysid.subspace.scaling`), as SLICOT's IB01AD does.{_frd_note(method)}
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> rng = np.random.default_rng(1)
-    >>> true = sysid.StateSpaceModel([[0.7]], [[1.0]], [[1.0]])
-    >>> u = rng.standard_normal(300)
-    >>> m = sysid.{fit.__name__}(sysid.IOData(u=u, y=true.simulate(u)), order=1, horizon=4)
-    >>> bool(abs(m.poles()[0] - 0.7) < 1e-8)
-    True
-    """
-    return fit
-
-
-moesp = _shortcut("moesp")
-n4sid = _shortcut("n4sid")
-cva = _shortcut("cva")
