@@ -218,6 +218,7 @@ _LAZY = {
     "StabilityWarning": "errors",
     "check_offsets": "data.offsets",
     "CompareSet": "validation.comparison",
+    "FRDCompareSet": "validation.compare_frd",
     "TrendedModel": "models.trended",
     # issue 27 (branch tfproc): transfer functions, process models, analysis helpers
     "TransferFunction": "tf.model",
@@ -516,6 +517,7 @@ __all__ = [
     "StabilityWarning",
     "check_offsets",
     "CompareSet",
+    "FRDCompareSet",
     "TrendedModel",
     # issue 27 (branch tfproc): transfer functions, process models, analysis helpers
     "TransferFunction",

@@ -532,7 +532,10 @@ def compare(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
 
     ``compare(data, m1, m2, ...)`` (MATLAB's order) compares several models on the same
     record and returns a :class:`~sysid.validation.comparison.CompareSet`; ``compare(model,
-    data)`` (or ``compare(data, model)``) one model, a :class:`CompareResult`. A model that
+    data)`` (or ``compare(data, model)``) one model, a :class:`CompareResult`. Frequency-
+    response data (an :class:`sysid.FRD`) compare the models' responses on its lines (fit of
+    the complex response per output/input pair): a
+    :class:`~sysid.validation.compare_frd.FRDCompareSet`. A model that
     diverges on the data (an unstable model on a long record) is reported with a fit of
     ``-inf`` and ``diverged`` set, never raised, and a :class:`~sysid.StabilityWarning`
     (so is a simulated model with an unstable pole whose fitted initial state kept it
@@ -585,7 +588,8 @@ def compare(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
     from .comparison import warn_diverging
 
     out = compare_quiet(*args, horizon=horizon, x0=x0)
-    warn_diverging(getattr(out, "results", [out]))
+    if not hasattr(out, "responses"):  # a frequency response does not diverge
+        warn_diverging(getattr(out, "results", [out]))
     return out
 
 
@@ -595,6 +599,10 @@ def compare_quiet(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -
     from .comparison import split_arguments
 
     data, models, horizon = split_arguments(args, horizon)
+    if not isinstance(data, (IOData, tuple)):  # an FRD: the responses on its lines
+        from .compare_frd import compare_frd
+
+        return compare_frd(data, models, horizon, x0)
     results = [compare_one(m, data, horizon, x0) for m in models]
     if isinstance(data, IOData):  # the record's own clock, for plots
         for r in results:

@@ -18,7 +18,9 @@ __all__ = ["CompareSet", "split_arguments"]
 
 
 def _is_data(x: Any) -> bool:
-    return isinstance(x, IOData) or (isinstance(x, tuple) and len(x) == 2)
+    """A record, a ``(u, y)`` pair or frequency-response data (an FRD)."""
+    return (isinstance(x, IOData) or (isinstance(x, tuple) and len(x) == 2)
+            or (hasattr(x, "omega") and hasattr(x, "response")))
 
 
 def split_arguments(args: tuple[Any, ...], horizon: Any) -> tuple[Any, list[Any], Any]:
@@ -37,7 +39,7 @@ def split_arguments(args: tuple[Any, ...], horizon: Any) -> tuple[Any, list[Any]
     else:
         raise DataError(
             "compare takes compare(data, m1, m2, ...) or compare(model, data): data is a "
-            "sysid.IOData or a pair (u, y), got "
+            "sysid.IOData, a pair (u, y) or a sysid.FRD, got "
             + ", ".join(type(a).__name__ for a in args))
     if not models:
         raise DataError("compare needs at least one model after the data")
