@@ -49,7 +49,7 @@ def augmented_fit(data: Any, functions: Sequence[Any], *, method: str = "n4sid",
             raise DataError("method='arx' needs na and nb")
         lin = arx(aug, na, nb, nk)
     elif method in ("n4sid", "moesp", "cva"):
-        from ..subspace import estimator as subspace
+        from ..subspace import shortcuts as subspace
 
         if order is None:
             raise DataError(f"method={method!r} needs the state order")
