@@ -30,6 +30,7 @@ from ..models.checks import check_start
 from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
+from ..polynomial.model import PolynomialModel
 from ..subspace.feedthrough import check_feedthrough, choose_feedthrough
 from .diagnostics import lines_record_length, warn_refinement, warn_undetermined
 from .units import SearchUnits, search_units
@@ -366,8 +367,12 @@ def pem(
     ----------
     data : IOData or (u, y)
         Estimation data (every experiment is used; remove means first).
-    model : StateSpaceModel
-        The start (for example a subspace estimate).
+    model : StateSpaceModel or PolynomialModel
+        The start (for example a subspace estimate). A polynomial model (``arx``,
+        ``armax``, ``oe``, ``bj``, ``polyest``; MATLAB's ``pem(data, idpoly)``) is refined in
+        its own structure by the polynomial estimators' prediction-error search
+        (:func:`sysid.polynomial.polyest.pem_polynomial`: ``max_iter`` and ``progress``
+        apply, the state-space options do not).
     focus : {"prediction", "simulation"}
         One-step prediction errors of the innovation form, or simulation errors (``K = 0``).
     feedthrough : bool or "auto", optional
@@ -508,6 +513,10 @@ def pem(
     >>> bool(np.allclose(np.sort_complex(m.poles()), np.sort_complex(true.poles()), atol=0.02))
     True
     """
+    if isinstance(model, PolynomialModel):  # MATLAB's pem(data, idpoly)
+        from ..polynomial.polyest import pem_polynomial
+
+        return pem_polynomial(_experiments(data), model, max_iter=max_iter, progress=progress)
     check_start(model, data, "pem")  # NaN matrices, another sample time: before any work
     max_iter, tol = as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")
     periodicity = None

@@ -1,6 +1,6 @@
 """MATLAB's order vectors: ``arx(data, [na nb nk])``, ``oe(data, [nb nf nk])``,
-``armax(data, [na nb nc nk])``, ``bj(data, [nb nc nd nf nk])``, ``iv4``, ``arxregul``,
-``nlarx`` and ``nlhw`` alike.
+``armax(data, [na nb nc nk])``, ``bj(data, [nb nc nd nf nk])``, ``polyest(data, [na nb nc
+nd nf nk])``, ``iv4``, ``arxregul``, ``nlarx`` and ``nlhw`` alike.
 
 A MATLAB user's first call gives the orders as one vector (one row per output for several
 outputs); the estimators here take them as separate arguments. :func:`matlab_orders` reads
@@ -27,6 +27,8 @@ LAYOUTS: dict[str, tuple[tuple[str, str], ...]] = {
     "armax": (("na", "1"), ("nb", "nu"), ("nc", "1"), ("nk", "nu")),
     "oe": (("nb", "nu"), ("nf", "nu"), ("nk", "nu")),
     "bj": (("nb", "nu"), ("nc", "1"), ("nd", "1"), ("nf", "nu"), ("nk", "nu")),
+    "polyest": (("na", "1"), ("nb", "nu"), ("nc", "1"), ("nd", "1"), ("nf", "nu"),
+                ("nk", "nu")),
     "nlhw": (("nb", "nu"), ("nf", "nu"), ("nk", "nu")),
     "nlarx": (("na", "ny"), ("nb", "nu"), ("nk", "nu")),
 }
