@@ -86,8 +86,14 @@ def test_bad_calls_say_what_to_do():
     u, y = rng.standard_normal((300, 2)), rng.standard_normal((300, 2))
     d = sysid.IOData(u, y, 1.0)
     coupled = sysid.arx(d, [[1, 1], [1, 1]], [[1, 1], [1, 1]], [[1, 1], [1, 1]])
+    # ARX with a coupled A: least squares again, its prediction-error minimum
+    again = sysid.pem(d, coupled)
+    np.testing.assert_allclose(again.a[0][1], coupled.a[0][1])
+    assert "least-squares" in again.info["note"]
+    with_c = sysid.PolynomialModel(coupled.a, coupled.b, coupled.nk, 1.0,
+                                   c=[np.array([0.1]), np.array([0.1])])
     with pytest.raises(DataError, match="couples output"):
-        sysid.pem(d, coupled)
+        sysid.pem(d, with_c)
     with pytest.raises(DataError, match="polyest"):
         sysid.polyest(d, "auto")
     with pytest.raises(DataError, match="sampled every 0.5"):

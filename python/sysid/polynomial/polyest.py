@@ -112,9 +112,9 @@ def _orders(model: PolynomialModel) -> tuple[list[int], ...]:
         for k in range(ny):
             if k != i and np.any(np.asarray(model.a[i][k]) != 0):
                 raise DataError(
-                    f"the model's A couples output {i} with output {k} (a multi-output ARX "
-                    "model with cross terms): pem refines one equation per output, with a "
-                    "diagonal A; refine a state-space form instead, sysid.pem(data, "
+                    f"the model's A couples output {i} with output {k} and it has C, D or "
+                    "F: pem refines such models one equation per output, with a diagonal "
+                    "A; refine a state-space form instead, sysid.pem(data, "
                     "model.to_statespace())")
     na = [len(model.a[i][i]) for i in range(ny)]
     nb = [[len(model.b[i][j]) for j in range(nu)] for i in range(ny)]
@@ -128,7 +128,9 @@ def _orders(model: PolynomialModel) -> tuple[list[int], ...]:
 def pem_polynomial(data: Any, model: PolynomialModel, *, max_iter: int,
                    progress: bool | None | Callable[..., Any]) -> PolynomialModel:
     """:func:`sysid.pem` given a polynomial model (MATLAB's ``pem(data, idpoly)``): the
-    prediction-error search from ``model`` in its own structure (orders and delays kept).
+    prediction-error search from ``model`` in its own structure (orders and delays kept);
+    an ARX model (no ``C``, ``D``, ``F``; a coupled multi-output ``A`` too) is fitted again
+    by least squares, its prediction-error minimum.
 
     Examples
     --------
@@ -149,6 +151,19 @@ def pem_polynomial(data: Any, model: PolynomialModel, *, max_iter: int,
     if getattr(data, "dt", None) and model.dt and not np.isclose(data.dt, model.dt):
         raise DataError(f"the model is sampled every {model.dt} s but the data every "
                         f"{data.dt} s: resample one of them")
+    ny, nu = model.n_outputs, model.n_inputs
+    if not any(len(model.c[i]) or len(model.d[i]) or any(len(f) for f in model.f[i])
+               for i in range(ny)):
+        # ARX: the least-squares fit is the prediction-error minimum (a coupled A too)
+        from .estimators import arx
+
+        m = arx(data, [[len(model.a[i][k]) for k in range(ny)] for i in range(ny)],
+                [[len(model.b[i][j]) for j in range(nu)] for i in range(ny)],
+                [[int(model.nk[i, j]) for j in range(nu)] for i in range(ny)])
+        m.info = dict(m.info or {}, start="init",
+                      note="ARX structure: its least-squares fit is the prediction-error "
+                           "minimum")
+        return m
     na, nb, nc, nd, nf, nk = _orders(model)
     m = _pem(data, na, nb, nc, nd, nf, nk, "pem", max_iter, progress, model)
     m.info["start"] = "init"
