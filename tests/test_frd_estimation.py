@@ -100,3 +100,30 @@ def test_bad_frequency_response_calls_say_what_to_do():
         sysid.ssest(sysid.FRD(w, true.freqresp(w)), 1)
     with pytest.raises(DataError, match=r"frequency-response data.*sysid\.ssest\(frd"):
         sysid.moesp(frd, 1)
+
+
+def test_oe_fits_frequency_response_data_as_matlab_oe_of_idfrd():
+    g = sysid.TransferFunction([0.5, 0.2], [1.0, -1.2, 0.5], dt=1.0)
+    w = np.linspace(0.02, 3.1, 100)
+    frd = sysid.FRD(w, g.freqresp(w), dt=1.0)
+    m = sysid.oe(frd, [2, 2, 1])  # MATLAB's vector form
+    np.testing.assert_allclose(m.b[0][0], [0.5, 0.2], atol=1e-10)
+    np.testing.assert_allclose(m.f[0][0], [-1.2, 0.5], atol=1e-10)
+    assert m.info["weighting"] == "uniform" and m.info["domain"] == "frequency"
+    assert np.all(m.noise_variance == 0) and "not estimated" in m.info["noise_variance"]
+    # periodic data: oe on the record's lines is oe on their FRD (sysid.bla)
+    u = sysid.multisine(128, band=(0, 0.5), periods=5, seed=0)
+    rng = np.random.default_rng(1)
+    y = g.simulate(np.vstack([u[-128:], u]))[128:] + 0.01 * rng.standard_normal((640, 1))
+    d = sysid.IOData(u, y, 1.0)
+    on_lines = sysid.oe(d, 2, 2, 1, periods=5)
+    on_frd = sysid.oe(sysid.bla(d, 5), 2, 2, 1)
+    assert on_frd.info["weighting"] == "noise"
+    np.testing.assert_allclose(on_frd.b[0][0], on_lines.b[0][0], rtol=1e-10)
+    np.testing.assert_allclose(on_frd.f[0][0], on_lines.f[0][0], rtol=1e-10)
+    with pytest.raises(DataError, match="leave init out"):
+        sysid.oe(frd, 2, 2, 1, init=m)
+    with pytest.raises(DataError, match="sample time"):
+        sysid.oe(sysid.FRD(w, g.freqresp(w)), 2, 2, 1)
+    with pytest.raises(DataError, match="leave periods"):
+        sysid.oe(frd, 2, 2, 1, periods=2)

@@ -139,5 +139,5 @@ def refuse_frd(data: object, who: str) -> None:
         raise DataError(
             f"{who} takes a time record (IOData), got frequency-response data "
             f"({type(data).__name__}): fit it with sysid.ssest(frd, order), "
-            "sysid.n4sid(frd, order), sysid.frd_subspace(frd, order) or "
-            "sysid.tfest(frd, n_poles)")
+            "sysid.n4sid(frd, order), sysid.frd_subspace(frd, order), "
+            "sysid.oe(frd, nb, nf, nk) or sysid.tfest(frd, n_poles)")

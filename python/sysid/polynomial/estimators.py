@@ -506,6 +506,10 @@ def oe(
     periods or fewer an ``UncertaintyWarning`` says the std is too small). ``transient``
     drops leading periods (default 0 declared, 1 with ``"auto"``). ``"auto"`` without a
     usable period fits in the time domain with the reason in ``info["periodicity"]``.
+    Frequency-response data (an :class:`sysid.FRD` with ``dt``, MATLAB's ``oe(idfrd, [nb nf
+    nk])``) are fitted the same way on their lines, weighted by the ``std`` or uniformly
+    without one (``info["weighting"]``); no output noise variance is estimated from a
+    response (``noise_variance`` zero, ``info["noise_variance"]`` says so).
 
     The errors of the time-domain fit are the output disturbance itself, coloured on nearly
     every real record, where the Gauss-Newton covariance ``sigma^2 (J^T J)^-1`` (kept as
@@ -526,6 +530,14 @@ def oe(
     (array([0.5, 0.2]), array([-1.2,  0.5]), 'frequency')
     """
     periodicity = None
+    if hasattr(data, "omega") and hasattr(data, "response"):  # an FRD: its lines
+        from .oe_lines import oe_frd
+
+        if periods is not None or transient is not None:
+            raise DataError("an FRD is already on its lines: leave periods= and transient= "
+                            "out")
+        nb, nf, nk = matlab_orders("oe", data, nb, nf=nf, nk=nk)
+        return oe_frd(data, nb, nf, nk, max_iter=max_iter, progress=progress, init=init)
     data = as_record(data)
     nb, nf, nk = matlab_orders("oe", data, nb, nf=nf, nk=nk)
     if periods is not None or transient is not None:

@@ -1,9 +1,10 @@
-"""``sysid.oe`` on periodic data (``periods=``, issue 28): ``B/F`` fitted on the excited
-lines by the weighted frequency-response fit of ``tfest``
+"""``sysid.oe`` on periodic data (``periods=``, issue 28) and on frequency-response data
+(an FRD, MATLAB's ``oe(idfrd, [nb nf nk])``): ``B/F`` fitted on the excited lines (or the
+FRD's) by the weighted frequency-response fit of ``tfest``
 (:func:`sysid.tf.frequency.fit_lines`: Sanathanan-Koerner start, then weighted NLS with the
-``1/std`` of :func:`sysid.bla`'s averaged response; covariance scaled by the residual
-scale, ``info["residual_scale"]``, and the sample-variance factor,
-``info["sample_variance_factor"]``), returned as the
+``1/std`` of :func:`sysid.bla`'s averaged response or the FRD's, uniform without one;
+covariance scaled by the residual scale, ``info["residual_scale"]``, and the
+sample-variance factor, ``info["sample_variance_factor"]``), returned as the
 :class:`~sysid.PolynomialModel` the time-domain ``oe`` gives."""
 
 from __future__ import annotations
@@ -25,8 +26,7 @@ def oe_lines(data: Any, nb: Any, nf: Any, nk: Any, *, periods: Any, transient: A
     """The OE model on the lines of periodic ``data``, and what was found of the
     periodicity; no model when ``periods="auto"`` finds no usable period (the caller then
     fits in the time domain). Internal: called by :func:`sysid.oe`."""
-    from ..tf.frequency import fit_lines, record_lines
-    from ..tf.options import blockdiag
+    from ..tf.frequency import record_lines
 
     if init is not None:
         raise DataError("periods= starts from Sanathanan-Koerner iterations on the lines: "
@@ -40,17 +40,55 @@ def oe_lines(data: Any, nb: Any, nf: Any, nk: Any, *, periods: Any, transient: A
     lines, periodicity = record_lines(data, periods, transient)
     if lines is None:
         return None, periodicity
+    m = _fit(lines, nb_g, nf_g, nk_g, float(data.dt), max_iter, progress)
+    m.noise_variance = _noise_variance(m, lines)
+    m.info.update(periods=lines.info.get("periods"), periodicity=periodicity)
+    return m, periodicity
+
+
+def oe_frd(frd: Any, nb: Any, nf: Any, nk: Any, *, max_iter: int, progress: Any,
+           init: Any) -> PolynomialModel:
+    """:func:`sysid.oe` on frequency-response data (MATLAB's ``oe(idfrd, [nb nf nk])``):
+    ``B/F`` fitted to the response, weighted by its ``std`` or uniformly without one.
+    Internal: called by :func:`sysid.oe`."""
+    if init is not None:
+        raise DataError("oe on an FRD starts from Sanathanan-Koerner iterations on its "
+                        "lines: leave init out")
+    if not frd.dt:
+        raise DataError("oe fits a discrete model and needs the FRD's sample time: pass dt= "
+                        "to sysid.FRD (for a continuous model use sysid.tfest(frd, n))")
+    ny, nu = frd.n_outputs, frd.n_inputs
+    nb_g, nf_g, nk_g = (np.array(as_int_grid(v, (ny, nu), name)) for v, name in
+                        ((nb, "nb"), (nf, "nf"), (nk, "nk")))
+    if np.any(nb_g < 1) or np.any(nf_g < 0) or np.any(nk_g < 0):
+        raise DataError("oe on an FRD fits every input-output pair: give nb >= 1, nf >= 0 "
+                        "and nk >= 0 for each")
+    m = _fit(frd, nb_g, nf_g, nk_g, float(frd.dt), max_iter, progress)
+    # a response carries no time-domain noise level: none is claimed
+    m.noise_variance = np.zeros(ny)
+    m.info.update(weighting="noise" if frd.std is not None else "uniform",
+                  noise_variance="not estimated (frequency-response data)")
+    return m
+
+
+def _fit(lines: Any, nb_g: np.ndarray, nf_g: np.ndarray, nk_g: np.ndarray, dt: float,
+         max_iter: int, progress: Any) -> PolynomialModel:
+    """``B/F`` of every pair fitted to the FRD ``lines`` (:func:`sysid.tf.frequency.fit_lines`)
+    as a :class:`PolynomialModel` with its covariance."""
+    from ..tf.frequency import fit_lines
+    from ..tf.options import blockdiag
+
+    ny, nu = lines.n_outputs, lines.n_inputs
     # tfest's discrete pair lags 1 + delay samples: the delay is nk - 1
     _, _, _, _, thetas, covs, scales, factor = fit_lines(
-        lines, nf_g, nb_g - 1, nk_g - 1.0, False, float(data.dt),
-        as_int(max_iter, "max_iter", 0), 1e-10, progress, "oe")
+        lines, nf_g, nb_g - 1, nk_g - 1.0, False, dt, as_int(max_iter, "max_iter", 0), 1e-10,
+        progress, "oe")
     b = [[thetas[i * nu + j][nf_g[i, j]:-1] for j in range(nu)] for i in range(ny)]
     f = [[thetas[i * nu + j][:nf_g[i, j]] for j in range(nu)] for i in range(ny)]
-    m = PolynomialModel([[np.zeros(0)] * ny for _ in range(ny)], b, nk_g, data.dt, f=f)
-    m.noise_variance = _noise_variance(m, lines)
+    m = PolynomialModel([[np.zeros(0)] * ny for _ in range(ny)], b, nk_g, dt, f=f)
+    m.input_names, m.output_names = list(lines.input_names), list(lines.output_names)
     m.info = {"method": "oe", "domain": "frequency", "lines": int(lines.omega.size),
               "criterion": "weighted sum of squares on the excited lines",
-              "periods": lines.info.get("periods"), "periodicity": periodicity,
               "residual_scale": scales, "sample_variance_factor": factor}
     cov = []
     for i in range(ny):  # oe's order per output: b_i1.., f_i1.. (the delays are fixed)
@@ -67,7 +105,7 @@ def oe_lines(data: Any, nb: Any, nf: Any, nk: Any, *, periods: Any, transient: A
     from .uncertainty import attach_uncertainty as _attach_uncertainty
 
     _attach_uncertainty(m, cov, "pem", "frequency lines")
-    return m, periodicity
+    return m
 
 
 def _noise_variance(m: PolynomialModel, lines: Any) -> np.ndarray:
