@@ -109,6 +109,7 @@ _LAZY = {
     "crest_factor": "data.input_design",
     "ctrb": "analysis.controllability",
     "d2c": "models.continuous",
+    "d2d": "models.continuous",
     "damp": "analysis.lti",
     "decimate": "data.filtering",
     "delayest": "polynomial.delayest",  # issue 27 (branch tfproc): its own module
@@ -431,6 +432,7 @@ __all__ = [
     "impulse",
     "c2d",
     "d2c",
+    "d2d",
     "to_control",
     "from_control",
     "to_scipy",

@@ -53,7 +53,7 @@ from .matched import matched_c2d, matched_d2c
 from .protocol import ModelMixin, TimeResponse, continuous_grid, slowest_decay
 from .statespace import StateSpaceModel, finite_dcgain, ss_parameter_count
 
-__all__ = ["ContinuousStateSpace", "SampledContinuous", "c2d", "d2c"]
+__all__ = ["ContinuousStateSpace", "SampledContinuous", "c2d", "d2c", "d2d"]
 
 _METHODS = ("zoh", "foh", "tustin", "matched", "impulse")
 _D2C_METHODS = ("zoh", "foh", "tustin", "matched")
@@ -625,5 +625,76 @@ def d2c(model: StateSpaceModel, method: str = "zoh", *,
         build = unc.build
         out.uncertainty = ParameterUncertainty(
             unc.theta, unc.covariance, lambda t: d2c(build(t), method, prewarp=prewarp),
+            names=unc.names, dof=unc.dof, method=unc.method, undetermined=unc.undetermined)
+    return out
+
+
+def d2d(model: StateSpaceModel, dt: float, method: str = "zoh", *,
+        prewarp: float | None = None) -> StateSpaceModel:
+    """Resample a discrete model to another sample time (MATLAB's ``d2d``).
+
+    With ``method="zoh"`` and ``dt`` a whole multiple ``k`` of the model's sample time the
+    result is exact for any model, poles on the negative real axis included: the input held
+    over ``k`` old samples gives ``A^k``, ``(I + A + ... + A^(k-1)) B``, ``C``, ``D``.
+    Otherwise the model goes through its continuous equivalent, ``c2d(d2c(model, method),
+    dt, method)`` (which needs one: :func:`d2c`'s conditions). The noise model (``K``) is
+    not converted; the parameter uncertainty is (the same parameters, through the map).
+
+    Parameters
+    ----------
+    model : StateSpaceModel or TransferFunction
+        A discrete model; a transfer function goes through its realisation.
+    dt : float
+        The new sample time in seconds.
+    method : {"zoh", "foh", "tustin", "bilinear"}
+        The hold (or the bilinear map) of both conversions.
+    prewarp : float, optional
+        Tustin only: the prewarp frequency (rad/s) of both conversions.
+
+    Returns
+    -------
+    StateSpaceModel
+        Sampled every ``dt`` (no noise model).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> m = sysid.StateSpaceModel([[-0.5]], [[1.0]], [[1.0]], dt=0.1)   # a pole at z < 0
+    >>> r = sysid.d2d(m, 0.3)                                           # 3 samples held
+    >>> float(r.A[0, 0]), float(r.B[0, 0]), r.dt
+    (-0.125, 0.75, 0.3)
+    >>> c = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]], dt=0.2)
+    >>> bool(np.isclose(sysid.d2d(c, 0.1).A[0, 0], np.sqrt(0.9)))       # through d2c
+    True
+    """
+    model = _convertible(model, StateSpaceModel, "d2d")
+    new = _sample_time(None, dt, 1)
+    method = _method(method, _D2C_METHODS)
+    if method == "matched":
+        raise DataError("d2d resamples through a hold or the bilinear map: method must be "
+                        "'zoh', 'foh', 'tustin' or 'bilinear'")
+    k = new / model.dt
+    if method == "zoh" and abs(k - round(k)) <= 1e-9 * k and round(k) >= 1:
+        k = int(round(k))
+        n = model.nstates
+        Ak, S = np.eye(n), np.zeros((n, n))
+        for _ in range(k):  # S = I + A + ... + A^(k-1), Ak = A^k
+            S, Ak = S + Ak, Ak @ model.A
+        out = StateSpaceModel(Ak, S @ model.B, model.C.copy(), model.D.copy(), dt=new,
+                              input_names=model.input_names, output_names=model.output_names,
+                              info={"method": f"d2d (zoh, {k} samples held)"})
+    else:
+        ct = d2c(StateSpaceModel(model.A, model.B, model.C, model.D, dt=model.dt), method,
+                 prewarp=prewarp)
+        out = c2d(ct, new, "tustin" if method == "bilinear" else method, prewarp=prewarp)
+        out.input_names, out.output_names = model.input_names, model.output_names
+        out.info = {"method": f"d2d ({method}, through the continuous equivalent)"}
+    unc = getattr(model, "uncertainty", None)
+    if unc is not None:  # the same parameters, seen through the resampling
+        from .uncertainty import ParameterUncertainty
+
+        build = unc.build
+        out.uncertainty = ParameterUncertainty(
+            unc.theta, unc.covariance, lambda t: d2d(build(t), new, method, prewarp=prewarp),
             names=unc.names, dof=unc.dof, method=unc.method, undetermined=unc.undetermined)
     return out
