@@ -327,8 +327,10 @@ def test_frd_takes_part_where_meaningful():
     xs = fig.axes[0].lines[1].get_xdata()
     np.testing.assert_allclose(xs, w / (2 * np.pi))  # the FRD's own grid
     assert plot_sigma(frd).lines
-    with pytest.raises(sysid.DataError, match="lacks simulate"):
+    with pytest.raises(sysid.DataError, match="no time response"):
         sysid.compare(frd, (np.zeros(10), np.zeros(10)))
+    with pytest.raises(sysid.DataError, match="no time response"):
+        sysid.compare((np.zeros(10), np.zeros(10)), frd)
     plt.close("all")
 
 

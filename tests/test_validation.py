@@ -122,7 +122,7 @@ def test_compare_bad_input():
         sysid.compare(m, (u, np.zeros((50, 1))), x0="model")
     with pytest.raises(sysid.DataError, match="horizon"):
         sysid.compare(m, (u, np.zeros((50, 1))), horizon=0)
-    with pytest.raises(sysid.DataError, match="IOData or a pair"):
+    with pytest.raises(sysid.DataError, match="IOData, a pair"):
         sysid.compare(m, np.zeros((50, 2)))
     with pytest.raises(sysid.DataError, match="StateSpaceModel"):
         sysid.compare("model", (u, np.zeros((50, 1))))

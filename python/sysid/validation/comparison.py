@@ -44,6 +44,10 @@ def split_arguments(args: tuple[Any, ...], horizon: Any) -> tuple[Any, list[Any]
     if not models:
         raise DataError("compare needs at least one model after the data")
     if any(_is_data(m) for m in models):
+        if hasattr(data, "omega") or any(hasattr(m, "omega") for m in models):
+            raise DataError("an FRD has no time response to compare with a record: compare "
+                            "models with frequency-response data, compare(frd, m1, m2, ...), "
+                            "or with a record, compare(data, m1, m2, ...)")
         raise DataError("compare takes one record: compare(data, m1, m2, ...)")
     return data, models, horizon
 
