@@ -31,12 +31,7 @@ def oe_lines(data: Any, nb: Any, nf: Any, nk: Any, *, periods: Any, transient: A
     if init is not None:
         raise DataError("periods= starts from Sanathanan-Koerner iterations on the lines: "
                         "leave init out, or leave periods out for the time-domain fit")
-    ny, nu = data.n_outputs, data.n_inputs
-    nb_g, nf_g, nk_g = (np.array(as_int_grid(v, (ny, nu), name)) for v, name in
-                        ((nb, "nb"), (nf, "nf"), (nk, "nk")))
-    if np.any(nb_g < 1) or np.any(nf_g < 0) or np.any(nk_g < 0):
-        raise DataError("periods= fits every input-output pair: give nb >= 1, nf >= 0 and "
-                        "nk >= 0 for each")
+    nb_g, nf_g, nk_g = _grids(data, nb, nf, nk, "periods=")
     lines, periodicity = record_lines(data, periods, transient)
     if lines is None:
         return None, periodicity
@@ -57,18 +52,24 @@ def oe_frd(frd: Any, nb: Any, nf: Any, nk: Any, *, max_iter: int, progress: Any,
     if not frd.dt:
         raise DataError("oe fits a discrete model and needs the FRD's sample time: pass dt= "
                         "to sysid.FRD (for a continuous model use sysid.tfest(frd, n))")
-    ny, nu = frd.n_outputs, frd.n_inputs
-    nb_g, nf_g, nk_g = (np.array(as_int_grid(v, (ny, nu), name)) for v, name in
-                        ((nb, "nb"), (nf, "nf"), (nk, "nk")))
-    if np.any(nb_g < 1) or np.any(nf_g < 0) or np.any(nk_g < 0):
-        raise DataError("oe on an FRD fits every input-output pair: give nb >= 1, nf >= 0 "
-                        "and nk >= 0 for each")
+    nb_g, nf_g, nk_g = _grids(frd, nb, nf, nk, "oe on an FRD")
     m = _fit(frd, nb_g, nf_g, nk_g, float(frd.dt), max_iter, progress)
     # a response carries no time-domain noise level: none is claimed
-    m.noise_variance = np.zeros(ny)
+    m.noise_variance = np.zeros(frd.n_outputs)
     m.info.update(weighting="noise" if frd.std is not None else "uniform",
                   noise_variance="not estimated (frequency-response data)")
     return m
+
+
+def _grids(data: Any, nb: Any, nf: Any, nk: Any, who: str) -> tuple[np.ndarray, ...]:
+    """``nb``, ``nf``, ``nk`` as ``(outputs, inputs)`` grids, each pair fitted."""
+    shape = (data.n_outputs, data.n_inputs)
+    nb_g, nf_g, nk_g = (np.array(as_int_grid(v, shape, name)) for v, name in
+                        ((nb, "nb"), (nf, "nf"), (nk, "nk")))
+    if np.any(nb_g < 1) or np.any(nf_g < 0) or np.any(nk_g < 0):
+        raise DataError(f"{who} fits every input-output pair: give nb >= 1, nf >= 0 and "
+                        "nk >= 0 for each")
+    return nb_g, nf_g, nk_g
 
 
 def _fit(lines: Any, nb_g: np.ndarray, nf_g: np.ndarray, nk_g: np.ndarray, dt: float,
