@@ -96,6 +96,8 @@ def test_bad_calls_say_what_to_do():
         sysid.pem(d, with_c)
     with pytest.raises(DataError, match="polyest"):
         sysid.polyest(d, "auto")
+    with pytest.raises(DataError, match="got focus, x0"):
+        sysid.pem(d, coupled, focus="simulation", x0="zero")
     with pytest.raises(DataError, match="sampled every 0.5"):
         sysid.pem(sysid.IOData(u, y, 1.0), sysid.polyest(sysid.IOData(u, y, 0.5), 1, 1, 0, 0,
                                                          0, 1))

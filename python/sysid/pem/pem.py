@@ -372,7 +372,7 @@ def pem(
         ``armax``, ``oe``, ``bj``, ``polyest``; MATLAB's ``pem(data, idpoly)``) is refined in
         its own structure by the polynomial estimators' prediction-error search
         (:func:`sysid.polynomial.polyest.pem_polynomial`: ``max_iter`` and ``progress``
-        apply, the state-space options do not).
+        apply; a state-space option given is an error that names it).
     focus : {"prediction", "simulation"}
         One-step prediction errors of the innovation form, or simulation errors (``K = 0``).
     feedthrough : bool or "auto", optional
@@ -516,6 +516,19 @@ def pem(
     if isinstance(model, PolynomialModel):  # MATLAB's pem(data, idpoly)
         from ..polynomial.polyest import pem_polynomial
 
+        given = [k for k, v, d in (
+            ("focus", focus, "prediction"), ("feedthrough", feedthrough, None),
+            ("x0", x0, "estimate"), ("noise", noise, "estimate"), ("tol", tol, 1e-6),
+            ("regularization", regularization, None), ("weighting", weighting, None),
+            ("enforce_stability", enforce_stability, None), ("periods", periods, None),
+            ("transient", transient, None), ("geodesic", geodesic, False),
+            ("local_coordinates", local_coordinates, True)) if not (v is d or v == d)]
+        if given:
+            raise DataError(f"pem refines a polynomial model in its own structure (one-step "
+                            f"prediction errors, its noise model included) and takes "
+                            f"max_iter and progress only, got {', '.join(given)}: for a "
+                            "simulation fit refine sysid.oe(data, nb, nf, nk, init=model), "
+                            "or a state-space form, sysid.pem(data, model.to_statespace())")
         return pem_polynomial(_experiments(data), model, max_iter=max_iter, progress=progress)
     check_start(model, data, "pem")  # NaN matrices, another sample time: before any work
     max_iter, tol = as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")
