@@ -12,6 +12,7 @@ import json
 import time
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -192,10 +193,46 @@ def _local(work: Iterator[tuple[str, Any]], fit: Callable[[Any], Any], cols: Col
     records in flight are *suspects*: each is run again alone, so the one that kills its
     worker is known; after ``retries`` such deaths it gets an error row."""
     import multiprocessing
+
+    ctx = multiprocessing.get_context("spawn")
+    with deferred_interrupt() as interrupted:
+        _pool_loop(work, fit, cols, n, retries, done, ctx, interrupted)
+
+
+#: seconds between looks at a deferred Ctrl-C while the pool works
+POLL = 0.1
+
+
+@contextmanager
+def deferred_interrupt() -> Iterator[list[int]]:
+    """Ctrl-C (SIGINT) recorded in the list yielded instead of raised where it lands, in the
+    main thread; the loop raises ``KeyboardInterrupt`` itself within :data:`POLL` seconds.
+    A ``KeyboardInterrupt`` raised inside ``concurrent.futures.wait`` can leave a future's
+    lock held (its locks are taken one by one, CPython's bpo-20319): the pool's manager
+    thread then blocks forever on that future, and so does the interpreter's exit, which
+    joins it (seen once under load: the test of Ctrl-C hung). Elsewhere (not the main
+    thread) nothing changes."""
+    import signal
+    import threading
+
+    got: list[int] = []
+    if threading.current_thread() is not threading.main_thread():
+        yield got
+        return
+    previous = signal.signal(signal.SIGINT, lambda signum, frame: got.append(signum))
+    try:
+        yield got
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+def _pool_loop(work: Iterator[tuple[str, Any]], fit: Callable[[Any], Any], cols: Columns,
+               n: int, retries: int, done: Callable[[dict[str, Any]], None], ctx: Any,
+               interrupted: list[int]) -> None:
+    """:func:`_local`'s loop over pools (a new one after a worker died)."""
     from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
     from concurrent.futures.process import BrokenProcessPool
 
-    ctx = multiprocessing.get_context("spawn")
     suspects: deque[tuple[str, Any]] = deque()
     deaths: dict[str, int] = {}
     exhausted = False
@@ -209,6 +246,9 @@ def _local(work: Iterator[tuple[str, Any]], fit: Callable[[Any], Any], cols: Col
             except BrokenProcessPool:
                 _stop(pool)
                 raise SysidError(START_FAILED) from None
+            if interrupted:
+                _stop(pool)
+                raise KeyboardInterrupt
         inflight: dict[Any, tuple[str, Any]] = {}
         broken = False
         try:
@@ -228,7 +268,7 @@ def _local(work: Iterator[tuple[str, Any]], fit: Callable[[Any], Any], cols: Col
                 if not inflight:
                     return
                 alone = len(inflight) == 1  # then a dead worker was running this record
-                finished, _ = wait(inflight, return_when=FIRST_COMPLETED)
+                finished, _ = wait(inflight, timeout=POLL, return_when=FIRST_COMPLETED)
                 for f in finished:
                     rid, src = inflight.pop(f)
                     try:
@@ -236,6 +276,8 @@ def _local(work: Iterator[tuple[str, Any]], fit: Callable[[Any], Any], cols: Col
                     except BrokenProcessPool:
                         broken = True
                         _suspect(rid, src, alone, deaths, retries, suspects, done)
+                if interrupted:  # Ctrl-C, raised here: outside the futures' locks
+                    raise KeyboardInterrupt
                 if broken:
                     for rid, src in inflight.values():  # also lost with the pool
                         _suspect(rid, src, False, deaths, retries, suspects, done)
