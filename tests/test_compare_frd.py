@@ -87,3 +87,10 @@ def test_bad_frequency_comparisons_say_what_to_do():
         sysid.compare(frd, sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=0.5))
     with pytest.raises(DataError, match="freqresp"):
         sysid.compare(frd, object())
+    # a nonlinear model's freqresp is its linear part's: refused, the part named
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(400)
+    hw = sysid.nlhw(sysid.IOData(u, true.simulate(u), 1.0), 1, 1, 1, max_iter=5)
+    with pytest.raises(DataError, match=r"nonlinear.*model\.linear\(\)"):
+        sysid.compare(frd, hw)
+    assert sysid.compare(frd, hw.linear()).fit.shape == (1, 1, 1)

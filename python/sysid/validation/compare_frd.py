@@ -11,7 +11,9 @@ mean response). With the FRD's ``std`` the share of lines whose model response l
 the confidence band is reported too. A model has a frequency response whether or not it is
 stable; one that is infinite on a line (a pole on the unit circle there) gets a fit of
 ``-inf``. A continuous model meets sampled data (an FRD with ``dt``) sampled with its hold,
-as :func:`sysid.compare` meets a record.
+as :func:`sysid.compare` meets a record. A nonlinear model is refused: its ``freqresp`` is
+its linear part's, whose gain the nonlinearities share (pass ``model.linear()`` to compare
+that part).
 """
 
 from __future__ import annotations
@@ -174,6 +176,12 @@ def compare_frd(frd: Any, models: list[Any], horizon: Any, x0: Any) -> FRDCompar
                         "have none: leave x0 out")
     for k, m in enumerate(models):
         require_freqresp(m, "model" if len(models) == 1 else f"model {k + 1}")
+        part = next((f for f in ("linear", "linearize") if callable(getattr(m, f, None))), None)
+        if part is not None:  # its freqresp is a linear part's, whose gain it shares
+            raise DataError(f"model {k + 1} ({type(m).__name__}) is nonlinear: its frequency "
+                            f"response is its linear part's (model.{part}()), whose gain the "
+                            "nonlinearities share; compare the model on a record, or pass "
+                            f"model.{part}() to compare that part on purpose")
         shape = (getattr(m, "noutputs", None), getattr(m, "ninputs", None))
         if None not in shape and shape != (frd.n_outputs, frd.n_inputs):
             raise DataError(f"model {k + 1} has {shape[1]} input(s) and {shape[0]} output(s) "
