@@ -124,6 +124,20 @@ class IdentifiabilityWarning(SysidWarning):
     determined."""
 
 
+def is_frd(data: object) -> bool:
+    """Whether ``data`` is frequency-response data (an :class:`sysid.FRD`, MATLAB's
+    ``idfrd``), told by its ``omega`` and ``response`` (no import of the model module).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.errors import is_frd
+    >>> is_frd(sysid.FRD([1.0], [1.0])), is_frd(sysid.IOData(np.ones(4), np.ones(4)))
+    (True, False)
+    """
+    return hasattr(data, "omega") and hasattr(data, "response")
+
+
 def refuse_frd(data: object, who: str) -> None:
     """A :class:`DataError` naming the estimators that take frequency-response data when
     ``data`` is one (an :class:`sysid.FRD`, MATLAB's ``idfrd``) and ``who`` takes time
@@ -135,7 +149,7 @@ def refuse_frd(data: object, who: str) -> None:
     >>> from sysid.errors import refuse_frd
     >>> refuse_frd(sysid.IOData(np.ones(4), np.ones(4)), "arx")  # a record: nothing to say
     """
-    if hasattr(data, "omega") and hasattr(data, "response"):
+    if is_frd(data):
         raise DataError(
             f"{who} takes a time record (IOData), got frequency-response data "
             f"({type(data).__name__}): fit it with sysid.ssest(frd, order), "

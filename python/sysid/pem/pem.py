@@ -25,7 +25,7 @@ from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
-from ..errors import DataError, SysidWarning
+from ..errors import DataError, SysidWarning, is_frd
 from ..models.checks import check_start
 from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
@@ -59,7 +59,7 @@ def _experiments(data: Any) -> IOData:
         return data
     if isinstance(data, tuple) and len(data) == 2:
         return IOData(u=data[0], y=data[1])
-    if hasattr(data, "omega") and hasattr(data, "response"):  # an FRD (MATLAB's idfrd)
+    if is_frd(data):  # MATLAB's idfrd
         raise DataError("this takes a time record; for a frequency response fit "
                         "sysid.ssest(frd, order) or sysid.frd_subspace(frd, order) (a "
                         "state-space model; refine it with sysid.pem(frd, model)) or "

@@ -26,7 +26,7 @@ from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..data.iodata import as_record
 from ..data.offsets import check_offsets
-from ..errors import DataError, InsufficientDataError, NumericalError, ShapeError
+from ..errors import DataError, InsufficientDataError, NumericalError, ShapeError, is_frd
 from .cancellation import cancellation, warn_cancellations
 from .model import PolynomialModel
 from .orders import matlab_orders
@@ -530,7 +530,7 @@ def oe(
     (array([0.5, 0.2]), array([-1.2,  0.5]), 'frequency')
     """
     periodicity = None
-    if hasattr(data, "omega") and hasattr(data, "response"):  # an FRD: its lines
+    if is_frd(data):  # its lines
         from .oe_lines import oe_frd
 
         if periods is not None or transient is not None:

@@ -12,7 +12,7 @@ import numpy as np
 from .._checks import as_int
 from .._threads import one_blas_thread
 from ..data.iodata import IOData, require_record
-from ..errors import DataError
+from ..errors import DataError, is_frd
 from ..models.statespace import StateSpaceModel
 from .estimator import Order, SubspaceEstimator, horizon_for_order
 from .feedthrough import warn_if_left_out
@@ -70,7 +70,7 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         x0: bool = False,
         scale: bool | None = None,
     ) -> StateSpaceModel:
-        if method == "n4sid" and hasattr(data, "omega") and hasattr(data, "response"):
+        if method == "n4sid" and is_frd(data):
             return n4sid_frd(data, order, horizon, feedthrough, stable, x0, scale)
         data = require_record(data, method.replace("-", "_"))
         if not isinstance(order, str) and np.ndim(order) == 0:

@@ -9,7 +9,7 @@ import numpy as np
 
 from .._checks import require_inputs_vary
 from .._threads import one_blas_thread
-from ..errors import DataError
+from ..errors import DataError, is_frd
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 from .model import TransferFunction
@@ -140,7 +140,7 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     max_iter, tol = search_limits(max_iter, tol, max_delay)
     if initial_state not in ("zero", "estimate"):
         raise DataError(f"initial_state must be 'zero' or 'estimate', got {initial_state!r}")
-    if hasattr(data, "omega") and hasattr(data, "response"):  # an FRD
+    if is_frd(data):
         from .frequency import tfest_frd
 
         if periods is not None or transient is not None:

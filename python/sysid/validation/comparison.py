@@ -12,15 +12,14 @@ from typing import Any
 import numpy as np
 
 from ..data.iodata import IOData
-from ..errors import DataError
+from ..errors import DataError, is_frd
 
 __all__ = ["CompareSet", "split_arguments"]
 
 
 def _is_data(x: Any) -> bool:
     """A record, a ``(u, y)`` pair or frequency-response data (an FRD)."""
-    return (isinstance(x, IOData) or (isinstance(x, tuple) and len(x) == 2)
-            or (hasattr(x, "omega") and hasattr(x, "response")))
+    return isinstance(x, IOData) or (isinstance(x, tuple) and len(x) == 2) or is_frd(x)
 
 
 def split_arguments(args: tuple[Any, ...], horizon: Any) -> tuple[Any, list[Any], Any]:
@@ -44,7 +43,7 @@ def split_arguments(args: tuple[Any, ...], horizon: Any) -> tuple[Any, list[Any]
     if not models:
         raise DataError("compare needs at least one model after the data")
     if any(_is_data(m) for m in models):
-        if hasattr(data, "omega") or any(hasattr(m, "omega") for m in models):
+        if is_frd(data) or any(is_frd(m) for m in models):
             raise DataError("an FRD has no time response to compare with a record: compare "
                             "models with frequency-response data, compare(frd, m1, m2, ...), "
                             "or with a record, compare(data, m1, m2, ...)")
