@@ -39,11 +39,9 @@ def n4sid_frd(frd: Any, order: Any, horizon: int | None, feedthrough: Any, stabl
         raise DataError("n4sid on frequency-response data fits the response on its lines: "
                         "stable= and x0= apply to time records; leave them out (refine with "
                         "sysid.ssest(frd, order), which keeps the model stable)")
-    if feedthrough is not None and not isinstance(feedthrough, (bool, np.bool_)):
-        raise DataError("feedthrough='auto' decides from a time record; with an FRD pass "
-                        "True or False")
-    return frd_subspace(frd, order, horizon=horizon, feedthrough=bool(feedthrough),
-                        scale=scale)
+    # frd_subspace refuses feedthrough="auto" for an FRD itself
+    return frd_subspace(frd, order, horizon=horizon,
+                        feedthrough=False if feedthrough is None else feedthrough, scale=scale)
 
 
 _FRD_NOTE = """
