@@ -164,6 +164,22 @@ def line_weights(frd: FRD) -> np.ndarray:
     return 2.0 / np.maximum(s2, max(floor, 1e-300))
 
 
+def frequency_weights(frd: FRD) -> np.ndarray:
+    """One weight per frequency for :func:`sysid.frd_subspace`: :func:`line_weights`
+    averaged over the output/input pairs, scaled to mean 1.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.pem.periodic import frequency_weights
+    >>> f = sysid.FRD([1.0, 2.0], np.ones(2), std=np.array([0.5, 1.0])[:, None, None])
+    >>> frequency_weights(f).tolist()
+    [1.6, 0.4]
+    """
+    w = np.mean(line_weights(frd), axis=(1, 2))
+    return w / w.mean()
+
+
 def with_line_weights(frd: FRD) -> tuple[FRD, str]:
     """``frd`` and ``"noise"`` when it carries its lines' noise level (``std`` or
     ``info["noise_std"]``); otherwise a copy with the same unit standard deviation on every

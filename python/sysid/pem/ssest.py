@@ -276,7 +276,7 @@ def periodic_start(data: Any, order: int, feedthrough: Any) -> StateSpaceModel |
     """
     from ..data.periodicity import detect
     from ..subspace.frd_subspace import frd_subspace
-    from .periodic import line_weights, periodic_lines, whole_periods
+    from .periodic import frequency_weights, periodic_lines, whole_periods
 
     try:
         with warnings.catch_warnings():
@@ -286,10 +286,7 @@ def periodic_start(data: Any, order: int, feedthrough: Any) -> StateSpaceModel |
                 return None
             frd = periodic_lines(whole_periods(data, found), found.periods,
                                  1 if found.periods >= 3 else 0)
-            weights = None
-            if frd.dof is not None and frd.dof > 4:
-                w = np.mean(line_weights(frd), axis=(1, 2))
-                weights = w / w.mean()
+            weights = frequency_weights(frd) if frd.dof is not None and frd.dof > 4 else None
             return frd_subspace(frd, order, weights=weights, feedthrough=bool(feedthrough))
     except SysidError:
         return None
@@ -302,7 +299,7 @@ def _ssest_frd(frd: FRD, order: Any, feedthrough: Any, horizon: int | None, max_
     by the lines' std, and unweighted) scored on the lines, the best stable one refined
     there by :func:`pem`."""
     from ..subspace.frd_subspace import frd_subspace
-    from .periodic import line_weights, lines_cost, with_line_weights
+    from .periodic import frequency_weights, lines_cost, with_line_weights
 
     if regularization is not None or periods is not None or transient is not None:
         raise DataError("an FRD is fitted on its lines: regularization, periods= and "
@@ -321,10 +318,7 @@ def _ssest_frd(frd: FRD, order: Any, feedthrough: Any, horizon: int | None, max_
                         "pass dt= to sysid.FRD (for a continuous model use sysid.tfest or "
                         "sysid.frd_subspace(frd, order, continuous=True))")
     scored_on, how = with_line_weights(frd)
-    weights = None
-    if how == "noise":
-        w = np.mean(line_weights(scored_on), axis=(1, 2))
-        weights = w / w.mean()
+    weights = frequency_weights(scored_on) if how == "noise" else None
     why: list[Exception] = []
     candidates = []
     with warnings.catch_warnings():
@@ -392,7 +386,7 @@ def _ssest_periodic(data: Any, order: Any, frd: Any, feedthrough: Any,
     """:func:`ssest` on the excited lines of periodic data: the stable candidate with the
     lowest weighted misfit on the lines, refined there."""
     from ..subspace.frd_subspace import frd_subspace
-    from .periodic import line_weights, lines_cost
+    from .periodic import frequency_weights, lines_cost
 
     if regularization is not None:
         raise DataError("regularization does not apply to the frequency-domain refinement of "
@@ -416,9 +410,8 @@ def _ssest_periodic(data: Any, order: Any, frd: Any, feedthrough: Any,
                 why.append(e)
                 continue
         try:
-            w = np.mean(line_weights(frd), axis=(1, 2))
-            candidates.append(("frd_subspace", frd_subspace(frd, order, weights=w / w.mean(),
-                                                            feedthrough=bool(ft))))
+            candidates.append(("frd_subspace", frd_subspace(
+                frd, order, weights=frequency_weights(frd), feedthrough=bool(ft))))
         except SysidError:
             pass
     scored = [(lines_cost(frd, c) if np.max(np.abs(c.poles()), initial=0.0) < 1 else np.inf,
