@@ -103,20 +103,11 @@ def polyest(
     return _warn_diverging(m, "polyest")
 
 
-def _orders(model: PolynomialModel) -> tuple[list[int], ...]:
-    """``(na, nb, nc, nd, nf, nk)`` of ``model`` as :func:`polyest` takes them, or a
-    :class:`DataError` when its ``A`` couples the outputs (the per-output search cannot
-    hold it)."""
+def _orders(model: PolynomialModel) -> tuple[list[Any], ...]:
+    """``(na, nb, nc, nd, nf, nk)`` of ``model``: ``na`` as the ``(outputs, outputs)`` grid of
+    its ``A``'s orders, the rest as :func:`polyest` takes them."""
     ny, nu = model.n_outputs, model.n_inputs
-    for i in range(ny):
-        for k in range(ny):
-            if k != i and np.any(np.asarray(model.a[i][k]) != 0):
-                raise DataError(
-                    f"the model's A couples output {i} with output {k} and it has C, D or "
-                    "F: pem refines such models one equation per output, with a diagonal "
-                    "A; refine a state-space form instead, sysid.pem(data, "
-                    "model.to_statespace())")
-    na = [len(model.a[i][i]) for i in range(ny)]
+    na = [[len(model.a[i][k]) for k in range(ny)] for i in range(ny)]
     nb = [[len(model.b[i][j]) for j in range(nu)] for i in range(ny)]
     nc = [len(model.c[i]) for i in range(ny)]
     nd = [len(model.d[i]) for i in range(ny)]
@@ -151,20 +142,26 @@ def pem_polynomial(data: Any, model: PolynomialModel, *, max_iter: int,
     if getattr(data, "dt", None) and model.dt and not np.isclose(data.dt, model.dt):
         raise DataError(f"the model is sampled every {model.dt} s but the data every "
                         f"{data.dt} s: resample one of them")
-    ny, nu = model.n_outputs, model.n_inputs
-    if not any(len(model.c[i]) or len(model.d[i]) or any(len(f) for f in model.f[i])
-               for i in range(ny)):
+    na, nb, nc, nd, nf, nk = _orders(model)
+    ny = model.n_outputs
+    if not any(nc[i] or nd[i] or any(nf[i]) for i in range(ny)):
         # ARX: the least-squares fit is the prediction-error minimum (a coupled A too)
         from .estimators import arx
 
-        m = arx(data, [[len(model.a[i][k]) for k in range(ny)] for i in range(ny)],
-                [[len(model.b[i][j]) for j in range(nu)] for i in range(ny)],
-                [[int(model.nk[i, j]) for j in range(nu)] for i in range(ny)])
+        m = arx(data, na, nb, nk)
         m.info = dict(m.info or {}, start="init",
                       note="ARX structure: its least-squares fit is the prediction-error "
                            "minimum")
         return m
-    na, nb, nc, nd, nf, nk = _orders(model)
+    coupled = [(i, k) for i in range(ny) for k in range(ny)
+               if k != i and np.any(np.asarray(model.a[i][k]) != 0)]
+    if coupled:
+        i, k = coupled[0]
+        raise DataError(
+            f"the model's A couples output {i} with output {k} and it has C, D or F: pem "
+            "refines such models one equation per output, with a diagonal A; refine a "
+            "state-space form instead, sysid.pem(data, model.to_statespace())")
+    na = [na[i][i] for i in range(ny)]
     m = _pem(data, na, nb, nc, nd, nf, nk, "pem", max_iter, progress, model)
     m.info["start"] = "init"
     return _warn_diverging(m, "pem")
