@@ -152,8 +152,10 @@ def test_pem_start_with_nan_matrix(record):
     start.__dict__["_matrix_A"] = np.array([[np.nan]])  # made NaN behind their back
     with pytest.raises(NonFiniteError, match="start model's A has non-finite entries"):
         sysid.pem(record[2], start)
-    with pytest.raises(DataError, match="ssest takes an order, got a StateSpaceModel"):
-        sysid.ssest(record[2], start)
+    with pytest.raises(NonFiniteError, match="start model's A has non-finite entries"):
+        sysid.ssest(record[2], start)  # MATLAB's ssest(data, init_sys): pem's checks
+    with pytest.raises(DataError, match="ssest takes an order, a sysid.StateSpaceModel"):
+        sysid.ssest(record[2], sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]]))
 
 
 def test_channel_statistics_of_no_channel_or_no_sample_do_not_panic():

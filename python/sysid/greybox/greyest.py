@@ -26,7 +26,7 @@ from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..errors import DataError
 from ..models.frd import FRD
-from ..pem.pem import _experiments
+from ..pem.records import _experiments
 from .delays import shift_taps
 from .greybox import GreyBox
 from .outer import OuterParameters, model_of

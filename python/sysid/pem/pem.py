@@ -25,7 +25,7 @@ from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..data.offsets import check_offsets
-from ..errors import DataError, SysidWarning, is_frd
+from ..errors import DataError, SysidWarning
 from ..models.checks import check_start
 from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
@@ -33,6 +33,8 @@ from ..models.uncertainty import ParameterUncertainty
 from ..polynomial.model import PolynomialModel
 from ..subspace.feedthrough import check_feedthrough, choose_feedthrough
 from .diagnostics import lines_record_length, warn_refinement, warn_undetermined
+from .records import _experiments
+from .ssform import StateSpaceStructure
 from .units import SearchUnits, search_units
 
 __all__ = ["pem", "pem_loss", "PemUncertainty"]
@@ -52,20 +54,6 @@ def _stabilize(A: np.ndarray) -> np.ndarray:
 
 def _radius(M: np.ndarray) -> float:
     return float(np.max(np.abs(np.linalg.eigvals(M)))) if M.size else 0.0
-
-
-def _experiments(data: Any) -> IOData:
-    if isinstance(data, IOData):
-        return data
-    if isinstance(data, tuple) and len(data) == 2:
-        return IOData(u=data[0], y=data[1])
-    if is_frd(data):  # MATLAB's idfrd
-        raise DataError("this takes a time record; for a frequency response fit "
-                        "sysid.ssest(frd, order) or sysid.frd_subspace(frd, order) (a "
-                        "state-space model; refine it with sysid.pem(frd, model)) or "
-                        "sysid.tfest(frd, n_poles), or pass the record itself (with periods= "
-                        "for periodic data: the fit is then on its excited lines)")
-    raise DataError(f"data must be a sysid.IOData or a (u, y) pair, got {type(data).__name__}")
 
 
 def _x0_modes(x0: Any, count: int, n: int) -> list[Any]:
@@ -344,7 +332,7 @@ def _start_noise(info: dict[str, Any]) -> None:
 @one_blas_thread
 def pem(
     data: Any,
-    model: StateSpaceModel,
+    model: StateSpaceModel | StateSpaceStructure | PolynomialModel,
     *,
     focus: str = "prediction",
     feedthrough: bool | str | None = None,
@@ -367,12 +355,15 @@ def pem(
     ----------
     data : IOData or (u, y)
         Estimation data (every experiment is used; remove means first).
-    model : StateSpaceModel or PolynomialModel
+    model : StateSpaceModel, StateSpaceStructure or PolynomialModel
         The start (for example a subspace estimate). A polynomial model (``arx``,
         ``armax``, ``oe``, ``bj``, ``polyest``; MATLAB's ``pem(data, idpoly)``) is refined in
         its own structure by the polynomial estimators' prediction-error search
         (:func:`sysid.polynomial.polyest.pem_polynomial`: ``max_iter`` and ``progress``
-        apply; a state-space option given is an error that names it).
+        apply; a state-space option given is an error that names it). A
+        :func:`sysid.ssform` structure (fixed entries, a canonical form) is refined in its
+        free parameters (:mod:`sysid.pem.structured`: ``focus``, ``x0``, ``max_iter``,
+        ``tol`` and ``progress`` apply).
     focus : {"prediction", "simulation"}
         One-step prediction errors of the innovation form, or simulation errors (``K = 0``).
     feedthrough : bool or "auto", optional
@@ -513,16 +504,17 @@ def pem(
     >>> bool(np.allclose(np.sort_complex(m.poles()), np.sort_complex(true.poles()), atol=0.02))
     True
     """
+    given = [k for k, v, d in (
+        ("focus", focus, "prediction"), ("feedthrough", feedthrough, None),
+        ("x0", x0, "estimate"), ("noise", noise, "estimate"), ("tol", tol, 1e-6),
+        ("regularization", regularization, None), ("weighting", weighting, None),
+        ("enforce_stability", enforce_stability, None), ("periods", periods, None),
+        ("transient", transient, None), ("geodesic", geodesic, False),
+        ("local_coordinates", local_coordinates, True))
+        if not (v is d or (isinstance(v, (str, bool, float, int)) and v == d))]
     if isinstance(model, PolynomialModel):  # MATLAB's pem(data, idpoly)
         from ..polynomial.polyest import pem_polynomial
 
-        given = [k for k, v, d in (
-            ("focus", focus, "prediction"), ("feedthrough", feedthrough, None),
-            ("x0", x0, "estimate"), ("noise", noise, "estimate"), ("tol", tol, 1e-6),
-            ("regularization", regularization, None), ("weighting", weighting, None),
-            ("enforce_stability", enforce_stability, None), ("periods", periods, None),
-            ("transient", transient, None), ("geodesic", geodesic, False),
-            ("local_coordinates", local_coordinates, True)) if not (v is d or v == d)]
         if given:
             raise DataError(f"pem refines a polynomial model in its own structure (one-step "
                             f"prediction errors, its noise model included) and takes "
@@ -530,6 +522,11 @@ def pem(
                             "simulation fit refine sysid.oe(data, nb, nf, nk, init=model), "
                             "or a state-space form, sysid.pem(data, model.to_statespace())")
         return pem_polynomial(_experiments(data), model, max_iter=max_iter, progress=progress)
+    if isinstance(model, StateSpaceStructure):  # MATLAB's pem(data, init_sys) with Structure
+        from .structured import pem_structured
+
+        return pem_structured(data, model, focus=focus, x0=x0, max_iter=max_iter, tol=tol,
+                              progress=progress, given=given, refine=pem)
     check_start(model, data, "pem")  # NaN matrices, another sample time: before any work
     max_iter, tol = as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")
     periodicity = None

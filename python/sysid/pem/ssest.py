@@ -22,6 +22,7 @@ from ..subspace.feedthrough import (
     warn_if_left_out,
 )
 from .pem import _experiments, pem, pem_loss
+from .ssform import StateSpaceStructure
 
 __all__ = ["ssest"]
 
@@ -55,9 +56,12 @@ def ssest(
 
     Parameters
     ----------
-    data : IOData or (u, y)
-    order : int, "auto" or sequence of int
-        Model order. ``"auto"`` (default): the order whose subspace models best simulate
+    data : IOData, (u, y) or FRD
+    order : int, "auto", sequence of int, StateSpaceModel or StateSpaceStructure
+        Model order. A model (MATLAB's ``ssest(data, init_sys)``) is the start, refined by
+        :func:`pem` with these options; a :func:`sysid.ssform` structure (fixed entries, a
+        canonical form) has its free parameters estimated (:mod:`sysid.pem.structured`).
+        ``"auto"`` (default): the order whose subspace models best simulate
         parts of the record held out (:meth:`SubspaceEstimator.order_selection`); a sequence
         (``range(1, 11)``): each order refined on the whole record, the one with the lowest
         BIC of its simulation errors wins (:func:`sysid.identify.structure.refined_order`).
@@ -128,13 +132,30 @@ def ssest(
     True
     """
     as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")  # before any fit
+    if isinstance(order, StateSpaceStructure):  # MATLAB's ssest(data, init_sys)
+        from .structured import pem_structured
+
+        given = [k for k, v, d in (("feedthrough", feedthrough, None), ("noise", noise,
+                 "estimate"), ("horizon", horizon, None), ("regularization", regularization,
+                 None), ("enforce_stability", enforce_stability, None), ("periods", periods,
+                 None), ("transient", transient, None)) if v is not d and v != d]
+        return pem_structured(data, order, focus=focus, x0=x0, max_iter=max_iter, tol=tol,
+                              progress=progress, caller="ssest", given=given, refine=pem)
+    if isinstance(order, StateSpaceModel):  # MATLAB's ssest(data, init_sys): refined by pem
+        if horizon is not None or method is not None:
+            raise DataError("ssest refines a start model without a subspace step: leave "
+                            "horizon and method out")
+        return pem(data, order, focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
+                   max_iter=max_iter, tol=tol, regularization=regularization,
+                   progress=progress, enforce_stability=enforce_stability, periods=periods,
+                   transient=transient)
+    if hasattr(order, "nstates"):  # another model (its repr may not print)
+        raise DataError(f"ssest takes an order, a sysid.StateSpaceModel or a sysid.ssform "
+                        f"structure, got a {type(order).__name__}")
     if isinstance(data, FRD):
         return _ssest_frd(data, order, feedthrough, horizon, max_iter, tol, progress,
                           regularization, periods, transient)
     data = _experiments(data)
-    if hasattr(order, "nstates"):  # a start model: pem refines one (its repr may not print)
-        raise DataError(f"ssest takes an order, got a {type(order).__name__}; refine a start "
-                        "model with sysid.pem(data, model)")
     if not isinstance(order, str) and np.ndim(order) == 0:
         order = as_int(order, "order", 1)  # inf, nan, 2.5: before any data are compressed
     if isinstance(methods, str):
