@@ -220,8 +220,12 @@ def pole_std(model: Any, method: str = "linear", *, n: int = 1000, rng: Any = No
     lam, G, bad = pole_jacobian(model)
     sd = _complex_std(G)
     if bad.any():
-        sd = np.where(bad, _draws_std(lam, _pole_draws(model, lam)), sd)
-        _warn_monte_carlo(bad, lam, "standard deviation")
+        mc = _draws_std(lam, _pole_draws(model, lam))
+        sd = np.where(bad, mc, sd)
+        # poles no draw moves (the unit delays of an absorbed input delay) are exact: std 0
+        moved = bad & (mc != 0)
+        if moved.any():
+            _warn_monte_carlo(moved, lam, "standard deviation")
     return lam, sd
 
 

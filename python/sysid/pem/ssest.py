@@ -46,6 +46,7 @@ def ssest(
     enforce_stability: bool | None = None,
     periods: int | str | None = None,
     transient: int | None = None,
+    input_delay: Any = None,
 ) -> StateSpaceModel:
     """Estimate a state-space model: the best subspace start, refined by :func:`pem`.
 
@@ -104,6 +105,11 @@ def ssest(
     transient : int, optional
         Leading periods dropped: default 1 with ``periods="auto"``, 0 with a declared
         ``periods`` (as :func:`pem`).
+    input_delay : int, sequence of int or "auto", optional
+        Known input delays in samples (MATLAB's ``InputDelay``; one for all inputs or one
+        each; ``"auto"``: from :func:`sysid.delayest`): the model is fitted to the shifted
+        inputs and returned with the delays absorbed as states
+        (:mod:`sysid.models.input_delay`; ``info["delay_free"]``, ``info["input_delay"]``).
 
     Frequency-response data (an :class:`sysid.FRD`, MATLAB's ``ssest(idfrd, n)``): the
     frequency-domain subspace fits (:func:`sysid.frd_subspace`, weighted by the lines' std
@@ -132,6 +138,20 @@ def ssest(
     True
     """
     as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")  # before any fit
+    if input_delay is not None:  # MATLAB's InputDelay: fitted on the shifted inputs
+        from ..models.input_delay import absorb_delay, input_delays, shift_inputs
+
+        if isinstance(data, FRD) or hasattr(order, "nstates"):
+            raise DataError("input_delay applies to a time record and an order: leave it out "
+                            "for an FRD or a start model")
+        data = _experiments(data)
+        k = input_delays(data, input_delay, feedthrough)
+        inner = ssest(shift_inputs(data, k), order, focus=focus, feedthrough=feedthrough,
+                      x0=x0, noise=noise, horizon=horizon, methods=methods, method=method,
+                      max_iter=max_iter, tol=tol, regularization=regularization,
+                      progress=progress, enforce_stability=enforce_stability, periods=periods,
+                      transient=transient)
+        return absorb_delay(inner, k)
     if isinstance(order, StateSpaceStructure):  # MATLAB's ssest(data, init_sys)
         from .structured import pem_structured
 

@@ -67,10 +67,18 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         stable: bool = False,
         x0: bool = False,
         scale: bool | None = None,
+        input_delay: Any = None,
     ) -> StateSpaceModel:
-        if method == "n4sid" and is_frd(data):
+        if method == "n4sid" and is_frd(data) and input_delay is None:
             return n4sid_frd(data, order, horizon, feedthrough, stable, x0, scale)
         data = require_record(data, method.replace("-", "_"))
+        if input_delay is not None:  # MATLAB's InputDelay: fitted on the shifted inputs
+            from ..models.input_delay import absorb_delay, input_delays, shift_inputs
+
+            k = input_delays(data, input_delay, feedthrough)
+            return absorb_delay(fit(shift_inputs(data, k), order, horizon=horizon,
+                                    feedthrough=feedthrough, kalman=kalman, stable=stable,
+                                    x0=x0, scale=scale), k)
         if not isinstance(order, str) and np.ndim(order) == 0:
             order = as_int(order, "order", 1)  # inf, nan, 2.5: before the data are compressed
         horizon = horizon_for_order(data, order, horizon)  # one that allows a given order
@@ -95,7 +103,10 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
     default) the order and ``D`` are chosen together by held-out simulation fit
     (``info["order_selection"]``, ``info["feedthrough_selection"]``). ``scale=False``
     computes in the record's units instead of on channels of unit root mean square
-    (:mod:`sysid.subspace.scaling`), as SLICOT's IB01AD does.{_frd_note(method)}
+    (:mod:`sysid.subspace.scaling`), as SLICOT's IB01AD does. ``input_delay`` (samples, one
+    for all inputs or one each, or ``"auto"``; MATLAB's ``InputDelay``): fitted to the
+    shifted inputs, the delays returned as states
+    (:mod:`sysid.models.input_delay`).{_frd_note(method)}
 
     Examples
     --------

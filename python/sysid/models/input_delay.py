@@ -1,0 +1,118 @@
+"""Known input delays of discrete state-space models (MATLAB's ``InputDelay`` option of
+``ssest``/``n4sid`` and ``absorbDelay``).
+
+An estimator given ``input_delay`` fits the delay-free model to the record with each input
+``j`` shifted by its delay ``k_j`` samples (``u_j(t - k_j)``; the first ``max k`` samples of
+each experiment are dropped, as their shifted inputs are not recorded), then returns the model
+of the raw record with the delays absorbed as states: each delayed input passes through a
+chain of ``k_j`` unit delays (``k_j`` states, poles at zero) before the delay-free model. The
+delay-free fit is ``info["delay_free"]``, the delays ``info["input_delay"]``; predictions,
+simulations, ``compare`` and the parameter uncertainty (the delay-free model's parameters,
+through the same map) apply to the absorbed model unchanged.
+
+``input_delay="auto"`` takes the delays from :func:`sysid.delayest` (ARX models over delays 0
+to 10): per input, the smallest delay to any output, less the one sample a model without
+feedthrough already has.
+
+Examples
+--------
+>>> import numpy as np, sysid
+>>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+>>> d = absorb_delay(m, [2])
+>>> d.nstates, np.round(d.impulse(5).y[:, 0, 0], 3).tolist()
+(3, [0.0, 0.0, 0.0, 1.0, 0.5])
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .._checks import as_int
+from ..data.iodata import IOData
+from ..errors import DataError
+from .statespace import StateSpaceModel
+
+__all__ = ["absorb_delay", "input_delays", "shift_inputs"]
+
+
+def input_delays(data: IOData, input_delay: Any, feedthrough: Any = None) -> np.ndarray:
+    """The delay of every input in samples (``input_delay``: one number for all, one per
+    input, or ``"auto"``), checked against the record before anything is fitted."""
+    m = data.n_inputs
+    if isinstance(input_delay, str):
+        if input_delay != "auto":
+            raise DataError(f"input_delay must be samples (one per input, or one for all) or "
+                            f"'auto', got {input_delay!r}")
+        from ..polynomial.delayest import delayest
+
+        nk = np.atleast_2d(delayest(data)).min(axis=0)
+        return np.maximum(nk - (0 if feedthrough is True else 1), 0).astype(int)
+    k = np.atleast_1d(np.asarray(input_delay))
+    if k.ndim != 1 or k.size not in (1, m):
+        raise DataError(f"input_delay must be one number or one per input ({m}), got "
+                        f"{input_delay!r}")
+    k = np.array([as_int(v, "input_delay", 0) for v in k], dtype=int)
+    k = np.repeat(k, m) if k.size == 1 else k
+    shortest = min(data.lengths)
+    if k.max(initial=0) >= shortest // 2:
+        raise DataError(f"input_delay {k.max()} samples leaves too little of the shortest "
+                        f"experiment ({shortest} samples): check the delay's units (samples, "
+                        "not seconds)")
+    return k
+
+
+def shift_inputs(data: IOData, delays: np.ndarray) -> IOData:
+    """Each input ``j`` delayed by ``delays[j]`` samples, the first ``max(delays)`` samples of
+    every experiment dropped."""
+    top = int(np.max(delays, initial=0))
+    us, ys = [], []
+    for u, y in data.experiments:
+        n = u.shape[0]
+        us.append(np.column_stack([u[top - k:n - k, j] for j, k in enumerate(delays)])
+                  if u.shape[1] else u[top:])
+        ys.append(y[top:])
+    return IOData(u=us if len(us) > 1 else us[0], y=ys if len(ys) > 1 else ys[0], dt=data.dt,
+                  input_names=data.input_names, output_names=data.output_names)
+
+
+def absorb_delay(model: StateSpaceModel, delays: Any) -> StateSpaceModel:
+    """The model of the raw inputs: ``delays[j]`` unit-delay states ahead of input ``j``
+    (module docstring); ``K``, the noise covariance and the uncertainty carried."""
+    k = np.asarray(delays, dtype=int).ravel()
+    n, m, l = model.nstates, model.ninputs, model.noutputs
+    if k.size != m:
+        raise DataError(f"need one delay per input ({m}), got {k.size}")
+    nd = int(k.sum())
+    A = np.zeros((n + nd, n + nd))
+    B = np.zeros((n + nd, m))
+    A[:n, :n] = model.A
+    C = np.hstack([model.C, np.zeros((l, nd))])
+    D = model.D.copy()
+    o = n
+    for j in range(m):
+        if k[j] == 0:
+            B[:n, j] = model.B[:, j]
+            continue
+        # u_j enters the chain's first state; its last feeds the model (and no direct term)
+        B[o, j] = 1.0
+        for s in range(k[j] - 1):
+            A[o + s + 1, o + s] = 1.0
+        A[:n, o + k[j] - 1] = model.B[:, j]
+        C[:, o + k[j] - 1] += model.D[:, j]
+        D[:, j] = 0.0
+        o += k[j]
+    K = None if model.K is None else np.vstack([model.K, np.zeros((nd, l))])
+    out = StateSpaceModel(A, B, C, D, K=K, dt=model.dt, noise_cov=model.noise_cov,
+                          input_names=model.input_names, output_names=model.output_names,
+                          info={**model.info, "input_delay": k.tolist(), "delay_free": model})
+    unc = getattr(model, "uncertainty", None)
+    if unc is not None:  # the delay-free model's parameters, through the same map
+        from .uncertainty import ParameterUncertainty
+
+        build = unc.build
+        out.uncertainty = ParameterUncertainty(
+            unc.theta, unc.covariance, lambda t: absorb_delay(build(t), k), names=unc.names,
+            dof=unc.dof, method=unc.method, undetermined=unc.undetermined)
+    return out
