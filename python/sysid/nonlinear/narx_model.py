@@ -360,7 +360,8 @@ class NARXModel(LaggedIO, ModelMixin):
 
     def linearize(self) -> Any:
         """The linear ARX model of the first-order terms around zero (a
-        :class:`~sysid.PolynomialModel`; constant, higher-degree and RBF terms dropped)."""
+        :class:`~sysid.PolynomialModel`; constant, higher-degree and RBF terms dropped). The
+        linearisation at a steady operating point is :func:`sysid.linearize`."""
         from ..polynomial.model import PolynomialModel
 
         ny, nu = self.noutputs, self.ninputs
