@@ -163,3 +163,22 @@ def test_bad_structures_and_options_are_refused():
         sysid.ssest(data, s, feedthrough=True)
     with pytest.raises(DataError, match="data have 1 and 2"):
         sysid.pem(sysid.IOData(u=u[:, :1], y=TRUE.simulate(u)), s)
+
+
+def test_bounds_hold_and_are_reported():
+    rng = np.random.default_rng(4)
+    true = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]])
+    u = rng.standard_normal(300)
+    data = sysid.IOData(u=u, y=true.simulate(u) + 0.01 * rng.standard_normal((300, 1)))
+    s = sysid.ssform(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), free={"C": False})
+    b = s.with_bounds(maximum={"A": 0.7})
+    assert b.bounds == {"A_0_0": (-np.inf, 0.7)}
+    m = sysid.pem(data, b, x0="zero")
+    assert m.A[0, 0] <= 0.7 and np.isclose(m.A[0, 0], 0.7, atol=1e-6)
+    assert m.info["structure"].bounds == b.bounds
+    free_fit = sysid.pem(data, s, x0="zero")
+    assert np.isclose(free_fit.A[0, 0], 0.8, atol=0.01)
+    with pytest.raises(DataError, match="outside its bounds"):
+        s.with_bounds(minimum={"A": 0.6})
+    with pytest.raises(DataError, match="shape"):
+        s.with_bounds(minimum={"A": [0.1, 0.2]})

@@ -81,9 +81,11 @@ class StateSpaceStructure:
     """
 
     def __init__(self, model: StateSpaceModel, params: list[tuple[str, float, list[Entry]]],
-                 form: str) -> None:
+                 form: str, bounds: dict[str, tuple[float, float]] | None = None) -> None:
         self.model, self.form = model, form
         self._params = params
+        #: ``{name: (lower, upper)}`` of the bounded free parameters (:meth:`with_bounds`)
+        self.bounds = {k: v for k, v in (bounds or {}).items() if k in self.names}
 
     @property
     def names(self) -> list[str]:
@@ -137,7 +139,7 @@ class StateSpaceStructure:
             m = self.matrices(theta)
             model = StateSpaceModel(m["A"], m["B"], m["C"], m["D"], K=m["K"], dt=self.model.dt)
         params = [(n, float(t), e) for t, (n, _, e) in zip(np.ravel(theta), self._params)]
-        return StateSpaceStructure(model, params, self.form)
+        return StateSpaceStructure(model, params, self.form, self.bounds)
 
     def read(self, model: StateSpaceModel) -> StateSpaceStructure:
         """The structure at the values of ``model``'s matrices (same form and basis)."""
@@ -150,7 +152,45 @@ class StateSpaceStructure:
         m = self.model
         model = StateSpaceModel(m.A, m.B, m.C, m.D, dt=m.dt)
         keep = [p for p in self._params if all(e[0] != "K" for e in p[2])]
-        return StateSpaceStructure(model, keep, self.form)
+        return StateSpaceStructure(model, keep, self.form, self.bounds)
+
+    def with_bounds(self, minimum: dict[str, Any] | None = None,
+                    maximum: dict[str, Any] | None = None) -> StateSpaceStructure:
+        """The structure with bounds on free entries (MATLAB's ``Structure.A.Minimum`` and
+        ``Maximum``), in its own state basis (:attr:`model`): ``{"A": array or number,
+        ...}``; a parameter tied to several entries takes its first entry's bounds. The
+        search stays inside; the parameter table reports an active bound.
+
+        Examples
+        --------
+        >>> import sysid
+        >>> s = sysid.ssform(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]))
+        >>> s.with_bounds(minimum={"A": 0.0}, maximum={"A": 0.99}).bounds
+        {'A_0_0': (0.0, 0.99)}
+        """
+        mats = _matrices(self.model)
+        lims = {}
+        for side, given, fill in (("minimum", minimum, -np.inf), ("maximum", maximum, np.inf)):
+            lims[side] = {k: np.full(v.shape, fill) for k, v in mats.items()}
+            for k, v in (given or {}).items():
+                if k not in MATRICES:
+                    raise DataError(f"{side} names matrices {list(MATRICES)}, got {k!r}")
+                a = np.asarray(v, dtype=float)
+                if a.ndim and a.shape != mats[k].shape:
+                    raise DataError(f"{side}[{k!r}] has shape {a.shape}, but {k} is "
+                                    f"{mats[k].shape}")
+                lims[side][k] = np.broadcast_to(a, mats[k].shape).astype(float)
+        bounds = dict(self.bounds)
+        for name, value, entries in self._params:
+            mat, i, j, c = entries[0]
+            lo, hi = lims["minimum"][mat][i, j] / c, lims["maximum"][mat][i, j] / c
+            lo, hi = min(lo, hi), max(lo, hi)
+            if np.isfinite(lo) or np.isfinite(hi):
+                if not lo <= value <= hi:
+                    raise DataError(f"{name} = {value:.6g} lies outside its bounds "
+                                    f"[{lo:.6g}, {hi:.6g}]: start inside them")
+                bounds[name] = (float(lo), float(hi))
+        return StateSpaceStructure(self.model, self._params, self.form, bounds)
 
     def summary(self) -> str:
         """The free entries of each matrix, as text (``x`` free, ``.`` fixed)."""

@@ -64,7 +64,7 @@ def pem_structured(data: Any, structure: StateSpaceStructure, *, focus: str = "p
                         f"x0, max_iter, tol and progress only, got {', '.join(other)}: the "
                         "structure itself says which entries of D and K are free "
                         "(sysid.ssform(model, feedthrough=..., noise=..., free=...)); for "
-                        "bounds or regularization use a sysid.GreyBox")
+                        "regularization use a sysid.GreyBox")
     data = _experiments(data)
     if not isinstance(focus, str) or focus not in ("prediction", "simulation"):
         raise DataError(f"focus must be 'prediction' or 'simulation', got {focus!r}")
@@ -72,7 +72,7 @@ def pem_structured(data: Any, structure: StateSpaceStructure, *, focus: str = "p
     if data.n_inputs != mdl.ninputs or data.n_outputs != mdl.noutputs:
         raise DataError(f"the structure has {mdl.ninputs} input(s) and {mdl.noutputs} "
                         f"output(s) but the data have {data.n_inputs} and {data.n_outputs}")
-    if _all_free(s) and refine is not None:
+    if _all_free(s) and not s.bounds and refine is not None:
         f = s.free
         noise = "estimate" if f["K"].any() else "none"
         out = refine(data, mdl, focus=focus, feedthrough=bool(f["D"].any()), x0=x0,
@@ -93,7 +93,11 @@ def pem_structured(data: Any, structure: StateSpaceStructure, *, focus: str = "p
     def jac(p: Any, dt: Any = None) -> dict[str, tuple[np.ndarray, ...]]:
         return {k: (d["A"], d["B"], d["C"], d["D"], d["K"]) for k, d in zip(names, ders)}
 
-    gb = GreyBox(fn, dict(zip(names, s.values)), continuous=False, dt=mdl.dt, jacobian=jac,
+    from ..greybox.greybox import param
+
+    start = {k: (param(v, bounds=s.bounds[k]) if k in s.bounds else v)
+             for k, v in zip(names, s.values)}
+    gb = GreyBox(fn, start, continuous=False, dt=mdl.dt, jacobian=jac,
                  input_names=data.input_names, output_names=data.output_names)
     # greyest's x0 is "estimate" | "zero" | array (its "model" needs an x0 from fn)
     est = greyest(data, gb, focus=focus, x0=x0, noise="model",
