@@ -182,3 +182,24 @@ def test_bounds_hold_and_are_reported():
         s.with_bounds(minimum={"A": 0.6})
     with pytest.raises(DataError, match="shape"):
         s.with_bounds(minimum={"A": [0.1, 0.2]})
+
+
+def test_ssest_form_option_gives_the_same_model_in_identifiable_parameters():
+    """MATLAB's ssest(..., 'Form', f): the same model (response, poles and their std) in
+    every form, each with a full-rank parameter table."""
+    rng = np.random.default_rng(5)
+    true = sysid.StateSpaceModel([[0.9, 0.2], [-0.2, 0.9]], [[1.0], [0.0]], [[1.0, 0.5]],
+                                 K=[[0.3], [0.1]])
+    u = rng.standard_normal(800)
+    y = _innovations(true, u[:, None], 0.05 * rng.standard_normal((800, 1)))
+    data = sysid.IOData(u=u, y=y)
+    free = sysid.ssest(data, 2)
+    p0, s0 = free.poles(std=True)
+    for form in ("canonical", "modal", "companion"):
+        m = sysid.ssest(data, 2, form=form)
+        assert m.info["structure"].form == form and m.info["structure"].n_free == 6
+        assert np.allclose(_response(m), _response(free), rtol=1e-4, atol=1e-6)
+        p, s = m.poles(std=True)
+        assert np.allclose(np.sort_complex(p), np.sort_complex(p0), atol=1e-6)
+        assert np.allclose(np.sort(np.abs(s)), np.sort(np.abs(s0)), rtol=0.05)
+        assert np.all(np.isfinite(m.info["parameters"].std))

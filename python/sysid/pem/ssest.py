@@ -47,6 +47,7 @@ def ssest(
     periods: int | str | None = None,
     transient: int | None = None,
     input_delay: Any = None,
+    form: str | None = None,
 ) -> StateSpaceModel:
     """Estimate a state-space model: the best subspace start, refined by :func:`pem`.
 
@@ -105,6 +106,11 @@ def ssest(
     transient : int, optional
         Leading periods dropped: default 1 with ``periods="auto"``, 0 with a declared
         ``periods`` (as :func:`pem`).
+    form : {"canonical", "companion", "modal"}, optional
+        MATLAB's ``ssest(..., 'Form', f)``: the model fitted as without it, then its
+        parameters estimated again in that form (:func:`sysid.ssform`; ``D`` and ``K`` free
+        as fitted): the same model class with an identifiable parameter vector, its table in
+        ``info["parameters"]`` and ``info["structure"]``.
     input_delay : int, sequence of int or "auto", optional
         Known input delays in samples (MATLAB's ``InputDelay``; one for all inputs or one
         each; ``"auto"``: from :func:`sysid.delayest`): the model is fitted to the shifted
@@ -138,6 +144,27 @@ def ssest(
     True
     """
     as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")  # before any fit
+    if form is not None:  # MATLAB's 'Form': the free fit, then estimated in the form
+        from .ssform import ssform
+        from .structured import pem_structured
+
+        free_fit = ssest(data, order, focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
+                         horizon=horizon, methods=methods, method=method, max_iter=max_iter,
+                         tol=tol, regularization=regularization, progress=progress,
+                         enforce_stability=enforce_stability, periods=periods,
+                         transient=transient, input_delay=input_delay)
+        inner = free_fit.info.get("delay_free", free_fit)
+        s = ssform(inner, form, feedthrough=bool(np.any(inner.D)),
+                   noise="estimate" if inner.K is not None and focus == "prediction" else "none")
+        model = pem_structured(_experiments(data) if "input_delay" not in free_fit.info else
+                               _shifted(data, free_fit.info["input_delay"]), s, focus=focus,
+                               x0=x0, max_iter=max_iter, tol=tol, progress=progress,
+                               caller="ssest")
+        if "input_delay" in free_fit.info:
+            from ..models.input_delay import absorb_delay
+
+            model = absorb_delay(model, free_fit.info["input_delay"])
+        return model
     if input_delay is not None:  # MATLAB's InputDelay: fitted on the shifted inputs
         from ..models.input_delay import absorb_delay, input_delays, shift_inputs
 
@@ -467,3 +494,9 @@ def _ssest_periodic(data: Any, order: Any, frd: Any, feedthrough: Any,
     model.info["start"] = {"method": scored[0][1], "bd_x0": False,
                            "losses": {c[1]: c[0] for c in scored}}
     return model
+
+
+def _shifted(data: Any, delays: Any) -> Any:
+    from ..models.input_delay import shift_inputs
+
+    return shift_inputs(_experiments(data), np.asarray(delays, dtype=int))
