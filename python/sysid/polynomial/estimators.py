@@ -24,7 +24,7 @@ from .._checks import (
 )
 from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
-from ..data.iodata import as_record
+from ..data.iodata import IOData, as_record
 from ..data.offsets import check_offsets
 from ..errors import DataError, InsufficientDataError, NumericalError, ShapeError, is_frd
 from .cancellation import cancellation, warn_cancellations
@@ -67,6 +67,7 @@ def arx(
     *,
     regularization: Any = 0.0,
     kernel: np.ndarray | None = None,
+    integrate_noise: bool = False,
 ) -> PolynomialModel:
     """Least-squares (or regularised) ARX ``A(q) y(t) = B(q) u(t - nk) + e(t)``.
 
@@ -93,6 +94,11 @@ def arx(
     kernel : ndarray, optional
         With a number ``regularization``: the factor ``M`` (for example the inverse Cholesky
         factor of a kernel); as many columns as each output's equation has parameters.
+    integrate_noise : bool
+        MATLAB's ``IntegrateNoise`` (ARIX): ``A y = B u + e / (1 - q^-1)``, a disturbance
+        that drifts (a random walk, a slowly moving offset). Fitted by least squares on the
+        differenced record (each experiment's first sample dropped); the model's ``D(q) = 1 -
+        q^-1`` makes its predictions follow the drift; its simulation is the same ``B/A``.
 
     Returns
     -------
@@ -112,6 +118,8 @@ def arx(
     True
     """
     data = as_record(data)  # a (u, y) pair, as ssest and compare take
+    if integrate_noise is not False:
+        return _arix(data, na, nb, nk, integrate_noise, regularization, kernel)
     exps = experiment_arrays(data)
     na, nb, nk = matlab_orders("arx", data, na, nb=nb, nk=nk)
     check_offsets(data)
@@ -134,6 +142,31 @@ def arx(
     fac = None if kernel is None else np.ascontiguousarray(kernel, float)
     fits = _sysid.arx_fit(exps, na_g, nb_g, nk_g, float(regularization), fac)
     return _warn_diverging(_arx_model(data, fits, nk_g), "arx")
+
+
+def _arix(data: Any, na: Any, nb: Any, nk: Any, integrate_noise: Any, regularization: Any,
+          kernel: Any) -> PolynomialModel:
+    """ARX with an integrated disturbance (MATLAB's ``IntegrateNoise``): least squares on the
+    differenced record, then ``D(q) = 1 - q^-1`` on every output."""
+    if not isinstance(integrate_noise, (bool, np.bool_)):
+        raise DataError(f"integrate_noise must be True or False (every output alike), got "
+                        f"{integrate_noise!r}")
+    exps = experiment_arrays(data)
+    if min(u.shape[0] for u, _ in exps) < 3:
+        raise DataError("integrate_noise differences the record: every experiment needs at "
+                        "least 3 samples")
+    du = [np.diff(u, axis=0) for u, _ in exps]
+    dy = [np.diff(y, axis=0) for _, y in exps]
+    diffed = IOData(u=du if len(du) > 1 else du[0], y=dy if len(dy) > 1 else dy[0],
+                    dt=data.dt, input_names=getattr(data, "input_names", None),
+                    output_names=getattr(data, "output_names", None))
+    m = arx(diffed, na, nb, nk, regularization=regularization, kernel=kernel)
+    m.d = [np.array([-1.0]) for _ in range(m.noutputs)]
+    m.uncertainty = None
+    _attach_uncertainty(m, m.covariance, "arx",  # type: ignore[attr-defined]
+                        "posterior" if isinstance(regularization, str) else "least-squares")
+    m.info = {**m.info, "integrate_noise": True}
+    return m
 
 
 def _warn_diverging(m: PolynomialModel, method: str) -> PolynomialModel:
