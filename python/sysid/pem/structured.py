@@ -5,9 +5,11 @@ The structure's free parameters are those of a discrete :class:`sysid.GreyBox` w
 matrices are affine in them (constant derivatives, given exactly), fitted by
 :func:`sysid.greyest`: the shared search, its covariance and its identifiability check. A
 structure with nothing fixed (``form="free"``) is refined by :func:`sysid.pem` instead, in
-its identifiable local coordinates. Prediction focus weights the errors by the inverse of
-their covariance (maximum likelihood); simulation focus takes the plain sum of squares and
-no ``K``.
+its identifiable local coordinates. The errors (one-step prediction errors, or simulation
+errors with no ``K`` under ``focus="simulation"``) are weighted by the inverse of their
+covariance (the determinant criterion: maximum likelihood for prediction errors, and for
+several outputs a fit that does not depend on their units; for one output the plain sum of
+squares).
 
 Examples
 --------
@@ -101,7 +103,7 @@ def pem_structured(data: Any, structure: StateSpaceStructure, *, focus: str = "p
                  input_names=data.input_names, output_names=data.output_names)
     # greyest's x0 is "estimate" | "zero" | array (its "model" needs an x0 from fn)
     est = greyest(data, gb, focus=focus, x0=x0, noise="model",
-                  weighting="noise" if focus == "prediction" else "identity",
+                  weighting="noise",
                   max_iter=max_iter, tol=tol,
                   progress=False if progress is None else progress)
     model = est.model
