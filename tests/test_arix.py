@@ -66,3 +66,19 @@ def test_refusals():
         sysid.arx(d, 1, 1, 1, integrate_noise=[True])
     with pytest.raises(DataError, match="at least 3 samples"):
         sysid.arx(sysid.IOData(u=d.u[:2], y=d.y[:2]), 1, 1, 1, integrate_noise=True)
+
+
+def test_armax_with_integrated_noise():
+    """ARIMAX: (1 - 0.7 q^-1) y = u(t-1) + (1 + 0.5 q^-1) e / (1 - q^-1)."""
+    rng = np.random.default_rng(4)
+    n = 3000
+    u, e = rng.standard_normal(n), 0.1 * rng.standard_normal(n)
+    y, v, w = np.zeros(n), 0.0, np.zeros(n)
+    for t in range(1, n):
+        w[t] = e[t] + 0.5 * e[t - 1]
+        v += w[t]
+        y[t] = 0.7 * y[t - 1] + u[t - 1] + v
+    m = sysid.armax(sysid.IOData(u=u, y=y), 1, 1, 1, 1, integrate_noise=True)
+    sd = m.uncertainty.std
+    assert m.d[0].tolist() == [-1.0] and m.info["integrate_noise"] is True
+    assert abs(m.a[0][0][0] + 0.7) < 4 * sd[0] and abs(m.c[0][0] - 0.5) < 4 * sd[2]

@@ -118,8 +118,10 @@ def arx(
     True
     """
     data = as_record(data)  # a (u, y) pair, as ssest and compare take
-    if integrate_noise is not False:
-        return _arix(data, na, nb, nk, integrate_noise, regularization, kernel)
+    if integrate_noise is not False:  # ARIX: least squares on the differenced record
+        m = arx(_differenced(data, integrate_noise), na, nb, nk,
+                regularization=regularization, kernel=kernel)
+        return _integrated(m)
     exps = experiment_arrays(data)
     na, nb, nk = matlab_orders("arx", data, na, nb=nb, nk=nk)
     check_offsets(data)
@@ -144,10 +146,9 @@ def arx(
     return _warn_diverging(_arx_model(data, fits, nk_g), "arx")
 
 
-def _arix(data: Any, na: Any, nb: Any, nk: Any, integrate_noise: Any, regularization: Any,
-          kernel: Any) -> PolynomialModel:
-    """ARX with an integrated disturbance (MATLAB's ``IntegrateNoise``): least squares on the
-    differenced record, then ``D(q) = 1 - q^-1`` on every output."""
+def _differenced(data: Any, integrate_noise: Any) -> IOData:
+    """The record differenced per experiment (each one's first sample dropped), for a fit
+    with an integrated disturbance (MATLAB's ``IntegrateNoise``)."""
     if not isinstance(integrate_noise, (bool, np.bool_)):
         raise DataError(f"integrate_noise must be True or False (every output alike), got "
                         f"{integrate_noise!r}")
@@ -157,14 +158,29 @@ def _arix(data: Any, na: Any, nb: Any, nk: Any, integrate_noise: Any, regulariza
                         "least 3 samples")
     du = [np.diff(u, axis=0) for u, _ in exps]
     dy = [np.diff(y, axis=0) for _, y in exps]
-    diffed = IOData(u=du if len(du) > 1 else du[0], y=dy if len(dy) > 1 else dy[0],
-                    dt=data.dt, input_names=getattr(data, "input_names", None),
-                    output_names=getattr(data, "output_names", None))
-    m = arx(diffed, na, nb, nk, regularization=regularization, kernel=kernel)
+    return IOData(u=du if len(du) > 1 else du[0], y=dy if len(dy) > 1 else dy[0],
+                  dt=data.dt, input_names=getattr(data, "input_names", None),
+                  output_names=getattr(data, "output_names", None))
+
+
+def _integrated(m: PolynomialModel) -> PolynomialModel:
+    """A model fitted on the differenced record as the model of the record: ``D(q) = 1 -
+    q^-1`` on every output (its uncertainty's models get the same ``D``)."""
     m.d = [np.array([-1.0]) for _ in range(m.noutputs)]
-    m.uncertainty = None
-    _attach_uncertainty(m, m.covariance, "arx",  # type: ignore[attr-defined]
-                        "posterior" if isinstance(regularization, str) else "least-squares")
+    unc = m.uncertainty
+    if unc is not None:
+        from ..models.uncertainty import ParameterUncertainty
+
+        build = unc.build
+
+        def with_d(t: np.ndarray) -> PolynomialModel:
+            b = build(t)
+            b.d = [np.array([-1.0]) for _ in range(b.noutputs)]
+            return b
+
+        m.uncertainty = ParameterUncertainty(unc.theta, unc.covariance, with_d,
+                                             names=unc.names, dof=unc.dof, method=unc.method,
+                                             undetermined=unc.undetermined)
     m.info = {**m.info, "integrate_noise": True}
     return m
 
@@ -470,10 +486,13 @@ def armax(
     max_iter: int = 100,
     progress: bool | None | Callable[..., Any] = None,
     init: PolynomialModel | None = None,
+    integrate_noise: bool = False,
 ) -> PolynomialModel:
     """ARMAX ``A y = B u(t-nk) + C e`` by prediction-error minimisation (per output). The
     orders may be given as MATLAB's one vector, ``armax(data, [na, nb, nc, nk])``
     (:func:`~sysid.polynomial.orders.matlab_orders`); ``nk`` defaults to 1.
+    ``integrate_noise=True`` (MATLAB's ``IntegrateNoise``, ARIMAX): ``A y = B u + C e / (1 -
+    q^-1)``, fitted on the differenced record, as :func:`arx`'s.
 
     The search starts from an ARX fit, or from ``init`` (a polynomial model with the data's
     channel counts, e.g. an earlier ``armax`` or an ``arx`` fit: its ``A``, ``B`` and ``C``
@@ -496,6 +515,10 @@ def armax(
     ('init', True)
     """
     data = as_record(data)
+    if integrate_noise is not False:  # ARIMAX: the fit of the differenced record
+        m = armax(_differenced(data, integrate_noise), na, nb, nc, nk, max_iter=max_iter,
+                  progress=progress, init=init)
+        return _integrated(m)
     na, nb, nc, nk = matlab_orders("armax", data, na, nb=nb, nc=nc, nk=nk)
     m = _pem(data, na, nb, nc, 0, 0, nk, "armax", max_iter, progress, init)
     if init is not None:
