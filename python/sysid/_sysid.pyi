@@ -19,6 +19,7 @@ __all__ = [
     "channel_stats",
     "arx_fit",
     "iv4",
+    "ivx",
     "arx_struc",
     "arx_summary",
     "arx_matrix_filter",
@@ -472,6 +473,13 @@ def polynomial_pem(
 ) -> dict[str, Any]: ...
 def iv4(
     experiments: list[tuple[_Array, _Array, _Array | None]],
+    na: list[list[int]],
+    nb: list[list[int]],
+    nk: list[list[int]],
+) -> list[dict[str, Any]]: ...
+def ivx(
+    experiments: list[tuple[_Array, _Array, _Array | None]],
+    x: list[_Array],
     na: list[list[int]],
     nb: list[list[int]],
     nk: list[list[int]],

@@ -262,6 +262,37 @@ pub fn iv4<'py>(
         .collect();
     let orders = ArxOrders { na, nb, nk };
     let fit = py.detach(|| iv::iv4_multi(&recs, &orders)).py()?;
+    fit_dicts(py, &fit)
+}
+
+/// IV estimate with given instruments (MATLAB's `ivx`) from experiments `(u, y, reference
+/// or None)` and one instrument array `x` (N x ny) per experiment: per output a dict as
+/// [`iv4`]'s.
+#[pyfunction]
+pub fn ivx<'py>(
+    py: Python<'py>,
+    experiments: IvExperiments<'_>,
+    x: Vec<PyReadonlyArray2<'_, f64>>,
+    na: Vec<Vec<usize>>,
+    nb: Vec<Vec<usize>>,
+    nk: Vec<Vec<usize>>,
+) -> PyResult<Vec<Bound<'py, PyDict>>> {
+    let recs: Vec<IvRecord<'_>> = experiments
+        .iter()
+        .map(|(u, y, r)| IvRecord {
+            u: view_nd(u.as_array()),
+            y: view_nd(y.as_array()),
+            r: r.as_ref().map(|r| view_nd(r.as_array())),
+        })
+        .collect();
+    let xs: Vec<_> = x.iter().map(|a| view_nd(a.as_array())).collect();
+    let orders = ArxOrders { na, nb, nk };
+    let fit = py.detach(|| iv::ivx_multi(&recs, &xs, &orders)).py()?;
+    fit_dicts(py, &fit)
+}
+
+/// Per output, `theta`, `covariance` and `noise_variance` of an IV fit.
+fn fit_dicts<'py>(py: Python<'py>, fit: &iv::Iv4Fit) -> PyResult<Vec<Bound<'py, PyDict>>> {
     (0..fit.theta.len())
         .map(|i| {
             let d = PyDict::new(py);
@@ -332,5 +363,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(poly_filter, m)?)?;
     m.add_function(wrap_pyfunction!(polynomial_pem, m)?)?;
     m.add_function(wrap_pyfunction!(iv4, m)?)?;
+    m.add_function(wrap_pyfunction!(ivx, m)?)?;
     Ok(())
 }

@@ -718,6 +718,13 @@ def iv4(data: Any, na: Any, nb: Any = None, nk: Any = None, *, reference: Any = 
     na_g, nb_g, nk_g = _grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"), _grid(nk, ny, nu, "nk")
     refs = _references(reference, exps)
     fits = _sysid.iv4([(u, y, r) for (u, y), r in zip(exps, refs)], na_g, nb_g, nk_g)
+    return _iv_model(data, fits, na_g, nb_g, nk_g, "iv4", reference is not None)
+
+
+def _iv_model(data: Any, fits: list[Any], na_g: Any, nb_g: Any, nk_g: Any, method: str,
+              closed_loop: bool) -> PolynomialModel:
+    """The polynomial model of an IV fit (per output ``theta = [a.., b..]``)."""
+    ny = len(fits)
     a, b = [], []
     for i, f in enumerate(fits):
         th = np.asarray(f["theta"])
@@ -726,7 +733,7 @@ def iv4(data: Any, na: Any, nb: Any = None, nk: Any = None, *, reference: Any = 
         b.append([np.asarray(x) for x in pieces[ny:]])
     m = PolynomialModel(a, b, nk_g, data.dt)
     _names_of(m, data)
-    m.info = {"method": "iv4", "closed_loop": reference is not None}
+    m.info = {"method": method, "closed_loop": closed_loop}
     cov = [np.asarray(f["covariance"]) for f in fits]
     m.noise_variance = np.array([f["noise_variance"] for f in fits])
     m.covariance = cov  # type: ignore[attr-defined]
@@ -734,7 +741,7 @@ def iv4(data: Any, na: Any, nb: Any = None, nk: Any = None, *, reference: Any = 
     _attach_uncertainty(m, cov, "arx", "instrumental-variable")
     from ..models.checks import warn_unstable
 
-    warn_unstable(m, "iv4", advice=(
+    warn_unstable(m, method, advice=(
         "Unless the process itself is unstable, the instruments did not pin A down: try "
         "lower orders, sysid.oe (whose simulation is stable) or "
         "sysid.ssest(data, order, focus='simulation')."))

@@ -23,6 +23,7 @@ __all__ = ["matlab_orders"]
 LAYOUTS: dict[str, tuple[tuple[str, str], ...]] = {
     "arx": (("na", "ny"), ("nb", "nu"), ("nk", "nu")),
     "iv4": (("na", "ny"), ("nb", "nu"), ("nk", "nu")),
+    "ivx": (("na", "ny"), ("nb", "nu"), ("nk", "nu")),
     "arxregul": (("na", "ny"), ("nb", "nu"), ("nk", "nu")),
     "armax": (("na", "1"), ("nb", "nu"), ("nc", "1"), ("nk", "nu")),
     "oe": (("nb", "nu"), ("nf", "nu"), ("nk", "nu")),

@@ -427,21 +427,51 @@ fn check_orders(o: &ArxOrders, ny: usize, nu: usize) -> Result<()> {
     Ok(())
 }
 
-/// IV4 estimate of a MIMO ARX structure from several experiments; with `r` in a record
-/// (closed-loop data), the instruments are built from it instead of the input.
-///
-/// ```
-/// use faer::Mat;
-/// use sysid_core::polynomial::{arx::ArxOrders, iv::{iv4_multi, IvRecord}};
-/// let n = 400;
-/// let u = Mat::from_fn(n, 1, |t, _| ((t * 7919 % 17) as f64) - 8.0);
-/// let mut y = Mat::<f64>::zeros(n, 1);
-/// for t in 1..n { y[(t, 0)] = 0.5 * y[(t - 1, 0)] + u[(t - 1, 0)]; }
-/// let o = ArxOrders { na: vec![vec![1]], nb: vec![vec![1]], nk: vec![vec![1]] };
-/// let fit = iv4_multi(&[IvRecord { u: u.as_ref(), y: y.as_ref(), r: None }], &o).unwrap();
-/// assert!((fit.theta[0][0] + 0.5).abs() < 1e-8 && (fit.theta[0][1] - 1.0).abs() < 1e-8);
-/// ```
-pub fn iv4_multi(records: &[IvRecord<'_>], orders: &ArxOrders) -> Result<Iv4Fit> {
+/// The asymptotic covariance `lambda R^-1 S R^-T` of every equation from its sums at the
+/// estimate, with `lambda` the mean square of the (prefiltered by `l`) equation error.
+fn iv_covariance(
+    orders: &ArxOrders,
+    sums: &[Sums],
+    theta: &[Vec<f64>],
+    recs: &[Rec],
+    l: &[Vec<f64>],
+) -> Result<(Vec<Mat<f64>>, Vec<f64>)> {
+    let ny = theta.len();
+    let mut covariance = Vec::with_capacity(ny);
+    let mut noise_variance = Vec::with_capacity(ny);
+    for (i, (r, _, s, rows)) in sums.iter().enumerate() {
+        let start = first_row(orders, i);
+        let (mut ss, mut cnt) = (0.0, 0usize);
+        for rec in recs {
+            let w = equation_error(orders, i, &theta[i], &rec.y, &rec.u);
+            let wf = filter(&l[i], &[1.0], &w);
+            for v in wf.iter().skip(start) {
+                ss += v * v;
+                cnt += 1;
+            }
+        }
+        let lam = ss / cnt.max(1) as f64;
+        // R^-1 S R^-T in Gram form, (R^-1 V L^1/2)(R^-1 V L^1/2)^T with S = V L V^T: positive
+        // semi-definite by construction (the product formed directly lost that on real
+        // records whose R is ill-conditioned: an eigenvalue of -5e-4 times the largest)
+        let (v, l) = crate::optim::symmetric_eigen(s, "iv4 covariance")?;
+        let mut half = v;
+        for (j, lj) in l.iter().enumerate() {
+            let f = lj.max(0.0).sqrt();
+            half.col_mut(j).iter_mut().for_each(|x| *x *= f);
+        }
+        let m = r.partial_piv_lu().solve(&half);
+        let cov = &m * m.transpose() * faer::Scale(lam);
+        debug_assert_eq!(*rows, cnt);
+        covariance.push(cov);
+        noise_variance.push(lam);
+    }
+    Ok((covariance, noise_variance))
+}
+
+/// The experiments checked against the orders and each other (shapes, finiteness, length
+/// for the parameters), as channel vectors; `what` names the caller in the errors.
+fn prepare(records: &[IvRecord<'_>], orders: &ArxOrders, what: &str) -> Result<Vec<Rec>> {
     let Some(first) = records.first() else {
         return Err(SysidError::invalid(
             "experiments",
@@ -452,7 +482,7 @@ pub fn iv4_multi(records: &[IvRecord<'_>], orders: &ArxOrders) -> Result<Iv4Fit>
     if ny == 0 || nu == 0 {
         return Err(SysidError::invalid(
             "data",
-            "iv4 needs at least one input and one output",
+            format!("{what} needs at least one input and one output"),
         ));
     }
     check_orders(orders, ny, nu)?;
@@ -506,12 +536,31 @@ pub fn iv4_multi(records: &[IvRecord<'_>], orders: &ArxOrders) -> Result<Iv4Fit>
         .saturating_add(10);
     if total < need {
         return Err(SysidError::InsufficientData {
-            context: format!("iv4 with {pmax} parameters per equation (largest lag {lag})"),
+            context: format!("{what} with {pmax} parameters per equation (largest lag {lag})"),
             needed: need,
             got: total,
             fix: "use a longer record or smaller orders",
         });
     }
+    Ok(recs)
+}
+
+/// IV4 estimate of a MIMO ARX structure from several experiments; with `r` in a record
+/// (closed-loop data), the instruments are built from it instead of the input.
+///
+/// ```
+/// use faer::Mat;
+/// use sysid_core::polynomial::{arx::ArxOrders, iv::{iv4_multi, IvRecord}};
+/// let n = 400;
+/// let u = Mat::from_fn(n, 1, |t, _| ((t * 7919 % 17) as f64) - 8.0);
+/// let mut y = Mat::<f64>::zeros(n, 1);
+/// for t in 1..n { y[(t, 0)] = 0.5 * y[(t - 1, 0)] + u[(t - 1, 0)]; }
+/// let o = ArxOrders { na: vec![vec![1]], nb: vec![vec![1]], nk: vec![vec![1]] };
+/// let fit = iv4_multi(&[IvRecord { u: u.as_ref(), y: y.as_ref(), r: None }], &o).unwrap();
+/// assert!((fit.theta[0][0] + 0.5).abs() < 1e-8 && (fit.theta[0][1] - 1.0).abs() < 1e-8);
+/// ```
+pub fn iv4_multi(records: &[IvRecord<'_>], orders: &ArxOrders) -> Result<Iv4Fit> {
+    let recs = prepare(records, orders, "iv4")?;
     let solve_all = |sums: &[Sums]| -> Result<Vec<Vec<f64>>> {
         sums.iter().map(|(r, v, _, _)| solve(r, v)).collect()
     };
@@ -563,37 +612,66 @@ pub fn iv4_multi(records: &[IvRecord<'_>], orders: &ArxOrders) -> Result<Iv4Fit>
         instruments(&th4)?
     };
     let sums = stage(orders, &recs, Some(&z4), Some(&l4));
-    let mut covariance = Vec::with_capacity(ny);
-    let mut noise_variance = Vec::with_capacity(ny);
-    for (i, (r, _, s, rows)) in sums.iter().enumerate() {
-        let start = first_row(orders, i);
-        let (mut ss, mut cnt) = (0.0, 0usize);
-        for rec in &recs {
-            let w = equation_error(orders, i, &th4[i], &rec.y, &rec.u);
-            let wf = filter(&l4[i], &[1.0], &w);
-            for v in wf.iter().skip(start) {
-                ss += v * v;
-                cnt += 1;
-            }
-        }
-        let lam = ss / cnt.max(1) as f64;
-        // R^-1 S R^-T in Gram form, (R^-1 V L^1/2)(R^-1 V L^1/2)^T with S = V L V^T: positive
-        // semi-definite by construction (the product formed directly lost that on real
-        // records whose R is ill-conditioned: an eigenvalue of -5e-4 times the largest)
-        let (v, l) = crate::optim::symmetric_eigen(s, "iv4 covariance")?;
-        let mut half = v;
-        for (j, lj) in l.iter().enumerate() {
-            let f = lj.max(0.0).sqrt();
-            half.col_mut(j).iter_mut().for_each(|x| *x *= f);
-        }
-        let m = r.partial_piv_lu().solve(&half);
-        let cov = &m * m.transpose() * faer::Scale(lam);
-        debug_assert_eq!(*rows, cnt);
-        covariance.push(cov);
-        noise_variance.push(lam);
-    }
+    let (covariance, noise_variance) = iv_covariance(orders, &sums, &th4, &recs, &l4)?;
     Ok(Iv4Fit {
         theta: th4,
+        covariance,
+        noise_variance,
+    })
+}
+
+/// Instrumental-variable estimate of a MIMO ARX structure with given instruments (MATLAB's
+/// `ivx`): the lags of `x[e]` (N x ny, one per experiment, a signal correlated with the
+/// outputs but not with their noise, for example a noise-free simulation) take the place of
+/// the outputs' lags in the instruments, the inputs' (or the reference's) lags stay; one IV
+/// solve per equation, no prefilter; covariance `lambda R^-1 S R^-T`.
+///
+/// ```
+/// use faer::Mat;
+/// use sysid_core::polynomial::{arx::ArxOrders, iv::{ivx_multi, IvRecord}};
+/// let n = 400;
+/// let u = Mat::from_fn(n, 1, |t, _| ((t * 7919 % 17) as f64) - 8.0);
+/// let mut y = Mat::<f64>::zeros(n, 1);
+/// for t in 1..n { y[(t, 0)] = 0.5 * y[(t - 1, 0)] + u[(t - 1, 0)]; }
+/// let o = ArxOrders { na: vec![vec![1]], nb: vec![vec![1]], nk: vec![vec![1]] };
+/// let rec = IvRecord { u: u.as_ref(), y: y.as_ref(), r: None };
+/// let fit = ivx_multi(&[rec], &[y.as_ref()], &o).unwrap();
+/// assert!((fit.theta[0][0] + 0.5).abs() < 1e-8 && (fit.theta[0][1] - 1.0).abs() < 1e-8);
+/// ```
+pub fn ivx_multi(
+    records: &[IvRecord<'_>],
+    x: &[MatRef<'_, f64>],
+    orders: &ArxOrders,
+) -> Result<Iv4Fit> {
+    let recs = prepare(records, orders, "ivx")?;
+    if x.len() != records.len()
+        || x.iter()
+            .zip(records)
+            .any(|(xe, r)| xe.nrows() != r.y.nrows() || xe.ncols() != r.y.ncols())
+    {
+        return Err(SysidError::ShapeMismatch {
+            what: "instruments x".into(),
+            expected: "one array per experiment, shaped as its outputs (N, ny)".into(),
+            got: format!("{} arrays for {} experiments", x.len(), records.len()),
+        });
+    }
+    for xe in x {
+        check_finite("x", *xe)?;
+    }
+    let inst: Vec<Inst> = x
+        .iter()
+        .zip(&recs)
+        .map(|(xe, rec)| (columns(*xe), rec.r.clone()))
+        .collect();
+    let sums = stage(orders, &recs, Some(&inst), None);
+    let theta = sums
+        .iter()
+        .map(|(r, v, _, _)| solve(r, v))
+        .collect::<Result<Vec<_>>>()?;
+    let ones = vec![vec![1.0]; theta.len()];
+    let (covariance, noise_variance) = iv_covariance(orders, &sums, &theta, &recs, &ones)?;
+    Ok(Iv4Fit {
+        theta,
         covariance,
         noise_variance,
     })
