@@ -89,6 +89,7 @@ class StateSpaceStructure:
 
     @property
     def names(self) -> list[str]:
+        """The free parameters' names (the order of :attr:`values`)."""
         return [p[0] for p in self._params]
 
     @property
@@ -98,10 +99,12 @@ class StateSpaceStructure:
 
     @property
     def n_free(self) -> int:
+        """The number of free parameters."""
         return len(self._params)
 
     @property
     def free(self) -> dict[str, np.ndarray]:
+        """Per matrix (``A``, ``B``, ``C``, ``D``, ``K``), the entries a free parameter moves."""
         mats = _matrices(self.model)
         out = {k: np.zeros(v.shape, bool) for k, v in mats.items()}
         for _, _, entries in self._params:
