@@ -87,3 +87,16 @@ def test_bad_delays_are_refused():
         sysid.ssest(data, 2, input_delay="guess")
     with pytest.raises(DataError, match="start model"):
         sysid.ssest(data, TRUE, input_delay=1)
+
+
+def test_nkshift_delays_and_advances():
+    u = np.column_stack([np.arange(6.0), 10 + np.arange(6.0)])
+    d = sysid.nkshift(sysid.IOData(u=u, y=np.arange(6.0)), [1, -1])
+    assert d.y.ravel().tolist() == [1.0, 2.0, 3.0, 4.0]
+    assert d.u.tolist() == [[0.0, 12.0], [1.0, 13.0], [2.0, 14.0], [3.0, 15.0]]
+    two = sysid.nkshift(sysid.IOData(u=[u, u], y=[np.arange(6.0), np.arange(6.0)]), 2)
+    assert two.lengths == [4, 4]
+    with pytest.raises(DataError, match="whole samples"):
+        sysid.nkshift(sysid.IOData(u=u, y=np.arange(6.0)), 1.5)
+    with pytest.raises(DataError, match="too little"):
+        sysid.nkshift(sysid.IOData(u=u, y=np.arange(6.0)), [5, -1])

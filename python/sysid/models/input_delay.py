@@ -34,7 +34,7 @@ from ..data.iodata import IOData
 from ..errors import DataError
 from .statespace import StateSpaceModel
 
-__all__ = ["absorb_delay", "input_delays", "shift_inputs"]
+__all__ = ["absorb_delay", "input_delays", "nkshift", "shift_inputs"]
 
 
 def input_delays(data: IOData, input_delay: Any, feedthrough: Any = None) -> np.ndarray:
@@ -64,15 +64,16 @@ def input_delays(data: IOData, input_delay: Any, feedthrough: Any = None) -> np.
 
 
 def shift_inputs(data: IOData, delays: np.ndarray) -> IOData:
-    """Each input ``j`` delayed by ``delays[j]`` samples, the first ``max(delays)`` samples of
-    every experiment dropped."""
-    top = int(np.max(delays, initial=0))
+    """Each input ``j`` delayed by ``delays[j]`` samples (advanced when negative), the
+    samples whose shifted inputs were not recorded dropped from every experiment."""
+    top = max(0, int(np.max(delays, initial=0)))
+    bottom = max(0, -int(np.min(delays, initial=0)))
     us, ys = [], []
     for u, y in data.experiments:
         n = u.shape[0]
-        us.append(np.column_stack([u[top - k:n - k, j] for j, k in enumerate(delays)])
-                  if u.shape[1] else u[top:])
-        ys.append(y[top:])
+        us.append(np.column_stack([u[top - k:n - bottom - k, j] for j, k in enumerate(delays)])
+                  if u.shape[1] else u[top:n - bottom])
+        ys.append(y[top:n - bottom])
     return IOData(u=us if len(us) > 1 else us[0], y=ys if len(ys) > 1 else ys[0], dt=data.dt,
                   input_names=data.input_names, output_names=data.output_names)
 
@@ -116,3 +117,42 @@ def absorb_delay(model: StateSpaceModel, delays: Any) -> StateSpaceModel:
             unc.theta, unc.covariance, lambda t: absorb_delay(build(t), k), names=unc.names,
             dof=unc.dof, method=unc.method, undetermined=unc.undetermined)
     return out
+
+
+def nkshift(data: Any, nk: Any) -> IOData:
+    """The record with each input shifted by ``nk`` samples (MATLAB's ``nkshift``): positive
+    values delay an input (``u_j(t - nk_j)``), negative ones advance it; the samples whose
+    shifted inputs were not recorded are dropped from every experiment.
+
+    Parameters
+    ----------
+    data : IOData or (u, y)
+    nk : int or sequence of int
+        One shift for all inputs, or one per input.
+
+    Returns
+    -------
+    IOData
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> d = sysid.nkshift(sysid.IOData(u=np.arange(5.0), y=np.arange(5.0)), 2)
+    >>> d.u.ravel().tolist(), d.y.ravel().tolist()
+    ([0.0, 1.0, 2.0], [2.0, 3.0, 4.0])
+    """
+    from ..data.iodata import as_record
+
+    data = as_record(data)
+    m = data.n_inputs
+    k = np.atleast_1d(np.asarray(nk))
+    if k.ndim != 1 or k.size not in (1, m) or not np.all(np.isfinite(k.astype(float))) \
+            or np.any(k != np.round(k)):
+        raise DataError(f"nk must be whole samples, one for all inputs or one per input ({m}), "
+                        f"got {nk!r}")
+    k = np.repeat(k.astype(int), m) if k.size == 1 else k.astype(int)
+    span = max(0, int(k.max(initial=0))) + max(0, -int(k.min(initial=0)))
+    if span > min(data.lengths) - 2:
+        raise DataError(f"shifts dropping {span} samples leave too little of the shortest "
+                        f"experiment ({min(data.lengths)} samples)")
+    return shift_inputs(data, k)
