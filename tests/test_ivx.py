@@ -10,6 +10,8 @@ import pytest
 import sysid
 from sysid.errors import DataError
 
+from conftest import assert_std_calibrated
+
 G = sysid.StateSpaceModel([[0.7]], [[1.0]], [[1.0]])  # y = q^-1 / (1 - 0.7 q^-1) u
 
 
@@ -49,11 +51,7 @@ def test_standard_deviation_is_calibrated_monte_carlo():
         m = sysid.ivx(sysid.IOData(u=u, y=y), 1, 1, 1, x=G.simulate(u))
         est.append([m.a[0][0][0], m.b[0][0][0]])
         sd.append(m.uncertainty.std[:2])
-    est, sd = np.array(est), np.array(sd)
-    ratio = sd.mean(0) / est.std(0, ddof=1)
-    assert np.all(np.abs(ratio - 1) < 0.2), ratio
-    cover = np.mean(np.abs(est - [-0.7, 1.0]) <= 1.96 * sd, axis=0)
-    assert np.all((cover >= 0.90) & (cover <= 0.99)), cover
+    assert_std_calibrated(est, sd, [-0.7, 1.0])
 
 
 def test_refusals():

@@ -15,6 +15,8 @@ import sysid
 from sysid.errors import DataError
 from sysid.pem.ssform import observability_form
 
+from conftest import assert_std_calibrated
+
 A = np.array([[0.9, 0.2, 0.0], [-0.2, 0.9, 0.1], [0.0, 0.0, 0.5]])
 B = np.array([[1.0, 0.2], [0.0, 1.0], [1.0, 0.3]])
 C = np.array([[1.0, 0.5, 0.0], [0.0, 1.0, 1.0]])
@@ -110,11 +112,7 @@ def test_uncertainty_is_calibrated_monte_carlo():
         t = m.info["parameters"]
         est.append(t.value[:2])
         sds.append(t.std[:2])
-    est, sds = np.array(est), np.array(sds)
-    ratio = sds.mean(0) / est.std(0, ddof=1)
-    assert np.all(np.abs(ratio - 1) < 0.2), ratio
-    cover = np.mean(np.abs(est - true.A[1]) <= 1.96 * sds, axis=0)
-    assert np.all((cover >= 0.90) & (cover <= 0.99)), cover
+    assert_std_calibrated(est, sds, true.A[1])
 
 
 def test_ssest_of_a_start_model_is_pem():

@@ -252,14 +252,7 @@ pub fn iv4<'py>(
     nb: Vec<Vec<usize>>,
     nk: Vec<Vec<usize>>,
 ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-    let recs: Vec<IvRecord<'_>> = experiments
-        .iter()
-        .map(|(u, y, r)| IvRecord {
-            u: view_nd(u.as_array()),
-            y: view_nd(y.as_array()),
-            r: r.as_ref().map(|r| view_nd(r.as_array())),
-        })
-        .collect();
+    let recs = iv_records(&experiments);
     let orders = ArxOrders { na, nb, nk };
     let fit = py.detach(|| iv::iv4_multi(&recs, &orders)).py()?;
     fit_dicts(py, &fit)
@@ -277,18 +270,23 @@ pub fn ivx<'py>(
     nb: Vec<Vec<usize>>,
     nk: Vec<Vec<usize>>,
 ) -> PyResult<Vec<Bound<'py, PyDict>>> {
-    let recs: Vec<IvRecord<'_>> = experiments
+    let recs = iv_records(&experiments);
+    let xs: Vec<_> = x.iter().map(|a| view_nd(a.as_array())).collect();
+    let orders = ArxOrders { na, nb, nk };
+    let fit = py.detach(|| iv::ivx_multi(&recs, &xs, &orders)).py()?;
+    fit_dicts(py, &fit)
+}
+
+/// The core's view of the experiments `(u, y, reference or None)`.
+fn iv_records<'a>(experiments: &'a IvExperiments<'_>) -> Vec<IvRecord<'a>> {
+    experiments
         .iter()
         .map(|(u, y, r)| IvRecord {
             u: view_nd(u.as_array()),
             y: view_nd(y.as_array()),
             r: r.as_ref().map(|r| view_nd(r.as_array())),
         })
-        .collect();
-    let xs: Vec<_> = x.iter().map(|a| view_nd(a.as_array())).collect();
-    let orders = ArxOrders { na, nb, nk };
-    let fit = py.detach(|| iv::ivx_multi(&recs, &xs, &orders)).py()?;
-    fit_dicts(py, &fit)
+        .collect()
 }
 
 /// Per output, `theta`, `covariance` and `noise_variance` of an IV fit.
