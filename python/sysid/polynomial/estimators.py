@@ -708,17 +708,25 @@ def iv4(data: Any, na: Any, nb: Any = None, nk: Any = None, *, reference: Any = 
     >>> bool(abs(m.a[0][0][0] + 0.5) < 0.05)
     True
     """
-    data = as_record(data)  # a (u, y) pair, as ssest and compare take
-    exps = experiment_arrays(data)
-    na, nb, nk = matlab_orders("iv4", data, na, nb=nb, nk=nk)
-    check_offsets(data)
-    ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
-    if nu == 0:
-        raise DataError("iv4 needs an input signal (use ar/arma for time series)")
-    na_g, nb_g, nk_g = _grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"), _grid(nk, ny, nu, "nk")
+    data, exps, (na_g, nb_g, nk_g) = iv_setup("iv4", data, na, nb, nk)
     refs = _references(reference, exps)
     fits = _sysid.iv4([(u, y, r) for (u, y), r in zip(exps, refs)], na_g, nb_g, nk_g)
     return _iv_model(data, fits, na_g, nb_g, nk_g, "iv4", reference is not None)
+
+
+def iv_setup(method: str, data: Any, na: Any, nb: Any, nk: Any
+             ) -> tuple[Any, list[Any], tuple[Any, Any, Any]]:
+    """The record, its experiments and the order grids of an IV estimator (``iv4``, ``ivx``):
+    MATLAB's order vector read, offsets checked, an input required."""
+    data = as_record(data)  # a (u, y) pair, as ssest and compare take
+    exps = experiment_arrays(data)
+    na, nb, nk = matlab_orders(method, data, na, nb=nb, nk=nk)
+    check_offsets(data)
+    ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
+    if nu == 0:
+        raise DataError(f"{method} needs an input signal (use ar/arma for time series)")
+    return data, exps, (_grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"),
+                        _grid(nk, ny, nu, "nk"))
 
 
 def _iv_model(data: Any, fits: list[Any], na_g: Any, nb_g: Any, nk_g: Any, method: str,

@@ -27,13 +27,9 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import experiment_arrays
-from ..data.iodata import as_record
-from ..data.offsets import check_offsets
 from ..errors import DataError
-from .estimators import _grid, _iv_model
+from .estimators import _iv_model, iv_setup
 from .model import PolynomialModel
-from .orders import matlab_orders
 
 __all__ = ["ivx"]
 
@@ -63,13 +59,7 @@ def ivx(data: Any, na: Any, nb: Any = None, nk: Any = None, *, x: Any) -> Polyno
     >>> sysid.ivx((u, y), 1, 1, 1, x=y).a[0][0].round(8).tolist()
     [-0.5]
     """
-    data = as_record(data)
-    exps = experiment_arrays(data)
-    na, nb, nk = matlab_orders("ivx", data, na, nb=nb, nk=nk)
-    check_offsets(data)
-    ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
-    if nu == 0:
-        raise DataError("ivx needs an input signal (use ar/arma for time series)")
+    data, exps, (na_g, nb_g, nk_g) = iv_setup("ivx", data, na, nb, nk)
     xs = list(x) if isinstance(x, (list, tuple)) and len(exps) > 1 else [x]
     if len(xs) != len(exps):
         raise DataError(f"x: one instrument array per experiment ({len(exps)}), got {len(xs)}")
@@ -83,6 +73,5 @@ def ivx(data: Any, na: Any, nb: Any = None, nk: Any = None, *, x: Any) -> Polyno
         if not np.all(np.isfinite(a)):
             raise DataError("x has non-finite values")
         arrays.append(np.ascontiguousarray(a))
-    na_g, nb_g, nk_g = _grid(na, ny, ny, "na"), _grid(nb, ny, nu, "nb"), _grid(nk, ny, nu, "nk")
     fits = _sysid.ivx([(u, y, None) for u, y in exps], arrays, na_g, nb_g, nk_g)
     return _iv_model(data, fits, na_g, nb_g, nk_g, "ivx", False)
