@@ -57,7 +57,7 @@ def pem_structured(data: Any, structure: StateSpaceStructure, *, focus: str = "p
     ``info["greyest"]`` (iterations, cost, stop). ``given``: the caller's options set that
     a structure does not take (an error names them); ``refine``: :func:`sysid.pem`, for a
     structure with nothing fixed."""
-    from ..greybox.greybox import GreyBox
+    from ..greybox.greybox import GreyBox, param
     from ..greybox.greyest import greyest
 
     other = [k for k in (given or []) if k not in ("focus", "x0", "tol")]
@@ -78,7 +78,7 @@ def pem_structured(data: Any, structure: StateSpaceStructure, *, focus: str = "p
         f = s.free
         noise = "estimate" if f["K"].any() else "none"
         out = refine(data, mdl, focus=focus, feedthrough=bool(f["D"].any()), x0=x0,
-                  noise=noise, max_iter=max_iter, tol=tol, progress=progress)
+                     noise=noise, max_iter=max_iter, tol=tol, progress=progress)
         out.info["structure"] = s.read(out)
         return out
     if focus == "simulation":  # no noise model: K's entries would be undetermined
@@ -95,22 +95,18 @@ def pem_structured(data: Any, structure: StateSpaceStructure, *, focus: str = "p
     def jac(p: Any, dt: Any = None) -> dict[str, tuple[np.ndarray, ...]]:
         return {k: (d["A"], d["B"], d["C"], d["D"], d["K"]) for k, d in zip(names, ders)}
 
-    from ..greybox.greybox import param
-
     start = {k: (param(v, bounds=s.bounds[k]) if k in s.bounds else v)
              for k, v in zip(names, s.values)}
     gb = GreyBox(fn, start, continuous=False, dt=mdl.dt, jacobian=jac,
                  input_names=data.input_names, output_names=data.output_names)
     # greyest's x0 is "estimate" | "zero" | array (its "model" needs an x0 from fn)
-    est = greyest(data, gb, focus=focus, x0=x0, noise="model",
-                  weighting="noise",
-                  max_iter=max_iter, tol=tol,
-                  progress=False if progress is None else progress)
+    est = greyest(data, gb, focus=focus, x0=x0, noise="model", weighting="noise",
+                  max_iter=max_iter, tol=tol, progress=False if progress is None else progress)
     model = est.model
     theta = np.array([est.parameters.value[est.parameters.names.index(k)] for k in names])
     model.info.update({"method": caller, "structure": s.with_values(theta, model),
                        "greyest": est.info, "parameters": est.parameters})
     warn_unstable(model, caller, advice=(
-        "The structure's free entries allow unstable models; fix or bound them (a "
-        "sysid.GreyBox takes bounds), or start from a stable model closer to the data."))
+        "The structure's free entries allow unstable models; fix or bound them "
+        "(structure.with_bounds(...)), or start from a stable model closer to the data."))
     return model
