@@ -25,6 +25,7 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -34,7 +35,7 @@ from ..data.iodata import IOData
 from ..errors import DataError
 from .statespace import StateSpaceModel
 
-__all__ = ["absorb_delay", "input_delays", "nkshift", "shift_inputs"]
+__all__ = ["absorb_delay", "delayed_fit", "input_delays", "nkshift", "shift_inputs"]
 
 
 def input_delays(data: IOData, input_delay: Any, feedthrough: Any = None) -> np.ndarray:
@@ -61,6 +62,14 @@ def input_delays(data: IOData, input_delay: Any, feedthrough: Any = None) -> np.
                         f"experiment ({shortest} samples): check the delay's units (samples, "
                         "not seconds)")
     return k
+
+
+def delayed_fit(data: IOData, input_delay: Any, feedthrough: Any,
+                fit: Callable[[IOData], StateSpaceModel]) -> StateSpaceModel:
+    """``fit`` of the record with its inputs shifted by their delays (:func:`input_delays`),
+    returned with the delays absorbed: what every estimator's ``input_delay=`` does."""
+    k = input_delays(data, input_delay, feedthrough)
+    return absorb_delay(fit(shift_inputs(data, k)), k)
 
 
 def shift_inputs(data: IOData, delays: np.ndarray) -> IOData:

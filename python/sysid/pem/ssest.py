@@ -144,6 +144,18 @@ def ssest(
     True
     """
     as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")  # before any fit
+    if input_delay is not None:  # MATLAB's InputDelay: fitted on the shifted inputs
+        from ..models.input_delay import delayed_fit
+
+        if isinstance(data, FRD) or hasattr(order, "nstates"):
+            raise DataError("input_delay applies to a time record and an order: leave it out "
+                            "for an FRD or a start model")
+        return delayed_fit(_experiments(data), input_delay, feedthrough, lambda shifted: ssest(
+            shifted, order, focus=focus, feedthrough=feedthrough, x0=x0, noise=noise,
+            horizon=horizon, methods=methods, method=method, max_iter=max_iter, tol=tol,
+            regularization=regularization, progress=progress,
+            enforce_stability=enforce_stability, periods=periods, transient=transient,
+            form=form))
     if form is not None:  # MATLAB's 'Form': the free fit, then estimated in the form
         from .ssform import ssform
         from .structured import pem_structured
@@ -152,33 +164,12 @@ def ssest(
                          horizon=horizon, methods=methods, method=method, max_iter=max_iter,
                          tol=tol, regularization=regularization, progress=progress,
                          enforce_stability=enforce_stability, periods=periods,
-                         transient=transient, input_delay=input_delay)
-        inner = free_fit.info.get("delay_free", free_fit)
-        s = ssform(inner, form, feedthrough=bool(np.any(inner.D)),
-                   noise="estimate" if inner.K is not None and focus == "prediction" else "none")
-        model = pem_structured(_experiments(data) if "input_delay" not in free_fit.info else
-                               _shifted(data, free_fit.info["input_delay"]), s, focus=focus,
-                               x0=x0, max_iter=max_iter, tol=tol, progress=progress,
-                               caller="ssest")
-        if "input_delay" in free_fit.info:
-            from ..models.input_delay import absorb_delay
-
-            model = absorb_delay(model, free_fit.info["input_delay"])
-        return model
-    if input_delay is not None:  # MATLAB's InputDelay: fitted on the shifted inputs
-        from ..models.input_delay import absorb_delay, input_delays, shift_inputs
-
-        if isinstance(data, FRD) or hasattr(order, "nstates"):
-            raise DataError("input_delay applies to a time record and an order: leave it out "
-                            "for an FRD or a start model")
-        data = _experiments(data)
-        k = input_delays(data, input_delay, feedthrough)
-        inner = ssest(shift_inputs(data, k), order, focus=focus, feedthrough=feedthrough,
-                      x0=x0, noise=noise, horizon=horizon, methods=methods, method=method,
-                      max_iter=max_iter, tol=tol, regularization=regularization,
-                      progress=progress, enforce_stability=enforce_stability, periods=periods,
-                      transient=transient)
-        return absorb_delay(inner, k)
+                         transient=transient)
+        s = ssform(free_fit, form, feedthrough=bool(np.any(free_fit.D)),
+                   noise="estimate" if free_fit.K is not None and focus == "prediction"
+                   else "none")
+        return pem_structured(data, s, focus=focus, x0=x0, max_iter=max_iter, tol=tol,
+                              progress=progress, caller="ssest")
     if isinstance(order, StateSpaceStructure):  # MATLAB's ssest(data, init_sys)
         from .structured import pem_structured
 
@@ -495,8 +486,3 @@ def _ssest_periodic(data: Any, order: Any, frd: Any, feedthrough: Any,
                            "losses": {c[1]: c[0] for c in scored}}
     return model
 
-
-def _shifted(data: Any, delays: Any) -> Any:
-    from ..models.input_delay import shift_inputs
-
-    return shift_inputs(_experiments(data), np.asarray(delays, dtype=int))

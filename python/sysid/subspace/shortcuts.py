@@ -73,12 +73,11 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
             return n4sid_frd(data, order, horizon, feedthrough, stable, x0, scale)
         data = require_record(data, method.replace("-", "_"))
         if input_delay is not None:  # MATLAB's InputDelay: fitted on the shifted inputs
-            from ..models.input_delay import absorb_delay, input_delays, shift_inputs
+            from ..models.input_delay import delayed_fit
 
-            k = input_delays(data, input_delay, feedthrough)
-            return absorb_delay(fit(shift_inputs(data, k), order, horizon=horizon,
-                                    feedthrough=feedthrough, kalman=kalman, stable=stable,
-                                    x0=x0, scale=scale), k)
+            return delayed_fit(data, input_delay, feedthrough, lambda shifted: fit(
+                shifted, order, horizon=horizon, feedthrough=feedthrough, kalman=kalman,
+                stable=stable, x0=x0, scale=scale))
         if not isinstance(order, str) and np.ndim(order) == 0:
             order = as_int(order, "order", 1)  # inf, nan, 2.5: before the data are compressed
         horizon = horizon_for_order(data, order, horizon)  # one that allows a given order
