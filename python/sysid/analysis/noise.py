@@ -91,19 +91,15 @@ def noise2meas(model: Any, noise: str = "innovations") -> StateSpaceModel:
                           info={"method": f"noise2meas ({noise})"})
     unc = getattr(model, "uncertainty", None)
     if unc is not None:  # the same parameters, seen through the map
-        from ..models.uncertainty import ParameterUncertainty
+        cov = ss.noise_cov
 
-        build, cov = unc.build, ss.noise_cov
-
-        def mapped(t: np.ndarray) -> StateSpaceModel:
-            b = build(t)  # drawn models carry no noise covariance: the estimate's
+        def mapped(b: Any) -> StateSpaceModel:
+            # drawn models carry no noise covariance: the estimate's
             b = b if isinstance(b, StateSpaceModel) else b.to_statespace()
             return noise2meas(StateSpaceModel(b.A, b.B, b.C, b.D, K=b.K, dt=b.dt,
                                               noise_cov=cov), noise)
 
-        out.uncertainty = ParameterUncertainty(
-            unc.theta, unc.covariance, mapped, names=unc.names, dof=unc.dof,
-            method=unc.method, undetermined=unc.undetermined)
+        out.uncertainty = unc.through(mapped)
     return out
 
 

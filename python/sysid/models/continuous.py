@@ -620,12 +620,7 @@ def d2c(model: StateSpaceModel, method: str = "zoh", *,
     )
     unc = getattr(model, "uncertainty", None)
     if unc is not None:  # the same parameters, seen through the conversion
-        from .uncertainty import ParameterUncertainty
-
-        build = unc.build
-        out.uncertainty = ParameterUncertainty(
-            unc.theta, unc.covariance, lambda t: d2c(build(t), method, prewarp=prewarp),
-            names=unc.names, dof=unc.dof, method=unc.method, undetermined=unc.undetermined)
+        out.uncertainty = unc.through(lambda m: d2c(m, method, prewarp=prewarp))
     return out
 
 
@@ -691,10 +686,5 @@ def d2d(model: StateSpaceModel, dt: float, method: str = "zoh", *,
         out.info = {"method": f"d2d ({method}, through the continuous equivalent)"}
     unc = getattr(model, "uncertainty", None)
     if unc is not None:  # the same parameters, seen through the resampling
-        from .uncertainty import ParameterUncertainty
-
-        build = unc.build
-        out.uncertainty = ParameterUncertainty(
-            unc.theta, unc.covariance, lambda t: d2d(build(t), new, method, prewarp=prewarp),
-            names=unc.names, dof=unc.dof, method=unc.method, undetermined=unc.undetermined)
+        out.uncertainty = unc.through(lambda m: d2d(m, new, method, prewarp=prewarp))
     return out

@@ -119,12 +119,7 @@ def absorb_delay(model: StateSpaceModel, delays: Any) -> StateSpaceModel:
                           info={**model.info, "input_delay": k.tolist(), "delay_free": model})
     unc = getattr(model, "uncertainty", None)
     if unc is not None:  # the delay-free model's parameters, through the same map
-        from .uncertainty import ParameterUncertainty
-
-        build = unc.build
-        out.uncertainty = ParameterUncertainty(
-            unc.theta, unc.covariance, lambda t: absorb_delay(build(t), k), names=unc.names,
-            dof=unc.dof, method=unc.method, undetermined=unc.undetermined)
+        out.uncertainty = unc.through(lambda m: absorb_delay(m, k))
     return out
 
 

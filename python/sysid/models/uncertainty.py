@@ -178,6 +178,23 @@ class ParameterUncertainty(HTMLResult):
                             f"{self.undetermined}")
         self._cache: tuple[list[float], list[Any], list[Any]] | None = None
 
+    def through(self, fn: Callable[[Any], Any]) -> ParameterUncertainty:
+        """The same parameters and covariance seen through ``fn``: the uncertainty of a
+        model derived from the estimate (resampled, converted, delays absorbed), whose
+        draws are ``fn`` of the estimate's draws.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> p = ParameterUncertainty([0.5], [[1e-4]], lambda t: float(t[0]))
+        >>> float(np.round(p.through(lambda a: 2 * a).build(np.array([0.25])), 6))
+        0.5
+        """
+        build = self.build
+        return ParameterUncertainty(self.theta, self.covariance, lambda t: fn(build(t)),
+                                    names=self.names, dof=self.dof, method=self.method,
+                                    undetermined=self.undetermined)
+
     def __reduce__(self) -> Any:
         """Pickling: an estimator's ``build`` is often a closure, which cannot be pickled;
         it is then replaced by the affine map :func:`sysid.save_model` writes (the same

@@ -167,20 +167,13 @@ def _integrated(m: PolynomialModel) -> PolynomialModel:
     """A model fitted on the differenced record as the model of the record: ``D(q) = 1 -
     q^-1`` on every output (its uncertainty's models get the same ``D``)."""
     m.d = [np.array([-1.0]) for _ in range(m.noutputs)]
-    unc = m.uncertainty
-    if unc is not None:
-        from ..models.uncertainty import ParameterUncertainty
+    if m.uncertainty is not None:
 
-        build = unc.build
-
-        def with_d(t: np.ndarray) -> PolynomialModel:
-            b = build(t)
+        def with_d(b: PolynomialModel) -> PolynomialModel:
             b.d = [np.array([-1.0]) for _ in range(b.noutputs)]
             return b
 
-        m.uncertainty = ParameterUncertainty(unc.theta, unc.covariance, with_d,
-                                             names=unc.names, dof=unc.dof, method=unc.method,
-                                             undetermined=unc.undetermined)
+        m.uncertainty = m.uncertainty.through(with_d)
     m.info = {**m.info, "integrate_noise": True}
     return m
 

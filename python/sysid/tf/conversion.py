@@ -94,12 +94,7 @@ def ss2tf(model: Any) -> TransferFunction:
                                .get("method", type(model).__name__)})
     unc = getattr(model, "uncertainty", None) or getattr(ss, "uncertainty", None)
     if unc is not None:  # the same parameters, seen through the conversion
-        from ..models.uncertainty import ParameterUncertainty
-
-        build = unc.build
-        G.uncertainty = ParameterUncertainty(
-            unc.theta, unc.covariance, lambda t: ss2tf(_plain(build(t))), names=unc.names,
-            dof=unc.dof, method=unc.method, undetermined=unc.undetermined)
+        G.uncertainty = unc.through(lambda m: ss2tf(_plain(m)))
     return G
 
 
