@@ -90,3 +90,11 @@ def test_refusals():
         sysid.linearize(m, [1.0, 2.0, 3.0])
     with pytest.raises(DataError, match="step"):
         sysid.linearize(m, 0.0, step=-1.0)
+
+
+def test_bad_order_is_refused():
+    m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    with pytest.raises(DataError, match="order"):
+        sysid.linearize(m, 0.0, order=-1)
+    with pytest.raises(DataError, match="max_samples"):
+        sysid.linearize(m, 0.0, max_samples=10)

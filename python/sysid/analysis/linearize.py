@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import as_int
 from ..errors import DataError, NumericalError, StabilityWarning
 from ..models.statespace import StateSpaceModel
 
@@ -160,6 +161,9 @@ def linearize(model: Any, u0: Any = None, *, order: int | None = None,
     >>> float(np.round(lin.dcgain()[0, 0], 6))
     8.0
     """
+    if order is not None:
+        order = as_int(order, "order", 0)
+    max_samples = as_int(max_samples, "max_samples", FIRST_RUN)
     op = findop(model, u0, max_samples=max_samples)
     u, m = op.u0, op.u0.size
     h = np.full(m, 1e-5) * np.maximum(1.0, np.abs(u)) if step is None else \
