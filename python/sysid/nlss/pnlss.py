@@ -46,6 +46,7 @@ from .common import (
     signal,
 )
 from .memory import check_memory
+from .selection import ValidationRecords, select_iterate, validation_records
 
 __all__ = ["PNLSSModel", "pnlss"]
 
@@ -205,6 +206,7 @@ def pnlss(
     seed: int = 0,
     max_iter: int = 100,
     tol: float = 1e-8,
+    validation: Any = None,
     progress: bool | None | Callable[..., Any] = None,
 ) -> PNLSSModel:
     """Polynomial nonlinear state-space model fitted on the simulation error.
@@ -283,6 +285,18 @@ def pnlss(
         Seeds the decoupled variant's initial branch directions.
     max_iter, tol : int, float
         Iterations and the relative cost/step tolerance of the search.
+    validation : float, IOData or (u, y), optional
+        Choose the returned model on validation data, as the PNLSS literature does: every
+        iterate of the search (the linear start first) simulates the validation data from
+        rest and the one with the lowest mean squared error of the scaled outputs is
+        returned (never one that validates worse than the start; the search itself is
+        unchanged). A fraction in ``(0, 0.9]``: that share of each experiment's end is
+        held out of the fit (each experiment simulated whole, its end scored; not with
+        ``periods``); records: each scored after ``transient`` samples (default: the
+        linear start's settling time, at most a quarter). ``info["fit"]["validation"]``
+        holds every iterate's error, the one returned and the first sample scored in each
+        record. Default: the search's last
+        iterate (see Warns).
     progress : bool or callable, optional
         The shared progress machinery (a bar on a terminal; a callable receives
         ``(iteration, cost, step, gradient, damping)`` and may return ``False`` to stop).
@@ -291,7 +305,8 @@ def pnlss(
     -------
     PNLSSModel or DecoupledPNLSSModel
         ``info["fit"]``: iterations, costs, stop reason, parameters, transient, and
-        ``"returned"`` when the model is an earlier iterate than the search's last (below);
+        ``"returned"`` when the model is an earlier iterate than the search's last (below,
+        and ``validation``);
         ``info["memory"]``: the check that the model forgets its initial state
         (:mod:`sysid.nlss.memory`).
 
@@ -343,6 +358,9 @@ def pnlss(
         branches = as_int(branches, "branches", 1)
     if data.n_inputs == 0:
         raise DataError("pnlss needs inputs; for output-only records use sysid.ar/arma")
+    val_recs = None
+    if validation is not None:
+        data, val_recs = validation_records(data, validation, periods is not None)
     sc = Scaling.of(data)
     sd = scaled_data(data, sc)
     pers = _periods(periods, len(sd.experiments))
@@ -406,10 +424,35 @@ def pnlss(
     finally:
         close()
     info["fit"] = _report(res, recs)
-    _warn_short(res, max_iter)
     build = lambda th: cls(**kw_of(th), **common,  # noqa: E731
                            info={**info, "fit": dict(info["fit"])})
+    if val_recs is not None:
+        val = ValidationRecords(val_recs, sc.y_scale, lambda N: (
+            transient if transient is not None else settle_samples(lin, N)))
+        return _validated(build, res, data, val, max_iter)
+    _warn_short(res, max_iter)
     return _forgetting(build, res, data)
+
+
+def _validated(build: Callable[[np.ndarray], Any], res: dict[str, Any], data: IOData,
+               val: ValidationRecords, max_iter: int) -> Any:
+    """The iterate that simulates the validation records best
+    (:func:`~sysid.nlss.selection.select_iterate`), checked for fading memory; the cap
+    warning only when that is the search's last iterate (an earlier one was chosen on
+    data the later ones simulate worse)."""
+    k, model, errors = select_iterate(build, res["iterates"], val)
+    last = len(errors) - 1
+    hist = res["history"]
+    model.info["fit"]["validation"] = {"errors": [float(e) for e in errors],
+                                       "returned": int(k),
+                                       "scored_from": [r[2] for r in val.records]}
+    if k < last:
+        model.info["fit"]["returned"] = {
+            "iteration": int(k), "cost": float(hist[min(k, len(hist) - 1)]),
+            "last_cost": float(hist[-1]), "reason": "lowest validation error"}
+    else:
+        _warn_short(res, max_iter)
+    return check_memory(_warn_unstable(model), data, "pnlss")
 
 
 def _forgetting(build: Callable[[np.ndarray], Any], res: dict[str, Any], data: IOData) -> Any:
