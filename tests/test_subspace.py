@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import sysid
+from sysid import _sysid
 
 from conftest import markov, match_poles, random_system, simulate
 
@@ -161,6 +162,37 @@ def test_feedthrough_false_forces_zero_d_and_x0_estimate_matches():
     model = sysid.SubspaceEstimator(data, horizon=5).fit(3, feedthrough=False, x0=True)
     assert np.all(model.D == 0)
     np.testing.assert_allclose(model.simulate(u, x0="model"), y, atol=1e-8 * np.abs(y).max())
+
+
+def test_x0_estimate_over_several_experiments():
+    # one B, D for all experiments and an initial state per experiment (MATLAB's n4sid with
+    # multi-experiment data and InitialState 'estimate'); noise-free: exact
+    rng = np.random.default_rng(10)
+    a, b, c, d = random_system(3, 2, 2, rng)
+    us = [rng.standard_normal((400, 2)), rng.standard_normal((300, 2))]
+    x0s = [np.array([2.0, -1.0, 0.5]), np.array([-1.0, 0.0, 3.0])]
+    ys = [simulate(a, b, c, d, u, x0=x) for u, x in zip(us, x0s)]
+    model = sysid.SubspaceEstimator(sysid.IOData(u=us, y=ys), horizon=5).fit(
+        3, feedthrough=True, x0=True)
+    assert model.x0 is None
+    got = model.info["x0_experiments"]
+    assert len(got) == 2
+    for u, y, x in zip(us, ys, got):
+        np.testing.assert_allclose(model.simulate(u, x0=x), y, atol=1e-8 * np.abs(y).max())
+    # the kernel: the same B, D as the single-record one on one record, exact on two
+    one = _sysid.estimate_bd_x0(a, c, us[0], ys[0], True)
+    rec = _sysid.estimate_bd_x0_records(a, c, us[:1], ys[:1], True)
+    for p, q in zip(one[:2], rec[:2]):
+        np.testing.assert_array_equal(p, q)
+    bb, dd, xx = _sysid.estimate_bd_x0_records(a, c, us, ys, True)
+    np.testing.assert_allclose(bb, b, atol=1e-9)
+    np.testing.assert_allclose(dd, d, atol=1e-9)
+    for x, x_true in zip(xx, x0s):
+        np.testing.assert_allclose(x, x_true, atol=1e-8)
+    with pytest.raises(ValueError, match="one of each per experiment"):
+        _sysid.estimate_bd_x0_records(a, c, us, ys[:1], True)
+    with pytest.raises(sysid.ShapeError, match="record 1"):
+        _sysid.estimate_bd_x0_records(a, c, us, [ys[0], ys[1][:, :1]], True)
 
 
 def test_separate_past_and_future_horizons():

@@ -45,6 +45,7 @@ __all__ = [
     "frd_subspace",
     "spectra_subspace",
     "estimate_bd_x0",
+    "estimate_bd_x0_records",
     "realize",
     "fir",
     "okid",
@@ -217,6 +218,9 @@ def spectra_subspace(
 def estimate_bd_x0(
     a: _Array, c: _Array, u: _Array, y: _Array, feedthrough: bool
 ) -> tuple[_Array, _Array, _Array]: ...
+def estimate_bd_x0_records(
+    a: _Array, c: _Array, us: list[_Array], ys: list[_Array], feedthrough: bool
+) -> tuple[_Array, _Array, list[_Array]]: ...
 def simulate(
     a: _Array, b: _Array, c: _Array, d: _Array, u: _Array, x0: _Array | None = None
 ) -> _Array: ...

@@ -113,6 +113,45 @@ pub fn estimate_bd_x0<'py>(
     ))
 }
 
+/// B, D and an x0 per record by least squares on several records given A and C:
+/// `(B, D, [x0, ...])`.
+#[pyfunction]
+#[allow(clippy::type_complexity)]
+pub fn estimate_bd_x0_records<'py>(
+    py: Python<'py>,
+    a: PyReadonlyArray2<'_, f64>,
+    c: PyReadonlyArray2<'_, f64>,
+    us: Vec<PyReadonlyArray2<'_, f64>>,
+    ys: Vec<PyReadonlyArray2<'_, f64>>,
+    feedthrough: bool,
+) -> PyResult<(
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<f64>>,
+    Vec<Bound<'py, PyArray1<f64>>>,
+)> {
+    if us.len() != ys.len() {
+        return Err(pyo3::exceptions::PyValueError::new_err(format!(
+            "{} input records and {} output records: give one of each per experiment",
+            us.len(),
+            ys.len()
+        )));
+    }
+    let (av, cv) = (view(&a), view(&c));
+    let recs: Vec<_> = us
+        .iter()
+        .zip(&ys)
+        .map(|(u, y)| (view(u), view(y)))
+        .collect();
+    let (b, d, x0) = crate::search::detach(py, || {
+        bd_x0::estimate_bd_x0_records(av, cv, &recs, feedthrough)
+    })?;
+    Ok((
+        mat_to_numpy(py, &b),
+        mat_to_numpy(py, &d),
+        x0.iter().map(|x| slice_to_numpy(py, x)).collect(),
+    ))
+}
+
 /// Frequency-domain subspace identification from `G_k` (rows of `g_re`/`g_im`: the
 /// row-major `l x m` response at `omega[k]`, rad/sample): dict with A, B, C, D and
 /// singular_values. `order=None` takes the largest log gap.
@@ -245,5 +284,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PySubspace>()?;
     m.add_function(wrap_pyfunction!(frd_subspace, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_bd_x0, m)?)?;
+    m.add_function(wrap_pyfunction!(estimate_bd_x0_records, m)?)?;
     Ok(())
 }

@@ -525,8 +525,10 @@ class SubspaceEstimator:
         stable : bool
             Enforce a stable ``A`` (Maciejowski's zero-padded shift); recorded in ``info``.
         x0 : bool
-            Also estimate ``B, D`` jointly with the initial state by least squares on the data
-            (one more pass over the record; single-experiment data only).
+            Also estimate ``B, D`` jointly with the initial state by least squares on the
+            simulation error of the data (one more pass over the record; SLICOT's IB01CD).
+            Several experiments: one ``B, D`` for all and an initial state per experiment,
+            in ``info["x0_experiments"]`` (the model's ``x0`` is then None).
         uncertainty : {None, "bootstrap"}
             ``"bootstrap"``: attach the parameter uncertainty from a residual bootstrap of
             ``n_boot`` records (see :mod:`sysid.subspace.bootstrap`), so that
@@ -602,13 +604,17 @@ class SubspaceEstimator:
             warn_excitation(self._excitation_order(2 * n), n, stacklevel=2)
         x0_est = None
         B, D = res["B"], res["D"]
+        x0_all = None
         if x0:
             if self._from_factor:
                 raise DataError("x0=True needs the data; this estimator was built from a factor")
-            if self.data.n_experiments != 1:
-                raise DataError("x0=True needs a single-experiment record")
-            u, y = scaled_experiments(self.data, self._su, self._sy)[0]
-            B, D, x0_est = _sysid.estimate_bd_x0(res["A"], res["C"], u, y, bool(feedthrough))
+            exps = scaled_experiments(self.data, self._su, self._sy)
+            B, D, x0_all = _sysid.estimate_bd_x0_records(
+                res["A"], res["C"], [u for u, _ in exps], [y for _, y in exps],
+                bool(feedthrough))
+            x0_all = [np.asarray(v, float) for v in x0_all]
+            # one initial state is the model's; several (one per experiment) are reported
+            x0_est = x0_all[0] if len(x0_all) == 1 else None
         info = {
             "method": method and _method(method) or self.method,
             "order": n,
@@ -636,6 +642,8 @@ class SubspaceEstimator:
                          "stable": bool(stable), "x0": bool(x0), "scale": bool(self.scale)},
             "preprocessing": _preprocessing(self.data, self._from_factor),
         }
+        if x0_all is not None and len(x0_all) > 1:
+            info["x0_experiments"] = [v.tolist() for v in x0_all]
         if selection is not None:
             info["order_selection"] = selection
         if ft_selection is not None:

@@ -37,105 +37,157 @@ pub fn estimate_bd_x0(
     y: MatRef<'_, f64>,
     feedthrough: bool,
 ) -> Result<(Mat<f64>, Mat<f64>, Vec<f64>)> {
-    let (n, l, m) = (a.nrows(), c.nrows(), u.ncols());
+    let (b, d, mut x0) = estimate_bd_x0_records(a, c, &[(u, y)], feedthrough)?;
+    Ok((b, d, x0.remove(0)))
+}
+
+/// `(B, D, [x0 of each record])` minimising the simulation error of `(A, B, C, D)` over
+/// several records (experiments), each simulated from its own initial state: one `B`, `D`
+/// for all, an `x0` per record. With `feedthrough = false`, D is fixed at zero. Records
+/// may differ in length; each must have the same input and output channels.
+///
+/// ```
+/// use faer::{mat, Mat};
+/// use sysid_core::subspace::bd_x0::estimate_bd_x0_records;
+/// use sysid_core::{StateSpace, simulate::simulate};
+/// let sys = StateSpace::new(mat![[0.8]], mat![[0.5]], mat![[2.0]], mat![[0.1]]).unwrap();
+/// let u1 = Mat::from_fn(40, 1, |t, _| ((t * 37) % 11) as f64 - 5.0);
+/// let u2 = Mat::from_fn(30, 1, |t, _| ((t * 17) % 7) as f64 - 3.0);
+/// let y1 = simulate(&sys, u1.as_ref(), Some(&[3.0])).unwrap();
+/// let y2 = simulate(&sys, u2.as_ref(), Some(&[-1.0])).unwrap();
+/// let recs = [(u1.as_ref(), y1.as_ref()), (u2.as_ref(), y2.as_ref())];
+/// let (b, d, x0) = estimate_bd_x0_records(sys.a.as_ref(), sys.c.as_ref(), &recs, true).unwrap();
+/// assert!((b[(0, 0)] - 0.5).abs() < 1e-10 && (d[(0, 0)] - 0.1).abs() < 1e-10);
+/// assert!((x0[0][0] - 3.0).abs() < 1e-9 && (x0[1][0] + 1.0).abs() < 1e-9);
+/// ```
+#[allow(clippy::type_complexity)]
+pub fn estimate_bd_x0_records(
+    a: MatRef<'_, f64>,
+    c: MatRef<'_, f64>,
+    records: &[(MatRef<'_, f64>, MatRef<'_, f64>)],
+    feedthrough: bool,
+) -> Result<(Mat<f64>, Mat<f64>, Vec<Vec<f64>>)> {
+    let (n, l) = (a.nrows(), c.nrows());
     if c.ncols() != n || a.ncols() != n {
         return Err(SysidError::invalid("A, C", "A must be n x n and C l x n"));
     }
-    if y.ncols() != l || y.nrows() != u.nrows() {
-        return Err(SysidError::ShapeMismatch {
-            what: "y".into(),
-            expected: format!("({}, {l})", u.nrows()),
-            got: format!("({}, {})", y.nrows(), y.ncols()),
-        });
+    let Some(&(u0, _)) = records.first() else {
+        return Err(SysidError::invalid("records", "give at least one record"));
+    };
+    let m = u0.ncols();
+    let mut total = 0usize;
+    for (k, &(u, y)) in records.iter().enumerate() {
+        if u.ncols() != m || y.ncols() != l || y.nrows() != u.nrows() {
+            return Err(SysidError::ShapeMismatch {
+                what: format!("record {k}"),
+                expected: format!("u ({}, {m}) and y ({}, {l})", u.nrows(), u.nrows()),
+                got: format!(
+                    "u ({}, {}), y ({}, {})",
+                    u.nrows(),
+                    u.ncols(),
+                    y.nrows(),
+                    y.ncols()
+                ),
+            });
+        }
+        check_finite("u", u)?;
+        check_finite("y", y)?;
+        total += y.nrows();
     }
-    check_finite("u", u)?;
-    check_finite("y", y)?;
+    let e = records.len();
+    let nx = n * e;
     let nb = n * m;
     let nd = if feedthrough { l * m } else { 0 };
-    let p = n + nb + nd;
-    let len = y.nrows();
-    if len * l < p {
+    let p = nx + nb + nd;
+    if total * l < p {
         return Err(SysidError::InsufficientData {
-            context: format!("estimating x0, B and D ({p} unknowns) from {l} output(s)"),
+            context: format!(
+                "estimating B, D and {e} initial state(s) ({p} unknowns) from {l} output(s)"
+            ),
             needed: p.div_ceil(l),
-            got: len,
+            got: total,
             fix: "use a longer record",
         });
     }
     let af: Vec<f64> = (0..n * n).map(|i| a[(i / n, i % n)]).collect();
-    let mut ca = c.to_owned(); // C A^t (l x n)
-    let mut z = vec![0.0; n * nb]; // Z_t, row-major n x (n m)
-    let mut zn = vec![0.0; n * nb];
     let mut acc = QrAccumulator::new(p + 1, (8 * (p + 1)).max(256));
     let mut row = vec![0.0; p + 1];
-    for t in 0..len {
-        if t % 4096 == 4095 {
-            crate::interrupt::check()?; // Ctrl-C within a long record
-        }
-        for i in 0..l {
-            row.iter_mut().for_each(|v| *v = 0.0);
-            for j in 0..n {
-                row[j] = ca[(i, j)];
+    let mut z = vec![0.0; n * nb]; // Z_t, row-major n x (n m)
+    let mut zn = vec![0.0; n * nb];
+    for (k, &(u, y)) in records.iter().enumerate() {
+        let mut ca = c.to_owned(); // C A^t (l x n)
+        z.iter_mut().for_each(|v| *v = 0.0);
+        for t in 0..y.nrows() {
+            if t % 4096 == 4095 {
+                crate::interrupt::check()?; // Ctrl-C within a long record
             }
-            // C Z_t, row i
-            for col in 0..nb {
-                let mut s = 0.0;
-                for r in 0..n {
-                    s += c[(i, r)] * z[r * nb + col];
+            for i in 0..l {
+                row.iter_mut().for_each(|v| *v = 0.0);
+                for j in 0..n {
+                    row[n * k + j] = ca[(i, j)];
                 }
-                row[n + col] = s;
+                // C Z_t, row i
+                for col in 0..nb {
+                    let mut s = 0.0;
+                    for r in 0..n {
+                        s += c[(i, r)] * z[r * nb + col];
+                    }
+                    row[nx + col] = s;
+                }
+                if feedthrough {
+                    // vec(D) column-major: index i + l * j
+                    for j in 0..m {
+                        row[nx + nb + i + l * j] = u[(t, j)];
+                    }
+                }
+                row[p] = y[(t, i)];
+                acc.push_row(&row);
             }
-            if feedthrough {
-                // vec(D) column-major: index i + l * j
+            // Z_{t+1} = A Z_t + u(t)^T ⊗ I_n ; vec(B) column-major: entry (r, j) at r + n j
+            for r in 0..n {
+                for col in 0..nb {
+                    let mut s = 0.0;
+                    for q in 0..n {
+                        s += af[r * n + q] * z[q * nb + col];
+                    }
+                    zn[r * nb + col] = s;
+                }
                 for j in 0..m {
-                    row[n + nb + i + l * j] = u[(t, j)];
+                    zn[r * nb + r + n * j] += u[(t, j)];
                 }
             }
-            row[p] = y[(t, i)];
-            acc.push_row(&row);
-        }
-        // Z_{t+1} = A Z_t + u(t)^T ⊗ I_n ; vec(B) column-major: entry (r, j) at r + n j
-        for r in 0..n {
-            for col in 0..nb {
-                let mut s = 0.0;
-                for q in 0..n {
-                    s += af[r * n + q] * z[q * nb + col];
-                }
-                zn[r * nb + col] = s;
+            std::mem::swap(&mut z, &mut zn);
+            ca = &ca * a;
+            if t % crate::optim::FLUSH_EVERY == 0 {
+                // C A^t decays through the subnormal numbers, slow on Intel processors
+                crate::optim::flush_tiny_mat(&mut ca);
             }
-            for j in 0..m {
-                zn[r * nb + r + n * j] += u[(t, j)];
+            if !ca.norm_max().is_finite() {
+                return Err(SysidError::numerical(
+                    "initial-state regression",
+                    "C A^t overflowed: A is unstable over this record length",
+                ));
             }
-        }
-        std::mem::swap(&mut z, &mut zn);
-        ca = &ca * a;
-        if t % crate::optim::FLUSH_EVERY == 0 {
-            // C A^t decays through the subnormal numbers, slow on Intel processors
-            crate::optim::flush_tiny_mat(&mut ca);
-        }
-        if !ca.norm_max().is_finite() {
-            return Err(SysidError::numerical(
-                "initial-state regression",
-                "C A^t overflowed: A is unstable over this record length",
-            ));
         }
     }
     let r = acc.finish();
     let r11 = r.as_ref().submatrix(0, 0, p, p);
     let r12 = r.as_ref().submatrix(0, p, p, 1);
     let theta = pinv(r11, 1e-12)? * r12;
-    let x0: Vec<f64> = (0..n).map(|i| theta[(i, 0)]).collect();
+    let x0: Vec<Vec<f64>> = (0..e)
+        .map(|k| (0..n).map(|i| theta[(n * k + i, 0)]).collect())
+        .collect();
     let mut b = Mat::<f64>::zeros(n, m);
     for j in 0..m {
         for i in 0..n {
-            b[(i, j)] = theta[(n + i + n * j, 0)];
+            b[(i, j)] = theta[(nx + i + n * j, 0)];
         }
     }
     let mut d = Mat::<f64>::zeros(l, m);
     if feedthrough {
         for j in 0..m {
             for i in 0..l {
-                d[(i, j)] = theta[(n + nb + i + l * j, 0)];
+                d[(i, j)] = theta[(nx + nb + i + l * j, 0)];
             }
         }
     }
