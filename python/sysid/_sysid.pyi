@@ -44,7 +44,6 @@ __all__ = [
     "RecursiveEstimator",
     "frd_subspace",
     "spectra_subspace",
-    "estimate_bd_x0",
     "estimate_bd_x0_records",
     "realize",
     "fir",
@@ -215,9 +214,6 @@ def spectra_subspace(
     transient: bool = True,
     feedthrough: str = "zero",
 ) -> dict[str, Any]: ...
-def estimate_bd_x0(
-    a: _Array, c: _Array, u: _Array, y: _Array, feedthrough: bool
-) -> tuple[_Array, _Array, _Array]: ...
 def estimate_bd_x0_records(
     a: _Array, c: _Array, us: list[_Array], ys: list[_Array], feedthrough: bool
 ) -> tuple[_Array, _Array, list[_Array]]: ...

@@ -88,31 +88,6 @@ impl PySubspace {
     }
 }
 
-/// B, D and x0 by least squares on one record given A and C: `(B, D, x0)`.
-#[pyfunction]
-#[allow(clippy::type_complexity)]
-pub fn estimate_bd_x0<'py>(
-    py: Python<'py>,
-    a: PyReadonlyArray2<'_, f64>,
-    c: PyReadonlyArray2<'_, f64>,
-    u: PyReadonlyArray2<'_, f64>,
-    y: PyReadonlyArray2<'_, f64>,
-    feedthrough: bool,
-) -> PyResult<(
-    Bound<'py, PyArray2<f64>>,
-    Bound<'py, PyArray2<f64>>,
-    Bound<'py, PyArray1<f64>>,
-)> {
-    let (av, cv, uv, yv) = (view(&a), view(&c), view(&u), view(&y));
-    let (b, d, x0) =
-        crate::search::detach(py, || bd_x0::estimate_bd_x0(av, cv, uv, yv, feedthrough))?;
-    Ok((
-        mat_to_numpy(py, &b),
-        mat_to_numpy(py, &d),
-        slice_to_numpy(py, &x0),
-    ))
-}
-
 /// B, D and an x0 per record by least squares on several records given A and C:
 /// `(B, D, [x0, ...])`.
 #[pyfunction]
@@ -283,7 +258,6 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(spectra_subspace, m)?)?;
     m.add_class::<PySubspace>()?;
     m.add_function(wrap_pyfunction!(frd_subspace, m)?)?;
-    m.add_function(wrap_pyfunction!(estimate_bd_x0, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_bd_x0_records, m)?)?;
     Ok(())
 }

@@ -241,7 +241,7 @@ def orthogonal_decomposition(
     for u, y in data.experiments:
         # B, D and x0 by least squares on each record: y - y_d is then the residual of the
         # orthogonal projection of y on the (filtered) inputs
-        B, D, x0 = _sysid.estimate_bd_x0(A, C, u, y, feedthrough)
+        B, D, (x0,) = _sysid.estimate_bd_x0_records(A, C, [u], [y], feedthrough)
         yd = StateSpaceModel(A, B, C, D).simulate(u, x0=x0)
         residuals.append(y - yd)
     if data.n_experiments == 1:
