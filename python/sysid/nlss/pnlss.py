@@ -295,8 +295,7 @@ def pnlss(
         ``periods``); records: each scored after ``transient`` samples (default: the
         linear start's settling time, at most a quarter). ``info["fit"]["validation"]``
         holds every iterate's error, the one returned and the first sample scored in each
-        record. Default: the search's last
-        iterate (see Warns).
+        record. Default: the search's last iterate (see Warns).
     progress : bool or callable, optional
         The shared progress machinery (a bar on a terminal; a callable receives
         ``(iteration, cost, step, gradient, damping)`` and may return ``False`` to stop).
