@@ -188,6 +188,14 @@ def test_x0_estimate_over_several_experiments():
     np.testing.assert_allclose(dd, d, atol=1e-9)
     for x, x_true in zip(xx, x0s):
         np.testing.assert_allclose(x, x_true, atol=1e-8)
+    # with an input delay the delay-free fit's states are not the returned model's (these
+    # records have none: the shifted fit warns of feedback, rightly)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        delayed = sysid.n4sid(sysid.IOData(u=us, y=ys), 3, feedthrough=True, x0=True,
+                              input_delay=[1, 0])
+    assert delayed.nstates == 4 and "x0_experiments" not in delayed.info
+    assert len(delayed.info["delay_free"].info["x0_experiments"]) == 2
     with pytest.raises(ValueError, match="one of each per experiment"):
         _sysid.estimate_bd_x0_records(a, c, us, ys[:1], True)
     with pytest.raises(sysid.ShapeError, match="record 1"):

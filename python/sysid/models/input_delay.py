@@ -114,9 +114,12 @@ def absorb_delay(model: StateSpaceModel, delays: Any) -> StateSpaceModel:
         D[:, j] = 0.0
         o += k[j]
     K = None if model.K is None else np.vstack([model.K, np.zeros((nd, l))])
+    # initial states of the delay-free fit (the shifted record's start, fewer states) are
+    # not this model's: they stay with ``info["delay_free"]``
+    info = {key: v for key, v in model.info.items() if key != "x0_experiments"}
     out = StateSpaceModel(A, B, C, D, K=K, dt=model.dt, noise_cov=model.noise_cov,
                           input_names=model.input_names, output_names=model.output_names,
-                          info={**model.info, "input_delay": k.tolist(), "delay_free": model})
+                          info={**info, "input_delay": k.tolist(), "delay_free": model})
     unc = getattr(model, "uncertainty", None)
     if unc is not None:  # the delay-free model's parameters, through the same map
         out.uncertainty = unc.through(lambda m: absorb_delay(m, k))
