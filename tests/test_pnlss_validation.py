@@ -85,5 +85,7 @@ def test_validation_is_checked_before_the_fit():
         _fit(d, validation="last")
     with pytest.raises(DataError, match="same channels"):
         _fit(d, validation=sysid.IOData(np.zeros((50, 2)), np.zeros((50, 1)), 1.0))
+    with pytest.raises(DataError, match="none left after transient=60"):
+        _fit(d, validation=_record(7, 50, 0.0), transient=60)
     with pytest.raises(DataError, match="cut the periods"):
         _fit(d, validation=0.2, periods=3)

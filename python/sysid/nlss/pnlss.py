@@ -360,6 +360,12 @@ def pnlss(
     val_recs = None
     if validation is not None:
         data, val_recs = validation_records(data, validation, periods is not None)
+        short = [u.shape[0] for u, _, s in val_recs if s is None and transient is not None
+                 and u.shape[0] <= transient]
+        if short:  # said before the search, not after it
+            raise DataError(f"a validation record of {short[0]} samples has none left after "
+                            f"transient={transient}; give longer validation records or a "
+                            f"shorter transient")
     sc = Scaling.of(data)
     sd = scaled_data(data, sc)
     pers = _periods(periods, len(sd.experiments))
