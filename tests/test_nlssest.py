@@ -64,6 +64,19 @@ def test_bad_input():
         sysid.nlssest(d, 1, validation=0.95)
     with pytest.raises(DataError, match="horizon"):
         sysid.nlssest(sysid.IOData(d.u[:50], d.y[:50], 1.0), 1, horizon=100)
+    # validation records of other channels: refused (they were scaled by broadcasting and
+    # trained against silently)
+    with pytest.raises(DataError, match="give the same channels"):
+        sysid.nlssest(d, 1, validation=sysid.IOData(np.zeros((200, 2)), np.zeros(200), 1.0))
+
+
+@pytest.mark.filterwarnings("ignore::sysid.IterationLimitWarning")  # few epochs, for speed
+def test_validation_records_as_a_pair_equal_an_iodata():
+    v = _data(seed=5, n=400)
+    a = _fit(epochs=3, validation=(v.u, v.y))
+    b = _fit(epochs=3, validation=v)
+    np.testing.assert_array_equal(a.params, b.params)
+    assert a.info["training"]["validation"] == b.info["training"]["validation"]
 
 
 def test_never_returns_worse_than_its_linear_start():

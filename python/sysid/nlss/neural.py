@@ -48,6 +48,7 @@ from .common import (
 )
 from .memory import check_memory
 from .neural_start import check_hw, embed_hw, hw_states
+from .selection import validation_data
 
 __all__ = ["NeuralStateSpaceModel", "nlssest"]
 
@@ -268,7 +269,7 @@ def nlssest(
         the start where the data say little (regularisation toward a prior guess: Ljung,
         *System Identification*, 2nd ed., 1999, sec. 7.1; MATLAB's ``nlssest`` has the
         same term toward zero, ``Lambda``). Default 0: no penalty.
-    validation : float or IOData
+    validation : float, IOData or (u, y)
         The fraction of each experiment's end held out, or separate records. The criterion
         is the error of the free-run simulation from rest (as the model is used and
         compared: each experiment simulated whole, its held-out end scored); the start
@@ -358,6 +359,8 @@ def nlssest(
         raise DataError(f"learning_rate must be a finite number > 0, got {learning_rate!r}")
     sc = Scaling.of(data)
     sd = scaled_data(data, sc)
+    # records (an IOData or a (u, y) pair) checked for the training data's channels
+    validation = validation_data(validation, data)
     train, val = _split(sd, sc, validation, L, 2 if H is None else H)
     lin_data = IOData([u[:at] for u, _, at in train], [y[:at] for _, y, at in train], data.dt)
     whole = isinstance(validation, IOData) or float(validation) == 0.0

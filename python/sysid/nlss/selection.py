@@ -21,7 +21,7 @@ import numpy as np
 from ..data.iodata import IOData
 from ..errors import DataError, NumericalError
 
-__all__ = ["ValidationRecords", "validation_records", "select_iterate"]
+__all__ = ["ValidationRecords", "select_iterate", "validation_data", "validation_records"]
 
 
 class ValidationRecords:
@@ -68,6 +68,29 @@ class ValidationRecords:
         return total / max(count, 1)
 
 
+def validation_data(validation: Any, data: IOData) -> Any:
+    """``validation`` as an :class:`IOData` when it is records (a ``(u, y)`` pair is made
+    one, with ``data``'s sample time), checked for ``data``'s channels; anything else (a
+    fraction) unchanged.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.nlss.selection import validation_data
+    >>> d = sysid.IOData(u=np.ones((10, 2)), y=np.ones(10))
+    >>> validation_data((np.ones((5, 2)), np.ones(5)), d).lengths
+    [5]
+    """
+    if isinstance(validation, tuple) and len(validation) == 2:
+        validation = IOData(u=validation[0], y=validation[1], dt=data.dt)
+    if isinstance(validation, IOData) and (validation.n_inputs, validation.n_outputs) != (
+            data.n_inputs, data.n_outputs):
+        raise DataError(f"validation has {validation.n_inputs} input(s) and "
+                        f"{validation.n_outputs} output(s), the estimation data "
+                        f"{data.n_inputs} and {data.n_outputs}: give the same channels")
+    return validation
+
+
 def validation_records(data: IOData, validation: Any, periodic: bool
                        ) -> tuple[IOData, list[tuple[np.ndarray, np.ndarray, int | None]]]:
     """The training record and the validation records ``(u, y, start)`` of ``validation``
@@ -93,13 +116,8 @@ def validation_records(data: IOData, validation: Any, periodic: bool
     >>> train.lengths, recs[0][2]
     ([80], 80)
     """
-    if isinstance(validation, tuple) and len(validation) == 2:
-        validation = IOData(u=validation[0], y=validation[1], dt=data.dt)
+    validation = validation_data(validation, data)
     if isinstance(validation, IOData):
-        if (validation.n_inputs, validation.n_outputs) != (data.n_inputs, data.n_outputs):
-            raise DataError(f"validation has {validation.n_inputs} input(s) and "
-                            f"{validation.n_outputs} output(s), the estimation data "
-                            f"{data.n_inputs} and {data.n_outputs}: give the same channels")
         return data, [(u, y, None) for u, y in validation.experiments]
     if isinstance(validation, bool) or not isinstance(validation, (int, float, np.floating)) \
             or not 0.0 < float(validation) <= 0.9:
