@@ -69,7 +69,6 @@ from ..data.segments import long_enough
 from ..errors import DataError, ExcitationError, InsufficientDataError, NumericalError, SysidWarning
 from ..models.statespace import ss_parameter_count
 from ..subspace.estimator import available_horizon
-from ..validation.compare import require_outputs_vary
 from ..validation.crossval import (
     MAX_ORDER,
     MIN_BLOCK,
@@ -80,6 +79,7 @@ from ..validation.crossval import (
     require_held_out_length,
     simulation_fit,
 )
+from ..validation.records import validation_record
 from .board import Board, bic
 from .notes import persistent_mode_check, refit_cap_check, trend_check, weak_check
 from .result import IdentifiedModel, IdentifyResult, _family
@@ -575,7 +575,7 @@ def identify(
     require_inputs_vary(data.experiments, "identify", data.input_names)
     # before the means are removed (a constant output is then 0)
     require_inputs_vary(data.experiments, "identify", data.output_names, side=1)
-    validation = _checked_validation(validation, data)  # before the search, not after it
+    validation = validation_record(validation, data)  # before the search, not after it
     centred, mu, my = _offsets(data)
     checks, feedback = _checks(centred)
     # six significant digits: rounding to decimals printed data in micro-units as [0.0]
@@ -708,33 +708,6 @@ def identify(
                          interrupted)
     out.out_of_time = board.out_of_time
     return out
-
-
-def _checked_validation(validation: Any, data: IOData) -> IOData | None:
-    """The validation record as an :class:`IOData`, refused (a :class:`DataError` naming
-    the mismatch) when its channels or sample time differ from the estimation data's or an
-    output stands still (a fit against it is undefined): said before the search, not as a
-    validation fit of -inf after it."""
-    if validation is None:
-        return None
-    if isinstance(validation, tuple) and len(validation) == 2:
-        validation = IOData(u=validation[0], y=validation[1], dt=data.dt)
-    if not isinstance(validation, IOData):
-        raise DataError(f"validation must be a sysid.IOData or a (u, y) pair, got "
-                        f"{type(validation).__name__}")
-    if (validation.n_inputs, validation.n_outputs) != (data.n_inputs, data.n_outputs):
-        raise DataError(f"validation has {validation.n_inputs} input(s) and "
-                        f"{validation.n_outputs} output(s), the estimation data "
-                        f"{data.n_inputs} and {data.n_outputs}: give the same channels")
-    if abs(float(validation.dt) - float(data.dt)) > 1e-9 * float(data.dt):
-        raise DataError(f"validation is sampled every {validation.dt:.10g} s, the estimation "
-                        f"data every {data.dt:.10g} s: resample one of them (sysid.resample)")
-    if min(validation.lengths) < 2:  # one sample is "constant": say what is wrong
-        raise InsufficientDataError(
-            f"the validation record is too short ({min(validation.lengths)} sample in an "
-            "experiment): a fit against it needs an output that can vary; pass a longer one")
-    require_outputs_vary([y for _, y in validation.experiments], validation.output_names)
-    return validation
 
 
 def _choose(board: Board, ranked: list[dict[str, Any]], data: IOData, stable_only: bool

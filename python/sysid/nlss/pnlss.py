@@ -453,7 +453,7 @@ def _validated(build: Callable[[np.ndarray], Any], res: dict[str, Any], data: IO
                                        "scored_from": [r[2] for r in val.records]}
     if k < last:
         model.info["fit"]["returned"] = {
-            "iteration": int(k), "cost": float(hist[min(k, len(hist) - 1)]),
+            "iteration": int(k), "cost": float(hist[k]),
             "last_cost": float(hist[-1]), "reason": "lowest validation error"}
     else:
         _warn_short(res, max_iter)

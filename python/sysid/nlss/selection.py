@@ -20,6 +20,7 @@ import numpy as np
 
 from ..data.iodata import IOData
 from ..errors import DataError, NumericalError
+from ..validation.records import validation_record
 
 __all__ = ["ValidationRecords", "select_iterate", "validation_data", "validation_records"]
 
@@ -43,10 +44,6 @@ class ValidationRecords:
         for u, y, start in records:
             if start is None:  # a separate record: scored after its transient from rest
                 start = 0 if settle is None else int(settle(u.shape[0]))
-                if u.shape[0] - start < 1:
-                    raise DataError(f"a validation experiment of {u.shape[0]} samples has "
-                                    f"none left after its transient of {start}; give a "
-                                    f"longer one or transient=")
             out.append((u, y, int(start)))
         self.records = out
         self.scale = np.asarray(scale, float)
@@ -69,25 +66,11 @@ class ValidationRecords:
 
 
 def validation_data(validation: Any, data: IOData) -> Any:
-    """``validation`` as an :class:`IOData` when it is records (a ``(u, y)`` pair is made
-    one, with ``data``'s sample time), checked for ``data``'s channels; anything else (a
-    fraction) unchanged.
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> from sysid.nlss.selection import validation_data
-    >>> d = sysid.IOData(u=np.ones((10, 2)), y=np.ones(10))
-    >>> validation_data((np.ones((5, 2)), np.ones(5)), d).lengths
-    [5]
-    """
-    if isinstance(validation, tuple) and len(validation) == 2:
-        validation = IOData(u=validation[0], y=validation[1], dt=data.dt)
-    if isinstance(validation, IOData) and (validation.n_inputs, validation.n_outputs) != (
-            data.n_inputs, data.n_outputs):
-        raise DataError(f"validation has {validation.n_inputs} input(s) and "
-                        f"{validation.n_outputs} output(s), the estimation data "
-                        f"{data.n_inputs} and {data.n_outputs}: give the same channels")
+    """Records (an :class:`IOData` or a ``(u, y)`` pair) checked against ``data``
+    (:func:`sysid.validation.records.validation_record`); anything else (a fraction)
+    unchanged, for the caller to check."""
+    if isinstance(validation, (IOData, tuple)):
+        return validation_record(validation, data)
     return validation
 
 
