@@ -49,3 +49,26 @@ def test_simulation_focus_standard_deviations_match_monte_carlo(K):
     assert 0.75 * mc < reported < 1.25 * mc
     assert 0.75 * pole_mc < pole_reported < 1.25 * pole_mc
     assert 0.86 <= coverage <= 0.99
+
+
+def test_a_correction_that_overflows_keeps_the_gauss_newton_covariance():
+    """A simulated Jacobian that is finite but beyond squaring (1e200: from a model one step
+    from the estimate that runs away over the record) overflowed the correction, and
+    ``np.linalg.eigh`` raised LinAlgError from every standard deviation and from saving the
+    model. Now the Gauss-Newton covariance stays, and the fit's note says why."""
+    from sysid.models.uncertainty import ParameterUncertainty
+    from sysid.pem.sandwich import sandwich_covariance
+
+    rng = np.random.default_rng(0)
+    y = rng.standard_normal((400, 1))
+    e = np.cumsum(y[:, 0]) * 0.05  # coloured errors: the correction is formed
+
+    class Runaway(ParameterUncertainty):
+        def scaled_jacobian(self, fn, *, step=1e-3):
+            G = np.column_stack([y[:, 0], e, 1e200 * e])
+            return y[:, 0] - e, G
+
+    unc = Runaway([0.5, 1.0, 1.0], np.diag([1e-2, 2e-2, 3e-2]),
+                  lambda t: sysid.StateSpaceModel([[t[0]]], [[t[1]]], [[t[2]]]))
+    got, note = sandwich_covariance(unc, lambda m: None, y)  # no RuntimeWarning either
+    assert got is None and "overflows" in note

@@ -327,6 +327,38 @@ def test_a_quantity_undefined_on_one_side_of_the_estimate_gets_a_one_sided_deriv
     assert np.isinf(G[0, 0])
 
 
+def test_a_large_parameter_does_not_stretch_the_steps_of_well_determined_directions():
+    """identify's output-error model of an industrial robot record (an initial state in the
+    millions beside a pole at 0.9993 known to 1e-3) raised LinAlgError from poles(std=True)
+    and from saving: the difference step's floor was 1e-7 of the largest parameter, so the
+    best-determined direction was stepped hundreds of its standard deviations, into an
+    unstable model whose simulation reached 1e204. The floor now follows the parameters each
+    direction moves: dcgain's std from the pole is its first-order value."""
+    a, sd_a = 0.99, 1e-4
+    unc = ParameterUncertainty(
+        [a, 3e6], np.diag([sd_a**2, 1.0]),
+        lambda t: sysid.StateSpaceModel([[t[0]]], [[1.0, t[1]]], [[1.0]]), names=["a", "b2"])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        g = unc.propagate(lambda m: m.dcgain().ravel()[:1])
+    np.testing.assert_allclose(g.std[0], sd_a / (1 - a) ** 2, rtol=1e-4)
+
+
+def test_a_step_into_a_runaway_simulation_is_shortened():
+    """A simulation that runs away on one side of a step (the perturbed model unstable over
+    the record) is no derivative: the step is shortened until both sides agree, and the std
+    of a simulated output is its first-order value, not the runaway's."""
+    a, sd_a = 0.9999, 1.0  # a std far past the stability margin: 1e-3 std crosses it
+    unc = ParameterUncertainty([a], [[sd_a**2]],
+                               lambda t: sysid.StateSpaceModel([[t[0]]], [[1.0]], [[1.0]]))
+    u = np.ones((20000, 1))
+    g = unc.propagate(lambda m: m.simulate(u)[-1])
+    t = np.arange(20000)  # y[N-1] = sum_{k<N-1} a^k: its derivative sum k a^(k-1)
+    # (before: 3.6e13 from the runaway side; the shortened step's curvature error: 0.3 %)
+    np.testing.assert_allclose(g.std[0], sd_a * np.sum(t[1:-1] * a ** (t[1:-1] - 1)),
+                               rtol=1e-2)
+
+
 def test_a_near_integrator_does_not_stretch_the_step_horizon_to_years():
     """tfest on a real record fitted a pole at -5.5e-12 beside dynamics at 1e-3 rad/s: the
     default step horizon (five time constants of the slowest pole) was 1e12 s, and

@@ -80,6 +80,25 @@ def _real_vector(x: Any, what: str = "fn(model)") -> np.ndarray:
     return a.astype(float)
 
 
+#: times a central difference's step is shortened (by 10 each) where the two sides disagree
+BENT_RETRIES = 4
+
+
+def _bent(fp: np.ndarray, fm: np.ndarray, f0: np.ndarray) -> bool:
+    """Whether values ``fp``, ``fm`` one step either side of ``f0`` are far from a straight
+    line through it: the second difference over half the first difference's size (above
+    1e-6 of the values, so that rounding of a flat function is not taken for a bend). In
+    the linear range it is of the order of the step; it is about 1 when one side runs away
+    (a perturbed model that turns unstable and whose simulation grows without bound)."""
+    with np.errstate(all="ignore"):
+        bend = float(np.linalg.norm(fp + fm - 2.0 * f0))
+        slope = float(np.linalg.norm(fp - fm))
+        size = float(np.linalg.norm(f0))
+    if not (np.isfinite(bend) and np.isfinite(slope)):
+        return True
+    return bend > 0.5 * slope and bend > 1e-6 * size
+
+
 class ParameterUncertainty(HTMLResult):
     """Covariance of the free parameters of an estimated model, and its propagation.
 
@@ -324,10 +343,13 @@ class ParameterUncertainty(HTMLResult):
         every first-order quantity reuses them)."""
         if self._cache is not None and self._cache[0] and self._step == step:
             return self._cache
-        scale = max(1.0, float(np.max(np.abs(self.theta)))) if self.theta.size else 1.0
         hs, plus, minus = [], [], []
         for lam, v in zip(self._w, self._V.T):
-            h = max(step * np.sqrt(lam), 1e-7 * scale)
+            # not below the rounding of the parameters the direction moves (those of the
+            # others, large ones among them, would push a well-determined direction hundreds
+            # of its standard deviations: into an unstable model, on an output-error fit
+            # whose initial state was in the millions)
+            h = max(step * np.sqrt(lam), 1e-7 * max(1.0, float(np.linalg.norm(self.theta * v))))
             hs.append(h)
             plus.append(self.build(self.theta + h * v))
             minus.append(self.build(self.theta - h * v))
@@ -349,26 +371,37 @@ class ParameterUncertainty(HTMLResult):
         hs, plus, minus = self._perturbed(step)
         G = np.zeros((flat.size, len(hs)), dtype=complex if np.iscomplexobj(flat) else float)
         failed: list[str] = []
-        for k, (h, mp, mm) in enumerate(zip(hs, plus, minus)):
+
+        def at(m: Any) -> tuple[np.ndarray | None, str]:
             # a model this close to the estimate may have no such quantity (its simulation
-            # overflows, its matrices are not finite): a one-sided difference on the other
-            # side, and no finite std when neither side has one
-            ends: list[np.ndarray | None] = []
-            err = ""
-            for m in (mp, mm):
-                try:
-                    ends.append(np.asarray(fn(m)).ravel())
-                except (NumericalError, NonFiniteError) as e:
-                    ends.append(None)
-                    err = str(e)
-            if ends[0] is not None and ends[1] is not None:
-                d = (ends[0] - ends[1]) / (2 * h)
-            elif ends[0] is not None:
-                d = (ends[0] - flat) / h
-            elif ends[1] is not None:
-                d = (flat - ends[1]) / h
+            # overflows, its matrices are not finite)
+            try:
+                return np.asarray(fn(m)).ravel(), ""
+            except (NumericalError, NonFiniteError) as e:
+                return None, str(e)
+
+        for k, (h, mp, mm) in enumerate(zip(hs, plus, minus)):
+            (fp, ep), (fm, em) = at(mp), at(mm)
+            # a step past where ``fn`` is nearly linear (a simulation whose model turns
+            # unstable on one side and grows without bound there): shorter steps, until
+            # both sides agree on the slope
+            for _ in range(BENT_RETRIES):
+                if fp is None or fm is None or not _bent(fp, fm, flat):
+                    break
+                h /= 10.0
+                v = self._V[:, k]
+                (fp, ep), (fm, em) = (at(self.build(self.theta + h * v)),
+                                      at(self.build(self.theta - h * v)))
+            # a one-sided difference on the side that has the quantity, and no finite std
+            # when neither side has one
+            if fp is not None and fm is not None:
+                d = (fp - fm) / (2 * h)
+            elif fp is not None:
+                d = (fp - flat) / h
+            elif fm is not None:
+                d = (flat - fm) / h
             else:
-                failed.append(err)
+                failed.append(ep or em)
                 G[:, k] = np.inf
                 continue
             G[:, k] = d * np.sqrt(self._w[k])

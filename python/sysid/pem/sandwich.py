@@ -230,28 +230,33 @@ def _block(unc: ParameterUncertainty, sim: Callable[[Any], np.ndarray], y: np.nd
     if not (np.all(np.isfinite(e)) and np.all(np.isfinite(G))):
         return None, ("gauss-newton, as for white errors: the errors or their Jacobian "
                       "overflow"), [], 1.0
-    J = G.reshape(N, l, r) * np.asarray(weights, float)[None, :, None]
-    A = np.einsum("tkr,tks->rs", J, J)
-    sigma2 = float(np.median(np.diag(A)))
-    if not sigma2 > 0:
-        return None, ("gauss-newton, as for white errors: the fit does not move its "
-                      "outputs"), [], 1.0
-    delta = np.zeros((r, r))
-    orders = []
-    nfft = 1 << int(np.ceil(np.log2(2 * N)))
-    wts = np.full(nfft // 2 + 1, 2.0)  # the rfft grid's weights on the full one
-    wts[0] = 1.0
-    wts[-1] = 1.0
-    for k in range(l):
-        S, p = error_spectrum(e[:, k], nfft)
-        orders.append(p)
-        if p == 0:  # white: nothing to correct
-            continue
-        F = np.fft.rfft(J[:, k, :], nfft, axis=0)
-        dev = (S - np.sum(wts * S) / nfft) * wts * float(weights[k]) ** 2
-        M = ((np.conj(F) * dev[:, None]).T @ F).real / nfft
-        delta += 0.5 * (M + M.T) / sigma2 ** 2
-    Pz = np.eye(r) + delta
+    # a Jacobian finite but beyond squaring overflows here: checked below, not warned
+    with np.errstate(over="ignore", invalid="ignore"):
+        J = G.reshape(N, l, r) * np.asarray(weights, float)[None, :, None]
+        A = np.einsum("tkr,tks->rs", J, J)
+        sigma2 = float(np.median(np.diag(A)))
+        if not sigma2 > 0:
+            return None, ("gauss-newton, as for white errors: the fit does not move its "
+                          "outputs"), [], 1.0
+        delta = np.zeros((r, r))
+        orders = []
+        nfft = 1 << int(np.ceil(np.log2(2 * N)))
+        wts = np.full(nfft // 2 + 1, 2.0)  # the rfft grid's weights on the full one
+        wts[0] = 1.0
+        wts[-1] = 1.0
+        for k in range(l):
+            S, p = error_spectrum(e[:, k], nfft)
+            orders.append(p)
+            if p == 0:  # white: nothing to correct
+                continue
+            F = np.fft.rfft(J[:, k, :], nfft, axis=0)
+            dev = (S - np.sum(wts * S) / nfft) * wts * float(weights[k]) ** 2
+            M = ((np.conj(F) * dev[:, None]).T @ F).real / nfft
+            delta += 0.5 * (M + M.T) / sigma2 ** 2
+        Pz = np.eye(r) + delta
+    if not np.all(np.isfinite(Pz)):
+        return None, ("gauss-newton, as for white errors: the coloured-error correction "
+                      "overflows"), [], 1.0
     ev, Q = np.linalg.eigh(0.5 * (Pz + Pz.T))
     Pz = (Q * np.clip(ev, 0.0, None)) @ Q.T
     Gd = V * np.sqrt(w)  # parameters = theta + Gd z, z of unit Gauss-Newton covariance
