@@ -95,7 +95,7 @@ class Trend:
             Sample of the experiment where ``y`` begins.
         """
         arr = as_2d(y, "y", ncols=len(self.y_scale))
-        tr = self.y_trend[experiment]
+        tr = self._record_values("y", experiment)
         if start < 0 or start + arr.shape[0] > tr.shape[0]:
             raise ShapeError(
                 f"y covers samples {start}..{start + arr.shape[0] - 1} but experiment "
@@ -106,7 +106,7 @@ class Trend:
     def add_inputs(self, u: Any, experiment: int = 0, start: int = 0) -> np.ndarray:
         """Map inputs in processed units back to original units (as :meth:`add_outputs`)."""
         arr = as_2d(u, "u", ncols=len(self.u_scale))
-        tr = self.u_trend[experiment]
+        tr = self._record_values("u", experiment)
         if start < 0 or start + arr.shape[0] > tr.shape[0]:
             raise ShapeError(f"u does not fit inside experiment {experiment}")
         return arr * self.u_scale + tr[start : start + arr.shape[0]]
@@ -221,6 +221,53 @@ class Trend:
         self._parametric()
         return TrendedModel(model, self)
 
+    def to_dict(self) -> dict[str, Any]:
+        """What applies to other data (kind, offsets, slopes, scales, sample and start time),
+        for saving with a :class:`~sysid.models.trended.TrendedModel`; the per-sample values
+        of the record it was fitted on are not kept (:meth:`add_outputs` needs the record).
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> d, tr = sysid.detrend(sysid.IOData(u=[1.0, 3.0], y=[10.0, 14.0]), "linear",
+        ...                       return_trend=True)
+        >>> back = sysid.Trend.from_dict(tr.to_dict())
+        >>> np.round(back.restore_outputs(np.zeros((2, 1))), 9).ravel().tolist()
+        [10.0, 14.0]
+        """
+        self._parametric()
+        return {"kind": self.kind, "u_offset": np.asarray(self.u_offset, float),
+                "y_offset": np.asarray(self.y_offset, float),
+                "u_slope": np.asarray(self.u_slope, float),
+                "y_slope": np.asarray(self.y_slope, float),
+                "u_scale": np.asarray(self.u_scale, float),
+                "y_scale": np.asarray(self.y_scale, float), "dt": self.dt, "t0": self.t0}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> Trend:
+        """Inverse of :meth:`to_dict` (a trend that applies to other data, without the
+        fitted record's per-sample values)."""
+        def vec(k: str) -> np.ndarray:
+            return np.asarray(d[k], float).ravel()
+        if d["kind"] not in ("mean", "linear"):
+            raise DataError(f"a saved trend's kind must be 'mean' or 'linear', got {d['kind']!r}")
+        return cls([], [], vec("u_scale"), vec("y_scale"), kind=str(d["kind"]),
+                   offsets=(vec("u_offset"), vec("y_offset")),
+                   slopes=(vec("u_slope"), vec("y_slope")),
+                   dt=None if d.get("dt") is None else float(d["dt"]),
+                   t0=None if d.get("t0") is None else float(d["t0"]))
+
+    def _record_values(self, which: str, experiment: int) -> np.ndarray:
+        """The fitted record's per-sample trend of one experiment."""
+        values = self.y_trend if which == "y" else self.u_trend
+        if not values:
+            raise DataError("this Trend holds no per-sample values (it was loaded with a saved "
+                            "model: only its offsets and slopes); use restore_outputs or "
+                            "apply, which evaluate the line on any record")
+        if not 0 <= experiment < len(values):
+            raise DataError(f"experiment must be 0..{len(values) - 1}, got {experiment}")
+        return values[experiment]
+
     def __repr__(self) -> str:
         if self.kind is not None and self.u_offset is not None:
             return (f"Trend({self.kind}, input offset {np.round(self.u_offset, 6)}, output "
@@ -231,3 +278,12 @@ class Trend:
             f"Trend({len(self.y_trend)} experiment(s), input scale {np.round(self.u_scale, 6)}, "
             f"output scale {np.round(self.y_scale, 6)})"
         )
+
+
+def _register() -> None:
+    from ..models.serialize import register_model
+
+    register_model(Trend)  # saved inside a TrendedModel
+
+
+_register()

@@ -177,6 +177,13 @@ class IdentifiedModel:
         return {"statespace": body_with_uncertainty(self.statespace), "u_offset": self.u_offset,
                 "y_offset": self.y_offset}
 
+    def save(self, path: Any, *, format: str | None = None) -> None:
+        """Write the model (its offsets too) to a ``.json`` or ``.npz`` file, as every model
+        saves itself; see :func:`sysid.save_model` and :meth:`to_dict`."""
+        from ..models.serialize import save_model
+
+        save_model(self, path, format=format)
+
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> IdentifiedModel:
         """Inverse of :meth:`to_dict`."""

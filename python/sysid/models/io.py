@@ -46,6 +46,7 @@ from .serialize import (
     VERSION,
     PathLike,
     _decode,
+    family_class,
     model_to_dict,
     read_model_file,
     register_model,
@@ -54,13 +55,6 @@ from .serialize import (
 from .statespace import StateSpaceModel
 
 __all__ = ["save_model", "load_model", "model_to_dict", "model_from_dict", "register_model"]
-
-# families in their own packages (issues 27, 29), imported on first load
-_LAZY_FAMILIES = {"TransferFunction": "sysid.tf.model", "ProcessModel": "sysid.process.model",
-                  "PNLSSModel": "sysid.nlss.pnlss",
-                  "NeuralStateSpaceModel": "sysid.nlss.neural",
-                  "NetworkNARXModel": "sysid.nonlinear.narx_network_model",
-                  "IdentifiedModel": "sysid.identify.result"}
 
 for _cls in (StateSpaceModel, ContinuousStateSpace, PolynomialModel, NARXModel,
              HammersteinWienerModel, HammersteinWienerSSModel, NonlinearGreyBox):
@@ -89,15 +83,7 @@ def model_from_dict(d: dict[str, Any]) -> Any:
             "class's from_dict (e.g. sysid.StateSpaceModel.from_dict(d)), or pair "
             "sysid.model_to_dict(model) with sysid.model_from_dict(d)")
     family = check_file(d, VERSION)
-    cls = REGISTRY.get(family)
-    if cls is None and family in _LAZY_FAMILIES:  # families registered when first imported
-        import importlib
-
-        importlib.import_module(_LAZY_FAMILIES[family])
-        cls = REGISTRY.get(family)
-    if cls is None:
-        raise DataError(f"unknown model family {family!r}: import the module that defines it "
-                        "and register the class with sysid.register_model before loading")
+    cls = family_class(family)
     try:
         body = {k: _decode(v) for k, v in d.items()}
         from .uncertainty_io import model_from_body

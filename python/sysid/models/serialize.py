@@ -102,6 +102,39 @@ def register_model(cls: T | None = None, *, name: str | None = None) -> Any:
     return add if cls is None else add(cls)
 
 
+#: families in their own modules (issues 27, 29; wrappers), registered when first imported
+LAZY_FAMILIES = {"TransferFunction": "sysid.tf.model", "ProcessModel": "sysid.process.model",
+                 "PNLSSModel": "sysid.nlss.pnlss",
+                 "NeuralStateSpaceModel": "sysid.nlss.neural",
+                 "NetworkNARXModel": "sysid.nonlinear.narx_network_model",
+                 "IdentifiedModel": "sysid.identify.result",
+                 "TrendedModel": "sysid.models.trended", "Trend": "sysid.data.trend",
+                 "AugmentedInputModel": "sysid.nonlinear.augmented",
+                 "NARXStateSpace": "sysid.nonlinear.narx_ss"}
+
+
+def family_class(family: str) -> type:
+    """The class registered as ``family`` (its module imported first when it registers
+    itself on import, :data:`LAZY_FAMILIES`); a :class:`~sysid.DataError` for an unknown one.
+
+    Examples
+    --------
+    >>> from sysid.models.serialize import family_class
+    >>> family_class("TransferFunction").__name__   # its module imported on first use
+    'TransferFunction'
+    """
+    cls = REGISTRY.get(family)
+    if cls is None and family in LAZY_FAMILIES:
+        import importlib
+
+        importlib.import_module(LAZY_FAMILIES[family])
+        cls = REGISTRY.get(family)
+    if cls is None:
+        raise DataError(f"unknown model family {family!r}: import the module that defines it "
+                        "and register the class with sysid.register_model before loading")
+    return cls
+
+
 def family_name(model: Any) -> str:
     """The registered name of ``model``'s class (its class name if it is not registered)."""
     for key, c in REGISTRY.items():

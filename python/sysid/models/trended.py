@@ -125,5 +125,47 @@ class TrendedModel(ModelMixin):
         """The inner model's stability (a trend does not change it)."""
         return bool(self.model.is_stable())
 
+    # -- saving: the inner model (any registered family, with its uncertainty) and the trend
+    def to_dict(self) -> dict[str, Any]:
+        """The inner model (its family and :func:`sysid.model_to_dict` body, uncertainty
+        included) and the trend's offsets and slopes (:meth:`sysid.Trend.to_dict`), for
+        :func:`sysid.save_model`; :func:`sysid.load_model` gives back a model that still
+        takes and returns raw data.
+
+        Examples
+        --------
+        >>> import os, tempfile, numpy as np, sysid
+        >>> raw = sysid.IOData(u=[1.0, 2.0, 0.0, 1.0], y=[5.0, 5.5, 6.0, 5.0])
+        >>> d, tr = sysid.detrend(raw, "mean", return_trend=True)
+        >>> m = tr.attach(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]))
+        >>> path = os.path.join(tempfile.mkdtemp(), "m.json")
+        >>> m.save(path)
+        >>> bool(np.allclose(sysid.load_model(path).simulate(raw.u), m.simulate(raw.u)))
+        True
+        """
+        from .serialize import family_name
+        from .uncertainty_io import body_with_uncertainty
+
+        return {"model_family": family_name(self.model),
+                "model": body_with_uncertainty(self.model), "trend": self.trend.to_dict()}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> TrendedModel:
+        """Inverse of :meth:`to_dict`."""
+        from .serialize import REGISTRY, family_class
+        from .uncertainty_io import model_from_body
+
+        inner = model_from_body(family_class(str(d["model_family"])), d["model"], REGISTRY)
+        return cls(inner, family_class("Trend").from_dict(d["trend"]))  # type: ignore[attr-defined]
+
     def __repr__(self) -> str:
         return f"TrendedModel({self.model!r}, {self.trend!r})"
+
+
+def _register() -> None:
+    from .serialize import register_model
+
+    register_model(TrendedModel)
+
+
+_register()

@@ -158,5 +158,50 @@ class AugmentedInputModel(ModelMixin):
         no_pole_std(self, std)
         return np.asarray(self.linear.poles())
 
+    def to_dict(self) -> dict[str, Any]:
+        """The linear model (its family and body, uncertainty included), the functions' names
+        and the number of inputs, for :func:`sysid.save_model`; functions given as callables
+        cannot be written (a :class:`~sysid.DataError` says so).
+
+        Examples
+        --------
+        >>> import os, tempfile, numpy as np, sysid
+        >>> lin = sysid.StateSpaceModel([[0.5]], [[1.0, 0.5]], [[1.0]])
+        >>> path = os.path.join(tempfile.mkdtemp(), "m.json")
+        >>> sysid.AugmentedInputModel(lin, ["square"], 1).save(path)
+        >>> sysid.load_model(path).simulate(np.full(3, 2.0)).ravel().tolist()
+        [0.0, 4.0, 6.0]
+        """
+        from ..models.serialize import family_name
+        from ..models.uncertainty_io import body_with_uncertainty
+
+        given = [f for f in self.functions if not isinstance(f, str)]
+        if given:
+            raise DataError(f"AugmentedInputModel cannot be saved with basis functions given as "
+                            f"callables ({', '.join(n for n, _ in self._fns)}): a file holds "
+                            f"names only ({', '.join(sorted(NAMED))}); save its linear model "
+                            f"(model.linear.save(path)) and rebuild it with your functions")
+        return {"linear_family": family_name(self.linear),
+                "linear": body_with_uncertainty(self.linear),
+                "functions": list(self.functions), "ninputs": self.ninputs}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> AugmentedInputModel:
+        """Inverse of :meth:`to_dict`."""
+        from ..models.serialize import REGISTRY, family_class
+        from ..models.uncertainty_io import model_from_body
+
+        linear = model_from_body(family_class(str(d["linear_family"])), d["linear"], REGISTRY)
+        return cls(linear, [str(f) for f in d["functions"]], int(d["ninputs"]))
+
     def __repr__(self) -> str:
         return f"AugmentedInputModel({self.info['functions']}, {self.linear!r})"
+
+
+def _register() -> None:
+    from ..models.serialize import register_model
+
+    register_model(AugmentedInputModel)
+
+
+_register()

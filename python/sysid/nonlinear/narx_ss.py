@@ -122,8 +122,43 @@ class NARXStateSpace(ModelMixin):
         return (f"NARXStateSpace({self.nstates} states, {self.ninputs} input(s), "
                 f"{self.noutputs} output(s), from {self.narx!r})")
 
+    def to_dict(self) -> dict[str, Any]:
+        """The NARX model it is a view of (:meth:`sysid.NARXModel.to_dict`), for
+        :func:`sysid.save_model`.
+
+        Examples
+        --------
+        >>> import os, tempfile, sysid
+        >>> m = sysid.NARXModel([1], [1], [1], sysid.PolynomialBasis(2), [[[0], [1]]],
+        ...                     [[0.5, 1.0]], dt=1.0)
+        >>> path = os.path.join(tempfile.mkdtemp(), "m.json")
+        >>> m.to_nlss().save(path)
+        >>> sysid.load_model(path).nstates
+        2
+        """
+        from ..models.uncertainty_io import body_with_uncertainty
+
+        return {"narx": body_with_uncertainty(self.narx)}
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> NARXStateSpace:
+        """Inverse of :meth:`to_dict`."""
+        from ..models.serialize import REGISTRY, family_class
+        from ..models.uncertainty_io import model_from_body
+
+        return cls(model_from_body(family_class("NARXModel"), d["narx"], REGISTRY))
+
     def summary(self) -> str:
         """The state and the output equations."""
         return "\n".join([repr(self), "state: " + ", ".join(self.state_names),
                           "x(t+1): shift in y(t) and u(t)", "y(t) = h(x(t), u(t)):",
                           self.narx.terms_table()])
+
+
+def _register() -> None:
+    from ..models.serialize import register_model
+
+    register_model(NARXStateSpace)
+
+
+_register()
