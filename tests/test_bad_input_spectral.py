@@ -158,3 +158,14 @@ def test_frf_beyond_double_precision(rec):
     _, u, y = rec
     with pytest.raises(sysid.DataError, match="beyond double precision; rescale"):
         sysid.spa(sysid.IOData(u=u * 1e-200, y=y * 1e200, dt=0.1))
+
+
+@pytest.mark.parametrize("fn", [sysid.spa, sysid.etfe, sysid.spafdr, sysid.default_lags])
+def test_frequency_response_of_a_time_series_names_the_spectrum_tools(fn):
+    # MATLAB's spa(y) / etfe(y) give a time series' spectrum; here the error said only that
+    # a frequency response needs inputs, not where the spectrum is
+    data = sysid.IOData(y=np.random.default_rng(0).standard_normal(400), dt=0.1)
+    with pytest.raises(sysid.DataError, match=r"time series .*sysid\.spectra\(data\).*"
+                                              r"sysid\.periodogram\(data\)"):
+        fn(data)
+    assert np.all(np.isfinite(sysid.spectra(data).psd("y0")))

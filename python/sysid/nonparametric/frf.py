@@ -88,7 +88,7 @@ def default_lags(data: IOData, remove_mean: bool = True) -> tuple[int, dict[str,
     >>> bool(m_slow > 4 * m_fast)
     True
     """
-    data = _need_data(data)
+    data = _need_data(data, who="default_lags")
     shortest = min(data.lengths)
     limit = int(max(1, min(data.n_samples // 10, shortest - 1, 2000)))
     R, total = _lag_covariances(_z_scaled(data, per_channel=True)[0], limit, remove_mean)

@@ -30,7 +30,11 @@ def _need_data(data: Any, inputs: bool = True, who: str = "spectra") -> IOData:
     # the frequency axis follows the sample time: a bare (u, y) pair is refused
     data = require_record(data, who, pairs=False)
     if inputs and data.n_inputs == 0:
-        raise DataError("a frequency response needs inputs; this record is a time series")
+        # MATLAB's spa(y), etfe(y) and spafdr(y) give the spectrum of a time series
+        raise DataError(f"{who} relates the outputs to the inputs, and this record is a time "
+                        f"series (no inputs): its spectrum is sysid.spectra(data) (Welch, every "
+                        f"output pair, with coherence) or sysid.periodogram(data) (as "
+                        f"etfe(y)), a model of it sysid.ar(data, na) or sysid.n4sid(data)")
     return data
 
 
