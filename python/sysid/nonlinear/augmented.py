@@ -175,10 +175,10 @@ class AugmentedInputModel(ModelMixin):
         from ..models.serialize import family_name
         from ..models.uncertainty_io import body_with_uncertainty
 
-        given = [f for f in self.functions if not isinstance(f, str)]
+        given = [n for f, (n, _) in zip(self.functions, self._fns) if not isinstance(f, str)]
         if given:
             raise DataError(f"AugmentedInputModel cannot be saved with basis functions given as "
-                            f"callables ({', '.join(n for n, _ in self._fns)}): a file holds "
+                            f"callables ({', '.join(given)}): a file holds "
                             f"names only ({', '.join(sorted(NAMED))}); save its linear model "
                             f"(model.linear.save(path)) and rebuild it with your functions")
         return {"linear_family": family_name(self.linear),
