@@ -572,3 +572,23 @@ def test_an_estimate_on_a_bound_has_its_interval_cut_there():
     c = sysid.greyest(sysid.IOData(u=u, y=y, dt=0.05), s).parameters["c"]
     assert c["bound"] == "upper" and c["std"] > 0
     assert c["ci95"] == (pytest.approx(0.3 - z * c["std"], rel=1e-12), 0.3)
+
+
+def test_an_undetermined_direction_names_every_parameter_it_moves_relatively():
+    """The direction a product ``a * b`` leaves free moves ``a`` (1000) by 1000 times more
+    than ``b`` (0.002) in absolute terms, the same fraction of each. The warning named ``a``
+    alone ("the combination 1*a does not change the fit", untrue without ``b``); it now names
+    ``b`` as moved along with it (on a stirred-tank record in the modal form: two entries of
+    K and, moved along, the block's frequency, entries of C and the initial state)."""
+    def prod(p, dt=None):
+        return [[-p.a * p.b]], [[1.0]], [[1.0]], [[0.0]]
+
+    u = np.sign(np.sin(np.arange(300) * 0.07))
+    y = sysid.GreyBox(prod, {"a": 1000.0, "b": 0.002}).model(dt=0.05).simulate(u)
+    y = y + 0.01 * np.random.default_rng(0).standard_normal(y.shape)
+    s = sysid.GreyBox(prod, {"a": 1500.0, "b": 0.0015})
+    with pytest.warns(sysid.IdentifiabilityWarning, match=r"a \(the combination .*\*a, with "
+                                                          r"smaller changes of 1 other .*\(b\)"):
+        fit = sysid.greyest(sysid.IOData(u=u, y=y, dt=0.05), s, x0="zero")
+    assert abs(np.prod(fit.parameters.value) - 2.0) < 0.02
+    assert np.all(np.isinf(fit.parameters.std))  # b's was finite: only a's was inf

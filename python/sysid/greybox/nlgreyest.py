@@ -122,7 +122,7 @@ def nlgreyest(data: IOData, s: NonlinearGreyBox, *, x0: Any, weighting: str, mul
     std = dict(zip(free, np.sqrt(np.clip(np.diag(cov), 0, None))))
     qnames = free + [f"x0[{e}][{i}]" for e, i in free_x0]
     for i in _warn_unidentifiable(np.asarray(best["unidentifiable"]), qnames,
-                                  np.ones(len(qnames))):
+                                  np.ones(len(qnames)), theta):
         if i < nf:  # a direction the data do not determine: no finite std
             std[free[i]] = float("inf")
     active = {int(i) for i in best["active_bounds"] if i < nf}

@@ -97,8 +97,9 @@ class OuterParameters:
                 bound.append("lower" if z[i] <= self.lower[i] else "upper")
             else:
                 bound.append("")
-        weak = _warn_unidentifiable(np.asarray(res["unidentifiable"]), self.names,
-                                    np.concatenate([self.scale, np.ones(z.size - nf)]))
+        full_scale = np.concatenate([self.scale, np.ones(z.size - nf)])
+        weak = _warn_unidentifiable(np.asarray(res["unidentifiable"]), self.names, full_scale,
+                                    z * full_scale)
         for i in weak:  # a direction the data do not determine: no finite std
             if i < nf:
                 std[self.free[i]] = float("inf")

@@ -121,10 +121,15 @@ def _costs(res: dict[str, Any], reweight: bool) -> dict[str, Any]:
         "loss_history": list(res["loss_history"])}
 
 
-def _warn_unidentifiable(null: np.ndarray, names: list[str], scale: np.ndarray) -> list[int]:
+def _warn_unidentifiable(null: np.ndarray, names: list[str], scale: np.ndarray,
+                         values: np.ndarray | None = None) -> list[int]:
     """An :class:`IdentifiabilityWarning` naming the parameters in each direction the data
     do not determine (null vectors of the Gauss-Newton matrix); returns their indices, whose
-    standard deviations the tables report as inf (as ``tfest`` does)."""
+    standard deviations the tables report as inf (as ``tfest`` does). ``values``: the
+    parameters (in the units of ``scale * null``), to also name (and count as undetermined)
+    those the direction moves by a comparable fraction of their value though by less in
+    absolute terms (a similarity of two states moves large entries of ``K`` most, and the
+    entries of ``C`` and the initial state by as much relatively)."""
     if null.size == 0 or null.ndim != 2 or null.shape[1] == 0:
         return []
     parts, weak = [], set()
@@ -134,8 +139,20 @@ def _warn_unidentifiable(null: np.ndarray, names: list[str], scale: np.ndarray) 
         big = np.abs(v) >= 0.05 * np.max(np.abs(v))
         weak |= {int(i) for i in np.nonzero(big)[0]}
         combo = " + ".join(f"{v[i]:.3g}*{names[i]}" for i in np.nonzero(big)[0])
+        also = ""
+        if values is not None:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                rel = np.abs(v) / np.abs(np.asarray(values, float))
+            rel[~np.isfinite(rel)] = 0.0  # a parameter at zero: its change is in `big`
+            more = np.nonzero(~big & (rel >= 0.05 * np.max(rel[big])))[0]
+            weak |= {int(i) for i in more}  # moved along it: as undetermined
+            if more.size:
+                listed = ", ".join(names[i] for i in more[:6]) + (", ..." if more.size > 6
+                                                                 else "")
+                also = (f", with smaller changes of {more.size} other parameter(s) as large "
+                        f"relative to their values ({listed}),")
         parts.append(f"{', '.join(names[i] for i in np.nonzero(big)[0])} (the combination "
-                     f"{combo} does not change the fit)")
+                     f"{combo}{also} does not change the fit)")
     warnings.warn("the data cannot determine these parameters separately: "
                   + "; ".join(parts) + ". Fix one of them, reparameterise, or use more "
                   "informative data; their standard deviations are reported as inf (poles, "
