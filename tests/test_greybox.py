@@ -155,14 +155,21 @@ def test_dc_motor_matches_least_squares_on_noise_free_data():
     np.testing.assert_allclose(fit2.parameters.value, [K_ls, tau_ls], atol=1e-8)
 
 
-def test_product_only_parameters_are_named():
-    def prod(p, dt=None):
-        return [[-p.a * p.b]], [[1.0]], [[1.0]], [[0.0]]
+def _product(p, dt=None):
+    return [[-p.a * p.b]], [[1.0]], [[1.0]], [[0.0]]
 
+
+def _product_record(a: float, b: float) -> tuple[np.ndarray, np.ndarray]:
+    """A square wave through ``1 / (s + a b)`` sampled at 0.05 s, with a little noise: only
+    the product ``a b`` is determined."""
     u = np.sign(np.sin(np.arange(300) * 0.07))
-    y = sysid.GreyBox(prod, {"a": 1.0, "b": 2.0}).model(dt=0.05).simulate(u)
-    y = y + 0.01 * np.random.default_rng(0).standard_normal(y.shape)
-    s = sysid.GreyBox(prod, {"a": 1.5, "b": 1.5})
+    y = sysid.GreyBox(_product, {"a": a, "b": b}).model(dt=0.05).simulate(u)
+    return u, y + 0.01 * np.random.default_rng(0).standard_normal(y.shape)
+
+
+def test_product_only_parameters_are_named():
+    u, y = _product_record(1.0, 2.0)
+    s = sysid.GreyBox(_product, {"a": 1.5, "b": 1.5})
     with pytest.warns(sysid.IdentifiabilityWarning, match=r"a, b") as rec:
         fit = sysid.greyest(sysid.IOData(u=u, y=y, dt=0.05), s, x0="zero")
     assert rec[0].filename == __file__  # at the user's line, not inside sysid
@@ -183,7 +190,7 @@ def test_product_only_parameters_are_named():
     _, pole_sd = fit.model.poles(std=True)
     assert np.all(np.isfinite(pole_sd)) and abs(pole_sd[0]) < 0.05
     # fixing one of them removes the warning
-    s = sysid.GreyBox(prod, {"a": sysid.fixed(1.0), "b": 1.5})
+    s = sysid.GreyBox(_product, {"a": sysid.fixed(1.0), "b": 1.5})
     with warnings.catch_warnings():
         warnings.simplefilter("error", sysid.IdentifiabilityWarning)
         fit = sysid.greyest(sysid.IOData(u=u, y=y, dt=0.05), s, x0="zero")
@@ -580,13 +587,8 @@ def test_an_undetermined_direction_names_every_parameter_it_moves_relatively():
     alone ("the combination 1*a does not change the fit", untrue without ``b``); it now names
     ``b`` as moved along with it (on a stirred-tank record in the modal form: two entries of
     K and, moved along, the block's frequency, entries of C and the initial state)."""
-    def prod(p, dt=None):
-        return [[-p.a * p.b]], [[1.0]], [[1.0]], [[0.0]]
-
-    u = np.sign(np.sin(np.arange(300) * 0.07))
-    y = sysid.GreyBox(prod, {"a": 1000.0, "b": 0.002}).model(dt=0.05).simulate(u)
-    y = y + 0.01 * np.random.default_rng(0).standard_normal(y.shape)
-    s = sysid.GreyBox(prod, {"a": 1500.0, "b": 0.0015})
+    u, y = _product_record(1000.0, 0.002)
+    s = sysid.GreyBox(_product, {"a": 1500.0, "b": 0.0015})
     with pytest.warns(sysid.IdentifiabilityWarning, match=r"a \(the combination .*\*a, with "
                                                           r"smaller changes of 1 other .*\(b\)"):
         fit = sysid.greyest(sysid.IOData(u=u, y=y, dt=0.05), s, x0="zero")
