@@ -23,7 +23,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import as_int
 from ..data.iodata import IOData
-from ..errors import DataError
+from ..errors import DataError, NumericalError
 from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
 
@@ -53,6 +53,34 @@ def _align(m: StateSpaceModel, O_ref: np.ndarray, rows: int) -> StateSpaceModel 
 def _vector(m: StateSpaceModel, with_k: bool) -> np.ndarray:
     parts = [m.A, m.B, m.C, m.D] + ([m.K] if with_k else [])
     return np.concatenate([np.asarray(p, float).ravel() for p in parts])
+
+
+#: a simulated record whose output spread exceeds the data's this many times is no resample
+RUNAWAY = 100.0
+
+
+def _runs_away(model: StateSpaceModel, exps: list[tuple[np.ndarray, np.ndarray]],
+               pooled: np.ndarray, simulated: Callable[[np.ndarray, np.ndarray], np.ndarray],
+               rng: np.random.Generator) -> bool:
+    """Whether records simulated from an unstable estimate (resampled innovations, measured
+    inputs) grow beyond the data: their output's standard deviation above :data:`RUNAWAY`
+    times the measured one on some channel (always False for a stable estimate: its
+    records look like the data). One trial record per experiment, from a generator of its
+    own (the bootstrap draws stay those of a stable estimate)."""
+    if model.nstates == 0 or np.max(np.abs(np.linalg.eigvals(model.A))) < 1.0:
+        return False
+    trial = np.random.default_rng(rng.integers(2**63))
+    for u, y in exps:
+        e = pooled[trial.integers(0, pooled.shape[0], y.shape[0])]
+        try:
+            ys = simulated(u, e)
+        except NumericalError:  # the simulation overflowed
+            return True
+        with np.errstate(all="ignore"):
+            spread = np.std(ys, axis=0)
+        if np.any(~(spread <= RUNAWAY * np.maximum(np.std(y, axis=0), 1e-300))):
+            return True
+    return False
 
 
 def bootstrap_uncertainty(estimator: Any, model: StateSpaceModel,
@@ -98,13 +126,20 @@ def bootstrap_uncertainty(estimator: Any, model: StateSpaceModel,
     O_ref = _observability(model.A, model.C, rows)
     Ba = np.hstack([model.B, model.K])
     Da = np.hstack([model.D, np.eye(l)])
+
+    def simulated(u: np.ndarray, e: np.ndarray) -> np.ndarray:
+        return np.asarray(_sysid.simulate(model.A, Ba, model.C, Da,
+                                          np.ascontiguousarray(np.hstack([u, e])), None))
+    fixed = _runs_away(model, exps, pooled, simulated, rng)
     draws, failed = [], 0
     for _ in range(n_boot):
         us, ys = [], []
-        for u, y in exps:
+        for (u, y), r in zip(exps, resid):
             e = pooled[rng.integers(0, pooled.shape[0], y.shape[0])]
-            ys.append(_sysid.simulate(model.A, Ba, model.C, Da,
-                                      np.ascontiguousarray(np.hstack([u, e])), None))
+            # fixed design: the one-step predictions of the measured record plus resampled
+            # innovations (the recursive records of an unstable estimate grow without bound
+            # where the data do not, and their refits look far more certain than the data)
+            ys.append(y - r + e if fixed else simulated(u, e))
             us.append(u)
         rec = IOData(u=us if len(us) > 1 else us[0], y=ys if len(ys) > 1 else ys[0],
                      dt=data.dt)
@@ -140,7 +175,9 @@ def bootstrap_uncertainty(estimator: Any, model: StateSpaceModel,
     names = [f"{k}[{i},{j}]" for k, r, c in (("A", n, n), ("B", n, m_), ("C", l, n),
                                               ("D", l, m_), ("K", n, l))
              for i in range(r) for j in range(c)]
-    unc = ParameterUncertainty(theta, cov, build, names=names, method="bootstrap")
+    method = "bootstrap" + (" (fixed design: the estimate is unstable and its simulated "
+                            "records grow far beyond the data)" if fixed else "")
+    unc = ParameterUncertainty(theta, cov, build, names=names, method=method)
     unc.n_boot = len(draws)  # type: ignore[attr-defined]
     unc.n_failed = failed  # type: ignore[attr-defined]
     return unc
