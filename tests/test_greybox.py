@@ -594,3 +594,15 @@ def test_an_undetermined_direction_names_every_parameter_it_moves_relatively():
         fit = sysid.greyest(sysid.IOData(u=u, y=y, dt=0.05), s, x0="zero")
     assert abs(np.prod(fit.parameters.value) - 2.0) < 0.02
     assert np.all(np.isinf(fit.parameters.std))  # b's was finite: only a's was inf
+
+
+def test_a_direction_through_parameters_at_zero_names_only_them():
+    # with the named parameters at zero (no relative change to compare with), every other
+    # parameter met "a comparable fraction" (0 >= 0.05 * 0) and was named and made inf
+    from sysid.greybox.results import _warn_unidentifiable
+
+    with pytest.warns(sysid.IdentifiabilityWarning, match=r"separately: a \(the combination "
+                                                          r"1\*a does not change the fit\)"):
+        weak = _warn_unidentifiable(np.array([[1.0], [0.0], [0.0]]), ["a", "b", "c"],
+                                    np.ones(3), np.array([0.0, 1.0, 2.0]))
+    assert weak == [0]

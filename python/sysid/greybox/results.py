@@ -144,7 +144,9 @@ def _warn_unidentifiable(null: np.ndarray, names: list[str], scale: np.ndarray,
             with np.errstate(divide="ignore", invalid="ignore"):
                 rel = np.abs(v) / np.abs(np.asarray(values, float))
             rel[~np.isfinite(rel)] = 0.0  # a parameter at zero: its change is in `big`
-            more = np.nonzero(~big & (rel >= 0.05 * np.max(rel[big])))[0]
+            top = float(np.max(rel[big]))  # 0 when the named parameters all sit at zero
+            more = np.nonzero(~big & (rel > 0.0) & (rel >= 0.05 * top))[0] if top > 0 else \
+                np.zeros(0, int)
             weak |= {int(i) for i in more}  # moved along it: as undetermined
             if more.size:
                 listed = ", ".join(names[i] for i in more[:6]) + (", ..." if more.size > 6
