@@ -9,6 +9,7 @@ sample-variance factor, ``info["sample_variance_factor"]``), returned as the
 
 from __future__ import annotations
 
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
@@ -76,14 +77,22 @@ def _fit(lines: Any, nb_g: np.ndarray, nf_g: np.ndarray, nk_g: np.ndarray, dt: f
          max_iter: int, progress: Any) -> PolynomialModel:
     """``B/F`` of every pair fitted to the FRD ``lines`` (:func:`sysid.tf.frequency.fit_lines`)
     as a :class:`PolynomialModel` with its covariance."""
-    from ..tf.frequency import fit_lines
+    from ..tf.frequency import fit_lines, warn_held, warn_insisting
     from ..tf.options import blockdiag
 
     ny, nu = lines.n_outputs, lines.n_inputs
     # tfest's discrete pair lags 1 + delay samples: the delay is nk - 1
-    _, _, _, _, thetas, covs, scales, factor = fit_lines(
+    insisting: list[dict[str, Any]] = []
+    _, _, _, _, thetas, covs, scales, factor = fit_lines(  # F kept stable, as in the time
         lines, nf_g, nb_g - 1, nk_g - 1.0, False, dt, as_int(max_iter, "max_iter", 0), 1e-10,
-        progress, "oe")
+        progress, "oe", stable=True, insisting=insisting)  # domain (oe's F search)
+    free = "fit it with sysid.tfest(..., dt=..., enforce_stability=False) or sysid.arx"
+    if not warn_insisting(insisting, "oe", dt, free=free):
+        f_of = [[np.concatenate([[1.0], thetas[i * nu + j][:nf_g[i, j]]]) for j in range(nu)]
+                for i in range(ny)]
+        warn_held(SimpleNamespace(den=f_of, output_names=lines.output_names,
+                                  input_names=lines.input_names), lines.omega, dt, "oe",
+                  free="sysid.tfest(..., dt=..., enforce_stability=False) shows it")
     b = [[thetas[i * nu + j][nf_g[i, j]:-1] for j in range(nu)] for i in range(ny)]
     f = [[thetas[i * nu + j][:nf_g[i, j]] for j in range(nu)] for i in range(ny)]
     m = PolynomialModel([[np.zeros(0)] * ny for _ in range(ny)], b, nk_g, dt, f=f)

