@@ -725,3 +725,39 @@ def test_the_bootstrap_of_an_unstable_estimate_resamples_like_the_data():
     pair = np.abs(p.imag) > 0.1
     assert np.max(np.abs(p)) > 1.0
     assert np.all(np.abs(sd[pair]) > 5e-3)  # was 1.3e-10
+
+
+def test_impulse_with_std_matches_the_delta_method_for_every_model_kind():
+    """``impulse(std=True)`` raised TypeError where ``step(std=True)`` worked (MATLAB's
+    ``impulse`` shows a confidence region as ``step`` does). For ``h_k = b a^(k-1)`` the
+    first-order std is ``sqrt(J P J')`` with ``J = [b (k-1) a^(k-2), a^(k-1)]``; the
+    state-space, polynomial, transfer-function and identified models give it, and
+    ``sysid.impulse`` too."""
+    from sysid.identify.result import IdentifiedModel
+
+    a, b, P = 0.8, 0.5, np.array([[4e-4, 1e-4], [1e-4, 9e-4]])
+
+    def build(t):
+        return sysid.StateSpaceModel([[t[0]]], [[t[1]]], [[1.0]], dt=1.0)
+    m = build([a, b])
+    m.uncertainty = ParameterUncertainty([a, b], P, build)
+    k = np.arange(1, 30)
+    J = np.column_stack([b * (k - 1) * a ** np.maximum(k - 2, 0), a ** (k - 1)])
+    want = np.sqrt(np.einsum("ij,jk,ik->i", J, P, J))
+    for model in (m, IdentifiedModel(m, [0.0], [3.0])):
+        for r in (model.impulse(30, std=True), sysid.impulse(model, 30, std=True)):
+            np.testing.assert_allclose(r.y[1:, 0, 0], b * a ** (k - 1), rtol=1e-12)
+            np.testing.assert_allclose(r.std[1:, 0, 0], want, rtol=1e-5)
+            assert r.std[0, 0, 0] == 0.0
+    # the estimators' models: the impulse std follows the step std's differences
+    rng = np.random.default_rng(72)
+    u = rng.standard_normal(800)
+    y = np.zeros(800)
+    for t in range(1, 800):
+        y[t] = 0.7 * y[t - 1] + 0.5 * u[t - 1]
+    d = sysid.IOData(u, y + 0.05 * rng.standard_normal(800), 1.0)
+    for est in (sysid.oe(d, 1, 1, 1), sysid.tfest(d, 1, progress=False)):
+        kw = {} if est.dt > 0 else {"dt": 1.0}
+        r = est.impulse(50, std=True, **kw)
+        assert r.std.shape == r.y.shape and np.all(np.isfinite(r.std))
+        assert 0 < np.max(r.std) < 0.05

@@ -125,8 +125,10 @@ def step(model: Any, n_samples: int | None = None, std: bool = False) -> TimeRes
     return resp
 
 
-def impulse(model: Any, n_samples: int | None = None) -> TimeResponse:
-    """Response to a unit pulse ``u(0) = 1`` on each input: the Markov parameters.
+def impulse(model: Any, n_samples: int | None = None, std: bool = False) -> TimeResponse:
+    """Response to a unit pulse ``u(0) = 1`` on each input: the Markov parameters. With
+    ``std=True`` (a model with ``uncertainty``) ``resp.std`` holds the first-order standard
+    deviation of each sample, drawn as a 95 % band by ``resp.plot()`` (as :func:`step`).
 
     Examples
     --------
@@ -134,7 +136,13 @@ def impulse(model: Any, n_samples: int | None = None) -> TimeResponse:
     >>> sysid.impulse(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), 3).y[:, 0, 0]
     array([0. , 1. , 0.5])
     """
-    return _response(model, "impulse", n_samples)
+    resp = _response(model, "impulse", n_samples)
+    if std:
+        from ..models.uncertainty import complex_std
+
+        N = len(resp.t)
+        _, resp.std = complex_std(model, lambda m: impulse(m, N).y)
+    return resp
 
 
 def _response(model: Any, kind: str, n_samples: int | None) -> TimeResponse:

@@ -122,9 +122,10 @@ class IdentifiedModel:
         """Transmission zeros of :attr:`statespace` (offsets do not move them)."""
         return np.asarray(self.statespace.zeros())
 
-    def impulse(self, n_samples: int | None = None) -> Any:
-        """Impulse response of the dynamics (:attr:`statespace`)."""
-        return self.statespace.impulse(n_samples)
+    def impulse(self, n_samples: int | None = None, std: bool = False) -> Any:
+        """Impulse response of the dynamics (:attr:`statespace`); ``std=True``: with its
+        standard deviations, as :meth:`StateSpaceModel.impulse`."""
+        return self.statespace.impulse(n_samples, std=std)
 
     def to_statespace(self) -> Any:
         """The model of the deviations from the offsets (:attr:`statespace`)."""

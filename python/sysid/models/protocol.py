@@ -350,9 +350,16 @@ class ModelMixin:
             return complex_std(self, lambda m: m.dcgain())
         return np.asarray(self.freqresp(np.array([0.0])))[0].real
 
-    def impulse(self, n_samples: int | None = None) -> TimeResponse:
-        """Response to a unit pulse ``u(0) = 1`` on each input, from rest (by simulation)."""
-        return sampled_response(self, "impulse", n_samples)
+    def impulse(self, n_samples: int | None = None, std: bool = False) -> TimeResponse:
+        """Response to a unit pulse ``u(0) = 1`` on each input, from rest (by simulation);
+        ``std=True`` (needs ``uncertainty``): with its first-order std as a band."""
+        resp = sampled_response(self, "impulse", n_samples)
+        if std:
+            from .uncertainty import complex_std
+
+            N = len(resp.t)
+            _, resp.std = complex_std(self, lambda m: m.impulse(N).y)
+        return resp
 
     def summary(self) -> str:
         """What the model is and how it was obtained, as text: family, sampling, channels,

@@ -453,8 +453,15 @@ class StateSpaceModel(ModelMixin):
                 out[i] = np.inf
         return out
 
-    def impulse(self, n_samples: int | None = None) -> TimeResponse:
-        """Impulse responses: the Markov parameters; see :func:`sysid.impulse`."""
+    def impulse(self, n_samples: int | None = None, std: bool = False) -> TimeResponse:
+        """Impulse responses: the Markov parameters; see :func:`sysid.impulse` (``std=True``:
+        with a band)."""
+        if std:
+            from .uncertainty import complex_std
+
+            resp = self.impulse(n_samples)
+            _, resp.std = complex_std(self, lambda m: m.impulse(len(resp.t)).y)
+            return resp
         N = default_length(self, n_samples)
         with np.errstate(over="ignore", invalid="ignore"):
             h = self.markov(N)

@@ -416,10 +416,11 @@ class TransferFunction(ModelMixin):
             y[:, :, j] = self.simulate(u, dt=h, hold="zoh")
         return TimeResponse("step", np.arange(N) * h, y, self)
 
-    def impulse(self, n_samples: int | None = None, *, dt: float | None = None
-                ) -> TimeResponse:
+    def impulse(self, n_samples: int | None = None, *, dt: float | None = None,
+                std: bool = False) -> TimeResponse:
         """Impulse response (continuous: ``c e^{A (t - tau)} b`` of each pair at the samples,
-        zero before its delay ``tau``, the Dirac part left out; the grid as :meth:`step`).
+        zero before its delay ``tau``, the Dirac part left out; the grid as :meth:`step`);
+        ``std=True`` (needs :attr:`uncertainty`): with its first-order std as a band.
 
         Examples
         --------
@@ -428,6 +429,14 @@ class TransferFunction(ModelMixin):
         >>> bool(np.allclose(r.y[:, 0, 0], 3 * np.exp(-2 * r.t)))
         True
         """
+        if std:
+            from ..models.uncertainty import complex_std
+
+            resp = self.impulse(n_samples, dt=dt)
+            N, h = len(resp.t), (resp.t[1] - resp.t[0] if len(resp.t) > 1 else dt)
+            _, resp.std = complex_std(
+                self, lambda m: m.impulse(N).y if self.dt > 0 else m.impulse(N, dt=h).y)
+            return resp
         if self.dt > 0:
             return super().impulse(n_samples)
         from scipy.linalg import expm
