@@ -305,6 +305,24 @@ def test_initial_state_on_long_records_matches_the_full_regression():
         np.testing.assert_allclose(sysid.estimate_x0(m, u, y, horizon), full, rtol=1e-9)
 
 
+def test_initial_state_of_a_record_given_whole():
+    # estimate_x0(model, data) raised TypeError (MATLAB's findstates(sys, data))
+    m = sysid.StateSpaceModel([[0.9, 0.2], [0.0, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]])
+    u = np.random.default_rng(17).standard_normal((300, 1))
+    y = m.simulate(u, x0=[2.0, -1.0])
+    want = sysid.estimate_x0(m, u, y)
+    np.testing.assert_allclose(want, [2.0, -1.0], atol=1e-9)
+    for record in (sysid.IOData(u=u, y=y), (u, y)):
+        np.testing.assert_allclose(sysid.estimate_x0(m, record), want, rtol=1e-12)
+    np.testing.assert_allclose(sysid.estimate_x0(m, sysid.IOData(u=u, y=y), horizon=1),
+                               sysid.estimate_x0(m, u, y, 1), rtol=1e-12)
+    two = sysid.IOData(u=[u[:150], u[150:]], y=[y[:150], y[150:]])
+    with pytest.raises(sysid.DataError, match=r"2 experiments.*data\.experiment\(i\)"):
+        sysid.estimate_x0(m, two)
+    with pytest.raises(sysid.DataError, match="needs the outputs too"):
+        sysid.estimate_x0(m, u)
+
+
 def test_unstable_model_fit_is_minus_infinity_or_a_clear_error():
     m = sysid.StateSpaceModel([[1.5]], [[1.0]], [[1.0]])
     y = np.random.default_rng(16).standard_normal((3000, 1))

@@ -118,7 +118,7 @@ _LAZY = {
     "drop_quiet": "data.preprocessing",
     "era": "realization.realize",
     "era_stabilization": "realization.realize",
-    "error_spectrum": "validation.compare",
+    "error_spectrum": "validation.error_spectrum",
     "estimate_x0": "validation.compare",
     "etfe": "nonparametric.frf",
     "filtfilt": "data.filtering",

@@ -26,8 +26,8 @@ from ..data.iodata import IOData
 from ..errors import DataError, SysidError
 from ..models.checks import check_model
 from ..validation.compare import compare_quiet as compare
-from ..validation.compare import error_spectrum
 from ..validation.criteria import _pct
+from ..validation.error_spectrum import error_spectrum
 from ..validation.residuals import default_max_lag, residuals
 from . import report_figures as rf
 from .report_page import Page, reissue, relevant, status, warning_items

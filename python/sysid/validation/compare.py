@@ -48,9 +48,7 @@ from ..models.trended import TrendedModel
 
 __all__ = [
     "CompareResult",
-    "ErrorSpectrum",
     "compare",
-    "error_spectrum",
     "fit_metrics",
     "estimate_x0",
 ]
@@ -199,8 +197,28 @@ def _run_raw(model: Any, u: np.ndarray, y: np.ndarray, horizon: int | None,
     return out.reshape(y.shape)
 
 
-def estimate_x0(model: Any, u: Any, y: Any, horizon: int | None = None) -> np.ndarray:
+def _one_record(data: Any) -> tuple[Any, Any]:
+    """``(u, y)`` of ``estimate_x0``'s record given alone: an IOData of one experiment or a
+    ``(u, y)`` pair."""
+    if isinstance(data, tuple) and len(data) == 2:
+        return data
+    exps = getattr(data, "experiments", None)
+    if exps is None:
+        raise DataError(f"estimate_x0 needs the outputs too: pass estimate_x0(model, u, y) or "
+                        f"estimate_x0(model, data) with a sysid.IOData, got "
+                        f"{type(data).__name__} alone")
+    if len(exps) != 1:
+        raise DataError(f"estimate_x0 fits one initial state, but the data hold {len(exps)} "
+                        "experiments: pass one (data.experiment(i) or its u, y)")
+    return exps[0]
+
+
+def estimate_x0(model: Any, u: Any, y: Any = None, horizon: int | None = None) -> np.ndarray:
     """Least-squares initial state for simulation (``horizon=None``) or prediction.
+
+    ``u, y`` are the record's arrays, or ``u`` is the record itself (an
+    :class:`~sysid.IOData` of one experiment, or a ``(u, y)`` pair) and ``y`` is left out,
+    as in MATLAB's ``findstates(sys, data)``.
 
     The output is ``yhat(x0) = yhat(0) + Phi x0`` where column ``i`` of ``Phi`` is the free
     response from the ``i``-th unit state (computed with the same simulator or predictor, so
@@ -217,7 +235,11 @@ def estimate_x0(model: Any, u: Any, y: Any, horizon: int | None = None) -> np.nd
     >>> y = m.simulate(u, x0=[3.0])
     >>> np.round(sysid.estimate_x0(m, u, y), 10)
     array([3.])
+    >>> np.round(sysid.estimate_x0(m, sysid.IOData(u=u, y=y)), 10)
+    array([3.])
     """
+    if y is None:
+        u, y = _one_record(u)
     if not _has_state(model):
         raise DataError(f"estimate_x0 needs a state-space model; {type(model).__name__} has no "
                         "A, B, C, D (pass model.to_statespace())")
@@ -711,86 +733,3 @@ def _simulator(model: Any, x0: Any, horizon: int | None, u: np.ndarray | None = 
                                                             if a.size else 1.0)):
             return model
     return ss
-
-
-# -- spectrum of the simulation error ---------------------------------------------------
-class ErrorSpectrum:
-    """Welch power spectra of the simulation error and of the measured output.
-
-    Attributes
-    ----------
-    freq : ndarray
-        Frequencies in Hz.
-    error_psd, output_psd : ndarray
-        ``(len(freq), noutputs)`` one-sided power spectral densities (units^2 / Hz).
-    """
-
-    def __init__(self, model: Any, freq: np.ndarray, err: np.ndarray,
-                 out: np.ndarray) -> None:
-        self.model, self.freq, self.error_psd, self.output_psd = model, freq, err, out
-        self.output_names = list(model.output_names)
-
-    def worst_frequency(self) -> np.ndarray:
-        """Frequency (Hz, above zero) of the largest simulation-error power, per output."""
-        return self.freq[np.argmax(self.error_psd[1:], axis=0) + 1]
-
-    def relative_error(self) -> np.ndarray:
-        """Error-to-output power ratio per frequency, ``(len(freq), noutputs)``."""
-        return self.error_psd / np.maximum(self.output_psd, 1e-300)
-
-    def plot(self, fig: Any = None) -> Any:
-        """Both spectra on a log scale, one axis per output."""
-        from ..plot.validation import plot_error_spectrum
-
-        return plot_error_spectrum(self, fig=fig)
-
-    def __repr__(self) -> str:
-        return (f"ErrorSpectrum({len(self.freq)} frequencies up to {self.freq[-1]:g} Hz, "
-                f"{len(self.output_names)} output(s))")
-
-
-def error_spectrum(model: Any, data: Any, *, x0: X0 = "estimate",
-                   nperseg: int | None = None) -> ErrorSpectrum:
-    """Power spectrum of the simulation error ``y - yhat`` beside the output's (Welch).
-
-    Where the error spectrum approaches the output spectrum the model explains nothing;
-    a peak in the error marks a mode the model misses or misplaces.
-
-    Parameters
-    ----------
-    model : sysid.Model
-    data : IOData or (u, y)
-    x0 : "estimate", "zero", "model" or array
-        Initial state of the simulation.
-    nperseg : int, optional
-        Welch segment length (default ``min(256, shortest experiment)``).
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> m = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]])
-    >>> u = np.random.default_rng(0).standard_normal(512)
-    >>> s = sysid.error_spectrum(m, (u, m.simulate(u) + np.sin(0.5 * np.arange(512))[:, None]))
-    >>> bool(abs(s.worst_frequency()[0] - 0.5 / (2 * np.pi)) < 0.01)
-    True
-    """
-    model, data = _model_first(model, data)  # MATLAB's order accepted too
-    cmp = compare_quiet(model, data, None, x0=x0)
-    shortest = min(y.shape[0] for y in cmp.y)
-    if nperseg is None:
-        nperseg = min(256, shortest)
-    else:
-        nperseg = as_int(nperseg, "nperseg", 4, shortest)
-    fs = 1.0 / cmp.dt
-    err_sum, out_sum, weight = 0.0, 0.0, 0
-    freq = np.zeros(0)
-    for y, yh in zip(cmp.y, cmp.yhat):
-        import scipy.signal
-
-        freq, pe = scipy.signal.welch(y - yh, fs=fs, nperseg=int(nperseg), axis=0)
-        _, py = scipy.signal.welch(y, fs=fs, nperseg=int(nperseg), axis=0)
-        err_sum = err_sum + pe * y.shape[0]
-        out_sum = out_sum + py * y.shape[0]
-        weight += y.shape[0]
-    return ErrorSpectrum(cmp.model, freq, np.asarray(err_sum) / weight,
-                         np.asarray(out_sum) / weight)
