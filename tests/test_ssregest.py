@@ -249,3 +249,18 @@ def test_no_order_chosen_because_the_arx_model_is_unstable_says_so(monkeypatch):
     # a stable ARX model: the scoring's own error, unchanged
     with pytest.raises(InsufficientDataError, match="no order gave"):
         sysid.ssregest(_feedback_record(0.8), feedthrough=False)
+
+
+def test_a_given_order_gets_the_lags_it_needs_by_default():
+    # a short record with many channels (a power plant: 133 samples, 5 inputs, 3 outputs)
+    # got 1 lag by default, 3 states, and order 4 was refused for "a larger arx_orders"
+    rng = np.random.default_rng(31)
+    true = sysid.StateSpaceModel(np.diag([0.9, 0.7, 0.5, 0.3]), rng.standard_normal((4, 5)),
+                                 rng.standard_normal((3, 4)))
+    u = rng.standard_normal((133, 5))
+    d = sysid.IOData(u, true.simulate(u) + 0.01 * rng.standard_normal((133, 3)), 1.0)
+    m = sysid.ssregest(d, 4)
+    assert m.nstates == 4 and m.info["ssregest"]["arx_orders"][0] == 2
+    # a record too short for the lags an order needs is still refused, with the way out
+    with pytest.raises(sysid.DataError, match="larger arx_orders"):
+        sysid.ssregest(sysid.IOData(u[:60], d.y[:60], 1.0), 10)
