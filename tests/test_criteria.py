@@ -157,6 +157,22 @@ def test_order_selection_bad_input():
     assert set(CRITERIA) == {"aic", "aicc", "bic", "fpe"}
 
 
+def test_the_horizon_follows_the_orders_asked_for():
+    # select_order(data, range(1, 9)) on a 200-sample record refused order 5 ("larger than
+    # the horizon allows (4)") though the data hold it; n4sid(data, 8) fits it
+    rng = np.random.default_rng(6)
+    true = sysid.StateSpaceModel(np.diag([0.9, 0.6, -0.5, 0.3, 0.1]), np.ones((5, 1)),
+                                 np.ones((1, 5)))
+    u = rng.standard_normal((200, 1))
+    data = sysid.IOData(u=u, y=true.simulate(u) + 0.01 * rng.standard_normal((200, 1)))
+    assert sysid.SubspaceEstimator(data).max_order < 8
+    sel = sysid.select_order(data, range(1, 9))
+    assert sorted({r["order"] for r in sel.rows}) == list(range(1, 9))
+    assert sel.order >= 4 and sysid.n4sid(data, 8).nstates == 8
+    with pytest.raises(sysid.DataError, match="larger than the horizon allows"):
+        sysid.select_order(sysid.IOData(u=u[:40], y=data.y[:40]), range(1, 30))
+
+
 @needs_engine
 def test_order_selection_from_a_factor_uses_the_gap():
     true = order6_system(6)

@@ -486,7 +486,8 @@ def select_order(
     methods : sequence of str, optional
         Weightings to sweep (default: the estimator's method).
     horizon : int, optional
-        Horizon of the estimator built from ``data``.
+        Horizon of the estimator built from ``data``; default the data's, or the smallest
+        that allows the largest of ``orders`` when the data support it (as ``n4sid``).
     validation : IOData or (u, y), optional
         Fresh data for the validation fit (simulation, NRMSE %; for a time series, without
         inputs, the one-step prediction).
@@ -536,13 +537,17 @@ def select_order(
     if orders is not None and (np.ndim(orders) == 0 or isinstance(orders, (str, bytes))):
         raise DataError(f"orders must be a sequence of model orders (e.g. range(1, 6) or "
                         f"[{orders!r}]), got {orders!r}")
-    from ..subspace.estimator import SubspaceEstimator
+    from ..subspace.estimator import SubspaceEstimator, horizon_for_order
 
     est = data if isinstance(data, SubspaceEstimator) else None
     if est is None:
         if not isinstance(data, IOData):
             raise DataError(f"data must be a sysid.IOData or SubspaceEstimator, got "
                             f"{type(data).__name__}")
+        if orders is not None:  # the horizon follows the largest order asked for
+            orders = list(orders)
+            whole = [int(o) for o in orders if isinstance(o, (int, np.integer))]
+            horizon = horizon_for_order(data, max(whole, default=None), horizon)
         est = SubspaceEstimator(data, horizon)
     if x0 not in ("estimate", "zero"):
         raise DataError(f"x0 must be 'estimate' or 'zero', got {x0!r}")
