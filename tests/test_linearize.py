@@ -85,6 +85,10 @@ def test_small_signal_response_of_fitted_models(family):
 def test_refusals():
     with pytest.raises(NumericalError, match="does not settle"):
         sysid.findop(sysid.StateSpaceModel([[1.1]], [[1.0]], [[1.0]]), 1.0)
+    # at rest (u0 = 0) an unstable model stays there, but its impulse response runs away:
+    # this said "numerical failure in simulate: the simulated output overflowed"
+    with pytest.raises(NumericalError, match="grows without bound.*to_statespace"):
+        sysid.linearize(sysid.StateSpaceModel([[1.1]], [[1.0]], [[1.0]]))
     m = sysid.StateSpaceModel([[0.5]], [[1.0, 1.0]], [[1.0]])
     with pytest.raises(DataError, match="one value per input"):
         sysid.linearize(m, [1.0, 2.0, 3.0])

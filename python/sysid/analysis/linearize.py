@@ -224,11 +224,16 @@ def _markov(model: Any, u: np.ndarray, h: np.ndarray, settle: int, n: int) -> np
         up, dn = U.copy(), U.copy()
         up[settle, j] += h[j]
         dn[settle, j] -= h[j]
-        d = (_simulate(model, up) - _simulate(model, dn))[settle:] / (2 * h[j])
+        try:
+            d = (_simulate(model, up) - _simulate(model, dn))[settle:] / (2 * h[j])
+        except NumericalError:  # the simulation overflowed: the impulse response runs away
+            d = np.full((n, 1), np.inf)
         if not np.all(np.isfinite(d)):
-            raise NumericalError("the model's response to a small input impulse at the "
-                                 "operating point is not finite: it is not linearisable "
-                                 "there")
+            raise NumericalError(
+                "the model's response to a small input impulse at the operating point grows "
+                "without bound: the operating point is not a stable one (an unstable model "
+                "rests there only from rest), so it is not linearisable by its response; a "
+                "linear model is its own linearisation (model.to_statespace())")
         cols.append(d)
     return np.stack(cols, axis=2)
 
