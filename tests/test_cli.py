@@ -138,6 +138,25 @@ def test_identify_from_csv(tmp_path, capsys):
         np.loadtxt(sysid.datasets.path("dryer"))[:500, 1].mean())
 
 
+def test_identify_reads_a_loggers_units_row_and_date_time_stamps(tmp_path):
+    # "line 2, column 'time': 's' is not a number" and "'2026-...' is not a number" before
+    d = np.loadtxt(sysid.datasets.path("dryer"))
+    path = tmp_path / "logger.csv"
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["time", "heater", "temperature"])
+        w.writerow(["", "W", "degC"])
+        for k, (u, y) in enumerate(d):
+            w.writerow([f"2026-03-01T08:00:{0.08 * k:06.3f}" if k < 750 else
+                        f"2026-03-01T08:01:{0.08 * k - 60:06.3f}", u, y])
+    rep = tmp_path / "out"
+    assert main(["identify", str(path), "--inputs", "heater", "--outputs", "temperature",
+                 "--time", "time", "--split", "500", "--order", "4", "--quiet",
+                 "--report", str(rep)]) == 0
+    model = sysid.load_model(rep / "model.json")
+    assert model.nstates == 4 and model.dt == pytest.approx(0.08)
+
+
 def test_identify_mimo_without_header(tmp_path):
     rng = np.random.default_rng(0)
     true = sysid.StateSpaceModel(np.diag([0.9, 0.5, -0.3]), rng.standard_normal((3, 2)),

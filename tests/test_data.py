@@ -506,6 +506,35 @@ def test_from_csv_decimal_comma(tmp_path: Path) -> None:
     np.testing.assert_allclose(d.y[:, 0], [2.5, 4.5, 6.5])
 
 
+def test_from_csv_reads_a_loggers_units_row_stamps_and_headers_as_written(
+        tmp_path: Path) -> None:
+    # a logger's export: date-time stamps, a units row, "name [unit]" headers named as
+    # written; each was refused ("'s' is not a number", "no column 'Heater Power [W]'")
+    t = 0.08 * np.arange(6)
+    u, y = np.sin(t), np.cos(t)
+    p = tmp_path / "log.csv"
+    p.write_text("time,power,temp\ns,W,degC\n"
+                 + "".join(f"{a},{b},{c}\n" for a, b, c in zip(t, u, y)))
+    d = sysid.IOData.from_csv(p, ["power"], ["temp"])
+    assert d.dt == pytest.approx(0.08) and d.n_samples == 6
+    assert d.input_units == ["W"] and d.output_units == ["degC"]
+    np.testing.assert_allclose(d.u[:, 0], u)
+    stamps = [f"2026-03-01T23:59:59.{k * 8:02d}+01:00" for k in range(6)]
+    p.write_text("time,Heater Power [W],temp\n"
+                 + "".join(f"{a},{b},{c}\n" for a, b, c in zip(stamps, u, y)))
+    d = sysid.IOData.from_csv(p, ["Heater Power [W]"], ["temp"], time="time")
+    assert d.dt == pytest.approx(0.08) and d.input_units == ["W"]
+    assert d.input_names == ["Heater Power"]
+    np.testing.assert_allclose(d.y[:, 0], y)
+    # a first data row of missing values is data, not units; a bad stamp is named
+    p.write_text("time,u,y\nNA,NA,NA\n1,2,3\n")
+    with pytest.raises(DataError, match="line 2, column 'time'"):
+        sysid.IOData.from_csv(p, ["u"], ["y"])
+    p.write_text("time,u,y\n2026-03-01 00:00:00,1,2\n2026-03-01 00:00:xx,3,4\n")
+    with pytest.raises(DataError, match="line 3, column 'time'"):
+        sysid.IOData.from_csv(p, ["u"], ["y"])
+
+
 def test_from_pandas_datetime_and_timedelta_time() -> None:
     # a datetime64 time column read as nanosecond counts: dt 10000.0 for 10 ms; a
     # TimedeltaIndex was ignored (dt 1 with a warning that there was no sample time)

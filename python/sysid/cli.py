@@ -26,12 +26,14 @@ from .data.iodata import IOData
 from .data.table import (
     ForwardReader,
     Uncommented,
+    datetime_seconds,
     decompressing,
     first_bad_cell,
     header,
     numeric,
     read_table,
     text_bytes,
+    units_row,
 )
 from .errors import DataError, InsufficientDataError, OrderError, SysidError
 from .validation.crossval import MIN_BLOCK
@@ -484,7 +486,7 @@ def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         u, y = z[:, :len(ui)], z[:, len(ui):len(ui) + len(yi)]
         return names, ui, yi, u, y, (z[:, -1] if ti else None)
     say(f"reading {args.data}")
-    table = read_table(args.data, args.delimiter)
+    table, _ = units_row(read_table(args.data, args.delimiter))  # a logger's units row
     names = table.names
     ui = _columns(args.inputs, names, "inputs") if args.inputs else []
     yi = _columns(args.outputs, names, "outputs")
@@ -495,7 +497,8 @@ def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
     t = None
     if args.time is not None:
         ti = _columns(args.time, names, "times")[0]
-        t = numeric(table, [ti])[:, 0]
+        t = datetime_seconds(table, ti)  # date-time stamps: seconds after the first
+        t = numeric(table, [ti])[:, 0] if t is None else t
     return names, ui, yi, u, y, t
 
 

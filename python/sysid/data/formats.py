@@ -22,7 +22,7 @@ import numpy as np
 
 from .._atomic import atomic_path
 from ..errors import DataError, SysidWarning
-from .table import numeric, read_table
+from .table import datetime_seconds, numeric, read_table, units_row
 
 __all__: list[str] = []
 
@@ -295,7 +295,10 @@ def from_csv(
     The first line is a header of names unless every field in it is a number: then it is
     the first sample, the columns are chosen by 0-based index (or ``"0"``, ``"1"``, ...)
     and the channels get the default names (``u0``, ``y0``, ...). Columns are chosen by
-    header name or 0-based index; ``name [unit]`` headers give units. Without
+    header name (as written, or without its ``[unit]``) or 0-based index; ``name [unit]``
+    headers give units, and so does a row of units under the header (a logger's ``s, W,
+    degC``: no number in it). A time column may hold date-time stamps (ISO 8601, ``Z`` or
+    ``+hh:mm`` offsets), read as seconds after the first. Without
     ``inputs``/``outputs``, a file written by :meth:`to_csv` is read back whole. Empty
     fields become NaN and are handled as ``nan`` says (see :meth:`from_raw`; only for
     single-experiment files); a field that is not a number raises a
@@ -321,13 +324,13 @@ def from_csv(
     p = Path(path)
     if decimal not in (".", ","):
         raise DataError(f"decimal must be '.' or ',', got {decimal!r}")
-    table = read_table(p, delimiter, decimal=decimal)
+    table, row_units = units_row(read_table(p, delimiter, decimal=decimal), decimal)
     names, unit_of = [], {}
-    for h in table.names:
+    for k, h in enumerate(table.names):
         m = re.fullmatch(r"(.*?)\s*\[(.*)\]", h)
         n = m.group(1) if m else h
         names.append(n)
-        unit_of[n] = m.group(2) if m else ""
+        unit_of[n] = m.group(2) if m else row_units.get(k, "")
 
     def col(c: str | int) -> int:
         if isinstance(c, (int, np.integer)):
@@ -342,6 +345,8 @@ def from_csv(
                     f"column {c} out of range: the file has {len(names)} columns{hint}"
                 )
             return int(c)
+        if c not in names and c in table.names:  # the header as written, "name [unit]"
+            return table.names.index(c)
         if c not in names:
             raise DataError(f"no column {c!r} in {p.name}; its columns are {names}")
         return names.index(c)
@@ -371,6 +376,10 @@ def from_csv(
     }
     used = sorted(set(iu + iy + [c for c in (tcol, ecol) if c is not None]))
     data = np.full((len(table.rows), len(names)), np.nan)
+    stamps = None if tcol is None else datetime_seconds(table, tcol, decimal)
+    if stamps is not None:  # date-time stamps: seconds after the first
+        data[:, tcol] = stamps
+        used = [c for c in used if c != tcol]
     data[:, used] = numeric(table, used, missing=True, decimal=decimal,
                             hint="pass decimal=','")
     if tcol is None and dt is None:

@@ -105,7 +105,10 @@ def repair_nan(
         raise NonFiniteError(
             f"non-finite value at sample {i} ({'u' if j < ua.shape[1] else 'y'} channel "
             f"{j if j < ua.shape[1] else j - ua.shape[1]}), {int(bad.any(axis=1).sum())} bad "
-            "sample(s) in all; use IOData.from_raw(..., nan='interpolate') or nan='split'"
+            "sample(s) in all; pass nan='interpolate' (gaps of up to max_gap samples "
+            "filled) or nan='split' (the record cut into experiments there) to the reader "
+            "(IOData.from_csv, from_pandas or from_raw), or repair them with "
+            "sysid.repair_nan"
         )
     x = np.concatenate([ua, y], axis=1)
     any_bad = np.asarray(bad.any(axis=1), dtype=bool)

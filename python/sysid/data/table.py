@@ -634,3 +634,89 @@ class Uncommented(ForwardReader):
     @property
     def _seen(self) -> bool:
         return bool(self._carry or self._out) or not self._first
+
+
+#: Cells that mark a missing value, not a unit, in the row under a header.
+_MISSING_WORDS = {"na", "nan", "n/a", "null", "none", "-"}
+
+
+def units_row(table: Table, decimal: str = ".") -> tuple[Table, dict[int, str]]:
+    """``table`` without a row of units under its header, and the units by column.
+
+    Loggers often write one: ``time,power,temp`` then ``s,W,degC``. It is taken for units
+    when no cell of it is a number or a missing-value word (``NA``, ``nan``, ...), at least
+    one is filled, and the row after it holds a number; else the table comes back as it is.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from sysid.data.table import read_table, units_row
+    >>> path = os.path.join(tempfile.mkdtemp(), "d.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("t,u,y\\ns,,m\\n0,1,2\\n1,3,4\\n")
+    >>> t, units = units_row(read_table(path))
+    >>> len(t.rows), units
+    (2, {0: 's', 2: 'm'})
+    """
+    if table.headerless or len(table.rows) < 2:
+        return table, {}
+    first, second = table.rows[0], table.rows[1]
+    filled = [c for c in first if c]
+    if (not filled or any(is_number(c, decimal) or c.lower() in _MISSING_WORDS
+                          for c in filled)
+            or not any(is_number(c, decimal) for c in second if c)):
+        return table, {}
+    units = {k: c.strip("[]() ") for k, c in enumerate(first) if c}
+    return table._replace(rows=table.rows[1:], lines=table.lines[1:]), units
+
+
+_ZONE = re.compile(r"(Z|[+-]\d\d:?\d\d)$")
+
+
+def datetime_seconds(table: Table, col: int, decimal: str = ".") -> np.ndarray | None:
+    """The column ``col`` of date-time stamps (ISO 8601: ``2026-01-01 08:00:00.250``, ``T``
+    between date and time, an optional ``Z`` or ``+hh:mm`` offset) as seconds after its
+    first; ``None`` when its first cell is a number or no stamp (the caller reads numbers).
+    A later cell that is no stamp raises a :class:`~sysid.DataError` naming its line.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from sysid.data.table import read_table, datetime_seconds
+    >>> path = os.path.join(tempfile.mkdtemp(), "d.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("t,y\\n2026-01-01T00:59:59.5+01:00,1\\n2026-01-01 00:00:00Z,2\\n")
+    >>> datetime_seconds(read_table(path), 0)
+    array([0. , 0.5])
+    """
+    cells = [r[col] for r in table.rows]
+    if not cells or is_number(cells[0], decimal) or not re.match(r"\d{4}-\d\d-\d\d", cells[0]):
+        return None
+    stamps, shift = [], np.zeros(len(cells))
+    for k, c in enumerate(cells):
+        m = _ZONE.search(c) if len(c) > 10 else None
+        if m:
+            z = m.group(1)
+            if z != "Z":
+                hh, mm = int(z[1:3]), int(z[-2:])
+                shift[k] = (1 if z[0] == "+" else -1) * (3600 * hh + 60 * mm)
+            c = c[:m.start()]
+        stamps.append(c)
+    try:
+        t = np.array(stamps, dtype="datetime64[ns]")
+    except ValueError:
+        t = None
+    if t is None or np.isnat(t).any():
+        for k, c in enumerate(stamps):  # name the first cell that is no stamp
+            try:
+                ok = not np.isnat(np.datetime64(c, "ns"))
+            except ValueError:
+                ok = False
+            if not ok:
+                if k == 0:
+                    return None
+                raise DataError(f"{table.path.name} line {table.lines[k]}, column "
+                                f"{table.names[col]!r}: {cells[k]!r} is not a date-time "
+                                f"stamp like the first ({cells[0]!r}); fix or remove that row")
+        t = np.array([np.datetime64(c, "ns") for c in stamps])
+    return (t - t[0]).astype(np.int64) * 1e-9 - (shift - shift[0])
