@@ -90,3 +90,25 @@ def test_bla_refuses_an_input_that_does_not_repeat():
     g = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]])
     with pytest.raises(sysid.DataError, match="does not repeat every 256 samples"):
         sysid.bla(sysid.IOData(u, g.simulate(u)), periods=4)
+
+
+def test_periods_auto_detects_them_as_pem_does():
+    # bla(data, "auto") was refused ("periods must be a positive integer") where pem, ssest,
+    # tfest and oe take it; the F-16 records hold 9 periods, and bla(data, 8) is refused
+    d = _records(lambda x: x + 0.2 * x**3, 2, P=4)
+    cut = sysid.IOData([u[:-100] for u, _ in d.experiments],   # a trailing partial period
+                       [y[:-100] for _, y in d.experiments], 1.0)
+    auto = sysid.bla(cut, "auto")
+    whole = sysid.IOData([u[:3 * 512] for u, _ in d.experiments],
+                         [y[:3 * 512] for _, y in d.experiments], 1.0)
+    want = sysid.bla(whole, periods=3, transient=1)
+    np.testing.assert_allclose(auto.response, want.response, rtol=1e-12)
+    assert auto.info["periods"] == 3 and auto.info["transient"] == 1
+    assert auto.info["periodicity"]["period"] == 512
+    assert auto.info["periodicity"]["unused_samples"] == [412, 412]
+    both = sysid.bla(cut, "auto", transient=0)
+    assert both.info["transient"] == 0
+    rng = np.random.default_rng(4)
+    u = rng.standard_normal((1024, 1))
+    with pytest.raises(sysid.DataError, match="does not repeat.*spa"):
+        sysid.bla(sysid.IOData(u, G.simulate(u), 1.0), "auto")

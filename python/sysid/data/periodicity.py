@@ -27,7 +27,7 @@ import numpy as np
 from ..errors import DataError
 from .iodata import IOData
 
-__all__ = ["Periodicity", "detect_period"]
+__all__ = ["Periodicity", "detect_period", "whole_periods"]
 
 #: Default tolerance on ``m(L)``: a generated input repeats to rounding (``m`` ~ 1e-30);
 #: a measured one up to its noise (the F-16 shaker force: ~1e-5; 1 % noise: 1e-4), while a
@@ -181,3 +181,25 @@ def detect(data: Any, tol: float = TOL, min_periods: int = 2) -> tuple[Periodici
     unused = tuple(int(u.shape[0] - k * lag) for u in inputs)
     return (Periodicity(lag, k, unused, worst),
             f"the input repeats every {lag} samples: {k} whole periods")
+
+
+def whole_periods(data: IOData, found: Any) -> IOData:
+    """``data`` cut to the whole periods :func:`detect_period` found in every experiment
+    (``found``: its result); ``data`` itself when no sample is left over.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.data.periodicity import detect_period, whole_periods
+    >>> u = np.tile(np.random.default_rng(0).standard_normal(50), 3)[:130]
+    >>> d = sysid.IOData(u=u, y=u)
+    >>> whole_periods(d, detect_period(d)).n_samples
+    100
+    """
+    if not any(found.unused):
+        return data
+    cut = found.period * found.periods
+    return IOData([u[:cut] for u, _ in data.experiments],
+                  [y[:cut] for _, y in data.experiments], data.dt,
+                  input_names=data.input_names, output_names=data.output_names,
+                  input_units=data.input_units, output_units=data.output_units)

@@ -75,9 +75,9 @@ def _excited(U: np.ndarray, lines: Any, n_per: int) -> tuple[np.ndarray, np.ndar
 
 def bla(
     data: IOData,
-    periods: int,
+    periods: int | str,
     *,
-    transient: int = 0,
+    transient: int | None = None,
     lines: Any = None,
     confidence: float = 0.95,
 ) -> FRD:
@@ -91,11 +91,16 @@ def bla(
         periods of the same length. With ``m`` inputs, every ``m`` consecutive experiments
         form one realisation block (their phases must differ so that the ``m x m`` input
         matrix of each line is invertible).
-    periods : int
-        Periods in each experiment (the record length must be a multiple).
-    transient : int
+    periods : int or "auto"
+        Periods in each experiment (the record length must be a multiple). ``"auto"``: the
+        period the input repeats with (:func:`sysid.detect_period`, exact repetition in
+        every experiment; a trailing partial period is dropped), as ``pem``'s
+        ``periods="auto"``; ``info["periodicity"]`` says what was found.
+    transient : int, optional
         Leading periods to drop (transients); ``periods - transient >= 2`` gives the noise
         variance, and two realisation blocks or more the nonlinear-distortion variance.
+        Default 0 with a declared ``periods`` (they are in steady state), 1 with ``"auto"``
+        (the usual practice with a multisine applied from rest).
     lines : array_like of int, optional
         Excited DFT lines of one period; default: the lines the input excites, found from
         its power (above 1e-8 of the largest in every experiment, and above the first drop
@@ -135,8 +140,18 @@ def bla(
     data = require_record(data, "bla", pairs=False)
     from .._checks import as_int
 
-    P = as_int(periods, "periods", 1)
-    T = as_int(transient, "transient", 0)
+    found = None
+    if isinstance(periods, str) and periods == "auto":
+        from ..data.periodicity import detect, whole_periods
+
+        found, why = detect(data)
+        if found is None:
+            raise DataError(f"bla averages whole periods of a periodic excitation, and "
+                            f"{why}: use sysid.spa or sysid.welch_frf for non-periodic data")
+        data, periods = whole_periods(data, found), found.periods
+        transient = 1 if transient is None else transient
+    P = as_int(periods, "periods", 1, alt="'auto'")  # not "auto": checked above
+    T = as_int(0 if transient is None else transient, "transient", 0)
     if P - T < 1:
         raise DataError(f"transient ({T}) leaves no period of the {P}; lower it")
     exps = data.experiments
@@ -195,6 +210,10 @@ def bla(
             "unexcited_lines": unexcited, "n_per": n_per, "periods": P, "transient": T,
             "realizations": R,
             "averaged": (avg_u, avg_y)}
+    if found is not None:
+        info["periodicity"] = {"periods": "auto", "period": found.period,
+                               "whole_periods": found.periods,
+                               "unused_samples": list(found.unused), "mismatch": found.mismatch}
     return FRD(2 * np.pi * k / (n_per * dt), Gbla,
                std=None if not np.all(np.isfinite(std)) else std, confidence=confidence,
                dof=dof, dt=dt, input_names=data.input_names, output_names=data.output_names,

@@ -28,6 +28,7 @@ from .. import _sysid
 from .._checks import as_int, user_stacklevel
 from .._progress import iteration_callback, iteration_printer
 from ..data.iodata import IOData
+from ..data.periodicity import whole_periods
 from ..errors import DataError
 from ..models.frd import FRD
 from ..models.statespace import StateSpaceModel
@@ -126,17 +127,6 @@ def resolve_periods(data: IOData, periods: Any,
         info["reason"] = (f"{why} (the samples after them dropped: {list(found.unused)}; a "
                           "partial period)")
     return periodic_lines(whole_periods(data, found), found.periods, T), info
-
-
-def whole_periods(data: IOData, found: Any) -> IOData:
-    """``data`` cut to the whole periods :func:`sysid.detect_period` found in every
-    experiment (``found``: its result); ``data`` itself when no sample is left over."""
-    if not any(found.unused):
-        return data
-    cut = found.period * found.periods
-    return IOData([u[:cut] for u, _ in data.experiments],
-                  [y[:cut] for _, y in data.experiments], data.dt,
-                  input_names=data.input_names, output_names=data.output_names)
 
 
 def line_weights(frd: FRD) -> np.ndarray:

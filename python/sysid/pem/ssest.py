@@ -333,9 +333,9 @@ def periodic_start(data: Any, order: int, feedthrough: Any) -> StateSpaceModel |
     ...                             y=np.zeros(512)), 2, False) is None
     True
     """
-    from ..data.periodicity import detect
+    from ..data.periodicity import detect, whole_periods
     from ..subspace.frd_subspace import frd_subspace
-    from .periodic import frequency_weights, periodic_lines, whole_periods
+    from .periodic import frequency_weights, periodic_lines
 
     try:
         with warnings.catch_warnings():
