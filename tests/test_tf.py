@@ -499,3 +499,23 @@ def test_enforce_stability_starts_from_an_integrator_too():
     with pytest.warns(sysid.StabilityWarning, match=r"stability boundary.*static gain"):
         held = sysid.tfest(sysid.FRD(w, g.freqresp(w)), 2, 0, enforce_stability=True)
     assert np.all(held.poles().real < 0)
+
+
+def test_a_short_record_with_many_inputs_is_checked_against_the_free_parameters():
+    # tfest refused 133 samples of a 5-input, 3-output power plant ("needs at least 210"):
+    # the check counted the full realisation of the states of an output (5 first-order
+    # pairs: n^2 + n m + l n = 55 entries, more than 40 samples), not the 10 coefficients
+    # the transfer functions have
+    rng = np.random.default_rng(8)
+    pairs = [sysid.TransferFunction([0.5 * (j + 1)], [1.0, 1.0 + 0.3 * j]) for j in range(5)]
+    u = rng.standard_normal((40, 5))
+    y = sum(g.simulate(u[:, j], dt=0.5) for j, g in enumerate(pairs))
+    data = sysid.IOData(u, y + 1e-3 * rng.standard_normal(y.shape), dt=0.5)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.SysidWarning)  # the search's own diagnostics
+        G = sysid.tfest(data, 1, 0)
+    for j, g in enumerate(pairs):
+        np.testing.assert_allclose(G.den[0][j], g.den[0][0], rtol=0.01)
+        np.testing.assert_allclose(G.num[0][j], g.num[0][0], rtol=0.01)
+    with pytest.raises(sysid.DataError, match="8 samples but the model has 10 parameters"):
+        sysid.tfest(sysid.IOData(u[:8], y[:8], dt=0.5), 1, 0)

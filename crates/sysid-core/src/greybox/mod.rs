@@ -165,6 +165,7 @@ pub fn linear(
         x0: vec![InitialState::Estimate],
         reweight: options.reweight,
         local_coordinates: false,
+        free_parameters: Some(np),
         ..Default::default()
     };
     if options.with_k && options.focus != Focus::Prediction {

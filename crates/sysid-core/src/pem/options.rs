@@ -115,6 +115,10 @@ pub struct PemOptions {
     pub block: usize,
     /// Options of the search (tolerances, iteration cap, regularisation, ...).
     pub optim: optim::Options,
+    /// The free parameters of a structure that maps its own parameters to the matrices (a
+    /// grey box, a transfer function): the record's size is checked against them instead
+    /// of the full realisation's `n^2 + n m + l n`. `None` (default): the full realisation.
+    pub free_parameters: Option<usize>,
 }
 
 impl Default for PemOptions {
@@ -139,6 +143,7 @@ impl Default for PemOptions {
             enforce_stability: None,
             block: 128,
             optim: o,
+            free_parameters: None,
         }
     }
 }

@@ -506,18 +506,23 @@ impl<'a> Predictor<'a> {
             n_samples += y.nrows();
         }
         let x0_mode = x0_modes(opts, experiments.len(), n)?;
-        let needed = n * n + n * m + l * n;
+        let full = n * n + n * m + l * n;
+        let needed = opts.free_parameters.unwrap_or(full);
         if n_samples * l < needed {
             return Err(SysidError::InsufficientData {
                 context: "prediction-error refinement".into(),
                 needed: needed.div_ceil(l.max(1)),
                 got: n_samples,
-                fix: "use a longer record or a lower order",
+                fix: if opts.free_parameters.is_some() {
+                    "use a longer record or fewer free parameters"
+                } else {
+                    "use a longer record or a lower order"
+                },
             });
         }
         let est_k = opts.focus.estimates_k(opts.estimate_k);
         let k_fixed = fixed_gain(opts.focus, k0, n, l)?;
-        let mut p = needed + if opts.estimate_d { l * m } else { 0 };
+        let mut p = full + if opts.estimate_d { l * m } else { 0 };
         p += if est_k { n * l } else { 0 };
         let mut x0_off = Vec::new();
         for s in &x0_mode {
