@@ -47,5 +47,14 @@ def test_short_records_and_simulation_focus():
     short = sysid.nlarx(_linear(n=30), 1, 1)
     assert short.info["basis_choice"]["kind"] == "linear"
     assert "too short" in short.info["basis_choice"]["reason"]
+    # the automatic basis with the simulation focus was refused ("needs a network"): it is
+    # a sigmoid network trained on the simulation error, and the choice says why
+    sim = sysid.nlarx(_linear(), 2, 2, focus="simulation")
+    assert isinstance(sim, sysid.NetworkNARXModel)
+    assert sim.info["focus"] == "simulation" and sim.info["refine"]["iterations"] > 0
+    assert "focus='simulation'" in sim.info["basis_choice"]["reason"]
+    assert sysid.compare(_linear(seed=5), sim).fit[0, 0] > 90.0
     with pytest.raises(sysid.DataError, match="focus='simulation' needs a network"):
-        sysid.nlarx(_linear(), 2, 2, focus="simulation")
+        sysid.nlarx(_linear(), 2, 2, basis=sysid.PolynomialBasis(2), focus="simulation")
+    with pytest.raises(sysid.DataError, match="no noise_terms"):
+        sysid.nlarx(_linear(), 2, 2, focus="simulation", noise_terms=1)

@@ -176,7 +176,7 @@ def test_bad_input_is_refused_with_the_fix_named():
     with pytest.raises(DataError, match="focus"):
         sysid.nlarx(data, 2, 2, 1, basis=sysid.SigmoidNetwork(2), focus="sim")
     with pytest.raises(DataError, match="focus='simulation' needs a network"):
-        sysid.nlarx(data, 2, 2, 1, focus="simulation")
+        sysid.nlarx(data, 2, 2, 1, basis=sysid.PolynomialBasis(2), focus="simulation")
     with pytest.raises(DataError, match="noise_terms"):
         sysid.nlarx(data, 2, 2, 1, basis=sysid.SigmoidNetwork(2), noise_terms=1)
     flat = sysid.IOData(np.ones((200, 1)), data.y, 1.0)

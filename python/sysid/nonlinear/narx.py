@@ -35,7 +35,7 @@ from ..polynomial.orders import matlab_orders
 from ..validation.compare import diverged
 from .choice import is_auto
 from .customreg import CustomRegressor
-from .hw_model import check_search_size
+from .hw_model import SigmoidNetwork, check_search_size
 from .narx_model import NARXModel, PolynomialBasis, RBFBasis
 from .narx_network import is_network, nlarx_network
 from .narx_network_model import NetworkNARXModel
@@ -209,7 +209,9 @@ def nlarx(
         1: every lag and custom regressor, least squares): FROLS picks terms by their
         one-step error, and run free they can simulate far worse than that linear model
         (:mod:`sysid.nonlinear.choice`; about ten FROLS fits: give the basis to fit once);
-        ``info["basis_choice"]`` holds the table and the reason. Or a network nonlinearity of all
+        ``info["basis_choice"]`` holds the table and the reason; with ``focus="simulation"``
+        a sigmoid network (``SigmoidNetwork()``), as FROLS selects terms for the one-step
+        prediction. Or a network nonlinearity of all
         lagged variables (MATLAB's ``idSigmoidNetwork``, ``idWaveletNetwork``,
         ``idTreePartition``): then the result is a :class:`~sysid.NetworkNARXModel`, trained
         by separable least squares (the term-selection arguments do not apply). A
@@ -295,11 +297,14 @@ def nlarx(
     # the unexplained fraction at which the selection stops: NaN stopped it never, a value
     # of 1 or more before the first term
     err_tol = as_between(err_tol, "err_tol", 0.0, 1.0, closed="left")
-    if is_auto(basis):
-        if focus != "prediction":
-            raise DataError("focus='simulation' needs a network nonlinearity "
-                            "(basis=SigmoidNetwork(...), WaveletNetwork, TreePartition); the "
-                            "polynomial terms are selected for prediction")
+    auto_network = is_auto(basis) and focus != "prediction"
+    if auto_network:  # FROLS selects for prediction: the automatic basis is then a network
+        if noise_terms or custom:
+            raise DataError("focus='simulation' trains a sigmoid network (the polynomial "
+                            "terms are selected for prediction), which takes no noise_terms "
+                            "or custom regressors: leave them out, or use focus='prediction'")
+        basis = SigmoidNetwork()
+    elif is_auto(basis):
         return _auto_basis(data, dict(
             na=na, nb=nb, nk=nk, max_terms=max_terms, criterion=criterion,
             validation=validation, noise_terms=noise_terms, n_iterations=n_iterations,
@@ -320,6 +325,12 @@ def nlarx(
                             focus=focus, max_iter=max_iter, tol=1e-4, progress=progress)
         if net.info.get("refine", {}).get("stop") != "failed to start":  # that one warned
             free_run_check(net, exps)
+        if auto_network:
+            net.info["basis_choice"] = {
+                "choice": repr(basis),
+                "reason": "basis='auto' with focus='simulation': a sigmoid network trained on "
+                          "the simulation error (the polynomial terms are selected for the "
+                          "one-step prediction)"}
         return net
     if focus != "prediction":
         raise DataError("focus='simulation' needs a network nonlinearity (SigmoidNetwork, "
