@@ -78,7 +78,7 @@ CASES: dict[str, tuple[str, str]] = {
     "greyest": (
         "def motor(p, dt=None):\n"
         "    return [[-1 / p.tau]], [[p.K / p.tau]], [[1.0]], [[0.0]]\n"
-        "u = np.sign(np.sin(np.arange(2_000_000) * 0.05))\n"
+        "u = np.sign(np.sin(np.arange(6_000_000) * 0.05))\n"
         "y = sysid.GreyBox(motor, {'K': 2.0, 'tau': 0.3}).model(dt=0.05).simulate(u)\n"
         "y = y + 0.01 * rng.standard_normal(y.shape)\n"
         "s = sysid.GreyBox(motor, params={'K': 1.0, 'tau': sysid.param(1.0, bounds=(0.01, 10))})\n"
