@@ -399,13 +399,7 @@ class TransferFunction(ModelMixin):
         five time constants of the slowest pole plus the largest delay); ``std=True``
         (needs :attr:`uncertainty`): with its first-order std as a band."""
         if std:
-            from ..models.uncertainty import complex_std
-
-            resp = self.step(n_samples, dt=dt)
-            N, h = len(resp.t), (resp.t[1] - resp.t[0] if len(resp.t) > 1 else dt)
-            _, resp.std = complex_std(
-                self, lambda m: m.step(N).y if self.dt > 0 else m.step(N, dt=h).y)
-            return resp
+            return self._banded("step", n_samples, dt)
         if self.dt > 0:
             return super().step(n_samples)
         N, h = self._time_grid(n_samples, dt)
@@ -415,6 +409,17 @@ class TransferFunction(ModelMixin):
             u[:, j] = 1.0
             y[:, :, j] = self.simulate(u, dt=h, hold="zoh")
         return TimeResponse("step", np.arange(N) * h, y, self)
+
+    def _banded(self, kind: str, n_samples: int | None, dt: float | None) -> TimeResponse:
+        """The ``kind`` response (``"step"`` or ``"impulse"``) with its first-order std from
+        :attr:`uncertainty` (``std=True``), each model of the propagation on its grid."""
+        from ..models.uncertainty import complex_std
+
+        resp = getattr(self, kind)(n_samples, dt=dt)
+        N, h = len(resp.t), (resp.t[1] - resp.t[0] if len(resp.t) > 1 else dt)
+        _, resp.std = complex_std(self, lambda m: (getattr(m, kind)(N) if self.dt > 0 else
+                                                   getattr(m, kind)(N, dt=h)).y)
+        return resp
 
     def impulse(self, n_samples: int | None = None, *, dt: float | None = None,
                 std: bool = False) -> TimeResponse:
@@ -430,13 +435,7 @@ class TransferFunction(ModelMixin):
         True
         """
         if std:
-            from ..models.uncertainty import complex_std
-
-            resp = self.impulse(n_samples, dt=dt)
-            N, h = len(resp.t), (resp.t[1] - resp.t[0] if len(resp.t) > 1 else dt)
-            _, resp.std = complex_std(
-                self, lambda m: m.impulse(N).y if self.dt > 0 else m.impulse(N, dt=h).y)
-            return resp
+            return self._banded("impulse", n_samples, dt)
         if self.dt > 0:
             return super().impulse(n_samples)
         from scipy.linalg import expm
