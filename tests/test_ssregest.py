@@ -261,6 +261,10 @@ def test_a_given_order_gets_the_lags_it_needs_by_default():
     d = sysid.IOData(u, true.simulate(u) + 0.01 * rng.standard_normal((133, 3)), 1.0)
     m = sysid.ssregest(d, 4)
     assert m.nstates == 4 and m.info["ssregest"]["arx_orders"][0] == 2
+    # a list: the lags hold the largest order, and the choice is made among all of them
+    sel = sysid.ssregest(d, [2, 4, 6])
+    assert sel.info["ssregest"]["arx_orders"][0] == 2
+    assert sorted(sel.info["ssregest"]["order_selection"]["table"]) == [2, 4, 6]
     # a record too short for the lags an order needs is still refused, with the way out
     with pytest.raises(sysid.DataError, match="larger arx_orders"):
         sysid.ssregest(sysid.IOData(u[:60], d.y[:60], 1.0), 10)

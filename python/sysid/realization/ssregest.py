@@ -262,8 +262,8 @@ def ssregest(
     arx_orders : int, optional
         Lags of every ``A`` and ``B`` polynomial of the ARX model (MATLAB's ``ARXOrders``);
         default about a tenth of the samples per equation parameter, at most 30, and at
-        least the lags a given order needs (while each equation keeps two samples per
-        parameter).
+        least the lags the largest given order needs (or else the smallest) while each
+        equation keeps two samples per parameter.
     kernel : {"tc", "ss", "dc", "ridge"}
         The prior of :func:`sysid.arxregul` (MATLAB's ``RegularizationKernel``, default TC).
     feedthrough : bool or "auto", optional
@@ -308,12 +308,15 @@ def ssregest(
     candidates = _orders(order)
     n_samples = int(sum(y.shape[0] for _, y in exps))
     na = _arx_order(n_samples, data.n_inputs, data.n_outputs, arx_orders)
-    if arx_orders is None and candidates is not None and candidates[0] > na * data.n_outputs:
-        # the default lags hold fewer states than asked for: enough lags for the order, as
-        # long as each equation keeps two samples per parameter (the prior does the rest)
-        need = -(-candidates[0] // data.n_outputs)
-        if 2 * need * (data.n_inputs + data.n_outputs) <= n_samples:
-            na = need
+    if arx_orders is None and candidates is not None and candidates[-1] > na * data.n_outputs:
+        # the default lags hold fewer states than asked for: enough lags for the largest
+        # order (else the smallest), as long as each equation keeps two samples per
+        # parameter (the prior does the rest)
+        for order_ in (candidates[-1], candidates[0]):
+            need = -(-order_ // data.n_outputs)
+            if na < need and 2 * need * (data.n_inputs + data.n_outputs) <= n_samples:
+                na = need
+                break
     top = na * data.n_outputs
     pool = candidates if candidates is not None else list(range(1, min(20, top) + 1))
     if pool[0] > top:
