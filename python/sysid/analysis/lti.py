@@ -118,10 +118,9 @@ def step(model: Any, n_samples: int | None = None, std: bool = False) -> TimeRes
     """
     resp = _response(model, "step", n_samples)
     if std:
-        from ..models.uncertainty import complex_std
+        from ..models.uncertainty import response_band
 
-        N = len(resp.t)
-        _, resp.std = complex_std(model, lambda m: step(m, N).y)
+        return response_band(model, resp, step)
     return resp
 
 
@@ -138,10 +137,9 @@ def impulse(model: Any, n_samples: int | None = None, std: bool = False) -> Time
     """
     resp = _response(model, "impulse", n_samples)
     if std:
-        from ..models.uncertainty import complex_std
+        from ..models.uncertainty import response_band
 
-        N = len(resp.t)
-        _, resp.std = complex_std(model, lambda m: impulse(m, N).y)
+        return response_band(model, resp, impulse)
     return resp
 
 

@@ -335,10 +335,9 @@ class ModelMixin:
         (needs ``uncertainty``): with its first-order std as a band."""
         resp = sampled_response(self, "step", n_samples)
         if std:
-            from .uncertainty import complex_std
+            from .uncertainty import response_band
 
-            N = len(resp.t)
-            _, resp.std = complex_std(self, lambda m: m.step(N).y)
+            return response_band(self, resp, lambda m, n: m.step(n))
         return resp
 
     def dcgain(self, std: bool = False) -> Any:
@@ -355,10 +354,9 @@ class ModelMixin:
         ``std=True`` (needs ``uncertainty``): with its first-order std as a band."""
         resp = sampled_response(self, "impulse", n_samples)
         if std:
-            from .uncertainty import complex_std
+            from .uncertainty import response_band
 
-            N = len(resp.t)
-            _, resp.std = complex_std(self, lambda m: m.impulse(N).y)
+            return response_band(self, resp, lambda m, n: m.impulse(n))
         return resp
 
     def summary(self) -> str:

@@ -457,11 +457,9 @@ class StateSpaceModel(ModelMixin):
         """Impulse responses: the Markov parameters; see :func:`sysid.impulse` (``std=True``:
         with a band)."""
         if std:
-            from .uncertainty import complex_std
+            from .uncertainty import response_band
 
-            resp = self.impulse(n_samples)
-            _, resp.std = complex_std(self, lambda m: m.impulse(len(resp.t)).y)
-            return resp
+            return response_band(self, self.impulse(n_samples), lambda m, n: m.impulse(n))
         N = default_length(self, n_samples)
         with np.errstate(over="ignore", invalid="ignore"):
             h = self.markov(N)
@@ -542,16 +540,6 @@ class StateSpaceModel(ModelMixin):
             d = damping_std(self, self.dt)
             return DampingTable(d["poles"], d["s"].astype(complex), self.dt, std=d)
         return damping_table(self.poles(), self.dt)
-
-    def step(self, n_samples: int | None = None, std: bool = False) -> TimeResponse:
-        """Step responses from rest; see :func:`sysid.step` (``std=True``: with a band)."""
-        resp = super().step(n_samples)
-        if std:
-            from .uncertainty import complex_std
-
-            N = len(resp.t)
-            _, resp.std = complex_std(self, lambda m: m.step(N).y)
-        return resp
 
     # -- parameter uncertainty (sysid.models.uncertainty) ---------------------------------
     @property

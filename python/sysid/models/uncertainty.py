@@ -567,6 +567,29 @@ def complex_std(model: Any, fn: Callable[[Any], Any]) -> tuple[np.ndarray, np.nd
     return value, sd.reshape(np.shape(value))
 
 
+def response_band(model: Any, resp: Any, respond: Callable[[Any, int], Any]) -> Any:
+    """``resp`` (a time response of ``model``) with ``resp.std``: the first-order standard
+    deviation of each sample over the parameter uncertainty, ``respond(m, N)`` giving the
+    same response of a perturbed model ``m`` over the ``N`` samples of ``resp`` (the band
+    of ``step(std=True)`` and ``impulse(std=True)``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.models.uncertainty import response_band
+    >>> def build(t):
+    ...     return sysid.StateSpaceModel([[0.5]], [[t[0]]], [[1.0]])
+    >>> m = build([1.0])
+    >>> m.uncertainty = sysid.ParameterUncertainty([1.0], np.array([[0.01]]), build)
+    >>> r = response_band(m, m.impulse(3), lambda p, n: p.impulse(n))
+    >>> np.round(r.std[:, 0, 0], 6)
+    array([0.  , 0.1 , 0.05])
+    """
+    n = len(resp.t)
+    _, resp.std = complex_std(model, lambda m: respond(m, n).y)
+    return resp
+
+
 def _is_statespace(m: Any) -> bool:
     return all(isinstance(getattr(m, k, None), np.ndarray) for k in "ABCD") and \
         getattr(m, "dt", None) is not None

@@ -413,13 +413,12 @@ class TransferFunction(ModelMixin):
     def _banded(self, kind: str, n_samples: int | None, dt: float | None) -> TimeResponse:
         """The ``kind`` response (``"step"`` or ``"impulse"``) with its first-order std from
         :attr:`uncertainty` (``std=True``), each model of the propagation on its grid."""
-        from ..models.uncertainty import complex_std
+        from ..models.uncertainty import response_band
 
         resp = getattr(self, kind)(n_samples, dt=dt)
-        N, h = len(resp.t), (resp.t[1] - resp.t[0] if len(resp.t) > 1 else dt)
-        _, resp.std = complex_std(self, lambda m: (getattr(m, kind)(N) if self.dt > 0 else
-                                                   getattr(m, kind)(N, dt=h)).y)
-        return resp
+        h = resp.t[1] - resp.t[0] if len(resp.t) > 1 else dt
+        return response_band(self, resp, lambda m, n: (getattr(m, kind)(n) if self.dt > 0
+                                                       else getattr(m, kind)(n, dt=h)))
 
     def impulse(self, n_samples: int | None = None, *, dt: float | None = None,
                 std: bool = False) -> TimeResponse:
