@@ -72,3 +72,22 @@ def test_complex_arrays_are_refused_not_cast(call, match):
 def test_frequency_responses_stay_complex():
     frd = sysid.FRD([1.0, 2.0], np.array([1 + 1j, 0.5 - 0.2j]), dt=0.1)
     assert np.iscomplexobj(frd.response) and frd.response[1, 0, 0] == 0.5 - 0.2j
+
+
+@pytest.mark.parametrize("call", [
+    lambda recs: sysid.ssest(recs, 1),
+    lambda recs: sysid.pem(recs, sysid.n4sid(REC, 1)),
+    lambda recs: sysid.n4sid(recs, 1),
+    lambda recs: sysid.arx(recs, 1, 1, 1),
+    lambda recs: sysid.oe(recs, 1, 1, 1),
+    lambda recs: sysid.tfest(recs, 1),
+    lambda recs: sysid.spa(recs),
+    lambda recs: sysid.identify(recs),
+    lambda recs: sysid.compare(recs, sysid.n4sid(REC, 1)),
+])
+def test_a_list_of_records_names_merge(call):
+    """ssest([est1, est2], 4) said only "got list": several records are one record's
+    experiments, which a user makes with merge (MATLAB's merge(z1, z2))."""
+    with pytest.raises(DataError, match=r"several experiments.*\.merge\(") as err:
+        call([REC, REC])
+    assert str(err.value).count("merge") == 2

@@ -179,6 +179,19 @@ def test_one_call_functions_and_ssest():
     assert pole < 0.03 and dc < 0.3, (pole, dc)
 
 
+def test_a_given_order_takes_the_horizon_it_needs():
+    """pbsid(data, 4) on a short record (the gas furnace's 148 samples) was refused: "order 4
+    is too large with a future horizon of 3" although n4sid(data, 4) fits it, taking the
+    smallest horizon that allows the order when the data support it."""
+    data, _ = closed_loop(150, 3)
+    for fn in (sysid.pbsid, sysid.ssarx):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", sysid.FeedbackWarning)
+            assert fn(data, 4).A.shape == (4, 4)
+            with pytest.raises(sysid.OrderError, match="horizon of 3"):
+                fn(data, 4, horizon=3)
+
+
 def test_bad_arguments():
     data, _ = closed_loop(500, 1)
     with pytest.raises(sysid.DataError, match="future"):

@@ -150,6 +150,28 @@ def test_multi_input_arx():
     np.testing.assert_allclose(est.parameters, [-0.5, 1.0, -2.0], atol=1e-6)
 
 
+def test_run_takes_a_record():
+    """RecursiveARX(...).run(data) on an IOData raised TypeError (y was required): a record
+    runs as its arrays do, one output at a time."""
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal((800, 2))
+    y = signal.lfilter([0, 1.0], [1, -0.6], u[:, 0]) + 0.5 * np.r_[0, u[:-1, 1]]
+    data = sysid.IOData(u, np.c_[y, -y], 0.1)
+    a, b = sysid.RecursiveARX(1, [1, 1]), sysid.RecursiveARX(1, [1, 1])
+    ra = a.run(data.select(outputs=[0]))
+    rb = b.run(u, y)
+    np.testing.assert_array_equal(ra.yhat, rb.yhat)
+    np.testing.assert_array_equal(a.parameters, b.parameters)
+    with pytest.raises(sysid.ShapeError, match="one estimator per output"):
+        a.run(data)
+    with pytest.raises(sysid.DataError, match="not both"):
+        a.run(data.select(outputs=[0]), y)
+    with pytest.raises(sysid.DataError, match="experiment"):
+        a.run(sysid.IOData([u, u], [y, y], 0.1))
+    with pytest.raises(sysid.DataError, match="needs the outputs"):
+        a.run(u)
+
+
 def test_bad_input_is_refused_with_a_clear_message():
     with pytest.raises(sysid.DataError, match="forgetting factor"):
         sysid.RecursiveARX(1, 1, forgetting=1.5)

@@ -10,7 +10,14 @@ from typing import Any
 import numpy as np
 
 from . import _sysid
-from .errors import DataError, ExcitationError, NonFiniteError, ShapeError, refuse_frd
+from .errors import (
+    DataError,
+    ExcitationError,
+    NonFiniteError,
+    ShapeError,
+    refuse_frd,
+    several_records_hint,
+)
 
 
 def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = False) -> np.ndarray:
@@ -558,7 +565,8 @@ def experiment_arrays(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
     try:
         exps = data.experiments
     except AttributeError:
-        raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))") from None
+        raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))"
+                        + several_records_hint(data)) from None
     return [(np.ascontiguousarray(u, float), np.ascontiguousarray(y, float)) for u, y in exps]
 
 

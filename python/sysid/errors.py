@@ -138,6 +138,24 @@ def is_frd(data: object) -> bool:
     return hasattr(data, "omega") and hasattr(data, "response")
 
 
+def several_records_hint(data: object) -> str:
+    """A hint for a list of records passed where one record goes: MATLAB's ``merge``.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.errors import several_records_hint
+    >>> a = sysid.IOData(u=np.ones(5), y=np.ones(5))
+    >>> several_records_hint([a, a])[:40]
+    '; several records are several experiment'
+    """
+    if isinstance(data, (list, tuple)) and data and all(
+            hasattr(d, "experiments") and hasattr(d, "input_names") for d in data):
+        return ("; several records are several experiments of one: pass "
+                "records[0].merge(*records[1:]) (MATLAB's merge)")
+    return ""
+
+
 def refuse_frd(data: object, who: str) -> None:
     """A :class:`DataError` naming the estimators that take frequency-response data when
     ``data`` is one (an :class:`sysid.FRD`, MATLAB's ``idfrd``) and ``who`` takes time

@@ -24,7 +24,13 @@ import numpy as np
 
 from .._checks import as_2d, as_dt
 from .._display import HTMLResult
-from ..errors import DataError, InsufficientDataError, ShapeError, refuse_frd
+from ..errors import (
+    DataError,
+    InsufficientDataError,
+    ShapeError,
+    refuse_frd,
+    several_records_hint,
+)
 from . import formats as _formats
 from . import raw as _raw
 from . import segments as _segments
@@ -567,6 +573,7 @@ def require_record(data: Any, who: str, pairs: bool = True) -> IOData:
     if not isinstance(data, IOData):
         pair = " or a (u, y) pair of arrays" if pairs else ""
         raise DataError(
-            f"{who} takes an IOData record{pair}, got {type(data).__name__}: wrap the arrays "
-            f"first, sysid.{who}(sysid.IOData(u=u, y=y, dt=dt)) (u=None for output-only data)")
+            f"{who} takes an IOData record{pair}, got {type(data).__name__}"
+            + (several_records_hint(data) or ": wrap the arrays first, "
+               f"sysid.{who}(sysid.IOData(u=u, y=y, dt=dt)) (u=None for output-only data)"))
     return data

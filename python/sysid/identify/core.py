@@ -66,7 +66,14 @@ from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..data.preprocessing import spike_report
 from ..data.segments import long_enough
-from ..errors import DataError, ExcitationError, InsufficientDataError, NumericalError, SysidWarning
+from ..errors import (
+    DataError,
+    ExcitationError,
+    InsufficientDataError,
+    NumericalError,
+    SysidWarning,
+    several_records_hint,
+)
 from ..models.statespace import ss_parameter_count
 from ..subspace.estimator import available_horizon
 from ..validation.crossval import (
@@ -557,7 +564,7 @@ def identify(
         data = IOData(u=data[0], y=data[1])
     if not isinstance(data, IOData):
         raise DataError(f"data must be a sysid.IOData or a (u, y) pair, got "
-                        f"{type(data).__name__}")
+                        f"{type(data).__name__}" + several_records_hint(data))
     if data.n_inputs == 0:
         raise DataError("identify needs inputs; for output-only data use sysid.n4sid(data) "
                         "(a time-series model) or the oma tools")

@@ -10,7 +10,7 @@ import numpy as np
 from .._checks import as_int
 from .._display import HTMLResult, model_html
 from ..data.iodata import IOData
-from ..errors import DataError
+from ..errors import DataError, several_records_hint
 
 __all__ = ["IdentifiedModel", "IdentifyResult"]
 
@@ -77,7 +77,7 @@ class IdentifiedModel:
             data = IOData(u=data[0], y=data[1], dt=self.dt)
         if not isinstance(data, IOData):
             raise DataError(f"data must be a sysid.IOData or a (u, y) pair, got "
-                            f"{type(data).__name__}")
+                            f"{type(data).__name__}" + several_records_hint(data))
         if data.n_inputs != self.ninputs or data.n_outputs != self.noutputs:
             raise DataError(f"the model has {self.ninputs} input(s) and {self.noutputs} "
                             f"output(s) but the data have {data.n_inputs} and "

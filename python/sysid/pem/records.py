@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..data.iodata import IOData
-from ..errors import DataError, is_frd
+from ..errors import DataError, is_frd, several_records_hint
 
 __all__ = ["_experiments"]
 
@@ -30,4 +30,5 @@ def _experiments(data: Any) -> IOData:
                         "state-space model; refine it with sysid.pem(frd, model)) or "
                         "sysid.tfest(frd, n_poles), or pass the record itself (with periods= "
                         "for periodic data: the fit is then on its excited lines)")
-    raise DataError(f"data must be a sysid.IOData or a (u, y) pair, got {type(data).__name__}")
+    raise DataError(f"data must be a sysid.IOData or a (u, y) pair, got {type(data).__name__}"
+                    + several_records_hint(data))

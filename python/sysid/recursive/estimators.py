@@ -227,15 +227,26 @@ class _Recursive:
                              f"{yv.shape}; use run() for a record")
         return float(self._core.step(self._u_row(u), float(yv.ravel()[0])))
 
-    def run(self, u: Any, y: Any, *, store_parameters: bool = True) -> RecursiveResult:
-        """Process a record ``u (n_samples, ninputs)``, ``y (n_samples,)`` in the Rust core
-        (GIL released, Ctrl-C honoured); the estimator's state carries over, so records
-        can be fed in pieces."""
-        if y is None or (hasattr(u, "experiments") and hasattr(u, "input_names")):
-            got = "a record (IOData)" if y is not None or hasattr(u, "experiments") else \
-                "y=None"
-            raise DataError(f"run takes the arrays u (n_samples, ninputs) and y (n_samples,), "
-                            f"got {got}: for a record, run(data.u, data.y)")
+    def run(self, u: Any, y: Any = None, *, store_parameters: bool = True) -> RecursiveResult:
+        """Process a record in the Rust core (GIL released, Ctrl-C honoured): an
+        :class:`~sysid.IOData` of one experiment and one output, or the arrays
+        ``u (n_samples, ninputs)`` and ``y (n_samples,)``; the estimator's state carries
+        over, so records can be fed in pieces."""
+        if hasattr(u, "experiments") and hasattr(u, "input_names"):
+            if y is not None:
+                raise DataError("run takes a record (IOData) or the arrays u and y, not both: "
+                                "run(data) or run(data.u, data.y)")
+            if u.n_experiments != 1:
+                raise DataError(f"the record has {u.n_experiments} experiments; an online "
+                                "estimator runs through one: run(data.experiment(k)) each")
+            if u.n_outputs != 1:
+                raise ShapeError(f"the record has {u.n_outputs} outputs; online estimators "
+                                 "model one output: make one estimator per output and run "
+                                 "each on data.select(outputs=[k])")
+            u, y = u.u, u.y
+        if y is None:
+            raise DataError("run needs the outputs: run(data) for a record (IOData), or "
+                            "run(u, y) with the arrays u (n_samples, ninputs), y (n_samples,)")
         y2 = as_2d(y, "y")
         if y2.shape[1] != 1:
             raise ShapeError(f"y has shape {y2.shape}: online estimators model one output; "

@@ -8,7 +8,7 @@ from typing import Any
 
 from ..data.iodata import IOData, require_record
 from ..models.statespace import StateSpaceModel
-from .estimator import Order, SubspaceEstimator
+from .estimator import Order, SubspaceEstimator, horizon_for_order
 from .feedthrough import check_feedthrough, choose_feedthrough, default_feedthrough
 
 __all__ = ["pbsid", "ssarx"]
@@ -30,6 +30,8 @@ def _one_call(method: str) -> Any:
         from .closed_loop import closed_loop_fit
 
         data = require_record(data, method)
+        if past is None and future is None:  # one that allows a given order, as n4sid's
+            horizon = horizon_for_order(data, order, horizon)
         est = SubspaceEstimator(data, horizon, past=past, future=future, method=method,
                                 scale=scale)
         ft, why = check_feedthrough(default_feedthrough(feedthrough, order)), None
@@ -58,7 +60,9 @@ pbsid.__doc__ = """Identify a state-space model from closed-loop data with PBSID
     data : IOData or (u, y)
     order : int or "auto"
     horizon, past, future : int, optional
-        VARX order (past) and observability horizon (future <= past + 1).
+        VARX order (past) and observability horizon (future <= past + 1). Without them at a
+        given order, the horizon of :func:`~sysid.subspace.estimator.horizon_for_order` (the
+        default, or the smallest that allows the order when the data do), as :func:`n4sid`.
     feedthrough : bool or "auto", optional
         Estimate ``D`` (only with a controller without direct feedthrough). Default
         ``D = 0``, as every sysid state-space estimator (with ``order="auto"`` as

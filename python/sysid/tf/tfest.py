@@ -9,7 +9,7 @@ import numpy as np
 
 from .._checks import require_inputs_vary
 from .._threads import one_blas_thread
-from ..errors import DataError, is_frd
+from ..errors import DataError, is_frd, several_records_hint
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 from .model import TransferFunction
@@ -155,8 +155,9 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
                                   max_iter=max_iter, tol=tol, progress=progress,
                                   stable=bool(enforce_stability)))
     if not hasattr(data, "experiments") or not hasattr(data, "dt"):
-        raise DataError(f"tfest needs a sysid.IOData or sysid.FRD, got {type(data).__name__}; "
-                        "wrap arrays as sysid.IOData(u, y, dt=...)")
+        raise DataError(f"tfest needs a sysid.IOData or sysid.FRD, got {type(data).__name__}"
+                        + (several_records_hint(data)
+                           or "; wrap arrays as sysid.IOData(u, y, dt=...)"))
     l, m = data.n_outputs, data.n_inputs
     if m == 0:
         raise DataError("tfest needs at least one input; for a time series use sysid.ar")

@@ -42,7 +42,7 @@ from .._checks import as_2d, as_int
 from .._display import HTMLResult
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
-from ..errors import DataError, NumericalError, ShapeError, SysidWarning
+from ..errors import DataError, NumericalError, ShapeError, SysidWarning, several_records_hint
 from ..models.checks import check_model
 from ..models.trended import TrendedModel
 
@@ -101,7 +101,7 @@ def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndar
     else:
         raise DataError(
             f"data must be a sysid.IOData or a pair (u, y), got {type(data).__name__}"
-        )
+            + several_records_hint(data))
     m, l = model.ninputs, model.noutputs
     for u, y in recs:
         if u.shape[1] != m or y.shape[1] != l:

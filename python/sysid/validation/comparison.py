@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from ..data.iodata import IOData
-from ..errors import DataError, is_frd
+from ..errors import DataError, is_frd, several_records_hint
 
 __all__ = ["CompareSet", "split_arguments"]
 
@@ -39,7 +39,7 @@ def split_arguments(args: tuple[Any, ...], horizon: Any) -> tuple[Any, list[Any]
         raise DataError(
             "compare takes compare(data, m1, m2, ...) or compare(model, data): data is a "
             "sysid.IOData, a pair (u, y) or a sysid.FRD, got "
-            + ", ".join(type(a).__name__ for a in args))
+            + ", ".join(type(a).__name__ for a in args) + several_records_hint(args[0]))
     if not models:
         raise DataError("compare needs at least one model after the data")
     if any(_is_data(m) for m in models):

@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from ..data.iodata import IOData
-from ..errors import DataError, InsufficientDataError
+from ..errors import DataError, InsufficientDataError, several_records_hint
 from .compare import require_outputs_vary
 
 __all__ = ["validation_record"]
@@ -33,7 +33,7 @@ def validation_record(validation: Any, data: IOData) -> IOData | None:
         validation = IOData(u=validation[0], y=validation[1], dt=data.dt)
     if not isinstance(validation, IOData):
         raise DataError(f"validation must be a sysid.IOData or a (u, y) pair, got "
-                        f"{type(validation).__name__}")
+                        f"{type(validation).__name__}" + several_records_hint(validation))
     if (validation.n_inputs, validation.n_outputs) != (data.n_inputs, data.n_outputs):
         raise DataError(f"validation has {validation.n_inputs} input(s) and "
                         f"{validation.n_outputs} output(s), the estimation data "
