@@ -157,6 +157,36 @@ def test_identify_reads_a_loggers_units_row_and_date_time_stamps(tmp_path):
     assert model.nstates == 4 and model.dt == pytest.approx(0.08)
 
 
+@pytest.mark.parametrize("name", ["time", "Time [s]", "t", "timestamp"])
+def test_a_time_column_gives_the_sample_time_without_asking(tmp_path, capsys, name):
+    """A file with a time column, read without --time or --dt, gave a model at dt = 1 s,
+    silently (the gas furnace's 9 s record: every frequency and time constant of its report
+    off by 9); the column is now taken and the progress says so. Without one, dt = 1 s is
+    assumed with a warning."""
+    d = np.loadtxt(sysid.datasets.path("dryer"))
+    path = tmp_path / "rec.csv"
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow([name, "heater", "temperature"])
+        for k, (u, y) in enumerate(d):
+            w.writerow([f"{0.08 * k:.2f}", u, y])
+    argv = ["identify", str(path), "--inputs", "heater", "--outputs", "temperature",
+            "--split", "500", "--order", "4", "--report", str(tmp_path / "out")]
+    assert main(argv) == 0
+    assert sysid.load_model(tmp_path / "out" / "model.json").dt == pytest.approx(0.08)
+    err = capsys.readouterr().err
+    assert f"sample time from the time column {name!r}" in err and "warning" not in err
+    assert main(argv[:-1] + [str(tmp_path / "o2"), "--dt", "0.5"]) == 0  # --dt overrides
+    assert sysid.load_model(tmp_path / "o2" / "model.json").dt == 0.5
+    path.write_text("u,y\n" + "\n".join(f"{a},{b}" for a, b in d))
+    argv = ["identify", str(path), "--inputs", "u", "--outputs", "y", "--split", "500",
+            "--order", "4", "--quiet", "--report", str(tmp_path / "o3")]
+    capsys.readouterr()
+    assert main(argv) == 0
+    assert "no time column" in capsys.readouterr().err
+    assert sysid.load_model(tmp_path / "o3" / "model.json").dt == 1.0
+
+
 def test_identify_mimo_without_header(tmp_path):
     rng = np.random.default_rng(0)
     true = sysid.StateSpaceModel(np.diag([0.9, 0.5, -0.3]), rng.standard_normal((3, 2)),
@@ -453,6 +483,7 @@ def test_a_short_file_is_too_short_before_its_channels_are_checked(tmp_path, cap
     path.write_text("u,y\n1,2\n3,4\n5,6\n")
     err = run_error(capsys, ["identify", str(path), "--inputs", "u", "--outputs", "y",
                              "--report", str(tmp_path / "r")])
+    err = err.split("sysid: error:")[1]  # (the warning before it names time constants)
     assert "the record is too short: it has 3 samples" in err and "constant" not in err
     err = run_error(capsys, ["identify", str(path), "--inputs", "u", "--outputs", "y",
                              "--method", "moesp", "--report", str(tmp_path / "r")])

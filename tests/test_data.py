@@ -476,6 +476,17 @@ def test_from_csv_bom_and_assumed_dt(tmp_path: Path) -> None:
         assert sysid.IOData.from_csv(q, ["u"], ["y"]).dt == 1.0
 
 
+@pytest.mark.parametrize("name", ["Time [s]", "t", "TIME", "timestamp"])
+def test_from_csv_finds_a_time_column_by_its_usual_names(tmp_path: Path, name: str) -> None:
+    # only a column named exactly "time" was taken; "Time [s]" or "t" gave dt = 1 s
+    p = tmp_path / "t.csv"
+    p.write_text(f"{name},u,y\n0,1,2\n0.25,3,4\n0.5,5,6\n")
+    assert sysid.IOData.from_csv(p, ["u"], ["y"]).dt == pytest.approx(0.25)
+    # a time-named column chosen as a channel is a channel
+    with pytest.warns(UserWarning, match="assuming dt = 1 s"):
+        assert sysid.IOData.from_csv(p, ["u"], [name.split(" [")[0], "y"]).n_outputs == 2
+
+
 def test_from_csv_names_a_bad_cell(tmp_path: Path) -> None:
     p = tmp_path / "txt.csv"
     p.write_text("time,u,y\n0,1,2\n\n0.1,abc,4\n0.2,5,6\n0.3,7,8\n")

@@ -33,6 +33,7 @@ from .data.table import (
     numeric,
     read_table,
     text_bytes,
+    time_column,
     units_row,
 )
 from .errors import DataError, InsufficientDataError, OrderError, SysidError
@@ -480,6 +481,7 @@ def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         names = _header(path, args.delimiter)
         ui = _columns(args.inputs, names, "inputs") if args.inputs else []
         yi = _columns(args.outputs, names, "outputs")
+        _find_time(args, names, ui + yi, say)
         ti = [_columns(args.time, names, "times")[0]] if args.time is not None else []
         z = read_columns(path, [names[i] for i in ui + yi + ti], delimiter=args.delimiter,
                          progress=_bars(args))
@@ -492,6 +494,7 @@ def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
     yi = _columns(args.outputs, names, "outputs")
     say(f"{len(table.rows)} samples; converting {len(ui)} input and {len(yi)} output "
         "column(s)")
+    _find_time(args, names, ui + yi, say)
     u = numeric(table, ui)
     y = numeric(table, yi)
     t = None
@@ -500,6 +503,26 @@ def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         t = datetime_seconds(table, ti)  # date-time stamps: seconds after the first
         t = numeric(table, [ti])[:, 0] if t is None else t
     return names, ui, yi, u, y, t
+
+
+def _find_time(args: argparse.Namespace, names: list[str], used: list[int],
+               say: Callable[[str], None]) -> None:
+    """Without --time or --dt: the file's time column (``time``, ``t``, ``Time [s]``, ...;
+    not an input or output) gives the sample time, said on stderr; without one, dt = 1 s
+    is assumed with a warning (a silent dt = 1 made every frequency, time constant and
+    continuous-time model of the report wrong by the true sample time)."""
+    if args.time is not None or args.dt is not None:
+        return
+    k = time_column(names, used)
+    if k is not None:
+        args.time = names[k]
+        say(f"sample time from the time column {names[k]!r} (--dt or --time override it)")
+        return
+    # printed as the command's warnings are (--quiet silences progress, not this)
+    print(f"sysid: warning: {Path(args.data).name} has no time column (time, t, Time [s], "
+          "timestamp, ...) and no --dt or --time was given: assuming a sample time of 1 s "
+          "(the report's frequencies and time constants are then per sample); pass --dt "
+          "SECONDS or --time COLUMN", file=sys.stderr)
 
 
 def _bars(args: argparse.Namespace) -> bool | None:

@@ -22,7 +22,7 @@ import numpy as np
 
 from .._atomic import atomic_path
 from ..errors import DataError, SysidWarning
-from .table import datetime_seconds, numeric, read_table, units_row
+from .table import datetime_seconds, numeric, read_table, time_column, units_row
 
 __all__: list[str] = []
 
@@ -308,8 +308,9 @@ def from_csv(
     as in ``.dat`` files) unless given; ``decimal=","`` reads decimal commas (then the
     delimiter is a semicolon, tab or white space). Files ending in ``.gz``, ``.bz2`` or
     ``.xz`` are decompressed while reading. The same reader serves the command line
-    (``sysid.data.table``). Without a time column or ``dt``, dt = 1 s is assumed with a
-    warning.
+    (``sysid.data.table``). Without ``time`` or ``dt``, a column named as a time column
+    (``time``, ``t``, ``Time [s]``, ``timestamp``, ...; not an input or output) is the time
+    column; without one, dt = 1 s is assumed with a warning.
 
     Examples
     --------
@@ -361,8 +362,8 @@ def from_csv(
         raise DataError(f"name the output columns of {p.name}; its columns are {names}")
     iu = [col(c) for c in (inputs or [])]
     iy = [col(c) for c in outputs]
-    if time is None and "time" in names and dt is None:
-        time = "time"
+    if time is None and dt is None:  # a column named time, t, Time [s], timestamp, ...
+        time = time_column(table.names, iu + iy)
     if experiment is None and "experiment" in names:
         experiment = "experiment"
     tcol = None if time is None else col(time)

@@ -670,6 +670,29 @@ def units_row(table: Table, decimal: str = ".") -> tuple[Table, dict[int, str]]:
     return table._replace(rows=table.rows[1:], lines=table.lines[1:]), units
 
 
+TIME_NAMES = ("time", "t", "time_s", "t_s", "seconds", "sec", "timestamp", "datetime",
+              "date_time", "elapsed_time")
+
+
+def time_column(names: list[str], exclude: Iterable[int] = ()) -> int | None:
+    """The index of the first column named as a time column (``time``, ``t``, ``Time [s]``,
+    ``timestamp``, ...: :data:`TIME_NAMES` in any case, a ``[unit]`` or ``(unit)`` after
+    it allowed) that is not in ``exclude`` (the chosen inputs and outputs), or ``None``.
+
+    Examples
+    --------
+    >>> from sysid.data.table import time_column
+    >>> time_column(["Time [s]", "u", "y"]), time_column(["u", "y"]), time_column(["t"], [0])
+    (0, None, None)
+    """
+    skip = set(exclude)
+    for k, name in enumerate(names):
+        bare = re.sub(r"\s*[\[(].*[\])]\s*$", "", str(name)).strip().lower()
+        if k not in skip and bare in TIME_NAMES:
+            return k
+    return None
+
+
 _ZONE = re.compile(r"(Z|[+-]\d\d:?\d\d)$")
 
 
