@@ -80,7 +80,7 @@ def _rows(a: np.ndarray, bnum: np.ndarray, m: int) -> tuple[np.ndarray, np.ndarr
 
 
 def _step(u: np.ndarray, y: np.ndarray, dt: float, tau: float, hold: str, a: np.ndarray,
-          bnum: np.ndarray, m: int, iv: bool) -> tuple[np.ndarray, np.ndarray]:
+          bnum: np.ndarray, m: int, iv: bool) -> tuple[np.ndarray, np.ndarray] | None:
     n = a.size - 1
     Ady, cy = _sampled_filter(a, dt, 0.0, "foh")
     Adu, cu = _sampled_filter(np.convolve(a, a), dt, tau, hold)
@@ -104,6 +104,10 @@ def _step(u: np.ndarray, y: np.ndarray, dt: float, tau: float, hold: str, a: np.
                                 np.ascontiguousarray(L @ Ds), V)
     p = n + m + 1
     z = slice(1 + p, 1 + 2 * p) if iv else slice(1, 1 + p)
+    if not np.all(np.isfinite(G[z, :1 + p])):
+        # a filter whose sampling lost its stability in rounding (coefficients of 1e10 and
+        # more: six poles at 63 rad/s) ran its states to overflow: no estimate from it
+        return None
     theta = np.linalg.lstsq(G[z, 1:1 + p], G[z, 0], rcond=None)[0]
     return np.concatenate([[1.0], theta[:n]]), theta[n:]
 
@@ -123,7 +127,9 @@ def srivc(u: np.ndarray, y: np.ndarray, dt: float, n: int, m: int, tau: float, h
     output ``y`` (1-D), delay ``tau`` seconds, starting from the filter ``a0``.
 
     The first step is the least-squares (state-variable filter) estimate; the following ones
-    use the instruments of the previous model.
+    use the instruments of the previous model. A step whose filtered signals overflow ends
+    the iteration at the last estimate (NaN coefficients when the first one does: the
+    caller tries another filter).
 
     Examples
     --------
@@ -139,7 +145,12 @@ def srivc(u: np.ndarray, y: np.ndarray, dt: float, n: int, m: int, tau: float, h
     b = np.zeros(m + 1)
     it = 0
     for it in range(1, max_iter + 1):
-        a_new, b_new = _step(u, y, dt, tau, hold, a, b, m, iv=it > 1)
+        step = _step(u, y, dt, tau, hold, a, b, m, iv=it > 1)
+        if step is None:
+            if it == 1:
+                return np.full(n + 1, np.nan), np.full(m + 1, np.nan), it
+            break
+        a_new, b_new = step
         a_new = _stabilised(a_new)
         change = np.linalg.norm(np.concatenate([a_new - a, b_new - b])) / max(
             np.linalg.norm(np.concatenate([a_new, b_new])), 1e-300)
