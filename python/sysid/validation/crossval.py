@@ -764,4 +764,9 @@ def stable_first(score: dict[int, float], folds: dict[int, list[float]], unstabl
                  f"better on every held-out block, but simulating the whole record worse than "
                  f"the best stable order (its unstable mode grows too fast to follow over the "
                  f"record)")
+    if insisted:
+        note += (f"; order(s) {', '.join(map(str, sorted(insisted)))} unstable but kept: "
+                 f"better than the best stable order ({best_s}) on every held-out block"
+                 + (" and over the whole record" if whole_fit is not None else "")
+                 + " (an integrating or unstable plant, or a mode the data insist on)")
     return allowed, note
