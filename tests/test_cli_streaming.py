@@ -6,7 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import sysid
 from sysid import cli
+from sysid.data import blocks
 from sysid.errors import DataError
 
 
@@ -83,7 +85,7 @@ def test_a_streamed_bad_cell_is_named_by_line_and_column_as_in_memory(tmp_path, 
     in_memory = capsys.readouterr().err
     assert f"big.csv line {line}, column 'u2'" in in_memory
     monkeypatch.setattr(cli, "STREAM_BYTES", 0)  # streamed
-    monkeypatch.setattr(cli, "STREAM_BLOCK", 4096)  # in about 40 blocks: the cell in a late one
+    monkeypatch.setattr(blocks, "STREAM_BLOCK", 4096)  # in about 40 blocks: the cell in a late one
     assert cli.main(argv) == 2
     assert capsys.readouterr().err == in_memory
 
@@ -200,7 +202,7 @@ def test_a_headerless_file_names_a_bad_cell_as_in_memory(tmp_path, monkeypatch, 
     in_memory = capsys.readouterr().err
     assert f"big.csv line {line - 1}, column '2'" in in_memory
     monkeypatch.setattr(cli, "STREAM_BYTES", 0)
-    monkeypatch.setattr(cli, "STREAM_BLOCK", 4096)
+    monkeypatch.setattr(blocks, "STREAM_BLOCK", 4096)
     assert cli.main(argv) == 2
     assert capsys.readouterr().err == in_memory
 
@@ -261,3 +263,47 @@ def test_a_damaged_compressed_file_is_named_as_damaged(tmp_path, suffix, damage)
                  lambda: cli.read_csv(path)):
         with pytest.raises(DataError, match=want):
             read()
+
+
+def _logger_file(path, stamps: bool, bad: str | None = None, row: int = 2500) -> None:
+    """``_record`` as a logger exports it: a units row under the header and, with
+    ``stamps``, ISO 8601 date-time stamps (with an offset) in the time column; ``bad``
+    replaces the time cell (stamps) or u2 (numbers) of data row ``row``."""
+    z = _record()
+    lines = ["time,u1,u2,y", "s,V,V,m"]
+    for k, r in enumerate(z):
+        t = (f"2026-03-01T{8 + int(r[0] // 3600):02d}:{int(r[0] % 3600 // 60):02d}:"
+             f"{r[0] % 60:06.3f}+02:00" if stamps else f"{r[0]:.1f}")
+        cells = [t] + [f"{v:.17g}" for v in r[1:]]
+        if bad is not None and k == row:
+            cells[0 if stamps else 2] = bad
+        lines.append(",".join(cells))
+    path.write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize("stamps", [False, True])
+def test_a_streamed_loggers_file_reads_as_in_memory(tmp_path, monkeypatch, capsys, stamps):
+    """A file over the streaming size with a units row under its header ("s,V,V,m") or
+    date-time stamps in its time column was refused ("'s' is not a number"), though the
+    same file under that size was read; both read alike now, bad cells named alike."""
+    path = tmp_path / "log.csv"
+    _logger_file(path, stamps)
+    argv = _identify(path, ["--inputs", "u1,u2", "--outputs", "y", "--quiet"], tmp_path)
+    assert cli.main(argv) == 0
+    small = sysid.load_model(tmp_path / "rep" / "model.json")
+    monkeypatch.setattr(cli, "STREAM_BYTES", 0)
+    monkeypatch.setattr(blocks, "STREAM_BLOCK", 4096)
+    got = blocks.read_columns(path, ["u1", "time"], progress=False, stamps="time")
+    np.testing.assert_allclose(got[:, 1], 0.1 * np.arange(3000), atol=1e-9)
+    assert cli.main(argv) == 0
+    big = sysid.load_model(tmp_path / "rep" / "model.json")
+    assert big.dt == pytest.approx(0.1) and small.dt == pytest.approx(0.1)
+    np.testing.assert_allclose(big.poles(), small.poles(), rtol=1e-12)
+    capsys.readouterr()
+    _logger_file(path, stamps, bad="oops")
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    if stamps:  # by its data row (line 2503: header, units row)
+        assert "data row 2501, column 'time': 'oops' is not a date-time stamp" in err
+    else:  # by its file line, as in memory
+        assert "log.csv line 2503, column 'u2': 'oops' is not a number" in err

@@ -10,14 +10,7 @@ from typing import Any
 import numpy as np
 
 from . import _sysid
-from .errors import (
-    DataError,
-    ExcitationError,
-    NonFiniteError,
-    ShapeError,
-    refuse_frd,
-    several_records_hint,
-)
+from .errors import DataError, ExcitationError, NonFiniteError, ShapeError, not_a_record, refuse_frd
 
 
 def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = False) -> np.ndarray:
@@ -565,8 +558,7 @@ def experiment_arrays(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
     try:
         exps = data.experiments
     except AttributeError:
-        raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))"
-                        + several_records_hint(data)) from None
+        raise not_a_record(data) from None
     return [(np.ascontiguousarray(u, float), np.ascontiguousarray(y, float)) for u, y in exps]
 
 

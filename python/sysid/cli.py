@@ -22,13 +22,10 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .data.blocks import read_columns
 from .data.iodata import IOData
 from .data.table import (
-    ForwardReader,
-    Uncommented,
     datetime_seconds,
-    decompressing,
-    first_bad_cell,
     header,
     numeric,
     read_table,
@@ -326,147 +323,6 @@ def _check_report_dir(report: str | Path) -> None:
 #: CSV files holding more text than this (decompressed) are read by pyarrow's streaming
 #: reader, in blocks.
 STREAM_BYTES = 8 << 20
-#: Bytes per block of that reader (at least one line).
-STREAM_BLOCK = 16 << 20
-
-
-class _CountingFile(ForwardReader):
-    """A binary file that advances a progress bar by the bytes read through it."""
-
-    def __init__(self, path: Path, bar: Any) -> None:
-        self._src, self._bar = open(path, "rb"), bar  # noqa: SIM115 (closed by close())
-
-    def read(self, n: int = -1) -> bytes:
-        b = self._src.read(n)
-        self._bar.update(len(b))
-        return b
-
-
-def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None = None,
-                 progress: bool | None = None, block_size: int | None = None) -> np.ndarray:
-    """Read the named numeric columns of a large CSV or Parquet file in blocks.
-
-    CSV goes through pyarrow's streaming reader (``pyarrow.csv.open_csv``, blocks of
-    ``block_size`` bytes, default :data:`STREAM_BLOCK` = 16 MB, only the named columns
-    converted, to float64) with a progress bar over the file's bytes (rate and time left);
-    a file ending in ``.gz``, ``.bz2``, ``.xz`` or ``.lzma`` is decompressed as it is read.
-    The columns are named as by :func:`read_csv` (``sysid.data.table.header``): a file whose
-    first line is all numbers has no header, and its columns are ``"0", "1", ...``. Parquet
-    through ``ParquetFile.iter_batches`` with a bar over the rows. Only the requested
-    columns are held in memory, as float64.
-
-    Every value must be a finite number. A CSV cell that is not (text, empty, ``nan``,
-    ``inf``) raises the :class:`~sysid.DataError` of :func:`read_csv`, naming its file line
-    (the header counted) and column: the file is read again from the block that held it,
-    line by line, by the in-memory reader's rules (``sysid.data.table``). A Parquet value
-    that is not finite is named by its row and column.
-
-    Examples
-    --------
-    >>> import os, tempfile
-    >>> from sysid.cli import read_columns
-    >>> path = os.path.join(tempfile.mkdtemp(), "d.csv")
-    >>> with open(path, "w") as f:
-    ...     _ = f.write("t,u,y\\n0,1,2\\n1,3,4\\n")
-    >>> read_columns(path, ["y", "u"], progress=False)
-    array([[2., 1.],
-           [4., 3.]])
-    """
-    from ._progress import Bar, show
-
-    path = Path(path)
-    try:
-        import pyarrow as pa
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise ImportError("reading large files in blocks needs pyarrow: pip install pyarrow") \
-            from exc
-    parts: list[np.ndarray] = []
-
-    def take(batch: Any) -> bool:
-        """Keep a block's columns as float64; whether they are all finite."""
-        names = batch.schema.names
-        parts.append(np.column_stack([
-            batch.column(names.index(c)).to_numpy(zero_copy_only=False).astype(float)
-            for c in columns]) if columns else np.zeros((batch.num_rows, 0)))
-        return bool(np.isfinite(parts[-1]).all())
-
-    if path.suffix.lower() in (".parquet", ".pq"):
-        import pyarrow.parquet as pq
-
-        pf = pq.ParquetFile(path)
-        missing = [c for c in columns if c not in pf.schema_arrow.names]
-        if missing:
-            raise DataError(f"{path.name}: no column(s) {missing}; the file has "
-                            f"{pf.schema_arrow.names}")
-        with Bar(pf.metadata.num_rows, f"reading {path.name}", unit="rows", unit_scale=True,
-                 enabled=show(progress)) as bar:
-            done = 0
-            for batch in pf.iter_batches(batch_size=1 << 20, columns=columns):
-                if not take(batch):
-                    r, c = np.argwhere(~np.isfinite(parts[-1]))[0]
-                    raise DataError(
-                        f"{path.name} row {done + r + 1}, column {columns[c]!r}: "
-                        f"{parts[-1][r, c]} is not a finite number; fix or remove that row "
-                        "(missing values must be repaired before identification)")
-                done += batch.num_rows
-                bar.update(batch.num_rows)
-    else:
-        import pyarrow.csv as pacsv
-
-        head = header(path, delimiter)
-        delim = head.delimiter
-        # a headerless file's first line is data: its names are read_table's "0", "1", ...
-        # (the trailing empty fields of a trailing delimiter named so as to be asked by none)
-        names = (head.names + [f"\0{i}" for i in range(len(head.names), head.width)]
-                 if head.headerless else None)
-        rows = 0  # data rows read whole: the bad cell is in the block after them
-        with Bar(path.stat().st_size, f"reading {path.name}", unit="B", unit_scale=True,
-                 enabled=show(progress)) as bar:
-            raw = _CountingFile(path, bar)
-            src = Uncommented(decompressing(path, raw), path)  # comments go, wherever
-            try:
-                reader = pacsv.open_csv(
-                    src,
-                    read_options=pacsv.ReadOptions(
-                        block_size=block_size or STREAM_BLOCK, column_names=names),
-                    parse_options=pacsv.ParseOptions(delimiter=delim,
-                                                     invalid_row_handler=_skip_comment),
-                    convert_options=pacsv.ConvertOptions(
-                        include_columns=columns,
-                        column_types={c: pa.float64() for c in columns}))
-                for batch in reader:
-                    if not take(batch):
-                        raise _bad_cell(path, columns, delim, rows,
-                                        "a value that is not a finite number")
-                    rows += batch.num_rows
-            except (pa.ArrowInvalid, KeyError) as e:
-                if src.error is not None:  # pyarrow's error for the damaged stream
-                    raise src.error from None
-                raise _bad_cell(path, columns, delim, rows, f"{e}; check the column names "
-                                "and that every field is a number") from None
-            finally:
-                src.close()
-                raw.close()
-    return np.concatenate(parts) if parts else np.zeros((0, len(columns)))
-
-
-def _bad_cell(path: Path, columns: list[str], delimiter: str, rows: int,
-              what: str) -> DataError:
-    """The error for a block of a streamed CSV file that did not convert: its bad cell by
-    line and column (read again from data row ``rows`` by the in-memory reader's rules),
-    else ``what`` (pyarrow's message)."""
-    return (first_bad_cell(path, columns, delimiter=delimiter, start=rows)
-            or DataError(f"{path.name}: {what} (after data row {rows})"))
-
-
-def _skip_comment(row: Any) -> str:
-    """pyarrow's handler of a row with the wrong number of fields: a blank line (white
-    space) is skipped, as ``read_table`` skips it (the ``#`` comments, whatever their
-    fields, are gone before: ``sysid.data.table.Uncommented``); anything else is an error."""
-    text = row.text or ""
-    return "skip" if not text.strip() else "error"
-
-
 def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         list[str], list[int], list[int], np.ndarray, np.ndarray, np.ndarray | None]:
     """Names, input and output column indices, u, y and the time column if asked."""
@@ -484,7 +340,7 @@ def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         _find_time(args, names, ui + yi, say)
         ti = [_columns(args.time, names, "times")[0]] if args.time is not None else []
         z = read_columns(path, [names[i] for i in ui + yi + ti], delimiter=args.delimiter,
-                         progress=_bars(args))
+                         progress=_bars(args), stamps=args.time and names[ti[0]])
         u, y = z[:, :len(ui)], z[:, len(ui):len(ui) + len(yi)]
         return names, ui, yi, u, y, (z[:, -1] if ti else None)
     say(f"reading {args.data}")

@@ -156,6 +156,18 @@ def several_records_hint(data: object) -> str:
     return ""
 
 
+def not_a_record(data: object) -> DataError:
+    """The error for ``data`` where an IOData record goes (with :func:`several_records_hint`).
+
+    Examples
+    --------
+    >>> str(not_a_record(3))
+    'data must be an IOData record (sysid.IOData(u, y, dt))'
+    """
+    return DataError("data must be an IOData record (sysid.IOData(u, y, dt))"
+                     + several_records_hint(data))
+
+
 def refuse_frd(data: object, who: str) -> None:
     """A :class:`DataError` naming the estimators that take frequency-response data when
     ``data`` is one (an :class:`sysid.FRD`, MATLAB's ``idfrd``) and ``who`` takes time

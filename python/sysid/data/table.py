@@ -328,6 +328,31 @@ def first_line(path: str | Path) -> tuple[int, str]:
         raise damaged(path, e, seen[0], seen[0] > 0) from None
 
 
+def first_rows(path: str | Path, head: Header, k: int) -> Table:
+    """The first ``k`` data rows of a text table (after its header, a units row included)
+    as a :class:`Table`, read without reading the rest (the streamed reader's look ahead).
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> from sysid.data.table import first_rows, header
+    >>> path = os.path.join(tempfile.mkdtemp(), "d.csv")
+    >>> with open(path, "w") as f:
+    ...     _ = f.write("t,y\\ns,m\\n0,1\\n1,2\\n2,3\\n")
+    >>> first_rows(path, header(path), 2).rows
+    [['s', 'm'], ['0', '1']]
+    """
+    path, split, out = Path(path), splitter(head.delimiter), []
+    with _open_text(path) as f:
+        for line, text in _kept(f.read(_SNIFF).splitlines()):
+            if line > head.line or head.headerless:
+                out.append((line, split(text)))
+            if len(out) == k + 1:  # the last line of the sniffed text may be cut short
+                break
+    out = out[:k]
+    return Table(path, head.names, [r for _, r in out], [n for n, _ in out], head.headerless)
+
+
 def _counted(f: Iterable[str], seen: list[int]) -> Iterator[str]:
     """The lines of ``f`` without their line break, their number kept in ``seen[0]``."""
     for seen[0], line in enumerate(f, 1):  # noqa: B007 (seen[0] is read by the caller)
@@ -696,6 +721,50 @@ def time_column(names: list[str], exclude: Iterable[int] = ()) -> int | None:
 _ZONE = re.compile(r"(Z|[+-]\d\d:?\d\d)$")
 
 
+def stamps_ns(cells: list[str]) -> tuple[np.ndarray | None, int]:
+    """Date-time stamps (ISO 8601, an optional ``Z`` or ``+hh:mm`` offset) as UTC
+    nanoseconds (int64), and the index of the first cell that is no stamp (-1 when all
+    are); ``(None, 0)`` when the first is none.
+
+    Examples
+    --------
+    >>> from sysid.data.table import stamps_ns
+    >>> t, bad = stamps_ns(["2026-01-01T01:00:00+01:00", "2026-01-01 00:00:01Z", "x"])
+    >>> float(t[1] - t[0]) / 1e9, bad
+    (1.0, 2)
+    """
+    if not cells or not re.match(r"\d{4}-\d\d-\d\d", cells[0]):
+        return None, 0
+    stamps, shift = [], np.zeros(len(cells), dtype=np.int64)
+    for k, c in enumerate(cells):
+        m = _ZONE.search(c) if len(c) > 10 else None
+        if m:
+            z = m.group(1)
+            if z != "Z":
+                hh, mm = int(z[1:3]), int(z[-2:])
+                shift[k] = (1 if z[0] == "+" else -1) * (3600 * hh + 60 * mm) * 10**9
+            c = c[:m.start()]
+        stamps.append(c)
+    try:
+        t = np.array(stamps, dtype="datetime64[ns]")
+        bad = int(np.argmax(np.isnat(t))) if np.isnat(t).any() else -1
+    except ValueError:
+        t, bad = None, -1
+    if t is None or bad >= 0:
+        for k, c in enumerate(stamps):  # the first cell that is no stamp
+            try:
+                ok = not np.isnat(np.datetime64(c, "ns"))
+            except ValueError:
+                ok = False
+            if not ok:
+                if k == 0:
+                    return None, 0
+                t = np.array([np.datetime64(x, "ns") for x in stamps[:k]])
+                return t.astype(np.int64) - shift[:k], k
+    assert t is not None
+    return t.astype(np.int64) - shift, -1
+
+
 def datetime_seconds(table: Table, col: int, decimal: str = ".") -> np.ndarray | None:
     """The column ``col`` of date-time stamps (ISO 8601: ``2026-01-01 08:00:00.250``, ``T``
     between date and time, an optional ``Z`` or ``+hh:mm`` offset) as seconds after its
@@ -713,33 +782,13 @@ def datetime_seconds(table: Table, col: int, decimal: str = ".") -> np.ndarray |
     array([0. , 0.5])
     """
     cells = [r[col] for r in table.rows]
-    if not cells or is_number(cells[0], decimal) or not re.match(r"\d{4}-\d\d-\d\d", cells[0]):
+    if not cells or is_number(cells[0], decimal):
         return None
-    stamps, shift = [], np.zeros(len(cells))
-    for k, c in enumerate(cells):
-        m = _ZONE.search(c) if len(c) > 10 else None
-        if m:
-            z = m.group(1)
-            if z != "Z":
-                hh, mm = int(z[1:3]), int(z[-2:])
-                shift[k] = (1 if z[0] == "+" else -1) * (3600 * hh + 60 * mm)
-            c = c[:m.start()]
-        stamps.append(c)
-    try:
-        t = np.array(stamps, dtype="datetime64[ns]")
-    except ValueError:
-        t = None
-    if t is None or np.isnat(t).any():
-        for k, c in enumerate(stamps):  # name the first cell that is no stamp
-            try:
-                ok = not np.isnat(np.datetime64(c, "ns"))
-            except ValueError:
-                ok = False
-            if not ok:
-                if k == 0:
-                    return None
-                raise DataError(f"{table.path.name} line {table.lines[k]}, column "
-                                f"{table.names[col]!r}: {cells[k]!r} is not a date-time "
-                                f"stamp like the first ({cells[0]!r}); fix or remove that row")
-        t = np.array([np.datetime64(c, "ns") for c in stamps])
-    return (t - t[0]).astype(np.int64) * 1e-9 - (shift - shift[0])
+    t, bad = stamps_ns(cells)
+    if t is None:
+        return None
+    if bad >= 0:
+        raise DataError(f"{table.path.name} line {table.lines[bad]}, column "
+                        f"{table.names[col]!r}: {cells[bad]!r} is not a date-time "
+                        f"stamp like the first ({cells[0]!r}); fix or remove that row")
+    return (t - t[0]) * 1e-9

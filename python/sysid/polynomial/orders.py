@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import DataError, ShapeError, refuse_frd, several_records_hint
+from ..errors import DataError, ShapeError, not_a_record, refuse_frd
 
 __all__ = ["matlab_orders"]
 
@@ -84,8 +84,7 @@ def matlab_orders(fn: str, data: Any, first: Any, **rest: Any) -> tuple[Any, ...
         return tuple(1 if (k == "nk" and v is None) else v for k, v in zip(names, given))
     if not hasattr(data, "n_inputs"):
         refuse_frd(data, fn)
-        raise DataError("data must be an IOData record (sysid.IOData(u, y, dt))"
-                        + several_records_hint(data))
+        raise not_a_record(data)
     nu, ny = data.n_inputs, data.n_outputs
     widths = [{"1": 1, "nu": nu, "ny": ny}[w] for _, w in LAYOUTS[fn]]
     try:
