@@ -164,3 +164,34 @@ def test_a_folder_refuses_two_files_of_one_record(tmp_path):
     with pytest.raises(sysid.DataError, match=r"a\.csv and a\.csv\.gz in .* are both record "
                        "'a': keep one of them"):
         sysid.identify_many(folder, workers=0, out=tmp_path / "t.parquet", progress=False)
+
+
+@pytest.mark.parametrize("kind", ["csv", "parquet", "frame"])
+def test_a_records_time_column_gives_its_sample_time(tmp_path, kind):
+    """identify_many on a folder of logger files with a "Time [s]" column and no
+    time_column= fitted every record at dt = 1 s (the dryer's 0.08 s record: a model whose
+    every frequency was off by 12.5), silently; the column is now taken, as from_csv does."""
+    rng = np.random.default_rng(1)
+    u = rng.standard_normal(300)
+    y = TRUE.simulate(u[:, None])[:, 0]
+    t = 0.25 * np.arange(300)
+    if kind == "frame":
+        import pandas as pd
+
+        src = pd.DataFrame({"Time [s]": t, "u": u, "y": y})
+    elif kind == "csv":
+        src = tmp_path / "r.csv"
+        src.write_text("Time [s],u,y\n" + "\n".join(f"{a:.17g},{b:.17g},{c:.17g}"
+                                                   for a, b, c in zip(t, u, y)) + "\n")
+    else:
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        src = tmp_path / "r.parquet"
+        pq.write_table(pa.table({"Time [s]": t, "u": u, "y": y}), src)
+    rec = load(src, Columns(("u",), ("y",)), "r")
+    assert rec.dt == pytest.approx(0.25) and rec.n_inputs == 1 and rec.n_outputs == 1
+    np.testing.assert_array_equal(rec.y[:, 0], y)
+    # dt given, or the time-named column chosen as an output: no time column taken
+    assert load(src, Columns(("u",), ("y",), dt=0.5), "r").dt == 0.5
+    assert load(src, Columns(("u",), ("y", "Time [s]")), "r").dt == 1.0

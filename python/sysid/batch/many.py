@@ -64,7 +64,10 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
     workers : int, optional
         Local processes (default: the machine's cores); ignored with a Dask client.
     inputs, outputs, dt, time_column : optional
-        How tables become records (file and dataframe sources).
+        How tables become records (file and dataframe sources). Without ``dt`` or
+        ``time_column``, a column named as a time column (``time``, ``t``, ``Time [s]``,
+        ``timestamp``, ...; not an input or output) gives the sample time, as
+        :meth:`IOData.from_csv` takes it; without one, dt = 1 s.
     record_id : str
         The record id column of a dataframe.
     retries : int

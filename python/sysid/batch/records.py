@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -67,6 +67,19 @@ class Columns:
         """The columns a record is made of: inputs, outputs and the time column."""
         return (self.inputs or ()) + (self.outputs or ()) + ((self.time,) if self.time else ())
 
+    def timed(self, names: list[str]) -> Columns:
+        """These columns with the table's time column (``time``, ``t``, ``Time [s]``, ...,
+        not an input or output) when neither ``dt`` nor ``time`` was given, as
+        :meth:`sysid.IOData.from_csv` and the command line take it."""
+        if self.dt is not None or self.time is not None:
+            return self
+        from ..data.table import time_column
+
+        used = [names.index(c) for c in (self.inputs or ()) + (self.outputs or ())
+                if c in names]
+        k = time_column(names, used)
+        return self if k is None else replace(self, time=names[k])
+
     def check(self, names: list[str], what: str) -> None:
         """Refuse a table without outputs named, or without a named column."""
         if self.outputs is None:
@@ -88,6 +101,7 @@ class Columns:
 
 def _frame_record(frame: Any, cols: Columns, what: str) -> IOData:
     names = [str(c) for c in frame.columns]
+    cols = cols.timed(names)
     use = [c for c in names if c in set(cols.wanted())]
     try:
         values = frame[use].to_numpy(dtype=float)
@@ -171,6 +185,7 @@ def _text_record(path: Path, cols: Columns) -> IOData:
         raise DataError(f"no data file at {str(path)!r}")
     text_bytes(path, 0)  # refuses a file that is not text, as read_csv does
     head = header(path)
+    cols = cols.timed(head.names)
     cols.check(head.names, path.name)
     use = list(dict.fromkeys(cols.wanted()))
     rows = max(count_lines(path) - (head.line - head.headerless), 0)
@@ -189,6 +204,7 @@ def _parquet_record(path: Path, cols: Columns) -> IOData:
         names, rows = list(pf.schema_arrow.names), int(pf.metadata.num_rows)
     except Exception as e:  # noqa: BLE001 - any reader failure is a bad record
         raise DataError(f"{path.name}: not a readable Parquet file ({e})") from None
+    cols = cols.timed(names)
     cols.check(names, path.name)
     use = list(dict.fromkeys(cols.wanted()))
     check_record_size(path.name, rows, len(use))
