@@ -137,8 +137,12 @@ def test_experiment_by_a_non_integer_says_how_experiments_are_indexed(record):
 
 def test_recursive_run_of_a_record_says_what_run_takes(record):
     d = record[3]
-    with pytest.raises(sysid.DataError, match=r"run\(data.u, data.y\)"):
-        sysid.RecursiveARX(2, 2, 1).run(d, None)
+    # a record runs as its arrays (tests/test_recursive.py); the arrays without y, or a
+    # record and y, are refused naming both forms
+    with pytest.raises(sysid.DataError, match=r"run\(data\) for a record.*run\(u, y\)"):
+        sysid.RecursiveARX(2, 2, 1).run(d.u, None)
+    with pytest.raises(sysid.DataError, match=r"run\(data\) or run\(data.u, data.y\)"):
+        sysid.RecursiveARX(2, 2, 1).run(d, d.y)
 
 
 # ---- 3. wrong or misleading messages ----------------------------------------------------

@@ -625,6 +625,18 @@ def test_from_pandas_named_integer_index_is_time_only_under_a_time_name() -> Non
     assert sysid.IOData.from_pandas(df, ["u"], ["y"]).dt == 2.0
 
 
+@pytest.mark.parametrize("name", ["Time [s]", "timestamp", "T"])
+def test_from_pandas_finds_a_time_column_by_its_usual_names(name: str) -> None:
+    # "Time [s]" and "timestamp" columns were not taken: dt = 1 s with a warning
+    import pandas as pd
+
+    n = 20
+    t = (pd.date_range("2026-03-01 08:00", periods=n, freq="250ms") if name == "timestamp"
+         else 0.25 * np.arange(n))
+    df = pd.DataFrame({name: t, "u": np.ones(n), "y": np.arange(n, dtype=float)})
+    assert sysid.IOData.from_pandas(df, ["u"], ["y"]).dt == pytest.approx(0.25)
+
+
 def test_from_raw_checks_dt_first() -> None:
     # dt=0 said "time repeats at sample 1"
     for bad in (0, -0.1, np.nan):

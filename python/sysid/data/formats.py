@@ -37,13 +37,14 @@ def _pandas() -> Any:
 
 def _index_is_time(index: Any) -> bool:
     """A numeric index that holds time: float values, or integers under a time-like name
-    (``time``, ``t``, ``seconds``, ...: :data:`_TIME_NAMES`, any case). Other integers are
+    (``time``, ``t``, ``seconds``, ...: :data:`sysid.data.table.TIME_NAMES`, any case,
+    a ``[unit]`` allowed). Other integers are
     row labels (left by ``iloc[::2]``, ``dropna()`` or ``read_csv(index_col=0)`` of a
     ``sample`` column), not seconds."""
     if index.dtype.kind == "f":
         return True
     return (index.dtype.kind in "iu" and index.name is not None
-            and str(index.name).lower() in {n.lower() for n in _TIME_NAMES})
+            and time_column([str(index.name)]) == 0)
 
 
 def _warn_dropped_rows(index: Any, timed: bool) -> None:
@@ -98,12 +99,12 @@ def _grid_dt(ts: list[np.ndarray], candidates: list[Any], rtol: float = 0.0) -> 
     return None
 
 
-_TIME_NAMES = ("time", "t", "Time", "TIME", "time_s", "t_s", "seconds")
-
-
-def _time_column(df: Any) -> str | None:
-    """The name of a time column when the frame has one under a usual name."""
-    return next((c for c in _TIME_NAMES if c in df.columns), None)
+def _time_column(df: Any, channels: list[Any]) -> Any:
+    """The frame's time column under a usual name (``time``, ``t``, ``Time [s]``,
+    ``timestamp``, ...: :func:`sysid.data.table.time_column`), not one of ``channels``."""
+    names = [str(c) for c in df.columns]
+    k = time_column(names, [names.index(str(c)) for c in channels if str(c) in names])
+    return None if k is None else df.columns[k]
 
 
 def to_pandas(data: Any) -> Any:
@@ -211,8 +212,8 @@ def from_pandas(
             ts.append(_seconds(g.index, groups[0].index))
         elif dt is None and _index_is_time(g.index):
             ts.append(g.index.to_numpy(dtype=float))
-        elif dt is None and _time_column(g) is not None:
-            ts.append(_seconds(g[_time_column(g)], groups[0][_time_column(g)]))
+        elif dt is None and (tc := _time_column(g, inputs + outputs)) is not None:
+            ts.append(_seconds(g[tc], groups[0][tc]))
     for g in groups:
         _warn_dropped_rows(g.index, time is not None or bool(ts))
     if dt is None and ts and "dt" in df.attrs:
