@@ -103,6 +103,34 @@ def test_piecewise_linear_and_sigmoid_fit_better_than_linear():
         assert abs(m.poles()[0].real - 0.8) < 0.02
 
 
+def test_piecewise_linear_takes_a_number_of_breakpoints_as_matlab():
+    """MATLAB's idPiecewiseLinear takes a number of units (default 10); ours refused a
+    number. PiecewiseLinear(8) is eight breakpoints placed evenly over the range of the
+    signal the nonlinearity sees when the fit starts: the same fit as those values given,
+    for an input and an output nonlinearity, saved and loaded as fitted; the object passed
+    in is left as it was (the fit places them on its copy)."""
+    u = _u(2000, 7, 2.0)
+    y = linear(np.tanh(1.5 * u))
+    d = sysid.IOData(u, y, 1.0)
+    count = sysid.PiecewiseLinear(8)
+    by_count = sysid.nlhw(d, 1, 1, 1, input_nl=count, output_nl=None)
+    given = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.PiecewiseLinear(np.linspace(u.min(),
+                                                                           u.max(), 8)),
+                       output_nl=None)
+    np.testing.assert_allclose(by_count.input_nl.breakpoints, np.linspace(u.min(), u.max(), 8))
+    np.testing.assert_array_equal(by_count.input_nl.params, given.input_nl.params)
+    np.testing.assert_array_equal(by_count.simulate(u), given.simulate(u))
+    assert count.breakpoints is None and count.count == 8
+    assert sysid.PiecewiseLinear().count == 10  # MATLAB's default
+    both = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.PiecewiseLinear(4),
+                      output_nl=sysid.PiecewiseLinear(5))
+    assert both.output_nl.breakpoints.size == 5
+    back = sysid.model_from_dict(sysid.model_to_dict(both))
+    np.testing.assert_array_equal(back.simulate(u), both.simulate(u))
+    with pytest.raises(sysid.DataError, match="signal is constant"):
+        sysid.PiecewiseLinear(4).initial(np.ones(5))
+
+
 def test_user_function_input():
     u = _u(500, 8)
     y = linear(np.sign(u) * u ** 2)

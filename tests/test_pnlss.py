@@ -202,8 +202,12 @@ def test_predict_checks_y_and_piecewise_linear_says_it_wants_values():
     with pytest.raises(DataError, match="samples"):
         truth.predict(d.u, d.y[:-5])
     np.testing.assert_array_equal(truth.predict(d.u, d.y), truth.simulate(d.u))
-    with pytest.raises(DataError, match=r"the number 3: give the values themselves"):
-        sysid.PiecewiseLinear(3)
+    # PiecewiseLinear(3) is now three breakpoints over the signal's range (MATLAB's count):
+    # evaluating it before they are placed names initial(x)
+    with pytest.raises(DataError, match=r"no breakpoints yet.*initial\(x\)"):
+        sysid.PiecewiseLinear(3)(0.5)
+    with pytest.raises(DataError, match=r"number of breakpoints must be an integer >= 2"):
+        sysid.PiecewiseLinear(1)
 
 
 def test_a_record_too_short_for_the_linear_start_says_so():

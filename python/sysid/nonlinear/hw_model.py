@@ -197,35 +197,69 @@ class PiecewiseLinear(Nonlinearity):
     extended); the value at the last breakpoint is held at the breakpoint (gain
     normalisation), the others are free.
 
+    ``breakpoints`` are the values themselves, or their number (MATLAB's
+    ``idPiecewiseLinear`` with ``NumberOfUnits``; default 10): that many are then placed
+    evenly over the range of the signal the nonlinearity sees when the fit starts (its
+    :meth:`initial`), the input for an input nonlinearity, the linear model's output for an
+    output one.
+
     Examples
     --------
     >>> import sysid
     >>> p = sysid.PiecewiseLinear([-1.0, 0.0, 1.0]); p.params = p.initial(None)
     >>> p([-2.0, 0.5]).tolist()
     [-2.0, 0.5]
+    >>> q = sysid.PiecewiseLinear(5); q.params = q.initial([-2.0, 0.0, 2.0])
+    >>> q.breakpoints.tolist()
+    [-2.0, -1.0, 0.0, 1.0, 2.0]
     """
 
     kind = "pwl"
 
-    def __init__(self, breakpoints: Any) -> None:
+    def __init__(self, breakpoints: Any = 10) -> None:
+        self.count: int | None = None
+        self.breakpoints: Any = None
+        self.params = np.zeros(0)
+        if np.ndim(breakpoints) == 0 and not isinstance(breakpoints, str):
+            self.count = as_count(breakpoints, "the number of breakpoints", 8, lo=2)
+            return
         self.breakpoints = np.asarray(breakpoints, float).ravel()
         if self.breakpoints.size < 2 or np.any(np.diff(self.breakpoints) <= 0):
-            hint = (f"; got the number {breakpoints!r}: give the values themselves, e.g. "
-                    f"np.linspace(lo, hi, {int(breakpoints)}) over the signal's range"
-                    if np.ndim(breakpoints) == 0 and float(breakpoints) >= 2 else
-                    f"; got {breakpoints!r}")
             raise DataError("breakpoints must be an array of at least two strictly increasing "
-                            "values" + hint)
+                            f"values, or their number (at least 2); got {breakpoints!r}")
         self.params = self.breakpoints[:-1].copy()
 
+    def _placed(self, x: Any) -> np.ndarray:
+        """The breakpoints, placed over the range of ``x`` first when only their number was
+        given."""
+        if self.breakpoints is None:
+            v = np.asarray(x, float).ravel() if x is not None else np.zeros(0)
+            v = v[np.isfinite(v)]
+            if v.size == 0 or not np.max(v) > np.min(v):
+                raise DataError(f"PiecewiseLinear({self.count}) places its breakpoints over "
+                                "the range of the signal it sees, and that signal is constant "
+                                "(or missing): give the breakpoints themselves")
+            self.breakpoints = np.linspace(np.min(v), np.max(v), self.count)
+            self.params = self.breakpoints[:-1].copy()
+        return np.asarray(self.breakpoints)
+
     def spec(self) -> tuple[str, int, list[float]]:
+        if self.breakpoints is None:
+            raise DataError(f"PiecewiseLinear({self.count}) has no breakpoints yet: they are "
+                            "placed by initial(x) over the range of the signal x it sees (a "
+                            "fit does this), or give them")
         return self.kind, 0, self.breakpoints.tolist()
 
     def initial(self, x: Any) -> np.ndarray:
-        return self.breakpoints[:-1].copy()
+        return self._placed(x)[:-1].copy()
+
+    def linear_start(self, x: Any) -> np.ndarray | None:
+        self._placed(x)  # the identity: initial(x) already is
+        return None
 
     def __call__(self, x: Any) -> np.ndarray:
-        z = self.breakpoints
+        self.spec()  # refuses breakpoints not yet placed
+        z = np.asarray(self.breakpoints)
         v = np.append(np.asarray(self.params, float), z[-1])
         x = np.asarray(x, float)
         s = np.clip(np.searchsorted(z, x, side="right") - 1, 0, z.size - 2)
@@ -233,7 +267,8 @@ class PiecewiseLinear(Nonlinearity):
         return (1 - lam) * v[s] + lam * v[s + 1]
 
     def to_dict(self) -> dict[str, Any]:
-        return {"kind": self.kind, "params": self.params, "breakpoints": self.breakpoints}
+        return {"kind": self.kind, "params": self.params,
+                "breakpoints": self.breakpoints if self.breakpoints is not None else self.count}
 
 
 class SigmoidNetwork(Nonlinearity):
