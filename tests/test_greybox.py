@@ -606,3 +606,15 @@ def test_a_direction_through_parameters_at_zero_names_only_them():
         weak = _warn_unidentifiable(np.array([[1.0], [0.0], [0.0]]), ["a", "b", "c"],
                                     np.ones(3), np.array([0.0, 1.0, 2.0]))
     assert weak == [0]
+
+
+def test_a_one_sided_bound_is_written_with_none():
+    """param(0.5, bounds=(0.01, None)), SciPy's way of saying "no upper bound", raised
+    float()'s TypeError; None is no bound on that side, and a malformed pair is named."""
+    p = sysid.param(0.5, bounds=(0.01, None))
+    assert p.bounds == (0.01, np.inf)
+    assert sysid.param(-2.0, bounds=(None, 0.0)).bounds == (-np.inf, 0.0)
+    with pytest.raises(sysid.DataError, match="a pair"):
+        sysid.param(0.5, bounds=0.01)
+    with pytest.raises(sysid.DataError, match="outside its bounds"):
+        sysid.param(0.005, bounds=(0.01, None))

@@ -76,8 +76,8 @@ def param(value: float, bounds: tuple[float, float] | None = None, fixed: bool =
     value : float
         Initial value (the value itself when ``fixed``).
     bounds : (float, float), optional
-        Lower and upper bound (``-inf``/``inf`` for none); the search stays inside and the
-        parameter table reports an active bound.
+        Lower and upper bound (``None``, ``-inf`` or ``inf`` for none, as SciPy's bounds);
+        the search stays inside and the parameter table reports an active bound.
     fixed : bool
         Keep the value: it never moves.
     scale : float, optional
@@ -98,7 +98,7 @@ def param(value: float, bounds: tuple[float, float] | None = None, fixed: bool =
         raise DataError(f"a parameter value must be a real number, got {value!r}") from None
     if not np.isfinite(v):
         raise DataError(f"a parameter value must be finite, got {value!r}")
-    lo, hi = (-np.inf, np.inf) if bounds is None else (float(bounds[0]), float(bounds[1]))
+    lo, hi = _bounds(bounds)
     if not lo <= hi:
         raise DataError(f"bounds must satisfy lower <= upper, got {bounds!r}")
     if not fixed and not lo <= v <= hi:
@@ -107,6 +107,18 @@ def param(value: float, bounds: tuple[float, float] | None = None, fixed: bool =
         raise DataError(f"scale must be a positive number, got {scale!r}")
     return Param(v, (lo, hi), bool(fixed), None if scale is None else float(scale), str(unit),
                  str(description))
+
+
+def _bounds(bounds: Any) -> tuple[float, float]:
+    """``(lower, upper)`` of ``param``'s bounds: ``None`` for no bound on that side."""
+    if bounds is None:
+        return -np.inf, np.inf
+    try:
+        lo, hi = bounds
+        return (-np.inf if lo is None else float(lo)), (np.inf if hi is None else float(hi))
+    except (TypeError, ValueError):
+        raise DataError(f"bounds must be a pair (lower, upper) of numbers or None, got "
+                        f"{bounds!r}") from None
 
 
 def fixed(value: float, unit: str = "", description: str = "") -> Param:
