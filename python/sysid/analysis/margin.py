@@ -64,6 +64,47 @@ class Margins:
         """``(gm, pm, wcg, wcp)`` in MATLAB's order (``wcg`` the phase crossover)."""
         return self.gain_margin, self.phase_margin, self.phase_crossover, self.gain_crossover
 
+    def to_pandas(self) -> Any:
+        """Every crossover found: one row each, its kind (``"gain margin"`` at a phase
+        crossover, ``"phase margin"`` at a gain crossover), frequency (rad/s) and margin.
+
+        Examples
+        --------
+        >>> import sysid
+        >>> m = sysid.margin(sysid.TransferFunction([1.0], [1.0, 2.0, 1.0, 0.0]))
+        >>> m.to_pandas()["kind"].tolist()
+        ['gain margin', 'phase margin']
+        """
+        import pandas as pd
+
+        rows = [("gain margin", w, g, 20 * np.log10(g) if g > 0 else -np.inf, np.nan)
+                for w, g in zip(self.phase_crossovers, self.gain_margins)]
+        rows += [("phase margin", w, np.nan, np.nan, p)
+                 for w, p in zip(self.gain_crossovers, self.phase_margins)]
+        return pd.DataFrame(rows, columns=["kind", "frequency [rad/s]", "gain margin",
+                                           "gain margin [dB]", "phase margin [deg]"])
+
+    def summary(self) -> str:
+        """The margins read (the smallest) and every crossover found.
+
+        Examples
+        --------
+        >>> import sysid
+        >>> print(sysid.margin(sysid.TransferFunction([1.0], [1.0, 2.0, 1.0, 0.0])).summary())
+        Margins(gain=2 (6.02 dB) at 1 rad/s, phase=21.39 deg at 0.6823 rad/s)
+          phase crossovers (rad/s): 1 (gain margin 2)
+          gain crossovers (rad/s): 0.6823 (phase margin 21.39 deg)
+        """
+        def listed(ws: np.ndarray, vs: np.ndarray, fmt: str) -> str:
+            return ", ".join(f"{w:.4g} ({fmt.format(v)})" for w, v in zip(ws, vs)) or "none"
+
+        return "\n".join([
+            repr(self),
+            "  phase crossovers (rad/s): " + listed(self.phase_crossovers, self.gain_margins,
+                                                    "gain margin {:.4g}"),
+            "  gain crossovers (rad/s): " + listed(self.gain_crossovers, self.phase_margins,
+                                                   "phase margin {:.4g} deg")])
+
     def __repr__(self) -> str:
         return (f"Margins(gain={self.gain_margin:.4g} ({self.gain_margin_db:.3g} dB) at "
                 f"{self.phase_crossover:.4g} rad/s, phase={self.phase_margin:.4g} deg at "

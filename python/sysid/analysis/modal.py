@@ -116,6 +116,10 @@ class ModalAnalysis(HTMLResult):
         }
         return pd.DataFrame(cols)
 
+    def summary(self) -> str:
+        """The modes as a text table (frequency, damping, and the extra columns)."""
+        return repr(self)
+
     def __repr__(self) -> str:
         return f"ModalAnalysis({len(self)} modes, dt={self.dt:g})\n" + self.table()
 

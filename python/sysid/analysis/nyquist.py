@@ -61,6 +61,22 @@ class NyquistResponse:
         ax.legend()
         return ax
 
+    def to_pandas(self) -> Any:
+        """The curve: frequency (rad/s), real and imaginary parts, magnitude and phase
+        (degrees)."""
+        import pandas as pd
+
+        g = np.asarray(self.response)
+        return pd.DataFrame({"omega [rad/s]": self.omega, "real": g.real, "imag": g.imag,
+                             "magnitude": np.abs(g), "phase [deg]": np.degrees(np.angle(g))})
+
+    def summary(self) -> str:
+        """The Nyquist criterion's numbers: ``N + P = Z`` and what it says."""
+        z = self.closed_loop_unstable
+        return (f"{self!r}\n  N + P = {self.encirclements} + {self.open_loop_unstable} = {z}: "
+                + ("the closed loop under unit negative feedback is stable" if z == 0 else
+                   f"{z} closed-loop pole(s) unstable under unit negative feedback"))
+
     def __repr__(self) -> str:
         return (f"NyquistResponse(encirclements={self.encirclements}, open-loop unstable="
                 f"{self.open_loop_unstable}, closed-loop unstable={self.closed_loop_unstable})")

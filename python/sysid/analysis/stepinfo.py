@@ -69,6 +69,23 @@ class StepInfo:
                 for i in range(l) for j in range(m)]
         return pd.DataFrame(rows)
 
+    def summary(self) -> str:
+        """One line per output/input pair with every characteristic.
+
+        Examples
+        --------
+        >>> import sysid
+        >>> s = sysid.stepinfo(sysid.TransferFunction([1.0], [1.0, 1.0])).summary()
+        >>> s.splitlines()[1].split()[:2]
+        ['y0', '<-']
+        """
+        df = self.to_pandas()
+        lines = [repr(self) if self._v["rise_time"].size > 1 else "StepInfo"]
+        for _, r in df.iterrows():
+            lines.append(f"  {r['output']} <- {r['input']}: "
+                         + ", ".join(f"{k} {r[k]:.4g}" for k in _KEYS))
+        return "\n".join(lines)
+
     def __repr__(self) -> str:
         if self._v["rise_time"].size == 1:
             return "StepInfo(" + ", ".join(f"{k}={getattr(self, k):.4g}" for k in _KEYS) + ")"

@@ -172,6 +172,50 @@ class TimeResponse:
 
         return plot_time_response(self, fig=fig)
 
+    def _pairs(self) -> list[tuple[int, int, str]]:
+        return [(i, j, f"{o} <- {u}") for i, o in enumerate(self.output_names)
+                for j, u in enumerate(self.input_names or ["e"] * self.y.shape[2])]
+
+    def to_pandas(self) -> Any:
+        """A DataFrame indexed by time, one column per ``"output <- input"`` pair (and its
+        ``"... std"`` with ``std=True``).
+
+        Examples
+        --------
+        >>> import sysid
+        >>> r = sysid.step(sysid.StateSpaceModel([[0.5]], [[0.5]], [[1.0]]), 3)
+        >>> r.to_pandas()["y0 <- u0"].tolist()
+        [0.0, 0.5, 0.75]
+        """
+        import pandas as pd
+
+        cols: dict[str, Any] = {}
+        for i, j, name in self._pairs():
+            cols[name] = self.y[:, i, j]
+            if self.std is not None:
+                cols[f"{name} std"] = self.std[:, i, j]
+        return pd.DataFrame(cols, index=pd.Index(self.t, name="time"))
+
+    def summary(self) -> str:
+        """Per ``output <- input`` pair: the last value (with its standard deviation when
+        computed) and the largest in magnitude, with its time.
+
+        Examples
+        --------
+        >>> import sysid
+        >>> print(sysid.step(sysid.StateSpaceModel([[0.5]], [[0.5]], [[1.0]]), 20).summary())
+        TimeResponse(step, 20 samples, 1 output(s) x 1 input(s))
+          y0 <- u0: final 1, peak 1 at t = 19
+        """
+        lines = [repr(self)]
+        for i, j, name in self._pairs():
+            v = self.y[:, i, j]
+            k = int(np.argmax(np.abs(v))) if v.size else 0
+            sd = "" if self.std is None else f" (std {self.std[-1, i, j]:.3g})"
+            lines.append(f"  {name}: final {v[-1]:.4g}{sd}, peak {v[k]:.4g} at "
+                         f"t = {self.t[k]:.4g}" if v.size else f"  {name}: empty")
+        return "\n".join(lines)
+
     def __repr__(self) -> str:
         return (
             f"TimeResponse({self.kind}, {len(self.t)} samples, {self.y.shape[1]} output(s) x "

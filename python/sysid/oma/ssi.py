@@ -204,6 +204,17 @@ class SSIResult:
         """The stabilisation diagram (frequency against order); returns the axes."""
         return self.diagram.plot(ax=ax)
 
+    def to_pandas(self) -> Any:
+        """The diagram's modes, one row per mode and order
+        (:meth:`sysid.StabilizationDiagram.to_pandas`)."""
+        return self.diagram.to_pandas()
+
+    def summary(self, min_count: int = 3) -> str:
+        """The diagram's summary (:meth:`sysid.StabilizationDiagram.summary`) under this
+        result's line; :meth:`modes_at` gives an order's modes with their standard
+        deviations."""
+        return "\n".join([repr(self)] + self.diagram.summary(min_count).splitlines()[1:])
+
     def modes_at(self, order: int, *, std: bool = True) -> Any:
         """The modes at ``order`` (one of :attr:`orders`) with, when ``std``, the jackknife
         standard deviations ``extra["sd_hz"]``, ``extra["sd_damping"]`` and

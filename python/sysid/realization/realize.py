@@ -298,6 +298,19 @@ class EraResult:
 
         return plot_hankel_singular_values(self.singular_values, self.order, ax=ax)
 
+    def to_pandas(self) -> Any:
+        """The modes with their MAC and MPC (:meth:`modes`)."""
+        return self.modes().to_pandas()
+
+    def summary(self) -> str:
+        """The order, the Hankel singular values around it, and the modes with their MAC
+        and MPC."""
+        lo = max(0, self.order - 2)
+        near = self.singular_values[lo:self.order + 2]
+        lines = repr(self).splitlines()
+        return "\n".join(lines[:1] + [f"  Hankel singular values {lo + 1}..{lo + near.size}: "
+                                       + ", ".join(f"{v:.4g}" for v in near)] + lines[1:])
+
     def __repr__(self) -> str:
         head = (f"EraResult(order={self.order}, hankel {self.rows}x{self.cols} blocks, "
                 f"min MAC={self.mac.min():.3f}, min MPC={self.mpc.min():.3f})")
@@ -440,6 +453,42 @@ class StabilizationDiagram:
         from ..plot.realization import plot_stabilization
 
         return plot_stabilization(self, ax=ax)
+
+    def to_pandas(self) -> Any:
+        """One row per mode and order: ``order``, ``frequency [Hz]``, ``damping`` and
+        ``status`` (``"stable"``: frequency, damping and MAC agree with the previous
+        order; ``"frequency"``: the frequency alone; ``"new"``).
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> k = np.arange(1, 41)
+        >>> h = (0.9 ** k * np.cos(0.5 * k) + 0.8 ** k * np.cos(1.5 * k))[:, None, None]
+        >>> df = sysid.era_stabilization(h, [2, 4]).to_pandas()
+        >>> list(df.columns), df["order"].tolist()
+        (['order', 'frequency [Hz]', 'damping', 'status'], [2, 4, 4])
+        """
+        import pandas as pd
+
+        names = {2: "stable", 1: "frequency", 0: "new"}
+        rows = [(n, f, d, names[int(st)]) for n, m, sts in zip(self.orders, self.modes,
+                                                              self.status)
+                for f, d, st in zip(m.frequencies_hz, m.damping, sts)]
+        return pd.DataFrame(rows, columns=["order", "frequency [Hz]", "damping", "status"])
+
+    def summary(self, min_count: int = 3) -> str:
+        """The orders, the modes stable at ``min_count`` or more of them, and per order
+        how many modes are stable, agree in frequency only, or are new."""
+        lines = [repr(self), f"  stable at {min_count} or more orders (Hz): "
+                 + (", ".join(f"{f:.4g}" for f in self.stable_frequencies(min_count))
+                    or "none")]
+        if len(self.orders) < min_count:
+            lines.append(f"  (a mode is stable across orders: give at least {min_count} "
+                         "orders, e.g. range(2, 41, 2))")
+        for n, st in zip(self.orders, self.status):
+            lines.append(f"  order {n}: {int(np.sum(st == 2))} stable, "
+                         f"{int(np.sum(st == 1))} frequency only, {int(np.sum(st == 0))} new")
+        return "\n".join(lines)
 
     def __repr__(self) -> str:
         return (f"StabilizationDiagram(orders {self.orders[0]}..{self.orders[-1]}, stable "

@@ -92,6 +92,16 @@ class RecursiveResult:
         ax2.set_xlabel("time")
         return fig
 
+    def summary(self) -> str:
+        """The record's length, the prediction error's root mean square over the whole
+        record and its last tenth, and the final parameters."""
+        tail = self.error[-max(1, self.error.size // 10):]
+        lines = [repr(self), "  rms prediction error, last tenth: "
+                 f"{float(np.sqrt(np.mean(tail ** 2))) if tail.size else float('nan'):.4g}"]
+        if self.parameters is not None and self.parameters.shape[0]:
+            lines += [f"  {n} = {v:.6g}" for n, v in zip(self.names, self.parameters[-1])]
+        return "\n".join(lines)
+
     def __repr__(self) -> str:
         rms = float(np.sqrt(np.mean(self.error ** 2))) if self.error.size else float("nan")
         return (f"RecursiveResult({self.yhat.size} samples, {len(self.names)} parameters, "

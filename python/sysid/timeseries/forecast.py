@@ -88,6 +88,15 @@ class Forecast:
         axes[-1].set_xlabel("time")
         return fig
 
+    def summary(self) -> str:
+        """Per output: the first and last forecast with their bands."""
+        lines = [repr(self)]
+        for i, n in enumerate(self.output_names):
+            for k in sorted({0, self.mean.shape[0] - 1}):
+                lines.append(f"  {n} at t = {self.t[k]:.4g}: {self.mean[k, i]:.4g} "
+                             f"[{self.lower[k, i]:.4g}, {self.upper[k, i]:.4g}]")
+        return "\n".join(lines)
+
     def __repr__(self) -> str:
         return (f"Forecast({self.mean.shape[0]} steps, {self.mean.shape[1]} output(s), "
                 f"{self.level:.0%} bands)")
