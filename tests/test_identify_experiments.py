@@ -6,6 +6,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import pytest
 
 import sysid
 from sysid.identify.core import _horizon
@@ -90,3 +91,44 @@ def test_order_auto_of_the_subspace_estimators_with_a_short_second_experiment():
         m = sysid.n4sid(both)  # was order 1 (horizon 2 from the 30 samples), 17 %
         fit = sysid.compare(m, sysid.IOData(u=uv, y=yv)).mean_fit
     assert m.nstates >= 4 and fit > 80.0
+
+
+def test_bic_counts_an_initial_state_per_experiment():
+    """identify's BIC fits each experiment's initial state but counted one: on the dryer
+    with its gaps cut out (five experiments, 100-300 samples), a model of order 10 was
+    chosen where the blocks could not tell it from order 3 (50 fitted initial values
+    counted as 10); it simulated the clean record at 86.2 % against order 3's 88.7 %."""
+    from sysid.identify.board import bic
+    from sysid.models.statespace import ss_parameter_count
+    from sysid.validation.crossval import simulation_errors
+
+    u, y = _record(600, 3)
+    m = _plant()
+    for cut in ([600], [150, 300, 450, 600]):
+        edges = [0] + cut
+        d = sysid.IOData([u[a:b] for a, b in zip(edges, edges[1:])],
+                         [y[a:b] for a, b in zip(edges, edges[1:])], 1.0)
+        E = np.vstack([e for _, e in simulation_errors(m, d)])
+        fit_part = 600 * np.linalg.slogdet(E.T @ E / 600)[1]
+        p = ss_parameter_count(4, 1, 1, feedthrough=False, noise_model=False, x0=True,
+                               n_experiments=len(cut))
+        assert p == 4 * 2 + 4 * len(cut)
+        assert bic(m, d) - fit_part == pytest.approx(p * np.log(600), rel=1e-9)
+
+
+def test_a_record_cut_at_its_gaps_keeps_a_low_order():
+    path = sysid.datasets.path("dryer")
+    a = np.loadtxt(path)
+    y = a[:, 1].copy()
+    y[[100, 101, 700]] = np.nan
+    y[300:340] = np.nan
+    u = a[:, 0].copy()
+    u[550] = np.nan
+    d = sysid.IOData.from_raw(u, y, 0.08, nan="split")
+    assert d.n_experiments == 5
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        r = sysid.identify(d, progress=False)
+    assert r.model.nstates <= 5, r.summary()[:300]
+    clean = sysid.IOData(a[:, :1], a[:, 1:], 0.08)
+    assert sysid.compare(clean, r.model).fit[0, 0] > 88.0
