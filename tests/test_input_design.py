@@ -99,6 +99,14 @@ def test_persistent_excitation_orders() -> None:
     assert sysid.persistent_excitation_order([rng.standard_normal(50)] * 3, 8) == 8
     with pytest.raises(DataError, match="no inputs"):
         sysid.persistent_excitation_order(np.zeros((10, 0)), 3)
+    # a record (MATLAB's pexcit(data)): its inputs, every experiment; it was refused
+    sine = np.sin(0.4 * t)[:, None]
+    rec = sysid.IOData([sine[:500], sine[500:]], [sine[:500], sine[500:]], 0.1)
+    assert sysid.persistent_excitation_order(rec, 10) == 2
+    with pytest.warns(sysid.ExcitationWarning, match="order 2 only"):
+        assert sysid.check_excitation(rec, order=2) == 2
+    with pytest.raises(DataError, match="no inputs"):
+        sysid.persistent_excitation_order(sysid.IOData(y=sine), 3)
 
 
 def test_check_excitation_warns() -> None:

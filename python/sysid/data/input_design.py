@@ -439,13 +439,13 @@ def persistent_excitation_order(u: Any, max_order: int = 20, *, method: str = "s
     calls a band-limited input poorly exciting (its lag covariance is ill-conditioned
     however many lines it has) and a sine with a little noise richly exciting.
 
-    Several experiments (a list of arrays): the best one decides (``"spectrum"``), or their
-    lag columns count together (``"covariance"``).
+    Several experiments (a list of arrays, or a record's): the best one decides
+    (``"spectrum"``), or their lag columns count together (``"covariance"``).
 
     Parameters
     ----------
-    u : array_like or list of array_like
-        ``(n_samples, n_inputs)``.
+    u : array_like, list of array_like or IOData
+        ``(n_samples, n_inputs)``; a record's inputs (MATLAB's ``pexcit(data)``).
     max_order : int
         Largest order reported (the answer ``max_order`` means "at least").
     method : {"spectrum", "covariance"}
@@ -468,6 +468,8 @@ def persistent_excitation_order(u: Any, max_order: int = 20, *, method: str = "s
     4
     """
     mo = _n(max_order, "max_order")
+    if hasattr(u, "experiments") and hasattr(u, "input_names"):  # a record: its inputs
+        u = [x for x, _ in u.experiments]
     us = [as_2d(x, "u") for x in (u if isinstance(u, list) else [u])]
     m = us[0].shape[1]
     if m == 0:
@@ -525,8 +527,9 @@ def warn_excitation(got: int, order: int, *, stacklevel: int = 2) -> None:
 
 
 def check_excitation(u: Any, order: int, *, stacklevel: int = 2) -> int:
-    """Warn (:class:`~sysid.ExcitationWarning`) if ``u`` cannot support a model of ``order``:
-    its persistent-excitation order is below ``2 * order``. Returns that order.
+    """Warn (:class:`~sysid.ExcitationWarning`) if ``u`` (the inputs, or a record) cannot
+    support a model of ``order``: its persistent-excitation order is below ``2 * order``.
+    Returns that order.
 
     Examples
     --------
