@@ -200,6 +200,9 @@ def test_plots_draw() -> None:
     assert sysid.spectra(d).plot() is not None
     assert len(sysid.coherence(d).plot().axes) == 2
     assert sysid.correlation(d, 10).plot("y0", "u0") is not None
+    # without the pair (a TypeError before): the last channel against the first
+    ax = sysid.correlation(d, 10).plot()
+    assert ax.get_ylabel() == f"r({d.output_names[-1]}, {d.input_names[0]})"
     import matplotlib.pyplot as plt
 
     plt.close("all")

@@ -95,11 +95,14 @@ class Correlation:
             "a": names[idx[1]], "b": names[idx[2]], "r": r,
             "significant": np.abs(r) > self.bound})
 
-    def plot(self, a: str, b: str, *, ax: Any = None) -> Any:
-        """Stem plot of ``r_ab`` with the confidence bounds."""
+    def plot(self, a: str | None = None, b: str | None = None, *, ax: Any = None) -> Any:
+        """Stem plot of ``r_ab`` with the confidence bounds; by default the last channel
+        (the record's last output) against the first (its first input, when it has one;
+        ``plot()`` raised a ``TypeError`` without the pair)."""
         from ..plot.data import plot_correlation
 
-        return plot_correlation(self, a, b, ax=ax)
+        return plot_correlation(self, self.names[-1] if a is None else a,
+                                self.names[0] if b is None else b, ax=ax)
 
     def __repr__(self) -> str:
         return (f"Correlation: lags {self.lags[0]}..{self.lags[-1]}, channels {self.names}, "
