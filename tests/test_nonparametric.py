@@ -341,3 +341,24 @@ def test_etfe_removes_the_operating_point_like_spa():
     np.testing.assert_allclose(np.abs(e.response[k, 0, 0]), 7.5, rtol=0.02)
     raw = sysid.etfe(d, smoothing=20, remove_mean=False)  # the old behaviour, on request
     assert abs(abs(raw.response[k[0], 0, 0]) - 7.5) > 1.0
+
+
+def test_welch_segments_of_a_record_cut_into_experiments():
+    """The default segment length was a quarter of the shortest experiment: the dryer cut
+    at four gaps into 100-299 samples got 16-sample segments (9 frequencies), where each
+    experiment's segments are averaged together: now the largest length every experiment
+    holds with seven segments in all (64 samples, 33 frequencies), and a single record's
+    default is unchanged (a quarter of it)."""
+    a = np.loadtxt(sysid.datasets.path("dryer"))
+    cuts = [0, 100, 299, 548, 697, 996]
+    d = sysid.IOData([a[s:e, :1] for s, e in zip(cuts, cuts[1:])],
+                     [a[s:e, 1:] for s, e in zip(cuts, cuts[1:])], 0.08)
+    frd = sysid.welch_frf(sysid.detrend(d, "mean"))
+    assert frd.omega.size == 32  # 33 bins less the zero-frequency one
+    one = sysid.welch_frf(sysid.detrend(sysid.IOData(a[:, :1], a[:, 1:], 0.08), "mean"))
+    assert one.omega.size == 64  # 1000 samples: 128-sample segments, as before
+    # the two estimates agree where both are sure (the dryer's band: below 10 rad/s)
+    low = frd.omega < 10.0
+    g1 = frd.response[low, 0, 0]
+    g2 = np.interp(frd.omega[low], one.omega, np.abs(one.response[:, 0, 0]))
+    assert np.median(np.abs(np.abs(g1) - g2) / g2) < 0.1

@@ -202,7 +202,8 @@ def welch_frf(
     data : IOData
         Inputs and outputs (several experiments are averaged).
     nperseg : int, optional
-        Segment length (default ``min(256, shortest experiment / 4)`` rounded to a power of 2).
+        Segment length (default: a power of two up to 256, a quarter of a single record; with
+        several experiments the largest every one holds that gives seven segments in all).
     noverlap : int, optional
         Overlap (default half a segment).
     window : str

@@ -228,8 +228,27 @@ def _band(ratio: np.ndarray, K: float, m: int, fix: str) -> tuple[np.ndarray, fl
 
 
 def _default_nperseg(data: IOData) -> int:
-    shortest = min(data.lengths)
-    return int(min(256, 2 ** max(3, int(np.log2(max(shortest // 4, 8))))))
+    """The default segment length: the largest power of two up to 256 that every
+    experiment holds and that gives at least seven half-overlapping segments in all (one
+    record: a quarter of it). Each experiment's segments are averaged together, so a record
+    cut into experiments is not held to a quarter of its shortest piece (the dryer cut at
+    four gaps into 100-299 samples got 16-sample segments, 9 frequencies; now 64, 33).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.nonparametric.spectra import _default_nperseg
+    >>> one = sysid.IOData(u=np.zeros(1000), y=np.zeros(1000))
+    >>> cut = sysid.IOData([np.zeros(n) for n in (100, 199, 249, 149, 299)],
+    ...                    [np.zeros(n) for n in (100, 199, 249, 149, 299)])
+    >>> _default_nperseg(one), _default_nperseg(cut)
+    (128, 64)
+    """
+    lengths = list(data.lengths)
+    for p in (256, 128, 64, 32, 16):
+        if min(lengths) >= p and sum((n - p) // (p // 2) + 1 for n in lengths) >= 7:
+            return p
+    return 8
 
 
 # --------------------------------------------------------------------------------------------
