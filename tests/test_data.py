@@ -358,6 +358,11 @@ def test_plain_mat_file(tmp_path: Path) -> None:
                                     "y": rng.standard_normal((50, 1)), "Ts": 0.25})
     d = sysid.IOData.from_mat(tmp_path / "plain.mat", dt="Ts")
     assert (d.n_inputs, d.n_outputs, d.dt) == (2, 1, 0.25)
+    # without dt=, the file's Ts (MATLAB's iddata name) is taken: it was dt = 1 s, silently
+    assert sysid.IOData.from_mat(tmp_path / "plain.mat").dt == 0.25
+    savemat(tmp_path / "bare.mat", {"u": np.ones((50, 1)), "y": np.ones((50, 1))})
+    with pytest.warns(UserWarning, match="no sample time.*assuming dt = 1 s"):
+        assert sysid.IOData.from_mat(tmp_path / "bare.mat").dt == 1.0
     with pytest.raises(DataError, match="no variable"):
         sysid.IOData.from_mat(tmp_path / "plain.mat", y="out")
 

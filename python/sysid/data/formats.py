@@ -541,9 +541,11 @@ def from_mat(
     """Load a MATLAB ``.mat`` file: one written by :meth:`to_mat`, or any file with
     input/output matrices under the variable names ``u`` and ``y`` (samples in rows).
 
-    ``dt`` may be a number or the name of a variable holding it. A variable ``u`` or ``y``
-    that is not in the file raises a :class:`~sysid.DataError` listing the file's
-    variables; output-only data (a time series) is read with ``u=None``.
+    ``dt`` may be a number or the name of a variable holding it; without it, a scalar
+    variable named ``Ts`` (MATLAB's ``iddata`` property), ``dt`` or ``ts`` is the sample
+    time, and without one dt = 1 s is assumed with a warning (it was assumed silently). A
+    variable ``u`` or ``y`` that is not in the file raises a :class:`~sysid.DataError`
+    listing the file's variables; output-only data (a time series) is read with ``u=None``.
     """
     from scipy.io import loadmat
     from scipy.io.matlab import MatReadError
@@ -573,4 +575,12 @@ def from_mat(
         raise DataError(
             f"{y!r} in {path} has shape {yy.shape}: samples must be rows; transpose it"
         )
+    if dt is None:  # the file's own sample time, under MATLAB's name or ours
+        ts = next((k for k in ("Ts", "dt", "ts") if k in m and np.size(m[k]) == 1), None)
+        if ts is not None:
+            dt = float(np.asarray(m[ts]).ravel()[0])
+        else:
+            warnings.warn(f"{Path(path).name} holds no sample time (a scalar Ts or dt) and no "
+                          "dt= was given: assuming dt = 1 s; pass dt=... (seconds, or the name "
+                          "of the variable holding it)", SysidWarning, stacklevel=2)
     return cls(uu, yy, dt, input_names=input_names, output_names=output_names)
