@@ -9,8 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from . import _sysid
-from .errors import DataError, ExcitationError, NonFiniteError, ShapeError, not_a_record, refuse_frd
+from . import _sysid, errors
+from .errors import DataError, ExcitationError, NonFiniteError, ShapeError, refuse_frd
 
 
 def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = False) -> np.ndarray:
@@ -21,7 +21,7 @@ def as_2d(x: Any, name: str, *, ncols: int | None = None, allow_empty: bool = Fa
     """
     if isinstance(x, (str, bytes)):
         raise ShapeError(f"{name} must be a numeric array, got a string")
-    if hasattr(x, "experiments") and hasattr(x, "input_names"):  # an IOData record
+    if errors.is_record(x):  # an IOData record
         raise DataError(
             f"{name} must be an array of samples, got a whole record (IOData): pass its "
             f"signals (data.u for inputs, data.y for outputs), or hand the record to "
@@ -558,7 +558,7 @@ def experiment_arrays(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
     try:
         exps = data.experiments
     except AttributeError:
-        raise not_a_record(data) from None
+        raise errors.not_a_record(data) from None
     return [(np.ascontiguousarray(u, float), np.ascontiguousarray(y, float)) for u, y in exps]
 
 

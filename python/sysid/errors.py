@@ -138,6 +138,20 @@ def is_frd(data: object) -> bool:
     return hasattr(data, "omega") and hasattr(data, "response")
 
 
+def is_record(data: object) -> bool:
+    """Whether ``data`` is an input/output record (a :class:`sysid.IOData`), told by its
+    ``experiments`` and ``input_names`` (no import of the data module).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.errors import is_record
+    >>> is_record(sysid.IOData(np.ones(4), np.ones(4))), is_record(np.ones(4))
+    (True, False)
+    """
+    return hasattr(data, "experiments") and hasattr(data, "input_names")
+
+
 def several_records_hint(data: object) -> str:
     """A hint for a list of records passed where one record goes: MATLAB's ``merge``.
 
@@ -149,8 +163,7 @@ def several_records_hint(data: object) -> str:
     >>> several_records_hint([a, a])[:40]
     '; several records are several experiment'
     """
-    if isinstance(data, (list, tuple)) and data and all(
-            hasattr(d, "experiments") and hasattr(d, "input_names") for d in data):
+    if isinstance(data, (list, tuple)) and data and all(is_record(d) for d in data):
         return ("; several records are several experiments of one: pass "
                 "records[0].merge(*records[1:]) (MATLAB's merge)")
     return ""

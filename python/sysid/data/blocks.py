@@ -19,7 +19,6 @@ from .table import (
     first_bad_cell,
     first_rows,
     header,
-    is_number,
     stamps_ns,
     units_row,
 )
@@ -86,14 +85,27 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
             from exc
     parts: list[np.ndarray] = []
     text: str | None = None  # a column of date-time stamps, read as text
+    t0: list[int] = []  # the file's first stamp (ns)
+    rows = 0  # data rows read whole: the bad cell is in the block after them
+
+    def values(batch: Any, c: str) -> np.ndarray:
+        col = batch.column(batch.schema.names.index(c))
+        if c != text:
+            return col.to_numpy(zero_copy_only=False).astype(float)
+        cells = [str(v) for v in col.to_pylist()]  # stamps: seconds after the file's first
+        ns, bad = stamps_ns(cells)
+        if ns is None or bad >= 0:
+            at = max(bad, 0)
+            raise DataError(f"{path.name} data row {rows + at + 1}, column {c!r}: "
+                            f"{cells[at]!r} is not a date-time stamp like the first; fix or "
+                            "remove that row")
+        t0[:] = t0 or [int(ns[0])]
+        return (ns - t0[0]) * 1e-9
 
     def take(batch: Any) -> bool:
         """Keep a block's columns as float64; whether they are all finite."""
-        names = batch.schema.names
-        parts.append(np.column_stack([
-            np.zeros(batch.num_rows) if c == text else  # stamps: converted after
-            batch.column(names.index(c)).to_numpy(zero_copy_only=False).astype(float)
-            for c in columns]) if columns else np.zeros((batch.num_rows, 0)))
+        parts.append(np.column_stack([values(batch, c) for c in columns]) if columns
+                     else np.zeros((batch.num_rows, 0)))
         return bool(np.isfinite(parts[-1]).all())
 
     if path.suffix.lower() in (".parquet", ".pq"):
@@ -125,31 +137,14 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
         # (the trailing empty fields of a trailing delimiter named so as to be asked by none)
         names = (head.names + [f"\0{i}" for i in range(len(head.names), head.width)]
                  if head.headerless else None)
-        # a logger's units row under the header (read_table's rule) and date-time stamps
+        # a logger's units row under the header (read_table's rule), and the time column
+        # read as text when its first cell is a date-time stamp
         ahead = first_rows(path, head, 3)
         units = not head.headerless and len(units_row(ahead)[0].rows) < len(ahead.rows)
-        data0 = ahead.rows[int(units)] if len(ahead.rows) > int(units) else []
-        k = (head.names.index(stamps) if stamps in head.names and stamps in columns
-             else -1)
-        dated = (k >= 0 and k < len(data0) and not is_number(data0[k])
-                 and stamps_ns([data0[k]])[0] is not None)
-        t0: list[int] = []
-        text = stamps if dated else None
-
-        def stamp(batch: Any) -> None:
-            # the stamps of a block as seconds after the file's first (in place, column k)
-            col = columns.index(str(stamps))
-            cells = [str(c) for c in batch.column(batch.schema.names.index(stamps)).to_pylist()]
-            ns, bad = stamps_ns(cells)
-            if ns is None or bad >= 0:
-                at = 0 if ns is None else bad
-                raise DataError(f"{path.name} data row {rows + at + 1}, column {stamps!r}: "
-                                f"{cells[at]!r} is not a date-time stamp like the first; fix "
-                                "or remove that row")
-            t0[:] = t0 or [int(ns[0])]
-            parts[-1][:, col] = (ns - t0[0]) * 1e-9
-
-        rows = 0  # data rows read whole: the bad cell is in the block after them
+        first = ahead.rows[int(units)] if len(ahead.rows) > int(units) else []
+        k = head.names.index(stamps) if stamps in head.names and stamps in columns else -1
+        if 0 <= k < len(first) and stamps_ns([first[k]])[0] is not None:
+            text = stamps
         with Bar(path.stat().st_size, f"reading {path.name}", unit="B", unit_scale=True,
                  enabled=show(progress)) as bar:
             raw = _CountingFile(path, bar)
@@ -164,14 +159,12 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
                                                      invalid_row_handler=_skip_comment),
                     convert_options=pacsv.ConvertOptions(
                         include_columns=columns,
-                        column_types={c: pa.string() if dated and c == stamps
-                                      else pa.float64() for c in columns}))
+                        column_types={c: pa.string() if c == text else pa.float64()
+                                      for c in columns}))
                 for batch in reader:
                     if not take(batch):
                         raise _bad_cell(path, columns, delim, rows + int(units),
                                         "a value that is not a finite number")
-                    if dated:
-                        stamp(batch)
                     rows += batch.num_rows
             except (pa.ArrowInvalid, KeyError) as e:
                 if src.error is not None:  # pyarrow's error for the damaged stream

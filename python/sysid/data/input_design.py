@@ -27,7 +27,7 @@ from .._checks import (
     check_elements,
     check_magnitudes,
 )
-from ..errors import DataError, ExcitationWarning
+from ..errors import DataError, ExcitationWarning, is_record
 
 __all__ = [
     "prbs",
@@ -468,7 +468,7 @@ def persistent_excitation_order(u: Any, max_order: int = 20, *, method: str = "s
     4
     """
     mo = _n(max_order, "max_order")
-    if hasattr(u, "experiments") and hasattr(u, "input_names"):  # a record: its inputs
+    if is_record(u):  # a record: its inputs
         u = [x for x, _ in u.experiments]
     us = [as_2d(x, "u") for x in (u if isinstance(u, list) else [u])]
     m = us[0].shape[1]

@@ -747,21 +747,21 @@ def stamps_ns(cells: list[str]) -> tuple[np.ndarray | None, int]:
         stamps.append(c)
     try:
         t = np.array(stamps, dtype="datetime64[ns]")
-        bad = int(np.argmax(np.isnat(t))) if np.isnat(t).any() else -1
+        if not np.isnat(t).any():
+            return t.astype(np.int64) - shift, -1
     except ValueError:
-        t, bad = None, -1
-    if t is None or bad >= 0:
-        for k, c in enumerate(stamps):  # the first cell that is no stamp
-            try:
-                ok = not np.isnat(np.datetime64(c, "ns"))
-            except ValueError:
-                ok = False
-            if not ok:
-                if k == 0:
-                    return None, 0
-                t = np.array([np.datetime64(x, "ns") for x in stamps[:k]])
-                return t.astype(np.int64) - shift[:k], k
-    assert t is not None
+        pass
+    for k, c in enumerate(stamps):  # the first cell that is no stamp, one by one
+        try:
+            ok = not np.isnat(np.datetime64(c, "ns"))
+        except ValueError:
+            ok = False
+        if not ok:
+            if k == 0:
+                return None, 0
+            t = np.array([np.datetime64(x, "ns") for x in stamps[:k]])
+            return t.astype(np.int64) - shift[:k], k
+    t = np.array([np.datetime64(x, "ns") for x in stamps])
     return t.astype(np.int64) - shift, -1
 
 

@@ -26,7 +26,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_2d, as_dt, as_int, as_option
-from ..errors import DataError, ShapeError
+from ..errors import DataError, ShapeError, is_record
 
 
 def _orders(v: Any, name: str, lo: int = 0) -> list[int]:
@@ -242,7 +242,7 @@ class _Recursive:
         :class:`~sysid.IOData` of one experiment and one output, or the arrays
         ``u (n_samples, ninputs)`` and ``y (n_samples,)``; the estimator's state carries
         over, so records can be fed in pieces."""
-        if hasattr(u, "experiments") and hasattr(u, "input_names"):
+        if is_record(u):
             if y is not None:
                 raise DataError("run takes a record (IOData) or the arrays u and y, not both: "
                                 "run(data) or run(data.u, data.y)")
