@@ -341,7 +341,7 @@ def test_docs_models_examples_run(tmp_path, monkeypatch, capsys):
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "models.md").read_text()
     blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
-    assert len(blocks) == 2
+    assert len(blocks) == 3
     monkeypatch.chdir(tmp_path)
     for i, block in enumerate(blocks):
         exec(compile(block, f"docs/models.md[{i}]", "exec"), {})
@@ -349,6 +349,7 @@ def test_docs_models_examples_run(tmp_path, monkeypatch, capsys):
     assert out[1] == "True" and out[2] == "4 bic"
     assert out[3].startswith("[0.  1.  0.6 0.3]")
     assert out[4] == "[[100.]]" and out[6] == "True"
+    assert out[7:] == ["['valve', 'heater'] ['temp']", "[[5.]]", "['temp', 'flow']"]
 
 
 def test_mixin_defaults_go_through_to_statespace():

@@ -334,50 +334,6 @@ def as_seed(seed: Any, name: str = "seed") -> int:
     raise DataError(f"{name} must be a non-negative integer (below 2**64), got {seed!r}")
 
 
-def as_horizon(horizon: Any) -> int | None:
-    """A prediction horizon: a positive integer (an integral float too), or ``np.inf`` (the
-    simulation), returned as ``None``.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from sysid._checks import as_horizon
-    >>> as_horizon(3), as_horizon(2.0), as_horizon(np.inf)
-    (3, 2, None)
-    """
-    if isinstance(horizon, (float, np.floating)) and horizon == np.inf:
-        return None
-    if (isinstance(horizon, (bool, np.bool_)) or not isinstance(horizon, (int, np.integer,
-                                                                          float, np.floating))
-            or not np.isfinite(horizon) or int(horizon) != horizon or horizon < 1):
-        raise DataError(f"horizon must be a positive integer (or np.inf for the simulation), "
-                        f"got {horizon!r}")
-    return int(horizon)
-
-
-def as_measured(u: Any, y: Any, ninputs: int, noutputs: int) -> tuple[np.ndarray, np.ndarray]:
-    """A predictor's measured ``(u, y)``: real, finite, ``(samples, ninputs)`` and
-    ``(samples, noutputs)`` with one number of samples (``u=None`` for a model without
-    inputs); the errors of :func:`as_2d`, naming the argument at fault.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from sysid._checks import as_measured
-    >>> as_measured(np.zeros(4), np.zeros(3), 1, 1)
-    Traceback (most recent call last):
-    ...
-    sysid.errors.ShapeError: u has 4 samples but y has 3
-    """
-    y = as_2d(y, "y", ncols=noutputs)
-    if u is None and ninputs == 0:
-        return np.zeros((y.shape[0], 0)), y
-    u = as_2d(u, "u", ncols=ninputs, allow_empty=ninputs == 0)
-    if u.shape[0] != y.shape[0]:
-        raise ShapeError(f"u has {u.shape[0]} samples but y has {y.shape[0]}")
-    return u, y
-
-
 def as_nonnegative(x: Any, name: str) -> float:
     """Return a real argument (a Python or NumPy number, not a bool) that is finite and
     ``>= 0``, as a float; the message names the argument."""

@@ -358,8 +358,12 @@ class NonlinearGreyBox(ModelMixin):
             self.rhs(), self.out(), np.ascontiguousarray(u), self.nx, list(self.values),
             list(map(float, x)), dt, integration=self.core_options()))
 
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
-        """No noise model: the simulation."""
+    def predict(self, u: Any, y: Any = None, horizon: int = 1) -> np.ndarray:
+        """No noise model: the simulation (``y`` and ``horizon`` are checked)."""
+        from .._measured import as_horizon, as_measured, predict_args
+
+        as_horizon(horizon)
+        u, _ = as_measured(*predict_args(u, y), self.ninputs, self.noutputs)
         return self.simulate(u)
 
     def linearize(self, x: Any = None, u: Any = None, dt: float | None = None) -> Any:

@@ -55,6 +55,24 @@ class IdentifiedModel:
     def n_parameters(self) -> int:
         return int(self.statespace.n_parameters)
 
+    def select(self, outputs: Any = None, inputs: Any = None) -> IdentifiedModel:
+        """The model from some inputs to some outputs (names or indices; MATLAB's
+        ``sys(i, j)``) around their offsets; see :meth:`sysid.ModelMixin.select`."""
+        from ..models.subsystem import subsystem
+
+        return subsystem(self, outputs, inputs)
+
+    def __getitem__(self, key: Any) -> IdentifiedModel:
+        """``model[outputs, inputs]`` (MATLAB's ``sys(i, j)``)."""
+        from ..models.subsystem import selection_key, subsystem
+
+        return subsystem(self, *selection_key(key, list(self.output_names),
+                                              list(self.input_names), "a model"))
+
+    def _select(self, iy: list[int], iu: list[int]) -> IdentifiedModel:
+        return IdentifiedModel(self.statespace.select(outputs=iy, inputs=iu),
+                               self.u_offset[iu], self.y_offset[iy])
+
     def _repr_html_(self) -> str:
         """Notebook display: the facts and poles of its model, as every model shows them."""
         return model_html(self)
@@ -94,8 +112,11 @@ class IdentifiedModel:
         u = np.asarray(u, float).reshape(-1, self.ninputs)
         return self.statespace.simulate(u - self.u_offset, x0) + self.y_offset
 
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
-        """``horizon``-step prediction from raw ``u`` and ``y``, in raw units."""
+    def predict(self, u: Any, y: Any = None, horizon: int = 1) -> np.ndarray:
+        """``horizon``-step prediction from raw ``u`` and ``y`` (or a record), in raw units."""
+        from .._measured import predict_args
+
+        u, y = predict_args(u, y)
         u = np.asarray(u, float).reshape(-1, self.ninputs)
         y = np.asarray(y, float).reshape(-1, self.noutputs)
         return (self.statespace.predict(u - self.u_offset, y - self.y_offset, horizon)

@@ -45,6 +45,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
+from .. import errors
 from .._checks import as_2d, as_dt
 from ..errors import DataError, NumericalError
 from .discretisation import expm, hold_blocks, require_finite_sampling
@@ -111,6 +112,15 @@ class ContinuousStateSpace(ModelMixin):
         self.hold = _method(hold, ("zoh", "foh"), "hold")
         self.info: dict[str, Any] = dict(info or {})
         self.uncertainty: Any = None  # a ParameterUncertainty when estimated (or d2c'd)
+
+    def _select(self, iy: list[int], iu: list[int]) -> ContinuousStateSpace:
+        """Outputs ``iy`` from inputs ``iu`` (:meth:`select`)."""
+        from .subsystem import names
+
+        return ContinuousStateSpace(
+            self.A, self.B[:, iu], self.C[iy], self.D[np.ix_(iy, iu)],
+            input_names=names(self.input_names, iu), output_names=names(self.output_names, iy),
+            hold=self.hold, info=self.info)
 
     dt = 0.0  # continuous time (python-control's convention)
     nstates = property(lambda self: self.A.shape[0], doc="Number of states n.")
@@ -228,10 +238,15 @@ class ContinuousStateSpace(ModelMixin):
         d = StateSpaceModel(Ad, Bd, Cd, Dd, dt=step)
         return d.simulate(u, x0=xi0 if np.any(xi0) else None)
 
-    def predict(self, u: Any, y: Any, horizon: int = 1, *, t: Any = None,
+    def predict(self, u: Any, y: Any = None, horizon: int = 1, *, t: Any = None,
                 dt: float | None = None, method: str | None = None,
                 x0: Any = None) -> np.ndarray:
         """No noise model: the prediction is the simulation (``y`` only sets the length)."""
+        from .._measured import predict_args
+
+        if dt is None and t is None and errors.is_record(u):  # the record's sample time
+            dt = u.dt
+        u, y = predict_args(u, y)
         y = np.asarray(y, dtype=float)
         if y.shape[0] != np.shape(u)[0]:
             raise DataError(f"u has {np.shape(u)[0]} samples but y has {y.shape[0]}")
@@ -342,7 +357,7 @@ class SampledContinuous:
         """The continuous model's response with its hold (``x0``: continuous state)."""
         return self.continuous.simulate(u, dt=self.dt, x0=x0)
 
-    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
+    def predict(self, u: Any, y: Any = None, horizon: int = 1, x0: Any = None) -> np.ndarray:
         """No noise model: the simulation."""
         return self.continuous.predict(u, y, horizon, dt=self.dt, x0=x0)
 

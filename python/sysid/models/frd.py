@@ -22,6 +22,7 @@ from ..data.segments import channel_index
 from ..errors import DataError, ShapeError
 from .checks import require_freqresp
 from .frd_algebra import FRDAlgebra, check_grid
+from .subsystem import selection_key
 
 __all__ = ["FRD", "FRDComparison"]
 
@@ -201,20 +202,8 @@ class FRD(FRDAlgebra):
         >>> g[0, :].response.shape, g["c", 1].response.shape, g[1:, [1, 0]].input_names
         ((2, 1, 2), (2, 1, 1), ['u1', 'u0'])
         """
-        if not (isinstance(key, tuple) and len(key) == 2):
-            raise DataError(f"index an FRD with two selections, G[outputs, inputs] (use : for "
-                            f"all), got {key!r}")
-        sel = []
-        for k, names, kind in zip(key, (self.output_names, self.input_names),
-                                  ("output", "input")):
-            if isinstance(k, slice):
-                k = list(range(len(names)))[k]
-            elif isinstance(k, np.ndarray):
-                k = k.tolist()
-            if isinstance(k, list) and not k:
-                raise DataError(f"the {kind} selection {key!r} is empty")
-            sel.append(k)
-        return self.select(outputs=sel[0], inputs=sel[1])
+        outputs, inputs = selection_key(key, self.output_names, self.input_names, "an FRD")
+        return self.select(outputs=outputs, inputs=inputs)
 
     @property
     def n_inputs(self) -> int:

@@ -140,8 +140,9 @@ class Model(Protocol):
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
         """Noise-free output ``(n_samples, noutputs)``."""
 
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
-        """``horizon``-step-ahead prediction ``(n_samples, noutputs)``."""
+    def predict(self, u: Any, y: Any = None, horizon: int = 1) -> np.ndarray:
+        """``horizon``-step-ahead prediction ``(n_samples, noutputs)`` from measured ``u``,
+        ``y`` (or a record in ``u``'s place)."""
 
     def freqresp(self, omega: Any) -> np.ndarray:
         """Complex frequency response ``(len(omega), noutputs, ninputs)``."""
@@ -361,7 +362,30 @@ class ModelMixin:
                             f"define {name}() on the class")
         return getattr(ss, name)
 
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+    def select(self, outputs: Any = None, inputs: Any = None) -> Any:
+        """The model from some inputs to some outputs (names or indices, ``None`` for all;
+        MATLAB's ``sys(i, j)``), of the same family, its uncertainty carried through.
+
+        Examples
+        --------
+        >>> import sysid
+        >>> m = sysid.StateSpaceModel([[0.5]], [[1.0, 2.0]], [[1.0], [3.0]])
+        >>> m.select(outputs=1, inputs=[1]).dcgain()
+        array([[12.]])
+        """
+        from .subsystem import subsystem
+
+        return subsystem(self, outputs, inputs)
+
+    def __getitem__(self, key: Any) -> Any:
+        """``model[outputs, inputs]``: :meth:`select` with indices, names, slices or lists
+        (MATLAB's ``sys(i, j)``; ``model[0, :]`` is the first output from every input)."""
+        from .subsystem import selection_key, subsystem
+
+        return subsystem(self, *selection_key(key, list(self.output_names),
+                                              list(self.input_names), "a model"))
+
+    def predict(self, u: Any, y: Any = None, horizon: int = 1) -> np.ndarray:
         """``horizon``-step prediction with the Kalman predictor of ``to_statespace()``."""
         return np.asarray(self._delegate("predict")(u, y, horizon))
 

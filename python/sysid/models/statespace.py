@@ -18,6 +18,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_2d, as_count, as_dt, as_int, as_matrix, check_covariance, unmask
+from .._measured import predict_args
 from ..errors import DataError, NumericalError, ShapeError
 from .linear import DampingTable, damping_table, minimal_basis, transmission_zeros
 from .protocol import ModelMixin, TimeResponse, default_length
@@ -315,7 +316,7 @@ class StateSpaceModel(ModelMixin):
                 "for the model's gain; scale the input (and the model) to order 1"
             ) from None
 
-    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
+    def predict(self, u: Any, y: Any = None, horizon: int = 1, x0: Any = None) -> np.ndarray:
         """``horizon``-step-ahead prediction ``ŷ(t | t - horizon)`` with the Kalman predictor.
 
         Uses ``K``; a model without ``K`` (output error) predicts by simulation.
@@ -323,7 +324,9 @@ class StateSpaceModel(ModelMixin):
         Parameters
         ----------
         u, y : array_like
-            Measured inputs and outputs.
+            Measured inputs and outputs; or a single-experiment record
+            (:class:`~sysid.IOData`) in ``u``'s place and ``y`` left out (MATLAB's
+            ``predict(sys, data, K)``).
         horizon : int
             Steps ahead, ``>= 1``.
         x0 : array_like or "model", optional
@@ -341,6 +344,7 @@ class StateSpaceModel(ModelMixin):
         >>> m.predict(None, [1.0, 0.9, 0.81])[:, 0]
         array([0.  , 0.9 , 0.81])
         """
+        u, y = predict_args(u, y)
         y = as_2d(y, "y", ncols=self.noutputs)
         u = self._u(u, y.shape[0])
         if u.shape[0] != y.shape[0]:
@@ -497,6 +501,19 @@ class StateSpaceModel(ModelMixin):
         return ss_parameter_count(self.nstates, self.ninputs, self.noutputs,
                                   feedthrough=bool(np.any(self.D != 0)),
                                   noise_model=self.K is not None)
+
+    def _select(self, iy: list[int], iu: list[int]) -> StateSpaceModel:
+        """Outputs ``iy`` from inputs ``iu`` (:meth:`select`): the columns of ``B``, rows of
+        ``C``, ``D``, and the innovations of the outputs kept (``K``'s columns and their
+        covariance), as MATLAB's ``sys(i, j)``."""
+        from .subsystem import names
+
+        return StateSpaceModel(
+            self.A, self.B[:, iu], self.C[iy], self.D[np.ix_(iy, iu)],
+            None if self.K is None else self.K[:, iy], dt=self.dt,
+            noise_cov=None if self.noise_cov is None else self.noise_cov[np.ix_(iy, iy)],
+            x0=self.x0, input_names=names(self.input_names, iu),
+            output_names=names(self.output_names, iy), info=self.info)
 
     def to_statespace(self) -> StateSpaceModel:
         """The model itself (it is already in state-space form)."""

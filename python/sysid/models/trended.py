@@ -101,8 +101,12 @@ class TrendedModel(ModelMixin):
         y = self.model.simulate(du) if x0 is None else self.model.simulate(du, x0=x0)
         return self.trend.restore_outputs(y, self.dt)
 
-    def predict(self, u: Any, y: Any, horizon: int = 1, **kw: Any) -> np.ndarray:
-        """``horizon``-step predictions of the raw outputs from raw data."""
+    def predict(self, u: Any, y: Any = None, horizon: int = 1, **kw: Any) -> np.ndarray:
+        """``horizon``-step predictions of the raw outputs from raw data (arrays or a
+        record)."""
+        from .._measured import predict_args
+
+        u, y = predict_args(u, y)
         du = self.trend.remove_inputs(u, self.dt)
         dy = self.trend.remove_outputs(y, self.dt)
         out = self.model.predict(du, dy, horizon, **kw)

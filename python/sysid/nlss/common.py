@@ -134,12 +134,14 @@ class LinearPart:
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:  # pragma: no cover - the host's
         raise NotImplementedError
 
-    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
+    def predict(self, u: Any, y: Any = None, horizon: int = 1, x0: Any = None) -> np.ndarray:
         """An output-error model has no noise model: its prediction is its simulation
         (from ``x0``, as :meth:`simulate`). ``y`` is checked against the model's outputs
         and ``u``'s samples, as every model's ``predict`` checks it."""
         from .._checks import as_2d
+        from .._measured import predict_args
 
+        u, y = predict_args(u, y)
         out = self.simulate(u) if x0 is None else self.simulate(u, x0=x0)
         yy = as_2d(y, "y", ncols=out.shape[1])
         if yy.shape[0] != out.shape[0]:

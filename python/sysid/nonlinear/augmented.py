@@ -145,8 +145,11 @@ class AugmentedInputModel(ModelMixin):
         return np.asarray(self.linear.simulate(ua) if x0 is None
                           else self.linear.simulate(ua, x0=x0))
 
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+    def predict(self, u: Any, y: Any = None, horizon: int = 1) -> np.ndarray:
         """The linear model's prediction for the augmented inputs."""
+        from .._measured import predict_args
+
+        u, y = predict_args(u, y)
         return np.asarray(self.linear.predict(self._u(u), y, horizon))
 
     def freqresp(self, omega: Any) -> np.ndarray:

@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_count, as_horizon, as_matrix, as_measured, check_elements
+from .._checks import as_2d, as_count, as_matrix, check_elements
+from .._measured import as_horizon, as_measured, predict_args
 from ..errors import DataError, ShapeError
 from ..models.protocol import ModelMixin, no_pole_std
 
@@ -515,12 +516,12 @@ class HammersteinWienerModel(ModelMixin):
         free = lfilter([1.0], a, np.zeros(x.size), zi=lfiltic([1.0], a, past))[0]
         return (np.asarray(self.output_nl(x + free), float) + self.y_offset)[:, None]
 
-    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
+    def predict(self, u: Any, y: Any = None, horizon: int = 1, x0: Any = None) -> np.ndarray:
         """The output-error predictor does not use measured outputs: equals ``simulate``
         (from ``x0``; ``u``, ``y`` and ``horizon`` are checked all the same, as every
         model's are)."""
         as_horizon(horizon)
-        u, _ = as_measured(u, y, 1, 1)
+        u, _ = as_measured(*predict_args(u, y), 1, 1)
         return self.simulate(u, x0)
 
     def linear(self) -> Any:

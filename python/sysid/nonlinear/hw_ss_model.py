@@ -12,7 +12,8 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_horizon, as_matrix, as_measured
+from .._checks import as_2d, as_matrix
+from .._measured import as_horizon, as_measured, predict_args
 from ..errors import DataError, ShapeError
 from ..models.protocol import ModelMixin, no_pole_std
 from .hw_model import Nonlinearity, UserFunction, nonlinearity_from_dict
@@ -146,12 +147,12 @@ class HammersteinWienerSSModel(ModelMixin):
                              f"{self.nstates} states")
         return x.tolist()
 
-    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
+    def predict(self, u: Any, y: Any = None, horizon: int = 1, x0: Any = None) -> np.ndarray:
         """The output-error predictor does not use measured outputs: equals ``simulate``
         (from ``x0``; ``u``, ``y`` and ``horizon`` are checked all the same, as every
         model's are)."""
         as_horizon(horizon)
-        u, _ = as_measured(u, y, self.ninputs, self.noutputs)
+        u, _ = as_measured(*predict_args(u, y), self.ninputs, self.noutputs)
         return self.simulate(u, x0)
 
     def linear(self) -> Any:

@@ -15,7 +15,8 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_horizon, as_measured
+from .._checks import as_2d
+from .._measured import as_horizon, as_measured, predict_args
 from ..errors import DataError, ShapeError
 from ..models.protocol import ModelMixin, no_pole_std
 from .customreg import CustomRegressor
@@ -224,7 +225,7 @@ class LaggedIO:
         """``predict``'s arguments checked: ``u``, ``y`` of one length and the horizon."""
         if self.ninputs == 0 and np.ndim(u) == 1:
             u = np.zeros((np.size(u), 0))
-        u, y = as_measured(u, y, self.ninputs, self.noutputs)
+        u, y = as_measured(*predict_args(u, y), self.ninputs, self.noutputs)
         h = as_horizon(horizon)
         if h is None:
             raise DataError("horizon must be a positive integer; for the free-run prediction "
@@ -353,7 +354,7 @@ class NARXModel(LaggedIO, ModelMixin):
         """
         return self._rust("simulate", self._u(u), self._y0(x0))
 
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+    def predict(self, u: Any, y: Any = None, horizon: int = 1) -> np.ndarray:
         """``horizon``-step prediction ``yhat(t | t - horizon)`` from measured ``u``, ``y``
         (NARMAX: residual terms from the one-step residuals up to ``t - horizon``)."""
         return self._rust("predict", *self._measured(u, y, horizon))

@@ -155,7 +155,7 @@ class NetworkNARXModel(LaggedIO, ModelMixin):
         u, y0 = self._u(u), self._y0(x0)
         return np.asarray(_sysid.narx_network_simulate(self._args(), u, np.ascontiguousarray(y0)))
 
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+    def predict(self, u: Any, y: Any = None, horizon: int = 1) -> np.ndarray:
         """``horizon``-step prediction ``yhat(t | t - horizon)`` from measured ``u``, ``y``."""
         u, y, horizon = self._measured(u, y, horizon)
         return np.asarray(_sysid.narx_network_predict(self._args(), u, np.ascontiguousarray(y),

@@ -105,7 +105,7 @@ class NARXStateSpace(ModelMixin):
         full = self.narx.simulate(np.vstack([upast, u]), x0=ypast)
         return full[self.lags:]
 
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+    def predict(self, u: Any, y: Any = None, horizon: int = 1) -> np.ndarray:
         """k-step prediction: that of the NARX model."""
         return self.narx.predict(u, y, horizon)
 

@@ -11,7 +11,8 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_dt, as_horizon, as_measured
+from .._checks import as_2d, as_dt
+from .._measured import as_horizon, as_measured, predict_args
 from ..errors import DataError
 from ..models.protocol import ModelMixin
 
@@ -265,7 +266,7 @@ class PolynomialModel(ModelMixin):
             out.append(_sysid.poly_filter(list(_monic(self.d[i])), list(_monic(self.c[i])), v))
         return np.column_stack(out)
 
-    def predict(self, u: Any, y: Any, horizon: int = 1, x0: Any = None) -> np.ndarray:
+    def predict(self, u: Any, y: Any = None, horizon: int = 1, x0: Any = None) -> np.ndarray:
         """``horizon``-step-ahead prediction ``yhat(t | t - horizon)``.
 
         With ``H_i = C_i / (A_i D_i)`` the noise filter of output ``i`` and ``h_0 = 1, h_1,
@@ -284,7 +285,7 @@ class PolynomialModel(ModelMixin):
         """
         _rest(x0)
         h = as_horizon(horizon)  # np.inf: MATLAB's predict(..., Inf), the simulation
-        u, y2 = as_measured(u, y, self.n_inputs, self.n_outputs)
+        u, y2 = as_measured(*predict_args(u, y), self.n_inputs, self.n_outputs)
         k = np.iinfo(np.int64).max if h is None else h
         if k >= max(y2.shape[0], 1):  # every innovation is unseen: the simulation from rest
             return np.asarray(self.simulate(u), dtype=float).reshape(u.shape[0], -1)
@@ -458,6 +459,25 @@ class PolynomialModel(ModelMixin):
             [self._channel_tf(i, j)[1] for j in range(self.n_inputs)] for i in range(self.n_outputs)
         ]
         return control.tf(nums, dens, self.dt)
+
+    def _select(self, iy: list[int], iu: list[int]) -> PolynomialModel:
+        """Outputs ``iy`` from inputs ``iu`` (:meth:`select`); a model whose ``A`` couples
+        the outputs has no polynomial subsystem (each output's equation holds the others)."""
+        from ..models.subsystem import names
+
+        if self.coupled:
+            raise DataError("this polynomial model's A couples its outputs, so no polynomial "
+                            "model holds some of them alone: select from its state-space "
+                            "form, model.to_statespace().select(...)")
+        out = PolynomialModel(
+            [[self.a[i][k] for k in iy] for i in iy], [[self.b[i][j] for j in iu] for i in iy],
+            self.nk[np.ix_(iy, iu)], self.dt, c=[self.c[i] for i in iy],
+            d=[self.d[i] for i in iy], f=[[self.f[i][j] for j in iu] for i in iy],
+            noise_variance=self.noise_variance[iy])
+        out.input_names, out.output_names = names(self.input_names, iu), names(
+            self.output_names, iy)
+        out.info = dict(self.info)
+        return out
 
     def to_statespace(self) -> Any:
         """The model as a :class:`~sysid.StateSpaceModel` in innovations form, noise model

@@ -116,6 +116,15 @@ class ProcessModel(TransferFunction):
         return ProcessModel(self.type.code, vals, hold=self.hold, input_names=self.input_names,
                             output_names=self.output_names)
 
+    def _select(self, iy: list[int], iu: list[int]) -> ProcessModel:
+        """Outputs ``iy`` from inputs ``iu`` (:meth:`select`), with their parameters."""
+        from ..models.subsystem import names
+
+        return ProcessModel(self.type.code, [[dict(self._values[i][j]) for j in iu]
+                                             for i in iy], hold=self.hold,
+                            input_names=names(self.input_names, iu),
+                            output_names=names(self.output_names, iy), info=self.info)
+
     def to_tf(self) -> TransferFunction:
         """The same model as a plain :class:`~sysid.TransferFunction`."""
         return TransferFunction(self.num, self.den, iodelay=self.iodelay, hold=self.hold,

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from .. import errors
 from .._checks import as_2d, as_dt
 from ..errors import DataError, ShapeError
 from ..greybox.delays import shift_taps
@@ -261,6 +262,16 @@ class TransferFunction(ModelMixin):
     def _blocks(self) -> list[tuple[int, int, tuple[np.ndarray, ...]]]:
         return [(i, j, canonical(self.den[i][j], self.num[i][j])) for i, j in self.pairs()]
 
+    def _select(self, iy: list[int], iu: list[int]) -> TransferFunction:
+        """Outputs ``iy`` from inputs ``iu`` (:meth:`select`)."""
+        from ..models.subsystem import names
+
+        return TransferFunction([[self.num[i][j] for j in iu] for i in iy],
+                                [[self.den[i][j] for j in iu] for i in iy], dt=self.dt,
+                                iodelay=self.iodelay[np.ix_(iy, iu)], hold=self.hold,
+                                input_names=names(self.input_names, iu),
+                                output_names=names(self.output_names, iy), info=self.info)
+
     def to_statespace(self, dt: float | None = None) -> Any:
         """An equivalent state-space model.
 
@@ -379,9 +390,14 @@ class TransferFunction(ModelMixin):
         ss = StateSpaceModel(Ad, Bt, Cd, Dt, dt=dt)
         return ss.simulate(shift_taps(u, taps), z0 if np.any(z0) else None)
 
-    def predict(self, u: Any, y: Any, horizon: int = 1, *, dt: float | None = None
+    def predict(self, u: Any, y: Any = None, horizon: int = 1, *, dt: float | None = None
                 ) -> np.ndarray:
         """No noise model (output error): the prediction is the simulation."""
+        from .._measured import predict_args
+
+        if dt is None and errors.is_record(u):  # the record's sample time
+            dt = u.dt
+        u, y = predict_args(u, y)
         if np.shape(y)[0] != np.shape(u)[0]:
             raise DataError(f"u has {np.shape(u)[0]} samples but y has {np.shape(y)[0]}")
         return self.simulate(u, dt=dt)
@@ -610,7 +626,7 @@ class _Sampled:
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
         return self.continuous.simulate(u, x0, dt=self.dt)
 
-    def predict(self, u: Any, y: Any, horizon: int = 1) -> np.ndarray:
+    def predict(self, u: Any, y: Any = None, horizon: int = 1) -> np.ndarray:
         return self.continuous.predict(u, y, horizon, dt=self.dt)
 
     def freqresp(self, omega: Any) -> np.ndarray:
