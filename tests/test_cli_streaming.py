@@ -307,3 +307,34 @@ def test_a_streamed_loggers_file_reads_as_in_memory(tmp_path, monkeypatch, capsy
         assert "data row 2501, column 'time': 'oops' is not a date-time stamp" in err
     else:  # by its file line, as in memory
         assert "log.csv line 2503, column 'u2': 'oops' is not a number" in err
+
+
+@pytest.mark.parametrize("streamed", [False, True])
+def test_a_european_logger_file_with_decimal_commas(tmp_path, monkeypatch, capsys, streamed):
+    """``Zeit;Eingang;Ausgang`` with ``0,08;4,9;11,2`` rows: the command said "'0,08' is not a
+    number" with no way to read it (the Python readers take ``decimal=","``), the German
+    time column was not recognised (dt = 1 s), and a time column's steps gave dt =
+    0.08000000000000007. Now ``--decimal ,`` reads it, the error names that option, "Zeit"
+    is a time column and dt is the 0.08 the column was written with; in memory and streamed
+    alike."""
+    if streamed:
+        monkeypatch.setattr(cli, "STREAM_BYTES", 0)
+    d = np.loadtxt(sysid.datasets.path("dryer"))
+    path = tmp_path / "messung.csv"
+    path.write_text("Zeit;Eingang;Ausgang\n" + "".join(
+        f"{0.08 * k:.2f};{u};{y}\n".replace(".", ",") for k, (u, y) in enumerate(d)))
+    argv = ["identify", str(path), "--inputs", "Eingang", "--outputs", "Ausgang", "--split",
+            "500", "--order", "4", "--report", str(tmp_path / "out")]
+    assert cli.main(argv) == 2
+    err = capsys.readouterr().err
+    assert "line 2, column 'Eingang'" in err and "(a decimal comma? pass --decimal ,)" in err
+    assert cli.main(argv + ["--decimal", ","]) == 0
+    assert "sample time from the time column 'Zeit'" in capsys.readouterr().err
+    model = sysid.load_model(tmp_path / "out" / "model.json")
+    assert model.nstates == 4 and model.dt == 0.08
+    ref = tmp_path / "ref.csv"  # the same numbers with decimal points
+    ref.write_text("time,Eingang,Ausgang\n" + "".join(
+        f"{0.08 * k:.2f},{u},{y}\n" for k, (u, y) in enumerate(d)))
+    assert cli.main(["identify", str(ref), *argv[2:-1], str(tmp_path / "ref"), "--quiet"]) == 0
+    np.testing.assert_array_equal(model.statespace.A,
+                                  sysid.load_model(tmp_path / "ref" / "model.json").statespace.A)

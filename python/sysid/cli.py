@@ -23,6 +23,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .data.blocks import read_columns
+from .data.formats import grid_dt
 from .data.iodata import IOData
 from .data.table import (
     datetime_seconds,
@@ -323,6 +324,8 @@ def _check_report_dir(report: str | Path) -> None:
 #: CSV files holding more text than this (decompressed) are read by pyarrow's streaming
 #: reader, in blocks.
 STREAM_BYTES = 8 << 20
+#: how the command says to read decimal commas (in a number's error)
+DECIMAL_HINT = "pass --decimal ,"
 def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         list[str], list[int], list[int], np.ndarray, np.ndarray, np.ndarray | None]:
     """Names, input and output column indices, u, y and the time column if asked."""
@@ -331,33 +334,36 @@ def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
     # read_table (pyarrow splits on one character)
     big = path.is_file() and (path.suffix.lower() in (".parquet", ".pq")
                               or (text_bytes(path, STREAM_BYTES) > STREAM_BYTES
-                                  and header(path, args.delimiter).delimiter not in (" ", "\t")))
+                                  and header(path, args.delimiter, decimal=args.decimal
+                                             ).delimiter not in (" ", "\t")))
     if big:
         say(f"reading {args.data} in blocks")
-        names = _header(path, args.delimiter)
+        names = _header(path, args.delimiter, args.decimal)
         ui = _columns(args.inputs, names, "inputs") if args.inputs else []
         yi = _columns(args.outputs, names, "outputs")
         _find_time(args, names, ui + yi, say)
         ti = [_columns(args.time, names, "times")[0]] if args.time is not None else []
         z = read_columns(path, [names[i] for i in ui + yi + ti], delimiter=args.delimiter,
-                         progress=_bars(args), stamps=args.time and names[ti[0]])
+                         progress=_bars(args), stamps=args.time and names[ti[0]],
+                         decimal=args.decimal, hint=DECIMAL_HINT)
         u, y = z[:, :len(ui)], z[:, len(ui):len(ui) + len(yi)]
         return names, ui, yi, u, y, (z[:, -1] if ti else None)
     say(f"reading {args.data}")
-    table, _ = units_row(read_table(args.data, args.delimiter))  # a logger's units row
+    dec = args.decimal  # a logger's units row skipped; decimal commas if asked
+    table, _ = units_row(read_table(args.data, args.delimiter, decimal=dec), dec)
     names = table.names
     ui = _columns(args.inputs, names, "inputs") if args.inputs else []
     yi = _columns(args.outputs, names, "outputs")
     say(f"{len(table.rows)} samples; converting {len(ui)} input and {len(yi)} output "
         "column(s)")
     _find_time(args, names, ui + yi, say)
-    u = numeric(table, ui)
-    y = numeric(table, yi)
+    u = numeric(table, ui, decimal=dec, hint=DECIMAL_HINT)
+    y = numeric(table, yi, decimal=dec, hint=DECIMAL_HINT)
     t = None
     if args.time is not None:
         ti = _columns(args.time, names, "times")[0]
-        t = datetime_seconds(table, ti)  # date-time stamps: seconds after the first
-        t = numeric(table, [ti])[:, 0] if t is None else t
+        t = datetime_seconds(table, ti, dec)  # date-time stamps: seconds after the first
+        t = numeric(table, [ti], decimal=dec, hint=DECIMAL_HINT)[:, 0] if t is None else t
     return names, ui, yi, u, y, t
 
 
@@ -386,14 +392,14 @@ def _bars(args: argparse.Namespace) -> bool | None:
     return True if args.progress else False if args.quiet else None
 
 
-def _header(path: Path, delimiter: str | None) -> list[str]:
+def _header(path: Path, delimiter: str | None, decimal: str = ".") -> list[str]:
     """The column names of a file read in blocks (a text table's as ``read_table`` names
     them: ``"0", "1", ...`` without a header)."""
     if path.suffix.lower() in (".parquet", ".pq"):
         import pyarrow.parquet as pq
 
         return list(pq.ParquetFile(path).schema_arrow.names)
-    return header(path, delimiter).names
+    return header(path, delimiter, decimal=decimal).names
 
 
 def _identify(args: argparse.Namespace) -> int:
@@ -411,7 +417,10 @@ def _identify(args: argparse.Namespace) -> int:
         steps = np.diff(t)
         if steps.size == 0 or not np.all(steps > 0):
             raise DataError(f"time column {args.time!r} must increase strictly")
-        dt = float(np.median(steps))
+        # the dt the column was written with (0.1, not 0.10000000000000009 from its steps'
+        # rounding), as IOData.from_csv reads it; else the median step
+        span = (t[-1] - t[0]) / (t.size - 1)
+        dt = grid_dt([t], [float(f"{span:.12g}")]) or float(np.median(steps))
         if args.dt is not None:
             raise DataError("give either --dt or --time, not both")
     else:
@@ -555,6 +564,10 @@ def _parser() -> argparse.ArgumentParser:
                           "none fits the raw data, as SLICOT, and warns when an offset "
                           "dominates)")
     ide.add_argument("--delimiter", default=None, help="field separator (default: guessed)")
+    ide.add_argument("--decimal", choices=(".", ","), default=".",
+                     help="decimal mark of the numbers: . (default) or , (decimal commas, as "
+                          "European loggers write them: 0,25;1,5 with a semicolon between "
+                          "fields)")
     ide.add_argument("--report", required=True, help="output directory")
     ide.add_argument("--uncertainty", choices=("none", "bootstrap"), default="none",
                      help="pole standard deviations in the report from a residual bootstrap")

@@ -43,7 +43,7 @@ class _CountingFile(ForwardReader):
 
 def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None = None,
                  progress: bool | None = None, block_size: int | None = None,
-                 stamps: str | None = None) -> np.ndarray:
+                 stamps: str | None = None, decimal: str = ".", hint: str = "") -> np.ndarray:
     """Read the named numeric columns of a large CSV or Parquet file in blocks.
 
     CSV goes through pyarrow's streaming reader (``pyarrow.csv.open_csv``, blocks of
@@ -56,7 +56,8 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
     requested columns are held in memory, as float64. As the in-memory reader, a CSV file
     may have a logger's row of units under its header (no number in it: skipped), and the
     column ``stamps`` (the time column) may hold date-time stamps (ISO 8601, ``Z`` or
-    ``+hh:mm`` offsets), returned as seconds after the first.
+    ``+hh:mm`` offsets), returned as seconds after the first. ``decimal=","`` reads decimal
+    commas (CSV); ``hint`` says how to ask for them in a number's error.
 
     Every value must be a finite number. A CSV cell that is not (text, empty, ``nan``,
     ``inf``) raises the :class:`~sysid.DataError` of :func:`sysid.cli.read_csv`, naming its
@@ -131,7 +132,7 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
     else:
         import pyarrow.csv as pacsv
 
-        head = header(path, delimiter)
+        head = header(path, delimiter, decimal=decimal)
         delim = head.delimiter
         # a headerless file's first line is data: its names are read_table's "0", "1", ...
         # (the trailing empty fields of a trailing delimiter named so as to be asked by none)
@@ -140,7 +141,8 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
         # a logger's units row under the header (read_table's rule), and the time column
         # read as text when its first cell is a date-time stamp
         ahead = first_rows(path, head, 3)
-        units = not head.headerless and len(units_row(ahead)[0].rows) < len(ahead.rows)
+        units = (not head.headerless
+                 and len(units_row(ahead, decimal)[0].rows) < len(ahead.rows))
         first = ahead.rows[int(units)] if len(ahead.rows) > int(units) else []
         k = head.names.index(stamps) if stamps in head.names and stamps in columns else -1
         if 0 <= k < len(first) and stamps_ns([first[k]])[0] is not None:
@@ -158,20 +160,20 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
                     parse_options=pacsv.ParseOptions(delimiter=delim,
                                                      invalid_row_handler=_skip_comment),
                     convert_options=pacsv.ConvertOptions(
-                        include_columns=columns,
+                        include_columns=columns, decimal_point=decimal,
                         column_types={c: pa.string() if c == text else pa.float64()
                                       for c in columns}))
                 for batch in reader:
                     if not take(batch):
                         raise _bad_cell(path, columns, delim, rows + int(units),
-                                        "a value that is not a finite number")
+                                        "a value that is not a finite number", decimal, hint)
                     rows += batch.num_rows
             except (pa.ArrowInvalid, KeyError) as e:
                 if src.error is not None:  # pyarrow's error for the damaged stream
                     raise src.error from None
                 raise _bad_cell(path, columns, delim, rows + int(units),
                                 f"{e}; check the column names and that every field is a "
-                                "number") from None
+                                "number", decimal, hint) from None
             finally:
                 src.close()
                 raw.close()
@@ -179,11 +181,12 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
 
 
 def _bad_cell(path: Path, columns: list[str], delimiter: str, rows: int,
-              what: str) -> DataError:
+              what: str, decimal: str = ".", hint: str = "") -> DataError:
     """The error for a block of a streamed CSV file that did not convert: its bad cell by
     line and column (read again from data row ``rows`` by the in-memory reader's rules),
     else ``what`` (pyarrow's message)."""
-    return (first_bad_cell(path, columns, delimiter=delimiter, start=rows)
+    return (first_bad_cell(path, columns, delimiter=delimiter, start=rows, decimal=decimal,
+                           hint=hint)
             or DataError(f"{path.name}: {what} (after data row {rows})"))
 
 

@@ -77,7 +77,7 @@ def _seconds(x: Any, first: Any) -> np.ndarray:
     return np.asarray((idx - pd.Index(first)[0]).total_seconds(), dtype=float)
 
 
-def _grid_dt(ts: list[np.ndarray], candidates: list[Any], rtol: float = 0.0) -> float | None:
+def grid_dt(ts: list[np.ndarray], candidates: list[Any], rtol: float = 0.0) -> float | None:
     """The first candidate sample time whose grid ``t0 + k dt`` gives every time vector
     back within its rounding (a few units in the last place, or ``rtol`` of the largest
     instant): a stored dt such as 1/60, which the time vector alone would read as the
@@ -218,7 +218,7 @@ def from_pandas(
         _warn_dropped_rows(g.index, time is not None or bool(ts))
     if dt is None and ts and "dt" in df.attrs:
         # the stored dt (to_pandas) when the time agrees with it: 1/60, not 0.0166666666667
-        dt = _grid_dt(ts, [df.attrs["dt"]], rtol=1e-9)
+        dt = grid_dt(ts, [df.attrs["dt"]], rtol=1e-9)
     if dt is None and not ts:
         dt = df.attrs.get("dt")
         if dt is None:
@@ -395,7 +395,7 @@ def from_csv(
             data[data[:, ecol] == k, tcol] for k in np.unique(data[:, ecol])]
         if all(t.size >= 2 and np.all(np.diff(t) > 0) for t in ks):
             spans = [(t[-1] - t[0]) / (t.size - 1) for t in ks]
-            dt = _grid_dt(ks, [float(f"{spans[0]:.12g}"), *spans])
+            dt = grid_dt(ks, [float(f"{spans[0]:.12g}"), *spans])
     if ecol is not None:
         ks = data[:, ecol]
         parts = [data[ks == k] for k in np.unique(ks)]

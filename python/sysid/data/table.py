@@ -273,7 +273,7 @@ def _python_only_any(cells: np.ndarray) -> bool:
 
 
 def first_bad_cell(path: str | Path, columns: list[str], *, delimiter: str | None = None,
-                   start: int = 0, decimal: str = ".") -> DataError | None:
+                   start: int = 0, decimal: str = ".", hint: str = "") -> DataError | None:
     """The error :func:`numeric` gives for the named ``columns`` of a text table, found by
     reading the file line by line (bounded memory, for files too large to hold as strings).
 
@@ -306,7 +306,7 @@ def first_bad_cell(path: str | Path, columns: list[str], *, delimiter: str | Non
         return None
     try:
         for _ in _data_rows(path, head, [head.names.index(c) for c in columns],
-                            start=start, decimal=decimal):
+                            start=start, decimal=decimal, hint=hint):
             pass
     except DataError as e:
         return e
@@ -548,7 +548,7 @@ def _open_text(path: Path) -> IO[str]:
 
 
 def _data_rows(path: Path, head: Header, cols: list[int], *, start: int = 0,
-               decimal: str = ".") -> Iterator[tuple[int, list[float]]]:
+               decimal: str = ".", hint: str = "") -> Iterator[tuple[int, list[float]]]:
     """``(file line, values of cols)`` of each data row from the ``start``-th, read line by
     line by :func:`read_table`'s rules; a row with the wrong number of fields or a cell that
     is not a finite number raises its :class:`~sysid.DataError` (file line and column)."""
@@ -563,7 +563,8 @@ def _data_rows(path: Path, head: Header, cols: list[int], *, start: int = 0,
                 cells = _fields(path, k, split(line), n)
                 for c in cols:
                     if not is_finite(cells[c], decimal):
-                        raise cell_error(path, k, head.names[c], cells[c], decimal=decimal)
+                        raise cell_error(path, k, head.names[c], cells[c], decimal=decimal,
+                                         hint=hint)
                 yield k, [float(cells[c].replace(decimal, ".")) for c in cols]
     except _UNREADABLE as e:
         raise damaged(path, e, seen[0], seen[0] > 0) from None
@@ -695,8 +696,10 @@ def units_row(table: Table, decimal: str = ".") -> tuple[Table, dict[int, str]]:
     return table._replace(rows=table.rows[1:], lines=table.lines[1:]), units
 
 
+#: the word "time" in the languages loggers are set to most often (German, French,
+#: Spanish, Italian and Portuguese, Dutch, the Scandinavian ones) is a time column too
 TIME_NAMES = ("time", "t", "time_s", "t_s", "seconds", "sec", "timestamp", "datetime",
-              "date_time", "elapsed_time")
+              "date_time", "elapsed_time", "zeit", "temps", "tiempo", "tempo", "tijd", "tid")
 
 
 def time_column(names: list[str], exclude: Iterable[int] = ()) -> int | None:
