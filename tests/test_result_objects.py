@@ -85,3 +85,30 @@ def test_the_tables_hold_the_numbers(results):
     ny = r["nyquist"].to_pandas()
     np.testing.assert_allclose(ny["real"] + 1j * ny["imag"], r["nyquist"].response)
     assert "stable" in r["nyquist"].summary()
+
+
+def test_an_impulse_response_estimate_reads_as_matlab_s_impulseest_model():
+    # impulse_response(data) had neither plot, summary nor to_pandas (impulseplot with
+    # showConfidence, present): only the raw array and its std in a dict
+    d = sysid.datasets.load_dryer()
+    est = sysid.impulse_response(d, 40)
+    assert (est.input_names, est.output_names) == (d.input_names, d.output_names)
+    imp, stp = est.impulse(), est.step()
+    np.testing.assert_array_equal(imp.y, est.markov)
+    np.testing.assert_array_equal(imp.std, est.info["std"])
+    np.testing.assert_allclose(stp.y[:, 0, 0], np.cumsum(est.markov[:, 0, 0]))
+    np.testing.assert_allclose(imp.t, 0.08 * np.arange(40))
+    table = est.to_pandas()
+    pair = "air temperature <- heater voltage"
+    assert list(table.columns) == [pair, f"{pair} std"]
+    np.testing.assert_array_equal(table[pair].to_numpy(), est.markov[:, 0, 0])
+    text = est.summary()
+    k = int(np.argmax(np.abs(est.markov[:, 0, 0])))
+    assert f"largest {est.markov[k, 0, 0]:.4g}" in text and f"t = {0.08 * k:.4g}" in text
+    assert f"sum (the gain) {est.markov[:, 0, 0].sum():.4g}" in text
+    fig = est.plot()
+    assert len(fig.axes) == 1 and "heater voltage" in fig.axes[0].get_title()
+    # OKID's and the FRF's estimates carry the record's names too (no std: none estimated)
+    ok = sysid.okid(d, 8, 30)
+    assert ok.output_names == d.output_names and ok.impulse().std is None
+    assert "std" not in ok.summary()

@@ -144,7 +144,8 @@ def impulse_response(data: IOData, length: int | None = None, *,
     info["std"] = np.asarray(out["std"]).reshape(-1, l, m)
     if why is not None:
         info["length"] = why
-    return MarkovEstimate(h, dt, "fir-tc" if regularization else "fir", info)
+    return MarkovEstimate(h, dt, "fir-tc" if regularization else "fir", info,
+                          input_names=data.input_names, output_names=data.output_names)
 
 
 def okid(data: IOData, observer_order: int, count: int | None = None, *,
@@ -204,7 +205,8 @@ def okid(data: IOData, observer_order: int, count: int | None = None, *,
         "samples": out["samples"],
         "observer_order": p,
     }
-    return MarkovEstimate(h, dt, "okid", info)
+    return MarkovEstimate(h, dt, "okid", info, input_names=data.input_names,
+                          output_names=data.output_names)
 
 
 def impulse_from_frf(frf: Any, n_fft: int | None = None, *, dt: float | None = None,
@@ -296,4 +298,6 @@ def impulse_from_frf(frf: Any, n_fft: int | None = None, *, dt: float | None = N
                 "lines?); excite the whole band, or pass fill_missing=True for a band-limited "
                 "impulse response")
     h = np.fft.irfft(full, n=n_fft, axis=0)
-    return MarkovEstimate(h, dt, "ifft", {"samples": n_fft})
+    return MarkovEstimate(h, dt, "ifft", {"samples": n_fft},
+                          input_names=getattr(frf, "input_names", None),
+                          output_names=getattr(frf, "output_names", None))

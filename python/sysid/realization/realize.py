@@ -396,13 +396,79 @@ class MarkovEstimate:
         parameters ``(p, l, m + l)`` and residual covariance. A FIR estimate's ``"std"``
         (the shape of ``markov``): each parameter's standard deviation, the least-squares
         one (``"fir"``) or the TC posterior's (``"fir-tc"``, the prior included).
+    input_names, output_names : list of str
+        The record's channel names.
+
+    The estimate reads as MATLAB's ``impulseest`` model does: :meth:`impulse` and
+    :meth:`step` give its responses (:class:`~sysid.TimeResponse`, the impulse response
+    with its standard deviations when estimated), :meth:`plot` draws the impulse response
+    with its bands (``impulseplot`` with ``showConfidence``), :meth:`summary` and
+    :meth:`to_pandas` give it as text and a table.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(400)
+    >>> y = sysid.StateSpaceModel([[0.7]], [[1.0]], [[1.0]]).simulate(u)[:, 0]
+    >>> est = sysid.impulse_response(sysid.IOData(u, y + 0.01 * rng.standard_normal(400)), 20)
+    >>> est.to_pandas()[["y0 <- u0", "y0 <- u0 std"]].round(2).iloc[1:3].values.tolist()
+    [[1.0, 0.0], [0.7, 0.0]]
+    >>> round(float(est.step().y[-1, 0, 0]), 2)  # the gain 1 / (1 - 0.7)
+    3.33
     """
 
-    def __init__(self, markov: np.ndarray, dt: float, method: str, info: dict[str, Any]) -> None:
+    def __init__(self, markov: np.ndarray, dt: float, method: str, info: dict[str, Any], *,
+                 input_names: Any = None, output_names: Any = None) -> None:
         self.markov = markov
         self.dt = dt
         self.method = method
         self.info = info
+        _, l, m = np.shape(markov)
+        self.input_names = ([f"u{j}" for j in range(m)] if input_names is None
+                            else [str(s) for s in input_names])
+        self.output_names = ([f"y{i}" for i in range(l)] if output_names is None
+                             else [str(s) for s in output_names])
+
+    def impulse(self) -> Any:
+        """The impulse response ``h_k`` at ``t = k dt`` as a :class:`~sysid.TimeResponse`,
+        with each value's standard deviation when the estimate has them (FIR)."""
+        from ..models.protocol import TimeResponse
+
+        t = np.arange(self.markov.shape[0]) * self.dt
+        return TimeResponse("impulse", t, self.markov, self, std=self.info.get("std"))
+
+    def step(self) -> Any:
+        """The step response, the running sum of the Markov parameters, as a
+        :class:`~sysid.TimeResponse` (no standard deviations: those of a sum need the
+        parameters' covariance, which the estimate does not keep)."""
+        from ..models.protocol import TimeResponse
+
+        t = np.arange(self.markov.shape[0]) * self.dt
+        return TimeResponse("step", t, np.cumsum(self.markov, axis=0), self)
+
+    def plot(self, fig: Any = None) -> Any:
+        """The impulse response, one axis per ``output <- input`` pair, with its bands."""
+        return self.impulse().plot(fig=fig)
+
+    def to_pandas(self) -> Any:
+        """The impulse response by time, a column per pair (and its ``std``)."""
+        return self.impulse().to_pandas()
+
+    def summary(self) -> str:
+        """What was estimated, and per pair the largest Markov parameter and its time."""
+        lines = [repr(self)]
+        std = self.info.get("std")
+        for i, o in enumerate(self.output_names):
+            for j, u in enumerate(self.input_names):
+                h = self.markov[:, i, j]
+                k = int(np.argmax(np.abs(h))) if h.size else 0
+                sd = "" if std is None else f" (std {std[k, i, j]:.3g})"
+                lines.append(f"  {o} <- {u}: largest {h[k]:.4g}{sd} at t = {k * self.dt:.4g}, "
+                             f"sum (the gain) {h.sum():.4g}")
+        if "length" in self.info:
+            lines.append(f"  length: {self.info['length']}")
+        return "\n".join(lines)
 
     def era(self, order: int | None = None, *, rows: int | None = None,
             cols: int | None = None, scale: bool | None = None) -> EraResult:
