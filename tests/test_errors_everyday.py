@@ -174,7 +174,7 @@ CASES = [
      errors.ShapeError, "2 value", "pass one value per input"),
     # analysis helpers
     ("margin mimo", lambda: sysid.margin(MIMO), errors.DataError,
-     "margin is defined for a single-input single-output", "select one pair"),
+     "margin is defined for a single-input single-output", r"select one pair: model\[i, j\]"),
     ("margin type", lambda: sysid.margin("G"), errors.DataError, "got str",
      "a model with freqresp"),
     ("margin omega", lambda: sysid.margin(G1, omega=[-1.0, 2.0]), errors.DataError,
@@ -197,6 +197,13 @@ CASES = [
      errors.DataError, "too few", "smaller nk_max"),
     ("delayest time series", lambda: sysid.delayest(TS), errors.DataError,
      "needs inputs", "no input delay"),
+    # automatic orders where MATLAB has none: what to call instead
+    ("ar auto", lambda: sysid.ar(TS, "auto"), errors.DataError, "got 'auto'",
+     r"sysid\.selstruc\(sysid\.arxstruc\(est, val, sysid\.struc\(range"),
+    ("tfest auto", lambda: sysid.tfest(D, "auto"), errors.DataError,
+     "tfest has no automatic order", r"sysid\.select_order\(est, models="),
+    ("struc half", lambda: sysid.struc([1, 2], [1]), errors.DataError,
+     "give both nb and nk", "or neither"),
 ]
 
 

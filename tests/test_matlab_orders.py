@@ -137,6 +137,35 @@ def test_arxstruc_with_validation_data_as_matlab_s(dryer):
         sysid.arxstruc(ze, [1, 2])
 
 
+def test_ar_orders_of_a_time_series_compared_as_matlab_s():
+    # V = arxstruc(ze, zv, struc(1:10)) on a time series, selstruc(V): arxstruc gave a table
+    # [na, loss, parameters] that selstruc refused ("shape (10, 3)"), and struc needed nb, nk
+    from scipy import signal
+
+    rng = np.random.default_rng(2)
+    y = signal.lfilter([1.0], [1.0, -1.2, 0.5, -0.1], rng.standard_normal(3000))
+    ts = sysid.IOData(None, y[:, None], 1.0)
+    ze, zv = ts[:2000], ts[2000:]
+    nn = sysid.struc(range(1, 9))
+    assert nn.tolist() == [[k] for k in range(1, 9)]
+    v = sysid.arxstruc(ze, zv, nn)
+    assert v.shape == (8, 3)
+    for na, loss, p in v[[0, 2, 7]]:
+        m = sysid.arx(ze, int(na))  # MATLAB's arx(y, na): no input orders for a series
+        r = zv.y - m.predict(zv, horizon=1)
+        assert p == na and loss == pytest.approx(float(np.mean(r ** 2)), rel=1e-12)
+    assert sysid.selstruc(v, 0) == (int(v[int(np.argmin(v[:, 1])), 0]),)
+    assert sysid.selstruc(v, "bic") == (3,)  # the true order
+    # the time series' own orders alone (arx(y, na) asked for nb before); input orders for
+    # a record without inputs are refused with the call to make
+    np.testing.assert_allclose(sysid.armax(ze, 2, nc=1).c[0], sysid.armax(ze, [2, 1]).c[0])
+    with pytest.raises(sysid.DataError, match=r"no inputs \(a time series\), so armax takes "
+                       r"no nb: armax\(data, na, nc=\.\.\.\), or \[na, nc\]"):
+        sysid.armax(ze, 2, 1)
+    with pytest.raises(sysid.DataError, match=r"oe models the response to inputs.*sysid\.ar"):
+        sysid.oe(ze, 2, 2)
+
+
 def test_arxstruc_validation_form_with_several_inputs():
     # MATLAB's NN rows for m inputs are [na, nb1..nbm, nk1..nkm]; before, arxstruc(ze, zv, NN)
     # took one input, and selstruc read columns 3 and 4 as loss and parameter count

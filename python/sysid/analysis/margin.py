@@ -117,7 +117,7 @@ def _siso(sys: Any, what: str = "margin") -> Any:
                         f"{type(sys).__name__}")
     if getattr(sys, "ninputs", 1) != 1 or getattr(sys, "noutputs", 1) != 1:
         raise DataError(f"{what} is defined for a single-input single-output loop; select one "
-                        "pair (model.select or a TransferFunction of one pair)")
+                        "pair: model[i, j] (output i from input j)")
     return sys
 
 

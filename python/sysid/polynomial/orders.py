@@ -68,7 +68,24 @@ def matlab_orders(fn: str, data: Any, first: Any, **rest: Any) -> tuple[Any, ...
             f"automatic order): compare structures with sysid.selstruc(sysid.arxstruc(est, "
             f"val, sysid.struc(range(1, 11), range(1, 11), nk))), or let a state-space fit "
             f"choose its order: sysid.ssest(data, 'auto') or sysid.identify(data)")
-    missing = [k for k, v in zip(names[1:], given[1:]) if v is None and k != "nk"]
+    # a time series has no input orders to give: arx(y, na), armax(y, na, nc=1) (MATLAB's
+    # arx(data, na) for time series)
+    series = getattr(data, "n_inputs", None) == 0
+    per_input = {k for k, w in LAYOUTS[fn] if w == "nu"}
+    missing = [k for k, v in zip(names[1:], given[1:])
+               if v is None and k != "nk" and not (series and k in per_input)]
+    stray = [k for k, v in zip(names[1:], given[1:])
+             if series and k in per_input and v is not None and np.size(v)]
+    if stray and not (np.ndim(first) > 0 and all(v is None for v in given[1:])):
+        own = [k for k in names if k not in per_input]
+        if not own or own == ["nc", "nd"]:  # oe, nlhw, bj: models of the inputs' response
+            raise DataError(f"{fn} models the response to inputs, and the record has none (a "
+                            "time series): use sysid.ar(data, na) or sysid.armax(data, [na, "
+                            "nc])")
+        raise DataError(
+            f"the record has no inputs (a time series), so {fn} takes no {', '.join(stray)}: "
+            f"{fn}(data, {', '.join(f'{k}=...' if i else k for i, k in enumerate(own))})"
+            + (f", or [{', '.join(own)}] as in MATLAB" if len(own) > 1 else ""))
     try:
         vector = np.ndim(first) > 0 and not isinstance(first, str)
     except ValueError:  # a ragged sequence, [1, [1, 1], [1, 1]]: MATLAB's vector is flat
@@ -81,7 +98,8 @@ def matlab_orders(fn: str, data: Any, first: Any, **rest: Any) -> tuple[Any, ...
             raise DataError(
                 f"{fn} needs {', '.join(missing)}: {fn}(data, {', '.join(names)}), or the "
                 f"orders as one vector, {fn}(data, [{', '.join(names)}]) as in MATLAB{alone}")
-        return tuple(1 if (k == "nk" and v is None) else v for k, v in zip(names, given))
+        return tuple([] if (series and k in per_input and v is None)
+                     else 1 if (k == "nk" and v is None) else v for k, v in zip(names, given))
     if not hasattr(data, "n_inputs"):
         refuse_frd(data, fn)
         raise not_a_record(data)

@@ -33,16 +33,23 @@ class StructureTable(np.ndarray):
         self.n_samples = getattr(obj, "n_samples", None)
 
 
-def struc(na: Any, nb: Any, nk: Any) -> np.ndarray:
+def struc(na: Any, nb: Any = None, nk: Any = None) -> np.ndarray:
     """Every ``[na, nb, nk]`` of the ranges, one per row (MATLAB's ``struc``), for
-    ``arxstruc(ze, zv, NN)``.
+    ``arxstruc(ze, zv, NN)``; ``struc(na)`` alone: the AR orders ``[na]`` of a time series.
 
     Examples
     --------
     >>> import sysid
     >>> sysid.struc([1, 2], [1], [0, 1]).tolist()
     [[1, 1, 0], [1, 1, 1], [2, 1, 0], [2, 1, 1]]
+    >>> sysid.struc(range(1, 4)).tolist()
+    [[1], [2], [3]]
     """
+    if nb is None and nk is None:  # a time series: AR orders only
+        return np.array([[a] for a in _range(na, "na")], dtype=int)
+    if nb is None or nk is None:
+        raise DataError("give both nb and nk (the input orders and delays), or neither for "
+                        "the AR orders of a time series")
     ra, rb, rk = (_range(v, name) for v, name in ((na, "na"), (nb, "nb"), (nk, "nk")))
     return np.array([[a, b, k] for a in ra for b in rb for k in rk], dtype=int)
 
@@ -196,10 +203,10 @@ def selstruc(
     >>> sysid.selstruc(t, 0), sysid.selstruc(t, "aic", 100)
     ((2, 2, 1), (1, 1, 1))
     """
-    if np.ndim(table) != 2 or np.shape(table)[1] < 5:
+    if np.ndim(table) != 2 or np.shape(table)[1] < 3:
         raise DataError(f"table must be the 2-D table of sysid.arxstruc (rows [na, nb.., "
-                        f"nk.., loss, parameters]), got {type(table).__name__} of shape "
-                        f"{np.shape(table)}")
+                        f"nk.., loss, parameters], or [na, loss, parameters] for a time "
+                        f"series), got {type(table).__name__} of shape {np.shape(table)}")
     loss, p = table[:, -2], table[:, -1]
     if isinstance(criterion, (int, float, np.number)) and not isinstance(criterion, bool):
         c = float(criterion)

@@ -164,6 +164,10 @@ def ar(data: Any, na: int, method: str = "fb", *, dt: float | None = None) -> An
     if method not in _METHODS:
         raise DataError(f"method must be one of {', '.join(map(repr, _METHODS))}, got "
                         f"{method!r}")
+    if isinstance(na, str):  # "auto": MATLAB's ar has no automatic order either
+        raise DataError(f"ar takes its order as a whole number, got {na!r}: compare orders "
+                        "with sysid.selstruc(sysid.arxstruc(est, val, sysid.struc(range(1, "
+                        "21)))) on an estimation and a validation part of the series")
     na = as_int(na, "na", 1)
     ys, dt0 = _series(data, na, "ar")
     from ..data.iodata import IOData
