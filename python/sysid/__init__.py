@@ -316,7 +316,19 @@ _MATLAB = {"resid": "sysid.residuals(model, data)", "iddata": "sysid.IOData(u, y
            "roe": "sysid.RecursiveOE", "rbj": "sysid.RecursiveBJ",
            "ssdata": "model.A, model.B, model.C, model.D (and model.K)",
            "rsample": "model.uncertainty.sample(n)", "arxRegul": "sysid.arxregul",
-           "recursiveARX": "sysid.RecursiveARX(na, nb, nk)"}
+           "recursiveARX": "sysid.RecursiveARX(na, nb, nk)",
+           "getcov": "model.uncertainty.covariance",
+           "translatecov": "model.uncertainty.propagate(fn)",
+           "dcgain": "model.dcgain()", "pole": "model.poles()", "zero": "model.zeros()",
+           "noisecnv": "sysid.noise2meas(model)",
+           "modred": "sysid.balanced_truncation(model, order)", "iopzmap": "sysid.pzmap(model)",
+           "idnlarx": "sysid.NARXModel or sysid.nlarx(data, orders)",
+           "xcorr": "sysid.correlation(data, max_lag)",
+           "tfestimate": "sysid.welch_frf(data)", "mscohere": "sysid.coherence(data)",
+           "cpsd": "sysid.spectra(data)", "pwelch": "sysid.spectra(data)",
+           "n4sidOptions": "keyword arguments of sysid.n4sid (horizon=, feedthrough=, ...)",
+           "ssestOptions": "keyword arguments of sysid.ssest (focus=, feedthrough=, ...)",
+           "compareOptions": "keyword arguments of sysid.compare (horizon=, x0=)"}
 
 
 def __getattr__(name: str) -> object:
