@@ -457,6 +457,41 @@ def test_state_space_tools_go_through_to_statespace():
         sysid.modal_analysis(_families()["continuous"])
 
 
+def test_pzmap_draws_each_pole_s_confidence_region():
+    # MATLAB's showConfidence(pzmap(sys)): pzmap(model, confidence=0.95) was a TypeError
+    import warnings
+
+    from matplotlib.patches import Ellipse
+
+    from sysid.models.uncertainty import UncertaintyWarning
+
+    rng = np.random.default_rng(5)
+    true = sysid.StateSpaceModel([[0.7, 0.5, 0.0], [-0.5, 0.7, 0.0], [0.0, 0.0, 0.3]],
+                                 [[1.0], [0.0], [1.0]], [[1.0, 0.0, 1.0]], dt=1.0)
+    u = rng.standard_normal((1000, 1))
+    d = sysid.IOData(u, true.simulate(u) + 0.1 * rng.standard_normal((1000, 1)), 1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = sysid.ssest(d, 3, focus="simulation")
+    p, sd = m.poles(std=True)
+    ax = sysid.pzmap(m, confidence=0.95)
+    k2, k1 = np.sqrt(-2 * np.log(0.05)), 1.959964
+    ellipses = [a for a in ax.patches if isinstance(a, Ellipse)]
+    cplx = [(q, s) for q, s in zip(p, sd) if q.imag != 0]
+    assert len(ellipses) == len(cplx) == 2
+    for (q, s), e in zip(cplx, ellipses):
+        assert e.center == pytest.approx((q.real, q.imag))
+        assert (e.width, e.height) == pytest.approx((2 * k2 * s.real, 2 * k2 * s.imag))
+    q, s = next((q, s) for q, s in zip(p, sd) if q.imag == 0)
+    seg = [ln for ln in ax.lines if ln.get_linewidth() == 3]
+    assert len(seg) == 1
+    assert seg[0].get_xdata() == pytest.approx([q.real - k1 * s.real, q.real + k1 * s.real])
+    plt.close("all")
+    with pytest.warns(UncertaintyWarning, match="carry no parameter uncertainty"):
+        sysid.pzmap(true, confidence=0.9)
+    plt.close("all")
+
+
 def test_matlab_s_bode_and_pzmap_and_the_plot_package_s_own_names():
     # docs/pem.md said `sysid.plot.plot_bode(model, confidence=0.95)`, which raised
     # AttributeError (the function was only in sysid.plot.model), and MATLAB's bode(sys1,

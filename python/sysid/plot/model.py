@@ -68,18 +68,8 @@ def plot_bode(models: Any, omega: Any = None, *, hz: bool = True, fig: Any = Non
     plt = _pyplot()
     ms = _models(models)
     zc = None if confidence is None else _z(confidence)
-    bare = [k for k, mod in enumerate(ms) if getattr(mod, "uncertainty", None) is None
-            and not hasattr(mod, "omega")]  # an FRD draws its own band (FRD.plot)
-    if zc is not None and bare:
-        import warnings
-
-        from .._checks import user_stacklevel
-        from ..models.uncertainty import UncertaintyWarning
-
-        warnings.warn(f"confidence={confidence} but model(s) {bare} carry no parameter "
-                      "uncertainty: no band for them (fit with a prediction-error method, "
-                      "or SubspaceEstimator(...).fit(..., uncertainty='bootstrap'))",
-                      UncertaintyWarning, stacklevel=user_stacklevel())
+    if zc is not None:
+        _warn_bare(ms, confidence)
     w = _omega(ms, omega)
     l, m = ms[0].noutputs, ms[0].ninputs
     if fig is None:
@@ -139,14 +129,23 @@ def plot_sigma(models: Any, omega: Any = None, *, hz: bool = True, ax: Any = Non
     return ax
 
 
-def plot_pzmap(models: Any, ax: Any = None) -> Any:
+def plot_pzmap(models: Any, ax: Any = None, confidence: float | None = None) -> Any:
     """Poles (x) and zeros (o): z-plane with the unit circle, or s-plane (continuous).
 
     Any model with ``poles()``/``zeros()`` or ``to_statespace()``; a model with neither
-    raises a :class:`~sysid.DataError` naming the missing method.
+    raises a :class:`~sysid.DataError` naming the missing method. ``confidence`` (e.g.
+    ``0.95``): around each pole of a model that carries a parameter ``uncertainty``, the
+    region of that level from the poles' first-order standard deviations
+    (``model.poles(std=True)``): an ellipse with half-axes ``k`` times the standard
+    deviations of the real and imaginary parts for a complex pole (``k`` the radius of a
+    two-dimensional normal's region), an interval along the real axis for a real one
+    (MATLAB's ``showConfidence`` on a pole-zero plot).
     """
     plt = _pyplot()
     ms = _models(models)
+    if confidence is not None:
+        _z(confidence)  # checked
+        _warn_bare(ms, confidence)
     if ax is None:
         _, ax = plt.subplots(figsize=(5, 5))
     discrete = all(getattr(m, "dt", None) for m in ms)
@@ -159,6 +158,8 @@ def plot_pzmap(models: Any, ax: Any = None) -> Any:
         name = "" if len(ms) == 1 else \
             f"{(getattr(mod, 'info', None) or {}).get('method', f'model {k}')}: "
         ax.plot(p.real, p.imag, "x", color=f"C{k}", ms=8, label=f"{name}poles")
+        if confidence is not None and getattr(mod, "uncertainty", None) is not None:
+            _pole_regions(ax, mod, confidence, f"C{k}")
         ax.plot(z.real, z.imag, "o", color=f"C{k}", mfc="none", ms=8, label=f"{name}zeros")
     ax.axhline(0, color="0.8", lw=0.5)
     ax.axvline(0, color="0.8", lw=0.5)
@@ -168,6 +169,41 @@ def plot_pzmap(models: Any, ax: Any = None) -> Any:
     ax.legend(fontsize=8, loc="upper left")
     ax.set_title("pole-zero map")
     return ax
+
+
+def _pole_regions(ax: Any, mod: Any, confidence: float, color: str) -> None:
+    """The ``confidence`` regions of a model's poles (:func:`plot_pzmap`)."""
+    from matplotlib.patches import Ellipse
+
+    p, sd = mod.poles(std=True)
+    p, sd = np.asarray(p), np.asarray(sd)
+    k2 = float(np.sqrt(-2.0 * np.log1p(-confidence)))  # 2-D normal: P(|x| <= k2) = confidence
+    k1 = _z(confidence)
+    for pole, s in zip(p, sd):
+        if not (np.isfinite(s.real) and np.isfinite(s.imag)):
+            continue  # coinciding poles: no first-order std (poles(std=True) says so)
+        if pole.imag == 0:
+            ax.plot([pole.real - k1 * s.real, pole.real + k1 * s.real], [0.0, 0.0],
+                    color=color, lw=3, alpha=0.35, solid_capstyle="butt")
+        else:
+            ax.add_patch(Ellipse((pole.real, pole.imag), 2 * k2 * s.real, 2 * k2 * s.imag,
+                                 color=color, alpha=0.25, lw=0))
+
+
+def _warn_bare(ms: list[Any], confidence: float) -> None:
+    """The warning for models without parameter uncertainty asked for confidence regions."""
+    bare = [k for k, mod in enumerate(ms) if getattr(mod, "uncertainty", None) is None
+            and not hasattr(mod, "omega")]  # an FRD draws its own band (FRD.plot)
+    if bare:
+        import warnings
+
+        from .._checks import user_stacklevel
+        from ..models.uncertainty import UncertaintyWarning
+
+        warnings.warn(f"confidence={confidence} but model(s) {bare} carry no parameter "
+                      "uncertainty: no band for them (fit with a prediction-error method, "
+                      "or SubspaceEstimator(...).fit(..., uncertainty='bootstrap'))",
+                      UncertaintyWarning, stacklevel=user_stacklevel())
 
 
 def plot_time_response(resp: Any, fig: Any = None) -> Any:
@@ -220,10 +256,11 @@ def bode(*models: Any, omega: Any = None, hz: bool = True, confidence: float | N
     return plot_bode(list(models), omega, hz=hz, fig=fig, labels=labels, confidence=confidence)
 
 
-def pzmap(*models: Any, ax: Any = None) -> Any:
+def pzmap(*models: Any, ax: Any = None, confidence: float | None = None) -> Any:
     """MATLAB's ``pzmap(sys1, sys2, ...)``: poles (x) and zeros (o) of one or more models
     (:func:`plot_pzmap`); returns the axis. The values are ``model.poles()`` and
-    ``model.zeros()``.
+    ``model.zeros()``; ``confidence`` (e.g. ``0.95``) draws each pole's region of that level
+    for the models that carry a parameter uncertainty (MATLAB's ``showConfidence``).
 
     Examples
     --------
@@ -234,4 +271,4 @@ def pzmap(*models: Any, ax: Any = None) -> Any:
     """
     if not models:
         raise DataError("pzmap needs at least one model: sysid.pzmap(model, ...)")
-    return plot_pzmap(list(models), ax=ax)
+    return plot_pzmap(list(models), ax=ax, confidence=confidence)
