@@ -370,3 +370,40 @@ def test_equal_but_separate_frds_are_independent():
     h = sysid.FRD(g.omega, g.response, std=g.std)  # copies: a second, independent estimate
     np.testing.assert_allclose((g - h).std[:, 0, 0], np.sqrt(2) * np.array([0.3, 0.4]))
     np.testing.assert_allclose((g - g[0, 0]).std[:, 0, 0], np.sqrt(2) * np.array([0.3, 0.4]))
+
+
+def test_fselect_keeps_a_band_with_its_std_and_coherence_for_a_band_limited_fit():
+    # MATLAB's fselect(G, fmin, fmax): no way to keep a band of an FRD (users rebuilt it by
+    # hand, losing its std and coherence)
+    rng = np.random.default_rng(3)
+    true = sysid.StateSpaceModel([[0.9, 0.3], [-0.3, 0.9]], [[1.0], [0.0]], [[1.0, 0.0]],
+                                 dt=0.1, input_names=["f"], output_names=["a"])
+    u = rng.standard_normal((4000, 1))
+    d = sysid.IOData(u, true.simulate(u) + 0.05 * rng.standard_normal((4000, 1)), 0.1,
+                     input_names=["f"], output_names=["a"])
+    g = sysid.spa(d)
+    band = g.fselect(1.0, 10.0)  # rad/s, the FRD's units
+    keep = (g.omega >= 1.0) & (g.omega <= 10.0)
+    np.testing.assert_array_equal(band.omega, g.omega[keep])
+    np.testing.assert_array_equal(band.response, g.response[keep])
+    np.testing.assert_array_equal(band.std, g.std[keep])
+    np.testing.assert_array_equal(band.coherence, g.coherence[keep])
+    assert (band.input_names, band.output_names, band.dt) == (["f"], ["a"], 0.1)
+    hz = g.fselect(1.0 / (2 * np.pi), 10.0 / (2 * np.pi), units="Hz")
+    np.testing.assert_array_equal(hz.omega, band.omega)
+    np.testing.assert_array_equal(g.fselect(np.flatnonzero(keep)).omega, band.omega)
+    np.testing.assert_array_equal(g.fselect(keep).omega, band.omega)
+    # a frequency-domain fit of the band sees only the band: there it fits the estimate far
+    # better than a fit of every line (0.76 against 2.4 mean error here)
+    def err(m):
+        return np.abs(m.freqresp(band.omega) - band.response).mean()
+    assert err(sysid.tfest(band, 2, 1)) < 0.5 * err(sysid.tfest(g, 2, 1))
+    with pytest.raises(sysid.DataError, match=r"no frequency from 50 to 60 rad/s: the FRD "
+                                              r"spans .* rad/s"):
+        g.fselect(50, 60)
+    with pytest.raises(sysid.DataError, match="lo <= hi"):
+        g.fselect(5, 1)
+    with pytest.raises(sysid.ShapeError, match="one per frequency"):
+        g.fselect(np.ones(3, bool))
+    with pytest.raises(sysid.DataError, match="integers from 0 to"):
+        g.fselect([0.5, 1.5])

@@ -328,7 +328,8 @@ _MATLAB = {"resid": "sysid.residuals(model, data)", "iddata": "sysid.IOData(u, y
            "cpsd": "sysid.spectra(data)", "pwelch": "sysid.spectra(data)",
            "n4sidOptions": "keyword arguments of sysid.n4sid (horizon=, feedthrough=, ...)",
            "ssestOptions": "keyword arguments of sysid.ssest (focus=, feedthrough=, ...)",
-           "compareOptions": "keyword arguments of sysid.compare (horizon=, x0=)"}
+           "compareOptions": "keyword arguments of sysid.compare (horizon=, x0=)",
+           "fselect": "frd.fselect(lo, hi) (an FRD's band)"}
 
 
 def __getattr__(name: str) -> object:

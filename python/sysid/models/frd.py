@@ -315,6 +315,61 @@ class FRD(FRDAlgebra):
             units=self.units,
         )
 
+    def fselect(self, lo: Any = None, hi: Any = None, *, units: str | None = None) -> FRD:
+        """The response at some of its frequencies (MATLAB's ``fselect``), with its std and
+        coherence: those from ``lo`` to ``hi`` (both included; ``None``: no bound) in
+        ``units`` (default the FRD's own, rad/s unless it was given in Hz), or, with ``hi``
+        left out, those at the indices (or boolean mask) ``lo``. A frequency-domain fit
+        (``tfest``, ``ssest``, ``frd_subspace``) of the result fits that band only.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> g = sysid.FRD([1.0, 2.0, 5.0, 10.0], np.ones(4), units="Hz")
+        >>> g.fselect(2, 6).frequencies, g.fselect([0, 3]).frequencies
+        (array([2., 5.]), array([ 1., 10.]))
+        >>> g.fselect(20, None)
+        Traceback (most recent call last):
+        ...
+        sysid.errors.DataError: no frequency from 20 to inf Hz: the FRD spans 1 to 10 Hz
+        """
+        unit = _unit(units) or self.units or "rad/s"
+        f = self.omega / UNITS[unit]
+        if hi is None and np.ndim(lo) == 1:  # indices or a mask
+            sel = np.asarray(lo)
+            if sel.dtype == bool:
+                if sel.shape != f.shape:
+                    raise ShapeError(f"a mask of frequencies has {f.size} entries (one per "
+                                     f"frequency), got {sel.size}")
+                idx = np.flatnonzero(sel)
+            elif sel.dtype.kind in "iu" and sel.size and sel.min() >= -f.size and \
+                    sel.max() < f.size:
+                idx = np.unique(sel % f.size)
+            else:
+                raise DataError(f"frequency indices must be integers from 0 to {f.size - 1} "
+                                f"(or a boolean mask), got {lo!r:.60}")
+        else:
+            a = -np.inf if lo is None else float(lo)
+            b = np.inf if hi is None else float(hi)
+            if not a <= b:
+                raise DataError(f"fselect needs lo <= hi, got {lo} and {hi}")
+            idx = np.flatnonzero((f >= a) & (f <= b))
+            if not idx.size:
+                raise DataError(f"no frequency from {a:g} to {b:g} {unit}: the FRD spans "
+                                f"{f[0]:g} to {f[-1]:g} {unit}")
+        if not idx.size:
+            raise DataError("the selection holds no frequency")
+
+        def sub(x: np.ndarray | None) -> np.ndarray | None:
+            return None if x is None else x[idx]
+
+        out = type(self)(self.omega[idx], self.response[idx], coherence=sub(self.coherence),
+                         std=sub(self.std), confidence=self.confidence, dof=self.dof,
+                         dt=self.dt, input_names=self.input_names,
+                         output_names=self.output_names, method=self.method, info=self.info)
+        out.units = self.units
+        return out
+
     def _new(self, response: Any, *, units: str | None, **kw: Any) -> FRD:
         """An FRD on this grid (:attr:`omega` bit for bit) shown in ``units``."""
         out = type(self)(self.omega, response, **kw)
