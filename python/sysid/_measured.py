@@ -42,8 +42,7 @@ def predict_args(u: Any, y: Any) -> tuple[Any, Any]:
             raise DataError(
                 f"the record has {n} experiments and predict returns one array: predict "
                 "each (model.predict(data.experiment(i), horizon=k) for i in range(n)), or "
-                "compare all "
-                "of them with sysid.compare(data, model, horizon=k)")
+                "compare all of them with sysid.compare(data, model, horizon=k)")
         return u.u, u.y
     if y is None:
         raise DataError("predict needs the measured outputs y, or a record in u's place: "

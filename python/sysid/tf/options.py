@@ -19,8 +19,7 @@ def orders(x: Any, l: int, m: int, name: str, lo: int) -> np.ndarray:
             f"{name} must be a whole number (or one per output/input pair), got {x!r}: "
             "tfest has no automatic order (as MATLAB's); compare a few with "
             "sysid.select_order(est, models=[sysid.tfest(est, n) for n in range(1, 5)], "
-            "validation=val), or "
-            "let sysid.identify(data) choose a model")
+            "validation=val), or let sysid.identify(data) choose a model")
     a = np.asarray(x)
     # inf equals its rounding: refused here, before the cast to int wraps it
     if a.dtype.kind not in "iuf" or not np.all(np.isfinite(a)) or not np.all(a == np.round(a)):
