@@ -24,7 +24,7 @@ from ..greybox.delays import shift_taps
 from ..models.discretisation import require_finite_sampling
 from ..models.protocol import ModelMixin, TimeResponse, continuous_grid, slowest_decay
 from ..models.statespace import StateSpaceModel
-from .sampling import canonical, sample_pair, split_delay
+from .sampling import canonical, natural_frequency, sample_pair, split_delay
 
 __all__ = ["TransferFunction"]
 
@@ -260,7 +260,8 @@ class TransferFunction(ModelMixin):
 
     # -- state space and simulation --------------------------------------------------------
     def _blocks(self) -> list[tuple[int, int, tuple[np.ndarray, ...]]]:
-        return [(i, j, canonical(self.den[i][j], self.num[i][j])) for i, j in self.pairs()]
+        return [(i, j, canonical(self.den[i][j], self.num[i][j],
+                                 natural_frequency(self.den[i][j]))) for i, j in self.pairs()]
 
     def _select(self, iy: list[int], iu: list[int]) -> TransferFunction:
         """Outputs ``iy`` from inputs ``iu`` (:meth:`select`)."""

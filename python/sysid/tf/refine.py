@@ -26,7 +26,7 @@ from .. import _sysid
 from ..errors import DataError, IterationLimitWarning
 from ..greybox.delays import shift_taps
 from .model import assemble
-from .sampling import canonical, sample_pair
+from .sampling import canonical, natural_frequency, sample_pair
 from .sensitivity import pair_derivatives
 
 __all__ = ["PairStructure", "refine", "ConvergenceWarning"]
@@ -60,6 +60,9 @@ class _Map:
                  whole: list[int], exps: list[tuple[np.ndarray, np.ndarray]],
                  x0_mode: str) -> None:
         self.pairs, self.dt, self.hold, self.whole = pairs, dt, hold, whole
+        # each pair realised in time scaled by its start's natural frequency, fixed for the
+        # search (a high-order pair's plain companion form lost its poles in the sampling)
+        self.freqs = [natural_frequency(p.coef(p.p0)[1]) for p in pairs]
         self.sizes = [p.p0.size for p in pairs]
         self.delay_idx = [j for j, p in enumerate(pairs) if p.delay_free or p.delay > 0]
         self.m = len(pairs)
@@ -92,7 +95,7 @@ class _Map:
         blocks, canon = [], []
         for j, (pair, p, tau) in enumerate(zip(self.pairs, ps, taus)):
             num, den = pair.coef(p)
-            A, b, c, d = canonical(den, num)
+            A, b, c, d = canonical(den, num, self.freqs[j])
             r = tau - self.whole[j] * self.dt
             blocks.append((0, j, sample_pair(A, b, c, d, self.dt, self.whole[j], r, self.hold)))
             canon.append((A, b, c, d))
@@ -125,7 +128,7 @@ class _Map:
         for j, (pair, p, tau) in enumerate(zip(self.pairs, ps, taus)):
             r = tau - self.whole[j] * self.dt
             derivs.append(pair_derivatives(pair.coef, p, self.dt, self.whole[j], r,
-                                           self.hold))
+                                           self.hold, self.freqs[j]))
         th = self._assembled([(d.Ad, d.cols, d.G, d.c) for d in derivs])
         if self.n_x0:
             th[th.size - self.n_x0:] += z[nv:]

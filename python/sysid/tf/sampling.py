@@ -37,14 +37,39 @@ import numpy as np
 from .. import _sysid
 from ..errors import DataError
 
-__all__ = ["canonical", "sample_pair", "split_delay"]
+__all__ = ["canonical", "canonical_form", "natural_frequency", "sample_pair", "split_delay"]
 
 _SNAP = 1e-9
 
 
-def canonical(den: Any, num: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def natural_frequency(den: Any) -> float:
+    """The power of two nearest the geometric mean of the magnitudes of the roots of ``den``
+    (``|a_n / a_0|^(1/n)``; 1 without a nonzero constant term): the frequency that
+    :func:`canonical` scales time by, exactly (a power of two).
+
+    Examples
+    --------
+    >>> from sysid.tf.sampling import natural_frequency
+    >>> natural_frequency([1.0, 3.0]), natural_frequency([1.0, 500.0, 250.0 ** 2])
+    (4.0, 256.0)
+    """
+    den = np.atleast_1d(np.asarray(den, dtype=float))
+    n = den.size - 1
+    if n < 1 or den[0] == 0 or den[-1] == 0:
+        return 1.0
+    w = abs(den[-1] / den[0]) ** (1.0 / n)
+    return float(2.0 ** np.round(np.log2(w))) if np.isfinite(w) and w > 0 else 1.0
+
+
+def canonical(den: Any, num: Any, freq: float = 1.0
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(A, b, c, d)`` of ``num(s) / den(s)`` (descending powers, ``den`` monic after scaling),
-    with ``c`` of shape ``(1, n)`` and ``d`` of shape ``(1,)``.
+    with ``c`` of shape ``(1, n)`` and ``d`` of shape ``(1,)``: the controllable canonical
+    form in time scaled by ``freq`` (``s = freq s'``: the companion matrix of ``den(freq
+    s')`` made monic, times ``freq``; ``b = freq e_n``). With ``freq`` near the poles'
+    magnitudes (:func:`natural_frequency`) its entries are of the order of the poles
+    themselves, where the plain form's last row holds ``a_n ~ |pole|^n`` (1e19 for eight
+    poles at 250 rad/s: its sampled exponential then lost the poles to rounding).
 
     Examples
     --------
@@ -52,28 +77,43 @@ def canonical(den: Any, num: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
     >>> A, b, c, d = canonical([1.0, 1.0], [2.0, 3.0])   # (2 s + 3) / (s + 1) = 2 + 1 / (s + 1)
     >>> A.tolist(), c.tolist(), d.tolist()
     ([[-1.0]], [[1.0]], [2.0])
+    >>> A, b, c, d = canonical([1.0, 1.0], [2.0, 3.0], 2.0)   # the same transfer function
+    >>> A.tolist(), b.tolist(), c.tolist(), d.tolist()
+    ([[-1.0]], [2.0], [[0.5]], [2.0])
     """
     den = np.atleast_1d(np.asarray(den, dtype=float))
     num = np.atleast_1d(np.asarray(num, dtype=float))
     if den.size == 0 or den[0] == 0:
         raise DataError("the denominator's leading coefficient must be nonzero")
-    num, den = num / den[0], den / den[0]
     n = den.size - 1
     if num.size > n + 1:
         raise DataError(f"the numerator has degree {num.size - 1} above the denominator's {n}: "
                         "the transfer function is improper; give at most as many zeros as poles")
-    A = np.zeros((n, n))
+    A, c, d = canonical_form(den, num, freq)
+    b = np.zeros(n)
+    if n:
+        b[-1] = freq
+    return A, b, c, d
+
+
+def canonical_form(den: np.ndarray, num: np.ndarray, freq: float = 1.0
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(A, c, d)`` of :func:`canonical` (``b = freq e_n``) for real or complex coefficients
+    (the complex step of :mod:`sysid.tf.sensitivity` goes through it)."""
+    num, den = num / den[0], den / den[0]
+    n = den.size - 1
+    k = np.arange(n + 1)
+    den = den / float(freq) ** k               # a'_k = a_k / freq^k: den(freq s') / freq^n
+    beta = np.zeros(n + 1, dtype=np.result_type(num, den))
+    beta[:num.size] = num[::-1]                # ascending powers: beta'_j = beta_j freq^(j-n)
+    beta = beta * float(freq) ** (k - n)
+    A = np.zeros((n, n), dtype=den.dtype)
     if n:
         A[:-1, 1:] = np.eye(n - 1)
         A[-1, :] = -den[::-1][:n]
-    b = np.zeros(n)
-    if n:
-        b[-1] = 1.0
-    beta = np.zeros(n + 1)
-    beta[:num.size] = num[::-1]            # ascending powers
     d = beta[n] if n else beta[0]
     c = (beta[:n] - d * den[::-1][:n]).reshape(1, n)
-    return A, b, c, np.array([d])
+    return A * float(freq), c, np.array([d])
 
 
 def split_delay(tau: float, dt: float) -> tuple[int, float]:

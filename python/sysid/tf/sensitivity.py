@@ -41,28 +41,11 @@ import numpy as np
 
 from ..greybox import delays as greydelay
 from ..models.discretisation import expm
-from .sampling import _foh_shift
+from .sampling import _foh_shift, canonical_form
 
-__all__ = ["PairDerivatives", "pair_derivatives", "canonical_any"]
+__all__ = ["PairDerivatives", "pair_derivatives"]
 
 _STEP = 1e-30
-
-
-def canonical_any(den: np.ndarray, num: np.ndarray) -> tuple[np.ndarray, np.ndarray,
-                                                               np.ndarray]:
-    """``(A, c, d)`` of the controllable canonical form of ``num / den`` for real or complex
-    coefficients (``b = e_n`` is constant), as :func:`sysid.tf.sampling.canonical`."""
-    num, den = num / den[0], den / den[0]
-    n = den.size - 1
-    A = np.zeros((n, n), dtype=den.dtype)
-    if n:
-        A[:-1, 1:] = np.eye(n - 1)
-        A[-1, :] = -den[::-1][:n]
-    beta = np.zeros(n + 1, dtype=np.result_type(num, den))
-    beta[:num.size] = num[::-1]
-    d = beta[n] if n else beta[0]
-    c = (beta[:n] - d * den[::-1][:n]).reshape(1, n)
-    return A, c, np.array([d])
 
 
 @dataclass
@@ -84,29 +67,30 @@ class PairDerivatives:
     d_G: list[np.ndarray]
 
 
-def _realisation_derivatives(coef: Callable[[np.ndarray], Any], p: np.ndarray
+def _realisation_derivatives(coef: Callable[[np.ndarray], Any], p: np.ndarray, freq: float
                              ) -> tuple[tuple[np.ndarray, ...], list[tuple[np.ndarray, ...]]]:
     num, den = coef(p)
-    A, c, d = canonical_any(np.asarray(den, float), np.asarray(num, float))
+    A, c, d = canonical_form(np.asarray(den, float), np.asarray(num, float), freq)
     ders = []
     for k in range(p.size):
         q = p.astype(complex)
         q[k] += 1j * _STEP
         nq, dq = coef(q)
-        Aq, cq, dq_ = canonical_any(np.asarray(dq, complex), np.asarray(nq, complex))
+        Aq, cq, dq_ = canonical_form(np.asarray(dq, complex), np.asarray(nq, complex), freq)
         ders.append((Aq.imag / _STEP, cq.imag / _STEP, dq_.imag / _STEP))
     return (A, c, d), ders
 
 
 def pair_derivatives(coef: Callable[[np.ndarray], Any], p: np.ndarray, dt: float, whole: int,
-                     r: float, hold: str) -> PairDerivatives:
+                     r: float, hold: str, freq: float = 1.0) -> PairDerivatives:
     """The sampled pair of ``coef(p)`` delayed by ``whole dt + r`` and its derivatives along
-    each entry of ``p``, then along ``r`` (``len(p) + 1`` directions)."""
-    (A, c, d), ders = _realisation_derivatives(coef, np.asarray(p, float))
+    each entry of ``p``, then along ``r`` (``len(p) + 1`` directions); realised in time
+    scaled by ``freq`` (:func:`sysid.tf.sampling.canonical`), a constant of the search."""
+    (A, c, d), ders = _realisation_derivatives(coef, np.asarray(p, float), freq)
     n = A.shape[0]
     b = np.zeros(n)
     if n:
-        b[-1] = 1.0
+        b[-1] = freq
     Ad, dAd = expm(A * dt, [dA * dt for dA, _, _ in ders]) if n else (np.zeros((0, 0)), [
         np.zeros((0, 0)) for _ in ders])
     if hold == "zoh":

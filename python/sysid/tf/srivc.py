@@ -131,6 +131,12 @@ def srivc(u: np.ndarray, y: np.ndarray, dt: float, n: int, m: int, tau: float, h
     the iteration at the last estimate (NaN coefficients when the first one does: the
     caller tries another filter).
 
+    The estimate is computed in time scaled by the start filter's frequency ``c`` (the
+    geometric mean of its poles' magnitudes: ``s' = s / c``, sample time ``c dt``), where
+    the filter ``(s' + 1)^n`` has coefficients of order one, and mapped back (``a_k c^k``);
+    unscaled, the filter ``1 / A^2`` of eight poles at 250 rad/s has coefficients up to
+    1e38 and its sampled states overflow (MATLAB's CONTSID scales time likewise).
+
     Examples
     --------
     >>> import numpy as np, sysid
@@ -141,6 +147,20 @@ def srivc(u: np.ndarray, y: np.ndarray, dt: float, n: int, m: int, tau: float, h
     >>> np.round(a, 3), np.round(b, 3)
     (array([1., 3.]), array([2.]))
     """
+    a0 = np.asarray(a0, dtype=float)
+    c = abs(a0[-1]) ** (1.0 / n) if n and a0[-1] != 0 else 1.0  # the filter's frequency
+    if not (np.isfinite(c) and c > 0):
+        c = 1.0
+    a, b, it = _srivc_scaled(u, y, dt * c, n, m, tau * c, hold,
+                             a0 / c ** np.arange(n + 1), max_iter, tol)
+    # back to unscaled time: a_k = a'_k c^k, b_i = b'_i c^(n - m + i) (descending b)
+    return a * c ** np.arange(n + 1), b * c ** (n - m + np.arange(m + 1)), it
+
+
+def _srivc_scaled(u: np.ndarray, y: np.ndarray, dt: float, n: int, m: int, tau: float,
+                  hold: str, a0: np.ndarray, max_iter: int, tol: float
+                  ) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`srivc`'s iteration (in whatever time units ``dt`` and ``tau`` are given)."""
     a = _stabilised(np.asarray(a0, dtype=float))
     b = np.zeros(m + 1)
     it = 0

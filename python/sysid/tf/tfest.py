@@ -293,17 +293,17 @@ def _oe_cost(exps: list[tuple[np.ndarray, np.ndarray]], j: int, a: np.ndarray,
 
 
 def _siso_start(exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt: float, n: int, nz: int,
-                tau: float, hold: str, lams: Any = None
+                tau: float, hold: str, lams: Any = None, max_iter: int = 30
                 ) -> tuple[np.ndarray, np.ndarray, float, float]:
     """The best SRIVC start over a few initial filters ``(s + lam)^n`` (by the simulation
-    error): ``(a, b, cost, lam)``."""
+    error): ``(a, b, cost, lam)``; ``max_iter`` SRIVC iterations at most."""
     wn = np.pi / dt
     best: tuple[float, np.ndarray, np.ndarray, float] | None = None
     for lam in (lams if lams is not None else (wn / 100, wn / 20, wn / 5)):
         a_list, b_list = [], []
         for u, y in exps:
             a, b, _ = srivc(np.ascontiguousarray(u[:, j]), np.ascontiguousarray(y), dt, n, nz,
-                            tau, hold, _start_filter(n, lam))
+                            tau, hold, _start_filter(n, lam), max_iter=max_iter)
             a_list.append(a)
             b_list.append(b)
         a, b = np.mean(a_list, axis=0), np.mean(b_list, axis=0)
@@ -343,6 +343,10 @@ def _delay_grid(exps: list[tuple[np.ndarray, np.ndarray]], j: int, dt: float, dm
 
 #: whole-sample delays every SRIVC start scans (:func:`_delay_grid`)
 DELAY_SCAN = 40
+#: SRIVC iterations per delay of the scan, and the delays of the lowest costs then iterated
+#: to convergence: the scan ranks 41 delays by the simulation error of a few iterations
+#: (most of SRIVC's fall there) instead of iterating every one out (0.9 s on 2000 samples)
+SCAN_ITER, SCAN_KEEP = 4, 3
 
 
 def _starts(exps: list[tuple[np.ndarray, np.ndarray]], dt: float, npo: np.ndarray,
@@ -361,10 +365,20 @@ def _starts(exps: list[tuple[np.ndarray, np.ndarray]], dt: float, npo: np.ndarra
                                                  hold=hold).simulate(u[:, k], dt=dt)[:, 0]
                                 for k in range(m) if k != j))
                     for u, y in exps]
+            n_j, z_j = int(npo[j]), int(nze[j])
+            grid = grids[j]
+            if len(grid) > SCAN_KEEP:  # ranked by a few iterations, the best few iterated out
+                ranked = []
+                for tau in grid:
+                    _, _, c, lam = _siso_start(rest, j, dt, n_j, z_j, tau, hold, lams[j],
+                                               SCAN_ITER)
+                    lams[j] = [lam]
+                    ranked.append((c, tau))
+                grid = [t for _, t in sorted(ranked, key=lambda r: r[0] if np.isfinite(r[0])
+                                             else np.inf)[:SCAN_KEEP]]
             best = None
-            for tau in grids[j]:
-                a, b, c, lam = _siso_start(rest, j, dt, int(npo[j]), int(nze[j]), tau, hold,
-                                           lams[j])
+            for tau in grid:
+                a, b, c, lam = _siso_start(rest, j, dt, n_j, z_j, tau, hold, lams[j])
                 lams[j] = [lam]
                 if best is None or c < best[3]:
                     best = (a, b, tau, c)
