@@ -642,6 +642,23 @@ def test_from_pandas_finds_a_time_column_by_its_usual_names(name: str) -> None:
     assert sysid.IOData.from_pandas(df, ["u"], ["y"]).dt == pytest.approx(0.25)
 
 
+def test_from_pandas_takes_the_one_date_time_column_whatever_its_name() -> None:
+    # a "stamp" column of datetime64 (or "elapsed" of timedelta64) was not taken: dt = 1 s
+    # with a warning, though its type says it is the time; two such columns stay a choice
+    import pandas as pd
+
+    n = 20
+    stamps = pd.date_range("2026-03-01 08:00", periods=n, freq="250ms")
+    df = pd.DataFrame({"stamp": stamps, "u": np.ones(n), "y": np.arange(n, dtype=float)})
+    assert sysid.IOData.from_pandas(df, ["u"], ["y"]).dt == pytest.approx(0.25)
+    df = pd.DataFrame({"elapsed": pd.to_timedelta(0.5 * np.arange(n), unit="s"),
+                       "u": np.ones(n), "y": np.arange(n, dtype=float)})
+    assert sysid.IOData.from_pandas(df, ["u"], ["y"]).dt == pytest.approx(0.5)
+    df["logged"] = stamps
+    with pytest.warns(sysid.SysidWarning, match="no sample time"):
+        assert sysid.IOData.from_pandas(df, ["u"], ["y"]).dt == 1.0
+
+
 def test_from_raw_checks_dt_first() -> None:
     # dt=0 said "time repeats at sample 1"
     for bad in (0, -0.1, np.nan):

@@ -100,11 +100,17 @@ def grid_dt(ts: list[np.ndarray], candidates: list[Any], rtol: float = 0.0) -> f
 
 
 def _time_column(df: Any, channels: list[Any]) -> Any:
-    """The frame's time column under a usual name (``time``, ``t``, ``Time [s]``,
-    ``timestamp``, ...: :func:`sysid.data.table.time_column`), not one of ``channels``."""
+    """The frame's time column, not one of ``channels``: under a usual name (``time``, ``t``,
+    ``Time [s]``, ``timestamp``, ...: :func:`sysid.data.table.time_column`), else the one
+    column of date-times or durations whatever its name (``stamp``, ``recorded_at``: its
+    type says what it is)."""
     names = [str(c) for c in df.columns]
     k = time_column(names, [names.index(str(c)) for c in channels if str(c) in names])
-    return None if k is None else df.columns[k]
+    if k is not None:
+        return df.columns[k]
+    used = {str(c) for c in channels}
+    stamps = [c for c in df.columns if str(c) not in used and df[c].dtype.kind in "mM"]
+    return stamps[0] if len(stamps) == 1 else None
 
 
 def to_pandas(data: Any) -> Any:
