@@ -100,8 +100,17 @@ def test_frd_subspace_continuous_default_has_no_continuous_feedthrough():
     fit = sysid.frd_subspace(sysid.FRD(w, ctd.freqresp(w)), 2, continuous=True,
                              feedthrough=True)
     assert abs(fit.D[0, 0] - 0.3) < 1e-8
-    with pytest.raises(sysid.DataError, match="time record"):
-        sysid.frd_subspace(sysid.FRD(w, ct.freqresp(w)), 2, continuous=True,
+    # "auto" decides on held-out lines (it was refused for an FRD): D for the plant with one,
+    # none for the one without; the default without D says when the response shows one
+    for g, has in ((ct, False), (ctd, True)):
+        fit = sysid.frd_subspace(sysid.FRD(w, g.freqresp(w)), 2, continuous=True,
+                                 feedthrough="auto")
+        assert fit.info["feedthrough_selection"]["feedthrough"] is has
+        assert abs(fit.D[0, 0] - (0.3 if has else 0.0)) < 1e-8
+    with pytest.warns(sysid.FeedthroughWarning, match="the response shows one"):
+        sysid.frd_subspace(sysid.FRD(w, ctd.freqresp(w)), 2, continuous=True)
+    with pytest.raises(sysid.DataError, match="the FRD's own time base"):
+        sysid.frd_subspace(sysid.FRD(w, ct.freqresp(w), dt=0.01), 2, continuous=True,
                            feedthrough="auto")
 
 

@@ -714,11 +714,16 @@ def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
                         "and regularization out, or refine in the time domain (no periods=)")
     ft = check_feedthrough(feedthrough)
     if ft == "auto":
-        if isinstance(data, FRD):
-            raise DataError("feedthrough='auto' decides from a time record; pass True or False")
-        from ..subspace.estimator import SubspaceEstimator
+        if isinstance(data, FRD):  # on lines held out of frequency-subspace fits
+            from ..subspace.feedthrough_frd import choose_feedthrough_frd
+            from ..subspace.frd_subspace import frd_subspace
 
-        ft, _ = choose_feedthrough(SubspaceEstimator(_experiments(data)), model.nstates)
+            ft, _ = choose_feedthrough_frd(data, model.nstates, lambda g, n, d: frd_subspace(
+                g, n, continuous=g.dt is None, feedthrough=d))
+        else:
+            from ..subspace.estimator import SubspaceEstimator
+
+            ft, _ = choose_feedthrough(SubspaceEstimator(_experiments(data)), model.nstates)
     if not ft and np.any(model.D != 0):
         _warn_dropped_d(3)
     how = "noise"

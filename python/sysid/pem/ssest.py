@@ -368,9 +368,12 @@ def _ssest_frd(frd: FRD, order: Any, feedthrough: Any, horizon: int | None, max_
                         "'auto' (frd_subspace's gap of the singular values); for an order "
                         "search estimate from the time record")
     ft = False if feedthrough is None else feedthrough
-    if check_feedthrough(ft) == "auto":
-        raise DataError("feedthrough='auto' decides from a time record; with an FRD pass "
-                        "True or False")
+    ft_why = None
+    if frd.dt is not None and check_feedthrough(ft) == "auto":  # on held-out lines
+        from ..subspace.feedthrough_frd import choose_feedthrough_frd
+
+        ft, ft_why = choose_feedthrough_frd(frd, order, lambda g, n, d: frd_subspace(
+            g, n, feedthrough=d))
     ft = bool(ft)
     if frd.dt is None:
         raise DataError("ssest fits a discrete model and needs the FRD's sample time: "
@@ -400,6 +403,13 @@ def _ssest_frd(frd: FRD, order: Any, feedthrough: Any, horizon: int | None, max_
                 progress=progress)
     model.info["start"] = {"method": candidates[0][1], "bd_x0": False,
                            "losses": {c[1]: c[0] for c in candidates}}
+    if ft_why is not None:
+        model.info["feedthrough_selection"] = ft_why
+    if feedthrough is None:  # the default, no D: checked against the subspace fit with D
+        from ..subspace.feedthrough_frd import warn_if_left_out_frd
+
+        warn_if_left_out_frd(frd, model, lambda d: frd_subspace(
+            frd, order, horizon=horizon, weights=weights, feedthrough=d), "ssest")
     return model
 
 

@@ -54,7 +54,7 @@ def frd_subspace(
     weights: Any = None,
     lags: int | None = None,
     method: str = "spa",
-    feedthrough: bool | str = False,
+    feedthrough: bool | str | None = None,
     scale: bool | None = None,
     warp: bool | str = "auto",
 ) -> Any:
@@ -88,12 +88,17 @@ def frd_subspace(
         (``"spa"``) or directly from the input and output DFTs of the (single-experiment)
         record (``"dft"``, McKelvey, Akçay & Ljung's spectra form, with the transient term
         estimated: exact for noise-free records, periodic or not).
-    feedthrough : bool or "auto"
-        Estimate ``D``. Default ``False``: no direct term, as every sysid state-space
-        estimator (with ``continuous=True`` the continuous-time ``D`` is zero: the discrete
-        fit is constrained to ``G(-1) = 0``, which Tustin's map sends to infinite frequency).
-        ``"auto"`` (``IOData`` input only): decided from the record by held-out simulation
-        fit (:func:`sysid.subspace.feedthrough.choose_feedthrough`).
+    feedthrough : bool or "auto", optional
+        Estimate ``D``. Default: no direct term, as every sysid state-space estimator; with
+        an FRD that shows one (the fit with ``D`` errs on its lines at least twice less) a
+        :class:`~sysid.FeedthroughWarning` says so (with ``continuous=True`` the
+        continuous-time ``D`` is zero: the discrete fit is constrained to ``G(-1) = 0``,
+        which Tustin's map sends to infinite frequency).
+        ``"auto"``: decided from the data, a record's by held-out simulation fit
+        (:func:`sysid.subspace.feedthrough.choose_feedthrough`), an FRD's by the error on
+        lines held out of the fit (:func:`sysid.subspace.feedthrough_frd.choose_feedthrough_frd`:
+        a force-to-acceleration response needs ``D``); the reason in
+        ``info["feedthrough_selection"]``.
     scale : bool, optional
         Fit with the channels scaled and return the model in the record's units: the same
         model whatever the channels' units. An FRD has every output row and input column of
@@ -134,7 +139,8 @@ def frd_subspace(
     from ..models.frd import FRD
     from ..models.statespace import StateSpaceModel
 
-    ft = check_feedthrough(feedthrough)
+    left_out = feedthrough is None and isinstance(frd, FRD)  # the default: D checked
+    ft = check_feedthrough(False if feedthrough is None else feedthrough)
     scale = check_scale(scale)
     if not isinstance(order, str):
         as_int(order, "order", 1)
@@ -169,11 +175,20 @@ def frd_subspace(
         ct = d2c(dmodel, "zoh")  # the zero-order hold keeps D: no D stays no D
         ct.info.update(dmodel.info)
         return ct
-    if ft == "auto":
-        raise DataError("feedthrough='auto' decides from a time record (held-out simulation "
-                        "fit); for an FRD pass True or False, or give the IOData")
     if not isinstance(frd, FRD):
         raise DataError(f"frd must be a sysid.FRD, got {type(frd).__name__}")
+    if ft == "auto":  # decided on held-out lines, then fitted on all of them
+        from .feedthrough_frd import choose_feedthrough_frd
+
+        if continuous != (frd.dt is None):
+            raise DataError("feedthrough='auto' decides with the FRD's own time base: a "
+                            "discrete FRD fitted discrete, a continuous one continuous")
+        use, why = choose_feedthrough_frd(frd, order, lambda g, n, d: frd_subspace(
+            g, n, continuous=continuous, feedthrough=d, scale=scale, warp=warp))
+        model = frd_subspace(frd, order, horizon=horizon, continuous=continuous, T=T,
+                             weights=weights, feedthrough=use, scale=scale, warp=warp)
+        model.info["feedthrough_selection"] = why
+        return model
     if method != "spa":
         raise DataError(f"method={method!r} applies to a time record (IOData); an FRD is "
                         "fitted as it is: drop method")
@@ -186,6 +201,15 @@ def frd_subspace(
     if warp is True and continuous:
         raise DataError("warp=True is the discrete fit's option (continuous=True always fits "
                         "at warped frequencies): drop it")
+    if left_out:  # fitted without D, then checked against the fit with it
+        from .feedthrough_frd import warn_if_left_out_frd
+
+        def fit(d: bool) -> Any:
+            return frd_subspace(frd, order, horizon=horizon, continuous=continuous, T=T,
+                                weights=weights, feedthrough=d, scale=scale, warp=warp)
+        model = fit(False)
+        warn_if_left_out_frd(frd, model, fit, "frd_subspace")
+        return model
     if not continuous and frd.dt is not None and warp is not False:
         warped = _warped(frd, order, horizon, weights, bool(ft), scale, warp)
         if warped is not None:

@@ -39,9 +39,8 @@ def n4sid_frd(frd: Any, order: Any, horizon: int | None, feedthrough: Any, stabl
         raise DataError("n4sid on frequency-response data fits the response on its lines: "
                         "stable= and x0= apply to time records; leave them out (refine with "
                         "sysid.ssest(frd, order), which keeps the model stable)")
-    # frd_subspace refuses feedthrough="auto" for an FRD itself
-    return frd_subspace(frd, order, horizon=horizon,
-                        feedthrough=False if feedthrough is None else feedthrough, scale=scale)
+    # the default (None): no D, with frd_subspace's check that the response shows none
+    return frd_subspace(frd, order, horizon=horizon, feedthrough=feedthrough, scale=scale)
 
 
 _FRD_NOTE = """
