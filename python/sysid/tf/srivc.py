@@ -135,7 +135,7 @@ def srivc(u: np.ndarray, y: np.ndarray, dt: float, n: int, m: int, tau: float, h
     geometric mean of its poles' magnitudes: ``s' = s / c``, sample time ``c dt``), where
     the filter ``(s' + 1)^n`` has coefficients of order one, and mapped back (``a_k c^k``);
     unscaled, the filter ``1 / A^2`` of eight poles at 250 rad/s has coefficients up to
-    1e38 and its sampled states overflow (MATLAB's CONTSID scales time likewise).
+    1e38 and its sampled states overflow (the CONTSID toolbox scales time likewise).
 
     Examples
     --------
