@@ -326,6 +326,8 @@ def _check_report_dir(report: str | Path) -> None:
 STREAM_BYTES = 8 << 20
 #: how the command says to read decimal commas (in a number's error)
 DECIMAL_HINT = "pass --decimal ,"
+
+
 def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         list[str], list[int], list[int], np.ndarray, np.ndarray, np.ndarray | None]:
     """Names, input and output column indices, u, y and the time column if asked."""
