@@ -383,6 +383,12 @@ def era(markov: Any, order: int | None = None, *, rows: int | None = None,
 class MarkovEstimate:
     """Markov parameters estimated from input/output data.
 
+    The estimate reads as MATLAB's ``impulseest`` model does: :meth:`impulse` and
+    :meth:`step` give its responses (:class:`~sysid.TimeResponse`, the impulse response
+    with its standard deviations when estimated), :meth:`plot` draws the impulse response
+    with its bands (``impulseplot`` with ``showConfidence``), :meth:`summary` and
+    :meth:`to_pandas` give it as text and a table.
+
     Attributes
     ----------
     markov : ndarray
@@ -396,14 +402,10 @@ class MarkovEstimate:
         parameters ``(p, l, m + l)`` and residual covariance. A FIR estimate's ``"std"``
         (the shape of ``markov``): each parameter's standard deviation, the least-squares
         one (``"fir"``) or the TC posterior's (``"fir-tc"``, the prior included).
-    input_names, output_names : list of str
-        The record's channel names.
-
-    The estimate reads as MATLAB's ``impulseest`` model does: :meth:`impulse` and
-    :meth:`step` give its responses (:class:`~sysid.TimeResponse`, the impulse response
-    with its standard deviations when estimated), :meth:`plot` draws the impulse response
-    with its bands (``impulseplot`` with ``showConfidence``), :meth:`summary` and
-    :meth:`to_pandas` give it as text and a table.
+    input_names : list of str
+        The record's input names.
+    output_names : list of str
+        The record's output names.
 
     Examples
     --------
