@@ -31,6 +31,9 @@ from .sensitivity import pair_derivatives
 
 __all__ = ["PairStructure", "refine", "ConvergenceWarning"]
 
+#: iterations of the search in a neighbouring delay interval before the best one is run out
+TRIAL_ITER = 8
+
 
 class ConvergenceWarning(IterationLimitWarning):
     """The search stopped on its iteration limit, before a convergence test was met."""
@@ -285,29 +288,44 @@ def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarr
     res, mp = _run(pairs, exps, dt, hold, whole, x0_mode, max_iter, tol, progress)
     history: list[float] = list(res["history"])
     moves = 0
+    # the delay intervals already searched: a delay whose input hardly matters has the same
+    # cost in two intervals, and the moves went back and forth between them 20 times
+    visited = {tuple(whole)}
     while moves < 20:
         started = [p.delay for p in pairs]
         v = np.asarray(res["p"])[:mp.scale.size] * mp.scale
         ps, taus = mp.split(v)
         pairs = [PairStructure(p.coef, q, p.fixed, p.lower, p.upper, t, p.delay_free,
                                p.delay_max, p.names) for p, q, t in zip(pairs, ps, taus)]
-        trials = _interval_trials(pairs, mp.delay_idx, whole, taus, started, dt)
+        trials = [t for t in _interval_trials(pairs, mp.delay_idx, whole, taus, started, dt)
+                  if tuple(t) not in visited]
+        visited.update(tuple(t) for t in trials)
         if not trials:
             break
-        # the neighbouring sample intervals: the best kept only if it fits better
+        # the neighbouring sample intervals, each searched a few iterations from the current
+        # point (every trial run out took procest(winding, "P2D") 80 s); the best, run out
+        # from where its trial stopped, kept only if it fits better
         best = None
         for trial in trials:
             moved = [PairStructure(p.coef, p.p0, p.fixed, p.lower, p.upper,
                                    float(np.clip(p.delay, t * dt, (t + 1) * dt)), p.delay_free,
                                    p.delay_max, p.names) for p, t in zip(pairs, trial)]
-            res2, mp2 = _run(moved, exps, dt, hold, trial, x0_mode, max_iter, tol, progress)
+            res2, mp2 = _run(moved, exps, dt, hold, trial, x0_mode,
+                             min(max_iter, TRIAL_ITER), tol, progress)
             if best is None or res2["cost"] < best[0]["cost"]:
                 best = (res2, mp2, trial, moved)
         moves += 1
         assert best is not None
         if not best[0]["cost"] < res["cost"] * (1 - 1e-12):
             break
-        res, mp, whole, pairs = best
+        res2, mp2, trial, moved = best
+        if res2["stop"] == "maximum iterations" and max_iter > TRIAL_ITER:
+            v2 = np.asarray(res2["p"])[:mp2.scale.size] * mp2.scale
+            ps2, taus2 = mp2.split(v2)
+            moved = [PairStructure(p.coef, q, p.fixed, p.lower, p.upper, t, p.delay_free,
+                                   p.delay_max, p.names) for p, q, t in zip(moved, ps2, taus2)]
+            res2, mp2 = _run(moved, exps, dt, hold, trial, x0_mode, max_iter, tol, progress)
+        res, mp, whole, pairs = res2, mp2, trial, moved
         history += list(res["history"])
     v = np.asarray(res["p"])[:mp.scale.size] * mp.scale
     ps, taus = mp.split(v)
