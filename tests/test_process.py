@@ -262,3 +262,17 @@ def test_procest_spreads_equal_time_constants_of_a_user_init():
     full = sysid.procest(data, "P2", init={"Tp1": 0.9, "Tp2": 0.9})  # Kp from the data
     assert full.values["Tp1"] == pytest.approx(2.0, rel=1e-6)
     assert full.values["Tp2"] == pytest.approx(0.4, rel=1e-6)
+
+
+@pytest.mark.parametrize("load", ["load_ballbeam", "load_robot_arm"])
+def test_a_type_that_holds_the_one_pole_model_fits_no_worse_than_it(load):
+    # P2DZ (two poles, a zero, a delay) holds P1D (a zero on a pole), yet from the SRIVC start
+    # alone it ended above it: ball and beam 1.0096 against 0.5646, robot arm 32.45 against
+    # 31.60. A second search from the one-pole start embedded keeps the lower
+    d = getattr(sysid.datasets, load)()
+    d = sysid.detrend(d.select(inputs=[0], outputs=[0]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        one = sysid.procest(d, "P1D").info["cost"][0]
+        two = sysid.procest(d, "P2DZ").info["cost"][0]
+    assert two <= one * (1 + 1e-6)
