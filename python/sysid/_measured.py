@@ -50,6 +50,20 @@ def predict_args(u: Any, y: Any) -> tuple[Any, Any]:
     return u, y
 
 
+def record_dt(u: Any, dt: float | None) -> float | None:
+    """``dt``, or the sample time of the record passed in ``u``'s place when ``dt`` is not
+    given: what a continuous-time model's ``predict(data)`` samples at.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid._measured import record_dt
+    >>> record_dt(sysid.IOData(u=np.zeros(3), y=np.ones(3), dt=0.5), None), record_dt(None, 2.0)
+    (0.5, 2.0)
+    """
+    return u.dt if dt is None and errors.is_record(u) else dt
+
+
 def as_horizon(horizon: Any) -> int | None:
     """A prediction horizon: a positive integer (an integral float too), or ``np.inf`` (the
     simulation), returned as ``None``.

@@ -11,6 +11,7 @@ from .._checks import as_int
 from .._display import HTMLResult, model_html
 from ..data.iodata import IOData
 from ..errors import DataError, several_records_hint
+from ..models.subsystem import ChannelSelection
 
 __all__ = ["IdentifiedModel", "IdentifyResult"]
 
@@ -28,7 +29,7 @@ def _family(row: dict[str, Any]) -> str:
                             else "")
 
 
-class IdentifiedModel:
+class IdentifiedModel(ChannelSelection):
     """A linear model identified around operating-point offsets.
 
     ``y = y_offset + G (u - u_offset)``: :meth:`simulate` and :meth:`predict` take and return
@@ -55,21 +56,8 @@ class IdentifiedModel:
     def n_parameters(self) -> int:
         return int(self.statespace.n_parameters)
 
-    def select(self, outputs: Any = None, inputs: Any = None) -> IdentifiedModel:
-        """The model from some inputs to some outputs (names or indices; MATLAB's
-        ``sys(i, j)``) around their offsets; see :meth:`sysid.ModelMixin.select`."""
-        from ..models.subsystem import subsystem
-
-        return subsystem(self, outputs, inputs)
-
-    def __getitem__(self, key: Any) -> IdentifiedModel:
-        """``model[outputs, inputs]`` (MATLAB's ``sys(i, j)``)."""
-        from ..models.subsystem import selection_key, subsystem
-
-        return subsystem(self, *selection_key(key, list(self.output_names),
-                                              list(self.input_names), "a model"))
-
     def _select(self, iy: list[int], iu: list[int]) -> IdentifiedModel:
+        """Outputs ``iy`` from inputs ``iu`` around their offsets (:meth:`select`)."""
         return IdentifiedModel(self.statespace.select(outputs=iy, inputs=iu),
                                self.u_offset[iu], self.y_offset[iy])
 

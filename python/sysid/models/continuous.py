@@ -45,7 +45,6 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from .. import errors
 from .._checks import as_2d, as_dt
 from ..errors import DataError, NumericalError
 from .discretisation import expm, hold_blocks, require_finite_sampling
@@ -242,10 +241,9 @@ class ContinuousStateSpace(ModelMixin):
                 dt: float | None = None, method: str | None = None,
                 x0: Any = None) -> np.ndarray:
         """No noise model: the prediction is the simulation (``y`` only sets the length)."""
-        from .._measured import predict_args
+        from .._measured import predict_args, record_dt
 
-        if dt is None and t is None and errors.is_record(u):  # the record's sample time
-            dt = u.dt
+        dt = dt if t is not None else record_dt(u, dt)
         u, y = predict_args(u, y)
         y = np.asarray(y, dtype=float)
         if y.shape[0] != np.shape(u)[0]:

@@ -72,6 +72,7 @@ import numpy as np
 
 from ..errors import DataError
 from .checks import REQUIRED, _optional, as_statespace, check_model
+from .subsystem import ChannelSelection
 
 __all__ = ["Model", "ModelMixin", "REQUIRED", "check_model", "as_statespace", "TimeResponse",
            "no_pole_std"]
@@ -320,7 +321,7 @@ def _last(cost: Any) -> str:
     return _plain(cost)
 
 
-class ModelMixin:
+class ModelMixin(ChannelSelection):
     """Default implementations of the protocol's derived members, written once.
 
     A class defining ``simulate``, ``freqresp``, ``dt``, the channel names and counts,
@@ -361,29 +362,6 @@ class ModelMixin:
             raise DataError(f"{type(self).__name__}.to_statespace() returns the model itself; "
                             f"define {name}() on the class")
         return getattr(ss, name)
-
-    def select(self, outputs: Any = None, inputs: Any = None) -> Any:
-        """The model from some inputs to some outputs (names or indices, ``None`` for all;
-        MATLAB's ``sys(i, j)``), of the same family, its uncertainty carried through.
-
-        Examples
-        --------
-        >>> import sysid
-        >>> m = sysid.StateSpaceModel([[0.5]], [[1.0, 2.0]], [[1.0], [3.0]])
-        >>> m.select(outputs=1, inputs=[1]).dcgain()
-        array([[12.]])
-        """
-        from .subsystem import subsystem
-
-        return subsystem(self, outputs, inputs)
-
-    def __getitem__(self, key: Any) -> Any:
-        """``model[outputs, inputs]``: :meth:`select` with indices, names, slices or lists
-        (MATLAB's ``sys(i, j)``; ``model[0, :]`` is the first output from every input)."""
-        from .subsystem import selection_key, subsystem
-
-        return subsystem(self, *selection_key(key, list(self.output_names),
-                                              list(self.input_names), "a model"))
 
     def predict(self, u: Any, y: Any = None, horizon: int = 1) -> np.ndarray:
         """``horizon``-step prediction with the Kalman predictor of ``to_statespace()``."""

@@ -76,6 +76,34 @@ def subsystem(model: Any, outputs: Any = None, inputs: Any = None) -> Any:
     return out
 
 
+class ChannelSelection:
+    """``select`` and ``[outputs, inputs]`` for a model class with ``input_names``,
+    ``output_names`` and its own ``_select(iy, iu)`` (every :class:`sysid.ModelMixin`, and
+    ``identify``'s model)."""
+
+    input_names: Any
+    output_names: Any
+
+    def select(self, outputs: Any = None, inputs: Any = None) -> Any:
+        """The model from some inputs to some outputs (names or indices, ``None`` for all;
+        MATLAB's ``sys(i, j)``), of the same family, its uncertainty carried through.
+
+        Examples
+        --------
+        >>> import sysid
+        >>> m = sysid.StateSpaceModel([[0.5]], [[1.0, 2.0]], [[1.0], [3.0]])
+        >>> m.select(outputs=1, inputs=[1]).dcgain()
+        array([[12.]])
+        """
+        return subsystem(self, outputs, inputs)
+
+    def __getitem__(self, key: Any) -> Any:
+        """``model[outputs, inputs]``: :meth:`select` with indices, names, slices or lists
+        (MATLAB's ``sys(i, j)``; ``model[0, :]`` is the first output from every input)."""
+        return subsystem(self, *selection_key(key, list(self.output_names),
+                                              list(self.input_names), "a model"))
+
+
 def names(all_names: Any, index: list[int]) -> list[str]:
     """The names at ``index``."""
     return [list(all_names)[i] for i in index]

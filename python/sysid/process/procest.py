@@ -198,22 +198,17 @@ def _nested_pairs(t: ProcessType, exps: list[tuple[np.ndarray, np.ndarray]], dat
     has one pole or complex poles, the user set parameters, or the output has several
     inputs (there the second search's delay moves took procest(winding, "P2D") from 67 to
     186 s: left out)."""
-    if data.n_inputs > 1:
+    if data.n_inputs > 1 or t.poles < 2 or t.underdamped or init or fixed:
         return None
-    if t.poles < 2 or t.underdamped or init or fixed:
-        return None
-    one = ProcessType(1, t.delay, False, False, False)
-    pairs = []
-    for j in range(data.n_inputs):
-        s1 = _start(one, exps, j, data.dt, hold, dmax, {}, {})
-        start = {"Kp": s1["Kp"], "Tp1": s1["Tp1"], "Td": s1.get("Td", 0.0)}
-        for k in range(2, t.poles + 1):
-            start[f"Tp{k}"] = s1["Tp1"] / 20.0 ** (k - 1)
-        if t.zero:
-            start["Tz"] = start["Tp2"] * 1.5
-        pairs.append(_pair(t, names, {k: start[k] for k in t.names}, fixed, bounds, dmax,
-                           f"{data.output_names[i]}<-{data.input_names[j]}"))
-    return pairs
+    s1 = _start(ProcessType(1, t.delay, False, False, False), exps, 0, data.dt, hold, dmax,
+                {}, {})
+    start = {"Kp": s1["Kp"], "Tp1": s1["Tp1"], "Td": s1.get("Td", 0.0)}
+    for k in range(2, t.poles + 1):
+        start[f"Tp{k}"] = s1["Tp1"] / 20.0 ** (k - 1)
+    if t.zero:
+        start["Tz"] = start["Tp2"] * 1.5
+    return [_pair(t, names, {k: start[k] for k in t.names}, fixed, bounds, dmax,
+                  f"{data.output_names[i]}<-{data.input_names[0]}")]
 
 
 def _diverged(e: NumericalError, t: ProcessType, data: Any) -> NumericalError:

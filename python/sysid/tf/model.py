@@ -17,7 +17,6 @@ from typing import Any
 
 import numpy as np
 
-from .. import errors
 from .._checks import as_2d, as_dt
 from ..errors import DataError, ShapeError
 from ..greybox.delays import shift_taps
@@ -394,10 +393,9 @@ class TransferFunction(ModelMixin):
     def predict(self, u: Any, y: Any = None, horizon: int = 1, *, dt: float | None = None
                 ) -> np.ndarray:
         """No noise model (output error): the prediction is the simulation."""
-        from .._measured import predict_args
+        from .._measured import predict_args, record_dt
 
-        if dt is None and errors.is_record(u):  # the record's sample time
-            dt = u.dt
+        dt = record_dt(u, dt)
         u, y = predict_args(u, y)
         if np.shape(y)[0] != np.shape(u)[0]:
             raise DataError(f"u has {np.shape(u)[0]} samples but y has {np.shape(y)[0]}")

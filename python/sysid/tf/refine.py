@@ -247,6 +247,14 @@ def _run(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarray
     return res, mp
 
 
+def _reached(res: dict[str, Any], mp: _Map, pairs: Sequence[PairStructure]
+             ) -> tuple[list[PairStructure], list[float]]:
+    """The pairs started where the search ``res`` (on the map ``mp``) ended, and the delays."""
+    ps, taus = mp.split(np.asarray(res["p"])[:mp.scale.size] * mp.scale)
+    return [PairStructure(p.coef, q, p.fixed, p.lower, p.upper, t, p.delay_free, p.delay_max,
+                          p.names) for p, q, t in zip(pairs, ps, taus)], taus
+
+
 def _interval_trials(pairs: Sequence[PairStructure], delay_idx: list[int], whole: list[int],
                      taus: list[float], started: list[float], dt: float) -> list[list[int]]:
     """The sample intervals of the delays to try next: the neighbouring one of every free
@@ -293,10 +301,7 @@ def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarr
     visited = {tuple(whole)}
     while moves < 20:
         started = [p.delay for p in pairs]
-        v = np.asarray(res["p"])[:mp.scale.size] * mp.scale
-        ps, taus = mp.split(v)
-        pairs = [PairStructure(p.coef, q, p.fixed, p.lower, p.upper, t, p.delay_free,
-                               p.delay_max, p.names) for p, q, t in zip(pairs, ps, taus)]
+        pairs, taus = _reached(res, mp, pairs)
         trials = [t for t in _interval_trials(pairs, mp.delay_idx, whole, taus, started, dt)
                   if tuple(t) not in visited]
         visited.update(tuple(t) for t in trials)
@@ -320,17 +325,11 @@ def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarr
             break
         res2, mp2, trial, moved = best
         if res2["stop"] == "maximum iterations" and max_iter > TRIAL_ITER:
-            v2 = np.asarray(res2["p"])[:mp2.scale.size] * mp2.scale
-            ps2, taus2 = mp2.split(v2)
-            moved = [PairStructure(p.coef, q, p.fixed, p.lower, p.upper, t, p.delay_free,
-                                   p.delay_max, p.names) for p, q, t in zip(moved, ps2, taus2)]
+            moved = _reached(res2, mp2, moved)[0]
             res2, mp2 = _run(moved, exps, dt, hold, trial, x0_mode, max_iter, tol, progress)
         res, mp, whole, pairs = res2, mp2, trial, moved
         history += list(res["history"])
-    v = np.asarray(res["p"])[:mp.scale.size] * mp.scale
-    ps, taus = mp.split(v)
-    pairs = [PairStructure(p.coef, q, p.fixed, p.lower, p.upper, t, p.delay_free,
-                           p.delay_max, p.names) for p, q, t in zip(pairs, ps, taus)]
+    pairs = _reached(res, mp, pairs)[0]
     if res["stop"] == "maximum iterations":
         import warnings
 
