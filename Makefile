@@ -25,8 +25,10 @@ test-rust:
 	cargo test --release -p sysid-core
 
 # the tests on every core (pytest-xdist), then alone the few that time a latency (marked
-# `serial`: Ctrl-C within a second), so that the others' load does not decide them
-test-python: build
+# `serial`: Ctrl-C within a second), so that the others' load does not decide them; the site
+# first (docs builds it after build), so that tests/test_docs_site.py checks it and nothing is
+# skipped on a fresh clone
+test-python: docs
 	$(BIN)/python -m pytest -q -n auto -m "not serial"
 	$(BIN)/python -m pytest -q -m serial
 
