@@ -182,8 +182,10 @@ def test_d2c_frequency_response_tustin():
 
 
 def test_d2c_errors():
-    with pytest.raises(sysid.NumericalError, match="negative real axis"):
-        sysid.d2c(sysid.StateSpaceModel([[-0.5]], [[1.0]], [[1.0]]))
+    with pytest.raises(sysid.NumericalError, match="at zero: .*method='tustin'"):
+        sysid.d2c(sysid.StateSpaceModel([[0.0]], [[1.0]], [[1.0]]))
+    with pytest.raises(sysid.NumericalError, match="negative real axis.*'zoh' or 'tustin'"):
+        sysid.d2c(sysid.StateSpaceModel([[-0.5]], [[1.0]], [[1.0]]), "foh")
     with pytest.raises(sysid.NumericalError, match="z = -1"):
         sysid.d2c(sysid.StateSpaceModel([[-1.0]], [[1.0]], [[1.0]]), "tustin")
     with pytest.raises(sysid.DataError, match="zoh"):
@@ -297,6 +299,57 @@ def test_integrators_give_sysid_answers_not_numpy_errors():
         info = sysid.stepinfo(sys)
         assert np.isinf(info.steady_state) and np.isinf(info.peak) and np.isinf(info.peak_time)
         assert np.isnan(info.rise_time)
+
+
+def test_d2c_doubles_poles_on_the_negative_real_axis_as_matlab():
+    # d2c refused any model with a pole on the negative real axis (ssest's order-4 model of
+    # the winding record has one at z = -0.09); MATLAB doubles each into a complex pair at
+    # the Nyquist frequency. Its documented example: G = (z + 0.5) / ((z + 2)(z - 5)),
+    # dt = 0.1 -> 2.6663 (s^2 + 14.28 s + 780.9) / ((s - 16.09)(s^2 - 13.86 s + 1035))
+    G = sysid.TransferFunction([1.0, 0.5], [1.0, -3.0, -10.0], dt=0.1)
+    with pytest.warns(sysid.SysidWarning, match="order 2 -> 3"):
+        c = sysid.d2c(G)
+    assert c.nstates == 3
+    den = np.real(np.poly(c.poles()))
+    a, b = np.log(2) / 0.1, np.pi / 0.1      # z = -2 -> (log 2 +- i pi) / dt: 6.93 +- 31.4i
+    np.testing.assert_allclose(den, np.polymul([1, -np.log(5) / 0.1],
+                                               [1, -2 * a, a * a + b * b]), rtol=1e-12)
+    num = np.real(np.poly(sysid.zeros(c)))
+    np.testing.assert_allclose(num, [1.0, 14.28, 780.9], rtol=2e-3)
+    assert float(c.dcgain()[0, 0]) == pytest.approx(-0.125)       # G(1) = 1.5 / (3 * -4)
+    # sampled back with the same hold it is the discrete model, at every frequency
+    w = np.linspace(0.1, np.pi / 0.1, 40)
+    np.testing.assert_allclose(sysid.c2d(c, 0.1).freqresp(w), G.freqresp(w), atol=1e-12)
+    # MIMO, several such poles and a coupled block: still the same sampled model
+    rng = np.random.default_rng(3)
+    V = rng.standard_normal((5, 5))
+    A = V @ np.diag([-0.6, -0.2, 0.3, 0.8, 0.5]) @ np.linalg.inv(V)
+    A[:, 4] += 0.05 * rng.standard_normal(5)
+    m = sysid.StateSpaceModel(A, rng.standard_normal((5, 2)), rng.standard_normal((3, 5)),
+                              rng.standard_normal((3, 2)), dt=0.2)
+    k = int(np.sum((np.abs(m.poles().imag) < 1e-12) & (m.poles().real < 0)))
+    with pytest.warns(sysid.SysidWarning, match="negative real axis"):
+        c = sysid.d2c(m)
+    assert c.nstates == 5 + k and np.isrealobj(c.A)
+    w = np.linspace(0.05, np.pi / 0.2, 30)
+    np.testing.assert_allclose(sysid.c2d(c, 0.2).freqresp(w), m.freqresp(w), atol=1e-10)
+
+
+def test_stepinfo_of_an_unstable_model_is_nan_with_an_infinite_peak():
+    # an unstable model's step diverges; stepinfo took its DC gain as the final value and
+    # reported a settling band, a peak and an undershoot of 1580 % (ball and beam, n4sid
+    # order 4, pole 1.016); MATLAB: every characteristic NaN, Peak and PeakTime Inf
+    for sys in (sysid.StateSpaceModel([[1.02, 0.0], [0.1, 0.5]], [[1.0], [0.0]], [[0.0, 1.0]],
+                                      dt=0.1),
+                sysid.TransferFunction([1.0], [1.0, 1.0, -0.5]),
+                sysid.ContinuousStateSpace([[0.2]], [[1.0]], [[1.0]])):
+        info = sysid.stepinfo(sys)
+        assert np.isinf(info.peak) and np.isinf(info.peak_time)
+        for k in ("rise_time", "settling_time", "settling_min", "overshoot", "undershoot"):
+            assert np.isnan(getattr(info, k)), k
+    # a stable model still has its characteristics
+    ok = sysid.stepinfo(sysid.StateSpaceModel([[0.9]], [[0.1]], [[1.0]], dt=0.1))
+    assert ok.steady_state == pytest.approx(1.0) and np.isfinite(ok.settling_time)
 
 
 def test_margin_and_nyquist_of_a_frequency_response_use_its_lines():

@@ -147,6 +147,8 @@ def test_sample_time_arguments_are_checked():
         sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]], hold="tustin")
     with pytest.raises(sysid.NumericalError, match="negative real axis"):
         sysid.d2c(sysid.StateSpaceModel([[-0.5]], [[1.0]], [[1.0]]), "foh")
+    with pytest.raises(sysid.NumericalError, match="at zero"):
+        sysid.d2c(sysid.StateSpaceModel([[0.0]], [[1.0]], [[1.0]]))
 
 
 def test_public_names_and_protocol():

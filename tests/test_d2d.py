@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import sysid
-from sysid.errors import DataError, NumericalError
+from sysid.errors import DataError
 
 
 def _model() -> sysid.StateSpaceModel:
@@ -26,8 +26,13 @@ def test_a_whole_multiple_with_zoh_is_exact_for_any_poles():
     u = np.random.default_rng(0).standard_normal((200, 2))
     fine = m.simulate(np.repeat(u, k, axis=0))[::k]
     np.testing.assert_allclose(r.simulate(u), fine, atol=1e-12)
-    with pytest.raises(NumericalError, match="negative real axis"):
-        sysid.d2d(m, 0.25)
+    # another ratio goes through the ZOH continuous equivalent, whose negative real pole is
+    # doubled (as MATLAB's d2c); halving the sample time and holding two samples is exact
+    with pytest.warns(sysid.SysidWarning, match="negative real axis"):
+        half = sysid.d2d(m, 0.05)
+    assert half.nstates == m.nstates + 1
+    back = sysid.d2d(half, 0.1)
+    np.testing.assert_allclose(back.simulate(u), m.simulate(u), atol=1e-9)
 
 
 def test_other_ratios_go_through_the_continuous_equivalent_and_round_trip():

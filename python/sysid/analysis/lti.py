@@ -94,7 +94,7 @@ def damp(model: Any, std: bool = False) -> DampingTable:
     >>> np.round(table.zeta, 4)
     array([0.0995, 0.0995])
     """
-    check_model(model)
+    model = check_model(model)
     check_start(model, None, "damp", role="model")
     return damping(model, std)
 
@@ -144,7 +144,7 @@ def impulse(model: Any, n_samples: int | None = None, std: bool = False) -> Time
 
 
 def _response(model: Any, kind: str, n_samples: int | None) -> TimeResponse:
-    check_model(model)
+    model = check_model(model)
     fn = getattr(model, kind, None)
     if fn is None:
         from ..models.protocol import sampled_response

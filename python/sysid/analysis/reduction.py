@@ -71,7 +71,7 @@ def _state_space(model: Any, purpose: str) -> Any:
     :func:`_check`'s discrete form."""
     if getattr(model, "dt", None) != 0:
         return _check(model)
-    check_model(model)
+    model = check_model(model)
     ss = model if all(hasattr(model, k) for k in _ABCD) else as_statespace(model, purpose)
     if not all(hasattr(ss, k) for k in _ABCD) or ss.dt != 0:
         raise DataError(f"{type(model).__name__}.to_statespace() returned a "

@@ -83,7 +83,7 @@ def report(model: Any, data: Any, path: str | Path, *, selection: Any = None,
     >>> sorted(files)
     ['fit', 'html', 'model']
     """
-    check_model(model)
+    model = check_model(model)
     _check_selection(selection)
     if which not in ("validation", "estimation"):
         raise DataError(f"which must be 'validation' or 'estimation' (what the data are, for "

@@ -172,6 +172,13 @@ def stepinfo(sys: Any, t: Any = None, *, yfinal: Any = None, yinit: Any = None,
     n_samples : int
         Grid size of a model's step response.
 
+    Returns
+    -------
+    StepInfo
+        The characteristics per output/input pair. A model whose step does not settle (an
+        integrator, or any unstable pole, as MATLAB has it) has every characteristic NaN
+        but ``peak`` and ``peak_time``, which are ``inf``.
+
     Examples
     --------
     >>> import numpy as np, sysid
@@ -243,9 +250,13 @@ def _nonlinear(sys: Any) -> bool:
             or type(sys).__module__.startswith(("sysid.nonlinear.", "sysid.nlss.")))
 
 
-def _final_value(sys: Any, shape: tuple[int, ...]) -> np.ndarray:
+def _final_value(sys: Any, shape: tuple[int, ...], unstable: bool) -> np.ndarray:
     """The step's final value: the model's DC gain (a pole at ``s = 0`` or ``z = 1`` that a
-    zero cancels leaves it finite), ``inf`` when an integrator makes the step unbounded."""
+    zero cancels leaves it finite), ``inf`` when an integrator makes the step unbounded or
+    the model is unstable (MATLAB: every characteristic NaN, the peak and its time Inf; the
+    DC gain of an unstable model is no value its step tends to)."""
+    if unstable:
+        return np.full(shape, np.inf)
     try:
         gain = sys.dcgain() if hasattr(sys, "dcgain") else sys.freqresp([0.0])[0].real
         gain = np.asarray(gain, dtype=float).reshape(shape)
@@ -271,7 +282,7 @@ def _model_step(sys: Any, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
             # the response's own final value: the linear part's (or the linearisation's)
             # static gain is not the nonlinear model's (0.909 for a step that ends at 0.934)
             return np.asarray(resp.t, float), Y, Y[-1].copy(), np.zeros_like(Y[-1])
-        gain = _final_value(sys, Y.shape[1:])
+        gain = _final_value(sys, Y.shape[1:], rho > 1.0 + 1e-9)
         return np.asarray(resp.t, float), Y, gain, np.zeros_like(gain)
     re = -p.real
     slow = float(np.min(re[re > 1e-12])) if np.any(re > 1e-12) else 0.0
@@ -280,5 +291,6 @@ def _model_step(sys: Any, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
     else:
         t_final = 10.0 / slow + 1.2 * delay
     resp = sys.step(n, dt=t_final / (n - 1))
-    gain = _final_value(sys, resp.y.shape[1:])
+    unstable = bool(np.any(-re > 1e-9 * np.maximum(1.0, np.abs(p))))
+    gain = _final_value(sys, resp.y.shape[1:], unstable)
     return np.asarray(resp.t, float), np.asarray(resp.y), gain, np.zeros_like(gain)

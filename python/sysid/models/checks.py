@@ -11,7 +11,7 @@ from typing import Any
 from ..errors import DataError, NonFiniteError
 
 __all__ = [
-    "REQUIRED", "FREQUENCY", "check_model", "as_statespace", "discrete_statespace",
+    "REQUIRED", "FREQUENCY", "check_model", "inner_model", "as_statespace", "discrete_statespace",
     "check_start", "warn_unstable",
 ]
 
@@ -22,9 +22,19 @@ REQUIRED = ("simulate", "predict", "freqresp", "dt", "ninputs", "noutputs", "inp
 FREQUENCY = ("freqresp", "ninputs", "noutputs", "input_names", "output_names")
 
 
+def inner_model(obj: Any) -> Any:
+    """The model a result holds (``sysid.identify``'s, ``greyest``'s, ...: its ``.model``)
+    when ``obj`` is such a result and not a model itself; ``obj`` otherwise."""
+    if callable(getattr(obj, "simulate", None)):
+        return obj
+    inner = getattr(obj, "model", None)
+    return inner if callable(getattr(inner, "simulate", None)) else obj
+
+
 def check_model(model: Any, what: str = "model", members: tuple[str, ...] = REQUIRED) -> Any:
-    """Return ``model`` if it satisfies :class:`Model`, else raise a :class:`DataError`
-    naming the missing members.
+    """Return ``model`` if it satisfies :class:`Model` (a result that holds one, such as
+    ``sysid.identify``'s, gives its ``.model``), else raise a :class:`DataError` naming the
+    missing members.
 
     Examples
     --------
@@ -35,6 +45,9 @@ def check_model(model: Any, what: str = "model", members: tuple[str, ...] = REQU
     sysid.errors.DataError: model must satisfy sysid.Model (e.g. a sysid.StateSpaceModel); ...
     """
     missing = [name for name in members if not hasattr(model, name)]
+    inner = inner_model(model)
+    if missing and inner is not model:
+        return check_model(inner, what, members)
     if missing:
         raise DataError(
             f"{what} must satisfy sysid.Model (e.g. a sysid.StateSpaceModel); "
@@ -77,7 +90,7 @@ def discrete_statespace(model: Any, purpose: str) -> Any:
     A model with ``A``, ``B``, ``C``, ``D`` and ``dt > 0`` is returned as it is; others go
     through ``to_statespace()``; a continuous-time model is told to discretise first.
     """
-    check_model(model)
+    model = check_model(model)
     if all(hasattr(model, k) for k in ("A", "B", "C", "D")) and model.dt:
         return model
     if not model.dt:

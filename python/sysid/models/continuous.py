@@ -39,6 +39,7 @@ The discrete model is then simulated by the Rust simulator.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
@@ -46,10 +47,11 @@ import numpy as np
 import scipy.linalg
 
 from .._checks import as_2d, as_dt
-from ..errors import DataError, NumericalError
+from ..errors import DataError, NumericalError, SysidWarning
 from .discretisation import expm, hold_blocks, require_finite_sampling
 from .linear import transmission_zeros
 from .matched import matched_c2d, matched_d2c
+from .negative_real import negative_real, zoh_doubled
 from .protocol import ModelMixin, TimeResponse, continuous_grid, slowest_decay
 from .statespace import StateSpaceModel, finite_dcgain, ss_parameter_count
 
@@ -557,9 +559,11 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh", *,
 def _real_log(M: np.ndarray, p: np.ndarray, method: str) -> np.ndarray:
     bad = (np.abs(p.imag) <= 1e-12 * np.maximum(1, np.abs(p))) & (p.real <= 0)
     if bad.any():
+        where = "at zero" if abs(p[bad][0]) <= 1e-12 else "on the negative real axis"
+        other = "'tustin'" if method == "zoh" or where == "at zero" else "'zoh' or 'tustin'"
         raise NumericalError(
-            f"the model has a pole at z = {p[bad][0].real:g} on the negative real axis or at "
-            f"zero: it has no {method.upper()} continuous equivalent; use method='tustin'"
+            f"the model has a pole at z = {p[bad][0].real:g} {where}: it has no "
+            f"{method.upper()} continuous equivalent; use method={other}"
         )
     L = np.real_if_close(scipy.linalg.logm(M), tol=1e6)
     if np.iscomplexobj(L):
@@ -571,13 +575,16 @@ def d2c(model: StateSpaceModel, method: str = "zoh", *,
         prewarp: float | None = None) -> ContinuousStateSpace:
     """Continuous-time equivalent of a discrete model (inverse of :func:`c2d`).
 
-    ``zoh`` takes the principal matrix logarithm of ``[[A, B], [0, I]]``; ``foh`` takes
-    ``A = log(Ad) / dt`` and solves the FOH relations for ``B`` and ``D``. Both fail with a
-    :class:`NumericalError` when a pole lies on the negative real axis or at zero (no real
-    logarithm). ``tustin`` fails when a pole is at ``z = -1``; with ``prewarp`` it inverts the
-    prewarped transform. ``matched`` (one input and one output) maps poles and zeros by
-    ``log(z) / dt`` and keeps the DC gain. The noise model (``K``) is not converted; the
-    parameter uncertainty is (the same parameters, through the conversion).
+    ``zoh`` takes the principal matrix logarithm of ``[[A, B], [0, I]]``; a pole on the
+    negative real axis, which has no real logarithm, is doubled first (as MATLAB does: the
+    order rises by one per such pole, each becoming a complex pair at the Nyquist frequency,
+    with a warning). ``foh`` takes ``A = log(Ad) / dt`` and solves the FOH relations for
+    ``B`` and ``D``; it fails with a :class:`NumericalError` on the negative real axis. Both
+    fail for a pole at zero (no logarithm). ``tustin`` fails when a pole is at ``z = -1``;
+    with ``prewarp`` it inverts the prewarped transform. ``matched`` (one input and one
+    output) maps poles and zeros by ``log(z) / dt`` and keeps the DC gain. The noise model
+    (``K``) is not converted; the parameter uncertainty is (the same parameters, through the
+    conversion).
 
     Parameters
     ----------
@@ -600,13 +607,28 @@ def d2c(model: StateSpaceModel, method: str = "zoh", *,
     >>> bool(np.isclose(c.A[0, 0], -1.0))
     True
     """
+    return _d2c(model, method, prewarp, quiet=False)
+
+
+def _d2c(model: StateSpaceModel, method: str, prewarp: float | None, quiet: bool
+         ) -> ContinuousStateSpace:
     model = _convertible(model, StateSpaceModel, "d2c")
     method = _method(method, _D2C_METHODS)
     A, B, C, D, dt = model.A, model.B, model.C, model.D, model.dt
     h = _warp(prewarp, dt, method, "d2c")
     n, m = B.shape
     p = model.poles()
-    if method == "zoh":
+    if method == "zoh" and negative_real(p).any() and not np.any(np.abs(p) <= 1e-12):
+        if not quiet:
+            warnings.warn(
+                f"d2c: the model has {int(negative_real(p).sum())} pole(s) on the negative "
+                f"real axis (z = {p[negative_real(p)][0].real:g}), which no continuous model "
+                "of its order samples to; each is doubled into a complex pair at the Nyquist "
+                f"frequency (order {n} -> {n + int(negative_real(p).sum())}, as MATLAB's "
+                "d2c); method='tustin' keeps the order", SysidWarning, stacklevel=3)
+        Ac, Bc, Cc = zoh_doubled(A, B, C, dt)
+        Dc = D.copy()
+    elif method == "zoh":
         big = np.eye(n + m)
         big[:n, :n], big[:n, n:] = A, B
         L = _real_log(big, p, method) / dt
@@ -633,7 +655,7 @@ def d2c(model: StateSpaceModel, method: str = "zoh", *,
     )
     unc = getattr(model, "uncertainty", None)
     if unc is not None:  # the same parameters, seen through the conversion
-        out.uncertainty = unc.through(lambda m: d2c(m, method, prewarp=prewarp))
+        out.uncertainty = unc.through(lambda m: _d2c(m, method, prewarp, quiet=True))
     return out
 
 

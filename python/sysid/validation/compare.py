@@ -43,7 +43,7 @@ from .._display import HTMLResult
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..errors import DataError, NumericalError, ShapeError, SysidWarning, several_records_hint
-from ..models.checks import check_model
+from ..models.checks import check_model, inner_model
 from ..models.trended import TrendedModel
 
 __all__ = [
@@ -60,6 +60,7 @@ X0 = Union[str, np.ndarray, None]
 def _model_first(model: Any, data: Any) -> tuple[Any, Any]:
     """``(model, data)``, also when given in MATLAB's order (``resid(data, sys)``): a
     record (an :class:`IOData` or a ``(u, y)`` pair) followed by a model."""
+    model, data = inner_model(model), inner_model(data)
     is_record = isinstance(model, IOData) or (isinstance(model, tuple) and len(model) == 2)
     if is_record and callable(getattr(data, "simulate", None)):
         return data, model
@@ -83,7 +84,7 @@ def _records(model: Any, data: Any) -> tuple[Any, list[tuple[np.ndarray, np.ndar
     are taken as such: a record and a model cannot be mistaken for each other.
     """
     model, data = _model_first(model, data)
-    check_model(model)
+    model = check_model(model)
     if isinstance(model, TrendedModel):  # the inner model on the record less the trend
         if isinstance(data, tuple) and len(data) == 2:
             data = IOData(u=data[0], y=data[1], dt=model.dt)

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..data.iodata import IOData
 from ..errors import DataError, is_frd, several_records_hint
+from ..models.checks import inner_model
 
 __all__ = ["CompareSet", "split_arguments"]
 
@@ -42,6 +43,7 @@ def split_arguments(args: tuple[Any, ...], horizon: Any) -> tuple[Any, list[Any]
             + ", ".join(type(a).__name__ for a in args) + several_records_hint(args[0]))
     if not models:
         raise DataError("compare needs at least one model after the data")
+    models = [inner_model(m) for m in models]
     if any(_is_data(m) for m in models):
         if is_frd(data) or any(is_frd(m) for m in models):
             raise DataError("an FRD has no time response to compare with a record: compare "
