@@ -132,7 +132,8 @@ def test_text_tables_keep_long_channel_names_whole():
 
 
 def test_bode_bands_asked_of_a_model_without_uncertainty_are_said_missing():
-    # plot_bode(m, confidence=0.95) drew no band for an n4sid model and said nothing
+    # plot_bode(m, confidence=0.95) drew no band for a model without uncertainty and said
+    # nothing
     pytest.importorskip("matplotlib")
     import matplotlib
 
@@ -143,7 +144,7 @@ def test_bode_bands_asked_of_a_model_without_uncertainty_are_said_missing():
     u = rng.standard_normal(400)
     d = sysid.IOData(u, np.convolve(u, [0, 0.5, 0.3])[:400] + 0.01 * rng.standard_normal(400))
     with pytest.warns(sysid.UncertaintyWarning, match=r"model\(s\) \[0\] carry no parameter"):
-        plot_bode(sysid.n4sid(d, 2), confidence=0.95)
+        plot_bode(sysid.n4sid(d, 2, uncertainty=None), confidence=0.95)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         plot_bode(sysid.arx(d, 1, 2, 1), confidence=0.95)

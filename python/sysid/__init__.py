@@ -41,7 +41,6 @@ from .errors import (
 )
 from .models.statespace import StateSpaceModel
 from .subspace.estimator import SubspaceEstimator, default_horizon
-from .subspace.shortcuts import cva, moesp, n4sid
 from .validation.criteria import criteria  # a function named like its module: bind it eagerly
 
 # Subpackages named like a public function (`sysid/pem/` holds `pem()`): load the (empty)
@@ -55,6 +54,9 @@ for _pkg in ("pem", "identify"):
 # Everything else loads on first use (PEP 562), so that `import sysid` pulls in neither
 # SciPy's signal and statistics modules nor plotting: name -> submodule.
 _LAZY = {
+    "cva": "subspace.shortcuts",
+    "moesp": "subspace.shortcuts",
+    "n4sid": "subspace.shortcuts",
     "Coherence": "nonparametric.spectra",
     "ContinuousStateSpace": "models.continuous",
     "Correlation": "nonparametric.correlation",

@@ -526,12 +526,20 @@ def require(model: Any) -> ParameterUncertainty:
     """The model's :class:`ParameterUncertainty`, or a clear error when it has none."""
     unc = getattr(model, "uncertainty", None)
     if unc is None:
-        why = (getattr(model, "info", None) or {}).get("identify_uncertainty")
+        info = getattr(model, "info", None) or {}
+        why = info.get("identify_uncertainty")
+        why = f"sysid.identify: {why}" if why else None
+        none = info.get("uncertainty")
+        if not why and isinstance(none, dict) and none.get("method") == "none":
+            why = none.get("why")
         raise DataError(
             "this model carries no parameter uncertainty"
-            + (f" (sysid.identify: {why})" if why else
-               ": estimate it with sysid.pem/ssest, a polynomial estimator, or "
-               "SubspaceEstimator.fit(..., uncertainty='bootstrap')"))
+            + (f" ({why})" if why else
+               ": estimate it with sysid.pem/ssest, a polynomial estimator, "
+               "sysid.n4sid/moesp/cva (attached by default), or "
+               "SubspaceEstimator.fit(..., uncertainty='bootstrap'); "
+               "sysid.pem(data, model, max_iter=0) gives any state-space model the "
+               "criterion's at it"))
     return unc  # type: ignore[no-any-return]
 
 

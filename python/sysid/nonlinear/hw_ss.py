@@ -132,7 +132,7 @@ def nlhw_ss(
     """
     from ..data.iodata import IOData
     from ..models.statespace import StateSpaceModel
-    from ..subspace.shortcuts import n4sid
+    from ..subspace.estimator import SubspaceEstimator, horizon_for_order
     from .choice import auto_fit, is_auto
 
     data = require_record(data, "nlhw_ss")
@@ -183,12 +183,14 @@ def nlhw_ss(
         lin_data = IOData([r[0] for r in records], [r[1] for r in records], dt)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            lin = n4sid(lin_data, int(order), feedthrough=bool(feedthrough))
+            est = SubspaceEstimator(lin_data, horizon_for_order(lin_data, int(order), None),
+                                    method="n4sid")
+            lin = est.fit(int(order), feedthrough=bool(feedthrough))
             rho = float(np.max(np.abs(lin.poles())))
             if rho >= 1:
                 # the simulation errors of an unstable block grow without bound: start from
                 # the subspace fit with a stable A enforced (Maciejowski's shift) instead
-                lin = n4sid(lin_data, int(order), feedthrough=bool(feedthrough), stable=True)
+                lin = est.fit(int(order), feedthrough=bool(feedthrough), stable=True)
                 start_note = (f"n4sid's model of order {int(order)} was unstable (largest "
                               f"|pole| {rho:.4g}); started from it with a stable A enforced")
     else:

@@ -304,6 +304,32 @@ class DeferredSandwich(ParameterUncertainty):
         return object.__getattribute__(self, name)
 
 
+def through_deferred(unc: Any, fn: Callable[[Any], Any]) -> Any:
+    """``unc.through(fn)`` that keeps a :class:`DeferredSandwich` deferred (``through`` reads
+    the covariance, which forms it).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> from sysid.pem.sandwich import DeferredSandwich, through_deferred
+    >>> base = sysid.ParameterUncertainty([0.5], [[0.01]], lambda t: float(t[0]))
+    >>> d = through_deferred(DeferredSandwich(base, lambda: (None, "gn"), print),
+    ...                      lambda a: 2 * a)
+    >>> d.__dict__["_pending"] is not None, d.build([0.25])
+    (True, 0.5)
+    """
+    pending = unc.__dict__.get("_pending") if hasattr(unc, "__dict__") else None
+    if pending is None:
+        return unc.through(fn)
+    base, form, then = pending
+
+    def formed() -> tuple[ParameterUncertainty | None, str]:
+        new, note = form()
+        return (None if new is None else new.through(fn)), note
+
+    return DeferredSandwich(base.through(fn), formed, then)
+
+
 def gauss_newton(unc: Any) -> Any:
     """The Gauss-Newton uncertainty of a :class:`DeferredSandwich` not formed yet, without
     forming it; any other uncertainty itself.

@@ -95,7 +95,7 @@ def subspace_starts(data: IOData, nb: list[list[int]], nf: list[list[int]],
     >>> np.round([s.b[0][0][0], s.f[0][0][0]], 6).tolist()
     [0.5, -0.8]
     """
-    from ..subspace.shortcuts import n4sid
+    from ..subspace.estimator import SubspaceEstimator, horizon_for_order
 
     out: list[PolynomialModel | None] = []
     exps = data.experiments
@@ -109,7 +109,8 @@ def subspace_starts(data: IOData, nb: list[list[int]], nf: list[list[int]],
                 warnings.simplefilter("ignore")
                 one = IOData([u for u, _ in exps], [y[:, [i]] for _, y in exps], data.dt) \
                     if len(exps) > 1 else IOData(exps[0][0], exps[0][1][:, [i]], data.dt)
-                s = n4sid(one, n, feedthrough=min(nk[i]) == 0)
+                s = SubspaceEstimator(one, horizon_for_order(one, n, None), method="n4sid").fit(
+                    n, feedthrough=min(nk[i]) == 0)
         except Exception:  # noqa: BLE001 - no subspace start for this output: the default's
             out.append(None)
             continue

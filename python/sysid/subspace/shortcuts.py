@@ -14,6 +14,7 @@ from .._threads import one_blas_thread
 from ..data.iodata import IOData, require_record
 from ..errors import DataError, is_frd
 from ..models.statespace import StateSpaceModel
+from ..pem.at_estimate import attach_criterion_uncertainty
 from .estimator import Order, SubspaceEstimator, horizon_for_order
 from .feedthrough import warn_if_left_out
 from .frd_subspace import frd_subspace
@@ -67,7 +68,11 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         x0: bool = False,
         scale: bool | None = None,
         input_delay: Any = None,
+        uncertainty: str | None = "criterion",
     ) -> StateSpaceModel:
+        if uncertainty not in ("criterion", "bootstrap", None):
+            raise DataError(f"uncertainty must be 'criterion', 'bootstrap' or None, got "
+                            f"{uncertainty!r}")
         if method == "n4sid" and is_frd(data) and input_delay is None:
             return n4sid_frd(data, order, horizon, feedthrough, stable, x0, scale)
         data = require_record(data, method.replace("-", "_"))
@@ -76,16 +81,19 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
 
             return delayed_fit(data, input_delay, feedthrough, lambda shifted: fit(
                 shifted, order, horizon=horizon, feedthrough=feedthrough, kalman=kalman,
-                stable=stable, x0=x0, scale=scale))
+                stable=stable, x0=x0, scale=scale, uncertainty=None))
         if not isinstance(order, str) and np.ndim(order) == 0:
             order = as_int(order, "order", 1)  # inf, nan, 2.5: before the data are compressed
         horizon = horizon_for_order(data, order, horizon)  # one that allows a given order
         est = SubspaceEstimator(data, horizon, method=method, scale=scale)
-        model = est.fit(order, feedthrough=feedthrough, kalman=kalman, stable=stable, x0=x0)
+        model = est.fit(order, feedthrough=feedthrough, kalman=kalman, stable=stable, x0=x0,
+                        uncertainty="bootstrap" if uncertainty == "bootstrap" else None)
         if feedthrough is None and not isinstance(order, str) and np.ndim(order) == 0:
             # D left out by default: say so when the record shows a direct term
             warn_if_left_out(est, order, method, model, fit.__name__, kalman=kalman, x0=x0,
                              stable=stable)
+        if uncertainty == "criterion":
+            model = attach_criterion_uncertainty(model, data)
         return model
 
     fit.__name__ = method.replace("-", "_")
@@ -104,7 +112,12 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
     (:mod:`sysid.subspace.scaling`), as SLICOT's IB01AD does. ``input_delay`` (samples, one
     for all inputs or one each, or ``"auto"``; MATLAB's ``InputDelay``): fitted to the
     shifted inputs, the delays returned as states
-    (:mod:`sysid.models.input_delay`).{_frd_note(method)}
+    (:mod:`sysid.models.input_delay`). ``uncertainty``: ``"criterion"`` (the default, as
+    MATLAB's ``n4sid`` reports a covariance) attaches the first-order uncertainty of the
+    simulation-error criterion at the estimate (:mod:`sysid.pem.at_estimate`; its spread
+    matches the estimator's own in a Monte Carlo test), so ``model.poles(std=True)``,
+    ``damp`` and the response bands work; ``"bootstrap"`` the estimator's own spread by a
+    residual bootstrap (slower); ``None`` none (the fastest).{_frd_note(method)}
 
     Examples
     --------

@@ -1,0 +1,106 @@
+"""The first-order uncertainty of a model estimated by another method (a subspace one): the
+prediction-error criterion's covariance at it, with no search.
+
+A subspace estimate is not the minimum of any criterion, but near one: the covariance of the
+simulation-error criterion at it (:func:`sysid.pem` with ``max_iter=0``: the Gauss-Newton
+matrix over the record, with the correction for coloured errors) gives the spread its poles,
+gains and responses have. Checked by Monte Carlo against ``n4sid``'s own spread
+(``tests/test_subspace_uncertainty.py``); MATLAB's ``n4sid`` reports a covariance by default
+as well. An unstable model has no simulation-error criterion; the prediction-error one is
+used when its predictor ``A - K C`` is stable (the data insist on the unstable plant).
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+
+from ..data.iodata import IOData
+
+__all__ = ["criterion_at", "attach_criterion_uncertainty"]
+
+
+def criterion_at(model: Any, data: IOData) -> tuple[Any, str]:
+    """``(fitted, focus)``: ``model`` as :func:`sysid.pem` returns it with no iteration (the
+    same ``A, B, C, D``, its uncertainty attached, ``K`` left out in simulation focus) and
+    the focus used; ``(None, why)`` when no criterion can be evaluated at it.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.pem.at_estimate import criterion_at
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal((400, 1))
+    >>> y = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]]).simulate(u)
+    >>> d = sysid.IOData(u=u, y=y + 0.1 * rng.standard_normal((400, 1)))
+    >>> m = sysid.SubspaceEstimator(d, 5).fit(1)
+    >>> fitted, focus = criterion_at(m, d)
+    >>> focus, bool(np.allclose(fitted.A, m.A)), fitted.poles(std=True)[1].shape
+    ('simulation', True, (1,))
+    """
+    from .pem import pem
+
+    focus = "simulation"
+    if not model.is_stable():
+        # the simulation-error criterion diverges at an unstable A; the prediction-error one
+        # is defined wherever the predictor A - K C is stable
+        K = getattr(model, "K", None)
+        stable_predictor = K is not None and np.max(np.abs(np.linalg.eigvals(
+            np.asarray(model.A) - np.asarray(K) @ np.asarray(model.C)))) < 1.0
+        if not stable_predictor:
+            return None, ("the model is unstable and has no stable predictor, so neither "
+                          "prediction-error criterion is defined at it; refine it with "
+                          "sysid.ssest(data, model) for a model with uncertainty")
+        focus = "prediction"
+    wt = "output" if data.n_outputs > 1 else None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            m = pem(data, model, focus=focus, weighting=wt, max_iter=0,
+                    feedthrough=bool(np.any(np.asarray(model.D) != 0)), progress=False)
+        if m.uncertainty is None:
+            raise ValueError("no covariance")
+        step = np.ones((20, data.n_inputs))  # the same model, in whatever state basis
+        if not np.allclose(m.simulate(step), model.simulate(step), rtol=1e-8, atol=1e-12):
+            raise ValueError("the criterion moved the model")
+    except Exception as e:  # noqa: BLE001 - reported to the caller, never raised
+        return None, f"could not be evaluated ({type(e).__name__}: {e})"[:300]
+    return m, focus
+
+
+def attach_criterion_uncertainty(model: Any, data: IOData) -> Any:
+    """``model`` (unchanged, its ``K`` kept) with the uncertainty of :func:`criterion_at`,
+    and ``info["uncertainty"]`` saying what it is (or why there is none). The draws of the
+    uncertainty carry the model's ``K`` and no initial state, as the model does.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.pem.at_estimate import attach_criterion_uncertainty
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal((400, 1))
+    >>> y = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]]).simulate(u)
+    >>> d = sysid.IOData(u=u, y=y + 0.1 * rng.standard_normal((400, 1)))
+    >>> m = attach_criterion_uncertainty(sysid.SubspaceEstimator(d, 5).fit(1), d)
+    >>> m.K is not None, m.uncertainty.build(m.uncertainty.theta).K is not None
+    (True, True)
+    """
+    from .sandwich import through_deferred
+
+    fitted, focus = criterion_at(model, data)
+    if fitted is None:
+        model.info["uncertainty"] = {"method": "none", "why": focus}
+        return model
+    K, noise = model.K, model.noise_cov
+
+    def like_model(draw: Any) -> Any:
+        draw.K, draw.noise_cov, draw.x0 = K, noise, None
+        return draw
+
+    model.uncertainty = through_deferred(fitted.uncertainty, like_model)
+    model.info["uncertainty"] = {
+        "method": f"the {focus}-error criterion's covariance at the estimate (first order, "
+                  "no search: sysid.pem(data, model, max_iter=0))"}
+    return model
