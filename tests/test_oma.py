@@ -143,3 +143,35 @@ def test_the_default_horizon_allows_the_largest_order_for_both_methods():
         assert res.horizon == 15
     with pytest.raises(sysid.DataError, match="horizon >= 15"):
         sysid.ssi(d, [40], horizon=14)
+
+
+def _structure(fs, seconds, seed=0):
+    """Three modes (2, 5, 11 Hz, 2 % damping) under white forces, three displacements."""
+    rng = np.random.default_rng(seed)
+    Ac = np.zeros((6, 6))
+    for k, f in enumerate((2.0, 5.0, 11.0)):
+        w = 2 * np.pi * f
+        Ac[2 * k:2 * k + 2, 2 * k:2 * k + 2] = [[0.0, 1.0], [-w * w, -0.04 * w]]
+    Bc = np.zeros((6, 3))
+    Bc[1::2] = rng.standard_normal((3, 3))
+    Cc = np.zeros((3, 6))
+    Cc[:, 0::2] = rng.standard_normal((3, 3))
+    sys_d = sysid.c2d(sysid.ContinuousStateSpace(Ac, Bc, Cc), 1.0 / fs)
+    y = sys_d.simulate(rng.standard_normal((int(seconds * fs), 3)))
+    return sysid.IOData(None, y + 0.05 * y.std(0) * rng.standard_normal(y.shape), 1.0 / fs)
+
+
+def test_the_default_horizon_follows_a_record_sampled_far_faster_than_its_modes():
+    # at 1 kHz the default (the fewest block rows the orders allow: 11) spanned 11 ms of a
+    # 500 ms period and the diagram showed only the 11 Hz mode, silently; the default now
+    # spans a tenth of the period of the slowest content
+    d = _structure(1000.0, 120)
+    res = sysid.ssi(d, range(2, 31, 2))
+    assert res.horizon > 40
+    found = np.array(res.stable_frequencies())
+    for f in (2.0, 5.0, 11.0):
+        assert np.any(np.abs(found - f) < 0.02 * f), (f, found)
+    # a record too short for that horizon says so, with the fix
+    with pytest.warns(sysid.SysidWarning, match=r"decimate first \(sysid.decimate"):
+        short = sysid.ssi(_structure(1000.0, 2.5), range(2, 13, 2))
+    assert short.horizon == 2500 // 40
