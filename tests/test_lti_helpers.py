@@ -137,6 +137,8 @@ def test_delayest_on_real_records():
 
 
 def test_delayest_multi_input_and_errors():
+    import warnings
+
     from scipy import signal
 
     rng = np.random.default_rng(3)
@@ -147,9 +149,42 @@ def test_delayest_multi_input_and_errors():
     with pytest.raises(DataError, match="nk_min <= nk_max"):
         sysid.delayest(sysid.IOData(u, y[:, None], 1.0), nk_min=5, nk_max=2)
     with pytest.raises(DataError, match="too few"):
-        sysid.delayest(sysid.IOData(u[:20], y[:20, None], 1.0))
+        sysid.delayest(sysid.IOData(u[:20], y[:20, None], 1.0), nk_max=10)
+    with pytest.raises(DataError, match="too few"):
+        sysid.delayest(sysid.IOData(u[:12], y[:12, None], 1.0))
+    # the default range shrinks to what a short record allows (MATLAB's 20 does not fit)
+    d = sysid.IOData(u[:60], y[:60, None], 1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert sysid.delayest(d).shape == (1, 2)
     with pytest.raises(DataError, match="time series"):
         sysid.delayest(sysid.IOData(None, y[:, None], 1.0))
+
+
+def test_delayest_says_when_no_delay_in_its_range_explains_the_output():
+    # a delay beyond nk_max left the loss flat over the range and its smallest value fell
+    # anywhere: 16 samples came out as 2 and 26 as 8, with no warning (the edge warning
+    # only fires when the minimum sits on the edge). MATLAB's range (nk_min + 20) is the
+    # default now, and a pair whose input explains nothing at any delay searched warns
+    import warnings
+
+    rng = np.random.default_rng(4)
+    u = rng.standard_normal((2000, 1))
+    lag = sysid.StateSpaceModel([[0.7]], [[1.0]], [[1.0]])      # one more sample of delay
+    for k, want in ((3, 4), (15, 16)):
+        y = lag.simulate(np.vstack([np.zeros((k, 1)), u[:-k]]))
+        d = sysid.IOData(u, y + 0.05 * rng.standard_normal(y.shape))
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            assert sysid.delayest(d) == want
+    y = lag.simulate(np.vstack([np.zeros((25, 1)), u[:-25]]))
+    d = sysid.IOData(u, y + 0.05 * rng.standard_normal(y.shape))
+    with pytest.warns(sysid.DelayWarning, match=r"no delay in 0..20 .*larger nk_max"):
+        sysid.delayest(d)
+    assert sysid.delayest(d, nk_max=40) == 26
+    # an input that does not act on the output at all is said the same way
+    with pytest.warns(sysid.DelayWarning, match="not act on that output"):
+        sysid.delayest(sysid.IOData(u, rng.standard_normal((2000, 1))))
 
 
 def test_stepinfo_of_a_nonlinear_model_uses_its_own_final_value():

@@ -145,7 +145,7 @@ def test_the_default_horizon_allows_the_largest_order_for_both_methods():
         sysid.ssi(d, [40], horizon=14)
 
 
-def _structure(fs, seconds, seed=0):
+def _three_modes(fs, seconds, seed=0):
     """Three modes (2, 5, 11 Hz, 2 % damping) under white forces, three displacements."""
     rng = np.random.default_rng(seed)
     Ac = np.zeros((6, 6))
@@ -165,7 +165,7 @@ def test_the_default_horizon_follows_a_record_sampled_far_faster_than_its_modes(
     # at 1 kHz the default (the fewest block rows the orders allow: 11) spanned 11 ms of a
     # 500 ms period and the diagram showed only the 11 Hz mode, silently; the default now
     # spans a tenth of the period of the slowest content
-    d = _structure(1000.0, 120)
+    d = _three_modes(1000.0, 120)
     res = sysid.ssi(d, range(2, 31, 2))
     assert res.horizon > 40
     found = np.array(res.stable_frequencies())
@@ -173,5 +173,5 @@ def test_the_default_horizon_follows_a_record_sampled_far_faster_than_its_modes(
         assert np.any(np.abs(found - f) < 0.02 * f), (f, found)
     # a record too short for that horizon says so, with the fix
     with pytest.warns(sysid.SysidWarning, match=r"decimate first \(sysid.decimate"):
-        short = sysid.ssi(_structure(1000.0, 2.5), range(2, 13, 2))
+        short = sysid.ssi(_three_modes(1000.0, 2.5), range(2, 13, 2))
     assert short.horizon == 2500 // 40

@@ -318,7 +318,9 @@ def default_horizon(ys: list[np.ndarray], dt: float, least: int, blocks: int) ->
         f, P = welch(y - y.mean(axis=0), fs=1.0 / dt, nperseg=seg, axis=0)
         total = P.sum(axis=0)
         spectra.append(P[:, total > 0] / total[total > 0])
-    mean = np.mean([S.mean(axis=1) for S in spectra], axis=0)
+    if not any(S.shape[1] for S in spectra):
+        return least  # constant channels: nothing to resolve (refused by the caller)
+    mean = np.mean([S.mean(axis=1) for S in spectra if S.shape[1]], axis=0)
     k = int(np.searchsorted(np.cumsum(mean), SLOW_POWER))
     slow = float(f[max(k, 1)])
     need = int(np.ceil(1.0 / (10.0 * slow * dt)))

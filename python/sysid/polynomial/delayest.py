@@ -7,7 +7,11 @@ delay, so the means of each experiment are removed first. With several inputs th
 chosen together: each input alone gives a start, then a coordinate search changes one
 input's delay at a time in the ARX model with all inputs until none improves the loss (the
 other inputs are part of the model, not noise). A delay on the edge of the searched range is
-reported with a warning, because the minimum may lie beyond it.
+reported with a warning, because the minimum may lie beyond it; so is a pair whose input
+explains nothing of the output at any delay searched (an F test of its ``nb`` terms at the
+chosen delay, 1 % with the search over the range corrected for): a delay longer than the
+range leaves the loss flat, and its smallest value then falls anywhere in the range (a
+delay of 16 samples came out as 2).
 
 Examples
 --------
@@ -35,8 +39,8 @@ class DelayWarning(SysidWarning):
     """The estimated delay sits on the edge of the searched range."""
 
 
-def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int = 10
-             ) -> Any:
+def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0,
+             nk_max: int | None = None) -> Any:
     """Input delay(s) in samples.
 
     Parameters
@@ -46,7 +50,8 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int =
     na, nb : int
         Orders of the ARX models compared (``na >= 0``, ``nb >= 1``).
     nk_min, nk_max : int
-        Range of delays searched (samples).
+        Range of delays searched (samples); ``nk_max`` defaults to ``nk_min + 20``, as
+        MATLAB's (less when the shortest experiment allows fewer).
 
     Returns
     -------
@@ -68,7 +73,8 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int =
     na = as_int(na, "na", 0, 50)
     nb = as_int(nb, "nb", 1, 50)
     nk_min = as_int(nk_min, "nk_min", 0)
-    nk_max = as_int(nk_max, "nk_max", 0)
+    default = nk_max is None
+    nk_max = nk_min + 20 if default else as_int(nk_max, "nk_max", 0)
     if nk_min > nk_max:
         raise DataError(f"need nk_min <= nk_max, got {nk_min} and {nk_max}")
     exps = experiment_arrays(data)
@@ -81,6 +87,8 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int =
     require_inputs_vary(exps, "delayest", getattr(data, "output_names", None), side=1)
     check_magnitudes(exps, "delayest")  # ARX losses of outputs near 1e200 overflow
     shortest = min(u.shape[0] for u, _ in exps)
+    if default:  # MATLAB's range, or what the shortest experiment allows
+        nk_max = max(nk_min, min(nk_max, (shortest - 2) // 2 - max(na, nb) - na - m * nb))
     need = 2 * (nk_max + max(na, nb) + na + m * nb) + 2
     if shortest < need:
         raise DataError(f"the shortest experiment has {shortest} samples, too few to compare "
@@ -89,15 +97,72 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int =
     centred = [(np.ascontiguousarray(u - u.mean(axis=0)), y - y.mean(axis=0)) for u, y in exps]
     out = np.zeros((l, m), dtype=int)
     grid = list(range(nk_min, nk_max + 1))
+    weak = []
     for i in range(l):
         one = [(u, np.ascontiguousarray(y[:, [i]])) for u, y in centred]
         out[i] = _output_delays(one, na, nb, grid)
+        # the chosen delay is the best of len(grid): Bonferroni's correction for the search
+        weak += [(i, j, min(1.0, p * len(grid)))
+                 for j, p in enumerate(_input_p_values(one, na, nb, out[i]))
+                 if p * len(grid) > 0.01]
+    if weak:
+        names = [f"{data.input_names[j]} -> {data.output_names[i]} (p = {p:.2g})"
+                 for i, j, p in weak]
+        warnings.warn(f"no delay in {nk_min}..{nk_max} makes the input explain the output "
+                      f"for {', '.join(names)} (F test of its ARX terms at 1 %, corrected for "
+                      "the search): the delay "
+                      "may be longer than the range (search a larger nk_max) or the input "
+                      "not act on that output; the delay returned there is not determined",
+                      DelayWarning, stacklevel=2)
     edge = (out == nk_max) & (nk_max > nk_min)
     if np.any(edge):
         warnings.warn(f"the estimated delay equals nk_max={nk_max} for "
                       f"{int(edge.sum())} pair(s): the loss may fall further beyond; "
                       "search a larger range (nk_max)", DelayWarning, stacklevel=2)
     return int(out[0, 0]) if l == m == 1 else out
+
+
+def _input_p_values(exps: list[tuple[np.ndarray, np.ndarray]], na: int, nb: int,
+                    nk: np.ndarray) -> list[float]:
+    """Per input, the p-value of the F test of its ``nb`` terms in the ARX model of one
+    output at the delays ``nk`` (the model without that input nested in it, both fitted on
+    the same samples)."""
+    from scipy.stats import f as f_dist
+
+    m = len(nk)
+    t0 = max(na, int(max(nk)) + nb - 1)
+    p = na + m * nb
+    G, g, zz, count = np.zeros((p, p)), np.zeros(p), 0.0, 0
+    for u, y in exps:  # the normal equations, accumulated over blocks of samples
+        for a in range(t0, y.shape[0], 65536):
+            b = min(a + 65536, y.shape[0])
+            cols = [-y[a - k:b - k, 0] for k in range(1, na + 1)]
+            cols += [u[a - int(nk[j]) - q:b - int(nk[j]) - q, j] for j in range(m)
+                     for q in range(nb)]
+            X, z = np.column_stack(cols), y[a:b, 0]
+            G += X.T @ X
+            g += X.T @ z
+            zz += float(z @ z)
+            count += b - a
+    dof = count - p
+
+    def loss(keep: np.ndarray) -> float:
+        if keep.size == 0:
+            return zz
+        theta = np.linalg.lstsq(G[np.ix_(keep, keep)], g[keep], rcond=None)[0]
+        return max(zz - float(theta @ g[keep]), 0.0)
+
+    full = loss(np.arange(p))
+    out = []
+    for j in range(m):
+        own = na + j * nb + np.arange(nb)
+        low = loss(np.setdiff1d(np.arange(p), own))
+        if dof <= 0 or not full > 0:
+            out.append(0.0)
+            continue
+        F = (low - full) / nb / (full / dof)
+        out.append(float(f_dist.sf(max(F, 0.0), nb, dof)))
+    return out
 
 
 def _output_delays(exps: list[tuple[np.ndarray, np.ndarray]], na: int, nb: int,
