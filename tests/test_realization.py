@@ -226,7 +226,9 @@ def test_okid_poles_converge_with_n_and_beat_fir_of_the_same_length() -> None:
             est = sysid.okid(data, observer_order=p, count=120)
             errs.append(pole_error(est.era(order=4).model, true))
             # plain least-squares FIR with as many lags truncates the slow impulse response
-            fir = sysid.impulse_response(data, p + 1, regularization=None)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # (it says so)
+                fir = sysid.impulse_response(data, p + 1, regularization=None)
             ferrs.append(pole_error(fir.era(order=4).model, true))
         okid_err[n], fir_err[n] = float(np.median(errs)), float(np.median(ferrs))
         assert okid_err[n] < 3.0 / np.sqrt(n), (n, okid_err[n])
@@ -246,6 +248,49 @@ def test_tc_regularised_fir_beats_least_squares_on_short_noisy_records() -> None
         assert 0 < tc.info["decay"][0] < 1 and tc.info["scale"][0] > 0
         assert tc.method == "fir-tc" and ls.method == "fir"
     assert wins >= 4
+
+
+def test_tc_fir_of_a_slow_pole_over_many_lags_is_not_garbage() -> None:
+    # the TC tuning took the eigenvalues of B^T B (B = R11 L): the kernel's decay spreads
+    # B's columns over tens of decades, round-off of the largest eigenvalue decided the
+    # marginal likelihood, and a 200-lag fit of a pole at 0.99 chose a scale of 1e11 and
+    # returned Markov parameters 70-300 times the true peak (least squares: 1-15 %)
+    rng = np.random.default_rng(0)
+    for a in (0.9, 0.99, 0.998):
+        true = sysid.StateSpaceModel([[a]], [[1.0 - a]], [[1.0]])
+        u = rng.standard_normal((20000, 1))
+        y = true.simulate(u)
+        y = y + 0.05 * y.std() * rng.standard_normal(y.shape)
+        h = true.markov(200)[:, 0, 0]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # 0.99 ** 180 of the peak is left: truncated
+            tc = sysid.impulse_response(sysid.IOData(u, y), 200).markov[:, 0, 0]
+            ls = sysid.impulse_response(sysid.IOData(u, y), 200, regularization=None).markov
+        assert np.abs(tc - h).max() < np.abs(ls[:, 0, 0] - h).max(), a
+
+
+def test_the_default_length_follows_a_response_that_runs_on() -> None:
+    # impulse_response(data) kept 70 lags of a response that decays over thousands: the
+    # step of the estimate ended at 0.13 of the true DC gain, silently
+    rng = np.random.default_rng(1)
+    true = sysid.StateSpaceModel([[0.99]], [[0.01]], [[1.0]])
+    u = rng.standard_normal((20000, 1))
+    d = sysid.IOData(u, true.simulate(u) + 0.01 * rng.standard_normal((20000, 1)))
+    est = sysid.impulse_response(d)
+    assert est.markov.shape[0] == 400 and "lengthened to 400" in est.info["length"]
+    assert float(est.step().y[-1, 0, 0]) == pytest.approx(1 - 0.99 ** 400, abs=0.03)
+    slower = sysid.StateSpaceModel([[0.999]], [[0.001]], [[1.0]])
+    d = sysid.IOData(u, slower.simulate(u) + 0.001 * rng.standard_normal((20000, 1)))
+    with pytest.warns(sysid.SysidWarning, match="has not decayed within its 400"):
+        sysid.impulse_response(d)
+    with pytest.warns(sysid.SysidWarning, match="has not decayed within its 30"):
+        sysid.impulse_response(d, 30)
+    # a response that has decayed is left alone, at the default length and silently
+    quick = sysid.StateSpaceModel([[0.8]], [[0.2]], [[1.0]])
+    d = sysid.IOData(u, quick.simulate(u) + 0.01 * rng.standard_normal((20000, 1)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert sysid.impulse_response(d).markov.shape[0] == 70
 
 
 def test_fir_options_change_the_estimate() -> None:
@@ -426,8 +471,9 @@ def test_markov_estimators_run_the_offset_check():
     u = rng.standard_normal((400, 1))
     y = 50.0 + sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]]).simulate(u)
     raw = sysid.IOData(u, y)
-    with pytest.warns(sysid.OffsetWarning, match="offset"):
+    with pytest.warns(sysid.SysidWarning) as seen:  # (and the FIR of an offset runs on)
         sysid.impulse_response(raw, 20)
+    assert any(issubclass(w.category, sysid.OffsetWarning) for w in seen)
     with pytest.warns(sysid.OffsetWarning, match="offset"):
         sysid.okid(raw, 5)
 

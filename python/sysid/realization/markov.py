@@ -12,6 +12,7 @@ Each returns a :class:`~sysid.MarkovEstimate` shaped ``(count, noutputs, ninputs
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -19,7 +20,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import check_elements, require_inputs_vary
 from ..data.iodata import IOData
-from ..errors import DataError, ExcitationError, NonFiniteError, ShapeError
+from ..errors import DataError, ExcitationError, NonFiniteError, ShapeError, SysidWarning
 from .realize import MarkovEstimate, _count
 
 __all__ = ["impulse_response", "okid", "impulse_from_frf"]
@@ -53,6 +54,26 @@ def _feedthrough(data: IOData, value: Any) -> bool:
 
 #: the longest default FIR of :func:`impulse_response` (as MATLAB's ``impulseest`` default)
 DEFAULT_LENGTH = 70
+#: the most coefficients per output the default lengthens to when the response has not
+#: decayed at ``DEFAULT_LENGTH`` (the TC tuning's SVDs are of this size, about a second)
+LONGEST_DEFAULT = 400
+
+
+def _tail(out: dict[str, Any], l: int, m: int) -> float | None:
+    """The largest share of its pair's peak that the last tenth of the Markov parameters
+    holds (root mean square), where it is also 3 standard deviations above zero and above
+    5 %; None when every pair has decayed."""
+    h = np.asarray(out["markov"]).reshape(-1, l, m)
+    sd = np.asarray(out["std"]).reshape(-1, l, m)
+    k = max(3, h.shape[0] // 10)
+    if h.shape[0] < 2 * k:
+        return None
+    rms = np.sqrt(np.mean(h[-k:] ** 2, axis=0))
+    noise = np.sqrt(np.mean(sd[-k:] ** 2, axis=0))
+    peak = np.max(np.abs(h), axis=0)
+    share = np.where(peak > 0, rms / np.where(peak > 0, peak, 1.0), 0.0)
+    bad = (share > 0.05) & (rms > 3.0 * noise)
+    return float(share[bad].max()) if np.any(bad) else None
 
 
 def default_length(exps: list[tuple[np.ndarray, np.ndarray]]) -> tuple[int, str]:
@@ -103,7 +124,10 @@ def impulse_response(data: IOData, length: int | None = None, *,
         Number of Markov parameters ``h_0 .. h_{length-1}``. Default (MATLAB's
         ``impulseest(data)``): from the input's order of persistent excitation, at most 70
         and a quarter of the samples per input (:func:`default_length`; the reason in
-        ``info["length"]``).
+        ``info["length"]``), lengthened (up to 400 coefficients per output) when the
+        response runs on past it. A response that has not decayed (its last tenth above 5 %
+        of its peak and 3 standard deviations) is said with a warning: its step and DC gain
+        would be truncated.
     regularization : {"tc", None}
         ``"tc"``: prior ``E[h_k h_j] = c lambda^max(k, j)`` (per output, inputs scaled to unit
         variance), hyperparameters by marginal likelihood unless ``hyper`` fixes them;
@@ -137,8 +161,28 @@ def impulse_response(data: IOData, length: int | None = None, *,
         n, why = default_length(exps)
     if regularization not in ("tc", None):
         raise DataError(f"regularization must be 'tc' or None, got {regularization!r}")
-    out = _sysid.fir(exps, n, _feedthrough(data, feedthrough), regularization or "none", hyper)
+    ft = _feedthrough(data, feedthrough)
+    out = _sysid.fir(exps, n, ft, regularization or "none", hyper)
     l, m = exps[0][1].shape[1], exps[0][0].shape[1]
+    tail = _tail(out, l, m)
+    if why is not None and tail is not None:
+        # the response runs on past the default length (a slow or oversampled system):
+        # as long as the tuning allows
+        total = sum(u.shape[0] for u, _ in exps)
+        longer = min(LONGEST_DEFAULT // m, total // (4 * m))
+        if longer > n:
+            out = _sysid.fir(exps, longer, ft, regularization or "none", hyper)
+            why += (f"; lengthened to {longer} (the last tenth of {n} lags still held "
+                    f"{100 * tail:.0f} % of the peak)")
+            n = longer
+            tail = _tail(out, l, m)
+    if tail is not None:
+        warnings.warn(
+            f"impulse_response: the response has not decayed within its {n} Markov "
+            f"parameters (their last tenth holds {100 * tail:.0f} % of the peak, well above "
+            "their standard deviation): its step, DC gain and any model realised from it are "
+            "truncated; pass a longer length=, decimate the record (sysid.decimate), or use "
+            "sysid.okid or a parametric model (sysid.n4sid)", SysidWarning, stacklevel=2)
     h = np.asarray(out["markov"]).reshape(-1, l, m)
     info = {k: out[k] for k in ("scale", "decay", "noise_variance", "samples")}
     info["std"] = np.asarray(out["std"]).reshape(-1, l, m)
