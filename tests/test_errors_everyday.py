@@ -193,8 +193,10 @@ CASES = [
      "got int", "TransferFunction or a state-space model"),
     ("delayest range", lambda: sysid.delayest(D, nk_min=5, nk_max=2), errors.DataError,
      "got 5 and 2", "nk_min <= nk_max"),
-    ("delayest short", lambda: sysid.delayest(sysid.IOData(U[:20], U[:20], 1.0)),
+    ("delayest short", lambda: sysid.delayest(sysid.IOData(U[:20], U[:20], 1.0), nk_max=10),
      errors.DataError, "too few", "smaller nk_max"),
+    ("delayest very short", lambda: sysid.delayest(sysid.IOData(U[:10], U[:10], 1.0)),
+     errors.DataError, "too few", "smaller na and nb"),
     ("delayest time series", lambda: sysid.delayest(TS), errors.DataError,
      "needs inputs", "no input delay"),
     # automatic orders where MATLAB has none: what to call instead

@@ -93,7 +93,8 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0,
     if shortest < need:
         raise DataError(f"the shortest experiment has {shortest} samples, too few to compare "
                         f"delays up to nk_max={nk_max} with ARX({na}, {nb}): give at least "
-                        f"{need} samples or a smaller nk_max")
+                        f"{need} samples or "
+                        + ("smaller na and nb" if nk_max <= nk_min else "a smaller nk_max"))
     centred = [(np.ascontiguousarray(u - u.mean(axis=0)), y - y.mean(axis=0)) for u, y in exps]
     out = np.zeros((l, m), dtype=int)
     grid = list(range(nk_min, nk_max + 1))
