@@ -57,7 +57,7 @@ def test_the_model_is_unchanged_and_keeps_its_noise_model():
     assert "criterion" in a.info["uncertainty"]["method"]
     draw = a.uncertainty.sample(1, np.random.default_rng(0))[0]
     np.testing.assert_array_equal(draw.K, a.K)   # draws are models like the estimate
-    assert draw.x0 is None
+    assert draw.x0 is None and a.x0 is None
     # what the uncertainty gives: damping, response bands, the parameter table
     assert np.all(np.isfinite(sysid.damp(a, std=True).wn_std))
     H, sH = a.freqresp([0.1, 1.0], std=True)

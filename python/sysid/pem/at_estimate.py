@@ -1,4 +1,4 @@
-"""The first-order uncertainty of a model estimated by another method (a subspace one): the
+"""The first-order uncertainty of a model estimated by another method (a subspace one): a
 prediction-error criterion's covariance at it, with no search.
 
 A subspace estimate is not the minimum of any criterion, but near one: the covariance of the
@@ -73,7 +73,7 @@ def criterion_at(model: Any, data: IOData) -> tuple[Any, str]:
 def attach_criterion_uncertainty(model: Any, data: IOData) -> Any:
     """``model`` (unchanged, its ``K`` kept) with the uncertainty of :func:`criterion_at`,
     and ``info["uncertainty"]`` saying what it is (or why there is none). The draws of the
-    uncertainty carry the model's ``K`` and no initial state, as the model does.
+    uncertainty carry the model's ``K`` and initial state, as the model does.
 
     Examples
     --------
@@ -93,10 +93,10 @@ def attach_criterion_uncertainty(model: Any, data: IOData) -> Any:
     if fitted is None:
         model.info["uncertainty"] = {"method": "none", "why": focus}
         return model
-    K, noise = model.K, model.noise_cov
+    K, noise, x0 = model.K, model.noise_cov, model.x0
 
     def like_model(draw: Any) -> Any:
-        draw.K, draw.noise_cov, draw.x0 = K, noise, None
+        draw.K, draw.noise_cov, draw.x0 = K, noise, x0
         return draw
 
     model.uncertainty = through_deferred(fitted.uncertainty, like_model)

@@ -81,7 +81,7 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
 
             return delayed_fit(data, input_delay, feedthrough, lambda shifted: fit(
                 shifted, order, horizon=horizon, feedthrough=feedthrough, kalman=kalman,
-                stable=stable, x0=x0, scale=scale, uncertainty=None))
+                stable=stable, x0=x0, scale=scale, uncertainty=uncertainty))
         if not isinstance(order, str) and np.ndim(order) == 0:
             order = as_int(order, "order", 1)  # inf, nan, 2.5: before the data are compressed
         horizon = horizon_for_order(data, order, horizon)  # one that allows a given order
