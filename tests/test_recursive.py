@@ -231,3 +231,25 @@ def test_a_covariance_of_another_shape_is_a_shape_error():
         r.covariance = [1.0, 2.0]
     r.covariance = 4.0
     np.testing.assert_array_equal(r.covariance, 4.0 * np.eye(3))
+
+
+def test_orders_as_one_vector_as_matlab_writes_them():
+    # MATLAB's recursiveARX([na nb nk]) was a TypeError ("missing 1 required positional
+    # argument: 'nb'"); the one-vector form now gives the same estimator as the separate one
+    rng = np.random.default_rng(7)
+    u = rng.standard_normal((600, 2))
+    y = signal.lfilter([0, 1.0], [1, -0.6], u[:, 0]) + signal.lfilter([0, 0, 0.5], [1, -0.6],
+                                                                       u[:, 1])
+    y = y + 0.1 * rng.standard_normal(600)
+    pairs = [(sysid.RecursiveARX([1, 1, 2, 1, 2]), sysid.RecursiveARX(1, [1, 2], [1, 2])),
+             (sysid.RecursiveARMAX([1, 1, 1, 1, 1, 1]), sysid.RecursiveARMAX(1, [1, 1], 1,
+                                                                               [1, 1])),
+             (sysid.RecursiveOE([1, 1, 1, 1, 1, 2]), sysid.RecursiveOE([1, 1], [1, 1], [1, 2])),
+             (sysid.RecursiveBJ([1, 1, 1, 1, 1, 1, 1, 2]),
+              sysid.RecursiveBJ([1, 1], 1, 1, [1, 1], [1, 2]))]
+    for one, apart in pairs:
+        np.testing.assert_array_equal(one.run(u, y).parameters, apart.run(u, y).parameters)
+    with pytest.raises(sysid.DataError, match=r"\[na, nb, nk\].*got 4 numbers"):
+        sysid.RecursiveARX([1, 1, 1, 1])
+    with pytest.raises(sysid.DataError, match="needs nb"):
+        sysid.RecursiveARX(2)

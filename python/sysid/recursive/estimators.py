@@ -36,6 +36,30 @@ def _orders(v: Any, name: str, lo: int = 0) -> list[int]:
     return [as_int(x, name, lo) for x in vals]
 
 
+def _one_vector(first: Any, rest: tuple[Any, ...], names: str, who: str) -> list[Any] | None:
+    """MATLAB's ``recursiveARX([na nb nk])``: the orders as one vector in the first argument
+    (``names`` as MATLAB writes them, the per-input ones with a ``*``), split into the
+    constructor's arguments; None when the orders come separately."""
+    if np.ndim(first) == 0 or any(r is not None for r in rest):
+        return None
+    vec = list(np.asarray(first, dtype=object).ravel())
+    fields = names.split()
+    scalar = sum(1 for f in fields if not f.endswith("*"))
+    per = len(fields) - scalar
+    m, left = divmod(len(vec) - scalar, per)
+    if m < 1 or left:
+        raise DataError(
+            f"{who}'s orders as one vector are [{', '.join(f.rstrip('*') for f in fields)}] "
+            f"({'one number each' if per == len(fields) else 'the starred ones one per input'}"
+            f": {' '.join(fields)}), got {len(vec)} numbers; or give them separately")
+    out, k = [], 0
+    for f in fields:
+        n = m if f.endswith("*") else 1
+        out.append(vec[k:k + n] if f.endswith("*") else vec[k])
+        k += n
+    return out
+
+
 def _per_input(v: Any, m: int, name: str, lo: int = 0) -> list[int]:
     vals = _orders(v, name, lo)
     if len(vals) == 1:
@@ -357,11 +381,19 @@ class RecursiveARX(_Recursive):
     """
     _kind = "arx"
 
-    def __init__(self, na: int, nb: Any, nk: Any = 1, *, method: str = "forgetting",
+    def __init__(self, na: Any, nb: Any = None, nk: Any = None, *,
+                 method: str = "forgetting",
                  forgetting: float = 1.0, process_noise: Any = None,
                  noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
                  initial_parameters: Any = None, initial_covariance: Any = 1e4,
                  dt: float = 1.0) -> None:
+        one = _one_vector(na, (nb, nk), "na nb* nk*", "RecursiveARX")
+        if one is not None:
+            na, nb, nk = one
+        if nb is None:
+            raise DataError("RecursiveARX needs nb: RecursiveARX(na, nb, nk) or "
+                            "RecursiveARX([na, nb, nk])")
+        nk = 1 if nk is None else nk
         nbv = _orders(nb, "nb")
         super().__init__(na, nbv, 0, 0, [0] * len(nbv), nk, method=method,
                          forgetting=forgetting, process_noise=process_noise,
@@ -395,11 +427,19 @@ class RecursiveARMAX(_Recursive):
     """
     _kind = "armax"
 
-    def __init__(self, na: int, nb: Any, nc: int, nk: Any = 1, *, method: str = "forgetting",
+    def __init__(self, na: Any, nb: Any = None, nc: Any = None, nk: Any = None, *,
+                 method: str = "forgetting",
                  forgetting: float = 1.0, process_noise: Any = None,
                  noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
                  initial_parameters: Any = None, initial_covariance: Any = 1e4,
                  dt: float = 1.0) -> None:
+        one = _one_vector(na, (nb, nc, nk), "na nb* nc nk*", "RecursiveARMAX")
+        if one is not None:
+            na, nb, nc, nk = one
+        if nb is None or nc is None:
+            raise DataError("RecursiveARMAX needs nb and nc: RecursiveARMAX(na, nb, nc, nk) "
+                            "or RecursiveARMAX([na, nb, nc, nk])")
+        nk = 1 if nk is None else nk
         nbv = _orders(nb, "nb")
         super().__init__(na, nbv, nc, 0, [0] * len(nbv), nk, method=method,
                          forgetting=forgetting, process_noise=process_noise,
@@ -430,11 +470,19 @@ class RecursiveOE(_Recursive):
     """
     _kind = "oe"
 
-    def __init__(self, nb: Any, nf: Any, nk: Any = 1, *, method: str = "forgetting",
+    def __init__(self, nb: Any, nf: Any = None, nk: Any = None, *,
+                 method: str = "forgetting",
                  forgetting: float = 1.0, process_noise: Any = None,
                  noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
                  initial_parameters: Any = None, initial_covariance: Any = 1e4,
                  dt: float = 1.0) -> None:
+        one = _one_vector(nb, (nf, nk), "nb* nf* nk*", "RecursiveOE")
+        if one is not None:
+            nb, nf, nk = one
+        if nf is None:
+            raise DataError("RecursiveOE needs nf: RecursiveOE(nb, nf, nk) or "
+                            "RecursiveOE([nb, nf, nk])")
+        nk = 1 if nk is None else nk
         super().__init__(0, nb, 0, 0, nf, nk, method=method, forgetting=forgetting,
                          process_noise=process_noise, noise_variance=noise_variance,
                          gain=gain, bias=bias, initial_parameters=initial_parameters,
@@ -465,11 +513,19 @@ class RecursiveBJ(_Recursive):
     """
     _kind = "bj"
 
-    def __init__(self, nb: Any, nc: int, nd: int, nf: Any, nk: Any = 1, *,
+    def __init__(self, nb: Any, nc: Any = None, nd: Any = None, nf: Any = None,
+                 nk: Any = None, *,
                  method: str = "forgetting", forgetting: float = 1.0,
                  process_noise: Any = None, noise_variance: float = 1.0, gain: float = 1.0,
                  bias: float = 2.2e-16, initial_parameters: Any = None,
                  initial_covariance: Any = 1e4, dt: float = 1.0) -> None:
+        one = _one_vector(nb, (nc, nd, nf, nk), "nb* nc nd nf* nk*", "RecursiveBJ")
+        if one is not None:
+            nb, nc, nd, nf, nk = one
+        if nc is None or nd is None or nf is None:
+            raise DataError("RecursiveBJ needs nc, nd and nf: RecursiveBJ(nb, nc, nd, nf, nk) "
+                            "or RecursiveBJ([nb, nc, nd, nf, nk])")
+        nk = 1 if nk is None else nk
         super().__init__(0, nb, nc, nd, nf, nk, method=method, forgetting=forgetting,
                          process_noise=process_noise, noise_variance=noise_variance,
                          gain=gain, bias=bias, initial_parameters=initial_parameters,
