@@ -319,3 +319,19 @@ def test_matlab_structure_choice_chain_on_several_inputs():
     assert sysid.selstruc(v, 0)[:1] == (1,) and len(sysid.selstruc(v, 0)) == 5
     with pytest.raises(sysid.DataError, match="flat numbers"):
         sysid.arx(d, [1, [1, 1], [1, 1]])
+
+
+def test_model_interconnection_names_python_control():
+    # G * K, G + H and 2 * G gave Python's bare "unsupported operand type(s)"; MATLAB users
+    # write them first. The error names the route (python-control's interconnections), and
+    # the FRD's own algebra with a model is unchanged
+    g = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]], dt=0.1)
+    for op in (lambda: g * g, lambda: g + g, lambda: g - g, lambda: 2 * g, lambda: g + 1):
+        with pytest.raises(TypeError, match=r"sysid.to_control\(model\).*series, parallel"):
+            op()
+    f = sysid.FRD.from_model(g, np.linspace(0.1, 30.0, 20))
+    np.testing.assert_allclose((g * f).response, (f * f).response)
+    np.testing.assert_allclose((f - g).response, 0.0, atol=1e-12)
+    control = pytest.importorskip("control")
+    loop = sysid.from_control(control.feedback(sysid.to_control(g) * 0.1, 1))
+    np.testing.assert_allclose(loop.poles(), [0.7])

@@ -283,6 +283,8 @@ _LAZY = {
 }
 
 
+_CONNECT = ("sysid.to_control(model), then python-control's series, parallel, feedback or "
+            "interconnect (and sysid.from_control for the result)")
 #: MATLAB System Identification Toolbox names a new user types first, and sysid's
 _MATLAB = {"resid": "sysid.residuals(model, data)", "iddata": "sysid.IOData(u, y, dt)",
            "idss": "sysid.StateSpaceModel", "idpoly": "sysid.PolynomialModel",
@@ -314,11 +316,11 @@ _MATLAB = {"resid": "sysid.residuals(model, data)", "iddata": "sysid.IOData(u, y
            "findstates": "sysid.estimate_x0(model, u, y)",
            "getexp": "data.experiment(k)", "idresamp": "sysid.resample(data, dt)",
            "idfilt": "sysid.lowpass, sysid.highpass, sysid.bandpass or sysid.filtfilt",
-           "rarx": "sysid.RecursiveARX(na, nb, nk)", "rarmax": "sysid.RecursiveARMAX",
+           "rarx": "sysid.RecursiveARX([na, nb, nk])", "rarmax": "sysid.RecursiveARMAX",
            "roe": "sysid.RecursiveOE", "rbj": "sysid.RecursiveBJ",
            "ssdata": "model.A, model.B, model.C, model.D (and model.K)",
            "rsample": "model.uncertainty.sample(n)", "arxRegul": "sysid.arxregul",
-           "recursiveARX": "sysid.RecursiveARX(na, nb, nk)",
+           "recursiveARX": "sysid.RecursiveARX([na, nb, nk])",
            "getcov": "model.uncertainty.covariance",
            "translatecov": "model.uncertainty.propagate(fn)",
            "dcgain": "model.dcgain()", "pole": "model.poles()", "zero": "model.zeros()",
@@ -331,7 +333,9 @@ _MATLAB = {"resid": "sysid.residuals(model, data)", "iddata": "sysid.IOData(u, y
            "n4sidOptions": "keyword arguments of sysid.n4sid (horizon=, feedthrough=, ...)",
            "ssestOptions": "keyword arguments of sysid.ssest (focus=, feedthrough=, ...)",
            "compareOptions": "keyword arguments of sysid.compare (horizon=, x0=)",
-           "fselect": "frd.fselect(lo, hi) (an FRD's band)"}
+           "fselect": "frd.fselect(lo, hi) (an FRD's band)",
+           "series": _CONNECT, "parallel": _CONNECT, "connect": _CONNECT,
+           "append": _CONNECT, "lft": _CONNECT}
 
 
 def __getattr__(name: str) -> object:

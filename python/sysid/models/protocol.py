@@ -333,7 +333,9 @@ class ModelMixin(ChannelSelection):
     - ``save(path)`` through :func:`sysid.save_model` (needs ``to_dict``).
 
     Each raises a :class:`~sysid.DataError` naming the missing method when the class does
-    not provide what it needs.
+    not provide what it needs. ``model * other``, ``+`` and ``-`` with another model or a
+    number (MATLAB's interconnections) raise a ``TypeError`` that names python-control's
+    (``sysid.to_control``); with an :class:`~sysid.FRD` they are the FRD's.
 
     Examples
     --------
@@ -346,6 +348,19 @@ class ModelMixin(ChannelSelection):
     >>> Integrator().predict([1.0, 1.0, 1.0], [0.0, 1.0, 2.0], 2)[:, 0]
     array([0., 1., 2.])
     """
+
+    def _interconnect(self, other: Any) -> Any:
+        from numbers import Number
+
+        if isinstance(other, Number) or callable(getattr(other, "simulate", None)):
+            raise TypeError(
+                "sysid models are not combined with * + - (MATLAB's series, parallel and "
+                "gains): convert them with sysid.to_control(model) and use python-control's "
+                "operators, series, parallel, feedback or interconnect (sysid.from_control "
+                "brings the result back)")
+        return NotImplemented
+
+    __mul__ = __rmul__ = __add__ = __radd__ = __sub__ = __rsub__ = _interconnect
 
     def __getstate__(self) -> dict[str, Any]:
         """Pickling (and copying): a covariance still deferred (the sandwich of
