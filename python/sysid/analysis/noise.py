@@ -120,7 +120,9 @@ def spectrum(model: Any, omega: Any = None, n_freq: int = 256) -> Any:
     -------
     Spectra
         ``matrix[:, a, b]`` the one-sided cross density of outputs ``a, b`` (units^2/Hz),
-        ``2 dt H Lambda H^*``; ``psd(name)``, ``plot()``, ``to_pandas()``.
+        ``2 dt H Lambda H^*`` (SciPy's ``welch`` convention; MATLAB's ``spectrum`` is the
+        two-sided ``dt H Lambda H^*``, half of it); ``psd(name)``, ``plot()``,
+        ``to_pandas()``.
 
     Examples
     --------
