@@ -119,6 +119,11 @@ pub struct PemOptions {
     /// grey box, a transfer function): the record's size is checked against them instead
     /// of the full realisation's `n^2 + n m + l n`. `None` (default): the full realisation.
     pub free_parameters: Option<usize>,
+    /// Admit a predictor (and, where kept stable, an `A`) with poles on the unit circle, to
+    /// `1e-9`: a structure that fixes an integrator (a grey box's pole at `s = 0`, sampled to
+    /// exactly `z = 1`) keeps it there, where the errors grow at most linearly. Default
+    /// `false`: the full parameterisation is kept strictly inside.
+    pub marginal: bool,
 }
 
 impl Default for PemOptions {
@@ -144,6 +149,7 @@ impl Default for PemOptions {
             block: 128,
             optim: o,
             free_parameters: None,
+            marginal: false,
         }
     }
 }
@@ -166,7 +172,19 @@ pub fn stable_enough(
     c: MatRef<'_, f64>,
     enforce_stability: bool,
 ) -> bool {
-    let inside = |m: MatRef<'_, f64>| matches!(spectral_radius(m), Ok(r) if r < 1.0);
+    stable_within(a, k, c, enforce_stability, 1.0)
+}
+
+/// [`stable_enough`] with the spectral radii below `limit` instead of 1 (`1 + 1e-9` admits
+/// a structural integrator, [`PemOptions::marginal`]).
+pub(crate) fn stable_within(
+    a: MatRef<'_, f64>,
+    k: MatRef<'_, f64>,
+    c: MatRef<'_, f64>,
+    enforce_stability: bool,
+    limit: f64,
+) -> bool {
+    let inside = |m: MatRef<'_, f64>| matches!(spectral_radius(m), Ok(r) if r < limit);
     let abar = a - crate::linalg::mul(k, c);
     inside(abar.as_ref()) && (!enforce_stability || inside(a))
 }

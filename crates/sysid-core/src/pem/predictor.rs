@@ -7,7 +7,7 @@
 //!
 //! with the weighted errors `R^-1 e` (`R R^T = Lambda`) whose half squared norm is the cost.
 
-use super::options::{stable_enough, Focus, InitialState, PemOptions};
+use super::options::{stable_within, Focus, InitialState, PemOptions};
 use crate::error::{check_finite, check_io, Result, SysidError};
 use crate::linalg::determinant;
 use crate::model::StateSpace;
@@ -29,6 +29,8 @@ pub struct Predictor<'a> {
     pub(super) est_d: bool,
     pub(super) est_k: bool,
     pub(super) enforce_stability: bool,
+    /// The largest spectral radius admitted (1, or `1 + 1e-9` with `PemOptions::marginal`).
+    pub(super) radius_limit: f64,
     pub(super) d_fixed: Mat<f64>,
     pub(super) k_fixed: Mat<f64>,
     pub(super) x0_mode: Vec<InitialState>,
@@ -542,6 +544,7 @@ impl<'a> Predictor<'a> {
             est_k,
             enforce_stability: opts.enforce_stability == Some(true)
                 || opts.focus == Focus::Simulation,
+            radius_limit: if opts.marginal { 1.0 + 1e-9 } else { 1.0 },
             d_fixed: start.d.clone(),
             k_fixed,
             x0_mode,
@@ -657,13 +660,19 @@ impl<'a> Predictor<'a> {
     pub(super) fn is_admissible(&mut self, th: &[f64]) -> bool {
         let pm = self.unpack(th);
         let (a, k, c) = (pm.a.as_ref(), pm.k.as_ref(), pm.c.as_ref());
-        if stable_enough(a, k, c, self.enforce_stability) {
+        let limit = self.radius_limit;
+        if stable_within(a, k, c, self.enforce_stability, limit) {
             return true;
         }
-        if self.enforce_stability && stable_enough(a, k, c, false) {
+        if self.enforce_stability && stable_within(a, k, c, false, limit) {
             self.a_bound_hits += 1;
         }
         false
+    }
+
+    /// Admit poles on the unit circle (to `1e-9`) from now on ([`PemOptions::marginal`]).
+    pub(crate) fn set_marginal(&mut self, on: bool) {
+        self.radius_limit = if on { 1.0 + 1e-9 } else { 1.0 };
     }
 
     /// `det(Lambda)` at the start and after every accepted step (the maximum-likelihood loss).
