@@ -674,6 +674,10 @@ def test_continuous_models_carry_uncertainty_through_d2c_and_damp():
     assert np.all(np.isfinite(table.wn_std)) and np.all(np.isfinite(table.zeta_std))
     H, sd = c.freqresp([0.5, 2.0], std=True)
     assert sd.shape == H.shape and np.all(np.abs(sd) > 0)
+    # and back: c2d dropped it (d2c carried it), so a round trip lost the uncertainty
+    back = sysid.c2d(c, 0.1)
+    np.testing.assert_allclose(back.poles(std=True)[1][np.argsort(back.poles().imag)],
+                               zsd[np.argsort(z.imag)], rtol=1e-5)
 
 
 def test_a_real_poles_damping_std_is_zero_not_round_off():

@@ -529,7 +529,8 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh", *,
     Returns
     -------
     StateSpaceModel
-        The discrete model (no noise model).
+        The discrete model (no noise model); the parameter uncertainty is carried (the same
+        parameters, through the conversion).
 
     Examples
     --------
@@ -549,11 +550,15 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh", *,
     method = _method(method)
     warp = _warp(prewarp, dt, method, "c2d")
     Ad, Bd, Cd, Dd, _ = _discretise(sys, dt, method, warp)
-    return StateSpaceModel(
+    out = StateSpaceModel(
         Ad, Bd, Cd, Dd, dt=dt, input_names=sys.input_names, output_names=sys.output_names,
         info={"method": f"c2d ({method})" if warp == dt
               else f"c2d ({method}, prewarp {float(prewarp):g} rad/s)"},
     )
+    unc = getattr(sys, "uncertainty", None)
+    if unc is not None:  # the same parameters, seen through the conversion (as d2c)
+        out.uncertainty = unc.through(lambda m: c2d(m, dt, method, prewarp=prewarp))
+    return out
 
 
 def _real_log(M: np.ndarray, p: np.ndarray, method: str) -> np.ndarray:
