@@ -60,6 +60,20 @@ def _one_vector(first: Any, rest: tuple[Any, ...], names: str, who: str) -> list
     return out
 
 
+def _given(first: Any, rest: tuple[Any, ...], names: str, who: str) -> list[Any]:
+    """The constructor's orders from either form (:func:`_one_vector`), each one given (the
+    delay ``nk``, last, defaults to 1), or a :class:`DataError` naming the missing ones."""
+    one = _one_vector(first, rest, names, who)
+    vals = one if one is not None else [first, *rest]
+    fields = [f.rstrip("*") for f in names.split()]
+    missing = [f for f, v in zip(fields[:-1], vals[:-1]) if v is None]
+    if missing:
+        raise DataError(f"{who} needs {' and '.join(missing)}: {who}({', '.join(fields)}) or "
+                        f"{who}([{', '.join(fields)}])")
+    vals[-1] = 1 if vals[-1] is None else vals[-1]
+    return vals
+
+
 def _per_input(v: Any, m: int, name: str, lo: int = 0) -> list[int]:
     vals = _orders(v, name, lo)
     if len(vals) == 1:
@@ -387,13 +401,7 @@ class RecursiveARX(_Recursive):
                  noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
                  initial_parameters: Any = None, initial_covariance: Any = 1e4,
                  dt: float = 1.0) -> None:
-        one = _one_vector(na, (nb, nk), "na nb* nk*", "RecursiveARX")
-        if one is not None:
-            na, nb, nk = one
-        if nb is None:
-            raise DataError("RecursiveARX needs nb: RecursiveARX(na, nb, nk) or "
-                            "RecursiveARX([na, nb, nk])")
-        nk = 1 if nk is None else nk
+        na, nb, nk = _given(na, (nb, nk), "na nb* nk*", "RecursiveARX")
         nbv = _orders(nb, "nb")
         super().__init__(na, nbv, 0, 0, [0] * len(nbv), nk, method=method,
                          forgetting=forgetting, process_noise=process_noise,
@@ -433,13 +441,7 @@ class RecursiveARMAX(_Recursive):
                  noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
                  initial_parameters: Any = None, initial_covariance: Any = 1e4,
                  dt: float = 1.0) -> None:
-        one = _one_vector(na, (nb, nc, nk), "na nb* nc nk*", "RecursiveARMAX")
-        if one is not None:
-            na, nb, nc, nk = one
-        if nb is None or nc is None:
-            raise DataError("RecursiveARMAX needs nb and nc: RecursiveARMAX(na, nb, nc, nk) "
-                            "or RecursiveARMAX([na, nb, nc, nk])")
-        nk = 1 if nk is None else nk
+        na, nb, nc, nk = _given(na, (nb, nc, nk), "na nb* nc nk*", "RecursiveARMAX")
         nbv = _orders(nb, "nb")
         super().__init__(na, nbv, nc, 0, [0] * len(nbv), nk, method=method,
                          forgetting=forgetting, process_noise=process_noise,
@@ -476,13 +478,7 @@ class RecursiveOE(_Recursive):
                  noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
                  initial_parameters: Any = None, initial_covariance: Any = 1e4,
                  dt: float = 1.0) -> None:
-        one = _one_vector(nb, (nf, nk), "nb* nf* nk*", "RecursiveOE")
-        if one is not None:
-            nb, nf, nk = one
-        if nf is None:
-            raise DataError("RecursiveOE needs nf: RecursiveOE(nb, nf, nk) or "
-                            "RecursiveOE([nb, nf, nk])")
-        nk = 1 if nk is None else nk
+        nb, nf, nk = _given(nb, (nf, nk), "nb* nf* nk*", "RecursiveOE")
         super().__init__(0, nb, 0, 0, nf, nk, method=method, forgetting=forgetting,
                          process_noise=process_noise, noise_variance=noise_variance,
                          gain=gain, bias=bias, initial_parameters=initial_parameters,
@@ -519,13 +515,8 @@ class RecursiveBJ(_Recursive):
                  process_noise: Any = None, noise_variance: float = 1.0, gain: float = 1.0,
                  bias: float = 2.2e-16, initial_parameters: Any = None,
                  initial_covariance: Any = 1e4, dt: float = 1.0) -> None:
-        one = _one_vector(nb, (nc, nd, nf, nk), "nb* nc nd nf* nk*", "RecursiveBJ")
-        if one is not None:
-            nb, nc, nd, nf, nk = one
-        if nc is None or nd is None or nf is None:
-            raise DataError("RecursiveBJ needs nc, nd and nf: RecursiveBJ(nb, nc, nd, nf, nk) "
-                            "or RecursiveBJ([nb, nc, nd, nf, nk])")
-        nk = 1 if nk is None else nk
+        nb, nc, nd, nf, nk = _given(nb, (nc, nd, nf, nk), "nb* nc nd nf* nk*",
+                                    "RecursiveBJ")
         super().__init__(0, nb, nc, nd, nf, nk, method=method, forgetting=forgetting,
                          process_noise=process_noise, noise_variance=noise_variance,
                          gain=gain, bias=bias, initial_parameters=initial_parameters,
