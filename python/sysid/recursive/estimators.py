@@ -68,7 +68,9 @@ def _given(first: Any, rest: tuple[Any, ...], names: str, who: str) -> list[Any]
     fields = [f.rstrip("*") for f in names.split()]
     missing = [f for f, v in zip(fields[:-1], vals[:-1]) if v is None]
     if missing:
-        raise DataError(f"{who} needs {' and '.join(missing)}: {who}({', '.join(fields)}) or "
+        said = " and ".join([", ".join(missing[:-1]), missing[-1]] if len(missing) > 1
+                            else missing)
+        raise DataError(f"{who} needs {said}: {who}({', '.join(fields)}) or "
                         f"{who}([{', '.join(fields)}])")
     vals[-1] = 1 if vals[-1] is None else vals[-1]
     return vals
