@@ -331,8 +331,9 @@ def default_horizon(ys: list[np.ndarray], dt: float, least: int, blocks: int) ->
         warnings.warn(
             f"ssi: 2 % of the output power lies below {slow:.3g} Hz, and resolving it needs "
             f"a horizon of about {need} block rows (a tenth of its period, at dt = {dt:g} s); the "
-            f"default stops at {i} (" + ("the record's length" if room < LONGEST_HORIZON
-                                         else "for time") + f"), so modes below about "
+            f"default stops at {i} (" + ("what the record's length allows"
+                                         if room < LONGEST_HORIZON else "its longest")
+            + f"), so modes below about "
             f"{1.0 / (10.0 * i * dt):.3g} Hz may be missed: decimate first "
             f"(sysid.decimate(data, {k})) or pass horizon=", SysidWarning, stacklevel=3)
     return i

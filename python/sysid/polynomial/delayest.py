@@ -36,7 +36,8 @@ __all__ = ["delayest", "DelayWarning"]
 
 
 class DelayWarning(SysidWarning):
-    """The estimated delay sits on the edge of the searched range."""
+    """The estimated delay sits on the edge of the searched range, or no delay in the range
+    makes the input explain the output (the delay returned there is not determined)."""
 
 
 def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0,
