@@ -100,3 +100,26 @@ def test_nkshift_delays_and_advances():
         sysid.nkshift(sysid.IOData(u=u, y=np.arange(6.0)), 1.5)
     with pytest.raises(DataError, match="too little"):
         sysid.nkshift(sysid.IOData(u=u, y=np.arange(6.0)), [5, -1])
+
+
+def test_auto_delay_leaves_out_outputs_the_input_does_not_act_on():
+    # input_delay="auto" took each input's smallest delayest delay over all outputs, an
+    # output the input does not reach included: its delay is anywhere in the range (here 4
+    # for pure noise, against 6 on the output the input drives), and the fit got 3
+    # samples of delay states instead of 5
+    from sysid.models.input_delay import input_delays
+
+    rng = np.random.default_rng(5)
+    u = rng.standard_normal((2000, 1))
+    y0 = sysid.StateSpaceModel([[0.7]], [[1.0]], [[1.0]]).simulate(
+        np.vstack([np.zeros((5, 1)), u[:-5]]))
+    r = np.random.default_rng(2)
+    d = sysid.IOData(u, np.hstack([y0 + 0.05 * r.standard_normal((2000, 1)),
+                                   r.standard_normal((2000, 1))]))
+    with pytest.warns(sysid.DelayWarning, match="u0 -> y1"):
+        assert sysid.delayest(d).ravel().tolist() == [6, 4]
+    assert input_delays(d, "auto").tolist() == [5]
+    # an input that reaches no output gets no delay, and says so
+    blind = sysid.IOData(u, r.standard_normal((2000, 2)))
+    with pytest.warns(sysid.DelayWarning, match="no delay is given to it"):
+        assert input_delays(blind, "auto").tolist() == [0]

@@ -25,6 +25,7 @@ Examples
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -46,9 +47,23 @@ def input_delays(data: IOData, input_delay: Any, feedthrough: Any = None) -> np.
         if input_delay != "auto":
             raise DataError(f"input_delay must be samples (one per input, or one for all) or "
                             f"'auto', got {input_delay!r}")
-        from ..polynomial.delayest import delayest
+        from ..polynomial.delayest import DelayWarning, delays
 
-        nk = np.atleast_2d(delayest(data)).min(axis=0)
+        out, weak, _, _ = delays(data)
+        # each input's smallest delay over the outputs it acts on: a pair whose input
+        # explains nothing has an undetermined delay (anywhere in the range), left out
+        known = np.ones(out.shape, dtype=bool)
+        for i, j, _ in weak:
+            known[i, j] = False
+        nk = np.where(known, out, np.iinfo(np.int64).max).min(axis=0)
+        blind = ~known.any(axis=0)
+        nk[blind] = 0
+        if blind.any():
+            warnings.warn(
+                "input_delay='auto': no delay in the range searched makes "
+                + ", ".join(data.input_names[j] for j in np.flatnonzero(blind))
+                + " explain any output (sysid.delayest says which pairs): no delay is "
+                "given to it; pass input_delay= if it has one", DelayWarning, stacklevel=3)
         return np.maximum(nk - (0 if feedthrough is True else 1), 0).astype(int)
     k = np.atleast_1d(np.asarray(input_delay))
     if k.ndim != 1 or k.size not in (1, m):

@@ -32,7 +32,7 @@ from .._checks import as_int, check_magnitudes, experiment_arrays, require_input
 from ..data.iodata import require_record
 from ..errors import DataError, ExcitationError, SysidWarning
 
-__all__ = ["delayest", "DelayWarning"]
+__all__ = ["delayest", "delays", "DelayWarning"]
 
 
 class DelayWarning(SysidWarning):
@@ -71,6 +71,40 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0,
     array([[3, 1]])
     """
     data = require_record(data, "delayest")
+    out, weak, nk_min, nk_max = delays(data, na, nb, nk_min, nk_max)
+    if weak:
+        names = [f"{data.input_names[j]} -> {data.output_names[i]} (p = {p:.2g})"
+                 for i, j, p in weak]
+        warnings.warn(f"no delay in {nk_min}..{nk_max} makes the input explain the output "
+                      f"for {', '.join(names)} (F test of its ARX terms at 1 %, corrected for "
+                      "the search): the delay "
+                      "may be longer than the range (search a larger nk_max) or the input "
+                      "not act on that output; the delay returned there is not determined",
+                      DelayWarning, stacklevel=2)
+    edge = (out == nk_max) & (nk_max > nk_min)
+    if np.any(edge):
+        warnings.warn(f"the estimated delay equals nk_max={nk_max} for "
+                      f"{int(edge.sum())} pair(s): the loss may fall further beyond; "
+                      "search a larger range (nk_max)", DelayWarning, stacklevel=2)
+    l, m = out.shape
+    return int(out[0, 0]) if l == m == 1 else out
+
+
+def delays(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int | None = None
+           ) -> tuple[np.ndarray, list[tuple[int, int, float]], int, int]:
+    """:func:`delayest`'s work without its warnings: the ``(noutputs, ninputs)`` delays, the
+    pairs ``(output, input, p)`` whose input explains nothing at its delay (the delay there
+    not determined), and the range searched ``(nk_min, nk_max)``.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> from sysid.polynomial.delayest import delays
+    >>> nk, weak, lo, hi = delays(sysid.datasets.load_dryer())
+    >>> int(nk[0, 0]), weak, (lo, hi)
+    (3, [], (0, 20))
+    """
+    data = require_record(data, "delayest")
     na = as_int(na, "na", 0, 50)
     nb = as_int(nb, "nb", 1, 50)
     nk_min = as_int(nk_min, "nk_min", 0)
@@ -99,7 +133,7 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0,
     centred = [(np.ascontiguousarray(u - u.mean(axis=0)), y - y.mean(axis=0)) for u, y in exps]
     out = np.zeros((l, m), dtype=int)
     grid = list(range(nk_min, nk_max + 1))
-    weak = []
+    weak: list[tuple[int, int, float]] = []
     for i in range(l):
         one = [(u, np.ascontiguousarray(y[:, [i]])) for u, y in centred]
         out[i] = _output_delays(one, na, nb, grid)
@@ -107,21 +141,7 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0,
         weak += [(i, j, min(1.0, p * len(grid)))
                  for j, p in enumerate(_input_p_values(one, na, nb, out[i]))
                  if p * len(grid) > 0.01]
-    if weak:
-        names = [f"{data.input_names[j]} -> {data.output_names[i]} (p = {p:.2g})"
-                 for i, j, p in weak]
-        warnings.warn(f"no delay in {nk_min}..{nk_max} makes the input explain the output "
-                      f"for {', '.join(names)} (F test of its ARX terms at 1 %, corrected for "
-                      "the search): the delay "
-                      "may be longer than the range (search a larger nk_max) or the input "
-                      "not act on that output; the delay returned there is not determined",
-                      DelayWarning, stacklevel=2)
-    edge = (out == nk_max) & (nk_max > nk_min)
-    if np.any(edge):
-        warnings.warn(f"the estimated delay equals nk_max={nk_max} for "
-                      f"{int(edge.sum())} pair(s): the loss may fall further beyond; "
-                      "search a larger range (nk_max)", DelayWarning, stacklevel=2)
-    return int(out[0, 0]) if l == m == 1 else out
+    return out, weak, nk_min, nk_max
 
 
 def _input_p_values(exps: list[tuple[np.ndarray, np.ndarray]], na: int, nb: int,
