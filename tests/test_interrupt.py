@@ -139,6 +139,10 @@ CASES: dict[str, tuple[str, str]] = {
         "w = np.linspace(0.01, 3.0, 500)",
         "m.uncertainty.propagate(lambda s: np.abs(s.freqresp(w)).ravel(), 'monte-carlo', "
         "n=100_000)"),
+    # a long regularised FIR: the record's blocks and the TC grid's SVDs ask for Ctrl-C
+    "impulse_response": (
+        "u, y = arrays(2_000_000, m=1, l=1)",
+        "sysid.impulse_response(sysid.IOData(u, y), 400)"),
     "recursive_arx": (
         "u, y = arrays(2_000_000, m=1, l=1)\nest = sysid.RecursiveARX(40, 40, 1)",
         "est.run(u, y[:, 0], store_parameters=False)"),

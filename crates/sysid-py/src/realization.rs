@@ -126,7 +126,7 @@ pub fn fir<'py>(
     opts.feedthrough = feedthrough;
     opts.regularization = Regularization::from_name(regularization, hyper).py()?;
     let v = views(&experiments);
-    let est = py.detach(|| rz::fir(&v, &opts)).py()?;
+    let est = crate::search::detach(py, || rz::fir(&v, &opts))?; // Ctrl-C stops it
     let d = PyDict::new(py);
     d.set_item("markov", mat_to_numpy(py, &stack(&est.markov)))?;
     d.set_item("scale", slice_to_numpy(py, &est.scale))?;
@@ -152,7 +152,7 @@ pub fn okid<'py>(
     opts.count = count;
     opts.feedthrough = feedthrough;
     let v = views(&experiments);
-    let est = py.detach(|| rz::okid(&v, &opts)).py()?;
+    let est = crate::search::detach(py, || rz::okid(&v, &opts))?;
     let d = PyDict::new(py);
     d.set_item("markov", mat_to_numpy(py, &stack(&est.markov)))?;
     d.set_item(

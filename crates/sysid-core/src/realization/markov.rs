@@ -216,7 +216,7 @@ fn accumulate(
     d: usize,
     ys: &[f64],
     fill: impl Fn(MatRef<'_, f64>, MatRef<'_, f64>, usize, &mut [f64]),
-) -> (Mat<f64>, usize) {
+) -> Result<(Mat<f64>, usize)> {
     let l = exps[0].1.ncols();
     let w = d + l;
     let chunk = 4096usize.max(2 * w);
@@ -227,6 +227,7 @@ fn accumulate(
         let n = u.nrows();
         let mut t0 = lag;
         while t0 < n {
+            crate::interrupt::check()?; // Ctrl-C between blocks of a long record
             let t1 = (t0 + chunk).min(n);
             let k = r.nrows();
             let mut block = Mat::<f64>::zeros(k + t1 - t0, w);
@@ -251,7 +252,7 @@ fn accumulate(
         full.as_mut().subrows_mut(0, r.nrows()).copy_from(&r);
         r = full;
     }
-    (r, rows)
+    Ok((r, rows))
 }
 
 /// Least-squares FIR estimate of the Markov parameters, over one or more experiments.
@@ -291,7 +292,7 @@ pub fn fir(exps: Experiments<'_, '_>, opts: &FirOptions) -> Result<FirEstimate> 
                 row[kk * m + i] = u[(t - kk - k0, i)] / su[i];
             }
         }
-    });
+    })?;
     if rows <= d {
         return Err(SysidError::InsufficientData {
             context: format!(
@@ -445,7 +446,8 @@ fn tc_estimate(
             let mut best = vec![(f64::INFINITY, 0.0, 0.0); l];
             let grid = 30;
             for g in 0..grid {
-                // 1 - lambda log-spaced from 0.9 down to 1e-4
+                crate::interrupt::check()?; // Ctrl-C between the grid's SVDs
+                                            // 1 - lambda log-spaced from 0.9 down to 1e-4
                 let frac = g as f64 / (grid - 1) as f64;
                 let lambda = 1.0 - 10f64.powf(0.9f64.log10() * (1.0 - frac) + (-4.0) * frac);
                 let sp = tc_spectrum(r11, r12, lambda, nk, m)?;
@@ -568,7 +570,7 @@ pub fn okid(exps: Experiments<'_, '_>, opts: &OkidOptions) -> Result<OkidEstimat
                 row[base + m + i] = y[(t - k, i)] / sy[i];
             }
         }
-    });
+    })?;
     if rows <= d {
         return Err(SysidError::InsufficientData {
             context: format!("OKID with observer order {p} ({d} unknowns per output)"),
