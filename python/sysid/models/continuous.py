@@ -562,7 +562,7 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh", *,
 
 
 def _real_log(M: np.ndarray, p: np.ndarray, method: str) -> np.ndarray:
-    bad = (np.abs(p.imag) <= 1e-12 * np.maximum(1, np.abs(p))) & (p.real <= 0)
+    bad = negative_real(p) | (np.abs(p) <= 1e-12)
     if bad.any():
         where = "at zero" if abs(p[bad][0]) <= 1e-12 else "on the negative real axis"
         other = "'tustin'" if method == "zoh" or where == "at zero" else "'zoh' or 'tustin'"
@@ -624,15 +624,15 @@ def _d2c(model: StateSpaceModel, method: str, prewarp: float | None, quiet: bool
     n, m = B.shape
     p = model.poles()
     if method == "zoh" and negative_real(p).any() and not np.any(np.abs(p) <= 1e-12):
-        if not quiet:
-            warnings.warn(
-                f"d2c: the model has {int(negative_real(p).sum())} pole(s) on the negative "
-                f"real axis (z = {p[negative_real(p)][0].real:g}), which no continuous model "
-                "of its order samples to; each is doubled into a complex pair at the Nyquist "
-                f"frequency (order {n} -> {n + int(negative_real(p).sum())}, as MATLAB's "
-                "d2c); method='tustin' keeps the order", SysidWarning, stacklevel=3)
         Ac, Bc, Cc = zoh_doubled(A, B, C, dt)
         Dc = D.copy()
+        if not quiet and Ac.shape[0] > n:
+            warnings.warn(
+                f"d2c: the model has {Ac.shape[0] - n} pole(s) on the negative real axis "
+                f"(z = {p[negative_real(p)][0].real:g}), which no continuous model of its "
+                "order samples to; each is doubled into a complex pair at the Nyquist "
+                f"frequency (order {n} -> {Ac.shape[0]}, as MATLAB's d2c); method='tustin' "
+                "keeps the order", SysidWarning, stacklevel=3)
     elif method == "zoh":
         big = np.eye(n + m)
         big[:n, :n], big[:n, n:] = A, B

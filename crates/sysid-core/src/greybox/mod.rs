@@ -193,7 +193,7 @@ pub fn linear(
         // a structure's integrator (a pole at s = 0, sampled to z = 1 to round-off) is
         // physics, not a predictor about to diverge (MATLAB's DC-motor grey box): a start on
         // the unit circle admits the circle for the whole search
-        pred.set_marginal(true);
+        pred.set_marginal();
     }
     if !pred.admissible(&th0) {
         return Err(SysidError::invalid(

@@ -119,11 +119,6 @@ pub struct PemOptions {
     /// grey box, a transfer function): the record's size is checked against them instead
     /// of the full realisation's `n^2 + n m + l n`. `None` (default): the full realisation.
     pub free_parameters: Option<usize>,
-    /// Admit a predictor (and, where kept stable, an `A`) with poles on the unit circle, to
-    /// `1e-9`: a structure that fixes an integrator (a grey box's pole at `s = 0`, sampled to
-    /// exactly `z = 1`) keeps it there, where the errors grow at most linearly. Default
-    /// `false`: the full parameterisation is kept strictly inside.
-    pub marginal: bool,
 }
 
 impl Default for PemOptions {
@@ -149,7 +144,6 @@ impl Default for PemOptions {
             block: 128,
             optim: o,
             free_parameters: None,
-            marginal: false,
         }
     }
 }
@@ -175,8 +169,13 @@ pub fn stable_enough(
     stable_within(a, k, c, enforce_stability, 1.0)
 }
 
-/// [`stable_enough`] with the spectral radii below `limit` instead of 1 (`1 + 1e-9` admits
-/// a structural integrator, [`PemOptions::marginal`]).
+/// The spectral radius a search admits once its start sits on the unit circle: a structure
+/// that fixes an integrator (a grey box's pole at `s = 0`, sampled to `z = 1` to round-off)
+/// keeps it there, where the errors grow at most linearly.
+pub(crate) const MARGINAL_RADIUS: f64 = 1.0 + 1e-9;
+
+/// [`stable_enough`] with the spectral radii below `limit` instead of 1
+/// ([`MARGINAL_RADIUS`] admits a structural integrator).
 pub(crate) fn stable_within(
     a: MatRef<'_, f64>,
     k: MatRef<'_, f64>,

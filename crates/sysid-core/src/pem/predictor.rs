@@ -7,7 +7,7 @@
 //!
 //! with the weighted errors `R^-1 e` (`R R^T = Lambda`) whose half squared norm is the cost.
 
-use super::options::{stable_within, Focus, InitialState, PemOptions};
+use super::options::{stable_within, Focus, InitialState, PemOptions, MARGINAL_RADIUS};
 use crate::error::{check_finite, check_io, Result, SysidError};
 use crate::linalg::determinant;
 use crate::model::StateSpace;
@@ -29,7 +29,8 @@ pub struct Predictor<'a> {
     pub(super) est_d: bool,
     pub(super) est_k: bool,
     pub(super) enforce_stability: bool,
-    /// The largest spectral radius admitted (1, or `1 + 1e-9` with `PemOptions::marginal`).
+    /// The largest spectral radius admitted (1, or [`MARGINAL_RADIUS`] after
+    /// [`Self::set_marginal`]).
     pub(super) radius_limit: f64,
     pub(super) d_fixed: Mat<f64>,
     pub(super) k_fixed: Mat<f64>,
@@ -544,7 +545,7 @@ impl<'a> Predictor<'a> {
             est_k,
             enforce_stability: opts.enforce_stability == Some(true)
                 || opts.focus == Focus::Simulation,
-            radius_limit: if opts.marginal { 1.0 + 1e-9 } else { 1.0 },
+            radius_limit: 1.0,
             d_fixed: start.d.clone(),
             k_fixed,
             x0_mode,
@@ -670,9 +671,10 @@ impl<'a> Predictor<'a> {
         false
     }
 
-    /// Admit poles on the unit circle (to `1e-9`) from now on ([`PemOptions::marginal`]).
-    pub(crate) fn set_marginal(&mut self, on: bool) {
-        self.radius_limit = if on { 1.0 + 1e-9 } else { 1.0 };
+    /// Admit poles on the unit circle (to [`MARGINAL_RADIUS`]) from now on: a grey box whose
+    /// start has a structural integrator.
+    pub(crate) fn set_marginal(&mut self) {
+        self.radius_limit = MARGINAL_RADIUS;
     }
 
     /// `det(Lambda)` at the start and after every accepted step (the maximum-likelihood loss).

@@ -446,8 +446,8 @@ fn tc_estimate(
             let mut best = vec![(f64::INFINITY, 0.0, 0.0); l];
             let grid = 30;
             for g in 0..grid {
-                crate::interrupt::check()?; // Ctrl-C between the grid's SVDs
-                                            // 1 - lambda log-spaced from 0.9 down to 1e-4
+                // Ctrl-C between the grid's SVDs; 1 - lambda log-spaced from 0.9 to 1e-4
+                crate::interrupt::check()?;
                 let frac = g as f64 / (grid - 1) as f64;
                 let lambda = 1.0 - 10f64.powf(0.9f64.log10() * (1.0 - frac) + (-4.0) * frac);
                 let sp = tc_spectrum(r11, r12, lambda, nk, m)?;
