@@ -55,6 +55,11 @@ def test_feedback_and_poor_excitation_are_to_act_on():
         x = G.A @ x + G.B[:, 0] * u[t]
     a = sysid.advice(sysid.IOData(u, y, 1.0))
     assert "feedback" in a.to_act_on and "pbsid" in a["feedback"].action
+    # the calls it names exist as written (it once named n4sid(..., method='pbsid'))
+    d = sysid.IOData(u, y, 1.0)
+    assert "sysid.pbsid(data, order)" in a["feedback"].action
+    assert "n4sid" not in a["feedback"].action
+    assert sysid.pbsid(d, 2).poles(std=True)[1].shape == (2,)
     # the test sees past outputs in the input; it cannot tell a loop from a nonlinear plant
     # (the Bouc-Wen benchmark, open loop, read "the record was taken in closed loop")
     assert "unless the plant is nonlinear" in a["feedback"].finding

@@ -86,7 +86,8 @@ class ExcitationWarning(SysidWarning):
 
 class FeedbackWarning(SysidWarning):
     """The input depends on past outputs (feedback): open-loop subspace methods are biased;
-    use ``method="pbsid"`` or ``"ssarx"`` (see :func:`sysid.check_feedback`)."""
+    use :func:`sysid.pbsid` or :func:`sysid.ssarx` (``method="pbsid"`` in ``ssest`` and
+    ``SubspaceEstimator``; see :func:`sysid.check_feedback`)."""
 
 
 class OffsetWarning(SysidWarning):

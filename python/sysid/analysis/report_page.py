@@ -24,7 +24,8 @@ ADVICE = {
                          "check the input with sysid.check_excitation, or record with a richer "
                          "input (sysid.prbs, sysid.multisine).",
     "FeedbackWarning": "The data look closed-loop: open-loop subspace estimates are biased; "
-                       "use method='pbsid' or 'ssarx', or sysid.ssest.",
+                       "use sysid.pbsid or sysid.ssarx, or sysid.ssest(..., "
+                       "method='pbsid').",
     "UncertaintyWarning": "Some standard deviations are not reliable to first order: use the "
                           "bootstrap (--uncertainty bootstrap) or the Monte Carlo option.",
     "StabilityWarning": "The model is unstable: use focus='simulation' or "

@@ -8,6 +8,11 @@ gains and responses have. Checked by Monte Carlo against ``n4sid``'s own spread
 (``tests/test_subspace_uncertainty.py``); MATLAB's ``n4sid`` reports a covariance by default
 as well. An unstable model has no simulation-error criterion; the prediction-error one is
 used when its predictor ``A - K C`` is stable (the data insist on the unstable plant).
+Under feedback the simulation-error criterion's minimum is biased and its covariance
+formula assumes an input independent of the noise: the closed-loop estimators
+(:func:`sysid.pbsid`, :func:`sysid.ssarx`) take the prediction-error criterion with their
+``K`` (``focus="prediction"``), whose covariance holds in closed loop (Monte Carlo in
+``tests/test_subspace_uncertainty.py``).
 """
 
 from __future__ import annotations
@@ -22,10 +27,13 @@ from ..data.iodata import IOData
 __all__ = ["criterion_at", "attach_criterion_uncertainty"]
 
 
-def criterion_at(model: Any, data: IOData) -> tuple[Any, str]:
+def criterion_at(model: Any, data: IOData, focus: str = "simulation") -> tuple[Any, str]:
     """``(fitted, focus)``: ``model`` as :func:`sysid.pem` returns it with no iteration (the
     same ``A, B, C, D``, its uncertainty attached, ``K`` left out in simulation focus) and
-    the focus used; ``(None, why)`` when no criterion can be evaluated at it.
+    the focus used; ``(None, why)`` when no criterion can be evaluated at it. ``focus``:
+    the criterion of a stable model (an unstable one always takes the prediction error);
+    ``"prediction"`` needs the model's ``K`` and a stable predictor, else the simulation
+    error is used.
 
     Examples
     --------
@@ -42,13 +50,14 @@ def criterion_at(model: Any, data: IOData) -> tuple[Any, str]:
     """
     from .pem import pem
 
-    focus = "simulation"
+    K = getattr(model, "K", None)
+    stable_predictor = K is not None and np.max(np.abs(np.linalg.eigvals(
+        np.asarray(model.A) - np.asarray(K) @ np.asarray(model.C)))) < 1.0
+    if focus == "prediction" and not stable_predictor:
+        focus = "simulation"
     if not model.is_stable():
         # the simulation-error criterion diverges at an unstable A; the prediction-error one
         # is defined wherever the predictor A - K C is stable
-        K = getattr(model, "K", None)
-        stable_predictor = K is not None and np.max(np.abs(np.linalg.eigvals(
-            np.asarray(model.A) - np.asarray(K) @ np.asarray(model.C)))) < 1.0
         if not stable_predictor:
             return None, ("the model is unstable and has no stable predictor, so neither "
                           "prediction-error criterion is defined at it; refine it with "
@@ -70,8 +79,9 @@ def criterion_at(model: Any, data: IOData) -> tuple[Any, str]:
     return m, focus
 
 
-def attach_criterion_uncertainty(model: Any, data: IOData) -> Any:
-    """``model`` (unchanged, its ``K`` kept) with the uncertainty of :func:`criterion_at`,
+def attach_criterion_uncertainty(model: Any, data: IOData, focus: str = "simulation") -> Any:
+    """``model`` (unchanged, its ``K`` kept) with the uncertainty of :func:`criterion_at`
+    (``focus`` as there),
     and ``info["uncertainty"]`` saying what it is (or why there is none). The draws of the
     uncertainty carry the model's ``K`` and initial state, as the model does.
 
@@ -89,7 +99,7 @@ def attach_criterion_uncertainty(model: Any, data: IOData) -> Any:
     """
     from .sandwich import through_deferred
 
-    fitted, focus = criterion_at(model, data)
+    fitted, focus = criterion_at(model, data, focus)
     if fitted is None:
         model.info["uncertainty"] = {"method": "none", "why": focus}
         return model

@@ -7,7 +7,9 @@ from __future__ import annotations
 from typing import Any
 
 from ..data.iodata import IOData, require_record
+from ..errors import DataError
 from ..models.statespace import StateSpaceModel
+from ..pem.at_estimate import attach_criterion_uncertainty
 from .estimator import Order, SubspaceEstimator, horizon_for_order
 from .feedthrough import check_feedthrough, choose_feedthrough, default_feedthrough
 
@@ -26,9 +28,14 @@ def _one_call(method: str) -> Any:
         regularization: str = "none",
         ridge: float = 1e-3,
         scale: bool | None = None,
+        uncertainty: str | None = "criterion",
     ) -> StateSpaceModel:
         from .closed_loop import closed_loop_fit
 
+        if uncertainty not in ("criterion", None):
+            raise DataError(f"uncertainty must be 'criterion' or None, got {uncertainty!r} "
+                            "(a residual bootstrap that keeps the input would break the "
+                            "feedback loop)")
         data = require_record(data, method)
         if past is None and future is None:  # one that allows a given order, as n4sid's
             horizon = horizon_for_order(data, order, horizon)
@@ -41,6 +48,8 @@ def _one_call(method: str) -> Any:
                                 regularization=regularization, ridge=ridge)
         if why is not None:
             model.info["feedthrough_selection"] = why
+        if uncertainty == "criterion":  # the prediction error: its covariance holds in
+            model = attach_criterion_uncertainty(model, data, "prediction")  # closed loop
         return model
 
     fit.__name__ = method
@@ -75,6 +84,11 @@ pbsid.__doc__ = """Identify a state-space model from closed-loop data with PBSID
     scale : bool, optional
         Fit on channels of unit root mean square (default; :mod:`sysid.subspace.scaling`),
         or in the record's units (``False``).
+    uncertainty : {"criterion", None}
+        ``"criterion"`` (default): the first-order uncertainty of the prediction-error
+        criterion with the model's ``K`` at the estimate (:mod:`sysid.pem.at_estimate`; it
+        holds under feedback, and matches the estimator's spread in a Monte Carlo test), so
+        ``model.poles(std=True)``, ``damp`` and the response bands work; ``None``: none.
 
     Returns
     -------

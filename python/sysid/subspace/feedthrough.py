@@ -242,7 +242,7 @@ def record_left_out(ratio: float, fit: str, order: Any, who: str) -> dict[str, A
             f"within the sample). Pass feedthrough=True, or feedthrough='auto' to decide from "
             f"held-out data; unless the input is a controller's answer to the same sample's "
             f"output (feedback within the sample), where D = 0 is right and the closed-loop "
-            f"methods (method='pbsid' or 'ssarx') apply", FeedthroughWarning,
+            f"methods (sysid.pbsid or sysid.ssarx) apply", FeedthroughWarning,
             stacklevel=user_stacklevel())
     return check
 

@@ -191,8 +191,8 @@ def _feedback(data: Any) -> Finding:
                        "model leaves in its residuals, look like feedback: a periodic input "
                        "to a nonlinear structure does this)",
                        "open-loop subspace fits are biased there: use "
-                       "sysid.n4sid(data, order, method='pbsid') or 'ssarx', or "
-                       "sysid.ssest(data, order) (prediction error)")
+                       "sysid.pbsid(data, order) or sysid.ssarx, or "
+                       "sysid.ssest(data, order, method='pbsid') (prediction error)")
     return Finding("feedback", "ok", f"no feedback found (p = {fb.p_value:.2g})")
 
 

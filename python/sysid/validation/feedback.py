@@ -171,8 +171,8 @@ class FeedbackTest(HTMLResult):
             lines.append(f"{name:<12}{F:>12.4g}{p:>14.3g}")
         lines.append(repr(self))
         if self.detected:
-            lines.append("open-loop subspace methods are biased here: use method='pbsid' or "
-                         "'ssarx' (or PEM with a noise model)")
+            lines.append("open-loop subspace methods are biased here: use sysid.pbsid or "
+                         "sysid.ssarx (or PEM with a noise model)")
         return "\n".join(lines)
 
     def to_pandas(self) -> Any:
