@@ -157,3 +157,21 @@ def test_compare_simulates_a_nonlinear_model_not_its_linear_part():
     # a linear model's state-space form is still used for its initial state
     arx = sysid.arx(sysid.IOData(u=u, y=model.G.simulate(u)), 1, 1, 1)
     assert sysid.compare(arx, sysid.IOData(u=u[50:], y=model.G.simulate(u)[50:])).fit[0][0] > 99.9
+
+
+def test_matlab_order_with_a_prediction_horizon():
+    # MATLAB's compare(data, sys, K) raised "int lacks simulate, predict, ..."
+    from scipy.signal import lfilter
+
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(300)
+    y = lfilter([0, 0.5], [1, -0.8], u) + lfilter([1], [1, -0.9], 0.1 * rng.standard_normal(300))
+    d = sysid.IOData(u, y, 1.0)
+    m = sysid.armax(d, [1, 1, 1, 1])
+    five = sysid.compare(d, m, horizon=5).fit
+    np.testing.assert_array_equal(sysid.compare(d, m, 5).fit, five)
+    np.testing.assert_array_equal(sysid.compare(d, m, np.inf).fit, sysid.compare(d, m).fit)
+    both = sysid.compare(d, m, sysid.arx(d, [1, 1, 1]), 5)
+    np.testing.assert_array_equal(both.fit[0], five)
+    with pytest.raises(sysid.DataError, match="horizon given twice"):
+        sysid.compare(d, m, 5, horizon=5)

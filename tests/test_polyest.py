@@ -101,3 +101,23 @@ def test_bad_calls_say_what_to_do():
     with pytest.raises(DataError, match="sampled every 0.5"):
         sysid.pem(sysid.IOData(u, y, 1.0), sysid.polyest(sysid.IOData(u, y, 0.5), 1, 1, 0, 0,
                                                          0, 1))
+
+
+def test_an_output_error_structure_carries_oes_uncertainty():
+    # polyest([0, nb, 0, 0, nf, nk]) and bj with C = D = 1 are oe: the same estimate, but
+    # they carried the Gauss-Newton covariance (std 0.6-0.77 of the sample one, intervals
+    # covering 76-89 % under a coloured disturbance) where oe carries the sandwich
+    from scipy.signal import lfilter
+
+    rng = np.random.default_rng(1)
+    u = rng.standard_normal(800)
+    v = lfilter([1.0], [1.0, -0.95], 0.1 * rng.standard_normal(800))
+    d = sysid.IOData(u, lfilter([0.0, 1.0, 0.5], [1.0, -1.2, 0.5], u) + v, 1.0)
+    ref = sysid.oe(d, 2, 2, 1)
+    for m in (sysid.polyest(d, [0, 2, 0, 0, 2, 1]), sysid.bj(d, 2, 0, 0, 2, 1)):
+        assert m.info["covariance"].startswith("gauss-newton until first used")
+        np.testing.assert_allclose(m.uncertainty.covariance, ref.uncertainty.covariance,
+                                   rtol=1e-6)
+        assert m.info["covariance"].startswith("sandwich")
+    # a structure with a noise model keeps its Gauss-Newton covariance
+    assert "covariance" not in sysid.bj(d, 2, 1, 1, 2, 1).info

@@ -276,3 +276,51 @@ def test_a_type_that_holds_the_one_pole_model_fits_no_worse_than_it(load):
         one = sysid.procest(d, "P1D").info["cost"][0]
         two = sysid.procest(d, "P2DZ").info["cost"][0]
     assert two <= one * (1 + 1e-6)
+
+
+def _late_delay_record():
+    # a 10 s record whose dead time (1.5 s) is beyond the default bound (a tenth: 1 s)
+    rng = np.random.default_rng(2)
+    u = np.repeat(rng.choice([-1.0, 1.0], 20), 5)
+    true = sysid.ProcessModel("P1D", Kp=2.0, Tp1=1.0, Td=1.5)
+    return sysid.IOData(u, true.simulate(u, dt=0.1)[:, 0], 0.1)
+
+
+def test_a_fixed_or_started_dead_time_beyond_the_default_bound_is_the_users():
+    # fixed={"Td": 1.5} came back as Td = 1.0 (the default bound), still marked fixed, and
+    # Kp, Tp1 wrong (2.70, 2.33), silently
+    d = _late_delay_record()
+    for kw in ({"fixed": {"Td": 1.5}}, {"init": {"Td": 1.5}}):
+        m = sysid.procest(d, "P1D", **kw)
+        np.testing.assert_allclose([m.values[k] for k in ("Kp", "Tp1", "Td")],
+                                   [2.0, 1.0, 1.5], rtol=1e-8)
+        assert m.parameters["Td"]["bound"] == ""
+    with pytest.raises(sysid.DataError, match="beyond max_delay = 1 s"):
+        sysid.procest(d, "P1D", fixed={"Td": 1.5}, max_delay=1.0)
+
+
+def test_a_dead_time_on_the_default_bound_warns_in_procests_terms():
+    # the start's delay estimate warned "search a larger range (nk_max)", an option procest
+    # does not have; the fit itself ended on the bound without a word
+    with pytest.warns(sysid.DelayWarning, match="default max_delay") as rec:
+        m = sysid.procest(_late_delay_record(), "P1D")
+    assert m.values["Td"] == pytest.approx(1.0)
+    assert not any("nk_max" in str(w.message) for w in rec)
+    with pytest.warns(sysid.DelayWarning, match="default max_delay"):
+        sysid.tfest(_late_delay_record(), 1, 0, iodelay="auto")
+
+
+@pytest.mark.parametrize("kw, what", [
+    ({"init": {"Tp1": -1.0}}, r"init\['Tp1'\] = -1 is outside .* positive"),
+    ({"fixed": {"Tp1": -1.0}}, r"fixed\['Tp1'\] = -1 is outside"),
+    ({"init": {"Td": -0.3}}, r"init\['Td'\] = -0.3 .* not negative"),
+    ({"init": {"Td": 0.5}, "bounds": {"Td": (0.0, 0.3)}}, r"bounds\['Td'\] = \(0, 0.3\)"),
+])
+def test_starts_and_fixed_values_outside_their_range_are_refused(kw, what):
+    # init Tp1 = -1 ended at Tp1 = 5.6e-6 with a 38 % fit, fixed Tp1 = -1 came back as 1e-9,
+    # and init Td = -0.3 raised a broadcasting error from deep inside
+    rng = np.random.default_rng(2)
+    u = np.repeat(rng.choice([-1.0, 1.0], 100), 10)
+    y = sysid.ProcessModel("P1D", Kp=2.0, Tp1=1.5, Td=0.3).simulate(u, dt=0.1)[:, 0]
+    with pytest.raises(sysid.DataError, match=what):
+        sysid.procest(sysid.IOData(u, y, 0.1), "P1D", **kw)

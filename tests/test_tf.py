@@ -576,3 +576,28 @@ def test_the_time_scaled_canonical_form_is_the_same_transfer_function(n, log2f, 
     exact = np.polyval(num, s) / np.polyval(den, s)
     np.testing.assert_allclose(tf(*canonical(den, num, 2.0 ** round(log2f))), exact,
                                rtol=1e-8, atol=1e-10 * np.abs(exact).max())
+
+
+def test_discrete_delay_is_the_models_iodelay_in_samples():
+    # the delay came back folded into the denominator, (z + 0.5) / (z^4 - 1.5 z^3 + 0.7 z^2)
+    # with iodelay 0; MATLAB reports IODelay = 2 (samples, for a discrete model)
+    g = sysid.TransferFunction([1.0, 0.5], [1.0, -1.5, 0.7], dt=0.5, iodelay=2)
+    u = np.random.default_rng(0).standard_normal(600)
+    d = sysid.IOData(u, g.simulate(u), dt=0.5)
+    for delay in (2, "auto"):
+        G = sysid.tfest(d, 2, 1, dt=0.5, iodelay=delay)
+        assert G.iodelay[0, 0] == 2 and G.den[0][0].size == 3
+        np.testing.assert_allclose(G.simulate(u), g.simulate(u), atol=1e-9)
+        again = G.uncertainty.build(G.uncertainty.theta)
+        assert again.iodelay[0, 0] == 2
+
+
+def test_an_unstable_start_is_refused_in_tfests_terms():
+    # the message named focus="prediction", an option tfest does not have
+    rng = np.random.default_rng(2)
+    u = np.repeat(rng.choice([-1.0, 1.0], 100), 10)
+    y = sysid.ProcessModel("P1D", Kp=2.0, Tp1=1.5, Td=0.3).simulate(u, dt=0.1)[:, 0]
+    with pytest.raises(DataError, match=r"init pair \(0, 0\) is unstable .* stable init") as e:
+        sysid.tfest(sysid.IOData(u, y, 0.1), 1, 0, iodelay=0.3,
+                    init=sysid.TransferFunction([1.0], [1.0, -0.5]))
+    assert "focus" not in str(e.value)

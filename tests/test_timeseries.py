@@ -246,3 +246,12 @@ def test_forecast_with_inputs_takes_a_u_y_pair_and_says_what_is_missing():
         sysid.forecast(m, y[:N], k, future_inputs=u[N:])
     with pytest.raises(sysid.ShapeError, match="200 samples but the past outputs 199"):
         sysid.forecast(m, (u[:N], y[:N - 1]), k, future_inputs=u[N:])
+
+
+def test_forecast_refuses_a_past_shorter_than_the_order():
+    # an AR(2) forecast from one past sample silently took the sample before it as zero
+    y = np.sin(0.3 * np.arange(200)) + 0.1 * np.random.default_rng(0).standard_normal(200)
+    m = sysid.ar(y, 2)
+    with pytest.raises(sysid.InsufficientDataError, match="fewer than the model's order 2"):
+        sysid.forecast(m, y[:1], 3)
+    assert sysid.forecast(m, y[:2], 3).mean.shape == (3, 1)

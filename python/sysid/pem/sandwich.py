@@ -40,7 +40,8 @@ import numpy as np
 from ..models.paramtable import Z95, ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 
-__all__ = ["DeferredSandwich", "DeferredTable", "coloured_error_covariance", "gauss_newton",
+__all__ = ["DeferredSandwich", "DeferredTable", "coloured_error_covariance", "defer_sandwich",
+           "gauss_newton",
            "sandwich_covariance"]
 
 #: the Jacobian over the record holds samples x outputs x directions numbers: beyond this the
@@ -368,9 +369,12 @@ class DeferredTable(ParameterTable):
     0.2
     """
 
-    def __init__(self, table: ParameterTable, unc: ParameterUncertainty) -> None:
+    def __init__(self, table: ParameterTable, unc: ParameterUncertainty,
+                 limits: tuple[Any, Any] | None = None) -> None:
         self.__dict__.update(table.__dict__)
         self._source: ParameterUncertainty | None = unc
+        # the parameters' bounds: the intervals stay cut there (ParameterTable.cut_at_bounds)
+        self._limits = limits
 
     def __getattribute__(self, name: str) -> Any:
         if name in ("std", "lower", "upper", "__reduce_ex__", "__reduce__", "__deepcopy__",
@@ -382,5 +386,52 @@ class DeferredTable(ParameterTable):
                 sd[np.isinf(d["std"])] = np.inf  # the undetermined stay so
                 sd[d["fixed"]] = d["std"][d["fixed"]]
                 d["std"], d["lower"], d["upper"] = sd, d["value"] - Z95 * sd, d["value"] + Z95 * sd
+                limits = d.pop("_limits", None)
                 self.__class__ = ParameterTable  # type: ignore[assignment]
+                if limits is not None:
+                    self.cut_at_bounds(*limits)
         return object.__getattribute__(self, name)
+
+
+def defer_sandwich(model: Any, sim: Callable[[Any], np.ndarray], y: np.ndarray,
+                   blocks: Sequence[tuple[Sequence[int], Sequence[int]]],
+                   limits: tuple[Any, Any] | None = None) -> None:
+    """A simulation-error fit's Gauss-Newton uncertainty (and parameter table) becoming the
+    sandwich for coloured errors when first used, as :func:`sysid.oe`'s: for the fits of
+    continuous-time models (:func:`sysid.tfest`, :func:`sysid.procest`), ``sim(model)``
+    simulating the record's input exactly as the search formed its errors ``y - sim``;
+    ``blocks`` as in :func:`sandwich_covariance`, ``limits`` the parameters' bounds (the
+    table's intervals stay cut there). ``model.info["covariance"]`` says which covariance
+    the model carries.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy.signal import lfilter
+    >>> from sysid.pem.sandwich import defer_sandwich
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(600)
+    >>> y = lfilter([0.0, 0.5], [1.0, -0.8], u)
+    >>> y = y + lfilter([1.0], [1.0, -0.9], 0.1 * rng.standard_normal(600))
+    >>> m = sysid.arx(sysid.IOData(u, y, 1.0), 1, 1, 1)   # any fit with an uncertainty
+    >>> defer_sandwich(m, lambda g: g.simulate(u), y[:, None], [([0, 1], [0])])
+    >>> m.info["covariance"].startswith("gauss-newton until first used")
+    True
+    >>> sd = m.std                                  # the first use forms it
+    >>> m.info["covariance"].startswith("sandwich for coloured simulation errors")
+    True
+    """
+    base = model.uncertainty
+    info = model.info
+    info["covariance"] = ("gauss-newton until first used, then the sandwich for coloured "
+                          "simulation errors")
+
+    def form() -> tuple[ParameterUncertainty | None, str]:
+        return sandwich_covariance(base, sim, y, blocks=blocks)
+
+    def then(note: str) -> None:
+        info["covariance"] = note
+    model.uncertainty = DeferredSandwich(base, form, then)
+    table = getattr(model, "parameters", None)
+    if isinstance(table, ParameterTable):
+        model.parameters = DeferredTable(table, model.uncertainty, limits)

@@ -392,7 +392,9 @@ def _pem(
     warn_if_capped(info, f"the {method} search", iters)
     m.covariance = cov  # type: ignore[attr-defined]
     _attach_uncertainty(m, cov, "pem", "gauss-newton")
-    if method == "oe":  # its errors are the output disturbance: coloured as it is
+    # no noise model (oe, or bj / polyest with C = D = 1 and A = 1): the errors are the
+    # output disturbance, coloured as it is
+    if method == "oe" or not any(np.any(np.asarray(v) != 0) for v in (na_v, nc_v, nd_v)):
         defer_coloured(m, exps)
     found = []
     for i in range(ny):

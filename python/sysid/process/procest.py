@@ -82,6 +82,7 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
     """
     from ..tf.options import fit_percent, progress_callback, search_limits
     from ..tf.refine import check_experiments, refine
+    from ..tf.tfest import coloured_uncertainty, warn_delay_at_bound
 
     t = ProcessType.parse(type_code)
     max_iter, tol = search_limits(max_iter, tol, max_delay)
@@ -108,6 +109,14 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
     require_inputs_vary(exps_all, "procest", data.output_names, side=1)
     N = sum(u.shape[0] for u, _ in exps_all)
     dmax = max_delay if max_delay is not None else 0.1 * N * data.dt / len(exps_all)
+    given = {**init, **fixed}.get("Td")
+    if given is not None and given > dmax:
+        if max_delay is not None:
+            raise DataError(f"the dead time given ({given:g} s) is beyond max_delay = "
+                            f"{max_delay:g} s: raise max_delay or give a shorter Td")
+        # the default bound (a tenth of the record) takes the user's value: a fixed one as
+        # it is, a start with the default's room beyond it
+        dmax = given + (0.0 if "Td" in fixed else dmax)
     names = [n for n in t.names if n != "Td"]
     # an integrator is fitted through the integrated input: under a zero-order hold its
     # integral is piecewise linear through dt * cumsum(u), exactly a first-order hold
@@ -177,10 +186,15 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
         "noise_variance": [r["noise_variance"] for r in infos],
         "n_samples": infos[0]["n_samples"], "initial_state": initial_state,
         "fixed": sorted(fixed)})
-    _attach(model, covs, fixed, weak,
-            {k: bounds.get(k, (max(bounds.get("Td", (0.0, dmax))[0], 0.0),
-                               min(bounds.get("Td", (0.0, dmax))[1], dmax))
-                           if k == "Td" else t.default_bounds(k)) for k in t.names})
+    limits = _attach(model, covs, fixed, weak,
+                     {k: bounds.get(k, (max(bounds.get("Td", (0.0, dmax))[0], 0.0),
+                                        min(bounds.get("Td", (0.0, dmax))[1], dmax))
+                                    if k == "Td" else t.default_bounds(k)) for k in t.names})
+    if t.delay and "Td" not in fixed and not ("Td" in bounds and bounds["Td"][1] <= dmax):
+        warn_delay_at_bound(np.array([[v.get("Td", 0.0) for v in row] for row in values]),
+                            np.ones((l, m), bool), dmax, max_delay is not None,
+                            [f"{o}<-{i}" for o in data.output_names for i in data.input_names])
+    coloured_uncertainty(model, data, [c.shape[0] for c in covs], hold, initial_state, limits)
     if initial_state == "zero":  # the fit of a simulation from rest, as the model was fitted
         fit_percent(model, data)
     return model
@@ -255,6 +269,15 @@ def _options(t: ProcessType, init: Any, fixed: Any, bounds: Any
         if not lo < hi:
             raise DataError(f"bounds[{k!r}] = ({lo}, {hi}): lower must be below upper")
         bounds[k] = (lo, hi)
+    for what, d in (("init", init), ("fixed", fixed)):
+        for k, v in d.items():
+            lo, hi = bounds.get(k, t.default_bounds(k))
+            if not lo <= float(v) <= hi:
+                why = ("time constants and damping are positive" if k not in bounds and k != "Td"
+                       else "a dead time is not negative" if k not in bounds else
+                       f"bounds[{k!r}] = ({lo:g}, {hi:g})")
+                raise DataError(f"{what}[{k!r}] = {float(v):g} is outside the range of {k} "
+                                f"({why}): give a value inside it")
     return ({k: float(v) for k, v in init.items()}, {k: float(v) for k, v in fixed.items()},
             bounds)
 
@@ -416,10 +439,12 @@ def _weak(res: dict[str, Any], t: ProcessType, names: list[str], m: int) -> list
 
 
 def _attach(model: ProcessModel, covs: list[np.ndarray], fixed: dict[str, float],
-            weak: list[list[int]], limits: dict[str, tuple[float, float]]) -> None:
+            weak: list[list[int]], limits: dict[str, tuple[float, float]]
+            ) -> tuple[np.ndarray, np.ndarray]:
     """The parameter table and uncertainty. A parameter the search left on one of its
     ``limits`` is marked ``bound`` and its 95 % interval is cut at the bound (its std is
-    that of the unconstrained curvature: a dead time of 0 is not -1.2 .. 1.2 s)."""
+    that of the unconstrained curvature: a dead time of 0 is not -1.2 .. 1.2 s). Returns
+    the lower and upper limits per parameter."""
     from ..tf.options import blockdiag
 
     names, theta = model.parameter_names(), model.parameter_vector()
@@ -440,3 +465,4 @@ def _attach(model: ProcessModel, covs: list[np.ndarray], fixed: dict[str, float]
                                       bound=[str(b) for b in on]).cut_at_bounds(lo, hi)
     model.uncertainty = ParameterUncertainty(theta, P, model.with_parameter_vector,
                                              names=names)
+    return lo, hi

@@ -214,8 +214,10 @@ def _bounds(pairs: Sequence[PairStructure], mp: _Map) -> tuple[np.ndarray, ...]:
     dlo, dhi, dfx = [], [], []
     for j in mp.delay_idx:
         w = mp.whole[j]
-        dlo.append(w * mp.dt)
         dhi.append(min((w + 1) * mp.dt, pairs[j].delay_max))
+        # a bound on a sample multiple (0.3 s at dt = 0.1) starts the interval above it by
+        # round-off (0.30000000000000004 > 0.3): the interval is then that bound alone
+        dlo.append(min(w * mp.dt, dhi[-1]))
         dfx.append(not pairs[j].delay_free)
     lo = np.concatenate([lo, dlo]) / mp.scale
     hi = np.concatenate([hi, dhi]) / mp.scale

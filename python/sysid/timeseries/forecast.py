@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_2d, as_int, check_elements
-from ..errors import DataError, ShapeError
+from ..errors import DataError, InsufficientDataError, ShapeError
 from ..models.trended import TrendedModel
 
 
@@ -245,6 +245,11 @@ def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
                    "forecast fewer steps (the forecast settles to the mean, and its band "
                    "to the output's spread, within a few time constants of the model)")
     u, y, t, dt = _past(model, past, l, m, h, future_inputs)
+    if y.shape[0] < A.shape[0]:
+        raise InsufficientDataError(
+            f"the past holds {y.shape[0]} sample(s), fewer than the model's order "
+            f"{A.shape[0]}: it does not determine the state the forecast starts from; give at "
+            "least that many past samples (to forecast from rest, pad the past with zeros)")
     if m and future_inputs is None:
         raise DataError(f"the model has {m} input(s): give future_inputs of shape ({h}, {m})")
     uf = np.zeros((h, 0)) if not m else as_2d(future_inputs, "future_inputs", ncols=m)

@@ -23,13 +23,25 @@ def _is_data(x: Any) -> bool:
     return isinstance(x, IOData) or (isinstance(x, tuple) and len(x) == 2) or is_frd(x)
 
 
+def _is_horizon(a: Any) -> bool:
+    """An integer (not a bool) or ``inf`` in the models' place: MATLAB's prediction horizon
+    ``K`` of ``compare(data, sys, K)``."""
+    if isinstance(a, (bool, np.bool_)):
+        return False
+    return isinstance(a, (int, np.integer)) or (isinstance(a, float) and a == np.inf)
+
+
 def split_arguments(args: tuple[Any, ...], horizon: Any) -> tuple[Any, list[Any], Any]:
     """``(data, models, horizon)`` from ``compare``'s positional arguments: ``data, m1, m2,
-    ...`` or ``model, data[, horizon]``."""
+    ...[, horizon]`` (MATLAB's ``compare(data, sys, K)``) or ``model, data[, horizon]``."""
     if not args:
         raise DataError("compare needs data and at least one model: compare(data, m1, m2, ...)")
     if _is_data(args[0]):
         data, models = args[0], list(args[1:])
+        if len(models) > 1 and _is_horizon(models[-1]):  # MATLAB's compare(data, m1, .., K)
+            if horizon is not None:
+                raise DataError("horizon given twice (positionally and by keyword)")
+            horizon = models.pop()
     elif len(args) in (2, 3) and _is_data(args[1]):
         data, models = args[1], [args[0]]
         if len(args) == 3:
