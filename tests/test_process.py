@@ -324,3 +324,12 @@ def test_starts_and_fixed_values_outside_their_range_are_refused(kw, what):
     y = sysid.ProcessModel("P1D", Kp=2.0, Tp1=1.5, Td=0.3).simulate(u, dt=0.1)[:, 0]
     with pytest.raises(sysid.DataError, match=what):
         sysid.procest(sysid.IOData(u, y, 0.1), "P1D", **kw)
+
+
+def test_per_input_types_name_the_route():
+    # MATLAB's procest(data, {'P1D', 'P2'}) gave "must be a string ..., got list"
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((300, 2))
+    d = sysid.IOData(u, u @ [1.0, 0.5] + 0.01 * rng.standard_normal(300), 0.1)
+    with pytest.raises(DataError, match=r"one process type for every input.*sysid.tfest"):
+        sysid.procest(d, ["P1D", "P2"])

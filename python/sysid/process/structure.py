@@ -50,6 +50,11 @@ class ProcessType:
     @classmethod
     def parse(cls, code: Any) -> ProcessType:
         """Read a type code (case-insensitive); a clear error names the grammar otherwise."""
+        if isinstance(code, (list, tuple)):
+            raise DataError(f"one process type for every input, got a {type(code).__name__} "
+                            f"{list(code)!r} (MATLAB's per-input types): give one code, or fit "
+                            "a structure per input with sysid.tfest(data, n_poles, n_zeros, "
+                            "iodelay='auto') and per-pair orders, e.g. n_poles=[[1, 2]]")
         if not isinstance(code, str):
             raise DataError(f"the process type must be a string such as 'P1D', got "
                             f"{type(code).__name__}; {_FIX}")
