@@ -97,3 +97,25 @@ def test_forms_that_do_not_exist_say_why():
     assert isinstance(cm, sysid.ContinuousStateSpace) and cm.A[0, 1] > 0
     w = np.array([0.1, 1.0, 10.0])
     np.testing.assert_allclose(cm.freqresp(w), cont.freqresp(w), rtol=1e-9)
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-6, 1e-12])
+def test_minreal_does_not_depend_on_units(scale):
+    # a stiff oscillator in SI units (m = 100 kg, k = 1e9 N/m, metres per newton: |B| 1e-9)
+    # reduced to 0 states, its static gain 1e-9 -> 0, silently; and a minimal 3-state model
+    # with B scaled by 1e-6 lost every state
+    from scipy.signal import cont2discrete
+
+    m, k = 100.0, 1e9
+    Ac = np.array([[0.0, 1.0], [-k / m, -2 * 0.02 * np.sqrt(k * m) / m]])
+    Bc, Cc = np.array([[0.0], [1 / m]]) * scale, np.array([[1.0, 0.0]])
+    Ad, Bd, Cd, Dd, _ = cont2discrete((Ac, Bc, Cc, np.zeros((1, 1))), 1e-4)
+    for G in (sysid.StateSpaceModel(Ad, Bd, Cd, Dd, dt=1e-4),
+              sysid.ContinuousStateSpace(Ac, Bc, Cc, np.zeros((1, 1)))):
+        r = sysid.minreal(G)
+        assert r.nstates == 2
+        np.testing.assert_allclose(r.dcgain(), G.dcgain(), rtol=1e-8)
+    # units do not make a non-minimal model minimal: an unreached mode still goes
+    A = np.diag([0.5, 0.9, -0.3])
+    G = sysid.StateSpaceModel(A, np.array([[1.0], [0.0], [1.0]]) * scale, [[1.0, 1.0, 1.0]])
+    assert sysid.minreal(G).nstates == 2

@@ -208,9 +208,24 @@ def damping_table(poles: np.ndarray, dt: float) -> DampingTable:
 
 def reachable_basis(A: np.ndarray, B: np.ndarray, tol: float) -> np.ndarray:
     """Orthonormal basis of the subspace ``B`` reaches through ``A`` (staircase with SVD rank
-    decisions, relative to ``tol`` times the larger of the norms)."""
+    decisions at ``tol``). The subspace does not depend on the units: not on the scale of
+    ``B`` or of ``A``, nor on the state's (a diagonal similarity), so the rank tests run on
+    ``D^-1 A D`` balanced (:func:`scipy.linalg.matrix_balance`) and ``D^-1 B``, each of unit
+    norm, and the basis is mapped back (a stiff oscillator in SI units, ``|B|`` 1e-9, lost
+    every state to a test against ``tol`` times ``max(|A|, |B|, 1)``)."""
+    from scipy.linalg import matrix_balance
+
     n = A.shape[0]
-    scale = max(np.linalg.norm(A), np.linalg.norm(B), 1.0)
+    if n == 0 or not np.any(B):
+        return np.zeros((n, 0))
+    d = np.ones(n)
+    if np.any(A):
+        _, (d, _) = matrix_balance(A, permute=False, separate=True)
+    A = A * (1.0 / d)[:, None] * d[None, :]
+    B = B / d[:, None]
+    A = A / max(float(np.linalg.norm(A)), 1e-300)
+    B = B / float(np.linalg.norm(B))
+    scale = 1.0
     basis = np.zeros((n, 0))
     block = B
     for _ in range(n):
@@ -226,7 +241,7 @@ def reachable_basis(A: np.ndarray, B: np.ndarray, tol: float) -> np.ndarray:
         if basis.shape[1] >= n:
             break
         block = A @ U[:, :r]
-    q, _ = np.linalg.qr(basis) if basis.shape[1] else (basis, None)
+    q, _ = np.linalg.qr(d[:, None] * basis) if basis.shape[1] else (basis, None)
     return q
 
 

@@ -373,7 +373,7 @@ def ssi(data: Any, orders: Any, *, method: str = "cov", horizon: int | None = No
     Examples
     --------
     >>> import numpy as np, sysid
-    >>> A = np.array([[0.98, 0.15], [-0.15, 0.98]])     # one mode at ~2.4 Hz, dt = 0.1
+    >>> A = np.array([[0.98, 0.15], [-0.15, 0.98]])     # one mode at ~0.24 Hz, dt = 0.1
     >>> rng = np.random.default_rng(0)
     >>> x = np.zeros(2); y = np.empty((20000, 2))
     >>> for t in range(20000):
