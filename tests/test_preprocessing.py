@@ -292,3 +292,16 @@ def test_linear_detrend_with_breakpoints_is_matlabs_piecewise_line():
     assert np.abs(a.y[:, 0] - np.sin(t)).max() < 0.1
     with pytest.raises(sysid.DataError, match="a mean has none"):
         sysid.detrend(d, "mean", breakpoints=[120])
+
+
+def test_spikes_at_the_ends_of_the_record_are_found():
+    # edge padding repeated a spike at sample 0 (or N - 1) until it was its own median:
+    # despike left 7.0 at both ends of a record of noise of std 0.1
+    x = 0.1 * np.random.default_rng(0).standard_normal(200)
+    x[0] = x[-1] = 7.0
+    hits = sysid.find_spikes(x)
+    assert hits[0] and hits[-1]
+    d = sysid.despike(sysid.IOData(None, x[:, None], 1.0))
+    assert np.all(np.abs(d.y[[0, -1], 0]) < 0.5)
+    # a ramp's ends are not spikes
+    assert not sysid.find_spikes(np.arange(50.0)).any()

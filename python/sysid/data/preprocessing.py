@@ -95,6 +95,14 @@ def find_spikes(x: Any, window: int = 7, n_sigmas: float = 3.0) -> np.ndarray:
     win = np.lib.stride_tricks.sliding_window_view(padded, window, axis=0)  # (n, ch, window)
     med = np.median(win, axis=2)
     mad = np.median(np.abs(win - med[:, :, None]), axis=2)
+    # the first and last h samples: their windows cut at the record's ends (edge padding
+    # repeated a spike at sample 0 until it was its own median)
+    ends = np.r_[0:min(h, arr.shape[0]), max(arr.shape[0] - h, h):arr.shape[0]]
+    if ends.size:
+        cut = np.lib.stride_tricks.sliding_window_view(
+            np.pad(arr, ((h, h), (0, 0)), constant_values=np.nan), window, axis=0)[ends]
+        med[ends] = np.nanmedian(cut, axis=2)
+        mad[ends] = np.nanmedian(np.abs(cut - med[ends][:, :, None]), axis=2)
     dev = np.abs(arr - med)
     # floor: round-off in constant stretches
     floor = 1e-9 * (np.max(np.abs(arr), axis=0) + 1e-300)
