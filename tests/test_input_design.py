@@ -193,3 +193,12 @@ def test_crest_factor_and_chirp_refuse_degenerate_input() -> None:
         sysid.chirp(1, 0.01, 0.1, 10)
     with pytest.raises(DataError, match="dt must be a positive number"):
         sysid.chirp(100, -0.01, 0.1, 10)
+
+
+def test_covariance_order_never_falls_as_max_order_grows():
+    # the lag covariance of n lags was formed from N - max_order + 1 columns for every n:
+    # white noise of 100 samples gave 50 at max_order=50 and 1 at max_order=100
+    u = np.random.default_rng(0).standard_normal(100)
+    got = [sysid.persistent_excitation_order(u, mo, method="covariance")
+           for mo in (10, 30, 50, 60, 100)]
+    assert got == sorted(got) and got[0] == 10 and got[-1] == 50

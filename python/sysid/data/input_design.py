@@ -493,6 +493,11 @@ def _covariance_order(us: list[np.ndarray], mo: int, tol: float) -> int:
     """MATLAB ``pexcit``'s rule: rank of the stacked-lag covariance (see above)."""
     m = us[0].shape[1]
     mo = min(mo, max(x.shape[0] for x in us))
+    # the lag covariance of n m rows needs at least n m lag columns, else it is singular by
+    # construction: a larger max_order would lower the answer (white noise of 100 samples:
+    # max_order 50 -> 50, 100 -> 1); the record shows at most that order
+    while mo > 1 and sum(max(x.shape[0] - mo + 1, 0) for x in us) < mo * m:
+        mo -= 1
     G, cols = _lag_gram(us, mo)
     if cols == 0:
         raise DataError(f"every experiment is shorter than max_order = {mo}")
