@@ -152,3 +152,17 @@ def test_forecast_of_a_trended_model_continues_the_line():
     np.testing.assert_allclose(f.mean, ref.mean + tr.y_offset + tr.y_slope * s, atol=1e-9)
     np.testing.assert_allclose(f.std, ref.std, atol=1e-12)
     np.testing.assert_allclose(f.mean, val.y[300:305], atol=0.3)   # raw units, near 400
+
+
+def test_restore_of_model_outputs_takes_the_records_start():
+    # a model's simulation of the second half of a drifting record, restored, came back off
+    # by the drift over the first half (restore added the trend from t = 0)
+    n, dt = 400, 0.5
+    t = np.arange(n) * dt
+    u = np.random.default_rng(0).standard_normal(n)
+    est, val = sysid.IOData(u, 5.0 + 0.1 * t, dt).split(0.5)
+    _, tr = sysid.detrend(est, "linear", return_trend=True)
+    zero = sysid.StateSpaceModel([[0.0]], [[0.0]], [[0.0]], dt=dt)
+    sim = zero.simulate(tr.apply(val).u)
+    np.testing.assert_allclose(tr.restore(sim, t0=val.time[0]), val.y, atol=1e-9)
+    np.testing.assert_allclose(tr.restore(zero.simulate(est.u)), est.y, atol=1e-9)

@@ -197,9 +197,13 @@ class Trend:
         raise DataError("this record is scaled differently from the one the trend was fitted "
                         "on; apply the trend to the unscaled record")
 
-    def restore(self, x: Any) -> Any:
+    def restore(self, x: Any, t0: float | None = None) -> Any:
         """Add this trend back: to a record (:class:`~sysid.IOData`, like ``retrend``) or to
-        model outputs (an array ``(n, n_outputs)``, from ``t = 0``).
+        model outputs (an array ``(n, n_outputs)``). An array has no clock: its first sample
+        is at ``t0`` on the estimation record's clock (a validation record's ``time[0]``, as
+        :meth:`apply` takes it), by default where the trend starts; without it a model's
+        simulation of the second half of a drifting record came back off by the drift over
+        the first half.
 
         Examples
         --------
@@ -211,7 +215,7 @@ class Trend:
         """
         if hasattr(x, "experiments"):
             return x.retrend()
-        return self.restore_outputs(x)
+        return self.restore_outputs(x, start=0.0 if t0 is None else self.start_of(t0))
 
     def attach(self, model: Any) -> Any:
         """``model`` (fitted on the detrended record) wrapped to take and return raw data:
