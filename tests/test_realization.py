@@ -334,7 +334,7 @@ def test_okid_mimo_noise_free_is_exact_and_pools_experiments() -> None:
     assert est.markov.shape == (40, 3, 2)
     assert est.info["observer_markov"].shape == (4, 3, 5)
     np.testing.assert_allclose(est.markov, true.markov(40), atol=1e-8)
-    assert sysid.okid(both, observer_order=4).markov.shape[0] == 17
+    assert sysid.okid(both, observer_order=4, feedthrough=True).markov.shape[0] == 17
 
 
 def test_markov_estimators_reject_bad_input() -> None:
@@ -439,7 +439,10 @@ def test_okid_feedthrough_flag_and_default_count() -> None:
     with_d = sysid.okid(data, observer_order=4, feedthrough=True)
     assert with_d.markov.shape[0] == 17
     np.testing.assert_allclose(with_d.markov[0], true.D, atol=1e-9)
-    strictly = sysid.okid(data, observer_order=4)  # the default: no feedthrough
+    # the default: no feedthrough, and now a warning that the record shows one (the
+    # Markov parameters were biased without a word)
+    with pytest.warns(sysid.FeedthroughWarning, match="shows a direct term"):
+        strictly = sysid.okid(data, observer_order=4)
     assert np.all(strictly.markov[0] == 0)
     assert not np.allclose(strictly.markov[1:5], true.markov(5)[1:], atol=1e-3)  # D is missed
 

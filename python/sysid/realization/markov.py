@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import check_elements, require_inputs_vary
+from .._checks import check_elements, require_inputs_vary, user_stacklevel
 from ..data.iodata import IOData
 from ..errors import DataError, ExcitationError, NonFiniteError, ShapeError, SysidWarning
 from .realize import MarkovEstimate, _count
@@ -241,7 +241,10 @@ def okid(data: IOData, observer_order: int, count: int | None = None, *,
     # the recursion keeps about 3 (l, m + l) and one (l, m) blocks per Markov parameter
     check_elements(c * (3 * l * (m + l) + l * m), f"count = {c}",
                    "pass a count of the order of the response's length in samples")
-    out = _sysid.okid(exps, p, c, _feedthrough(data, feedthrough))
+    ft = _feedthrough(data, feedthrough)
+    out = _sysid.okid(exps, p, c, ft)
+    if feedthrough is False:  # the default: said when the record shows a direct term
+        _warn_direct_term(exps, out, _sysid.okid(exps, p, 1, True), l, m)
     h = np.asarray(out["markov"]).reshape(-1, l, m)
     info = {
         "observer_markov": np.asarray(out["observer_markov"]).reshape(-1, l, m + l),
@@ -251,6 +254,38 @@ def okid(data: IOData, observer_order: int, count: int | None = None, *,
     }
     return MarkovEstimate(h, dt, "okid", info, input_names=data.input_names,
                           output_names=data.output_names)
+
+
+#: how many standard deviations (and how large a share of the largest Markov parameter) the
+#: estimated direct term must reach for :func:`okid` to say it left one out
+DIRECT_TERM_SIGMAS, DIRECT_TERM_SHARE = 10.0, 0.05
+
+
+def _warn_direct_term(exps: list[tuple[np.ndarray, np.ndarray]], without: dict[str, Any],
+                      with_d: dict[str, Any], l: int, m: int) -> None:
+    """A :class:`~sysid.FeedthroughWarning` when the regression's own estimate of ``D`` (the
+    observer regression holds ``u(t)`` either way) is far from zero: more than
+    ``DIRECT_TERM_SIGMAS`` rough standard deviations (residual std over ``sqrt(N var u)``)
+    and ``DIRECT_TERM_SHARE`` of the largest Markov parameter. Acceleration records have a
+    direct term, and ``D = 0`` then bends every Markov parameter (a 3-mass structure's ERA
+    model came back unstable at the wrong frequency)."""
+    from ..errors import FeedthroughWarning
+
+    d = np.asarray(with_d["markov"]).reshape(-1, l, m)[0]
+    h = np.asarray(without["markov"]).reshape(-1, l, m)
+    lam = np.clip(np.diag(np.atleast_2d(with_d["residual_cov"])), 0.0, None)
+    u = np.vstack([x for x, _ in exps])
+    su = np.sqrt(u.shape[0] * np.maximum(u.var(axis=0), 1e-300))
+    sd = np.sqrt(lam)[:, None] / su[None, :]
+    big = (np.abs(d) > DIRECT_TERM_SIGMAS * sd) & (np.abs(d) > DIRECT_TERM_SHARE
+                                                   * max(float(np.abs(h).max()), 1e-300))
+    if np.any(big):
+        warnings.warn(FeedthroughWarning(
+            f"the record shows a direct term (D estimated at up to "
+            f"{float(np.abs(d[big]).max()):.3g}, against Markov parameters up to "
+            f"{float(np.abs(h).max()):.3g}): with D = 0 every Markov parameter is biased; pass "
+            "feedthrough=True (acceleration sensors have one) or feedthrough='auto'"),
+            stacklevel=user_stacklevel())
 
 
 def impulse_from_frf(frf: Any, n_fft: int | None = None, *, dt: float | None = None,
