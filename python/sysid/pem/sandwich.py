@@ -41,8 +41,7 @@ from ..models.paramtable import Z95, ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 
 __all__ = ["DeferredSandwich", "DeferredTable", "coloured_error_covariance", "defer_sandwich",
-           "gauss_newton",
-           "sandwich_covariance"]
+           "gauss_newton", "sandwich_covariance"]
 
 #: the Jacobian over the record holds samples x outputs x directions numbers: beyond this the
 #: correction is not formed (``info["pem"]["covariance"]`` says so)
