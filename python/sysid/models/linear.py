@@ -225,7 +225,6 @@ def reachable_basis(A: np.ndarray, B: np.ndarray, tol: float) -> np.ndarray:
     B = B / d[:, None]
     A = A / max(float(np.linalg.norm(A)), 1e-300)
     B = B / float(np.linalg.norm(B))
-    scale = 1.0
     basis = np.zeros((n, 0))
     block = B
     for _ in range(n):
@@ -234,7 +233,7 @@ def reachable_basis(A: np.ndarray, B: np.ndarray, tol: float) -> np.ndarray:
         if block.size == 0:
             break
         U, s, _ = np.linalg.svd(block, full_matrices=False)
-        r = int(np.sum(s > tol * scale))
+        r = int(np.sum(s > tol))
         if r == 0:
             break
         basis = np.hstack([basis, U[:, :r]])

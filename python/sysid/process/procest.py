@@ -191,9 +191,8 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
                                         min(bounds.get("Td", (0.0, dmax))[1], dmax))
                                     if k == "Td" else t.default_bounds(k)) for k in t.names})
     if t.delay and "Td" not in fixed and not ("Td" in bounds and bounds["Td"][1] <= dmax):
-        warn_delay_at_bound(np.array([[v.get("Td", 0.0) for v in row] for row in values]),
-                            np.ones((l, m), bool), dmax, max_delay is not None,
-                            [f"{o}<-{i}" for o in data.output_names for i in data.input_names])
+        warn_delay_at_bound(np.array([[v["Td"] for v in row] for row in values]), dmax,
+                            max_delay is not None, data)
     coloured_uncertainty(model, data, [c.shape[0] for c in covs], hold, initial_state, limits)
     if initial_state == "zero":  # the fit of a simulation from rest, as the model was fitted
         fit_percent(model, data)

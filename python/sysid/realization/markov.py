@@ -263,10 +263,11 @@ DIRECT_TERM_SIGMAS, DIRECT_TERM_SHARE = 10.0, 0.05
 
 def _warn_direct_term(exps: list[tuple[np.ndarray, np.ndarray]], without: dict[str, Any],
                       with_d: dict[str, Any], l: int, m: int) -> None:
-    """A :class:`~sysid.FeedthroughWarning` when the regression's own estimate of ``D`` (the
-    observer regression holds ``u(t)`` either way) is far from zero: more than
-    ``DIRECT_TERM_SIGMAS`` rough standard deviations (residual std over ``sqrt(N var u)``)
-    and ``DIRECT_TERM_SHARE`` of the largest Markov parameter. Acceleration records have a
+    """A :class:`~sysid.FeedthroughWarning` when the observer regression run with ``u(t)``
+    (``with_d``, a second pass over the record) estimates ``D`` far from zero: more than
+    ``DIRECT_TERM_SIGMAS`` rough standard deviations (residual std over ``sqrt(N var u)``,
+    as if ``u(t)`` were uncorrelated with the past) and ``DIRECT_TERM_SHARE`` of the
+    largest Markov parameter of the fit without it (``without``). Acceleration records have a
     direct term, and ``D = 0`` then bends every Markov parameter (a 3-mass structure's ERA
     model came back unstable at the wrong frequency)."""
     from ..errors import FeedthroughWarning

@@ -261,23 +261,21 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
                          info=info)
     _attach(G, tables, covs, auto)
     if auto:
-        warn_delay_at_bound(est_delays, np.ones((l, m), bool), dmax, max_delay is not None,
-                            [f"{o}<-{i}" for o in data.output_names for i in data.input_names])
+        warn_delay_at_bound(est_delays, dmax, max_delay is not None, data)
     coloured_uncertainty(G, data, [len(nm) for nm, _ in tables], hold, initial_state)
     if initial_state == "zero":  # the fit of a simulation from rest, as the model was fitted
         fit_percent(G, data)
     return G
 
 
-def warn_delay_at_bound(delays: np.ndarray, free: np.ndarray, dmax: float, given: bool,
-                        names: list[str]) -> None:
-    """A :class:`~sysid.DelayWarning` when an estimated dead time ended on the search's upper
-    bound ``dmax`` (``given``: the user's ``max_delay``, else a tenth of the record): the
-    fit may improve beyond it. ``delays``/``free``: per pair, ``names`` the pairs."""
+def warn_delay_at_bound(delays: np.ndarray, dmax: float, given: bool, data: Any) -> None:
+    """A :class:`~sysid.DelayWarning` when an estimated dead time (``delays``, outputs x
+    inputs of ``data``) ended on the search's upper bound ``dmax`` (``given``: the user's
+    ``max_delay``, else a tenth of the record): the fit may improve beyond it."""
     from ..polynomial.delayest import DelayWarning
 
-    at = [n for n, d, f in zip(names, np.ravel(delays), np.ravel(free))
-          if f and d >= dmax * (1 - 1e-9)]
+    names = [f"{o}<-{i}" for o in data.output_names for i in data.input_names]
+    at = [n for n, d in zip(names, np.ravel(delays)) if d >= dmax * (1 - 1e-9)]
     if at:
         bound = "max_delay" if given else "the default max_delay (a tenth of the record)"
         warnings.warn(f"the dead time of {', '.join(at)} ended on {bound}, {dmax:g} s: the "
