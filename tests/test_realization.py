@@ -549,6 +549,30 @@ def test_the_automatic_order_counts_the_singular_values_above_the_noise_floor() 
     assert max(orders[1e-2]) <= 12, orders[1e-2]
 
 
+def test_the_automatic_order_does_not_grow_with_the_count_of_mimo_markov_parameters() -> None:
+    """2 x 2 and 3 x 2 Markov parameters of three-mode systems with 0.1 % noise: the count
+    above the median-based floor grew with the record (orders 8-66 from 400 parameters,
+    12-187 from 1000: block-Hankel noise is not independent from entry to entry, and its top
+    singular values spread past the floor). Now the order is 6 on most, 8 on a few (a weak
+    mode's pair split), and it does not grow with the count."""
+    for l, m in ((2, 2), (3, 2)):
+        for count in (121, 400, 1000):
+            got = []
+            for seed in range(4):
+                r = np.random.default_rng(seed + 1000 * l + 100 * m)
+                t = _three_modes(seed)
+                t = sysid.StateSpaceModel(t.A, r.standard_normal((6, m)),
+                                          r.standard_normal((l, 6)), np.zeros((l, m)))
+                h = t.markov(count)
+                noisy = h + 1e-3 * np.abs(h).max() * r.standard_normal(h.shape)
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", sysid.StabilityWarning)
+                    e, k = sysid.era(noisy), sysid.kung(noisy)
+                assert e.order == k.nstates
+                got.append(e.order)
+            assert got.count(6) >= 2 and max(got) <= 8, (l, m, count, got)
+
+
 def test_era_of_a_defective_realisation_returns_the_model_and_says_why_no_modes():
     """era(impulse_response(data)) on the DaISy steam generator raised "A is defective ...
     modal quantities are not defined" at its automatic order: the model was realised, only
