@@ -147,7 +147,7 @@ def test_sample_time_arguments_are_checked():
         sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]], hold="tustin")
     with pytest.raises(sysid.NumericalError, match="negative real axis"):
         sysid.d2c(sysid.StateSpaceModel([[-0.5]], [[1.0]], [[1.0]]), "foh")
-    with pytest.raises(sysid.NumericalError, match="at zero"):
+    with pytest.raises(sysid.NumericalError, match="pole at z = 0"):
         sysid.d2c(sysid.StateSpaceModel([[0.0]], [[1.0]], [[1.0]]))
 
 
@@ -178,3 +178,28 @@ def test_compare_uses_the_continuous_state_and_rest():
     np.testing.assert_allclose(r.fit, 100.0, atol=1e-8)
     assert sysid.compare(sys, moved, x0="zero").fit[0, 0] < 99
     assert "SampledContinuous" in r.summary() and r.dt == 0.1
+
+
+@pytest.mark.parametrize("method", ["zoh", "foh", "tustin"])
+def test_d2c_of_a_transfer_function_with_delays_keeps_them_as_seconds(method):
+    # d2c of a discrete transfer function with a delay realised the delay as poles at z = 0
+    # and raised "a pole at z = 0 at zero ... use method='tustin'" (which turns each delay
+    # sample into a pole at -2/dt); as MATLAB's d2c the delay is kept: k samples, k dt s
+    G = sysid.TransferFunction([[[0.2, 0.1], [0.5]], [[0.3], [1.0, -0.5]]],
+                               [[[1.0, -1.2, 0.5], [1.0, -0.8]], [[1.0, -0.6], [1.0, -0.1]]],
+                               dt=0.1, iodelay=[[2, 0], [1, 3]])
+    c = sysid.d2c(G, method)
+    assert isinstance(c, sysid.TransferFunction) and c.dt == 0.0
+    np.testing.assert_allclose(c.iodelay, [[0.2, 0.0], [0.1, 0.3]])
+    back = c.to_statespace(0.1) if method != "tustin" else None
+    w = np.linspace(0.1, 30.0, 25)
+    if back is not None:  # sampled again with the same hold: the discrete model itself
+        np.testing.assert_allclose(back.freqresp(w), G.freqresp(w), atol=1e-10)
+    for i, j in G.pairs():  # each pair's delay-free part as d2c of it alone
+        part = sysid.TransferFunction(G.num[i][j], G.den[i][j], dt=0.1)
+        ref = sysid.d2c(part, method).freqresp(w)[:, 0, 0] * np.exp(-1j * w * c.iodelay[i, j])
+        np.testing.assert_allclose(c.freqresp(w)[:, i, j], ref, rtol=1e-9, atol=1e-12)
+    # a pole at z = 0 that is not a declared delay says what it is and the way out
+    with pytest.raises(sysid.NumericalError, match="iodelay"):
+        sysid.d2c(sysid.StateSpaceModel([[0.0, 0.0], [1.0, 0.9]], [[1.0], [0.0]],
+                                        [[0.0, 1.0]], dt=0.1))

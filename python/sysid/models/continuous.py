@@ -564,11 +564,17 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh", *,
 def _real_log(M: np.ndarray, p: np.ndarray, method: str) -> np.ndarray:
     bad = negative_real(p) | (np.abs(p) <= 1e-12)
     if bad.any():
-        where = "at zero" if abs(p[bad][0]) <= 1e-12 else "on the negative real axis"
-        other = "'tustin'" if method == "zoh" or where == "at zero" else "'zoh' or 'tustin'"
+        if abs(p[bad][0]) <= 1e-12:
+            raise NumericalError(
+                f"the model has a pole at z = 0, which has no {method.upper()} continuous "
+                "equivalent (no logarithm); if it is a delay realised as a state, give the "
+                "delay as the model's iodelay instead (sysid.TransferFunction(num, den, dt=dt, "
+                "iodelay=k)), which d2c keeps as k dt seconds; method='tustin' maps it to a "
+                "pole at s = -2/dt, an approximation")
+        other = "'tustin'" if method == "zoh" else "'zoh' or 'tustin'"
         raise NumericalError(
-            f"the model has a pole at z = {p[bad][0].real:g} {where}: it has no "
-            f"{method.upper()} continuous equivalent; use method={other}"
+            f"the model has a pole at z = {p[bad][0].real:g} on the negative real axis: it "
+            f"has no {method.upper()} continuous equivalent; use method={other}"
         )
     L = np.real_if_close(scipy.linalg.logm(M), tol=1e6)
     if np.iscomplexobj(L):
@@ -589,7 +595,9 @@ def d2c(model: StateSpaceModel, method: str = "zoh", *,
     with ``prewarp`` it inverts the prewarped transform. ``matched`` (one input and one
     output) maps poles and zeros by ``log(z) / dt`` and keeps the DC gain. The noise model
     (``K``) is not converted; the parameter uncertainty is (the same parameters, through the
-    conversion).
+    conversion). A discrete transfer function with delays of ``k`` samples gives a continuous
+    :class:`~sysid.TransferFunction` with delays of ``k dt`` seconds (as MATLAB's ``d2c``;
+    realised as states, a delay is a pole at ``z = 0``, which has no continuous equivalent).
 
     Parameters
     ----------
@@ -603,7 +611,8 @@ def d2c(model: StateSpaceModel, method: str = "zoh", *,
     Returns
     -------
     ContinuousStateSpace
-        With ``hold="foh"`` after ``method="foh"``, ``"zoh"`` otherwise.
+        With ``hold="foh"`` after ``method="foh"``, ``"zoh"`` otherwise (a TransferFunction
+        for a transfer function with delays).
 
     Examples
     --------
@@ -611,8 +620,25 @@ def d2c(model: StateSpaceModel, method: str = "zoh", *,
     >>> c = sysid.d2c(sysid.StateSpaceModel([[np.exp(-0.1)]], [[1.0]], [[1.0]], dt=0.1))
     >>> bool(np.isclose(c.A[0, 0], -1.0))
     True
+    >>> g = sysid.d2c(sysid.TransferFunction([0.1], [1.0, -0.9], dt=0.1, iodelay=2))
+    >>> g.iodelay.tolist(), bool(np.isclose(g.poles()[0], np.log(0.9) / 0.1))
+    ([[0.2]], True)
     """
+    delayed = getattr(model, "_continuous_with_delays", None)
+    if delayed is not None and float(getattr(model, "dt", 0.0) or 0.0) > 0 and np.any(
+            np.asarray(getattr(model, "iodelay", 0.0)) > 0):
+        out = delayed(_method(method, _D2C_METHODS), prewarp)
+        unc = getattr(model, "uncertainty", None)
+        if unc is not None:  # the same parameters, seen through the conversion
+            out.uncertainty = unc.through(lambda m: _without_uncertainty(m)
+                                          ._continuous_with_delays(method, prewarp))
+        return out
     return _d2c(model, method, prewarp, quiet=False)
+
+
+def _without_uncertainty(m: Any) -> Any:
+    m.uncertainty = None
+    return m
 
 
 def _d2c(model: StateSpaceModel, method: str, prewarp: float | None, quiet: bool

@@ -304,6 +304,26 @@ class TransferFunction(ModelMixin):
         return StateSpaceModel(A, B, C, D, dt=float(dt), input_names=self.input_names,
                                output_names=self.output_names, info=self.info)
 
+    def _continuous_with_delays(self, method: str, prewarp: float | None) -> TransferFunction:
+        """:func:`sysid.d2c` of a discrete model with delays (as MATLAB's ``d2c``): each
+        pair's delay-free part converted, its delay of ``k`` samples kept as ``k dt``
+        seconds (a continuous state-space model could not hold it; realised as states, the
+        delay would be poles at ``z = 0``, which have no continuous equivalent)."""
+        from ..models.continuous import d2c
+        from .conversion import ss2tf
+
+        nums = [[np.zeros(1)] * self.ninputs for _ in range(self.noutputs)]
+        dens = [[np.ones(1)] * self.ninputs for _ in range(self.noutputs)]
+        for i, j in self.pairs():
+            part = TransferFunction(self.num[i][j], self.den[i][j], dt=self.dt)
+            g = ss2tf(d2c(part, method, prewarp=prewarp))
+            nums[i][j], dens[i][j] = g.num[0][0], g.den[0][0]
+        return TransferFunction(nums, dens, iodelay=self.iodelay * self.dt,
+                                hold="foh" if method == "foh" else "zoh",
+                                input_names=self.input_names, output_names=self.output_names,
+                                info={"method": f"d2c ({method})",
+                                      "from": self.info.get("method", "TransferFunction")})
+
     def _stack(self, blocks: list[tuple[np.ndarray, ...]]
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Block-diagonal realisation of per-pair blocks ``(A, B(n, m), C(1, n), D(1, m))``
