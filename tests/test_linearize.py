@@ -102,3 +102,20 @@ def test_bad_order_is_refused():
         sysid.linearize(m, 0.0, order=-1)
     with pytest.raises(DataError, match="max_samples"):
         sysid.linearize(m, 0.0, max_samples=10)
+
+
+def test_continuous_linear_models_are_their_own_linearisation():
+    # findop/linearize of a TransferFunction or ContinuousStateSpace raised "a continuous-time
+    # model needs the sample time of the data: pass dt", which neither function takes
+    g = sysid.TransferFunction([2.0], [1.0, 3.0, 2.0], iodelay=0.2)
+    c = sysid.ContinuousStateSpace([[-1.0, 0.5], [0.0, -2.0]], [[1.0], [1.0]], [[1.0, 1.0]])
+    p = sysid.ProcessModel("P1D", Kp=2.0, Tp1=1.0, Td=0.2)
+    for m in (g, c, p):
+        op = sysid.findop(m, 3.0)
+        np.testing.assert_allclose(op.y0, 3.0 * np.asarray(m.dcgain()).ravel(), rtol=1e-12)
+        lin = sysid.linearize(m, 3.0)
+        assert lin is not m and lin.info["operating_point"].samples == 0
+        w = np.array([0.1, 1.0, 5.0])
+        np.testing.assert_allclose(lin.freqresp(w), m.freqresp(w), rtol=1e-12)
+    with pytest.raises(sysid.NumericalError, match="integrates its input"):
+        sysid.findop(sysid.TransferFunction([1.0], [1.0, 0.0]), 1.0)

@@ -79,6 +79,33 @@ def _simulate(model: Any, u: np.ndarray) -> np.ndarray:
     return y.reshape(u.shape[0], -1)
 
 
+def _continuous(model: Any) -> bool:
+    """A continuous-time model (``dt == 0``): its simulation needs a sample time, and a linear
+    one has its steady point in closed form."""
+    dt = getattr(model, "dt", None)
+    return dt is not None and float(dt) == 0.0
+
+
+def _continuous_op(model: Any, u: np.ndarray) -> OperatingPoint:
+    """The steady output of a continuous linear model, ``dcgain() u0``."""
+    if not hasattr(model, "dcgain"):
+        raise DataError(
+            f"this continuous-time {type(model).__name__} has no closed-form steady state and "
+            "its simulation needs a sample time: sample it first (for example "
+            "model.sampled(dt) or sysid.c2d(model, dt)) and pass the sampled model")
+    try:
+        g = np.asarray(model.dcgain(), dtype=float).reshape(-1, u.size)
+    except NumericalError as e:
+        raise NumericalError(f"no steady operating point: {e}") from None
+    if not np.all(np.isfinite(g)):
+        raise NumericalError("no steady operating point: the model integrates its input (an "
+                             "infinite DC gain), so its output does not settle")
+    if hasattr(model, "is_stable") and not model.is_stable():
+        raise NumericalError("no steady operating point: the model is unstable, so its output "
+                             "does not settle with the input held")
+    return OperatingPoint(u, g @ u, 0)
+
+
 def _settled(y: np.ndarray) -> bool:
     tail = y[-max(2, y.shape[0] // 4):]
     size = max(1.0, float(np.max(np.abs(tail))))
@@ -92,6 +119,7 @@ def findop(model: Any, u0: Any = None, *, max_samples: int = 1_000_000) -> Opera
     Parameters
     ----------
     model : any sysid model with ``simulate(u)`` and ``ninputs``
+        A continuous-time linear model's steady output is ``dcgain() u0`` (``samples`` 0).
     u0 : float or array_like, optional
         The held input, one value per input (or one for all); default zero.
     max_samples : int
@@ -108,6 +136,8 @@ def findop(model: Any, u0: Any = None, *, max_samples: int = 1_000_000) -> Opera
     array([10.])
     """
     u = _inputs(model, u0)
+    if _continuous(model):
+        return _continuous_op(model, u)
     n = FIRST_RUN
     while True:
         try:
@@ -149,7 +179,9 @@ def linearize(model: Any, u0: Any = None, *, order: int | None = None,
     StateSpaceModel
         Deviations ``u - u0`` to ``y - y0`` (``info["operating_point"]``; MATLAB's
         ``linearize``). A NARX model's own ``linearize()`` is its first-order terms about
-        zero; this is the linearisation at the operating point.
+        zero; this is the linearisation at the operating point. A continuous-time linear
+        model (``ContinuousStateSpace``, ``TransferFunction``, ``ProcessModel``) is returned
+        as itself (a copy), its operating point from its DC gain.
 
     Examples
     --------
@@ -165,6 +197,13 @@ def linearize(model: Any, u0: Any = None, *, order: int | None = None,
         order = as_int(order, "order", 0)
     max_samples = as_int(max_samples, "max_samples", FIRST_RUN)
     op = findop(model, u0, max_samples=max_samples)
+    if _continuous(model):  # a linear model is its own linearisation (MATLAB's linearize)
+        import copy
+
+        lin = copy.deepcopy(model)
+        lin.info = {**dict(getattr(model, "info", {}) or {}), "method": "linearize",
+                    "operating_point": op}
+        return lin
     u, m = op.u0, op.u0.size
     h = np.full(m, 1e-5) * np.maximum(1.0, np.abs(u)) if step is None else \
         np.full(m, float(step))

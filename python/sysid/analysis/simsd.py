@@ -140,6 +140,26 @@ def _noise_std(model: Any, L: np.ndarray, n_samples: int) -> np.ndarray:
     return np.sqrt(var)
 
 
+def _sample_time(model: Any, dt: Any, record_dt: Any) -> float:
+    """The sample time of the simulation: the model's (discrete), else ``dt`` or the
+    record's (continuous), which must agree when both are given."""
+    own = float(getattr(model, "dt", 1.0) or 0.0)
+    given = None if dt is None else float(dt)
+    if given is not None and not (np.isfinite(given) and given > 0):
+        raise DataError(f"dt must be a positive sample time in seconds, got {dt!r}")
+    if own > 0:
+        return own
+    if given is not None and record_dt is not None and abs(given - float(record_dt)) > 1e-12 * \
+            given:
+        raise DataError(f"dt = {given:g} s disagrees with the record's dt = "
+                        f"{float(record_dt):g} s; pass one of them")
+    step = given if given is not None else record_dt
+    if step is None:
+        raise DataError("this continuous-time model needs the sample time of u: pass dt= (or "
+                        "u as an IOData, whose dt is used)")
+    return float(step)
+
+
 def simsd(
     model: Any,
     u: Any,
@@ -149,6 +169,7 @@ def simsd(
     x0: Any = None,
     noise: bool = False,
     seed: Any = None,
+    dt: float | None = None,
 ) -> SimulationSpread:
     """Simulate a model with its uncertainty (MATLAB's ``simsd``).
 
@@ -172,6 +193,9 @@ def simsd(
         Add a realisation of the model's noise to each drawn response, and its stationary
         variance to ``std`` (MATLAB's ``AddNoise``).
     seed : int or numpy.random.Generator, optional
+    dt : float, optional
+        Sample time of ``u`` for a continuous-time model (``tfest``, ``procest``, ``greyest``
+        in continuous time); taken from ``u`` when it is an :class:`~sysid.IOData`.
 
     Returns
     -------
@@ -195,7 +219,9 @@ def simsd(
     if method not in _METHODS:
         raise DataError(f"method must be 'linear' or 'monte-carlo', got {method!r}")
     unc = require(model)
-    uu = real_array(u.u if hasattr(u, "u") and hasattr(u, "y") else u, "u")
+    record = hasattr(u, "u") and hasattr(u, "y")
+    step = _sample_time(model, dt, getattr(u, "dt", None) if record else None)
+    uu = real_array(u.u if record else u, "u")
     if uu.ndim == 1:
         uu = uu[:, None]
     if uu.ndim != 2 or uu.shape[1] != model.ninputs:
@@ -211,8 +237,11 @@ def simsd(
     rng = np.random.default_rng(seed)
 
     def sim(m: Any) -> np.ndarray:
-        out = m.simulate(uu, x0=x0) if x0 is not None else m.simulate(uu)
+        kw = {} if x0 is None else {"x0": x0}
+        out = m.simulate(uu, dt=step, **kw) if continuous else m.simulate(uu, **kw)
         return np.asarray(out, dtype=float).reshape(N, ny)
+
+    continuous = float(getattr(model, "dt", 1.0) or 0.0) == 0.0
 
     y = sim(model)
     draws = unc.sample(n, rng) if n else []
@@ -230,6 +259,6 @@ def simsd(
         for k, m in enumerate(draws):
             samples[k] += _noise_path(m, rng.standard_normal((N, ny)) @ L.T)
         var = var + _noise_std(model, L, N) ** 2
-    t = np.arange(N) * float(getattr(model, "dt", 1.0) or 1.0)
+    t = np.arange(N) * step
     return SimulationSpread(t, y, np.sqrt(var), samples, method, bool(noise),
                             list(model.output_names))
