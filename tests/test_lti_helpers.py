@@ -220,3 +220,18 @@ def test_the_notebook_pole_table_agrees_with_damp_at_s_0():
     m = sysid.TransferFunction([1.0], [1.0, 1.0, 0.0])
     rows = sorted(pole_rows(m.poles(), 0.0), key=lambda r: abs(r[0]))
     np.testing.assert_allclose([r[3] for r in rows], sorted(sysid.damp(m).zeta))
+
+
+@pytest.mark.parametrize("gain", [0.05, 0.5, 1.5, 3.0])
+def test_nyquist_counts_a_discrete_loop_with_an_integrator(gain):
+    # a discrete PI loop, L = k (z - 0.5) / ((z - 1)(z - 0.8)) at dt = 0.1: nyquist refused
+    # it ("needs a continuous sysid.TransferFunction (convert it first)") since the pole at
+    # z = 1 lies on the unit circle; the contour now passes it outside. Oracle: the roots of
+    # the closed loop's characteristic polynomial
+    num, den = gain * np.array([1.0, -0.5]), np.polymul([1.0, -1.0], [1.0, -0.8])
+    L = sysid.TransferFunction(num, den, dt=0.1)
+    unstable = int(np.sum(np.abs(np.roots(np.polyadd(den, num))) > 1 + 1e-9))
+    for sys in (L, L.to_statespace()):
+        r = sysid.nyquist(sys)
+        assert r.open_loop_unstable == 0
+        assert r.closed_loop_unstable == unstable, (gain, r, unstable)

@@ -5,8 +5,9 @@ conjugate of the positive one); the number of clockwise encirclements of ``-1`` 
 number of ``1 + L`` around the origin, from the unwrapped phase along the closed curve. By
 Nyquist's criterion the closed loop ``L / (1 + L)`` has ``Z = N + P`` unstable poles, ``P``
 the unstable open-loop poles (MATLAB's ``nyquist``; python-control's ``nyquist_response``).
-Open-loop poles on the imaginary axis (continuous transfer functions) are passed on their
-right: the contour is shifted to ``Re s = 1e-3 omega_min``.
+Open-loop poles on the imaginary axis are passed on their right: the contour is shifted to
+``Re s = 1e-3 omega_min`` (for a discrete loop, poles on the unit circle such as an
+integrator's ``z = 1`` are passed outside, on the circle of radius ``e^(1e-3 omega_min dt)``).
 """
 
 from __future__ import annotations
@@ -135,12 +136,17 @@ def nyquist(sys: Any, *, omega: Any = None, n_points: int = 20000) -> NyquistRes
 
 
 def _curve(sys: Any, w: np.ndarray, dt: float, eps: float) -> np.ndarray:
-    """``L`` on the contour, shifted by ``eps`` to the right of poles on the axis."""
+    """``L`` on the contour, shifted by ``eps`` to the right of poles on the axis (outside
+    poles on the unit circle: ``z = e^((eps + j omega) dt)``)."""
     from ..tf.model import TransferFunction
 
-    if not isinstance(sys, TransferFunction) or dt > 0:
-        raise DataError("nyquist of a model with poles on the stability boundary needs a "
-                        "continuous sysid.TransferFunction (convert it first)")
+    if not isinstance(sys, TransferFunction):
+        from ..tf.conversion import ss2tf
+
+        sys = ss2tf(sys)  # the curve off the axis needs L at complex frequencies
     s = eps + 1j * w
     num, den = sys.num[0][0], sys.den[0][0]
+    if dt > 0:
+        z = np.exp(s * dt)
+        return np.polyval(num, z) / np.polyval(den, z) * z ** (-sys.iodelay[0, 0])
     return np.polyval(num, s) / np.polyval(den, s) * np.exp(-s * sys.iodelay[0, 0])
