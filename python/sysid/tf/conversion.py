@@ -25,27 +25,9 @@ from typing import Any
 import numpy as np
 
 from ..errors import DataError
-from .model import TransferFunction
+from .model import TransferFunction, statespace_polynomials
 
 __all__ = ["ss2tf"]
-
-
-def _pairs(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray
-           ) -> tuple[list[list[np.ndarray]], list[list[np.ndarray]]]:
-    den = np.real(np.poly(A)) if A.size else np.ones(1)
-    nums, dens = [], []
-    for i in range(C.shape[0]):
-        rn, rd = [], []
-        for j in range(B.shape[1]):
-            if A.size:
-                num = np.real(np.poly(A - np.outer(B[:, j], C[i]))) - den + D[i, j] * den
-            else:
-                num = np.array([D[i, j]])
-            rn.append(num)
-            rd.append(den.copy())
-        nums.append(rn)
-        dens.append(rd)
-    return nums, dens
 
 
 def ss2tf(model: Any) -> TransferFunction:
@@ -85,7 +67,7 @@ def ss2tf(model: Any) -> TransferFunction:
     A, B, C, D = (np.asarray(x, dtype=float) for x in (ss.A, ss.B, ss.C, ss.D))
     if not all(np.all(np.isfinite(x)) for x in (A, B, C, D)):
         raise DataError("the model has non-finite matrices: no transfer function")
-    nums, dens = _pairs(A, B, C, D)
+    nums, dens = statespace_polynomials(A, B, C, D)
     continuous = isinstance(ss, ContinuousStateSpace)
     G = TransferFunction(nums, dens, dt=0.0 if continuous else float(ss.dt),
                          hold=getattr(ss, "hold", "zoh"), input_names=ss.input_names,

@@ -310,14 +310,14 @@ class TransferFunction(ModelMixin):
         seconds (a continuous state-space model could not hold it; realised as states, the
         delay would be poles at ``z = 0``, which have no continuous equivalent)."""
         from ..models.continuous import d2c
-        from .conversion import ss2tf
 
         nums = [[np.zeros(1)] * self.ninputs for _ in range(self.noutputs)]
         dens = [[np.ones(1)] * self.ninputs for _ in range(self.noutputs)]
         for i, j in self.pairs():
-            part = TransferFunction(self.num[i][j], self.den[i][j], dt=self.dt)
-            g = ss2tf(d2c(part, method, prewarp=prewarp))
-            nums[i][j], dens[i][j] = g.num[0][0], g.den[0][0]
+            c = d2c(TransferFunction(self.num[i][j], self.den[i][j], dt=self.dt), method,
+                    prewarp=prewarp)
+            (n_,), (d_,) = statespace_polynomials(c.A, c.B, c.C, c.D)
+            nums[i][j], dens[i][j] = n_[0], d_[0]
         return TransferFunction(nums, dens, iodelay=self.iodelay * self.dt,
                                 hold="foh" if method == "foh" else "zoh",
                                 input_names=self.input_names, output_names=self.output_names,
@@ -660,6 +660,26 @@ class _Sampled:
         """The exact sampled state-space model (delays as extra states): what lets
         :func:`sysid.compare` estimate the initial state."""
         return self.continuous.to_statespace(self.dt)
+
+
+def statespace_polynomials(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray
+                           ) -> tuple[list[list[np.ndarray]], list[list[np.ndarray]]]:
+    """Numerator and denominator of every output/input pair of ``(A, B, C, D)`` over
+    ``det(xI - A)`` (:func:`sysid.ss2tf`'s map, the determinant lemma)."""
+    den = np.real(np.poly(A)) if A.size else np.ones(1)
+    nums, dens = [], []
+    for i in range(C.shape[0]):
+        rn, rd = [], []
+        for j in range(B.shape[1]):
+            if A.size:
+                num = np.real(np.poly(A - np.outer(B[:, j], C[i]))) - den + D[i, j] * den
+            else:
+                num = np.array([D[i, j]])
+            rn.append(num)
+            rd.append(den.copy())
+        nums.append(rn)
+        dens.append(rd)
+    return nums, dens
 
 
 def _register() -> None:
