@@ -91,3 +91,22 @@ def test_a_list_of_records_names_merge(call):
     with pytest.raises(DataError, match=r"several experiments.*\.merge\(") as err:
         call([REC, REC])
     assert str(err.value).count("merge") == 2
+
+
+def test_channels_first_arrays_are_refused_by_the_signal_tools_too():
+    # IOData refused a (channels, samples) array with the fix, but crest_factor returned 500
+    # "channels" of 2 samples each, detect_period searched a 2-sample record and repair_nan
+    # interpolated across channels, silently
+    from sysid.data.raw import repair_nan
+
+    x = np.random.default_rng(0).standard_normal((2, 500))
+    gap = x.copy()
+    gap[1, 7] = np.nan
+    for call in (lambda: sysid.crest_factor(x), lambda: sysid.detect_period(x),
+                 lambda: repair_nan(None, gap)):
+        with pytest.raises(sysid.ShapeError, match=r"time-first \(samples, channels\).*\.T"):
+            call()
+    # time-first, the same calls work
+    assert sysid.crest_factor(x.T).shape == (2,)
+    assert sysid.detect_period(x.T) is None
+    assert repair_nan(None, gap.T)[0][1].shape == (500, 2)

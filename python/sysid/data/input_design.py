@@ -390,7 +390,9 @@ def crest_factor(u: Any) -> np.ndarray:
     >>> np.round(sysid.crest_factor(np.cos(2 * np.pi * np.arange(100) / 10)), 4)
     array([1.4142])
     """
-    x = as_2d(u, "u")
+    from .layout import time_first
+
+    x = time_first(as_2d(u, "u"), "u")
     rms = np.sqrt(np.mean(x * x, axis=0))
     if np.any(rms == 0):
         raise DataError(f"channel(s) {np.flatnonzero(rms == 0).tolist()} are all zero: an "

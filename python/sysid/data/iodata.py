@@ -35,6 +35,7 @@ from . import formats as _formats
 from . import raw as _raw
 from . import segments as _segments
 from .formats import _pandas
+from .layout import time_first
 from .segments import SplitData, _Exp
 from .trend import Trend
 from .units import check_unit, sample_time
@@ -75,17 +76,6 @@ def _as_list(x: Any, name: str = "data") -> list[Any] | None:
             )
         return [x]
     return [x]
-
-
-def _time_first(a: np.ndarray, name: str) -> np.ndarray:
-    """Refuse a channels-first array (fewer samples than channels) with the fix."""
-    if a.ndim == 2 and 1 < a.shape[0] < a.shape[1] or a.shape[0] == 1 and a.shape[1] > 1:
-        raise ShapeError(
-            f"{name} has {a.shape[0]} sample(s) and {a.shape[1]} channels; sysid arrays are "
-            f"time-first (samples, channels): if the data are channels-first (python-control's "
-            f"layout), pass {name}.T"
-        )
-    return a
 
 
 def _plural(n: int, word: str) -> str:
@@ -169,7 +159,7 @@ class IOData:
         ylist = _as_list(y, "y")
         if not ylist:
             raise ShapeError("y is an empty list: give at least one experiment")
-        ys = [_time_first(as_2d(v, "y" if i == 0 else f"y[{i}]"), "y" if i == 0 else f"y[{i}]")
+        ys = [time_first(as_2d(v, "y" if i == 0 else f"y[{i}]"), "y" if i == 0 else f"y[{i}]")
               for i, v in enumerate(ylist)]
         n_out = ys[0].shape[1]
         if n_out == 0:
@@ -189,7 +179,7 @@ class IOData:
                 raise ShapeError(
                     f"u has {len(us_in)} experiment(s) but y has {len(ys)}; give one array each"
                 )
-            us = [_time_first(as_2d(v, "u" if i == 0 else f"u[{i}]"),
+            us = [time_first(as_2d(v, "u" if i == 0 else f"u[{i}]"),
                               "u" if i == 0 else f"u[{i}]") for i, v in enumerate(us_in)]
         n_in = us[0].shape[1]
         for i, (a, b) in enumerate(zip(us, ys)):

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import DataError
 from .iodata import IOData
+from .layout import time_first
 
 __all__ = ["Periodicity", "detect_period", "whole_periods"]
 
@@ -165,7 +166,7 @@ def detect(data: Any, tol: float = TOL, min_periods: int = 2) -> tuple[Periodici
         if u.ndim not in (1, 2) or not np.all(np.isfinite(u)) or u.shape[0] == 0:
             raise DataError(f"give an IOData or a finite input (N,) or (N, m) with samples; "
                             f"got shape {u.shape}")
-        inputs = [u.reshape(u.shape[0], -1)]
+        inputs = [time_first(u.reshape(u.shape[0], -1), "u")]
     lags, worst = set(), 0.0
     for i, u in enumerate(inputs):
         lag, mis, why = period_of(u, tol, min_periods)

@@ -16,6 +16,7 @@ import numpy as np
 
 from .._checks import as_2d, as_dt, check_elements, real_array
 from ..errors import DataError, InsufficientDataError, NonFiniteError, ShapeError
+from .layout import time_first
 from .units import sample_time
 
 __all__ = ["repair_nan"]
@@ -96,6 +97,9 @@ def repair_nan(
             raise ShapeError(f"{name} must be a (samples, channels) array with y's samples, "
                              f"got shape {a.shape} (y {y.shape}); reshape 1-D signals with "
                              "x[:, None]")
+    time_first(y, "y")
+    if u is not None:
+        time_first(u, "u")
     ua = np.zeros((y.shape[0], 0)) if u is None else u
     bad = np.concatenate([~np.isfinite(ua), ~np.isfinite(y)], axis=1)
     if not bad.any():
