@@ -202,3 +202,19 @@ def test_covariance_order_never_falls_as_max_order_grows():
     got = [sysid.persistent_excitation_order(u, mo, method="covariance")
            for mo in (10, 30, 50, 60, 100)]
     assert got == sorted(got) and got[0] == 10 and got[-1] == 50
+
+
+def test_a_linear_chirp_may_start_at_zero_hertz():
+    # chirp(..., f0=0) was refused ("f0, f1 must lie in (0, nyq]") for every method, though a
+    # linear or quadratic sweep from DC is what scipy.signal.chirp and MATLAB's chirp give
+    from scipy import signal
+
+    t = np.arange(1000) * 0.01
+    for method in ("linear", "quadratic"):
+        u = sysid.chirp(1000, 0.01, 0.0, 20.0, method=method)
+        np.testing.assert_allclose(u[:, 0], signal.chirp(t, 0.0, t[-1], 20.0, method=method))
+    for method in ("logarithmic", "hyperbolic"):
+        with pytest.raises(sysid.DataError, match="cannot start or end at 0 Hz.*'linear'"):
+            sysid.chirp(1000, 0.01, 0.0, 20.0, method=method)
+    with pytest.raises(sysid.DataError, match="two different frequencies in \\[0, 50\\] Hz"):
+        sysid.chirp(1000, 0.01, 1.0, 60.0)

@@ -353,14 +353,17 @@ def chirp(
 ) -> np.ndarray:
     """Frequency sweep from ``f0`` to ``f1`` Hz over the record (``scipy.signal.chirp``).
 
-    A one-sample record has no sweep and raises a :class:`~sysid.DataError`, as does a
-    sample time that is not a positive number.
+    Linear and quadratic sweeps may start (or end) at 0 Hz; logarithmic (the default) and
+    hyperbolic ones need both frequencies positive. A one-sample record has no sweep and
+    raises a :class:`~sysid.DataError`, as does a sample time that is not a positive number.
 
     Examples
     --------
     >>> import sysid
     >>> sysid.chirp(500, 0.01, 0.1, 10.0).shape
     (500, 1)
+    >>> float(sysid.chirp(500, 0.01, 0.0, 10.0, method="linear")[0, 0])   # cos(0)
+    1.0
     """
     n = _n(n_samples)
     dt = as_dt(dt)
@@ -369,10 +372,17 @@ def chirp(
     if n < 2:
         raise DataError(f"a chirp sweeps over its record: it needs at least 2 samples, got {n}")
     nyq = 0.5 / dt
-    if not (0 < f0 < nyq and 0 < f1 <= nyq):
-        raise DataError(f"f0, f1 must lie in (0, {nyq:g}] Hz (the Nyquist frequency)")
     if method not in ("linear", "logarithmic", "quadratic", "hyperbolic"):
-        raise DataError(f"unknown chirp method {method!r}")
+        raise DataError(f"unknown chirp method {method!r}: use 'linear', 'logarithmic', "
+                        "'quadratic' or 'hyperbolic'")
+    f0, f1 = _finite(f0, "f0"), _finite(f1, "f1")
+    if not (0 <= f0 <= nyq and 0 <= f1 <= nyq) or f0 == f1:
+        raise DataError(f"f0, f1 must be two different frequencies in [0, {nyq:g}] Hz (the "
+                        f"Nyquist frequency of dt = {dt:g} s), got {f0:g} and {f1:g}")
+    if min(f0, f1) == 0 and method in ("logarithmic", "hyperbolic"):
+        raise DataError(f"a {method} sweep cannot start or end at 0 Hz (its frequency is a "
+                        "ratio of them); give a positive f0 (e.g. a tenth of the slowest "
+                        "frequency of interest) or method='linear'")
     t = np.arange(n) * dt
     from scipy import signal
 
