@@ -77,3 +77,19 @@ def test_bad_requests_name_the_fix():
         sysid.spafdr(d, resolution=[0.1, 0.2], omega=[1.0, 2.0, 3.0])
     with pytest.raises(sysid.DataError, match="time series"):
         sysid.spafdr(sysid.IOData(y=rng.standard_normal(100)))
+
+
+def test_the_window_at_the_nyquist_frequency_takes_the_mirrored_lines():
+    # the grid ends at the Nyquist frequency, where the window held only the lines below it:
+    # a pole at z = -0.5 (G = -2 there, real) came out -1.966 - 0.240j (12 % off, complex)
+    rng = np.random.default_rng(0)
+    g = sysid.StateSpaceModel([[-0.5]], [[1.0]], [[1.0]])
+    u = rng.standard_normal((20000, 1))
+    frd = sysid.spafdr(sysid.IOData(u=u, y=g.simulate(u)))
+    assert frd.omega[-1] == pytest.approx(np.pi)
+    top = frd.response[-1, 0, 0]
+    assert abs(top.imag) < 1e-12                      # real, as every real system there
+    assert abs(top - (-2.0)) < 0.03 * 2.0             # leakage and smoothing only
+    # and the lines below zero: a window wider than its frequency mirrors them too
+    low = sysid.spafdr(sysid.IOData(u=u, y=g.simulate(u)), resolution=0.05, omega=[0.02])
+    assert abs(low.response[0, 0, 0] - g.freqresp([0.02])[0, 0, 0]) < 0.02

@@ -59,6 +59,26 @@ def _resolution(w: np.ndarray, resolution: Any) -> np.ndarray:
     return r
 
 
+def _window(omega: np.ndarray, P: np.ndarray, wk: float, rk: float, nyquist: float
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Hann weights of the lines within ``rk`` of ``wk`` and their periodograms. The part of
+    the window beyond the Nyquist frequency (or below zero) takes the lines mirrored there:
+    the spectra of real signals are conjugate-symmetric about both (at the Nyquist frequency
+    itself the window was one-sided, and a resonance there came out 27 % low and complex)."""
+    lo, hi = np.searchsorted(omega, [wk - rk, wk + rk], side="right")
+    d, Pk = [omega[lo:hi] - wk], [P[lo:hi]]
+    if wk + rk > nyquist:  # lines at 2 nyquist - omega, below the Nyquist line itself
+        a, b = np.searchsorted(omega, [2 * nyquist - wk - rk, nyquist], side="left")
+        d.append(2 * nyquist - omega[a:b] - wk)
+        Pk.append(P[a:b].conj())
+    if wk - rk < 0:  # lines at -omega
+        b = np.searchsorted(omega, rk - wk, side="left")
+        d.append(-omega[:b] - wk)
+        Pk.append(P[:b].conj())
+    dd = np.concatenate(d)
+    return 0.5 * (1.0 + np.cos(np.pi * dd / rk)), np.concatenate(Pk)
+
+
 def spafdr(
     data: IOData,
     resolution: Any = None,
@@ -130,14 +150,13 @@ def spafdr(
     R = np.maximum(_resolution(w, resolution), (m + 2) * spacing)
     S = np.empty((w.size, nc, nc), dtype=complex)
     K = np.empty(w.size)
+    nyquist = np.pi / data.dt
     for k, (wk, rk) in enumerate(zip(w, R)):
-        lo, hi = np.searchsorted(omega_all, [wk - rk, wk + rk], side="right")
-        d = omega_all[lo:hi] - wk
-        W = 0.5 * (1.0 + np.cos(np.pi * d / rk))
+        W, Pk = _window(omega_all, P, wk, rk, nyquist)
         if W.sum() <= 0:
             raise InsufficientDataError(f"no line of the record lies within {rk:.3g} rad/s "
                                         f"of {wk:.4g} rad/s: widen the resolution")
-        S[k] = np.einsum("f,fab->ab", W / W.sum(), P[lo:hi])
+        S[k] = np.einsum("f,fab->ab", W / W.sum(), Pk)
         K[k] = W.sum() ** 2 / (W * W).sum()
     G, coh, mcoh, ratio, keep, _ = _frf_from_S(S, m, averages=float(K.min()))
     Kk = K[keep]
