@@ -191,3 +191,13 @@ def test_the_default_horizon_resolves_the_slowest_mode_of_accelerations(seed):
     found = np.array(res.stable_frequencies())
     for f in (2.0, 5.0, 11.0):
         assert np.any(np.abs(found - f) < 0.02 * f), (f, found, res.horizon)
+
+
+def test_mac_does_not_depend_on_the_scale_of_the_shapes():
+    # shapes whose squares overflow or underflow gave NaN (1e200) or 0 (1e-200) for
+    # identical shapes (and a RuntimeWarning); the MAC is scale-free
+    shape, other = np.array([1.0, 2.0, 3.0]), np.array([1.0, -1.0, 0.5j])
+    ref = sysid.mac(shape, other)
+    for s in (1e-310, 1e-200, 1e200, 1e300):
+        np.testing.assert_allclose(sysid.mac(shape * s, shape), [[1.0]], rtol=1e-12)
+        np.testing.assert_allclose(sysid.mac(shape * s, other * s), ref, rtol=1e-12)

@@ -72,10 +72,19 @@ def mac(phi1: Any, phi2: Any) -> np.ndarray:
         if not np.isfinite(arr).all():
             raise NonFiniteError(f"{name} has non-finite entries (NaN or Inf): the MAC of "
                                  "such a mode shape is undefined; drop or recompute that mode")
-    num = np.abs(a.conj() @ b.T) ** 2
-    den = np.outer(np.sum(np.abs(a) ** 2, 1), np.sum(np.abs(b) ** 2, 1))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(den > 0, num / np.where(den > 0, den, 1), 0.0)
+    # each shape to unit length first (the MAC does not depend on scale): shapes in units that
+    # make their squares overflow or underflow (1e+-200) gave NaN or 0 for identical shapes
+    a, b = _unit_rows(a), _unit_rows(b)
+    return np.minimum(np.abs(a.conj() @ b.T) ** 2, 1.0)
+
+
+def _unit_rows(x: np.ndarray) -> np.ndarray:
+    """Rows scaled to unit 2-norm (an all-zero row stays zero: its MAC is 0)."""
+    big = np.max(np.abs(x), axis=1, keepdims=True)
+    big = np.where(big > 0, big, 1.0)
+    x = x.real / big + 1j * (x.imag / big)  # real divisions: no overflow for subnormal scales
+    norm = np.sqrt(np.sum(np.abs(x) ** 2, axis=1, keepdims=True))
+    return x / np.where(norm > 0, norm, 1.0)
 
 
 def _correlations(ys: list[np.ndarray], kmax: int) -> np.ndarray:
