@@ -102,3 +102,17 @@ def test_several_inputs_count_the_weakest_direction_whatever_the_units():
     # each input on its own 10 lines (zippered multisine): 20 lines each
     a, b = _multisine(np.arange(1, 11) * 40, 0.0), _multisine(np.arange(1, 11) * 40 + 20, 0.0)
     assert sysid.persistent_excitation_order(np.column_stack([a, b]), 40) == 20
+
+
+@pytest.mark.parametrize("bits", [3, 5, 6])
+def test_a_short_periodic_input_counts_the_lines_of_its_period(bits):
+    # a maximum-length PRBS of period M repeated a few times is persistently exciting of
+    # order M exactly (its M lines, the offset included: Ljung 1999, section 13.2); under
+    # the window a short record's lines merged into one run (period 7 over 35 samples: 20)
+    period = 2 ** bits - 1
+    u = np.tile(sysid.prbs(period), (5, 1))
+    assert sysid.persistent_excitation_order(u, 3 * period) == period
+    assert sysid.persistent_excitation_order(u, 3 * period, method="covariance") == period
+    # a sinusoid whose period is not a whole number of samples is not exactly periodic
+    t = np.arange(5 * period)
+    assert sysid.persistent_excitation_order(np.sin(0.3 * t), 10) == 2

@@ -40,6 +40,10 @@ SEGMENT = 1 << 16
 JOINT_SEGMENT = 1 << 12
 #: Default relative power threshold of an excited bin (50 dB below the strongest).
 TOL = 1e-5
+#: Mismatch between periods (relative to the variance) below which an input counts as
+#: periodic and its lines are counted exactly: a generated input repeats to rounding (a
+#: sinusoid of a period that is not a whole number of samples does not).
+EXACT_PERIOD = 1e-9
 
 
 #: the 4-term Blackman-Harris window's cosine coefficients
@@ -154,10 +158,33 @@ def _joint_rank_count(us: list[np.ndarray], tol: float) -> int:
     return best
 
 
+def _periodic_lines(x: np.ndarray, period: int, tol: float) -> tuple[list[int], int]:
+    """Excited lines of a periodic input's variation ``x`` (``(N, m)``, whole periods from the
+    start), exactly: the DFT of its period average has no leakage. Per channel and principal
+    direction (against the strongest bin of all), and the bins where any channel is
+    excited (each holds one direction: the spectral matrix of one period is of rank one)."""
+    k = x.shape[0] // period
+    one = x[: k * period].reshape(k, period, -1).mean(axis=0)
+    F = np.fft.fft(one - one.mean(axis=0), axis=0)  # its mean is the offset, counted apart
+    cols = [F[:, j] for j in range(F.shape[1])]
+    if F.shape[1] > 1:
+        _, vecs = np.linalg.eigh(x.T @ x)
+        cols += [F @ vecs[:, j] for j in range(F.shape[1])]
+    power = [np.abs(c) ** 2 for c in cols]
+    top = max(float(p.max()) for p in power)
+    if top <= 0:
+        return [0] * len(cols), 0
+    return ([int(np.sum(p > tol * top)) for p in power],
+            int(np.sum(np.any(np.abs(F) ** 2 > tol * top, axis=1))))
+
+
 def spectral_excitation_order(us: list[np.ndarray], tol: float = TOL) -> int:
     """Persistent-excitation order of the inputs (a list of ``(n_samples, m)`` experiments)
     from their spectra; see the module notes. Experiments count separately and the best
-    one decides (each is a record of its own).
+    one decides (each is a record of its own). An experiment whose input repeats exactly (at
+    least two whole periods, to :data:`EXACT_PERIOD`) counts the lines of one period's
+    DFT exactly: under the window a short periodic record's lines merged into one run (a
+    period-7 PRBS of 35 samples counted 20 lines, not 7).
 
     Examples
     --------
@@ -168,7 +195,10 @@ def spectral_excitation_order(us: list[np.ndarray], tol: float = TOL) -> int:
     >>> spectral_excitation_order([u[:, None]])
     118
     """
-    counts, normalised, dcs = [], [], []
+    from .periodicity import period_of
+
+    counts, normalised, dcs, joints = [], [], [], []
+    m = us[0].shape[1]
     for u in us:
         w = _window(u.shape[0])[:, None]
         mean = (w * u).sum(axis=0) / w.sum()
@@ -176,12 +206,25 @@ def spectral_excitation_order(us: list[np.ndarray], tol: float = TOL) -> int:
         rms = np.sqrt(np.mean(x * x, axis=0))
         # units do not matter: every channel's variation is scaled to unit power
         x = x / np.where(rms > 0, rms, 1.0)
-        normalised.append(x)
         scale = max(float(rms.max()), float(np.abs(mean).max()))
         # an offset is one line, at zero frequency (window-weighted: a sine has none), when
         # it stands above the chance mean of the variation (3 rms / sqrt(N))
         floor = np.maximum(np.sqrt(tol) * scale, 3.0 * rms / np.sqrt(u.shape[0]))
         dc = int(scale > 0 and bool(np.any(np.abs(mean) > floor)))
+        dcs.append(dc)
+        # (records up to one segment: longer ones resolve their lines under the window, and
+        # the period search's FFT would grow with the record)
+        period = period_of(u, EXACT_PERIOD, 2)[0] if 4 <= u.shape[0] <= SEGMENT else None
+        if period is not None:
+            lines, union = _periodic_lines(x, period, tol)
+            # the mean of whole periods is exact, not a chance one: an offset line above tol
+            whole = u[: u.shape[0] // period * period].mean(axis=0)
+            dc = int(scale > 0 and bool(np.any(np.abs(whole) > np.sqrt(tol) * scale)))
+            dcs[-1] = dc
+            counts.append(dc + min(lines))
+            joints.append(dc + union // m)
+            continue
+        normalised.append(x)
         cols = [x[:, j] for j in range(x.shape[1])]
         if x.shape[1] > 1:
             # a direction is measured against the strongest channel: a combination of
@@ -189,10 +232,10 @@ def spectral_excitation_order(us: list[np.ndarray], tol: float = TOL) -> int:
             _, vecs = np.linalg.eigh(x.T @ x)
             cols += [x @ vecs[:, k] for k in range(x.shape[1])]
         top = float(_power(x).max())
-        dcs.append(dc)
         counts.append(dc + min(excited_lines(c, tol, top) for c in cols))
     order = max(counts)
-    m = us[0].shape[1]
     if m > 1:
-        order = min(order, max(dcs) + _joint_rank_count(normalised, tol) // m)
+        if normalised:
+            joints.append(max(dcs) + _joint_rank_count(normalised, tol) // m)
+        order = min(order, max(joints))
     return int(order)
