@@ -139,18 +139,20 @@ pub fn fir<'py>(
 
 /// OKID: observer and system Markov parameters.
 #[pyfunction]
-#[pyo3(signature = (experiments, observer_order, count, feedthrough=false))]
+#[pyo3(signature = (experiments, observer_order, count, feedthrough=false, check_direct=false))]
 pub fn okid<'py>(
     py: Python<'py>,
     experiments: Vec<(PyReadonlyArray2<'_, f64>, PyReadonlyArray2<'_, f64>)>,
     observer_order: usize,
     count: usize,
     feedthrough: bool,
+    check_direct: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut opts = OkidOptions::default();
     opts.observer_order = observer_order;
     opts.count = count;
     opts.feedthrough = feedthrough;
+    opts.check_direct = check_direct;
     let v = views(&experiments);
     let est = crate::search::detach(py, || rz::okid(&v, &opts))?;
     let d = PyDict::new(py);
@@ -161,6 +163,13 @@ pub fn okid<'py>(
     )?;
     d.set_item("residual_cov", mat_to_numpy(py, &est.residual_cov))?;
     d.set_item("samples", est.samples)?;
+    if let Some(direct) = &est.direct {
+        d.set_item("direct", mat_to_numpy(py, &direct.d))?;
+        d.set_item(
+            "direct_residual_cov",
+            mat_to_numpy(py, &direct.residual_cov),
+        )?;
+    }
     Ok(d)
 }
 

@@ -242,9 +242,11 @@ def okid(data: IOData, observer_order: int, count: int | None = None, *,
     check_elements(c * (3 * l * (m + l) + l * m), f"count = {c}",
                    "pass a count of the order of the response's length in samples")
     ft = _feedthrough(data, feedthrough)
-    out = _sysid.okid(exps, p, c, ft)
-    if feedthrough is False:  # the default: said when the record shows a direct term
-        _warn_direct_term(exps, out, _sysid.okid(exps, p, 1, True), l, m)
+    # the default: said when the record shows a direct term (the regression with u(t) from
+    # the same triangular factor)
+    out = _sysid.okid(exps, p, c, ft, check_direct=feedthrough is False)
+    if feedthrough is False:
+        _warn_direct_term(exps, out, l, m)
     h = np.asarray(out["markov"]).reshape(-1, l, m)
     info = {
         "observer_markov": np.asarray(out["observer_markov"]).reshape(-1, l, m + l),
@@ -261,20 +263,21 @@ def okid(data: IOData, observer_order: int, count: int | None = None, *,
 DIRECT_TERM_SIGMAS, DIRECT_TERM_SHARE = 10.0, 0.05
 
 
-def _warn_direct_term(exps: list[tuple[np.ndarray, np.ndarray]], without: dict[str, Any],
-                      with_d: dict[str, Any], l: int, m: int) -> None:
-    """A :class:`~sysid.FeedthroughWarning` when the observer regression run with ``u(t)``
-    (``with_d``, a second pass over the record) estimates ``D`` far from zero: more than
-    ``DIRECT_TERM_SIGMAS`` rough standard deviations (residual std over ``sqrt(N var u)``,
-    as if ``u(t)`` were uncorrelated with the past) and ``DIRECT_TERM_SHARE`` of the
-    largest Markov parameter of the fit without it (``without``). Acceleration records have a
+def _warn_direct_term(exps: list[tuple[np.ndarray, np.ndarray]], out: dict[str, Any],
+                      l: int, m: int) -> None:
+    """A :class:`~sysid.FeedthroughWarning` when the observer regression with ``u(t)``
+    (``out["direct"]``, solved from the same triangular factor) estimates ``D`` far from
+    zero: more than ``DIRECT_TERM_SIGMAS`` rough standard deviations (residual std over
+    ``sqrt(N var u)``, as if ``u(t)`` were uncorrelated with the past) and
+    ``DIRECT_TERM_SHARE`` of the largest Markov parameter of the fit without it
+    (``out["markov"]``). Acceleration records have a
     direct term, and ``D = 0`` then bends every Markov parameter (a 3-mass structure's ERA
     model came back unstable at the wrong frequency)."""
     from ..errors import FeedthroughWarning
 
-    d = np.asarray(with_d["markov"]).reshape(-1, l, m)[0]
-    h = np.asarray(without["markov"]).reshape(-1, l, m)
-    lam = np.clip(np.diag(np.atleast_2d(with_d["residual_cov"])), 0.0, None)
+    d = np.asarray(out["direct"]).reshape(l, m)
+    h = np.asarray(out["markov"]).reshape(-1, l, m)
+    lam = np.clip(np.diag(np.atleast_2d(out["direct_residual_cov"])), 0.0, None)
     u = np.vstack([x for x, _ in exps])
     su = np.sqrt(u.shape[0] * np.maximum(u.var(axis=0), 1e-300))
     sd = np.sqrt(lam)[:, None] / su[None, :]

@@ -112,6 +112,10 @@ pub struct OkidOptions {
     pub count: usize,
     /// Estimate `h_0 = D`; if false (the default) it is fixed at zero.
     pub feedthrough: bool,
+    /// Without `feedthrough`: also solve the regression with `u(t)` from the same triangular
+    /// factor (its columns last), for [`OkidEstimate::direct`]: a check of the record for
+    /// a direct term at no second pass over the data.
+    pub check_direct: bool,
 }
 
 impl Default for OkidOptions {
@@ -120,8 +124,18 @@ impl Default for OkidOptions {
             observer_order: 20,
             count: 100,
             feedthrough: false,
+            check_direct: false,
         }
     }
+}
+
+/// The regression with `u(t)` solved beside one without it ([`OkidOptions::check_direct`]).
+#[derive(Debug, Clone)]
+pub struct DirectTerm {
+    /// Its estimate of `D = h_0`, `l x m`.
+    pub d: Mat<f64>,
+    /// Covariance of its residuals, `l x l`.
+    pub residual_cov: Mat<f64>,
 }
 
 /// Markov parameters estimated by [`okid`].
@@ -135,6 +149,8 @@ pub struct OkidEstimate {
     pub residual_cov: Mat<f64>,
     /// Number of regression equations (samples used).
     pub samples: usize,
+    /// With [`OkidOptions::check_direct`] (and no `feedthrough`): the regression with `u(t)`.
+    pub direct: Option<DirectTerm>,
 }
 
 type Experiments<'a, 'b> = &'a [(MatRef<'b, f64>, MatRef<'b, f64>)];
@@ -554,20 +570,25 @@ pub fn okid(exps: Experiments<'_, '_>, opts: &OkidOptions) -> Result<OkidEstimat
         ));
     }
     let (m, l, su, sy) = check_experiments(exps, p)?;
-    let k0 = usize::from(opts.feedthrough) * m;
     let v = m + l;
-    let d = k0 + p * v;
+    // past regressors first, then u(t) (estimated, or only checked): the regression without
+    // u(t) is the leading block of the same triangular factor
+    let d0 = p * v;
+    let with_now = opts.feedthrough || opts.check_direct;
+    let d = d0 + usize::from(with_now) * m;
     let (r, rows) = accumulate(exps, p, d, &sy, |u, y, t, row| {
-        for i in 0..k0 {
-            row[i] = u[(t, i)] / su[i];
-        }
         for k in 1..=p {
-            let base = k0 + (k - 1) * v;
+            let base = (k - 1) * v;
             for i in 0..m {
                 row[base + i] = u[(t - k, i)] / su[i];
             }
             for i in 0..l {
                 row[base + m + i] = y[(t - k, i)] / sy[i];
+            }
+        }
+        if with_now {
+            for i in 0..m {
+                row[d0 + i] = u[(t, i)] / su[i];
             }
         }
     })?;
@@ -579,18 +600,40 @@ pub fn okid(exps: Experiments<'_, '_>, opts: &OkidOptions) -> Result<OkidEstimat
             fix: "lower the observer order or use a longer record",
         });
     }
-    let theta = pinv(r.submatrix(0, 0, d, d), 1e-12)? * r.submatrix(0, d, d, l);
-    // unscale: coefficient of regressor x / s_x on output y / s_y
-    let coef = |j: usize, col: usize, sx: f64| theta[(col, j)] * sy[j] / sx;
-    let mut dmat = Mat::<f64>::zeros(l, m);
-    for j in 0..l {
-        for i in 0..k0 {
-            dmat[(j, i)] = coef(j, i, su[i]);
+    let y_cols = r.submatrix(0, d, d + l, l);
+    // the regression on the first `k` columns: coefficients and residual covariance
+    let solve = |k: usize| -> Result<(Mat<f64>, Mat<f64>)> {
+        let theta = pinv(r.submatrix(0, 0, k, k), 1e-12)? * y_cols.subrows(0, k);
+        let rest = y_cols.subrows(k, d + l - k);
+        let mut cov = rest.transpose() * rest;
+        for i in 0..l {
+            for j in 0..l {
+                cov[(i, j)] *= sy[i] * sy[j] / (rows - k) as f64;
+            }
         }
-    }
+        Ok((theta, cov))
+    };
+    let (theta, residual_cov) = solve(if opts.feedthrough { d } else { d0 })?;
+    // unscale: coefficient of regressor x / s_x on output y / s_y
+    let direct_d = |theta: &Mat<f64>| Mat::from_fn(l, m, |j, i| theta[(d0 + i, j)] * sy[j] / su[i]);
+    let dmat = if opts.feedthrough {
+        direct_d(&theta)
+    } else {
+        Mat::<f64>::zeros(l, m)
+    };
+    let direct = if opts.check_direct && !opts.feedthrough {
+        let (full, cov) = solve(d)?;
+        Some(DirectTerm {
+            d: direct_d(&full),
+            residual_cov: cov,
+        })
+    } else {
+        None
+    };
+    let coef = |j: usize, col: usize, sx: f64| theta[(col, j)] * sy[j] / sx;
     let mut observer_markov = Vec::with_capacity(p);
     for k in 1..=p {
-        let base = k0 + (k - 1) * v;
+        let base = (k - 1) * v;
         observer_markov.push(Mat::from_fn(l, v, |j, i| {
             let sx = if i < m { su[i] } else { sy[i - m] };
             coef(j, base + i, sx)
@@ -619,18 +662,12 @@ pub fn okid(exps: Experiments<'_, '_>, opts: &OkidOptions) -> Result<OkidEstimat
         }
         markov.push(h);
     }
-    let r22 = r.submatrix(d, d, l, l);
-    let mut residual_cov = r22.transpose() * r22;
-    for i in 0..l {
-        for j in 0..l {
-            residual_cov[(i, j)] *= sy[i] * sy[j] / (rows - d) as f64;
-        }
-    }
     Ok(OkidEstimate {
         markov,
         observer_markov,
         residual_cov,
         samples: rows,
+        direct,
     })
 }
 
@@ -709,6 +746,43 @@ mod tests {
             assert!(tc.decay[0] > 0.0 && tc.decay[0] < 1.0);
         }
         assert!(wins >= 4, "TC won {wins} of 5");
+    }
+
+    #[test]
+    fn the_direct_term_check_is_the_regression_with_u_now_from_the_same_factor() {
+        let sys = random_system(4, 2, 2, 0.6, 21); // it has a D
+        let (u, y) = noisy_data(&sys, 900, 0.05, 3);
+        let e = [(u.as_ref(), y.as_ref())];
+        let base = OkidOptions {
+            observer_order: 6,
+            count: 30,
+            ..Default::default()
+        };
+        let plain = okid(&e, &base).unwrap();
+        let checked = okid(
+            &e,
+            &OkidOptions {
+                check_direct: true,
+                ..base.clone()
+            },
+        )
+        .unwrap();
+        let with_d = okid(
+            &e,
+            &OkidOptions {
+                feedthrough: true,
+                ..base.clone()
+            },
+        )
+        .unwrap();
+        assert!(plain.direct.is_none() && with_d.direct.is_none());
+        let direct = checked.direct.as_ref().unwrap();
+        assert!((&direct.d - &with_d.markov[0]).norm_max() < 1e-10 * with_d.markov[0].norm_max());
+        assert!((&direct.residual_cov - &with_d.residual_cov).norm_max() < 1e-12);
+        for (a, b) in plain.markov.iter().zip(&checked.markov) {
+            assert!((a - b).norm_max() < 1e-10 * (1.0 + b.norm_max()));
+        }
+        assert!((&plain.residual_cov - &checked.residual_cov).norm_max() < 1e-12);
     }
 
     #[test]

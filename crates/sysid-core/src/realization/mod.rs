@@ -35,7 +35,9 @@ pub use balanced::{
 };
 pub use era::{era, EraResult};
 pub use ho_kalman::{ho_kalman, kung};
-pub use markov::{fir, okid, FirEstimate, FirOptions, OkidEstimate, OkidOptions, Regularization};
+pub use markov::{
+    fir, okid, DirectTerm, FirEstimate, FirOptions, OkidEstimate, OkidOptions, Regularization,
+};
 pub use modal::{modal_analysis, Mode};
 
 use crate::error::{Result, SysidError};
