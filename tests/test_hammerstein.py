@@ -4,6 +4,8 @@ nonlinearity; saving, protocol, errors."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -331,3 +333,27 @@ def test_compare_fits_the_linear_blocks_state_as_of_a_linear_model():
     assert float(np.ravel(sysid.compare(data, m, x0="zero").fit)[0]) < 95
     with pytest.raises(sysid.ShapeError, match="x0 has 1 entries but the linear block has 2"):
         m.simulate(u, x0=[1.0])
+
+
+def test_a_saturation_about_an_operating_point_is_fitted_both_ways():
+    # a Hammerstein system with a saturation about u = 5, its record starting at steady
+    # state (y = 10): fitted from rest without offsets (the rule for levels in the data's
+    # units) the model began 10 away from the record and nlhw settled at a 71 % fit with the
+    # warning to detrend (which would move the levels); "auto" now fits both ways and keeps
+    # the better
+    from scipy import signal
+
+    rng = np.random.default_rng(1)
+    B, F = [0.0, 0.4, 0.2], [1.0, -1.2, 0.5]
+    sat = lambda x: np.clip(x, 4.5, 5.6)  # noqa: E731
+    zi = signal.lfilter_zi(B, F) * 5.0
+    u = 5.0 + rng.uniform(-1, 1, 800)
+    y = signal.lfilter(B, F, sat(u), zi=zi)[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        m = sysid.nlhw(sysid.IOData(u, y, 1.0), 2, 2, 1, input_nl=sysid.Saturation(),
+                       output_nl=None)
+    assert m.info["offsets"]["removed"] and "with kept" in m.info["offsets"]["auto"]
+    u2 = 5.0 + rng.uniform(-1, 1, 400)
+    val = sysid.IOData(u2, signal.lfilter(B, F, sat(u2), zi=zi)[0], 1.0)
+    assert float(np.ravel(sysid.compare(val, m).fit)[0]) > 95.0

@@ -4,6 +4,8 @@ n4sid fit; protocol, saving and errors."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -177,7 +179,14 @@ def test_nlhw_ss_offset_and_constant_input_are_named():
     y = 97.0 + x[:, None] + 0.01 * rng.standard_normal((600, 1))
     with pytest.warns(sysid.OffsetWarning, match="offset"):
         sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 1, input_nl=sysid.Saturation(),
-                      max_iter=400, progress=False, output_nl=None)
+                      max_iter=400, progress=False, output_nl=None, offsets=False)
+    # offsets="auto" fits it both ways (levels in the data's units, a record off zero) and
+    # keeps the fit about the means, which has the constant the other lacks: no warning due
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sysid.OffsetWarning)
+        m = sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 1, input_nl=sysid.Saturation(),
+                          max_iter=400, progress=False, output_nl=None)
+    assert m.info["offsets"]["removed"] and "with kept" in m.info["offsets"]["auto"]
     with pytest.raises(sysid.DataError, match="u0 is 3 in every sample: nlhw_ss"):
         sysid.nlhw_ss(sysid.IOData(np.full((600, 1), 3.0), y, 1.0), 1,
                       input_nl=sysid.SigmoidNetwork(2), progress=False, output_nl=None)

@@ -31,7 +31,7 @@ from ..data.iodata import require_record
 from ..errors import DataError, StabilityWarning
 from ..polynomial.orders import matlab_orders
 from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction, check_search_size
-from .operating_point import centred, record_means, use_offsets
+from .operating_point import better_of_both, centred, record_means, undecided, use_offsets
 
 __all__ = ["nlhw"]
 
@@ -92,7 +92,9 @@ def nlhw(
         Fit about the record's means and keep them in the model (its operating point,
         :mod:`sysid.nonlinear.operating_point`): ``"auto"`` when a channel's mean is farther
         from zero than its standard deviation and both nonlinearities are sigmoid networks or
-        the identity (the others have levels in the data's units).
+        the identity; with a nonlinearity whose levels are in the data's units (a saturation,
+        dead zone, polynomial, ...) on such a record, both ways are fitted and the lower sum
+        of squares kept (``info["offsets"]["auto"]`` says which).
 
     Returns
     -------
@@ -148,6 +150,13 @@ def nlhw(
     max_iter, tol = as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")
     fin, fout = _check_nl(input_nl, "input_nl"), _check_nl(output_nl, "output_nl")
     check_search_size([fin, fout], sum(y.size for _, y in exps), "nlhw")
+    if undecided(offsets, [fin, fout], exps):
+        import copy
+
+        return better_of_both(lambda o: nlhw(
+            data, nb, nf, nk, input_nl=copy.deepcopy(input_nl),
+            output_nl=copy.deepcopy(output_nl), max_iter=max_iter, tol=tol, progress=progress,
+            offsets=o))
     shift = use_offsets(offsets, [fin, fout], exps)
     u0, y0 = record_means(exps) if shift else (np.zeros(1), np.zeros(1))
     if shift:

@@ -31,7 +31,7 @@ from ..data.offsets import check_offsets
 from ..errors import DataError
 from .hw_model import Nonlinearity, UserFunction, check_search_size
 from .hw_ss_model import HammersteinWienerSSModel
-from .operating_point import centred, record_means, use_offsets
+from .operating_point import better_of_both, centred, record_means, undecided, use_offsets
 
 __all__ = ["nlhw_ss"]
 
@@ -99,7 +99,8 @@ def nlhw_ss(
     offsets : "auto", True or False
         As for :func:`sysid.nlhw`: fit about the record's means and keep them in the model
         (``"auto"``: a channel's mean farther from zero than its standard deviation, and
-        every nonlinearity a sigmoid network or the identity).
+        every nonlinearity a sigmoid network or the identity; with levels in the data's units
+        on such a record, the better of both fits).
 
     Returns
     -------
@@ -160,6 +161,13 @@ def nlhw_ss(
     require_inputs_vary(exps, "nlhw_ss", getattr(data, "output_names", None), side=1)
     # before the Rust core, which takes max_iter unsigned (OverflowError on a negative)
     max_iter, tol = as_int(max_iter, "max_iter", 0), as_nonnegative(tol, "tol")
+    if undecided(offsets, fin + fout, exps):
+        import copy
+
+        return better_of_both(lambda o: nlhw_ss(
+            data, order, input_nl=copy.deepcopy(input_nl), output_nl=copy.deepcopy(output_nl),
+            feedthrough=feedthrough, max_iter=max_iter, tol=tol, progress=progress,
+            linear=linear, offsets=o))
     shift = use_offsets(offsets, fin + fout, exps)
     u0, y0 = record_means(exps) if shift else (np.zeros(m), np.zeros(p))
     if shift:
