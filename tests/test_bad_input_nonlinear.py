@@ -130,3 +130,16 @@ def test_nlhw_says_its_linear_start_s_warnings_as_its_own(record):
     said = [str(w.message) for w in rec if issubclass(w.category, sysid.IdentifiabilityWarning)]
     assert said and all(s.startswith("nlhw (its linear start") for s in said)
     assert not any(s.startswith("oe:") for s in said)
+
+
+def test_a_record_too_short_for_the_linear_start_says_so_in_the_fits_terms():
+    # pnlss/nlssest on 10 samples raised the subspace start's "a data matrix with 8 rows
+    # (horizons p=2, f=2 ...)", settings a nonlinear-model user never gave
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(300)
+    y = np.convolve(u, [0.0, 1.0, 0.5])[:300]
+    for fit in (lambda d: sysid.pnlss(d, 2, degree=2, progress=False),
+                lambda d: sysid.nlssest(d, 2, progress=False)):
+        with pytest.raises(sysid.InsufficientDataError,
+                           match=r"too short for the linear start of order 2.*init="):
+            fit(sysid.IOData(u[:10], y[:10], 1.0))

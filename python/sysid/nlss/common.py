@@ -10,7 +10,13 @@ from typing import Any
 import numpy as np
 
 from ..data.iodata import IOData
-from ..errors import DataError, IterationLimitWarning, OrderError, StabilityWarning
+from ..errors import (
+    DataError,
+    InsufficientDataError,
+    IterationLimitWarning,
+    OrderError,
+    StabilityWarning,
+)
 from ..models.statespace import StateSpaceModel
 
 
@@ -186,11 +192,14 @@ def linear_start(data: IOData, sd: IOData, sc: Scaling, order: int, init: Any,
             kw = {} if max_iter is None else {"max_iter": max_iter}
             return sysid.ssest(sd, order, focus="simulation", feedthrough=False,
                                progress=False, **kw)
-        except OrderError as e:  # a record too short for the order (its own words after)
+        except (OrderError, InsufficientDataError) as e:
+            # a record too short for the order, in the nonlinear fit's words (the subspace
+            # start's horizons are not the user's settings), its own after
             n = sum(u.shape[0] for u, _ in sd.experiments)
-            raise OrderError(f"the record ({n} training samples) is too short for a linear "
-                             f"start of order {order}: give a longer record or a lower "
-                             f"order, or a linear start (init=); {e}") from e
+            raise type(e)(f"the record ({n} training samples) is too short for the linear "
+                          f"start of order {order} (a subspace fit refined by ssest): give a "
+                          f"longer record or a lower order, or a linear start (init=); the "
+                          f"subspace fit said: {e}") from e
 
 
 def linear_states(m: StateSpaceModel, us: list[np.ndarray]) -> list[np.ndarray]:
