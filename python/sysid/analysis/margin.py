@@ -10,7 +10,10 @@ With the open-loop response ``L(j omega)`` (any sysid model, delays included):
 Crossovers are bracketed on a dense logarithmic grid and refined by Brent's method on the
 exact response; with several, the reported margins are the smallest (MATLAB's convention:
 the gain margin closest to 1 in decibels, the smallest phase margin). :meth:`Margins.all`
-lists every crossover (``allmargin``).
+lists every crossover (``allmargin``). The default grid is widened, a decade at a time, past
+an end where ``|L|`` still heads for 1 (a slow integral loop crosses far below its poles),
+and the end points where ``L`` is real are checked too: ``omega = 0`` (a negative DC gain is a
+phase crossover) and, discrete, the Nyquist frequency ``pi / dt``.
 """
 
 from __future__ import annotations
@@ -158,7 +161,9 @@ def margin(sys: Any, *, omega: Any = None) -> Margins:
         space, process model; continuous or discrete; delays included).
     omega : array_like, optional
         Frequency grid (rad/s) to search; default spans the poles by three decades each way
-        (up to the Nyquist frequency for discrete models).
+        (up to the Nyquist frequency for discrete models), widened while ``|L|`` heads for 1
+        past an end, plus the end points ``omega = 0`` and (discrete) ``pi / dt``, where a
+        negative real ``L`` is a phase crossover. A given grid is searched as it is.
 
     Returns
     -------
@@ -170,9 +175,20 @@ def margin(sys: Any, *, omega: Any = None) -> Margins:
     >>> m = sysid.margin(sysid.TransferFunction([4.0], [1.0, 3.0, 2.0, 0.0]))   # 4 / (s (s+1)(s+2))
     >>> round(m.gain_margin, 6), round(m.phase_crossover, 6)                    # 6/4 at sqrt 2
     (1.5, 1.414214)
+
+    A negative DC gain is a phase crossover at ``omega = 0`` (the closed loop ``s + 1 - 2 k``
+    of ``-2 / (s + 1)`` is unstable for ``k > 0.5``):
+
+    >>> m = sysid.margin(sysid.TransferFunction([-2.0], [1.0, 1.0]))
+    >>> m.gain_margin, m.phase_crossover
+    (0.5, 0.0)
     """
     sys = _siso(sys)
     w = _range(sys, omega)
+    parametric = omega is None and hasattr(sys, "poles")   # not an FRD's own lines
+    dt = float(getattr(sys, "dt", 0.0) or 0.0)
+    if parametric:
+        w = _widen(sys, w, dt)
 
     def L(x: float) -> complex:
         return complex(np.asarray(sys.freqresp([x]))[0, 0, 0])
@@ -192,15 +208,68 @@ def margin(sys: Any, *, omega: Any = None) -> Margins:
             a += 2 * np.pi * np.round((ph[i] - a) / (2 * np.pi))
             return a - t
         wpc.append(_root(f, w[i], w[i + 1]))
-    mag = np.abs(g)
+    d = np.abs(g) - 1.0
     wgc = [_root(lambda x: abs(L(x)) - 1.0, w[i], w[i + 1])
-           for i in np.flatnonzero((mag[:-1] - 1) * (mag[1:] - 1) < 0)]
-    wpc_a = np.array([x for x in wpc if np.isfinite(x)])
+           for i in np.flatnonzero(d[:-1] * d[1:] < 0)]
+    # |L| = 1 right on a grid point it crosses through (not at an end, where it may only touch)
+    wgc += list(w[1:-1][(d[1:-1] == 0) & (d[:-2] * d[2:] < 0)])
+    wgc.sort()
+    wpc = [x for x in wpc if np.isfinite(x)]
+    if parametric:   # the ends, where L is real: a phase crossover if it is negative there
+        ends = [x for x in ([0.0] + ([np.pi / dt] if dt > 0 else []))
+                if _negative_real(_at(sys, x))
+                and not any(abs(y - x) <= 1e-9 * max(x, 1e-300) for y in wpc)]
+        wpc = sorted(wpc + ends)
+    wpc_a = np.array(wpc, dtype=float)
     wgc_a = np.array([x for x in wgc if np.isfinite(x)])
-    gms = np.array([1.0 / abs(L(x)) for x in wpc_a])
+    gms = np.array([1.0 / abs(_at(sys, x)) for x in wpc_a])
     pms = np.array([(np.degrees(np.angle(L(x))) + 180.0 + 180.0) % 360.0 - 180.0
                     for x in wgc_a])
     return Margins(wpc_a, gms, wgc_a, pms)
+
+
+def _at(sys: Any, x: float) -> complex:
+    """``L(j x)``; a pole there (an integrator at ``x = 0``) gives a non-finite value."""
+    with np.errstate(all="ignore"):
+        return complex(np.asarray(sys.freqresp([x]))[0, 0, 0])
+
+
+def _negative_real(v: complex) -> bool:
+    return bool(np.isfinite(v) and v.real < 0 and abs(v.imag) <= 1e-9 * abs(v))
+
+
+_DECADES = 60     # how far past the poles' span a gain crossover is looked for
+
+
+def _widen(sys: Any, w: np.ndarray, dt: float) -> np.ndarray:
+    """The default grid, extended past an end where ``|L|`` still heads for 1 (downwards; also
+    upwards for a continuous loop) to a decade past where it has crossed; unchanged when
+    ``|L|`` is flat there or moves away from 1 (no gain crossover out there)."""
+    def reach(x: float, step: float) -> float:
+        m = abs(_at(sys, x))
+        for _ in range(_DECADES):
+            y = x * step
+            n = abs(_at(sys, y))
+            if not (np.isfinite(m) and np.isfinite(n) and m > 0 and n > 0):
+                break
+            if (m - 1.0) * (n - 1.0) <= 0:
+                return y * step      # a decade beyond: the crossing strictly inside the grid
+            if abs(np.log(n)) > abs(np.log(m)) - 0.1:   # flat or receding from 1
+                break
+            x, m = y, n
+        return float("nan")
+
+    lo, hi = float(w[0]), float(w[-1])
+    parts = [w]
+    new_lo = reach(lo, 0.1)
+    if np.isfinite(new_lo):
+        parts.insert(0, np.geomspace(new_lo, lo, int(200 * np.log10(lo / new_lo)) + 2)[:-1])
+    new_hi = reach(hi, 10.0) if dt == 0 else float("nan")
+    if np.isfinite(new_hi):
+        delay = float(np.max(getattr(sys, "iodelay", 0.0), initial=0.0))
+        n = int(200 * np.log10(new_hi / hi) + 50 * delay * new_hi) + 2
+        parts.append(np.geomspace(hi, new_hi, min(n, 200000))[1:])
+    return np.concatenate(parts) if len(parts) > 1 else w
 
 
 def _root(f: Any, a: float, b: float) -> float:

@@ -12,7 +12,10 @@ For a response ``y(t)`` from ``y_init`` to ``y_final`` (``dy = y_final - y_init`
 - peak: largest ``|y - y_init|`` and its time.
 
 A model's step response is computed on a fine grid (continuous models exactly sampled) and
-``y_final`` is its steady-state gain.
+``y_final`` is its steady-state gain. Every step starts from rest: ``y_init`` is 0 by default
+(MATLAB's ``stepinfo(y, t)`` too), not the first sample, which a direct term lifts off 0; a
+model's :class:`~sysid.TimeResponse` (``sysid.step(G)``) ends at the model's steady-state gain,
+not at its last sample.
 """
 
 from __future__ import annotations
@@ -162,9 +165,12 @@ def stepinfo(sys: Any, t: Any = None, *, yfinal: Any = None, yinit: Any = None,
     t : array_like, optional
         Sample times of ``y`` (needed for arrays).
     yfinal : float or array_like, optional
-        Steady-state value (default: the model's steady-state gain; the last sample for data).
+        Steady-state value (default: the model's steady-state gain, also for the step
+        response of a linear model; the last sample for samples or other responses).
     yinit : float or array_like, optional
-        Initial value (default ``y[0]``; zero for a model).
+        The value before the step (default 0, as MATLAB's: a response from rest; its first
+        sample is not it when a direct term makes the output jump). Pass ``y[0]`` for a
+        record that starts off zero.
     threshold : float
         Settling band as a fraction (MATLAB's ``SettlingTimeThreshold``, 2 %).
     rise_limits : (float, float)
@@ -187,6 +193,13 @@ def stepinfo(sys: Any, t: Any = None, *, yfinal: Any = None, yinit: Any = None,
     (2.1972, 3.912)
     >>> round(sysid.stepinfo(sysid.TransferFunction([1.0], [1.0, 0.6, 1.0])).overshoot, 2)
     37.23
+
+    A direct term: ``(s + 3) / (s + 1)`` jumps to 1 and rises from rest (0) to 3, over
+    ``ln(2 / 0.3)`` from 10 % to 90 %, as its step response (a ``TimeResponse``) says too:
+
+    >>> G = sysid.TransferFunction([1.0, 3.0], [1.0, 1.0])
+    >>> round(sysid.stepinfo(sysid.step(G)).rise_time, 3), round(float(np.log(2 / 0.3)), 3)
+    (1.897, 1.897)
     """
     if not 0 < threshold < 1:
         raise DataError(f"threshold must lie in (0, 1), got {threshold}")
@@ -222,9 +235,9 @@ def _response(sys: Any, t: Any, n: int
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     from ..models.protocol import TimeResponse
 
-    if isinstance(sys, TimeResponse):
+    if isinstance(sys, TimeResponse):   # a response from rest: it starts at 0
         Y = np.asarray(sys.y, dtype=float)
-        return np.asarray(sys.t, float), Y, Y[-1], Y[0]
+        return np.asarray(sys.t, float), Y, _response_final(sys, Y), np.zeros(Y.shape[1:])
     if hasattr(sys, "freqresp") and hasattr(sys, "dt"):
         return _model_step(sys, n)
     if t is None:
@@ -241,7 +254,30 @@ def _response(sys: Any, t: Any, n: int
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(tt))):
         raise DataError("y and t must be finite")
     Y = y[:, :, None]
-    return tt, Y, Y[-1], Y[0]
+    return tt, Y, Y[-1], np.zeros(Y.shape[1:])
+
+
+def _response_final(resp: Any, Y: np.ndarray) -> np.ndarray:
+    """The final value of a :class:`~sysid.TimeResponse`: its linear model's steady-state gain
+    for a step response (``inf`` when it does not settle), else its last sample."""
+    src = getattr(resp, "model", None)
+    if (resp.kind != "step" or not (hasattr(src, "freqresp") and hasattr(src, "poles"))
+            or _nonlinear(src)):
+        return Y[-1].copy()
+    try:
+        p = np.asarray(src.poles())
+    except (DataError, np.linalg.LinAlgError, NumericalError):
+        return Y[-1].copy()
+    if Y.shape[1:] != (getattr(src, "noutputs", -1), getattr(src, "ninputs", -1)):
+        return Y[-1].copy()
+    return _final_value(src, Y.shape[1:], _unstable(p, float(getattr(src, "dt", 0.0) or 0.0)))
+
+
+def _unstable(p: np.ndarray, dt: float) -> bool:
+    """A pole outside the unit circle (``dt > 0``) or in the right half plane."""
+    if dt > 0:
+        return bool(p.size and np.max(np.abs(p)) > 1.0 + 1e-9)
+    return bool(np.any(p.real > 1e-9 * np.maximum(1.0, np.abs(p))))
 
 
 def _nonlinear(sys: Any) -> bool:
@@ -282,7 +318,7 @@ def _model_step(sys: Any, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
             # the response's own final value: the linear part's (or the linearisation's)
             # static gain is not the nonlinear model's (0.909 for a step that ends at 0.934)
             return np.asarray(resp.t, float), Y, Y[-1].copy(), np.zeros_like(Y[-1])
-        gain = _final_value(sys, Y.shape[1:], rho > 1.0 + 1e-9)
+        gain = _final_value(sys, Y.shape[1:], _unstable(p, float(sys.dt)))
         return np.asarray(resp.t, float), Y, gain, np.zeros_like(gain)
     re = -p.real
     slow = float(np.min(re[re > 1e-12])) if np.any(re > 1e-12) else 0.0
@@ -291,6 +327,5 @@ def _model_step(sys: Any, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, n
     else:
         t_final = 10.0 / slow + 1.2 * delay
     resp = sys.step(n, dt=t_final / (n - 1))
-    unstable = bool(np.any(-re > 1e-9 * np.maximum(1.0, np.abs(p))))
-    gain = _final_value(sys, resp.y.shape[1:], unstable)
+    gain = _final_value(sys, resp.y.shape[1:], _unstable(p, 0.0))
     return np.asarray(resp.t, float), np.asarray(resp.y), gain, np.zeros_like(gain)

@@ -164,6 +164,8 @@ class TimeResponse:
                  std: np.ndarray | None = None) -> None:
         self.kind, self.t, self.y = kind, t, y
         self.std = std  # first-order std of y (step(..., std=True)); plotted as bands
+        #: what it is the response of (``stepinfo`` reads a model's steady-state gain there)
+        self.model = model
         self.input_names, self.output_names = list(model.input_names), list(model.output_names)
         #: the response of a continuous-time model (plotted as a line, not a staircase)
         self.continuous = not float(getattr(model, "dt", 1.0) or 0.0) > 0

@@ -125,6 +125,46 @@ class TrendedModel(ModelMixin):
         return self.model.poles(std=True, method=method) if std else np.asarray(
             self.model.poles())
 
+    # -- responses: of the linear model, in deviation variables (MATLAB's step on a model) --
+    def step(self, n_samples: int | None = None, *args: Any, **kw: Any) -> Any:
+        """The inner model's step response (``args``, ``kw``: as its ``step``): a unit step
+        in deviation from the operating point, from rest, as :func:`sysid.step` and
+        :func:`sysid.stepinfo` read it; the trend's offsets are no part of it (``simulate``
+        with raw inputs gives raw outputs).
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> raw = sysid.IOData(u=[21.0, 19.0, 20.0, 20.0], y=[50.0, 51.0, 49.0, 50.0])
+        >>> d, tr = sysid.detrend(raw, "mean", return_trend=True)
+        >>> m = tr.attach(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]))
+        >>> m.step(4).y[:, 0, 0]                  # from 0, not through the offsets
+        array([0.  , 1.  , 1.5 , 1.75])
+        """
+        return self._respond("step", n_samples, *args, **kw)
+
+    def impulse(self, n_samples: int | None = None, *args: Any, **kw: Any) -> Any:
+        """The inner model's impulse response (``args``, ``kw``: as its ``impulse``), in
+        deviation variables as :meth:`step`.
+
+        Examples
+        --------
+        >>> import sysid
+        >>> raw = sysid.IOData(u=[21.0, 19.0, 20.0, 20.0], y=[50.0, 51.0, 49.0, 50.0])
+        >>> d, tr = sysid.detrend(raw, "mean", return_trend=True)
+        >>> tr.attach(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])).impulse(3).y[:, 0, 0]
+        array([0. , 1. , 0.5])
+        """
+        return self._respond("impulse", n_samples, *args, **kw)
+
+    def _respond(self, kind: str, n_samples: int | None, *args: Any, **kw: Any) -> Any:
+        fn = getattr(self.model, kind, None)
+        if fn is None:
+            from .protocol import sampled_response
+
+            return sampled_response(self.model, kind, n_samples)
+        return fn(n_samples, *args, **kw)
+
     def is_stable(self) -> bool:
         """The inner model's stability (a trend does not change it)."""
         return bool(self.model.is_stable())
