@@ -664,3 +664,27 @@ def test_from_raw_checks_dt_first() -> None:
     for bad in (0, -0.1, np.nan):
         with pytest.raises(DataError, match="dt must be a positive number of seconds"):
             sysid.IOData.from_raw(np.ones(5), np.ones(5), dt=bad)
+
+
+def test_a_time_column_in_milliseconds_is_read_in_seconds(tmp_path):
+    # a column headed "time [ms]" (or named time_ms) was read as seconds: dt = 10 for 10 ms
+    # samples, every time constant 1000 times too long, silently
+    import pandas as pd
+
+    p = tmp_path / "ms.csv"
+    p.write_text("time [ms],u,y\n0,1,2\n10,2,3\n20,3,4\n30,4,5\n")
+    assert sysid.IOData.from_csv(p, inputs=["u"], outputs=["y"]).dt == pytest.approx(0.01)
+    frame = pd.DataFrame({"time [ms]": [0, 10, 20, 30.0], "u": [1, 2, 3, 4.0],
+                          "y": [2, 3, 4, 5.0]})
+    assert sysid.IOData.from_pandas(frame, ["u"], ["y"]).dt == pytest.approx(0.01)
+    indexed = frame.drop(columns="time [ms]").set_index(pd.Index([0, 10, 20, 30.0],
+                                                                 name="time_ms"))
+    assert sysid.IOData.from_pandas(indexed, ["u"], ["y"]).dt == pytest.approx(0.01)
+    p.write_text("time [deg],u,y\n0,1,2\n10,2,3\n20,3,4\n30,4,5\n")
+    with pytest.raises(sysid.DataError, match="not read as a unit of time"):
+        sysid.IOData.from_csv(p, inputs=["u"], outputs=["y"])
+    # dt= beside a time column that says otherwise: refused, as IOData(dt=, time=) is
+    p.write_text("t,u,y\n0,1,2\n0.1,2,3\n0.2,3,4\n0.3,4,5\n")
+    with pytest.raises(sysid.DataError, match="disagrees with its time column 't'"):
+        sysid.IOData.from_csv(p, inputs=["u"], outputs=["y"], dt=0.2)
+    assert sysid.IOData.from_csv(p, inputs=["u"], outputs=["y"], dt=0.1).dt == 0.1

@@ -22,7 +22,7 @@ import numpy as np
 
 from .._atomic import atomic_path
 from ..errors import DataError, SysidWarning
-from .table import datetime_seconds, numeric, read_table, time_column, units_row
+from .table import datetime_seconds, numeric, read_table, time_column, time_unit_seconds, units_row
 
 __all__: list[str] = []
 
@@ -66,14 +66,17 @@ def _warn_dropped_rows(index: Any, timed: bool) -> None:
         SysidWarning, stacklevel=3)
 
 
-def _seconds(x: Any, first: Any) -> np.ndarray:
-    """Time values in seconds: numbers as they are; datetime64 and timedelta64 stamps (a
-    column or a ``DatetimeIndex``/``TimedeltaIndex``) as seconds since the first stamp of
-    ``first`` (the first experiment's), not as their raw nanosecond counts."""
+def _seconds(x: Any, first: Any, unit: str = "") -> np.ndarray:
+    """Time values in seconds: numbers in the unit of their name or ``unit`` (``time [ms]``,
+    ``time_ms``: :func:`sysid.data.table.time_unit_seconds`; seconds without one); datetime64
+    and timedelta64 stamps (a column or a ``DatetimeIndex``/``TimedeltaIndex``) as seconds
+    since the first stamp of ``first`` (the first experiment's), not as their raw nanosecond
+    counts."""
     pd = _pandas()
     idx = pd.Index(x)
     if idx.dtype.kind not in "mM":
-        return idx.to_numpy(dtype=float)
+        return idx.to_numpy(dtype=float) * time_unit_seconds(str(getattr(x, "name", "") or ""),
+                                                             unit)
     return np.asarray((idx - pd.Index(first)[0]).total_seconds(), dtype=float)
 
 
@@ -213,15 +216,24 @@ def from_pandas(
         us.append(g[inputs].to_numpy(dtype=float) if inputs else None)
         ys.append(g[outputs].to_numpy(dtype=float))
         if time is not None:
-            ts.append(_seconds(g[time], groups[0][time]))
+            ts.append(_seconds(g[time], groups[0][time], units.get(time, "")))
         elif dt is None and g.index.dtype.kind in "mM":
             ts.append(_seconds(g.index, groups[0].index))
         elif dt is None and _index_is_time(g.index):
-            ts.append(g.index.to_numpy(dtype=float))
+            ts.append(g.index.to_numpy(dtype=float)
+                      * time_unit_seconds(str(g.index.name or "")))
         elif dt is None and (tc := _time_column(g, inputs + outputs)) is not None:
-            ts.append(_seconds(g[tc], groups[0][tc]))
+            ts.append(_seconds(g[tc], groups[0][tc], units.get(tc, "")))
     for g in groups:
         _warn_dropped_rows(g.index, time is not None or bool(ts))
+    if dt is not None and time is None and (tc := _time_column(df, inputs + outputs)) is not None:
+        t = _seconds(df[tc], df[tc], units.get(tc, "")) if experiment is None else None
+        step = np.diff(t) if t is not None else np.zeros(0)
+        if step.size and np.all(step > 0) and abs(float(np.median(step)) - float(dt)) > \
+                1e-6 * max(float(np.median(step)), float(dt)):
+            raise DataError(f"dt = {float(dt):g} s disagrees with the time column {tc!r} "
+                            f"(samples {float(np.median(step)):g} s apart); pass one of them "
+                            "(dt= alone, or time= without dt=)")
     if dt is None and ts and "dt" in df.attrs:
         # the stored dt (to_pandas) when the time agrees with it: 1/60, not 0.0166666666667
         dt = grid_dt(ts, [df.attrs["dt"]], rtol=1e-9)
@@ -390,6 +402,10 @@ def from_csv(
         used = [c for c in used if c != tcol]
     data[:, used] = numeric(table, used, missing=True, decimal=decimal,
                             hint="pass decimal=','")
+    if tcol is not None and stamps is None:  # numbers in the column's unit: to seconds
+        data[:, tcol] *= time_unit_seconds(table.names[tcol], unit_of[names[tcol]])
+    elif tcol is None and dt is not None:
+        _check_dt_against_time(table, names, unit_of, iu + iy, float(dt), decimal, p.name)
     if tcol is None and dt is None:
         warnings.warn(
             f"{p.name} has no time column and no dt= was given: assuming dt = 1 s; pass "
@@ -421,6 +437,27 @@ def from_csv(
         max_gap=max_gap,
         **kw,
     )
+
+
+def _check_dt_against_time(table: Any, names: list[str], unit_of: dict[str, str],
+                           channels: list[int], dt: float, decimal: str, file: str) -> None:
+    """``dt=`` given while the file has a time column (not read then): they must agree, as
+    ``IOData(dt=, time=)`` requires (a 0.1 s column read at dt = 0.2 was taken silently)."""
+    k = time_column(table.names, channels)
+    if k is None:
+        return
+    try:
+        t = numeric(table, [k], missing=True, decimal=decimal, hint="")[:, 0]
+        t = t * time_unit_seconds(table.names[k], unit_of[names[k]])
+    except DataError:
+        return  # not numbers (date-time stamps or text): nothing to compare
+    step = np.diff(t[np.isfinite(t)])
+    if step.size and np.all(step > 0):
+        spacing = float(np.median(step))
+        if abs(spacing - dt) > 1e-6 * max(spacing, dt):
+            raise DataError(f"{file}: dt = {dt:g} s disagrees with its time column "
+                            f"{table.names[k]!r} (samples {spacing:g} s apart); pass one of "
+                            "them (dt= alone, or time= without dt=)")
 
 
 def _arrays(data: Any) -> dict[str, Any]:
