@@ -688,3 +688,21 @@ def test_a_time_column_in_milliseconds_is_read_in_seconds(tmp_path):
     with pytest.raises(sysid.DataError, match="disagrees with its time column 't'"):
         sysid.IOData.from_csv(p, inputs=["u"], outputs=["y"], dt=0.2)
     assert sysid.IOData.from_csv(p, inputs=["u"], outputs=["y"], dt=0.1).dt == 0.1
+
+
+def test_from_irregular_cuts_at_an_outage_instead_of_bridging_it():
+    # a 30 s outage in a 0.1 s record was filled with a straight line (300 of 500 samples),
+    # silently, by the very call IOData(time=...)'s gap error recommends
+    rng = np.random.default_rng(0)
+    t = np.r_[np.arange(0.0, 10.0, 0.1), np.arange(40.0, 50.0, 0.1)]
+    t = t + 0.01 * rng.uniform(size=t.size)
+    y = np.sin(t)
+    with pytest.warns(sysid.SysidWarning, match="cut into 2 experiment"):
+        d = sysid.IOData.from_irregular(t, None, y, dt=0.1)
+    assert d.n_experiments == 2 and d.n_samples < 205
+    for e in range(2):
+        tt = d.experiment(e).time
+        np.testing.assert_allclose(d.experiment(e).y[:, 0], np.sin(tt), atol=2e-3)
+    # a larger max_gap bridges it as before
+    whole = sysid.IOData.from_irregular(t, None, y, dt=0.1, max_gap=40.0)
+    assert whole.n_experiments == 1 and whole.n_samples > 490

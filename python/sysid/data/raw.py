@@ -222,6 +222,7 @@ def from_irregular(
     dt: float | None = None,
     *,
     method: str = "linear",
+    max_gap: float | None = None,
     input_names: Sequence[str] | None = None,
     output_names: Sequence[str] | None = None,
     input_units: Sequence[str] | None = None,
@@ -240,6 +241,10 @@ def from_irregular(
     method : {"linear", "cubic"}
         Interpolation (``"cubic"``: SciPy's ``CubicSpline``). No anti-alias filter is
         applied: choose ``dt`` no longer than the typical spacing.
+    max_gap : float, optional
+        Longest interval between instants (seconds) that is bridged; default ``5 dt``. At a
+        longer gap (an outage) the record is cut into experiments, with a warning, rather
+        than filled with a straight line the data never showed.
 
     Examples
     --------
@@ -271,30 +276,54 @@ def from_irregular(
     nch = ya.shape[1] + (0 if ua is None else ua.shape[1])
     check_elements(n_float * (nch + 1), f"dt = {h:g} over a span of {t[-1] - t[0]:g} "
                    f"({n_float:.3g} samples)", "pass a dt near the typical spacing of time")
-    n_new = int(n_float)
-    grid = t[0] + np.arange(n_new) * h
-    if method == "linear":
-        def interp(x: np.ndarray) -> np.ndarray:
-            return np.column_stack([np.interp(grid, t, c) for c in x.T]).reshape(
-                grid.size, x.shape[1]
-            )
-    elif method == "cubic":
-        from scipy.interpolate import CubicSpline
-
-        def interp(x: np.ndarray) -> np.ndarray:
-            return CubicSpline(t, x, axis=0)(grid)
-    else:
+    if method not in ("linear", "cubic"):
         raise DataError(f"method must be 'linear' or 'cubic', got {method!r}")
+    gap = 5.0 * h if max_gap is None else float(max_gap)
+    if not (np.isfinite(gap) and gap > 0):
+        raise DataError(f"max_gap must be a positive number of seconds, got {max_gap!r}")
+    cuts = np.flatnonzero(d > gap) + 1
+    pieces = [(a, b) for a, b in zip(np.r_[0, cuts], np.r_[cuts, t.size])
+              if b - a >= 2 and t[b - 1] - t[a] >= h]
+    if cuts.size:
+        import warnings
+
+        from ..errors import SysidWarning
+
+        warnings.warn(
+            f"time has {cuts.size} gap(s) longer than max_gap = {gap:g} s (the longest "
+            f"{float(d.max()):g} s, after {t[int(np.argmax(d))]:g} s): the record is cut into "
+            f"{len(pieces)} experiment(s) there instead of bridged by interpolation; pass a "
+            "larger max_gap to bridge them", SysidWarning, stacklevel=3)
+    if not pieces:
+        raise DataError(f"no stretch of time between gaps longer than max_gap = {gap:g} s "
+                        f"holds two instants dt = {h:g} s apart: nothing to interpolate")
+    us, ys, grids = [], [], []
+    for a, b in pieces:
+        ts = t[a:b]
+        grid = ts[0] + np.arange(int(np.floor((ts[-1] - ts[0]) / h + 1e-9)) + 1) * h
+        grids.append(grid)
+        ys.append(_interpolate(ts, ya[a:b], grid, method))
+        us.append(None if ua is None else _interpolate(ts, ua[a:b], grid, method))
+    one = len(pieces) == 1
     return cls(
-        None if ua is None else interp(ua),
-        interp(ya),
+        us[0] if one else (None if ua is None else us),
+        ys[0] if one else ys,
         h,
-        time=grid,
+        time=grids[0] if one else grids,
         input_names=input_names,
         output_names=output_names,
         input_units=input_units,
         output_units=output_units,
     )
+
+
+def _interpolate(t: np.ndarray, x: np.ndarray, grid: np.ndarray, method: str) -> np.ndarray:
+    """The columns of ``x`` (at instants ``t``) on ``grid``, linearly or by a cubic spline."""
+    if method == "cubic":
+        from scipy.interpolate import CubicSpline
+
+        return np.asarray(CubicSpline(t, x, axis=0)(grid))
+    return np.column_stack([np.interp(grid, t, c) for c in x.T]).reshape(grid.size, x.shape[1])
 
 
 def _raw2d(x: Any, name: str) -> np.ndarray:
