@@ -706,3 +706,14 @@ def test_from_irregular_cuts_at_an_outage_instead_of_bridging_it():
     # a larger max_gap bridges it as before
     whole = sysid.IOData.from_irregular(t, None, y, dt=0.1, max_gap=40.0)
     assert whole.n_experiments == 1 and whole.n_samples > 490
+
+
+def test_float64_stamps_on_a_power_of_two_rate_are_not_taken_for_float32():
+    # t = k / 1024 over 1100 s: every stamp is a float32 value, and the record was refused
+    # as "time stamps ... stored as float32" (it is float64, on an exact grid)
+    t = np.arange(1100 * 1024) / 1024.0
+    assert sysid.sample_time(t) == 1 / 1024
+    # float32 seconds far from zero, rounded off the grid, are still refused
+    coarse = (1.7e9 + np.arange(200) * 0.01).astype(np.float32)
+    with pytest.raises(sysid.DataError, match="stored as float32"):
+        sysid.sample_time(coarse)

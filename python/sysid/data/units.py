@@ -183,7 +183,11 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
     coarse = (ulp > _COARSEST * span if span > 0 else raw.dtype.kind == "f"
               and raw.dtype.itemsize < 8) or (
         bool(np.any(d == 0)) and pos.size > 0 and ulp > _COARSEST * float(np.min(pos)))
-    if coarse:
+    # stamps on an exact grid lost nothing to rounding, whatever type holds them: float64
+    # multiples of 1/1024 s are float32 values too, and a 1024 Hz record of 1100 s was
+    # refused as "float32 stamps"
+    exact = bool(d.size and d[0] > 0 and np.all(d == d[0]))
+    if coarse and not exact:
         raise DataError(
             f"time stamps near {np.max(np.abs(t)):g} s stored as {kind} are {ulp:g} s apart at "
             f"best (the resolution of {kind} there), more than a tenth of the sample spacing "
