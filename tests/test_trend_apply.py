@@ -166,3 +166,21 @@ def test_restore_of_model_outputs_takes_the_records_start():
     sim = zero.simulate(tr.apply(val).u)
     np.testing.assert_allclose(tr.restore(sim, t0=val.time[0]), val.y, atol=1e-9)
     np.testing.assert_allclose(tr.restore(zero.simulate(est.u)), est.y, atol=1e-9)
+
+
+def test_a_continuous_model_with_a_trend_compares_on_the_records_clock():
+    # tr.attach(continuous model): compare's result had dt = 0 (the inner model's), so a
+    # linear trend was restored at the record's start for every sample, error_spectrum and
+    # report divided by zero, and the plot put every sample at t = 0
+    rng = np.random.default_rng(10)
+    mc = sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]])
+    u = rng.standard_normal(512)
+    y = mc.sampled(0.1).simulate(u)[:, 0] + 0.01 * rng.standard_normal(512)
+    t = np.arange(512) * 0.1
+    raw = sysid.IOData(u=u + 1.0, y=y + 2.0 + 0.3 * t, dt=0.1)
+    _, tr = sysid.detrend(raw, "linear", return_trend=True)
+    tm = tr.attach(mc)
+    c = sysid.compare(tm, raw)
+    assert c.dt == 0.1 and float(np.ravel(c.fit)[0]) > 90.0
+    spec = sysid.error_spectrum(tm, raw)
+    assert spec is not None

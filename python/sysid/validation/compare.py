@@ -644,16 +644,22 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
             data = IOData(u=data[0], y=data[1], dt=model.dt)
         inner = compare_one(model.model, model.trend.apply(data), horizon, x0)
         raw = data.experiments
-        yh = [model.trend.restore_outputs(b, model.dt, model.trend.start_of(t[0]))
+        # the record's sample time: a continuous inner model has none (dt = 0 put every
+        # sample of a linear trend at its start, and error_spectrum divided by it)
+        yh = [model.trend.restore_outputs(b, inner.dt, model.trend.start_of(t[0]))
               for b, t in zip(inner.yhat, data.times)]
-        return CompareResult(model, inner.horizon, [u for u, _ in raw], [y for _, y in raw],
-                             yh, inner.x0)
+        out = CompareResult(model, inner.horizon, [u for u, _ in raw], [y for _, y in raw],
+                            yh, inner.x0)
+        out.dt = inner.dt
+        return out
     if _operating_point(model):  # the model of the deviations, its offsets added back
         raw = data if isinstance(data, IOData) else IOData(u=data[0], y=data[1], dt=model.dt)
         inner = compare_one(model.statespace, model.remove_offsets(raw), horizon, x0)
-        return CompareResult(model, inner.horizon, [u for u, _ in raw.experiments],
-                             [y for _, y in raw.experiments],
-                             [yh + model.y_offset for yh in inner.yhat], inner.x0)
+        out = CompareResult(model, inner.horizon, [u for u, _ in raw.experiments],
+                            [y for _, y in raw.experiments],
+                            [yh + model.y_offset for yh in inner.yhat], inner.x0)
+        out.dt = inner.dt
+        return out
     model, recs = _records(model, data)
     h = _horizon(horizon)
     runner = _simulator(model, x0, h, recs[0][0] if recs else None)
