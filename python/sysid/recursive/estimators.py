@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_dt, as_int, as_option
+from .._checks import as_2d, as_dt, as_option, as_whole_int
 from ..errors import DataError, ShapeError, is_record
 
 
@@ -33,7 +33,7 @@ def _orders(v: Any, name: str, lo: int = 0) -> list[int]:
     vals = list(np.atleast_1d(np.asarray(v, dtype=object)).ravel())
     if not vals:
         raise DataError(f"{name} needs one entry per input, got none")
-    return [as_int(x, name, lo) for x in vals]
+    return [as_whole_int(x, name, lo) for x in vals]
 
 
 def _one_vector(first: Any, rest: tuple[Any, ...], names: str, who: str) -> list[Any] | None:
@@ -156,14 +156,17 @@ class _Recursive:
     def __init__(self, na: int, nb: Any, nc: int, nd: int, nf: Any, nk: Any, *,
                  method: str, forgetting: float, process_noise: Any, noise_variance: float,
                  gain: float, bias: float, initial_parameters: Any, initial_covariance: Any,
-                 dt: float) -> None:
+                 dt: float | None) -> None:
         method = as_option(method, "recursive_method", "method")
+        na_i = as_whole_int(na, "na", 0)  # the orders in the signature's order: na first
         nb_v = _orders(nb, "nb")
         m = len(nb_v)
+        nc_i, nd_i = as_whole_int(nc, "nc", 0), as_whole_int(nd, "nd", 0)
         nf_v, nk_v = _per_input(nf, m, "nf"), _per_input(nk, m, "nk")
-        self._orders = (as_int(na, "na", 0), nb_v, as_int(nc, "nc", 0), as_int(nd, "nd", 0),
-                        nf_v, nk_v)
-        self.method, self.dt = method, as_dt(dt)
+        self._orders = (na_i, nb_v, nc_i, nd_i, nf_v, nk_v)
+        # dt: the constructor's, else that of the first record run() gets (1 until then)
+        self.method, self._dt = method, 1.0 if dt is None else as_dt(dt)
+        self._dt_from = None if dt is None else "the constructor's dt"
         P0 = np.asarray(initial_covariance, dtype=float)
         theta0 = None if initial_parameters is None else np.ascontiguousarray(
             np.asarray(initial_parameters, dtype=float).ravel())
@@ -189,6 +192,15 @@ class _Recursive:
             self._set_covariance(P0, "initial_covariance")
 
     # -- state ---------------------------------------------------------------------------
+    @property
+    def dt(self) -> float:
+        """Sample time (settable): the constructor's, else the first record's, else 1."""
+        return self._dt
+
+    @dt.setter
+    def dt(self, value: Any) -> None:
+        self._dt, self._dt_from = as_dt(value), "the dt set on it"
+
     @property
     def ninputs(self) -> int:
         """Number of inputs."""
@@ -281,7 +293,9 @@ class _Recursive:
         """Process a record in the Rust core (GIL released, Ctrl-C honoured): an
         :class:`~sysid.IOData` of one experiment and one output, or the arrays
         ``u (n_samples, ninputs)`` and ``y (n_samples,)``; the estimator's state carries
-        over, so records can be fed in pieces."""
+        over, so records can be fed in pieces. A record's ``dt`` becomes the estimator's
+        when its constructor got none."""
+        rec_dt = None
         if is_record(u):
             if y is not None:
                 raise DataError("run takes a record (IOData) or the arrays u and y, not both: "
@@ -293,6 +307,7 @@ class _Recursive:
                 raise ShapeError(f"the record has {u.n_outputs} outputs; online estimators "
                                  "model one output: make one estimator per output and run "
                                  "each on data.select(outputs=[k])")
+            rec_dt = u.dt
             u, y = u.u, u.y
         if y is None:
             raise DataError("run needs the outputs: run(data) for a record (IOData), or "
@@ -305,6 +320,8 @@ class _Recursive:
         if u2.shape[0] != y2.shape[0]:
             raise ShapeError(f"u has {u2.shape[0]} samples but y has {y2.shape[0]}")
         yv = np.ascontiguousarray(y2[:, 0])
+        if rec_dt is not None:
+            self._take_dt(rec_dt)
         before = self.rejected
         yhat, th = self._core.run(np.ascontiguousarray(u2), yv, bool(store_parameters))
         refused = self.rejected - before
@@ -321,6 +338,19 @@ class _Recursive:
                 "'kalman'), or normalise the signals"), stacklevel=user_stacklevel())
         return RecursiveResult(np.asarray(yhat), yv - yhat, None if th is None
                                else np.asarray(th), self.names, self.dt)
+
+    def _take_dt(self, dt: Any) -> None:
+        """The record's sample time becomes the estimator's when none was given (to the
+        constructor or by an earlier record); a different one raises."""
+        dt = float(dt)
+        if self._dt_from is None:
+            self._dt, self._dt_from = dt, "the dt of the first record it ran through"
+        elif abs(dt - self.dt) > 1e-9 * max(dt, self.dt):
+            raise DataError(
+                f"the record's sample time dt={dt:g} differs from the estimator's dt="
+                f"{self.dt:g} ({self._dt_from}); the parameters would mean other dynamics: "
+                f"resample the record (sysid.resample) or make the estimator with "
+                f"dt={dt:g}")
 
     def reset_history(self) -> None:
         """Forget the signal history (keep the parameters and ``P``): the next sample
@@ -369,8 +399,10 @@ _SETTINGS_DOC = """
         ``theta(0)`` (zeros by default).
     initial_covariance : float or array_like (p, p)
         ``P(0)`` (a number: times the identity; default 1e4).
-    dt : float
-        Sample time of the models :meth:`to_model` returns.
+    dt : float, optional
+        Sample time of the models :meth:`to_model` returns and of :meth:`run`'s time axis;
+        by default the ``dt`` of the first record (:class:`~sysid.IOData`) :meth:`run`
+        gets, else 1. A record of another ``dt`` than the estimator's raises.
 """
 
 
@@ -402,8 +434,9 @@ class RecursiveARX(_Recursive):
                  forgetting: float = 1.0, process_noise: Any = None,
                  noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
                  initial_parameters: Any = None, initial_covariance: Any = 1e4,
-                 dt: float = 1.0) -> None:
+                 dt: float | None = None) -> None:
         na, nb, nk = _given(na, (nb, nk), "na nb* nk*", "RecursiveARX")
+        na = as_whole_int(na, "na", 0)
         nbv = _orders(nb, "nb")
         super().__init__(na, nbv, 0, 0, [0] * len(nbv), nk, method=method,
                          forgetting=forgetting, process_noise=process_noise,
@@ -442,8 +475,9 @@ class RecursiveARMAX(_Recursive):
                  forgetting: float = 1.0, process_noise: Any = None,
                  noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
                  initial_parameters: Any = None, initial_covariance: Any = 1e4,
-                 dt: float = 1.0) -> None:
+                 dt: float | None = None) -> None:
         na, nb, nc, nk = _given(na, (nb, nc, nk), "na nb* nc nk*", "RecursiveARMAX")
+        na = as_whole_int(na, "na", 0)
         nbv = _orders(nb, "nb")
         super().__init__(na, nbv, nc, 0, [0] * len(nbv), nk, method=method,
                          forgetting=forgetting, process_noise=process_noise,
@@ -479,7 +513,7 @@ class RecursiveOE(_Recursive):
                  forgetting: float = 1.0, process_noise: Any = None,
                  noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
                  initial_parameters: Any = None, initial_covariance: Any = 1e4,
-                 dt: float = 1.0) -> None:
+                 dt: float | None = None) -> None:
         nb, nf, nk = _given(nb, (nf, nk), "nb* nf* nk*", "RecursiveOE")
         super().__init__(0, nb, 0, 0, nf, nk, method=method, forgetting=forgetting,
                          process_noise=process_noise, noise_variance=noise_variance,
@@ -516,7 +550,7 @@ class RecursiveBJ(_Recursive):
                  method: str = "forgetting", forgetting: float = 1.0,
                  process_noise: Any = None, noise_variance: float = 1.0, gain: float = 1.0,
                  bias: float = 2.2e-16, initial_parameters: Any = None,
-                 initial_covariance: Any = 1e4, dt: float = 1.0) -> None:
+                 initial_covariance: Any = 1e4, dt: float | None = None) -> None:
         nb, nc, nd, nf, nk = _given(nb, (nc, nd, nf, nk), "nb* nc nd nf* nk*",
                                     "RecursiveBJ")
         super().__init__(0, nb, nc, nd, nf, nk, method=method, forgetting=forgetting,
