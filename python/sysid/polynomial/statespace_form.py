@@ -12,7 +12,8 @@ predictions:
 - **Other structures** (``F`` or ``D``): one block per input channel, ``B_ij / (A_i F_ij)``,
   and one per output for the strictly proper part of the noise model ``C_i / (A_i D_i)``,
   whose input is the innovation (not minimal when ``A`` is shared; exact).
-- **Output error** (noise model 1): the deterministic blocks, no ``K``.
+- **Output error** (noise model 1): the deterministic blocks, no ``K`` (the noise
+  covariance kept: the innovations are the white output noise).
 - **Time series**: the noise blocks alone (a coupled AR model: the block observer form).
 """
 
@@ -167,9 +168,10 @@ def _blocks(m: Any) -> Any:
         r = a.shape[0]
         A[o:o + r, o:o + r], K[o:o + r, i], C[i, o:o + r] = a, k, c
         o += r
-    if nu and nn == 0:  # output error: the noise model is 1, no innovations gain
-        return StateSpaceModel(A, B, C, D, dt=m.dt, input_names=m.input_names,
-                               output_names=m.output_names)
+    if nu and nn == 0:  # output error: the noise model is 1, no innovations gain; the
+        # innovations are the output's white noise e (variance lambda): keep its covariance
+        return StateSpaceModel(A, B, C, D, dt=m.dt, noise_cov=_noise_cov(m),
+                               input_names=m.input_names, output_names=m.output_names)
     return StateSpaceModel(A, B, C, D, K, dt=m.dt, noise_cov=_noise_cov(m),
                            input_names=m.input_names if nu else None,
                            output_names=m.output_names)
