@@ -25,9 +25,11 @@ from .._progress import iteration_printer
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
 from ..errors import DataError
+from ..models.discretisation import expm, hold_blocks
 from ..models.frd import FRD
 from ..pem.records import _experiments
-from .delays import shift_taps
+from .delays import _aug_foh as foh_block
+from .delays import shift_taps, split_delays
 from .greybox import GreyBox
 from .outer import OuterParameters, model_of
 from .results import GreyEstimate, _costs, _criterion
@@ -99,7 +101,9 @@ def greyest(
         Initial states: estimated, zero, the structure's own (a linear ``fn`` returning x0,
         possibly a function of the parameters; a nonlinear structure's ``x0`` and
         ``x0_free``), or given. Default: "estimate" for linear, "model" for nonlinear
-        structures.
+        structures. Given, zero and reported (``initial_states``) states are the
+        structure's own, also under ``hold="foh"``, whose sampled model runs in the states
+        ``x - G u`` (``info["x0_values"]``; zero is rest, ``x(0) = 0``).
     noise : {"model", "none", "estimate"}
         ``K`` as the structure returns it (zero when it returns none), no ``K``, or every entry
         of ``K`` estimated freely (innovation gain of the sampled model). Prediction focus only.
@@ -269,6 +273,7 @@ class _LinearFit(OuterParameters):
         super().__init__(s)
         self.data, self.dt, self.focus, self.reweight = data, dt, focus, reweight
         self.taps = s.input_taps(dt)
+        self.foh = s.continuous and s.hold == "foh"
         base = s.sampled_taps(None, dt)[0]
         self.n, self.m = base["B"].shape  # m: one input column per tap (delayed input)
         self.l = base["C"].shape[0]
@@ -322,6 +327,12 @@ class _LinearFit(OuterParameters):
                 xs.append(np.zeros(n))
             else:
                 xs.append(mode)
+        # a zero, given or model x0 is the physical state: the sampled model's is x - G u(0)
+        fixed = [not (isinstance(md, str) and md == "estimate") for md in self.modes]
+        offs, doffs = (self._hold_offsets(vals, jac) if any(fixed) and self.foh
+                       else (None, None))
+        if offs is not None:
+            xs = [x - g if f else x for x, g, f in zip(xs, offs, fixed)]
         th = np.concatenate(pack(base, xs, k_now))
         if not jac:
             return th, None
@@ -332,6 +343,8 @@ class _LinearFit(OuterParameters):
             dx = [np.asarray(d["x0"]).ravel() if (isinstance(md, str) and md == "model"
                                                    and d["x0"] is not None) else np.zeros(n)
                   for md in self.modes]
+            if doffs is not None:
+                dx = [x - g if f else x for x, g, f in zip(dx, doffs[j], fixed)]
             M[:, j] = np.concatenate(pack(d, dx, dk)) * self.scale[j]
         # the freely estimated K entries and initial states enter theta directly
         off_k = n * n + n * self.m + l * n + l * self.m
@@ -364,7 +377,11 @@ class _LinearFit(OuterParameters):
         off = n * n + n * self.m + self.l * n + self.l * self.m
         K = th[off:off + n * self.l].reshape(n, self.l) if self.with_k else None
         row = off + (n * self.l if self.with_k else 0)
-        x0s = [th[row + e * n: row + (e + 1) * n] for e in range(len(self.exps))]
+        xis = [th[row + e * n: row + (e + 1) * n] for e in range(len(self.exps))]
+        # initial_states are the structure's (physical) states; a first-order hold samples
+        # the model in the states xi = x - G u (info["x0_values"], a sampled model's x0)
+        x0s = ([x + g for x, g in zip(xis, self._hold_offsets(self.values(z))[0])]
+               if self.foh else xis)
         lam = np.asarray(res["innovation_covariance"])
         d = self.data
         names = {"input_names": d.input_names, "output_names": d.output_names}
@@ -374,11 +391,48 @@ class _LinearFit(OuterParameters):
             "stop": res["stop"], "remaining_decrease": float(res["remaining_decrease"]),
             "condition": res["condition"], "rank": int(res["rank"]), "n_free": int(z.size),
             "n_samples": int(res["n_samples"]), "focus": self.focus, "noise": self.noise,
-            "x0_values": x0s, "multistart": starts, "loss": res["loss"],
+            "x0_values": xis, "multistart": starts, "loss": res["loss"],
         }
         table, cov, est, model = self.estimate(
             res, lambda s, v, inf: model_of(s, v, self.dt, K, names, lam, inf), info)
         delayed = bool(np.any(self.s.input_delay > 0))
-        if len(x0s) == 1 and not delayed and hasattr(model, "K"):
-            model.x0 = x0s[0]
+        if len(xis) == 1 and not delayed and hasattr(model, "K"):
+            model.x0 = xis[0]
         return GreyEstimate(table, cov, list(self.free), model, est, x0s, info)
+
+    def _hold_offsets(self, vals: dict[str, float], jac: bool = False
+                      ) -> tuple[list[np.ndarray], list[list[np.ndarray]] | None]:
+        """Per experiment, ``G u(0)``, what a first-order hold moves out of the state (and
+        its derivatives along each free parameter when ``jac``): the sampled model's state is
+        ``xi = x - G u`` with ``G`` the ``G2`` of
+        :func:`~sysid.models.discretisation.from_blocks` for an input delayed by whole samples,
+        the weight of ``u[k+1]`` of :func:`~sysid.greybox.delays.foh_columns` for a delay of
+        a fraction of one sample (nothing for longer fractional delays), and ``u(0)`` the
+        first row of the experiment's tap columns (zero for a delayed tap)."""
+        n, m, h, s = self.n, self.s.ninputs, self.dt, self.s
+        base = s.matrices(vals, h)
+        A, B = np.asarray(base["A"], float), np.asarray(base["B"], float)
+        raw = s._raw_derivatives(vals, h, self.free, base) if jac else []
+
+        def blocks(A: np.ndarray, B: np.ndarray, unit: float) -> np.ndarray:
+            M = hold_blocks(A, B, h, "foh")
+            M[n:n + m, n + m:] *= unit  # the ramp's identity block has no derivative
+            return M
+
+        E, dE = expm(blocks(A, B, 1.0), [blocks(d["A"], d["B"], 0.0) for d in raw])
+        lo, r = split_delays(s.input_delay, h)
+        cols = [E[:n, n + m:]] + [d[:n, n + m:] for d in dE]  # G2 and its derivatives
+        G = [np.zeros((n, len(self.taps))) for _ in cols]
+        for c, (j, shift) in enumerate(self.taps):
+            if r[j] == 0:
+                for g, g2 in zip(G, cols):
+                    g[:, c] = g2[:, j]
+            elif lo[j] == 0 and shift == 0:
+                t = h - float(r[j])
+                E2, dE2 = expm(foh_block(A, B[:, j], t, 1.0),
+                               [foh_block(d["A"], d["B"][:, j], t, 0.0) for d in raw])
+                for g, e2 in zip(G, [E2, *dE2]):
+                    g[:, c] = e2[:n, n + 1] / h
+        u0 = [u[0] if u.shape[0] else np.zeros(len(self.taps)) for u, _ in self.exps]
+        offs = [G[0] @ u for u in u0]
+        return offs, ([[g @ u for u in u0] for g in G[1:]] if jac else None)
