@@ -356,6 +356,15 @@ def nlarx(
     if n_rows < 2:
         raise DataError(f"the record gives {n_rows} regression row(s) for these lags: too "
                         "short to fit a NARX model; give a longer record or shorter lags")
+    may = min(int(max_terms), int(n_cands))  # the terms FROLS may select per output
+    if n_rows < may:  # it would interpolate the rows exactly (3 rows for 35 candidates)
+        raise InsufficientDataError(
+            f"nlarx: the record gives {n_rows} regression rows for {int(n_cands)} candidate "
+            f"terms, of which FROLS may select {may} (max_terms={int(max_terms)}): fewer "
+            f"rows than terms fit the record exactly and say nothing of the system; give a "
+            f"longer record (at least {may} rows, {2 * may} to keep them all), a lower "
+            "degree or shorter lags (na, nb), or fewer candidate terms (a smaller max_terms, "
+            "fewer custom regressors)")
     keep, scores = [], []
     for s in sel:
         # at least as many residual degrees of freedom as terms: on a short record FROLS
