@@ -31,9 +31,9 @@ from .data.table import (
     numeric,
     read_table,
     text_bytes,
-    time_column,
     units_row,
 )
+from .data.units import time_column
 from .errors import DataError, InsufficientDataError, OrderError, SysidError
 from .validation.crossval import MIN_BLOCK
 

@@ -73,7 +73,7 @@ class Columns:
         :meth:`sysid.IOData.from_csv` and the command line take it."""
         if self.dt is not None or self.time is not None:
             return self
-        from ..data.table import time_column
+        from ..data.units import time_column
 
         used = [names.index(c) for c in (self.inputs or ()) + (self.outputs or ())
                 if c in names]

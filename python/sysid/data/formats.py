@@ -22,7 +22,8 @@ import numpy as np
 
 from .._atomic import atomic_path
 from ..errors import DataError, SysidWarning
-from .table import datetime_seconds, numeric, read_table, time_column, time_unit_seconds, units_row
+from .table import datetime_seconds, numeric, read_table, units_row
+from .units import time_column, time_unit_seconds
 
 __all__: list[str] = []
 
@@ -37,7 +38,7 @@ def _pandas() -> Any:
 
 def _index_is_time(index: Any) -> bool:
     """A numeric index that holds time: float values, or integers under a time-like name
-    (``time``, ``t``, ``seconds``, ...: :data:`sysid.data.table.TIME_NAMES`, any case,
+    (``time``, ``t``, ``seconds``, ...: :data:`sysid.data.units.TIME_NAMES`, any case,
     a ``[unit]`` allowed). Other integers are
     row labels (left by ``iloc[::2]``, ``dropna()`` or ``read_csv(index_col=0)`` of a
     ``sample`` column), not seconds."""
@@ -68,7 +69,7 @@ def _warn_dropped_rows(index: Any, timed: bool) -> None:
 
 def _seconds(x: Any, first: Any, unit: str = "") -> np.ndarray:
     """Time values in seconds: numbers in the unit of their name or ``unit`` (``time [ms]``,
-    ``time_ms``: :func:`sysid.data.table.time_unit_seconds`; seconds without one); datetime64
+    ``time_ms``: :func:`sysid.data.units.time_unit_seconds`; seconds without one); datetime64
     and timedelta64 stamps (a column or a ``DatetimeIndex``/``TimedeltaIndex``) as seconds
     since the first stamp of ``first`` (the first experiment's), not as their raw nanosecond
     counts."""
@@ -104,7 +105,7 @@ def grid_dt(ts: list[np.ndarray], candidates: list[Any], rtol: float = 0.0) -> f
 
 def _time_column(df: Any, channels: list[Any]) -> Any:
     """The frame's time column, not one of ``channels``: under a usual name (``time``, ``t``,
-    ``Time [s]``, ``timestamp``, ...: :func:`sysid.data.table.time_column`), else the one
+    ``Time [s]``, ``timestamp``, ...: :func:`sysid.data.units.time_column`), else the one
     column of date-times or durations whatever its name (``stamp``, ``recorded_at``: its
     type says what it is)."""
     names = [str(c) for c in df.columns]

@@ -8,6 +8,7 @@ non-uniform sampling with a message that names the first offending sample.
 from __future__ import annotations
 
 import re
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
@@ -235,3 +236,67 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
             return r
     r = float(f"{h:.12g}")
     return r if abs(r - h) <= 1e-9 * h else h
+
+
+#: the word "time" in the languages loggers are set to most often (German, French,
+#: Spanish, Italian and Portuguese, Dutch, the Scandinavian ones) is a time column too
+TIME_NAMES = ("time", "t", "time_s", "t_s", "seconds", "sec", "timestamp", "datetime",
+              "date_time", "elapsed_time", "zeit", "temps", "tiempo", "tempo", "tijd", "tid",
+              "time_ms", "t_ms", "time_us", "t_us", "time_ns", "t_ns", "timestamp_ms")
+
+#: Seconds per unit of a time column: its header's ``[unit]``/``(unit)`` (or a units row), or
+#: a name such as ``time_ms``.
+TIME_UNITS = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0,
+              "ms": 1e-3, "msec": 1e-3, "millisecond": 1e-3, "milliseconds": 1e-3,
+              "us": 1e-6, "\u00b5s": 1e-6, "\u03bcs": 1e-6, "usec": 1e-6, "microsecond": 1e-6,
+              "microseconds": 1e-6, "ns": 1e-9, "nanosecond": 1e-9, "nanoseconds": 1e-9,
+              "min": 60.0, "mins": 60.0, "minute": 60.0, "minutes": 60.0, "h": 3600.0,
+              "hr": 3600.0, "hrs": 3600.0, "hour": 3600.0, "hours": 3600.0}
+
+
+def time_unit_seconds(name: str, unit: str = "") -> float:
+    """Seconds per unit of a numeric time column called ``name``: ``unit`` when given (a CSV
+    file's units), else the ``[unit]`` or ``(unit)`` after the name, else a suffix of the name
+    (``time_ms``); 1 without one. A unit that is not one of time raises a
+    :class:`~sysid.DataError` (read as seconds it would scale every time constant).
+
+    Examples
+    --------
+    >>> from sysid.data.units import time_unit_seconds
+    >>> time_unit_seconds("time [ms]"), time_unit_seconds("t_us"), time_unit_seconds("Time")
+    (0.001, 1e-06, 1.0)
+    """
+    u = str(unit or "").strip()
+    if not u:
+        m = re.search(r"[\[(]\s*([^\])]*?)\s*[\])]\s*$", str(name))
+        u = m.group(1) if m else ""
+    if not u:
+        m = re.fullmatch(r"(?:time|t|timestamp)_(ms|us|ns|s)", str(name).strip().lower())
+        u = m.group(1) if m else ""
+    if not u:
+        return 1.0
+    key = u.lower()
+    if key not in TIME_UNITS:
+        raise DataError(f"the time column {name!r} is in {u!r}, which sysid does not read as a "
+                        "unit of time (s, ms, us, ns, min, h): convert it to seconds, or pass "
+                        "dt= (and time=None)")
+    return TIME_UNITS[key]
+
+
+def time_column(names: list[str], exclude: Iterable[int] = ()) -> int | None:
+    """The index of the first column named as a time column (``time``, ``t``, ``Time [s]``,
+    ``timestamp``, ...: :data:`TIME_NAMES` in any case, a ``[unit]`` or ``(unit)`` after
+    it allowed) that is not in ``exclude`` (the chosen inputs and outputs), or ``None``.
+
+    Examples
+    --------
+    >>> from sysid.data.units import time_column
+    >>> time_column(["Time [s]", "u", "y"]), time_column(["u", "y"]), time_column(["t"], [0])
+    (0, None, None)
+    """
+    skip = set(exclude)
+    for k, name in enumerate(names):
+        bare = re.sub(r"\s*[\[(].*[\])]\s*$", "", str(name)).strip().lower()
+        if k not in skip and bare in TIME_NAMES:
+            return k
+    return None
