@@ -237,3 +237,20 @@ def test_integer_valued_floats_give_the_same_model():
 def test_non_integers_still_refused(call, message):
     with pytest.raises(DataError, match=message.replace("(", r"\(")):
         call()
+
+
+def test_integer_valued_floats_everywhere_a_count_is_taken():
+    # n4sid(d, 2.0), ssest(..., max_iter=5.0), era(h, 2.0), impulse_response(d, 50.0) and
+    # delayest refused what arx took: the one integer check now takes whole floats
+    import warnings
+
+    d = sysid.datasets.load_dryer()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert sysid.n4sid(d, 2.0).nstates == sysid.n4sid(d, 2).nstates == 2
+        assert sysid.ssest(d, 2, max_iter=5.0).info["pem"]["iterations"] <= 5
+        h = sysid.impulse_response(d, 50.0)
+        assert h.markov.shape[0] == sysid.impulse_response(d, 50).markov.shape[0]
+        assert sysid.era(h, 2.0).model.nstates == 2
+    with pytest.raises(sysid.DataError, match="got 2.5"):
+        sysid.n4sid(d, 2.5)

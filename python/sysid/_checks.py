@@ -299,9 +299,15 @@ def mode_kept(rho: float, n: int) -> float:
 def as_int(x: Any, name: str, lo: int = 1, hi: int | None = None, *, alt: str = "") -> int:
     """Return an integer argument (a Python or NumPy integer, not a bool) in ``[lo, hi]``.
 
-    The message names the argument and the range; ``alt`` names another accepted value
-    (e.g. ``"None (simulation)"``) that the caller has already handled.
+    An integer-valued float (``2.0``, ``np.float64(2)``) is taken too: MATLAB's orders,
+    counts and horizons are doubles. The message names the argument and the range; ``alt``
+    names another accepted value (e.g. ``"None (simulation)"``) that the caller has already
+    handled.
     """
+    given = x  # quoted as given in the refusals
+    if isinstance(x, (float, np.floating)) and np.isfinite(x) and float(x).is_integer() \
+            and abs(x) <= MAX_SIZE:
+        x = int(x)
     ok = isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_))
     if ok and x >= lo and (hi is None or x <= hi) and x <= MAX_SIZE:
         return int(x)
@@ -316,26 +322,7 @@ def as_int(x: Any, name: str, lo: int = 1, hi: int | None = None, *, alt: str = 
         want = "a positive integer"
     else:
         want = f"an integer >= {lo}"
-    raise DataError(f"{name} must be {alt + ' or ' if alt else ''}{want}, got {x!r}")
-
-
-def as_whole_int(x: Any, name: str, lo: int = 1, hi: int | None = None, *, alt: str = "") -> int:
-    """:func:`as_int` that also takes an integer-valued float (``2.0``, ``np.float64(2)``):
-    MATLAB's orders and horizons are doubles. Fractions, NaN, infinities and bools are
-    refused with :func:`as_int`'s message.
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from sysid._checks import as_whole_int
-    >>> as_whole_int(2.0, "na"), as_whole_int(np.float64(3), "nb", 0)
-    (2, 3)
-    """
-    if isinstance(x, (float, np.floating)) and np.isfinite(x) and float(x).is_integer() \
-            and lo <= x <= min(hi if hi is not None else MAX_SIZE, MAX_SIZE):
-        # (out of range: as_int's refusal quotes the value as given)
-        x = int(x)
-    return as_int(x, name, lo, hi, alt=alt)
+    raise DataError(f"{name} must be {alt + ' or ' if alt else ''}{want}, got {given!r}")
 
 
 def as_seed(seed: Any, name: str = "seed") -> int:

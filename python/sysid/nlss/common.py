@@ -255,6 +255,6 @@ def check_parameters(n_par: int, recs: list[Any], fix: str) -> None:
 
 
 def check_order(order: Any) -> int:
-    from .._checks import as_whole_int
+    from .._checks import as_int
 
-    return as_whole_int(order, "order", 1)  # MATLAB's orders are doubles: 2.0 is 2
+    return as_int(order, "order", 1)  # MATLAB's orders are doubles: 2.0 is 2

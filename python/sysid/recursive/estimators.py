@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_dt, as_option, as_whole_int
+from .._checks import as_2d, as_dt, as_int, as_option
 from ..errors import DataError, ShapeError, is_record
 
 
@@ -33,7 +33,7 @@ def _orders(v: Any, name: str, lo: int = 0) -> list[int]:
     vals = list(np.atleast_1d(np.asarray(v, dtype=object)).ravel())
     if not vals:
         raise DataError(f"{name} needs one entry per input, got none")
-    return [as_whole_int(x, name, lo) for x in vals]
+    return [as_int(x, name, lo) for x in vals]
 
 
 def _one_vector(first: Any, rest: tuple[Any, ...], names: str, who: str) -> list[Any] | None:
@@ -158,10 +158,10 @@ class _Recursive:
                  gain: float, bias: float, initial_parameters: Any, initial_covariance: Any,
                  dt: float | None) -> None:
         method = as_option(method, "recursive_method", "method")
-        na_i = as_whole_int(na, "na", 0)  # the orders in the signature's order: na first
+        na_i = as_int(na, "na", 0)  # the orders in the signature's order: na first
         nb_v = _orders(nb, "nb")
         m = len(nb_v)
-        nc_i, nd_i = as_whole_int(nc, "nc", 0), as_whole_int(nd, "nd", 0)
+        nc_i, nd_i = as_int(nc, "nc", 0), as_int(nd, "nd", 0)
         nf_v, nk_v = _per_input(nf, m, "nf"), _per_input(nk, m, "nk")
         self._orders = (na_i, nb_v, nc_i, nd_i, nf_v, nk_v)
         # dt: the constructor's, else that of the first record run() gets (1 until then)
@@ -436,7 +436,7 @@ class RecursiveARX(_Recursive):
                  initial_parameters: Any = None, initial_covariance: Any = 1e4,
                  dt: float | None = None) -> None:
         na, nb, nk = _given(na, (nb, nk), "na nb* nk*", "RecursiveARX")
-        na = as_whole_int(na, "na", 0)
+        na = as_int(na, "na", 0)
         nbv = _orders(nb, "nb")
         super().__init__(na, nbv, 0, 0, [0] * len(nbv), nk, method=method,
                          forgetting=forgetting, process_noise=process_noise,
@@ -477,7 +477,7 @@ class RecursiveARMAX(_Recursive):
                  initial_parameters: Any = None, initial_covariance: Any = 1e4,
                  dt: float | None = None) -> None:
         na, nb, nc, nk = _given(na, (nb, nc, nk), "na nb* nc nk*", "RecursiveARMAX")
-        na = as_whole_int(na, "na", 0)
+        na = as_int(na, "na", 0)
         nbv = _orders(nb, "nb")
         super().__init__(na, nbv, nc, 0, [0] * len(nbv), nk, method=method,
                          forgetting=forgetting, process_noise=process_noise,

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_whole_int, experiment_arrays, require_inputs_vary
+from .._checks import as_int, experiment_arrays, require_inputs_vary
 from ..errors import DataError, InsufficientDataError
 
 _METHODS = ("burg", "yw", "ls", "fb")
@@ -168,7 +168,7 @@ def ar(data: Any, na: int, method: str = "fb", *, dt: float | None = None) -> An
         raise DataError(f"ar takes its order as a whole number, got {na!r}: compare orders "
                         "with sysid.selstruc(sysid.arxstruc(est, val, sysid.struc(range(1, "
                         "21)))) on an estimation and a validation part of the series")
-    na = as_whole_int(na, "na", 1)
+    na = as_int(na, "na", 1)
     ys, dt0 = _series(data, na, "ar")
     from ..data.iodata import IOData
     from ..data.offsets import check_offsets
@@ -226,7 +226,7 @@ def arma(data: Any, na: int, nc: int, *, max_iter: int = 100) -> Any:
     from ..data.iodata import IOData
     from ..polynomial.estimators import _pem
 
-    na_i, nc_i = as_whole_int(na, "na", 0), as_whole_int(nc, "nc", 0)
+    na_i, nc_i = as_int(na, "na", 0), as_int(nc, "nc", 0)
     if na_i + nc_i == 0:
         raise DataError("arma needs na + nc >= 1")
     if not isinstance(data, IOData):

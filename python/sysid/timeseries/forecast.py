@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_2d, as_whole_int, check_elements
+from .._checks import as_2d, as_int, check_elements
 from ..errors import DataError, InsufficientDataError, ShapeError
 from ..models.trended import TrendedModel
 
@@ -234,7 +234,7 @@ def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
     >>> f.t                                           # the samples after t = 0, 1, 2
     array([3., 4., 5.])
     """
-    h = as_whole_int(horizon, "horizon", 1)
+    h = as_int(horizon, "horizon", 1)
     if not (isinstance(level, (int, float)) and 0 < level < 1):
         raise DataError(f"level must be a number in (0, 1), e.g. 0.95; got {level!r}")
     inner, trend, offsets = _unwrap(model)
