@@ -601,3 +601,48 @@ def test_an_unstable_start_is_refused_in_tfests_terms():
         sysid.tfest(sysid.IOData(u, y, 0.1), 1, 0, iodelay=0.3,
                     init=sysid.TransferFunction([1.0], [1.0, -0.5]))
     assert "focus" not in str(e.value)
+
+
+def test_discrete_tfest_on_an_frd_estimates_the_delay_and_carries_uncertainty():
+    # the exact FRD of z^-2 (0.5 z + 0.2) / (z^2 - 1.2 z + 0.5): with iodelay="auto" the
+    # delay grid of a discrete fit was [0] and the model came back with delay 0 and a 0.59
+    # error, silently; the delay is now searched over whole samples and kept as iodelay
+    Gz = sysid.TransferFunction([0.5, 0.2], [1.0, -1.2, 0.5], dt=0.1, iodelay=2)
+    w = np.linspace(0.05, 0.98 * np.pi / 0.1, 80)
+    f = sysid.FRD(w, Gz.freqresp(w), dt=0.1)
+    G = sysid.tfest(f, 2, 1, dt=0.1, iodelay="auto")
+    assert G.iodelay[0, 0] == 2
+    np.testing.assert_allclose(G.freqresp(w), Gz.freqresp(w), atol=1e-10)
+    # with a std the discrete model carries its uncertainty (as the continuous one did)
+    rng = np.random.default_rng(0)
+    sd = 0.02 * np.ones(w.size)
+    noisy = sysid.FRD(w, Gz.freqresp(w)[:, 0, 0] + sd / np.sqrt(2) * (
+        rng.standard_normal(w.size) + 1j * rng.standard_normal(w.size)), std=sd, dt=0.1)
+    Gn = sysid.tfest(noisy, 2, 1, dt=0.1, iodelay=2)
+    assert Gn.uncertainty is not None and Gn.step(10, std=True).std is not None
+
+
+def test_tfest_on_an_frd_honours_max_delay_and_refuses_time_domain_options():
+    G0 = sysid.TransferFunction([2.0], [5.0, 1.0], iodelay=3.0)
+    w = np.logspace(-2, np.log10(2), 80)
+    f = sysid.FRD(w, G0.freqresp(w))
+    G = sysid.tfest(f, 1, 0, iodelay="auto", max_delay=1.0)
+    assert G.iodelay[0, 0] <= 1.0 + 1e-12        # was 3.0: max_delay dropped silently
+    with pytest.raises(sysid.DataError, match="init= applies to time-domain data"):
+        sysid.tfest(f, 1, 0, init=sysid.TransferFunction([1.0], [1.0, 1.0]))
+    with pytest.raises(sysid.DataError, match="initial_state= applies to time-domain"):
+        sysid.tfest(f, 1, 0, initial_state="estimate")
+
+
+def test_tfest_on_a_noise_free_bla_floors_the_zero_std():
+    # a noise-free BLA has std exactly 0 on some lines: tfest and oe raised "the FRD's std
+    # has zero entries", where ssest(bla) and tfest(data, periods=...) floor it
+    G0 = sysid.StateSpaceModel([[0.7, 0.2], [-0.2, 0.7]], [[1.0], [0.5]], [[1.0, 0.0]])
+    u = np.tile(sysid.multisine(256, band=(0.0, 0.8), seed=1)[:, 0], 3)
+    bla = sysid.bla(sysid.IOData(u, G0.simulate(u), 1.0), periods=3, transient=1)
+    for std in (np.asarray(bla.std), np.where(np.arange(bla.omega.size) < 2, 0.0, 1e-3)):
+        std = np.broadcast_to(np.reshape(std, (-1, 1, 1)) if std.ndim == 1 else std,
+                              bla.response.shape)
+        frd = sysid.FRD(bla.omega, bla.response, std=std, dt=1.0)
+        G = sysid.tfest(frd, 2, 1, dt=1.0)
+        np.testing.assert_allclose(G.freqresp(bla.omega), G0.freqresp(bla.omega), atol=1e-8)

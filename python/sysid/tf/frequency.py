@@ -110,7 +110,7 @@ def _is_stable(a: np.ndarray, cont: bool) -> bool:
 
 def _fit_pair(omega: np.ndarray, h: np.ndarray, wgt: np.ndarray, n: int, m: int, dt: float,
               tau0: float, free: bool, max_iter: int, tol: float, cb: Any,
-              stable: bool = False) -> dict[str, Any]:
+              stable: bool = False, max_delay: float | None = None) -> dict[str, Any]:
     cont = not dt
     if cont:
         w0 = float(np.exp(np.mean(np.log(omega[omega > 0])))) if np.any(omega > 0) else 1.0
@@ -119,11 +119,15 @@ def _fit_pair(omega: np.ndarray, h: np.ndarray, wgt: np.ndarray, n: int, m: int,
     else:
         w0 = 1.0
         x = np.exp(-1j * omega * dt)
-        lag = 1 + int(round(tau0))       # one-sample lag (no feedthrough), as MATLAB
-        lead, den_pow, num_pow = 0, list(range(1, n + 1)), list(range(lag, lag + m + 1))
+        lead, den_pow = 0, list(range(1, n + 1))
     wvar = 1j * omega if cont else np.zeros(omega.size, complex)
     best = free_best = None
-    for tau in (_delay_grid(omega, h, dt) if free else [0.0 if dt else tau0]):
+    upper = np.inf if max_delay is None else float(max_delay)
+    for tau in (_delay_grid(omega, h, dt, max_delay) if free else [tau0]):
+        if not cont:  # a delay of whole samples: the numerator's lag, one sample more (as
+            # MATLAB, no feedthrough), searched over the grid when "auto"
+            lag = 1 + int(round(tau))
+            num_pow = list(range(lag, lag + m + 1))
         hd = h * np.exp(wvar * tau)
         a, b = sanathanan_koerner(x, hd, wgt, den_pow, lead, num_pow)
         a = np.asarray(a, float)
@@ -134,15 +138,17 @@ def _fit_pair(omega: np.ndarray, h: np.ndarray, wgt: np.ndarray, n: int, m: int,
             # of it is as valid a fit), so both run and the lower stable one is kept
             starts = [(_reflect(a, cont), True), (a, False)]
         for a0, bound in starts:
-            th0 = list(a0) + list(b) + [tau * w0]
+            th0 = list(a0) + list(b) + [(tau if cont else 0.0) * w0]
             res = _sysid.tf_fit_frequency(
                 (x.real.copy(), x.imag.copy()),
                 ((wvar / w0).real.copy(), (wvar / w0).imag.copy()),
                 (h.real.copy(), h.imag.copy()), list(map(float, wgt)), lead, den_pow,
                 num_pow, list(map(float, th0)),
                 fixed=[False] * (n + m + 1) + [not (free and cont)],
-                lower=[-np.inf] * (n + m + 1) + [0.0], noise_variance=None,
-                max_iter=max_iter, tol=tol, progress=cb, stable=bound)
+                lower=[-np.inf] * (n + m + 1) + [0.0],
+                upper=[np.inf] * (n + m + 1) + [upper * w0 if cont else np.inf],
+                noise_variance=None, max_iter=max_iter, tol=tol, progress=cb, stable=bound)
+            res["delay_samples"] = 0 if cont else int(round(tau))
             if stable and not bound:
                 if free_best is None or res["cost"] < free_best["cost"]:
                     free_best = res
@@ -168,11 +174,20 @@ def _fit_pair(omega: np.ndarray, h: np.ndarray, wgt: np.ndarray, n: int, m: int,
     return best
 
 
-def _delay_grid(omega: np.ndarray, h: np.ndarray, dt: float) -> list[float]:
-    if dt:
-        return [0.0]
+def _delay_grid(omega: np.ndarray, h: np.ndarray, dt: float,
+                max_delay: float | None = None) -> list[float]:
+    """Starting delays of the search: eight periods of the highest line in 17 steps
+    (continuous, seconds), or every whole sample up to 16 (discrete, where each is fitted
+    and the best kept: a delay of samples is no continuous parameter); at most
+    ``max_delay``."""
     wmax = float(np.max(omega))
-    return list(np.linspace(0.0, 2.0 * np.pi / wmax * 8, 17)) if wmax > 0 else [0.0]
+    top = 2.0 * np.pi / wmax * 8 if wmax > 0 else 0.0
+    if dt:
+        top = 16.0 if max_delay is None else float(max_delay) / dt
+        return [float(k) for k in range(int(np.floor(top + 1e-9)) + 1)]
+    if max_delay is not None:
+        top = min(top, float(max_delay))
+    return list(np.linspace(0.0, top, 17)) if top > 0 else [0.0]
 
 
 def record_lines(data: Any, periods: Any, transient: Any) -> tuple[Any, dict[str, Any]]:
@@ -191,8 +206,8 @@ def record_lines(data: Any, periods: Any, transient: Any) -> tuple[Any, dict[str
 
 
 def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
-              max_iter: int, tol: float, progress: Any, stable: bool = False
-              ) -> TransferFunction:
+              max_iter: int, tol: float, progress: Any, stable: bool = False,
+              max_delay: float | None = None) -> TransferFunction:
     """The FRD branch of :func:`sysid.tfest` (see the module documentation)."""
     l, m = frd.n_outputs, frd.n_inputs
     npo, nze = pole_zero_orders(n_poles, n_zeros, l, m)
@@ -204,7 +219,7 @@ def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
     insisting: list[dict[str, Any]] = []
     nums, dens, dl, names, thetas, covs, scales, factor = fit_lines(
         frd, npo, nze, given, auto, dtv, max_iter, tol, progress, stable=stable,
-        insisting=insisting)
+        insisting=insisting, max_delay=max_delay)
     G = _assemble(frd, nums, dens, dl, dtv, names, thetas, covs, auto)
     G.info["residual_scale"] = scales
     G.info["sample_variance_factor"] = factor
@@ -327,7 +342,8 @@ def warn_held(G: TransferFunction, omega: np.ndarray, dtv: float, who: str = "tf
 
 def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, auto: bool,
               dtv: float, max_iter: int, tol: float, progress: Any, who: str = "tfest",
-              stable: bool = False, insisting: list[dict[str, Any]] | None = None
+              stable: bool = False, insisting: list[dict[str, Any]] | None = None,
+              max_delay: float | None = None
               ) -> tuple[list[Any], list[Any], np.ndarray, list[str], list[np.ndarray],
                          list[np.ndarray], np.ndarray, float]:
     """The weighted fit of every pair of ``frd`` (``npo`` poles, ``nze + 1`` numerator
@@ -349,9 +365,12 @@ def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, aut
         raise DataError(f"the FRD has {omega.size} frequencies, too few for {k_par} "
                         "parameters: measure more frequencies or lower n_poles")
     if frd.std is not None:
-        if np.any(frd.std <= 0):
-            raise DataError("the FRD's std has zero entries: drop them or remove the std")
-        weights = np.sqrt(line_weights(frd))   # sqrt(2)/std: pem's and greyest's weights
+        if np.any(frd.std < 0):
+            raise DataError("the FRD's std has negative entries: give the measured std (>= 0), "
+                            "or remove it for an unweighted fit")
+        # sqrt(2)/std: pem's and greyest's weights (a zero std, the noise-free line of a BLA,
+        # floored at 1e-6 of the median std; all zero: equal weights)
+        weights = np.sqrt(line_weights(frd))
         factor = sample_variance_factor(frd, who)
     else:
         weights, factor = np.ones(frd.response.shape), 1.0
@@ -364,8 +383,11 @@ def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, aut
             for j in range(m):
                 n, z = int(npo[i, j]), int(nze[i, j])
                 r = _fit_pair(omega, frd.response[:, i, j], weights[:, i, j], n, z, dtv,
-                              float(given[i, j]), auto, max_iter, tol, cb, stable)
+                              float(given[i, j]), auto, max_iter, tol, cb, stable,
+                              max_delay)
                 th = r["theta"]
+                if dtv:  # the delay of whole samples the pair was fitted with
+                    th[-1] = float(r["delay_samples"])
                 free = r.get("free")
                 if (insisting is not None and free and free["cost"] < INSIST * r["cost"]
                         and _grows(free["pole"], omega, dtv)):
@@ -374,7 +396,7 @@ def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, aut
                                       "pole": free["pole"]})
                 rd.append(np.concatenate([[1.0], th[:n]]))
                 rn.append(th[n:n + z + 1])
-                dl[i, j] = th[-1] if not dtv else float(given[i, j])
+                dl[i, j] = th[-1]
                 scales[i, j] = float(r["noise_variance"])
                 pre = f"{frd.output_names[i]}<-{frd.input_names[j]}:"
                 names += [f"{pre}a{k + 1}" for k in range(n)] + \
@@ -391,15 +413,12 @@ def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, aut
 def _assemble(frd: Any, nums: list[Any], dens: list[Any], dl: np.ndarray, dtv: float,
               names: list[str], thetas: list[np.ndarray], covs: list[np.ndarray],
               auto: bool) -> TransferFunction:
-    if dtv:  # z^-1 polynomials (numerator after its lag) -> descending powers of z
-        nums = [[np.concatenate([np.zeros(1 + int(round(d))), b]) for b, d in zip(rn, dr)]
-                for rn, dr in zip(nums, dl)]
-        dl = np.zeros_like(dl)
-        pad = [[(np.pad(b, (0, max(a.size, b.size) - b.size)),
-                 np.pad(a, (0, max(a.size, b.size) - a.size))) for b, a in zip(rn, rd)]
-               for rn, rd in zip(nums, dens)]
-        nums = [[p[0] for p in r] for r in pad]
-        dens = [[p[1] for p in r] for r in pad]
+    if dtv:  # z^-1 polynomials (numerator after its one-sample lag) -> descending powers
+        # of z; the delay stays the model's iodelay in samples (as from time-domain data)
+        pairs = [[_descending(b, a) for b, a in zip(rn, rd)] for rn, rd in zip(nums, dens)]
+        nums = [[p[0] for p in r] for r in pairs]
+        dens = [[p[1] for p in r] for r in pairs]
+        dl = np.round(dl)
     info = {"method": "tfest (frequency response: Sanathanan-Koerner + weighted NLS)",
             "n_frequencies": int(frd.omega.size), "weighting": "1/std" if frd.std is not None
             else "none", "n_delays_estimated": int(dl.size) if auto else 0}
@@ -423,8 +442,11 @@ def _assemble(frd: Any, nums: list[Any], dens: list[Any], dl: np.ndarray, dtv: f
                 k = thetas[i * m + j].size
                 q = t[o:o + k]
                 n = n_den[i * m + j]
-                ddn.append(np.concatenate([[1.0], q[:n]]))
-                nn.append(q[n:k - 1])
+                a, b = np.concatenate([[1.0], q[:n]]), q[n:k - 1]
+                if dtv:
+                    b, a = _descending(b, a)
+                ddn.append(a)
+                nn.append(b)
                 dd[i, j] = max(q[-1], 0.0)
                 o += k
             rn.append(nn)
@@ -432,6 +454,13 @@ def _assemble(frd: Any, nums: list[Any], dens: list[Any], dl: np.ndarray, dtv: f
         return TransferFunction(rn, rd, dt=dtv, iodelay=np.round(dd) if dtv else dd,
                                 input_names=G.input_names, output_names=G.output_names)
 
-    if not dtv:
-        G.uncertainty = ParameterUncertainty(theta, P, build, names=names)
+    G.uncertainty = ParameterUncertainty(theta, P, build, names=names)
     return G
+
+
+def _descending(b: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A discrete pair ``z^-1 B(z^-1) / A(z^-1)`` as numerator and denominator in
+    descending powers of ``z`` (of equal length)."""
+    b = np.concatenate([[0.0], b])
+    k = max(a.size, b.size)
+    return np.pad(b, (0, k - b.size)), np.pad(a, (0, k - a.size))

@@ -154,9 +154,18 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         if periods is not None or transient is not None:
             raise DataError("periods= and transient= describe a time record; an FRD is "
                             "already on its lines: leave them out")
+        # what only a time record has, refused rather than dropped silently
+        for name, given, default in (("init", init, None), ("hold", hold, "zoh"),
+                                     ("initial_state", initial_state, "zero")):
+            if given is not default and given != default:
+                raise DataError(
+                    f"{name}= applies to time-domain data; tfest on an FRD starts from its "
+                    "own Sanathanan-Koerner fit of the lines, on which a continuous model "
+                    "is its response at j omega and a discrete one at exp(j omega dt): "
+                    f"leave {name} out")
         return _checked(tfest_frd(data, n_poles, n_zeros, iodelay=iodelay, dt=dt,
                                   max_iter=max_iter, tol=tol, progress=progress,
-                                  stable=bool(enforce_stability)))
+                                  stable=bool(enforce_stability), max_delay=max_delay))
     if not hasattr(data, "experiments") or not hasattr(data, "dt"):
         raise DataError(f"tfest needs a sysid.IOData or sysid.FRD, got {type(data).__name__}"
                         + (several_records_hint(data)
