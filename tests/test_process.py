@@ -346,3 +346,11 @@ def test_equal_time_constants_leave_the_delay_determined():
     text = " ".join(str(w.message) for w in said)
     assert "Tp1" in text and "Tp2" in text and "iodelay" not in text
     assert np.isinf(m.parameters["Tp1"]["std"]) and np.isfinite(m.parameters["Td"]["std"])
+
+
+def test_procest_on_an_frd_names_the_frequency_domain_route():
+    # the advice was "wrap arrays as sysid.IOData(u, y, dt=...)", for an FRD
+    w = np.logspace(-1, 1.5, 60)
+    frd = sysid.FRD(w, sysid.TransferFunction([2.0], [3.0, 1.0], iodelay=0.5).freqresp(w))
+    with pytest.raises(DataError, match=r"sysid.tfest\(frd, n_poles, n_zeros, iodelay='auto'\)"):
+        sysid.procest(frd, "P1D")

@@ -646,3 +646,14 @@ def test_tfest_on_a_noise_free_bla_floors_the_zero_std():
         frd = sysid.FRD(bla.omega, bla.response, std=std, dt=1.0)
         G = sysid.tfest(frd, 2, 1, dt=1.0)
         np.testing.assert_allclose(G.freqresp(bla.omega), G0.freqresp(bla.omega), atol=1e-8)
+
+
+def test_frd_compare_refuses_a_model_of_another_sample_time():
+    # FRD.compare(model at dt = 0.2) on a dt = 0.1 FRD reported an error of 2.63, where
+    # sysid.compare refuses the mismatch
+    Gz = sysid.TransferFunction([0.5, 0.2], [1.0, -1.2, 0.5], dt=0.1)
+    w = np.linspace(0.05, 10, 30)
+    f = sysid.FRD(w, Gz.freqresp(w), dt=0.1)
+    assert f.compare(Gz).max_error < 1e-12
+    with pytest.raises(sysid.DataError, match="sample time 0.2 but the FRD 0.1"):
+        f.compare(sysid.TransferFunction([0.5, 0.2], [1.0, -1.2, 0.5], dt=0.2))

@@ -274,6 +274,13 @@ class FRD(FRDAlgebra):
                        "purpose")
             g = other.response
         elif hasattr(other, "freqresp"):
+            dt = getattr(other, "dt", None)
+            if dt and self.dt and not np.isclose(float(dt), float(self.dt), rtol=1e-9):
+                # a discrete model's response is periodic in its own dt: another's differs
+                # beyond any error of the measurement (as sysid.compare refuses it)
+                raise DataError(f"the model has sample time {dt} but the FRD {self.dt}: "
+                                "resample the model (sysid.d2c / sysid.c2d / sysid.d2d) or "
+                                "compare on the FRD of its own sample time")
             g = np.asarray(other.freqresp(self.omega))
         else:
             g = _as_complex(other, "other", "a model with freqresp, an FRD or ")

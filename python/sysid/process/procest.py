@@ -87,8 +87,14 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
     t = ProcessType.parse(type_code)
     max_iter, tol = search_limits(max_iter, tol, max_delay)
     if not hasattr(data, "experiments") or not hasattr(data, "dt"):
-        raise DataError(f"procest needs a sysid.IOData, got {type(data).__name__}; wrap arrays "
-                        "as sysid.IOData(u, y, dt=...)")
+        from ..errors import is_frd
+
+        raise DataError(
+            f"procest needs a sysid.IOData, got {type(data).__name__}; " + (
+                "procest fits time-domain records: for frequency-response data use "
+                "sysid.tfest(frd, n_poles, n_zeros, iodelay='auto') (a process model is a "
+                "transfer function with a delay)" if is_frd(data) else
+                "wrap arrays as sysid.IOData(u, y, dt=...)"))
     if hold not in ("zoh", "foh"):
         raise DataError(f"hold must be 'zoh' or 'foh', got {hold!r}")
     if initial_state not in ("zero", "estimate"):
