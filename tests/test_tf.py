@@ -657,3 +657,27 @@ def test_frd_compare_refuses_a_model_of_another_sample_time():
     assert f.compare(Gz).max_error < 1e-12
     with pytest.raises(sysid.DataError, match="sample time 0.2 but the FRD 0.1"):
         f.compare(sysid.TransferFunction([0.5, 0.2], [1.0, -1.2, 0.5], dt=0.2))
+
+
+def test_discrete_tfest_fits_a_direct_term_with_feedthrough():
+    # MATLAB's 'Feedthrough': a biproper discrete system (0.3 + 0.5 z^-1 + 0.2 z^-2) /
+    # (1 - 1.2 z^-1 + 0.5 z^-2) was fitted with a one-sample lag, a 31 % error with no way
+    # out; feedthrough=True fits it exactly from an FRD, a record and periodic data
+    G0 = sysid.TransferFunction([0.3, 0.5, 0.2], [1.0, -1.2, 0.5], dt=0.1)
+    w = np.linspace(0.05, 0.98 * np.pi / 0.1, 80)
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(500)
+    up = np.tile(sysid.multisine(128, band=(0, 0.9), seed=0)[:, 0], 9)
+    fits = [sysid.tfest(sysid.FRD(w, G0.freqresp(w), dt=0.1), 2, 2, dt=0.1, feedthrough=True),
+            sysid.tfest(sysid.IOData(u, G0.simulate(u), 0.1), 2, 2, dt=0.1, feedthrough=True),
+            sysid.tfest(sysid.IOData(up, G0.simulate(up), 0.1), 2, 2, dt=0.1, feedthrough=True,
+                        periods=9, transient=1)]
+    for G in fits:
+        np.testing.assert_allclose(G.freqresp(w), G0.freqresp(w), atol=1e-9)
+    # a delay estimated beside it counts the samples before the direct term
+    G2 = sysid.TransferFunction([0.3, 0.5, 0.2], [1.0, -1.2, 0.5], dt=0.1, iodelay=2)
+    G = sysid.tfest(sysid.IOData(u, G2.simulate(u), 0.1), 2, 2, dt=0.1, feedthrough=True,
+                    iodelay="auto")
+    assert G.iodelay[0, 0] == 2
+    with pytest.raises(sysid.DataError, match="applies to discrete-time models"):
+        sysid.tfest(sysid.IOData(u, G0.simulate(u), 0.1), 2, 2, feedthrough=True)

@@ -110,7 +110,8 @@ def _is_stable(a: np.ndarray, cont: bool) -> bool:
 
 def _fit_pair(omega: np.ndarray, h: np.ndarray, wgt: np.ndarray, n: int, m: int, dt: float,
               tau0: float, free: bool, max_iter: int, tol: float, cb: Any,
-              stable: bool = False, max_delay: float | None = None) -> dict[str, Any]:
+              stable: bool = False, max_delay: float | None = None,
+              lag0: int = 1) -> dict[str, Any]:
     cont = not dt
     if cont:
         w0 = float(np.exp(np.mean(np.log(omega[omega > 0])))) if np.any(omega > 0) else 1.0
@@ -125,8 +126,8 @@ def _fit_pair(omega: np.ndarray, h: np.ndarray, wgt: np.ndarray, n: int, m: int,
     upper = np.inf if max_delay is None else float(max_delay)
     for tau in (_delay_grid(omega, h, dt, max_delay) if free else [tau0]):
         if not cont:  # a delay of whole samples: the numerator's lag, one sample more (as
-            # MATLAB, no feedthrough), searched over the grid when "auto"
-            lag = 1 + int(round(tau))
+            # MATLAB, no feedthrough; lag0 = 0 with one), searched over the grid when "auto"
+            lag = lag0 + int(round(tau))
             num_pow = list(range(lag, lag + m + 1))
         hd = h * np.exp(wvar * tau)
         a, b = sanathanan_koerner(x, hd, wgt, den_pow, lead, num_pow)
@@ -207,7 +208,7 @@ def record_lines(data: Any, periods: Any, transient: Any) -> tuple[Any, dict[str
 
 def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
               max_iter: int, tol: float, progress: Any, stable: bool = False,
-              max_delay: float | None = None) -> TransferFunction:
+              max_delay: float | None = None, feedthrough: bool = False) -> TransferFunction:
     """The FRD branch of :func:`sysid.tfest` (see the module documentation)."""
     l, m = frd.n_outputs, frd.n_inputs
     npo, nze = pole_zero_orders(n_poles, n_zeros, l, m)
@@ -219,8 +220,9 @@ def tfest_frd(frd: Any, n_poles: Any, n_zeros: Any, *, iodelay: Any, dt: Any,
     insisting: list[dict[str, Any]] = []
     nums, dens, dl, names, thetas, covs, scales, factor = fit_lines(
         frd, npo, nze, given, auto, dtv, max_iter, tol, progress, stable=stable,
-        insisting=insisting, max_delay=max_delay)
-    G = _assemble(frd, nums, dens, dl, dtv, names, thetas, covs, auto)
+        insisting=insisting, max_delay=max_delay, lag0=0 if feedthrough else 1)
+    G = _assemble(frd, nums, dens, dl, dtv, names, thetas, covs, auto,
+                  lag0=0 if feedthrough else 1)
     G.info["residual_scale"] = scales
     G.info["sample_variance_factor"] = factor
     if stable and not warn_insisting(insisting, "tfest", dtv):
@@ -343,7 +345,7 @@ def warn_held(G: TransferFunction, omega: np.ndarray, dtv: float, who: str = "tf
 def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, auto: bool,
               dtv: float, max_iter: int, tol: float, progress: Any, who: str = "tfest",
               stable: bool = False, insisting: list[dict[str, Any]] | None = None,
-              max_delay: float | None = None
+              max_delay: float | None = None, lag0: int = 1
               ) -> tuple[list[Any], list[Any], np.ndarray, list[str], list[np.ndarray],
                          list[np.ndarray], np.ndarray, float]:
     """The weighted fit of every pair of ``frd`` (``npo`` poles, ``nze + 1`` numerator
@@ -384,7 +386,7 @@ def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, aut
                 n, z = int(npo[i, j]), int(nze[i, j])
                 r = _fit_pair(omega, frd.response[:, i, j], weights[:, i, j], n, z, dtv,
                               float(given[i, j]), auto, max_iter, tol, cb, stable,
-                              max_delay)
+                              max_delay, lag0)
                 th = r["theta"]
                 if dtv:  # the delay of whole samples the pair was fitted with
                     th[-1] = float(r["delay_samples"])
@@ -412,10 +414,11 @@ def fit_lines(frd: Any, npo: np.ndarray, nze: np.ndarray, given: np.ndarray, aut
 
 def _assemble(frd: Any, nums: list[Any], dens: list[Any], dl: np.ndarray, dtv: float,
               names: list[str], thetas: list[np.ndarray], covs: list[np.ndarray],
-              auto: bool) -> TransferFunction:
+              auto: bool, lag0: int = 1) -> TransferFunction:
     if dtv:  # z^-1 polynomials (numerator after its one-sample lag) -> descending powers
         # of z; the delay stays the model's iodelay in samples (as from time-domain data)
-        pairs = [[_descending(b, a) for b, a in zip(rn, rd)] for rn, rd in zip(nums, dens)]
+        pairs = [[_descending(b, a, lag0) for b, a in zip(rn, rd)]
+                 for rn, rd in zip(nums, dens)]
         nums = [[p[0] for p in r] for r in pairs]
         dens = [[p[1] for p in r] for r in pairs]
         dl = np.round(dl)
@@ -444,7 +447,7 @@ def _assemble(frd: Any, nums: list[Any], dens: list[Any], dl: np.ndarray, dtv: f
                 n = n_den[i * m + j]
                 a, b = np.concatenate([[1.0], q[:n]]), q[n:k - 1]
                 if dtv:
-                    b, a = _descending(b, a)
+                    b, a = _descending(b, a, lag0)
                 ddn.append(a)
                 nn.append(b)
                 dd[i, j] = max(q[-1], 0.0)
@@ -458,9 +461,9 @@ def _assemble(frd: Any, nums: list[Any], dens: list[Any], dl: np.ndarray, dtv: f
     return G
 
 
-def _descending(b: np.ndarray, a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A discrete pair ``z^-1 B(z^-1) / A(z^-1)`` as numerator and denominator in
-    descending powers of ``z`` (of equal length)."""
-    b = np.concatenate([[0.0], b])
+def _descending(b: np.ndarray, a: np.ndarray, lag0: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """A discrete pair ``z^-lag0 B(z^-1) / A(z^-1)`` (``lag0`` 1, or 0 with feedthrough) as
+    numerator and denominator in descending powers of ``z`` (of equal length)."""
+    b = np.concatenate([np.zeros(lag0), b])
     k = max(a.size, b.size)
     return np.pad(b, (0, k - b.size)), np.pad(a, (0, k - a.size))

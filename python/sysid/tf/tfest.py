@@ -37,7 +37,7 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
           max_delay: float | None = None, max_iter: int = 100, tol: float = 1e-10,
           progress: bool | None | Callable[..., Any] = None,
           periods: int | str | None = None, transient: int | None = None,
-          enforce_stability: bool = True) -> TransferFunction:
+          enforce_stability: bool = True, feedthrough: bool = False) -> TransferFunction:
     """Estimate a transfer-function model (MATLAB's ``tfest``).
 
     .. math::
@@ -108,6 +108,11 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         of 2 and 3 poles were unstable in 22 of 34 cases, 20 of them diverging on the
         validation data. ``False`` for an unstable plant's response (measured in closed
         loop). Fits of time records keep the simulation stable always.
+    feedthrough : bool
+        Discrete-time models: ``False`` (default, MATLAB's) lags every numerator one sample
+        behind the input (no direct term, ``B(z) = b_0 z^(n-1) + ...``); ``True`` lets the
+        output answer the input at the same sample (``B(z) = b_0 z^n + ...``, a biproper
+        pair). A continuous model has a direct term when ``n_zeros == n_poles``.
 
     Returns
     -------
@@ -148,6 +153,12 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     max_iter, tol = search_limits(max_iter, tol, max_delay)
     if initial_state not in ("zero", "estimate"):
         raise DataError(f"initial_state must be 'zero' or 'estimate', got {initial_state!r}")
+    if not isinstance(feedthrough, (bool, np.bool_)):
+        raise DataError(f"feedthrough must be True or False, got {feedthrough!r}")
+    ft = bool(feedthrough)
+    if ft and dt is None:
+        raise DataError("feedthrough= applies to discrete-time models (dt=); a continuous "
+                        "transfer function has a direct term when n_zeros == n_poles")
     if is_frd(data):
         from .frequency import tfest_frd
 
@@ -165,7 +176,8 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
                     f"leave {name} out")
         return _checked(tfest_frd(data, n_poles, n_zeros, iodelay=iodelay, dt=dt,
                                   max_iter=max_iter, tol=tol, progress=progress,
-                                  stable=bool(enforce_stability), max_delay=max_delay))
+                                  stable=bool(enforce_stability), max_delay=max_delay,
+                                  feedthrough=ft))
     if not hasattr(data, "experiments") or not hasattr(data, "dt"):
         raise DataError(f"tfest needs a sysid.IOData or sysid.FRD, got {type(data).__name__}"
                         + (several_records_hint(data)
@@ -195,11 +207,11 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
                             "own linear least squares; leave them out, or leave periods out "
                             "for the time-domain fit")
         G, periodicity = _periodic(data, npo, nze, fixed_delays, auto, dt, periods, transient,
-                                   max_iter, tol, progress, bool(enforce_stability))
+                                   max_iter, tol, progress, bool(enforce_stability), ft)
         if G is not None:
             return _checked(G)
     if dt is not None:
-        G = _discrete(data, npo, nze, fixed_delays, auto, dt, max_iter, progress)
+        G = _discrete(data, npo, nze, fixed_delays, auto, dt, max_iter, progress, ft)
         if periodicity is not None:  # periods="auto" found none: why the time domain
             G.info["periodicity"] = periodicity
         return _checked(G)
@@ -520,7 +532,7 @@ def _attach(G: TransferFunction, tables: list[Any], covs: list[np.ndarray], auto
 
 def _periodic(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
               dt: float | None, periods: Any, transient: Any, max_iter: int, tol: float,
-              progress: Any, stable: bool = False
+              progress: Any, stable: bool = False, ft: bool = False
               ) -> tuple[TransferFunction | None, dict[str, Any]]:
     """The discrete model fitted on the excited lines of periodic data (the FRD branch on
     :func:`sysid.bla` of the record), and what was found of the periodicity; no model when
@@ -534,9 +546,9 @@ def _periodic(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
     lines, periodicity = record_lines(data, periods, transient)
     if lines is None:
         return None, periodicity
-    nk = _whole_delays(data, delays, auto, dt)
+    nk = _whole_delays(data, delays, auto, dt, ft)
     G = tfest_frd(lines, npo, nze, iodelay=nk, dt=dt, max_iter=max_iter, tol=tol,
-                  progress=progress, stable=stable)
+                  progress=progress, stable=stable, feedthrough=ft)
     G.info.update(method="tfest (periodic data: weighted NLS on the excited lines)",
                   domain="frequency", lines=int(lines.omega.size),
                   periods=lines.info.get("periods"), periodicity=periodicity,
@@ -544,29 +556,33 @@ def _periodic(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
     return G, periodicity
 
 
-def _whole_delays(data: Any, delays: np.ndarray, auto: bool, dt: float) -> np.ndarray:
+def _whole_delays(data: Any, delays: np.ndarray, auto: bool, dt: float,
+                  ft: bool = False) -> np.ndarray:
     """A discrete model's delays in whole samples: estimated (``auto``) or checked."""
     if abs(float(dt) - data.dt) > 1e-9 * data.dt:
         raise DataError(f"dt={dt} differs from the data's sample time {data.dt}: resample the "
                         "data first (sysid.resample) or pass dt=data.dt")
-    if auto:  # delayest counts the model's one-sample lag too
-        return np.array([[max(_delayest_one(data, i, j) - 1, 0) for j in range(data.n_inputs)]
-                         for i in range(data.n_outputs)], dtype=float)
+    if auto:  # delayest counts the model's one-sample lag too (none with feedthrough)
+        lag0 = 0 if ft else 1
+        return np.array([[max(_delayest_one(data, i, j) - lag0, 0)
+                          for j in range(data.n_inputs)] for i in range(data.n_outputs)],
+                        dtype=float)
     if np.any(np.abs(delays - np.round(delays)) > 1e-9):
         raise DataError("a discrete model's iodelay counts whole samples; round it")
     return np.round(delays)
 
 
 def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
-              dt: float, max_iter: int, progress: Any) -> TransferFunction:
+              dt: float, max_iter: int, progress: Any, ft: bool = False) -> TransferFunction:
     """Discrete-time variant: output error ``B(q)/F(q) q^-nk`` per output (``sysid.oe``),
     with the parameter table, uncertainty and ``info`` of the continuous fit (per pair
     ``[a_1.., b_0..]``; ``info["cost"]`` the final cost per output)."""
     import sysid
 
-    nk = _whole_delays(data, delays, auto, dt)
+    nk = _whole_delays(data, delays, auto, dt, ft)
     l, m = data.n_outputs, data.n_inputs
-    lag = 1 + np.round(nk).astype(int)  # one-sample lag as MATLAB's discrete tfest, + delay
+    lag0 = 0 if ft else 1  # a one-sample lag as MATLAB's discrete tfest (none: feedthrough)
+    lag = lag0 + np.round(nk).astype(int)
     poly = sysid.oe(data, nze + 1, npo, lag, max_iter=max_iter, progress=progress)
     nb = [[poly.b[i][j].size for j in range(m)] for i in range(l)]
     nf = [[poly.f[i][j].size for j in range(m)] for i in range(l)]
@@ -574,8 +590,9 @@ def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
     def from_pairs(b: list[list[np.ndarray]], f: list[list[np.ndarray]]) -> TransferFunction:
         # the one-sample lag in B, the delay as the model's iodelay (MATLAB's IODelay in
         # samples), not as powers of z folded into the denominator
-        pairs = [[_z_form(np.concatenate([[0.0], b[i][j]]), np.concatenate([[1.0], f[i][j]]))
-                  for j in range(m)] for i in range(l)]
+        pairs = [[_z_form(np.concatenate([np.zeros(lag0), b[i][j]]),
+                          np.concatenate([[1.0], f[i][j]])) for j in range(m)]
+                 for i in range(l)]
         return TransferFunction([[p[0] for p in r] for r in pairs],
                                 [[p[1] for p in r] for r in pairs], dt=data.dt, iodelay=nk,
                                 input_names=data.input_names, output_names=data.output_names)
