@@ -23,7 +23,7 @@ import numpy as np
 from .._atomic import atomic_path
 from ..errors import DataError, SysidWarning
 from .table import datetime_seconds, numeric, read_table, units_row
-from .units import time_column, time_unit_seconds
+from .units import check_dt_against_time, time_column, time_unit_seconds
 
 __all__: list[str] = []
 
@@ -227,14 +227,9 @@ def from_pandas(
             ts.append(_seconds(g[tc], groups[0][tc], units.get(tc, "")))
     for g in groups:
         _warn_dropped_rows(g.index, time is not None or bool(ts))
-    if dt is not None and time is None and (tc := _time_column(df, inputs + outputs)) is not None:
-        t = _seconds(df[tc], df[tc], units.get(tc, "")) if experiment is None else None
-        step = np.diff(t) if t is not None else np.zeros(0)
-        if step.size and np.all(step > 0) and abs(float(np.median(step)) - float(dt)) > \
-                1e-6 * max(float(np.median(step)), float(dt)):
-            raise DataError(f"dt = {float(dt):g} s disagrees with the time column {tc!r} "
-                            f"(samples {float(np.median(step)):g} s apart); pass one of them "
-                            "(dt= alone, or time= without dt=)")
+    if (dt is not None and time is None and experiment is None
+            and (tc := _time_column(df, inputs + outputs)) is not None):
+        check_dt_against_time(_seconds(df[tc], df[tc], units.get(tc, "")), float(dt), str(tc))
     if dt is None and ts and "dt" in df.attrs:
         # the stored dt (to_pandas) when the time agrees with it: 1/60, not 0.0166666666667
         dt = grid_dt(ts, [df.attrs["dt"]], rtol=1e-9)
@@ -449,16 +444,10 @@ def _check_dt_against_time(table: Any, names: list[str], unit_of: dict[str, str]
         return
     try:
         t = numeric(table, [k], missing=True, decimal=decimal, hint="")[:, 0]
-        t = t * time_unit_seconds(table.names[k], unit_of[names[k]])
     except DataError:
         return  # not numbers (date-time stamps or text): nothing to compare
-    step = np.diff(t[np.isfinite(t)])
-    if step.size and np.all(step > 0):
-        spacing = float(np.median(step))
-        if abs(spacing - dt) > 1e-6 * max(spacing, dt):
-            raise DataError(f"{file}: dt = {dt:g} s disagrees with its time column "
-                            f"{table.names[k]!r} (samples {spacing:g} s apart); pass one of "
-                            "them (dt= alone, or time= without dt=)")
+    check_dt_against_time(t * time_unit_seconds(table.names[k], unit_of[names[k]]), dt,
+                          table.names[k], f"{file}: ")
 
 
 def _arrays(data: Any) -> dict[str, Any]:

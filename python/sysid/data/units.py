@@ -300,3 +300,19 @@ def time_column(names: list[str], exclude: Iterable[int] = ()) -> int | None:
         if k not in skip and bare in TIME_NAMES:
             return k
     return None
+
+
+def check_dt_against_time(t: np.ndarray, dt: float, column: str, where: str = "") -> None:
+    """``dt=`` given beside a time column the reader does not read (``t``, seconds): a
+    :class:`~sysid.DataError` when the column's median spacing says otherwise, as
+    ``IOData(dt=, time=)`` requires (a 0.1 s column read at dt = 0.2 was taken silently).
+    Columns that are not increasing (several experiments) are not compared."""
+    step = np.diff(np.asarray(t, dtype=float))
+    step = step[np.isfinite(step)]
+    if not step.size or np.any(step <= 0):
+        return
+    spacing = float(np.median(step))
+    if abs(spacing - dt) > 1e-6 * max(spacing, dt):
+        raise DataError(f"{where}dt = {dt:g} s disagrees with its time column {column!r} "
+                        f"(samples {spacing:g} s apart); pass one of them (dt= alone, or "
+                        "time= without dt=)")

@@ -417,7 +417,7 @@ def _assemble(frd: Any, nums: list[Any], dens: list[Any], dl: np.ndarray, dtv: f
               auto: bool, lag0: int = 1) -> TransferFunction:
     if dtv:  # z^-1 polynomials (numerator after its one-sample lag) -> descending powers
         # of z; the delay stays the model's iodelay in samples (as from time-domain data)
-        pairs = [[_descending(b, a, lag0) for b, a in zip(rn, rd)]
+        pairs = [[descending(b, a, lag0) for b, a in zip(rn, rd)]
                  for rn, rd in zip(nums, dens)]
         nums = [[p[0] for p in r] for r in pairs]
         dens = [[p[1] for p in r] for r in pairs]
@@ -447,7 +447,7 @@ def _assemble(frd: Any, nums: list[Any], dens: list[Any], dl: np.ndarray, dtv: f
                 n = n_den[i * m + j]
                 a, b = np.concatenate([[1.0], q[:n]]), q[n:k - 1]
                 if dtv:
-                    b, a = _descending(b, a, lag0)
+                    b, a = descending(b, a, lag0)
                 ddn.append(a)
                 nn.append(b)
                 dd[i, j] = max(q[-1], 0.0)
@@ -461,7 +461,7 @@ def _assemble(frd: Any, nums: list[Any], dens: list[Any], dl: np.ndarray, dtv: f
     return G
 
 
-def _descending(b: np.ndarray, a: np.ndarray, lag0: int = 1) -> tuple[np.ndarray, np.ndarray]:
+def descending(b: np.ndarray, a: np.ndarray, lag0: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """A discrete pair ``z^-lag0 B(z^-1) / A(z^-1)`` (``lag0`` 1, or 0 with feedthrough) as
     numerator and denominator in descending powers of ``z`` (of equal length)."""
     b = np.concatenate([np.zeros(lag0), b])

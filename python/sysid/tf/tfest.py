@@ -579,6 +579,8 @@ def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
     ``[a_1.., b_0..]``; ``info["cost"]`` the final cost per output)."""
     import sysid
 
+    from .frequency import descending
+
     nk = _whole_delays(data, delays, auto, dt, ft)
     l, m = data.n_outputs, data.n_inputs
     lag0 = 0 if ft else 1  # a one-sample lag as MATLAB's discrete tfest (none: feedthrough)
@@ -590,9 +592,8 @@ def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
     def from_pairs(b: list[list[np.ndarray]], f: list[list[np.ndarray]]) -> TransferFunction:
         # the one-sample lag in B, the delay as the model's iodelay (MATLAB's IODelay in
         # samples), not as powers of z folded into the denominator
-        pairs = [[_z_form(np.concatenate([np.zeros(lag0), b[i][j]]),
-                          np.concatenate([[1.0], f[i][j]])) for j in range(m)]
-                 for i in range(l)]
+        pairs = [[descending(b[i][j], np.concatenate([[1.0], f[i][j]]), lag0)
+                  for j in range(m)] for i in range(l)]
         return TransferFunction([[p[0] for p in r] for r in pairs],
                                 [[p[1] for p in r] for r in pairs], dt=data.dt, iodelay=nk,
                                 input_names=data.input_names, output_names=data.output_names)
@@ -663,12 +664,6 @@ def _defer(G: TransferFunction, poly: Any, order: list[int]) -> None:
         G.info["covariance"] = note
     G.uncertainty = DeferredSandwich(base, form, then)
     G.parameters = DeferredTable(G.parameters, G.uncertainty)
-
-
-def _z_form(b: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``B(q^-1)``, ``F(q^-1)`` as numerator and denominator in descending powers of z."""
-    k = max(b.size - 1, f.size - 1)
-    return np.pad(b, (0, k - b.size + 1)), np.pad(f, (0, k - f.size + 1))
 
 
 def _delayest_one(data: Any, i: int, j: int) -> int:
