@@ -60,8 +60,7 @@ def _units(nl: Any, what: str) -> tuple[float, np.ndarray]:
     if type(nl) is Nonlinearity:
         return 1.0, np.zeros((0, 3))
     if isinstance(nl, SigmoidNetwork):
-        P = np.asarray(nl.params, float).reshape(-1, 3)
-        return float(P[0, 0]), np.column_stack([np.r_[1.0, P[1:, 0]], P[:, 1], P[:, 2]])
+        return nl.table()
     raise DataError(f"{what} is {type(nl).__name__}: only SigmoidNetwork and identity "
                     "channels embed exactly in a neural state-space model; fit the "
                     "Hammerstein-Wiener start with sysid.SigmoidNetwork")

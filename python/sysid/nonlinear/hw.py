@@ -30,7 +30,13 @@ from .._threads import one_blas_thread
 from ..data.iodata import require_record
 from ..errors import DataError, StabilityWarning
 from ..polynomial.orders import matlab_orders
-from .hw_model import HammersteinWienerModel, Nonlinearity, UserFunction, check_search_size
+from .hw_model import (
+    HammersteinWienerModel,
+    Nonlinearity,
+    UserFunction,
+    check_search_size,
+    output_amplitudes,
+)
 from .operating_point import better_of_both, centred, record_means, undecided, use_offsets
 
 __all__ = ["nlhw"]
@@ -161,6 +167,7 @@ def nlhw(
     u0, y0 = record_means(exps) if shift else (np.zeros(1), np.zeros(1))
     if shift:
         exps = centred(exps, u0, y0)
+    output_amplitudes([fout], np.concatenate([y for _, y in exps]))
     n_par = int(nb) + int(nf) + sum(np.size(getattr(f, "params", ())) for f in (fin, fout)
                                      if not isinstance(f, UserFunction))
     n_samples = sum(len(y) for _, y in exps)

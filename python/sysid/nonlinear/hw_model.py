@@ -273,8 +273,15 @@ class PiecewiseLinear(Nonlinearity):
 
 
 class SigmoidNetwork(Nonlinearity):
-    """``c x + sum_k a_k tanh(b_k x + d_k)`` with ``units`` units, ``a_1 = 1`` (gain
-    normalisation); ``params = [c, b_1, d_1, a_2, b_2, d_2, ...]``.
+    """``c x + sum_k a_k tanh(b_k x + d_k)`` with ``units`` units and the first amplitude
+    fixed, ``a_1 = amplitude``; ``params = [c, b_1, d_1, a_2, b_2, d_2, ...]``.
+
+    As an input nonlinearity ``amplitude`` is one: it normalises the scale of the network's
+    output, which lives in ``B``. As an output nonlinearity the fixed amplitude is in the
+    output's own units, so :func:`sysid.nlhw` and :func:`sysid.nlhw_ss` set it to the
+    standard deviation of the output it models in the training record (a unit amplitude
+    would be a different curve in volts and in millivolts: the fitted model would depend on
+    the units the output was recorded in).
 
     Examples
     --------
@@ -282,31 +289,58 @@ class SigmoidNetwork(Nonlinearity):
     >>> s = sysid.SigmoidNetwork(2); s.params = s.initial([-1.0, 1.0])
     >>> s.params.shape
     (6,)
+    >>> g = sysid.SigmoidNetwork(1, amplitude=3.0); g.params = [0.5, 2.0, 0.0]
+    >>> round(float(g(0.25)), 6)  # 0.5 * 0.25 + 3 tanh(2 * 0.25)
+    1.511351
     """
 
     kind = "sigmoid"
 
-    def __init__(self, units: int = 3) -> None:
+    def __init__(self, units: int = 3, amplitude: float = 1.0) -> None:
         # three parameters a unit: a count beyond memory is refused before they are made
         self.units = as_count(units, "units", 3 * 8)
         self.params = np.zeros(3 * self.units)
+        try:
+            self.amplitude = float(amplitude)
+        except (TypeError, ValueError):
+            self.amplitude = float("nan")
+        if not (np.isfinite(self.amplitude) and self.amplitude != 0.0):
+            raise DataError(f"SigmoidNetwork: amplitude must be a finite nonzero number, got "
+                            f"{amplitude!r}")
 
     def spec(self) -> tuple[str, int, list[float]]:
-        return self.kind, self.units, []
+        return self.kind, self.units, [] if self.amplitude == 1.0 else [self.amplitude]
+
+    def table(self) -> tuple[float, np.ndarray]:
+        """The linear coefficient ``c`` and one row ``(a_k, b_k, d_k)`` per unit, ``a_1``
+        filled in.
+
+        Examples
+        --------
+        >>> import sysid
+        >>> g = sysid.SigmoidNetwork(1, amplitude=3.0); g.params = [0.5, 2.0, -1.0]
+        >>> c, rows = g.table(); c, rows.tolist()
+        (0.5, [[3.0, 2.0, -1.0]])
+        """
+        rows = np.asarray(self.params, float).reshape(-1, 3).copy()
+        c = float(rows[0, 0])
+        rows[0, 0] = self.amplitude
+        return c, rows
 
     def initial(self, x: Any) -> np.ndarray:
         s = float(np.std(x)) or 1.0
         centres = np.linspace(-1, 1, self.units) * s if self.units > 1 else np.zeros(1)
-        p = np.column_stack([np.full(self.units, 0.5), np.full(self.units, 1.0 / s),
+        a = 0.5 * self.amplitude  # amplitudes (and c) in the units of the fixed one
+        p = np.column_stack([np.full(self.units, a), np.full(self.units, 1.0 / s),
                              -1.0 / s * centres]).ravel()
-        p[0] = 0.5 / s  # the linear coefficient c
+        p[0] = a / s  # the linear coefficient c
         return p
 
     def linear_start(self, x: Any) -> np.ndarray:
-        """``c x + tanh(b_1 x)`` with ``b_1 = 1e-3 / std(x)``, ``c = 1 - b_1`` (the fixed unit
-        amplitude in its linear range: ``|b_1 x|^3 / 3`` at most ``1e-8`` over 3 standard
-        deviations), the other units' amplitudes zero and their slopes and centres as in
-        :meth:`initial` (the search can grow them).
+        """``c x + a_1 tanh(b_1 x)`` with ``b_1 = 1e-3 / std(x)``, ``c = 1 - a_1 b_1`` (the
+        fixed unit in its linear range: ``|a_1| |b_1 x|^3 / 3`` at most ``1e-8 |a_1|`` over
+        3 standard deviations), the other units' amplitudes zero and their slopes and
+        centres as in :meth:`initial` (the search can grow them).
 
         Examples
         --------
@@ -318,18 +352,18 @@ class SigmoidNetwork(Nonlinearity):
         """
         p = self.initial(x).reshape(-1, 3)
         b1 = 1e-3 / (float(np.std(x)) or 1.0)
-        p[0] = [1.0 - b1, b1, 0.0]
+        p[0] = [1.0 - self.amplitude * b1, b1, 0.0]
         p[1:, 0] = 0.0
         return p.ravel()
 
     def __call__(self, x: Any) -> np.ndarray:
         x = np.asarray(x, float)
-        p = np.asarray(self.params, float).reshape(-1, 3)
-        amps = np.concatenate([[1.0], p[1:, 0]])
-        return p[0, 0] * x + sum(a * np.tanh(b * x + d) for a, (_, b, d) in zip(amps, p))
+        c, rows = self.table()
+        return c * x + sum(a * np.tanh(b * x + d) for a, b, d in rows)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"kind": self.kind, "params": self.params, "units": self.units}
+        return {"kind": self.kind, "params": self.params, "units": self.units,
+                "amplitude": self.amplitude}
 
 
 class UserFunction(Nonlinearity):
@@ -363,6 +397,16 @@ class UserFunction(Nonlinearity):
         return out
 
 
+def output_amplitudes(outputs: list[Any], y: np.ndarray) -> None:
+    """Fix the first amplitude of every output :class:`SigmoidNetwork` at the standard
+    deviation of the output column it models (``y``: samples x outputs, the training
+    record as fitted), so that the model class scales with the output's units."""
+    for g, col in zip(outputs, np.asarray(y, float).reshape(len(y), -1).T):
+        if isinstance(g, SigmoidNetwork):
+            sd = float(np.std(col))
+            g.amplitude = sd if np.isfinite(sd) and sd > 0 else 1.0
+
+
 _KINDS = {c.kind: c for c in (Nonlinearity, Saturation, DeadZone, PolynomialNonlinearity,
                               PiecewiseLinear, SigmoidNetwork)}
 
@@ -377,8 +421,8 @@ def nonlinearity_from_dict(d: dict[str, Any]) -> Nonlinearity:
         nl: Nonlinearity = PolynomialNonlinearity(int(d["degree"]))
     elif kind == "pwl":
         nl = PiecewiseLinear(d["breakpoints"])
-    elif kind == "sigmoid":
-        nl = SigmoidNetwork(int(d["units"]))
+    elif kind == "sigmoid":  # saved before the amplitude was kept: one
+        nl = SigmoidNetwork(int(d["units"]), amplitude=float(d.get("amplitude", 1.0)))
     else:
         nl = _KINDS[kind]()
     nl.params = np.asarray(d["params"], float).ravel()

@@ -29,7 +29,7 @@ from .._threads import one_blas_thread
 from ..data.iodata import require_record
 from ..data.offsets import check_offsets
 from ..errors import DataError
-from .hw_model import Nonlinearity, UserFunction, check_search_size
+from .hw_model import Nonlinearity, UserFunction, check_search_size, output_amplitudes
 from .hw_ss_model import HammersteinWienerSSModel
 from .operating_point import better_of_both, centred, record_means, undecided, use_offsets
 
@@ -175,6 +175,7 @@ def nlhw_ss(
     else:  # the start's own check is silenced below with its other warnings
         check_offsets(data if isinstance(data, IOData) else
                       IOData([u for u, _ in exps], [y for _, y in exps], 1.0))
+    output_amplitudes(fout, np.vstack([y for _, y in exps]))
     records = []
     for u, y in exps:
         uu = u.copy()

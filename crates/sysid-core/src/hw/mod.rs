@@ -11,11 +11,14 @@
 //! `r = y - g(x)`, its Jacobian `-g'(x) dx/dtheta` and `-dg/dbeta`, where the sensitivities
 //! of `x` are `1/F` filters of `B dw/dalpha`, `w(t - nk - k)` and `-x(t - k)`, run sample by
 //! sample with a ring of the last `nf` values; `J^T J` and `J^T r` are accumulated per sample.
-//! The admissible set is `F` stable. Each nonlinearity has a unit-gain normalisation so that
-//! the gain lives in `B` only: saturation and dead zone have unit slope, the polynomial and
-//! the sigmoid network its first unit's amplitude fixed at one, the polynomial a unit
-//! linear term, the piecewise-linear map keeps its value at
-//! its last breakpoint fixed.
+//! The admissible set is `F` stable. Each nonlinearity has a normalisation so that the scale
+//! of the signal between it and the linear block lives in `B` only: saturation and dead zone
+//! have unit slope, the polynomial a unit linear term, the piecewise-linear map keeps its
+//! value at its last breakpoint fixed. A sigmoid network has its first unit's amplitude
+//! fixed: at the input at one (the scale of `w`); at the output, where it restricts the
+//! curve rather than normalising a scale, at a value in the output's own units (the caller
+//! passes the output's standard deviation, so that the model class does not depend on
+//! the units the output is recorded in).
 
 use crate::error::{Result, SysidError};
 
@@ -47,11 +50,13 @@ pub enum Nonlinearity {
         /// The breakpoints.
         breakpoints: Vec<f64>,
     },
-    /// `c x + sum_k a_k tanh(b_k x + d_k)` with `a_1 = 1` (the gain normalisation);
-    /// parameters `[c, b_1, d_1, a_2, b_2, d_2, ...]`.
+    /// `c x + sum_k a_k tanh(b_k x + d_k)` with `a_1 = amplitude` fixed; parameters
+    /// `[c, b_1, d_1, a_2, b_2, d_2, ...]`.
     Sigmoid {
         /// Number of units.
         units: usize,
+        /// The first unit's fixed amplitude (one at the input).
+        amplitude: f64,
     },
 }
 
@@ -59,17 +64,21 @@ crate::names::option_names! { Nonlinearity, "nonlinearity", false, [
     ("identity", Nonlinearity::Identity), ("saturation", Nonlinearity::Saturation),
     ("deadzone", Nonlinearity::DeadZone), ("polynomial", Nonlinearity::Polynomial { degree: 2 }),
     ("pwl", Nonlinearity::PiecewiseLinear { breakpoints: Vec::new() }),
-    ("sigmoid", Nonlinearity::Sigmoid { units: 1 }),
+    ("sigmoid", Nonlinearity::Sigmoid { units: 1, amplitude: 1.0 }),
 ] }
 
 impl Nonlinearity {
     /// The nonlinearity of kind `kind` with `n` (a polynomial's degree, a sigmoid network's
-    /// units) and the breakpoints of a piecewise-linear one (the others ignore them).
+    /// units) and the breakpoints of a piecewise-linear one (for a sigmoid network: empty,
+    /// or its first unit's fixed amplitude; the others ignore them).
     ///
     /// ```
     /// use sysid_core::hw::Nonlinearity;
     /// let p = Nonlinearity::from_spec("polynomial", 3, &[]).unwrap();
     /// assert_eq!(p, Nonlinearity::Polynomial { degree: 3 });
+    /// let s = Nonlinearity::from_spec("sigmoid", 2, &[0.5]).unwrap();
+    /// assert_eq!(s, Nonlinearity::Sigmoid { units: 2, amplitude: 0.5 });
+    /// assert_eq!(s.n_params(), 6);
     /// assert!(Nonlinearity::from_spec("spline", 3, &[]).is_err());
     /// ```
     pub fn from_spec(kind: &str, n: usize, breakpoints: &[f64]) -> Result<Self> {
@@ -78,7 +87,10 @@ impl Nonlinearity {
             Nonlinearity::PiecewiseLinear { .. } => Nonlinearity::PiecewiseLinear {
                 breakpoints: breakpoints.to_vec(),
             },
-            Nonlinearity::Sigmoid { .. } => Nonlinearity::Sigmoid { units: n },
+            Nonlinearity::Sigmoid { .. } => Nonlinearity::Sigmoid {
+                units: n,
+                amplitude: breakpoints.first().copied().unwrap_or(1.0),
+            },
             other => other,
         })
     }
@@ -90,7 +102,7 @@ impl Nonlinearity {
             Nonlinearity::Saturation | Nonlinearity::DeadZone => 2,
             Nonlinearity::Polynomial { degree } => degree.saturating_sub(1),
             Nonlinearity::PiecewiseLinear { breakpoints } => breakpoints.len().saturating_sub(1),
-            Nonlinearity::Sigmoid { units } => 3 * units,
+            Nonlinearity::Sigmoid { units, .. } => 3 * units,
         }
     }
 
@@ -109,6 +121,14 @@ impl Nonlinearity {
                 Err(SysidError::invalid(
                     "breakpoints",
                     "need at least two finite, strictly increasing breakpoints",
+                ))
+            }
+            Nonlinearity::Sigmoid { amplitude, .. }
+                if !(amplitude.is_finite() && *amplitude != 0.0) =>
+            {
+                Err(SysidError::invalid(
+                    "amplitude",
+                    "a sigmoid network's fixed first amplitude must be finite and nonzero",
                 ))
             }
             _ => Ok(()),
@@ -179,12 +199,12 @@ impl Nonlinearity {
                 let v = (1.0 - lam) * val(s) + lam * val(s + 1);
                 (v, (val(s + 1) - val(s)) / h)
             }
-            Nonlinearity::Sigmoid { units } => {
+            Nonlinearity::Sigmoid { units, amplitude } => {
                 let c = p[0];
                 let (mut v, mut d) = (c * x, c);
                 dp[0] = x;
                 for k in 0..*units {
-                    let a = if k == 0 { 1.0 } else { p[3 * k] };
+                    let a = if k == 0 { *amplitude } else { p[3 * k] };
                     let (b, o) = (p[3 * k + 1], p[3 * k + 2]);
                     let th = (b * x + o).tanh();
                     let sech2 = 1.0 - th * th;
@@ -459,12 +479,22 @@ mod tests {
                 vec![-0.9, -0.3, 0.4],
             ),
             (
-                Nonlinearity::Sigmoid { units: 2 },
+                Nonlinearity::Sigmoid {
+                    units: 2,
+                    amplitude: 1.0,
+                },
+                vec![0.3, 1.1, 0.1, 0.5, 0.7, -0.2],
+            ),
+            (
+                Nonlinearity::Sigmoid {
+                    units: 2,
+                    amplitude: 0.6,
+                },
                 vec![0.3, 1.1, 0.1, 0.5, 0.7, -0.2],
             ),
         ];
         for (inp, pin) in &nls {
-            for (out, pout) in [&nls[2], &nls[4]] {
+            for (out, pout) in [&nls[2], &nls[4], &nls[5]] {
                 let s = HwStructure {
                     input: inp.clone(),
                     output: out.clone(),

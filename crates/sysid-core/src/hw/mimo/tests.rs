@@ -192,9 +192,18 @@ fn bad_starts_and_shapes_are_errors() {
 /// evaluation through the modal coordinates there.
 fn order3() -> (MimoHwStructure, Vec<f64>, Mat<f64>, Mat<f64>, Evaluation) {
     let s = MimoHwStructure {
-        inputs: vec![Nonlinearity::Sigmoid { units: 2 }, Nonlinearity::Identity],
+        inputs: vec![
+            Nonlinearity::Sigmoid {
+                units: 2,
+                amplitude: 1.0,
+            },
+            Nonlinearity::Identity,
+        ],
         outputs: vec![
-            Nonlinearity::Sigmoid { units: 1 },
+            Nonlinearity::Sigmoid {
+                units: 1,
+                amplitude: 0.7,
+            },
             Nonlinearity::Polynomial { degree: 2 },
         ],
         order: 3,
