@@ -176,8 +176,12 @@ def test_a_time_column_gives_the_sample_time_without_asking(tmp_path, capsys, na
     assert sysid.load_model(tmp_path / "out" / "model.json").dt == pytest.approx(0.08)
     err = capsys.readouterr().err
     assert f"sample time from the time column {name!r}" in err and "warning" not in err
-    assert main(argv[:-1] + [str(tmp_path / "o2"), "--dt", "0.5"]) == 0  # --dt overrides
-    assert sysid.load_model(tmp_path / "o2" / "model.json").dt == 0.5
+    # a --dt that disagrees with the time column is refused, as IOData.from_csv(dt=) refuses
+    # it; one that agrees is taken
+    assert main(argv[:-1] + [str(tmp_path / "o2"), "--dt", "0.5"]) == 2
+    assert "disagrees with its time column" in capsys.readouterr().err
+    assert main(argv[:-1] + [str(tmp_path / "o2"), "--dt", "0.08"]) == 0
+    assert sysid.load_model(tmp_path / "o2" / "model.json").dt == 0.08
     path.write_text("u,y\n" + "\n".join(f"{a},{b}" for a, b in d))
     argv = ["identify", str(path), "--inputs", "u", "--outputs", "y", "--split", "500",
             "--order", "4", "--quiet", "--report", str(tmp_path / "o3")]

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import re
 import sys
 import time
 import warnings
@@ -26,14 +27,17 @@ from .data.blocks import read_columns
 from .data.formats import grid_dt
 from .data.iodata import IOData
 from .data.table import (
+    Table,
     datetime_seconds,
+    first_rows,
     header,
     numeric,
     read_table,
+    stamps_ns,
     text_bytes,
     units_row,
 )
-from .data.units import time_column
+from .data.units import check_dt_against_time, time_column, time_unit_seconds
 from .errors import DataError, InsufficientDataError, OrderError, SysidError
 from .validation.crossval import MIN_BLOCK
 
@@ -330,7 +334,10 @@ DECIMAL_HINT = "pass --decimal ,"
 
 def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         list[str], list[int], list[int], np.ndarray, np.ndarray, np.ndarray | None]:
-    """Names, input and output column indices, u, y and the time column if asked."""
+    """Names, input and output column indices, u, y and the time column if asked, in seconds
+    (numbers in the unit of the column's header, units row or name, as
+    :meth:`sysid.IOData.from_csv` reads them: ``time_ms``, ``Time [ms]``); a ``--dt`` given
+    beside a time column is checked against it, as the readers check ``dt=``."""
     path = Path(args.data)
     # the size that counts is the text's, decompressed; white-space separated files go to
     # read_table (pyarrow splits on one character)
@@ -344,29 +351,126 @@ def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         ui = _columns(args.inputs, names, "inputs") if args.inputs else []
         yi = _columns(args.outputs, names, "outputs")
         _find_time(args, names, ui + yi, say)
+        _check_dt_streamed(args, path, names, ui + yi)
         ti = [_columns(args.time, names, "times")[0]] if args.time is not None else []
         z = read_columns(path, [names[i] for i in ui + yi + ti], delimiter=args.delimiter,
                          progress=_bars(args), stamps=args.time and names[ti[0]],
                          decimal=args.decimal, hint=DECIMAL_HINT)
         u, y = z[:, :len(ui)], z[:, len(ui):len(ui) + len(yi)]
-        return names, ui, yi, u, y, (z[:, -1] if ti else None)
+        t = z[:, -1] * _streamed_time_scale(args, path, names[ti[0]]) if ti else None
+        return names, ui, yi, u, y, t
     say(f"reading {args.data}")
     dec = args.decimal  # a logger's units row skipped; decimal commas if asked
-    table, _ = units_row(read_table(args.data, args.delimiter, decimal=dec), dec)
+    table, row_units = units_row(read_table(args.data, args.delimiter, decimal=dec), dec)
     names = table.names
     ui = _columns(args.inputs, names, "inputs") if args.inputs else []
     yi = _columns(args.outputs, names, "outputs")
     say(f"{len(table.rows)} samples; converting {len(ui)} input and {len(yi)} output "
         "column(s)")
     _find_time(args, names, ui + yi, say)
+    _check_dt(args, table, row_units, ui + yi)
     u = numeric(table, ui, decimal=dec, hint=DECIMAL_HINT)
     y = numeric(table, yi, decimal=dec, hint=DECIMAL_HINT)
     t = None
     if args.time is not None:
         ti = _columns(args.time, names, "times")[0]
-        t = datetime_seconds(table, ti, dec)  # date-time stamps: seconds after the first
-        t = numeric(table, [ti], decimal=dec, hint=DECIMAL_HINT)[:, 0] if t is None else t
+        t = _time_seconds(table, ti, row_units, dec)
     return names, ui, yi, u, y, t
+
+
+def _seconds_per_unit(name: str, row_unit: str = "") -> float:
+    """Seconds per unit of a numeric time column named ``name``, as
+    :meth:`sysid.IOData.from_csv` takes it: the ``[unit]`` of its header, else the logger's
+    units row (``row_unit``), else its name (``(ms)``, ``time_ms``): one function,
+    :func:`sysid.data.units.time_unit_seconds`; seconds without one."""
+    m = re.fullmatch(r"(.*?)\s*\[(.*)\]", name)
+    return time_unit_seconds(name, m.group(2) if m else row_unit)
+
+
+def _time_seconds(table: Table, k: int, row_units: dict[int, str], dec: str) -> np.ndarray:
+    """Column ``k`` of ``table`` in seconds: date-time stamps as seconds after the first,
+    numbers in the column's unit (:func:`_seconds_per_unit`)."""
+    t = datetime_seconds(table, k, dec)
+    if t is not None:
+        return t
+    return (numeric(table, [k], decimal=dec, hint=DECIMAL_HINT)[:, 0]
+            * _seconds_per_unit(table.names[k], row_units.get(k, "")))
+
+
+def _check_dt(args: argparse.Namespace, table: Table, row_units: dict[int, str],
+              used: list[int]) -> None:
+    """``--dt`` given while the file has a time column (``time``, ``time_ms``, ``Time [s]``,
+    ...: not an input or output, and not read then): they must agree, as
+    ``IOData.from_csv(dt=...)`` requires of the same file (a column 10 ms apart read at
+    --dt 10, or at a --dt off by the column's unit, was taken silently). A column that is
+    not numbers or date-time stamps is not compared."""
+    k = time_column(table.names, used)
+    if args.dt is None or args.time is not None or k is None:
+        return
+    try:
+        t = _time_seconds(table, k, row_units, args.decimal)
+    except DataError:
+        return  # text, not times: nothing to compare
+    _refuse_dt(args, t, table.names[k], _seconds_per_unit(table.names[k],
+                                                          row_units.get(k, "")))
+
+
+def _refuse_dt(args: argparse.Namespace, t: np.ndarray, name: str, unit: float) -> None:
+    """The readers' test (:func:`sysid.data.units.check_dt_against_time`) of ``--dt``
+    against the time column ``name`` (``t`` in seconds; ``unit``: seconds per its unit),
+    its error in the command's terms."""
+    try:
+        check_dt_against_time(t, float(args.dt), name)
+    except DataError:
+        spacing = float(np.median(np.diff(t)))
+        raise DataError(
+            f"{Path(args.data).name}: --dt {args.dt:g} s disagrees with its time column "
+            f"{name!r}, whose samples are {spacing:g} s apart"
+            + (f" (its numbers are in units of {unit:g} s)" if unit != 1.0 else "")
+            + "; leave --dt out (the time column gives the sample time), or correct it "
+            "(--dt is in seconds)") from None
+
+
+def _check_dt_streamed(args: argparse.Namespace, path: Path, names: list[str],
+                       used: list[int]) -> None:
+    """:func:`_check_dt` for a file read in blocks: on its first rows (CSV), or on its time
+    column when that holds numbers (Parquet)."""
+    k = time_column(names, used)
+    if args.dt is None or args.time is not None or k is None:
+        return
+    if path.suffix.lower() in (".parquet", ".pq"):
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        pf = pq.ParquetFile(path)
+        kind = pf.schema_arrow.field(names[k]).type
+        if pa.types.is_integer(kind) or pa.types.is_floating(kind):
+            col = pf.read(columns=[names[k]]).column(0).to_numpy(zero_copy_only=False)
+            unit = _seconds_per_unit(names[k])
+            _refuse_dt(args, np.asarray(col, float) * unit, names[k], unit)
+        return
+    head = header(path, args.delimiter, decimal=args.decimal)
+    table, row_units = units_row(first_rows(path, head, _CHECK_ROWS), args.decimal)
+    _check_dt(args, table, row_units, used)
+
+
+#: rows at the start of a file read in blocks on which a --dt is checked against its time
+#: column (the median spacing of the whole column is the same on a uniformly sampled record)
+_CHECK_ROWS = 2000
+
+
+def _streamed_time_scale(args: argparse.Namespace, path: Path, name: str) -> float:
+    """Seconds per unit of the time column ``name`` of a file read in blocks (1 when it holds
+    date-time stamps, which the block reader returns in seconds; a Parquet file has no
+    units row)."""
+    if path.suffix.lower() in (".parquet", ".pq"):
+        return _seconds_per_unit(name)
+    head = header(path, args.delimiter, decimal=args.decimal)
+    table, row_units = units_row(first_rows(path, head, 3), args.decimal)
+    k = head.names.index(name)
+    if table.rows and k < len(table.rows[0]) and stamps_ns([table.rows[0][k]])[0] is not None:
+        return 1.0
+    return _seconds_per_unit(name, row_units.get(k, ""))
 
 
 def _find_time(args: argparse.Namespace, names: list[str], used: list[int],
@@ -380,7 +484,8 @@ def _find_time(args: argparse.Namespace, names: list[str], used: list[int],
     k = time_column(names, used)
     if k is not None:
         args.time = names[k]
-        say(f"sample time from the time column {names[k]!r} (--dt or --time override it)")
+        say(f"sample time from the time column {names[k]!r} (--time names another; a --dt "
+            "must agree with it)")
         return
     # printed as the command's warnings are (--quiet silences progress, not this)
     print(f"sysid: warning: {Path(args.data).name} has no time column (time, t, Time [s], "
@@ -441,6 +546,7 @@ def _identify(args: argparse.Namespace) -> int:
         # offset gives it a pole near 1 and a wrong gain (fits far below zero on the DaISy
         # and other real records), so the estimation part's means are taken out first
         args.detrend = "none" if via_identify else "mean"
+    trend = None  # the lines --detrend linear takes out, as a sysid.Trend
     if args.detrend == "mean":
         mu, my = u[:k].mean(0), y[:k].mean(0)
         u, y = u - mu, y - my
@@ -457,6 +563,12 @@ def _identify(args: argparse.Namespace) -> int:
         pre["removed_lines"] = {
             "inputs": [] if coef_u is None else coef_u.T.tolist(),
             "outputs": coef_y.T.tolist(), "basis": "offset + slope * sample index"}
+        # the same lines as a trend on the record's clock (seconds from its first sample, or
+        # from the time column's first instant, as IOData.from_csv reads the file), which the
+        # saved model adds back (TrendedModel): offset + slope / dt per second
+        no_u = np.zeros((2, 0))
+        trend = _line_trend(no_u if coef_u is None else coef_u, coef_y, dt,
+                            0.0 if t is None else float(t[0]))
     pre["detrend"] = args.detrend
     kw = {"dt": dt, "input_names": pre["inputs"], "output_names": pre["outputs"]}
     est_data = IOData(u=u[:k] if ui else None, y=y[:k], **kw)
@@ -473,16 +585,13 @@ def _identify(args: argparse.Namespace) -> int:
             if "files" in out and "model" in out["files"]:
                 # the file holds the model with its offsets: it predicts the raw signals
                 # (the report is of the deviations, which the model of the deviations fits);
-                # the means --detrend mean took out first are offsets of it too
-                from .identify.result import IdentifiedModel
+                # the means --detrend mean took out first are offsets of it too, the lines
+                # --detrend linear took out its trend
                 from .models.serialize import save_model
 
                 m = p["result"].model
-                if "removed_means" in pre:
-                    mu = np.asarray(pre["removed_means"]["inputs"], float)
-                    my = np.asarray(pre["removed_means"]["outputs"], float)
-                    m = IdentifiedModel(m.statespace, m.u_offset + mu, m.y_offset + my)
-                save_model(m, out["files"]["model"])
+                save_model(_raw_model(m.statespace, pre, trend, m.u_offset, m.y_offset),
+                           out["files"]["model"])
                 out["files"]["leaderboard"] = _write_leaderboard(
                     p["result"], Path(out["files"]["model"]).with_name("leaderboard.csv"))
         out["warnings"] = reissue(caught)
@@ -502,16 +611,57 @@ def _identify(args: argparse.Namespace) -> int:
                    uncertainty=None if args.uncertainty == "none" else args.uncertainty,
                    n_boot=args.n_boot,
                    feedthrough={"no": False, "yes": True, "auto": "auto"}.get(args.feedthrough))
-    if "removed_means" in pre and ui and "model" in out.get("files", {}):
-        # as on the identify path: the file holds the model with the means taken out first
-        # as its offsets, so that it predicts the raw signals (the report is of the deviations)
-        from .identify.result import IdentifiedModel
+    if ("removed_means" in pre or trend is not None) and ui and "model" in out.get("files",
+                                                                                  {}):
+        # as on the identify path: the file holds the model with the means (or lines) taken
+        # out first as its offsets (or trend), so that it predicts the raw signals (the report
+        # is of the deviations)
         from .models.serialize import save_model
 
-        save_model(IdentifiedModel(out["model"], pre["removed_means"]["inputs"],
-                                   pre["removed_means"]["outputs"]), out["files"]["model"])
+        save_model(_raw_model(out["model"], pre, trend), out["files"]["model"])
     _print_summary(out)
     return 0
+
+
+def _line_trend(coef_u: np.ndarray, coef_y: np.ndarray, dt: float, t0: float) -> Any:
+    """The lines ``offset + slope * sample index`` (``coef_*``: rows offset, slope; a column
+    per channel) fitted on the estimation part, as a :class:`sysid.Trend` that applies to
+    other data: ``offset + slope / dt * t``, ``t`` seconds from the record's start ``t0``
+    (what :func:`sysid.detrend` with ``"linear"`` returns)."""
+    from .data.trend import Trend
+
+    cu, cy = np.atleast_2d(coef_u), np.atleast_2d(coef_y)
+    return Trend([], [], np.ones(cu.shape[1]), np.ones(cy.shape[1]), kind="linear",
+                 offsets=(cu[0].copy(), cy[0].copy()), slopes=(cu[1] / dt, cy[1] / dt),
+                 dt=dt, t0=t0)
+
+
+def _raw_model(model: Any, pre: dict[str, Any], trend: Any, u_offset: Any = 0.0,
+               y_offset: Any = 0.0) -> Any:
+    """The model ``model.json`` holds: ``model`` (of the deviations from ``u_offset``,
+    ``y_offset``: identify's, about the record it was given) taking and returning the
+    file's raw signals. The means ``--detrend mean`` took out first are offsets of it too
+    (an :class:`~sysid.identify.result.IdentifiedModel`); the lines ``--detrend linear``
+    took out, its trend (a :class:`~sysid.models.trended.TrendedModel`: the lines' offsets
+    plus ``u_offset``, ``y_offset``, their slopes, on the record's clock). A model fitted
+    on the detrended record alone predicted only the deviations (a record on a trend of 0.01
+    per sample from 50: simulations about 0.8 where the output is 57.5, a fit of -2615 %)."""
+    from .identify.result import IdentifiedModel
+
+    u0 = np.zeros(model.ninputs) + np.asarray(u_offset, float)
+    y0 = np.zeros(model.noutputs) + np.asarray(y_offset, float)
+    if trend is not None:
+        from .data.trend import Trend
+        from .models.trended import TrendedModel
+
+        line = Trend([], [], trend.u_scale, trend.y_scale, kind="linear",
+                     offsets=(trend.u_offset + u0, trend.y_offset + y0),
+                     slopes=(trend.u_slope, trend.y_slope), dt=trend.dt, t0=trend.t0)
+        return TrendedModel(model, line)
+    if "removed_means" in pre:
+        u0 = u0 + np.asarray(pre["removed_means"]["inputs"], float)
+        y0 = y0 + np.asarray(pre["removed_means"]["outputs"], float)
+    return IdentifiedModel(model, u0, y0)
 
 
 def _write_leaderboard(result: Any, path: Path) -> Path:
@@ -556,8 +706,11 @@ def _parser() -> argparse.ArgumentParser:
     ide.add_argument("--horizon", type=int, default=None, help="past/future horizon")
     ide.add_argument("--split", default="0.5",
                      help="estimation part: fraction (0.5) or sample count (500); 1 = all")
-    ide.add_argument("--dt", type=float, default=None, help="sample time in seconds")
-    ide.add_argument("--time", default=None, help="time column (sample time from its steps)")
+    ide.add_argument("--dt", type=float, default=None,
+                     help="sample time in seconds (a time column of the file must agree)")
+    ide.add_argument("--time", default=None,
+                     help="time column (sample time from its steps, in the unit of its "
+                          "header, units row or name: Time [ms], time_ms; seconds without)")
     ide.add_argument("--detrend", choices=("auto", "none", "mean", "linear"), default="auto",
                      help="remove the estimation part's means (or lines) first; recorded in "
                           "the model. auto (default): none when sysid.identify runs (it "

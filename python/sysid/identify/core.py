@@ -36,11 +36,14 @@
    once settled, the fold fits are capped, later refinements are not scored (the checks say
    so).
 4. The held-out blocks rank the candidates but cannot tell apart those within half a fit
-   point of the best (5 % of its error at most), nor, for the final choice, those with no
+   point of the best (5 % of its error at most), nor any within ``RESOLUTION`` (0.1 point)
+   of 100 % (:func:`.board.tie`), nor, for the final choice, those with no
    more parameters within one standard error of their block-by-block difference to the
    best (:meth:`.board.Board.paired_se`: blocks that disagree by ten points leave a gap of
    a few points to chance): those are re-fitted on the whole record and
-   the one with the smallest BIC of its simulation errors is returned; unstable candidates
+   the one with the smallest BIC of its simulation errors is returned (:func:`.board.bic`);
+   a subspace model keeps its Kalman gain (:func:`.uncertainty.with_uncertainty`); unstable
+   candidates
    only when the data insist (:meth:`.board.Board.insisting`) or ``enforce_stability=False``.
    An unstable candidate that wins only while the record's drift is left in is not one
    the data insist on (``checks["drift"]`` says so).
