@@ -214,10 +214,25 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
     return checks, feedback
 
 
+#: the smallest horizon identify gives a short record when its data matrix can still have
+#: three times as many columns as rows (orders up to ``(SHORT_HORIZON - 1) l``)
+SHORT_HORIZON = 4
+
+
 def _horizon(data: IOData) -> int:
     """The subspace horizon of ``data``: :func:`~sysid.subspace.estimator.available_horizon`,
-    from the experiments long enough for it, not the shortest one."""
-    return available_horizon(data.lengths, data.n_inputs, data.n_outputs)
+    from the experiments long enough for it, not the shortest one; on a short record, where
+    that rule (ten columns a row) gives fewer than :data:`SHORT_HORIZON` block rows, up to
+    :data:`SHORT_HORIZON` as long as the data matrix keeps three columns a row (as a fold's
+    horizon does, :func:`~sysid.validation.crossval.fold_horizon`). With the ten-column rule
+    alone a 100-sample record of one input and output had horizon 2, and every candidate
+    order 1: a two-state plant validated at 35 %, where ``ssest(data, 2)`` gives 96 %."""
+    h = available_horizon(data.lengths, data.n_inputs, data.n_outputs)
+    if h >= SHORT_HORIZON:
+        return h
+    ch = data.n_inputs + data.n_outputs
+    cols = max(data.lengths) + 1  # the columns of the longest experiment's window, + 2 i
+    return max(h, min(SHORT_HORIZON, cols // (6 * ch + 2)))
 
 
 def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
