@@ -29,7 +29,10 @@ def test_default_window_gives_an_honest_99_percent_band() -> None:
     inside = frd.within_band(g).mean()
     assert inside >= 0.95, (inside, frd.info)
     assert frd.info["lags_rule"].startswith("data")
-    assert frd.info["lags"] == 6 * frd.info["significant_lag"]
+    # 6 x the last significant lag, doubled until the bias check passes (here once: the
+    # estimates with 78 and 156 lags disagree beyond the band at the resonance)
+    doubled = frd.info["lags"] / (6 * frd.info["significant_lag"])
+    assert doubled in (1, 2, 4, 8) and frd.info["bias_check"] == "passed", frd.info
     # MATLAB's fixed default is the thing beaten here
     fixed = sysid.spa(data, lags=30).within_band(g).mean()
     assert fixed < 0.9 < inside

@@ -152,11 +152,22 @@ def bandpass(
 
 
 def _trend_on(tr: np.ndarray | None, n_new: int, factor: float) -> np.ndarray | None:
+    """A recorded trend (one value per old sample) at the new samples ``k * factor`` (in
+    old samples): linear between old samples, and past the last one its last segment
+    extended (a trend removed by :func:`~sysid.detrend` is linear there; holding its last
+    value made ``retrend()`` wrong at the end of an upsampled record)."""
     if tr is None:
         return None
-    k_old = np.arange(tr.shape[0], dtype=float)
+    n = tr.shape[0]
+    k_old = np.arange(n, dtype=float)
     k_new = np.arange(n_new) * factor
-    return np.column_stack([np.interp(k_new, k_old, c) for c in tr.T]).reshape(n_new, -1)
+    out = np.empty((n_new, tr.shape[1]))  # no columns: a time series' input trend
+    for j in range(tr.shape[1]):
+        out[:, j] = np.interp(k_new, k_old, tr[:, j])
+    past = k_new > n - 1
+    if n >= 2 and past.any():
+        out[past] = tr[-1] + (k_new[past] - (n - 1))[:, None] * (tr[-1] - tr[-2])
+    return out
 
 
 def resample(data: IOData, dt: float, *, max_denominator: int = 1000) -> IOData:
@@ -167,6 +178,9 @@ def resample(data: IOData, dt: float, *, max_denominator: int = 1000) -> IOData:
     ``max_denominator`` (to 1e-9): the result has exactly the sample time asked for, or a
     :class:`~sysid.DataError` names the nearest one that can be had (resampling to another
     rate than asked, silently, moved every frequency of a model fitted to the result).
+
+    A trend recorded by :func:`~sysid.detrend` is evaluated at the new instants, its last
+    segment extended past the last old sample, so that ``retrend()`` restores it there.
 
     Examples
     --------

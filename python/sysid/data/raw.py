@@ -65,7 +65,9 @@ def repair_nan(
     nan : {"error", "interpolate", "split"}
         ``"error"``: raise :class:`~sysid.NonFiniteError` naming the first bad sample.
         ``"interpolate"``: fill gaps of at most ``max_gap`` samples (linearly, per channel)
-        and cut the record at longer ones. ``"split"``: cut at every gap.
+        and cut the record at longer ones, and at gaps without a valid sample on one side
+        (at the record's ends, or next to where another channel's long gap cuts it).
+        ``"split"``: cut at every gap.
     max_gap : int
         Longest gap to interpolate.
     min_length : int
@@ -124,6 +126,16 @@ def repair_nan(
             for a, b in _runs(bad[:, j]):
                 if b - a > max_gap or a == 0 or b == len(any_bad):
                     long_gap[a:b] = True
+        # a short gap next to a cut (another channel's long gap) has no valid sample on that
+        # side, like a gap at the record's ends: it is cut too, not filled by holding the last
+        # value (which made up samples); a new cut can reach another channel's short gap
+        grown = True
+        while grown:
+            grown = False
+            for j in range(x.shape[1]):
+                for a, b in _runs(bad[:, j] & ~long_gap):
+                    if a == 0 or long_gap[a - 1] or b == len(any_bad) or long_gap[b]:
+                        long_gap[a:b] = grown = True
         cut = long_gap
         fillable = bad & ~long_gap[:, None]
         x = np.where(bad, 0.0, x)
@@ -168,8 +180,9 @@ def from_raw(
     nan : {"error", "interpolate", "split"}
         ``"error"`` raises on any NaN/Inf; ``"interpolate"`` fills gaps of at most
         ``max_gap`` consecutive samples linearly (per channel) and splits the record at
-        longer ones; ``"split"`` cuts the record at every gap, each clean run becoming
-        its own experiment.
+        longer ones and at gaps without a valid sample on one side (at the ends, or next to
+        another channel's long gap); ``"split"`` cuts the record at every gap, each clean
+        run becoming its own experiment.
     max_gap : int
         Longest gap (samples) that ``"interpolate"`` fills.
     min_length : int

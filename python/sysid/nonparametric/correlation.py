@@ -16,7 +16,7 @@ from .. import _sysid
 from .._checks import as_between, as_int
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
-from .spectra import _names, _need_data, _z_scaled
+from .spectra import _names, _need_data, _need_varying, _z_scaled
 
 __all__ = ["Correlation", "correlation"]
 
@@ -114,6 +114,11 @@ def correlation(
 ) -> Correlation:
     """Auto and cross correlations of all channels (inputs then outputs) up to ``max_lag``.
 
+    A channel without variation (constant within every experiment, with ``remove_mean``;
+    zero in every sample, without) has a correlation of 0 / 0 with any channel, undefined:
+    such an input raises an :class:`~sysid.ExcitationError`, such an output a
+    :class:`~sysid.DataError`, naming it (the coefficients were reported as 0).
+
     Examples
     --------
     >>> import numpy as np, sysid
@@ -128,6 +133,7 @@ def correlation(
     if L >= min(data.lengths):
         raise InsufficientDataError(f"max_lag = {L} needs experiments longer than {L} samples")
     confidence = as_between(confidence, "confidence", 0.0, 1.0)
+    _need_varying(data, "correlation", "correlation", centred=bool(remove_mean))
     # coefficients are unitless: channels near 1e300 (whose squares overflow) are scaled
     R, total = _lag_covariances(_z_scaled(data, per_channel=True)[0], L, remove_mean)
     d = np.sqrt(np.maximum(np.einsum("aa->a", R[0]), np.finfo(float).tiny))

@@ -19,7 +19,7 @@ from scipy import signal
 
 from .._checks import as_int, check_elements
 from ..data.iodata import IOData, require_record
-from ..errors import DataError, InsufficientDataError, SysidWarning
+from ..errors import DataError, ExcitationError, InsufficientDataError, SysidWarning
 
 __all__ = ["Spectra", "Coherence", "spectra", "periodogram", "coherence"]
 
@@ -87,6 +87,34 @@ def _unscaled(S: np.ndarray, s: np.ndarray, names: list[str]) -> np.ndarray:
 
 def _names(data: IOData) -> list[str]:
     return list(data.input_names) + list(data.output_names)
+
+
+def _need_varying(data: IOData, who: str, what: str, centred: bool = True) -> None:
+    """Refuse channels without variation: constant within every experiment (``centred``:
+    each experiment's mean is removed, leaving zeros), else zero in every sample. A
+    coherence or correlation with such a channel is 0 / 0, undefined (it was reported as 0,
+    "no relation"). A flat input raises an :class:`ExcitationError` (as the frequency
+    responses do), a flat output a :class:`DataError`; both name the channels."""
+    names = _names(data)
+    varies = np.zeros(len(names), dtype=bool)
+    for u, y in data.experiments:
+        z = np.hstack([u, y])
+        if z.shape[0]:
+            varies |= np.any(z != (z[:1] if centred else 0.0), axis=0)
+    if varies.all():
+        return
+    m = data.n_inputs
+    flat_in = [n for n, v in zip(names[:m], varies[:m]) if not v]
+    flat_out = [n for n, v in zip(names[m:], varies[m:]) if not v]
+    side, flat = ("input", flat_in) if flat_in else ("output", flat_out)
+    how = ("constant within every experiment (no variation about the mean)" if centred
+           else "zero in every sample")
+    one = len(flat) == 1
+    raise (ExcitationError if flat_in else DataError)(
+        f"{who}: {side}{'' if one else 's'} {', '.join(flat)} {'is' if one else 'are'} {how}, "
+        f"so {'its' if one else 'their'} {what} with any channel is 0 / 0, undefined; check "
+        f"the channel (the wrong column, a stuck {'actuator' if flat_in else 'sensor'}?) or "
+        f"leave {'it' if one else 'them'} out (data.select({side}s=...))")
 
 
 # --------------------------------------------------------------------------------------------
@@ -162,10 +190,11 @@ def _welch_matrix(
     return S, f, k_eff, count
 
 
-def _window(window: Any, n: int) -> np.ndarray:
-    """``scipy.signal.get_window(window, n)``; an unknown name is a :class:`DataError`."""
+def _window(window: Any, n: int, fftbins: bool = True) -> np.ndarray:
+    """``scipy.signal.get_window(window, n, fftbins)`` (periodic, or ``fftbins=False``
+    symmetric); an unknown name is a :class:`DataError`."""
     try:
-        return np.asarray(signal.get_window(window, n), dtype=float)
+        return np.asarray(signal.get_window(window, n, fftbins=fftbins), dtype=float)
     except (ValueError, TypeError) as exc:
         raise DataError(
             f"window {window!r} is not a window scipy.signal.get_window knows ({exc}); use a "
@@ -489,6 +518,11 @@ def coherence(
     """Magnitude-squared coherence per output/input pair (Welch; as
     ``scipy.signal.coherence``) and the multiple coherence of each output.
 
+    A channel constant within every experiment has no spectrum (each segment's mean is
+    removed), so its coherence with anything is 0 / 0: such an input raises an
+    :class:`~sysid.ExcitationError`, such an output a :class:`~sysid.DataError`, naming it
+    (``scipy.signal.coherence`` gives NaN with a warning; the value was 0).
+
     Examples
     --------
     >>> import numpy as np, sysid
@@ -498,6 +532,7 @@ def coherence(
     True
     """
     data = _need_data(data, who="coherence")
+    _need_varying(data, "coherence", "coherence")  # every segment is detrended
     # coherence is unitless: taken of the scaled channels, it never overflows
     S, f, _, _ = _welch_scaled(data, nperseg, noverlap, window, None, True)
     m = data.n_inputs

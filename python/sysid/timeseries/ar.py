@@ -138,7 +138,8 @@ def ar(data: Any, na: int, method: str = "fb", *, dt: float | None = None) -> An
         Forward-backward least squares (default, as MATLAB), Burg, Yule-Walker, or forward
         least squares; see :mod:`sysid.timeseries.ar`.
     dt : float, optional
-        Sample time when ``data`` is an array (default 1).
+        Sample time when ``data`` is an array (default 1). With a record it may only repeat
+        the record's own ``dt``; another value is a :class:`~sysid.DataError`.
 
     Returns
     -------
@@ -179,7 +180,14 @@ def ar(data: Any, na: int, method: str = "fb", *, dt: float | None = None) -> An
     if dt is not None:
         from .._checks import as_dt
 
-        dt0 = as_dt(dt)
+        given = as_dt(dt)
+        if isinstance(data, IOData) and abs(given - dt0) > 1e-12 * max(given, dt0):
+            # the record's own sample time was silently replaced: every frequency of the
+            # model (its spectrum, its poles in rad/s) moved by the ratio
+            raise DataError(f"ar: dt = {given:g} s disagrees with the record's dt = {dt0:g} s; "
+                            "an IOData record carries its own sample time: leave dt out (it "
+                            "is for arrays), or rebuild the record with the right dt")
+        dt0 = given
     if method == "yw":
         a = _yule_walker(ys, na)
     elif method == "burg":
