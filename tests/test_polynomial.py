@@ -452,14 +452,15 @@ def test_repr_of_a_coupled_model_shows_every_entry_of_a():
                               [[1], [1]], 1.0)
     np.testing.assert_allclose(np.abs(m.poles()), np.hypot(0.3, 0.3), rtol=1e-9)
     text = repr(m)
-    for line in ["y2: A21(q) y1(t) + A22(q) y2(t) = B1(q) u1(t-1) + e(t)",
-                 "A11(q) = 1 + 0.6 q^-1", "A12(q) = 1 q^-1", "A21(q) = -0.9 q^-1",
-                 "A22(q) = 1 - 1.2 q^-1", "row 2 of A, a 2x2 matrix polynomial"]:
+    # labels indexed as a[i][k] and b[i][j], signals by the model's channel names
+    for line in ["y1: A10(q) y0(t) + A11(q) y1(t) = B0(q) u0(t-1) + e(t)",
+                 "A00(q) = 1 + 0.6 q^-1", "A01(q) = 1 q^-1", "A10(q) = -0.9 q^-1",
+                 "A11(q) = 1 - 1.2 q^-1", "y1's row of A, a 2x2 matrix polynomial"]:
         assert line in text
     assert "A(q) =" not in text
     diag = sysid.PolynomialModel([[[0.6], []], [[], [-0.5]]], [[[1.0]], [[0.5]]],
                                  [[1], [1]], 1.0)
-    assert "A(q) = 1 - 0.5 q^-1" in repr(diag) and "A22" not in repr(diag)
+    assert "A(q) = 1 - 0.5 q^-1" in repr(diag) and "A11" not in repr(diag)
 
 
 def test_per_output_orders_of_another_shape_are_reported_as_given():
@@ -492,7 +493,10 @@ def test_iv4_covariance_is_positive_semidefinite_where_r_is_ill_conditioned():
     rng = np.random.default_rng(15)
     u = 2.36 + 0.15 * np.sign(rng.standard_normal(600))
     y = 13 + signal.lfilter([0, 0.5], [1, -0.9], u - 2.36) + 0.01 * rng.standard_normal(600)
-    with pytest.warns(sysid.OffsetWarning):
+    # over-parameterised on a record left on its offset: unstable since iv4 skips the rows
+    # its prefilter's start-up spoils (they had acted as a step from zero to the offset)
+    with pytest.warns(sysid.OffsetWarning), warnings.catch_warnings():
+        warnings.simplefilter("ignore", sysid.StabilityWarning)
         m = sysid.iv4(sysid.IOData(u[:, None], y[:, None], 1.0), 6, 6, 1)
     w = np.linalg.eigvalsh(m.covariance[0])
     assert w.min() >= -1e-12 * w.max() and np.all(np.isfinite(m.uncertainty.std))

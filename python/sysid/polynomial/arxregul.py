@@ -275,8 +275,9 @@ class ArxRegularization(HTMLResult):
     """Tuned regularisation of an ARX structure (the result of :func:`arxregul`).
 
     Per output ``i``: ``lam[i]`` and ``R[i]`` are MATLAB's ``Lambda`` and ``R`` (the penalty
-    ``lam theta^T R theta``, ``lam = sigma^2``, ``R = P^-1`` computed by a pseudo-inverse),
-    ``prior[i]`` is the prior covariance ``P`` itself (what the fit uses: it needs no
+    ``lam theta^T R theta`` on ``theta = [a, b]``, the model's ``parameters``, ``lam =
+    sigma^2``, ``R = P^-1`` computed by a pseudo-inverse), ``prior[i]`` is the prior
+    covariance ``P`` of that ``theta`` itself (what the fit uses: it needs no
     inverse), ``hyperparameters[i]`` one dict per block, ``neg_log_likelihood[i]`` the value
     of ``-log p(y)`` at the optimum.
     """
@@ -419,14 +420,22 @@ def regularized_fits(data: Any, na: Any, nb: Any, nk: Any, reg: ArxRegularizatio
     """Per output: posterior mean ``theta = P R1^T (lam I + R1 P R1^T)^-1 r`` (regression
     signs), residual mean square and posterior covariance ``P - P R1^T S^-1 R1 P``
     (``S = lam I + R1 P R1^T``), from the summaries, through the SVD of ``R1 P^(1/2)`` (in
-    Rust: ``sysid_core::polynomial::regul::regularized_solve``)."""
+    Rust: ``sysid_core::polynomial::regul::regularized_solve``).
+
+    ``reg.prior`` is the prior covariance of MATLAB's ``theta = [a, b]`` (``reg.R`` its
+    ``R``); the regression's unknowns are ``[-a, b]``, so its ``A`` rows and columns are
+    negated first: a change only where the prior couples ``A`` and ``B`` coefficients (the
+    tuned kernels are block diagonal, and their prior is the same in both)."""
     sums, g = summaries(data, na, nb, nk)
     if [list(map(list, x)) for x in g] != [list(map(list, x)) for x in reg.orders]:
         raise DataError(f"the regularisation was tuned for orders {reg.orders}, not {g}; "
                         "call arxregul with the same na, nb, nk")
     out = []
     for i, (s, n) in enumerate(sums):
-        P, lam = reg.prior[i], float(reg.lam[i])
+        P, lam = np.asarray(reg.prior[i], float), float(reg.lam[i])
+        sign = np.r_[-np.ones(sum(g[0][i])), np.ones(P.shape[0] - sum(g[0][i]))]
+        if np.any(P[sign < 0][:, sign > 0]):  # A-B cross terms: the prior of [-a, b]
+            P = sign[:, None] * P * sign[None, :]
         theta, cov, rss = _sysid.arx_regularized_solve(np.ascontiguousarray(s, float),
                                                        np.ascontiguousarray(P, float), lam)
         out.append({"theta": theta, "loss": rss / n, "cov": np.asarray(cov),

@@ -27,6 +27,7 @@ from .._threads import one_blas_thread
 from ..data.iodata import IOData, as_record
 from ..data.offsets import check_offsets
 from ..errors import DataError, InsufficientDataError, NumericalError, ShapeError, is_frd
+from .arx_penalty import kernel_penalties, pair_penalties, penalised_fits
 from .cancellation import cancellation, warn_cancellations
 from .model import PolynomialModel
 from .orders import matlab_orders
@@ -88,12 +89,16 @@ def arx(
         * ``"tc"``, ``"ss"``, ``"dc"`` or ``"ridge"``: a kernel prior tuned by empirical Bayes
           (:func:`sysid.arxregul`), the estimate its posterior mean and ``covariance`` its
           posterior covariance; ``info["regularization"]`` holds the tuning result;
-        * ``(lam, R)``: MATLAB's ``Lambda`` and ``R`` (``lam theta^T R theta``; one pair, or
-          per-output sequences of them);
+        * ``(lam, R)``: MATLAB's ``Lambda`` and ``R``, the penalty ``lam theta^T R theta`` on
+          ``theta = [a, b]``, the polynomials' coefficients (``parameters``), ``R`` as many
+          rows and columns as that output's equation has parameters; one pair for every
+          output, or a sequence of one pair per output;
         * an :class:`~sysid.polynomial.arxregul.ArxRegularization` from :func:`sysid.arxregul`.
     kernel : ndarray, optional
         With a number ``regularization``: the factor ``M`` (for example the inverse Cholesky
-        factor of a kernel); as many columns as each output's equation has parameters.
+        factor of a kernel) of the penalty ``lambda |M theta|^2`` on ``theta = [a, b]`` (as
+        ``(lam, R)``, ``R = M^T M``); as many columns as each output's equation has
+        parameters.
     integrate_noise : bool
         MATLAB's ``IntegrateNoise`` (ARIX): ``A y = B u + e / (1 - q^-1)``, a disturbance
         that drifts (a random walk, a slowly moving offset). Fitted by least squares on the
@@ -133,16 +138,24 @@ def arx(
         return _warn_diverging(_arx_posterior(data, na_g, nb_g, nk_g, regularization, kernel),
                                "arx")
     if isinstance(regularization, (tuple, list)):
-        return _warn_diverging(_arx_pairs(data, exps, na_g, nb_g, nk_g, regularization, kernel),
-                               "arx")
+        if kernel is not None:
+            raise DataError("kernel= goes with a numeric regularization; a (lam, R) pair "
+                            "carries R")
+        lams, factors = pair_penalties(regularization, na_g, nb_g)
+        m = _arx_model(data, penalised_fits(exps, na_g, nb_g, nk_g, lams, factors), nk_g)
+        m.info["regularization"] = {"lam": lams}
+        return _warn_diverging(m, "arx")
     if isinstance(regularization, bool) or not isinstance(regularization, (int, float, np.number)):
         raise DataError("regularization must be a number, a kernel name ('tc', 'ss', 'dc', "
                         f"'ridge'), a (lam, R) pair or an ArxRegularization, got "
                         f"{type(regularization).__name__}")
     if not (regularization >= 0 and np.isfinite(regularization)):
         raise DataError(f"regularization must be a finite number >= 0, got {regularization}")
-    fac = None if kernel is None else np.ascontiguousarray(kernel, float)
-    fits = _sysid.arx_fit(exps, na_g, nb_g, nk_g, float(regularization), fac)
+    if kernel is not None:  # lam |M theta|^2 on theta = [a, b], as a (lam, R) pair
+        lams, factors = kernel_penalties(float(regularization), kernel, na_g, nb_g)
+        fits = penalised_fits(exps, na_g, nb_g, nk_g, lams, factors)
+    else:  # ridge: lam |theta|^2, the same on [-a, b]
+        fits = _sysid.arx_fit(exps, na_g, nb_g, nk_g, float(regularization), None)
     return _warn_diverging(_arx_model(data, fits, nk_g), "arx")
 
 
@@ -215,35 +228,6 @@ def _arx_model(data: Any, fits: list[Any], nk_g: list[list[int]]) -> PolynomialM
     model.parameters = [f["theta"] for f in fits]  # type: ignore[attr-defined]
     _attach_uncertainty(model, model.covariance, "arx",  # type: ignore[attr-defined]
                         "posterior" if "covariance" in fits[0] else "least-squares")
-    return model
-
-
-def _arx_pairs(data: Any, exps: Any, na_g: Any, nb_g: Any, nk_g: Any, pairs: Any,
-               kernel: Any) -> PolynomialModel:
-    """ARX with MATLAB's ``(Lambda, R)`` per output: ``R = M^T M`` by an eigen-factor, solved
-    by the streaming QR with the penalty rows appended (``lam = 0``: plain least squares)."""
-    if kernel is not None:
-        raise DataError("kernel= goes with a numeric regularization; a (lam, R) pair carries R")
-    ny = len(na_g)
-    if len(pairs) == 2 and np.ndim(pairs[0]) == 0:
-        pairs = [pairs] * ny
-    if len(pairs) != ny or any(len(pr) != 2 for pr in pairs):
-        raise DataError(f"regularization=(lam, R): one pair, or {ny} pairs (one per output)")
-    fits = []
-    for i, (lam, R) in enumerate(pairs):
-        lam = float(lam)
-        if not (lam >= 0 and np.isfinite(lam)):
-            raise DataError(f"lam must be a finite number >= 0, got {lam}")
-        R = np.asarray(R, float)
-        w, V = np.linalg.eigh(0.5 * (R + R.T)) if R.ndim == 2 and R.shape[0] == R.shape[1] \
-            else (None, None)
-        if w is None or not np.all(np.isfinite(R)) or w.min() < -1e-10 * max(1.0, w.max()):
-            raise DataError(f"R of output {i} must be a finite symmetric positive "
-                            f"semi-definite matrix, got shape {R.shape}")
-        M = np.ascontiguousarray(np.sqrt(np.clip(w, 0, None))[:, None] * V.T)
-        fits.append(_sysid.arx_fit(exps, na_g, nb_g, nk_g, lam, M)[i])
-    model = _arx_model(data, fits, nk_g)
-    model.info["regularization"] = {"lam": [float(p[0]) for p in pairs]}
     return model
 
 
@@ -685,7 +669,9 @@ def iv4(data: Any, na: Any, nb: Any = None, nk: Any = None, *, reference: Any = 
     Consistent for coloured noise ``v`` where least squares (:func:`arx`) is biased. MIMO
     with the orders of :func:`arx` (``na`` outputs x outputs, ``nb``/``nk`` outputs x
     inputs; or MATLAB's one vector ``[na, nb, nk]``, ``nk`` default 1); several experiments
-    are used together (each filtered from rest). For
+    are used together (each filtered from rest; the prefiltered stage's sums start after its
+    prefilter's start-up in each, so that a record that does not start at rest is fitted
+    without bias). For
     closed-loop data pass the reference signal (``(N, n_ref)``, a list with one array per
     experiment) as ``reference``: the instruments are then the parts of ``y`` and ``u``
     explained by the reference (a least-squares FIR projection on its lags), which the

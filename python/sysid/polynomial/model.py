@@ -11,9 +11,9 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_dt
+from .._checks import as_2d, as_dt, as_int, real_array
 from .._measured import as_horizon, as_measured, predict_args
-from ..errors import DataError
+from ..errors import DataError, ShapeError
 from ..models.protocol import ModelMixin
 
 Poly = np.ndarray
@@ -44,6 +44,93 @@ def _names(names: Any, count: int, what: str) -> list[str]:
     out = [str(n) for n in names]
     if len(out) != count:
         raise DataError(f"{len(out)} {what} names given for {count} {what}s")
+    return out
+
+
+_LAYOUT = {"a": "outputs x outputs, a[i][k]: the lags of output k in output i's equation",
+           "b": "outputs x inputs, b[i][j]: B of input j in output i's equation",
+           "f": "outputs x inputs, f[i][j]: the free coefficients of the monic F_ij"}
+
+
+def _coefficients(x: Any, name: str) -> np.ndarray:
+    """One polynomial's coefficients as a flat float array (a number: one coefficient)."""
+    return real_array(x, name).ravel()
+
+
+def _is_row(x: Any) -> bool:
+    return isinstance(x, (list, tuple)) or (isinstance(x, np.ndarray) and x.ndim >= 1)
+
+
+def _poly_grid(x: Any, name: str, rows: int | None, cols: int | None
+               ) -> list[list[np.ndarray]]:
+    """``x[i][j]`` as coefficient arrays, ``rows x cols`` (``rows=None``: as many rows as
+    given, then ``cols=None``: as many columns as rows, ``a``'s square; ``cols=None`` alone:
+    every row as long as the first); a flat or ragged nesting raises a :class:`DataError`
+    saying the layout."""
+    example = {"a": "a=[[[-0.5]]]", "b": "b=[[[1.0, 0.5]]]", "f": "f=[[[-0.7]]]"}[name]
+    layout = (f"{name} must be nested lists of coefficient arrays ({_LAYOUT[name]}; for one "
+              f"output and one input {example})")
+    if not _is_row(x) or not all(_is_row(r) for r in x):
+        raise DataError(f"{layout}, got {x!r:.60}")
+    grid = [[_coefficients(v, f"{name}[{i}][{j}]") for j, v in enumerate(r)]
+            for i, r in enumerate(x)]
+    if rows is None:
+        rows = cols = len(grid)
+    elif cols is None:
+        cols = len(grid[0]) if grid else 0
+    shape = [len(r) for r in grid]
+    if len(grid) != rows or any(n != cols for n in shape):
+        raise ShapeError(f"{name} has {len(grid)} row(s) of {shape} entries but should be "
+                         f"{rows} x {cols} ({_LAYOUT[name]})")
+    return grid
+
+
+def _per_output(x: Any, name: str, ny: int) -> list[np.ndarray]:
+    """``c`` or ``d``: one coefficient array per output (``None`` or ``[]``: none)."""
+    if x is None or (isinstance(x, (list, tuple)) and len(x) == 0):
+        return [np.zeros(0) for _ in range(ny)]
+    if not _is_row(x) or len(x) != ny:
+        raise ShapeError(f"{name} must hold one coefficient array per output ({ny}: "
+                         f"{name}[i] the free coefficients of the monic {name.upper()}_i, e.g. "
+                         f"{name}=[[0.5]] for one output), got {x!r:.60}")
+    return [_coefficients(v, f"{name}[{i}]") for i, v in enumerate(x)]
+
+
+def _delays(nk: Any, ny: int, nu: int) -> np.ndarray:
+    """The input delays as an ``(ny, nu)`` integer array (a number: every channel's)."""
+    try:
+        grid = np.array(nk, dtype=object)
+    except (TypeError, ValueError):
+        grid = np.array(None, dtype=object)
+    if grid.ndim == 0 and grid.item() is not None:
+        grid = np.full((ny, nu), grid.item(), dtype=object)
+    elif grid.ndim == 1 and ny == 1:
+        grid = grid.reshape(1, -1)
+    if grid.shape != (ny, nu):
+        raise ShapeError(f"nk has shape {grid.shape} but should be ({ny}, {nu}): one delay "
+                         f"per output (row) and input (column), or one number for all")
+    out = np.zeros((ny, nu), dtype=int)
+    for (i, j), v in np.ndenumerate(grid):
+        try:
+            out[i, j] = as_int(v, f"nk[{i}][{j}]", 0)
+        except DataError as e:
+            raise DataError(f"nk must hold delays >= 0 in whole samples (integer-valued "
+                            f"floats such as 2.0 are taken): {e}") from None
+    return out
+
+
+def _variances(nv: Any, ny: int) -> np.ndarray:
+    """The innovation variances: one per output (a number for one output) or ``ny x ny``."""
+    if nv is None:
+        return np.ones(ny)
+    out = real_array(nv, "noise_variance")
+    if out.ndim == 0 and ny == 1:
+        out = out.reshape(1)
+    if out.shape not in ((ny,), (ny, ny)):
+        raise ShapeError(f"noise_variance has shape {out.shape} but should be ({ny},), one "
+                         f"innovation variance per output (or a ({ny}, {ny}) covariance)")
+    if not (np.all(np.isfinite(out)) and np.all(out >= 0)):
+        raise DataError(f"noise_variance must be finite and >= 0, got {out.tolist()}")
     return out
 
 
@@ -91,25 +178,23 @@ class PolynomialModel(ModelMixin):
         f: Any = None,
         noise_variance: Any = None,
     ) -> None:
-        self.a = [[np.asarray(x, dtype=float).ravel() for x in row] for row in a]
+        self.a = _poly_grid(a, "a", None, None)
         ny = len(self.a)
-        self.b = [[np.asarray(x, dtype=float).ravel() for x in row] for row in b]
-        nu = len(self.b[0]) if self.b else 0
-        self.nk = np.asarray(nk, dtype=int).reshape(ny, nu)
-        self.c = [np.asarray(x, dtype=float).ravel() for x in (c or [[]] * ny)]
-        self.d = [np.asarray(x, dtype=float).ravel() for x in (d or [[]] * ny)]
-        self.f = [
-            [np.asarray(x, dtype=float).ravel() for x in row]
-            for row in (f or [[[]] * nu for _ in range(ny)])
-        ]
+        if ny == 0:
+            raise DataError("a model needs at least one output: a must be nested as "
+                            "a[i][k] (e.g. a=[[[-0.5]]], or a=[[[]]] for no A)")
+        self.b = _poly_grid(b, "b", ny, None)
+        nu = len(self.b[0])
+        self.nk = _delays(nk, ny, nu)
+        self.c = _per_output(c, "c", ny)
+        self.d = _per_output(d, "d", ny)
+        no_f = f is None or (isinstance(f, (list, tuple)) and len(f) == 0)
+        self.f = ([[np.zeros(0) for _ in range(nu)] for _ in range(ny)] if no_f
+                  else _poly_grid(f, "f", ny, nu))
         self.dt = as_dt(dt)
-        self.noise_variance = (
-            np.ones(ny) if noise_variance is None else np.asarray(noise_variance, float)
-        )
+        self.noise_variance = _variances(noise_variance, ny)
         self.uncertainty: Any = None
         self.info: dict[str, Any] = {}
-        if len(self.b) != ny or any(len(r) != ny for r in self.a):
-            raise DataError(f"a must be {ny} x {ny} and b must have {ny} rows")
         for name, rows in (("a", self.a), ("b", self.b), ("f", self.f), ("c", [self.c]),
                            ("d", [self.d])):
             for i, row in enumerate(rows):
@@ -118,11 +203,6 @@ class PolynomialModel(ModelMixin):
                         at = f"[{j}]" if name in ("c", "d") else f"[{i}][{j}]"
                         raise DataError(f"{name}{at} has a non-finite coefficient (NaN or "
                                         f"Inf): {x}; every coefficient must be finite")
-        if np.any(self.nk < 0):
-            raise DataError(f"nk must hold delays >= 0 (samples), got {self.nk.tolist()}")
-        if not (np.all(np.isfinite(self.noise_variance)) and np.all(self.noise_variance >= 0)):
-            raise DataError(f"noise_variance must be finite and >= 0, got "
-                            f"{self.noise_variance.tolist()}")
 
     @property
     def n_outputs(self) -> int:
@@ -500,14 +580,30 @@ class PolynomialModel(ModelMixin):
         return realize(self)
 
     def __repr__(self) -> str:
+        """The equations with the model's channel names (``y0``, ``u0`` or the data's); the
+        polynomials are labelled by their indices in ``a``, ``b``, ``f`` (``B1`` is
+        ``b[i][1]``, the input ``input_names[1]``'s; ``A01`` is ``a[0][1]``).
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> m = sysid.PolynomialModel([[[-0.5]]], [[[1.0]]], [[1]], 1.0)
+        >>> m.input_names, m.output_names = ["flow"], ["level"]
+        >>> print(m)
+        PolynomialModel: 1 output(s), 1 input(s), dt=1
+          level: A(q) level(t) = B0(q) flow(t-1) + e(t)
+            A(q) = 1 - 0.5 q^-1
+            B0(q) = 1
+        """
+        ys, us = self.output_names, self.input_names
         lines = [
             f"PolynomialModel: {self.n_outputs} output(s), {self.n_inputs} input(s), dt={self.dt:g}"
         ]
         for i in range(self.n_outputs):
             rhs = " + ".join(
-                f"B{j + 1}(q)/F{j + 1}(q) u{j + 1}(t-{self.nk[i, j]})"
+                f"B{j}(q)/F{j}(q) {us[j]}(t-{self.nk[i, j]})"
                 if self.f[i][j].size
-                else f"B{j + 1}(q) u{j + 1}(t-{self.nk[i, j]})"
+                else f"B{j}(q) {us[j]}(t-{self.nk[i, j]})"
                 for j in range(self.n_inputs)
             )
             noise = (
@@ -517,22 +613,21 @@ class PolynomialModel(ModelMixin):
                 ny = self.n_outputs
                 sep = "" if ny < 10 else ","
                 ks = [k for k in range(ny) if k == i or self.a[i][k].size]
-                lhs = " + ".join(f"A{i + 1}{sep}{k + 1}(q) y{k + 1}(t)" for k in ks)
-                lines.append(f"  y{i + 1}: {lhs} = {rhs + ' + ' if rhs else ''}{noise}")
-                lines.append(f"    (row {i + 1} of A, a {ny}x{ny} matrix polynomial coupling "
+                lhs = " + ".join(f"A{i}{sep}{k}(q) {ys[k]}(t)" for k in ks)
+                lines.append(f"  {ys[i]}: {lhs} = {rhs + ' + ' if rhs else ''}{noise}")
+                lines.append(f"    ({ys[i]}'s row of A, a {ny}x{ny} matrix polynomial coupling "
                              "the outputs: the poles are those of det A(q), model.poles())")
                 for k in ks:
-                    lines.append("    " + (_fmt(f"A{i + 1}{sep}{k + 1}", _monic(self.a[i][k]),
-                                                True) if k == i else
-                                           _fmt(f"A{i + 1}{sep}{k + 1}", self.a[i][k], False,
-                                                first=1)))
+                    lines.append("    " + (_fmt(f"A{i}{sep}{k}", _monic(self.a[i][k]), True)
+                                           if k == i else
+                                           _fmt(f"A{i}{sep}{k}", self.a[i][k], False, first=1)))
             else:
-                lines.append(f"  y{i + 1}: A(q) y(t) = {rhs + ' + ' if rhs else ''}{noise}")
+                lines.append(f"  {ys[i]}: A(q) {ys[i]}(t) = {rhs + ' + ' if rhs else ''}{noise}")
                 lines.append("    " + _fmt("A", _monic(self.a[i][i]), True))
             for j in range(self.n_inputs):
-                lines.append("    " + _fmt(f"B{j + 1}", self.b[i][j], False))
+                lines.append("    " + _fmt(f"B{j}", self.b[i][j], False))
                 if self.f[i][j].size:
-                    lines.append("    " + _fmt(f"F{j + 1}", _monic(self.f[i][j]), True))
+                    lines.append("    " + _fmt(f"F{j}", _monic(self.f[i][j]), True))
             if self.c[i].size:
                 lines.append("    " + _fmt("C", _monic(self.c[i]), True))
             if self.d[i].size:

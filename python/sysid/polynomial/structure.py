@@ -3,9 +3,10 @@
 ``arxstruc(data, na, nb, nk)`` ranks every structure of the ranges by its loss on the
 estimation data, from one compression (Rust); MATLAB's own form, ``arxstruc(ze, zv, NN)``
 with ``NN = struc(1:10, 1:10, 1:5)``, fits each row of ``NN`` on ``ze`` and scores its
-one-step prediction errors on the validation data ``zv``. ``selstruc`` picks one by AIC,
-BIC/MDL or a number ``c`` (``loss (1 + c p / N)``; ``0``: the lowest loss, the choice for
-losses on validation data).
+one-step prediction errors on the validation data ``zv``. ``selstruc`` picks one by AIC
+or MDL as MATLAB's (``loss (1 + 2 p / N)``, ``loss (1 + p log N / N)``), BIC (``log loss +
+p log N / N``) or a number ``c`` (``loss (1 + c p / N)``; ``0``: the lowest loss, the choice
+for losses on validation data).
 """
 
 from __future__ import annotations
@@ -190,11 +191,20 @@ def _on_validation(data: Any, exps: list[Any], val: Any, nn: Any, extra: Any) ->
 def selstruc(
     table: np.ndarray, criterion: Any = "aic", n_samples: int | None = None
 ) -> tuple[int, ...]:
-    """Choose ``(na, nb, nk)`` from an :func:`arxstruc` table by ``aic``, ``bic``/``mdl``, or a
-    number ``c`` as MATLAB's ``selstruc(V, c)``: the least ``loss (1 + c p / N)``, ``0`` the
-    lowest loss (the choice on a table of losses on validation data). ``n_samples``: by
-    default the number of estimation samples the table remembers. A table of ``m``-input
-    rows gives ``(na, nb1, .., nbm, nk1, .., nkm)``.
+    """Choose ``(na, nb, nk)`` from an :func:`arxstruc` table as MATLAB's ``selstruc(V, c)``,
+    with ``V`` the loss, ``d`` the number of parameters and ``N`` ``n_samples``:
+
+    * ``"aic"``: the least ``V (1 + 2 d / N)`` (MATLAB's ``log(V (1 + 2 d / N))``, the same
+      choice; Akaike's ``log V + 2 d / N`` to first order);
+    * ``"mdl"``: the least ``V (1 + d log N / N)``, Rissanen's MDL as MATLAB's;
+    * ``"bic"``: the least ``log V + d log N / N`` (the Bayesian information criterion, as
+      MATLAB's ``aic(model, "BIC")`` divided by ``N``; MATLAB's ``selstruc`` has no
+      ``"bic"``);
+    * a number ``c``: the least ``V (1 + c d / N)``, ``0`` the lowest loss (the choice on a
+      table of losses on validation data).
+
+    ``n_samples``: by default the number of estimation samples the table remembers. A table
+    of ``m``-input rows gives ``(na, nb1, .., nbm, nk1, .., nkm)``.
 
     Examples
     --------
@@ -207,6 +217,10 @@ def selstruc(
         raise DataError(f"table must be the 2-D table of sysid.arxstruc (rows [na, nb.., "
                         f"nk.., loss, parameters], or [na, loss, parameters] for a time "
                         f"series), got {type(table).__name__} of shape {np.shape(table)}")
+    if np.shape(table)[0] == 0:
+        raise DataError("table has no rows, so there is no structure to choose: pass the "
+                        "table of sysid.arxstruc with at least one structure (widen the "
+                        "ranges of na, nb, nk if every one was left out)")
     loss, p = table[:, -2], table[:, -1]
     if isinstance(criterion, (int, float, np.number)) and not isinstance(criterion, bool):
         c = float(criterion)
@@ -221,9 +235,11 @@ def selstruc(
         raise DataError("selstruc needs n_samples (the number of estimation samples): this "
                         "table does not remember it (pass the one from sysid.arxstruc)")
     n_samples = as_int(n_samples, "n_samples")
-    if criterion == "aic":
-        score = np.log(loss) + 2 * p / n_samples
-    elif criterion in ("bic", "mdl"):
+    if criterion == "aic":  # MATLAB's log(V (1 + 2 d / N)): the same choice
+        score = loss * (1 + 2 * p / n_samples)
+    elif criterion == "mdl":  # MATLAB's V (1 + d log N / N)
+        score = loss * (1 + p * np.log(n_samples) / n_samples)
+    elif criterion == "bic":
         score = np.log(loss) + p * np.log(n_samples) / n_samples
     else:
         raise DataError(f"unknown criterion {criterion!r}; use 'aic', 'bic', 'mdl' or a "

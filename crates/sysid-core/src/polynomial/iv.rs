@@ -14,7 +14,11 @@
 //! reference (a least-squares FIR projection on its lags), which the feedback cannot
 //! correlate with the noise; stage 1 is then IV with those instruments. Sums run over the rows of every
 //! experiment separately (each filtered and simulated from rest): no sample of one experiment
-//! enters a regressor or instrument of another.
+//! enters a regressor or instrument of another. The prefilter `L_i` of order `n` is a moving
+//! average started from rest, so the first `n` filtered samples of an experiment lack the
+//! samples before it: the sums of stage 4 (and of the covariance) start `n` rows later in
+//! every experiment (a record that does not start at rest was otherwise fitted with a bias,
+//! `5e-4` on noise-free data).
 
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef};
@@ -98,9 +102,18 @@ fn row(o: &ArxOrders, i: usize, y: &[Vec<f64>], u: &[Vec<f64>], t: usize, out: &
 /// over the experiments `(y, u, x, r)`.
 type Sums = (Mat<f64>, Vec<f64>, Mat<f64>, usize);
 
-fn iv_sums(o: &ArxOrders, i: usize, exps: &[[&[Vec<f64>]; 4]]) -> Sums {
+/// The first row of equation `i` whose regressors and equation error are free of the
+/// start-up transient of a prefilter of order `filter_order` (a moving average started from
+/// rest: its first `filter_order` outputs lack the samples before the record).
+fn first_clean_row(o: &ArxOrders, i: usize, filter_order: usize) -> usize {
+    first_row(o, i).saturating_add(filter_order)
+}
+
+/// The sums of equation `i`, from row [`first_clean_row`] of every experiment (signals
+/// prefiltered by a filter of order `filter_order`).
+fn iv_sums(o: &ArxOrders, i: usize, exps: &[[&[Vec<f64>]; 4]], filter_order: usize) -> Sums {
     let p = n_params(o, i);
-    let start = first_row(o, i);
+    let start = first_clean_row(o, i, filter_order);
     let mut rm = vec![0.0; p * p];
     let mut sm = vec![0.0; p * p];
     let mut v = vec![0.0; p];
@@ -130,23 +143,33 @@ fn iv_sums(o: &ArxOrders, i: usize, exps: &[[&[Vec<f64>]; 4]]) -> Sums {
     )
 }
 
-fn check_rank(r: &Mat<f64>) -> Result<()> {
+/// The estimator an error names: `"iv4"` or `"ivx"` (the function the user called).
+type Caller = &'static str;
+
+fn check_rank(r: &Mat<f64>, what: Caller) -> Result<()> {
     let p = r.nrows();
     let s = r
         .singular_values()
-        .map_err(|e| SysidError::numerical("iv4", format!("{e:?}")))?;
+        .map_err(|e| SysidError::numerical(what, format!("{e:?}")))?;
     let full = s.last().is_some_and(|&l| l > 1e-12 * s[0]);
     if !full {
         let rank = s.iter().filter(|&&v| v > 1e-12 * s[0]).count();
+        let fix = if what == "ivx" {
+            "the instruments (the lags of x and of the inputs) do not span them: give an x \
+             correlated with the outputs and not with their noise (a noise-free simulation of \
+             a prior model), or use lower orders (na, nb), or sysid.iv4 / sysid.arx"
+        } else {
+            "the instruments (simulated or projected outputs and the inputs) do not span \
+             them: use lower orders (na, nb; with several outputs and fewer inputs the \
+             output lags' instruments are dependent: fit one output at a time), or \
+             sysid.arx / sysid.oe"
+        };
         return Err(SysidError::RegressorRank {
-            estimator: "iv4",
+            estimator: what,
             rank,
             columns: p,
             tol: 1e-12,
-            fix: "the instruments (simulated or projected outputs and the inputs) do not span \
-                  them: use lower orders (na, nb; with several outputs and fewer inputs the \
-                  output lags' instruments are dependent: fit one output at a time), or \
-                  sysid.arx / sysid.oe",
+            fix,
         });
     }
     Ok(())
@@ -157,7 +180,7 @@ fn check_rank(r: &Mat<f64>) -> Result<()> {
 /// a real ball-and-beam record the instruments simulated by the first-stage model are 10^5
 /// times the inputs, and unscaled `R` looked rank-deficient at `1e-12` where the scaled one
 /// is well conditioned). The solution is the same where `R` is regular.
-fn solve(r: &Mat<f64>, v: &[f64]) -> Result<Vec<f64>> {
+fn solve(r: &Mat<f64>, v: &[f64], what: Caller) -> Result<Vec<f64>> {
     let p = r.nrows();
     let inv_norm = |x: f64| {
         if x > 0.0 && x.is_finite() {
@@ -170,7 +193,7 @@ fn solve(r: &Mat<f64>, v: &[f64]) -> Result<Vec<f64>> {
     let rows = Mat::from_fn(p, p, |i, j| dr[i] * r[(i, j)]);
     let dc: Vec<f64> = (0..p).map(|j| inv_norm(rows.col(j).norm_l2())).collect();
     let scaled = Mat::from_fn(p, p, |i, j| rows[(i, j)] * dc[j]);
-    check_rank(&scaled)?;
+    check_rank(&scaled, what)?;
     let rhs = Mat::from_fn(p, 1, |a, _| dr[a] * v[a]);
     let sol = scaled.partial_piv_lu().solve(&rhs);
     Ok((0..p).map(|a| dc[a] * sol[(a, 0)]).collect())
@@ -260,7 +283,7 @@ fn ar_prefilter(w: &[Vec<f64>], n: usize) -> Vec<f64> {
             }
         }
     }
-    match solve(&g, &h) {
+    match solve(&g, &h, "iv4") {
         Ok(l) if l.iter().all(|v| v.is_finite()) => monic(&l),
         _ => vec![1.0],
     }
@@ -333,7 +356,7 @@ fn projected(recs: &[Rec]) -> Result<Vec<Inst>> {
             g[(a, b)] = g[(b, a)];
         }
     }
-    check_rank(&g)?;
+    check_rank(&g, "iv4")?;
     let coef = g.partial_piv_lu().solve(&h);
     let ny = recs[0].y.len();
     Ok(recs
@@ -388,7 +411,7 @@ fn stage(
                 .iter()
                 .map(|s| [&s[0][..], &s[1][..], &s[2][..], &s[3][..]])
                 .collect();
-            iv_sums(o, i, &refs)
+            iv_sums(o, i, &refs, l.len().saturating_sub(1))
         })
         .collect()
 }
@@ -435,12 +458,13 @@ fn iv_covariance(
     theta: &[Vec<f64>],
     recs: &[Rec],
     l: &[Vec<f64>],
+    what: Caller,
 ) -> Result<(Vec<Mat<f64>>, Vec<f64>)> {
     let ny = theta.len();
     let mut covariance = Vec::with_capacity(ny);
     let mut noise_variance = Vec::with_capacity(ny);
     for (i, (r, _, s, rows)) in sums.iter().enumerate() {
-        let start = first_row(orders, i);
+        let start = first_clean_row(orders, i, l[i].len().saturating_sub(1));
         let (mut ss, mut cnt) = (0.0, 0usize);
         for rec in recs {
             let w = equation_error(orders, i, &theta[i], &rec.y, &rec.u);
@@ -454,7 +478,14 @@ fn iv_covariance(
         // R^-1 S R^-T in Gram form, (R^-1 V L^1/2)(R^-1 V L^1/2)^T with S = V L V^T: positive
         // semi-definite by construction (the product formed directly lost that on real
         // records whose R is ill-conditioned: an eigenvalue of -5e-4 times the largest)
-        let (v, l) = crate::optim::symmetric_eigen(s, "iv4 covariance")?;
+        let (v, l) = crate::optim::symmetric_eigen(
+            s,
+            if what == "ivx" {
+                "ivx covariance"
+            } else {
+                "iv4 covariance"
+            },
+        )?;
         let mut half = v;
         for (j, lj) in l.iter().enumerate() {
             let f = lj.max(0.0).sqrt();
@@ -542,6 +573,31 @@ fn prepare(records: &[IvRecord<'_>], orders: &ArxOrders, what: &str) -> Result<V
             fix: "use a longer record or smaller orders",
         });
     }
+    if what == "iv4" {
+        // stage 4 drops each experiment's first `lag + p` rows (the lags and the start-up of
+        // the order-p prefilter): the rows left must still outnumber the parameters
+        for i in 0..ny {
+            let (p, skip) = (
+                n_params(orders, i),
+                first_clean_row(orders, i, n_params(orders, i)),
+            );
+            let rows: usize = records
+                .iter()
+                .map(|r| r.y.nrows().saturating_sub(skip))
+                .sum();
+            if rows <= p {
+                return Err(SysidError::InsufficientData {
+                    context: format!(
+                        "iv4's prefiltered stage of output {i} ({p} parameters; the first {skip} \
+                         samples of every experiment are its lags and the prefilter's start-up)"
+                    ),
+                    needed: p + 1,
+                    got: rows,
+                    fix: "use longer experiments (merge short ones) or smaller orders",
+                });
+            }
+        }
+    }
     Ok(recs)
 }
 
@@ -562,7 +618,7 @@ fn prepare(records: &[IvRecord<'_>], orders: &ArxOrders, what: &str) -> Result<V
 pub fn iv4_multi(records: &[IvRecord<'_>], orders: &ArxOrders) -> Result<Iv4Fit> {
     let recs = prepare(records, orders, "iv4")?;
     let solve_all = |sums: &[Sums]| -> Result<Vec<Vec<f64>>> {
-        sums.iter().map(|(r, v, _, _)| solve(r, v)).collect()
+        sums.iter().map(|(r, v, _, _)| solve(r, v, "iv4")).collect()
     };
     let closed_loop = records.iter().any(|r| r.r.is_some());
     // Closed loop: instruments are the parts of y and u explained by the reference (fixed
@@ -612,7 +668,7 @@ pub fn iv4_multi(records: &[IvRecord<'_>], orders: &ArxOrders) -> Result<Iv4Fit>
         instruments(&th4)?
     };
     let sums = stage(orders, &recs, Some(&z4), Some(&l4));
-    let (covariance, noise_variance) = iv_covariance(orders, &sums, &th4, &recs, &l4)?;
+    let (covariance, noise_variance) = iv_covariance(orders, &sums, &th4, &recs, &l4, "iv4")?;
     Ok(Iv4Fit {
         theta: th4,
         covariance,
@@ -666,10 +722,10 @@ pub fn ivx_multi(
     let sums = stage(orders, &recs, Some(&inst), None);
     let theta = sums
         .iter()
-        .map(|(r, v, _, _)| solve(r, v))
+        .map(|(r, v, _, _)| solve(r, v, "ivx"))
         .collect::<Result<Vec<_>>>()?;
     let ones = vec![vec![1.0]; theta.len()];
-    let (covariance, noise_variance) = iv_covariance(orders, &sums, &theta, &recs, &ones)?;
+    let (covariance, noise_variance) = iv_covariance(orders, &sums, &theta, &recs, &ones, "ivx")?;
     Ok(Iv4Fit {
         theta,
         covariance,
@@ -721,4 +777,157 @@ pub fn iv4(
         &o,
     )?;
     Ok(fit.theta.into_iter().next().unwrap_or_default())
+}
+
+#[cfg(test)]
+mod tests {
+    use faer::Mat;
+
+    use super::{iv4_multi, ivx_multi, IvRecord};
+    use crate::error::SysidError;
+    use crate::polynomial::arx::ArxOrders;
+
+    /// Uniform(-0.5, 0.5) samples from a 64-bit LCG.
+    fn noise(n: usize, seed: u64) -> Vec<f64> {
+        let mut s = seed.wrapping_mul(2862933555777941757).wrapping_add(1);
+        (0..n)
+            .map(|_| {
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                (s >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+            })
+            .collect()
+    }
+
+    fn close(a: &[f64], b: &[f64], tol: f64) {
+        assert_eq!(a.len(), b.len());
+        for (x, y) in a.iter().zip(b) {
+            assert!((x - y).abs() < tol, "{a:?} vs {b:?}");
+        }
+    }
+
+    /// The samples `cut..` of a noise-free SISO `y = (0.1 q^-1 + 0.05 q^-2) / (1 - 1.8 q^-1
+    /// + 0.85 q^-2) u` run from rest at sample 0: a record that does not start at rest.
+    fn siso_mid_record(n: usize, cut: usize, seed: u64) -> (Mat<f64>, Mat<f64>) {
+        let u = noise(n, seed);
+        let mut y = vec![0.0; n];
+        for t in 2..n {
+            y[t] = 1.8 * y[t - 1] - 0.85 * y[t - 2] + 0.1 * u[t - 1] + 0.05 * u[t - 2];
+        }
+        (
+            Mat::from_fn(n - cut, 1, |t, _| u[t + cut]),
+            Mat::from_fn(n - cut, 1, |t, _| y[t + cut]),
+        )
+    }
+
+    #[test]
+    fn iv4_noise_free_record_not_at_rest_is_recovered_exactly() {
+        // the stage-4 prefilter started from rest made the first rows' equation error
+        // nonzero: a[0] was off by -4.8e-4 (least squares: 1e-16)
+        let (u, y) = siso_mid_record(3200, 200, 3);
+        let o = ArxOrders {
+            na: vec![vec![2]],
+            nb: vec![vec![2]],
+            nk: vec![vec![1]],
+        };
+        let rec = IvRecord {
+            u: u.as_ref(),
+            y: y.as_ref(),
+            r: None,
+        };
+        let fit = iv4_multi(&[rec], &o).unwrap();
+        close(&fit.theta[0], &[-1.8, 0.85, 0.1, 0.05], 1e-10);
+        assert!(fit.noise_variance[0] < 1e-20, "{:?}", fit.noise_variance);
+    }
+
+    #[test]
+    fn iv4_mimo_experiments_not_at_rest_are_recovered_exactly() {
+        // 2 x 2 ARX with a coupled A; two experiments, each cut from a longer run
+        let o = ArxOrders {
+            na: vec![vec![1, 1], vec![1, 1]],
+            nb: vec![vec![1, 1], vec![1, 1]],
+            nk: vec![vec![1, 2], vec![1, 1]],
+        };
+        let sim = |n: usize, cut: usize, s: u64| {
+            let u: Vec<Vec<f64>> = (0..2).map(|j| noise(n, s + j)).collect();
+            let mut y = vec![vec![0.0; n]; 2];
+            for t in 2..n {
+                y[0][t] = 0.6 * y[0][t - 1] - 0.2 * y[1][t - 1] + u[0][t - 1] + 0.3 * u[1][t - 2];
+                y[1][t] =
+                    0.1 * y[0][t - 1] + 0.5 * y[1][t - 1] + 0.7 * u[1][t - 1] - 0.4 * u[0][t - 1];
+            }
+            (
+                Mat::from_fn(n - cut, 2, |t, j| u[j][t + cut]),
+                Mat::from_fn(n - cut, 2, |t, j| y[j][t + cut]),
+            )
+        };
+        let (ua, ya) = sim(900, 300, 60);
+        let (ub, yb) = sim(700, 150, 70);
+        let recs = [
+            IvRecord {
+                u: ua.as_ref(),
+                y: ya.as_ref(),
+                r: None,
+            },
+            IvRecord {
+                u: ub.as_ref(),
+                y: yb.as_ref(),
+                r: None,
+            },
+        ];
+        let fit = iv4_multi(&recs, &o).unwrap();
+        close(&fit.theta[0], &[-0.6, 0.2, 1.0, 0.3], 1e-10);
+        close(&fit.theta[1], &[-0.1, -0.5, -0.4, 0.7], 1e-10);
+    }
+
+    #[test]
+    fn iv4_refuses_experiments_too_short_for_the_prefilter_start_up() {
+        // ten experiments of 6 samples: 60 in all, each one's rows all lags (2) and the
+        // order-4 prefilter's start-up
+        let (u, y) = siso_mid_record(230, 200, 5);
+        let o = ArxOrders {
+            na: vec![vec![2]],
+            nb: vec![vec![2]],
+            nk: vec![vec![1]],
+        };
+        let recs: Vec<_> = (0..10)
+            .map(|_| IvRecord {
+                u: u.subrows(0, 6),
+                y: y.subrows(0, 6),
+                r: None,
+            })
+            .collect();
+        match iv4_multi(&recs, &o) {
+            Err(SysidError::InsufficientData { context, .. }) => {
+                assert!(context.contains("prefilter"), "{context}")
+            }
+            other => panic!("expected an insufficient-data error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn ivx_rank_loss_names_ivx() {
+        // an instrument that is a constant cannot determine a_1: the error names ivx, the
+        // function called (it said "iv4")
+        let (u, y) = siso_mid_record(600, 100, 9);
+        let x = Mat::from_fn(500, 1, |_, _| 1.0);
+        let o = ArxOrders {
+            na: vec![vec![2]],
+            nb: vec![vec![2]],
+            nk: vec![vec![1]],
+        };
+        let rec = IvRecord {
+            u: u.as_ref(),
+            y: y.as_ref(),
+            r: None,
+        };
+        match ivx_multi(&[rec], &[x.as_ref()], &o) {
+            Err(e @ SysidError::RegressorRank { .. }) => {
+                let text = e.to_string();
+                assert!(text.starts_with("ivx:") && text.contains("x"), "{text}");
+            }
+            other => panic!("expected a regressor rank error, got {other:?}"),
+        }
+    }
 }
