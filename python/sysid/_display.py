@@ -189,11 +189,21 @@ def model_facts(model: Any) -> list[list[Any]]:
 
 
 def pole_rows(p: np.ndarray, dt: float) -> list[list[Any]]:
-    """``[pole, |pole|, natural frequency Hz, damping]`` per pole (discrete: via log z / dt)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.log(p.astype(complex)) / dt if dt > 0 else p
-        wn = np.abs(s)
-        zeta = np.where(wn > 0, -s.real / np.where(wn > 0, wn, 1.0), -1.0)  # as damp()
+    """``[pole, |pole|, natural frequency Hz, damping]`` per pole (discrete: via log z / dt),
+    by the rule of :func:`sysid.damp` (:mod:`sysid.models.pole_map`: a pole at ``z = 0``
+    is infinitely fast, damping 1).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid._display import pole_rows
+    >>> pole_rows(np.array([0.0 + 0.0j]), 0.1)
+    [[0j, 0.0, inf, 1.0]]
+    """
+    from .models.pole_map import continuous_equivalent, damping_ratio
+
+    s = continuous_equivalent(p, dt if dt > 0 else None)
+    wn, zeta = np.abs(s), damping_ratio(s)
     return [[complex(p[k]), float(abs(p[k])), float(wn[k] / (2 * np.pi)), float(zeta[k])]
             for k in range(p.size)]
 

@@ -30,6 +30,7 @@ from .._display import HTMLResult
 from ..data.formats import _pandas
 from ..errors import DataError
 from ..models.checks import discrete_statespace
+from ..models.pole_map import continuous_equivalent
 from ..models.statespace import StateSpaceModel
 
 __all__ = ["ModalAnalysis", "modal_analysis"]
@@ -43,9 +44,10 @@ class ModalAnalysis(HTMLResult):
     eigenvalues : ndarray
         Discrete-time poles (complex; the member with positive imaginary part of each pair).
     s : ndarray
-        Continuous-time equivalents ``ln(z) / dt`` (1/s).
+        Continuous-time equivalents ``ln(z) / dt`` (1/s); ``-inf`` for a pole at ``z = 0``.
     omega : ndarray
-        Natural frequencies in rad/s.
+        Natural frequencies in rad/s (``inf`` for a pole at ``z = 0``, infinitely fast, with
+        damping 1, as :func:`sysid.damp`).
     frequencies_hz : ndarray
         Natural frequencies in Hz.
     damping : ndarray
@@ -67,8 +69,7 @@ class ModalAnalysis(HTMLResult):
         self.damping = np.asarray(d["damping"])
         self.mode_shapes = np.asarray(d["shape_re"]) + 1j * np.asarray(d["shape_im"])
         self.dt = dt
-        z = self.eigenvalues
-        self.s = (np.log(np.maximum(np.abs(z), np.finfo(float).tiny)) + 1j * np.angle(z)) / dt
+        self.s = continuous_equivalent(self.eigenvalues, dt)  # z = 0: -inf, as damp()
         self.output_names = output_names
         self.extra: dict[str, np.ndarray] = {}
 

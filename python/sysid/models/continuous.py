@@ -48,6 +48,7 @@ import scipy.linalg
 
 from .._checks import as_2d, as_dt
 from ..errors import DataError, NumericalError, SysidWarning
+from .attributes import ContinuousTime, Matrix
 from .discretisation import expm, hold_blocks, require_finite_sampling
 from .linear import transmission_zeros
 from .matched import matched_c2d, matched_d2c
@@ -92,7 +93,18 @@ class ContinuousStateSpace(ModelMixin):
     1.0
     >>> sys.simulate([1.0, 1.0, 1.0], dt=0.5)[:, 0].round(4)
     array([0.    , 0.3935, 0.6321])
+
+    The matrices are replaced only whole, checked as the constructor checks them (a
+    parameter uncertainty of the old values is dropped, as for a StateSpaceModel); dt stays 0
+
+    >>> sys.B = [[1.0, 2.0]]
+    Traceback (most recent call last):
+    ...
+    sysid.errors.ShapeError: B has shape (1, 2) but should have shape (1, 1); ...
     """
+
+    A, B, C, D = (Matrix() for _ in range(4))
+    dt = ContinuousTime()  # 0.0: continuous time (python-control's convention)
 
     def __init__(
         self,
@@ -123,7 +135,6 @@ class ContinuousStateSpace(ModelMixin):
             input_names=names(self.input_names, iu), output_names=names(self.output_names, iy),
             hold=self.hold, info=self.info)
 
-    dt = 0.0  # continuous time (python-control's convention)
     nstates = property(lambda self: self.A.shape[0], doc="Number of states n.")
     ninputs = property(lambda self: self.B.shape[1], doc="Number of inputs m.")
     noutputs = property(lambda self: self.C.shape[0], doc="Number of outputs l.")
@@ -258,10 +269,13 @@ class ContinuousStateSpace(ModelMixin):
         step = None if dt is None else _sample_time(None, dt, 1)
         return continuous_grid(self.poles(), t_final, n_samples, step, 100000)
 
-    def step(self, n_samples: int | None = None, *, dt: float | None = None) -> TimeResponse:
+    def step(self, n_samples: int | None = None, *, dt: float | None = None,
+             std: bool = False) -> TimeResponse:
         """Unit-step response sampled every ``dt`` (exact: a step is held by ZOH).
 
-        Without ``dt`` the grid spans five time constants of the slowest pole.
+        Without ``dt`` the grid spans five time constants of the slowest pole. With
+        ``std=True`` (needs :attr:`uncertainty`) ``resp.std`` is the first-order standard
+        deviation of each sample, every model of the propagation evaluated on this grid.
 
         Examples
         --------
@@ -269,7 +283,15 @@ class ContinuousStateSpace(ModelMixin):
         >>> r = sysid.ContinuousStateSpace([[-1.0]], [[1.0]], [[1.0]]).step(3, dt=1.0)
         >>> bool(np.allclose(r.y[:, 0, 0], 1 - np.exp(-r.t)))
         True
+        >>> build = lambda t: sysid.ContinuousStateSpace([[-t[0]]], [[1.0]], [[1.0]])
+        >>> c = build([1.0])
+        >>> c.uncertainty = sysid.ParameterUncertainty([1.0], [[0.01]], build)
+        >>> r = c.step(3, dt=1.0, std=True)       # 0.1 |t e^-t - (1 - e^-t)|
+        >>> np.round(r.std[:, 0, 0], 4)
+        array([0.    , 0.0264, 0.0594])
         """
+        if std:
+            return self._banded("step", n_samples, dt)
         N, step = self._grid(n_samples, dt)
         m = self.ninputs
         y = np.empty((N, self.noutputs, m))
@@ -279,8 +301,10 @@ class ContinuousStateSpace(ModelMixin):
             y[:, :, j] = self.simulate(u, dt=step, method="zoh")
         return TimeResponse("step", np.arange(N) * step, y, self)
 
-    def impulse(self, n_samples: int | None = None, *, dt: float | None = None) -> TimeResponse:
-        """Impulse response ``C e^{A t} B`` at the samples (the Dirac part ``D`` is left out).
+    def impulse(self, n_samples: int | None = None, *, dt: float | None = None,
+                std: bool = False) -> TimeResponse:
+        """Impulse response ``C e^{A t} B`` at the samples (the Dirac part ``D`` is left
+        out); the grid as :meth:`step`, and ``std=True`` as there.
 
         Examples
         --------
@@ -289,6 +313,8 @@ class ContinuousStateSpace(ModelMixin):
         >>> bool(np.allclose(r.y[:, 0, 0], 3 * np.exp(-2 * r.t)))
         True
         """
+        if std:
+            return self._banded("impulse", n_samples, dt)
         N, step = self._grid(n_samples, dt)
         m = self.ninputs
         y = np.empty((N, self.noutputs, m))
@@ -296,6 +322,13 @@ class ContinuousStateSpace(ModelMixin):
         for j in range(m):
             y[:, :, j] = self.simulate(zero, dt=step, x0=self.B[:, j], method="zoh")
         return TimeResponse("impulse", np.arange(N) * step, y, self)
+
+    def _banded(self, kind: str, n_samples: int | None, dt: float | None) -> TimeResponse:
+        """The ``kind`` response with its std band, every draw on this model's grid."""
+        from .uncertainty import response_band
+
+        resp = getattr(self, kind)(n_samples, dt=dt)
+        return response_band(self, resp, lambda m, n: getattr(m, kind)(n))
 
     # -- saving -----------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
@@ -341,11 +374,20 @@ class SampledContinuous:
     """
 
     def __init__(self, sys: ContinuousStateSpace, dt: float) -> None:
-        self.continuous, self.dt = sys, _sample_time(None, dt, 1)
-        self.A, self.B, self.C, self.D, _ = _discretise(sys, self.dt, sys.hold)
+        self.continuous, self.dt = sys, dt
         self.K, self.x0 = None, None
         self.input_names, self.output_names = sys.input_names, sys.output_names
         self.info = sys.info
+
+    @property
+    def dt(self) -> float:
+        """The sample time; writing it (checked as in the constructor) samples again."""
+        return self._dt
+
+    @dt.setter
+    def dt(self, value: Any) -> None:
+        self._dt = dt = _sample_time(None, value, 1)
+        self.A, self.B, self.C, self.D, _ = _discretise(self.continuous, dt, self.continuous.hold)
 
     nstates = property(lambda self: self.A.shape[0], doc="Number of states n.")
     ninputs = property(lambda self: self.B.shape[1], doc="Number of inputs m.")

@@ -18,11 +18,11 @@ import numpy as np
 from .._checks import as_between
 from ..data.formats import _pandas
 from ..data.iodata import IOData
-from ..data.segments import channel_index
 from ..errors import DataError, ShapeError
+from .attributes import SampleTime
 from .checks import require_freqresp
 from .frd_algebra import FRDAlgebra, check_grid
-from .subsystem import selection_key
+from .subsystem import channels, selection_key
 
 __all__ = ["FRD", "FRDComparison"]
 
@@ -91,6 +91,10 @@ class FRD(FRDAlgebra):
     True
     """
 
+    #: sample time of the data it came from (``None``: continuous time), checked whenever
+    #: it is written (:class:`~sysid.models.attributes.SampleTime`)
+    dt = SampleTime(continuous=None)
+
     def __init__(
         self,
         omega: Any,
@@ -137,10 +141,7 @@ class FRD(FRDAlgebra):
         if dof is not None and not dof > 0:
             raise DataError(f"dof must be positive, got {dof}")
         self.dof = None if dof is None else float(dof)
-        if dt is not None and not (np.isfinite(float(dt)) and float(dt) >= 0.0):
-            raise DataError(f"dt must be a positive sample time in seconds (or 0 / None for a "
-                            f"continuous-time response), got {dt}")
-        self.dt = None if dt is None or float(dt) == 0.0 else float(dt)  # 0: continuous
+        self.dt = dt  # None (or 0): continuous; checked by SampleTime, as later
         l, m = g.shape[1:]
         self.input_names = IOData._names(input_names, m, "u", "input")
         self.output_names = IOData._names(output_names, l, "y", "output")
@@ -308,8 +309,8 @@ class FRD(FRDAlgebra):
 
     def select(self, outputs: Any = None, inputs: Any = None) -> FRD:
         """The sub-response of some outputs and inputs (names or indices)."""
-        iu = channel_index(inputs, self.input_names, "input")
-        iy = channel_index(outputs, self.output_names, "output")
+        iu = channels(inputs, self.input_names, "input")
+        iy = channels(outputs, self.output_names, "output")
 
         def sub(a: np.ndarray | None) -> np.ndarray | None:
             return None if a is None else a[:, iy][:, :, iu]

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from .._display import HTMLResult
+from .pole_map import continuous_equivalent, damping_ratio
 
 __all__ = ["transmission_zeros", "DampingTable", "damping_table"]
 
@@ -121,9 +122,7 @@ class DampingTable(HTMLResult):
             self.zeta_std = std["zeta_std"][order]
         with np.errstate(divide="ignore", invalid="ignore"):
             self.wn = np.abs(self.s)
-            safe = np.where(self.wn > 0, self.wn, 1.0)
-            self.zeta = np.where(self.wn > 0, -self.s.real / safe, -1.0)
-            self.zeta = np.where(np.isinf(self.s.real), 1.0, self.zeta)
+            self.zeta = damping_ratio(self.s)
             self.wd = np.abs(self.s.imag)
             self.tau = np.where(self.s.real != 0, -1.0 / self.s.real, np.inf)
         self.wn_hz = self.wn / (2 * np.pi)
@@ -199,11 +198,7 @@ def damping_table(poles: np.ndarray, dt: float) -> DampingTable:
     array([0.4472, 0.4472])
     """
     p = np.asarray(poles, dtype=complex)
-    if not dt:
-        return DampingTable(p, p.copy(), None)
-    with np.errstate(divide="ignore"):
-        s = np.where(np.abs(p) > 0, np.log(np.where(np.abs(p) > 0, p, 1)) / dt, -np.inf)
-    return DampingTable(p, s.astype(complex), dt)
+    return DampingTable(p, continuous_equivalent(p, dt), dt or None)
 
 
 def reachable_basis(A: np.ndarray, B: np.ndarray, tol: float) -> np.ndarray:

@@ -17,9 +17,10 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_count, as_dt, as_int, as_matrix, check_covariance, unmask
+from .._checks import as_2d, as_count, as_int, as_matrix, check_covariance, unmask
 from .._measured import predict_args
 from ..errors import DataError, NumericalError, ShapeError
+from .attributes import Matrix, SampleTime
 from .linear import DampingTable, damping_table, minimal_basis, transmission_zeros
 from .protocol import ModelMixin, TimeResponse, default_length
 
@@ -78,59 +79,6 @@ def ss_parameter_count(n: int, m: int, l: int, *, feedthrough: bool = True,
     return int(d)
 
 
-def frozen(arr: np.ndarray | None) -> np.ndarray | None:
-    """A read-only copy of ``arr`` (``None`` stays ``None``): the model's own, which neither
-    an in-place edit (NumPy's "assignment destination is read-only") nor a change to the
-    caller's array reaches."""
-    if arr is None:
-        return None
-    out = np.array(arr, dtype=float, copy=True)
-    out.flags.writeable = False
-    return out
-
-
-class _Matrix:
-    """A :class:`StateSpaceModel` matrix attribute: read-only, replaced only whole and then
-    checked as the constructor checks it (real, finite, the model's shape), so that neither
-    ``m.A[0, 0] = np.nan`` nor ``m.A = np.full((2, 2), np.nan)`` makes a model that
-    simulates to NaN without a word."""
-
-    def __set_name__(self, owner: type, name: str) -> None:
-        self.name, self.slot = name, "_matrix_" + name
-
-    def __get__(self, obj: Any, owner: type | None = None) -> Any:
-        if obj is None:
-            return self
-        try:
-            arr = obj.__dict__[self.slot]
-        except KeyError:
-            raise AttributeError(self.name) from None
-        if arr is not None and arr.flags.writeable:  # a copy's (deepcopy, pickle)
-            arr.flags.writeable = False
-        return arr
-
-    def __set__(self, obj: Any, value: Any) -> None:
-        if self.slot not in obj.__dict__:  # the constructor's own, already checked
-            obj.__dict__[self.slot] = frozen(value)
-            return
-        n, m, l = obj.nstates, obj.ninputs, obj.noutputs
-        shape = {"A": (n, n), "B": (n, m), "C": (l, n), "D": (l, m), "K": (n, l),
-                 "noise_cov": (l, l), "x0": (n, 1)}[self.name]
-        if value is None and self.name in ("K", "noise_cov", "x0"):
-            obj.__dict__[self.slot] = None
-            return
-        if self.name == "x0" and np.size(value) == n:
-            value = np.reshape(value, (n, 1))
-        try:
-            arr = as_matrix(value, self.name, shape)
-        except ShapeError as e:
-            raise ShapeError(f"{e}; a matrix of another size is another model: build it "
-                             "with sysid.StateSpaceModel(A, B, C, D, ...)") from None
-        if self.name == "noise_cov":
-            arr = check_covariance(arr, "noise_cov")
-        obj.__dict__[self.slot] = frozen(arr[:, 0] if self.name == "x0" else arr)
-
-
 class StateSpaceModel(ModelMixin):
     """Discrete-time state-space model ``x(t+1) = A x + B u + K e``, ``y = C x + D u + e``.
 
@@ -165,7 +113,10 @@ class StateSpaceModel(ModelMixin):
     array([0. , 1. , 0.5])
 
     The matrices are read-only: a model with other values is another model, made from
-    copies (or by assigning a whole matrix of the same shape, checked as here)
+    copies (or by assigning a whole matrix of the same shape, or another ``dt``, checked as
+    the constructor checks them; a replaced ``A, B, C, D, K`` or ``dt`` drops the
+    :attr:`uncertainty`, which belonged to the old values, with a warning: see
+    :mod:`sysid.models.attributes`)
 
     >>> m.A[0, 0] = 0.9
     Traceback (most recent call last):
@@ -178,9 +129,14 @@ class StateSpaceModel(ModelMixin):
     Traceback (most recent call last):
     ...
     sysid.errors.NonFiniteError: A has non-finite entries (NaN or Inf)
+    >>> m.dt = -0.1
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: dt must be a positive number of seconds, got -0.1; ...
     """
 
-    A, B, C, D, K, noise_cov, x0 = (_Matrix() for _ in range(7))
+    A, B, C, D, K, noise_cov, x0 = (Matrix() for _ in range(7))
+    dt = SampleTime()
 
     #: Parameter uncertainty (:class:`~sysid.ParameterUncertainty`) attached by the estimator
     #: (``sysid.pem``, ``fit(uncertainty="bootstrap")``, ...); ``None`` when unknown.
@@ -234,7 +190,7 @@ class StateSpaceModel(ModelMixin):
         if x0 is not None and np.size(x0) != n:
             raise ShapeError(f"x0 has {np.size(x0)} entries but the model has {n} states")
         self.x0 = None if x0 is None else as_matrix(np.reshape(x0, (n, 1)), "x0", (n, 1))[:, 0]
-        self.dt = as_dt(dt)
+        self.dt = dt  # checked by SampleTime (as_dt), as every later assignment
         self.input_names = (
             list(input_names) if input_names is not None else [f"u{i}" for i in range(m)]
         )
@@ -278,7 +234,11 @@ class StateSpaceModel(ModelMixin):
             if self.ninputs:
                 raise DataError("u is required: the model has inputs")
             if n_samples is None:
-                raise DataError("a model without inputs needs n_samples (or y) to simulate")
+                raise DataError(
+                    "u is None but the model has no inputs, so nothing gives the number of "
+                    "samples: pass an empty input array of that length, e.g. "
+                    "model.simulate(np.zeros((n_samples, 0))) (its noise-free output is "
+                    "zero from rest, or the free response from x0)")
             return np.zeros((n_samples, 0))
         return as_2d(u, "u", ncols=self.ninputs, allow_empty=self.ninputs == 0)
 

@@ -94,6 +94,37 @@ class TrendedModel(ModelMixin):
     def info(self) -> dict[str, Any]:
         return {**dict(self.model.info), "trend": repr(self.trend)}
 
+    @property
+    def uncertainty(self) -> Any:
+        """The inner model's parameter uncertainty (``None`` when it has none; a trend adds
+        no parameter): what ``dcgain(std=True)``, ``sysid.damp(model, std=True)``,
+        ``summary()`` and ``to_pandas()`` read, as ``poles(std=True)`` and the responses do.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> raw = sysid.IOData(u=[21.0, 19.0, 20.0, 20.0], y=[50.0, 51.0, 49.0, 50.0])
+        >>> d, tr = sysid.detrend(raw, "mean", return_trend=True)
+        >>> build = lambda t: sysid.StateSpaceModel([[t[0]]], [[1.0]], [[1.0]])
+        >>> inner = build([0.5])
+        >>> inner.uncertainty = sysid.ParameterUncertainty([0.5], [[1e-4]], build)
+        >>> m = tr.attach(inner)
+        >>> m.uncertainty is inner.uncertainty
+        True
+        >>> gain, sd = m.dcgain(std=True)              # 1 / (1 - a), std 0.01 / (1 - a)^2
+        >>> float(gain[0, 0]), round(float(sd[0, 0]), 6)
+        (2.0, 0.04)
+        """
+        return getattr(self.model, "uncertainty", None)
+
+    def dcgain(self, std: bool = False) -> Any:
+        """The inner model's DC gain (a trend does not change it); ``std=True``: with its
+        standard deviation, as the inner model's ``dcgain``."""
+        fn = getattr(self.model, "dcgain", None)
+        if fn is None:
+            return super().dcgain(std=std)
+        return fn(std=True) if std else fn()
+
     # -- raw data in, raw data out ---------------------------------------------------------
     def simulate(self, u: Any, x0: Any = None) -> np.ndarray:
         """Raw outputs for raw inputs (``x0``: the inner model's initial state)."""

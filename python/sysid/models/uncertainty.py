@@ -592,10 +592,46 @@ def response_band(model: Any, resp: Any, respond: Callable[[Any, int], Any]) -> 
     >>> r = response_band(m, m.impulse(3), lambda p, n: p.impulse(n))
     >>> np.round(r.std[:, 0, 0], 6)
     array([0.  , 0.1 , 0.05])
+
+    A continuous-time response (``resp.continuous``) is sampled on a grid its model chose
+    (five time constants of its slowest pole): every perturbed model is evaluated on that
+    same grid (``m.step(N, dt=h)``), not on its own, and a response of a perturbed model at
+    other times is refused rather than differenced.
     """
     n = len(resp.t)
-    _, resp.std = complex_std(model, lambda m: respond(m, n).y)
+    t = np.asarray(resp.t, dtype=float)
+    h = float(t[1] - t[0]) if n > 1 and getattr(resp, "continuous", False) else None
+    h = h if h is not None and h > 0 else None
+
+    def on_grid(m: Any) -> np.ndarray:
+        kind = getattr(m, str(resp.kind), None)
+        r = kind(n, dt=h) if h is not None and _takes_dt(kind) else respond(m, n)
+        tm = np.asarray(r.t, dtype=float)
+        if tm.shape != t.shape or not np.allclose(tm, t, rtol=1e-9, atol=0.0):
+            raise DataError(
+                f"the {resp.kind} response of a model drawn from the parameter covariance is "
+                f"sampled at other times than the estimate's (its {resp.kind}() chooses its "
+                "own grid): give the model's "
+                f"{resp.kind}() a dt= keyword that fixes the sample time, as "
+                "sysid.ContinuousStateSpace's does")
+        return np.asarray(r.y)
+
+    _, resp.std = complex_std(model, on_grid)
     return resp
+
+
+def _takes_dt(fn: Any) -> bool:
+    """Whether the callable ``fn`` takes a ``dt=`` keyword (by name or ``**kwargs``)."""
+    import inspect
+
+    if fn is None:
+        return False
+    try:
+        params = inspect.signature(fn).parameters.values()
+    except (TypeError, ValueError):
+        return False
+    return any(p.name == "dt" and p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD)
+               or p.kind == p.VAR_KEYWORD for p in params)
 
 
 def _is_statespace(m: Any) -> bool:

@@ -66,16 +66,33 @@ pub(crate) fn eigen_decomposition(a: MatRef<'_, f64>) -> Result<EigenDecompositi
 pub struct Mode {
     /// Discrete-time eigenvalue z.
     pub eigenvalue: c64,
-    /// Continuous-time equivalent `s = ln(z) / dt` (1/s).
+    /// Continuous-time equivalent `s = ln(z) / dt` (1/s); `-inf` for `z = 0`.
     pub s: c64,
-    /// Natural frequency in rad/s.
+    /// Natural frequency in rad/s (infinite for `z = 0`, a pure delay).
     pub omega: f64,
     /// Natural frequency in Hz.
     pub frequency_hz: f64,
-    /// Damping ratio (1 for a positive real pole, negative for an unstable mode).
+    /// Damping ratio (1 for a positive real pole and for `z = 0`, negative for an unstable
+    /// mode).
     pub damping: f64,
     /// Mode shape `C psi`, one entry per output, largest entry scaled to 1.
     pub shape: Vec<c64>,
+}
+
+/// The continuous-time equivalent `s = ln(z) / dt` of a discrete pole, its natural frequency
+/// `|s|` (rad/s) and damping ratio `-Re(s) / |s|`. A pole at `z = 0` (a pure delay,
+/// infinitely fast) has `s = -inf`, infinite frequency and damping 1, as `sysid.damp` and
+/// MATLAB's `damp` report it (not the `ln(f64::MIN_POSITIVE) / dt` of a clamped modulus, a
+/// finite frequency above Nyquist).
+fn continuous_mode(z: c64, dt: f64) -> (c64, f64, f64) {
+    let r = z.norm();
+    if r == 0.0 {
+        return (c64::new(f64::NEG_INFINITY, 0.0), f64::INFINITY, 1.0);
+    }
+    let s = c64::new(r.ln(), z.im.atan2(z.re)) / dt;
+    let omega = s.norm();
+    let damping = if omega > 0.0 { -s.re / omega } else { 1.0 };
+    (s, omega, damping)
 }
 
 /// Modes of `(A, C)` with sample time `dt`, one per real eigenvalue and one per complex pair
@@ -132,10 +149,7 @@ pub fn modal_analysis(a: MatRef<'_, f64>, c: MatRef<'_, f64>, dt: f64) -> Result
         {
             continue; // the partner with positive imaginary part represents the pair
         }
-        let r = z.norm().max(f64::MIN_POSITIVE);
-        let s = c64::new(r.ln(), z.im.atan2(z.re)) / dt;
-        let omega = s.norm();
-        let damping = if omega > 0.0 { -s.re / omega } else { 1.0 };
+        let (s, omega, damping) = continuous_mode(z, dt);
         let mut shape: Vec<c64> = (0..l).map(|k| shapes[(k, i)]).collect();
         if let Some(big) = shape
             .iter()
@@ -199,6 +213,23 @@ mod tests {
             let big = m.shape.iter().map(|z| z.norm()).fold(0.0, f64::max);
             assert!((big - 1.0).abs() < 1e-12);
         }
+    }
+
+    #[test]
+    fn pole_at_zero_is_infinitely_fast_with_damping_one() {
+        // z = 0 (a delay state) beside z = 0.5, dt = 0.1: the delay has no finite frequency
+        // (it read 7083.96 rad/s, ln(f64::MIN_POSITIVE) / dt, above Nyquist)
+        let a = faer::mat![[0.0, 0.0], [1.0, 0.5]];
+        let c = faer::mat![[0.0, 1.0]];
+        let modes = modal_analysis(a.as_ref(), c.as_ref(), 0.1).unwrap();
+        assert_eq!(modes.len(), 2);
+        assert!((modes[0].omega - 0.5f64.ln().abs() / 0.1).abs() < 1e-12);
+        let delay = &modes[1];
+        assert_eq!(delay.eigenvalue.norm(), 0.0);
+        assert!(delay.omega.is_infinite() && delay.frequency_hz.is_infinite());
+        assert_eq!(delay.damping, 1.0);
+        assert_eq!(delay.s.re, f64::NEG_INFINITY);
+        assert_eq!(delay.s.im, 0.0);
     }
 
     #[test]
