@@ -98,7 +98,7 @@ def test_frd_checks_std_coherence_and_dt() -> None:
         sysid.FRD(w, [1.0, 2.0], std=[np.nan, 0.2])
     with pytest.raises(DataError, match=r"coherence must be in \[0, 1\]"):
         sysid.FRD(w, [1.0, 2.0], coherence=[0.5, 2.0])
-    with pytest.raises(DataError, match="dt must be a positive sample time"):
+    with pytest.raises(DataError, match="dt must be a positive number of seconds"):
         sysid.FRD(w, [1.0, 2.0], dt=-0.1)
     with pytest.raises(ShapeError):
         sysid.FRD(w, np.ones((2, 2, 1)), std=[0.1, 0.2])

@@ -154,7 +154,8 @@ def test_a_settled_network_search_is_not_warned_about_whatever_its_distance():
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         capped = sysid.nlhw(data, 2, 2, 1, progress=False)
-        done = sysid.nlhw(data, 2, 2, 1, progress=False, max_iter=2000)
+        # its own convergence (a far larger cap lets another start's longer search win)
+        done = sysid.nlhw(data, 2, 2, 1, progress=False, max_iter=400)
     assert capped.info["stop"] == "maximum iterations"
     assert capped.info["remaining_decrease"] >= NEGLIGIBLE_REMAINING
     assert done.info["stop"] != "maximum iterations"
