@@ -20,6 +20,7 @@ import numpy as np
 from .._checks import as_2d, as_dt
 from ..errors import DataError, ShapeError
 from ..greybox.delays import shift_taps
+from ..models.attributes import SampleTime
 from ..models.discretisation import require_finite_sampling
 from ..models.protocol import ModelMixin, TimeResponse, continuous_grid, slowest_decay
 from ..models.statespace import StateSpaceModel
@@ -110,6 +111,8 @@ class TransferFunction(ModelMixin):
     #: no noise model: the predictions of its state-space form, the simulation, are its
     #: own at every horizon (compare fits their initial state)
     statespace_predicts = True
+    #: checked whenever written (0 or None: continuous time); a change drops the uncertainty
+    dt = SampleTime(continuous=0.0)
 
     def __init__(self, num: Any, den: Any, *, dt: float = 0.0, iodelay: Any = None,
                  hold: str = "zoh", input_names: Sequence[str] | None = None,
