@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import re
 import sys
 import time
 import warnings
@@ -37,7 +36,7 @@ from .data.table import (
     text_bytes,
     units_row,
 )
-from .data.units import check_dt_against_time, time_column, time_unit_seconds
+from .data.units import check_dt_against_time, split_header, time_column, time_unit_seconds
 from .errors import DataError, InsufficientDataError, OrderError, SysidError
 from .validation.crossval import MIN_BLOCK
 
@@ -383,8 +382,7 @@ def _seconds_per_unit(name: str, row_unit: str = "") -> float:
     :meth:`sysid.IOData.from_csv` takes it: the ``[unit]`` of its header, else the logger's
     units row (``row_unit``), else its name (``(ms)``, ``time_ms``): one function,
     :func:`sysid.data.units.time_unit_seconds`; seconds without one."""
-    m = re.fullmatch(r"(.*?)\s*\[(.*)\]", name)
-    return time_unit_seconds(name, m.group(2) if m else row_unit)
+    return time_unit_seconds(name, split_header(name, row_unit)[1])
 
 
 def _time_seconds(table: Table, k: int, row_units: dict[int, str], dec: str) -> np.ndarray:

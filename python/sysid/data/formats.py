@@ -11,7 +11,6 @@ and the matching reader gives the record back unchanged.
 from __future__ import annotations
 
 import gzip
-import re
 import warnings
 import zipfile
 from collections.abc import Sequence
@@ -23,7 +22,7 @@ import numpy as np
 from .._atomic import atomic_path
 from ..errors import DataError, SysidWarning
 from .table import datetime_seconds, numeric, read_table, units_row
-from .units import check_dt_against_time, time_column, time_unit_seconds
+from .units import check_dt_against_time, split_header, time_column, time_unit_seconds
 
 __all__: list[str] = []
 
@@ -343,10 +342,9 @@ def from_csv(
     table, row_units = units_row(read_table(p, delimiter, decimal=decimal), decimal)
     names, unit_of = [], {}
     for k, h in enumerate(table.names):
-        m = re.fullmatch(r"(.*?)\s*\[(.*)\]", h)
-        n = m.group(1) if m else h
+        n, unit_of_h = split_header(h, row_units.get(k, ""))
         names.append(n)
-        unit_of[n] = m.group(2) if m else row_units.get(k, "")
+        unit_of[n] = unit_of_h
 
     def col(c: str | int) -> int:
         if isinstance(c, (int, np.integer)):

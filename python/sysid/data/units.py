@@ -254,6 +254,21 @@ TIME_UNITS = {"s": 1.0, "sec": 1.0, "secs": 1.0, "second": 1.0, "seconds": 1.0,
               "hr": 3600.0, "hrs": 3600.0, "hour": 3600.0, "hours": 3600.0}
 
 
+def split_header(header: str, row_unit: str = "") -> tuple[str, str]:
+    """``(name, unit)`` of a column header ``"name [unit]"``; without brackets, the header
+    itself and ``row_unit`` (its entry in a logger's units row), as the CSV readers and the
+    command line take a column's unit.
+
+    Examples
+    --------
+    >>> from sysid.data.units import split_header
+    >>> split_header("Time [ms]"), split_header("temp", "degC")
+    (('Time', 'ms'), ('temp', 'degC'))
+    """
+    m = re.fullmatch(r"(.*?)\s*\[(.*)\]", str(header))
+    return (m.group(1), m.group(2)) if m else (str(header), row_unit)
+
+
 def time_unit_seconds(name: str, unit: str = "") -> float:
     """Seconds per unit of a numeric time column called ``name``: ``unit`` when given (a CSV
     file's units), else the ``[unit]`` or ``(unit)`` after the name, else a suffix of the name
