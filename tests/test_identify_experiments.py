@@ -111,7 +111,7 @@ def test_bic_counts_an_initial_state_per_experiment():
         edges = [0] + cut
         d = sysid.IOData([u[a:b] for a, b in zip(edges, edges[1:])],
                          [y[a:b] for a, b in zip(edges, edges[1:])], 1.0)
-        E = np.vstack([e for _, e in simulation_errors(m, d)])
+        E = np.vstack([e for _, e in simulation_errors(m, d, prior=False)])
         fit_part = 600 * np.linalg.slogdet(E.T @ E / 600)[1]
         p = ss_parameter_count(4, 1, 1, feedthrough=False, noise_model=False, x0=True,
                                n_experiments=len(cut))

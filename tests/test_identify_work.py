@@ -129,7 +129,8 @@ def test_simulation_errors_are_those_of_the_full_least_squares_problem():
         u = rng.standard_normal((count, m))
         y = model.simulate(u, x0=rng.standard_normal(n)) + 0.3 * rng.standard_normal(
             (count, l)) * np.array([1.0, 1e3, 1e-3][:l])
-        (_, e), = simulation_errors(model, sysid.IOData(u=u, y=y), trend=trend)
+        (_, e), = simulation_errors(model, sysid.IOData(u=u, y=y), trend=trend,
+                                   prior=False)
         np.testing.assert_allclose(e, _direct_fit(model, u, y, trend), rtol=1e-9,
                                    atol=1e-9 * np.max(np.abs(y - y.mean(0))))
     # a mode just outside the unit circle: free responses that grow 2e8-fold over the

@@ -235,7 +235,12 @@ def kalman_gain(
     a: _Array, c: _Array, q: _Array, r: _Array, s: _Array
 ) -> tuple[_Array, _Array, _Array]: ...
 def fitted_errors(
-    a: _Array, c: _Array, y: _Array, ys: _Array, trend: bool = False
+    a: _Array,
+    c: _Array,
+    y: _Array,
+    ys: _Array,
+    trend: bool = False,
+    prior: _Array | None = None,
 ) -> _Array | None: ...
 
 # -- realisation, Markov parameters, balancing, modal analysis (crates/sysid-py/src/realization.rs)

@@ -53,9 +53,10 @@ pub fn predict<'py>(
 }
 
 /// Simulation errors `y - ys` with the initial state and per-output offsets (or lines)
-/// fitted by least squares; `None` when the model diverges on these data.
+/// fitted by least squares (the initial state with the prior factor `prior`, when given);
+/// `None` when the model diverges on these data.
 #[pyfunction]
-#[pyo3(signature = (a, c, y, ys, trend=false))]
+#[pyo3(signature = (a, c, y, ys, trend=false, prior=None))]
 pub fn fitted_errors<'py>(
     py: Python<'py>,
     a: PyReadonlyArray2<'_, f64>,
@@ -63,10 +64,14 @@ pub fn fitted_errors<'py>(
     y: PyReadonlyArray2<'_, f64>,
     ys: PyReadonlyArray2<'_, f64>,
     trend: bool,
+    prior: Option<PyReadonlyArray2<'_, f64>>,
 ) -> PyResult<Option<Bound<'py, PyArray2<f64>>>> {
     let (av, cv, yv, sv) = (view(&a), view(&c), view(&y), view(&ys));
+    let pv = prior.as_ref().map(|p| view(p));
     // GIL released, Ctrl-C seen within milliseconds (the core checks between blocks)
-    let e = crate::search::detach(py, || initial_state::fitted_errors(av, cv, yv, sv, trend))?;
+    let e = crate::search::detach(py, || {
+        initial_state::fitted_errors(av, cv, yv, sv, trend, pv)
+    })?;
     Ok(e.map(|e| mat_to_numpy(py, &e)))
 }
 

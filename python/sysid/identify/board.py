@@ -174,7 +174,7 @@ def bic(model: Any, data: IOData) -> float:
     >>> bool(bic(m, d) < bic(idle, d))  # a state that explains nothing costs its parameters
     True
     """
-    errs = simulation_errors(model, data)
+    errs = simulation_errors(model, data, prior=False)  # x0 counted in p
     E = np.vstack([e for _, e in errs])
     N = E.shape[0]
     S = E.T @ E / N

@@ -766,6 +766,17 @@ def _choose(board: Board, ranked: list[dict[str, Any]], data: IOData, stable_onl
         m = _refit_one(r, data, stable_only)
         if m is not None:
             return m, r
+    # none of those re-fits stable: the stable candidates held back as starts or as below
+    # their start, by score, before giving up
+    for r in sorted(ranked, key=lambda r: -r["held_out_fit"]):
+        if not np.isfinite(r["held_out_fit"]) or not r["stable"] or "bic" in r or (
+                board.eligible(r, stable_only)):
+            continue
+        m = _refit_one(r, data, stable_only)
+        if m is not None:
+            r["note"] = ("chosen although held back (" + (r.get("note") or "") + "): no "
+                         "eligible candidate re-fitted stable on the whole record")
+            return m, r
     raise DataError("no candidate gave a stable model on this record; check the data "
                     "(offsets, an integrating process: difference the output) or fit one "
                     "model directly")

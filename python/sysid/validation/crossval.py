@@ -262,26 +262,35 @@ def _io(exps: list[tuple[np.ndarray, np.ndarray]], kw: dict[str, Any]) -> IOData
     return IOData(u=[e[0] for e in exps], y=[e[1] for e in exps], **kw)
 
 
-def simulation_errors(model: Any, data: IOData, trend: bool = False
+def simulation_errors(model: Any, data: IOData, trend: bool = False, prior: bool = True
                       ) -> list[tuple[np.ndarray, np.ndarray]]:
     """``(y, y - yhat)`` per experiment: the model's simulation with its initial state and a
     constant offset per output fitted by least squares (see :func:`simulation_fit`); with
-    ``trend``, a straight line per output instead of the offset. Raises when the model cannot
-    be simulated on the data."""
+    ``trend``, a straight line per output instead of the offset. The initial state is
+    fitted with the prior of where the experiment's input can put the model's state
+    (:mod:`.state_prior`: a mode the input does not drive cannot fit the block's noise);
+    ``prior=False`` fits it freely. Raises when the model cannot be simulated on the
+    data."""
+    from .state_prior import input_state_covariance
+
     A = np.ascontiguousarray(model.A, dtype=float)
     C = np.ascontiguousarray(model.C, dtype=float)
+    B = np.asarray(getattr(model, "B", np.zeros((A.shape[0], 0))), dtype=float)
     out = []
     with warnings.catch_warnings(), np.errstate(all="ignore"):
         warnings.simplefilter("ignore")
         for u, y in data.experiments:
             ys = np.asarray(model.simulate(u), dtype=float)
+            P = None  # the prior covariance of the initial state
+            if prior and B.ndim == 2 and B.shape[0] == A.shape[0] and u is not None:
+                P = input_state_covariance(A, B, np.asarray(u, dtype=float).reshape(len(y), -1))
             # the offsets and the initial state fitted in the core (sysid_core::model::
             # initial_state: block by block, no (N l, n) array of free responses, as thousands
             # of candidates are scored on blocks of long records; normal equations, or QR where
             # a growing mode makes them ill-conditioned), rows weighed by 1 / each output's
             # spread (the fit % is relative to it: the shared initial state does not follow
             # whichever output has the largest numbers in its units)
-            e = _sysid.fitted_errors(A, C, np.asarray(y, dtype=float), ys, trend)
+            e = _sysid.fitted_errors(A, C, np.asarray(y, dtype=float), ys, trend, P)
             if e is None:
                 raise FloatingPointError("the model diverges on these data")
             out.append((y, e))

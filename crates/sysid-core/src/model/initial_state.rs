@@ -21,7 +21,8 @@
 
 use crate::denormals::DenormalsAreZero;
 use crate::error::{Result, SysidError};
-use crate::linalg::{mul_seq, pinv, svd_seq, QrAccumulator};
+use crate::linalg::{mul_seq, pinv, svd_seq, symmetrize, QrAccumulator};
+use crate::optim::dense::symmetric_eigen;
 use faer::linalg::matmul::matmul;
 use faer::{Accum, Mat, MatRef, Par};
 
@@ -29,6 +30,11 @@ use faer::{Accum, Mat, MatRef, Par};
 const BLOCK: usize = 64;
 /// Blocks between two checks for Ctrl-C (16 384 samples).
 const CHECK_EVERY: usize = 256;
+/// The initial state's prior covariance is at least `FLOOR G^-1` in every direction (`G` the
+/// weighted free responses' Gram): a direction the input does not drive is shrunk by
+/// `FLOOR / (FLOOR + s^2)` of its least-squares value (`s^2` the weighted error variance,
+/// the fit's `1 - fit` squared), nothing on noise-free data; basis- and units-free.
+const FLOOR: f64 = 1e-6;
 /// `A^t` below this (entrywise, `A^0 = I`) ends the free responses: their squares are below
 /// round-off of the sums they would add to.
 const NEGLIGIBLE: f64 = 1e-17;
@@ -70,16 +76,29 @@ fn weights(y: MatRef<'_, f64>) -> Vec<f64> {
 /// weighted least squares; `None` when the simulation or the free responses are not finite
 /// (a model that diverges on these data).
 ///
+/// With `prior = Some(P)` (`n x n`, the covariance of the states the model's input drives),
+/// the initial state is `x0 ~ N(0, P + FLOOR G^-1)` a priori: the fit minimises the weighted
+/// squared errors plus `s^2 x0' (P + FLOOR G^-1)^-1 x0`, `s^2` the weighted error variance of
+/// the fit without the prior (its residual degrees of freedom `N l - n - q`). A held-out
+/// block then cannot spend its initial state on directions the model's input does not drive:
+/// a mode with no input gain fits the block's noise only as far as the data outweigh the
+/// prior. Without residual degrees of freedom the prior is not used.
+///
 /// ```
 /// use faer::{mat, Mat};
 /// use sysid_core::model::initial_state::fitted_errors;
 /// let (a, c) = (mat![[0.5]], mat![[1.0]]);
 /// // the output is the free response from x0 = 2 plus an offset of 3
 /// let y = Mat::from_fn(20, 1, |t, _| 2.0 * 0.5f64.powi(t as i32) + 3.0);
-/// let e = fitted_errors(a.as_ref(), c.as_ref(), y.as_ref(), Mat::zeros(20, 1).as_ref(), false)
+/// let e = fitted_errors(a.as_ref(), c.as_ref(), y.as_ref(), Mat::zeros(20, 1).as_ref(), false, None)
 ///     .unwrap()
 ///     .unwrap();
 /// assert!(e.col(0).iter().all(|v| v.abs() < 1e-12));
+/// // noise-free: the prior changes nothing
+/// let wide = mat![[10.0]];
+/// let e = fitted_errors(a.as_ref(), c.as_ref(), y.as_ref(), Mat::zeros(20, 1).as_ref(), false,
+///     Some(wide.as_ref())).unwrap().unwrap();
+/// assert!(e.col(0).iter().all(|v| v.abs() < 1e-10));
 /// ```
 pub fn fitted_errors(
     a: MatRef<'_, f64>,
@@ -87,8 +106,18 @@ pub fn fitted_errors(
     y: MatRef<'_, f64>,
     ys: MatRef<'_, f64>,
     trend: bool,
+    prior: Option<MatRef<'_, f64>>,
 ) -> Result<Option<Mat<f64>>> {
     let (count, l, n) = (y.nrows(), y.ncols(), a.nrows());
+    if let Some(cov) = prior {
+        if cov.nrows() != n || cov.ncols() != n {
+            return Err(SysidError::ShapeMismatch {
+                what: "the initial state's prior covariance".into(),
+                got: format!("{}x{}", cov.nrows(), cov.ncols()),
+                expected: format!("{n}x{n}"),
+            });
+        }
+    }
     if a.ncols() != n || c.nrows() != l || c.ncols() != n {
         return Err(SysidError::ShapeMismatch {
             what: "A and C".into(),
@@ -135,12 +164,31 @@ pub fn fitted_errors(
         return Ok(None);
     }
     let theta = match solve_normal(&g)? {
-        Some(theta) => theta,
+        Some(theta) => match prior {
+            Some(cov) if n > 0 => {
+                // the residual sum of squares of the least-squares solution: r'r - theta' X'r
+                let p = g.ncols() - 1;
+                let rss = g[(p, p)] - (0..p).map(|i| theta[i] * g[(i, p)]).sum::<f64>();
+                with_prior(&g, rss, cov, count * l)?.unwrap_or(theta)
+            }
+            _ => theta,
+        },
         None => {
             let Some(tri) = triangle(&free, &r, &w, &lines)? else {
                 return Ok(None);
             };
-            solve(&tri)?
+            let theta = solve(&tri)?;
+            match prior {
+                Some(cov) if n > 0 => {
+                    // the triangle's last diagonal entry is the residual norm; the prior
+                    // makes the penalised equations well conditioned
+                    let p = tri.ncols() - 1;
+                    let rss = tri[(p, p)] * tri[(p, p)];
+                    let g = mul_seq(tri.transpose(), tri.as_ref());
+                    with_prior(&g, rss, cov, count * l)?.unwrap_or(theta)
+                }
+                _ => theta,
+            }
         }
     };
     let q = lines.tcols * l;
@@ -330,6 +378,76 @@ fn normal_equations(
         }
     }
     Ok(Some(g))
+}
+
+/// The solution of the normal equations `g` (initial state first, `n` columns) with the
+/// prior `x0 ~ N(0, Pi)`, `Pi = P + FLOOR G^-1` (`G` the initial state's block of `g`), the
+/// penalty `s^2 x0' Pi^-1 x0` added ([`fitted_errors`]); `s^2` from `rss`, the residual sum of
+/// squares without it. `Pi^-1 = G^(1/2) (G^(1/2) P G^(1/2) + FLOOR I)^-1 G^(1/2)` (on the state
+/// scaled to unit free-response norms) needs no inverse of `G` or `P` (either may be
+/// singular: a state the outputs do not see, a direction the input does not drive).
+/// `None` without residual degrees of freedom (`rows` weighted rows in all) or when the
+/// penalised equations cannot be solved.
+fn with_prior(
+    g: &Mat<f64>,
+    rss: f64,
+    cov: MatRef<'_, f64>,
+    rows: usize,
+) -> Result<Option<Vec<f64>>> {
+    let p = g.ncols() - 1; // unknowns: n initial-state entries, then the lines
+    let n = cov.nrows();
+    if rows <= p || cov.ncols() != n {
+        return Ok(None);
+    }
+    let s2 = rss.max(0.0) / (rows - p) as f64;
+    if !s2.is_finite() || cov.col_iter().any(|c| c.iter().any(|v| !v.is_finite())) {
+        return Ok(None);
+    }
+    // on the state scaled to unit free-response norms (x^ = D x), with S = G^^(1/2):
+    // Pi^^-1 = S (S P^ S + FLOOR I)^-1 S, whose middle factor has eigenvalues >= FLOOR
+    let d: Vec<f64> = (0..n)
+        .map(|i| {
+            let v = g[(i, i)].max(0.0).sqrt();
+            if v > 0.0 && v.is_finite() {
+                v
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let gs = Mat::from_fn(n, n, |i, k| g[(i, k)] / (d[i] * d[k]));
+    let (v, lam) = symmetric_eigen(&gs, "initial-state prior (free responses)")?;
+    let root = Mat::from_fn(n, n, |i, k| {
+        (0..n)
+            .map(|j| v[(i, j)] * lam[j].max(0.0).sqrt() * v[(k, j)])
+            .sum::<f64>()
+    });
+    let ps = Mat::from_fn(n, n, |i, k| cov[(i, k)] * d[i] * d[k]);
+    let mut mid = mul_seq(mul_seq(root.as_ref(), ps.as_ref()).as_ref(), root.as_ref());
+    symmetrize(&mut mid);
+    for i in 0..n {
+        mid[(i, i)] += FLOOR;
+    }
+    let (w, gam) = symmetric_eigen(&mid, "initial-state prior (penalty)")?;
+    if gam.iter().any(|&x| x.is_nan() || x <= 0.0 || !x.is_finite()) {
+        return Ok(None);
+    }
+    let inv = Mat::from_fn(n, n, |i, k| {
+        (0..n).map(|j| w[(i, j)] * w[(k, j)] / gam[j]).sum::<f64>()
+    });
+    let hat = mul_seq(mul_seq(root.as_ref(), inv.as_ref()).as_ref(), root.as_ref());
+    let mut penalty = Mat::from_fn(n, n, |i, k| hat[(i, k)] * d[i] * d[k]);
+    symmetrize(&mut penalty);
+    let mut g2 = g.clone();
+    for i in 0..n {
+        for k in 0..n {
+            g2[(i, k)] += s2 * penalty[(i, k)];
+        }
+    }
+    if g2.col_iter().any(|c| c.iter().any(|v| !v.is_finite())) {
+        return Ok(None);
+    }
+    solve_normal(&g2)
 }
 
 /// The minimum-norm solution of the normal equations' leading block against their last

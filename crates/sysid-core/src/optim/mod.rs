@@ -42,7 +42,7 @@
 //! the data do not determine.
 
 mod covariance;
-mod dense;
+pub(crate) mod dense;
 mod normal;
 mod reduced;
 mod reparam;
