@@ -152,6 +152,35 @@ def test_correlation_refuses_a_constant_channel_by_name() -> None:
         sysid.correlation(sysid.IOData(u=np.zeros(500), y=y), 5, remove_mean=False)
 
 
+def test_one_constant_channel_rule_for_estimators_and_spectra() -> None:
+    # a stuck channel with round-off-level wiggle (1 + 1e-13 noise): the spectral estimates
+    # refused it as constant (to 1e-12 of its size), oe and coherence took it (exact
+    # comparison), arx refused it for rank and spafdr for "insufficient data"
+    from sysid._checks import CONSTANT_TOL, constant_channels
+
+    rng = np.random.default_rng(3)
+    n = 400
+    u1 = rng.standard_normal(n)
+    y = np.convolve(u1, [0.0, 1.0, 0.5])[:n] + 0.1 * rng.standard_normal(n)
+    stuck = sysid.IOData(u=np.c_[u1, 1.0 + 1e-13 * rng.standard_normal(n)], y=y)
+    calls = {"arx": lambda d: sysid.arx(d, 2, [2, 2], [1, 1]),
+             "oe": lambda d: sysid.oe(d, [2, 2], [2, 2], [1, 1]),
+             "spafdr": sysid.spafdr, "etfe": lambda d: sysid.etfe(d, smoothing=31),
+             "welch_frf": sysid.welch_frf, "coherence": sysid.coherence}
+    for who, call in calls.items():
+        with pytest.raises(sysid.DataError, match=r"u1 (is 1 in every sample|is constant)|"
+                           r"\['u1'\] are constant") as caught:
+            call(stuck)
+        assert who in str(caught.value)  # each in its own words
+    # the one rule and its tolerance: varying by more than CONSTANT_TOL of its size varies
+    parts = [np.c_[np.ones(5), 1.0 + np.r_[0, 0, 0, 0, 10 * CONSTANT_TOL]]]
+    assert constant_channels(parts).tolist() == [True, False]
+    assert constant_channels(parts, "all").tolist() == [True, False]
+    two = [np.full((3, 1), 1.0), np.full((3, 1), 2.0)]  # a level per experiment
+    assert constant_channels(two).tolist() == [True]        # no spectrum
+    assert constant_channels(two, "all").tolist() == [False]  # but it moves the output
+
+
 # ------------------------------------------------ bands at the real lines (zero, Nyquist)
 
 

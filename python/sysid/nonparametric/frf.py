@@ -37,7 +37,7 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from .._checks import as_between, as_int, as_nonnegative, check_elements
+from .._checks import as_between, as_int, as_nonnegative, check_elements, constant_channels
 from ..data.iodata import IOData
 from ..errors import DataError, ExcitationError, InsufficientDataError
 from ..models.frd import FRD, band_quantile
@@ -207,14 +207,10 @@ def check_omega(omega: Any, dt: float, positive: bool = False) -> np.ndarray:
 
 
 def _constant_inputs(data: IOData) -> np.ndarray:
-    """Per input, whether it is constant (to ``1e-12`` of its magnitude) in every
-    experiment: it has no power but at zero frequency."""
-    varying = np.zeros(data.n_inputs, dtype=bool)
-    for u, _ in data.experiments:
-        if u.shape[0]:
-            mag = np.max(np.abs(u), axis=0)  # scaled first: 1e300 overflows, 1e-200 underflows
-            varying |= np.std(u / np.where(mag > 0, mag, 1.0), axis=0) > 1e-12
-    return ~varying
+    """Per input, whether it is constant in every experiment (:func:`sysid._checks.
+    constant_channels`, each experiment about its own level): it has no power but at zero
+    frequency."""
+    return constant_channels([u for u, _ in data.experiments], "each")
 
 
 def _need_excitation(keep: np.ndarray, what: str, data: IOData | None = None) -> None:
