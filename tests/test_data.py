@@ -248,6 +248,28 @@ def test_select_channels_by_name() -> None:
     assert d.select(inputs=[]).n_inputs == 0
 
 
+@pytest.mark.parametrize("sel, message", [
+    (0.0, "input 0.0 is not a channel.*integer index.*use 0"),      # was TypeError
+    (np.float64(1.0), "is not a channel.*use 1"),                   # was TypeError
+    ([1.0], "input 1.0 is not a channel.*use 1"),
+    (1.5, "input 1.5 is not a channel.*integer index"),
+    (True, "boolean reads as the index 1.*np.flatnonzero"),         # was input 1, silently
+    (np.array([True, False, True]), "boolean reads as the index 1.*np.flatnonzero"),
+])
+def test_select_channels_refuses_what_models_refuse(sel, message) -> None:
+    # the rule of model[i, j] and FRD[i, j] (sysid.data.segments.channel_index, one function)
+    d = record(m=3, l=2)
+    with pytest.raises(DataError, match=message):
+        d.select(inputs=sel)
+    with pytest.raises(DataError, match=message.replace("input", "output")):
+        d.select(outputs=sel)
+    m = sysid.StateSpaceModel(np.zeros((1, 1)), np.ones((1, 3)), np.ones((2, 1)))
+    with pytest.raises(DataError, match=message):
+        m.select(inputs=sel)
+    assert d.select(inputs=np.int64(2), outputs=slice(1, None)).input_names == ["in2"]
+    assert m.select(outputs=slice(1, None)).noutputs == 1
+
+
 def test_split_and_merge() -> None:
     d = record(n=100)
     est, val = d.split(0.7)

@@ -47,3 +47,14 @@ def test_tables_show_it(delayed):
     df = modes.to_pandas()
     assert np.isinf(df["omega"]).sum() == 1
     assert len(modes.select(np.isfinite(modes.frequencies_hz))) == 1
+
+
+def test_integrator_has_damping_minus_one_as_damp():
+    # z = 1 (s = 0): MATLAB's damp reports wn = 0 and zeta = -1; modal_analysis said 1
+    m = sysid.StateSpaceModel([[1.0, 0.0], [0.0, 0.5]], [[1.0], [1.0]], [[1.0, 1.0]], dt=0.1)
+    modes = sysid.modal_analysis(m)
+    k = int(np.argmin(np.abs(modes.eigenvalues - 1.0)))
+    assert modes.omega[k] == 0.0 and modes.damping[k] == -1.0
+    table = sysid.damp(m)
+    np.testing.assert_allclose(np.sort(modes.damping), np.sort(table.zeta), rtol=1e-12)
+    assert "-1.0000" in modes.table() and modes.to_pandas()["damping"].min() == -1.0

@@ -16,6 +16,7 @@ import pytest
 
 import sysid
 from sysid.errors import DataError
+from sysid.models.paramtable import ParameterTable
 from sysid.models.uncertainty import UncertaintyWarning
 
 
@@ -123,3 +124,82 @@ def test_continuous_model_drops_it_too():
         c.A = [[-2.0]]
     assert c.uncertainty is None
     assert c.dcgain()[0, 0] == pytest.approx(0.5)
+
+
+def tf_build(t):
+    return sysid.TransferFunction([1.0], [1.0, t[0]])
+
+
+def poly_build(t):
+    return sysid.PolynomialModel(a=[[np.array([t[0]])]], b=[[np.array([1.0])]], nk=[[1]],
+                                 dt=1.0)
+
+
+@pytest.mark.parametrize("name, value", [("num", [[np.array([3.0])]]),
+                                         ("den", [[np.array([1.0, 4.0])]]),
+                                         ("iodelay", np.array([[0.2]])), ("dt", 0.1)])
+def test_transfer_function_coefficients_drop_it(name, value):
+    # before: G.den = (s + 4) kept the uncertainty, dcgain 0.25 but with std=True 0.5
+    G = tf_build([2.0])
+    G.uncertainty = sysid.ParameterUncertainty([2.0], [[1e-4]], tf_build)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        setattr(G, name, getattr(G, name))  # the same value keeps it
+        G.hold = "foh"                      # no std result reads the hold
+    assert G.uncertainty is not None
+    with pytest.warns(UncertaintyWarning, match=f"TransferFunction.{name}.* was replaced"):
+        setattr(G, name, value)
+    assert G.uncertainty is None
+    with pytest.raises(DataError, match=f"no parameter uncertainty \\(dropped when {name}"):
+        G.dcgain(std=True)
+
+
+def test_transfer_function_parameter_table_goes_with_it():
+    G = tf_build([2.0])
+    G.uncertainty = sysid.ParameterUncertainty([2.0], [[1e-4]], tf_build)
+    G.parameters = ParameterTable(["a1"], [2.0], [0.01], [False])
+    with pytest.warns(UncertaintyWarning):
+        G.den = [[np.array([1.0, 4.0])]]
+    assert G.parameters is None and "0.01" not in G.summary()
+
+
+@pytest.mark.parametrize("name, value", [("a", [[np.array([-0.8])]]),
+                                         ("b", [[np.array([2.0])]]),
+                                         ("c", [np.array([0.3])]), ("d", [np.array([-1.0])]),
+                                         ("f", [[np.array([-0.2])]]), ("nk", np.array([[2]])),
+                                         ("dt", 0.5)])
+def test_polynomial_coefficients_drop_it(name, value):
+    # before: m.a = [[[-0.8]]] kept the uncertainty, dcgain 5 but with std=True 2
+    m = poly_build([-0.5])
+    m.uncertainty = sysid.ParameterUncertainty([-0.5], [[1e-4]], poly_build)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        setattr(m, name, getattr(m, name))
+        m.noise_variance = np.array([4.0])  # no std result reads the innovation variance
+    assert m.uncertainty is not None
+    with pytest.warns(UncertaintyWarning, match=f"PolynomialModel.{name}.* was replaced"):
+        setattr(m, name, value)
+    assert m.uncertainty is None
+    with pytest.raises(DataError, match=f"no parameter uncertainty \\(dropped when {name}"):
+        m.dcgain(std=True)
+
+
+def test_polynomial_sample_time_checked_when_written():
+    m = poly_build([-0.5])
+    with pytest.raises(DataError, match="dt must be a positive number"):
+        m.dt = -1.0
+    assert m.dt == 1.0
+
+
+def test_estimators_keep_their_own_uncertainty():
+    rng = np.random.default_rng(1)
+    u = rng.standard_normal((400, 1))
+    v = np.cumsum(0.1 * rng.standard_normal(400))  # integrated noise: D = 1 - q^-1
+    y = np.zeros((400, 1))
+    for t in range(1, 400):
+        y[t] = 0.5 * y[t - 1] + u[t - 1] + v[t] - 0.5 * v[t - 1]
+    data = sysid.IOData(u, y, 1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UncertaintyWarning)
+        m = sysid.arx(data, 1, 1, 1, integrate_noise=True)
+    assert m.uncertainty is not None and m.d[0].tolist() == [-1.0]

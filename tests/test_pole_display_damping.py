@@ -55,3 +55,11 @@ def test_the_shared_rule():
     table = sysid.damp(sysid.ContinuousStateSpace(np.diag([-1.0, 0.0]), [[1.0], [1.0]],
                                                   [[1.0, 1.0]]))
     assert sorted(table.zeta) == sorted(damping_ratio(np.array([-1.0, 0.0]))) == [-1.0, 1.0]
+
+
+def test_html_display_shows_the_infinite_frequency_as_the_summary():
+    # before: the notebook table printed "n/a" where summary() prints "inf"
+    html = delayed()._repr_html_()
+    row = re.findall(r"<tr><td>0\+0j</td>(.*?)</tr>", html)[0]
+    assert re.findall(r"<td>(.*?)</td>", row) == ["0", "inf", "1"], row
+    assert "n/a" not in html

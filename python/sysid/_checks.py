@@ -524,11 +524,49 @@ def experiment_arrays(data: Any) -> list[tuple[np.ndarray, np.ndarray]]:
     return [(np.ascontiguousarray(u, float), np.ascontiguousarray(y, float)) for u, y in exps]
 
 
+#: A channel is constant when its samples lie within this fraction of its largest
+#: ``|value|`` of one level (:func:`constant_channels`): far above what arithmetic leaves of
+#: a constant (round-off, 1e-16 of it), far below what a measurement varies by (a 24-bit
+#: converter resolves 6e-8 of its range). A channel of 1 + 1e-13 noise was refused by the
+#: spectral estimates and taken by ``oe`` (the time-domain check compared samples exactly).
+CONSTANT_TOL = 1e-12
+
+
+def constant_channels(arrays: list[np.ndarray], about: str = "each") -> np.ndarray:
+    """Per column of the ``(samples, channels)`` arrays (one per experiment), whether the
+    channel is constant (:data:`CONSTANT_TOL`): about each experiment's own level
+    (``"each"``: no variation within any experiment, hence no spectrum) or about one level
+    in every experiment (``"all"``: a channel at other levels in other experiments still
+    moves what it drives). The one check of both, used by the estimators
+    (:func:`require_inputs_vary`) and the spectral estimates.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid._checks import constant_channels
+    >>> parts = [np.array([[1.0, 0.0], [1.0, 1.0]]), np.array([[2.0, 0.0], [2.0 + 1e-15, 0.5]])]
+    >>> constant_channels(parts).tolist(), constant_channels(parts, "all").tolist()
+    ([True, False], [False, False])
+    """
+    parts = [np.asarray(a, float) for a in arrays if len(a)]
+    if not parts:
+        return np.zeros(arrays[0].shape[1] if len(arrays) else 0, dtype=bool)
+    mag = np.max([np.max(np.abs(a), axis=0) for a in parts], axis=0)
+    scaled = [a / np.where(mag > 0, mag, 1.0) for a in parts]  # no overflow, no underflow
+    if about == "all":
+        spread = np.max([a.max(axis=0) for a in scaled], axis=0) - np.min(
+            [a.min(axis=0) for a in scaled], axis=0)
+    else:
+        spread = np.max([np.ptp(a, axis=0) for a in scaled], axis=0)
+    return spread <= CONSTANT_TOL
+
+
 def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
                         names: Any = None, side: int = 0, error: type = DataError) -> None:
     """Refuse a record in which an input (``side=1``: an output) is zero or constant in
-    every experiment: the dynamics ``who`` estimates would not be determined by the data.
-    ``error``: the exception raised (a :class:`DataError` subclass).
+    every experiment, at one level (:func:`constant_channels`): the dynamics ``who``
+    estimates would not be determined by the data. ``error``: the exception raised (a
+    :class:`DataError` subclass).
 
     Examples
     --------
@@ -540,20 +578,16 @@ def require_inputs_vary(exps: list[tuple[np.ndarray, np.ndarray]], who: str,
     sysid.errors.DataError: input u0 is 0 in every sample: bj cannot estimate ...
     """
     kind = ("input", "output")[side]
-    nu = exps[0][side].shape[1] if exps else 0
-    for j in range(nu):
-        cols = [e[side][:, j] for e in exps if len(e[side])]
-        if not cols:
-            continue
-        first = cols[0][0]
-        if all(np.all(c == first) for c in cols):
-            name = names[j] if names is not None and j < len(names) else f"{'uy'[side]}{j}"
-            fix = ("drop it (data.select), or fit an output-only model (sysid.ar, sysid.arma)"
-                   if side == 0 else "drop it (data.select)")
-            raise error(f"{kind} {name} is {first:g} in every sample: {who} cannot estimate "
-                            f"{'how the output responds to it' if side == 0 else 'its dynamics'}"
-                            f"; check the channel (the wrong column, a stuck "
-                            f"{'actuator' if side == 0 else 'sensor'}?), {fix}")
+    flat = constant_channels([e[side] for e in exps], "all")
+    for j in np.flatnonzero(flat):
+        first = next(e[side][0, j] for e in exps if len(e[side]))
+        name = names[j] if names is not None and j < len(names) else f"{'uy'[side]}{j}"
+        fix = ("drop it (data.select), or fit an output-only model (sysid.ar, sysid.arma)"
+               if side == 0 else "drop it (data.select)")
+        raise error(f"{kind} {name} is {first:g} in every sample: {who} cannot estimate "
+                    f"{'how the output responds to it' if side == 0 else 'its dynamics'}"
+                    f"; check the channel (the wrong column, a stuck "
+                    f"{'actuator' if side == 0 else 'sensor'}?), {fix}")
     if side == 0:
         require_independent_inputs(exps, who, names, error)
 
@@ -661,14 +695,14 @@ def check_magnitudes(data: Any, who: str = "identification",
     for kind, idx in (("output", 1), ("input", 0)):
         if idx not in stats:
             continue
-        big, _, sd = stats[idx]
+        big = stats[idx][0]
         names = getattr(data, f"{kind}_names", None) or [
             f"{'uy'[idx]}{j}" for j in range(len(big))]
         for j, name in enumerate(names):
             b = float(big[j])
             if b > MAX_MAGNITUDE:
                 side = "overflow"
-            elif 0 < b < MIN_MAGNITUDE and not _constant(data, idx, j, float(sd[j])):
+            elif 0 < b < MIN_MAGNITUDE and not _constant(data, idx, j):
                 side = "underflow"
             else:
                 continue
@@ -681,11 +715,11 @@ def check_magnitudes(data: Any, who: str = "identification",
             )
 
 
-def _constant(data: Any, idx: int, j: int, sd: float) -> bool:
-    """Whether channel ``j`` of side ``idx`` holds one value in every sample (its standard
-    deviation of tiny values can underflow to 0 while it varies: compared sample by sample)."""
-    parts = [e[idx] for e in _pairs(data) if len(e[idx])]
-    return sd == 0.0 and all(np.all(p[:, j] == parts[0][0, j]) for p in parts)
+def _constant(data: Any, idx: int, j: int) -> bool:
+    """Whether channel ``j`` of side ``idx`` holds one value in every sample
+    (:func:`constant_channels`; its standard deviation of tiny values can underflow to 0
+    while it varies: compared scaled)."""
+    return bool(constant_channels([e[idx][:, j:j + 1] for e in _pairs(data)], "all")[0])
 
 
 def user_stacklevel() -> int:

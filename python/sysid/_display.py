@@ -40,7 +40,16 @@ def esc(x: Any) -> str:
 
 
 def fmt(x: Any, digits: int = 4) -> str:
-    """A cell: numbers with ``digits`` significant figures, complex as ``a+bj``, else str."""
+    """A cell: numbers with ``digits`` significant figures (infinities as ``inf``, as the
+    text summaries print them; NaN, a value that does not exist, as ``n/a``), complex as
+    ``a+bj``, else str.
+
+    Examples
+    --------
+    >>> from sysid._display import fmt
+    >>> fmt(1.23456), fmt(float("inf")), fmt(-float("inf")), fmt(float("nan"))
+    ('1.235', 'inf', '-inf', 'n/a')
+    """
     if isinstance(x, (bool, np.bool_)):
         return "yes" if x else "no"
     if isinstance(x, (int, np.integer)):
@@ -48,7 +57,7 @@ def fmt(x: Any, digits: int = 4) -> str:
     if isinstance(x, (complex, np.complexfloating)):
         return f"{x.real:.{digits}g}{x.imag:+.{digits}g}j"
     if isinstance(x, (float, np.floating)):
-        return "n/a" if not np.isfinite(x) else f"{float(x):.{digits}g}"
+        return "n/a" if np.isnan(x) else f"{float(x):.{digits}g}"
     if x is None:
         return ""
     return str(x)

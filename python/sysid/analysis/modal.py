@@ -30,7 +30,7 @@ from .._display import HTMLResult
 from ..data.formats import _pandas
 from ..errors import DataError
 from ..models.checks import discrete_statespace
-from ..models.pole_map import continuous_equivalent
+from ..models.pole_map import continuous_equivalent, damping_ratio
 from ..models.statespace import StateSpaceModel
 
 __all__ = ["ModalAnalysis", "modal_analysis"]
@@ -51,7 +51,8 @@ class ModalAnalysis(HTMLResult):
     frequencies_hz : ndarray
         Natural frequencies in Hz.
     damping : ndarray
-        Damping ratios (1 for a positive real pole, negative for an unstable mode).
+        Damping ratios (1 for a positive real pole, negative for an unstable mode, -1 for a
+        pole at ``z = 1``, an integrator, as :func:`sysid.damp` and MATLAB's ``damp``).
     mode_shapes : ndarray
         Complex, ``(n_modes, noutputs)``, largest entry of each shape equal to 1.
     dt : float
@@ -66,10 +67,12 @@ class ModalAnalysis(HTMLResult):
         self.eigenvalues = np.asarray(d["eig_re"]) + 1j * np.asarray(d["eig_im"])
         self.omega = np.asarray(d["omega"])
         self.frequencies_hz = np.asarray(d["frequency_hz"])
-        self.damping = np.asarray(d["damping"])
         self.mode_shapes = np.asarray(d["shape_re"]) + 1j * np.asarray(d["shape_im"])
         self.dt = dt
         self.s = continuous_equivalent(self.eigenvalues, dt)  # z = 0: -inf, as damp()
+        # damp()'s rule (sysid.models.pole_map), not the core's: -1 at z = 1 (s = 0), as
+        # MATLAB's damp, where the core says 1
+        self.damping = damping_ratio(self.s)
         self.output_names = output_names
         self.extra: dict[str, np.ndarray] = {}
 

@@ -11,7 +11,8 @@ return_trend=True)`` (then ``trend.apply(validation)`` for the validation data),
 :func:`sysid.identify`, which removes the offsets and restores them in its predictions.
 
 A channel is flagged when ``|mean| > 10 std`` (the offset dwarfs the variation), unless the
-record was detrended (:attr:`IOData.has_trend`).
+record was detrended (:attr:`IOData.has_trend`) or the channel is constant
+(:func:`sysid._checks.constant_channels`: the estimators refuse it as such).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import check_magnitudes, record_stats, user_stacklevel
+from .._checks import check_magnitudes, constant_channels, record_stats, user_stacklevel
 from ..errors import OffsetWarning
 
 __all__ = ["check_offsets", "remove_means", "OFFSET_RATIO"]
@@ -57,9 +58,11 @@ def offsets(data: Any, stats: dict[int, Any] | None = None) -> list[tuple[str, s
         else:  # one pass in Rust (NumPy's column reductions of (samples, channels) are slow)
             _, mean, std = _sysid.channel_stats(
                 [np.ascontiguousarray(e[idx], float) for e in exps])
-        for j, name in enumerate(names):
-            if abs(mean[j]) > OFFSET_RATIO * std[j] > 0:
-                out.append((kind, str(name), float(mean[j]), float(std[j])))
+        flagged = [j for j in range(len(names)) if abs(mean[j]) > OFFSET_RATIO * std[j] > 0]
+        if flagged:  # a constant channel is the estimators' constancy check's to refuse
+            flat = constant_channels([np.asarray(e[idx]) for e in exps], "all")
+            out += [(kind, str(names[j]), float(mean[j]), float(std[j])) for j in flagged
+                    if not flat[j]]
     return out
 
 

@@ -153,28 +153,62 @@ def unknown_names(data: Any, names: list[str]) -> str:
 
 
 def channel_index(sel: Any, names: list[str], kind: str) -> list[int]:
-    """Indices of the channels ``sel`` (names or indices, ``None`` for all) among ``names``."""
+    """Indices of the channels ``sel`` among ``names``: an index, a name, a slice, or a list,
+    tuple, range or integer array of indices and names; ``None`` for all. The one rule of
+    records (:meth:`sysid.IOData.select`), FRDs and models (``model[i, j]``): anything else
+    (a float such as ``0.0``, even a whole one, which MATLAB's ``y(:, 1.0)`` would take; a
+    boolean or boolean mask, which would read as the indices 0 and 1) is refused with what
+    to pass instead.
+
+    Examples
+    --------
+    >>> from sysid.data.segments import channel_index
+    >>> channel_index([1, "y0"], ["y0", "y1"], "output")
+    [1, 0]
+    >>> channel_index(0.0, ["y0", "y1"], "output")
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: output 0.0 is not a channel: ... use 0
+    """
     if sel is None:
         return list(range(len(names)))
-    if isinstance(sel, (str, int, np.integer)):
-        sel = [sel]
+    if isinstance(sel, slice):
+        sel = range(len(names))[sel]
+    items = sel.tolist() if isinstance(sel, np.ndarray) else sel
+    if isinstance(items, (str, int, np.integer, float, np.floating)) or np.ndim(items) == 0:
+        items = [items]
+    elif not isinstance(items, (list, tuple, range)):
+        raise DataError(f"the {kind} selection {sel!r} is not an index, a name or a list of "
+                        f"them: select {kind}s by integer index, name, slice or a list of "
+                        "those")
     out = []
-    for s in sel:
+    for s in items:
+        if isinstance(s, (bool, np.bool_)):
+            raise DataError(
+                f"{kind} {s!r} is not a channel: a boolean reads as the index "
+                f"{int(s)}; select {kind}s by integer index or name (a boolean mask: pass "
+                "np.flatnonzero(mask))")
         if isinstance(s, str):
             if s not in names:
                 raise DataError(f"no {kind} named {s!r}; the {kind}s are {names}")
             out.append(names.index(s))
-        elif isinstance(s, (int, np.integer)) and -len(names) <= s < len(names):
+        elif isinstance(s, (int, np.integer)):
+            if not -len(names) <= s < len(names):
+                raise DataError(f"{kind} {s!r} does not exist; the {kind}s are {names}")
             out.append(int(s) % len(names))
         else:
-            raise DataError(f"{kind} {s!r} does not exist; the {kind}s are {names}")
+            whole = isinstance(s, (float, np.floating)) and float(s).is_integer()
+            raise DataError(
+                f"{kind} {s!r} is not a channel: select {kind}s by integer index, name, "
+                "slice or a list of those" + (f"; use {int(s)}" if whole else ""))
     if len(set(out)) != len(out):
-        raise DataError(f"{kind} selection {list(sel)} repeats a channel")
+        raise DataError(f"{kind} selection {list(items)} repeats a channel")
     return out
 
 
 def select(data: Any, inputs: Any = None, outputs: Any = None) -> Any:
-    """A record with the chosen channels (by name or index; ``None`` keeps all).
+    """A record with the chosen channels (by name, index, slice or a list of them; ``None``
+    keeps all; :func:`channel_index`'s rule).
 
     ``inputs=[]`` drops every input (a time series).
 

@@ -37,45 +37,15 @@ from .._progress import Bar
 from ..data.iodata import IOData
 from ..errors import SysidError
 from ..models.statespace import ss_parameter_count
-from ..validation.crossval import (
-    output_fits,
-    simulation_errors,
+from ..validation.crossval import output_fits, simulation_errors, variation
+from ..validation.ties import (  # the subspace automatic order's rule too
+    RESOLUTION,
     slack,
-    variation,
+    tie,
     wins_every_block,
 )
 
 __all__ = ["Board", "RESOLUTION", "slack", "tie", "bic", "held_out_score", "noise_fitted"]
-
-#: fit points below 100 % that identify does not choose on: a held-out fit of ``100 -
-#: RESOLUTION`` % or more (errors within a thousandth of the output's spread, 60 dB) is as
-#: good as a record resolves, and candidates that reach it are ties, whatever :func:`slack`
-#: (5 % of the best's error, next to nothing on a record with next to no noise) says. On a
-#: noise-free record a model of the true order scoring 99.94-99.98 % lost to ones with a
-#: spurious pole at 1 (a state holding the offset the means left, excited by the initial
-#: state alone; 100.00 %, its pole 1 - 1e-15 or 1 + 1e-15 by round-off), reported in 6 of 16
-#: records as an unstable plant the data insist on. The held-out rules compare within
-#: :func:`tie`, the data insist on an unstable candidate only beyond it, and :func:`bic`
-#: counts smaller errors as this large. Measured records score far below it (the best
-#: held-out fit of ``benches/results/realdata.md`` is 98.6 %), where nothing changes.
-RESOLUTION = 0.1
-
-
-def tie(best: float) -> float:
-    """Fit points identify's held-out rules cannot tell from ``best``: :func:`slack`, and at
-    least down to ``100 - RESOLUTION`` (:data:`RESOLUTION`); 0 for a score that is not
-    finite.
-
-    Examples
-    --------
-    >>> from sysid.identify.board import tie
-    >>> tie(80.0), tie(99.0), round(tie(99.95), 6), round(tie(100.0), 6)
-    (0.5, 0.05, 0.05, 0.1)
-    """
-    if not np.isfinite(best):
-        return 0.0
-    return max(slack(best), best - (100.0 - RESOLUTION))
-
 
 def block_fit(fits: Any) -> float:
     """A block's fit: the mean over its outputs (those that move), ``-inf`` when none does."""

@@ -15,7 +15,10 @@ model's current matrices. Replacing a value those parameters determine (``A, B, 
 :class:`~sysid.models.uncertainty.UncertaintyWarning` saying why: the numbers with a
 standard deviation are never those of the old model mixed with the values of the new one.
 Giving a model without a noise model a ``K`` (its parameters never held one), and replacing
-``noise_cov`` or ``x0`` (which no standard deviation is computed from), keep it.
+``noise_cov`` or ``x0`` (which no standard deviation is computed from), keep it. The
+coefficients of a :class:`~sysid.TransferFunction` (``num, den, iodelay``) and of a
+:class:`~sysid.PolynomialModel` (``a, b, c, d, f, nk``) are :class:`Coefficients` and follow
+the same rule; ``hold`` and ``noise_variance`` keep it.
 
 Examples
 --------
@@ -44,8 +47,10 @@ import numpy as np
 
 from .._checks import as_dt, as_matrix, check_covariance
 from ..errors import DataError, ShapeError
+from .paramtable import ParameterTable
 
-__all__ = ["ContinuousTime", "Matrix", "SampleTime", "drop_uncertainty", "frozen"]
+__all__ = ["Coefficients", "ContinuousTime", "Matrix", "SampleTime", "drop_uncertainty",
+           "frozen"]
 
 
 def frozen(arr: Any) -> np.ndarray | None:
@@ -68,6 +73,8 @@ def drop_uncertainty(obj: Any, what: str) -> None:
     from .uncertainty import UncertaintyWarning
 
     obj.__dict__["uncertainty"] = None
+    if isinstance(obj.__dict__.get("parameters"), ParameterTable):  # its std are the old's
+        obj.__dict__["parameters"] = None
     info = obj.__dict__.get("info")
     if isinstance(info, dict):  # what std=True's "carries no parameter uncertainty" says
         info["uncertainty"] = {
@@ -136,6 +143,44 @@ class Matrix:
         if self.name in _ESTIMATED and old is not None and not same:
             drop_uncertainty(obj, self.name)
         obj.__dict__[self.slot] = arr
+
+
+class Coefficients:
+    """Coefficient arrays a model keeps as given (a transfer function's ``num``, ``den``,
+    ``iodelay``; a polynomial model's ``a``, ``b``, ``c``, ``d``, ``f``, ``nk``), kept in the
+    instance's ``__dict__`` under their own name (pickles and copies as before): replacing
+    one by a different value drops the model's parameter uncertainty
+    (:func:`drop_uncertainty`), the same value keeps it silently."""
+
+    def __set_name__(self, owner: type, name: str) -> None:
+        self.name = name
+
+    def __get__(self, obj: Any, owner: type | None = None) -> Any:
+        if obj is None:
+            return self
+        try:
+            return obj.__dict__[self.name]
+        except KeyError:
+            raise AttributeError(self.name) from None
+
+    def __set__(self, obj: Any, value: Any) -> None:
+        if (obj.__dict__.get("uncertainty") is not None and self.name in obj.__dict__
+                and not _same(obj.__dict__[self.name], value)):
+            drop_uncertainty(obj, self.name)
+        obj.__dict__[self.name] = value
+
+
+def _same(x: Any, y: Any) -> bool:
+    """``x`` and ``y`` hold the same numbers in the same nesting (arrays or lists of them,
+    ragged ones compared entry by entry)."""
+    try:
+        return bool(np.array_equal(np.asarray(x, dtype=float), np.asarray(y, dtype=float)))
+    except (TypeError, ValueError):  # ragged: one array per entry
+        pass
+    if not (isinstance(x, (list, tuple, np.ndarray)) and isinstance(y, (list, tuple, np.ndarray))
+            and len(x) == len(y)):
+        return False
+    return all(_same(a, b) for a, b in zip(x, y))
 
 
 _DISCRETE = object()  # SampleTime(): no continuous-time value, dt must be positive

@@ -44,43 +44,8 @@ def selection_key(key: Any, output_names: list[str], input_names: list[str],
     return sel[0], sel[1]
 
 
-def channels(sel: Any, names: list[str], kind: str) -> list[int]:
-    """Indices of the channels ``sel`` (an index, a name, or a list, tuple, range or integer
-    array of them; ``None`` for all) among ``names``; anything else (a float such as
-    ``0.0``, a boolean or boolean mask, which read as the indices 0 and 1) is refused with
-    what to pass instead.
-
-    Examples
-    --------
-    >>> from sysid.models.subsystem import channels
-    >>> channels([1, "y0"], ["y0", "y1"], "output")
-    [1, 0]
-    >>> channels(0.0, ["y0", "y1"], "output")
-    Traceback (most recent call last):
-    ...
-    sysid.errors.DataError: output 0.0 is not a channel: ... use 0
-    """
-    if sel is None:
-        return channel_index(sel, names, kind)
-    items = sel.tolist() if isinstance(sel, np.ndarray) else sel
-    if isinstance(items, (str, int, np.integer, float, np.floating)) or np.ndim(items) == 0:
-        items = [items]
-    elif not isinstance(items, (list, tuple, range)):
-        raise DataError(f"the {kind} selection {sel!r} is not an index, a name or a list of "
-                        f"them: select {kind}s by integer index, name, slice or a list of "
-                        "those")
-    for s in items:
-        if isinstance(s, (bool, np.bool_)):
-            raise DataError(
-                f"{kind} {s!r} is not a channel: a boolean reads as the index "
-                f"{int(s)}; select {kind}s by integer index or name (a boolean mask: pass "
-                "np.flatnonzero(mask))")
-        if not isinstance(s, (str, int, np.integer)):
-            whole = isinstance(s, (float, np.floating)) and float(s).is_integer()
-            raise DataError(
-                f"{kind} {s!r} is not a channel: select {kind}s by integer index, name, "
-                "slice or a list of those" + (f"; use {int(s)}" if whole else ""))
-    return channel_index(list(items), names, kind)
+#: the channel rule of records, FRDs and models: one function
+channels = channel_index
 
 
 def subsystem(model: Any, outputs: Any = None, inputs: Any = None) -> Any:

@@ -20,7 +20,9 @@ With ``m`` inputs the variance of each entry is estimated as ``sigma^2 = [S_vv]_
 [S_uu^{-1}]_jj / (K - m)`` and the error, normalised by it, follows an F distribution with
 ``(2, 2 (K - m))`` degrees of freedom (Gaussian data): the confidence band at level ``p`` is the
 circle of radius ``sigma sqrt(F^{-1}(p))`` around the estimate, which tends to
-``sigma sqrt(-ln(1 - p))`` for large ``K``. Frequencies are angular, in rad/s.
+``sigma sqrt(-ln(1 - p))`` for large ``K``. At zero frequency and at the Nyquist frequency
+the spectra of real records are real, and so is the error: ``(1, K - m)`` degrees of freedom
+there (:func:`sysid.models.frd.band_quantile`). Frequencies are angular, in rad/s.
 
 Spectra are one-sided densities in units^2/Hz, as ``scipy.signal.welch``. Several
 experiments are averaged (no segment or lag spans two). Frequencies where the input
@@ -33,12 +35,12 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from scipy import ndimage, stats
+from scipy import ndimage
 
-from .._checks import as_between, as_int, as_nonnegative, check_elements
+from .._checks import as_between, as_int, as_nonnegative, check_elements, constant_channels
 from ..data.iodata import IOData
 from ..errors import DataError, ExcitationError, InsufficientDataError
-from ..models.frd import FRD
+from ..models.frd import FRD, band_quantile
 from .correlation import _lag_covariances
 from .spectra import (
     _band,
@@ -93,7 +95,9 @@ def _bias_check(R: np.ndarray, total: int, m: int, M: int) -> bool:
     (G1, sd1, k1), (G2, _, _) = out
     both = np.isfinite(G1) & np.isfinite(G2)
     level = 1.0 - BIAS_CHECK_ALPHA / max(int(both.sum()), 1)
-    radius = sd1 * np.sqrt(stats.f.ppf(level, 2, 2.0 * max(k1 - m, 1.0)))
+    nyquist = np.arange(1, G1.shape[0] + 1) == nfft // 2  # a real line: band_quantile's rule
+    radius = sd1 * np.sqrt(band_quantile(level, 2.0 * max(k1 - m, 1.0),
+                                         nyquist[:, None, None] & (nfft % 2 == 0)))
     return bool(np.all(np.abs(G1 - G2)[both] <= radius[both]))
 
 
@@ -203,14 +207,10 @@ def check_omega(omega: Any, dt: float, positive: bool = False) -> np.ndarray:
 
 
 def _constant_inputs(data: IOData) -> np.ndarray:
-    """Per input, whether it is constant (to ``1e-12`` of its magnitude) in every
-    experiment: it has no power but at zero frequency."""
-    varying = np.zeros(data.n_inputs, dtype=bool)
-    for u, _ in data.experiments:
-        if u.shape[0]:
-            mag = np.max(np.abs(u), axis=0)  # scaled first: 1e300 overflows, 1e-200 underflows
-            varying |= np.std(u / np.where(mag > 0, mag, 1.0), axis=0) > 1e-12
-    return ~varying
+    """Per input, whether it is constant in every experiment (:func:`sysid._checks.
+    constant_channels`, each experiment about its own level): it has no power but at zero
+    frequency."""
+    return constant_channels([u for u, _ in data.experiments], "each")
 
 
 def _need_excitation(keep: np.ndarray, what: str, data: IOData | None = None) -> None:

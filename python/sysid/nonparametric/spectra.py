@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
-from .._checks import as_int, check_elements
+from .._checks import as_int, check_elements, constant_channels
 from ..data.iodata import IOData, require_record
 from ..errors import DataError, ExcitationError, InsufficientDataError, SysidWarning
 
@@ -91,16 +91,17 @@ def _names(data: IOData) -> list[str]:
 
 def _need_varying(data: IOData, who: str, what: str, centred: bool = True) -> None:
     """Refuse channels without variation: constant within every experiment (``centred``:
-    each experiment's mean is removed, leaving zeros), else zero in every sample. A
+    each experiment's mean is removed, leaving zeros; :func:`sysid._checks.
+    constant_channels`), else zero in every sample. A
     coherence or correlation with such a channel is 0 / 0, undefined (it was reported as 0,
     "no relation"). A flat input raises an :class:`ExcitationError` (as the frequency
     responses do), a flat output a :class:`DataError`; both name the channels."""
     names = _names(data)
-    varies = np.zeros(len(names), dtype=bool)
-    for u, y in data.experiments:
-        z = np.hstack([u, y])
-        if z.shape[0]:
-            varies |= np.any(z != (z[:1] if centred else 0.0), axis=0)
+    zs = [np.hstack([u, y]) for u, y in data.experiments]
+    if centred:
+        varies = ~constant_channels(zs, "each")
+    else:
+        varies = np.any([np.any(z != 0.0, axis=0) for z in zs], axis=0)
     if varies.all():
         return
     m = data.n_inputs

@@ -179,14 +179,15 @@ def _differenced(data: Any, integrate_noise: Any) -> IOData:
 def _integrated(m: PolynomialModel) -> PolynomialModel:
     """A model fitted on the differenced record as the model of the record: ``D(q) = 1 -
     q^-1`` on every output (its uncertainty's models get the same ``D``)."""
-    m.d = [np.array([-1.0]) for _ in range(m.noutputs)]
-    if m.uncertainty is not None:
+    unc, m.uncertainty = m.uncertainty, None  # replaced by its own with D below
 
-        def with_d(b: PolynomialModel) -> PolynomialModel:
-            b.d = [np.array([-1.0]) for _ in range(b.noutputs)]
-            return b
+    def with_d(b: PolynomialModel) -> PolynomialModel:
+        b.d = [np.array([-1.0]) for _ in range(b.noutputs)]
+        return b
 
-        m.uncertainty = m.uncertainty.through(with_d)
+    with_d(m)
+    if unc is not None:
+        m.uncertainty = unc.through(with_d)
     m.info = {**m.info, "integrate_noise": True}
     return m
 

@@ -11,9 +11,10 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_dt, as_int, real_array
+from .._checks import as_2d, as_int, real_array
 from .._measured import as_horizon, as_measured, predict_args
 from ..errors import DataError, ShapeError
+from ..models.attributes import Coefficients, SampleTime
 from ..models.protocol import ModelMixin
 
 Poly = np.ndarray
@@ -166,6 +167,16 @@ class PolynomialModel(ModelMixin):
     [0.0, 1.0, 1.5]
     """
 
+    #: replacing one by another drops the uncertainty (``noise_variance`` keeps it: no std
+    #: result reads it); ``dt`` is checked whenever written
+    a = Coefficients()
+    b = Coefficients()
+    c = Coefficients()
+    d = Coefficients()
+    f = Coefficients()
+    nk = Coefficients()
+    dt = SampleTime()
+
     def __init__(
         self,
         a: Any,
@@ -191,7 +202,7 @@ class PolynomialModel(ModelMixin):
         no_f = f is None or (isinstance(f, (list, tuple)) and len(f) == 0)
         self.f = ([[np.zeros(0) for _ in range(nu)] for _ in range(ny)] if no_f
                   else _poly_grid(f, "f", ny, nu))
-        self.dt = as_dt(dt)
+        self.dt = dt
         self.noise_variance = _variances(noise_variance, ny)
         self.uncertainty: Any = None
         self.info: dict[str, Any] = {}

@@ -20,7 +20,7 @@ import numpy as np
 from .._checks import as_2d, as_dt
 from ..errors import DataError, ShapeError
 from ..greybox.delays import shift_taps
-from ..models.attributes import SampleTime
+from ..models.attributes import Coefficients, SampleTime
 from ..models.discretisation import require_finite_sampling
 from ..models.protocol import ModelMixin, TimeResponse, continuous_grid, slowest_decay
 from ..models.statespace import StateSpaceModel
@@ -113,6 +113,11 @@ class TransferFunction(ModelMixin):
     statespace_predicts = True
     #: checked whenever written (0 or None: continuous time); a change drops the uncertainty
     dt = SampleTime(continuous=0.0)
+    #: replacing one by another drops the uncertainty (``hold`` keeps it: no std result
+    #: reads it)
+    num = Coefficients()
+    den = Coefficients()
+    iodelay = Coefficients()
 
     def __init__(self, num: Any, den: Any, *, dt: float = 0.0, iodelay: Any = None,
                  hold: str = "zoh", input_names: Sequence[str] | None = None,

@@ -10,7 +10,8 @@ of every order are fitted on the rest and simulated on the block left out (initi
 fitted by least squares), and the order whose median held-out simulation fit is best wins (the
 median: a record often holds one block unlike the others, which would otherwise decide
 alone); a smaller order within ``tol`` fit points (and 5 % of the best's error) of the best
-is preferred (a smaller model generalises better). Given the estimator on the whole record
+is preferred (a smaller model generalises better), and so is one within :data:`RESOLUTION`
+of 100 %, identify's tie (:func:`tie`). Given the estimator on the whole record
 (``whole=``), an order whose model there is unstable is chosen only when the data insist
 (:func:`stable_first`). Fits are on compressions of the blocks, so a sweep costs about one
 pass over the record per block plus one simulation per order and block.
@@ -49,15 +50,13 @@ import numpy as np
 from .. import _sysid
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError, SysidError
+from .ties import RESOLUTION, TOL, slack, tie, wins_every_block
 
 __all__ = ["OrderChoice", "cross_validated_order", "fold_count", "fold_horizon", "folds",
            "held_out_fit", "held_out_folds", "insists", "output_fits", "prediction_fit",
            "predictor", "record_folds", "simulation_errors", "simulation_fit", "slack",
-           "stable_first", "variation", "wins_every_block"]
+           "stable_first", "tie", "variation", "wins_every_block", "RESOLUTION"]
 
-#: fit points a smaller order may give up and still win (held-out fits of half-record
-#: models scatter by about this much between neighbouring orders)
-TOL = 0.5
 #: largest order tried by the automatic choice
 MAX_ORDER = 20
 #: blocks of a record, each held out once (the rest fits the candidates)
@@ -447,22 +446,6 @@ def output_fits(model: Any, data: IOData, trend: bool = False,
     return np.where(np.isnan(f) & (dev > 0), -np.inf, f)
 
 
-def slack(best: float, tol: float = TOL) -> float:
-    """Fit points the held-out blocks cannot tell from ``best``: ``tol``, at most 5 % of the
-    best's error (noise-free data: round-off only); 0 for a score that is not finite. A
-    simpler candidate may give up this much against the best and still be preferred."""
-    return max(min(tol, 0.05 * (100.0 - best)), 1e-6) if np.isfinite(best) else 0.0
-
-
-def wins_every_block(fits: Any, ref: Any, score: float, ref_score: float) -> bool:
-    """``fits`` (per held-out block) better than ``ref`` on every block, and its ``score``
-    above ``ref_score`` by more than :func:`slack`: the sign test (at ``2**-K``) by which
-    the data insist on an unstable model against the best stable one
-    (:func:`stable_first`, :meth:`sysid.identify.board.Board.insisting`)."""
-    return (len(fits) == len(ref) and all(a > b for a, b in zip(fits, ref))
-            and score > ref_score + slack(score))
-
-
 def insists(better: Any, worse: Any) -> bool:
     """Whether per-block fits ``better`` beat the paired ``worse`` by more than twice the
     standard error of their differences (mean), and in the median: the held-out blocks
@@ -555,9 +538,17 @@ def held_out_folds(pairs: list[tuple[IOData, IOData]], kinds: Sequence[Any],
 
 def choose(table: dict[int, float], tol: float = TOL, what: str = "simulation"
            ) -> tuple[int, str]:
-    """The smallest order within ``min(tol, 5 % of the best's error)`` fit points of the best
-    held-out fit (a smaller model generalises better; on noise-free data only round-off
-    separates the orders from the true one up, and the true one is taken)."""
+    """The smallest order within :func:`tie` of the best held-out fit (``min(tol, 5 % of the
+    best's error)`` fit points, and every fit within :data:`RESOLUTION` of 100 %): a smaller
+    model generalises better, and on noise-free data only round-off separates the orders
+    from the true one up, and the true one is taken.
+
+    Examples
+    --------
+    >>> from sysid.validation.crossval import choose
+    >>> choose({1: 40.0, 2: 99.98, 3: 100.0})[0], choose({1: 40.0, 2: 97.0, 3: 97.3})[0]
+    (2, 3)
+    """
     finite = {n: f for n, f in table.items() if np.isfinite(f)}
     if not finite:
         raise InsufficientDataError(
@@ -567,7 +558,7 @@ def choose(table: dict[int, float], tol: float = TOL, what: str = "simulation"
             f"blocks; pass an order, or use a longer record")
     best_n = max(finite, key=lambda n: finite[n])
     best = finite[best_n]
-    margin = slack(best, tol)
+    margin = tie(best, tol)
     n = min(o for o, f in finite.items() if f >= best - margin)
     why = (f"held-out {what} fit {finite[n]:.1f} % at order {n}"
            + (f" (best {best:.1f} % at order {best_n}; a smaller order within {margin:.2g} "
@@ -711,7 +702,7 @@ def stable_first(score: dict[int, float], folds: dict[int, list[float]], unstabl
     An unstable model that simulates held-out blocks well is scored on what it does over a
     block; on a longer record (the user's validation data, a simulation) its unstable mode
     grows without bound. An unstable order stays a candidate only when it beats the best
-    stable order on *every* held-out block and by more than the slack on the score (a sign
+    stable order on *every* held-out block and by more than :func:`tie` on the score (a sign
     test at ``2**-K``: an integrating or open-loop unstable plant), the rule
     :meth:`sysid.identify.board.Board.insisting` applies to its candidates; with no stable
     order at all, every order is, and the note says so.
