@@ -30,7 +30,8 @@ samples:
 - ``FPE = V (1 + d / N) / (1 - d / N)`` (Akaike's final prediction error).
 
 Constants common to all orders (``N l (log 2 pi + 1)``) are omitted, so values differ from
-MATLAB's by a constant; the minimising order is the same.
+MATLAB's by a constant; the minimising order is the same. :func:`sysid.aic` and
+:func:`sysid.fpe` give MATLAB's numbers under MATLAB's names (``nAIC`` included).
 
 Noise-free data drive ``V`` to round-off, where its value is meaningless and would reward
 fitting rounding noise. ``V`` is therefore regularised: ``Lambda + diag(resolution^2 *
