@@ -34,6 +34,32 @@ def innovation_data(model, N, seed, noise=0.3):
 
 
 # -- fit numbers ---------------------------------------------------------------------
+def test_goodness_of_fit_has_matlabs_order_and_costs():
+    # the MATLAB-name hint sent goodnessOfFit(x, xref) to fit_metrics(y, yhat), reference
+    # first: typed in MATLAB's order it gave 54.15 % where the fit is 67.88 %
+    rng = np.random.default_rng(0)
+    t = np.arange(200) / 10
+    y = np.sin(t)[:, None] + 0.1 * rng.standard_normal((200, 1))
+    yhat = 0.7 * np.sin(t)[:, None]
+    nrmse = sysid.goodness_of_fit(yhat, y)
+    assert 100 * (1 - nrmse) == pytest.approx(sysid.fit_metrics(y, yhat)["fit"])
+    assert 100 * (1 - nrmse[0]) == pytest.approx(67.88, abs=0.01)
+    e, dev = y - yhat, y - y.mean()
+    assert sysid.goodness_of_fit(yhat, y, "nmse") == pytest.approx(nrmse**2)
+    assert sysid.goodness_of_fit(yhat, y, "NMSE")[0] == pytest.approx(
+        np.sum(e**2) / np.sum(dev**2))
+    assert sysid.goodness_of_fit(yhat, y, "MSE")[0] == pytest.approx(np.mean(e**2))
+    two = sysid.goodness_of_fit(np.hstack([yhat, y]), np.hstack([y, y]))  # per channel
+    assert two == pytest.approx([nrmse[0], 0.0])
+    with pytest.raises(sysid.DataError, match="cost must be one of"):
+        sysid.goodness_of_fit(yhat, y, "fit")
+    with pytest.raises(sysid.ShapeError, match="reference second"):
+        sysid.goodness_of_fit(yhat[:10], y)
+    from sysid import _MATLAB
+
+    assert "goodness_of_fit" in _MATLAB["goodnessOfFit"]
+
+
 def test_fit_metrics_definitions():
     rng = np.random.default_rng(0)
     y = rng.standard_normal((100, 2)) + [3.0, -1.0]
