@@ -237,3 +237,41 @@ def test_docs_cv_block_chooses_without_the_validation_data():
     exec(compile(block, "docs/validation.md[cv]", "exec"), ns)
     assert (ns["sel"].order, ns["sel"].picks["validation"]) == (5, 4)
     assert "only reported on" in ns["sel"].reason
+
+
+def test_aic_and_fpe_give_matlabs_numbers():
+    # MATLAB's documented examples: tfest(z1, 2) on 300 samples (4 coefficients and 2
+    # initial states, loss 1.6575) and oe(z2, [1 3 2]) on 400 samples (4 coefficients)
+    m = sysid.StateSpaceModel([[0.5, 0.1], [0.0, 0.3]], [[1.0], [0.5]], [[1.0, 0.0]],
+                              noise_cov=[[1.6575]],
+                              info={"pem": {"n_samples": 300, "x0": ["estimate"]}})
+    assert sysid.aic(m) == pytest.approx(0.5453, abs=1e-4)
+    assert sysid.aic(m, kind="nAIC") == sysid.aic(m)
+    assert sysid.aic(m, kind="AIC") == pytest.approx(1.0150e3, abs=0.5)
+    assert sysid.aic(m, kind="AICc") == pytest.approx(1.0153e3, abs=0.5)
+    assert sysid.aic(m, kind="BIC") == pytest.approx(1.0372e3, abs=0.5)
+    assert sysid.fpe(m) == pytest.approx(1.7252, abs=1e-4)
+    oe = sysid.PolynomialModel([[[]]], [[[1.067]]], [[2]], 0.1,
+                               f=[[[-1.824, 1.195, -0.2307]]], noise_variance=[0.9615])
+    oe.info["n_samples"] = 400
+    assert sysid.fpe(oe) == pytest.approx(0.9809, abs=1e-4)
+    with pytest.raises(sysid.DataError, match="kind must be one of"):
+        sysid.aic(m, kind="hqc")
+    with pytest.raises(sysid.DataError, match="pass the estimation data"):
+        sysid.aic(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]))
+
+
+def test_aic_on_data_is_criteria_with_matlabs_constants():
+    rng = np.random.default_rng(4)
+    m = sysid.StateSpaceModel([[0.9, 0.0], [0.0, 0.5]], [[1.0], [0.5]], [[1.0, 0.0], [0.0, 1.0]])
+    u = rng.standard_normal(300)
+    d = (u, m.simulate(u) + 0.1 * rng.standard_normal((300, 2)))
+    c = sysid.criteria(m, d)
+    const = 300 * 2 * (np.log(2 * np.pi) + 1)
+    assert sysid.aic(m, d) == pytest.approx(c.log_loss + 2 * c.n_params / 300)
+    assert sysid.aic(m, d, "aic") == pytest.approx(c.aic + const)
+    assert sysid.aic(m, d, "aicc") == pytest.approx(c.aicc + const)
+    # MATLAB's BIC constant is N (ny log(2 pi) + 1), as documented
+    assert sysid.aic(m, d, "bic") == pytest.approx(c.bic + 300 * (2 * np.log(2 * np.pi) + 1))
+    assert sysid.fpe(m, d) == pytest.approx(c.fpe)
+    assert sysid.aic(m, d, x0="zero") < sysid.aic(m, d)  # no initial states to charge here

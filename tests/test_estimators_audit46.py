@@ -87,8 +87,13 @@ def test_oe_forecast_band_is_the_noise_std():
     lam = float(m.noise_variance[0])
     uf = np.zeros((3, 1))
     for past in (2000, 20, 3):  # a 3-sample past gave std 0.57 (its own residuals)
-        f = sysid.forecast(m, (u[-past:, None], y[-past:, None]), 3, future_inputs=uf)
+        rec = (u[-past:, None], y[-past:, None])
+        f = sysid.forecast(m, rec, 3, future_inputs=uf, initial_condition="zero")
         np.testing.assert_allclose(f.std[:, 0], np.sqrt(lam), rtol=1e-12)
+        # the fitted start (the default) adds its own uncertainty, gone on a long past
+        g = sysid.forecast(m, rec, 3, future_inputs=uf)
+        assert np.all(g.std[:, 0] >= np.sqrt(lam) * (1 - 1e-12))
+        assert np.allclose(g.std[:, 0], np.sqrt(lam), rtol={2000: 1e-12, 20: 1e-5, 3: 0.05}[past])
 
 
 # -- 3. greyest with hold="foh" reports the physical initial state ---------------------------

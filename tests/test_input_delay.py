@@ -123,3 +123,37 @@ def test_auto_delay_leaves_out_outputs_the_input_does_not_act_on():
     blind = sysid.IOData(u, r.standard_normal((2000, 2)))
     with pytest.warns(sysid.DelayWarning, match="no delay is given to it"):
         assert input_delays(blind, "auto").tolist() == [0]
+
+
+def test_a_known_delay_adds_no_parameters(tmp_path):
+    # the delay line's states were counted as parameters (n4sid(d, 1, input_delay=5): 18
+    # instead of 3) and criteria charged their initial values too (24); MATLAB counts neither
+    d = absorb_delay(TRUE, DELAYS)  # the delayed input's feed-through moved into C
+    assert TRUE.n_parameters == 12 and d.n_parameters == 12
+    sysid.save_model(d, tmp_path / "d.json")
+    assert sysid.load_model(tmp_path / "d.json").n_parameters == 12
+    rng = np.random.default_rng(1)
+    u = rng.standard_normal((300, 1))
+    m0 = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]], K=[[0.3]])
+    y = absorb_delay(m0, [5]).simulate(u) + 0.1 * rng.standard_normal((300, 1))
+    rec = sysid.IOData(u=u, y=y)
+    est = sysid.n4sid(rec, 1, input_delay=5)
+    assert est.nstates == 6 and est.n_parameters == 3
+    assert sysid.criteria(est, rec).n_params == 3 + 1  # one fitted initial state, not six
+    assert sysid.criteria(est, rec, x0="zero").n_params == 3
+    # a polynomial model's nk beyond one sample: no initial states for its delay line
+    p6 = sysid.PolynomialModel([[[-0.8]]], [[[1.0]]], [[6]], 1.0)
+    p1 = sysid.PolynomialModel([[[-0.8]]], [[[1.0]]], [[1]], 1.0)
+    assert sysid.criteria(p6, rec).n_params == sysid.criteria(p1, rec).n_params == 2 + 1
+
+
+def test_identify_bic_does_not_charge_a_known_delay():
+    from sysid.identify.board import bic
+
+    rng = np.random.default_rng(2)
+    u = rng.standard_normal((400, 1))
+    m = absorb_delay(sysid.StateSpaceModel([[0.7]], [[1.0]], [[1.0]]), [4])
+    rec = sysid.IOData(u=u, y=m.simulate(u) + 0.1 * rng.standard_normal((400, 1)))
+    bare = sysid.StateSpaceModel(m.A, m.B, m.C, m.D)  # the same matrices, no delay recorded
+    # four states of (1 + 1) entries and a fitted start each, charged only without the record
+    assert bic(bare, rec) - bic(m, rec) == pytest.approx(4 * 3 * np.log(400))

@@ -70,6 +70,13 @@ def test_noise_through_a_noise_model_and_the_result_object():
     want = 0.3 * np.sqrt(1 + 0.25 / 0.36)
     assert s.std[-1, 0] == pytest.approx(want, rel=0.08)
     assert float(np.std(s.samples[:, -1, 0])) == pytest.approx(want, rel=0.1)
+    # each drawn noise path starts at rest: the std reported follows it from the innovation's
+    # (0.3 at t = 0, where the stationary 0.37 was reported at every sample) to the
+    # stationary one; 1500 draws: a sample std within 2 % (one sigma), 8 % is four sigmas
+    assert s.std[0, 0] == pytest.approx(0.3, rel=0.08) and s.std[0, 0] < s.std[3, 0]
+    spread = (s.samples - s.y).std(axis=0)[:, 0]
+    for t in (0, 1, 2, 5, 199):
+        assert spread[t] == pytest.approx(s.std[t, 0], rel=0.08), t
     df = s.to_pandas()
     assert list(df.columns) == ["t", "y0", "y0 std"] and len(df) == 200
     assert "std mean" in s.summary() and "with noise" in repr(s)

@@ -240,7 +240,7 @@ def residual_figures(res: Any) -> list[dict[str, Any]]:
             f"residual autocorrelation: {on} (Ljung-Box p = {res.ljung_box_pvalue[i]:.3g})",
             "lag [samples]", "correlation",
             [series("autocorrelation", lags, res.autocorr[1:, i, i], BLUE, mode="markers")],
-            [band(level, lags, -res.bound + 0 * lags, res.bound + 0 * lags, GREY)]))
+            [band(level, lags, -res.bounds[1:], res.bounds[1:], GREY)]))
         for j, inn in enumerate(res.input_names):
             x = res.xlags
             figs.append(figure(
@@ -248,7 +248,7 @@ def residual_figures(res: Any) -> list[dict[str, Any]]:
                 f"{res.independence_pvalue[i]:.3g})", "lag [samples] (positive: past inputs)",
                 "correlation",
                 [series("cross-correlation", x, res.crosscorr[:, i, j], BLUE, mode="markers")],
-                [band(level, x, -res.bound + 0 * x, res.bound + 0 * x, GREY)]))
+                [band(level, x, -res.xbounds, res.xbounds, GREY)]))
     return figs
 
 

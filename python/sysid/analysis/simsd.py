@@ -36,8 +36,8 @@ class SimulationSpread(HTMLResult):
     y : ndarray (N, n_outputs)
         The estimate's simulation.
     std : ndarray (N, n_outputs)
-        Standard deviation of the simulated output (``method``; with ``noise``, the noise's
-        variance added).
+        Standard deviation of the simulated output (``method``; with ``noise``, the variance
+        at each sample of the noise path started at rest added, as the samples draw it).
     samples : ndarray (n, N, n_outputs)
         The drawn models' responses (with a noise realisation each when ``noise``).
     method : str
@@ -128,15 +128,16 @@ def _noise_cov(model: Any) -> np.ndarray:
 
 
 def _noise_std(model: Any, L: np.ndarray, n_samples: int) -> np.ndarray:
-    """Standard deviation of the noise path's stationary output (from its impulse response
-    over the record's length), for innovations of covariance ``L L^T``."""
+    """Standard deviation at every sample, ``(n_samples, ny)``, of the noise path started at
+    rest (as :func:`_noise_path` draws it): ``sum_{k <= t} g_k^2`` of its impulse response
+    ``g`` for innovations of covariance ``L L^T``, growing to the stationary value."""
     ny = L.shape[0]
-    var = np.zeros(ny)
+    var = np.zeros((n_samples, ny))
     for j in range(ny):
         e = np.zeros((n_samples, ny))
         e[0] = L[:, j]
         g = _noise_path(model, e)
-        var += np.sum(g * g, axis=0)
+        var += np.cumsum(g * g, axis=0)
     return np.sqrt(var)
 
 
@@ -190,8 +191,11 @@ def simsd(
     x0 : array_like, optional
         Initial state of every simulation (default zero).
     noise : bool
-        Add a realisation of the model's noise to each drawn response, and its stationary
-        variance to ``std`` (MATLAB's ``AddNoise``).
+        Add a realisation of the model's noise to each drawn response, and its variance to
+        ``std`` (MATLAB's ``AddNoise``). The noise model starts at rest, as the simulation
+        does from its zero initial state (MATLAB's ``sim`` default): the variance added is
+        that of the path at each sample, ``lambda`` at the first for an innovation model,
+        growing to the stationary one over the noise model's settling time.
     seed : int or numpy.random.Generator, optional
     dt : float, optional
         Sample time of ``u`` for a continuous-time model (``tfest``, ``procest``, ``greyest``

@@ -36,7 +36,7 @@ from .._parallel import ordered
 from .._progress import Bar
 from ..data.iodata import IOData
 from ..errors import SysidError
-from ..models.statespace import ss_parameter_count
+from ..models.statespace import delay_free_order, ss_parameter_count
 from ..validation.crossval import output_fits, simulation_errors, variation
 from ..validation.ties import (  # the subspace automatic order's rule too
     RESOLUTION,
@@ -130,7 +130,9 @@ def bic(model: Any, data: IOData) -> float:
     could not tell it from order 3, 50 fitted initial values counted as 10). A subspace
     fit's ``K``, on which no simulation error depends, is not counted: the leaderboard
     charged it to every subspace candidate, while the model returned, the same fit without
-    its ``K``, scored without it.
+    its ``K``, scored without it. ``n`` leaves out the states of known input delays the
+    model absorbed (:func:`~sysid.models.statespace.delay_free_order`): a delay is no
+    parameter, nor are its delay line's initial values.
 
     Examples
     --------
@@ -155,8 +157,8 @@ def bic(model: Any, data: IOData) -> float:
     sign, logdet = np.linalg.slogdet(S)
     if sign <= 0 or not np.isfinite(logdet):
         return -np.inf if sign == 0 else np.inf
-    p = ss_parameter_count(model.nstates, model.ninputs, model.noutputs,
-                           feedthrough=bool(np.any(np.asarray(model.D) != 0)),
+    n, feedthrough = delay_free_order(model)  # known input delays' states cost nothing
+    p = ss_parameter_count(n, model.ninputs, model.noutputs, feedthrough=feedthrough,
                            noise_model=noise_fitted(model), x0=True,
                            n_experiments=data.n_experiments)
     return float(N * logdet + p * np.log(N))

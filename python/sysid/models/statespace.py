@@ -24,7 +24,7 @@ from .attributes import Matrix, SampleTime
 from .linear import DampingTable, damping_table, minimal_basis, transmission_zeros
 from .protocol import ModelMixin, TimeResponse, default_length
 
-__all__ = ["StateSpaceModel", "ss_parameter_count"]
+__all__ = ["StateSpaceModel", "delay_free_order", "delay_states", "ss_parameter_count"]
 
 
 def minimal_dcgain(model: Any) -> np.ndarray | None:
@@ -77,6 +77,39 @@ def ss_parameter_count(n: int, m: int, l: int, *, feedthrough: bool = True,
     if x0:
         d += n * n_experiments
     return int(d)
+
+
+def delay_states(model: Any) -> int:
+    """States of the unit-delay chains of known input delays absorbed into a discrete
+    state-space model (``info["input_delay"]``, :func:`sysid.models.input_delay.absorb_delay`):
+    their initial values are past inputs and their entries fixed, no parameters; 0 when none.
+
+    Examples
+    --------
+    >>> import sysid
+    >>> from sysid.models.input_delay import absorb_delay
+    >>> delay_states(absorb_delay(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), [2]))
+    2
+    """
+    k = getattr(model, "info", {}).get("input_delay")
+    if k is None:
+        return 0
+    nd = int(np.sum(np.maximum(np.asarray(k, dtype=int), 0)))
+    return nd if nd <= model.nstates else 0
+
+
+def delay_free_order(model: Any) -> tuple[int, bool]:
+    """``(n, feedthrough)`` of the model without its absorbed input-delay states
+    (:func:`delay_states`): the order, and whether the delay-free model has a non-zero
+    ``D``, that a parameter count charges (absorbing moves a delayed input's feed-through
+    into the column of ``C`` at the end of its delay line)."""
+    nd = delay_states(model)
+    n = int(model.nstates - nd)
+    feedthrough = bool(np.any(np.asarray(model.D) != 0))
+    if nd:
+        ends = n - 1 + np.cumsum([k for k in model.info["input_delay"] if k > 0])
+        feedthrough |= bool(np.any(np.asarray(model.C)[:, ends] != 0))
+    return n, feedthrough
 
 
 class StateSpaceModel(ModelMixin):
@@ -457,9 +490,22 @@ class StateSpaceModel(ModelMixin):
     @property
     def n_parameters(self) -> int:
         """Identifiable parameters: ``n (2 l + m)`` with ``K`` (``n (l + m)`` without) plus
-        ``l m`` when ``D`` is non-zero; see :func:`sysid.n_parameters`."""
-        return ss_parameter_count(self.nstates, self.ninputs, self.noutputs,
-                                  feedthrough=bool(np.any(self.D != 0)),
+        ``l m`` when ``D`` is non-zero; see :func:`sysid.n_parameters`. Known input delays
+        absorbed as states (``info["input_delay"]``, :mod:`sysid.models.input_delay`) add
+        none: ``n`` is the delay-free model's order and its ``D`` says whether there is a
+        feed-through (as MATLAB, which does not count ``InputDelay`` as free parameters).
+
+        Examples
+        --------
+        >>> import sysid
+        >>> from sysid.models.input_delay import absorb_delay
+        >>> m = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]], K=[[0.3]])
+        >>> d = absorb_delay(m, [5])
+        >>> d.nstates, d.n_parameters, m.n_parameters
+        (6, 3, 3)
+        """
+        n, feedthrough = delay_free_order(self)
+        return ss_parameter_count(n, self.ninputs, self.noutputs, feedthrough=feedthrough,
                                   noise_model=self.K is not None)
 
     def _select(self, iy: list[int], iu: list[int]) -> StateSpaceModel:

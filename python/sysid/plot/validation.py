@@ -66,14 +66,15 @@ def plot_compare_set(cset: Any, experiment: int = 0, fig: Any = None) -> Any:
 
 
 def plot_residuals(res: Any, fig: Any = None) -> Any:
-    """Auto-correlations (left) and input cross-correlations (right) with the bound."""
+    """Auto-correlations (left) and input cross-correlations (right) with the band per lag."""
     l, m = len(res.output_names), len(res.input_names)
     ncols = 2 if m else 1
     fig, axes = _fig(fig, l, ncols)
     for i in range(l):
         ax = axes[i, 0]
         ax.vlines(res.lags[1:], 0, res.autocorr[1:, i, i], color="C0")
-        ax.axhspan(-res.bound, res.bound, color="C2", alpha=0.2)
+        ax.fill_between(res.lags[1:], -res.bounds[1:], res.bounds[1:], color="C2", alpha=0.2,
+                        step="mid")
         verdict = "white" if res.whiteness[i] else "NOT white"
         ax.set_title(f"auto-correlation of e({res.output_names[i]}): {verdict} "
                      f"(p = {res.ljung_box_pvalue[i]:.2g})", fontsize=9)
@@ -83,7 +84,8 @@ def plot_residuals(res: Any, fig: Any = None) -> Any:
             for j in range(m):
                 ax.plot(res.xlags, res.crosscorr[:, i, j], marker=".", lw=0.8,
                         label=res.input_names[j])
-            ax.axhspan(-res.bound, res.bound, color="C2", alpha=0.2)
+            ax.fill_between(res.xlags, -res.xbounds, res.xbounds, color="C2", alpha=0.2,
+                            step="mid")
             ax.set_title(f"cross-correlation e({res.output_names[i]}) with u(t - lag)",
                          fontsize=9)
             ax.set_xlabel("lag")

@@ -12,6 +12,15 @@ over the past record to ``xhat(N | N-1)``; the forecast ``j`` steps on is
 which grows from ``Lambda`` toward the covariance of the output. The bands are
 ``mean +- z sqrt(diag Sigma_j)`` for Gaussian innovations; parameter uncertainty is not
 included (it is of order ``1/N`` against the innovations).
+
+The predictor's initial state is estimated by default (MATLAB's ``forecastOptions``
+``InitialCondition = 'e'``): with ``Ap = A - K C``, the one-step errors from rest are
+``e_0(t) = e(t) + C Ap^t x0``, so ``x0`` is their weighted least-squares fit
+(weight ``Lambda^{-1}``), with covariance ``P0 = (sum_t Ap^tT C^T Lambda^{-1} C Ap^t)^{-1}``.
+Its error reaches the state after the record as ``Ap^N (x0_hat - x0)``, which adds
+``C A^j Ap^N P0 Ap^NT A^jT C^T`` to ``Sigma_j`` (vanishing as the record outgrows the
+predictor's memory). ``initial_condition="zero"`` starts from rest, as earlier versions
+did, and its bands leave out the error of that start.
 """
 
 from __future__ import annotations
@@ -163,6 +172,51 @@ def _predictor_states(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray
     return np.vstack([np.zeros((1, n)), np.asarray(nxt)])
 
 
+def _initial_state(Ap: np.ndarray, C: np.ndarray, e0: np.ndarray,
+                   lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(x0, P0)``: the predictor's initial state fitted to the one-step errors ``e0`` of
+    the predictor from rest, ``e0(t) = e(t) + C Ap^t x0``, weighted by ``Lambda^{-1}``, and
+    the covariance of that fit (module docs)."""
+    from .. import _sysid
+
+    N, l = e0.shape
+    n = Ap.shape[0]
+    c = np.ascontiguousarray
+    quiet = np.zeros((N, 0))
+    # C Ap^t e_i for every state direction i: (N, l, n)
+    phi = np.stack([np.asarray(_sysid.simulate(c(Ap), np.zeros((n, 0)), c(C),
+                                               np.zeros((l, 0)), quiet, c(np.eye(n)[i])))
+                    for i in range(n)], axis=2)
+    w = np.linalg.cholesky(np.linalg.inv(lam + 1e-12 * np.trace(lam) / l * np.eye(l)))
+    Phi = np.einsum("ab,kbn->kan", w.T, phi).reshape(N * l, n)
+    rhs = (e0 @ w).reshape(N * l)
+    x0 = np.linalg.lstsq(Phi, rhs, rcond=1e-12)[0]
+    return x0, np.linalg.pinv(Phi.T @ Phi, rcond=1e-12, hermitian=True)
+
+
+def _free_response(Ap: np.ndarray, x0: np.ndarray, count: int) -> np.ndarray:
+    """``Ap^t x0`` for ``t = 0..count-1``, ``(count, n)`` (the Rust core's recursion)."""
+    from .. import _sysid
+
+    n = Ap.shape[0]
+    c = np.ascontiguousarray
+    return np.asarray(_sysid.simulate(c(Ap), np.zeros((n, 0)), np.eye(n), np.zeros((n, 0)),
+                                      np.zeros((count, 0)), c(x0))).reshape(count, n)
+
+
+def _start_spread(A: np.ndarray, C: np.ndarray, S: np.ndarray, h: int) -> np.ndarray:
+    """``C A^j S A^jT C^T`` for ``j = 0..h-1``: a state error of covariance ``S`` after the
+    record, carried over the horizon."""
+    from .. import _sysid
+
+    n, l = A.shape[0], C.shape[0]
+    c = np.ascontiguousarray
+    G = np.stack([np.asarray(_sysid.simulate(c(A), np.zeros((n, 0)), c(C), np.zeros((l, 0)),
+                                             np.zeros((h, 0)), c(np.eye(n)[i])))
+                  for i in range(n)], axis=2)  # (h, l, n): C A^j e_i
+    return np.einsum("kan,nm,kbm->kab", G, S, G)
+
+
 def _propagate(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray, K: np.ndarray,
                lam: np.ndarray, x: np.ndarray, uf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The forecast's mean ``C x(j) + D u(j)`` from the state ``x`` after the record and its
@@ -192,7 +246,7 @@ def _propagate(A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray, K: np
 
 
 def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
-             level: float = 0.95) -> Forecast:
+             level: float = 0.95, initial_condition: str = "estimate") -> Forecast:
     """Forecast ``horizon`` samples beyond a record, with confidence bands
     (MATLAB's ``forecast``).
 
@@ -215,6 +269,10 @@ def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
         Inputs over the forecast, for models with inputs.
     level : float
         Confidence level of the bands (default 0.95).
+    initial_condition : {"estimate", "zero"}
+        The predictor's state at the record's start: fitted to the record (default, as
+        MATLAB's ``forecast``; its uncertainty widens the bands, module docs), or zero (from
+        rest; the bands leave that start's error out).
 
     Returns
     -------
@@ -235,6 +293,9 @@ def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
     array([3., 4., 5.])
     """
     h = as_int(horizon, "horizon", 1)
+    if initial_condition not in ("estimate", "zero"):
+        raise DataError(f"initial_condition must be 'estimate' or 'zero' (MATLAB's 'e' and "
+                        f"'z'), got {initial_condition!r}")
     if not (isinstance(level, (int, float)) and 0 < level < 1):
         raise DataError(f"level must be a number in (0, 1), e.g. 0.95; got {level!r}")
     inner, trend, offsets = _unwrap(model)
@@ -267,11 +328,23 @@ def forecast(model: Any, past: Any, horizon: int, *, future_inputs: Any = None,
         u, y, uf = u - offsets[0], y - offsets[1], uf - offsets[0]
         add = add + scale * offsets[1]
     xs = _predictor_states(A, B, C, D, K, u, y)
-    x = xs[-1]
     e = y - xs[:-1] @ C.T - u @ D.T
+    given = lam
     if lam is None:  # no stored innovation covariance: the sample one of the past
         lam = np.atleast_2d(e.T @ e / max(y.shape[0], 1))
-    mean, cov = _propagate(A, B, C, D, K, lam, x, uf)
+    spread = None
+    if initial_condition == "estimate" and A.shape[0]:
+        Ap = A - K @ C
+        x0, P0 = _initial_state(Ap, C, e, lam)
+        xs = xs + _free_response(Ap, x0, xs.shape[0])  # Ap^t x0 added to the run from rest
+        e = y - xs[:-1] @ C.T - u @ D.T
+        carry = np.linalg.matrix_power(Ap, y.shape[0])  # x0's reach to the record's end
+        if given is None:
+            lam = np.atleast_2d(e.T @ e / max(y.shape[0], 1))
+        spread = _start_spread(A, C, carry @ P0 @ carry.T, h)
+    mean, cov = _propagate(A, B, C, D, K, lam, xs[-1], uf)
+    if spread is not None:
+        cov = cov + spread
     names = list(getattr(model, "output_names", [f"y{i}" for i in range(l)]))
     return Forecast(tf, mean * scale + add, cov * np.outer(scale, scale)[None], float(level),
                     names, y_raw, t)

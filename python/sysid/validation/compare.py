@@ -413,7 +413,8 @@ def fit_metrics(y: Any, yhat: Any) -> dict[str, np.ndarray]:
     perfect, 0 is no better than the mean, negative is worse), ``vaf = 100 (1 - var(y - yhat)
     / var(y))`` and ``rmse = sqrt(mean((y - yhat)^2))``. Fit and VAF are undefined for a
     constant output channel: it raises a :class:`~sysid.errors.DataError` (as
-    :func:`compare` does).
+    :func:`compare` does). The measurement comes first; MATLAB's ``goodnessOfFit(x, xref)``
+    takes the reference second: :func:`sysid.goodness_of_fit` has its order and costs.
 
     Examples
     --------

@@ -14,7 +14,10 @@ structures; McKelvey 1995, PhD thesis, Linkoping, on fully parameterised forms):
     d = n (2 l + m) + [D]\\, l m + [x_0]\\, n \\cdot n_{exp}
 
 ``K`` contributes ``n l`` only when a noise model is estimated (without it ``d = n (l + m)
-+ [D] l m``), and estimated initial states count ``n`` per experiment. The noise covariance
++ [D] l m``), and estimated initial states count ``n`` per experiment. Known input delays
+add nothing: ``n`` leaves out the unit delays a state-space model absorbed
+(``input_delay=``) or a polynomial model's ``nk`` beyond one sample realises, as MATLAB
+counts no ``InputDelay``. The noise covariance
 ``l (l + 1) / 2`` is the same for every order and is left out (it cancels in comparisons).
 
 Criteria (Ljung 1999, Sec. 16.4), with ``V = det(Lambda)``, ``Lambda = (1/N) sum e e^T`` the
@@ -27,7 +30,8 @@ samples:
 - ``FPE = V (1 + d / N) / (1 - d / N)`` (Akaike's final prediction error).
 
 Constants common to all orders (``N l (log 2 pi + 1)``) are omitted, so values differ from
-MATLAB's by a constant; the minimising order is the same.
+MATLAB's by a constant; the minimising order is the same. :func:`sysid.aic` and
+:func:`sysid.fpe` give MATLAB's numbers under MATLAB's names (``nAIC`` included).
 
 Noise-free data drive ``V`` to round-off, where its value is meaningless and would reward
 fitting rounding noise. ``V`` is therefore regularised: ``Lambda + diag(resolution^2 *
@@ -134,8 +138,10 @@ def criteria(model: Any, data: Any, *, x0: Any = "estimate",
         Initial predictor state; an estimated one counts ``n`` parameters per experiment,
         ``n`` the states of the model whose state is fitted (as :func:`sysid.compare` does:
         a state-space model's own, a polynomial or transfer-function model's through its
-        state-space form, hold and delay states included); models without one start from
-        rest and count none.
+        state-space form, hold states included) less the delay lines of known input delays
+        (a state-space model's absorbed ``input_delay``, a polynomial model's ``nk`` beyond
+        one sample: their start is the unrecorded past input); models without one start
+        from rest and count none.
     n_params : int, optional
         Override the parameter count (default ``model.n_parameters``, for a state-space
         model :func:`n_parameters` from its shape, its ``D`` and ``K``); a count of at
@@ -189,8 +195,29 @@ def _criteria(model: Any, data: Any, x0: Any, n_params: int | None,
     if n_params is None:
         n_params = int(given.n_parameters)
         if _has_state(runner) and isinstance(x0, str) and x0 == "estimate":
-            n_params += runner.nstates * len(recs)  # the fitted initial states
+            n_params += _x0_states(given, runner) * len(recs)  # the fitted initial states
     return Criteria(logdet, n_params, N)
+
+
+def _x0_states(model: Any, runner: Any) -> int:
+    """The initial states an estimated ``x0`` counts: those of the state-space form
+    ``runner`` less the unit delays of known input delays (their start is the unrecorded
+    past input, not a parameter of the model: a state-space model's absorbed
+    ``input_delay``, a polynomial model's ``nk`` beyond one sample)."""
+    from ..models.statespace import delay_states
+
+    n = int(runner.nstates)
+    if runner is model or isinstance(runner, StateSpaceModel) and "input_delay" in getattr(
+            runner, "info", {}):
+        return n - delay_states(runner)
+    nk = getattr(model, "nk", None)
+    if isinstance(nk, np.ndarray) and np.any(nk > 1) and hasattr(model, "to_dict"):
+        try:  # the same model with at most one sample of delay: its realisation's order
+            free = type(model).from_dict({**model.to_dict(), "nk": np.minimum(nk, 1)})
+            return min(n, int(free.to_statespace().nstates))
+        except SysidError:
+            return n
+    return n
 
 
 # -- order selection ----------------------------------------------------------------------

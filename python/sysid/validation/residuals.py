@@ -38,6 +38,18 @@ def _xcorr_sums(a: np.ndarray, b: np.ndarray, lags: np.ndarray) -> np.ndarray:
     return out
 
 
+def _pooled_centred(x: list[np.ndarray]) -> list[np.ndarray]:
+    """The experiments less their pooled mean (one mean over all samples)."""
+    mean = sum(a.sum(0) for a in x) / max(sum(a.shape[0] for a in x), 1)
+    return [a - mean for a in x]
+
+
+def _lag_products(lengths: list[int], lags: np.ndarray) -> np.ndarray:
+    """``N_tau = sum_k max(N_k - |tau|, 0)``: products at each lag within the experiments."""
+    n = np.asarray(lengths, float)
+    return np.maximum(n[None, :] - np.abs(lags)[:, None], 0.0).sum(1)
+
+
 def _largest_testable_lag(lengths: list[int], m: int, below: int) -> int:
     """The largest ``M < below`` for which experiments of ``lengths`` samples leave at least
     ``_MIN_RESIDUAL_DOF`` rows beyond the ``m (M + 1)`` regressors; 0 if none."""
@@ -80,7 +92,10 @@ class ResidualAnalysis(HTMLResult):
     lags : ndarray
         ``0 .. max_lag`` for :attr:`autocorr`.
     autocorr : ndarray
-        ``(max_lag + 1, l, l)`` normalised correlations ``r_ij(tau) = E[e_i(t) e_j(t - tau)]``.
+        ``(max_lag + 1, l, l)`` normalised correlations ``r_ij(tau) = E[e_i(t) e_j(t - tau)]``:
+        the lag products within each experiment, summed over the experiments and divided by
+        the pooled ``N`` (and the lag-0 scales), after removing the pooled mean (MATLAB's
+        ``resid`` joins experiments' correlations this way).
     xlags : ndarray
         ``-max_lag .. max_lag`` for :attr:`crosscorr`.
     crosscorr : ndarray
@@ -88,10 +103,15 @@ class ResidualAnalysis(HTMLResult):
         past inputs (missing dynamics), negative ones at future inputs (feedback).
     bound : float
         ``z_{1 - alpha/2} / sqrt(N)``: the band a white, input-independent residual stays in
-        with probability ``1 - alpha`` at each lag.
+        with probability ``1 - alpha`` at each lag of one experiment.
+    bounds, xbounds : ndarray
+        The band per lag of :attr:`lags` and :attr:`xlags`: :attr:`bound` times
+        ``sqrt(N_tau / (N - |tau|))``, with ``N_tau = sum_k max(N_k - |tau|, 0)`` the lag
+        products the experiments hold (``N - n_exp |tau|`` for equal lengths, not the
+        ``N - |tau|`` of one record); equal to :attr:`bound` for one experiment.
     ljung_box, ljung_box_pvalue : ndarray
-        Portmanteau statistic ``Q = N (N + 2) sum_{tau=1}^{M} r_ii(tau)^2 / (N - tau)`` per
-        output and its p-value under ``chi2(M)``.
+        Portmanteau statistic ``Q = N (N + 2) sum_{tau=1}^{M} r_ii(tau)^2 / N_tau`` per
+        output (``N_tau = N - tau`` for one experiment) and its p-value under ``chi2(M)``.
     whiteness : ndarray of bool
         ``p >= alpha`` per output: whiteness is not rejected.
     independence_stat, independence_pvalue : ndarray
@@ -118,12 +138,14 @@ class ResidualAnalysis(HTMLResult):
         self.model, self.e, self.max_lag, self.alpha = model, e, max_lag, alpha
         self.output_names, self.input_names = list(model.output_names), list(model.input_names)
         M = max_lag
-        ec = [x - x.mean(0) for x in e]
-        uc = [x - x.mean(0) for x in u]
+        # one mean over all experiments: a mean per experiment biases every lag by about
+        # -1 / N_k, which the Ljung-Box sum of squares turns into rejections of a true model
+        ec, uc = _pooled_centred(e), _pooled_centred(u)
         N = sum(x.shape[0] for x in e)
         self.n_samples = N
         self.lags = np.arange(M + 1)
         self.xlags = np.arange(-M, M + 1)
+        counts = _lag_products([x.shape[0] for x in e], self.xlags)  # N_tau per xlag
         ree = sum(_xcorr_sums(x, x, self.lags) for x in ec) / N
         se = np.sqrt(np.maximum(np.diag(ree[0]), 1e-300))
         self.autocorr = ree / np.outer(se, se)[None]
@@ -138,8 +160,13 @@ class ResidualAnalysis(HTMLResult):
 
         z = scipy.stats.norm.ppf(1 - alpha / 2)
         self.bound = float(z / np.sqrt(N))
+        # a white residual's r(tau) has variance N_tau / N^2: the one-record band scaled by
+        # the share of lag products the experiments' breaks leave
+        self.xbounds = self.bound * np.sqrt(counts / np.maximum(N - np.abs(self.xlags), 1))
+        self.bounds = self.xbounds[M:]
         r = np.array([self.autocorr[1:, i, i] for i in range(len(se))])  # (l, M)
-        self.ljung_box = N * (N + 2) * np.sum(r**2 / (N - self.lags[1:]), axis=1)
+        n_tau = np.maximum(counts[M + 1:], 1)
+        self.ljung_box = N * (N + 2) * np.sum(r**2 / n_tau, axis=1)
         self.ljung_box_pvalue = scipy.stats.chi2.sf(self.ljung_box, M)
         self.whiteness = self.ljung_box_pvalue >= alpha
         self.independence_stat = np.full(len(se), np.nan)
@@ -247,7 +274,8 @@ def residuals(model: Any, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
     """Whiteness and independence tests of the one-step prediction errors.
 
     A model that captures the dynamics and the noise leaves innovations that are white and
-    uncorrelated with past inputs. Means are removed before correlating.
+    uncorrelated with past inputs. The mean over all experiments is removed before
+    correlating; lags run within experiments, never across their joins.
 
     Parameters
     ----------
