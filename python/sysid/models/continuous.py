@@ -49,6 +49,7 @@ import scipy.linalg
 from .._checks import as_2d, as_dt
 from ..errors import DataError, NumericalError, SysidWarning
 from .attributes import ContinuousTime, Matrix
+from .carried import carry
 from .discretisation import expm, hold_blocks, require_finite_sampling
 from .linear import transmission_zeros
 from .matched import matched_c2d, matched_d2c
@@ -519,8 +520,9 @@ def _warp(prewarp: Any, dt: float, method: str, direction: str) -> float:
 
 
 def _convertible(sys: Any, kind: type, purpose: str) -> Any:
-    """``sys`` as a ``kind`` (a transfer function through its ``to_statespace()``), or a
-    :class:`DataError` saying which conversion applies instead."""
+    """``sys`` as a ``kind`` (a transfer function or polynomial model through its
+    ``to_statespace()``, which carries its parameter uncertainty), or a :class:`DataError`
+    saying which conversion applies instead."""
     if isinstance(sys, kind):
         return sys
     want = "continuous" if kind is ContinuousStateSpace else "discrete"
@@ -597,10 +599,7 @@ def c2d(sys: ContinuousStateSpace, dt: float, method: str = "zoh", *,
         info={"method": f"c2d ({method})" if warp == dt
               else f"c2d ({method}, prewarp {float(prewarp):g} rad/s)"},
     )
-    unc = getattr(sys, "uncertainty", None)
-    if unc is not None:  # the same parameters, seen through the conversion (as d2c)
-        out.uncertainty = unc.through(lambda m: c2d(m, dt, method, prewarp=prewarp))
-    return out
+    return carry(sys, out, lambda m: c2d(m, dt, method, prewarp=prewarp))
 
 
 def _real_log(M: np.ndarray, p: np.ndarray, method: str) -> np.ndarray:
@@ -670,17 +669,8 @@ def d2c(model: StateSpaceModel, method: str = "zoh", *,
     if delayed is not None and float(getattr(model, "dt", 0.0) or 0.0) > 0 and np.any(
             np.asarray(getattr(model, "iodelay", 0.0)) > 0):
         out = delayed(_method(method, _D2C_METHODS), prewarp)
-        unc = getattr(model, "uncertainty", None)
-        if unc is not None:  # the same parameters, seen through the conversion
-            out.uncertainty = unc.through(lambda m: _without_uncertainty(m)
-                                          ._continuous_with_delays(method, prewarp))
-        return out
+        return carry(model, out, lambda m: m._continuous_with_delays(method, prewarp))
     return _d2c(model, method, prewarp, quiet=False)
-
-
-def _without_uncertainty(m: Any) -> Any:
-    m.uncertainty = None
-    return m
 
 
 def _d2c(model: StateSpaceModel, method: str, prewarp: float | None, quiet: bool
@@ -726,10 +716,7 @@ def _d2c(model: StateSpaceModel, method: str, prewarp: float | None, quiet: bool
         Ac, Bc, Cc, Dc, input_names=model.input_names, output_names=model.output_names,
         hold="foh" if method == "foh" else "zoh",
     )
-    unc = getattr(model, "uncertainty", None)
-    if unc is not None:  # the same parameters, seen through the conversion
-        out.uncertainty = unc.through(lambda m: _d2c(m, method, prewarp, quiet=True))
-    return out
+    return carry(model, out, lambda m: _d2c(m, method, prewarp, quiet=True))
 
 
 def d2d(model: StateSpaceModel, dt: float, method: str = "zoh", *,
@@ -792,7 +779,4 @@ def d2d(model: StateSpaceModel, dt: float, method: str = "zoh", *,
         out = c2d(ct, new, "tustin" if method == "bilinear" else method, prewarp=prewarp)
         out.input_names, out.output_names = model.input_names, model.output_names
         out.info = {"method": f"d2d ({method}, through the continuous equivalent)"}
-    unc = getattr(model, "uncertainty", None)
-    if unc is not None:  # the same parameters, seen through the resampling
-        out.uncertainty = unc.through(lambda m: d2d(m, new, method, prewarp=prewarp))
-    return out
+    return carry(model, out, lambda m: d2d(m, new, method, prewarp=prewarp))

@@ -210,9 +210,16 @@ class ParameterUncertainty(HTMLResult):
         0.5
         """
         build = self.build
-        return ParameterUncertainty(self.theta, self.covariance, lambda t: fn(build(t)),
-                                    names=self.names, dof=self.dof, method=self.method,
-                                    undetermined=self.undetermined)
+        self.covariance  # noqa: B018 - a deferred covariance (pem's sandwich) formed first
+        # the covariance was checked, and its eigenpairs (when computed) hold: reused, so
+        # that a conversion on every call (a polynomial model's response through its
+        # state-space form) costs no factorisation; only the draws change
+        new = object.__new__(ParameterUncertainty)
+        new.__dict__.update(self.__dict__)
+        new.__dict__.pop("_pending", None)
+        new.build = lambda t: fn(build(t))
+        new._cache = None
+        return new
 
     def __reduce__(self) -> Any:
         """Pickling: an estimator's ``build`` is often a closure, which cannot be pickled;

@@ -577,7 +577,8 @@ class PolynomialModel(ModelMixin):
         noise block per output; an output-error model has no ``K``. A time series is its
         noise model (``B``, ``D`` empty); a coupled MIMO ARX model (matrix ``A``) is realised
         whole. The simulation and the predictions are this model's
-        (:mod:`sysid.polynomial.statespace_form`).
+        (:mod:`sysid.polynomial.statespace_form`), and so is the parameter uncertainty: the
+        same parameters seen through the realisation (:mod:`sysid.models.carried`).
 
         Examples
         --------
@@ -586,9 +587,10 @@ class PolynomialModel(ModelMixin):
         >>> ss.poles().real, ss.K.shape, ss.B.shape
         (array([0.5]), (1, 1), (1, 0))
         """
+        from ..models.carried import carry
         from .statespace_form import realize
 
-        return realize(self)
+        return carry(self, realize(self), realize)
 
     def __repr__(self) -> str:
         """The equations with the model's channel names (``y0``, ``u0`` or the data's); the

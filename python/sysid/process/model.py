@@ -126,10 +126,14 @@ class ProcessModel(TransferFunction):
                             output_names=names(self.output_names, iy), info=self.info)
 
     def to_tf(self) -> TransferFunction:
-        """The same model as a plain :class:`~sysid.TransferFunction`."""
-        return TransferFunction(self.num, self.den, iodelay=self.iodelay, hold=self.hold,
-                                input_names=self.input_names, output_names=self.output_names,
-                                info=self.info)
+        """The same model as a plain :class:`~sysid.TransferFunction`, its parameter
+        uncertainty carried (:mod:`sysid.models.carried`)."""
+        from ..models.carried import carry
+
+        return carry(self, TransferFunction(
+            self.num, self.den, iodelay=self.iodelay, hold=self.hold,
+            input_names=self.input_names, output_names=self.output_names, info=self.info),
+            ProcessModel.to_tf)
 
     def to_dict(self) -> dict[str, Any]:
         """Type, parameter values, names and info (see :func:`sysid.save_model`)."""

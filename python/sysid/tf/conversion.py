@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DataError
+from ..models.carried import carry
 from .model import TransferFunction, statespace_polynomials
 
 __all__ = ["ss2tf"]
@@ -74,14 +75,4 @@ def ss2tf(model: Any) -> TransferFunction:
                          output_names=ss.output_names,
                          info={"method": "ss2tf", "from": dict(getattr(ss, "info", {}) or {})
                                .get("method", type(model).__name__)})
-    unc = getattr(model, "uncertainty", None) or getattr(ss, "uncertainty", None)
-    if unc is not None:  # the same parameters, seen through the conversion
-        G.uncertainty = unc.through(lambda m: ss2tf(_plain(m)))
-    return G
-
-
-def _plain(m: Any) -> Any:
-    """A built model without its own uncertainty (no recursion through the map)."""
-    if getattr(m, "uncertainty", None) is not None:
-        m.uncertainty = None
-    return m
+    return carry(model if getattr(model, "uncertainty", None) is not None else ss, G, ss2tf)

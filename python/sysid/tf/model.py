@@ -285,7 +285,9 @@ class TransferFunction(ModelMixin):
 
         A continuous model without delays gives a :class:`~sysid.ContinuousStateSpace`; with
         ``dt`` (or a discrete model) a :class:`~sysid.StateSpaceModel` sampled exactly with
-        the model's hold, delays realised as extra states.
+        the model's hold, delays realised as extra states. The parameter uncertainty is
+        carried (the same parameters seen through the realisation,
+        :mod:`sysid.models.carried`).
 
         Examples
         --------
@@ -293,6 +295,12 @@ class TransferFunction(ModelMixin):
         >>> sysid.TransferFunction([1.0], [1.0, 2.0]).to_statespace()
         ContinuousStateSpace(nstates=1, ninputs=1, noutputs=1, stable)
         """
+        from ..models.carried import carry
+
+        return carry(self, self._statespace(dt), lambda m: m.to_statespace(dt))
+
+    def _statespace(self, dt: float | None) -> Any:
+        """:meth:`to_statespace` without the uncertainty."""
         if self.dt > 0:
             return self._discrete_ss()
         if dt is None:
