@@ -84,3 +84,15 @@ def test_resampling_keeps_the_dc_gain_std(record):
 def test_a_model_without_uncertainty_converts_without_one():
     m = sysid.PolynomialModel([[[-0.5]]], [[[1.0]]], [[1]], 1.0)
     assert m.to_statespace().uncertainty is None and sysid.d2c(m).uncertainty is None
+
+
+@pytest.mark.parametrize("convert", [
+    lambda m: sysid.canon(m, "modal"),
+    lambda m: sysid.canon(m, "companion"),
+    sysid.balanced_realization,
+], ids=["modal", "companion", "balanced"])
+def test_a_change_of_state_basis_keeps_every_std(record, convert):
+    # each draw taken to the estimate's new basis (a fixed similarity): poles, responses
+    # and the DC gain have the standard deviations they had
+    for m in (sysid.n4sid(record, 2), sysid.oe(record, 2, 2, 1)):
+        np.testing.assert_allclose(_stds(convert(m)), _stds(m), rtol=1e-6)

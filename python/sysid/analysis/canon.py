@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import DataError, NumericalError
+from ..models.carried import carry_basis
 from ..models.statespace import StateSpaceModel
 
 __all__ = ["canon", "real_modal_basis"]
@@ -100,8 +101,8 @@ def canon(model: Any, form: str = "modal") -> StateSpaceModel:
     StateSpaceModel
         The same input-output and noise map in the new basis; ``info["T"]`` (``x = T
         x_new``), ``info["T_inv"]`` (``x_new = T_inv x``, MATLAB's ``T``) and
-        ``info["canonical_form"]``. A parameter covariance does not follow (it belongs to
-        the estimate's basis).
+        ``info["canonical_form"]``. The parameter uncertainty follows, each draw in the same
+        basis ``T`` (:func:`sysid.models.carried.carry_basis`).
 
     Examples
     --------
@@ -159,9 +160,11 @@ def canon(model: Any, form: str = "modal") -> StateSpaceModel:
     info = {k: v for k, v in dict(m.info).items() if k != "uncertainty"}
     info.update(canonical_form=form, T=T, T_inv=Ti)
     if isinstance(m, ContinuousStateSpace):
-        return ContinuousStateSpace(A, B, m.C @ T, m.D, input_names=m.input_names,
-                                    output_names=m.output_names, hold=m.hold, info=info)
-    return StateSpaceModel(
-        A, B, m.C @ T, m.D, None if m.K is None else Ti @ m.K,
-        dt=m.dt, noise_cov=m.noise_cov, x0=None if m.x0 is None else Ti @ m.x0,
-        input_names=m.input_names, output_names=m.output_names, info=info)
+        out: Any = ContinuousStateSpace(A, B, m.C @ T, m.D, input_names=m.input_names,
+                                        output_names=m.output_names, hold=m.hold, info=info)
+    else:
+        out = StateSpaceModel(
+            A, B, m.C @ T, m.D, None if m.K is None else Ti @ m.K,
+            dt=m.dt, noise_cov=m.noise_cov, x0=None if m.x0 is None else Ti @ m.x0,
+            input_names=m.input_names, output_names=m.output_names, info=info)
+    return carry_basis(m, out, T, Ti)

@@ -267,7 +267,8 @@ def balanced_realization(model: Any) -> Any:
     order of :func:`hankel_singular_values` (``inf`` first). A continuous model
     (:class:`sysid.ContinuousStateSpace`) is balanced with its continuous gramians and stays
     continuous. The stable part must be minimal (use :func:`balanced_truncation` otherwise).
-    A Kalman gain and initial state are transformed with the states.
+    A Kalman gain and initial state are transformed with the states, and so is the parameter
+    uncertainty (each draw in the same basis, :func:`sysid.models.carried.carry_basis`).
 
     ``info`` of the result holds ``hankel_singular_values`` (with the ``inf``),
     ``unstable_states`` and the transformation ``T``, ``T_inv`` (``x_balanced = T_inv x``).
@@ -294,12 +295,15 @@ def balanced_realization(model: Any) -> Any:
     >>> round(float(b.A[0, 0]), 12), b.info["unstable_states"]
     (1.5, 1)
     """
+    from ..models.carried import carry_basis
+
     m = _state_space(model, "balanced_realization")
     if m.dt and not _unstable_poles(m).size:
         out = _reduce(m, None, "balanced")
         out.info["unstable_states"] = 0
-        return out
-    return _truncate_split(m, m.nstates, continuous=not m.dt, realization=True)
+    else:
+        out = _truncate_split(m, m.nstates, continuous=not m.dt, realization=True)
+    return carry_basis(m, out, out.info["T"], out.info["T_inv"])
 
 
 def balanced_truncation(model: Any, order: Any) -> Any:

@@ -24,10 +24,11 @@ Examples
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Callable
 from typing import Any
 
-__all__ = ["carry", "plain"]
+__all__ = ["carry", "carry_basis", "plain"]
 
 
 def plain(m: Any) -> Any:
@@ -63,3 +64,35 @@ def carry(source: Any, derived: Any, convert: Callable[[Any], Any]) -> Any:
         derived.uncertainty = unc.through(lambda m: convert(plain(m)))
     return derived
 
+
+def carry_basis(source: Any, derived: Any, T: Any, T_inv: Any) -> Any:
+    """``derived``, ``source`` in the state basis ``x = T x_new`` (``x_new = T_inv x``; a
+    state-space model), with ``source``'s parameter uncertainty: each draw taken to the same
+    basis (the nominal's ``T``: a fixed similarity, smooth in the parameters, where the
+    canonical basis of each draw would reorder or flip its modes). Returns ``derived``.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> m = sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]])
+    >>> m.uncertainty = sysid.ParameterUncertainty(
+    ...     [0.5], [[1e-4]], lambda t: sysid.StateSpaceModel([[t[0]]], [[1.0]], [[1.0]]))
+    >>> T, Ti = np.array([[2.0]]), np.array([[0.5]])
+    >>> out = carry_basis(m, sysid.StateSpaceModel([[0.5]], [[0.5]], [[2.0]]), T, Ti)
+    >>> out.uncertainty.build(np.array([0.6])).B.tolist(), out.poles(std=True)[1].real
+    ([[0.5]], array([0.01]))
+    """
+    import numpy as np
+
+    T, T_inv = np.asarray(T, dtype=float), np.asarray(T_inv, dtype=float)
+
+    def to_basis(m: Any) -> Any:
+        new = copy.copy(derived)
+        new.uncertainty = None
+        A, B, C = (np.asarray(x, dtype=float) for x in (m.A, m.B, m.C))
+        new.A, new.B, new.C, new.D = T_inv @ A @ T, T_inv @ B, C @ T, np.array(m.D, float)
+        if getattr(derived, "K", None) is not None and getattr(m, "K", None) is not None:
+            new.K = T_inv @ np.asarray(m.K, dtype=float)
+        return new
+
+    return carry(source, derived, to_basis)
