@@ -62,3 +62,26 @@ def test_two_records_oe_and_pem() -> None:
     e, s = np.asarray(err["gauss-newton"]), np.asarray(std["gauss-newton"])
     assert np.sqrt(np.mean(s ** 2)) < 0.7 * np.std(e, ddof=1)
 
+
+
+def test_greyest_simulation_focus() -> None:
+    """``greyest(focus="simulation")`` with an AR(1) output disturbance: the sandwich
+    (before, the Gauss-Newton covariance: a third of the spread)."""
+    def first_order(p, dt=None):  # type: ignore[no-untyped-def]
+        return [[-p.a]], [[p.b]], [[1.0]], [[0.0]]
+
+    u = np.repeat(np.random.default_rng(1).choice([-1.0, 1.0], 31), 10)[:300, None]
+    y0 = sysid.GreyBox(first_order, {"a": 1.0, "b": 2.0}).model(dt=0.1).simulate(u)
+    err: list[float] = []
+    std: list[float] = []
+    for run in range(120):
+        v = _ar(np.random.default_rng(5200 + run), 300, 0.02)[:, None]
+        fit = _quietly(sysid.greyest, sysid.IOData(u, y0 + v, 0.1),
+                       sysid.GreyBox(first_order, {"a": 1.0, "b": 2.0}),
+                       focus="simulation", x0="zero")
+        assert fit.info["covariance"].startswith("sandwich for coloured"), fit.info
+        g, s = fit.model.dcgain(std=True)
+        err.append(float(np.ravel(g)[0]) - 2.0)
+        std.append(float(np.ravel(s)[0]))
+        assert np.isclose(fit.parameters["b"]["std"], np.sqrt(fit.covariance[1, 1]))
+    _check(err, std, "greyest")
