@@ -85,3 +85,24 @@ def test_greyest_simulation_focus() -> None:
         std.append(float(np.ravel(s)[0]))
         assert np.isclose(fit.parameters["b"]["std"], np.sqrt(fit.covariance[1, 1]))
     _check(err, std, "greyest")
+
+
+def test_pem_noise_weighting_two_outputs() -> None:
+    """``pem(focus="simulation", weighting="noise")`` on two outputs with coloured
+    disturbances: the sandwich on the errors weighted by their inverse covariance (before,
+    the Gauss-Newton covariance: 0.4 of the spread)."""
+    plant = sysid.StateSpaceModel([[0.7, 0.0], [0.0, 0.5]], [[1.0, 0.0], [0.5, 1.0]],
+                                  [[1.0, 0.0], [0.0, 1.0]])
+    err: list[float] = []
+    std: list[float] = []
+    for run in range(80):
+        rng = np.random.default_rng(6300 + run)
+        u = rng.standard_normal((300, 2))
+        v = np.column_stack([_ar(rng, 300, 0.1, 0.8), _ar(rng, 300, 0.05, 0.8)])
+        m = _quietly(sysid.pem, sysid.IOData(u, plant.simulate(u) + v), plant,
+                     focus="simulation", weighting="noise")
+        g, s = m.dcgain(std=True)
+        err.append(float(g[1, 0]) - 1.0)
+        std.append(float(s[1, 0]))
+    assert m.info["pem"]["covariance"].startswith("sandwich for coloured")
+    _check(err, std, "pem noise weighting")

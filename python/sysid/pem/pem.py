@@ -662,7 +662,7 @@ def pem(
     out.uncertainty = _uncertainty(
         res["theta"], res["covariance"], build, int(res["rank"]),
         _names(n, model.ninputs, l, bool(feedthrough), estimate_k and K is not None, len(est_x0)))
-    if focus == "simulation" and weighting in ("identity", "output") and out.K is None:
+    if focus == "simulation" and out.K is None:
         from .sandwich import defer_state_space
 
         fixed = [None if isinstance(md, str) and md == "estimate" else x
