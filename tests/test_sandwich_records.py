@@ -63,7 +63,6 @@ def test_two_records_oe_and_pem() -> None:
     assert np.sqrt(np.mean(s ** 2)) < 0.7 * np.std(e, ddof=1)
 
 
-
 def test_greyest_simulation_focus() -> None:
     """``greyest(focus="simulation")`` with an AR(1) output disturbance: the sandwich
     (before, the Gauss-Newton covariance: a third of the spread)."""
@@ -106,3 +105,23 @@ def test_pem_noise_weighting_two_outputs() -> None:
         std.append(float(s[1, 0]))
     assert m.info["pem"]["covariance"].startswith("sandwich for coloured")
     _check(err, std, "pem noise weighting")
+
+
+def test_tfest_estimated_initial_state() -> None:
+    """``tfest(initial_state="estimate")`` with an AR(1) disturbance: the sandwich on the
+    model's parameters, the initial state refitted for each (before: the Gauss-Newton
+    covariance, half the spread)."""
+    G = sysid.TransferFunction([2.0], [1.0, 1.0])
+    u = np.repeat(np.random.default_rng(2).choice([-1.0, 1.0], 61), 10)[:600]
+    y0 = G.simulate(u, dt=0.1)[:, 0]
+    err: list[float] = []
+    std: list[float] = []
+    for run in range(120):
+        v = _ar(np.random.default_rng(7400 + run), 600, 0.03, 0.8)
+        m = _quietly(sysid.tfest, sysid.IOData(u, y0 + v, 0.1), 1, 0, init=G,
+                     initial_state="estimate")
+        g, s = m.dcgain(std=True)
+        err.append(float(np.ravel(g)[0]) - 2.0)
+        std.append(float(np.ravel(s)[0]))
+    assert m.info["covariance"].startswith("sandwich for coloured"), m.info["covariance"]
+    _check(err, std, "tfest initial_state='estimate'")

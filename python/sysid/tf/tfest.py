@@ -316,10 +316,6 @@ def coloured_uncertainty(model: Any, data: Any, sizes: list[int], hold: str,
     times too small (Monte Carlo in ``tests/test_oe_coloured.py``)."""
     from ..pem.sandwich import defer_sandwich, free_response, with_fitted_state
 
-    if initial_state != "zero":
-        model.info["covariance"] = ("gauss-newton, as for white errors (the coloured-error "
-                                    "correction is formed on fits from rest)")
-        return
     records = [(np.asarray(u, float), np.asarray(y, float)) for u, y in data.experiments]
     ys = [y.reshape(len(y), -1) for _, y in records]
 
