@@ -220,6 +220,10 @@ def greyest(
                      weighting == "noise")
     best, starts = fit.best_of_starts(max_iter, float(tol), cb, multistart, rng, "loss")
     est = fit.result(best, starts)
+    if focus == "simulation" and not fit.with_k:  # the errors are the disturbance, coloured
+        from .coloured import coloured_covariance
+
+        coloured_covariance(fit, best, est)
     if periodicity is not None:  # periods="auto" found none: why the time domain
         est.info["periodicity"] = periodicity
     warn_if_capped(est.info, "the greyest search", max_iter)

@@ -662,40 +662,14 @@ def pem(
     out.uncertainty = _uncertainty(
         res["theta"], res["covariance"], build, int(res["rank"]),
         _names(n, model.ninputs, l, bool(feedthrough), estimate_k and K is not None, len(est_x0)))
-    if focus == "simulation" and weighting in ("identity", "output") and out.K is None:
-        _coloured(out, st.record, units.sy if weighting == "output" else None)
+    if focus == "simulation" and out.K is None:
+        from .sandwich import defer_state_space
+
+        fixed = [None if isinstance(md, str) and md == "estimate" else x
+                 for md, x in zip(modes, x0s)]  # the estimated refitted for every draw
+        defer_state_space(out, list(_experiments(st.record).experiments), weighting,
+                          units.sy, fixed)
     return out
-
-
-def _coloured(out: StateSpaceModel, data: Any, scale: np.ndarray | None) -> None:
-    """A simulation-error fit's uncertainty for coloured errors (:mod:`.sandwich`), on one
-    record (in its own units; ``scale``: each output's weight is its inverse);
-    ``info["pem"]["covariance"]`` says which covariance the model carries."""
-    from .sandwich import DeferredSandwich, coloured_error_covariance
-
-    exps = list(_experiments(data).experiments)
-    if len(exps) != 1:
-        out.info["pem"]["covariance"] = ("gauss-newton, as for white errors (the coloured-error "
-                                         "correction is formed on one record)")
-        return
-    u, y = (np.asarray(a, float) for a in exps[0])  # the record in the model's units
-    w = np.ones(y.shape[1]) if scale is None else 1.0 / np.asarray(scale, float)
-    info = out.info["pem"]
-    info["covariance"] = ("gauss-newton until first used, then the sandwich for coloured "
-                          "simulation errors")
-
-    def form() -> tuple[ParameterUncertainty | None, str]:
-        out.uncertainty = base  # the Jacobian is the Gauss-Newton uncertainty's
-        try:
-            return coloured_error_covariance(out, u, y, w)
-        finally:
-            out.uncertainty = deferred
-
-    def then(note: str) -> None:
-        info["covariance"] = note
-    base = out.uncertainty
-    deferred = DeferredSandwich(base, form, then)
-    out.uncertainty = deferred
 
 
 def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,

@@ -41,19 +41,53 @@ from ..models.paramtable import Z95, ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 
 __all__ = ["DeferredSandwich", "DeferredTable", "coloured_error_covariance", "defer_sandwich",
-           "gauss_newton", "sandwich_covariance"]
+           "defer_state_space", "free_response", "gauss_newton", "sandwich_covariance",
+           "with_fitted_state"]
 
 #: the Jacobian over the record holds samples x outputs x directions numbers: beyond this the
 #: correction is not formed (``info["pem"]["covariance"]`` says so)
 MAX_ENTRIES = 10_000_000
 
 
-def error_spectrum(e: np.ndarray, nfft: int, max_order: int = 30) -> tuple[np.ndarray, int]:
+def _ar_fit(series: Sequence[np.ndarray], max_order: int) -> tuple[np.ndarray, float, int]:
+    """An autoregressive model of one process seen on several independent ``series``
+    (their autocorrelations pooled, each series about its own mean): Yule-Walker by
+    Levinson-Durbin, the order by AIC up to ``max_order`` and a tenth of the samples (and
+    below the shortest series). Returns its coefficients, its variance and its order."""
+    es = [np.asarray(e, float) - np.mean(e) for e in series]
+    N = sum(e.size for e in es)
+    top = int(min(max_order, N // 10, min(e.size for e in es) - 1))
+    r = np.zeros(max(top, 0) + 1)
+    for e in es:
+        E = np.fft.rfft(e, 1 << int(np.ceil(np.log2(2 * e.size))))
+        r += np.fft.irfft(E * np.conj(E))[:top + 1]
+    r /= N
+    if r[0] <= 0:
+        return np.zeros(0), 0.0, 0
+    # Levinson-Durbin: the prediction-error variance of every order, AIC over them
+    a, v = np.zeros(0), float(r[0])
+    best = (N * np.log(v), 0, a.copy(), v)
+    for k in range(1, top + 1):
+        kap = (r[k] - (a @ r[k - 1:0:-1] if a.size else 0.0)) / v
+        a = np.r_[a - kap * a[::-1], kap]
+        v *= 1.0 - kap * kap
+        if v <= 0:
+            break
+        aic = N * np.log(v) + 2 * k
+        if aic < best[0]:
+            best = (aic, k, a.copy(), v)
+    _, p, a, v = best
+    return a, v, p
+
+
+def error_spectrum(e: Any, nfft: int, max_order: int = 30) -> tuple[np.ndarray, int]:
     """The spectral density of a series ``e`` on the ``rfft`` grid of ``nfft`` points, from an
     autoregressive model of it (Yule-Walker by Levinson-Durbin, the order by AIC up to
     ``max_order`` and a tenth of the record): a slowly decaying autocorrelation (errors
     through a pole near 1) is caught in full, as a lag window cut short would not. Returns
     the density (its mean over the full grid is the AR model's variance) and the order.
+    ``e`` may be a list of series, independent records of one process (the model is fitted
+    to their pooled autocorrelations).
 
     Examples
     --------
@@ -68,37 +102,75 @@ def error_spectrum(e: np.ndarray, nfft: int, max_order: int = 30) -> tuple[np.nd
     >>> p >= 1, bool(abs(S[0] / 100.0 - 1.0) < 0.3)  # 1 / (1 - 0.9)^2 at zero frequency
     (True, True)
     """
-    e = np.asarray(e, float) - np.mean(e)
-    N = e.size
-    E = np.fft.rfft(e, 1 << int(np.ceil(np.log2(2 * N))))
-    top = int(min(max_order, N // 10))
-    r = np.fft.irfft(E * np.conj(E))[:top + 1] / N
-    if r[0] <= 0:
+    series = list(e) if isinstance(e, (list, tuple)) else [e]
+    a, v, p = _ar_fit(series, max_order)
+    if v <= 0:
         return np.zeros(nfft // 2 + 1), 0
-    # Levinson-Durbin: the prediction-error variance of every order, AIC over them
-    a, v = np.zeros(0), float(r[0])
-    best = (N * np.log(v), 0, a.copy(), v)
-    for k in range(1, top + 1):
-        kap = (r[k] - (a @ r[k - 1:0:-1] if a.size else 0.0)) / v
-        a = np.r_[a - kap * a[::-1], kap]
-        v *= 1.0 - kap * kap
-        if v <= 0:
-            break
-        aic = N * np.log(v) + 2 * k
-        if aic < best[0]:
-            best = (aic, k, a.copy(), v)
-    _, p, a, v = best
     A = np.fft.rfft(np.r_[1.0, -a], nfft)
     return v / np.abs(A) ** 2, p
 
 
-def coloured_error_covariance(model: Any, u: np.ndarray, y: np.ndarray,
-                              weights: np.ndarray) -> tuple[ParameterUncertainty | None, str]:
+def free_response(A: np.ndarray, C: np.ndarray, N: int) -> np.ndarray:
+    """``O[t] = C A^t``, ``(N, l, n)``: the outputs of ``x(t+1) = A x(t), y = C x`` from each
+    unit initial state.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.pem.sandwich import free_response
+    >>> free_response(np.array([[0.5]]), np.array([[2.0]]), 3)[:, 0, 0].tolist()
+    [2.0, 1.0, 0.5]
+    """
+    A, C = np.asarray(A, float), np.asarray(C, float)
+    out = np.empty((N, C.shape[0], A.shape[0]))
+    X = np.eye(A.shape[0])
+    with np.errstate(all="ignore"):  # an unstable draw overflows: caught as not finite
+        for t in range(N):
+            out[t] = C @ X
+            X = A @ X
+    return out
+
+
+def with_fitted_state(y_sim: np.ndarray, y: np.ndarray, O: np.ndarray,
+                      weights: Any = None) -> np.ndarray:
+    """``y_sim + O x0`` with ``x0`` fitted to ``y`` by least squares (``O`` from
+    :func:`free_response`; ``weights`` the criterion's, a vector per output or a matrix
+    applied to the errors): the simulation of a fit that estimated its initial state,
+    as a function of the model alone. Its Jacobian is the one of the model's parameters
+    with the initial state profiled out, so the sandwich formed on it holds for the
+    model's parameters whatever the (nuisance) initial state's estimate."""
+    y_sim, y = np.asarray(y_sim, float), np.asarray(y, float)
+    N, l, n = O.shape
+    if n == 0:
+        return y_sim
+    T = _weight_matrix(weights, l)
+    M = np.einsum("kj,tjn->tkn", T, O).reshape(N * l, n)
+    r = ((y - y_sim) @ T.T).ravel()
+    with np.errstate(all="ignore"):
+        x0 = np.linalg.lstsq(M, r, rcond=None)[0] if np.all(np.isfinite(M)) else \
+            np.full(n, np.nan)
+    return y_sim + O @ x0
+
+
+def _weight_matrix(weights: Any, l: int) -> np.ndarray:
+    """The criterion's weighting as a matrix ``T`` applied to the errors (``e -> T e``):
+    ``None`` the identity, a vector per output its diagonal, a matrix itself."""
+    if weights is None:
+        return np.eye(l)
+    w = np.asarray(weights, float)
+    return np.diag(w) if w.ndim == 1 else w
+
+
+def coloured_error_covariance(model: Any, records: Sequence[tuple[np.ndarray, np.ndarray]],
+                              weights: Any, x0s: Sequence[Any] | None = None
+                              ) -> tuple[ParameterUncertainty | None, str]:
     """The sandwich covariance of a state-space simulation-error fit of ``model`` (its
-    Gauss-Newton :class:`ParameterUncertainty`) on one record ``(u, y)`` whose outputs'
-    errors weighed ``weights`` (per output) in its criterion; and a sentence for
-    ``info["pem"]``. ``None`` when the correction is not formed (the record too long, the
-    errors not finite). The simulation starts from the model's ``x0`` (zero without one).
+    Gauss-Newton :class:`ParameterUncertainty`) on the records ``(u, y)`` whose errors
+    weighed ``weights`` (per output, or a matrix applied to them) in its criterion; and a
+    sentence for ``info["pem"]``. ``None`` when the correction is not formed (the records
+    too long, the errors not finite). ``x0s``: per record, the initial state the simulation
+    starts from, or ``None`` where the fit estimated it (fitted again for every model,
+    :func:`with_fitted_state`); default the model's ``x0`` (zero without one).
 
     Examples
     --------
@@ -116,23 +188,37 @@ def coloured_error_covariance(model: Any, u: np.ndarray, y: np.ndarray,
     >>> m.info["pem"]["covariance"].startswith("sandwich for coloured simulation errors")
     True
     """
-    x0 = getattr(model, "x0", None)
-    x0 = np.zeros(model.nstates) if x0 is None else np.asarray(x0, float)
+    records = [(np.asarray(u, float), np.asarray(y, float)) for u, y in records]
+    if x0s is None:
+        x0 = getattr(model, "x0", None)
+        x0s = [np.zeros(model.nstates) if x0 is None else np.asarray(x0, float)] * len(records)
 
-    def sim(m: Any) -> np.ndarray:
-        return np.asarray(m.simulate(u, x0=x0), float)
+    def sim(m: Any) -> list[np.ndarray]:
+        out = []
+        for (u, y), x0 in zip(records, x0s):
+            if x0 is not None:
+                out.append(np.asarray(m.simulate(u, x0=x0), float))
+            else:
+                O = free_response(m.A, m.C, u.shape[0])
+                out.append(with_fitted_state(m.simulate(u), y, O, weights))
+        return out
 
-    return sandwich_covariance(model.uncertainty, sim, y, weights)
+    return sandwich_covariance(model.uncertainty, sim, [y for _, y in records], weights)
 
 
-def sandwich_covariance(unc: ParameterUncertainty, sim: Callable[[Any], np.ndarray],
-                        y: np.ndarray, weights: Any = None,
+def sandwich_covariance(unc: ParameterUncertainty, sim: Callable[[Any], Any],
+                        y: Any, weights: Any = None,
                         blocks: Sequence[tuple[Sequence[int], Sequence[int]]] | None = None,
                         ) -> tuple[ParameterUncertainty | None, str]:
-    """The sandwich covariance of any simulation-error fit on one record: ``unc`` its
-    Gauss-Newton uncertainty, ``sim(model)`` the simulated outputs ``(N, l)`` exactly as the
-    fit's errors ``y - sim(model)`` were formed (its initial conditions included), ``weights``
-    the outputs' weights in the criterion (default 1). ``blocks`` lists ``(parameters,
+    """The sandwich covariance of any simulation-error fit: ``unc`` its Gauss-Newton
+    uncertainty, ``y`` the record's outputs ``(N, l)`` or a list of independent records',
+    ``sim(model)`` the simulated outputs (an array, or a list of one per record) exactly as
+    the fit's errors ``y - sim(model)`` were formed (its initial conditions included; an
+    estimated initial state fitted again, :func:`with_fitted_state`), ``weights`` the
+    outputs' weights in the criterion (default 1; a matrix ``T`` weighs the errors ``T e``,
+    its rows' sum of squares the criterion). The records' terms of the "meat" add (they are
+    independent); one autoregressive model per output serves them all (their
+    autocorrelations pooled). ``blocks`` lists ``(parameters,
     outputs)`` index pairs fitted separately (a polynomial or transfer-function model's one
     search per output, each with its own noise variance): each block's correction is formed
     on its own outputs' errors, and between blocks (zero for separate searches) and outside
@@ -157,11 +243,21 @@ def sandwich_covariance(unc: ParameterUncertainty, sim: Callable[[Any], np.ndarr
     >>> bool(np.allclose(unc.covariance, m.uncertainty.covariance))   # what oe carries
     True
     """
-    y = np.asarray(y, float)
-    l = y.shape[1]
-    w_out = np.ones(l) if weights is None else np.asarray(weights, float)
+    several = isinstance(y, (list, tuple))
+    ys = [np.asarray(r, float) for r in (y if several else [y])]
+    ys = [r[:, None] if r.ndim == 1 else r for r in ys]
+    lens = [r.shape[0] for r in ys]
+    l = ys[0].shape[1]
+
+    def records(m: Any) -> np.ndarray:  # every record's simulation, stacked
+        out = sim(m)
+        parts = list(out) if several else [out]
+        return np.concatenate([np.asarray(p, float).reshape(n, -1) for p, n in zip(parts, lens)])
+
+    stacked = np.concatenate(ys)
     if blocks is None:
-        return _block(unc, sim, y, w_out)[:2]
+        return _block(unc, records, stacked, lens, weights)[:2]
+    w_out = np.ones(l) if weights is None else np.asarray(weights, float)
     P = np.array(unc.covariance, float)
     orders: list[int] = []
     ratios: list[float] = []
@@ -172,9 +268,9 @@ def sandwich_covariance(unc: ParameterUncertainty, sim: Callable[[Any], np.ndarr
         sub = _sub_uncertainty(unc, ix)
 
         def sim_block(m: Any, ox: np.ndarray = ox) -> np.ndarray:
-            return np.asarray(sim(m), float)[:, ox]
+            return records(m)[:, ox]
 
-        got, note, ords, ratio = _block(sub, sim_block, y[:, ox], w_out[ox])
+        got, note, ords, ratio = _block(sub, sim_block, stacked[:, ox], lens, w_out[ox])
         formed |= got is not None
         res = sub if got is None else got
         P[np.ix_(ix, ix)] = res.covariance
@@ -187,7 +283,8 @@ def sandwich_covariance(unc: ParameterUncertainty, sim: Callable[[Any], np.ndarr
     out = ParameterUncertainty(unc.theta, P, unc.build, names=unc.names, method=_METHOD,
                                undetermined=unc.undetermined)  # its rank from P
     kept = [n for n in notes if not n.startswith("sandwich")]
-    return out, (f"{_NOTE} (their autoregressive order {', '.join(map(str, orders))}; the "
+    return out, (f"{_NOTE}{_on(lens)} (their autoregressive order "
+                 f"{', '.join(map(str, orders))}; the "
                  f"variances {np.mean(ratios):.2g} times the Gauss-Newton ones on average"
                  + ("; gauss-newton for the others: " + "; ".join(kept) if kept else "")
                  + ")")
@@ -195,6 +292,10 @@ def sandwich_covariance(unc: ParameterUncertainty, sim: Callable[[Any], np.ndarr
 
 _METHOD = "gauss-newton with coloured simulation errors (sandwich)"
 _NOTE = "sandwich for coloured simulation errors"
+
+
+def _on(lens: Sequence[int]) -> str:
+    return f" on {len(lens)} records" if len(lens) > 1 else ""
 
 
 def _sub_uncertainty(unc: ParameterUncertainty, ix: np.ndarray) -> ParameterUncertainty:
@@ -211,11 +312,12 @@ def _sub_uncertainty(unc: ParameterUncertainty, ix: np.ndarray) -> ParameterUnce
 
 
 def _block(unc: ParameterUncertainty, sim: Callable[[Any], np.ndarray], y: np.ndarray,
-           weights: np.ndarray) -> tuple[ParameterUncertainty | None, str, list[int], float]:
+           lens: Sequence[int], weights: Any
+           ) -> tuple[ParameterUncertainty | None, str, list[int], float]:
     """:func:`sandwich_covariance` of one block: every parameter of ``unc``, every output
-    of ``y`` (one noise variance: the Gauss-Newton covariance in the coordinates ``z`` is
-    ``sigma^2`` times the identity); also the errors' AR orders and the mean variance
-    ratio."""
+    of ``y`` (the records of lengths ``lens`` stacked; one noise variance: the Gauss-Newton
+    covariance in the coordinates ``z`` is ``sigma^2`` times the identity, on the directions
+    the simulation sees); also the errors' AR orders and the mean variance ratio."""
     w, V = unc._eigen()
     N, l = y.shape
     r = w.size
@@ -230,29 +332,40 @@ def _block(unc: ParameterUncertainty, sim: Callable[[Any], np.ndarray], y: np.nd
     if not (np.all(np.isfinite(e)) and np.all(np.isfinite(G))):
         return None, ("gauss-newton, as for white errors: the errors or their Jacobian "
                       "overflow"), [], 1.0
+    T = _weight_matrix(weights, l)
     # a Jacobian finite but beyond squaring overflows here: checked below, not warned
     with np.errstate(over="ignore", invalid="ignore"):
-        J = G.reshape(N, l, r) * np.asarray(weights, float)[None, :, None]
+        J = np.einsum("kj,tjr->tkr", T, G.reshape(N, l, r))
+        E = e @ T.T
         A = np.einsum("tkr,tks->rs", J, J)
-        sigma2 = float(np.median(np.diag(A)))
+        if not np.all(np.isfinite(A)):
+            return None, ("gauss-newton, as for white errors: the coloured-error correction "
+                          "overflows"), [], 1.0
+        ev = np.linalg.eigvalsh(0.5 * (A + A.T))
+        # sigma^2 on every direction the simulation sees (an estimated initial state's, fitted
+        # again in it, it does not)
+        sigma2 = float(np.median(ev[ev > 0.1 * ev.max()])) if ev.max() > 0 else 0.0
         if not sigma2 > 0:
             return None, ("gauss-newton, as for white errors: the fit does not move its "
                           "outputs"), [], 1.0
         delta = np.zeros((r, r))
         orders = []
-        nfft = 1 << int(np.ceil(np.log2(2 * N)))
-        wts = np.full(nfft // 2 + 1, 2.0)  # the rfft grid's weights on the full one
-        wts[0] = 1.0
-        wts[-1] = 1.0
+        cuts = np.concatenate([[0], np.cumsum(lens)]).astype(int)
         for k in range(l):
-            S, p = error_spectrum(e[:, k], nfft)
+            a, v, p = _ar_fit([E[s:t, k] for s, t in zip(cuts[:-1], cuts[1:])], 30)
             orders.append(p)
-            if p == 0:  # white: nothing to correct
+            if p == 0 or v <= 0:  # white: nothing to correct
                 continue
-            F = np.fft.rfft(J[:, k, :], nfft, axis=0)
-            dev = (S - np.sum(wts * S) / nfft) * wts * float(weights[k]) ** 2
-            M = ((np.conj(F) * dev[:, None]).T @ F).real / nfft
-            delta += 0.5 * (M + M.T) / sigma2 ** 2
+            for s, t in zip(cuts[:-1], cuts[1:]):
+                nfft = 1 << int(np.ceil(np.log2(2 * (t - s))))
+                wts = np.full(nfft // 2 + 1, 2.0)  # the rfft grid's weights on the full one
+                wts[0] = 1.0
+                wts[-1] = 1.0
+                S = v / np.abs(np.fft.rfft(np.r_[1.0, -a], nfft)) ** 2
+                F = np.fft.rfft(J[s:t, k, :], nfft, axis=0)
+                dev = (S - np.sum(wts * S) / nfft) * wts
+                M = ((np.conj(F) * dev[:, None]).T @ F).real / nfft
+                delta += 0.5 * (M + M.T) / sigma2 ** 2
         Pz = np.eye(r) + delta
     if not np.all(np.isfinite(Pz)):
         return None, ("gauss-newton, as for white errors: the coloured-error correction "
@@ -265,7 +378,8 @@ def _block(unc: ParameterUncertainty, sim: Callable[[Any], np.ndarray], y: np.nd
     out = ParameterUncertainty(unc.theta, 0.5 * (P + P.T), unc.build, names=unc.names,
                                dof=int(np.sum(ev > 1e-12 * max(float(ev.max()), 1e-300))),
                                method=_METHOD, undetermined=unc.undetermined)
-    return out, (f"{_NOTE} (their autoregressive order {', '.join(map(str, orders))}; the "
+    return out, (f"{_NOTE}{_on(lens)} (their autoregressive order "
+                 f"{', '.join(map(str, orders))}; the "
                  f"variances {ratio:.2g} times the Gauss-Newton ones on average)"), orders, ratio
 
 
@@ -434,3 +548,40 @@ def defer_sandwich(model: Any, sim: Callable[[Any], np.ndarray], y: np.ndarray,
     table = getattr(model, "parameters", None)
     if isinstance(table, ParameterTable):
         model.parameters = DeferredTable(table, model.uncertainty, limits)
+
+
+def defer_state_space(out: Any, records: Sequence[tuple[np.ndarray, np.ndarray]],
+                      weighting: str, scale: np.ndarray, x0s: Sequence[Any]) -> None:
+    """A state-space simulation-error fit's (:func:`sysid.pem`'s) uncertainty for coloured
+    errors: its Gauss-Newton one becoming :func:`coloured_error_covariance`'s when first
+    used, on every record (in its own units) with its initial state (``x0s``: ``None``
+    where estimated). ``weighting`` the criterion's: ``"identity"``, ``"output"`` (each
+    output by ``1 / scale``), ``"noise"`` (the inverse of the errors' covariance, the
+    model's ``noise_cov``). ``info["pem"]["covariance"]`` says which covariance the model
+    carries."""
+    if weighting == "noise":
+        lam = np.atleast_2d(np.asarray(out.noise_cov, float))
+        try:
+            weights: Any = np.linalg.inv(np.linalg.cholesky(lam))
+        except np.linalg.LinAlgError:
+            out.info["pem"]["covariance"] = ("gauss-newton, as for white errors (the errors' "
+                                             "covariance is singular)")
+            return
+    else:
+        weights = 1.0 / np.asarray(scale, float) if weighting == "output" else None
+    info = out.info["pem"]
+    info["covariance"] = ("gauss-newton until first used, then the sandwich for coloured "
+                          "simulation errors")
+
+    def form() -> tuple[ParameterUncertainty | None, str]:
+        out.uncertainty = base  # the Jacobian is the Gauss-Newton uncertainty's
+        try:
+            return coloured_error_covariance(out, records, weights, x0s)
+        finally:
+            out.uncertainty = deferred
+
+    def then(note: str) -> None:
+        info["covariance"] = note
+    base = out.uncertainty
+    deferred = DeferredSandwich(base, form, then)
+    out.uncertainty = deferred

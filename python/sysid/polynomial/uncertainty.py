@@ -88,7 +88,7 @@ def defer_coloured(model: PolynomialModel, experiments: list[tuple[np.ndarray, n
                    ) -> None:
     """An output-error fit's uncertainty for coloured errors: its Gauss-Newton covariance
     becomes the sandwich of :mod:`sysid.pem.sandwich` when first used (per output, on the
-    errors of the simulation from rest that the search minimised), on one record;
+    errors of the simulation from rest that the search minimised), on every record;
     ``info["covariance"]`` says which covariance the model carries (as ``pem``'s
     ``info["pem"]["covariance"]``).
 
@@ -112,18 +112,16 @@ def defer_coloured(model: PolynomialModel, experiments: list[tuple[np.ndarray, n
     base = getattr(model, "uncertainty", None)
     if not isinstance(base, ParameterUncertainty):
         return
-    if len(experiments) != 1:
-        model.info["covariance"] = ("gauss-newton, as for white errors (the coloured-error "
-                                    "correction is formed on one record)")
-        return
-    u, y = (np.asarray(a, float) for a in experiments[0])
+    records = [(np.asarray(u, float), np.asarray(y, float)) for u, y in experiments]
+    ys = [y.reshape(len(y), -1) for _, y in records]
     info = model.info
     info["covariance"] = ("gauss-newton until first used, then the sandwich for coloured "
                           "simulation errors")
     blocks = output_blocks(model)
 
     def form() -> tuple[ParameterUncertainty | None, str]:
-        return sandwich_covariance(base, lambda m: m.simulate(u), y, blocks=blocks)
+        return sandwich_covariance(base, lambda m: [m.simulate(u) for u, _ in records], ys,
+                                   blocks=blocks)
 
     def then(note: str) -> None:
         info["covariance"] = note
