@@ -429,7 +429,10 @@ fn with_prior(
         mid[(i, i)] += FLOOR;
     }
     let (w, gam) = symmetric_eigen(&mid, "initial-state prior (penalty)")?;
-    if gam.iter().any(|&x| x.is_nan() || x <= 0.0 || !x.is_finite()) {
+    if gam
+        .iter()
+        .any(|&x| x.is_nan() || x <= 0.0 || !x.is_finite())
+    {
         return Ok(None);
     }
     let inv = Mat::from_fn(n, n, |i, k| {
