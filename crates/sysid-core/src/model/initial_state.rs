@@ -405,16 +405,7 @@ fn with_prior(
     }
     // on the state scaled to unit free-response norms (x^ = D x), with S = G^^(1/2):
     // Pi^^-1 = S (S P^ S + FLOOR I)^-1 S, whose middle factor has eigenvalues >= FLOOR
-    let d: Vec<f64> = (0..n)
-        .map(|i| {
-            let v = g[(i, i)].max(0.0).sqrt();
-            if v > 0.0 && v.is_finite() {
-                v
-            } else {
-                1.0
-            }
-        })
-        .collect();
+    let d = column_norms(g, n);
     let gs = Mat::from_fn(n, n, |i, k| g[(i, k)] / (d[i] * d[k]));
     let (v, lam) = symmetric_eigen(&gs, "initial-state prior (free responses)")?;
     let root = Mat::from_fn(n, n, |i, k| {
@@ -453,14 +444,10 @@ fn with_prior(
     solve_normal(&g2)
 }
 
-/// The minimum-norm solution of the normal equations' leading block against their last
-/// column, columns scaled to unit norm first (free responses of slow and fast modes differ
-/// by orders of magnitude) and singular values below `1e-12` of the largest dropped; `None`
-/// when the scaled matrix is too ill-conditioned for normal equations (its singular values
-/// spread by more than `1e10`: the regressor's by more than `1e5`).
-fn solve_normal(g: &Mat<f64>) -> Result<Option<Vec<f64>>> {
-    let p = g.ncols() - 1;
-    let scale: Vec<f64> = (0..p)
+/// The norms of the first `count` columns behind the normal equations `g` (the square roots
+/// of its diagonal), 1 for a zero or non-finite one: the column scaling of the solvers.
+fn column_norms(g: &Mat<f64>, count: usize) -> Vec<f64> {
+    (0..count)
         .map(|k| {
             let s = g[(k, k)].max(0.0).sqrt();
             if s > 0.0 && s.is_finite() {
@@ -469,7 +456,17 @@ fn solve_normal(g: &Mat<f64>) -> Result<Option<Vec<f64>>> {
                 1.0
             }
         })
-        .collect();
+        .collect()
+}
+
+/// The minimum-norm solution of the normal equations' leading block against their last
+/// column, columns scaled to unit norm first (free responses of slow and fast modes differ
+/// by orders of magnitude) and singular values below `1e-12` of the largest dropped; `None`
+/// when the scaled matrix is too ill-conditioned for normal equations (its singular values
+/// spread by more than `1e10`: the regressor's by more than `1e5`).
+fn solve_normal(g: &Mat<f64>) -> Result<Option<Vec<f64>>> {
+    let p = g.ncols() - 1;
+    let scale = column_norms(g, p);
     let gs = Mat::from_fn(p, p, |i, k| g[(i, k)] / (scale[i] * scale[k]));
     if p > 0 {
         let (sv, _, _) = svd_seq("initial-state fit (SVD)", gs.as_ref(), false, false)?;
