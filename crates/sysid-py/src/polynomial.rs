@@ -270,6 +270,13 @@ pub fn polynomial_pem<'py>(
     Ok(d)
 }
 
+/// The name of an `initial_condition` (`"auto"`, `"zero"`, `"estimate"`), checked by the core
+/// (a `DataError` naming the allowed values otherwise).
+#[pyfunction]
+pub fn initial_condition_name(name: &str) -> PyResult<&'static str> {
+    InitialCondition::parse(name).map(|ic| ic.name()).py()
+}
+
 /// The prediction errors of one output's polynomial model at `theta`, every experiment's after
 /// another, from rest (`"zero"`) or from each experiment's least-squares initial state
 /// (`"estimate"`); and those initial states.
@@ -451,6 +458,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(poly_filter, m)?)?;
     m.add_function(wrap_pyfunction!(polynomial_pem, m)?)?;
     m.add_function(wrap_pyfunction!(polynomial_residuals, m)?)?;
+    m.add_function(wrap_pyfunction!(initial_condition_name, m)?)?;
     m.add_function(wrap_pyfunction!(iv4, m)?)?;
     m.add_function(wrap_pyfunction!(ivx, m)?)?;
     Ok(())

@@ -32,7 +32,8 @@
 //! the sum of squared errors by more than [`AUTO_FACTOR`] `n_h sigma^2` (`n_h` the initial
 //! coefficients of every experiment, `sigma^2` the mean squared error with them): a drop that
 //! `n_h` free coefficients fitting white noise exceed with probability about 5 % (`n_h = 1`)
-//! and below 0.5 % (`n_h >= 4`), a chi-square test of the initial state being zero.
+//! and below 0.5 % (`n_h >= 4`), a chi-square test of the initial state being zero. When it
+//! does, the result is `Estimate`'s (searched from the same start).
 
 use faer::Mat;
 
@@ -86,6 +87,11 @@ impl InitialCondition {
 /// `Auto` estimates when the sum of squared errors drops by more than this many times
 /// `sigma^2` per initial coefficient.
 pub const AUTO_FACTOR: f64 = 4.0;
+
+/// With the initial states estimated, a cost below `0.5 |y|^2 ROUNDOFF^2` is an exact fit (the
+/// search stops there: the rest is round-off, which would move the directions the data leave
+/// undetermined, such as `C` of a noise-free ARMAX record).
+pub const ROUNDOFF: f64 = 1e-14;
 
 /// How many initial coefficients each polynomial of one experiment has.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -95,6 +95,8 @@ pub struct MisoProblem {
     segs: Vec<Segment>,
     block: usize,
     layout: Option<Layout>,
+    /// `0.5 |y|^2 ROUNDOFF^2`: with the initial states estimated, a cost below it is zero.
+    floor: f64,
 }
 
 pub(super) fn delayed(u: MatRef<'_, f64>, j: usize, nk: usize) -> Vec<f64> {
@@ -170,6 +172,10 @@ impl MisoProblem {
         orders: MisoOrders,
     ) -> Result<Self> {
         check_experiments(experiments, &orders)?;
+        let energy: f64 = experiments
+            .iter()
+            .map(|(y, _)| y.iter().map(|v| v * v).sum::<f64>())
+            .sum();
         let segs = experiments
             .iter()
             .map(|(y, u)| Segment {
@@ -184,6 +190,7 @@ impl MisoProblem {
             segs,
             block: 128,
             layout: None,
+            floor: 0.5 * energy * initial::ROUNDOFF * initial::ROUNDOFF,
         })
     }
 
@@ -373,11 +380,14 @@ impl Problem for MisoProblem {
         let o = &self.orders;
         let p = o.polys(theta);
         let (sigs, qs): (Vec<_>, Vec<_>) = self.segs.iter().map(|s| self.solved(s, &p)).unzip();
-        let cost = 0.5
+        let mut cost = 0.5
             * sigs
                 .iter()
                 .map(|(e, _, _)| e.iter().map(|x| x * x).sum::<f64>())
                 .sum::<f64>();
+        if self.layout.is_some() && cost <= self.floor {
+            cost = 0.0; // an exact fit: what is left is round-off, with no direction to follow
+        }
         if !cost.is_finite() {
             return Ok(Evaluation::cost_only(f64::INFINITY));
         }
@@ -511,13 +521,17 @@ pub fn estimate_with(
         if solution.stop != StopReason::Cancelled {
             prob.estimate_initial(true);
             let with = prob.evaluate(&solution.theta, false)?.cost;
-            auto_costs = Some((solution.cost, with));
-            if initial::worth_estimating(solution.cost, with, prob.n_initial(), n) {
-                solution = minimize(&mut prob, &solution.theta, options, observer)?;
-                chosen = InitialCondition::Estimate;
-            } else {
-                prob.estimate_initial(false);
+            let nh = prob.n_initial();
+            prob.estimate_initial(false);
+            if initial::worth_estimating(solution.cost, with, nh, n) {
+                // what "estimate" gives, from the same start (the fit from rest carries the
+                // transient's bias, in directions the data may not determine)
+                let ic = InitialCondition::Estimate;
+                let mut est = estimate_with(experiments, orders, theta0, ic, options, observer)?;
+                est.auto_costs = Some((solution.cost, with));
+                return Ok(est);
             }
+            auto_costs = Some((solution.cost, with));
         }
     }
     let noise_variance = 2.0 * solution.cost / n as f64;
