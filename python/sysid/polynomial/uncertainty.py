@@ -4,6 +4,8 @@ time-domain estimators, the frequency-domain ``oe`` and ``ar``/``arma``)."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..models.uncertainty import ParameterUncertainty
@@ -84,11 +86,13 @@ def output_blocks(model: PolynomialModel, kind: str = "pem") -> list[tuple[list[
     return blocks
 
 
-def defer_coloured(model: PolynomialModel, experiments: list[tuple[np.ndarray, np.ndarray]]
-                   ) -> None:
+def defer_coloured(model: PolynomialModel, experiments: list[tuple[np.ndarray, np.ndarray]],
+                   sim: Any = None) -> None:
     """An output-error fit's uncertainty for coloured errors: its Gauss-Newton covariance
     becomes the sandwich of :mod:`sysid.pem.sandwich` when first used (per output, on the
-    errors of the simulation from rest that the search minimised), on one record;
+    errors that the search minimised: of the simulation from rest, or ``sim(model)``'s when
+    given, with the initial states estimated: :func:`sysid.polynomial.initial.simulator`),
+    on one record;
     ``info["covariance"]`` says which covariance the model carries (as ``pem``'s
     ``info["pem"]["covariance"]``).
 
@@ -123,7 +127,7 @@ def defer_coloured(model: PolynomialModel, experiments: list[tuple[np.ndarray, n
     blocks = output_blocks(model)
 
     def form() -> tuple[ParameterUncertainty | None, str]:
-        return sandwich_covariance(base, lambda m: m.simulate(u), y, blocks=blocks)
+        return sandwich_covariance(base, sim or (lambda m: m.simulate(u)), y, blocks=blocks)
 
     def then(note: str) -> None:
         info["covariance"] = note
