@@ -16,13 +16,16 @@ squares at every step of the search (variable projection), one ``h`` per experim
 parameter covariance is then the marginal one (the Schur complement of the joint
 information: the initial state a nuisance). ``"zero"`` starts from rest. ``"auto"`` (the
 default, as MATLAB's) fits from rest, then estimates the initial state at that fit and, when
-this lowers the sum of squared errors by more than ``4 n_h sigma^2`` (``n_h`` the initial
-coefficients of all experiments, ``sigma^2`` their mean square with the state estimated: a
-drop that fitting white noise exceeds with about 5 % probability for one coefficient and
-below 0.5 % for four or more), searches again with it estimated. MATLAB's ``"backcast"`` is
-not offered. The choice is ``info["initial_condition"]``, the states
-``info["initial_state"]`` and, with ``"auto"``, the two sums of squares that decided
-``info["initial_condition_costs"]`` (one entry for one output, a list per output otherwise).
+this lowers the sum of squared errors by more than ``6.63`` times what it lowers it by on
+average when the true state is zero (``n_h sigma^2`` for white errors, ``n_h`` the initial
+coefficients of all experiments; more for coloured errors, from their autocovariances), the
+result is that of ``"estimate"``: for white errors a chi-square test of a zero initial state,
+passed by chance with probability 1 % for one coefficient and below 0.2 % for two or more
+(on an OE record at rest with an AR(1) disturbance of pole 0.9, 1 of 100 records; from
+mid-response, 47 of 100). MATLAB's ``"backcast"`` is not offered. The choice is
+``info["initial_condition"]``, the states ``info["initial_state"]`` and, with ``"auto"``, the
+two sums of squares that decided ``info["initial_condition_costs"]`` (one entry for one
+output, a list per output otherwise).
 """
 
 from __future__ import annotations

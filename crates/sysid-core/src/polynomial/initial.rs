@@ -29,11 +29,12 @@
 //! covariance of the parameters, the initial state a nuisance.
 //!
 //! `Auto` fits from rest first and then estimates when, at that fit, eliminating `h` lowers
-//! the sum of squared errors by more than [`AUTO_FACTOR`] `n_h sigma^2` (`n_h` the initial
-//! coefficients of every experiment, `sigma^2` the mean squared error with them): a drop that
-//! `n_h` free coefficients fitting white noise exceed with probability about 5 % (`n_h = 1`)
-//! and below 0.5 % (`n_h >= 4`), a chi-square test of the initial state being zero. When it
-//! does, the result is `Estimate`'s (searched from the same start).
+//! the sum of squared errors by more than [`AUTO_FACTOR`] times what it lowers it by on
+//! average when the true initial state is zero ([`chance_drop`]: `n_h sigma^2` for white
+//! errors, `n_h` the initial coefficients of every experiment; more for coloured ones, from
+//! the errors' autocovariances): for white errors a chi-square test of the initial state
+//! being zero, passed by chance with probability 1 % (`n_h = 1`; the 99 % point of
+//! chi-square with one degree of freedom) and below 0.2 % (`n_h >= 2`). When it does, the result is `Estimate`'s (searched from the same start).
 
 use faer::Mat;
 
@@ -84,9 +85,9 @@ impl InitialCondition {
     }
 }
 
-/// `Auto` estimates when the sum of squared errors drops by more than this many times
-/// `sigma^2` per initial coefficient.
-pub const AUTO_FACTOR: f64 = 4.0;
+/// `Auto` estimates when the sum of squared errors drops by more than this many times what a
+/// zero initial state lets it drop by on average ([`chance_drop`]).
+pub const AUTO_FACTOR: f64 = 6.63;
 
 /// With the initial states estimated, a cost below `0.5 |y|^2 ROUNDOFF^2` is an exact fit (the
 /// search stops there: the rest is round-off, which would move the directions the data leave
@@ -282,12 +283,39 @@ pub(super) fn project(e0: &[f64], p: &MisoPolys, layout: &Layout) -> Projection 
     }
 }
 
+/// What eliminating an initial state lowers the sum of squares by when the true state is
+/// zero, on average: `trace(Q^T Sigma Q)` for errors of covariance `Sigma` (`n_h sigma^2` for
+/// white ones). `Sigma` from the autocovariances `r(k)` of the errors `e` (with the state
+/// eliminated), Bartlett-weighted up to lag `L = min(n/4, 2 sqrt(n))`, and `Q`'s own lagged
+/// products: `sum_k w_k r(k) sum_t q(t) q(t+k)`, at least its white value `n_h r(0)` (the
+/// lagged terms of white errors are noise). Coloured errors (an OE fit's are the
+/// disturbance itself) put more of their power along the slow free responses than white
+/// ones: with an AR(1) disturbance of pole 0.9 the white count fired on a quarter of records
+/// that start at rest.
+pub(super) fn chance_drop(e: &[f64], q: &Mat<f64>) -> f64 {
+    let n = e.len();
+    let lags = ((2.0 * (n as f64).sqrt()) as usize).min(n / 4);
+    let mut total = 0.0;
+    let mut white = 0.0;
+    for k in 0..=lags {
+        let r: f64 = (0..n - k).map(|t| e[t] * e[t + k]).sum::<f64>() / n as f64;
+        let c: f64 = (0..q.ncols())
+            .map(|j| (0..n - k).map(|t| q[(t, j)] * q[(t + k, j)]).sum::<f64>())
+            .sum();
+        let w = 1.0 - k as f64 / (lags + 1) as f64;
+        if k == 0 {
+            white = r * c;
+        }
+        total += if k == 0 { r * c } else { 2.0 * w * r * c };
+    }
+    total.max(white)
+}
+
 /// `Auto`'s rule: `cost_zero` and `cost_estimated` (half sums of squares, from rest and with
-/// the initial state eliminated, at the same parameters) over `n` samples and `n_h` initial
-/// coefficients; `true` when estimating lowers the sum of squares by more than
-/// `AUTO_FACTOR n_h sigma^2`, `sigma^2 = 2 cost_estimated / n` (and by more than round-off).
-pub fn worth_estimating(cost_zero: f64, cost_estimated: f64, n_h: usize, n: usize) -> bool {
+/// the initial state eliminated, at the same parameters) and `chance` ([`chance_drop`]
+/// summed over the experiments); `true` when estimating lowers the sum of squares by more
+/// than `AUTO_FACTOR chance` (and by more than round-off).
+pub fn worth_estimating(cost_zero: f64, cost_estimated: f64, chance: f64) -> bool {
     let drop = cost_zero - cost_estimated;
-    let sigma2 = 2.0 * cost_estimated / n.max(1) as f64;
-    drop.is_finite() && drop > 1e-10 * cost_zero && 2.0 * drop > AUTO_FACTOR * n_h as f64 * sigma2
+    drop.is_finite() && drop > 1e-10 * cost_zero && 2.0 * drop > AUTO_FACTOR * chance
 }

@@ -181,6 +181,6 @@ fn auto_keeps_rest_when_the_state_does_not_matter() {
     let (z, w) = est.auto_costs.unwrap();
     assert!(w <= z);
     assert_eq!(est.initial, InitialCondition::Zero, "{z} {w}");
-    assert!(!worth_estimating(1.0, 0.999, 1, 500));
-    assert!(worth_estimating(1.0, 0.5, 1, 500));
+    assert!(!worth_estimating(1.0, 0.999, 0.001));
+    assert!(worth_estimating(1.0, 0.5, 0.001));
 }

@@ -207,6 +207,18 @@ impl MisoProblem {
             .map_or(0, |l| l.len() * self.segs.len())
     }
 
+    /// [`initial::chance_drop`] summed over the experiments at `theta` (state estimated).
+    pub fn chance_drop(&self, theta: &[f64]) -> f64 {
+        let p = self.orders.polys(theta);
+        self.segs
+            .iter()
+            .map(|s| match self.solved(s, &p) {
+                ((e, _, _), Some(pr)) => initial::chance_drop(&e, &pr.q),
+                _ => 0.0,
+            })
+            .sum()
+    }
+
     /// Each experiment's initial state at `theta` (zeros from rest).
     pub fn initial_states(&self, theta: &[f64]) -> Vec<InitialState> {
         let p = self.orders.polys(theta);
@@ -521,9 +533,9 @@ pub fn estimate_with(
         if solution.stop != StopReason::Cancelled {
             prob.estimate_initial(true);
             let with = prob.evaluate(&solution.theta, false)?.cost;
-            let nh = prob.n_initial();
+            let chance = prob.chance_drop(&solution.theta);
             prob.estimate_initial(false);
-            if initial::worth_estimating(solution.cost, with, nh, n) {
+            if initial::worth_estimating(solution.cost, with, chance) {
                 // what "estimate" gives, from the same start (the fit from rest carries the
                 // transient's bias, in directions the data may not determine)
                 let ic = InitialCondition::Estimate;
