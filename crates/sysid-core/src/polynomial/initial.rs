@@ -250,7 +250,7 @@ pub(super) fn project(e0: &[f64], p: &MisoPolys, layout: &Layout) -> Projection 
             }
         }
         let nv = dot(&v, &v).sqrt();
-        if !(nv > 1e-10 * norm0) {
+        if nv.is_nan() || nv <= 1e-10 * norm0 {
             continue;
         }
         let m = kept.len();
