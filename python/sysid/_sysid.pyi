@@ -27,6 +27,8 @@ __all__ = [
     "arx_regularized_solve",
     "poly_filter",
     "polynomial_pem",
+    "polynomial_residuals",
+    "initial_condition_name",
     "__version__",
     "HankelFactor",
     "compress",
@@ -476,7 +478,20 @@ def polynomial_pem(
     max_iter: int = 100,
     tol: float = 1e-9,
     progress: Callable[..., Any] | None = None,
+    initial_condition: str = "zero",
 ) -> dict[str, Any]: ...
+def polynomial_residuals(
+    experiments: list[tuple[_Array, _Array]],
+    na: int,
+    nb: list[int],
+    nc: int,
+    nd: int,
+    nf: list[int],
+    nk: list[int],
+    theta: list[float] | _Array,
+    initial_condition: str = "zero",
+) -> tuple[_Array, list[dict[str, Any]]]: ...
+def initial_condition_name(name: str) -> str: ...
 def iv4(
     experiments: list[tuple[_Array, _Array, _Array | None]],
     na: list[list[int]],

@@ -6,10 +6,11 @@ use crate::errors::IntoPy;
 use crate::search::{run, search_items};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
 use sysid_core::optim::Options;
 use sysid_core::polynomial::arx::{ArxCompressor, ArxOrders};
 use sysid_core::polynomial::filter;
+use sysid_core::polynomial::initial::{InitialCondition, InitialState};
 use sysid_core::polynomial::iv::{self, IvRecord};
 use sysid_core::polynomial::pem::{self, MisoOrders};
 
@@ -184,14 +185,49 @@ pub fn poly_filter<'py>(
     Ok(slice_to_numpy(py, &y))
 }
 
+type MisoExperiments<'a> = Vec<(PyReadonlyArray1<'a, f64>, PyReadonlyArray2<'a, f64>)>;
+
+/// The outputs (copied: they may be strided) of `experiments`.
+fn outputs(experiments: &MisoExperiments<'_>) -> Vec<Vec<f64>> {
+    experiments
+        .iter()
+        .map(|(y, _)| y.as_array().to_vec())
+        .collect()
+}
+
+/// `(y, u)` views of `experiments`, the outputs from [`outputs`].
+fn miso_views<'a>(
+    ys: &'a [Vec<f64>],
+    experiments: &'a MisoExperiments<'_>,
+) -> Vec<(&'a [f64], faer::MatRef<'a, f64>)> {
+    ys.iter()
+        .zip(experiments)
+        .map(|(y, (_, u))| (y.as_slice(), view_nd(u.as_array())))
+        .collect()
+}
+
+/// Each experiment's initial state as `{"input": [h_j..], "noise": h_e}`.
+fn states_list<'py>(py: Python<'py>, states: &[InitialState]) -> PyResult<Bound<'py, PyList>> {
+    let out = PyList::empty(py);
+    for s in states {
+        let d = PyDict::new(py);
+        let inputs: Vec<_> = s.input.iter().map(|h| slice_to_numpy(py, h)).collect();
+        d.set_item("input", inputs)?;
+        d.set_item("noise", slice_to_numpy(py, &s.noise))?;
+        out.append(d)?;
+    }
+    Ok(out)
+}
+
 /// Prediction-error estimate of one output: `A y = sum B_j/F_j u_j(t-nk_j) + C/D e`, from
-/// one or several experiments `(y, u)` (the cost summed over them, each from rest).
+/// one or several experiments `(y, u)` (the cost summed over them, each from rest or, by
+/// `initial_condition` `"estimate"` or `"auto"`, from its estimated initial state).
 #[pyfunction]
-#[pyo3(signature = (experiments, na, nb, nc, nd, nf, nk, theta0=None, max_iter=100, tol=1e-9, progress=None))]
+#[pyo3(signature = (experiments, na, nb, nc, nd, nf, nk, theta0=None, max_iter=100, tol=1e-9, progress=None, initial_condition="zero"))]
 #[allow(clippy::too_many_arguments)]
 pub fn polynomial_pem<'py>(
     py: Python<'py>,
-    experiments: Vec<(PyReadonlyArray1<'_, f64>, PyReadonlyArray2<'_, f64>)>,
+    experiments: MisoExperiments<'_>,
     na: usize,
     nb: Vec<usize>,
     nc: usize,
@@ -202,16 +238,11 @@ pub fn polynomial_pem<'py>(
     max_iter: usize,
     tol: f64,
     progress: Option<Py<PyAny>>,
+    initial_condition: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let ys: Vec<Vec<f64>> = experiments
-        .iter()
-        .map(|(y, _)| y.as_array().to_vec())
-        .collect();
-    let exps: Vec<(&[f64], faer::MatRef<'_, f64>)> = ys
-        .iter()
-        .zip(&experiments)
-        .map(|(y, (_, u))| (y.as_slice(), view_nd(u.as_array())))
-        .collect();
+    let ic = InitialCondition::parse(initial_condition).py()?;
+    let ys = outputs(&experiments);
+    let exps = miso_views(&ys, &experiments);
     let orders = MisoOrders {
         na,
         nb,
@@ -225,7 +256,7 @@ pub fn polynomial_pem<'py>(
     opts.tol_gradient = tol;
     opts.tol_step = tol;
     let est = run(py, &progress, |obs| {
-        pem::estimate_multi(&exps, orders, theta0.as_deref(), &opts, obs)
+        pem::estimate_with(&exps, orders, theta0.as_deref(), ic, &opts, obs)
     })?;
     let d = PyDict::new(py);
     search_items(&d, py, &est.solution)?;
@@ -233,7 +264,73 @@ pub fn polynomial_pem<'py>(
     d.set_item("theta0", slice_to_numpy(py, &est.theta0))?;
     d.set_item("noise_variance", est.noise_variance)?;
     d.set_item("covariance", mat_to_numpy(py, &est.covariance))?;
+    d.set_item("initial_condition", est.initial.name())?;
+    d.set_item("initial_states", states_list(py, &est.initial_states)?)?;
+    d.set_item("auto_costs", est.auto_costs)?;
     Ok(d)
+}
+
+/// The name of an `initial_condition` (`"auto"`, `"zero"`, `"estimate"`), checked by the core
+/// (a `DataError` naming the allowed values otherwise).
+#[pyfunction]
+pub fn initial_condition_name(name: &str) -> PyResult<&'static str> {
+    InitialCondition::parse(name).map(|ic| ic.name()).py()
+}
+
+/// The prediction errors of one output's polynomial model at `theta`, every experiment's after
+/// another, from rest (`"zero"`) or from each experiment's least-squares initial state
+/// (`"estimate"`); and those initial states.
+#[pyfunction]
+#[pyo3(signature = (experiments, na, nb, nc, nd, nf, nk, theta, initial_condition="zero"))]
+#[allow(clippy::too_many_arguments)]
+pub fn polynomial_residuals<'py>(
+    py: Python<'py>,
+    experiments: MisoExperiments<'_>,
+    na: usize,
+    nb: Vec<usize>,
+    nc: usize,
+    nd: usize,
+    nf: Vec<usize>,
+    nk: Vec<usize>,
+    theta: Vec<f64>,
+    initial_condition: &str,
+) -> PyResult<(Bound<'py, numpy::PyArray1<f64>>, Bound<'py, PyList>)> {
+    let ic = InitialCondition::parse(initial_condition).py()?;
+    if ic == InitialCondition::Auto {
+        return Err(sysid_core::SysidError::InvalidArgument {
+            name: "initial_condition",
+            reason: "'auto' chooses during a search: give 'zero' or 'estimate'".into(),
+        })
+        .py();
+    }
+    let ys = outputs(&experiments);
+    let exps = miso_views(&ys, &experiments);
+    let orders = MisoOrders {
+        na,
+        nb,
+        nc,
+        nd,
+        nf,
+        nk,
+    };
+    let (e, states) = py
+        .detach(|| -> sysid_core::Result<_> {
+            let mut prob = pem::MisoProblem::new_multi(&exps, orders.clone())?;
+            if theta.len() != orders.n_params() {
+                return Err(sysid_core::SysidError::InvalidArgument {
+                    name: "theta",
+                    reason: format!(
+                        "has {} entries but the structure has {}",
+                        theta.len(),
+                        orders.n_params()
+                    ),
+                });
+            }
+            prob.estimate_initial(ic == InitialCondition::Estimate);
+            Ok((prob.residuals(&theta), prob.initial_states(&theta)))
+        })
+        .py()?;
+    Ok((slice_to_numpy(py, &e), states_list(py, &states)?))
 }
 
 type IvExperiments<'a> = Vec<(
@@ -360,6 +457,8 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(arx_regularized_solve, m)?)?;
     m.add_function(wrap_pyfunction!(poly_filter, m)?)?;
     m.add_function(wrap_pyfunction!(polynomial_pem, m)?)?;
+    m.add_function(wrap_pyfunction!(polynomial_residuals, m)?)?;
+    m.add_function(wrap_pyfunction!(initial_condition_name, m)?)?;
     m.add_function(wrap_pyfunction!(iv4, m)?)?;
     m.add_function(wrap_pyfunction!(ivx, m)?)?;
     Ok(())

@@ -188,7 +188,7 @@ def nlhw(
     with warnings.catch_warnings(record=True) as said:  # a start: where its F sits is the
         warnings.simplefilter("always")  # search's to move; the rest is said as nlhw's
         lin = oe(IOData([r[0][:, None] for r in records], [r[1][:, None] for r in records],
-                        dt), int(nb), int(nf), int(nk))
+                        dt), int(nb), int(nf), int(nk), initial_condition="zero")
     for w in said:
         if not issubclass(w.category, StabilityWarning):
             text = str(w.message)

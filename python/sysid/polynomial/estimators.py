@@ -5,7 +5,6 @@ streaming QR in Rust; the iterative structures through the shared Gauss-Newton o
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Callable
 from typing import Any
 
@@ -26,12 +25,15 @@ from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..data.iodata import IOData, as_record
 from ..data.offsets import check_offsets
-from ..errors import DataError, InsufficientDataError, NumericalError, ShapeError, is_frd
+from ..errors import DataError, InsufficientDataError, ShapeError, is_frd
 from .arx_penalty import kernel_penalties, pair_penalties, penalised_fits
 from .cancellation import cancellation, warn_cancellations
+from .initial import check as _check_initial
+from .initial import record as _record_initial
+from .initial import simulator as _initial_simulator
 from .model import PolynomialModel
 from .orders import matlab_orders
-from .starts import RESTART_GAIN, init_parameters, subspace_starts
+from .starts import init_parameters, second_start
 from .uncertainty import attach_uncertainty as _attach_uncertainty
 from .uncertainty import defer_coloured
 
@@ -295,13 +297,16 @@ def _pem(
     progress: bool | None | Callable[..., Any],
     init: PolynomialModel | None = None,
     second: bool = False,
+    initial_condition: str = "zero",
 ) -> PolynomialModel:
     """The prediction-error search of ``armax``/``oe``/``bj``, per output, from the default
     start (ARX; Steiglitz-McBride for ``B/F``) or ``init``; with ``second``, each output
     also from a subspace fit (:func:`.starts.subspace_starts`), the lower criterion kept
-    (``info["start"]``)."""
+    (``info["start"]``); the initial conditions by ``initial_condition``
+    (:mod:`sysid.polynomial.initial`; the second start takes the first's choice)."""
     data = as_record(data)  # a (u, y) pair, as ssest and compare take
     iters = as_int(max_iter, "max_iter", 0)
+    ic = _check_initial(initial_condition)
     exps = experiment_arrays(data)
     check_offsets(data)
     require_inputs_vary(exps, method, getattr(data, "input_names", None))
@@ -330,16 +335,16 @@ def _pem(
     if init is not None:
         info["start_stabilized"] = [bool(s[1]) for s in starts]  # type: ignore[index]
 
-    def search(i: int, theta0: Any, callback: Any) -> dict[str, Any]:
+    def search(i: int, theta0: Any, callback: Any, how: str = ic) -> dict[str, Any]:
         return _sysid.polynomial_pem(
             [(np.ascontiguousarray(y[:, i]), u) for u, y in exps], na_v[i], nb_g[i], nc_v[i],
-            nd_v[i], nf_g[i], nk_g[i], theta0, iters, 1e-9, callback)
+            nd_v[i], nf_g[i], nk_g[i], theta0, iters, 1e-9, callback, how)
     try:
         rs = [search(i, None if starts[i] is None else starts[i][0], cb) for i in range(ny)]
     finally:
         close_bar()
     if second:
-        _second_start(data, rs, search, nb_g, nf_g, nk_g, na_v, nc_v, nd_v, progress, info)
+        second_start(data, rs, search, nb_g, nf_g, nk_g, na_v, nc_v, nd_v, progress, info)
     for i in range(ny):
         r = rs[i]
         th = np.asarray(r["theta"])
@@ -373,6 +378,7 @@ def _pem(
         noise_variance=var,
     )
     _names_of(m, data)
+    _record_initial(info, rs)
     m.info = info
     warn_if_capped(info, f"the {method} search", iters)
     m.covariance = cov  # type: ignore[attr-defined]
@@ -380,7 +386,11 @@ def _pem(
     # no noise model (oe, or bj / polyest with C = D = 1 and A = 1): the errors are the
     # output disturbance, coloured as it is
     if method == "oe" or not any(np.any(np.asarray(v) != 0) for v in (na_v, nc_v, nd_v)):
-        defer_coloured(m, exps)
+        chosen = [r["initial_condition"] for r in rs]
+        sim = None if len(exps) != 1 or "estimate" not in chosen else _initial_simulator(
+            m, *exps[0], [(na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i], nk_g[i])
+                          for i in range(ny)], chosen)
+        defer_coloured(m, exps, sim)
     found = []
     for i in range(ny):
         at = na_v[i] + sum(nb_g[i]) + nc_v[i] + nd_v[i]
@@ -421,40 +431,6 @@ def _warn_held_f(m: PolynomialModel, f: list[list[np.ndarray]], method: str, n: 
             "stable)", lower="a smaller nf", stacklevel=user_stacklevel())
 
 
-def _second_start(data: Any, rs: list[dict[str, Any]], search: Callable[..., Any],
-                  nb: Any, nf: Any, nk: Any, na: Any, nc: Any, nd: Any,
-                  progress: bool | None | Callable[..., Any], info: dict[str, Any]) -> None:
-    """Each output's search also from its subspace start (``C = D = 1``): its result
-    replaces the default one's in ``rs`` when its criterion is lower by more than
-    ``RESTART_GAIN``; ``info["start"]`` names the start kept (one name for one output, a
-    list per output otherwise). The Steiglitz-McBride iterates need not come near the
-    minimum: on a motor-position record (EMPS, an integrating plant) every stable iterate is
-    far from it; ``oe(2, 2, 1)`` ended at a 1.9 % fit (83.7 % from the subspace start) and
-    ``bj(2, 1, 1, 2, 1)`` simulated at 0.05 % (94.7 %, at a lower prediction-error
-    criterion). A search stopped by the user's callback is not followed by another."""
-    names = ["Steiglitz-McBride"] * len(rs)
-    if any(r["stop"] == "cancelled" for r in rs):
-        info["start"] = names[0] if len(rs) == 1 else names
-        return
-    # the bar counted the first searches; a callable of the user's sees every step
-    cb = progress if callable(progress) else None
-    for i, s in enumerate(subspace_starts(data, nb, nf, nk)):
-        if s is None:
-            continue
-        theta0 = init_parameters(s, 0, na[i], nb[i], nc[i], nd[i], nf[i])[0]
-        try:
-            with warnings.catch_warnings():  # a failed second search says nothing
-                warnings.simplefilter("ignore")
-                r = search(i, theta0, cb)
-        except (DataError, NumericalError):
-            continue  # the first search stands
-        if r["history"][-1] < rs[i]["history"][-1] * (1 - RESTART_GAIN):
-            rs[i], names[i] = r, "subspace (n4sid)"
-        if r["stop"] == "cancelled":
-            break
-    info["start"] = names[0] if len(rs) == 1 else names
-
-
 @one_blas_thread
 def armax(
     data: Any,
@@ -467,6 +443,7 @@ def armax(
     progress: bool | None | Callable[..., Any] = None,
     init: PolynomialModel | None = None,
     integrate_noise: bool = False,
+    initial_condition: str = "auto",
 ) -> PolynomialModel:
     """ARMAX ``A y = B u(t-nk) + C e`` by prediction-error minimisation (per output). The
     orders may be given as MATLAB's one vector, ``armax(data, [na, nb, nc, nk])``
@@ -479,6 +456,13 @@ def armax(
     cut or padded with zeros to ``na``, ``nb``, ``nc``; an unstable ``C`` has its roots
     reflected into the unit circle and ``info["start_stabilized"]`` says so), as MATLAB's
     ``armax(data, init_sys)``.
+
+    ``initial_condition`` (MATLAB's ``InitialCondition``): ``"auto"`` (default) fits from
+    rest and estimates the initial filter states when that lowers the criterion beyond what
+    fitting noise would, ``"zero"`` from rest, ``"estimate"`` always estimated (eliminated by
+    least squares at every step, one state per experiment; the covariance is then the
+    marginal one). ``"backcast"`` is not offered. ``info["initial_condition"]`` says which,
+    ``info["initial_state"]`` holds the states (:mod:`sysid.polynomial.initial`).
 
     Examples
     --------
@@ -493,14 +477,25 @@ def armax(
     >>> again = sysid.polynomial.estimators.armax(sysid.IOData(u, y, 1.0), 1, 1, 1, init=m)
     >>> again.info["start"], bool(abs(again.c[0][0] - m.c[0][0]) < 1e-6)
     ('init', True)
+
+    A record that starts mid-response (here at sample 200 of a noise-free run):
+
+    >>> y0 = np.zeros((2200, 1)); u0 = rng.standard_normal((2200, 1))
+    >>> for t in range(1, 2200): y0[t] = 0.7 * y0[t-1] + u0[t-1, 0]
+    >>> d = sysid.IOData(u0[200:], y0[200:], 1.0)
+    >>> m = sysid.armax(d, 1, 1, 1, 1)
+    >>> m.info["initial_condition"], np.round([m.a[0][0][0], m.b[0][0][0], m.c[0][0]], 8)
+    ('estimate', array([-0.7,  1. ,  0. ]))
     """
     data = as_record(data)
+    _check_initial(initial_condition)
     if integrate_noise is not False:  # ARIMAX: the fit of the differenced record
         m = armax(_differenced(data, integrate_noise), na, nb, nc, nk, max_iter=max_iter,
-                  progress=progress, init=init)
+                  progress=progress, init=init, initial_condition=initial_condition)
         return _integrated(m)
     na, nb, nc, nk = matlab_orders("armax", data, na, nb=nb, nc=nc, nk=nk)
-    m = _pem(data, na, nb, nc, 0, 0, nk, "armax", max_iter, progress, init)
+    m = _pem(data, na, nb, nc, 0, 0, nk, "armax", max_iter, progress, init,
+             initial_condition=initial_condition)
     if init is not None:
         m.info["start"] = "init"
     return _warn_diverging(m, "armax")
@@ -518,6 +513,7 @@ def oe(
     init: PolynomialModel | None = None,
     periods: int | str | None = None,
     transient: int | None = None,
+    initial_condition: str = "auto",
 ) -> PolynomialModel:
     """Output error ``y = B/F u(t-nk) + e``. The orders may be given as MATLAB's one vector,
     ``oe(data, [nb, nf, nk])`` (:func:`~sysid.polynomial.orders.matlab_orders`); ``nk``
@@ -555,6 +551,14 @@ def oe(
     ``info["covariance"]`` says which covariance the model carries. With several
     experiments it stays the Gauss-Newton one, and ``info["covariance"]`` says so.
 
+    ``initial_condition`` (MATLAB's ``InitialCondition``): ``"auto"`` (default) fits from
+    rest and estimates the initial filter states when that lowers the criterion beyond what
+    fitting noise would, ``"zero"`` from rest, ``"estimate"`` always estimated (eliminated by
+    least squares at every step, one state per experiment; the covariance is then the
+    marginal one). ``"backcast"`` is not offered. ``info["initial_condition"]`` says which,
+    ``info["initial_state"]`` holds the states (:mod:`sysid.polynomial.initial`).
+    A fit on lines (``periods``, an FRD) has no transient: there ``"estimate"`` is refused.
+
     Examples
     --------
     >>> import numpy as np, sysid
@@ -564,8 +568,17 @@ def oe(
     >>> m = sysid.oe(sysid.IOData(up, yp, dt=1.0), 2, 2, 1, periods=4)
     >>> np.round(m.b[0][0], 8), np.round(m.f[0][0], 8), m.info["domain"]
     (array([0.5, 0.2]), array([-1.2,  0.5]), 'frequency')
+
+    The same plant from a record that starts mid-response (the transient estimated):
+
+    >>> u = np.random.default_rng(0).standard_normal((600, 1))
+    >>> m = sysid.oe(sysid.IOData(u[100:], g.simulate(u)[100:], 1.0), 2, 2, 1)
+    >>> np.round(m.f[0][0], 8), m.info["initial_condition"]
+    (array([-1.2,  0.5]), 'estimate')
     """
     periodicity = None
+    on_lines = is_frd(data) or (periods is not None and periods != "auto")
+    _check_initial(initial_condition, lines=on_lines)
     if is_frd(data):  # its lines
         from .oe_lines import oe_frd
 
@@ -584,10 +597,12 @@ def oe(
         if m is not None:
             return m
     if init is not None:
-        m = _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, init)
+        m = _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, init,
+                 initial_condition=initial_condition)
         m.info["start"] = "init"
     else:
-        m = _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, second=True)
+        m = _pem(data, 0, nb, 0, 0, nf, nk, "oe", max_iter, progress, second=True,
+                 initial_condition=initial_condition)
     if periodicity is not None:  # periods="auto" found none: why the time domain
         m.info["periodicity"] = periodicity
     return m
@@ -605,6 +620,7 @@ def bj(
     max_iter: int = 100,
     progress: bool | None | Callable[..., Any] = None,
     init: PolynomialModel | None = None,
+    initial_condition: str = "auto",
 ) -> PolynomialModel:
     """Box-Jenkins ``y = B/F u(t-nk) + C/D e``. The orders may be given as MATLAB's one
     vector, ``bj(data, [nb, nc, nd, nf, nk])`` (:func:`~sysid.polynomial.orders.matlab_orders`);
@@ -617,6 +633,13 @@ def bj(
     padded with zeros to the orders given) the search starts there alone, as MATLAB's
     ``bj(data, init_sys)``; unstable ``C``, ``D`` or ``F`` roots are reflected into the unit
     circle and ``info["start_stabilized"]`` says so.
+
+    ``initial_condition`` (MATLAB's ``InitialCondition``): ``"auto"`` (default) fits from
+    rest and estimates the initial filter states when that lowers the criterion beyond what
+    fitting noise would, ``"zero"`` from rest, ``"estimate"`` always estimated (eliminated by
+    least squares at every step, one state per experiment; the covariance is then the
+    marginal one). ``"backcast"`` is not offered. ``info["initial_condition"]`` says which,
+    ``info["initial_state"]`` holds the states (:mod:`sysid.polynomial.initial`).
 
     Examples
     --------
@@ -631,14 +654,19 @@ def bj(
     [-0.8, -0.9]
     >>> sysid.bj(sysid.IOData(u, y, 1.0), 1, 0, 1, 1, 1, init=m).info["start"]
     'init'
+    >>> sysid.bj(sysid.IOData(u, y, 1.0), 1, 0, 1, 1, 1).info["initial_condition"]  # at rest
+    'zero'
     """
     data = as_record(data)
+    _check_initial(initial_condition)
     nb, nc, nd, nf, nk = matlab_orders("bj", data, nb, nc=nc, nd=nd, nf=nf, nk=nk)
     if init is not None:
-        m = _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress, init)
+        m = _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress, init,
+                 initial_condition=initial_condition)
         m.info["start"] = "init"
         return m
-    return _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress, second=True)
+    return _pem(data, 0, nb, nc, nd, nf, nk, "bj", max_iter, progress, second=True,
+                initial_condition=initial_condition)
 
 
 def _references(reference: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> list[Any]:

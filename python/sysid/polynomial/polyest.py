@@ -21,6 +21,7 @@ from .._threads import one_blas_thread
 from ..data.iodata import as_record
 from ..errors import DataError
 from .estimators import _pem, _warn_diverging
+from .initial import check as _check_initial
 from .model import PolynomialModel
 from .orders import matlab_orders
 
@@ -40,6 +41,7 @@ def polyest(
     max_iter: int = 100,
     progress: bool | None | Callable[..., Any] = None,
     init: PolynomialModel | None = None,
+    initial_condition: str = "auto",
 ) -> PolynomialModel:
     """The general polynomial model ``A y = B/F u(t-nk) + C/D e`` (MATLAB's ``polyest``).
 
@@ -67,6 +69,12 @@ def polyest(
         Start from this model (its polynomials cut or padded with zeros to the orders
         given; unstable ``C``, ``D`` or ``F`` roots reflected into the unit circle,
         ``info["start_stabilized"]``), as MATLAB's ``polyest(data, init_sys)``.
+    initial_condition : {"auto", "zero", "estimate"}
+        MATLAB's ``InitialCondition``: from rest (``"zero"``), each experiment's initial
+        state estimated with the parameters (``"estimate"``; the covariance the marginal
+        one), or ``"auto"`` (default): estimated when that lowers the criterion beyond what
+        fitting noise would (:mod:`sysid.polynomial.initial`). ``"backcast"`` is not
+        offered. ``info["initial_condition"]`` and ``info["initial_state"]`` record it.
 
     Returns
     -------
@@ -88,16 +96,19 @@ def polyest(
     [-0.5, -0.6, 0.4, -0.3]
     """
     data = as_record(data)
+    _check_initial(initial_condition)
     na, nb, nc, nd, nf, nk = matlab_orders("polyest", data, na, nb=nb, nc=nc, nd=nd, nf=nf,
                                            nk=nk)
     if init is not None:
-        m = _pem(data, na, nb, nc, nd, nf, nk, "polyest", max_iter, progress, init)
+        m = _pem(data, na, nb, nc, nd, nf, nk, "polyest", max_iter, progress, init,
+                 initial_condition=initial_condition)
         m.info["start"] = "init"
         return _warn_diverging(m, "polyest")
     # without A, a subspace fit of B/F is a second start (as oe and bj): the ARX-based
     # start of B/F can stay far from the minimum on a slow plant
     second = bool(np.all(np.asarray(na) == 0)) and bool(np.any(np.asarray(nf) > 0))
-    m = _pem(data, na, nb, nc, nd, nf, nk, "polyest", max_iter, progress, second=second)
+    m = _pem(data, na, nb, nc, nd, nf, nk, "polyest", max_iter, progress, second=second,
+             initial_condition=initial_condition)
     if not second:
         m.info["start"] = "ARX" if not np.any(np.asarray(nf) > 0) else "Steiglitz-McBride"
     return _warn_diverging(m, "polyest")

@@ -4,6 +4,8 @@ time-domain estimators, the frequency-domain ``oe`` and ``ar``/``arma``)."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..models.uncertainty import ParameterUncertainty
@@ -84,11 +86,13 @@ def output_blocks(model: PolynomialModel, kind: str = "pem") -> list[tuple[list[
     return blocks
 
 
-def defer_coloured(model: PolynomialModel, experiments: list[tuple[np.ndarray, np.ndarray]]
-                   ) -> None:
+def defer_coloured(model: PolynomialModel, experiments: list[tuple[np.ndarray, np.ndarray]],
+                   sim: Any = None) -> None:
     """An output-error fit's uncertainty for coloured errors: its Gauss-Newton covariance
     becomes the sandwich of :mod:`sysid.pem.sandwich` when first used (per output, on the
-    errors of the simulation from rest that the search minimised), on every record;
+    errors that the search minimised: of the simulation from rest on every record, or on one
+    record ``sim(model)``'s when given, with the initial states estimated:
+    :func:`sysid.polynomial.initial.simulator`);
     ``info["covariance"]`` says which covariance the model carries (as ``pem``'s
     ``info["pem"]["covariance"]``).
 
@@ -120,6 +124,8 @@ def defer_coloured(model: PolynomialModel, experiments: list[tuple[np.ndarray, n
     blocks = output_blocks(model)
 
     def form() -> tuple[ParameterUncertainty | None, str]:
+        if sim is not None:  # one record, its initial states estimated
+            return sandwich_covariance(base, lambda m: [sim(m)], ys, blocks=blocks)
         return sandwich_covariance(base, lambda m: [m.simulate(u) for u, _ in records], ys,
                                    blocks=blocks)
 

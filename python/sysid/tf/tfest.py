@@ -72,7 +72,8 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     initial_state : {"zero", "estimate"}
         Start from rest, or estimate the initial state of each experiment (the model's
         state; the input before the record, which a delay would still deliver, is taken as
-        zero).
+        zero). A discrete-time fit passes it to :func:`sysid.oe` as ``initial_condition``
+        (there the delayed inputs before the record are estimated too).
     init : TransferFunction, optional
         Start the refinement from this model (continuous, same orders) instead of SRIVC.
     max_delay : float, optional
@@ -211,7 +212,8 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         if G is not None:
             return _checked(G)
     if dt is not None:
-        G = _discrete(data, npo, nze, fixed_delays, auto, dt, max_iter, progress, ft)
+        G = _discrete(data, npo, nze, fixed_delays, auto, dt, max_iter, progress, ft,
+                      initial_state)
         if periodicity is not None:  # periods="auto" found none: why the time domain
             G.info["periodicity"] = periodicity
         return _checked(G)
@@ -580,8 +582,10 @@ def _whole_delays(data: Any, delays: np.ndarray, auto: bool, dt: float,
 
 
 def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
-              dt: float, max_iter: int, progress: Any, ft: bool = False) -> TransferFunction:
-    """Discrete-time variant: output error ``B(q)/F(q) q^-nk`` per output (``sysid.oe``),
+              dt: float, max_iter: int, progress: Any, ft: bool = False,
+              initial_state: str = "zero") -> TransferFunction:
+    """Discrete-time variant: output error ``B(q)/F(q) q^-nk`` per output (``sysid.oe``, its
+    ``initial_condition`` the ``initial_state``),
     with the parameter table, uncertainty and ``info`` of the continuous fit (per pair
     ``[a_1.., b_0..]``; ``info["cost"]`` the final cost per output)."""
     import sysid
@@ -592,7 +596,8 @@ def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
     l, m = data.n_outputs, data.n_inputs
     lag0 = 0 if ft else 1  # a one-sample lag as MATLAB's discrete tfest (none: feedthrough)
     lag = lag0 + np.round(nk).astype(int)
-    poly = sysid.oe(data, nze + 1, npo, lag, max_iter=max_iter, progress=progress)
+    poly = sysid.oe(data, nze + 1, npo, lag, max_iter=max_iter, progress=progress,
+                    initial_condition=initial_state)
     nb = [[poly.b[i][j].size for j in range(m)] for i in range(l)]
     nf = [[poly.f[i][j].size for j in range(m)] for i in range(l)]
 

@@ -23,14 +23,23 @@
 //!   into `J^T J` in blocks of samples, as a [`crate::optim::Problem`]; predictor stability
 //!   (`C`, `F_j` stable) is the admissible set. Starting values: least squares (ARX),
 //!   Hannan-Rissanen (ARMAX, noise models), Steiglitz-McBride (OE).
+//! * [`initial`]: the predictors' initial conditions (MATLAB's `InitialCondition`): each
+//!   experiment's initial state eliminated by least squares at every evaluation of [`pem`]
+//!   (variable projection), its Gauss-Newton matrix the Schur complement (the marginal
+//!   covariance); `Auto` estimates it when that lowers the criterion beyond chance.
+//! * [`start`]: the starting values of [`pem`]'s searches.
 //! * [`regul`]: the marginal likelihood (value and gradient) of a kernel-prior regression from
 //!   the compressed summary of [`arx`], for the empirical-Bayes tuning of regularised ARX.
 
 pub mod arx;
 pub mod filter;
+pub mod initial;
 pub mod iv;
 pub mod pem;
 pub mod regul;
+pub mod start;
 
+#[cfg(test)]
+mod initial_tests;
 #[cfg(test)]
 mod tests;

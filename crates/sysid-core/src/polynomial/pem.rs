@@ -4,8 +4,10 @@
 use faer::{Mat, MatRef};
 
 use super::filter::{conv, filter, is_stable, monic};
+use super::initial::{self, InitialCondition, InitialState, Layout};
+use super::start::guess_multi;
+pub use super::start::{initial_guess, initial_guess_multi, steiglitz_mcbride};
 use crate::error::{check_io, Result, SysidError};
-use crate::linalg::QrAccumulator;
 use crate::optim::{minimize, Evaluation, Flow, Iteration, Options, Problem, Solution, StopReason};
 
 /// Orders of `A y = sum B_j/F_j u_j(t-nk_j) + C/D e` for one output.
@@ -71,7 +73,7 @@ impl MisoOrders {
 }
 
 /// A signal of several experiments: one vector per experiment.
-type Sig = Vec<Vec<f64>>;
+pub(super) type Sig = Vec<Vec<f64>>;
 
 /// Residual `e`, equation error `v` and filtered inputs `w_j` of one experiment.
 type Signals = (Vec<f64>, Vec<f64>, Vec<Vec<f64>>);
@@ -83,23 +85,28 @@ struct Segment {
 }
 
 /// Prediction-error problem of one output: residual `e = D/C (A y - sum B_j/F_j x_j)`,
-/// `x_j(t) = u_j(t - nk_j)`, zero initial conditions. With several experiments the cost,
-/// gradient and Gauss-Newton matrix are sums over the experiments, each filtered from rest
-/// (no sample of one experiment enters a regressor of another).
+/// `x_j(t) = u_j(t - nk_j)`, zero initial conditions (or, after
+/// [`MisoProblem::estimate_initial`], each experiment's initial state eliminated by least
+/// squares: [`super::initial`]). With several experiments the cost, gradient and Gauss-Newton
+/// matrix are sums over the experiments, each filtered from its own initial state (no sample
+/// of one experiment enters a regressor of another).
 pub struct MisoProblem {
     orders: MisoOrders,
     segs: Vec<Segment>,
     block: usize,
+    layout: Option<Layout>,
+    /// `0.5 |y|^2 ROUNDOFF^2`: with the initial states estimated, a cost below it is zero.
+    floor: f64,
 }
 
-fn delayed(u: MatRef<'_, f64>, j: usize, nk: usize) -> Vec<f64> {
+pub(super) fn delayed(u: MatRef<'_, f64>, j: usize, nk: usize) -> Vec<f64> {
     let n = u.nrows();
     (0..n)
         .map(|t| if t >= nk { u[(t - nk, j)] } else { 0.0 })
         .collect()
 }
 
-fn shifted(s: &[f64], t: usize, k: usize) -> f64 {
+pub(super) fn shifted(s: &[f64], t: usize, k: usize) -> f64 {
     if t >= k {
         s[t - k]
     } else {
@@ -108,7 +115,7 @@ fn shifted(s: &[f64], t: usize, k: usize) -> f64 {
 }
 
 /// Checks one output's experiments against `orders`; returns the total sample count.
-fn check_experiments(
+pub(super) fn check_experiments(
     experiments: &[(&[f64], MatRef<'_, f64>)],
     orders: &MisoOrders,
 ) -> Result<usize> {
@@ -165,6 +172,10 @@ impl MisoProblem {
         orders: MisoOrders,
     ) -> Result<Self> {
         check_experiments(experiments, &orders)?;
+        let energy: f64 = experiments
+            .iter()
+            .map(|(y, _)| y.iter().map(|v| v * v).sum::<f64>())
+            .sum();
         let segs = experiments
             .iter()
             .map(|(y, u)| Segment {
@@ -178,13 +189,74 @@ impl MisoProblem {
             orders,
             segs,
             block: 128,
+            layout: None,
+            floor: 0.5 * energy * initial::ROUNDOFF * initial::ROUNDOFF,
         })
     }
 
-    /// Residuals and the intermediate signals `(e, v, w_j)` of one experiment.
-    fn signals(seg: &Segment, p: &MisoPolys) -> Signals {
+    /// With `on`, every experiment's initial state is estimated (eliminated by least squares
+    /// at every evaluation); without, the predictors start from rest.
+    pub fn estimate_initial(&mut self, on: bool) {
+        self.layout = on.then(|| Layout::new(&self.orders));
+    }
+
+    /// Initial coefficients of all experiments together (0 from rest).
+    pub fn n_initial(&self) -> usize {
+        self.layout
+            .as_ref()
+            .map_or(0, |l| l.len() * self.segs.len())
+    }
+
+    /// [`initial::chance_drop`] summed over the experiments at `theta` (state estimated).
+    pub fn chance_drop(&self, theta: &[f64]) -> f64 {
+        let p = self.orders.polys(theta);
+        self.segs
+            .iter()
+            .map(|s| match self.solved(s, &p) {
+                ((e, _, _), Some(pr)) => initial::chance_drop(&e, &pr.q),
+                _ => 0.0,
+            })
+            .sum()
+    }
+
+    /// Each experiment's initial state at `theta` (zeros from rest).
+    pub fn initial_states(&self, theta: &[f64]) -> Vec<InitialState> {
+        let p = self.orders.polys(theta);
+        let zero = InitialState::zeros(&Layout::new(&self.orders));
+        self.segs
+            .iter()
+            .map(|s| match self.solved(s, &p) {
+                (_, Some(pr)) => pr.state,
+                _ => zero.clone(),
+            })
+            .collect()
+    }
+
+    /// One experiment's signals at its initial state (fitted, or zero) and the projection.
+    fn solved(&self, seg: &Segment, p: &MisoPolys) -> (Signals, Option<initial::Projection>) {
+        let s0 = Self::signals(seg, p, None);
+        match &self.layout {
+            Some(l) if s0.0.iter().all(|v| v.is_finite()) => {
+                let pr = initial::project(&s0.0, p, l);
+                (Self::signals(seg, p, Some(&pr.state)), Some(pr))
+            }
+            _ => (s0, None),
+        }
+    }
+
+    /// Residuals and the intermediate signals `(e, v, w_j)` of one experiment, from rest or
+    /// from the initial state `h`.
+    fn signals(seg: &Segment, p: &MisoPolys, h: Option<&InitialState>) -> Signals {
+        let n = seg.y.len();
         let w: Vec<Vec<f64>> = (0..seg.x.len())
-            .map(|j| filter(&p.b[j], &p.f[j], &seg.x[j]))
+            .map(|j| {
+                let mut wj = filter(&p.b[j], &p.f[j], &seg.x[j]);
+                if let Some(hj) = h.map(|h| &h.input[j]).filter(|hj| !hj.is_empty()) {
+                    let free = InitialState::response(hj, &p.f[j], n);
+                    wj.iter_mut().zip(&free).for_each(|(a, b)| *a += b);
+                }
+                wj
+            })
             .collect();
         let mut v = filter(&p.a, &[1.0], &seg.y);
         for wj in &w {
@@ -192,25 +264,32 @@ impl MisoProblem {
                 *vt -= wt;
             }
         }
-        let e = filter(&p.d, &p.c, &v);
+        let mut e = filter(&p.d, &p.c, &v);
+        if let Some(he) = h.map(|h| &h.noise).filter(|he| !he.is_empty()) {
+            let free = InitialState::response(he, &p.c, n);
+            e.iter_mut().zip(&free).for_each(|(a, b)| *a += b);
+        }
         (e, v, w)
     }
 
-    /// Residuals at `theta`, experiment after experiment (each from rest).
+    /// Residuals at `theta`, experiment after experiment (each from rest, or from its
+    /// fitted initial state).
     pub fn residuals(&self, theta: &[f64]) -> Vec<f64> {
         let p = self.orders.polys(theta);
         self.segs
             .iter()
-            .flat_map(|s| Self::signals(s, &p).0)
+            .flat_map(|s| self.solved(s, &p).0 .0)
             .collect()
     }
 
-    /// Adds one experiment's `J^T J` and `J^T e` (blocks of `self.block` rows) to `gn`, `grad`.
+    /// Adds one experiment's `J^T J` and `J^T e` (blocks of `self.block` rows) to `gn`, `grad`;
+    /// with the basis `q` of its initial state's columns, `J^T J - (J^T q)(q^T J)`.
     fn accumulate(
         &self,
         seg: &Segment,
         p: &MisoPolys,
         signals: &Signals,
+        q: Option<&Mat<f64>>,
         gn: &mut Mat<f64>,
         grad: &mut [f64],
     ) {
@@ -243,6 +322,7 @@ impl MisoProblem {
         };
         let mut jb = Mat::<f64>::zeros(self.block, np);
         let mut eb = Mat::<f64>::zeros(self.block, 1);
+        let mut jq = Mat::<f64>::zeros(np, q.map_or(0, |q| q.ncols()));
         let mut t0 = 0;
         while t0 < n {
             let rows = self.block.min(n - t0);
@@ -281,7 +361,13 @@ impl MisoProblem {
             for a in 0..np {
                 grad[a] += g[(a, 0)];
             }
+            if let Some(q) = q {
+                jq += jr.transpose() * q.as_ref().subrows(t0, rows);
+            }
             t0 += rows;
+        }
+        if jq.ncols() > 0 {
+            *gn -= &jq * jq.transpose();
         }
     }
 }
@@ -305,12 +391,15 @@ impl Problem for MisoProblem {
     fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
         let o = &self.orders;
         let p = o.polys(theta);
-        let sigs: Vec<_> = self.segs.iter().map(|s| Self::signals(s, &p)).collect();
-        let cost = 0.5
+        let (sigs, qs): (Vec<_>, Vec<_>) = self.segs.iter().map(|s| self.solved(s, &p)).unzip();
+        let mut cost = 0.5
             * sigs
                 .iter()
                 .map(|(e, _, _)| e.iter().map(|x| x * x).sum::<f64>())
                 .sum::<f64>();
+        if self.layout.is_some() && cost <= self.floor {
+            cost = 0.0; // an exact fit: what is left is round-off, with no direction to follow
+        }
         if !cost.is_finite() {
             return Ok(Evaluation::cost_only(f64::INFINITY));
         }
@@ -321,327 +410,14 @@ impl Problem for MisoProblem {
         let np = o.n_params();
         let mut gn = Mat::<f64>::zeros(np, np);
         let mut grad = vec![0.0; np];
-        for (seg, sig) in self.segs.iter().zip(&sigs) {
-            self.accumulate(seg, &p, sig, &mut gn, &mut grad);
+        for ((seg, sig), pr) in self.segs.iter().zip(&sigs).zip(&qs) {
+            let q = pr.as_ref().map(|pr| &pr.q);
+            self.accumulate(seg, &p, sig, q, &mut gn, &mut grad);
         }
         ev.gradient = grad;
         ev.gauss_newton = gn;
         Ok(ev)
     }
-}
-
-fn fmap(b: &[f64], a: &[f64], s: &Sig) -> Sig {
-    s.iter().map(|x| filter(b, a, x)).collect()
-}
-
-/// Least squares of `target` on lagged signals: `regs` lists `(signal, first_lag, n_lags)`;
-/// rows `t >= max(first_lag + n_lags)` of every experiment.
-fn lagged_ls(target: &Sig, regs: &[(&Sig, usize, usize)]) -> Result<Vec<f64>> {
-    let p: usize = regs.iter().map(|r| r.2).sum();
-    if p == 0 {
-        return Ok(Vec::new());
-    }
-    let start = regs.iter().map(|r| r.1 + r.2).max().unwrap_or(0);
-    let mut acc = QrAccumulator::new(p + 1, 256);
-    let mut row = vec![0.0; p + 1];
-    for (ex, tgt) in target.iter().enumerate() {
-        for t in start..tgt.len() {
-            if t % 4096 == 0 {
-                crate::interrupt::check()?; // Ctrl-C
-            }
-            let mut c = 0;
-            for (s, first, nl) in regs {
-                for k in *first..*first + *nl {
-                    row[c] = s[ex][t - k];
-                    c += 1;
-                }
-            }
-            row[p] = tgt[t];
-            acc.push_row(&row);
-        }
-    }
-    let r = acc.finish();
-    let dmax = (0..p).map(|d| r[(d, d)]).fold(0.0, f64::max);
-    let mut th = vec![0.0; p];
-    for d in (0..p).rev() {
-        if r[(d, d)] <= 1e-13 * dmax {
-            th[d] = 0.0;
-            continue;
-        }
-        let mut v = r[(d, p)];
-        for e in d + 1..p {
-            v -= r[(d, e)] * th[e];
-        }
-        th[d] = v / r[(d, d)];
-    }
-    Ok(th)
-}
-
-/// Steiglitz-McBride for a single-input output-error model: returns `(b, f)`.
-pub fn steiglitz_mcbride(
-    y: &[f64],
-    x: &[f64],
-    nb: usize,
-    nf: usize,
-    iters: usize,
-) -> Result<(Vec<f64>, Vec<f64>)> {
-    steiglitz_mcbride_multi(&vec![y.to_vec()], &vec![x.to_vec()], nb, nf, iters)
-}
-
-/// [`steiglitz_mcbride`] over several experiments (each filtered from rest).
-fn steiglitz_mcbride_multi(
-    y: &Sig,
-    x: &Sig,
-    nb: usize,
-    nf: usize,
-    iters: usize,
-) -> Result<(Vec<f64>, Vec<f64>)> {
-    let mut f = vec![0.0; nf];
-    // The iterations need not converge (on a dryer record they cycle with period 6, the
-    // last iterate just outside the unit circle): the start is the stable iterate whose
-    // simulation fits best, not the last one.
-    let mut best: Option<(f64, Vec<f64>, Vec<f64>)> = None;
-    for _ in 0..iters.max(1) {
-        let fp = monic(&f);
-        let (yf, xf) = if is_stable(&fp) {
-            (fmap(&[1.0], &fp, y), fmap(&[1.0], &fp, x))
-        } else {
-            (y.clone(), x.clone())
-        };
-        let th = lagged_ls(&yf, &[(&yf, 1, nf), (&xf, 0, nb)])?;
-        let fnew: Vec<f64> = th[..nf].iter().map(|v| -v).collect();
-        let bnew = th[nf..].to_vec();
-        let change: f64 = fnew.iter().zip(&f).map(|(a, c)| (a - c).abs()).sum();
-        let fm = monic(&fnew);
-        if is_stable(&fm) {
-            let sim = fmap(&bnew, &fm, x);
-            let cost: f64 = y
-                .iter()
-                .zip(&sim)
-                .map(|(ye, se)| {
-                    ye.iter()
-                        .zip(se)
-                        .map(|(a, c)| (a - c) * (a - c))
-                        .sum::<f64>()
-                })
-                .sum();
-            if cost.is_finite() && best.as_ref().is_none_or(|(c, _, _)| cost < *c) {
-                best = Some((cost, bnew.clone(), fnew.clone()));
-            }
-        }
-        f = fnew;
-        if change < 1e-12 {
-            break;
-        }
-    }
-    match best {
-        Some((_, b, f)) => Ok((b, f)),
-        None => {
-            // no stable iterate: a finite impulse response (F = 1) by least squares
-            let th = lagged_ls(y, &[(x, 0, nb)])?;
-            Ok((th, vec![0.0; nf]))
-        }
-    }
-}
-
-fn stable_or_zero(c: Vec<f64>) -> Vec<f64> {
-    if is_stable(&monic(&c)) {
-        c
-    } else {
-        vec![0.0; c.len()]
-    }
-}
-
-/// Sweeps of Gauss-Seidel over the inputs of a several-input output-error part: each input's
-/// `B_j / F_j` by Steiglitz-McBride on what the other inputs' current parts leave of the
-/// target (whose `F` stays stable), `GS_SWEEPS` times. The least-squares impulse responses
-/// with `F = 1` (`b`, `f`) start it, and are returned instead when the sweeps do not lower the
-/// simulation error: from `F = 1` the search settled in poor local minima on real
-/// several-input records (four times the cost of an ARX-started search on a steam
-/// generator, a pole of `F` on the unit circle on an industrial dryer).
-fn gauss_seidel_start(
-    target: &Sig,
-    x: &[Sig],
-    o: &MisoOrders,
-    b: Vec<Vec<f64>>,
-    f: Vec<Vec<f64>>,
-) -> (Vec<Vec<f64>>, Vec<Vec<f64>>) {
-    let cost = |b: &[Vec<f64>], f: &[Vec<f64>]| -> f64 {
-        minus_filtered(target, x, b, f)
-            .iter()
-            .map(|e| e.iter().map(|v| v * v).sum::<f64>())
-            .sum()
-    };
-    let start = cost(&b, &f);
-    let (mut b2, mut f2) = (b.clone(), f.clone());
-    for _ in 0..GS_SWEEPS {
-        for j in 0..x.len() {
-            let mut others = b2.clone();
-            others[j] = vec![0.0; o.nb[j]];
-            let rest = minus_filtered(target, x, &others, &f2);
-            match steiglitz_mcbride_multi(&rest, &x[j], o.nb[j], o.nf[j], 30) {
-                Ok((bj, fj)) => {
-                    b2[j] = bj;
-                    f2[j] = fj;
-                }
-                Err(_) => return (b, f),
-            }
-        }
-    }
-    let swept = cost(&b2, &f2);
-    if swept.is_finite() && swept < start && f2.iter().all(|fj| is_stable(&monic(fj))) {
-        (b2, f2)
-    } else {
-        (b, f)
-    }
-}
-
-/// Gauss-Seidel sweeps over the inputs of [`gauss_seidel_start`].
-const GS_SWEEPS: usize = 3;
-
-/// `target - sum_j B_j/F_j x_j` per experiment.
-fn minus_filtered(target: &Sig, x: &[Sig], b: &[Vec<f64>], f: &[Vec<f64>]) -> Sig {
-    let mut v = target.clone();
-    for j in 0..x.len() {
-        let fj = monic(&f[j]);
-        for (ve, xe) in v.iter_mut().zip(&x[j]) {
-            let w = filter(&b[j], &fj, xe);
-            ve.iter_mut().zip(&w).for_each(|(vt, wt)| *vt -= wt);
-        }
-    }
-    v
-}
-
-/// Starting parameters: ARX / Hannan-Rissanen for `A, B, C`; Steiglitz-McBride (one input) or
-/// least squares with `F = 1` for OE parts; Hannan-Rissanen on the output-error residual for
-/// the noise model `C/D` of Box-Jenkins structures.
-pub fn initial_guess(y: &[f64], u: MatRef<'_, f64>, o: &MisoOrders) -> Result<Vec<f64>> {
-    initial_guess_multi(&[(y, u)], o)
-}
-
-/// [`initial_guess`] from several experiments (every regression row inside one experiment).
-pub fn initial_guess_multi(
-    experiments: &[(&[f64], MatRef<'_, f64>)],
-    o: &MisoOrders,
-) -> Result<Vec<f64>> {
-    guess_multi(experiments, o, true)
-}
-
-/// [`initial_guess_multi`]; without `sweep`, the least-squares impulse responses with `F = 1`
-/// start the output-error part of several inputs (no [`gauss_seidel_start`]).
-fn guess_multi(
-    experiments: &[(&[f64], MatRef<'_, f64>)],
-    o: &MisoOrders,
-    sweep: bool,
-) -> Result<Vec<f64>> {
-    check_experiments(experiments, o)?;
-    let m = experiments[0].1.ncols();
-    let y: Sig = experiments.iter().map(|e| e.0.to_vec()).collect();
-    let x: Vec<Sig> = (0..m)
-        .map(|j| {
-            experiments
-                .iter()
-                .map(|(_, u)| delayed(*u, j, o.nk[j]))
-                .collect()
-        })
-        .collect();
-    let n = experiments.iter().map(|e| e.0.len()).max().unwrap_or(0);
-    let has_f = o.nf.iter().any(|&f| f > 0);
-    let mut a = vec![0.0; o.na];
-    let mut b: Vec<Vec<f64>> = o.nb.iter().map(|&k| vec![0.0; k]).collect();
-    let mut f: Vec<Vec<f64>> = o.nf.iter().map(|&k| vec![0.0; k]).collect();
-    let mut c = vec![0.0; o.nc];
-    let mut d = vec![0.0; o.nd];
-    // High-order ARX residual as an innovation estimate.
-    let high = (o.na.max(o.nc).max(o.nd) + o.nf.iter().copied().max().unwrap_or(0) + 4)
-        .min(n / 10)
-        .max(1);
-    let innov = |target: &Sig, xs: &[Sig], ar_only: bool| -> Result<Sig> {
-        let mut regs: Vec<(&Sig, usize, usize)> = vec![(target, 1, high)];
-        if !ar_only {
-            for xj in xs {
-                regs.push((xj, 0, high));
-            }
-        }
-        let th = lagged_ls(target, &regs)?;
-        let mut out = target.clone();
-        for (ex, e) in out.iter_mut().enumerate() {
-            for (t, et) in e.iter_mut().enumerate() {
-                let mut s = 0.0;
-                let mut c = 0;
-                for (sig, first, nl) in &regs {
-                    for k in *first..*first + *nl {
-                        s += th[c] * shifted(&sig[ex], t, k);
-                        c += 1;
-                    }
-                }
-                *et -= s;
-            }
-        }
-        Ok(out)
-    };
-    if !has_f {
-        // A, B (and C, D if any) jointly: ARX or Hannan-Rissanen.
-        let ehat = if o.nc > 0 || o.nd > 0 {
-            innov(&y, &x, false)?
-        } else {
-            y.iter().map(|e| vec![0.0; e.len()]).collect()
-        };
-        let mut regs: Vec<(&Sig, usize, usize)> = vec![(&y, 1, o.na)];
-        for j in 0..m {
-            regs.push((&x[j], 0, o.nb[j]));
-        }
-        regs.push((&ehat, 1, o.nc));
-        let th = lagged_ls(&y, &regs)?;
-        a = th[..o.na].iter().map(|v| -v).collect();
-        let mut i = o.na;
-        for j in 0..m {
-            b[j] = th[i..i + o.nb[j]].to_vec();
-            i += o.nb[j];
-        }
-        c = stable_or_zero(th[i..i + o.nc].to_vec());
-        if o.nd > 0 {
-            // D from an AR fit of the equation error.
-            let v = minus_filtered(&fmap(&monic(&a), &[1.0], &y), &x, &b, &f);
-            let th = lagged_ls(&v, &[(&v, 1, o.nd)])?;
-            d = th.iter().map(|t| -t).collect();
-        }
-    } else {
-        let ya = fmap(&monic(&a), &[1.0], &y);
-        if m == 1 {
-            let (bb, ff) = steiglitz_mcbride_multi(&ya, &x[0], o.nb[0], o.nf[0], 30)?;
-            b[0] = bb;
-            f[0] = ff;
-        } else {
-            let regs: Vec<(&Sig, usize, usize)> = (0..m).map(|j| (&x[j], 0, o.nb[j])).collect();
-            let th = lagged_ls(&ya, &regs)?;
-            let mut i = 0;
-            for j in 0..m {
-                b[j] = th[i..i + o.nb[j]].to_vec();
-                i += o.nb[j];
-            }
-            if sweep {
-                (b, f) = gauss_seidel_start(&ya, &x, o, b, f);
-            }
-        }
-        if o.nc > 0 || o.nd > 0 {
-            let v = minus_filtered(&ya, &x, &b, &f);
-            let ehat = innov(&v, &[], true)?;
-            let th = lagged_ls(&v, &[(&v, 1, o.nd), (&ehat, 1, o.nc)])?;
-            d = th[..o.nd].iter().map(|t| -t).collect();
-            c = stable_or_zero(th[o.nd..].to_vec());
-        }
-    }
-    let mut theta = a;
-    for bj in b {
-        theta.extend(bj);
-    }
-    theta.extend(c);
-    theta.extend(d);
-    for fj in f {
-        theta.extend(fj);
-    }
-    Ok(theta)
 }
 
 /// Result of [`estimate`].
@@ -653,8 +429,16 @@ pub struct MisoEstimate {
     pub theta0: Vec<f64>,
     /// Innovation variance estimate `2 cost / N`.
     pub noise_variance: f64,
-    /// Parameter covariance `noise_variance * (J^T J)^+`.
+    /// Parameter covariance `noise_variance * (J^T J)^+` (with the initial states estimated,
+    /// `J^T J` is the Schur complement: the marginal covariance).
     pub covariance: Mat<f64>,
+    /// How the initial conditions were set: `Zero` or `Estimate` (`Auto` has chosen).
+    pub initial: InitialCondition,
+    /// Each experiment's initial state (zeros from rest).
+    pub initial_states: Vec<InitialState>,
+    /// With `Auto`: the costs from rest and with the initial states eliminated at the fit from
+    /// rest, which decided ([`initial::worth_estimating`]).
+    pub auto_costs: Option<(f64, f64)>,
 }
 
 /// Prediction-error estimate of one output's polynomial model, from `theta0` or (when `None`)
@@ -681,7 +465,24 @@ pub fn estimate_multi(
     options: &Options,
     observer: &mut dyn FnMut(&Iteration) -> Flow,
 ) -> Result<MisoEstimate> {
+    let ic = InitialCondition::Zero;
+    estimate_with(experiments, orders, theta0, ic, options, observer)
+}
+
+/// [`estimate_multi`] with the initial conditions set by `initial` ([`super::initial`]):
+/// `Estimate` eliminates each experiment's initial state at every evaluation; `Auto` searches
+/// from rest and then, when [`initial::worth_estimating`] at that fit, again from it with the
+/// initial states estimated.
+pub fn estimate_with(
+    experiments: &[(&[f64], MatRef<'_, f64>)],
+    orders: MisoOrders,
+    theta0: Option<&[f64]>,
+    initial: InitialCondition,
+    options: &Options,
+    observer: &mut dyn FnMut(&Iteration) -> Flow,
+) -> Result<MisoEstimate> {
     let mut prob = MisoProblem::new_multi(experiments, orders.clone())?;
+    prob.estimate_initial(initial == InitialCondition::Estimate);
     let mut th0 = match theta0 {
         Some(t) => {
             if t.len() != orders.n_params() {
@@ -725,12 +526,36 @@ pub fn estimate_multi(
         }
     }
     let n: usize = experiments.iter().map(|e| e.0.len()).sum();
+    let mut chosen = initial;
+    let mut auto_costs = None;
+    if initial == InitialCondition::Auto {
+        chosen = InitialCondition::Zero;
+        if solution.stop != StopReason::Cancelled {
+            prob.estimate_initial(true);
+            let with = prob.evaluate(&solution.theta, false)?.cost;
+            let chance = prob.chance_drop(&solution.theta);
+            prob.estimate_initial(false);
+            if initial::worth_estimating(solution.cost, with, chance) {
+                // what "estimate" gives, from the same start (the fit from rest carries the
+                // transient's bias, in directions the data may not determine)
+                let ic = InitialCondition::Estimate;
+                let mut est = estimate_with(experiments, orders, theta0, ic, options, observer)?;
+                est.auto_costs = Some((solution.cost, with));
+                return Ok(est);
+            }
+            auto_costs = Some((solution.cost, with));
+        }
+    }
     let noise_variance = 2.0 * solution.cost / n as f64;
     let cov = crate::optim::covariance(solution.gauss_newton.as_ref(), noise_variance, 1e-10)?;
+    let initial_states = prob.initial_states(&solution.theta);
     Ok(MisoEstimate {
         solution,
         theta0: th0,
         noise_variance,
         covariance: cov.covariance,
+        initial: chosen,
+        initial_states,
+        auto_costs,
     })
 }

@@ -5,7 +5,7 @@ use super::filter::{filter, is_stable, monic};
 use super::pem::{estimate, MisoOrders, MisoProblem};
 use crate::optim::{Flow, Options, Problem};
 
-fn noise(n: usize, seed: u64) -> Vec<f64> {
+pub(super) fn noise(n: usize, seed: u64) -> Vec<f64> {
     // Uniform(-0.5, 0.5) from a 64-bit LCG, summed twice for a smoother distribution.
     let mut s = seed
         .wrapping_mul(2862933555777941757)
