@@ -12,7 +12,8 @@
    record is cut into five contiguous blocks (fewer on short records; several experiments
    laid end to end, cut where one ends: :func:`~sysid.validation.crossval.record_folds`),
    each held out once while the rest fits the candidate, which then simulates
-   it (initial state fitted); the score is the fit of the held-out blocks pooled (each
+   it (initial state fitted with the prior of where the block's input puts the state,
+   :mod:`sysid.validation.state_prior`); the score is the fit of the held-out blocks pooled (each
    weighs its output variation), without the block where it fits worst and the one where it
    fits best (:mod:`.board`); a block where every output stands still is left
    out (:func:`_informative`); ``checks["held_out_evidence"]`` notes when one block holds

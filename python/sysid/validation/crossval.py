@@ -7,7 +7,8 @@ checks instead is how well a model of each order *simulates data it was not fitt
 module does that without touching the user's validation data: the estimation record is cut
 into five contiguous blocks (fewer on short records; or the experiments themselves), models
 of every order are fitted on the rest and simulated on the block left out (initial state
-fitted by least squares), and the order whose median held-out simulation fit is best wins (the
+fitted by least squares, with the prior of where the block's input puts the model's state:
+:mod:`.state_prior`), and the order whose median held-out simulation fit is best wins (the
 median: a record often holds one block unlike the others, which would otherwise decide
 alone); a smaller order within ``tol`` fit points (and 5 % of the best's error) of the best
 is preferred (a smaller model generalises better), and so is one within :data:`RESOLUTION`
