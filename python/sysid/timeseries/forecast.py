@@ -182,16 +182,30 @@ def _initial_state(Ap: np.ndarray, C: np.ndarray, e0: np.ndarray,
     N, l = e0.shape
     n = Ap.shape[0]
     c = np.ascontiguousarray
-    quiet = np.zeros((N, 0))
-    # C Ap^t e_i for every state direction i: (N, l, n)
-    phi = np.stack([np.asarray(_sysid.simulate(c(Ap), np.zeros((n, 0)), c(C),
-                                               np.zeros((l, 0)), quiet, c(np.eye(n)[i])))
-                    for i in range(n)], axis=2)
     w = np.linalg.cholesky(np.linalg.inv(lam + 1e-12 * np.trace(lam) / l * np.eye(l)))
-    Phi = np.einsum("ab,kbn->kan", w.T, phi).reshape(N * l, n)
-    rhs = (e0 @ w).reshape(N * l)
-    x0 = np.linalg.lstsq(Phi, rhs, rcond=1e-12)[0]
-    return x0, np.linalg.pinv(Phi.T @ Phi, rcond=1e-12, hermitian=True)
+    # normal equations summed block by block of samples (no (N l, n) regressor on long
+    # records), until the free responses C Ap^t fall below round-off
+    G, b = np.zeros((n, n)), np.zeros(n)
+    M = np.eye(n)  # Ap^t0
+    for t0 in range(0, N, _BLOCK):
+        k = min(_BLOCK, N - t0)
+        quiet = np.zeros((k, 0))
+        # C Ap^(t0 + j) e_i for the block's samples j and every state direction i: (k, l, n)
+        phi = np.stack([np.asarray(_sysid.simulate(c(Ap), np.zeros((n, 0)), c(C),
+                                                   np.zeros((l, 0)), quiet, c(M[:, i])))
+                        for i in range(n)], axis=2)
+        Phi = np.einsum("ab,kbn->kan", w.T, phi).reshape(k * l, n)
+        G += Phi.T @ Phi
+        b += Phi.T @ (e0[t0:t0 + k] @ w).reshape(k * l)
+        M = np.linalg.matrix_power(Ap, k) @ M
+        if not np.all(np.isfinite(M)) or np.max(np.abs(M)) < 1e-17:
+            break
+    P0 = np.linalg.pinv(G, rcond=1e-12, hermitian=True)
+    return P0 @ b, P0
+
+
+#: samples per block of the initial state's normal equations
+_BLOCK = 4096
 
 
 def _free_response(Ap: np.ndarray, x0: np.ndarray, count: int) -> np.ndarray:
