@@ -235,7 +235,7 @@ def test_docs_cv_block_chooses_without_the_validation_data():
           "est": sysid.SubspaceEstimator(sysid.IOData(u=d.u[:500], y=d.y[:500], dt=d.dt),
                                          horizon=15)}
     exec(compile(block, "docs/validation.md[cv]", "exec"), ns)
-    assert (ns["sel"].order, ns["sel"].picks["validation"]) == (5, 4)
+    assert (ns["sel"].order, ns["sel"].picks["validation"]) == (4, 4)
     assert "only reported on" in ns["sel"].reason
 
 

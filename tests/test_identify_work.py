@@ -201,8 +201,9 @@ def test_a_fold_left_out_takes_its_block_weight_with_it():
 def test_a_final_refit_stopped_at_its_cap_is_noted_with_the_call_that_searches_on(monkeypatch):
     """Before: ``identify`` on DaISy's heating system returned a re-fit that had stopped at its
     300-iteration cap and said nothing (3 of 38 splits of the real records); the note names the
-    cap and the call, which runs as printed and searches on from the model."""
-    est, _ = daisy_split("robot_arm")
+    cap and the call, which runs as printed and searches on from the model (on the winding
+    record, whose choice is a prediction-error refinement)."""
+    est, _ = daisy_split("winding")
     monkeypatch.setattr(core, "FINAL_ITER", 3)
     res = quiet(sysid.identify, est, progress=False)
     assert res.model.statespace.info["pem"]["stop"] == "maximum iterations"
