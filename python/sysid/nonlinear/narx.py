@@ -32,7 +32,7 @@ from ..errors import (
     StabilityWarning,
 )
 from ..polynomial.orders import matlab_orders
-from ..validation.compare import diverged
+from ..validation.compare import diverged, given_start
 from .choice import is_auto
 from .customreg import CustomRegressor
 from .hw_model import SigmoidNetwork, check_search_size
@@ -124,12 +124,13 @@ def _free_run(model: Any, exps: list[tuple[np.ndarray, np.ndarray]]
               ) -> tuple[np.ndarray, np.ndarray, int] | tuple[None, str, int]:
     """The model run free on each experiment from its measured first ``max_lag`` outputs:
     ``(sum of squared errors, sum of squared deviations from the mean, count)`` per output
-    after those samples, or ``(None, why, experiment)`` when a run diverges."""
+    after those samples (:func:`~sysid.validation.compare.given_start`, as ``compare``
+    scores them), or ``(None, why, experiment)`` when a run diverges."""
     sse, var, count = 0.0, 0.0, 0
-    k = model.max_lag
+    k = given_start(model)
     for i, (u, y) in enumerate(exps):
         try:
-            ys = np.asarray(model.simulate(u, x0=y[:k])).reshape(y.shape)
+            ys = np.asarray(model.simulate(u, x0=y[:model.max_lag])).reshape(y.shape)
             if not np.all(np.isfinite(ys)):
                 raise NumericalError("the simulated output is not finite")
             if diverged(y, ys):  # finite, but grown far beyond the record (F-16: 1e37 x)
