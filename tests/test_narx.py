@@ -423,3 +423,22 @@ def test_compare_does_not_call_a_bounded_narx_simulation_unstable_by_its_lineari
         warnings.simplefilter("error", sysid.StabilityWarning)
         r = sysid.compare(record(1), m)
     assert r.mean_fit > 99.9
+
+
+def test_predict_with_an_infinite_horizon_is_the_simulation():
+    # predict(u, y, np.inf) raised a DataError for NARX models, where every other family
+    # (and MATLAB's predict(sys, data, Inf)) gives the simulation: here from the measured
+    # first max_lag outputs, as any horizon beyond the record does
+    from test_narx_network import _truth_sigmoid
+
+    u, y = billings(120, 31, noise=0.05)
+    poly = sysid.NARXModel([2], [2], [1], sysid.PolynomialBasis(2), [list(BILLINGS)],
+                           [list(BILLINGS.values())], dt=1.0)
+    for m in (poly, _truth_sigmoid()):
+        want = m.simulate(u, x0=y[:2])
+        np.testing.assert_array_equal(m.predict(u, y, np.inf), want)
+        np.testing.assert_array_equal(m.predict(sysid.IOData(u, y, 1.0), horizon=np.inf), want)
+        np.testing.assert_allclose(m.predict(u, y, 200), want, atol=1e-12)
+        np.testing.assert_array_equal(m.predict(u[:1], y[:1], np.inf), y[:1])  # all copied
+        with pytest.raises(sysid.DataError, match="positive integer"):
+            m.predict(u, y, 0)
