@@ -442,3 +442,22 @@ def test_predict_with_an_infinite_horizon_is_the_simulation():
         np.testing.assert_array_equal(m.predict(u[:1], y[:1], np.inf), y[:1])  # all copied
         with pytest.raises(sysid.DataError, match="positive integer"):
             m.predict(u, y, 0)
+
+
+def test_a_validation_record_of_another_sample_time_is_refused():
+    # nlarx chose its terms on a validation record sampled every 0.5 s for data sampled
+    # every 1 s without a word; pnlss and nlssest refuse it (one check, validation_record)
+    u, y = billings(300, 41, noise=0.02)
+    uv, yv = billings(200, 42, noise=0.02)
+    d, poly = sysid.IOData(u, y, 1.0), sysid.PolynomialBasis(2)
+    with pytest.raises(sysid.DataError, match=r"sampled every 0\.5 s, the estimation data "
+                                              r"every 1 s"):
+        sysid.nlarx(d, 2, 2, 1, basis=poly, criterion="validation",
+                    validation=sysid.IOData(uv, yv, 0.5))
+    with pytest.raises(sysid.DataError, match="validation has 2 input"):
+        sysid.nlarx(d, 2, 2, 1, basis=poly, criterion="validation",
+                    validation=sysid.IOData(np.c_[uv, uv], yv, 1.0))
+    same = sysid.nlarx(d, 2, 2, 1, basis=poly, criterion="validation",
+                       validation=sysid.IOData(uv, yv, 1.0))
+    pair = sysid.nlarx(d, 2, 2, 1, basis=poly, criterion="validation", validation=(uv, yv))
+    assert same.terms == pair.terms  # a (u, y) pair takes the data's sample time

@@ -33,6 +33,7 @@ from ..errors import (
 )
 from ..polynomial.orders import matlab_orders
 from ..validation.compare import diverged, given_start
+from ..validation.records import validation_record
 from .choice import is_auto
 from .customreg import CustomRegressor
 from .hw_model import SigmoidNetwork, check_search_size
@@ -227,8 +228,9 @@ def nlarx(
         ``basis="auto"`` and ``"validation"``, the validation record also chooses between
         the polynomial and the linear model (the lower free-run RMSE on it), in place of
         the estimation record's held-out blocks.
-    validation : IOData, optional
-        Validation record for ``criterion="validation"``.
+    validation : IOData or (u, y), optional
+        Validation record for ``criterion="validation"``: the estimation data's channels
+        and sample time (a ``(u, y)`` pair takes the latter), refused otherwise.
     noise_terms : int
         NARMAX: residual lags ``1..noise_terms``; up to ``max_terms`` noise terms are chosen
         after the process terms by the extended-least-squares iteration (``n_iterations``
@@ -287,12 +289,8 @@ def nlarx(
         raise DataError(f"focus must be 'prediction' or 'simulation', got {focus!r}")
     if criterion == "validation" and validation is None:
         raise DataError("criterion='validation' needs validation data (validation=IOData)")
-    if validation is not None:
-        vu, vy = experiment_arrays(validation)[0]
-        if (vu.shape[1], vy.shape[1]) != (nu, ny):
-            raise DataError(f"validation has {vu.shape[1]} input(s) and {vy.shape[1]} "
-                            f"output(s), the estimation data {nu} and {ny}: give a record of "
-                            "the same channels")
+    # channels, sample time, length and varying outputs: the check pnlss and nlssest make
+    validation = validation_record(validation, data)
     max_terms, noise_terms = as_int(max_terms, "max_terms"), as_int(noise_terms, "noise_terms", 0)
     n_iterations, max_iter = as_int(n_iterations, "n_iterations"), as_int(max_iter, "max_iter", 0)
     # the unexplained fraction at which the selection stops: NaN stopped it never, a value
