@@ -461,3 +461,25 @@ def test_a_validation_record_of_another_sample_time_is_refused():
                        validation=sysid.IOData(uv, yv, 1.0))
     pair = sysid.nlarx(d, 2, 2, 1, basis=poly, criterion="validation", validation=(uv, yv))
     assert same.terms == pair.terms  # a (u, y) pair takes the data's sample time
+
+
+
+def test_rbf_basis_does_not_depend_on_the_order_of_the_experiments():
+    # the seeded k-means ran on the experiments' lag vectors stacked as given: the same
+    # three experiments in three orders validated at 96.51, 94.92 and 95.52 %
+    sets = [billings(n, seed, noise=0.02) for n, seed in ((200, 51), (150, 52), (250, 53))]
+    val = sysid.IOData(*billings(400, 54), 1.0)
+    u_test = np.random.default_rng(0).uniform(-1, 1, 100)
+    sims, fits = [], []
+    for order in ([0, 1, 2], [2, 0, 1], [1, 2, 0]):
+        d = sysid.IOData([sets[i][0] for i in order], [sets[i][1] for i in order], 1.0)
+        m = sysid.nlarx(d, 2, 2, 1, basis=sysid.RBFBasis(5), max_terms=6)
+        sims.append(m.simulate(u_test))
+        fits.append(sysid.compare(val, m).fit[0, 0])
+    np.testing.assert_allclose(sims[1], sims[0], atol=1e-9)
+    np.testing.assert_allclose(sims[2], sims[0], atol=1e-9)
+    assert max(fits) - min(fits) < 1e-7
+    # one experiment's rows are taken as they come: its basis is the one fitted before
+    lags = np.random.default_rng(1).standard_normal((300, 4))
+    np.testing.assert_array_equal(sysid.RBFBasis(5).fitted(lags).centres,
+                                  sysid.RBFBasis(5).fitted([lags]).centres)

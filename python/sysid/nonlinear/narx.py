@@ -340,7 +340,7 @@ def nlarx(
     if isinstance(basis, RBFBasis):
         if noise_terms:
             raise DataError("noise_terms (NARMAX) needs a PolynomialBasis")
-        basis = basis.fitted(np.vstack([_lag_matrix(u, y, na_, nb_, nk_) for u, y in exps]))
+        basis = basis.fitted([_lag_matrix(u, y, na_, nb_, nk_) for u, y in exps])
     degree, rbf = basis.rust_args()
     orders = (na_, nb_, nk_, [0] * ny)
     names = dict(input_names=getattr(data, "input_names", None),

@@ -94,10 +94,15 @@ class RBFBasis:
         self.shift: np.ndarray | None = None
         self.scale: np.ndarray | None = None
 
-    def fitted(self, lags: np.ndarray) -> RBFBasis:
-        """A copy with shift, scale, centres and widths fitted to lag vectors ``(n, nv)``."""
+    def fitted(self, lags: np.ndarray | list[np.ndarray]) -> RBFBasis:
+        """A copy with shift, scale, centres and widths fitted to lag vectors ``(n, nv)``, or
+        to a list of them, one per experiment: stacked in an order of their own (by their
+        contents), so that the seeded clustering does not depend on the order in which the
+        experiments are given (one experiment is taken as it is)."""
         from scipy.cluster.vq import kmeans2
 
+        if isinstance(lags, (list, tuple)):
+            lags = np.vstack(sorted(lags, key=lambda a: (a.shape[0], a.tobytes())))
         out = RBFBasis(self.n_centres, centres=self.centres_data, widths=self.widths_arg,
                        seed=self.seed)
         shift = lags.mean(axis=0)
