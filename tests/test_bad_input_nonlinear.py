@@ -5,6 +5,8 @@ or a NaN passed through to the result."""
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -143,3 +145,37 @@ def test_a_record_too_short_for_the_linear_start_says_so_in_the_fits_terms():
         with pytest.raises(sysid.InsufficientDataError,
                            match=r"too short for the linear start of order 2.*init="):
             fit(sysid.IOData(u[:10], y[:10], 1.0))
+
+
+@pytest.fixture(scope="module")
+def nlss_models(record):
+    d = record[2]
+    with warnings.catch_warnings():  # short searches: what they say is not tested here
+        warnings.simplefilter("ignore", sysid.IterationLimitWarning)
+        return {"pnlss": sysid.pnlss(d, 1, degree=2, max_iter=3, progress=False),
+                "decoupled": sysid.pnlss(d, 1, degree=3, branches=2, max_iter=2,
+                                         progress=False),
+                "neural": sysid.nlssest(d, 1, hidden=4, epochs=2, progress=False)}
+
+
+@pytest.mark.parametrize("kind", ["pnlss", "decoupled", "neural"])
+def test_nonlinear_state_space_models_check_their_arguments_as_every_family(record,
+                                                                             nlss_models,
+                                                                             kind):
+    # predict took horizon 0 or 1.5, simulate dropped a complex input's imaginary part and
+    # returned an empty output for an empty input, where the other families refuse them
+    u, y, _ = record
+    m = nlss_models[kind]
+    for h in (0, 1.5, -1, "2"):
+        with pytest.raises(sysid.DataError, match="horizon must be a positive integer"):
+            m.predict(u, y, h)
+    with pytest.raises(sysid.DataError, match="u must be a real numeric array"):
+        m.simulate(u + 1j)
+    with pytest.raises(sysid.DataError, match="u must be a real numeric array"):
+        m.predict(u + 1j, y)
+    with pytest.raises(sysid.ShapeError, match="u has no samples"):
+        m.simulate(np.zeros(0))
+    with pytest.raises(sysid.ShapeError, match="u has 400 samples but y has 395"):
+        m.predict(u, y[:-5])
+    np.testing.assert_array_equal(m.predict(u, y, np.inf), m.simulate(u))
+    np.testing.assert_array_equal(m.predict(u, y, 3), m.simulate(u))

@@ -104,7 +104,7 @@ def test_divergence_and_bad_input():
                          zeta=[[0, 0]], eta=[])
     with pytest.raises(NumericalError, match="diverged"):
         m.simulate(np.full(100, 3.0))
-    with pytest.raises(DataError, match="u must be"):
+    with pytest.raises(DataError, match=r"u has shape \(10, 2\) but should have 1 column"):
         m.simulate(np.ones((10, 2)))
     d = _data(_truth(), 1)
     with pytest.raises(DataError, match="degree"):

@@ -156,7 +156,29 @@ def test_decoupled_iteration_cap_names_the_cap_given():
     with pytest.warns(sysid.IterationLimitWarning, match=r"stopped at max_iter=10 "):
         m = sysid.pnlss(sysid.IOData(u, y, 1.0), 2, degree=3, branches=2, max_iter=10,
                         progress=False)
-    assert m.info["fit"]["iterations"] > 10  # the starts' iterations are still reported
+    fit = m.info["fit"]
+    # the path returned: its best start's 8 iterations, then 2 more, one per cost entry
+    assert fit["iterations"] == len(fit["cost"]) - 1 == 10
+    assert fit["iterations_all_trials"] > 10  # the other starts' iterations, separately
+
+
+def test_decoupled_fit_reports_the_returned_path_s_iterations():
+    # max_iter=2 reported 6 iterations (three random starts of 2 summed) beside a cost
+    # history of 3 entries (the start returned: its 2 iterations)
+    rng = np.random.default_rng(1)
+    u = rng.uniform(-1, 1, 300)
+    x = np.zeros(300)
+    for t in range(1, 300):
+        x[t] = 0.7 * x[t - 1] + 0.5 * u[t - 1]
+    d = sysid.IOData(u, x + 0.5 * x ** 3 + 0.01 * rng.standard_normal(300), 0.1)
+    with pytest.warns(sysid.IterationLimitWarning, match="max_iter=2 "):
+        m = sysid.pnlss(d, 1, degree=3, branches=1, max_iter=2, progress=False)
+    fit = m.info["fit"]
+    assert fit["iterations"] == len(fit["cost"]) - 1 == 2
+    assert fit["iterations_all_trials"] == 6
+    assert fit["evaluations"] < fit["evaluations_all_trials"]
+    coupled = sysid.pnlss(d, 1, degree=2, max_iter=40, progress=False).info["fit"]
+    assert coupled["iterations_all_trials"] == coupled["iterations"] == len(coupled["cost"]) - 1
 
 
 def test_a_cancelled_decoupled_fit_stops_at_once():

@@ -95,14 +95,12 @@ def clamp_box(clamp: Any, size: int, of: str = "") -> tuple[np.ndarray, np.ndarr
 
 
 def signal(a: Any, width: int, name: str) -> np.ndarray:
-    """``a`` as a finite ``(n_samples, width)`` float array (1-D: one channel)."""
-    x = np.asarray(a, dtype=float)
-    x = x.reshape(-1, 1) if x.ndim == 1 else x
-    if x.ndim != 2 or x.shape[1] != width:
-        raise DataError(f"{name} must be (n_samples, {width}), got {np.shape(a)}")
-    if not np.isfinite(x).all():
-        raise DataError(f"{name} has non-finite values (NaN or Inf)")
-    return x
+    """``a`` as a finite, real ``(n_samples, width)`` float array (1-D: one channel) with at
+    least one sample: the check every model family applies (:func:`sysid._checks.as_2d`;
+    complex values are refused, not cast to their real parts)."""
+    from .._checks import as_2d
+
+    return as_2d(a, name, ncols=width)
 
 
 def fit_summary(model: Any) -> str:
@@ -142,17 +140,13 @@ class LinearPart:
 
     def predict(self, u: Any, y: Any = None, horizon: int = 1, x0: Any = None) -> np.ndarray:
         """An output-error model has no noise model: its prediction is its simulation
-        (from ``x0``, as :meth:`simulate`). ``y`` is checked against the model's outputs
-        and ``u``'s samples, as every model's ``predict`` checks it."""
-        from .._checks import as_2d
-        from .._measured import predict_args
+        (from ``x0``, as :meth:`simulate`). ``u``, ``y`` and ``horizon`` (a positive
+        integer, or ``np.inf``) are checked as every model's ``predict`` checks them."""
+        from .._measured import as_horizon, as_measured, predict_args
 
-        u, y = predict_args(u, y)
-        out = self.simulate(u) if x0 is None else self.simulate(u, x0=x0)
-        yy = as_2d(y, "y", ncols=out.shape[1])
-        if yy.shape[0] != out.shape[0]:
-            raise DataError(f"y has {yy.shape[0]} samples but u has {out.shape[0]}")
-        return out
+        as_horizon(horizon)
+        u, _ = as_measured(*predict_args(u, y), self.ninputs, self.noutputs)
+        return self.simulate(u) if x0 is None else self.simulate(u, x0=x0)
 
 
 def scaled_data(data: IOData, sc: Scaling) -> IOData:

@@ -224,8 +224,13 @@ def fit_decoupled(lin: StateSpaceModel, us: list[np.ndarray], recs: list[tuple[A
         best["stop"] = "cancelled"
     res = best if cancelled or max_iter <= STARTS_ITER else \
         fit(np.asarray(best["theta"]), max_iter - STARTS_ITER)
-    res["iterations"] += sum(t["iterations"] for t in trials) - (res is best) * best["iterations"]
+    # the work over every start, then the returned path's own (as its history counts it)
+    more = (res is not best) * res["iterations"], (res is not best) * res["evaluations"]
+    res["iterations_all_trials"] = sum(t["iterations"] for t in trials) + more[0]
+    res["evaluations_all_trials"] = sum(t["evaluations"] for t in trials) + more[1]
     if res is not best:  # the best start's path, then its continuation's
+        res["iterations"] += best["iterations"]
+        res["evaluations"] += best["evaluations"]
         res["history"] = list(best["history"]) + list(res["history"])[1:]
         res["iterates"] = np.vstack([best["iterates"], res["iterates"]])
 

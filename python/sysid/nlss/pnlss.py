@@ -303,7 +303,9 @@ def pnlss(
     Returns
     -------
     PNLSSModel or DecoupledPNLSSModel
-        ``info["fit"]``: iterations, costs, stop reason, parameters, transient, and
+        ``info["fit"]``: iterations (those of the path returned, one per entry of
+        ``cost`` after the first; ``iterations_all_trials`` adds the decoupled fit's other
+        random starts), costs, stop reason, parameters, transient, and
         ``"returned"`` when the model is an earlier iterate than the search's last (below,
         and ``validation``);
         ``info["memory"]``: the check that the model forgets its initial state
@@ -676,6 +678,9 @@ def _averaged(sd: IOData, pers: list[int] | None) -> list[Any]:
 
 def _report(res: dict[str, Any], recs: list[Any]) -> dict[str, Any]:
     return {"iterations": res["iterations"], "evaluations": res["evaluations"],
+            # the decoupled fit's random starts, the ones not returned too
+            "iterations_all_trials": res.get("iterations_all_trials", res["iterations"]),
+            "evaluations_all_trials": res.get("evaluations_all_trials", res["evaluations"]),
             "cost": list(res["history"]), "stop": res["stop"],
             "remaining_decrease": float(res["remaining_decrease"]),
             "n_parameters": int(np.asarray(res["theta"]).size),
@@ -705,8 +710,8 @@ def _warn_unstable(model: Any) -> Any:
 
 def _warn_short(res: dict[str, Any], max_iter: int) -> None:
     """The search stopped short: at its cap ``max_iter`` (an :class:`IterationLimitWarning`,
-    as every iterative estimator's, with how much the last iteration still gained; the
-    decoupled fit's ``res["iterations"]`` also counts its starts' iterations) or cancelled."""
+    as every iterative estimator's, with how much the last iteration still gained) or
+    cancelled (after the iterations of every start of a decoupled fit)."""
     import warnings
 
     from .._checks import user_stacklevel, warn_iteration_limit
@@ -715,7 +720,8 @@ def _warn_short(res: dict[str, Any], max_iter: int) -> None:
         warn_iteration_limit("pnlss", int(max_iter), res["history"],
                              remaining=res["remaining_decrease"])
     elif res["stop"] == "cancelled":
-        warnings.warn(f"pnlss was cancelled after {res['iterations']} iterations; the model is "
+        done = res.get("iterations_all_trials", res["iterations"])
+        warnings.warn(f"pnlss was cancelled after {done} iterations; the model is "
                       "the best iterate", SysidWarning, stacklevel=user_stacklevel())
 
 

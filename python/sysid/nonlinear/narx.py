@@ -32,7 +32,8 @@ from ..errors import (
     StabilityWarning,
 )
 from ..polynomial.orders import matlab_orders
-from ..validation.compare import diverged
+from ..validation.compare import diverged, given_start
+from ..validation.records import validation_record
 from .choice import is_auto
 from .customreg import CustomRegressor
 from .hw_model import SigmoidNetwork, check_search_size
@@ -124,12 +125,13 @@ def _free_run(model: Any, exps: list[tuple[np.ndarray, np.ndarray]]
               ) -> tuple[np.ndarray, np.ndarray, int] | tuple[None, str, int]:
     """The model run free on each experiment from its measured first ``max_lag`` outputs:
     ``(sum of squared errors, sum of squared deviations from the mean, count)`` per output
-    after those samples, or ``(None, why, experiment)`` when a run diverges."""
+    after those samples (:func:`~sysid.validation.compare.given_start`, as ``compare``
+    scores them), or ``(None, why, experiment)`` when a run diverges."""
     sse, var, count = 0.0, 0.0, 0
-    k = model.max_lag
+    k = given_start(model)
     for i, (u, y) in enumerate(exps):
         try:
-            ys = np.asarray(model.simulate(u, x0=y[:k])).reshape(y.shape)
+            ys = np.asarray(model.simulate(u, x0=y[:model.max_lag])).reshape(y.shape)
             if not np.all(np.isfinite(ys)):
                 raise NumericalError("the simulated output is not finite")
             if diverged(y, ys):  # finite, but grown far beyond the record (F-16: 1e37 x)
@@ -226,8 +228,9 @@ def nlarx(
         ``basis="auto"`` and ``"validation"``, the validation record also chooses between
         the polynomial and the linear model (the lower free-run RMSE on it), in place of
         the estimation record's held-out blocks.
-    validation : IOData, optional
-        Validation record for ``criterion="validation"``.
+    validation : IOData or (u, y), optional
+        Validation record for ``criterion="validation"``: the estimation data's channels
+        and sample time (a ``(u, y)`` pair takes the latter), refused otherwise.
     noise_terms : int
         NARMAX: residual lags ``1..noise_terms``; up to ``max_terms`` noise terms are chosen
         after the process terms by the extended-least-squares iteration (``n_iterations``
@@ -286,12 +289,8 @@ def nlarx(
         raise DataError(f"focus must be 'prediction' or 'simulation', got {focus!r}")
     if criterion == "validation" and validation is None:
         raise DataError("criterion='validation' needs validation data (validation=IOData)")
-    if validation is not None:
-        vu, vy = experiment_arrays(validation)[0]
-        if (vu.shape[1], vy.shape[1]) != (nu, ny):
-            raise DataError(f"validation has {vu.shape[1]} input(s) and {vy.shape[1]} "
-                            f"output(s), the estimation data {nu} and {ny}: give a record of "
-                            "the same channels")
+    # channels, sample time, length and varying outputs: the check pnlss and nlssest make
+    validation = validation_record(validation, data)
     max_terms, noise_terms = as_int(max_terms, "max_terms"), as_int(noise_terms, "noise_terms", 0)
     n_iterations, max_iter = as_int(n_iterations, "n_iterations"), as_int(max_iter, "max_iter", 0)
     # the unexplained fraction at which the selection stops: NaN stopped it never, a value
@@ -341,7 +340,7 @@ def nlarx(
     if isinstance(basis, RBFBasis):
         if noise_terms:
             raise DataError("noise_terms (NARMAX) needs a PolynomialBasis")
-        basis = basis.fitted(np.vstack([_lag_matrix(u, y, na_, nb_, nk_) for u, y in exps]))
+        basis = basis.fitted([_lag_matrix(u, y, na_, nb_, nk_) for u, y in exps])
     degree, rbf = basis.rust_args()
     orders = (na_, nb_, nk_, [0] * ny)
     names = dict(input_names=getattr(data, "input_names", None),

@@ -94,10 +94,15 @@ class RBFBasis:
         self.shift: np.ndarray | None = None
         self.scale: np.ndarray | None = None
 
-    def fitted(self, lags: np.ndarray) -> RBFBasis:
-        """A copy with shift, scale, centres and widths fitted to lag vectors ``(n, nv)``."""
+    def fitted(self, lags: np.ndarray | list[np.ndarray]) -> RBFBasis:
+        """A copy with shift, scale, centres and widths fitted to lag vectors ``(n, nv)``, or
+        to a list of them, one per experiment: stacked in an order of their own (by their
+        contents), so that the seeded clustering does not depend on the order in which the
+        experiments are given (one experiment is taken as it is)."""
         from scipy.cluster.vq import kmeans2
 
+        if isinstance(lags, (list, tuple)):
+            lags = np.vstack(sorted(lags, key=lambda a: (a.shape[0], a.tobytes())))
         out = RBFBasis(self.n_centres, centres=self.centres_data, widths=self.widths_arg,
                        seed=self.seed)
         shift = lags.mean(axis=0)
@@ -221,16 +226,24 @@ class LaggedIO:
             raise ShapeError(f"x0 must hold {want}")
         return np.ascontiguousarray(y0)
 
-    def _measured(self, u: Any, y: Any, horizon: Any) -> tuple[np.ndarray, np.ndarray, int]:
-        """``predict``'s arguments checked: ``u``, ``y`` of one length and the horizon."""
+    def _measured(self, u: Any, y: Any, horizon: Any
+                  ) -> tuple[np.ndarray, np.ndarray, int | None]:
+        """``predict``'s arguments checked: ``u``, ``y`` of one length and the horizon
+        (``None`` for ``np.inf``, the simulation)."""
         if self.ninputs == 0 and np.ndim(u) == 1:
             u = np.zeros((np.size(u), 0))
         u, y = as_measured(*predict_args(u, y), self.ninputs, self.noutputs)
-        h = as_horizon(horizon)
-        if h is None:
-            raise DataError("horizon must be a positive integer; for the free-run prediction "
-                            "(np.inf) call model.simulate(u)")
-        return np.ascontiguousarray(u), np.ascontiguousarray(y), h
+        return np.ascontiguousarray(u), np.ascontiguousarray(y), as_horizon(horizon)
+
+    def _measured_start(self, y: np.ndarray) -> np.ndarray:
+        """The first ``max_lag`` measured outputs, from which ``predict(..., np.inf)``
+        simulates (MATLAB's ``predict(sys, data, Inf)``; any ``k``-step prediction with ``k``
+        beyond the record equals it); zeros past a record shorter than that, whose outputs
+        are then all copied."""
+        lag = self.max_lag
+        start = np.zeros((lag, self.noutputs))
+        start[:min(lag, y.shape[0])] = y[:lag]
+        return start
 
 
 class NARXModel(LaggedIO, ModelMixin):
@@ -356,8 +369,13 @@ class NARXModel(LaggedIO, ModelMixin):
 
     def predict(self, u: Any, y: Any = None, horizon: int = 1) -> np.ndarray:
         """``horizon``-step prediction ``yhat(t | t - horizon)`` from measured ``u``, ``y``
-        (NARMAX: residual terms from the one-step residuals up to ``t - horizon``)."""
-        return self._rust("predict", *self._measured(u, y, horizon))
+        (NARMAX: residual terms from the one-step residuals up to ``t - horizon``);
+        ``np.inf``: the simulation from the measured first ``max_lag`` outputs. The first
+        ``max_lag`` rows repeat the measured outputs."""
+        u, y, h = self._measured(u, y, horizon)
+        if h is None:
+            return self.simulate(u, x0=self._measured_start(y))
+        return self._rust("predict", u, y, h)
 
     def linearize(self) -> Any:
         """The linear ARX model of the first-order terms around zero (a

@@ -25,6 +25,7 @@ from ..errors import (
     NumericalError,
     StabilityWarning,
 )
+from ..validation.compare import given_start
 from .hw_model import SigmoidNetwork
 from .narx_model import lag_names
 from .narx_network_model import NetworkNARXModel, from_rust_nl
@@ -312,12 +313,13 @@ def _refine(model: NetworkNARXModel, recs: list[tuple[np.ndarray, np.ndarray]], 
 def _free_run_variances(model: NetworkNARXModel, recs: list[tuple[np.ndarray, np.ndarray]],
                         pooled: np.ndarray) -> np.ndarray:
     """Each output's mean squared free-run error (from the measured first outputs, as the
-    refinement runs it), not their pool; ``pooled`` if the run fails."""
-    L = model.max_lag
+    refinement runs it), not their pool; ``pooled`` if the run fails. The samples scored are
+    those :func:`~sysid.validation.compare.given_start` says the model predicts."""
+    L, k = model.max_lag, given_start(model)
     sums, count = np.zeros(model.noutputs), 0
     try:
         for u, y in recs:
-            e = (y - np.asarray(model.simulate(u, x0=y[:L])).reshape(y.shape))[L:]
+            e = (y - np.asarray(model.simulate(u, x0=y[:L])).reshape(y.shape))[k:]
             sums += np.sum(e ** 2, axis=0)
             count += e.shape[0]
     except NumericalError:

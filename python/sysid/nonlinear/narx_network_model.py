@@ -156,8 +156,12 @@ class NetworkNARXModel(LaggedIO, ModelMixin):
         return np.asarray(_sysid.narx_network_simulate(self._args(), u, np.ascontiguousarray(y0)))
 
     def predict(self, u: Any, y: Any = None, horizon: int = 1) -> np.ndarray:
-        """``horizon``-step prediction ``yhat(t | t - horizon)`` from measured ``u``, ``y``."""
+        """``horizon``-step prediction ``yhat(t | t - horizon)`` from measured ``u``, ``y``;
+        ``np.inf``: the simulation from the measured first ``max_lag`` outputs. The first
+        ``max_lag`` rows repeat the measured outputs."""
         u, y, horizon = self._measured(u, y, horizon)
+        if horizon is None:
+            return self.simulate(u, x0=self._measured_start(y))
         return np.asarray(_sysid.narx_network_predict(self._args(), u, np.ascontiguousarray(y),
                                                       int(horizon)))
 

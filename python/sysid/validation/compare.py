@@ -367,11 +367,45 @@ def _linear_part(model: Any) -> Any:
     return lin if hasattr(lin, "A") else lin.to_statespace()
 
 
+def given_start(model: Any) -> int:
+    """Samples at the start of each experiment that a run of ``model`` copies rather than
+    predicts: a NARX model's first ``max_lag`` outputs are its initial condition (the
+    measured outputs, or the ``x0`` given) in its simulation and its prediction alike; 0 for
+    other models. The one rule by which :func:`compare`'s fit numbers, :func:`residuals`'
+    tests and ``nlarx``'s own free-run checks leave them out (as MATLAB's ``compare`` scores a
+    nonlinear ARX model whose initial condition comes from the data).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> from sysid.validation.compare import given_start
+    >>> m = sysid.NARXModel([2], [1], [1], sysid.PolynomialBasis(1), [[[0]]], [[0.5]], dt=1.0)
+    >>> given_start(m), given_start(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]))
+    (2, 0)
+    """
+    if _has_state(model):
+        return 0
+    lag = getattr(model, "max_lag", None)
+    return int(lag) if isinstance(lag, (int, np.integer)) and lag > 0 else 0
+
+
+def require_scored(recs: list[tuple[np.ndarray, np.ndarray]], start: int, model: Any) -> None:
+    """Refuse experiments with no sample after the ``start`` a model's run copies
+    (:func:`given_start`): nothing of theirs would be the model's."""
+    for i, (_, y) in enumerate(recs):
+        if start and y.shape[0] <= start:
+            raise DataError(
+                f"{type(model).__name__} copies its first {start} outputs (max_lag, its initial "
+                f"condition) and predicts the rest, but "
+                + (f"experiment {i}" if len(recs) > 1 else "the record")
+                + f" has {y.shape[0]} samples: nothing is left to score; give a longer record")
+
+
 def _x0_for(model: Any, x0: Any, u: np.ndarray, y: np.ndarray, horizon: int | None,
             index: int, count: int) -> np.ndarray | None:
     if not _has_state(model):
-        lag = getattr(model, "max_lag", None)
-        if horizon is None and isinstance(lag, (int, np.integer)) and lag > 0:
+        lag = given_start(model)
+        if horizon is None and lag > 0:
             # a NARX model's "state" is its first max_lag outputs: the measured ones (as
             # nlarx's own validation criterion runs it), or those given
             if isinstance(x0, str) and x0 == "estimate":
@@ -476,8 +510,13 @@ class CompareResult(HTMLResult):
         Inputs per experiment.
     x0 : list of ndarray or None
         Initial state used per experiment.
+    start : int
+        Samples at the start of each experiment that the model's run copies rather than
+        predicts (:func:`given_start`: a NARX model's first ``max_lag`` outputs, its initial
+        condition; 0 for other models): kept in ``yhat``, left out of the fit numbers.
     fit, vaf, rmse : ndarray
-        Shape ``(n_experiments, noutputs)``; see :func:`fit_metrics`.
+        Shape ``(n_experiments, noutputs)`` over the samples after ``start``; see
+        :func:`fit_metrics`.
     diverged : ndarray of bool
         Per experiment: the model's output diverged on it (not finite, or beyond ``1e8``
         times the measured range: an unstable model on a long record); its fit is ``-inf``
@@ -485,14 +524,16 @@ class CompareResult(HTMLResult):
     """
 
     def __init__(self, model: Any, horizon: int | None, u: list[np.ndarray],
-                 y: list[np.ndarray], yhat: list[np.ndarray], x0: list[Any]) -> None:
+                 y: list[np.ndarray], yhat: list[np.ndarray], x0: list[Any],
+                 start: int = 0) -> None:
         self.model, self.horizon = model, horizon
         self.u, self.y, self.yhat, self.x0 = u, y, yhat, x0
+        self.start = int(start)
         #: start time of each experiment (the record's clock; ``None``: from 0)
         self.t0: list[float] | None = None
         self.output_names = list(model.output_names)
         self.dt = model.dt
-        metrics = [_metrics(a, b) for a, b in zip(y, yhat)]
+        metrics = [_metrics(a[start:], b[start:]) for a, b in zip(y, yhat)]
         self.fit = np.array([d["fit"] for d in metrics])
         self.vaf = np.array([d["vaf"] for d in metrics])
         self.rmse = np.array([d["rmse"] for d in metrics])
@@ -581,7 +622,10 @@ def compare(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
         given (one array, or a list with one per experiment). A nonlinear state-space
         model's is fitted by Gauss-Newton on the record (never worse than zero); a NARX
         model's simulation starts from the measured first ``max_lag`` outputs
-        (``"estimate"``), from zero outputs, or from the outputs given.
+        (``"estimate"``), from zero outputs, or from the outputs given. Those first
+        ``max_lag`` samples (its initial condition, in prediction too) stay in ``yhat`` but
+        not in the fit numbers, which score the samples the model predicts
+        (:attr:`CompareResult.start`).
 
     Returns
     -------
@@ -650,7 +694,7 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
         yh = [model.trend.restore_outputs(b, inner.dt, model.trend.start_of(t[0]))
               for b, t in zip(inner.yhat, data.times)]
         out = CompareResult(model, inner.horizon, [u for u, _ in raw], [y for _, y in raw],
-                            yh, inner.x0)
+                            yh, inner.x0, inner.start)
         out.dt = inner.dt
         return out
     if _operating_point(model):  # the model of the deviations, its offsets added back
@@ -658,12 +702,15 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
         inner = compare_one(model.statespace, model.remove_offsets(raw), horizon, x0)
         out = CompareResult(model, inner.horizon, [u for u, _ in raw.experiments],
                             [y for _, y in raw.experiments],
-                            [yh + model.y_offset for yh in inner.yhat], inner.x0)
+                            [yh + model.y_offset for yh in inner.yhat], inner.x0,
+                            inner.start)
         out.dt = inner.dt
         return out
     model, recs = _records(model, data)
     h = _horizon(horizon)
     runner = _simulator(model, x0, h, recs[0][0] if recs else None)
+    start = given_start(runner)
+    require_scored(recs, start, model)
     us, ys, yh, x0s = [], [], [], []
     for i, (u, y) in enumerate(recs):
         x = _x0_for(runner, x0, u, y, h, i, len(recs))
@@ -682,8 +729,8 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
         ys.append(y)
         yh.append(_run(runner, u, y, h, x))
         x0s.append(x)
-    require_outputs_vary([y for _, y in recs], getattr(model, "output_names", None))
-    return CompareResult(model, h, us, ys, yh, x0s)
+    require_outputs_vary([y[start:] for _, y in recs], getattr(model, "output_names", None))
+    return CompareResult(model, h, us, ys, yh, x0s, start)
 
 
 def require_outputs_vary(ys: list[np.ndarray], names: Any = None) -> None:

@@ -15,7 +15,7 @@ import numpy as np
 from .._checks import as_between, as_int, check_magnitudes, user_stacklevel
 from .._display import HTMLResult
 from ..errors import DataError, SysidWarning
-from .compare import X0, _records, _run, _simulator, _x0_for
+from .compare import X0, _records, _run, _simulator, _x0_for, given_start, require_scored
 
 __all__ = ["ResidualAnalysis", "default_max_lag", "residuals"]
 
@@ -88,7 +88,8 @@ class ResidualAnalysis(HTMLResult):
     Attributes
     ----------
     e : list of ndarray
-        One-step prediction errors per experiment, ``(n_samples, noutputs)``.
+        One-step prediction errors per experiment, ``(n_samples, noutputs)`` (a NARX
+        model's: after its first ``max_lag`` samples, which it copies).
     lags : ndarray
         ``0 .. max_lag`` for :attr:`autocorr`.
     autocorr : ndarray
@@ -275,7 +276,10 @@ def residuals(model: Any, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
 
     A model that captures the dynamics and the noise leaves innovations that are white and
     uncorrelated with past inputs. The mean over all experiments is removed before
-    correlating; lags run within experiments, never across their joins.
+    correlating; lags run within experiments, never across their joins. A NARX model's first
+    ``max_lag`` samples of each experiment are its initial condition, copies of the measured
+    outputs (errors of zero): they are left out, errors and inputs alike
+    (:func:`~sysid.validation.compare.given_start`).
 
     Parameters
     ----------
@@ -316,16 +320,19 @@ def residuals(model: Any, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
     # the range check the estimators apply: |y| near 1e200 gave a NaN Ljung-Box statistic
     check_magnitudes(recs, "residuals")
     alpha = as_between(alpha, "alpha", 0.0, 1.0)
-    N = min(y.shape[0] for _, y in recs)
-    if max_lag >= N:
-        raise DataError(f"max_lag={max_lag} needs more than {max_lag} samples per experiment; "
-                        f"the shortest has {N}")
-    es, us = [], []
     runner = _simulator(model, x0, 1, recs[0][0] if recs else None)  # x0 fitted as compare
+    start = given_start(runner)  # a NARX model's first max_lag errors are zero by construction
+    require_scored(recs, start, model)
+    N = min(y.shape[0] for _, y in recs) - start
+    if max_lag >= N:
+        raise DataError(f"max_lag={max_lag} needs more than {max_lag} samples per experiment"
+                        + (f" after the first {start} (the model's initial condition)"
+                           if start else "") + f"; the shortest has {N}")
+    es, us = [], []
     for i, (u, y) in enumerate(recs):
         x = _x0_for(runner, x0, u, y, 1, i, len(recs))
-        es.append(y - _run(runner, u, y, 1, x))
-        us.append(u)
+        es.append((y - _run(runner, u, y, 1, x))[start:])
+        us.append(u[start:])
     res = ResidualAnalysis(model, es, us, int(max_lag), float(alpha))
     if model.ninputs and res.independence_note:
         warnings.warn(res.independence_note + " (the whiteness test stands)", SysidWarning,
