@@ -114,8 +114,9 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
     shifted inputs, the delays returned as states
     (:mod:`sysid.models.input_delay`). ``uncertainty``: ``"criterion"`` (the default, as
     MATLAB's ``n4sid`` reports a covariance) attaches the first-order uncertainty of the
-    simulation-error criterion at the estimate (:mod:`sysid.pem.at_estimate`; its spread
-    matches the estimator's own in a Monte Carlo test), so ``model.poles(std=True)``,
+    simulation-error criterion at the estimate (the prediction-error one, with ``K``, for a
+    time series; :mod:`sysid.pem.at_estimate`; its spread matches the estimator's own in a
+    Monte Carlo test; ``info["uncertainty"]["criterion"]`` names it), so ``model.poles(std=True)``,
     ``damp`` and the response bands work; ``"bootstrap"`` the estimator's own spread by a
     residual bootstrap (slower); ``None`` none (the fastest).{_frd_note(method)}
 
