@@ -1,5 +1,6 @@
 """The uncertainty :func:`sysid.identify` attaches to a chosen model that carries none (a
-subspace one): the simulation-error criterion's at it."""
+subspace one): the simulation-error criterion's at it (the prediction-error one for a time
+series or an unstable model)."""
 
 from __future__ import annotations
 
@@ -60,6 +61,8 @@ def with_uncertainty(model: Any, data: IOData, checks: dict[str, Any],
         + ("; on long records it matches a subspace estimator's own spread, as sysid.n4sid "
            "attaches it; SubspaceEstimator(...).fit(..., uncertainty='bootstrap') for the "
            "estimator's own)" if subspace else ")")
-        + ("; the prediction-error criterion because the model is unstable (the data insist)"
-           if focus == "prediction" else ""))
+        + ("" if focus != "prediction" else
+           "; the prediction-error criterion because the record is a time series (without an "
+           "input the simulation-error criterion is flat in A, C)" if data.n_inputs == 0 else
+           "; the prediction-error criterion because the model is unstable (the data insist)"))
     return m

@@ -65,6 +65,7 @@ from .feedthrough import (
 from .kalman import schur_gain
 from .methods import CLOSED_LOOP, METHODS, _method
 from .scaling import check_scale, in_record_units, scaled_experiments
+from .series_horizon import series_horizons
 from .streaming import compression_info, warn_if_fallback
 
 __all__ = ["SubspaceEstimator", "default_horizon", "METHODS"]
@@ -182,7 +183,9 @@ def available_horizon(lengths: Sequence[int], n_inputs: int, n_outputs: int) -> 
 
 def horizon_for_order(data: IOData, order: Any, horizon: int | None) -> int | None:
     """The horizon for fitting ``order`` states: ``horizon`` when given, else the default
-    (:func:`available_horizon`) or, when that allows fewer than ``order`` states (at most
+    (:func:`available_horizon`; a time series: the past of
+    :func:`~sysid.subspace.series_horizon.series_horizons` when it allows the order, else
+    :func:`available_horizon`) or, when that allows fewer than ``order`` states (at most
     ``(i - 1) l``), the smallest horizon that allows them, provided the data have as many
     Hankel columns as its data matrix has rows (``2 i (m + l)``); otherwise the largest
     horizon the data support (whose order error then names the largest order they allow).
@@ -201,9 +204,11 @@ def horizon_for_order(data: IOData, order: Any, horizon: int | None) -> int | No
         return horizon
     m, l = data.n_inputs, data.n_outputs
     lengths = list(data.lengths)
+    if m == 0 and int(order) <= (series_horizons(data)["past"] - 1) * l:
+        return None  # a time series' default (its AIC autoregression's) allows the order
     i0 = available_horizon(lengths, m, l)
     if int(order) <= (i0 - 1) * l:
-        return None
+        return i0 if m == 0 else None  # beyond a time series' autoregression: the record's
     def fits(i: int) -> bool:
         return sum(max(0, n - 2 * i + 1) for n in lengths) >= 2 * i * (m + l)
 
@@ -226,7 +231,11 @@ class SubspaceEstimator:
     horizon : int, optional
         Past and future horizon ``i`` (block rows); default :func:`default_horizon`, with
         several experiments :func:`available_horizon` (experiments shorter than its window
-        ``2 i`` are left out, with a warning; pass ``horizon`` to keep them).
+        ``2 i`` are left out, with a warning; pass ``horizon`` to keep them). A time series
+        (no input): the order of the autoregression AIC picks, plus one
+        (:func:`~sysid.subspace.series_horizon.series_horizons`, recorded in
+        :attr:`horizon_selection` and the models' ``info["horizon_selection"]``); ``n4sid``,
+        ``moesp`` and ``cva`` then shorten the future to the order's.
     past, future : int, optional
         Separate past and future horizons (override ``horizon``).
     method : str
@@ -279,10 +288,17 @@ class SubspaceEstimator:
         self._from_factor = False
         self.method = _method(method)
         self._horizon_note = ""
+        #: how the default horizons were chosen for a time series (None otherwise)
+        self.horizon_selection: dict[str, Any] | None = None
         if horizon is None and past is None and future is None:
-            # the horizon from the data available; experiments too short for its window are
-            # left out (and said), not allowed to set it
-            horizon = available_horizon(data.lengths, data.n_inputs, data.n_outputs)
+            # the horizon from the data available (a time series: from its AIC
+            # autoregression, :mod:`sysid.subspace.series_horizon`); experiments too short
+            # for its window are left out (and said), not allowed to set it
+            if data.n_inputs == 0:
+                self.horizon_selection = series_horizons(data)
+                horizon = self.horizon_selection["past"]
+            else:
+                horizon = available_horizon(data.lengths, data.n_inputs, data.n_outputs)
             short = [f"{k} ({n} samples)" for k, n in enumerate(data.lengths)
                      if n < 2 * horizon]
             if short and len(short) < data.n_experiments:
@@ -339,6 +355,7 @@ class SubspaceEstimator:
             )
         self = cls.__new__(cls)
         self._horizon_note = ""
+        self.horizon_selection = None
         m, l = factor.n_inputs, factor.n_outputs
         # a placeholder record that carries only channel counts, names and dt
         rows = max(m, l, 1)  # time-first: at least as many samples as channels
@@ -646,6 +663,8 @@ class SubspaceEstimator:
             info["x0_experiments"] = [v.tolist() for v in x0_all]
         if selection is not None:
             info["order_selection"] = selection
+        if self.horizon_selection is not None:
+            info["horizon_selection"] = dict(self.horizon_selection)
         if ft_selection is not None:
             info["feedthrough_selection"] = ft_selection
         model = StateSpaceModel(

@@ -12,12 +12,13 @@ import numpy as np
 from .._checks import as_int
 from .._threads import one_blas_thread
 from ..data.iodata import IOData, require_record
-from ..errors import DataError, is_frd
+from ..errors import DataError, SysidError, is_frd
 from ..models.statespace import StateSpaceModel
 from ..pem.at_estimate import attach_criterion_uncertainty
 from .estimator import Order, SubspaceEstimator, horizon_for_order
 from .feedthrough import warn_if_left_out
 from .frd_subspace import frd_subspace
+from .series_horizon import series_horizons
 
 __all__ = ["moesp", "n4sid", "cva"]
 
@@ -49,6 +50,57 @@ _FRD_NOTE = """
     Frequency-response data (an :class:`sysid.FRD`, MATLAB's ``n4sid(idfrd, n)``): the
     frequency-domain subspace fit :func:`sysid.frd_subspace` (``order`` an integer or
     ``"auto"``, ``feedthrough`` ``True`` or ``False``; ``stable`` and ``x0`` do not apply)."""
+
+
+def _series_estimator(data: IOData, order: int, method: str, scale: Any,
+                      past: int | None = None) -> SubspaceEstimator | None:
+    """The estimator of a time series at ``order`` states: past from its AIC autoregression
+    (or ``past``), future the shortest that allows the order
+    (:mod:`sysid.subspace.series_horizon`: the efficient one); None for an order above the
+    autoregression's ``p l`` (its extra states, fitted on a short future, are wild: the
+    record's horizon, :func:`~sysid.subspace.estimator.horizon_for_order`, instead)."""
+    sel = series_horizons(data, order)
+    if order > sel["ar_order"] * data.n_outputs and past is None:
+        return None
+    if past is not None:
+        sel["past"] = max(past, sel["future"])
+    est = SubspaceEstimator(data, past=sel["past"], future=sel["future"], method=method,
+                            scale=scale)
+    est.horizon_selection = sel
+    return est
+
+
+def _at_order_future(est: SubspaceEstimator, model: StateSpaceModel, data: IOData,
+                     method: str, scale: Any, **fit: Any) -> StateSpaceModel:
+    """A time series' model of the order ``order="auto"`` chose (with the default horizons,
+    future = past), fitted again with the future shortened to that order's, as
+    ``fit(data, n)`` fits it, unless that fit fails or is unstable where the first was not
+    (an order above the process's: its extra states on a short future are wild; the first
+    fit is kept and ``info["horizon_selection"]`` says so). The choices made on the first
+    fit are kept in ``info``."""
+    n = int(model.info["order"])
+    short = _series_estimator(data, n, method, scale, past=est.past)
+    if short is None or short.future >= est.future:
+        return model
+    try:  # warnings were given by the first fit
+        again = short._quiet_fit(n, feedthrough=bool(model.info["settings"]["feedthrough"]),
+                                 **fit)
+    except SysidError:
+        again = None
+    if again is None or _radius(again) >= 1.0 > _radius(model):
+        model.info["horizon_selection"]["rule"] += (
+            f"; future {short.future} (the order's) gave no stable model at order {n}: "
+            "the order choice's horizons kept")
+        return model
+    for key in ("order_selection", "feedthrough_selection"):
+        if key in model.info:
+            again.info[key] = model.info[key]
+    again.info["settings"]["order_rule"] = model.info["settings"]["order_rule"]
+    return again
+
+
+def _radius(model: StateSpaceModel) -> float:
+    return float(np.max(np.abs(model.poles()), initial=0.0))
 
 
 def _frd_note(method: str) -> str:
@@ -84,10 +136,18 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
                 stable=stable, x0=x0, scale=scale, uncertainty=uncertainty))
         if not isinstance(order, str) and np.ndim(order) == 0:
             order = as_int(order, "order", 1)  # inf, nan, 2.5: before the data are compressed
-        horizon = horizon_for_order(data, order, horizon)  # one that allows a given order
-        est = SubspaceEstimator(data, horizon, method=method, scale=scale)
+        boot = "bootstrap" if uncertainty == "bootstrap" else None
+        est = None
+        if data.n_inputs == 0 and horizon is None and isinstance(order, int):
+            est = _series_estimator(data, order, method, scale)
+        if est is None:
+            horizon = horizon_for_order(data, order, horizon)  # one that allows a given order
+            est = SubspaceEstimator(data, horizon, method=method, scale=scale)
         model = est.fit(order, feedthrough=feedthrough, kalman=kalman, stable=stable, x0=x0,
-                        uncertainty="bootstrap" if uncertainty == "bootstrap" else None)
+                        uncertainty=boot)
+        if est.horizon_selection is not None and (isinstance(order, str) or np.ndim(order)):
+            model = _at_order_future(est, model, data, method, scale, kalman=kalman,
+                                     stable=stable, x0=x0, uncertainty=boot)
         if feedthrough is None and not isinstance(order, str) and np.ndim(order) == 0:
             # D left out by default: say so when the record shows a direct term
             warn_if_left_out(est, order, method, model, fit.__name__, kalman=kalman, x0=x0,
@@ -102,7 +162,10 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
     Equivalent to ``SubspaceEstimator(data, horizon, method="{method}").fit(order, ...)``
     (at a given order without ``horizon``, the horizon of
     :func:`~sysid.subspace.estimator.horizon_for_order`: the default, or the smallest that
-    allows the order when the default does not and the data do); no feedthrough (``D = 0``)
+    allows the order when the default does not and the data do; a time series, no input:
+    past from the autoregression AIC picks, future the shortest that allows the order, for an
+    efficient estimate, :mod:`sysid.subspace.series_horizon`, ``info["horizon_selection"]``,
+    and ``order="auto"`` refitted at its order's future); no feedthrough (``D = 0``)
     at a given order unless ``feedthrough=True`` (or ``"auto"``: decided from the data), as
     every sysid state-space estimator (left out by default, a ``FeedthroughWarning`` says when
     the record shows a direct term); with ``order="auto"`` (the
@@ -114,8 +177,9 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
     shifted inputs, the delays returned as states
     (:mod:`sysid.models.input_delay`). ``uncertainty``: ``"criterion"`` (the default, as
     MATLAB's ``n4sid`` reports a covariance) attaches the first-order uncertainty of the
-    simulation-error criterion at the estimate (:mod:`sysid.pem.at_estimate`; its spread
-    matches the estimator's own in a Monte Carlo test), so ``model.poles(std=True)``,
+    simulation-error criterion at the estimate (the prediction-error one, with ``K``, for a
+    time series; :mod:`sysid.pem.at_estimate`; its spread matches the estimator's own in a
+    Monte Carlo test; ``info["uncertainty"]["criterion"]`` names it), so ``model.poles(std=True)``,
     ``damp`` and the response bands work; ``"bootstrap"`` the estimator's own spread by a
     residual bootstrap (slower); ``None`` none (the fastest).{_frd_note(method)}
 
