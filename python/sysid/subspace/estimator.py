@@ -56,6 +56,7 @@ from ..errors import (
 from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
 from ..validation.feedback import feedback_pvalues
+from .data_horizon import available_horizon
 from .feedthrough import (
     FEEDTHROUGH_DEFAULT,
     check_feedthrough,
@@ -159,26 +160,6 @@ def default_horizon(n_samples: int, n_inputs: int, n_outputs: int) -> int:
     2
     """
     return available_horizon([int(n_samples)], n_inputs, n_outputs)
-
-
-def available_horizon(lengths: Sequence[int], n_inputs: int, n_outputs: int) -> int:
-    """The horizon from the data available: the largest ``i`` (2 to 20) whose data matrix,
-    from the experiments of at least ``4 i`` samples, has ten times as many columns as rows
-    (``20 i (m + l)`` samples), as :func:`default_horizon` asks of one experiment (the same
-    horizon for one). Not the shortest experiment's: a short experiment next to a long one
-    held every model to order 1 or 2.
-
-    Examples
-    --------
-    >>> from sysid.subspace.estimator import available_horizon
-    >>> available_horizon([500, 30], 1, 1), available_horizon([500], 1, 1)
-    (12, 12)
-    """
-    ch = n_inputs + n_outputs
-    for i in range(20, 1, -1):
-        if sum(n for n in lengths if n >= 4 * i) >= 20 * i * ch:
-            return i
-    return 2
 
 
 def horizon_for_order(data: IOData, order: Any, horizon: int | None) -> int | None:

@@ -21,6 +21,8 @@ from typing import Any
 
 import numpy as np
 
+from .data_horizon import available_horizon
+
 __all__ = ["ar_order_aic", "series_horizons"]
 
 #: rows of the lagged regressor formed at a time when the Gram matrix is summed
@@ -89,8 +91,6 @@ def series_horizons(data: Any, order: Any = None) -> dict[str, Any]:
     >>> h["ar_order"], h["past"], h["future"]
     (2, 3, 3)
     """
-    from .estimator import available_horizon
-
     l = data.n_outputs
     top = available_horizon(data.lengths, 0, l)
     outputs = [y for _, y in data.experiments if y.shape[0] > top]
