@@ -76,3 +76,24 @@ def test_a_record_no_longer_than_max_lag_is_refused(fitted):
         sysid.compare(m, (uv[:8], yv[:8]))
     with pytest.raises(sysid.DataError, match="after the first 8"):
         sysid.residuals(m, (uv[:20], yv[:20]), max_lag=12)
+
+
+def test_error_spectrum_leaves_out_the_copied_start():
+    """``error_spectrum`` took a NARX model's first ``max_lag`` samples (copies of the
+    measured outputs, zero error) into its Welch estimate: the same rule as ``compare``."""
+    import scipy.signal
+
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal(400)
+    y = np.zeros(400)
+    for t in range(1, 400):
+        y[t] = 0.5 * y[t - 1] + u[t - 1] + 0.2 * u[t - 1] ** 2
+    y = y + 0.1 * rng.standard_normal(400)
+    d = sysid.IOData(u, y[:, None], 1.0)
+    m = sysid.nlarx(d, 4, 4, 1, basis=sysid.PolynomialBasis(2))
+    spec = sysid.error_spectrum(m, d, nperseg=64)
+    cmp = sysid.compare(d, m)
+    s = m.max_lag
+    assert cmp.start == s
+    _, want = scipy.signal.welch((cmp.y[0] - cmp.yhat[0])[s:], fs=1.0, nperseg=64, axis=0)
+    np.testing.assert_allclose(spec.error_psd, want, rtol=1e-12)

@@ -75,7 +75,11 @@ def error_spectrum(model: Any, data: Any, *, x0: X0 = "estimate",
     """
     model, data = _model_first(model, data)  # MATLAB's order accepted too
     cmp = compare_quiet(model, data, None, x0=x0)
-    shortest = min(y.shape[0] for y in cmp.y)
+    # the samples the model predicts: a NARX model's copied start is no error of its own
+    # (:func:`~sysid.validation.compare.given_start`, as compare's fit leaves it out)
+    s = int(getattr(cmp, "start", 0) or 0)
+    pairs = [(y[s:], yh[s:]) for y, yh in zip(cmp.y, cmp.yhat)]
+    shortest = min(y.shape[0] for y, _ in pairs)
     if nperseg is None:
         nperseg = min(256, shortest)
     else:
@@ -83,7 +87,7 @@ def error_spectrum(model: Any, data: Any, *, x0: X0 = "estimate",
     fs = 1.0 / cmp.dt
     err_sum, out_sum, weight = 0.0, 0.0, 0
     freq = np.zeros(0)
-    for y, yh in zip(cmp.y, cmp.yhat):
+    for y, yh in pairs:
         import scipy.signal
 
         freq, pe = scipy.signal.welch(y - yh, fs=fs, nperseg=int(nperseg), axis=0)
