@@ -5,6 +5,7 @@ was 8-70 times too wide). Calibrated by Monte Carlo against the estimators' own 
 
 import numpy as np
 import pytest
+from test_subspace_uncertainty import _assert_pole_calibrated
 
 import sysid
 
@@ -29,20 +30,13 @@ def test_time_series_pole_std_matches_the_estimators_spread(method):
     # at the input-output default (past = future = 20) the estimator's own spread was 1.5-4
     # times wider and the intervals covered 55-80 % of the time.
     rng = np.random.default_rng(5)
-    est, sd = [], []
-    for _ in range(200):
+
+    def fit():
         m = getattr(sysid, method)(_series(rng), 2)
         assert m.info["future"] == 3 and "AIC" in m.info["horizon_selection"]["rule"]
-        p, s = m.poles(std=True)
-        k = int(np.argmin(np.abs(p - POLE)))
-        est.append(p[k])
-        sd.append(s[k])
-    est, sd = np.array(est), np.array(sd)
-    for part in (np.real, np.imag):
-        ratio = float(np.median(part(sd)) / np.std(part(est)))
-        assert 0.8 < ratio < 1.2, ratio
-        cover = float(np.mean(np.abs(part(est) - part(POLE)) <= 1.96 * part(sd)))
-        assert 0.90 <= cover <= 0.99, cover
+        return m
+
+    m = _assert_pole_calibrated(fit, pole=POLE)
     unc = m.info["uncertainty"]
     assert unc["criterion"] == "prediction" and "prediction-error" in unc["method"]
     assert "time series" in unc["why"]

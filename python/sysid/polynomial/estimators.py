@@ -457,12 +457,8 @@ def armax(
     reflected into the unit circle and ``info["start_stabilized"]`` says so), as MATLAB's
     ``armax(data, init_sys)``.
 
-    ``initial_condition`` (MATLAB's ``InitialCondition``): ``"auto"`` (default) fits from
-    rest and estimates the initial filter states when that lowers the criterion beyond what
-    fitting noise would, ``"zero"`` from rest, ``"estimate"`` always estimated (eliminated by
-    least squares at every step, one state per experiment; the covariance is then the
-    marginal one). ``"backcast"`` is not offered. ``info["initial_condition"]`` says which,
-    ``info["initial_state"]`` holds the states (:mod:`sysid.polynomial.initial`).
+    ``initial_condition``: MATLAB's ``InitialCondition``, ``"auto"`` (default), ``"zero"``
+    or ``"estimate"`` (:mod:`sysid.polynomial.initial`).
 
     Examples
     --------
@@ -551,12 +547,8 @@ def oe(
     ``info["covariance"]`` says which covariance the model carries. With several
     experiments it stays the Gauss-Newton one, and ``info["covariance"]`` says so.
 
-    ``initial_condition`` (MATLAB's ``InitialCondition``): ``"auto"`` (default) fits from
-    rest and estimates the initial filter states when that lowers the criterion beyond what
-    fitting noise would, ``"zero"`` from rest, ``"estimate"`` always estimated (eliminated by
-    least squares at every step, one state per experiment; the covariance is then the
-    marginal one). ``"backcast"`` is not offered. ``info["initial_condition"]`` says which,
-    ``info["initial_state"]`` holds the states (:mod:`sysid.polynomial.initial`).
+    ``initial_condition``: MATLAB's ``InitialCondition``, ``"auto"`` (default), ``"zero"``
+    or ``"estimate"`` (:mod:`sysid.polynomial.initial`).
     A fit on lines (``periods``, an FRD) has no transient: there ``"estimate"`` is refused.
 
     Examples
@@ -634,12 +626,8 @@ def bj(
     ``bj(data, init_sys)``; unstable ``C``, ``D`` or ``F`` roots are reflected into the unit
     circle and ``info["start_stabilized"]`` says so.
 
-    ``initial_condition`` (MATLAB's ``InitialCondition``): ``"auto"`` (default) fits from
-    rest and estimates the initial filter states when that lowers the criterion beyond what
-    fitting noise would, ``"zero"`` from rest, ``"estimate"`` always estimated (eliminated by
-    least squares at every step, one state per experiment; the covariance is then the
-    marginal one). ``"backcast"`` is not offered. ``info["initial_condition"]`` says which,
-    ``info["initial_state"]`` holds the states (:mod:`sysid.polynomial.initial`).
+    ``initial_condition``: MATLAB's ``InitialCondition``, ``"auto"`` (default), ``"zero"``
+    or ``"estimate"`` (:mod:`sysid.polynomial.initial`).
 
     Examples
     --------
