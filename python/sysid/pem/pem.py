@@ -348,6 +348,7 @@ def pem(
     periods: int | str | None = None,
     transient: int | None = None,
     geodesic: bool = False,
+    initial_condition: str = "auto",
 ) -> StateSpaceModel:
     """Refine a state-space model by minimising its prediction (or simulation) errors.
 
@@ -457,6 +458,10 @@ def pem(
         and refused. Default ``False``: at equal CPU time it did not pay on the F-16 at
         ``max_iter=100`` nor on the smaller records; it does on long searches of lightly
         damped large records (benches/results/pem_speed.md). Not used with ``periods``.
+    initial_condition : {"auto", "zero", "estimate"}
+        A polynomial model's only (a state-space model's initial state is ``x0``): MATLAB's
+        ``InitialCondition``, ``"auto"`` (default), ``"zero"`` or ``"estimate"``
+        (:mod:`sysid.polynomial.initial`).
 
     Returns
     -------
@@ -521,7 +526,12 @@ def pem(
                             f"max_iter and progress only, got {', '.join(given)}: for a "
                             "simulation fit refine sysid.oe(data, nb, nf, nk, init=model), "
                             "or a state-space form, sysid.pem(data, model.to_statespace())")
-        return pem_polynomial(_experiments(data), model, max_iter=max_iter, progress=progress)
+        return pem_polynomial(_experiments(data), model, max_iter=max_iter, progress=progress,
+                              initial_condition=initial_condition)
+    if not (isinstance(initial_condition, str) and initial_condition == "auto"):
+        raise DataError(f"initial_condition={initial_condition!r} is a polynomial model's "
+                        "option (MATLAB's InitialCondition); a state-space model's initial "
+                        "state is x0: 'estimate' (default), 'zero' or given")
     if isinstance(model, StateSpaceStructure):  # MATLAB's pem(data, init_sys) with Structure
         from .structured import pem_structured
 

@@ -1,5 +1,8 @@
 """Initial conditions of the polynomial prediction-error fits (MATLAB's ``InitialCondition``
-of ``oeOptions``, ``armaxOptions``, ``bjOptions`` and ``polyestOptions``).
+of ``oeOptions``, ``armaxOptions``, ``bjOptions``, ``polyestOptions`` and ``pemOptions``):
+:func:`sysid.oe`, :func:`sysid.armax`, :func:`sysid.bj`, :func:`sysid.polyest`,
+:func:`sysid.arma` (a time series: no inputs, only ``h_e``) and :func:`sysid.pem` given a
+polynomial model.
 
 From rest, the predictor ``e = D/C (A y - sum_j B_j/F_j u_j(t - nk_j))`` treats every sample
 before the record as zero; on a record that starts mid-response the transient this leaves

@@ -128,11 +128,14 @@ def _orders(model: PolynomialModel) -> tuple[list[Any], ...]:
 
 
 def pem_polynomial(data: Any, model: PolynomialModel, *, max_iter: int,
-                   progress: bool | None | Callable[..., Any]) -> PolynomialModel:
+                   progress: bool | None | Callable[..., Any],
+                   initial_condition: str = "auto") -> PolynomialModel:
     """:func:`sysid.pem` given a polynomial model (MATLAB's ``pem(data, idpoly)``): the
-    prediction-error search from ``model`` in its own structure (orders and delays kept);
-    an ARX model (no ``C``, ``D``, ``F``; a coupled multi-output ``A`` too) is fitted again
-    by least squares, its prediction-error minimum.
+    prediction-error search from ``model`` in its own structure (orders and delays kept),
+    its initial conditions by ``initial_condition`` (:mod:`sysid.polynomial.initial`, as
+    :func:`polyest`); an ARX model (no ``C``, ``D``, ``F``; a coupled multi-output ``A``
+    too) is fitted again by least squares, its prediction-error minimum (over the samples
+    whose lags are all measured: not from rest, whatever ``initial_condition``).
 
     Examples
     --------
@@ -153,6 +156,7 @@ def pem_polynomial(data: Any, model: PolynomialModel, *, max_iter: int,
     if getattr(data, "dt", None) and model.dt and not np.isclose(data.dt, model.dt):
         raise DataError(f"the model is sampled every {model.dt} s but the data every "
                         f"{data.dt} s: resample one of them")
+    _check_initial(initial_condition)
     na, nb, nc, nd, nf, nk = _orders(model)
     ny = model.n_outputs
     if not any(nc[i] or nd[i] or any(nf[i]) for i in range(ny)):
@@ -173,6 +177,7 @@ def pem_polynomial(data: Any, model: PolynomialModel, *, max_iter: int,
             "refines such models one equation per output, with a diagonal A; refine a "
             "state-space form instead, sysid.pem(data, model.to_statespace())")
     na = [na[i][i] for i in range(ny)]
-    m = _pem(data, na, nb, nc, nd, nf, nk, "pem", max_iter, progress, model)
+    m = _pem(data, na, nb, nc, nd, nf, nk, "pem", max_iter, progress, model,
+             initial_condition=initial_condition)
     m.info["start"] = "init"
     return _warn_diverging(m, "pem")

@@ -209,7 +209,8 @@ def ar(data: Any, na: int, method: str = "fb", *, dt: float | None = None) -> An
     return m
 
 
-def arma(data: Any, na: int, nc: int, *, max_iter: int = 100) -> Any:
+def arma(data: Any, na: int, nc: int, *, max_iter: int = 100,
+         initial_condition: str = "auto") -> Any:
     """ARMA model ``A(q) y(t) = C(q) e(t)`` of a time series by prediction-error
     minimisation (the shared Gauss-Newton optimiser; MATLAB's ``armax`` without input).
 
@@ -221,6 +222,10 @@ def arma(data: Any, na: int, nc: int, *, max_iter: int = 100) -> Any:
         Orders of ``A`` and ``C``.
     max_iter : int
         Iteration limit of the search.
+    initial_condition : {"auto", "zero", "estimate"}
+        MATLAB's ``InitialCondition``, ``"auto"`` (default), ``"zero"`` or ``"estimate"``
+        (:mod:`sysid.polynomial.initial`; the series before the record, one state per
+        experiment).
 
     Examples
     --------
@@ -230,16 +235,26 @@ def arma(data: Any, na: int, nc: int, *, max_iter: int = 100) -> Any:
     >>> m = sysid.arma(y, 1, 1)
     >>> np.round([m.a[0][0][0], m.c[0][0]], 1)
     array([-0.7,  0.5])
+
+    A noise-free series that starts off rest (the free response of ``A``):
+
+    >>> y = signal.lfilter([1.0], [1, -1.5, 0.7, -0.1], np.r_[1.0, -0.3, 0.4, np.zeros(97)])
+    >>> m = sysid.arma(y, 3, 1)
+    >>> m.info["initial_condition"], np.round(m.a[0][0], 12), np.round(m.c[0], 12)
+    ('estimate', array([-1.5,  0.7, -0.1]), array([0.]))
     """
     from ..data.iodata import IOData
     from ..polynomial.estimators import _pem
+    from ..polynomial.initial import check as _check_initial
 
     na_i, nc_i = as_int(na, "na", 0), as_int(nc, "nc", 0)
     if na_i + nc_i == 0:
         raise DataError("arma needs na + nc >= 1")
+    _check_initial(initial_condition)
     if not isinstance(data, IOData):
         ys, _ = _series(data, na_i + nc_i, "arma")
         data = IOData(None, ys[0][:, None], 1.0)
     else:
         _series(data, na_i + nc_i, "arma")
-    return _pem(data, na_i, 0, nc_i, 0, 0, 0, "arma", max_iter, None)
+    return _pem(data, na_i, 0, nc_i, 0, 0, 0, "arma", max_iter, None,
+                initial_condition=initial_condition)
