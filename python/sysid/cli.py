@@ -163,6 +163,11 @@ def identify(
     :func:`sysid.subspace.feedthrough.choose_feedthrough`; default as every sysid state-space
     estimator: ``D = 0`` at a given order, ``"auto"`` with ``order="auto"``.
 
+    A time series (no inputs) without ``horizon`` is fitted at the time-series default
+    horizons (:mod:`sysid.subspace.series_horizon`, as ``sysid.moesp(data, n)``): the order
+    sweep at the autoregression's past (future = past), the model of the order chosen or
+    given at its own, shorter future (``model.info["horizon_selection"]``).
+
     ``compressor`` is passed to :class:`~sysid.SubspaceEstimator` (its decision is in
     ``model.info["compression"]``); ``bars`` draws progress bars in the order sweep (None:
     on a terminal). ``uncertainty="bootstrap"`` attaches the residual-bootstrap parameter
@@ -190,6 +195,7 @@ def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, me
               feedthrough: bool | str | None = None) -> Any:
     from .subspace.estimator import SubspaceEstimator
     from .subspace.feedthrough import check_feedthrough, choose_feedthrough, default_feedthrough
+    from .subspace.shortcuts import _at_order_future, order_estimator
     from .validation.criteria import select_order
 
     say = progress or (lambda _msg: None)
@@ -203,7 +209,12 @@ def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, me
     say(f"compressing {est_data.n_samples} samples "
         f"({est_data.n_inputs} in, {est_data.n_outputs} out, horizon {horizon or 'default'})")
     t0 = time.perf_counter()
-    est = SubspaceEstimator(est_data, horizon, method=method, compressor=compressor)
+    # a time series without --horizon: the default horizons of moesp(data, order), from its
+    # AIC autoregression (:mod:`sysid.subspace.series_horizon`; "auto": future = past)
+    series = est_data.n_inputs == 0 and horizon is None
+    est = (order_estimator(est_data, order, None, method, compressor=compressor)
+           if series and order != "auto" else
+           SubspaceEstimator(est_data, horizon, method=method, compressor=compressor))
     dt_c = time.perf_counter() - t0
     say(f"compressed with {est.factor.source} in {dt_c:.2f} s "
         f"({est_data.n_samples / max(dt_c, 1e-9) / 1e6:.1f} M samples/s)")
@@ -239,13 +250,17 @@ def _pipeline(est_data: IOData, val_data: IOData | None, *, order: str | int, me
         say(f"fitting order {n} with a residual bootstrap of {n_boot} records")
     # the model saved and reported is the one the sweep validated (same fit, same settings);
     # the bootstrap adds its uncertainty without changing the estimate
+    fit_kw = {} if uncertainty is None else {"x0": x0, "uncertainty": uncertainty,
+                                             "n_boot": n_boot, "rng": 0}
     model = (sel.model(n, est.method) if uncertainty is None
-             else est.fit(n, x0=x0, uncertainty=uncertainty, n_boot=n_boot, rng=0,
-                          feedthrough=bool(feedthrough)))
+             else est.fit(n, feedthrough=bool(feedthrough), **fit_kw))
+    if series and order == "auto":  # refitted at the chosen order's future, as moesp's
+        model = _at_order_future(est, model, est_data, est.method, None, compressor, **fit_kw)
     model.info["settings"] = {**model.info.get("settings", {}), "method": est.method,
                               "order": n, "order_rule": (
-        sel.criterion if order == "auto" else "given"), "past": est.past,
-        "future": est.future, "x0": x0}
+        sel.criterion if order == "auto" else "given"), "x0": x0,
+        "past": model.info.get("settings", {}).get("past", est.past),
+        "future": model.info.get("settings", {}).get("future", est.future)}
     model.info["preprocessing"] = {**model.info.get("preprocessing", {}),
                                    **dict(preprocessing or {})}
     return _validate(model, sel, est_data, val_data, report, say, caught)

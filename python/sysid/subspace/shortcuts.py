@@ -20,7 +20,7 @@ from .feedthrough import warn_if_left_out
 from .frd_subspace import frd_subspace
 from .series_horizon import series_horizons
 
-__all__ = ["moesp", "n4sid", "cva"]
+__all__ = ["moesp", "n4sid", "cva", "order_estimator"]
 
 
 def n4sid_frd(frd: Any, order: Any, horizon: int | None, feedthrough: Any, stable: bool,
@@ -53,7 +53,8 @@ _FRD_NOTE = """
 
 
 def _series_estimator(data: IOData, order: int, method: str, scale: Any,
-                      past: int | None = None) -> SubspaceEstimator | None:
+                      past: int | None = None, compressor: str = "auto"
+                      ) -> SubspaceEstimator | None:
     """The estimator of a time series at ``order`` states: past from its AIC autoregression
     (or ``past``), future the shortest that allows the order
     (:mod:`sysid.subspace.series_horizon`: the efficient one); None for an order above the
@@ -65,13 +66,41 @@ def _series_estimator(data: IOData, order: int, method: str, scale: Any,
     if past is not None:
         sel["past"] = max(past, sel["future"])
     est = SubspaceEstimator(data, past=sel["past"], future=sel["future"], method=method,
-                            scale=scale)
+                            scale=scale, compressor=compressor)
     est.horizon_selection = sel
     return est
 
 
+def order_estimator(data: IOData, order: Any, horizon: int | None, method: str,
+                    scale: Any = None, compressor: str = "auto") -> SubspaceEstimator:
+    """The estimator ``moesp``/``n4sid``/``cva(data, order, horizon=horizon)`` fit with: a
+    time series without ``horizon`` at a given order, :func:`_series_estimator`'s; else
+    :func:`~sysid.subspace.estimator.horizon_for_order`'s horizon (``horizon`` when given).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from scipy import signal
+    >>> from sysid.subspace.shortcuts import order_estimator
+    >>> e = np.random.default_rng(0).standard_normal(500)
+    >>> d = sysid.IOData(None, signal.lfilter([1.0], [1, -1.5, 0.7], e)[:, None], 1.0)
+    >>> est = order_estimator(d, 2, None, "moesp")
+    >>> est.past, est.future
+    (3, 3)
+    """
+    est = None
+    if data.n_inputs == 0 and horizon is None and isinstance(order, int):
+        est = _series_estimator(data, order, method, scale, compressor=compressor)
+    if est is None:
+        horizon = horizon_for_order(data, order, horizon)  # one that allows a given order
+        est = SubspaceEstimator(data, horizon, method=method, scale=scale,
+                                compressor=compressor)
+    return est
+
+
 def _at_order_future(est: SubspaceEstimator, model: StateSpaceModel, data: IOData,
-                     method: str, scale: Any, **fit: Any) -> StateSpaceModel:
+                     method: str, scale: Any, compressor: str = "auto", **fit: Any
+                     ) -> StateSpaceModel:
     """A time series' model of the order ``order="auto"`` chose (with the default horizons,
     future = past), fitted again with the future shortened to that order's, as
     ``fit(data, n)`` fits it, unless that fit fails or is unstable where the first was not
@@ -79,7 +108,7 @@ def _at_order_future(est: SubspaceEstimator, model: StateSpaceModel, data: IODat
     fit is kept and ``info["horizon_selection"]`` says so). The choices made on the first
     fit are kept in ``info``."""
     n = int(model.info["order"])
-    short = _series_estimator(data, n, method, scale, past=est.past)
+    short = _series_estimator(data, n, method, scale, past=est.past, compressor=compressor)
     if short is None or short.future >= est.future:
         return model
     try:  # warnings were given by the first fit
@@ -137,12 +166,7 @@ def _shortcut(method: str):  # type: ignore[no-untyped-def]
         if not isinstance(order, str) and np.ndim(order) == 0:
             order = as_int(order, "order", 1)  # inf, nan, 2.5: before the data are compressed
         boot = "bootstrap" if uncertainty == "bootstrap" else None
-        est = None
-        if data.n_inputs == 0 and horizon is None and isinstance(order, int):
-            est = _series_estimator(data, order, method, scale)
-        if est is None:
-            horizon = horizon_for_order(data, order, horizon)  # one that allows a given order
-            est = SubspaceEstimator(data, horizon, method=method, scale=scale)
+        est = order_estimator(data, order, horizon, method, scale)
         model = est.fit(order, feedthrough=feedthrough, kalman=kalman, stable=stable, x0=x0,
                         uncertainty=boot)
         if est.horizon_selection is not None and (isinstance(order, str) or np.ndim(order)):
