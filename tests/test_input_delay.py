@@ -147,6 +147,38 @@ def test_a_known_delay_adds_no_parameters(tmp_path):
     assert sysid.criteria(p6, rec).n_params == sysid.criteria(p1, rec).n_params == 2 + 1
 
 
+@pytest.mark.parametrize("dt", [1.0, None])
+def test_a_transfer_functions_iodelay_adds_no_parameters(dt):
+    # criteria, aic(model, data) and fpe(model, data) counted the iodelay's delay line as
+    # fitted initial states (tfest with iodelay=3: 9 instead of 6 discrete, 10 instead of 7
+    # continuous); a known delay is no parameter, MATLAB counts neither it nor its states
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal(600)
+    g = sysid.TransferFunction([0.5, 0.2], [1.0, -1.2, 0.5], dt=1.0)
+    kw = {} if dt is None else {"dt": dt}
+    counts = []
+    for delay in (0, 3):
+        y = g.simulate(np.r_[np.zeros(delay), u][:600]) + 0.05 * rng.standard_normal((600, 1))
+        rec = sysid.IOData(u, y, 1.0)
+        m = sysid.tfest(rec, 2, 1, iodelay=delay, **kw)
+        c = sysid.criteria(m, rec)
+        assert sysid.aic(m, rec) == pytest.approx(c.log_loss + 2 * c.n_params / 600)
+        counts.append((m.n_parameters, c.n_params, sysid.criteria(m, rec, x0="zero").n_params))
+    assert counts[0] == counts[1]
+    assert counts[0][0] == counts[0][2] == 4
+
+
+def test_a_process_models_delay_line_is_no_initial_state():
+    # Td is estimated (a parameter) but the states of its delay line start from the
+    # unrecorded past input: the count is that of the same model without its delay
+    rng = np.random.default_rng(0)
+    u = np.repeat(rng.standard_normal(100), 6)
+    rec = sysid.IOData(u, rng.standard_normal((600, 1)), 1.0)
+    counts = [sysid.criteria(sysid.ProcessModel("P1D", Kp=2.0, Tp1=4.0, Td=td), rec).n_params
+              for td in (0.0, 2.5, 3.0)]
+    assert counts[0] == counts[1] == counts[2]
+
+
 def test_identify_bic_does_not_charge_a_known_delay():
     from sysid.identify.board import bic
 

@@ -195,21 +195,38 @@ def _criteria(model: Any, data: Any, x0: Any, n_params: int | None,
     if n_params is None:
         n_params = int(given.n_parameters)
         if _has_state(runner) and isinstance(x0, str) and x0 == "estimate":
-            n_params += _x0_states(given, runner) * len(recs)  # the fitted initial states
+            def realise(m: Any) -> Any:  # another model's runner, made as ``runner`` was
+                return _simulator(_records(m, data)[0], x0, 1, recs[0][0] if recs else None)
+
+            # the fitted initial states
+            n_params += _x0_states(given, runner, realise) * len(recs)
     return Criteria(logdet, n_params, N)
 
 
-def _x0_states(model: Any, runner: Any) -> int:
+def _x0_states(model: Any, runner: Any, realise: Any = None) -> int:
     """The initial states an estimated ``x0`` counts: those of the state-space form
     ``runner`` less the unit delays of known input delays (their start is the unrecorded
     past input, not a parameter of the model: a state-space model's absorbed
-    ``input_delay``, a polynomial model's ``nk`` beyond one sample)."""
+    ``input_delay``, a polynomial model's ``nk`` beyond one sample, a transfer-function or
+    process model's ``iodelay``: the order of the runner ``realise`` makes of the model
+    without it; MATLAB counts no state of an ``IODelay`` either)."""
     from ..models.statespace import delay_states
 
     n = int(runner.nstates)
     if runner is model or isinstance(runner, StateSpaceModel) and "input_delay" in getattr(
             runner, "info", {}):
         return n - delay_states(runner)
+    from ..tf.model import TransferFunction
+
+    if (realise is not None and isinstance(model, TransferFunction)
+            and np.any(np.asarray(model.iodelay) != 0)):
+        try:  # the same transfer functions without their delays: their runner's order
+            d = TransferFunction.to_dict(model)  # a process model's too (its Td)
+            free = realise(TransferFunction.from_dict({**d, "iodelay": 0.0 * np.asarray(
+                d["iodelay"], float)}))
+            return min(n, int(free.nstates)) if _has_state(free) else n
+        except SysidError:
+            return n
     nk = getattr(model, "nk", None)
     if isinstance(nk, np.ndarray) and np.any(nk > 1) and hasattr(model, "to_dict"):
         try:  # the same model with at most one sample of delay: its realisation's order
