@@ -234,8 +234,9 @@ def test_an_operating_point_is_fitted_about_and_kept(tmp_path):
     # A Wiener plant around an operating point (input 5 +- 1, output about 3), a slow pole:
     # fitted raw from rest with an OE start that has no constant term, nlhw spent its fit on
     # the offset (the cascaded tanks: 61.7 % training fit, the linear model 75.1 %). With
-    # sigmoid networks it now fits about the means and keeps them (y = y0 + g(L f(u - u0))):
-    # the same model as a fit of the centred record, simulated on raw inputs.
+    # sigmoid networks it now fits about the means and keeps them (y = y0 + g(L f(u - u0)),
+    # the level y0 estimated from the means): the same model as a fit of the centred record
+    # about its own means (zero), simulated on raw inputs.
     rng = np.random.default_rng(4)
     u = 5.0 + np.repeat(rng.uniform(-1, 1, 150), 8)
     x = np.zeros_like(u)
@@ -249,10 +250,11 @@ def test_an_operating_point_is_fitted_about_and_kept(tmp_path):
     capped = pytest.warns(sysid.IterationLimitWarning, match="max_iter=100")
     with capped:
         raw = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, **kw)
-    assert raw.u_offset == pytest.approx(u.mean()) and raw.y_offset == pytest.approx(y.mean())
+    assert raw.u_offset == pytest.approx(u.mean()) and raw.info["offsets"]["y_estimated"]
+    assert raw.y_offset == raw.info["offsets"]["y"] != y.mean()  # the mean, then estimated
     with capped:
         centred = sysid.nlhw(sysid.IOData(u - u.mean(), y - y.mean(), 1.0), 1, 1,
-                             offsets=False, **kw)
+                             offsets=True, **kw)
     np.testing.assert_allclose(raw.simulate(u), centred.simulate(u - u.mean()) + y.mean(),
                                rtol=0, atol=1e-9)
     # the OE start on the raw record says so; in the same iterations the raw fit is worse
@@ -263,13 +265,41 @@ def test_an_operating_point_is_fitted_about_and_kept(tmp_path):
     sysid.save_model(raw, tmp_path / "hw.json")
     back = sysid.load_model(tmp_path / "hw.json")
     np.testing.assert_allclose(back.simulate(u), raw.simulate(u), rtol=0, atol=1e-12)
-    # levels given in the data's units are not shifted
-    with pytest.warns(sysid.OffsetWarning):
-        sat = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, input_nl=sysid.Saturation(),
-                         output_nl=None, progress=False)
-    assert sat.u_offset == 0.0 and sat.info["offsets"]["removed"] is False
+    # levels given in the data's units: fitted both ways, the lower sum of squares kept (the
+    # fit about the means, its level estimated, beats the one from rest at zero here)
+    sat = sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, input_nl=sysid.Saturation(),
+                     output_nl=None, progress=False)
+    assert sat.info["offsets"]["removed"] and sat.info["offsets"]["auto"].endswith("with kept")
     with pytest.raises(sysid.DataError, match="offsets must be"):
         sysid.nlhw(sysid.IOData(u, y, 1.0), 1, 1, offsets="mean", **kw)
+
+
+@pytest.mark.parametrize("fit", [
+    lambda d: sysid.nlhw(d, 1, 1, 1, input_nl=sysid.Saturation(), output_nl=None,
+                         progress=False),
+    lambda d: sysid.nlhw_ss(d, 1, input_nl=sysid.Saturation(), output_nl=None,
+                            progress=False)])
+def test_the_operating_points_output_level_is_estimated(fit):
+    # A noise-free Hammerstein record (an asymmetric saturation, so its output's mean is not
+    # the level it sits at) read 10 units up: the model about the means kept y0 at the
+    # output's mean, 0.1 away from its level, and fitted 90.2 % where the record without the
+    # offset fits 100 %. The level is now estimated with the other parameters: what is left
+    # is the record's start from rest below the operating point (a transient of the slow
+    # pole), 0.1 % of the fit.
+    rng = np.random.default_rng(2)
+    u = rng.uniform(-1, 1, 400)
+    y = np.zeros_like(u)
+    w = np.clip(u, -0.4, 0.6)
+    for t in range(1, u.size):
+        y[t] = 0.8 * y[t - 1] + 0.5 * w[t - 1]
+    d = sysid.IOData(u, y + 10.0, 1.0)
+    m = fit(d)
+    assert m.info["offsets"]["removed"] and m.info["offsets"]["y_estimated"]
+    assert float(sysid.compare(d, m).fit.ravel()[0]) > 99.8
+    assert abs(float(np.ravel(m.y_offset)[0]) - (10.0 + 2.5 * u.mean())) < 0.02
+    sat = m.input_nls[0] if hasattr(m, "input_nls") else m.input_nl
+    np.testing.assert_allclose(sat.params + u.mean(), [-0.4, 0.6], atol=0.02)
+    assert m.n_parameters == m.theta.size + 1
 
 
 def test_a_capped_search_warns_and_a_converged_one_stops_statistically():

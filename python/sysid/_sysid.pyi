@@ -559,6 +559,7 @@ def hw_estimate(
     max_iter: int = 100,
     tol: float = 1e-10,
     progress: Callable[..., Any] | None = None,
+    offset: bool = False,
 ) -> dict[str, Any]: ...
 def hw_simulate(
     input: tuple[str, int, list[float]],
@@ -579,6 +580,7 @@ def hw_mimo_estimate(
     max_iter: int = 100,
     tol: float = 1e-10,
     progress: Callable[..., Any] | None = None,
+    offsets: bool = False,
 ) -> dict[str, Any]: ...
 def hw_mimo_simulate(
     inputs: list[tuple[str, int, list[float]]],

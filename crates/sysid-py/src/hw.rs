@@ -27,13 +27,19 @@ fn nl(spec: &Nl) -> PyResult<Nonlinearity> {
     Nonlinearity::from_spec(kind, *n, bp).py()
 }
 
-fn structure(input: &Nl, output: &Nl, nb: usize, nf: usize, nk: usize) -> PyResult<HwStructure> {
+fn structure(
+    input: &Nl,
+    output: &Nl,
+    (nb, nf, nk): (usize, usize, usize),
+    offset: bool,
+) -> PyResult<HwStructure> {
     let s = HwStructure {
         input: nl(input)?,
         output: nl(output)?,
         nb,
         nf,
         nk,
+        offset,
     };
     s.input.check().py()?;
     s.output.check().py()?;
@@ -53,9 +59,9 @@ fn options(max_iter: usize, tol: f64) -> Options {
 }
 
 /// Prediction-error estimate from `theta0`; returns a dict (theta, cost, history,
-/// iterations, stop, covariance).
+/// iterations, stop, covariance). With `offset`, `theta` ends with the output offset.
 #[pyfunction]
-#[pyo3(signature = (records, input, output, nb, nf, nk, theta0, max_iter=100, tol=1e-10, progress=None))]
+#[pyo3(signature = (records, input, output, nb, nf, nk, theta0, max_iter=100, tol=1e-10, progress=None, offset=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn hw_estimate<'py>(
     py: Python<'py>,
@@ -69,8 +75,9 @@ pub fn hw_estimate<'py>(
     max_iter: usize,
     tol: f64,
     progress: Option<Py<PyAny>>,
+    offset: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let s = structure(&input, &output, nb, nf, nk)?;
+    let s = structure(&input, &output, (nb, nf, nk), offset)?;
     let data: Vec<(Vec<f64>, Vec<f64>)> = records.iter().map(|(u, y)| (vec1(u), vec1(y))).collect();
     let refs: Vec<(&[f64], &[f64])> = data.iter().map(|(u, y)| (&u[..], &y[..])).collect();
     let opts = options(max_iter, tol);
@@ -101,7 +108,7 @@ pub fn hw_simulate<'py>(
     theta: Vec<f64>,
     u: PyReadonlyArray1<'_, f64>,
 ) -> PyResult<Signals<'py>> {
-    let s = structure(&input, &output, nb, nf, nk)?;
+    let s = structure(&input, &output, (nb, nf, nk), false)?;
     if theta.len() != s.n_params() {
         return Err(crate::errors::to_py(SysidError::InvalidArgument {
             name: "theta",
@@ -123,21 +130,24 @@ fn mimo_structure(
     outputs: &[Nl],
     order: usize,
     feedthrough: bool,
+    offsets: bool,
 ) -> PyResult<MimoHwStructure> {
     let s = MimoHwStructure {
         inputs: inputs.iter().map(nl).collect::<PyResult<_>>()?,
         outputs: outputs.iter().map(nl).collect::<PyResult<_>>()?,
         order,
         feedthrough,
+        offsets,
     };
     s.check().py()?;
     Ok(s)
 }
 
 /// MIMO Hammerstein-Wiener (state-space linear block) prediction-error estimate from
-/// `theta0`; returns a dict (theta, cost, history, iterations, stop, noise_variance).
+/// `theta0`; returns a dict (theta, cost, history, iterations, stop, noise_variance). With
+/// `offsets`, `theta` ends with one output offset per output.
 #[pyfunction]
-#[pyo3(signature = (records, inputs, outputs, order, feedthrough, theta0, max_iter=100, tol=1e-10, progress=None))]
+#[pyo3(signature = (records, inputs, outputs, order, feedthrough, theta0, max_iter=100, tol=1e-10, progress=None, offsets=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn hw_mimo_estimate<'py>(
     py: Python<'py>,
@@ -150,8 +160,9 @@ pub fn hw_mimo_estimate<'py>(
     max_iter: usize,
     tol: f64,
     progress: Option<Py<PyAny>>,
+    offsets: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let s = mimo_structure(&inputs, &outputs, order, feedthrough)?;
+    let s = mimo_structure(&inputs, &outputs, order, feedthrough, offsets)?;
     let refs: Vec<_> = records.iter().map(|(u, y)| (view(u), view(y))).collect();
     let opts = options(max_iter, tol);
     let sol = run(py, &progress, |obs| {
@@ -181,7 +192,7 @@ pub fn hw_mimo_simulate<'py>(
     u: PyReadonlyArray2<'_, f64>,
     x0: Option<Vec<f64>>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let s = mimo_structure(&inputs, &outputs, order, feedthrough)?;
+    let s = mimo_structure(&inputs, &outputs, order, feedthrough, false)?;
     if theta.len() != s.n_params() {
         return Err(crate::errors::to_py(SysidError::InvalidArgument {
             name: "theta",

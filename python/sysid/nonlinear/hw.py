@@ -100,14 +100,17 @@ def nlhw(
         from zero than its standard deviation and both nonlinearities are sigmoid networks or
         the identity; with a nonlinearity whose levels are in the data's units (a saturation,
         dead zone, polynomial, ...) on such a record, both ways are fitted and the lower sum
-        of squares kept (``info["offsets"]["auto"]`` says which).
+        of squares kept (``info["offsets"]["auto"]`` says which). About the means, the
+        output level of the operating point (``y_offset``) is estimated with the other
+        parameters (the input's is the mean: a shift of it is a shift of the nonlinearity).
 
     Returns
     -------
     HammersteinWienerModel
         With ``info``: ``iterations``, ``cost`` (``1/2 sum e^2`` at the start and after each
         iteration of the chosen start's search), ``criterion``, ``stop`` (reason), the start,
-        and the parameter covariance in ``info["covariance"]``.
+        and the parameter covariance in ``info["covariance"]`` (over ``theta``, then the
+        output level when it is estimated).
 
     Warns
     -----
@@ -223,10 +226,12 @@ def nlhw(
             lin_out = fout.linear_start(xs) if kind else None
             for start_out in ([fout.initial(xs) if lin_out is None else lin_out] if kind
                               else fout.starts(xs)):
-                th0 = np.concatenate([start_in, b0, f0, start_out])
+                # about the means, the output level is estimated with the rest (from 0)
+                th0 = np.concatenate([start_in, b0, f0, start_out, np.zeros(int(shift))])
                 try:
                     r = _sysid.hw_estimate(records, fin.spec(), fout.spec(), int(nb), int(nf),
-                                           int(nk), th0.tolist(), int(max_iter), float(tol), cb)
+                                           int(nk), th0.tolist(), int(max_iter), float(tol), cb,
+                                           offset=shift)
                 except DataError:
                     continue  # an inadmissible start (unstable F): try the next one
                 if res is None or r["cost"] < res["cost"] or r["stop"] == "cancelled":
@@ -242,7 +247,8 @@ def nlhw(
     na, nbeta = fin.params.size, fout.params.size
     fin.params = th[:na]
     b, f = th[na:na + int(nb)], th[na + int(nb):na + int(nb) + int(nf)]
-    fout.params = th[na + int(nb) + int(nf):]
+    fout.params = th[na + int(nb) + int(nf):na + int(nb) + int(nf) + nbeta]
+    level = float(th[-1]) if shift else 0.0  # the operating point's level, estimated
     info = {"method": "nlhw", "iterations": int(res["iterations"]), "stop": res["stop"],
             "remaining_decrease": float(res["remaining_decrease"]),
             "cost": list(res["history"]), "criterion": "sum of squares", "theta0": theta0,
@@ -250,10 +256,11 @@ def nlhw(
             "covariance": np.asarray(res["covariance"]),
             "u_range": (float(u_all.min()), float(u_all.max())),
             "x_range": (float(x_all.min()), float(x_all.max())), "n_output_params": nbeta,
-            "offsets": {"removed": shift, "u": float(u0[0]), "y": float(y0[0])}}
+            "offsets": {"removed": shift, "u": float(u0[0]), "y": float(y0[0] + level),
+                        "y_estimated": shift}}
     warn_if_capped(info, "the nlhw search", int(max_iter), n_residuals=n_samples)
     return HammersteinWienerModel(fin, fout, b, f, int(nk), dt,
-                                  u_offset=float(u0[0]), y_offset=float(y0[0]),
+                                  u_offset=float(u0[0]), y_offset=float(y0[0] + level),
                                   noise_variance=float(res["noise_variance"]), info=info,
                                   input_names=getattr(data, "input_names", None),
                                   output_names=getattr(data, "output_names", None))

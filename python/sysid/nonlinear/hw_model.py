@@ -522,8 +522,9 @@ class HammersteinWienerModel(ModelMixin):
 
     @property
     def n_parameters(self) -> int:
-        """Number of free parameters."""
-        return int(self.theta.size)
+        """Number of free parameters, the output level included when estimated."""
+        return int(self.theta.size) + bool(dict(self.info.get("offsets") or {}).get(
+            "y_estimated"))
 
     def _u(self, u: Any) -> np.ndarray:
         # complex, NaN or Inf, a wrong shape: an error naming u, not NaN outputs

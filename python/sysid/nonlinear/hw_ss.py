@@ -100,7 +100,8 @@ def nlhw_ss(
         As for :func:`sysid.nlhw`: fit about the record's means and keep them in the model
         (``"auto"``: a channel's mean farther from zero than its standard deviation, and
         every nonlinearity a sigmoid network or the identity; with levels in the data's units
-        on such a record, the better of both fits).
+        on such a record, the better of both fits); about the means the outputs' levels
+        (``y_offset``) are estimated with the other parameters.
 
     Returns
     -------
@@ -252,9 +253,11 @@ def nlhw_ss(
                 start = HammersteinWienerSSModel(fin, fout, A, Bk, C, Dk, dt)
                 fi, fo = start.specs()
                 try:
+                    # about the means, the output levels are estimated with the rest
                     r = _sysid.hw_mimo_estimate(
-                        records, fi, fo, int(order), bool(feedthrough), start.theta.tolist(),
-                        int(max_iter), float(tol), cb)
+                        records, fi, fo, int(order), bool(feedthrough),
+                        start.theta.tolist() + [0.0] * (p * shift), int(max_iter),
+                        float(tol), cb, offsets=shift)
                 except DataError:
                     continue  # an inadmissible start: try the next one
                 if res is None or r["cost"] < res["cost"] or r["stop"] == "cancelled":
@@ -278,13 +281,15 @@ def nlhw_ss(
         D, k = th[k:k + p * m].reshape(p, m), k + p * m
     for g in fout:
         g.params, k = th[k:k + np.size(g.params)], k + np.size(g.params)
+    y0 = y0 + th[k:k + p] if shift else y0  # the operating point's levels, estimated
     info = {"method": "nlhw_ss", "iterations": int(res["iterations"]), "stop": res["stop"],
             "remaining_decrease": float(res["remaining_decrease"]),
             "n_starts": len(passes),
             "cost": list(res["history"]), "criterion": "sum of squares", "theta0": th0,
             "u_ranges": [(float(c.min()), float(c.max())) for c in u_all.T],
             "v_ranges": [(float(c.min()), float(c.max())) for c in v_all.T],
-            "offsets": {"removed": shift, "u": u0.tolist(), "y": y0.tolist()}}
+            "offsets": {"removed": shift, "u": u0.tolist(), "y": y0.tolist(),
+                        "y_estimated": shift}}
     if start_note:
         info["linear_start"] = start_note
     n_res = sum(y.size for _, y in exps)

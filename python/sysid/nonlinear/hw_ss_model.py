@@ -115,8 +115,9 @@ class HammersteinWienerSSModel(ModelMixin):
     @property
     def n_parameters(self) -> int:
         """Number of parameters (the state-space part is not unique: similarity transforms
-        leave ``n^2`` directions free)."""
-        return int(self.theta.size)
+        leave ``n^2`` directions free), the output levels included when estimated."""
+        levels = bool(dict(self.info.get("offsets") or {}).get("y_estimated"))
+        return int(self.theta.size) + levels * self.noutputs
 
     def specs(self) -> tuple[list[Any], list[Any]]:
         """The nonlinearities as the Rust functions take them."""

@@ -7,7 +7,8 @@
 //! y_i(t) = g_i(v_i(t); beta_i) + e_i(t)        per-output static nonlinearity
 //! ```
 //!
-//! Parameters `theta = [alpha_1..alpha_m, vec(A), vec(B), vec(C), (vec(D)), beta_1..beta_p]`
+//! Parameters `theta = [alpha_1..alpha_m, vec(A), vec(B), vec(C), (vec(D)), beta_1..beta_p,
+//! (y0_1..y0_p)]`
 //! (matrices row-major), estimated by prediction error with the one optimiser
 //! ([`crate::optim`]): the state sensitivities `S(t) = dx(t)/dtheta` run sample by sample
 //! for the parameters that move the state only (`alpha`, `A`, `B`), once per sample for all
@@ -43,6 +44,9 @@ pub struct MimoHwStructure {
     pub order: usize,
     /// Whether the linear block has a direct term `D`.
     pub feedthrough: bool,
+    /// Whether `theta` ends with one output offset per output, added to the output
+    /// nonlinearities' values (`y_i = y0_i + g_i(v_i)`): the levels of the operating point.
+    pub offsets: bool,
 }
 
 /// Offsets of the parameter groups.
@@ -53,6 +57,7 @@ struct Layout {
     c: usize,
     d: usize,
     beta: Vec<usize>,
+    offset: usize,
     total: usize,
 }
 
@@ -88,7 +93,8 @@ impl MimoHwStructure {
             c,
             d,
             beta,
-            total: off,
+            offset: off,
+            total: off + if self.offsets { p } else { 0 },
         }
     }
 
@@ -149,7 +155,7 @@ impl MimoHwStructure {
     /// use faer::Mat;
     /// use sysid_core::hw::{mimo::MimoHwStructure, Nonlinearity};
     /// let s = MimoHwStructure { inputs: vec![Nonlinearity::Identity],
-    ///     outputs: vec![Nonlinearity::Identity], order: 1, feedthrough: false };
+    ///     outputs: vec![Nonlinearity::Identity], order: 1, feedthrough: false, offsets: false };
     /// // x(t+1) = 0.5 x + w, v = x: from x0 = 2 with no input, 2, 1, 0.5
     /// let y = s.simulate_from(&[0.5, 1.0, 1.0], Mat::<f64>::zeros(3, 1).as_ref(), &[2.0])
     ///     .unwrap();
@@ -185,6 +191,9 @@ impl MimoHwStructure {
         }
         for (i, g) in self.outputs.iter().enumerate() {
             cols.extend((0..g.n_params()).map(|q| Column::Beta(i, l.beta[i] + q)));
+        }
+        if self.offsets {
+            cols.extend((0..p).map(Column::Offset));
         }
         debug_assert_eq!(cols.len(), l.total);
         cols.into_iter()
@@ -233,7 +242,8 @@ impl MimoHwStructure {
             .collect();
         let mut own: Vec<Vec<(usize, Column)>> = vec![Vec::new(); p];
         for (cn, col) in cols.iter().enumerate().skip(nd) {
-            if let Column::C(i, _) | Column::D(i, _) | Column::Beta(i, _) = *col {
+            if let Column::C(i, _) | Column::D(i, _) | Column::Beta(i, _) | Column::Offset(i) = *col
+            {
                 own[i].push((cn, *col));
             }
         }
@@ -262,7 +272,12 @@ impl MimoHwStructure {
                     + (0..m).map(|j| d[(i, j)] * w[j]).sum::<f64>();
                 let nb = self.outputs[i].n_params();
                 let b0 = l.beta[i];
-                let (yhat, gd) = self.outputs[i].eval(&theta[b0..b0 + nb], v, &mut dg[b0..b0 + nb]);
+                let (g, gd) = self.outputs[i].eval(&theta[b0..b0 + nb], v, &mut dg[b0..b0 + nb]);
+                let yhat = if self.offsets {
+                    g + theta[l.offset + i]
+                } else {
+                    g
+                };
                 if q > 0 {
                     // dv_i = C_i S + dC_i x + D_i dw + dD_i w, times g_i'; + dg_i / dbeta_i
                     let dyn_row = &mut row[..nd];
@@ -285,6 +300,7 @@ impl MimoHwStructure {
                             Column::C(_, k) => gd * x[k],
                             Column::D(_, j) => gd * w[j],
                             Column::Beta(_, at) => dg[at],
+                            Column::Offset(_) => 1.0,
                             _ => 0.0,
                         };
                     }
@@ -348,6 +364,8 @@ enum Column {
     D(usize, usize),
     /// Parameter at `theta[at]` of output `i`'s nonlinearity.
     Beta(usize, usize),
+    /// Output `i`'s offset.
+    Offset(usize),
 }
 
 impl Column {

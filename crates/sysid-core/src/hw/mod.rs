@@ -235,20 +235,32 @@ pub struct HwStructure {
     pub nf: usize,
     /// Input delay.
     pub nk: usize,
+    /// Whether `theta` ends with an output offset `y0`, added to the output nonlinearity's
+    /// value (`y = y0 + g(x)`): the level of the operating point, estimated with the rest.
+    pub offset: bool,
 }
 
 impl HwStructure {
-    /// Total parameters `[alpha, b, f, beta]`.
+    /// Total parameters `[alpha, b, f, beta]`, then `y0` with [`Self::offset`].
     pub fn n_params(&self) -> usize {
-        self.input.n_params() + self.nb + self.nf + self.output.n_params()
+        self.input.n_params() + self.nb + self.nf + self.output.n_params() + self.offset as usize
     }
 
     fn split<'a>(&self, th: &'a [f64]) -> (&'a [f64], &'a [f64], &'a [f64], &'a [f64]) {
         let na = self.input.n_params();
         let (alpha, rest) = th.split_at(na);
         let (b, rest) = rest.split_at(self.nb);
-        let (f, beta) = rest.split_at(self.nf);
-        (alpha, b, f, beta)
+        let (f, rest) = rest.split_at(self.nf);
+        (alpha, b, f, &rest[..self.output.n_params()])
+    }
+
+    /// The output offset `y0` at `theta` (0 without [`Self::offset`]).
+    fn y0(&self, th: &[f64]) -> f64 {
+        if self.offset {
+            th[th.len() - 1]
+        } else {
+            0.0
+        }
     }
 
     /// Noise-free output for input `u` at parameters `theta` (from rest).
@@ -296,6 +308,7 @@ impl HwStructure {
         mut visit: impl FnMut(usize, f64, Option<&[f64]>, ()),
     ) -> Result<()> {
         let (alpha, b, f, beta) = self.split(theta);
+        let y0 = self.y0(theta);
         let (na, nbeta) = (alpha.len(), beta.len());
         let n = u.len();
         let p = self.n_params();
@@ -329,7 +342,8 @@ impl HwStructure {
                 }
             }
             x[t] = xt;
-            let (yhat, gd) = self.output.eval(beta, xt, &mut dpb);
+            let (g, gd) = self.output.eval(beta, xt, &mut dpb);
+            let yhat = y0 + g;
             if let Some(row) = jac.as_deref_mut() {
                 // sources of the 1/F filters
                 s.iter_mut().for_each(|v| *v = 0.0);
@@ -360,6 +374,9 @@ impl HwStructure {
                 row.clear();
                 row.extend(s.iter().map(|v| gd * v));
                 row.extend_from_slice(&dpb);
+                if self.offset {
+                    row.push(1.0);
+                }
                 debug_assert_eq!(row.len(), p);
                 visit(t, yhat, Some(row), ());
             } else {
@@ -416,7 +433,7 @@ impl Problem for HwProblem<'_> {
 /// use sysid_core::optim::Options;
 /// // Hammerstein: saturation at +-0.5, then 0.5 q^-1 / (1 - 0.8 q^-1)
 /// let s = HwStructure { input: Nonlinearity::Saturation, output: Nonlinearity::Identity,
-///                       nb: 1, nf: 1, nk: 1 };
+///                       nb: 1, nf: 1, nk: 1, offset: false };
 /// let u: Vec<f64> = (0..400).map(|t| ((t * 7919 % 101) as f64 / 50.0) - 1.0).collect();
 /// let y = s.simulate(&[-0.5, 0.5, 0.5, -0.8], &u).unwrap();
 /// let sol = estimate(&s, &[(&u, &y)], &[-0.9, 0.9, 0.4, -0.7], &Options::default(),
@@ -501,10 +518,12 @@ mod tests {
                     nb: 2,
                     nf: 1,
                     nk: 1,
+                    offset: true,
                 };
                 let mut th = pin.clone();
                 th.extend([0.4, 0.2, -0.6]);
                 th.extend(pout.iter());
+                th.push(0.3); // the output offset y0
                 let mut pr = HwProblem {
                     structure: s,
                     records: vec![(&u, &y)],
@@ -528,6 +547,37 @@ mod tests {
         }
     }
 
+    /// A Hammerstein record sitting at an output level (`y = 2.5 + L sat(u)`) is recovered
+    /// exactly with the offset estimated, from a start at the output's mean.
+    #[test]
+    fn the_output_offset_is_estimated_with_the_rest() {
+        let u: Vec<f64> = (0..400)
+            .map(|t| ((t * 7919 % 101) as f64 / 50.0) - 1.0)
+            .collect();
+        let s = HwStructure {
+            input: Nonlinearity::Saturation,
+            output: Nonlinearity::Identity,
+            nb: 1,
+            nf: 1,
+            nk: 1,
+            offset: true,
+        };
+        let truth = [-0.5, 0.5, 0.5, -0.8, 2.5];
+        let y = s.simulate(&truth, &u).unwrap();
+        let mean = y.iter().sum::<f64>() / y.len() as f64;
+        let sol = estimate(
+            &s,
+            &[(&u, &y)],
+            &[-0.9, 0.9, 0.4, -0.7, mean],
+            &Options::default(),
+            &mut |_| Flow::Continue,
+        )
+        .unwrap();
+        for (a, b) in sol.theta.iter().zip(truth) {
+            assert!((a - b).abs() < 1e-8, "{:?} vs {truth:?}", sol.theta);
+        }
+    }
+
     /// A pass over a long record asks whether to stop every few thousand samples (see the
     /// MIMO structure's test of the same name).
     #[test]
@@ -541,6 +591,7 @@ mod tests {
             nb: 1,
             nf: 1,
             nk: 1,
+            offset: false,
         };
         let th = [-0.5, 0.5, 0.5, -0.8];
         let y = s.simulate(&th, &u).unwrap();

@@ -59,11 +59,13 @@ fn gradient_matches_finite_differences() {
         ],
         order: 2,
         feedthrough: true,
+        offsets: true,
     };
     let mut th = vec![-0.613, 0.707, 0.2, -0.1];
     th.extend(linear_block());
     th.extend([0.1, -0.2, 0.05, 0.3]); // D
     th.push(0.25);
+    th.extend([0.4, -1.3]); // output offsets
     let u = inputs(300, 1);
     let y = Mat::from_fn(300, 2, |t, i| ((t * (i + 3)) as f64 * 0.37).sin());
     let mut pr = MimoHwProblem {
@@ -97,6 +99,7 @@ fn hammerstein_2x2_recovered() {
         outputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
         order: 2,
         feedthrough: false,
+        offsets: false,
     };
     let mut truth = vec![-0.5, 0.6, 0.3, -0.2];
     truth.extend(linear_block());
@@ -124,6 +127,41 @@ fn hammerstein_2x2_recovered() {
     assert!(sol.cost < 1e-18, "cost {}", sol.cost);
 }
 
+/// The 2 x 2 Hammerstein record at output levels (2, -1): recovered with the offsets
+/// estimated, from a start at level zero.
+#[test]
+fn hammerstein_2x2_with_output_levels_recovered() {
+    let s = MimoHwStructure {
+        inputs: vec![
+            Nonlinearity::Saturation,
+            Nonlinearity::Polynomial { degree: 3 },
+        ],
+        outputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
+        order: 2,
+        feedthrough: false,
+        offsets: true,
+    };
+    let mut truth = vec![-0.5, 0.6, 0.3, -0.2];
+    truth.extend(linear_block());
+    truth.extend([2.0, -1.0]);
+    let mut start = vec![-0.9, 0.9, 0.0, 0.0];
+    start.extend(
+        linear_block()
+            .iter()
+            .enumerate()
+            .map(|(k, v)| v * (1.0 + 0.1 * ((k as f64 * 1.7).sin()))),
+    );
+    start.extend([0.0, 0.0]);
+    let sol = fit(&s, &truth, &start);
+    let n = sol.theta.len();
+    assert!(
+        (sol.theta[n - 2] - 2.0).abs() < 1e-6 && (sol.theta[n - 1] + 1.0).abs() < 1e-6,
+        "{:?}",
+        &sol.theta[n - 2..]
+    );
+    assert!(sol.cost < 1e-18, "cost {}", sol.cost);
+}
+
 /// 2 x 2 Wiener: quadratic polynomial on output 0, saturation on output 1.
 #[test]
 fn wiener_2x2_recovered() {
@@ -135,6 +173,7 @@ fn wiener_2x2_recovered() {
         ],
         order: 2,
         feedthrough: false,
+        offsets: false,
     };
     let mut truth = linear_block();
     truth.extend([0.4, -0.5, 0.45]);
@@ -163,6 +202,7 @@ fn bad_starts_and_shapes_are_errors() {
         outputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
         order: 2,
         feedthrough: false,
+        offsets: false,
     };
     let u = inputs(50, 2);
     let y = Mat::<f64>::zeros(50, 2);
@@ -208,6 +248,7 @@ fn order3() -> (MimoHwStructure, Vec<f64>, Mat<f64>, Mat<f64>, Evaluation) {
         ],
         order: 3,
         feedthrough: true,
+        offsets: true,
     };
     let mut th = vec![0.3, 1.1, 0.1, 0.5, 0.7, -0.2]; // input 0's network
     th.extend([0.6, -0.3, 0.1, 0.3, 0.5, -0.2, 0.1, 0.2, -0.4]); // A
@@ -215,6 +256,7 @@ fn order3() -> (MimoHwStructure, Vec<f64>, Mat<f64>, Mat<f64>, Evaluation) {
     th.extend([0.6, 0.3, -0.4, 0.9, 0.1, 0.5]); // C
     th.extend([0.1, -0.2, 0.05, 0.3]); // D
     th.extend([0.8, 0.9, 0.1, 0.25]); // output networks
+    th.extend([0.4, -1.3]); // output offsets
     assert_eq!(th.len(), s.n_params());
     let u = inputs(400, 5);
     let y = Mat::from_fn(400, 2, |t, i| ((t * (i + 2)) as f64 * 0.29).cos());
@@ -302,6 +344,7 @@ fn a_pass_stops_inside_the_record_when_asked() {
         outputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
         order: 2,
         feedthrough: false,
+        offsets: false,
     };
     let mut th = vec![-0.5, 0.5];
     th.extend(linear_block());
