@@ -10,16 +10,23 @@ import sysid
 
 def _random_model(seed, n, m, l):
     rng = np.random.default_rng(seed)
-    # distinct poles: real ones and complex pairs, well inside the unit circle
-    blocks, k = [], 0
-    while k < n:
-        if n - k >= 2 and rng.random() < 0.5:
-            r, th = rng.uniform(0.2, 0.9), rng.uniform(0.2, 2.8)
-            blocks.append(r * np.array([[np.cos(th), np.sin(th)], [-np.sin(th), np.cos(th)]]))
-            k += 2
-        else:
-            blocks.append(np.array([[rng.uniform(-0.9, 0.9)]]))
-            k += 1
+    # distinct poles: real ones and complex pairs, well inside the unit circle and at least
+    # 0.05 apart (nearly repeated poles, 0.0654 and 0.0655 in one draw, make the companion
+    # form itself ill-conditioned: its maps then hold to about 1e-5, not to these tolerances)
+    while True:
+        blocks, k = [], 0
+        while k < n:
+            if n - k >= 2 and rng.random() < 0.5:
+                r, th = rng.uniform(0.2, 0.9), rng.uniform(0.2, 2.8)
+                blocks.append(r * np.array([[np.cos(th), np.sin(th)],
+                                            [-np.sin(th), np.cos(th)]]))
+                k += 2
+            else:
+                blocks.append(np.array([[rng.uniform(-0.9, 0.9)]]))
+                k += 1
+        p = np.concatenate([np.linalg.eigvals(b) for b in blocks])
+        if n == 1 or np.abs(p[:, None] - p[None, :])[~np.eye(n, dtype=bool)].min() >= 0.05:
+            break
     A0 = np.zeros((n, n))
     o = 0
     for b in blocks:
