@@ -730,6 +730,7 @@ class RecursiveEstimator:
         bias: float = ...,
         theta0: _Array | None = None,
         p0: float = 1e4,
+        startup_forgetting: bool = True,
     ) -> RecursiveEstimator: ...
     def step(self, u: list[float], y: float) -> float: ...
     def run(

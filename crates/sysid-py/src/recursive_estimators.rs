@@ -22,7 +22,7 @@ impl PyRecursiveEstimator {
     #[new]
     #[pyo3(signature = (na, nb, nc, nd, nf, nk, method="forgetting", forgetting=1.0,
         process_noise=None, noise_variance=1.0, gain=1.0, bias=f64::EPSILON, theta0=None,
-        p0=1e4))]
+        p0=1e4, startup_forgetting=true))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         na: usize,
@@ -39,6 +39,7 @@ impl PyRecursiveEstimator {
         bias: f64,
         theta0: Option<PyReadonlyArray1<'_, f64>>,
         p0: f64,
+        startup_forgetting: bool,
     ) -> PyResult<Self> {
         let s = Structure {
             na,
@@ -58,9 +59,9 @@ impl PyRecursiveEstimator {
         };
         let m = Method::from_name(method, p, &settings).py()?;
         let t0: Option<Vec<f64>> = theta0.map(|t| t.as_array().to_vec());
-        Ok(Self {
-            inner: Recursive::new(s, m, t0.as_deref(), Some(p0)).py()?,
-        })
+        let mut inner = Recursive::new(s, m, t0.as_deref(), Some(p0)).py()?;
+        inner.set_startup_forgetting(startup_forgetting);
+        Ok(Self { inner })
     }
 
     /// One sample; returns the prior prediction `yhat(t | t-1)`.

@@ -107,7 +107,8 @@ def default_length(exps: list[tuple[np.ndarray, np.ndarray]]) -> tuple[int, str]
 def impulse_response(data: IOData, length: int | None = None, *,
                      regularization: str | None = "tc",
                      hyper: tuple[float, float] | None = None,
-                     feedthrough: bool | str = False) -> MarkovEstimate:
+                     feedthrough: bool | str = False,
+                     prewhiten: bool = True) -> MarkovEstimate:
     """Markov parameters by least-squares FIR, optionally TC-regularised.
 
     Fits ``y(t) = sum_{k<length} h_k u(t-k) + e(t)`` over all experiments of ``data`` (means
@@ -138,6 +139,16 @@ def impulse_response(data: IOData, length: int | None = None, *,
         Estimate ``h_0 = D``; if False (the default, as every sysid state-space estimator)
         it is zero. ``"auto"``: decided from the data
         (:func:`sysid.subspace.feedthrough.choose_feedthrough`).
+    prewhiten : bool
+        When the FIR's residuals of an output are coloured (an AR model of order 1 to
+        ``PREWHITEN_MAX`` chosen by BIC over order 0), fit that output again with its input
+        and output filtered by the AR polynomial ``A(q)``: the residuals are then white, as
+        the standard deviations (and the TC prior's likelihood) assume. Without it, coloured
+        output noise makes ``info["std"]`` wrong, too large or too small depending on the
+        input's spectrum. ``info["prewhitening"]`` lists each output's ``A`` (``[1.0]``:
+        white residuals, the fit unchanged). Not done when the response has not decayed
+        within ``length`` (the warning below): the residuals then hold the truncated tail,
+        which the filter would turn into bias.
 
     Returns
     -------
@@ -186,10 +197,78 @@ def impulse_response(data: IOData, length: int | None = None, *,
     h = np.asarray(out["markov"]).reshape(-1, l, m)
     info = {k: out[k] for k in ("scale", "decay", "noise_variance", "samples")}
     info["std"] = np.asarray(out["std"]).reshape(-1, l, m)
+    if prewhiten and tail is None:  # a truncated FIR's residuals hold its missing tail
+        h = _prewhitened(exps, h, info, ft, regularization or "none", hyper)
     if why is not None:
         info["length"] = why
     return MarkovEstimate(h, dt, "fir-tc" if regularization else "fir", info,
                           input_names=data.input_names, output_names=data.output_names)
+
+
+#: the highest order of the AR filter that whitens the FIR's residuals
+PREWHITEN_MAX = 10
+
+
+def _fir_residuals(exps: list[tuple[np.ndarray, np.ndarray]], h: np.ndarray,
+                   j: int) -> list[np.ndarray]:
+    """Output ``j``'s residuals ``y - sum_k h_k u(t - k)`` of each experiment, over the
+    samples the regression used (all ``len(h) - 1`` lags measured)."""
+    n = h.shape[0]
+    out = []
+    for u, y in exps:
+        fit = sum(np.convolve(u[:, i], h[:, j, i])[:u.shape[0]] for i in range(u.shape[1]))
+        out.append((y[:, j] - fit)[n - 1:])
+    return out
+
+
+def _ar_by_bic(res: list[np.ndarray], top: int) -> np.ndarray:
+    """``[1, a_1 .. a_p]`` of the AR model of the residual series, ``p`` in ``0 .. top`` by
+    BIC (least squares over the same samples for every order; several series pooled)."""
+    rows = [np.column_stack([r[top - k:r.size - k] for k in range(top + 1)])
+            for r in res if r.size > 2 * top + 1]
+    if not rows or top == 0:
+        return np.ones(1)
+    z = np.vstack(rows)  # column k: the series delayed k samples
+    big_n = z.shape[0]
+    best, best_bic = np.ones(1), big_n * np.log(max(np.mean(z[:, 0] ** 2), 1e-300))
+    for p in range(1, top + 1):
+        coef = np.linalg.lstsq(-z[:, 1:p + 1], z[:, 0], rcond=None)[0]
+        rss = np.mean((z[:, 0] + z[:, 1:p + 1] @ coef) ** 2)
+        bic = big_n * np.log(max(rss, 1e-300)) + p * np.log(big_n)
+        if bic < best_bic:
+            best, best_bic = np.r_[1.0, coef], bic
+    return best
+
+
+def _prewhitened(exps: list[tuple[np.ndarray, np.ndarray]], h: np.ndarray,
+                 info: dict[str, Any], ft: bool, reg: str,
+                 hyper: tuple[float, float] | None) -> np.ndarray:
+    """The FIR refitted, output by output, on data filtered by the AR polynomial that whitens
+    that output's residuals (:func:`_ar_by_bic`); updates ``info`` (``std``, ``scale``,
+    ``decay``, ``prewhitening``) and returns the Markov parameters. A generalised least
+    squares step: with ``y = H u + v`` and ``A(q) v = e`` white, ``A y = H (A u) + e``."""
+    n, l, _ = h.shape
+    shortest = min(u.shape[0] for u, _ in exps)
+    top = min(PREWHITEN_MAX, max(0, (shortest - n) // 20))
+    h = h.copy()
+    polys = []
+    for j in range(l):
+        a = _ar_by_bic(_fir_residuals(exps, h, j), top)
+        polys.append(a)
+        if a.size == 1:
+            continue
+        p = a.size - 1
+        filt = [(np.column_stack([np.convolve(u[:, i], a)[p:u.shape[0]]
+                                  for i in range(u.shape[1])]),
+                 np.convolve(y[:, j], a)[p:y.shape[0]][:, None]) for u, y in exps]
+        out = _sysid.fir(filt, n, ft, reg, hyper)
+        h[:, j, :] = np.asarray(out["markov"]).reshape(n, 1, -1)[:, 0, :]
+        info["std"][:, j, :] = np.asarray(out["std"]).reshape(n, 1, -1)[:, 0, :]
+        for key in ("scale", "decay"):
+            info[key] = np.array(info[key], dtype=float)
+            info[key][j] = np.asarray(out[key])[0]
+    info["prewhitening"] = polys
+    return h
 
 
 def okid(data: IOData, observer_order: int, count: int | None = None, *,

@@ -13,9 +13,14 @@ update ``theta(t) = theta(t-1) + K(t) eps(t)`` with
 * ``"gradient"``: ``K = gamma psi``;
 
 where ``psi`` is the gradient of the prediction (``phi`` filtered by ``D/C``, ``D/(C F_j)``
-or ``1/C``; ``psi = phi`` for ARX): the recursive prediction-error method. ``step`` and
-``run`` execute the same Rust code, so a record processed either way gives bit-identical
-results.
+or ``1/C``; ``psi = phi`` for ARX): the recursive prediction-error method. With those
+filters, method ``"forgetting"`` starts with a smaller factor that tends to ``lambda``,
+``lambda(t) = 0.99 lambda(t-1) + 0.01 lambda`` from ``min(lambda, 0.95)`` (Ljung &
+Soderstrom 1983; ``startup_forgetting=False`` turns it off): it forgets the first updates,
+made from the starting values, so that ``covariance`` times the noise variance is the
+estimate's covariance (with a constant ``lambda = 1`` a few percent of the estimates stayed
+many standard deviations off). ``step`` and ``run`` execute the same Rust code, so a record
+processed either way gives bit-identical results.
 """
 
 from __future__ import annotations
@@ -156,7 +161,7 @@ class _Recursive:
     def __init__(self, na: int, nb: Any, nc: int, nd: int, nf: Any, nk: Any, *,
                  method: str, forgetting: float, process_noise: Any, noise_variance: float,
                  gain: float, bias: float, initial_parameters: Any, initial_covariance: Any,
-                 dt: float | None) -> None:
+                 dt: float | None, startup_forgetting: bool = True) -> None:
         method = as_option(method, "recursive_method", "method")
         na_i = as_int(na, "na", 0)  # the orders in the signature's order: na first
         nb_v = _orders(nb, "nb")
@@ -175,7 +180,8 @@ class _Recursive:
             return _sysid.RecursiveEstimator(
                 *self._orders, method=method, forgetting=float(forgetting), process_noise=q,
                 noise_variance=float(noise_variance), gain=float(gain), bias=float(bias),
-                theta0=theta0, p0=float(P0) if P0.ndim == 0 else 1.0)
+                theta0=theta0, p0=float(P0) if P0.ndim == 0 else 1.0,
+                startup_forgetting=bool(startup_forgetting))
 
         # the core checks the structure (and its size) first: the process-noise matrix is
         # sized from the parameter count it accepted, never from unchecked orders
@@ -405,6 +411,15 @@ _SETTINGS_DOC = """
         gets, else 1. A record of another ``dt`` than the estimator's raises.
 """
 
+_STARTUP_DOC = """    startup_forgetting : bool
+        With method ``"forgetting"``, let the factor start at ``min(forgetting, 0.95)`` and
+        tend to ``forgetting`` (default; see :mod:`sysid.recursive.estimators`), so that the
+        first updates, made from the starting values, are forgotten and ``covariance`` times
+        the noise variance is the estimate's covariance. False: the constant factor, for
+        ``initial_parameters`` and ``initial_covariance`` already right (a batch estimate
+        and its covariance), which the start-up forgetting would discount.
+"""
+
 
 class RecursiveARX(_Recursive):
     __doc__ = """Online ARX ``A(q) y(t) = B(q) u(t - nk) + e(t)``.
@@ -455,7 +470,7 @@ class RecursiveARMAX(_Recursive):
         Orders of ``A`` and ``C``.
     nb, nk : int or sequence of int
         ``B`` coefficients and delay per input.
-""" + _SETTINGS_DOC + """
+""" + _SETTINGS_DOC + _STARTUP_DOC + """
     Examples
     --------
     >>> import numpy as np, sysid
@@ -475,7 +490,7 @@ class RecursiveARMAX(_Recursive):
                  forgetting: float = 1.0, process_noise: Any = None,
                  noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
                  initial_parameters: Any = None, initial_covariance: Any = 1e4,
-                 dt: float | None = None) -> None:
+                 dt: float | None = None, startup_forgetting: bool = True) -> None:
         na, nb, nc, nk = _given(na, (nb, nc, nk), "na nb* nc nk*", "RecursiveARMAX")
         na = as_int(na, "na", 0)
         nbv = _orders(nb, "nb")
@@ -483,7 +498,8 @@ class RecursiveARMAX(_Recursive):
                          forgetting=forgetting, process_noise=process_noise,
                          noise_variance=noise_variance, gain=gain, bias=bias,
                          initial_parameters=initial_parameters,
-                         initial_covariance=initial_covariance, dt=dt)
+                         initial_covariance=initial_covariance, dt=dt,
+                         startup_forgetting=startup_forgetting)
 
 
 class RecursiveOE(_Recursive):
@@ -493,7 +509,7 @@ class RecursiveOE(_Recursive):
     ----------
     nb, nf, nk : int or sequence of int
         ``B`` coefficients, ``F`` order and delay per input.
-""" + _SETTINGS_DOC + """
+""" + _SETTINGS_DOC + _STARTUP_DOC + """
     Examples
     --------
     >>> import numpy as np, sysid
@@ -513,12 +529,13 @@ class RecursiveOE(_Recursive):
                  forgetting: float = 1.0, process_noise: Any = None,
                  noise_variance: float = 1.0, gain: float = 1.0, bias: float = 2.2e-16,
                  initial_parameters: Any = None, initial_covariance: Any = 1e4,
-                 dt: float | None = None) -> None:
+                 dt: float | None = None, startup_forgetting: bool = True) -> None:
         nb, nf, nk = _given(nb, (nf, nk), "nb* nf* nk*", "RecursiveOE")
         super().__init__(0, nb, 0, 0, nf, nk, method=method, forgetting=forgetting,
                          process_noise=process_noise, noise_variance=noise_variance,
                          gain=gain, bias=bias, initial_parameters=initial_parameters,
-                         initial_covariance=initial_covariance, dt=dt)
+                         initial_covariance=initial_covariance, dt=dt,
+                         startup_forgetting=startup_forgetting)
 
 
 class RecursiveBJ(_Recursive):
@@ -530,7 +547,7 @@ class RecursiveBJ(_Recursive):
         ``B`` coefficients, ``F`` order and delay per input.
     nc, nd : int
         Orders of ``C`` and ``D``.
-""" + _SETTINGS_DOC + """
+""" + _SETTINGS_DOC + _STARTUP_DOC + """
     Examples
     --------
     >>> import numpy as np, sysid
@@ -550,10 +567,12 @@ class RecursiveBJ(_Recursive):
                  method: str = "forgetting", forgetting: float = 1.0,
                  process_noise: Any = None, noise_variance: float = 1.0, gain: float = 1.0,
                  bias: float = 2.2e-16, initial_parameters: Any = None,
-                 initial_covariance: Any = 1e4, dt: float | None = None) -> None:
+                 initial_covariance: Any = 1e4, dt: float | None = None,
+                 startup_forgetting: bool = True) -> None:
         nb, nc, nd, nf, nk = _given(nb, (nc, nd, nf, nk), "nb* nc nd nf* nk*",
                                     "RecursiveBJ")
         super().__init__(0, nb, nc, nd, nf, nk, method=method, forgetting=forgetting,
                          process_noise=process_noise, noise_variance=noise_variance,
                          gain=gain, bias=bias, initial_parameters=initial_parameters,
-                         initial_covariance=initial_covariance, dt=dt)
+                         initial_covariance=initial_covariance, dt=dt,
+                         startup_forgetting=startup_forgetting)

@@ -37,6 +37,16 @@
 //! (posterior values, as in recursive pseudo-linear regression) before they enter later
 //! regressors. An update that would make a parameter or `P` non-finite is refused (the
 //! sample still advances the histories) and counted in [`Recursive::rejected`].
+//!
+//! With filters (the prediction-error method) the forgetting factor starts below the one
+//! asked for and tends to it, `lambda(t) = 0.99 lambda(t-1) + 0.01 lambda` from
+//! `min(lambda, 0.95)` (Ljung & Soderstrom 1983; [`LAMBDA_START`]). The first updates, made
+//! from the starting values with gradient filters far from the final ones, are then forgotten:
+//! with a constant `lambda = 1` they stayed in `P` and in the estimate for good, and 1-4 % of
+//! the estimates of a Monte Carlo study ended more than 4 standard deviations (`P` times the
+//! noise variance) from the truth, so that `P` understated their spread 1.3-3 times.
+//! `P` times the noise variance is then the estimate's covariance (to about 10 % from 600
+//! samples on; with `lambda < 1`, about `P sigma^2 / (1 + lambda)`).
 
 mod lagged;
 #[cfg(test)]
@@ -163,6 +173,7 @@ pub struct Recursive {
     filt: Option<Filters>,
     samples: usize,
     rejected: usize,
+    startup: bool,
 }
 
 /// The gradient filters of the prediction-error method and their output delay lines.
@@ -222,6 +233,7 @@ impl Recursive {
             filt,
             samples: 0,
             rejected: 0,
+            startup: true,
             method,
             s,
         };
@@ -229,6 +241,20 @@ impl Recursive {
             est.set_theta(t)?;
         }
         Ok(est)
+    }
+
+    /// Whether the prediction-error method (`C`, `D` or an `F_j` in the structure, method
+    /// [`Method::Forgetting`]) forgets its start-up ([`LAMBDA_START`]; on by default). Off, it
+    /// runs with the constant factor, as the prediction-error method without a profile does:
+    /// for starting values and `P` that are already right (a batch estimate and its
+    /// covariance), which the start-up forgetting would discount.
+    pub fn set_startup_forgetting(&mut self, on: bool) {
+        self.startup = on;
+    }
+
+    /// Whether the start-up forgetting is on ([`Recursive::set_startup_forgetting`]).
+    pub fn startup_forgetting(&self) -> bool {
+        self.startup
     }
 
     /// Number of parameters.
@@ -365,8 +391,14 @@ impl Recursive {
         if filtered {
             self.prev.copy_from_slice(&self.theta);
         }
+        let profiled = match (&self.method, filtered) {
+            (Method::Forgetting { lambda }, true) if self.startup => Some(Method::Forgetting {
+                lambda: start_up_forgetting(*lambda, self.samples),
+            }),
+            _ => None,
+        };
         let ok = update::apply(
-            &self.method,
+            profiled.as_ref().unwrap_or(&self.method),
             &mut self.theta,
             &mut self.p,
             &self.psi,
@@ -545,6 +577,25 @@ impl Recursive {
             self.filt = Some(Filters::new(&self.s));
         }
     }
+}
+
+/// The start-up forgetting of the prediction-error method (Ljung & Soderstrom 1983):
+/// `lambda(t) = LAMBDA_RATE lambda(t-1) + (1 - LAMBDA_RATE) lambda` from
+/// `lambda(0) = min(lambda, LAMBDA_START)`, which tends to the factor `lambda` asked for.
+pub const LAMBDA_START: f64 = 0.95;
+/// See [`LAMBDA_START`].
+pub const LAMBDA_RATE: f64 = 0.99;
+
+/// The forgetting factor of sample `t` of the prediction-error method with start-up
+/// forgetting ([`LAMBDA_START`]): it forgets the first samples' updates, made with the
+/// starting values and the gradient filters they give, which with `lambda = 1` would otherwise
+/// stay in `P` and in the estimate for good.
+fn start_up_forgetting(lambda: f64, t: usize) -> f64 {
+    let start = lambda.min(LAMBDA_START);
+    if t > 10_000 {
+        return lambda; // 0.99^10000 = 2e-44
+    }
+    lambda - (lambda - start) * LAMBDA_RATE.powi(t as i32)
 }
 
 fn check_record(u: &[f64], y: &[f64], m: usize, offset: usize) -> Result<()> {

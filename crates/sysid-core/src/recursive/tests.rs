@@ -206,3 +206,36 @@ fn delays_and_orders_are_bounded_before_sizing() {
     // a long but bounded delay is fine
     assert_eq!(check_structure(&s(1, MAX_DELAY_LINE - 1, 2)).unwrap(), 3);
 }
+
+#[test]
+fn start_up_forgetting_tends_to_the_factor_asked_for() {
+    assert_eq!(start_up_forgetting(1.0, 0), LAMBDA_START);
+    assert!(
+        (start_up_forgetting(1.0, 1) - (LAMBDA_RATE * LAMBDA_START + 1.0 - LAMBDA_RATE)).abs()
+            < 1e-15
+    );
+    assert!(1.0 - start_up_forgetting(1.0, 2000) < 1e-9);
+    assert_eq!(start_up_forgetting(1.0, 20_000), 1.0);
+    // a factor below the start is used from the first sample
+    assert_eq!(start_up_forgetting(0.9, 0), 0.9);
+    assert_eq!(start_up_forgetting(0.9, 500), 0.9);
+}
+
+#[test]
+fn start_up_forgetting_only_changes_the_prediction_error_method() {
+    let (u, y) = arx_data(300);
+    let run = |s: Structure, on: bool| {
+        let mut est = Recursive::new(s, Method::Forgetting { lambda: 1.0 }, None, None).unwrap();
+        est.set_startup_forgetting(on);
+        assert_eq!(est.startup_forgetting(), on);
+        let mut yhat = vec![0.0; 300];
+        est.run(&u, &y, &mut yhat, None, 64, &mut || false).unwrap();
+        est.theta().to_vec()
+    };
+    // ARX: recursive least squares either way
+    assert_eq!(run(arx_structure(), true), run(arx_structure(), false));
+    assert_ne!(
+        run(siso(0, 2, 0, 0, 2, 1), true),
+        run(siso(0, 2, 0, 0, 2, 1), false)
+    );
+}
