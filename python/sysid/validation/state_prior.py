@@ -19,7 +19,13 @@ direction the input drives is free, one it does not drive costs what it explains
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
+
+#: Held-out blocks whose DFT lines are kept (:func:`_lines`): every candidate model is
+#: scored on the same few blocks, so each block's FFT is computed once.
+_KEPT_BLOCKS = 8
 
 
 def input_state_covariance(A: np.ndarray, B: np.ndarray, u: np.ndarray) -> np.ndarray | None:
@@ -29,9 +35,12 @@ def input_state_covariance(A: np.ndarray, B: np.ndarray, u: np.ndarray) -> np.nd
 
     Per DFT line ``k``, ``X_k = (z_k I - A)^-1 B U_k`` (``z_k = exp(2 pi i k / N)``), solved on
     the complex Schur form ``A = Z T Z^H`` by back-substitution for all lines at once; the
-    covariance is ``sum_k X_k X_k^H / N^2`` (Parseval). A pole on the unit circle at a line
-    makes its direction's variance huge (the distance is floored at ``1e-12``): a state the
-    input integrates is free.
+    covariance is ``sum_k X_k X_k^H / N^2`` (Parseval). The input is real, so the lines above
+    ``N/2`` are the conjugates of those below: the sum is that over ``k <= N/2``, the lines
+    other than ``0`` and ``N/2`` counted twice, real part. A block's lines are computed once
+    and kept for the next models scored on it. A pole on the unit circle at a line makes its
+    direction's variance huge (the distance is floored at ``1e-12``): a state the input
+    integrates is free.
 
     Examples
     --------
@@ -43,21 +52,45 @@ def input_state_covariance(A: np.ndarray, B: np.ndarray, u: np.ndarray) -> np.nd
     5.3
     """
     from scipy.linalg import schur
+    from scipy.linalg.blas import zherk
 
     A = np.asarray(A, dtype=float)
     B = np.asarray(B, dtype=float)
-    u = np.asarray(u, dtype=float)
+    u = np.ascontiguousarray(u, dtype=float)
     n, N = A.shape[0], u.shape[0]
     if n == 0 or N == 0 or B.size == 0 or u.ndim != 2 or u.shape[1] != B.shape[1]:
         return None
     T, Z = schur(A, output="complex")
-    C = (Z.conj().T @ B) @ np.fft.fft(u, axis=0).T  # n x N: Z^H B U_k per line
-    z = np.exp(2j * np.pi * np.arange(N) / N)
-    X = np.empty_like(C)
+    U, z = _lines(u.tobytes(), N, u.shape[1])
+    X = (Z.conj().T @ B) @ U  # n x (N//2 + 1): Z^H B U_k per line, weighed
     for i in range(n - 1, -1, -1):
+        if i < n - 1:
+            X[i] += T[i, i + 1:] @ X[i + 1:]
         d = z - T[i, i]
-        d = np.where(np.abs(d) < 1e-12, 1e-12, d)
-        X[i] = (C[i] + T[i, i + 1:] @ X[i + 1:]) / d
-    P = (Z @ ((X @ X.conj().T) / float(N) ** 2) @ Z.conj().T).real
+        if abs(abs(T[i, i]) - 1.0) < 1e-11:  # else |z_k - T_ii| >= 1e-11 on every line
+            d[np.abs(d) < 1e-12] = 1e-12
+        X[i] /= d
+    # sum_k X_k X_k^H: the upper triangle of its conjugate from the BLAS's Hermitian product
+    S = np.triu(zherk(1.0, X.T, trans=2)).conj()
+    S += np.triu(S, 1).conj().T
+    P = (Z @ S @ Z.conj().T).real
     P = 0.5 * (P + P.T)
     return P if np.all(np.isfinite(P)) else None
+
+
+@lru_cache(maxsize=_KEPT_BLOCKS)
+def _lines(block: bytes, N: int, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """The DFT lines ``k <= N/2`` of the input ``block`` (the bytes of an ``N x m`` float
+    array), ``m x (N//2 + 1)``, weighed by ``sqrt(2) / N`` (``1 / N`` at ``0`` and ``N/2``);
+    and ``z_k = exp(2 pi i k / N)``. Read-only: shared by the models scored on the block."""
+    u = np.frombuffer(block, dtype=float).reshape(N, m)
+    U = np.fft.rfft(u, axis=0).T
+    w = np.full(U.shape[1], np.sqrt(2.0) / N)
+    w[0] = 1.0 / N
+    if N % 2 == 0:
+        w[-1] = 1.0 / N
+    U = U * w
+    z = np.exp(2j * np.pi * np.arange(U.shape[1]) / N)
+    U.flags.writeable = False
+    z.flags.writeable = False
+    return U, z
