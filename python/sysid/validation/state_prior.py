@@ -19,13 +19,45 @@ direction the input drives is free, one it does not drive costs what it explains
 
 from __future__ import annotations
 
-from functools import lru_cache
+import hashlib
+import threading
+from collections import OrderedDict
+from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 
-#: Held-out blocks whose DFT lines are kept (:func:`_lines`): every candidate model is
-#: scored on the same few blocks, so each block's FFT is computed once.
-_KEPT_BLOCKS = 8
+
+class _Kept:
+    """The last few results of ``make(*arrays)`` (C-contiguous arrays), found by the arrays'
+    shapes and a digest of their numbers (an array changed in place is another key: no
+    block's numbers are held); thread-safe, read-only results (shared by every caller).
+    Every candidate model is scored on the same few held-out blocks: a block's DFT lines are
+    computed once."""
+
+    def __init__(self, make: Callable[..., tuple[np.ndarray, ...]], size: int = 8) -> None:
+        self._make, self._size = make, size
+        self._kept: OrderedDict[tuple[Any, ...], tuple[np.ndarray, ...]] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def __call__(self, *arrays: np.ndarray) -> tuple[np.ndarray, ...]:
+        digest = hashlib.blake2b(digest_size=20)
+        for a in arrays:
+            digest.update(a)
+        key = (*(a.shape for a in arrays), digest.digest())
+        with self._lock:
+            hit = self._kept.get(key)
+            if hit is not None:
+                self._kept.move_to_end(key)
+                return hit
+        out = self._make(*arrays)
+        for a in out:
+            a.flags.writeable = False
+        with self._lock:
+            self._kept[key] = out
+            while len(self._kept) > self._size:
+                self._kept.popitem(last=False)
+        return out
 
 
 def input_state_covariance(A: np.ndarray, B: np.ndarray, u: np.ndarray) -> np.ndarray | None:
@@ -61,13 +93,15 @@ def input_state_covariance(A: np.ndarray, B: np.ndarray, u: np.ndarray) -> np.nd
     if n == 0 or N == 0 or B.size == 0 or u.ndim != 2 or u.shape[1] != B.shape[1]:
         return None
     T, Z = schur(A, output="complex")
-    U, z = _lines(u.tobytes(), N, u.shape[1])
+    U, z = _lines(u)
     X = (Z.conj().T @ B) @ U  # n x (N//2 + 1): Z^H B U_k per line, weighed
+    # only a pole within 1e-11 of the unit circle can come within 1e-12 of a line
+    near = np.abs(np.abs(np.diag(T)) - 1.0) < 1e-11
     for i in range(n - 1, -1, -1):
         if i < n - 1:
             X[i] += T[i, i + 1:] @ X[i + 1:]
         d = z - T[i, i]
-        if abs(abs(T[i, i]) - 1.0) < 1e-11:  # else |z_k - T_ii| >= 1e-11 on every line
+        if near[i]:
             d[np.abs(d) < 1e-12] = 1e-12
         X[i] /= d
     # sum_k X_k X_k^H: the upper triangle of its conjugate from the BLAS's Hermitian product
@@ -78,19 +112,17 @@ def input_state_covariance(A: np.ndarray, B: np.ndarray, u: np.ndarray) -> np.nd
     return P if np.all(np.isfinite(P)) else None
 
 
-@lru_cache(maxsize=_KEPT_BLOCKS)
-def _lines(block: bytes, N: int, m: int) -> tuple[np.ndarray, np.ndarray]:
-    """The DFT lines ``k <= N/2`` of the input ``block`` (the bytes of an ``N x m`` float
-    array), ``m x (N//2 + 1)``, weighed by ``sqrt(2) / N`` (``1 / N`` at ``0`` and ``N/2``);
-    and ``z_k = exp(2 pi i k / N)``. Read-only: shared by the models scored on the block."""
-    u = np.frombuffer(block, dtype=float).reshape(N, m)
+def _block_lines(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The DFT lines ``k <= N/2`` of the block input ``u`` (``N x m``), ``m x (N//2 + 1)``,
+    weighed by ``sqrt(2) / N`` (``1 / N`` at ``0`` and ``N/2``); and
+    ``z_k = exp(2 pi i k / N)``."""
+    N = u.shape[0]
     U = np.fft.rfft(u, axis=0).T
     w = np.full(U.shape[1], np.sqrt(2.0) / N)
     w[0] = 1.0 / N
     if N % 2 == 0:
         w[-1] = 1.0 / N
-    U = U * w
-    z = np.exp(2j * np.pi * np.arange(U.shape[1]) / N)
-    U.flags.writeable = False
-    z.flags.writeable = False
-    return U, z
+    return U * w, np.exp(2j * np.pi * np.arange(U.shape[1]) / N)
+
+
+_lines = _Kept(_block_lines)
