@@ -39,6 +39,70 @@ def test_covariance_is_the_periodic_steady_state_of_a_non_normal_model():
     assert np.max(np.abs(P - ref)) < 1e-9 * np.max(np.abs(ref))
 
 
+def _all_lines_covariance(A, B, u):
+    """The covariance over all N DFT lines, each solved on its own (the first version of
+    input_state_covariance, before the half spectrum and the kept block lines)."""
+    from scipy.linalg import schur
+
+    n, N = A.shape[0], u.shape[0]
+    T, Z = schur(A, output="complex")
+    C = (Z.conj().T @ B) @ np.fft.fft(u, axis=0).T
+    z = np.exp(2j * np.pi * np.arange(N) / N)
+    X = np.empty_like(C)
+    for i in range(n - 1, -1, -1):
+        d = z - T[i, i]
+        d = np.where(np.abs(d) < 1e-12, 1e-12, d)
+        X[i] = (C[i] + T[i, i + 1:] @ X[i + 1:]) / d
+    P = (Z @ ((X @ X.conj().T) / float(N) ** 2) @ Z.conj().T).real
+    return 0.5 * (P + P.T)
+
+
+def _random_model(rng, n, m, radius):
+    A = rng.standard_normal((n, n))
+    A *= radius / np.max(np.abs(np.linalg.eigvals(A)))
+    return A, rng.standard_normal((n, m))
+
+
+def test_half_spectrum_matches_all_lines():
+    """Half the lines, one FFT per block and the Hermitian product change round-off only:
+    random models of orders 1-20 (poles up to |z| 0.9999, integrators, odd and even and
+    tiny N, 1-3 inputs)."""
+    rng = np.random.default_rng(7)
+    worst = 0.0
+    for trial in range(400):
+        n, m = int(rng.integers(1, 21)), int(rng.integers(1, 4))
+        N = int(rng.choice([1, 2, 3, int(rng.integers(4, 3000))]))
+        A, B = _random_model(rng, n, m, rng.choice([0.3, 0.9, 0.99, 0.9999]))
+        if trial % 10 == 0:  # an integrator and a pole at -1: floored at lines 0 and N/2
+            A = np.diag(np.r_[1.0, -1.0, np.diag(A)[:n - 2]])[:n, :n]
+        u = rng.standard_normal((N, m))
+        ref, P = _all_lines_covariance(A, B, u), input_state_covariance(A, B, u)
+        scale = np.max(np.abs(ref))
+        assert P.shape == (n, n) and np.all(P == P.T)
+        if scale == 0.0:
+            assert np.all(P == 0.0)
+            continue
+        worst = max(worst, np.max(np.abs(P - ref)) / scale)
+    assert worst < 1e-10
+
+
+def test_kept_block_lines_follow_the_input():
+    """The block's lines are kept by content: the same array changed in place, or the same
+    numbers in another shape, is another block."""
+    rng = np.random.default_rng(2)
+    A, B = _random_model(rng, 4, 1, 0.9)
+    u = rng.standard_normal((300, 1))
+    first = input_state_covariance(A, B, u)
+    u[:150] *= 3.0
+    assert np.allclose(input_state_covariance(A, B, u), _all_lines_covariance(A, B, u),
+                       rtol=1e-10, atol=0.0)
+    assert not np.allclose(input_state_covariance(A, B, u), first)
+    A2, B2 = _random_model(rng, 3, 2, 0.8)
+    u2 = u.reshape(150, 2)
+    assert np.allclose(input_state_covariance(A2, B2, u2), _all_lines_covariance(A2, B2, u2),
+                       rtol=1e-10, atol=0.0)
+
+
 def test_prior_closes_the_directions_the_input_does_not_drive():
     u = np.random.default_rng(0).standard_normal((500, 1))
     P = input_state_covariance(np.diag([0.8, 0.999]), np.array([[1.0], [0.0]]), u)
