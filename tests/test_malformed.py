@@ -31,16 +31,15 @@ except ImportError:  # pragma: no cover
 
 
 def _no_panic(f, *args, **kw):
-    """Run ``f``: success or a sysid error are fine; a panic or another type fails (an
-    unstable fit's StabilityWarning, a capped search's IterationLimitWarning and an
-    over-sized model's IdentifiabilityWarning are results, not failures)."""
+    """Run ``f``: success or a sysid error are fine; a panic or another type fails (a
+    sysid warning is a result, not a failure: an unstable fit's StabilityWarning, a capped
+    search's IterationLimitWarning, an over-sized model's IdentifiabilityWarning, a FIR
+    shorter than its response's decay)."""
     import warnings
 
     try:
         with warnings.catch_warnings():
-            warnings.simplefilter("ignore", sysid.StabilityWarning)
-            warnings.simplefilter("ignore", sysid.IterationLimitWarning)
-            warnings.simplefilter("ignore", sysid.IdentifiabilityWarning)
+            warnings.simplefilter("ignore", sysid.SysidWarning)
             f(*args, **kw)
     except SysidError:
         pass
