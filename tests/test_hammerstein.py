@@ -431,3 +431,72 @@ def test_an_output_networks_amplitude_is_saved_and_old_files_load(tmp_path):
     assert g.amplitude == 1.0 and g(0.0) == 0.0 and g(1.0) == pytest.approx(0.5 + np.tanh(1.0))
     with pytest.raises(sysid.DataError, match="amplitude"):
         sysid.SigmoidNetwork(2, amplitude=0.0)
+
+
+def _mid_response(n=700, cut=200, seed=3):
+    """A noise-free Hammerstein record (saturation at +-0.4, then 0.5 + 0.3 q^-1 over
+    1 - 1.5 q^-1 + 0.7 q^-2, delay 1) cut from a longer one at ``cut``: it starts
+    mid-response, in the lfilter state ``h`` the first ``cut`` samples leave."""
+    from scipy.signal import lfilter
+
+    u = np.random.default_rng(seed).uniform(-1, 1, n)
+    num, den = np.r_[0.0, 0.5, 0.3], np.r_[1.0, -1.5, 0.7]
+    w = np.clip(u, -0.4, 0.4)
+    _, h = lfilter(num, den, w[:cut], zi=np.zeros(2))
+    return u[cut:], lfilter(num, den, w)[cut:], h
+
+
+def test_a_record_starting_mid_response_is_fitted_with_its_initial_state():
+    u, y, h = _mid_response()
+    d = sysid.IOData(u, y, 1.0)
+    truth = np.r_[-0.4, 0.4, 0.5, 0.3, -1.5, 0.7]
+    m = sysid.nlhw(d, 2, 2, 1, input_nl=sysid.Saturation(), output_nl=None,
+                   initial_condition="estimate")
+    assert m.info["initial_condition"] == "estimate"
+    np.testing.assert_allclose(m.theta, truth, rtol=1e-8, atol=1e-10)
+    assert len(m.info["initial_state"]) == 1
+    np.testing.assert_allclose(m.info["initial_state"][0], h, rtol=1e-8, atol=1e-10)
+    # the covariance is the model's parameters' (the state marginalised)
+    assert m.info["covariance"].shape == (6, 6)
+    # from rest the transient is fitted by the model itself
+    z = sysid.nlhw(d, 2, 2, 1, input_nl=sysid.Saturation(), output_nl=None)
+    assert z.info["initial_condition"] == "zero"
+    np.testing.assert_array_equal(z.info["initial_state"][0], np.zeros(2))
+    assert np.max(np.abs(z.theta - truth) / np.abs(truth)) > 1e-4
+
+
+def test_initial_states_are_estimated_per_experiment_with_a_delay_line_and_a_level():
+    """Two experiments cut at different places, delay 2 (the state holds the input still in
+    the delay line: max(nf, nk + nb - 1) = 3 entries), the output at a level estimated
+    with the rest: the model recovered, and each experiment's output from its state."""
+    from scipy.signal import lfilter
+
+    rng = np.random.default_rng(5)
+    num, den = np.r_[0.0, 0.0, 0.5, 0.3], np.r_[1.0, -1.5, 0.7]
+    us, ys = [], []
+    for cut in (150, 260):
+        u = rng.uniform(-1, 1, 600)
+        w = np.clip(u, -0.4, 0.4)
+        us.append(u[cut:])
+        ys.append(lfilter(num, den, w)[cut:] + 2.0)
+    m = sysid.nlhw(sysid.IOData(us, ys, 1.0), 2, 2, 2, input_nl=sysid.Saturation(),
+                   output_nl=None, initial_condition="estimate", offsets=True)
+    # about the input's mean: the saturation's levels relative to it
+    np.testing.assert_allclose(m.input_nl.params + m.u_offset, [-0.4, 0.4], rtol=1e-8)
+    np.testing.assert_allclose(m.theta[2:], [0.5, 0.3, -1.5, 0.7], rtol=1e-8)
+    # the level: 2, and the input's mean through the block's DC gain (0.8 / 0.2)
+    assert abs(m.y_offset - (2.0 + 4.0 * m.u_offset)) < 1e-8
+    # the states are those of the centred record: each experiment's output from its own
+    for u, y, h in zip(us, ys, m.info["initial_state"]):
+        w = m.input_nl(u - m.u_offset)
+        fit = lfilter(np.r_[0.0, 0.0, m.b], np.r_[1.0, m.f], w, zi=h)[0] + m.y_offset
+        np.testing.assert_allclose(fit, y, rtol=1e-8)
+    assert m.info["covariance"].shape == (7, 7)  # theta and the level
+
+
+@pytest.mark.parametrize("bad", ["est", "auto", 3, None])
+def test_a_bad_initial_condition_is_a_data_error(bad):
+    u, y, _ = _mid_response(n=300)
+    with pytest.raises(sysid.DataError, match="initial_condition"):
+        sysid.nlhw(sysid.IOData(u, y, 1.0), 2, 2, 1, input_nl=sysid.Saturation(),
+                   output_nl=None, initial_condition=bad)

@@ -16,8 +16,8 @@ B = np.array([[1.0, 0.5], [0.2, -0.7]])
 C = np.array([[0.6, 0.3], [-0.4, 0.9]])
 
 
-def _simulate(u, f_in, g_out):
-    x = np.zeros(2)
+def _simulate(u, f_in, g_out, x0=(0.0, 0.0)):
+    x = np.array(x0, float)
     y = np.zeros((u.shape[0], 2))
     for t in range(u.shape[0]):
         y[t] = g_out(C @ x)
@@ -227,3 +227,35 @@ def test_compare_fits_the_linear_blocks_state_as_of_a_linear_model():
     assert float(np.min(sysid.compare(data, m, x0="zero").fit)) < 90
     with pytest.raises(sysid.ShapeError, match="x0 has 3 entries but the linear block has 2"):
         m.simulate(u, x0=[1.0, 2.0, 3.0])
+
+
+def test_experiments_starting_mid_response_are_fitted_with_their_initial_states():
+    """Two noise-free 2 x 2 Hammerstein experiments (saturations, the poles 0.8 and 0.5)
+    from different states: with ``initial_condition="estimate"`` the model and each
+    experiment's output from its estimated state are exact; from rest they are not."""
+    states = [(3.0, -2.0), (-1.5, 4.0)]
+    us = [_inputs(400, seed=7 + e) for e in range(2)]
+    ys = [_simulate(u, lambda v: np.clip(v, -0.5, 0.5), lambda v: v, x0)
+          for u, x0 in zip(us, states)]
+    d = sysid.IOData(us, ys, 1.0)
+    m = sysid.nlhw_ss(d, 2, input_nl=sysid.Saturation(), output_nl=None,
+                      initial_condition="estimate")
+    assert m.info["initial_condition"] == "estimate" and len(m.info["initial_state"]) == 2
+    np.testing.assert_allclose(_poles(m), [0.5, 0.8], rtol=1e-8)
+    for f in m.input_nls:
+        np.testing.assert_allclose(f.params, [-0.5, 0.5], rtol=1e-8)
+    for u, y, x0 in zip(us, ys, m.info["initial_state"]):
+        np.testing.assert_allclose(m.simulate(u, x0), y, rtol=1e-8, atol=1e-8 * np.abs(y).max())
+    z = sysid.nlhw_ss(d, 2, input_nl=sysid.Saturation(), output_nl=None)
+    assert z.info["initial_condition"] == "zero"
+    assert all(not np.any(x) for x in z.info["initial_state"])
+    assert max(np.max(np.abs(f.params - [-0.5, 0.5])) for f in z.input_nls) > 1e-4
+
+
+@pytest.mark.parametrize("bad", ["est", "auto", 1])
+def test_a_bad_initial_condition_is_a_data_error(bad):
+    u = _inputs(200)
+    y = _simulate(u, lambda v: v, lambda v: v)
+    with pytest.raises(sysid.DataError, match="initial_condition"):
+        sysid.nlhw_ss(sysid.IOData(u, y, 1.0), 2, input_nl=None, output_nl=None,
+                      initial_condition=bad)

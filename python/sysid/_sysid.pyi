@@ -560,6 +560,7 @@ def hw_estimate(
     tol: float = 1e-10,
     progress: Callable[..., Any] | None = None,
     offset: bool = False,
+    initial_state: bool = False,
 ) -> dict[str, Any]: ...
 def hw_simulate(
     input: tuple[str, int, list[float]],
@@ -581,6 +582,7 @@ def hw_mimo_estimate(
     tol: float = 1e-10,
     progress: Callable[..., Any] | None = None,
     offsets: bool = False,
+    initial_state: bool = False,
 ) -> dict[str, Any]: ...
 def hw_mimo_simulate(
     inputs: list[tuple[str, int, list[float]]],

@@ -32,6 +32,7 @@ fn structure(
     output: &Nl,
     (nb, nf, nk): (usize, usize, usize),
     offset: bool,
+    initial_states: usize,
 ) -> PyResult<HwStructure> {
     let s = HwStructure {
         input: nl(input)?,
@@ -40,6 +41,7 @@ fn structure(
         nf,
         nk,
         offset,
+        initial_states,
     };
     s.input.check().py()?;
     s.output.check().py()?;
@@ -59,9 +61,12 @@ fn options(max_iter: usize, tol: f64) -> Options {
 }
 
 /// Prediction-error estimate from `theta0`; returns a dict (theta, cost, history,
-/// iterations, stop, covariance). With `offset`, `theta` ends with the output offset.
+/// iterations, stop, covariance). With `offset`, `theta` ends with the output offset; with
+/// `initial_state`, then with each record's initial state (`max(nf, nk + nb - 1)` entries),
+/// and the covariance is the marginal one of the model's parameters (the states a
+/// nuisance).
 #[pyfunction]
-#[pyo3(signature = (records, input, output, nb, nf, nk, theta0, max_iter=100, tol=1e-10, progress=None, offset=false))]
+#[pyo3(signature = (records, input, output, nb, nf, nk, theta0, max_iter=100, tol=1e-10, progress=None, offset=false, initial_state=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn hw_estimate<'py>(
     py: Python<'py>,
@@ -76,8 +81,10 @@ pub fn hw_estimate<'py>(
     tol: f64,
     progress: Option<Py<PyAny>>,
     offset: bool,
+    initial_state: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let s = structure(&input, &output, (nb, nf, nk), offset)?;
+    let states = if initial_state { records.len() } else { 0 };
+    let s = structure(&input, &output, (nb, nf, nk), offset, states)?;
     let data: Vec<(Vec<f64>, Vec<f64>)> = records.iter().map(|(u, y)| (vec1(u), vec1(y))).collect();
     let refs: Vec<(&[f64], &[f64])> = data.iter().map(|(u, y)| (&u[..], &y[..])).collect();
     let opts = options(max_iter, tol);
@@ -87,11 +94,14 @@ pub fn hw_estimate<'py>(
     let n: usize = data.iter().map(|d| d.0.len()).sum();
     let var = 2.0 * sol.cost / (n.saturating_sub(theta0.len()).max(1)) as f64;
     let cov = covariance(sol.gauss_newton.as_ref(), var, 1e-10).py()?;
+    // the marginal covariance of the model's parameters: the leading block of the joint one
+    let pm = s.n_model();
+    let cov = cov.covariance.as_ref().submatrix(0, 0, pm, pm).to_owned();
     let d = PyDict::new(py);
     search_items(&d, py, &sol)?;
     d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
     d.set_item("noise_variance", var)?;
-    d.set_item("covariance", mat_to_numpy(py, &cov.covariance))?;
+    d.set_item("covariance", mat_to_numpy(py, &cov))?;
     Ok(d)
 }
 
@@ -108,7 +118,7 @@ pub fn hw_simulate<'py>(
     theta: Vec<f64>,
     u: PyReadonlyArray1<'_, f64>,
 ) -> PyResult<Signals<'py>> {
-    let s = structure(&input, &output, (nb, nf, nk), false)?;
+    let s = structure(&input, &output, (nb, nf, nk), false, 0)?;
     if theta.len() != s.n_params() {
         return Err(crate::errors::to_py(SysidError::InvalidArgument {
             name: "theta",
@@ -131,6 +141,7 @@ fn mimo_structure(
     order: usize,
     feedthrough: bool,
     offsets: bool,
+    initial_states: usize,
 ) -> PyResult<MimoHwStructure> {
     let s = MimoHwStructure {
         inputs: inputs.iter().map(nl).collect::<PyResult<_>>()?,
@@ -138,6 +149,7 @@ fn mimo_structure(
         order,
         feedthrough,
         offsets,
+        initial_states,
     };
     s.check().py()?;
     Ok(s)
@@ -145,9 +157,10 @@ fn mimo_structure(
 
 /// MIMO Hammerstein-Wiener (state-space linear block) prediction-error estimate from
 /// `theta0`; returns a dict (theta, cost, history, iterations, stop, noise_variance). With
-/// `offsets`, `theta` ends with one output offset per output.
+/// `offsets`, `theta` ends with one output offset per output; with `initial_state`, then
+/// with each record's initial state (`order` entries).
 #[pyfunction]
-#[pyo3(signature = (records, inputs, outputs, order, feedthrough, theta0, max_iter=100, tol=1e-10, progress=None, offsets=false))]
+#[pyo3(signature = (records, inputs, outputs, order, feedthrough, theta0, max_iter=100, tol=1e-10, progress=None, offsets=false, initial_state=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn hw_mimo_estimate<'py>(
     py: Python<'py>,
@@ -161,8 +174,10 @@ pub fn hw_mimo_estimate<'py>(
     tol: f64,
     progress: Option<Py<PyAny>>,
     offsets: bool,
+    initial_state: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let s = mimo_structure(&inputs, &outputs, order, feedthrough, offsets)?;
+    let states = if initial_state { records.len() } else { 0 };
+    let s = mimo_structure(&inputs, &outputs, order, feedthrough, offsets, states)?;
     let refs: Vec<_> = records.iter().map(|(u, y)| (view(u), view(y))).collect();
     let opts = options(max_iter, tol);
     let sol = run(py, &progress, |obs| {
@@ -192,7 +207,7 @@ pub fn hw_mimo_simulate<'py>(
     u: PyReadonlyArray2<'_, f64>,
     x0: Option<Vec<f64>>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let s = mimo_structure(&inputs, &outputs, order, feedthrough, false)?;
+    let s = mimo_structure(&inputs, &outputs, order, feedthrough, false, 0)?;
     if theta.len() != s.n_params() {
         return Err(crate::errors::to_py(SysidError::InvalidArgument {
             name: "theta",

@@ -30,6 +30,7 @@ from .._threads import one_blas_thread
 from ..data.iodata import require_record
 from ..errors import DataError, StabilityWarning
 from ..polynomial.orders import matlab_orders
+from .hw_initial import check_initial, free_response_bf, least_squares_states
 from .hw_model import (
     HammersteinWienerModel,
     Nonlinearity,
@@ -65,6 +66,7 @@ def nlhw(
     tol: float = 1e-10,
     progress: bool | None | Callable[..., Any] = None,
     offsets: bool | str = "auto",
+    initial_condition: str = "zero",
 ) -> HammersteinWienerModel:
     """Hammerstein-Wiener model ``y = g(B/F f(u(t - nk))) + e`` (one input, one output).
 
@@ -103,6 +105,13 @@ def nlhw(
         of squares kept (``info["offsets"]["auto"]`` says which). About the means, the
         output level of the operating point (``y_offset``) is estimated with the other
         parameters (the input's is the mean: a shift of it is a shift of the nonlinearity).
+    initial_condition : "zero" or "estimate"
+        MATLAB's ``InitialCondition``: every experiment from rest (default), or its linear
+        block's initial state estimated with the other parameters (for a record that starts
+        mid-response; :mod:`sysid.nonlinear.hw_initial`): ``h`` with ``max(nf, nk + nb - 1)``
+        entries, SciPy's ``lfilter(r_[zeros(nk), b], r_[1, f], w, zi=h)`` state.
+        ``info["initial_condition"]`` says which, ``info["initial_state"]`` holds one ``h``
+        per experiment (zeros from rest).
 
     Returns
     -------
@@ -110,7 +119,7 @@ def nlhw(
         With ``info``: ``iterations``, ``cost`` (``1/2 sum e^2`` at the start and after each
         iteration of the chosen start's search), ``criterion``, ``stop`` (reason), the start,
         and the parameter covariance in ``info["covariance"]`` (over ``theta``, then the
-        output level when it is estimated).
+        output level when it is estimated; with estimated initial states, the marginal one).
 
     Warns
     -----
@@ -136,6 +145,7 @@ def nlhw(
     from .choice import auto_fit, is_auto
 
     data = require_record(data, "nlhw")
+    ic = check_initial(initial_condition, "nlhw")
     exps = experiment_arrays(data)
     if exps[0][0].shape[1] != 1 or exps[0][1].shape[1] != 1:
         raise DataError(f"nlhw handles one input and one output (the record has "
@@ -146,7 +156,8 @@ def nlhw(
     if is_auto(input_nl) or is_auto(output_nl):
         return auto_fit(data, lambda d, fi, fo, prog: nlhw(
             d, nb, nf, nk, input_nl=fi, output_nl=fo, max_iter=max_iter, tol=tol,
-            progress=prog, offsets=offsets), input_nl, output_nl, (0, 0), progress, "nlhw")
+            progress=prog, offsets=offsets, initial_condition=ic), input_nl, output_nl, (0, 0),
+            progress, "nlhw")
     check_magnitudes(data, "nlhw")
     require_inputs_vary(exps, "nlhw", getattr(data, "input_names", None))
     # before centring (a constant output is then 0) and the linear start (named oe)
@@ -165,14 +176,17 @@ def nlhw(
         return better_of_both(lambda o: nlhw(
             data, nb, nf, nk, input_nl=copy.deepcopy(input_nl),
             output_nl=copy.deepcopy(output_nl), max_iter=max_iter, tol=tol, progress=progress,
-            offsets=o))
+            offsets=o, initial_condition=ic))
     shift = use_offsets(offsets, [fin, fout], exps)
     u0, y0 = record_means(exps) if shift else (np.zeros(1), np.zeros(1))
     if shift:
         exps = centred(exps, u0, y0)
     output_amplitudes([fout], np.concatenate([y for _, y in exps]))
+    estimate_x0 = ic == "estimate"
+    nh = max(int(nf), int(nk) + int(nb) - 1)  # the linear block's initial state (h)
     n_par = int(nb) + int(nf) + sum(np.size(getattr(f, "params", ())) for f in (fin, fout)
                                      if not isinstance(f, UserFunction))
+    n_par += nh * len(exps) * estimate_x0
     n_samples = sum(len(y) for _, y in exps)
     if n_par >= n_samples:  # before any regressor is allocated
         raise DataError(f"nlhw with these orders and nonlinearities has {n_par} parameters "
@@ -200,6 +214,14 @@ def nlhw(
                                      f"orders): {text}"), stacklevel=2)
     b0, f0 = np.asarray(lin.b[0][0], float), np.asarray(lin.f[0][0], float)
     u_all = np.concatenate([r[0] for r in records])
+    h0: list[np.ndarray] = [np.zeros(nh) for _ in records]
+    if estimate_x0:  # the states whose free responses fit the linear start's errors
+        frees = [free_response_bf(f0, nh, r[1].size) for r in records]
+        h0 = least_squares_states(frees, [r[1] - np.asarray(lin.simulate(r[0][:, None]),
+                                                            float)[:, 0] for r in records])
+        free = np.concatenate([o @ h for o, h in zip(frees, h0)])
+    else:
+        free = np.zeros(u_all.size)
     lin_b = b0
     res, theta0, x_all = None, None, np.zeros(0)
     cb, close_bar = iteration_callback(progress, "nlhw", int(max_iter),
@@ -222,16 +244,17 @@ def nlhw(
             if not isinstance(fin, UserFunction) and float(fu @ fu) > 0 and float(fu @ u_all):
                 b0 = lin_b * float(fu @ u_all) / float(fu @ fu)
             start = HammersteinWienerModel(fin, Nonlinearity(), b0, f0, int(nk), dt)
-            xs = np.concatenate([start.signals(r[0])[2] for r in records])
+            xs = np.concatenate([start.signals(r[0])[2] for r in records]) + free
             lin_out = fout.linear_start(xs) if kind else None
             for start_out in ([fout.initial(xs) if lin_out is None else lin_out] if kind
                               else fout.starts(xs)):
                 # about the means, the output level is estimated with the rest (from 0)
-                th0 = np.concatenate([start_in, b0, f0, start_out, np.zeros(int(shift))])
+                th0 = np.concatenate([start_in, b0, f0, start_out, np.zeros(int(shift)),
+                                      *(h0 if estimate_x0 else [])])
                 try:
                     r = _sysid.hw_estimate(records, fin.spec(), fout.spec(), int(nb), int(nf),
                                            int(nk), th0.tolist(), int(max_iter), float(tol), cb,
-                                           offset=shift)
+                                           offset=shift, initial_state=estimate_x0)
                 except DataError:
                     continue  # an inadmissible start (unstable F): try the next one
                 if res is None or r["cost"] < res["cost"] or r["stop"] == "cancelled":
@@ -245,6 +268,10 @@ def nlhw(
                         "and nk against a linear fit (sysid.oe)")
     th = np.asarray(res["theta"], float)
     na, nbeta = fin.params.size, fout.params.size
+    n_model = na + int(nb) + int(nf) + nbeta + int(shift)
+    states = th[n_model:].reshape(len(records), nh) if estimate_x0 else \
+        np.zeros((len(records), nh))
+    th = th[:n_model]
     fin.params = th[:na]
     b, f = th[na:na + int(nb)], th[na + int(nb):na + int(nb) + int(nf)]
     fout.params = th[na + int(nb) + int(nf):na + int(nb) + int(nf) + nbeta]
@@ -257,7 +284,8 @@ def nlhw(
             "u_range": (float(u_all.min()), float(u_all.max())),
             "x_range": (float(x_all.min()), float(x_all.max())), "n_output_params": nbeta,
             "offsets": {"removed": shift, "u": float(u0[0]), "y": float(y0[0] + level),
-                        "y_estimated": shift}}
+                        "y_estimated": shift},
+            "initial_condition": ic, "initial_state": [h.copy() for h in states]}
     warn_if_capped(info, "the nlhw search", int(max_iter), n_residuals=n_samples)
     return HammersteinWienerModel(fin, fout, b, f, int(nk), dt,
                                   u_offset=float(u0[0]), y_offset=float(y0[0] + level),

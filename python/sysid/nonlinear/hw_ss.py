@@ -29,6 +29,7 @@ from .._threads import one_blas_thread
 from ..data.iodata import require_record
 from ..data.offsets import check_offsets
 from ..errors import DataError
+from .hw_initial import check_initial, free_response_ss, least_squares_states
 from .hw_model import Nonlinearity, UserFunction, check_search_size, output_amplitudes
 from .hw_ss_model import HammersteinWienerSSModel
 from .operating_point import better_of_both, centred, record_means, undecided, use_offsets
@@ -67,6 +68,7 @@ def nlhw_ss(
     progress: bool | None | Callable[..., Any] = None,
     linear: Any = None,
     offsets: bool | str = "auto",
+    initial_condition: str = "zero",
 ) -> HammersteinWienerSSModel:
     """Hammerstein-Wiener model with per-channel static nonlinearities around a MIMO
     state-space linear block: ``w_j = f_j(u_j)``, ``x(t+1) = A x + B w``, ``v = C x + D w``,
@@ -102,6 +104,12 @@ def nlhw_ss(
         every nonlinearity a sigmoid network or the identity; with levels in the data's units
         on such a record, the better of both fits); about the means the outputs' levels
         (``y_offset``) are estimated with the other parameters.
+    initial_condition : "zero" or "estimate"
+        MATLAB's ``InitialCondition``: every experiment from rest (default), or its linear
+        block's initial state ``x(0)`` estimated with the other parameters (for a record that
+        starts mid-response; :mod:`sysid.nonlinear.hw_initial`). ``info["initial_condition"]``
+        says which, ``info["initial_state"]`` holds one ``x(0)`` per experiment (zeros from
+        rest; in the fitted model's state basis, as its ``simulate(u, x0)`` takes it).
 
     Returns
     -------
@@ -138,11 +146,13 @@ def nlhw_ss(
     from .choice import auto_fit, is_auto
 
     data = require_record(data, "nlhw_ss")
+    ic = check_initial(initial_condition, "nlhw_ss")
     if is_auto(input_nl) or is_auto(output_nl):
         u0, y0 = experiment_arrays(data)[0]
         return auto_fit(data, lambda d, fi, fo, prog: nlhw_ss(
             d, order, input_nl=fi, output_nl=fo, feedthrough=feedthrough, max_iter=max_iter,
-            tol=tol, progress=prog, linear=linear, offsets=offsets), input_nl, output_nl,
+            tol=tol, progress=prog, linear=linear, offsets=offsets, initial_condition=ic),
+            input_nl, output_nl,
             (u0.shape[1], y0.shape[1]), progress, "nlhw_ss")
     exps = experiment_arrays(data)
     check_magnitudes(data, "nlhw_ss")
@@ -168,7 +178,7 @@ def nlhw_ss(
         return better_of_both(lambda o: nlhw_ss(
             data, order, input_nl=copy.deepcopy(input_nl), output_nl=copy.deepcopy(output_nl),
             feedthrough=feedthrough, max_iter=max_iter, tol=tol, progress=progress,
-            linear=linear, offsets=o))
+            linear=linear, offsets=o, initial_condition=ic))
     shift = use_offsets(offsets, fin + fout, exps)
     u0, y0 = record_means(exps) if shift else (np.zeros(m), np.zeros(p))
     if shift:
@@ -215,6 +225,16 @@ def nlhw_ss(
         raise DataError("the linear start (n4sid, or linear=) is unstable; try another order "
                         "or give a stable linear start")
     u_all = np.vstack([r[0] for r in records])
+    n = int(order)
+    estimate_x0 = ic == "estimate"
+    x0s: list[np.ndarray] = [np.zeros(n) for _ in records]
+    frees = [np.zeros_like(r[1]) for r in records]
+    if estimate_x0:  # the states whose free responses fit the linear start's errors
+        lin0 = HammersteinWienerSSModel([Nonlinearity()] * m, [Nonlinearity()] * p, A, B, C,
+                                        D, dt)
+        cols = [free_response_ss(A, C, r[1].shape[0]) for r in records]
+        x0s = least_squares_states(cols, [r[1] - lin0.simulate(r[0]) for r in records])
+        frees = [(o @ x).reshape(r[1].shape) for o, x, r in zip(cols, x0s, records)]
     in_starts = [f.starts(u_all[:, j]) for j, f in enumerate(fin)]
     res, th0, v_all = None, None, np.zeros((0, p))
     # start k: every channel's k-th starting point (the last one when it has fewer)
@@ -243,7 +263,7 @@ def nlhw_ss(
                     if Dk is not None:
                         Dk[:, j] *= g
             start = HammersteinWienerSSModel(fin, [Nonlinearity()] * p, A, Bk, C, Dk, dt)
-            vs = np.vstack([start.simulate(r[0]) for r in records])
+            vs = np.vstack([start.simulate(r[0]) + e for r, e in zip(records, frees)])
             out_starts = [g.starts(vs[:, i]) if k >= 0 else
                           [g.initial(vs[:, i]) if g.linear_start(vs[:, i]) is None
                            else g.linear_start(vs[:, i])] for i, g in enumerate(fout)]
@@ -256,8 +276,10 @@ def nlhw_ss(
                     # about the means, the output levels are estimated with the rest
                     r = _sysid.hw_mimo_estimate(
                         records, fi, fo, int(order), bool(feedthrough),
-                        start.theta.tolist() + [0.0] * (p * shift), int(max_iter),
-                        float(tol), cb, offsets=shift)
+                        start.theta.tolist() + [0.0] * (p * shift)
+                        + (np.concatenate(x0s).tolist() if estimate_x0 else []),
+                        int(max_iter), float(tol), cb, offsets=shift,
+                        initial_state=estimate_x0)
                 except DataError:
                     continue  # an inadmissible start: try the next one
                 if res is None or r["cost"] < res["cost"] or r["stop"] == "cancelled":
@@ -273,7 +295,6 @@ def nlhw_ss(
     k = 0
     for f in fin:
         f.params, k = th[k:k + np.size(f.params)], k + np.size(f.params)
-    n = int(order)
     A, k = th[k:k + n * n].reshape(n, n), k + n * n
     B, k = th[k:k + n * m].reshape(n, m), k + n * m
     C, k = th[k:k + p * n].reshape(p, n), k + p * n
@@ -282,6 +303,8 @@ def nlhw_ss(
     for g in fout:
         g.params, k = th[k:k + np.size(g.params)], k + np.size(g.params)
     y0 = y0 + th[k:k + p] if shift else y0  # the operating point's levels, estimated
+    k += p * shift
+    states = th[k:].reshape(len(records), n) if estimate_x0 else np.zeros((len(records), n))
     info = {"method": "nlhw_ss", "iterations": int(res["iterations"]), "stop": res["stop"],
             "remaining_decrease": float(res["remaining_decrease"]),
             "n_starts": len(passes),
@@ -289,7 +312,8 @@ def nlhw_ss(
             "u_ranges": [(float(c.min()), float(c.max())) for c in u_all.T],
             "v_ranges": [(float(c.min()), float(c.max())) for c in v_all.T],
             "offsets": {"removed": shift, "u": u0.tolist(), "y": y0.tolist(),
-                        "y_estimated": shift}}
+                        "y_estimated": shift},
+            "initial_condition": ic, "initial_state": [x.copy() for x in states]}
     if start_note:
         info["linear_start"] = start_note
     n_res = sum(y.size for _, y in exps)

@@ -8,12 +8,14 @@
 //! ```
 //!
 //! Parameters `theta = [alpha_1..alpha_m, vec(A), vec(B), vec(C), (vec(D)), beta_1..beta_p,
-//! (y0_1..y0_p)]`
+//! (y0_1..y0_p), (x0 of each record)]`
 //! (matrices row-major), estimated by prediction error with the one optimiser
 //! ([`crate::optim`]): the state sensitivities `S(t) = dx(t)/dtheta` run sample by sample
 //! for the parameters that move the state only (`alpha`, `A`, `B`), once per sample for all
 //! outputs, `S(t+1) = A S(t) + dA x(t) + dB w(t) + B dw(t)/dalpha`, and
-//! `dy_i/dtheta = g_i'(v_i) (C S + dC x + D dw/dalpha + dD w)_i + dg_i/dbeta_i`; the rows are
+//! `dy_i/dtheta = g_i'(v_i) (C S + dC x + D dw/dalpha + dD w)_i + dg_i/dbeta_i`; an estimated
+//! initial state `x0` (the output is not affine in it through `g_i`, so it is searched with
+//! the rest) has `S(0) = I` in its columns (`dx(t)/dx0 = A^t`); the rows are
 //! folded into `J^T J` in blocks by one matrix product ([`NormalEquations::blocked`]), no
 //! `N x p` array. The full state-space parametrisation is not identifiable (similarity transforms):
 //! the Gauss-Newton products are formed over the identifiable columns in the modal
@@ -47,6 +49,10 @@ pub struct MimoHwStructure {
     /// Whether `theta` ends with one output offset per output, added to the output
     /// nonlinearities' values (`y_i = y0_i + g_i(v_i)`): the levels of the operating point.
     pub offsets: bool,
+    /// The number of records whose initial state `x(0)` is estimated: `theta` ends (after
+    /// the offsets) with one state (`order` entries) per record, in order; 0 when every
+    /// record starts from rest.
+    pub initial_states: usize,
 }
 
 /// Offsets of the parameter groups.
@@ -58,6 +64,7 @@ struct Layout {
     d: usize,
     beta: Vec<usize>,
     offset: usize,
+    x0: usize,
     total: usize,
 }
 
@@ -86,6 +93,7 @@ impl MimoHwStructure {
                 off - g.n_params()
             })
             .collect();
+        let x0 = off + if self.offsets { p } else { 0 };
         Layout {
             alpha,
             a,
@@ -94,13 +102,20 @@ impl MimoHwStructure {
             d,
             beta,
             offset: off,
-            total: off + if self.offsets { p } else { 0 },
+            x0,
+            total: x0 + self.initial_states * n,
         }
     }
 
     /// Total number of parameters.
     pub fn n_params(&self) -> usize {
         self.layout().total
+    }
+
+    /// Record `k`'s initial state in `theta` (with [`Self::initial_states`]).
+    pub fn initial_state<'a>(&self, theta: &'a [f64], k: usize) -> &'a [f64] {
+        let at = self.layout().x0 + k * self.order;
+        &theta[at..at + self.order]
     }
 
     /// Checks the definition.
@@ -140,7 +155,9 @@ impl MimoHwStructure {
     /// [`SysidError::Interrupted`] when stopped inside an [`crate::interrupt`] scope.
     pub fn simulate(&self, theta: &[f64], u: MatRef<'_, f64>) -> Result<Mat<f64>> {
         let mut y = Mat::<f64>::zeros(u.nrows(), self.outputs.len());
-        self.run(theta, u, None, None, |t, i, yhat, _| y[(t, i)] = yhat)?;
+        self.run(theta, u, None, None, usize::MAX, |t, i, yhat, _| {
+            y[(t, i)] = yhat
+        })?;
         Ok(y)
     }
 
@@ -155,7 +172,8 @@ impl MimoHwStructure {
     /// use faer::Mat;
     /// use sysid_core::hw::{mimo::MimoHwStructure, Nonlinearity};
     /// let s = MimoHwStructure { inputs: vec![Nonlinearity::Identity],
-    ///     outputs: vec![Nonlinearity::Identity], order: 1, feedthrough: false, offsets: false };
+    ///     outputs: vec![Nonlinearity::Identity], order: 1, feedthrough: false, offsets: false,
+    ///     initial_states: 0 };
     /// // x(t+1) = 0.5 x + w, v = x: from x0 = 2 with no input, 2, 1, 0.5
     /// let y = s.simulate_from(&[0.5, 1.0, 1.0], Mat::<f64>::zeros(3, 1).as_ref(), &[2.0])
     ///     .unwrap();
@@ -170,12 +188,15 @@ impl MimoHwStructure {
             });
         }
         let mut y = Mat::<f64>::zeros(u.nrows(), self.outputs.len());
-        self.run(theta, u, None, Some(x0), |t, i, yhat, _| y[(t, i)] = yhat)?;
+        self.run(theta, u, None, Some(x0), usize::MAX, |t, i, yhat, _| {
+            y[(t, i)] = yhat
+        })?;
         Ok(y)
     }
 
     /// The Jacobian columns of the parameters that move (all but those in `held`), in
-    /// layout order: those that move the state (`alpha`, `A`, `B`) first.
+    /// layout order: those that move the state (`alpha`, `A`, `B`) first, the records'
+    /// initial states last.
     fn columns(&self, held: &[bool]) -> Vec<Column> {
         let l = self.layout();
         let (n, m, p) = (self.order, self.inputs.len(), self.outputs.len());
@@ -195,6 +216,9 @@ impl MimoHwStructure {
         if self.offsets {
             cols.extend((0..p).map(Column::Offset));
         }
+        for e in 0..self.initial_states {
+            cols.extend((0..n).map(|k| Column::X0(e, k)));
+        }
         debug_assert_eq!(cols.len(), l.total);
         cols.into_iter()
             .enumerate()
@@ -203,17 +227,20 @@ impl MimoHwStructure {
             .collect()
     }
 
-    /// Runs the model; `visit(t, output, yhat, d yhat / d theta)` per sample and output, the
-    /// row over `cols` ([`Self::columns`]; empty when `cols` is `None`). The state
-    /// sensitivities `S` (`n x nd`, row-major) are carried for the `nd` columns that move the
-    /// state only, once per sample for all outputs; `A S` skips the zeros of `A` (the modal
-    /// chart holds all but its blocks at zero).
+    /// Runs the model of record `record` from `x0` (`None`: from rest); `visit(t, output,
+    /// yhat, d yhat / d theta)` per sample and output, the row over `cols`
+    /// ([`Self::columns`]; empty when `cols` is `None`; the columns of other records' initial
+    /// states zero). The state sensitivities `S` (`n x nd`, row-major) are carried for the
+    /// `nd` columns that move the state only (`alpha`, `A`, `B`, this record's `x0`, whose
+    /// `S(0)` is the identity), once per sample for all outputs; `A S` skips the zeros of `A`
+    /// (the modal chart holds all but its blocks at zero).
     fn run(
         &self,
         theta: &[f64],
         u: MatRef<'_, f64>,
         cols: Option<&[Column]>,
         x0: Option<&[f64]>,
+        record: usize,
         mut visit: impl FnMut(usize, usize, f64, &[f64]),
     ) -> Result<()> {
         let l = self.layout();
@@ -221,7 +248,11 @@ impl MimoHwStructure {
         let (a, b, c, d) = self.matrices(theta);
         let cols = cols.unwrap_or(&[]);
         let q = cols.len();
-        let nd = cols.iter().take_while(|c| c.moves_state()).count();
+        // the columns that move the state, in order (alpha first), and where they sit
+        let moves = |c: &Column| c.moves_state() || matches!(*c, Column::X0(e, _) if e == record);
+        let dyn_at: Vec<usize> = (0..q).filter(|&k| moves(&cols[k])).collect();
+        let dyn_cols: Vec<Column> = dyn_at.iter().map(|&k| cols[k]).collect();
+        let nd = dyn_at.len();
         let mut x = x0.map_or_else(|| vec![0.0; n], <[f64]>::to_vec);
         let mut xn = vec![0.0; n];
         let mut w = vec![0.0; m];
@@ -229,10 +260,16 @@ impl MimoHwStructure {
         let mut dw = vec![0.0; l.total];
         let mut dg = vec![0.0; l.total];
         let mut s = vec![0.0; n * nd];
+        for (cn, col) in dyn_cols.iter().enumerate() {
+            if let Column::X0(_, k) = *col {
+                s[k * nd + cn] = 1.0; // dx(0) / dx0 = I
+            }
+        }
         let mut sn = vec![0.0; n * nd];
         let mut row = vec![0.0; q];
+        let mut dyn_row = vec![0.0; nd];
         // the input parameters' columns, and per output the static columns it moves
-        let alphas: Vec<(usize, usize, usize)> = cols[..nd]
+        let alphas: Vec<(usize, usize, usize)> = dyn_cols
             .iter()
             .enumerate()
             .filter_map(|(cn, col)| match *col {
@@ -241,7 +278,7 @@ impl MimoHwStructure {
             })
             .collect();
         let mut own: Vec<Vec<(usize, Column)>> = vec![Vec::new(); p];
-        for (cn, col) in cols.iter().enumerate().skip(nd) {
+        for (cn, col) in cols.iter().enumerate().filter(|(_, c)| !moves(c)) {
             if let Column::C(i, _) | Column::D(i, _) | Column::Beta(i, _) | Column::Offset(i) = *col
             {
                 own[i].push((cn, *col));
@@ -280,7 +317,6 @@ impl MimoHwStructure {
                 };
                 if q > 0 {
                     // dv_i = C_i S + dC_i x + D_i dw + dD_i w, times g_i'; + dg_i / dbeta_i
-                    let dyn_row = &mut row[..nd];
                     dyn_row.fill(0.0);
                     for k in 0..n {
                         let cik = c[(i, k)];
@@ -294,7 +330,10 @@ impl MimoHwStructure {
                         dyn_row[cn] += d[(i, j)] * dw[at];
                     }
                     dyn_row.iter_mut().for_each(|rv| *rv *= gd);
-                    row[nd..].fill(0.0);
+                    row.fill(0.0);
+                    for (&at, &rv) in dyn_at.iter().zip(&dyn_row) {
+                        row[at] = rv;
+                    }
                     for &(cn, col) in &own[i] {
                         row[cn] = match col {
                             Column::C(_, k) => gd * x[k],
@@ -321,14 +360,14 @@ impl MimoHwStructure {
                             *ov += ark * sv;
                         }
                     }
-                    for (ov, col) in out.iter_mut().zip(cols) {
+                    for (ov, col) in out.iter_mut().zip(&dyn_cols) {
                         match *col {
                             Column::Alpha(j, at) => *ov += b[(r, j)] * dw[at],
                             _ => break, // alpha first, then A and B
                         }
                     }
                 }
-                for (cn, col) in cols[..nd].iter().enumerate() {
+                for (cn, col) in dyn_cols.iter().enumerate() {
                     match *col {
                         Column::A(r, k) => sn[r * nd + cn] += x[k],
                         Column::B(r, j) => sn[r * nd + cn] += w[j],
@@ -366,6 +405,8 @@ enum Column {
     Beta(usize, usize),
     /// Output `i`'s offset.
     Offset(usize),
+    /// Entry `k` of record `e`'s initial state.
+    X0(usize, usize),
 }
 
 impl Column {
@@ -395,11 +436,13 @@ impl Problem for MimoHwProblem<'_> {
                 return Ok(ev);
             }
         }
-        let cols = self.structure.columns(&[]);
+        let s = &self.structure;
+        let cols = s.columns(&[]);
         let mut sums = NormalEquations::blocked(cols.len(), jacobian);
-        for (u, y) in &self.records {
+        for (e, (u, y)) in self.records.iter().enumerate() {
             let c = jacobian.then_some(cols.as_slice());
-            self.structure.run(theta, *u, c, None, |t, i, yhat, jr| {
+            let x0 = (s.initial_states > 0).then(|| s.initial_state(theta, e));
+            s.run(theta, *u, c, x0, e, |t, i, yhat, jr| {
                 sums.add(y[(t, i)] - yhat, Some(jr))
             })?;
         }
@@ -440,6 +483,16 @@ pub fn estimate_mimo(
         return Err(SysidError::invalid(
             "theta0",
             format!("needs {} parameters", structure.n_params()),
+        ));
+    }
+    if structure.initial_states != 0 && structure.initial_states != records.len() {
+        return Err(SysidError::invalid(
+            "initial_states",
+            format!(
+                "one initial state per record ({}) or none, got {}",
+                records.len(),
+                structure.initial_states
+            ),
         ));
     }
     let (m, p) = (structure.inputs.len(), structure.outputs.len());

@@ -11,6 +11,9 @@
 //! `r = y - g(x)`, its Jacobian `-g'(x) dx/dtheta` and `-dg/dbeta`, where the sensitivities
 //! of `x` are `1/F` filters of `B dw/dalpha`, `w(t - nk - k)` and `-x(t - k)`, run sample by
 //! sample with a ring of the last `nf` values; `J^T J` and `J^T r` are accumulated per sample.
+//! A record's initial state, when estimated ([`HwStructure::initial_states`]), is the short
+//! polynomial `h` of `F x = B w(t - nk) + h` (what the samples before the record leave), its
+//! sensitivity the `1/F` filter of a unit pulse at each of its lags.
 //! The admissible set is `F` stable. Each nonlinearity has a normalisation so that the scale
 //! of the signal between it and the linear block lives in `B` only: saturation and dead zone
 //! have unit slope, the polynomial a unit linear term, the piecewise-linear map keeps its
@@ -238,12 +241,36 @@ pub struct HwStructure {
     /// Whether `theta` ends with an output offset `y0`, added to the output nonlinearity's
     /// value (`y = y0 + g(x)`): the level of the operating point, estimated with the rest.
     pub offset: bool,
+    /// The number of records whose linear block's initial state is estimated: `theta` ends
+    /// (after `y0`) with one state of [`Self::n_initial`] entries per record, in order; 0
+    /// when every record starts from rest.
+    pub initial_states: usize,
 }
 
 impl HwStructure {
-    /// Total parameters `[alpha, b, f, beta]`, then `y0` with [`Self::offset`].
+    /// Total parameters `[alpha, b, f, beta]`, then `y0` with [`Self::offset`], then the
+    /// records' initial states ([`Self::initial_states`]).
     pub fn n_params(&self) -> usize {
+        self.n_model() + self.initial_states * self.n_initial()
+    }
+
+    /// The model's own parameters `[alpha, b, f, beta, (y0)]` (the initial states excluded).
+    pub fn n_model(&self) -> usize {
         self.input.n_params() + self.nb + self.nf + self.output.n_params() + self.offset as usize
+    }
+
+    /// Entries of a record's initial state: `max(nf, nk + nb - 1)`, the coefficients `h` of
+    /// `F x = B w(t - nk) + h` acting on the first samples (what the samples before the
+    /// record leave; SciPy's `lfilter(r_[zeros(nk), b], r_[1, f], w, zi=h)` state), as the
+    /// polynomial estimators' initial conditions.
+    pub fn n_initial(&self) -> usize {
+        self.nf.max((self.nk + self.nb).saturating_sub(1))
+    }
+
+    /// Record `k`'s initial state in `theta` (with [`Self::initial_states`]).
+    pub fn initial_state<'a>(&self, th: &'a [f64], k: usize) -> &'a [f64] {
+        let (start, nh) = (self.n_model(), self.n_initial());
+        &th[start + k * nh..start + (k + 1) * nh]
     }
 
     fn split<'a>(&self, th: &'a [f64]) -> (&'a [f64], &'a [f64], &'a [f64], &'a [f64]) {
@@ -257,7 +284,7 @@ impl HwStructure {
     /// The output offset `y0` at `theta` (0 without [`Self::offset`]).
     fn y0(&self, th: &[f64]) -> f64 {
         if self.offset {
-            th[th.len() - 1]
+            th[self.n_model() - 1]
         } else {
             0.0
         }
@@ -269,7 +296,35 @@ impl HwStructure {
     /// [`SysidError::Interrupted`] when stopped inside an [`crate::interrupt`] scope.
     pub fn simulate(&self, theta: &[f64], u: &[f64]) -> Result<Vec<f64>> {
         let mut out = vec![0.0; u.len()];
-        self.run(theta, u, None, |t, yhat, _, _| out[t] = yhat)?;
+        self.run(theta, u, None, None, |t, yhat, _, _| out[t] = yhat)?;
+        Ok(out)
+    }
+
+    /// Noise-free output from the linear block's initial state `h` ([`Self::n_initial`]
+    /// entries: what [`Self::simulate`] takes as zero).
+    ///
+    /// # Errors
+    /// [`SysidError::ShapeMismatch`] when `h` has not [`Self::n_initial`] entries;
+    /// [`SysidError::Interrupted`] as [`Self::simulate`].
+    ///
+    /// ```
+    /// use sysid_core::hw::{HwStructure, Nonlinearity};
+    /// let s = HwStructure { input: Nonlinearity::Identity, output: Nonlinearity::Identity,
+    ///                       nb: 1, nf: 1, nk: 1, offset: false, initial_states: 0 };
+    /// // x(t) = 0.5 x(t - 1) + w(t - 1) + h(t): from h = [2] with no input, 2, 1, 0.5
+    /// let y = s.simulate_from(&[1.0, -0.5], &[0.0; 3], &[2.0]).unwrap();
+    /// assert_eq!(y, vec![2.0, 1.0, 0.5]);
+    /// ```
+    pub fn simulate_from(&self, theta: &[f64], u: &[f64], h: &[f64]) -> Result<Vec<f64>> {
+        if h.len() != self.n_initial() {
+            return Err(SysidError::ShapeMismatch {
+                what: "h".into(),
+                expected: format!("{} entries (max(nf, nk + nb - 1))", self.n_initial()),
+                got: format!("{} entries", h.len()),
+            });
+        }
+        let mut out = vec![0.0; u.len()];
+        self.run(theta, u, None, Some(h), |t, yhat, _, _| out[t] = yhat)?;
         Ok(out)
     }
 
@@ -299,20 +354,27 @@ impl HwStructure {
         (w, x)
     }
 
-    /// Runs the model; `visit(t, yhat, jacobian row of yhat (if asked), _)` per sample.
+    /// Runs the model from the initial state `h` (`None`: from rest); `visit(t, yhat,
+    /// jacobian row of yhat (if asked), _)` per sample, the row over the model's parameters
+    /// ([`Self::n_model`]) and then, with `h`, over `h`'s entries.
     fn run(
         &self,
         theta: &[f64],
         u: &[f64],
         mut jac: Option<&mut Vec<f64>>,
+        h: Option<&[f64]>,
         mut visit: impl FnMut(usize, f64, Option<&[f64]>, ()),
     ) -> Result<()> {
         let (alpha, b, f, beta) = self.split(theta);
         let y0 = self.y0(theta);
         let (na, nbeta) = (alpha.len(), beta.len());
         let n = u.len();
-        let p = self.n_params();
-        let plin = na + self.nb + self.nf;
+        let h = h.unwrap_or(&[]);
+        let nh = h.len();
+        let p = self.n_model() + nh;
+        // the sensitivities run through 1/F: alpha, b, f, then h's entries
+        let plin0 = na + self.nb + self.nf;
+        let plin = plin0 + nh;
         let mut dpa = vec![0.0; na];
         let mut dpb = vec![0.0; nbeta];
         // w and dw/dalpha for every sample (n x (1 + na)); x history
@@ -341,6 +403,9 @@ impl HwStructure {
                     xt -= fi * x[t - 1 - i];
                 }
             }
+            if t < nh {
+                xt += h[t];
+            }
             x[t] = xt;
             let (g, gd) = self.output.eval(beta, xt, &mut dpb);
             let yhat = y0 + g;
@@ -361,6 +426,9 @@ impl HwStructure {
                         s[na + self.nb + i] = -x[t - 1 - i];
                     }
                 }
+                if t < nh {
+                    s[plin0 + t] = 1.0;
+                }
                 for (i, fi) in f.iter().enumerate() {
                     if t > i {
                         let slot = (t - 1 - i) % ring;
@@ -372,11 +440,12 @@ impl HwStructure {
                 let slot = t % ring;
                 s_hist[slot * plin..(slot + 1) * plin].copy_from_slice(&s);
                 row.clear();
-                row.extend(s.iter().map(|v| gd * v));
+                row.extend(s[..plin0].iter().map(|v| gd * v));
                 row.extend_from_slice(&dpb);
                 if self.offset {
                     row.push(1.0);
                 }
+                row.extend(s[plin0..].iter().map(|v| gd * v));
                 debug_assert_eq!(row.len(), p);
                 visit(t, yhat, Some(row), ());
             } else {
@@ -401,12 +470,38 @@ impl Problem for HwProblem<'_> {
     }
 
     fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
+        let s = &self.structure;
         let mut sums = NormalEquations::blocked(self.n_params(), jacobian);
         let mut row = Vec::with_capacity(self.n_params());
-        for (u, y) in &self.records {
+        if s.initial_states == 0 {
+            for (u, y) in &self.records {
+                let jac = if jacobian { Some(&mut row) } else { None };
+                s.run(theta, u, jac, None, |t, yhat, jr, _| {
+                    sums.add(y[t] - yhat, jr)
+                })?;
+            }
+            return Ok(sums.finish());
+        }
+        // each record's row: the model's columns, its own state's, zeros for the others'
+        let (pm, nh) = (s.n_model(), s.n_initial());
+        let mut full = vec![0.0; self.n_params()];
+        for (k, (u, y)) in self.records.iter().enumerate() {
             let jac = if jacobian { Some(&mut row) } else { None };
-            self.structure
-                .run(theta, u, jac, |t, yhat, jr, _| sums.add(y[t] - yhat, jr))?;
+            let at = pm + k * nh;
+            s.run(
+                theta,
+                u,
+                jac,
+                Some(s.initial_state(theta, k)),
+                |t, yhat, jr, _| {
+                    let jr = jr.map(|jr| {
+                        full[..pm].copy_from_slice(&jr[..pm]);
+                        full[at..at + nh].copy_from_slice(&jr[pm..]);
+                        &full[..]
+                    });
+                    sums.add(y[t] - yhat, jr)
+                },
+            )?;
         }
         Ok(sums.finish())
     }
@@ -433,7 +528,8 @@ impl Problem for HwProblem<'_> {
 /// use sysid_core::optim::Options;
 /// // Hammerstein: saturation at +-0.5, then 0.5 q^-1 / (1 - 0.8 q^-1)
 /// let s = HwStructure { input: Nonlinearity::Saturation, output: Nonlinearity::Identity,
-///                       nb: 1, nf: 1, nk: 1, offset: false };
+///                       nb: 1, nf: 1, nk: 1, offset: false,
+///                       initial_states: 0 };
 /// let u: Vec<f64> = (0..400).map(|t| ((t * 7919 % 101) as f64 / 50.0) - 1.0).collect();
 /// let y = s.simulate(&[-0.5, 0.5, 0.5, -0.8], &u).unwrap();
 /// let sol = estimate(&s, &[(&u, &y)], &[-0.9, 0.9, 0.4, -0.7], &Options::default(),
@@ -456,6 +552,16 @@ pub fn estimate(
         return Err(SysidError::invalid(
             "theta0",
             format!("needs {} parameters", structure.n_params()),
+        ));
+    }
+    if structure.initial_states != 0 && structure.initial_states != records.len() {
+        return Err(SysidError::invalid(
+            "initial_states",
+            format!(
+                "one initial state per record ({}) or none, got {}",
+                records.len(),
+                structure.initial_states
+            ),
         ));
     }
     for (u, y) in records {
@@ -519,6 +625,7 @@ mod tests {
                     nf: 1,
                     nk: 1,
                     offset: true,
+                    initial_states: 0,
                 };
                 let mut th = pin.clone();
                 th.extend([0.4, 0.2, -0.6]);
@@ -561,6 +668,7 @@ mod tests {
             nf: 1,
             nk: 1,
             offset: true,
+            initial_states: 0,
         };
         let truth = [-0.5, 0.5, 0.5, -0.8, 2.5];
         let y = s.simulate(&truth, &u).unwrap();
@@ -578,6 +686,100 @@ mod tests {
         }
     }
 
+    /// With the records' initial states estimated (two records; `nk + nb - 1 > nf`, so the
+    /// state holds past inputs too), the Gauss-Newton gradient still equals the
+    /// finite-difference one, the states' columns included.
+    #[test]
+    fn gradient_with_initial_states_matches_finite_differences() {
+        let u: Vec<f64> = (0..200)
+            .map(|t| (((t * 7919) % 211) as f64 / 105.0) - 1.0)
+            .collect();
+        let y: Vec<f64> = u.iter().map(|v| (2.0 * v).tanh() + 0.1 * v * v).collect();
+        let (u2, y2): (Vec<f64>, Vec<f64>) = (u[50..].to_vec(), y[..150].to_vec());
+        let s = HwStructure {
+            input: Nonlinearity::Saturation,
+            output: Nonlinearity::Polynomial { degree: 3 },
+            nb: 2,
+            nf: 2,
+            nk: 2,
+            offset: true,
+            initial_states: 2,
+        };
+        assert_eq!(s.n_initial(), 3);
+        let mut th = vec![-0.613, 0.707, 0.4, 0.2, -0.6, 0.25, 0.2, -0.1, 0.3];
+        th.extend([0.5, -0.3, 0.2, -0.4, 0.1, 0.6]); // the two records' states
+        assert_eq!(th.len(), s.n_params());
+        let mut pr = HwProblem {
+            structure: s,
+            records: vec![(&u, &y), (&u2, &y2)],
+        };
+        let ev = pr.evaluate(&th, true).unwrap();
+        for a in 0..th.len() {
+            let h = 1e-6;
+            let (mut tp, mut tm) = (th.clone(), th.clone());
+            tp[a] += h;
+            tm[a] -= h;
+            let fd = (pr.evaluate(&tp, false).unwrap().cost
+                - pr.evaluate(&tm, false).unwrap().cost)
+                / (2.0 * h);
+            let g = ev.gradient[a];
+            assert!(
+                (fd - g).abs() < 1e-5 * (1.0 + g.abs()),
+                "param {a}: fd {fd} vs {g}"
+            );
+        }
+    }
+
+    /// The initial state is SciPy's `lfilter` state of `B/F` with `nk` leading zeros: a
+    /// record cut from a longer one is the longer one's continuation from the state the cut
+    /// leaves, and the state recovered by the search (from rest) reproduces it.
+    #[test]
+    fn a_record_starting_mid_response_is_fitted_with_its_initial_state() {
+        let u: Vec<f64> = (0..600)
+            .map(|t| ((t * 7919 % 101) as f64 / 50.0) - 1.0)
+            .collect();
+        let mut s = HwStructure {
+            input: Nonlinearity::Saturation,
+            output: Nonlinearity::Identity,
+            nb: 2,
+            nf: 2,
+            nk: 1,
+            offset: false,
+            initial_states: 0,
+        };
+        let truth = [-0.5, 0.5, 0.5, 0.3, -1.5, 0.7];
+        let long = s.simulate(&truth, &u).unwrap();
+        let (uc, yc) = (&u[100..], &long[100..]);
+        // the state the first 100 samples leave: x(t) + f1 x(t-1) + f2 x(t-2) = b0 w(t-1) +
+        // b1 w(t-2) at t = 100, 101, its terms before sample 100
+        let w = |t: usize| u[t].clamp(-0.5, 0.5);
+        let (b0, b1, f1, f2) = (0.5, 0.3, -1.5, 0.7);
+        let h = [
+            b0 * w(99) + b1 * w(98) - f1 * long[99] - f2 * long[98],
+            b1 * w(99) - f2 * long[99],
+        ];
+        let from = s.simulate_from(&truth, uc, &h).unwrap();
+        for (a, b) in from.iter().zip(yc) {
+            assert!((a - b).abs() < 1e-12, "{a} vs {b}");
+        }
+        let start = [-0.6, 0.6, 0.45, 0.25, -1.4, 0.6];
+        let zero = estimate(&s, &[(uc, yc)], &start, &Options::default(), &mut |_| {
+            Flow::Continue
+        })
+        .unwrap();
+        assert!((zero.theta[4] - f1).abs() > 1e-4, "{:?}", zero.theta);
+        s.initial_states = 1;
+        let mut th0 = start.to_vec();
+        th0.extend([0.0, 0.0]);
+        let sol = estimate(&s, &[(uc, yc)], &th0, &Options::default(), &mut |_| {
+            Flow::Continue
+        })
+        .unwrap();
+        for (a, b) in sol.theta.iter().zip(truth.iter().chain(&h)) {
+            assert!((a - b).abs() < 1e-8 * (1.0 + b.abs()), "{:?}", sol.theta);
+        }
+    }
+
     /// A pass over a long record asks whether to stop every few thousand samples (see the
     /// MIMO structure's test of the same name).
     #[test]
@@ -592,6 +794,7 @@ mod tests {
             nf: 1,
             nk: 1,
             offset: false,
+            initial_states: 0,
         };
         let th = [-0.5, 0.5, 0.5, -0.8];
         let y = s.simulate(&th, &u).unwrap();

@@ -68,6 +68,18 @@ impl MimoHwProblem<'_> {
                 th[lay.c + i * n + k] = cm[(i, k)];
             }
         }
+        // the records' initial states, x0' = T^-1 x0
+        let x0m: Vec<Vec<f64>> = (0..s.initial_states)
+            .map(|e| {
+                let x0 = s.initial_state(theta, e);
+                (0..n)
+                    .map(|r| (0..n).map(|k| md.ti[(r, k)] * x0[k]).sum())
+                    .collect()
+            })
+            .collect();
+        for (e, x) in x0m.iter().enumerate() {
+            th[lay.x0 + e * n..lay.x0 + (e + 1) * n].copy_from_slice(x);
+        }
         if th.iter().any(|v| !v.is_finite()) {
             return Ok(None);
         }
@@ -96,6 +108,12 @@ impl MimoHwProblem<'_> {
                 rr[(at_free[k], col)] += v;
             }
         });
+        // and of the initial states: -E_pq x0' (as of B')
+        for (col, &(pp, qq)) in pairs.iter().enumerate() {
+            for (e, x) in x0m.iter().enumerate() {
+                rr[(at_free[lay.x0 + e * n + pp], col)] -= x[qq];
+            }
+        }
         // K^T (p x free): identity on the free parameters, -(R G^-1)^T on the held ones
         let mut kt = Mat::<f64>::zeros(lay.total, free.len());
         for (f, &k) in free.iter().enumerate() {
@@ -117,16 +135,19 @@ impl MimoHwProblem<'_> {
         // J_F^T J_F and J_F^T r over the free columns, at the modal parameters
         let cols = s.columns(&held);
         let mut sums = NormalEquations::blocked(cols.len(), true);
-        for (u, y) in &self.records {
-            s.run(&th, *u, Some(&cols), None, |t, i, yhat, jr| {
+        for (e, (u, y)) in self.records.iter().enumerate() {
+            let x0 = x0m.get(e).map(Vec::as_slice);
+            s.run(&th, *u, Some(&cols), x0, e, |t, i, yhat, jr| {
                 sums.add(y[(t, i)] - yhat, Some(jr))
             })?;
         }
         let ev = sums.finish();
         // Z^T = M^T K^T
+        let mut left = vec![(lay.b, m)];
+        left.extend((0..s.initial_states).map(|e| (lay.x0 + e * n, 1)));
         let at = StateBlocks {
             a: lay.a,
-            left: vec![(lay.b, m)],
+            left,
             c: lay.c,
             rows: p,
         };

@@ -60,6 +60,7 @@ fn gradient_matches_finite_differences() {
         order: 2,
         feedthrough: true,
         offsets: true,
+        initial_states: 0,
     };
     let mut th = vec![-0.613, 0.707, 0.2, -0.1];
     th.extend(linear_block());
@@ -100,6 +101,7 @@ fn hammerstein_2x2_recovered() {
         order: 2,
         feedthrough: false,
         offsets: false,
+        initial_states: 0,
     };
     let mut truth = vec![-0.5, 0.6, 0.3, -0.2];
     truth.extend(linear_block());
@@ -140,6 +142,7 @@ fn hammerstein_2x2_with_output_levels_recovered() {
         order: 2,
         feedthrough: false,
         offsets: true,
+        initial_states: 0,
     };
     let mut truth = vec![-0.5, 0.6, 0.3, -0.2];
     truth.extend(linear_block());
@@ -174,6 +177,7 @@ fn wiener_2x2_recovered() {
         order: 2,
         feedthrough: false,
         offsets: false,
+        initial_states: 0,
     };
     let mut truth = linear_block();
     truth.extend([0.4, -0.5, 0.45]);
@@ -203,6 +207,7 @@ fn bad_starts_and_shapes_are_errors() {
         order: 2,
         feedthrough: false,
         offsets: false,
+        initial_states: 0,
     };
     let u = inputs(50, 2);
     let y = Mat::<f64>::zeros(50, 2);
@@ -227,10 +232,13 @@ fn bad_starts_and_shapes_are_errors() {
     assert!(r.is_err());
 }
 
+type Records = Vec<(Mat<f64>, Mat<f64>)>;
+
 /// An order-3 structure with sigmoid networks in and out and feedthrough, its parameters
-/// with `A` having a complex pair and a real pole (not in modal form), a record, and the
-/// evaluation through the modal coordinates there.
-fn order3() -> (MimoHwStructure, Vec<f64>, Mat<f64>, Mat<f64>, Evaluation) {
+/// with `A` having a complex pair and a real pole (not in modal form), a record (with
+/// `states`, two, their initial states estimated), and the evaluation through the modal
+/// coordinates there.
+fn order3(states: bool) -> (MimoHwStructure, Vec<f64>, Records, Evaluation) {
     let s = MimoHwStructure {
         inputs: vec![
             Nonlinearity::Sigmoid {
@@ -249,6 +257,7 @@ fn order3() -> (MimoHwStructure, Vec<f64>, Mat<f64>, Mat<f64>, Evaluation) {
         order: 3,
         feedthrough: true,
         offsets: true,
+        initial_states: if states { 2 } else { 0 },
     };
     let mut th = vec![0.3, 1.1, 0.1, 0.5, 0.7, -0.2]; // input 0's network
     th.extend([0.6, -0.3, 0.1, 0.3, 0.5, -0.2, 0.1, 0.2, -0.4]); // A
@@ -257,59 +266,95 @@ fn order3() -> (MimoHwStructure, Vec<f64>, Mat<f64>, Mat<f64>, Evaluation) {
     th.extend([0.1, -0.2, 0.05, 0.3]); // D
     th.extend([0.8, 0.9, 0.1, 0.25]); // output networks
     th.extend([0.4, -1.3]); // output offsets
+    let mut recs = vec![(
+        inputs(400, 5),
+        Mat::from_fn(400, 2, |t, i| ((t * (i + 2)) as f64 * 0.29).cos()),
+    )];
+    if states {
+        th.extend([0.5, -0.8, 0.3, -0.2, 0.9, 0.4]); // the two records' x(0)
+        recs.push((
+            inputs(250, 6),
+            Mat::from_fn(250, 2, |t, i| ((t * (i + 1)) as f64 * 0.41).sin()),
+        ));
+    }
     assert_eq!(th.len(), s.n_params());
-    let u = inputs(400, 5);
-    let y = Mat::from_fn(400, 2, |t, i| ((t * (i + 2)) as f64 * 0.29).cos());
     let pr = MimoHwProblem {
         structure: s.clone(),
-        records: vec![(u.as_ref(), y.as_ref())],
+        records: recs.iter().map(|(u, y)| (u.as_ref(), y.as_ref())).collect(),
     };
     let ev = pr
         .evaluate_modal(&th)
         .unwrap()
         .expect("the modal path applies");
-    (s, th, u, y, ev)
+    (s, th, recs, ev)
+}
+
+/// The simulated outputs of every record (from its estimated initial state, if any).
+fn simulate_all(s: &MimoHwStructure, th: &[f64], recs: &Records) -> Vec<Mat<f64>> {
+    recs.iter()
+        .enumerate()
+        .map(|(e, (u, _))| {
+            if s.initial_states > 0 {
+                s.simulate_from(th, u.as_ref(), s.initial_state(th, e))
+                    .unwrap()
+            } else {
+                s.simulate(th, u.as_ref()).unwrap()
+            }
+        })
+        .collect()
 }
 
 /// The Gauss-Newton products formed in the modal coordinates over the identifiable columns
 /// equal `J^T J` and `-J^T r` of a finite-difference Jacobian of the simulation over all
-/// parameters (the similarity directions included).
+/// parameters (the similarity directions included; with the records' initial states, their
+/// columns too).
 #[test]
 fn modal_gauss_newton_matches_finite_differences() {
-    let (s, th, u, y, ev) = order3();
-    let sim = |th: &[f64]| s.simulate(th, u.as_ref()).unwrap();
-    let y0 = sim(&th);
-    let p = th.len();
-    let jac: Vec<Mat<f64>> = (0..p)
-        .map(|a| {
-            let h = 1e-6;
-            let (mut tp, mut tm) = (th.clone(), th.clone());
-            tp[a] += h;
-            tm[a] -= h;
-            (sim(&tp) - sim(&tm)) * faer::Scale(0.5 / h)
-        })
-        .collect();
-    let each = || (0..400).flat_map(|t| (0..2).map(move |i| (t, i)));
-    let cost: f64 = each()
-        .map(|(t, i)| 0.5 * (y[(t, i)] - y0[(t, i)]).powi(2))
-        .sum();
-    assert!((ev.cost - cost).abs() < 1e-9 * cost);
-    for a in 0..p {
-        let want: f64 = each()
-            .map(|(t, i)| -jac[a][(t, i)] * (y[(t, i)] - y0[(t, i)]))
-            .sum();
-        let got = ev.gradient[a];
-        assert!(
-            (got - want).abs() < 1e-5 * (1.0 + want.abs()),
-            "g {a}: {got} vs {want}"
-        );
-        for b in 0..p {
-            let want: f64 = each().map(|(t, i)| jac[a][(t, i)] * jac[b][(t, i)]).sum();
-            let got = ev.gauss_newton[(a, b)];
+    for states in [false, true] {
+        let (s, th, recs, ev) = order3(states);
+        let sim = |th: &[f64]| simulate_all(&s, th, &recs);
+        let y0 = sim(&th);
+        let p = th.len();
+        let jac: Vec<Vec<Mat<f64>>> = (0..p)
+            .map(|a| {
+                let h = 1e-6;
+                let (mut tp, mut tm) = (th.clone(), th.clone());
+                tp[a] += h;
+                tm[a] -= h;
+                sim(&tp)
+                    .iter()
+                    .zip(sim(&tm))
+                    .map(|(yp, ym)| (yp - ym) * faer::Scale(0.5 / h))
+                    .collect()
+            })
+            .collect();
+        let each = || {
+            recs.iter().enumerate().flat_map(|(e, (_, y))| {
+                (0..y.nrows()).flat_map(move |t| (0..2).map(move |i| (e, t, i)))
+            })
+        };
+        let r = |e: usize, t: usize, i: usize| recs[e].1[(t, i)] - y0[e][(t, i)];
+        let cost: f64 = each().map(|(e, t, i)| 0.5 * r(e, t, i).powi(2)).sum();
+        assert!((ev.cost - cost).abs() < 1e-9 * cost);
+        for a in 0..p {
+            let want: f64 = each()
+                .map(|(e, t, i)| -jac[a][e][(t, i)] * r(e, t, i))
+                .sum();
+            let got = ev.gradient[a];
             assert!(
                 (got - want).abs() < 1e-5 * (1.0 + want.abs()),
-                "H {a},{b}: {got} vs {want}"
+                "states {states} g {a}: {got} vs {want}"
             );
+            for b in 0..p {
+                let want: f64 = each()
+                    .map(|(e, t, i)| jac[a][e][(t, i)] * jac[b][e][(t, i)])
+                    .sum();
+                let got = ev.gauss_newton[(a, b)];
+                assert!(
+                    (got - want).abs() < 1e-5 * (1.0 + want.abs()),
+                    "states {states} H {a},{b}: {got} vs {want}"
+                );
+            }
         }
     }
 }
@@ -317,14 +362,23 @@ fn modal_gauss_newton_matches_finite_differences() {
 /// The modal path and the plain one (every column formed) agree to rounding.
 #[test]
 fn modal_gauss_newton_matches_the_plain_products() {
-    let (s, th, u, y, ev) = order3();
-    let cols = s.columns(&[]);
-    let mut sums = NormalEquations::new(cols.len(), true);
-    s.run(&th, u.as_ref(), Some(&cols), None, |t, i, yhat, jr| {
-        sums.add(y[(t, i)] - yhat, Some(jr))
-    })
-    .unwrap();
-    let plain = sums.finish();
+    for states in [false, true] {
+        let (s, th, recs, ev) = order3(states);
+        let cols = s.columns(&[]);
+        let mut sums = NormalEquations::new(cols.len(), true);
+        for (e, (u, y)) in recs.iter().enumerate() {
+            let x0 = states.then(|| s.initial_state(&th, e));
+            s.run(&th, u.as_ref(), Some(&cols), x0, e, |t, i, yhat, jr| {
+                sums.add(y[(t, i)] - yhat, Some(jr))
+            })
+            .unwrap();
+        }
+        let plain = sums.finish();
+        plain_agrees(&plain, &ev);
+    }
+}
+
+fn plain_agrees(plain: &Evaluation, ev: &Evaluation) {
     let hmax = plain.gauss_newton.norm_max();
     let dh = (&ev.gauss_newton - &plain.gauss_newton).norm_max();
     assert!(dh < 1e-10 * hmax, "H differs by {dh} (max {hmax})");
@@ -345,6 +399,7 @@ fn a_pass_stops_inside_the_record_when_asked() {
         order: 2,
         feedthrough: false,
         offsets: false,
+        initial_states: 0,
     };
     let mut th = vec![-0.5, 0.5];
     th.extend(linear_block());
@@ -362,4 +417,70 @@ fn a_pass_stops_inside_the_record_when_asked() {
     assert_eq!(r, Some(SysidError::Interrupted));
     // outside a scope nothing stops it
     assert!(pr.evaluate(&th, true).is_ok());
+}
+
+/// Two records of the 2 x 2 Hammerstein model starting from different states: with their
+/// initial states estimated (from rest) the model and both states are recovered exactly;
+/// from rest the fit is biased.
+#[test]
+fn records_starting_mid_response_are_fitted_with_their_initial_states() {
+    let mut s = MimoHwStructure {
+        inputs: vec![
+            Nonlinearity::Saturation,
+            Nonlinearity::Polynomial { degree: 3 },
+        ],
+        outputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
+        order: 2,
+        feedthrough: false,
+        offsets: false,
+        initial_states: 0,
+    };
+    let mut truth = vec![-0.5, 0.6, 0.3, -0.2];
+    truth.extend(linear_block());
+    let states = [[3.0, -2.0], [-1.5, 4.0]];
+    let recs: Vec<(Mat<f64>, Mat<f64>)> = states
+        .iter()
+        .enumerate()
+        .map(|(e, x0)| {
+            let u = inputs(300, 11 + e as u64);
+            let y = s.simulate_from(&truth, u.as_ref(), x0).unwrap();
+            (u, y)
+        })
+        .collect();
+    let refs: Vec<_> = recs.iter().map(|(u, y)| (u.as_ref(), y.as_ref())).collect();
+    let mut start = vec![-0.9, 0.9, 0.0, 0.0];
+    start.extend(
+        linear_block()
+            .iter()
+            .enumerate()
+            .map(|(k, v)| v * (1.0 + 0.1 * ((k as f64 * 1.7).sin()))),
+    );
+    let opts = Options {
+        max_iter: 200,
+        ..Options::default()
+    };
+    let zero = estimate_mimo(&s, &refs, &start, &opts, &mut |_| Flow::Continue).unwrap();
+    assert!(zero.cost > 1e-6, "cost from rest {}", zero.cost);
+    s.initial_states = 2;
+    start.extend([0.0; 4]);
+    let sol = estimate_mimo(&s, &refs, &start, &opts, &mut |_| Flow::Continue).unwrap();
+    assert!(sol.cost < 1e-18, "cost {}", sol.cost);
+    let p = sorted_poles(&s, &sol.theta);
+    assert!(
+        (p[0] - 0.5).abs() < 1e-8 && (p[1] - 0.8).abs() < 1e-8,
+        "{p:?}"
+    );
+    for k in 0..4 {
+        assert!(
+            (sol.theta[k] - truth[k]).abs() < 1e-8,
+            "{:?}",
+            &sol.theta[..4]
+        );
+    }
+    // the states in the estimate's basis: the same outputs from them
+    for (e, (u, y)) in recs.iter().enumerate() {
+        let x0 = s.initial_state(&sol.theta, e);
+        let fit = s.simulate_from(&sol.theta, u.as_ref(), x0).unwrap();
+        assert!((&fit - y).norm_max() < 1e-8 * y.norm_max());
+    }
 }
