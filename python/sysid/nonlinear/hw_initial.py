@@ -62,13 +62,17 @@ def free_response_bf(f: np.ndarray, nh: int, n: int) -> np.ndarray:
 
 
 def free_response_ss(a: np.ndarray, c: np.ndarray, n: int) -> np.ndarray:
-    """``(n * p, nx)``: ``C A^t`` stacked sample by sample (outputs fastest)."""
+    """``(n * p, nx)``: ``C A^t`` stacked sample by sample (outputs fastest); the loop stops
+    once the free response has decayed below round-off of its start (zeros after)."""
     p, nx = c.shape
     out = np.zeros((n, p, nx))
     m = c.copy()
+    floor = 1e-17 * max(float(np.abs(c).max()), np.finfo(float).tiny)
     for t in range(n):
         out[t] = m
         m = m @ a
+        if float(np.abs(m).max()) < floor:
+            break
     return out.reshape(n * p, nx)
 
 
