@@ -13,15 +13,16 @@ where the plant's parameters are learnt. An autoregressive model of the errors t
 spectrum is ``H^-1 S_v H^-H``, the model's own (exactly known) ``H^-1`` applied to an
 autoregressive model ``S_v`` of the disturbance ``v = H eps = y - G u`` (the simulation
 errors from the same initial state), whose spectrum is smooth where the errors' is not. The
-errors' own autoregressive model is the alternative; the one of lower AIC (the same Gaussian
-likelihood of the errors: ``H`` is monic and minimum phase) is used, and white errors keep
-the Gauss-Newton covariance.
+errors' own autoregressive model is the alternative; the one of lower BIC (the same Gaussian
+likelihood of the errors: ``H`` is monic and minimum phase; BIC, as errors of a noise model
+that fits are white and should stay so) is used, and white errors keep the Gauss-Newton
+covariance.
 
 On a mass-spring-damper grey box with an AR(1) output disturbance, fitted with a free
 ``K`` (``greyest(..., noise="estimate")``, 200 runs), the Gauss-Newton standard deviations
 of the stiffness and damping were 1.80 and 1.53 times the sample ones (the errors' own
-AR model: 1.57 and 1.34); this covariance gives 1.08 and 0.99, its 95 % intervals covering
-93-96 % (``tests/test_greyest_kalman.py``).
+AR model: 1.57 and 1.34); this covariance gives 1.15 and 1.04, its 95 % intervals covering
+94-96 % (``tests/test_greyest_kalman.py``).
 """
 
 from __future__ import annotations
@@ -80,7 +81,7 @@ def prediction_sandwich(jacobians: Sequence[np.ndarray], errors: Sequence[np.nda
         The criterion's weighting as a matrix ``T`` applied to the errors (``W = T^T T``);
         default the identity.
     max_order : int
-        Highest autoregressive order (chosen by AIC, at most a tenth of the samples).
+        Highest autoregressive order (chosen by BIC, at most a tenth of the samples).
 
     Returns
     -------
@@ -114,11 +115,13 @@ def prediction_sandwich(jacobians: Sequence[np.ndarray], errors: Sequence[np.nda
     if not all(np.all(np.isfinite(x)) for x in [*Js, *es]):
         return None, "gauss-newton, as for white errors: the errors or their Jacobian overflow"
 
+    penalty = float(np.log(total))  # BIC: white errors (a right noise model) stay so
+
     def ar_models(series: Sequence[np.ndarray]) -> tuple[list[Any], float]:
-        fits = [_ar_fit([s[:, k] for s in series], max_order) for k in range(l)]
+        fits = [_ar_fit([s[:, k] for s in series], max_order, penalty) for k in range(l)]
         if any(v <= 0 for _, v, _ in fits):
             return fits, np.inf
-        return fits, float(sum(total * np.log(v) + 2 * p for _, v, p in fits))
+        return fits, float(sum(total * np.log(v) + penalty * p for _, v, p in fits))
 
     own, aic_own = ar_models(es)
     through, aic_through = None, np.inf
