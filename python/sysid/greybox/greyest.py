@@ -222,7 +222,7 @@ def greyest(
                      weighting == "noise")
     best, starts = fit.best_of_starts(max_iter, float(tol), cb, multistart, rng, "loss")
     est = fit.result(best, starts)
-    if focus == "simulation" and not fit.with_k:  # the errors are the disturbance, coloured
+    if not fit.with_k:  # no noise model (either focus): the errors are the disturbance
         from .coloured import coloured_covariance
 
         coloured_covariance(fit, best, est)
