@@ -226,7 +226,7 @@ def greyest(
         from .coloured import coloured_covariance
 
         coloured_covariance(fit, best, est)
-    elif fit.with_k:  # a noise model that may not take the disturbance's shape
+    else:  # a noise model K, which may not take the disturbance's shape
         from .coloured import prediction_covariance
 
         prediction_covariance(fit, best, est)
