@@ -1,4 +1,4 @@
-"""The covariance of a simulation-focus :func:`sysid.greyest` fit whose errors are coloured.
+"""The covariance of a :func:`sysid.greyest` fit whose errors are coloured.
 
 With ``focus="simulation"`` the errors the search minimises are the output disturbance
 itself; its Gauss-Newton covariance assumes them white and was a third of the spread on a
@@ -8,6 +8,10 @@ the sampled model the search simulated, every record, an estimated initial state
 again for every parameter vector (the free parameters' covariance with it profiled out),
 the errors weighted as the criterion weighted them (``weighting="noise"``: the inverse of
 their covariance). ``info["covariance"]`` says which covariance the estimate carries.
+
+With ``focus="prediction"`` and a noise model ``K`` the errors are the one-step prediction
+errors, white only when ``K`` can take the disturbance's shape: :func:`prediction_covariance`
+forms the sandwich of :mod:`sysid.pem.prediction_sandwich` for them.
 """
 
 from __future__ import annotations
@@ -70,12 +74,97 @@ def coloured_covariance(fit: Any, res: dict[str, Any], est: Any) -> None:
                                 dof=unc.dof, undetermined=unc.undetermined)
     got, note = sandwich_covariance(work, sim, [y for _, y in fit.exps], weights)
     est.info["covariance"] = note
-    if got is None:
+    if got is not None:
+        _install(est, fit, got.covariance, got.method, got.dof)
+
+
+def prediction_covariance(fit: Any, res: dict[str, Any], est: Any) -> None:
+    """``est`` (the linear fit ``fit`` with a noise model ``K``, the core's result ``res``)
+    with the sandwich covariance of :func:`sysid.pem.prediction_sandwich.prediction_sandwich`
+    when its prediction errors are coloured (the structure's noise model cannot take the
+    disturbance's shape): formed on every searched quantity (the free parameters, the
+    entries of a free ``K``, estimated initial states), the free parameters' block kept.
+    ``info["covariance"]`` says which covariance the estimate carries."""
+    from ..pem.prediction_sandwich import inverse_noise_response, prediction_sandwich
+    from ..pem.sandwich import MAX_ENTRIES
+
+    n, m, l = fit.n, fit.m, fit.l
+    z_hat = np.asarray(res["p"], float)
+    size = sum(y.shape[0] for _, y in fit.exps) * l * z_hat.size
+    if size > MAX_ENTRIES:
+        est.info["covariance"] = (f"gauss-newton, as for white errors: the coloured-error "
+                                  f"correction would hold {size:.2g} numbers (at most "
+                                  f"{MAX_ENTRIES:.0e})")
         return
-    P = got.covariance
+    if fit.reweight:
+        try:
+            weights: Any = np.linalg.inv(np.linalg.cholesky(
+                np.atleast_2d(np.asarray(res["innovation_covariance"], float))))
+        except np.linalg.LinAlgError:
+            est.info["covariance"] = ("gauss-newton, as for white errors (the errors' "
+                                      "covariance is singular)")
+            return
+    else:
+        weights = None
+
+    def unpack(z: np.ndarray) -> tuple[np.ndarray, ...]:
+        th = fit.theta(z, False)[0]
+        sizes = [n * n, n * m, l * n, l * m, n * l]
+        A, B, C, D, K = (th[a:a + s] for a, s in zip(np.cumsum([0, *sizes[:-1]]), sizes))
+        return (A.reshape(n, n), B.reshape(n, m), C.reshape(l, n), D.reshape(l, m),
+                K.reshape(n, l), th[sum(sizes):])
+
+    def errors(z: np.ndarray, sim: bool = False) -> list[np.ndarray]:
+        A, B, C, D, K, x0s = unpack(z)
+        if sim:  # the disturbance H eps: the simulation errors from the same state
+            ss = StateSpaceModel(A, B, C, D, dt=fit.dt)
+            return [y - ss.simulate(u, x0s[e * n:(e + 1) * n])
+                    for e, (u, y) in enumerate(fit.exps)]
+        pred = StateSpaceModel(A - K @ C, np.hstack([B - K @ D, K]), C,
+                               np.hstack([D, np.zeros((l, l))]), dt=fit.dt)
+        return [y - pred.simulate(np.hstack([u, y]), x0s[e * n:(e + 1) * n])
+                for e, (u, y) in enumerate(fit.exps)]
+
+    with np.errstate(all="ignore"):
+        e_hat = errors(z_hat)
+        cols: list[list[np.ndarray]] = [[] for _ in fit.exps]
+        for i in range(z_hat.size):
+            h = 1e-6 * max(1.0, abs(z_hat[i]))
+            up, dn = z_hat.copy(), z_hat.copy()
+            up[i] += h
+            dn[i] -= h
+            for c, a, b in zip(cols, errors(up), errors(dn)):
+                c.append((a - b) / (2 * h))
+        jac = [np.stack(c, axis=-1) for c in cols]
+        A, _, C, _, K, _ = unpack(z_hat)
+        # the model's noise filter is used where its impulse responses die out within the
+        # shortest record (the plant's poles for the disturbance H eps, the predictor's for
+        # H^-1); else the errors' own AR model alone
+        shortest = min(y.shape[0] for _, y in fit.exps)
+        rho = max(_radius(A), _radius(A - K @ C))
+        usable = rho < 1.0 and rho ** shortest < 1e-3
+        dist = errors(z_hat, sim=True) if usable else None
+    P, note = prediction_sandwich(
+        jac, e_hat, dist, (lambda nfft: inverse_noise_response(A, K, C, nfft)) if usable else
+        None, weights)
+    est.info["covariance"] = note
+    if P is not None:
+        S = np.diag(fit.scale)
+        _install(est, fit, S @ P[:fit.nf, :fit.nf] @ S,
+                 "gauss-newton with coloured prediction errors (sandwich)", None)
+
+
+def _radius(A: np.ndarray) -> float:
+    return float(np.max(np.abs(np.linalg.eigvals(A)), initial=0.0))
+
+
+def _install(est: Any, fit: Any, P: np.ndarray, method: str, dof: int | None) -> None:
+    """``est`` carrying the covariance ``P`` of its free parameters: its ``covariance``,
+    parameter table and model's uncertainty."""
+    unc = est.model.uncertainty
     est.covariance = P
     est.model.uncertainty = ParameterUncertainty(
-        unc.theta, P, unc.build, names=unc.names, dof=got.dof, method=got.method,
+        unc.theta, P, unc.build, names=unc.names, dof=dof, method=method,
         undetermined=unc.undetermined)
     est.parameters = _with_std(est.parameters, fit, P)
 

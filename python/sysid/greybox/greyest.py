@@ -9,7 +9,9 @@ differences of the structure function, Fréchet derivative of the matrix exponen
 nonlinear structure (:class:`sysid.NonlinearGreyBox`) is integrated in the Rust core with all
 finite-difference perturbations at once. Both report the parameters with standard deviations
 from the same Gauss-Newton covariance (the inverse-covariance-weighted criterion, maximum
-likelihood for Gaussian errors).
+likelihood for Gaussian errors); where a linear fit's errors are coloured (simulation errors,
+or prediction errors of a noise model that cannot take the disturbance's shape) the
+sandwich of :mod:`sysid.greybox.coloured` replaces it.
 """
 
 from __future__ import annotations
@@ -220,10 +222,14 @@ def greyest(
                      weighting == "noise")
     best, starts = fit.best_of_starts(max_iter, float(tol), cb, multistart, rng, "loss")
     est = fit.result(best, starts)
-    if focus == "simulation" and not fit.with_k:  # the errors are the disturbance, coloured
+    if not fit.with_k:  # no noise model (either focus): the errors are the disturbance
         from .coloured import coloured_covariance
 
         coloured_covariance(fit, best, est)
+    else:  # a noise model K, which may not take the disturbance's shape
+        from .coloured import prediction_covariance
+
+        prediction_covariance(fit, best, est)
     if periodicity is not None:  # periods="auto" found none: why the time domain
         est.info["periodicity"] = periodicity
     warn_if_capped(est.info, "the greyest search", max_iter)

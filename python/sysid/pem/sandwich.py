@@ -49,11 +49,13 @@ __all__ = ["DeferredSandwich", "DeferredTable", "coloured_error_covariance", "de
 MAX_ENTRIES = 10_000_000
 
 
-def _ar_fit(series: Sequence[np.ndarray], max_order: int) -> tuple[np.ndarray, float, int]:
+def _ar_fit(series: Sequence[np.ndarray], max_order: int,
+            penalty: float = 2.0) -> tuple[np.ndarray, float, int]:
     """An autoregressive model of one process seen on several independent ``series``
     (their autocorrelations pooled, each series about its own mean): Yule-Walker by
-    Levinson-Durbin, the order by AIC up to ``max_order`` and a tenth of the samples (and
-    below the shortest series). Returns its coefficients, its variance and its order."""
+    Levinson-Durbin, the order by AIC (``N log v + penalty * order``; ``penalty=log N``
+    is BIC) up to ``max_order`` and a tenth of the samples (and below the shortest series).
+    Returns its coefficients, its variance and its order."""
     es = [np.asarray(e, float) - np.mean(e) for e in series]
     N = sum(e.size for e in es)
     top = int(min(max_order, N // 10, min(e.size for e in es) - 1))
@@ -73,7 +75,7 @@ def _ar_fit(series: Sequence[np.ndarray], max_order: int) -> tuple[np.ndarray, f
         v *= 1.0 - kap * kap
         if v <= 0:
             break
-        aic = N * np.log(v) + 2 * k
+        aic = N * np.log(v) + penalty * k
         if aic < best[0]:
             best = (aic, k, a.copy(), v)
     _, p, a, v = best
