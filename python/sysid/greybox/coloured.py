@@ -38,16 +38,10 @@ def coloured_covariance(fit: Any, res: dict[str, Any], est: Any) -> None:
     unc = est.model.uncertainty
     n, m, l = fit.n, fit.m, fit.l
     z_hat = np.asarray(res["p"], float)
-    if fit.reweight:
-        lam = np.atleast_2d(np.asarray(res["innovation_covariance"], float))
-        try:
-            weights: Any = np.linalg.inv(np.linalg.cholesky(lam))
-        except np.linalg.LinAlgError:
-            est.info["covariance"] = ("gauss-newton, as for white errors (the errors' "
-                                      "covariance is singular)")
-            return
-    else:
-        weights = None
+    weights = _weights(fit, res)
+    if isinstance(weights, str):
+        est.info["covariance"] = weights
+        return
     estimated = [isinstance(md, str) and md == "estimate" for md in fit.modes]
 
     def sampled(values: np.ndarray) -> np.ndarray:  # free values -> the sampled model, x0s
@@ -96,16 +90,10 @@ def prediction_covariance(fit: Any, res: dict[str, Any], est: Any) -> None:
                                   f"correction would hold {size:.2g} numbers (at most "
                                   f"{MAX_ENTRIES:.0e})")
         return
-    if fit.reweight:
-        try:
-            weights: Any = np.linalg.inv(np.linalg.cholesky(
-                np.atleast_2d(np.asarray(res["innovation_covariance"], float))))
-        except np.linalg.LinAlgError:
-            est.info["covariance"] = ("gauss-newton, as for white errors (the errors' "
-                                      "covariance is singular)")
-            return
-    else:
-        weights = None
+    weights = _weights(fit, res)
+    if isinstance(weights, str):
+        est.info["covariance"] = weights
+        return
 
     def unpack(z: np.ndarray) -> tuple[np.ndarray, ...]:
         th = fit.theta(z, False)[0]
@@ -152,6 +140,19 @@ def prediction_covariance(fit: Any, res: dict[str, Any], est: Any) -> None:
         S = np.diag(fit.scale)
         _install(est, fit, S @ P[:fit.nf, :fit.nf] @ S,
                  "gauss-newton with coloured prediction errors (sandwich)", None)
+
+
+def _weights(fit: Any, res: dict[str, Any]) -> Any:
+    """The errors' weighting of a fit that reweights (the inverse Cholesky factor of the
+    innovations' covariance), None for one that does not, or the reason the Gauss-Newton
+    covariance stays (a singular covariance)."""
+    if not fit.reweight:
+        return None
+    try:
+        return np.linalg.inv(np.linalg.cholesky(
+            np.atleast_2d(np.asarray(res["innovation_covariance"], float))))
+    except np.linalg.LinAlgError:
+        return "gauss-newton, as for white errors (the errors' covariance is singular)"
 
 
 def _radius(A: np.ndarray) -> float:

@@ -635,21 +635,8 @@ mod tests {
                     structure: s,
                     records: vec![(&u, &y)],
                 };
-                let ev = pr.evaluate(&th, true).unwrap();
-                for a in 0..th.len() {
-                    let h = 1e-6;
-                    let (mut tp, mut tm) = (th.clone(), th.clone());
-                    tp[a] += h;
-                    tm[a] -= h;
-                    let fd = (pr.evaluate(&tp, false).unwrap().cost
-                        - pr.evaluate(&tm, false).unwrap().cost)
-                        / (2.0 * h);
-                    let g = ev.gradient[a];
-                    assert!(
-                        (fd - g).abs() < 1e-4 * (1.0 + g.abs()),
-                        "{inp:?}/{out:?} param {a}: fd {fd} vs {g}"
-                    );
-                }
+                let what = format!("{inp:?}/{out:?}");
+                crate::optim::assert_gradient_matches_cost(&mut pr, &th, 1e-4, &what);
             }
         }
     }
@@ -713,21 +700,7 @@ mod tests {
             structure: s,
             records: vec![(&u, &y), (&u2, &y2)],
         };
-        let ev = pr.evaluate(&th, true).unwrap();
-        for a in 0..th.len() {
-            let h = 1e-6;
-            let (mut tp, mut tm) = (th.clone(), th.clone());
-            tp[a] += h;
-            tm[a] -= h;
-            let fd = (pr.evaluate(&tp, false).unwrap().cost
-                - pr.evaluate(&tm, false).unwrap().cost)
-                / (2.0 * h);
-            let g = ev.gradient[a];
-            assert!(
-                (fd - g).abs() < 1e-5 * (1.0 + g.abs()),
-                "param {a}: fd {fd} vs {g}"
-            );
-        }
+        crate::optim::assert_gradient_matches_cost(&mut pr, &th, 1e-5, "");
     }
 
     /// The initial state is SciPy's `lfilter` state of `B/F` with `nk` leading zeros: a

@@ -50,6 +50,31 @@ mod search;
 #[cfg(test)]
 mod tests;
 
+/// Test support: a problem's Gauss-Newton gradient against the central finite differences
+/// of its cost (step `1e-6`), parameter by parameter, to `tol (1 + |g|)`.
+#[cfg(test)]
+pub(crate) fn assert_gradient_matches_cost<P: Problem>(
+    pr: &mut P,
+    th: &[f64],
+    tol: f64,
+    what: &str,
+) {
+    let ev = pr.evaluate(th, true).unwrap();
+    for a in 0..th.len() {
+        let h = 1e-6;
+        let (mut tp, mut tm) = (th.to_vec(), th.to_vec());
+        tp[a] += h;
+        tm[a] -= h;
+        let fd = (pr.evaluate(&tp, false).unwrap().cost - pr.evaluate(&tm, false).unwrap().cost)
+            / (2.0 * h);
+        let g = ev.gradient[a];
+        assert!(
+            (fd - g).abs() < tol * (1.0 + g.abs()),
+            "{what} param {a}: fd {fd} vs {g}"
+        );
+    }
+}
+
 pub use covariance::{covariance, residual_scale, Covariance};
 pub(crate) use dense::{
     clear_upper, flush_tiny, flush_tiny_mat, gram_add, mirror_lower, small_par, symmetric_eigen,

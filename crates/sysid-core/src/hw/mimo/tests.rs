@@ -73,20 +73,7 @@ fn gradient_matches_finite_differences() {
         structure: s,
         records: vec![(u.as_ref(), y.as_ref())],
     };
-    let ev = pr.evaluate(&th, true).unwrap();
-    for a in 0..th.len() {
-        let h = 1e-6;
-        let (mut tp, mut tm) = (th.clone(), th.clone());
-        tp[a] += h;
-        tm[a] -= h;
-        let fd = (pr.evaluate(&tp, false).unwrap().cost - pr.evaluate(&tm, false).unwrap().cost)
-            / (2.0 * h);
-        let g = ev.gradient[a];
-        assert!(
-            (fd - g).abs() < 1e-5 * (1.0 + g.abs()),
-            "param {a}: fd {fd} vs {g}"
-        );
-    }
+    crate::optim::assert_gradient_matches_cost(&mut pr, &th, 1e-5, "");
 }
 
 /// 2 x 2 Hammerstein: saturation on input 0, cubic polynomial on input 1.
