@@ -21,6 +21,7 @@ from .. import _sysid
 from .._checks import check_elements, require_inputs_vary, user_stacklevel
 from ..data.iodata import IOData
 from ..errors import DataError, ExcitationError, NonFiniteError, ShapeError, SysidWarning
+from ..pem.sandwich import _ar_fit
 from .realize import MarkovEstimate, _count
 
 __all__ = ["impulse_response", "okid", "impulse_from_frf"]
@@ -221,39 +222,24 @@ def _fir_residuals(exps: list[tuple[np.ndarray, np.ndarray]], h: np.ndarray,
     return out
 
 
-def _ar_by_bic(res: list[np.ndarray], top: int) -> np.ndarray:
-    """``[1, a_1 .. a_p]`` of the AR model of the residual series, ``p`` in ``0 .. top`` by
-    BIC (least squares over the same samples for every order; several series pooled)."""
-    rows = [np.column_stack([r[top - k:r.size - k] for k in range(top + 1)])
-            for r in res if r.size > 2 * top + 1]
-    if not rows or top == 0:
-        return np.ones(1)
-    z = np.vstack(rows)  # column k: the series delayed k samples
-    big_n = z.shape[0]
-    best, best_bic = np.ones(1), big_n * np.log(max(np.mean(z[:, 0] ** 2), 1e-300))
-    for p in range(1, top + 1):
-        coef = np.linalg.lstsq(-z[:, 1:p + 1], z[:, 0], rcond=None)[0]
-        rss = np.mean((z[:, 0] + z[:, 1:p + 1] @ coef) ** 2)
-        bic = big_n * np.log(max(rss, 1e-300)) + p * np.log(big_n)
-        if bic < best_bic:
-            best, best_bic = np.r_[1.0, coef], bic
-    return best
-
-
 def _prewhitened(exps: list[tuple[np.ndarray, np.ndarray]], h: np.ndarray,
                  info: dict[str, Any], ft: bool, reg: str,
                  hyper: tuple[float, float] | None) -> np.ndarray:
     """The FIR refitted, output by output, on data filtered by the AR polynomial that whitens
-    that output's residuals (:func:`_ar_by_bic`); updates ``info`` (``std``, ``scale``,
-    ``decay``, ``prewhitening``) and returns the Markov parameters. A generalised least
-    squares step: with ``y = H u + v`` and ``A(q) v = e`` white, ``A y = H (A u) + e``."""
+    that output's residuals (the sandwich covariances' autoregression, its order by BIC);
+    updates ``info`` (``std``, ``scale``, ``decay``, ``prewhitening``) and returns the
+    Markov parameters. A generalised least squares step: with ``y = H u + v`` and
+    ``A(q) v = e`` white, ``A y = H (A u) + e``."""
     n, l, _ = h.shape
     shortest = min(u.shape[0] for u, _ in exps)
     top = min(PREWHITEN_MAX, max(0, (shortest - n) // 20))
     h = h.copy()
     polys = []
     for j in range(l):
-        a = _ar_by_bic(_fir_residuals(exps, h, j), top)
+        res = [r for r in _fir_residuals(exps, h, j) if r.size > 2 * top + 1]
+        ar = _ar_fit(res, top, penalty=np.log(sum(r.size for r in res)))[0] if (
+            top and res) else []
+        a = np.r_[1.0, -np.asarray(ar, float)]
         polys.append(a)
         if a.size == 1:
             continue

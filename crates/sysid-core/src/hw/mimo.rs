@@ -27,7 +27,7 @@
 
 use faer::{Mat, MatRef};
 
-use super::Nonlinearity;
+use super::{check_start, Nonlinearity};
 use crate::error::{Result, SysidError};
 use crate::linalg::spectral_radius;
 use crate::optim::{
@@ -479,22 +479,12 @@ pub fn estimate_mimo(
     observer: &mut dyn FnMut(&Iteration) -> Flow,
 ) -> Result<Solution> {
     structure.check()?;
-    if theta0.len() != structure.n_params() {
-        return Err(SysidError::invalid(
-            "theta0",
-            format!("needs {} parameters", structure.n_params()),
-        ));
-    }
-    if structure.initial_states != 0 && structure.initial_states != records.len() {
-        return Err(SysidError::invalid(
-            "initial_states",
-            format!(
-                "one initial state per record ({}) or none, got {}",
-                records.len(),
-                structure.initial_states
-            ),
-        ));
-    }
+    check_start(
+        structure.n_params(),
+        theta0.len(),
+        structure.initial_states,
+        records.len(),
+    )?;
     let (m, p) = (structure.inputs.len(), structure.outputs.len());
     for (u, y) in records {
         crate::error::check_io("u, y", *u, *y, m, p)?;

@@ -520,6 +520,29 @@ impl Problem for HwProblem<'_> {
     }
 }
 
+/// The search's start and records agree: `theta0` has the structure's `n_params`, and the
+/// initial states estimated are one per record or none (both estimators).
+pub(crate) fn check_start(
+    n_params: usize,
+    theta0: usize,
+    initial_states: usize,
+    records: usize,
+) -> Result<()> {
+    if theta0 != n_params {
+        return Err(SysidError::invalid(
+            "theta0",
+            format!("needs {n_params} parameters"),
+        ));
+    }
+    if initial_states != 0 && initial_states != records {
+        return Err(SysidError::invalid(
+            "initial_states",
+            format!("one initial state per record ({records}) or none, got {initial_states}"),
+        ));
+    }
+    Ok(())
+}
+
 /// Prediction-error estimate of a Hammerstein-Wiener model from `theta0` (for example a
 /// linear output-error fit with identity-like nonlinearities).
 ///
@@ -548,22 +571,12 @@ pub fn estimate(
     if structure.nb == 0 {
         return Err(SysidError::invalid("nb", "must be at least 1"));
     }
-    if theta0.len() != structure.n_params() {
-        return Err(SysidError::invalid(
-            "theta0",
-            format!("needs {} parameters", structure.n_params()),
-        ));
-    }
-    if structure.initial_states != 0 && structure.initial_states != records.len() {
-        return Err(SysidError::invalid(
-            "initial_states",
-            format!(
-                "one initial state per record ({}) or none, got {}",
-                records.len(),
-                structure.initial_states
-            ),
-        ));
-    }
+    check_start(
+        structure.n_params(),
+        theta0.len(),
+        structure.initial_states,
+        records.len(),
+    )?;
     for (u, y) in records {
         crate::error::check_io(
             "u, y",
