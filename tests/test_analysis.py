@@ -289,6 +289,31 @@ def test_minreal_keeps_the_noise_model():
     assert det.nstates == 2 and det.K is None
 
 
+def test_minreal_keeps_the_parameter_uncertainty():
+    # minreal returned models without uncertainty: poles(std=True) raised on the result
+    P = np.array([[4e-4, 1e-4], [1e-4, 9e-4]])
+
+    def tf(t):  # t1 (s + 1) / ((s + 1)(s + t0)): the pair at -1 cancels in every draw
+        return sysid.TransferFunction(t[1] * np.array([1.0, 1.0]), np.poly([-1.0, -t[0]]))
+
+    G = tf(np.array([2.0, 3.0]))
+    G.uncertainty = sysid.ParameterUncertainty([2.0, 3.0], P, tf)
+    R = sysid.minreal(G)
+    assert R.den[0][0].size == 2 and R.uncertainty is not None
+    np.testing.assert_allclose(R.poles(std=True)[1].real, [0.02], rtol=1e-5)
+    np.testing.assert_allclose(R.dcgain(std=True)[1], G.dcgain(std=True)[1], rtol=1e-5)
+
+    def ss(t):  # the second state is not reached by the input in any draw
+        return sysid.StateSpaceModel(np.diag([t[0], 0.3]), [[t[1]], [0.0]], [[1.0, 1.0]])
+
+    m = ss(np.array([0.5, 1.0]))
+    m.uncertainty = sysid.ParameterUncertainty([0.5, 1.0], P, ss)
+    r = sysid.minreal(m)
+    assert r.nstates == 1 and r.uncertainty is not None
+    np.testing.assert_allclose(r.poles(std=True)[1].real, [0.02], rtol=1e-5)
+    np.testing.assert_allclose(r.dcgain(std=True)[1], m.dcgain(std=True)[1], rtol=1e-5)
+
+
 def test_integrators_give_sysid_answers_not_numpy_errors():
     # ContinuousStateSpace.dcgain and stepinfo of a discrete integrator raised numpy's
     # LinAlgError; stepinfo reported a peak of 2 at 3.33 s for an unbounded ramp

@@ -6,6 +6,10 @@
   cancels as many times as it occurs in both.
 - State-space models: the controllable and observable part, by two staircase
   (orthogonal Hessenberg) reductions: ``ctrb``/``obsv`` rank decisions from an SVD at ``tol``.
+
+A model with a parameter uncertainty keeps it: each draw is reduced the way the estimate
+was (the same projection of the states; the roots nearest the ones the estimate cancelled
+removed), so its structure does not change from draw to draw.
 """
 
 from __future__ import annotations
@@ -44,29 +48,61 @@ def minreal(sys: Any, tol: float | None = None) -> Any:
     """
     tol = (float(np.sqrt(np.finfo(float).eps)) if tol is None
            else as_real(tol, "tol (or None for the default)", positive=True))
+    from ..models.carried import carry
     from ..tf.model import TransferFunction
 
     if isinstance(sys, TransferFunction):
-        return _tf(sys, tol)
+        plan = _tf_plan(sys, tol)
+        return carry(sys, _tf(sys, plan), lambda d: _tf(d, plan))
     if hasattr(sys, "A") and hasattr(sys, "B") and hasattr(sys, "C"):
         check_start(sys, None, "minreal", role="model")
-        return _ss(sys, tol)
+        K = getattr(sys, "K", None)
+        # an innovations-form model: the noise enters through K, so the states it reaches
+        # are kept too (the noise model and the predictor survive)
+        BK = sys.B if K is None else np.hstack([np.asarray(sys.B, float), np.asarray(K, float)])
+        T = minimal_basis(np.asarray(sys.A, float), np.asarray(BK, float),
+                          np.asarray(sys.C, float), tol)
+        return carry(sys, _ss(sys, T), lambda d: _ss(d, T))
     raise DataError(f"minreal needs a TransferFunction or a state-space model, got "
                     f"{type(sys).__name__}")
 
 
-def _tf(G: Any, tol: float) -> Any:
+def _tf_plan(G: Any, tol: float) -> list[list[tuple[np.ndarray, np.ndarray]]]:
+    """Per channel, the zeros and the poles that cancel (their values)."""
+    plan = []
+    for i in range(G.noutputs):
+        row = []
+        for j in range(G.ninputs):
+            z, p = np.roots(G.num[i][j]), np.roots(G.den[i][j])
+            zk, pk = _cancel(z, p, tol)
+            row.append((_drop(z, zk), _drop(p, pk)))
+        plan.append(row)
+    return plan
+
+
+def _drop(r: np.ndarray, gone: np.ndarray) -> np.ndarray:
+    """``r`` without the root nearest each of ``gone`` (one each)."""
+    left = list(np.asarray(r, complex))
+    for g in np.asarray(gone, complex):
+        if left:
+            left.pop(int(np.argmin([abs(x - g) for x in left])))
+    return np.array(left, dtype=complex)
+
+
+def _tf(G: Any, plan: list[list[tuple[np.ndarray, np.ndarray]]]) -> Any:
+    """``G`` with, in each channel, the roots nearest the planned cancelling ones removed."""
     from ..tf.model import TransferFunction
 
     nums, dens = [], []
     for i in range(G.noutputs):
         rn, rd = [], []
         for j in range(G.ninputs):
-            num, den = G.num[i][j], G.den[i][j]
-            z, p = _cancel(np.roots(num), np.roots(den), tol)
+            num, den = np.asarray(G.num[i][j], float), np.asarray(G.den[i][j], float)
+            zc, pc = plan[i][j]
+            z, p = _drop(np.roots(num), zc), _drop(np.roots(den), pc)
             k0 = num[0] if num.size else 0.0
             rn.append(np.real(k0 * np.poly(z)) if z.size else np.array([k0]))
-            rd.append(np.real(np.poly(p)) if p.size else np.ones(1))
+            rd.append(np.real(den[0] * np.poly(p)) if p.size else den[:1].copy())
         nums.append(rn)
         dens.append(rd)
     return TransferFunction(nums, dens, dt=G.dt, iodelay=G.iodelay, hold=G.hold,
@@ -139,13 +175,10 @@ def _cancel(z: np.ndarray, p: np.ndarray, tol: float) -> tuple[np.ndarray, np.nd
     return np.array(zs, dtype=complex), np.array(keep, dtype=complex)
 
 
-def _ss(sys: Any, tol: float) -> Any:
+def _ss(sys: Any, T: np.ndarray) -> Any:
+    """``sys`` projected on the states ``T`` (orthonormal columns) keeps."""
     A, B, C, D = (np.asarray(x, float) for x in (sys.A, sys.B, sys.C, sys.D))
     K = getattr(sys, "K", None)
-    # an innovations-form model: the noise enters through K, so the states it reaches are
-    # kept too (the noise model and the predictor survive)
-    BK = B if K is None else np.hstack([B, np.asarray(K, float)])
-    T = minimal_basis(A, BK, C, tol)
     A2, B2, C2 = T.T @ A @ T, T.T @ B, C @ T
     kw = {"input_names": sys.input_names, "output_names": sys.output_names}
     from ..models.continuous import ContinuousStateSpace
