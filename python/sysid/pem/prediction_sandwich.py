@@ -23,6 +23,14 @@ On a mass-spring-damper grey box with an AR(1) output disturbance, fitted with a
 of the stiffness and damping were 1.80 and 1.53 times the sample ones (the errors' own
 AR model: 1.57 and 1.34); this covariance gives 1.15 and 1.04, its 95 % intervals covering
 94-96 % (``tests/test_greyest_kalman.py``).
+
+A free state-space fit (:func:`sysid.pem`, :func:`sysid.ssest`, ``focus="prediction"``, the
+default) has the same noise model: :func:`defer_prediction` forms this covariance when its
+uncertainty is first used, along the Gauss-Newton covariance's identifiable directions. On a
+second-order plant with poles ``0.95 exp(+-0.5 i)`` and an AR(1) disturbance (200 runs of
+1000 samples) the Gauss-Newton std of the pole's radius and angle were 1.72 and 1.55 times
+the sample ones; this covariance gives 1.02 and 0.94, covering 92-94 %
+(``tests/test_ssest_prediction_coloured.py``).
 """
 
 from __future__ import annotations
