@@ -311,7 +311,8 @@ def defer_prediction(out: Any, res: dict[str, Any], records: Records, est_x0: Se
     def form() -> tuple[ParameterUncertainty | None, str]:
         work = ParameterUncertainty(base.theta, base.covariance, unpack, names=base.names,
                                     dof=base.dof)
-        w, V = work._eigen()
+        w, V = base._eigen()  # its identifiable directions, computed once
+        work._eig = (w, V)
         if sum(lens) * l * w.size > MAX_ENTRIES:
             return None, (f"gauss-newton, as for white errors: the coloured-error correction "
                           f"would hold {sum(lens) * l * w.size:.2g} numbers (at most "
