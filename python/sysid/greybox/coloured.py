@@ -79,7 +79,7 @@ def prediction_covariance(fit: Any, res: dict[str, Any], est: Any) -> None:
     disturbance's shape): formed on every searched quantity (the free parameters, the
     entries of a free ``K``, estimated initial states), the free parameters' block kept.
     ``info["covariance"]`` says which covariance the estimate carries."""
-    from ..pem.prediction_sandwich import inverse_noise_response, prediction_sandwich
+    from ..pem.prediction_sandwich import prediction_errors, state_space_sandwich
     from ..pem.sandwich import MAX_ENTRIES
 
     n, m, l = fit.n, fit.m, fit.l
@@ -95,26 +95,19 @@ def prediction_covariance(fit: Any, res: dict[str, Any], est: Any) -> None:
         est.info["covariance"] = weights
         return
 
-    def unpack(z: np.ndarray) -> tuple[np.ndarray, ...]:
+    def unpack(z: np.ndarray) -> tuple[Any, ...]:  # A, B, C, D, K, each record's x0
         th = fit.theta(z, False)[0]
         sizes = [n * n, n * m, l * n, l * m, n * l]
         A, B, C, D, K = (th[a:a + s] for a, s in zip(np.cumsum([0, *sizes[:-1]]), sizes))
+        x0 = th[sum(sizes):]
         return (A.reshape(n, n), B.reshape(n, m), C.reshape(l, n), D.reshape(l, m),
-                K.reshape(n, l), th[sum(sizes):])
+                K.reshape(n, l), [x0[e * n:(e + 1) * n] for e in range(len(fit.exps))])
 
-    def errors(z: np.ndarray, sim: bool = False) -> list[np.ndarray]:
+    def errors(z: np.ndarray) -> list[np.ndarray]:
         A, B, C, D, K, x0s = unpack(z)
-        if sim:  # the disturbance H eps: the simulation errors from the same state
-            ss = StateSpaceModel(A, B, C, D, dt=fit.dt)
-            return [y - ss.simulate(u, x0s[e * n:(e + 1) * n])
-                    for e, (u, y) in enumerate(fit.exps)]
-        pred = StateSpaceModel(A - K @ C, np.hstack([B - K @ D, K]), C,
-                               np.hstack([D, np.zeros((l, l))]), dt=fit.dt)
-        return [y - pred.simulate(np.hstack([u, y]), x0s[e * n:(e + 1) * n])
-                for e, (u, y) in enumerate(fit.exps)]
+        return prediction_errors(A, B, C, D, K, fit.exps, x0s)
 
     with np.errstate(all="ignore"):
-        e_hat = errors(z_hat)
         cols: list[list[np.ndarray]] = [[] for _ in fit.exps]
         for i in range(z_hat.size):
             h = 1e-6 * max(1.0, abs(z_hat[i]))
@@ -124,17 +117,8 @@ def prediction_covariance(fit: Any, res: dict[str, Any], est: Any) -> None:
             for c, a, b in zip(cols, errors(up), errors(dn)):
                 c.append((a - b) / (2 * h))
         jac = [np.stack(c, axis=-1) for c in cols]
-        A, _, C, _, K, _ = unpack(z_hat)
-        # the model's noise filter is used where its impulse responses die out within the
-        # shortest record (the plant's poles for the disturbance H eps, the predictor's for
-        # H^-1); else the errors' own AR model alone
-        shortest = min(y.shape[0] for _, y in fit.exps)
-        rho = max(_radius(A), _radius(A - K @ C))
-        usable = rho < 1.0 and rho ** shortest < 1e-3
-        dist = errors(z_hat, sim=True) if usable else None
-    P, note = prediction_sandwich(
-        jac, e_hat, dist, (lambda nfft: inverse_noise_response(A, K, C, nfft)) if usable else
-        None, weights)
+    A, B, C, D, K, x0s = unpack(z_hat)
+    P, note = state_space_sandwich(jac, A, B, C, D, K, fit.exps, x0s, weights)
     est.info["covariance"] = note
     if P is not None:
         S = np.diag(fit.scale)
@@ -153,10 +137,6 @@ def _weights(fit: Any, res: dict[str, Any]) -> Any:
             np.atleast_2d(np.asarray(res["innovation_covariance"], float))))
     except np.linalg.LinAlgError:
         return "gauss-newton, as for white errors (the errors' covariance is singular)"
-
-
-def _radius(A: np.ndarray) -> float:
-    return float(np.max(np.abs(np.linalg.eigvals(A)), initial=0.0))
 
 
 def _install(est: Any, fit: Any, P: np.ndarray, method: str, dof: int | None) -> None:

@@ -679,6 +679,11 @@ def pem(
                  for md, x in zip(modes, x0s)]  # the estimated refitted for every draw
         defer_state_space(out, list(_experiments(st.record).experiments), weighting,
                           units.sy, fixed)
+    elif focus == "prediction":  # the sandwich where K cannot take the errors' shape
+        from .prediction_sandwich import defer_prediction
+
+        defer_prediction(out, res, list(data.experiments), est_x0, bool(feedthrough),
+                         estimate_k and K is not None, weighting)
     return out
 
 
