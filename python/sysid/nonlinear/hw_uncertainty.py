@@ -24,10 +24,13 @@ Gauss-Newton array (as before); ``info["covariance_method"]`` says which covaria
 uncertainty is. :func:`sysid.save_model` writes it (the stored numbers are linear in the
 parameters: the saved map is exact).
 
-Measured (``tests/test_hw_uncertainty.py``): a Hammerstein model (a cubic polynomial input
-nonlinearity, a first-order block) with an AR(1) output disturbance, 200 Monte Carlo runs:
-the Gauss-Newton standard deviation of the pole was about half the sample one; the sandwich
-is within 20 % of it and its 95 % intervals cover 90-99 % of the runs.
+Measured (``tests/test_hw_uncertainty.py``, 200 Monte Carlo runs of 1000 samples): a
+Hammerstein model (``x + 0.2 x^2 + 0.3 x^3`` into ``0.5 q^-1 / (1 - 0.8 q^-1)``) with an
+AR(1) output disturbance (pole 0.9). The Gauss-Newton standard deviations of the pole and of
+the steady output at ``u = 0.5`` were 0.40 and 0.35 of the sample ones (95 % intervals
+covering 58 % and 52 % of the runs); the sandwich's are 0.95 and 0.97 of them, covering
+93.5 % and 94 % (``nlhw_ss``: 0.93 and 0.93, covering 93 % and 93.5 %). White noise: 1.00
+and 0.92, covering 93.5 %, as Gauss-Newton's.
 """
 
 from __future__ import annotations
