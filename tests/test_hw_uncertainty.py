@@ -100,6 +100,32 @@ def test_nlhw_ss_sandwich_matches_the_spread_under_coloured_noise():
     assert np.all(gn.mean(axis=0) < 0.6 * sample)
 
 
+def test_nlhw_sandwich_with_estimated_initial_states():
+    # two records of 500 samples that start mid-response (after 100 samples about -1.5 and
+    # +1.5), their initial states estimated: the states are profiled out of the sandwich
+    # (to first order), which matches the spread of the pole and the steady output
+    rng = np.random.default_rng(11)
+    est, sd = [], []
+    for _ in range(200):
+        us, ys = [], []
+        for k in range(2):
+            u = rng.uniform(-1, 1, 600)
+            u[:100] += 1.5 if k else -1.5
+            x = lfilter([0.0, B0], [1.0, F1], u + C2 * u**2 + C3 * u**3)[100:]
+            v = lfilter([1.0], [1.0, -0.9], 0.05 * rng.standard_normal(500))
+            us.append(u[100:])
+            ys.append(x + v)
+        m = sysid.nlhw(sysid.IOData(us, ys, 1.0), 1, 1, 1, offsets=False, output_nl=None,
+                       input_nl=sysid.PolynomialNonlinearity(3), initial_condition="estimate")
+
+        def fn(g):
+            return np.r_[g.poles().real, _level(g)]
+        p = m.uncertainty.propagate(fn)
+        est.append(p.value)
+        sd.append(p.std)
+    _check(np.array(est), np.array(sd))
+
+
 def test_both_families_agree_and_report_which_covariance():
     rng = np.random.default_rng(3)
     u, y = _record(rng, 800, 0.9)
@@ -196,4 +222,16 @@ def test_pole_std_of_a_hand_built_model_names_the_fix():
     sat.params = sat.initial(None)
     m = sysid.HammersteinWienerModel(sat, None, [1.0], [-0.5], 1, 1.0)
     with pytest.raises(sysid.DataError, match="sysid.nlhw and sysid.nlhw_ss attach"):
+        m.poles(std=True)
+
+
+def test_a_fit_whose_gauss_newton_matrix_is_not_finite_stands_without_one():
+    # the core now returns None for it (nlhw raised before, nlhw_ss had no covariance)
+    from sysid.nonlinear.hw_uncertainty import attach
+
+    m = sysid.HammersteinWienerModel(None, None, [1.0], [-0.5], 1, 1.0)
+    u = np.random.default_rng(0).standard_normal(50)
+    attach(m, None, [(u, m.simulate(u))], None)
+    assert "uncertainty" not in m.__dict__ and m.info["uncertainty"]["method"] == "none"
+    with pytest.raises(sysid.DataError, match="not finite"):
         m.poles(std=True)
