@@ -548,6 +548,8 @@ def narx_predict(
     horizon: int,
     custom_fns: list[Callable[..., float]] = ...,
 ) -> _Array: ...
+# hw_estimate / hw_mimo_estimate: theta, cost, history, iterations, stop, noise_variance and
+# covariance (the model parameters' marginal Gauss-Newton one; None where not finite)
 def hw_estimate(
     records: list[tuple[_Array, _Array]],
     input: tuple[str, int, list[float]],

@@ -64,7 +64,8 @@ fn options(max_iter: usize, tol: f64) -> Options {
 /// iterations, stop, covariance). With `offset`, `theta` ends with the output offset; with
 /// `initial_state`, then with each record's initial state (`max(nf, nk + nb - 1)` entries),
 /// and the covariance is the marginal one of the model's parameters (the states a
-/// nuisance).
+/// nuisance). `covariance` is None where the Gauss-Newton matrix at the estimate is not
+/// finite (the search's sensitivities overflow there): the estimate stands without it.
 #[pyfunction]
 #[pyo3(signature = (records, input, output, nb, nf, nk, theta0, max_iter=100, tol=1e-10, progress=None, offset=false, initial_state=false))]
 #[allow(clippy::too_many_arguments)]
@@ -93,15 +94,20 @@ pub fn hw_estimate<'py>(
     })?;
     let n: usize = data.iter().map(|d| d.0.len()).sum();
     let var = 2.0 * sol.cost / (n.saturating_sub(theta0.len()).max(1)) as f64;
-    let cov = covariance(sol.gauss_newton.as_ref(), var, 1e-10).py()?;
-    // the marginal covariance of the model's parameters: the leading block of the joint one
+    // the marginal covariance of the model's parameters: the leading block of the joint
+    // one; None where the Gauss-Newton matrix is not finite (the estimate stands, without)
     let pm = s.n_model();
-    let cov = cov.covariance.as_ref().submatrix(0, 0, pm, pm).to_owned();
+    let cov = covariance(sol.gauss_newton.as_ref(), var, 1e-10)
+        .ok()
+        .map(|c| c.covariance.as_ref().submatrix(0, 0, pm, pm).to_owned());
     let d = PyDict::new(py);
     search_items(&d, py, &sol)?;
     d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
     d.set_item("noise_variance", var)?;
-    d.set_item("covariance", mat_to_numpy(py, &cov))?;
+    match cov {
+        Some(c) => d.set_item("covariance", mat_to_numpy(py, &c))?,
+        None => d.set_item("covariance", py.None())?,
+    }
     Ok(d)
 }
 
@@ -156,9 +162,13 @@ fn mimo_structure(
 }
 
 /// MIMO Hammerstein-Wiener (state-space linear block) prediction-error estimate from
-/// `theta0`; returns a dict (theta, cost, history, iterations, stop, noise_variance). With
-/// `offsets`, `theta` ends with one output offset per output; with `initial_state`, then
-/// with each record's initial state (`order` entries).
+/// `theta0`; returns a dict (theta, cost, history, iterations, stop, noise_variance,
+/// covariance). With `offsets`, `theta` ends with one output offset per output; with
+/// `initial_state`, then with each record's initial state (`order` entries), and the
+/// covariance is the marginal one of the model's parameters (the states a nuisance). The
+/// similarity directions of the free `A, B, C` are not determined: the covariance is the
+/// pseudo-inverse's, zero along them. `covariance` is None where the Gauss-Newton matrix
+/// at the estimate is not finite.
 #[pyfunction]
 #[pyo3(signature = (records, inputs, outputs, order, feedthrough, theta0, max_iter=100, tol=1e-10, progress=None, offsets=false, initial_state=false))]
 #[allow(clippy::too_many_arguments)]
@@ -185,10 +195,19 @@ pub fn hw_mimo_estimate<'py>(
     })?;
     let n: usize = refs.iter().map(|(_, y)| y.nrows() * y.ncols()).sum();
     let var = 2.0 * sol.cost / (n.saturating_sub(theta0.len()).max(1)) as f64;
+    // as `hw_estimate`'s: the marginal covariance, or None
+    let pm = s.n_model();
+    let cov = covariance(sol.gauss_newton.as_ref(), var, 1e-10)
+        .ok()
+        .map(|c| c.covariance.as_ref().submatrix(0, 0, pm, pm).to_owned());
     let d = PyDict::new(py);
     search_items(&d, py, &sol)?;
     d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
     d.set_item("noise_variance", var)?;
+    match cov {
+        Some(c) => d.set_item("covariance", mat_to_numpy(py, &c))?,
+        None => d.set_item("covariance", py.None())?,
+    }
     Ok(d)
 }
 

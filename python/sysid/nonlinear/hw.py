@@ -38,6 +38,7 @@ from .hw_model import (
     check_search_size,
     output_amplitudes,
 )
+from .hw_uncertainty import attach
 from .operating_point import better_of_both, centred, record_means, undecided, use_offsets
 
 __all__ = ["nlhw"]
@@ -118,8 +119,13 @@ def nlhw(
     HammersteinWienerModel
         With ``info``: ``iterations``, ``cost`` (``1/2 sum e^2`` at the start and after each
         iteration of the chosen start's search), ``criterion``, ``stop`` (reason), the start,
-        and the parameter covariance in ``info["covariance"]`` (over ``theta``, then the
-        output level when it is estimated; with estimated initial states, the marginal one).
+        and the Gauss-Newton parameter covariance in ``info["covariance"]`` (over ``theta``,
+        then the output level when it is estimated; with estimated initial states, the
+        marginal one). ``model.uncertainty`` (a :class:`~sysid.ParameterUncertainty` over the
+        same parameters, ``build(theta)`` the model) carries it, becoming the sandwich
+        covariance for coloured simulation errors when first used
+        (:mod:`sysid.nonlinear.hw_uncertainty`; ``info["covariance_method"]`` says which):
+        ``model.poles(std=True)``, ``model.uncertainty.propagate(fn)`` for anything else.
 
     Warns
     -----
@@ -178,6 +184,7 @@ def nlhw(
             output_nl=copy.deepcopy(output_nl), max_iter=max_iter, tol=tol, progress=progress,
             offsets=o, initial_condition=ic))
     shift = use_offsets(offsets, [fin, fout], exps)
+    raw = exps  # the record in its own units: the covariance's simulation errors
     u0, y0 = record_means(exps) if shift else (np.zeros(1), np.zeros(1))
     if shift:
         exps = centred(exps, u0, y0)
@@ -280,15 +287,17 @@ def nlhw(
             "remaining_decrease": float(res["remaining_decrease"]),
             "cost": list(res["history"]), "criterion": "sum of squares", "theta0": theta0,
             "n_starts": len(fin.starts(u_all)) * len(fout.starts(x_all)) + int(linear_pair),
-            "covariance": np.asarray(res["covariance"]),
+            "covariance": None if res["covariance"] is None else np.asarray(res["covariance"]),
             "u_range": (float(u_all.min()), float(u_all.max())),
             "x_range": (float(x_all.min()), float(x_all.max())), "n_output_params": nbeta,
             "offsets": {"removed": shift, "u": float(u0[0]), "y": float(y0[0] + level),
                         "y_estimated": shift},
             "initial_condition": ic, "initial_state": [h.copy() for h in states]}
     warn_if_capped(info, "the nlhw search", int(max_iter), n_residuals=n_samples)
-    return HammersteinWienerModel(fin, fout, b, f, int(nk), dt,
-                                  u_offset=float(u0[0]), y_offset=float(y0[0] + level),
-                                  noise_variance=float(res["noise_variance"]), info=info,
-                                  input_names=getattr(data, "input_names", None),
-                                  output_names=getattr(data, "output_names", None))
+    model = HammersteinWienerModel(fin, fout, b, f, int(nk), dt,
+                                   u_offset=float(u0[0]), y_offset=float(y0[0] + level),
+                                   noise_variance=float(res["noise_variance"]), info=info,
+                                   input_names=getattr(data, "input_names", None),
+                                   output_names=getattr(data, "output_names", None))
+    attach(model, res["covariance"], raw, list(states) if estimate_x0 else None)
+    return model

@@ -17,7 +17,7 @@ from .. import _sysid
 from .._checks import as_2d, as_count, as_matrix, check_elements
 from .._measured import as_horizon, as_measured, predict_args
 from ..errors import DataError, ShapeError
-from ..models.protocol import ModelMixin, no_pole_std
+from ..models.protocol import ModelMixin
 
 __all__ = ["Nonlinearity", "Saturation", "DeadZone", "PolynomialNonlinearity",
            "PiecewiseLinear", "SigmoidNetwork", "UserFunction", "HammersteinWienerModel"]
@@ -407,6 +407,40 @@ def output_amplitudes(outputs: list[Any], y: np.ndarray) -> None:
             g.amplitude = sd if np.isfinite(sd) and sd > 0 else 1.0
 
 
+def with_linear_uncertainty(model: Any, linear: Any) -> Any:
+    """``linear`` (``model.linear()``'s block) carrying ``model``'s uncertainty seen
+    through ``linear()`` (a deferred sandwich stays deferred); itself when there is none."""
+    unc = model.__dict__.get("uncertainty")
+    if unc is not None:
+        from ..pem.sandwich import through_deferred
+
+        linear.uncertainty = through_deferred(unc, lambda m: m.linear())
+    return linear
+
+
+def linear_with_std(model: Any) -> Any:
+    """``model.linear()`` with the uncertainty of ``model`` formed first (a clear error
+    without one): for ``poles(std=True)`` and ``freqresp(omega, std=True)``."""
+    from ..models.uncertainty import form_deferred, require
+
+    info = getattr(model, "info", None) or {}
+    if getattr(model, "uncertainty", None) is None and not isinstance(
+            info.get("uncertainty"), dict):
+        raise DataError(f"{type(model).__name__}: std=True needs the parameter uncertainty "
+                        "that sysid.nlhw and sysid.nlhw_ss attach (model.uncertainty); this "
+                        "model carries none (built by hand, or saved without it)")
+    require(model)  # names why the fit attached none
+    form_deferred(model)
+    return model.linear()
+
+
+def uncertainty_lines(model: Any) -> list[str]:
+    """The parameter table with standard deviations for ``summary()`` (none without an
+    uncertainty)."""
+    unc = model.__dict__.get("uncertainty")
+    return [] if unc is None else ["  parameters:", unc.summary(max_rows=20)]
+
+
 _KINDS = {c.kind: c for c in (Nonlinearity, Saturation, DeadZone, PolynomialNonlinearity,
                               PiecewiseLinear, SigmoidNetwork)}
 
@@ -526,6 +560,49 @@ class HammersteinWienerModel(ModelMixin):
         return int(self.theta.size) + bool(dict(self.info.get("offsets") or {}).get(
             "y_estimated"))
 
+    def _level_estimated(self) -> bool:
+        return bool(dict(self.info.get("offsets") or {}).get("y_estimated"))
+
+    def _searched(self) -> np.ndarray:
+        """The parameters the search estimated: ``theta``, then ``y_offset`` when the output
+        level was estimated (:mod:`sysid.nonlinear.hw_uncertainty`)."""
+        return np.concatenate([self.theta, [self.y_offset] * self._level_estimated()])
+
+    def _searched_names(self) -> list[str]:
+        return self._names() + ["y_offset"] * self._level_estimated()
+
+    def _names(self) -> list[str]:
+        return ([f"input[{k}]" for k in range(self.input_nl.params.size)]
+                + [f"b{k}" for k in range(self.b.size)]
+                + [f"f{k + 1}" for k in range(self.f.size)]
+                + [f"output[{k}]" for k in range(self.output_nl.params.size)])
+
+    def _rebuilt(self, theta: Any) -> HammersteinWienerModel:
+        """The model with the searched parameters ``theta`` (:meth:`_searched`'s order): the
+        ``build`` of its uncertainty."""
+        import copy
+
+        t = np.asarray(theta, float).ravel()
+        fin, fout = copy.deepcopy(self.input_nl), copy.deepcopy(self.output_nl)
+        cuts = np.cumsum([fin.params.size, self.b.size, self.f.size, fout.params.size])
+        fin.params, b, f, fout.params = (t[:cuts[0]], t[cuts[0]:cuts[1]], t[cuts[1]:cuts[2]],
+                                         t[cuts[2]:cuts[3]])
+        return HammersteinWienerModel(
+            fin, fout, b, f, self.nk, self.dt, noise_variance=self.noise_variance,
+            info={"offsets": self.info.get("offsets")}, input_names=self.input_names,
+            output_names=self.output_names, u_offset=self.u_offset,
+            y_offset=float(t[-1]) if self._level_estimated() else self.y_offset)
+
+    def _from_state(self, u: Any, h: Any) -> np.ndarray:
+        """``(n, 1)``: the output from the estimator's initial state ``h`` (``max(nf, nk + nb
+        - 1)`` coefficients acting on the first samples, ``info["initial_state"]``)."""
+        from .hw_initial import free_response_bf
+
+        _, _, x = self.signals(u)
+        h = np.asarray(h, float).ravel()
+        free = free_response_bf(self.f, h.size, x.size) @ h
+        return (np.asarray(self.output_nl(x + free), float) + self.y_offset)[:, None]
+
     def _u(self, u: Any) -> np.ndarray:
         # complex, NaN or Inf, a wrong shape: an error naming u, not NaN outputs
         u = as_2d(u, "u", ncols=1)[:, 0]
@@ -570,18 +647,26 @@ class HammersteinWienerModel(ModelMixin):
         return self.simulate(u, x0)
 
     def linear(self) -> Any:
-        """The linear block ``B/F`` as a :class:`~sysid.PolynomialModel`."""
+        """The linear block ``B/F`` as a :class:`~sysid.PolynomialModel` (with the
+        uncertainty of its coefficients when the model carries one)."""
         from ..polynomial.model import PolynomialModel
 
-        return PolynomialModel([[np.zeros(0)]], [[self.b]], [[self.nk]], self.dt, f=[[self.f]])
+        out = PolynomialModel([[np.zeros(0)]], [[self.b]], [[self.nk]], self.dt, f=[[self.f]])
+        return with_linear_uncertainty(self, out)
 
-    def freqresp(self, omega: Any) -> np.ndarray:
-        """Frequency response of the linear block (between the nonlinearities)."""
+    def freqresp(self, omega: Any, std: bool = False) -> Any:
+        """Frequency response of the linear block (between the nonlinearities); with
+        ``std=True`` (needs ``uncertainty``) the pair ``(H, sd)`` as for
+        :meth:`sysid.PolynomialModel.freqresp`."""
+        if std:
+            return linear_with_std(self).freqresp(omega, std=True)
         return np.asarray(self.linear().freqresp(omega))
 
-    def poles(self, std: bool = False) -> np.ndarray:
-        """Poles of the linear block (roots of ``F``)."""
-        no_pole_std(self, std)
+    def poles(self, std: bool = False) -> Any:
+        """Poles of the linear block (roots of ``F``); with ``std=True`` (needs
+        ``uncertainty``) the pair ``(poles, sd)`` as for :meth:`sysid.PolynomialModel.poles`."""
+        if std:
+            return linear_with_std(self).poles(std=True)
         return np.roots(np.concatenate([[1.0], self.f])).astype(complex) if self.f.size \
             else np.zeros(0, complex)
 
@@ -595,7 +680,7 @@ class HammersteinWienerModel(ModelMixin):
                           f"y0 = {self.y_offset:.6g}",
                           f"  residual variance {self.noise_variance:.4g}, "
                           f"{self.info.get('iterations', '-')} iterations "
-                          f"({self.info.get('stop', '-')})"])
+                          f"({self.info.get('stop', '-')})"] + uncertainty_lines(self))
 
     def __repr__(self) -> str:
         ident_in, ident_out = (type(f) is Nonlinearity for f in (self.input_nl, self.output_nl))
@@ -606,14 +691,15 @@ class HammersteinWienerModel(ModelMixin):
                 f"nk={self.nk}, dt={self.dt:g})")
 
     def to_pandas(self) -> Any:
-        """Parameters as a table."""
+        """Parameters as a table (with their standard deviations when the model carries an
+        uncertainty; the estimated output level is the uncertainty's last row)."""
         import pandas as pd
 
-        names = ([f"input[{k}]" for k in range(self.input_nl.params.size)]
-                 + [f"b{k}" for k in range(self.b.size)]
-                 + [f"f{k + 1}" for k in range(self.f.size)]
-                 + [f"output[{k}]" for k in range(self.output_nl.params.size)])
-        return pd.DataFrame({"parameter": names, "value": self.theta})
+        out = pd.DataFrame({"parameter": self._names(), "value": self.theta})
+        unc = getattr(self, "uncertainty", None)
+        if unc is not None:
+            out["std"] = unc.std[:self.theta.size]
+        return out
 
     def plot(self, fig: Any = None) -> Any:
         """The two nonlinearities over the range seen in estimation; returns the figure."""

@@ -32,6 +32,7 @@ from ..errors import DataError
 from .hw_initial import check_initial, free_response_ss, least_squares_states
 from .hw_model import Nonlinearity, UserFunction, check_search_size, output_amplitudes
 from .hw_ss_model import HammersteinWienerSSModel
+from .hw_uncertainty import attach
 from .operating_point import better_of_both, centred, record_means, undecided, use_offsets
 
 __all__ = ["nlhw_ss"]
@@ -115,7 +116,13 @@ def nlhw_ss(
     -------
     HammersteinWienerSSModel
         With ``info``: ``iterations``, ``cost`` (``1/2 sum |e|^2`` at the start and after each
-        iteration of the chosen start's search), ``criterion``, ``stop`` (reason), the start.
+        iteration of the chosen start's search), ``criterion``, ``stop`` (reason), the start,
+        and the Gauss-Newton parameter covariance in ``info["covariance"]`` (over ``theta``,
+        then the outputs' levels when estimated; the pseudo-inverse's, zero along the
+        similarity directions of ``A, B, C``; with estimated initial states, the marginal
+        one). ``model.uncertainty`` carries it as for :func:`sysid.nlhw` (the sandwich for
+        coloured simulation errors when first used, :mod:`sysid.nonlinear.hw_uncertainty`):
+        ``model.poles(std=True)``, ``model.uncertainty.propagate(fn)`` for anything else.
 
     Warns
     -----
@@ -180,6 +187,7 @@ def nlhw_ss(
             feedthrough=feedthrough, max_iter=max_iter, tol=tol, progress=progress,
             linear=linear, offsets=o, initial_condition=ic))
     shift = use_offsets(offsets, fin + fout, exps)
+    raw = exps  # the record in its own units: the covariance's simulation errors
     u0, y0 = record_means(exps) if shift else (np.zeros(m), np.zeros(p))
     if shift:
         exps = centred(exps, u0, y0)
@@ -313,12 +321,15 @@ def nlhw_ss(
             "v_ranges": [(float(c.min()), float(c.max())) for c in v_all.T],
             "offsets": {"removed": shift, "u": u0.tolist(), "y": y0.tolist(),
                         "y_estimated": shift},
-            "initial_condition": ic, "initial_state": [x.copy() for x in states]}
+            "initial_condition": ic, "initial_state": [x.copy() for x in states],
+            "covariance": None if res["covariance"] is None else np.asarray(res["covariance"])}
     if start_note:
         info["linear_start"] = start_note
     n_res = sum(y.size for _, y in exps)
     warn_if_capped(info, "the nlhw_ss search", int(max_iter), n_residuals=n_res)
-    return HammersteinWienerSSModel(fin, fout, A, B, C, D, dt, u_offset=u0, y_offset=y0,
-                                    noise_variance=float(res["noise_variance"]), info=info,
-                                    input_names=getattr(data, "input_names", None),
-                                    output_names=getattr(data, "output_names", None))
+    model = HammersteinWienerSSModel(fin, fout, A, B, C, D, dt, u_offset=u0, y_offset=y0,
+                                     noise_variance=float(res["noise_variance"]), info=info,
+                                     input_names=getattr(data, "input_names", None),
+                                     output_names=getattr(data, "output_names", None))
+    attach(model, res["covariance"], raw, list(states) if estimate_x0 else None)
+    return model

@@ -15,8 +15,15 @@ from .. import _sysid
 from .._checks import as_2d, as_matrix
 from .._measured import as_horizon, as_measured, predict_args
 from ..errors import DataError, ShapeError
-from ..models.protocol import ModelMixin, no_pole_std
-from .hw_model import Nonlinearity, UserFunction, nonlinearity_from_dict
+from ..models.protocol import ModelMixin
+from .hw_model import (
+    Nonlinearity,
+    UserFunction,
+    linear_with_std,
+    nonlinearity_from_dict,
+    uncertainty_lines,
+    with_linear_uncertainty,
+)
 
 __all__ = ["HammersteinWienerSSModel"]
 
@@ -119,6 +126,54 @@ class HammersteinWienerSSModel(ModelMixin):
         levels = bool(dict(self.info.get("offsets") or {}).get("y_estimated"))
         return int(self.theta.size) + levels * self.noutputs
 
+    def _level_estimated(self) -> bool:
+        return bool(dict(self.info.get("offsets") or {}).get("y_estimated"))
+
+    def _searched(self) -> np.ndarray:
+        """The parameters the search estimated: ``theta``, then the outputs' levels
+        ``y_offset`` when estimated (:mod:`sysid.nonlinear.hw_uncertainty`)."""
+        return np.concatenate([self.theta, self.y_offset if self._level_estimated() else []])
+
+    def _searched_names(self) -> list[str]:
+        return self._names() + [f"{n}:y_offset" for n in self.output_names
+                                if self._level_estimated()]
+
+    def _names(self) -> list[str]:
+        names = [f"{n}:in[{k}]" for n, f in zip(self.input_names, self.input_nls)
+                 for k in range(np.size(f.params))]
+        for key, mat in (("A", self.A), ("B", self.B), ("C", self.C)) + (
+                (("D", self.D),) if self.feedthrough else ()):
+            names += [f"{key}[{r},{c}]" for r in range(mat.shape[0]) for c in range(mat.shape[1])]
+        return names + [f"{n}:out[{k}]" for n, g in zip(self.output_names, self.output_nls)
+                        for k in range(np.size(g.params))]
+
+    def _rebuilt(self, theta: Any) -> HammersteinWienerSSModel:
+        """The model with the searched parameters ``theta`` (:meth:`_searched`'s order): the
+        ``build`` of its uncertainty."""
+        import copy
+
+        t = np.asarray(theta, float).ravel()
+        n, m, p = self.order, self.ninputs, self.noutputs
+        fin, fout = copy.deepcopy(self.input_nls), copy.deepcopy(self.output_nls)
+        k = 0
+        for f in fin:
+            f.params, k = t[k:k + np.size(f.params)], k + np.size(f.params)
+        mats = []
+        for r, c, on in ((n, n, True), (n, m, True), (p, n, True), (p, m, self.feedthrough)):
+            mats.append(t[k:k + r * c].reshape(r, c) if on else None)
+            k += r * c * on
+        for g in fout:
+            g.params, k = t[k:k + np.size(g.params)], k + np.size(g.params)
+        return HammersteinWienerSSModel(
+            fin, fout, *mats, self.dt, noise_variance=self.noise_variance,
+            info={"offsets": self.info.get("offsets")}, input_names=self.input_names,
+            output_names=self.output_names, u_offset=self.u_offset,
+            y_offset=t[k:k + p] if self._level_estimated() else self.y_offset)
+
+    def _from_state(self, u: Any, x0: Any) -> np.ndarray:
+        """The outputs from the linear block's initial state ``x0``."""
+        return self.simulate(u, x0)
+
     def specs(self) -> tuple[list[Any], list[Any]]:
         """The nonlinearities as the Rust functions take them."""
         return [f.spec() for f in self.input_nls], [g.spec() for g in self.output_nls]
@@ -157,18 +212,26 @@ class HammersteinWienerSSModel(ModelMixin):
         return self.simulate(u, x0)
 
     def linear(self) -> Any:
-        """The linear block as a :class:`~sysid.StateSpaceModel`."""
+        """The linear block as a :class:`~sysid.StateSpaceModel` (with the uncertainty of
+        its matrices when the model carries one)."""
         from ..models.statespace import StateSpaceModel
 
-        return StateSpaceModel(self.A, self.B, self.C, self.D, dt=self.dt)
+        return with_linear_uncertainty(self, StateSpaceModel(self.A, self.B, self.C, self.D,
+                                                             dt=self.dt))
 
-    def freqresp(self, omega: Any) -> np.ndarray:
-        """Frequency response of the linear block (between the nonlinearities)."""
+    def freqresp(self, omega: Any, std: bool = False) -> Any:
+        """Frequency response of the linear block (between the nonlinearities); with
+        ``std=True`` (needs ``uncertainty``) the pair ``(H, sd)`` as for
+        :meth:`sysid.StateSpaceModel.freqresp`."""
+        if std:
+            return linear_with_std(self).freqresp(omega, std=True)
         return np.asarray(self.linear().freqresp(omega))
 
-    def poles(self, std: bool = False) -> np.ndarray:
-        """Poles of the linear block (eigenvalues of ``A``)."""
-        no_pole_std(self, std)
+    def poles(self, std: bool = False) -> Any:
+        """Poles of the linear block (eigenvalues of ``A``); with ``std=True`` (needs
+        ``uncertainty``) the pair ``(poles, sd)`` as for :meth:`sysid.StateSpaceModel.poles`."""
+        if std:
+            return linear_with_std(self).poles(std=True)
         return np.linalg.eigvals(self.A).astype(complex)
 
     def summary(self) -> str:
@@ -182,7 +245,7 @@ class HammersteinWienerSSModel(ModelMixin):
         lines.append(f"  residual variance {np.array2string(self.noise_variance, precision=4)}"
                      f", {self.info.get('iterations', '-')} iterations "
                      f"({self.info.get('stop', '-')})")
-        return "\n".join(lines)
+        return "\n".join(lines + uncertainty_lines(self))
 
     def __repr__(self) -> str:
         hin = any(type(f) is not Nonlinearity for f in self.input_nls)
@@ -193,17 +256,16 @@ class HammersteinWienerSSModel(ModelMixin):
                 f"output(s), order {self.order}, dt={self.dt:g})")
 
     def to_pandas(self) -> Any:
-        """Parameters as a table."""
+        """Parameters as a table (with their standard deviations when the model carries an
+        uncertainty: those of ``A``, ``B``, ``C`` only up to the state basis, which the data
+        do not determine; the estimated output levels are the uncertainty's last rows)."""
         import pandas as pd
 
-        names = [f"{n}:in[{k}]" for n, f in zip(self.input_names, self.input_nls)
-                 for k in range(np.size(f.params))]
-        for key, mat in (("A", self.A), ("B", self.B), ("C", self.C)) + (
-                (("D", self.D),) if self.feedthrough else ()):
-            names += [f"{key}[{r},{c}]" for r in range(mat.shape[0]) for c in range(mat.shape[1])]
-        names += [f"{n}:out[{k}]" for n, g in zip(self.output_names, self.output_nls)
-                  for k in range(np.size(g.params))]
-        return pd.DataFrame({"parameter": names, "value": self.theta})
+        out = pd.DataFrame({"parameter": self._names(), "value": self.theta})
+        unc = getattr(self, "uncertainty", None)
+        if unc is not None:
+            out["std"] = unc.std[:self.theta.size]
+        return out
 
     def plot(self, fig: Any = None) -> Any:
         """Every nonlinearity over the range seen in estimation; returns the figure."""

@@ -508,16 +508,17 @@ class DeferredTable(ParameterTable):
         return object.__getattribute__(self, name)
 
 
-def defer_sandwich(model: Any, sim: Callable[[Any], np.ndarray], y: np.ndarray,
-                   blocks: Sequence[tuple[Sequence[int], Sequence[int]]],
-                   limits: tuple[Any, Any] | None = None) -> None:
+def defer_sandwich(model: Any, sim: Callable[[Any], Any], y: Any,
+                   blocks: Sequence[tuple[Sequence[int], Sequence[int]]] | None,
+                   limits: tuple[Any, Any] | None = None, key: str = "covariance") -> None:
     """A simulation-error fit's Gauss-Newton uncertainty (and parameter table) becoming the
     sandwich for coloured errors when first used, as :func:`sysid.oe`'s: for the fits of
     continuous-time models (:func:`sysid.tfest`, :func:`sysid.procest`), ``sim(model)``
     simulating the record's input exactly as the search formed its errors ``y - sim``;
     ``blocks`` as in :func:`sandwich_covariance`, ``limits`` the parameters' bounds (the
-    table's intervals stay cut there). ``model.info["covariance"]`` says which covariance
-    the model carries.
+    table's intervals stay cut there). ``model.info[key]`` (default ``"covariance"``) says
+    which covariance the model carries (the Hammerstein-Wiener fits keep their Gauss-Newton
+    array under ``"covariance"`` and say it under ``"covariance_method"``).
 
     Examples
     --------
@@ -538,14 +539,14 @@ def defer_sandwich(model: Any, sim: Callable[[Any], np.ndarray], y: np.ndarray,
     """
     base = model.uncertainty
     info = model.info
-    info["covariance"] = ("gauss-newton until first used, then the sandwich for coloured "
-                          "simulation errors")
+    info[key] = ("gauss-newton until first used, then the sandwich for coloured "
+                 "simulation errors")
 
     def form() -> tuple[ParameterUncertainty | None, str]:
         return sandwich_covariance(base, sim, y, blocks=blocks)
 
     def then(note: str) -> None:
-        info["covariance"] = note
+        info[key] = note
     model.uncertainty = DeferredSandwich(base, form, then)
     table = getattr(model, "parameters", None)
     if isinstance(table, ParameterTable):

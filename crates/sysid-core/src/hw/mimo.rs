@@ -112,6 +112,12 @@ impl MimoHwStructure {
         self.layout().total
     }
 
+    /// The model's own parameters `[alpha, A, B, C, (D), beta, (offsets)]` (the initial
+    /// states excluded).
+    pub fn n_model(&self) -> usize {
+        self.layout().x0
+    }
+
     /// Record `k`'s initial state in `theta` (with [`Self::initial_states`]).
     pub fn initial_state<'a>(&self, theta: &'a [f64], k: usize) -> &'a [f64] {
         let at = self.layout().x0 + k * self.order;
