@@ -193,6 +193,10 @@ def test_progress_is_the_shared_observer():
     cost = m.info["cost"]
     assert len(cost) == m.info["iterations"] + 1 and np.all(np.diff(cost) < 0)
     assert [[c[1] for c in r] for r in runs].count(cost[1:]) >= 1
+    sec = m.info["seconds"]  # one time per search run (the benchmark's search-only figure)
+    assert len(runs) <= len(sec["searches"]) <= m.info["n_starts"]
+    assert sec["chosen_start_search"] in sec["searches"]
+    assert sec["linear_start"] > 0
     stopped = sysid.nlhw(d, 1, 1, 1, input_nl=sysid.DeadZone(), progress=lambda *a: False,
                          output_nl=None)
     assert stopped.info["stop"] == "cancelled" and stopped.info["iterations"] == 1

@@ -9,6 +9,7 @@ Levenberg-Marquardt search of ``sysid-core`` (``optim/``), the admissible set be
 from __future__ import annotations
 
 import copy
+import time
 import warnings
 from collections.abc import Callable
 from typing import Any
@@ -126,6 +127,7 @@ def nlhw(
         covariance for coloured simulation errors when first used
         (:mod:`sysid.nonlinear.hw_uncertainty`; ``info["covariance_method"]`` says which):
         ``model.poles(std=True)``, ``model.uncertainty.propagate(fn)`` for anything else.
+        ``info["seconds"]``: the linear start's, each start's search and the chosen start's.
 
     Warns
     -----
@@ -209,6 +211,7 @@ def nlhw(
     # linear start: output error on the (transformed) input
     from ..data.iodata import IOData
 
+    t_lin = time.perf_counter()
     with warnings.catch_warnings(record=True) as said:  # a start: where its F sits is the
         warnings.simplefilter("always")  # search's to move; the rest is said as nlhw's
         lin = oe(IOData([r[0][:, None] for r in records], [r[1][:, None] for r in records],
@@ -219,6 +222,7 @@ def nlhw(
             text = text[4:] if text.startswith("oe: ") else text
             warnings.warn(w.category(f"nlhw (its linear start, an output-error fit of the same "
                                      f"orders): {text}"), stacklevel=2)
+    t_lin = time.perf_counter() - t_lin
     b0, f0 = np.asarray(lin.b[0][0], float), np.asarray(lin.f[0][0], float)
     u_all = np.concatenate([r[0] for r in records])
     h0: list[np.ndarray] = [np.zeros(nh) for _ in records]
@@ -231,6 +235,8 @@ def nlhw(
         free = np.zeros(u_all.size)
     lin_b = b0
     res, theta0, x_all = None, None, np.zeros(0)
+    searches: list[float] = []  # each start's search, seconds (the chosen one's: t_chosen)
+    t_chosen = 0.0
     cb, close_bar = iteration_callback(progress, "nlhw", int(max_iter),
                                        iteration_printer("nlhw", "sum of squares"))
     # every start of the input nonlinearity with every start of the output one, and (when
@@ -258,14 +264,16 @@ def nlhw(
                 # about the means, the output level is estimated with the rest (from 0)
                 th0 = np.concatenate([start_in, b0, f0, start_out, np.zeros(int(shift)),
                                       *(h0 if estimate_x0 else [])])
+                t_search = time.perf_counter()
                 try:
                     r = _sysid.hw_estimate(records, fin.spec(), fout.spec(), int(nb), int(nf),
                                            int(nk), th0.tolist(), int(max_iter), float(tol), cb,
                                            offset=shift, initial_state=estimate_x0)
                 except DataError:
                     continue  # an inadmissible start (unstable F): try the next one
+                searches.append(time.perf_counter() - t_search)
                 if res is None or r["cost"] < res["cost"] or r["stop"] == "cancelled":
-                    res, theta0, x_all = r, th0, xs
+                    res, theta0, x_all, t_chosen = r, th0, xs, searches[-1]
                 if r["stop"] == "cancelled":
                     break
     finally:
@@ -292,7 +300,9 @@ def nlhw(
             "x_range": (float(x_all.min()), float(x_all.max())), "n_output_params": nbeta,
             "offsets": {"removed": shift, "u": float(u0[0]), "y": float(y0[0] + level),
                         "y_estimated": shift},
-            "initial_condition": ic, "initial_state": [h.copy() for h in states]}
+            "initial_condition": ic, "initial_state": [h.copy() for h in states],
+            "seconds": {"linear_start": t_lin, "searches": searches,
+                        "chosen_start_search": t_chosen}}
     warn_if_capped(info, "the nlhw search", int(max_iter), n_residuals=n_samples)
     model = HammersteinWienerModel(fin, fout, b, f, int(nk), dt,
                                    u_offset=float(u0[0]), y_offset=float(y0[0] + level),
