@@ -331,6 +331,9 @@ def _order_body(page: Page, sel: Any, frd: Any) -> str:
 def _parameter_table(page: Page, model: Any) -> str:
     """The grey-box parameter table (name, value, std, fixed, active bound, 95 % interval,
     unit) when the model carries one (``info["greybox"]["parameters"]``, set by greyest)."""
+    from ..models.uncertainty import form_deferred
+
+    form_deferred(model)  # a deferred sandwich writes its std into the rows when formed
     info = getattr(model, "info", None) or {}
     rows = (info.get("greybox") or {}).get("parameters")
     if not rows:

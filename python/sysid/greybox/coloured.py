@@ -9,6 +9,11 @@ again for every parameter vector (the free parameters' covariance with it profil
 the errors weighted as the criterion weighted them (``weighting="noise"``: the inverse of
 their covariance). ``info["covariance"]`` says which covariance the estimate carries.
 
+A nonlinear structure's errors are always simulation errors: :func:`defer_nonlinear` gives
+its estimate the same sandwich, formed when first used (each direction costs two
+simulations, Python calls of ``f``), on every searched quantity (estimated initial states
+included, each record's simulation started from its own).
+
 With ``focus="prediction"`` and a noise model ``K`` the errors are the one-step prediction
 errors, white only when ``K`` can take the disturbance's shape: :func:`prediction_covariance`
 forms the sandwich of :mod:`sysid.pem.prediction_sandwich` for them.
@@ -38,7 +43,7 @@ def coloured_covariance(fit: Any, res: dict[str, Any], est: Any) -> None:
     unc = est.model.uncertainty
     n, m, l = fit.n, fit.m, fit.l
     z_hat = np.asarray(res["p"], float)
-    weights = _weights(fit, res)
+    weights = _weights(fit.reweight, res)
     if isinstance(weights, str):
         est.info["covariance"] = weights
         return
@@ -90,7 +95,7 @@ def prediction_covariance(fit: Any, res: dict[str, Any], est: Any) -> None:
                                   f"correction would hold {size:.2g} numbers (at most "
                                   f"{MAX_ENTRIES:.0e})")
         return
-    weights = _weights(fit, res)
+    weights = _weights(fit.reweight, res)
     if isinstance(weights, str):
         est.info["covariance"] = weights
         return
@@ -126,11 +131,68 @@ def prediction_covariance(fit: Any, res: dict[str, Any], est: Any) -> None:
                  "gauss-newton with coloured prediction errors (sandwich)", None)
 
 
-def _weights(fit: Any, res: dict[str, Any]) -> Any:
+def defer_nonlinear(est: Any, res: dict[str, Any], exps: list[tuple[np.ndarray, np.ndarray]],
+                    X: np.ndarray, free_x0: list[tuple[int, int]], reweight: bool,
+                    limits: tuple[np.ndarray, np.ndarray]) -> None:
+    """``est`` (a :class:`~sysid.greybox.results.GreyEstimate` of a
+    :class:`sysid.NonlinearGreyBox` fit, the core's result ``res``) with its Gauss-Newton
+    covariance becoming the sandwich for coloured simulation errors when first used (a
+    standard deviation, the table, ``est.covariance``, a band, saving): formed on every
+    searched quantity, the free parameters and the estimated initial-state entries
+    ``free_x0`` (``(experiment, state)``; ``X`` the initial states at the estimate), from
+    the Jacobian of the simulations of every record (``exps``, independent) weighted as the
+    criterion weighted the errors, and the free parameters' block kept (their covariance
+    with the initial states estimated beside them). ``limits`` are the table's bounds.
+    ``info["covariance"]`` says which covariance the estimate carries."""
+    from ..pem.sandwich import DeferredSandwich, DeferredTable, sandwich_covariance
+
+    model, info = est.model, est.info
+    base = model.uncertainty
+    weights = _weights(reweight, res)
+    if isinstance(weights, str):
+        info["covariance"] = weights
+        return
+    nf = base.theta.size
+    theta = np.asarray(res["theta"], float)
+    cov_all = np.asarray(res["covariance"], float)
+
+    def build(t: np.ndarray) -> tuple[Any, np.ndarray]:  # every searched quantity
+        x = X.copy()
+        for k, (e, i) in enumerate(free_x0):
+            x[e, i] = t[nf + k]
+        return base.build(t[:nf]), x
+
+    def sim(mx: tuple[Any, np.ndarray]) -> list[np.ndarray]:
+        m, x = mx
+        return [m.simulate(u, x0=x[e]) for e, (u, _) in enumerate(exps)]
+
+    def form() -> tuple[ParameterUncertainty | None, str]:
+        full = ParameterUncertainty(theta, cov_all, build)
+        got, note = sandwich_covariance(full, sim, [y for _, y in exps], weights)
+        if got is None:
+            return None, note
+        return ParameterUncertainty(base.theta, got.covariance[:nf, :nf], base.build,
+                                    names=base.names, dof=base.dof, method=got.method,
+                                    undetermined=base.undetermined), note
+
+    def then(note: str) -> None:
+        info["covariance"] = note
+        info["greybox"]["parameters"] = est.parameters.rows()
+
+    info["covariance"] = ("gauss-newton until first used, then the sandwich for coloured "
+                          "simulation errors")
+    model.uncertainty = DeferredSandwich(base, form, then)
+    est.covariance = model.uncertainty
+    names = list(est.parameters.names)
+    est.parameters = DeferredTable(est.parameters, model.uncertainty, limits,
+                                   rows=[names.index(k) for k in base.names])
+
+
+def _weights(reweight: bool, res: dict[str, Any]) -> Any:
     """The errors' weighting of a fit that reweights (the inverse Cholesky factor of the
     innovations' covariance), None for one that does not, or the reason the Gauss-Newton
     covariance stays (a singular covariance)."""
-    if not fit.reweight:
+    if not reweight:
         return None
     try:
         return np.linalg.inv(np.linalg.cholesky(

@@ -9,9 +9,10 @@ differences of the structure function, Fréchet derivative of the matrix exponen
 nonlinear structure (:class:`sysid.NonlinearGreyBox`) is integrated in the Rust core with all
 finite-difference perturbations at once. Both report the parameters with standard deviations
 from the same Gauss-Newton covariance (the inverse-covariance-weighted criterion, maximum
-likelihood for Gaussian errors); where a linear fit's errors are coloured (simulation errors,
-or prediction errors of a noise model that cannot take the disturbance's shape) the
-sandwich of :mod:`sysid.greybox.coloured` replaces it.
+likelihood for Gaussian errors); where a fit's errors are coloured (simulation errors, a
+nonlinear fit's always, or prediction errors of a noise model that cannot take the
+disturbance's shape) the sandwich of :mod:`sysid.greybox.coloured` replaces it (a nonlinear
+fit's when first used).
 """
 
 from __future__ import annotations

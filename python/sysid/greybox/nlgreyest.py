@@ -6,6 +6,13 @@ between iterations) with the one optimiser of the Rust core. The Rust core integ
 state equation with all forward-difference perturbations at once (one call of a vectorised
 ``f`` per integrator stage for the whole Jacobian) and accumulates ``J^T W J`` over the
 samples.
+
+The simulation errors are the output disturbance itself, coloured on nearly every real
+record, where the search's Gauss-Newton covariance is too small (a first-order plant with a
+cubic term and an AR(1) disturbance, pole 0.9, 200 runs: 0.31-0.47 of the sample std, 95 %
+intervals covering 47-65 %). The estimate carries the sandwich of :mod:`sysid.pem.sandwich`
+instead, formed when first used (:func:`sysid.greybox.coloured.defer_nonlinear`): 0.89-0.94,
+covering 89-93 % (``tests/test_nlgreyest_coloured.py``).
 """
 
 from __future__ import annotations
@@ -20,6 +27,7 @@ from ..data.iodata import IOData
 from ..errors import DataError, SysidError
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
+from .coloured import defer_nonlinear
 from .nlgreybox import NonlinearGreyBox
 from .results import GreyEstimate, _costs, _warn_unidentifiable
 
@@ -157,4 +165,7 @@ def nlgreyest(data: IOData, s: NonlinearGreyBox, *, x0: Any, weighting: str, mul
 
     est.uncertainty = ParameterUncertainty(theta[:nf], cov, build, names=free,
                                            dof=min(int(best["rank"]), nf))
-    return GreyEstimate(table, cov, free, est, est, list(X), info)
+    out = GreyEstimate(table, cov, free, est, est, list(X), info)
+    defer_nonlinear(out, best, exps, X, free_x0, weighting == "noise",
+                    tuple(np.array([s.params[k].bounds for k in names], float).T))
+    return out

@@ -62,6 +62,21 @@ class GreyEstimate(HTMLResult):
         self.info = info
 
     @property
+    def covariance(self) -> np.ndarray:
+        """Of the free parameters (order of ``free_names``); a sandwich still deferred (a
+        nonlinear fit's, :mod:`sysid.greybox.coloured`) is formed when first read."""
+        d = self.__dict__
+        c = d.get("_covariance", d.get("covariance"))
+        if not isinstance(c, np.ndarray) and hasattr(c, "covariance"):  # the model's
+            # uncertainty, its sandwich formed now
+            c = d["_covariance"] = np.asarray(c.covariance, float)
+        return c
+
+    @covariance.setter
+    def covariance(self, value: Any) -> None:
+        self.__dict__["_covariance"] = value
+
+    @property
     def correlation(self) -> np.ndarray:
         """Correlation matrix of the free parameters."""
         s = np.sqrt(np.clip(np.diag(self.covariance), 0, None))

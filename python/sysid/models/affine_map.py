@@ -92,8 +92,11 @@ def stored_map(unc: Any, cls: type, max_parameters: int = MAX_PARAMETERS) -> dic
                     or minus[k].shape != base[k].shape:
                 return {"omitted": f"the model's stored numbers change shape with parameter "
                                    f"{unc.names[i]}"}
-            d = (plus[k] - minus[k]).ravel() / (2 * h)
-            curv = (plus[k] + minus[k] - 2 * base[k]).ravel()
+            # numbers the parameter does not move (an infinite bound among them) move by 0
+            same = (plus[k] == base[k]) & (minus[k] == base[k])
+            with np.errstate(invalid="ignore"):
+                d = np.where(same, 0.0, plus[k] - minus[k]).ravel() / (2 * h)
+                curv = np.where(same, 0.0, plus[k] + minus[k] - 2 * base[k]).ravel()
             if np.any(np.abs(curv) > 1e-9 * (1.0 + np.abs(base[k].ravel()))):
                 linear = False
             nz = np.flatnonzero(d)

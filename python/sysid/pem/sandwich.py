@@ -468,7 +468,8 @@ class DeferredTable(ParameterTable):
     """A :class:`~sysid.models.paramtable.ParameterTable` whose standard deviations (and
     95 % intervals) are those of a :class:`DeferredSandwich`: reading them forms it, and the
     table becomes a plain one (an estimator that reports a table next to its uncertainty
-    keeps the deferral; the discrete :func:`sysid.tfest`).
+    keeps the deferral; the discrete :func:`sysid.tfest`). ``rows``: the table's rows of the
+    uncertainty's parameters, when it lists others too (a grey box's fixed parameters).
 
     Examples
     --------
@@ -485,19 +486,29 @@ class DeferredTable(ParameterTable):
     """
 
     def __init__(self, table: ParameterTable, unc: ParameterUncertainty,
-                 limits: tuple[Any, Any] | None = None) -> None:
+                 limits: tuple[Any, Any] | None = None,
+                 rows: Sequence[int] | None = None) -> None:
         self.__dict__.update(table.__dict__)
         self._source: ParameterUncertainty | None = unc
         # the parameters' bounds: the intervals stay cut there (ParameterTable.cut_at_bounds)
         self._limits = limits
+        # the table's rows of the uncertainty's parameters (a grey box's table lists its
+        # fixed parameters too); default every row, in order
+        self._rows = None if rows is None else np.asarray(rows, int)
 
     def __getattribute__(self, name: str) -> Any:
         if name in ("std", "lower", "upper", "__reduce_ex__", "__reduce__", "__deepcopy__",
                     "__copy__", "__getstate__"):
             d = object.__getattribute__(self, "__dict__")
+            if d.get("_source") is not None:
+                # formed first: its note's writer may read this table (then turned plain)
+                _ = d["_source"].covariance
             src = d.pop("_source", None)
             if src is not None:
-                sd = np.sqrt(np.clip(np.diag(src.covariance), 0.0, None))
+                rows = d.pop("_rows", None)
+                sd = np.array(d["std"], float)
+                sd[slice(None) if rows is None else rows] = np.sqrt(
+                    np.clip(np.diag(src.covariance), 0.0, None))
                 sd[np.isinf(d["std"])] = np.inf  # the undetermined stay so
                 sd[d["fixed"]] = d["std"][d["fixed"]]
                 d["std"], d["lower"], d["upper"] = sd, d["value"] - Z95 * sd, d["value"] + Z95 * sd
