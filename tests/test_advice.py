@@ -29,6 +29,19 @@ def test_a_clean_open_loop_record_needs_nothing():
     assert "to act on: none" in repr(a)
 
 
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_an_input_that_does_not_act_has_no_delay_in_the_advice(seed):
+    # G acts through u0 (no dead time beyond its one sample); u1 does not act at all, so
+    # the ARX loss over its delays is flat and its least falls anywhere in 0..20: the
+    # finding reported that number as u1's dead time (a note to give it to nk), where
+    # delayest itself warns that the delay there is not determined
+    u, y = _open_loop(seed)
+    u = np.c_[u, np.random.default_rng(seed + 10).standard_normal(len(u))]
+    a = sysid.advice(sysid.IOData(u, y, 1.0))
+    assert "u1 -> y0: not determined" in a["delays"].finding, a["delays"]
+    assert "u0 -> y0: 1" in a["delays"].finding and a["delays"].verdict == "ok"
+
 def test_offsets_drift_spikes_and_delay_are_found():
     u, y = _open_loop(1, delay=4)
     t = np.arange(len(y))[:, None]

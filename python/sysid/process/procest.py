@@ -209,15 +209,19 @@ def _nested_pairs(t: ProcessType, exps: list[tuple[np.ndarray, np.ndarray]], dat
                   hold: str, dmax: float, init: dict[str, float], fixed: dict[str, float],
                   bounds: dict[str, tuple[float, float]], names: list[str], i: int
                   ) -> list[Any] | None:
-    """Starts for a type of several real poles from the one-pole fit's start embedded in it
-    (the other time constants a twentieth of ``Tp1``, a zero near the second pole, the
-    one-pole start's delay): a type that holds the one-pole model can then fit no worse
-    than it (``P2DZ`` on the ball and beam and the robot arm ended above ``P1D`` from the
-    SRIVC start alone: 1.0096 against 0.5646, 32.45 against 31.60). ``None`` when the type
-    has one pole or complex poles, the user set parameters, or the output has several
-    inputs (there the second search's delay moves took procest(winding, "P2D") from 67 to
-    186 s: left out)."""
-    if data.n_inputs > 1 or t.poles < 2 or t.underdamped or init or fixed:
+    """Starts for a type of several poles from the one-pole fit's start embedded in it (the
+    other time constants a twentieth of ``Tp1``, a zero near the second pole, the one-pole
+    start's delay): a type that holds the one-pole model can then fit no worse than it
+    (``P2DZ`` on the ball and beam and the robot arm ended above ``P1D`` from the SRIVC start
+    alone: 1.0096 against 0.5646, 32.45 against 31.60). An underdamped type (``U``) holds it
+    too, its pair overdamped: the pair of real time constants ``Ta, Tb`` is ``Tw = sqrt(Ta
+    Tb)``, ``Zeta = (Ta + Tb) / (2 Tw)`` (``P2U``'s the two slowest, ``P3U``'s the two
+    fastest beside ``Tp3 = Tp1``); from the SRIVC start alone ``P2DU`` ended at
+    ``Tw = Zeta = 1e-9`` and 18 times ``P1D``'s cost on the DaISy heating system. ``None``
+    when the type has one pole, the user set parameters, or the output has several inputs
+    (there the second search's delay moves took procest(winding, "P2D") from 67 to 186 s:
+    left out)."""
+    if data.n_inputs > 1 or t.poles < 2 or init or fixed:
         return None
     s1 = _start(ProcessType(1, t.delay, False, False, False), exps, 0, data.dt, hold, dmax,
                 {}, {})
@@ -226,6 +230,12 @@ def _nested_pairs(t: ProcessType, exps: list[tuple[np.ndarray, np.ndarray]], dat
         start[f"Tp{k}"] = s1["Tp1"] / 20.0 ** (k - 1)
     if t.zero:
         start["Tz"] = start["Tp2"] * 1.5
+    if t.underdamped:
+        ta, tb = (start["Tp1"], start["Tp2"]) if t.poles == 2 else (start["Tp2"],
+                                                                      start["Tp3"])
+        start["Tp3"] = start["Tp1"]
+        start["Tw"] = float(np.sqrt(ta * tb))
+        start["Zeta"] = (ta + tb) / (2.0 * start["Tw"])
     return [_pair(t, names, {k: start[k] for k in t.names}, fixed, bounds, dmax,
                   f"{data.output_names[i]}<-{data.input_names[0]}")]
 

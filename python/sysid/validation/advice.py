@@ -222,19 +222,25 @@ def _outliers(data: Any) -> Finding:
 
 
 def _delays(data: Any) -> tuple[Finding, np.ndarray | None]:
-    from ..polynomial.delayest import delayest
+    from ..polynomial.delayest import delays
 
     if data.n_inputs == 0:
         return Finding("delays", "ok", "no inputs"), None
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            nk = np.atleast_2d(np.asarray(delayest(data), dtype=int))
+            nk, weak, _, _ = delays(data)
     except Exception as e:  # noqa: BLE001 - reported, not raised
         return Finding("delays", "note", f"not estimated ({e})"), None
-    pairs = [f"{data.input_names[j]} -> {data.output_names[i]}: {nk[i, j]}"
+    # a pair whose input explains nothing at any delay searched has no delay to give (its
+    # loss is flat, the least anywhere: delayest warns so, which this finding swallowed)
+    blind = {(i, j) for i, j, _ in weak}
+    pairs = [f"{data.input_names[j]} -> {data.output_names[i]}: "
+             + ("not determined (no delay searched makes the input explain it)" if (i, j) in blind
+                else str(nk[i, j]))
              for i in range(nk.shape[0]) for j in range(nk.shape[1])]
-    if np.all(nk <= 1):
+    if all(nk[i, j] <= 1 or (i, j) in blind
+           for i in range(nk.shape[0]) for j in range(nk.shape[1])):
         return Finding("delays", "ok", "no dead time beyond one sample (" + "; ".join(
             pairs[:6]) + ")"), nk
     return Finding("delays", "note", "input delays in samples: " + "; ".join(pairs[:6]),
