@@ -163,6 +163,24 @@ def test_open_loop_methods_warn_on_feedback_only():
             sysid.SubspaceEstimator(open_loop, 10, method=method).fit(2)
 
 
+def test_a_short_past_window_does_not_take_a_sweep_for_feedback():
+    # the robot arm's record (open loop, a swept input) at horizon 8 warned of feedback,
+    # p = 2e-42: its own 8 past values do not predict the sweep, the past outputs (which
+    # carry its older history) do; at check_feedback's default lags (17 here) p = 0.21
+    d = sysid.datasets.load_robot_arm()
+    n = 2 * d.u.shape[0] // 3
+    est = sysid.IOData(u=d.u[:n] - d.u[:n].mean(0), y=d.y[:n] - d.y[:n].mean(0), dt=d.dt)
+    assert not sysid.check_feedback(est).detected
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", sysid.FeedbackWarning)
+        for h in (5, 8):
+            sysid.SubspaceEstimator(est, h).fit(4)
+    # a loop is still found at that window
+    data, _ = closed_loop(2_000, 7)
+    with pytest.warns(sysid.FeedbackWarning, match="pbsid"):
+        sysid.SubspaceEstimator(data, 5).fit(2)
+
+
 def test_one_call_functions_and_ssest():
     data, _ = closed_loop(5_000, 21)
     for fn in (sysid.pbsid, sysid.ssarx):

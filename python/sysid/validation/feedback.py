@@ -37,7 +37,7 @@ from .._display import HTMLResult
 from ..data.iodata import IOData, require_record
 from ..errors import DataError, InsufficientDataError
 
-__all__ = ["FeedbackTest", "check_feedback", "feedback_pvalues"]
+__all__ = ["FeedbackTest", "check_feedback", "default_lags", "feedback_pvalues"]
 
 
 def f_sf(F: float, d1: float, d2: float) -> float:
@@ -198,6 +198,20 @@ class FeedbackTest(HTMLResult):
         return ax
 
 
+def default_lags(data: IOData) -> int:
+    """:func:`check_feedback`'s default number of lags: ``min(20, max(2, N // (20 (m +
+    l))))``, ``N`` the shortest experiment's length.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> default_lags(sysid.IOData(u=np.zeros(683), y=np.zeros(683)))
+    17
+    """
+    shortest = min(y.shape[0] for _, y in data.experiments)
+    return int(min(20, max(2, shortest // (20 * (data.n_inputs + data.n_outputs)))))
+
+
 def check_feedback(data: IOData | tuple[Any, Any], lags: int | None = None, *, alpha: float = 0.01
                    ) -> FeedbackTest:
     """Test whether the input depends on past outputs (a feedback loop).
@@ -240,7 +254,7 @@ def check_feedback(data: IOData | tuple[Any, Any], lags: int | None = None, *, a
     alpha = as_between(alpha, "alpha", 0.0, 1.0)
     shortest = min(y.shape[0] for _, y in data.experiments)
     if lags is None:
-        lags = int(min(20, max(2, shortest // (20 * (data.n_inputs + data.n_outputs)))))
+        lags = default_lags(data)
     lags = as_int(lags, "lags", 1)
     if shortest < 2 * lags + 2:
         raise InsufficientDataError(f"lags = {lags} needs experiments of at least "
