@@ -156,7 +156,9 @@ def delays(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int | N
     weak: list[tuple[int, int, float]] = []
     for i in range(l):
         one = [(u, np.ascontiguousarray(y[:, [i]])) for u, y in centred]
-        out[i] = _first_response(one, nk_min, nk_max, _output_delays(one, na, nb, grid))
+        out[i] = _first_response(one, nk_min, nk_max)
+        if np.any(out[i] < 0):  # no response found in the range: the least ARX loss
+            out[i] = np.where(out[i] < 0, _output_delays(one, na, nb, grid), out[i])
         # the chosen delay is the best of len(grid): Bonferroni's correction for the search
         weak += [(i, j, min(1.0, p * len(grid)))
                  for j, p in enumerate(_input_p_values(one, na, nb, out[i]))
@@ -242,20 +244,20 @@ def _output_delays(exps: list[tuple[np.ndarray, np.ndarray]], na: int, nb: int,
 ORDERS = (2, 4, 6, 8, 12, 16, 20)
 
 
-def _first_response(exps: list[tuple[np.ndarray, np.ndarray]], nk_min: int, nk_max: int,
-                    fallback: np.ndarray) -> np.ndarray:
-    """Per input, the first lag in ``nk_min..nk_max`` with evidence of a response, or its
-    ``fallback`` delay where there is none.
+def _first_response(exps: list[tuple[np.ndarray, np.ndarray]], nk_min: int,
+                    nk_max: int) -> np.ndarray:
+    """Per input, the first lag in ``nk_min..nk_max`` with evidence of a response, or -1
+    where there is none.
 
     The model: ARX with ``n`` past outputs and, per input, every lag from ``nk_min`` to
     ``nk_max + n``, ``n`` in :data:`ORDERS` by BIC (at most a quarter as many regressors as
     samples), all fitted on the same samples, so its residuals are near white and its F
     tests hold. The delay of input ``j``: the smallest ``k`` whose lags ``nk_min..k`` are
     jointly significant (F test at 1 %, Bonferroni over the ``nk_max - nk_min + 1`` lags
-    tested); none before it is. ``fallback`` (the least ARX(na, nb) loss) where no order
-    fits the record or nothing in the range is significant."""
+    tested); none before it is. -1 for every input where no order fits the record, and
+    for an input whose lags in the range are not significant."""
     m = exps[0][0].shape[1]
-    out = np.array(fallback, dtype=int)
+    out = np.full(m, -1)
     top = max(ORDERS)
     t0 = nk_max + top
     width = nk_max - nk_min + top + 1          # lags per input at the largest order
@@ -274,8 +276,7 @@ def _first_response(exps: list[tuple[np.ndarray, np.ndarray]], nk_min: int, nk_m
                                                 for j in range(m)])
 
     def loss(keep: np.ndarray) -> float:
-        theta = np.linalg.lstsq(G[np.ix_(keep, keep)], g[keep], rcond=None)[0]
-        return max(zz - float(theta @ g[keep]), 1e-13 * zz)
+        return float(_nested_losses(G, g, zz, keep)[-1])
 
     bic = [count * np.log(loss(columns(n)) / count) + np.log(count) * columns(n).size
            for n in orders]
@@ -286,19 +287,39 @@ def _first_response(exps: list[tuple[np.ndarray, np.ndarray]], nk_min: int, nk_m
     from scipy.stats import f as f_dist
 
     for j in range(m):
-        first = top + j * width         # the column of u_j(t - nk_min)
+        block = top + j * width + np.arange(ntest)  # u_j(t - nk_min) .. u_j(t - nk_max)
+        # the block last, latest lag first: leaving out lags nk_min..k leaves a leading set
+        losses = _nested_losses(G, g, zz, np.r_[np.setdiff1d(cols, block), block[::-1]])
         for k in range(ntest):
-            drop = first + np.arange(k + 1)
-            low = loss(np.setdiff1d(cols, drop))
+            low = losses[cols.size - k - 1]
             if exact:
                 hit = low > 1e-9 * zz
             else:
-                F = (low - full) / drop.size / (full / dof)
-                hit = float(f_dist.sf(max(F, 0.0), drop.size, dof)) * ntest < 0.01
+                F = (low - full) / (k + 1) / (full / dof)
+                hit = float(f_dist.sf(max(F, 0.0), k + 1, dof)) * ntest < 0.01
             if hit:
                 out[j] = nk_min + k
                 break
     return out
+
+
+def _nested_losses(G: np.ndarray, g: np.ndarray, zz: float, order: np.ndarray) -> np.ndarray:
+    """The least-squares losses of the models on the first ``q`` regressors of ``order``,
+    ``q = 0 .. len(order)``, from the normal equations ``(G, g, zz)``: one Cholesky factor
+    (of the scaled equations; column by column least squares if it fails), floored at
+    ``1e-13 zz``."""
+    A, b = G[np.ix_(order, order)], g[order]
+    d = np.sqrt(np.maximum(np.diag(A), 1e-300))
+    try:
+        L = np.linalg.cholesky(A / np.outer(d, d))
+        from scipy.linalg import solve_triangular
+
+        w = solve_triangular(L, b / d, lower=True)
+        out = zz - np.r_[0.0, np.cumsum(w * w)]
+    except np.linalg.LinAlgError:
+        out = np.array([zz] + [zz - float(np.linalg.lstsq(A[:q, :q], b[:q], rcond=None)[0]
+                                          @ b[:q]) for q in range(1, len(order) + 1)])
+    return np.maximum(out, 1e-13 * zz)
 
 
 def _normal_equations(exps: list[tuple[np.ndarray, np.ndarray]], na: int,
