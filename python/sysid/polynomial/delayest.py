@@ -6,15 +6,17 @@ MATLAB's criterion alone, the ``nk`` whose ARX(na, nb, nk) model leaves the smal
 residual, comes out late when the input is coloured and the output noisy: the low-order ARX
 model cannot describe the plant, its error is coloured, and a later window of ``nb`` input
 lags fits it better (a second-order plant with delay 1: 2 in 27 of 30 runs with a smooth
-input; the wing flutter record: 14 samples, its response at the first lags already the
-largest; the ball and beam's: 10). So each output gets an ARX model of an order high enough
-for its tests to hold: ``n`` past outputs and, per input, every lag from ``nk_min`` to
-``nk_max + n``, ``n`` chosen by BIC; an input's delay is the smallest ``k`` whose lags
-``nk_min..k`` are jointly significant (F test at 1 %, Bonferroni over the lags tested), so no
-earlier lag shows a response. Where nothing in the range is significant (or the record is too
-short for that model) the least ARX(na, nb) loss gives the delay, as before: each input alone
-gives a start, then a coordinate search changes one input's delay at a time in the ARX model
-with all inputs until none improves the loss.
+input, 30 of 30 with a narrowband one; the ball and beam: 10). So each output gets an ARX
+model of an order high enough for its tests to hold: ``n`` past outputs and, per input, every
+lag from ``nk_min`` to ``nk_max + n``, ``n`` chosen by BIC; an input's delay is the smallest
+``k`` whose lags ``nk_min..k`` are jointly significant (F test at 1 %, Bonferroni over the
+lags tested), so no earlier lag shows a response. The least ARX(na, nb) loss gives the delay,
+as before, where nothing in the range is significant, where the record is too short for that
+model, and where the input's lags in it are not linearly independent (a sum of a few sines,
+or a steep low-pass such as the wing flutter record's input, 15 independent lags of 41: which
+lag acts first is not in the data then, and its 14 samples stay): each input alone gives a
+start, then a coordinate search changes one input's delay at a time in the ARX model with all
+inputs until none improves the loss.
 
 Real records carry offsets (a heater at 5 V, a temperature at 40 degC); an ARX model without
 an intercept fits them through its coefficients and the loss then says little about the
@@ -254,8 +256,11 @@ def _first_response(exps: list[tuple[np.ndarray, np.ndarray]], nk_min: int,
     samples), all fitted on the same samples, so its residuals are near white and its F
     tests hold. The delay of input ``j``: the smallest ``k`` whose lags ``nk_min..k`` are
     jointly significant (F test at 1 %, Bonferroni over the ``nk_max - nk_min + 1`` lags
-    tested); none before it is. -1 for every input where no order fits the record, and
-    for an input whose lags in the range are not significant."""
+    tested); none before it is. -1 for every input where no order fits the record, for an
+    input whose lags in the model are not linearly independent (it is not persistently
+    exciting of that order: which lag acts first is then not in the data, and the test
+    would only find where too few lags are left to stand in for the dropped ones), and for
+    an input whose lags in the range are not significant."""
     m = exps[0][0].shape[1]
     out = np.full(m, -1)
     top = max(ORDERS)
@@ -287,7 +292,10 @@ def _first_response(exps: list[tuple[np.ndarray, np.ndarray]], nk_min: int,
     from scipy.stats import f as f_dist
 
     for j in range(m):
-        block = top + j * width + np.arange(ntest)  # u_j(t - nk_min) .. u_j(t - nk_max)
+        own = top + j * width + np.arange(nk_max - nk_min + n + 1)
+        if _nested_losses(G, g, zz, own, pivots=True).min() <= 1e-10:
+            continue  # its lags are not independent: a few sines, or a steep low-pass
+        block = own[:ntest]                         # u_j(t - nk_min) .. u_j(t - nk_max)
         # the block last, latest lag first: leaving out lags nk_min..k leaves a leading set
         losses = _nested_losses(G, g, zz, np.r_[np.setdiff1d(cols, block), block[::-1]])
         for k in range(ntest):
@@ -303,23 +311,29 @@ def _first_response(exps: list[tuple[np.ndarray, np.ndarray]], nk_min: int,
     return out
 
 
-def _nested_losses(G: np.ndarray, g: np.ndarray, zz: float, order: np.ndarray) -> np.ndarray:
+def _nested_losses(G: np.ndarray, g: np.ndarray, zz: float, order: np.ndarray,
+                   pivots: bool = False) -> np.ndarray:
     """The least-squares losses of the models on the first ``q`` regressors of ``order``,
-    ``q = 0 .. len(order)``, from the normal equations ``(G, g, zz)``: one Cholesky factor
-    (of the scaled equations; column by column least squares if it fails), floored at
-    ``1e-13 zz``."""
-    A, b = G[np.ix_(order, order)], g[order]
-    d = np.sqrt(np.maximum(np.diag(A), 1e-300))
-    try:
-        L = np.linalg.cholesky(A / np.outer(d, d))
-        from scipy.linalg import solve_triangular
-
-        w = solve_triangular(L, b / d, lower=True)
-        out = zz - np.r_[0.0, np.cumsum(w * w)]
-    except np.linalg.LinAlgError:
-        out = np.array([zz] + [zz - float(np.linalg.lstsq(A[:q, :q], b[:q], rcond=None)[0]
-                                          @ b[:q]) for q in range(1, len(order) + 1)])
-    return np.maximum(out, 1e-13 * zz)
+    ``q = 0 .. len(order)``, from the normal equations ``(G, g, zz)``: Gaussian elimination
+    of the scaled equations in that order (a Cholesky factor), a regressor that the ones
+    before it already span (its residual below ``1e-10`` of its own square) left out, so it
+    explains nothing (a sum of sines excites only a few lags: the others are combinations of
+    them). Floored at ``1e-13 zz``. ``pivots=True``: instead, each regressor's residual
+    variance given the ones before it, relative to its own (0 .. 1)."""
+    p = len(order)
+    d = np.sqrt(np.maximum(np.diag(G)[order], 1e-300))
+    M = np.empty((p + 1, p + 1))
+    M[:p, :p] = G[np.ix_(order, order)] / np.outer(d, d)
+    M[:p, p] = M[p, :p] = g[order] / d
+    M[p, p] = zz
+    out, piv = np.empty(p + 1), np.empty(p)
+    out[0] = zz
+    for k in range(p):
+        piv[k] = M[k, k]
+        if M[k, k] > 1e-10:
+            M[k + 1:, k + 1:] -= np.outer(M[k + 1:, k], M[k, k + 1:] / M[k, k])
+        out[k + 1] = M[p, p]
+    return piv if pivots else np.maximum(out, 1e-13 * zz)
 
 
 def _normal_equations(exps: list[tuple[np.ndarray, np.ndarray]], na: int,
