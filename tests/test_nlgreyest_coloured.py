@@ -41,11 +41,8 @@ def _disturbance(n: int, rng: np.random.Generator, coloured: bool) -> np.ndarray
     return lfilter([np.sqrt(1 - POLE ** 2)], [1.0, -POLE], e) if coloured else e
 
 
-def _exact_std(u: np.ndarray) -> np.ndarray:
-    """The covariance of the least-squares estimate to first order, ``(J^T J)^-1 J^T Sigma J
-    (J^T J)^-1``, with ``Sigma`` the disturbance's own (``N x N``, from its filter) and ``J``
-    the simulation's Jacobian at the true parameters: the reference, no estimate in it."""
-    n = u.shape[0]
+def _jacobian(u: np.ndarray) -> np.ndarray:
+    """``(N, p)``: central differences of the simulation in the parameters, at the truth."""
     s = _structure()
     theta = np.array(list(TRUE.values()))
     cols = []
@@ -55,7 +52,15 @@ def _exact_std(u: np.ndarray) -> np.ndarray:
         up, dn = (s.with_values(dict(zip(TRUE, theta + sg * d))).simulate(u, dt=DT)[:, 0]
                   for sg in (1, -1))
         cols.append((up - dn) / 2e-6)
-    J = np.column_stack(cols)
+    return np.column_stack(cols)
+
+
+def _exact_std(u: np.ndarray) -> np.ndarray:
+    """The covariance of the least-squares estimate to first order, ``(J^T J)^-1 J^T Sigma J
+    (J^T J)^-1``, with ``Sigma`` the disturbance's own (``N x N``, from its filter) and ``J``
+    the simulation's Jacobian at the true parameters: the reference, no estimate in it."""
+    n = u.shape[0]
+    J = _jacobian(u)
     L = np.sqrt(1 - POLE ** 2) * SIGMA * POLE ** np.subtract.outer(np.arange(n), np.arange(n))
     L = np.tril(L)
     A = np.linalg.inv(J.T @ J)
@@ -121,16 +126,7 @@ def test_nlgreyest_white_errors_keep_gauss_newton():
 
 def _exact_std_white(u: np.ndarray) -> np.ndarray:
     """``sigma (J^T J)^-1/2`` for white errors of standard deviation ``SIGMA``."""
-    s = _structure()
-    theta = np.array(list(TRUE.values()))
-    cols = []
-    for i in range(theta.size):
-        d = np.zeros_like(theta)
-        d[i] = 1e-6
-        up, dn = (s.with_values(dict(zip(TRUE, theta + sg * d))).simulate(u, dt=DT)[:, 0]
-                  for sg in (1, -1))
-        cols.append((up - dn) / 2e-6)
-    J = np.column_stack(cols)
+    J = _jacobian(u)
     return SIGMA * np.sqrt(np.diag(np.linalg.inv(J.T @ J)))
 
 
