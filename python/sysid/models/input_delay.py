@@ -50,8 +50,9 @@ def input_delays(data: IOData, input_delay: Any, feedthrough: Any = None) -> np.
         from ..polynomial.delayest import DelayWarning, delays
 
         out, weak, _, _ = delays(data)
-        # each input's smallest delay over the outputs it acts on: a pair whose input
-        # explains nothing has an undetermined delay (anywhere in the range), left out
+        # each input's smallest delay over the outputs it acts on: a pair whose delay the
+        # data do not determine (its input explains nothing, or does not excite its lags
+        # independently) is left out
         known = np.ones(out.shape, dtype=bool)
         for i, j, _ in weak:
             known[i, j] = False
@@ -60,10 +61,12 @@ def input_delays(data: IOData, input_delay: Any, feedthrough: Any = None) -> np.
         nk[blind] = 0
         if blind.any():
             warnings.warn(
-                "input_delay='auto': no delay in the range searched makes "
+                "input_delay='auto': the data do not determine the delay of "
                 + ", ".join(data.input_names[j] for j in np.flatnonzero(blind))
-                + " explain any output (sysid.delayest says which pairs): no delay is "
-                "given to it; pass input_delay= if it has one", DelayWarning, stacklevel=3)
+                + " on any output (no delay in the range searched makes it explain one, or "
+                "it does not excite its lags independently; sysid.delayest says which "
+                "pairs): no delay is given to it; pass input_delay= if it has one",
+                DelayWarning, stacklevel=3)
         return np.maximum(nk - (0 if feedthrough is True else 1), 0).astype(int)
     k = np.atleast_1d(np.asarray(input_delay))
     if k.ndim != 1 or k.size not in (1, m):

@@ -94,6 +94,16 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0,
     """
     data = require_record(data, "delayest")
     out, weak, nk_min, nk_max = delays(data, na, nb, nk_min, nk_max)
+    flat = [(i, j) for i, j, p in weak if np.isnan(p)]
+    weak = [w for w in weak if not np.isnan(w[2])]
+    if flat:
+        warnings.warn("the delay of " + ", ".join(f"{data.input_names[j]} -> "
+                                                   f"{data.output_names[i]}" for i, j in flat)
+                      + " is not determined: the input does not excite its lags "
+                      "independently (a few sines, a steep low-pass), so which acts first is "
+                      "not in the data; the delay returned there is the least ARX "
+                      f"({na}, {nb}) loss's, which such an input can place anywhere",
+                      DelayWarning, stacklevel=2)
     if weak:
         names = [f"{data.input_names[j]} -> {data.output_names[i]} (p = {p:.2g})"
                  for i, j, p in weak]
@@ -115,8 +125,10 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0,
 def delays(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int | None = None
            ) -> tuple[np.ndarray, list[tuple[int, int, float]], int, int]:
     """:func:`delayest`'s work without its warnings: the ``(noutputs, ninputs)`` delays, the
-    pairs ``(output, input, p)`` whose input explains nothing at its delay (the delay there
-    not determined), and the range searched ``(nk_min, nk_max)``.
+    pairs ``(output, input, p)`` whose delay the data do not determine (its input explains
+    nothing at it, ``p`` the test's; or ``p`` NaN: the input does not excite its lags
+    independently, so which acts first is not in the data, and the delay there is MATLAB's
+    least ARX loss), and the range searched ``(nk_min, nk_max)``.
 
     Examples
     --------
@@ -159,12 +171,13 @@ def delays(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0, nk_max: int | N
     for i in range(l):
         one = [(u, np.ascontiguousarray(y[:, [i]])) for u, y in centred]
         out[i] = _first_response(one, nk_min, nk_max)
+        unexcited = out[i] == -2  # which lag acts first is not in the data
         if np.any(out[i] < 0):  # no response found in the range: the least ARX loss
             out[i] = np.where(out[i] < 0, _output_delays(one, na, nb, grid), out[i])
         # the chosen delay is the best of len(grid): Bonferroni's correction for the search
-        weak += [(i, j, min(1.0, p * len(grid)))
+        weak += [(i, j, float("nan") if unexcited[j] else min(1.0, p * len(grid)))
                  for j, p in enumerate(_input_p_values(one, na, nb, out[i]))
-                 if p * len(grid) > 0.01]
+                 if unexcited[j] or p * len(grid) > 0.01]
     return out, weak, nk_min, nk_max
 
 
@@ -256,11 +269,11 @@ def _first_response(exps: list[tuple[np.ndarray, np.ndarray]], nk_min: int,
     samples), all fitted on the same samples, so its residuals are near white and its F
     tests hold. The delay of input ``j``: the smallest ``k`` whose lags ``nk_min..k`` are
     jointly significant (F test at 1 %, Bonferroni over the ``nk_max - nk_min + 1`` lags
-    tested); none before it is. -1 for every input where no order fits the record, for an
-    input whose lags in the model are not linearly independent (it is not persistently
-    exciting of that order: which lag acts first is then not in the data, and the test
-    would only find where too few lags are left to stand in for the dropped ones), and for
-    an input whose lags in the range are not significant."""
+    tested); none before it is. -1 for every input where no order fits the record and for
+    an input whose lags in the range are not significant; -2 for an input whose lags in the
+    model are not linearly independent (it is not persistently exciting of that order:
+    which lag acts first is then not in the data, and the test would only find where too
+    few lags are left to stand in for the dropped ones)."""
     m = exps[0][0].shape[1]
     out = np.full(m, -1)
     top = max(ORDERS)
@@ -294,7 +307,8 @@ def _first_response(exps: list[tuple[np.ndarray, np.ndarray]], nk_min: int,
     for j in range(m):
         own = top + j * width + np.arange(nk_max - nk_min + n + 1)
         if _nested_losses(G, g, zz, own, pivots=True).min() <= 1e-10:
-            continue  # its lags are not independent: a few sines, or a steep low-pass
+            out[j] = -2  # its lags are not independent: a few sines, or a steep low-pass
+            continue
         block = own[:ntest]                         # u_j(t - nk_min) .. u_j(t - nk_max)
         # the block last, latest lag first: leaving out lags nk_min..k leaves a leading set
         losses = _nested_losses(G, g, zz, np.r_[np.setdiff1d(cols, block), block[::-1]])

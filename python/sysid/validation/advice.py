@@ -234,10 +234,11 @@ def _delays(data: Any) -> tuple[Finding, np.ndarray | None]:
         return Finding("delays", "note", f"not estimated ({e})"), None
     # a pair whose input explains nothing at any delay searched has no delay to give (its
     # loss is flat, the least anywhere: delayest warns so, which this finding swallowed)
-    blind = {(i, j) for i, j, _ in weak}
+    blind = {(i, j): ("the input does not excite its lags independently" if np.isnan(p)
+                      else "no delay searched makes the input explain it")
+             for i, j, p in weak}
     pairs = [f"{data.input_names[j]} -> {data.output_names[i]}: "
-             + ("not determined (no delay searched makes the input explain it)" if (i, j) in blind
-                else str(nk[i, j]))
+             + (f"not determined ({blind[i, j]})" if (i, j) in blind else str(nk[i, j]))
              for i in range(nk.shape[0]) for j in range(nk.shape[1])]
     if all(nk[i, j] <= 1 or (i, j) in blind
            for i in range(nk.shape[0]) for j in range(nk.shape[1])):
