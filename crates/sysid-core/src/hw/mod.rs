@@ -597,6 +597,19 @@ pub fn estimate(
 mod tests {
     use super::*;
 
+    /// A saturation before a first-order block with a one-sample delay.
+    fn saturation_first_order(offset: bool) -> HwStructure {
+        HwStructure {
+            input: Nonlinearity::Saturation,
+            output: Nonlinearity::Identity,
+            nb: 1,
+            nf: 1,
+            nk: 1,
+            offset,
+            initial_states: 0,
+        }
+    }
+
     /// The Gauss-Newton gradient equals the finite-difference gradient of the cost.
     #[test]
     fn gradient_matches_finite_differences() {
@@ -661,15 +674,7 @@ mod tests {
         let u: Vec<f64> = (0..400)
             .map(|t| ((t * 7919 % 101) as f64 / 50.0) - 1.0)
             .collect();
-        let s = HwStructure {
-            input: Nonlinearity::Saturation,
-            output: Nonlinearity::Identity,
-            nb: 1,
-            nf: 1,
-            nk: 1,
-            offset: true,
-            initial_states: 0,
-        };
+        let s = saturation_first_order(true);
         let truth = [-0.5, 0.5, 0.5, -0.8, 2.5];
         let y = s.simulate(&truth, &u).unwrap();
         let mean = y.iter().sum::<f64>() / y.len() as f64;
@@ -773,15 +778,7 @@ mod tests {
         let u: Vec<f64> = (0..20_000)
             .map(|t| (((t * 7919) % 211) as f64 / 105.0) - 1.0)
             .collect();
-        let s = HwStructure {
-            input: Nonlinearity::Saturation,
-            output: Nonlinearity::Identity,
-            nb: 1,
-            nf: 1,
-            nk: 1,
-            offset: false,
-            initial_states: 0,
-        };
+        let s = saturation_first_order(false);
         let th = [-0.5, 0.5, 0.5, -0.8];
         let y = s.simulate(&th, &u).unwrap();
         let mut pr = HwProblem {

@@ -19,6 +19,41 @@ fn linear_block() -> Vec<f64> {
     ]
 }
 
+/// The 2 x 2 Hammerstein structure of several tests: saturation on input 0, a cubic
+/// polynomial on input 1, a second-order linear block, no feedthrough.
+fn hammerstein_2x2(offsets: bool) -> MimoHwStructure {
+    MimoHwStructure {
+        inputs: vec![
+            Nonlinearity::Saturation,
+            Nonlinearity::Polynomial { degree: 3 },
+        ],
+        outputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
+        order: 2,
+        feedthrough: false,
+        offsets,
+        initial_states: 0,
+    }
+}
+
+/// Its true parameters (without offsets).
+fn hammerstein_2x2_truth() -> Vec<f64> {
+    let mut truth = vec![-0.5, 0.6, 0.3, -0.2];
+    truth.extend(linear_block());
+    truth
+}
+
+/// Its start: the nonlinearities near identity, the linear block perturbed by ~10 %.
+fn hammerstein_2x2_start() -> Vec<f64> {
+    let mut start = vec![-0.9, 0.9, 0.0, 0.0];
+    start.extend(
+        linear_block()
+            .iter()
+            .enumerate()
+            .map(|(k, v)| v * (1.0 + 0.1 * ((k as f64 * 1.7).sin()))),
+    );
+    start
+}
+
 fn sorted_poles(s: &MimoHwStructure, th: &[f64]) -> Vec<f64> {
     let (a, _, _, _) = s.matrices(th);
     let mut p: Vec<f64> = eigenvalues(a.as_ref())
@@ -79,27 +114,9 @@ fn gradient_matches_finite_differences() {
 /// 2 x 2 Hammerstein: saturation on input 0, cubic polynomial on input 1.
 #[test]
 fn hammerstein_2x2_recovered() {
-    let s = MimoHwStructure {
-        inputs: vec![
-            Nonlinearity::Saturation,
-            Nonlinearity::Polynomial { degree: 3 },
-        ],
-        outputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
-        order: 2,
-        feedthrough: false,
-        offsets: false,
-        initial_states: 0,
-    };
-    let mut truth = vec![-0.5, 0.6, 0.3, -0.2];
-    truth.extend(linear_block());
-    // start: the nonlinearities near identity, the linear block perturbed by ~10 %
-    let mut start = vec![-0.9, 0.9, 0.0, 0.0];
-    start.extend(
-        linear_block()
-            .iter()
-            .enumerate()
-            .map(|(k, v)| v * (1.0 + 0.1 * ((k as f64 * 1.7).sin()))),
-    );
+    let s = hammerstein_2x2(false);
+    let truth = hammerstein_2x2_truth();
+    let start = hammerstein_2x2_start();
     let sol = fit(&s, &truth, &start);
     let p = sorted_poles(&s, &sol.theta);
     assert!(
@@ -120,27 +137,10 @@ fn hammerstein_2x2_recovered() {
 /// estimated, from a start at level zero.
 #[test]
 fn hammerstein_2x2_with_output_levels_recovered() {
-    let s = MimoHwStructure {
-        inputs: vec![
-            Nonlinearity::Saturation,
-            Nonlinearity::Polynomial { degree: 3 },
-        ],
-        outputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
-        order: 2,
-        feedthrough: false,
-        offsets: true,
-        initial_states: 0,
-    };
-    let mut truth = vec![-0.5, 0.6, 0.3, -0.2];
-    truth.extend(linear_block());
+    let s = hammerstein_2x2(true);
+    let mut truth = hammerstein_2x2_truth();
     truth.extend([2.0, -1.0]);
-    let mut start = vec![-0.9, 0.9, 0.0, 0.0];
-    start.extend(
-        linear_block()
-            .iter()
-            .enumerate()
-            .map(|(k, v)| v * (1.0 + 0.1 * ((k as f64 * 1.7).sin()))),
-    );
+    let mut start = hammerstein_2x2_start();
     start.extend([0.0, 0.0]);
     let sol = fit(&s, &truth, &start);
     let n = sol.theta.len();
@@ -411,19 +411,8 @@ fn a_pass_stops_inside_the_record_when_asked() {
 /// from rest the fit is biased.
 #[test]
 fn records_starting_mid_response_are_fitted_with_their_initial_states() {
-    let mut s = MimoHwStructure {
-        inputs: vec![
-            Nonlinearity::Saturation,
-            Nonlinearity::Polynomial { degree: 3 },
-        ],
-        outputs: vec![Nonlinearity::Identity, Nonlinearity::Identity],
-        order: 2,
-        feedthrough: false,
-        offsets: false,
-        initial_states: 0,
-    };
-    let mut truth = vec![-0.5, 0.6, 0.3, -0.2];
-    truth.extend(linear_block());
+    let mut s = hammerstein_2x2(false);
+    let truth = hammerstein_2x2_truth();
     let states = [[3.0, -2.0], [-1.5, 4.0]];
     let recs: Vec<(Mat<f64>, Mat<f64>)> = states
         .iter()
@@ -435,13 +424,7 @@ fn records_starting_mid_response_are_fitted_with_their_initial_states() {
         })
         .collect();
     let refs: Vec<_> = recs.iter().map(|(u, y)| (u.as_ref(), y.as_ref())).collect();
-    let mut start = vec![-0.9, 0.9, 0.0, 0.0];
-    start.extend(
-        linear_block()
-            .iter()
-            .enumerate()
-            .map(|(k, v)| v * (1.0 + 0.1 * ((k as f64 * 1.7).sin()))),
-    );
+    let mut start = hammerstein_2x2_start();
     let opts = Options {
         max_iter: 200,
         ..Options::default()
