@@ -37,6 +37,10 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
     behaviour (``hold``), the dead time sampled exactly (any value, not only whole samples),
     by minimising the simulation error on the shared Gauss-Newton search; the start comes
     from refined instrumental variables (SRIVC). Each parameter gets its standard deviation.
+    A free parameter the search leaves on a bound (an undamped pair, a time constant run to
+    zero), and a time constant whose pole acts within one sample (the model is then in effect
+    a simpler type, :meth:`ProcessModel.collapsed`), are named in a
+    :class:`~sysid.BoundWarning` with what to change.
 
     Parameters
     ----------
