@@ -49,7 +49,9 @@ def test_fixed_values_and_bounds():
     m = sysid.procest(data, "P1D", fixed={"Kp": 2.5})
     assert m.values["Kp"] == 2.5 and m.parameters["Kp"]["fixed"]
     assert m.parameters["Kp"]["std"] == 0.0
-    b = sysid.procest(data, "P1D", bounds={"Tp1": (0.1, 1.0)})
+    with pytest.warns(sysid.BoundWarning, match=r"Tp1 = 1 on its upper bound \(1\)\. The "
+                      r"fit may improve beyond it: .*bounds=\{'Tp1'"):
+        b = sysid.procest(data, "P1D", bounds={"Tp1": (0.1, 1.0)})
     assert b.values["Tp1"] <= 1.0 + 1e-12
     assert b.values["Tp1"] == pytest.approx(1.0)   # held on its upper bound
     # the table says so and cuts the 95 % interval there (it was symmetric across it, and
@@ -219,8 +221,9 @@ def test_real_poles_capped_on_a_lightly_damped_record_return_the_capped_fit(code
         m = sysid.procest(data, code, max_iter=max_iter)
     kinds = {w.category for w in rec}
     assert sysid.IterationLimitWarning in {k for c in kinds for k in c.__mro__}
+    # (a capped P2Z may leave Tp2 where its pole acts within one sample: said so)
     assert kinds <= {sysid.tf.refine.ConvergenceWarning, sysid.IdentifiabilityWarning,
-                     DelayWarning}, kinds
+                     DelayWarning, sysid.BoundWarning}, kinds
     assert m.info["iterations"] == [max_iter]
     assert m.info["cost"][0] <= m.info["cost_start"][0]
     if max_iter == 0:  # the start itself, off the symmetric set Tp1 == Tp2
@@ -390,3 +393,48 @@ def test_procest_on_an_frd_names_the_frequency_domain_route():
     frd = sysid.FRD(w, sysid.TransferFunction([2.0], [3.0, 1.0], iodelay=0.5).freqresp(w))
     with pytest.raises(DataError, match=r"sysid.tfest\(frd, n_poles, n_zeros, iodelay='auto'\)"):
         sysid.procest(frd, "P1D")
+
+
+def _prbs(seed: int) -> np.ndarray:
+    return np.repeat(np.random.default_rng(seed).choice([-1.0, 1.0], 60), 10)
+
+
+def test_an_undamped_pair_on_its_bound_is_said_with_the_options():
+    # the wing flutter's P2DU ended at Zeta = 1e-9 (an undamped pair, validation -131 %),
+    # marked "bound" in the table but said nowhere: a growing oscillation (damping -0.02)
+    # holds the positive damping on its bound the same way
+    u = _prbs(3)
+    y = sysid.TransferFunction([[[4.0]]], [[[1.0, -0.08, 4.0]]]).simulate(u, dt=0.05)[:, 0]
+    data = sysid.IOData(u, y + 0.01 * y.std() * np.random.default_rng(4).standard_normal(
+        u.size), 0.05)
+    with pytest.warns(sysid.BoundWarning) as rec:
+        m = sysid.procest(data, "P2U")
+    assert m.values["Zeta"] == pytest.approx(1e-9) and m.parameters["Zeta"]["bound"] == "lower"
+    text = str(rec[0].message)
+    assert "Zeta = 1e-09 on its lower bound" in text and "undamped pair" in text
+    assert "init={'Zeta'" in text and "bounds={'Zeta'" in text and "another type" in text
+
+
+@pytest.mark.parametrize("code, effect", [("P2", "P1"), ("P3", "P1"), ("P2D", "P1D")])
+def test_a_time_constant_run_to_zero_is_said_and_the_model_reads_as_what_it_is(code, effect):
+    # real-pole types on a first-order record ran a time constant to its bound 1e-9: the
+    # fit is the one-pole type's, the model displayed with coefficients 1e9 .. 1e18, and no
+    # warning; now the warning and the display give the type it is in effect
+    u = _prbs(3)
+    y = sysid.ProcessModel("P1", Kp=2.0, Tp1=0.5).simulate(u, dt=0.1)[:, 0]
+    data = sysid.IOData(u, y + 0.05 * np.random.default_rng(5).standard_normal(u.size), 0.1)
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        m = sysid.procest(data, code)
+    said = [str(w.message) for w in rec if w.category is sysid.BoundWarning]
+    assert len(said) == 1 and f"in effect {effect}, 1.99" in said[0], said
+    assert f"fit '{effect}'" in said[0] and "Tp2 = " in said[0]
+    assert m.values["Tp2"] < 0.1 / 40  # its pole decays to exp(-40) within a sample
+    assert list(m.collapsed()) == ["y0<-u0"] and m.collapsed()["y0<-u0"][0] == effect
+    text = m.summary()
+    assert f"in effect {effect}: 1.99" in text and f"(1 + {m.values['Tp2']:.6g} s)" in text
+    assert "e+08" not in text and "e+09" not in text and "e+1" not in text
+    # the same model fitted without a collapse reads as before, and says nothing
+    one = sysid.procest(data, effect)
+    assert one.collapsed() == {} and "in effect" not in str(one)
+    assert one.info["fit_percent"][0] == pytest.approx(m.info["fit_percent"][0], abs=0.01)

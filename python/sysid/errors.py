@@ -125,6 +125,13 @@ class IdentifiabilityWarning(SysidWarning):
     determined."""
 
 
+class BoundWarning(SysidWarning):
+    """An estimate ended on a bound of its search (the message names the parameter and the
+    option to change: a start, the bounds, another structure), or a time constant collapsed
+    towards zero, so that its pole acts within one sample and the model is in effect a
+    simpler one (the message gives it)."""
+
+
 def is_frd(data: object) -> bool:
     """Whether ``data`` is frequency-response data (an :class:`sysid.FRD`, MATLAB's
     ``idfrd``), told by its ``omega`` and ``response`` (no import of the model module).

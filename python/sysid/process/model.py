@@ -148,8 +148,48 @@ class ProcessModel(TransferFunction):
                    input_names=d.get("input_names"), output_names=d.get("output_names"),
                    info=d.get("info"))
 
+    def collapsed(self, dt: float | None = None) -> dict[str, tuple[str, str]]:
+        """The pairs with a pole that acts within one sample of ``dt`` (default: the sample
+        interval of the data :func:`sysid.procest` fitted, ``info["sample_time"]``), a time
+        constant under ``dt / 40``, as a search that ran one to its lower bound leaves it:
+        ``{"y<-u": (type, transfer function)}`` of what the pair is in effect, those poles
+        left out (the sampled model is the same to ``exp(-40)``).
+
+        Examples
+        --------
+        >>> import sysid
+        >>> m = sysid.ProcessModel("P2", Kp=2.0, Tp1=1.5, Tp2=1e-9)
+        >>> m.collapsed(dt=0.1)
+        {'y0<-u0': ('P1', '2 / (1 + 1.5 s)')}
+        """
+        dt = self.info.get("sample_time") if dt is None else dt
+        if dt is None or not dt > 0:
+            return {}
+        out = {}
+        for i, j in self.pairs():
+            p = self._values[i][j]
+            fast = self.type.fast(p, float(dt))
+            if fast:
+                out[f"{self.output_names[i]}<-{self.input_names[j]}"] = self.type.text(p, fast)
+        return out
+
     def __str__(self) -> str:
-        return f"{self!r}\n{TransferFunction.__str__(self)}"
+        gone = self.collapsed()
+        if not gone:
+            return f"{self!r}\n{TransferFunction.__str__(self)}"
+        # a pole run to 1e-9 makes the expanded coefficients 1e9 .. 1e18: the factored form,
+        # and what the pair is in effect
+        lines = [repr(self)]
+        for i, j in self.pairs():
+            key = f"{self.output_names[i]}<-{self.input_names[j]}"
+            p = self._values[i][j]
+            lines.append(f"{self.output_names[i]} <- {self.input_names[j]}:  "
+                         f"{self.type.text(p)[1]}")
+            if key in gone:
+                code, text = gone[key]
+                lines.append(f"    in effect {code}: {text} (a pole acts within one sample, "
+                             f"dt = {self.info['sample_time']:g})")
+        return "\n".join(lines)
 
     def __repr__(self) -> str:
         if self.noutputs == self.ninputs == 1:

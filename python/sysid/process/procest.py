@@ -37,6 +37,10 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
     behaviour (``hold``), the dead time sampled exactly (any value, not only whole samples),
     by minimising the simulation error on the shared Gauss-Newton search; the start comes
     from refined instrumental variables (SRIVC). Each parameter gets its standard deviation.
+    A free parameter the search leaves on a bound (an undamped pair, a time constant run to
+    zero), and a time constant whose pole acts within one sample (the model is then in effect
+    a simpler type, :meth:`ProcessModel.collapsed`), are named in a
+    :class:`~sysid.BoundWarning` with what to change.
 
     Parameters
     ----------
@@ -199,10 +203,82 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
     if t.delay and "Td" not in fixed and not ("Td" in bounds and bounds["Td"][1] <= dmax):
         warn_delay_at_bound(np.array([[v["Td"] for v in row] for row in values]), dmax,
                             max_delay is not None, data)
+    model.info["sample_time"] = float(data.dt)
+    _warn_bounds(model, t, fixed, bounds, limits)
     coloured_uncertainty(model, data, [c.shape[0] for c in covs], hold, initial_state, limits)
     if initial_state == "zero":  # the fit of a simulation from rest, as the model was fitted
         fit_percent(model, data)
     return model
+
+
+def _warn_bounds(model: ProcessModel, t: ProcessType, fixed: dict[str, float],
+                 bounds: dict[str, tuple[float, float]], limits: tuple[Any, Any]) -> None:
+    """A :class:`~sysid.BoundWarning` naming every free parameter the search left on one of
+    its ``limits`` (what that means: a time constant run to zero, an undamped pair) and the
+    options to change, and what a pair with a pole that acts within one sample is in effect
+    (:meth:`ProcessModel.collapsed`): the wing flutter's ``P2DU`` ended at ``Zeta = 1e-9``
+    (validation -131 %) and ``P2`` on the ball and beam at ``Tp2 = 1e-9`` (coefficients
+    1e9 .. 1e18), said nowhere. A dead time of 0 on its default bound is an answer (no dead
+    time), and one on the default ``max_delay`` has its own :class:`~sysid.DelayWarning`:
+    neither is listed here."""
+    from .._checks import user_stacklevel
+    from ..errors import BoundWarning
+
+    gone = model.collapsed()
+    table, (lo, hi) = model.parameters, limits
+    said, names, c, values = [], [], 0, {}
+    structural = bool(gone)  # a pole run to zero or an undamped pair, not a user's bound
+    for i, j in model.pairs():
+        pair = f"{model.output_names[i]}<-{model.input_names[j]}"
+        vals = values[pair] = model._values[i][j]
+        for k in t.names:
+            side, full, c = table.bound[c], table.names[c], c + 1
+            if not side or k in fixed or (k == "Td" and "Td" not in bounds):
+                continue
+            fast = t.fast(vals, model.info["sample_time"]) if pair in gone else {}
+            if side == "lower" and (k in fast or ("pair" in fast and k in ("Tw", "Zeta"))):
+                names.append(k)
+                continue  # said with the pair's collapse below
+            edge = lo[c - 1] if side == "lower" else hi[c - 1]
+            what = ""
+            if side == "lower" and k == "Zeta" and edge <= 1e-6:
+                what = (f": an undamped pair, an oscillation at {1.0 / abs(vals['Tw']):.4g} "
+                        "rad/s that never decays")
+            elif side == "lower" and k in ("Tp1", "Tp2", "Tp3", "Tw") and edge <= 1e-9:
+                what = ": a time constant run to zero"
+            structural |= bool(what)
+            said.append(f"{full} = {vals[k]:.4g} on its {side} bound ({edge:.4g}){what}")
+            names.append(k)
+    dt = model.info["sample_time"]
+    for pair, (code, text) in gone.items():
+        vals = values[pair]
+        fast = t.fast(vals, dt)
+        which = [f"{k} = {vals[k]:.4g}" for k in fast if k != "pair"]
+        names += [k for k in fast if k != "pair"]
+        if "pair" in fast:
+            which.append(f"Tw = {vals['Tw']:.4g}, Zeta = {vals['Zeta']:.4g} ("
+                         + ("one pole" if fast["pair"] == "one" else "both poles")
+                         + " of the pair)")
+            names.append("Tw")
+        said.append(f"{pair}: {', '.join(which)}: a pole that acts within one sample "
+                    f"(dt = {dt:g}): in effect "
+                    + (f"{code}, {text}" if code[1] != "0" or "I" in code else
+                       f"a static gain, {text}"))
+    if not said:
+        return
+    k = names[0] if names else next((n for n in t.names if n.startswith("T")), "Kp")
+    # a static gain (no pole left) is fitted as 'P1D' with a small Tp1: not a type to name
+    simpler = sorted({code for code, _ in gone.values() if code[1] != "0" or "I" in code})
+    fix = (f"a start (init={{{k!r}: ...}}) or the bounds (bounds={{{k!r}: (lower, "
+           "upper)})")
+    if structural:
+        fix = ("the data do not support that structure: fit " + "".join(
+            f"{x!r} or " for x in simpler) + "another type (a zero 'Z', fewer or more "
+            "poles), or change the search: " + fix)
+    else:
+        fix = "the fit may improve beyond it: widen the bounds or start elsewhere, " + fix
+    warnings.warn(f"procest({t.code!r}): " + "; ".join(said) + ". " + fix[0].upper()
+                  + fix[1:], BoundWarning, stacklevel=user_stacklevel())
 
 
 def _nested_pairs(t: ProcessType, exps: list[tuple[np.ndarray, np.ndarray]], data: Any,

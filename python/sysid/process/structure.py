@@ -31,7 +31,11 @@ import numpy as np
 
 from ..errors import DataError
 
-__all__ = ["ProcessType"]
+__all__ = ["ProcessType", "FAST"]
+
+#: a pole whose time constant is under ``dt / FAST`` acts within one sample (``exp(-40)``,
+#: 4e-18: the sampled model does not have it)
+FAST = 40.0
 
 _FIX = ("use a code like 'P1D', 'P2DU', 'P1DI' or 'P3DZ': P, the number of poles 0-3, then "
         "any of D (dead time), Z (zero), I (integrator), U (underdamped, 2 or 3 poles)")
@@ -112,6 +116,80 @@ class ProcessType:
         num = np.array([p["Kp"] * p["Tz"], p["Kp"]]) if self.zero else np.array([p["Kp"]])
         return num, den
 
+    def fast(self, p: dict[str, float], dt: float) -> dict[str, str]:
+        """The poles of ``p`` that act within one sample of ``dt``: their time constant under
+        ``dt / FAST`` (decayed to ``exp(-40)`` within a sample, so the sampled model does not
+        have them). Keys: ``"Tp1"`` .. ``"Tp3"`` (a real pole), ``"pair"`` (the ``U`` pair:
+        value ``"both"``, or ``"one"`` for the faster of an overdamped pair's real poles).
+
+        Examples
+        --------
+        >>> from sysid.process.structure import ProcessType
+        >>> ProcessType.parse("P2").fast({"Kp": 1.0, "Tp1": 2.0, "Tp2": 1e-9}, 0.1)
+        {'Tp2': 'Tp2'}
+        """
+        lim, out = dt / FAST, {}
+        if self.underdamped:
+            tw, z = abs(p["Tw"]), p["Zeta"]
+            times = _pair_times(tw, z)
+            if times is not None:
+                if times[0] < lim:
+                    out["pair"] = "both"
+                elif times[1] < lim:
+                    out["pair"] = "one"
+            elif z > 0 and tw / z < lim:  # complex poles that decay within a sample
+                out["pair"] = "both"
+        reals = ["Tp3"] if self.underdamped and self.poles == 3 else \
+            ([] if self.underdamped else [f"Tp{k + 1}" for k in range(self.poles)])
+        for k in reals:
+            if abs(p[k]) < lim:
+                out[k] = k
+        return out
+
+    def text(self, p: dict[str, float], leave: dict[str, str] | None = None
+             ) -> tuple[str, str]:
+        """The type code and the factored transfer function ``Kp (1 + Tz s) / ((1 + Tp1 s)
+        ...) * exp(-Td s)`` of the values ``p``, the poles ``leave`` (:meth:`fast`) left out.
+
+        Examples
+        --------
+        >>> from sysid.process.structure import ProcessType
+        >>> t = ProcessType.parse("P2D")
+        >>> p = {"Kp": 2.0, "Tp1": 1.5, "Tp2": 1e-9, "Td": 0.3}
+        >>> t.text(p)
+        ('P2D', '2 / ((1 + 1.5 s) (1 + 1e-09 s)) * exp(-0.3 s)')
+        >>> t.text(p, t.fast(p, 0.1))
+        ('P1D', '2 / (1 + 1.5 s) * exp(-0.3 s)')
+        """
+        leave = leave or {}
+        facs, poles, pair = [], 0, False
+        if self.underdamped:
+            tw, z = p["Tw"], p["Zeta"]
+            if leave.get("pair") == "one":
+                times = _pair_times(abs(tw), z)
+                facs.append(f"(1 + {times[0] if times else tw:.6g} s)")
+                poles += 1
+            elif "pair" not in leave:
+                facs.append(f"(1 + {2.0 * z * tw:.6g} s + {tw * tw:.6g} s^2)")
+                poles, pair = poles + 2, True
+        for k in range(self.poles):
+            name = f"Tp{k + 1}"
+            if name in p and name not in leave:
+                facs.append(f"(1 + {p[name]:.6g} s)")
+                poles += 1
+        if self.integrator:
+            facs.insert(0, "s")
+        num = f"{p['Kp']:.6g}" + (f" (1 {'-' if p['Tz'] < 0 else '+'} {abs(p['Tz']):.6g} s)"
+                                  if self.zero else "")
+        den = " ".join(facs)
+        if len(facs) > 1:
+            den = f"({den})"
+        td = p.get("Td", 0.0)
+        tail = f" * exp(-{td:.6g} s)" if self.delay and td > 0 else ""
+        code = ProcessType(poles, self.delay, self.zero and poles > 0, self.integrator,
+                           pair).code
+        return code, (f"{num} / {den}" if den else num) + tail
+
     def default_bounds(self, name: str) -> tuple[float, float]:
         """MATLAB-like defaults: time constants and damping positive, the rest free."""
         if name == "Kp":
@@ -121,3 +199,12 @@ class ProcessType:
         if name == "Td":
             return 0.0, np.inf
         return 1e-9, np.inf
+
+
+def _pair_times(tw: float, zeta: float) -> tuple[float, float] | None:
+    """The real time constants (slower, faster) of an overdamped pair ``1 + 2 zeta Tw s +
+    (Tw s)^2``; None for complex poles."""
+    if zeta < 1.0:
+        return None
+    r = float(np.sqrt(zeta * zeta - 1.0))
+    return tw * (zeta + r), tw / (zeta + r)

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from .._display import HTMLResult
+from .._threads import one_blas_thread
 from ..data.iodata import require_record
 from ..errors import DataError, InsufficientDataError
 
@@ -312,6 +313,7 @@ def _nonlinearity(data: Any, nk: np.ndarray | None) -> Finding:
     return Finding("nonlinearity", "ok", "no sign that a nonlinear model would fit better")
 
 
+@one_blas_thread
 def advice(data: Any) -> Advice:
     """Check a record before fitting it and say what to do (MATLAB's ``advice(data)``).
 
