@@ -32,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int
+from .._checks import as_int, user_stacklevel
 from ..errors import DataError, NumericalError, StabilityWarning
 from ..models.statespace import StateSpaceModel
 
@@ -235,7 +235,7 @@ def linearize(model: Any, u0: Any = None, *, order: int | None = None,
         warnings.warn(f"the linearisation at {np.round(u, 6).tolist()} has a pole outside the "
                       f"unit circle although the model settles there: its order "
                       f"({lin.nstates}) is likely too high; pass order=",
-                      StabilityWarning, stacklevel=2)
+                      StabilityWarning, stacklevel=user_stacklevel())
     return StateSpaceModel(lin.A, lin.B, lin.C, lin.D, dt=_dt(model),
                            input_names=getattr(model, "input_names", None),
                            output_names=getattr(model, "output_names", None),

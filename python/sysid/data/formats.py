@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from .._atomic import atomic_path
+from .._checks import user_stacklevel
 from ..errors import DataError, SysidWarning
 from .table import datetime_seconds, numeric, read_table, units_row
 from .units import check_dt_against_time, split_header, time_column, time_unit_seconds
@@ -63,7 +64,7 @@ def _warn_dropped_rows(index: Any, timed: bool) -> None:
         "a time column the record treats the rows left as consecutive samples; fill the "
         "gaps instead (IOData.from_pandas(df, nan='interpolate') on the full frame), or "
         "give the time (time='column' or a time index)",
-        SysidWarning, stacklevel=3)
+        SysidWarning, stacklevel=user_stacklevel())
 
 
 def _seconds(x: Any, first: Any, unit: str = "") -> np.ndarray:
@@ -241,7 +242,7 @@ def from_pandas(
                 + (f"an integer index named {df.index.name!r}, read as row numbers"
                    if named else "a default 0, 1, 2, ... index")
                 + "): assuming dt = 1 s; pass dt=... or time='column'",
-                SysidWarning, stacklevel=2,
+                SysidWarning, stacklevel=user_stacklevel(),
             )
     kw: dict[str, Any] = {
         "input_names": inputs,
@@ -403,7 +404,7 @@ def from_csv(
     if tcol is None and dt is None:
         warnings.warn(
             f"{p.name} has no time column and no dt= was given: assuming dt = 1 s; pass "
-            "dt=... or time='column'", SysidWarning, stacklevel=2)
+            "dt=... or time='column'", SysidWarning, stacklevel=user_stacklevel())
     if tcol is not None and dt is None and np.isfinite(data[:, tcol]).all():
         # the dt the time column was written with (to_csv): its shortest decimal (0.1) or,
         # for a rate such as 1/60, its mean spacing, when that grid gives the column back
@@ -613,5 +614,5 @@ def from_mat(
         else:
             warnings.warn(f"{Path(path).name} holds no sample time (a scalar Ts or dt) and no "
                           "dt= was given: assuming dt = 1 s; pass dt=... (seconds, or the name "
-                          "of the variable holding it)", SysidWarning, stacklevel=2)
+                          "of the variable holding it)", SysidWarning, stacklevel=user_stacklevel())
     return cls(uu, yy, dt, input_names=input_names, output_names=output_names)

@@ -26,6 +26,7 @@ from .._checks import (
     as_real,
     check_elements,
     check_magnitudes,
+    user_stacklevel,
 )
 from ..errors import DataError, ExcitationWarning, is_record
 
@@ -527,7 +528,7 @@ def _covariance_order(us: list[np.ndarray], mo: int, tol: float) -> int:
     return order
 
 
-def warn_excitation(got: int, order: int, *, stacklevel: int = 2) -> None:
+def warn_excitation(got: int, order: int, *, stacklevel: int | None = None) -> None:
     """Issue the :class:`~sysid.ExcitationWarning` for an input of excitation order ``got``
     asked to support a model of ``order`` (which needs ``2 * order``); silent otherwise."""
     need = 2 * order
@@ -539,11 +540,11 @@ def warn_excitation(got: int, order: int, *, stacklevel: int = 2) -> None:
                 "Use a richer input (white noise, PRBS, a multisine with more lines) or a lower "
                 "order"
             ),
-            stacklevel=stacklevel + 1,
+            stacklevel=user_stacklevel() if stacklevel is None else stacklevel + 1,
         )
 
 
-def check_excitation(u: Any, order: int, *, stacklevel: int = 2) -> int:
+def check_excitation(u: Any, order: int, *, stacklevel: int | None = None) -> int:
     """Warn (:class:`~sysid.ExcitationWarning`) if ``u`` (the inputs, or a record) cannot
     support a model of ``order``: its persistent-excitation order is below ``2 * order``.
     Returns that order.
@@ -558,5 +559,5 @@ def check_excitation(u: Any, order: int, *, stacklevel: int = 2) -> int:
     order = as_int(order, "order", 1)
     need = 2 * order
     got = persistent_excitation_order(u, need)
-    warn_excitation(got, int(order), stacklevel=stacklevel + 1)
+    warn_excitation(got, int(order), stacklevel=None if stacklevel is None else stacklevel + 1)
     return got

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_2d, as_dt, check_elements, real_array
+from .._checks import as_2d, as_dt, check_elements, real_array, user_stacklevel
 from ..errors import DataError, InsufficientDataError, NonFiniteError, ShapeError
 from .layout import time_first
 from .units import sample_time
@@ -306,7 +306,7 @@ def from_irregular(
             f"time has {cuts.size} gap(s) longer than max_gap = {gap:g} s (the longest "
             f"{float(d.max()):g} s, after {t[int(np.argmax(d))]:g} s): the record is cut into "
             f"{len(pieces)} experiment(s) there instead of bridged by interpolation; pass a "
-            "larger max_gap to bridge them", SysidWarning, stacklevel=3)
+            "larger max_gap to bridge them", SysidWarning, stacklevel=user_stacklevel())
     if not pieces:
         raise DataError(f"no stretch of time between gaps longer than max_gap = {gap:g} s "
                         f"holds two instants dt = {h:g} s apart: nothing to interpolate")

@@ -63,7 +63,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_real, require_inputs_vary
+from .._checks import as_real, require_inputs_vary, user_stacklevel
 from .._display import modulus
 from .._progress import Bar, show
 from .._threads import one_blas_thread
@@ -211,7 +211,7 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
     if spikes:
         checks["outliers"] = (f"{spikes}: every fit bends to them; repair them first "
                               f"(sysid.despike(data)) or cut them out")
-        warnings.warn(f"identify: {checks['outliers']}", SysidWarning, stacklevel=3)
+        warnings.warn(f"identify: {checks['outliers']}", SysidWarning, stacklevel=user_stacklevel())
     return checks, feedback
 
 
@@ -665,7 +665,8 @@ def identify(
             f"{len(broken)} candidate(s) failed with an error that says nothing of the data "
             f"(first: {r['family']} of order {r['order']}, {r['note']}); the choice was made "
             f"without them: check the installation (a failed import) or report it")
-        warnings.warn(f"identify: {checks['candidate_errors']}", SysidWarning, stacklevel=2)
+        warnings.warn(f"identify: {checks['candidate_errors']}", SysidWarning,
+                      stacklevel=user_stacklevel())
     if board.skipped:
         checks["long_record"] = (
             f"not scored, to keep the work in proportion on this record: "
@@ -674,7 +675,7 @@ def identify(
     if board.out_of_time:
         warnings.warn(f"identify stopped scoring candidates after time_budget={time_budget} s "
                       f"({len(board.rows)} scored): the best so far is returned; raise "
-                      "time_budget for the full search", SysidWarning, stacklevel=2)
+                      "time_budget for the full search", SysidWarning, stacklevel=user_stacklevel())
     insist = board.insisting() if enforce_stability is None else None
     if board.drift is not None:
         u = board.drift["unstable"]
@@ -700,7 +701,7 @@ def identify(
                "enforce_stability=False")
         warnings.warn(f"identify returns an unstable model (largest pole modulus {modulus(rho)}): "
                       f"{why}; pass enforce_stability=True for the best stable model",
-                      StabilityWarning, stacklevel=2)
+                      StabilityWarning, stacklevel=user_stacklevel())
     for r in ranked:
         r["chosen"] = r is chosen
     rows = [{k: v for k, v in r.items()

@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_dt, as_matrix, check_covariance
+from .._checks import as_dt, as_matrix, check_covariance, user_stacklevel
 from ..errors import DataError, ShapeError
 from .paramtable import ParameterTable
 
@@ -88,7 +88,7 @@ def drop_uncertainty(obj: Any, what: str) -> None:
         "its covariance belongs to the estimated parameters, which give the old value, and "
         "every std=True result would describe that old model; re-estimate the model "
         "(sysid.pem(data, model, max_iter=0) gives the criterion's covariance at it) or set "
-        "model.uncertainty again", UncertaintyWarning, stacklevel=3)
+        "model.uncertainty again", UncertaintyWarning, stacklevel=user_stacklevel())
 
 
 #: the matrices whose replacement drops a parameter uncertainty (``K`` only when the model

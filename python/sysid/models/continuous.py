@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 import scipy.linalg
 
-from .._checks import as_2d, as_dt
+from .._checks import as_2d, as_dt, user_stacklevel
 from ..errors import DataError, NumericalError, SysidWarning
 from .attributes import ContinuousTime, Matrix
 from .carried import carry
@@ -690,7 +690,7 @@ def _d2c(model: StateSpaceModel, method: str, prewarp: float | None, quiet: bool
                 f"(z = {p[negative_real(p)][0].real:g}), which no continuous model of its "
                 "order samples to; each is doubled into a complex pair at the Nyquist "
                 f"frequency (order {n} -> {Ac.shape[0]}, as MATLAB's d2c); method='tustin' "
-                "keeps the order", SysidWarning, stacklevel=3)
+                "keeps the order", SysidWarning, stacklevel=user_stacklevel())
     elif method == "zoh":
         big = np.eye(n + m)
         big[:n, :n], big[:n, n:] = A, B

@@ -31,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int
+from .._checks import as_int, user_stacklevel
 from ..data.iodata import IOData
 from ..errors import DataError
 from .statespace import StateSpaceModel
@@ -66,7 +66,7 @@ def input_delays(data: IOData, input_delay: Any, feedthrough: Any = None) -> np.
                 + " on any output (no delay in the range searched makes it explain one, or "
                 "it does not excite its lags independently; sysid.delayest says which "
                 "pairs): no delay is given to it; pass input_delay= if it has one",
-                DelayWarning, stacklevel=3)
+                DelayWarning, stacklevel=user_stacklevel())
         return np.maximum(nk - (0 if feedthrough is True else 1), 0).astype(int)
     k = np.atleast_1d(np.asarray(input_delay))
     if k.ndim != 1 or k.size not in (1, m):

@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import user_stacklevel
 from ..errors import DataError
 from .uncertainty import _METHODS, UncertaintyWarning, _complex_std, _match, require
 
@@ -185,7 +186,7 @@ def _warn_monte_carlo(mask: np.ndarray, lam: np.ndarray, what: str) -> None:
         f"{int(mask.sum())} pole(s) ({which}) coincide with another pole within their "
         f"uncertainty, where a first-order {what} does not hold: reported the Monte Carlo "
         f"value from {_MC_DRAWS} models drawn from the parameter covariance (first order for "
-        "the other poles)", UncertaintyWarning, stacklevel=4)
+        "the other poles)", UncertaintyWarning, stacklevel=user_stacklevel())
 
 
 def _warn_undetermined(model: Any) -> None:
@@ -198,7 +199,7 @@ def _warn_undetermined(model: Any) -> None:
             f"the model's parameter covariance leaves out {k} direction(s) the data do not "
             "determine (an order above what they support): these standard deviations are "
             "not reliable; refit at a lower order, or check them by bootstrap",
-            UncertaintyWarning, stacklevel=4)
+            UncertaintyWarning, stacklevel=user_stacklevel())
 
 
 def pole_std(model: Any, method: str = "linear", *, n: int = 1000, rng: Any = None
@@ -273,7 +274,7 @@ def damping_std(model: Any, dt: float) -> dict[str, np.ndarray]:
     if at_zero.any():
         where = "z = 0 (infinitely fast)" if dt else "s = 0 (integrators)"
         warnings.warn(f"{int(at_zero.sum())} pole(s) at {where}: their damping and frequency "
-                      "std are reported as NaN", UncertaintyWarning, stacklevel=3)
+                      "std are reported as NaN", UncertaintyWarning, stacklevel=user_stacklevel())
     nan = np.full(lam.size, np.nan)
     return {
         "poles": lam, "s": s, "pole_std": pole_sd,

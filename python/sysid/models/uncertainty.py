@@ -39,6 +39,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from .._checks import user_stacklevel
 from .._display import HTMLResult
 from ..errors import DataError, SysidWarning
 
@@ -420,7 +421,7 @@ class ParameterUncertainty(HTMLResult):
                 "the estimate is that close to an unstable or degenerate model, so the "
                 "standard deviations that depend on them are reported as inf; refit with "
                 "fewer parameters, or check with method='monte-carlo'",
-                UncertaintyWarning, stacklevel=3)
+                UncertaintyWarning, stacklevel=user_stacklevel())
         return value, G
 
     def jacobian(self, fn: Callable[[Any], Any], *, step: float = 1e-3) -> np.ndarray:

@@ -24,6 +24,7 @@ from .._checks import (
     check_magnitudes,
     experiment_arrays,
     require_inputs_vary,
+    user_stacklevel,
     warn_if_capped,
 )
 from .._progress import iteration_callback, iteration_printer
@@ -221,7 +222,7 @@ def nlhw(
             text = str(w.message)
             text = text[4:] if text.startswith("oe: ") else text
             warnings.warn(w.category(f"nlhw (its linear start, an output-error fit of the same "
-                                     f"orders): {text}"), stacklevel=2)
+                                     f"orders): {text}"), stacklevel=user_stacklevel())
     t_lin = time.perf_counter() - t_lin
     b0, f0 = np.asarray(lin.b[0][0], float), np.asarray(lin.f[0][0], float)
     u_all = np.concatenate([r[0] for r in records])

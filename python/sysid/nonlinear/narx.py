@@ -21,6 +21,7 @@ from .._checks import (
     check_magnitudes,
     experiment_arrays,
     require_independent_inputs,
+    user_stacklevel,
 )
 from .._threads import one_blas_thread
 from ..data.iodata import require_record
@@ -166,7 +167,7 @@ def free_run_check(model: Any, exps: list[tuple[np.ndarray, np.ndarray]]) -> Non
             f"(experiment {i}: {var}). It is fitted for one-step prediction, which it still "
             "does; to simulate, keep fewer terms (criterion='bic'), a lower degree or shorter "
             "lags, or fit for simulation (nlarx with a SigmoidNetwork and focus='simulation', "
-            "nlhw, pnlss)"), stacklevel=3)
+            "nlhw, pnlss)"), stacklevel=user_stacklevel())
         return
     fit = 100.0 * (1.0 - np.sqrt(sse / np.maximum(var, 1e-300)))
     model.info["free_run"] = {"diverged": False, "fit": fit.tolist()}
@@ -419,7 +420,8 @@ def nlarx(
             f"err_tol={err_tol:g}; criterion={criterion!r} keeps a prefix of the terms chosen)"
             ". A fast-sampled or integrating output does "
             "this: decimate the record (sysid.decimate), lower err_tol, or fit for simulation "
-            "(nlarx with a SigmoidNetwork and focus='simulation', nlhw, pnlss)"), stacklevel=2)
+            "(nlarx with a SigmoidNetwork and focus='simulation', nlhw, pnlss)"),
+            stacklevel=user_stacklevel())
     return model
 
 

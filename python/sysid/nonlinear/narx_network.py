@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import warn_iteration_limit
+from .._checks import user_stacklevel, warn_iteration_limit
 from .._progress import iteration_callback, iteration_printer
 from ..errors import (
     DataError,
@@ -265,7 +265,7 @@ def _report(rep: dict[str, Any]) -> dict[str, Any]:
 
 def _warn(rep: dict[str, Any], what: str, max_iter: int) -> None:
     if rep["stop"] == "maximum iterations" and max_iter > 0:
-        warn_iteration_limit(what, max_iter, rep["history"], stacklevel=5,
+        warn_iteration_limit(what, max_iter, rep["history"],
                              remaining=rep["remaining_decrease"])
 
 
@@ -293,7 +293,7 @@ def _refine(model: NetworkNARXModel, recs: list[tuple[np.ndarray, np.ndarray]], 
         warnings.warn(f"the simulation-focus refinement could not start: the prediction "
                       f"fit's free run diverges on the estimation data ({e}); the model is the "
                       "prediction fit: use fewer units or smaller lags", StabilityWarning,
-                      stacklevel=4)
+                      stacklevel=user_stacklevel())
         info["refine"] = {"iterations": 0, "stop": "failed to start", "cost": float("nan")}
         return model
     finally:

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from scipy import signal
 
-from .._checks import as_int, check_elements, constant_channels
+from .._checks import as_int, check_elements, constant_channels, user_stacklevel
 from ..data.iodata import IOData, require_record
 from ..errors import DataError, ExcitationError, InsufficientDataError, SysidWarning
 
@@ -160,7 +160,7 @@ def _welch_matrix(
     if short and len(short) < len(zs):
         warnings.warn(f"experiment(s) {', '.join(short)} shorter than nperseg = {nperseg} were "
                       f"left out of the spectra; lower nperseg to use them", SysidWarning,
-                      stacklevel=3)
+                      stacklevel=user_stacklevel())
     for z in zs:
         if z.shape[0] < nperseg:
             continue

@@ -36,7 +36,13 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int, experiment_arrays, require_inputs_vary, stability_criteria
+from .._checks import (
+    as_int,
+    experiment_arrays,
+    require_inputs_vary,
+    stability_criteria,
+    user_stacklevel,
+)
 from ..errors import DataError, InsufficientDataError, NonFiniteError, SysidWarning
 
 _METHODS = ("cov", "data")
@@ -378,7 +384,8 @@ def default_horizon(ys: list[np.ndarray], dt: float, least: int, blocks: int) ->
                                          if room < LONGEST_HORIZON else "its longest")
             + f"), so modes below about "
             f"{1.0 / (10.0 * i * dt):.3g} Hz may be missed: decimate first "
-            f"(sysid.decimate(data, {k})) or pass horizon=", SysidWarning, stacklevel=3)
+            f"(sysid.decimate(data, {k})) or pass horizon=", SysidWarning,
+            stacklevel=user_stacklevel())
     return i
 
 

@@ -15,13 +15,14 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import PERSISTENT_DECAY, mode_kept
+from .._checks import PERSISTENT_DECAY, mode_kept, user_stacklevel
 from ..errors import StabilityWarning
 
 __all__ = ["cap_advice", "warn_boundary", "warn_poles_at_bound"]
 
 
-def warn_boundary(A: np.ndarray, n: int, stacklevel: int = 3, held: bool = True) -> bool:
+def warn_boundary(A: np.ndarray, n: int, stacklevel: int | None = None,
+                  held: bool = True) -> bool:
     """A :class:`~sysid.StabilityWarning` when a pole of the stable ``A`` keeps more than
     ``PERSISTENT_DECAY`` of its mode over ``n`` samples (the longest experiment); True if it
     warned. A real pole (or one turning less than once over the record) acts as an
@@ -46,11 +47,11 @@ def warn_boundary(A: np.ndarray, n: int, stacklevel: int = 3, held: bool = True)
                      "enforce_stability=False"),
         lower="order='auto' chooses one on data held out of the fit; a model of an "
               "automatic order holds every order's score in info['order_selection']",
-        stacklevel=stacklevel + 1)
+        stacklevel=user_stacklevel() if stacklevel is None else stacklevel + 1)
 
 
 def warn_poles_at_bound(poles: np.ndarray, n: int, model: str, bound: str | None, *,
-                        integrating: str, lower: str, stacklevel: int = 3) -> bool:
+                        integrating: str, lower: str, stacklevel: int | None = None) -> bool:
     """:func:`warn_boundary` for the ``poles`` of any search that keeps them inside the
     unit circle (``bound`` says which, e.g. "the search keeps F stable"; ``None`` for a
     search that ended there freely; ``model`` names the model; ``integrating`` is the
@@ -96,7 +97,8 @@ def warn_poles_at_bound(poles: np.ndarray, n: int, model: str, bound: str | None
                f"than the data support, fitting noise, or a periodic disturbance in the "
                f"output); try a lower order ({lower}) or look for the disturbance "
                f"(sysid.spectra(data))")
-    warnings.warn(msg, StabilityWarning, stacklevel=stacklevel + 1)
+    warnings.warn(msg, StabilityWarning,
+                  stacklevel=user_stacklevel() if stacklevel is None else stacklevel + 1)
     return True
 
 

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, as_nonnegative, check_magnitudes, record_stats
+from .._checks import as_int, as_nonnegative, check_magnitudes, record_stats, user_stacklevel
 from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
@@ -250,11 +250,11 @@ def _as_start(feedthrough: Any, model: Any) -> Any:
     return feedthrough
 
 
-def _warn_dropped_d(stacklevel: int) -> None:
+def _warn_dropped_d() -> None:
     """A start with a non-zero ``D`` refined with ``feedthrough=False``: say its D goes."""
     warnings.warn("the start model has a non-zero D but feedthrough=False: it is refined "
                   "with D = 0; leave feedthrough out (or pass True) to refine its D as well",
-                  SysidWarning, stacklevel=stacklevel + 1)
+                  SysidWarning, stacklevel=user_stacklevel())
 
 
 def pem_loss(
@@ -564,7 +564,7 @@ def pem(
     st = _setup(data, model, focus, feedthrough, x0, noise, weighting, enforce_stability,
                 balance=regularization is None)
     if st.dropped_d:
-        _warn_dropped_d(2)
+        _warn_dropped_d()
     check_offsets(st.record, who="pem", stats=st.stats)  # issue 26: the one offset check
     data, A, B, C, D, K = st.data, st.A, st.B, st.C, st.D, st.K
     n, l = model.nstates, model.noutputs
@@ -714,7 +714,7 @@ def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
 
             ft, _ = choose_feedthrough(SubspaceEstimator(_experiments(data)), model.nstates)
     if not ft and np.any(model.D != 0):
-        _warn_dropped_d(3)
+        _warn_dropped_d()
     how = "noise"
     if isinstance(data, FRD):
         frd, how = with_line_weights(frd)

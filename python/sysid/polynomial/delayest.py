@@ -46,7 +46,13 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, check_magnitudes, experiment_arrays, require_inputs_vary
+from .._checks import (
+    as_int,
+    check_magnitudes,
+    experiment_arrays,
+    require_inputs_vary,
+    user_stacklevel,
+)
 from .._threads import one_blas_thread
 from ..data.iodata import require_record
 from ..errors import DataError, ExcitationError, SysidWarning
@@ -105,7 +111,7 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0,
                       "independently (a few sines, a steep low-pass), so which acts first is "
                       "not in the data; the delay returned there is the least ARX "
                       f"({na}, {nb}) loss's, which such an input can place anywhere",
-                      DelayWarning, stacklevel=2)
+                      DelayWarning, stacklevel=user_stacklevel())
     if weak:
         names = [f"{data.input_names[j]} -> {data.output_names[i]} (p = {p:.2g})"
                  for i, j, p in weak]
@@ -114,12 +120,12 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0,
                       "the search): the delay "
                       "may be longer than the range (search a larger nk_max) or the input "
                       "not act on that output; the delay returned there is not determined",
-                      DelayWarning, stacklevel=2)
+                      DelayWarning, stacklevel=user_stacklevel())
     edge = (out == nk_max) & (nk_max > nk_min)
     if np.any(edge):
         warnings.warn(f"the estimated delay equals nk_max={nk_max} for "
                       f"{int(edge.sum())} pair(s): the loss may fall further beyond; "
-                      "search a larger range (nk_max)", DelayWarning, stacklevel=2)
+                      "search a larger range (nk_max)", DelayWarning, stacklevel=user_stacklevel())
     l, m = out.shape
     return int(out[0, 0]) if l == m == 1 else out
 

@@ -194,7 +194,8 @@ def impulse_response(data: IOData, length: int | None = None, *,
             f"parameters (their last tenth holds {100 * tail:.0f} % of the peak, well above "
             "their standard deviation): its step, DC gain and any model realised from it are "
             "truncated; pass a longer length=, decimate the record (sysid.decimate), or use "
-            "sysid.okid or a parametric model (sysid.n4sid)", SysidWarning, stacklevel=2)
+            "sysid.okid or a parametric model (sysid.n4sid)", SysidWarning,
+            stacklevel=user_stacklevel())
     h = np.asarray(out["markov"]).reshape(-1, l, m)
     info = {k: out[k] for k in ("scale", "decay", "noise_variance", "samples")}
     info["std"] = np.asarray(out["std"]).reshape(-1, l, m)

@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, stability_criteria
+from .._checks import as_int, stability_criteria, user_stacklevel
 from ..analysis.modal import ModalAnalysis, modal_analysis
 from ..errors import DataError, NonFiniteError, ShapeError, StabilityWarning
 from ..models.checks import warn_unstable
@@ -376,7 +376,7 @@ def era(markov: Any, order: int | None = None, *, rows: int | None = None,
             f"the realised A of order {res.order} is defective (repeated poles without a full "
             "set of eigenvectors): its modal indicators (MAC, MPC) and modes are not defined "
             "(NaN); the model stands. Choose another order (the singular values: "
-            "result.plot()) for a modal reading", SysidWarning, stacklevel=2)
+            "result.plot()) for a modal reading", SysidWarning, stacklevel=user_stacklevel())
     return res
 
 

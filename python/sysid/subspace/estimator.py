@@ -40,7 +40,14 @@ from typing import Any, Literal, Union
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_int, as_orders, check_magnitudes, record_stats, require_inputs_vary
+from .._checks import (
+    as_int,
+    as_orders,
+    check_magnitudes,
+    record_stats,
+    require_inputs_vary,
+    user_stacklevel,
+)
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData, require_record
 from ..data.offsets import check_offsets
@@ -288,7 +295,7 @@ class SubspaceEstimator:
                     f" (experiment(s) {', '.join(short)} shorter than the window of the "
                     f"default horizon {horizon} were left out; pass horizon=... to keep them)")
                 warnings.warn(f"SubspaceEstimator:{self._horizon_note[1:-1]}", SysidWarning,
-                              stacklevel=2)
+                              stacklevel=user_stacklevel())
                 data = long_enough(data, 2 * horizon) or data
         elif horizon is None:
             horizon = default_horizon(min(data.lengths), data.n_inputs, data.n_outputs)
@@ -445,7 +452,7 @@ class SubspaceEstimator:
                 "show the same (its distortions, functions of past inputs, stay in a linear "
                 "model's outputs): sysid.advice(data) weighs both",
                 FeedbackWarning,
-                stacklevel=3,
+                stacklevel=user_stacklevel(),
             )
 
     @property
@@ -620,7 +627,7 @@ class SubspaceEstimator:
                 raise
         if self.factor.n_inputs:
             # warn (ExcitationWarning) when the input cannot support order n
-            warn_excitation(self._excitation_order(2 * n), n, stacklevel=2)
+            warn_excitation(self._excitation_order(2 * n), n, stacklevel=user_stacklevel())
         x0_est = None
         B, D = res["B"], res["D"]
         x0_all = None

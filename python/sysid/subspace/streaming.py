@@ -20,7 +20,7 @@ from typing import Any, Union
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_2d, as_int, as_option
+from .._checks import as_2d, as_int, as_option, user_stacklevel
 from .._progress import Bar, show
 from ..errors import DataError, ShapeError, SysidWarning
 
@@ -70,7 +70,8 @@ def compression_info(factor: Any, requested: str) -> dict[str, Any]:
     }
 
 
-def warn_if_fallback(factor: Any, stacklevel: int = 2, requested: str = "correlation") -> None:
+def warn_if_fallback(factor: Any, stacklevel: int | None = None,
+                     requested: str = "correlation") -> None:
     """Warn when a factor did not come from the requested path without a fallback.
 
     ``factor.source`` is ``"qr"`` or ``"correlation"`` normally; ``"qr-fallback"`` means the
@@ -81,13 +82,14 @@ def warn_if_fallback(factor: Any, stacklevel: int = 2, requested: str = "correla
     largest are not resolved.
     """
     src = getattr(factor, "source", "qr")
+    level = user_stacklevel() if stacklevel is None else stacklevel + 1
     if src == "qr-fallback" and requested != "auto":
         warnings.warn(
             "the correlation compressor's Gram matrix was ill-conditioned (relative pivot "
             f"{factor.relative_pivot:.1e}); the data were compressed again with the exact QR "
             "compressor (factor.source == 'qr-fallback')",
             CompressionFallbackWarning,
-            stacklevel=stacklevel + 1,
+            stacklevel=level,
         )
     elif src == "correlation-ill-conditioned":
         warnings.warn(
@@ -96,7 +98,7 @@ def warn_if_fallback(factor: Any, stacklevel: int = 2, requested: str = "correla
             "values below about 1e-8 of the largest are not resolved; compress with "
             "compressor='qr' if they matter (noise-free data, constant channels)",
             CompressionFallbackWarning,
-            stacklevel=stacklevel + 1,
+            stacklevel=level,
         )
 
 

@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import user_stacklevel
 from ..errors import DataError, IterationLimitWarning
 from ..greybox.delays import shift_taps
 from .model import assemble
@@ -337,7 +338,8 @@ def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarr
 
         warnings.warn(f"the output-error search stopped after max_iter={max_iter} iterations "
                       "before converging (the result is the best point reached, never worse "
-                      "than the start); raise max_iter", ConvergenceWarning, stacklevel=4)
+                      "than the start); raise max_iter", ConvergenceWarning,
+                      stacklevel=user_stacklevel())
     assert res is not None and mp is not None
     S = mp.scale
     cov = np.asarray(res["covariance"])[:S.size, :S.size] * np.outer(S, S)
@@ -379,7 +381,7 @@ def _unidentifiable(null: np.ndarray, names: list[str], fix: str) -> list[int]:
            if delay and "n_zeros" in fix else "")
     warnings.warn("the data cannot determine these parameters separately: " + "; ".join(parts)
                   + f"{why}. {fix}; their standard deviations are reported as inf.",
-                  IdentifiabilityWarning, stacklevel=4)
+                  IdentifiabilityWarning, stacklevel=user_stacklevel())
     return sorted(idx)
 
 

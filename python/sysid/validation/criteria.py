@@ -47,7 +47,7 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import as_int, as_nonnegative, check_magnitudes
+from .._checks import as_int, as_nonnegative, check_magnitudes, user_stacklevel
 from .._display import HTMLResult
 from .._progress import Bar, show
 from ..data.iodata import IOData
@@ -656,14 +656,14 @@ def _warn_once(caught: list[Any]) -> None:
             msg = str(w.message)
             if len(excitation) > 1:
                 msg += " (the same holds for every higher order of the sweep)"
-            warnings.warn(msg, w.category, stacklevel=3)
+            warnings.warn(msg, w.category, stacklevel=user_stacklevel())
             continue
         if issubclass(w.category, StabilityWarning):
             continue  # a sweep's unstable candidates: the table shows them, the pick warns
         key = (w.category, str(w.message))
         if key not in seen:
             seen.add(key)
-            warnings.warn(w.message, w.category, stacklevel=3)
+            warnings.warn(w.message, w.category, stacklevel=user_stacklevel())
 
 
 def _sweep(est: Any, est_data: Any, meths: list[str], orders_: list[int], validation: Any,
