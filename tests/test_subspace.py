@@ -261,3 +261,67 @@ def test_a_given_order_gets_a_horizon_that_allows_it():
     assert sysid.ssest(d, 4).nstates == 4
     with pytest.raises(sysid.OrderError, match="at most 3 states"):
         sysid.n4sid(d, 4, horizon=2)  # a horizon given is kept
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_noise_free_systems_are_recovered_from_the_state_sequence(seed):
+    rng = np.random.default_rng(100 + seed)
+    n, m, l = 2 + seed, 1 + seed % 2, 1 + seed // 2
+    a, b, c, d = random_system(n, m, l, rng)
+    u = rng.standard_normal((800, m))
+    data = sysid.IOData(u=u, y=simulate(a, b, c, d, u))
+    est = sysid.SubspaceEstimator(data, horizon=n + 3, matrices="states")
+    for method in ("moesp", "n4sid", "cva"):
+        model = est.fit(n, method=method, kalman=False, feedthrough=True)
+        h_true = markov(a, b, c, d, 40)
+        assert np.max(np.abs(model.markov(40) - h_true)) < 1e-8 * np.max(np.abs(h_true))
+        assert model.info["settings"]["matrices"] == "states"
+
+
+def test_the_state_sequence_keeps_a_slow_pole_inside_the_unit_circle():
+    # a slow pole (0.99) under white output noise, fitted with more states than the system
+    # has: the shift invariance of the observability matrix puts a pole outside the unit
+    # circle on many records (issue 26: the evaporator's order-16 fits), the least squares
+    # on the state sequence on none
+    a = np.diag([0.99, 0.5])
+    b, c = np.ones((2, 1)), np.array([[0.1, 1.0]])
+    unstable = {"shift": 0, "states": 0, "auto": 0}
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        u = rng.standard_normal((1000, 1))
+        y = simulate(a, b, c, np.zeros((1, 1)), u)
+        data = sysid.IOData(u=u, y=y + 0.3 * y.std() * rng.standard_normal(y.shape))
+        models = {}
+        for matrices in unstable:
+            est = sysid.SubspaceEstimator(data, horizon=10, matrices=matrices)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", sysid.StabilityWarning)
+                models[matrices] = est.fit(6)
+            unstable[matrices] += not models[matrices].is_stable()
+        # "auto": the shift's estimate where it is stable, the states' where it is not
+        want = models["shift"] if models["shift"].is_stable() else models["states"]
+        np.testing.assert_allclose(models["auto"].A, want.A, rtol=1e-12, atol=1e-12)
+    assert unstable["shift"] >= 3, unstable
+    assert unstable["states"] == unstable["auto"] == 0, unstable
+
+
+def test_matrices_is_checked_and_reaches_the_order_choice():
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal((400, 1))
+    data = sysid.IOData(u=u, y=simulate(np.array([[0.7]]), np.ones((1, 1)), np.ones((1, 1)),
+                                        np.zeros((1, 1)), u))
+    with pytest.raises(sysid.DataError, match="matrices must be one of"):
+        sysid.SubspaceEstimator(data, horizon=4, matrices="gamma")
+    est = sysid.SubspaceEstimator(data, horizon=4, matrices="states")
+    seen = []
+    real = sysid.SubspaceEstimator.__init__
+
+    def spy(self, *args, **kwargs):
+        seen.append(kwargs.get("matrices"))
+        real(self, *args, **kwargs)
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(sysid.SubspaceEstimator, "__init__", spy)
+        model = est.fit("auto", feedthrough=False)
+    assert seen and set(seen) == {"states"}  # every fold's estimator
+    assert model.nstates == 1

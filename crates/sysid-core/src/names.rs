@@ -88,6 +88,7 @@ fn name_of<T: OptionName>(value: &str) -> Result<&'static str> {
 /// The options [`canonical`] knows, by the name a caller asks with.
 pub const OPTIONS: &[&str] = &[
     "method",
+    "matrices",
     "closed_loop_method",
     "compressor",
     "regularization",
@@ -107,6 +108,7 @@ pub fn canonical(option: &str, value: &str) -> Result<&'static str> {
     use crate::{greybox::ode, hankel, hw, nlss, realization, recursive, subspace};
     match option {
         "method" => name_of::<subspace::Method>(value),
+        "matrices" => name_of::<subspace::SystemMatrices>(value),
         "closed_loop_method" => name_of::<subspace::closed_loop::ClosedLoopMethod>(value),
         "compressor" => name_of::<hankel::CompressorKind>(value),
         "regularization" => name_of::<subspace::closed_loop::VarxRegularization>(value),

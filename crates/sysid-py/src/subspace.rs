@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::subspace::{
     bd_x0, checks, frequency, FitOptions, Identified, Method, Subspace, SubspaceOptions,
+    SystemMatrices,
 };
 use sysid_core::StateSpace;
 
@@ -71,6 +72,8 @@ impl PySubspace {
     }
 
     /// Returns a dict with A, B, C, D, K, noise_cov (None without Kalman), Q, R, S, stabilized.
+    /// `matrices`: "shift" or "states" (`SystemMatrices`).
+    #[pyo3(signature = (order, feedthrough, kalman, stable, matrices="shift"))]
     fn fit<'py>(
         &self,
         py: Python<'py>,
@@ -78,11 +81,13 @@ impl PySubspace {
         feedthrough: bool,
         kalman: bool,
         stable: bool,
+        matrices: &str,
     ) -> PyResult<Bound<'py, PyDict>> {
         let mut opts = FitOptions::default();
         opts.feedthrough = feedthrough;
         opts.kalman = kalman;
         opts.stable = stable;
+        opts.matrices = matrices.parse::<SystemMatrices>().py()?;
         let id = py.detach(|| self.inner.fit(order, &opts)).py()?;
         identified_dict(py, &id)
     }

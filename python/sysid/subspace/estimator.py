@@ -72,7 +72,7 @@ from .feedthrough import (
     default_feedthrough,
 )
 from .kalman import schur_gain
-from .methods import CLOSED_LOOP, METHODS, _method
+from .methods import CLOSED_LOOP, METHODS, _matrices, _method
 from .scaling import check_scale, in_record_units, scaled_experiments
 from .series_horizon import series_horizons
 from .streaming import compression_info, warn_if_fallback
@@ -246,6 +246,14 @@ class SubspaceEstimator:
         :mod:`sysid.subspace.scaling`) and return the model in the record's units: the
         estimate is then the same whatever the channels' units. Default True; ``False``
         computes in the record's units, as SLICOT's ``IB01AD`` does.
+    matrices : {"shift", "states", "auto"}, optional
+        How every open-loop fit takes ``A, B, C, D`` from the weighted SVD. ``"shift"``
+        (default): ``A``, ``C`` by the shift invariance of the observability matrix, ``B``,
+        ``D`` by least squares (Van Overschee & De Moor 1996); ``"states"``: all four by
+        least squares on the estimated state sequence, ``x(t+1)`` on ``x(t), u(t)`` (Larimore
+        1990; Verhaegen & Verdult 2007; SIPPY's and nfoursid's N4SID), often inside the unit
+        circle where the shift's slow poles are not; ``"auto"``: the shift, and where its
+        ``A`` is unstable the states' when stable (benches/results/subspace_defaults.md).
 
     Examples
     --------
@@ -272,9 +280,11 @@ class SubspaceEstimator:
         chunk_rows: int | None = None,
         compressor: str = "auto",
         scale: bool | None = None,
+        matrices: str | None = None,
     ) -> None:
         data = require_record(data, "SubspaceEstimator")
         self._from_factor = False
+        self.matrices = _matrices(matrices)
         self.method = _method(method)
         self._horizon_note = ""
         #: how the default horizons were chosen for a time series (None otherwise)
@@ -329,13 +339,15 @@ class SubspaceEstimator:
         input_names: list[str] | None = None,
         output_names: list[str] | None = None,
         scale: bool | None = None,
+        matrices: str | None = None,
     ) -> SubspaceEstimator:
         """An estimator on an already computed :class:`~sysid._sysid.HankelFactor`.
 
         For factors computed out of core, merged across experiments or machines, or loaded
         from disk. Fits with ``x0=True`` need the data and are not available. ``scale``: as
         the constructor's (the channels' root mean squares are read from the factor, so an
-        estimator rebuilt from ``est.factor`` fits what ``est`` fits).
+        estimator rebuilt from ``est.factor`` fits what ``est`` fits); ``matrices``: as the
+        constructor's.
         """
         if not isinstance(factor, _sysid.HankelFactor):
             raise DataError(
@@ -356,6 +368,7 @@ class SubspaceEstimator:
             output_names=output_names,
         )
         self._from_factor = True
+        self.matrices = _matrices(matrices)
         self.method = _method(method)
         self.past, self.future = factor.past, factor.future
         self.factor = factor
@@ -616,13 +629,13 @@ class SubspaceEstimator:
             if not isinstance(flag, (bool, np.bool_)):
                 raise DataError(f"{name} must be True or False, got {flag!r}")
         try:
-            res = sub.fit(n, bool(feedthrough), bool(kalman), bool(stable))
+            res = sub.fit(n, bool(feedthrough), bool(kalman), bool(stable), self.matrices)
         except OrderError as e:
             if not self._horizon_note:
                 raise
             raise OrderError(f"{e}{self._horizon_note}") from None
         except RiccatiError:  # SciPy's Schur solver may still find the stabilising gain
-            res = schur_gain(sub.fit(n, bool(feedthrough), False, bool(stable)))
+            res = schur_gain(sub.fit(n, bool(feedthrough), False, bool(stable), self.matrices))
             if res is None:
                 raise
         if self.factor.n_inputs:
@@ -665,7 +678,8 @@ class SubspaceEstimator:
                          "order_rule": "auto" if isinstance(order, str) else "given",
                          "past": self.past, "future": self.future,
                          "feedthrough": bool(feedthrough), "kalman": bool(kalman),
-                         "stable": bool(stable), "x0": bool(x0), "scale": bool(self.scale)},
+                         "stable": bool(stable), "x0": bool(x0), "scale": bool(self.scale),
+                         "matrices": self.matrices},
             "preprocessing": _preprocessing(self.data, self._from_factor),
         }
         if x0_all is not None and len(x0_all) > 1:
@@ -700,7 +714,7 @@ class SubspaceEstimator:
                 # its Gram matrix is ill-conditioned), 2-3x faster on short records
                 est = SubspaceEstimator(rec, past=self.past, future=self.future,
                                         method=self.method, compressor="correlation",
-                                        scale=self.scale)
+                                        scale=self.scale, matrices=self.matrices)
                 return est.fit(n, method=method, feedthrough=feedthrough, stable=stable, x0=x0)
 
             model.uncertainty = bootstrap_uncertainty(self, model, refit, n_boot, rng)

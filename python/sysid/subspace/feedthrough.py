@@ -157,7 +157,8 @@ def choose_feedthrough(est: Any, order: Any = "auto", *, method: str | None = No
                 if c["criterion"] != "cross-validated simulation fit":
                     return _undecided("the record could not be cross-validated")
             else:
-                c = cross_validated_order(est.data, partial(type(est), scale=est.scale),
+                make = partial(type(est), scale=est.scale, matrices=est.matrices)
+                c = cross_validated_order(est.data, make,
                                           method=key, past=est.past,
                                           future=est.future, feedthrough=ft, orders=orders,
                                           whole=est).as_dict()

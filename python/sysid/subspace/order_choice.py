@@ -37,7 +37,8 @@ def order_selection(est: Any, key: str, feedthrough: bool,
     if not est._from_factor:
         focus = "simulation" if est.factor.n_inputs else "prediction"
         try:
-            out = cross_validated_order(est.data, partial(type(est), scale=est.scale),
+            make = partial(type(est), scale=est.scale, matrices=est.matrices)
+            out = cross_validated_order(est.data, make,
                                         method=key, past=est.past,
                                         future=est.future, feedthrough=feedthrough,
                                         orders=orders, whole=est, focus=focus).as_dict()

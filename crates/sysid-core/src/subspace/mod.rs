@@ -22,7 +22,8 @@
 //! The left singular vectors give the extended observability matrix `Γ_f`; the order is the
 //! number of retained singular values ([`order`]); `A`, `C` come from its shift invariance,
 //! `B`, `D` and the noise covariances from a least-squares regression on `L` and `K` from the
-//! Riccati equation ([`system`]). `B`, `D` and `x0` can also be re-estimated on the data
+//! Riccati equation ([`system`]); or all four by least squares on the estimated state
+//! sequence ([`SystemMatrices`]). `B`, `D` and `x0` can also be re-estimated on the data
 //! given `A`, `C` ([`bd_x0`]). Nothing here depends on the record length.
 
 pub mod bd_x0;
@@ -76,6 +77,29 @@ impl Method {
     }
 }
 
+/// How a fit takes the system matrices from the weighted SVD.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[non_exhaustive]
+pub enum SystemMatrices {
+    /// A and C by the shift invariance of `Γ_f`; B, D by the least squares of Van Overschee
+    /// & De Moor (1996, sec. 4.3.3); noise covariances from its residuals.
+    #[default]
+    Shift,
+    /// A, B, C, D by least squares on the estimated state sequence, `x(t+1)` on `x(t)`,
+    /// `u(t)` and `y(t)` on `x(t)`, `u(t)` (the states `Γ_f^+` times the oblique
+    /// projection of the future outputs, one window and the next: Larimore 1990, Verhaegen
+    /// & Verdult 2007, sec. 9.6); noise covariances from its residuals.
+    States,
+    /// [`SystemMatrices::Shift`], and where its A is unstable [`SystemMatrices::States`]
+    /// when that one's A is stable.
+    Auto,
+}
+
+crate::names::option_names! { SystemMatrices, "matrices", true, [
+    ("shift", SystemMatrices::Shift), ("states", SystemMatrices::States),
+    ("auto", SystemMatrices::Auto),
+] }
+
 /// Options of the weighted SVD.
 #[derive(Debug, Clone)]
 #[non_exhaustive]
@@ -114,8 +138,11 @@ pub struct FitOptions {
     pub feedthrough: bool,
     /// Estimate the noise model: K from the Riccati equation and the innovation covariance.
     pub kalman: bool,
-    /// Enforce a stable A when the least-squares estimate is not (Chui & Maciejowski 1996).
+    /// Enforce a stable A when the least-squares estimate is not (Chui & Maciejowski 1996;
+    /// with [`SystemMatrices::States`], the shift path with it replaces an unstable estimate).
     pub stable: bool,
+    /// How A, B, C, D are estimated.
+    pub matrices: SystemMatrices,
 }
 
 impl Default for FitOptions {
@@ -124,6 +151,7 @@ impl Default for FitOptions {
             feedthrough: false,
             kalman: true,
             stable: false,
+            matrices: SystemMatrices::Shift,
         }
     }
 }

@@ -15,7 +15,7 @@
 //! step is that of A and C.
 
 use super::weighting::Weighted;
-use super::{FitOptions, Identified};
+use super::{FitOptions, Identified, SystemMatrices};
 use crate::error::{Result, SysidError};
 use crate::hankel::{Block, HankelFactor};
 use crate::linalg::{mul_seq, pinv, spectral_radius, symmetrize};
@@ -194,6 +194,25 @@ pub fn identify(
             gamma[(i, j)] *= s;
         }
     }
+    let states = match opts.matrices {
+        SystemMatrices::Shift => false,
+        SystemMatrices::States => true,
+        SystemMatrices::Auto => {
+            spectral_radius(shift_invariance(gamma.as_ref(), l, false)?.0.as_ref())? >= 1.0
+        }
+    };
+    if states {
+        let (a, b, c, d, cov) = from_states(factor, gamma.as_ref(), opts.feedthrough)?;
+        // an unstable estimate gives way to the shift path (stabilised with `stable`) where
+        // the states were a fallback or `stable` asks for a stable A
+        let keep = match opts.matrices {
+            SystemMatrices::States => !opts.stable,
+            _ => false,
+        };
+        if keep || spectral_radius(a.as_ref())? < 1.0 {
+            return finish(a, b, c, d, cov, factor.n_columns(), false, opts);
+        }
+    }
     let (a, c, stabilized) = shift_invariance(gamma.as_ref(), l, opts.stable)?;
 
     let o = observability(a.as_ref(), c.as_ref(), f);
@@ -296,8 +315,25 @@ pub fn identify(
         fit_cols -= &kt;
     }
 
-    let mut cov = mul_seq(resid.as_ref(), resid.transpose());
-    let scale = 1.0 / factor.n_columns() as f64;
+    let cov = mul_seq(resid.as_ref(), resid.transpose());
+    finish(a, b, c, d, cov, factor.n_columns(), stabilized, opts)
+}
+
+/// The model and its noise description from A, B, C, D and the residuals' sum of squares
+/// `[Q S; S^T R]` (times the number of data columns `cols`).
+#[allow(clippy::too_many_arguments)]
+fn finish(
+    a: Mat<f64>,
+    b: Mat<f64>,
+    c: Mat<f64>,
+    d: Mat<f64>,
+    mut cov: Mat<f64>,
+    cols: usize,
+    stabilized: bool,
+    opts: &FitOptions,
+) -> Result<Identified> {
+    let (n, l) = (a.nrows(), c.nrows());
+    let scale = 1.0 / cols as f64;
     for j in 0..n + l {
         for i in 0..n + l {
             cov[(i, j)] *= scale;
@@ -343,6 +379,101 @@ pub fn identify(
         kalman_regularization,
         kalman_residual,
     })
+}
+
+/// A, B, C, D and the residuals' sum of squares by least squares on the estimated state
+/// sequence ([`SystemMatrices::States`]).
+///
+/// The state of the window starting at sample `t` is `x(t+p) = Γ_f^+ L32 L22^+ w_p(t)`, the
+/// oblique projection of the future outputs onto the past `w_p(t)` (`u(t), ..., u(t+p-1)`
+/// and `y(t), ..., y(t+p-1)`) mapped to the states; the next one, `x(t+p+1)`, is the same
+/// map of the past one sample later, `w_p(t+1)`, whose rows are rows of the same data column
+/// (the last p - 1 past blocks and the first future one). Every regressor and regressand is
+/// thus a fixed combination of rows of the data matrix `H = L Q^T`, and the least squares
+/// over the columns of `H` are those over the columns of `L` (`Q` has orthonormal columns):
+///
+/// ```text
+/// [x(t+p+1); y(t+p)] = [A B; C D] [x(t+p); u(t+p)] + residuals
+/// ```
+///
+/// (without feedthrough, `y` on `x` alone). On noise-free data of order n the states are
+/// exact and so are the matrices; on noisy data the states are those of a bank of Kalman
+/// filters of p past samples, as in the state-sequence methods of Larimore (1990) and
+/// Verhaegen & Verdult (2007, sec. 9.6), SIPPY's and nfoursid's.
+#[allow(clippy::type_complexity)]
+fn from_states(
+    factor: &HankelFactor,
+    gamma: MatRef<'_, f64>,
+    feedthrough: bool,
+) -> Result<(Mat<f64>, Mat<f64>, Mat<f64>, Mat<f64>, Mat<f64>)> {
+    let lay = factor.layout();
+    let (m, l, p, f) = (lay.n_inputs, lay.n_outputs, lay.past, lay.future);
+    let n = gamma.ncols();
+    let lmat = factor.l();
+    let (uf_s, _) = lay.block(Block::UFuture);
+    let (up_s, _) = lay.block(Block::UPast);
+    let (yp_s, _) = lay.block(Block::YPast);
+    let (yf_s, _) = lay.block(Block::YFuture);
+    let wp_n = p * (m + l);
+    // the map from a past window to the state
+    let l32 = lmat.submatrix(yf_s, up_s, f * l, wp_n);
+    let l22 = lmat.submatrix(up_s, up_s, wp_n, wp_n);
+    let theta = mul_seq(l32, pinv(l22, PINV_TOL)?.as_ref());
+    let g = mul_seq(pinv(gamma, PINV_TOL)?.as_ref(), theta.as_ref());
+    // the past of this window and of the next one, as rows of L
+    let w0 = lmat.subrows(up_s, wp_n);
+    let mut w1 = Mat::<f64>::zeros(wp_n, lmat.ncols());
+    let shifted = [
+        (up_s + m, (p - 1) * m, 0),
+        (uf_s, m, (p - 1) * m),
+        (yp_s + l, (p - 1) * l, p * m),
+        (yf_s, l, p * m + (p - 1) * l),
+    ];
+    for (src, rows, dst) in shifted {
+        w1.as_mut()
+            .subrows_mut(dst, rows)
+            .copy_from(lmat.subrows(src, rows));
+    }
+    let x0 = mul_seq(g.as_ref(), w0);
+    let x1 = mul_seq(g.as_ref(), w1.as_ref());
+    let u0 = lmat.subrows(uf_s, m);
+    let y0 = lmat.subrows(yf_s, l);
+    let cols = lmat.ncols();
+    // regressors [x; u] and regressands [x+; y] as columns of the design (one row per column
+    // of L)
+    let mut phi = Mat::<f64>::zeros(cols, n + m);
+    phi.as_mut().subcols_mut(0, n).copy_from(x0.transpose());
+    phi.as_mut().subcols_mut(n, m).copy_from(u0.transpose());
+    let mut psi = Mat::<f64>::zeros(cols, n + l);
+    psi.as_mut().subcols_mut(0, n).copy_from(x1.transpose());
+    psi.as_mut().subcols_mut(n, l).copy_from(y0.transpose());
+    let mut theta_sys = Mat::<f64>::zeros(n + m, n + l); // [A B; C D]^T
+    if feedthrough {
+        theta_sys.copy_from(crate::linalg::lstsq_seq(phi.as_ref(), psi.as_ref()));
+    } else {
+        theta_sys
+            .as_mut()
+            .subcols_mut(0, n)
+            .copy_from(crate::linalg::lstsq_seq(
+                phi.as_ref(),
+                psi.as_ref().subcols(0, n),
+            ));
+        theta_sys
+            .as_mut()
+            .submatrix_mut(0, n, n, l)
+            .copy_from(crate::linalg::lstsq_seq(
+                phi.as_ref().subcols(0, n),
+                psi.as_ref().subcols(n, l),
+            ));
+    }
+    let sys = theta_sys.transpose().to_owned(); // (n + l) x (n + m)
+    let a = sys.as_ref().submatrix(0, 0, n, n).to_owned();
+    let b = sys.as_ref().submatrix(0, n, n, m).to_owned();
+    let c = sys.as_ref().submatrix(n, 0, l, n).to_owned();
+    let d = sys.as_ref().submatrix(n, n, l, m).to_owned();
+    let resid = &psi - mul_seq(phi.as_ref(), theta_sys.as_ref()); // cols x (n + l)
+    let cov = mul_seq(resid.transpose(), resid.as_ref());
+    Ok((a, b, c, d, cov))
 }
 
 /// `dst += coef * src` (columns of equal length).

@@ -139,3 +139,80 @@ fn constant_input_is_not_persistently_exciting() {
         Err(SysidError::NotPersistentlyExciting { .. })
     ));
 }
+
+#[test]
+fn noise_free_systems_are_recovered_from_the_state_sequence() {
+    let mut rng = Rng(17);
+    for case in 0..12 {
+        let n = 1 + case % 6;
+        let m = 1 + case % 3;
+        let l = 1 + (case / 3) % 3;
+        let mut sys = random_system(n, m, l, &mut rng);
+        let feedthrough = case % 2 == 0;
+        if !feedthrough {
+            sys.d.fill(0.0);
+        }
+        let u = Mat::from_fn(600, m, |_, _| rng.normal());
+        let y = simulate(&sys, u.as_ref(), None).unwrap();
+        let f = (n + 2).div_ceil(l) + 2;
+        let fac = compress(&u, &y, f, f);
+        for method in [Method::Moesp, Method::N4sid, Method::Cva] {
+            let sub = Subspace::new(&fac, &SubspaceOptions::with_method(method)).unwrap();
+            let opts = FitOptions {
+                kalman: false,
+                feedthrough,
+                matrices: SystemMatrices::States,
+                ..FitOptions::default()
+            };
+            let id = sub.fit(n, &opts).unwrap();
+            let err = rel_markov_error(&sys, &id.sys, 30);
+            assert!(
+                err < 1e-8,
+                "case {case} n={n} m={m} l={l} {method:?} D={feedthrough}: {err:e}"
+            );
+        }
+    }
+}
+
+/// A slow pole (0.99) under white output noise, fitted with more states than the system
+/// has: the shift-invariance estimate of A puts a pole outside the unit circle on many
+/// records, the least squares on the state sequence on none.
+#[test]
+fn the_state_sequence_keeps_a_slow_pole_inside_the_unit_circle() {
+    let a = faer::mat![[0.99, 0.0], [0.0, 0.5]];
+    let b = faer::mat![[1.0], [1.0]];
+    let c = faer::mat![[0.1, 1.0]];
+    let sys = StateSpace::new(a, b, c, Mat::zeros(1, 1)).unwrap();
+    let (mut shift_unstable, mut states_unstable) = (0, 0);
+    let mut rng = Rng(5);
+    for _ in 0..20 {
+        let u = Mat::from_fn(1000, 1, |_, _| rng.normal());
+        let mut y = simulate(&sys, u.as_ref(), None).unwrap();
+        let sd = (y.col(0).iter().map(|v| v * v).sum::<f64>() / 1000.0).sqrt();
+        for t in 0..1000 {
+            y[(t, 0)] += 0.3 * sd * rng.normal();
+        }
+        let sub = Subspace::new(&compress(&u, &y, 10, 10), &SubspaceOptions::default()).unwrap();
+        for (matrices, count) in [
+            (SystemMatrices::Shift, &mut shift_unstable),
+            (SystemMatrices::States, &mut states_unstable),
+        ] {
+            let opts = FitOptions {
+                matrices,
+                ..FitOptions::default()
+            };
+            let id = sub.fit(6, &opts).unwrap();
+            if crate::linalg::spectral_radius(id.sys.a.as_ref()).unwrap() >= 1.0 {
+                *count += 1;
+            }
+        }
+    }
+    assert!(
+        shift_unstable >= 3,
+        "shift: {shift_unstable} unstable of 20"
+    );
+    assert_eq!(
+        states_unstable, 0,
+        "states: {states_unstable} unstable of 20"
+    );
+}
