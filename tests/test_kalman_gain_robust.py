@@ -114,10 +114,10 @@ def test_a_core_riccati_failure_falls_back_to_the_schur_solver(monkeypatch):
         def __init__(self, sub):
             self.sub = sub
 
-        def fit(self, n, ft, kalman, stable):
+        def fit(self, n, ft, kalman, stable, *rest):
             if kalman:
                 raise sysid.RiccatiError("no stabilising solution (emulated)")
-            return self.sub.fit(n, ft, kalman, stable)
+            return self.sub.fit(n, ft, kalman, stable, *rest)
 
         def __getattr__(self, name):
             return getattr(self.sub, name)
