@@ -72,7 +72,7 @@ impl PySubspace {
     }
 
     /// Returns a dict with A, B, C, D, K, noise_cov (None without Kalman), Q, R, S, stabilized.
-    /// `matrices`: "shift" or "states" (`SystemMatrices`).
+    /// `matrices`: "shift", "states" or "auto" (`SystemMatrices`).
     #[pyo3(signature = (order, feedthrough, kalman, stable, matrices="shift"))]
     fn fit<'py>(
         &self,
