@@ -310,7 +310,7 @@ def test_matrices_is_checked_and_reaches_the_order_choice():
     u = rng.standard_normal((400, 1))
     data = sysid.IOData(u=u, y=simulate(np.array([[0.7]]), np.ones((1, 1)), np.ones((1, 1)),
                                         np.zeros((1, 1)), u))
-    with pytest.raises(sysid.DataError, match="matrices must be one of"):
+    with pytest.raises(sysid.DataError, match='matrices must be "shift", "states" or "auto"'):
         sysid.SubspaceEstimator(data, horizon=4, matrices="gamma")
     est = sysid.SubspaceEstimator(data, horizon=4, matrices="states")
     seen = []

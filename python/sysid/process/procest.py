@@ -226,16 +226,16 @@ def _warn_bounds(model: ProcessModel, t: ProcessType, fixed: dict[str, float],
 
     gone = model.collapsed()
     table, (lo, hi) = model.parameters, limits
-    said, names, c, values = [], [], 0, {}
+    said, names, c, values, fasts = [], [], 0, {}, {}
     structural = bool(gone)  # a pole run to zero or an undamped pair, not a user's bound
     for i, j in model.pairs():
         pair = f"{model.output_names[i]}<-{model.input_names[j]}"
         vals = values[pair] = model._values[i][j]
+        fast = fasts[pair] = t.fast(vals, model.info["sample_time"]) if pair in gone else {}
         for k in t.names:
             side, full, c = table.bound[c], table.names[c], c + 1
             if not side or k in fixed or (k == "Td" and "Td" not in bounds):
                 continue
-            fast = t.fast(vals, model.info["sample_time"]) if pair in gone else {}
             if side == "lower" and (k in fast or ("pair" in fast and k in ("Tw", "Zeta"))):
                 names.append(k)
                 continue  # said with the pair's collapse below
@@ -251,8 +251,7 @@ def _warn_bounds(model: ProcessModel, t: ProcessType, fixed: dict[str, float],
             names.append(k)
     dt = model.info["sample_time"]
     for pair, (code, text) in gone.items():
-        vals = values[pair]
-        fast = t.fast(vals, dt)
+        vals, fast = values[pair], fasts[pair]
         which = [f"{k} = {vals[k]:.4g}" for k in fast if k != "pair"]
         names += [k for k in fast if k != "pair"]
         if "pair" in fast:

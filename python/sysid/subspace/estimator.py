@@ -42,6 +42,7 @@ import numpy as np
 from .. import _sysid
 from .._checks import (
     as_int,
+    as_option,
     as_orders,
     check_magnitudes,
     record_stats,
@@ -72,7 +73,7 @@ from .feedthrough import (
     default_feedthrough,
 )
 from .kalman import schur_gain
-from .methods import CLOSED_LOOP, METHODS, _matrices, _method
+from .methods import CLOSED_LOOP, METHODS, _method
 from .scaling import check_scale, in_record_units, scaled_experiments
 from .series_horizon import series_horizons
 from .streaming import compression_info, warn_if_fallback
@@ -284,7 +285,7 @@ class SubspaceEstimator:
     ) -> None:
         data = require_record(data, "SubspaceEstimator")
         self._from_factor = False
-        self.matrices = _matrices(matrices)
+        self.matrices = "shift" if matrices is None else as_option(matrices, "matrices")
         self.method = _method(method)
         self._horizon_note = ""
         #: how the default horizons were chosen for a time series (None otherwise)
@@ -368,7 +369,7 @@ class SubspaceEstimator:
             output_names=output_names,
         )
         self._from_factor = True
-        self.matrices = _matrices(matrices)
+        self.matrices = "shift" if matrices is None else as_option(matrices, "matrices")
         self.method = _method(method)
         self.past, self.future = factor.past, factor.future
         self.factor = factor

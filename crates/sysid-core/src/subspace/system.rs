@@ -194,11 +194,17 @@ pub fn identify(
             gamma[(i, j)] *= s;
         }
     }
+    // the shift estimate, once: `Auto` reads its A first (with `stable`, a stabilised A says
+    // the plain one was unstable)
+    let mut shift = None;
     let states = match opts.matrices {
         SystemMatrices::Shift => false,
         SystemMatrices::States => true,
         SystemMatrices::Auto => {
-            spectral_radius(shift_invariance(gamma.as_ref(), l, false)?.0.as_ref())? >= 1.0
+            let est = shift_invariance(gamma.as_ref(), l, opts.stable)?;
+            let unstable = est.2 || spectral_radius(est.0.as_ref())? >= 1.0;
+            shift = Some(est);
+            unstable
         }
     };
     if states {
@@ -213,7 +219,10 @@ pub fn identify(
             return finish(a, b, c, d, cov, factor.n_columns(), false, opts);
         }
     }
-    let (a, c, stabilized) = shift_invariance(gamma.as_ref(), l, opts.stable)?;
+    let (a, c, stabilized) = match shift {
+        Some(est) => est,
+        None => shift_invariance(gamma.as_ref(), l, opts.stable)?,
+    };
 
     let o = observability(a.as_ref(), c.as_ref(), f);
     let o_pinv = pinv(o.as_ref(), PINV_TOL)?;
