@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sysid_core::hw::mimo::{self, MimoHwStructure};
 use sysid_core::hw::{self, HwStructure, Nonlinearity};
-use sysid_core::optim::{covariance, Options};
+use sysid_core::optim::{covariance, Options, Solution};
 use sysid_core::SysidError;
 
 type Nl = (String, usize, Vec<f64>);
@@ -93,15 +93,25 @@ pub fn hw_estimate<'py>(
         hw::estimate(&s, &refs, &theta0, &opts, obs)
     })?;
     let n: usize = data.iter().map(|d| d.0.len()).sum();
-    let var = 2.0 * sol.cost / (n.saturating_sub(theta0.len()).max(1)) as f64;
-    // the marginal covariance of the model's parameters: the leading block of the joint
-    // one; None where the Gauss-Newton matrix is not finite (the estimate stands, without)
-    let pm = s.n_model();
+    result(py, &sol, n, s.n_model())
+}
+
+/// The estimate's dict: the search's items, `theta`, the noise variance (`2 cost / (n - p)`
+/// over `n` residuals) and the marginal covariance of the model's `pm` parameters (the
+/// leading block of the joint one; None where the Gauss-Newton matrix is not finite: the
+/// estimate stands, without).
+fn result<'py>(
+    py: Python<'py>,
+    sol: &Solution,
+    n: usize,
+    pm: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let var = 2.0 * sol.cost / (n.saturating_sub(sol.theta.len()).max(1)) as f64;
     let cov = covariance(sol.gauss_newton.as_ref(), var, 1e-10)
         .ok()
         .map(|c| c.covariance.as_ref().submatrix(0, 0, pm, pm).to_owned());
     let d = PyDict::new(py);
-    search_items(&d, py, &sol)?;
+    search_items(&d, py, sol)?;
     d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
     d.set_item("noise_variance", var)?;
     match cov {
@@ -194,21 +204,7 @@ pub fn hw_mimo_estimate<'py>(
         mimo::estimate_mimo(&s, &refs, &theta0, &opts, obs)
     })?;
     let n: usize = refs.iter().map(|(_, y)| y.nrows() * y.ncols()).sum();
-    let var = 2.0 * sol.cost / (n.saturating_sub(theta0.len()).max(1)) as f64;
-    // as `hw_estimate`'s: the marginal covariance, or None
-    let pm = s.n_model();
-    let cov = covariance(sol.gauss_newton.as_ref(), var, 1e-10)
-        .ok()
-        .map(|c| c.covariance.as_ref().submatrix(0, 0, pm, pm).to_owned());
-    let d = PyDict::new(py);
-    search_items(&d, py, &sol)?;
-    d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
-    d.set_item("noise_variance", var)?;
-    match cov {
-        Some(c) => d.set_item("covariance", mat_to_numpy(py, &c))?,
-        None => d.set_item("covariance", py.None())?,
-    }
-    Ok(d)
+    result(py, &sol, n, s.n_model())
 }
 
 /// Simulated outputs `(N, p)` of a MIMO Hammerstein-Wiener model from rest, or from the

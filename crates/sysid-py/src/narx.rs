@@ -99,6 +99,29 @@ fn decode(v: &[i64], n_lagged: usize) -> Term {
 
 type Views<'a> = (MatRef<'a, f64>, MatRef<'a, f64>, Option<MatRef<'a, f64>>);
 
+/// The structure's basis and lag specification for the experiments' channel counts.
+fn built(experiments: &Experiments<'_>, structure: Structure<'_>) -> PyResult<(Basis, LagSpec)> {
+    let (nu, ny) = experiments
+        .first()
+        .map(|(u, y, _)| (u.as_array().ncols(), y.as_array().ncols()))
+        .unwrap_or((0, 1));
+    structure.build(nu, ny)
+}
+
+/// Views of every experiment's `(u, y, e)`, no copies.
+fn experiment_views<'a>(experiments: &'a Experiments<'_>) -> Vec<Views<'a>> {
+    experiments
+        .iter()
+        .map(|(u, y, e)| {
+            (
+                view_nd(u.as_array()),
+                view_nd(y.as_array()),
+                e.as_ref().map(|e| view_nd(e.as_array())),
+            )
+        })
+        .collect()
+}
+
 fn records<'a>(views: &'a [Views<'a>], custom: &'a [MatRef<'a, f64>]) -> Vec<Record<'a>> {
     views
         .iter()
@@ -153,22 +176,9 @@ pub fn narx_frols<'py>(
     block_rows: usize,
     custom_values: Vec<PyReadonlyArray2<'_, f64>>,
 ) -> PyResult<(Vec<Bound<'py, PyDict>>, usize)> {
-    let (nu, ny) = experiments
-        .first()
-        .map(|(u, y, _)| (u.as_array().ncols(), y.as_array().ncols()))
-        .unwrap_or((0, 1));
-    let (b, sp) = structure.build(nu, ny)?;
+    let (b, sp) = built(&experiments, structure)?;
     let cviews: Vec<MatRef<'_, f64>> = custom_values.iter().map(view).collect();
-    let views: Vec<_> = experiments
-        .iter()
-        .map(|(u, y, e)| {
-            (
-                view_nd(u.as_array()),
-                view_nd(y.as_array()),
-                e.as_ref().map(|e| view_nd(e.as_array())),
-            )
-        })
-        .collect();
+    let views = experiment_views(&experiments);
     let (sels, rs, terms, m) = crate::search::detach(py, || -> sysid_core::Result<_> {
         let cands = Candidates::with_custom(&b, sp.n_lagged(), sp.n_custom())?;
         let index =
@@ -229,22 +239,9 @@ pub fn narx_fit<'py>(
     terms: Vec<Vec<Vec<i64>>>,
     custom_values: Vec<PyReadonlyArray2<'_, f64>>,
 ) -> PyResult<Vec<Bound<'py, PyArray2<f64>>>> {
-    let (nu, ny) = experiments
-        .first()
-        .map(|(u, y, _)| (u.as_array().ncols(), y.as_array().ncols()))
-        .unwrap_or((0, 1));
-    let (b, sp) = structure.build(nu, ny)?;
+    let (b, sp) = built(&experiments, structure)?;
     let cviews: Vec<MatRef<'_, f64>> = custom_values.iter().map(view).collect();
-    let views: Vec<_> = experiments
-        .iter()
-        .map(|(u, y, e)| {
-            (
-                view_nd(u.as_array()),
-                view_nd(y.as_array()),
-                e.as_ref().map(|e| view_nd(e.as_array())),
-            )
-        })
-        .collect();
+    let views = experiment_views(&experiments);
     let rs = crate::search::detach(py, || -> sysid_core::Result<Vec<Mat<f64>>> {
         let ts: Vec<Vec<Term>> = terms
             .iter()
