@@ -417,6 +417,43 @@ def test_an_output_network_fits_the_same_model_in_any_output_units(fit):
     assert np.std(out[0] - y) < 0.05 * np.std(y)
 
 
+@pytest.mark.parametrize("fit", ["nlhw", "nlhw_ss"])
+def test_an_input_network_fits_the_same_model_in_any_input_units(fit):
+    # An input SigmoidNetwork had its first amplitude fixed at one while its linear start
+    # (the identity) put the network's output in the input's units: in other input units
+    # the start that begins at the linear model was another point of the model class, the
+    # searches went other ways (here: simulations 0.13 apart after four iterations), and
+    # nlhw_ss on a pH record tested at 0.345 / 0.325 / 0.303 with an input in units x 1 /
+    # x 1000 / the other input x 1000. The amplitude is the input's standard deviation now.
+    rng = np.random.default_rng(1)
+    m_in = 1 if fit == "nlhw" else 2
+    u = rng.uniform(-1, 1, (1500, m_in))
+    x, y = np.zeros(2), np.zeros(1500)
+    for t in range(1500):  # a 2-state plant between two tanh, fitted at order 3
+        y[t] = np.tanh(x[0] + 0.5 * x[1])
+        x = [[0.8, 0.1], [-0.1, 0.7]] @ x + np.array([[1.0, 0.3], [0.2, 1.0]])[:, :m_in] \
+            @ np.tanh(1.5 * u[t])
+    y += 0.01 * rng.standard_normal(1500)
+    out = []
+    for k in ([1.0] * m_in, [1.0] * (m_in - 1) + [1e-3], [1e3] + [1.0] * (m_in - 1)):
+        k = np.asarray(k)
+        d = sysid.IOData(u / k, y[:, None], 1.0)
+        kw = dict(input_nl=sysid.SigmoidNetwork(3), output_nl=sysid.SigmoidNetwork(3),
+                  progress=False, max_iter=4)
+        with warnings.catch_warnings():
+            # the order is one above the plant's (the linear start says so): the searches
+            # then have most room to go their own ways
+            warnings.simplefilter("ignore", sysid.IterationLimitWarning)
+            warnings.simplefilter("ignore", sysid.IdentifiabilityWarning)
+            m = sysid.nlhw(d, 3, 3, 1, **kw) if fit == "nlhw" else sysid.nlhw_ss(d, 3, **kw)
+        nets = [m.input_nl] if fit == "nlhw" else m.input_nls
+        assert [g.amplitude for g in nets] == pytest.approx(np.std(u / k, axis=0))
+        out.append(np.asarray(m.simulate(u / k)).ravel())
+    for o in out[1:]:
+        np.testing.assert_allclose(o, out[0], rtol=0, atol=1e-6 * np.ptp(y))
+    assert np.std(out[0] - y) < 0.1 * np.std(y)
+
+
 def test_an_output_networks_amplitude_is_saved_and_old_files_load(tmp_path):
     rng = np.random.default_rng(5)
     u = rng.uniform(-1, 1, 500)

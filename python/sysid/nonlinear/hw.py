@@ -38,7 +38,7 @@ from .hw_model import (
     Nonlinearity,
     UserFunction,
     check_search_size,
-    output_amplitudes,
+    fit_amplitudes,
 )
 from .hw_uncertainty import attach
 from .operating_point import better_of_both, centred, record_means, undecided, use_offsets
@@ -191,7 +191,7 @@ def nlhw(
     u0, y0 = record_means(exps) if shift else (np.zeros(1), np.zeros(1))
     if shift:
         exps = centred(exps, u0, y0)
-    output_amplitudes([fout], np.concatenate([y for _, y in exps]))
+    fit_amplitudes([fout], np.concatenate([y for _, y in exps]))
     estimate_x0 = ic == "estimate"
     nh = max(int(nf), int(nk) + int(nb) - 1)  # the linear block's initial state (h)
     n_par = int(nb) + int(nf) + sum(np.size(getattr(f, "params", ())) for f in (fin, fout)
@@ -226,6 +226,7 @@ def nlhw(
     t_lin = time.perf_counter() - t_lin
     b0, f0 = np.asarray(lin.b[0][0], float), np.asarray(lin.f[0][0], float)
     u_all = np.concatenate([r[0] for r in records])
+    fit_amplitudes([fin], u_all[:, None])
     h0: list[np.ndarray] = [np.zeros(nh) for _ in records]
     if estimate_x0:  # the states whose free responses fit the linear start's errors
         frees = [free_response_bf(f0, nh, r[1].size) for r in records]

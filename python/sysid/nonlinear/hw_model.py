@@ -276,12 +276,11 @@ class SigmoidNetwork(Nonlinearity):
     """``c x + sum_k a_k tanh(b_k x + d_k)`` with ``units`` units and the first amplitude
     fixed, ``a_1 = amplitude``; ``params = [c, b_1, d_1, a_2, b_2, d_2, ...]``.
 
-    As an input nonlinearity ``amplitude`` is one: it normalises the scale of the network's
-    output, which lives in ``B``. As an output nonlinearity the fixed amplitude is in the
-    output's own units, so :func:`sysid.nlhw` and :func:`sysid.nlhw_ss` set it to the
-    standard deviation of the output it models in the training record (a unit amplitude
-    would be a different curve in volts and in millivolts: the fitted model would depend on
-    the units the output was recorded in).
+    The fixed amplitude is in the units of the signal the network takes (an input network,
+    whose output then lives in ``B``) or models (an output network), so :func:`sysid.nlhw`
+    and :func:`sysid.nlhw_ss` set it to that channel's standard deviation in the training
+    record (a unit amplitude would be a different curve in volts and in millivolts: the
+    fitted model would depend on the units the channel was recorded in).
 
     Examples
     --------
@@ -397,11 +396,14 @@ class UserFunction(Nonlinearity):
         return out
 
 
-def output_amplitudes(outputs: list[Any], y: np.ndarray) -> None:
-    """Fix the first amplitude of every output :class:`SigmoidNetwork` at the standard
-    deviation of the output column it models (``y``: samples x outputs, the training
-    record as fitted), so that the model class scales with the output's units."""
-    for g, col in zip(outputs, np.asarray(y, float).reshape(len(y), -1).T):
+def fit_amplitudes(nls: list[Any], x: np.ndarray) -> None:
+    """Fix the first amplitude of every :class:`SigmoidNetwork` in ``nls`` at the standard
+    deviation of its column of ``x`` (samples x channels, the training record as fitted):
+    for an input network the input it takes, for an output network the output it models,
+    so that the model class scales with the channel's units (a fit of the record in other
+    units is the same model, scaled) and a network's linear start (the identity) is on
+    the scale of its fixed unit."""
+    for g, col in zip(nls, np.asarray(x, float).reshape(len(x), -1).T):
         if isinstance(g, SigmoidNetwork):
             sd = float(np.std(col))
             g.amplitude = sd if np.isfinite(sd) and sd > 0 else 1.0

@@ -30,7 +30,7 @@ from ..data.iodata import require_record
 from ..data.offsets import check_offsets
 from ..errors import DataError
 from .hw_initial import check_initial, free_response_ss, least_squares_states
-from .hw_model import Nonlinearity, UserFunction, check_search_size, output_amplitudes
+from .hw_model import Nonlinearity, UserFunction, check_search_size, fit_amplitudes
 from .hw_ss_model import HammersteinWienerSSModel
 from .hw_uncertainty import attach
 from .operating_point import better_of_both, centred, record_means, undecided, use_offsets
@@ -194,7 +194,7 @@ def nlhw_ss(
     else:  # the start's own check is silenced below with its other warnings
         check_offsets(data if isinstance(data, IOData) else
                       IOData([u for u, _ in exps], [y for _, y in exps], 1.0))
-    output_amplitudes(fout, np.vstack([y for _, y in exps]))
+    fit_amplitudes(fout, np.vstack([y for _, y in exps]))
     records = []
     for u, y in exps:
         uu = u.copy()
@@ -233,6 +233,7 @@ def nlhw_ss(
         raise DataError("the linear start (n4sid, or linear=) is unstable; try another order "
                         "or give a stable linear start")
     u_all = np.vstack([r[0] for r in records])
+    fit_amplitudes(fin, u_all)
     n = int(order)
     estimate_x0 = ic == "estimate"
     x0s: list[np.ndarray] = [np.zeros(n) for _ in records]
