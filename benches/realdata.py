@@ -52,7 +52,7 @@ inputs, 28 outputs, 8 523 samples; a copy at GitHub robotsorcerer/FARNN,
 first 2/3 / last 1/3 split (every ``--split`` applies); the two with a separate validation
 record keep it under every ``--split``, as the F-16 levels do.
 ``--fresh-records DIR`` runs, the same way (``FRESH``, ``DIR/<name>.npz``, first 2/3 / last
-1/3), into ``results/realdata_fresh[_<split>].md``, four records first used on 2026-12-05:
+1/3), into ``results/realdata_fresh[_<split>].md``, seven records first used on 2026-12-05:
 the coupled electric drives benchmark (Wigren and Schoukens, 2017; copies in GitHub
 Agnibha-31/AURA-Membership-Function-Neuro-Fuzzy-Process-Control-Automation, ``Coupled
 Eletric Drives Datasets/DATAPRBS.MAT`` ``u1, z1`` and ``DATAUNIF.MAT`` ``u11, z11``, 500
@@ -60,7 +60,11 @@ samples each, 20 ms), a TCLab heater step test (GitHub jckantor/cbe30338-book,
 ``tclab/Step_Test_Data.csv``: ``Q1`` -> ``T1, T2``, 801 samples, 1 s) and a step test of the
 HSM150 two-motor bench (GitHub malik-robert/HSM150-data, ``Data/Identification/
 idf_pos_0.065_2.mat``, ``data`` column 5 (input torque) -> column 4 (speed), 20 000 samples,
-1 ms).
+1 ms), and three AutomationShield lab devices (GitHub gergelytakacs/AutomationShield,
+``matlab/examples/``: ``FloatShield/PRBS_R4.mat`` ``u -> y``, fan to ball height, 7 200
+samples, 25 ms; ``MotoShield/aprbsResult.mat`` ``u -> y``, voltage to speed, 4 801 samples,
+20 ms; ``MagnetoShield/MagnetoShield_ID_Data.mat`` ``result`` column 2 -> columns 1, 3,
+voltage to position and current under PID feedback, 7 500 samples, 3.25 ms).
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -188,6 +192,10 @@ FRESH = {
     "ced_unif": ("ced_unif", None),  # the same, uniform-amplitude input
     "tclab_step": ("tclab_step", None),  # TCLab heater 1 step -> temperatures 1, 2
     "hsm150_step": ("hsm150_step", None),  # HSM150 motor torque steps -> speed
+    "floatshield": ("floatshield_prbs", None),  # FloatShield fan PRBS -> ball height
+    "motoshield": ("motoshield_aprbs", None),  # MotoShield voltage APRBS -> motor speed
+    "magnetoshield": ("magneto_pid", None),  # MagnetoShield under PID: voltage -> position,
+    # current (closed loop, an unstable plant)
 }
 
 
