@@ -526,3 +526,19 @@ def test_the_subspace_path_removes_the_means_by_default(tmp_path, capsys):
     assert m.y_offset[0] == pytest.approx(y[:600].mean())
     val = sysid.IOData(u=u[600:], y=y[600:])
     assert sysid.compare(m, val).fit[0, 0] > 90  # on the raw signals
+
+
+def test_an_input_still_in_the_estimation_part_only_names_the_split(tmp_path, capsys):
+    """A motor step test (torque 0.05, stepping to 0.065 at sample 10 000 of 20 000) gave
+    'input torque is 0.05 in every sample' under the default --split 0.5: the file's torque
+    does change, after the estimation part ends. The refusal names the part and the split."""
+    n = 400
+    torque = np.r_[np.full(n // 2 + 20, 0.05), np.full(n // 2 - 20, 0.065)]
+    speed = np.cumsum(torque) + 0.001 * np.random.default_rng(0).standard_normal(n)
+    path = tmp_path / "step.csv"
+    np.savetxt(path, np.c_[torque, speed], delimiter=",", header="torque,speed", comments="")
+    err = run_error(capsys, ["identify", str(path), "--inputs", "torque", "--outputs",
+                             "speed", "--report", str(tmp_path / "r")])
+    assert "input torque is 0.05 in every sample of the estimation part" in err
+    assert "(samples 0-199 of 400, --split 0.5)" in err and "changes at sample 220" in err
+    assert "--split past that sample" in err

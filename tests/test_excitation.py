@@ -116,3 +116,28 @@ def test_a_short_periodic_input_counts_the_lines_of_its_period(bits):
     # a sinusoid whose period is not a whole number of samples is not exactly periodic
     t = np.arange(5 * period)
     assert sysid.persistent_excitation_order(np.sin(0.3 * t), 10) == 2
+
+
+def test_a_step_test_refused_by_the_subspace_methods_says_what_fits_it():
+    """A TCLab heater step test (0 -> 50 % after one sample) made identify, ssest(order=
+    'auto') and n4sid raise 'not persistently exciting ... use a richer input, a shorter
+    horizon': no horizon helps (the step comes before the data matrix's future rows start),
+    and nothing said what does fit a step test. The refusal now says it is a step test,
+    where the input changes, and names the fits simulated from rest."""
+    n = 300
+    u = np.r_[0.0, np.full(n - 1, 50.0)]
+    y = sysid.StateSpaceModel([[0.98]], [[1.0]], [[0.02]], dt=1.0).simulate(u).ravel()
+    y += 0.01 * np.random.default_rng(1).standard_normal(n)
+    d = sysid.IOData(u=u, y=y - y[0], dt=1.0)
+    for fit in (lambda: sysid.n4sid(d), lambda: sysid.ssest(d, order="auto"),
+                lambda: sysid.identify(d, progress=False)):
+        with pytest.raises(sysid.ExcitationError) as err:
+            fit()
+        msg = str(err.value)
+        assert "step test" in msg and "(index 1)" in msg and "no horizon helps" in msg
+        assert "shorter horizon" not in msg
+        assert "sysid.procest" in msg and "sysid.oe" in msg
+    # what it names fits: oe from rest recovers the plant
+    assert abs(sysid.oe(d, 1, 1, 1).poles()[0] - 0.98) < 0.01
+    # a rich input refused for another reason keeps the core's remedies
+    assert sysid.subspace.steptest.step_test_note([(np.c_[np.arange(50.0)], None)], 8) == ""

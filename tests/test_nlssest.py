@@ -194,3 +194,21 @@ def test_compare_fits_the_initial_state_of_a_neural_model_as_of_a_linear_one():
     assert fits[0] > 99.999 and fits[1] > 99.999, fits
     np.testing.assert_allclose(sysid.estimate_x0(neural, u, y), [30.0, -20.0], rtol=1e-6)
     assert float(np.ravel(sysid.compare(data, neural, x0="zero").fit)[0]) < 90  # from rest it loses
+
+
+def test_default_widths_too_wide_for_a_short_record_say_so_and_what_fits():
+    """nlssest(est, 3) on a 333-sample record (the coupled electric drives) said "invalid
+    hidden: the networks have 319 parameters but the training record gives 260 residuals",
+    to a call that passed no hidden. The refusal now names the default widths, the counts,
+    and the widest single layer that fits, which then trains."""
+    d = _data(n=333)
+    with pytest.raises(DataError) as err:
+        sysid.nlssest(d, 3, progress=False)
+    msg = str(err.value)
+    assert "hidden=16, output_hidden='same' (the defaults)" in msg and "invalid hidden" not in msg
+    width = int(msg.split("pass hidden=")[1].split(" ")[0])
+    assert "parameters" in msg and "residuals" in msg and width < 16
+    m = sysid.nlssest(d, 3, hidden=width, epochs=2, progress=False)
+    assert m.hidden == (width,)
+    with pytest.raises(DataError, match=r"hidden=\[8, 8\].*fewer states or hidden layers"):
+        sysid.nlssest(d, 3, hidden=[8, 8], progress=False)

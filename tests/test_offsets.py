@@ -103,3 +103,35 @@ def test_ar_and_ssi_run_the_offset_check():
         except sysid.SysidError:
             pass
     assert any(issubclass(w.category, sysid.OffsetWarning) for w in rec)
+
+
+def _step_from_rest(n=400, level=50.0, seed=3):
+    """A step test from rest: the input switched from 0 to ``level`` after one sample, the
+    output a first-order response measured from its initial value (as a TCLab heater test)."""
+    rng = np.random.default_rng(seed)
+    u = np.r_[0.0, np.full(n - 1, level)]
+    true = sysid.StateSpaceModel([[0.98]], [[1.0]], [[0.02]], dt=1.0)
+    y = true.simulate(u).ravel() + 0.05 * rng.standard_normal(n)
+    return sysid.IOData(u=u, y=y - y[0], dt=1.0)
+
+
+def test_a_step_from_rest_is_not_an_offset():
+    """A heater step test (0 -> 50 % after one sample, 800 samples) warned 'input u0 has an
+    offset (49.91) much larger than its variation (std 2.16)' and told the user to remove the
+    mean, which moves the record's start off rest: the step is the excitation, not an
+    offset. A channel whose values reach zero is not flagged; one that never does still is."""
+    rest = _step_from_rest()
+    assert abs(rest.u.mean()) > 10 * rest.u.std()  # the ratio the check flags at
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        m = sysid.oe(rest, 1, 1, 1)
+    assert not [w for w in caught if issubclass(w.category, OffsetWarning)]
+    assert abs(m.poles()[0] - 0.98) < 0.01  # from rest, the step determines the plant
+    acts = [f.topic for f in sysid.advice(rest).findings if f.verdict == "act"]
+    assert "offsets" not in acts
+    # the same test measured in kelvin: the output's offset is real, the input's still not
+    hot = sysid.IOData(u=rest.u, y=rest.y + 300.0, dt=1.0)
+    with pytest.warns(OffsetWarning) as caught:
+        sysid.oe(hot, 1, 1, 1)
+    msg = str(caught[0].message)
+    assert "output y0 has an offset" in msg and "input u0" not in msg

@@ -550,6 +550,9 @@ def _identify(args: argparse.Namespace) -> int:
     # the default path is sysid.identify, unless the options ask for a subspace fit
     via_identify = auto and bool(ui) and args.uncertainty == "none" and args.horizon is None
     _check_parts(args.split, N, k, via_identify)
+    from .identify.command import refuse_still_part  # a channel still in one part only
+
+    refuse_still_part(u, y, k, args.split, [names[i] for i in ui], [names[i] for i in yi])
     pre: dict[str, Any] = {"file": str(args.data), "inputs": [names[i] for i in ui],
                            "outputs": [names[i] for i in yi],
                            "estimation_samples": [0, k], "validation_samples": [k, N]}

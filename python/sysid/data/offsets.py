@@ -11,8 +11,11 @@ return_trend=True)`` (then ``trend.apply(validation)`` for the validation data),
 :func:`sysid.identify`, which removes the offsets and restores them in its predictions.
 
 A channel is flagged when ``|mean| > 10 std`` (the offset dwarfs the variation), unless the
-record was detrended (:attr:`IOData.has_trend`) or the channel is constant
-(:func:`sysid._checks.constant_channels`: the estimators refuse it as such).
+record was detrended (:attr:`IOData.has_trend`), the channel is constant
+(:func:`sysid._checks.constant_channels`: the estimators refuse it as such), or its values
+reach zero (``min <= 0 <= max``): a step test from rest (an input switched on from 0, an
+output measured from its initial value) has a mean far above its standard deviation, made by
+the step itself; removing that mean, as the warning said, moved the record's start off rest.
 """
 
 from __future__ import annotations
@@ -62,8 +65,23 @@ def offsets(data: Any, stats: dict[int, Any] | None = None) -> list[tuple[str, s
         if flagged:  # a constant channel is the estimators' constancy check's to refuse
             flat = constant_channels([np.asarray(e[idx]) for e in exps], "all")
             out += [(kind, str(names[j]), float(mean[j]), float(std[j])) for j in flagged
-                    if not flat[j]]
+                    if not flat[j] and not _reaches_zero(exps, idx, j)]
     return out
+
+
+def _reaches_zero(exps: list[Any], idx: int, j: int) -> bool:
+    """Whether channel ``j`` of side ``idx`` takes zero within its range (``min <= 0 <=
+    max`` over every experiment): then its mean is made by its excursions from zero (a step
+    test from rest: a heater switched from 0 to 50 %, a temperature measured from its start),
+    a level the data visit, not an offset they never leave; removing the mean would move the
+    start off rest instead."""
+    lo, hi = np.inf, -np.inf
+    for e in exps:
+        x = np.asarray(e[idx])
+        if x.shape[0]:
+            col = x[:, j]
+            lo, hi = min(lo, float(np.min(col))), max(hi, float(np.max(col)))
+    return bool(lo <= 0.0 <= hi)
 
 
 def check_offsets(data: Any, *, stacklevel: int | None = None, who: str = "identification",

@@ -6,9 +6,42 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from ..data.iodata import IOData
+import numpy as np
 
-__all__ = ["prepare"]
+from ..data.iodata import IOData
+from ..errors import DataError
+
+__all__ = ["prepare", "refuse_still_part"]
+
+
+def refuse_still_part(u: np.ndarray, y: np.ndarray, k: int, split: str,
+                      inputs: list[str], outputs: list[str]) -> None:
+    """Refuse a channel constant in the estimation part (the first ``k`` samples) of a file
+    in which it changes later, naming the split: the estimators' own refusal said "input
+    torque is 0.05 in every sample" of a motor step test whose torque steps at sample 10 000,
+    where the default ``--split 0.5`` ends the estimation part.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> u = np.r_[np.zeros(6), np.ones(4)][:, None]
+    >>> refuse_still_part(u, np.arange(10.0)[:, None], 5, "0.5", ["u"], ["y"])
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: input u is 0 in every sample of the estimation part (samples 0-4 \
+of 10, --split 0.5) and first changes at sample 6: nothing to identify its effect from; pass \
+a --split past that sample (a larger fraction, or a sample count above 6)
+    """
+    for kind, x, names in (("input", u, inputs), ("output", y, outputs)):
+        for j, name in enumerate(names):
+            part, rest = x[:k, j], x[k:, j]
+            if part.size and rest.size and np.all(part == part[0]) and np.any(rest != part[0]):
+                first = k + int(np.flatnonzero(rest != part[0])[0])
+                raise DataError(
+                    f"{kind} {name} is {part[0]:g} in every sample of the estimation part "
+                    f"(samples 0-{k - 1} of {x.shape[0]}, --split {split}) and first changes at "
+                    f"sample {first}: nothing to identify its effect from; pass a --split past "
+                    f"that sample (a larger fraction, or a sample count above {first})")
 
 
 def prepare(est_data: IOData, val_data: IOData | None, preprocessing: dict[str, Any] | None,

@@ -362,6 +362,8 @@ def nlssest(
     # records (an IOData or a (u, y) pair) checked for the training data's channels
     validation = validation_data(validation, data)
     train, val = _split(sd, sc, validation, L, 2 if H is None else H)
+    _check_size(train, (n, data.n_inputs, data.n_outputs), hid, out, enc, L,
+                isinstance(hidden, int) and hidden == 16 and isinstance(output_hidden, str))
     lin_data = IOData([u[:at] for u, _, at in train], [y[:at] for _, y, at in train], data.dt)
     whole = isinstance(validation, IOData) or float(validation) == 0.0
     args = (hid, out, enc, L, seed, sc, train, H)
@@ -436,6 +438,33 @@ def _warn_short(res: dict[str, Any], epochs: int, learning_rate: float) -> None:
                       f"falling (best at the last epoch, {v[-1]:.4g} after {v[-2]:.4g}); "
                       "the model is that epoch's: raise epochs", IterationLimitWarning,
                       stacklevel=user_stacklevel())
+
+
+def _check_size(train: list, dims: tuple[int, int, int], hid: Sequence[int],
+                out: Sequence[int] | None, enc: Sequence[int], L: int, default: bool) -> None:
+    """Refuse networks with as many parameters as the training part has residuals, naming
+    the widths (the defaults, when the caller gave none) and the widest single hidden layer
+    that fits: the core's own refusal said "invalid hidden" to a call that passed no
+    ``hidden`` (``nlssest(est, 3)`` on 333 samples: 319 parameters, 260 residuals)."""
+    def count(h: Sequence[int], o: Sequence[int] | None) -> int:
+        return int(_sysid.neural_ss_n_params({"dims": dims, "f_hidden": list(h), "g_hidden":
+                                              None if o is None else list(o),
+                                              "h_hidden": list(enc), "lags": L}))
+    residuals = sum(max(at - L, 0) for _, _, at in train) * dims[2]
+    have = count(hid, out)
+    if have < residuals:
+        return
+    same = out is not None and tuple(out) == tuple(hid)
+    fits = [w for w in range(max(hid) - 1, 0, -1)
+            if len(hid) == 1 and count([w], [w] if same else out) < residuals]
+    what = ("hidden=16, output_hidden='same' (the defaults)" if default else
+            f"hidden={list(hid)}" + (f", output_hidden={list(out)}" if out is not None else ""))
+    hint = (f"pass hidden={fits[0]} or narrower" + ("" if same or out is None else
+                                                    " with these output widths")
+            if fits else "give fewer states or hidden layers")
+    raise DataError(f"nlssest: {what} give networks of {have} parameters, and the training "
+                    f"part of the record has {residuals} residuals (samples after the {L} "
+                    f"lags, times outputs): {hint}, or give more data")
 
 
 def _split(sd: IOData, sc: Scaling, validation: Any, L: int, H: int) -> tuple[list, list]:

@@ -76,6 +76,7 @@ from .kalman import schur_gain
 from .methods import CLOSED_LOOP, METHODS, _method
 from .scaling import check_scale, in_record_units, scaled_experiments
 from .series_horizon import series_horizons
+from .steptest import step_test_note
 from .streaming import compression_info, warn_if_fallback
 
 __all__ = ["SubspaceEstimator", "default_horizon", "METHODS"]
@@ -120,6 +121,15 @@ def _check_signals(data: IOData) -> None:
                             error=ExcitationError)
     # the one offset check of every linear estimator (sysid.data.offsets)
     check_offsets(data, who="the subspace methods", stats=stats)
+
+
+def _say_step_test(err: ExcitationError, data: IOData, past: int) -> None:
+    """Raise ``err``, with what fits a step test when the record is one."""
+    note = step_test_note(data.experiments, past)
+    if note:  # the core's remedies (a richer input, a shorter horizon) in the record's terms
+        head = str(err).split("; use a richer input")[0]
+        raise ExcitationError(f"{head}: {note}") from None
+    raise err
 
 
 def _refuse_white_noise(data: IOData, lags: int = 20, level: float = 0.05) -> None:
@@ -317,10 +327,12 @@ class SubspaceEstimator:
         if chunk_rows is not None:
             chunk_rows = as_int(chunk_rows, "chunk_rows", 1)
         _check_signals(data)
-        # the window against the record, then the data-matrix size: both in the core
-        self.factor = _sysid.compress(
-            data.experiments, self.past, self.future, chunk_rows, compressor
-        )
+        try:  # the window against the record, then the data-matrix size: both in the core
+            self.factor = _sysid.compress(
+                data.experiments, self.past, self.future, chunk_rows, compressor
+            )
+        except ExcitationError as e:
+            _say_step_test(e, data, self.past)
         self.compressor = compressor
         warn_if_fallback(self.factor, requested=compressor)
         self._set_scaling(scale)
@@ -328,7 +340,10 @@ class SubspaceEstimator:
         self._pe_cache: dict[int | str, int] = {}
         self._feedback_p: float | None = None
         self._feedback_warned = False
-        self._subspace(None)  # checks the record (length, excitation) right away
+        try:
+            self._subspace(None)  # checks the record (length, excitation) right away
+        except ExcitationError as e:
+            _say_step_test(e, data, self.past)
 
     @classmethod
     def from_factor(

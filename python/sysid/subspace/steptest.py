@@ -1,0 +1,63 @@
+"""Say when a record the subspace methods refuse for want of excitation is a step test.
+
+A step test (an input switched once or a few times, then held) is a common first record,
+and the subspace data matrix cannot use it: its rows of future inputs, from ``past`` samples
+on, see a constant or a handful of distinct windows, so the core's rank test refuses it
+("use a richer input, a shorter horizon ..."). No horizon helps when the steps come before
+the window does; what fits a step test is a model simulated from rest (:func:`sysid.procest`,
+:func:`sysid.tfest`, :func:`sysid.oe`). :func:`step_test_note` is what the refusal adds.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+__all__ = ["step_test_note", "MAX_STEPS"]
+
+#: at most this many samples where an input changes make a record a step test
+MAX_STEPS = 4
+
+
+def step_test_note(experiments: list[Any], past: int) -> str:
+    """The sentence an excitation refusal adds for a step test (``""`` for another record):
+    where the inputs change, and what fits such a record.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> u = np.r_[0.0, np.full(99, 50.0)][:, None]
+    >>> step_test_note([(u, np.zeros((100, 1)))], past=8)[:60]
+    'the input changes at 1 sample of 100 (index 1), a step test,'
+    """
+    changes: list[int] = []
+    total = 0
+    for e in experiments:
+        u = np.asarray(e[0])
+        if u.ndim != 2 or u.shape[1] == 0 or u.shape[0] < 2:
+            return ""
+        at = np.flatnonzero(np.any(np.diff(u, axis=0) != 0, axis=1)) + 1 + total
+        changes += at.tolist()
+        total += u.shape[0]
+        if len(changes) > MAX_STEPS:
+            return ""
+    if not changes:
+        return ""
+    k = len(changes)
+    where = ", ".join(str(c) for c in changes)  # 0-based, as the arrays index them
+    early = all(c - off <= past for c, off in _offsets(changes, experiments))
+    why = (f"every change comes before the data matrix's rows of future inputs start (sample "
+           f"{past}, the past horizon), so no horizon helps" if early else
+           "the data matrix's rows of future inputs see only a few distinct windows")
+    return (f"the input changes at {k} sample{'s' if k > 1 else ''} of {total} "
+            f"(index {where}), a step test, and {why}; fit it with a "
+            f"model simulated from rest: sysid.procest(data, 'P1D') (a process model), "
+            f"sysid.tfest or sysid.oe, after subtracting the values before the step "
+            f"(u - u[0], y - y[0]) rather than the means")
+
+
+def _offsets(changes: list[int], experiments: list[Any]) -> list[tuple[int, int]]:
+    """Each change with the first sample index of its experiment."""
+    starts = np.cumsum([0] + [np.asarray(e[0]).shape[0] for e in experiments])
+    return [(c, int(starts[np.searchsorted(starts, c, side="right") - 1])) for c in changes]
