@@ -91,9 +91,11 @@ from ..validation.crossval import (
     simulation_fit,
 )
 from ..validation.records import validation_record
-from .board import Board, bic
+from .board import Board
+from .choice import _choose
 from .notes import persistent_mode_check, refit_cap_check, trend_check, weak_check
 from .result import IdentifiedModel, IdentifyResult, _family
+from .steptest import identify_step_test, input_changes
 from .uncertainty import with_uncertainty
 
 __all__ = ["identify"]
@@ -102,8 +104,6 @@ SUBSPACE = ("moesp", "n4sid", "cva")
 CLOSED_LOOP = ("pbsid", "ssarx")
 #: subspace candidates (distinct order and feedthrough) refined by prediction-error search
 N_REFINE = 3
-#: candidates the held-out blocks cannot tell apart that are re-fitted and compared by BIC
-N_FINAL = 12
 #: unstable subspace candidates re-fitted with a stable A when no candidate is stable
 N_STABILISED = 10
 #: iteration cap of a refinement re-fitted on the whole record (only near-best ones are): the
@@ -521,6 +521,13 @@ def identify(
     """Identify a linear model from a record with no settings: offsets, checks, candidate
     families and orders, chosen on data held out from the estimation record.
 
+    A step test (every input changes at most four times: switched from rest and held) has
+    no part that can be held out and the subspace methods refuse it: it gets the process
+    models of :func:`sysid.procest` (one to three poles, a zero, an underdamped pair, each
+    with a dead time) fitted from rest around the levels before the first step, the one of
+    smallest BIC chosen (:mod:`sysid.identify.steptest`; ``result.score == "BIC"``,
+    ``max_order`` bounds the poles, the other settings do not apply).
+
     Parameters
     ----------
     data : IOData or (u, y)
@@ -597,6 +604,11 @@ def identify(
     if time_budget is not None:
         time_budget = as_real(time_budget, "time_budget (seconds, or None for no limit)",
                               positive=True)
+    steps = input_changes(data)
+    if steps is not None:  # a step test: nothing to hold out; process models by BIC
+        require_inputs_vary(data.experiments, "identify", data.output_names, side=1)
+        return identify_step_test(data, validation_record(validation, data), steps, t0,
+                                  max_order)
     require_held_out_length(data)  # before the channel checks: 1 sample is "constant"
     require_inputs_vary(data.experiments, "identify", data.input_names)
     # before the means are removed (a constant output is then 0)
@@ -735,66 +747,3 @@ def identify(
                          interrupted)
     out.out_of_time = board.out_of_time
     return out
-
-
-def _choose(board: Board, ranked: list[dict[str, Any]], data: IOData, stable_only: bool
-            ) -> tuple[Any, dict[str, Any]]:
-    """Among the candidates the held-out blocks cannot tell apart (within the slack of the
-    best score, or with no more parameters within one standard error of their difference
-    to it, :meth:`.board.Board.paired_se`; at most ``N_FINAL``), the one whose re-fit on
-    the whole record has the
-    smallest BIC (its simulation errors there against its parameter count); when none
-    re-fits well, the next candidates of the ranking."""
-    fitted = []
-    near = board.near_best(stable_only, paired=True)[:N_FINAL]
-    if board.out_of_time:  # one refined re-fit at most (each is a search on the whole record)
-        refined = [r for r in near if not r["criterion"].startswith("subspace")]
-        near = [r for r in near if r["criterion"].startswith("subspace") or r is refined[0]]
-    for r in near:
-        m = _refit_one(r, data, stable_only)
-        if m is not None:
-            try:
-                r["bic"] = bic(m, data)
-            except Exception:  # noqa: BLE001 - cannot be simulated on the record
-                r["note"] = "re-fit on the whole record cannot be simulated"
-                continue
-            fitted.append((r["bic"], r, m))
-    if fitted:
-        _, r, m = min(fitted, key=lambda t: t[0])
-        return m, r
-    for r in ranked:
-        if not board.eligible(r, stable_only) or "bic" in r:
-            continue
-        m = _refit_one(r, data, stable_only)
-        if m is not None:
-            return m, r
-    # none of those re-fits stable: the stable candidates held back as starts or as below
-    # their start, by score, before giving up
-    for r in sorted(ranked, key=lambda r: -r["held_out_fit"]):
-        if not np.isfinite(r["held_out_fit"]) or not r["stable"] or "bic" in r or (
-                board.eligible(r, stable_only)):
-            continue
-        m = _refit_one(r, data, stable_only)
-        if m is not None:
-            r["note"] = ("chosen although held back (" + (r.get("note") or "") + "): no "
-                         "eligible candidate re-fitted stable on the whole record")
-            return m, r
-    raise DataError("no candidate gave a stable model on this record; check the data "
-                    "(offsets, an integrating process: difference the output) or fit one "
-                    "model directly")
-
-
-def _refit_one(r: dict[str, Any], data: IOData, stable_only: bool) -> Any:
-    """Candidate ``r`` re-fitted on the whole record, or None (noted) when that fails or is
-    unstable where a stable model is wanted."""
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            m = r["refit"](data)
-    except Exception as e:  # noqa: BLE001 - try the next candidate
-        r["note"] = f"re-fit on the whole record failed ({type(e).__name__})"
-        return None
-    if stable_only and not m.is_stable():
-        r["note"] = "re-fit on the whole record unstable"
-        return None
-    return m

@@ -241,6 +241,9 @@ class IdentifyResult(HTMLResult):
         self.interrupted = interrupted
         #: whether ``time_budget`` ran out before every candidate was scored
         self.out_of_time = False
+        #: what chose the model: ``"held-out"`` (the blocks held out of the record), or
+        #: ``"BIC"`` (a step test, :mod:`sysid.identify.steptest`: no part can be held out)
+        self.score = "held-out"
 
     def to_pandas(self) -> Any:
         """The leaderboard as a DataFrame, in the order of :meth:`summary`: the stable
@@ -283,13 +286,15 @@ class IdentifyResult(HTMLResult):
             lines.append(f"validation fit (reported only): {self.validation_fit:.1f} %")
         for k, v in self.checks.items():
             lines.append(f"{k}: {v}")
+        held = self.score == "held-out"  # else the fit to the record itself (a step test)
         lines.append(f"  {'family':<18} {'order':>5} {'D':>3} {'focus':<10} "
-                     f"{'held-out fit %':>14} {'stable':>6} {'s':>6}  note")
+                     f"{'held-out fit %' if held else 'record fit %':>14} {'stable':>6} "
+                     f"{'s':>6}  note")
         shown = [r for i, r in enumerate(self.leaderboard)
                  if rows is None or i < rows or r.get("chosen")
                  or not r["criterion"].startswith("subspace")]
         for r in shown:
-            f = r["held_out_fit"]
+            f = r["held_out_fit"] if held else r["mean_fit"]
             fs = f"{f:14.2f}" if np.isfinite(f) and f > -1e4 else f"{'< -1e4':>14}"
             ft = "yes" if r["feedthrough"] else "no"
             lines.append(f"{'*' if r.get('chosen') else ' '} {_family(r):<18} {r['order']:>5} "
@@ -301,39 +306,41 @@ class IdentifyResult(HTMLResult):
                          "subspace ones ranked below these (every row: summary(rows=None) or "
                          "to_pandas())")
         lines.append("* chosen (re-fitted on the whole record; among those the held-out blocks "
-                     "cannot tell apart, the smallest BIC)")
+                     "cannot tell apart, the smallest BIC)" if held else
+                     "* chosen (the smallest BIC of the simulation errors from rest)")
         return "\n".join(lines)
 
     def plot(self, ax: Any = None) -> Any:
         """Held-out fit against order, one colour per family (hollow markers: unstable
         candidates, which are not chosen unless the data insist; fits below -100 % drawn at
-        -100 % as triangles); returns the axes."""
+        -100 % as triangles); for a step test (:attr:`score` ``"BIC"``) the fit to the
+        record; returns the axes."""
         import matplotlib.pyplot as plt
         from matplotlib.ticker import MaxNLocator
 
         if ax is None:
             _, ax = plt.subplots()
+        key = "held_out_fit" if self.score == "held-out" else "mean_fit"
         fams = sorted({r["family"] for r in self.leaderboard})
         for k, fam in enumerate(fams):
-            rows = [r for r in self.leaderboard if r["family"] == fam
-                    and np.isfinite(r["held_out_fit"])]
+            rows = [r for r in self.leaderboard if r["family"] == fam and np.isfinite(r[key])]
             label: str | None = fam  # on the family's first group drawn
             for stable in (True, False):
                 for low in (False, True):
                     sel = [r for r in rows if bool(r["stable"]) == stable
-                           and (r["held_out_fit"] < -100) == low]
+                           and (r[key] < -100) == low]
                     if sel:
                         ax.plot([r["order"] for r in sel],
-                                [max(r["held_out_fit"], -100) for r in sel], "v" if low else "o",
+                                [max(r[key], -100) for r in sel], "v" if low else "o",
                                 color=f"C{k}", mfc=f"C{k}" if stable else "none", alpha=0.7,
                                 label=label)
                         label = None
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-        s = self.model.statespace
         chosen = next((r for r in self.leaderboard if r.get("chosen")), self.leaderboard[0])
-        ax.plot([s.nstates], [max(chosen["held_out_fit"], -100)], "k*", ms=14, label="chosen")
+        ax.plot([chosen["order"]], [max(chosen[key], -100)], "k*", ms=14, label="chosen")
         ax.set_xlabel("order")
-        ax.set_ylabel("held-out simulation fit (%)")
+        ax.set_ylabel("held-out simulation fit (%)" if key == "held_out_fit" else
+                      "simulation fit to the record (%)")
         ax.legend(fontsize="small")
         return ax
 

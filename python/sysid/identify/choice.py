@@ -1,0 +1,79 @@
+"""The choice among :func:`sysid.identify`'s candidates: the near-best ones re-fitted on the
+whole record, the smallest BIC kept (:func:`_choose`)."""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+
+from ..data.iodata import IOData
+from ..errors import DataError
+from .board import Board, bic
+
+#: candidates the held-out blocks cannot tell apart that are re-fitted and compared by BIC
+N_FINAL = 12
+
+
+def _choose(board: Board, ranked: list[dict[str, Any]], data: IOData, stable_only: bool
+            ) -> tuple[Any, dict[str, Any]]:
+    """Among the candidates the held-out blocks cannot tell apart (within the slack of the
+    best score, or with no more parameters within one standard error of their difference
+    to it, :meth:`.board.Board.paired_se`; at most ``N_FINAL``), the one whose re-fit on
+    the whole record has the
+    smallest BIC (its simulation errors there against its parameter count); when none
+    re-fits well, the next candidates of the ranking."""
+    fitted = []
+    near = board.near_best(stable_only, paired=True)[:N_FINAL]
+    if board.out_of_time:  # one refined re-fit at most (each is a search on the whole record)
+        refined = [r for r in near if not r["criterion"].startswith("subspace")]
+        near = [r for r in near if r["criterion"].startswith("subspace") or r is refined[0]]
+    for r in near:
+        m = _refit_one(r, data, stable_only)
+        if m is not None:
+            try:
+                r["bic"] = bic(m, data)
+            except Exception:  # noqa: BLE001 - cannot be simulated on the record
+                r["note"] = "re-fit on the whole record cannot be simulated"
+                continue
+            fitted.append((r["bic"], r, m))
+    if fitted:
+        _, r, m = min(fitted, key=lambda t: t[0])
+        return m, r
+    for r in ranked:
+        if not board.eligible(r, stable_only) or "bic" in r:
+            continue
+        m = _refit_one(r, data, stable_only)
+        if m is not None:
+            return m, r
+    # none of those re-fits stable: the stable candidates held back as starts or as below
+    # their start, by score, before giving up
+    for r in sorted(ranked, key=lambda r: -r["held_out_fit"]):
+        if not np.isfinite(r["held_out_fit"]) or not r["stable"] or "bic" in r or (
+                board.eligible(r, stable_only)):
+            continue
+        m = _refit_one(r, data, stable_only)
+        if m is not None:
+            r["note"] = ("chosen although held back (" + (r.get("note") or "") + "): no "
+                         "eligible candidate re-fitted stable on the whole record")
+            return m, r
+    raise DataError("no candidate gave a stable model on this record; check the data "
+                    "(offsets, an integrating process: difference the output) or fit one "
+                    "model directly")
+
+
+def _refit_one(r: dict[str, Any], data: IOData, stable_only: bool) -> Any:
+    """Candidate ``r`` re-fitted on the whole record, or None (noted) when that fails or is
+    unstable where a stable model is wanted."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            m = r["refit"](data)
+    except Exception as e:  # noqa: BLE001 - try the next candidate
+        r["note"] = f"re-fit on the whole record failed ({type(e).__name__})"
+        return None
+    if stable_only and not m.is_stable():
+        r["note"] = "re-fit on the whole record unstable"
+        return None
+    return m

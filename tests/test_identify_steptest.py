@@ -1,0 +1,80 @@
+"""sysid.identify on a step test: process models chosen by BIC (sysid.identify.steptest).
+
+A step test from rest (a heater switched from 0 to 50 %, the TCLab record of
+benches/results/realdata_fresh.md) raised an ExcitationError from identify: no block of it
+can be held out and the subspace methods refuse it."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+import sysid
+
+
+def _step_record(seed=0, n=400, noise=0.02, level=21.0, at=20):
+    true = sysid.ProcessModel("P2D", Kp=0.6, Tp1=40.0, Tp2=8.0, Td=5.0)
+    u = np.r_[np.zeros(at), np.full(n - at, 50.0)]
+    y = level + true.to_statespace(dt=1.0).simulate(u).ravel()
+    y += noise * np.random.default_rng(seed).standard_normal(n)
+    return true, u, y
+
+
+def test_a_step_test_gets_a_process_model_around_the_levels_before_the_step():
+    true, u, y = _step_record()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res = sysid.identify(sysid.IOData(u=u, y=y, dt=1.0), progress=False)
+    assert res.score == "BIC" and "step test" in res.checks["step_test"]
+    chosen = [r for r in res.leaderboard if r["chosen"]]
+    assert len(chosen) == 1 and chosen[0]["family"].startswith("procest P")
+    stable = [r for r in res.leaderboard if r["stable"] and np.isfinite(r["bic"])]
+    low = min(r["bic"] for r in stable)
+    assert chosen[0]["bic"] <= low + 2.0 and chosen[0]["n_parameters"] == min(
+        r["n_parameters"] for r in stable if r["bic"] <= low + 2.0)
+    # the levels the record rests at before the step, not its means
+    assert res.model.u_offset[0] == 0.0
+    assert abs(res.model.y_offset[0] - 21.0) < 0.02
+    # it predicts raw data: the step response of the plant, from rest
+    yh = np.asarray(res.model.simulate(u)).ravel()
+    assert np.std(yh - y) < 2 * 0.02 + 0.01 * np.ptp(y)
+    assert res.model.is_stable()
+    # the static gain is the plant's, and the dead time is found
+    gain = float(np.asarray(res.model.statespace.dcgain()).ravel()[0])
+    assert gain == pytest.approx(0.6, rel=0.02)
+    text = res.summary()
+    assert "record fit %" in text and "smallest BIC" in text
+    assert list(res.to_pandas()["family"])[0] == chosen[0]["family"]
+
+
+def test_a_fresh_step_validates_and_a_record_with_more_steps_takes_the_usual_path():
+    true, u, y = _step_record(seed=1)
+    _, u2, y2 = _step_record(seed=2, level=21.0, at=40)
+    res = sysid.identify(sysid.IOData(u=u, y=y, dt=1.0),
+                         validation=sysid.IOData(u=u2, y=y2, dt=1.0), progress=False)
+    assert res.validation_fit > 95.0
+    # a rich input is not a step test: the held-out path, as before
+    rng = np.random.default_rng(3)
+    ur = np.repeat(rng.choice([0.0, 50.0], 40), 10)
+    yr = 21.0 + true.to_statespace(dt=1.0).simulate(ur).ravel() + 0.02 * rng.standard_normal(400)
+    res2 = sysid.identify(sysid.IOData(u=ur, y=yr, dt=1.0), progress=False)
+    assert res2.score == "held-out" and "step_test" not in res2.checks
+
+
+def test_step_tests_with_two_inputs_and_the_plot():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    rng = np.random.default_rng(4)
+    p1 = sysid.ProcessModel("P1D", Kp=2.0, Tp1=15.0, Td=2.0).to_statespace(dt=1.0)
+    p2 = sysid.ProcessModel("P1D", Kp=-1.0, Tp1=30.0, Td=4.0).to_statespace(dt=1.0)
+    u = np.zeros((500, 2))
+    u[30:, 0], u[250:, 1] = 1.0, 3.0
+    y = 5.0 + p1.simulate(u[:, :1]).ravel() + p2.simulate(u[:, 1:]).ravel()
+    y += 0.01 * rng.standard_normal(500)
+    res = sysid.identify(sysid.IOData(u=u, y=y, dt=1.0), progress=False)
+    assert res.score == "BIC"
+    gains = np.asarray(res.model.statespace.dcgain()).ravel()
+    np.testing.assert_allclose(gains, [2.0, -1.0], rtol=0.02)
+    ax = res.plot()
+    assert ax.get_ylabel().startswith("simulation fit to the record")
