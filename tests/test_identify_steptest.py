@@ -78,3 +78,15 @@ def test_step_tests_with_two_inputs_and_the_plot():
     np.testing.assert_allclose(gains, [2.0, -1.0], rtol=0.02)
     ax = res.plot()
     assert ax.get_ylabel().startswith("simulation fit to the record")
+
+
+def test_an_integrating_plant_s_step_test_is_said_to_integrate():
+    # a tank level under a step of inflow ramps: the stable process models follow it with a
+    # pole on their bound (1 - 1e-9), which the checks name as an integrator
+    ss = sysid.ProcessModel("P1DI", Kp=0.05, Tp1=10.0, Td=3.0).to_statespace(dt=1.0)
+    u = np.r_[np.zeros(20), np.ones(280)]
+    y = 2.0 + ss.simulate(u).ravel() + 0.01 * np.random.default_rng(0).standard_normal(300)
+    res = sysid.identify(sysid.IOData(u=u, y=y, dt=1.0), progress=False)
+    assert res.score == "BIC" and "integrator" in res.checks["persistent_mode"]
+    yh = np.asarray(res.model.simulate(u)).ravel()
+    assert np.std(yh - y) < 0.02

@@ -25,6 +25,7 @@ import numpy as np
 from ..data.iodata import IOData
 from ..errors import NumericalError, SysidError
 from ..subspace.steptest import MAX_STEPS
+from .notes import persistent_mode_check
 from .result import IdentifiedModel, IdentifyResult
 
 __all__ = ["TYPES", "input_changes", "identify_step_test"]
@@ -178,6 +179,7 @@ def identify_step_test(data: IOData, validation: IOData | None, changes: list[in
                       f"whole record from rest and the smallest BIC chosen (a fresh record, "
                       f"validation=, tells how it predicts)"),
         "offsets": levels}
+    persistent_mode_check(fits[best], dev, checks)  # an integrating plant: a pole at 1 - eps
     vfit = None
     if validation is not None:
         try:
