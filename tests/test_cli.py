@@ -542,3 +542,23 @@ def test_an_input_still_in_the_estimation_part_only_names_the_split(tmp_path, ca
     assert "input torque is 0.05 in every sample of the estimation part" in err
     assert "(samples 0-199 of 400, --split 0.5)" in err and "changes at sample 220" in err
     assert "--split past that sample" in err
+
+
+def test_a_step_test_file_is_identified_with_process_models(tmp_path, capsys):
+    """A heater step test (0 -> 50 % at sample 10, 20 % at 500) made `sysid identify` fail with the
+    subspace methods' refusal; identify now fits process models from rest and chooses by
+    BIC, and the report says that, not "on blocks held out"."""
+    plant = sysid.ProcessModel("P1D", Kp=0.7, Tp1=30.0, Td=4.0).to_statespace(dt=1.0)
+    q = np.r_[np.zeros(10), np.full(490, 50.0), np.full(100, 20.0)]  # down at 500
+    t = 21.0 + plant.simulate(q).ravel() + 0.05 * np.random.default_rng(1).standard_normal(600)
+    path = tmp_path / "tclab.csv"
+    np.savetxt(path, np.c_[q, t], delimiter=",", header="Q1,T1", comments="")
+    rep = tmp_path / "r"
+    code = main(["identify", str(path), "--inputs", "Q1", "--outputs", "T1", "--dt", "1",
+                 "--split", "0.75", "--report", str(rep)])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    line = next(ln for ln in out.splitlines() if ln.startswith("order choice:"))
+    assert "procest" in line and "by BIC on the whole estimation data" in line, line
+    assert "blocks held out" not in line and "a step test: process models" in err
+    assert "procest" in (rep / "leaderboard.csv").read_text()

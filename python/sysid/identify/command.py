@@ -50,9 +50,11 @@ def prepare(est_data: IOData, val_data: IOData | None, preprocessing: dict[str, 
     ``result`` for the command line's validation and report."""
     from ..validation.criteria import select_order
     from .core import identify
+    from .steptest import input_changes
 
-    say("sysid.identify: candidate families and orders, chosen on held-out parts of the "
-        "estimation data")
+    say("sysid.identify: " + ("candidate families and orders, chosen on held-out parts of the "
+                              "estimation data" if input_changes(est_data) is None else
+                              "a step test: process models fitted from rest, chosen by BIC"))
     res = identify(est_data, val_data, progress=bars)
     say(f"chosen: {res.choice} ({res.seconds:.1f} s)")
     model = res.model.statespace
@@ -65,6 +67,8 @@ def prepare(est_data: IOData, val_data: IOData | None, preprocessing: dict[str, 
     sel = select_order(est, models=[model], validation=val)
     # the one-model table's own reason ("order n (models) chosen by validation") is not why:
     # identify chose it, on blocks held out of the estimation data
-    sel.reason = (f"{res.choice}, chosen by sysid.identify on blocks held out of the "
-                  "estimation data (its leaderboard: leaderboard.csv beside the report)")
+    how = ("on blocks held out of the estimation data" if res.score == "held-out" else
+           "by BIC on the whole estimation data (a step test: no part can be held out)")
+    sel.reason = (f"{res.choice}, chosen by sysid.identify {how} (its leaderboard: "
+                  "leaderboard.csv beside the report)")
     return {"model": model, "selection": sel, "est": est, "val": val, "result": res}
