@@ -6,6 +6,7 @@ import csv
 import json
 import subprocess
 import sys
+import warnings
 from html.parser import HTMLParser
 from pathlib import Path
 
@@ -562,3 +563,22 @@ def test_a_step_test_file_is_identified_with_process_models(tmp_path, capsys):
     assert "procest" in line and "by BIC on the whole estimation data" in line, line
     assert "blocks held out" not in line and "a step test: process models" in err
     assert "procest" in (rep / "leaderboard.csv").read_text()
+
+
+def test_a_warning_is_printed_once_per_run(tmp_path, capsys):
+    """The validation's residual test and the report's both tested the same residuals: a
+    step test validated where its input no longer moves printed "independence not tested"
+    twice."""
+    plant = sysid.ProcessModel("P1D", Kp=0.7, Tp1=30.0, Td=4.0).to_statespace(dt=1.0)
+    q = np.r_[np.zeros(10), np.full(590, 50.0)]
+    t = 21.0 + plant.simulate(q).ravel() + 0.05 * np.random.default_rng(1).standard_normal(600)
+    path = tmp_path / "tclab.csv"
+    np.savetxt(path, np.c_[q, t], delimiter=",", header="Q1,T1", comments="")
+    with warnings.catch_warnings():
+        warnings.simplefilter("default")  # as on the command line: once per place
+        assert main(["identify", str(path), "--inputs", "Q1", "--outputs", "T1", "--dt", "1",
+                     "--split", "0.75", "--report", str(tmp_path / "r")]) == 0
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.startswith("sysid: warning:")]
+    assert any("independence not tested" in ln for ln in lines), err
+    assert len(lines) == len(set(lines)), err

@@ -759,6 +759,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = _parser().parse_args(argv)
     try:
         with warnings.catch_warnings():
+            _SHOWN.clear()
             warnings.showwarning = _show_warning  # one line each, no source line
             return int(args.func(args))
     except (SysidError, ImportError) as e:
@@ -778,9 +779,16 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 130
 
 
+#: the warning lines printed by this run: the validation's residual test and the report's
+#: both test the same residuals, and a warning said once is enough
+_SHOWN: set[str] = set()
+
+
 def _show_warning(message: Any, category: type[Warning], *_: Any, **__: Any) -> None:
-    print(f"sysid: warning: {category.__name__}: {' '.join(str(message).split())}",
-          file=sys.stderr)
+    line = f"sysid: warning: {category.__name__}: {' '.join(str(message).split())}"
+    if line not in _SHOWN:
+        _SHOWN.add(line)
+        print(line, file=sys.stderr)
 
 
 def _one_line(e: BaseException) -> str:
