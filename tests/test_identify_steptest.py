@@ -90,3 +90,10 @@ def test_an_integrating_plant_s_step_test_is_said_to_integrate():
     assert res.score == "BIC" and "integrator" in res.checks["persistent_mode"]
     yh = np.asarray(res.model.simulate(u)).ravel()
     assert np.std(yh - y) < 0.02
+
+
+def test_a_step_test_with_an_input_that_never_moves_names_it():
+    u = np.c_[np.r_[np.zeros(20), np.ones(280)], np.full(300, 3.0)]
+    y = np.r_[np.zeros(20), 1.0 - 0.9 ** np.arange(280)]
+    with pytest.raises(sysid.DataError, match="input u1 is 3 in every sample"):
+        sysid.identify(sysid.IOData(u=u, y=y, dt=1.0), progress=False)

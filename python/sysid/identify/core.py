@@ -606,6 +606,7 @@ def identify(
                               positive=True)
     steps = input_changes(data)
     if steps is not None:  # a step test: nothing to hold out; process models by BIC
+        require_inputs_vary(data.experiments, "identify", data.input_names)
         require_inputs_vary(data.experiments, "identify", data.output_names, side=1)
         return identify_step_test(data, validation_record(validation, data), steps, t0,
                                   max_order)

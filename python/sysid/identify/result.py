@@ -307,7 +307,8 @@ class IdentifyResult(HTMLResult):
                          "to_pandas())")
         lines.append("* chosen (re-fitted on the whole record; among those the held-out blocks "
                      "cannot tell apart, the smallest BIC)" if held else
-                     "* chosen (the smallest BIC of the simulation errors from rest)")
+                     "* chosen (the smallest BIC of the simulation errors from rest; within "
+                     "2 of it, the fewest parameters)")
         return "\n".join(lines)
 
     def plot(self, ax: Any = None) -> Any:

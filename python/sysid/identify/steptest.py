@@ -142,9 +142,8 @@ def identify_step_test(data: IOData, validation: IOData | None, changes: list[in
             poles = np.abs(ss.poles())
             said = [str(w.message).split(":")[0][:80] for w in caught
                     if issubclass(w.category, UserWarning)]
-            row.update(order=int(code[1]), mean_fit=fit, bic=crit, n_parameters=int(
-                pm.n_parameters),
-                       stable=bool(ss.is_stable()),
+            row.update(order=int(code[1]), mean_fit=fit, bic=crit,
+                       n_parameters=int(pm.n_parameters), stable=bool(ss.is_stable()),
                        max_abs_pole=float(poles.max()) if poles.size else 0.0,
                        note=f"BIC {crit:.1f}" + (f"; {said[0]}" if said else ""))
         rows.append(row)
