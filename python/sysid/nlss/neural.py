@@ -362,21 +362,24 @@ def nlssest(
     # records (an IOData or a (u, y) pair) checked for the training data's channels
     validation = validation_data(validation, data)
     train, val = _split(sd, sc, validation, L, 2 if H is None else H)
-    _check_size(train, (n, data.n_inputs, data.n_outputs), hid, out, enc, L,
-                isinstance(hidden, int) and hidden == 16 and isinstance(output_hidden, str))
     lin_data = IOData([u[:at] for u, _, at in train], [y[:at] for _, y, at in train], data.dt)
     whole = isinstance(validation, IOData) or float(validation) == 0.0
     args = (hid, out, enc, L, seed, sc, train, H)
+    default = isinstance(hidden, int) and hidden == 16 and isinstance(output_hidden, str)
     if isinstance(init, HammersteinWienerSSModel):  # in engineering units
         check_hw(init, n, data.n_inputs, data.n_outputs, hid, out)
         units = Scaling(np.zeros(data.n_inputs), np.ones(data.n_inputs),
                         np.zeros(data.n_outputs), np.ones(data.n_outputs))
+        _check_size(train, (n, data.n_inputs, data.n_outputs), hid, out, enc, L, default)
         cands = [_hw_start(init, units, *args)]
     else:
         # its linear start is capped at 30 iterations: from the converged ssest fit the
         # training validated worse on held-out data (pH, F-16; benches/results/nonlinear.md)
         lin0 = linear_start(data, lin_data, sc, n, None if isinstance(init, str) else init,
                             periods if whole else None, max_iter=30)
+        # after the linear start, whose refusal of a record too short for the order comes
+        # first: no network fits where no linear model does
+        _check_size(train, (n, data.n_inputs, data.n_outputs), hid, out, enc, L, default)
         cands = [_linear_start(lin0, *args)]
         if isinstance(init, str) and init == "auto":
             hw = _hw_fit(lin_data, lin0, hid, out,  # in the scaled channels
