@@ -350,8 +350,8 @@ def test_nlssest_refuses_absurd_batches_and_widths(data):
     short = data.slice(0, 300)
     with pytest.raises(DataError, match=r"batch <= \d+"):
         sysid.nlssest(short, 1, hidden=4, batch=10**9, progress=False)
-    with pytest.raises(DataError, match=r"parameters but the training record gives \d+ "
-                                        r"residuals"):
+    with pytest.raises(DataError, match=r"give networks of \d+ parameters, and the training "
+                                        r"part of the record has \d+ residuals"):
         sysid.nlssest(short, 1, hidden=10**6, progress=False)
 
 

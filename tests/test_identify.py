@@ -237,9 +237,11 @@ def test_the_command_line_uses_identify_by_default(tmp_path, capsys):
 
 def test_the_identify_guide_runs():
     """docs/identify.md: every python block executes."""
-    assert len(python_blocks(guide_text("identify.md"))) == 3
+    assert len(python_blocks(guide_text("identify.md"))) == 4
     ns = quiet(run_guide, "identify.md")
     assert ns["res"].model.is_stable() and ns["m"].nstates >= 3
+    assert ns["step"].score == "BIC" and ns["step"].model.y_offset[0] == pytest.approx(
+        21.0, abs=0.02)
 
 
 def test_identify_returns_an_unstable_model_only_when_the_data_insist():

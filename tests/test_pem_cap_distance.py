@@ -143,8 +143,11 @@ def test_a_settled_network_search_is_not_warned_about_whatever_its_distance():
     # a sigmoid network's search is flat and ill-conditioned: the default nlhw, capped at 100
     # iterations, stood about 2 residual variances from its Gauss-Newton model's minimum,
     # yet the rest of the way to its own convergence lowered the cost by far less (0.009);
-    # its last steps had settled, and that decides
-    rng = np.random.default_rng(0)
+    # its last steps had settled, and that decides. (Since an input network's amplitude
+    # follows the input's units, seed 0's search crawls on for 900 iterations and 3.4
+    # residual variances, unwarned; seeds 1, 4, 5 alike by 1.2-1.9: the rule's known miss,
+    # benches/results/nonlinear.md, 2026-12-05. Seed 3 is this test's settled case.)
+    rng = np.random.default_rng(3)
     u = rng.uniform(-1, 1, (600, 1))
     x, y = np.zeros(2), np.zeros((600, 1))
     for t, w in enumerate(np.tanh(2 * u[:, 0])):
