@@ -187,6 +187,11 @@ class Board:
         self.unexcited = 0
         #: set by :meth:`insisting` when an unstable candidate wins only by following a drift
         self.drift: dict[str, Any] | None = None
+        #: the subspace sweep's fold estimators, whole-record estimator (a function of the
+        #: record) and largest order, and whether the record shows feedback: for the
+        #: state-sequence candidates (:func:`.states.states_candidates`)
+        self.subspace: tuple[list[Any], Any, int] | None = None
+        self.feedback = False
 
     def keep_folds(self, keep: list[int]) -> None:
         """Only the folds ``keep`` (indices, in order) stay: their blocks, output variations
@@ -523,6 +528,13 @@ class Board:
         if all(self._wins(*self._trend_fits([best_u, best_s], d)) for d in (False, True)):
             return "insist", best_u, best_s, winners
         return "drift", best_u, best_s, winners
+
+    def beats_without_drift(self, r: dict[str, Any], ref: dict[str, Any]) -> bool:
+        """Whether ``r`` beats ``ref`` as :meth:`insisting` asks of an unstable candidate:
+        better on every held-out block and by more than :func:`tie` on the score, both as
+        scored and once the record's drift is taken out of the held-out blocks and the
+        fitted parts (:meth:`_trend_fits`)."""
+        return all(self._wins(*self._trend_fits([r, ref], d)) for d in (False, True))
 
     def _wins(self, ou: list[Any], os: list[Any]) -> bool:
         """Better on every block, and by more than :func:`tie` on the score (per-output fits

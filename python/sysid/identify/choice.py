@@ -25,7 +25,10 @@ def _choose(board: Board, ranked: list[dict[str, Any]], data: IOData, stable_onl
     smallest BIC (its simulation errors there against its parameter count); when none
     re-fits well, the next candidates of the ranking."""
     fitted = []
-    near = board.near_best(stable_only, paired=True)[:N_FINAL]
+    # the state-sequence rows last: stable where the sweep's spurious modes are not, their
+    # high orders would crowd the others out (:func:`.states.states_candidates`)
+    near = sorted(board.near_best(stable_only, paired=True),
+                  key=lambda r: r["criterion"] == "subspace, states")[:N_FINAL]
     if board.out_of_time:  # one refined re-fit at most (each is a search on the whole record)
         refined = [r for r in near if not r["criterion"].startswith("subspace")]
         near = [r for r in near if r["criterion"].startswith("subspace") or r is refined[0]]

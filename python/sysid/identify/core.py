@@ -26,7 +26,9 @@
    one input and output; near-best candidates unstable on some block, at orders not refined
    yet, with a stable ``A`` enforced and refined likewise, unless the data insist on an
    unstable candidate or it wins only by following the record's drift
-   (:func:`_stabilised_refinements`). A refinement scored clearly below its start on the
+   (:func:`_stabilised_refinements`); at orders whose N4SID candidate is unstable on some
+   block, N4SID from the estimated state sequence (:func:`.states.states_candidates`:
+   candidates, not starts; not under feedback). A refinement scored clearly below its start on the
    held-out blocks is never chosen; one below it, or below the best candidate so far, on most
    blocks is stopped there. On the held-out blocks a refinement's search stops once it has settled
    (:func:`settled`: its last iterations raised the fit its criterion implies by less than a
@@ -95,6 +97,7 @@ from .board import Board
 from .choice import _choose
 from .notes import persistent_mode_check, refit_cap_check, trend_check, weak_check
 from .result import IdentifiedModel, IdentifyResult, _family
+from .states import stabilised_candidates, states_candidates
 from .steptest import identify_step_test, input_changes
 from .uncertainty import with_uncertainty
 
@@ -104,8 +107,6 @@ SUBSPACE = ("moesp", "n4sid", "cva")
 CLOSED_LOOP = ("pbsid", "ssarx")
 #: subspace candidates (distinct order and feedthrough) refined by prediction-error search
 N_REFINE = 3
-#: unstable subspace candidates re-fitted with a stable A when no candidate is stable
-N_STABILISED = 10
 #: iteration cap of a refinement re-fitted on the whole record (only near-best ones are): the
 #: model returned is converged, not stopped at pem's default cap of 50 nor once settled (a
 #: start far from the minimum needs more, and a search can crawl along a plateau before it
@@ -278,10 +279,14 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
     # one after another, and a freed one's id can come back as the next one's
     whole: list[Any] = [None, None]
 
-    def refit(data: IOData, m: str, n: int, ft: bool, stable: bool = False) -> Any:
+    def estimator(data: IOData) -> Any:
         if whole[0] is not data:
             whole[:] = [data, SubspaceEstimator(long_enough(data, 2 * h_full) or data, h_full)]
-        return whole[1].fit(n, method=m, feedthrough=ft, stable=stable)
+        return whole[1]
+
+    def refit(data: IOData, m: str, n: int, ft: bool, stable: bool = False) -> Any:
+        return estimator(data).fit(n, method=m, feedthrough=ft, stable=stable)
+    board.subspace = (ests, estimator, top)  # for the state-sequence candidates
 
     for meth in methods:
         for ft in (False, True):
@@ -296,17 +301,6 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
                         lambda k, m=meth, n=n, ft=ft: ests[k].fit(
                             n, method=m, feedthrough=ft, kalman=False, stable=True),
                         lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft, True))
-
-
-def _stabilised_candidates(board: Board) -> None:
-    """No stable candidate: the best subspace candidates with a stable ``A`` enforced
-    (Maciejowski's zero-padded shift), so that a stable model can still be returned."""
-    rows = sorted((r for r in board.rows if "stabilised" in r and np.isfinite(
-        r["held_out_fit"])), key=lambda r: -r["held_out_fit"])
-    for r in rows[:N_STABILISED]:
-        fit_fn, refit = r["stabilised"]
-        board.add(r["family"], r["order"], r["feedthrough"], None, "subspace, stable A",
-                  fit_fn, refit, budgeted=False)
 
 
 def implied_fit(cost: float, data: IOData, weighting: str | None) -> float:
@@ -428,7 +422,7 @@ def _stabilised_refinements(board: Board) -> None:
     they win only by following the record's drift, which a slow stable mode follows as
     well (on a four-stage evaporator, held-out 64 % against 60 %, validation 43 % against
     60 %), nor when the data insist on one (an integrating plant, or no stable candidate at
-    all: the choice is then made as before, :func:`_stabilised_candidates` as the last
+    all: the choice is then made as before, :func:`.states.stabilised_candidates` as the last
     resort). On a heat exchanger whose subspace fits are unstable on some block from order
     4 on, order 2 was the only choice (validation 55.6 %); from a stable ``A`` at order 4
     it is 61.0 %."""
@@ -644,7 +638,7 @@ def identify(
     deadline = None if time_budget is None else time.process_time() + float(time_budget)
     with Bar(None, "identify", unit="candidates", enabled=show(progress)) as bar:
         board = Board(parts, bar, deadline)
-        board.whole = centred
+        board.whole, board.feedback = centred, feedback
         blocks = board.effective_blocks()
         if blocks < min(2.0, len(parts) - 0.5):  # two blocks count 2.0 at most
             checks["held_out_evidence"] = (
@@ -667,6 +661,7 @@ def identify(
                     "none scored: no stable subspace candidate to start a prediction-error "
                     "search from (every one was unstable on some held-out block); the model "
                     "is a subspace one")
+        states_candidates(board)  # after the refinements: candidates, not starts
     if feedback and refine and board.starts_only(
             SUBSPACE, "open-loop subspace fit under feedback (biased): a start, not chosen"):
         checks["feedback"] += ("; the open-loop subspace fits (n4sid, moesp, cva), biased "
@@ -701,7 +696,7 @@ def identify(
             f"(remove the trend, sysid.detrend(data, 'linear'), or difference the output if "
             f"the plant integrates)")
     if enforce_stability is not False and insist is None and not np.isfinite(board.best_fit()):
-        _stabilised_candidates(board)
+        stabilised_candidates(board)
     ranked = board.ranked(allow_unstable=enforce_stability is False or insist is not None)
     model, chosen = _choose(board, ranked, centred, enforce_stability is True or (
         enforce_stability is None and insist is None))

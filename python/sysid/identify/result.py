@@ -25,8 +25,8 @@ SUMMARY_ROWS = 30
 def _family(row: dict[str, Any]) -> str:
     """The leaderboard's family column: a subspace candidate with a stable ``A`` enforced is
     told apart from the same weighting's plain one."""
-    return row["family"] + (" (stable A)" if row.get("criterion") == "subspace, stable A"
-                            else "")
+    return row["family"] + {"subspace, stable A": " (stable A)",
+                            "subspace, states": " (states)"}.get(row.get("criterion"), "")
 
 
 class IdentifiedModel(ChannelSelection):
@@ -218,7 +218,9 @@ class IdentifyResult(HTMLResult):
     model : IdentifiedModel
         The chosen model, re-fitted on the whole estimation record (predicts raw data).
     leaderboard : list of dict
-        Every candidate: family, order, feedthrough, focus, criterion, held-out fit (%, the
+        Every candidate: family, order, feedthrough, focus, criterion (``"subspace, stable
+        A"``, ``"subspace, states"``: ``A`` enforced stable, or from the estimated state
+        sequence; ``summary`` shows them as ``(stable A)``, ``(states)``), held-out fit (%, the
         simulation fit of the model fitted on the rest of the estimation record, on the
         held-out blocks pooled, without the one where it fits worst and the one where it
         fits best: :func:`sysid.identify.board.held_out_score`), mean fit and ``fold_fits``
