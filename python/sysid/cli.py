@@ -556,7 +556,8 @@ def _identify(args: argparse.Namespace) -> int:
     _check_parts(args.split, N, k, via_identify)
     from .identify.command import refuse_still_part  # a channel still in one part only
 
-    refuse_still_part(u, y, k, args.split, [names[i] for i in ui], [names[i] for i in yi])
+    refuse_still_part(u, y, k, args.split, [names[i] for i in ui], [names[i] for i in yi],
+                      via_identify or args.detrend != "none")
     pre: dict[str, Any] = {"file": str(args.data), "inputs": [names[i] for i in ui],
                            "outputs": [names[i] for i in yi],
                            "estimation_samples": [0, k], "validation_samples": [k, N]}
