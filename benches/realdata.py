@@ -65,6 +65,10 @@ idf_pos_0.065_2.mat``, ``data`` column 5 (input torque) -> column 4 (speed), 20 
 samples, 25 ms; ``MotoShield/aprbsResult.mat`` ``u -> y``, voltage to speed, 4 801 samples,
 20 ms; ``MagnetoShield/MagnetoShield_ID_Data.mat`` ``result`` column 2 -> columns 1, 3,
 voltage to position and current under PID feedback, 7 500 samples, 3.25 ms).
+``--fresh2-records DIR`` (``FRESH2``, results/realdata_fresh2[_<split>].md): the second
+sweep's four records (a TCLab log of two heaters under PID, a catchment's daily rainfall and
+evaporation to flow, a balancing robot car's 2 ms log, two tail-sitter UAV flights); their
+sources, SHA-256 and how each ``.npz`` is made: results/realdata_fresh.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -196,6 +200,17 @@ FRESH = {
     "motoshield": ("motoshield_aprbs", None),  # MotoShield voltage APRBS -> motor speed
     "magnetoshield": ("magneto_pid", None),  # MagnetoShield under PID: voltage -> position,
     # current (closed loop, an unstable plant)
+}
+
+#: real records of kinds no sweep had used (``--fresh2-records DIR``, second sweep of
+#: 2026-12-05), read as ``FRESH``'s are; the irregular logs resampled onto their median
+#: step by ``IOData.from_irregular`` (sources: results/realdata_fresh.md)
+FRESH2 = {
+    "tclab_pid2": ("tclab_pid2", None),  # TCLab, two heaters under PID: U1, U2 -> T1, T2
+    "hydro_120": ("hydro_120", None),  # catchment 120, daily: rain, evaporation -> flow
+    "mcar_sine": ("mcar_sine", None),  # balancing robot car, 2 ms: drive -> rate, angle
+    "tailsitter": ("tailsitter_alt1", "tailsitter_alt2"),  # tail-sitter UAV, 100 Hz:
+    # 4 actuator controls -> 3 body rates (flight 2 validates flight 1)
 }
 
 
@@ -664,6 +679,9 @@ def main() -> None:
     ap.add_argument("--fresh-records", default=None, metavar="DIR",
                     help="run the records first used on 2026-12-05 (FRESH), read from "
                          "DIR/<name>.npz, instead of the shipped ones")
+    ap.add_argument("--fresh2-records", default=None, metavar="DIR",
+                    help="run the records of the second sweep of 2026-12-05 (FRESH2), read "
+                         "from DIR/<name>.npz")
     args = ap.parse_args()
     global SPLIT
     SPLIT = args.split
@@ -681,6 +699,9 @@ def main() -> None:
     if args.fresh_records:
         stem = "realdata_fresh"
         _use(args, FRESH, lambda name: _more(Path(args.fresh_records), name, FRESH))
+    if args.fresh2_records:
+        stem = "realdata_fresh2"
+        _use(args, FRESH2, lambda name: _more(Path(args.fresh2_records), name, FRESH2))
     if args.out is None:
         tail = "" if args.split == "default" else f"_{args.split}"
         args.out = str(HERE / "results" / f"{stem}{tail}.md")

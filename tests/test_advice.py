@@ -133,3 +133,20 @@ def test_a_record_too_short_for_the_feedback_test_is_still_advised_on():
         a = sysid.advice(d)
     assert a["feedback"].verdict == "note"
     assert a["feedback"].finding.startswith("not tested (lags = 2 leaves no degrees")
+
+
+def test_poor_excitation_of_several_inputs_names_the_poor_one():
+    """A catchment's daily rainfall (a rich input) beside its climatological potential
+    evaporation (the same annual curve every year: a few spectral lines) was advised 'the
+    input is persistently exciting of order 3 only', as if the rainfall were poor; the
+    finding now names the input that limits the order and the order of each."""
+    rng = np.random.default_rng(4)
+    n = 3000
+    rain = rng.exponential(1.0, n) * (rng.random(n) < 0.3)
+    evap = 3.0 + 2.0 * np.sin(2 * np.pi * np.arange(n) / 365.0)
+    u = np.c_[rain, evap]
+    y = sysid.StateSpaceModel([[0.9]], [[0.1, -0.02]], [[1.0]]).simulate(u)
+    a = sysid.advice(sysid.IOData(u, y, 86400.0, input_names=["P", "Ep"]))
+    f = a["excitation"].finding
+    assert a["excitation"].verdict == "act" and "the inputs together" in f
+    assert "limited by Ep (alone: order 3" in f and "P alone: order >= 40" in f

@@ -258,3 +258,19 @@ def test_model_matrices_are_read_only_and_checked_when_replaced():
     for twin in (copy.deepcopy(m), pickle.loads(pickle.dumps(m))):
         with pytest.raises(ValueError, match="read-only"):
             twin.A[0, 0] = 1.0
+
+
+def test_inputs_on_one_line_about_their_means_are_not_called_recorded_twice():
+    """Two heaters' controller outputs on one line, U2 = 30 - 0.3 U1 (a TCLab log's first
+    half): ``identify`` removes the means, and the check then said 'linearly dependent in
+    every sample ... a channel recorded twice?' of inputs neither equal nor proportional.
+    On centred inputs it now says the dependence holds about their means."""
+    u1 = np.repeat(RNG.uniform(20.0, 50.0, 40), 10)
+    u = np.column_stack([u1, 30.0 - 0.3 * u1])
+    y = sysid.StateSpaceModel([[0.9]], [[0.1, 0.05]], [[1.0]]).simulate(u)
+    d = sysid.IOData(u, y, 1.0, input_names=["U1", "U2"])
+    with pytest.raises(sysid.ExcitationError) as err:
+        sysid.identify(d)
+    msg = str(err.value)
+    assert "inputs U1, U2 lie on one line or plane about their means" in msg
+    assert "recorded twice" not in msg and "linearly dependent" not in msg

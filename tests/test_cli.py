@@ -582,3 +582,27 @@ def test_a_warning_is_printed_once_per_run(tmp_path, capsys):
     lines = [ln for ln in err.splitlines() if ln.startswith("sysid: warning:")]
     assert any("independence not tested" in ln for ln in lines), err
     assert len(lines) == len(set(lines)), err
+
+
+def test_inputs_on_one_line_in_the_estimation_part_only_name_the_split(tmp_path, capsys):
+    """Two heaters under two controllers (a TCLab log) moved along one line, U2 = a - b U1,
+    for the first 1012 of 1936 samples, and apart after: under the default --split 0.5 the
+    command said 'inputs U1, U2 are linearly dependent in every sample ... a channel recorded
+    twice?', of inputs that are neither equal nor proportional (the dependence holds about
+    their means, which the command removes, and in the estimation part only). The refusal
+    names the part, the split and the sample where they part."""
+    rng = np.random.default_rng(3)
+    n = 400
+    u1 = np.repeat(rng.uniform(20, 50, n // 10), 10)
+    u2 = 30.0 - 0.3 * u1
+    u2[260:] = np.repeat(rng.uniform(10, 40, (n - 260) // 10), 10)
+    y = sysid.StateSpaceModel([[0.9]], [[0.1, 0.05]], [[1.0]]).simulate(np.c_[u1, u2])[:, 0]
+    path = tmp_path / "two.csv"
+    np.savetxt(path, np.c_[u1, u2, y], delimiter=",", header="U1,U2,T1", comments="")
+    argv = ["identify", str(path), "--inputs", "U1,U2", "--outputs", "T1", "--report",
+            str(tmp_path / "r")]
+    err = run_error(capsys, argv)
+    assert "inputs U1, U2 lie on one line about their means in every sample of the " \
+           "estimation part (samples 0-199 of 400, --split 0.5)" in err
+    assert "part at sample 260" in err and "a channel recorded twice" not in err
+    assert main(argv[:-1] + [str(tmp_path / "r2"), "--split", "0.8", "--quiet"]) == 0

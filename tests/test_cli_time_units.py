@@ -91,3 +91,28 @@ def test_a_dt_beside_a_text_column_named_time_is_taken(tmp_path):
                                             enumerate(zip(u, y))) + "\n")
     assert _run(path, tmp_path / "out", "--dt", "0.5") == 0
     assert sysid.load_model(tmp_path / "out" / "model.json").dt == 0.5
+
+
+@pytest.mark.parametrize(("where", "step", "kind"), [(150, 0.06, "a gap"),
+                                                      (150, 0.0095, "jitter")])
+def test_an_irregular_time_column_is_refused_as_the_reader_refuses_it(tmp_path, capsys,
+                                                                       where, step, kind):
+    """A time column with missing samples (a logger's 5 samples lost at once) or jitter was
+    read by the command line at its median spacing, every sample taken as one step apart
+    (a balancing robot's log with 12 gaps, a heater log with 5 s +- 10 % stamps, both
+    identified without a word), where ``IOData.from_csv`` refuses the same file. It is now
+    refused the same way, naming the place and saying what to do."""
+    rng = np.random.default_rng(12)
+    u = rng.standard_normal(400)
+    y = PLANT.simulate(u)[:, 0] + 0.05 * rng.standard_normal(400)
+    t = np.arange(400) * 0.01
+    t[where:] += step - 0.01
+    path = tmp_path / "rec.csv"
+    path.write_text("time,u,y\n" + "\n".join(f"{a:.15g},{b:.8g},{c:.8g}"
+                                             for a, b, c in zip(t, u, y)) + "\n")
+    with pytest.raises(DataError, match=f"irregular sampling: {kind} at sample {where}"):
+        sysid.IOData.from_csv(path, inputs=["u"], outputs=["y"])
+    assert _run(path, tmp_path / "out") == 2
+    err = capsys.readouterr().err
+    assert f"irregular sampling: {kind} at sample {where}" in err
+    assert "time column 'time'" in err and not (tmp_path / "out" / "model.json").exists()

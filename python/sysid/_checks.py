@@ -626,12 +626,16 @@ def require_independent_inputs(exps: list[tuple[np.ndarray, np.ndarray]], who: s
     v = V[:, 0]
     involved = [j for j in range(m) if abs(v[j]) > 1e-3 * np.abs(v).max()]
     label = [names[j] if names is not None and j < len(names) else f"u{j}" for j in involved]
+    r, n = int(np.sum(w > 1e-12 * w[-1])), sum(len(u) for u, _ in exps)
+    centred = np.all(np.abs(sum(u.sum(axis=0) for u, _ in exps)) <= 1e-9 * d * np.sqrt(n))
     # an ExcitationError (a DataError) whichever the caller raises for a constant channel
     raise (error if issubclass(error, ExcitationError) else ExcitationError)(
-        f"inputs {', '.join(label)} are linearly dependent in every sample (the {m} inputs "
-        f"have rank {int(np.sum(w > 1e-12 * w[-1]))}: one is a combination of the others, a "
-        f"channel recorded twice?): {who} cannot tell their "
-        "effects apart; drop one of them (data.select) or record them excited independently")
+        f"inputs {', '.join(label)} " + (f"lie on one line or plane about their means in every "
+        f"sample (rank {r} with the means removed: one is a constant "
+        "plus a combination of the others)" if centred else f"are linearly dependent in every "
+        f"sample (the {m} inputs have rank {r}: one is a combination of the others, a channel "
+        f"recorded twice?)") + f": {who} cannot tell their effects apart; drop one of them "
+        "(data.select) or record them excited independently")
 
 
 #: Largest ``|value|`` of a channel an estimator accepts: every sum of products of samples

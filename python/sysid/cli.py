@@ -23,7 +23,6 @@ from typing import Any, Callable
 import numpy as np
 
 from .data.blocks import read_columns
-from .data.formats import grid_dt
 from .data.iodata import IOData
 from .data.table import (
     Table,
@@ -36,7 +35,13 @@ from .data.table import (
     text_bytes,
     units_row,
 )
-from .data.units import check_dt_against_time, split_header, time_column, time_unit_seconds
+from .data.units import (
+    check_dt_against_time,
+    sample_time,
+    split_header,
+    time_column,
+    time_unit_seconds,
+)
 from .errors import DataError, InsufficientDataError, OrderError, SysidError
 from .validation.crossval import MIN_BLOCK
 
@@ -534,15 +539,14 @@ def _identify(args: argparse.Namespace) -> int:
     say = _Progress(args.quiet)
     names, ui, yi, u, y, t = _load(args, say)
     if t is not None:
-        steps = np.diff(t)
-        if steps.size == 0 or not np.all(steps > 0):
-            raise DataError(f"time column {args.time!r} must increase strictly")
-        # the dt the column was written with (0.1, not 0.10000000000000009 from its steps'
-        # rounding), as IOData.from_csv reads it; else the median step
-        span = (t[-1] - t[0]) / (t.size - 1)
-        dt = grid_dt([t], [float(f"{span:.12g}")]) or float(np.median(steps))
         if args.dt is not None:
             raise DataError("give either --dt or --time, not both")
+        # the dt the column was written with (0.1, not 0.10000000000000009), after checking
+        # it is uniform, as IOData.from_csv reads it (gaps and jitter were read at the median)
+        try:
+            dt = sample_time(t)
+        except DataError as e:
+            raise DataError(f"time column {args.time!r}: {e}") from None
     else:
         dt = 1.0 if args.dt is None else float(args.dt)
     N = y.shape[0]
@@ -552,7 +556,8 @@ def _identify(args: argparse.Namespace) -> int:
     _check_parts(args.split, N, k, via_identify)
     from .identify.command import refuse_still_part  # a channel still in one part only
 
-    refuse_still_part(u, y, k, args.split, [names[i] for i in ui], [names[i] for i in yi])
+    refuse_still_part(u, y, k, args.split, [names[i] for i in ui], [names[i] for i in yi],
+                      via_identify or args.detrend != "none")
     pre: dict[str, Any] = {"file": str(args.data), "inputs": [names[i] for i in ui],
                            "outputs": [names[i] for i in yi],
                            "estimation_samples": [0, k], "validation_samples": [k, N]}

@@ -15,11 +15,13 @@ __all__ = ["prepare", "refuse_still_part"]
 
 
 def refuse_still_part(u: np.ndarray, y: np.ndarray, k: int, split: str,
-                      inputs: list[str], outputs: list[str]) -> None:
+                      inputs: list[str], outputs: list[str], centred: bool = True) -> None:
     """Refuse a channel constant in the estimation part (the first ``k`` samples) of a file
     in which it changes later, naming the split: the estimators' own refusal said "input
     torque is 0.05 in every sample" of a motor step test whose torque steps at sample 10 000,
-    where the default ``--split 0.5`` ends the estimation part.
+    where the default ``--split 0.5`` ends the estimation part. With ``centred`` (the means
+    are removed before the fit), inputs on one line about their means there and apart later
+    are refused the same way.
 
     Examples
     --------
@@ -42,6 +44,36 @@ a --split past that sample (a larger fraction, or a sample count above 6)
                     f"(samples 0-{k - 1} of {x.shape[0]}, --split {split}) and first changes at "
                     f"sample {first}: nothing to identify its effect from; pass a --split past "
                     f"that sample (a larger fraction, or a sample count above {first})")
+    if centred and u.shape[1] > 1 and 0 < k < u.shape[0]:
+        _refuse_dependent_part(u, k, split, inputs)
+
+
+def _refuse_dependent_part(u: np.ndarray, k: int, split: str, inputs: list[str]) -> None:
+    """Refuse inputs dependent about their means (their values on one line or plane) in the
+    estimation part only: the estimators, fitted after the means are removed, said "linearly
+    dependent in every sample ... a channel recorded twice?" of two heaters' controller
+    outputs that moved along one line for the first 1012 of 1936 samples only."""
+    c = u[:k] - u[:k].mean(axis=0)
+    d = np.sqrt(np.sum(c * c, axis=0))
+    if np.any(d == 0) or not np.all(np.isfinite(c)):
+        return  # constant and non-finite channels have their own refusals
+    w, V = np.linalg.eigh((c.T @ c) / np.outer(d, d))
+    if w[0] > 1e-12 * w[-1]:
+        return  # the same tolerance as sysid._checks.require_independent_inputs
+    v = V[:, 0] / d
+    r = np.abs((u - u[:k].mean(axis=0)) @ v)
+    off = np.flatnonzero(r > 1e-6 * float(np.max(np.abs(c) @ np.abs(v))))
+    off = off[off >= k]
+    if off.size == 0:
+        return  # dependent in the whole file too: the estimators' own refusal says so
+    names = [inputs[j] for j in range(len(inputs)) if abs(V[j, 0]) > 1e-3 * np.abs(V[:, 0]).max()]
+    first = int(off[0])
+    raise DataError(
+        f"inputs {', '.join(names)} lie on one line about their means in every sample of the "
+        f"estimation part (samples 0-{k - 1} of {u.shape[0]}, --split {split}): one is a "
+        f"constant plus a combination of the others there, so their effects cannot be told "
+        f"apart; they part at sample {first}: pass a --split past that sample (a larger "
+        f"fraction, or a sample count above {first})")
 
 
 def prepare(est_data: IOData, val_data: IOData | None, preprocessing: dict[str, Any] | None,

@@ -166,9 +166,22 @@ def _excitation(data: Any, flat: list[str]) -> Finding:
     pe = persistent_excitation_order(
         [e[0] for e in data.experiments] if data.n_experiments > 1 else u, 40)
     if pe < 4:
+        what = f"the input is persistently exciting of order {pe} only"
+        if data.n_inputs > 1:  # name the input that limits it (rain beside a climatology)
+            per = [persistent_excitation_order(
+                [e[0][:, [j]] for e in data.experiments] if data.n_experiments > 1
+                else u[:, [j]], 40) for j in range(data.n_inputs)]
+            low = [n for n, p in zip(data.input_names, per) if p < 4]
+            what = (f"the inputs together are persistently exciting of order {pe} only, "
+                    f"limited by {', '.join(low)} (alone: order "
+                    f"{', '.join(str(p) for p in per if p < 4)}; "
+                    + "; ".join(f"{n} alone: order {'>= ' if p == 40 else ''}{p}"
+                                for n, p in zip(data.input_names, per) if p >= 4) + ")"
+                    if low and len(low) < data.n_inputs else
+                    f"the inputs together are persistently exciting of order {pe} only")
         return Finding("excitation", "act",
-                       f"the input is persistently exciting of order {pe} only: models of "
-                       f"order above {pe // 2} are not determined by the data",
+                       f"{what}: models of order above {pe // 2} are not determined by the "
+                       "data",
                        "excite more frequencies (sysid.idinput, sysid.multisine) or keep "
                        f"the order at most {max(pe // 2, 1)}")
     return Finding("excitation", "ok",
