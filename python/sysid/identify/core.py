@@ -76,7 +76,6 @@ from ..errors import (
     DataError,
     ExcitationError,
     InsufficientDataError,
-    NumericalError,
     SysidWarning,
     several_records_hint,
 )
@@ -96,7 +95,7 @@ from ..validation.records import validation_record
 from .board import Board
 from .choice import _choose
 from .notes import persistent_mode_check, refit_cap_check, trend_check, weak_check
-from .result import IdentifiedModel, IdentifyResult, _family
+from .result import IdentifiedModel, IdentifyResult, _family, reported_fit
 from .states import stabilised_candidates, states_candidates
 from .steptest import identify_step_test, input_changes
 from .uncertainty import with_uncertainty
@@ -731,15 +730,7 @@ def identify(
     if getattr(model, "uncertainty", None) is None:
         model = with_uncertainty(model, centred, checks, SUBSPACE + CLOSED_LOOP)
     result_model = IdentifiedModel(model, mu, my)
-    vfit = None
-    if validation is not None:
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                vfit = float(result_model.compare(validation).mean_fit)
-        except (NumericalError, FloatingPointError):  # a diverging model: reported, not raised
-            vfit = -np.inf
-    out = IdentifyResult(result_model, rows, desc, checks, vfit, time.perf_counter() - t0,
-                         interrupted)
+    out = IdentifyResult(result_model, rows, desc, checks, reported_fit(result_model, validation),
+                         time.perf_counter() - t0, interrupted)
     out.out_of_time = board.out_of_time
     return out

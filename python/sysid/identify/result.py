@@ -29,6 +29,24 @@ def _family(row: dict[str, Any]) -> str:
                             "subspace, states": " (states)"}.get(row.get("criterion"), "")
 
 
+def reported_fit(model: IdentifiedModel, validation: IOData | None) -> float | None:
+    """The simulation fit (%) of ``model`` on ``validation`` that identify reports (None
+    without validation data; ``-inf`` for a model that diverges there: reported, not
+    raised)."""
+    import warnings
+
+    from ..errors import NumericalError
+
+    if validation is None:
+        return None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return float(model.compare(validation).mean_fit)
+    except (NumericalError, FloatingPointError):
+        return -np.inf
+
+
 class IdentifiedModel(ChannelSelection):
     """A linear model identified around operating-point offsets.
 

@@ -26,7 +26,7 @@ from ..data.iodata import IOData
 from ..errors import NumericalError, SysidError
 from ..subspace.steptest import MAX_STEPS
 from .notes import persistent_mode_check
-from .result import IdentifiedModel, IdentifyResult
+from .result import IdentifiedModel, IdentifyResult, reported_fit
 
 __all__ = ["TYPES", "input_changes", "identify_step_test"]
 
@@ -179,17 +179,10 @@ def identify_step_test(data: IOData, validation: IOData | None, changes: list[in
                       f"validation=, tells how it predicts)"),
         "offsets": levels}
     persistent_mode_check(fits[best], dev, checks)  # an integrating plant: a pole at 1 - eps
-    vfit = None
-    if validation is not None:
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                vfit = float(model.compare(validation).mean_fit)
-        except (NumericalError, FloatingPointError):
-            vfit = -np.inf
     desc = (f"{chosen['family']} (a step test: fitted from rest, chosen by BIC), "
             f"{chosen['order']} pole(s) and a dead time ({fits[best].nstates} states with its "
             f"delay line): fit {chosen['mean_fit']:.1f} % to the record")
-    out = IdentifyResult(model, board, desc, checks, vfit, time.perf_counter() - t0)
+    out = IdentifyResult(model, board, desc, checks, reported_fit(model, validation),
+                         time.perf_counter() - t0)
     out.score = "BIC"
     return out
