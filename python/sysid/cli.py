@@ -12,7 +12,6 @@
 from __future__ import annotations
 
 import argparse
-import csv
 import sys
 import time
 import warnings
@@ -596,7 +595,7 @@ def _identify(args: argparse.Namespace) -> int:
     val_data = IOData(u=u[k:] if ui else None, y=y[k:], **kw) if k < N else None
     if via_identify:
         from .analysis.report_page import reissue
-        from .identify.command import prepare
+        from .identify.command import prepare, write_leaderboard
 
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -613,7 +612,7 @@ def _identify(args: argparse.Namespace) -> int:
                 m = p["result"].model
                 save_model(_raw_model(m.statespace, pre, trend, m.u_offset, m.y_offset),
                            out["files"]["model"])
-                out["files"]["leaderboard"] = _write_leaderboard(
+                out["files"]["leaderboard"] = write_leaderboard(
                     p["result"], Path(out["files"]["model"]).with_name("leaderboard.csv"))
         out["warnings"] = reissue(caught)
         print(p["result"].summary())
@@ -683,19 +682,6 @@ def _raw_model(model: Any, pre: dict[str, Any], trend: Any, u_offset: Any = 0.0,
         u0 = u0 + np.asarray(pre["removed_means"]["inputs"], float)
         y0 = y0 + np.asarray(pre["removed_means"]["outputs"], float)
     return IdentifiedModel(model, u0, y0)
-
-
-def _write_leaderboard(result: Any, path: Path) -> Path:
-    """identify's leaderboard as a CSV beside the report (no pandas needed)."""
-    from ._atomic import atomic_path
-    from .identify.result import COLUMNS
-
-    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(COLUMNS)
-        for row in result.leaderboard:
-            w.writerow(["" if row.get(c) is None else row.get(c) for c in COLUMNS])
-    return path
 
 
 def _parser() -> argparse.ArgumentParser:

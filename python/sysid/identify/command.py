@@ -4,6 +4,7 @@ of the deviations, the records with its offsets removed, and a one-model order t
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -11,7 +12,7 @@ import numpy as np
 from ..data.iodata import IOData
 from ..errors import DataError
 
-__all__ = ["prepare", "refuse_still_part"]
+__all__ = ["prepare", "refuse_still_part", "write_leaderboard"]
 
 
 def refuse_still_part(u: np.ndarray, y: np.ndarray, k: int, split: str,
@@ -104,3 +105,18 @@ def prepare(est_data: IOData, val_data: IOData | None, preprocessing: dict[str, 
     sel.reason = (f"{res.choice}, chosen by sysid.identify {how} (its leaderboard: "
                   "leaderboard.csv beside the report)")
     return {"model": model, "selection": sel, "est": est, "val": val, "result": res}
+
+
+def write_leaderboard(result: Any, path: Path) -> Path:
+    """identify's leaderboard as a CSV beside the command line's report (no pandas needed)."""
+    import csv
+
+    from .._atomic import atomic_path
+    from .result import COLUMNS
+
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(COLUMNS)
+        for row in result.leaderboard:
+            w.writerow(["" if row.get(c) is None else row.get(c) for c in COLUMNS])
+    return path
