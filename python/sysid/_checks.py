@@ -610,23 +610,16 @@ def require_independent_inputs(exps: list[tuple[np.ndarray, np.ndarray]], who: s
     ...
     sysid.errors.ExcitationError: inputs u0, u1 are linearly dependent in every sample ...
     """
-    m = exps[0][0].shape[1] if exps else 0
-    if m < 2:
-        return
-    G = np.zeros((m, m))
-    for u, _ in exps:
-        if len(u):
-            G += u.T @ u
-    d = np.sqrt(np.diag(G))
-    if not np.all(np.isfinite(G)) or np.any(d == 0):
-        return  # overflow and all-zero channels have their own checks
-    w, V = np.linalg.eigh(G / np.outer(d, d))
-    if w[0] > 1e-12 * w[-1]:
-        return
-    v = V[:, 0]
+    from ._dependence import TOL, input_dependence
+
+    found = input_dependence([u for u, _ in exps])
+    if found is None:
+        return  # independent (overflow and all-zero channels have their own checks)
+    w, v, d = found
+    m = v.size
     involved = [j for j in range(m) if abs(v[j]) > 1e-3 * np.abs(v).max()]
     label = [names[j] if names is not None and j < len(names) else f"u{j}" for j in involved]
-    r, n = int(np.sum(w > 1e-12 * w[-1])), sum(len(u) for u, _ in exps)
+    r, n = int(np.sum(w > TOL * w[-1])), sum(len(u) for u, _ in exps)
     centred = np.all(np.abs(sum(u.sum(axis=0) for u, _ in exps)) <= 1e-9 * d * np.sqrt(n))
     # an ExcitationError (a DataError) whichever the caller raises for a constant channel
     raise (error if issubclass(error, ExcitationError) else ExcitationError)(

@@ -54,20 +54,20 @@ def _refuse_dependent_part(u: np.ndarray, k: int, split: str, inputs: list[str])
     estimation part only: the estimators, fitted after the means are removed, said "linearly
     dependent in every sample ... a channel recorded twice?" of two heaters' controller
     outputs that moved along one line for the first 1012 of 1936 samples only."""
+    from .._dependence import input_dependence
+
     c = u[:k] - u[:k].mean(axis=0)
-    d = np.sqrt(np.sum(c * c, axis=0))
-    if np.any(d == 0) or not np.all(np.isfinite(c)):
-        return  # constant and non-finite channels have their own refusals
-    w, V = np.linalg.eigh((c.T @ c) / np.outer(d, d))
-    if w[0] > 1e-12 * w[-1]:
-        return  # the same tolerance as sysid._checks.require_independent_inputs
-    v = V[:, 0] / d
+    found = input_dependence([c])  # the estimators' test, on the centred estimation part
+    if found is None:
+        return  # independent there (constant and non-finite channels: their own refusals)
+    _, v0, d = found
+    v = v0 / d
     r = np.abs((u - u[:k].mean(axis=0)) @ v)
     off = np.flatnonzero(r > 1e-6 * float(np.max(np.abs(c) @ np.abs(v))))
     off = off[off >= k]
     if off.size == 0:
         return  # dependent in the whole file too: the estimators' own refusal says so
-    names = [inputs[j] for j in range(len(inputs)) if abs(V[j, 0]) > 1e-3 * np.abs(V[:, 0]).max()]
+    names = [inputs[j] for j in range(len(inputs)) if abs(v0[j]) > 1e-3 * np.abs(v0).max()]
     first = int(off[0])
     raise DataError(
         f"inputs {', '.join(names)} lie on one line about their means in every sample of the "

@@ -597,17 +597,15 @@ def identify(
     if time_budget is not None:
         time_budget = as_real(time_budget, "time_budget (seconds, or None for no limit)",
                               positive=True)
-    steps = input_changes(data)
-    if steps is not None:  # a step test: nothing to hold out; process models by BIC
-        require_inputs_vary(data.experiments, "identify", data.input_names)
-        require_inputs_vary(data.experiments, "identify", data.output_names, side=1)
-        return identify_step_test(data, validation_record(validation, data), steps, t0,
-                                  max_order)
-    require_held_out_length(data)  # before the channel checks: 1 sample is "constant"
+    steps = input_changes(data)  # a step test: nothing to hold out (its own path below)
+    if steps is None:
+        require_held_out_length(data)  # before the channel checks: 1 sample is "constant"
     require_inputs_vary(data.experiments, "identify", data.input_names)
     # before the means are removed (a constant output is then 0)
     require_inputs_vary(data.experiments, "identify", data.output_names, side=1)
     validation = validation_record(validation, data)  # before the search, not after it
+    if steps is not None:  # process models fitted from rest, chosen by BIC
+        return identify_step_test(data, validation, steps, t0, max_order)
     centred, mu, my = _offsets(data)
     checks, feedback = _checks(centred)
     # six significant digits: rounding to decimals printed data in micro-units as [0.0]

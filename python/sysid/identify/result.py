@@ -255,7 +255,7 @@ class IdentifyResult(HTMLResult):
 
     def __init__(self, model: IdentifiedModel, leaderboard: list[dict[str, Any]], choice: str,
                  checks: dict[str, Any], validation_fit: float | None, seconds: float,
-                 interrupted: bool = False) -> None:
+                 interrupted: bool = False, score: str = "held-out") -> None:
         self.model, self.leaderboard, self.choice = model, leaderboard, choice
         self.checks, self.validation_fit, self.seconds = checks, validation_fit, seconds
         self.interrupted = interrupted
@@ -263,7 +263,7 @@ class IdentifyResult(HTMLResult):
         self.out_of_time = False
         #: what chose the model: ``"held-out"`` (the blocks held out of the record), or
         #: ``"BIC"`` (a step test, :mod:`sysid.identify.steptest`: no part can be held out)
-        self.score = "held-out"
+        self.score = score
 
     def to_pandas(self) -> Any:
         """The leaderboard as a DataFrame, in the order of :meth:`summary`: the stable

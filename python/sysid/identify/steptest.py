@@ -24,7 +24,7 @@ import numpy as np
 
 from ..data.iodata import IOData
 from ..errors import NumericalError, SysidError
-from ..subspace.steptest import MAX_STEPS
+from ..subspace.steptest import step_changes
 from .notes import persistent_mode_check
 from .result import IdentifiedModel, IdentifyResult, reported_fit
 
@@ -40,7 +40,7 @@ TIE = 2.0
 def input_changes(data: IOData) -> list[int] | None:
     """The samples (counted over the experiments laid end to end) where some input changes,
     or ``None`` when there are more than :data:`~sysid.subspace.steptest.MAX_STEPS` (not a
-    step test) or none.
+    step test) or none (:func:`sysid.subspace.steptest.step_changes`).
 
     Examples
     --------
@@ -48,18 +48,8 @@ def input_changes(data: IOData) -> list[int] | None:
     >>> u = np.r_[np.zeros(20), np.ones(80)]
     >>> input_changes(sysid.IOData(u=u, y=np.zeros(100)))
     [20]
-    >>> input_changes(sysid.IOData(u=np.sin(np.arange(100.0)), y=np.zeros(100))) is None
-    True
     """
-    out: list[int] = []
-    start = 0
-    for u, _ in data.experiments:
-        u = np.asarray(u, float).reshape(len(u), -1)
-        out += (np.flatnonzero(np.any(np.diff(u, axis=0) != 0, axis=1)) + 1 + start).tolist()
-        if len(out) > MAX_STEPS:
-            return None
-        start += u.shape[0]
-    return out or None
+    return step_changes(data.experiments)
 
 
 def _rest_levels(data: IOData) -> tuple[np.ndarray, np.ndarray]:
@@ -67,8 +57,6 @@ def _rest_levels(data: IOData) -> tuple[np.ndarray, np.ndarray]:
     the samples before it, at least the first sample), pooled over the experiments."""
     us, ys = [], []
     for u, y in data.experiments:
-        u = np.asarray(u, float).reshape(len(u), -1)
-        y = np.asarray(y, float).reshape(len(y), -1)
         moved = np.flatnonzero(np.any(np.diff(u, axis=0) != 0, axis=1))
         k = int(moved[0]) + 1 if moved.size else u.shape[0]
         us.append(u[:k])
@@ -116,8 +104,8 @@ def identify_step_test(data: IOData, validation: IOData | None, changes: list[in
 
     u0, y0 = _rest_levels(data)
     kw = {"dt": data.dt, "input_names": data.input_names, "output_names": data.output_names}
-    us = [np.asarray(u, float).reshape(len(u), -1) - u0 for u, _ in data.experiments]
-    ys = [np.asarray(y, float).reshape(len(y), -1) - y0 for _, y in data.experiments]
+    us = [u - u0 for u, _ in data.experiments]
+    ys = [y - y0 for _, y in data.experiments]
     dev = IOData(u=us[0], y=ys[0], **kw) if len(us) == 1 else IOData(u=us, y=ys, **kw)
     rows: list[dict[str, Any]] = []
     fits: list[Any] = []
@@ -182,7 +170,5 @@ def identify_step_test(data: IOData, validation: IOData | None, changes: list[in
     desc = (f"{chosen['family']} (a step test: fitted from rest, chosen by BIC), "
             f"{chosen['order']} pole(s) and a dead time ({fits[best].nstates} states with its "
             f"delay line): fit {chosen['mean_fit']:.1f} % to the record")
-    out = IdentifyResult(model, board, desc, checks, reported_fit(model, validation),
-                         time.perf_counter() - t0)
-    out.score = "BIC"
-    return out
+    return IdentifyResult(model, board, desc, checks, reported_fit(model, validation),
+                          time.perf_counter() - t0, score="BIC")

@@ -14,10 +14,36 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["step_test_note", "MAX_STEPS"]
+__all__ = ["step_test_note", "step_changes", "MAX_STEPS"]
 
 #: at most this many samples where an input changes make a record a step test
 MAX_STEPS = 4
+
+
+def step_changes(experiments: list[Any]) -> list[int] | None:
+    """The samples (counted over the experiments laid end to end) where some input
+    changes, when there are 1 to :data:`MAX_STEPS` of them (a step test), else ``None``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> step_changes([(np.r_[np.zeros(20), np.ones(80)][:, None], None)])
+    [20]
+    >>> step_changes([(np.sin(np.arange(100.0))[:, None], None)]) is None
+    True
+    """
+    changes: list[int] = []
+    total = 0
+    for e in experiments:
+        u = np.asarray(e[0])
+        if u.ndim != 2 or u.shape[1] == 0 or u.shape[0] < 2:
+            return None
+        changes += (np.flatnonzero(np.any(np.diff(u, axis=0) != 0, axis=1)) + 1
+                    + total).tolist()
+        total += u.shape[0]
+        if len(changes) > MAX_STEPS:
+            return None
+    return changes or None
 
 
 def step_test_note(experiments: list[Any], past: int) -> str:
@@ -31,19 +57,10 @@ def step_test_note(experiments: list[Any], past: int) -> str:
     >>> step_test_note([(u, np.zeros((100, 1)))], past=8)[:60]
     'the input changes at 1 sample of 100 (index 1), a step test,'
     """
-    changes: list[int] = []
-    total = 0
-    for e in experiments:
-        u = np.asarray(e[0])
-        if u.ndim != 2 or u.shape[1] == 0 or u.shape[0] < 2:
-            return ""
-        at = np.flatnonzero(np.any(np.diff(u, axis=0) != 0, axis=1)) + 1 + total
-        changes += at.tolist()
-        total += u.shape[0]
-        if len(changes) > MAX_STEPS:
-            return ""
-    if not changes:
+    changes = step_changes(experiments)
+    if changes is None:
         return ""
+    total = sum(np.asarray(e[0]).shape[0] for e in experiments)
     k = len(changes)
     where = ", ".join(str(c) for c in changes)  # 0-based, as the arrays index them
     early = all(c - off <= past for c, off in _offsets(changes, experiments))

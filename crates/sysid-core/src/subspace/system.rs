@@ -211,10 +211,7 @@ pub fn identify(
         let (a, b, c, d, cov) = from_states(factor, gamma.as_ref(), opts.feedthrough)?;
         // an unstable estimate gives way to the shift path (stabilised with `stable`) where
         // the states were a fallback or `stable` asks for a stable A
-        let keep = match opts.matrices {
-            SystemMatrices::States => !opts.stable,
-            _ => false,
-        };
+        let keep = opts.matrices == SystemMatrices::States && !opts.stable;
         if keep || spectral_radius(a.as_ref())? < 1.0 {
             return finish(a, b, c, d, cov, factor.n_columns(), false, opts);
         }

@@ -71,12 +71,17 @@ fn rel_markov_error(a: &StateSpace, b: &StateSpace, count: usize) -> f64 {
 
 #[test]
 fn noise_free_mimo_systems_are_recovered_for_every_method() {
+    // A, B, C, D by the shift invariance and from the state sequence, with and without D
     let mut rng = Rng(11);
     for case in 0..12 {
         let n = 1 + case % 6;
         let m = 1 + case % 3;
         let l = 1 + (case / 3) % 3;
-        let sys = random_system(n, m, l, &mut rng);
+        let mut sys = random_system(n, m, l, &mut rng);
+        let feedthrough = case % 2 == 0;
+        if !feedthrough {
+            sys.d.fill(0.0);
+        }
         let len = 600;
         let u = Mat::from_fn(len, m, |_, _| rng.normal());
         let y = simulate(&sys, u.as_ref(), None).unwrap();
@@ -96,21 +101,21 @@ fn noise_free_mimo_systems_are_recovered_for_every_method() {
                 "case {case} {method:?} sv={:?}",
                 sub.singular_values()
             );
-            let id = sub
-                .fit(
-                    n,
-                    &FitOptions {
-                        kalman: false,
-                        feedthrough: true, // random_system has a D
-                        ..FitOptions::default()
-                    },
-                )
-                .unwrap();
-            let err = rel_markov_error(&sys, &id.sys, 30);
-            assert!(
-                err < 1e-8,
-                "case {case} n={n} m={m} l={l} {method:?}: markov err {err:e}"
-            );
+            for matrices in [SystemMatrices::Shift, SystemMatrices::States] {
+                let opts = FitOptions {
+                    kalman: false,
+                    feedthrough,
+                    matrices,
+                    ..FitOptions::default()
+                };
+                let id = sub.fit(n, &opts).unwrap();
+                let err = rel_markov_error(&sys, &id.sys, 30);
+                assert!(
+                    err < 1e-8,
+                    "case {case} n={n} m={m} l={l} {method:?} {matrices:?} D={feedthrough}: \
+                     markov err {err:e}"
+                );
+            }
         }
     }
 }
@@ -138,40 +143,6 @@ fn constant_input_is_not_persistently_exciting() {
         Subspace::new(&fac, &SubspaceOptions::default()),
         Err(SysidError::NotPersistentlyExciting { .. })
     ));
-}
-
-#[test]
-fn noise_free_systems_are_recovered_from_the_state_sequence() {
-    let mut rng = Rng(17);
-    for case in 0..12 {
-        let n = 1 + case % 6;
-        let m = 1 + case % 3;
-        let l = 1 + (case / 3) % 3;
-        let mut sys = random_system(n, m, l, &mut rng);
-        let feedthrough = case % 2 == 0;
-        if !feedthrough {
-            sys.d.fill(0.0);
-        }
-        let u = Mat::from_fn(600, m, |_, _| rng.normal());
-        let y = simulate(&sys, u.as_ref(), None).unwrap();
-        let f = (n + 2).div_ceil(l) + 2;
-        let fac = compress(&u, &y, f, f);
-        for method in [Method::Moesp, Method::N4sid, Method::Cva] {
-            let sub = Subspace::new(&fac, &SubspaceOptions::with_method(method)).unwrap();
-            let opts = FitOptions {
-                kalman: false,
-                feedthrough,
-                matrices: SystemMatrices::States,
-                ..FitOptions::default()
-            };
-            let id = sub.fit(n, &opts).unwrap();
-            let err = rel_markov_error(&sys, &id.sys, 30);
-            assert!(
-                err < 1e-8,
-                "case {case} n={n} m={m} l={l} {method:?} D={feedthrough}: {err:e}"
-            );
-        }
-    }
 }
 
 /// A slow pole (0.99) under white output noise, fitted with more states than the system
