@@ -1,6 +1,8 @@
 """nlhw / nlhw_ss with nonlinearities "auto" (the default): the identity or sigmoid networks,
 as the estimation record's held-out blocks insist (sysid.nonlinear.choice)."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -32,8 +34,11 @@ def _linear(seed=1, n=600):
                          ids=["nlhw_ss", "nlhw"])
 def test_a_saturating_input_gets_the_networks_and_they_validate_better(fit):
     # the old default fitted the identity on both sides: a linear model under a
-    # nonlinear name
-    m = fit(_wiener())
+    # nonlinear name. (nlhw's search on this record stops at its cap while still leaving a
+    # plateau, and says so: tests/test_pem_cap_distance.py; not what this test is about.)
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", category=sysid.IterationLimitWarning)
+        m = fit(_wiener())
     choice = m.info["nonlinearity_choice"]
     assert choice["kind"] == "sigmoid" and choice["sides"] == ["input", "output"]
     assert choice["table"]["sigmoid"] > choice["table"]["identity"] + 5

@@ -226,6 +226,9 @@ def warn_iteration_limit(what: str, max_iter: int, history: Any, fix: str = "rai
                f"{np.sqrt(2.0 * remaining):.2g} standard deviations of the estimate away")
     h = [float(c) for c in history]
     last = abs(h[-2] - h[-1]) / max(abs(h[-2]), 1e-300) if len(h) > 1 else 0.0
+    if len(h) > RECENT:  # a crawl's last step is small: its last ten tell more
+        ten = abs(h[-1 - RECENT] - h[-1]) / max(abs(h[-1 - RECENT]), 1e-300)
+        far = f", the last {RECENT} by {100 * ten:.2g} %" + far
     warnings.warn(f"{what} stopped at max_iter={max_iter} before converging (the last "
                   f"iteration still lowered the cost by {100 * last:.2g} %{far}); the model "
                   f"is the best iterate: {fix}", IterationLimitWarning,
@@ -241,13 +244,12 @@ def warn_if_capped(info: dict[str, Any], what: str, max_iter: int,
     in the flat, ill-conditioned searches of networks: a default ``nlhw`` capped at 100
     iterations stood 2.1 residual variances from its model's minimum, yet the 336 further
     iterations to its convergence lowered the cost by 0.009. A last step that lowered the
-    cost by less than ``SETTLED`` (relative) had settled,
-    and a warning would be noise (a sigmoid network crawling by 1e-7 per iteration); so had
-    one that lowered it by less than ``FLOOR`` of the start's cost (a noise-free fit at the
-    rounding floor, its cost 1e-24 of the start's and still halving); and, given the number
-    of residuals the cost sums, one that lowered it by less than ``STATISTICAL`` residual
-    variances ``2 cost / n_residuals`` (a step that moves no test on the estimate: the
-    optimiser's statistical convergence, applied to the decrease achieved)."""
+    cost by less than ``SETTLED`` (relative) had settled (a network crawling by 1e-7); so had
+    one by less than ``FLOOR`` of the start's cost (a noise-free fit at the rounding floor,
+    1e-24 of the start's and still halving) or by less than ``STATISTICAL`` residual variances
+    ``2 cost / n_residuals`` (a step that moves no test on the estimate); and the last
+    ``RECENT`` iterations by less than ``RECENT`` times the bound (an ``nlhw`` whose last
+    step was small after a drop of 1.9 residual variances over ten went on 3.4 lower)."""
     stop = info.get("stop")
     stops = stop if isinstance(stop, list) else [stop]
     if max_iter > 0 and "maximum iterations" in stops:
@@ -259,8 +261,11 @@ def warn_if_capped(info: dict[str, Any], what: str, max_iter: int,
             remaining = remaining[stops.index("maximum iterations")] if remaining else None
         h = [float(c) for c in cost]
         stat = STATISTICAL * 2 * abs(h[-1]) / n_residuals if n_residuals and h else 0.0
-        if len(h) > 1 and abs(h[-2] - h[-1]) <= max(SETTLED * abs(h[-2]), FLOOR * abs(h[0]),
-                                                     stat, 1e-300):
+
+        def small(k: int) -> bool:  # the last k iterations lowered the cost by a settled k
+            return abs(h[-1 - k] - h[-1]) <= k * max(SETTLED * abs(h[-1 - k]),
+                                                     FLOOR * abs(h[0]), stat, 1e-300)
+        if len(h) > 1 and small(1) and (len(h) <= RECENT or small(RECENT)):
             return
         warn_iteration_limit(what, max_iter, cost, fix, remaining=remaining)
 
@@ -273,6 +278,7 @@ FLOOR = 1e-12
 #: decrease of a capped search's last iteration, in residual variances, below which it had
 #: converged statistically (the optimiser's ``tol_statistical``)
 STATISTICAL = 1e-2
+RECENT = 10  #: iterations whose decrease together must be settled too (warn_if_capped)
 #: a capped search's remaining predicted decrease (the optimiser's ``remaining_decrease``,
 #: in residual variances) below which its stop is not warned about: the rest of the way
 #: would move the estimate by less than half of its standard deviation (``sqrt(2 x 1/8)``)
