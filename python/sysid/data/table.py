@@ -770,7 +770,8 @@ def datetime_seconds(table: Table, col: int, decimal: str = ".") -> np.ndarray |
     """The column ``col`` of date-time stamps (ISO 8601: ``2026-01-01 08:00:00.250``, ``T``
     between date and time, an optional ``Z`` or ``+hh:mm`` offset) or of time-of-day
     stamps (``08:00:00.250``, midnight passed forward) as seconds after its first; ``None``
-    when its first cell is a number or no stamp (the caller reads numbers). A later cell that is no stamp raises a :class:`~sysid.DataError` naming its line.
+    when its first cell is a number or no stamp (the caller reads numbers). A later cell
+    that is no stamp raises a :class:`~sysid.DataError` naming its line.
 
     Examples
     --------
