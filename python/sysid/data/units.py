@@ -223,7 +223,7 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
         raise DataError(
             f"irregular sampling: {kind} at sample {i + 1} (spacing {d[i]:g} s against the "
             f"median {h:g} s; {int(dev.sum())} spacing(s) off by more than {rtol:.0%}"
-            + (f", {gaps.size} of them gaps (longer than 1.5 times it)" if gaps.size else "")
+            + (f", {gaps.size} of them gaps (over 1.5 times the median)" if gaps.size else "")
             + "); resample onto a uniform grid with sysid.IOData.from_irregular(time, u, y, "
             "dt)" + (", or cut the record at the gap" if gaps.size else "")
         )
