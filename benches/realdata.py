@@ -69,6 +69,10 @@ voltage to position and current under PID feedback, 7 500 samples, 3.25 ms).
 sweep's four records (a TCLab log of two heaters under PID, a catchment's daily rainfall and
 evaporation to flow, a balancing robot car's 2 ms log, two tail-sitter UAV flights); their
 sources, SHA-256 and how each ``.npz`` is made: results/realdata_fresh.md.
+``--fresh3-records DIR`` (``FRESH3``, results/realdata_fresh3_table[_<split>].md): the third
+sweep's four records (a test building's heating, a level pilot plant, a hydro generator's
+excitation step test, an aircraft's lateral flight test); sources, SHA-256, how each ``.npz``
+is made and the findings: results/realdata_fresh3.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -212,6 +216,25 @@ FRESH2 = {
     "tailsitter": ("tailsitter_alt1", "tailsitter_alt2"),  # tail-sitter UAV, 100 Hz:
     # 4 actuator controls -> 3 body rates (flight 2 validates flight 1)
 }
+
+#: the third sweep's records (``--fresh3-records DIR``), read as ``FRESH``'s are (sources,
+#: SHA-256 and how each ``.npz`` is made: results/realdata_fresh3.md)
+FRESH3 = {
+    "building_dtu": ("building_dtu", None),  # test building, 10 min: outdoor temperature,
+    # heating power, solar radiation -> indoor temperature
+    "pilot_level": ("pilot_level_est", "pilot_level_val"),  # level pilot plant, 10 s: pump
+    # voltage -> water level (its test record validates)
+    "mostar_step5": ("mostar_step5", None),  # hydro generator, AVR step test, 4.8 ms: field
+    # voltage -> field current, terminal voltage, reactive power
+    "attas_ailrud": ("attas_ailrud", None),  # ATTAS aircraft, 25 Hz: aileron, rudder -> roll
+    # rate, yaw rate, lateral acceleration
+}
+
+#: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
+#: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
+#: results/realdata_fresh3.md)
+SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"),
+          "fresh2": ("FRESH2", "realdata_fresh2"), "fresh3": ("FRESH3", "realdata_fresh3_table")}
 
 
 def _more(folder: Path, name: str, table: dict | None = None):
@@ -673,15 +696,10 @@ def main() -> None:
                          "(Silverbox, WH2009, cascaded tanks, EMPS; read from DIR as "
                          "benches/nonlinear_unshipped.py reads them, training cut to 20 000 "
                          "samples; their test records validate under every --split)")
-    ap.add_argument("--more-records", default=None, metavar="DIR",
-                    help="run more records the project does not ship (MORE), read from "
-                         "DIR/<name>.npz, instead of the shipped ones")
-    ap.add_argument("--fresh-records", default=None, metavar="DIR",
-                    help="run the records first used on 2026-12-05 (FRESH), read from "
-                         "DIR/<name>.npz, instead of the shipped ones")
-    ap.add_argument("--fresh2-records", default=None, metavar="DIR",
-                    help="run the records of the second sweep of 2026-12-05 (FRESH2), read "
-                         "from DIR/<name>.npz")
+    for sweep, (table, _) in SWEEPS.items():
+        ap.add_argument(f"--{sweep}-records", default=None, metavar="DIR",
+                        help=f"run the records of {table} (docstring), read from DIR/<name>.npz, "
+                             "instead of the shipped ones")
     args = ap.parse_args()
     global SPLIT
     SPLIT = args.split
@@ -693,15 +711,11 @@ def main() -> None:
     if args.unshipped:
         stem = "realdata_unshipped"
         _use(args, UNSHIPPED, lambda name: _unshipped(Path(args.unshipped), name))
-    if args.more_records:
-        stem = "realdata_more"
-        _use(args, MORE, lambda name: _more(Path(args.more_records), name))
-    if args.fresh_records:
-        stem = "realdata_fresh"
-        _use(args, FRESH, lambda name: _more(Path(args.fresh_records), name, FRESH))
-    if args.fresh2_records:
-        stem = "realdata_fresh2"
-        _use(args, FRESH2, lambda name: _more(Path(args.fresh2_records), name, FRESH2))
+    for sweep, (table, sweep_stem) in SWEEPS.items():
+        folder = getattr(args, f"{sweep}_records")
+        if folder:
+            stem, names = sweep_stem, globals()[table]
+            _use(args, names, lambda name, f=folder, t=names: _more(Path(f), name, t))
     if args.out is None:
         tail = "" if args.split == "default" else f"_{args.split}"
         args.out = str(HERE / "results" / f"{stem}{tail}.md")

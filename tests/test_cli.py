@@ -158,6 +158,30 @@ def test_identify_reads_a_loggers_units_row_and_date_time_stamps(tmp_path):
     assert model.nstates == 4 and model.dt == pytest.approx(0.08)
 
 
+def test_identify_reads_a_loggers_time_of_day_column(tmp_path):
+    """A logger's clock column (``date,time,...`` with ``12:52:35.2364630``: the date in
+    its own column) was refused as "'12:52:35.2364630' is not a number; fix or remove that
+    row (missing values must be repaired ...)", a fix for a missing value that every row of
+    the column would need; it is read as seconds, midnight passed included."""
+    d = np.loadtxt(sysid.datasets.path("dryer"))
+    path = tmp_path / "clock.csv"
+    t0 = 23 * 3600 + 59 * 60 + 30.0  # 23:59:30: the record passes midnight
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["date", "time", "heater", "temperature"])
+        for k, (u, y) in enumerate(d):
+            s = (t0 + 0.08 * k) % 86400
+            w.writerow(["01.03.2026", f"{int(s // 3600):02d}:{int(s % 3600 // 60):02d}:"
+                        f"{s % 60:010.7f}", u, y])
+    rep = tmp_path / "out"
+    assert main(["identify", str(path), "--inputs", "heater", "--outputs", "temperature",
+                 "--time", "time", "--split", "500", "--order", "4", "--quiet",
+                 "--report", str(rep)]) == 0
+    assert sysid.load_model(rep / "model.json").dt == pytest.approx(0.08)
+    p = sysid.IOData.from_csv(path, ["heater"], ["temperature"], time="time")
+    assert p.dt == pytest.approx(0.08) and p.n_samples == len(d)
+
+
 @pytest.mark.parametrize("name", ["time", "Time [s]", "t", "timestamp"])
 def test_a_time_column_gives_the_sample_time_without_asking(tmp_path, capsys, name):
     """A file with a time column, read without --time or --dt, gave a model at dt = 1 s,

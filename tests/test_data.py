@@ -739,3 +739,20 @@ def test_float64_stamps_on_a_power_of_two_rate_are_not_taken_for_float32():
     coarse = (1.7e9 + np.arange(200) * 0.01).astype(np.float32)
     with pytest.raises(sysid.DataError, match="stored as float32"):
         sysid.sample_time(coarse)
+
+
+def test_a_jittering_clock_is_called_jitter_not_a_gap() -> None:
+    """A trend recorder's clock steps 4.6 to 5.0 ms about a 4.8 ms median: the refusal named
+    "a gap at sample 1" (the first spacing off by more than 1 %, longer than the median)
+    and told the user to cut the record at it. It is jitter, with no sample lost; a real
+    gap elsewhere in the record is the one named."""
+    rng = np.random.default_rng(3)
+    t = np.cumsum(np.r_[0.0, 0.0048 * (1 + 0.04 * (rng.random(999) - 0.5))])
+    t[1] = t[0] + 0.0049  # the first spacing longer than the median by 2 %
+    with pytest.raises(DataError, match="jitter at sample 1 ") as e:
+        sysid.sample_time(t)
+    assert "gap" not in str(e.value)
+    t[600:] += 0.05  # ten samples lost
+    with pytest.raises(DataError, match="a gap at sample 600 .*1 of them gaps") as e:
+        sysid.sample_time(t)
+    assert "cut the record at the gap" in str(e.value)

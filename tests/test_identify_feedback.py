@@ -5,6 +5,7 @@ choice was ``n4sid`` order 3, validated at 46.6 %; now a refinement, 59.8 %."""
 
 from __future__ import annotations
 
+import types
 import warnings
 
 import numpy as np
@@ -63,3 +64,30 @@ def test_starts_only_keeps_the_families_when_the_rest_is_clearly_worse_or_absent
     b.rows.append(row("pbsid", 79.8))  # within the blocks' resolution of it
     assert b.starts_only(OPEN_LOOP, "biased") == 2
     assert b.best()["family"] == "pbsid" and b.rows[0]["note"] == "biased"
+
+
+def test_open_loop_fits_kept_under_feedback_say_why(monkeypatch):
+    """Under detected feedback the open-loop subspace fits stay candidates when every other
+    candidate scores clearly below them; the summary then said "feedback: detected" above an
+    n4sid choice (an aircraft's flight test), with n4sid's own FeedbackWarning advising
+    against it, and nothing to say why. The check now gives the best held-out fit with and
+    without them."""
+    b = Board.__new__(Board)
+    b.rows = [{"family": f, "criterion": "subspace", "held_out_fit": fit, "stable": True,
+               "note": ""} for f, fit in (("n4sid", 80.0), ("moesp", 70.0))]
+    assert b.starts_only(OPEN_LOOP, "biased") == 0 and b.kept_biased == (80.0, None)
+    b.rows.append({"family": "ssarx", "criterion": "subspace", "held_out_fit": 60.0,
+                   "stable": True, "note": ""})
+    assert b.starts_only(OPEN_LOOP, "biased") == 0 and b.kept_biased == (80.0, 60.0)
+
+    def kept(self, families, note):  # the blocks prefer the biased fits clearly
+        self.kept_biased = (72.3, 64.7)
+        return 0
+    monkeypatch.setattr(Board, "starts_only", kept)
+    monkeypatch.setattr(sysid, "check_feedback",
+                        lambda data, **kw: types.SimpleNamespace(detected=True, p_value=1e-9))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = sysid.identify(_closed_loop(600, 7), progress=False)
+    assert ("stay candidates: without them the best held-out fit falls from 72.3 % to "
+            "64.7 %") in res.checks["feedback"]

@@ -38,6 +38,23 @@ def test_summary_and_plot_mark_the_chosen_row_not_the_first():
     assert star.get_ydata()[0] == 90.1 and star.get_xdata()[0] == 2
 
 
+def test_a_chosen_row_unstable_on_a_block_says_the_returned_model_is_stable():
+    """A test building's record: every candidate was unstable on some held-out block, the
+    chosen row read "stable NO", and the model returned (re-fitted on the whole record) is
+    stable, with nothing in the summary to tell the two apart. The summary now says which the
+    column is of and that the returned model is stable."""
+    m = sysid.StateSpaceModel([[0.9969, 0.0], [0.0, 0.5]], [[1.0], [1.0]], [[1.0, 1.0]])
+    rows = [_row("moesp", 2, 84.6, True), _row("cva", 2, 84.8, False)]
+    for r in rows:
+        r["stable"], r["max_abs_pole"] = False, 1.02
+    res = IdentifyResult(IdentifiedModel(m, [0.0], [0.0]), rows, "moesp, order 2", {},
+                         None, 0.1)
+    text = res.summary()
+    assert "re-fitted on the whole record, is stable (largest pole modulus 0.9969)" in text
+    rows[0]["stable"] = True  # no such line when the chosen row was stable on every block
+    assert "largest pole modulus" not in res.summary()
+
+
 def test_summary_shows_the_top_rows_every_refinement_and_the_choice_and_counts_the_rest():
     # a long record's search scores a few hundred candidates: the text shows the top of the
     # leaderboard, every refined candidate and the chosen one wherever they rank

@@ -3,6 +3,8 @@ cannot tell from an integrator (issue 26: "never a silent" model an engineer can
 on an integrating plant a simulation-focus fit returned a pole at 1 - 2e-8 with a validation
 fit of 29 % (the ball and beam record) and no word about it."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -115,3 +117,23 @@ def test_oe_names_the_channel_whose_f_is_held():
     y = np.hstack([p.simulate(u) for p in plants]) + 0.01 * rng.standard_normal((1500, 2))
     with pytest.warns(StabilityWarning, match="F of y1 <- u0"):
         sysid.oe(sysid.IOData(u=u, y=y), 2, 2, 1)
+
+
+def test_a_pole_pulled_to_the_bound_by_an_offset_names_the_offset():
+    """A stable plant whose input and output keep their operating point (a level plant's
+    pump voltage, mean 3.5 V against a 0.15 V excitation) gives a pole at the bound, as a
+    drift does; the warning named only "an integrating plant, or a drift" and "remove the
+    drift", not the offset the record holds. It names the offset and a fix for both."""
+    rng = np.random.default_rng(0)
+    n = 700
+    u = 0.15 * np.repeat(np.sign(rng.standard_normal(n // 10 + 1)), 10)[:n]
+    plant = sysid.StateSpaceModel([[0.95]], [[0.5]], [[1.0]])
+    y = plant.simulate(u[:, None])[:, 0] + 300 + 0.05 * rng.standard_normal(n)
+    d = sysid.IOData(u + 3.5, y)
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")  # the offset's own warning and the search's cap too
+        sysid.ssest(d, 2)
+    said = [str(w.message) for w in rec
+            if issubclass(w.category, StabilityWarning) and "keeps" in str(w.message)]
+    assert said and "offset left in the data" in said[0]
+    assert "detrend(data, 'linear') removes both" in said[0]

@@ -699,9 +699,30 @@ def units_row(table: Table, decimal: str = ".") -> tuple[Table, dict[int, str]]:
 _ZONE = re.compile(r"(Z|[+-]\d\d:?\d\d)$")
 
 
+_CLOCK = re.compile(r"([01]?\d|2[0-3]):([0-5]\d):([0-5]\d|60)(\.\d+)?$")
+
+
+def _clock_ns(cells: list[str]) -> tuple[np.ndarray, int]:
+    """Time-of-day stamps (``12:52:35.2364630``: a logger's clock, its date in another
+    column or nowhere) as nanoseconds after the first one's midnight, a day added at every
+    step back of more than 12 h (midnight passed); the index of the first cell that is
+    none (-1 when all are)."""
+    out = np.zeros(len(cells), dtype=np.int64)
+    for k, c in enumerate(cells):
+        m = _CLOCK.match(c.strip())
+        if m is None:
+            return out[:k], k
+        frac = (m.group(4) or ".")[1:]
+        out[k] = ((int(m.group(1)) * 60 + int(m.group(2))) * 60 + int(m.group(3))) * 10**9 \
+            + int((frac + "0" * 9)[:9])
+    day = np.concatenate([[0], np.cumsum(np.diff(out) < -12 * 3600 * 10**9)])
+    return out + day * 86400 * 10**9, -1
+
+
 def stamps_ns(cells: list[str]) -> tuple[np.ndarray | None, int]:
     """Date-time stamps (ISO 8601, an optional ``Z`` or ``+hh:mm`` offset) as UTC
-    nanoseconds (int64), and the index of the first cell that is no stamp (-1 when all
+    nanoseconds (int64), or time-of-day stamps (``hh:mm:ss.fff``) as nanoseconds after
+    their first midnight, and the index of the first cell that is no stamp (-1 when all
     are); ``(None, 0)`` when the first is none.
 
     Examples
@@ -711,6 +732,8 @@ def stamps_ns(cells: list[str]) -> tuple[np.ndarray | None, int]:
     >>> float(t[1] - t[0]) / 1e9, bad
     (1.0, 2)
     """
+    if cells and _CLOCK.match(cells[0].strip()):
+        return _clock_ns(cells)
     if not cells or not re.match(r"\d{4}-\d\d-\d\d", cells[0]):
         return None, 0
     stamps, shift = [], np.zeros(len(cells), dtype=np.int64)
@@ -745,9 +768,10 @@ def stamps_ns(cells: list[str]) -> tuple[np.ndarray | None, int]:
 
 def datetime_seconds(table: Table, col: int, decimal: str = ".") -> np.ndarray | None:
     """The column ``col`` of date-time stamps (ISO 8601: ``2026-01-01 08:00:00.250``, ``T``
-    between date and time, an optional ``Z`` or ``+hh:mm`` offset) as seconds after its
-    first; ``None`` when its first cell is a number or no stamp (the caller reads numbers).
-    A later cell that is no stamp raises a :class:`~sysid.DataError` naming its line.
+    between date and time, an optional ``Z`` or ``+hh:mm`` offset) or of time-of-day
+    stamps (``08:00:00.250``, midnight passed forward) as seconds after its first; ``None``
+    when its first cell is a number or no stamp (the caller reads numbers). A later cell
+    that is no stamp raises a :class:`~sysid.DataError` naming its line.
 
     Examples
     --------

@@ -214,13 +214,18 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
     # resolution), and so is the median: that much is rounding, not jitter
     dev = np.abs(d - h) > rtol * h + 2 * ulp
     if dev.any():
-        i = int(np.flatnonzero(dev)[0])
-        kind = "a gap" if d[i] > h else "jitter"
+        # a gap: a spacing that could hold a lost sample (half a step longer, at least); a
+        # clock jittering by 2 % (a plant's trend recorder) was called "a gap at sample 1",
+        # the first spacing off, and told to cut the record at it
+        gaps = np.flatnonzero(d > 1.5 * h)
+        i = int(gaps[0]) if gaps.size else int(np.flatnonzero(dev)[0])
+        kind = "a gap" if gaps.size else "jitter"
         raise DataError(
             f"irregular sampling: {kind} at sample {i + 1} (spacing {d[i]:g} s against the "
-            f"median {h:g} s; {int(dev.sum())} spacing(s) off by more than {rtol:.0%}); "
-            "resample onto a uniform grid with sysid.IOData.from_irregular(time, u, y, dt), "
-            "or cut the record at the gap"
+            f"median {h:g} s; {int(dev.sum())} spacing(s) off by more than {rtol:.0%}"
+            + (f", {gaps.size} of them gaps (over 1.5 times the median)" if gaps.size else "")
+            + "); resample onto a uniform grid with sysid.IOData.from_irregular(time, u, y, "
+            "dt)" + (", or cut the record at the gap" if gaps.size else "")
         )
     # the mean spacing, from the end points: the median of single-precision instants is off
     # by their rounding (float32 seconds at 0.1 s: 0.10000038 s), the mean by it / (n - 1)

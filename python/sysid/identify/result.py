@@ -325,6 +325,14 @@ class IdentifyResult(HTMLResult):
             lines.append(f"  ... {len(self.leaderboard) - len(shown)} more candidates, all "
                          "subspace ones ranked below these (every row: summary(rows=None) or "
                          "to_pandas())")
+        if held and any(r.get("chosen") and not r["stable"] for r in self.leaderboard) \
+                and self.model.is_stable():
+            # the column is of the fits with a block held out: a test building's row said
+            # "NO" above the stable model returned, with nothing to tell them apart
+            rho = float(np.max(np.abs(self.model.poles())))
+            lines.append(f"  stable: of the fits with a block held out; the chosen one, "
+                         f"re-fitted on the whole record, is stable (largest pole modulus "
+                         f"{rho:.4g})")
         lines.append("* chosen (re-fitted on the whole record; among those the held-out blocks "
                      "cannot tell apart, the smallest BIC)" if held else
                      "* chosen (the smallest BIC of the simulation errors from rest; within "

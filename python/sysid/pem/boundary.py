@@ -81,14 +81,17 @@ def warn_poles_at_bound(poles: np.ndarray, n: int, model: str, bound: str | None
            f"over the record ({n} samples)"
     turns = abs(float(np.angle(z))) * n / (2 * np.pi)
     if turns < 1.0:
+        # an offset left in the data pulls a pole there as a drift does (a level pilot
+        # plant's pump voltage, mean 3.5 V, std 0.15 V): named with the drift, one fix
         why = (f"{bound}, and such a pole usually sits where that bound held it (an "
-               f"integrating plant, or a drift); the record cannot tell it from an integrator"
+               f"integrating plant, a drift, or an offset left in the data); the record "
+               f"cannot tell it from an integrator"
                if bound else "the record cannot tell it from an integrator (an integrating "
-               "plant, or a drift)")
+               "plant, a drift, or an offset left in the data)")
         msg = (f"{model} has {what}: {why}, so the static gain and the step response's final "
                f"value (which grow as 1 / (1 - |p|)) are not determined. If the plant "
-               f"integrates, {integrating}; if not, remove the drift first "
-               f"(sysid.detrend(data, 'linear'))")
+               f"integrates, {integrating}; if not, remove the offset and any drift first "
+               f"(sysid.detrend(data, 'linear') removes both)")
     else:
         where = (f"{bound}, and such a pair usually sits where that bound held it" if bound
                  else "such a pair usually comes from")
