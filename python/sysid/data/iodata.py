@@ -234,6 +234,9 @@ class IOData:
         self.output_units = self._units(output_units, self.output_names, "output")
         self._u_scale = np.ones(n_in)
         self._y_scale = np.ones(n_out)
+        #: what interpolation onto a uniform grid did (:class:`~sysid.data.raw.Resampling`:
+        #: from_irregular, the readers' resample=), None for a record read as sampled
+        self.resampling: _raw.Resampling | None = None
 
     # ---------------------------------------------------------------- construction helpers
 
@@ -291,6 +294,7 @@ class IOData:
         new.output_units = [self.output_units[i] for i in iy]
         new._u_scale = self._u_scale[iu].copy()
         new._y_scale = self._y_scale[iy].copy()
+        new.resampling = self.resampling
         return new
 
     # ---------------------------------------------------------------- basic properties
