@@ -357,6 +357,32 @@ class SubspaceEstimator:
         self._feedback_warned = False
         return self
 
+    def with_matrices(self, matrices: str) -> SubspaceEstimator:
+        """This estimator taking ``A, B, C, D`` as ``matrices`` says (the constructor's
+        option), sharing its record, factor, channel scaling and weighted SVDs (none depends
+        on ``matrices``): another way to fit, with no pass over the data.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> u = np.random.default_rng(0).standard_normal((300, 1))
+        >>> y = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]]).simulate(u)
+        >>> est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=4)
+        >>> est.with_matrices("states").fit(1).info["settings"]["matrices"], est.matrices
+        ('states', 'shift')
+        """
+        new = type(self).__new__(type(self))
+        new.matrices = as_option(matrices, "matrices")
+        new.data, new.factor, new.method, new.compressor = (
+            self.data, self.factor, self.method, self.compressor)
+        new.past, new.future, new._from_factor = self.past, self.future, self._from_factor
+        new._horizon_note, new.horizon_selection = self._horizon_note, self.horizon_selection
+        new.scale, new._su, new._sy = self.scale, self._su, self._sy
+        new.scaled_factor, new._svd, new._pe_cache = (  # the caches filled for both
+            self.scaled_factor, self._svd, self._pe_cache)
+        new._feedback_p, new._feedback_warned = self._feedback_p, self._feedback_warned
+        return new
+
     def _set_scaling(self, scale: bool | None) -> None:
         """The channel scaling of the fits (:mod:`sysid.subspace.scaling`): the record's
         factor with every channel at unit root mean square, :attr:`scaled_factor`."""
