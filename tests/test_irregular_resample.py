@@ -72,6 +72,7 @@ def test_jittered_stamps_resampled_match_the_uniform_truth(tmp_path, resample):
     k = int(np.argmax(np.diff(t)))
     assert r.largest_gap == pytest.approx(np.diff(t)[k]) and r.gap_after == pytest.approx(t[k])
     assert f"dt = {d.dt:g} s" in str(r) and d.experiment(0).resampling == r  # kept on slices
+    assert repr(d).endswith(", resampled")
     # a record read as it was sampled notes nothing
     assert sysid.IOData(u=np.ones(5), y=np.arange(5.0)).resampling is None
 

@@ -370,7 +370,8 @@ class IOData:
 
     def __repr__(self) -> str:
         exp = f" in {self.n_experiments} experiments" if self.n_experiments > 1 else ""
-        tr = ", detrended" if self.has_trend else ""
+        tr = (", resampled" if self.resampling is not None else "") + (
+            ", detrended" if self.has_trend else "")
         return (
             f"IOData: {_plural(self.n_samples, 'sample')}{exp}, {_plural(self.n_inputs, 'input')}, "
             f"{_plural(self.n_outputs, 'output')}, dt = {self.dt:g} s{tr}"
