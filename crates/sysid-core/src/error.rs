@@ -354,3 +354,61 @@ pub fn check_io(
     check_finite("u", u)?;
     check_finite("y", y)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_are_problem_then_remedy_as_before() {
+        let pe = SysidError::NotPersistentlyExciting {
+            rank: 3,
+            rows: 10,
+            tol: 1e-9,
+        };
+        assert_eq!(
+            pe.to_string(),
+            "the input is not persistently exciting: the 10 rows of future inputs in the data \
+             matrix have numerical rank 3 (relative tolerance 1.0e-9); use a richer input \
+             (white noise, PRBS, multisine), a shorter horizon, or remove constant input channels"
+        );
+        let short = SysidError::InsufficientData {
+            context: "the horizon".into(),
+            needed: 40,
+            got: 12,
+            fix: "use a longer record",
+        };
+        assert_eq!(
+            short.to_string(),
+            "too few samples: the horizon needs at least 40 but got 12; use a longer record"
+        );
+        let rank = SysidError::RegressorRank {
+            estimator: "arx",
+            rank: 2,
+            columns: 3,
+            tol: 1e-10,
+            fix: "excite more",
+        };
+        assert_eq!(
+            rank.to_string(),
+            "arx: the 3 regressor columns of each equation have numerical rank 2 (relative \
+             tolerance 1.0e-10), so the data do not determine the parameters; excite more"
+        );
+        for e in [&pe, &short, &rank] {
+            assert_eq!(
+                e.to_string(),
+                format!("{}; {}", e.problem(), e.remedy().unwrap())
+            );
+        }
+        let order = SysidError::OrderTooLarge {
+            order: 5,
+            max: 3,
+            future: 3,
+            outputs: 1,
+        };
+        assert_eq!(
+            (order.kind(), order.remedy(), order.problem()),
+            ("OrderTooLarge", None, order.to_string())
+        );
+    }
+}
