@@ -197,3 +197,31 @@ def test_the_command_line_resamples_with_resample(tmp_path, capsys):
     path.write_text("u,y\n" + "\n".join(f"{a},{a}" for a in range(50)) + "\n")
     assert _run(path, tmp_path / "none", "--resample", "0.01", "--dt", "0.01") == 2
     assert "--resample needs a time column" in capsys.readouterr().err
+
+
+def _on_the_grid(d):
+    """A "fit" that checks the record it is given was resampled at H."""
+    assert d.resampling is not None and d.dt == H
+    return sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=d.dt)
+
+
+def test_identify_many_resamples_its_records_as_from_csv_does(tmp_path):
+    pytest.importorskip("pyarrow")
+    from sysid.batch.records import Columns, load
+
+    t = _stamps(600, seed=6)
+    _write(tmp_path / "a.csv", t)
+    with pytest.raises(DataError, match="resample="):
+        load(tmp_path / "a.csv", Columns(("u",), ("y",)), "a")
+    got = load(tmp_path / "a.csv", Columns(("u",), ("y",), resample=H), "a")
+    want = sysid.IOData.from_csv(tmp_path / "a.csv", inputs=["u"], outputs=["y"], resample=H)
+    assert got == want and got.resampling == want.resampling
+    with pytest.raises(DataError, match="no time column to resample"):
+        Columns(("u",), ("y",), resample=H).record(["u", "y"], np.ones((5, 2)), "b")
+
+    res = sysid.identify_many(tmp_path, fit=_on_the_grid, workers=0, inputs=["u"],
+                              outputs=["y"], resample=H, out=tmp_path / "t.parquet")
+    assert res.n_ok == 1 and res.to_pandas()["n_samples"].tolist() == [want.n_samples]
+    with pytest.raises(DataError, match="not both"):
+        sysid.identify_many(tmp_path, workers=0, outputs=["y"], resample=H, dt=H,
+                            out=tmp_path / "u.parquet")
