@@ -143,3 +143,34 @@ def test_a_step_test_refused_by_the_subspace_methods_says_what_fits_it():
     assert res.score == "BIC" and abs(np.max(np.abs(res.model.poles())) - 0.98) < 0.01
     # a rich input refused for another reason keeps the core's remedies
     assert sysid.subspace.steptest.step_test_note([(np.c_[np.arange(50.0)], None)], 8) == ""
+
+
+def test_the_cores_excitation_error_carries_its_facts_as_data():
+    """The step-test refusal re-worded the core's ExcitationError by splitting its message
+    at "; use a richer input". The binding now sets the core error's variant, the problem
+    and the remedy on the exception; the messages are as before."""
+    t = np.arange(500)
+    u = np.sin(0.05 * t) + 0.5 * np.sin(0.3 * t)  # exciting of order 4 only
+    y = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]]).simulate(u)
+    with pytest.raises(sysid.ExcitationError) as err:
+        sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=10)
+    e = err.value
+    assert e.kind == "NotPersistentlyExciting"
+    assert e.problem.startswith("the input is not persistently exciting: the 10 rows")
+    assert e.remedy.startswith("use a richer input") and "shorter horizon" in e.remedy
+    assert str(e) == f"{e.problem}; {e.remedy}"
+    # a step test: the core's problem, and what fits a step test as the remedy
+    u = np.r_[0.0, np.full(299, 50.0)]
+    d = sysid.IOData(u=u, y=sysid.StateSpaceModel([[0.98]], [[1.0]], [[0.02]]).simulate(u))
+    with pytest.raises(sysid.ExcitationError) as err:
+        sysid.SubspaceEstimator(d, horizon=8)
+    e = err.value
+    assert e.kind == "NotPersistentlyExciting" and "step test" in e.remedy
+    assert str(e) == f"{e.problem}: {e.remedy}" and "richer input" not in str(e)
+    # errors of other kinds and errors raised in Python
+    with pytest.raises(sysid.OrderError) as err:
+        sysid.n4sid(sysid.IOData(u=np.random.default_rng(0).standard_normal(200), y=y[:200]),
+                    9, horizon=3)
+    assert err.value.kind == "OrderTooLarge" and err.value.remedy is None
+    assert err.value.problem == str(err.value)
+    assert sysid.DataError("raised in Python").kind is None

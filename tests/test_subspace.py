@@ -278,6 +278,33 @@ def test_noise_free_systems_are_recovered_from_the_state_sequence(seed):
         assert model.info["settings"]["matrices"] == "states"
 
 
+def test_with_matrices_fits_what_an_estimator_built_with_them_fits():
+    # identify's state-sequence candidates shallow-copied an estimator and set its matrices
+    # from outside; SubspaceEstimator.with_matrices builds that estimator itself, sharing the
+    # factor and SVDs, and leaves the original as it was
+    rng = np.random.default_rng(7)
+    a, b, c, d = random_system(3, 1, 1, rng)
+    u = rng.standard_normal((600, 1))
+    y = simulate(a, b, c, d, u) + 0.05 * rng.standard_normal((600, 1))
+    data = sysid.IOData(u=u, y=y)
+    est = sysid.SubspaceEstimator(data, horizon=6)
+    states = est.with_matrices("states")
+    built = sysid.SubspaceEstimator(data, horizon=6, matrices="states")
+    assert states.factor is est.factor and est.matrices == "shift"
+    for ft in (False, True):
+        got = states.fit(3, method="n4sid", feedthrough=ft)
+        want = built.fit(3, method="n4sid", feedthrough=ft)
+        assert got.info["settings"]["matrices"] == "states"
+        assert np.allclose(got.markov(30), want.markov(30), rtol=1e-10, atol=1e-12)
+        assert np.allclose(np.sort_complex(got.poles()), np.sort_complex(want.poles()))
+    shift = est.fit(3, method="n4sid")
+    assert shift.info["settings"]["matrices"] == "shift"
+    assert np.allclose(shift.markov(30), sysid.SubspaceEstimator(data, horizon=6).fit(
+        3, method="n4sid").markov(30))
+    with pytest.raises(sysid.DataError, match="matrices"):
+        est.with_matrices("diagonal")
+
+
 def test_the_state_sequence_keeps_a_slow_pole_inside_the_unit_circle():
     # a slow pole (0.99) under white output noise, fitted with more states than the system
     # has: the shift invariance of the observability matrix puts a pole outside the unit

@@ -1,4 +1,7 @@
-"""Type stubs of the compiled core (``sysid._sysid``); see the Python wrappers for docs."""
+"""Type stubs of the compiled core (``sysid._sysid``); see the Python wrappers for docs.
+
+A core error raises its ``sysid.errors`` class with the attributes ``kind`` (the core
+variant's name), ``problem`` and ``remedy`` (see :class:`sysid.errors.SysidError`)."""
 
 from typing import Any, Callable, TypedDict, final
 

@@ -36,7 +36,6 @@ from .data.table import (
 )
 from .data.units import (
     check_dt_against_time,
-    sample_time,
     split_header,
     time_column,
     time_unit_seconds,
@@ -537,15 +536,20 @@ def _identify(args: argparse.Namespace) -> int:
         raise DataError(f"--horizon must be a positive integer, got {args.horizon}")
     say = _Progress(args.quiet)
     names, ui, yi, u, y, t = _load(args, say)
+    from .identify.command import refuse_still_part, uniform_time
+
+    pre: dict[str, Any] = {"file": str(args.data), "inputs": [names[i] for i in ui],
+                           "outputs": [names[i] for i in yi]}
     if t is not None:
         if args.dt is not None:
             raise DataError("give either --dt or --time, not both")
         # the dt the column was written with (0.1, not 0.10000000000000009), after checking
-        # it is uniform, as IOData.from_csv reads it (gaps and jitter were read at the median)
-        try:
-            dt = sample_time(t)
-        except DataError as e:
-            raise DataError(f"time column {args.time!r}: {e}") from None
+        # it is uniform, as IOData.from_csv reads it (gaps and jitter were read at the
+        # median); or the record interpolated onto a uniform grid (--resample)
+        u, y, t, dt = uniform_time(u, y, t, args.time, args.resample, args.resample_gap,
+                                   say, pre)
+    elif args.resample is not None:
+        raise DataError("--resample needs a time column (--time COLUMN)")
     else:
         dt = 1.0 if args.dt is None else float(args.dt)
     N = y.shape[0]
@@ -553,13 +557,9 @@ def _identify(args: argparse.Namespace) -> int:
     # the default path is sysid.identify, unless the options ask for a subspace fit
     via_identify = auto and bool(ui) and args.uncertainty == "none" and args.horizon is None
     _check_parts(args.split, N, k, via_identify)
-    from .identify.command import refuse_still_part  # a channel still in one part only
-
-    refuse_still_part(u, y, k, args.split, [names[i] for i in ui], [names[i] for i in yi],
+    refuse_still_part(u, y, k, args.split, pre["inputs"], pre["outputs"],  # one part only
                       via_identify or args.detrend != "none")
-    pre: dict[str, Any] = {"file": str(args.data), "inputs": [names[i] for i in ui],
-                           "outputs": [names[i] for i in yi],
-                           "estimation_samples": [0, k], "validation_samples": [k, N]}
+    pre.update({"estimation_samples": [0, k], "validation_samples": [k, N]})
     if args.detrend == "auto":
         # sysid.identify removes the offsets itself (and restores them in the saved model);
         # every other path fits a linear model, which has no constant term: a record on an
@@ -718,6 +718,13 @@ def _parser() -> argparse.ArgumentParser:
     ide.add_argument("--time", default=None,
                      help="time column (sample time from its steps, in the unit of its "
                           "header, units row or name: Time [ms], time_ms; seconds without)")
+    ide.add_argument("--resample", default=None, metavar="median|SECONDS",
+                     help="a time column with gaps or jitter (a logger's stamps): interpolate "
+                          "the record linearly onto a uniform grid of this sample time (median: "
+                          "the stamps' median spacing); noted in the report")
+    ide.add_argument("--resample-gap", dest="resample_gap", type=float, default=5.0,
+                     help="with --resample: longest interval between stamps bridged, in sample "
+                          "times (default 5); a longer one is refused, naming it")
     ide.add_argument("--detrend", choices=("auto", "none", "mean", "linear"), default="auto",
                      help="remove the estimation part's means (or lines) first; recorded in "
                           "the model. auto (default): none when sysid.identify runs (it "

@@ -40,7 +40,20 @@ __all__ = [
 
 
 class SysidError(Exception):
-    """Base class of every sysid exception."""
+    """Base class of every sysid exception.
+
+    An error of the Rust core also carries its facts as data (set by the binding crate's
+    one error mapping): ``kind``, the core variant's name (``"NotPersistentlyExciting"``);
+    ``problem``, the message without its remedy; ``remedy``, what may help (``None`` when
+    the message has no separate one). Errors raised in Python have ``kind = None``.
+    """
+
+    #: the core error's variant, e.g. ``"NotPersistentlyExciting"`` (None: raised in Python)
+    kind: str | None = None
+    #: the core's message without its remedy (None: raised in Python)
+    problem: str | None = None
+    #: what the core suggests, e.g. a richer input or a shorter horizon (None: nothing apart)
+    remedy: str | None = None
 
 
 class DataError(SysidError, ValueError):

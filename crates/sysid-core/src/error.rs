@@ -24,7 +24,7 @@ pub enum SysidError {
         channel: usize,
     },
     /// The record is too short for what was asked of it.
-    #[error("too few samples: {context} needs at least {needed} but got {got}; {fix}")]
+    #[error("{}; {fix}", self.problem())]
     InsufficientData {
         /// What needed the samples.
         context: String,
@@ -46,11 +46,7 @@ pub enum SysidError {
         got: String,
     },
     /// The input does not excite the system enough for the requested horizon.
-    #[error(
-        "the input is not persistently exciting: the {rows} rows of future inputs in the data \
-         matrix have numerical rank {rank} (relative tolerance {tol:.1e}); use a richer input \
-         (white noise, PRBS, multisine), a shorter horizon, or remove constant input channels"
-    )]
+    #[error("{}; {}", self.problem(), EXCITATION_REMEDY)]
     NotPersistentlyExciting {
         /// Numerical rank found.
         rank: usize,
@@ -61,11 +57,7 @@ pub enum SysidError {
     },
     /// The regressors (or instruments) of a linear-regression estimator are rank deficient:
     /// the data do not determine the parameters.
-    #[error(
-        "{estimator}: the {columns} regressor columns of each equation have numerical rank \
-         {rank} (relative tolerance {tol:.1e}), so the data do not determine the parameters; \
-         {fix}"
-    )]
+    #[error("{}; {fix}", self.problem())]
     RegressorRank {
         /// The estimator (`"arx"`, `"iv4"`).
         estimator: &'static str,
@@ -149,7 +141,76 @@ pub fn horizon_fix(past: usize, future: usize) -> &'static str {
     }
 }
 
+/// What [`SysidError::NotPersistentlyExciting`] suggests (its [`SysidError::remedy`]).
+pub const EXCITATION_REMEDY: &str = "use a richer input (white noise, PRBS, multisine), a \
+     shorter horizon, or remove constant input channels";
+
 impl SysidError {
+    /// The variant's name (`"NotPersistentlyExciting"`): the Python exception's `kind`, so
+    /// that callers tell errors apart without reading their text.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            SysidError::NonFinite { .. } => "NonFinite",
+            SysidError::InsufficientData { .. } => "InsufficientData",
+            SysidError::ShapeMismatch { .. } => "ShapeMismatch",
+            SysidError::NotPersistentlyExciting { .. } => "NotPersistentlyExciting",
+            SysidError::RegressorRank { .. } => "RegressorRank",
+            SysidError::OrderTooLarge { .. } => "OrderTooLarge",
+            SysidError::InvalidArgument { .. } => "InvalidArgument",
+            SysidError::IncompatibleFactors { .. } => "IncompatibleFactors",
+            SysidError::Numerical { .. } => "Numerical",
+            SysidError::NoStabilizingSolution { .. } => "NoStabilizingSolution",
+            SysidError::Interrupted => "Interrupted",
+        }
+    }
+
+    /// What may help, for the errors whose message ends in a separate remedy (the message is
+    /// then `"{problem}; {remedy}"`, see [`SysidError::problem`]); `None` for the others.
+    ///
+    /// ```
+    /// use sysid_core::SysidError;
+    /// let e = SysidError::NotPersistentlyExciting { rank: 3, rows: 4, tol: 1e-9 };
+    /// assert_eq!(e.to_string(), format!("{}; {}", e.problem(), e.remedy().unwrap()));
+    /// ```
+    pub fn remedy(&self) -> Option<&'static str> {
+        match self {
+            SysidError::NotPersistentlyExciting { .. } => Some(EXCITATION_REMEDY),
+            SysidError::InsufficientData { fix, .. } | SysidError::RegressorRank { fix, .. } => {
+                Some(fix)
+            }
+            _ => None,
+        }
+    }
+
+    /// The message without its [`SysidError::remedy`] (the whole message when there is
+    /// none): what a caller that knows a better remedy for its own data says first.
+    pub fn problem(&self) -> String {
+        match self {
+            SysidError::NotPersistentlyExciting { rank, rows, tol } => format!(
+                "the input is not persistently exciting: the {rows} rows of future inputs in \
+                 the data matrix have numerical rank {rank} (relative tolerance {tol:.1e})"
+            ),
+            SysidError::InsufficientData {
+                context,
+                needed,
+                got,
+                ..
+            } => format!("too few samples: {context} needs at least {needed} but got {got}"),
+            SysidError::RegressorRank {
+                estimator,
+                rank,
+                columns,
+                tol,
+                ..
+            } => format!(
+                "{estimator}: the {columns} regressor columns of each equation have numerical \
+                 rank {rank} (relative tolerance {tol:.1e}), so the data do not determine the \
+                 parameters"
+            ),
+            _ => self.to_string(),
+        }
+    }
+
     pub(crate) fn invalid(name: &'static str, reason: impl Into<String>) -> Self {
         SysidError::InvalidArgument {
             name,
@@ -292,4 +353,62 @@ pub fn check_io(
     }
     check_finite("u", u)?;
     check_finite("y", y)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_are_problem_then_remedy_as_before() {
+        let pe = SysidError::NotPersistentlyExciting {
+            rank: 3,
+            rows: 10,
+            tol: 1e-9,
+        };
+        assert_eq!(
+            pe.to_string(),
+            "the input is not persistently exciting: the 10 rows of future inputs in the data \
+             matrix have numerical rank 3 (relative tolerance 1.0e-9); use a richer input \
+             (white noise, PRBS, multisine), a shorter horizon, or remove constant input channels"
+        );
+        let short = SysidError::InsufficientData {
+            context: "the horizon".into(),
+            needed: 40,
+            got: 12,
+            fix: "use a longer record",
+        };
+        assert_eq!(
+            short.to_string(),
+            "too few samples: the horizon needs at least 40 but got 12; use a longer record"
+        );
+        let rank = SysidError::RegressorRank {
+            estimator: "arx",
+            rank: 2,
+            columns: 3,
+            tol: 1e-10,
+            fix: "excite more",
+        };
+        assert_eq!(
+            rank.to_string(),
+            "arx: the 3 regressor columns of each equation have numerical rank 2 (relative \
+             tolerance 1.0e-10), so the data do not determine the parameters; excite more"
+        );
+        for e in [&pe, &short, &rank] {
+            assert_eq!(
+                e.to_string(),
+                format!("{}; {}", e.problem(), e.remedy().unwrap())
+            );
+        }
+        let order = SysidError::OrderTooLarge {
+            order: 5,
+            max: 3,
+            future: 3,
+            outputs: 1,
+        };
+        assert_eq!(
+            (order.kind(), order.remedy(), order.problem()),
+            ("OrderTooLarge", None, order.to_string())
+        );
+    }
 }

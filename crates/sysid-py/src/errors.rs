@@ -22,7 +22,9 @@ fn class_name(e: &SysidError) -> &'static str {
     }
 }
 
-/// Converts a core error into the matching `sysid.errors` exception.
+/// Converts a core error into the matching `sysid.errors` exception, its message the core's
+/// and its attributes `kind` (the variant's name), `problem` (the message without its
+/// remedy) and `remedy` (what may help, or `None`): see `SysidError::remedy`.
 pub fn to_py(e: SysidError) -> PyErr {
     if e == SysidError::Interrupted {
         // the signal handler's own exception when there is one (see `search::watch`)
@@ -31,13 +33,23 @@ pub fn to_py(e: SysidError) -> PyErr {
     }
     Python::attach(|py| {
         let msg = e.to_string();
-        match py
+        let err = match py
             .import("sysid.errors")
             .and_then(|m| m.getattr(class_name(&e)))
             .and_then(|c| c.cast_into::<PyType>().map_err(PyErr::from))
         {
             Ok(cls) => PyErr::from_type(cls, msg),
-            Err(_) => pyo3::exceptions::PyValueError::new_err(msg),
+            Err(_) => return pyo3::exceptions::PyValueError::new_err(msg),
+        };
+        // the facts as data, so that Python re-words a message without parsing it
+        let value = err.value(py);
+        let set = value
+            .setattr("kind", e.kind())
+            .and_then(|_| value.setattr("problem", e.problem()))
+            .and_then(|_| value.setattr("remedy", e.remedy()));
+        match set {
+            Ok(()) => err,
+            Err(failed) => failed,
         }
     })
 }

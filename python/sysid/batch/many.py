@@ -33,6 +33,7 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
                   out: str | Path = "identify_many.parquet", workers: int | None = None,
                   inputs: list[str] | None = None, outputs: list[str] | None = None,
                   dt: float | None = None, time_column: str | None = None,
+                  resample: float | str | None = None, resample_gap: float = 5.0,
                   record_id: str = "record_id", retries: int = 1,
                   progress: bool | None = None, flush_every: int = 32) -> BatchResult:
     """Fit a model per record, in parallel, and stream one row per record to Parquet.
@@ -68,6 +69,9 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
         ``time_column``, a column named as a time column (``time``, ``t``, ``Time [s]``,
         ``timestamp``, ...; not an input or output) gives the sample time, as
         :meth:`IOData.from_csv` takes it; without one, dt = 1 s.
+    resample, resample_gap : optional
+        Time stamps with jitter or gaps: interpolated onto a uniform grid, as
+        :meth:`IOData.from_csv`'s (file and dataframe sources).
     record_id : str
         The record id column of a dataframe.
     retries : int
@@ -107,9 +111,11 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
         raise DataError(f"record_id must be the name of the record id column (a string), "
                         f"got {record_id!r}")
     _refuse_table_options(records, inputs=inputs, outputs=outputs, dt=dt,
-                          time_column=time_column)
+                          time_column=time_column, resample=resample)
+    if resample is not None and dt is not None:
+        raise DataError("give resample= (the new sample time, or 'median') or dt=, not both")
     cols = Columns(tuple(inputs) if inputs else None, tuple(outputs) if outputs else None,
-                   dt, time_column)
+                   dt, time_column, resample, resample_gap)
     work = tasks(records, record_id)
     if hasattr(records, "__len__") or isinstance(records, (str, Path)):  # a known total
         work = list(work)  # type: ignore[assignment]

@@ -62,6 +62,9 @@ class Columns:
     outputs: tuple[str, ...] | None = None
     dt: float | None = None
     time: str | None = None
+    #: jittered stamps onto a uniform grid (``IOData.from_csv``'s ``resample=``)
+    resample: float | str | None = None
+    resample_gap: float = 5.0
 
     def wanted(self) -> tuple[str, ...]:
         """The columns a record is made of: inputs, outputs and the time column."""
@@ -95,8 +98,14 @@ class Columns:
         u = np.column_stack([col[c] for c in self.inputs]) if self.inputs else None
         y = np.column_stack([col[c] for c in self.outputs])
         t = col[self.time] if self.time else None
-        return IOData(u=u, y=y, dt=self.dt if t is None else None, time=t,
-                      input_names=list(self.inputs or ()), output_names=list(self.outputs))
+        names = {"input_names": list(self.inputs or ()), "output_names": list(self.outputs)}
+        if self.resample is None:
+            return IOData(u=u, y=y, dt=self.dt if t is None else None, time=t, **names)
+        if t is None:
+            raise DataError(f"{what}: no time column to resample (name it: time_column=...)")
+        from ..data.raw import resample_stamps
+
+        return resample_stamps(IOData, [(t, u, y)], self.resample, self.resample_gap, names)
 
 
 def _frame_record(frame: Any, cols: Columns, what: str) -> IOData:

@@ -22,6 +22,7 @@ import numpy as np
 from .._atomic import atomic_path
 from .._checks import user_stacklevel
 from ..errors import DataError, SysidWarning
+from .raw import resample_stamps
 from .table import datetime_seconds, numeric, read_table, units_row
 from .units import check_dt_against_time, split_header, time_column, time_unit_seconds
 
@@ -161,6 +162,8 @@ def from_pandas(
     units: dict[str, str] | None = None,
     nan: str = "error",
     max_gap: int = 5,
+    resample: float | str | None = None,
+    resample_gap: float = 5.0,
 ) -> Any:
     """A record from a DataFrame's columns.
 
@@ -182,6 +185,8 @@ def from_pandas(
         Unit per column name.
     nan, max_gap :
         Handling of missing values (single-experiment frames), as in :meth:`from_raw`.
+    resample, resample_gap : optional
+        Time stamps with jitter or gaps: as :meth:`from_csv`'s.
 
     Examples
     --------
@@ -209,6 +214,8 @@ def from_pandas(
             raise DataError(f"{arg} column {col!r} is not in the DataFrame (columns: "
                             f"{list(df.columns)}); name one of them, or leave {arg}=None")
     units = dict(df.attrs.get("units", {})) if units is None else dict(units)
+    if resample is not None:
+        _resample_args(dt, True, "", "")
     if experiment is None and "experiment" in df.columns:
         experiment = "experiment"
     groups = [df] if experiment is None else [g for _, g in df.groupby(experiment, sort=True)]
@@ -230,6 +237,15 @@ def from_pandas(
     if (dt is not None and time is None and experiment is None
             and (tc := _time_column(df, inputs + outputs)) is not None):
         check_dt_against_time(_seconds(df[tc], df[tc], units.get(tc, "")), float(dt), str(tc))
+    kw: dict[str, Any] = {
+        "input_names": inputs,
+        "output_names": outputs,
+        "input_units": [units.get(c, "") for c in inputs],
+        "output_units": [units.get(c, "") for c in outputs],
+    }
+    if resample is not None:
+        _resample_args(dt, bool(ts), "the DataFrame", "time='column' or a time index")
+        return resample_stamps(cls, list(zip(ts, us, ys)), resample, resample_gap, kw, nan=nan)
     if dt is None and ts and "dt" in df.attrs:
         # the stored dt (to_pandas) when the time agrees with it: 1/60, not 0.0166666666667
         dt = grid_dt(ts, [df.attrs["dt"]], rtol=1e-9)
@@ -244,12 +260,6 @@ def from_pandas(
                 + "): assuming dt = 1 s; pass dt=... or time='column'",
                 SysidWarning, stacklevel=user_stacklevel(),
             )
-    kw: dict[str, Any] = {
-        "input_names": inputs,
-        "output_names": outputs,
-        "input_units": [units.get(c, "") for c in inputs],
-        "output_units": [units.get(c, "") for c in outputs],
-    }
     if nan != "error":
         if len(groups) != 1:
             raise DataError("nan= repairs single-experiment frames; split them first")
@@ -303,6 +313,8 @@ def from_csv(
     decimal: str = ".",
     nan: str = "error",
     max_gap: int = 5,
+    resample: float | str | None = None,
+    resample_gap: float = 5.0,
 ) -> Any:
     """Read a CSV file (the format of :meth:`to_csv`, or any other) or a white-space
     separated ``.dat`` file.
@@ -327,6 +339,16 @@ def from_csv(
     (``time``, ``t``, ``Time [s]``, ``timestamp``, ...; not an input or output) is the time
     column; without one, dt = 1 s is assumed with a warning.
 
+    A time column with gaps or jitter (a logger's stamps) is refused unless ``resample``
+    is given: then every channel is interpolated linearly onto a uniform grid of that sample
+    time in seconds (``"median"``: the stamps' median spacing), as
+    :meth:`from_irregular` does, and the record notes it (``record.resampling``: the sample
+    time, the samples, the longest interval bridged). An interval between stamps longer
+    than ``resample_gap`` sample times (an outage) is refused, naming it and where it
+    starts: pass a larger ``resample_gap`` to bridge it (``numpy.inf``: every one). With
+    ``resample``, samples with an empty value are left out and interpolated across
+    (within ``resample_gap``) when ``nan`` is not ``"error"``.
+
     Examples
     --------
     >>> import numpy as np, sysid, tempfile, os
@@ -338,6 +360,8 @@ def from_csv(
     (True, ['m'])
     """
     p = Path(path)
+    if resample is not None:
+        _resample_args(dt, True, "", "")
     if decimal not in (".", ","):
         raise DataError(f"decimal must be '.' or ',', got {decimal!r}")
     table, row_units = units_row(read_table(p, delimiter, decimal=decimal), decimal)
@@ -405,6 +429,12 @@ def from_csv(
         warnings.warn(
             f"{p.name} has no time column and no dt= was given: assuming dt = 1 s; pass "
             "dt=... or time='column'", SysidWarning, stacklevel=user_stacklevel())
+    if resample is not None:
+        _resample_args(dt, tcol is not None, p.name, "time='column'")
+        qs = [data] if ecol is None else [data[data[:, ecol] == k] for k in
+                                          np.unique(data[:, ecol])]
+        return resample_stamps(cls, [(q[:, tcol], q[:, iu] if iu else None, q[:, iy])
+                                     for q in qs], resample, resample_gap, kw, nan=nan)
     if tcol is not None and dt is None and np.isfinite(data[:, tcol]).all():
         # the dt the time column was written with (to_csv): its shortest decimal (0.1) or,
         # for a rate such as 1/60, its mean spacing, when that grid gives the column back
@@ -432,6 +462,15 @@ def from_csv(
         max_gap=max_gap,
         **kw,
     )
+
+
+def _resample_args(dt: Any, timed: bool, what: str, how: str) -> None:
+    """``resample=`` needs the time stamps (``timed``) and no ``dt=`` (it is the new sample
+    time); ``timed=True`` checks ``dt`` alone."""
+    if dt is not None:
+        raise DataError("give resample= (the new sample time, or 'median') or dt=, not both")
+    if not timed:
+        raise DataError(f"{what} has no time column to resample: name it ({how})")
 
 
 def _check_dt_against_time(table: Any, names: list[str], unit_of: dict[str, str],

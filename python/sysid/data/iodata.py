@@ -234,6 +234,9 @@ class IOData:
         self.output_units = self._units(output_units, self.output_names, "output")
         self._u_scale = np.ones(n_in)
         self._y_scale = np.ones(n_out)
+        #: what interpolation onto a uniform grid did (:class:`~sysid.data.raw.Resampling`:
+        #: from_irregular, the readers' resample=), None for a record read as sampled
+        self.resampling: _raw.Resampling | None = None
 
     # ---------------------------------------------------------------- construction helpers
 
@@ -291,6 +294,7 @@ class IOData:
         new.output_units = [self.output_units[i] for i in iy]
         new._u_scale = self._u_scale[iu].copy()
         new._y_scale = self._y_scale[iy].copy()
+        new.resampling = self.resampling
         return new
 
     # ---------------------------------------------------------------- basic properties
@@ -366,7 +370,8 @@ class IOData:
 
     def __repr__(self) -> str:
         exp = f" in {self.n_experiments} experiments" if self.n_experiments > 1 else ""
-        tr = ", detrended" if self.has_trend else ""
+        tr = (", resampled" if self.resampling is not None else "") + (
+            ", detrended" if self.has_trend else "")
         return (
             f"IOData: {_plural(self.n_samples, 'sample')}{exp}, {_plural(self.n_inputs, 'input')}, "
             f"{_plural(self.n_outputs, 'output')}, dt = {self.dt:g} s{tr}"

@@ -4,12 +4,15 @@
 :meth:`IOData.from_raw <sysid.IOData.from_raw>` and
 :meth:`IOData.from_irregular <sysid.IOData.from_irregular>` build a clean, uniformly sampled
 record from raw arrays (plain functions of the class, bound as its class methods in
-:mod:`sysid.data.iodata`).
+:mod:`sysid.data.iodata`); :func:`resample_stamps` is the readers' ``resample=`` (a CSV file
+or DataFrame of jittered stamps) on the same interpolation, and :class:`Resampling` what it
+did, kept on the record (``IOData.resampling``).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -19,7 +22,51 @@ from ..errors import DataError, InsufficientDataError, NonFiniteError, ShapeErro
 from .layout import time_first
 from .units import sample_time
 
-__all__ = ["repair_nan"]
+__all__ = ["repair_nan", "Resampling", "resample_stamps"]
+
+
+@dataclass(frozen=True)
+class Resampling:
+    """What interpolation onto a uniform grid did to a record (``IOData.resampling``, set by
+    :meth:`IOData.from_irregular <sysid.IOData.from_irregular>` and the readers'
+    ``resample=``; ``None`` on a record read as it was sampled).
+
+    Attributes
+    ----------
+    dt : float
+        The grid's sample time (seconds).
+    method : str
+        ``"linear"`` or ``"cubic"``.
+    n_stamps, n_samples : int
+        Time stamps read, and samples on the grid (over every experiment).
+    largest_gap : float
+        The longest interval between two stamps the interpolation bridged (seconds).
+    gap_after : float
+        The time stamp that interval starts at.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> t = np.array([0.0, 0.1, 0.2, 0.35, 0.4, 0.5])
+    >>> r = sysid.IOData.from_irregular(t, None, 2 * t, dt=0.1).resampling
+    >>> r.n_stamps, r.n_samples, round(r.largest_gap, 9), r.gap_after
+    (6, 6, 0.15, 0.2)
+    >>> str(r)[:52]
+    'resampled 6 time stamps onto 6 samples at dt = 0.1 s'
+    """
+
+    dt: float
+    method: str
+    n_stamps: int
+    n_samples: int
+    largest_gap: float
+    gap_after: float
+
+    def __str__(self) -> str:
+        return (f"resampled {self.n_stamps} time stamps onto {self.n_samples} samples at "
+                f"dt = {self.dt:g} s ({self.method} interpolation); the longest interval "
+                f"bridged: {self.largest_gap:g} s after t = {self.gap_after:g} s")
+
 
 
 # --------------------------------------------------------------------------------------------
@@ -318,7 +365,7 @@ def from_irregular(
         ys.append(_interpolate(ts, ya[a:b], grid, method))
         us.append(None if ua is None else _interpolate(ts, ua[a:b], grid, method))
     one = len(pieces) == 1
-    return cls(
+    rec = cls(
         us[0] if one else (None if ua is None else us),
         ys[0] if one else ys,
         h,
@@ -328,6 +375,112 @@ def from_irregular(
         input_units=input_units,
         output_units=output_units,
     )
+    bridged = [(float(d[k]), float(t[k])) for a, b in pieces for k in range(a, b - 1)]
+    wide = max(bridged)
+    rec.resampling = Resampling(h, method, int(t.size), sum(g.size for g in grids), *wide)
+    return rec
+
+
+def resample_stamps(
+    cls: Any,
+    parts: list[tuple[np.ndarray, np.ndarray | None, np.ndarray]],
+    resample: float | str,
+    resample_gap: float,
+    kw: dict[str, Any],
+    *,
+    nan: str = "error",
+    option: str = "resample_gap=",
+) -> Any:
+    """The readers' ``resample=``: the experiments ``parts`` (``(time, u, y)``, time in
+    seconds, jittered or with gaps) interpolated linearly onto one uniform grid each by
+    :meth:`IOData.from_irregular <sysid.IOData.from_irregular>`, the record noting it
+    (:class:`Resampling`).
+
+    Parameters
+    ----------
+    cls : type
+        :class:`~sysid.IOData`.
+    parts : list of (time, u, y)
+        One experiment each; ``u`` may be ``None``.
+    resample : float or "median"
+        The new sample time in seconds, or ``"median"``: the median spacing of the stamps
+        (over every experiment).
+    resample_gap : float
+        Longest interval between two stamps that is bridged, in multiples of the new sample
+        time; a longer one (an outage) is refused with a :class:`~sysid.DataError` naming it
+        and where it starts (``numpy.inf`` bridges every gap).
+    kw : dict
+        Channel names and units, passed on to the record.
+    nan : {"error", "interpolate", "split"}
+        Samples with a NaN or empty value: ``"error"`` refuses them; otherwise they are left
+        out and the interval around them interpolated (within ``resample_gap``).
+    option : str
+        How the refusal says to pass a larger gap limit (``"resample_gap="``; the command
+        line's ``"--resample-gap "``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.data.raw import resample_stamps
+    >>> t = np.array([0.0, 0.11, 0.19, 0.3, 0.42, 0.5])
+    >>> d = resample_stamps(sysid.IOData, [(t, None, 2 * t)], 0.1, 5.0, {})
+    >>> d.y.ravel(), d.resampling.n_samples
+    (array([0. , 0.2, 0.4, 0.6, 0.8, 1. ]), 6)
+    """
+    if nan not in ("error", "interpolate", "split"):
+        raise DataError(f"nan must be 'error', 'interpolate' or 'split', got {nan!r}")
+    clean = []
+    for k, (t, u, y) in enumerate(parts):
+        t = np.asarray(t, dtype=float).ravel()
+        y = real_array(y, "y").reshape(t.size, -1)
+        u = None if u is None else real_array(u, "u").reshape(t.size, -1)
+        x = y if u is None else np.concatenate([u, y], axis=1)
+        if not np.isfinite(t).all():
+            i = int(np.flatnonzero(~np.isfinite(t))[0])
+            raise NonFiniteError(f"time has no value at sample {i}: every sample to resample "
+                                 "needs its time stamp")
+        ok = np.isfinite(x).all(axis=1)
+        if not ok.all() and nan == "error":
+            i = int(np.flatnonzero(~ok)[0])
+            raise NonFiniteError(f"a non-finite or empty value at sample {i} (t = {t[i]:g} s);"
+                                 " pass nan='interpolate' to leave such samples out and "
+                                 "interpolate across them")
+        clean.append((t[ok], None if u is None else u[ok], y[ok], k))
+    if isinstance(resample, str):
+        if resample != "median":
+            raise DataError(f"resample must be a sample time in seconds or 'median', got "
+                            f"{resample!r}")
+        steps = np.concatenate([np.diff(t) for t, *_ in clean])
+        h = float(np.median(steps[steps > 0])) if np.any(steps > 0) else np.nan
+    else:
+        h = as_dt(resample)
+    gap, name = float(resample_gap), option.rstrip("= ")
+    if not gap > 0:  # NaN too
+        raise DataError(f"{name} must be a positive number of sample times, got "
+                        f"{resample_gap!r}")
+    for t, _, _, k in clean:
+        d = np.diff(t)
+        if d.size and d.max() > gap * h:
+            i = int(np.argmax(d))
+            exp = f" of experiment {k}" if len(clean) > 1 else ""
+            raise DataError(
+                f"the time stamps{exp} jump by {d[i]:g} s ({d[i] / h:.3g} sample times of "
+                f"{h:g} s) after t = {t[i]:g} s (sample {i}): a gap longer than {name} = "
+                f"{gap:g} sample times, which interpolation would bridge with a straight line "
+                f"the data never showed; cut the record there (IOData.from_irregular cuts it "
+                f"into experiments at such gaps), or pass {option}"
+                f"{int(np.ceil(d.max() / h))} (or more) to bridge it")
+    # no interval is longer than the limit: one piece each, nothing cut
+    recs = [from_irregular(cls, t, u, y, h, max_gap=max(float(np.max(np.diff(t), initial=h)),
+                                                        h), **kw) for t, u, y, _ in clean]
+    if len(recs) == 1:
+        return recs[0]
+    widest = max(recs, key=lambda r: r.resampling.largest_gap).resampling
+    rec = cls([r.u for r in recs] if clean[0][1] is not None else None, [r.y for r in recs],
+              h, time=[r.time for r in recs], **kw)
+    rec.resampling = Resampling(h, "linear", sum(r.resampling.n_stamps for r in recs),
+                                rec.n_samples, widest.largest_gap, widest.gap_after)
+    return rec
 
 
 def _interpolate(t: np.ndarray, x: np.ndarray, grid: np.ndarray, method: str) -> np.ndarray:

@@ -126,7 +126,13 @@ def stamp_resolution(raw: np.ndarray, t: np.ndarray) -> tuple[str, float]:
     return np.dtype(dtype).name, float(np.spacing(dtype(top)))
 
 
-def sample_time(time: Any, *, rtol: float = 0.01) -> float:
+#: what a refusal of irregular sampling suggests (:func:`sample_time`'s ``remedy``)
+RESAMPLE_REMEDY = ("resample onto a uniform grid: IOData.from_csv(..., resample='median') or "
+                   "IOData.from_pandas(..., resample='median') (resample=SECONDS for another "
+                   "sample time), sysid.IOData.from_irregular(time, u, y, dt) for arrays")
+
+
+def sample_time(time: Any, *, rtol: float = 0.01, remedy: str = RESAMPLE_REMEDY) -> float:
     """The sample time of a time vector: its mean spacing, after checking it is uniform.
 
     Parameters
@@ -138,6 +144,9 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
         the rounding of the stamps: two units of their floating-point resolution at their
         magnitude (``np.spacing`` in their type, see :func:`stamp_resolution`) are rounding,
         not jitter (float32 seconds near 1e4 are 0.98 ms apart).
+    remedy : str
+        What the refusal of gaps or jitter suggests (the command line names its
+        ``--resample``).
 
     Returns
     -------
@@ -151,8 +160,9 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
     ------
     DataError
         If the vector repeats or goes back in time, or has gaps or jitter beyond ``rtol``
-        (the message names the first offending sample and suggests
-        :meth:`IOData.from_irregular` to resample onto a uniform grid); or if the stamps'
+        (the message names the first offending sample and ends in ``remedy``: by default
+        the readers' ``resample=`` and :meth:`IOData.from_irregular`, which resample onto a
+        uniform grid); or if the stamps'
         resolution is coarser than a tenth of their spacing (float32 stamps far from zero,
         such as Unix seconds: the message says to store them as float64 or relative to the
         first stamp).
@@ -224,8 +234,7 @@ def sample_time(time: Any, *, rtol: float = 0.01) -> float:
             f"irregular sampling: {kind} at sample {i + 1} (spacing {d[i]:g} s against the "
             f"median {h:g} s; {int(dev.sum())} spacing(s) off by more than {rtol:.0%}"
             + (f", {gaps.size} of them gaps (over 1.5 times the median)" if gaps.size else "")
-            + "); resample onto a uniform grid with sysid.IOData.from_irregular(time, u, y, "
-            "dt)" + (", or cut the record at the gap" if gaps.size else "")
+            + f"); {remedy}" + ("; or cut the record at the gap" if gaps.size else "")
         )
     # the mean spacing, from the end points: the median of single-precision instants is off
     # by their rounding (float32 seconds at 0.1 s: 0.10000038 s), the mean by it / (n - 1)

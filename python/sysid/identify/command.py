@@ -12,7 +12,56 @@ import numpy as np
 from ..data.iodata import IOData
 from ..errors import DataError
 
-__all__ = ["prepare", "refuse_still_part", "write_leaderboard"]
+__all__ = ["prepare", "refuse_still_part", "write_leaderboard", "uniform_time", "RESAMPLE_HINT"]
+
+#: what the command says of a time column with gaps or jitter
+RESAMPLE_HINT = ("pass --resample median (the stamps' median spacing) or --resample SECONDS "
+                 "to interpolate the record onto a uniform grid")
+
+
+def uniform_time(u: np.ndarray, y: np.ndarray, t: np.ndarray, column: str,
+                 resample: str | None, resample_gap: float, say: Callable[[str], None],
+                 pre: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """``u``, ``y``, the time column ``t`` (seconds) and the sample time of a file's record:
+    its stamps' own when they are uniform (:func:`sysid.sample_time`; gaps and jitter are
+    refused, naming ``--resample``), else, with ``resample`` (``--resample``: ``"median"``
+    or seconds), the record interpolated onto a uniform grid as
+    ``IOData.from_csv(resample=...)`` does it (:func:`sysid.data.raw.resample_stamps`; a gap
+    over ``resample_gap`` sample times refused), said and noted in ``pre["resampled"]``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = np.array([0.0, 0.11, 0.19, 0.3, 0.42, 0.5])
+    >>> pre = {}
+    >>> u, y, tt, dt = uniform_time(t[:, None], 2 * t[:, None], t, "time", "0.1", 5.0,
+    ...                             lambda s: None, pre)
+    >>> dt, y.ravel(), pre["resampled"]["n_stamps"]
+    (0.1, array([0. , 0.2, 0.4, 0.6, 0.8, 1. ]), 6)
+    """
+    from ..data.units import sample_time
+
+    if resample is None:
+        try:
+            return u, y, t, sample_time(t, remedy=RESAMPLE_HINT)
+        except DataError as e:
+            raise DataError(f"time column {column!r}: {e}") from None
+    from dataclasses import asdict
+
+    from ..data.raw import resample_stamps
+
+    try:
+        step: float | str = float(resample)
+    except ValueError:
+        step = resample
+    try:
+        rec = resample_stamps(IOData, [(t, u if u.shape[1] else None, y)], step,
+                              resample_gap, {}, option="--resample-gap ")
+    except DataError as e:
+        raise DataError(f"time column {column!r}: {e}") from None
+    say(str(rec.resampling))
+    pre["resampled"] = asdict(rec.resampling)
+    return rec.u, rec.y, rec.time, rec.dt
 
 
 def refuse_still_part(u: np.ndarray, y: np.ndarray, k: int, split: str,

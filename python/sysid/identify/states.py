@@ -4,7 +4,6 @@ with a stable ``A`` enforced when no candidate is stable (:func:`stabilised_cand
 
 from __future__ import annotations
 
-import copy
 from typing import Any
 
 import numpy as np
@@ -22,10 +21,8 @@ N_STABILISED = 10
 
 def _from_states(est: Any) -> Any:
     """``est`` taking ``A, B, C, D`` from its estimated state sequence (``matrices="states"``,
-    read at each fit): a shallow copy sharing its record, factor and SVDs."""
-    est = copy.copy(est)
-    est.matrices = "states"
-    return est
+    :meth:`~sysid.SubspaceEstimator.with_matrices`: sharing its record, factor and SVDs)."""
+    return est.with_matrices("states")
 
 
 def states_candidates(board: Board) -> None:

@@ -75,8 +75,8 @@ from .feedthrough import (
 from .kalman import schur_gain
 from .methods import CLOSED_LOOP, METHODS, _method
 from .scaling import check_scale, in_record_units, scaled_experiments
-from .series_horizon import series_horizons
-from .steptest import step_test_note
+from .series_horizon import refuse_white_noise, series_horizons
+from .steptest import refuse_step_test
 from .streaming import compression_info, warn_if_fallback
 
 __all__ = ["SubspaceEstimator", "default_horizon", "METHODS"]
@@ -121,45 +121,6 @@ def _check_signals(data: IOData) -> None:
                             error=ExcitationError)
     # the one offset check of every linear estimator (sysid.data.offsets)
     check_offsets(data, who="the subspace methods", stats=stats)
-
-
-def _say_step_test(err: ExcitationError, data: IOData, past: int) -> None:
-    """Raise ``err``, with what fits a step test when the record is one."""
-    note = step_test_note(data.experiments, past)
-    if note:  # the core's remedies (a richer input, a shorter horizon) in the record's terms
-        head = str(err).split("; use a richer input")[0]
-        raise ExcitationError(f"{head}: {note}") from None
-    raise err
-
-
-def _refuse_white_noise(data: IOData, lags: int = 20, level: float = 0.05) -> None:
-    """Output-only data that pass a Ljung-Box whiteness test have no dynamics to identify."""
-    from scipy import stats
-
-    pvals = []
-    for j in range(data.n_outputs):
-        q, n_tot = 0.0, 0
-        for _, y in data.experiments:
-            x = y[:, j] - y[:, j].mean()
-            N = x.size
-            if N <= lags + 1:
-                continue
-            c0 = float(x @ x)
-            if c0 == 0.0:
-                continue
-            r = np.array([x[k:] @ x[:-k] for k in range(1, lags + 1)]) / c0
-            q += N * (N + 2) * float(np.sum(r**2 / (N - np.arange(1, lags + 1))))
-            n_tot += 1
-        if n_tot == 0:
-            return
-        pvals.append(float(stats.chi2.sf(q, lags * n_tot)))
-    if min(pvals) > level:
-        raise DataError(
-            "order='auto' on output-only data that look like white noise (Ljung-Box p = "
-            + ", ".join(f"{n}: {p:.2g}" for n, p in zip(data.output_names, pvals))
-            + f" at {lags} lags): there are no dynamics to identify (an order-0 model y = e "
-            "describes them); pass an explicit order to fit one anyway"
-        )
 
 
 def default_horizon(n_samples: int, n_inputs: int, n_outputs: int) -> int:
@@ -332,7 +293,7 @@ class SubspaceEstimator:
                 data.experiments, self.past, self.future, chunk_rows, compressor
             )
         except ExcitationError as e:
-            _say_step_test(e, data, self.past)
+            refuse_step_test(e, data.experiments, self.past)
         self.compressor = compressor
         warn_if_fallback(self.factor, requested=compressor)
         self._set_scaling(scale)
@@ -343,7 +304,7 @@ class SubspaceEstimator:
         try:
             self._subspace(None)  # checks the record (length, excitation) right away
         except ExcitationError as e:
-            _say_step_test(e, data, self.past)
+            refuse_step_test(e, data.experiments, self.past)
 
     @classmethod
     def from_factor(
@@ -395,6 +356,32 @@ class SubspaceEstimator:
         self._feedback_p = None
         self._feedback_warned = False
         return self
+
+    def with_matrices(self, matrices: str) -> SubspaceEstimator:
+        """This estimator taking ``A, B, C, D`` as ``matrices`` says (the constructor's
+        option), sharing its record, factor, channel scaling and weighted SVDs (none depends
+        on ``matrices``): another way to fit, with no pass over the data.
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> u = np.random.default_rng(0).standard_normal((300, 1))
+        >>> y = sysid.StateSpaceModel([[0.9]], [[1.0]], [[1.0]]).simulate(u)
+        >>> est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=4)
+        >>> est.with_matrices("states").fit(1).info["settings"]["matrices"], est.matrices
+        ('states', 'shift')
+        """
+        new = type(self).__new__(type(self))
+        new.matrices = as_option(matrices, "matrices")
+        new.data, new.factor, new.method, new.compressor = (
+            self.data, self.factor, self.method, self.compressor)
+        new.past, new.future, new._from_factor = self.past, self.future, self._from_factor
+        new._horizon_note, new.horizon_selection = self._horizon_note, self.horizon_selection
+        new.scale, new._su, new._sy = self.scale, self._su, self._sy
+        new.scaled_factor, new._svd, new._pe_cache = (  # the caches filled for both
+            self.scaled_factor, self._svd, self._pe_cache)
+        new._feedback_p, new._feedback_warned = self._feedback_p, self._feedback_warned
+        return new
 
     def _set_scaling(self, scale: bool | None) -> None:
         """The channel scaling of the fits (:mod:`sysid.subspace.scaling`): the record's
@@ -629,7 +616,7 @@ class SubspaceEstimator:
                 raise DataError(f"order must be an integer, a sequence of integers or 'auto', "
                                 f"got {order!r}")
             if self.factor.n_inputs == 0 and not self._from_factor:
-                _refuse_white_noise(self.data)
+                refuse_white_noise(self.data)
             selection = self.order_selection(method=key, feedthrough=bool(feedthrough),
                                              orders=orders)
             n = selection["order"]

@@ -21,9 +21,10 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import DataError
 from .data_horizon import available_horizon
 
-__all__ = ["ar_order_aic", "series_horizons"]
+__all__ = ["ar_order_aic", "series_horizons", "refuse_white_noise"]
 
 #: rows of the lagged regressor formed at a time when the Gram matrix is summed
 _CHUNK = 8192
@@ -106,3 +107,45 @@ def series_horizons(data: Any, order: Any = None) -> dict[str, Any]:
     rule = (f"time series: past {past} = the AIC autoregression order {p} + 1 (at least 2 "
             f"and the future); future {future}, {why}")
     return {"past": past, "future": future, "ar_order": p, "rule": rule}
+
+
+def refuse_white_noise(data: Any, lags: int = 20, level: float = 0.05) -> None:
+    """Refuse ``order="auto"`` on output-only data that pass a Ljung-Box whiteness test
+    (every output's p-value above ``level``): they have no dynamics to identify.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.subspace.series_horizon import refuse_white_noise
+    >>> e = np.random.default_rng(0).standard_normal((500, 1))
+    >>> refuse_white_noise(sysid.IOData(None, e))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    sysid.errors.DataError: order='auto' on output-only data that look like white noise ...
+    """
+    from scipy import stats
+
+    pvals = []
+    for j in range(data.n_outputs):
+        q, n_tot = 0.0, 0
+        for _, y in data.experiments:
+            x = y[:, j] - y[:, j].mean()
+            N = x.size
+            if N <= lags + 1:
+                continue
+            c0 = float(x @ x)
+            if c0 == 0.0:
+                continue
+            r = np.array([x[k:] @ x[:-k] for k in range(1, lags + 1)]) / c0
+            q += N * (N + 2) * float(np.sum(r**2 / (N - np.arange(1, lags + 1))))
+            n_tot += 1
+        if n_tot == 0:
+            return
+        pvals.append(float(stats.chi2.sf(q, lags * n_tot)))
+    if min(pvals) > level:
+        raise DataError(
+            "order='auto' on output-only data that look like white noise (Ljung-Box p = "
+            + ", ".join(f"{n}: {p:.2g}" for n, p in zip(data.output_names, pvals))
+            + f" at {lags} lags): there are no dynamics to identify (an order-0 model y = e "
+            "describes them); pass an explicit order to fit one anyway"
+        )

@@ -10,11 +10,13 @@ the window does; what fits a step test is a model simulated from rest (:func:`sy
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NoReturn
 
 import numpy as np
 
-__all__ = ["step_test_note", "step_changes", "MAX_STEPS"]
+from ..errors import ExcitationError
+
+__all__ = ["step_test_note", "step_changes", "refuse_step_test", "MAX_STEPS"]
 
 #: at most this many samples where an input changes make a record a step test
 MAX_STEPS = 4
@@ -72,6 +74,33 @@ def step_test_note(experiments: list[Any], past: int) -> str:
             f"model simulated from rest: sysid.procest(data, 'P1D') (a process model), "
             f"sysid.tfest or sysid.oe, after subtracting the values before the step "
             f"(u - u[0], y - y[0]) rather than the means")
+
+
+def refuse_step_test(err: ExcitationError, experiments: list[Any], past: int) -> NoReturn:
+    """Raise the core's excitation error ``err``; for a step test, with what fits one
+    (:func:`step_test_note`) in place of the core's remedy (``err.remedy``: a richer input,
+    a shorter horizon), which the new error's ``remedy`` then holds.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.subspace.steptest import refuse_step_test
+    >>> u = np.r_[0.0, np.full(99, 50.0)][:, None]
+    >>> e = sysid.ExcitationError("the input is not persistently exciting: ...; use a richer "
+    ...                           "input")
+    >>> e.problem = "the input is not persistently exciting: ..."
+    >>> try:
+    ...     refuse_step_test(e, [(u, np.zeros((100, 1)))], past=8)
+    ... except sysid.ExcitationError as said:
+    ...     print(str(said)[:65])
+    the input is not persistently exciting: ...: the input changes at
+    """
+    note = step_test_note(experiments, past)
+    if note and err.problem:  # the core's remedy in the record's terms
+        said = ExcitationError(f"{err.problem}: {note}")
+        said.kind, said.problem, said.remedy = err.kind, err.problem, note
+        raise said from None
+    raise err
 
 
 def _offsets(changes: list[int], experiments: list[Any]) -> list[tuple[int, int]]:
