@@ -135,7 +135,26 @@ def compare(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
     out = compare_quiet(*args, horizon=horizon, x0=x0)
     if not hasattr(out, "responses"):  # a frequency response does not diverge
         warn_diverging(getattr(out, "results", [out]))
+        _warn_flat(getattr(out, "results", [out]))
     return out
+
+
+def _warn_flat(results: list[CompareResult]) -> None:
+    """One :class:`~sysid.errors.SysidWarning` with the notes of the flat outputs whose fit
+    reads below zero (there the number misleads; above it the note in the summary is
+    enough)."""
+    said = []
+    for r in results:
+        for (e, j), note in zip(r.flat, r.notes):
+            if not r.diverged[e] and r.fit[e, j] < 0 and note not in said:
+                said.append(note)
+    if said:
+        import warnings
+
+        from .._checks import user_stacklevel
+
+        warnings.warn("; ".join(said[:3]) + (f" (and {len(said) - 3} more)" if len(said) > 3
+                                             else ""), SysidWarning, stacklevel=user_stacklevel())
 
 
 def compare_quiet(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
@@ -173,7 +192,7 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
         out = CompareResult(model, inner.horizon, [u for u, _ in raw], [y for _, y in raw],
                             yh, inner.x0, inner.start)
         out.dt = inner.dt
-        return out
+        return _flat_as(out, inner)
     if _operating_point(model):  # the model of the deviations, its offsets added back
         raw = data if isinstance(data, IOData) else IOData(u=data[0], y=data[1], dt=model.dt)
         inner = compare_one(model.statespace, model.remove_offsets(raw), horizon, x0)
@@ -182,7 +201,7 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
                             [yh + model.y_offset for yh in inner.yhat], inner.x0,
                             inner.start)
         out.dt = inner.dt
-        return out
+        return _flat_as(out, inner)
     model, recs = _records(model, data)
     h = _horizon(horizon)
     runner = _simulator(model, x0, h, recs[0][0] if recs else None)
@@ -208,3 +227,13 @@ def compare_one(model: Any, data: Any, horizon: int | None, x0: X0) -> CompareRe
         x0s.append(x)
     require_outputs_vary([y[start:] for _, y in recs], getattr(model, "output_names", None))
     return CompareResult(model, h, us, ys, yh, x0s, start)
+
+
+def _flat_as(out: CompareResult, inner: CompareResult) -> CompareResult:
+    """``out`` (a comparison on the raw record) with the flat outputs of ``inner`` (the same
+    on the model's deviations from its operating point or trend): an output's level is
+    measured from where the model puts it, not from zero."""
+    out.flat, out.notes, out._why = [], [], []
+    for (e, j), why in zip(inner.flat, inner._why):
+        out.add_flat(e, j, why)
+    return out

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from .._display import HTMLResult
-from .fit import _metrics, diverged
+from .fit import _metrics, diverged, flat_outputs
 
 __all__ = ["CompareResult"]
 
@@ -37,6 +37,12 @@ class CompareResult(HTMLResult):
         Per experiment: the model's output diverged on it (not finite, or beyond ``1e8``
         times the measured range: an unstable model on a long record); its fit is ``-inf``
         and the comparison is reported, not raised.
+    flat : list of (int, int)
+        ``(experiment, output)`` pairs whose output barely moves on the record
+        (:func:`~sysid.validation.fit.flat_outputs`: a step test's settled end): their
+        NRMSE fit is not a meaningful measure; :attr:`notes` says why.
+    notes : list of str
+        What the fit numbers cannot say (shown by :meth:`summary`).
     """
 
     def __init__(self, model: Any, horizon: int | None, u: list[np.ndarray],
@@ -57,6 +63,23 @@ class CompareResult(HTMLResult):
         #: the measured range); its fit is -inf
         self.diverged = np.array([diverged(a, b) for a, b in zip(y, yhat)])
         self.fit[self.diverged] = -np.inf
+        self.flat: list[tuple[int, int]] = []
+        self.notes: list[str] = []
+        self._why: list[str] = []  # per flat output: its measure (flat_outputs)
+        for e, (a, b) in enumerate(zip(u, y)):
+            for j, why in flat_outputs(a[start:] if a is not None else None, b[start:]):
+                self.add_flat(e, j, why)
+
+    def add_flat(self, e: int, j: int, why: str) -> None:
+        """Record that output ``j`` of experiment ``e`` is flat (``why``: the measure)."""
+        where = f" in experiment {e}" if len(self.y) > 1 else ""
+        self.flat.append((e, j))
+        self._why.append(why)
+        self.notes.append(
+            f"output {self.output_names[j]}{where}: the NRMSE fit ({self.fit[e, j]:.1f} %) is "
+            f"not a meaningful measure on this record: {why}, so any error in the level is "
+            "weighed against that small variation; validate on a segment where the output "
+            f"changes (a step inside it), or judge by the RMSE ({self.rmse[e, j]:.3g})")
 
     @property
     def kind(self) -> str:
@@ -90,7 +113,9 @@ class CompareResult(HTMLResult):
                 lines.append(f"{e:>4} {name:<{w}} {self.fit[e, j]:9.2f} {self.vaf[e, j]:9.2f} "
                              f"{self.rmse[e, j]:11.4g}"
                              + ("  diverged (unstable on this record)" if self.diverged[e]
-                                else ""))
+                                else "")
+                             + ("  flat output: see the note" if (e, j) in self.flat else ""))
+        lines += [f"note: {n}" for n in self.notes]
         return "\n".join(lines)
 
     def plot(self, experiment: int = 0, fig: Any = None) -> Any:
@@ -103,6 +128,9 @@ class CompareResult(HTMLResult):
         fits = ", ".join(f"{n}: {f:.1f}" for n, f in zip(self.output_names, self.fit.mean(0)))
         ne = len(self.y)
         div = ", diverged" if self.diverged.any() else ""
+        flat = sorted({self.output_names[j] for _, j in self.flat})
+        note = (f", fit not meaningful on flat output{'s' * (len(flat) != 1)} "
+                f"{', '.join(flat)} (see .notes)") if flat else ""
         return (f"CompareResult({self.kind}, {ne} experiment{'s' * (ne != 1)}, fit % "
-                f"[{fits}]{div})")
+                f"[{fits}]{div}{note})")
 

@@ -109,3 +109,71 @@ def require_outputs_vary(ys: list[np.ndarray], names: Any = None) -> None:
                 + ": the fit (NRMSE against the mean) is undefined for a constant signal; "
                 "compare on a record where the output varies, or look at the residuals"
             )
+
+
+#: An output whose standard deviation is below this share of its level (``|mean|``, in the
+#: coordinates the model is compared in) barely moves on the record.
+FLAT_LEVEL_SHARE = 0.1
+#: An input whose standard deviation is below this share of its level (or zero) stands still
+#: (a raw input at an operating point, 20 +- 1, moves: 5 %).
+STILL_INPUT_SHARE = 0.01
+#: ... and an output whose standard deviation is below this many times its noise (the
+#: sample-to-sample scatter, ``std(diff(y)) / sqrt(2)``) shows little but noise.
+FLAT_NOISE_MULTIPLE = 3.0
+
+
+def flat_outputs(u: np.ndarray | None, y: np.ndarray) -> list[tuple[int, str]]:
+    """``(output index, why)`` of every output whose NRMSE fit is not a meaningful measure on
+    this record: every input stands still (its standard deviation below
+    :data:`STILL_INPUT_SHARE` of its level ``|mean|``, or zero) and the output's variation is
+    below :data:`FLAT_LEVEL_SHARE` of its level or :data:`FLAT_NOISE_MULTIPLE` times its noise
+    (``std(diff(y)) / sqrt(2)``). The fit divides the error by the variation about the mean:
+    on the settled end of a step test a level error of 1 % of the output is several times
+    that variation, and the fit reads -300 % for a model whose level is nearly right. While
+    an input moves, the output's response to it is what the fit measures (a record far from
+    zero is not flat: its offset is the model's to carry); a time series is never flat.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.validation.fit import flat_outputs
+    >>> t = np.arange(300.0)
+    >>> settled = 100.0 + 0.5 * np.sin(t / 7)[:, None]  # a step test's settled end
+    >>> flat_outputs(np.ones((300, 1)), settled)[0][0]
+    0
+    >>> flat_outputs(np.sin(t / 5)[:, None], settled)  # an input that moves: not flat
+    []
+    """
+    y = np.asarray(y, float)
+    if y.ndim == 1:
+        y = y[:, None]
+    u = None if u is None else np.asarray(u, float)
+    if y.shape[0] < 3 or u is None or u.size == 0 or not _still(u.reshape(u.shape[0], -1)):
+        return []
+    s = _unit(y)
+    with np.errstate(all="ignore"):
+        ys = y / s
+        sd, level = ys.std(0), np.abs(ys.mean(0))
+        noise = np.diff(ys, axis=0).std(0) / np.sqrt(2.0)
+    out = []
+    for j in range(y.shape[1]):
+        if not (np.isfinite(sd[j]) and sd[j] > 0):
+            continue
+        if sd[j] < FLAT_LEVEL_SHARE * level[j]:
+            out.append((j, f"the inputs stand still and its variation (std {sd[j] * s[j]:.3g}) "
+                           f"is {100 * sd[j] / level[j]:.2g} % of its level "
+                           f"({level[j] * s[j]:.4g})"))
+        elif sd[j] < FLAT_NOISE_MULTIPLE * noise[j]:
+            out.append((j, f"the inputs stand still and its variation (std {sd[j] * s[j]:.3g}) "
+                           f"is {sd[j] / noise[j]:.2g} times its noise"))
+    return out
+
+
+def _still(u: np.ndarray) -> bool:
+    """Whether every input stands still: a standard deviation below :data:`STILL_INPUT_SHARE`
+    of its level, or none at all."""
+    s = _unit(u)
+    with np.errstate(all="ignore"):
+        us = u / s
+        sd, level = us.std(0), np.abs(us.mean(0))
+    return bool(np.all((sd == 0) | (sd < STILL_INPUT_SHARE * level)))
