@@ -135,3 +135,50 @@ def test_a_step_from_rest_is_not_an_offset():
         sysid.oe(hot, 1, 1, 1)
     msg = str(caught[0].message)
     assert "output y0 has an offset" in msg and "input u0" not in msg
+
+
+def _operating_point(extra, seed=5, n=800):
+    """A 2nd-order process (static gain 2.5) driven around an input of 3 +- 1 with output
+    noise: its output sits at 7.5 (the gain times the input's level) plus ``extra`` (a level
+    its dynamics do not carry: a sensor's zero, ambient temperature), std about 2.3. The
+    input's mean is 3 standard deviations, the output's 3 to 7: under the 10 the ratio alone
+    warned at."""
+    rng = np.random.default_rng(seed)
+    true = sysid.StateSpaceModel([[1.2, -0.5], [1.0, 0.0]], [[1.0], [0.0]], [[0.5, 0.25]],
+                                 dt=1.0)
+    du = np.repeat(rng.standard_normal(n // 4), 4)  # a slow random-level input
+    y = true.simulate(3.0 + du, x0=[7.5 / 0.75, 7.5 / 0.75])
+    return sysid.IOData(u=3.0 + du, y=extra + y + 0.3 * rng.standard_normal((n, 1)), dt=1.0)
+
+
+def test_an_offset_of_a_few_standard_deviations_that_costs_the_fit_warns():
+    """issue 26: a TCLab log under PID (heaters 36 +- 12 %, temperatures 51 +- 9 degC) gave
+    n4sid -252 % and oe -145 % on validation, 67 and 92 % with the means removed, and no
+    OffsetWarning: the means were 3-5 standard deviations, under the 10 of the check. The
+    check now also fits a quick ARX model with and without the means and warns when they cost
+    it the fit; an offset the static gain carries (y's mean = gain * u's mean) costs nothing
+    and stays quiet."""
+    raw = _operating_point(8.0)  # 15.5 is not 2.5 * 3: the model must bend to carry it
+    sd = np.asarray(raw.y).std()
+    assert 3 < abs(np.asarray(raw.y).mean()) / sd < 10  # under the ratio rule
+    est, val = raw.split(0.5)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")  # the raw fit's own symptoms (a pole at 1) besides
+        m_raw = sysid.oe(est, 2, 2, 1)
+        sysid.n4sid(est, 2)
+    offs = [str(w.message) for w in caught if issubclass(w.category, OffsetWarning)]
+    assert len(offs) == 2 and "quick ARX fit of the raw record loses" in offs[0]
+    assert "output y0 has an offset (14.9" in offs[0] and "input u0" in offs[0]
+    d, trend = sysid.detrend(est, "mean", return_trend=True)
+    m = sysid.oe(d, 2, 2, 1)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        raw_fit = sysid.compare(m_raw, val).mean_fit
+    assert sysid.compare(m, trend.apply(val)).mean_fit > raw_fit + 10
+    # the same record with the output at the level its dynamics put it: silent
+    carried = _operating_point(0.0)
+    assert abs(np.asarray(carried.y).mean()) > 1.5 * np.asarray(carried.y).std()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", OffsetWarning)
+        sysid.oe(carried, 2, 2, 1)
+        sysid.n4sid(carried, 2)

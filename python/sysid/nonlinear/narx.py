@@ -33,8 +33,9 @@ from ..errors import (
     StabilityWarning,
 )
 from ..polynomial.orders import matlab_orders
-from ..validation.compare import diverged, given_start
+from ..validation.fit import diverged
 from ..validation.records import validation_record
+from ..validation.runner import given_start
 from .choice import is_auto
 from .customreg import CustomRegressor
 from .hw_model import SigmoidNetwork, check_search_size
@@ -126,7 +127,7 @@ def _free_run(model: Any, exps: list[tuple[np.ndarray, np.ndarray]]
               ) -> tuple[np.ndarray, np.ndarray, int] | tuple[None, str, int]:
     """The model run free on each experiment from its measured first ``max_lag`` outputs:
     ``(sum of squared errors, sum of squared deviations from the mean, count)`` per output
-    after those samples (:func:`~sysid.validation.compare.given_start`, as ``compare``
+    after those samples (:func:`~sysid.validation.runner.given_start`, as ``compare``
     scores them), or ``(None, why, experiment)`` when a run diverges."""
     sse, var, count = 0.0, 0.0, 0
     k = given_start(model)

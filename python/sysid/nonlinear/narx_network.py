@@ -25,7 +25,7 @@ from ..errors import (
     NumericalError,
     StabilityWarning,
 )
-from ..validation.compare import given_start
+from ..validation.runner import given_start
 from .hw_model import SigmoidNetwork
 from .narx_model import lag_names
 from .narx_network_model import NetworkNARXModel, from_rust_nl
@@ -314,7 +314,7 @@ def _free_run_variances(model: NetworkNARXModel, recs: list[tuple[np.ndarray, np
                         pooled: np.ndarray) -> np.ndarray:
     """Each output's mean squared free-run error (from the measured first outputs, as the
     refinement runs it), not their pool; ``pooled`` if the run fails. The samples scored are
-    those :func:`~sysid.validation.compare.given_start` says the model predicts."""
+    those :func:`~sysid.validation.runner.given_start` says the model predicts."""
     L, k = model.max_lag, given_start(model)
     sums, count = np.zeros(model.noutputs), 0
     try:

@@ -104,7 +104,7 @@ def _offsets(data: Any) -> Finding:
     big = offsets(data)
     if big:
         names = ", ".join(f"{k} {n} (mean {m:.4g}, std {s:.3g})" for k, n, m, s in big[:4])
-        return Finding("offsets", "act", f"offsets much larger than the variation: {names}",
+        return Finding("offsets", "act", f"offsets that cost a linear fit: {names}",
                        "sysid.detrend(data, 'constant', return_trend=True), then "
                        "trend.apply(validation); or sysid.identify(data), which removes "
                        "and restores them")
@@ -117,8 +117,9 @@ def _offsets(data: Any) -> Finding:
             small.append(f"{kind} {name}")
     if small and not getattr(data, "has_trend", False):
         return Finding("offsets", "note",
-                       f"non-zero means ({', '.join(small[:4])}; below the {OFFSET_RATIO:g} "
-                       "standard deviations every estimator warns at)",
+                       f"non-zero means ({', '.join(small[:4])}; below what every estimator "
+                       f"warns at: {OFFSET_RATIO:g} standard deviations, or a quick ARX fit "
+                       "losing fit to them)",
                        "linear models have no constant term: remove the means "
                        "(sysid.detrend(data, 'constant', return_trend=True))")
     return Finding("offsets", "ok", "means removed or negligible")

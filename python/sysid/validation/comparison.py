@@ -126,6 +126,13 @@ class CompareSet:
             flag = "  diverged (unstable on this record)" if self.diverged[k] else ""
             best = "  best" if k == self.best else ""
             lines.append(f"{name[:28]:<28}{fits}{flag}{best}")
+        flat = sorted({r.output_names[j] for r in self.results for _, j in r.flat})
+        if flat:  # the measure is each result's (a model's operating point moves the level)
+            many = len(flat) != 1
+            lines.append(f"note: output{'s' * many} {', '.join(flat)} barely "
+                         f"move{'' if many else 's'} on this record: the NRMSE fits there are "
+                         "not a meaningful "
+                         "measure (each result's .notes says why)")
         return "\n".join(lines)
 
     def plot(self, experiment: int = 0, fig: Any = None) -> Any:

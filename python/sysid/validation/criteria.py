@@ -54,8 +54,8 @@ from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError, NumericalError, SysidError
 from ..models.checks import _optional, check_model
 from ..models.statespace import StateSpaceModel, ss_parameter_count
-from .compare import _has_state, _records, _run, _simulator, _x0_for
 from .compare import compare_quiet as compare
+from .runner import _has_state, _records, _run, _simulator, _x0_for
 
 __all__ = ["n_parameters", "Criteria", "criteria", "OrderSelection", "select_order"]
 

@@ -8,7 +8,8 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_int
-from .compare import X0, _model_first, compare_quiet
+from .compare import compare_quiet
+from .runner import X0, _model_first
 
 __all__ = ["ErrorSpectrum", "error_spectrum"]
 
@@ -76,7 +77,7 @@ def error_spectrum(model: Any, data: Any, *, x0: X0 = "estimate",
     model, data = _model_first(model, data)  # MATLAB's order accepted too
     cmp = compare_quiet(model, data, None, x0=x0)
     # the samples the model predicts: a NARX model's copied start is no error of its own
-    # (:func:`~sysid.validation.compare.given_start`, as compare's fit leaves it out)
+    # (:func:`~sysid.validation.runner.given_start`, as compare's fit leaves it out)
     s = int(getattr(cmp, "start", 0) or 0)
     pairs = [(y[s:], yh[s:]) for y, yh in zip(cmp.y, cmp.yhat)]
     shortest = min(y.shape[0] for y, _ in pairs)

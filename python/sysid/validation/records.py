@@ -7,7 +7,7 @@ from typing import Any
 
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError, several_records_hint
-from .compare import require_outputs_vary
+from .fit import require_outputs_vary
 
 __all__ = ["validation_record"]
 

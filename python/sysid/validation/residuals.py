@@ -15,7 +15,7 @@ import numpy as np
 from .._checks import as_between, as_int, check_magnitudes, user_stacklevel
 from .._display import HTMLResult
 from ..errors import DataError, SysidWarning
-from .compare import X0, _records, _run, _simulator, _x0_for, given_start, require_scored
+from .runner import X0, _records, _run, _simulator, _x0_for, given_start, require_scored
 
 __all__ = ["ResidualAnalysis", "default_max_lag", "residuals"]
 
@@ -279,7 +279,7 @@ def residuals(model: Any, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
     correlating; lags run within experiments, never across their joins. A NARX model's first
     ``max_lag`` samples of each experiment are its initial condition, copies of the measured
     outputs (errors of zero): they are left out, errors and inputs alike
-    (:func:`~sysid.validation.compare.given_start`).
+    (:func:`~sysid.validation.runner.given_start`).
 
     Parameters
     ----------
