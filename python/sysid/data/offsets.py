@@ -94,24 +94,20 @@ def offset_effect(data: Any) -> float:
 
 
 def _arx_sim_fit(exps: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
-    """Per output, the NRMSE fit (%) of an ARX(2, 2, 1) model fitted by least squares on
-    ``exps`` and simulated on them from their first two measured outputs (-inf if it
-    diverges or the fit fails)."""
-    ny = exps[0][1].shape[1]
-    rows, targets = [], []
-    for u, y in exps:
-        rows.append(np.hstack([y[1:-1], y[:-2], u[1:-1], u[:-2]]))
-        targets.append(y[2:])
-    X, Y = np.vstack(rows), np.vstack(targets)
-    scale = np.max(np.abs(X), axis=0)
-    scale = np.where(scale > 0, scale, 1.0)
+    """Per output, the NRMSE fit (%) of an ARX(2, 2, 1) model fitted by the core's least
+    squares (``_sysid.arx_fit``, as :func:`sysid.arx`) on ``exps`` and simulated on them from
+    their first two measured outputs (-inf if it diverges or the fit fails)."""
+    ny, nu = exps[0][1].shape[1], exps[0][0].shape[1]
     try:
-        theta = np.linalg.lstsq(X / scale, Y, rcond=None)[0] / scale[:, None]
-    except (np.linalg.LinAlgError, ValueError):
+        fits = _sysid.arx_fit([(np.ascontiguousarray(u), np.ascontiguousarray(y))
+                               for u, y in exps], [[2] * ny] * ny, [[2] * nu] * ny,
+                              [[1] * nu] * ny, 0.0, None)
+    except Exception:  # noqa: BLE001 - a fit that fails fits nothing
         return np.full(ny, -np.inf)
-    nu = exps[0][0].shape[1]
-    a1, a2 = theta[:ny].T, theta[ny:2 * ny].T
-    b1, b2 = theta[2 * ny:2 * ny + nu].T, theta[2 * ny + nu:].T
+    # A(q) y = B(q) u: y_t = -a1 y_{t-1} - a2 y_{t-2} + b1 u_{t-1} + b2 u_{t-2}
+    a = np.array([np.asarray(f["a"], float) for f in fits])  # (ny, ny, 2)
+    bb = np.array([np.asarray(f["b"], float) for f in fits])  # (ny, nu, 2)
+    a1, a2, b1, b2 = -a[:, :, 0], -a[:, :, 1], bb[:, :, 0], bb[:, :, 1]
     # the state (y_t, y_{t-1}, u_{t-1}), simulated in Rust from the measured first samples
     n = 2 * ny + nu
     A = np.zeros((n, n))
