@@ -20,18 +20,9 @@ def main() -> None:
     from sysid.validation.fit import flat_outputs
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    for opt in ("--unshipped", "--more-records", "--fresh-records", "--fresh2-records"):
-        ap.add_argument(opt, default=None, metavar="DIR")
+    rd.add_record_options(ap)
     args = ap.parse_args()
-    loads = dict(rd.RECORDS)
-    if args.unshipped:
-        loads.update({n: (lambda n=n: rd._unshipped(Path(args.unshipped), n))
-                      for n in rd.UNSHIPPED})
-    for folder, names in ((args.more_records, rd.MORE), (args.fresh_records, rd.FRESH),
-                          (args.fresh2_records, rd.FRESH2)):
-        if folder:
-            loads.update({n: (lambda n=n, f=folder, t=names: rd._more(Path(f), n, t))
-                          for n in names})
+    loads = rd.record_loaders(args)
     for split in ("default", "reversed"):
         rd.SPLIT = split
         hits = []

@@ -107,23 +107,12 @@ def table(rows: list[dict]) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--split", choices=rd.SPLITS, default="default")
-    ap.add_argument("--unshipped", default=None, metavar="DIR")
-    ap.add_argument("--more-records", default=None, metavar="DIR")
-    ap.add_argument("--fresh-records", default=None, metavar="DIR")
-    ap.add_argument("--fresh2-records", default=None, metavar="DIR")
+    rd.add_record_options(ap)
     ap.add_argument("--records", nargs="*", default=None, help="only these records")
     ap.add_argument("--json", default=None, help="also write the rows to this file")
     args = ap.parse_args()
     rd.SPLIT = args.split
-    loads = dict(rd.RECORDS)
-    if args.unshipped:
-        loads.update({n: (lambda n=n: rd._unshipped(Path(args.unshipped), n))
-                      for n in rd.UNSHIPPED})
-    for folder, names in ((args.more_records, rd.MORE), (args.fresh_records, rd.FRESH),
-                          (args.fresh2_records, rd.FRESH2)):
-        if folder:
-            loads.update({n: (lambda n=n, f=folder, t=names: rd._more(Path(f), n, t))
-                          for n in names})
+    loads = rd.record_loaders(args)
     rows = []
     for name, load in loads.items():
         if args.records and name not in args.records:

@@ -669,6 +669,32 @@ def _use(args, names, load) -> None:
         args.records = list(names)
 
 
+def add_record_options(ap) -> None:
+    """``--unshipped DIR`` and the sweeps' ``--<sweep>-records DIR`` (also for the scripts that
+    scan the same records: offset_check.py, flat_scan.py)."""
+    ap.add_argument("--unshipped", default=None, metavar="DIR",
+                    help="run the DaISy records the project does not ship (UNSHIPPED), read "
+                         "from DIR (the collection's .dat files), instead of the shipped ones")
+    for sweep, (table, _) in SWEEPS.items():
+        ap.add_argument(f"--{sweep}-records", default=None, metavar="DIR",
+                        help=f"run the records of {table} (docstring), read from DIR/<name>.npz, "
+                             "instead of the shipped ones")
+
+
+def record_loaders(args) -> dict:
+    """The shipped records' loaders and those of the folders ``args`` names
+    (:func:`add_record_options`), by record name."""
+    loads = dict(RECORDS)
+    if args.unshipped:
+        loads.update({n: (lambda n=n: _unshipped(Path(args.unshipped), n)) for n in UNSHIPPED})
+    for sweep, (table, _) in SWEEPS.items():
+        folder, names = getattr(args, f"{sweep}_records"), globals()[table]
+        if folder:
+            loads.update({n: (lambda n=n, f=folder, t=names: _more(Path(f), n, t))
+                          for n in names})
+    return loads
+
+
 def main() -> None:
     if len(sys.argv) > 1 and sys.argv[1] == "--worker":
         worker(sys.argv[2], sys.argv[3])
@@ -688,18 +714,12 @@ def main() -> None:
                          "are taken instead of re-running them (marked in the table)")
     ap.add_argument("--table-from", default=None,
                     help="rewrite the table from a results .json (no fitting)")
-    ap.add_argument("--unshipped", default=None, metavar="DIR",
-                    help="run the DaISy records the project does not ship (UNSHIPPED), read "
-                         "from DIR (the collection's .dat files), instead of the shipped ones")
     ap.add_argument("--nonlinear-records", default=None, metavar="DIR",
                     help="run the nonlinear benchmark records the project does not ship "
                          "(Silverbox, WH2009, cascaded tanks, EMPS; read from DIR as "
                          "benches/nonlinear_unshipped.py reads them, training cut to 20 000 "
                          "samples; their test records validate under every --split)")
-    for sweep, (table, _) in SWEEPS.items():
-        ap.add_argument(f"--{sweep}-records", default=None, metavar="DIR",
-                        help=f"run the records of {table} (docstring), read from DIR/<name>.npz, "
-                             "instead of the shipped ones")
+    add_record_options(ap)
     args = ap.parse_args()
     global SPLIT
     SPLIT = args.split
