@@ -97,7 +97,7 @@ from .choice import _choose
 from .notes import persistent_mode_check, refit_cap_check, trend_check, weak_check
 from .result import IdentifiedModel, IdentifyResult, _family, reported_fit
 from .states import stabilised_candidates, states_candidates
-from .steptest import identify_step_test, input_changes
+from .steptest import STAIRCASE_BLOCKS, blocks_with_steps, identify_step_test, input_changes
 from .uncertainty import with_uncertainty
 
 __all__ = ["identify"]
@@ -514,8 +514,10 @@ def identify(
     """Identify a linear model from a record with no settings: offsets, checks, candidate
     families and orders, chosen on data held out from the estimation record.
 
-    A step test (every input changes at most four times: switched from rest and held) has
-    no part that can be held out and the subspace methods refuse it: it gets the process
+    A step test (every input changes at most four times: switched from rest and held, the
+    changes in fewer than three held-out blocks, or parts that cannot be fitted without a
+    block) has no
+    part that can be held out and the subspace methods refuse it: it gets the process
     models of :func:`sysid.procest` (one to three poles, a zero, an underdamped pair, each
     with a dead time) fitted from rest around the levels before the first step, the one of
     smallest BIC chosen (:mod:`sysid.identify.steptest`; ``result.score == "BIC"``,
@@ -598,13 +600,15 @@ def identify(
         time_budget = as_real(time_budget, "time_budget (seconds, or None for no limit)",
                               positive=True)
     steps = input_changes(data)  # a step test: nothing to hold out (its own path below)
-    if steps is None:
+    # a staircase with steps in several held-out blocks is held out as any record is
+    staircase = steps is not None and blocks_with_steps(data) >= STAIRCASE_BLOCKS
+    if steps is None or staircase:
         require_held_out_length(data)  # before the channel checks: 1 sample is "constant"
     require_inputs_vary(data.experiments, "identify", data.input_names)
     # before the means are removed (a constant output is then 0)
     require_inputs_vary(data.experiments, "identify", data.output_names, side=1)
     validation = validation_record(validation, data)  # before the search, not after it
-    if steps is not None:  # process models fitted from rest, chosen by BIC
+    if steps is not None and not staircase:  # process models fitted from rest, by BIC
         return identify_step_test(data, validation, steps, t0, max_order)
     centred, mu, my = _offsets(data)
     checks, feedback = _checks(centred)
@@ -644,7 +648,13 @@ def identify(
                 f"{blocks:.1f}), so the choice rests on that block alone; data that move the "
                 f"plant otherwise (other amplitudes or frequencies) may rank the candidates "
                 f"differently: a longer, evenly excited record makes it firmer")
-        _subspace_candidates(board, centred, methods, max_order)
+        try:
+            _subspace_candidates(board, centred, methods, max_order)
+        except ExcitationError:
+            if not staircase:
+                raise
+            # the parts without a block are not excited enough: the step test's own path
+            return identify_step_test(data, validation, steps, t0, max_order)
         if board.unexcited:
             checks["held_out_excitation"] = (
                 f"{board.unexcited} held-out block(s) left out of the choice: the rest of the "
