@@ -73,6 +73,9 @@ sources, SHA-256 and how each ``.npz`` is made: results/realdata_fresh.md.
 sweep's four records (a test building's heating, a level pilot plant, a hydro generator's
 excitation step test, an aircraft's lateral flight test); sources, SHA-256, how each ``.npz``
 is made and the findings: results/realdata_fresh3.md.
+``--fresh4-records DIR`` (``FRESH4``, results/realdata_fresh4_table[_<split>].md): the fourth
+sweep's three records (a car's acceleration, a servo-hydraulic actuator, a quadrotor on a test
+bed); sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh4.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -230,11 +233,22 @@ FRESH3 = {
     # rate, yaw rate, lateral acceleration
 }
 
+#: the fourth sweep's records (``--fresh4-records DIR``), read as ``FRESH``'s are (sources:
+#: results/realdata_fresh4.md)
+FRESH4 = {
+    "car_accel": ("car_accel", None),  # car, 20 Hz: acceleration command -> acceleration, speed
+    "hydraulic_mts": ("hydraulic_mts", None),  # servo-hydraulic actuator, 1 kHz chirp:
+    # commanded -> measured displacement
+    "antx_pos": ("antx_pos", None),  # quadrotor on a 2-DoF bed, 4 ms: position set-point ->
+    # position, pitch
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
 SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"),
-          "fresh2": ("FRESH2", "realdata_fresh2"), "fresh3": ("FRESH3", "realdata_fresh3_table")}
+          "fresh2": ("FRESH2", "realdata_fresh2"), "fresh3": ("FRESH3", "realdata_fresh3_table"),
+          "fresh4": ("FRESH4", "realdata_fresh4_table")}
 
 
 def _more(folder: Path, name: str, table: dict | None = None):

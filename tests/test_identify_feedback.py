@@ -91,3 +91,27 @@ def test_open_loop_fits_kept_under_feedback_say_why(monkeypatch):
         res = sysid.identify(_closed_loop(600, 7), progress=False)
     assert ("stay candidates: without them the best held-out fit falls from 72.3 % to "
             "64.7 %") in res.checks["feedback"]
+
+
+def test_open_loop_fits_kept_when_the_others_are_unstable_do_not_say_none_scored(monkeypatch):
+    """On a car's acceleration log under feedback every closed-loop fit (pbsid, ssarx) scored,
+    some above the kept n4sid fit, but each was unstable on a held-out block; the summary said
+    "stay candidates: no other candidate scored", which was false. It now says that without
+    them no stable candidate is left."""
+    b = Board.__new__(Board)
+    b.rows = [{"family": f, "criterion": "subspace", "held_out_fit": fit, "stable": st,
+               "note": ""} for f, fit, st in (("n4sid", 53.7, True), ("pbsid", 57.4, False))]
+    assert b.starts_only(OPEN_LOOP, "biased") == 0 and b.kept_biased == (53.7, None)
+
+    def kept(self, families, note):
+        self.kept_biased = (53.7, None)
+        return 0
+    monkeypatch.setattr(Board, "starts_only", kept)
+    monkeypatch.setattr(sysid, "check_feedback",
+                        lambda data, **kw: types.SimpleNamespace(detected=True, p_value=1e-9))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = sysid.identify(_closed_loop(600, 7), progress=False)
+    check = res.checks["feedback"]
+    assert "no other candidate scored" not in check
+    assert "stay candidates: without them no stable candidate is left" in check

@@ -370,7 +370,7 @@ class Board:
         below the best one (by more than :func:`tie`: the
         blocks then prefer the biased fit to every other) or none is left; returns how many.
         When they are kept, ``kept_biased`` holds the best held-out fit with and without them
-        (None: no other candidate).
+        (None: no stable candidate is left without them).
         Under feedback the open-loop subspace fits are biased (the future inputs the data
         matrix projects on are correlated with the past noise): on a buck converter in
         closed loop the choice was ``n4sid`` order 3, validated at 46.6 %, where the

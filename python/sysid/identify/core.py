@@ -680,7 +680,9 @@ def identify(
         checks["feedback"] += (
             "; the open-loop subspace fits (n4sid, moesp, cva), biased by it, stay candidates: "
             + (f"without them the best held-out fit falls from {b:.1f} % to {a:.1f} %, "
-               f"clearly below" if a is not None else "no other candidate scored"))
+               f"clearly below" if a is not None
+               else "without them no stable candidate is left (the others are unstable on some "
+                    "held-out block, below their start or not scored)"))
     broken = board.broken()
     if broken:
         r = broken[0]
