@@ -8,6 +8,7 @@ import pytest
 
 import sysid
 from sysid import cli
+from sysid.cli import load as cli_load  # the file reader: its STREAM_BYTES
 from sysid.data import blocks
 from sysid.errors import DataError
 
@@ -49,7 +50,7 @@ def test_identify_streams_a_large_file_with_the_chosen_compressor(tmp_path, caps
     z = _record()
     path = tmp_path / "big.csv"
     np.savetxt(path, z, delimiter=",", header="t,u1,u2,y", comments="", fmt="%.17g")
-    monkeypatch.setattr(cli, "STREAM_BYTES", 0)  # treat the file as large
+    monkeypatch.setattr(cli_load, "STREAM_BYTES", 0)  # treat the file as large
     code = cli.main(["identify", str(path), "--inputs", "u1,u2", "--outputs", "y", "--time",
                      "t", "--order", "1", "--report", str(tmp_path / "rep"),
                      "--compressor", compressor])
@@ -84,7 +85,7 @@ def test_a_streamed_bad_cell_is_named_by_line_and_column_as_in_memory(tmp_path, 
     assert cli.main(argv) == 2  # in memory (a small file)
     in_memory = capsys.readouterr().err
     assert f"big.csv line {line}, column 'u2'" in in_memory
-    monkeypatch.setattr(cli, "STREAM_BYTES", 0)  # streamed
+    monkeypatch.setattr(cli_load, "STREAM_BYTES", 0)  # streamed
     monkeypatch.setattr(blocks, "STREAM_BLOCK", 4096)  # in about 40 blocks: the cell in a late one
     assert cli.main(argv) == 2
     assert capsys.readouterr().err == in_memory
@@ -119,7 +120,7 @@ def test_a_large_white_space_separated_file_is_read_as_a_small_one(tmp_path, mon
     z = _record()
     path = tmp_path / "big.txt"
     np.savetxt(path, z, delimiter=" ", header="t u1 u2 y", comments="", fmt="%.17g")
-    monkeypatch.setattr(cli, "STREAM_BYTES", 0)  # large: pyarrow cannot split on runs of spaces
+    monkeypatch.setattr(cli_load, "STREAM_BYTES", 0)  # large: pyarrow splits no runs of spaces
     code = cli.main(["identify", str(path), "--inputs", "u1,u2", "--outputs", "y", "--order",
                      "1", "--report", str(tmp_path / "rep"), "--quiet"])
     assert code == 0, capsys.readouterr().err
@@ -149,8 +150,8 @@ def test_a_compressed_file_is_read_decompressed_whatever_its_size(tmp_path, monk
     memory = capsys.readouterr()
     assert "in blocks" not in memory.err
     # the size that counts is the text's: a file of less than STREAM_BYTES that holds more
-    monkeypatch.setattr(cli, "STREAM_BYTES", path.stat().st_size + 1)
-    assert path.stat().st_size < cli.STREAM_BYTES < plain.stat().st_size
+    monkeypatch.setattr(cli_load, "STREAM_BYTES", path.stat().st_size + 1)
+    assert path.stat().st_size < cli_load.STREAM_BYTES < plain.stat().st_size
     assert cli.main(argv) == 0
     streamed = capsys.readouterr()
     assert "in blocks" in streamed.err
@@ -166,7 +167,7 @@ def test_a_zip_archive_is_refused_the_same_way_whatever_its_size(tmp_path, monke
     with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as f:
         f.writestr("d.csv", "u,y\n" + "1,2\n" * 5000)
     if stream:
-        monkeypatch.setattr(cli, "STREAM_BYTES", 0)
+        monkeypatch.setattr(cli_load, "STREAM_BYTES", 0)
     assert cli.main(_identify(path, ["--inputs", "u", "--outputs", "y"], tmp_path)) == 2
     err = capsys.readouterr().err
     assert "big.zip' is not a text table (binary content); a zip archive is not read: " \
@@ -181,7 +182,7 @@ def test_a_headerless_file_has_the_same_columns_whatever_its_size(tmp_path, monk
     argv = _identify(path, ["--inputs", "1,2", "--outputs", "3", "--time", "0"], tmp_path)
     assert cli.main(argv) == 0
     memory = capsys.readouterr()
-    monkeypatch.setattr(cli, "STREAM_BYTES", 0)
+    monkeypatch.setattr(cli_load, "STREAM_BYTES", 0)
     assert cli.main(argv) == 0
     streamed = capsys.readouterr()
     assert "in blocks" in streamed.err and streamed.out == memory.out
@@ -201,7 +202,7 @@ def test_a_headerless_file_names_a_bad_cell_as_in_memory(tmp_path, monkeypatch, 
     assert cli.main(argv) == 2
     in_memory = capsys.readouterr().err
     assert f"big.csv line {line - 1}, column '2'" in in_memory
-    monkeypatch.setattr(cli, "STREAM_BYTES", 0)
+    monkeypatch.setattr(cli_load, "STREAM_BYTES", 0)
     monkeypatch.setattr(blocks, "STREAM_BLOCK", 4096)
     assert cli.main(argv) == 2
     assert capsys.readouterr().err == in_memory
@@ -291,7 +292,7 @@ def test_a_streamed_loggers_file_reads_as_in_memory(tmp_path, monkeypatch, capsy
     argv = _identify(path, ["--inputs", "u1,u2", "--outputs", "y", "--quiet"], tmp_path)
     assert cli.main(argv) == 0
     small = sysid.load_model(tmp_path / "rep" / "model.json")
-    monkeypatch.setattr(cli, "STREAM_BYTES", 0)
+    monkeypatch.setattr(cli_load, "STREAM_BYTES", 0)
     monkeypatch.setattr(blocks, "STREAM_BLOCK", 4096)
     got = blocks.read_columns(path, ["u1", "time"], progress=False, stamps="time")
     np.testing.assert_allclose(got[:, 1], 0.1 * np.arange(3000), atol=1e-9)
@@ -318,7 +319,7 @@ def test_a_european_logger_file_with_decimal_commas(tmp_path, monkeypatch, capsy
     is a time column and dt is the 0.08 the column was written with; in memory and streamed
     alike."""
     if streamed:
-        monkeypatch.setattr(cli, "STREAM_BYTES", 0)
+        monkeypatch.setattr(cli_load, "STREAM_BYTES", 0)
     d = np.loadtxt(sysid.datasets.path("dryer"))
     path = tmp_path / "messung.csv"
     path.write_text("Zeit;Eingang;Ausgang\n" + "".join(

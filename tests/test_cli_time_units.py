@@ -11,6 +11,8 @@ import pytest
 
 import sysid
 from sysid import cli
+from sysid.cli import identify_command, parser
+from sysid.cli import load as cli_load  # the file reader: its STREAM_BYTES
 from sysid.errors import DataError
 
 PLANT = sysid.StateSpaceModel([[0.8, 0.3], [-0.3, 0.8]], [[1.0], [0.0]], [[1.0, 0.5]])
@@ -54,13 +56,13 @@ def test_the_time_column_is_read_in_its_unit(tmp_path, head, scale, units_row):
 
 
 def test_a_streamed_file_reads_its_time_column_in_its_unit(tmp_path, monkeypatch):
-    monkeypatch.setattr(cli, "STREAM_BYTES", 0)  # read in blocks
+    monkeypatch.setattr(cli_load, "STREAM_BYTES", 0)  # read in blocks
     path = tmp_path / "d.csv"
     _write(path, ["Time [ms]", "u", "y"], 1e-3)
     assert _run(path, tmp_path / "out") == 0
     assert sysid.load_model(tmp_path / "out" / "model.json").dt == pytest.approx(0.01)
     with pytest.raises(DataError, match="disagrees with its time column 'Time \\[ms\\]'"):
-        cli._identify(cli._parser().parse_args(
+        identify_command._identify(parser._parser().parse_args(
             ["identify", str(path), "--inputs", "u", "--outputs", "y", "--order", "2",
              "--method", "moesp", "--quiet", "--report", str(tmp_path / "o2"), "--dt", "10"]))
 

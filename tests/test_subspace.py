@@ -305,6 +305,27 @@ def test_with_matrices_fits_what_an_estimator_built_with_them_fits():
         est.with_matrices("diagonal")
 
 
+def test_every_way_to_build_an_estimator_sets_the_same_state():
+    # the constructor, from_factor and with_matrices set their attributes through one
+    # initialiser: an attribute added to one and forgotten in another broke the copy's fits
+    rng = np.random.default_rng(8)
+    u = rng.standard_normal((400, 1))
+    y = simulate(*random_system(2, 1, 1, rng), u)
+    est = sysid.SubspaceEstimator(sysid.IOData(u=u, y=y), horizon=5)
+    est.fit(2)  # fills the shared caches
+    twins = [est.with_matrices("states"),
+             sysid.SubspaceEstimator.from_factor(est.factor, matrices="auto"),
+             sysid.SubspaceEstimator.from_factor(est.factor).with_matrices("states")]
+    for other in twins:
+        assert set(vars(other)) == set(vars(est))
+        assert (other.past, other.future) == (est.past, est.future)
+    copy = twins[0]
+    assert copy._svd is est._svd and copy.scaled_factor is est.scaled_factor
+    assert twins[1]._svd is not est._svd  # a new estimator starts its own caches
+    assert np.allclose(twins[1].fit(2).markov(20), sysid.SubspaceEstimator(
+        sysid.IOData(u=u, y=y), horizon=5, matrices="auto").fit(2).markov(20))
+
+
 def test_the_state_sequence_keeps_a_slow_pole_inside_the_unit_circle():
     # a slow pole (0.99) under white output noise, fitted with more states than the system
     # has: the shift invariance of the observability matrix puts a pole outside the unit

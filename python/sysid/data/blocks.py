@@ -2,7 +2,7 @@
 CSV through pyarrow's streaming reader, Parquet by record batches, with a progress bar and
 the in-memory reader's rules (``sysid.data.table``): its names, comments, bad cells named by
 line and column, a logger's units row and date-time stamps in the time column. The command
-line reads files over ``sysid.cli.STREAM_BYTES`` through it."""
+line reads files over ``sysid.cli.load.STREAM_BYTES`` through it."""
 
 from __future__ import annotations
 

@@ -4,8 +4,10 @@ They are methods of :class:`~sysid.IOData` (``from_pandas``/``to_pandas``,
 ``from_csv``/``to_csv``, ``from_npz``/``to_npz``, ``from_mat``/``to_mat``): plain functions
 of the record (or of its class, for readers), bound as methods in :mod:`sysid.data.iodata`;
 this module never imports that one. Every writer keeps names, units, sample time, experiments
-and start times,
-and the matching reader gives the record back unchanged.
+and start times, and the matching reader gives the record back unchanged. ``.npz`` and
+``.mat`` files also keep what resampling did (``IOData.resampling``); a CSV file holds no
+record-level notes (its header names the columns and their units), and a record read back
+from one was not resampled.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ import numpy as np
 from .._atomic import atomic_path
 from .._checks import user_stacklevel
 from ..errors import DataError, SysidWarning
-from .raw import resample_stamps
+from .raw import Resampling, resample_stamps
 from .table import datetime_seconds, numeric, read_table, units_row
 from .units import check_dt_against_time, split_header, time_column, time_unit_seconds
 
@@ -278,6 +280,9 @@ def to_csv(data: Any, path: str | Path) -> None:
     """Write a CSV file: header ``time,experiment,<inputs>,<outputs>``, one row a sample.
 
     Units are written into the header as ``name [unit]``; :meth:`from_csv` reads them back.
+The record's ``resampling`` (what ``resample=`` did) has no place in the file: the samples
+are written, on their uniform grid, and the record read back has ``resampling = None``
+(:meth:`to_npz` and :meth:`to_mat` keep it).
     A name ending in ``.gz`` writes a gzip-compressed file. The file is written whole or not
     at all (see ``sysid._atomic``).
     """
@@ -501,7 +506,26 @@ def _arrays(data: Any) -> dict[str, Any]:
     for k, e in enumerate(data._exps):
         out[f"u_{k}"] = e.u
         out[f"y_{k}"] = e.y
+    r = data.resampling
+    if r is not None:  # what resample= / from_irregular did: absent on a record as sampled
+        out["resampling"] = np.array([r.dt, r.n_stamps, r.n_samples, r.largest_gap,
+                                      r.gap_after], dtype=float)
+        out["resampling_method"] = np.array([r.method], dtype=str)
     return out
+
+
+def _resampling(get: Any, strs: Any) -> Resampling | None:
+    """The :class:`~sysid.data.raw.Resampling` :func:`_arrays` wrote, ``None`` when the
+    record was not resampled (or the file predates it)."""
+    try:
+        v = np.asarray(get("resampling"), dtype=float).ravel()
+        method = strs("resampling_method")
+    except KeyError:
+        return None
+    if v.size != 5 or len(method) != 1:
+        raise DataError(f"the record's resampling is malformed: {v.size} numbers and "
+                        f"{len(method)} method(s) (want 5 and 1); write it again with IOData")
+    return Resampling(float(v[0]), method[0], int(v[1]), int(v[2]), float(v[3]), float(v[4]))
 
 
 def _from_arrays(cls: Any, get: Any, what: str) -> Any:
@@ -527,7 +551,7 @@ def _from_arrays(cls: Any, get: Any, what: str) -> Any:
     us = [u.reshape(len(y), len(in_names)) for u, y in zip(us, ys)]
     out_names = strs("output_names")
     ys = [y.reshape(-1, len(out_names)) for y in ys]
-    return cls(
+    rec = cls(
         us if in_names else None,
         ys,
         dt,
@@ -537,10 +561,13 @@ def _from_arrays(cls: Any, get: Any, what: str) -> Any:
         input_units=strs("input_units")[: len(in_names)] if in_names else [],
         output_units=strs("output_units")[: len(out_names)],
     )
+    rec.resampling = _resampling(get, strs)
+    return rec
 
 
 def to_npz(data: Any, path: str | Path) -> None:
-    """Save to a NumPy ``.npz`` archive (all experiments, names, units, dt, start times);
+    """Save to a NumPy ``.npz`` archive (all experiments, names, units, dt, start times and
+    the record's ``resampling``, when it was resampled);
     ``.npz`` is appended to a name without it, as :func:`numpy.savez` does. The file is
     written whole or not at all (see ``sysid._atomic``)."""
     path = Path(path)
@@ -585,8 +612,9 @@ def from_npz(cls: Any, path: str | Path) -> Any:
 
 
 def to_mat(data: Any, path: str | Path) -> None:
-    """Save to a MATLAB ``.mat`` file (``scipy.io.savemat``); one experiment also gets the
-    plain variables ``u``, ``y``, ``dt`` that MATLAB users expect. The file is written whole
+    """Save to a MATLAB ``.mat`` file (``scipy.io.savemat``): what :meth:`to_npz` saves
+    (with the record's ``resampling``); one experiment also gets the plain variables ``u``,
+    ``y``, ``dt`` that MATLAB users expect. The file is written whole
     or not at all (see ``sysid._atomic``)."""
     from scipy.io import savemat
 

@@ -378,6 +378,22 @@ class IOData:
         )
 
     def __eq__(self, other: object) -> bool:
+        """Same samples: sample time, channel names, experiments' lengths and values.
+
+        Units, start times, a removed trend's bookkeeping and :attr:`resampling` are not
+        compared: ``resampling`` says how the samples were obtained (interpolated from
+        irregular stamps), not what they are, and a record with the same samples is equal
+        whether it was resampled or not (a resampled record written with :meth:`to_csv`,
+        which has no place for the note, reads back equal).
+
+        Examples
+        --------
+        >>> import numpy as np, sysid
+        >>> t = np.array([0.0, 0.1, 0.2, 0.35, 0.4, 0.5])
+        >>> r = sysid.IOData.from_irregular(t, None, 2 * t, dt=0.1)
+        >>> r == sysid.IOData(y=r.y, dt=0.1), r.resampling is None
+        (True, False)
+        """
         if not isinstance(other, IOData):
             return NotImplemented
         return (

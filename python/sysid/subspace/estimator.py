@@ -255,52 +255,43 @@ class SubspaceEstimator:
         matrices: str | None = None,
     ) -> None:
         data = require_record(data, "SubspaceEstimator")
-        self._from_factor = False
-        self.matrices = "shift" if matrices is None else as_option(matrices, "matrices")
-        self.method = _method(method)
-        self._horizon_note = ""
-        #: how the default horizons were chosen for a time series (None otherwise)
-        self.horizon_selection: dict[str, Any] | None = None
+        matrices = "shift" if matrices is None else as_option(matrices, "matrices")
+        method = _method(method)  # both checked before any pass over the data
+        note, selection = "", None
         if horizon is None and past is None and future is None:
             # the horizon from the data available (a time series: from its AIC
             # autoregression, :mod:`sysid.subspace.series_horizon`); experiments too short
             # for its window are left out (and said), not allowed to set it
             if data.n_inputs == 0:
-                self.horizon_selection = series_horizons(data)
-                horizon = self.horizon_selection["past"]
+                selection = series_horizons(data)
+                horizon = selection["past"]
             else:
                 horizon = available_horizon(data.lengths, data.n_inputs, data.n_outputs)
             short = [f"{k} ({n} samples)" for k, n in enumerate(data.lengths)
                      if n < 2 * horizon]
             if short and len(short) < data.n_experiments:
-                self._horizon_note = (
+                note = (
                     f" (experiment(s) {', '.join(short)} shorter than the window of the "
                     f"default horizon {horizon} were left out; pass horizon=... to keep them)")
-                warnings.warn(f"SubspaceEstimator:{self._horizon_note[1:-1]}", SysidWarning,
+                warnings.warn(f"SubspaceEstimator:{note[1:-1]}", SysidWarning,
                               stacklevel=user_stacklevel())
                 data = long_enough(data, 2 * horizon) or data
         elif horizon is None:
             horizon = default_horizon(min(data.lengths), data.n_inputs, data.n_outputs)
-        self.data = data
         horizon = as_int(horizon, "horizon", 1)
-        self.past = as_int(past if past is not None else horizon, "past", 1)
-        self.future = as_int(future if future is not None else horizon, "future", 1)
+        past = as_int(past if past is not None else horizon, "past", 1)
+        future = as_int(future if future is not None else horizon, "future", 1)
         if chunk_rows is not None:
             chunk_rows = as_int(chunk_rows, "chunk_rows", 1)
         _check_signals(data)
         try:  # the window against the record, then the data-matrix size: both in the core
-            self.factor = _sysid.compress(
-                data.experiments, self.past, self.future, chunk_rows, compressor
-            )
+            factor = _sysid.compress(data.experiments, past, future, chunk_rows, compressor)
         except ExcitationError as e:
-            refuse_step_test(e, data.experiments, self.past)
-        self.compressor = compressor
-        warn_if_fallback(self.factor, requested=compressor)
-        self._set_scaling(scale)
-        self._svd: dict[Any, Any] = {}
-        self._pe_cache: dict[int | str, int] = {}
-        self._feedback_p: float | None = None
-        self._feedback_warned = False
+            refuse_step_test(e, data.experiments, past)
+        warn_if_fallback(factor, requested=compressor)
+        self._init_state(data, factor, method=method, matrices=matrices, compressor=compressor,
+                         scale=scale, from_factor=False, horizon_note=note,
+                         horizon_selection=selection)
         try:
             self._subspace(None)  # checks the record (length, excitation) right away
         except ExcitationError as e:
@@ -331,30 +322,21 @@ class SubspaceEstimator:
                 f"factor must be a HankelFactor (from sysid.compress_stream or "
                 f"SubspaceEstimator(...).factor), got {type(factor).__name__}"
             )
-        self = cls.__new__(cls)
-        self._horizon_note = ""
-        self.horizon_selection = None
         m, l = factor.n_inputs, factor.n_outputs
         # a placeholder record that carries only channel counts, names and dt
         rows = max(m, l, 1)  # time-first: at least as many samples as channels
-        self.data = IOData(
+        data = IOData(
             u=np.zeros((rows, m)),
             y=np.zeros((rows, l)),
             dt=dt,
             input_names=input_names,
             output_names=output_names,
         )
-        self._from_factor = True
-        self.matrices = "shift" if matrices is None else as_option(matrices, "matrices")
-        self.method = _method(method)
-        self.past, self.future = factor.past, factor.future
-        self.factor = factor
-        self.compressor = "given"
-        self._set_scaling(scale)
-        self._svd = {}
-        self._pe_cache = {}
-        self._feedback_p = None
-        self._feedback_warned = False
+        self = cls.__new__(cls)
+        self._init_state(data, factor, method=_method(method),
+                         matrices="shift" if matrices is None else as_option(matrices,
+                                                                             "matrices"),
+                         compressor="given", scale=scale, from_factor=True)
         return self
 
     def with_matrices(self, matrices: str) -> SubspaceEstimator:
@@ -372,16 +354,43 @@ class SubspaceEstimator:
         ('states', 'shift')
         """
         new = type(self).__new__(type(self))
-        new.matrices = as_option(matrices, "matrices")
-        new.data, new.factor, new.method, new.compressor = (
-            self.data, self.factor, self.method, self.compressor)
-        new.past, new.future, new._from_factor = self.past, self.future, self._from_factor
-        new._horizon_note, new.horizon_selection = self._horizon_note, self.horizon_selection
-        new.scale, new._su, new._sy = self.scale, self._su, self._sy
-        new.scaled_factor, new._svd, new._pe_cache = (  # the caches filled for both
-            self.scaled_factor, self._svd, self._pe_cache)
-        new._feedback_p, new._feedback_warned = self._feedback_p, self._feedback_warned
+        new._init_state(self.data, self.factor, method=self.method,
+                        matrices=as_option(matrices, "matrices"), compressor=self.compressor,
+                        scale=self.scale, from_factor=self._from_factor,
+                        horizon_note=self._horizon_note,
+                        horizon_selection=self.horizon_selection, shared=self)
         return new
+
+    def _init_state(self, data: IOData, factor: Any, *, method: str, matrices: str,
+                    compressor: str, scale: bool | None, from_factor: bool,
+                    horizon_note: str = "", horizon_selection: dict[str, Any] | None = None,
+                    shared: SubspaceEstimator | None = None) -> None:
+        """Every attribute of an estimator, set here alone (the constructor,
+        :meth:`from_factor` and :meth:`with_matrices` all come through it, so that new state
+        is added once). ``method``, ``matrices``: checked by the caller. ``shared``: an
+        estimator on the same factor whose channel scaling, weighted SVDs and caches this
+        one shares (none depends on ``matrices``: filled once for both); without it they
+        are computed (``scale``) or start empty."""
+        self.data, self.factor = data, factor
+        self.past, self.future = factor.past, factor.future
+        self.method, self.matrices, self.compressor = method, matrices, compressor
+        #: built from a factor alone: no record (fits with x0=True are not available)
+        self._from_factor = from_factor
+        #: said in an order error: experiments the default horizon left out
+        self._horizon_note = horizon_note
+        #: how the default horizons were chosen for a time series (None otherwise)
+        self.horizon_selection = horizon_selection
+        if shared is None:
+            self._set_scaling(scale)
+            self._svd: dict[Any, Any] = {}
+            self._pe_cache: dict[int | str, int] = {}
+            self._feedback_p: float | None = None
+            self._feedback_warned = False
+        else:
+            self.scale, self._su, self._sy = shared.scale, shared._su, shared._sy
+            self.scaled_factor = shared.scaled_factor
+            self._svd, self._pe_cache = shared._svd, shared._pe_cache  # filled for both
+            self._feedback_p, self._feedback_warned = shared._feedback_p, shared._feedback_warned
 
     def _set_scaling(self, scale: bool | None) -> None:
         """The channel scaling of the fits (:mod:`sysid.subspace.scaling`): the record's
