@@ -192,6 +192,9 @@ class Board:
         #: state-sequence candidates (:func:`.states.states_candidates`)
         self.subspace: tuple[list[Any], Any, int] | None = None
         self.feedback = False
+        #: the best held-out fit with and without the open-loop subspace fits, when they stay
+        #: candidates under feedback (:meth:`starts_only`)
+        self.kept_biased: tuple[float, float | None] | None = None
 
     def keep_folds(self, keep: list[int]) -> None:
         """Only the folds ``keep`` (indices, in order) stay: their blocks, output variations

@@ -516,12 +516,11 @@ def identify(
 
     A step test (every input changes at most four times: switched from rest and held, the
     changes in fewer than three held-out blocks, or parts that cannot be fitted without a
-    block) has no
-    part that can be held out and the subspace methods refuse it: it gets the process
-    models of :func:`sysid.procest` (one to three poles, a zero, an underdamped pair, each
-    with a dead time) fitted from rest around the levels before the first step, the one of
-    smallest BIC chosen (:mod:`sysid.identify.steptest`; ``result.score == "BIC"``,
-    ``max_order`` bounds the poles, the other settings do not apply).
+    block) has no part that can be held out and the subspace methods refuse it: it gets the
+    process models of :func:`sysid.procest` (one to three poles, a zero, an underdamped
+    pair, each with a dead time) fitted from rest around the levels before the first step,
+    the one of smallest BIC chosen (:mod:`sysid.identify.steptest`; ``result.score ==
+    "BIC"``, ``max_order`` bounds the poles, the other settings do not apply).
 
     Parameters
     ----------
@@ -673,7 +672,7 @@ def identify(
             SUBSPACE, "open-loop subspace fit under feedback (biased): a start, not chosen"):
         checks["feedback"] += ("; the open-loop subspace fits (n4sid, moesp, cva), biased "
                                "by it, are refined from but not chosen")
-    elif feedback and refine and getattr(board, "kept_biased", None):
+    elif feedback and refine and board.kept_biased is not None:
         # an aircraft's flight test: "detected" above an n4sid choice, with nothing to say
         # why the biased fits were not set aside (as the FeedbackWarning of n4sid advises)
         b, a = board.kept_biased
