@@ -129,3 +129,30 @@ def test_tfest_estimated_initial_state() -> None:
         std.append(float(np.ravel(s)[0]))
     assert m.info["covariance"].startswith("sandwich for coloured"), m.info["covariance"]
     _check(err, std, "tfest initial_state='estimate'")
+
+
+def _naive_free_response(A, C, N):
+    out, X = np.empty((N, C.shape[0], A.shape[0])), np.eye(A.shape[0])
+    with np.errstate(all="ignore"):
+        for t in range(N):
+            out[t], X = C @ X, A @ X
+    return out
+
+
+def test_the_free_response_is_the_recursion_s_and_stops_where_it_has_decayed():
+    from sysid.pem.sandwich import DECAYED, free_response
+
+    rng = np.random.default_rng(0)
+    Q = np.linalg.qr(rng.standard_normal((4, 4)))[0]
+    slow = Q @ np.diag([0.96, -0.9, 0.5, 0.1]) @ Q.T  # sinks into subnormals over 20 000
+    shear = np.array([[0.9, 50.0], [0.0, 0.9]])  # a transient 20 times its start first
+    C = rng.standard_normal((2, 4))
+    for A, c in ((slow, C), (shear, C[:, :2])):
+        ref, got = _naive_free_response(A, c, 20000), free_response(A, c, 20000)
+        scale = np.max(np.abs(ref))
+        assert np.max(np.abs(got - ref)) <= 1e-12 * scale
+        # past the decay the response is zero, not subnormal (a run on there was 40x slower)
+        last = int(np.max(np.flatnonzero(np.any(got != 0, axis=(1, 2)))))
+        assert last < 5000 and np.max(np.abs(ref[last + 1:])) < DECAYED * scale
+    # an unstable A overflows: not finite, as the callers check
+    assert not np.all(np.isfinite(free_response(np.array([[1.5]]), np.array([[1.0]]), 5000)))
