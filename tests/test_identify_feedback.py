@@ -66,6 +66,20 @@ def test_starts_only_keeps_the_families_when_the_rest_is_clearly_worse_or_absent
     assert b.best()["family"] == "pbsid" and b.rows[0]["note"] == "biased"
 
 
+def _identify_keeping_biased_fits(monkeypatch, kept_biased):
+    """identify on a closed-loop record whose board keeps the open-loop fits as candidates,
+    with ``kept_biased`` the best held-out fits with and without them."""
+    def kept(self, families, note):
+        self.kept_biased = kept_biased
+        return 0
+    monkeypatch.setattr(Board, "starts_only", kept)
+    monkeypatch.setattr(sysid, "check_feedback",
+                        lambda data, **kw: types.SimpleNamespace(detected=True, p_value=1e-9))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return sysid.identify(_closed_loop(600, 7), progress=False)
+
+
 def test_open_loop_fits_kept_under_feedback_say_why(monkeypatch):
     """Under detected feedback the open-loop subspace fits stay candidates when every other
     candidate scores clearly below them; the summary then said "feedback: detected" above an
@@ -79,16 +93,8 @@ def test_open_loop_fits_kept_under_feedback_say_why(monkeypatch):
     b.rows.append({"family": "ssarx", "criterion": "subspace", "held_out_fit": 60.0,
                    "stable": True, "note": ""})
     assert b.starts_only(OPEN_LOOP, "biased") == 0 and b.kept_biased == (80.0, 60.0)
-
-    def kept(self, families, note):  # the blocks prefer the biased fits clearly
-        self.kept_biased = (72.3, 64.7)
-        return 0
-    monkeypatch.setattr(Board, "starts_only", kept)
-    monkeypatch.setattr(sysid, "check_feedback",
-                        lambda data, **kw: types.SimpleNamespace(detected=True, p_value=1e-9))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = sysid.identify(_closed_loop(600, 7), progress=False)
+    # the blocks prefer the biased fits clearly
+    res = _identify_keeping_biased_fits(monkeypatch, (72.3, 64.7))
     assert ("stay candidates: without them the best held-out fit falls from 72.3 % to "
             "64.7 %") in res.checks["feedback"]
 
@@ -102,16 +108,7 @@ def test_open_loop_fits_kept_when_the_others_are_unstable_do_not_say_none_scored
     b.rows = [{"family": f, "criterion": "subspace", "held_out_fit": fit, "stable": st,
                "note": ""} for f, fit, st in (("n4sid", 53.7, True), ("pbsid", 57.4, False))]
     assert b.starts_only(OPEN_LOOP, "biased") == 0 and b.kept_biased == (53.7, None)
-
-    def kept(self, families, note):
-        self.kept_biased = (53.7, None)
-        return 0
-    monkeypatch.setattr(Board, "starts_only", kept)
-    monkeypatch.setattr(sysid, "check_feedback",
-                        lambda data, **kw: types.SimpleNamespace(detected=True, p_value=1e-9))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        res = sysid.identify(_closed_loop(600, 7), progress=False)
+    res = _identify_keeping_biased_fits(monkeypatch, (53.7, None))
     check = res.checks["feedback"]
     assert "no other candidate scored" not in check
     assert "stay candidates: without them no stable candidate is left" in check
