@@ -112,8 +112,10 @@ def identify_many(records: Any, *, fit: Callable[[Any], Any] | None = None,
                         f"got {record_id!r}")
     _refuse_table_options(records, inputs=inputs, outputs=outputs, dt=dt,
                           time_column=time_column, resample=resample)
-    if resample is not None and dt is not None:
-        raise DataError("give resample= (the new sample time, or 'median') or dt=, not both")
+    if resample is not None:
+        from ..data.formats import _resample_args
+
+        _resample_args(dt, True, "", "")  # a sample time of its own and dt=: refused
     cols = Columns(tuple(inputs) if inputs else None, tuple(outputs) if outputs else None,
                    dt, time_column, resample, resample_gap)
     work = tasks(records, record_id)

@@ -27,7 +27,6 @@ the step itself; removing that mean, as the warning said, moved the record's sta
 
 from __future__ import annotations
 
-import contextvars
 import warnings
 from typing import Any
 
@@ -48,9 +47,6 @@ SCREEN_RATIO = 1.5
 #: The share of simulation fit (fit % / 100) a quick ARX fit of the raw record may lose
 #: against the same fit of the mean-removed record before the offsets are flagged.
 EFFECT_LIMIT = 0.05
-
-#: set to skip the effect test (:func:`offsets` by the ratio alone)
-_MEASURING: contextvars.ContextVar[bool] = contextvars.ContextVar("offset_effect", default=False)
 
 
 def offset_effect(data: Any) -> float:
@@ -172,7 +168,7 @@ def _flagged(data: Any, stats: dict[int, Any] | None = None
                     continue
                 row = (kind, str(names[j]), float(mean[j]), float(std[j]))
                 (big if abs(mean[j]) > OFFSET_RATIO * std[j] else screened).append(row)
-    if big or not screened or _MEASURING.get():
+    if big or not screened:
         return big, None
     raw = data
     if getattr(data, "has_trend", False):  # the raw experiments alone
