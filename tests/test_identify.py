@@ -6,6 +6,7 @@ README (dryer 1:500 / 501:1000, robot arm 1:800 / 801:1024, winding first 2/3 / 
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
@@ -271,6 +272,31 @@ def test_identify_returns_an_unstable_model_only_when_the_data_insist():
     assert stable.model.is_stable()
     with pytest.raises(sysid.errors.DataError, match="enforce_stability"):
         sysid.identify(data, enforce_stability="yes")
+
+
+def test_the_unstable_model_warning_names_its_modes_and_the_margin():
+    # the warning said only "an integrating or unstable plant", also for a growing
+    # oscillation far from any integrator (a car's log: a pole pair of modulus 1.056 at a
+    # quarter of the sample rate); it names each unstable mode and the held-out fits compared
+    rng = np.random.default_rng(4)
+    r, w = 1.01, 0.5
+    a = [[r * np.cos(w), -r * np.sin(w), 0.0], [r * np.sin(w), r * np.cos(w), 0.0],
+         [0.0, 0.0, 0.6]]
+    plant = sysid.StateSpaceModel(a, [[1.0], [0.0], [1.0]], [[1.0, 0.5, 1.0]], dt=0.1)
+    u = rng.standard_normal((800, 1))
+    data = sysid.IOData(u=u, y=plant.simulate(u) + 0.05 * rng.standard_normal((800, 1)),
+                        dt=0.1)
+    with pytest.warns(sysid.errors.StabilityWarning) as rec:
+        res = sysid.identify(data, refine=False, progress=False)
+    text = " ".join(str(m.message) for m in rec
+                    if "identify returns an unstable model" in str(m.message))
+    f = float(np.angle(res.model.poles()[np.argmax(np.abs(res.model.poles()))]))
+    assert re.search(r"a growing oscillation at ([0-9.]+) Hz \(pole pair of modulus 1\.01",
+                     text), text
+    hz = float(re.search(r"oscillation at ([0-9.]+) Hz", text).group(1))
+    assert hz == pytest.approx(abs(f) / (2 * np.pi * 0.1), rel=1e-3)
+    assert hz == pytest.approx(w / (2 * np.pi * 0.1), rel=0.02)
+    assert re.search(r"held-out fit [0-9.]+ % against -?[0-9.]+ %", text), text
 
 
 def test_identify_time_budget_keeps_the_subspace_sweep_and_says_it_stopped():

@@ -80,6 +80,38 @@ def modulus(rho: float) -> str:
     return f"{rho:.17g}"
 
 
+def unstable_modes(poles: Any, dt: float | None, most: int = 3) -> str:
+    """The unstable modes of discrete-time ``poles`` (modulus at least 1) in words, largest
+    first, a complex pair named once with its frequency (in Hz with the sample time ``dt``,
+    else in cycles per sample); at most ``most`` modes, then how many more.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid._display import unstable_modes
+    >>> p = [1.0048, 1.056 * np.exp(0.5j * np.pi), 1.056 * np.exp(-0.5j * np.pi), 0.9]
+    >>> unstable_modes(p, 0.05)
+    'a growing oscillation at 5 Hz (pole pair of modulus 1.056), a real pole at 1.005'
+    """
+    p = np.asarray(poles, dtype=complex).ravel()
+    p = p[np.isfinite(p) & (np.abs(p) >= 1.0)]
+    p = p[p.imag >= 0]  # a pair once, by its upper half
+    p = p[np.argsort(-np.abs(p), kind="stable")]
+    words = []
+    for z in p[:most]:
+        if z.imag == 0.0:
+            words.append(f"a real pole at {modulus(z.real) if z.real > 0 else f'{z.real:.4g}'}"
+                         + (" (an oscillation at the Nyquist frequency)" if z.real < 0 else ""))
+            continue
+        cycles = float(np.angle(z)) / (2 * np.pi)
+        freq = f"{cycles / dt:.4g} Hz" if dt else f"{cycles:.4g} cycles per sample"
+        words.append(f"a growing oscillation at {freq} (pole pair of modulus "
+                     f"{modulus(abs(z))})")
+    if p.size > most:
+        words.append(f"{p.size - most} more")
+    return ", ".join(words)
+
+
 def table(header: Sequence[str], rows: Sequence[Sequence[Any]], *, tid: str | None = None,
           max_rows: int | None = MAX_ROWS, caption: str | None = None) -> str:
     """An HTML table; cells formatted by :func:`fmt`, rows beyond ``max_rows`` summarised."""

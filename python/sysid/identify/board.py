@@ -187,6 +187,9 @@ class Board:
         self.unexcited = 0
         #: set by :meth:`insisting` when an unstable candidate wins only by following a drift
         self.drift: dict[str, Any] | None = None
+        #: set by :meth:`insisting` when the data insist on an unstable candidate: the best
+        #: stable candidate it beat (``None`` when no stable candidate was left)
+        self.insisted_over: dict[str, Any] | None = None
         #: the subspace sweep's fold estimators, whole-record estimator (a function of the
         #: record) and largest order, and whether the record shows feedback: for the
         #: state-sequence candidates (:func:`.states.states_candidates`)
@@ -492,6 +495,7 @@ class Board:
                     r["not_insisted"] = True
                     r["note"] = r["note"] or ("unstable and not better than the best stable "
                                               "candidate on every held-out block: not chosen")
+            self.insisted_over = best_s
             return best_u
         if outcome == "drift":
             self.drift = {"unstable": best_u, "stable": best_s}

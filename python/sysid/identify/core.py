@@ -66,7 +66,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_real, require_inputs_vary, user_stacklevel
-from .._display import modulus
+from .._display import modulus, unstable_modes
 from .._progress import Bar, show
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
@@ -720,11 +720,17 @@ def identify(
         from ..errors import StabilityWarning
 
         rho = float(np.max(np.abs(model.poles())))
-        why = ("it simulates every held-out block better than the best stable candidate "
-               "(an integrating or unstable plant)" if insist is not None else
-               "enforce_stability=False")
-        warnings.warn(f"identify returns an unstable model (largest pole modulus {modulus(rho)}): "
-                      f"{why}; pass enforce_stability=True for the best stable model",
+        over = board.insisted_over
+        why = ("enforce_stability=False" if insist is None else
+               "no stable candidate was left" if over is None else
+               f"it simulates every held-out block better than the best stable candidate "
+               f"({_family(over)}, order {over['order']}: held-out fit "
+               f"{chosen['held_out_fit']:.1f} % against {over['held_out_fit']:.1f} %), as "
+               f"an integrating or unstable plant does; if the plant is stable, the mode is "
+               f"one the record does not pin down")
+        warnings.warn(f"identify returns an unstable model (largest pole modulus {modulus(rho)}; "
+                      f"{unstable_modes(model.poles(), model.dt)}): {why}; pass "
+                      f"enforce_stability=True for the best stable model",
                       StabilityWarning, stacklevel=user_stacklevel())
     for r in ranked:
         r["chosen"] = r is chosen
