@@ -15,9 +15,9 @@ validation input's power in the bins where the estimation input's power is below
 times its peak. A share above ``limit`` is reported as an extrapolation; :func:`sysid.identify`
 records it among its checks when it is given ``validation=`` data (:func:`coverage_note`).
 
-Measured on the real records of ``benches/realdata.py`` (every sweep, both splits; 82 pairs,
+Measured on the real records of ``benches/realdata.py`` (every sweep, both splits; 86 pairs,
 ``benches/results/chirp_feedback.md``): at the defaults (30 dB, 10 %) the chirp's two splits are
-flagged (87 and 39 %), and four more: a step record whose estimation part has no step (100 %),
+flagged (87 and 39 %), and three more: a step record whose estimation part has no step (100 %),
 the pH record's second input (13 %), the ATTAS aircraft's aileron (13 %); every PRBS,
 multisine and the other records stay below 10 % (most below 5 %). At 20 dB below the peak
 seven more pairs were flagged (the DaISy flutter, steam generator and power plant records).
