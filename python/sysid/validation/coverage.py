@@ -20,7 +20,8 @@ Measured on the real records of ``benches/realdata.py`` (every sweep, both split
 flagged (87 and 39 %), and three more: a step record whose estimation part has no step (100 %),
 the pH record's second input (13 %), the ATTAS aircraft's aileron (13 %); every PRBS,
 multisine and the other records stay below 10 % (most below 5 %). At 20 dB below the peak
-seven more pairs were flagged (the DaISy flutter, steam generator and power plant records).
+six more pairs were flagged (the DaISy flutter, steam generator and power plant records, the
+balancing car's sine record reversed).
 """
 
 from __future__ import annotations
