@@ -193,7 +193,8 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
             fb = sysid.check_feedback(data)
             feedback = bool(fb.detected)
             checks["feedback"] = (f"{'detected' if feedback else 'not detected'} "
-                                  f"(p = {fb.p_value:.2g})")
+                                  f"(p = {fb.p_value:.2g}; past outputs explain "
+                                  f"{100 * fb.explained_share:.2g} % of the input's variance)")
         except Exception as e:  # noqa: BLE001
             checks["feedback"] = f"not checked ({e})"
     try:
