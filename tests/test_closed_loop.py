@@ -142,7 +142,7 @@ def test_feedback_result_presentation():
     # F(innovation lags (8 - 8 // 2) x 1 output, ...)
     assert "pbsid" in text and "F(4," in text and res.df[0] == 4
     df = res.to_pandas()
-    assert list(df.columns) == ["F", "p_value"] and df.shape == (1, 2)
+    assert list(df.columns) == ["F", "p_value", "explained"] and df.shape == (1, 3)
     pytest.importorskip("matplotlib")
     import matplotlib
 

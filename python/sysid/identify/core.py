@@ -81,6 +81,7 @@ from ..errors import (
 )
 from ..models.statespace import ss_parameter_count
 from ..subspace.estimator import available_horizon
+from ..validation.coverage import coverage_note
 from ..validation.crossval import (
     MAX_ORDER,
     MIN_BLOCK,
@@ -192,7 +193,8 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
             fb = sysid.check_feedback(data)
             feedback = bool(fb.detected)
             checks["feedback"] = (f"{'detected' if feedback else 'not detected'} "
-                                  f"(p = {fb.p_value:.2g})")
+                                  f"(p = {fb.p_value:.2g}; past outputs explain "
+                                  f"{100 * fb.explained_share:.2g} % of the input's variance)")
         except Exception as e:  # noqa: BLE001
             checks["feedback"] = f"not checked ({e})"
     try:
@@ -753,6 +755,8 @@ def identify(
     if getattr(model, "uncertainty", None) is None:
         model = with_uncertainty(model, centred, checks, SUBSPACE + CLOSED_LOOP)
     result_model = IdentifiedModel(model, mu, my)
+    if validation is not None and (note := coverage_note(data, validation)) is not None:
+        checks["validation"] = note
     out = IdentifyResult(result_model, rows, desc, checks, reported_fit(result_model, validation),
                          time.perf_counter() - t0, interrupted)
     out.out_of_time = board.out_of_time

@@ -64,7 +64,7 @@ from ..errors import (
 )
 from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
-from ..validation.feedback import check_feedback, default_lags, feedback_pvalues
+from ..validation.feedback import check_feedback, default_lags, feedback_statistics
 from .data_horizon import available_horizon
 from .feedthrough import (
     FEEDTHROUGH_DEFAULT,
@@ -385,12 +385,14 @@ class SubspaceEstimator:
             self._svd: dict[Any, Any] = {}
             self._pe_cache: dict[int | str, int] = {}
             self._feedback_p: float | None = None
+            self._feedback_share = 0.0
             self._feedback_warned = False
         else:
             self.scale, self._su, self._sy = shared.scale, shared._su, shared._sy
             self.scaled_factor = shared.scaled_factor
             self._svd, self._pe_cache = shared._svd, shared._pe_cache  # filled for both
             self._feedback_p, self._feedback_warned = shared._feedback_p, shared._feedback_warned
+            self._feedback_share = shared._feedback_share
 
     def _set_scaling(self, scale: bool | None) -> None:
         """The channel scaling of the fits (:mod:`sysid.subspace.scaling`): the record's
@@ -430,27 +432,32 @@ class SubspaceEstimator:
         default lags 0.21). A detection there is checked at the default lags on the record
         (one more pass), and the larger p-value kept."""
         if self._feedback_p is None:
-            p = 1.0
+            p, share = 1.0, 0.0
             if self.factor.n_inputs:
-                pv = feedback_pvalues(self.scaled_factor)[1]
+                _, pv, shares, _, _ = feedback_statistics(self.scaled_factor)
                 p = float(min(1.0, len(pv) * float(np.min(pv))))
+                share = float(np.max(shares))
                 if p < FEEDBACK_WARNING_LEVEL and isinstance(self.data, IOData):
-                    p = max(p, self._default_lags_pvalue())
-            self._feedback_p = p
+                    p_default, share_default = self._default_lags_test()
+                    if p_default > p:
+                        p, share = p_default, share_default
+            self._feedback_p, self._feedback_share = p, share
         return self._feedback_p
 
-    def _default_lags_pvalue(self) -> float:
-        """:func:`sysid.check_feedback`'s combined p-value at its default lags, where they
-        exceed this estimator's past window (else 0.0: the window's test stands)."""
+    def _default_lags_test(self) -> tuple[float, float]:
+        """:func:`sysid.check_feedback`'s combined p-value and largest explained share at its
+        default lags, where they exceed this estimator's past window (else ``(0.0, 0.0)``:
+        the window's test stands)."""
         data = self.data
         lags = default_lags(data)
         if lags <= self.past:
-            return 0.0
+            return 0.0, 0.0
         try:
-            pv = np.asarray(check_feedback(data, lags).p_values, float)
+            fb = check_feedback(data, lags)
         except SysidError:  # too short for those lags: the window's test stands
-            return 0.0
-        return float(min(1.0, pv.size * float(np.min(pv))))
+            return 0.0, 0.0
+        pv = np.asarray(fb.p_values, float)
+        return float(min(1.0, pv.size * float(np.min(pv)))), fb.explained_share
 
     def _quiet_fit(self, *args: Any, **kwargs: Any) -> StateSpaceModel:
         """:meth:`fit` with every warning suppressed, for the package's own checks (order
@@ -471,7 +478,9 @@ class SubspaceEstimator:
         self._feedback_warned = True
         if p < FEEDBACK_WARNING_LEVEL:
             warnings.warn(
-                f"the record shows feedback (past outputs predict the input, p = {p:.2g}): "
+                f"the record shows feedback (past outputs predict the input, p = {p:.2g}; they "
+                f"explain {100 * self._feedback_share:.2g} % of its variance, and the bias of "
+                f"open-loop fits grows with that share): "
                 f"the open-loop method {key!r} is biased under feedback; use method='pbsid' "
                 "or 'ssarx' (see sysid.check_feedback). A nonlinear plant in open loop can "
                 "show the same (its distortions, functions of past inputs, stay in a linear "

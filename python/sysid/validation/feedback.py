@@ -37,7 +37,8 @@ from .._display import HTMLResult
 from ..data.iodata import IOData, require_record
 from ..errors import DataError, InsufficientDataError
 
-__all__ = ["FeedbackTest", "check_feedback", "default_lags", "feedback_pvalues"]
+__all__ = ["FeedbackTest", "check_feedback", "default_lags", "feedback_pvalues",
+           "feedback_statistics"]
 
 
 def f_sf(F: float, d1: float, d2: float) -> float:
@@ -101,9 +102,26 @@ def feedback_pvalues(factor: Any) -> tuple[np.ndarray, np.ndarray, int, int]:
     Returns ``(F, p_values, df_num, df_den)``; an input that its own past predicts exactly
     (a sum of sinusoids, a step) cannot be tested and gets ``F = 0, p = 1``.
     """
+    F, p, _, q, df2 = feedback_statistics(factor)
+    return F, p, q, df2
+
+
+def feedback_statistics(factor: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int]:
+    """:func:`feedback_pvalues` and the effect size beside them: ``(F, p_values, explained,
+    df_num, df_den)``, ``explained`` per input the share (0-1) of the input's variance that
+    the past output innovations explain beyond its own past (``(RSS_r - RSS_f) / |u|^2``).
+
+    The p-value says whether the dependence is there, the share how large it is. On a long
+    record of a smooth, nearly deterministic input (a chirp, whose own past predicts it to
+    0.1 % of its variance) a dependence of 0.004 % of the input's variance is significant at
+    p = 1e-232 (the servo-hydraulic actuator's chirp, ``benches/results/chirp_feedback.md``):
+    a measured input and output that share a coloured interference do this as a controller
+    would, and so does a linear model's misfit of a nonlinear plant. The bias such a
+    dependence puts in an open-loop fit grows with the share.
+    """
     m, l, p = factor.n_inputs, factor.n_outputs, factor.past
     n_cols = int(factor.n_columns)
-    Fs, ps = np.zeros(m), np.ones(m)
+    Fs, ps, shares = np.zeros(m), np.ones(m), np.zeros(m)
     # the regressions of u(t) on U_p (restricted) and on U_p, Y_p (full), on the rows of the
     # triangular factor, in the Rust core on the calling thread (a threaded LAPACK call here
     # cost a loaded machine seconds on the first fit): one Householder QR per regressor set
@@ -120,7 +138,8 @@ def feedback_pvalues(factor: Any) -> tuple[np.ndarray, np.ndarray, int, int]:
         rss_f = max(rss_f, 1e-300)
         F = max(rss_r - rss_f, 0.0) / q / (rss_f / df2)
         Fs[i], ps[i] = F, f_sf(F, q, df2)
-    return Fs, ps, q, df2
+        shares[i] = max(rss_r - rss_f, 0.0) / total
+    return Fs, ps, shares, q, df2
 
 
 class FeedbackTest(HTMLResult):
@@ -142,10 +161,16 @@ class FeedbackTest(HTMLResult):
         Level at which :attr:`detected` is decided.
     detected : bool
         ``p_value < alpha``.
+    explained : ndarray
+        Per input channel, the share (0-1) of the input's variance that the past output
+        innovations explain beyond the input's own past: the size of the dependence the
+        p-value finds (on a long record a tiny share is significant; the bias of open-loop
+        fits grows with it). Zeros when not given.
     """
 
     def __init__(self, statistic: np.ndarray, p_values: np.ndarray, lags: int,
-                 df: tuple[int, int], alpha: float, input_names: list[str]) -> None:
+                 df: tuple[int, int], alpha: float, input_names: list[str],
+                 explained: np.ndarray | None = None) -> None:
         self.statistic = statistic
         self.p_values = p_values
         self.p_value = float(min(1.0, len(p_values) * float(np.min(p_values))))
@@ -154,6 +179,13 @@ class FeedbackTest(HTMLResult):
         self.alpha = alpha
         self.detected = bool(self.p_value < alpha)
         self.input_names = input_names
+        self.explained = (np.zeros(len(p_values)) if explained is None
+                          else np.asarray(explained, float))
+
+    @property
+    def explained_share(self) -> float:
+        """The largest :attr:`explained` over the inputs."""
+        return float(np.max(self.explained)) if self.explained.size else 0.0
 
     def __repr__(self) -> str:
         verdict = "feedback detected" if self.detected else "no feedback detected"
@@ -165,10 +197,13 @@ class FeedbackTest(HTMLResult):
         lines = [
             "Feedback test: do past outputs predict the input beyond its own past?",
             f"lags = {self.lags}, F({self.df[0]}, {self.df[1]}) per input",
-            f"{'input':<12}{'F':>12}{'p-value':>14}",
+            f"{'input':<12}{'F':>12}{'p-value':>14}{'explained %':>14}",
         ]
-        for name, F, p in zip(self.input_names, self.statistic, self.p_values):
-            lines.append(f"{name:<12}{F:>12.4g}{p:>14.3g}")
+        for name, F, p, e in zip(self.input_names, self.statistic, self.p_values,
+                                 self.explained):
+            lines.append(f"{name:<12}{F:>12.4g}{p:>14.3g}{100 * e:>14.3g}")
+        lines.append("explained: the share of the input's variance the past output innovations "
+                     "explain beyond its own past")
         lines.append(repr(self))
         if self.detected:
             lines.append("open-loop subspace methods are biased here: use sysid.pbsid or "
@@ -176,10 +211,11 @@ class FeedbackTest(HTMLResult):
         return "\n".join(lines)
 
     def to_pandas(self) -> Any:
-        """One row per input: ``F``, ``p_value``."""
+        """One row per input: ``F``, ``p_value``, ``explained``."""
         import pandas as pd
 
-        return pd.DataFrame({"F": self.statistic, "p_value": self.p_values},
+        return pd.DataFrame({"F": self.statistic, "p_value": self.p_values,
+                             "explained": self.explained},
                             index=pd.Index(self.input_names, name="input"))
 
     def plot(self, ax: Any = None) -> Any:
@@ -261,8 +297,8 @@ def check_feedback(data: IOData | tuple[Any, Any], lags: int | None = None, *, a
                                     f"{2 * lags + 2} samples; use fewer lags")
     exps = [(u - u.mean(axis=0), y - y.mean(axis=0)) for u, y in data.experiments]
     factor = _sysid.compress(exps, lags, 1, None, "qr")
-    F, p, q, df2 = feedback_pvalues(factor)
+    F, p, shares, q, df2 = feedback_statistics(factor)
     if factor.n_columns <= lags * (data.n_inputs + data.n_outputs):
         raise InsufficientDataError(f"lags = {lags} leaves no degrees of freedom; use a "
                                     "longer record or fewer lags")
-    return FeedbackTest(F, p, lags, (q, df2), float(alpha), list(data.input_names))
+    return FeedbackTest(F, p, lags, (q, df2), float(alpha), list(data.input_names), shares)
