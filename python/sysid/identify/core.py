@@ -66,7 +66,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import as_real, require_inputs_vary, user_stacklevel
-from .._display import modulus
+from .._display import modulus, pvalue
 from .._progress import Bar, show
 from .._threads import one_blas_thread
 from ..data.iodata import IOData
@@ -192,7 +192,7 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
             fb = sysid.check_feedback(data)
             feedback = bool(fb.detected)
             checks["feedback"] = (f"{'detected' if feedback else 'not detected'} "
-                                  f"(p = {fb.p_value:.2g})")
+                                  f"({pvalue(fb.p_value)})")
         except Exception as e:  # noqa: BLE001
             checks["feedback"] = f"not checked ({e})"
     try:

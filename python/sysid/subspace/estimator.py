@@ -49,6 +49,7 @@ from .._checks import (
     require_inputs_vary,
     user_stacklevel,
 )
+from .._display import pvalue
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData, require_record
 from ..data.offsets import check_offsets
@@ -471,7 +472,7 @@ class SubspaceEstimator:
         self._feedback_warned = True
         if p < FEEDBACK_WARNING_LEVEL:
             warnings.warn(
-                f"the record shows feedback (past outputs predict the input, p = {p:.2g}): "
+                f"the record shows feedback (past outputs predict the input, {pvalue(p)}): "
                 f"the open-loop method {key!r} is biased under feedback; use method='pbsid' "
                 "or 'ssarx' (see sysid.check_feedback). A nonlinear plant in open loop can "
                 "show the same (its distortions, functions of past inputs, stay in a linear "
