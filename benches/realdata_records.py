@@ -63,9 +63,6 @@ FRESH4 = {
     # position, pitch
 }
 
-#: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
-#: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
-#: results/realdata_fresh3.md)
 #: the fifth sweep's records (``--fresh5-records DIR``), read as ``FRESH``'s are (sources:
 #: results/realdata_fresh5.md)
 FRESH5 = {
@@ -77,6 +74,9 @@ FRESH5 = {
     # the heading), 50 ms: rudder -> yaw rate, heading (the 20/10 zigzag validates)
 }
 
+#: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
+#: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
+#: results/realdata_fresh3.md)
 SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"),
           "fresh2": ("FRESH2", "realdata_fresh2"), "fresh3": ("FRESH3", "realdata_fresh3_table"),
           "fresh4": ("FRESH4", "realdata_fresh4_table"),
