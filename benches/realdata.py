@@ -76,6 +76,9 @@ is made and the findings: results/realdata_fresh3.md.
 ``--fresh4-records DIR`` (``FRESH4``, results/realdata_fresh4_table[_<split>].md): the fourth
 sweep's three records (a car's acceleration, a servo-hydraulic actuator, a quadrotor on a test
 bed); sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh4.md.
+``--fresh5-records DIR`` (``FRESH5``, results/realdata_fresh5_table[_<split>].md): the fifth
+sweep's records (a battery cell's pulse test, a car's lateral force, a ship model's zigzag);
+sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh5.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -111,6 +114,9 @@ import warnings
 from pathlib import Path
 
 import numpy as np
+
+# the record tables read from ``DIR/<name>.npz``
+from realdata_records import FRESH, FRESH2, FRESH3, FRESH4, FRESH5, MORE, SWEEPS  # noqa: F401
 
 HERE = Path(__file__).resolve().parent
 SHARED = Path("/work/shared/data")
@@ -180,75 +186,6 @@ UNSHIPPED = {
     "steamgen": ("steamgen", [1, 2, 3, 4], [5, 6, 7, 8]),  # steam generator
     "powerplant": ("powerplant", [1, 2, 3, 4, 5], [6, 7, 8]),  # power plant (references left out)
 }
-
-
-#: records from outside DaISy the project does not ship (``--more-records DIR``): the files
-#: ``DIR/<name>.npz`` hold ``u`` and ``y`` (samples x channels); a second name is a separate
-#: validation record (kept under every split)
-MORE = {
-    "gas_furnace": ("gas_furnace_bj", None),  # gas rate -> CO2 (Box and Jenkins, series J)
-    "buck": ("buck_converter_id", "buck_converter_valid"),  # duty cycle -> output voltage
-    "dc_motor": ("dc_motor_generator_d500", None),  # motor voltage -> generator voltage
-    "mr_damper": ("mr_damper_matlab", None),  # velocity -> force
-    "ind_robot": ("industrial_robot_arm_matlab_est",  # motor torque -> motor speed
-                  "industrial_robot_arm_matlab_val"),
-    "flexible_structure": ("flexible_structure", None),  # 2 forces -> 28 accelerations
-}
-
-
-#: real records no run of the project had used before 2026-12-05 (``--fresh-records DIR``),
-#: read as ``MORE``'s are (``DIR/<name>.npz``; how each file is made: the docstring)
-FRESH = {
-    "ced_prbs": ("ced_prbs", None),  # coupled electric drives, PRBS: drive voltage -> |speed|
-    "ced_unif": ("ced_unif", None),  # the same, uniform-amplitude input
-    "tclab_step": ("tclab_step", None),  # TCLab heater 1 step -> temperatures 1, 2
-    "hsm150_step": ("hsm150_step", None),  # HSM150 motor torque steps -> speed
-    "floatshield": ("floatshield_prbs", None),  # FloatShield fan PRBS -> ball height
-    "motoshield": ("motoshield_aprbs", None),  # MotoShield voltage APRBS -> motor speed
-    "magnetoshield": ("magneto_pid", None),  # MagnetoShield under PID: voltage -> position,
-    # current (closed loop, an unstable plant)
-}
-
-#: real records of kinds no sweep had used (``--fresh2-records DIR``, second sweep of
-#: 2026-12-05), read as ``FRESH``'s are; the irregular logs resampled onto their median
-#: step by ``IOData.from_irregular`` (sources: results/realdata_fresh.md)
-FRESH2 = {
-    "tclab_pid2": ("tclab_pid2", None),  # TCLab, two heaters under PID: U1, U2 -> T1, T2
-    "hydro_120": ("hydro_120", None),  # catchment 120, daily: rain, evaporation -> flow
-    "mcar_sine": ("mcar_sine", None),  # balancing robot car, 2 ms: drive -> rate, angle
-    "tailsitter": ("tailsitter_alt1", "tailsitter_alt2"),  # tail-sitter UAV, 100 Hz:
-    # 4 actuator controls -> 3 body rates (flight 2 validates flight 1)
-}
-
-#: the third sweep's records (``--fresh3-records DIR``), read as ``FRESH``'s are (sources,
-#: SHA-256 and how each ``.npz`` is made: results/realdata_fresh3.md)
-FRESH3 = {
-    "building_dtu": ("building_dtu", None),  # test building, 10 min: outdoor temperature,
-    # heating power, solar radiation -> indoor temperature
-    "pilot_level": ("pilot_level_est", "pilot_level_val"),  # level pilot plant, 10 s: pump
-    # voltage -> water level (its test record validates)
-    "mostar_step5": ("mostar_step5", None),  # hydro generator, AVR step test, 4.8 ms: field
-    # voltage -> field current, terminal voltage, reactive power
-    "attas_ailrud": ("attas_ailrud", None),  # ATTAS aircraft, 25 Hz: aileron, rudder -> roll
-    # rate, yaw rate, lateral acceleration
-}
-
-#: the fourth sweep's records (``--fresh4-records DIR``), read as ``FRESH``'s are (sources:
-#: results/realdata_fresh4.md)
-FRESH4 = {
-    "car_accel": ("car_accel", None),  # car, 20 Hz: acceleration command -> acceleration, speed
-    "hydraulic_mts": ("hydraulic_mts", None),  # servo-hydraulic actuator, 1 kHz chirp:
-    # commanded -> measured displacement
-    "antx_pos": ("antx_pos", None),  # quadrotor on a 2-DoF bed, 4 ms: position set-point ->
-    # position, pitch
-}
-
-#: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
-#: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
-#: results/realdata_fresh3.md)
-SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"),
-          "fresh2": ("FRESH2", "realdata_fresh2"), "fresh3": ("FRESH3", "realdata_fresh3_table"),
-          "fresh4": ("FRESH4", "realdata_fresh4_table")}
 
 
 def _more(folder: Path, name: str, table: dict | None = None):

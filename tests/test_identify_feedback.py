@@ -9,6 +9,7 @@ import types
 import warnings
 
 import numpy as np
+import pytest
 
 import sysid
 from sysid.identify.board import Board
@@ -112,3 +113,29 @@ def test_open_loop_fits_kept_when_the_others_are_unstable_do_not_say_none_scored
     check = res.checks["feedback"]
     assert "no other candidate scored" not in check
     assert "stay candidates: without them no stable candidate is left" in check
+
+
+def test_a_p_value_that_underflowed_is_not_printed_as_zero():
+    # a battery tester's record: "feedback: detected (p = 0)" in identify's checks, and the
+    # command line's "residual whiteness (Ljung-Box p): Voltage(V): 0"; no test gives p = 0,
+    # the tail probability underflowed
+    rng = np.random.default_rng(0)
+    n = 20000
+    y, u, x = np.zeros(n), np.zeros(n), 0.0
+    for t in range(n):  # a controller acting on the last output sample, a noisy output
+        y[t] = x + rng.standard_normal()
+        u[t] = -0.8 * y[t - 1] + 0.1 * rng.standard_normal()
+        x = 0.9 * x + 0.5 * u[t]
+    data = sysid.IOData(u, y, 1.0)
+    fb = sysid.check_feedback(data)
+    assert fb.p_value == 0.0  # the premise: an underflow
+    assert "p < 1e-300" in repr(fb) and "p = 0 " not in repr(fb)
+    with pytest.warns(sysid.FeedbackWarning) as got:
+        sysid.n4sid(data, 1)
+    assert any("p < 1e-300" in str(w.message) for w in got)
+    assert not any("p = 0)" in str(w.message) or "p = 0:" in str(w.message) for w in got)
+    assert "p < 1e-300" in sysid.advice(data)["feedback"].finding
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = sysid.identify(data, progress=False)
+    assert res.checks["feedback"].startswith("detected (p < 1e-300)")

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["table", "svg_lines", "model_html", "result_html", "iodata_html", "frd_html",
-           "HTMLResult", "fmt", "greybox_html", "modulus"]
+           "HTMLResult", "fmt", "greybox_html", "modulus", "pvalue"]
 
 _STYLE = ("<style>.sysid-repr table{border-collapse:collapse;margin:4px 0}"
           ".sysid-repr td,.sysid-repr th{border:1px solid #ccc;padding:2px 6px;"
@@ -110,6 +110,21 @@ def unstable_modes(poles: Any, dt: float | None, most: int = 3) -> str:
     if p.size > most:
         words.append(f"{p.size - most} more")
     return ", ".join(words)
+
+
+def pvalue(p: float, digits: int = 2) -> str:
+    """A p-value for a message, ``p = ...`` with ``digits`` significant digits; one below
+    ``1e-300`` (a tail probability that underflowed, computed as 0) as ``p < 1e-300``,
+    never ``p = 0``, which no test gives.
+
+    Examples
+    --------
+    >>> from sysid._display import pvalue
+    >>> pvalue(1.5e-24), pvalue(0.0), pvalue(0.31, 3)
+    ('p = 1.5e-24', 'p < 1e-300', 'p = 0.31')
+    """
+    p = float(p)
+    return "p < 1e-300" if p < 1e-300 else f"p = {p:.{digits}g}"
 
 
 def table(header: Sequence[str], rows: Sequence[Sequence[Any]], *, tid: str | None = None,

@@ -10,6 +10,7 @@ from typing import Any, Callable
 
 import numpy as np
 
+from .._display import pvalue
 from ..data.iodata import IOData
 from ..errors import DataError, OrderError
 
@@ -183,8 +184,8 @@ def _print_summary(out: dict[str, Any]) -> None:
         fits = ", ".join(f"{n}: {f:.1f} %" for n, f in zip(r.output_names, r.fit.mean(0)))
         print(f"{out['which']} fit ({kind}): {fits}")
     res = out["residuals"]
-    print("residual whiteness (Ljung-Box p): " + ", ".join(
-        f"{n}: {p:.3g}" for n, p in zip(res.output_names, res.ljung_box_pvalue)))
+    print("residual whiteness (Ljung-Box): " + ", ".join(
+        f"{n}: {pvalue(p, 3)}" for n, p in zip(res.output_names, res.ljung_box_pvalue)))
     if "files" in out:
         print(f"report: {out['files']['html']}")
 

@@ -53,6 +53,7 @@ from .._checks import (
     require_inputs_vary,
     user_stacklevel,
 )
+from .._display import pvalue
 from .._threads import one_blas_thread
 from ..data.iodata import require_record
 from ..errors import DataError, ExcitationError, SysidWarning
@@ -113,7 +114,7 @@ def delayest(data: Any, na: int = 2, nb: int = 2, nk_min: int = 0,
                       f"({na}, {nb}) loss's, which such an input can place anywhere",
                       DelayWarning, stacklevel=user_stacklevel())
     if weak:
-        names = [f"{data.input_names[j]} -> {data.output_names[i]} (p = {p:.2g})"
+        names = [f"{data.input_names[j]} -> {data.output_names[i]} ({pvalue(p)})"
                  for i, j, p in weak]
         warnings.warn(f"no delay in {nk_min}..{nk_max} makes the input explain the output "
                       f"for {', '.join(names)} (F test of its ARX terms at 1 %, corrected for "

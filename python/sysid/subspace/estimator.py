@@ -49,6 +49,7 @@ from .._checks import (
     require_inputs_vary,
     user_stacklevel,
 )
+from .._display import pvalue
 from ..data.input_design import warn_excitation
 from ..data.iodata import IOData, require_record
 from ..data.offsets import check_offsets
@@ -478,7 +479,7 @@ class SubspaceEstimator:
         self._feedback_warned = True
         if p < FEEDBACK_WARNING_LEVEL:
             warnings.warn(
-                f"the record shows feedback (past outputs predict the input, p = {p:.2g}; they "
+                f"the record shows feedback (past outputs predict the input, {pvalue(p)}; they "
                 f"explain {100 * self._feedback_share:.2g} % of its variance, and the bias of "
                 f"open-loop fits grows with that share): "
                 f"the open-loop method {key!r} is biased under feedback; use method='pbsid' "

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from .._display import HTMLResult
+from .._display import HTMLResult, pvalue
 from .._threads import one_blas_thread
 from ..data.iodata import require_record
 from ..errors import DataError, InsufficientDataError
@@ -201,7 +201,7 @@ def _feedback(data: Any) -> Finding:
         return Finding("feedback", "note", f"not tested ({e})")
     if fb.detected:
         return Finding("feedback", "act",
-                       f"the input depends on past outputs (p = {fb.p_value:.2g}; they "
+                       f"the input depends on past outputs ({pvalue(fb.p_value)}; they "
                        f"explain {100 * fb.explained_share:.2g} % of its variance): a closed "
                        "loop, unless the plant is nonlinear (its distortions, which a linear "
                        "model leaves in its residuals, look like feedback: a periodic input "
@@ -209,7 +209,7 @@ def _feedback(data: Any) -> Finding:
                        "open-loop subspace fits are biased there: use "
                        "sysid.pbsid(data, order) or sysid.ssarx, or "
                        "sysid.ssest(data, order, method='pbsid') (prediction error)")
-    return Finding("feedback", "ok", f"no feedback found (p = {fb.p_value:.2g})")
+    return Finding("feedback", "ok", f"no feedback found ({pvalue(fb.p_value)})")
 
 
 def _periodic(data: Any) -> Finding:
@@ -318,7 +318,7 @@ def _nonlinearity(data: Any, nk: np.ndarray | None) -> Finding:
         share = 1 - rss1 / rss0
         if p < NONLINEAR_ALPHA and share >= NONLINEAR_SHARE:
             flagged.append(f"{name} ({100 * share:.0f} % of its residual variance, "
-                           f"p = {p:.1g})")
+                           f"{pvalue(p, 1)})")
     if flagged:
         return Finding("nonlinearity", "note",
                        "products of past inputs and outputs explain a linear model's "

@@ -33,7 +33,7 @@ import numpy as np
 
 from .. import _sysid
 from .._checks import as_between, as_int
-from .._display import HTMLResult
+from .._display import HTMLResult, pvalue
 from ..data.iodata import IOData, require_record
 from ..errors import DataError, InsufficientDataError
 
@@ -189,7 +189,7 @@ class FeedbackTest(HTMLResult):
 
     def __repr__(self) -> str:
         verdict = "feedback detected" if self.detected else "no feedback detected"
-        return (f"FeedbackTest({verdict}: p = {self.p_value:.3g} at alpha = {self.alpha}, "
+        return (f"FeedbackTest({verdict}: {pvalue(self.p_value, 3)} at alpha = {self.alpha}, "
                 f"lags = {self.lags})")
 
     def summary(self) -> str:

@@ -1,0 +1,83 @@
+"""The record tables of the sweeps ``benches/realdata.py`` reads from ``DIR/<name>.npz``
+(``--more-records DIR``, ``--<sweep>-records DIR``): each name maps to its estimation file and,
+if it has one, a separate validation file."""
+
+#: records from outside DaISy the project does not ship (``--more-records DIR``): the files
+#: ``DIR/<name>.npz`` hold ``u`` and ``y`` (samples x channels); a second name is a separate
+#: validation record (kept under every split)
+MORE = {
+    "gas_furnace": ("gas_furnace_bj", None),  # gas rate -> CO2 (Box and Jenkins, series J)
+    "buck": ("buck_converter_id", "buck_converter_valid"),  # duty cycle -> output voltage
+    "dc_motor": ("dc_motor_generator_d500", None),  # motor voltage -> generator voltage
+    "mr_damper": ("mr_damper_matlab", None),  # velocity -> force
+    "ind_robot": ("industrial_robot_arm_matlab_est",  # motor torque -> motor speed
+                  "industrial_robot_arm_matlab_val"),
+    "flexible_structure": ("flexible_structure", None),  # 2 forces -> 28 accelerations
+}
+
+
+#: real records no run of the project had used before 2026-12-05 (``--fresh-records DIR``),
+#: read as ``MORE``'s are (``DIR/<name>.npz``; how each file is made: the docstring)
+FRESH = {
+    "ced_prbs": ("ced_prbs", None),  # coupled electric drives, PRBS: drive voltage -> |speed|
+    "ced_unif": ("ced_unif", None),  # the same, uniform-amplitude input
+    "tclab_step": ("tclab_step", None),  # TCLab heater 1 step -> temperatures 1, 2
+    "hsm150_step": ("hsm150_step", None),  # HSM150 motor torque steps -> speed
+    "floatshield": ("floatshield_prbs", None),  # FloatShield fan PRBS -> ball height
+    "motoshield": ("motoshield_aprbs", None),  # MotoShield voltage APRBS -> motor speed
+    "magnetoshield": ("magneto_pid", None),  # MagnetoShield under PID: voltage -> position,
+    # current (closed loop, an unstable plant)
+}
+
+#: real records of kinds no sweep had used (``--fresh2-records DIR``, second sweep of
+#: 2026-12-05), read as ``FRESH``'s are; the irregular logs resampled onto their median
+#: step by ``IOData.from_irregular`` (sources: results/realdata_fresh.md)
+FRESH2 = {
+    "tclab_pid2": ("tclab_pid2", None),  # TCLab, two heaters under PID: U1, U2 -> T1, T2
+    "hydro_120": ("hydro_120", None),  # catchment 120, daily: rain, evaporation -> flow
+    "mcar_sine": ("mcar_sine", None),  # balancing robot car, 2 ms: drive -> rate, angle
+    "tailsitter": ("tailsitter_alt1", "tailsitter_alt2"),  # tail-sitter UAV, 100 Hz:
+    # 4 actuator controls -> 3 body rates (flight 2 validates flight 1)
+}
+
+#: the third sweep's records (``--fresh3-records DIR``), read as ``FRESH``'s are (sources,
+#: SHA-256 and how each ``.npz`` is made: results/realdata_fresh3.md)
+FRESH3 = {
+    "building_dtu": ("building_dtu", None),  # test building, 10 min: outdoor temperature,
+    # heating power, solar radiation -> indoor temperature
+    "pilot_level": ("pilot_level_est", "pilot_level_val"),  # level pilot plant, 10 s: pump
+    # voltage -> water level (its test record validates)
+    "mostar_step5": ("mostar_step5", None),  # hydro generator, AVR step test, 4.8 ms: field
+    # voltage -> field current, terminal voltage, reactive power
+    "attas_ailrud": ("attas_ailrud", None),  # ATTAS aircraft, 25 Hz: aileron, rudder -> roll
+    # rate, yaw rate, lateral acceleration
+}
+
+#: the fourth sweep's records (``--fresh4-records DIR``), read as ``FRESH``'s are (sources:
+#: results/realdata_fresh4.md)
+FRESH4 = {
+    "car_accel": ("car_accel", None),  # car, 20 Hz: acceleration command -> acceleration, speed
+    "hydraulic_mts": ("hydraulic_mts", None),  # servo-hydraulic actuator, 1 kHz chirp:
+    # commanded -> measured displacement
+    "antx_pos": ("antx_pos", None),  # quadrotor on a 2-DoF bed, 4 ms: position set-point ->
+    # position, pitch
+}
+
+#: the fifth sweep's records (``--fresh5-records DIR``), read as ``FRESH``'s are (sources:
+#: results/realdata_fresh5.md)
+FRESH5 = {
+    "battery_hppc": ("battery_hppc", None),  # Nissan Leaf cell, HPPC at 25 degC, 2 s: current
+    # -> terminal voltage
+    "dyna_lateral": ("dyna_lateral1", "dyna_lateral2"),  # car, 10 ms: steering angle ->
+    # lateral force (the second test validates the first)
+    "ship_zigzag": ("ship_z20_05", "ship_z20_10p"),  # tanker model, zigzag 20/5 (relay on
+    # the heading), 50 ms: rudder -> yaw rate, heading (the 20/10 zigzag validates)
+}
+
+#: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
+#: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
+#: results/realdata_fresh3.md)
+SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"),
+          "fresh2": ("FRESH2", "realdata_fresh2"), "fresh3": ("FRESH3", "realdata_fresh3_table"),
+          "fresh4": ("FRESH4", "realdata_fresh4_table"),
+          "fresh5": ("FRESH5", "realdata_fresh5_table")}
