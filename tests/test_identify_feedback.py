@@ -138,4 +138,4 @@ def test_a_p_value_that_underflowed_is_not_printed_as_zero():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = sysid.identify(data, progress=False)
-    assert res.checks["feedback"].startswith("detected (p < 1e-300)")
+    assert res.checks["feedback"].startswith("detected (p < 1e-300;")
