@@ -256,7 +256,8 @@ def check_offsets(data: Any, *, stacklevel: int | None = None, who: str = "ident
         "'mean', return_trend=True), then trend.apply(validation) for other records (command "
         "line: --detrend mean); or use sysid.identify(data), which removes it and restores it "
         "in its predictions" + (" (or fit the initial state: initial_state='estimate')"
-                                if from_rest else "")), stacklevel=user_stacklevel() if stacklevel is None else stacklevel)
+                                if from_rest else "")),
+        stacklevel=user_stacklevel() if stacklevel is None else stacklevel)
     return True
 
 
