@@ -156,3 +156,21 @@ def test_the_free_response_is_the_recursion_s_and_stops_where_it_has_decayed():
         assert last < 5000 and np.max(np.abs(ref[last + 1:])) < DECAYED * scale
     # an unstable A overflows: not finite, as the callers check
     assert not np.all(np.isfinite(free_response(np.array([[1.5]]), np.array([[1.0]]), 5000)))
+
+
+def test_huge_jacobian_does_not_overflow() -> None:
+    """The correction is scale-free: simulation and record scaled by 1e100 (a process model's
+    Jacobian along a time constant at its bound reached 6e180) give the covariance of the
+    unscaled ones (before: ``sigma2 ** 2`` of a Python float raised OverflowError, out of
+    ``model.std``, ``summary()`` and ``compare``)."""
+    from sysid.pem.sandwich import sandwich_covariance
+
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal(800)
+    y = lfilter([0.0, 0.5], [1.0, -0.8], u) + _ar(rng, 800, 0.1)
+    m = _quietly(sysid.oe, sysid.IOData(u, y, 1.0), 1, 1, 1)
+    gn = gauss_newton(m.uncertainty)
+    base, note = sandwich_covariance(gn, lambda g: g.simulate(u), y)
+    big, note_big = sandwich_covariance(gn, lambda g: 1e100 * g.simulate(u), 1e100 * y)
+    assert note.startswith("sandwich") and note_big.startswith("sandwich")
+    np.testing.assert_allclose(big.covariance, base.covariance, rtol=1e-6)

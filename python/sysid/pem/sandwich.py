@@ -400,10 +400,13 @@ def _block(unc: ParameterUncertainty, sim: Callable[[Any], np.ndarray], y: np.nd
                 wts[0] = 1.0
                 wts[-1] = 1.0
                 S = v / np.abs(np.fft.rfft(np.r_[1.0, -a], nfft)) ** 2
-                F = np.fft.rfft(J[s:t, k, :], nfft, axis=0)
-                dev = (S - np.sum(wts * S) / nfft) * wts
+                # J / sqrt(sigma2) and the spectrum / sigma2: M / sigma2^2 formed in units
+                # near one (sigma2 ** 2 of a Python float raised OverflowError past 1e154:
+                # a process model's Jacobian along a time constant at its bound)
+                F = np.fft.rfft(J[s:t, k, :] / np.sqrt(sigma2), nfft, axis=0)
+                dev = (S - np.sum(wts * S) / nfft) * wts / sigma2
                 M = ((np.conj(F) * dev[:, None]).T @ F).real / nfft
-                delta += 0.5 * (M + M.T) / sigma2 ** 2
+                delta += 0.5 * (M + M.T)
         Pz = np.eye(r) + delta
     if not np.all(np.isfinite(Pz)):
         return None, ("gauss-newton, as for white errors: the coloured-error correction "

@@ -403,7 +403,34 @@ def _pem(
             at += nf
     warn_cancellations(method, found)
     _warn_held_f(m, parts["f"], method, max(u.shape[0] for u, _ in exps))
+    _warn_returned_unstable(m, parts["f"], method)
     return m
+
+
+def _warn_returned_unstable(m: PolynomialModel, f: list[list[np.ndarray]], method: str) -> None:
+    """A :class:`~sysid.StabilityWarning` when the returned model is unstable, as ``arx``
+    says: the search keeps F stable, yet rounding can leave a pole on the unit circle (a
+    detrended step record: ``oe(data, 2, 2, 1)`` ended with F = (1 - q^-1)(1 - 0.9989 q^-1)
+    silently, its simulation a ramp), and A (``arma``, ``polyest``) is not held stable (on
+    seven raw records ``arma(y, 2, 1)`` returned a pole at or beyond 1 without a word)."""
+    if m.is_stable():
+        return
+    from ..models.checks import warn_unstable
+
+    def outside(c: np.ndarray) -> bool:
+        return len(c) > 0 and bool(np.abs(np.roots(np.r_[1.0, np.asarray(c, float)])).max()
+                                   >= 1.0)
+    if any(outside(fj) for row in f for fj in row):
+        advice = ("The search keeps F stable, but a pole ended on the unit circle: unless the "
+                  "process itself integrates, try a smaller nf or a detrended record; for an "
+                  "integrating process fit the differenced output, or arx/armax (whose A is "
+                  "not held stable).")
+    else:
+        advice = ("A is not held stable: unless the "
+                  + ("series" if method == "arma" else "process") + " itself integrates or "
+                  "grows, remove its offsets and trends first (sysid.detrend), or model the "
+                  "differenced " + ("series" if method == "arma" else "output") + ".")
+    warn_unstable(m, method, advice=advice)
 
 
 def _warn_held_f(m: PolynomialModel, f: list[list[np.ndarray]], method: str, n: int) -> None:

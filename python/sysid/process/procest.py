@@ -107,7 +107,8 @@ def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = Non
         raise DataError("procest needs at least one input")
     from ..data.offsets import check_offsets
 
-    check_offsets(data)  # a process model has no constant term (as every estimator)
+    # a process model has no constant term (as every estimator); from rest, no state
+    check_offsets(data, from_rest=initial_state == "zero")
     if t.poles == 0 and not t.integrator:
         raise DataError(f"{t.code} (a pure gain and dead time) is not supported: the sampled "
                         "response of a pure delay is not smooth in the dead time; fit 'P1D' "

@@ -188,7 +188,8 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         raise DataError("tfest needs at least one input; for a time series use sysid.ar")
     from ..data.offsets import check_offsets
 
-    check_offsets(data)  # a transfer function has no constant term (as every estimator)
+    # a transfer function has no constant term (as every estimator); from rest, no state
+    check_offsets(data, from_rest=initial_state == "zero")
     npo, nze = pole_zero_orders(n_poles, n_zeros, l, m)
     fixed_delays, auto = delays(iodelay, l, m)
     span = max(len(y) for _, y in data.experiments) * data.dt  # the longest experiment, s
