@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import sysid
-from sysid._checks import NEGLIGIBLE_REMAINING, warn_if_capped
+from sysid._checks import DISTANT, NEGLIGIBLE_REMAINING, warn_if_capped
 
 
 def _record() -> sysid.IOData:
@@ -203,3 +203,19 @@ def test_an_nlhw_search_leaving_a_plateau_at_its_cap_is_warned_about():
     with pytest.warns(sysid.IterationLimitWarning, match="the last 10 by"):
         capped = sysid.nlhw(data, 2, 2, 1, progress=False)
     assert capped.info["stop"] == "maximum iterations"
+
+
+@pytest.mark.parametrize("remaining,warned", [(2.5, False), (DISTANT, True), (9.5, True)])
+def test_a_settled_history_far_from_the_gauss_newton_minimum_is_warned_about(remaining, warned):
+    # a crawling polynomial search (bj on a heat exchanger, oe on a CD player arm: steps of
+    # 1e-6 of the cost, settled by every history rule) stood 5.7 and 9.5 residual variances
+    # from its Gauss-Newton model's minimum and went on to costs 0.18 % and 1.15 % lower:
+    # three standard deviations or more away is warned about; a network's flat 2.5 is not
+    info = {"stop": "maximum iterations", "cost": _crawling_history(0.02),
+            "remaining_decrease": remaining}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        warn_if_capped(info, "the search", 100, n_residuals=1000)
+    assert len(caught) == int(warned)
+    if warned:
+        assert f"about {np.sqrt(2 * remaining):.2g} standard deviations" in str(caught[0].message)
