@@ -412,8 +412,10 @@ def _warn_returned_unstable(m: PolynomialModel, f: list[list[np.ndarray]], metho
     says: the search keeps F stable, yet rounding can leave a pole on the unit circle (a
     detrended step record: ``oe(data, 2, 2, 1)`` ended with F = (1 - q^-1)(1 - 0.9989 q^-1)
     silently, its simulation a ramp), and A (``arma``, ``polyest``) is not held stable (on
-    seven raw records ``arma(y, 2, 1)`` returned a pole at or beyond 1 without a word)."""
-    if m.is_stable():
+    seven raw records ``arma(y, 2, 1)`` returned a pole at or beyond 1 without a word).
+    ``armax``, ``polyest`` and the polynomial ``pem`` say it themselves
+    (:func:`_warn_diverging`): one warning, not two."""
+    if m.is_stable() or method in ("armax", "polyest", "pem"):
         return
     from ..models.checks import warn_unstable
 
