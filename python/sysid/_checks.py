@@ -238,24 +238,15 @@ def warn_iteration_limit(what: str, max_iter: int, history: Any, fix: str = "rai
 def warn_if_capped(info: dict[str, Any], what: str, max_iter: int,
                    fix: str = "raise max_iter", n_residuals: int | None = None) -> None:
     """:func:`warn_iteration_limit` when a search's ``info["stop"]`` says it stopped at its
-    cap (``info["cost"]``: its criterion per iteration, when recorded) short of its minimum:
-    both its last step and its distance from the minimum of its Gauss-Newton model
-    (``info["remaining_decrease"]``, when measured) must say so. The distance alone misleads
-    in the flat, ill-conditioned searches of networks: a default ``nlhw`` capped at 100
-    iterations stood 2.1 residual variances from its model's minimum, yet the 336 further
-    iterations to its convergence lowered the cost by 0.009. A last step that lowered the
-    cost by less than ``SETTLED`` (relative) had settled (a network crawling by 1e-7); so had
-    one by less than ``FLOOR`` of the start's cost (a noise-free fit at the rounding floor,
-    1e-24 of the start's and still halving) or by less than ``STATISTICAL`` residual variances
-    ``2 cost / n_residuals`` (a step that moves no test on the estimate); and the last
-    ``RECENT`` iterations by less than ``RECENT`` times the bound (an ``nlhw`` whose last
-    step was small after a drop of 1.9 residual variances over ten went on 3.4 lower). A
-    search whose Gauss-Newton model puts its minimum ``DISTANT`` residual variances away or
-    more (three standard deviations of the estimate) is warned about however settled its
-    history: crawling polynomial searches (``bj`` on a heat exchanger, ``oe`` on a CD player
-    arm, 5.7 and 9.5 variances away, steps of 1e-6 of the cost) went on to costs 0.18 % and
-    1.15 % lower, their estimates several standard deviations away; the flat network searches
-    the history rules are for stood at most 2.6 variances away (``nlhw``, eight seeds)."""
+    cap (``info["cost"]``: its criterion per iteration) short of its minimum: its distance
+    from its Gauss-Newton model's minimum (``info["remaining_decrease"]``) and, below
+    ``DISTANT``, its history must say so. The distance alone misleads in flat network
+    searches: a default ``nlhw`` capped 2.1 residual variances away went on 0.009 lower in
+    336 iterations. A last step below ``SETTLED`` (relative) had settled, as had one below
+    ``FLOOR`` of the start's cost (a noise-free fit at the rounding floor) or below
+    ``STATISTICAL`` residual variances ``2 cost / n_residuals``; the last ``RECENT``
+    iterations must be below ``RECENT`` times the bound too (an ``nlhw`` whose small last
+    step followed a drop of 1.9 variances over ten went on 3.4 lower)."""
     stop = info.get("stop")
     stops = stop if isinstance(stop, list) else [stop]
     if max_iter > 0 and "maximum iterations" in stops:
@@ -277,22 +268,18 @@ def warn_if_capped(info: dict[str, Any], what: str, max_iter: int,
         warn_iteration_limit(what, max_iter, cost, fix, remaining=remaining)
 
 
-#: relative decrease of a capped search's last iteration below which it had settled
-SETTLED = 1e-5
-#: decrease of a capped search's last iteration, relative to its start's cost, below which
-#: it had reached the rounding floor of a noise-free fit
-FLOOR = 1e-12
-#: decrease of a capped search's last iteration, in residual variances, below which it had
-#: converged statistically (the optimiser's ``tol_statistical``)
-STATISTICAL = 1e-2
+SETTLED = 1e-5  #: relative decrease of a capped search's last iteration: settled below
+FLOOR = 1e-12  #: the same relative to the start's cost: a noise-free fit's rounding floor
+STATISTICAL = 1e-2  #: in residual variances: converged statistically (``tol_statistical``)
 RECENT = 10  #: iterations whose decrease together must be settled too (warn_if_capped)
 #: a capped search's remaining predicted decrease (the optimiser's ``remaining_decrease``,
 #: in residual variances) below which its stop is not warned about: the rest of the way
 #: would move the estimate by less than half of its standard deviation (``sqrt(2 x 1/8)``)
 NEGLIGIBLE_REMAINING = 0.125
-#: a capped search's remaining predicted decrease (residual variances) from which it is warned
-#: about whatever its cost history: its Gauss-Newton minimum lies three standard deviations of
-#: the estimate away (``sqrt(2 x 4.5)``), beyond what a flat model's misprediction explains
+#: a capped search's remaining predicted decrease (residual variances; three standard
+#: deviations, ``sqrt(2 x 4.5)``) from which it is warned about whatever its history: crawling
+#: ``bj``/``oe`` searches 5.7 and 9.5 away went on 0.18 % and 1.15 % lower; flat ``nlhw``
+#: network searches stood at most 2.6 away (eight seeds)
 DISTANT = 4.5
 
 
