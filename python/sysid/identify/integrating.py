@@ -125,7 +125,7 @@ def _sweep(board: Board, horizon: int, methods: tuple[str, ...], top: int,
     for meth in methods:
         for ft in (False, True):
             for n in range(1, min(top, *(e.max_order for e in ests)) + 1):
-                row = board.add(meth, n, ft, None, CRITERION,
+                row = board.add(meth, n + len(outputs), ft, None, CRITERION,
                                 lambda k, m=meth, n=n, ft=ft: integrated(ests[k].fit(
                                     n, method=m, feedthrough=ft, kalman=False), outputs),
                                 lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft),
