@@ -89,3 +89,18 @@ def test_no_integrating_candidates_when_no_unstable_candidate_wins():
     y = PLANT.simulate(u) + 0.02 * rng.standard_normal((600, 1))
     res = sysid.identify(sysid.IOData(u=u, y=y), refine=False, progress=False)
     assert not any(r["criterion"] == CRITERION for r in res.leaderboard)
+
+
+def test_a_search_from_an_integrating_model_does_not_keep_its_pinned_integrator_mark():
+    # pem frees every pole: its result is no longer built with an integrator, and identify's
+    # reading of it (free_poles, the uncertainty's criterion) must not take it for one
+    rng = np.random.default_rng(1)
+    u = rng.standard_normal(300)
+    start = integrated(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]), [0])
+    y = start.simulate(u) + 0.01 * rng.standard_normal((300, 1))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the search creeps along the stability bound
+        m = sysid.pem(sysid.IOData(u=u, y=y), start, focus="simulation", max_iter=3,
+                      progress=False)
+    assert "integrating" not in m.info and "integrating" in start.info
+    assert len(free_poles(m)) == 2
