@@ -139,8 +139,10 @@ def integrating_candidates(board: Board, horizon: int, methods: tuple[str, ...])
     fitted to the record with one output differenced and integrated back
     (:func:`integrated`), one family per output (records of at most :data:`MAX_OUTPUTS`
     outputs), leaderboard rows ``<method> (integrating)``. Only when an unstable candidate
-    beats the stable ones on every held-out block (:meth:`.board.Board.unstable_verdict`
-    is not ``"none"``: the data show a mode at or beyond the unit circle), and kept as
+    beats the stable ones on every held-out block but not once the record's drift is taken
+    out (:meth:`.board.Board.unstable_verdict` ``"drift"``, which an integrating output
+    gives as well: the line taken out of each channel takes part of its summed response),
+    not under feedback (open-loop fits, biased there, as the sweep's), and kept as
     candidates only when the best of them beats the best stable candidate on every held-out
     block with the record's drift left in and taken out
     (:meth:`.board.Board.beats_without_drift`, the test an unstable candidate must pass):
