@@ -45,7 +45,8 @@ from ..validation.ties import (  # the subspace automatic order's rule too
     wins_every_block,
 )
 
-__all__ = ["Board", "RESOLUTION", "slack", "tie", "bic", "held_out_score", "noise_fitted"]
+__all__ = ["Board", "RESOLUTION", "slack", "tie", "bic", "free_poles", "held_out_score",
+           "noise_fitted"]
 
 def block_fit(fits: Any) -> float:
     """A block's fit: the mean over its outputs (those that move), ``-inf`` when none does."""
@@ -164,6 +165,29 @@ def bic(model: Any, data: IOData) -> float:
     return float(N * logdet + p * np.log(N))
 
 
+def free_poles(model: Any) -> np.ndarray:
+    """The poles of ``model`` apart from the integrators it was built with
+    (:func:`.integrating.integrated`, ``info["integrating"]``: each a pole pinned at exactly
+    1, a marginally stable mode, not a diverging one): all poles but the one nearest 1 for
+    each integrated output (in any basis of the states).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> from sysid.identify.board import free_poles
+    >>> m = sysid.StateSpaceModel([[0.5, 0.0], [1.0, 1.0]], [[1.0], [0.0]], [[0.0, 1.0]])
+    >>> m.info["integrating"] = {"outputs": [0], "free_order": 1}
+    >>> free_poles(m), m.poles()  # the pole at 1 is the integrator's
+    (array([0.5+0.j]), array([1. +0.j, 0.5+0.j]))
+    """
+    poles = np.asarray(model.poles())
+    spec = (getattr(model, "info", None) or {}).get("integrating")
+    if not spec:
+        return poles
+    pinned = np.argsort(np.abs(poles - 1.0), kind="stable")[:len(spec["outputs"])]
+    return np.delete(poles, pinned)
+
+
 class Board:
     """Candidates with their held-out scores and a way to re-fit each on the whole record."""
 
@@ -260,7 +284,7 @@ class Board:
                     fits.append(block_fit(outs[-1]))
                     if start is not None:  # a refinement's fold fits: starts for its re-fit
                         row.setdefault("fold_models", []).append(model)
-                    poles = model.poles()
+                    poles = free_poles(model)
                     rho = max(rho, float(np.max(np.abs(poles))) if len(poles) else 0.0)
                     if start is not None and self._below_start(fits, outs, start):
                         hopeless = True  # the remaining blocks cannot save it: not fitted

@@ -28,9 +28,13 @@
    unstable candidate or it wins only by following the record's drift
    (:func:`_stabilised_refinements`); at orders whose N4SID candidate is unstable on some
    block, N4SID from the estimated state sequence (:func:`.states.states_candidates`:
-   candidates, not starts; not under feedback). A refinement scored clearly below its start on the
-   held-out blocks is never chosen; one below it, or below the best candidate so far, on most
-   blocks is stopped there. On the held-out blocks a refinement's search stops once it has settled
+   candidates, not starts; not under feedback); when an unstable candidate wins only with the
+   record's drift left in, every sweep candidate once more with one output differenced and
+   summed back, a pole pinned at 1 (:mod:`.integrating`: an output that integrates, kept
+   only if it beats the stable ones with the drift left in and taken out). A refinement
+   scored clearly below its start on the held-out blocks is never chosen; one below it, or
+   below the best candidate so far, on most blocks is stopped there. On the held-out blocks
+   a refinement's search stops once it has settled
    (:func:`settled`: its last iterations raised the fit its criterion implies by less than a
    tenth of what the blocks resolve); re-fitted on the whole record it runs to convergence
    (up to ``FINAL_ITER`` iterations: a search can crawl along a plateau and then drop) when
@@ -93,8 +97,9 @@ from ..validation.crossval import (
     simulation_fit,
 )
 from ..validation.records import validation_record
-from .board import Board
+from .board import Board, free_poles
 from .choice import _choose
+from .integrating import integrating_candidates, integrating_note
 from .notes import persistent_mode_check, refit_cap_check, trend_check, weak_check
 from .result import IdentifiedModel, IdentifyResult, _family, reported_fit
 from .states import stabilised_candidates, states_candidates
@@ -551,7 +556,9 @@ def identify(
         simulates every held-out block better than the best stable one, also once the
         record's drift is taken out: an integrating or unstable plant), then a
         :class:`sysid.StabilityWarning` names its largest pole; one that wins only with the
-        drift left in is not returned (``result.checks["drift"]`` says so).
+        drift left in is not returned (``result.checks["drift"]`` says so), but a model
+        with an output summed from its increments (a pole at exactly 1, the stable ones
+        beaten with the drift left in and taken out) can be (``checks["integrating"]``).
         ``True``: only stable models. ``False``: the best held-out fit, stable or not.
     time_budget : float or None
         CPU seconds of this process (default 60) after which no further refinement is
@@ -680,6 +687,7 @@ def identify(
                     "search from (every one was unstable on some held-out block); the model "
                     "is a subspace one")
         states_candidates(board)  # after the refinements: candidates, not starts
+        integrating_candidates(board, h, SUBSPACE)  # an output that integrates: the last
     if feedback and refine and board.starts_only(
             SUBSPACE, "open-loop subspace fit under feedback (biased): a start, not chosen"):
         checks["feedback"] += ("; the open-loop subspace fits (n4sid, moesp, cva), biased "
@@ -719,16 +727,19 @@ def identify(
             f"the record drifts: an unstable {u['family']} model of order {u['order']} "
             f"(largest pole modulus {modulus(u['max_abs_pole'])}) simulates every held-out block "
             f"better than the best stable one, but not once the record's trend is taken out "
-            f"(a line per channel): it follows a drift, not the plant; the stable model is "
-            f"returned "
-            f"(remove the trend, sysid.detrend(data, 'linear'), or difference the output if "
-            f"the plant integrates)")
+            f"(a line per channel): it follows a drift, not the plant; " + (
+                "the model with an integrator is returned (checks['integrating'])"
+                if board.drift["stable"].get("integrating") else
+                "the stable model is returned (remove the trend, sysid.detrend(data, "
+                "'linear'), or difference the output if the plant integrates)"))
     if enforce_stability is not False and insist is None and not np.isfinite(board.best_fit()):
         stabilised_candidates(board)
     ranked = board.ranked(allow_unstable=enforce_stability is False or insist is not None)
     model, chosen = _choose(board, ranked, centred, enforce_stability is True or (
         enforce_stability is None and insist is None))
-    if not model.is_stable():
+    if (note := integrating_note(model)) is not None:
+        checks["integrating"] = note
+    if np.any(np.abs(free_poles(model)) >= 1.0):
         from ..errors import StabilityWarning
 
         rho = float(np.max(np.abs(model.poles())))

@@ -70,8 +70,9 @@ def persistent_mode_check(model: Any, data: IOData, checks: dict[str, Any]) -> N
     >>> checks["persistent_mode"][:40]
     'a pole of modulus 1 - 1e-08 keeps 100 % '
     """
-    if isinstance(model, ContinuousStateSpace) or not hasattr(model, "poles"):
-        return
+    if isinstance(model, ContinuousStateSpace) or not hasattr(model, "poles") or (
+            (getattr(model, "info", None) or {}).get("integrating")):
+        return  # an integrator made explicit is said by checks["integrating"]
     try:
         poles = np.asarray(model.poles())
     except Exception:  # noqa: BLE001 - a model without poles has no mode to note

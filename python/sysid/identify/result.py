@@ -26,7 +26,8 @@ def _family(row: dict[str, Any]) -> str:
     """The leaderboard's family column: a subspace candidate with a stable ``A`` enforced is
     told apart from the same weighting's plain one."""
     return row["family"] + {"subspace, stable A": " (stable A)",
-                            "subspace, states": " (states)"}.get(row.get("criterion"), "")
+                            "subspace, states": " (states)",
+                            "subspace, integrating": " (integrating)"}.get(row.get("criterion"), "")
 
 
 def reported_fit(model: IdentifiedModel, validation: IOData | None) -> float | None:

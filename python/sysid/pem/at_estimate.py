@@ -66,7 +66,10 @@ def criterion_at(model: Any, data: IOData, focus: str = "simulation") -> tuple[A
         focus = "prediction"
     if focus == "prediction" and not stable_predictor:
         focus = "simulation"
-    if not model.is_stable():
+    # an integrator made explicit (``info["integrating"]``, :mod:`sysid.identify.integrating`)
+    # is a pole at exactly 1: the simulation error grows at most linearly, and is defined
+    integrating = bool((getattr(model, "info", None) or {}).get("integrating"))
+    if not model.is_stable() and not integrating:
         # the simulation-error criterion diverges at an unstable A; the prediction-error one
         # is defined wherever the predictor A - K C is stable
         if not stable_predictor:

@@ -618,6 +618,7 @@ def pem(
     info = dict(model.info) if model.info else {}
     info["method"] = "pem"
     info["start_method"] = model.info.get("method") if model.info else None
+    info.pop("integrating", None)  # a start's pinned integrator (identify's) is free here
     if "settings" in info:  # the start's estimator settings (its kalman=True, ...), not ours
         info["start_settings"] = info.pop("settings")
     _start_noise(info)
@@ -735,6 +736,7 @@ def _pem_periodic(data: Any, model: StateSpaceModel, frd: FRD, feedthrough: Any,
     info = dict(model.info) if model.info else {}
     info["method"] = "pem"
     info["start_method"] = model.info.get("method") if model.info else None
+    info.pop("integrating", None)  # a start's pinned integrator (identify's) is free here
     if "settings" in info:  # the start's estimator settings (its kalman=True, ...), not ours
         info["start_settings"] = info.pop("settings")
     _start_noise(info)
