@@ -254,7 +254,7 @@ def test_identify_returns_an_unstable_model_only_when_the_data_insist():
     data = sysid.IOData(u=u, y=plant.simulate(u) + 0.05 * rng.standard_normal((600, 1)))
     with pytest.warns(sysid.errors.StabilityWarning, match="largest pole modulus 1.01"):
         res = sysid.identify(data, refine=False, progress=False)
-    assert not res.model.is_stable()
+    assert not res.model.is_stable() and "UNSTABLE" in repr(res.model)
     assert np.max(np.abs(res.model.poles())) == pytest.approx(1.01, abs=2e-3)
     # its uncertainty is the prediction-error criterion's (the simulation error diverges at
     # an unstable model; poles(std=True) raised "no parameter uncertainty" here)
@@ -269,7 +269,7 @@ def test_identify_returns_an_unstable_model_only_when_the_data_insist():
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         stable = sysid.identify(data, refine=False, enforce_stability=True, progress=False)
-    assert stable.model.is_stable()
+    assert stable.model.is_stable() and "UNSTABLE" not in repr(stable.model)
     with pytest.raises(sysid.errors.DataError, match="enforce_stability"):
         sysid.identify(data, enforce_stability="yes")
 

@@ -55,6 +55,7 @@ def test_an_integrating_output_that_looks_like_a_drift_gets_its_integrator():
     m = res.model.statespace
     assert m.info["integrating"]["outputs"] == [1]
     assert "y1 integrate" in res.checks["integrating"]
+    assert "integrator on y1" in repr(res.model) and "UNSTABLE" not in repr(res.model)
     assert "persistent_mode" not in res.checks  # the pinned pole is said as an integrator
     assert np.sum(np.isclose(m.poles(), 1.0)) == 1 and np.all(np.abs(free_poles(m)) < 1.0)
     assert res.validation_fit > 30.0
