@@ -209,7 +209,8 @@ def _reaches_zero(exps: list[Any], idx: int, j: int) -> bool:
 
 
 def check_offsets(data: Any, *, stacklevel: int | None = None, who: str = "identification",
-                  stats: dict[int, Any] | None = None, from_rest: bool = False) -> bool:
+                  stats: dict[int, Any] | None = None, from_rest: bool = False,
+                  fix: str | None = None) -> bool:
     """Warn (:class:`~sysid.errors.OffsetWarning`) when a channel of ``data`` sits on an offset
     much larger than its variation and the record was not detrended; True if it warned. The
     warning points at the first caller outside sysid (or ``stacklevel`` frames up).
@@ -220,7 +221,8 @@ def check_offsets(data: Any, *, stacklevel: int | None = None, who: str = "ident
     record's :func:`~sysid._checks.record_stats` (``stats``, when the caller has them).
     ``from_rest``: the caller's model has no initial state to carry an offset (a transfer
     function simulated from rest, an FIR): the quick fit that screens moderate offsets is
-    simulated from rest too (:func:`offset_effect`).
+    simulated from rest too (:func:`offset_effect`). ``fix``: the caller's own remedy, added
+    to the warning's advice (with ``from_rest`` and no ``fix``: fit the initial state).
 
     Examples
     --------
@@ -262,8 +264,9 @@ def check_offsets(data: Any, *, stacklevel: int | None = None, who: str = "ident
         "validation fits far below zero). Remove it first: d, trend = sysid.detrend(data, "
         "'mean', return_trend=True), then trend.apply(validation) for other records (command "
         "line: --detrend mean); or use sysid.identify(data), which removes it and restores it "
-        "in its predictions" + (" (or fit the initial state: initial_state='estimate')"
-                                if from_rest else "")),
+        "in its predictions" + (f" ({fix})" if fix else
+                                " (or fit the initial state: initial_state='estimate')"
+                                if from_rest and fix is None else "")),
         stacklevel=user_stacklevel() if stacklevel is None else stacklevel)
     return True
 
