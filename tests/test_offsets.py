@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import sysid
+from sysid.data.offsets import check_offsets, offset_effect
 from sysid.errors import OffsetWarning
 
 
@@ -280,3 +281,42 @@ def test_an_offset_that_costs_markov_parameters_warns_in_impulse_response_and_ok
         clean = sysid.IOData(u=u0, y=y0 + e, dt=1.0)
         sysid.impulse_response(clean, 30)
         sysid.okid(clean, 4)
+
+
+def test_an_offset_the_quick_fit_cannot_judge_is_flagged_by_its_ratio():
+    """The quick ARX(2, 2, 1) that screens offsets of 1.5-10 standard deviations may not
+    describe a record even without them (a long delay, coloured noise: its simulation fit
+    below zero); it then said nothing, and on the CED record (output mean 1.9 std) every tool
+    was 15-150 fit points worse raw than detrended. When the quick fit cannot judge, the ratio
+    above SCREEN_RATIO decides (a step from rest stays exempt)."""
+    rng = np.random.default_rng(23)
+    n, delay = 1200, 13
+    u0 = np.repeat(rng.choice([-1.0, 1.0], n // 10), 10)
+    g = sysid.StateSpaceModel([[0.7]], [[1.0]], [[0.5]], dt=1.0)
+    y0 = np.r_[np.zeros(delay - 1), g.simulate(u0)[:n - delay + 1, 0]]
+    w = 0.3 * rng.standard_normal(n)
+    e = np.zeros(n)
+    for t in range(n):
+        e[t] = 0.9 * e[t - 1] + w[t] if t else w[t]
+    yc = y0 + e
+    raw = sysid.IOData(u=0.3 + u0, y=3.0 * yc.std() + yc, dt=1.0)  # never reaches 0
+    assert np.isnan(offset_effect(raw))  # the quick fit fails on the mean-removed record
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert check_offsets(raw)
+    offs = [str(w.message) for w in caught if issubclass(w.category, OffsetWarning)]
+    assert len(offs) == 1 and "output y0" in offs[0] and "cannot be screened" in offs[0]
+    est, val = raw.split(0.7)
+    d, trend = sysid.detrend(est, "mean", return_trend=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        raw_fit = sysid.compare(sysid.oe(est, 1, 1, delay), val).mean_fit
+        det_fit = sysid.compare(sysid.oe(d, 1, 1, delay), trend.apply(val)).mean_fit
+    assert det_fit > raw_fit + 20  # the warning is true
+    # below the screen's ratio, or a step from rest (the channel reaches zero): quiet
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", OffsetWarning)
+        assert not check_offsets(sysid.IOData(u=0.3 + u0, y=yc, dt=1.0))
+        step = np.r_[np.zeros(100), np.ones(n - 100)]
+        assert not check_offsets(sysid.IOData(u=np.c_[0.3 + u0, step],
+                                              y=yc + 2.0 * yc.std() * step, dt=1.0))
