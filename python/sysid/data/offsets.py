@@ -26,7 +26,11 @@ the step itself; removing that mean, as the warning said, moved the record's sta
 Such a channel is flagged only when the quick ARX fit loses more than ``EFFECT_LIMIT`` with the
 offsets left in (whatever its ratio): a motor-generator record (generator voltage 4741 +- 1084,
 one sample below zero at its start) lost 50-60 validation fit points in every estimator on
-raw data without a word.
+raw data without a word. When the quick fit does not describe even the mean-removed record
+(its simulation fit below zero: a long delay, a dominant disturbance), it cannot judge, and
+the ratio above ``SCREEN_RATIO`` decides alone (steps from rest still exempt): the CED
+record (output mean 1.9 std) and a sine-driven car (2.2 std) lost 27-152 fit points raw
+without a word.
 """
 
 from __future__ import annotations
@@ -65,7 +69,9 @@ def offset_effect(data: Any, *, from_rest: bool = False) -> float:
     estimators, which fit their initial conditions, nothing). A linear model has no
     constant term: an offset the dynamics cannot carry (an output mean that is not the static
     gain times the input mean) pulls its poles toward 1 and its gain off. Zero for a time
-    series (no inputs) or a record too short for the fit; ``inf`` when the raw fit diverges.
+    series (no inputs) or a record too short for the fit; ``inf`` when the raw fit diverges;
+    NaN when the quick model does not describe even the mean-removed record (its fit below
+    zero or diverging): then it cannot tell what the offsets cost.
 
     Examples
     --------
@@ -91,8 +97,8 @@ def offset_effect(data: Any, *, from_rest: bool = False) -> float:
         raw = _arx_sim_fit(exps, from_rest)
         cen = _arx_sim_fit([(u - mu, y - my) for u, y in exps], from_rest)
     if not np.all(np.isfinite(cen)) or np.min(cen) < 0:
-        return 0.0  # the quick model does not describe the record even without the offsets:
-        # what it loses with them says nothing
+        return float("nan")  # the quick model does not describe the record even without the
+        # offsets: what it loses with them says nothing
     loss = np.where(np.isfinite(raw), (cen - raw) / 100.0, np.inf)
     return float(max(0.0, np.max(loss)))
 
@@ -139,14 +145,16 @@ def offsets(data: Any, stats: dict[int, Any] | None = None
     """``(kind, name, mean, std)`` of every channel flagged (empty for a detrended record):
     ``|mean| > OFFSET_RATIO std > 0``, or ``|mean| > SCREEN_RATIO std`` when the offsets cost
     a quick fit more than :data:`EFFECT_LIMIT` (:func:`offset_effect`; a record without such
-    a channel is not fitted); ``stats``: the record's :func:`~sysid._checks.record_stats`
+    a channel is not fitted) or the quick fit cannot judge (and the channel does not reach
+    zero); ``stats``: the record's :func:`~sysid._checks.record_stats`
     when the caller has them."""
     return _flagged(data, stats)[0]
 
 
 def _flagged(data: Any, stats: dict[int, Any] | None = None, from_rest: bool = False
              ) -> tuple[list[tuple[str, str, float, float]], float | None]:
-    """:func:`offsets` and the :func:`offset_effect` that flagged them (None: by the ratio)."""
+    """:func:`offsets` and the :func:`offset_effect` that flagged them (None: by the ratio;
+    NaN: by the ratio above ``SCREEN_RATIO`` because the quick fit could not judge)."""
     exps = list(data.experiments)
     if getattr(data, "has_trend", False):
         stats = None  # only some experiments count: their own statistics below
@@ -158,7 +166,7 @@ def _flagged(data: Any, stats: dict[int, Any] | None = None, from_rest: bool = F
             if not (np.any(e.tu) or np.any(e.ty))]
         if not exps:
             return [], None
-    big, screened = [], []
+    big, screened, at_zero = [], [], set()
     for kind, idx, names in (("input", 0, data.input_names), ("output", 1, data.output_names)):
         if not names:
             continue
@@ -178,8 +186,10 @@ def _flagged(data: Any, stats: dict[int, Any] | None = None, from_rest: bool = F
                 row = (kind, str(names[j]), float(mean[j]), float(std[j]))
                 # a channel that reaches zero (a step from rest) is flagged only when the
                 # quick fit says its offset costs the fit, whatever its ratio
-                (screened if _reaches_zero(exps, idx, j) or abs(mean[j]) <= OFFSET_RATIO
-                 * std[j] else big).append(row)
+                zero = _reaches_zero(exps, idx, j)
+                if zero:
+                    at_zero.add(row)
+                (screened if zero or abs(mean[j]) <= OFFSET_RATIO * std[j] else big).append(row)
     if big or not screened:
         return big, None
     raw = data
@@ -190,6 +200,11 @@ def _flagged(data: Any, stats: dict[int, Any] | None = None, from_rest: bool = F
         kw = {"dt": data.dt, "input_names": data.input_names, "output_names": data.output_names}
         raw = IOData(u=us[0], y=ys[0], **kw) if len(us) == 1 else IOData(u=us, y=ys, **kw)
     effect = offset_effect(raw, from_rest=from_rest)
+    if np.isnan(effect):  # the quick fit cannot judge (it fails on the mean-removed record
+        # too): the ratio alone decides, steps from rest still exempt; the CED record
+        # (output mean 1.9 std) and a sine-driven car (2.2 std) lost 27-152 fit points raw
+        kept = [r for r in screened if r not in at_zero]
+        return (kept, effect) if kept else ([], None)
     return (screened, effect) if effect > EFFECT_LIMIT else ([], None)
 
 
@@ -209,7 +224,8 @@ def _reaches_zero(exps: list[Any], idx: int, j: int) -> bool:
 
 
 def check_offsets(data: Any, *, stacklevel: int | None = None, who: str = "identification",
-                  stats: dict[int, Any] | None = None, from_rest: bool = False) -> bool:
+                  stats: dict[int, Any] | None = None, from_rest: bool = False,
+                  fix: str | None = None) -> bool:
     """Warn (:class:`~sysid.errors.OffsetWarning`) when a channel of ``data`` sits on an offset
     much larger than its variation and the record was not detrended; True if it warned. The
     warning points at the first caller outside sysid (or ``stacklevel`` frames up).
@@ -220,7 +236,8 @@ def check_offsets(data: Any, *, stacklevel: int | None = None, who: str = "ident
     record's :func:`~sysid._checks.record_stats` (``stats``, when the caller has them).
     ``from_rest``: the caller's model has no initial state to carry an offset (a transfer
     function simulated from rest, an FIR): the quick fit that screens moderate offsets is
-    simulated from rest too (:func:`offset_effect`).
+    simulated from rest too (:func:`offset_effect`). ``fix``: the caller's own remedy, added
+    to the warning's advice (with ``from_rest`` and no ``fix``: fit the initial state).
 
     Examples
     --------
@@ -251,7 +268,11 @@ def check_offsets(data: Any, *, stacklevel: int | None = None, who: str = "ident
         what = "; ".join(f"{kind} {name} has an offset ({mean:.4g}, {abs(mean) / std:.1f} "
                          f"times its std {std:.3g})" for kind, name, mean, std in found[:4])
     more = f" (and {len(found) - 4} more channels)" if len(found) > 4 else ""
-    if effect is not None:
+    if effect is not None and np.isnan(effect):
+        more += ("; a quick ARX fit does not describe even the mean-removed record, so what "
+                 "the offset costs cannot be screened: a mean this size usually costs linear "
+                 "models their fit")
+    elif effect is not None:
         lost = "all of its fit" if not np.isfinite(effect) else f"{100 * effect:.0f} fit points"
         rest = " simulated from rest" if from_rest else ""
         more += (f"; a quick ARX fit of the raw record{rest} loses {lost} against the same "
@@ -262,8 +283,9 @@ def check_offsets(data: Any, *, stacklevel: int | None = None, who: str = "ident
         "validation fits far below zero). Remove it first: d, trend = sysid.detrend(data, "
         "'mean', return_trend=True), then trend.apply(validation) for other records (command "
         "line: --detrend mean); or use sysid.identify(data), which removes it and restores it "
-        "in its predictions" + (" (or fit the initial state: initial_state='estimate')"
-                                if from_rest else "")),
+        "in its predictions" + (f" ({fix})" if fix else
+                                " (or fit the initial state: initial_state='estimate')"
+                                if from_rest and fix is None else "")),
         stacklevel=user_stacklevel() if stacklevel is None else stacklevel)
     return True
 

@@ -39,7 +39,13 @@ def _experiments(data: Any, who: str) -> tuple[list[tuple[np.ndarray, np.ndarray
     require_inputs_vary(exps, who, data.input_names, error=ExcitationError)
     from ..data.offsets import check_offsets
 
-    check_offsets(data)  # the FIR has no constant term, as every estimator
+    # Markov parameters have neither a constant term nor an initial state: an offset costs
+    # them what it costs a model simulated from rest (the dryer and heating-system records:
+    # ERA of order 2 validated 39 and 34 % raw against 81 and 66 % detrended, while the
+    # quick fit from measured samples lost nothing); the means removed inside would not
+    # help either: the model still lacks the offset when it meets raw data
+    check_offsets(data, from_rest=True,
+                  fix="Markov parameters carry neither a constant term nor an initial state")
     return [(np.asarray(u, dtype=float), np.asarray(y, dtype=float)) for u, y in exps], data.dt
 
 
