@@ -80,3 +80,13 @@ def test_bad_records_are_refused_clearly() -> None:
         input_coverage((u, u), (u, u), segment=4)
     with pytest.raises(sysid.DataError, match="floor"):
         input_coverage((u, u), (u, u), floor=2.0)
+
+
+def test_a_validation_input_that_stands_still_is_no_extrapolation():
+    # a heater held at one level through the validation part (a PID log): its rounding
+    # noise sat in a bin the estimation input's spectrum leaves empty, read as 67 % outside
+    rng = np.random.default_rng(3)
+    u = np.r_[rng.standard_normal(3000), np.full(1500, 21.116)]
+    y = np.zeros_like(u)
+    cov = input_coverage((u[:3000], y[:3000]), (u[3000:], y[3000:]))
+    assert not cov.extrapolates and cov.outside[0] == 0.0

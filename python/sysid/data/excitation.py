@@ -70,11 +70,11 @@ def _centred(w: np.ndarray, x: np.ndarray) -> np.ndarray:
     return w * (x - (w * x).sum(axis=0) / w.sum())
 
 
-def _power(x: np.ndarray) -> np.ndarray:
+def _power(x: np.ndarray, longest: int = SEGMENT) -> np.ndarray:
     """Two-sided windowed periodogram of the variation of the columns of ``x`` (``(nfft,
-    k)``, window-weighted mean removed), averaged over segments of at most :data:`SEGMENT`
-    samples (half overlapping)."""
-    seg, starts = _segments(x.shape[0])
+    k)``, window-weighted mean removed), averaged over segments of at most ``longest``
+    samples (half overlapping; records of that length or more share one frequency grid)."""
+    seg, starts = _segments(x.shape[0], longest)
     w = _window(seg)[:, None]
     out = np.zeros((seg, x.shape[1]))
     for s in starts:
