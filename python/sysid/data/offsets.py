@@ -285,7 +285,7 @@ def check_offsets(data: Any, *, stacklevel: int | None = None, who: str = "ident
         "line: --detrend mean); or use sysid.identify(data), which removes it and restores it "
         "in its predictions" + (f" ({fix})" if fix else
                                 " (or fit the initial state: initial_state='estimate')"
-                                if from_rest and fix is None else "")),
+                                if from_rest else "")),
         stacklevel=user_stacklevel() if stacklevel is None else stacklevel)
     return True
 

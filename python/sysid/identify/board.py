@@ -46,7 +46,7 @@ from ..validation.ties import (  # the subspace automatic order's rule too
 )
 
 __all__ = ["Board", "RESOLUTION", "slack", "tie", "bic", "free_poles", "held_out_score",
-           "noise_fitted"]
+           "noise_fitted", "unstable"]
 
 def block_fit(fits: Any) -> float:
     """A block's fit: the mean over its outputs (those that move), ``-inf`` when none does."""
@@ -186,6 +186,13 @@ def free_poles(model: Any) -> np.ndarray:
         return poles
     pinned = np.argsort(np.abs(poles - 1.0), kind="stable")[:len(spec["outputs"])]
     return np.delete(poles, pinned)
+
+
+def unstable(model: Any) -> bool:
+    """Whether a pole of ``model`` other than its integrators made explicit
+    (:func:`free_poles`) lies on or outside the unit circle: the stability identify judges,
+    warns about and reports."""
+    return bool(np.any(np.abs(free_poles(model)) >= 1.0))
 
 
 class Board:

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..data.iodata import IOData
 from ..errors import DataError
-from .board import Board, bic, free_poles
+from .board import Board, bic, unstable
 
 #: candidates the held-out blocks cannot tell apart that are re-fitted and compared by BIC
 N_FINAL = 12
@@ -76,8 +76,8 @@ def _refit_one(r: dict[str, Any], data: IOData, stable_only: bool) -> Any:
     except Exception as e:  # noqa: BLE001 - try the next candidate
         r["note"] = f"re-fit on the whole record failed ({type(e).__name__})"
         return None
-    if stable_only and np.any(np.abs(free_poles(m)) >= 1.0):  # an integrator made explicit
-        # (:mod:`.integrating`) is a pole pinned at 1, not a diverging mode
+    if stable_only and unstable(m):  # an integrator made explicit (:mod:`.integrating`) is
+        # a pole pinned at 1, not a diverging mode
         r["note"] = "re-fit on the whole record unstable"
         return None
     return m

@@ -97,7 +97,7 @@ from ..validation.crossval import (
     simulation_fit,
 )
 from ..validation.records import validation_record
-from .board import Board, free_poles
+from .board import Board, free_poles, unstable
 from .choice import _choose
 from .integrating import integrating_candidates, integrating_note
 from .notes import persistent_mode_check, refit_cap_check, trend_check, weak_check
@@ -739,10 +739,11 @@ def identify(
         enforce_stability is None and insist is None))
     if (note := integrating_note(model)) is not None:
         checks["integrating"] = note
-    if np.any(np.abs(free_poles(model)) >= 1.0):
+    if unstable(model):
         from ..errors import StabilityWarning
 
-        rho = float(np.max(np.abs(model.poles())))
+        free = free_poles(model)  # an integrator made explicit is said by its own check
+        rho = float(np.max(np.abs(free)))
         over = board.insisted_over
         # with no stable candidate scored there was nothing to compare it with: the data did
         # not show an unstable model better than a stable one, only that none was stable
@@ -757,7 +758,7 @@ def identify(
                f"an integrating or unstable plant does; if the plant is stable, the mode is "
                f"one the record does not pin down")
         warnings.warn(f"identify returns an unstable model (largest pole modulus {modulus(rho)}; "
-                      f"{unstable_modes(model.poles(), model.dt)}): {why}; pass "
+                      f"{unstable_modes(free, model.dt)}): {why}; pass "
                       f"enforce_stability=True for the best stable model",
                       StabilityWarning, stacklevel=user_stacklevel())
     for r in ranked:

@@ -12,6 +12,7 @@ from .._display import HTMLResult, model_html
 from ..data.iodata import IOData
 from ..errors import DataError, several_records_hint
 from ..models.subsystem import ChannelSelection
+from .board import unstable
 
 __all__ = ["IdentifiedModel", "IdentifyResult"]
 
@@ -223,13 +224,11 @@ class IdentifiedModel(ChannelSelection):
                    d["y_offset"])
 
     def __repr__(self) -> str:
-        from .board import free_poles
-
         s = self.statespace
         spec = s.info.get("integrating") or {}
         names = [str(s.output_names[i]) for i in spec.get("outputs", [])]
         flags = (f", integrator on {', '.join(names)}" if names else "") + (
-            ", UNSTABLE" if np.any(np.abs(free_poles(s)) >= 1.0) else "")
+            ", UNSTABLE" if unstable(s) else "")
         return (f"IdentifiedModel({s.info.get('identify', {}).get('family', 'model')}, "
                 f"order {s.nstates}, {s.ninputs} input(s), {s.noutputs} output(s), "
                 f"offsets removed{flags})")
