@@ -320,3 +320,38 @@ def test_an_offset_the_quick_fit_cannot_judge_is_flagged_by_its_ratio():
         step = np.r_[np.zeros(100), np.ones(n - 100)]
         assert not check_offsets(sysid.IOData(u=np.c_[0.3 + u0, step],
                                               y=yc + 2.0 * yc.std() * step, dt=1.0))
+
+
+def _series(a, n=2000, seed=3):
+    """An AR series ``A(q) y = e`` (``a``: A's coefficients after the leading 1)."""
+    from scipy.signal import lfilter
+
+    return lfilter([1.0], np.r_[1.0, a], np.random.default_rng(seed).standard_normal(n))
+
+
+@pytest.mark.parametrize("fit", [lambda y: sysid.ar(y, 2), lambda y: sysid.arma(y, 2, 1)],
+                         ids=["ar", "arma"])
+def test_time_series_offsets_are_screened_by_what_they_cost(fit):
+    """A time series 2-3 standard deviations off zero passed unwarned (the screen's quick fit
+    needed an input) while ``ar`` returned poles 0.96 and 0.63 for 0.75 +- 0.37j; a series
+    whose pole is near 1 anyway loses almost nothing to its mean and stays unwarned."""
+    y = _series([-1.5, 0.7])
+    for shift, due in ((0.0, False), (2.0, True), (3.4, True)):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            fit(y + shift * y.std())
+        offs = [w for w in caught if issubclass(w.category, OffsetWarning)]
+        assert len(offs) == int(due), (shift, [str(w.message) for w in offs])
+        if due:
+            assert "AR(2)" in str(offs[0].message) and "one-step errors" in str(offs[0].message)
+    # the raw fit's poles are the harm the warning names
+    raw = np.sort(np.abs(sysid.ar(y - y.mean(), 2).poles()))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", OffsetWarning)
+        shifted = np.sort(np.abs(sysid.ar(y + 3.4 * y.std(), 2).poles()))
+    assert shifted[-1] > raw[-1] + 0.1
+    slow = _series([-0.95])
+    assert offset_effect(sysid.IOData(u=None, y=(slow + 3.0 * slow.std())[:, None])) < 0.05
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", OffsetWarning)
+        sysid.ar(slow + 3.0 * slow.std(), 1)
