@@ -14,7 +14,7 @@ import numpy as np
 from ..data.iodata import IOData
 from ..errors import DataError, InsufficientDataError
 from ..validation.crossval import MIN_BLOCK
-from .load import _load
+from .load import _load, fill_gaps
 from .pipeline import _check_report_dir, _print_summary, _validate, identify
 from .progress import _bars, _Progress
 
@@ -71,6 +71,9 @@ def _identify(args: argparse.Namespace) -> int:
 
     pre: dict[str, Any] = {"file": str(args.data), "inputs": [names[i] for i in ui],
                            "outputs": [names[i] for i in yi]}
+    u, y, t, filled = fill_gaps(u, y, t, args.fill_gaps, [names[i] for i in ui + yi], say)
+    if filled is not None:
+        pre["filled_gaps"] = filled
     if t is not None:
         if args.dt is not None:
             raise DataError("give either --dt or --time, not both")

@@ -95,7 +95,9 @@ def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         ti = [_columns(args.time, names, "times")[0]] if args.time is not None else []
         z = read_columns(path, [names[i] for i in ui + yi + ti], delimiter=args.delimiter,
                          progress=_bars(args), stamps=args.time and names[ti[0]],
-                         decimal=args.decimal, hint=DECIMAL_HINT)
+                         decimal=args.decimal, hint=DECIMAL_HINT,
+                         missing=[names[i] for i in ui + yi]
+                         if getattr(args, "fill_gaps", None) is not None else None)
         u, y = z[:, :len(ui)], z[:, len(ui):len(ui) + len(yi)]
         t = z[:, -1] * _streamed_time_scale(args, path, names[ti[0]]) if ti else None
         return names, ui, yi, u, y, t
@@ -109,8 +111,9 @@ def _load(args: argparse.Namespace, say: Callable[[str], None]) -> tuple[
         "column(s)")
     _find_time(args, names, ui + yi, say)
     _check_dt(args, table, row_units, ui + yi)
-    u = numeric(table, ui, decimal=dec, hint=DECIMAL_HINT)
-    y = numeric(table, yi, decimal=dec, hint=DECIMAL_HINT)
+    gaps = getattr(args, "fill_gaps", None) is not None  # missing cells come as NaN
+    u = numeric(table, ui, decimal=dec, hint=DECIMAL_HINT, missing=gaps)
+    y = numeric(table, yi, decimal=dec, hint=DECIMAL_HINT, missing=gaps)
     t = None
     if args.time is not None:
         ti = _columns(args.time, names, "times")[0]
@@ -150,3 +153,58 @@ def _header(path: Path, delimiter: str | None, decimal: str = ".") -> list[str]:
         return list(pq.ParquetFile(path).schema_arrow.names)
     return header(path, delimiter, decimal=decimal).names
 
+
+
+def fill_gaps(u: np.ndarray, y: np.ndarray, t: np.ndarray | None, max_gap: int | None,
+              names: list[str], say: Callable[[str], None]
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, dict | None]:
+    """``--fill-gaps N``: the missing cells (NaN) of ``u`` and ``y`` filled linearly in runs of
+    at most ``max_gap`` samples of a channel (:func:`sysid.repair_nan`), rows at the start or
+    end that miss a cell dropped (``t`` with them), and what was done for the report (None:
+    nothing was missing). A longer run inside the record is refused, naming its channel,
+    rows and length: a block of made-up samples is not data (cut the file there, or read it
+    with ``IOData.from_csv(..., nan="split")``, which makes each part an experiment).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> u, y = np.arange(6.0)[:, None], np.array([[np.nan], [1], [np.nan], [3], [4], [5]])
+    >>> u2, y2, _, note = fill_gaps(u, y, None, 2, ["u", "y"], lambda s: None)
+    >>> y2.ravel().tolist(), note["filled_cells"], note["rows_kept"]
+    ([1.0, 2.0, 3.0, 4.0, 5.0], 1, [1, 6])
+    """
+    if max_gap is None:
+        return u, y, t, None
+    if max_gap < 1:
+        raise DataError(f"--fill-gaps must be a positive number of samples, got {max_gap}")
+    x = np.concatenate([u, y], axis=1)
+    bad = np.isnan(x)
+    if not bad.any():
+        return u, y, t, None
+    from ..data.raw import _runs, repair_nan
+
+    rows = bad.any(axis=1)
+    first = int(np.argmin(rows))  # the first and last complete rows
+    last = len(rows) - int(np.argmin(rows[::-1]))
+    if rows.all():
+        raise DataError("every row misses a cell of the inputs or outputs: nothing to fill "
+                        "from")
+    for j in range(x.shape[1]):
+        for a, b in _runs(bad[first:last, j]):
+            if b - a > max_gap:
+                raise DataError(
+                    f"column {names[j]!r} misses {b - a} samples in a row (data rows "
+                    f"{first + a + 1}-{first + b}), more than --fill-gaps {max_gap}: a longer "
+                    "run is not filled with made-up samples; cut the file there, or read it "
+                    "in Python with sysid.IOData.from_csv(path, nan='split', ...), which makes "
+                    "each part an experiment")
+    (uu, yy, _), = repair_nan(u[first:last], y[first:last], nan="interpolate",
+                              max_gap=max_gap)
+    filled = int(bad[first:last].sum())
+    note = {"filled_cells": filled, "max_gap": int(max_gap),
+            "rows_kept": [first, last], "rows_in_file": len(rows)}
+    dropped = first + len(rows) - last
+    say(f"filled {filled} missing cell(s) linearly (runs of at most {max_gap} samples)"
+        + (f"; dropped {dropped} row(s) at the start or end that miss one" if dropped else ""))
+    return (np.asarray(uu if uu is not None else u[first:last], float), np.asarray(yy, float),
+            None if t is None else t[first:last], note)

@@ -61,6 +61,12 @@ def _parser() -> argparse.ArgumentParser:
     ide.add_argument("--resample-gap", dest="resample_gap", type=float, default=5.0,
                      help="with --resample: longest interval between stamps bridged, in sample "
                           "times (default 5); a longer one is refused, naming it")
+    ide.add_argument("--fill-gaps", dest="fill_gaps", type=int, default=None, metavar="N",
+                     help="missing cells (empty or nan) of the inputs and outputs: fill runs "
+                          "of at most N samples of a channel linearly between the samples "
+                          "around them, and drop rows at the file's start or end that miss "
+                          "one; a longer run is refused, naming it (default: any missing "
+                          "cell is refused); noted in the report")
     ide.add_argument("--detrend", choices=("auto", "none", "mean", "linear"), default="auto",
                      help="remove the estimation part's means (or lines) first; recorded in "
                           "the model. auto (default): none when sysid.identify runs (it "

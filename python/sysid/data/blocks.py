@@ -13,6 +13,7 @@ import numpy as np
 
 from ..errors import DataError
 from .table import (
+    REPAIR,
     ForwardReader,
     Uncommented,
     decompressing,
@@ -43,7 +44,8 @@ class _CountingFile(ForwardReader):
 
 def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None = None,
                  progress: bool | None = None, block_size: int | None = None,
-                 stamps: str | None = None, decimal: str = ".", hint: str = "") -> np.ndarray:
+                 stamps: str | None = None, decimal: str = ".", hint: str = "",
+                 missing: list[str] | None = None) -> np.ndarray:
     """Read the named numeric columns of a large CSV or Parquet file in blocks.
 
     CSV goes through pyarrow's streaming reader (``pyarrow.csv.open_csv``, blocks of
@@ -59,9 +61,10 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
     ``+hh:mm`` offsets), returned as seconds after the first. ``decimal=","`` reads decimal
     commas (CSV); ``hint`` says how to ask for them in a number's error.
 
-    Every value must be a finite number. A CSV cell that is not (text, empty, ``nan``,
-    ``inf``) raises the :class:`~sysid.DataError` of :func:`sysid.cli.read_csv`, naming its
-    file line (the header counted) and column: the file is read again from the block that
+    Every value must be a finite number, but in the columns ``missing``, where an empty cell or
+    ``nan`` is read as NaN (for the caller to repair). A CSV cell that is not (text, empty,
+    ``nan``, ``inf``) raises the :class:`~sysid.DataError` of :func:`sysid.cli.read_csv`, naming
+    its file line (the header counted) and column: the file is read again from the block that
     held it, line by line, by the in-memory reader's rules (``sysid.data.table``). A Parquet
     value that is not finite is named by its row and column.
 
@@ -88,6 +91,7 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
     text: str | None = None  # a column of date-time stamps, read as text
     t0: list[int] = []  # the file's first stamp (ns)
     rows = 0  # data rows read whole: the bad cell is in the block after them
+    gaps = np.array([c in (missing or ()) for c in columns], dtype=bool)  # NaN allowed
 
     def values(batch: Any, c: str) -> np.ndarray:
         col = batch.column(batch.schema.names.index(c))
@@ -107,15 +111,18 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
         """Keep a block's columns as float64; whether they are all finite."""
         parts.append(np.column_stack([values(batch, c) for c in columns]) if columns
                      else np.zeros((batch.num_rows, 0)))
-        return bool(np.isfinite(parts[-1]).all())
+        ok = np.isfinite(parts[-1])
+        if gaps.any():
+            ok |= np.isnan(parts[-1]) & gaps
+        return bool(ok.all())
 
     if path.suffix.lower() in (".parquet", ".pq"):
         import pyarrow.parquet as pq
 
         pf = pq.ParquetFile(path)
-        missing = [c for c in columns if c not in pf.schema_arrow.names]
-        if missing:
-            raise DataError(f"{path.name}: no column(s) {missing}; the file has "
+        absent = [c for c in columns if c not in pf.schema_arrow.names]
+        if absent:
+            raise DataError(f"{path.name}: no column(s) {absent}; the file has "
                             f"{pf.schema_arrow.names}")
         with Bar(pf.metadata.num_rows, f"reading {path.name}", unit="rows", unit_scale=True,
                  enabled=show(progress)) as bar:
@@ -126,7 +133,7 @@ def read_columns(path: str | Path, columns: list[str], *, delimiter: str | None 
                     raise DataError(
                         f"{path.name} row {done + r + 1}, column {columns[c]!r}: "
                         f"{parts[-1][r, c]} is not a finite number; fix or remove that row "
-                        "(missing values must be repaired before identification)")
+                        f"({REPAIR})")
                 done += batch.num_rows
                 bar.update(batch.num_rows)
     else:

@@ -135,6 +135,11 @@ def _fields(path: Path, k: int, cells: list[str], n: int) -> list[str]:
     return cells
 
 
+#: How a record with missing cells is repaired: the readers' and the command's options.
+REPAIR = ("missing values must be repaired before identification: IOData.from_csv(path, nan="
+          "'interpolate' or 'split'), or the command's --fill-gaps N")
+
+
 def cell_error(path: Path, line: int, column: str, cell: str, *, missing: bool = False,
                decimal: str = ".", hint: str = "") -> DataError:
     """The error for a field that is not a (finite) number: its file, line and column, what
@@ -148,8 +153,7 @@ def cell_error(path: Path, line: int, column: str, cell: str, *, missing: bool =
                  else " (only ASCII digits, signs, '.' and exponents are read)")
     if hint and decimal == "." and "," in cell and is_number(cell, ","):
         what += f" (a decimal comma? {hint})"
-    fix = ("fix or remove that row" if missing else "fix or remove that row "
-           "(missing values must be repaired before identification)")
+    fix = "fix or remove that row" if missing else f"fix or remove that row ({REPAIR})"
     return DataError(f"{path.name} line {line}, column {column!r}: {what}; {fix}")
 
 
