@@ -119,8 +119,7 @@ from pathlib import Path
 import numpy as np
 
 # the record tables read from ``DIR/<name>.npz``
-from realdata_records import (  # noqa: F401
-    FRESH, FRESH2, FRESH3, FRESH4, FRESH5, FRESH6, MORE, SWEEPS)
+from realdata_records import FRESH, FRESH2, FRESH3, FRESH4, FRESH5, FRESH6, MORE, SWEEPS  # noqa: F401
 
 HERE = Path(__file__).resolve().parent
 SHARED = Path("/work/shared/data")

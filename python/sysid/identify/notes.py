@@ -72,9 +72,9 @@ def persistent_mode_check(model: Any, data: IOData, checks: dict[str, Any]) -> N
     >>> persistent_mode_check(m, d, checks)
     >>> checks["persistent_mode"][:40]
     'a pole of modulus 1 - 1e-08 keeps 100 % '
-    >>> pair = 1 - 1e-8, 0.3  # modulus and angle: an undamped oscillation of period 21 samples
-    >>> m = sysid.StateSpaceModel(pair[0] * np.array([[np.cos(pair[1]), -np.sin(pair[1])],
-    ...                           [np.sin(pair[1]), np.cos(pair[1])]]), [[1.0], [0.0]], [[1.0, 0.0]])
+    >>> r, a = 1 - 1e-8, 0.3  # modulus and angle: an undamped oscillation of period 21 samples
+    >>> A = r * np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    >>> m = sysid.StateSpaceModel(A, [[1.0], [0.0]], [[1.0, 0.0]])
     >>> persistent_mode_check(m, d, checks)
     >>> "undamped oscillation of period 20.9 samples" in checks["persistent_mode"]
     True
