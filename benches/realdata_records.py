@@ -81,6 +81,8 @@ FRESH6 = {
     # 10 ms: heater voltage -> air temperature; a 1 -> 5 V step test estimates, a PID run
     # (set-point step 30 -> 35 degC) validates
     "airduct45": ("airduct45_step", "airduct45_pid"),  # the same duct, damper at 45 deg
+    "airduct90_ff": ("airduct90_ff", None),  # the duct at 90 deg under feedforward and PI
+    # control (set-point step 30 -> 35 degC, closed loop): heater voltage -> temperature
     "aeroshield": ("aeroshield_id", "aeroshield_val"),  # propeller-driven pendulum, 10 ms: motor
     # voltage (APRBS) -> pendulum angle (the second test validates the first)
 }
