@@ -79,6 +79,9 @@ bed); sources, SHA-256, how each ``.npz`` is made and the findings: results/real
 ``--fresh5-records DIR`` (``FRESH5``, results/realdata_fresh5_table[_<split>].md): the fifth
 sweep's records (a battery cell's pulse test, a car's lateral force, a ship model's zigzag);
 sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh5.md.
+``--fresh6-records DIR`` (``FRESH6``, results/realdata_fresh6_table[_<split>].md): the sixth
+sweep's records (a heated air duct at two damper settings, a propeller-driven pendulum);
+sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh6.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -116,7 +119,7 @@ from pathlib import Path
 import numpy as np
 
 # the record tables read from ``DIR/<name>.npz``
-from realdata_records import FRESH, FRESH2, FRESH3, FRESH4, FRESH5, MORE, SWEEPS  # noqa: F401
+from realdata_records import FRESH, FRESH2, FRESH3, FRESH4, FRESH5, FRESH6, MORE, SWEEPS  # noqa: F401
 
 HERE = Path(__file__).resolve().parent
 SHARED = Path("/work/shared/data")

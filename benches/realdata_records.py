@@ -74,10 +74,24 @@ FRESH5 = {
     # the heading), 50 ms: rudder -> yaw rate, heading (the 20/10 zigzag validates)
 }
 
+#: the sixth sweep's records (``--fresh6-records DIR``), read as ``FRESH``'s are (sources:
+#: results/realdata_fresh6.md)
+FRESH6 = {
+    "airduct90": ("airduct90_step", "airduct90_pid"),  # heated air duct, damper open (90 deg),
+    # 10 ms: heater voltage -> air temperature; a 1 -> 5 V step test estimates, a PID run
+    # (set-point step 30 -> 35 degC) validates
+    "airduct45": ("airduct45_step", "airduct45_pid"),  # the same duct, damper at 45 deg
+    "airduct90_ff": ("airduct90_ff", None),  # the duct at 90 deg under feedforward and PI
+    # control (set-point step 30 -> 35 degC, closed loop): heater voltage -> temperature
+    "aeroshield": ("aeroshield_id", "aeroshield_val"),  # propeller-driven pendulum, 10 ms: motor
+    # voltage (APRBS) -> pendulum angle (the second test validates the first)
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
 SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"),
           "fresh2": ("FRESH2", "realdata_fresh2"), "fresh3": ("FRESH3", "realdata_fresh3_table"),
           "fresh4": ("FRESH4", "realdata_fresh4_table"),
-          "fresh5": ("FRESH5", "realdata_fresh5_table")}
+          "fresh5": ("FRESH5", "realdata_fresh5_table"),
+          "fresh6": ("FRESH6", "realdata_fresh6_table")}

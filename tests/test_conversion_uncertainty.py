@@ -4,6 +4,8 @@ every ``std=True`` after them raised "no parameter uncertainty"). What a convers
 unchanged has the same standard deviation after it; what it changes (continuous poles)
 has the spread of the converted draws."""
 
+import warnings
+
 import numpy as np
 import pytest
 
@@ -96,3 +98,30 @@ def test_a_change_of_state_basis_keeps_every_std(record, convert):
     # and the DC gain have the standard deviations they had
     for m in (sysid.n4sid(record, 2), sysid.oe(record, 2, 2, 1)):
         np.testing.assert_allclose(_stds(convert(m)), _stds(m), rtol=1e-6)
+
+
+def test_pole_std_of_a_dead_time_realised_as_a_delay_line():
+    # Before: poles(std=True) raised "the number of poles changed between samples" on a
+    # process model with a dead time realised as states (identify's model of a heated air
+    # duct's step test, 20 delay-line poles): the delay line's poles at z = 0 coincide, so
+    # they go to Monte Carlo, and a draw whose dead time crosses a sample boundary has one
+    # pole more or fewer there
+    dt = 0.1
+    true = sysid.ProcessModel("P1D", Kp=2.0, Tp1=1.5, Td=1.995)  # 19.95 samples
+    rng = np.random.default_rng(1)
+    u = np.repeat(rng.choice([-1.0, 1.0], 60), 10)
+    y = true.to_statespace(dt=dt).simulate(u).ravel() + 0.05 * rng.standard_normal(u.size)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        pm = sysid.procest(sysid.IOData(u=u, y=y, dt=dt), "P1D")
+    sd_td = float(np.sqrt(pm.uncertainty.covariance[2, 2]))
+    td, tp1 = pm.uncertainty.theta[2], pm.uncertainty.theta[1]  # Kp, Tp1, Td
+    assert abs(td / dt - 20.0) < 3 * sd_td / dt  # draws fall on both sides of 20 samples
+    ss = pm.to_statespace(dt=dt)
+    p, sd = ss.poles(std=True)
+    slow = np.abs(p) > 0
+    assert slow.sum() == 1 and np.all(sd[~slow] == 0)  # the delay line's poles: exact
+    # the process pole exp(-dt / Tp1): first order through Tp1
+    z = float(p[slow][0].real)
+    expected = z * dt / tp1**2 * float(np.sqrt(pm.uncertainty.covariance[1, 1]))
+    assert np.isclose(float(sd[slow][0].real), expected, rtol=0.05)

@@ -19,14 +19,16 @@ def quiet_identify(data):
         return sysid.identify(data, progress=False)
 
 
-def test_the_robot_arm_integrator_is_noted():
+def test_the_robot_arm_persistent_pair_is_noted():
+    # the persistent mode is a pair turning 173 times over the half record (period 2.95
+    # samples): an undamped oscillation there, not an integrator (said as one before)
     d = sysid.datasets.load_robot_arm()
     half = d.lengths[0] // 2
     res = quiet_identify(sysid.IOData(u=d.u[:half], y=d.y[:half], dt=d.dt))
     rho = float(np.max(np.abs(res.model.poles())))
     assert rho ** half > PERSISTENT_DECAY  # the case: a mode that keeps > 99 % over the record
     assert "persistent_mode" in res.checks, res.checks
-    assert "integrator" in res.checks["persistent_mode"]
+    assert "undamped oscillation" in res.checks["persistent_mode"]
 
 
 def test_a_plant_with_decaying_modes_gets_no_note():
@@ -45,3 +47,40 @@ def test_the_rule_follows_the_record_length():
     unstable = sysid.StateSpaceModel([[1.01]], [[1.0]], [[1.0]])  # warned where chosen
     persistent_mode_check(unstable, sysid.IOData(u=np.ones(50), y=np.ones(50) * 2), checks)
     assert checks == {}
+
+
+def _rotation(rho: float, angle: float) -> sysid.StateSpaceModel:
+    """A pair of poles ``rho exp(+-j angle)``."""
+    c, s = np.cos(angle), np.sin(angle)
+    return sysid.StateSpaceModel(rho * np.array([[c, -s], [s, c]]), [[1.0], [0.0]],
+                                 [[1.0, 0.0]])
+
+
+def test_an_undamped_pair_is_named_an_oscillation_not_an_integrator():
+    # Before: a pendulum's pair at modulus 1 - 1.3e-10, turning 77 times over its record
+    # (5001 samples), was noted as acting "as an integrator", its static gain growing as
+    # 1 / (1 - |p|), with a drift's advice; the pair's static gain is set by |1 - p|
+    n, period = 5000, 65.0
+    checks: dict = {}
+    persistent_mode_check(_rotation(1 - 1e-9, 2 * np.pi / period),
+                          sysid.IOData(u=np.ones(n), y=np.zeros(n)), checks)
+    note = checks["persistent_mode"]
+    assert "undamped oscillation of period 65 samples" in note, note
+    assert "integrator" not in note and "detrend" not in note, note
+    # a pair turning less than once over the record still acts as an integrator there
+    checks = {}
+    persistent_mode_check(_rotation(1 - 1e-9, 2 * np.pi / (3 * n)),
+                          sysid.IOData(u=np.ones(n), y=np.zeros(n)), checks)
+    assert "integrator" in checks["persistent_mode"]
+
+
+def test_a_real_pole_near_one_is_named_before_a_pair():
+    # both persist: the integrator (the static gain the data leave open) is what is said
+    A = np.zeros((3, 3))
+    A[:2, :2] = _rotation(1 - 1e-9, 0.3).A
+    A[2, 2] = 1 - 1e-7
+    m = sysid.StateSpaceModel(A, np.ones((3, 1)), np.ones((1, 3)))
+    checks: dict = {}
+    persistent_mode_check(m, sysid.IOData(u=np.ones(1000), y=np.zeros(1000)), checks)
+    assert "1 - 1e-07" in checks["persistent_mode"]
+    assert "integrator" in checks["persistent_mode"]

@@ -54,10 +54,13 @@ def trend_check(model: Any, data: IOData, checks: dict[str, Any]) -> None:
 
 def persistent_mode_check(model: Any, data: IOData, checks: dict[str, Any]) -> None:
     """``checks["persistent_mode"]`` when a pole of the chosen (stable) discrete-time model
-    decays by less than ``1 - PERSISTENT_DECAY`` over the longest experiment: within the
-    record the mode is an integrator, and how far inside the unit circle it sits (often just
-    where the stability bound of the search held it) is not determined by the data, nor are
-    the static gain and the step response's final value, which grow as ``1 / (1 - |p|)``.
+    decays by less than ``1 - PERSISTENT_DECAY`` over the longest experiment. How far inside
+    the unit circle it sits (often just where the stability bound of the search held it) is
+    then not determined by the data. A real pole, or one turning less than once over the
+    record, acts there as an integrator: the static gain and the step response's final value
+    grow as ``1 / (1 - |p|)``. A pair turning more often is an undamped oscillation: its
+    damping and the height of its resonance peak are what the data leave open (its static
+    gain is set by ``|1 - p|``, not by ``1 - |p|``), and the advice is not a drift's.
 
     Examples
     --------
@@ -69,6 +72,12 @@ def persistent_mode_check(model: Any, data: IOData, checks: dict[str, Any]) -> N
     >>> persistent_mode_check(m, d, checks)
     >>> checks["persistent_mode"][:40]
     'a pole of modulus 1 - 1e-08 keeps 100 % '
+    >>> r, a = 1 - 1e-8, 0.3  # modulus and angle: an undamped oscillation of period 21 samples
+    >>> A = r * np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    >>> m = sysid.StateSpaceModel(A, [[1.0], [0.0]], [[1.0, 0.0]])
+    >>> persistent_mode_check(m, d, checks)
+    >>> "undamped oscillation of period 20.9 samples" in checks["persistent_mode"]
+    True
     """
     if isinstance(model, ContinuousStateSpace) or not hasattr(model, "poles") or (
             (getattr(model, "info", None) or {}).get("integrating")):
@@ -83,18 +92,38 @@ def persistent_mode_check(model: Any, data: IOData, checks: dict[str, Any]) -> N
     n = max(data.lengths)
     if not 0.0 < rho < 1.0:
         return  # an unstable model is warned about where it is chosen
-    kept = mode_kept(rho, n)
-    if kept <= PERSISTENT_DECAY:
+    kept = np.array([mode_kept(float(abs(z)), n) for z in poles])
+    persistent = kept > PERSISTENT_DECAY
+    if not persistent.any():
         return
-    shown = f"1 - {1.0 - rho:.2g}" if rho > 0.999 else modulus(rho)
+    # turns over the record: below one the mode cannot be told from an integrator there
+    turns = np.abs(np.angle(poles)) * n / (2 * np.pi)
+    slow = persistent & (turns < 1.0)
+    k = int(np.argmax(np.where(slow if slow.any() else persistent, kept, -1.0)))
+    z = complex(poles[k])
+    shown = f"1 - {1.0 - abs(z):.2g}" if abs(z) > 0.999 else modulus(abs(z))
+    if slow.any():
+        checks["persistent_mode"] = (
+            f"a pole of modulus {shown} keeps {100 * kept[k]:.0f} % of its mode over the "
+            f"record ({n} samples): within the record it acts as an integrator, and the data "
+            f"do not say how far inside the unit circle it is (nor the static gain and the "
+            f"step response's final value, which grow as 1 / (1 - |p|)); read the model's "
+            f"response within the record's time span only. If the plant integrates, say so "
+            f"in the structure (identify the differenced output, or enforce_stability=False); "
+            f"if it does not, look for a drift in the output (sysid.detrend(data, 'linear'))")
+        return
+    period = 2 * np.pi / abs(float(np.angle(z)))
+    what = "a pair of poles" if z.imag != 0.0 else "a pole"  # a real one: at -1
     checks["persistent_mode"] = (
-        f"a pole of modulus {shown} keeps {100 * kept:.0f} % of its mode over the "
-        f"record ({n} samples): within the record it acts as an integrator, and the data do "
-        f"not say how far inside the unit circle it is (nor the static gain and the step "
-        f"response's final value, which grow as 1 / (1 - |p|)); read the model's response "
-        f"within the record's time span only. If the plant integrates, say so in the "
-        f"structure (identify the differenced output, or enforce_stability=False); if it "
-        f"does not, look for a drift in the output (sysid.detrend(data, 'linear'))")
+        f"{what} of modulus {shown} keeps {100 * kept[k]:.0f} % of its mode over "
+        f"the record ({n} samples): within the record it is an undamped oscillation of "
+        f"period {period:.3g} samples, and the data do not say how far inside the unit circle "
+        f"it is (nor its damping, nor the height of its resonance peak, which grows as "
+        f"1 / (1 - |p|)); read the model's response within the record's time span only. Such "
+        f"a pair often sits where the search's stability bound held it: if the plant is "
+        f"lightly damped, a record in which its oscillations visibly decay (a longer one, or "
+        f"a free decay) sets the damping; if it is not, look for a periodic disturbance in "
+        f"the output (sysid.spectra(data)) or an order higher than the data support")
 
 
 def weak_check(held_out_fit: float, checks: dict[str, Any]) -> None:

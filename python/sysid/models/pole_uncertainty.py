@@ -90,10 +90,39 @@ def pole_groups(model: Any, n: int) -> list[slice]:
     return [slice(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:]) if b > a]
 
 
+def _origin_aligned(lam: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """``p`` with poles at the origin added or dropped to give ``lam``'s number of poles:
+    a dead time realised as a delay line has a pole at ``z = 0`` per sample, so a draw
+    whose dead time crosses a sample boundary has one more or one fewer of them (those
+    poles carry no uncertainty of their own). Any other difference raises.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> _origin_aligned(np.array([0.9, 0.0, 0.0]), np.array([0.91, 0.0])).tolist()
+    [(0.91+0j), 0j, 0j]
+    >>> _origin_aligned(np.array([0.9, 0.0]), np.array([0.0, 0.91, 0.0])).tolist()
+    [(0.91+0j), 0j]
+    """
+    lam, p = np.asarray(lam, complex), np.asarray(p, complex)
+    tiny = 1e-9 * max(1.0, float(np.max(np.abs(lam), initial=0.0)))
+    extra = p.size - lam.size
+    if extra > 0:
+        order = np.argsort(np.abs(p), kind="stable")
+        if np.all(np.abs(p[order[:extra]]) <= tiny):
+            return p[np.sort(order[extra:])]
+    elif extra < 0 and np.sum(np.abs(lam) <= tiny) >= -extra:
+        return np.r_[p, np.zeros(-extra, complex)]
+    return _match(lam, p)     # raises: the number of poles changed
+
+
 def _match_groups(lam: np.ndarray, p: np.ndarray, groups: list[slice]) -> np.ndarray:
-    """``p`` reordered to match ``lam``, each group among its own roots."""
+    """``p`` reordered to match ``lam``, each group among its own roots (a draw with more or
+    fewer delay-line poles at the origin first aligned, :func:`_origin_aligned`)."""
     if p.size != lam.size:
-        return _match(lam, p)     # raises: the number of poles changed
+        p = _origin_aligned(lam, p)
+        if len(groups) > 1:
+            return _match(lam, p)  # the groups' sizes are the nominal's: match as a whole
     out = np.empty_like(p)
     for g in groups:
         out[g] = _match(lam[g], p[g])
