@@ -32,13 +32,14 @@ their errors are the whitened innovations, and their Gauss-Newton covariance sta
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 
 from ..models.paramtable import Z95, ParameterTable
-from ..models.uncertainty import ParameterUncertainty
+from ..models.uncertainty import ParameterUncertainty, UncertaintyWarning
 
 __all__ = ["DeferredSandwich", "DeferredTable", "coloured_error_covariance", "defer_sandwich",
            "defer_state_space", "free_response", "gauss_newton", "sandwich_covariance",
@@ -364,7 +365,12 @@ def _block(unc: ParameterUncertainty, sim: Callable[[Any], np.ndarray], y: np.nd
     if N * l * r > MAX_ENTRIES:
         return None, (f"gauss-newton, as for white errors: the coloured-error correction "
                       f"would hold {N * l * r:.2g} numbers (at most {MAX_ENTRIES:.0e})"), [], 1.0
-    with np.errstate(all="ignore"):
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        # a direction whose perturbed models cannot be simulated (an estimate next to an
+        # unstable model: a time constant run to its bound) gives an infinite column: the
+        # correction then falls back to the Gauss-Newton covariance and its note says why
+        # (the Jacobian's own warning would be raised by printing the summary)
+        warnings.simplefilter("ignore", UncertaintyWarning)
         value, G = unc.scaled_jacobian(sim)
         e = y - np.asarray(value, float).reshape(N, l)
     if not (np.all(np.isfinite(e)) and np.all(np.isfinite(G))):
