@@ -82,6 +82,10 @@ sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_f
 ``--fresh6-records DIR`` (``FRESH6``, results/realdata_fresh6_table[_<split>].md): the sixth
 sweep's records (a heated air duct at two damper settings, a propeller-driven pendulum);
 sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh6.md.
+``--fresh7-records DIR`` (``FRESH7``, results/realdata_fresh7_table[_<split>].md): the seventh
+sweep's records (a four-tank process under feedback, its valves set for a non-minimum-phase and
+a minimum-phase zero: two pumps to two levels); sources, SHA-256, how each ``.npz`` is made and
+the findings: results/realdata_fresh7.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -119,7 +123,7 @@ from pathlib import Path
 import numpy as np
 
 # the record tables read from ``DIR/<name>.npz``
-from realdata_records import FRESH, FRESH2, FRESH3, FRESH4, FRESH5, FRESH6, MORE, SWEEPS  # noqa: F401
+from realdata_records import FRESH, FRESH2, FRESH3, FRESH4, FRESH5, FRESH6, FRESH7, MORE, SWEEPS  # noqa: F401
 
 HERE = Path(__file__).resolve().parent
 SHARED = Path("/work/shared/data")

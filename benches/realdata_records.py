@@ -87,6 +87,18 @@ FRESH6 = {
     # voltage (APRBS) -> pendulum angle (the second test validates the first)
 }
 
+#: the seventh sweep's records (``--fresh7-records DIR``), read as ``FRESH``'s are (sources:
+#: results/realdata_fresh7.md)
+FRESH7 = {
+    "fourtank_nmp": ("fourtank_nmp_dec", "fourtank_nmp_gm"),  # four-tank process, valves set
+    # non-minimum-phase, 0.5 s, closed loop: pumps 1, 2 -> levels of tanks 1, 2; a run under
+    # decentralised PI control estimates, a run under a Glover-McFarlane controller validates
+    "fourtank_mp": ("fourtank_mp_dec", "fourtank_mp_gm"),  # the same rig, valves set
+    # minimum-phase, the same two controllers
+    "fourtank_manual": ("fourtank_manual", None),  # the minimum-phase rig under manual control
+    # (an operator moving both pumps to hold the levels near 50 %)
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -94,4 +106,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh2": ("FRESH2", "realdata_fresh2"), "fresh3": ("FRESH3", "realdata_fresh3_table"),
           "fresh4": ("FRESH4", "realdata_fresh4_table"),
           "fresh5": ("FRESH5", "realdata_fresh5_table"),
-          "fresh6": ("FRESH6", "realdata_fresh6_table")}
+          "fresh6": ("FRESH6", "realdata_fresh6_table"),
+          "fresh7": ("FRESH7", "realdata_fresh7_table")}

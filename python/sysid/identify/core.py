@@ -198,8 +198,7 @@ def _checks(data: IOData) -> tuple[dict[str, Any], bool]:
             fb = sysid.check_feedback(data)
             feedback = bool(fb.detected)
             checks["feedback"] = (f"{'detected' if feedback else 'not detected'} "
-                                  f"({pvalue(fb.p_value)}; past outputs explain "
-                                  f"{100 * fb.explained_share:.2g} % of the input's variance)")
+                                  f"({pvalue(fb.p_value)}; {fb.size_text()})")
         except Exception as e:  # noqa: BLE001
             checks["feedback"] = f"not checked ({e})"
     try:

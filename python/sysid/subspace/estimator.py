@@ -387,6 +387,7 @@ class SubspaceEstimator:
             self._pe_cache: dict[int | str, int] = {}
             self._feedback_p: float | None = None
             self._feedback_share = 0.0
+            self._feedback_new = 0.0
             self._feedback_warned = False
         else:
             self.scale, self._su, self._sy = shared.scale, shared._su, shared._sy
@@ -394,6 +395,7 @@ class SubspaceEstimator:
             self._svd, self._pe_cache = shared._svd, shared._pe_cache  # filled for both
             self._feedback_p, self._feedback_warned = shared._feedback_p, shared._feedback_warned
             self._feedback_share = shared._feedback_share
+            self._feedback_new = shared._feedback_new
 
     def _set_scaling(self, scale: bool | None) -> None:
         """The channel scaling of the fits (:mod:`sysid.subspace.scaling`): the record's
@@ -433,32 +435,34 @@ class SubspaceEstimator:
         default lags 0.21). A detection there is checked at the default lags on the record
         (one more pass), and the larger p-value kept."""
         if self._feedback_p is None:
-            p, share = 1.0, 0.0
+            p, share, new = 1.0, 0.0, 0.0
             if self.factor.n_inputs:
-                _, pv, shares, _, _ = feedback_statistics(self.scaled_factor)
+                _, pv, shares, _, _, news = feedback_statistics(self.scaled_factor, True)
                 p = float(min(1.0, len(pv) * float(np.min(pv))))
-                share = float(np.max(shares))
+                share, new = float(np.max(shares)), float(np.max(news))
                 if p < FEEDBACK_WARNING_LEVEL and isinstance(self.data, IOData):
-                    p_default, share_default = self._default_lags_test()
+                    p_default, share_default, new_default = self._default_lags_test()
                     if p_default > p:
-                        p, share = p_default, share_default
-            self._feedback_p, self._feedback_share = p, share
+                        p, share, new = p_default, share_default, new_default
+            self._feedback_p, self._feedback_share, self._feedback_new = p, share, new
         return self._feedback_p
 
-    def _default_lags_test(self) -> tuple[float, float]:
-        """:func:`sysid.check_feedback`'s combined p-value and largest explained share at its
-        default lags, where they exceed this estimator's past window (else ``(0.0, 0.0)``:
-        the window's test stands)."""
+    def _default_lags_test(self) -> tuple[float, float, float]:
+        """:func:`sysid.check_feedback`'s combined p-value and largest explained shares (of
+        the input's variance, and of the part its own past does not predict) at its default
+        lags, where they exceed this estimator's past window (else zeros: the window's test
+        stands)."""
         data = self.data
         lags = default_lags(data)
         if lags <= self.past:
-            return 0.0, 0.0
+            return 0.0, 0.0, 0.0
         try:
             fb = check_feedback(data, lags)
         except SysidError:  # too short for those lags: the window's test stands
-            return 0.0, 0.0
+            return 0.0, 0.0, 0.0
         pv = np.asarray(fb.p_values, float)
-        return float(min(1.0, pv.size * float(np.min(pv)))), fb.explained_share
+        return (float(min(1.0, pv.size * float(np.min(pv)))), fb.explained_share,
+                fb.explained_new_share)
 
     def _quiet_fit(self, *args: Any, **kwargs: Any) -> StateSpaceModel:
         """:meth:`fit` with every warning suppressed, for the package's own checks (order
@@ -479,9 +483,10 @@ class SubspaceEstimator:
         self._feedback_warned = True
         if p < FEEDBACK_WARNING_LEVEL:
             warnings.warn(
-                f"the record shows feedback (past outputs predict the input, {pvalue(p)}; they "
-                f"explain {100 * self._feedback_share:.2g} % of its variance, and the bias of "
-                f"open-loop fits grows with that share): "
+                f"the record shows feedback (past outputs predict the input, {pvalue(p)}; beyond "
+                f"its own past they explain {100 * self._feedback_share:.2g} % of its variance, "
+                f"{100 * self._feedback_new:.2g} % of the part its own past does not predict, "
+                f"and the bias of open-loop fits grows with them): "
                 f"the open-loop method {key!r} is biased under feedback; use method='pbsid' "
                 "or 'ssarx' (see sysid.check_feedback). A nonlinear plant in open loop can "
                 "show the same (its distortions, functions of past inputs, stay in a linear "

@@ -201,8 +201,8 @@ def _feedback(data: Any) -> Finding:
         return Finding("feedback", "note", f"not tested ({e})")
     if fb.detected:
         return Finding("feedback", "act",
-                       f"the input depends on past outputs ({pvalue(fb.p_value)}; they "
-                       f"explain {100 * fb.explained_share:.2g} % of its variance): a closed "
+                       f"the input depends on past outputs ({pvalue(fb.p_value)}; "
+                       f"{fb.size_text()}): a closed "
                        "loop, unless the plant is nonlinear (its distortions, which a linear "
                        "model leaves in its residuals, look like feedback: a periodic input "
                        "to a nonlinear structure does this)",
