@@ -430,8 +430,12 @@ class SubspaceEstimator:
         shorter than the test's default lags cannot tell an input with a long memory (a
         sweep, a narrow band) from one fed back: past outputs, which carry the input's older
         history, predict it (a robot arm's sweep at ``horizon=8``: p = 2e-42, at the 17
-        default lags 0.21). A detection there is checked at the default lags on the record
-        (one more pass), and the larger p-value kept."""
+        default lags 0.21). The factor's rows are not centred either: on a record with an
+        offset left in, past outputs predict the input's constant, and the test found
+        "feedback" in open-loop data (p = 6e-12 where the mean-removed record gives 0.72,
+        ``benches/results/warning_audit.md``). A detection is therefore checked on the record
+        by :func:`sysid.check_feedback`, which removes the means, at the larger of its default
+        lags and the past window (one more pass), and the larger p-value kept."""
         if self._feedback_p is None:
             p, share = 1.0, 0.0
             if self.factor.n_inputs:
@@ -446,13 +450,12 @@ class SubspaceEstimator:
         return self._feedback_p
 
     def _default_lags_test(self) -> tuple[float, float]:
-        """:func:`sysid.check_feedback`'s combined p-value and largest explained share at its
-        default lags, where they exceed this estimator's past window (else ``(0.0, 0.0)``:
-        the window's test stands)."""
+        """:func:`sysid.check_feedback`'s combined p-value and largest explained share on the
+        mean-removed record, at the larger of its default lags and this estimator's past
+        window (``(0.0, 0.0)`` when the record is too short for them: the window's test
+        stands)."""
         data = self.data
-        lags = default_lags(data)
-        if lags <= self.past:
-            return 0.0, 0.0
+        lags = max(default_lags(data), self.past)
         try:
             fb = check_feedback(data, lags)
         except SysidError:  # too short for those lags: the window's test stands
