@@ -8,9 +8,10 @@ and by message (digits blanked). The statistical tests at a stated level (the fe
 ``check_feedback`` at its ``alpha``, the residual whiteness and independence tests at theirs)
 are counted as rejections, to be set against their level.
 
-Scenarios where no warning is due (``clean-*``): random stable systems (orders 2-6, distinct
-poles), 1 x 1 or 2 x 2, inputs white, PRBS, multisine or low-pass filtered noise (cycled), SNR
-10-40 dB, N 500-5000, zero-mean or with offsets added and removed by ``detrend(kind="constant")``.
+Scenarios where no warning is due (``clean-*``): random stable systems (orders 2-6, poles
+0.15 apart, every channel's zeros 0.15 from its poles: no near cancellation), 1 x 1 or 2 x 2,
+inputs white, PRBS, multisine or low-pass filtered noise (cycled), SNR 10-40 dB, N 500-5000,
+zero-mean or with offsets added and removed by ``detrend(kind="constant")``.
 Scenarios where one is due: ``closed`` (a proportional controller on the output, reference
 white: FeedbackWarning), ``offset`` (offsets 20 x the variation left in: OffsetWarning),
 ``narrow`` (two sines, order 4-6: ExcitationWarning), ``unstable`` (one real pole at 1.01-1.03:
@@ -79,6 +80,26 @@ def random_system(rng: np.random.Generator, n: int, nu: int, ny: int,
     return sysid.StateSpaceModel(A, B, C, np.zeros((ny, nu)), dt=1.0)
 
 
+def separated(true: sysid.StateSpaceModel, gap: float = 0.15) -> bool:
+    """Whether every input-output channel of ``true`` keeps its zeros ``gap`` away from its
+    poles and its poles ``gap`` apart: no near pole-zero cancellation (a mode the channel
+    hardly shows), which the data could not determine and an IdentifiabilityWarning would
+    rightly name."""
+    A, B, C = np.asarray(true.A), np.asarray(true.B), np.asarray(true.C)
+    poles = np.linalg.eigvals(A)
+    d = np.abs(poles[:, None] - poles[None])
+    if np.min(d + np.eye(len(poles)) * 9) < gap:
+        return False
+    den = np.poly(A)
+    for i in range(C.shape[0]):
+        for j in range(B.shape[1]):
+            num = np.trim_zeros(np.poly(A - np.outer(B[:, j], C[i])) - den, "f")
+            zeros = np.roots(num) if num.size > 1 else np.zeros(0)
+            if zeros.size and np.min(np.abs(zeros[:, None] - poles[None])) < gap:
+                return False
+    return True
+
+
 def make_input(rng: np.random.Generator, kind: str, N: int, nu: int) -> np.ndarray:
     """Zero-mean input of ``kind`` (INPUTS, or ``narrow``: two sines)."""
     if kind == "white":
@@ -126,6 +147,11 @@ def scenario_record(scenario: str, run: int, seed: int):
         kind, n = "narrow", int(rng.integers(4, 7))
         facts.update(input=kind, order=n)
     true = random_system(rng, n, nu, ny, unstable=scenario == "unstable")
+    if scenario.startswith("clean"):  # nothing due: no near pole-zero cancellation either
+        for _ in range(200):
+            if separated(true):
+                break
+            true = random_system(rng, n, nu, ny)
     if scenario == "unstable":
         N = min(N, 800)
         facts["N"] = N
@@ -301,17 +327,29 @@ def tables(rows: list[dict]) -> str:
             out.append(f"Misses of {cls}:\n")
             for c in calls:
                 rr = [r["calls"][c] for r in rs if c in r["calls"]]
+                if sc == "offset" and c == "identify":
+                    out.append("- identify: removes the offsets itself (no warning due)")
+                    continue
+                refused = sum(x["error"] is not None for x in rr)
+                rr = [x for x in rr if x["error"] is None]  # an error is a refusal, no miss
                 if sc == "unstable":
                     due = [x for x in rr if x["unstable"]]
                 elif sc == "capped":
                     due = [x for x in rr if x.get("due")]
                 else:
                     due = rr
-                miss = sum(not any(w.startswith(cls) or (cls == "IterationLimitWarning" and
-                                                         w.startswith("ConvergenceWarning"))
-                                   for w in x["warnings"]) for x in due)
-                extra = (f" (unstable model returned in {len(due)}/{len(rr)})"
+                said = [any(w.startswith(cls) or (cls == "IterationLimitWarning" and
+                                                  w.startswith("ConvergenceWarning"))
+                            for w in x["warnings"]) for x in due]
+                miss = sum(not s for s in said)
+                extra = (f"; unstable model returned in {len(due)}/{len(rr)}"
                          if sc == "unstable" else "")
+                if sc == "capped":
+                    fired = sum(any(w.startswith(("IterationLimitWarning", "ConvergenceWarning"))
+                                    for w in x["warnings"]) for x in rr if not x.get("due"))
+                    extra = f"; fired where the full search gained < 0.1 point: {fired}"
+                if refused:
+                    extra += f"; refused with an error in {refused} runs"
                 out.append(f"- {c}: missed {rate(miss, len(due))}{extra}")
             out.append("")
         tests = [r["tests"] for r in rs]
