@@ -614,8 +614,11 @@ def check_polynomial_excitation(exps: Any, method: str, na_v: list[int],
     >>> u = np.random.default_rng(0).standard_normal((500, 1))
     >>> check_polynomial_excitation([(u, u)], "oe", [0], [[3]], [[3]])  # white: silent
     """
-    need, i, j = max((na_v[i] + nb + nf_g[i][j], i, j) for i in range(len(nb_g))
-                     for j, nb in enumerate(nb_g[i]))
+    channels = [(na_v[i] + nb + nf_g[i][j], i, j) for i in range(len(nb_g))
+                for j, nb in enumerate(nb_g[i])]
+    if not channels:  # a time series: no input to excite anything
+        return
+    need, i, j = max(channels)
     terms = [(k, v) for k, v in (("na", na_v[i]), ("nb", nb_g[i][j]), ("nf", nf_g[i][j])) if v]
     needs = " + ".join(k for k, _ in terms) + " = " + " + ".join(str(v) for _, v in terms)
     check_model_excitation(exps, need, method, needs,
