@@ -106,3 +106,28 @@ def test_polynomial_excitation_check_silent_on_rich_inputs():
             sysid.armax(d, 4, 4, 4, 1)
         said += [x for x in w if issubclass(x.category, sysid.ExcitationWarning)]
     assert not said
+
+
+def test_tfest_cap_warns_only_short_of_the_minimum():
+    # tfest warned whenever it stopped at max_iter, also one iteration short of a minimum it
+    # had settled on; it now follows every other capped search's rule (warn_if_capped)
+    rng = np.random.default_rng(0)
+    u = rng.standard_normal((1000, 1))
+    y = TRUE.simulate(u)
+    d = sysid.IOData(u=u, y=y + 0.1 * y.std() * rng.standard_normal(y.shape), dt=1.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        m = sysid.tfest(d, 2)
+    init = sysid.TransferFunction([[np.asarray(m.num[0][0]) * 0.7]],
+                                  [[np.asarray(m.den[0][0]) * np.array([1.0, 1.3, 0.8])]])
+    full = sysid.tfest(d, 2, init=init)
+    said = {}
+    for cap in (1, 6):
+        with warnings.catch_warnings(record=True) as w:
+            warnings.simplefilter("always")
+            capped = sysid.tfest(d, 2, max_iter=cap, init=init)
+        assert capped.info["stop"] == ["maximum iterations"]
+        said[cap] = [x for x in w if issubclass(x.category, sysid.IterationLimitWarning)]
+        gap = sysid.compare(d, full).fit.mean() - sysid.compare(d, capped).fit.mean()
+        assert (gap > 0.01) == bool(said[cap]), (cap, gap)
+    assert said[1] and not said[6]

@@ -589,6 +589,11 @@ def check_model_excitation(data: Any, needed: int, who: str, needs: str, fix: st
     us = [as_2d(u, "u") for u, _ in exps]
     if not us or us[0].shape[1] == 0 or needed < 1:
         return needed
+    # too few samples for the parameters, or an input that never moves: the estimator's own
+    # checks refuse the record with the reason, and no warning should come first
+    if sum(u.shape[0] for u in us) < 2 * needed * us[0].shape[1] + 2 or not np.all(
+            np.ptp(np.vstack(us), axis=0) > 0):
+        return needed
     got = model_excitation_order(us, int(needed))
     if got < needed:
         warnings.warn(ExcitationWarning(
