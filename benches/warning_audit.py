@@ -419,7 +419,7 @@ def real_record(name: str, est, val) -> dict:
         return m
 
     ident = rec("identify", lambda: sysid.identify(est))
-    n = ident.model.order if ident is not None else 4
+    n = int(ident.model.nstates) if ident is not None else 4
     res["identify_order"] = n
     m = rec("ssest(n)", lambda: sysid.ssest(est, n))
     rec("ssest(auto)", lambda: sysid.ssest(est))
