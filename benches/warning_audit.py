@@ -47,6 +47,7 @@ import sysid
 HERE = Path(__file__).resolve().parent
 INPUTS = ("white", "prbs", "multisine", "filtered")
 CLEAN = ("clean-1x1", "clean-2x2")
+ONLY: set[str] = set()  # --only: the calls to make (all when empty)
 DUE = {"closed": "FeedbackWarning", "offset": "OffsetWarning", "narrow": "ExcitationWarning",
        "unstable": "StabilityWarning", "capped": "IterationLimitWarning",
        "feedthrough": "FeedthroughWarning"}
@@ -233,6 +234,8 @@ def run_calls(scenario: str, est, val, facts: dict, with_identify: bool) -> dict
     out: dict = {"facts": facts, "calls": {}, "tests": {}}
 
     def rec(name, fn):
+        if ONLY and name not in ONLY:
+            return None
         t = time.perf_counter()
         m, ws, err = caught(fn)
         out["calls"][name] = {"warnings": ws, "error": err,
@@ -472,6 +475,7 @@ def real_md(rows: list[dict]) -> str:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=200)
+    ap.add_argument("--only", nargs="*", default=[], help="make these calls only (tfest ...)")
     ap.add_argument("--first", type=int, default=0, help="index of the first run (to extend)")
     ap.add_argument("--quick", action="store_true", help="12 runs per scenario")
     ap.add_argument("--scenarios", nargs="*", default=list(CLEAN) + list(DUE))
@@ -494,6 +498,7 @@ def main() -> None:
     if args.real is not None:
         print(real_md(real_table(args.real, args.out)))
         return
+    ONLY.update(args.only)
     runs = 12 if args.quick else args.runs
     f = open(args.out, "a") if args.out else None
     rows = []
