@@ -416,6 +416,8 @@ def real_record(name: str, est, val) -> dict:
     t0 = time.perf_counter()
 
     def rec(call, fn):
+        if ONLY and call not in ONLY:
+            return None
         m, ws, err = caught(fn)
         res["calls"][call] = {"warnings": sorted(set(ws)), "error": err,
                               "unstable": unstable(m) if hasattr(m, "poles") else None}
@@ -496,6 +498,7 @@ def main() -> None:
         print(by_input(rows))
         return
     if args.real is not None:
+        ONLY.update(args.only)
         print(real_md(real_table(args.real, args.out)))
         return
     ONLY.update(args.only)
