@@ -474,6 +474,27 @@ def real_md(rows: list[dict]) -> str:
     return "\n".join(out)
 
 
+def calibration(runs: int, seed: int) -> str:
+    """The tests at a stated level where the truth is known to meet their null hypothesis, on
+    clean 1 x 1 records: ``check_feedback`` (open loop, alpha 0.01) and the residual tests of
+    the TRUE model on the validation part (alpha 0.01): rejections against the level."""
+    fb, white, indep = [], [], []
+    by_kind: dict[str, list[bool]] = defaultdict(list)
+    for i in range(runs):
+        est, val, facts, true = scenario_record("clean-1x1", i, seed)
+        d = bool(sysid.check_feedback(est).detected)
+        fb.append(d)
+        by_kind[facts["input"]].append(d)
+        r = sysid.residuals(true, val)
+        white.append(not bool(r.is_white))
+        indep.append(any(x is False for x in r.independence))
+    out = [f"check_feedback detected (alpha 0.01, open loop): {rate(sum(fb), runs)}"]
+    out += [f"- {k}: {rate(sum(v), len(v))}" for k, v in by_kind.items()]
+    out.append(f"residuals of the true model (alpha 0.01): whiteness rejected "
+               f"{rate(sum(white), runs)}, independence rejected {rate(sum(indep), runs)}")
+    return "\n".join(out)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=200)
@@ -487,6 +508,8 @@ def main() -> None:
     ap.add_argument("--out", default=None, help="JSON lines, one per run (appended)")
     ap.add_argument("--real", nargs="*", default=None, help="the real-record table")
     ap.add_argument("--table", default=None, help="print the tables of a JSON-lines file")
+    ap.add_argument("--calibration", action="store_true",
+                    help="the stated-level tests on records meeting their null (--runs)")
     args = ap.parse_args()
     if args.table:
         rows = [json.loads(x) for x in Path(args.table).read_text().splitlines() if x.strip()]
@@ -496,6 +519,9 @@ def main() -> None:
         print(tables(rows))
         print()
         print(by_input(rows))
+        return
+    if args.calibration:
+        print(calibration(args.runs, args.seed))
         return
     if args.real is not None:
         ONLY.update(args.only)
