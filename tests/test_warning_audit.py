@@ -131,16 +131,3 @@ def test_tfest_cap_warns_only_short_of_the_minimum():
         gap = sysid.compare(d, full).fit.mean() - sysid.compare(d, capped).fit.mean()
         assert (gap > 0.01) == bool(said[cap]), (cap, gap)
     assert said[1] and not said[6]
-
-
-@pytest.mark.parametrize("fit", [lambda d: sysid.oe(d, 2, 2, 1), lambda d: sysid.tfest(d, 2)],
-                         ids=["oe", "tfest"])
-def test_output_error_fits_warn_of_feedback(fit):
-    # an output-error model is biased under feedback; oe and tfest said nothing (n4sid did)
-    said = []
-    for k, record in enumerate([_closed_loop(0), _closed_loop(1), _open_loop(0), _open_loop(1)]):
-        with warnings.catch_warnings(record=True) as w:
-            warnings.simplefilter("always")
-            fit(record)
-        said.append(any(issubclass(x.category, sysid.FeedbackWarning) for x in w))
-    assert said == [True, True, False, False]
