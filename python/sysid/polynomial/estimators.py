@@ -27,7 +27,6 @@ from ..data.input_design import check_polynomial_excitation
 from ..data.iodata import IOData, as_record
 from ..data.offsets import check_offsets
 from ..errors import DataError, InsufficientDataError, ShapeError, is_frd
-from ..validation.feedback import warn_output_error_feedback
 from .arx_penalty import kernel_penalties, pair_penalties, penalised_fits
 from .cancellation import cancellation, warn_cancellations
 from .initial import check as _check_initial
@@ -326,8 +325,6 @@ def _pem(
     for i in range(ny):
         _require_samples(exps, method, i, na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i], nk_g[i])
     check_polynomial_excitation(exps, method, na_v, nb_g, nf_g)
-    if method == "oe":
-        warn_output_error_feedback(data, "oe")
     parts: dict[str, list[Any]] = {k: [] for k in "abcdf"}
     info: dict[str, Any] = {"method": method, "iterations": [], "cost": [],
                             "criterion": "sum of squares", "stop": [],

@@ -198,9 +198,6 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     p_k, z_k = int(npo.flat[k]), int(nze.flat[k])
     check_model_excitation(data, p_k + z_k + 1, "tfest",
                            f"n_poles + n_zeros + 1 = {p_k} + {z_k} + 1", "fewer poles and zeros")
-    from ..validation.feedback import warn_output_error_feedback
-
-    warn_output_error_feedback(data, "tfest")
     fixed_delays, auto = delays(iodelay, l, m)
     span = max(len(y) for _, y in data.experiments) * data.dt  # the longest experiment, s
     if np.any(fixed_delays >= span):

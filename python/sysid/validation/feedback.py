@@ -32,10 +32,10 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import as_between, as_int, user_stacklevel
+from .._checks import as_between, as_int
 from .._display import HTMLResult, pvalue
 from ..data.iodata import IOData, require_record
-from ..errors import DataError, FeedbackWarning, InsufficientDataError, SysidError
+from ..errors import DataError, InsufficientDataError
 
 __all__ = ["FeedbackTest", "check_feedback", "default_lags", "feedback_pvalues",
            "feedback_statistics"]
@@ -302,45 +302,3 @@ def check_feedback(data: IOData | tuple[Any, Any], lags: int | None = None, *, a
         raise InsufficientDataError(f"lags = {lags} leaves no degrees of freedom; use a "
                                     "longer record or fewer lags")
     return FeedbackTest(F, p, lags, (q, df2), float(alpha), list(data.input_names), shares)
-
-
-#: combined p-value below which the open-loop estimators warn of feedback (strict: the warning
-#: must not fire by chance on open-loop data)
-FEEDBACK_WARNING_LEVEL = 1e-6
-
-
-def warn_output_error_feedback(data: Any, who: str) -> float:
-    """The :class:`~sysid.FeedbackWarning` of an output-error fit (``oe``, ``tfest``: no noise
-    model) on a record that shows feedback: :func:`check_feedback` (means removed, default
-    lags) below :data:`FEEDBACK_WARNING_LEVEL`. Under feedback the noise reaches the input,
-    and a model that simulates the output from the input alone is biased (the direct
-    prediction-error method needs a noise model). Returns the test's p-value (1.0 where it
-    cannot be made: no inputs, too short a record).
-
-    Examples
-    --------
-    >>> import numpy as np, sysid
-    >>> from sysid.validation.feedback import warn_output_error_feedback
-    >>> u = np.random.default_rng(0).standard_normal((500, 1))
-    >>> warn_output_error_feedback(sysid.IOData(u=u, y=np.cumsum(u, axis=0)), "oe") > 1e-6
-    True
-    """
-    if not getattr(data, "n_inputs", 0):
-        return 1.0
-    try:
-        fb = check_feedback(data)
-    except SysidError:  # too short for the test's lags: nothing to say
-        return 1.0
-    p = float(fb.p_value)
-    if p < FEEDBACK_WARNING_LEVEL:
-        import warnings
-
-        warnings.warn(FeedbackWarning(
-            f"the record shows feedback (past outputs predict the input, {pvalue(p)}; they "
-            f"explain {100 * fb.explained_share:.2g} % of its variance): {who} fits an "
-            "output-error model (no noise model), which is biased under feedback, since the "
-            "noise reaches the input through the loop; use a prediction-error model with a "
-            "noise model (sysid.armax, sysid.bj, sysid.ssest) or sysid.pbsid (see "
-            "sysid.check_feedback). A nonlinear plant in open loop can show the same: "
-            "sysid.advice(data) weighs both"), stacklevel=user_stacklevel())
-    return p
