@@ -589,11 +589,14 @@ def check_model_excitation(data: Any, needed: int, who: str, needs: str, fix: st
     us = [as_2d(u, "u") for u, _ in exps]
     if not us or us[0].shape[1] == 0 or needed < 1:
         return needed
-    # too few samples for the parameters, or an input that never moves: the estimator's own
-    # checks refuse the record with the reason, and no warning should come first
+    # too few samples for the parameters, an input that never moves, inputs that depend on
+    # each other: the estimator's own checks refuse the record with the reason, and no
+    # warning should come first
+    stacked = np.vstack(us)
     if sum(u.shape[0] for u in us) < 2 * needed * us[0].shape[1] + 2 or not np.all(
-            np.ptp(np.vstack(us), axis=0) > 0):
-        return needed
+            np.ptp(stacked, axis=0) > 0) or np.linalg.matrix_rank(
+            stacked - stacked.mean(axis=0)) < stacked.shape[1]:
+        return needed  # (an input recorded twice: refused as dependent inputs)
     got = model_excitation_order(us, int(needed))
     if got < needed:
         warnings.warn(ExcitationWarning(
