@@ -550,7 +550,16 @@ def model_excitation_order(us: list[np.ndarray], needed: int) -> int:
     covariance of the inputs scaled to unit root mean square first (full rank: persistently
     exciting), and only where it falls short the excited lines of the spectrum, which take a
     band-limited multisine for what it is however many lines it has
-    (:mod:`sysid.data.excitation`)."""
+    (:mod:`sysid.data.excitation`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.data.input_design import model_excitation_order
+    >>> t = np.arange(1000)[:, None]
+    >>> model_excitation_order([np.sin(0.3 * t) + np.sin(0.9 * t)], 10)
+    4
+    """
     from .excitation import spectral_excitation_order
 
     scaled = []
