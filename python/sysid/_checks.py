@@ -193,15 +193,16 @@ def as_orders(order: Any, name: str = "order") -> list[int]:
 
 
 def warn_iteration_limit(what: str, max_iter: int, history: Any, fix: str = "raise max_iter",
-                         stacklevel: int | None = None, remaining: float | None = None
-                         ) -> None:
+                         stacklevel: int | None = None, remaining: float | None = None,
+                         category: type | None = None) -> None:
     """The :class:`~sysid.errors.IterationLimitWarning` of a search stopped at its cap: how
     much its last iteration still lowered the cost, how far the estimate stands from the
     minimum of the search's Gauss-Newton model (``remaining``: the optimiser's
     ``remaining_decrease``, in residual variances), and what to do; at the caller's line
     outside sysid unless ``stacklevel`` is given. No warning when ``remaining`` is below
     ``NEGLIGIBLE_REMAINING``: the rest of the way would move the estimate by less than half
-    of its standard deviation.
+    of its standard deviation. ``category``: a subclass of the warning (tfest's
+    ``ConvergenceWarning``).
 
     Examples
     --------
@@ -231,12 +232,13 @@ def warn_iteration_limit(what: str, max_iter: int, history: Any, fix: str = "rai
         far = f", the last {RECENT} by {100 * ten:.2g} %" + far
     warnings.warn(f"{what} stopped at max_iter={max_iter} before converging (the last "
                   f"iteration still lowered the cost by {100 * last:.2g} %{far}); the model "
-                  f"is the best iterate: {fix}", IterationLimitWarning,
+                  f"is the best iterate: {fix}", category or IterationLimitWarning,
                   stacklevel=user_stacklevel() if stacklevel is None else stacklevel)
 
 
 def warn_if_capped(info: dict[str, Any], what: str, max_iter: int,
-                   fix: str = "raise max_iter", n_residuals: int | None = None) -> None:
+                   fix: str = "raise max_iter", n_residuals: int | None = None,
+                   category: type | None = None) -> None:
     """:func:`warn_iteration_limit` when a search's ``info["stop"]`` says it stopped at its
     cap (``info["cost"]``: its criterion per iteration) short of its minimum: its distance
     from its Gauss-Newton model's minimum (``info["remaining_decrease"]``) and, below
@@ -265,7 +267,8 @@ def warn_if_capped(info: dict[str, Any], what: str, max_iter: int,
         far = remaining is not None and np.isfinite(remaining) and remaining >= DISTANT
         if len(h) > 1 and small(1) and (len(h) <= RECENT or small(RECENT)) and not far:
             return
-        warn_iteration_limit(what, max_iter, cost, fix, remaining=remaining)
+        warn_iteration_limit(what, max_iter, cost, fix, remaining=remaining,
+                             category=category)
 
 
 SETTLED = 1e-5  #: relative decrease of a capped search's last iteration: settled below

@@ -544,6 +544,104 @@ def warn_excitation(got: int, order: int, *, stacklevel: int | None = None) -> N
         )
 
 
+def model_excitation_order(us: list[np.ndarray], needed: int) -> int:
+    """Persistent-excitation order of the inputs ``us`` (a list of ``(n_samples, m)``
+    experiments) up to ``needed``, by the subspace estimator's rule: the rank of the lag
+    covariance of the inputs scaled to unit root mean square first (full rank: persistently
+    exciting), and only where it falls short the excited lines of the spectrum, which take a
+    band-limited multisine for what it is however many lines it has
+    (:mod:`sysid.data.excitation`).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.data.input_design import model_excitation_order
+    >>> t = np.arange(1000)[:, None]
+    >>> model_excitation_order([np.sin(0.3 * t) + np.sin(0.9 * t)], 10)
+    4
+    """
+    from .excitation import spectral_excitation_order
+
+    scaled = []
+    for u in us:
+        rms = np.sqrt(np.mean(u * u, axis=0))
+        scaled.append(u / np.where(rms > 0, rms, 1.0))
+    mo = min(needed, max(u.shape[0] for u in scaled))
+    got = _covariance_order(scaled, mo, 1e-9) if mo >= 1 else 0
+    if got < needed:
+        got = min(needed, spectral_excitation_order([np.ascontiguousarray(u) for u in us]))
+    return got
+
+
+def check_model_excitation(data: Any, needed: int, who: str, needs: str, fix: str) -> int:
+    """Warn (:class:`~sysid.ExcitationWarning`) when the inputs of ``data`` (a record, or
+    ``(u, y)`` experiments) are persistently exciting of a lower order than ``needed``, the
+    number of parameters of the input channel of ``who``'s model (Ljung's condition for an
+    input-output model: ``nb + nf`` for OE and BJ, ``na + nb`` for ARMAX, the numerator and
+    denominator coefficients of a transfer function); ``needs`` says how it is counted and
+    ``fix`` what to lower. Returns the order found (up to ``needed``).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid, warnings
+    >>> from sysid.data.input_design import check_model_excitation
+    >>> t = np.arange(1000)
+    >>> d = sysid.IOData(u=np.sin(0.3 * t) + np.sin(0.7 * t), y=np.zeros(1000) + t % 3)
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     check_model_excitation(d, 6, "oe", "nb + nf = 3 + 3", "lower nb and nf")
+    4
+    >>> w[0].category.__name__
+    'ExcitationWarning'
+    """
+    exps = data.experiments if is_record(data) else data
+    us = [as_2d(u, "u") for u, _ in exps]
+    if not us or us[0].shape[1] == 0 or needed < 1:
+        return needed
+    # too few samples for the parameters, an input that never moves, inputs that depend on
+    # each other: the estimator's own checks refuse the record with the reason, and no
+    # warning should come first
+    stacked = np.vstack(us)
+    if sum(u.shape[0] for u in us) < 2 * needed * us[0].shape[1] + 2 or not np.all(
+            np.ptp(stacked, axis=0) > 0) or np.linalg.matrix_rank(
+            stacked - stacked.mean(axis=0)) < stacked.shape[1]:
+        return needed  # (an input recorded twice: refused as dependent inputs)
+    got = model_excitation_order(us, int(needed))
+    if got < needed:
+        warnings.warn(ExcitationWarning(
+            f"the input is persistently exciting of order {got} only, but the {who} model "
+            f"needs order {needed} ({needs}): its parameters are not determined by the data "
+            f"(the fit can look good, the model between the excited frequencies means "
+            f"nothing). Use a richer input (white noise, PRBS, a multisine with more lines) "
+            f"or {fix}"), stacklevel=user_stacklevel())
+    return got
+
+
+def check_polynomial_excitation(exps: Any, method: str, na_v: list[int],
+                                nb_g: list[list[int]], nf_g: list[list[int]]) -> None:
+    """The :class:`~sysid.ExcitationWarning` when the input cannot determine the input path
+    of the largest channel: persistently exciting of a lower order than its ``na + nb + nf``
+    parameters (a narrow-band input under oe(5, 5, 1) fitted silently before); ``na_v`` per
+    output, ``nb_g`` and ``nf_g`` per output and input.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.data.input_design import check_polynomial_excitation
+    >>> u = np.random.default_rng(0).standard_normal((500, 1))
+    >>> check_polynomial_excitation([(u, u)], "oe", [0], [[3]], [[3]])  # white: silent
+    """
+    channels = [(na_v[i] + nb + nf_g[i][j], i, j) for i in range(len(nb_g))
+                for j, nb in enumerate(nb_g[i])]
+    if not channels:  # a time series: no input to excite anything
+        return
+    need, i, j = max(channels)
+    terms = [(k, v) for k, v in (("na", na_v[i]), ("nb", nb_g[i][j]), ("nf", nf_g[i][j])) if v]
+    needs = " + ".join(k for k, _ in terms) + " = " + " + ".join(str(v) for _, v in terms)
+    check_model_excitation(exps, need, method, needs,
+                           f"lower {' and '.join(k for k, _ in terms)}")
+
+
 def check_excitation(u: Any, order: int, *, stacklevel: int | None = None) -> int:
     """Warn (:class:`~sysid.ExcitationWarning`) if ``u`` (the inputs, or a record) cannot
     support a model of ``order``: its persistent-excitation order is below ``2 * order``.

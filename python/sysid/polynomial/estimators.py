@@ -23,6 +23,7 @@ from .._checks import (
 )
 from .._progress import iteration_callback, iteration_printer
 from .._threads import one_blas_thread
+from ..data.input_design import check_polynomial_excitation
 from ..data.iodata import IOData, as_record
 from ..data.offsets import check_offsets
 from ..errors import DataError, InsufficientDataError, ShapeError, is_frd
@@ -323,6 +324,7 @@ def _pem(
         raise DataError("na, nc and nd must be non-negative integers")
     for i in range(ny):
         _require_samples(exps, method, i, na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i], nk_g[i])
+    check_polynomial_excitation(exps, method, na_v, nb_g, nf_g)
     parts: dict[str, list[Any]] = {k: [] for k in "abcdf"}
     info: dict[str, Any] = {"method": method, "iterations": [], "cost": [],
                             "criterion": "sum of squares", "stop": [],

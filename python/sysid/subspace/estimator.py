@@ -432,8 +432,12 @@ class SubspaceEstimator:
         shorter than the test's default lags cannot tell an input with a long memory (a
         sweep, a narrow band) from one fed back: past outputs, which carry the input's older
         history, predict it (a robot arm's sweep at ``horizon=8``: p = 2e-42, at the 17
-        default lags 0.21). A detection there is checked at the default lags on the record
-        (one more pass), and the larger p-value kept."""
+        default lags 0.21). The factor's rows are not centred either: on a record with an
+        offset left in, past outputs predict the input's constant, and the test found
+        "feedback" in open-loop data (p = 6e-12 where the mean-removed record gives 0.72,
+        ``benches/results/warning_audit.md``). A detection is therefore checked on the record
+        by :func:`sysid.check_feedback`, which removes the means, at the larger of its default
+        lags and the past window (one more pass), and the larger p-value kept."""
         if self._feedback_p is None:
             p, share, new = 1.0, 0.0, 0.0
             if self.factor.n_inputs:
@@ -449,13 +453,11 @@ class SubspaceEstimator:
 
     def _default_lags_test(self) -> tuple[float, float, float]:
         """:func:`sysid.check_feedback`'s combined p-value and largest explained shares (of
-        the input's variance, and of the part its own past does not predict) at its default
-        lags, where they exceed this estimator's past window (else zeros: the window's test
-        stands)."""
+        the input's variance, and of the part its own past does not predict) on the
+        mean-removed record, at the larger of its default lags and this estimator's past
+        window (zeros when the record is too short for them: the window's test stands)."""
         data = self.data
-        lags = default_lags(data)
-        if lags <= self.past:
-            return 0.0, 0.0, 0.0
+        lags = max(default_lags(data), self.past)
         try:
             fb = check_feedback(data, lags)
         except SysidError:  # too short for those lags: the window's test stands

@@ -191,6 +191,13 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     # a transfer function has no constant term (as every estimator); from rest, no state
     check_offsets(data, from_rest=initial_state == "zero")
     npo, nze = pole_zero_orders(n_poles, n_zeros, l, m)
+    from ..data.input_design import check_model_excitation
+
+    # the numerator and denominator coefficients of the largest channel: n_poles + n_zeros + 1
+    k = int(np.argmax(npo + nze))
+    p_k, z_k = int(npo.flat[k]), int(nze.flat[k])
+    check_model_excitation(data, p_k + z_k + 1, "tfest",
+                           f"n_poles + n_zeros + 1 = {p_k} + {z_k} + 1", "fewer poles and zeros")
     fixed_delays, auto = delays(iodelay, l, m)
     span = max(len(y) for _, y in data.experiments) * data.dt  # the longest experiment, s
     if np.any(fixed_delays >= span):
