@@ -41,6 +41,7 @@ from collections import Counter, defaultdict
 from pathlib import Path
 
 import numpy as np
+from scipy.linalg import block_diag
 
 import sysid
 
@@ -71,12 +72,7 @@ def random_system(rng: np.random.Generator, n: int, nu: int, ny: int,
     for th in angles:
         r = rng.uniform(0.5, 0.95)
         blocks.append(r * np.array([[np.cos(th), np.sin(th)], [-np.sin(th), np.cos(th)]]))
-    A = np.zeros((n, n))
-    i = 0
-    for b in blocks:
-        s = b.shape[0]
-        A[i:i + s, i:i + s] = b
-        i += s
+    A = block_diag(*blocks)
     B = rng.standard_normal((n, nu))
     C = rng.standard_normal((ny, n))
     return sysid.StateSpaceModel(A, B, C, np.zeros((ny, nu)), dt=1.0)
