@@ -441,7 +441,7 @@ class SubspaceEstimator:
         if self._feedback_p is None:
             p, share, new = 1.0, 0.0, 0.0
             if self.factor.n_inputs:
-                _, pv, shares, _, _, news = feedback_statistics(self.scaled_factor, True)
+                _, pv, shares, _, _, news = feedback_statistics(self.scaled_factor)
                 p = float(min(1.0, len(pv) * float(np.min(pv))))
                 share, new = float(np.max(shares)), float(np.max(news))
                 if p < FEEDBACK_WARNING_LEVEL and isinstance(self.data, IOData):

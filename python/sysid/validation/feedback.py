@@ -102,14 +102,16 @@ def feedback_pvalues(factor: Any) -> tuple[np.ndarray, np.ndarray, int, int]:
     Returns ``(F, p_values, df_num, df_den)``; an input that its own past predicts exactly
     (a sum of sinusoids, a step) cannot be tested and gets ``F = 0, p = 1``.
     """
-    F, p, _, q, df2 = feedback_statistics(factor)
+    F, p, _, q, df2, _ = feedback_statistics(factor)
     return F, p, q, df2
 
 
-def feedback_statistics(factor: Any, innovation: bool = False) -> tuple[Any, ...]:
-    """:func:`feedback_pvalues` and the effect size beside them: ``(F, p_values, explained,
-    df_num, df_den)``, ``explained`` per input the share (0-1) of the input's variance that
-    the past output innovations explain beyond its own past (``(RSS_r - RSS_f) / |u|^2``).
+def feedback_statistics(factor: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int,
+                                            np.ndarray]:
+    """:func:`feedback_pvalues` and the effect sizes beside them: ``(F, p_values, explained,
+    df_num, df_den, explained_new)``, ``explained`` per input the share (0-1) of the input's
+    variance that the past output innovations explain beyond its own past (``(RSS_r - RSS_f)
+    / |u|^2``).
 
     The p-value says whether the dependence is there, the share how large it is. On a long
     record of a smooth, nearly deterministic input (a chirp, whose own past predicts it to
@@ -119,12 +121,12 @@ def feedback_statistics(factor: Any, innovation: bool = False) -> tuple[Any, ...
     would, and so does a linear model's misfit of a nonlinear plant. The bias such a
     dependence puts in an open-loop fit grows with the share.
 
-    With ``innovation=True`` a sixth item: per input the share (0-1) of what the input's own
-    past leaves unexplained that the past output innovations explain (``(RSS_r - RSS_f) /
-    RSS_r``). An integrating controller's output (a PI loop's) is predicted by its own past
-    almost wholly, so the first share is tiny however closed the loop; this one says how much
-    of the input's new movement the outputs drive (3-20 % on a four-tank rig under PI
-    control, where the first share is 0.002-0.02 %).
+    ``explained_new``: per input the share (0-1) of what the input's own past leaves unexplained
+    that the past output innovations explain (``(RSS_r - RSS_f) / RSS_r``). An integrating
+    controller's output (a PI loop's) is predicted by its own past almost wholly, so the first
+    share is tiny however closed the loop; this one says how much of the input's new movement
+    the outputs drive (3-20 % on a four-tank rig under PI control, where the first share is
+    0.002-0.02 %).
     """
     m, l, p = factor.n_inputs, factor.n_outputs, factor.past
     n_cols = int(factor.n_columns)
@@ -147,9 +149,7 @@ def feedback_statistics(factor: Any, innovation: bool = False) -> tuple[Any, ...
         Fs[i], ps[i] = F, f_sf(F, q, df2)
         shares[i] = max(rss_r - rss_f, 0.0) / total
         news[i] = max(rss_r - rss_f, 0.0) / rss_r
-    if innovation:
-        return Fs, ps, shares, q, df2, news
-    return Fs, ps, shares, q, df2
+    return Fs, ps, shares, q, df2, news
 
 
 class FeedbackTest(HTMLResult):
@@ -340,7 +340,7 @@ def check_feedback(data: IOData | tuple[Any, Any], lags: int | None = None, *, a
                                     f"{2 * lags + 2} samples; use fewer lags")
     exps = [(u - u.mean(axis=0), y - y.mean(axis=0)) for u, y in data.experiments]
     factor = _sysid.compress(exps, lags, 1, None, "qr")
-    F, p, shares, q, df2, news = feedback_statistics(factor, innovation=True)
+    F, p, shares, q, df2, news = feedback_statistics(factor)
     if factor.n_columns <= lags * (data.n_inputs + data.n_outputs):
         raise InsufficientDataError(f"lags = {lags} leaves no degrees of freedom; use a "
                                     "longer record or fewer lags")
