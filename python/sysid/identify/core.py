@@ -100,7 +100,13 @@ from ..validation.records import validation_record
 from .board import Board, free_poles, unstable
 from .choice import _choose
 from .integrating import integrating_candidates, integrating_note
-from .notes import persistent_mode_check, refit_cap_check, trend_check, weak_check
+from .notes import (
+    loop_feedthrough_check,
+    persistent_mode_check,
+    refit_cap_check,
+    trend_check,
+    weak_check,
+)
 from .result import IdentifiedModel, IdentifyResult, _family, reported_fit
 from .states import stabilised_candidates, states_candidates
 from .steptest import STAIRCASE_BLOCKS, blocks_with_steps, identify_step_test, input_changes
@@ -778,6 +784,7 @@ def identify(
     trend_check(model, centred, checks)
     persistent_mode_check(model, centred, checks)
     weak_check(float(chosen["held_out_fit"]), checks)
+    loop_feedthrough_check(bool(chosen["feedthrough"]), feedback, checks)
     if getattr(model, "uncertainty", None) is None:
         model = with_uncertainty(model, centred, checks, SUBSPACE + CLOSED_LOOP)
     result_model = IdentifiedModel(model, mu, my)

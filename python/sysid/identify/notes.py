@@ -196,3 +196,33 @@ def refit_cap_check(model: Any, checks: dict[str, Any]) -> None:
         f"focus='{focus}', feedthrough={bool(chosen.get('feedthrough'))}{weighting}, "
         f"max_iter=1000) (a lower cost on this record, which need not simulate other data "
         f"better)")
+
+
+def loop_feedthrough_check(feedthrough: bool, feedback: bool, checks: dict[str, Any]) -> None:
+    """``checks["loop_feedthrough"]`` when the chosen model has a direct term (``D``) and the
+    record shows feedback. A controller that computes its output from the same sample's
+    measurement (most sampled loops log them in one row) ties ``u(t)`` to ``y(t)`` within the
+    sample, and a closed-loop record cannot tell that tie from a plant's direct term: ``D``
+    then carries the controller's, with the sign and size of its gain (a heated air duct with a
+    0.12-0.2 s dead time, under PI control: ``D`` = -0.23 and -0.59 on two parts of its
+    record, validation fits far below those of the fits without it). Whether the plant has a
+    direct term is knowledge the data do not hold: the note says so and how to refit.
+
+    Examples
+    --------
+    >>> from sysid.identify.notes import loop_feedthrough_check
+    >>> checks = {}
+    >>> loop_feedthrough_check(True, True, checks)
+    >>> checks["loop_feedthrough"][:56]
+    'the chosen model has a direct term (D) and the record sh'
+    >>> loop_feedthrough_check(True, False, {})  # open loop: D is the plant's
+    """
+    if not (feedthrough and feedback):
+        return
+    checks["loop_feedthrough"] = (
+        "the chosen model has a direct term (D) and the record shows feedback: if the "
+        "controller acts within the sample (its output computed from the same sample's "
+        "measurement), closed-loop data cannot tell its direct term from the plant's, and D "
+        "may be the controller's; a plant with a dead time, or an output that cannot respond "
+        "within a sample, has none: refit without it (sysid.ssest(data, order, "
+        "feedthrough=False), or sysid.pbsid(data, order, feedthrough=False))")
