@@ -154,7 +154,6 @@ def _header(path: Path, delimiter: str | None, decimal: str = ".") -> list[str]:
     return header(path, delimiter, decimal=decimal).names
 
 
-
 def fill_gaps(u: np.ndarray, y: np.ndarray, t: np.ndarray | None, max_gap: int | None,
               names: list[str], say: Callable[[str], None]
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None, dict | None]:
@@ -184,11 +183,11 @@ def fill_gaps(u: np.ndarray, y: np.ndarray, t: np.ndarray | None, max_gap: int |
     from ..data.raw import _runs, repair_nan
 
     rows = bad.any(axis=1)
-    first = int(np.argmin(rows))  # the first and last complete rows
-    last = len(rows) - int(np.argmin(rows[::-1]))
     if rows.all():
         raise DataError("every row misses a cell of the inputs or outputs: nothing to fill "
                         "from")
+    first = int(np.argmin(rows))  # the first and last complete rows
+    last = len(rows) - int(np.argmin(rows[::-1]))
     for j in range(x.shape[1]):
         for a, b in _runs(bad[first:last, j]):
             if b - a > max_gap:
@@ -206,5 +205,5 @@ def fill_gaps(u: np.ndarray, y: np.ndarray, t: np.ndarray | None, max_gap: int |
     dropped = first + len(rows) - last
     say(f"filled {filled} missing cell(s) linearly (runs of at most {max_gap} samples)"
         + (f"; dropped {dropped} row(s) at the start or end that miss one" if dropped else ""))
-    return (np.asarray(uu if uu is not None else u[first:last], float), np.asarray(yy, float),
-            None if t is None else t[first:last], note)
+    return (np.asarray(uu, float), np.asarray(yy, float), None if t is None else t[first:last],
+            note)
