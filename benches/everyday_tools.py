@@ -185,19 +185,14 @@ def tools(est, val, siso_est):
         t = sysid.arxstruc(miso, range(1, 6), range(1, 6), range(1, 4))
         return {"selstruc": str(sysid.selstruc(t, "aic"))}
 
-    def rarx():
-        r = sysid.RecursiveARX(2, 2, 1)
-        res = r.run(siso_est.u, siso_est.y)
-        return {"finite": _finite(res.yhat) and _finite(r.parameters),
-                "rel_err": float(np.std(res.error[len(res.error) // 2:])
-                                 / (np.std(siso_est.y) + 1e-300))}
-
-    def roe():
-        r = sysid.RecursiveOE(2, 2, 1)
-        res = r.run(siso_est.u, siso_est.y)
-        return {"finite": _finite(res.yhat) and _finite(r.parameters),
-                "rel_err": float(np.std(res.error[len(res.error) // 2:])
-                                 / (np.std(siso_est.y) + 1e-300))}
+    def recursive(cls):  # RecursiveARX / RecursiveOE (2, 2, 1): the late error's size
+        def run():
+            r = cls(2, 2, 1)
+            res = r.run(siso_est.u, siso_est.y)
+            return {"finite": _finite(res.yhat) and _finite(r.parameters),
+                    "rel_err": float(np.std(res.error[len(res.error) // 2:])
+                                     / (np.std(siso_est.y) + 1e-300))}
+        return run
 
     def spa():
         g = sysid.spa(est)
@@ -269,8 +264,8 @@ def tools(est, val, siso_est):
         ("step/stepinfo", step_info),
         ("residuals(oe)", resid),
         ("compare arx,oe,n4sid", multi),
-        ("RecursiveARX", rarx),
-        ("RecursiveOE", roe),
+        ("RecursiveARX", recursive(sysid.RecursiveARX)),
+        ("RecursiveOE", recursive(sysid.RecursiveOE)),
         ("pem_loss", loss),
         ("forecast(ar)", fc),
     ]
