@@ -29,6 +29,7 @@ from ..data.offsets import check_offsets
 from ..errors import DataError, InsufficientDataError, ShapeError, is_frd
 from .arx_penalty import kernel_penalties, pair_penalties, penalised_fits
 from .cancellation import cancellation, warn_cancellations
+from .feedthrough import check_polynomial_feedthrough
 from .initial import check as _check_initial
 from .initial import record as _record_initial
 from .initial import simulator as _initial_simulator
@@ -159,7 +160,13 @@ def arx(
         fits = penalised_fits(exps, na_g, nb_g, nk_g, lams, factors)
     else:  # ridge: lam |theta|^2, the same on [-a, b]
         fits = _sysid.arx_fit(exps, na_g, nb_g, nk_g, float(regularization), None)
-    return _warn_diverging(_arx_model(data, fits, nk_g), "arx")
+    m = _arx_model(data, fits, nk_g)
+    if nu:
+        check = check_polynomial_feedthrough(
+            exps, "arx", [max(*na_g[i], *nb_g[i]) for i in range(ny)], nb_g, nk_g)
+        if check is not None:
+            m.info["feedthrough_check"] = check
+    return _warn_diverging(m, "arx")
 
 
 def _differenced(data: Any, integrate_noise: Any) -> IOData:
@@ -325,10 +332,15 @@ def _pem(
     for i in range(ny):
         _require_samples(exps, method, i, na_v[i], nb_g[i], nc_v[i], nd_v[i], nf_g[i], nk_g[i])
     check_polynomial_excitation(exps, method, na_v, nb_g, nf_g)
+    ft_check = check_polynomial_feedthrough(
+        exps, method, [max(na_v[i], nc_v[i], nd_v[i], *nb_g[i], *nf_g[i]) for i in range(ny)],
+        nb_g, nk_g, data)
     parts: dict[str, list[Any]] = {k: [] for k in "abcdf"}
     info: dict[str, Any] = {"method": method, "iterations": [], "cost": [],
                             "criterion": "sum of squares", "stop": [],
                             "remaining_decrease": []}
+    if ft_check is not None:
+        info["feedthrough_check"] = ft_check
     cov, var = [], []
     cb, close_bar = iteration_callback(progress, method, iters * ny,
                                        iteration_printer(method, "sum of squares"))

@@ -20,7 +20,7 @@ from .. import _sysid
 from .._checks import as_int, experiment_arrays, require_inputs_vary
 from ..data.iodata import as_record
 from ..data.offsets import check_offsets
-from ..errors import DataError, StabilityWarning
+from ..errors import DataError, FeedthroughWarning, StabilityWarning
 
 __all__ = ["StructureTable", "arxstruc", "selstruc", "struc"]
 
@@ -185,9 +185,10 @@ def _on_validation(data: Any, exps: list[Any], val: Any, nn: Any, extra: Any) ->
             continue  # a structure the estimation data do not determine
         # a candidate whose simulation diverges says nothing about the table (its one-step
         # predictor, scored here, is stable): the robot arm's 125 rows gave ten such
-        # warnings; the others (offsets) once each, not once per row
+        # warnings; the others (offsets) once each, not once per row. A row's nk = 1 against
+        # a direct term is the table's to show (its nk = 0 rows score it), not a warning
         for w in caught:
-            if not issubclass(w.category, StabilityWarning):
+            if not issubclass(w.category, (StabilityWarning, FeedthroughWarning)):
                 said.setdefault((w.category, str(w.message)), w)
         e = [y - model.predict(u, y, 1) for u, y in vexps]
         loss = float(sum(np.sum(r ** 2) for r in e) / n_val)
