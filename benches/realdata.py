@@ -86,6 +86,10 @@ sources, SHA-256, how each ``.npz`` is made and the findings: results/realdata_f
 sweep's records (a four-tank process under feedback, its valves set for a non-minimum-phase and
 a minimum-phase zero: two pumps to two levels); sources, SHA-256, how each ``.npz`` is made and
 the findings: results/realdata_fresh7.md.
+``--fresh8-records DIR`` (``FRESH8``, results/realdata_fresh8_table[_<split>].md): the eighth
+sweep's records (a five-storey test tower shaken by its hybrid mass damper, a soft pneumatic
+bending actuator, an LED lighting a photoresistor); sources, SHA-256, how each ``.npz`` is made
+and the findings: results/realdata_fresh8.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -123,7 +127,18 @@ from pathlib import Path
 import numpy as np
 
 # the record tables read from ``DIR/<name>.npz``
-from realdata_records import FRESH, FRESH2, FRESH3, FRESH4, FRESH5, FRESH6, FRESH7, MORE, SWEEPS  # noqa: F401
+from realdata_records import (  # noqa: F401
+    FRESH,
+    FRESH2,
+    FRESH3,
+    FRESH4,
+    FRESH5,
+    FRESH6,
+    FRESH7,
+    FRESH8,
+    MORE,
+    SWEEPS,
+)
 
 HERE = Path(__file__).resolve().parent
 SHARED = Path("/work/shared/data")

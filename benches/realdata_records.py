@@ -99,6 +99,19 @@ FRESH7 = {
     # (an operator moving both pumps to hold the levels near 50 %)
 }
 
+#: the eighth sweep's records (``--fresh8-records DIR``), read as ``FRESH``'s are (sources:
+#: results/realdata_fresh8.md)
+FRESH8 = {
+    "tower_hmd": ("tower_hmd_est", "tower_hmd_val"),  # five-storey steel test tower, white
+    # noise into the hybrid mass damper on its roof, decimated to 25 Hz: actuator command ->
+    # accelerations of floors 1-5 (a second white-noise run validates)
+    "soft_actuator": ("soft_actuator_est", "soft_actuator_val"),  # soft pneumatic bending
+    # actuator, 0.04 s: two pump voltages (on/off pulses) -> the two chamber pressures and the
+    # bending angle (9 V pulses estimate, 7 V pulses validate)
+    "optoshield": ("optoshield", None),  # OptoShield, 5 ms: LED power steps -> light on a
+    # photoresistor
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -107,4 +120,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh4": ("FRESH4", "realdata_fresh4_table"),
           "fresh5": ("FRESH5", "realdata_fresh5_table"),
           "fresh6": ("FRESH6", "realdata_fresh6_table"),
-          "fresh7": ("FRESH7", "realdata_fresh7_table")}
+          "fresh7": ("FRESH7", "realdata_fresh7_table"),
+          "fresh8": ("FRESH8", "realdata_fresh8_table")}

@@ -140,12 +140,13 @@ def compare(*args: Any, horizon: int | None = None, x0: X0 = "estimate") -> Any:
 
 
 def _warn_flat(results: list[CompareResult]) -> None:
-    """One :class:`~sysid.errors.SysidWarning` with the notes of the flat outputs whose fit
-    reads below zero (there the number misleads; above it the note in the summary is
-    enough)."""
+    """One :class:`~sysid.errors.SysidWarning` with the notes of the flat outputs and of the
+    level errors whose fit reads below zero (there the number misleads; above it the note in
+    the summary is enough)."""
     said = []
     for r in results:
-        for (e, j), note in zip(r.flat, r.notes):
+        # the notes list the flat outputs' first, then those of the level errors
+        for (e, j), note in zip(r.flat + r.levels, r.notes):
             if not r.diverged[e] and r.fit[e, j] < 0 and note not in said:
                 said.append(note)
     if said:
@@ -233,7 +234,8 @@ def _flat_as(out: CompareResult, inner: CompareResult) -> CompareResult:
     """``out`` (a comparison on the raw record) with the flat outputs of ``inner`` (the same
     on the model's deviations from its operating point or trend): an output's level is
     measured from where the model puts it, not from zero."""
-    out.flat, out.notes, out._why = [], [], []
+    out.flat, out.notes, out._why, out.levels = [], [], [], []
     for (e, j), why in zip(inner.flat, inner._why):
         out.add_flat(e, j, why)
+    out.add_levels()
     return out

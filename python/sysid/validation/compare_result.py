@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from .._display import HTMLResult
-from .fit import _metrics, diverged, flat_outputs
+from .fit import _metrics, diverged, flat_outputs, level_errors
 
 __all__ = ["CompareResult"]
 
@@ -41,6 +41,10 @@ class CompareResult(HTMLResult):
         ``(experiment, output)`` pairs whose output barely moves on the record
         (:func:`~sysid.validation.fit.flat_outputs`: a step test's settled end): their
         NRMSE fit is not a meaningful measure; :attr:`notes` says why.
+    levels : list of (int, int)
+        ``(experiment, output)`` pairs (not flat) whose simulation error is mostly a constant
+        level (:func:`~sysid.validation.fit.level_errors`): the fit measures the level the
+        model puts the output at, not its response; :attr:`notes` says how large.
     notes : list of str
         What the fit numbers cannot say (shown by :meth:`summary`).
     """
@@ -69,6 +73,28 @@ class CompareResult(HTMLResult):
         for e, (a, b) in enumerate(zip(u, y)):
             for j, why in flat_outputs(a[start:] if a is not None else None, b[start:]):
                 self.add_flat(e, j, why)
+        self.levels: list[tuple[int, int]] = []
+        self.add_levels()
+
+    def add_levels(self) -> None:
+        """Note the outputs (not flat, not diverged) whose error is mostly a constant level
+        (:func:`~sysid.validation.fit.level_errors`)."""
+        for e, (a, b) in enumerate(zip(self.y, self.yhat)):
+            if self.diverged[e]:
+                continue
+            where = f" in experiment {e}" if len(self.y) > 1 else ""
+            for j, level, k, fit in level_errors(a[self.start:], b[self.start:]):
+                if (e, j) in self.flat:
+                    continue
+                self.levels.append((e, j))
+                self.notes.append(
+                    f"output {self.output_names[j]}{where}: the error is mostly a constant "
+                    f"level ({level:.3g}, {k:.1f} times the output's standard deviation on "
+                    f"this record): the fit ({self.fit[e, j]:.1f} %) measures where the model "
+                    f"puts the output's level; without that level it would be {fit:.1f} %. "
+                    "Either the model's static gain is wrong at this record's input level, or "
+                    "the level is not the input's doing (a sensor offset or drift that differs "
+                    "between records: then judge the response by the fit without it)")
 
     def add_flat(self, e: int, j: int, why: str) -> None:
         """Record that output ``j`` of experiment ``e`` is flat (``why``: the measure)."""

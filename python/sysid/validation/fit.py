@@ -177,3 +177,55 @@ def _still(u: np.ndarray) -> bool:
         us = u / s
         sd, level = us.std(0), np.abs(us.mean(0))
     return bool(np.all((sd == 0) | (sd < STILL_INPUT_SHARE * level)))
+
+
+#: The error's constant part counts as a level apart from the dynamics when the fit without it
+#: is at least this many points higher (a small offset on a near-perfect fit does not).
+LEVEL_GAIN_POINTS = 10.0
+
+
+def level_errors(y: np.ndarray, yhat: np.ndarray) -> list[tuple[int, float, float, float]]:
+    """``(output index, level, its multiple of the output's std, fit without it)`` of every
+    output whose simulation error is mostly a constant: the error's mean exceeds its spread
+    about the mean (``|mean(e)| > std(e)``, over half the squared error), the means of its
+    two halves are within half of it of each other (a level, not an error that grows, as an
+    unstable model's), and taking it out raises the fit by :data:`LEVEL_GAIN_POINTS` or more,
+    to zero or above (without it the response is simulated). The model then puts the output
+    at a level the record does not have; the fit measures that level, not the response (a
+    sensor offset that differs between records, or a static gain wrong at this record's
+    input level).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sysid.validation.fit import level_errors
+    >>> t = np.arange(400.0)
+    >>> y = np.sin(t / 9)[:, None]
+    >>> [(j, round(lv, 2), round(k, 1), round(f, 1)) for j, lv, k, f in level_errors(y, y - 2)]
+    [(0, 2.0, 2.8, 100.0)]
+    >>> level_errors(y, y - 0.01)      # a small offset on a near-perfect fit: not a level
+    []
+    """
+    y, yhat = np.asarray(y, float), np.asarray(yhat, float)
+    if y.ndim == 1:
+        y, yhat = y[:, None], yhat[:, None]
+    out: list[tuple[int, float, float, float]] = []
+    if y.shape[0] < 3 or not np.all(np.isfinite(yhat)):
+        return out
+    s = _unit(y)
+    with np.errstate(all="ignore"):
+        ys, err = y / s, (y - yhat) / s
+        dev = np.linalg.norm(ys - ys.mean(0), axis=0)
+        level, spread = err.mean(0), err.std(0)
+        h = y.shape[0] // 2
+        halves = np.abs(err[:h].mean(0) - err[h:].mean(0))
+        fit = 100.0 * (1.0 - np.linalg.norm(err, axis=0) / dev)
+        fit_flat = 100.0 * (1.0 - np.linalg.norm(err - level, axis=0) / dev)
+        sd = ys.std(0)
+    for j in range(y.shape[1]):
+        if (dev[j] > 0 and np.isfinite(fit[j]) and abs(level[j]) > spread[j]
+                and halves[j] < 0.5 * abs(level[j]) and fit_flat[j] >= 0
+                and fit_flat[j] - fit[j] >= LEVEL_GAIN_POINTS):
+            out.append((j, float(level[j] * s[j]), float(abs(level[j]) / sd[j]),
+                        float(fit_flat[j])))
+    return out
