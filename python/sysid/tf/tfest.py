@@ -22,7 +22,7 @@ from .options import (
     progress_callback,
     search_limits,
 )
-from .refine import PairStructure, check_experiments, refine
+from .refine import PairStructure, check_experiments, free_search, free_test, refine
 from .srivc import srivc
 
 __all__ = ["tfest"]
@@ -111,7 +111,13 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         default is ``False``): on 17 real records' :func:`sysid.spa` estimates, the free fits
         of 2 and 3 poles were unstable in 22 of 34 cases, 20 of them diverging on the
         validation data. ``False`` for an unstable plant's response (measured in closed
-        loop). Fits of time records keep the simulation stable always.
+        loop). Continuous-time fits of time records keep the simulation stable too; there,
+        from the stable fit, the search is run again free of the bound (``False``: its
+        result is returned when lower), and with the default a
+        :class:`sysid.StabilityWarning` names the pole when the data insist on an unstable
+        model (likelihood-ratio test at 1 %, as :func:`sysid.ssest`'s prediction focus;
+        ``info["insisting"]``). A discrete-time fit is :func:`sysid.oe`'s, which keeps
+        ``F`` stable and warns likewise.
     feedthrough : bool
         Discrete-time models: ``False`` (default, MATLAB's) lags every numerator one sample
         behind the input (no direct term, ``B(z) = b_0 z^(n-1) + ...``); ``True`` lets the
@@ -231,7 +237,8 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     cb, close = progress_callback(progress, max_iter)
     try:
         return _checked(_continuous(data, npo, nze, fixed_delays, auto, hold, initial_state,
-                                    max_delay, max_iter, tol, cb, _init(init, npo, nze)))
+                                    max_delay, max_iter, tol, cb, _init(init, npo, nze),
+                                    bool(enforce_stability)))
     finally:
         close()
 
@@ -242,16 +249,16 @@ def _checked(G: TransferFunction) -> TransferFunction:
 
     warn_unstable(G, "tfest", advice=(
         "Unless the process itself is unstable, leave enforce_stability at its default "
-        "(True; frequency data or periodic records), try fewer poles, a start from a stable "
-        "model (init=), or "
+        "(True), try fewer poles, a start from a stable model (init=), or "
         "sysid.ssest(data, order, focus='simulation') (which keeps the simulation stable)."))
     return G
 
 
 def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
                 hold: str, initial_state: str, max_delay: float | None, max_iter: int,
-                tol: float, cb: Any, init: Any) -> TransferFunction:
+                tol: float, cb: Any, init: Any, stable: bool = True) -> TransferFunction:
     l, m = data.n_outputs, data.n_inputs
+    insisted = []
     exps_all = [(np.asarray(u, float), np.asarray(y, float)) for u, y in data.experiments]
     N = sum(u.shape[0] for u, _ in exps_all)
     dmax = max_delay if max_delay is not None else 0.1 * N * data.dt / len(exps_all)
@@ -279,8 +286,24 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
             res, pairs, said = _second_start(res, said, pairs, exps, data, npo[i], nze[i],
                                              starts, auto, dmax, hold, initial_state,
                                              max_iter, tol, cb, i)
+        if not stable and res["stop"] != "cancelled":  # free, from the stable fit
+            with warnings.catch_warnings(record=True) as said_free:
+                warnings.simplefilter("always")
+                free = free_search(res, pairs, exps, data.dt, hold, initial_state, max_iter,
+                                   tol)
+            if free is not None and free["cost_history"][-1] < res["cost_history"][-1]:
+                free["start"] = res["start"]
+                pairs = [PairStructure(pr.coef, q, pr.fixed, pr.lower, pr.upper, d,
+                                       pr.delay_free, pr.delay_max, pr.names)
+                         for pr, q, d in zip(pairs, res["p"], res["delays"])]
+                res, said = free, list(said_free)
         for w in said:  # the kept search's warnings, at the user's line
             warnings.warn(w.message, w.category, stacklevel=user_stacklevel())
+        if stable and res["stop"] != "cancelled":  # held at the bound: do the data insist?
+            got = free_test(res, pairs, exps, data.dt, hold, initial_state, max_iter, tol)
+            if got is not None:
+                insisted.append((f"{data.output_names[i]}<-{data.input_names[got[0]]}",
+                                 *got[1:]))
         nums, dens = [], []
         for j, p in enumerate(res["p"]):
             n = int(npo[i, j])
@@ -300,6 +323,14 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
                          input_names=data.input_names, output_names=data.output_names,
                          info=info)
     _attach(G, tables, covs, auto)
+    if insisted:
+        from ..pem.boundary import warn_insisted
+
+        pair, pole, lr = max(insisted, key=lambda x: x[2])
+        warn_insisted("tfest's model", pair, pole, 0.0, lr,
+                      "pass enforce_stability=False for the unstable model (its simulation "
+                      "grows as the plant's does)")
+        G.info["insisting"] = [{"pair": a, "pole": b, "statistic": c} for a, b, c in insisted]
     if auto:
         warn_delay_at_bound(est_delays, dmax, max_delay is not None, data)
     coloured_uncertainty(G, data, [len(nm) for nm, _ in tables], hold, initial_state)
