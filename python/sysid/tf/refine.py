@@ -388,10 +388,9 @@ def free_test(res: dict[str, Any], pairs: Sequence[PairStructure],
     ``pairs``) ended: the search runs again from there, free to leave the unit circle, and
     the likelihood-ratio test of :func:`sysid.pem.boundary.insists` (1 %) decides;
     ``(pair, pole, statistic)`` of the free fit's most unstable pole when the data insist,
-    else ``None``. Run after every stable fit, not only where a pole sits at the bound: the
-    bound can also stop the search elsewhere (an unstable plant's record: a stable pole at
-    s = -0.009, its mode gone within the record); from a minimum inside the stable region
-    the free search stops at once."""
+    else ``None``. Run after every stable fit, not only where a pole sits at the bound (a
+    step refused at the bound can also stop the search away from it); from a minimum inside
+    the stable region the free search stops at once."""
     import warnings
 
     from ..pem.boundary import insists
