@@ -300,7 +300,8 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
         for w in said:  # the kept search's warnings, at the user's line
             warnings.warn(w.message, w.category, stacklevel=user_stacklevel())
         if stable and res["stop"] != "cancelled":  # held at the bound: do the data insist?
-            got = free_test(res, pairs, exps, data.dt, hold, initial_state, max_iter, tol)
+            got = free_test(res, pairs, exps, data.dt, hold, initial_state, max_iter, tol,
+                            _reflected)
             if got is not None:
                 insisted.append((f"{data.output_names[i]}<-{data.input_names[got[0]]}",
                                  *got[1:]))
@@ -337,6 +338,16 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
     if initial_state == "zero":  # the fit of a simulation from rest, as the model was fitted
         fit_percent(G, data)
     return G
+
+
+def _reflected(pair: PairStructure, q: np.ndarray) -> np.ndarray:
+    """A pair's parameters ``[a_1.., b..]`` (:func:`_pair`) with the unstable poles of
+    ``s^n + a_1 s^(n-1) + ...`` mirrored into the left half-plane (``s -> -conj(s)``; the
+    numerator kept)."""
+    num, den = pair.coef(np.asarray(q, float))
+    r = np.roots(den)
+    r = np.where(r.real > 0, -np.conj(r), r)
+    return np.concatenate([np.real(np.poly(r))[1:], num])
 
 
 def _refined(pairs: list[PairStructure], exps: list[tuple[np.ndarray, np.ndarray]],
