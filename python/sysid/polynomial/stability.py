@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
+from .._checks import PERSISTENT_DECAY
 from ..errors import DataError, NumericalError
 from .model import PolynomialModel
 
@@ -27,6 +28,7 @@ def warn_insisting_f(m: PolynomialModel, exps: list[Any], rs: list[dict[str, Any
     from ..pem.boundary import insists, warn_insisted
 
     found = []
+    longest = max(len(y) for _, y in exps)
     for i, r in enumerate(rs):
         if not any(nf[i]) or r.get("stop") == "cancelled":
             continue
@@ -45,7 +47,9 @@ def warn_insisting_f(m: PolynomialModel, exps: list[Any], rs: list[dict[str, Any
         for j, n in enumerate(nf[i]):
             roots = np.roots(np.concatenate([[1.0], th[at:at + n]])) if n else np.zeros(0)
             at += n
-            if roots.size and np.abs(roots).max() > 1.0:
+            # a mode growing less than 1 / PERSISTENT_DECAY over the record is one on the
+            # bound (an integrating plant: the held pole's own warning names it)
+            if roots.size and np.abs(roots).max() ** longest * PERSISTENT_DECAY > 1.0:
                 found.append((lr, f"{m.output_names[i]} <- {m.input_names[j]}",
                               complex(roots[np.argmax(np.abs(roots))])))
     if not found:
