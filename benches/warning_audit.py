@@ -49,6 +49,7 @@ HERE = Path(__file__).resolve().parent
 INPUTS = ("white", "prbs", "multisine", "filtered")
 CLEAN = ("clean-1x1", "clean-2x2")
 ONLY: set[str] = set()  # --only: the calls to make (all when empty)
+FITTED = ("oe", "tfest")  # calls whose validation fit (worst output) is recorded
 DUE = {"closed": "FeedbackWarning", "offset": "OffsetWarning", "narrow": "ExcitationWarning",
        "unstable": "StabilityWarning", "capped": "IterationLimitWarning",
        "feedthrough": "FeedthroughWarning"}
@@ -237,6 +238,14 @@ def run_calls(scenario: str, est, val, facts: dict, with_identify: bool) -> dict
         out["calls"][name] = {"warnings": ws, "error": err,
                               "unstable": unstable(m) if hasattr(m, "poles") else None,
                               "seconds": round(time.perf_counter() - t, 3)}
+        if name in FITTED and m is not None:  # the validation fit, worst output
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                try:
+                    fit = float(np.min(sysid.compare(val, m).fit))
+                except Exception:  # noqa: BLE001
+                    fit = float("nan")
+            out["calls"][name]["fit"] = round(fit, 2) if np.isfinite(fit) else None
         return m
 
     capped = scenario == "capped"
@@ -372,6 +381,16 @@ def tables(rows: list[dict]) -> str:
                        f"rejects): whiteness {rate(sum(wr), len(wr))}; independence "
                        f"{rate(sum(ir), len(ir))}")
         out.append("")
+        for c in FITTED:
+            fits = [r["calls"][c].get("fit") for r in rs if c in r["calls"]
+                    and "fit" in r["calls"][c]]
+            if fits:
+                f = np.array([-np.inf if x is None else x for x in fits])
+                secs = [r["calls"][c]["seconds"] for r in rs if c in r["calls"]]
+                out.append(f"{c}: validation fit (worst output) median {np.median(f):.1f} %, "
+                           f"10th percentile {np.percentile(f, 10):.1f} %, below 50 %: "
+                           f"{int(np.sum(f < 50))}/{f.size}; seconds per call: mean "
+                           f"{np.mean(secs):.2f}, max {np.max(secs):.2f}")
         msgs = Counter(w for r in rs for c in r["calls"].values() for w in set(c["warnings"]))
         if msgs:
             out.append("Messages (runs x calls):\n")

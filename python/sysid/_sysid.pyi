@@ -383,7 +383,11 @@ def greybox_linear(
     x0_params: list[int] = ...,
     search: dict[str, Any] | None = None,
     progress: Any = None,
+    unbounded: bool = False,
 ) -> dict[str, Any]: ...
+def stability_insists(
+    kept: float, free: float, n: int, l: int = 1, det: bool = False
+) -> tuple[float, bool]: ...
 def greybox_frequency(
     dims: tuple[int, int, int],
     omega: _Array,
@@ -496,6 +500,19 @@ def polynomial_residuals(
     theta: list[float] | _Array,
     initial_condition: str = "zero",
 ) -> tuple[_Array, list[dict[str, Any]]]: ...
+def polynomial_free_search(
+    experiments: list[tuple[_Array, _Array]],
+    na: int,
+    nb: list[int],
+    nc: int,
+    nd: int,
+    nf: list[int],
+    nk: list[int],
+    theta: list[float],
+    initial_condition: str = "zero",
+    max_iter: int = 100,
+    tol: float = 1e-9,
+) -> dict[str, Any]: ...
 def initial_condition_name(name: str) -> str: ...
 def iv4(
     experiments: list[tuple[_Array, _Array, _Array | None]],

@@ -341,7 +341,7 @@ fn with_map<T: Send>(
 /// Estimates a linear grey-box structure; `structure(p, jac) -> (theta, dtheta/dp or None)`.
 #[pyfunction]
 #[pyo3(signature = (dims, experiments, structure, p0, *, focus="prediction", with_k=false,
-    reweight=true, x0_params=vec![], search=None, progress=None))]
+    reweight=true, x0_params=vec![], search=None, progress=None, unbounded=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn greybox_linear<'py>(
     py: Python<'py>,
@@ -355,9 +355,11 @@ pub fn greybox_linear<'py>(
     x0_params: Vec<usize>,
     search: Option<SearchArgs>,
     progress: Option<Py<PyAny>>,
+    unbounded: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let focus: Focus = focus.parse().py()?;
     let mut o = LinearOptions::default();
+    o.unbounded = unbounded;
     o.focus = focus;
     o.with_k = with_k;
     o.reweight = reweight;
@@ -595,7 +597,17 @@ pub fn expm_frechet<'py>(
     ))
 }
 
+/// Whether the data insist on an unconstrained fit over the one a stability bound kept
+/// (`sysid_core::pem::insists`: the likelihood-ratio statistic against chi-square(1) at
+/// 1 %): `(statistic, insist)`.
+#[pyfunction]
+#[pyo3(signature = (kept, free, n, l=1, det=false))]
+pub fn stability_insists(kept: f64, free: f64, n: usize, l: usize, det: bool) -> (f64, bool) {
+    sysid_core::pem::insists(kept, free, n, l, det)
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(stability_insists, m)?)?;
     m.add_function(wrap_pyfunction!(expm_frechet, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_linear, m)?)?;
     m.add_function(wrap_pyfunction!(greybox_frequency, m)?)?;

@@ -270,6 +270,51 @@ pub fn polynomial_pem<'py>(
     Ok(d)
 }
 
+/// One output's search from `theta` with `F` free to leave the unit circle
+/// (`sysid_core::polynomial::pem::free_search`): the search's items, `theta` and `kept_cost`
+/// (the criterion at the start).
+#[pyfunction]
+#[pyo3(signature = (experiments, na, nb, nc, nd, nf, nk, theta, initial_condition="zero", max_iter=100, tol=1e-9))]
+#[allow(clippy::too_many_arguments)]
+pub fn polynomial_free_search<'py>(
+    py: Python<'py>,
+    experiments: MisoExperiments<'_>,
+    na: usize,
+    nb: Vec<usize>,
+    nc: usize,
+    nd: usize,
+    nf: Vec<usize>,
+    nk: Vec<usize>,
+    theta: Vec<f64>,
+    initial_condition: &str,
+    max_iter: usize,
+    tol: f64,
+) -> PyResult<Bound<'py, PyDict>> {
+    let ic = InitialCondition::parse(initial_condition).py()?;
+    let ys = outputs(&experiments);
+    let exps = miso_views(&ys, &experiments);
+    let orders = MisoOrders {
+        na,
+        nb,
+        nc,
+        nd,
+        nf,
+        nk,
+    };
+    let mut opts = Options::default();
+    opts.max_iter = max_iter;
+    opts.tol_gradient = tol;
+    opts.tol_step = tol;
+    let (kept, sol) = run(py, &None, |obs| {
+        pem::free_search(&exps, orders, &theta, ic, &opts, obs)
+    })?;
+    let d = PyDict::new(py);
+    search_items(&d, py, &sol)?;
+    d.set_item("kept_cost", kept)?;
+    d.set_item("theta", slice_to_numpy(py, &sol.theta))?;
+    Ok(d)
+}
+
 /// The name of an `initial_condition` (`"auto"`, `"zero"`, `"estimate"`), checked by the core
 /// (a `DataError` naming the allowed values otherwise).
 #[pyfunction]
@@ -458,6 +503,7 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(poly_filter, m)?)?;
     m.add_function(wrap_pyfunction!(polynomial_pem, m)?)?;
     m.add_function(wrap_pyfunction!(polynomial_residuals, m)?)?;
+    m.add_function(wrap_pyfunction!(polynomial_free_search, m)?)?;
     m.add_function(wrap_pyfunction!(initial_condition_name, m)?)?;
     m.add_function(wrap_pyfunction!(iv4, m)?)?;
     m.add_function(wrap_pyfunction!(ivx, m)?)?;

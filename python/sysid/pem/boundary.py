@@ -18,7 +18,7 @@ import numpy as np
 from .._checks import PERSISTENT_DECAY, mode_kept, user_stacklevel
 from ..errors import StabilityWarning
 
-__all__ = ["cap_advice", "warn_boundary", "warn_poles_at_bound"]
+__all__ = ["cap_advice", "insists", "warn_boundary", "warn_insisted", "warn_poles_at_bound"]
 
 
 def warn_boundary(A: np.ndarray, n: int, stacklevel: int | None = None,
@@ -131,3 +131,57 @@ def cap_advice(res: dict[str, Any], focus: str = "prediction") -> str:
                 "(it may take hundreds)")
     again = "" if focus == "prediction" else f", focus={focus!r}"
     return f"raise max_iter, or refine again with sysid.pem(data, model{again})"
+
+
+def insists(kept: float, free: float, n: int, l: int = 1) -> tuple[float, bool]:
+    """Whether the data insist on a free fit (sum of squared errors ``free``) over the one a
+    stability bound kept (``kept``), over ``n`` samples and ``l`` outputs: the
+    likelihood-ratio statistic ``n l ln(kept / free)`` and whether it exceeds the 1 % level
+    of chi-square with one degree of freedom (6.63). The rule of ``ssest``/``pem``'s
+    default stability choice (``sysid_core::pem::insists``), here for the estimators that
+    keep their model stable and warn instead (``tfest``, ``oe``).
+
+    Examples
+    --------
+    >>> from sysid.pem.boundary import insists
+    >>> [round(v, 2) if isinstance(v, float) else v for v in insists(1.02, 1.0, 1000)]
+    [19.8, True]
+    >>> insists(1.001, 1.0, 1000)[1]
+    False
+    """
+    from .. import _sysid
+
+    if not (np.isfinite(kept) and np.isfinite(free) and kept > 0 and free > 0):
+        return 0.0, False
+    lr, yes = _sysid.stability_insists(float(kept), float(free), int(n), int(l), False)
+    return float(lr), bool(yes)
+
+
+def warn_insisted(model: str, pair: str, pole: complex, dt: float, lr: float, option: str,
+                  stacklevel: int | None = None) -> None:
+    """A :class:`~sysid.StabilityWarning`: ``model`` was held stable, but from its fit the
+    search left free moves a pole of ``pair`` out to ``pole`` (continuous when ``dt`` is 0,
+    else discrete) with a likelihood ratio ``lr`` above the 1 % level (:func:`insists`);
+    ``option`` says how to have the unstable model.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from sysid.pem.boundary import warn_insisted
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     warn_insisted("tfest's model", "y1<-u1", 0.02 + 0j, 0.0, 40.0,
+    ...                   "pass enforce_stability=False")
+    >>> "s = 0.02" in str(w[0].message), w[0].category.__name__
+    (True, 'StabilityWarning')
+    """
+    p = complex(pole)
+    where = f"z = {p:.4g} (modulus {abs(p):.4g})" if dt else f"s = {p:.3g}"
+    warnings.warn(
+        f"{model} is held stable, but the data insist on an unstable one: from the stable "
+        f"fit, the search left free moves a pole of {pair} to {where} and lowers the "
+        f"criterion significantly (likelihood ratio {lr:.3g} > 6.63, the 1 % level of "
+        f"chi-square(1)). If the plant is unstable, {option}; if not, look for a drift or an "
+        "offset left in the data (sysid.detrend(data, 'linear') removes both)",
+        StabilityWarning,
+        stacklevel=user_stacklevel() if stacklevel is None else stacklevel + 1)

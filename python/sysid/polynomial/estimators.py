@@ -35,6 +35,7 @@ from .initial import record as _record_initial
 from .initial import simulator as _initial_simulator
 from .model import PolynomialModel
 from .orders import matlab_orders
+from .stability import warn_insisting_f
 from .starts import init_parameters, second_start
 from .uncertainty import attach_uncertainty as _attach_uncertainty
 from .uncertainty import defer_coloured
@@ -416,9 +417,12 @@ def _pem(
                 found.append((f"{m.output_names[i]} <- {m.input_names[j]}", said))
             at += nf
     warn_cancellations(method, found)
-    _warn_held_f(m, parts["f"], method, max(u.shape[0] for u, _ in exps))
+    if not (method == "oe" and m.is_stable() and warn_insisting_f(
+            m, exps, rs, na_v, nb_g, nc_v, nd_v, nf_g, nk_g, iters)):
+        _warn_held_f(m, parts["f"], method, max(u.shape[0] for u, _ in exps))
     _warn_returned_unstable(m, parts["f"], method)
     return m
+
 
 
 def _warn_returned_unstable(m: PolynomialModel, f: list[list[np.ndarray]], method: str) -> None:

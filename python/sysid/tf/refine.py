@@ -30,7 +30,7 @@ from .model import assemble
 from .sampling import canonical, natural_frequency, sample_pair
 from .sensitivity import pair_derivatives
 
-__all__ = ["PairStructure", "refine", "ConvergenceWarning"]
+__all__ = ["PairStructure", "refine", "free_search", "free_test", "ConvergenceWarning"]
 
 #: iterations of the search in a neighbouring delay interval before the best one is run out
 TRIAL_ITER = 8
@@ -228,7 +228,7 @@ def _bounds(pairs: Sequence[PairStructure], mp: _Map) -> tuple[np.ndarray, ...]:
 
 def _run(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarray]], dt: float,
          hold: str, whole: list[int], x0_mode: str, max_iter: int, tol: float,
-         progress: Any) -> tuple[dict[str, Any], _Map]:
+         progress: Any, stable: bool = True) -> tuple[dict[str, Any], _Map]:
     mp = _Map(pairs, dt, hold, whole, exps, x0_mode)
     lo, hi, fx = _bounds(pairs, mp)
     v0 = mp.vector([p.p0 for p in pairs], [p.delay for p in pairs])
@@ -246,7 +246,7 @@ def _run(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarray
                 "fixed": list(map(bool, np.concatenate([fx, np.zeros(mp.n_x0, bool)]))),
                 "max_iter": max_iter, "tol_cost": tol, "tol_step": tol,
                 "tol_gradient": tol * 1e-2},
-        progress=progress)
+        progress=progress, unbounded=not stable)
     return res, mp
 
 
@@ -290,13 +290,14 @@ def _interval_trials(pairs: Sequence[PairStructure], delay_idx: list[int], whole
 def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarray]],
            dt: float, hold: str, *, x0_mode: str = "zero", max_iter: int = 100,
            tol: float = 1e-10, progress: Any = None,
-           fix: str = "Lower n_zeros, fix the delay or use more informative data"
-           ) -> dict[str, Any]:
+           fix: str = "Lower n_zeros, fix the delay or use more informative data",
+           stable: bool = True) -> dict[str, Any]:
     """Output-error fit of one output; returns ``p`` per pair, the delays, the covariance of
     ``[p..., estimated delays...]`` (physical units), ``std``, the search report. ``fix``:
-    what an :class:`~sysid.IdentifiabilityWarning` tells the user to do."""
+    what an :class:`~sysid.IdentifiabilityWarning` tells the user to do. ``stable``: the
+    sampled model is kept stable (``False``: the search is free to leave the unit circle)."""
     whole = [int(np.floor(p.delay / dt + 1e-9)) for p in pairs]
-    res, mp = _run(pairs, exps, dt, hold, whole, x0_mode, max_iter, tol, progress)
+    res, mp = _run(pairs, exps, dt, hold, whole, x0_mode, max_iter, tol, progress, stable)
     history: list[float] = list(res["history"])
     moves = 0
     # the delay intervals already searched: a delay whose input hardly matters has the same
@@ -319,7 +320,7 @@ def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarr
                                    float(np.clip(p.delay, t * dt, (t + 1) * dt)), p.delay_free,
                                    p.delay_max, p.names) for p, t in zip(pairs, trial)]
             res2, mp2 = _run(moved, exps, dt, hold, trial, x0_mode,
-                             min(max_iter, TRIAL_ITER), tol, progress)
+                             min(max_iter, TRIAL_ITER), tol, progress, stable)
             if best is None or res2["cost"] < best[0]["cost"]:
                 best = (res2, mp2, trial, moved)
         moves += 1
@@ -329,7 +330,8 @@ def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarr
         res2, mp2, trial, moved = best
         if res2["stop"] == "maximum iterations" and max_iter > TRIAL_ITER:
             moved = _reached(res2, mp2, moved)[0]
-            res2, mp2 = _run(moved, exps, dt, hold, trial, x0_mode, max_iter, tol, progress)
+            res2, mp2 = _run(moved, exps, dt, hold, trial, x0_mode, max_iter, tol, progress,
+                             stable)
         res, mp, whole, pairs = res2, mp2, trial, moved
         history += list(res["history"])
     pairs = _reached(res, mp, pairs)[0]
@@ -360,6 +362,85 @@ def refine(pairs: Sequence[PairStructure], exps: list[tuple[np.ndarray, np.ndarr
             "cost_history": history, "interval_moves": moves,
             "n_samples": int(res["n_samples"]), "rank": int(res["rank"]),
             "condition": float(res["condition"]), "unidentifiable": weak}
+
+
+def free_search(res: dict[str, Any], pairs: Sequence[PairStructure],
+                exps: list[tuple[np.ndarray, np.ndarray]], dt: float, hold: str, x0_mode: str,
+                max_iter: int, tol: float) -> dict[str, Any] | None:
+    """The search from where the stable search ``res`` (from ``pairs``) ended, free to
+    leave the unit circle (``None`` when it fails); from a stable start of its own, a free
+    search can wander (an unstable plant's record: a criterion 10^3 times the one from the
+    stable fit)."""
+    start = [PairStructure(pr.coef, q, pr.fixed, pr.lower, pr.upper, d, pr.delay_free,
+                           pr.delay_max, pr.names)
+             for pr, q, d in zip(pairs, res["p"], res["delays"])]
+    try:
+        return refine(start, exps, dt, hold, x0_mode=x0_mode, max_iter=max_iter, tol=tol,
+                      stable=False)
+    except (DataError, ArithmeticError):
+        return None
+
+
+def free_test(res: dict[str, Any], pairs: Sequence[PairStructure],
+              exps: list[tuple[np.ndarray, np.ndarray]], dt: float, hold: str, x0_mode: str,
+              max_iter: int, tol: float,
+              reflect: Callable[[PairStructure, np.ndarray], np.ndarray] | None = None
+              ) -> tuple[int, complex, float] | None:
+    """Whether the data insist on an unstable model where the stable search ``res`` (from
+    ``pairs``) ended: the search runs again from there, free to leave the unit circle, and
+    the likelihood-ratio test of :func:`sysid.pem.boundary.insists` (1 %) decides;
+    ``(pair, pole, statistic)`` of the free fit's most unstable pole when the data insist,
+    else ``None``. Run after every stable fit, not only where a pole sits at the bound (a
+    step refused at the bound can also stop the search away from it); from a minimum inside
+    the stable region the free search stops at once.
+
+    The test's stable model must be the best stable one near the free fit: a stable search
+    can stop with a spurious pole held at the bound (clean stable records of order 6: a pole
+    at s = -0.000 the truth does not have, which the free search moved to +0.014 at a 15 %
+    lower criterion). With ``reflect`` (a pair and its parameters -> the same with its
+    unstable poles mirrored into the stable region), the stable search also runs from the free fit
+    mirrored, and the lower stable criterion is the one tested."""
+    import warnings
+
+    from ..pem.boundary import insists
+
+    slowest = max((float(np.max(np.roots(pr.coef(q)[1]).real)) for pr, q in zip(pairs, res["p"])
+                   if pr.coef(q)[1].size > 1), default=-np.inf)
+    if slowest >= 0.0:
+        return None  # unstable already (said by the StabilityWarning of an unstable model)
+    with warnings.catch_warnings():  # a test: its own search's warnings are not the user's
+        warnings.simplefilter("ignore")
+        free = free_search(res, pairs, exps, dt, hold, x0_mode, max_iter, tol)
+    if free is None:
+        return None
+    kept = res["cost_history"][-1]
+    lr, yes = insists(kept, free["cost_history"][-1], res["n_samples"])
+    if yes and reflect is not None:
+        start = [PairStructure(pr.coef, reflect(pr, q), pr.fixed, pr.lower, pr.upper, d,
+                               pr.delay_free, pr.delay_max, pr.names)
+                 for pr, q, d in zip(pairs, free["p"], free["delays"])]
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                again = refine(start, exps, dt, hold, x0_mode=x0_mode, max_iter=max_iter,
+                               tol=tol)
+            kept = min(kept, again["cost_history"][-1])
+        except (DataError, ArithmeticError):
+            pass
+        lr, yes = insists(kept, free["cost_history"][-1], res["n_samples"])
+    if not yes:
+        return None
+    from .._checks import PERSISTENT_DECAY
+
+    # a mode growing less than 1 / PERSISTENT_DECAY over the record is one on the bound (an
+    # integrating plant), not an unstable one
+    grow = -np.log(PERSISTENT_DECAY) / (max(len(y) for _, y in exps) * dt)
+    best: tuple[int, complex, float] | None = None
+    for j, (pr, q) in enumerate(zip(pairs, free["p"])):
+        r = np.roots(pr.coef(q)[1])
+        if r.size and r.real.max() > grow and (best is None or r.real.max() > best[1].real):
+            best = (j, complex(r[np.argmax(r.real)]), lr)
+    return best
 
 
 def _unidentifiable(null: np.ndarray, names: list[str], fix: str) -> list[int]:

@@ -10,7 +10,7 @@ import numpy as np
 
 from .._checks import require_inputs_vary, user_stacklevel
 from .._threads import one_blas_thread
-from ..errors import DataError, is_frd, several_records_hint
+from ..errors import DataError, NumericalError, is_frd, several_records_hint
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 from .model import TransferFunction
@@ -22,7 +22,7 @@ from .options import (
     progress_callback,
     search_limits,
 )
-from .refine import PairStructure, check_experiments, refine
+from .refine import PairStructure, check_experiments, free_search, free_test, refine
 from .srivc import srivc
 
 __all__ = ["tfest"]
@@ -50,7 +50,10 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     (fractional delays included). From frequency-response data (an :class:`~sysid.FRD`):
     Sanathanan-Koerner iterations, then weighted nonlinear least squares (weights ``1/std``
     when the FRD has a confidence band). Several outputs: one model per output, each a sum of
-    single-input rational functions with their own poles.
+    single-input rational functions with their own poles. With several inputs each output's
+    continuous-time search also runs from the poles of its subspace model (numerators by
+    least squares, :mod:`sysid.tf.starts`) and the lower criterion is kept
+    (``info["start"]`` names the start per output).
 
     Parameters
     ----------
@@ -108,7 +111,13 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         default is ``False``): on 17 real records' :func:`sysid.spa` estimates, the free fits
         of 2 and 3 poles were unstable in 22 of 34 cases, 20 of them diverging on the
         validation data. ``False`` for an unstable plant's response (measured in closed
-        loop). Fits of time records keep the simulation stable always.
+        loop). Continuous-time fits of time records keep the simulation stable too; there,
+        from the stable fit, the search is run again free of the bound (``False``: its
+        result is returned when lower), and with the default a
+        :class:`sysid.StabilityWarning` names the pole when the data insist on an unstable
+        model (likelihood-ratio test at 1 %, as :func:`sysid.ssest`'s prediction focus;
+        ``info["insisting"]``). A discrete-time fit is :func:`sysid.oe`'s, which keeps
+        ``F`` stable and warns likewise.
     feedthrough : bool
         Discrete-time models: ``False`` (default, MATLAB's) lags every numerator one sample
         behind the input (no direct term, ``B(z) = b_0 z^(n-1) + ...``); ``True`` lets the
@@ -228,7 +237,8 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     cb, close = progress_callback(progress, max_iter)
     try:
         return _checked(_continuous(data, npo, nze, fixed_delays, auto, hold, initial_state,
-                                    max_delay, max_iter, tol, cb, _init(init, npo, nze)))
+                                    max_delay, max_iter, tol, cb, _init(init, npo, nze),
+                                    bool(enforce_stability)))
     finally:
         close()
 
@@ -239,16 +249,16 @@ def _checked(G: TransferFunction) -> TransferFunction:
 
     warn_unstable(G, "tfest", advice=(
         "Unless the process itself is unstable, leave enforce_stability at its default "
-        "(True; frequency data or periodic records), try fewer poles, a start from a stable "
-        "model (init=), or "
+        "(True), try fewer poles, a start from a stable model (init=), or "
         "sysid.ssest(data, order, focus='simulation') (which keeps the simulation stable)."))
     return G
 
 
 def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, auto: bool,
                 hold: str, initial_state: str, max_delay: float | None, max_iter: int,
-                tol: float, cb: Any, init: Any) -> TransferFunction:
+                tol: float, cb: Any, init: Any, stable: bool = True) -> TransferFunction:
     l, m = data.n_outputs, data.n_inputs
+    insisted = []
     exps_all = [(np.asarray(u, float), np.asarray(y, float)) for u, y in data.experiments]
     N = sum(u.shape[0] for u, _ in exps_all)
     dmax = max_delay if max_delay is not None else 0.1 * N * data.dt / len(exps_all)
@@ -270,8 +280,31 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
         # a fixed delay longer than the default bound on estimated ones is the user's
         pairs = [_pair(a, b, t, auto, dmax if auto else max(dmax, t), data.output_names[i],
                        data.input_names[j]) for j, (a, b, t) in enumerate(starts)]
-        res = refine(pairs, exps, data.dt, hold, x0_mode=initial_state, max_iter=max_iter,
-                     tol=tol, progress=cb)
+        res, said = _refined(pairs, exps, data.dt, hold, initial_state, max_iter, tol, cb)
+        res["start"] = "SRIVC" if init is None else "init"
+        if init is None and m > 1 and res["stop"] != "cancelled":
+            res, pairs, said = _second_start(res, said, pairs, exps, data, npo[i], nze[i],
+                                             starts, auto, dmax, hold, initial_state,
+                                             max_iter, tol, cb, i)
+        if not stable and res["stop"] != "cancelled":  # free, from the stable fit
+            with warnings.catch_warnings(record=True) as said_free:
+                warnings.simplefilter("always")
+                free = free_search(res, pairs, exps, data.dt, hold, initial_state, max_iter,
+                                   tol)
+            if free is not None and free["cost_history"][-1] < res["cost_history"][-1]:
+                free["start"] = res["start"]
+                pairs = [PairStructure(pr.coef, q, pr.fixed, pr.lower, pr.upper, d,
+                                       pr.delay_free, pr.delay_max, pr.names)
+                         for pr, q, d in zip(pairs, res["p"], res["delays"])]
+                res, said = free, list(said_free)
+        for w in said:  # the kept search's warnings, at the user's line
+            warnings.warn(w.message, w.category, stacklevel=user_stacklevel())
+        if stable and res["stop"] != "cancelled":  # held at the bound: do the data insist?
+            got = free_test(res, pairs, exps, data.dt, hold, initial_state, max_iter, tol,
+                            _reflected)
+            if got is not None:
+                insisted.append((f"{data.output_names[i]}<-{data.input_names[got[0]]}",
+                                 *got[1:]))
         nums, dens = [], []
         for j, p in enumerate(res["p"]):
             n = int(npo[i, j])
@@ -291,12 +324,72 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
                          input_names=data.input_names, output_names=data.output_names,
                          info=info)
     _attach(G, tables, covs, auto)
+    if insisted:
+        from ..pem.boundary import warn_insisted
+
+        pair, pole, lr = max(insisted, key=lambda x: x[2])
+        warn_insisted("tfest's model", pair, pole, 0.0, lr,
+                      "pass enforce_stability=False for the unstable model (its simulation "
+                      "grows as the plant's does)")
+        G.info["insisting"] = [{"pair": a, "pole": b, "statistic": c} for a, b, c in insisted]
     if auto:
         warn_delay_at_bound(est_delays, dmax, max_delay is not None, data)
     coloured_uncertainty(G, data, [len(nm) for nm, _ in tables], hold, initial_state)
     if initial_state == "zero":  # the fit of a simulation from rest, as the model was fitted
         fit_percent(G, data)
     return G
+
+
+def _reflected(pair: PairStructure, q: np.ndarray) -> np.ndarray:
+    """A pair's parameters ``[a_1.., b..]`` (:func:`_pair`) with the unstable poles of
+    ``s^n + a_1 s^(n-1) + ...`` mirrored into the left half-plane (``s -> -conj(s)``; the
+    numerator kept)."""
+    num, den = pair.coef(np.asarray(q, float))
+    r = np.roots(den)
+    r = np.where(r.real > 0, -np.conj(r), r)
+    return np.concatenate([np.real(np.poly(r))[1:], num])
+
+
+def _refined(pairs: list[PairStructure], exps: list[tuple[np.ndarray, np.ndarray]],
+             dt: float, hold: str, initial_state: str, max_iter: int, tol: float, cb: Any
+             ) -> tuple[dict[str, Any], list[Any]]:
+    """:func:`.refine.refine` of one output, and the warnings it gave (held back: a
+    search from another start may replace it)."""
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        res = refine(pairs, exps, dt, hold, x0_mode=initial_state, max_iter=max_iter,
+                     tol=tol, progress=cb)
+    return res, list(said)
+
+
+def _second_start(res: dict[str, Any], said: list[Any], pairs: list[PairStructure],
+                  exps: list[tuple[np.ndarray, np.ndarray]], data: Any, npo: np.ndarray,
+                  nze: np.ndarray, starts: list[Any], auto: bool, dmax: float, hold: str,
+                  initial_state: str, max_iter: int, tol: float, cb: Any, i: int
+                  ) -> tuple[dict[str, Any], list[PairStructure], list[Any]]:
+    """Output ``i``'s search also from the poles of its subspace model
+    (:func:`sysid.tf.starts.subspace_pairs`, the delays of the default start): the result
+    with the lower criterion is kept (``res["start"]`` names its start), its warnings only
+    (the other search's are dropped, as its model is). On the warning audit's clean 2 x 2
+    records the SRIVC sweeps left one output's pairs far from the truth (a criterion 10 and
+    90 times the subspace start's search's, an IdentifiabilityWarning from a degenerate
+    point)."""
+    from ..polynomial.starts import RESTART_GAIN
+    from .starts import subspace_pairs
+
+    alt = subspace_pairs(exps, data.dt, npo, nze, [float(t) for _, _, t in starts], hold)
+    if alt is None:
+        return res, pairs, said
+    pairs2 = [_pair(a, b, t, auto, dmax if auto else max(dmax, t), data.output_names[i],
+                    data.input_names[j]) for j, (a, b, t) in enumerate(alt)]
+    try:
+        res2, said2 = _refined(pairs2, exps, data.dt, hold, initial_state, max_iter, tol, cb)
+    except (DataError, NumericalError):
+        return res, pairs, said
+    if not res2["cost_history"][-1] < res["cost_history"][-1] * (1 - RESTART_GAIN):
+        return res, pairs, said
+    res2["start"] = "subspace (n4sid)"
+    return res2, pairs2, said2
 
 
 def warn_delay_at_bound(delays: np.ndarray, dmax: float, given: bool, data: Any) -> None:
@@ -499,6 +592,7 @@ def _info(results: list[dict[str, Any]], auto: bool, hold: str, x0: str) -> dict
             "stop": [r["stop"] for r in results],
             "cost": [float(r["cost_history"][-1]) for r in results],
             "cost_start": [float(r["cost_history"][0]) for r in results],
+            "start": [r.get("start", "SRIVC") for r in results],
             "noise_variance": [r["noise_variance"] for r in results],
             "n_samples": results[0]["n_samples"], "hold": hold, "initial_state": x0,
             "delays": "estimated" if auto else "fixed"}

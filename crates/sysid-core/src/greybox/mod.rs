@@ -45,6 +45,10 @@ pub struct LinearOptions {
     pub x0_params: Vec<usize>,
     /// Options of the search (bounds and fixed mask in the outer parameters).
     pub optim: optim::Options,
+    /// Let the model's `A` (simulation focus; the predictor's `A - K C` otherwise) leave the
+    /// unit circle: a free search, for the test whether the data insist on an unstable model
+    /// ([`crate::pem::insists`]). Default `false`: kept inside.
+    pub unbounded: bool,
 }
 
 impl Default for LinearOptions {
@@ -59,6 +63,7 @@ impl Default for LinearOptions {
                 tol_cost: 1e-10,
                 ..Default::default()
             },
+            unbounded: false,
         }
     }
 }
@@ -176,6 +181,9 @@ pub fn linear(
     }
     let k0 = Mat::<f64>::zeros(n, l);
     let mut pred = Predictor::new(&start, Some(k0.as_ref()), experiments, &po)?;
+    if options.unbounded {
+        pred.set_unbounded();
+    }
     let q = pred.n_params();
     let (th0, _) = map.map(p0, false)?;
     if th0.len() != q {

@@ -313,6 +313,24 @@ fn likelihood_ratio(kept: f64, free: f64, n: usize, l: usize, det: bool) -> f64 
     scale * (kept / free).ln()
 }
 
+/// Whether the data insist on the unconstrained fit (criterion `free`) over the one a
+/// stability bound kept (`kept`), over `n` samples and `l` outputs (`det`: determinant
+/// criteria, else sums of squares): the likelihood-ratio statistic and whether it exceeds
+/// the 99 % quantile of chi-square with one degree of freedom (the 1 % level). The rule of
+/// [`pem`]'s default stability choice, and of the estimators that keep their model stable
+/// and warn when the data insist (`tfest`, `oe`).
+///
+/// ```
+/// use sysid_core::pem::insists;
+/// let (lr, yes) = insists(1.02, 1.0, 1000, 1, false);
+/// assert!(yes && (lr - 1000.0 * 1.02f64.ln()).abs() < 1e-12);
+/// assert!(!insists(1.001, 1.0, 1000, 1, false).1);
+/// ```
+pub fn insists(kept: f64, free: f64, n: usize, l: usize, det: bool) -> (f64, bool) {
+    let lr = likelihood_ratio(kept, free, n, l, det);
+    (lr, lr > CHI2_1_99)
+}
+
 /// Refines a start model by minimising its prediction (or simulation) errors over one or more
 /// experiments `(u, y)`, each `(N_e, m)` and `(N_e, l)`.
 ///
@@ -397,8 +415,8 @@ fn pem_from(
         let kept = solution.theta.clone();
         let free = search(&mut prob, &kept, options, observer)?;
         let (ck, cf) = (prob.criterion_at(&kept), prob.criterion_at(&free.theta));
-        let lr = likelihood_ratio(ck, cf, prob.n_samples, prob.l, prob.reweight);
-        if lr > CHI2_1_99 && rho(&prob, &free.theta) >= 1.0 {
+        let (_, insist) = insists(ck, cf, prob.n_samples, prob.l, prob.reweight);
+        if insist && rho(&prob, &free.theta) >= 1.0 {
             solution = merge(solution, free);
             losses.extend(prob.losses.iter().skip(1));
         } else {

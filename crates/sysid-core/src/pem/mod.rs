@@ -58,7 +58,7 @@ mod sensitivities;
 mod tests;
 
 pub(crate) use coordinates::{similarity_tangent, Part};
-pub use driver::{criterion, pem};
+pub use driver::{criterion, insists, pem};
 pub use frequency::{pem_frequency, FrequencyOptions, FrequencyResult, Lines};
 pub(crate) use modal::{modal_form, modal_mt_cols, StateBlocks};
 pub use options::{stable_enough, Focus, InitialState, PemOptions, PemResult};

@@ -677,6 +677,12 @@ impl<'a> Predictor<'a> {
         self.radius_limit = MARGINAL_RADIUS;
     }
 
+    /// Admit any spectral radius from now on: a simulation search left free of the stability
+    /// bound (the test whether the data insist on an unstable model).
+    pub(crate) fn set_unbounded(&mut self) {
+        self.radius_limit = f64::INFINITY;
+    }
+
     /// `det(Lambda)` at the start and after every accepted step (the maximum-likelihood loss).
     pub(crate) fn losses(&mut self) -> &mut Vec<f64> {
         &mut self.losses

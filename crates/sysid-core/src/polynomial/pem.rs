@@ -97,6 +97,8 @@ pub struct MisoProblem {
     layout: Option<Layout>,
     /// `0.5 |y|^2 ROUNDOFF^2`: with the initial states estimated, a cost below it is zero.
     floor: f64,
+    /// Admit unstable `F` ([`free_search`]); `C` stays stable (the predictor).
+    free_f: bool,
 }
 
 pub(super) fn delayed(u: MatRef<'_, f64>, j: usize, nk: usize) -> Vec<f64> {
@@ -191,6 +193,7 @@ impl MisoProblem {
             block: 128,
             layout: None,
             floor: 0.5 * energy * initial::ROUNDOFF * initial::ROUNDOFF,
+            free_f: false,
         })
     }
 
@@ -385,7 +388,7 @@ impl Problem for MisoProblem {
 
     fn admissible(&mut self, theta: &[f64]) -> bool {
         let p = self.orders.polys(theta);
-        is_stable(&p.c) && p.f.iter().all(|f| is_stable(f))
+        is_stable(&p.c) && (self.free_f || p.f.iter().all(|f| is_stable(f)))
     }
 
     fn evaluate(&mut self, theta: &[f64], jacobian: bool) -> Result<Evaluation> {
@@ -467,6 +470,36 @@ pub fn estimate_multi(
 ) -> Result<MisoEstimate> {
     let ic = InitialCondition::Zero;
     estimate_with(experiments, orders, theta0, ic, options, observer)
+}
+
+/// The search of one output's model from `theta` (a fit whose `F` was kept stable) with `F`
+/// free to leave the unit circle, the initial conditions `Zero` or `Estimate` as that fit
+/// chose: the criterion at `theta` and the free search's solution, for the test whether the
+/// data insist on an unstable `F` ([`crate::pem::insists`]).
+pub fn free_search(
+    experiments: &[(&[f64], MatRef<'_, f64>)],
+    orders: MisoOrders,
+    theta: &[f64],
+    initial: InitialCondition,
+    options: &Options,
+    observer: &mut dyn FnMut(&Iteration) -> Flow,
+) -> Result<(f64, Solution)> {
+    if theta.len() != orders.n_params() {
+        return Err(SysidError::invalid(
+            "theta",
+            format!(
+                "has {} entries but the structure has {}",
+                theta.len(),
+                orders.n_params()
+            ),
+        ));
+    }
+    let mut prob = MisoProblem::new_multi(experiments, orders)?;
+    prob.estimate_initial(initial == InitialCondition::Estimate);
+    prob.free_f = true;
+    let kept = prob.evaluate(theta, false)?.cost;
+    let solution = minimize(&mut prob, theta, options, observer)?;
+    Ok((kept, solution))
 }
 
 /// [`estimate_multi`] with the initial conditions set by `initial` ([`super::initial`]):

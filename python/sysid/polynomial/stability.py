@@ -1,0 +1,63 @@
+"""Whether the data insist on an unstable ``F`` where ``oe``'s search keeps every ``F``
+stable (issue 26: a stable model unless the data insist, and then a StabilityWarning that
+names the pole and the option)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import _sysid
+from .._checks import PERSISTENT_DECAY
+from ..errors import DataError, NumericalError
+from .model import PolynomialModel
+
+__all__ = ["warn_insisting_f"]
+
+
+def warn_insisting_f(m: PolynomialModel, exps: list[Any], rs: list[dict[str, Any]],
+                      na: list[int], nb: list[list[int]], nc: list[int], nd: list[int],
+                      nf: list[list[int]], nk: list[list[int]], iters: int) -> bool:
+    """The search keeps every ``F`` stable: from each output's fit, the search again with
+    ``F`` free to leave the unit circle, and a :class:`~sysid.StabilityWarning` when the data
+    insist on an unstable ``F`` (:func:`sysid.pem.boundary.insists`, 1 %), naming the pole
+    and what fits it (``oe`` itself keeps ``F`` stable); True if it warned. From a minimum
+    inside the stability region the free search stops at once; an unstable plant's record
+    (a real pole at 1.01-1.03) left ``oe``'s stable fit silent in 48 of 100 runs."""
+    from ..pem.boundary import insists, warn_insisted
+
+    found = []
+    longest = max(len(y) for _, y in exps)
+    for i, r in enumerate(rs):
+        if not any(nf[i]) or r.get("stop") == "cancelled":
+            continue
+        try:
+            free = _sysid.polynomial_free_search(
+                [(np.ascontiguousarray(y[:, i]), u) for u, y in exps], na[i], nb[i], nc[i],
+                nd[i], nf[i], nk[i], list(map(float, r["theta"])),
+                initial_condition=r["initial_condition"], max_iter=max(iters, 1))
+        except (DataError, NumericalError):
+            continue
+        lr, yes = insists(free["kept_cost"], free["cost"], sum(len(y) for _, y in exps))
+        if not yes:
+            continue
+        th = np.asarray(free["theta"], float)
+        at = na[i] + sum(nb[i]) + nc[i] + nd[i]
+        for j, n in enumerate(nf[i]):
+            roots = np.roots(np.concatenate([[1.0], th[at:at + n]])) if n else np.zeros(0)
+            at += n
+            # a mode growing less than 1 / PERSISTENT_DECAY over the record is one on the
+            # bound (an integrating plant: the held pole's own warning names it)
+            if roots.size and np.abs(roots).max() ** longest * PERSISTENT_DECAY > 1.0:
+                found.append((lr, f"{m.output_names[i]} <- {m.input_names[j]}",
+                              complex(roots[np.argmax(np.abs(roots))])))
+    if not found:
+        return False
+    lr, pair, pole = max(found, key=lambda x: x[0])
+    warn_insisted("the oe model's F", pair, pole, float(m.dt), lr,
+                  "oe keeps F stable: sysid.ssest(data, order) (prediction focus, whose "
+                  "default returns the unstable model when the data insist) or arx/armax "
+                  "(whose A is not held stable) fit it")
+    m.info["insisting"] = [{"pair": p, "pole": z, "statistic": v} for v, p, z in found]
+    return True
