@@ -85,3 +85,21 @@ def test_arxstruc_scores_nk_rather_than_warning_per_row():
         v = sysid.arxstruc(est, val, nn)
     # the table itself shows the direct term: nk = 0 has the smallest loss
     assert int(v[np.argmin(v[:, 3]), 2]) == 0
+
+
+@pytest.mark.parametrize("kw", [{"dt": 1.0}, {}])
+def test_tfest_s_one_sample_lag_is_checked_in_its_own_words(kw):
+    # discrete tfest (feedthrough=False, a one-sample lag) and a strictly proper continuous
+    # tfest cannot answer within the sample either; they said nothing
+    est, _ = _record(3, d=1.0)
+    est = sysid.IOData(est.u, est.y, 1.0)
+    G, said = _said(lambda: sysid.tfest(est, 2, **kw))
+    assert len(said) == 1  # tfest's own, not also the oe it runs inside
+    text = str(said[0].message)
+    assert text.startswith("tfest") and ("feedthrough=True" if kw else "n_zeros") in text
+    assert G.info["feedthrough_check"]["ratio"] >= 2.0
+    quiet, said = _said(lambda: sysid.tfest(_record(3, d=0.0)[0], 2, **kw))
+    assert not said and quiet.info["feedthrough_check"]["ratio"] < 1.3
+    if kw:  # feedthrough=True holds the direct term: nothing to check
+        G1, said = _said(lambda: sysid.tfest(est, 2, feedthrough=True, **kw))
+        assert not said and "feedthrough_check" not in G1.info

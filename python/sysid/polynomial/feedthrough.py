@@ -87,7 +87,9 @@ def _state_space_ratio(data: Any, order: int) -> float | None:
 
 def check_polynomial_feedthrough(exps: list[tuple[np.ndarray, np.ndarray]], method: str,
                                  orders: list[int], nb_g: list[list[int]],
-                                 nk_g: list[list[int]], data: Any = None
+                                 nk_g: list[list[int]], data: Any = None, *,
+                                 lag: str = "delays every input by nk = 1 sample",
+                                 remedy: str = "Fit nk=0 for the channels with nk = 1"
                                  ) -> dict[str, Any] | None:
     """Warn (:class:`~sysid.errors.FeedthroughWarning`) when channels with ``nk = 1`` leave
     out a direct term the record shows (the module's rule); return the check for
@@ -95,7 +97,10 @@ def check_polynomial_feedthrough(exps: list[tuple[np.ndarray, np.ndarray]], meth
     ``nk = 1`` with ``B``, or the check's fits cannot be made).
 
     ``exps``: the experiments' ``(u, y)`` arrays; ``orders``: per output, the model's largest
-    order (``na``, ``nb``, ``nf``, ``nc``, ``nd``); ``nb_g``, ``nk_g``: per output and input.
+    order (``na``, ``nb``, ``nf``, ``nc``, ``nd``); ``nb_g``, ``nk_g``: per output and input;
+    ``data``: the record, for the state-space check (left out when None); ``lag`` and
+    ``remedy``: how the warning names the structure's one-sample lag and its way out (another
+    family's, as ``tfest``'s ``feedthrough=False``).
 
     Examples
     --------
@@ -156,11 +161,11 @@ def check_polynomial_feedthrough(exps: list[tuple[np.ndarray, np.ndarray]], meth
                                                 f"{order} ({sub:.3g} times)"]))
     if where:
         warnings.warn(
-            f"{method} delays every input by nk = 1 sample, but the record shows a direct term: "
-            f"with u(t) in the model the one-step prediction errors are smaller on {where} "
-            f"(the output answers the input within the sample). Fit nk=0 for the channels "
-            f"with nk = 1 and compare both on validation data (sysid.delayest estimates the "
-            f"delay); unless the input is a controller's answer to the same sample's output "
-            f"(feedback within the sample), where nk = 1 is right", FeedthroughWarning,
+            f"{method} {lag}, but the record shows a direct term: with u(t) in the model the "
+            f"one-step prediction errors are smaller on {where} (the output answers the input "
+            f"within the sample). {remedy} and compare both on validation data "
+            f"(sysid.delayest estimates the delay); unless the input is a controller's answer "
+            f"to the same sample's output (feedback within the sample), where the lag is "
+            f"right", FeedthroughWarning,
             stacklevel=user_stacklevel())
     return check

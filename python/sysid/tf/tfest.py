@@ -13,6 +13,7 @@ from .._threads import one_blas_thread
 from ..errors import DataError, NumericalError, is_frd, several_records_hint
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
+from .feedthrough import lag_check
 from .model import TransferFunction
 from .options import (
     blockdiag,
@@ -208,6 +209,7 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     check_model_excitation(data, p_k + z_k + 1, "tfest",
                            f"n_poles + n_zeros + 1 = {p_k} + {z_k} + 1", "fewer poles and zeros")
     fixed_delays, auto = delays(iodelay, l, m)
+    ft_check = lag_check(data, npo, nze, dt, ft, iodelay)
     span = max(len(y) for _, y in data.experiments) * data.dt  # the longest experiment, s
     if np.any(fixed_delays >= span):
         raise DataError(
@@ -227,26 +229,29 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         G, periodicity = _periodic(data, npo, nze, fixed_delays, auto, dt, periods, transient,
                                    max_iter, tol, progress, bool(enforce_stability), ft)
         if G is not None:
-            return _checked(G)
+            return _checked(G, ft_check)
     if dt is not None:
         G = _discrete(data, npo, nze, fixed_delays, auto, dt, max_iter, progress, ft,
                       initial_state)
         if periodicity is not None:  # periods="auto" found none: why the time domain
             G.info["periodicity"] = periodicity
-        return _checked(G)
+        return _checked(G, ft_check)
     cb, close = progress_callback(progress, max_iter)
     try:
         return _checked(_continuous(data, npo, nze, fixed_delays, auto, hold, initial_state,
                                     max_delay, max_iter, tol, cb, _init(init, npo, nze),
-                                    bool(enforce_stability)))
+                                    bool(enforce_stability)), ft_check)
     finally:
         close()
 
 
-def _checked(G: TransferFunction) -> TransferFunction:
-    """``G``, with a :class:`sysid.StabilityWarning` when it is unstable."""
+def _checked(G: TransferFunction, ft_check: dict[str, Any] | None = None) -> TransferFunction:
+    """``G``, with a :class:`sysid.StabilityWarning` when it is unstable (and ``ft_check``,
+    the lag check's record, in its ``info``)."""
     from ..models.checks import warn_unstable
 
+    if ft_check is not None:
+        G.info["feedthrough_check"] = ft_check
     warn_unstable(G, "tfest", advice=(
         "Unless the process itself is unstable, leave enforce_stability at its default "
         "(True), try fewer poles, a start from a stable model (init=), or "
@@ -698,8 +703,10 @@ def _discrete(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray, a
     l, m = data.n_outputs, data.n_inputs
     lag0 = 0 if ft else 1  # a one-sample lag as MATLAB's discrete tfest (none: feedthrough)
     lag = lag0 + np.round(nk).astype(int)
-    poly = sysid.oe(data, nze + 1, npo, lag, max_iter=max_iter, progress=progress,
-                    initial_condition=initial_state)
+    with warnings.catch_warnings():  # tfest checks its own lag (tf.feedthrough), in its words
+        warnings.filterwarnings("ignore", category=sysid.FeedthroughWarning)
+        poly = sysid.oe(data, nze + 1, npo, lag, max_iter=max_iter, progress=progress,
+                        initial_condition=initial_state)
     nb = [[poly.b[i][j].size for j in range(m)] for i in range(l)]
     nf = [[poly.f[i][j].size for j in range(m)] for i in range(l)]
 
