@@ -162,11 +162,9 @@ def arx(
     else:  # ridge: lam |theta|^2, the same on [-a, b]
         fits = _sysid.arx_fit(exps, na_g, nb_g, nk_g, float(regularization), None)
     m = _arx_model(data, fits, nk_g)
-    if nu:
-        check = check_polynomial_feedthrough(
-            exps, "arx", [max(*na_g[i], *nb_g[i]) for i in range(ny)], nb_g, nk_g)
-        if check is not None:
-            m.info["feedthrough_check"] = check
+    ft = check_polynomial_feedthrough(exps, "arx", [max([*na_g[i], *nb_g[i]]) for i in range(ny)],
+                                      nb_g, nk_g)
+    m.info.update({} if ft is None else {"feedthrough_check": ft})
     return _warn_diverging(m, "arx")
 
 
