@@ -222,6 +222,33 @@ fn states_list<'py>(py: Python<'py>, states: &[InitialState]) -> PyResult<Bound<
 /// Prediction-error estimate of one output: `A y = sum B_j/F_j u_j(t-nk_j) + C/D e`, from
 /// one or several experiments `(y, u)` (the cost summed over them, each from rest or, by
 /// `initial_condition` `"estimate"` or `"auto"`, from its estimated initial state).
+/// The initial condition, orders and search options of one output's polynomial search
+/// (`[na, nc, nd]`, then `nb`, `nf`, `nk` per input).
+fn miso_setup(
+    [na, nc, nd]: [usize; 3],
+    nb: Vec<usize>,
+    nf: Vec<usize>,
+    nk: Vec<usize>,
+    max_iter: usize,
+    tol: f64,
+    initial_condition: &str,
+) -> PyResult<(InitialCondition, MisoOrders, Options)> {
+    let ic = InitialCondition::parse(initial_condition).py()?;
+    let orders = MisoOrders {
+        na,
+        nb,
+        nc,
+        nd,
+        nf,
+        nk,
+    };
+    let mut opts = Options::default();
+    opts.max_iter = max_iter;
+    opts.tol_gradient = tol;
+    opts.tol_step = tol;
+    Ok((ic, orders, opts))
+}
+
 #[pyfunction]
 #[pyo3(signature = (experiments, na, nb, nc, nd, nf, nk, theta0=None, max_iter=100, tol=1e-9, progress=None, initial_condition="zero"))]
 #[allow(clippy::too_many_arguments)]
@@ -240,21 +267,10 @@ pub fn polynomial_pem<'py>(
     progress: Option<Py<PyAny>>,
     initial_condition: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let ic = InitialCondition::parse(initial_condition).py()?;
+    let (ic, orders, opts) =
+        miso_setup([na, nc, nd], nb, nf, nk, max_iter, tol, initial_condition)?;
     let ys = outputs(&experiments);
     let exps = miso_views(&ys, &experiments);
-    let orders = MisoOrders {
-        na,
-        nb,
-        nc,
-        nd,
-        nf,
-        nk,
-    };
-    let mut opts = Options::default();
-    opts.max_iter = max_iter;
-    opts.tol_gradient = tol;
-    opts.tol_step = tol;
     let est = run(py, &progress, |obs| {
         pem::estimate_with(&exps, orders, theta0.as_deref(), ic, &opts, obs)
     })?;
@@ -290,21 +306,10 @@ pub fn polynomial_free_search<'py>(
     max_iter: usize,
     tol: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let ic = InitialCondition::parse(initial_condition).py()?;
+    let (ic, orders, opts) =
+        miso_setup([na, nc, nd], nb, nf, nk, max_iter, tol, initial_condition)?;
     let ys = outputs(&experiments);
     let exps = miso_views(&ys, &experiments);
-    let orders = MisoOrders {
-        na,
-        nb,
-        nc,
-        nd,
-        nf,
-        nk,
-    };
-    let mut opts = Options::default();
-    opts.max_iter = max_iter;
-    opts.tol_gradient = tol;
-    opts.tol_step = tol;
     let (kept, sol) = run(py, &None, |obs| {
         pem::free_search(&exps, orders, &theta, ic, &opts, obs)
     })?;

@@ -472,6 +472,21 @@ pub fn estimate_multi(
     estimate_with(experiments, orders, theta0, ic, options, observer)
 }
 
+/// `theta` (named `name`) has one entry per parameter of `orders`.
+fn check_length(name: &'static str, theta: &[f64], orders: &MisoOrders) -> Result<()> {
+    if theta.len() != orders.n_params() {
+        return Err(SysidError::invalid(
+            name,
+            format!(
+                "has {} entries but the structure has {}",
+                theta.len(),
+                orders.n_params()
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// The search of one output's model from `theta` (a fit whose `F` was kept stable) with `F`
 /// free to leave the unit circle, the initial conditions `Zero` or `Estimate` as that fit
 /// chose: the criterion at `theta` and the free search's solution, for the test whether the
@@ -484,16 +499,7 @@ pub fn free_search(
     options: &Options,
     observer: &mut dyn FnMut(&Iteration) -> Flow,
 ) -> Result<(f64, Solution)> {
-    if theta.len() != orders.n_params() {
-        return Err(SysidError::invalid(
-            "theta",
-            format!(
-                "has {} entries but the structure has {}",
-                theta.len(),
-                orders.n_params()
-            ),
-        ));
-    }
+    check_length("theta", theta, &orders)?;
     let mut prob = MisoProblem::new_multi(experiments, orders)?;
     prob.estimate_initial(initial == InitialCondition::Estimate);
     prob.free_f = true;
@@ -518,16 +524,7 @@ pub fn estimate_with(
     prob.estimate_initial(initial == InitialCondition::Estimate);
     let mut th0 = match theta0 {
         Some(t) => {
-            if t.len() != orders.n_params() {
-                return Err(SysidError::invalid(
-                    "theta0",
-                    format!(
-                        "has {} entries but the structure has {}",
-                        t.len(),
-                        orders.n_params()
-                    ),
-                ));
-            }
+            check_length("theta0", t, &orders)?;
             t.to_vec()
         }
         None => initial_guess_multi(experiments, &orders)?,
