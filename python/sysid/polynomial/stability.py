@@ -32,14 +32,23 @@ def warn_insisting_f(m: PolynomialModel, exps: list[Any], rs: list[dict[str, Any
     for i, r in enumerate(rs):
         if not any(nf[i]) or r.get("stop") == "cancelled":
             continue
-        try:
-            free = _sysid.polynomial_free_search(
-                [(np.ascontiguousarray(y[:, i]), u) for u, y in exps], na[i], nb[i], nc[i],
-                nd[i], nf[i], nk[i], list(map(float, r["theta"])),
-                initial_condition=r["initial_condition"], max_iter=max(iters, 1))
-        except (DataError, NumericalError):
+        runs = []
+        for start in (r["theta"], _arx_start(exps, i, na[i], nb[i], nc[i], nd[i], nf[i], nk[i])):
+            if start is None:
+                continue
+            try:
+                runs.append(_sysid.polynomial_free_search(
+                    [(np.ascontiguousarray(y[:, i]), u) for u, y in exps], na[i], nb[i],
+                    nc[i], nd[i], nf[i], nk[i], list(map(float, start)),
+                    initial_condition=r["initial_condition"], max_iter=max(iters, 1)))
+            except (DataError, NumericalError):
+                continue
+        if not runs or not np.isfinite(runs[0]["kept_cost"]):
             continue
-        lr, yes = insists(free["kept_cost"], free["cost"], sum(len(y) for _, y in exps))
+        # the stable fit against the better free search: from it (which stops at once at a
+        # minimum inside the region) and from the unconstrained least-squares ARX fit
+        free = min(runs, key=lambda x: x["cost"] if np.isfinite(x["cost"]) else np.inf)
+        lr, yes = insists(runs[0]["kept_cost"], free["cost"], sum(len(y) for _, y in exps))
         if not yes:
             continue
         th = np.asarray(free["theta"], float)
@@ -61,3 +70,23 @@ def warn_insisting_f(m: PolynomialModel, exps: list[Any], rs: list[dict[str, Any
                   "(whose A is not held stable) fit it")
     m.info["insisting"] = [{"pair": p, "pole": z, "statistic": v} for v, p, z in found]
     return True
+
+
+def _arx_start(exps: list[Any], i: int, na: int, nb: list[int], nc: int, nd: int,
+               nf: list[int], nk: list[int]) -> np.ndarray | None:
+    """Output ``i``'s parameters (``[a, b, c, d, f]``) from its least-squares ARX fit, whose
+    ``A`` is not held stable: ``F`` of every input its ``A`` (truncated or padded to ``nf``),
+    ``B`` its ``B``, ``C`` and ``D`` zero; None when the fit cannot be made. A second start
+    for the free search, which from a stable minimum alone stops at once."""
+    n = max(nf)
+    try:
+        fit = _sysid.arx_fit([(np.ascontiguousarray(u, float),
+                               np.ascontiguousarray(y[:, [i]], float)) for u, y in exps],
+                             [[n]], [list(nb)], [list(nk)], 0.0, None)[0]
+    except Exception:  # noqa: BLE001 - no second start
+        return None
+    a = np.asarray(fit["a"][0], float)
+    f = [np.concatenate([a, np.zeros(max(k - n, 0))])[:k] for k in nf]
+    b = [np.asarray(x, float) for x in fit["b"]]
+    parts = [np.zeros(na)] + b + [np.zeros(nc), np.zeros(nd)] + f
+    return np.concatenate(parts)
