@@ -30,6 +30,8 @@ __all__ = [
     "arx_regularized_solve",
     "poly_filter",
     "polynomial_pem",
+    "polynomial_free_search",
+    "stability_insists",
     "polynomial_residuals",
     "initial_condition_name",
     "__version__",
