@@ -55,7 +55,7 @@ import numpy as np
 from .. import _sysid
 from ..subspace.feedthrough import CHECK_SAMPLES, LEFT_OUT_RATIO, _prediction_error
 
-__all__ = ["check_polynomial_feedthrough"]
+__all__ = ["check_polynomial_feedthrough", "say_left_out"]
 
 #: the fewest and the most poles per output of the check's ARX models
 CHECK_ORDER = (4, 10)
@@ -122,11 +122,6 @@ def check_polynomial_feedthrough(exps: list[tuple[np.ndarray, np.ndarray]], meth
     >>> [type(x.message).__name__ for x in w], check["ratio"] > 2
     (['FeedthroughWarning'], True)
     """
-    import warnings
-
-    from .._checks import user_stacklevel
-    from ..errors import FeedthroughWarning
-
     ny = len(nb_g)
     one = [[nk_g[i][j] == 1 and nb_g[i][j] > 0 for j in range(len(nb_g[i]))] for i in range(ny)]
     if not any(any(row) for row in one):
@@ -165,13 +160,40 @@ def check_polynomial_feedthrough(exps: list[tuple[np.ndarray, np.ndarray]], meth
                 check["ratio"] = max(check["ratio"], float(sub))
                 where = ", ".join(filter(None, [where, f"a state-space model of order "
                                                 f"{order} ({sub:.3g} times)"]))
-    if where:
-        warnings.warn(
-            f"{method} {lag}, but the record shows a direct term: with u(t) in the model the "
-            f"one-step prediction errors are smaller on {where} (the output answers the input "
-            f"within the sample). {remedy} and compare both on validation data "
-            f"(sysid.delayest estimates the delay); unless the input is a controller's answer "
-            f"to the same sample's output (feedback within the sample), where the lag is "
-            f"right", FeedthroughWarning,
-            stacklevel=user_stacklevel())
+    check["shows"] = where
+    say_left_out(check, method, lag, remedy)
     return check
+
+
+def say_left_out(check: dict[str, Any] | None, method: str,
+                 lag: str = "delays every input by nk = 1 sample",
+                 remedy: str = "Fit nk=0 for the channels with nk = 1") -> None:
+    """The :class:`~sysid.errors.FeedthroughWarning` of a check
+    (:func:`check_polynomial_feedthrough`) that found a direct term (``check["shows"]``
+    names where), in the words of ``method``'s structure (``lag``) and its way out
+    (``remedy``); nothing otherwise. ``tfest`` says what the ``oe`` it runs found.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from sysid.polynomial.feedthrough import say_left_out
+    >>> with warnings.catch_warnings(record=True) as w:
+    ...     warnings.simplefilter("always")
+    ...     say_left_out({"shows": "y0 (5 times)"}, "arx")
+    >>> w[0].category.__name__
+    'FeedthroughWarning'
+    """
+    import warnings
+
+    from .._checks import user_stacklevel
+    from ..errors import FeedthroughWarning
+
+    if not check or not check.get("shows"):
+        return
+    warnings.warn(
+        f"{method} {lag}, but the record shows a direct term: with u(t) in the model the "
+        f"one-step prediction errors are smaller on {check['shows']} (the output answers the "
+        f"input within the sample). {remedy} and compare both on validation data "
+        f"(sysid.delayest estimates the delay); unless the input is a controller's answer to "
+        f"the same sample's output (feedback within the sample), where the lag is right",
+        FeedthroughWarning, stacklevel=user_stacklevel())

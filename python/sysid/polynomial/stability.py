@@ -33,7 +33,8 @@ def warn_insisting_f(m: PolynomialModel, exps: list[Any], rs: list[dict[str, Any
         if not any(nf[i]) or r.get("stop") == "cancelled":
             continue
         runs = []
-        for start in (r["theta"], _arx_start(exps, i, na[i], nb[i], nc[i], nd[i], nf[i], nk[i])):
+        arx = _arx_start(exps, i, na[i], nb[i], nc[i], nd[i], nf[i], nk[i], longest)
+        for start in (r["theta"], arx):
             if start is None:
                 continue
             try:
@@ -73,11 +74,13 @@ def warn_insisting_f(m: PolynomialModel, exps: list[Any], rs: list[dict[str, Any
 
 
 def _arx_start(exps: list[Any], i: int, na: int, nb: list[int], nc: int, nd: int,
-               nf: list[int], nk: list[int]) -> np.ndarray | None:
+               nf: list[int], nk: list[int], longest: int) -> np.ndarray | None:
     """Output ``i``'s parameters (``[a, b, c, d, f]``) from its least-squares ARX fit, whose
     ``A`` is not held stable: ``F`` of every input its ``A`` (truncated or padded to ``nf``),
-    ``B`` its ``B``, ``C`` and ``D`` zero; None when the fit cannot be made. A second start
-    for the free search, which from a stable minimum alone stops at once."""
+    ``B`` its ``B``, ``C`` and ``D`` zero. A second start for the free search, which from a
+    stable minimum alone stops at once; None when the fit cannot be made or its ``A`` has
+    no mode that grows over the ``longest`` experiment (then it starts inside the region the
+    first search covers)."""
     n = max(nf)
     try:
         fit = _sysid.arx_fit([(np.ascontiguousarray(u, float),
@@ -86,6 +89,9 @@ def _arx_start(exps: list[Any], i: int, na: int, nb: list[int], nc: int, nd: int
     except Exception:  # noqa: BLE001 - no second start
         return None
     a = np.asarray(fit["a"][0], float)
+    roots = np.roots(np.concatenate([[1.0], a])) if n else np.zeros(0)
+    if not (roots.size and np.abs(roots).max() ** longest * PERSISTENT_DECAY > 1.0):
+        return None
     f = [np.concatenate([a, np.zeros(max(k - n, 0))])[:k] for k in nf]
     b = [np.asarray(x, float) for x in fit["b"]]
     parts = [np.zeros(na)] + b + [np.zeros(nc), np.zeros(nd)] + f

@@ -6,7 +6,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["lag_check"]
+__all__ = ["WORDS", "lag_check", "say_discrete"]
 
 
 def lag_check(data: Any, npo: np.ndarray, nze: np.ndarray, dt: float | None, ft: bool,
@@ -37,11 +37,23 @@ def lag_check(data: Any, npo: np.ndarray, nze: np.ndarray, dt: float | None, ft:
     from ..polynomial.feedthrough import check_polynomial_feedthrough
 
     l, m = data.n_outputs, data.n_inputs
-    lag, remedy = (("(discrete, feedthrough=False) delays every input by one sample",
-                    "Fit feedthrough=True") if dt is not None else
-                   ("(fewer zeros than poles) cannot answer within the sample",
-                    "Fit n_zeros equal to n_poles"))
     return check_polynomial_feedthrough(
         experiment_arrays(data), "tfest", [int(np.max(npo[i])) for i in range(l)],
-        [[1] * m for _ in range(l)], [[1] * m for _ in range(l)], data, lag=lag,
-        remedy=remedy)
+        [[1] * m for _ in range(l)], [[1] * m for _ in range(l)], data,
+        **WORDS[dt is not None])
+
+
+#: how the warning names each structure's one-sample lag and its way out (discrete: True)
+WORDS = {True: {"lag": "(discrete, feedthrough=False) delays every input by one sample",
+                "remedy": "Fit feedthrough=True"},
+         False: {"lag": "(fewer zeros than poles) cannot answer within the sample",
+                 "remedy": "Fit n_zeros equal to n_poles"}}
+
+
+def say_discrete(check: dict[str, Any] | None) -> None:
+    """What the ``oe`` fit of a discrete ``tfest`` found of the record's direct term
+    (its ``info["feedthrough_check"]``), said in ``tfest``'s words: the check is made once,
+    by that ``oe``."""
+    from ..polynomial.feedthrough import say_left_out
+
+    say_left_out(check, "tfest", **WORDS[True])

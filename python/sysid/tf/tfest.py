@@ -13,7 +13,7 @@ from .._threads import one_blas_thread
 from ..errors import DataError, NumericalError, is_frd, several_records_hint
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
-from .feedthrough import lag_check
+from .feedthrough import lag_check, say_discrete
 from .model import TransferFunction
 from .options import (
     blockdiag,
@@ -209,7 +209,6 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
     check_model_excitation(data, p_k + z_k + 1, "tfest",
                            f"n_poles + n_zeros + 1 = {p_k} + {z_k} + 1", "fewer poles and zeros")
     fixed_delays, auto = delays(iodelay, l, m)
-    ft_check = lag_check(data, npo, nze, dt, ft, iodelay)
     span = max(len(y) for _, y in data.experiments) * data.dt  # the longest experiment, s
     if np.any(fixed_delays >= span):
         raise DataError(
@@ -229,18 +228,20 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         G, periodicity = _periodic(data, npo, nze, fixed_delays, auto, dt, periods, transient,
                                    max_iter, tol, progress, bool(enforce_stability), ft)
         if G is not None:
-            return _checked(G, ft_check)
+            return _checked(G, lag_check(data, npo, nze, dt, ft, iodelay))
     if dt is not None:
         G = _discrete(data, npo, nze, fixed_delays, auto, dt, max_iter, progress, ft,
                       initial_state)
         if periodicity is not None:  # periods="auto" found none: why the time domain
             G.info["periodicity"] = periodicity
-        return _checked(G, ft_check)
+        if iodelay is None:  # the oe inside checked the one-sample lag (feedthrough=False)
+            say_discrete(G.info.get("feedthrough_check"))
+        return _checked(G)
     cb, close = progress_callback(progress, max_iter)
     try:
-        return _checked(_continuous(data, npo, nze, fixed_delays, auto, hold, initial_state,
-                                    max_delay, max_iter, tol, cb, _init(init, npo, nze),
-                                    bool(enforce_stability)), ft_check)
+        G = _continuous(data, npo, nze, fixed_delays, auto, hold, initial_state, max_delay,
+                        max_iter, tol, cb, _init(init, npo, nze), bool(enforce_stability))
+        return _checked(G, lag_check(data, npo, nze, dt, ft, iodelay))
     finally:
         close()
 
