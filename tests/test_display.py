@@ -148,3 +148,18 @@ def test_text_is_escaped():
     html = d._repr_html_()
     parse(html)
     assert "a&lt;b &amp; c" in html
+
+
+def test_print_shows_a_results_summary_not_one_line(dryer, capsys):
+    """``print(result)`` shows the text summary (every finding of ``advice``, each line of a
+    ``compare``), the ``repr`` only where a result has no text summary."""
+    a = sysid.advice(dryer)
+    print(a)
+    out = capsys.readouterr().out.strip()
+    assert out == a.summary() and out != repr(a)
+    assert all(f.topic in out for f in a.findings) and len(out.splitlines()) > len(a.findings)
+    m = sysid.n4sid(dryer, 3)
+    c = sysid.compare(dryer, m)
+    assert str(c) == c.summary() != repr(c)
+    table = m.damp()
+    assert str(table) == repr(table)  # no text summary: the repr

@@ -324,10 +324,17 @@ def result_html(obj: Any, title: str | None = None) -> str:
 
 
 class HTMLResult:
-    """Mixin: ``_repr_html_`` from the class's ``repr`` and ``to_pandas()``."""
+    """Mixin: ``_repr_html_`` from the class's ``repr`` and ``to_pandas()``; ``str`` (what
+    ``print`` shows) is the class's text ``summary()`` where it has one, the ``repr`` else,
+    so that ``print(sysid.advice(data))`` reads as MATLAB's display does, not one line."""
 
     def _repr_html_(self) -> str:
         return result_html(self)
+
+    def __str__(self) -> str:
+        summary = getattr(self, "summary", None)
+        text = summary() if callable(summary) else None
+        return text if isinstance(text, str) else repr(self)
 
 
 # -- records -------------------------------------------------------------------------------
