@@ -346,6 +346,9 @@ def test_docs_models_examples_run(tmp_path, monkeypatch, capsys):
     for i, block in enumerate(blocks):
         exec(compile(block, f"docs/models.md[{i}]", "exec"), {})
     out = capsys.readouterr().out.splitlines()
+    # print(compare(...)) shows its summary: a header, the column names, one row per output
+    assert out[0].startswith("simulation of") and out[1].split()[:3] == ["exp", "output", "fit"]
+    out = out[2:]
     assert out[1] == "True" and out[2] == "4 bic"
     assert out[3].startswith("[0.  1.  0.6 0.3]")
     assert out[4] == "[[100.]]" and out[6] == "True"
