@@ -22,6 +22,7 @@ __all__ = ["ResidualAnalysis", "default_max_lag", "residuals"]
 # fewest residual degrees of freedom (samples with a full past minus regressors) for which
 # the independence test is reported; below, the regression is (nearly) exact and says nothing
 _MIN_RESIDUAL_DOF = 5
+_BLOCK = 16384  # rows of the independence regression accumulated at a time
 
 
 def _xcorr_sums(a: np.ndarray, b: np.ndarray, lags: np.ndarray) -> np.ndarray:
@@ -111,11 +112,13 @@ def _regression_statistic(es: list[np.ndarray], us: list[np.ndarray], M: int,
             continue
         ew = lfilter(a, 1.0, e)[q:] if q else e
         uw = lfilter(a, 1.0, u, axis=0)[q:] if q else u
-        phi = np.hstack([uw[M - k: uw.shape[0] - k] for k in range(M + 1)])
-        Rphi = Rphi + phi.T @ phi
-        rr = rr + phi.T @ ew[M:]
+        for t0 in range(M, uw.shape[0], _BLOCK):  # blocks of rows: no N x p array
+            t1 = min(t0 + _BLOCK, uw.shape[0])
+            phi = np.hstack([uw[t0 - k: t1 - k] for k in range(M + 1)])
+            Rphi = Rphi + phi.T @ phi
+            rr = rr + phi.T @ ew[t0:t1]
         ee = ee + float(ew[M:] @ ew[M:])
-        n += phi.shape[0]
+        n += uw.shape[0] - M
     Rphi, rr = np.asarray(Rphi) / n, np.asarray(rr) / n
     sol, _, rank, _ = np.linalg.lstsq(Rphi, rr, rcond=1e-12)
     return float(n * (rr @ sol) / max(ee / n, 1e-300)), int(rank), n
