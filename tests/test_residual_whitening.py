@@ -51,3 +51,16 @@ def test_a_white_residual_is_left_unfiltered_in_most_records():
     orders = [int(sysid.residuals(PLANT, record(s, 0.5, 0.0), x0="zero").whitening_order[0])
               for s in range(40)]
     assert sum(q == 0 for q in orders) >= 24, orders
+
+
+def test_whiteness_rejected_for_a_model_without_a_noise_model_says_what_it_means():
+    """The true plant without a noise model under an AR(1) 0.9 disturbance: whiteness is
+    rejected (its errors are the disturbance) and the summary says to judge it by the
+    independence test; a model with a Kalman gain gets no such note."""
+    u, y = record(3, 0.5, 0.9)
+    res = sysid.residuals(PLANT, (u, y), x0="zero")
+    assert not res.is_white and res.independence[0] is True
+    assert "no noise model" in res.whiteness_note and res.whiteness_note in res.summary()
+    with_k = sysid.StateSpaceModel([[0.8]], [[1.0]], [[1.0]], K=[[0.5]], dt=1.0)
+    res_k = sysid.residuals(with_k, (u, y), x0="zero")
+    assert not res_k.is_white and res_k.whiteness_note == ""

@@ -124,6 +124,21 @@ def _regression_statistic(es: list[np.ndarray], us: list[np.ndarray], M: int,
     return float(n * (rr @ sol) / max(ee / n, 1e-300)), int(rank), n
 
 
+def _predicts_by_simulation(model: Any) -> bool:
+    """Whether ``model`` has no noise model: its exact state-space form has no (or a zero)
+    Kalman gain, so its one-step prediction is its simulation (an output-error,
+    transfer-function or process model, a simulation-focus ``ssest``). False where that
+    cannot be told (a nonlinear model's form is its linear part)."""
+    if not hasattr(model, "to_statespace") or not getattr(model, "statespace_is_exact", True):
+        return False
+    try:
+        ss = model if hasattr(model, "K") and hasattr(model, "A") else model.to_statespace()
+    except Exception:  # noqa: BLE001 - no state-space form: nothing to say
+        return False
+    K = getattr(ss, "K", None)
+    return K is None or not np.any(np.asarray(K) != 0)
+
+
 def default_max_lag(data: Any) -> int:
     """The largest residual lag the command line and the report use: ``min(25, N / 5)`` for
     the shortest experiment, lowered to the largest for which the independence test can be
@@ -198,6 +213,9 @@ class ResidualAnalysis(HTMLResult):
         ``None`` where the test is not made.
     independence_note : str
         Why the independence test is not made (empty when it is).
+    whiteness_note : str
+        Set by :func:`residuals` when whiteness is rejected for a model without a noise
+        model (its errors are the disturbance: the test then says nothing about the model).
     whitening_order : ndarray of int
         Per output, the order ``q`` of the residual's autoregressive whitening filter
         ``A(q)`` (AIC, at most ``M``) by which the residual and the inputs are filtered
@@ -248,6 +266,7 @@ class ResidualAnalysis(HTMLResult):
         self.independence_note = ("" if m else
                                   "independence not tested: the model has no inputs")
         self.whitening_order = np.zeros(len(se), dtype=int)
+        self.whiteness_note = ""
         if m:
             self._independence(ec, uc, M, m)
         self.independence = np.array(
@@ -324,6 +343,8 @@ class ResidualAnalysis(HTMLResult):
             )
         if self.independence_note:
             lines.append(self.independence_note)
+        if self.whiteness_note:
+            lines.append(self.whiteness_note)
         return "\n".join(lines)
 
     def plot(self, fig: Any = None) -> Any:
@@ -416,6 +437,13 @@ def residuals(model: Any, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
         es.append((y - _run(runner, u, y, 1, x))[start:])
         us.append(u[start:])
     res = ResidualAnalysis(model, es, us, int(max_lag), float(alpha))
+    if not res.is_white and model.ninputs and _predicts_by_simulation(model):
+        res.whiteness_note = (
+            "whiteness: the model has no noise model (its one-step prediction is its "
+            "simulation), so its errors are the disturbance itself and the whiteness test "
+            "judges the disturbance, not the model; judge its dynamics by the independence "
+            "test (MATLAB's advice for output-error models), or fit a noise model (focus="
+            "'prediction', armax, bj) for predictions")
     if model.ninputs and res.independence_note:
         warnings.warn(res.independence_note + " (the whiteness test stands)", SysidWarning,
                       stacklevel=user_stacklevel())
