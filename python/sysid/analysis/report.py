@@ -28,7 +28,7 @@ from ..models.checks import check_model
 from ..validation.compare import compare_quiet as compare
 from ..validation.criteria import _pct
 from ..validation.error_spectrum import error_spectrum
-from ..validation.residuals import default_max_lag, residuals
+from ..validation.residuals import default_max_lag, no_noise_model, residuals
 from . import report_figures as rf
 from .report_page import Page, reissue, relevant, status, warning_items
 
@@ -251,7 +251,7 @@ def _summary(model: Any, facts: dict[str, Any], sel: Any,
                    + "</tr>" for r in rows)
     lines.append(f'<table id="summary-fit"><thead><tr>{th}</tr></thead><tbody>{body}'
                  "</tbody></table>")
-    if not all(res.whiteness) and _no_noise_model(model):
+    if not all(res.whiteness) and no_noise_model(model):
         lines.append("<p>Residuals not white, as expected: the model has no noise model "
                      "(output error, or a simulation-focus fit), so its one-step errors are "
                      "its simulation errors. For a model of the noise too, fit with "
@@ -266,15 +266,6 @@ def _summary(model: Any, facts: dict[str, Any], sel: Any,
                      "(sysid.check_feedback).</p>")
     lines.append(f"<h3>Warnings ({len(found)})</h3>" + warning_items(found))
     return f'<section class="summary" id="summary"><h2>Summary</h2>{"".join(lines)}</section>'
-
-
-def _no_noise_model(model: Any) -> bool:
-    """The model predicts as it simulates: no Kalman gain (state space, or the state-space
-    model of an ``identify`` result) or an output-error structure."""
-    if getattr(model, "prediction_is_simulation", False):
-        return True
-    inner = getattr(model, "statespace", model)
-    return all(hasattr(inner, k) for k in ("A", "K")) and getattr(inner, "K", None) is None
 
 
 def _fit_body(page: Page, model: Any, sim: Any, pred: Any, res: Any, data: IOData) -> str:

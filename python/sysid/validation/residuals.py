@@ -17,7 +17,7 @@ from .._display import HTMLResult
 from ..errors import DataError, SysidWarning
 from .runner import X0, _records, _run, _simulator, _x0_for, given_start, require_scored
 
-__all__ = ["ResidualAnalysis", "default_max_lag", "residuals"]
+__all__ = ["ResidualAnalysis", "default_max_lag", "no_noise_model", "residuals"]
 
 # fewest residual degrees of freedom (samples with a full past minus regressors) for which
 # the independence test is reported; below, the regression is (nearly) exact and says nothing
@@ -124,11 +124,25 @@ def _regression_statistic(es: list[np.ndarray], us: list[np.ndarray], M: int,
     return float(n * (rr @ sol) / max(ee / n, 1e-300)), int(rank), n
 
 
-def _predicts_by_simulation(model: Any) -> bool:
-    """Whether ``model`` has no noise model: its exact state-space form has no (or a zero)
-    Kalman gain, so its one-step prediction is its simulation (an output-error,
-    transfer-function or process model, a simulation-focus ``ssest``). False where that
-    cannot be told (a nonlinear model's form is its linear part)."""
+def no_noise_model(model: Any) -> bool:
+    """Whether ``model`` has no noise model: its one-step prediction is its simulation (an
+    output-error polynomial, a transfer-function or process model, a state-space model
+    without a Kalman gain or with a zero one, as a simulation-focus ``ssest``; an
+    :class:`~sysid.IdentifiedModel` by its state-space model). False where that cannot be
+    told (a nonlinear model's state-space form is its linear part).
+
+    Examples
+    --------
+    >>> import sysid
+    >>> from sysid.validation.residuals import no_noise_model
+    >>> no_noise_model(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]]))
+    True
+    >>> no_noise_model(sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], K=[[0.2]]))
+    False
+    """
+    if getattr(model, "prediction_is_simulation", False):
+        return True
+    model = getattr(model, "statespace", model)
     if not hasattr(model, "to_statespace") or not getattr(model, "statespace_is_exact", True):
         return False
     try:
@@ -437,7 +451,7 @@ def residuals(model: Any, data: Any, max_lag: int = 25, *, x0: X0 = "estimate",
         es.append((y - _run(runner, u, y, 1, x))[start:])
         us.append(u[start:])
     res = ResidualAnalysis(model, es, us, int(max_lag), float(alpha))
-    if not res.is_white and model.ninputs and _predicts_by_simulation(model):
+    if not res.is_white and model.ninputs and no_noise_model(model):
         res.whiteness_note = (
             "whiteness: the model has no noise model (its one-step prediction is its "
             "simulation), so its errors are the disturbance itself and the whiteness test "
