@@ -14,7 +14,7 @@ from ..errors import DataError, NumericalError, is_frd, several_records_hint
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 from .feedthrough import lag_check, say_discrete
-from .free import arx_start, free_fit, reflected
+from .free import arx_start, free_fit, reflected, unstable_uncertainty
 from .model import TransferFunction
 from .options import (
     blockdiag,
@@ -300,6 +300,7 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
             if got is not None:
                 got[0]["start"] = res["start"]
                 res, said = got
+        said = unstable_uncertainty(res, said, pairs, exps, data.dt, hold, initial_state)
         for w in said:  # the kept search's warnings, at the user's line
             warnings.warn(w.message, w.category, stacklevel=user_stacklevel())
         if stable and res["stop"] != "cancelled":  # held at the bound: do the data insist?
