@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import PERSISTENT_DECAY
 from ..errors import DataError
 from .refine import PairStructure, free_search, refine
 
@@ -110,6 +111,9 @@ def free_fit(res: dict[str, Any], pairs: list[PairStructure],
 #: growing samples) and where a column is a central difference (relative step ``_STEP``,
 #: accurate to about 1e-10 of a column)
 _SV_EXACT, _SV_DIFF, _STEP = 1e-12, 1e-8, 1e-5
+#: the search's rank test on the singular values (its 1e-10 is on their squares)
+_RANK = 1e-5
+FIX = "Lower n_zeros, fix the delay or use more informative data"
 
 
 def unstable_uncertainty(res: dict[str, Any], said: list[Any], pairs: list[PairStructure],
@@ -133,14 +137,20 @@ def unstable_uncertainty(res: dict[str, Any], said: list[Any], pairs: list[PairS
     squared): the sensitivities to the coefficients are the responses of the filters
     ``-s^k B / A^2`` and ``s^k / A`` (sampled with the data's hold and delay: sampling is
     linear in the transfer function), exact; a delay's, and every column when the initial
-    state was estimated (fitted again in each), by central differences. A direction below
-    the accuracy of those columns (1e-12 of the largest singular value, 1e-8 with a
-    difference) cannot be resolved in double precision: its parameters keep an infinite
-    standard deviation and an :class:`~sysid.models.uncertainty.UncertaintyWarning` says
-    why (the growth of the mode over the record) instead of claiming that the data do not
-    determine them. On the first 40 records of the warning audit's ``unstable`` scenario,
-    ``enforce_stability=False``: the IdentifiabilityWarning on 32 of 37 unstable fits
-    before, none now; this UncertaintyWarning on 3 of 40 (each with a low-pass input).
+    state was estimated (fitted again in each), by central differences. The rank test is
+    the search's (1e-10 on the eigenvalues, 1e-5 on the singular values) loosened by the
+    spread the mode adds, ``exp(-sigma T)``, down to the accuracy of the columns (1e-12 of
+    the largest singular value, 1e-8 with a difference): a direction below the loosened
+    test is named by the IdentifiabilityWarning, as before; one below the columns' accuracy
+    only keeps an infinite standard deviation, and an
+    :class:`~sysid.models.uncertainty.UncertaintyWarning` says why (the growth of the mode)
+    instead of claiming that the data do not determine it. A fit held at the bound (a mode
+    that grows by less than ``1 / PERSISTENT_DECAY`` over the record) keeps the search's
+    covariance and warnings. On the first 40 records of the warning audit's ``unstable``
+    scenario with ``enforce_stability=False``: the IdentifiabilityWarning on 32 of 37
+    unstable fits before; now on 2 of 40 (low-pass inputs; one fit has a pole at
+    ``s`` = -15 with ``dt`` = 1, far beyond the band the input excites) and this
+    UncertaintyWarning on 1.
 
     Examples
     --------
@@ -160,8 +170,9 @@ def unstable_uncertainty(res: dict[str, Any], said: list[Any], pairs: list[PairS
 
     growth = max((float(np.max(np.roots(pr.coef(q)[1]).real)) for pr, q in zip(pairs, res["p"])
                   if pr.coef(q)[1].size > 1), default=-np.inf)
-    if not growth > 0:
-        return said  # stable: the search's own covariance and rank test stand
+    span = max(len(y) for _, y in exps) * dt
+    if not growth * span > -np.log(PERSISTENT_DECAY):
+        return said  # no mode grows over the record: the search's own rank test stands
     names = [nm for pr in pairs for nm in pr.names] + [
         f"{pairs[j].names[0].split(':')[0]}:iodelay" if pairs[j].names else f"iodelay{j}"
         for j in res["delay_index"]]
@@ -176,7 +187,10 @@ def unstable_uncertainty(res: dict[str, Any], said: list[Any], pairs: list[PairS
     D = np.linalg.norm(J, axis=0)
     D = np.where(D > 0, D, 1.0)
     _, S, Vt = np.linalg.svd(J / D, full_matrices=False)
-    keep = S > (_SV_EXACT if exact else _SV_DIFF) * S[0]
+    # the search's test (1e-10 on eigenvalues: _RANK on singular values), loosened by the
+    # spread the growing mode adds over the record, down to the columns' accuracy
+    floor = max(_RANK * np.exp(-growth * span), _SV_EXACT if exact else _SV_DIFF)
+    keep = S > floor * S[0]
     F = Vt[keep].T / S[keep] / D[:, None]
     res["covariance"] = float(res["noise_variance"]) * (F @ F.T)
     kept = [w for w in said if not (issubclass(w.category, IdentifiabilityWarning) and str(
@@ -185,13 +199,16 @@ def unstable_uncertainty(res: dict[str, Any], said: list[Any], pairs: list[PairS
     if keep.all():
         return kept
     from ..models.uncertainty import UncertaintyWarning
+    from .refine import _unidentifiable
 
-    weak = sorted({int(i) for v in Vt[~keep] / D for i in
-                   np.flatnonzero(np.abs(v) >= 1e-3 * np.max(np.abs(v)))})
-    res["unidentifiable"] = weak
-    span = max(len(y) for _, y in exps) * dt
     with warnings.catch_warnings(record=True) as again:
         warnings.simplefilter("always")
+        if floor > (_SV_EXACT if exact else _SV_DIFF):  # the test decided: a true warning
+            res["unidentifiable"] = _unidentifiable((Vt[~keep] / D).T, names, FIX)
+            return kept + list(again)
+        weak = sorted({int(i) for v in Vt[~keep] / D for i in
+                       np.flatnonzero(np.abs(v) >= 1e-3 * np.max(np.abs(v)))})
+        res["unidentifiable"] = weak
         warnings.warn(
             f"the standard deviations of {', '.join(names[i] for i in weak)} are not computed "
             f"(reported as inf): the model is unstable (a pole at real part {growth:.3g}), so "
