@@ -160,9 +160,10 @@ def insists(kept: float, free: float, n: int, l: int = 1) -> tuple[float, bool]:
 def warn_insisted(model: str, pair: str, pole: complex, dt: float, lr: float, option: str,
                   stacklevel: int | None = None) -> None:
     """A :class:`~sysid.StabilityWarning`: ``model`` was held stable, but the search left free
-    of the bound (from its fit and from the least-squares ARX fit) puts a pole of ``pair`` at
-    ``pole`` (continuous when ``dt`` is 0, else discrete) with a likelihood ratio ``lr`` above the 1 % level (:func:`insists`);
-    ``option`` says how to have the unstable model.
+    of the bound (from its fit, and from the least-squares ARX fit when its ``A`` grows) puts
+    a pole of ``pair`` at ``pole`` (continuous when ``dt`` is 0, else discrete) with a
+    likelihood ratio ``lr`` above the 1 % level (:func:`insists`); ``option`` says how to
+    have the unstable model.
 
     Examples
     --------

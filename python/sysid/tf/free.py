@@ -86,7 +86,29 @@ def free_fit(res: dict[str, Any], pairs: list[PairStructure],
              ) -> tuple[dict[str, Any], list[Any]] | None:
     """``enforce_stability=False``: the search free of the bound from the stable fit ``res``
     and from the ARX start (:func:`arx_start`), the lower criterion kept with its warnings
-    (held back: the caller raises them); ``None`` when neither lowers ``res``'s."""
+    (held back: the caller raises them); ``None`` when neither lowers ``res``'s.
+
+    Examples
+    --------
+    >>> import numpy as np, sysid, warnings
+    >>> from sysid.tf.free import free_fit
+    >>> from sysid.tf.refine import PairStructure, refine
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(400)
+    >>> y = sysid.TransferFunction([1.0], [1.0, -0.02]).simulate(u, dt=1.0)[:, 0]
+    >>> y = y + 0.1 * rng.standard_normal(400)
+    >>> pr = PairStructure(lambda p: (p[1:], np.concatenate([[1.0], p[:1]])),
+    ...                    np.array([0.5, 1.0]), np.zeros(2, bool), np.full(2, -np.inf),
+    ...                    np.full(2, np.inf), names=["a1", "b0"])
+    >>> exps = [(u[:, None], y)]
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     held = refine([pr], exps, 1.0, "zoh")  # kept stable
+    >>> got, said = free_fit(held, [pr], exps, 1.0, np.array([1]), np.array([0]), "zoh",
+    ...                      "zero", 50, 1e-10)
+    >>> round(float(got["p"][0][0]), 3)  # a1: the pole at s = 0.02
+    -0.02
+    """
     best = None
     arx = arx_start(res, pairs, exps, dt, npo, nze, hold)
     for start in [None] + ([arx] if arx is not None else []):
