@@ -159,10 +159,11 @@ def insists(kept: float, free: float, n: int, l: int = 1) -> tuple[float, bool]:
 
 def warn_insisted(model: str, pair: str, pole: complex, dt: float, lr: float, option: str,
                   stacklevel: int | None = None) -> None:
-    """A :class:`~sysid.StabilityWarning`: ``model`` was held stable, but from its fit the
-    search left free moves a pole of ``pair`` out to ``pole`` (continuous when ``dt`` is 0,
-    else discrete) with a likelihood ratio ``lr`` above the 1 % level (:func:`insists`);
-    ``option`` says how to have the unstable model.
+    """A :class:`~sysid.StabilityWarning`: ``model`` was held stable, but the search left free
+    of the bound (from its fit, and from the least-squares ARX fit when its ``A`` grows) puts
+    a pole of ``pair`` at ``pole`` (continuous when ``dt`` is 0, else discrete) with a
+    likelihood ratio ``lr`` above the 1 % level (:func:`insists`); ``option`` says how to
+    have the unstable model.
 
     Examples
     --------
@@ -178,9 +179,10 @@ def warn_insisted(model: str, pair: str, pole: complex, dt: float, lr: float, op
     p = complex(pole)
     where = f"z = {p:.4g} (modulus {abs(p):.4g})" if dt else f"s = {p:.3g}"
     warnings.warn(
-        f"{model} is held stable, but the data insist on an unstable one: from the stable "
-        f"fit, the search left free moves a pole of {pair} to {where} and lowers the "
-        f"criterion significantly (likelihood ratio {lr:.3g} > 6.63, the 1 % level of "
+        f"{model} is held stable, but the data insist on an unstable one: the search left "
+        f"free of the bound (from the stable fit, and from the least-squares ARX fit when "
+        f"its A grows) puts a pole of {pair} at {where} and lowers the criterion "
+        f"significantly (likelihood ratio {lr:.3g} > 6.63, the 1 % level of "
         f"chi-square(1)). If the plant is unstable, {option}; if not, look for a drift or an "
         "offset left in the data (sysid.detrend(data, 'linear') removes both)",
         StabilityWarning,

@@ -384,7 +384,8 @@ def free_search(res: dict[str, Any], pairs: Sequence[PairStructure],
 def free_test(res: dict[str, Any], pairs: Sequence[PairStructure],
               exps: list[tuple[np.ndarray, np.ndarray]], dt: float, hold: str, x0_mode: str,
               max_iter: int, tol: float,
-              reflect: Callable[[PairStructure, np.ndarray], np.ndarray] | None = None
+              reflect: Callable[[PairStructure, np.ndarray], np.ndarray] | None = None,
+              other: Sequence[PairStructure] | None = None
               ) -> tuple[int, complex, float] | None:
     """Whether the data insist on an unstable model where the stable search ``res`` (from
     ``pairs``) ended: the search runs again from there, free to leave the unit circle, and
@@ -399,7 +400,15 @@ def free_test(res: dict[str, Any], pairs: Sequence[PairStructure],
     at s = -0.000 the truth does not have, which the free search moved to +0.014 at a 15 %
     lower criterion). With ``reflect`` (a pair and its parameters -> the same with its
     unstable poles mirrored into the stable region), the stable search also runs from the free fit
-    mirrored, and the lower stable criterion is the one tested."""
+    mirrored, and the lower stable criterion is the one tested.
+
+    With ``other`` (another start of the free search: an unconstrained fit,
+    :func:`sysid.tf.free.arx_start`), the free search also runs from there and the lower
+    free criterion is the one tested: 13 of 100 records of an unstable plant (a real pole
+    at ``z`` = 1.01-1.03) were left silent without it: on 7 the free search from the stable
+    fit did not move, on 2 it moved to a nearby unstable pair short of the test, and on 4
+    the stable search from the free fit mirrored reached a criterion the free fit did not
+    beat significantly."""
     import warnings
 
     from ..pem.boundary import insists
@@ -411,6 +420,14 @@ def free_test(res: dict[str, Any], pairs: Sequence[PairStructure],
     with warnings.catch_warnings():  # a test: its own search's warnings are not the user's
         warnings.simplefilter("ignore")
         free = free_search(res, pairs, exps, dt, hold, x0_mode, max_iter, tol)
+        if other is not None:
+            try:
+                alt = refine(other, exps, dt, hold, x0_mode=x0_mode, max_iter=max_iter,
+                             tol=tol, stable=False)
+                if free is None or alt["cost_history"][-1] < free["cost_history"][-1]:
+                    free = alt
+            except (DataError, ArithmeticError):
+                pass
     if free is None:
         return None
     kept = res["cost_history"][-1]

@@ -166,3 +166,64 @@ def subspace_pairs(exps: list[tuple[np.ndarray, np.ndarray]], dt: float, npo: np
         if fitted is not None and (best is None or fitted[1] < best[0]):
             best = (fitted[1], [(a, b, float(t)) for a, b, t in zip(dens, fitted[0], taus)])
     return None if best is None else best[1]
+
+
+def arx_pairs(exps: list[tuple[np.ndarray, np.ndarray]], dt: float, npo: np.ndarray,
+              nze: np.ndarray, taus: list[float], hold: str
+              ) -> list[tuple[np.ndarray, np.ndarray, float]] | None:
+    """Per input ``(a, b, delay)`` of one output from its least-squares ARX fit (``na`` =
+    ``max(npo)``, ``nb`` = ``na``, the delays ``taus`` in whole samples plus one), whose
+    ``A`` is not held stable: its poles mapped to continuous time as they are (``log(z) /
+    dt``, an unstable pole kept unstable), each pair ``npo[j]`` of them (the slowest first)
+    and the numerators by least squares (:func:`_numerators`). A start for the search free
+    of the stability bound, which from :func:`sysid.tfest`'s stable fit alone can stop at
+    once (a minimum inside the region: 13 of 100 records of an unstable plant left silent);
+    ``None`` when the fit fails or its ``A`` has no mode that grows over the longest
+    experiment (it would start inside the region the stable search covers).
+
+    Examples
+    --------
+    >>> import numpy as np, sysid
+    >>> from sysid.tf.starts import arx_pairs
+    >>> rng = np.random.default_rng(0)
+    >>> u = rng.standard_normal(400)
+    >>> y = sysid.TransferFunction([1.0], [1.0, -0.02]).simulate(u, dt=1.0)[:, 0]
+    >>> (a, b, tau), = arx_pairs([(u[:, None], y)], 1.0, np.array([1]), np.array([0]),
+    ...                          [0.0], "zoh")
+    >>> np.round(a, 3).tolist(), np.round(b, 3).tolist()
+    ([1.0, -0.02], [1.0])
+    """
+    from .. import _sysid
+    from .._checks import PERSISTENT_DECAY
+
+    npo, nze = np.ravel(npo), np.ravel(nze)
+    n = int(np.max(npo)) if npo.size else 0
+    if n == 0:
+        return None
+    nk = [int(np.floor(t / dt + 1e-9)) + 1 for t in taus]
+    try:
+        fit = _sysid.arx_fit([(np.ascontiguousarray(u, float),
+                               np.ascontiguousarray(np.asarray(y, float)[:, None]))
+                              for u, y in exps], [[n]], [[n] * len(taus)], [nk], 0.0, None)[0]
+        z = np.roots(np.concatenate([[1.0], np.asarray(fit["a"][0], float)]))
+    except Exception:  # noqa: BLE001 - no ARX start
+        return None
+    longest = max(len(y) for _, y in exps)
+    if not (z.size and np.all(np.isfinite(z))
+            and np.abs(z).max() ** longest * PERSISTENT_DECAY > 1.0):
+        return None
+    # log(z) / dt as it is: an unstable pole stays unstable (a pole on the negative real
+    # axis, which has no real logarithm, at its modulus; z = 0 at 1e-3)
+    r = np.maximum(np.abs(z), 1e-3)
+    real = np.abs(z.imag) <= 1e-9 * np.maximum(np.abs(z), 1e-300)
+    s = (np.log(r) + 1j * np.where(real, 0.0, np.angle(z))) / dt
+    dens = []
+    for k in npo:
+        p = _channel_poles(s, np.abs(z), int(k))
+        dens.append(np.real(np.poly(p)) if p.size else np.ones(1))
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        warnings.simplefilter("ignore")  # the responses of an unstable start grow
+        fitted = _numerators(exps, dens, nze, list(taus), dt, hold)
+    if fitted is None:
+        return None
+    return [(a, b, float(t)) for a, b, t in zip(dens, fitted[0], taus)]

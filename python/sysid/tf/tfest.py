@@ -14,6 +14,7 @@ from ..errors import DataError, NumericalError, is_frd, several_records_hint
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
 from .feedthrough import lag_check, say_discrete
+from .free import arx_start, free_fit, reflected, unstable_uncertainty
 from .model import TransferFunction
 from .options import (
     blockdiag,
@@ -23,7 +24,7 @@ from .options import (
     progress_callback,
     search_limits,
 )
-from .refine import PairStructure, check_experiments, free_search, free_test, refine
+from .refine import PairStructure, check_experiments, free_test, refine
 from .srivc import srivc
 
 __all__ = ["tfest"]
@@ -113,8 +114,9 @@ def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
         of 2 and 3 poles were unstable in 22 of 34 cases, 20 of them diverging on the
         validation data. ``False`` for an unstable plant's response (measured in closed
         loop). Continuous-time fits of time records keep the simulation stable too; there,
-        from the stable fit, the search is run again free of the bound (``False``: its
-        result is returned when lower), and with the default a
+        from the stable fit and from the least-squares ARX fit when its ``A`` grows over
+        the record, the search is run again free of the bound (``False``: the lower
+        result is returned when it improves on the stable fit), and with the default a
         :class:`sysid.StabilityWarning` names the pole when the data insist on an unstable
         model (likelihood-ratio test at 1 %, as :func:`sysid.ssest`'s prediction focus;
         ``info["insisting"]``). A discrete-time fit is :func:`sysid.oe`'s, which keeps
@@ -292,22 +294,19 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
             res, pairs, said = _second_start(res, said, pairs, exps, data, npo[i], nze[i],
                                              starts, auto, dmax, hold, initial_state,
                                              max_iter, tol, cb, i)
-        if not stable and res["stop"] != "cancelled":  # free, from the stable fit
-            with warnings.catch_warnings(record=True) as said_free:
-                warnings.simplefilter("always")
-                free = free_search(res, pairs, exps, data.dt, hold, initial_state, max_iter,
-                                   tol)
-            if free is not None and free["cost_history"][-1] < res["cost_history"][-1]:
-                free["start"] = res["start"]
-                pairs = [PairStructure(pr.coef, q, pr.fixed, pr.lower, pr.upper, d,
-                                       pr.delay_free, pr.delay_max, pr.names)
-                         for pr, q, d in zip(pairs, res["p"], res["delays"])]
-                res, said = free, list(said_free)
+        if not stable and res["stop"] != "cancelled":  # free, from the stable fit (or ARX)
+            got = free_fit(res, pairs, exps, data.dt, npo[i], nze[i], hold, initial_state,
+                           max_iter, tol)
+            if got is not None:
+                got[0]["start"] = res["start"]
+                res, said = got
+        said = unstable_uncertainty(res, said, pairs, exps, data.dt, hold, initial_state)
         for w in said:  # the kept search's warnings, at the user's line
             warnings.warn(w.message, w.category, stacklevel=user_stacklevel())
         if stable and res["stop"] != "cancelled":  # held at the bound: do the data insist?
             got = free_test(res, pairs, exps, data.dt, hold, initial_state, max_iter, tol,
-                            _reflected)
+                            reflected, arx_start(res, pairs, exps, data.dt, npo[i], nze[i],
+                                                 hold))
             if got is not None:
                 insisted.append((f"{data.output_names[i]}<-{data.input_names[got[0]]}",
                                  *got[1:]))
@@ -344,16 +343,6 @@ def _continuous(data: Any, npo: np.ndarray, nze: np.ndarray, delays: np.ndarray,
     if initial_state == "zero":  # the fit of a simulation from rest, as the model was fitted
         fit_percent(G, data)
     return G
-
-
-def _reflected(pair: PairStructure, q: np.ndarray) -> np.ndarray:
-    """A pair's parameters ``[a_1.., b..]`` (:func:`_pair`) with the unstable poles of
-    ``s^n + a_1 s^(n-1) + ...`` mirrored into the left half-plane (``s -> -conj(s)``; the
-    numerator kept)."""
-    num, den = pair.coef(np.asarray(q, float))
-    r = np.roots(den)
-    r = np.where(r.real > 0, -np.conj(r), r)
-    return np.concatenate([np.real(np.poly(r))[1:], num])
 
 
 def _refined(pairs: list[PairStructure], exps: list[tuple[np.ndarray, np.ndarray]],
