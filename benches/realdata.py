@@ -90,6 +90,10 @@ the findings: results/realdata_fresh7.md.
 sweep's records (a five-storey test tower shaken by its hybrid mass damper, a soft pneumatic
 bending actuator, an LED lighting a photoresistor); sources, SHA-256, how each ``.npz`` is made
 and the findings: results/realdata_fresh8.md.
+``--fresh9-records DIR`` (``FRESH9``, results/realdata_fresh9_table[_<split>].md): the ninth
+sweep's records (a single-zone building's heat pump in summer and in winter, a gantry crane's
+load swing); sources, SHA-256, how each ``.npz`` is made and the findings:
+results/realdata_fresh9.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -136,6 +140,7 @@ from realdata_records import (  # noqa: F401
     FRESH6,
     FRESH7,
     FRESH8,
+    FRESH9,
     MORE,
     SWEEPS,
 )

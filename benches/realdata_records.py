@@ -112,6 +112,17 @@ FRESH8 = {
     # photoresistor
 }
 
+#: the ninth sweep's records (``--fresh9-records DIR``), read as ``FRESH``'s are (sources:
+#: results/realdata_fresh9.md)
+FRESH9 = {
+    "polydome_summer": ("polydome_summer", None),  # a 600 m2 single-zone building's heat pump
+    # (HVAC), 15 min, summer (cooling, no occupants): heat pump electrical power, outdoor
+    # temperature, solar radiation -> four room temperatures
+    "polydome_winter": ("polydome_winter", None),  # the same building in winter (heating)
+    "crane_square": ("crane_square", None),  # gantry crane, decimated to 11.6 ms: trolley
+    # motor voltage (a square wave, then rest) -> the load's swing (wire) angle
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -121,4 +132,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh5": ("FRESH5", "realdata_fresh5_table"),
           "fresh6": ("FRESH6", "realdata_fresh6_table"),
           "fresh7": ("FRESH7", "realdata_fresh7_table"),
-          "fresh8": ("FRESH8", "realdata_fresh8_table")}
+          "fresh8": ("FRESH8", "realdata_fresh8_table"),
+          "fresh9": ("FRESH9", "realdata_fresh9_table")}

@@ -26,7 +26,8 @@
    one input and output; near-best candidates unstable on some block, at orders not refined
    yet, with a stable ``A`` enforced and refined likewise, unless the data insist on an
    unstable candidate or it wins only by following the record's drift
-   (:func:`_stabilised_refinements`); at orders whose N4SID candidate is unstable on some
+   (:func:`_stabilised_refinements`); the orders above a refinement that rose past every
+   subspace fit (:func:`.climb.higher_orders`); at orders whose N4SID fit is unstable on some
    block, N4SID from the estimated state sequence (:func:`.states.states_candidates`:
    candidates, not starts; not under feedback); when an unstable candidate wins only with the
    record's drift left in, every sweep candidate once more with one output differenced and
@@ -99,6 +100,7 @@ from ..validation.crossval import (
 from ..validation.records import validation_record
 from .board import Board, free_poles, unstable
 from .choice import _choose
+from .climb import higher_orders
 from .integrating import integrating_candidates, integrating_note
 from .notes import (
     loop_feedthrough_check,
@@ -686,6 +688,8 @@ def identify(
         if refine:
             _refined_candidates(board)
             _stabilised_refinements(board)
+            if not feedback:
+                higher_orders(board, _refine, N_REFINE)
             if all(r["criterion"].startswith("subspace") for r in board.rows):
                 checks["refinement"] = (
                     "none scored: no stable subspace candidate to start a prediction-error "
