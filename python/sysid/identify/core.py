@@ -96,6 +96,7 @@ from ..validation.crossval import (
     require_held_out_length,
     simulation_fit,
 )
+from ..validation.output_error import feedback_checked
 from ..validation.records import validation_record
 from .board import Board, free_poles, unstable
 from .choice import _choose
@@ -522,6 +523,7 @@ def _final_refit(data: IOData, start: Any, order: int, ft: bool, focus: str,
     return m
 
 
+@feedback_checked()  # its own check (_checks); candidates neither repeat nor say it
 @one_blas_thread
 def identify(
     data: IOData,
