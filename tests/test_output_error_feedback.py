@@ -56,6 +56,7 @@ FITS = {
     "pem": lambda d: sysid.pem(d, sysid.StateSpaceModel([[0.5]], [[1.0]], [[1.0]], dt=DT),
                                focus="simulation"),
     "procest": lambda d: sysid.procest(d, "P1"),
+    "polyest": lambda d: sysid.polyest(d, 0, 1, 0, 0, 1, 1),  # na = nc = nd = 0: output error
     "greyest": lambda d: sysid.greyest(d, _grey(), focus="simulation"),
 }
 
@@ -75,7 +76,8 @@ def test_each_output_error_fit_warns_once_in_its_words_on_a_closed_loop(name):
     assert said[0].startswith(f"{who}: the record shows feedback"), said[0]
     assert "input u0" in said[0] and "% of the input's variance" in said[0]
     remedy = {"oe": "sysid.bj", "tfest": "sysid.bj", "ssest": "focus='prediction'",
-              "pem": "focus='prediction'", "procest": "sysid.bj", "greyest": "focus='prediction'"}
+              "pem": "focus='prediction'", "procest": "sysid.bj", "greyest": "focus='prediction'",
+              "polyest": "Box-Jenkins"}
     assert remedy[who] in said[0]
     info = model.info["feedback_check"]
     assert info["warned"] and info["p_value"] < 1e-6
@@ -96,6 +98,7 @@ def test_open_loop_records_are_not_warned(kind, name):
 
 @pytest.mark.parametrize("fit", [lambda d: sysid.armax(d, 1, 1, 1, 1),
                                  lambda d: sysid.bj(d, 1, 1, 1, 1, 1),
+                                 lambda d: sysid.polyest(d, 0, 1, 1, 1, 1, 1),
                                  lambda d: sysid.ssest(d, 1)])
 def test_fits_with_a_noise_model_do_not_run_the_check(fit, monkeypatch):
     calls = []

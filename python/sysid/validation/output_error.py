@@ -1,8 +1,8 @@
 """The feedback check of the output-error fits: one helper, said in each estimator's words.
 
 An output-error fit (``oe``, ``tfest`` on a time record, ``ssest``/``pem`` with
-``focus="simulation"`` or ``noise="none"``, ``procest``, ``greyest`` without a noise model)
-minimises the simulation error ``y - G u`` with no noise model: it takes the input as
+``focus="simulation"`` or ``noise="none"``, ``procest``, ``polyest`` with ``na = nc = nd =
+0``, ``greyest`` without a noise model) minimises the simulation error ``y - G u`` with no noise model: it takes the input as
 independent of the output noise. Under feedback (``u = r - F y``) the input carries that
 noise, and the estimate of ``G`` is biased (Ljung 1999, section 13.4; Forssell & Ljung 1999).
 The prediction-error fits with a noise model (``arx``, ``armax``, ``bj``, ``ssest`` with the
@@ -61,6 +61,8 @@ REMEDY = {
     "procest": "fit a noise model with the plant (sysid.bj, sysid.armax, or "
                "sysid.ssest(data, order) with the prediction focus), or run the test in open "
                "loop",
+    "polyest": "give it a noise model (nc, nd: Box-Jenkins; na with nc: ARMAX), or use "
+               "sysid.ssest(data, order) (prediction focus, the default)",
     "greyest": "use focus='prediction' with a noise model (noise='model' with the "
                "structure's K, or noise='estimate')",
 }
