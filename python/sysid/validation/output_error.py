@@ -1,13 +1,13 @@
 """The feedback check of the output-error fits: one helper, said in each estimator's words.
 
 An output-error fit (``oe``, ``tfest`` on a time record, ``ssest``/``pem`` with
-``focus="simulation"`` or ``noise="none"``, ``procest``, ``polyest`` with ``na = nc = nd =
-0``, ``greyest`` without a noise model) minimises the simulation error ``y - G u`` with no noise model: it takes the input as
-independent of the output noise. Under feedback (``u = r - F y``) the input carries that
-noise, and the estimate of ``G`` is biased (Ljung 1999, section 13.4; Forssell & Ljung 1999).
-The prediction-error fits with a noise model (``arx``, ``armax``, ``bj``, ``ssest`` with the
-default prediction focus, ``pbsid``, ``ssarx``) are consistent under feedback when their
-noise model can describe the noise, and are not checked here.
+``focus="simulation"`` or ``noise="none"``, ``procest``, ``polyest`` with ``na = nc = nd = 0``,
+``greyest`` without a noise model) minimises the simulation error ``y - G u`` with no noise
+model: it takes the input as independent of the output noise. Under feedback (``u = r - F y``)
+the input carries that noise, and the estimate of ``G`` is biased (Ljung 1999, section 13.4;
+Forssell & Ljung 1999). The prediction-error fits with a noise model (``arx``, ``armax``,
+``bj``, ``ssest`` with the default prediction focus, ``pbsid``, ``ssarx``) are consistent under
+feedback when their noise model can describe the noise, and are not checked here.
 
 :func:`output_error` wraps such an estimator: on a time record with inputs it runs
 :func:`sysid.check_feedback` once (means removed, default lags: one compression pass of the
