@@ -254,6 +254,7 @@ def run_calls(scenario: str, est, val, facts: dict, with_identify: bool) -> dict
         rec("identify", lambda: sysid.identify(est).model)
     m_ss = rec("ssest(n)", lambda: sysid.ssest(est, n, **it))
     if not capped:
+        rec("ssest(n,sim)", lambda: sysid.ssest(est, n, focus="simulation"))
         rec("ssest(auto)", lambda: sysid.ssest(est))
         rec("n4sid", lambda: sysid.n4sid(est))
     if nu == 1 or not capped:
@@ -443,6 +444,7 @@ def real_record(name: str, est, val) -> dict:
     res["identify_order"] = n
     m = rec("ssest(n)", lambda: sysid.ssest(est, n))
     rec("ssest(auto)", lambda: sysid.ssest(est))
+    rec("ssest(n,sim)", lambda: sysid.ssest(est, n, focus="simulation"))
     rec("n4sid", lambda: sysid.n4sid(est))
     if est.n_inputs == 1 and est.n_outputs == 1:
         rec("arx(4,4,1)", lambda: sysid.arx(est, 4, 4, 1))

@@ -399,6 +399,9 @@ def test_real_records_reach_the_published_fits(name, inputs, outputs, n_est, ord
     with warnings.catch_warnings():
         # the robot arm's search is still creeping down at 100 iterations: that warns
         warnings.simplefilter("ignore", sysid.IterationLimitWarning)
+        # the winding record's reel speed S3 (input 2) answers the web tensions (n4sid warns
+        # the same on it): the simulation focus says so
+        warnings.simplefilter("ignore", sysid.FeedbackWarning)
         m = sysid.ssest(est, order, focus="simulation", feedthrough=feedthrough, max_iter=100)
     assert float(sysid.compare(m, val).fit.mean()) >= goal
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import threading
 from collections.abc import Callable, Iterator, Sequence
+from contextvars import copy_context
 from typing import Any
 
 from ._progress import stopped_by
@@ -76,10 +77,13 @@ def ordered(tasks: Sequence[Callable[[], Any]], workers: int | None = None) -> I
 
     pool = ThreadPoolExecutor(n, thread_name_prefix="sysid-fit")
     try:
-        futures = [pool.submit(run, t) for t in tasks[:n]]
+        # each task in a copy of the caller's context (a ContextVar such as
+        # sysid.validation.output_error.feedback_checked holds in the threads too)
+        ctx = copy_context()
+        futures = [pool.submit(ctx.copy().run, run, t) for t in tasks[:n]]
         for i in range(len(tasks)):
             if i + n < len(tasks):
-                futures.append(pool.submit(run, tasks[i + n]))
+                futures.append(pool.submit(ctx.copy().run, run, tasks[i + n]))
             yield futures[i].result()
     finally:
         stop.set()  # early close or an error: the rest stop (no-op once all are done)

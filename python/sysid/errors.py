@@ -100,7 +100,9 @@ class ExcitationWarning(SysidWarning):
 class FeedbackWarning(SysidWarning):
     """The input depends on past outputs (feedback): open-loop subspace methods are biased;
     use :func:`sysid.pbsid` or :func:`sysid.ssarx` (``method="pbsid"`` in ``ssest`` and
-    ``SubspaceEstimator``; see :func:`sysid.check_feedback`)."""
+    ``SubspaceEstimator``; see :func:`sysid.check_feedback`). The output-error fits (no noise
+    model: ``oe``, ``tfest``, ``ssest``/``pem`` with ``focus="simulation"``, ``procest``) are
+    biased too and say so with their own remedy (:mod:`sysid.validation.output_error`)."""
 
 
 class OffsetWarning(SysidWarning):

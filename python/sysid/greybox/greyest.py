@@ -31,11 +31,20 @@ from ..errors import DataError
 from ..models.discretisation import expm, hold_blocks
 from ..models.frd import FRD
 from ..pem.records import _experiments
+from ..validation.output_error import output_error
 from .delays import _aug_foh as foh_block
 from .delays import shift_taps, split_delays
 from .greybox import GreyBox
 from .outer import OuterParameters, model_of
 from .results import GreyEstimate, _costs, _criterion
+
+
+def _no_noise_model(a: dict[str, Any]) -> bool:
+    """A linear structure fitted without a noise model (the simulation focus, or no ``K``):
+    the output-error fits :mod:`sysid.validation.output_error` checks for feedback (a
+    nonlinear structure is left out: the test reads its distortions as feedback)."""
+    return isinstance(a["structure"], GreyBox) and (a["focus"] == "simulation"
+                                                    or a["noise"] == "none")
 
 __all__ = ["greyest", "GreyEstimate"]
 
@@ -70,6 +79,7 @@ def _x0_modes(x0: Any, count: int, n: int, has_model_x0: bool) -> list[Any]:
     return [arr] * count
 
 
+@output_error("greyest", when=_no_noise_model)
 @one_blas_thread
 def greyest(
     data: Any,

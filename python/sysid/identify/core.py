@@ -97,6 +97,7 @@ from ..validation.crossval import (
     require_held_out_length,
     simulation_fit,
 )
+from ..validation.output_error import feedback_checked
 from ..validation.records import validation_record
 from .board import Board, free_poles, unstable
 from .choice import _choose
@@ -335,8 +336,7 @@ def implied_fit(cost: float, data: IOData, weighting: str | None) -> float:
 def settled(data: IOData, weighting: str | None, then: Any = None) -> Any:
     """A progress callback for :func:`sysid.pem` that stops the search once it has settled:
     its last ``SETTLE_WINDOW`` iterations raised :func:`implied_fit` by less than
-    ``SETTLE_POINTS``; ``then`` (another callback, e.g. the time budget's) may stop it
-    earlier.
+    ``SETTLE_POINTS``; ``then`` (another callback: a time budget's) may stop it earlier.
 
     Examples
     --------
@@ -444,9 +444,8 @@ def _stabilised_refinements(board: Board) -> None:
     (validation 55.6 %); from a stable ``A`` at order 4 it is 61.0 %."""
     done = {r["order"] for r in board.rows if r["criterion"].startswith("prediction error")}
     picks: dict[int, dict[str, Any]] = {}
-    # with no stable candidate at all the data cannot insist on an unstable one (there is
-    # nothing to beat it): the best open-loop subspace fits are started from a stable A (the
-    # closed-loop ones have no stable variant), and the test is run against their refinements
+    # no stable candidate: the best open-loop subspace fits (the closed-loop ones have no
+    # stable variant) start from a stable A, and the test runs against their refinements
     none_stable = board.best() is None
     rows = board.near_best(stable_only=False) if not none_stable else sorted(
         (r for r in board.rows if r["family"] in SUBSPACE and np.isfinite(r["held_out_fit"])),
@@ -524,6 +523,7 @@ def _final_refit(data: IOData, start: Any, order: int, ft: bool, focus: str,
     return m
 
 
+@feedback_checked()  # its own check (_checks); candidates neither repeat nor say it
 @one_blas_thread
 def identify(
     data: IOData,

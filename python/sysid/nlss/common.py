@@ -18,6 +18,7 @@ from ..errors import (
     StabilityWarning,
 )
 from ..models.statespace import StateSpaceModel
+from ..validation.output_error import feedback_checked
 
 
 class Scaling:
@@ -184,8 +185,9 @@ def linear_start(data: IOData, sd: IOData, sc: Scaling, order: int, init: Any,
         warnings.simplefilter("ignore", StabilityWarning)
         try:
             kw = {} if max_iter is None else {"max_iter": max_iter}
-            return sysid.ssest(sd, order, focus="simulation", feedthrough=False,
-                               progress=False, **kw)
+            with feedback_checked():  # a nonlinear model's start (see nlhw)
+                return sysid.ssest(sd, order, focus="simulation", feedthrough=False,
+                                   progress=False, **kw)
         except (OrderError, InsufficientDataError) as e:
             # a record too short for the order, in the nonlinear fit's words (the subspace
             # start's horizons are not the user's settings), its own after

@@ -27,6 +27,7 @@ import numpy as np
 from ..data.iodata import IOData, require_record
 from ..errors import DataError
 from ..models.frd import FRD
+from ..validation.output_error import feedback_checked
 
 __all__ = ["bla", "bla_model"]
 
@@ -281,8 +282,9 @@ def bla_model(frd: FRD, order: int, *, refine: bool = True, max_iter: int = 50,
         return float(np.sum(e * wt))
 
     try:
-        ref = sysid.pem(d, model, focus="simulation", max_iter=max_iter, progress=False,
-                        x0="estimate", feedthrough=feedthrough)
+        with feedback_checked():  # the averaged periods: no noise, no feedback check
+            ref = sysid.pem(d, model, focus="simulation", max_iter=max_iter, progress=False,
+                            x0="estimate", feedthrough=feedthrough)
     except Exception:  # noqa: BLE001 - the subspace model stands when the refinement fails
         return model
     del n_per

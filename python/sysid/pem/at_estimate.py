@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 
 from ..data.iodata import IOData
+from ..validation.output_error import feedback_checked
 
 __all__ = ["criterion_at", "attach_criterion_uncertainty"]
 
@@ -79,7 +80,7 @@ def criterion_at(model: Any, data: IOData, focus: str = "simulation") -> tuple[A
         focus = "prediction"
     wt = "output" if data.n_outputs > 1 else None
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), feedback_checked():  # no fit: no feedback check
             warnings.simplefilter("ignore")
             m = pem(data, model, focus=focus, weighting=wt, max_iter=0,
                     feedthrough=bool(np.any(np.asarray(model.D) != 0)), progress=False)

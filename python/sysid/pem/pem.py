@@ -32,6 +32,7 @@ from ..models.statespace import StateSpaceModel
 from ..models.uncertainty import ParameterUncertainty
 from ..polynomial.model import PolynomialModel
 from ..subspace.feedthrough import check_feedthrough, choose_feedthrough
+from ..validation.output_error import output_error
 from .diagnostics import lines_record_length, warn_refinement, warn_undetermined
 from .records import _experiments
 from .ssform import StateSpaceStructure
@@ -329,6 +330,7 @@ def _start_noise(info: dict[str, Any]) -> None:
     if moved:
         info["start_noise"] = moved
 
+@output_error("pem", when=lambda a: a["focus"] == "simulation" or a["noise"] == "none")
 @one_blas_thread
 def pem(
     data: Any,

@@ -21,12 +21,14 @@ from ..subspace.feedthrough import (
     default_feedthrough,
     warn_if_left_out,
 )
+from ..validation.output_error import output_error
 from .pem import _experiments, pem, pem_loss
 from .ssform import StateSpaceStructure
 
 __all__ = ["ssest"]
 
 
+@output_error("ssest", when=lambda a: a["focus"] == "simulation" or a["noise"] == "none")
 @one_blas_thread
 def ssest(
     data: Any,

@@ -27,6 +27,7 @@ from ..data.input_design import check_polynomial_excitation
 from ..data.iodata import IOData, as_record
 from ..data.offsets import check_offsets
 from ..errors import DataError, InsufficientDataError, ShapeError, is_frd
+from ..validation.output_error import output_error
 from .arx_penalty import kernel_penalties, pair_penalties, penalised_fits
 from .cancellation import cancellation, warn_cancellations
 from .feedthrough import check_polynomial_feedthrough
@@ -380,16 +381,8 @@ def _pem(
         info["remaining_decrease"].append(float(r["remaining_decrease"]))
         cov.append(r["covariance"])
         var.append(r["noise_variance"])
-    m = PolynomialModel(
-        parts["a"],
-        parts["b"],
-        nk_g,
-        data.dt,
-        c=parts["c"],
-        d=parts["d"],
-        f=parts["f"],
-        noise_variance=var,
-    )
+    m = PolynomialModel(parts["a"], parts["b"], nk_g, data.dt, c=parts["c"], d=parts["d"],
+                        f=parts["f"], noise_variance=var)
     _names_of(m, data)
     _record_initial(info, rs)
     m.info = info
@@ -542,6 +535,7 @@ def armax(
     return _warn_diverging(m, "armax")
 
 
+@output_error("oe")
 @one_blas_thread
 def oe(
     data: Any,
@@ -567,7 +561,8 @@ def oe(
     (:func:`sysid.n4sid` of order ``max(nf)`` on that output, as ``B/F``) and, per output,
     the fit with the lower criterion is returned, ``info["start"]`` naming its start (a list
     per output for several): the Steiglitz-McBride iterates can stay far from the minimum
-    on a slow, nearly integrating plant.
+    on a slow, nearly integrating plant. On a time record it warns when the record shows
+    feedback, which biases an output-error fit (:mod:`sysid.validation.output_error`).
 
     With ``periods=P`` (whole periods of a periodic input in steady state in every
     experiment) or ``"auto"`` (:func:`sysid.detect_period`), ``B/F`` is fitted on the

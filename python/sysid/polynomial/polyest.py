@@ -20,6 +20,7 @@ import numpy as np
 from .._threads import one_blas_thread
 from ..data.iodata import as_record
 from ..errors import DataError
+from ..validation.output_error import output_error
 from .estimators import _pem, _warn_diverging
 from .initial import check as _check_initial
 from .model import PolynomialModel
@@ -28,6 +29,18 @@ from .orders import matlab_orders
 __all__ = ["polyest", "pem_polynomial"]
 
 
+def _output_error(a: dict[str, Any]) -> bool:
+    """``na = nc = nd = 0``: the output-error structure, whose fit
+    :mod:`sysid.validation.output_error` checks for feedback (orders it cannot read: no)."""
+    try:
+        na, _, nc, nd, _, _ = matlab_orders("polyest", as_record(a["data"]), a["na"], nb=a["nb"],
+                                            nc=a["nc"], nd=a["nd"], nf=a["nf"], nk=a["nk"])
+    except Exception:  # noqa: BLE001 - polyest's own error follows
+        return False
+    return all(int(np.max(np.asarray(x, dtype=float), initial=0)) == 0 for x in (na, nc, nd))
+
+
+@output_error("polyest", when=_output_error)
 @one_blas_thread
 def polyest(
     data: Any,

@@ -13,12 +13,14 @@ from .._threads import one_blas_thread
 from ..errors import DataError, NumericalError
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
+from ..validation.output_error import output_error
 from .model import ProcessModel
 from .structure import ProcessType
 
 __all__ = ["procest"]
 
 
+@output_error("procest")
 @one_blas_thread
 def procest(data: Any, type_code: Any, *, init: Mapping[str, float] | None = None,
             fixed: Mapping[str, float] | None = None,

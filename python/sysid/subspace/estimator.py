@@ -65,7 +65,12 @@ from ..errors import (
 )
 from ..models.checks import warn_unstable
 from ..models.statespace import StateSpaceModel
-from ..validation.feedback import check_feedback, default_lags, feedback_statistics
+from ..validation.feedback import (
+    FEEDBACK_WARNING_LEVEL,
+    check_feedback,
+    default_lags,
+    feedback_statistics,
+)
 from .data_horizon import available_horizon
 from .feedthrough import (
     FEEDTHROUGH_DEFAULT,
@@ -82,9 +87,6 @@ from .streaming import compression_info, warn_if_fallback
 
 __all__ = ["SubspaceEstimator", "default_horizon", "METHODS"]
 
-#: combined p-value below which the open-loop methods warn of feedback (strict: the warning
-#: must not fire by chance on open-loop data)
-FEEDBACK_WARNING_LEVEL = 1e-6
 
 Order = Union[int, Literal["auto"], Sequence[int]]
 

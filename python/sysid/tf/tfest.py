@@ -13,6 +13,7 @@ from .._threads import one_blas_thread
 from ..errors import DataError, NumericalError, is_frd, several_records_hint
 from ..models.paramtable import ParameterTable
 from ..models.uncertainty import ParameterUncertainty
+from ..validation.output_error import output_error
 from .feedthrough import lag_check, say_discrete
 from .free import arx_start, free_fit, reflected, unstable_uncertainty
 from .model import TransferFunction
@@ -32,6 +33,7 @@ __all__ = ["tfest"]
 _HOLDS = ("zoh", "foh")
 
 
+@output_error("tfest")
 @one_blas_thread
 def tfest(data: Any, n_poles: Any, n_zeros: Any = None, *, iodelay: Any = None,
           dt: float | None = None, hold: str = "zoh", initial_state: str = "zero",

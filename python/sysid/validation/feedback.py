@@ -37,8 +37,14 @@ from .._display import HTMLResult, pvalue
 from ..data.iodata import IOData, require_record
 from ..errors import DataError, InsufficientDataError
 
-__all__ = ["FeedbackTest", "check_feedback", "default_lags", "feedback_pvalues",
-           "feedback_statistics"]
+__all__ = ["FEEDBACK_WARNING_LEVEL", "FeedbackTest", "check_feedback", "default_lags",
+           "feedback_pvalues", "feedback_statistics"]
+
+#: combined p-value below which the estimators that feedback biases warn of it
+#: (:class:`sysid.FeedbackWarning`: the open-loop subspace methods, the output-error fits of
+#: :mod:`sysid.validation.output_error`); strict, so that it does not fire by chance on
+#: open-loop data
+FEEDBACK_WARNING_LEVEL = 1e-6
 
 
 def f_sf(F: float, d1: float, d2: float) -> float:
