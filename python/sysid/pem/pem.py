@@ -330,6 +330,7 @@ def _start_noise(info: dict[str, Any]) -> None:
     if moved:
         info["start_noise"] = moved
 
+
 @output_error("pem", when=lambda a: a["focus"] == "simulation" or a["noise"] == "none")
 @one_blas_thread
 def pem(
