@@ -407,9 +407,12 @@ def _pem(
             if said:
                 found.append((f"{m.output_names[i]} <- {m.input_names[j]}", said))
             at += nf
-    warn_cancellations(method, found)
-    if not (method == "oe" and m.is_stable() and warn_insisting_f(
-            m, exps, rs, na_v, nb_g, nc_v, nd_v, nf_g, nk_g, iters)):
+    insisting = method == "oe" and m.is_stable() and warn_insisting_f(
+        m, exps, rs, na_v, nb_g, nc_v, nd_v, nf_g, nk_g, iters)
+    if insisting:  # a stable fit of a plant the data say is unstable: its pole-zero pairs
+        m.info["cancellations"] = found  # are the bound's doing; "lower nb, nf" misleads
+    else:
+        warn_cancellations(method, found)
         _warn_held_f(m, parts["f"], method, max(u.shape[0] for u, _ in exps))
     _warn_returned_unstable(m, parts["f"], method)
     return m
