@@ -55,3 +55,27 @@ def test_open_loop_data_with_a_direct_term_get_no_such_note():
         res = sysid.identify(sysid.IOData(u=u, y=y, dt=1.0))
     assert res.model.statespace.info["identify"]["feedthrough"]
     assert "loop_feedthrough" not in res.checks
+
+
+def test_a_model_without_noise_model_chosen_under_feedback_is_named_as_biased_too():
+    """identify's feedback line calls the open-loop subspace fits biased and sets them
+    aside; a chosen refinement with simulation focus (no noise model) is biased by the loop
+    the same way, and the note says so (with the consistent fits to compare): on the
+    shipped winding record (feedback detected) identify chooses such a model. A
+    prediction-focus choice, or an open-loop record, gets no such note."""
+    from sysid.identify.notes import loop_bias_check
+
+    d = sysid.datasets.load_winding()
+    n = d.experiments[0][1].shape[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        res = sysid.identify(d[: 2 * n // 3])
+    chosen = res.model.statespace.info["identify"]
+    assert res.checks["feedback"].startswith("detected") and chosen["focus"] == "simulation"
+    note = res.checks["loop_bias"]
+    assert "no noise model" in note and "sysid.pbsid" in note and note in res.summary()
+    for focus, family, fb in (("prediction", "pem", True), ("simulation", "pem", False),
+                              (None, "pbsid", True)):
+        checks: dict = {}
+        loop_bias_check(focus, family, fb, checks)
+        assert "loop_bias" not in checks

@@ -104,7 +104,7 @@ from .choice import _choose
 from .climb import higher_orders
 from .integrating import integrating_candidates, integrating_note
 from .notes import (
-    loop_feedthrough_check,
+    loop_checks,
     persistent_mode_check,
     refit_cap_check,
     trend_check,
@@ -788,7 +788,7 @@ def identify(
     trend_check(model, centred, checks)
     persistent_mode_check(model, centred, checks)
     weak_check(float(chosen["held_out_fit"]), checks)
-    loop_feedthrough_check(bool(chosen["feedthrough"]), feedback, checks)
+    loop_checks(chosen, feedback, checks)
     if getattr(model, "uncertainty", None) is None:
         model = with_uncertainty(model, centred, checks, SUBSPACE + CLOSED_LOOP)
     result_model = IdentifiedModel(model, mu, my)

@@ -17,7 +17,8 @@ from ..models.continuous import ContinuousStateSpace
 from ..validation.crossval import trend_share
 
 __all__ = ["trend_check", "persistent_mode_check", "weak_check", "refit_cap_check",
-           "TREND_SHARE", "TREND_OUTPUT", "PERSISTENT_DECAY", "WEAK_FIT"]
+           "loop_checks", "loop_feedthrough_check", "loop_bias_check", "TREND_SHARE",
+           "TREND_OUTPUT", "PERSISTENT_DECAY", "WEAK_FIT"]
 
 #: a held-out fit below this (in %) explains less than half of the outputs' variation
 #: (``fit = 100 (1 - sqrt(1 - explained))``): ``checks["weak"]`` says so
@@ -226,3 +227,51 @@ def loop_feedthrough_check(feedthrough: bool, feedback: bool, checks: dict[str, 
         "may be the controller's; a plant with a dead time, or an output that cannot respond "
         "within a sample, has none: refit without it (sysid.ssest(data, order, "
         "feedthrough=False), or sysid.pbsid(data, order, feedthrough=False))")
+
+
+def loop_bias_check(focus: str | None, family: str, feedback: bool,
+                    checks: dict[str, Any]) -> None:
+    """``checks["loop_bias"]`` when the record shows feedback and the chosen model has no
+    noise model (a refinement with simulation focus, an ``oe`` model): its estimate is biased
+    by the loop as the open-loop subspace fits' are (the input carries the noise the fit
+    takes as independent of it), and identify sets those aside as biased. It is chosen
+    because it simulates the held-out blocks best; the bias is small where the loop moves
+    the input little, and a fit with a noise model (prediction focus, ``pbsid``) is the
+    consistent one to compare with. The note says so, so that the feedback line's "biased"
+    is not read as sparing the chosen model.
+
+    Examples
+    --------
+    >>> from sysid.identify.notes import loop_bias_check
+    >>> checks = {}
+    >>> loop_bias_check("simulation", "pem", True, checks)
+    >>> checks["loop_bias"][:50]
+    'the chosen model has no noise model (simulation fo'
+    >>> loop_bias_check("prediction", "pem", True, {})  # a noise model: consistent
+    """
+    if not feedback or not (focus == "simulation" or family == "oe"):
+        return
+    checks["loop_bias"] = (
+        "the chosen model has no noise model (simulation focus, as an output-error fit), and "
+        "feedback biases such an estimate as it does the open-loop subspace fits' (the input "
+        "carries the noise the fit takes as independent of it); it is chosen because it "
+        "simulates the held-out blocks best, and the bias is small where the loop moves the "
+        "input little. The fit consistent under feedback has a noise model: compare "
+        "sysid.ssest(data, order) (prediction focus) or sysid.pbsid(data, order) with it on "
+        "validation data")
+
+
+def loop_checks(chosen: dict[str, Any], feedback: bool, checks: dict[str, Any]) -> None:
+    """The notes on a chosen candidate (``family``, ``focus``, ``feedthrough``) fitted to a
+    record with feedback: :func:`loop_feedthrough_check` and :func:`loop_bias_check`.
+
+    Examples
+    --------
+    >>> from sysid.identify.notes import loop_checks
+    >>> checks = {}
+    >>> loop_checks({"family": "oe", "focus": "simulation", "feedthrough": True}, True, checks)
+    >>> sorted(checks)
+    ['loop_bias', 'loop_feedthrough']
+    """
+    loop_feedthrough_check(bool(chosen["feedthrough"]), feedback, checks)
+    loop_bias_check(chosen.get("focus"), str(chosen.get("family")), feedback, checks)
