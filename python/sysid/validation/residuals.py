@@ -75,11 +75,10 @@ def _whitening_filter(r: np.ndarray, n: int, M: int, lengths: list[int],
     Filtering the residual and the inputs by the same ``A(q)`` keeps the hypothesis (``A e``
     is independent of ``A u`` exactly when ``e`` is of ``u``) and whitens the residual, as
     the classic prewhitening of cross-correlation checks does (Box & Jenkins)."""
-    best, a, E = (0.0, np.ones(1)), np.ones(1), float(r[0])
+    a, E = np.ones(1), float(r[0])
     if not (np.isfinite(E) and E > 0.0):
         return a
-    aic0 = n * np.log(E)
-    best = (aic0, a)
+    best = (n * np.log(E), a)
     for k in range(1, M + 1):
         if sum(max(x - M - k, 0) for x in lengths) - p < _MIN_RESIDUAL_DOF:
             break
