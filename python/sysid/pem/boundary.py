@@ -18,7 +18,28 @@ import numpy as np
 from .._checks import PERSISTENT_DECAY, mode_kept, user_stacklevel
 from ..errors import StabilityWarning
 
-__all__ = ["cap_advice", "insists", "warn_boundary", "warn_insisted", "warn_poles_at_bound"]
+__all__ = ["cap_advice", "grows", "insists", "warn_boundary", "warn_insisted",
+           "warn_poles_at_bound"]
+
+
+def grows(poles: Any, n: int, dt: float = 0.0) -> bool:
+    """Whether the fastest mode of ``poles`` grows by more than ``1 / PERSISTENT_DECAY`` over
+    ``n`` samples: discrete poles (``dt = 0``: modulus to the ``n``) or continuous ones
+    (``exp(real n dt)``). A mode that grows less cannot be told from one on the stability
+    bound (an integrator) by the record; empty or non-finite poles: False.
+
+    Examples
+    --------
+    >>> from sysid.pem.boundary import grows
+    >>> grows([1.02, 0.5], 600), grows([1.00001], 600), grows([0.02], 600, dt=1.0)
+    (True, False, True)
+    """
+    p = np.asarray(poles, complex).ravel()
+    if not p.size or not np.all(np.isfinite(p)):
+        return False
+    with np.errstate(divide="ignore"):
+        rate = float(p.real.max()) * dt if dt else float(np.log(np.abs(p).max()))
+    return bool(rate * n > -np.log(PERSISTENT_DECAY))
 
 
 def warn_boundary(A: np.ndarray, n: int, stacklevel: int | None = None,

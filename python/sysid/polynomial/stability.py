@@ -9,7 +9,6 @@ from typing import Any
 import numpy as np
 
 from .. import _sysid
-from .._checks import PERSISTENT_DECAY
 from ..errors import DataError, NumericalError
 from .model import PolynomialModel
 
@@ -25,7 +24,7 @@ def warn_insisting_f(m: PolynomialModel, exps: list[Any], rs: list[dict[str, Any
     and what fits it (``oe`` itself keeps ``F`` stable); True if it warned. From a minimum
     inside the stability region the free search stops at once; an unstable plant's record
     (a real pole at 1.01-1.03) left ``oe``'s stable fit silent in 48 of 100 runs."""
-    from ..pem.boundary import insists, warn_insisted
+    from ..pem.boundary import grows, insists, warn_insisted
 
     found = []
     longest = max(len(y) for _, y in exps)
@@ -59,7 +58,7 @@ def warn_insisting_f(m: PolynomialModel, exps: list[Any], rs: list[dict[str, Any
             at += n
             # a mode growing less than 1 / PERSISTENT_DECAY over the record is one on the
             # bound (an integrating plant: the held pole's own warning names it)
-            if roots.size and np.abs(roots).max() ** longest * PERSISTENT_DECAY > 1.0:
+            if grows(roots, longest):
                 found.append((lr, f"{m.output_names[i]} <- {m.input_names[j]}",
                               complex(roots[np.argmax(np.abs(roots))])))
     if not found:
@@ -81,6 +80,8 @@ def _arx_start(exps: list[Any], i: int, na: int, nb: list[int], nc: int, nd: int
     stable minimum alone stops at once; None when the fit cannot be made or its ``A`` has
     no mode that grows over the ``longest`` experiment (then it starts inside the region the
     first search covers)."""
+    from ..pem.boundary import grows
+
     n = max(nf)
     try:
         fit = _sysid.arx_fit([(np.ascontiguousarray(u, float),
@@ -90,7 +91,7 @@ def _arx_start(exps: list[Any], i: int, na: int, nb: list[int], nc: int, nd: int
         return None
     a = np.asarray(fit["a"][0], float)
     roots = np.roots(np.concatenate([[1.0], a])) if n else np.zeros(0)
-    if not (roots.size and np.abs(roots).max() ** longest * PERSISTENT_DECAY > 1.0):
+    if not grows(roots, longest):
         return None
     f = [np.concatenate([a, np.zeros(max(k - n, 0))])[:k] for k in nf]
     b = [np.asarray(x, float) for x in fit["b"]]

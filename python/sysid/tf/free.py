@@ -19,7 +19,6 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import PERSISTENT_DECAY
 from ..errors import DataError
 from .refine import PairStructure, free_search, refine
 
@@ -189,11 +188,13 @@ def unstable_uncertainty(res: dict[str, Any], said: list[Any], pairs: list[PairS
     True
     """
     from ..greybox.greybox import IdentifiabilityWarning
+    from ..pem.boundary import grows
 
     growth = max((float(np.max(np.roots(pr.coef(q)[1]).real)) for pr, q in zip(pairs, res["p"])
                   if pr.coef(q)[1].size > 1), default=-np.inf)
-    span = max(len(y) for _, y in exps) * dt
-    if not growth * span > -np.log(PERSISTENT_DECAY):
+    longest = max(len(y) for _, y in exps)
+    span = longest * dt
+    if not grows([growth], longest, dt):
         return said  # no mode grows over the record: the search's own rank test stands
     names = [nm for pr in pairs for nm in pr.names] + [
         f"{pairs[j].names[0].split(':')[0]}:iodelay" if pairs[j].names else f"iodelay{j}"

@@ -447,15 +447,15 @@ def free_test(res: dict[str, Any], pairs: Sequence[PairStructure],
         lr, yes = insists(kept, free["cost_history"][-1], res["n_samples"])
     if not yes:
         return None
-    from .._checks import PERSISTENT_DECAY
+    from ..pem.boundary import grows
 
     # a mode growing less than 1 / PERSISTENT_DECAY over the record is one on the bound (an
     # integrating plant), not an unstable one
-    grow = -np.log(PERSISTENT_DECAY) / (max(len(y) for _, y in exps) * dt)
+    longest = max(len(y) for _, y in exps)
     best: tuple[int, complex, float] | None = None
     for j, (pr, q) in enumerate(zip(pairs, free["p"])):
         r = np.roots(pr.coef(q)[1])
-        if r.size and r.real.max() > grow and (best is None or r.real.max() > best[1].real):
+        if grows(r, longest, dt) and (best is None or r.real.max() > best[1].real):
             best = (j, complex(r[np.argmax(r.real)]), lr)
     return best
 

@@ -194,7 +194,7 @@ def arx_pairs(exps: list[tuple[np.ndarray, np.ndarray]], dt: float, npo: np.ndar
     ([1.0, -0.02], [1.0])
     """
     from .. import _sysid
-    from .._checks import PERSISTENT_DECAY
+    from ..pem.boundary import grows
 
     npo, nze = np.ravel(npo), np.ravel(nze)
     n = int(np.max(npo)) if npo.size else 0
@@ -209,8 +209,7 @@ def arx_pairs(exps: list[tuple[np.ndarray, np.ndarray]], dt: float, npo: np.ndar
     except Exception:  # noqa: BLE001 - no ARX start
         return None
     longest = max(len(y) for _, y in exps)
-    if not (z.size and np.all(np.isfinite(z))
-            and np.abs(z).max() ** longest * PERSISTENT_DECAY > 1.0):
+    if not grows(z, longest):
         return None
     # log(z) / dt as it is: an unstable pole stays unstable (a pole on the negative real
     # axis, which has no real logarithm, at its modulus; z = 0 at 1e-3)
