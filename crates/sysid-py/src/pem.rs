@@ -128,6 +128,7 @@ pub fn pem_refine<'py>(
     out.set_item("loss_history", r.loss_history.clone())?;
     out.set_item("spectral_radius", r.spectral_radius)?;
     solution_items(&out, py, &r.solution, &r.covariance)?;
+    out.set_item("gauss_newton", mat_to_numpy(py, &r.solution.gauss_newton))?;
     out.set_item("n_samples", r.n_samples)?;
     Ok(out)
 }

@@ -426,6 +426,60 @@ fn pem_from(
     finish(prob, solution, losses)
 }
 
+/// At most this many multiply-adds (`N l p^2`) for the exact Gauss-Newton matrix of
+/// [`suspect`]'s cases (a few seconds).
+const EXACT_ROWS_BUDGET: f64 = 2e10;
+
+/// The outputs' mean square over the errors' (`y^T Lambda^-1 y` averaged over samples and
+/// outputs) beyond which the structured Gauss-Newton matrix loses too many digits: the map
+/// to `theta` cancels columns of the outputs' size into ones of the errors' size, so about
+/// `log10` of this ratio of its 16 digits (an unstable model's growing state: 1e18 and
+/// more; a good fit of a clean record: 1e2 to 1e4).
+const OUTPUT_SHARE: f64 = 1e6;
+
+/// Whether the structured Gauss-Newton matrix `h` at the end of a search is to be formed
+/// again from every Jacobian row in `theta` (within [`EXACT_ROWS_BUDGET`], and where the
+/// similarity orbit is the whole of `K`'s too: `K` estimated or zero): the outputs exceed
+/// the errors by more than [`OUTPUT_SHARE`], its rank test did not find the `p - n^2`
+/// directions the orbit leaves, or it has a diagonal entry that is not positive (which
+/// `J^T W J` cannot have).
+fn suspect(prob: &Predictor<'_>, h: &Mat<f64>, rank: usize, lam: &Mat<f64>) -> bool {
+    let (n, p) = (prob.n, prob.p);
+    if n == 0 || h.nrows() != p || !(prob.est_k || prob.k_fixed.norm_max() == 0.0) {
+        return false;
+    }
+    let work = (prob.n_samples * prob.l) as f64 * (p * p) as f64;
+    if work > EXACT_ROWS_BUDGET {
+        return false;
+    }
+    rank != p.saturating_sub(n * n)
+        || (0..p).any(|i| h[(i, i)] <= 0.0)
+        || output_share(prob, lam) > OUTPUT_SHARE
+}
+
+/// `sum_t y_t^T Lambda^-1 y_t / (N l)` over every experiment (0 when `Lambda` is singular:
+/// noise-free data, whose covariance nobody reads).
+fn output_share(prob: &Predictor<'_>, lam: &Mat<f64>) -> f64 {
+    let l = prob.l;
+    if lam.nrows() != l || l == 0 {
+        return 0.0;
+    }
+    let Ok(fac) = lam.llt(faer::Side::Lower) else {
+        return 0.0;
+    };
+    let w = faer::linalg::solvers::Solve::solve(&fac, Mat::<f64>::identity(l, l)); // Lambda^-1
+    let mut total = 0.0;
+    for (_, y) in &prob.exps {
+        for t in 0..y.nrows() {
+            for i in 0..l {
+                let wy: f64 = (0..l).map(|j| w[(i, j)] * y[(t, j)]).sum();
+                total += y[(t, i)] * wy;
+            }
+        }
+    }
+    total / (prob.n_samples.max(1) * l) as f64
+}
+
 /// `first` followed by `second` (started at `first`'s end): one report of both searches.
 fn merge(first: optim::Solution, mut second: optim::Solution) -> optim::Solution {
     let mut history = first.history;
@@ -450,7 +504,10 @@ fn finish(
     let theta = solution.theta.clone();
     let pm = prob.unpack(&theta);
     let lam = prob.innovation_covariance(&theta);
-    let h = if prob.reweight && solution.gauss_newton.nrows() == prob.p {
+    let h = if prob.weight_unfloored(&lam) {
+        prob.reweight = true;
+        prob.evaluate(&theta, true)?.gauss_newton
+    } else if prob.reweight && solution.gauss_newton.nrows() == prob.p {
         solution.gauss_newton.clone()
     } else {
         prob.reweight = true;
@@ -458,12 +515,31 @@ fn finish(
         prob.evaluate(&theta, true)?.gauss_newton
     };
     let t0 = std::time::Instant::now();
-    let covariance = optim::covariance(h.as_ref(), 1.0, 1e-10)?;
+    let mut covariance = optim::covariance(h.as_ref(), 1.0, 1e-10)?;
+    let mut h = h;
+    if suspect(&prob, &h, covariance.rank, &lam) {
+        // the structured matrix is formed in the predictor parameters and mapped to theta
+        // (`normal::matrix_to_theta`): where the outputs are many times the errors (an
+        // unstable model's growing state) the map cancels columns of the outputs' size
+        // after squaring them, and its rank test is rounding. Every row in theta instead.
+        let lo = prob.col_lo;
+        prob.col_lo = 0;
+        let exact = prob.evaluate_rows(&theta);
+        prob.col_lo = lo;
+        if let Ok(ev) = exact {
+            if let Ok(c) = optim::covariance(ev.gauss_newton.as_ref(), 1.0, 1e-10) {
+                covariance = c;
+                h = ev.gauss_newton;
+            }
+        }
+    }
     crate::optim::prof("covariance", t0);
     if solution.condition.is_nan() {
         // a large search does not form the eigenvalues; those of the covariance say the same
         solution.condition = covariance.condition;
     }
+    // the matrix the covariance came from, for a caller's own test of it
+    solution.gauss_newton = h;
     let radius = spectral_radius(pm.a.as_ref())?;
     crate::optim::prof("finish", t_finish);
     Ok(PemResult {

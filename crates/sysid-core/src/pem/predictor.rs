@@ -762,6 +762,31 @@ impl<'a> Predictor<'a> {
         determinant(&self.innovation_covariance(th))
     }
 
+    /// Weighs by `lam^-1` itself, without the floor (a share `1e-12` of the outputs' power)
+    /// that keeps the search's weighting finite on noise-free data, where that floor is more
+    /// than `1e-6` of an error variance: the covariance at the estimate assumes `W =
+    /// Lambda^-1`, and an output that grows (an unstable model) lifts the floor above
+    /// `Lambda` itself (by 7e4 on a record whose output grew by 1.03^800), making every
+    /// standard deviation that much too large. `false` (nothing changed) when the floor is
+    /// negligible or `lam` is not positive definite.
+    pub(super) fn weight_unfloored(&mut self, lam: &Mat<f64>) -> bool {
+        let l = self.l;
+        if lam.nrows() != l || !(0..l).any(|i| self.floor[i] > 1e-6 * lam[(i, i)]) {
+            return false;
+        }
+        let Ok(llt) = lam.llt(Side::Lower) else {
+            return false;
+        };
+        let mut rinv = Mat::<f64>::identity(l, l);
+        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
+            llt.L(),
+            rinv.as_mut(),
+            Par::Seq,
+        );
+        self.rinv = rinv;
+        true
+    }
+
     /// Sets the weighting from the prediction errors at `theta`.
     pub(crate) fn reweight_at(&mut self, th: &[f64]) -> Result<()> {
         let l = self.l;
