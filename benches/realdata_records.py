@@ -132,6 +132,8 @@ FRESH10 = {
     # PID, 100 ms telemetry: differential motor command -> roll angle, roll rate
     "wis_gate3_step": ("wis_gate3_step", None),  # irrigation-canal lab, decimated to 0.125 s:
     # a step on gate 3 (open loop) -> water levels of the pools upstream and downstream of it
+    "wheel_loader": ("wheel_loader", None),  # wheel loader at work, 0.05 s: the operator's
+    # throttle, lift and tilt levers -> engine speed, boom and bucket angular speeds
 }
 
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
