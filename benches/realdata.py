@@ -96,8 +96,8 @@ load swing); sources, SHA-256, how each ``.npz`` is made and the findings:
 results/realdata_fresh9.md.
 ``--fresh10-records DIR`` (``FRESH10``, results/realdata_fresh10_table[_<split>].md): the tenth
 sweep's records (a rotary flexible link under a servo controller, a quadcopter on a roll rig
-under cascaded PID, an irrigation canal's gate step, a wheel loader at work); sources, SHA-256, how each ``.npz`` is
-made and the findings: results/realdata_fresh10.md.
+under cascaded PID, an irrigation canal's gate step, a wheel loader at work); sources,
+SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh10.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
