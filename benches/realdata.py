@@ -94,6 +94,10 @@ and the findings: results/realdata_fresh8.md.
 sweep's records (a single-zone building's heat pump in summer and in winter, a gantry crane's
 load swing); sources, SHA-256, how each ``.npz`` is made and the findings:
 results/realdata_fresh9.md.
+``--fresh10-records DIR`` (``FRESH10``, results/realdata_fresh10_table[_<split>].md): the tenth
+sweep's records (a rotary flexible link under a servo controller, a quadcopter on a roll rig
+under cascaded PID, an irrigation canal's gate step, a wheel loader at work); sources,
+SHA-256, how each ``.npz`` is made and the findings: results/realdata_fresh10.md.
 
 Score: the simulation fit on the validation part, NRMSE %, ``100 (1 - |y - yhat| / |y -
 mean(y)|)`` averaged over outputs, with the initial state fitted by least squares on the
@@ -141,6 +145,7 @@ from realdata_records import (  # noqa: F401
     FRESH7,
     FRESH8,
     FRESH9,
+    FRESH10,
     MORE,
     SWEEPS,
 )

@@ -123,6 +123,19 @@ FRESH9 = {
     # motor voltage (a square wave, then rest) -> the load's swing (wire) angle
 }
 
+#: the tenth sweep's records (``--fresh10-records DIR``), read as ``FRESH``'s are (sources:
+#: results/realdata_fresh10.md)
+FRESH10 = {
+    "rfl_square": ("rfl_square", None),  # Quanser rotary flexible link, 2 ms, under a servo
+    # position controller (square-wave reference): motor voltage -> servo angle, link deflection
+    "quad_roll_pid": ("quad_roll_pid", None),  # quadcopter on a one-axis roll rig under cascaded
+    # PID, 100 ms telemetry: differential motor command -> roll angle, roll rate
+    "wis_gate3_step": ("wis_gate3_step", None),  # irrigation-canal lab, decimated to 0.125 s:
+    # a step on gate 3 (open loop) -> water levels of the pools upstream and downstream of it
+    "wheel_loader": ("wheel_loader", None),  # wheel loader at work, 0.05 s: the operator's
+    # throttle, lift and tilt levers -> engine speed, boom and bucket angular speeds
+}
+
 #: the sweeps read from ``DIR/<name>.npz``: ``--<sweep>-records DIR`` runs a table's records
 #: into ``results/<stem>[_<split>].md`` (the third sweep's tables beside its account,
 #: results/realdata_fresh3.md)
@@ -133,4 +146,5 @@ SWEEPS = {"more": ("MORE", "realdata_more"), "fresh": ("FRESH", "realdata_fresh"
           "fresh6": ("FRESH6", "realdata_fresh6_table"),
           "fresh7": ("FRESH7", "realdata_fresh7_table"),
           "fresh8": ("FRESH8", "realdata_fresh8_table"),
-          "fresh9": ("FRESH9", "realdata_fresh9_table")}
+          "fresh9": ("FRESH9", "realdata_fresh9_table"),
+          "fresh10": ("FRESH10", "realdata_fresh10_table")}

@@ -150,3 +150,17 @@ def test_poor_excitation_of_several_inputs_names_the_poor_one():
     f = a["excitation"].finding
     assert a["excitation"].verdict == "act" and "the inputs together" in f
     assert "limited by Ep (alone: order 3" in f and "P alone: order >= 40" in f
+
+
+def test_a_step_test_is_not_called_richly_exciting():
+    # an irrigation canal's gate stepped at sample 1: the input's spectrum in the record is
+    # the step's edge, and the spectral count read "persistently exciting of order >= 40
+    # (models up to order 20 determined)" while the subspace methods refuse the record
+    n = 600
+    u = np.r_[0.0, np.full(n - 1, 25.0)][:, None]
+    y = G.simulate(u) + 0.01 * np.random.default_rng(0).standard_normal((n, 1))
+    f = sysid.advice(sysid.IOData(u, y, 1.0))["excitation"]
+    assert f.verdict == "note" and "step test" in f.finding and "sample(s) 1 " in f.finding
+    assert "order >= " not in f.finding and "procest" in f.action
+    with pytest.raises(sysid.errors.ExcitationError):  # what the finding says of them
+        sysid.n4sid(sysid.IOData(u - u.mean(), y - y.mean(), 1.0), 2)

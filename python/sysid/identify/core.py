@@ -310,8 +310,8 @@ def _subspace_candidates(board: Board, full: IOData, methods: tuple[str, ...],
                                     n, method=m, feedthrough=ft, kalman=False),
                                 lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft),
                                 budgeted=False)
-                if row is not None:  # its stabilised variant, scored only when needed
-                    row["stabilised"] = (
+                if row is not None and meth not in CLOSED_LOOP:  # its stable-A variant
+                    row["stabilised"] = (  # (none for ssarx, pbsid: their fit refuses it)
                         lambda k, m=meth, n=n, ft=ft: ests[k].fit(
                             n, method=m, feedthrough=ft, kalman=False, stable=True),
                         lambda data, m=meth, n=n, ft=ft: refit(data, m, n, ft, True))

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from .._checks import user_stacklevel
-from ..errors import DataError
+from ..errors import DataError, NumericalError
 from .uncertainty import _METHODS, UncertaintyWarning, _complex_std, _match, require
 
 __all__ = ["coincident_poles", "damping_std", "pole_groups", "pole_jacobian", "pole_std"]
@@ -171,11 +171,28 @@ _MC_DRAWS = 2000
 
 def _pole_draws(model: Any, lam: np.ndarray, n: int = _MC_DRAWS, rng: Any = 0) -> np.ndarray:
     """Poles of ``n`` models drawn from the parameter covariance, matched to ``lam``
-    (``(n, len(lam))``); the seed is fixed so that reports are reproducible."""
+    (``(n, len(lam))``); the seed is fixed so that reports are reproducible. A draw that
+    cannot be built (a continuous-time model whose sampling overflows, drawn far from the
+    estimate) is a row of NaN, which makes the stds infinite (:func:`_draws_std`), with an
+    :class:`UncertaintyWarning`: one such draw stopped ``poles(std=True)`` on a step test's
+    process model."""
     unc = require(model)
     groups = pole_groups(unc.build(unc.theta), lam.size)
-    return np.array([_match_groups(lam, np.asarray(m.poles(), complex), groups)
-                     for m in unc.sample(n, rng)])
+    rows, failed = [], 0
+    for t in unc.sample_parameters(n, rng):
+        try:
+            rows.append(_match_groups(lam, np.asarray(unc.build(t).poles(), complex), groups))
+        except NumericalError:
+            failed += 1
+            rows.append(np.full(lam.size, np.nan + 0j))
+    if failed:
+        warnings.warn(
+            f"{failed} of {n} models drawn from the parameter covariance could not be built "
+            "(sampling their continuous-time poles overflows: the covariance reaches models "
+            "far from this one: the data do not bound its parameters); the Monte Carlo "
+            "standard deviations are infinite",
+            UncertaintyWarning, stacklevel=user_stacklevel())
+    return np.array(rows)
 
 
 def _partners(lam: np.ndarray) -> np.ndarray:
@@ -205,8 +222,14 @@ def _pooled_std(lam: np.ndarray, x: np.ndarray, odd: bool = False) -> np.ndarray
 
 
 def _draws_std(lam: np.ndarray, draws: np.ndarray) -> np.ndarray:
-    """Complex std (real and imaginary parts) of matched pole draws, pooled over pairs."""
-    return _pooled_std(lam, draws.real) + 1j * _pooled_std(lam, draws.imag, odd=True)
+    """Complex std (real and imaginary parts) of matched pole draws, pooled over pairs;
+    infinite for every pole the other draws move when a draw could not be built (a row of
+    NaN from :func:`_pole_draws`: its poles lie beyond any finite spread)."""
+    sd = _pooled_std(lam, draws.real) + 1j * _pooled_std(lam, draws.imag, odd=True)
+    if draws.size and np.isnan(draws).all(axis=1).any():
+        moved = np.abs(sd) > 1e-9 * np.maximum(1.0, np.abs(lam))  # not round-off of 0
+        sd = np.where(moved, complex(np.inf, np.inf), sd)
+    return sd
 
 
 def _warn_monte_carlo(mask: np.ndarray, lam: np.ndarray, what: str) -> None:

@@ -359,10 +359,20 @@ class ParameterUncertainty(HTMLResult):
             # whose initial state was in the millions)
             h = max(step * np.sqrt(lam), 1e-7 * max(1.0, float(np.linalg.norm(self.theta * v))))
             hs.append(h)
-            plus.append(self.build(self.theta + h * v))
-            minus.append(self.build(self.theta - h * v))
+            plus.append(self._built(self.theta + h * v))
+            minus.append(self._built(self.theta - h * v))
         self._cache, self._step = (hs, plus, minus), step
         return self._cache
+
+    def _built(self, theta: np.ndarray) -> Any:
+        """The model at ``theta``, or the reason (a ``str``) it cannot be built there (a
+        continuous-time model whose sampling overflows: a process model's step test)."""
+        from ..errors import NonFiniteError, NumericalError
+
+        try:
+            return self.build(theta)
+        except (NumericalError, NonFiniteError) as e:
+            return str(e)
 
     def scaled_jacobian(self, fn: Callable[[Any], Any], *, step: float = 1e-3
                         ) -> tuple[np.ndarray, np.ndarray]:
@@ -382,7 +392,9 @@ class ParameterUncertainty(HTMLResult):
 
         def at(m: Any) -> tuple[np.ndarray | None, str]:
             # a model this close to the estimate may have no such quantity (its simulation
-            # overflows, its matrices are not finite)
+            # overflows, its matrices are not finite), or not be built at all (a reason)
+            if isinstance(m, str):
+                return None, m
             try:
                 return np.asarray(fn(m)).ravel(), ""
             except (NumericalError, NonFiniteError) as e:
@@ -398,8 +410,8 @@ class ParameterUncertainty(HTMLResult):
                     break
                 h /= 10.0
                 v = self._V[:, k]
-                (fp, ep), (fm, em) = (at(self.build(self.theta + h * v)),
-                                      at(self.build(self.theta - h * v)))
+                (fp, ep), (fm, em) = (at(self._built(self.theta + h * v)),
+                                      at(self._built(self.theta - h * v)))
             # a one-sided difference on the side that has the quantity, and no finite std
             # when neither side has one
             if fp is not None and fm is not None:

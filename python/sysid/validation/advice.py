@@ -157,6 +157,7 @@ def _flat_inputs(data: Any) -> list[str]:
 
 def _excitation(data: Any, flat: list[str]) -> Finding:
     from ..data.input_design import persistent_excitation_order
+    from ..subspace.steptest import step_changes
 
     if data.n_inputs == 0:
         return Finding("excitation", "ok", "no inputs: a time series (sysid.ar, sysid.n4sid)")
@@ -164,6 +165,16 @@ def _excitation(data: Any, flat: list[str]) -> Finding:
     if flat:
         return Finding("excitation", "act", f"input(s) {', '.join(flat)} never change",
                        "drop them (data.select(inputs=...)) or record with them excited")
+    steps = step_changes(data.experiments)
+    if steps is not None:
+        # the spectral count assumes a stationary input: that of a step test is its edges'
+        # (an irrigation canal's gate step at sample 1 read "order >= 40")
+        return Finding("excitation", "note",
+                       f"the input changes at sample(s) {', '.join(map(str, steps))} only: a "
+                       f"step test, not a stationary input whose spectrum counts its "
+                       f"excitation; the subspace methods refuse it",
+                       "fit models simulated from rest: sysid.identify(data) (process "
+                       "models by BIC), sysid.procest, sysid.tfest or sysid.oe")
     pe = persistent_excitation_order(
         [e[0] for e in data.experiments] if data.n_experiments > 1 else u, 40)
     if pe < 4:
