@@ -445,7 +445,9 @@ const OUTPUT_SHARE: f64 = 1e6;
 /// `J^T W J` cannot have).
 fn suspect(prob: &Predictor<'_>, h: &Mat<f64>, rank: usize, lam: &Mat<f64>) -> bool {
     let (n, p) = (prob.n, prob.p);
-    if n == 0 || h.nrows() != p || !(prob.est_k || prob.k_fixed.norm_max() == 0.0) {
+    // (the reference path already formed every row)
+    let rows_already = !(prob.structured && prob.col_lo == 0);
+    if n == 0 || h.nrows() != p || rows_already || !(prob.est_k || prob.k_fixed.norm_max() == 0.0) {
         return false;
     }
     let work = (prob.n_samples * prob.l) as f64 * (p * p) as f64;
