@@ -774,17 +774,7 @@ impl<'a> Predictor<'a> {
         if lam.nrows() != l || !(0..l).any(|i| self.floor[i] > 1e-6 * lam[(i, i)]) {
             return false;
         }
-        let Ok(llt) = lam.llt(Side::Lower) else {
-            return false;
-        };
-        let mut rinv = Mat::<f64>::identity(l, l);
-        faer::linalg::triangular_solve::solve_lower_triangular_in_place(
-            llt.L(),
-            rinv.as_mut(),
-            Par::Seq,
-        );
-        self.rinv = rinv;
-        true
+        self.weigh_by(lam).is_ok()
     }
 
     /// Sets the weighting from the prediction errors at `theta`.
@@ -796,13 +786,19 @@ impl<'a> Predictor<'a> {
         for i in 0..l {
             lam[(i, i)] += self.floor[i];
         }
+        self.weigh_by(&lam)
+    }
+
+    /// `rinv = L^-1` with `L L^T = lam` (the weighting `W = lam^-1`); an error, and nothing
+    /// changed, when `lam` is not positive definite.
+    fn weigh_by(&mut self, lam: &Mat<f64>) -> Result<()> {
         let llt = lam.llt(Side::Lower).map_err(|_| {
             SysidError::numerical(
                 "prediction-error weighting",
                 "the prediction-error covariance is not positive definite",
             )
         })?;
-        let mut rinv = Mat::<f64>::identity(l, l);
+        let mut rinv = Mat::<f64>::identity(self.l, self.l);
         faer::linalg::triangular_solve::solve_lower_triangular_in_place(
             llt.L(),
             rinv.as_mut(),
