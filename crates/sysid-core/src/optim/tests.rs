@@ -740,12 +740,21 @@ fn significance_leaves_unsupported_directions_out_of_the_step() {
         go(&mut Counted(ls(2, f.clone()), n), &[0.0, 0.0], &o).theta
     };
     let (ls_a, ls_b) = (fit(0.0, 400)[0], fit(0.0, 400)[1]);
-    assert!(ls_b.abs() > 1e-4, "the alternating coefficient is not zero by itself: {ls_b}");
+    assert!(
+        ls_b.abs() > 1e-4,
+        "the alternating coefficient is not zero by itself: {ls_b}"
+    );
     for limit in [400, 0] {
         let t = fit(1.0, limit);
         // the level moves from 0 to within its own standard deviation (0.07) of its
         // least-squares value (the search stops once no direction is worth one variance)
-        assert!((t[0] - ls_a).abs() < 0.05, "the level is still fitted: {t:?} ({ls_a})");
-        assert_eq!(t[1], 0.0, "the unsupported coefficient stays at its start: {t:?}");
+        assert!(
+            (t[0] - ls_a).abs() < 0.05,
+            "the level is still fitted: {t:?} ({ls_a})"
+        );
+        assert_eq!(
+            t[1], 0.0,
+            "the unsupported coefficient stays at its start: {t:?}"
+        );
     }
 }
